@@ -1,0 +1,156 @@
+#pragma once
+/// @file model.hpp
+/// core::Model: the immutable description of a scene, compiled once (sizes,
+/// masses, inertias, sphere sets, obstacles, materials, gains, time step).
+/// Mutable state lives in core::Data. Pattern of MuJoCo's mjModel/mjData.
+
+#include <cstdint>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "numen/core/broadphase.hpp"
+#include "numen/core/types.hpp"
+
+namespace numen::core {
+
+/// Time integration scheme of a scene (paper §5).
+enum class Integrator : std::uint8_t {
+  kLinearlyImplicitEuler,  ///< Backward Euler linearised with the stiffness and
+                           ///< damping Jacobians (Baraff & Witkin 1998) — paper's choice.
+  kSymplecticEuler,        ///< Semi-implicit Euler: v += h M⁻¹ f(x, v); x += h v. Explicit baseline.
+};
+
+/// How the attached body follows the device target (paper §3, Fig. 5, footnote).
+enum class CouplingMode : std::uint8_t {
+  kGodObject,   ///< Second order: damped springs of Eq. 2 on a body with mass (the paper's method).
+  kFirstOrder,  ///< Massless limit of Eq. 2: γ(v_t − v) + k e + F_ext = 0, i.e. velocity
+                ///< proportional to the error (the paper's footnote).
+  kDirect,      ///< Pose and twist imposed from the device (paper Fig. 5): no god-object.
+};
+
+/// A sphere of a sphere set. `center` is in the body frame for dynamic bodies
+/// (origin at the COM) and in the world frame for static sphere sets. Metres.
+struct Sphere {
+  Vec3 center = Vec3::Zero();
+  double radius = 0.0;
+};
+
+/// Gains of the coupling springs of Eq. 2 (zero-length, damped).
+/// k_t N/m, gamma_t N·s/m, k_r N·m/rad, gamma_r N·m·s/rad.
+struct CouplingGains {
+  double k_t = 0.0;
+  double gamma_t = 0.0;
+  double k_r = 0.0;
+  double gamma_r = 0.0;
+};
+
+/// Virtual-coupling gains of the device feedback (Eq. 8) and its saturation.
+/// All zero for a non-haptic device. max_force N, max_torque N·m (norm clamps).
+struct FeedbackGains {
+  double k_t = 0.0;
+  double gamma_t = 0.0;
+  double k_r = 0.0;
+  double gamma_r = 0.0;
+  double max_force = std::numeric_limits<double>::infinity();
+  double max_torque = std::numeric_limits<double>::infinity();
+};
+
+/// A dynamic rigid body (paper Eq. 1). The body frame has its origin at the
+/// centre of mass; inertia_body is expressed in it.
+struct BodyModel {
+  std::string name;
+  double mass = 1.0;                        ///< kg, > 0.
+  Mat3 inertia_body = Mat3::Identity();     ///< kg·m², symmetric positive definite.
+  Mat3 inertia_body_inv = Mat3::Identity(); ///< Derived by finalize_model().
+  int sphere_begin = 0;                     ///< First sphere in Model::body_spheres.
+  int sphere_count = 0;                     ///< Number of spheres (0: the body never collides).
+  int material = 0;                         ///< Index into the material table.
+  CouplingGains coupling;                   ///< Used while the device is attached to this body.
+  Pose initial_pose;                        ///< World pose of the COM frame at reset.
+  Twist initial_twist;                      ///< World twist at reset.
+  double bounding_radius = 0.0;             ///< Derived: max |c| + r over its spheres (m).
+};
+
+/// Shape of a static obstacle.
+enum class ShapeType : std::uint8_t { kPlane, kBox, kSphere, kCapsule, kSphereSet };
+
+/// A static obstacle, world frame.
+/// - plane: `pose.position` is a point on it, the normal is pose.orientation·z;
+///   the solid side is below the plane (half-space).
+/// - box: centre and axes from `pose`, `half_extents` (m).
+/// - sphere: centre pose.position, `radius` (m).
+/// - capsule: segment centred at pose.position along pose.orientation·z of
+///   half length `half_length`, `radius` (m).
+/// - sphere set: spheres [sphere_begin, sphere_begin + sphere_count) of
+///   Model::static_spheres, already in world coordinates.
+struct Obstacle {
+  std::string name;
+  ShapeType type = ShapeType::kPlane;
+  int material = 0;
+  Pose pose;
+  Vec3 half_extents = Vec3::Zero();
+  double radius = 0.0;
+  double half_length = 0.0;
+  int sphere_begin = 0;
+  int sphere_count = 0;
+  Vec3 aabb_min = Vec3::Constant(-std::numeric_limits<double>::infinity());  ///< Derived.
+  Vec3 aabb_max = Vec3::Constant(std::numeric_limits<double>::infinity());   ///< Derived.
+};
+
+/// Penalty contact parameters of a pair of materials (paper §5):
+/// normal force f_n = max(0, stiffness·depth − damping·v_n) (v_n: separating
+/// normal velocity), viscous tangential friction f_t = −friction·v_t.
+struct MaterialPair {
+  double stiffness = 1e4;  ///< N/m.
+  double damping = 10.0;   ///< N·s/m.
+  double friction = 0.0;   ///< N·s/m, viscous.
+};
+
+/// Settings of the linear solve of the implicit integrator.
+struct SolverSettings {
+  int max_iterations = 64;   ///< Preconditioned conjugate gradient iterations, at most.
+  double tolerance = 1e-10;  ///< Relative residual ‖r‖/‖b‖ that ends the iteration.
+};
+
+/// The immutable, compiled description of a scene. Fill the public fields,
+/// then call finalize_model(); afterwards only read it.
+struct Model {
+  double dt = 1e-3;                              ///< Fixed time step (s).
+  Vec3 gravity = Vec3(0.0, 0.0, -9.81);          ///< m/s², world frame.
+  Integrator integrator = Integrator::kLinearlyImplicitEuler;
+  CouplingMode coupling_mode = CouplingMode::kGodObject;
+
+  std::vector<BodyModel> bodies;       ///< Dynamic bodies.
+  std::vector<Sphere> body_spheres;    ///< Body-frame spheres of all bodies.
+  std::vector<Obstacle> obstacles;     ///< Static obstacles.
+  std::vector<Sphere> static_spheres;  ///< World-frame spheres of sphere-set obstacles.
+
+  std::vector<std::string> material_names;  ///< Size num_materials.
+  std::vector<MaterialPair> material_pairs; ///< num_materials², symmetric, row-major.
+
+  FeedbackGains feedback;          ///< Device virtual coupling (Eq. 8).
+  int initial_attached_body = 0;   ///< Body the device holds at reset; -1 for none.
+  SolverSettings solver;
+
+  StaticSphereGrid static_grid;    ///< Derived by finalize_model() (broad phase).
+
+  int num_materials() const noexcept { return static_cast<int>(material_names.size()); }
+  /// Contact parameters between materials a and b.
+  const MaterialPair& material_pair(int a, int b) const noexcept {
+    return material_pairs[static_cast<std::size_t>(a * num_materials() + b)];
+  }
+  int num_bodies() const noexcept { return static_cast<int>(bodies.size()); }
+};
+
+/// Validates `model` and computes its derived fields (inverse inertias,
+/// bounding radii, obstacle bounds, broad-phase grid). Returns an empty string
+/// on success, else a message naming the offending body/obstacle/field.
+/// Allocates: load time only.
+std::string finalize_model(Model& model);
+
+/// Default damping from a damping ratio ζ for a spring k acting on mass m:
+/// γ = 2 ζ √(m k). The paper's rule 1.4 ≤ γ/√(mk) ≤ 2 is ζ in [0.7, 1].
+double damping_from_ratio(double zeta, double mass, double stiffness) noexcept;
+
+}  // namespace numen::core

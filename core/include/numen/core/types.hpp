@@ -1,0 +1,38 @@
+#pragma once
+/// @file types.hpp
+/// Small fixed-size value types shared by every layer. SI units, world frame
+/// unless a name says otherwise. Quaternions are Hamilton (w, x, y, z), unit
+/// norm; q and -q are the same rotation (DESIGN.md, Conventions).
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+namespace numen::core {
+
+using Vec3 = Eigen::Vector3d;     ///< 3-vector (m, m/s, N, rad/s, ... by context).
+using Mat3 = Eigen::Matrix3d;     ///< 3x3 matrix (rotation, inertia kg·m², ...).
+using Vec6 = Eigen::Matrix<double, 6, 1>;  ///< Stacked (linear; angular) 6-vector.
+using Mat6 = Eigen::Matrix<double, 6, 6>;  ///< 6x6 block (mass, Jacobian blocks).
+using Quat = Eigen::Quaterniond;  ///< Unit quaternion, Hamilton convention.
+
+/// Rigid pose of a frame in the world: position (m) and orientation.
+struct Pose {
+  Vec3 position = Vec3::Zero();
+  Quat orientation = Quat::Identity();
+};
+
+/// Spatial velocity of a frame, both parts in world coordinates:
+/// linear velocity of the frame origin (m/s) and angular velocity (rad/s).
+struct Twist {
+  Vec3 linear = Vec3::Zero();
+  Vec3 angular = Vec3::Zero();
+};
+
+/// Force (N) and torque (N·m), world coordinates. The point the torque is
+/// taken about is stated where a Wrench is declared (usually a body's COM).
+struct Wrench {
+  Vec3 force = Vec3::Zero();
+  Vec3 torque = Vec3::Zero();
+};
+
+}  // namespace numen::core

@@ -1,0 +1,56 @@
+/// @file data.cpp
+/// Allocation and reset of core::Data.
+
+#include "numen/core/data.hpp"
+
+#include "numen/core/model.hpp"
+
+namespace numen::core {
+
+Data make_data(const Model& model) {
+  Data data;
+  const auto n = static_cast<std::size_t>(model.num_bodies());
+  data.bodies.resize(n);
+  data.applied_wrench.resize(n);
+  data.body_wrench.resize(n);
+  data.collision.resize(model);
+  data.solver.resize(model);
+  reset_data(model, data);
+  return data;
+}
+
+void reset_data(const Model& model, Data& data) noexcept {
+  data.time = 0.0;
+  data.step_count = 0;
+  for (std::size_t b = 0; b < data.bodies.size(); ++b) {
+    const BodyModel& bm = model.bodies[b];
+    BodyState& s = data.bodies[b];
+    s.position = bm.initial_pose.position;
+    s.orientation = bm.initial_pose.orientation;
+    s.linear_velocity = bm.initial_twist.linear;
+    s.angular_velocity = bm.initial_twist.angular;
+    data.applied_wrench[b] = Wrench{};
+    data.body_wrench[b] = Wrench{};
+  }
+  data.attached_body = model.initial_attached_body;
+  if (data.attached_body >= 0) {
+    const BodyState& s = data.bodies[static_cast<std::size_t>(data.attached_body)];
+    data.target = Pose{s.position, s.orientation};
+    data.target_twist = Twist{s.linear_velocity, s.angular_velocity};
+  } else {
+    data.target = Pose{};
+    data.target_twist = Twist{};
+  }
+  data.num_contacts = 0;
+  data.contacts_dropped = 0;
+  data.contact_overflow_steps = 0;
+  data.max_penetration = 0.0;
+  data.coupling_wrench = Wrench{};
+  data.feedback_wrench = Wrench{};
+  data.solver_iterations = 0;
+  data.solver_residual = 0.0;
+  data.status = kStepOk;
+  data.nonfinite_steps = 0;
+}
+
+}  // namespace numen::core

@@ -1,0 +1,105 @@
+/// @file model.cpp
+/// Validation and derived fields of core::Model.
+
+#include "numen/core/model.hpp"
+
+#include <cmath>
+#include <sstream>
+
+#include <Eigen/Eigenvalues>
+
+#include "numen/core/collision.hpp"
+
+namespace numen::core {
+namespace {
+
+bool finite(const Vec3& v) { return v.allFinite(); }
+
+}  // namespace
+
+double damping_from_ratio(double zeta, double mass, double stiffness) noexcept {
+  return 2.0 * zeta * std::sqrt(mass * stiffness);
+}
+
+std::string finalize_model(Model& model) {
+  std::ostringstream err;
+  if (!(model.dt > 0.0) || !std::isfinite(model.dt)) {
+    err << "time step dt must be finite and > 0 (got " << model.dt << ")";
+    return err.str();
+  }
+  if (!finite(model.gravity)) return "gravity must be finite";
+  if (model.material_names.empty()) model.material_names.push_back("default");
+  const auto nm = static_cast<std::size_t>(model.num_materials());
+  if (model.material_pairs.size() != nm * nm) {
+    err << "material_pairs has " << model.material_pairs.size() << " entries, expected "
+        << nm * nm << " (num_materials²)";
+    return err.str();
+  }
+  for (std::size_t i = 0; i < model.material_pairs.size(); ++i) {
+    const MaterialPair& p = model.material_pairs[i];
+    if (!(p.stiffness >= 0.0 && p.damping >= 0.0 && p.friction >= 0.0) ||
+        !std::isfinite(p.stiffness) || !std::isfinite(p.damping) || !std::isfinite(p.friction)) {
+      err << "material pair (" << model.material_names[i / nm] << ", "
+          << model.material_names[i % nm] << "): stiffness, damping and friction must be finite and >= 0";
+      return err.str();
+    }
+  }
+  for (std::size_t b = 0; b < model.bodies.size(); ++b) {
+    BodyModel& body = model.bodies[b];
+    const std::string who = "body '" + body.name + "'";
+    if (!(body.mass > 0.0) || !std::isfinite(body.mass)) return who + ": mass must be finite and > 0";
+    const Mat3 sym = 0.5 * (body.inertia_body + body.inertia_body.transpose());
+    if (!sym.allFinite() || (sym - body.inertia_body).norm() > 1e-12 * (1.0 + sym.norm()))
+      return who + ": inertia must be finite and symmetric";
+    Eigen::SelfAdjointEigenSolver<Mat3> eig(sym, Eigen::EigenvaluesOnly);
+    if (!(eig.eigenvalues().minCoeff() > 0.0)) return who + ": inertia must be positive definite";
+    body.inertia_body_inv = sym.inverse();
+    if (body.material < 0 || body.material >= model.num_materials())
+      return who + ": material index out of range";
+    if (body.sphere_begin < 0 || body.sphere_count < 0 ||
+        static_cast<std::size_t>(body.sphere_begin + body.sphere_count) > model.body_spheres.size())
+      return who + ": sphere range out of Model::body_spheres";
+    body.bounding_radius = 0.0;
+    for (int s = body.sphere_begin; s < body.sphere_begin + body.sphere_count; ++s) {
+      const Sphere& sp = model.body_spheres[static_cast<std::size_t>(s)];
+      if (!finite(sp.center) || !(sp.radius > 0.0) || !std::isfinite(sp.radius))
+        return who + ": sphere " + std::to_string(s - body.sphere_begin) +
+               " needs a finite centre and radius > 0";
+      body.bounding_radius = std::max(body.bounding_radius, sp.center.norm() + sp.radius);
+    }
+    const CouplingGains& g = body.coupling;
+    for (double v : {g.k_t, g.gamma_t, g.k_r, g.gamma_r})
+      if (!(v >= 0.0) || !std::isfinite(v)) return who + ": coupling gains must be finite and >= 0";
+    if (!finite(body.initial_pose.position) || !body.initial_pose.orientation.coeffs().allFinite() ||
+        body.initial_pose.orientation.norm() < 1e-9)
+      return who + ": initial pose must be finite with a non-zero quaternion";
+    body.initial_pose.orientation.normalize();
+    if (!finite(body.initial_twist.linear) || !finite(body.initial_twist.angular))
+      return who + ": initial twist must be finite";
+  }
+  for (const Obstacle& o : model.obstacles) {
+    const std::string who = "obstacle '" + o.name + "'";
+    if (o.material < 0 || o.material >= model.num_materials())
+      return who + ": material index out of range";
+    if (!finite(o.pose.position) || !o.pose.orientation.coeffs().allFinite() ||
+        o.pose.orientation.norm() < 1e-9)
+      return who + ": pose must be finite with a non-zero quaternion";
+    if (o.type == ShapeType::kSphereSet &&
+        (o.sphere_begin < 0 || o.sphere_count < 0 ||
+         static_cast<std::size_t>(o.sphere_begin + o.sphere_count) > model.static_spheres.size()))
+      return who + ": sphere range out of Model::static_spheres";
+  }
+  for (Obstacle& o : model.obstacles) o.pose.orientation.normalize();
+  const FeedbackGains& f = model.feedback;
+  for (double v : {f.k_t, f.gamma_t, f.k_r, f.gamma_r})
+    if (!(v >= 0.0) || !std::isfinite(v)) return "feedback gains must be finite and >= 0";
+  if (!(f.max_force >= 0.0) || !(f.max_torque >= 0.0)) return "feedback saturation must be >= 0";
+  if (model.initial_attached_body < -1 || model.initial_attached_body >= model.num_bodies())
+    return "initial attached body index out of range";
+  if (model.solver.max_iterations < 1 || !(model.solver.tolerance > 0.0))
+    return "solver needs max_iterations >= 1 and tolerance > 0";
+  build_collision_structures(model);
+  return {};
+}
+
+}  // namespace numen::core

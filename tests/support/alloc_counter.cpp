@@ -1,0 +1,111 @@
+/// @file alloc_counter.cpp
+/// Global allocation hooks for the zero-allocation tests (DESIGN.md, core).
+
+#include "alloc_counter.hpp"
+
+#include <cstdlib>
+#include <new>
+
+#include <Eigen/Core>
+
+extern "C" {
+void* __libc_malloc(std::size_t);
+void* __libc_calloc(std::size_t, std::size_t);
+void* __libc_realloc(void*, std::size_t);
+void* __libc_memalign(std::size_t, std::size_t);
+void __libc_free(void*);
+}
+
+namespace {
+thread_local std::int64_t g_count = 0;
+thread_local int g_depth = 0;
+inline void note() noexcept {
+  if (g_depth > 0) ++g_count;
+}
+}  // namespace
+
+extern "C" {
+void* malloc(std::size_t n) {
+  note();
+  return __libc_malloc(n);
+}
+void* calloc(std::size_t a, std::size_t b) {
+  note();
+  return __libc_calloc(a, b);
+}
+void* realloc(void* p, std::size_t n) {
+  note();
+  return __libc_realloc(p, n);
+}
+void free(void* p) { __libc_free(p); }
+void* aligned_alloc(std::size_t al, std::size_t n) {
+  note();
+  return __libc_memalign(al, n);
+}
+void* memalign(std::size_t al, std::size_t n) {
+  note();
+  return __libc_memalign(al, n);
+}
+int posix_memalign(void** out, std::size_t al, std::size_t n) {
+  note();
+  void* p = __libc_memalign(al, n);
+  if (p == nullptr) return 12;  // ENOMEM
+  *out = p;
+  return 0;
+}
+}
+
+namespace {
+void* checked(std::size_t n) {
+  note();
+  void* p = __libc_malloc(n == 0 ? 1 : n);
+  if (p == nullptr) throw std::bad_alloc();
+  return p;
+}
+void* checked_aligned(std::size_t n, std::align_val_t al) {
+  note();
+  void* p = __libc_memalign(static_cast<std::size_t>(al), n == 0 ? 1 : n);
+  if (p == nullptr) throw std::bad_alloc();
+  return p;
+}
+}  // namespace
+
+void* operator new(std::size_t n) { return checked(n); }
+void* operator new[](std::size_t n) { return checked(n); }
+void* operator new(std::size_t n, const std::nothrow_t&) noexcept {
+  note();
+  return __libc_malloc(n == 0 ? 1 : n);
+}
+void* operator new[](std::size_t n, const std::nothrow_t&) noexcept {
+  note();
+  return __libc_malloc(n == 0 ? 1 : n);
+}
+void* operator new(std::size_t n, std::align_val_t al) { return checked_aligned(n, al); }
+void* operator new[](std::size_t n, std::align_val_t al) { return checked_aligned(n, al); }
+void operator delete(void* p) noexcept { __libc_free(p); }
+void operator delete[](void* p) noexcept { __libc_free(p); }
+void operator delete(void* p, std::size_t) noexcept { __libc_free(p); }
+void operator delete[](void* p, std::size_t) noexcept { __libc_free(p); }
+void operator delete(void* p, std::align_val_t) noexcept { __libc_free(p); }
+void operator delete[](void* p, std::align_val_t) noexcept { __libc_free(p); }
+void operator delete(void* p, std::size_t, std::align_val_t) noexcept { __libc_free(p); }
+void operator delete[](void* p, std::size_t, std::align_val_t) noexcept { __libc_free(p); }
+
+namespace numen::test {
+
+std::int64_t allocation_count() noexcept { return g_count; }
+
+AllocationGuard::AllocationGuard() noexcept
+    : start_(g_count), eigen_was_allowed_(Eigen::internal::is_malloc_allowed()) {
+  ++g_depth;
+  Eigen::internal::set_is_malloc_allowed(false);
+}
+
+AllocationGuard::~AllocationGuard() {
+  --g_depth;
+  Eigen::internal::set_is_malloc_allowed(eigen_was_allowed_);
+}
+
+std::int64_t AllocationGuard::count() const noexcept { return g_count - start_; }
+
+}  // namespace numen::test
