@@ -1,16 +1,59 @@
 /// @file step.cpp
-/// PLACEHOLDER owned by the dynamics work: replaced by the real stages.
+/// One fixed time step of the god-object dynamics: a readable list of stages.
 
 #include "numen/core/step.hpp"
 
+#include "numen/core/collision.hpp"
+#include "numen/core/contact_force.hpp"
+#include "numen/core/coupling.hpp"
 #include "numen/core/data.hpp"
+#include "numen/core/feedback.hpp"
+#include "numen/core/integrator.hpp"
 #include "numen/core/model.hpp"
+#include "numen/core/rigid_body.hpp"
 
 namespace numen::core {
+namespace {
 
-void SolverScratch::resize(const Model&) {}
+void save_state(Data& data) noexcept {
+  for (std::size_t i = 0; i < data.bodies.size(); ++i) data.solver.saved_state[i] = data.bodies[i];
+}
+
+/// Checks stage: rejects a non-finite result (rollback to the saved poses,
+/// zero twists, zero feedback). Returns true when the step was accepted.
+bool check_finite(Data& data) noexcept {
+  bool finite = data.feedback_wrench.force.allFinite() && data.feedback_wrench.torque.allFinite();
+  for (const BodyState& s : data.bodies) finite = finite && state_is_finite(s);
+  if (finite) return true;
+  for (std::size_t i = 0; i < data.bodies.size(); ++i) {
+    BodyState& s = data.bodies[i];
+    s = data.solver.saved_state[i];
+    s.linear_velocity.setZero();
+    s.angular_velocity.setZero();
+  }
+  data.feedback_wrench = Wrench{};
+  data.status |= kNonFinite;
+  ++data.nonfinite_steps;
+  return false;
+}
+
+}  // namespace
+
+void compute_forces(const Model& model, Data& data) noexcept {
+  apply_external_forces(model, data);
+  apply_coupling(model, data);
+  compute_contact_forces(model, data);
+}
 
 void step(const Model& model, Data& data) noexcept {
+  data.status = kStepOk;
+  save_state(data);
+  impose_direct_target(model, data);
+  detect_contacts(model, data);  // may set kContactOverflow, counts contact_overflow_steps
+  compute_forces(model, data);
+  integrate(model, data);
+  compute_feedback(model, data);
+  check_finite(data);
   data.time += model.dt;
   ++data.step_count;
 }

@@ -1,8 +1,13 @@
 #pragma once
 /// @file broadphase.hpp
-/// Broad phase for static sphere sets: a uniform grid built once when the
-/// Model is finalized, queried without allocation during step().
+/// Broad phase of the collision stage (paper §5, sphere-based collision):
+/// - a uniform grid over the static sphere sets, built once when the Model is
+///   finalized and queried without allocation during step();
+/// - the sort-and-sweep order of the dynamic bodies' world AABBs (insertion
+///   sort of a preallocated index array, coherent between steps).
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -11,24 +16,88 @@
 namespace numen::core {
 
 struct Sphere;
+struct Obstacle;
+
+/// One grid entry copied into a cell: a static sphere (world frame) and the
+/// sphere-set obstacle it belongs to. Copies are stored cell by cell so that a
+/// query reads contiguous memory.
+struct GridItem {
+  Vec3 center = Vec3::Zero();  ///< World centre (m).
+  double radius = 0.0;         ///< m.
+  std::int32_t sphere = -1;    ///< Index into Model::static_spheres.
+  std::int32_t obstacle = -1;  ///< Owning sphere-set obstacle, -1 for a bare sphere list.
+  std::int32_t entry = -1;     ///< Entry id in [0, num_entries): key of the de-duplication stamp.
+  std::int32_t material = 0;   ///< Material of the owning obstacle (0 for a bare sphere list).
+};
 
 /// Uniform grid over the static spheres of a Model (world frame), built once.
-/// Each cell lists the indices of the spheres whose bounding box overlaps it
-/// (compressed row storage: cell_start has num_cells + 1 entries).
+/// Each cell lists the spheres whose bounding box overlaps it (compressed row
+/// storage: cell_start has num_cells + 1 entries; cells are numbered
+/// x fastest, then y, then z, so a run of cells along x is one contiguous
+/// range of `items`). A sphere straddling several cells appears once per cell:
+/// queries de-duplicate hits with a per-entry stamp (CollisionScratch).
+///
+/// An *entry* is a (sphere, obstacle) pair: a static sphere listed by two
+/// sphere-set obstacles is two entries (and gives two contacts).
 struct StaticSphereGrid {
   Vec3 origin = Vec3::Zero();   ///< World position of the grid's min corner (m).
   double cell_size = 0.0;       ///< Edge length of a cubic cell (m); 0 = empty grid.
+  double inv_cell_size = 0.0;   ///< 1 / cell_size (1/m), 0 for an empty grid.
   Eigen::Vector3i dims = Eigen::Vector3i::Zero();  ///< Cells along x, y, z.
-  std::vector<std::int32_t> cell_start;  ///< Offsets into sphere_index, size cells+1.
+  Vec3 bounds_min = Vec3::Zero();  ///< Union of the entries' bounding boxes (m).
+  Vec3 bounds_max = Vec3::Zero();  ///< Union of the entries' bounding boxes (m).
+  std::int32_t num_entries = 0;    ///< Distinct (sphere, obstacle) entries.
+  std::vector<std::int32_t> cell_start;    ///< Offsets into sphere_index/items, size cells+1.
   std::vector<std::int32_t> sphere_index;  ///< Sphere indices, grouped by cell.
+  std::vector<GridItem> items;             ///< Same order as sphere_index, with the sphere data.
 
   /// True when no static sphere is registered.
   bool empty() const noexcept { return cell_size <= 0.0; }
+
+  /// Number of cells.
+  int num_cells() const noexcept { return dims.x() * dims.y() * dims.z(); }
+
+  /// Linear index of cell (x, y, z).
+  int cell_index(int x, int y, int z) const noexcept { return (z * dims.y() + y) * dims.x() + x; }
+
+  /// Cell coordinate of world coordinate `v` along `axis`, clamped to the grid.
+  int cell_coord(double v, int axis) const noexcept {
+    const double f = std::floor((v - origin[axis]) * inv_cell_size);
+    const double hi = static_cast<double>(dims[axis] - 1);
+    return static_cast<int>(std::clamp(f, 0.0, hi));
+  }
+
+  /// Cells overlapped by the world box [lo, hi]: false when the box misses
+  /// every entry (outside bounds_min/max), else the inclusive cell ranges.
+  bool cell_range(const Vec3& lo, const Vec3& hi, Eigen::Vector3i& first,
+                  Eigen::Vector3i& last) const noexcept {
+    if (empty()) return false;
+    for (int k = 0; k < 3; ++k) {
+      if (!(hi[k] >= bounds_min[k]) || !(lo[k] <= bounds_max[k])) return false;  // NaN: miss
+      first[k] = cell_coord(lo[k], k);
+      last[k] = cell_coord(hi[k], k);
+    }
+    return true;
+  }
 };
 
-/// Builds the grid over `spheres` (world frame). cell_size <= 0 picks a cell of
-/// about twice the mean sphere diameter. Allocates; call at load time only.
+/// Builds the grid over every sphere of `spheres` (world frame), entry e =
+/// sphere e, obstacle -1. cell_size <= 0 picks a cell of about twice the mean
+/// sphere diameter (enlarged if the grid would exceed max(4096, 32·n) cells).
+/// Allocates; call at load time only.
 void build_static_grid(const std::vector<Sphere>& spheres, double cell_size,
                        StaticSphereGrid& grid);
+
+/// Builds the grid over the sphere-set obstacles of `obstacles` (their ranges of
+/// `spheres`, in obstacle order; other shapes are ignored). Same cell-size rule.
+/// Allocates; call at load time only.
+void build_static_grid(const std::vector<Sphere>& spheres, const std::vector<Obstacle>& obstacles,
+                       double cell_size, StaticSphereGrid& grid);
+
+/// Sort-and-sweep order: sorts `order[0, count)` (body indices) by
+/// (aabb_min[i][axis], i) ascending with an insertion sort, O(count) when the
+/// order of the previous step is nearly right. The tie-break on the index makes
+/// the result a pure function of the keys (deterministic, history-free).
+void sort_sweep_order(const Vec3* aabb_min, int axis, std::int32_t* order, int count) noexcept;
 
 }  // namespace numen::core

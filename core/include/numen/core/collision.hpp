@@ -1,7 +1,20 @@
 #pragma once
 /// @file collision.hpp
-/// Collision stage: sphere sets of dynamic bodies against static obstacles
-/// (plane, box, sphere, capsule, sphere set) and against each other.
+/// Collision stage (paper §5, sphere-based collision for penalty contacts):
+/// the sphere sets of the dynamic bodies against the static obstacles (plane,
+/// box, sphere, capsule, sphere set) and against each other.
+///
+/// Pipeline of detect_contacts():
+///   1. world centres c_w = x + R c_b of every body sphere, tight world AABB per body;
+///   2. per body (index order): primitive obstacles (index order) culled by the
+///      body's bounding sphere against their AABB (plane: signed distance), then
+///      each sphere against the shape; the static sphere sets through the
+///      uniform grid (Model::static_grid), one query per sphere;
+///   3. body–body: sort-and-sweep on the world AABBs along x (insertion sort of
+///      CollisionScratch::sweep_order), then sphere–sphere between the two
+///      bodies' spheres. body_a is the lower body index.
+/// The order of the contacts is a pure function of the model and the body
+/// states (deterministic, independent of the scratch's history).
 
 #include <cstdint>
 #include <vector>
@@ -15,18 +28,31 @@ struct Data;
 
 /// Scratch of the collision stage, sized once by resize().
 struct CollisionScratch {
-  std::vector<Vec3> sphere_world;  ///< World centres of Model::body_spheres (m).
+  std::vector<Vec3> sphere_world;     ///< World centres of Model::body_spheres (m).
+  std::vector<Vec3> body_aabb_min;    ///< Tight world AABB of each body's spheres (m);
+  std::vector<Vec3> body_aabb_max;    ///< inverted (+inf, −inf) for a body without spheres.
+  std::vector<std::int32_t> sweep_order;  ///< Bodies with spheres, sorted by body_aabb_min.x;
+                                          ///< kept between steps (coherent insertion sort).
+  std::vector<std::uint32_t> entry_stamp;  ///< Per static grid entry: last query that hit it.
+  std::uint32_t stamp = 0;            ///< Current query id (wraps: the stamps are then cleared).
   /// Sizes every buffer for `model`. Allocates: make_data() only.
   void resize(const Model& model);
 };
 
-/// Builds the broad-phase structures of `model` (static sphere grid, obstacle
-/// bounds). Called by finalize_model(); allocates.
+/// Builds the broad-phase structures of `model`: the AABB of every obstacle
+/// (Obstacle::aabb_min/max; planes stay infinite, an empty sphere set gets an
+/// inverted box) and the static sphere grid over the sphere-set obstacles.
+/// Called by finalize_model() after validation; allocates.
 void build_collision_structures(Model& model);
 
 /// Fills data.contacts[0, data.num_contacts) with the geometry of every
-/// penetrating sphere pair. Overflow beyond kMaxContacts sets
-/// StepStatus::kContactOverflow and counts data.contacts_dropped. No allocation.
+/// penetrating sphere pair (Contact::force is zeroed; the force stage fills it).
+/// Sets data.max_penetration (deepest contact found, dropped ones included;
+/// 0 if none). Overflow beyond kMaxContacts keeps the first kMaxContacts,
+/// counts the rest in data.contacts_dropped, ORs StepStatus::kContactOverflow
+/// into data.status and increments data.contact_overflow_steps (once per call).
+/// Clears only the kContactOverflow bit of data.status on entry. Requires
+/// data.collision sized for `model` (make_data). No allocation, no exception.
 void detect_contacts(const Model& model, Data& data) noexcept;
 
 }  // namespace numen::core

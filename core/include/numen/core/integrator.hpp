@@ -3,9 +3,23 @@
 /// Time integration of the rigid bodies (paper Eq. 1, §5): linearly implicit
 /// Euler with the stiffness and damping Jacobians of coupling springs and
 /// contacts, and symplectic Euler as the explicit baseline.
+///
+/// Linearly implicit (backward) Euler, Baraff & Witkin 1998 ("Large steps in
+/// cloth simulation", §2.3), on the stacked twists u = (v_0, ω_0, v_1, ω_1, …):
+///   (M − h D − h² K) Δu = h (f0 + h K u0) + M (u* − u0),
+///   u1 = u0 + Δu,  x1 = x0 + h v1,  q1 = exp(½ h ω1) ⊗ q0,
+/// with M = blockdiag(m_i I3, I_w,i), K = ∂f/∂x, D = ∂f/∂u, u* the twist after
+/// the implicit gyroscopic step (Catto, GDC 2015). The M (u* − u0) term makes
+/// the gyroscopic step an exact split: it equals re-evaluating the (linear in
+/// u) forces at u*. The system is symmetric positive definite and solved
+/// matrix-free by a conjugate gradient preconditioned with the exact 6×6
+/// diagonal block of each body (Cholesky).
 
+#include <cstdint>
+#include <span>
 #include <vector>
 
+#include <Eigen/Cholesky>
 #include <Eigen/Core>
 
 #include "numen/core/types.hpp"
@@ -14,11 +28,102 @@ namespace numen::core {
 
 struct Model;
 struct Data;
+struct BodyState;
 
-/// Scratch of the integrator, sized once by resize().
+/// Linearisation of one contact for the implicit solve, filled by
+/// compute_contact_forces() (lever arms, activity) and the integrator (weight).
+struct ContactTerm {
+  Vec3 r_a = Vec3::Zero();   ///< Contact point − COM of body_a (m, world).
+  Vec3 r_b = Vec3::Zero();   ///< Contact point − COM of body_b (m, world); zero when static.
+  double normal_force = 0.0; ///< f_n (N), ≥ 0.
+  bool active = false;       ///< f_n > 0: the contact contributes forces and Jacobians.
+  /// Weight W = (h c + h² k) n nᵀ + h μ (I − n nᵀ) (N·s/m): the contact's
+  /// contribution to A = M − hD − h²K is Gᵀ W G (G: contact_velocity_jacobian).
+  Mat3 weight = Mat3::Zero();
+};
+
+/// Scratch of the integrator, sized once by resize(). Fixed-size Eigen types
+/// per body/contact; nothing is resized during step().
 struct SolverScratch {
+  std::vector<BodyState> saved_state;   ///< State before the current step (non-finite rollback).
+  std::vector<Mat3> inertia_world;      ///< I_w per body at the step's start (kg·m²).
+  std::vector<Vec6> twist0;             ///< u0 per body: (v, ω) at the step's start.
+  std::vector<Vec6> rhs;                ///< b of A Δu = b (N·s, N·m·s).
+  std::vector<Vec6> delta;              ///< Δu, the unknowns (m/s, rad/s).
+  std::vector<Vec6> residual;           ///< CG residual r.
+  std::vector<Vec6> precond_residual;   ///< CG z = P⁻¹ r.
+  std::vector<Vec6> direction;          ///< CG search direction p.
+  std::vector<Vec6> a_direction;        ///< CG A p.
+  std::vector<Mat6> block;              ///< Diagonal 6×6 blocks of A (preconditioner).
+  std::vector<Eigen::LLT<Mat6>> block_llt;  ///< Cholesky factors of `block`.
+  std::vector<std::uint8_t> in_solve;   ///< 1: body's twist is unknown; 0: known (kDirect body).
+  std::vector<ContactTerm> contact_terms;   ///< Size kMaxContacts, parallel to Data::contacts.
+
+  int coupled_body = -1;     ///< Body whose coupling springs act this step (-1: none).
+  bool first_order = false;  ///< coupled_body uses the massless (first-order) model this step.
+  int direct_body = -1;      ///< Body whose pose/twist is imposed this step (kDirect), or -1.
+
   /// Sizes every buffer for `model`. Allocates: make_data() only.
   void resize(const Model& model);
 };
+
+/// Integrate stage: dispatches on Model::integrator to
+/// integrate_linearly_implicit_euler() or integrate_symplectic_euler(). Needs
+/// Data::body_wrench (explicit forces: gravity, applied, coupling, contacts)
+/// and the ContactTerm lever arms of this step. Advances Data::bodies by dt.
+void integrate(const Model& model, Data& data) noexcept;
+
+/// Symplectic (semi-implicit) Euler, the explicit baseline (paper §5):
+///   v1 = v0 + h F/m,  ω1 = ω0 + h I_w⁻¹ (T − ω0 × I_w ω0),
+///   x1 = x0 + h v1,   q1 = exp(½ h ω1) ⊗ q0.
+/// kFirstOrder attached body (γ_t, γ_r > 0): v1 = v_t + (k_t e + F_other)/γ_t,
+/// ω1 = ω_t + (k_r θu + T_other)/γ_r (massless limit of Eq. 2, explicit;
+/// F_other, T_other: every other force on the body — gravity, applied
+/// wrench, contacts; stable for h k/γ < 2).
+/// kDirect attached body: left at the imposed target. Sets solver_iterations
+/// and solver_residual to 0. Conditionally stable: h √(k/m) < 2.
+void integrate_symplectic_euler(const Model& model, Data& data) noexcept;
+
+/// Linearly implicit Euler (see file comment; paper §5, Baraff & Witkin 1998):
+/// implicit gyroscopic step, build_implicit_system(), solve_implicit_system(),
+/// then positions and orientations. Sets kSolverNotConverged when the solve
+/// ends at max_iterations above the tolerance (the best iterate is still used).
+void integrate_linearly_implicit_euler(const Model& model, Data& data) noexcept;
+
+/// First part of the implicit step: stores u0 (SolverScratch::twist0) and the
+/// world inertias at the step's start, then replaces the angular velocity of
+/// every body in the solve (not kDirect, not a first-order coupled body) by
+/// the implicit gyroscopic update implicit_gyroscopic_velocity() (Catto, GDC
+/// 2015). Call after the forces stage, before build_implicit_system().
+void prepare_implicit_step(const Model& model, Data& data) noexcept;
+
+/// Builds the implicit system of the current step in Data::solver (after
+/// prepare_implicit_step()): contact weights, the 6×6 diagonal blocks of
+/// A = M − hD − h²K and their Cholesky factors, and the right-hand side
+///   b = h (f0 + h K u0) + M (u* − u0),
+/// where u* is Data::bodies' twist after the implicit gyroscopic step (apply
+/// that to the state first), f0 = Data::body_wrench, K and D from the coupling
+/// springs of SolverScratch::coupled_body (−diag(k_t I3, k_r I3),
+/// −diag(γ_t I3, γ_r I3)) and each active contact (K = −k Gᵀ n nᵀ G,
+/// D = −c Gᵀ n nᵀ G − μ Gᵀ (I − n nᵀ) G). A first-order body (kFirstOrder,
+/// γ_t, γ_r > 0) has M_i := 0, giving (γ + h k) v1 = k e + γ v_t + F_other.
+/// Rows of a kDirect body are removed (b_i = 0): its twist is known.
+void build_implicit_system(const Model& model, Data& data) noexcept;
+
+/// Matrix-free product out = A · in with A = M − hD − h²K as built by
+/// build_implicit_system(). Spans have one Vec6 (linear; angular) per body.
+/// Rows and columns of bodies not in the solve are zero.
+void apply_implicit_system(const Model& model, const Data& data, std::span<const Vec6> in,
+                           std::span<Vec6> out) noexcept;
+
+/// Preconditioned conjugate gradient on A Δu = b (SolverScratch::rhs) with the
+/// block-Jacobi preconditioner of the 6×6 body blocks; Δu starts at 0.
+/// Stops when ‖r‖/‖b‖ ≤ model.solver.tolerance or after
+/// model.solver.max_iterations. Writes SolverScratch::delta,
+/// Data::solver_iterations and Data::solver_residual (relative); returns true
+/// when converged. Exact in one iteration when A is block diagonal (no
+/// body–body contact). A non-finite b gives a NaN Δu (rejected by step()'s
+/// checks). Fixed summation order: bit-for-bit deterministic.
+bool solve_implicit_system(const Model& model, Data& data) noexcept;
 
 }  // namespace numen::core

@@ -10,13 +10,28 @@ struct Data;
 /// Advances `data` by model.dt. Stages, in order:
 ///   1. detect_contacts — collision geometry (collision.hpp)
 ///   2. forces — gravity, applied wrenches, coupling (Eq. 2) on the attached
-///      body, penalty contact forces, gyroscopic term
+///      body, penalty contact forces (compute_forces); the gyroscopic term is
+///      applied by the integrator (implicit step or explicit torque)
 ///   3. integrate — linearly implicit or symplectic Euler (Eq. 1, §5), or
 ///      the imposed pose in CouplingMode::kDirect
 ///   4. feedback — Eq. 8 virtual-coupling wrench for the device, saturated
-///   5. checks — non-finite results are rejected (state kept, status set)
+///   5. checks — non-finite results are rejected: every body goes back to its
+///      pose before the step with zero twist, the feedback is zeroed,
+///      kNonFinite is set and Data::nonfinite_steps counted
+/// Data::status is cleared first (then detect_contacts may set
+/// kContactOverflow and count contact_overflow_steps);
+/// time += dt and ++step_count at the end. In kDirect the attached body's
+/// pose/twist are imposed before detect_contacts.
 /// Never allocates, throws, locks or calls the OS. Deterministic.
 void step(const Model& model, Data& data) noexcept;
+
+/// Forces stage of step(): body_wrench := gravity + applied wrench
+/// (apply_external_forces), + coupling on the attached body (apply_coupling,
+/// Eq. 2), + penalty contact forces of data.contacts (compute_contact_forces).
+/// The gyroscopic term is handled by the integrator (implicit or explicit).
+/// Expects detect_contacts() (and impose_direct_target() in kDirect) to have
+/// run this step. No allocation.
+void compute_forces(const Model& model, Data& data) noexcept;
 
 /// Attaches the device to body `body` (or detaches with -1); out-of-range
 /// values detach. Tool switching of the paper's construction game.

@@ -5,6 +5,7 @@
 ///   "<file>:<line>:<column>: <key>: <message>"
 /// with the parts that are unknown left out.
 
+#include <sstream>
 #include <stdexcept>
 #include <string>
 
@@ -29,12 +30,14 @@ class InputError : public std::runtime_error {
  private:
   static std::string format(const std::string& file, int line, int column,
                             const std::string& key, const std::string& message) {
-    std::string s = file;
-    if (line > 0) s += ":" + std::to_string(line);
-    if (line > 0 && column > 0) s += ":" + std::to_string(column);
-    s += ": ";
-    if (!key.empty()) s += key + ": ";
-    return s + message;
+    std::ostringstream os;
+    os << file;
+    if (line > 0) os << ':' << line;
+    if (line > 0 && column > 0) os << ':' << column;
+    os << ": ";
+    if (!key.empty()) os << key << ": ";
+    os << message;
+    return os.str();
   }
   std::string file_;
   int line_;

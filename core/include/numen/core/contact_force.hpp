@@ -1,0 +1,73 @@
+#pragma once
+/// @file contact_force.hpp
+/// Penalty contact forces (paper §5) and their Jacobians for the implicit
+/// integrator. For a contact with normal n (unit, from b towards a), depth
+/// d > 0 and lever arms r_a, r_b (contact point − COM, world):
+///   v_rel = (v_a + ω_a × r_a) − (v_b + ω_b × r_b)    (b static: 0),
+///   v_n   = n · v_rel,
+///   f_n   = max(0, k d − c v_n)                       (no pulling),
+///   f_t   = −μ (v_rel − v_n n)                        (viscous friction),
+///   F     = f_n n + f_t on a at the contact point, −F on b,
+/// with k, c, μ = MaterialPair::stiffness, damping, friction. Friction acts
+/// only while f_n > 0 (an inactive contact applies nothing).
+
+#include <Eigen/Core>
+
+#include "numen/core/types.hpp"
+
+namespace numen::core {
+
+struct Model;
+struct Data;
+struct Contact;
+struct MaterialPair;
+struct BodyState;
+
+using Vec12 = Eigen::Matrix<double, 12, 1>;     ///< Stacked (v_a, ω_a, v_b, ω_b).
+using Mat3x12 = Eigen::Matrix<double, 3, 12>;   ///< Twists of a pair → a 3-vector.
+using Mat12 = Eigen::Matrix<double, 12, 12>;    ///< Pair Jacobian block.
+
+/// Result of the penalty law at one contact.
+struct ContactForceResult {
+  Vec3 force = Vec3::Zero();  ///< F on body_a at the contact point (N, world); −F on body_b.
+  double normal_force = 0.0;  ///< f_n (N), ≥ 0.
+  bool active = false;        ///< f_n > 0.
+};
+
+/// Relative velocity (m/s, world) of the contact point of a with respect to
+/// that of b: (v_a + ω_a × r_a) − (v_b + ω_b × r_b). `b` may be null (static).
+Vec3 contact_relative_velocity(const BodyState& a, const Vec3& r_a, const BodyState* b,
+                               const Vec3& r_b) noexcept;
+
+/// Penalty law (see file comment) for a contact of `depth` (m, > 0 means
+/// penetrating) and unit `normal` (from b towards a), given the relative
+/// velocity `v_rel` (m/s) and the material pair. Never pulls: f_n ≥ 0.
+ContactForceResult contact_penalty_force(const Vec3& normal, double depth, const Vec3& v_rel,
+                                         const MaterialPair& material) noexcept;
+
+/// G (3×12): v_rel = G (v_a, ω_a, v_b, ω_b), G = [I, −[r_a]×, −I, [r_b]×].
+/// Gᵀ F is the generalized force (F, r_a × F, −F, −r_b × F) of the pair.
+Mat3x12 contact_velocity_jacobian(const Vec3& r_a, const Vec3& r_b) noexcept;
+
+/// Stiffness K = ∂f/∂x and damping D = ∂f/∂u (12×12, symmetric negative
+/// semidefinite) of the generalized contact force of the pair, with x the
+/// stacked displacements (δx_a, δθ_a, δx_b, δθ_b) (m, rad; δθ a world
+/// rotation vector) and u the stacked twists:
+///   K = −k Gᵀ n nᵀ G,  D = −c Gᵀ n nᵀ G − μ Gᵀ (I − n nᵀ) G   when active,
+///   K = D = 0 otherwise. Geometric terms (changes of n and of the lever arms)
+/// are neglected. Baraff & Witkin 1998 §5 form.
+void contact_stiffness_damping(const Vec3& normal, const Vec3& r_a, const Vec3& r_b, bool active,
+                               const MaterialPair& material, Mat12& stiffness,
+                               Mat12& damping) noexcept;
+
+/// Contact force stage: for each contact in data.contacts[0, num_contacts)
+/// (filled by detect_contacts), computes the penalty force into
+/// Contact::force, the lever arms and activity into
+/// SolverScratch::contact_terms, and adds (F, r_a × F) to body_wrench[body_a]
+/// and (−F, −r_b × F) to body_wrench[body_b] (at the COMs, world). Contacts
+/// with an out-of-range body or material_pair index are ignored (force 0,
+/// inactive). Forces on a kDirect body are computed but have no effect (its
+/// motion is imposed). Fixed contact order. No allocation.
+void compute_contact_forces(const Model& model, Data& data) noexcept;
+
+}  // namespace numen::core

@@ -1,0 +1,58 @@
+#pragma once
+/// @file coupling.hpp
+/// Coupling of the god-object to the device target (paper Eq. 2, §3, Fig. 5):
+///   F = k_t (x_t − x) + γ_t (v_t − v),
+///   T = k_r θu + γ_r (ω_t − ω),   θu = shortest-arc angle-axis of q_t q⁻¹,
+/// a zero-length damped spring pair acting at the COM of the attached body
+/// only (Data::attached_body; gains BodyModel::coupling). Modes
+/// (Model::coupling_mode): kGodObject (this wrench on a body with mass),
+/// kFirstOrder (massless limit, handled by the integrator), kDirect (pose and
+/// twist imposed: impose_direct_target()).
+
+#include "numen/core/types.hpp"
+
+namespace numen::core {
+
+struct Model;
+struct Data;
+struct BodyState;
+struct CouplingGains;
+
+/// Rotation error θu (rad, world frame) that takes orientation `q` to
+/// `q_target`: the shortest-arc angle-axis of q_target q⁻¹, θ in [0, π]
+/// (quat_log). Invariant under q → −q and q_target → −q_target. Smooth at
+/// θ = 0; uses atan2, robust at θ = π. Paper Eq. 2 (α u).
+Vec3 rotation_error(const Quat& q_target, const Quat& q) noexcept;
+
+/// Coupling wrench of Eq. 2 (N, N·m; world, at the COM) pulling `state`
+/// towards `target`/`target_twist` with `gains`.
+Wrench coupling_wrench(const CouplingGains& gains, const Pose& target, const Twist& target_twist,
+                       const BodyState& state) noexcept;
+
+/// True when the target pose and twist are finite and the target quaternion
+/// has a non-negligible norm (> 1e-9). A device target failing this check is
+/// ignored for the step (StepStatus::kInvalidTarget).
+bool target_is_finite(const Pose& target, const Twist& target_twist) noexcept;
+
+/// True when the first-order (massless) coupling can be used with `gains`:
+/// γ_t > 0 and γ_r > 0. Otherwise CouplingMode::kFirstOrder falls back to the
+/// god-object model (kGodObject) for that body.
+bool first_order_applicable(const CouplingGains& gains) noexcept;
+
+/// kDirect only (no-op in other modes or when no valid body is attached):
+/// imposes x, q, v, ω of the attached body := Data::target / target_twist
+/// (q normalised) and marks it SolverScratch::direct_body, i.e. a moving body
+/// of infinite mass for the rest of the step. With a non-finite target, sets
+/// kInvalidTarget and holds the body still (pose kept, twist zeroed).
+/// Call before detect_contacts() so that contacts see the imposed pose.
+void impose_direct_target(const Model& model, Data& data) noexcept;
+
+/// Coupling stage (Eq. 2): computes Data::coupling_wrench for the attached
+/// body, adds it to body_wrench, and records in Data::solver which body is
+/// coupled (coupled_body) and whether it is first order (first_order).
+/// Zero wrench and no coupled body when nothing is attached, in kDirect mode,
+/// or when the target is not finite (then kInvalidTarget is set in
+/// Data::status). Call after apply_external_forces().
+void apply_coupling(const Model& model, Data& data) noexcept;
+
+}  // namespace numen::core

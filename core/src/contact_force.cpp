@@ -1,0 +1,98 @@
+/// @file contact_force.cpp
+/// Penalty contact forces and their Jacobians (paper §5).
+
+#include "numen/core/contact_force.hpp"
+
+#include <algorithm>
+
+#include "numen/core/contact.hpp"
+#include "numen/core/data.hpp"
+#include "numen/core/model.hpp"
+#include "numen/core/rigid_body.hpp"
+
+namespace numen::core {
+
+Vec3 contact_relative_velocity(const BodyState& a, const Vec3& r_a, const BodyState* b,
+                               const Vec3& r_b) noexcept {
+  Vec3 v = a.linear_velocity + a.angular_velocity.cross(r_a);
+  if (b != nullptr) v -= b->linear_velocity + b->angular_velocity.cross(r_b);
+  return v;
+}
+
+ContactForceResult contact_penalty_force(const Vec3& normal, double depth, const Vec3& v_rel,
+                                         const MaterialPair& material) noexcept {
+  ContactForceResult out;
+  const double v_n = normal.dot(v_rel);
+  const double f_n = material.stiffness * depth - material.damping * v_n;
+  if (f_n > 0.0) {
+    out.normal_force = f_n;
+    out.active = true;
+    out.force = f_n * normal - material.friction * (v_rel - v_n * normal);
+  }
+  return out;
+}
+
+Mat3x12 contact_velocity_jacobian(const Vec3& r_a, const Vec3& r_b) noexcept {
+  Mat3x12 g;
+  g.block<3, 3>(0, 0) = Mat3::Identity();
+  g.block<3, 3>(0, 3) = -skew(r_a);
+  g.block<3, 3>(0, 6) = -Mat3::Identity();
+  g.block<3, 3>(0, 9) = skew(r_b);
+  return g;
+}
+
+void contact_stiffness_damping(const Vec3& normal, const Vec3& r_a, const Vec3& r_b, bool active,
+                               const MaterialPair& material, Mat12& stiffness,
+                               Mat12& damping) noexcept {
+  if (!active) {
+    stiffness.setZero();
+    damping.setZero();
+    return;
+  }
+  const Mat3x12 g = contact_velocity_jacobian(r_a, r_b);
+  const Mat3 nn = normal * normal.transpose();
+  const Mat3 tt = Mat3::Identity() - nn;
+  stiffness.noalias() = -material.stiffness * (g.transpose() * nn * g);
+  damping.noalias() = -material.damping * (g.transpose() * nn * g);
+  damping.noalias() -= material.friction * (g.transpose() * tt * g);
+}
+
+void compute_contact_forces(const Model& model, Data& data) noexcept {
+  const int nb = model.num_bodies();
+  const int np = static_cast<int>(model.material_pairs.size());
+  const int nc = std::clamp(data.num_contacts, 0, kMaxContacts);
+  for (int i = 0; i < nc; ++i) {
+    Contact& c = data.contacts[static_cast<std::size_t>(i)];
+    ContactTerm& t = data.solver.contact_terms[static_cast<std::size_t>(i)];
+    t.active = false;
+    t.normal_force = 0.0;
+    t.r_a.setZero();
+    t.r_b.setZero();
+    c.force.setZero();
+    if (c.body_a < 0 || c.body_a >= nb || c.body_b >= nb || c.body_b == c.body_a ||
+        c.material_pair < 0 || c.material_pair >= np)
+      continue;
+    const BodyState& a = data.bodies[static_cast<std::size_t>(c.body_a)];
+    const BodyState* b =
+        c.body_b >= 0 ? &data.bodies[static_cast<std::size_t>(c.body_b)] : nullptr;
+    t.r_a = c.position - a.position;
+    if (b != nullptr) t.r_b = c.position - b->position;
+    const Vec3 v_rel = contact_relative_velocity(a, t.r_a, b, t.r_b);
+    const ContactForceResult f = contact_penalty_force(
+        c.normal, c.depth, v_rel, model.material_pairs[static_cast<std::size_t>(c.material_pair)]);
+    if (!f.active) continue;
+    t.active = true;
+    t.normal_force = f.normal_force;
+    c.force = f.force;
+    Wrench& wa = data.body_wrench[static_cast<std::size_t>(c.body_a)];
+    wa.force += f.force;
+    wa.torque += t.r_a.cross(f.force);
+    if (b != nullptr) {
+      Wrench& wb = data.body_wrench[static_cast<std::size_t>(c.body_b)];
+      wb.force -= f.force;
+      wb.torque -= t.r_b.cross(f.force);
+    }
+  }
+}
+
+}  // namespace numen::core

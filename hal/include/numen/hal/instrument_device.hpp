@@ -1,0 +1,162 @@
+#pragma once
+/// @file instrument_device.hpp
+/// InstrumentDevice: the controller-side driver of one tracked instrument on a CAN bus. Each
+/// control period it turns the encoder TPDOs received since the last period into a checked
+/// target pose and twist for the god-object (paper Eq. 2 inputs), and a feedback wrench into
+/// saturated drive torques τ = Jᵀ w sent as RPDOs (paper Eq. 8 output, virtual coupling).
+/// Construction allocates and may throw; every other member is noexcept, allocation free,
+/// lock free and never blocks. See docs/protocol.md for the order of one period.
+
+#include <array>
+#include <cstdint>
+#include <memory>
+
+#include "numen/core/types.hpp"
+#include "numen/hal/bus.hpp"
+#include "numen/hal/can_frame.hpp"
+#include "numen/hal/device_config.hpp"
+#include "numen/hal/kinematics.hpp"
+#include "numen/hal/sample_check.hpp"
+
+namespace numen::hal {
+
+/// The outcome of one InstrumentDevice::sample().
+struct DeviceSample {
+  /// True if every axis has an accepted value and no check failed this period: the target is
+  /// fresh and plausible.
+  bool valid = false;
+  /// True once every axis has had at least one accepted value (the target is meaningful; it
+  /// may be held from an earlier period if `valid` is false).
+  bool ready = false;
+  /// Controlled frame's target pose, world. Always finite; built from the last accepted axis
+  /// values (0 clamped into [min, max] for an axis without one).
+  core::Pose target;
+  /// Controlled frame's target twist, world: J(q) q̇. q̇ of an axis comes from its last two
+  /// accepted values; it is 0 before two values and while its held value is stale.
+  core::Twist twist;
+  /// Axis values used for `target`, m or rad (n entries).
+  AxisVector q;
+  /// Axis rates used for `twist`, m/s or rad/s (n entries).
+  AxisVector qdot;
+  /// Union of the failed checks over all axes this period (SampleFault bits).
+  FaultMask faults = SampleFault::kNone;
+  /// Failed checks per axis this period (entries >= n are 0).
+  std::array<FaultMask, kMaxAxes> axis_faults{};
+  /// `now_ns` given to sample().
+  std::int64_t time_ns = 0;
+};
+
+/// Monotonic counters of an InstrumentDevice since construction or reset_counters().
+struct DeviceCounters {
+  // Frames seen by on_frame().
+  std::uint64_t frames_decoded = 0;       ///< Encoder TPDOs decoded.
+  std::uint64_t frames_wrong_length = 0;  ///< TPDOs of an axis with a wrong length.
+  std::uint64_t frames_not_data = 0;      ///< Remote/error/29-bit frames on an axis's COB-ID.
+  std::uint64_t frames_unknown_id = 0;    ///< Frames whose id belongs to no axis.
+  // Samples (one per axis per sample() call).
+  std::uint64_t samples = 0;                ///< sample() calls.
+  std::uint64_t samples_valid = 0;          ///< sample() calls that returned valid.
+  std::uint64_t values_accepted = 0;        ///< Axis values accepted.
+  std::uint64_t values_rejected = 0;        ///< Axis-periods with a failed check.
+  std::uint64_t rejected_malformed = 0;     ///< ... of which the latest frame was malformed.
+  std::uint64_t rejected_non_finite = 0;    ///< ... non-finite value.
+  std::uint64_t rejected_out_of_range = 0;  ///< ... outside [min, max].
+  std::uint64_t rejected_stale = 0;         ///< ... stale (including periods with no frame).
+  std::uint64_t rejected_jump = 0;          ///< ... implausible jump.
+  // Commands.
+  std::uint64_t commands = 0;             ///< command() calls.
+  std::uint64_t commands_zero = 0;        ///< command_zero() calls (and commands before ready).
+  std::uint64_t torque_saturations = 0;   ///< Axis torques clamped (|τ| > max_torque, int16).
+  std::uint64_t non_finite_wrenches = 0;  ///< command() calls with a NaN/inf wrench (sent 0).
+  std::uint64_t write_would_block = 0;    ///< RPDO writes refused (queue full).
+  std::uint64_t write_errors = 0;         ///< RPDO writes that failed.
+};
+
+/// Controller-side driver of one instrument: encoder TPDOs in, checked target out; wrench in,
+/// torque RPDOs out. Not thread safe (one control loop owns it).
+class InstrumentDevice {
+ public:
+  /// Takes the configuration and the kinematics. Throws std::invalid_argument if
+  /// validate(config) throws, `kinematics` is null or its num_axes() differs from
+  /// config.axes.size().
+  InstrumentDevice(DeviceConfig config, std::unique_ptr<const Kinematics> kinematics);
+  /// Same with make_kinematics(config).
+  explicit InstrumentDevice(DeviceConfig config);
+
+  /// Handles one received frame: an encoder TPDO of an axis becomes that axis's pending
+  /// sample (the newest frame of an axis wins); a malformed one marks the axis malformed
+  /// for this period. Returns true if the frame's id belongs to an axis. Frames of other
+  /// ids are counted as unknown.
+  bool on_frame(const CanFrame& frame) noexcept;
+
+  /// Reads up to `max_frames` frames from `bus` and passes each to on_frame(). Returns the
+  /// number read; stops at kWouldBlock or kError.
+  int poll(Bus& bus, int max_frames = 256) noexcept;
+
+  /// Checks the pending samples at time `now_ns` (bus clock), accepts or rejects each axis,
+  /// and returns the target. See DeviceSample and check_sample().
+  DeviceSample sample(std::int64_t now_ns) noexcept;
+
+  /// Sends the torques balancing `wrench` (world frame, at the controlled frame's origin):
+  /// τ = Jᵀ [force; torque] at the axis values of the last sample(), each clamped to
+  /// ±max_torque, one torque RPDO per axis with a drive, stamped `now_ns`. Sends zeros before
+  /// the device is ready or if the wrench is not finite. Returns kOk if every write succeeded,
+  /// else kError if one failed, else kWouldBlock.
+  IoStatus command(const core::Wrench& wrench, Bus& bus, std::int64_t now_ns) noexcept;
+
+  /// Safe state: sends zero torque to every drive. Same return as command().
+  IoStatus command_zero(Bus& bus, std::int64_t now_ns) noexcept;
+
+  /// Torques of the last command, N·m or N per axis after saturation (0 for axes without a
+  /// drive), n entries.
+  const AxisVector& last_torques() const noexcept { return last_torques_; }
+  /// Per mille values of the last command's RPDOs (entries without a drive are 0).
+  const std::array<std::int16_t, kMaxAxes>& last_torque_per_mille() const noexcept {
+    return last_per_mille_;
+  }
+
+  /// The last sample() result (default-constructed with q = 0 before the first call).
+  const DeviceSample& last_sample() const noexcept { return last_sample_; }
+  /// Counters.
+  const DeviceCounters& counters() const noexcept { return counters_; }
+  /// Zeroes the counters.
+  void reset_counters() noexcept { counters_ = DeviceCounters{}; }
+  /// Forgets every accepted and pending value (e.g. after re-homing); the next samples are
+  /// not ready until each axis has a new accepted value.
+  void reset() noexcept;
+
+  /// The configuration (validated).
+  const DeviceConfig& config() const noexcept { return config_; }
+  /// The kinematics.
+  const Kinematics& kinematics() const noexcept { return *kinematics_; }
+  /// Number of axes n.
+  int num_axes() const noexcept { return n_; }
+
+ private:
+  struct AxisState {
+    bool pending = false;    // a well-formed frame arrived since the last sample()
+    bool malformed = false;  // the newest frame since the last sample() was malformed
+    std::int32_t pending_counts = 0;
+    std::int64_t pending_stamp_ns = 0;
+    bool has_value = false;  // an accepted value exists
+    bool has_rate = false;   // two accepted values exist
+    AcceptedValue last;      // last accepted value
+    double rate = 0.0;       // from the last two accepted values, units/s
+  };
+
+  IoStatus send_torques(Bus& bus, std::int64_t now_ns) noexcept;
+
+  DeviceConfig config_;
+  std::unique_ptr<const Kinematics> kinematics_;
+  int n_ = 0;
+  std::array<AxisCheckLimits, kMaxAxes> limits_{};
+  std::array<AxisState, kMaxAxes> axes_{};
+  AxisVector hold_;    // value used before an axis's first accepted value
+  Jacobian jacobian_;  // at last_sample_.q
+  DeviceSample last_sample_;
+  AxisVector last_torques_;
+  std::array<std::int16_t, kMaxAxes> last_per_mille_{};
+  DeviceCounters counters_;
+};
+
+}  // namespace numen::hal

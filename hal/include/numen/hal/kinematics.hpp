@@ -1,0 +1,64 @@
+#pragma once
+/// @file kinematics.hpp
+/// Kinematics: the map between an instrument's axis values q and the pose of its controlled
+/// frame in the world (forward, inverse) and its geometric Jacobian (DESIGN.md: "instrument
+/// kinematics: encoder values <-> target poses, wrenches <-> joint torques"). Fixed capacity
+/// kMaxAxes, no heap: vectors and Jacobians are Eigen matrices with a compile-time maximum
+/// size, so every call is allocation free.
+
+#include <Eigen/Core>
+
+#include "numen/core/types.hpp"
+
+namespace numen::hal {
+
+/// Most axes an instrument may have.
+inline constexpr int kMaxAxes = 8;
+
+/// Axis values (m or rad), rates (m/s, rad/s) or torques (N, N·m): n x 1, n <= kMaxAxes,
+/// inline storage.
+using AxisVector = Eigen::Matrix<double, Eigen::Dynamic, 1, Eigen::ColMajor, kMaxAxes, 1>;
+
+/// Geometric Jacobian, 6 x n (n <= kMaxAxes), inline storage. Rows 0–2: linear velocity of
+/// the controlled frame's origin (m/s per unit rate); rows 3–5: angular velocity (rad/s per
+/// unit rate); world coordinates. Twist = J q̇; axis torques τ = Jᵀ [force; torque] for a
+/// wrench applied at the controlled frame's origin (virtual work).
+using Jacobian = Eigen::Matrix<double, 6, Eigen::Dynamic, Eigen::ColMajor, 6, kMaxAxes>;
+
+/// Kinematic model of an instrument. Implementations are immutable after construction and
+/// every member is noexcept and allocation free. Preconditions (checked by eigen_assert in
+/// debug builds): argument vectors have num_axes() entries.
+class Kinematics {
+ public:
+  virtual ~Kinematics() = default;
+
+  /// Number of axes n (1..kMaxAxes).
+  virtual int num_axes() const noexcept = 0;
+
+  /// World pose of the controlled frame at axis values q (n x 1).
+  virtual core::Pose forward(const AxisVector& q) const noexcept = 0;
+
+  /// Geometric Jacobian (6 x n) of the controlled frame at q; see Jacobian.
+  virtual Jacobian jacobian(const AxisVector& q) const noexcept = 0;
+
+  /// Axis values that place the controlled frame at (or, for a constrained instrument, as
+  /// close as the constraint allows to) `pose`. Axes the pose does not determine (the
+  /// trocar instrument's jaw) are copied from `q_free`, which has n entries or is empty
+  /// (then they are 0). Wrapping angles are returned in (−π, π].
+  virtual AxisVector inverse(const core::Pose& pose, const AxisVector& q_free) const noexcept = 0;
+
+ protected:
+  Kinematics() = default;
+  Kinematics(const Kinematics&) = default;
+  Kinematics& operator=(const Kinematics&) = default;
+};
+
+/// Twist of the controlled frame for axis rates q̇: [v; ω] = J q̇ (world frame, v at the
+/// controlled frame's origin).
+core::Twist twist_from_rates(const Jacobian& jacobian, const AxisVector& qdot) noexcept;
+
+/// Axis torques balancing a wrench applied at the controlled frame's origin (world frame):
+/// τ = Jᵀ [force; torque] (principle of virtual work). Result has J.cols() entries, N or N·m.
+AxisVector torques_from_wrench(const Jacobian& jacobian, const core::Wrench& wrench) noexcept;
+
+}  // namespace numen::hal

@@ -1,0 +1,226 @@
+/// @file instrument_device.cpp
+/// Controller-side instrument driver: TPDOs -> checked target pose/twist; wrench -> RPDOs.
+
+#include "numen/hal/instrument_device.hpp"
+
+#include <algorithm>
+#include <stdexcept>
+#include <string>
+#include <utility>
+
+#include "numen/hal/canopen.hpp"
+#include "numen/hal/kinematics_factory.hpp"
+
+namespace numen::hal {
+namespace {
+
+// Combines two write outcomes: an error dominates, then would-block.
+IoStatus worst(IoStatus a, IoStatus b) noexcept {
+  if (a == IoStatus::kError || b == IoStatus::kError) return IoStatus::kError;
+  if (a == IoStatus::kWouldBlock || b == IoStatus::kWouldBlock) return IoStatus::kWouldBlock;
+  return IoStatus::kOk;
+}
+
+}  // namespace
+
+InstrumentDevice::InstrumentDevice(DeviceConfig config)
+    : InstrumentDevice(config, make_kinematics(config)) {}
+
+InstrumentDevice::InstrumentDevice(DeviceConfig config,
+                                   std::unique_ptr<const Kinematics> kinematics)
+    : config_(std::move(config)), kinematics_(std::move(kinematics)) {
+  validate(config_);
+  if (!kinematics_) {
+    throw std::invalid_argument("device '" + config_.name + "': kinematics must not be null");
+  }
+  n_ = static_cast<int>(config_.axes.size());
+  if (kinematics_->num_axes() != n_) {
+    throw std::invalid_argument("device '" + config_.name + "': kinematics has " +
+                                std::to_string(kinematics_->num_axes()) +
+                                " axes but config.axes has " + std::to_string(n_));
+  }
+  const double age = config_.effective_max_sample_age_s();
+  hold_.resize(n_);
+  for (int i = 0; i < n_; ++i) {
+    const AxisConfig& a = config_.axes[static_cast<std::size_t>(i)];
+    limits_[static_cast<std::size_t>(i)] = make_check_limits(a, age, config_.jump_tolerance_counts);
+    hold_[i] = std::clamp(0.0, a.min, a.max);
+  }
+  last_torques_ = AxisVector::Zero(n_);
+  reset();
+}
+
+void InstrumentDevice::reset() noexcept {
+  axes_ = {};
+  last_sample_ = DeviceSample{};
+  last_sample_.q = hold_;
+  last_sample_.qdot = AxisVector::Zero(n_);
+  last_sample_.target = kinematics_->forward(hold_);
+  for (int i = 0; i < n_; ++i)
+    last_sample_.axis_faults[static_cast<std::size_t>(i)] = SampleFault::kNoData;
+  last_sample_.faults = n_ > 0 ? SampleFault::kNoData : SampleFault::kNone;
+  jacobian_ = kinematics_->jacobian(hold_);
+}
+
+bool InstrumentDevice::on_frame(const CanFrame& frame) noexcept {
+  for (int i = 0; i < n_; ++i) {
+    const AxisConfig& a = config_.axes[static_cast<std::size_t>(i)];
+    if (frame.id != a.encoder_cob_id) continue;
+    AxisState& st = axes_[static_cast<std::size_t>(i)];
+    std::int32_t counts = 0;
+    switch (decode_position_pdo(frame, a.encoder_cob_id, counts)) {
+      case DecodeStatus::kOk:
+        ++counters_.frames_decoded;
+        st.pending = true;
+        st.malformed = false;
+        st.pending_counts = counts;
+        st.pending_stamp_ns = frame.timestamp_ns;
+        break;
+      case DecodeStatus::kWrongLength:
+        ++counters_.frames_wrong_length;
+        st.pending = false;
+        st.malformed = true;
+        break;
+      case DecodeStatus::kNotDataFrame:
+        ++counters_.frames_not_data;
+        st.pending = false;
+        st.malformed = true;
+        break;
+      case DecodeStatus::kWrongId:  // cannot happen: the id matched
+        break;
+    }
+    return true;
+  }
+  ++counters_.frames_unknown_id;
+  return false;
+}
+
+int InstrumentDevice::poll(Bus& bus, int max_frames) noexcept {
+  CanFrame frame;
+  int read = 0;
+  while (read < max_frames && bus.read(frame) == IoStatus::kOk) {
+    on_frame(frame);
+    ++read;
+  }
+  return read;
+}
+
+DeviceSample InstrumentDevice::sample(std::int64_t now_ns) noexcept {
+  DeviceSample& s = last_sample_;
+  s.time_ns = now_ns;
+  s.faults = SampleFault::kNone;
+  s.axis_faults = {};
+  bool ready = true;
+  for (int i = 0; i < n_; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    const AxisConfig& a = config_.axes[k];
+    const AxisCheckLimits& lim = limits_[k];
+    AxisState& st = axes_[k];
+    FaultMask f = SampleFault::kNone;
+    bool accepted = false;
+    if (st.malformed) {
+      f |= SampleFault::kMalformed;
+    } else if (st.pending) {
+      const double v = counts_to_value(a, st.pending_counts);
+      const FaultMask c =
+          check_sample(lim, v, st.pending_stamp_ns, now_ns, st.has_value ? &st.last : nullptr);
+      if (c == SampleFault::kNone) {
+        if (st.has_value) {
+          const double dt = static_cast<double>(st.pending_stamp_ns - st.last.time_ns) * 1e-9;
+          st.rate = dt > 0.0 ? axis_difference(v, st.last.value, a.wraps) / dt : 0.0;
+          st.has_rate = true;
+        }
+        st.last = AcceptedValue{v, st.pending_stamp_ns};
+        st.has_value = true;
+        accepted = true;
+        ++counters_.values_accepted;
+      }
+      f |= c;
+    }
+    st.pending = false;
+    st.malformed = false;
+
+    // The held value's own freshness: with no new accepted value it may have gone stale.
+    bool held_stale = false;
+    if (st.has_value) {
+      held_stale = check_fresh(lim, st.last.time_ns, now_ns) != SampleFault::kNone;
+      if (!accepted && held_stale) f |= SampleFault::kStale;
+    }
+
+    if (f != SampleFault::kNone) {
+      ++counters_.values_rejected;
+      if (f & SampleFault::kMalformed) ++counters_.rejected_malformed;
+      if (f & SampleFault::kNonFinite) ++counters_.rejected_non_finite;
+      if (f & SampleFault::kOutOfRange) ++counters_.rejected_out_of_range;
+      if (f & SampleFault::kStale) ++counters_.rejected_stale;
+      if (f & SampleFault::kJump) ++counters_.rejected_jump;
+    }
+    if (!st.has_value) {
+      f |= SampleFault::kNoData;
+      ready = false;
+    }
+    s.q[i] = st.has_value ? st.last.value : hold_[i];
+    s.qdot[i] = (st.has_rate && !held_stale) ? st.rate : 0.0;
+    s.axis_faults[k] = f;
+    s.faults |= f;
+  }
+  s.ready = ready;
+  s.valid = ready && s.faults == SampleFault::kNone;
+  s.target = kinematics_->forward(s.q);
+  jacobian_ = kinematics_->jacobian(s.q);
+  s.twist = twist_from_rates(jacobian_, s.qdot);
+  ++counters_.samples;
+  if (s.valid) ++counters_.samples_valid;
+  return s;
+}
+
+IoStatus InstrumentDevice::send_torques(Bus& bus, std::int64_t now_ns) noexcept {
+  IoStatus status = IoStatus::kOk;
+  for (int i = 0; i < n_; ++i) {
+    const AxisConfig& a = config_.axes[static_cast<std::size_t>(i)];
+    if (!a.has_drive()) continue;
+    const IoStatus w = bus.write(
+        encode_torque_pdo(a.drive_cob_id, last_per_mille_[static_cast<std::size_t>(i)], now_ns));
+    if (w == IoStatus::kWouldBlock) ++counters_.write_would_block;
+    if (w == IoStatus::kError) ++counters_.write_errors;
+    status = worst(status, w);
+  }
+  return status;
+}
+
+IoStatus InstrumentDevice::command(const core::Wrench& wrench, Bus& bus,
+                                   std::int64_t now_ns) noexcept {
+  ++counters_.commands;
+  const bool finite = wrench.force.allFinite() && wrench.torque.allFinite();
+  if (!finite) ++counters_.non_finite_wrenches;
+  if (!finite || !last_sample_.ready) {
+    ++counters_.commands_zero;
+    last_torques_.setZero();
+    last_per_mille_ = {};
+    return send_torques(bus, now_ns);
+  }
+  const AxisVector tau = torques_from_wrench(jacobian_, wrench);
+  for (int i = 0; i < n_; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    const AxisConfig& a = config_.axes[k];
+    if (!a.has_drive()) {
+      last_torques_[i] = 0.0;
+      last_per_mille_[k] = 0;
+      continue;
+    }
+    const TorqueCommand c = torque_to_per_mille(a, tau[i]);
+    if (c.saturated) ++counters_.torque_saturations;
+    last_torques_[i] = c.torque;
+    last_per_mille_[k] = c.per_mille;
+  }
+  return send_torques(bus, now_ns);
+}
+
+IoStatus InstrumentDevice::command_zero(Bus& bus, std::int64_t now_ns) noexcept {
+  ++counters_.commands_zero;
+  last_torques_.setZero();
+  last_per_mille_ = {};
+  return send_torques(bus, now_ns);
+}
+
+}  // namespace numen::hal

@@ -1,0 +1,73 @@
+#pragma once
+/// @file control_loop.hpp
+/// One control period of numen (DESIGN.md, "One control period"):
+///   begin_period: SYNC on the bus;
+///   end_period:   read every pending frame → decode → check → forward kinematics
+///                 → core::Data target → core::step → feedback wrench (Eq. 8)
+///                 → axis torques Jᵀ w → saturate → torque PDOs on the bus.
+/// The same object runs against SimBus in simulation and, later, SocketCAN.
+/// Construction may allocate; begin_period/end_period never allocate, throw,
+/// lock or block.
+
+#include <cstdint>
+
+#include "numen/core/data.hpp"
+#include "numen/core/model.hpp"
+#include "numen/hal/bus.hpp"
+#include "numen/hal/instrument_device.hpp"
+#include "numen/platform/latency_histogram.hpp"
+
+namespace numen::platform {
+
+/// What one end_period() did.
+struct PeriodReport {
+  int frames_read = 0;              ///< Frames taken from the bus this period.
+  bool sample_valid = false;        ///< Every axis fresh and plausible this period.
+  bool target_ready = false;        ///< The device has a target (possibly held from earlier).
+  std::int64_t step_ns = 0;         ///< Wall time of core::step (ns, CLOCK_MONOTONIC).
+  hal::IoStatus command_status = hal::IoStatus::kOk;  ///< Result of the torque writes.
+};
+
+/// Counters since construction.
+struct ControlLoopCounters {
+  std::uint64_t periods = 0;          ///< end_period() calls.
+  std::uint64_t sync_write_failures = 0;  ///< SYNC writes not accepted by the bus.
+  std::uint64_t command_failures = 0;     ///< Periods whose torque writes did not all succeed.
+  std::uint64_t periods_zero_torque = 0;  ///< Periods that sent zero torque (no body held, or device not ready).
+};
+
+/// The control loop of one instrument driving one core::Data.
+/// Not thread safe: one real-time thread owns it.
+class ControlLoop {
+ public:
+  /// Keeps references: `model`, `data`, `bus` and `device` must outlive the loop.
+  ControlLoop(const core::Model& model, core::Data& data, hal::Bus& bus,
+              hal::InstrumentDevice& device) noexcept;
+
+  /// Starts period k: writes a SYNC (CANopen COB-ID 0x080) stamped `now_ns`.
+  void begin_period(std::int64_t now_ns) noexcept;
+
+  /// Ends the period at bus time `now_ns` (after the encoders answered): reads the
+  /// frames, checks the sample, sets data.target/target_twist when the device is
+  /// ready (a rejected sample keeps the last good target inside the device), runs
+  /// one core::step, then sends the torques for data.feedback_wrench (zero torque
+  /// while no body is attached or the device is not ready).
+  const PeriodReport& end_period(std::int64_t now_ns) noexcept;
+
+  /// Wall time of core::step per period (ns).
+  const LatencyHistogram& step_time() const noexcept { return step_time_; }
+  const ControlLoopCounters& counters() const noexcept { return counters_; }
+  const PeriodReport& last_report() const noexcept { return report_; }
+
+ private:
+  const core::Model* model_;
+  core::Data* data_;
+  hal::Bus* bus_;
+  hal::InstrumentDevice* device_;
+  std::uint8_t sync_counter_ = 0;
+  LatencyHistogram step_time_;
+  ControlLoopCounters counters_;
+  PeriodReport report_;
+};
+
+}  // namespace numen::platform

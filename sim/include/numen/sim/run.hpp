@@ -1,0 +1,76 @@
+#pragma once
+/// @file run.hpp
+/// The run harness behind `numen run`: a SimBus, a SimulatedInstrument on its
+/// device port, the platform::ControlLoop on its controller port, the fixed-step
+/// loop (as fast as possible, or paced to wall-clock time), the measurements of
+/// the summary and an optional per-step trace.
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "numen/sim/scene.hpp"
+
+namespace numen::sim {
+
+/// How to run a scene.
+struct RunOptions {
+  double duration_s = -1.0;  ///< Simulated time (s); < 0: the scene's duration.
+  bool realtime = false;     ///< Pace each period to CLOCK_MONOTONIC (clock_nanosleep).
+  std::string trace_path;    ///< Per-step CSV trace; empty: none.
+};
+
+/// Percentiles of a duration distribution (µs).
+struct DurationSummary {
+  double median = 0.0;
+  double p99 = 0.0;
+  double p999 = 0.0;
+  double max = 0.0;
+  double mean = 0.0;
+};
+
+/// What a run measured. Penetrations are the deepest overlap (mm) of the
+/// held body's spheres with obstacles and other bodies; "target" is the same
+/// body placed at the device's target pose (where the hand is), "tool" the
+/// god-object itself.
+struct RunSummary {
+  std::string scene;
+  std::string coupling;
+  std::string integrator;
+  std::int64_t steps = 0;
+  double dt_s = 0.0;
+  double sim_time_s = 0.0;
+  double wall_time_s = 0.0;
+  DurationSummary step_time_us;            ///< Wall time of core::step per period.
+  double target_penetration_max_mm = 0.0;
+  double tool_penetration_max_mm = 0.0;
+  double any_penetration_max_mm = 0.0;     ///< Deepest contact of any body this run.
+  double tracking_error_free_rms_mm = 0.0; ///< |x_tool − x_target| RMS over steps without tool contact.
+  double tracking_error_free_max_mm = 0.0;
+  std::int64_t free_steps = 0;             ///< Steps counted in the free-space error.
+  double feedback_force_max_n = 0.0;       ///< Largest |feedback force| sent (after saturation).
+  double feedback_torque_max_nm = 0.0;
+  double axis_torque_max = 0.0;            ///< Largest |axis torque| commanded (N·m or N).
+  std::int64_t rejected_samples = 0;       ///< Axis samples rejected by the checks.
+  std::int64_t invalid_periods = 0;        ///< Periods whose sample was not valid (target held).
+  std::int64_t contact_overflow = 0;       ///< Steps that ran out of contact capacity.
+  int contacts_max = 0;
+  int solver_iterations_max = 0;
+  bool nan_detected = false;
+  std::int64_t nonfinite_steps = 0;
+  std::int64_t bus_frames_dropped = 0;
+  std::int64_t bus_frames_corrupted = 0;
+  std::int64_t realtime_overruns = 0;      ///< Periods missed when paced (--realtime).
+  std::vector<std::string> warnings;
+  std::string trocar_note;
+};
+
+/// Runs `scene`. Throws std::runtime_error if the trace cannot be written.
+RunSummary run_scene(const Scene& scene, const RunOptions& options);
+
+/// Readable multi-line summary.
+std::string format_summary(const RunSummary& s);
+/// Exactly one JSON object (no trailing newline).
+std::string format_summary_json(const RunSummary& s);
+
+}  // namespace numen::sim

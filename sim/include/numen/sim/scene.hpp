@@ -1,0 +1,67 @@
+#pragma once
+/// @file scene.hpp
+/// A scene file (TOML, see docs/scenes.md) loaded into everything a run needs:
+/// the compiled core::Model, the instrument's hal::DeviceConfig, the SimBus
+/// settings, the target trajectory (world frame, at the control period) and
+/// the tool-switching events. Load time only: allocates, throws InputError
+/// naming file, line, column and key.
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "numen/core/model.hpp"
+#include "numen/hal/device_config.hpp"
+#include "numen/hal/sim_bus.hpp"
+#include "numen/sim/trajectory.hpp"
+
+namespace numen::sim {
+
+/// At `time_s`, the device lets go of its body and holds `body` (-1: none).
+/// The paper's construction game picks which block the hand holds.
+struct AttachEvent {
+  double time_s = 0.0;
+  int body = -1;
+};
+
+/// Everything a run of a scene needs.
+struct Scene {
+  std::string file;          ///< Path of the scene file, as given.
+  std::string name;
+  std::string description;
+  core::Model model;         ///< Finalized.
+  hal::DeviceConfig device;  ///< Validated; control_period_s = model.dt.
+  hal::SimBusSettings bus;   ///< The simulated bus between controller and instrument.
+  /// Bus time after SYNC at which the controller reads the encoder answers and
+  /// steps (s, in (2·latency, dt)): one SYNC round trip fits in the period.
+  double compute_phase_s = 0.0;
+  /// Target of the instrument's tool frame (trocar instrument: the tip) in the
+  /// world, sampled at model.dt.
+  Trajectory trajectory;
+  std::vector<AttachEvent> events;  ///< Sorted by time.
+  double duration_s = 0.0;          ///< Default run length (s).
+  std::vector<std::string> warnings;  ///< Non-fatal remarks of the loader.
+  /// How the trocar point was placed (for the summary), empty if not a trocar.
+  std::string trocar_note;
+};
+
+/// Changes a caller may impose on a scene at load time (command line).
+struct SceneOverrides {
+  std::optional<core::CouplingMode> coupling;
+};
+
+/// Loads and compiles `path`. Throws InputError.
+Scene load_scene(const std::string& path, const SceneOverrides& overrides = {});
+
+/// The shipped default scene (sim/scenes/default.toml of the source tree).
+std::string default_scene_path();
+
+/// "god-object", "first-order", "direct" → mode; throws InputError (key
+/// "coupling") otherwise.
+core::CouplingMode parse_coupling_mode(const std::string& name);
+/// Name of a coupling mode as used in scene files.
+const char* to_string(core::CouplingMode mode) noexcept;
+/// Name of an integrator as used in scene files.
+const char* to_string(core::Integrator integrator) noexcept;
+
+}  // namespace numen::sim

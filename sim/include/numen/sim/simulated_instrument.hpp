@@ -1,0 +1,57 @@
+#pragma once
+/// @file simulated_instrument.hpp
+/// The device side of a simulated run: a tracked instrument whose hand follows
+/// a recorded or scripted Trajectory. On each SYNC it latches the trajectory at
+/// the SYNC's bus time, turns the tool pose into axis values by the
+/// instrument's inverse kinematics, and its emulated encoders answer with
+/// quantised position PDOs; its drives receive the torque PDOs. The controller
+/// only ever sees the bus, as on hardware.
+
+#include <cstdint>
+#include <memory>
+
+#include "numen/hal/bus.hpp"
+#include "numen/hal/device_config.hpp"
+#include "numen/hal/device_emulator.hpp"
+#include "numen/hal/kinematics.hpp"
+#include "numen/sim/trajectory.hpp"
+
+namespace numen::sim {
+
+/// A simulated instrument on the device port of a bus. Construction allocates
+/// and may throw std::invalid_argument (invalid config); poll() is noexcept
+/// and allocation free.
+class SimulatedInstrument {
+ public:
+  /// `trajectory` is the world pose of the tool frame (trocar instrument: the
+  /// tip, z along the shaft; pose tracker: the tracked frame) and must outlive
+  /// this object. Time 0 of the trajectory is bus time `start_ns`.
+  SimulatedInstrument(const hal::DeviceConfig& config, const Trajectory& trajectory,
+                      std::int64_t start_ns = 0);
+
+  /// Handles every frame pending on `device_port`: a SYNC latches the axis
+  /// values of the trajectory at the SYNC's timestamp and is answered by the
+  /// encoders; torque PDOs update last_torques(). Returns frames handled.
+  int poll(hal::Bus& device_port) noexcept;
+
+  /// Axis values of the trajectory at bus time `t_ns` (m or rad).
+  hal::AxisVector axes_at(std::int64_t t_ns) const noexcept;
+  /// World pose of the controlled frame the instrument would report at `t_ns`
+  /// without quantisation (forward kinematics of axes_at()).
+  core::Pose controlled_pose_at(std::int64_t t_ns) const noexcept;
+
+  /// Last torques received by the drives (N·m or N per axis).
+  const hal::AxisVector& last_torques() const noexcept { return emulator_.last_torques(); }
+  const hal::DeviceEmulator& emulator() const noexcept { return emulator_; }
+  hal::DeviceEmulator& emulator() noexcept { return emulator_; }
+  const hal::Kinematics& kinematics() const noexcept { return *kinematics_; }
+
+ private:
+  hal::DeviceConfig config_;
+  const Trajectory* trajectory_;
+  std::int64_t start_ns_;
+  std::unique_ptr<hal::Kinematics> kinematics_;
+  hal::DeviceEmulator emulator_;
+};
+
+}  // namespace numen::sim

@@ -1,0 +1,65 @@
+#pragma once
+/// @file trace.hpp
+/// Per-step trace of a run (`numen run --trace FILE.csv`): target pose (the
+/// device), god-object pose, contacts, penetrations, feedback wrench, axis
+/// torques and step time. Records go into storage reserved before the loop
+/// (push never allocates; a full trace counts the records it drops) and are
+/// written as CSV after the run.
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "numen/core/data.hpp"
+#include "numen/hal/kinematics.hpp"
+#include "numen/platform/control_loop.hpp"
+
+namespace numen::sim {
+
+/// One control period. World frame, SI units except where the name says mm/µs.
+struct TraceRecord {
+  double time_s = 0.0;
+  int attached_body = -1;
+  bool sample_valid = false;
+  core::Pose target;                 ///< Device target of the held body's COM frame.
+  core::Pose tool;                   ///< Held body's pose (zero when none).
+  int contacts = 0;                  ///< All contacts this step.
+  int tool_contacts = 0;             ///< Contacts of the held body.
+  double tool_penetration_mm = 0.0;
+  double target_penetration_mm = 0.0;
+  core::Wrench feedback;             ///< Eq. 8, sent to the device (N, N·m).
+  std::array<double, hal::kMaxAxes> axis_torque{};  ///< N·m or N.
+  int num_axes = 0;
+  double step_time_us = 0.0;
+  int solver_iterations = 0;
+};
+
+/// Builds a record from the state after a step.
+TraceRecord make_trace_record(const core::Data& data, int held, int tool_contacts,
+                              double tool_penetration_m, double target_penetration_m,
+                              const platform::PeriodReport& report,
+                              const hal::AxisVector& axis_torques) noexcept;
+
+/// Fixed-capacity store of records.
+class Trace {
+ public:
+  /// Allocates room for `capacity` records.
+  void reserve(std::size_t capacity) { records_.reserve(capacity); }
+  /// Appends if there is room, else counts a drop. Never allocates.
+  void push(const TraceRecord& r) noexcept {
+    if (records_.size() < records_.capacity()) records_.push_back(r);
+    else ++dropped_;
+  }
+  const std::vector<TraceRecord>& records() const noexcept { return records_; }
+  std::uint64_t dropped() const noexcept { return dropped_; }
+  /// Writes a header line and one CSV row per record. Throws std::runtime_error
+  /// naming the path if it cannot be written.
+  void write_csv(const std::string& path) const;
+
+ private:
+  std::vector<TraceRecord> records_;
+  std::uint64_t dropped_ = 0;
+};
+
+}  // namespace numen::sim

@@ -1,0 +1,248 @@
+/// @file jigsaws.cpp
+/// JIGSAWS kinematics loader (see jigsaws.hpp): strict row parser, nearest
+/// rotation, quaternions with sign continuity.
+
+#include "numen/sim/jigsaws.hpp"
+
+#include <Eigen/SVD>
+#include <algorithm>
+#include <array>
+#include <charconv>
+#include <cmath>
+#include <fstream>
+#include <iterator>
+#include <limits>
+#include <sstream>
+
+#include "numen/sim/input_error.hpp"
+
+namespace numen::sim {
+namespace {
+
+constexpr int kGroupColumns = 19;
+
+/// Field names within a group of 19 columns, used in error keys.
+constexpr std::array<std::string_view, kGroupColumns> kFieldNames = {
+    "tip_x", "tip_y", "tip_z", "R11", "R12", "R13",     "R21",     "R22",     "R23",    "R31",
+    "R32",   "R33",   "v_x",   "v_y", "v_z", "omega_x", "omega_y", "omega_z", "gripper"};
+
+constexpr std::array<std::string_view, 4> kGroupNames = {"master_left", "master_right",
+                                                         "slave_left", "slave_right"};
+
+/// Largest allowed distance of a singular value of a recorded rotation matrix from 1.
+constexpr double kRotationTolerance = 0.1;
+
+/// "<group>.<field>" of a 0-based data column.
+std::string column_key(int column) {
+  return std::string(kGroupNames[static_cast<std::size_t>(column / kGroupColumns)]) + "." +
+         std::string(kFieldNames[static_cast<std::size_t>(column % kGroupColumns)]);
+}
+
+bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
+
+std::string quoted(std::string_view token) {
+  constexpr std::size_t kMax = 40;
+  std::string s(token.substr(0, kMax));
+  if (token.size() > kMax) s += "...";
+  return "'" + s + "'";
+}
+
+/// One data row, as parsed.
+struct Row {
+  std::array<double, kGroupColumns> group{};  ///< The 19 values of the manipulator taken.
+  int line = 0;                               ///< 1-based line in the file.
+  int rotation_column = 0;                    ///< 1-based character column of R11.
+};
+
+std::string format_number(double v) {
+  std::ostringstream os;
+  os.precision(6);
+  os << v;
+  return os.str();
+}
+
+}  // namespace
+
+std::string_view to_string(JigsawsManipulator m) noexcept {
+  return kGroupNames[static_cast<std::size_t>(m)];
+}
+
+JigsawsManipulator parse_jigsaws_manipulator(std::string_view name, const std::string& key) {
+  for (std::size_t i = 0; i < kGroupNames.size(); ++i) {
+    if (name == kGroupNames[i]) return static_cast<JigsawsManipulator>(i);
+  }
+  throw InputError("", 0, 0, key,
+                   "unknown manipulator '" + std::string(name) +
+                       "'; expected master_left, master_right, slave_left or slave_right");
+}
+
+core::Mat3 nearest_rotation(const core::Mat3& m) noexcept {
+  const Eigen::JacobiSVD<core::Mat3> svd(m, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  const core::Mat3& u = svd.matrixU();
+  const core::Mat3& v = svd.matrixV();
+  core::Vec3 d(1.0, 1.0, (u * v.transpose()).determinant() < 0.0 ? -1.0 : 1.0);
+  return u * d.asDiagonal() * v.transpose();
+}
+
+std::filesystem::path jigsaws_excerpt_path() {
+  return std::filesystem::path(NUMEN_SOURCE_SIM_DIR) / "data" / "jigsaws_suturing_b002_excerpt.txt";
+}
+
+JigsawsRecording load_jigsaws(const std::filesystem::path& path, JigsawsManipulator manipulator,
+                              const JigsawsOptions& options) {
+  const std::string file = path.string();
+  auto option_error = [&](const std::string& field, const std::string& message) {
+    return InputError(file, 0, 0, "options." + field, message);
+  };
+
+  // Rows to take, 1-based, inclusive; `last_row` may exceed the file.
+  std::size_t first_row = options.first_row;
+  std::size_t last_row = std::numeric_limits<std::size_t>::max();
+  if (options.start_time) {
+    if (options.first_row != 1)
+      throw option_error("start_time", "give first_row or start_time, not both");
+    const double t = *options.start_time;
+    if (!std::isfinite(t) || t < 0.0 || t > 1e8) {
+      throw option_error("start_time", "must be finite and >= 0 s, got " + format_number(t));
+    }
+    first_row = static_cast<std::size_t>(std::llround(t * kJigsawsRateHz)) + 1;
+  }
+  if (first_row < 1) throw option_error("first_row", "rows are counted from 1, got 0");
+  if (options.end_time) {
+    if (options.max_rows != 0)
+      throw option_error("end_time", "give max_rows or end_time, not both");
+    const double t = *options.end_time;
+    if (!std::isfinite(t) || t < 0.0 || t > 1e8) {
+      throw option_error("end_time", "must be finite and >= 0 s, got " + format_number(t));
+    }
+    last_row = static_cast<std::size_t>(std::llround(t * kJigsawsRateHz)) + 1;
+    if (last_row < first_row) {
+      throw option_error("end_time", "is before the start (" + format_number(t) + " s)");
+    }
+  } else if (options.max_rows != 0) {
+    last_row = first_row + options.max_rows - 1;
+  }
+
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(file, 0, 0, "", "cannot open the file");
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (in.bad()) throw InputError(file, 0, 0, "", "cannot read the file");
+
+  const int group_begin = static_cast<int>(manipulator) * kGroupColumns;
+  std::vector<Row> rows;
+  std::size_t file_rows = 0;
+  int line_number = 0;
+  int first_blank_line = 0;  // first blank line seen after the last data row
+  std::size_t pos = 0;
+  while (pos < text.size()) {
+    std::size_t end = text.find('\n', pos);
+    if (end == std::string::npos) end = text.size();
+    const std::string_view line(text.data() + pos, end - pos);
+    pos = end + 1;
+    ++line_number;
+
+    std::size_t c = 0;
+    while (c < line.size() && is_space(line[c])) ++c;
+    if (c == line.size()) {
+      if (first_blank_line == 0) first_blank_line = line_number;
+      continue;
+    }
+    if (first_blank_line != 0) {
+      throw InputError(file, first_blank_line, 0, "",
+                       "blank line inside the data; expected 76 numbers per line");
+    }
+    ++file_rows;
+    const bool taken = file_rows >= first_row && file_rows <= last_row;
+    Row row;
+    row.line = line_number;
+    int count = 0;
+    while (c < line.size()) {
+      const std::size_t start = c;
+      while (c < line.size() && !is_space(line[c])) ++c;
+      const std::string_view token = line.substr(start, c - start);
+      const int column = static_cast<int>(start) + 1;
+      if (count >= kJigsawsColumns) {
+        throw InputError(
+            file, line_number, column, "",
+            "too many columns: found a 77th value " + quoted(token) + ", expected exactly 76");
+      }
+      double value = 0.0;
+      const char* first = token.data();
+      const char* last = token.data() + token.size();
+      bool sign_ok = true;
+      if (*first == '+') {  // from_chars rejects a leading '+'; allow one
+        ++first;
+        sign_ok = first != last && *first != '-' && *first != '+';
+      }
+      const auto [ptr, ec] = std::from_chars(first, last, value);
+      const std::string where = "data column " + std::to_string(count + 1) + " of 76: ";
+      if (!sign_ok || ptr != last || (ec != std::errc() && ec != std::errc::result_out_of_range)) {
+        throw InputError(file, line_number, column, column_key(count),
+                         where + quoted(token) + " is not a number");
+      }
+      if (ec == std::errc::result_out_of_range || !std::isfinite(value)) {
+        throw InputError(file, line_number, column, column_key(count),
+                         where + quoted(token) + " is not a finite number");
+      }
+      if (taken && count >= group_begin && count < group_begin + kGroupColumns) {
+        row.group[static_cast<std::size_t>(count - group_begin)] = value;
+        if (count == group_begin + 3) row.rotation_column = column;
+      }
+      ++count;
+      while (c < line.size() && is_space(line[c])) ++c;
+    }
+    if (count != kJigsawsColumns) {
+      throw InputError(
+          file, line_number, static_cast<int>(line.size()) + 1, "",
+          "too few columns: found " + std::to_string(count) + " values, expected exactly 76");
+    }
+    if (taken) rows.push_back(row);
+  }
+  if (file_rows == 0) {
+    throw InputError(file, 1, 0, "", "the file is empty; expected lines of 76 numbers");
+  }
+  if (first_row > file_rows) {
+    throw option_error(options.start_time ? "start_time" : "first_row",
+                       "starts at row " + std::to_string(first_row) + " but the file has " +
+                           std::to_string(file_rows) + " rows");
+  }
+
+  JigsawsRecording rec;
+  rec.file = file;
+  rec.manipulator = manipulator;
+  rec.first_row = first_row;
+  rec.file_rows = file_rows;
+  rec.start_time_in_file = static_cast<double>(first_row - 1) / kJigsawsRateHz;
+  std::vector<core::Pose> poses(rows.size());
+  std::vector<double> jaw(rows.size());
+  rec.recorded_twist.resize(rows.size());
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    const auto& g = rows[i].group;
+    core::Mat3 r;
+    r << g[3], g[4], g[5], g[6], g[7], g[8], g[9], g[10], g[11];
+    const double ortho = (r.transpose() * r - core::Mat3::Identity()).cwiseAbs().maxCoeff();
+    const Eigen::JacobiSVD<core::Mat3> svd(r);
+    const core::Vec3 sigma = svd.singularValues();
+    const double det = r.determinant();
+    if ((sigma.array() - 1.0).abs().maxCoeff() > kRotationTolerance || !(det > 0.0)) {
+      throw InputError(file, rows[i].line, rows[i].rotation_column,
+                       std::string(to_string(manipulator)) + ".rotation",
+                       "data columns " + std::to_string(group_begin + 4) + "-" +
+                           std::to_string(group_begin + 12) +
+                           ": rotation matrix is not close to a rotation (singular values " +
+                           format_number(sigma[0]) + " " + format_number(sigma[1]) + " " +
+                           format_number(sigma[2]) + ", det " + format_number(det) + ")");
+    }
+    rec.max_orthonormality_error = std::max(rec.max_orthonormality_error, ortho);
+    poses[i].position = core::Vec3(g[0], g[1], g[2]);
+    poses[i].orientation = core::Quat(nearest_rotation(r));
+    jaw[i] = g[18];
+    rec.recorded_twist[i].linear = core::Vec3(g[12], g[13], g[14]);
+    rec.recorded_twist[i].angular = core::Vec3(g[15], g[16], g[17]);
+  }
+  // The Trajectory constructor normalises and makes the quaternion signs continuous.
+  rec.trajectory = Trajectory(1.0 / kJigsawsRateHz, std::move(poses), std::move(jaw));
+  return rec;
+}
+
+}  // namespace numen::sim

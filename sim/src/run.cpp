@@ -1,0 +1,245 @@
+/// @file run.cpp
+/// The fixed-step run of a scene on a simulated bus.
+
+#include "numen/sim/run.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <iomanip>
+#include <sstream>
+#include <stdexcept>
+
+#include "numen/core/collision.hpp"
+#include "numen/core/data.hpp"
+#include "numen/core/step.hpp"
+#include "numen/hal/instrument_device.hpp"
+#include "numen/hal/sim_bus.hpp"
+#include "numen/platform/control_loop.hpp"
+#include "numen/platform/monotonic_clock.hpp"
+#include "numen/platform/periodic_timer.hpp"
+#include "numen/sim/simulated_instrument.hpp"
+#include "numen/sim/trace.hpp"
+
+namespace numen::sim {
+namespace {
+
+/// Deepest contact (m) involving `body` among data's contacts; 0 if none.
+double deepest_contact_of(const core::Data& data, int body, int* count = nullptr) {
+  double deepest = 0.0;
+  int n = 0;
+  for (int i = 0; i < data.num_contacts; ++i) {
+    const core::Contact& c = data.contacts[static_cast<std::size_t>(i)];
+    if (c.body_a == body || c.body_b == body) {
+      deepest = std::max(deepest, c.depth);
+      ++n;
+    }
+  }
+  if (count) *count = n;
+  return deepest;
+}
+
+DurationSummary summarize_ns(const platform::LatencyHistogram& h) {
+  DurationSummary d;
+  d.median = static_cast<double>(h.quantile(0.5)) * 1e-3;
+  d.p99 = static_cast<double>(h.quantile(0.99)) * 1e-3;
+  d.p999 = static_cast<double>(h.quantile(0.999)) * 1e-3;
+  d.max = static_cast<double>(h.max()) * 1e-3;
+  d.mean = h.mean() * 1e-3;
+  return d;
+}
+
+}  // namespace
+
+RunSummary run_scene(const Scene& scene, const RunOptions& options) {
+  const core::Model& model = scene.model;
+  const double duration = options.duration_s >= 0.0 ? options.duration_s : scene.duration_s;
+  const auto steps = static_cast<std::int64_t>(std::llround(duration / model.dt));
+  const auto period_ns = static_cast<std::int64_t>(std::llround(model.dt * 1e9));
+  const auto phase_ns = static_cast<std::int64_t>(std::llround(scene.compute_phase_s * 1e9));
+  const std::int64_t latency_ns = scene.bus.latency_ns;
+
+  hal::SimBus bus(scene.bus);
+  SimulatedInstrument instrument(scene.device, scene.trajectory);
+  hal::InstrumentDevice device(scene.device);
+  core::Data data = core::make_data(model);
+  core::Data ghost = core::make_data(model);  // the held body placed at the target, for measurement
+  platform::ControlLoop loop(model, data, bus.controller(), device);
+
+  Trace trace;
+  if (!options.trace_path.empty()) trace.reserve(static_cast<std::size_t>(steps));
+
+  RunSummary s;
+  s.scene = scene.name;
+  s.coupling = to_string(model.coupling_mode);
+  s.integrator = to_string(model.integrator);
+  s.dt_s = model.dt;
+  s.warnings = scene.warnings;
+  s.trocar_note = scene.trocar_note;
+  double free_sq = 0.0;
+  std::size_t next_event = 0;
+
+  const std::int64_t wall0 = platform::monotonic_now_ns();
+  platform::PeriodicTimer timer(period_ns, wall0);
+  for (std::int64_t k = 0; k < steps; ++k) {
+    if (options.realtime) s.realtime_overruns += timer.wait_next().missed_periods;
+    const std::int64_t t = k * period_ns;
+    while (next_event < scene.events.size() &&
+           scene.events[next_event].time_s * 1e9 <= static_cast<double>(t) + 0.5) {
+      core::set_attached_body(model, data, scene.events[next_event].body);
+      ++next_event;
+    }
+    bus.set_time_ns(t);
+    loop.begin_period(t);
+    bus.set_time_ns(t + latency_ns);
+    instrument.poll(bus.device());  // encoders latch at SYNC and answer
+    bus.set_time_ns(t + phase_ns);
+    const platform::PeriodReport& report = loop.end_period(t + phase_ns);
+    if (!report.sample_valid) ++s.invalid_periods;
+
+    // ---- measurements (outside the timed step) ----
+    const int held = data.attached_body;
+    double tool_pen = 0.0, target_pen = 0.0;
+    int tool_contacts = 0;
+    if (held >= 0) {
+      tool_pen = deepest_contact_of(data, held, &tool_contacts);
+      ghost.bodies = data.bodies;
+      ghost.bodies[static_cast<std::size_t>(held)].position = data.target.position;
+      ghost.bodies[static_cast<std::size_t>(held)].orientation = data.target.orientation;
+      core::detect_contacts(model, ghost);
+      target_pen = deepest_contact_of(ghost, held);
+      if (tool_contacts == 0) {
+        const double e = (data.bodies[static_cast<std::size_t>(held)].position - data.target.position).norm();
+        free_sq += e * e;
+        s.tracking_error_free_max_mm = std::max(s.tracking_error_free_max_mm, e * 1e3);
+        ++s.free_steps;
+      }
+    }
+    s.tool_penetration_max_mm = std::max(s.tool_penetration_max_mm, tool_pen * 1e3);
+    s.target_penetration_max_mm = std::max(s.target_penetration_max_mm, target_pen * 1e3);
+    s.any_penetration_max_mm = std::max(s.any_penetration_max_mm, data.max_penetration * 1e3);
+    s.feedback_force_max_n = std::max(s.feedback_force_max_n, data.feedback_wrench.force.norm());
+    s.feedback_torque_max_nm = std::max(s.feedback_torque_max_nm, data.feedback_wrench.torque.norm());
+    const hal::AxisVector& tau = device.last_torques();
+    if (tau.size() > 0) s.axis_torque_max = std::max(s.axis_torque_max, tau.cwiseAbs().maxCoeff());
+    s.contacts_max = std::max(s.contacts_max, data.num_contacts);
+    s.solver_iterations_max = std::max(s.solver_iterations_max, data.solver_iterations);
+    if (!options.trace_path.empty())
+      trace.push(make_trace_record(data, held, tool_contacts, tool_pen, target_pen, report,
+                                   device.last_torques()));
+  }
+  s.wall_time_s = static_cast<double>(platform::monotonic_now_ns() - wall0) * 1e-9;
+  s.steps = steps;
+  s.sim_time_s = static_cast<double>(steps) * model.dt;
+  s.step_time_us = summarize_ns(loop.step_time());
+  s.tracking_error_free_rms_mm = s.free_steps ? std::sqrt(free_sq / s.free_steps) * 1e3 : 0.0;
+  s.rejected_samples = static_cast<std::int64_t>(device.counters().values_rejected);
+  s.contact_overflow = data.contact_overflow_steps;
+  s.nonfinite_steps = data.nonfinite_steps;
+  s.nan_detected = data.nonfinite_steps > 0;
+  for (const auto& b : data.bodies)
+    s.nan_detected = s.nan_detected || !b.position.allFinite() || !b.orientation.coeffs().allFinite();
+  for (auto dir : {hal::SimBus::Direction::kControllerToDevice, hal::SimBus::Direction::kDeviceToController}) {
+    s.bus_frames_dropped += static_cast<std::int64_t>(bus.link_counters(dir).dropped);
+    s.bus_frames_corrupted += static_cast<std::int64_t>(bus.link_counters(dir).corrupted());
+  }
+  if (!options.trace_path.empty()) trace.write_csv(options.trace_path);
+  return s;
+}
+
+std::string format_summary(const RunSummary& s) {
+  std::ostringstream os;
+  os << std::fixed << std::setprecision(3);
+  os << "scene " << s.scene << ": " << s.coupling << " coupling, " << s.integrator << ", dt "
+     << s.dt_s * 1e3 << " ms\n";
+  if (!s.trocar_note.empty()) os << "  " << s.trocar_note << "\n";
+  os << "  " << s.steps << " steps, " << s.sim_time_s << " s simulated in " << s.wall_time_s
+     << " s wall (" << (s.wall_time_s > 0 ? s.sim_time_s / s.wall_time_s : 0.0) << "x real time)\n";
+  os << "  step time us: median " << s.step_time_us.median << ", p99 " << s.step_time_us.p99
+     << ", p99.9 " << s.step_time_us.p999 << ", max " << s.step_time_us.max << "\n";
+  os << "  penetration max: target (the hand) " << s.target_penetration_max_mm
+     << " mm, god-object " << s.tool_penetration_max_mm << " mm\n";
+  os << "  tracking error in free space: rms " << s.tracking_error_free_rms_mm << " mm, max "
+     << s.tracking_error_free_max_mm << " mm over " << s.free_steps << " steps\n";
+  os << "  feedback: force max " << s.feedback_force_max_n << " N, torque max "
+     << s.feedback_torque_max_nm << " N·m, axis torque max " << s.axis_torque_max << "\n";
+  os << "  contacts max " << s.contacts_max << ", overflow steps " << s.contact_overflow
+     << ", solver iterations max " << s.solver_iterations_max << "\n";
+  os << "  bus: rejected samples " << s.rejected_samples << ", invalid periods "
+     << s.invalid_periods << ", frames dropped " << s.bus_frames_dropped << ", corrupted "
+     << s.bus_frames_corrupted << "\n";
+  os << "  nan detected: " << (s.nan_detected ? "YES" : "no");
+  if (s.realtime_overruns) os << ", realtime overruns " << s.realtime_overruns;
+  os << "\n";
+  for (const auto& w : s.warnings) os << "  warning: " << w << "\n";
+  return os.str();
+}
+
+namespace {
+std::string json_string(const std::string& in) {
+  std::string out = "\"";
+  for (unsigned char c : in) {
+    if (c == '"' || c == '\\') {
+      out += '\\';
+      out += static_cast<char>(c);
+    } else if (c < 0x20) {
+      char buf[8];
+      std::snprintf(buf, sizeof buf, "\\u%04x", c);
+      out += buf;
+    } else {
+      out += static_cast<char>(c);
+    }
+  }
+  return out + "\"";
+}
+std::string json_number(double v) {
+  if (!std::isfinite(v)) return "null";
+  std::ostringstream os;
+  os << std::setprecision(9) << v;
+  return os.str();
+}
+}  // namespace
+
+std::string format_summary_json(const RunSummary& s) {
+  std::ostringstream os;
+  auto num = [&](const char* k, double v) { os << "\"" << k << "\":" << json_number(v) << ","; };
+  auto integer = [&](const char* k, std::int64_t v) { os << "\"" << k << "\":" << v << ","; };
+  os << "{";
+  os << "\"scene\":" << json_string(s.scene) << ",";
+  os << "\"coupling\":" << json_string(s.coupling) << ",";
+  os << "\"integrator\":" << json_string(s.integrator) << ",";
+  integer("steps", s.steps);
+  num("dt_s", s.dt_s);
+  num("sim_time_s", s.sim_time_s);
+  num("wall_time_s", s.wall_time_s);
+  os << "\"step_time_us\":{\"median\":" << json_number(s.step_time_us.median)
+     << ",\"p99\":" << json_number(s.step_time_us.p99) << ",\"p999\":" << json_number(s.step_time_us.p999)
+     << ",\"max\":" << json_number(s.step_time_us.max) << ",\"mean\":" << json_number(s.step_time_us.mean)
+     << "},";
+  num("target_penetration_max_mm", s.target_penetration_max_mm);
+  num("tool_penetration_max_mm", s.tool_penetration_max_mm);
+  num("any_penetration_max_mm", s.any_penetration_max_mm);
+  num("tracking_error_free_rms_mm", s.tracking_error_free_rms_mm);
+  num("tracking_error_free_max_mm", s.tracking_error_free_max_mm);
+  integer("free_steps", s.free_steps);
+  num("feedback_force_max_n", s.feedback_force_max_n);
+  num("feedback_torque_max_nm", s.feedback_torque_max_nm);
+  num("axis_torque_max", s.axis_torque_max);
+  integer("rejected_samples", s.rejected_samples);
+  integer("invalid_periods", s.invalid_periods);
+  integer("contact_overflow", s.contact_overflow);
+  integer("contacts_max", s.contacts_max);
+  integer("solver_iterations_max", s.solver_iterations_max);
+  integer("nonfinite_steps", s.nonfinite_steps);
+  integer("bus_frames_dropped", s.bus_frames_dropped);
+  integer("bus_frames_corrupted", s.bus_frames_corrupted);
+  integer("realtime_overruns", s.realtime_overruns);
+  os << "\"warnings\":[";
+  for (std::size_t i = 0; i < s.warnings.size(); ++i) os << (i ? "," : "") << json_string(s.warnings[i]);
+  os << "],";
+  os << "\"nan_detected\":" << (s.nan_detected ? "true" : "false");
+  os << "}";
+  return os.str();
+}
+
+}  // namespace numen::sim

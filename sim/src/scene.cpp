@@ -1,0 +1,408 @@
+/// @file scene.cpp
+/// Scene file → Scene: physics (scene_model.cpp), trajectory, device, bus, events.
+
+#include "numen/sim/scene.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+
+#include "numen/hal/kinematics_factory.hpp"
+#include "numen/hal/trocar_kinematics.hpp"
+#include "numen/sim/jigsaws.hpp"
+#include "numen/sim/scripted_path.hpp"
+#include "numen/sim/trocar_placement.hpp"
+#include "scene_model.hpp"
+#include "toml_reader.hpp"
+
+#ifndef NUMEN_SOURCE_SIM_DIR
+#define NUMEN_SOURCE_SIM_DIR "sim"
+#endif
+
+namespace numen::sim {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+using core::Quat;
+using core::Vec3;
+
+// ---------- trajectory ----------
+
+Placement parse_placement(const TomlTable& t) {
+  Placement p;
+  auto pl = t.table("placement");
+  if (!pl) return p;
+  pl->allow_only({"origin", "position", "orientation", "scale"});
+  p.origin = pl->vec3_or("origin", Vec3::Zero());
+  p.pose.position = pl->vec3_or("position", Vec3::Zero());
+  p.pose.orientation = pl->quaternion_or("orientation", Quat::Identity());
+  p.scale = pl->number_in("scale", 1e-9, kInf, 1.0);
+  return p;
+}
+
+std::optional<Quat> optional_quat(const TomlTable& t, std::string_view key) {
+  if (!t.has(key)) return std::nullopt;
+  return t.quaternion_or(key, Quat::Identity());
+}
+std::optional<Vec3> optional_vec3(const TomlTable& t, std::string_view key) {
+  if (!t.has(key)) return std::nullopt;
+  return t.vec3(key);
+}
+
+PathSegment parse_segment(const TomlTable& s) {
+  PathSegment seg;
+  const std::string type = s.choice("type", {"line", "circle", "hold", "step"}, std::nullopt);
+  seg.orientation = optional_quat(s, "orientation");
+  seg.angular_velocity = s.vec3_or("angular_velocity", Vec3::Zero());
+  if (s.has("jaw")) seg.jaw = s.number("jaw");
+  if (type == "line") {
+    s.allow_only({"type", "orientation", "angular_velocity", "jaw", "from", "to", "duration"});
+    LineSegment l;
+    l.from = optional_vec3(s, "from");
+    l.to = s.vec3("to");
+    l.duration = s.number("duration");
+    seg.shape = l;
+  } else if (type == "circle") {
+    s.allow_only({"type", "orientation", "angular_velocity", "jaw", "centre", "radius", "axis",
+                  "period", "start_phase", "duration"});
+    CircleSegment c;
+    c.centre = optional_vec3(s, "centre");
+    c.radius = s.number("radius");
+    c.axis = s.vec3_or("axis", Vec3::UnitZ());
+    c.period = s.number("period");
+    c.start_phase = s.number_or("start_phase", 0.0);
+    c.duration = s.number("duration");
+    seg.shape = c;
+  } else if (type == "hold") {
+    s.allow_only({"type", "orientation", "angular_velocity", "jaw", "position", "duration"});
+    HoldSegment h;
+    h.position = optional_vec3(s, "position");
+    h.duration = s.number("duration");
+    seg.shape = h;
+  } else {
+    s.allow_only({"type", "orientation", "angular_velocity", "jaw", "from", "to", "to_orientation",
+                  "step_time", "duration"});
+    StepSegment st;
+    st.from = optional_vec3(s, "from");
+    st.to = s.vec3("to");
+    st.to_orientation = optional_quat(s, "to_orientation");
+    st.step_time = s.number("step_time");
+    st.duration = s.number("duration");
+    seg.shape = st;
+  }
+  return seg;
+}
+
+/// Re-throws an InputError of the trajectory code (which has no file/line) at
+/// the place in the scene its key points to.
+[[noreturn]] void relocate(const InputError& e, const TomlTable& traj,
+                           const std::vector<TomlTable>& segments) {
+  const std::string prefix = traj.key_path("segment") + "[";
+  if (e.key().rfind(prefix, 0) == 0) {
+    const std::size_t i = std::stoul(e.key().substr(prefix.size()));
+    if (i < segments.size()) {
+      const std::string field = e.key().substr(e.key().find(']') + 1);
+      const std::string leaf = field.empty() ? "" : field.substr(1);
+      if (!leaf.empty() && segments[i].has(leaf)) segments[i].fail(leaf, e.message());
+      segments[i].fail_at(nullptr, e.key(), e.message());
+    }
+  }
+  traj.fail_at(nullptr, e.key().empty() ? traj.path() : e.key(), e.message());
+}
+
+Trajectory parse_trajectory(const TomlTable& root, double dt, const std::filesystem::path& scene_dir) {
+  auto t = root.table("trajectory");
+  if (!t) root.fail("trajectory", "missing: a scene needs a [trajectory] (source = \"jigsaws\" or \"scripted\")");
+  const std::string source = t->choice("source", {"jigsaws", "scripted"}, std::nullopt);
+  Trajectory recorded;
+  if (source == "jigsaws") {
+    t->allow_only({"source", "file", "manipulator", "start_time", "end_time", "placement"});
+    std::filesystem::path file = t->string("file");
+    if (file.is_relative()) file = scene_dir / file;
+    if (!std::filesystem::exists(file))
+      t->fail("file", "trajectory file not found: " + file.string());
+    JigsawsManipulator arm;
+    try {
+      arm = parse_jigsaws_manipulator(t->string_or("manipulator", "slave_right"), t->key_path("manipulator"));
+    } catch (const InputError& e) {
+      t->fail("manipulator", e.message());
+    }
+    JigsawsOptions opt;
+    if (t->has("start_time")) opt.start_time = t->number_in("start_time", 0.0, kInf, std::nullopt);
+    if (t->has("end_time")) opt.end_time = t->number_in("end_time", 0.0, kInf, std::nullopt);
+    recorded = load_jigsaws(file, arm, opt).trajectory;  // errors name the data file and line
+  } else {
+    t->allow_only({"source", "start", "segment", "placement"});
+    TrajectorySample start;
+    if (auto s = t->table("start")) {
+      s->allow_only({"position", "orientation", "jaw"});
+      start.pose.position = s->vec3_or("position", Vec3::Zero());
+      start.pose.orientation = s->quaternion_or("orientation", Quat::Identity());
+      start.jaw = s->number_or("jaw", 0.0);
+    }
+    const std::vector<TomlTable> segs = t->tables("segment");
+    if (segs.empty()) t->fail("segment", "a scripted trajectory needs at least one [[trajectory.segment]]");
+    try {
+      std::vector<PathSegment> segments;
+      for (const TomlTable& s : segs) segments.push_back(parse_segment(s));
+      ScriptedPath path(std::move(segments), start, t->key_path("segment"));
+      recorded = path.sample(dt);
+    } catch (const InputError& e) {
+      if (e.line() > 0) throw;
+      relocate(e, *t, segs);
+    }
+  }
+  try {
+    return resample(transformed(recorded, parse_placement(*t)), dt);
+  } catch (const InputError& e) {
+    if (e.line() > 0) throw;
+    t->fail("placement", e.message());
+  }
+}
+
+// ---------- device ----------
+
+hal::AxisConfig parse_axis(const TomlTable& a, hal::AxisConfig axis) {
+  a.allow_only({"name", "encoder_cob_id", "drive_cob_id", "counts_per_unit", "offset_counts", "sign",
+                "min", "max", "max_speed", "wraps", "rated_torque", "max_torque"});
+  axis.name = a.string_or("name", axis.name);
+  auto cob = [&](std::string_view key, std::uint32_t fallback) {
+    const auto v = a.integer_or(key, fallback);
+    if (v < 0 || v > 0x7FF) a.fail(key, "must be an 11-bit COB-ID in [0, 0x7FF]");
+    return static_cast<std::uint32_t>(v);
+  };
+  axis.encoder_cob_id = cob("encoder_cob_id", axis.encoder_cob_id);
+  axis.drive_cob_id = cob("drive_cob_id", axis.drive_cob_id);
+  axis.counts_per_unit = a.number_in("counts_per_unit", 1e-12, kInf, axis.counts_per_unit);
+  const auto off = a.integer_or("offset_counts", axis.offset_counts);
+  if (off < INT32_MIN || off > INT32_MAX) a.fail("offset_counts", "must fit in int32");
+  axis.offset_counts = static_cast<std::int32_t>(off);
+  const auto sign = a.integer_or("sign", axis.sign);
+  if (sign != 1 && sign != -1) a.fail("sign", "must be 1 or -1");
+  axis.sign = static_cast<int>(sign);
+  axis.min = a.number_or("min", axis.min);
+  axis.max = a.number_or("max", axis.max);
+  if (!(axis.min < axis.max)) a.fail("max", "must be greater than min");
+  if (a.has("max_speed")) axis.max_speed = a.number_in("max_speed", 1e-12, kInf, std::nullopt);
+  axis.wraps = a.boolean_or("wraps", axis.wraps);
+  axis.rated_torque = a.number_in("rated_torque", 1e-12, kInf, axis.rated_torque);
+  axis.max_torque = a.number_in("max_torque", 0.0, kInf, axis.max_torque);
+  return axis;
+}
+
+void parse_feedback(const TomlTable& dev, core::FeedbackGains& f) {
+  auto fb = dev.table("feedback");
+  if (!fb) return;  // non-haptic: all zero
+  fb->allow_only({"stiffness", "damping", "rotational_stiffness", "rotational_damping", "max_force",
+                  "max_torque"});
+  f.k_t = fb->number_in("stiffness", 0.0, kInf, 0.0);
+  f.gamma_t = fb->number_in("damping", 0.0, kInf, 0.0);
+  f.k_r = fb->number_in("rotational_stiffness", 0.0, kInf, 0.0);
+  f.gamma_r = fb->number_in("rotational_damping", 0.0, kInf, 0.0);
+  f.max_force = fb->number_in("max_force", 0.0, kInf, kInf);
+  f.max_torque = fb->number_in("max_torque", 0.0, kInf, kInf);
+}
+
+int body_index(const TomlTable& t, std::string_view key, const core::Model& m) {
+  const std::string name = t.string(key);
+  if (name == "none") return -1;
+  for (int i = 0; i < m.num_bodies(); ++i)
+    if (m.bodies[static_cast<std::size_t>(i)].name == name) return i;
+  t.fail(key, "no body named \"" + name + "\" (use a [[body]] name or \"none\")");
+}
+
+void parse_device(const TomlTable& root, Scene& scene, const TomlTable*& body_table_of_attached,
+                  const std::vector<TomlTable>& body_tables) {
+  auto dev = root.table("device");
+  if (!dev) root.fail("device", "missing: a scene needs a [device] (the tracked instrument)");
+  dev->allow_only({"kind", "name", "attach", "max_sample_age", "jump_tolerance_counts",
+                   "first_node_id", "tool_offset", "trocar", "tracker", "feedback", "axis"});
+  const std::string kind =
+      dev->choice("kind", {"trocar-instrument", "pose-tracker"}, std::nullopt);
+  const auto node = dev->integer_or("first_node_id", 1);
+  if (node < 1 || node > 120) dev->fail("first_node_id", "must be a CANopen node id in [1, 120]");
+  hal::DeviceConfig cfg;
+  try {
+    cfg = kind == "trocar-instrument"
+              ? hal::make_default_trocar_config(static_cast<std::uint8_t>(node))
+              : hal::make_default_pose_tracker_config(static_cast<std::uint8_t>(node));
+  } catch (const std::invalid_argument& e) {
+    dev->fail("first_node_id", e.what());
+  }
+  cfg.name = dev->string_or("name", cfg.name);
+  cfg.control_period_s = scene.model.dt;
+  if (dev->has("max_sample_age"))
+    cfg.max_sample_age_s = dev->number_in("max_sample_age", 1e-9, kInf, std::nullopt);
+  cfg.jump_tolerance_counts = dev->number_in("jump_tolerance_counts", 0.0, kInf, cfg.jump_tolerance_counts);
+  if (auto off = dev->table("tool_offset")) {
+    off->allow_only({"position", "orientation"});
+    cfg.tool_offset.position = off->vec3_or("position", Vec3::Zero());
+    cfg.tool_offset.orientation = off->quaternion_or("orientation", Quat::Identity());
+  }
+  const std::vector<TomlTable> axes = dev->tables("axis");
+  if (!axes.empty()) {
+    if (axes.size() != cfg.axes.size())
+      dev->fail("axis", "a " + kind + " has " + std::to_string(cfg.axes.size()) + " axes, " +
+                            std::to_string(axes.size()) + " given (give all or none)");
+    for (std::size_t i = 0; i < axes.size(); ++i) cfg.axes[i] = parse_axis(axes[i], cfg.axes[i]);
+  }
+  if (kind == "trocar-instrument") {
+    cfg.kind = hal::DeviceKind::kTrocarInstrument;
+    auto tr = dev->table("trocar");
+    if (!tr) dev->fail("trocar", "missing: give point = [x, y, z] or placement = \"approach\"");
+    tr->allow_only({"point", "orientation", "placement", "standoff"});
+    const std::string placement = tr->choice("placement", {"explicit", "approach"},
+                                             tr->has("point") ? "explicit" : "approach");
+    Vec3 centroid = Vec3::Zero();
+    for (const auto& s : scene.trajectory.samples()) centroid += s.pose.position;
+    centroid /= static_cast<double>(std::max<std::size_t>(1, scene.trajectory.size()));
+    if (placement == "approach") {
+      if (tr->has("point")) tr->fail("point", "give either point or placement = \"approach\"");
+      const double standoff = tr->number_in("standoff", 1e-6, kInf, 0.12);
+      ApproachTrocar a;
+      try {
+        a = trocar_from_approach(scene.trajectory, standoff);
+      } catch (const InputError& e) {
+        tr->fail("standoff", e.message());
+      }
+      cfg.trocar.point = a.point;
+      cfg.trocar.orientation = Quat::FromTwoVectors(Vec3::UnitZ(), a.approach);
+      std::ostringstream os;
+      os << "trocar placed behind the recorded tip centroid along the mean approach axis, standoff "
+         << standoff * 1e3 << " mm (tip depths " << a.min_depth * 1e3 << "–" << a.max_depth * 1e3
+         << " mm)";
+      scene.trocar_note = os.str();
+    } else {
+      cfg.trocar.point = tr->vec3("point");
+      const Vec3 toward = centroid - cfg.trocar.point;
+      cfg.trocar.orientation = tr->quaternion_or(
+          "orientation", toward.norm() > 1e-9 ? Quat::FromTwoVectors(Vec3::UnitZ(), toward) : Quat::Identity());
+      scene.trocar_note = "trocar point given in the scene";
+    }
+    if (tr->has("orientation") && placement == "approach") tr->fail("orientation", "set by placement = \"approach\"");
+  } else {
+    cfg.kind = hal::DeviceKind::kPoseTracker;
+    if (auto tk = dev->table("tracker")) {
+      tk->allow_only({"position", "orientation"});
+      cfg.tracker.base.position = tk->vec3_or("position", Vec3::Zero());
+      cfg.tracker.base.orientation = tk->quaternion_or("orientation", Quat::Identity());
+    }
+  }
+  try {
+    hal::validate(cfg);
+  } catch (const std::invalid_argument& e) {
+    dev->fail("axis", e.what());
+  }
+  parse_feedback(*dev, scene.model.feedback);
+  scene.model.initial_attached_body = dev->has("attach") ? body_index(*dev, "attach", scene.model) : -1;
+  body_table_of_attached = nullptr;
+  if (scene.model.initial_attached_body >= 0)
+    body_table_of_attached = &body_tables[static_cast<std::size_t>(scene.model.initial_attached_body)];
+  scene.device = std::move(cfg);
+}
+
+/// Controlled-frame pose the device reports for the trajectory's first sample.
+core::Pose first_device_pose(const Scene& scene) {
+  const auto kin = hal::make_kinematics(scene.device);
+  const TrajectorySample s0 = scene.trajectory.at(0.0);
+  hal::AxisVector q;
+  if (scene.device.kind == hal::DeviceKind::kTrocarInstrument) {
+    q = static_cast<const hal::TrocarKinematics&>(*kin).inverse_tool(s0.pose, s0.jaw);
+  } else {
+    core::Pose controlled;
+    controlled.position = s0.pose.position + s0.pose.orientation * scene.device.tool_offset.position;
+    controlled.orientation = s0.pose.orientation * scene.device.tool_offset.orientation;
+    q = kin->inverse(controlled, hal::AxisVector());
+  }
+  return kin->forward(q);
+}
+
+}  // namespace
+
+core::CouplingMode parse_coupling_mode(const std::string& name) {
+  if (name == "god-object") return core::CouplingMode::kGodObject;
+  if (name == "first-order") return core::CouplingMode::kFirstOrder;
+  if (name == "direct") return core::CouplingMode::kDirect;
+  throw InputError("", 0, 0, "coupling",
+                   "unknown coupling mode \"" + name + "\" (god-object, first-order, direct)");
+}
+
+const char* to_string(core::CouplingMode mode) noexcept {
+  switch (mode) {
+    case core::CouplingMode::kGodObject: return "god-object";
+    case core::CouplingMode::kFirstOrder: return "first-order";
+    case core::CouplingMode::kDirect: return "direct";
+  }
+  return "?";
+}
+
+const char* to_string(core::Integrator integrator) noexcept {
+  return integrator == core::Integrator::kLinearlyImplicitEuler ? "implicit-euler" : "symplectic-euler";
+}
+
+std::string default_scene_path() { return std::string(NUMEN_SOURCE_SIM_DIR) + "/scenes/default.toml"; }
+
+Scene load_scene(const std::string& path, const SceneOverrides& overrides) {
+  Scene scene;
+  scene.file = path;
+  const toml::table doc = parse_toml_file(path);
+  const TomlTable root(doc, "", scene.file);
+  root.allow_only({"name", "description", "dt", "duration", "gravity", "integrator", "coupling",
+                   "solver", "material", "contact_default", "contact", "body", "obstacle", "device",
+                   "bus", "trajectory", "event"});
+  scene.name = root.string_or("name", std::filesystem::path(path).stem().string());
+  scene.description = root.string_or("description", "");
+  scene.model = parse_scene_model(root, scene.warnings);
+  if (overrides.coupling) scene.model.coupling_mode = *overrides.coupling;
+  const std::filesystem::path dir = std::filesystem::path(path).parent_path();
+  scene.trajectory = parse_trajectory(root, scene.model.dt, dir);
+
+  const std::vector<TomlTable> body_tables = root.tables("body");
+  const TomlTable* attached_table = nullptr;
+  parse_device(root, scene, attached_table, body_tables);
+  if (attached_table && !attached_table->has("position")) {
+    core::BodyModel& b = scene.model.bodies[static_cast<std::size_t>(scene.model.initial_attached_body)];
+    b.initial_pose = first_device_pose(scene);
+  }
+
+  // Bus between controller and instrument.
+  double latency = 100e-6;
+  if (auto bus = root.table("bus")) {
+    bus->allow_only({"latency", "drop_probability", "corruption_probability", "seed", "capacity",
+                     "compute_phase"});
+    latency = bus->number_in("latency", 0.0, 1.0, latency);
+    scene.bus.drop_probability = bus->number_in("drop_probability", 0.0, 1.0, 0.0);
+    scene.bus.corruption_probability = bus->number_in("corruption_probability", 0.0, 1.0, 0.0);
+    const auto seed = bus->integer_or("seed", 1);
+    scene.bus.seed = static_cast<std::uint64_t>(seed);
+    const auto cap = bus->integer_or("capacity", 256);
+    if (cap < 1 || cap > 1 << 20) bus->fail("capacity", "must be in [1, 2^20]");
+    scene.bus.capacity = static_cast<std::size_t>(cap);
+    scene.compute_phase_s = bus->number_or("compute_phase", 2.0 * latency + 50e-6);
+    if (!(scene.compute_phase_s >= 2.0 * latency && scene.compute_phase_s < scene.model.dt))
+      bus->fail("compute_phase", "must be in [2·latency, dt): one SYNC round trip must fit in the period");
+  } else {
+    scene.compute_phase_s = 2.0 * latency + 50e-6;
+  }
+  scene.bus.latency_ns = static_cast<std::int64_t>(std::llround(latency * 1e9));
+  if (!(scene.compute_phase_s < scene.model.dt))
+    root.fail("dt", "the period is shorter than one SYNC round trip on the bus (2·latency + 50 µs)");
+
+  for (const TomlTable& e : root.tables("event")) {
+    e.allow_only({"time", "attach"});
+    scene.events.push_back(AttachEvent{e.number_in("time", 0.0, kInf, std::nullopt),
+                                       body_index(e, "attach", scene.model)});
+  }
+  std::stable_sort(scene.events.begin(), scene.events.end(),
+                   [](const AttachEvent& a, const AttachEvent& b) { return a.time_s < b.time_s; });
+
+  scene.duration_s = root.number_in("duration", 1e-9, kInf, scene.trajectory.duration());
+  const std::string err = core::finalize_model(scene.model);
+  if (!err.empty()) root.fail_at(nullptr, "", err);
+  return scene;
+}
+
+}  // namespace numen::sim

@@ -1,0 +1,47 @@
+/// @file simulated_instrument.cpp
+
+#include "numen/sim/simulated_instrument.hpp"
+
+#include "numen/hal/canopen.hpp"
+#include "numen/hal/kinematics_factory.hpp"
+#include "numen/hal/trocar_kinematics.hpp"
+
+namespace numen::sim {
+
+SimulatedInstrument::SimulatedInstrument(const hal::DeviceConfig& config,
+                                         const Trajectory& trajectory, std::int64_t start_ns)
+    : config_(config),
+      trajectory_(&trajectory),
+      start_ns_(start_ns),
+      kinematics_(hal::make_kinematics(config)),
+      emulator_(config) {}
+
+hal::AxisVector SimulatedInstrument::axes_at(std::int64_t t_ns) const noexcept {
+  const TrajectorySample s = trajectory_->at(static_cast<double>(t_ns - start_ns_) * 1e-9);
+  if (config_.kind == hal::DeviceKind::kTrocarInstrument)
+    return static_cast<const hal::TrocarKinematics&>(*kinematics_).inverse_tool(s.pose, s.jaw);
+  core::Pose controlled;  // tracked frame · tool_offset
+  controlled.position = s.pose.position + s.pose.orientation * config_.tool_offset.position;
+  controlled.orientation = s.pose.orientation * config_.tool_offset.orientation;
+  return kinematics_->inverse(controlled, hal::AxisVector());
+}
+
+core::Pose SimulatedInstrument::controlled_pose_at(std::int64_t t_ns) const noexcept {
+  return kinematics_->forward(axes_at(t_ns));
+}
+
+int SimulatedInstrument::poll(hal::Bus& device_port) noexcept {
+  int handled = 0;
+  hal::CanFrame frame;
+  while (device_port.read(frame) == hal::IoStatus::kOk) {
+    ++handled;
+    if (hal::is_sync(frame)) {
+      const hal::AxisVector q = axes_at(frame.timestamp_ns);
+      emulator_.set_axis_values(q.data());
+    }
+    emulator_.on_frame(frame, device_port);
+  }
+  return handled;
+}
+
+}  // namespace numen::sim

@@ -1,0 +1,66 @@
+/// @file trace.cpp
+
+#include "numen/sim/trace.hpp"
+
+#include <fstream>
+#include <stdexcept>
+
+namespace numen::sim {
+
+TraceRecord make_trace_record(const core::Data& data, int held, int tool_contacts,
+                              double tool_penetration_m, double target_penetration_m,
+                              const platform::PeriodReport& report,
+                              const hal::AxisVector& axis_torques) noexcept {
+  TraceRecord r;
+  r.time_s = data.time;
+  r.attached_body = held;
+  r.sample_valid = report.sample_valid;
+  r.target = data.target;
+  if (held >= 0) {
+    const core::BodyState& b = data.bodies[static_cast<std::size_t>(held)];
+    r.tool = core::Pose{b.position, b.orientation};
+  }
+  r.contacts = data.num_contacts;
+  r.tool_contacts = tool_contacts;
+  r.tool_penetration_mm = tool_penetration_m * 1e3;
+  r.target_penetration_mm = target_penetration_m * 1e3;
+  r.feedback = data.feedback_wrench;
+  r.num_axes = static_cast<int>(axis_torques.size());
+  for (int i = 0; i < r.num_axes; ++i) r.axis_torque[static_cast<std::size_t>(i)] = axis_torques[i];
+  r.step_time_us = static_cast<double>(report.step_ns) * 1e-3;
+  r.solver_iterations = data.solver_iterations;
+  return r;
+}
+
+void Trace::write_csv(const std::string& path) const {
+  std::ofstream out(path);
+  if (!out) throw std::runtime_error(path + ": cannot open the trace file for writing");
+  const int axes = records_.empty() ? 0 : records_.front().num_axes;
+  out << "time_s,attached_body,sample_valid,"
+         "target_x,target_y,target_z,target_qw,target_qx,target_qy,target_qz,"
+         "tool_x,tool_y,tool_z,tool_qw,tool_qx,tool_qy,tool_qz,"
+         "contacts,tool_contacts,tool_penetration_mm,target_penetration_mm,"
+         "feedback_fx,feedback_fy,feedback_fz,feedback_tx,feedback_ty,feedback_tz";
+  for (int i = 0; i < axes; ++i) out << ",axis_torque_" << i;
+  out << ",step_time_us,solver_iterations\n";
+  out.precision(9);
+  auto pose = [&](const core::Pose& p) {
+    out << p.position.x() << ',' << p.position.y() << ',' << p.position.z() << ','
+        << p.orientation.w() << ',' << p.orientation.x() << ',' << p.orientation.y() << ','
+        << p.orientation.z() << ',';
+  };
+  for (const TraceRecord& r : records_) {
+    out << r.time_s << ',' << r.attached_body << ',' << (r.sample_valid ? 1 : 0) << ',';
+    pose(r.target);
+    pose(r.tool);
+    out << r.contacts << ',' << r.tool_contacts << ',' << r.tool_penetration_mm << ','
+        << r.target_penetration_mm << ',' << r.feedback.force.x() << ',' << r.feedback.force.y()
+        << ',' << r.feedback.force.z() << ',' << r.feedback.torque.x() << ','
+        << r.feedback.torque.y() << ',' << r.feedback.torque.z();
+    for (int i = 0; i < axes; ++i) out << ',' << r.axis_torque[static_cast<std::size_t>(i)];
+    out << ',' << r.step_time_us << ',' << r.solver_iterations << '\n';
+  }
+  if (!out) throw std::runtime_error(path + ": error while writing the trace");
+}
+
+}  // namespace numen::sim

@@ -1,0 +1,115 @@
+// Tests of core/feedback: the Eq. 8 virtual-coupling wrench, its gains,
+// direction and saturation, and when it must be zero.
+#include "numen/core/feedback.hpp"
+
+#include <cmath>
+#include <limits>
+
+#include <gtest/gtest.h>
+
+#include "numen/core/data.hpp"
+#include "numen/core/model.hpp"
+#include "numen/core/step.hpp"
+
+namespace core = numen::core;
+using core::Quat;
+using core::Vec3;
+
+namespace {
+
+Quat rot(double angle, const Vec3& axis) { return Quat(Eigen::AngleAxisd(angle, axis.normalized())); }
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+}  // namespace
+
+TEST(Feedback, PullsTheDeviceTowardsTheGodObjectWithItsOwnGains) {
+  const core::FeedbackGains g{150.0, 3.0, 2.0, 0.05, kInf, kInf};
+  core::BodyState s;
+  s.position = Vec3(0.0, 0.0, 0.01);  // held above the target (e.g. by a floor)
+  const core::Pose target{Vec3(0.0, 0.0, -0.02), rot(0.2, Vec3::UnitZ())};
+  const core::Twist tt{Vec3(0.0, 0.0, -0.1), Vec3::Zero()};
+  const core::Wrench w = core::feedback_wrench(g, target, tt, s);
+  // F_d = k_d (x − x_t) + γ_d (v − v_t): up, towards the god-object.
+  EXPECT_NEAR(w.force.z(), 150.0 * 0.03 + 3.0 * 0.1, 1e-12);
+  EXPECT_NEAR(w.force.head<2>().norm(), 0.0, 1e-15);
+  // The god-object is rotated by −0.2 about z relative to the target:
+  // T_d = k_rd θu' with θu' = log(q q_t⁻¹) = −0.2 z.
+  EXPECT_TRUE(w.torque.isApprox(Vec3(0.0, 0.0, -2.0 * 0.2), 1e-12));
+  // Angular damping: god-object spinning faster than the target.
+  s.angular_velocity = Vec3(1.0, 0.0, 0.0);
+  const core::Wrench w2 = core::feedback_wrench(g, target, tt, s);
+  EXPECT_TRUE((w2.torque - w.torque).isApprox(Vec3(0.05, 0.0, 0.0), 1e-12));
+  // Gains scale linearly; zero gains (non-haptic device) give zero.
+  const core::FeedbackGains g2{300.0, 6.0, 4.0, 0.1, kInf, kInf};
+  const core::Wrench w3 = core::feedback_wrench(g2, target, tt, s);
+  EXPECT_TRUE(w3.force.isApprox(2.0 * w2.force, 1e-12));
+  EXPECT_TRUE(w3.torque.isApprox(2.0 * w2.torque, 1e-12));
+  const core::Wrench w0 = core::feedback_wrench(core::FeedbackGains{}, target, tt, s);
+  EXPECT_TRUE(w0.force.isZero(0.0) && w0.torque.isZero(0.0));
+}
+
+TEST(Feedback, SaturationClampsTheNormAndKeepsTheDirection) {
+  const core::Wrench w{Vec3(3.0, -4.0, 0.0), Vec3(0.0, 0.6, 0.8)};
+  const core::Wrench s = core::saturate_wrench(w, 2.5, 0.5);
+  EXPECT_NEAR(s.force.norm(), 2.5, 1e-14);
+  EXPECT_NEAR(s.torque.norm(), 0.5, 1e-14);
+  EXPECT_GT(s.force.normalized().dot(w.force.normalized()), 1.0 - 1e-15);
+  EXPECT_GT(s.torque.normalized().dot(w.torque.normalized()), 1.0 - 1e-15);
+  const core::Wrench u = core::saturate_wrench(w, 10.0, kInf);  // under the limit: unchanged
+  EXPECT_EQ(u.force, w.force);
+  EXPECT_EQ(u.torque, w.torque);
+  const core::Wrench z = core::saturate_wrench(w, 0.0, 0.0);
+  EXPECT_TRUE(z.force.isZero(0.0) && z.torque.isZero(0.0));
+  // Through feedback_wrench.
+  const core::FeedbackGains g{1e4, 0.0, 10.0, 0.0, 5.0, 0.1};
+  core::BodyState b;
+  b.position = Vec3(0.01, 0.02, -0.02);
+  b.orientation = rot(1.0, Vec3(1, 1, 0));
+  const core::Wrench f = core::feedback_wrench(g, core::Pose{}, core::Twist{}, b);
+  EXPECT_NEAR(f.force.norm(), 5.0, 1e-12);
+  EXPECT_GT(f.force.normalized().dot(b.position.normalized()), 1.0 - 1e-12);
+  EXPECT_NEAR(f.torque.norm(), 0.1, 1e-12);
+}
+
+namespace {
+
+core::Model feedback_model(core::CouplingMode mode) {
+  core::Model m;
+  m.gravity = Vec3::Zero();
+  m.coupling_mode = mode;
+  m.material_pairs = {core::MaterialPair{}};
+  core::BodyModel b;
+  b.coupling = {100.0, 10.0, 1.0, 0.1};
+  m.bodies = {b};
+  m.feedback = {100.0, 1.0, 1.0, 0.01, 20.0, 2.0};
+  EXPECT_EQ(core::finalize_model(m), "");
+  return m;
+}
+
+}  // namespace
+
+TEST(Feedback, StageFollowsTheAttachedBodyAfterIntegration) {
+  const core::Model m = feedback_model(core::CouplingMode::kGodObject);
+  core::Data d = core::make_data(m);
+  d.target.position = Vec3(0.05, 0.0, 0.0);
+  core::step(m, d);
+  // After the step the god-object lags behind the target: the device is pulled back (−x).
+  const core::Wrench expect = core::feedback_wrench(m.feedback, d.target, d.target_twist, d.bodies[0]);
+  EXPECT_EQ(d.feedback_wrench.force, expect.force);
+  EXPECT_LT(d.feedback_wrench.force.x(), 0.0);
+  EXPECT_LE(d.feedback_wrench.force.norm(), 20.0);
+  // Detached: zero.
+  core::set_attached_body(m, d, -1);
+  core::step(m, d);
+  EXPECT_TRUE(d.feedback_wrench.force.isZero(0.0) && d.feedback_wrench.torque.isZero(0.0));
+}
+
+TEST(Feedback, ZeroInDirectMode) {
+  const core::Model m = feedback_model(core::CouplingMode::kDirect);
+  core::Data d = core::make_data(m);
+  d.target.position = Vec3(0.05, 0.0, 0.0);
+  d.target_twist.linear = Vec3(1.0, 0.0, 0.0);
+  core::step(m, d);
+  EXPECT_TRUE(d.feedback_wrench.force.isZero(0.0) && d.feedback_wrench.torque.isZero(0.0));
+}

@@ -1,0 +1,205 @@
+// Tests of core/step: the stage list as a whole — allocation-free,
+// deterministic, status handling, non-finite rollback, tool switching.
+#include "numen/core/step.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+
+#include <gtest/gtest.h>
+
+#include "alloc_counter.hpp"
+#include "numen/core/data.hpp"
+#include "numen/core/model.hpp"
+#include "numen/core/rigid_body.hpp"
+
+namespace core = numen::core;
+using core::Mat3;
+using core::Quat;
+using core::Vec3;
+
+namespace {
+
+Quat rot(double angle, const Vec3& axis) { return Quat(Eigen::AngleAxisd(angle, axis.normalized())); }
+
+/// 13 bodies with one sphere each above a floor plane, body 0 coupled.
+core::Model thirteen_bodies(core::Integrator integ, core::CouplingMode mode) {
+  core::Model m;
+  m.integrator = integ;
+  m.coupling_mode = mode;
+  m.material_pairs = {core::MaterialPair{2e4, 20.0, 1.0}};
+  core::Obstacle floor;
+  floor.name = "floor";
+  floor.type = core::ShapeType::kPlane;
+  m.obstacles = {floor};
+  for (int i = 0; i < 13; ++i) {
+    m.body_spheres.push_back(core::Sphere{Vec3::Zero(), 0.04});
+    core::BodyModel b;
+    b.name = "body" + std::to_string(i);
+    b.mass = 0.1 + 0.01 * i;
+    b.inertia_body = Vec3(1e-4, 2e-4, 3e-4).asDiagonal();
+    b.sphere_begin = i;
+    b.sphere_count = 1;
+    b.coupling = {400.0, core::damping_from_ratio(0.8, b.mass, 400.0), 0.5, 0.02};
+    b.initial_pose.position = Vec3(0.1 * (i % 4), 0.1 * (i / 4), 0.05 + 0.01 * i);
+    b.initial_pose.orientation = rot(0.1 * i, Vec3(1, 2, 3));
+    b.initial_twist.angular = Vec3(0.0, 0.5 * i, 1.0);
+    m.bodies.push_back(b);
+  }
+  m.feedback = {400.0, 2.0, 0.5, 0.01, 10.0, 1.0};
+  m.initial_attached_body = 0;
+  EXPECT_EQ(core::finalize_model(m), "");
+  return m;
+}
+
+/// Device motion around the attached body's initial pose (a tool switch
+/// does not make the new tool jump across the scene).
+void drive_target(const core::Model& m, core::Data& d, int i) {
+  const double t = 1e-3 * i;
+  const core::Pose& home = m.bodies[static_cast<std::size_t>(std::max(0, d.attached_body))].initial_pose;
+  d.target.position = home.position + Vec3(0.03 * std::sin(2.0 * t), 0.02 * std::cos(3.0 * t),
+                                            0.02 + 0.03 * std::sin(t));
+  d.target.orientation = rot(0.5 * std::sin(t), Vec3(0.0, 1.0, 1.0)) * home.orientation;
+  d.target_twist.linear = Vec3(0.06 * std::cos(2.0 * t), -0.06 * std::sin(3.0 * t), 0.03 * std::cos(t));
+  d.target_twist.angular = 0.5 * std::cos(t) * Vec3(0.0, 1.0, 1.0).normalized();
+}
+
+bool same_bits(const core::BodyState& a, const core::BodyState& b) {
+  return std::memcmp(a.position.data(), b.position.data(), sizeof(double) * 3) == 0 &&
+         std::memcmp(a.orientation.coeffs().data(), b.orientation.coeffs().data(), sizeof(double) * 4) == 0 &&
+         std::memcmp(a.linear_velocity.data(), b.linear_velocity.data(), sizeof(double) * 3) == 0 &&
+         std::memcmp(a.angular_velocity.data(), b.angular_velocity.data(), sizeof(double) * 3) == 0;
+}
+
+}  // namespace
+
+TEST(Step, TenThousandStepsOfThirteenBodiesDoNotAllocate) {
+  for (auto integ : {core::Integrator::kLinearlyImplicitEuler, core::Integrator::kSymplecticEuler}) {
+    for (auto mode : {core::CouplingMode::kGodObject, core::CouplingMode::kFirstOrder,
+                      core::CouplingMode::kDirect}) {
+      const core::Model m = thirteen_bodies(integ, mode);
+      core::Data d = core::make_data(m);
+      std::int64_t count = 0;
+      int first_bad = -1;
+      std::uint32_t bad_status = 0;
+      {
+        numen::test::AllocationGuard guard;
+        for (int i = 0; i < 10000; ++i) {
+          drive_target(m, d, i);
+          if (i == 5000) core::set_attached_body(m, d, 3);  // tool switching
+          core::step(m, d);
+          if (d.status != core::kStepOk && first_bad < 0) {
+            first_bad = i;
+            bad_status = d.status;
+          }
+        }
+        count = guard.count();
+      }
+      EXPECT_EQ(first_bad, -1) << "status " << bad_status << " integrator " << static_cast<int>(integ)
+                               << " mode " << static_cast<int>(mode);
+      EXPECT_EQ(count, 0) << static_cast<int>(integ) << " " << static_cast<int>(mode);
+      EXPECT_EQ(d.step_count, 10000);
+      EXPECT_EQ(d.nonfinite_steps, 0);
+      for (const auto& s : d.bodies) EXPECT_TRUE(core::state_is_finite(s));
+    }
+  }
+}
+
+TEST(Step, TwoDataFromTheSameModelStayBitIdentical) {
+  for (auto integ : {core::Integrator::kLinearlyImplicitEuler, core::Integrator::kSymplecticEuler}) {
+    const core::Model m = thirteen_bodies(integ, core::CouplingMode::kGodObject);
+    core::Data a = core::make_data(m);
+    core::Data b = core::make_data(m);
+    for (int i = 0; i < 3000; ++i) {
+      drive_target(m, a, i);
+      drive_target(m, b, i);
+      core::step(m, a);
+      core::step(m, b);
+    }
+    for (std::size_t i = 0; i < a.bodies.size(); ++i) EXPECT_TRUE(same_bits(a.bodies[i], b.bodies[i])) << i;
+    EXPECT_EQ(std::memcmp(a.feedback_wrench.force.data(), b.feedback_wrench.force.data(), 24), 0);
+    EXPECT_EQ(a.solver_iterations, b.solver_iterations);
+    // And a third one replayed after a reset gives the same bits again.
+    core::reset_data(m, a);
+    for (int i = 0; i < 3000; ++i) {
+      drive_target(m, a, i);
+      core::step(m, a);
+    }
+    for (std::size_t i = 0; i < a.bodies.size(); ++i) EXPECT_TRUE(same_bits(a.bodies[i], b.bodies[i])) << i;
+  }
+}
+
+TEST(Step, AdvancesTimeAndCountsSteps) {
+  const core::Model m = thirteen_bodies(core::Integrator::kLinearlyImplicitEuler, core::CouplingMode::kGodObject);
+  core::Data d = core::make_data(m);
+  for (int i = 0; i < 250; ++i) core::step(m, d);
+  EXPECT_EQ(d.step_count, 250);
+  EXPECT_NEAR(d.time, 250 * m.dt, 1e-12);
+}
+
+TEST(Step, NonFiniteTargetIsReportedAndTheStateStaysFinite) {
+  for (auto mode : {core::CouplingMode::kGodObject, core::CouplingMode::kFirstOrder, core::CouplingMode::kDirect}) {
+    const core::Model m = thirteen_bodies(core::Integrator::kLinearlyImplicitEuler, mode);
+    core::Data d = core::make_data(m);
+    for (int i = 0; i < 10; ++i) {
+      drive_target(m, d, i);
+      core::step(m, d);
+    }
+    d.target.position.y() = std::numeric_limits<double>::quiet_NaN();
+    core::step(m, d);
+    EXPECT_TRUE(d.status & core::kInvalidTarget) << static_cast<int>(mode);
+    EXPECT_EQ(d.status & core::kNonFinite, 0u);
+    for (const auto& s : d.bodies) EXPECT_TRUE(core::state_is_finite(s));
+    EXPECT_TRUE(d.feedback_wrench.force.isZero(0.0));
+    // Status is reset each step.
+    drive_target(m, d, 11);
+    core::step(m, d);
+    EXPECT_EQ(d.status & core::kInvalidTarget, 0u);
+  }
+}
+
+TEST(Step, NonFiniteResultIsRolledBack) {
+  const core::Model m = thirteen_bodies(core::Integrator::kLinearlyImplicitEuler, core::CouplingMode::kGodObject);
+  core::Data d = core::make_data(m);
+  for (int i = 0; i < 10; ++i) {
+    drive_target(m, d, i);
+    core::step(m, d);
+  }
+  const std::vector<core::BodyState> before = d.bodies;
+  d.applied_wrench[4].force.x() = std::numeric_limits<double>::infinity();
+  core::step(m, d);
+  EXPECT_TRUE(d.status & core::kNonFinite);
+  EXPECT_EQ(d.nonfinite_steps, 1);
+  for (std::size_t i = 0; i < d.bodies.size(); ++i) {
+    EXPECT_EQ(d.bodies[i].position, before[i].position);
+    EXPECT_EQ(d.bodies[i].orientation.coeffs(), before[i].orientation.coeffs());
+    EXPECT_TRUE(d.bodies[i].linear_velocity.isZero(0.0));
+    EXPECT_TRUE(d.bodies[i].angular_velocity.isZero(0.0));
+  }
+  EXPECT_TRUE(d.feedback_wrench.force.isZero(0.0) && d.feedback_wrench.torque.isZero(0.0));
+  EXPECT_EQ(d.step_count, 11);
+  // Recovers once the input is sane again.
+  d.applied_wrench[4] = core::Wrench{};
+  core::step(m, d);
+  EXPECT_EQ(d.status & core::kNonFinite, 0u);
+  EXPECT_EQ(d.nonfinite_steps, 1);
+}
+
+TEST(Step, SetAttachedBodyRangeChecks) {
+  const core::Model m = thirteen_bodies(core::Integrator::kLinearlyImplicitEuler, core::CouplingMode::kGodObject);
+  core::Data d = core::make_data(m);
+  core::set_attached_body(m, d, 12);
+  EXPECT_EQ(d.attached_body, 12);
+  core::set_attached_body(m, d, 13);
+  EXPECT_EQ(d.attached_body, -1);
+  core::set_attached_body(m, d, -5);
+  EXPECT_EQ(d.attached_body, -1);
+  core::set_attached_body(m, d, 0);
+  EXPECT_EQ(d.attached_body, 0);
+  // An attached-body index written directly out of range is treated as none.
+  d.attached_body = 99;
+  core::step(m, d);
+  EXPECT_TRUE(d.coupling_wrench.force.isZero(0.0));
+  EXPECT_EQ(d.status, core::kStepOk);
+}
