@@ -111,7 +111,10 @@ void collide_body_obstacle(const Model& model, const Data& data, int b, int o, C
   }
 }
 
-/// Body `b` against every static sphere set, one grid query per sphere.
+/// Body `b` against every static sphere set, one grid query per sphere: a
+/// branch-free float prefilter over each row of cells collects candidates, the
+/// exact double test (the one of the reference) decides, and a per-entry stamp
+/// drops the duplicates of spheres listed in several cells.
 void collide_body_grid(const Model& model, Data& data, int b, ContactSink& sink) noexcept {
   const StaticSphereGrid& grid = model.static_grid;
   CollisionScratch& cs = data.collision;
@@ -121,8 +124,12 @@ void collide_body_grid(const Model& model, Data& data, int b, ContactSink& sink)
   const Sphere* bs = model.body_spheres.data();
   const std::int32_t* cell_start = grid.cell_start.data();
   const GridItem* items = grid.items.data();
+  const std::int32_t* item_entry = grid.item_entry.data();
+  const GridEntry* entries = grid.entries.data();
   std::uint32_t* stamps = cs.entry_stamp.data();
   const int mat_a = bm.material * model.num_materials();
+  constexpr int kChunk = 64;
+  std::int32_t candidates[kChunk];
   ContactGeometry g;
 
   for (int s = bm.sphere_begin; s < bm.sphere_begin + bm.sphere_count; ++s) {
@@ -136,18 +143,34 @@ void collide_body_grid(const Model& model, Data& data, int b, ContactSink& sink)
       cs.stamp = 1;
     }
     const std::uint32_t stamp = cs.stamp;
+    const Vec3 rel = c - grid.origin;
+    const float qx = static_cast<float>(rel.x());
+    const float qy = static_cast<float>(rel.y());
+    const float qz = static_cast<float>(rel.z());
+    const float qr = static_cast<float>(r) * (1.0f + 1e-6f) + grid.float_slack;
     for (int z = first.z(); z <= last.z(); ++z) {
       for (int y = first.y(); y <= last.y(); ++y) {
         // Cells first.x..last.x of a row are one contiguous range of items.
-        const int k0 = cell_start[grid.cell_index(first.x(), y, z)];
-        const int k1 = cell_start[grid.cell_index(last.x(), y, z) + 1];
-        for (int k = k0; k < k1; ++k) {
-          const GridItem& it = items[k];
-          if (!spheres_overlap(c, r, it.center, it.radius)) continue;
-          if (stamps[it.entry] == stamp) continue;  // already seen in another cell
-          stamps[it.entry] = stamp;
-          if (sphere_sphere(c, r, it.center, it.radius, fallback_from(x, it.center), g)) {
-            sink.add(b, -1, it.obstacle, s, it.sphere, mat_a + it.material, g);
+        int k = cell_start[grid.cell_index(first.x(), y, z)];
+        const int k_end = cell_start[grid.cell_index(last.x(), y, z) + 1];
+        while (k < k_end) {
+          const int k1 = std::min(k_end, k + kChunk);
+          int n = 0;
+          for (; k < k1; ++k) {  // branch-free compaction
+            const GridItem& it = items[k];
+            const float dx = it.x - qx, dy = it.y - qy, dz = it.z - qz;
+            const float sr = it.radius + qr;
+            candidates[n] = k;
+            n += (dx * dx + dy * dy + dz * dz <= sr * sr) ? 1 : 0;
+          }
+          for (int i = 0; i < n; ++i) {
+            const std::int32_t e = item_entry[candidates[i]];
+            const GridEntry& en = entries[e];
+            if (!spheres_overlap(c, r, en.center, en.radius)) continue;
+            if (stamps[e] == stamp) continue;  // already seen in another cell
+            stamps[e] = stamp;
+            if (sphere_sphere(c, r, en.center, en.radius, fallback_from(x, en.center), g))
+              sink.add(b, -1, en.obstacle, s, en.sphere, mat_a + en.material, g);
           }
         }
       }

@@ -122,6 +122,10 @@ RunSummary run_scene(const Scene& scene, const RunOptions& options) {
     s.feedback_torque_max_nm = std::max(s.feedback_torque_max_nm, data.feedback_wrench.torque.norm());
     const hal::AxisVector& tau = device.last_torques();
     if (tau.size() > 0) s.axis_torque_max = std::max(s.axis_torque_max, tau.cwiseAbs().maxCoeff());
+    for (int b = 0; b < model.num_bodies(); ++b)
+      if (b != held)
+        s.free_body_speed_max_mps = std::max(s.free_body_speed_max_mps,
+                                             data.bodies[static_cast<std::size_t>(b)].linear_velocity.norm());
     s.contacts_max = std::max(s.contacts_max, data.num_contacts);
     s.solver_iterations_max = std::max(s.solver_iterations_max, data.solver_iterations);
     if (!options.trace_path.empty())
@@ -163,6 +167,7 @@ std::string format_summary(const RunSummary& s) {
      << s.tracking_error_free_max_mm << " mm over " << s.free_steps << " steps\n";
   os << "  feedback: force max " << s.feedback_force_max_n << " N, torque max "
      << s.feedback_torque_max_nm << " N·m, axis torque max " << s.axis_torque_max << "\n";
+  os << "  fastest body not held: " << s.free_body_speed_max_mps << " m/s\n";
   os << "  contacts max " << s.contacts_max << ", overflow steps " << s.contact_overflow
      << ", solver iterations max " << s.solver_iterations_max << "\n";
   os << "  bus: rejected samples " << s.rejected_samples << ", invalid periods "
@@ -225,6 +230,7 @@ std::string format_summary_json(const RunSummary& s) {
   num("feedback_force_max_n", s.feedback_force_max_n);
   num("feedback_torque_max_nm", s.feedback_torque_max_nm);
   num("axis_torque_max", s.axis_torque_max);
+  num("free_body_speed_max_mps", s.free_body_speed_max_mps);
   integer("rejected_samples", s.rejected_samples);
   integer("invalid_periods", s.invalid_periods);
   integer("contact_overflow", s.contact_overflow);

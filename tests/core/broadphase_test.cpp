@@ -50,6 +50,8 @@ std::set<int> query(const StaticSphereGrid& grid, const Vec3& lo, const Vec3& hi
 
 void expect_csr_consistent(const StaticSphereGrid& grid) {
   ASSERT_EQ(grid.cell_start.size(), static_cast<std::size_t>(grid.num_cells()) + 1);
+  ASSERT_EQ(grid.entries.size(), static_cast<std::size_t>(grid.num_entries));
+  ASSERT_EQ(grid.item_entry.size(), grid.items.size());
   EXPECT_EQ(grid.cell_start.front(), 0);
   EXPECT_EQ(static_cast<std::size_t>(grid.cell_start.back()), grid.items.size());
   EXPECT_EQ(grid.items.size(), grid.sphere_index.size());
@@ -57,9 +59,19 @@ void expect_csr_consistent(const StaticSphereGrid& grid) {
     ASSERT_LE(grid.cell_start[c], grid.cell_start[c + 1]);
     std::set<int> in_cell;
     for (int k = grid.cell_start[c]; k < grid.cell_start[c + 1]; ++k) {
-      const GridItem& it = grid.items[static_cast<std::size_t>(k)];
-      EXPECT_EQ(it.sphere, grid.sphere_index[static_cast<std::size_t>(k)]);
-      EXPECT_TRUE(in_cell.insert(it.entry).second) << "entry " << it.entry << " twice in cell " << c;
+      const auto kk = static_cast<std::size_t>(k);
+      const int e = grid.item_entry[kk];
+      ASSERT_GE(e, 0);
+      ASSERT_LT(e, grid.num_entries);
+      const GridEntry& en = grid.entries[static_cast<std::size_t>(e)];
+      EXPECT_EQ(en.sphere, grid.sphere_index[kk]);
+      // The compact copy is the entry's sphere relative to the origin, in float.
+      const Vec3 rel = en.center - grid.origin;
+      EXPECT_EQ(grid.items[kk].x, static_cast<float>(rel.x()));
+      EXPECT_EQ(grid.items[kk].y, static_cast<float>(rel.y()));
+      EXPECT_EQ(grid.items[kk].z, static_cast<float>(rel.z()));
+      EXPECT_EQ(grid.items[kk].radius, static_cast<float>(en.radius));
+      EXPECT_TRUE(in_cell.insert(e).second) << "entry " << e << " twice in cell " << c;
     }
   }
 }
@@ -82,14 +94,14 @@ TEST(BroadphaseGrid, QueriesReturnEveryOverlappingSphere) {
   EXPECT_GT(grid.num_cells(), 8);  // a real subdivision, not a single bucket
   expect_csr_consistent(grid);
 
-  // Auto cell size: about twice the mean diameter.
+  // Auto cell size: about the mean diameter.
   double mean_r = 0.0;
   for (const Sphere& s : spheres) mean_r += s.radius / 600.0;
-  EXPECT_NEAR(grid.cell_size, 4.0 * mean_r, 1e-12);
+  EXPECT_NEAR(grid.cell_size, 2.0 * mean_r, 1e-12);
 
   // Every entry is listed at least once.
   std::vector<int> seen(600, 0);
-  for (const GridItem& it : grid.items) ++seen[static_cast<std::size_t>(it.entry)];
+  for (int e : grid.item_entry) ++seen[static_cast<std::size_t>(e)];
   for (int s : seen) EXPECT_GE(s, 1);
 
   std::uniform_real_distribution<double> pos(-0.13, 0.13);
@@ -133,14 +145,14 @@ TEST(BroadphaseGrid, SizesStayBoundedForSparseOrUnevenSets) {
   StaticSphereGrid grid;
   build_static_grid(spheres, 0.0, grid);
   EXPECT_LE(grid.num_cells(), 32 * 1000);
-  EXPECT_LE(grid.items.size(), 16u * 1000u);
+  EXPECT_LE(grid.items.size(), 32u * 1000u);
   expect_csr_consistent(grid);
   // One huge sphere among small ones.
   spheres = random_spheres(rng, 500, 0.1, 0.001, 0.002);
   spheres.push_back(Sphere{Vec3::Zero(), 1.0});
   build_static_grid(spheres, 0.0, grid);
   EXPECT_LE(grid.num_cells(), 32 * 501);
-  EXPECT_LE(grid.items.size(), 16u * 501u);
+  EXPECT_LE(grid.items.size(), 32u * 501u);
   expect_csr_consistent(grid);
   const std::set<int> got = query(grid, Vec3::Constant(0.9), Vec3::Constant(0.95));
   EXPECT_TRUE(got.count(500));
@@ -164,7 +176,11 @@ TEST(BroadphaseGrid, ObstacleEntriesCarryTheirObstacleAndMaterial) {
   EXPECT_EQ(grid.num_entries, 5);
   expect_csr_consistent(grid);
   std::set<std::tuple<int, int, int, int>> entries;  // entry, sphere, obstacle, material
-  for (const GridItem& it : grid.items) entries.insert({it.entry, it.sphere, it.obstacle, it.material});
+  for (std::size_t e = 0; e < grid.entries.size(); ++e) {
+    const GridEntry& en = grid.entries[e];
+    entries.insert({static_cast<int>(e), en.sphere, en.obstacle, en.material});
+    EXPECT_EQ(en.center, spheres[static_cast<std::size_t>(en.sphere)].center);
+  }
   const std::set<std::tuple<int, int, int, int>> expected = {
       {0, 0, 1, 1}, {1, 1, 1, 1}, {2, 2, 1, 1}, {3, 2, 2, 2}, {4, 3, 2, 2}};
   EXPECT_EQ(entries, expected);

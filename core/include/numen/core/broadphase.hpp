@@ -18,16 +18,23 @@ namespace numen::core {
 struct Sphere;
 struct Obstacle;
 
-/// One grid entry copied into a cell: a static sphere (world frame) and the
-/// sphere-set obstacle it belongs to. Copies are stored cell by cell so that a
-/// query reads contiguous memory.
-struct GridItem {
+/// A grid entry: a static sphere (world frame, exact) and the sphere-set
+/// obstacle it belongs to. Read only for candidates that pass the float test.
+struct GridEntry {
   Vec3 center = Vec3::Zero();  ///< World centre (m).
   double radius = 0.0;         ///< m.
   std::int32_t sphere = -1;    ///< Index into Model::static_spheres.
   std::int32_t obstacle = -1;  ///< Owning sphere-set obstacle, -1 for a bare sphere list.
-  std::int32_t entry = -1;     ///< Entry id in [0, num_entries): key of the de-duplication stamp.
   std::int32_t material = 0;   ///< Material of the owning obstacle (0 for a bare sphere list).
+};
+
+/// Compact copy of an entry's sphere stored in a cell (16 bytes, four per cache
+/// line): centre relative to StaticSphereGrid::origin and radius, in float.
+/// Only a conservative prefilter (see StaticSphereGrid::float_slack); the exact
+/// test uses the double GridEntry.
+struct GridItem {
+  float x = 0.0f, y = 0.0f, z = 0.0f;  ///< Centre − origin (m).
+  float radius = 0.0f;                 ///< m.
 };
 
 /// Uniform grid over the static spheres of a Model (world frame), built once.
@@ -47,9 +54,15 @@ struct StaticSphereGrid {
   Vec3 bounds_min = Vec3::Zero();  ///< Union of the entries' bounding boxes (m).
   Vec3 bounds_max = Vec3::Zero();  ///< Union of the entries' bounding boxes (m).
   std::int32_t num_entries = 0;    ///< Distinct (sphere, obstacle) entries.
-  std::vector<std::int32_t> cell_start;    ///< Offsets into sphere_index/items, size cells+1.
+  /// Absolute slack (m) added to the radii sum in the float prefilter so that it
+  /// never rejects a pair the exact double test accepts (float rounding of
+  /// coordinates up to the grid's extent); a query adds 1e-6 of its own radius.
+  float float_slack = 0.0f;
+  std::vector<std::int32_t> cell_start;    ///< Offsets into the per-item arrays, size cells+1.
   std::vector<std::int32_t> sphere_index;  ///< Sphere indices, grouped by cell.
-  std::vector<GridItem> items;             ///< Same order as sphere_index, with the sphere data.
+  std::vector<GridItem> items;             ///< Same order: compact sphere copies (prefilter).
+  std::vector<std::int32_t> item_entry;    ///< Same order: entry of each item.
+  std::vector<GridEntry> entries;          ///< Size num_entries.
 
   /// True when no static sphere is registered.
   bool empty() const noexcept { return cell_size <= 0.0; }
@@ -82,14 +95,17 @@ struct StaticSphereGrid {
 };
 
 /// Builds the grid over every sphere of `spheres` (world frame), entry e =
-/// sphere e, obstacle -1. cell_size <= 0 picks a cell of about twice the mean
-/// sphere diameter (enlarged if the grid would exceed max(4096, 32·n) cells).
+/// sphere e, obstacle -1 (spheres with a non-finite centre or a negative radius
+/// are left out). cell_size <= 0 picks a cell of about the mean sphere diameter;
+/// any cell size is enlarged if the grid would exceed max(4096, 32·n) cells or
+/// max(4096, 32·n) items (n entries).
 /// Allocates; call at load time only.
 void build_static_grid(const std::vector<Sphere>& spheres, double cell_size,
                        StaticSphereGrid& grid);
 
 /// Builds the grid over the sphere-set obstacles of `obstacles` (their ranges of
 /// `spheres`, in obstacle order; other shapes are ignored). Same cell-size rule.
+/// Entry ids follow the obstacles' order.
 /// Allocates; call at load time only.
 void build_static_grid(const std::vector<Sphere>& spheres, const std::vector<Obstacle>& obstacles,
                        double cell_size, StaticSphereGrid& grid);

@@ -51,6 +51,7 @@ struct RunSummary {
   double feedback_force_max_n = 0.0;       ///< Largest |feedback force| sent (after saturation).
   double feedback_torque_max_nm = 0.0;
   double axis_torque_max = 0.0;            ///< Largest |axis torque| commanded (N·m or N).
+  double free_body_speed_max_mps = 0.0;    ///< Fastest body not held by the device (m/s): blocks thrown about.
   std::int64_t rejected_samples = 0;       ///< Axis samples rejected by the checks.
   std::int64_t invalid_periods = 0;        ///< Periods whose sample was not valid (target held).
   std::int64_t contact_overflow = 0;       ///< Steps that ran out of contact capacity.
