@@ -51,103 +51,112 @@ DurationSummary summarize_ns(const platform::LatencyHistogram& h) {
 
 }  // namespace
 
-RunSummary run_scene(const Scene& scene, const RunOptions& options) {
-  const core::Model& model = scene.model;
-  const double duration = options.duration_s >= 0.0 ? options.duration_s : scene.duration_s;
-  const auto steps = static_cast<std::int64_t>(std::llround(duration / model.dt));
-  const auto period_ns = static_cast<std::int64_t>(std::llround(model.dt * 1e9));
-  const auto phase_ns = static_cast<std::int64_t>(std::llround(scene.compute_phase_s * 1e9));
-  const std::int64_t latency_ns = scene.bus.latency_ns;
+SceneRunner::SceneRunner(const Scene& scene, std::size_t trace_capacity)
+    : scene_(&scene),
+      bus_(scene.bus),
+      instrument_(scene.device, scene.trajectory),
+      device_(scene.device),
+      data_(core::make_data(scene.model)),
+      ghost_(core::make_data(scene.model)),
+      loop_(scene.model, data_, bus_.controller(), device_),
+      period_ns_(static_cast<std::int64_t>(std::llround(scene.model.dt * 1e9))),
+      phase_ns_(static_cast<std::int64_t>(std::llround(scene.compute_phase_s * 1e9))) {
+  trace_.reserve(trace_capacity);
+  acc_.scene = scene.name;
+  acc_.coupling = to_string(scene.model.coupling_mode);
+  acc_.integrator = to_string(scene.model.integrator);
+  acc_.dt_s = scene.model.dt;
+  acc_.warnings = scene.warnings;
+  acc_.trocar_note = scene.trocar_note;
+}
 
-  hal::SimBus bus(scene.bus);
-  SimulatedInstrument instrument(scene.device, scene.trajectory);
-  hal::InstrumentDevice device(scene.device);
-  core::Data data = core::make_data(model);
-  core::Data ghost = core::make_data(model);  // the held body placed at the target, for measurement
-  platform::ControlLoop loop(model, data, bus.controller(), device);
-
-  Trace trace;
-  if (!options.trace_path.empty()) trace.reserve(static_cast<std::size_t>(steps));
-
-  RunSummary s;
-  s.scene = scene.name;
-  s.coupling = to_string(model.coupling_mode);
-  s.integrator = to_string(model.integrator);
-  s.dt_s = model.dt;
-  s.warnings = scene.warnings;
-  s.trocar_note = scene.trocar_note;
-  double free_sq = 0.0;
-  std::size_t next_event = 0;
-
-  const std::int64_t wall0 = platform::monotonic_now_ns();
-  platform::PeriodicTimer timer(period_ns, wall0);
-  for (std::int64_t k = 0; k < steps; ++k) {
-    if (options.realtime) s.realtime_overruns += timer.wait_next().missed_periods;
-    const std::int64_t t = k * period_ns;
-    while (next_event < scene.events.size() &&
-           scene.events[next_event].time_s * 1e9 <= static_cast<double>(t) + 0.5) {
-      core::set_attached_body(model, data, scene.events[next_event].body);
-      ++next_event;
-    }
-    bus.set_time_ns(t);
-    loop.begin_period(t);
-    bus.set_time_ns(t + latency_ns);
-    instrument.poll(bus.device());  // encoders latch at SYNC and answer
-    bus.set_time_ns(t + phase_ns);
-    const platform::PeriodReport& report = loop.end_period(t + phase_ns);
-    if (!report.sample_valid) ++s.invalid_periods;
-
-    // ---- measurements (outside the timed step) ----
-    const int held = data.attached_body;
-    double tool_pen = 0.0, target_pen = 0.0;
-    int tool_contacts = 0;
-    if (held >= 0) {
-      tool_pen = deepest_contact_of(data, held, &tool_contacts);
-      ghost.bodies = data.bodies;
-      ghost.bodies[static_cast<std::size_t>(held)].position = data.target.position;
-      ghost.bodies[static_cast<std::size_t>(held)].orientation = data.target.orientation;
-      core::detect_contacts(model, ghost);
-      target_pen = deepest_contact_of(ghost, held);
-      if (tool_contacts == 0) {
-        const double e = (data.bodies[static_cast<std::size_t>(held)].position - data.target.position).norm();
-        free_sq += e * e;
-        s.tracking_error_free_max_mm = std::max(s.tracking_error_free_max_mm, e * 1e3);
-        ++s.free_steps;
-      }
-    }
-    s.tool_penetration_max_mm = std::max(s.tool_penetration_max_mm, tool_pen * 1e3);
-    s.target_penetration_max_mm = std::max(s.target_penetration_max_mm, target_pen * 1e3);
-    s.any_penetration_max_mm = std::max(s.any_penetration_max_mm, data.max_penetration * 1e3);
-    s.feedback_force_max_n = std::max(s.feedback_force_max_n, data.feedback_wrench.force.norm());
-    s.feedback_torque_max_nm = std::max(s.feedback_torque_max_nm, data.feedback_wrench.torque.norm());
-    const hal::AxisVector& tau = device.last_torques();
-    if (tau.size() > 0) s.axis_torque_max = std::max(s.axis_torque_max, tau.cwiseAbs().maxCoeff());
-    for (int b = 0; b < model.num_bodies(); ++b)
-      if (b != held)
-        s.free_body_speed_max_mps = std::max(s.free_body_speed_max_mps,
-                                             data.bodies[static_cast<std::size_t>(b)].linear_velocity.norm());
-    s.contacts_max = std::max(s.contacts_max, data.num_contacts);
-    s.solver_iterations_max = std::max(s.solver_iterations_max, data.solver_iterations);
-    if (!options.trace_path.empty())
-      trace.push(make_trace_record(data, held, tool_contacts, tool_pen, target_pen, report,
-                                   device.last_torques()));
+void SceneRunner::period() noexcept {
+  const core::Model& model = scene_->model;
+  const std::int64_t t = k_ * period_ns_;
+  while (next_event_ < scene_->events.size() &&
+         scene_->events[next_event_].time_s * 1e9 <= static_cast<double>(t) + 0.5) {
+    core::set_attached_body(model, data_, scene_->events[next_event_].body);
+    ++next_event_;
   }
-  s.wall_time_s = static_cast<double>(platform::monotonic_now_ns() - wall0) * 1e-9;
-  s.steps = steps;
-  s.sim_time_s = static_cast<double>(steps) * model.dt;
-  s.step_time_us = summarize_ns(loop.step_time());
-  s.tracking_error_free_rms_mm = s.free_steps ? std::sqrt(free_sq / s.free_steps) * 1e3 : 0.0;
-  s.rejected_samples = static_cast<std::int64_t>(device.counters().values_rejected);
-  s.contact_overflow = data.contact_overflow_steps;
-  s.nonfinite_steps = data.nonfinite_steps;
-  s.nan_detected = data.nonfinite_steps > 0;
-  for (const auto& b : data.bodies)
+  bus_.set_time_ns(t);
+  loop_.begin_period(t);
+  bus_.set_time_ns(t + scene_->bus.latency_ns);
+  instrument_.poll(bus_.device());  // encoders latch at SYNC and answer
+  bus_.set_time_ns(t + phase_ns_);
+  const platform::PeriodReport& report = loop_.end_period(t + phase_ns_);
+  ++k_;
+
+  // ---- measurements (outside the timed step) ----
+  RunSummary& s = acc_;
+  if (!report.sample_valid) ++s.invalid_periods;
+  const int held = data_.attached_body;
+  double tool_pen = 0.0, target_pen = 0.0;
+  int tool_contacts = 0;
+  if (held >= 0) {
+    const auto h = static_cast<std::size_t>(held);
+    tool_pen = deepest_contact_of(data_, held, &tool_contacts);
+    ghost_.bodies = data_.bodies;  // same size: no allocation
+    ghost_.bodies[h].position = data_.target.position;
+    ghost_.bodies[h].orientation = data_.target.orientation;
+    core::detect_contacts(model, ghost_);
+    target_pen = deepest_contact_of(ghost_, held);
+    if (tool_contacts == 0) {
+      const double e = (data_.bodies[h].position - data_.target.position).norm();
+      free_sq_ += e * e;
+      s.tracking_error_free_max_mm = std::max(s.tracking_error_free_max_mm, e * 1e3);
+      ++s.free_steps;
+    }
+  }
+  s.tool_penetration_max_mm = std::max(s.tool_penetration_max_mm, tool_pen * 1e3);
+  s.target_penetration_max_mm = std::max(s.target_penetration_max_mm, target_pen * 1e3);
+  s.any_penetration_max_mm = std::max(s.any_penetration_max_mm, data_.max_penetration * 1e3);
+  s.feedback_force_max_n = std::max(s.feedback_force_max_n, data_.feedback_wrench.force.norm());
+  s.feedback_torque_max_nm = std::max(s.feedback_torque_max_nm, data_.feedback_wrench.torque.norm());
+  const hal::AxisVector& tau = device_.last_torques();
+  if (tau.size() > 0) s.axis_torque_max = std::max(s.axis_torque_max, tau.cwiseAbs().maxCoeff());
+  for (int b = 0; b < model.num_bodies(); ++b)
+    if (b != held)
+      s.free_body_speed_max_mps = std::max(
+          s.free_body_speed_max_mps, data_.bodies[static_cast<std::size_t>(b)].linear_velocity.norm());
+  s.contacts_max = std::max(s.contacts_max, data_.num_contacts);
+  s.solver_iterations_max = std::max(s.solver_iterations_max, data_.solver_iterations);
+  trace_.push(make_trace_record(data_, held, tool_contacts, tool_pen, target_pen, report, tau));
+}
+
+RunSummary SceneRunner::summary() const {
+  RunSummary s = acc_;
+  s.steps = k_;
+  s.sim_time_s = static_cast<double>(k_) * scene_->model.dt;
+  s.step_time_us = summarize_ns(loop_.step_time());
+  s.tracking_error_free_rms_mm = s.free_steps ? std::sqrt(free_sq_ / static_cast<double>(s.free_steps)) * 1e3 : 0.0;
+  s.rejected_samples = static_cast<std::int64_t>(device_.counters().values_rejected);
+  s.contact_overflow = data_.contact_overflow_steps;
+  s.nonfinite_steps = data_.nonfinite_steps;
+  s.nan_detected = data_.nonfinite_steps > 0;
+  for (const auto& b : data_.bodies)
     s.nan_detected = s.nan_detected || !b.position.allFinite() || !b.orientation.coeffs().allFinite();
   for (auto dir : {hal::SimBus::Direction::kControllerToDevice, hal::SimBus::Direction::kDeviceToController}) {
-    s.bus_frames_dropped += static_cast<std::int64_t>(bus.link_counters(dir).dropped);
-    s.bus_frames_corrupted += static_cast<std::int64_t>(bus.link_counters(dir).corrupted());
+    s.bus_frames_dropped += static_cast<std::int64_t>(bus_.link_counters(dir).dropped);
+    s.bus_frames_corrupted += static_cast<std::int64_t>(bus_.link_counters(dir).corrupted());
   }
-  if (!options.trace_path.empty()) trace.write_csv(options.trace_path);
+  return s;
+}
+
+RunSummary run_scene(const Scene& scene, const RunOptions& options) {
+  const double duration = options.duration_s >= 0.0 ? options.duration_s : scene.duration_s;
+  const auto steps = static_cast<std::int64_t>(std::llround(duration / scene.model.dt));
+  SceneRunner runner(scene, options.trace_path.empty() ? 0 : static_cast<std::size_t>(steps));
+  std::int64_t overruns = 0;
+  const std::int64_t wall0 = platform::monotonic_now_ns();
+  platform::PeriodicTimer timer(static_cast<std::int64_t>(std::llround(scene.model.dt * 1e9)), wall0);
+  for (std::int64_t k = 0; k < steps; ++k) {
+    if (options.realtime) overruns += timer.wait_next().missed_periods;
+    runner.period();
+  }
+  RunSummary s = runner.summary();
+  s.wall_time_s = static_cast<double>(platform::monotonic_now_ns() - wall0) * 1e-9;
+  s.realtime_overruns = overruns;
+  if (!options.trace_path.empty()) runner.trace().write_csv(options.trace_path);
   return s;
 }
 

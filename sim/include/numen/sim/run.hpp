@@ -9,7 +9,15 @@
 #include <string>
 #include <vector>
 
+#include <memory>
+
+#include "numen/core/data.hpp"
+#include "numen/hal/instrument_device.hpp"
+#include "numen/hal/sim_bus.hpp"
+#include "numen/platform/control_loop.hpp"
 #include "numen/sim/scene.hpp"
+#include "numen/sim/simulated_instrument.hpp"
+#include "numen/sim/trace.hpp"
 
 namespace numen::sim {
 
@@ -66,7 +74,52 @@ struct RunSummary {
   std::string trocar_note;
 };
 
-/// Runs `scene`. Throws std::runtime_error if the trace cannot be written.
+/// A scene wired for a run: SimBus, simulated instrument on its device port,
+/// InstrumentDevice and ControlLoop on its controller port, core Data, the
+/// measurement state and the trace storage. The constructor allocates
+/// everything; period() never allocates, throws or locks (tested), so the
+/// same loop can be driven by a test, a benchmark or `numen run`.
+class SceneRunner {
+ public:
+  /// `scene` must outlive the runner. `trace_capacity` records are reserved.
+  explicit SceneRunner(const Scene& scene, std::size_t trace_capacity = 0);
+
+  /// Runs control period k (bus time k·dt): tool-switching events due,
+  /// SYNC, the instrument's answer, the controller's read–check–step–write,
+  /// then the measurements and one trace record.
+  void period() noexcept;
+  /// Periods run so far.
+  std::int64_t periods() const noexcept { return k_; }
+
+  /// The summary of the periods run so far (wall time and realtime overruns
+  /// are the caller's, see run_scene).
+  RunSummary summary() const;
+
+  const core::Data& data() const noexcept { return data_; }
+  const hal::InstrumentDevice& device() const noexcept { return device_; }
+  const SimulatedInstrument& instrument() const noexcept { return instrument_; }
+  hal::SimBus& bus() noexcept { return bus_; }
+  const Trace& trace() const noexcept { return trace_; }
+
+ private:
+  const Scene* scene_;
+  hal::SimBus bus_;
+  SimulatedInstrument instrument_;
+  hal::InstrumentDevice device_;
+  core::Data data_;
+  core::Data ghost_;  // the held body placed at the target, for measurement
+  platform::ControlLoop loop_;
+  Trace trace_;
+  std::int64_t k_ = 0;
+  std::size_t next_event_ = 0;
+  std::int64_t period_ns_;
+  std::int64_t phase_ns_;
+  RunSummary acc_;     // running maxima and counts
+  double free_sq_ = 0.0;
+};
+
+/// Runs `scene` for options.duration_s (or the scene's duration).
+/// Throws std::runtime_error if the trace cannot be written.
 RunSummary run_scene(const Scene& scene, const RunOptions& options);
 
 /// Readable multi-line summary.
