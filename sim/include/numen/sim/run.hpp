@@ -100,6 +100,8 @@ class SceneRunner {
   const SimulatedInstrument& instrument() const noexcept { return instrument_; }
   hal::SimBus& bus() noexcept { return bus_; }
   const Trace& trace() const noexcept { return trace_; }
+  /// What the control loop did in the last period (step wall time included).
+  const platform::PeriodReport& last_report() const noexcept { return loop_.last_report(); }
 
  private:
   const Scene* scene_;
