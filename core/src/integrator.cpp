@@ -167,52 +167,39 @@ void build_implicit_system(const Model& model, Data& data) noexcept {
   for (std::size_t i = 0; i < n; ++i) s.block_llt[i].compute(s.block[i]);
 }
 
-void apply_implicit_system(const Model& model, const Data& data, std::span<const Vec6> in,
+void apply_implicit_system(const Model& /*model*/, const Data& data, std::span<const Vec6> in,
                            std::span<Vec6> out) noexcept {
+  // A = blockdiag(block[i]) + the off-diagonal blocks of body–body contacts.
+  // block[i] (build_implicit_system) already holds M_i (or 0 for a first-order
+  // body), the coupling terms and every contact's diagonal contribution
+  // G_iᵀ W G_i, so only the cross terms −G_aᵀ W G_b remain per body–body
+  // contact: static contacts cost nothing per iteration.
   const SolverScratch& s = data.solver;
-  const double h = model.dt;
-  const double h2 = h * h;
   const std::size_t n = data.bodies.size();
   for (std::size_t i = 0; i < n; ++i) {
-    const int b = static_cast<int>(i);
-    if (!s.in_solve[i]) {
-      out[i].setZero();
-      continue;
-    }
-    if (is_first_order(s, b)) {
-      out[i].setZero();
+    if (s.in_solve[i]) {
+      out[i].noalias() = s.block[i] * in[i];
     } else {
-      out[i].head<3>() = model.bodies[i].mass * in[i].head<3>();
-      out[i].tail<3>().noalias() = s.inertia_world[i] * in[i].tail<3>();
-    }
-    if (b == s.coupled_body) {
-      const CouplingGains& g = model.bodies[i].coupling;
-      out[i].head<3>() += (h * g.gamma_t + h2 * g.k_t) * in[i].head<3>();
-      out[i].tail<3>() += (h * g.gamma_r + h2 * g.k_r) * in[i].tail<3>();
+      out[i].setZero();
     }
   }
   const int nc = active_contact_count(data);
   for (int c = 0; c < nc; ++c) {
+    const Contact& ct = data.contacts[static_cast<std::size_t>(c)];
+    if (ct.body_b < 0) continue;
     const ContactTerm& t = s.contact_terms[static_cast<std::size_t>(c)];
     if (!t.active) continue;
-    const Contact& ct = data.contacts[static_cast<std::size_t>(c)];
     const auto a = static_cast<std::size_t>(ct.body_a);
-    const bool a_in = s.in_solve[a] != 0;
-    const bool b_in = ct.body_b >= 0 && s.in_solve[static_cast<std::size_t>(ct.body_b)] != 0;
-    if (!a_in && !b_in) continue;
-    Vec3 u = Vec3::Zero();
-    if (a_in) u += point_velocity(in[a], t.r_a);
-    if (b_in) u -= point_velocity(in[static_cast<std::size_t>(ct.body_b)], t.r_b);
-    const Vec3 w = t.weight * u;
-    if (a_in) {
-      out[a].head<3>() += w;
-      out[a].tail<3>() += t.r_a.cross(w);
-    }
-    if (b_in) {
-      const auto b = static_cast<std::size_t>(ct.body_b);
-      out[b].head<3>() -= w;
-      out[b].tail<3>() -= t.r_b.cross(w);
-    }
+    const auto b = static_cast<std::size_t>(ct.body_b);
+    if (!s.in_solve[a] || !s.in_solve[b]) continue;
+    // u = G_a in_a − G_b in_b; the cross terms are out_a −= G_aᵀ W G_b in_b and
+    // out_b −= G_bᵀ W G_a in_a.
+    const Vec3 wa = t.weight * point_velocity(in[a], t.r_a);
+    const Vec3 wb = t.weight * point_velocity(in[b], t.r_b);
+    out[a].head<3>() -= wb;
+    out[a].tail<3>() -= t.r_a.cross(wb);
+    out[b].head<3>() -= wa;
+    out[b].tail<3>() -= t.r_b.cross(wa);
   }
 }
 
