@@ -1,0 +1,13 @@
+#!/usr/bin/env bash
+# Regenerates the figures of docs/results.md. Run from the project root after
+# building (README). Needs python3-matplotlib (apt-get install python3-matplotlib).
+set -euo pipefail
+out=docs/figures
+tmp=$(mktemp -d)
+./build/numen run --trace "$tmp/default.csv" > /dev/null
+./build/numen run sim/scenes/construction.toml --trace "$tmp/god.csv" > /dev/null
+./build/numen run sim/scenes/construction.toml --coupling direct --trace "$tmp/direct.csv" > /dev/null
+/usr/bin/python3 $out/plot_runs.py default "$tmp/default.csv" $out/default_run.png
+/usr/bin/python3 $out/plot_runs.py construction "$tmp/god.csv" "$tmp/direct.csv" $out/construction.png
+rm -rf "$tmp"
+echo "wrote $out/default_run.png $out/construction.png"
