@@ -141,7 +141,7 @@ void parse_sphere_grids(const TomlTable& t, std::vector<Sphere>& out) {
 /// [ellipsoid]: spheres on a cubic lattice of pitch `spacing` whose centres
 /// lie inside the ellipsoid of semi-axes `radii` shrunk by `sphere_radius`,
 /// so the union of spheres approximates the solid ellipsoid (organ model).
-void parse_ellipsoid(const TomlTable& t, std::vector<Sphere>& out) {
+void parse_ellipsoid(const TomlTable& t, std::vector<Sphere>& out, std::vector<std::string>& warnings) {
   auto e = t.table("ellipsoid");
   if (!e) return;
   e->allow_only({"center", "radii", "spacing", "sphere_radius"});
@@ -150,6 +150,13 @@ void parse_ellipsoid(const TomlTable& t, std::vector<Sphere>& out) {
   if (!(radii.minCoeff() > 0.0)) e->fail("radii", "semi-axes must be > 0");
   const double pitch = e->number_in("spacing", 1e-6, kInf, std::nullopt);
   const double r = e->number_in("sphere_radius", 1e-6, kInf, std::nullopt);
+  if (r < 0.5 * std::sqrt(3.0) * pitch) {
+    std::ostringstream os;
+    os << e->file() << ":" << e->node("sphere_radius")->source().begin.line << ": "
+       << e->key_path("sphere_radius") << ": " << r << " m < spacing·√3/2 = " << 0.5 * std::sqrt(3.0) * pitch
+       << " m leaves holes at the lattice cell centres (the sphere set is porous)";
+    warnings.push_back(os.str());
+  }
   const Vec3 inner = (radii.array() - r).matrix();
   if (!(inner.minCoeff() > 0.0)) e->fail("sphere_radius", "must be smaller than every semi-axis");
   const Eigen::Vector3i n = (inner / pitch).array().floor().cast<int>().matrix();
@@ -226,8 +233,11 @@ double parse_damping(const TomlTable& c, std::string_view damping_key, std::stri
   if (stiffness > 0.0) {
     const double rule = gamma / std::sqrt(inertia * stiffness);
     if (rule < 1.4 - 1e-9 || rule > 2.0 + 1e-9) {
+      const std::string_view given = c.has(damping_key) ? damping_key : ratio_key;
       std::ostringstream os;
-      os << c.file() << ": " << c.key_path(damping_key) << ": γ/√(m k) = " << rule
+      os << c.file();
+      if (const toml::node* n = c.node(given)) os << ":" << n->source().begin.line;
+      os << ": " << c.key_path(given) << ": γ/√(m k) = " << rule
          << " is outside the paper's 1.4–2 (damping ratio 0.7–1)";
       warnings.push_back(os.str());
     }
@@ -284,7 +294,7 @@ void parse_bodies(const TomlTable& root, core::Model& m, std::vector<std::string
 /// Rotation taking +z onto the unit vector `dir`.
 Quat z_onto(const Vec3& dir) { return Quat::FromTwoVectors(Vec3::UnitZ(), dir.normalized()); }
 
-void parse_obstacles(const TomlTable& root, core::Model& m) {
+void parse_obstacles(const TomlTable& root, core::Model& m, std::vector<std::string>& warnings) {
   for (const TomlTable& t : root.tables("obstacle")) {
     core::Obstacle o;
     o.name = t.string("name");
@@ -327,7 +337,7 @@ void parse_obstacles(const TomlTable& root, core::Model& m) {
       o.pose.orientation = t.quaternion_or("orientation", Quat::Identity());
       const std::size_t begin = m.static_spheres.size();
       parse_sphere_list(t, "spheres", m.static_spheres);
-      parse_ellipsoid(t, m.static_spheres);
+      parse_ellipsoid(t, m.static_spheres, warnings);
       parse_sphere_lines(t, m.static_spheres);
       parse_sphere_grids(t, m.static_spheres);
       if (m.static_spheres.size() == begin)
@@ -364,7 +374,7 @@ core::Model parse_scene_model(const TomlTable& root, std::vector<std::string>& w
   }
   parse_materials(root, m);
   parse_bodies(root, m, warnings);
-  parse_obstacles(root, m);
+  parse_obstacles(root, m, warnings);
   m.initial_attached_body = -1;  // set by the device section (scene.cpp), which finalizes
   return m;
 }

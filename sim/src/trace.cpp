@@ -60,6 +60,7 @@ void Trace::write_csv(const std::string& path) const {
     for (int i = 0; i < axes; ++i) out << ',' << r.axis_torque[static_cast<std::size_t>(i)];
     out << ',' << r.step_time_us << ',' << r.solver_iterations << '\n';
   }
+  out.flush();  // a write error of the last buffered block must not pass silently
   if (!out) throw std::runtime_error(path + ": error while writing the trace");
 }
 

@@ -1,0 +1,290 @@
+// Tests of platform/control_loop: one control period on a SimBus against an
+// emulated instrument — SYNC out, encoder answers in, checked target into
+// core::Data, one core::step, torque RPDOs out; zero torque before the device
+// is ready or while no body is held; failures counted; no allocation.
+#include "numen/platform/control_loop.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "alloc_counter.hpp"
+#include "numen/core/data.hpp"
+#include "numen/core/model.hpp"
+#include "numen/core/step.hpp"
+#include "numen/hal/axis.hpp"
+#include "numen/hal/canopen.hpp"
+#include "numen/hal/device_config.hpp"
+#include "numen/hal/device_emulator.hpp"
+#include "numen/hal/instrument_device.hpp"
+#include "numen/hal/sim_bus.hpp"
+
+namespace {
+
+using numen::core::Pose;
+using numen::core::Quat;
+using numen::core::Vec3;
+using numen::hal::AxisVector;
+using numen::hal::CanFrame;
+using numen::hal::IoStatus;
+using numen::hal::SimBus;
+using numen::platform::ControlLoop;
+using numen::platform::PeriodReport;
+constexpr std::int64_t kMs = 1'000'000;
+constexpr std::int64_t kLatency = 100'000;
+constexpr std::int64_t kPhase = 250'000;
+
+numen::hal::DeviceConfig trocar_config() {
+  numen::hal::DeviceConfig c = numen::hal::make_default_trocar_config(1);
+  c.trocar.point = Vec3(0.0, 0.0, 0.2);
+  c.trocar.orientation = Quat(Eigen::AngleAxisd(std::numbers::pi, Vec3::UnitX()));
+  c.control_period_s = 1e-3;
+  return c;
+}
+
+numen::hal::SimBusSettings bus_settings() {
+  numen::hal::SimBusSettings s;
+  s.latency_ns = kLatency;
+  return s;
+}
+
+/// One body (no spheres), coupling gains, virtual-coupling feedback, no obstacles.
+numen::core::Model small_model() {
+  numen::core::Model m;
+  m.dt = 1e-3;
+  m.gravity = Vec3::Zero();
+  m.material_names = {"default"};
+  m.material_pairs = {numen::core::MaterialPair{}};
+  numen::core::BodyModel b;
+  b.name = "tool";
+  b.mass = 0.1;
+  b.inertia_body = 1e-4 * numen::core::Mat3::Identity();
+  b.coupling.k_t = 100.0;
+  b.coupling.gamma_t = numen::core::damping_from_ratio(0.85, b.mass, b.coupling.k_t);
+  b.coupling.k_r = 0.1;
+  b.coupling.gamma_r = numen::core::damping_from_ratio(0.85, 1e-4, b.coupling.k_r);
+  m.bodies.push_back(b);
+  m.feedback.k_t = 100.0;
+  m.feedback.gamma_t = 0.1;
+  m.feedback.max_force = 5.0;
+  m.feedback.max_torque = 0.5;
+  m.initial_attached_body = 0;
+  const std::string err = numen::core::finalize_model(m);
+  EXPECT_TRUE(err.empty()) << err;
+  return m;
+}
+
+const double kQ[5] = {0.1, -0.2, 0.1, 0.5, 0.3};
+
+/// Bus, emulated instrument, controller-side device, model, data and the loop.
+struct Rig {
+  numen::hal::DeviceConfig config = trocar_config();
+  SimBus bus{bus_settings()};
+  numen::hal::DeviceEmulator emulator{config};
+  numen::hal::InstrumentDevice device{config};
+  numen::core::Model model = small_model();
+  numen::core::Data data = numen::core::make_data(model);
+  ControlLoop loop{model, data, bus.controller(), device};
+
+  Rig() { emulator.set_axis_values(kQ); }
+
+  /// Period k as SceneRunner runs it; the emulator then takes the torque RPDOs.
+  const PeriodReport& period(std::int64_t k) {
+    const std::int64_t t = k * kMs;
+    bus.set_time_ns(t);
+    loop.begin_period(t);
+    bus.set_time_ns(t + kLatency);
+    emulator.poll(bus.device());
+    bus.set_time_ns(t + kPhase);
+    const PeriodReport& r = loop.end_period(t + kPhase);
+    bus.set_time_ns(t + kPhase + kLatency);
+    emulator.poll(bus.device());  // torque RPDOs
+    return r;
+  }
+
+  /// Target the device should report: forward kinematics of the quantised axes.
+  Pose expected_target() const {
+    AxisVector q(5);
+    for (int i = 0; i < 5; ++i) {
+      const auto& a = config.axes[static_cast<std::size_t>(i)];
+      q[i] = numen::hal::counts_to_value(a, numen::hal::value_to_counts(a, kQ[i]));
+    }
+    return device.kinematics().forward(q);
+  }
+};
+
+TEST(ControlLoop, BeginPeriodWritesASyncWithACounter) {
+  Rig rig;
+  rig.bus.set_time_ns(5 * kMs);
+  rig.loop.begin_period(5 * kMs);
+  EXPECT_EQ(rig.bus.pending(SimBus::Direction::kControllerToDevice), 1u);
+  rig.bus.set_time_ns(5 * kMs + kLatency);
+  CanFrame f;
+  ASSERT_EQ(rig.bus.device().read(f), IoStatus::kOk);
+  EXPECT_TRUE(numen::hal::is_sync(f));
+  EXPECT_EQ(f.id, 0x080u);
+  ASSERT_EQ(f.len, 1);
+  EXPECT_EQ(f.data[0], 1);
+  // The counter runs 1..240 and wraps to 1.
+  for (int k = 2; k <= 241; ++k) {
+    const std::int64_t t = (4 + k) * kMs;
+    rig.bus.set_time_ns(t);
+    rig.loop.begin_period(t);
+    rig.bus.set_time_ns(t + kLatency);
+    ASSERT_EQ(rig.bus.device().read(f), IoStatus::kOk);
+    EXPECT_EQ(f.timestamp_ns, t + kLatency);
+    ASSERT_TRUE(numen::hal::is_sync(f));
+    ASSERT_EQ(f.data[0], k <= 240 ? k : 1) << k;
+  }
+  EXPECT_EQ(rig.loop.counters().sync_write_failures, 0u);
+}
+
+TEST(ControlLoop, EndPeriodSetsTheTargetFromTheDeviceAndStepsOnce) {
+  Rig rig;
+  ASSERT_EQ(rig.data.step_count, 0);
+  const PeriodReport& r = rig.period(0);
+  EXPECT_EQ(r.frames_read, 5);
+  EXPECT_TRUE(r.sample_valid);
+  EXPECT_TRUE(r.target_ready);
+  EXPECT_EQ(r.command_status, IoStatus::kOk);
+  EXPECT_EQ(rig.data.step_count, 1);
+  EXPECT_DOUBLE_EQ(rig.data.time, rig.model.dt);
+  const Pose expected = rig.expected_target();
+  EXPECT_LT((rig.data.target.position - expected.position).norm(), 1e-12);
+  EXPECT_LT(rig.data.target.orientation.angularDistance(expected.orientation), 1e-9);
+  EXPECT_EQ(rig.data.target.position, rig.device.last_sample().target.position);
+  EXPECT_EQ(rig.loop.counters().periods, 1u);
+  EXPECT_EQ(rig.loop.counters().periods_zero_torque, 0u);
+  EXPECT_EQ(rig.loop.step_time().count(), 1);
+  EXPECT_GE(r.step_ns, 0);
+
+  // The body was pulled toward the target by the coupling spring.
+  const Vec3 before = rig.model.bodies[0].initial_pose.position;
+  const Vec3 after = rig.data.bodies[0].position;
+  EXPECT_GT((after - before).dot(expected.position - before), 0.0);
+
+  for (int k = 1; k < 10; ++k) rig.period(k);
+  EXPECT_EQ(rig.data.step_count, 10);
+  EXPECT_EQ(rig.loop.counters().periods, 10u);
+  EXPECT_EQ(rig.loop.step_time().count(), 10);
+  EXPECT_EQ(rig.device.counters().values_rejected, 0u);
+}
+
+TEST(ControlLoop, TorqueFramesReachTheEmulator) {
+  Rig rig;
+  rig.period(0);
+  // The god-object is ~0.1 m from the target: the feedback is saturated at 5 N.
+  EXPECT_NEAR(rig.data.feedback_wrench.force.norm(), rig.model.feedback.max_force, 1e-9);
+  // Three drives (pivot_x, pivot_y, depth) each got one RPDO.
+  EXPECT_EQ(rig.emulator.counters().rpdos, 3u);
+  double largest = 0.0;
+  for (int i = 0; i < 5; ++i) {
+    const auto& a = rig.config.axes[static_cast<std::size_t>(i)];
+    const double sent = rig.device.last_torques()[i];
+    const double got = rig.emulator.last_torques()[i];
+    EXPECT_NEAR(got, sent, a.has_drive() ? 0.5e-3 * a.rated_torque + 1e-12 : 0.0) << "axis " << i;
+    EXPECT_EQ(rig.emulator.last_torque_per_mille()[static_cast<std::size_t>(i)],
+              rig.device.last_torque_per_mille()[static_cast<std::size_t>(i)]);
+    largest = std::max(largest, std::abs(got));
+  }
+  EXPECT_GT(largest, 0.01) << "no torque reached the drives";
+  // τ = Jᵀ w at the sampled axes.
+  const AxisVector tau = numen::hal::torques_from_wrench(
+      rig.device.kinematics().jacobian(rig.device.last_sample().q), rig.data.feedback_wrench);
+  for (int i = 0; i < 3; ++i) {
+    const auto& a = rig.config.axes[static_cast<std::size_t>(i)];
+    EXPECT_NEAR(rig.device.last_torques()[i], std::clamp(tau[i], -a.max_torque, a.max_torque),
+                0.5e-3 * a.rated_torque + 1e-12)
+        << "axis " << i;
+  }
+}
+
+TEST(ControlLoop, ZeroTorqueAndTargetUntouchedBeforeTheDeviceIsReady) {
+  Rig rig;
+  rig.emulator.set_responding(false);
+  Pose sentinel;
+  sentinel.position = Vec3(1.0, 2.0, 3.0);
+  sentinel.orientation = Quat(Eigen::AngleAxisd(0.4, Vec3::UnitZ()));
+  rig.data.target = sentinel;
+  for (int k = 0; k < 3; ++k) {
+    const PeriodReport& r = rig.period(k);
+    EXPECT_FALSE(r.target_ready) << k;
+    EXPECT_FALSE(r.sample_valid) << k;
+    EXPECT_EQ(r.frames_read, 0) << k;
+    EXPECT_EQ(rig.data.target.position, sentinel.position) << k;
+    EXPECT_EQ(rig.data.target.orientation.coeffs(), sentinel.orientation.coeffs()) << k;
+    EXPECT_EQ(rig.loop.counters().periods_zero_torque, static_cast<std::uint64_t>(k + 1));
+    EXPECT_EQ(rig.data.step_count, k + 1) << "the world still steps";
+  }
+  EXPECT_EQ(rig.emulator.counters().syncs_ignored, 3u);
+  // Zero torque was sent to every drive each period.
+  EXPECT_EQ(rig.emulator.counters().rpdos, 9u);
+  for (int i = 0; i < 5; ++i) EXPECT_EQ(rig.emulator.last_torque_per_mille()[static_cast<std::size_t>(i)], 0);
+
+  // The device answers: the target is set, torques flow.
+  rig.emulator.set_responding(true);
+  const PeriodReport& r = rig.period(3);
+  EXPECT_TRUE(r.target_ready);
+  EXPECT_EQ(rig.loop.counters().periods_zero_torque, 3u);
+  EXPECT_LT((rig.data.target.position - rig.expected_target().position).norm(), 1e-12);
+  EXPECT_EQ(rig.emulator.counters().rpdos, 12u);
+}
+
+TEST(ControlLoop, ZeroTorqueWhileNoBodyIsHeld) {
+  Rig rig;
+  numen::core::set_attached_body(rig.model, rig.data, -1);
+  for (int k = 0; k < 4; ++k) rig.period(k);
+  EXPECT_EQ(rig.loop.counters().periods_zero_torque, 4u);
+  EXPECT_TRUE(rig.loop.last_report().target_ready);
+  for (int i = 0; i < 5; ++i) EXPECT_EQ(rig.emulator.last_torques()[i], 0.0) << i;
+  // Holding again: torque is commanded.
+  numen::core::set_attached_body(rig.model, rig.data, 0);
+  rig.period(4);
+  EXPECT_EQ(rig.loop.counters().periods_zero_torque, 4u);
+  EXPECT_GT(rig.emulator.last_torques().cwiseAbs().maxCoeff(), 0.0);
+}
+
+TEST(ControlLoop, BusOffIsCountedNotFatal) {
+  Rig rig;
+  rig.period(0);
+  rig.bus.set_state(numen::hal::BusState::kBusOff);
+  const std::int64_t steps = rig.data.step_count;
+  const Vec3 held_target = rig.data.target.position;
+  // Nothing gets through: the last good target is held (and counts as valid
+  // while younger than max_sample_age = 3 periods), then the sample goes stale.
+  for (int k = 1; k <= 5; ++k) {
+    const PeriodReport& r = rig.period(k);
+    EXPECT_EQ(r.frames_read, 0) << k;
+    EXPECT_EQ(r.command_status, IoStatus::kError) << k;
+    EXPECT_TRUE(r.target_ready) << k;
+  }
+  EXPECT_FALSE(rig.loop.last_report().sample_valid);
+  EXPECT_GT(rig.device.counters().rejected_stale, 0u);
+  EXPECT_EQ(rig.data.target.position, held_target);
+  EXPECT_EQ(rig.loop.counters().sync_write_failures, 5u);
+  EXPECT_EQ(rig.loop.counters().command_failures, 5u);
+  EXPECT_EQ(rig.data.step_count, steps + 5) << "the world keeps stepping";
+  rig.bus.set_state(numen::hal::BusState::kOk);
+  rig.period(6);
+  EXPECT_EQ(rig.loop.counters().command_failures, 5u);
+  EXPECT_EQ(rig.loop.counters().sync_write_failures, 5u);
+  EXPECT_TRUE(rig.loop.last_report().sample_valid);
+}
+
+TEST(ControlLoop, PeriodsNeverAllocate) {
+  Rig rig;
+  rig.period(0);  // warm-up outside the guard
+  std::int64_t count = -1;
+  {
+    numen::test::AllocationGuard guard;
+    for (int k = 1; k <= 2000; ++k) rig.period(k);
+    count = guard.count();
+  }
+  EXPECT_EQ(count, 0);
+  EXPECT_EQ(rig.data.step_count, 2001);
+  EXPECT_EQ(rig.device.counters().samples_valid, 2001u);
+}
+
+}  // namespace

@@ -1,0 +1,372 @@
+// Tests of sim/run: the shipped scenes run end to end through the simulated
+// bus, the instrument, the controller's checks and core::step (SceneRunner),
+// with the god-object staying on the surface while the hand goes through it;
+// period() never allocates; runs are bit-for-bit deterministic; corrupted and
+// lost bus frames are rejected without harm.
+#include "numen/sim/run.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <bit>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <memory>
+#include <string>
+
+#include "alloc_counter.hpp"
+#include "numen/core/data.hpp"
+#include "numen/sim/scene.hpp"
+
+namespace {
+
+using numen::core::CouplingMode;
+using numen::core::Vec3;
+using numen::sim::RunSummary;
+using numen::sim::Scene;
+using numen::sim::SceneRunner;
+using numen::sim::TraceRecord;
+
+std::string construction_path() { return std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/construction.toml"; }
+
+/// The shipped scenes, loaded once for the whole suite.
+const Scene& default_scene() {
+  static const Scene s = numen::sim::load_scene(numen::sim::default_scene_path());
+  return s;
+}
+const Scene& construction_scene() {
+  static const Scene s = numen::sim::load_scene(construction_path());
+  return s;
+}
+
+std::int64_t periods_for(const Scene& s, double seconds) {
+  return static_cast<std::int64_t>(std::llround(seconds / s.model.dt));
+}
+
+double wall_s(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+bool same_bits(double a, double b) { return std::bit_cast<std::uint64_t>(a) == std::bit_cast<std::uint64_t>(b); }
+bool same_bits(const Vec3& a, const Vec3& b) { return std::memcmp(a.data(), b.data(), sizeof(double) * 3) == 0; }
+bool same_bits(const numen::core::Quat& a, const numen::core::Quat& b) {
+  return std::memcmp(a.coeffs().data(), b.coeffs().data(), sizeof(double) * 4) == 0;
+}
+
+/// Every field of two trace records, bit for bit, except the wall-clock step time.
+bool same_record(const TraceRecord& a, const TraceRecord& b) {
+  bool same = same_bits(a.time_s, b.time_s) && a.attached_body == b.attached_body &&
+              a.sample_valid == b.sample_valid && same_bits(a.target.position, b.target.position) &&
+              same_bits(a.target.orientation, b.target.orientation) &&
+              same_bits(a.tool.position, b.tool.position) && same_bits(a.tool.orientation, b.tool.orientation) &&
+              a.contacts == b.contacts && a.tool_contacts == b.tool_contacts &&
+              same_bits(a.tool_penetration_mm, b.tool_penetration_mm) &&
+              same_bits(a.target_penetration_mm, b.target_penetration_mm) &&
+              same_bits(a.feedback.force, b.feedback.force) && same_bits(a.feedback.torque, b.feedback.torque) &&
+              a.num_axes == b.num_axes && a.solver_iterations == b.solver_iterations;
+  for (std::size_t i = 0; i < a.axis_torque.size(); ++i) same = same && same_bits(a.axis_torque[i], b.axis_torque[i]);
+  return same;
+}
+
+bool all_finite(const TraceRecord& r) {
+  return r.target.position.allFinite() && r.target.orientation.coeffs().allFinite() &&
+         r.tool.position.allFinite() && r.tool.orientation.coeffs().allFinite() &&
+         r.feedback.force.allFinite() && r.feedback.torque.allFinite() &&
+         std::isfinite(r.tool_penetration_mm) && std::isfinite(r.target_penetration_mm);
+}
+
+void print_summary(const char* what, const RunSummary& s, double wall) {
+  std::printf(
+      "[   info   ] %s: %lld steps in %.2f s wall; target pen %.2f mm, tool pen %.3f mm, "
+      "free rms %.3f mm (max %.3f, %lld steps), feedback max %.2f N, rejected %lld, invalid %lld, "
+      "corrupted %lld, dropped %lld, step median %.1f us\n",
+      what, static_cast<long long>(s.steps), wall, s.target_penetration_max_mm, s.tool_penetration_max_mm,
+      s.tracking_error_free_rms_mm, s.tracking_error_free_max_mm, static_cast<long long>(s.free_steps),
+      s.feedback_force_max_n, static_cast<long long>(s.rejected_samples), static_cast<long long>(s.invalid_periods),
+      static_cast<long long>(s.bus_frames_corrupted), static_cast<long long>(s.bus_frames_dropped),
+      s.step_time_us.median);
+}
+
+// ---------------------------------------------------------------- default scene end to end
+
+TEST(RunDefaultScene, GodObjectStaysOnTheSurfaceWhileTheHandGoesThrough) {
+  const Scene& scene = default_scene();
+  const std::int64_t n = periods_for(scene, 15.0);
+  SceneRunner runner(scene, static_cast<std::size_t>(n));
+  const auto t0 = std::chrono::steady_clock::now();
+  for (std::int64_t k = 0; k < n; ++k) runner.period();
+  const double wall = wall_s(t0);
+  const RunSummary s = runner.summary();
+  print_summary("default 15 s", s, wall);
+
+  EXPECT_EQ(runner.periods(), n);
+  EXPECT_EQ(s.steps, n);
+  EXPECT_NEAR(s.sim_time_s, 15.0, 1e-9);
+  EXPECT_EQ(runner.data().step_count, n);
+  EXPECT_EQ(s.scene, "default");
+  EXPECT_EQ(s.coupling, "god-object");
+
+  // The hand (the instrument placed at the device target) goes deep into the
+  // organ and the tissue; the god-object stays on the surface.
+  EXPECT_GE(s.target_penetration_max_mm, 10.0);
+  EXPECT_LE(s.tool_penetration_max_mm, 2.0);
+  EXPECT_GT(s.contacts_max, 0);
+  EXPECT_EQ(s.contact_overflow, 0);
+
+  EXPECT_FALSE(s.nan_detected);
+  EXPECT_EQ(s.nonfinite_steps, 0);
+  EXPECT_EQ(s.rejected_samples, 0);
+  EXPECT_EQ(s.invalid_periods, 0);
+  EXPECT_EQ(s.bus_frames_corrupted, 0);
+  EXPECT_EQ(s.bus_frames_dropped, 0);
+
+  // Free space: the god-object follows the hand closely.
+  EXPECT_GT(s.free_steps, n / 10);
+  EXPECT_LT(s.tracking_error_free_rms_mm, 1.0);
+
+  // Feedback: bounded by the scene's saturation, and really used while the
+  // god-object is held back by the organ (spring stretched by ≥ 8 mm × 300 N/m).
+  EXPECT_LE(s.feedback_force_max_n, scene.model.feedback.max_force + 1e-9);
+  EXPECT_LE(s.feedback_torque_max_nm, scene.model.feedback.max_torque + 1e-9);
+  EXPECT_GT(s.feedback_force_max_n, 1.0);
+  EXPECT_GT(s.axis_torque_max, 0.0);
+
+  // Trace: one record per period, finite, feedback saturated record by record,
+  // and the tool never far below the surface while the target is deep.
+  const auto& records = runner.trace().records();
+  ASSERT_EQ(records.size(), static_cast<std::size_t>(n));
+  EXPECT_EQ(runner.trace().dropped(), 0u);
+  double deepest_target = 0.0;
+  for (std::size_t i = 0; i < records.size(); ++i) {
+    const TraceRecord& r = records[i];
+    ASSERT_TRUE(all_finite(r)) << "period " << i;
+    ASSERT_LE(r.feedback.force.norm(), scene.model.feedback.max_force + 1e-9) << "period " << i;
+    ASSERT_NEAR(r.time_s, static_cast<double>(i + 1) * scene.model.dt, 1e-9);
+    ASSERT_EQ(r.attached_body, 0);
+    ASSERT_EQ(r.num_axes, 5);
+    deepest_target = std::max(deepest_target, r.target_penetration_mm);
+  }
+  EXPECT_DOUBLE_EQ(deepest_target, s.target_penetration_max_mm);
+}
+
+TEST(RunDefaultScene, NoJumpAtStart) {
+  // The instrument starts at the device's first target: after the first
+  // period, target and god-object agree to the encoder quantisation.
+  const Scene& scene = default_scene();
+  SceneRunner runner(scene);
+  runner.period();
+  const auto& d = runner.data();
+  ASSERT_TRUE(runner.device().last_sample().valid);
+  const double gap = (d.bodies[0].position - d.target.position).norm();
+  const double tilt = d.bodies[0].orientation.angularDistance(d.target.orientation);
+  std::printf("[   info   ] first period: |tool - target| = %.4f mm, %.4f mrad, feedback %.4f N\n", gap * 1e3,
+              tilt * 1e3, d.feedback_wrench.force.norm());
+  EXPECT_LT(gap, 0.1e-3);
+  EXPECT_LT(tilt, 1e-3);
+  EXPECT_LT(d.feedback_wrench.force.norm(), 0.05);
+}
+
+TEST(RunDefaultScene, RealtimeRunIsPacedToTheClock) {
+  numen::sim::RunOptions opt;
+  opt.duration_s = 0.1;
+  opt.realtime = true;
+  const RunSummary s = numen::sim::run_scene(default_scene(), opt);
+  EXPECT_EQ(s.steps, 100);
+  // 100 periods of 1 ms paced by clock_nanosleep take at least ~0.1 s.
+  EXPECT_GE(s.wall_time_s, 0.09);
+  std::printf("[   info   ] realtime 0.1 s: wall %.3f s, overruns %lld\n", s.wall_time_s,
+              static_cast<long long>(s.realtime_overruns));
+}
+
+TEST(RunDefaultScene, RunSceneRunsTheRequestedDuration) {
+  numen::sim::RunOptions opt;
+  opt.duration_s = 0.5;
+  const RunSummary s = numen::sim::run_scene(default_scene(), opt);
+  EXPECT_EQ(s.steps, 500);
+  EXPECT_NEAR(s.sim_time_s, 0.5, 1e-12);
+  EXPECT_GT(s.wall_time_s, 0.0);
+  EXPECT_EQ(s.realtime_overruns, 0);
+  EXPECT_FALSE(s.nan_detected);
+  // JSON summary: one object, numbers present.
+  const std::string json = numen::sim::format_summary_json(s);
+  EXPECT_EQ(json.front(), '{');
+  EXPECT_EQ(json.back(), '}');
+  EXPECT_NE(json.find("\"steps\":500,"), std::string::npos) << json;
+  EXPECT_NE(numen::sim::format_summary(s).find("500 steps"), std::string::npos);
+}
+
+// ---------------------------------------------------------------- construction scene
+
+TEST(RunConstructionScene, DirectCouplingPenetratesTenTimesMoreThanTheGodObject) {
+  const Scene& god_scene = construction_scene();
+  const Scene direct_scene = numen::sim::load_scene(construction_path(), numen::sim::SceneOverrides{CouplingMode::kDirect});
+  ASSERT_EQ(direct_scene.model.coupling_mode, CouplingMode::kDirect);
+  const std::int64_t n = periods_for(god_scene, god_scene.duration_s);
+
+  SceneRunner god(god_scene, static_cast<std::size_t>(n));
+  SceneRunner direct(direct_scene);
+  const auto t0 = std::chrono::steady_clock::now();
+  for (std::int64_t k = 0; k < n; ++k) {
+    god.period();
+    direct.period();
+  }
+  const double wall = wall_s(t0);
+  const RunSummary g = god.summary();
+  const RunSummary d = direct.summary();
+  print_summary("construction god-object", g, wall / 2);
+  print_summary("construction direct", d, wall / 2);
+  std::printf("[   info   ] construction: fastest free block %.3f m/s (god-object) vs %.3f m/s (direct)\n",
+              g.free_body_speed_max_mps, d.free_body_speed_max_mps);
+
+  EXPECT_EQ(g.coupling, "god-object");
+  EXPECT_EQ(d.coupling, "direct");
+  // The same hand: the target goes ~20 mm into the board in both runs.
+  EXPECT_GE(g.target_penetration_max_mm, 10.0);
+  EXPECT_GE(d.target_penetration_max_mm, 10.0);
+  // Imposed at the hand, the block goes into the board; the god-object does not.
+  EXPECT_GE(d.tool_penetration_max_mm, 10.0);
+  EXPECT_GT(g.tool_penetration_max_mm, 0.0) << "the held block never touched anything";
+  EXPECT_GE(d.tool_penetration_max_mm, 10.0 * g.tool_penetration_max_mm);
+  EXPECT_FALSE(g.nan_detected);
+  EXPECT_FALSE(d.nan_detected);
+  EXPECT_EQ(g.rejected_samples, 0);
+  EXPECT_EQ(d.rejected_samples, 0);
+  // Direct coupling sends no feedback (paper Fig. 5: no god-object).
+  EXPECT_EQ(d.feedback_force_max_n, 0.0);
+
+  // Paper Fig. 5/6: the held block carried through tower A pushes its middle
+  // block away with the god-object too, but only the imposed (direct) block
+  // throws blocks about with penalty forces. The block dropped at 5.7 s falls
+  // from 0.16 m (√(2 g h) ≈ 1.7 m/s) in both runs.
+  int tower_a2 = -1;
+  for (int b = 0; b < god_scene.model.num_bodies(); ++b)
+    if (god_scene.model.bodies[static_cast<std::size_t>(b)].name == "tower_a2") tower_a2 = b;
+  ASSERT_GE(tower_a2, 0);
+  const Vec3 a2_0 = god_scene.model.bodies[static_cast<std::size_t>(tower_a2)].initial_pose.position;
+  const double pushed_god = (god.data().bodies[static_cast<std::size_t>(tower_a2)].position - a2_0).norm();
+  const double pushed_direct = (direct.data().bodies[static_cast<std::size_t>(tower_a2)].position - a2_0).norm();
+  std::printf("[   info   ] construction: tower_a2 moved %.1f mm (god-object), %.1f mm (direct)\n",
+              pushed_god * 1e3, pushed_direct * 1e3);
+  EXPECT_GT(pushed_god, 0.01) << "the god-object did not push the tower";
+  EXPECT_GT(d.free_body_speed_max_mps, 2.0 * g.free_body_speed_max_mps) << "direct coupling threw nothing about";
+
+  // Tool switching: held until 5.7 s, nothing until 7.2 s, then loose_1.
+  const auto& rec = god.trace().records();
+  ASSERT_EQ(rec.size(), static_cast<std::size_t>(n));
+  int loose_1 = -1;
+  for (int b = 0; b < god_scene.model.num_bodies(); ++b)
+    if (god_scene.model.bodies[static_cast<std::size_t>(b)].name == "loose_1") loose_1 = b;
+  ASSERT_GE(loose_1, 0);
+  for (std::size_t i = 0; i < rec.size(); ++i) {
+    const double t_start = static_cast<double>(i) * god_scene.model.dt;  // period i starts at i·dt
+    const int expected = t_start < 5.7 - 1e-9 ? god_scene.model.initial_attached_body
+                         : t_start < 7.2 - 1e-9 ? -1
+                                                : loose_1;
+    ASSERT_EQ(rec[i].attached_body, expected) << "period " << i << " (t = " << t_start << " s)";
+  }
+  EXPECT_EQ(god.data().attached_body, loose_1);
+}
+
+// ---------------------------------------------------------------- zero allocations
+
+void expect_no_allocation(const Scene& scene, const char* name) {
+  SceneRunner runner(scene, 10'000);  // construction allocates (trace storage too)
+  std::int64_t count = -1;
+  {
+    numen::test::AllocationGuard guard;
+    for (int k = 0; k < 10'000; ++k) runner.period();
+    count = guard.count();
+  }
+  EXPECT_EQ(count, 0) << name << ": heap allocations in 10,000 periods";
+  EXPECT_EQ(runner.periods(), 10'000);
+  EXPECT_EQ(runner.trace().records().size(), 10'000u);
+  const RunSummary s = runner.summary();
+  EXPECT_GT(s.contacts_max, 0) << name << ": the contact path was not exercised";
+  EXPECT_FALSE(s.nan_detected);
+}
+
+TEST(RunAllocations, DefaultScenePeriodNeverAllocates) { expect_no_allocation(default_scene(), "default"); }
+
+TEST(RunAllocations, ConstructionScenePeriodNeverAllocates) {
+  expect_no_allocation(construction_scene(), "construction");
+}
+
+// ---------------------------------------------------------------- determinism
+
+void expect_deterministic(const Scene& scene, std::int64_t n, const char* name) {
+  SceneRunner a(scene, static_cast<std::size_t>(n));
+  SceneRunner b(scene, static_cast<std::size_t>(n));
+  for (std::int64_t k = 0; k < n; ++k) {
+    a.period();
+    b.period();
+  }
+  const auto& ra = a.trace().records();
+  const auto& rb = b.trace().records();
+  ASSERT_EQ(ra.size(), static_cast<std::size_t>(n));
+  ASSERT_EQ(rb.size(), ra.size());
+  for (std::size_t i = 0; i < ra.size(); ++i) ASSERT_TRUE(same_record(ra[i], rb[i])) << name << ": record " << i;
+  const numen::core::Data& da = a.data();
+  const numen::core::Data& db = b.data();
+  EXPECT_TRUE(same_bits(da.time, db.time));
+  EXPECT_EQ(da.step_count, db.step_count);
+  ASSERT_EQ(da.bodies.size(), db.bodies.size());
+  for (std::size_t i = 0; i < da.bodies.size(); ++i) {
+    EXPECT_TRUE(same_bits(da.bodies[i].position, db.bodies[i].position)) << name << ": body " << i;
+    EXPECT_TRUE(same_bits(da.bodies[i].orientation, db.bodies[i].orientation)) << name << ": body " << i;
+    EXPECT_TRUE(same_bits(da.bodies[i].linear_velocity, db.bodies[i].linear_velocity)) << name << ": body " << i;
+    EXPECT_TRUE(same_bits(da.bodies[i].angular_velocity, db.bodies[i].angular_velocity)) << name << ": body " << i;
+  }
+  EXPECT_TRUE(same_bits(da.feedback_wrench.force, db.feedback_wrench.force));
+  EXPECT_TRUE(same_bits(da.target.position, db.target.position));
+  // Something happened: the bodies moved and there were contacts.
+  EXPECT_GT(a.summary().contacts_max, 0) << name;
+  bool moved = false;
+  for (std::size_t i = 0; i < da.bodies.size(); ++i)
+    moved = moved || (da.bodies[i].position - scene.model.bodies[i].initial_pose.position).norm() > 1e-3;
+  EXPECT_TRUE(moved) << name;
+}
+
+TEST(RunDeterminism, DefaultSceneTwoRunnersAreBitIdentical) {
+  expect_deterministic(default_scene(), periods_for(default_scene(), 12.0), "default");
+}
+
+TEST(RunDeterminism, ConstructionSceneTwoRunnersAreBitIdentical) {
+  expect_deterministic(construction_scene(), periods_for(construction_scene(), 9.0), "construction");
+}
+
+// ---------------------------------------------------------------- bad bus frames
+
+TEST(RunBadBus, CorruptedAndLostFramesAreRejectedWithoutHarm) {
+  Scene scene = default_scene();  // a copy
+  scene.bus.corruption_probability = 0.05;
+  scene.bus.drop_probability = 0.02;
+  scene.bus.seed = 20240611;
+  const std::int64_t n = periods_for(scene, 12.0);
+  SceneRunner runner(scene, static_cast<std::size_t>(n));
+  const auto t0 = std::chrono::steady_clock::now();
+  for (std::int64_t k = 0; k < n; ++k) runner.period();
+  const RunSummary s = runner.summary();
+  print_summary("default 12 s, bad bus", s, wall_s(t0));
+
+  EXPECT_GT(s.bus_frames_corrupted, 0);
+  EXPECT_GT(s.bus_frames_dropped, 0);
+  EXPECT_GT(s.rejected_samples, 0);
+  EXPECT_GT(s.invalid_periods, 0);
+  EXPECT_FALSE(s.nan_detected);
+  EXPECT_EQ(s.nonfinite_steps, 0);
+  // The god-object is still held on the surface while the hand goes in.
+  EXPECT_GE(s.target_penetration_max_mm, 10.0);
+  EXPECT_LE(s.tool_penetration_max_mm, 4.0);
+  EXPECT_LE(s.feedback_force_max_n, scene.model.feedback.max_force + 1e-9);
+  EXPECT_LT(s.tracking_error_free_rms_mm, 2.0);
+  for (const TraceRecord& r : runner.trace().records()) ASSERT_TRUE(all_finite(r)) << "t = " << r.time_s;
+  // Positions stay near the recorded workspace (no wild jump from a bad frame).
+  const Vec3 p = runner.data().bodies[0].position;
+  EXPECT_TRUE(p.allFinite());
+  EXPECT_LT((p - runner.data().target.position).norm(), 0.05);
+}
+
+}  // namespace
