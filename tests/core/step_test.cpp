@@ -203,3 +203,97 @@ TEST(Step, SetAttachedBodyRangeChecks) {
   EXPECT_TRUE(d.coupling_wrench.force.isZero(0.0));
   EXPECT_EQ(d.status, core::kStepOk);
 }
+
+// ---- physics behaviour (issue: "a god-object pushed into a wall stays
+// outside within the penalty bound; a block resting on the board under
+// gravity stays put") ----
+
+namespace {
+
+/// A 40 mm block of 50 g (8 spheres of 10 mm at the corners of a 20 mm cube)
+/// resting on a static box board whose top face is z = 0.
+core::Model block_on_board(core::Integrator integ) {
+  core::Model m;
+  m.integrator = integ;
+  m.material_pairs = {core::MaterialPair{5000.0, 2.0, 0.5}};
+  core::Obstacle board;
+  board.name = "board";
+  board.type = core::ShapeType::kBox;
+  board.pose.position = Vec3(0.0, 0.0, -0.01);
+  board.half_extents = Vec3(0.3, 0.3, 0.01);
+  m.obstacles = {board};
+  for (int i = 0; i < 8; ++i)
+    m.body_spheres.push_back(core::Sphere{
+        Vec3((i & 1) ? 0.01 : -0.01, (i & 2) ? 0.01 : -0.01, (i & 4) ? 0.01 : -0.01), 0.01});
+  core::BodyModel b;
+  b.name = "block";
+  b.mass = 0.05;
+  b.inertia_body = Mat3::Identity() * (0.05 * 0.04 * 0.04 / 6.0);
+  b.sphere_count = 8;
+  b.initial_pose.position = Vec3(0.05, -0.02, 0.02);
+  m.bodies = {b};
+  m.initial_attached_body = -1;
+  EXPECT_EQ(core::finalize_model(m), "");
+  return m;
+}
+
+}  // namespace
+
+TEST(StepBehaviour, BlockRestingOnTheBoardStaysPut) {
+  for (auto integ : {core::Integrator::kLinearlyImplicitEuler, core::Integrator::kSymplecticEuler}) {
+    const core::Model m = block_on_board(integ);
+    core::Data d = core::make_data(m);
+    const Vec3 start = m.bodies[0].initial_pose.position;
+    for (int i = 0; i < 5000; ++i) core::step(m, d);  // 5 s
+    const core::BodyState& s = d.bodies[0];
+    // Static sag: the weight shared by the 4 bottom contacts, m g = 4 k d.
+    const double sag = 0.05 * 9.81 / (4.0 * 5000.0);
+    EXPECT_NEAR(s.position.z(), start.z() - sag, 1e-6) << static_cast<int>(integ);
+    EXPECT_LT((s.position.head<2>() - start.head<2>()).norm(), 1e-9) << static_cast<int>(integ);
+    EXPECT_LT(Eigen::AngleAxisd(s.orientation).angle(), 1e-9) << static_cast<int>(integ);
+    EXPECT_LT(s.linear_velocity.norm(), 1e-6) << static_cast<int>(integ);
+    EXPECT_EQ(d.num_contacts, 4) << static_cast<int>(integ);
+  }
+}
+
+TEST(StepBehaviour, GodObjectPushedIntoAWallStaysOutsideWithinThePenaltyBound) {
+  // A coupled ball (r = 10 mm) whose target moves at 0.2 m/s through a wall
+  // (the plane x = 0, solid for x > 0 after flipping the normal) and ends
+  // 50 mm inside it. At rest the penalty balance is k_t (x_t − x) = k_c d.
+  core::Model m;
+  m.gravity = Vec3::Zero();
+  const double k_c = 1e5, k_t = 1000.0;
+  m.material_pairs = {core::MaterialPair{k_c, 50.0, 0.0}};
+  core::Obstacle wall;
+  wall.name = "wall";
+  wall.type = core::ShapeType::kPlane;
+  wall.pose.orientation = Quat::FromTwoVectors(Vec3::UnitZ(), -Vec3::UnitX());  // normal −x
+  m.obstacles = {wall};
+  m.body_spheres = {core::Sphere{Vec3::Zero(), 0.01}};
+  core::BodyModel b;
+  b.name = "tool";
+  b.mass = 0.05;
+  b.inertia_body = Mat3::Identity() * 2e-6;
+  b.sphere_count = 1;
+  b.coupling = {k_t, core::damping_from_ratio(0.85, 0.05, k_t), 0.0, 0.0};
+  b.initial_pose.position = Vec3(-0.05, 0.0, 0.0);
+  m.bodies = {b};
+  m.initial_attached_body = 0;
+  ASSERT_EQ(core::finalize_model(m), "");
+  core::Data d = core::make_data(m);
+  const double x_end = 0.05;  // target 50 mm inside the wall
+  double deepest = 0.0;
+  for (int i = 0; i < 3000; ++i) {
+    const double t = 1e-3 * i;
+    d.target.position = Vec3(std::min(-0.05 + 0.2 * t, x_end), 0.0, 0.0);
+    d.target_twist.linear = Vec3(-0.05 + 0.2 * t < x_end ? 0.2 : 0.0, 0.0, 0.0);
+    core::step(m, d);
+    deepest = std::max(deepest, d.max_penetration);
+  }
+  // Static bound: x = −r + d, k_t (x_end − x) = k_c d.
+  const double d_static = k_t * (x_end + 0.01) / (k_c + k_t);
+  EXPECT_NEAR(d.max_penetration, d_static, 1e-3 * d_static);
+  EXPECT_LT(deepest, 1.2 * d_static);  // approaching at 0.2 m/s adds little
+  EXPECT_LT(d.bodies[0].position.x(), 0.0);  // the centre never crosses the wall
+  EXPECT_NEAR(d.feedback_wrench.force.norm(), 0.0, 1e-12);  // no device gains in this model
+}
