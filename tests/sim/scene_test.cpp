@@ -208,10 +208,10 @@ TEST(Scene, DefaultSceneLoadsWhatItsFileDescribes) {
   EXPECT_EQ(s.model.obstacles[1].name, "organ");
   EXPECT_EQ(s.model.obstacles[1].type, ShapeType::kSphereSet);
 
-  // The organ: an ellipsoid 35 × 25 × 20 mm filled with 4 mm spheres on a 5 mm
-  // lattice whose centres lie inside the ellipsoid shrunk by 4 mm. Count the
-  // lattice points here independently of the loader.
-  const Vec3 inner(0.031, 0.021, 0.016);
+  // The organ: an ellipsoid 35 × 25 × 20 mm filled with 4.5 mm spheres on a
+  // 5 mm lattice whose centres lie inside the ellipsoid shrunk by 4.5 mm. Count
+  // the lattice points here independently of the loader.
+  const Vec3 inner(0.0305, 0.0205, 0.0155);
   int expected = 0;
   for (int i = -10; i <= 10; ++i)
     for (int j = -10; j <= 10; ++j)
@@ -223,7 +223,7 @@ TEST(Scene, DefaultSceneLoadsWhatItsFileDescribes) {
   EXPECT_GE(organ.sphere_count, 200) << "the organ has several hundred spheres";
   EXPECT_EQ(s.model.static_spheres.size(), static_cast<std::size_t>(organ.sphere_count));
   for (int i = 0; i < organ.sphere_count; ++i)
-    EXPECT_DOUBLE_EQ(s.model.static_spheres[static_cast<std::size_t>(organ.sphere_begin + i)].radius, 0.004);
+    EXPECT_DOUBLE_EQ(s.model.static_spheres[static_cast<std::size_t>(organ.sphere_begin + i)].radius, 0.0045);
 
   EXPECT_EQ(s.device.kind, numen::hal::DeviceKind::kTrocarInstrument);
   EXPECT_EQ(s.device.axes.size(), 5u);
