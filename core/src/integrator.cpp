@@ -17,7 +17,6 @@
 namespace numen::core {
 namespace {
 
-using Mat3x6 = Eigen::Matrix<double, 3, 6>;
 
 int active_contact_count(const Data& data) noexcept {
   return std::clamp(data.num_contacts, 0, kMaxContacts);
@@ -34,10 +33,14 @@ Vec3 point_velocity(const Vec6& u, const Vec3& r) noexcept {
 
 /// Adds Jᵀ W J, J = [I, −[r]×] (3×6), to a body's 6×6 block.
 void add_contact_block(const Mat3& w, const Vec3& r, Mat6& block) noexcept {
-  Mat3x6 j;
-  j.leftCols<3>().setIdentity();
-  j.rightCols<3>() = -skew(r);
-  block.noalias() += j.transpose() * w * j;
+  // Jᵀ W J with J = [I, −S], S = [r]×, Sᵀ = −S and W symmetric:
+  //   [[W, −W S], [S W, −S W S]]; (W S)ᵀ = −S W, so only W S and S (W S) are formed.
+  const Mat3 sk = skew(r);
+  const Mat3 ws = w * sk;
+  block.topLeftCorner<3, 3>() += w;
+  block.topRightCorner<3, 3>() -= ws;
+  block.bottomLeftCorner<3, 3>() -= ws.transpose();
+  block.bottomRightCorner<3, 3>().noalias() -= sk * ws;
 }
 
 double dot(std::span<const Vec6> a, std::span<const Vec6> b) noexcept {
