@@ -20,7 +20,9 @@ struct Entry {
   std::int32_t material;
 };
 
-bool usable(const Sphere& s) { return s.center.allFinite() && std::isfinite(s.radius) && s.radius >= 0.0; }
+bool usable(const Sphere& s) {
+  return s.center.allFinite() && std::isfinite(s.radius) && s.radius >= 0.0;
+}
 
 /// Sets cell_size, inv_cell_size and dims of `grid` for a cell of `cell` metres.
 void set_cells(double cell, StaticSphereGrid& grid) {
@@ -36,7 +38,9 @@ void build(const std::vector<Sphere>& spheres, const std::vector<Entry>& entries
            StaticSphereGrid& grid) {
   grid = StaticSphereGrid{};
   if (entries.empty()) return;
-  const auto& sp = [&](const Entry& e) -> const Sphere& { return spheres[static_cast<std::size_t>(e.sphere)]; };
+  const auto& sp = [&](const Entry& e) -> const Sphere& {
+    return spheres[static_cast<std::size_t>(e.sphere)];
+  };
 
   grid.bounds_min = Vec3::Constant(std::numeric_limits<double>::infinity());
   grid.bounds_max = -grid.bounds_min;
@@ -74,7 +78,8 @@ void build(const std::vector<Sphere>& spheres, const std::vector<Entry>& entries
         const Sphere& s = sp(e);
         double c = 1.0;
         for (int k = 0; k < 3; ++k)
-          c *= grid.cell_coord(s.center[k] + s.radius, k) - grid.cell_coord(s.center[k] - s.radius, k) + 1;
+          c *= grid.cell_coord(s.center[k] + s.radius, k) -
+               grid.cell_coord(s.center[k] - s.radius, k) + 1;
         items += c;
       }
       if (items <= max_items) {
@@ -101,8 +106,10 @@ void build(const std::vector<Sphere>& spheres, const std::vector<Entry>& entries
   for (const Entry& e : entries)
     for_cells(sp(e), [&](int c) { ++grid.cell_start[static_cast<std::size_t>(c) + 1]; });
   for (int c = 0; c < num_cells; ++c)
-    grid.cell_start[static_cast<std::size_t>(c) + 1] += grid.cell_start[static_cast<std::size_t>(c)];
-  grid.items.resize(static_cast<std::size_t>(num_items));
+    grid.cell_start[static_cast<std::size_t>(c) + 1] +=
+        grid.cell_start[static_cast<std::size_t>(c)];
+  for (std::vector<float>* v : {&grid.item_x, &grid.item_y, &grid.item_z, &grid.item_radius})
+    v->resize(static_cast<std::size_t>(num_items));
   grid.item_entry.resize(static_cast<std::size_t>(num_items));
   grid.sphere_index.resize(static_cast<std::size_t>(num_items));
   grid.entries.resize(entries.size());
@@ -114,11 +121,12 @@ void build(const std::vector<Sphere>& spheres, const std::vector<Entry>& entries
     max_radius = std::max(max_radius, s.radius);
     grid.entries[i] = GridEntry{s.center, s.radius, e.sphere, e.obstacle, e.material};
     const Vec3 rel = s.center - grid.origin;
-    const GridItem item{static_cast<float>(rel.x()), static_cast<float>(rel.y()), static_cast<float>(rel.z()),
-                        static_cast<float>(s.radius)};
     for_cells(s, [&](int c) {
       const auto pos = static_cast<std::size_t>(fill[static_cast<std::size_t>(c)]++);
-      grid.items[pos] = item;
+      grid.item_x[pos] = static_cast<float>(rel.x());
+      grid.item_y[pos] = static_cast<float>(rel.y());
+      grid.item_z[pos] = static_cast<float>(rel.z());
+      grid.item_radius[pos] = static_cast<float>(s.radius);
       grid.item_entry[pos] = static_cast<std::int32_t>(i);
       grid.sphere_index[pos] = e.sphere;
     });
@@ -132,7 +140,8 @@ void build(const std::vector<Sphere>& spheres, const std::vector<Entry>& entries
 
 }  // namespace
 
-void build_static_grid(const std::vector<Sphere>& spheres, double cell_size, StaticSphereGrid& grid) {
+void build_static_grid(const std::vector<Sphere>& spheres, double cell_size,
+                       StaticSphereGrid& grid) {
   std::vector<Entry> entries;
   entries.reserve(spheres.size());
   for (std::size_t s = 0; s < spheres.size(); ++s)

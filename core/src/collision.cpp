@@ -57,16 +57,23 @@ inline double box_distance2(const Vec3& p, const Vec3& lo, const Vec3& hi) noexc
   return (p - p.cwiseMax(lo).cwiseMin(hi)).squaredNorm();
 }
 
-inline bool boxes_overlap(const Vec3& amin, const Vec3& amax, const Vec3& bmin, const Vec3& bmax) noexcept {
-  return (amin.array() <= bmax.array() + kMargin).all() && (bmin.array() <= amax.array() + kMargin).all();
+inline bool boxes_overlap(const Vec3& amin, const Vec3& amax, const Vec3& bmin,
+                          const Vec3& bmax) noexcept {
+  return amin.x() <= bmax.x() + kMargin && amin.y() <= bmax.y() + kMargin &&
+         amin.z() <= bmax.z() + kMargin && bmin.x() <= amax.x() + kMargin &&
+         bmin.y() <= amax.y() + kMargin && bmin.z() <= amax.z() + kMargin;
 }
 
 /// Fallback normal direction for coincident centres: from b's reference point
 /// towards a's centre of mass (normalized by the narrow phase, +z if zero).
-inline Vec3 fallback_from(const Vec3& body_com, const Vec3& b_point) noexcept { return body_com - b_point; }
+inline Vec3 fallback_from(const Vec3& body_com, const Vec3& b_point) noexcept {
+  return body_com - b_point;
+}
 
-/// Body `b` against the primitive (non sphere-set) obstacle `o`.
-void collide_body_obstacle(const Model& model, const Data& data, int b, int o, ContactSink& sink) noexcept {
+/// Body `b` against the primitive (non sphere-set) obstacle `o`: first its
+/// bounding sphere against the exact shape, then each of its spheres.
+void collide_body_obstacle(const Model& model, const Data& data, int b, int o,
+                           ContactSink& sink) noexcept {
   const BodyModel& bm = model.bodies[static_cast<std::size_t>(b)];
   const Obstacle& ob = model.obstacles[static_cast<std::size_t>(o)];
   const Vec3& x = data.bodies[static_cast<std::size_t>(b)].position;
@@ -80,19 +87,34 @@ void collide_body_obstacle(const Model& model, const Data& data, int b, int o, C
   switch (ob.type) {
     case ShapeType::kPlane: {
       const Vec3 n = ob.pose.orientation * Vec3::UnitZ();
-      if ((x - ob.pose.position).dot(n) >= bm.bounding_radius + kMargin) return;
-      for (int s = s0; s < s1; ++s)
-        if (sphere_plane(sw[s], bs[s].radius, ob.pose.position, n, g)) sink.add(b, -1, o, s, -1, mat, g);
+      const Vec3& p = ob.pose.position;
+      if ((x - p).dot(n) >= bm.bounding_radius + kMargin) return;
+      const CollisionScratch& cs = data.collision;
+      for (int s = s0; s < s1; ++s) {
+        // Signed distance prefilter on the flat arrays; sphere_plane decides.
+        const double dist = (cs.sphere_x[static_cast<std::size_t>(s)] - p.x()) * n.x() +
+                            (cs.sphere_y[static_cast<std::size_t>(s)] - p.y()) * n.y() +
+                            (cs.sphere_z[static_cast<std::size_t>(s)] - p.z()) * n.z();
+        if (dist >= bs[s].radius + kMargin) continue;
+        if (sphere_plane(sw[s], bs[s].radius, p, n, g)) sink.add(b, -1, o, s, -1, mat, g);
+      }
       return;
     }
     case ShapeType::kBox: {
       const Mat3 rot = ob.pose.orientation.toRotationMatrix();
+      // Body cull: distance from the centre of mass to the solid box.
+      const Vec3 local = rot.transpose() * (x - ob.pose.position);
+      const Vec3 outside = local - local.cwiseMax(-ob.half_extents).cwiseMin(ob.half_extents);
+      if (outside.squaredNorm() > (bm.bounding_radius + kMargin) * (bm.bounding_radius + kMargin))
+        return;
       for (int s = s0; s < s1; ++s)
         if (sphere_box(sw[s], bs[s].radius, ob.pose.position, rot, ob.half_extents, g))
           sink.add(b, -1, o, s, -1, mat, g);
       return;
     }
     case ShapeType::kSphere: {
+      const double reach = bm.bounding_radius + ob.radius + kMargin;
+      if ((x - ob.pose.position).squaredNorm() > reach * reach) return;  // body cull
       const Vec3 fb = fallback_from(x, ob.pose.position);
       for (int s = s0; s < s1; ++s)
         if (sphere_sphere(sw[s], bs[s].radius, ob.pose.position, ob.radius, fb, g))
@@ -101,8 +123,14 @@ void collide_body_obstacle(const Model& model, const Data& data, int b, int o, C
     }
     case ShapeType::kCapsule: {
       const Vec3 axis = ob.pose.orientation * Vec3::UnitZ();
+      // Body cull: distance from the centre of mass to the segment.
+      const Vec3 rel = x - ob.pose.position;
+      const double t = std::clamp(rel.dot(axis), -ob.half_length, ob.half_length);
+      const double reach = bm.bounding_radius + ob.radius + kMargin;
+      if ((rel - t * axis).squaredNorm() > reach * reach) return;
       for (int s = s0; s < s1; ++s)
-        if (sphere_capsule(sw[s], bs[s].radius, ob.pose.position, axis, ob.half_length, ob.radius, g))
+        if (sphere_capsule(sw[s], bs[s].radius, ob.pose.position, axis, ob.half_length, ob.radius,
+                           g))
           sink.add(b, -1, o, s, -1, mat, g);
       return;
     }
@@ -112,9 +140,9 @@ void collide_body_obstacle(const Model& model, const Data& data, int b, int o, C
 }
 
 /// Body `b` against every static sphere set, one grid query per sphere: a
-/// branch-free float prefilter over each row of cells collects candidates, the
-/// exact double test (the one of the reference) decides, and a per-entry stamp
-/// drops the duplicates of spheres listed in several cells.
+/// vectorized float prefilter over each row of cells collects candidates, a
+/// per-entry stamp drops the copies of spheres listed in several cells, and the
+/// exact double test (the one of the reference) decides.
 void collide_body_grid(const Model& model, Data& data, int b, ContactSink& sink) noexcept {
   const StaticSphereGrid& grid = model.static_grid;
   CollisionScratch& cs = data.collision;
@@ -123,7 +151,10 @@ void collide_body_grid(const Model& model, Data& data, int b, ContactSink& sink)
   const Vec3* sw = cs.sphere_world.data();
   const Sphere* bs = model.body_spheres.data();
   const std::int32_t* cell_start = grid.cell_start.data();
-  const GridItem* items = grid.items.data();
+  const float* item_x = grid.item_x.data();
+  const float* item_y = grid.item_y.data();
+  const float* item_z = grid.item_z.data();
+  const float* item_r = grid.item_radius.data();
   const std::int32_t* item_entry = grid.item_entry.data();
   const GridEntry* entries = grid.entries.data();
   std::uint32_t* stamps = cs.entry_stamp.data();
@@ -156,23 +187,29 @@ void collide_body_grid(const Model& model, Data& data, int b, ContactSink& sink)
         const int k_end = cell_start[grid.cell_index(last.x(), y, z) + 1];
         for (; k < k_end; k += kChunk) {
           const int m = std::min(k_end - k, kChunk);
-          const GridItem* chunk = items + k;
-          for (int i = 0; i < m; ++i) {  // vectorizable: no branch, no dependency
-            const float dx = chunk[i].x - qx, dy = chunk[i].y - qy, dz = chunk[i].z - qz;
-            const float sr = chunk[i].radius + qr;
+          const float* ix = item_x + k;
+          const float* iy = item_y + k;
+          const float* iz = item_z + k;
+          const float* ir = item_r + k;
+          int hits = 0;
+          for (int i = 0; i < m; ++i) {  // vectorized: no branch, no dependency
+            const float dx = ix[i] - qx, dy = iy[i] - qy, dz = iz[i] - qz;
+            const float sr = ir[i] + qr;
             gap[i] = dx * dx + dy * dy + dz * dz - sr * sr;
+            hits += gap[i] <= 0.0f ? 1 : 0;
           }
+          if (hits == 0) continue;
           int n = 0;
-          for (int i = 0; i < m; ++i) {  // branch-free compaction
+          for (int i = 0; n < hits; ++i) {  // compaction, stops at the last hit
             candidates[n] = k + i;
             n += gap[i] <= 0.0f ? 1 : 0;
           }
           for (int i = 0; i < n; ++i) {
+            // Every copy of an entry gives the same answer: test it once.
             const std::int32_t e = item_entry[candidates[i]];
-            const GridEntry& en = entries[e];
-            if (!spheres_overlap(c, r, en.center, en.radius)) continue;
-            if (stamps[e] == stamp) continue;  // already seen in another cell
+            if (stamps[e] == stamp) continue;
             stamps[e] = stamp;
+            const GridEntry& en = entries[e];
             if (sphere_sphere(c, r, en.center, en.radius, fallback_from(x, en.center), g))
               sink.add(b, -1, en.obstacle, s, en.sphere, mat_a + en.material, g);
           }
@@ -182,29 +219,56 @@ void collide_body_grid(const Model& model, Data& data, int b, ContactSink& sink)
   }
 }
 
-/// Spheres of body a against spheres of body b (a < b).
-void collide_bodies(const Model& model, const Data& data, int a, int b, ContactSink& sink) noexcept {
+/// Spheres of body a against spheres of body b (a < b): only the spheres of
+/// each body whose box meets the overlap of the two bodies' AABBs are paired
+/// (a face layer of each when blocks touch), in sphere index order. Prefilters
+/// run on the scratch's flat coordinate arrays; sphere_sphere() decides.
+void collide_bodies(const Model& model, Data& data, int a, int b, ContactSink& sink) noexcept {
   const BodyModel& ba = model.bodies[static_cast<std::size_t>(a)];
   const BodyModel& bb = model.bodies[static_cast<std::size_t>(b)];
-  const CollisionScratch& cs = data.collision;
-  const Vec3* sw = cs.sphere_world.data();
-  const Sphere* bs = model.body_spheres.data();
-  const Vec3& bmin = cs.body_aabb_min[static_cast<std::size_t>(b)];
-  const Vec3& bmax = cs.body_aabb_max[static_cast<std::size_t>(b)];
+  CollisionScratch& cs = data.collision;
+  const double* X = cs.sphere_x.data();
+  const double* Y = cs.sphere_y.data();
+  const double* Z = cs.sphere_z.data();
+  const double* R = cs.sphere_r.data();
+  const Vec3 lo = cs.body_aabb_min[static_cast<std::size_t>(a)].cwiseMax(
+      cs.body_aabb_min[static_cast<std::size_t>(b)]);
+  const Vec3 hi = cs.body_aabb_max[static_cast<std::size_t>(a)].cwiseMin(
+      cs.body_aabb_max[static_cast<std::size_t>(b)]);
+  const double lx = lo.x(), ly = lo.y(), lz = lo.z(), hx = hi.x(), hy = hi.y(), hz = hi.z();
+  auto select = [&](const BodyModel& body, std::int32_t* out) noexcept {
+    int n = 0;
+    for (int s = body.sphere_begin; s < body.sphere_begin + body.sphere_count; ++s) {
+      // Distance of the centre outside the overlap box, per axis, against r.
+      const double dx = std::max(lx - X[s], X[s] - hx);
+      const double dy = std::max(ly - Y[s], Y[s] - hy);
+      const double dz = std::max(lz - Z[s], Z[s] - hz);
+      out[n] = s;
+      n += std::max(dx, std::max(dy, dz)) <= R[s] + kMargin ? 1 : 0;
+    }
+    return n;
+  };
+  std::int32_t* near_a = cs.near_a.data();
+  std::int32_t* near_b = cs.near_b.data();
+  const int na = select(ba, near_a);
+  if (na == 0) return;
+  const int nb = select(bb, near_b);
+  if (nb == 0) return;
   const Vec3 fb = fallback_from(data.bodies[static_cast<std::size_t>(a)].position,
                                 data.bodies[static_cast<std::size_t>(b)].position);
   const int mat = ba.material * model.num_materials() + bb.material;
-  const int b0 = bb.sphere_begin;
-  const int b1 = bb.sphere_begin + bb.sphere_count;
+  const Vec3* sw = cs.sphere_world.data();
   ContactGeometry g;
-  for (int sa = ba.sphere_begin; sa < ba.sphere_begin + ba.sphere_count; ++sa) {
-    const Vec3& ca = sw[sa];
-    const double ra = bs[sa].radius;
-    const Vec3 ext = Vec3::Constant(ra);
-    if (!boxes_overlap(ca - ext, ca + ext, bmin, bmax)) continue;
-    for (int sb = b0; sb < b1; ++sb) {
-      if (!spheres_overlap(ca, ra, sw[sb], bs[sb].radius)) continue;
-      if (sphere_sphere(ca, ra, sw[sb], bs[sb].radius, fb, g)) sink.add(a, b, -1, sa, sb, mat, g);
+  for (int i = 0; i < na; ++i) {
+    const int sa = near_a[i];
+    const double xa = X[sa], ya = Y[sa], za = Z[sa], ra = R[sa];
+    for (int j = 0; j < nb; ++j) {
+      const int sb = near_b[j];
+      const double dx = xa - X[sb], dy = ya - Y[sb], dz = za - Z[sb];
+      const double sr = ra + R[sb];
+      // Conservative (relative slack 1e-12): the exact test is sphere_sphere's.
+      if (dx * dx + dy * dy + dz * dz > sr * sr * (1.0 + 1e-12)) continue;
+      if (sphere_sphere(sw[sa], ra, sw[sb], R[sb], fb, g)) sink.add(a, b, -1, sa, sb, mat, g);
     }
   }
 }
@@ -214,12 +278,22 @@ void collide_bodies(const Model& model, const Data& data, int a, int b, ContactS
 void CollisionScratch::resize(const Model& model) {
   const auto nb = static_cast<std::size_t>(model.num_bodies());
   sphere_world.assign(model.body_spheres.size(), Vec3::Zero());
+  sphere_x.assign(model.body_spheres.size(), 0.0);
+  sphere_y.assign(model.body_spheres.size(), 0.0);
+  sphere_z.assign(model.body_spheres.size(), 0.0);
+  sphere_r.resize(model.body_spheres.size());
+  for (std::size_t s = 0; s < model.body_spheres.size(); ++s)
+    sphere_r[s] = model.body_spheres[s].radius;
   body_aabb_min.assign(nb, Vec3::Constant(kInf));
   body_aabb_max.assign(nb, Vec3::Constant(-kInf));
   sweep_order.clear();
   sweep_order.reserve(nb);
   for (std::size_t b = 0; b < nb; ++b)
     if (model.bodies[b].sphere_count > 0) sweep_order.push_back(static_cast<std::int32_t>(b));
+  int max_spheres = 0;
+  for (const BodyModel& b : model.bodies) max_spheres = std::max(max_spheres, b.sphere_count);
+  near_a.assign(static_cast<std::size_t>(max_spheres), 0);
+  near_b.assign(static_cast<std::size_t>(max_spheres), 0);
   entry_stamp.assign(static_cast<std::size_t>(model.static_grid.num_entries), 0u);
   stamp = 0;
 }
@@ -279,13 +353,23 @@ void detect_contacts(const Model& model, Data& data) noexcept {
     Vec3 hi = Vec3::Constant(-kInf);
     if (bm.sphere_count > 0 && st.position.allFinite() && st.orientation.coeffs().allFinite()) {
       const Mat3 rot = st.orientation.toRotationMatrix();
+      double lx = kInf, ly = kInf, lz = kInf, hx = -kInf, hy = -kInf, hz = -kInf;
       for (int s = bm.sphere_begin; s < bm.sphere_begin + bm.sphere_count; ++s) {
         const Vec3 c = st.position + rot * bs[s].center;
         sw[s] = c;
-        const Vec3 r = Vec3::Constant(bs[s].radius);
-        lo = lo.cwiseMin(c - r);
-        hi = hi.cwiseMax(c + r);
+        const double r = bs[s].radius;
+        cs.sphere_x[static_cast<std::size_t>(s)] = c.x();
+        cs.sphere_y[static_cast<std::size_t>(s)] = c.y();
+        cs.sphere_z[static_cast<std::size_t>(s)] = c.z();
+        lx = std::min(lx, c.x() - r);
+        ly = std::min(ly, c.y() - r);
+        lz = std::min(lz, c.z() - r);
+        hx = std::max(hx, c.x() + r);
+        hy = std::max(hy, c.y() + r);
+        hz = std::max(hz, c.z() + r);
       }
+      lo = Vec3(lx, ly, lz);
+      hi = Vec3(hx, hy, hz);
       if (!(lo.allFinite() && hi.allFinite())) {
         lo = Vec3::Constant(kInf);
         hi = Vec3::Constant(-kInf);
@@ -310,13 +394,13 @@ void detect_contacts(const Model& model, Data& data) noexcept {
     for (int o = 0; o < no; ++o) {
       const Obstacle& ob = model.obstacles[static_cast<std::size_t>(o)];
       if (ob.type == ShapeType::kSphereSet) continue;
-      if (ob.type != ShapeType::kPlane &&
-          (!boxes_overlap(lo, hi, ob.aabb_min, ob.aabb_max) ||
-           box_distance2(x, ob.aabb_min, ob.aabb_max) > reach2))
+      if (ob.type != ShapeType::kPlane && (!boxes_overlap(lo, hi, ob.aabb_min, ob.aabb_max) ||
+                                           box_distance2(x, ob.aabb_min, ob.aabb_max) > reach2))
         continue;
       collide_body_obstacle(model, data, b, o, sink);
     }
-    if (has_grid && boxes_overlap(lo, hi, model.static_grid.bounds_min, model.static_grid.bounds_max))
+    if (has_grid &&
+        boxes_overlap(lo, hi, model.static_grid.bounds_min, model.static_grid.bounds_max))
       collide_body_grid(model, data, b, sink);
   }
 

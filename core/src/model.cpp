@@ -84,10 +84,22 @@ std::string finalize_model(Model& model) {
     if (!finite(o.pose.position) || !o.pose.orientation.coeffs().allFinite() ||
         o.pose.orientation.norm() < 1e-9)
       return who + ": pose must be finite with a non-zero quaternion";
+    if ((o.type == ShapeType::kSphere || o.type == ShapeType::kCapsule) &&
+        (!(o.radius > 0.0) || !std::isfinite(o.radius)))
+      return who + ": radius must be finite and > 0";
+    if (o.type == ShapeType::kCapsule && (!(o.half_length >= 0.0) || !std::isfinite(o.half_length)))
+      return who + ": half length must be finite and >= 0";
+    if (o.type == ShapeType::kBox && (!finite(o.half_extents) || !(o.half_extents.minCoeff() > 0.0)))
+      return who + ": half extents must be finite and > 0";
     if (o.type == ShapeType::kSphereSet &&
         (o.sphere_begin < 0 || o.sphere_count < 0 ||
          static_cast<std::size_t>(o.sphere_begin + o.sphere_count) > model.static_spheres.size()))
       return who + ": sphere range out of Model::static_spheres";
+  }
+  for (std::size_t i = 0; i < model.static_spheres.size(); ++i) {
+    const Sphere& sp = model.static_spheres[i];
+    if (!finite(sp.center) || !(sp.radius > 0.0) || !std::isfinite(sp.radius))
+      return "static sphere " + std::to_string(i) + " needs a finite centre and radius > 0";
   }
   for (Obstacle& o : model.obstacles) o.pose.orientation.normalize();
   const FeedbackGains& f = model.feedback;

@@ -12,7 +12,8 @@ namespace {
 
 /// Fills `out` from the surface point of b (`surface_b`), the normal and the
 /// depth: position is halfway between surface_b and the deepest point of a.
-inline void finish(const Vec3& surface_b, const Vec3& n, double depth, ContactGeometry& out) noexcept {
+inline void finish(const Vec3& surface_b, const Vec3& n, double depth,
+                   ContactGeometry& out) noexcept {
   out.normal = n;
   out.depth = depth;
   out.position = surface_b - (0.5 * depth) * n;
@@ -49,8 +50,8 @@ bool sphere_plane(const Vec3& c, double r, const Vec3& point, const Vec3& normal
   return true;
 }
 
-bool sphere_box(const Vec3& c, double r, const Vec3& center, const Mat3& rotation,
-                const Vec3& half, ContactGeometry& out) noexcept {
+bool sphere_box(const Vec3& c, double r, const Vec3& center, const Mat3& rotation, const Vec3& half,
+                ContactGeometry& out) noexcept {
   const Vec3 local = rotation.transpose() * (c - center);
   const Vec3 q = local.cwiseMax(-half).cwiseMin(half);
   const Vec3 diff = local - q;

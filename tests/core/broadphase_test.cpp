@@ -2,6 +2,10 @@
 // sphere in every cell its box overlaps, queries return a superset of the
 // overlapping spheres, sizes stay bounded, and the sort-and-sweep order is a
 // pure function of the keys.
+#include "numen/core/broadphase.hpp"
+
+#include <gtest/gtest.h>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -10,15 +14,13 @@
 #include <set>
 #include <vector>
 
-#include <gtest/gtest.h>
-
-#include "numen/core/broadphase.hpp"
 #include "numen/core/model.hpp"
 
 namespace numen::core {
 namespace {
 
-std::vector<Sphere> random_spheres(std::mt19937& rng, int n, double half_width, double rmin, double rmax) {
+std::vector<Sphere> random_spheres(std::mt19937& rng, int n, double half_width, double rmin,
+                                   double rmax) {
   std::uniform_real_distribution<double> pos(-half_width, half_width);
   std::uniform_real_distribution<double> rad(rmin, rmax);
   std::vector<Sphere> out(static_cast<std::size_t>(n));
@@ -42,7 +44,8 @@ std::set<int> query(const StaticSphereGrid& grid, const Vec3& lo, const Vec3& hi
     for (int y = f.y(); y <= l.y(); ++y)
       for (int x = f.x(); x <= l.x(); ++x) {
         const int c = grid.cell_index(x, y, z);
-        for (int k = grid.cell_start[static_cast<std::size_t>(c)]; k < grid.cell_start[static_cast<std::size_t>(c) + 1]; ++k)
+        for (int k = grid.cell_start[static_cast<std::size_t>(c)];
+             k < grid.cell_start[static_cast<std::size_t>(c) + 1]; ++k)
           out.insert(grid.sphere_index[static_cast<std::size_t>(k)]);
       }
   return out;
@@ -51,10 +54,13 @@ std::set<int> query(const StaticSphereGrid& grid, const Vec3& lo, const Vec3& hi
 void expect_csr_consistent(const StaticSphereGrid& grid) {
   ASSERT_EQ(grid.cell_start.size(), static_cast<std::size_t>(grid.num_cells()) + 1);
   ASSERT_EQ(grid.entries.size(), static_cast<std::size_t>(grid.num_entries));
-  ASSERT_EQ(grid.item_entry.size(), grid.items.size());
   EXPECT_EQ(grid.cell_start.front(), 0);
-  EXPECT_EQ(static_cast<std::size_t>(grid.cell_start.back()), grid.items.size());
-  EXPECT_EQ(grid.items.size(), grid.sphere_index.size());
+  EXPECT_EQ(grid.cell_start.back(), grid.num_items());
+  EXPECT_EQ(grid.item_entry.size(), grid.sphere_index.size());
+  EXPECT_EQ(grid.item_x.size(), grid.sphere_index.size());
+  EXPECT_EQ(grid.item_y.size(), grid.sphere_index.size());
+  EXPECT_EQ(grid.item_z.size(), grid.sphere_index.size());
+  EXPECT_EQ(grid.item_radius.size(), grid.sphere_index.size());
   for (std::size_t c = 0; c + 1 < grid.cell_start.size(); ++c) {
     ASSERT_LE(grid.cell_start[c], grid.cell_start[c + 1]);
     std::set<int> in_cell;
@@ -67,10 +73,10 @@ void expect_csr_consistent(const StaticSphereGrid& grid) {
       EXPECT_EQ(en.sphere, grid.sphere_index[kk]);
       // The compact copy is the entry's sphere relative to the origin, in float.
       const Vec3 rel = en.center - grid.origin;
-      EXPECT_EQ(grid.items[kk].x, static_cast<float>(rel.x()));
-      EXPECT_EQ(grid.items[kk].y, static_cast<float>(rel.y()));
-      EXPECT_EQ(grid.items[kk].z, static_cast<float>(rel.z()));
-      EXPECT_EQ(grid.items[kk].radius, static_cast<float>(en.radius));
+      EXPECT_EQ(grid.item_x[kk], static_cast<float>(rel.x()));
+      EXPECT_EQ(grid.item_y[kk], static_cast<float>(rel.y()));
+      EXPECT_EQ(grid.item_z[kk], static_cast<float>(rel.z()));
+      EXPECT_EQ(grid.item_radius[kk], static_cast<float>(en.radius));
       EXPECT_TRUE(in_cell.insert(e).second) << "entry " << e << " twice in cell " << c;
     }
   }
@@ -133,7 +139,8 @@ TEST(BroadphaseGrid, ExplicitCellSizeIsKept) {
   build_static_grid(spheres, 0.5, grid);
   EXPECT_DOUBLE_EQ(grid.cell_size, 0.5);
   for (int k = 0; k < 3; ++k)
-    EXPECT_EQ(grid.dims[k], static_cast<int>(std::ceil((grid.bounds_max[k] - grid.bounds_min[k]) / 0.5)));
+    EXPECT_EQ(grid.dims[k],
+              static_cast<int>(std::ceil((grid.bounds_max[k] - grid.bounds_min[k]) / 0.5)));
   EXPECT_EQ(grid.origin, grid.bounds_min);
   expect_csr_consistent(grid);
 }
@@ -145,14 +152,14 @@ TEST(BroadphaseGrid, SizesStayBoundedForSparseOrUnevenSets) {
   StaticSphereGrid grid;
   build_static_grid(spheres, 0.0, grid);
   EXPECT_LE(grid.num_cells(), 32 * 1000);
-  EXPECT_LE(grid.items.size(), 32u * 1000u);
+  EXPECT_LE(static_cast<std::size_t>(grid.num_items()), 32u * 1000u);
   expect_csr_consistent(grid);
   // One huge sphere among small ones.
   spheres = random_spheres(rng, 500, 0.1, 0.001, 0.002);
   spheres.push_back(Sphere{Vec3::Zero(), 1.0});
   build_static_grid(spheres, 0.0, grid);
   EXPECT_LE(grid.num_cells(), 32 * 501);
-  EXPECT_LE(grid.items.size(), 32u * 501u);
+  EXPECT_LE(static_cast<std::size_t>(grid.num_items()), 32u * 501u);
   expect_csr_consistent(grid);
   const std::set<int> got = query(grid, Vec3::Constant(0.9), Vec3::Constant(0.95));
   EXPECT_TRUE(got.count(500));
@@ -208,8 +215,9 @@ TEST(BroadphaseSweep, OrderIsSortedWithIndexTieBreakWhateverTheStart) {
   for (Vec3& m : mins) m = Vec3(0.5 * key(rng), 0.0, 0.0);
   std::vector<std::int32_t> reference(n);
   std::iota(reference.begin(), reference.end(), 0);
-  std::stable_sort(reference.begin(), reference.end(),
-                   [&](int a, int b) { return mins[static_cast<std::size_t>(a)].x() < mins[static_cast<std::size_t>(b)].x(); });
+  std::stable_sort(reference.begin(), reference.end(), [&](int a, int b) {
+    return mins[static_cast<std::size_t>(a)].x() < mins[static_cast<std::size_t>(b)].x();
+  });
   for (int trial = 0; trial < 20; ++trial) {
     std::vector<std::int32_t> order(n);
     std::iota(order.begin(), order.end(), 0);

@@ -1,6 +1,10 @@
 // Collision stage (core/src/collision.cpp): detect_contacts against an O(n²)
 // reference on random scenes, contact conventions, obstacle bounds, capacity
 // overflow, zero allocation and determinism.
+#include "numen/core/collision.hpp"
+
+#include <gtest/gtest.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -9,11 +13,8 @@
 #include <tuple>
 #include <vector>
 
-#include <gtest/gtest.h>
-
 #include "alloc_counter.hpp"
 #include "numen/core/capacity.hpp"
-#include "numen/core/collision.hpp"
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"
 #include "numen/core/narrowphase.hpp"
@@ -30,10 +31,12 @@ struct Scene {
   explicit Scene(int num_materials = 1) {
     model.material_names.clear();
     for (int i = 0; i < num_materials; ++i) model.material_names.push_back(std::to_string(i));
-    model.material_pairs.assign(static_cast<std::size_t>(num_materials * num_materials), MaterialPair{});
+    model.material_pairs.assign(static_cast<std::size_t>(num_materials * num_materials),
+                                MaterialPair{});
     model.initial_attached_body = -1;
   }
-  int body(const Vec3& position, const Quat& orientation, const std::vector<Sphere>& spheres, int material = 0) {
+  int body(const Vec3& position, const Quat& orientation, const std::vector<Sphere>& spheres,
+           int material = 0) {
     BodyModel b;
     b.name = std::to_string(model.bodies.size());
     b.sphere_begin = static_cast<int>(model.body_spheres.size());
@@ -54,7 +57,8 @@ struct Scene {
     return static_cast<int>(model.obstacles.size()) - 1;
   }
   int plane(const Vec3& point, const Vec3& normal, int material = 0) {
-    return obstacle(ShapeType::kPlane, point, Quat::FromTwoVectors(Vec3::UnitZ(), normal.normalized()), material);
+    return obstacle(ShapeType::kPlane, point,
+                    Quat::FromTwoVectors(Vec3::UnitZ(), normal.normalized()), material);
   }
   int box(const Vec3& centre, const Quat& q, const Vec3& half, int material = 0) {
     const int o = obstacle(ShapeType::kBox, centre, q, material);
@@ -66,7 +70,8 @@ struct Scene {
     model.obstacles.back().radius = radius;
     return o;
   }
-  int capsule(const Vec3& centre, const Quat& q, double half_length, double radius, int material = 0) {
+  int capsule(const Vec3& centre, const Quat& q, double half_length, double radius,
+              int material = 0) {
     const int o = obstacle(ShapeType::kCapsule, centre, q, material);
     model.obstacles.back().half_length = half_length;
     model.obstacles.back().radius = radius;
@@ -92,7 +97,8 @@ struct Scene {
   }
 };
 
-using Key = std::tuple<int, int, int, int, int, int>;  // body_a, body_b, obstacle, sphere_a, sphere_b, material_pair
+using Key = std::tuple<int, int, int, int, int,
+                       int>;  // body_a, body_b, obstacle, sphere_a, sphere_b, material_pair
 
 struct Ref {
   Key key;
@@ -110,7 +116,8 @@ std::vector<Ref> brute_force(const Model& m, const Data& d) {
     const BodyState& st = d.bodies[static_cast<std::size_t>(b)];
     const Mat3 rot = st.orientation.toRotationMatrix();
     for (int s = bm.sphere_begin; s < bm.sphere_begin + bm.sphere_count; ++s)
-      world[static_cast<std::size_t>(s)] = st.position + rot * m.body_spheres[static_cast<std::size_t>(s)].center;
+      world[static_cast<std::size_t>(s)] =
+          st.position + rot * m.body_spheres[static_cast<std::size_t>(s)].center;
   }
   const int nm = m.num_materials();
   ContactGeometry g;
@@ -126,18 +133,20 @@ std::vector<Ref> brute_force(const Model& m, const Data& d) {
         auto add = [&](int sb) { out.push_back(Ref{Key{b, -1, o, s, sb, mat}, g}); };
         switch (ob.type) {
           case ShapeType::kPlane:
-            if (sphere_plane(c, r, ob.pose.position, ob.pose.orientation * Vec3::UnitZ(), g)) add(-1);
+            if (sphere_plane(c, r, ob.pose.position, ob.pose.orientation * Vec3::UnitZ(), g))
+              add(-1);
             break;
           case ShapeType::kBox:
-            if (sphere_box(c, r, ob.pose.position, ob.pose.orientation.toRotationMatrix(), ob.half_extents, g))
+            if (sphere_box(c, r, ob.pose.position, ob.pose.orientation.toRotationMatrix(),
+                           ob.half_extents, g))
               add(-1);
             break;
           case ShapeType::kSphere:
             if (sphere_sphere(c, r, ob.pose.position, ob.radius, x - ob.pose.position, g)) add(-1);
             break;
           case ShapeType::kCapsule:
-            if (sphere_capsule(c, r, ob.pose.position, ob.pose.orientation * Vec3::UnitZ(), ob.half_length,
-                               ob.radius, g))
+            if (sphere_capsule(c, r, ob.pose.position, ob.pose.orientation * Vec3::UnitZ(),
+                               ob.half_length, ob.radius, g))
               add(-1);
             break;
           case ShapeType::kSphereSet:
@@ -154,12 +163,14 @@ std::vector<Ref> brute_force(const Model& m, const Data& d) {
     for (int b = a + 1; b < m.num_bodies(); ++b) {
       const BodyModel& ba = m.bodies[static_cast<std::size_t>(a)];
       const BodyModel& bb = m.bodies[static_cast<std::size_t>(b)];
-      const Vec3 fb = d.bodies[static_cast<std::size_t>(a)].position - d.bodies[static_cast<std::size_t>(b)].position;
+      const Vec3 fb = d.bodies[static_cast<std::size_t>(a)].position -
+                      d.bodies[static_cast<std::size_t>(b)].position;
       for (int sa = ba.sphere_begin; sa < ba.sphere_begin + ba.sphere_count; ++sa)
         for (int sb = bb.sphere_begin; sb < bb.sphere_begin + bb.sphere_count; ++sb)
-          if (sphere_sphere(world[static_cast<std::size_t>(sa)], m.body_spheres[static_cast<std::size_t>(sa)].radius,
-                            world[static_cast<std::size_t>(sb)], m.body_spheres[static_cast<std::size_t>(sb)].radius, fb,
-                            g))
+          if (sphere_sphere(world[static_cast<std::size_t>(sa)],
+                            m.body_spheres[static_cast<std::size_t>(sa)].radius,
+                            world[static_cast<std::size_t>(sb)],
+                            m.body_spheres[static_cast<std::size_t>(sb)].radius, fb, g))
             out.push_back(Ref{Key{a, b, -1, sa, sb, ba.material * nm + bb.material}, g});
     }
   std::sort(out.begin(), out.end());
@@ -174,14 +185,15 @@ std::vector<Ref> detected(const Data& d) {
     g.position = c.position;
     g.normal = c.normal;
     g.depth = c.depth;
-    out.push_back(Ref{Key{c.body_a, c.body_b, c.obstacle, c.sphere_a, c.sphere_b, c.material_pair}, g});
+    out.push_back(
+        Ref{Key{c.body_a, c.body_b, c.obstacle, c.sphere_a, c.sphere_b, c.material_pair}, g});
   }
   std::sort(out.begin(), out.end());
   return out;
 }
 
-std::vector<Sphere> ball_of_spheres(std::mt19937& rng, int n, const Vec3& centre, double radius, double rmin,
-                                    double rmax) {
+std::vector<Sphere> ball_of_spheres(std::mt19937& rng, int n, const Vec3& centre, double radius,
+                                    double rmin, double rmax) {
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   std::uniform_real_distribution<double> rad(rmin, rmax);
   std::vector<Sphere> out;
@@ -215,9 +227,11 @@ Scene random_scene(std::uint32_t seed) {
   std::uniform_real_distribution<double> at(-0.15, 0.15);
   std::uniform_real_distribution<double> size(0.01, 0.04);
   for (int i = 0; i < 3; ++i) {
-    sc.box(Vec3(at(rng), at(rng), at(rng)), random_rotation(rng), Vec3(size(rng), size(rng), size(rng)), 2);
+    sc.box(Vec3(at(rng), at(rng), at(rng)), random_rotation(rng),
+           Vec3(size(rng), size(rng), size(rng)), 2);
     sc.sphere(Vec3(at(rng), at(rng), at(rng)), size(rng), 1);
-    sc.capsule(Vec3(at(rng), at(rng), at(rng)), random_rotation(rng), size(rng), 0.5 * size(rng), 2);
+    sc.capsule(Vec3(at(rng), at(rng), at(rng)), random_rotation(rng), size(rng), 0.5 * size(rng),
+               2);
   }
   std::uniform_int_distribution<int> count(5, 30);
   std::uniform_int_distribution<int> mat(0, 2);
@@ -237,7 +251,8 @@ void jiggle(std::mt19937& rng, Data& d, double step) {
   for (BodyState& s : d.bodies) {
     s.position += Vec3(u(rng), u(rng), u(rng));
     s.position = s.position.cwiseMax(Vec3::Constant(-0.16)).cwiseMin(Vec3::Constant(0.16));
-    s.orientation = (s.orientation * Quat(Eigen::AngleAxisd(10.0 * step, Vec3(u(rng), u(rng), u(rng)).normalized())))
+    s.orientation = (s.orientation * Quat(Eigen::AngleAxisd(
+                                         10.0 * step, Vec3(u(rng), u(rng), u(rng)).normalized())))
                         .normalized();
   }
 }
@@ -291,6 +306,40 @@ TEST(CollisionBroadphase, EqualsBruteForceOnRandomScenes) {
   // The scenes really exercise every path.
   for (int k = 0; k < 6; ++k) EXPECT_GT(by_kind[k], 0) << "kind " << k;
   EXPECT_GT(total, 2000);
+}
+
+TEST(CollisionBroadphase, EqualsBruteForceOnADenseCluster) {
+  // Hundreds of overlapping spheres per cell: rows of cells hold far more
+  // items than one prefilter chunk.
+  std::mt19937 rng(42);
+  Scene sc;
+  sc.sphere_set(ball_of_spheres(rng, 600, Vec3::Zero(), 0.02, 0.008, 0.012));
+  sc.body(Vec3(0.03, 0, 0), Quat::Identity(),
+          ball_of_spheres(rng, 20, Vec3::Zero(), 0.02, 0.002, 0.006));
+  sc.finalize();
+  const StaticSphereGrid& grid = sc.model.static_grid;
+  int longest_row = 0;
+  for (int z = 0; z < grid.dims.z(); ++z)
+    for (int y = 0; y < grid.dims.y(); ++y)
+      longest_row = std::max(
+          longest_row,
+          grid.cell_start[static_cast<std::size_t>(grid.cell_index(grid.dims.x() - 1, y, z)) + 1] -
+              grid.cell_start[static_cast<std::size_t>(grid.cell_index(0, y, z))]);
+  EXPECT_GT(longest_row, 200);
+  Data d = make_data(sc.model);
+  std::mt19937 move(1);
+  int total = 0;
+  for (int t = 0; t < 40; ++t) {
+    jiggle(move, d, 0.005);
+    d.bodies[0].position =
+        d.bodies[0].position.cwiseMax(Vec3::Constant(-0.04)).cwiseMin(Vec3::Constant(0.04));
+    detect_contacts(sc.model, d);
+    ASSERT_EQ(d.contacts_dropped, 0);
+    SCOPED_TRACE(testing::Message() << "step " << t);
+    expect_same_contacts(detected(d), brute_force(sc.model, d));
+    total += d.num_contacts;
+  }
+  EXPECT_GT(total, 400);
 }
 
 TEST(CollisionBroadphase, ContactsFollowTheConvention) {
@@ -353,7 +402,8 @@ TEST(CollisionStage, WorldCentresAndPlaneContactFields) {
 
 TEST(CollisionStage, BodyDeepBelowAPlaneCollidesWithEverySphere) {
   Scene sc;
-  sc.body(Vec3(0, 0, -10), Quat::Identity(), {{Vec3(0, 0, 0), 0.1}, {Vec3(0, 0, 0.2), 0.1}, {Vec3(0, 0.2, 0), 0.1}});
+  sc.body(Vec3(0, 0, -10), Quat::Identity(),
+          {{Vec3(0, 0, 0), 0.1}, {Vec3(0, 0, 0.2), 0.1}, {Vec3(0, 0.2, 0), 0.1}});
   sc.body(Vec3(0, 0, 10), Quat::Identity(), {{Vec3(0, 0, 0), 0.1}});
   sc.plane(Vec3::Zero(), Vec3::UnitZ());
   sc.finalize();
@@ -427,12 +477,13 @@ TEST(CollisionStage, SphereSetContactsNameTheStaticSphereAndObstacle) {
 
 TEST(CollisionStage, CullingKeepsContactsAtTheRimOfTheBoundingSphere) {
   // One sphere offset from the COM: bounding radius 0.15. Each obstacle's box
-  // starts 0.14 from the COM, and its shape overlaps the sphere by 0.01.
+  // starts 0.14 from the COM, and its shape overlaps the sphere by 0.01 (the
+  // capsule's axis is 0.195 from the COM: within 0.15 + its radius 0.055).
   Scene sc;
   sc.body(Vec3::Zero(), Quat::Identity(), {{Vec3(0.1, 0, 0), 0.05}});
   sc.sphere(Vec3(0.2, 0, 0), 0.06);
   sc.box(Vec3(0.0, 0.19, 0.0), Quat::Identity(), Vec3(0.2, 0.05, 0.2));
-  sc.capsule(Vec3(0.1, 0, -0.19), Quat::FromTwoVectors(Vec3::UnitZ(), Vec3::UnitX()), 0.2, 0.05);
+  sc.capsule(Vec3(0.1, 0, -0.195), Quat::FromTwoVectors(Vec3::UnitZ(), Vec3::UnitX()), 0.2, 0.055);
   sc.finalize();
   Data d = make_data(sc.model);
   for (const Quat& q : {Quat::Identity(), Quat(Eigen::AngleAxisd(M_PI / 2, Vec3::UnitZ())),
@@ -460,9 +511,11 @@ TEST(CollisionStage, StampWrapForgetsOldStamps) {
 TEST(CollisionStage, ObstacleBoundsAreComputedAtFinalize) {
   Scene sc;
   const int plane = sc.plane(Vec3::Zero(), Vec3::UnitZ());
-  const int box = sc.box(Vec3(1, 1, 1), Quat(Eigen::AngleAxisd(M_PI / 2, Vec3::UnitZ())), Vec3(1, 2, 3));
+  const int box =
+      sc.box(Vec3(1, 1, 1), Quat(Eigen::AngleAxisd(M_PI / 2, Vec3::UnitZ())), Vec3(1, 2, 3));
   const int sphere = sc.sphere(Vec3(1, 2, 3), 0.5);
-  const int capsule = sc.capsule(Vec3(0, 0, 1), Quat::FromTwoVectors(Vec3::UnitZ(), Vec3::UnitX()), 2.0, 0.5);
+  const int capsule =
+      sc.capsule(Vec3(0, 0, 1), Quat::FromTwoVectors(Vec3::UnitZ(), Vec3::UnitX()), 2.0, 0.5);
   const int set = sc.sphere_set({{Vec3(0, 0, 0), 1.0}, {Vec3(3, 1, 0), 0.5}});
   const int empty = sc.sphere_set({});
   sc.finalize();
@@ -501,7 +554,8 @@ TEST(CollisionStage, NoObstaclesNoContacts) {
 TEST(CollisionCapacity, OverflowIsCountedAndReportedWithoutWritingPastTheArray) {
   const int n = kMaxContacts + 300;
   std::vector<Sphere> spheres;
-  for (int i = 0; i < n; ++i) spheres.push_back(Sphere{Vec3(0.01 * (i % 50), 0.01 * (i / 50), 0.0), 0.1});
+  for (int i = 0; i < n; ++i)
+    spheres.push_back(Sphere{Vec3(0.01 * (i % 50), 0.01 * (i / 50), 0.0), 0.1});
   Scene sc;
   sc.body(Vec3(0, 0, 0), Quat::Identity(), spheres);
   sc.plane(Vec3::Zero(), Vec3::UnitZ());
@@ -520,7 +574,8 @@ TEST(CollisionCapacity, OverflowIsCountedAndReportedWithoutWritingPastTheArray) 
   EXPECT_NEAR(d.max_penetration, 0.1, 1e-15);
   EXPECT_EQ(d.coupling_wrench.force, sentinel);
   EXPECT_EQ(d.feedback_wrench.torque, sentinel);
-  for (int i = 0; i < kMaxContacts; ++i) ASSERT_EQ(d.contacts[static_cast<std::size_t>(i)].sphere_a, i);
+  for (int i = 0; i < kMaxContacts; ++i)
+    ASSERT_EQ(d.contacts[static_cast<std::size_t>(i)].sphere_a, i);
 
   detect_contacts(sc.model, d);  // once more: counted once per call
   EXPECT_EQ(d.contact_overflow_steps, 2);
@@ -548,7 +603,8 @@ TEST(CollisionRealTime, NoHeapAllocationOverTenThousandSteps) {
     for (int t = 0; t < 10000; ++t) {
       for (std::size_t b = 0; b < d.bodies.size(); ++b) {
         const double phase = 1e-3 * t + static_cast<double>(b);
-        d.bodies[b].position = base[b] + 0.05 * Vec3(std::sin(phase), std::cos(1.3 * phase), std::sin(0.7 * phase));
+        d.bodies[b].position =
+            base[b] + 0.05 * Vec3(std::sin(phase), std::cos(1.3 * phase), std::sin(0.7 * phase));
         d.bodies[b].orientation = Quat(Eigen::AngleAxisd(phase, Vec3::UnitZ()));
       }
       detect_contacts(sc.model, d);
@@ -602,7 +658,8 @@ TEST(CollisionRealTime, DeterministicWithTiesOnTheSweepAxis) {
   // Identical bodies in a column along y at the same x: every sweep key ties,
   // and each overlaps its neighbours.
   Scene sc;
-  const std::vector<Sphere> shape = {{Vec3(0, 0, 0), 0.1}, {Vec3(0, 0.1, 0), 0.1}, {Vec3(0, 0, 0.1), 0.08}};
+  const std::vector<Sphere> shape = {
+      {Vec3(0, 0, 0), 0.1}, {Vec3(0, 0.1, 0), 0.1}, {Vec3(0, 0, 0.1), 0.08}};
   for (int b = 0; b < 6; ++b) sc.body(Vec3(0, 0.25 * b, 0), Quat::Identity(), shape);
   sc.finalize();
   const Model& m = sc.model;
@@ -612,7 +669,8 @@ TEST(CollisionRealTime, DeterministicWithTiesOnTheSweepAxis) {
   for (int b = 0; b < 6; ++b) d2.bodies[static_cast<std::size_t>(b)].position.x() = -1.0 * b;
   detect_contacts(m, d2);
   EXPECT_EQ(d2.num_contacts, 0);
-  for (int b = 0; b < 6; ++b) d2.bodies[static_cast<std::size_t>(b)] = d1.bodies[static_cast<std::size_t>(b)];
+  for (int b = 0; b < 6; ++b)
+    d2.bodies[static_cast<std::size_t>(b)] = d1.bodies[static_cast<std::size_t>(b)];
   detect_contacts(m, d1);
   detect_contacts(m, d2);
   EXPECT_EQ(d1.num_contacts, 5 * 1);  // sphere 1 of body b overlaps sphere 0 of body b+1 only

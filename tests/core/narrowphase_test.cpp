@@ -2,11 +2,11 @@
 // against sphere, plane, box and capsule on hand-computed cases, including the
 // degenerate ones (coincident centres, centre inside a box, centre on a
 // capsule's axis), which must give a finite unit normal.
-#include <cmath>
+#include "numen/core/narrowphase.hpp"
 
 #include <gtest/gtest.h>
 
-#include "numen/core/narrowphase.hpp"
+#include <cmath>
 
 namespace numen::core {
 namespace {
@@ -14,9 +14,12 @@ namespace {
 constexpr double kTol = 1e-12;
 
 void expect_vec(const Vec3& actual, const Vec3& expected, double tol = kTol) {
-  EXPECT_NEAR(actual.x(), expected.x(), tol) << "actual " << actual.transpose() << " expected " << expected.transpose();
-  EXPECT_NEAR(actual.y(), expected.y(), tol) << "actual " << actual.transpose() << " expected " << expected.transpose();
-  EXPECT_NEAR(actual.z(), expected.z(), tol) << "actual " << actual.transpose() << " expected " << expected.transpose();
+  EXPECT_NEAR(actual.x(), expected.x(), tol)
+      << "actual " << actual.transpose() << " expected " << expected.transpose();
+  EXPECT_NEAR(actual.y(), expected.y(), tol)
+      << "actual " << actual.transpose() << " expected " << expected.transpose();
+  EXPECT_NEAR(actual.z(), expected.z(), tol)
+      << "actual " << actual.transpose() << " expected " << expected.transpose();
 }
 
 void expect_unit(const Vec3& n) {
@@ -47,7 +50,8 @@ TEST(NarrowSphereSphere, ObliqueUnequalRadii) {
 
 TEST(NarrowSphereSphere, SeparatedOrTouchingGivesNoContact) {
   ContactGeometry g;
-  EXPECT_FALSE(sphere_sphere(Vec3(0, 0, 2.0), 1.0, Vec3::Zero(), 1.0, Vec3::Zero(), g));  // touching
+  EXPECT_FALSE(
+      sphere_sphere(Vec3(0, 0, 2.0), 1.0, Vec3::Zero(), 1.0, Vec3::Zero(), g));  // touching
   EXPECT_FALSE(sphere_sphere(Vec3(0, 3.0, 0), 1.0, Vec3::Zero(), 1.0, Vec3::Zero(), g));
   EXPECT_FALSE(spheres_overlap(Vec3(0, 0, 2.0), 1.0, Vec3::Zero(), 1.0));
   EXPECT_TRUE(spheres_overlap(Vec3(0, 0, 1.999), 1.0, Vec3::Zero(), 1.0));
@@ -107,7 +111,8 @@ TEST(NarrowSpherePlane, AboveOrTouchingGivesNoContact) {
 
 TEST(NarrowSphereBox, FaceRegion) {
   ContactGeometry g;
-  ASSERT_TRUE(sphere_box(Vec3(1.5, 0.5, 0.5), 1.0, Vec3::Zero(), Mat3::Identity(), Vec3(1, 2, 3), g));
+  ASSERT_TRUE(
+      sphere_box(Vec3(1.5, 0.5, 0.5), 1.0, Vec3::Zero(), Mat3::Identity(), Vec3(1, 2, 3), g));
   EXPECT_NEAR(g.depth, 0.5, kTol);
   expect_vec(g.normal, Vec3::UnitX());
   expect_vec(g.position, Vec3(0.75, 0.5, 0.5));
@@ -115,7 +120,8 @@ TEST(NarrowSphereBox, FaceRegion) {
 
 TEST(NarrowSphereBox, EdgeRegion) {
   ContactGeometry g;
-  ASSERT_TRUE(sphere_box(Vec3(1.3, 2.4, 0.0), 1.0, Vec3::Zero(), Mat3::Identity(), Vec3(1, 2, 3), g));
+  ASSERT_TRUE(
+      sphere_box(Vec3(1.3, 2.4, 0.0), 1.0, Vec3::Zero(), Mat3::Identity(), Vec3(1, 2, 3), g));
   EXPECT_NEAR(g.depth, 0.5, kTol);
   expect_vec(g.normal, Vec3(0.6, 0.8, 0.0));
   expect_vec(g.position, Vec3(1, 2, 0) - 0.25 * Vec3(0.6, 0.8, 0.0));
@@ -130,7 +136,8 @@ TEST(NarrowSphereBox, CentreInsideIsPushedOutThroughTheNearestFace) {
   // face point (1, 0, 0); deepest point 0.3; middle 0.65.
   expect_vec(g.position, Vec3(0.65, 0, 0));
 
-  ASSERT_TRUE(sphere_box(Vec3(0.3, -1.9, 1.0), 0.5, Vec3::Zero(), Mat3::Identity(), Vec3(1, 2, 3), g));
+  ASSERT_TRUE(
+      sphere_box(Vec3(0.3, -1.9, 1.0), 0.5, Vec3::Zero(), Mat3::Identity(), Vec3(1, 2, 3), g));
   expect_vec(g.normal, -Vec3::UnitY());
   EXPECT_NEAR(g.depth, 0.6, kTol);
   expect_vec(g.position, Vec3(0.3, -2.0 + 0.3, 1.0));
@@ -167,7 +174,8 @@ TEST(NarrowSphereBox, RotatedBox) {
 TEST(NarrowSphereBox, OutsideGivesNoContact) {
   ContactGeometry g;
   EXPECT_FALSE(sphere_box(Vec3(2.0, 0, 0), 1.0, Vec3::Zero(), Mat3::Identity(), Vec3(1, 2, 3), g));
-  EXPECT_FALSE(sphere_box(Vec3(1.8, 2.8, 0), 1.0, Vec3::Zero(), Mat3::Identity(), Vec3(1, 2, 3), g));  // corner gap
+  EXPECT_FALSE(sphere_box(Vec3(1.8, 2.8, 0), 1.0, Vec3::Zero(), Mat3::Identity(), Vec3(1, 2, 3),
+                          g));  // corner gap
 }
 
 // ---- sphere / capsule ------------------------------------------------------

@@ -6,8 +6,6 @@
 /// - the sort-and-sweep order of the dynamic bodies' world AABBs (insertion
 ///   sort of a preallocated index array, coherent between steps).
 
-#include <algorithm>
-#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -28,44 +26,41 @@ struct GridEntry {
   std::int32_t material = 0;   ///< Material of the owning obstacle (0 for a bare sphere list).
 };
 
-/// Compact copy of an entry's sphere stored in a cell (16 bytes, four per cache
-/// line): centre relative to StaticSphereGrid::origin and radius, in float.
-/// Only a conservative prefilter (see StaticSphereGrid::float_slack); the exact
-/// test uses the double GridEntry.
-struct GridItem {
-  float x = 0.0f, y = 0.0f, z = 0.0f;  ///< Centre − origin (m).
-  float radius = 0.0f;                 ///< m.
-};
-
 /// Uniform grid over the static spheres of a Model (world frame), built once.
 /// Each cell lists the spheres whose bounding box overlaps it (compressed row
 /// storage: cell_start has num_cells + 1 entries; cells are numbered
 /// x fastest, then y, then z, so a run of cells along x is one contiguous
-/// range of `items`). A sphere straddling several cells appears once per cell:
+/// range of items). A sphere straddling several cells appears once per cell:
 /// queries de-duplicate hits with a per-entry stamp (CollisionScratch).
 ///
 /// An *entry* is a (sphere, obstacle) pair: a static sphere listed by two
 /// sphere-set obstacles is two entries (and gives two contacts).
 struct StaticSphereGrid {
-  Vec3 origin = Vec3::Zero();   ///< World position of the grid's min corner (m).
-  double cell_size = 0.0;       ///< Edge length of a cubic cell (m); 0 = empty grid.
-  double inv_cell_size = 0.0;   ///< 1 / cell_size (1/m), 0 for an empty grid.
+  Vec3 origin = Vec3::Zero();  ///< World position of the grid's min corner (m).
+  double cell_size = 0.0;      ///< Edge length of a cubic cell (m); 0 = empty grid.
+  double inv_cell_size = 0.0;  ///< 1 / cell_size (1/m), 0 for an empty grid.
   Eigen::Vector3i dims = Eigen::Vector3i::Zero();  ///< Cells along x, y, z.
-  Vec3 bounds_min = Vec3::Zero();  ///< Union of the entries' bounding boxes (m).
-  Vec3 bounds_max = Vec3::Zero();  ///< Union of the entries' bounding boxes (m).
-  std::int32_t num_entries = 0;    ///< Distinct (sphere, obstacle) entries.
+  Vec3 bounds_min = Vec3::Zero();                  ///< Union of the entries' bounding boxes (m).
+  Vec3 bounds_max = Vec3::Zero();                  ///< Union of the entries' bounding boxes (m).
+  std::int32_t num_entries = 0;                    ///< Distinct (sphere, obstacle) entries.
   /// Absolute slack (m) added to the radii sum in the float prefilter so that it
   /// never rejects a pair the exact double test accepts (float rounding of
   /// coordinates up to the grid's extent); a query adds 1e-6 of its own radius.
   float float_slack = 0.0f;
   std::vector<std::int32_t> cell_start;    ///< Offsets into the per-item arrays, size cells+1.
   std::vector<std::int32_t> sphere_index;  ///< Sphere indices, grouped by cell.
-  std::vector<GridItem> items;             ///< Same order: compact sphere copies (prefilter).
   std::vector<std::int32_t> item_entry;    ///< Same order: entry of each item.
-  std::vector<GridEntry> entries;          ///< Size num_entries.
+  /// Same order, structure of arrays: compact float copy of each item's sphere,
+  /// centre relative to `origin` and radius (m). Only a conservative prefilter
+  /// (see float_slack); the exact test uses the double GridEntry.
+  std::vector<float> item_x, item_y, item_z, item_radius;
+  std::vector<GridEntry> entries;  ///< Size num_entries.
 
   /// True when no static sphere is registered.
   bool empty() const noexcept { return cell_size <= 0.0; }
+
+  /// Number of items (entries listed per cell, duplicates included).
+  int num_items() const noexcept { return static_cast<int>(item_entry.size()); }
 
   /// Number of cells.
   int num_cells() const noexcept { return dims.x() * dims.y() * dims.z(); }
@@ -73,20 +68,25 @@ struct StaticSphereGrid {
   /// Linear index of cell (x, y, z).
   int cell_index(int x, int y, int z) const noexcept { return (z * dims.y() + y) * dims.x() + x; }
 
-  /// Cell coordinate of world coordinate `v` along `axis`, clamped to the grid.
+  /// Cell coordinate of world coordinate `v` along `axis`, clamped to the grid
+  /// (NaN gives 0). Clamping to [0, dims − 1] first makes the truncation a
+  /// floor, without a call to std::floor (slow without SSE4.1).
   int cell_coord(double v, int axis) const noexcept {
-    const double f = std::floor((v - origin[axis]) * inv_cell_size);
+    double f = (v - origin[axis]) * inv_cell_size;
+    f = f > 0.0 ? f : 0.0;
     const double hi = static_cast<double>(dims[axis] - 1);
-    return static_cast<int>(std::clamp(f, 0.0, hi));
+    f = f < hi ? f : hi;
+    return static_cast<int>(f);
   }
 
   /// Cells overlapped by the world box [lo, hi]: false when the box misses
-  /// every entry (outside bounds_min/max), else the inclusive cell ranges.
+  /// every entry (outside bounds_min/max, or NaN), else the inclusive cell ranges.
   bool cell_range(const Vec3& lo, const Vec3& hi, Eigen::Vector3i& first,
                   Eigen::Vector3i& last) const noexcept {
     if (empty()) return false;
+    if (!((hi.array() >= bounds_min.array()).all() && (lo.array() <= bounds_max.array()).all()))
+      return false;
     for (int k = 0; k < 3; ++k) {
-      if (!(hi[k] >= bounds_min[k]) || !(lo[k] <= bounds_max[k])) return false;  // NaN: miss
       first[k] = cell_coord(lo[k], k);
       last[k] = cell_coord(hi[k], k);
     }

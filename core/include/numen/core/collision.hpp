@@ -7,14 +7,21 @@
 /// Pipeline of detect_contacts():
 ///   1. world centres c_w = x + R c_b of every body sphere, tight world AABB per body;
 ///   2. per body (index order): primitive obstacles (index order) culled by the
-///      body's bounding sphere against their AABB (plane: signed distance), then
-///      each sphere against the shape; the static sphere sets through the
-///      uniform grid (Model::static_grid), one query per sphere;
+///      body's AABB and bounding sphere against their AABB (plane: signed
+///      distance of the centre of mass), then each sphere against the shape;
+///      then the static sphere sets through the uniform grid
+///      (Model::static_grid), one query per sphere;
 ///   3. body–body: sort-and-sweep on the world AABBs along x (insertion sort of
-///      CollisionScratch::sweep_order), then sphere–sphere between the two
-///      bodies' spheres. body_a is the lower body index.
+///      CollisionScratch::sweep_order), then sphere–sphere between the spheres
+///      of the two bodies that meet the overlap of their AABBs. body_a is the
+///      lower body index.
 /// The order of the contacts is a pure function of the model and the body
 /// states (deterministic, independent of the scratch's history).
+///
+/// Coincident sphere centres (narrowphase.hpp fallbacks): against a static
+/// sphere or a sphere-set sphere, the normal points from that centre to the
+/// body's centre of mass; between two bodies, from b's centre of mass to a's;
+/// +z when those coincide too.
 
 #include <cstdint>
 #include <vector>
@@ -28,13 +35,17 @@ struct Data;
 
 /// Scratch of the collision stage, sized once by resize().
 struct CollisionScratch {
-  std::vector<Vec3> sphere_world;     ///< World centres of Model::body_spheres (m).
-  std::vector<Vec3> body_aabb_min;    ///< Tight world AABB of each body's spheres (m);
-  std::vector<Vec3> body_aabb_max;    ///< inverted (+inf, −inf) for a body without spheres.
+  std::vector<Vec3> sphere_world;                    ///< World centres of Model::body_spheres (m).
+  std::vector<double> sphere_x, sphere_y, sphere_z;  ///< Same centres as flat arrays (m).
+  std::vector<double> sphere_r;           ///< Radii of Model::body_spheres (m), copied by resize().
+  std::vector<Vec3> body_aabb_min;        ///< Tight world AABB of each body's spheres (m);
+  std::vector<Vec3> body_aabb_max;        ///< inverted (+inf, −inf) for a body without spheres.
   std::vector<std::int32_t> sweep_order;  ///< Bodies with spheres, sorted by body_aabb_min.x;
                                           ///< kept between steps (coherent insertion sort).
-  std::vector<std::uint32_t> entry_stamp;  ///< Per static grid entry: last query that hit it.
-  std::uint32_t stamp = 0;            ///< Current query id (wraps: the stamps are then cleared).
+  std::vector<std::int32_t> near_a;       ///< Body–body: spheres of each body near the other's
+  std::vector<std::int32_t> near_b;       ///< AABB; size = largest sphere count of a body.
+  std::vector<std::uint32_t> entry_stamp;  ///< Per static grid entry: last query that tested it.
+  std::uint32_t stamp = 0;  ///< Current query id (wraps: the stamps are then cleared).
   /// Sizes every buffer for `model`. Allocates: make_data() only.
   void resize(const Model& model);
 };

@@ -50,8 +50,8 @@ bool sphere_plane(const Vec3& c, double r, const Vec3& point, const Vec3& normal
 /// world, columns are the box axes) and half extents `half` (m). A centre
 /// inside the box (or on its surface) is pushed out through the nearest face
 /// (ties: x before y before z, + before −).
-bool sphere_box(const Vec3& c, double r, const Vec3& center, const Mat3& rotation,
-                const Vec3& half, ContactGeometry& out) noexcept;
+bool sphere_box(const Vec3& c, double r, const Vec3& center, const Mat3& rotation, const Vec3& half,
+                ContactGeometry& out) noexcept;
 
 /// Sphere against a capsule: segment centre `center`, unit axis `axis`, half
 /// length `half_length`, radius `radius` (m). A centre on the segment is pushed
