@@ -7,6 +7,7 @@
 #include <cmath>
 #include <filesystem>
 #include <limits>
+#include <iomanip>
 #include <sstream>
 #include <stdexcept>
 
@@ -271,7 +272,8 @@ void parse_device(const TomlTable& root, Scene& scene, const TomlTable*& body_ta
       cfg.trocar.point = a.point;
       cfg.trocar.orientation = Quat::FromTwoVectors(Vec3::UnitZ(), a.approach);
       std::ostringstream os;
-      os << "trocar placed behind the recorded tip centroid along the mean approach axis, standoff "
+      os << std::fixed << std::setprecision(1)
+         << "trocar placed behind the recorded tip centroid along the mean approach axis, standoff "
          << standoff * 1e3 << " mm (tip depths " << a.min_depth * 1e3 << "–" << a.max_depth * 1e3
          << " mm)";
       scene.trocar_note = os.str();
