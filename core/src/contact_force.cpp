@@ -12,15 +12,20 @@
 
 namespace numen::core {
 
-Vec3 contact_relative_velocity(const BodyState& a, const Vec3& r_a, const BodyState* b,
-                               const Vec3& r_b) noexcept {
+namespace {
+
+// Bodies of the public laws below, kept inline so that the per-contact loop of
+// compute_contact_forces() pays no call.
+
+inline Vec3 relative_velocity(const BodyState& a, const Vec3& r_a, const BodyState* b,
+                              const Vec3& r_b) noexcept {
   Vec3 v = a.linear_velocity + a.angular_velocity.cross(r_a);
   if (b != nullptr) v -= b->linear_velocity + b->angular_velocity.cross(r_b);
   return v;
 }
 
-ContactForceResult contact_penalty_force(const Vec3& normal, double depth, const Vec3& v_rel,
-                                         const MaterialPair& material) noexcept {
+inline ContactForceResult penalty_force(const Vec3& normal, double depth, const Vec3& v_rel,
+                                        const MaterialPair& material) noexcept {
   ContactForceResult out;
   const double v_n = normal.dot(v_rel);
   const double f_n = material.stiffness * depth - material.damping * v_n;
@@ -30,6 +35,18 @@ ContactForceResult contact_penalty_force(const Vec3& normal, double depth, const
     out.force = f_n * normal - material.friction * (v_rel - v_n * normal);
   }
   return out;
+}
+
+}  // namespace
+
+Vec3 contact_relative_velocity(const BodyState& a, const Vec3& r_a, const BodyState* b,
+                               const Vec3& r_b) noexcept {
+  return relative_velocity(a, r_a, b, r_b);
+}
+
+ContactForceResult contact_penalty_force(const Vec3& normal, double depth, const Vec3& v_rel,
+                                         const MaterialPair& material) noexcept {
+  return penalty_force(normal, depth, v_rel, material);
 }
 
 Mat3x12 contact_velocity_jacobian(const Vec3& r_a, const Vec3& r_b) noexcept {
@@ -66,6 +83,7 @@ void compute_contact_forces(const Model& model, Data& data) noexcept {
     ContactTerm& t = data.solver.contact_terms[static_cast<std::size_t>(i)];
     t.active = false;
     t.normal_force = 0.0;
+    t.normal_velocity = 0.0;
     t.r_a.setZero();
     t.r_b.setZero();
     c.force.setZero();
@@ -77,12 +95,13 @@ void compute_contact_forces(const Model& model, Data& data) noexcept {
         c.body_b >= 0 ? &data.bodies[static_cast<std::size_t>(c.body_b)] : nullptr;
     t.r_a = c.position - a.position;
     if (b != nullptr) t.r_b = c.position - b->position;
-    const Vec3 v_rel = contact_relative_velocity(a, t.r_a, b, t.r_b);
-    const ContactForceResult f = contact_penalty_force(
+    const Vec3 v_rel = relative_velocity(a, t.r_a, b, t.r_b);
+    const ContactForceResult f = penalty_force(
         c.normal, c.depth, v_rel, model.material_pairs[static_cast<std::size_t>(c.material_pair)]);
     if (!f.active) continue;
     t.active = true;
     t.normal_force = f.normal_force;
+    t.normal_velocity = c.normal.dot(v_rel);
     c.force = f.force;
     Wrench& wa = data.body_wrench[static_cast<std::size_t>(c.body_a)];
     wa.force += f.force;

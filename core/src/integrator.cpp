@@ -31,16 +31,100 @@ Vec3 point_velocity(const Vec6& u, const Vec3& r) noexcept {
   return u.head<3>() + u.tail<3>().cross(r);
 }
 
-/// Adds Jᵀ W J, J = [I, −[r]×] (3×6), to a body's 6×6 block.
-void add_contact_block(const Mat3& w, const Vec3& r, Mat6& block) noexcept {
-  // Jᵀ W J with J = [I, −S], S = [r]×, Sᵀ = −S and W symmetric:
-  //   [[W, −W S], [S W, −S W S]]; (W S)ᵀ = −S W, so only W S and S (W S) are formed.
-  const Mat3 sk = skew(r);
-  const Mat3 ws = w * sk;
-  block.topLeftCorner<3, 3>() += w;
-  block.topRightCorner<3, 3>() -= ws;
-  block.bottomLeftCorner<3, 3>() -= ws.transpose();
-  block.bottomRightCorner<3, 3>().noalias() -= sk * ws;
+/// Adds one body's share of a contact to its 6×6 block and right-hand side.
+/// With J = [I, −[r]×] (3×6, the body's part of G up to sign) and
+/// W = α n nᵀ + β I:
+///   Jᵀ W J = α g gᵀ + β Jᵀ J,  g = Jᵀ n = (n, r × n),
+/// and the impulse s n maps to Jᵀ (s n) = s g. The β Jᵀ J part is gathered in
+/// the body's IsotropicMoments and added once by add_isotropic_part().
+void add_contact_terms(double alpha, double beta, double impulse, const Vec3& n, const Vec3& r,
+                       Mat6& block, Vec6& rhs, IsotropicMoments& moments) noexcept {
+  Vec6 g;
+  g << n, r.cross(n);
+  rhs += impulse * g;
+  const Vec6 ag = alpha * g;
+  for (int j = 0; j < 6; ++j) block.col(j) += g(j) * ag;  // α g gᵀ, column by column
+  const Vec3 br = beta * r;
+  moments.sum += beta;
+  moments.first += br;
+  moments.second.noalias() += br * r.transpose();
+}
+
+/// Adds Σ β Jᵀ J = [[Σβ I, −[Σβ r]×], [[Σβ r]×, tr(Σβ r rᵀ) I − Σβ r rᵀ]]
+/// ([r]×ᵀ [r]× = |r|² I − r rᵀ) to a block. Only the lower triangle is
+/// written: mirror_lower() completes the block.
+void add_isotropic_part(const IsotropicMoments& m, Mat6& block) noexcept {
+  block.topLeftCorner<3, 3>().diagonal().array() += m.sum;
+  // [Σβ r]× in the bottom-left block, [v]× = [[0, −z, y], [z, 0, −x], [−y, x, 0]].
+  const Vec3& v = m.first;
+  block(3, 1) -= v.z();
+  block(3, 2) += v.y();
+  block(4, 0) += v.z();
+  block(4, 2) -= v.x();
+  block(5, 0) -= v.y();
+  block(5, 1) += v.x();
+  block.bottomRightCorner<3, 3>() -= m.second;
+  block.bottomRightCorner<3, 3>().diagonal().array() += m.second.trace();
+}
+
+/// out = B v for a 6×6 block, as a sum of scaled columns (fixed size, unrolled).
+void block_times(const Mat6& blk, const Vec6& v, Vec6& out) noexcept {
+  out = blk.col(0) * v(0) + blk.col(1) * v(1) + blk.col(2) * v(2) + blk.col(3) * v(3) +
+        blk.col(4) * v(4) + blk.col(5) * v(5);
+}
+
+/// Copies the lower triangle of a block into its upper triangle, so that the
+/// matrix-free product and the Cholesky factor (which reads the lower
+/// triangle) see the same exactly symmetric matrix.
+void mirror_lower(Mat6& block) noexcept {
+  for (int j = 1; j < 6; ++j)
+    for (int i = 0; i < j; ++i) block(i, j) = block(j, i);
+}
+
+/// Cholesky factorisation A = L Lᵀ of a 6×6 symmetric positive definite block
+/// (reads the lower triangle; Golub & Van Loan, Matrix Computations, Alg.
+/// 4.2.1). A non-positive pivot gives NaN, which the solve propagates and
+/// step()'s checks reject.
+void factor_block(const Mat6& a, BlockCholesky& f) noexcept {
+  Mat6& l = f.lower;
+#pragma GCC unroll 6
+  for (int j = 0; j < 6; ++j) {
+    double d = a(j, j);
+#pragma GCC unroll 6
+    for (int k = 0; k < j; ++k) d -= l(j, k) * l(j, k);
+    const double ljj = std::sqrt(d);
+    const double inv = 1.0 / ljj;
+    l(j, j) = ljj;
+    f.inv_diag(j) = inv;
+#pragma GCC unroll 6
+    for (int i = j + 1; i < 6; ++i) {
+      double v = a(i, j);
+#pragma GCC unroll 6
+      for (int k = 0; k < j; ++k) v -= l(i, k) * l(j, k);
+      l(i, j) = v * inv;
+    }
+  }
+}
+
+/// z = A⁻¹ r = L⁻ᵀ L⁻¹ r by forward and back substitution. The loops have
+/// compile-time bounds and are unrolled: this runs on every PCG iteration.
+void solve_block(const BlockCholesky& f, const Vec6& r, Vec6& z) noexcept {
+  const Mat6& l = f.lower;
+  Vec6 y;
+#pragma GCC unroll 6
+  for (int i = 0; i < 6; ++i) {
+    double v = r(i);
+#pragma GCC unroll 6
+    for (int k = 0; k < i; ++k) v -= l(i, k) * y(k);
+    y(i) = v * f.inv_diag(i);
+  }
+#pragma GCC unroll 6
+  for (int i = 5; i >= 0; --i) {
+    double v = y(i);
+#pragma GCC unroll 6
+    for (int k = i + 1; k < 6; ++k) v -= l(k, i) * z(k);
+    z(i) = v * f.inv_diag(i);
+  }
 }
 
 double dot(std::span<const Vec6> a, std::span<const Vec6> b) noexcept {
@@ -49,15 +133,40 @@ double dot(std::span<const Vec6> a, std::span<const Vec6> b) noexcept {
   return s;
 }
 
-void apply_preconditioner(const SolverScratch& s, std::span<const Vec6> r,
-                          std::span<Vec6> z) noexcept {
+/// z = P⁻¹ r (block-Jacobi preconditioner; 0 for bodies not in the solve).
+/// Returns r · z.
+double apply_preconditioner(const SolverScratch& s, std::span<const Vec6> r,
+                            std::span<Vec6> z) noexcept {
+  double rz = 0.0;
   for (std::size_t i = 0; i < r.size(); ++i) {
     if (s.in_solve[i]) {
-      z[i] = r[i];
-      s.block_llt[i].solveInPlace(z[i]);
+      solve_block(s.block_factor[i], r[i], z[i]);
+      rz += r[i].dot(z[i]);
     } else {
       z[i].setZero();
     }
+  }
+  return rz;
+}
+
+/// Adds the off-diagonal blocks of A to out: for each cross contact,
+/// out_a −= G_aᵀ W G_b in_b and out_b −= G_bᵀ W G_a in_a.
+void add_cross_terms(const SolverScratch& s, std::span<const Vec6> in,
+                     std::span<Vec6> out) noexcept {
+  for (int c = 0; c < s.num_cross_contacts; ++c) {
+    const CrossContact& x = s.cross_contacts[static_cast<std::size_t>(c)];
+    const auto a = static_cast<std::size_t>(x.body_a);
+    const auto b = static_cast<std::size_t>(x.body_b);
+    // u = G_a in_a − G_b in_b; the cross terms are out_a −= G_aᵀ W G_b in_b and
+    // out_b −= G_bᵀ W G_a in_a, with W v = α n (n · v) + β v.
+    const Vec3 ua = point_velocity(in[a], x.r_a);
+    const Vec3 ub = point_velocity(in[b], x.r_b);
+    const Vec3 wa = (x.weight_normal * x.normal.dot(ua)) * x.normal + x.weight_isotropic * ua;
+    const Vec3 wb = (x.weight_normal * x.normal.dot(ub)) * x.normal + x.weight_isotropic * ub;
+    out[a].head<3>() -= wb;
+    out[a].tail<3>() -= x.r_a.cross(wb);
+    out[b].head<3>() -= wa;
+    out[b].tail<3>() -= x.r_b.cross(wa);
   }
 }
 
@@ -75,9 +184,13 @@ void SolverScratch::resize(const Model& model) {
   direction.assign(n, Vec6::Zero());
   a_direction.assign(n, Vec6::Zero());
   block.assign(n, Mat6::Identity());
-  block_llt.assign(n, Eigen::LLT<Mat6>(Mat6::Identity()));
+  isotropic_moments.assign(n, IsotropicMoments{});
+  block_factor.assign(n, BlockCholesky{});
   in_solve.assign(n, 1);
   contact_terms.assign(static_cast<std::size_t>(kMaxContacts), ContactTerm{});
+  cross_contacts.assign(static_cast<std::size_t>(kMaxContacts), CrossContact{});
+  num_cross_contacts = 0;
+  coupled.assign(n, 0);
   coupled_body = -1;
   first_order = false;
   direct_body = -1;
@@ -90,11 +203,11 @@ void prepare_implicit_step(const Model& model, Data& data) noexcept {
     BodyState& st = data.bodies[i];
     const BodyModel& bm = model.bodies[i];
     s.twist0[i] << st.linear_velocity, st.angular_velocity;
-    s.inertia_world[i] = world_inertia(st.orientation, bm.inertia_body);
+    const Mat3 rot = st.orientation.toRotationMatrix();
+    s.inertia_world[i] = world_inertia(rot, bm.inertia_body);
     const int b = static_cast<int>(i);
     if (b == s.direct_body || is_first_order(s, b)) continue;
-    st.angular_velocity =
-        implicit_gyroscopic_velocity(st.orientation, bm.inertia_body, st.angular_velocity, h);
+    st.angular_velocity = implicit_gyroscopic_velocity(rot, bm.inertia_body, st.angular_velocity, h);
   }
 }
 
@@ -107,6 +220,8 @@ void build_implicit_system(const Model& model, Data& data) noexcept {
   for (std::size_t i = 0; i < n; ++i) {
     const int b = static_cast<int>(i);
     s.in_solve[i] = b != s.direct_body ? 1 : 0;
+    s.coupled[i] = 0;
+    s.isotropic_moments[i] = IsotropicMoments{};
     Mat6& blk = s.block[i];
     Vec6& rhs = s.rhs[i];
     if (!s.in_solve[i]) {
@@ -138,36 +253,49 @@ void build_implicit_system(const Model& model, Data& data) noexcept {
     s.rhs[i].tail<3>() -= h2 * g.k_r * s.twist0[i].tail<3>();
   }
 
-  // Active contacts: A += Gᵀ W G, b += h² K u0 = −h² k Gᵀ n (n · G u0).
+  // Active contacts: A += Gᵀ W G, b += h² K u0 = −h² k Gᵀ n v_n (v_n = n · G u0).
+  // W = (h c + h² k) n nᵀ + h μ (I − n nᵀ) = α n nᵀ + β I.
+  s.num_cross_contacts = 0;
   const int nc = active_contact_count(data);
   for (int c = 0; c < nc; ++c) {
     ContactTerm& t = s.contact_terms[static_cast<std::size_t>(c)];
     if (!t.active) continue;
     const Contact& ct = data.contacts[static_cast<std::size_t>(c)];
     const MaterialPair& mp = model.material_pairs[static_cast<std::size_t>(ct.material_pair)];
-    const Vec3& nrm = ct.normal;
-    const Mat3 nn = nrm * nrm.transpose();
-    t.weight = (h * mp.damping + h2 * mp.stiffness) * nn + (h * mp.friction) * (Mat3::Identity() - nn);
+    const double beta = h * mp.friction;
+    const double alpha = (h * mp.damping + h2 * mp.stiffness) - beta;
+    t.weight_normal = alpha;
+    t.weight_isotropic = beta;
+    const double impulse = -h2 * mp.stiffness * t.normal_velocity;  // b_a += Gᵀ_a (impulse n)
     const auto a = static_cast<std::size_t>(ct.body_a);
-    Vec3 v_rel0 = point_velocity(s.twist0[a], t.r_a);
-    if (ct.body_b >= 0) v_rel0 -= point_velocity(s.twist0[static_cast<std::size_t>(ct.body_b)], t.r_b);
-    const Vec3 imp = (-h2 * mp.stiffness * nrm.dot(v_rel0)) * nrm;
-    if (s.in_solve[a]) {
-      s.rhs[a].head<3>() += imp;
-      s.rhs[a].tail<3>() += t.r_a.cross(imp);
-      add_contact_block(t.weight, t.r_a, s.block[a]);
-    }
+    if (s.in_solve[a])
+      add_contact_terms(alpha, beta, impulse, ct.normal, t.r_a, s.block[a], s.rhs[a],
+                        s.isotropic_moments[a]);
     if (ct.body_b >= 0) {
       const auto b = static_cast<std::size_t>(ct.body_b);
-      if (s.in_solve[b]) {
-        s.rhs[b].head<3>() -= imp;
-        s.rhs[b].tail<3>() -= t.r_b.cross(imp);
-        add_contact_block(t.weight, t.r_b, s.block[b]);
+      if (s.in_solve[b])
+        add_contact_terms(alpha, beta, -impulse, ct.normal, t.r_b, s.block[b], s.rhs[b],
+                          s.isotropic_moments[b]);
+      if (s.in_solve[a] && s.in_solve[b]) {
+        s.coupled[a] = 1;
+        s.coupled[b] = 1;
+        CrossContact& x = s.cross_contacts[static_cast<std::size_t>(s.num_cross_contacts++)];
+        x.body_a = ct.body_a;
+        x.body_b = ct.body_b;
+        x.weight_normal = alpha;
+        x.weight_isotropic = beta;
+        x.normal = ct.normal;
+        x.r_a = t.r_a;
+        x.r_b = t.r_b;
       }
     }
   }
 
-  for (std::size_t i = 0; i < n; ++i) s.block_llt[i].compute(s.block[i]);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (s.in_solve[i]) add_isotropic_part(s.isotropic_moments[i], s.block[i]);
+    mirror_lower(s.block[i]);
+    factor_block(s.block[i], s.block_factor[i]);
+  }
 }
 
 void apply_implicit_system(const Model& /*model*/, const Data& data, std::span<const Vec6> in,
@@ -181,29 +309,12 @@ void apply_implicit_system(const Model& /*model*/, const Data& data, std::span<c
   const std::size_t n = data.bodies.size();
   for (std::size_t i = 0; i < n; ++i) {
     if (s.in_solve[i]) {
-      out[i].noalias() = s.block[i] * in[i];
+      block_times(s.block[i], in[i], out[i]);
     } else {
       out[i].setZero();
     }
   }
-  const int nc = active_contact_count(data);
-  for (int c = 0; c < nc; ++c) {
-    const Contact& ct = data.contacts[static_cast<std::size_t>(c)];
-    if (ct.body_b < 0) continue;
-    const ContactTerm& t = s.contact_terms[static_cast<std::size_t>(c)];
-    if (!t.active) continue;
-    const auto a = static_cast<std::size_t>(ct.body_a);
-    const auto b = static_cast<std::size_t>(ct.body_b);
-    if (!s.in_solve[a] || !s.in_solve[b]) continue;
-    // u = G_a in_a − G_b in_b; the cross terms are out_a −= G_aᵀ W G_b in_b and
-    // out_b −= G_bᵀ W G_a in_a.
-    const Vec3 wa = t.weight * point_velocity(in[a], t.r_a);
-    const Vec3 wb = t.weight * point_velocity(in[b], t.r_b);
-    out[a].head<3>() -= wb;
-    out[a].tail<3>() -= t.r_a.cross(wb);
-    out[b].head<3>() -= wa;
-    out[b].tail<3>() -= t.r_b.cross(wa);
-  }
+  add_cross_terms(s, in, out);
 }
 
 bool solve_implicit_system(const Model& model, Data& data) noexcept {
@@ -231,29 +342,46 @@ bool solve_implicit_system(const Model& model, Data& data) noexcept {
   }
   if (b_norm == 0.0) return true;
 
-  apply_preconditioner(s, r, z);
-  for (std::size_t i = 0; i < p.size(); ++i) p[i] = z[i];
-  double rz = dot(r, z);
+  double rz = apply_preconditioner(s, r, z);
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    p[i] = z[i];
+    if (!s.coupled[i]) ap[i] = r[i];  // B_i p_i = B_i B_i⁻¹ r_i
+  }
   double rel = 1.0;
   int it = 0;
   const int max_it = std::max(1, model.solver.max_iterations);
   while (it < max_it) {
     ++it;
-    apply_implicit_system(model, data, p, ap);
+    // ap = A p on the coupled bodies; the others' ap is kept by recurrence.
+    for (std::size_t i = 0; i < p.size(); ++i)
+      if (s.coupled[i]) block_times(s.block[i], p[i], ap[i]);
+    add_cross_terms(s, p, ap);
     const double pap = dot(p, ap);
     if (!(pap > 0.0)) break;  // breakdown (A not SPD numerically, or converged exactly)
     const double alpha = rz / pap;
+    double rr = 0.0;
     for (std::size_t i = 0; i < x.size(); ++i) {
       x[i] += alpha * p[i];
       r[i] -= alpha * ap[i];
+      rr += r[i].squaredNorm();
     }
-    rel = std::sqrt(dot(r, r)) / b_norm;
+    rel = std::sqrt(rr) / b_norm;
     if (rel <= model.solver.tolerance) break;
-    apply_preconditioner(s, r, z);
-    const double rz_new = dot(r, z);
+    double rz_new = 0.0;
+    for (std::size_t i = 0; i < r.size(); ++i) {
+      if (s.coupled[i]) {
+        solve_block(s.block_factor[i], r[i], z[i]);
+      } else {
+        z[i] -= alpha * p[i];  // B_i⁻¹ (r_i − α B_i p_i)
+      }
+      rz_new += r[i].dot(z[i]);
+    }
     const double beta = rz_new / rz;
     rz = rz_new;
-    for (std::size_t i = 0; i < p.size(); ++i) p[i] = z[i] + beta * p[i];
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      p[i] = z[i] + beta * p[i];
+      if (!s.coupled[i]) ap[i] = r[i] + beta * ap[i];  // B_i (z_i + β p_i)
+    }
   }
   data.solver_iterations = it;
   data.solver_residual = rel;

@@ -5,6 +5,8 @@
 
 #include <cmath>
 
+#include <Eigen/LU>
+
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"
 
@@ -18,9 +20,12 @@ Mat3 skew(const Vec3& v) noexcept {
   return m;
 }
 
+Mat3 world_inertia(const Mat3& rotation, const Mat3& inertia_body) noexcept {
+  return rotation * inertia_body * rotation.transpose();
+}
+
 Mat3 world_inertia(const Quat& q, const Mat3& inertia_body) noexcept {
-  const Mat3 r = q.toRotationMatrix();
-  return r * inertia_body * r.transpose();
+  return world_inertia(q.toRotationMatrix(), inertia_body);
 }
 
 Mat3 world_inertia_inverse(const Quat& q, const Mat3& inertia_body_inv) noexcept {
@@ -74,17 +79,28 @@ Vec3 gyroscopic_torque(const Mat3& inertia_world, const Vec3& omega) noexcept {
   return -omega.cross(inertia_world * omega);
 }
 
-Vec3 implicit_gyroscopic_velocity(const Quat& q, const Mat3& inertia_body,
+Vec3 implicit_gyroscopic_velocity(const Mat3& rotation, const Mat3& inertia_body,
                                   const Vec3& omega_world, double h) noexcept {
-  const Mat3 r = q.toRotationMatrix();
-  const Vec3 wb = r.transpose() * omega_world;
+  const Vec3 wb = rotation.transpose() * omega_world;
   const Vec3 iw = inertia_body * wb;
   const Vec3 f = h * wb.cross(iw);
-  const Mat3 jac = inertia_body + h * (skew(wb) * inertia_body - skew(iw));
-  const double det = jac.determinant();
-  if (!(std::abs(det) > 1e-300) || !std::isfinite(det)) return omega_world;
-  const Vec3 wb1 = wb - jac.inverse() * f;
-  return r * wb1;
+  // J = I_b + h ([ω_b]× I_b − [I_b ω_b]×), [ω_b]× I_b formed column by column.
+  Mat3 wb_ib;
+  for (int j = 0; j < 3; ++j) wb_ib.col(j) = wb.cross(inertia_body.col(j));
+  const Mat3 jac = inertia_body + h * (wb_ib - skew(iw));
+  // J⁻¹ = adj(J) / det J; the determinant is taken from the same cofactors.
+  Mat3 jac_inv;
+  double det = 0.0;
+  bool invertible = false;
+  jac.computeInverseAndDetWithCheck(jac_inv, det, invertible, 1e-300);
+  if (!invertible || !std::isfinite(det)) return omega_world;
+  const Vec3 wb1 = wb - jac_inv * f;
+  return rotation * wb1;
+}
+
+Vec3 implicit_gyroscopic_velocity(const Quat& q, const Mat3& inertia_body,
+                                  const Vec3& omega_world, double h) noexcept {
+  return implicit_gyroscopic_velocity(q.toRotationMatrix(), inertia_body, omega_world, h);
 }
 
 double kinetic_energy(const BodyModel& body, const BodyState& state) noexcept {

@@ -62,7 +62,7 @@ void contact_stiffness_damping(const Vec3& normal, const Vec3& r_a, const Vec3& 
 
 /// Contact force stage: for each contact in data.contacts[0, num_contacts)
 /// (filled by detect_contacts), computes the penalty force into
-/// Contact::force, the lever arms and activity into
+/// Contact::force, the lever arms, normal velocity v_n and activity into
 /// SolverScratch::contact_terms, and adds (F, r_a × F) to body_wrench[body_a]
 /// and (−F, −r_b × F) to body_wrench[body_b] (at the COMs, world). Contacts
 /// with an out-of-range body or material_pair index are ignored (force 0,

@@ -19,7 +19,6 @@
 #include <span>
 #include <vector>
 
-#include <Eigen/Cholesky>
 #include <Eigen/Core>
 
 #include "numen/core/types.hpp"
@@ -31,15 +30,49 @@ struct Data;
 struct BodyState;
 
 /// Linearisation of one contact for the implicit solve, filled by
-/// compute_contact_forces() (lever arms, activity) and the integrator (weight).
+/// compute_contact_forces() (lever arms, normal velocity, activity) and the
+/// integrator (weight).
 struct ContactTerm {
   Vec3 r_a = Vec3::Zero();   ///< Contact point − COM of body_a (m, world).
   Vec3 r_b = Vec3::Zero();   ///< Contact point − COM of body_b (m, world); zero when static.
   double normal_force = 0.0; ///< f_n (N), ≥ 0.
+  double normal_velocity = 0.0;  ///< v_n = n · v_rel at the step's start (m/s).
   bool active = false;       ///< f_n > 0: the contact contributes forces and Jacobians.
-  /// Weight W = (h c + h² k) n nᵀ + h μ (I − n nᵀ) (N·s/m): the contact's
-  /// contribution to A = M − hD − h²K is Gᵀ W G (G: contact_velocity_jacobian).
-  Mat3 weight = Mat3::Zero();
+  /// Weight W = (h c + h² k) n nᵀ + h μ (I − n nᵀ) = α n nᵀ + β I (N·s/m),
+  /// stored as its two scalars: the contact's contribution to A = M − hD − h²K
+  /// is Gᵀ W G (G: contact_velocity_jacobian).
+  double weight_normal = 0.0;   ///< α = h c + h² k − h μ (N·s/m).
+  double weight_isotropic = 0.0;  ///< β = h μ (N·s/m).
+};
+
+/// A body–body contact whose two bodies are both in the solve, packed by
+/// build_implicit_system() for the cross terms −G_aᵀ W G_b of the matrix-free
+/// product (apply_implicit_system()). Same quantities as Contact/ContactTerm.
+struct CrossContact {
+  int body_a = -1;
+  int body_b = -1;
+  double weight_normal = 0.0;     ///< α of ContactTerm (N·s/m).
+  double weight_isotropic = 0.0;  ///< β of ContactTerm (N·s/m).
+  Vec3 normal = Vec3::UnitZ();    ///< n, unit, from b towards a.
+  Vec3 r_a = Vec3::Zero();        ///< Lever arm on body_a (m, world).
+  Vec3 r_b = Vec3::Zero();        ///< Lever arm on body_b (m, world).
+};
+
+/// Moments of the isotropic contact weights β (ContactTerm::weight_isotropic)
+/// of one body over their lever arms r, accumulated by build_implicit_system():
+/// Σ β Jᵀ J = [[Σβ I, −[Σβ r]×], [[Σβ r]×, tr(Σβ r rᵀ) I − Σβ r rᵀ]], J = [I, −[r]×].
+struct IsotropicMoments {
+  double sum = 0.0;               ///< Σ β (N·s/m).
+  Vec3 first = Vec3::Zero();      ///< Σ β r (N·s).
+  Mat3 second = Mat3::Zero();     ///< Σ β r rᵀ (N·s·m).
+};
+
+/// Cholesky factor A_i = L Lᵀ of a 6×6 symmetric positive definite block:
+/// the lower triangle of `lower` holds L (the strict upper triangle is not
+/// used), `inv_diag` holds 1 / L_kk. Applied by forward and back substitution.
+struct BlockCholesky {
+  Mat6 lower = Mat6::Identity();
+  Vec6 inv_diag = Vec6::Ones();
 };
 
 /// Scratch of the integrator, sized once by resize(). Fixed-size Eigen types
@@ -55,9 +88,15 @@ struct SolverScratch {
   std::vector<Vec6> direction;          ///< CG search direction p.
   std::vector<Vec6> a_direction;        ///< CG A p.
   std::vector<Mat6> block;              ///< Diagonal 6×6 blocks of A (preconditioner).
-  std::vector<Eigen::LLT<Mat6>> block_llt;  ///< Cholesky factors of `block`.
+  std::vector<IsotropicMoments> isotropic_moments;  ///< Per body, this step's contacts.
+  std::vector<BlockCholesky> block_factor;  ///< Cholesky factors of `block` (preconditioner).
   std::vector<std::uint8_t> in_solve;   ///< 1: body's twist is unknown; 0: known (kDirect body).
   std::vector<ContactTerm> contact_terms;   ///< Size kMaxContacts, parallel to Data::contacts.
+  std::vector<CrossContact> cross_contacts;  ///< Size kMaxContacts; [0, num_cross_contacts) valid.
+  int num_cross_contacts = 0;  ///< Active body–body contacts in the solve this step.
+  /// 1: the body has a cross contact this step (off-diagonal blocks in its rows
+  /// of A); 0: its rows of A are its diagonal block only.
+  std::vector<std::uint8_t> coupled;
 
   int coupled_body = -1;     ///< Body whose coupling springs act this step (-1: none).
   bool first_order = false;  ///< coupled_body uses the massless (first-order) model this step.
@@ -70,7 +109,8 @@ struct SolverScratch {
 /// Integrate stage: dispatches on Model::integrator to
 /// integrate_linearly_implicit_euler() or integrate_symplectic_euler(). Needs
 /// Data::body_wrench (explicit forces: gravity, applied, coupling, contacts)
-/// and the ContactTerm lever arms of this step. Advances Data::bodies by dt.
+/// and the ContactTerm lever arms and normal velocities of this step.
+/// Advances Data::bodies by dt.
 void integrate(const Model& model, Data& data) noexcept;
 
 /// Symplectic (semi-implicit) Euler, the explicit baseline (paper §5):
@@ -98,15 +138,18 @@ void integrate_linearly_implicit_euler(const Model& model, Data& data) noexcept;
 void prepare_implicit_step(const Model& model, Data& data) noexcept;
 
 /// Builds the implicit system of the current step in Data::solver (after
-/// prepare_implicit_step()): contact weights, the 6×6 diagonal blocks of
-/// A = M − hD − h²K and their Cholesky factors, and the right-hand side
+/// prepare_implicit_step()): contact weights (α, β of ContactTerm), the 6×6
+/// diagonal blocks of A = M − hD − h²K (exactly symmetric) and their Cholesky
+/// factors, the packed body–body contacts (SolverScratch::cross_contacts) with
+/// the `coupled` flags, and the right-hand side
 ///   b = h (f0 + h K u0) + M (u* − u0),
 /// where u* is Data::bodies' twist after the implicit gyroscopic step (apply
 /// that to the state first), f0 = Data::body_wrench, K and D from the coupling
 /// springs of SolverScratch::coupled_body (−diag(k_t I3, k_r I3),
 /// −diag(γ_t I3, γ_r I3)) and each active contact (K = −k Gᵀ n nᵀ G,
-/// D = −c Gᵀ n nᵀ G − μ Gᵀ (I − n nᵀ) G). A first-order body (kFirstOrder,
-/// γ_t, γ_r > 0) has M_i := 0, giving (γ + h k) v1 = k e + γ v_t + F_other.
+/// D = −c Gᵀ n nᵀ G − μ Gᵀ (I − n nᵀ) G; K u0 uses the contact's normal
+/// velocity v_n = n · G u0 stored by compute_contact_forces()). A first-order
+/// body (kFirstOrder, γ_t, γ_r > 0) has M_i := 0, giving (γ + h k) v1 = k e + γ v_t + F_other.
 /// Rows of a kDirect body are removed (b_i = 0): its twist is known.
 void build_implicit_system(const Model& model, Data& data) noexcept;
 
@@ -124,6 +167,11 @@ void apply_implicit_system(const Model& model, const Data& data, std::span<const
 /// when converged. Exact in one iteration when A is block diagonal (no
 /// body–body contact). A non-finite b gives a NaN Δu (rejected by step()'s
 /// checks). Fixed summation order: bit-for-bit deterministic.
+/// For a body without cross contacts (SolverScratch::coupled = 0), (A p)_i =
+/// B_i p_i and z_i = B_i⁻¹ r_i satisfy the exact recurrences
+/// z_i ← z_i − α p_i and (A p)_i ← r_i + β (A p)_i, which replace its 6×6
+/// product and block solve in the iterations (same iterates in exact
+/// arithmetic).
 bool solve_implicit_system(const Model& model, Data& data) noexcept;
 
 }  // namespace numen::core

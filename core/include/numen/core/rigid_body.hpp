@@ -22,6 +22,9 @@ Mat3 skew(const Vec3& v) noexcept;
 /// orientation is `q` (unit, body → world) and body-frame inertia `inertia_body`.
 Mat3 world_inertia(const Quat& q, const Mat3& inertia_body) noexcept;
 
+/// Same, from the rotation matrix R (body → world) when the caller already has it.
+Mat3 world_inertia(const Mat3& rotation, const Mat3& inertia_body) noexcept;
+
 /// Inverse world inertia I_w⁻¹ = R I_b⁻¹ Rᵀ (1/(kg·m²)) from the precomputed
 /// body-frame inverse (BodyModel::inertia_body_inv).
 Mat3 world_inertia_inverse(const Quat& q, const Mat3& inertia_body_inv) noexcept;
@@ -56,6 +59,11 @@ Vec3 gyroscopic_torque(const Mat3& inertia_world, const Vec3& omega) noexcept;
 /// unchanged. Source: E. Catto, "Numerical Methods", GDC 2015; Bullet's
 /// btRigidBody::computeGyroscopicImpulseImplicit_Body.
 Vec3 implicit_gyroscopic_velocity(const Quat& q, const Mat3& inertia_body,
+                                  const Vec3& omega_world, double h) noexcept;
+
+/// Same, from the rotation matrix R of q (body → world) when the caller
+/// already has it (the implicit integrator shares it with world_inertia()).
+Vec3 implicit_gyroscopic_velocity(const Mat3& rotation, const Mat3& inertia_body,
                                   const Vec3& omega_world, double h) noexcept;
 
 /// Kinetic energy ½ m v·v + ½ ω·I_w ω (J) of a body in `state`.
