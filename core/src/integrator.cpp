@@ -83,8 +83,8 @@ void mirror_lower(Mat6& block) noexcept {
 
 /// Cholesky factorisation A = L Lᵀ of a 6×6 symmetric positive definite block
 /// (reads the lower triangle; Golub & Van Loan, Matrix Computations, Alg.
-/// 4.2.1). A non-positive pivot gives NaN, which the solve propagates and
-/// step()'s checks reject.
+/// 4.2.1). A non-positive pivot gives NaN; solve_implicit_system() then
+/// returns a non-finite result, which step()'s checks roll back.
 void factor_block(const Mat6& a, BlockCholesky& f) noexcept {
   Mat6& l = f.lower;
 #pragma GCC unroll 6
@@ -333,16 +333,19 @@ bool solve_implicit_system(const Model& model, Data& data) noexcept {
   const double b_norm = std::sqrt(dot(b, b));
   data.solver_iterations = 0;
   data.solver_residual = 0.0;
-  if (!std::isfinite(b_norm)) {
-    // Non-finite forces: make the result non-finite so that step()'s checks
-    // reject it, rather than silently dropping them.
+  // Non-finite forces or a non-positive pivot of a diagonal block (NaN in the
+  // factor): make the result non-finite so that step()'s checks roll the step
+  // back, rather than silently dropping every force of this step.
+  const auto poison = [&]() noexcept {
     for (Vec6& v : x) v.setConstant(std::numeric_limits<double>::quiet_NaN());
     data.solver_residual = std::numeric_limits<double>::quiet_NaN();
     return false;
-  }
+  };
+  if (!std::isfinite(b_norm)) return poison();
   if (b_norm == 0.0) return true;
 
   double rz = apply_preconditioner(s, r, z);
+  if (!std::isfinite(rz)) return poison();
   for (std::size_t i = 0; i < p.size(); ++i) {
     p[i] = z[i];
     if (!s.coupled[i]) ap[i] = r[i];  // B_i p_i = B_i B_i⁻¹ r_i
@@ -357,6 +360,7 @@ bool solve_implicit_system(const Model& model, Data& data) noexcept {
       if (s.coupled[i]) block_times(s.block[i], p[i], ap[i]);
     add_cross_terms(s, p, ap);
     const double pap = dot(p, ap);
+    if (!std::isfinite(pap)) return poison();
     if (!(pap > 0.0)) break;  // breakdown (A not SPD numerically, or converged exactly)
     const double alpha = rz / pap;
     double rr = 0.0;
@@ -376,6 +380,7 @@ bool solve_implicit_system(const Model& model, Data& data) noexcept {
       }
       rz_new += r[i].dot(z[i]);
     }
+    if (!std::isfinite(rz_new)) return poison();
     const double beta = rz_new / rz;
     rz = rz_new;
     for (std::size_t i = 0; i < p.size(); ++i) {

@@ -36,7 +36,10 @@ const PeriodReport& ControlLoop::end_period(std::int64_t now_ns) noexcept {
   report_.step_ns = monotonic_now_ns() - t0;
   step_time_.record(report_.step_ns);
 
-  if (sample.ready && data_->attached_body >= 0) {
+  // Torque only from a sample checked this period: a stale or rejected sample
+  // keeps the last good target for the god-object, but the drives get zero
+  // torque until fresh plausible data arrive (no "hold the last command").
+  if (sample.valid && data_->attached_body >= 0) {
     report_.command_status = device_->command(data_->feedback_wrench, *bus_, now_ns);
   } else {
     ++counters_.periods_zero_torque;

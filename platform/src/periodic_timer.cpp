@@ -15,6 +15,7 @@ PeriodicTimer::PeriodicTimer(std::int64_t period_ns, std::int64_t start_ns) noex
 Wakeup PeriodicTimer::wait_next() noexcept {
   Wakeup w;
   const std::int64_t now = monotonic_now_ns();
+  w.overrun = now > next_ns_;
   if (now > next_ns_ + period_ns_) {  // late by at least one whole period: skip, do not burst
     w.missed_periods = (now - next_ns_) / period_ns_;
     next_ns_ += w.missed_periods * period_ns_;

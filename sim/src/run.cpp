@@ -146,16 +146,24 @@ RunSummary run_scene(const Scene& scene, const RunOptions& options) {
   const double duration = options.duration_s >= 0.0 ? options.duration_s : scene.duration_s;
   const auto steps = static_cast<std::int64_t>(std::llround(duration / scene.model.dt));
   SceneRunner runner(scene, options.trace_path.empty() ? 0 : static_cast<std::size_t>(steps));
-  std::int64_t overruns = 0;
+  std::int64_t overruns = 0, missed = 0;
+  platform::LatencyHistogram wakeup;
   const std::int64_t wall0 = platform::monotonic_now_ns();
   platform::PeriodicTimer timer(static_cast<std::int64_t>(std::llround(scene.model.dt * 1e9)), wall0);
   for (std::int64_t k = 0; k < steps; ++k) {
-    if (options.realtime) overruns += timer.wait_next().missed_periods;
+    if (options.realtime) {
+      const platform::Wakeup w = timer.wait_next();
+      overruns += w.overrun ? 1 : 0;
+      missed += w.missed_periods;
+      wakeup.record(w.latency_ns());
+    }
     runner.period();
   }
   RunSummary s = runner.summary();
   s.wall_time_s = static_cast<double>(platform::monotonic_now_ns() - wall0) * 1e-9;
   s.realtime_overruns = overruns;
+  s.realtime_missed_periods = missed;
+  s.wakeup_latency_us = summarize_ns(wakeup);
   if (!options.trace_path.empty()) runner.trace().write_csv(options.trace_path);
   return s;
 }
@@ -183,7 +191,10 @@ std::string format_summary(const RunSummary& s) {
      << s.invalid_periods << ", frames dropped " << s.bus_frames_dropped << ", corrupted "
      << s.bus_frames_corrupted << "\n";
   os << "  nan detected: " << (s.nan_detected ? "YES" : "no");
-  if (s.realtime_overruns) os << ", realtime overruns " << s.realtime_overruns;
+  if (s.wakeup_latency_us.max > 0.0)
+    os << "\n  realtime: wake-up latency us median " << s.wakeup_latency_us.median << ", p99 "
+       << s.wakeup_latency_us.p99 << ", max " << s.wakeup_latency_us.max << "; overruns "
+       << s.realtime_overruns << ", missed periods " << s.realtime_missed_periods;
   os << "\n";
   for (const auto& w : s.warnings) os << "  warning: " << w << "\n";
   return os.str();
@@ -249,6 +260,10 @@ std::string format_summary_json(const RunSummary& s) {
   integer("bus_frames_dropped", s.bus_frames_dropped);
   integer("bus_frames_corrupted", s.bus_frames_corrupted);
   integer("realtime_overruns", s.realtime_overruns);
+  integer("realtime_missed_periods", s.realtime_missed_periods);
+  os << "\"wakeup_latency_us\":{\"median\":" << json_number(s.wakeup_latency_us.median)
+     << ",\"p99\":" << json_number(s.wakeup_latency_us.p99) << ",\"max\":" << json_number(s.wakeup_latency_us.max)
+     << "},";
   os << "\"warnings\":[";
   for (std::size_t i = 0; i < s.warnings.size(); ++i) os << (i ? "," : "") << json_string(s.warnings[i]);
   os << "],";

@@ -12,9 +12,9 @@
 #include <stdexcept>
 
 #include "numen/hal/kinematics_factory.hpp"
-#include "numen/hal/trocar_kinematics.hpp"
 #include "numen/sim/jigsaws.hpp"
 #include "numen/sim/scripted_path.hpp"
+#include "numen/sim/simulated_instrument.hpp"
 #include "numen/sim/trocar_placement.hpp"
 #include "scene_model.hpp"
 #include "toml_reader.hpp"
@@ -309,17 +309,7 @@ void parse_device(const TomlTable& root, Scene& scene, const TomlTable*& body_ta
 /// Controlled-frame pose the device reports for the trajectory's first sample.
 core::Pose first_device_pose(const Scene& scene) {
   const auto kin = hal::make_kinematics(scene.device);
-  const TrajectorySample s0 = scene.trajectory.at(0.0);
-  hal::AxisVector q;
-  if (scene.device.kind == hal::DeviceKind::kTrocarInstrument) {
-    q = static_cast<const hal::TrocarKinematics&>(*kin).inverse_tool(s0.pose, s0.jaw);
-  } else {
-    core::Pose controlled;
-    controlled.position = s0.pose.position + s0.pose.orientation * scene.device.tool_offset.position;
-    controlled.orientation = s0.pose.orientation * scene.device.tool_offset.orientation;
-    q = kin->inverse(controlled, hal::AxisVector());
-  }
-  return kin->forward(q);
+  return kin->forward(instrument_axes(scene.device, *kin, scene.trajectory.at(0.0)));
 }
 
 }  // namespace
@@ -390,6 +380,8 @@ Scene load_scene(const std::string& path, const SceneOverrides& overrides) {
     scene.compute_phase_s = 2.0 * latency + 50e-6;
   }
   scene.bus.latency_ns = static_cast<std::int64_t>(std::llround(latency * 1e9));
+  if (std::llround(scene.compute_phase_s * 1e9) < 2 * scene.bus.latency_ns)  // after rounding to ns
+    scene.compute_phase_s = 2.0 * static_cast<double>(scene.bus.latency_ns) * 1e-9;
   if (!(scene.compute_phase_s < scene.model.dt))
     root.fail("dt", "the period is shorter than one SYNC round trip on the bus (2·latency + 50 µs)");
 

@@ -127,6 +127,8 @@ void parse_sphere_grids(const TomlTable& t, std::vector<Sphere>& out) {
         g.fail("counts", "each count must be a whole number in [1, 1000]");
       n[k] = static_cast<int>(counts[k]);
     }
+    if (static_cast<double>(n[0]) * n[1] * n[2] > 1e6)
+      g.fail("counts", "more than a million spheres in one grid");
     for (int i = 0; i < n[0]; ++i)
       for (int j = 0; j < n[1]; ++j)
         for (int k = 0; k < n[2]; ++k) {

@@ -16,14 +16,19 @@ SimulatedInstrument::SimulatedInstrument(const hal::DeviceConfig& config,
       kinematics_(hal::make_kinematics(config)),
       emulator_(config) {}
 
-hal::AxisVector SimulatedInstrument::axes_at(std::int64_t t_ns) const noexcept {
-  const TrajectorySample s = trajectory_->at(static_cast<double>(t_ns - start_ns_) * 1e-9);
-  if (config_.kind == hal::DeviceKind::kTrocarInstrument)
-    return static_cast<const hal::TrocarKinematics&>(*kinematics_).inverse_tool(s.pose, s.jaw);
+hal::AxisVector instrument_axes(const hal::DeviceConfig& config, const hal::Kinematics& kinematics,
+                                const TrajectorySample& s) noexcept {
+  if (config.kind == hal::DeviceKind::kTrocarInstrument)
+    return static_cast<const hal::TrocarKinematics&>(kinematics).inverse_tool(s.pose, s.jaw);
   core::Pose controlled;  // tracked frame · tool_offset
-  controlled.position = s.pose.position + s.pose.orientation * config_.tool_offset.position;
-  controlled.orientation = s.pose.orientation * config_.tool_offset.orientation;
-  return kinematics_->inverse(controlled, hal::AxisVector());
+  controlled.position = s.pose.position + s.pose.orientation * config.tool_offset.position;
+  controlled.orientation = s.pose.orientation * config.tool_offset.orientation;
+  return kinematics.inverse(controlled, hal::AxisVector());
+}
+
+hal::AxisVector SimulatedInstrument::axes_at(std::int64_t t_ns) const noexcept {
+  return instrument_axes(config_, *kinematics_,
+                         trajectory_->at(static_cast<double>(t_ns - start_ns_) * 1e-9));
 }
 
 core::Pose SimulatedInstrument::controlled_pose_at(std::int64_t t_ns) const noexcept {

@@ -5,6 +5,7 @@
 #include "numen/core/integrator.hpp"
 
 #include <cmath>
+#include <limits>
 #include <cstdio>
 #include <vector>
 
@@ -360,6 +361,22 @@ TEST(Integrator, SolverReportsNonConvergenceAtMaxIterations) {
   EXPECT_EQ(d.solver_iterations, 1);
   EXPECT_GT(d.solver_residual, m.solver.tolerance);
   EXPECT_TRUE(d.status & core::kSolverNotConverged);
+}
+
+TEST(Integrator, BrokenDiagonalFactorGivesANonFiniteResultNotASilentlyForceFreeStep) {
+  // A non-positive pivot leaves NaN in a block's Cholesky factor. The solve must
+  // then return a non-finite Δu (so that step() rolls the step back), not stop
+  // with Δu = 0 and let every body coast without its forces.
+  core::Model m = stack_model(core::Integrator::kLinearlyImplicitEuler);
+  core::Data d = core::make_data(m);
+  fill_stack_contacts(d);
+  core::compute_forces(m, d);
+  core::prepare_implicit_step(m, d);
+  core::build_implicit_system(m, d);
+  d.solver.block_factor[0].inv_diag(0) = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_FALSE(core::solve_implicit_system(m, d));
+  EXPECT_FALSE(d.solver.delta[0].allFinite());
+  EXPECT_TRUE(std::isnan(d.solver_residual));
 }
 
 TEST(Integrator, StageCallsWithBodyBodyContactsDoNotAllocate) {

@@ -33,7 +33,7 @@ struct ControlLoopCounters {
   std::uint64_t periods = 0;          ///< end_period() calls.
   std::uint64_t sync_write_failures = 0;  ///< SYNC writes not accepted by the bus.
   std::uint64_t command_failures = 0;     ///< Periods whose torque writes did not all succeed.
-  std::uint64_t periods_zero_torque = 0;  ///< Periods that sent zero torque (no body held, or device not ready).
+  std::uint64_t periods_zero_torque = 0;  ///< Periods that sent zero torque (no body held, or no valid sample).
 };
 
 /// The control loop of one instrument driving one core::Data.
@@ -50,13 +50,16 @@ class ControlLoop {
   /// Ends the period at bus time `now_ns` (after the encoders answered): reads the
   /// frames, checks the sample, sets data.target/target_twist when the device is
   /// ready (a rejected sample keeps the last good target inside the device), runs
-  /// one core::step, then sends the torques for data.feedback_wrench (zero torque
-  /// while no body is attached or the device is not ready).
+  /// one core::step, then sends the torques for data.feedback_wrench — zero
+  /// torque while no body is attached or this period's sample is not valid
+  /// (stale, rejected, or the device not ready).
   const PeriodReport& end_period(std::int64_t now_ns) noexcept;
 
   /// Wall time of core::step per period (ns).
   const LatencyHistogram& step_time() const noexcept { return step_time_; }
+  /// Counters since construction.
   const ControlLoopCounters& counters() const noexcept { return counters_; }
+  /// What the last end_period() did.
   const PeriodReport& last_report() const noexcept { return report_; }
 
  private:

@@ -22,12 +22,16 @@ class LatencyHistogram {
   void record(std::int64_t ns) noexcept;
   /// Clears all counts.
   void reset() noexcept;
+  /// Samples recorded.
   std::int64_t count() const noexcept { return count_; }
+  /// Smallest sample (ns), 0 when empty.
   std::int64_t min() const noexcept { return count_ ? min_ : 0; }
+  /// Largest sample (ns), 0 when empty.
   std::int64_t max() const noexcept { return max_; }
+  /// Mean of the samples (ns), 0 when empty.
   double mean() const noexcept { return count_ ? static_cast<double>(sum_) / count_ : 0.0; }
-  /// Value at quantile q in [0, 1] (upper edge of its bucket, clamped to the
-  /// observed max); 0 when empty.
+  /// Value (ns) at quantile q in [0, 1] (upper edge of its bucket, clamped to
+  /// the observed max); 0 when empty.
   std::int64_t quantile(double q) const noexcept;
 
   /// Bucket of a value, and the inclusive upper edge of a bucket (for tests/export).

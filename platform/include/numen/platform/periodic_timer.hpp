@@ -12,7 +12,12 @@ namespace numen::platform {
 struct Wakeup {
   std::int64_t deadline_ns = 0;  ///< The absolute deadline that was waited for.
   std::int64_t woke_ns = 0;      ///< When the thread actually resumed.
-  std::int64_t missed_periods = 0;  ///< Whole periods skipped because the caller was late (overrun).
+  std::int64_t missed_periods = 0;  ///< Whole periods skipped because the caller was late.
+  /// The caller reached wait_next() after the deadline: the previous period
+  /// overran (counted even when less than a whole period late).
+  bool overrun = false;
+  /// Wake-up latency woke_ns − deadline_ns (ns); with overrun, how late.
+  std::int64_t latency_ns() const noexcept { return woke_ns - deadline_ns; }
 };
 
 /// Periodic timer on CLOCK_MONOTONIC. Not thread-safe; one per loop.
@@ -24,6 +29,7 @@ class PeriodicTimer {
   /// or more whole periods, the missed deadlines are skipped (counted in
   /// missed_periods) so the loop re-phases instead of bursting.
   Wakeup wait_next() noexcept;
+  /// The period (ns).
   std::int64_t period_ns() const noexcept { return period_ns_; }
 
  private:

@@ -69,7 +69,9 @@ struct RunSummary {
   std::int64_t nonfinite_steps = 0;
   std::int64_t bus_frames_dropped = 0;
   std::int64_t bus_frames_corrupted = 0;
-  std::int64_t realtime_overruns = 0;      ///< Periods missed when paced (--realtime).
+  std::int64_t realtime_overruns = 0;      ///< Paced periods (--realtime) that began after their deadline.
+  std::int64_t realtime_missed_periods = 0;  ///< Whole periods skipped to re-phase after overruns.
+  DurationSummary wakeup_latency_us;       ///< Paced runs: wake-up time − deadline (µs).
   std::vector<std::string> warnings;
   std::string trocar_note;
 };

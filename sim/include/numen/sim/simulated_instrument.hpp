@@ -18,6 +18,14 @@
 
 namespace numen::sim {
 
+/// Axis values (m or rad) that put an instrument of `config` (with its
+/// `kinematics`, built from the same config) at the tool-frame pose of
+/// `sample`: trocar instrument — inverse kinematics of the tip through the
+/// trocar, jaw from the sample; pose tracker — inverse kinematics of the
+/// tracked frame · tool_offset. noexcept, no allocation.
+hal::AxisVector instrument_axes(const hal::DeviceConfig& config, const hal::Kinematics& kinematics,
+                                const TrajectorySample& sample) noexcept;
+
 /// A simulated instrument on the device port of a bus. Construction allocates
 /// and may throw std::invalid_argument (invalid config); poll() is noexcept
 /// and allocation free.
