@@ -179,7 +179,7 @@ TrajectorySample ScriptedPath::evaluate_segment(const Resolved& s, double tau) n
       }
       break;
   }
-  out.pose.orientation = quat_from_rotation_vector(s.spin * tau) * base;
+  out.pose.orientation = core::quat_exp(s.spin * tau) * base;
   out.pose.orientation.normalize();
   return out;
 }

@@ -15,7 +15,6 @@ namespace {
 
 /// Below this norm of the quaternion's vector part (≈ half the angle, rad)
 /// the series forms are used; their error is O(n²) relative, i.e. < 1e-16.
-constexpr double kSmallAngle = 1e-8;
 
 /// A time within this fraction of a period of a sample instant is that
 /// instant, so that at(i · period) returns sample i bit for bit.
@@ -29,29 +28,9 @@ bool finite(const core::Vec3& v) { return v.allFinite(); }
 
 }  // namespace
 
-core::Vec3 rotation_vector(const core::Quat& q) noexcept {
-  // Shortest arc: use the representative with w >= 0.
-  const double sign = q.w() < 0.0 ? -1.0 : 1.0;
-  const double w = sign * q.w();
-  const core::Vec3 v = sign * q.vec();
-  const double n = v.norm();
-  const double factor = n > kSmallAngle ? 2.0 * std::atan2(n, w) / n : 2.0 / w;
-  return factor * v;
-}
-
-core::Quat quat_from_rotation_vector(const core::Vec3& v) noexcept {
-  const double angle = v.norm();
-  const double half = 0.5 * angle;
-  const double s = angle > kSmallAngle ? std::sin(half) / angle : 0.5 - angle * angle / 48.0;
-  core::Quat q;
-  q.w() = std::cos(half);
-  q.vec() = s * v;
-  return q;
-}
-
 core::Quat slerp_shortest(const core::Quat& q0, const core::Quat& q1, double s) noexcept {
-  const core::Vec3 v = rotation_vector(q1 * q0.conjugate());
-  core::Quat q = quat_from_rotation_vector(s * v) * q0;
+  const core::Vec3 v = core::quat_log(q1 * q0.conjugate());
+  core::Quat q = core::quat_exp(s * v) * q0;
   q.normalize();
   return q;
 }
@@ -140,7 +119,7 @@ core::Twist Trajectory::twist_at(double t) const noexcept {
   const TrajectorySample& b = samples_[i + 1];
   const double inv = 1.0 / period_;
   twist.linear = (b.pose.position - a.pose.position) * inv;
-  twist.angular = rotation_vector(b.pose.orientation * a.pose.orientation.conjugate()) * inv;
+  twist.angular = core::quat_log(b.pose.orientation * a.pose.orientation.conjugate()) * inv;
   return twist;
 }
 

@@ -13,6 +13,7 @@
 #include <span>
 #include <vector>
 
+#include "numen/core/rigid_body.hpp"
 #include "numen/core/types.hpp"
 
 namespace numen::sim {
@@ -24,14 +25,8 @@ struct TrajectorySample {
   double jaw = 0.0;   ///< Jaw / gripper opening angle (rad).
 };
 
-/// Rotation vector (axis · angle, rad) of the rotation `q`, taken on the
-/// shortest arc: q and -q give the same vector, and the angle is in [0, π].
-/// `q` must be a unit quaternion. Accurate for tiny angles (no acos).
-core::Vec3 rotation_vector(const core::Quat& q) noexcept;
-
-/// Unit quaternion of the rotation vector `v` (axis · angle, rad): the
-/// inverse of rotation_vector() for angles in [0, π]. Accurate for tiny angles.
-core::Quat quat_from_rotation_vector(const core::Vec3& v) noexcept;
+// Rotation vectors (axis · angle, shortest arc) and their quaternions are
+// core::quat_log() / core::quat_exp() (numen/core/rigid_body.hpp).
 
 /// Rotation between `q0` (s = 0) and `q1` (s = 1) on the shortest arc:
 /// exp(s · log(q1 q0⁻¹)) q0, i.e. a rotation about a fixed world axis at a
@@ -83,7 +78,7 @@ class Trajectory {
   /// the tip (m/s) and world angular velocity (rad/s), as the finite
   /// difference over the sample interval that contains `t` — the exact
   /// derivative of the interpolation used by at(): (p[i+1] - p[i]) / period
-  /// and rotation_vector(q[i+1] q[i]⁻¹) / period. At a sample instant the
+  /// and core::quat_log(q[i+1] q[i]⁻¹) / period. At a sample instant the
   /// interval that starts there is used (the last interval at t = duration()).
   /// Zero outside [0, duration()] (the clamped pose does not move) and for a
   /// trajectory of fewer than two samples. Real-time safe.
