@@ -110,6 +110,23 @@ std::string finalize_model(Model& model) {
     return "initial attached body index out of range";
   if (model.solver.max_iterations < 1 || !(model.solver.tolerance > 0.0))
     return "solver needs max_iterations >= 1 and tolerance > 0";
+  const BaumgarteSettings& bg = model.baumgarte;
+  if (!(bg.alpha_dt >= 0.0) || !(bg.beta_dt2 >= 0.0) || !std::isfinite(bg.alpha_dt) ||
+      !std::isfinite(bg.beta_dt2))
+    return "baumgarte: alpha_dt and beta_dt2 must be finite and >= 0";
+  for (JointModel& j : model.joints) {
+    const std::string who = "joint '" + j.name + "'";
+    for (const Pose* f : {&j.frame_parent, &j.frame_child})
+      if (!finite(f->position) || !f->orientation.coeffs().allFinite() || f->orientation.norm() < 1e-9)
+        return who + ": frames must be finite with a non-zero quaternion";
+    j.frame_parent.orientation.normalize();
+    j.frame_child.orientation.normalize();
+    if (j.prescribed && !joint_can_be_prescribed(j.type))
+      return who + ": only revolute and prismatic joints can be prescribed (got " +
+             to_string(j.type) + ")";
+    j.num_rows = joint_row_count(j.type, j.prescribed);
+  }
+  if (std::string e = build_articulation_topology(model); !e.empty()) return e;
   build_collision_structures(model);
   return {};
 }

@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "numen/core/articulation.hpp"
 #include "numen/core/capacity.hpp"
 #include "numen/core/collision.hpp"
 #include "numen/core/contact.hpp"
@@ -25,6 +26,34 @@ struct BodyState {
   Quat orientation = Quat::Identity();     ///< Unit, body → world.
   Vec3 linear_velocity = Vec3::Zero();     ///< m/s.
   Vec3 angular_velocity = Vec3::Zero();    ///< rad/s, world frame.
+};
+
+/// Target of one body's own coupling springs (paper Eq. 6): the pose and
+/// twist of its counterpart on the device, world frame, at the body's COM.
+/// Bodies without an enabled target are left to the simulation (partial control).
+struct BodyTarget {
+  Pose pose;
+  Twist twist;
+  bool enabled = false;
+};
+
+/// Imposed coordinate of a prescribed joint (JointModel::prescribed): angle
+/// (rad) and rate (rad/s) of a revolute, slide (m) and rate (m/s) of a prismatic.
+struct JointPrescription {
+  double value = 0.0;
+  double rate = 0.0;
+};
+
+/// What the articulation solve did to one joint in the last step (observable
+/// drift, Baumgarte terms and reaction; paper Eq. 4–5).
+struct JointState {
+  JointVector position_error = JointVector::Zero();  ///< C at the step's end (m or rad per row).
+  /// Right-hand side c of the joint's rows in G Δu = c (m/s or rad/s): the
+  /// Baumgarte-stabilised velocity change the rows ask for this step.
+  JointVector baumgarte_rhs = JointVector::Zero();
+  JointVector multiplier = JointVector::Zero();  ///< λ per row (N or N·m): force of the constraint.
+  Wrench reaction;            ///< G_childᵀ λ: the joint's wrench on the child (N, N·m; world; at the child's COM).
+  double coordinate = 0.0;    ///< joint_coordinate() at the step's end (rad or m).
 };
 
 /// Status bits of the last step (Data::status).
@@ -48,6 +77,10 @@ struct Data {
   Pose target;                     ///< Device target pose of the attached body's COM frame (world).
   Twist target_twist;              ///< Device target twist (world).
   std::vector<Wrench> applied_wrench;  ///< Per body, world, at the COM (admittance input, N, N·m).
+  /// Per body: its own device target (Eq. 6) besides the attached body's
+  /// `target`. An enabled entry of the attached body itself is ignored.
+  std::vector<BodyTarget> body_targets;
+  std::vector<JointPrescription> joint_prescribed;  ///< Per joint; read for prescribed joints only.
 
   // ---- outputs of the last step ----
   std::array<Contact, kMaxContacts> contacts{};  ///< [0, num_contacts) valid.
@@ -56,7 +89,16 @@ struct Data {
   std::int64_t contact_overflow_steps = 0;  ///< Steps with an overflow since reset.
   double max_penetration = 0.0;    ///< Deepest contact this step (m).
   Wrench coupling_wrench;          ///< Coupling (Eq. 2) on the attached body, at its COM.
-  Wrench feedback_wrench;          ///< Eq. 8 device feedback, world, about the target point, saturated.
+  /// Device feedback, world, about the attached body's target point: Eq. 8 of
+  /// the attached body plus, by Eq. 9, every other targeted body's Eq. 8
+  /// wrench carried to that point. Saturated.
+  Wrench feedback_wrench;
+  /// Per body: Eq. 8 wrench of a targeted body about its own target point
+  /// (world, unsaturated); zero for bodies without a target.
+  std::vector<Wrench> body_feedback;
+  std::vector<JointState> joints;  ///< Per joint (Model::joints).
+  double max_joint_drift = 0.0;    ///< Largest |C| of a linear joint row at the step's end (m).
+  double max_joint_angle_drift = 0.0;  ///< Largest |C| of an angular joint row at the step's end (rad).
   int solver_iterations = 0;       ///< Iterations of the implicit solve this step.
   double solver_residual = 0.0;    ///< Relative residual reached.
   std::uint32_t status = kStepOk;  ///< StepStatus bits of the last step.
@@ -66,6 +108,7 @@ struct Data {
   std::vector<Wrench> body_wrench; ///< Accumulated explicit wrench per body (N, N·m, at COM).
   CollisionScratch collision;
   SolverScratch solver;
+  ArticulationScratch articulation;
 };
 
 /// Allocates a Data for a finalized `model` and resets it. Allocates.

@@ -9,7 +9,9 @@
 #include <string>
 #include <vector>
 
+#include "numen/core/articulation.hpp"
 #include "numen/core/broadphase.hpp"
+#include "numen/core/joint.hpp"
 #include "numen/core/types.hpp"
 
 namespace numen::core {
@@ -113,6 +115,16 @@ struct SolverSettings {
   double tolerance = 1e-10;  ///< Relative residual ‖r‖/‖b‖ that ends the iteration.
 };
 
+/// Baumgarte stabilisation of the joint constraints (paper Eq. 5): the
+/// constraint error obeys C̈ + α Ċ + β C = 0 with α = alpha_dt / Δt (1/s) and
+/// β = beta_dt2 / Δt² (1/s²). The paper's values 2/Δt and 1/Δt² (a critically
+/// damped error at ω = 1/Δt) are the default. Discretised implicitly, like the
+/// springs: see docs/articulation.md. Both ≥ 0.
+struct BaumgarteSettings {
+  double alpha_dt = 2.0;  ///< α·Δt (dimensionless).
+  double beta_dt2 = 1.0;  ///< β·Δt² (dimensionless).
+};
+
 /// The immutable, compiled description of a scene. Fill the public fields,
 /// then call finalize_model(); afterwards only read it.
 struct Model {
@@ -125,6 +137,8 @@ struct Model {
   std::vector<Sphere> body_spheres;    ///< Body-frame spheres of all bodies.
   std::vector<Obstacle> obstacles;     ///< Static obstacles.
   std::vector<Sphere> static_spheres;  ///< World-frame spheres of sphere-set obstacles.
+  std::vector<JointModel> joints;      ///< Joints of the articulations (a forest; may be empty).
+  BaumgarteSettings baumgarte;         ///< Joint drift correction (Eq. 5).
 
   std::vector<std::string> material_names;  ///< Size num_materials.
   std::vector<MaterialPair> material_pairs; ///< num_materials², symmetric, row-major.
@@ -134,6 +148,7 @@ struct Model {
   SolverSettings solver;
 
   StaticSphereGrid static_grid;    ///< Derived by finalize_model() (broad phase).
+  ArticulationTopology articulation;  ///< Derived by finalize_model() (elimination order).
 
   int num_materials() const noexcept { return static_cast<int>(material_names.size()); }
   /// Contact parameters between materials a and b.
@@ -141,6 +156,7 @@ struct Model {
     return material_pairs[static_cast<std::size_t>(a * num_materials() + b)];
   }
   int num_bodies() const noexcept { return static_cast<int>(bodies.size()); }
+  int num_joints() const noexcept { return static_cast<int>(joints.size()); }
 };
 
 /// Validates `model` and computes its derived fields (inverse inertias,

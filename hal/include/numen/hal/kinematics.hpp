@@ -15,6 +15,10 @@ namespace numen::hal {
 /// Most axes an instrument may have.
 inline constexpr int kMaxAxes = 8;
 
+/// Most links (frames with their own target: the parts of an articulated instrument) an
+/// instrument may have (paper Eq. 6: one coupling spring per body of the articulated tool).
+inline constexpr int kMaxLinks = 8;
+
 /// Axis values (m or rad), rates (m/s, rad/s) or torques (N, N·m): n x 1, n <= kMaxAxes,
 /// inline storage.
 using AxisVector = Eigen::Matrix<double, Eigen::Dynamic, 1, Eigen::ColMajor, kMaxAxes, 1>;
@@ -46,6 +50,27 @@ class Kinematics {
   /// trocar instrument's jaw) are copied from `q_free`, which has n entries or is empty
   /// (then they are 0). Wrapping angles are returned in (−π, π].
   virtual AxisVector inverse(const core::Pose& pose, const AxisVector& q_free) const noexcept = 0;
+
+  /// Links of the instrument: frames whose world pose the axes determine, one per part of
+  /// an articulated instrument (paper Eq. 6). Link 0 is always the controlled frame
+  /// (link_pose(0, q) == forward(q), link_jacobian(0, q) == jacobian(q)). Default: 1.
+  virtual int num_links() const noexcept { return 1; }
+  /// Name of a link (static string; scene files bind bodies to links by name). Link 0 is
+  /// "tool". Returns "" for an index out of range.
+  virtual const char* link_name(int link) const noexcept { return link == 0 ? "tool" : ""; }
+  /// World pose of link `link` (0 <= link < num_links()) at axis values q.
+  virtual core::Pose link_pose(int link, const AxisVector& q) const noexcept {
+    (void)link;
+    return forward(q);
+  }
+  /// Geometric Jacobian (6 x n, world, linear part at the link's origin) of link `link`.
+  /// Axis torques balancing wrenches w_l applied at the links' origins: τ = Σ_l J_lᵀ w_l.
+  virtual Jacobian link_jacobian(int link, const AxisVector& q) const noexcept {
+    (void)link;
+    return jacobian(q);
+  }
+  /// Index of the link called `name`, or -1.
+  int find_link(const char* name) const noexcept;
 
  protected:
   Kinematics() = default;

@@ -1,0 +1,108 @@
+#pragma once
+/// @file articulation.hpp
+/// Linear-time solve of the constrained (KKT) system of tree-structured
+/// articulations (paper §4.1, Eq. 4, Eq. 7; D. Baraff, "Linear-time dynamics
+/// using Lagrange multipliers", SIGGRAPH 96, §5–7):
+///
+///     H [x; y] = [b; c],   H = [ A  Gᵀ ]
+///                              [ G  0  ]
+///
+/// A = blockdiag(A_i): one symmetric positive definite 6×6 block per body (the
+/// mass matrix, or the implicit integrator's M − hD − h²K restricted to the
+/// body); G: the joint rows (JointRows, one block row per joint, non-zero only
+/// in the columns of its child and parent bodies). x: one Vec6 per body
+/// (velocity change), y: one JointVector per joint (−impulse per row).
+///
+/// H is block sparse with the graph of the articulation forest: nodes are
+/// bodies and joints, edges join a joint to its child and (if not the world)
+/// its parent body. Eliminating nodes leaves-first (ArticulationTopology::nodes)
+/// creates no fill-in, so factor and solve are O(n) in the number of bodies
+/// (Baraff's Fig. 2 algorithm, with Cholesky factors: a body node's D_i is
+/// positive definite, a joint node's D_i negative definite, factored as −D_i).
+///
+/// Bodies whose twist is known this step (an imposed kDirect body) are
+/// decoupled: their block is the identity, their right-hand side is 0 and
+/// their joint rows' blocks on them are dropped. A joint whose bodies are all
+/// known (or world) has its rows disabled (y = 0).
+
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "numen/core/joint.hpp"
+#include "numen/core/types.hpp"
+
+namespace numen::core {
+
+struct Model;
+
+/// One node of the elimination tree.
+struct ArticulationNode {
+  bool is_joint = false;  ///< true: a joint node (dimension JointModel::num_rows); false: a body (6).
+  int index = 0;          ///< Body or joint index in the Model.
+  int parent = -1;        ///< Node index (in ArticulationTopology::nodes) of the elimination parent; -1: a root.
+};
+
+/// Elimination order of the articulation forest, derived from Model::joints by
+/// build_articulation_topology(). Every body appears (a body without joints is
+/// a one-node tree), every joint appears, each node before its parent.
+struct ArticulationTopology {
+  std::vector<ArticulationNode> nodes;  ///< Elimination order (leaves first).
+  std::vector<int> body_node;           ///< Node index of each body.
+  std::vector<int> joint_node;          ///< Node index of each joint.
+  /// Articulation (connected tree) of each body: bodies joined by joints share
+  /// an id and never collide with each other. Ids are 0..num_trees-1.
+  std::vector<int> body_tree;
+  int num_trees = 0;
+  int num_rows = 0;  ///< Σ JointModel::num_rows.
+};
+
+/// Builds Model::articulation from Model::joints (and JointModel::num_rows).
+/// Errors (returned as a message naming the joint; empty on success): bad
+/// body index, child == parent, a body that is the child of two joints, a
+/// cycle, two joints to the world in one tree (a loop through the ground), a
+/// prescribed flag on a type that cannot be prescribed. Allocates: load time.
+std::string build_articulation_topology(Model& model);
+
+/// Scratch of the tree factorisation and solve, sized once by resize().
+struct ArticulationScratch {
+  std::vector<JointRows> rows;   ///< Per joint: C and G at the step's start (filled by the caller).
+  std::vector<std::uint8_t> known;  ///< Per body: 1 if its twist is known this step (see file comment).
+  std::vector<std::uint8_t> joint_active;  ///< Per joint, derived by factor_articulation(): 0 if disabled.
+  std::vector<Mat6> off_diagonal;  ///< Per node: H_{i,parent(i)} (dim_i × dim_parent, zero padded).
+  std::vector<Mat6> factor;        ///< Per node: lower Cholesky factor of D_i (body) or −D_i (joint), padded with I.
+  std::vector<Mat6> coupling;      ///< Per node: D_i⁻¹ H_{i,parent(i)}.
+  std::vector<Vec6> work;          ///< Per node: right-hand side, then solution (solve_articulation()).
+
+  /// Sizes every buffer for `model` (finalized). Allocates: make_data() only.
+  void resize(const Model& model);
+};
+
+/// Factors H for the body blocks `body_blocks` (one symmetric positive
+/// definite Mat6 per body, full storage; blocks of known bodies are ignored)
+/// and the joint rows and known flags already in `scratch`. Returns false if a
+/// pivot is not positive (singular constraints or a non-SPD block); the
+/// factors then hold NaN, which solve_articulation() propagates.
+/// O(number of bodies + joints); no allocation.
+bool factor_articulation(const Model& model, std::span<const Mat6> body_blocks,
+                         ArticulationScratch& scratch) noexcept;
+
+/// Solves H [x; y] = [b; c] with the factors of factor_articulation().
+/// b: one Vec6 per body (entries of known bodies ignored); c: one JointVector
+/// per joint (rows ≥ num_rows ignored). x: per body (0 for known bodies);
+/// y: per joint (rows ≥ num_rows and disabled joints 0). Spans may not alias.
+/// O(number of bodies + joints); no allocation.
+void solve_articulation(const Model& model, ArticulationScratch& scratch,
+                        std::span<const Vec6> b, std::span<const JointVector> c,
+                        std::span<Vec6> x, std::span<JointVector> y) noexcept;
+
+/// Reference solve of the same system with a dense (6n + Σm)² matrix and a
+/// full-pivot LU — for tests and for checking the linear-time solve.
+/// Allocates; not for the real-time path. Same argument conventions.
+void solve_articulation_dense(const Model& model, const ArticulationScratch& scratch,
+                              std::span<const Mat6> body_blocks, std::span<const Vec6> b,
+                              std::span<const JointVector> c, std::span<Vec6> x,
+                              std::span<JointVector> y);
+
+}  // namespace numen::core
