@@ -410,6 +410,7 @@ void detect_contacts(const Model& model, Data& data) noexcept {
     std::int32_t* order = cs.sweep_order.data();
     const Vec3* amin = cs.body_aabb_min.data();
     const Vec3* amax = cs.body_aabb_max.data();
+    const int* tree = model.articulation.body_tree.data();
     sort_sweep_order(amin, 0, order, ns);
     for (int i = 0; i < ns; ++i) {
       const int a = order[i];
@@ -419,6 +420,7 @@ void detect_contacts(const Model& model, Data& data) noexcept {
         const int b = order[j];
         if (!(amin[b].x() <= reach)) break;
         if (!boxes_overlap(amin[a], amax[a], amin[b], amax[b])) continue;
+        if (tree[a] == tree[b]) continue;  // same articulation: no self-collision
         collide_bodies(model, data, std::min(a, b), std::max(a, b), sink);
       }
     }

@@ -40,44 +40,78 @@ bool first_order_applicable(const CouplingGains& gains) noexcept {
   return gains.gamma_t > 0.0 && gains.gamma_r > 0.0;
 }
 
-void impose_direct_target(const Model& model, Data& data) noexcept {
-  data.solver.direct_body = -1;
-  if (model.coupling_mode != CouplingMode::kDirect || !valid_body(model, data.attached_body))
-    return;
-  const auto i = static_cast<std::size_t>(data.attached_body);
+namespace {
+
+/// Imposes pose and twist on body i (kDirect); a non-finite target holds the
+/// body still and flags the step.
+void impose(Data& data, std::size_t i, const Pose& target, const Twist& twist) noexcept {
   BodyState& s = data.bodies[i];
-  data.solver.direct_body = data.attached_body;
-  if (!target_is_finite(data.target, data.target_twist)) {
+  data.solver.imposed[i] = 1;
+  if (!target_is_finite(target, twist)) {
     data.status |= kInvalidTarget;
     s.linear_velocity.setZero();
     s.angular_velocity.setZero();
     return;
   }
-  s.position = data.target.position;
-  s.orientation = data.target.orientation.normalized();
-  s.linear_velocity = data.target_twist.linear;
-  s.angular_velocity = data.target_twist.angular;
+  s.position = target.position;
+  s.orientation = target.orientation.normalized();
+  s.linear_velocity = twist.linear;
+  s.angular_velocity = twist.angular;
+}
+
+/// True when body i has its own enabled target (Eq. 6) other than the attached body's.
+bool has_own_target(const Data& data, std::size_t i) noexcept {
+  return data.body_targets[i].enabled && static_cast<int>(i) != data.attached_body;
+}
+
+}  // namespace
+
+void impose_direct_target(const Model& model, Data& data) noexcept {
+  for (auto& v : data.solver.imposed) v = 0;
+  if (model.coupling_mode != CouplingMode::kDirect) return;
+  if (valid_body(model, data.attached_body))
+    impose(data, static_cast<std::size_t>(data.attached_body), data.target, data.target_twist);
+  for (std::size_t i = 0; i < data.bodies.size(); ++i)
+    if (has_own_target(data, i))
+      impose(data, i, data.body_targets[i].pose, data.body_targets[i].twist);
 }
 
 void apply_coupling(const Model& model, Data& data) noexcept {
+  SolverScratch& s = data.solver;
   data.coupling_wrench = Wrench{};
-  data.solver.coupled_body = -1;
-  data.solver.first_order = false;
-  if (!valid_body(model, data.attached_body) || model.coupling_mode == CouplingMode::kDirect)
-    return;
-  if (!target_is_finite(data.target, data.target_twist)) {
-    data.status |= kInvalidTarget;
-    return;
+  s.coupled_body = -1;
+  s.first_order = false;
+  for (auto& v : s.target_coupled) v = 0;
+  if (model.coupling_mode == CouplingMode::kDirect) return;
+  if (valid_body(model, data.attached_body)) {
+    if (!target_is_finite(data.target, data.target_twist)) {
+      data.status |= kInvalidTarget;
+    } else {
+      const auto i = static_cast<std::size_t>(data.attached_body);
+      const CouplingGains& gains = model.bodies[i].coupling;
+      const Wrench w = coupling_wrench(gains, data.target, data.target_twist, data.bodies[i]);
+      data.coupling_wrench = w;
+      data.body_wrench[i].force += w.force;
+      data.body_wrench[i].torque += w.torque;
+      s.coupled_body = data.attached_body;
+      s.target_coupled[i] = 1;
+      s.first_order =
+          model.coupling_mode == CouplingMode::kFirstOrder && first_order_applicable(gains);
+    }
   }
-  const auto i = static_cast<std::size_t>(data.attached_body);
-  const CouplingGains& gains = model.bodies[i].coupling;
-  const Wrench w = coupling_wrench(gains, data.target, data.target_twist, data.bodies[i]);
-  data.coupling_wrench = w;
-  data.body_wrench[i].force += w.force;
-  data.body_wrench[i].torque += w.torque;
-  data.solver.coupled_body = data.attached_body;
-  data.solver.first_order =
-      model.coupling_mode == CouplingMode::kFirstOrder && first_order_applicable(gains);
+  // Eq. 6: every other body with its own device target, always second order.
+  for (std::size_t i = 0; i < data.bodies.size(); ++i) {
+    if (!has_own_target(data, i)) continue;
+    const BodyTarget& t = data.body_targets[i];
+    if (!target_is_finite(t.pose, t.twist)) {
+      data.status |= kInvalidTarget;
+      continue;
+    }
+    const Wrench w = coupling_wrench(model.bodies[i].coupling, t.pose, t.twist, data.bodies[i]);
+    data.body_wrench[i].force += w.force;
+    data.body_wrench[i].torque += w.torque;
+    s.target_coupled[i] = 1;
+  }
 }
 
 }  // namespace numen::core

@@ -13,6 +13,11 @@ Data make_data(const Model& model) {
   data.bodies.resize(n);
   data.applied_wrench.resize(n);
   data.body_wrench.resize(n);
+  data.body_targets.resize(n);
+  data.body_feedback.resize(n);
+  data.joint_prescribed.resize(static_cast<std::size_t>(model.num_joints()));
+  data.joints.resize(static_cast<std::size_t>(model.num_joints()));
+  data.articulation.resize(model);
   data.collision.resize(model);
   data.solver.resize(model);
   reset_data(model, data);
@@ -31,7 +36,14 @@ void reset_data(const Model& model, Data& data) noexcept {
     s.angular_velocity = bm.initial_twist.angular;
     data.applied_wrench[b] = Wrench{};
     data.body_wrench[b] = Wrench{};
+    data.body_targets[b] = BodyTarget{};
+    data.body_feedback[b] = Wrench{};
   }
+  for (JointPrescription& p : data.joint_prescribed) p = JointPrescription{};
+  for (JointState& j : data.joints) j = JointState{};
+  for (Vec6& v : data.solver.delta) v.setZero();  // Δu_prev of the joint rows (joint_system.hpp)
+  data.max_joint_drift = 0.0;
+  data.max_joint_angle_drift = 0.0;
   data.attached_body = model.initial_attached_body;
   if (data.attached_body >= 0) {
     const BodyState& s = data.bodies[static_cast<std::size_t>(data.attached_body)];

@@ -24,23 +24,70 @@ Wrench saturate_wrench(const Wrench& w, double max_force, double max_torque) noe
   return Wrench{clamp_norm(w.force, max_force), clamp_norm(w.torque, max_torque)};
 }
 
-Wrench feedback_wrench(const FeedbackGains& gains, const Pose& target, const Twist& target_twist,
-                       const BodyState& state) noexcept {
+Wrench feedback_wrench_unsaturated(const FeedbackGains& gains, const Pose& target,
+                                   const Twist& target_twist, const BodyState& state) noexcept {
   Wrench w;
   w.force = gains.k_t * (state.position - target.position) +
             gains.gamma_t * (state.linear_velocity - target_twist.linear);
   w.torque = gains.k_r * quat_log(state.orientation * target.orientation.conjugate()) +
              gains.gamma_r * (state.angular_velocity - target_twist.angular);
-  return saturate_wrench(w, gains.max_force, gains.max_torque);
+  return w;
+}
+
+Wrench feedback_wrench(const FeedbackGains& gains, const Pose& target, const Twist& target_twist,
+                       const BodyState& state) noexcept {
+  return saturate_wrench(feedback_wrench_unsaturated(gains, target, target_twist, state),
+                         gains.max_force, gains.max_torque);
+}
+
+Wrench carry_wrench(const Wrench& w, const Vec3& from, const Vec3& to) noexcept {
+  return Wrench{w.force, w.torque + (from - to).cross(w.force)};
 }
 
 void compute_feedback(const Model& model, Data& data) noexcept {
   data.feedback_wrench = Wrench{};
-  const int b = data.attached_body;
-  if (b < 0 || b >= model.num_bodies() || model.coupling_mode == CouplingMode::kDirect) return;
-  if (!target_is_finite(data.target, data.target_twist)) return;
-  data.feedback_wrench = feedback_wrench(model.feedback, data.target, data.target_twist,
-                                         data.bodies[static_cast<std::size_t>(b)]);
+  for (Wrench& w : data.body_feedback) w = Wrench{};
+  if (model.coupling_mode == CouplingMode::kDirect) return;
+  const int a = data.attached_body;
+  const bool attached = a >= 0 && a < model.num_bodies() &&
+                        target_is_finite(data.target, data.target_twist);
+  const Vec3 ref = attached ? data.target.position : Vec3::Zero();
+  Wrench total;
+  bool any = false;
+  for (std::size_t i = 0; i < data.bodies.size(); ++i) {
+    const bool own = data.body_targets[i].enabled && static_cast<int>(i) != a;
+    const Pose* target = nullptr;
+    const Twist* twist = nullptr;
+    if (attached && static_cast<int>(i) == a) {
+      target = &data.target;
+      twist = &data.target_twist;
+    } else if (own && target_is_finite(data.body_targets[i].pose, data.body_targets[i].twist)) {
+      target = &data.body_targets[i].pose;
+      twist = &data.body_targets[i].twist;
+    } else {
+      continue;
+    }
+    const Wrench w = feedback_wrench_unsaturated(model.feedback, *target, *twist, data.bodies[i]);
+    data.body_feedback[i] = w;
+    const Wrench carried = carry_wrench(w, target->position, ref);  // Eq. 9
+    total.force += carried.force;
+    total.torque += carried.torque;
+    any = true;
+  }
+  if (!any || !attached) return;
+  // Saturate the composite; scale the per-body wrenches by the same ratios so
+  // that both views of the feedback stay consistent.
+  const Wrench sat = saturate_wrench(total, model.feedback.max_force, model.feedback.max_torque);
+  const double fn = total.force.norm();
+  const double tn = total.torque.norm();
+  const double sf = fn > 0.0 ? sat.force.norm() / fn : 1.0;
+  const double st = tn > 0.0 ? sat.torque.norm() / tn : 1.0;
+  data.feedback_wrench = sat;
+  if (sf < 1.0 || st < 1.0)
+    for (Wrench& w : data.body_feedback) {
+      w.force *= sf;
+      w.torque *= st;
+    }
 }
 
 }  // namespace numen::core

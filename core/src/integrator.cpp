@@ -11,6 +11,7 @@
 #include "numen/core/capacity.hpp"
 #include "numen/core/coupling.hpp"
 #include "numen/core/data.hpp"
+#include "numen/core/joint_system.hpp"
 #include "numen/core/model.hpp"
 #include "numen/core/rigid_body.hpp"
 
@@ -191,9 +192,15 @@ void SolverScratch::resize(const Model& model) {
   cross_contacts.assign(static_cast<std::size_t>(kMaxContacts), CrossContact{});
   num_cross_contacts = 0;
   coupled.assign(n, 0);
+  const auto nj = static_cast<std::size_t>(model.num_joints());
+  joint_rhs.assign(nj, JointVector::Zero());
+  joint_y.assign(nj, JointVector::Zero());
+  joint_y_correction.assign(nj, JointVector::Zero());
+  projected_residual.assign(nj > 0 ? n : 0, Vec6::Zero());
+  target_coupled.assign(n, 0);
   coupled_body = -1;
   first_order = false;
-  direct_body = -1;
+  imposed.assign(n, 0);
 }
 
 void prepare_implicit_step(const Model& model, Data& data) noexcept {
@@ -206,7 +213,7 @@ void prepare_implicit_step(const Model& model, Data& data) noexcept {
     const Mat3 rot = st.orientation.toRotationMatrix();
     s.inertia_world[i] = world_inertia(rot, bm.inertia_body);
     const int b = static_cast<int>(i);
-    if (b == s.direct_body || is_first_order(s, b)) continue;
+    if (s.imposed[i] || is_first_order(s, b)) continue;
     st.angular_velocity = implicit_gyroscopic_velocity(rot, bm.inertia_body, st.angular_velocity, h);
   }
 }
@@ -219,7 +226,7 @@ void build_implicit_system(const Model& model, Data& data) noexcept {
 
   for (std::size_t i = 0; i < n; ++i) {
     const int b = static_cast<int>(i);
-    s.in_solve[i] = b != s.direct_body ? 1 : 0;
+    s.in_solve[i] = s.imposed[i] ? 0 : 1;
     s.coupled[i] = 0;
     s.isotropic_moments[i] = IsotropicMoments{};
     Mat6& blk = s.block[i];
@@ -242,10 +249,10 @@ void build_implicit_system(const Model& model, Data& data) noexcept {
     }
   }
 
-  // Coupling springs of Eq. 2: K = −diag(k_t I, k_r I), D = −diag(γ_t I, γ_r I).
-  const int cb = s.coupled_body;
-  if (cb >= 0 && cb < static_cast<int>(n) && s.in_solve[static_cast<std::size_t>(cb)]) {
-    const auto i = static_cast<std::size_t>(cb);
+  // Coupling springs of Eq. 2 / Eq. 6 on every targeted body:
+  // K = −diag(k_t I, k_r I), D = −diag(γ_t I, γ_r I).
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!s.target_coupled[i] || !s.in_solve[i]) continue;
     const CouplingGains& g = model.bodies[i].coupling;
     s.block[i].topLeftCorner<3, 3>().diagonal().array() += h * g.gamma_t + h2 * g.k_t;
     s.block[i].bottomRightCorner<3, 3>().diagonal().array() += h * g.gamma_r + h2 * g.k_r;
@@ -393,12 +400,101 @@ bool solve_implicit_system(const Model& model, Data& data) noexcept {
   return rel <= model.solver.tolerance;
 }
 
+bool solve_constrained_system(const Model& model, Data& data) noexcept {
+  SolverScratch& s = data.solver;
+  ArticulationScratch& art = data.articulation;
+  const std::size_t n = data.bodies.size();
+  for (std::size_t i = 0; i < n; ++i) art.known[i] = s.in_solve[i] ? 0 : 1;
+  build_joint_rows(model, data, s.twist0, s.delta, s.joint_rhs);
+  data.solver_iterations = 0;
+  data.solver_residual = 0.0;
+
+  const std::span<Vec6> x(s.delta);
+  const std::span<Vec6> r(s.residual);
+  const std::span<Vec6> z(s.precond_residual);
+  const std::span<Vec6> p(s.direction);
+  const std::span<Vec6> ap(s.a_direction);
+  const std::span<Vec6> rp(s.projected_residual);
+  const std::span<const Vec6> b(s.rhs);
+  const std::span<JointVector> y(s.joint_y);
+  const std::span<JointVector> yz(s.joint_y_correction);
+
+  const auto poison = [&]() noexcept {
+    for (Vec6& v : x) v.setConstant(std::numeric_limits<double>::quiet_NaN());
+    data.solver_residual = std::numeric_limits<double>::quiet_NaN();
+    return false;
+  };
+
+  // Tree solve with the block-diagonal part of A: exact without cross contacts.
+  factor_articulation(model, s.block, art);  // a bad pivot leaves NaN: rejected below / by step()
+  solve_articulation(model, art, b, s.joint_rhs, x, y);
+  bool converged = true;
+
+  if (s.num_cross_contacts > 0) {
+    // Projected PCG on the null space of G: r = b − A x − Gᵀ y.
+    const double b_norm = std::sqrt(dot(b, b));
+    const double ref = b_norm > 0.0 ? b_norm : 1.0;
+    apply_implicit_system(model, data, x, ap);
+    for (std::size_t i = 0; i < n; ++i) r[i] = s.in_solve[i] ? Vec6(b[i] - ap[i]) : Vec6::Zero();
+    for (std::size_t i = 0; i < n; ++i) ap[i].setZero();
+    add_joint_transpose(model, data, y, ap);
+    for (std::size_t i = 0; i < n; ++i) r[i] -= ap[i];
+
+    // z = P r (tree solve with zero constraint right-hand side), rp = r − Gᵀ yz.
+    const auto precondition = [&]() noexcept {
+      for (JointVector& v : s.joint_rhs) v.setZero();
+      solve_articulation(model, art, r, s.joint_rhs, z, yz);
+      for (std::size_t i = 0; i < n; ++i) rp[i].setZero();
+      add_joint_transpose(model, data, yz, rp);
+      double rr = 0.0;
+      for (std::size_t i = 0; i < n; ++i) {
+        rp[i] = r[i] - rp[i];
+        rr += rp[i].squaredNorm();
+      }
+      return std::sqrt(rr) / ref;
+    };
+    double rel = precondition();
+    double rz = dot(r, z);
+    if (!std::isfinite(rel) || !std::isfinite(rz)) return poison();
+    for (std::size_t i = 0; i < n; ++i) p[i] = z[i];
+    int it = 0;
+    const int max_it = std::max(1, model.solver.max_iterations);
+    while (rel > model.solver.tolerance && it < max_it) {
+      ++it;
+      apply_implicit_system(model, data, p, ap);
+      const double pap = dot(p, ap);
+      if (!std::isfinite(pap)) return poison();
+      if (!(pap > 0.0)) break;
+      const double alpha = rz / pap;
+      for (std::size_t i = 0; i < n; ++i) {
+        x[i] += alpha * p[i];
+        r[i] -= alpha * ap[i];
+      }
+      rel = precondition();
+      const double rz_new = dot(r, z);
+      if (!std::isfinite(rel) || !std::isfinite(rz_new)) return poison();
+      const double beta = rz_new / rz;
+      rz = rz_new;
+      for (std::size_t i = 0; i < n; ++i) p[i] = z[i] + beta * p[i];
+    }
+    // The multipliers of the remaining residual (r → Gᵀ yz at convergence).
+    for (std::size_t j = 0; j < y.size(); ++j) y[j] += yz[j];
+    data.solver_iterations = it;
+    data.solver_residual = rel;
+    converged = rel <= model.solver.tolerance;
+  }
+  store_joint_multipliers(model, data, y);
+  return converged;
+}
+
 void integrate_linearly_implicit_euler(const Model& model, Data& data) noexcept {
   SolverScratch& s = data.solver;
   const double h = model.dt;
   prepare_implicit_step(model, data);
   build_implicit_system(model, data);
-  if (!solve_implicit_system(model, data)) data.status |= kSolverNotConverged;
+  const bool converged = model.joints.empty() ? solve_implicit_system(model, data)
+                                              : solve_constrained_system(model, data);
+  if (!converged) data.status |= kSolverNotConverged;
   for (std::size_t i = 0; i < data.bodies.size(); ++i) {
     if (!s.in_solve[i]) continue;  // kDirect body: stays at the imposed target
     BodyState& st = data.bodies[i];
@@ -410,26 +506,84 @@ void integrate_linearly_implicit_euler(const Model& model, Data& data) noexcept 
   }
 }
 
+namespace {
+
+/// Massless limit of Eq. 2 for the first-order attached body:
+/// k e + γ (v_t − v) + F_other = 0 per axis group; sets its twist.
+void set_first_order_velocity(const Model& model, Data& data, std::size_t i) noexcept {
+  BodyState& st = data.bodies[i];
+  const CouplingGains& g = model.bodies[i].coupling;
+  const Wrench& f = data.body_wrench[i];
+  const Wrench& cw = data.coupling_wrench;
+  const Vec3 e = data.target.position - st.position;
+  const Vec3 theta_u = rotation_error(data.target.orientation, st.orientation);
+  st.linear_velocity = data.target_twist.linear + (g.k_t * e + (f.force - cw.force)) / g.gamma_t;
+  st.angular_velocity =
+      data.target_twist.angular + (g.k_r * theta_u + (f.torque - cw.torque)) / g.gamma_r;
+}
+
+/// Symplectic Euler with joints: the explicit impulses h(f + gyroscopic) go
+/// through the KKT system with A = M (paper Eq. 4 with the tendency and
+/// correction of Eq. 7 solved at once), then positions. Known bodies (kDirect,
+/// first-order) keep the twist they already have.
+void integrate_symplectic_euler_constrained(const Model& model, Data& data) noexcept {
+  SolverScratch& s = data.solver;
+  ArticulationScratch& art = data.articulation;
+  const double h = model.dt;
+  for (std::size_t i = 0; i < data.bodies.size(); ++i) {
+    const int b = static_cast<int>(i);
+    BodyState& st = data.bodies[i];
+    const bool first_order = is_first_order(s, b);
+    if (first_order) set_first_order_velocity(model, data, i);
+    const bool known = first_order || s.imposed[i];
+    art.known[i] = known ? 1 : 0;
+    s.twist0[i] << st.linear_velocity, st.angular_velocity;
+    if (known) continue;
+    const BodyModel& bm = model.bodies[i];
+    const Wrench& f = data.body_wrench[i];
+    const Mat3 iw = world_inertia(st.orientation, bm.inertia_body);
+    Mat6& blk = s.block[i];
+    blk.setZero();
+    blk.topLeftCorner<3, 3>().diagonal().setConstant(bm.mass);
+    blk.bottomRightCorner<3, 3>() = iw;
+    s.rhs[i] << h * f.force, h * (f.torque + gyroscopic_torque(iw, st.angular_velocity));
+  }
+  build_joint_rows(model, data, s.twist0, s.delta, s.joint_rhs);
+  factor_articulation(model, s.block, art);
+  solve_articulation(model, art, s.rhs, s.joint_rhs, s.delta, s.joint_y);
+  store_joint_multipliers(model, data, s.joint_y);
+  for (std::size_t i = 0; i < data.bodies.size(); ++i) {
+    if (s.imposed[i]) continue;
+    BodyState& st = data.bodies[i];
+    if (!art.known[i]) {
+      st.linear_velocity = s.twist0[i].head<3>() + s.delta[i].head<3>();
+      st.angular_velocity = s.twist0[i].tail<3>() + s.delta[i].tail<3>();
+    }
+    st.position += h * st.linear_velocity;
+    st.orientation = integrate_orientation(st.orientation, st.angular_velocity, h);
+  }
+}
+
+}  // namespace
+
 void integrate_symplectic_euler(const Model& model, Data& data) noexcept {
+  data.solver_iterations = 0;
+  data.solver_residual = 0.0;
+  if (!model.joints.empty()) {
+    integrate_symplectic_euler_constrained(model, data);
+    return;
+  }
   const SolverScratch& s = data.solver;
   const double h = model.dt;
   for (std::size_t i = 0; i < data.bodies.size(); ++i) {
     const int b = static_cast<int>(i);
-    if (b == s.direct_body) continue;
+    if (s.imposed[i]) continue;
     BodyState& st = data.bodies[i];
-    const BodyModel& bm = model.bodies[i];
-    const Wrench& f = data.body_wrench[i];
     if (is_first_order(s, b)) {
-      // Massless limit of Eq. 2: k e + γ (v_t − v) + F_other = 0, per axis group.
-      const CouplingGains& g = bm.coupling;
-      const Wrench& cw = data.coupling_wrench;
-      const Vec3 e = data.target.position - st.position;
-      const Vec3 theta_u = rotation_error(data.target.orientation, st.orientation);
-      st.linear_velocity =
-          data.target_twist.linear + (g.k_t * e + (f.force - cw.force)) / g.gamma_t;
-      st.angular_velocity =
-          data.target_twist.angular + (g.k_r * theta_u + (f.torque - cw.torque)) / g.gamma_r;
+      set_first_order_velocity(model, data, i);
     } else {
+      const BodyModel& bm = model.bodies[i];
+      const Wrench& f = data.body_wrench[i];
       const Mat3 iw = world_inertia(st.orientation, bm.inertia_body);
       const Mat3 iw_inv = world_inertia_inverse(st.orientation, bm.inertia_body_inv);
       st.linear_velocity += (h / bm.mass) * f.force;
@@ -439,8 +593,6 @@ void integrate_symplectic_euler(const Model& model, Data& data) noexcept {
     st.position += h * st.linear_velocity;
     st.orientation = integrate_orientation(st.orientation, st.angular_velocity, h);
   }
-  data.solver_iterations = 0;
-  data.solver_residual = 0.0;
 }
 
 void integrate(const Model& model, Data& data) noexcept {

@@ -114,6 +114,8 @@ std::string finalize_model(Model& model) {
   if (!(bg.alpha_dt >= 0.0) || !(bg.beta_dt2 >= 0.0) || !std::isfinite(bg.alpha_dt) ||
       !std::isfinite(bg.beta_dt2))
     return "baumgarte: alpha_dt and beta_dt2 must be finite and >= 0";
+  if (!(bg.alpha_dt + bg.beta_dt2 > 0.0))
+    return "baumgarte: alpha_dt and beta_dt2 cannot both be 0 (the joint error would drift unchecked)";
   for (JointModel& j : model.joints) {
     const std::string who = "joint '" + j.name + "'";
     for (const Pose* f : {&j.frame_parent, &j.frame_child})

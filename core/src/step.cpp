@@ -9,6 +9,7 @@
 #include "numen/core/data.hpp"
 #include "numen/core/feedback.hpp"
 #include "numen/core/integrator.hpp"
+#include "numen/core/joint_system.hpp"
 #include "numen/core/model.hpp"
 #include "numen/core/rigid_body.hpp"
 
@@ -52,6 +53,7 @@ void step(const Model& model, Data& data) noexcept {
   detect_contacts(model, data);  // may set kContactOverflow, counts contact_overflow_steps
   compute_forces(model, data);
   integrate(model, data);
+  if (!model.joints.empty()) measure_joint_drift(model, data);
   compute_feedback(model, data);
   check_finite(data);
   data.time += model.dt;

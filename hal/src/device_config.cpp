@@ -1,5 +1,5 @@
 /// @file device_config.cpp
-/// DeviceConfig validation and the default trocar / pose tracker configurations.
+/// DeviceConfig validation and the default trocar / pose tracker / phantom configurations.
 
 #include "numen/hal/device_config.hpp"
 
@@ -54,6 +54,8 @@ const char* to_string(DeviceKind kind) noexcept {
       return "trocar instrument";
     case DeviceKind::kPoseTracker:
       return "pose tracker";
+    case DeviceKind::kPhantom:
+      return "phantom";
   }
   return "unknown";
 }
@@ -64,6 +66,8 @@ int expected_axis_count(DeviceKind kind) noexcept {
       return TrocarKinematics::kNumAxes;
     case DeviceKind::kPoseTracker:
       return PoseTrackerKinematics::kNumAxes;
+    case DeviceKind::kPhantom:
+      return PhantomKinematics::kNumAxes;
   }
   return 0;
 }
@@ -109,13 +113,27 @@ void validate(const DeviceConfig& c) {
   const std::string prefix = device_name(c) + ": ";
   detail::checked_position(c.tool_offset.position, prefix + "tool_offset.position");
   detail::checked_unit_quaternion(c.tool_offset.orientation, prefix + "tool_offset.orientation");
-  if (c.kind == DeviceKind::kTrocarInstrument) {
-    detail::checked_position(c.trocar.point, prefix + "trocar.point");
-    detail::checked_unit_quaternion(c.trocar.orientation, prefix + "trocar.orientation");
-  } else {
-    detail::checked_position(c.tracker.base.position, prefix + "tracker.base.position");
-    detail::checked_unit_quaternion(c.tracker.base.orientation,
-                                    prefix + "tracker.base.orientation");
+  switch (c.kind) {
+    case DeviceKind::kTrocarInstrument:
+      detail::checked_position(c.trocar.point, prefix + "trocar.point");
+      detail::checked_unit_quaternion(c.trocar.orientation, prefix + "trocar.orientation");
+      break;
+    case DeviceKind::kPoseTracker:
+      detail::checked_position(c.tracker.base.position, prefix + "tracker.base.position");
+      detail::checked_unit_quaternion(c.tracker.base.orientation,
+                                      prefix + "tracker.base.orientation");
+      break;
+    case DeviceKind::kPhantom:
+      detail::checked_position(c.phantom.base.position, prefix + "phantom.base.position");
+      detail::checked_unit_quaternion(c.phantom.base.orientation,
+                                      prefix + "phantom.base.orientation");
+      if (!std::isfinite(c.phantom.l1) || c.phantom.l1 <= 0.0) {
+        fail(c, "phantom.l1", "must be finite and > 0 (got " + std::to_string(c.phantom.l1) + ")");
+      }
+      if (!std::isfinite(c.phantom.l2) || c.phantom.l2 <= 0.0) {
+        fail(c, "phantom.l2", "must be finite and > 0 (got " + std::to_string(c.phantom.l2) + ")");
+      }
+      break;
   }
 }
 
@@ -150,6 +168,27 @@ DeviceConfig make_default_pose_tracker_config(std::uint8_t first) {
   c.axes.push_back(axis("yaw", n(3), false, urad, -kPi, kPi, 30.0, true, 1.0, 0.0));
   c.axes.push_back(axis("pitch", n(4), false, urad, -kPi / 2, kPi / 2, 30.0, false, 1.0, 0.0));
   c.axes.push_back(axis("roll", n(5), false, urad, -kPi, kPi, 30.0, true, 1.0, 0.0));
+  return c;
+}
+
+DeviceConfig make_default_phantom_config(std::uint8_t first) {
+  check_node_range(first, PhantomKinematics::kNumAxes, "make_default_phantom_config");
+  const double per_rad_arm = 65536.0 / (2.0 * kPi);     // motor encoders through the capstan
+  const double per_rad_gimbal = 16384.0 / (2.0 * kPi);  // 14-bit gimbal encoders
+  const auto n = [first](int i) { return static_cast<std::uint8_t>(first + i); };
+  DeviceConfig c;
+  c.name = "phantom";
+  c.kind = DeviceKind::kPhantom;
+  //                 name           node  drive  counts          min   max  speed wraps rated max
+  c.axes.push_back(axis("turret", n(0), true, per_rad_arm, -1.0, 1.0, 10.0, false, 0.25, 1.0));
+  c.axes.push_back(axis("shoulder", n(1), true, per_rad_arm, -0.8, 0.8, 10.0, false, 0.25, 1.0));
+  c.axes.push_back(axis("elbow", n(2), true, per_rad_arm, -1.0, 0.7, 10.0, false, 0.25, 1.0));
+  c.axes.push_back(
+      axis("gimbal_yaw", n(3), false, per_rad_gimbal, -2.6, 2.6, 30.0, false, 1.0, 0.0));
+  c.axes.push_back(
+      axis("gimbal_pitch", n(4), false, per_rad_gimbal, -1.2, 1.2, 30.0, false, 1.0, 0.0));
+  c.axes.push_back(
+      axis("stylus_roll", n(5), false, per_rad_gimbal, -kPi, kPi, 30.0, true, 1.0, 0.0));
   return c;
 }
 

@@ -1,5 +1,6 @@
 /// @file instrument_device.cpp
-/// Controller-side instrument driver: TPDOs -> checked target pose/twist; wrench -> RPDOs.
+/// Controller-side instrument driver: TPDOs -> checked target poses/twists per link;
+/// link wrenches -> τ = Σ J_lᵀ w_l -> RPDOs.
 
 #include "numen/hal/instrument_device.hpp"
 
@@ -39,6 +40,12 @@ InstrumentDevice::InstrumentDevice(DeviceConfig config,
                                 std::to_string(kinematics_->num_axes()) +
                                 " axes but config.axes has " + std::to_string(n_));
   }
+  num_links_ = kinematics_->num_links();
+  if (num_links_ < 1 || num_links_ > kMaxLinks) {
+    throw std::invalid_argument("device '" + config_.name + "': kinematics has " +
+                                std::to_string(num_links_) + " links (must be 1.." +
+                                std::to_string(kMaxLinks) + ")");
+  }
   const double age = config_.effective_max_sample_age_s();
   hold_.resize(n_);
   for (int i = 0; i < n_; ++i) {
@@ -59,7 +66,22 @@ void InstrumentDevice::reset() noexcept {
   for (int i = 0; i < n_; ++i)
     last_sample_.axis_faults[static_cast<std::size_t>(i)] = SampleFault::kNoData;
   last_sample_.faults = n_ > 0 ? SampleFault::kNoData : SampleFault::kNone;
-  jacobian_ = kinematics_->jacobian(hold_);
+  evaluate_links(last_sample_);
+}
+
+void InstrumentDevice::evaluate_links(DeviceSample& s) noexcept {
+  s.num_links = num_links_;
+  s.target = kinematics_->forward(s.q);
+  link_jacobians_[0] = kinematics_->jacobian(s.q);
+  s.twist = twist_from_rates(link_jacobians_[0], s.qdot);
+  s.link_targets[0] = s.target;
+  s.link_twists[0] = s.twist;
+  for (int l = 1; l < num_links_; ++l) {
+    const auto k = static_cast<std::size_t>(l);
+    s.link_targets[k] = kinematics_->link_pose(l, s.q);
+    link_jacobians_[k] = kinematics_->link_jacobian(l, s.q);
+    s.link_twists[k] = twist_from_rates(link_jacobians_[k], s.qdot);
+  }
 }
 
 bool InstrumentDevice::on_frame(const CanFrame& frame) noexcept {
@@ -166,9 +188,7 @@ DeviceSample InstrumentDevice::sample(std::int64_t now_ns) noexcept {
   }
   s.ready = ready;
   s.valid = ready && s.faults == SampleFault::kNone;
-  s.target = kinematics_->forward(s.q);
-  jacobian_ = kinematics_->jacobian(s.q);
-  s.twist = twist_from_rates(jacobian_, s.qdot);
+  evaluate_links(s);
   ++counters_.samples;
   if (s.valid) ++counters_.samples_valid;
   return s;
@@ -188,18 +208,14 @@ IoStatus InstrumentDevice::send_torques(Bus& bus, std::int64_t now_ns) noexcept 
   return status;
 }
 
-IoStatus InstrumentDevice::command(const core::Wrench& wrench, Bus& bus,
-                                   std::int64_t now_ns) noexcept {
-  ++counters_.commands;
-  const bool finite = wrench.force.allFinite() && wrench.torque.allFinite();
-  if (!finite) ++counters_.non_finite_wrenches;
-  if (!finite || !last_sample_.ready) {
-    ++counters_.commands_zero;
-    last_torques_.setZero();
-    last_per_mille_ = {};
-    return send_torques(bus, now_ns);
-  }
-  const AxisVector tau = torques_from_wrench(jacobian_, wrench);
+IoStatus InstrumentDevice::send_zero(Bus& bus, std::int64_t now_ns) noexcept {
+  last_torques_.setZero();
+  last_per_mille_ = {};
+  return send_torques(bus, now_ns);
+}
+
+IoStatus InstrumentDevice::apply_torques(const AxisVector& tau, Bus& bus,
+                                         std::int64_t now_ns) noexcept {
   for (int i = 0; i < n_; ++i) {
     const auto k = static_cast<std::size_t>(i);
     const AxisConfig& a = config_.axes[k];
@@ -216,11 +232,39 @@ IoStatus InstrumentDevice::command(const core::Wrench& wrench, Bus& bus,
   return send_torques(bus, now_ns);
 }
 
+IoStatus InstrumentDevice::command(const core::Wrench& wrench, Bus& bus,
+                                   std::int64_t now_ns) noexcept {
+  return command_links(std::span<const core::Wrench>(&wrench, 1), bus, now_ns);
+}
+
+IoStatus InstrumentDevice::command_links(std::span<const core::Wrench> link_wrenches, Bus& bus,
+                                         std::int64_t now_ns) noexcept {
+  ++counters_.commands;
+  std::size_t used = link_wrenches.size();
+  if (used > static_cast<std::size_t>(num_links_)) {
+    ++counters_.extra_link_wrenches;
+    used = static_cast<std::size_t>(num_links_);
+  }
+  bool finite = true;
+  for (std::size_t l = 0; l < used; ++l) {
+    finite = finite && link_wrenches[l].force.allFinite() && link_wrenches[l].torque.allFinite();
+  }
+  if (!finite) ++counters_.non_finite_wrenches;
+  if (!finite || !last_sample_.ready) {
+    ++counters_.commands_zero;
+    return send_zero(bus, now_ns);
+  }
+  // τ = Σ_l J_lᵀ w_l (virtual work: each wrench at its link's origin).
+  AxisVector tau = AxisVector::Zero(n_);
+  for (std::size_t l = 0; l < used; ++l) {
+    tau += torques_from_wrench(link_jacobians_[l], link_wrenches[l]);
+  }
+  return apply_torques(tau, bus, now_ns);
+}
+
 IoStatus InstrumentDevice::command_zero(Bus& bus, std::int64_t now_ns) noexcept {
   ++counters_.commands_zero;
-  last_torques_.setZero();
-  last_per_mille_ = {};
-  return send_torques(bus, now_ns);
+  return send_zero(bus, now_ns);
 }
 
 }  // namespace numen::hal

@@ -1,9 +1,21 @@
 /// @file kinematics.cpp
-/// Jacobian mappings shared by every Kinematics: twist = J q̇, τ = Jᵀ w.
+/// Jacobian mappings shared by every Kinematics: twist = J q̇, τ = Jᵀ w; link lookup by name.
 
 #include "numen/hal/kinematics.hpp"
 
+#include <cstring>
+
 namespace numen::hal {
+
+int Kinematics::find_link(const char* name) const noexcept {
+  if (name == nullptr) return -1;
+  const int n = num_links();
+  for (int l = 0; l < n; ++l) {
+    const char* candidate = link_name(l);
+    if (candidate != nullptr && std::strcmp(candidate, name) == 0) return l;
+  }
+  return -1;
+}
 
 core::Twist twist_from_rates(const Jacobian& jacobian, const AxisVector& qdot) noexcept {
   eigen_assert(qdot.size() == jacobian.cols());

@@ -3,6 +3,7 @@
 
 #include "numen/hal/kinematics_factory.hpp"
 
+#include "numen/hal/phantom_kinematics.hpp"
 #include "numen/hal/pose_tracker_kinematics.hpp"
 #include "numen/hal/trocar_kinematics.hpp"
 
@@ -10,8 +11,13 @@ namespace numen::hal {
 
 std::unique_ptr<Kinematics> make_kinematics(const DeviceConfig& config) {
   validate(config);
-  if (config.kind == DeviceKind::kPoseTracker) {
-    return std::make_unique<PoseTrackerKinematics>(config.tracker, config.tool_offset);
+  switch (config.kind) {
+    case DeviceKind::kPoseTracker:
+      return std::make_unique<PoseTrackerKinematics>(config.tracker, config.tool_offset);
+    case DeviceKind::kPhantom:
+      return std::make_unique<PhantomKinematics>(config.phantom, config.tool_offset);
+    case DeviceKind::kTrocarInstrument:
+      break;
   }
   return std::make_unique<TrocarKinematics>(config.trocar, config.tool_offset);
 }

@@ -17,6 +17,12 @@ using core::Vec3;
 
 Quat rot(double angle, const Vec3& axis) noexcept { return Quat(Eigen::AngleAxisd(angle, axis)); }
 
+constexpr const char* kLinkNames[TrocarKinematics::kNumLinks] = {"tool", "trocar", "tube", "jaw_1",
+                                                                 "jaw_2"};
+
+// +1 for jaw_1, −1 for jaw_2: each jaw turns by ±jaw/2 about the tube's x axis.
+double jaw_sign(int link) noexcept { return link == TrocarKinematics::kLinkJaw1 ? 1.0 : -1.0; }
+
 }  // namespace
 
 TrocarKinematics::TrocarKinematics(const TrocarGeometry& trocar, const core::Pose& tool_offset) {
@@ -45,14 +51,15 @@ core::Pose TrocarKinematics::forward(const AxisVector& q) const noexcept {
   return out;
 }
 
-Jacobian TrocarKinematics::jacobian(const AxisVector& q) const noexcept {
+Jacobian TrocarKinematics::tube_fixed_jacobian(const AxisVector& q,
+                                               const Vec3& origin) const noexcept {
   eigen_assert(q.size() == kNumAxes);
   const Quat rc_a = trocar_.orientation * rot(q[kPivotX], Vec3::UnitX());
   const Quat swing = rc_a * rot(q[kPivotY], Vec3::UnitY());
   const Vec3 w_a = trocar_.orientation * Vec3::UnitX();
   const Vec3 w_b = rc_a * Vec3::UnitY();
   const Vec3 s = swing * Vec3::UnitZ();
-  const Vec3 r = forward(q).position - trocar_.point;  // controlled origin from the trocar
+  const Vec3 r = origin - trocar_.point;  // frame origin from the trocar
 
   Jacobian j(6, kNumAxes);
   j.setZero();
@@ -60,8 +67,67 @@ Jacobian TrocarKinematics::jacobian(const AxisVector& q) const noexcept {
   j.col(kPivotY) << w_b.cross(r), w_b;
   j.col(kDepth) << s, Vec3::Zero();
   j.col(kRoll) << s.cross(r), s;
-  // kJaw: zero column, the rigid tool ignores the jaw.
+  // kJaw: zero column, the rigid tube ignores the jaw.
   return j;
+}
+
+Jacobian TrocarKinematics::jacobian(const AxisVector& q) const noexcept {
+  return tube_fixed_jacobian(q, forward(q).position);
+}
+
+const char* TrocarKinematics::link_name(int link) const noexcept {
+  return (link >= 0 && link < kNumLinks) ? kLinkNames[link] : "";
+}
+
+core::Pose TrocarKinematics::link_pose(int link, const AxisVector& q) const noexcept {
+  eigen_assert(q.size() == kNumAxes);
+  switch (link) {
+    case kLinkTrocar: {
+      core::Pose sleeve;
+      sleeve.position = trocar_.point;
+      sleeve.orientation =
+          (trocar_.orientation * rot(q[kPivotX], Vec3::UnitX()) * rot(q[kPivotY], Vec3::UnitY()))
+              .normalized();
+      return sleeve;
+    }
+    case kLinkTube:
+      return tool_pose(q);
+    case kLinkJaw1:
+    case kLinkJaw2: {
+      core::Pose jaw = tool_pose(q);
+      jaw.orientation =
+          (jaw.orientation * rot(0.5 * jaw_sign(link) * q[kJaw], Vec3::UnitX())).normalized();
+      return jaw;
+    }
+    default:
+      return forward(q);
+  }
+}
+
+Jacobian TrocarKinematics::link_jacobian(int link, const AxisVector& q) const noexcept {
+  eigen_assert(q.size() == kNumAxes);
+  switch (link) {
+    case kLinkTrocar: {
+      // The sleeve pivots about p_c (fixed origin); depth, roll and jaw do not move it.
+      const Quat rc_a = trocar_.orientation * rot(q[kPivotX], Vec3::UnitX());
+      Jacobian j(6, kNumAxes);
+      j.setZero();
+      j.col(kPivotX).tail<3>() = trocar_.orientation * Vec3::UnitX();
+      j.col(kPivotY).tail<3>() = rc_a * Vec3::UnitY();
+      return j;
+    }
+    case kLinkTube:
+      return tube_fixed_jacobian(q, tool_pose(q).position);
+    case kLinkJaw1:
+    case kLinkJaw2: {
+      const core::Pose tube = tool_pose(q);
+      Jacobian j = tube_fixed_jacobian(q, tube.position);
+      j.col(kJaw).tail<3>() = (0.5 * jaw_sign(link)) * (tube.orientation * Vec3::UnitX());
+      return j;
+    }
+    default:
+      return jacobian(q);
+  }
 }
 
 AxisVector TrocarKinematics::inverse_tool(const core::Pose& tool, double jaw) const noexcept {

@@ -2,6 +2,11 @@
 
 #include "numen/platform/control_loop.hpp"
 
+#include <span>
+#include <stdexcept>
+#include <string>
+
+#include "numen/core/feedback.hpp"
 #include "numen/core/step.hpp"
 #include "numen/hal/canopen.hpp"
 #include "numen/platform/monotonic_clock.hpp"
@@ -9,8 +14,92 @@
 namespace numen::platform {
 
 ControlLoop::ControlLoop(const core::Model& model, core::Data& data, hal::Bus& bus,
-                         hal::InstrumentDevice& device) noexcept
-    : model_(&model), data_(&data), bus_(&bus), device_(&device) {}
+                         hal::InstrumentDevice& device, DeviceBinding binding)
+    : model_(&model), data_(&data), bus_(&bus), device_(&device), binding_(std::move(binding)) {
+  const int links = device.kinematics().num_links();
+  for (const LinkBinding& b : binding_.links) {
+    if (b.link < 0 || b.link >= links || b.link >= hal::kMaxLinks)
+      throw std::invalid_argument("device binding: link " + std::to_string(b.link) +
+                                  " out of range (the device has " + std::to_string(links) + ")");
+    if (b.body < -1 || b.body >= model.num_bodies())
+      throw std::invalid_argument("device binding: body " + std::to_string(b.body) + " out of range");
+  }
+  for (const AxisPrescription& p : binding_.prescriptions) {
+    if (p.joint < 0 || p.joint >= model.num_joints() ||
+        !model.joints[static_cast<std::size_t>(p.joint)].prescribed)
+      throw std::invalid_argument("device binding: joint " + std::to_string(p.joint) +
+                                  " is not a prescribed joint");
+    if (p.axis < 0 || p.axis >= device.num_axes())
+      throw std::invalid_argument("device binding: axis " + std::to_string(p.axis) + " out of range");
+  }
+  link_origin_.assign(binding_.links.size(), core::Vec3::Zero());
+  body_target_.assign(binding_.links.size(), core::Vec3::Zero());
+  bound_body_.assign(binding_.links.size(), -1);
+}
+
+void ControlLoop::apply_targets(const hal::DeviceSample& sample) noexcept {
+  core::Data& d = *data_;
+  if (binding_.links.empty()) {
+    d.target = sample.target;
+    d.target_twist = sample.twist;
+  }
+  for (std::size_t k = 0; k < binding_.links.size(); ++k) {
+    const LinkBinding& b = binding_.links[k];
+    const int body = b.body < 0 ? d.attached_body : b.body;
+    bound_body_[k] = body;
+    const core::Pose& link = sample.link_targets[static_cast<std::size_t>(b.link)];
+    const core::Twist& lt = sample.link_twists[static_cast<std::size_t>(b.link)];
+    core::Pose pose;
+    pose.position = link.position + link.orientation * b.body_in_link.position;
+    pose.orientation = link.orientation * b.body_in_link.orientation;
+    core::Twist twist;
+    twist.angular = lt.angular;
+    twist.linear = lt.linear + lt.angular.cross(pose.position - link.position);
+    link_origin_[k] = link.position;
+    body_target_[k] = pose.position;
+    if (body < 0) continue;
+    if (body == d.attached_body) {
+      d.target = pose;
+      d.target_twist = twist;
+    } else {
+      core::BodyTarget& t = d.body_targets[static_cast<std::size_t>(body)];
+      t.pose = pose;
+      t.twist = twist;
+      t.enabled = true;
+    }
+  }
+  for (const AxisPrescription& p : binding_.prescriptions) {
+    core::JointPrescription& jp = d.joint_prescribed[static_cast<std::size_t>(p.joint)];
+    jp.value = p.scale * sample.q(p.axis) + p.offset;
+    jp.rate = p.scale * sample.qdot(p.axis);
+  }
+}
+
+bool ControlLoop::send_feedback(std::int64_t now_ns) noexcept {
+  const core::Data& d = *data_;
+  if (binding_.links.empty()) {
+    if (d.attached_body < 0) return false;
+    report_.command_status = device_->command(d.feedback_wrench, *bus_, now_ns);
+    return true;
+  }
+  for (core::Wrench& w : link_wrench_) w = core::Wrench{};
+  bool any = false;
+  for (std::size_t k = 0; k < binding_.links.size(); ++k) {
+    const int body = bound_body_[k];
+    if (body < 0) continue;
+    any = true;
+    const core::Wrench w = core::carry_wrench(d.body_feedback[static_cast<std::size_t>(body)],
+                                              body_target_[k], link_origin_[k]);  // Eq. 9
+    core::Wrench& acc = link_wrench_[static_cast<std::size_t>(binding_.links[k].link)];
+    acc.force += w.force;
+    acc.torque += w.torque;
+  }
+  if (!any) return false;
+  const auto n = static_cast<std::size_t>(device_->kinematics().num_links());
+  report_.command_status =
+      device_->command_links(std::span<const core::Wrench>(link_wrench_.data(), n), *bus_, now_ns);
+  return true;
+}
 
 void ControlLoop::begin_period(std::int64_t now_ns) noexcept {
   // CiA 301 SYNC counter runs 1..240 when used.
@@ -26,10 +115,7 @@ const PeriodReport& ControlLoop::end_period(std::int64_t now_ns) noexcept {
   const hal::DeviceSample sample = device_->sample(now_ns);
   report_.sample_valid = sample.valid;
   report_.target_ready = sample.ready;
-  if (sample.ready) {
-    data_->target = sample.target;
-    data_->target_twist = sample.twist;
-  }
+  if (sample.ready) apply_targets(sample);
 
   const std::int64_t t0 = monotonic_now_ns();
   core::step(*model_, *data_);
@@ -39,9 +125,7 @@ const PeriodReport& ControlLoop::end_period(std::int64_t now_ns) noexcept {
   // Torque only from a sample checked this period: a stale or rejected sample
   // keeps the last good target for the god-object, but the drives get zero
   // torque until fresh plausible data arrive (no "hold the last command").
-  if (sample.valid && data_->attached_body >= 0) {
-    report_.command_status = device_->command(data_->feedback_wrench, *bus_, now_ns);
-  } else {
+  if (!(sample.valid && send_feedback(now_ns))) {
     ++counters_.periods_zero_torque;
     report_.command_status = device_->command_zero(*bus_, now_ns);
   }

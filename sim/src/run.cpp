@@ -58,7 +58,7 @@ SceneRunner::SceneRunner(const Scene& scene, std::size_t trace_capacity)
       device_(scene.device),
       data_(core::make_data(scene.model)),
       ghost_(core::make_data(scene.model)),
-      loop_(scene.model, data_, bus_.controller(), device_),
+      loop_(scene.model, data_, bus_.controller(), device_, scene.binding),
       period_ns_(static_cast<std::int64_t>(std::llround(scene.model.dt * 1e9))),
       phase_ns_(static_cast<std::int64_t>(std::llround(scene.compute_phase_s * 1e9))) {
   trace_.reserve(trace_capacity);
@@ -68,6 +68,8 @@ SceneRunner::SceneRunner(const Scene& scene, std::size_t trace_capacity)
   acc_.dt_s = scene.model.dt;
   acc_.warnings = scene.warnings;
   acc_.trocar_note = scene.trocar_note;
+  acc_.num_bodies = scene.model.num_bodies();
+  acc_.num_joints = scene.model.num_joints();
 }
 
 void SceneRunner::period() noexcept {
@@ -94,12 +96,28 @@ void SceneRunner::period() noexcept {
   int tool_contacts = 0;
   if (held >= 0) {
     const auto h = static_cast<std::size_t>(held);
-    tool_pen = deepest_contact_of(data_, held, &tool_contacts);
+    // The tool: every body of the held body's articulation (the held body
+    // alone for a rigid tool). The target: the same bodies placed where the
+    // device puts them (held body at data.target, the others at their own
+    // targets, Eq. 6).
+    const int tree = model.articulation.body_tree[h];
     ghost_.bodies = data_.bodies;  // same size: no allocation
     ghost_.bodies[h].position = data_.target.position;
     ghost_.bodies[h].orientation = data_.target.orientation;
+    for (std::size_t b = 0; b < data_.bodies.size(); ++b) {
+      const core::BodyTarget& bt = data_.body_targets[b];
+      if (b == h || !bt.enabled) continue;
+      ghost_.bodies[b].position = bt.pose.position;
+      ghost_.bodies[b].orientation = bt.pose.orientation;
+    }
     core::detect_contacts(model, ghost_);
-    target_pen = deepest_contact_of(ghost_, held);
+    for (int b = 0; b < model.num_bodies(); ++b) {
+      if (model.articulation.body_tree[static_cast<std::size_t>(b)] != tree) continue;
+      int n = 0;
+      tool_pen = std::max(tool_pen, deepest_contact_of(data_, b, &n));
+      tool_contacts += n;
+      target_pen = std::max(target_pen, deepest_contact_of(ghost_, b));
+    }
     if (tool_contacts == 0) {
       const double e = (data_.bodies[h].position - data_.target.position).norm();
       free_sq_ += e * e;
@@ -107,6 +125,9 @@ void SceneRunner::period() noexcept {
       ++s.free_steps;
     }
   }
+  s.joint_drift_max_mm = std::max(s.joint_drift_max_mm, data_.max_joint_drift * 1e3);
+  s.joint_angle_drift_max_mrad =
+      std::max(s.joint_angle_drift_max_mrad, data_.max_joint_angle_drift * 1e3);
   s.tool_penetration_max_mm = std::max(s.tool_penetration_max_mm, tool_pen * 1e3);
   s.target_penetration_max_mm = std::max(s.target_penetration_max_mm, target_pen * 1e3);
   s.any_penetration_max_mm = std::max(s.any_penetration_max_mm, data_.max_penetration * 1e3);
@@ -114,8 +135,9 @@ void SceneRunner::period() noexcept {
   s.feedback_torque_max_nm = std::max(s.feedback_torque_max_nm, data_.feedback_wrench.torque.norm());
   const hal::AxisVector& tau = device_.last_torques();
   if (tau.size() > 0) s.axis_torque_max = std::max(s.axis_torque_max, tau.cwiseAbs().maxCoeff());
+  const int held_tree = held >= 0 ? model.articulation.body_tree[static_cast<std::size_t>(held)] : -1;
   for (int b = 0; b < model.num_bodies(); ++b)
-    if (b != held)
+    if (model.articulation.body_tree[static_cast<std::size_t>(b)] != held_tree)
       s.free_body_speed_max_mps = std::max(
           s.free_body_speed_max_mps, data_.bodies[static_cast<std::size_t>(b)].linear_velocity.norm());
   s.contacts_max = std::max(s.contacts_max, data_.num_contacts);
@@ -184,6 +206,9 @@ std::string format_summary(const RunSummary& s) {
      << s.tracking_error_free_max_mm << " mm over " << s.free_steps << " steps\n";
   os << "  feedback: force max " << s.feedback_force_max_n << " N, torque max "
      << s.feedback_torque_max_nm << " N·m, axis torque max " << s.axis_torque_max << "\n";
+  if (s.num_joints > 0)
+    os << "  joints: " << s.num_joints << ", drift max " << s.joint_drift_max_mm << " mm, "
+       << s.joint_angle_drift_max_mrad << " mrad\n";
   os << "  fastest body not held: " << s.free_body_speed_max_mps << " m/s\n";
   os << "  contacts max " << s.contacts_max << ", overflow steps " << s.contact_overflow
      << ", solver iterations max " << s.solver_iterations_max << "\n";
@@ -251,6 +276,10 @@ std::string format_summary_json(const RunSummary& s) {
   num("feedback_torque_max_nm", s.feedback_torque_max_nm);
   num("axis_torque_max", s.axis_torque_max);
   num("free_body_speed_max_mps", s.free_body_speed_max_mps);
+  integer("num_bodies", s.num_bodies);
+  integer("num_joints", s.num_joints);
+  num("joint_drift_max_mm", s.joint_drift_max_mm);
+  num("joint_angle_drift_max_mrad", s.joint_angle_drift_max_mrad);
   integer("rejected_samples", s.rejected_samples);
   integer("invalid_periods", s.invalid_periods);
   integer("contact_overflow", s.contact_overflow);

@@ -16,6 +16,7 @@
 #include "numen/sim/scripted_path.hpp"
 #include "numen/sim/simulated_instrument.hpp"
 #include "numen/sim/trocar_placement.hpp"
+#include "scene_articulation.hpp"
 #include "scene_model.hpp"
 #include "toml_reader.hpp"
 
@@ -344,7 +345,7 @@ Scene load_scene(const std::string& path, const SceneOverrides& overrides) {
   const TomlTable root(doc, "", scene.file);
   root.allow_only({"name", "description", "dt", "duration", "gravity", "integrator", "coupling",
                    "solver", "material", "contact_default", "contact", "body", "obstacle", "device",
-                   "bus", "trajectory", "event"});
+                   "bus", "trajectory", "event", "joint", "baumgarte"});
   scene.name = root.string_or("name", std::filesystem::path(path).stem().string());
   scene.description = root.string_or("description", "");
   scene.model = parse_scene_model(root, scene.warnings);
@@ -355,10 +356,11 @@ Scene load_scene(const std::string& path, const SceneOverrides& overrides) {
   const std::vector<TomlTable> body_tables = root.tables("body");
   const TomlTable* attached_table = nullptr;
   parse_device(root, scene, attached_table, body_tables);
-  if (attached_table && !attached_table->has("position")) {
+  if (attached_table && !attached_table->has("position") && !attached_table->has("link")) {
     core::BodyModel& b = scene.model.bodies[static_cast<std::size_t>(scene.model.initial_attached_body)];
     b.initial_pose = first_device_pose(scene);
   }
+  parse_articulation(root, body_tables, scene);
 
   // Bus between controller and instrument.
   double latency = 100e-6;

@@ -268,7 +268,7 @@ void parse_bodies(const TomlTable& root, core::Model& m, std::vector<std::string
   for (const TomlTable& t : root.tables("body")) {
     t.allow_only({"name", "mass", "inertia", "material", "position", "orientation",
                   "linear_velocity", "angular_velocity", "spheres", "sphere_line",
-                  "sphere_grid", "coupling"});
+                  "sphere_grid", "coupling", "link", "link_offset"});
     core::BodyModel b;
     b.name = t.string("name");
     for (const auto& other : m.bodies)

@@ -2,6 +2,7 @@
 
 #include "numen/sim/trace.hpp"
 
+#include <algorithm>
 #include <fstream>
 #include <stdexcept>
 
@@ -29,6 +30,12 @@ TraceRecord make_trace_record(const core::Data& data, int held, int tool_contact
   for (int i = 0; i < r.num_axes; ++i) r.axis_torque[static_cast<std::size_t>(i)] = axis_torques[i];
   r.step_time_us = static_cast<double>(report.step_ns) * 1e-3;
   r.solver_iterations = data.solver_iterations;
+  r.joint_drift_mm = data.max_joint_drift * 1e3;
+  r.joint_angle_drift_mrad = data.max_joint_angle_drift * 1e3;
+  for (const core::JointState& j : data.joints) {
+    r.joint_reaction_max_n = std::max(r.joint_reaction_max_n, j.reaction.force.norm());
+    r.baumgarte_rhs_max = std::max(r.baumgarte_rhs_max, j.baumgarte_rhs.cwiseAbs().maxCoeff());
+  }
   return r;
 }
 
@@ -42,7 +49,8 @@ void Trace::write_csv(const std::string& path) const {
          "contacts,tool_contacts,tool_penetration_mm,target_penetration_mm,"
          "feedback_fx,feedback_fy,feedback_fz,feedback_tx,feedback_ty,feedback_tz";
   for (int i = 0; i < axes; ++i) out << ",axis_torque_" << i;
-  out << ",step_time_us,solver_iterations\n";
+  out << ",step_time_us,solver_iterations,joint_drift_mm,joint_angle_drift_mrad,"
+         "joint_reaction_max_n,baumgarte_rhs_max\n";
   out.precision(9);
   auto pose = [&](const core::Pose& p) {
     out << p.position.x() << ',' << p.position.y() << ',' << p.position.z() << ','
@@ -58,7 +66,9 @@ void Trace::write_csv(const std::string& path) const {
         << ',' << r.feedback.force.z() << ',' << r.feedback.torque.x() << ','
         << r.feedback.torque.y() << ',' << r.feedback.torque.z();
     for (int i = 0; i < axes; ++i) out << ',' << r.axis_torque[static_cast<std::size_t>(i)];
-    out << ',' << r.step_time_us << ',' << r.solver_iterations << '\n';
+    out << ',' << r.step_time_us << ',' << r.solver_iterations << ',' << r.joint_drift_mm << ','
+        << r.joint_angle_drift_mrad << ',' << r.joint_reaction_max_n << ',' << r.baumgarte_rhs_max
+        << '\n';
   }
   out.flush();  // a write error of the last buffered block must not pass silently
   if (!out) throw std::runtime_error(path + ": error while writing the trace");

@@ -1,9 +1,12 @@
 // Tests of numen/hal/device_config.hpp and kinematics_factory.hpp: defaults, validation
-// messages that name the field, kinematics of each kind.
+// messages that name the field, kinematics of each kind (trocar, pose tracker, phantom).
 #include "numen/hal/device_config.hpp"
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <limits>
+#include <numbers>
 #include <stdexcept>
 #include <string>
 
@@ -98,6 +101,98 @@ TEST(DeviceConfig, KindDecidesTheKinematics) {
   DeviceConfig bad = make_default_pose_tracker_config();
   bad.kind = DeviceKind::kTrocarInstrument;  // 6 axes for a 5-axis kind
   EXPECT_THROW(make_kinematics(bad), std::invalid_argument);
+}
+
+TEST(DeviceConfig, KindNamesAndAxisCounts) {
+  EXPECT_STREQ(to_string(DeviceKind::kTrocarInstrument), "trocar instrument");
+  EXPECT_STREQ(to_string(DeviceKind::kPoseTracker), "pose tracker");
+  EXPECT_STREQ(to_string(DeviceKind::kPhantom), "phantom");
+  EXPECT_EQ(expected_axis_count(DeviceKind::kTrocarInstrument), 5);
+  EXPECT_EQ(expected_axis_count(DeviceKind::kPoseTracker), 6);
+  EXPECT_EQ(expected_axis_count(DeviceKind::kPhantom), 6);
+  EXPECT_STREQ(to_string(static_cast<DeviceKind>(200)), "unknown");
+  EXPECT_EQ(expected_axis_count(static_cast<DeviceKind>(200)), 0);
+}
+
+TEST(DeviceConfig, DefaultPhantomHasDrivesOnTheFirstThreeAxesOnly) {
+  const DeviceConfig c = make_default_phantom_config(30);
+  EXPECT_EQ(error_of(c), "");
+  EXPECT_EQ(c.kind, DeviceKind::kPhantom);
+  ASSERT_EQ(c.axes.size(), 6u);
+  const char* names[] = {"turret",     "shoulder",     "elbow",
+                         "gimbal_yaw", "gimbal_pitch", "stylus_roll"};
+  for (std::size_t i = 0; i < 6; ++i) {
+    const AxisConfig& a = c.axes[i];
+    EXPECT_EQ(a.name, names[i]);
+    EXPECT_EQ(a.encoder_cob_id, 0x180u + 30u + i) << i;
+    EXPECT_EQ(a.has_drive(), i < 3) << i;
+    if (i < 3) {
+      EXPECT_EQ(a.drive_cob_id, 0x200u + 30u + i) << i;
+      EXPECT_GT(a.max_torque, 0.0);
+      EXPECT_LE(1000.0 * a.max_torque / a.rated_torque, 32767.0);  // fits the int16 RPDO
+    } else {
+      EXPECT_EQ(a.max_torque, 0.0);
+    }
+    EXPECT_LT(a.min, 0.0);  // the home posture q = 0 is inside every range
+    EXPECT_GT(a.max, 0.0);
+  }
+  EXPECT_TRUE(c.axes[5].wraps);
+  EXPECT_LT(c.axes[4].max, std::numbers::pi / 2);  // clear of the gimbal lock
+  EXPECT_DOUBLE_EQ(c.phantom.l1, 0.14);
+  EXPECT_DOUBLE_EQ(c.phantom.l2, 0.14);
+  EXPECT_NO_THROW(make_default_phantom_config(122));
+  EXPECT_THROW(make_default_phantom_config(123), std::invalid_argument);
+  EXPECT_THROW(make_default_phantom_config(0), std::invalid_argument);
+}
+
+TEST(DeviceConfig, PhantomGeometryIsValidated) {
+  DeviceConfig c = make_default_phantom_config();
+  c.name = "arm";
+  c.phantom.l1 = 0.0;
+  std::string e = error_of(c);
+  EXPECT_NE(e.find("device 'arm'"), std::string::npos) << e;
+  EXPECT_NE(e.find("phantom.l1"), std::string::npos) << e;
+
+  c = make_default_phantom_config();
+  c.phantom.l2 = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_NE(error_of(c).find("phantom.l2"), std::string::npos);
+
+  c = make_default_phantom_config();
+  c.phantom.base.orientation = numen::core::Quat(0.5, 0, 0, 0);
+  EXPECT_NE(error_of(c).find("phantom.base.orientation"), std::string::npos);
+
+  c = make_default_phantom_config();
+  c.phantom.base.position.x() = std::numeric_limits<double>::infinity();
+  EXPECT_NE(error_of(c).find("phantom.base.position"), std::string::npos);
+
+  // Only the kind's own geometry is checked.
+  c = make_default_phantom_config();
+  c.trocar.orientation = numen::core::Quat(0, 0, 0, 0);
+  EXPECT_EQ(error_of(c), "");
+  DeviceConfig t = make_default_trocar_config();
+  t.phantom.l1 = -1.0;
+  EXPECT_EQ(error_of(t), "");
+
+  c = make_default_phantom_config();
+  c.axes.pop_back();
+  EXPECT_NE(error_of(c).find("must have 6 entries for a phantom"), std::string::npos);
+}
+
+TEST(DeviceConfig, PhantomKindBuildsPhantomKinematics) {
+  DeviceConfig c = make_default_phantom_config();
+  c.phantom.l1 = 0.2;
+  c.phantom.base.position = numen::core::Vec3(1, 2, 3);
+  c.tool_offset.position = numen::core::Vec3(0.05, 0, 0);
+  const auto k = make_kinematics(c);
+  EXPECT_EQ(k->num_axes(), 6);
+  EXPECT_EQ(k->num_links(), 5);
+  const auto* p = dynamic_cast<const PhantomKinematics*>(k.get());
+  ASSERT_NE(p, nullptr);
+  EXPECT_DOUBLE_EQ(p->geometry().l1, 0.2);
+  EXPECT_EQ(p->geometry().base.position, c.phantom.base.position);
+  EXPECT_EQ(p->tool_offset().position, c.tool_offset.position);
+  c.phantom.l2 = -0.1;
+  EXPECT_THROW(make_kinematics(c), std::invalid_argument);
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <memory>
@@ -15,6 +16,7 @@
 #include "alloc_counter.hpp"
 #include "numen/hal/canopen.hpp"
 #include "numen/hal/instrument_device.hpp"
+#include "numen/hal/phantom_kinematics.hpp"
 #include "numen/hal/sim_bus.hpp"
 #include "numen/hal/trocar_kinematics.hpp"
 
@@ -400,6 +402,51 @@ TEST(DeviceEmulator, PoseTrackerEndToEnd) {
   EXPECT_LT((s.target.position - truth.position).norm(), 1e-6);
   EXPECT_LT(s.target.orientation.angularDistance(truth.orientation), 3e-6);
   EXPECT_EQ(rig.emulator.counters().rpdos, 0u);  // no drives: nothing commanded
+}
+
+TEST(DeviceEmulator, PhantomEndToEnd) {
+  // A phantom arm: six encoders answer each SYNC, three drives receive the link torques.
+  DeviceConfig c = make_default_phantom_config(50);
+  c.control_period_s = kPeriodS;
+  Rig rig(latency_only(), c);
+  const double q[6] = {0.3, -0.2, 0.1, -1.0, 0.6, 2.5};
+  rig.emulator.set_axis_values(q);
+  DeviceSample s;
+  for (int k = 0; k < 3; ++k) s = rig.period(k, Wrench{});
+  ASSERT_TRUE(s.valid);
+  EXPECT_EQ(rig.emulator.counters().tpdos_sent, 18u);  // 3 SYNCs × 6 axes
+  AxisVector qv(6);
+  for (int i = 0; i < 6; ++i) qv[i] = q[i];
+  const PhantomKinematics truth_k(c.phantom, c.tool_offset);
+  const numen::core::Pose truth = truth_k.forward(qv);
+  EXPECT_LT((s.target.position - truth.position).norm(), 1e-5);
+  EXPECT_LT(s.target.orientation.angularDistance(truth.orientation), 1e-3);
+  ASSERT_EQ(s.num_links, 5);
+  const numen::core::Pose elbow = truth_k.link_pose(PhantomKinematics::kLinkForearm, qv);
+  EXPECT_LT((s.link_targets[PhantomKinematics::kLinkForearm].position - elbow.position).norm(),
+            1e-5);
+  // Link wrenches -> RPDOs on the three drives only -> the emulated drives.
+  std::array<Wrench, PhantomKinematics::kNumLinks> w{};
+  w[PhantomKinematics::kLinkStylus].force = Vec3(0.0, 0.0, -2.0);  // push the gimbal down
+  w[PhantomKinematics::kLinkForearm].torque = Vec3(0.0, 0.05, 0.0);
+  const std::uint64_t rpdos = rig.emulator.counters().rpdos;
+  rig.bus.set_time_ns(3 * kPeriodNs);
+  rig.device.poll(rig.bus.controller());
+  rig.device.sample(3 * kPeriodNs);
+  ASSERT_EQ(rig.device.command_links(w, rig.bus.controller(), 3 * kPeriodNs), IoStatus::kOk);
+  rig.bus.set_time_ns(3 * kPeriodNs + kPeriodNs / 2);
+  rig.emulator.poll(rig.bus.device());
+  EXPECT_EQ(rig.emulator.counters().rpdos - rpdos, 3u);
+  for (int i = 0; i < 6; ++i) {
+    const AxisConfig& a = c.axes[static_cast<std::size_t>(i)];
+    EXPECT_NEAR(rig.emulator.last_torques()[i], rig.device.last_torques()[i],
+                0.5e-3 * a.rated_torque + 1e-12)
+        << i;
+    if (i >= 3) {
+      EXPECT_EQ(rig.emulator.last_torques()[i], 0.0);
+    }
+  }
+  EXPECT_GT(std::abs(rig.emulator.last_torques()[PhantomKinematics::kShoulder]), 0.1);
 }
 
 }  // namespace

@@ -1,15 +1,23 @@
 // Tests of numen/hal/instrument_device.hpp fed frame by frame (no bus): acceptance, each
-// rejection reason, held targets, twist, torque commands.
+// rejection reason, held targets, twist, torque commands; per-link targets and
+// command_links (τ = Σ_l J_lᵀ w_l) on a phantom arm with drives on three of its six axes.
 #include "numen/hal/instrument_device.hpp"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <numbers>
+#include <span>
 #include <stdexcept>
 
+#include "alloc_counter.hpp"
+#include "kinematics_check.hpp"
 #include "numen/hal/canopen.hpp"
+#include "numen/hal/phantom_kinematics.hpp"
 #include "numen/hal/sim_bus.hpp"
 #include "numen/hal/trocar_kinematics.hpp"
 
@@ -313,6 +321,275 @@ TEST(InstrumentDevice, ResetForgetsAcceptedValues) {
   EXPECT_TRUE(dev.sample(0).valid);
   dev.reset();
   EXPECT_FALSE(dev.sample(0).ready);
+}
+
+// ---- Links and command_links (phantom: six axes, drives on turret, shoulder, elbow) ----
+
+using PK = PhantomKinematics;
+using numen::core::Pose;
+using numen::core::Quat;
+
+DeviceConfig phantom_config() {
+  DeviceConfig c = make_default_phantom_config(30);
+  c.phantom.base.position = Vec3(0.1, 0.0, 0.2);
+  c.phantom.base.orientation = Quat(Eigen::AngleAxisd(0.3, Vec3::UnitZ()));
+  c.tool_offset.position = Vec3(0.03, 0.0, 0.0);  // a tip ahead of the gimbal along the pen
+  return c;
+}
+
+const double kP0[6] = {0.2, -0.3, 0.4, 0.5, -0.4, 1.0};
+
+// Reads every frame waiting on the device side; returns how many, and the per mille of each
+// drive COB-ID 0x200 + node seen (indexed by axis).
+int drain(SimBus& bus, const DeviceConfig& c, std::array<std::int16_t, kMaxAxes>& per_mille,
+          std::array<int, kMaxAxes>& frames_per_axis) {
+  per_mille = {};
+  frames_per_axis = {};
+  CanFrame f;
+  int n = 0;
+  while (bus.device().read(f) == IoStatus::kOk) {
+    ++n;
+    for (std::size_t i = 0; i < c.axes.size(); ++i) {
+      const AxisConfig& a = c.axes[i];
+      if (!a.has_drive() || a.drive_cob_id != f.id) continue;
+      std::int16_t pm = 0;
+      EXPECT_EQ(decode_torque_pdo(f, a.drive_cob_id, pm), DecodeStatus::kOk);
+      per_mille[i] = pm;
+      ++frames_per_axis[i];
+    }
+  }
+  return n;
+}
+
+std::array<Wrench, PK::kNumLinks> some_link_wrenches(double scale) {
+  SplitMix64 rng(314);
+  std::array<Wrench, PK::kNumLinks> w;
+  for (Wrench& x : w) x = numen::test::random_wrench(rng, scale);
+  return w;
+}
+
+TEST(InstrumentDeviceLinks, LinkTargetsAreTheLinkPosesOfTheDecodedAxes) {
+  InstrumentDevice dev(phantom_config());
+  ASSERT_EQ(dev.num_links(), 5);
+  EXPECT_EQ(dev.last_sample().num_links, 5);  // before any frame: links of the held values
+  feed(dev, kP0, 0);
+  dev.sample(0);
+  double q1[6];
+  const double rate[6] = {0.5, -0.3, 0.8, 1.0, -2.0, 3.0};
+  for (int i = 0; i < 6; ++i) q1[i] = kP0[i] + rate[i] * 1e-3;
+  feed(dev, q1, kMs);
+  const DeviceSample s = dev.sample(kMs);
+  ASSERT_TRUE(s.valid);
+  ASSERT_EQ(s.num_links, 5);
+  for (int i = 0; i < 6; ++i) {
+    const double quant = 0.5 / dev.config().axes[static_cast<std::size_t>(i)].counts_per_unit;
+    EXPECT_NEAR(s.q[i], q1[i], quant + 1e-15) << i;
+    EXPECT_NE(s.qdot[i], 0.0) << i;
+  }
+  const Kinematics& k = dev.kinematics();
+  for (int l = 0; l < 5; ++l) {
+    const auto m = static_cast<std::size_t>(l);
+    const Pose p = k.link_pose(l, s.q);
+    EXPECT_EQ(s.link_targets[m].position, p.position) << k.link_name(l);
+    EXPECT_EQ(s.link_targets[m].orientation.coeffs(), p.orientation.coeffs()) << k.link_name(l);
+    const numen::core::Twist t = twist_from_rates(k.link_jacobian(l, s.q), s.qdot);
+    EXPECT_EQ(s.link_twists[m].linear, t.linear) << k.link_name(l);
+    EXPECT_EQ(s.link_twists[m].angular, t.angular) << k.link_name(l);
+  }
+  EXPECT_EQ(s.link_targets[0].position, s.target.position);
+  EXPECT_EQ(s.link_twists[0].linear, s.twist.linear);
+  // The links are distinct frames: the forearm's origin is the elbow, 0.14 m from the turret.
+  EXPECT_NEAR(
+      (s.link_targets[PK::kLinkForearm].position - s.link_targets[PK::kLinkTurret].position).norm(),
+      0.14, 1e-12);
+  EXPECT_EQ(s.link_twists[PK::kLinkTurret].linear.norm(), 0.0);  // fixed origin
+  EXPECT_GT(s.link_twists[PK::kLinkStylus].angular.norm(), 0.1);
+}
+
+TEST(InstrumentDeviceLinks, CommandLinksDrivesOnlyTheMotorisedAxes) {
+  const DeviceConfig c = phantom_config();
+  InstrumentDevice dev(c);
+  SimBus bus(SimBusSettings{});
+  feed(dev, kP0, 0);
+  const DeviceSample s = dev.sample(0);
+  ASSERT_TRUE(s.valid);
+  const auto w = some_link_wrenches(0.1);
+  ASSERT_EQ(dev.command_links(w, bus.controller(), 3), IoStatus::kOk);
+  const AxisVector tau = numen::test::link_torques(dev.kinematics(), s.q, w);
+  std::array<std::int16_t, kMaxAxes> pm{};
+  std::array<int, kMaxAxes> frames{};
+  EXPECT_EQ(drain(bus, c, pm, frames), 3);  // turret, shoulder, elbow
+  for (int i = 0; i < 6; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    if (i < 3) {
+      ASSERT_TRUE(c.axes[k].has_drive());
+      EXPECT_EQ(frames[k], 1) << i;
+      ASSERT_LT(std::abs(tau[i]), c.axes[k].max_torque) << i;  // not saturated
+      EXPECT_NEAR(dev.last_torques()[i], tau[i], 1e-15) << i;
+      EXPECT_NEAR(per_mille_to_torque(c.axes[k], pm[k]), tau[i], 0.5e-3 * c.axes[k].rated_torque)
+          << i;
+      EXPECT_EQ(dev.last_torque_per_mille()[k], pm[k]);
+    } else {
+      EXPECT_FALSE(c.axes[k].has_drive());
+      EXPECT_EQ(frames[k], 0);
+      EXPECT_GT(std::abs(tau[i]), 1e-4) << i;  // the gimbal would feel it, but has no motor
+      EXPECT_EQ(dev.last_torques()[i], 0.0);
+    }
+  }
+  EXPECT_EQ(dev.counters().torque_saturations, 0u);
+  EXPECT_EQ(dev.counters().commands, 1u);
+}
+
+TEST(InstrumentDeviceLinks, CommandLinksSaturatesPerAxis) {
+  const DeviceConfig c = phantom_config();
+  InstrumentDevice dev(c);
+  SimBus bus(SimBusSettings{});
+  feed(dev, kP0, 0);
+  const DeviceSample s = dev.sample(0);
+  const auto w = some_link_wrenches(40.0);
+  dev.command_links(w, bus.controller(), 0);
+  const AxisVector tau = numen::test::link_torques(dev.kinematics(), s.q, w);
+  std::uint64_t expected_saturations = 0;
+  for (int i = 0; i < 3; ++i) {
+    const AxisConfig& a = c.axes[static_cast<std::size_t>(i)];
+    const double clamped = std::clamp(tau[i], -a.max_torque, a.max_torque);
+    if (clamped != tau[i]) ++expected_saturations;
+    EXPECT_DOUBLE_EQ(dev.last_torques()[i], clamped) << i;
+    EXPECT_LE(std::abs(dev.last_torques()[i]), a.max_torque);
+  }
+  EXPECT_GE(expected_saturations, 2u);  // the check is not vacuous
+  EXPECT_EQ(dev.counters().torque_saturations, expected_saturations);
+}
+
+TEST(InstrumentDeviceLinks, CommandEqualsCommandLinksOfOneWrench) {
+  for (const DeviceConfig& c : {phantom_config(), trocar_config()}) {
+    InstrumentDevice a(c);
+    InstrumentDevice b(c);
+    SimBus bus_a(SimBusSettings{});
+    SimBus bus_b(SimBusSettings{});
+    const double* q0 = c.kind == DeviceKind::kPhantom ? kP0 : kQ0;
+    feed(a, q0, 0);
+    feed(b, q0, 0);
+    a.sample(0);
+    b.sample(0);
+    Wrench w;
+    w.force = Vec3(0.7, -0.2, 0.4);
+    w.torque = Vec3(0.01, -0.03, 0.02);
+    a.command(w, bus_a.controller(), 5);
+    const std::array<Wrench, 1> one{w};
+    b.command_links(one, bus_b.controller(), 5);
+    EXPECT_EQ(a.last_torques(), b.last_torques());
+    EXPECT_EQ(a.last_torque_per_mille(), b.last_torque_per_mille());
+    EXPECT_GT(a.last_torques().norm(), 0.0);
+    // Missing entries are zero wrenches.
+    const std::array<Wrench, 3> padded{w, Wrench{}, Wrench{}};
+    b.command_links(padded, bus_b.controller(), 5);
+    EXPECT_EQ(a.last_torques(), b.last_torques());
+    // And the frames on the bus are the same.
+    CanFrame fa, fb;
+    int n = 0;
+    while (bus_a.device().read(fa) == IoStatus::kOk) {
+      ASSERT_EQ(bus_b.device().read(fb), IoStatus::kOk);
+      EXPECT_EQ(fa.id, fb.id);
+      EXPECT_EQ(fa.data, fb.data);
+      ++n;
+    }
+    EXPECT_EQ(n, 3);
+  }
+}
+
+TEST(InstrumentDeviceLinks, NonFiniteLinkWrenchSendsZeros) {
+  const DeviceConfig c = phantom_config();
+  InstrumentDevice dev(c);
+  SimBus bus(SimBusSettings{});
+  feed(dev, kP0, 0);
+  dev.sample(0);
+  auto w = some_link_wrenches(0.5);
+  dev.command_links(w, bus.controller(), 0);
+  EXPECT_GT(dev.last_torques().norm(), 0.0);
+  w[PK::kLinkForearm].torque.y() = std::numeric_limits<double>::infinity();
+  EXPECT_EQ(dev.command_links(w, bus.controller(), 0), IoStatus::kOk);
+  EXPECT_EQ(dev.last_torques().norm(), 0.0);
+  EXPECT_EQ(dev.counters().non_finite_wrenches, 1u);
+  std::array<std::int16_t, kMaxAxes> pm{};
+  std::array<int, kMaxAxes> frames{};
+  EXPECT_EQ(drain(bus, c, pm, frames), 6);  // two commands, three drives
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(pm[static_cast<std::size_t>(i)], 0) << i;
+  // Not ready (after reset): zeros too, whatever the wrench.
+  dev.reset();
+  w = some_link_wrenches(0.5);
+  dev.command_links(w, bus.controller(), 0);
+  EXPECT_EQ(dev.last_torques().norm(), 0.0);
+}
+
+TEST(InstrumentDeviceLinks, ExtraLinkWrenchesAreIgnoredAndCounted) {
+  InstrumentDevice dev(phantom_config());
+  SimBus bus(SimBusSettings{});
+  feed(dev, kP0, 0);
+  dev.sample(0);
+  const auto w = some_link_wrenches(0.3);
+  dev.command_links(w, bus.controller(), 0);
+  const AxisVector five = dev.last_torques();
+  std::array<Wrench, 7> seven{};
+  std::copy(w.begin(), w.end(), seven.begin());
+  seven[5].force = Vec3(100, 100, 100);
+  seven[6].force.x() = std::nan("");  // beyond the links: not even checked
+  dev.command_links(seven, bus.controller(), 0);
+  EXPECT_EQ(dev.last_torques(), five);
+  EXPECT_EQ(dev.counters().extra_link_wrenches, 1u);
+  EXPECT_EQ(dev.counters().non_finite_wrenches, 0u);
+}
+
+TEST(InstrumentDeviceLinks, SampleAndCommandLinksDoNotAllocate) {
+  const DeviceConfig c = phantom_config();
+  InstrumentDevice dev(c);
+  SimBus bus(SimBusSettings{});
+  std::array<Wrench, PK::kNumLinks> w{};
+  double q[6];
+  std::copy(kP0, kP0 + 6, q);
+  feed(dev, q, 0);
+  dev.sample(0);
+  int valid = 0;
+  std::int64_t allocations = 0;
+  {
+    numen::test::AllocationGuard guard;
+    CanFrame f;
+    for (int k = 1; k <= 1000; ++k) {
+      q[0] = kP0[0] + 0.2 * std::sin(0.01 * k);
+      q[4] = kP0[4] + 0.3 * std::sin(0.02 * k);
+      for (int i = 0; i < 6; ++i) {
+        const AxisConfig& a = c.axes[static_cast<std::size_t>(i)];
+        dev.on_frame(encode_position_pdo(a.encoder_cob_id, value_to_counts(a, q[i]), k * kMs));
+      }
+      const DeviceSample s = dev.sample(k * kMs);
+      valid += s.valid ? 1 : 0;
+      for (int l = 0; l < PK::kNumLinks; ++l) {
+        w[static_cast<std::size_t>(l)].force = Vec3(0.1 * l, -0.2, 0.3 * std::sin(0.01 * k));
+      }
+      dev.command_links(w, bus.controller(), k * kMs);
+      while (bus.device().read(f) == IoStatus::kOk) {
+      }
+    }
+    allocations = guard.count();
+  }
+  EXPECT_EQ(allocations, 0);
+  EXPECT_EQ(valid, 1000);
+  EXPECT_EQ(dev.counters().commands, 1000u);
+}
+
+TEST(InstrumentDeviceLinks, RejectsKinematicsWithTooManyLinks) {
+  class ManyLinks final : public Kinematics {
+   public:
+    int num_axes() const noexcept override { return 5; }
+    Pose forward(const AxisVector&) const noexcept override { return Pose{}; }
+    Jacobian jacobian(const AxisVector&) const noexcept override { return Jacobian::Zero(6, 5); }
+    AxisVector inverse(const Pose&, const AxisVector&) const noexcept override {
+      return AxisVector::Zero(5);
+    }
+    int num_links() const noexcept override { return kMaxLinks + 1; }
+  };
+  EXPECT_THROW(InstrumentDevice(trocar_config(), std::make_unique<ManyLinks>()),
+               std::invalid_argument);
 }
 
 }  // namespace

@@ -1,14 +1,17 @@
 // Tests of numen/hal/trocar_kinematics.hpp: geometry, round trips, Jacobian against finite
-// differences, virtual work τ = Jᵀ W, and what the inverse loses for a recorded wrist pose.
+// differences, virtual work τ = Jᵀ W, what the inverse loses for a recorded wrist pose, and
+// the links (trocar sleeve, tube, jaws): poses, Jacobians, τ = Σ_l J_lᵀ w_l.
 #include "numen/hal/trocar_kinematics.hpp"
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
 
 #include "alloc_counter.hpp"
+#include "kinematics_check.hpp"
 #include "numen/hal/axis.hpp"
 
 namespace {
@@ -227,6 +230,158 @@ TEST(TrocarKinematics, RejectsANonUnitQuaternion) {
   g = TrocarGeometry{};
   g.point.x() = std::nan("");
   EXPECT_THROW(TK k(g), std::invalid_argument);
+}
+
+// ---- Links: trocar sleeve, tube, two jaws (paper §5; Kinematics link API) ----
+
+using numen::test::numeric_link_jacobian;
+using numen::test::uniform;
+
+// Random configuration within the mechanism's useful range (away from d = 0).
+AxisVector random_q(numen::hal::SplitMix64& rng) {
+  return q_of(uniform(rng, -1.2, 1.2), uniform(rng, -1.2, 1.2), uniform(rng, 0.02, 0.3),
+              uniform(rng, -kPi, kPi), uniform(rng, 0.0, 1.2));
+}
+
+TEST(TrocarLinks, NamesAndLookup) {
+  const TK k(tilted_trocar());
+  ASSERT_EQ(k.num_links(), 5);
+  const char* names[] = {"tool", "trocar", "tube", "jaw_1", "jaw_2"};
+  for (int l = 0; l < 5; ++l) {
+    EXPECT_STREQ(k.link_name(l), names[l]);
+    EXPECT_EQ(k.find_link(names[l]), l);
+  }
+  EXPECT_STREQ(k.link_name(5), "");
+  EXPECT_STREQ(k.link_name(-1), "");
+  EXPECT_EQ(k.find_link("jaw"), -1);
+  EXPECT_EQ(k.find_link(""), -1);
+  EXPECT_EQ(k.find_link(nullptr), -1);
+}
+
+TEST(TrocarLinks, LinkZeroIsTheControlledFrame) {
+  const TK k(tilted_trocar(), some_offset());
+  numen::hal::SplitMix64 rng(11);
+  for (int trial = 0; trial < 20; ++trial) {
+    const AxisVector q = random_q(rng);
+    const Pose f = k.forward(q);
+    const Pose l0 = k.link_pose(TK::kLinkTool, q);
+    EXPECT_EQ(l0.position, f.position);
+    EXPECT_EQ(l0.orientation.coeffs(), f.orientation.coeffs());
+    EXPECT_EQ(k.link_jacobian(TK::kLinkTool, q), k.jacobian(q));
+  }
+}
+
+TEST(TrocarLinks, FramesFollowTheDocumentedGeometry) {
+  const TrocarGeometry g = tilted_trocar();
+  const TK k(g, some_offset());
+  const AxisVector q = q_of(0.3, -0.4, 0.15, 0.7, 0.6);
+  const Quat swing = g.orientation * rot(0.3, Vec3::UnitX()) * rot(-0.4, Vec3::UnitY());
+  // Sleeve: at the trocar point, no roll, z along the shaft.
+  const Pose sleeve = k.link_pose(TK::kLinkTrocar, q);
+  EXPECT_EQ(sleeve.position, g.point);
+  EXPECT_LT(angle_between(sleeve.orientation, swing), 1e-12);
+  // Tube == tool_pose (tip, with roll).
+  const Pose tube = k.link_pose(TK::kLinkTube, q);
+  const Pose tool = k.tool_pose(q);
+  EXPECT_TRUE(tube.position.isApprox(tool.position, 1e-15));
+  EXPECT_LT(angle_between(tube.orientation, tool.orientation), 1e-15);
+  EXPECT_TRUE(tube.position.isApprox(g.point + 0.15 * (sleeve.orientation * Vec3::UnitZ()), 1e-12));
+  // Jaws: at the tip, ±jaw/2 about the tube's x axis, so 0.6 rad apart.
+  const Pose j1 = k.link_pose(TK::kLinkJaw1, q);
+  const Pose j2 = k.link_pose(TK::kLinkJaw2, q);
+  EXPECT_EQ(j1.position, tube.position);
+  EXPECT_EQ(j2.position, tube.position);
+  EXPECT_LT(angle_between(j1.orientation, tube.orientation * rot(0.3, Vec3::UnitX())), 1e-12);
+  EXPECT_LT(angle_between(j2.orientation, tube.orientation * rot(-0.3, Vec3::UnitX())), 1e-12);
+  EXPECT_NEAR(angle_between(j1.orientation, j2.orientation), 0.6, 1e-12);
+  // Both jaws keep the tube's x axis (the hinge) and open symmetrically about the shaft.
+  const Vec3 x_t = tube.orientation * Vec3::UnitX();
+  EXPECT_TRUE((j1.orientation * Vec3::UnitX()).isApprox(x_t, 1e-12));
+  const Vec3 z1 = j1.orientation * Vec3::UnitZ();
+  const Vec3 z2 = j2.orientation * Vec3::UnitZ();
+  EXPECT_TRUE((z1 + z2).normalized().isApprox(tube.orientation * Vec3::UnitZ(), 1e-12));
+  // jaw = 0: both jaws are the tube.
+  const AxisVector closed = q_of(0.3, -0.4, 0.15, 0.7, 0.0);
+  EXPECT_LT(angle_between(k.link_pose(TK::kLinkJaw1, closed).orientation,
+                          k.link_pose(TK::kLinkTube, closed).orientation),
+            1e-15);
+  // An index out of range gives link 0.
+  EXPECT_EQ(k.link_pose(7, q).position, k.forward(q).position);
+}
+
+TEST(TrocarLinks, EveryLinkJacobianMatchesCentralDifferencesOfItsPose) {
+  const TK k(tilted_trocar(), some_offset());
+  numen::hal::SplitMix64 rng(2024);
+  for (int trial = 0; trial < 25; ++trial) {
+    const AxisVector q = random_q(rng);
+    for (int l = 0; l < k.num_links(); ++l) {
+      const Jacobian j = k.link_jacobian(l, q);
+      ASSERT_EQ(j.rows(), 6);
+      ASSERT_EQ(j.cols(), 5);
+      const Jacobian fd = numeric_link_jacobian(k, l, q, 1e-6);
+      for (int c = 0; c < 5; ++c) {
+        EXPECT_LT((j.col(c) - fd.col(c)).norm(), 1e-6)
+            << "link " << k.link_name(l) << " column " << c << " trial " << trial << "\n"
+            << j.col(c).transpose() << "\n"
+            << fd.col(c).transpose();
+      }
+    }
+  }
+}
+
+TEST(TrocarLinks, JacobianColumnsHaveTheDocumentedStructure) {
+  const TK k(tilted_trocar(), some_offset());
+  const AxisVector q = q_of(0.2, 0.5, 0.12, -1.0, 0.8);
+  // Sleeve: pure rotation about p_c by the pivots only.
+  const Jacobian sleeve = k.link_jacobian(TK::kLinkTrocar, q);
+  EXPECT_EQ(sleeve.topRows<3>().norm(), 0.0);
+  EXPECT_EQ(sleeve.col(TK::kDepth).norm(), 0.0);
+  EXPECT_EQ(sleeve.col(TK::kRoll).norm(), 0.0);
+  EXPECT_GT(sleeve.col(TK::kPivotX).norm(), 0.5);
+  // Tube: the jaw does nothing; jaws: the jaw turns them by ±½ x_tube.
+  const Jacobian tube = k.link_jacobian(TK::kLinkTube, q);
+  EXPECT_EQ(tube.col(TK::kJaw).norm(), 0.0);
+  const Vec3 x_t = k.tool_pose(q).orientation * Vec3::UnitX();
+  const Jacobian j1 = k.link_jacobian(TK::kLinkJaw1, q);
+  const Jacobian j2 = k.link_jacobian(TK::kLinkJaw2, q);
+  EXPECT_TRUE(j1.col(TK::kJaw).tail<3>().isApprox(0.5 * x_t, 1e-12));
+  EXPECT_TRUE(j2.col(TK::kJaw).tail<3>().isApprox(-0.5 * x_t, 1e-12));
+  EXPECT_EQ(j1.col(TK::kJaw).head<3>().norm(), 0.0);
+  EXPECT_EQ((j1.leftCols<4>() - tube.leftCols<4>()).norm(), 0.0);
+}
+
+TEST(TrocarLinks, TransposeMapsLinkWrenchesByVirtualWork) {
+  // Σ_l w_l · δx_l (δx_l from link_pose only) == τ · δq with τ = Σ_l J_lᵀ w_l, to O(|δq|²).
+  const TK k(tilted_trocar(), some_offset());
+  numen::hal::SplitMix64 rng(77);
+  for (int trial = 0; trial < 50; ++trial) {
+    const AxisVector q = random_q(rng);
+    std::array<Wrench, TK::kNumLinks> w;
+    for (Wrench& x : w) x = numen::test::random_wrench(rng, 2.0);
+    AxisVector dq(5);
+    for (int i = 0; i < 5; ++i) dq[i] = uniform(rng, -1e-5, 1e-5);
+    const AxisVector tau = numen::test::link_torques(k, q, w);
+    const double work = numen::test::link_virtual_work(k, q, dq, w);
+    EXPECT_NEAR(work, tau.dot(dq), 10.0 * dq.squaredNorm()) << "trial " << trial;
+    // The jaw axis carries the jaws' torques about the hinge: τ_jaw = ½ x_t · (t_3 − t_4).
+    const Vec3 x_t = k.tool_pose(q).orientation * Vec3::UnitX();
+    EXPECT_NEAR(tau[TK::kJaw], 0.5 * x_t.dot(w[3].torque - w[4].torque), 1e-12);
+  }
+}
+
+TEST(TrocarLinks, LinkCallsDoNotAllocate) {
+  const TK k(tilted_trocar(), some_offset());
+  const AxisVector q = sample_q(5);
+  numen::test::AllocationGuard guard;
+  double sink = 0;
+  for (int i = 0; i < 100; ++i) {
+    for (int l = 0; l < k.num_links(); ++l) {
+      sink += k.link_pose(l, q).position.x() + k.link_jacobian(l, q).sum();
+    }
+    sink += k.find_link("jaw_2");
+  }
+  EXPECT_EQ(guard.count(), 0);
+  EXPECT_TRUE(std::isfinite(sink));
 }
 
 }  // namespace

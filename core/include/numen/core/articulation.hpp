@@ -24,6 +24,19 @@
 /// decoupled: their block is the identity, their right-hand side is 0 and
 /// their joint rows' blocks on them are dropped. A joint whose bodies are all
 /// known (or world) has its rows disabled (y = 0).
+///
+/// Rooting. The static elimination tree follows the joints' direction: a body
+/// is below the joint of which it is the child, a joint below its parent body;
+/// the root of a tree is its joint to the world, if any, else its one body
+/// that is no joint's child. A joint must not be a leaf of the elimination
+/// (its pivot would be 0): with only one side an unknown body (a known child,
+/// say), it must instead be the root of its component. Known bodies and
+/// disabled joints cut the forest into components; in each, at most
+/// one joint may be "grounded" (tied to the world or a known body): the
+/// component is then re-rooted at that joint for the step (factor_articulation,
+/// ArticulationScratch::elimination_parent). Two grounded joints in one
+/// component close a loop through the world or the known bodies, which is not
+/// a tree: factor_articulation() returns false for it.
 
 #include <cstdint>
 #include <span>
@@ -59,10 +72,13 @@ struct ArticulationTopology {
 };
 
 /// Builds Model::articulation from Model::joints (and JointModel::num_rows).
-/// Errors (returned as a message naming the joint; empty on success): bad
-/// body index, child == parent, a body that is the child of two joints, a
-/// cycle, two joints to the world in one tree (a loop through the ground), a
-/// prescribed flag on a type that cannot be prescribed. Allocates: load time.
+/// Errors (returned as "joint 'NAME': ..."; empty on success): bad body index,
+/// child == parent, num_rows outside [1, kMaxJointRows], a prescribed flag on
+/// a type that cannot be prescribed, a body that is the child of two joints, a
+/// cycle. Two joints to the world in one tree (a loop through the ground)
+/// always make some body the child of two joints, and the message says so.
+/// Children are visited in joint index order and trees numbered by their
+/// smallest body index, so the result is deterministic. Allocates: load time.
 std::string build_articulation_topology(Model& model);
 
 /// Scratch of the tree factorisation and solve, sized once by resize().
@@ -70,20 +86,41 @@ struct ArticulationScratch {
   std::vector<JointRows> rows;   ///< Per joint: C and G at the step's start (filled by the caller).
   std::vector<std::uint8_t> known;  ///< Per body: 1 if its twist is known this step (see file comment).
   std::vector<std::uint8_t> joint_active;  ///< Per joint, derived by factor_articulation(): 0 if disabled.
-  std::vector<Mat6> off_diagonal;  ///< Per node: H_{i,parent(i)} (dim_i × dim_parent, zero padded).
+  /// Per node: H_{i,parent(i)} (dim_i × dim_parent, zero padded), parent(i)
+  /// being this step's elimination_parent; zero for a root.
+  std::vector<Mat6> off_diagonal;
   std::vector<Mat6> factor;        ///< Per node: lower Cholesky factor of D_i (body) or −D_i (joint), padded with I.
-  std::vector<Mat6> coupling;      ///< Per node: D_i⁻¹ H_{i,parent(i)}.
+  /// Per node: P_i⁻¹ H_{i,parent(i)}, P_i = D_i (body) or −D_i (joint): Baraff's
+  /// D_i⁻¹ H_{i,parent(i)} up to the node's sign. Zero for a root.
+  std::vector<Mat6> coupling;
   std::vector<Vec6> work;          ///< Per node: right-hand side, then solution (solve_articulation()).
+  /// Per node, derived by factor_articulation(): the elimination parent this
+  /// step (ArticulationTopology's, cut at known bodies and disabled joints and
+  /// reversed along a re-rooted path; see file comment), -1 for a root.
+  std::vector<int> elimination_parent;
+  /// Per node, derived by factor_articulation(): -1 normally; at the top
+  /// (topology order) of a re-rooted component, the node index of its new root
+  /// (a grounded joint); -2 on the other nodes of the reversed path from the
+  /// new root to that top, which are eliminated right after the top.
+  std::vector<int> reroot;
 
-  /// Sizes every buffer for `model` (finalized). Allocates: make_data() only.
+  /// Sizes every buffer for `model` (finalized): rows (count set to
+  /// JointModel::num_rows, zero rows), known (all 0), joint_active (all 1),
+  /// and the per-node buffers. Allocates: make_data() only.
   void resize(const Model& model);
 };
 
 /// Factors H for the body blocks `body_blocks` (one symmetric positive
 /// definite Mat6 per body, full storage; blocks of known bodies are ignored)
-/// and the joint rows and known flags already in `scratch`. Returns false if a
-/// pivot is not positive (singular constraints or a non-SPD block); the
-/// factors then hold NaN, which solve_articulation() propagates.
+/// and the joint rows and known flags already in `scratch`. Rows [0,
+/// JointModel::num_rows) of each JointRows are read (the rest are treated as
+/// zero); JointRows::count is not read. Returns false if a pivot is not
+/// positive — below 1e-12 of its diagonal entry, so that exactly dependent
+/// rows (a zero row, a duplicated row) are caught despite round-off — i.e. for
+/// rank-deficient joint rows, a non-SPD body block, or a loop through the
+/// world or known bodies (file comment). The failing node's factor is then
+/// NaN, which spreads to its whole component, and solve_articulation() gives
+/// NaN there (other components are solved normally).
 /// O(number of bodies + joints); no allocation.
 bool factor_articulation(const Model& model, std::span<const Mat6> body_blocks,
                          ArticulationScratch& scratch) noexcept;
@@ -97,8 +134,13 @@ void solve_articulation(const Model& model, ArticulationScratch& scratch,
                         std::span<const Vec6> b, std::span<const JointVector> c,
                         std::span<Vec6> x, std::span<JointVector> y) noexcept;
 
-/// Reference solve of the same system with a dense (6n + Σm)² matrix and a
-/// full-pivot LU — for tests and for checking the linear-time solve.
+/// Reference solve of the same system with a dense (6n + Σm)² matrix (Σm over
+/// the enabled joints; known bodies get an identity block and a zero
+/// right-hand side) and a full-pivot LU — for tests and for checking the
+/// linear-time solve. Reads scratch.rows and scratch.known only (joint
+/// activity is derived from `known`), so it needs no factor_articulation().
+/// Also solves (when regular) the loops through known bodies that the tree
+/// solve refuses.
 /// Allocates; not for the real-time path. Same argument conventions.
 void solve_articulation_dense(const Model& model, const ArticulationScratch& scratch,
                               std::span<const Mat6> body_blocks, std::span<const Vec6> b,

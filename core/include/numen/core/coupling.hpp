@@ -4,7 +4,10 @@
 ///   F = k_t (x_t − x) + γ_t (v_t − v),
 ///   T = k_r θu + γ_r (ω_t − ω),   θu = shortest-arc angle-axis of q_t q⁻¹,
 /// a zero-length damped spring pair acting at the COM of the attached body
-/// only (Data::attached_body; gains BodyModel::coupling). Modes
+/// (Data::attached_body, Data::target; gains BodyModel::coupling) and, for an
+/// articulated tool, of every body with its own enabled target
+/// (Data::body_targets, paper Eq. 6: one spring per body; bodies without a
+/// target are left to the simulation). Modes
 /// (Model::coupling_mode): kGodObject (this wrench on a body with mass),
 /// kFirstOrder (massless limit, handled by the integrator), kDirect (pose and
 /// twist imposed: impose_direct_target()).
@@ -39,20 +42,24 @@ bool target_is_finite(const Pose& target, const Twist& target_twist) noexcept;
 /// god-object model (kGodObject) for that body.
 bool first_order_applicable(const CouplingGains& gains) noexcept;
 
-/// kDirect only (no-op in other modes or when no valid body is attached):
-/// imposes x, q, v, ω of the attached body := Data::target / target_twist
-/// (q normalised) and marks it SolverScratch::direct_body, i.e. a moving body
-/// of infinite mass for the rest of the step. With a non-finite target, sets
-/// kInvalidTarget and holds the body still (pose kept, twist zeroed).
+/// kDirect only (no-op in other modes): imposes x, q, v, ω of the attached
+/// body := Data::target / target_twist, and of every other body with an
+/// enabled Data::body_targets entry := that target (q normalised), and marks
+/// them in SolverScratch::imposed, i.e. moving bodies of infinite mass for the
+/// rest of the step (their joints to each other are disabled). With a
+/// non-finite target, sets kInvalidTarget and holds that body still (pose
+/// kept, twist zeroed).
 /// Call before detect_contacts() so that contacts see the imposed pose.
 void impose_direct_target(const Model& model, Data& data) noexcept;
 
-/// Coupling stage (Eq. 2): computes Data::coupling_wrench for the attached
-/// body, adds it to body_wrench, and records in Data::solver which body is
-/// coupled (coupled_body) and whether it is first order (first_order).
-/// Zero wrench and no coupled body when nothing is attached, in kDirect mode,
-/// or when the target is not finite (then kInvalidTarget is set in
-/// Data::status). Call after apply_external_forces().
+/// Coupling stage (Eq. 2, Eq. 6): computes Data::coupling_wrench for the
+/// attached body and adds it to body_wrench, adds the springs of every other
+/// body with an enabled Data::body_targets entry (always second order), and
+/// records in Data::solver which bodies are coupled (target_coupled,
+/// coupled_body) and whether the attached one is first order (first_order).
+/// Nothing in kDirect mode; a body whose target is not finite gets no spring
+/// this step and kInvalidTarget is set in Data::status. Call after
+/// apply_external_forces().
 void apply_coupling(const Model& model, Data& data) noexcept;
 
 }  // namespace numen::core

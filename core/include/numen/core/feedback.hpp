@@ -26,9 +26,22 @@ Wrench saturate_wrench(const Wrench& w, double max_force, double max_torque) noe
 Wrench feedback_wrench(const FeedbackGains& gains, const Pose& target, const Twist& target_twist,
                        const BodyState& state) noexcept;
 
-/// Feedback stage: Data::feedback_wrench = feedback_wrench() of the attached
-/// body after integration; zero when no body is attached, in
-/// CouplingMode::kDirect, or when the target is not finite.
+/// Eq. 8 without the saturation.
+Wrench feedback_wrench_unsaturated(const FeedbackGains& gains, const Pose& target,
+                                   const Twist& target_twist, const BodyState& state) noexcept;
+
+/// Paper Eq. 9: the same wrench `w` (taken about point `from`) about point
+/// `to`: force unchanged, torque + (from − to) × force. World frame, m, N, N·m.
+Wrench carry_wrench(const Wrench& w, const Vec3& from, const Vec3& to) noexcept;
+
+/// Feedback stage, after integration. For the attached body (target
+/// Data::target) and every body with its own enabled target (Eq. 6,
+/// Data::body_targets): Data::body_feedback[i] = Eq. 8 about that body's
+/// target point. Data::feedback_wrench = Σ of these carried to the attached
+/// body's target point (Eq. 9: a child's feedback carried to its parent, up
+/// to the held body), saturated; the per-body wrenches are scaled by the same
+/// force and torque ratios. Zero composite when no body is attached or its
+/// target is not finite; all zero in CouplingMode::kDirect.
 void compute_feedback(const Model& model, Data& data) noexcept;
 
 }  // namespace numen::core

@@ -21,6 +21,7 @@
 
 #include <Eigen/Core>
 
+#include "numen/core/joint.hpp"
 #include "numen/core/types.hpp"
 
 namespace numen::core {
@@ -98,9 +99,22 @@ struct SolverScratch {
   /// of A); 0: its rows of A are its diagonal block only.
   std::vector<std::uint8_t> coupled;
 
+  // Joints (sized only when the model has joints).
+  std::vector<JointVector> joint_rhs;         ///< c of G Δu = c per joint (joint_system.hpp).
+  std::vector<JointVector> joint_y;           ///< y of the KKT solve per joint (−impulse per row).
+  std::vector<JointVector> joint_y_correction;  ///< y of the preconditioner solve (projected CG).
+  std::vector<Vec6> projected_residual;       ///< r − Gᵀ y per body (projected CG convergence test).
+
+  /// Per body: 1 if its own coupling springs (Eq. 6, Data::body_targets or
+  /// the attached body's target) act this step; their stiffness and damping
+  /// enter the body's block of A.
+  std::vector<std::uint8_t> target_coupled;
+
   int coupled_body = -1;     ///< Body whose coupling springs act this step (-1: none).
   bool first_order = false;  ///< coupled_body uses the massless (first-order) model this step.
-  int direct_body = -1;      ///< Body whose pose/twist is imposed this step (kDirect), or -1.
+  /// Per body: 1 if its pose and twist are imposed from the device this step
+  /// (CouplingMode::kDirect: the attached body and every targeted body).
+  std::vector<std::uint8_t> imposed;
 
   /// Sizes every buffer for `model`. Allocates: make_data() only.
   void resize(const Model& model);
@@ -158,6 +172,19 @@ void build_implicit_system(const Model& model, Data& data) noexcept;
 /// Rows and columns of bodies not in the solve are zero.
 void apply_implicit_system(const Model& model, const Data& data, std::span<const Vec6> in,
                            std::span<Vec6> out) noexcept;
+
+/// Joint-constrained solve of the implicit step (paper Eq. 4, Eq. 7):
+///   [A  Gᵀ] [Δu]   [b]
+///   [G  0 ] [y ] = [c],   c from build_joint_rows() (Baumgarte, Eq. 5),
+/// A = M − hD − h²K as built by build_implicit_system(). The block-diagonal
+/// part of A with G is factored in linear time (articulation.hpp, Baraff
+/// 1996); without body–body contacts that is the exact solution. With them,
+/// a projected preconditioned conjugate gradient (Gould, Hribar & Nocedal,
+/// SIAM J. Sci. Comput. 23(4), 2001) iterates on the null space of G with the
+/// tree solve as constraint preconditioner, stopping on ‖r − Gᵀy‖/‖b‖.
+/// Writes SolverScratch::delta, joint_y, Data::solver_iterations/residual,
+/// Data::joints multipliers. Returns true when converged.
+bool solve_constrained_system(const Model& model, Data& data) noexcept;
 
 /// Preconditioned conjugate gradient on A Δu = b (SolverScratch::rhs) with the
 /// block-Jacobi preconditioner of the 6×6 body blocks; Δu starts at 0.

@@ -26,6 +26,9 @@
 ///                (through a_c) passes through the fixed point a_p — the remote
 ///                centre of motion of laparoscopy. The child keeps pivoting
 ///                (2 rotations), sliding along and rolling about its axis.
+/// Swing rows equal the x, y components of log(R_rel) to first order; the
+/// prescribed twist row is wrapped to (−π, π]. Angular rows have
+/// G = ±[0, t_kᵀ] (t_k = x_pj, y_pj, z_pj: + child, − parent).
 /// Linear rows are in m, angular rows in rad. G is exact at the evaluation
 /// configuration for linear rows, and for angular rows equals ∂C/∂q to first
 /// order in C (exact when C = 0), which is what Baumgarte stabilisation needs.
@@ -84,7 +87,9 @@ int joint_row_count(JointType type, bool prescribed) noexcept;
 bool joint_can_be_prescribed(JointType type) noexcept;
 
 /// True if row `row` (0-based, < joint_row_count()) of a joint of this type is
-/// angular (rad), false if linear (m). Trocar rows are linear.
+/// angular (rad), false if linear (m). Trocar rows are linear; row 5 (the
+/// prescribed row) is angular for a revolute, linear for a prismatic. Rows out
+/// of range (< 0, or ≥ joint_row_count(type, joint_can_be_prescribed(type))) give false.
 bool joint_row_is_angular(JointType type, int row) noexcept;
 
 /// Constraint rows of one joint at one configuration.
@@ -108,9 +113,11 @@ void evaluate_joint(const JointModel& joint, const BodyState* parent, const Body
 double joint_coordinate(const JointModel& joint, const BodyState* parent,
                         const BodyState& child) noexcept;
 
-/// Slide z_pj · d (m) of a cylindrical or trocar joint (for the trocar: the
-/// signed distance along the child's axis from a_c to the foot of a_p, i.e.
-/// the insertion depth); 0 for other types.
+/// Slide of a cylindrical or trocar joint (m); 0 for other types.
+/// Cylindrical: z_pj · d. Trocar: z_cj · (a_p − a_c), the signed distance
+/// along the child's axis from a_c to the foot of a_p, i.e. the insertion
+/// depth (positive when a_p lies ahead of a_c along +z_cj; the parent frame's
+/// orientation plays no part).
 double joint_slide(const JointModel& joint, const BodyState* parent,
                    const BodyState& child) noexcept;
 

@@ -119,7 +119,8 @@ struct SolverSettings {
 /// constraint error obeys C̈ + α Ċ + β C = 0 with α = alpha_dt / Δt (1/s) and
 /// β = beta_dt2 / Δt² (1/s²). The paper's values 2/Δt and 1/Δt² (a critically
 /// damped error at ω = 1/Δt) are the default. Discretised implicitly, like the
-/// springs: see docs/articulation.md. Both ≥ 0.
+/// springs: see docs/articulation.md (and joint_system.hpp). Both ≥ 0, not
+/// both 0: without any correction the discrete error is not even bounded.
 struct BaumgarteSettings {
   double alpha_dt = 2.0;  ///< α·Δt (dimensionless).
   double beta_dt2 = 1.0;  ///< β·Δt² (dimensionless).

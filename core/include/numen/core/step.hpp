@@ -10,11 +10,15 @@ struct Data;
 /// Advances `data` by model.dt. Stages, in order:
 ///   1. detect_contacts — collision geometry (collision.hpp)
 ///   2. forces — gravity, applied wrenches, coupling (Eq. 2) on the attached
-///      body, penalty contact forces (compute_forces); the gyroscopic term is
-///      applied by the integrator (implicit step or explicit torque)
+///      body and (Eq. 6) on every body with its own target, penalty contact
+///      forces (compute_forces); the gyroscopic term is applied by the
+///      integrator (implicit step or explicit torque)
 ///   3. integrate — linearly implicit or symplectic Euler (Eq. 1, §5), or
-///      the imposed pose in CouplingMode::kDirect
-///   4. feedback — Eq. 8 virtual-coupling wrench for the device, saturated
+///      the imposed pose in CouplingMode::kDirect; with joints, the KKT
+///      system of Eq. 4 with Baumgarte rows (Eq. 5) solved in linear time
+///      (articulation.hpp), then the joint drift is measured
+///      (measure_joint_drift) — models without joints skip both
+///   4. feedback — Eq. 8 per targeted body, Eq. 9 composite, saturated
 ///   5. checks — non-finite results are rejected: every body goes back to its
 ///      pose before the step with zero twist, the feedback is zeroed,
 ///      kNonFinite is set and Data::nonfinite_steps counted

@@ -2,14 +2,16 @@
 /// @file instrument_device.hpp
 /// InstrumentDevice: the controller-side driver of one tracked instrument on a CAN bus. Each
 /// control period it turns the encoder TPDOs received since the last period into a checked
-/// target pose and twist for the god-object (paper Eq. 2 inputs), and a feedback wrench into
-/// saturated drive torques τ = Jᵀ w sent as RPDOs (paper Eq. 8 output, virtual coupling).
+/// target pose and twist for the god-object (paper Eq. 2 inputs) — one per link of an
+/// articulated instrument (paper Eq. 6) — and feedback wrenches into saturated drive torques
+/// τ = Σ_l J_lᵀ w_l sent as RPDOs (paper Eq. 8 output, virtual coupling).
 /// Construction allocates and may throw; every other member is noexcept, allocation free,
 /// lock free and never blocks. See docs/protocol.md for the order of one period.
 
 #include <array>
 #include <cstdint>
 #include <memory>
+#include <span>
 
 #include "numen/core/types.hpp"
 #include "numen/hal/bus.hpp"
@@ -34,6 +36,15 @@ struct DeviceSample {
   /// Controlled frame's target twist, world: J(q) q̇. q̇ of an axis comes from its last two
   /// accepted values; it is 0 before two values and while its held value is stale.
   core::Twist twist;
+  /// Number of links of the kinematics (Kinematics::num_links(), 1..kMaxLinks): entries
+  /// [0, num_links) of link_targets and link_twists are valid, the others are left default.
+  int num_links = 1;
+  /// Target pose of each link, world: Kinematics::link_pose(l, q), from the same held axis
+  /// values as `target`. link_targets[0] == target.
+  std::array<core::Pose, kMaxLinks> link_targets{};
+  /// Target twist of each link, world, linear part at the link's origin: J_l(q) q̇ with
+  /// J_l = Kinematics::link_jacobian(l, q). link_twists[0] == twist.
+  std::array<core::Twist, kMaxLinks> link_twists{};
   /// Axis values used for `target`, m or rad (n entries).
   AxisVector q;
   /// Axis rates used for `twist`, m/s or rad/s (n entries).
@@ -64,12 +75,15 @@ struct DeviceCounters {
   std::uint64_t rejected_stale = 0;         ///< ... stale (including periods with no frame).
   std::uint64_t rejected_jump = 0;          ///< ... implausible jump.
   // Commands.
-  std::uint64_t commands = 0;             ///< command() calls.
+  std::uint64_t commands = 0;             ///< command() and command_links() calls.
   std::uint64_t commands_zero = 0;        ///< command_zero() calls (and commands before ready).
   std::uint64_t torque_saturations = 0;   ///< Axis torques clamped (|τ| > max_torque, int16).
-  std::uint64_t non_finite_wrenches = 0;  ///< command() calls with a NaN/inf wrench (sent 0).
-  std::uint64_t write_would_block = 0;    ///< RPDO writes refused (queue full).
-  std::uint64_t write_errors = 0;         ///< RPDO writes that failed.
+  std::uint64_t non_finite_wrenches = 0;  ///< Commands with a NaN/inf wrench (sent 0).
+  /// command_links() calls given more wrenches than the instrument has links (the extra
+  /// entries were ignored).
+  std::uint64_t extra_link_wrenches = 0;
+  std::uint64_t write_would_block = 0;  ///< RPDO writes refused (queue full).
+  std::uint64_t write_errors = 0;       ///< RPDO writes that failed.
 };
 
 /// Controller-side driver of one instrument: encoder TPDOs in, checked target out; wrench in,
@@ -77,8 +91,8 @@ struct DeviceCounters {
 class InstrumentDevice {
  public:
   /// Takes the configuration and the kinematics. Throws std::invalid_argument if
-  /// validate(config) throws, `kinematics` is null or its num_axes() differs from
-  /// config.axes.size().
+  /// validate(config) throws, `kinematics` is null, its num_axes() differs from
+  /// config.axes.size() or its num_links() is outside 1..kMaxLinks.
   InstrumentDevice(DeviceConfig config, std::unique_ptr<const Kinematics> kinematics);
   /// Same with make_kinematics(config).
   explicit InstrumentDevice(DeviceConfig config);
@@ -101,8 +115,19 @@ class InstrumentDevice {
   /// τ = Jᵀ [force; torque] at the axis values of the last sample(), each clamped to
   /// ±max_torque, one torque RPDO per axis with a drive, stamped `now_ns`. Sends zeros before
   /// the device is ready or if the wrench is not finite. Returns kOk if every write succeeded,
-  /// else kError if one failed, else kWouldBlock.
+  /// else kError if one failed, else kWouldBlock. Same as command_links({wrench}).
   IoStatus command(const core::Wrench& wrench, Bus& bus, std::int64_t now_ns) noexcept;
+
+  /// Sends the torques balancing one wrench per link (paper Eq. 8 per body, mapped by virtual
+  /// work): τ = Σ_l J_lᵀ [force_l; torque_l], with w_l = link_wrenches[l] in world coordinates
+  /// about link l's origin and J_l = Kinematics::link_jacobian(l, q) at the axis values of the
+  /// last sample(). Links without an entry (l >= link_wrenches.size()) get a zero wrench;
+  /// entries beyond num_links() are ignored and counted (extra_link_wrenches). Then as
+  /// command(): each axis clamped to ±max_torque, one RPDO per axis with a drive (axes without
+  /// a drive get 0), zeros before ready or if a used wrench is not finite (counted once in
+  /// non_finite_wrenches). Same return as command().
+  IoStatus command_links(std::span<const core::Wrench> link_wrenches, Bus& bus,
+                         std::int64_t now_ns) noexcept;
 
   /// Safe state: sends zero torque to every drive. Same return as command().
   IoStatus command_zero(Bus& bus, std::int64_t now_ns) noexcept;
@@ -131,6 +156,8 @@ class InstrumentDevice {
   const Kinematics& kinematics() const noexcept { return *kinematics_; }
   /// Number of axes n.
   int num_axes() const noexcept { return n_; }
+  /// Number of links (Kinematics::num_links(), 1..kMaxLinks).
+  int num_links() const noexcept { return num_links_; }
 
  private:
   struct AxisState {
@@ -144,15 +171,22 @@ class InstrumentDevice {
     double rate = 0.0;       // from the last two accepted values, units/s
   };
 
+  // Link targets, twists and Jacobians of `s` from s.q, s.qdot (link 0 from forward/jacobian).
+  void evaluate_links(DeviceSample& s) noexcept;
+  // Saturates `tau` per driven axis into last_torques_ / last_per_mille_ and sends them.
+  IoStatus apply_torques(const AxisVector& tau, Bus& bus, std::int64_t now_ns) noexcept;
+  // Zero torque on every drive.
+  IoStatus send_zero(Bus& bus, std::int64_t now_ns) noexcept;
   IoStatus send_torques(Bus& bus, std::int64_t now_ns) noexcept;
 
   DeviceConfig config_;
   std::unique_ptr<const Kinematics> kinematics_;
   int n_ = 0;
+  int num_links_ = 1;
   std::array<AxisCheckLimits, kMaxAxes> limits_{};
   std::array<AxisState, kMaxAxes> axes_{};
-  AxisVector hold_;    // value used before an axis's first accepted value
-  Jacobian jacobian_;  // at last_sample_.q
+  AxisVector hold_;  // value used before an axis's first accepted value
+  std::array<Jacobian, kMaxLinks> link_jacobians_{};  // at last_sample_.q; [0]: jacobian()
   DeviceSample last_sample_;
   AxisVector last_torques_;
   std::array<std::int16_t, kMaxAxes> last_per_mille_{};

@@ -69,7 +69,8 @@ class Kinematics {
     (void)link;
     return jacobian(q);
   }
-  /// Index of the link called `name`, or -1.
+  /// Index of the link called `name` (exact, case-sensitive comparison with link_name()),
+  /// or -1 if no link has that name or `name` is null. O(num_links()), no allocation.
   int find_link(const char* name) const noexcept;
 
  protected:

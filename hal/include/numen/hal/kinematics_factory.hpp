@@ -9,8 +9,8 @@
 
 namespace numen::hal {
 
-/// Builds TrocarKinematics or PoseTrackerKinematics from the config's kind, geometry and tool
-/// offset. Allocates; throws std::invalid_argument if validate(config) does.
+/// Builds TrocarKinematics, PoseTrackerKinematics or PhantomKinematics from the config's kind,
+/// geometry and tool offset. Allocates; throws std::invalid_argument if validate(config) does.
 std::unique_ptr<Kinematics> make_kinematics(const DeviceConfig& config);
 
 }  // namespace numen::hal

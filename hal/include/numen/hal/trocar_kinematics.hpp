@@ -14,6 +14,16 @@
 ///   R = R_c · Rx(a) · Ry(b) · Rz(ψ),   tip = p_c + d · R e_z
 /// with p_c the trocar point and R_c the trocar frame (its z axis is the nominal shaft
 /// direction into the patient), both in world. Controlled frame = tool frame · tool_offset.
+///
+/// Links (Kinematics::link_pose; the parts of the articulated laparoscopic tool, paper §5):
+///   0 "tool"    controlled frame: tool frame · tool_offset (== forward());
+///   1 "trocar"  the pivoting sleeve: origin p_c, orientation R_s = R_c · Rx(a) · Ry(b)
+///               (no roll; z along the shaft towards the tip);
+///   2 "tube"    the tool frame: origin at the tip, R_s · Rz(ψ) (== tool_pose());
+///   3 "jaw_1"   origin at the tip (the jaw hinge), orientation tube · Rx(+jaw/2);
+///   4 "jaw_2"   origin at the tip, orientation tube · Rx(−jaw/2).
+/// The jaws open symmetrically about the tube frame's x axis (each by half the opening), so
+/// at jaw = 0 both jaw frames coincide with the tube frame.
 
 #include "numen/core/types.hpp"
 #include "numen/hal/kinematics.hpp"
@@ -38,6 +48,13 @@ class TrocarKinematics final : public Kinematics {
   static constexpr int kJaw = 4;      ///< Index of the jaw opening (rad).
   static constexpr int kNumAxes = 5;  ///< Number of axes.
 
+  static constexpr int kLinkTool = 0;    ///< Link "tool": the controlled frame.
+  static constexpr int kLinkTrocar = 1;  ///< Link "trocar": the pivoting sleeve at p_c.
+  static constexpr int kLinkTube = 2;    ///< Link "tube": the tool frame (tip).
+  static constexpr int kLinkJaw1 = 3;    ///< Link "jaw_1": opened by +jaw/2 about the tube's x.
+  static constexpr int kLinkJaw2 = 4;    ///< Link "jaw_2": opened by −jaw/2 about the tube's x.
+  static constexpr int kNumLinks = 5;    ///< Number of links.
+
   /// `trocar`: trocar point and frame in world; `tool_offset`: pose of the controlled frame in
   /// the tool (tip) frame. Throws std::invalid_argument if a position is not finite or a
   /// quaternion is not unit length within 1e-6 (they are normalised otherwise).
@@ -57,6 +74,27 @@ class TrocarKinematics final : public Kinematics {
   ///   ω_a = R_c e_x, ω_b = R_c Rx(a) e_y, ω_ψ = s, ω_d = ω_jaw = 0;
   ///   v_i = ω_i × (p − p_c) for a, b, ψ;  v_d = s;  v_jaw = 0.
   Jacobian jacobian(const AxisVector& q) const noexcept override;
+
+  /// Number of links: 5 ("tool", "trocar", "tube", "jaw_1", "jaw_2"; see the file comment).
+  int num_links() const noexcept override { return kNumLinks; }
+
+  /// Name of link `link` (static string), "" out of range.
+  const char* link_name(int link) const noexcept override;
+
+  /// World pose of link `link` at q (see the file comment). An index out of [0, 5) gives
+  /// link 0 (the controlled frame).
+  core::Pose link_pose(int link, const AxisVector& q) const noexcept override;
+
+  /// 6 x 5 geometric Jacobian of link `link` at q, world frame, linear rows at the link's
+  /// origin o_l. With ω_a, ω_b, s as for jacobian() and x_t = R_s Rz(ψ) e_x the tube's x axis:
+  ///   tool:   jacobian();
+  ///   trocar: ω_a, ω_b in the a, b columns; v = 0 (its origin p_c is fixed); d, ψ, jaw: 0;
+  ///   tube:   columns of jacobian() with o_l = tip: v_a,b = ω_a,b × (tip − p_c), v_d = s,
+  ///           ω_ψ = s, v_ψ = 0; jaw: 0;
+  ///   jaw_1 / jaw_2: the tube's columns, plus ω_jaw = ±½ x_t (v_jaw = 0: the hinge is the
+  ///           origin). An index out of [0, 5) gives link 0's.
+  /// Axis torques for wrenches w_l at the links' origins: τ = Σ_l J_lᵀ w_l.
+  Jacobian link_jacobian(int link, const AxisVector& q) const noexcept override;
 
   /// Axes for a controlled-frame pose: the tool pose is pose · tool_offset⁻¹, then
   /// inverse_tool(); the jaw is q_free[kJaw] (0 if q_free is empty).
@@ -80,6 +118,10 @@ class TrocarKinematics final : public Kinematics {
   const core::Pose& tool_offset() const noexcept { return tool_offset_; }
 
  private:
+  // Jacobian of a frame fixed to the tube whose world origin is `origin` (a, b, d, ψ columns;
+  // jaw column zero).
+  Jacobian tube_fixed_jacobian(const AxisVector& q, const core::Vec3& origin) const noexcept;
+
   TrocarGeometry trocar_;
   core::Pose tool_offset_;
 };

@@ -9,12 +9,15 @@
 /// Construction may allocate; begin_period/end_period never allocate, throw,
 /// lock or block.
 
+#include <array>
 #include <cstdint>
+#include <vector>
 
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"
 #include "numen/hal/bus.hpp"
 #include "numen/hal/instrument_device.hpp"
+#include "numen/platform/device_binding.hpp"
 #include "numen/platform/latency_histogram.hpp"
 
 namespace numen::platform {
@@ -41,18 +44,28 @@ struct ControlLoopCounters {
 class ControlLoop {
  public:
   /// Keeps references: `model`, `data`, `bus` and `device` must outlive the loop.
+  /// `binding` says which bodies the device's links drive and which prescribed
+  /// joints its axes impose (copied; the default drives the attached body by
+  /// link 0). Throws std::invalid_argument if a link, body, joint or axis index
+  /// of the binding is out of range or a prescription names a joint that is not
+  /// prescribed. Allocates (construction only).
   ControlLoop(const core::Model& model, core::Data& data, hal::Bus& bus,
-              hal::InstrumentDevice& device) noexcept;
+              hal::InstrumentDevice& device, DeviceBinding binding = DeviceBinding::rigid());
 
   /// Starts period k: writes a SYNC (CANopen COB-ID 0x080) stamped `now_ns`.
   void begin_period(std::int64_t now_ns) noexcept;
 
   /// Ends the period at bus time `now_ns` (after the encoders answered): reads the
-  /// frames, checks the sample, sets data.target/target_twist when the device is
-  /// ready (a rejected sample keeps the last good target inside the device), runs
-  /// one core::step, then sends the torques for data.feedback_wrench — zero
-  /// torque while no body is attached or this period's sample is not valid
-  /// (stale, rejected, or the device not ready).
+  /// frames, checks the sample and, when the device is ready (a rejected sample
+  /// keeps the last good target inside the device), sets the bound bodies'
+  /// targets — body pose = link pose · body_in_link, twist carried to the body's
+  /// origin; the attached body's into data.target, the others into
+  /// data.body_targets (paper Eq. 6) — and the prescribed joints'
+  /// values; runs one core::step; then sends the torques
+  /// τ = Σ_l J_lᵀ w_l, w_l the bound bodies' Eq. 8 feedback (data.body_feedback)
+  /// carried to their link's origin (Eq. 9) — zero torque while no bound body
+  /// is driven or this period's sample is not valid (stale, rejected, or the
+  /// device not ready).
   const PeriodReport& end_period(std::int64_t now_ns) noexcept;
 
   /// Wall time of core::step per period (ns).
@@ -63,10 +76,18 @@ class ControlLoop {
   const PeriodReport& last_report() const noexcept { return report_; }
 
  private:
+  void apply_targets(const hal::DeviceSample& sample) noexcept;
+  bool send_feedback(std::int64_t now_ns) noexcept;
+
   const core::Model* model_;
   core::Data* data_;
   hal::Bus* bus_;
   hal::InstrumentDevice* device_;
+  DeviceBinding binding_;
+  std::vector<core::Vec3> link_origin_;   // per binding: world origin of its link this period
+  std::vector<core::Vec3> body_target_;   // per binding: target point of its body this period
+  std::vector<int> bound_body_;           // per binding: body driven this period (-1: none)
+  std::array<core::Wrench, hal::kMaxLinks> link_wrench_{};
   std::uint8_t sync_counter_ = 0;
   LatencyHistogram step_time_;
   ControlLoopCounters counters_;

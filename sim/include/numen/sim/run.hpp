@@ -38,9 +38,9 @@ struct DurationSummary {
 };
 
 /// What a run measured. Penetrations are the deepest overlap (mm) of the
-/// held body's spheres with obstacles and other bodies; "target" is the same
-/// body placed at the device's target pose (where the hand is), "tool" the
-/// god-object itself.
+/// tool's spheres (the held body and the bodies jointed to it) with obstacles
+/// and other bodies; "target" is the same bodies placed at the device's
+/// target poses (where the hand is), "tool" the god-object itself.
 struct RunSummary {
   std::string scene;
   std::string coupling;
@@ -59,7 +59,11 @@ struct RunSummary {
   double feedback_force_max_n = 0.0;       ///< Largest |feedback force| sent (after saturation).
   double feedback_torque_max_nm = 0.0;
   double axis_torque_max = 0.0;            ///< Largest |axis torque| commanded (N·m or N).
-  double free_body_speed_max_mps = 0.0;    ///< Fastest body not held by the device (m/s): blocks thrown about.
+  double free_body_speed_max_mps = 0.0;    ///< Fastest body not part of the held tool (m/s): blocks thrown about.
+  int num_bodies = 0;
+  int num_joints = 0;
+  double joint_drift_max_mm = 0.0;         ///< Largest linear joint error |C| after a step (mm).
+  double joint_angle_drift_max_mrad = 0.0; ///< Largest angular joint error |C| after a step (mrad).
   std::int64_t rejected_samples = 0;       ///< Axis samples rejected by the checks.
   std::int64_t invalid_periods = 0;        ///< Periods whose sample was not valid (target held).
   std::int64_t contact_overflow = 0;       ///< Steps that ran out of contact capacity.

@@ -13,6 +13,7 @@
 #include "numen/core/model.hpp"
 #include "numen/hal/device_config.hpp"
 #include "numen/hal/sim_bus.hpp"
+#include "numen/platform/device_binding.hpp"
 #include "numen/sim/trajectory.hpp"
 
 namespace numen::sim {
@@ -31,6 +32,10 @@ struct Scene {
   std::string description;
   core::Model model;         ///< Finalized.
   hal::DeviceConfig device;  ///< Validated; control_period_s = model.dt.
+  /// Which bodies the device's links drive and which joints its axes impose
+  /// (bodies' `link` keys, joints' `prescribed`); the rigid binding (link 0 →
+  /// the attached body) when the scene binds nothing.
+  platform::DeviceBinding binding;
   hal::SimBusSettings bus;   ///< The simulated bus between controller and instrument.
   /// Bus time after SYNC at which the controller reads the encoder answers and
   /// steps (s, in (2·latency, dt)): one SYNC round trip fits in the period.

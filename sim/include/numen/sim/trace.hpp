@@ -2,7 +2,7 @@
 /// @file trace.hpp
 /// Per-step trace of a run (`numen run --trace FILE.csv`): target pose (the
 /// device), god-object pose, contacts, penetrations, feedback wrench, axis
-/// torques and step time. Records go into storage reserved before the loop
+/// torques, step time and the joints' drift, reactions and Baumgarte terms. Records go into storage reserved before the loop
 /// (push never allocates; a full trace counts the records it drops) and are
 /// written as CSV after the run.
 
@@ -33,6 +33,11 @@ struct TraceRecord {
   int num_axes = 0;
   double step_time_us = 0.0;
   int solver_iterations = 0;
+  // Articulation (zero without joints), paper Eq. 4–5.
+  double joint_drift_mm = 0.0;            ///< Largest linear joint error |C| after the step.
+  double joint_angle_drift_mrad = 0.0;    ///< Largest angular joint error |C| after the step.
+  double joint_reaction_max_n = 0.0;      ///< Largest |reaction force| of a joint on its child (N).
+  double baumgarte_rhs_max = 0.0;         ///< Largest |c| of a joint row (m/s or rad/s): the Baumgarte correction asked.
 };
 
 /// Builds a record from the state after a step.

@@ -1,0 +1,148 @@
+/// @file joint_system.cpp
+/// Baumgarte-stabilised joint rows of one step (paper Eq. 4–5); see joint_system.hpp.
+
+#include "numen/core/joint_system.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "numen/core/data.hpp"
+#include "numen/core/model.hpp"
+#include "numen/core/rigid_body.hpp"
+
+namespace numen::core {
+namespace {
+
+const BodyState* parent_state(const JointModel& j, const std::vector<BodyState>& states) noexcept {
+  return j.parent >= 0 ? &states[static_cast<std::size_t>(j.parent)] : nullptr;
+}
+
+/// State after a free drift over h at twist u (exact rotation).
+BodyState drifted(const BodyState& s, const Vec6& u, double h) noexcept {
+  BodyState out = s;
+  out.position = s.position + h * u.head<3>();
+  out.orientation = integrate_orientation(s.orientation, u.tail<3>(), h);
+  return out;
+}
+
+double prescribed_value(const JointModel& j, const Data& data, std::size_t index) noexcept {
+  return j.prescribed ? data.joint_prescribed[index].value : 0.0;
+}
+
+}  // namespace
+
+void build_joint_rows(const Model& model, Data& data, std::span<const Vec6> twist0,
+                      std::span<const Vec6> delta_prev, std::span<JointVector> rhs) noexcept {
+  const double h = model.dt;
+  const double alpha_h = model.baumgarte.alpha_dt;        // h α
+  const double beta_h2 = model.baumgarte.beta_dt2;        // h² β
+  const double scale = 1.0 / (1.0 + alpha_h + beta_h2);
+  ArticulationScratch& a = data.articulation;
+  for (std::size_t j = 0; j < model.joints.size(); ++j) {
+    const JointModel& jm = model.joints[j];
+    const BodyState* parent = parent_state(jm, data.bodies);
+    const BodyState& child = data.bodies[static_cast<std::size_t>(jm.child)];
+    JointRows& start = a.rows[j];
+    const double value = prescribed_value(jm, data, j);
+    evaluate_joint(jm, parent, child, value, start);
+
+    // Ċ0 = G u0 − v_ref.
+    const Vec6& uc = twist0[static_cast<std::size_t>(jm.child)];
+    JointVector cdot0 = start.g_child * uc;
+    if (parent) cdot0.noalias() += start.g_parent * twist0[static_cast<std::size_t>(jm.parent)];
+    double rate = 0.0;
+    if (jm.prescribed) {
+      rate = data.joint_prescribed[j].rate;
+      cdot0(start.count - 1) -= rate;
+    }
+
+    // C_pred: the error after a free drift at u0 (prescribed value moved on by
+    // h·rate), with the rows G_pred there. The KKT system keeps G0 (impulses
+    // along the start configuration's rows, as SHAKE does: energy is kept, no
+    // numerical damping); the linearisation C(q0 ⊕ h u1) ≈ C_pred + h G_pred Δu
+    // is then corrected by h (G_pred − G0) Δu_prev, the last step's Δu
+    // standing in for this one's: the error left is O(h² |Δu − Δu_prev| |u|).
+    JointRows predicted;
+    const BodyState child_pred = drifted(child, uc, h);
+    if (parent) {
+      const BodyState parent_pred =
+          drifted(*parent, twist0[static_cast<std::size_t>(jm.parent)], h);
+      evaluate_joint(jm, &parent_pred, child_pred, value + h * rate, predicted);
+    } else {
+      evaluate_joint(jm, nullptr, child_pred, value + h * rate, predicted);
+    }
+
+    // The error's rate over the last step, consistent with the positions.
+    // G u0 is the rate at the step's start; the chord velocities of the
+    // integrator (x1 = x0 + h v1, q1 = exp(h ω1) q0) make it exceed the mean
+    // rate over the step by ½ h q (q = Ġ u, the velocity-product term), which
+    // free drift reveals: (C_pred − C0)/h = G u0 + ½ h q. So
+    //   Ċ0 = G u0 − ½ h q = 2 (G u0 − v_ref) − (C_pred − C0)/h.
+    // Using G u0 itself would leave a steady error h² q (centripetal).
+    const JointVector& c0 = start.position_error;
+    const JointVector drift_rate = (predicted.position_error - c0) / h;
+    const JointVector cdot = 2.0 * cdot0 - drift_rate;
+    const JointVector cdot1 = scale * (cdot - (beta_h2 / h) * c0);
+    JointVector c = (c0 + h * cdot1 - predicted.position_error) / h;
+    c.noalias() -= (predicted.g_child - start.g_child) * delta_prev[static_cast<std::size_t>(jm.child)];
+    if (parent)
+      c.noalias() -=
+          (predicted.g_parent - start.g_parent) * delta_prev[static_cast<std::size_t>(jm.parent)];
+    for (int r = start.count; r < kMaxJointRows; ++r) c(r) = 0.0;
+    rhs[j] = c;
+    data.joints[j].baumgarte_rhs = c;
+  }
+}
+
+void add_joint_transpose(const Model& model, const Data& data, std::span<const JointVector> y,
+                         std::span<Vec6> out) noexcept {
+  const ArticulationScratch& a = data.articulation;
+  for (std::size_t j = 0; j < model.joints.size(); ++j) {
+    const JointModel& jm = model.joints[j];
+    const JointRows& rows = a.rows[j];
+    const auto c = static_cast<std::size_t>(jm.child);
+    if (!a.known[c]) out[c].noalias() += rows.g_child.transpose() * y[j];
+    if (jm.parent >= 0) {
+      const auto p = static_cast<std::size_t>(jm.parent);
+      if (!a.known[p]) out[p].noalias() += rows.g_parent.transpose() * y[j];
+    }
+  }
+}
+
+void store_joint_multipliers(const Model& model, Data& data, std::span<const JointVector> y) noexcept {
+  const double inv_h = 1.0 / model.dt;
+  for (std::size_t j = 0; j < model.joints.size(); ++j) {
+    JointState& js = data.joints[j];
+    js.multiplier = -inv_h * y[j];
+    const Vec6 w = data.articulation.rows[j].g_child.transpose() * js.multiplier;
+    js.reaction.force = w.head<3>();
+    js.reaction.torque = w.tail<3>();
+  }
+}
+
+void measure_joint_drift(const Model& model, Data& data) noexcept {
+  double linear = 0.0;
+  double angular = 0.0;
+  JointRows rows;
+  for (std::size_t j = 0; j < model.joints.size(); ++j) {
+    const JointModel& jm = model.joints[j];
+    const BodyState* parent = parent_state(jm, data.bodies);
+    const BodyState& child = data.bodies[static_cast<std::size_t>(jm.child)];
+    evaluate_joint(jm, parent, child, prescribed_value(jm, data, j), rows);
+    JointState& js = data.joints[j];
+    js.position_error = rows.position_error;
+    js.coordinate = joint_coordinate(jm, parent, child);
+    for (int r = 0; r < rows.count; ++r) {
+      const double e = std::abs(rows.position_error(r));
+      if (joint_row_is_angular(jm.type, r)) {
+        angular = std::max(angular, e);
+      } else {
+        linear = std::max(linear, e);
+      }
+    }
+  }
+  data.max_joint_drift = linear;
+  data.max_joint_angle_drift = angular;
+}
+
+}  // namespace numen::core
