@@ -440,7 +440,10 @@ bool solve_constrained_system(const Model& model, Data& data) noexcept {
     add_joint_transpose(model, data, y, ap);
     for (std::size_t i = 0; i < n; ++i) r[i] -= ap[i];
 
-    // z = P r (tree solve with zero constraint right-hand side), rp = r − Gᵀ yz.
+    // z = P r (tree solve with zero constraint right-hand side); then r is
+    // replaced by r − Gᵀ yz, which has the same z (P Gᵀ = 0) and tends to 0
+    // instead of to Gᵀ y (Gould, Hribar & Nocedal's residual update: no
+    // cancellation, no loss of accuracy), and yz is added to y.
     const auto precondition = [&]() noexcept {
       for (JointVector& v : s.joint_rhs) v.setZero();
       solve_articulation(model, art, r, s.joint_rhs, z, yz);
@@ -448,9 +451,10 @@ bool solve_constrained_system(const Model& model, Data& data) noexcept {
       add_joint_transpose(model, data, yz, rp);
       double rr = 0.0;
       for (std::size_t i = 0; i < n; ++i) {
-        rp[i] = r[i] - rp[i];
-        rr += rp[i].squaredNorm();
+        r[i] -= rp[i];
+        rr += r[i].squaredNorm();
       }
+      for (std::size_t j = 0; j < y.size(); ++j) y[j] += yz[j];
       return std::sqrt(rr) / ref;
     };
     double rel = precondition();
@@ -473,12 +477,11 @@ bool solve_constrained_system(const Model& model, Data& data) noexcept {
       rel = precondition();
       const double rz_new = dot(r, z);
       if (!std::isfinite(rel) || !std::isfinite(rz_new)) return poison();
+      if (!(rz_new > 0.0)) break;  // converged to rounding
       const double beta = rz_new / rz;
       rz = rz_new;
       for (std::size_t i = 0; i < n; ++i) p[i] = z[i] + beta * p[i];
     }
-    // The multipliers of the remaining residual (r → Gᵀ yz at convergence).
-    for (std::size_t j = 0; j < y.size(); ++j) y[j] += yz[j];
     data.solver_iterations = it;
     data.solver_residual = rel;
     converged = rel <= model.solver.tolerance;

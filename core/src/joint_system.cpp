@@ -132,7 +132,9 @@ void measure_joint_drift(const Model& model, Data& data) noexcept {
     JointState& js = data.joints[j];
     js.position_error = rows.position_error;
     js.coordinate = joint_coordinate(jm, parent, child);
-    for (int r = 0; r < rows.count; ++r) {
+    // A prescribed row's error is the lag behind the device, not drift.
+    const int structural = jm.prescribed ? rows.count - 1 : rows.count;
+    for (int r = 0; r < structural; ++r) {
       const double e = std::abs(rows.position_error(r));
       if (joint_row_is_angular(jm.type, r)) {
         angular = std::max(angular, e);

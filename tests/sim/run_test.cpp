@@ -145,7 +145,7 @@ TEST(RunDefaultScene, GodObjectStaysOnTheSurfaceWhileTheHandGoesThrough) {
     ASSERT_TRUE(all_finite(r)) << "period " << i;
     ASSERT_LE(r.feedback.force.norm(), scene.model.feedback.max_force + 1e-9) << "period " << i;
     ASSERT_NEAR(r.time_s, static_cast<double>(i + 1) * scene.model.dt, 1e-9);
-    ASSERT_EQ(r.attached_body, 0);
+    ASSERT_EQ(r.attached_body, scene.model.initial_attached_body);
     ASSERT_EQ(r.num_axes, 5);
     deepest_target = std::max(deepest_target, r.target_penetration_mm);
   }
@@ -160,8 +160,9 @@ TEST(RunDefaultScene, NoJumpAtStart) {
   runner.period();
   const auto& d = runner.data();
   ASSERT_TRUE(runner.device().last_sample().valid);
-  const double gap = (d.bodies[0].position - d.target.position).norm();
-  const double tilt = d.bodies[0].orientation.angularDistance(d.target.orientation);
+  const auto held = static_cast<std::size_t>(d.attached_body);
+  const double gap = (d.bodies[held].position - d.target.position).norm();
+  const double tilt = d.bodies[held].orientation.angularDistance(d.target.orientation);
   std::printf("[   info   ] first period: |tool - target| = %.4f mm, %.4f mrad, feedback %.4f N\n", gap * 1e3,
               tilt * 1e3, d.feedback_wrench.force.norm());
   EXPECT_LT(gap, 0.1e-3);
@@ -364,7 +365,7 @@ TEST(RunBadBus, CorruptedAndLostFramesAreRejectedWithoutHarm) {
   EXPECT_LT(s.tracking_error_free_rms_mm, 2.0);
   for (const TraceRecord& r : runner.trace().records()) ASSERT_TRUE(all_finite(r)) << "t = " << r.time_s;
   // Positions stay near the recorded workspace (no wild jump from a bad frame).
-  const Vec3 p = runner.data().bodies[0].position;
+  const Vec3 p = runner.data().bodies[static_cast<std::size_t>(runner.data().attached_body)].position;
   EXPECT_TRUE(p.allFinite());
   EXPECT_LT((p - runner.data().target.position).norm(), 0.05);
 }

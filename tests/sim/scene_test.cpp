@@ -5,6 +5,9 @@
 #include "numen/sim/scene.hpp"
 
 #include <gtest/gtest.h>
+
+#include "numen/core/data.hpp"
+#include "numen/core/joint_system.hpp"
 #include <unistd.h>
 
 #include <algorithm>
@@ -193,11 +196,33 @@ TEST(Scene, DefaultSceneLoadsWhatItsFileDescribes) {
   EXPECT_EQ(s.model.coupling_mode, CouplingMode::kGodObject);
   EXPECT_EQ(s.model.gravity, Vec3::Zero());
 
-  ASSERT_EQ(s.model.num_bodies(), 1);
-  EXPECT_EQ(s.model.bodies[0].name, "instrument");
-  EXPECT_EQ(s.model.bodies[0].sphere_count, 30);  // [[body.sphere_line]] count = 30
-  EXPECT_DOUBLE_EQ(s.model.bodies[0].mass, 0.05);
-  EXPECT_EQ(s.model.initial_attached_body, 0);
+  // The articulated instrument of the paper's Fig. 3: sleeve, tube, two jaws.
+  ASSERT_EQ(s.model.num_bodies(), 4);
+  EXPECT_EQ(s.model.bodies[0].name, "sleeve");
+  EXPECT_EQ(s.model.bodies[0].sphere_count, 0);
+  EXPECT_EQ(s.model.bodies[1].name, "tube");
+  EXPECT_EQ(s.model.bodies[1].sphere_count, 30);  // [[body.sphere_line]] count = 30
+  EXPECT_DOUBLE_EQ(s.model.bodies[1].mass, 0.05);
+  EXPECT_EQ(s.model.initial_attached_body, 1);
+  ASSERT_EQ(s.model.num_joints(), 4);
+  EXPECT_EQ(s.model.joints[0].type, numen::core::JointType::kSpherical);
+  EXPECT_EQ(s.model.joints[0].parent, -1);
+  EXPECT_EQ(s.model.joints[0].frame_parent.position, s.device.trocar.point);
+  EXPECT_EQ(s.model.joints[1].type, numen::core::JointType::kCylindrical);
+  EXPECT_EQ(s.model.joints[2].type, numen::core::JointType::kRevolute);
+  EXPECT_TRUE(s.model.joints[2].prescribed);
+  EXPECT_TRUE(s.model.joints[3].prescribed);
+  // Every body chases its own link (Eq. 6); both jaws follow the jaw axis.
+  ASSERT_EQ(s.binding.links.size(), 4u);
+  for (std::size_t b = 0; b < 4; ++b) EXPECT_EQ(s.binding.links[b].body, static_cast<int>(b));
+  ASSERT_EQ(s.binding.prescriptions.size(), 2u);
+  EXPECT_EQ(s.binding.prescriptions[0].axis, 4);
+  EXPECT_DOUBLE_EQ(s.binding.prescriptions[0].scale, 0.5);
+  EXPECT_DOUBLE_EQ(s.binding.prescriptions[1].scale, -0.5);
+  // Every body starts where its link puts it: the joints hold at t = 0.
+  numen::core::Data d = numen::core::make_data(s.model);
+  numen::core::measure_joint_drift(s.model, d);
+  EXPECT_LT(d.max_joint_drift, 1e-9);
   ASSERT_EQ(s.model.num_materials(), 2);
   EXPECT_EQ(s.model.material_names[0], "steel");
   EXPECT_EQ(s.model.material_names[1], "tissue");
@@ -281,7 +306,8 @@ TEST(Scene, AttachedBodyStartsAtTheDevicesFirstTarget) {
   // Default scene: the instrument's position is omitted, so it starts at the
   // device's first controlled pose (no jump at start).
   const Scene s = load_scene(numen::sim::default_scene_path());
-  const numen::core::Pose initial = s.model.bodies[0].initial_pose;
+  const numen::core::Pose initial =
+      s.model.bodies[static_cast<std::size_t>(s.model.initial_attached_body)].initial_pose;
   const numen::sim::SimulatedInstrument inst(s.device, s.trajectory);
   const numen::core::Pose first = inst.controlled_pose_at(0);
   EXPECT_LT((initial.position - first.position).norm(), 1e-12);

@@ -100,7 +100,8 @@ TEST(Trace, WriteCsvHasAHeaderAndOneRowPerRecord) {
   ASSERT_EQ(lines.size(), 5u);
   const std::vector<std::string> header = split(lines[0]);
   EXPECT_EQ(header.front(), "time_s");
-  EXPECT_EQ(header.back(), "solver_iterations");
+  EXPECT_EQ(header.back(), "baumgarte_rhs_max");
+  EXPECT_EQ(column(header, "solver_iterations") + 1, column(header, "joint_drift_mm"));
   // One column per axis torque, as many as the records have.
   EXPECT_EQ(column(header, "axis_torque_0") + 2, column(header, "axis_torque_2"));
   for (const auto& h : header) EXPECT_NE(h, "axis_torque_3");

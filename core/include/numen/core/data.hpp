@@ -98,7 +98,9 @@ struct Data {
   std::vector<Wrench> body_feedback;
   std::vector<JointState> joints;  ///< Per joint (Model::joints).
   double max_joint_drift = 0.0;    ///< Largest |C| of a linear joint row at the step's end (m).
-  double max_joint_angle_drift = 0.0;  ///< Largest |C| of an angular joint row at the step's end (rad).
+  /// Largest |C| of an angular joint row at the step's end (rad); a prescribed
+  /// joint's own row (its lag behind the device) is not drift and not counted.
+  double max_joint_angle_drift = 0.0;
   int solver_iterations = 0;       ///< Iterations of the implicit solve this step.
   double solver_residual = 0.0;    ///< Relative residual reached.
   std::uint32_t status = kStepOk;  ///< StepStatus bits of the last step.

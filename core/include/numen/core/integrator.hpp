@@ -103,7 +103,7 @@ struct SolverScratch {
   std::vector<JointVector> joint_rhs;         ///< c of G Δu = c per joint (joint_system.hpp).
   std::vector<JointVector> joint_y;           ///< y of the KKT solve per joint (−impulse per row).
   std::vector<JointVector> joint_y_correction;  ///< y of the preconditioner solve (projected CG).
-  std::vector<Vec6> projected_residual;       ///< r − Gᵀ y per body (projected CG convergence test).
+  std::vector<Vec6> projected_residual;       ///< Gᵀ yz per body (projected CG residual update).
 
   /// Per body: 1 if its own coupling springs (Eq. 6, Data::body_targets or
   /// the attached body's target) act this step; their stiffness and damping
@@ -181,7 +181,8 @@ void apply_implicit_system(const Model& model, const Data& data, std::span<const
 /// 1996); without body–body contacts that is the exact solution. With them,
 /// a projected preconditioned conjugate gradient (Gould, Hribar & Nocedal,
 /// SIAM J. Sci. Comput. 23(4), 2001) iterates on the null space of G with the
-/// tree solve as constraint preconditioner, stopping on ‖r − Gᵀy‖/‖b‖.
+/// tree solve as constraint preconditioner and their residual update
+/// (r ← r − Gᵀ yz after each preconditioning), stopping on ‖r‖/‖b‖.
 /// Writes SolverScratch::delta, joint_y, Data::solver_iterations/residual,
 /// Data::joints multipliers. Returns true when converged.
 bool solve_constrained_system(const Model& model, Data& data) noexcept;
