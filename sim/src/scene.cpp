@@ -221,16 +221,18 @@ void parse_device(const TomlTable& root, Scene& scene, const TomlTable*& body_ta
   auto dev = root.table("device");
   if (!dev) root.fail("device", "missing: a scene needs a [device] (the tracked instrument)");
   dev->allow_only({"kind", "name", "attach", "max_sample_age", "jump_tolerance_counts",
-                   "first_node_id", "tool_offset", "trocar", "tracker", "feedback", "axis"});
+                   "first_node_id", "tool_offset", "trocar", "tracker", "phantom", "feedback",
+                   "axis"});
   const std::string kind =
-      dev->choice("kind", {"trocar-instrument", "pose-tracker"}, std::nullopt);
+      dev->choice("kind", {"trocar-instrument", "pose-tracker", "phantom"}, std::nullopt);
   const auto node = dev->integer_or("first_node_id", 1);
   if (node < 1 || node > 120) dev->fail("first_node_id", "must be a CANopen node id in [1, 120]");
   hal::DeviceConfig cfg;
   try {
-    cfg = kind == "trocar-instrument"
-              ? hal::make_default_trocar_config(static_cast<std::uint8_t>(node))
-              : hal::make_default_pose_tracker_config(static_cast<std::uint8_t>(node));
+    const auto id = static_cast<std::uint8_t>(node);
+    cfg = kind == "trocar-instrument" ? hal::make_default_trocar_config(id)
+          : kind == "phantom"         ? hal::make_default_phantom_config(id)
+                                      : hal::make_default_pose_tracker_config(id);
   } catch (const std::invalid_argument& e) {
     dev->fail("first_node_id", e.what());
   }
@@ -286,6 +288,15 @@ void parse_device(const TomlTable& root, Scene& scene, const TomlTable*& body_ta
       scene.trocar_note = "trocar point given in the scene";
     }
     if (tr->has("orientation") && placement == "approach") tr->fail("orientation", "set by placement = \"approach\"");
+  } else if (kind == "phantom") {
+    cfg.kind = hal::DeviceKind::kPhantom;
+    if (auto ph = dev->table("phantom")) {
+      ph->allow_only({"position", "orientation", "upper_arm", "forearm"});
+      cfg.phantom.base.position = ph->vec3_or("position", Vec3::Zero());
+      cfg.phantom.base.orientation = ph->quaternion_or("orientation", Quat::Identity());
+      cfg.phantom.l1 = ph->number_in("upper_arm", 1e-3, 10.0, cfg.phantom.l1);
+      cfg.phantom.l2 = ph->number_in("forearm", 1e-3, 10.0, cfg.phantom.l2);
+    }
   } else {
     cfg.kind = hal::DeviceKind::kPoseTracker;
     if (auto tk = dev->table("tracker")) {

@@ -295,6 +295,57 @@ TEST(RunAllocations, ConstructionScenePeriodNeverAllocates) {
   expect_no_allocation(construction_scene(), "construction");
 }
 
+const Scene& phantom_scene() {
+  static const Scene s = numen::sim::load_scene(std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/phantom.toml");
+  return s;
+}
+
+TEST(RunAllocations, PhantomScenePeriodNeverAllocates) {
+  expect_no_allocation(phantom_scene(), "phantom");  // 6 s scene: the trajectory holds its end
+}
+
+// ---------------------------------------------------------------- articulated scenes
+
+TEST(RunArticulated, DefaultInstrumentStaysOutsideWhileTheJointsHold) {
+  // Paper Fig. 7: the articulated tool (sleeve, tube, jaws) stays on the
+  // organ and tissue while the recorded tip goes through; the joints hold.
+  SceneRunner runner(default_scene());
+  for (int k = 0; k < 15'000; ++k) runner.period();
+  const RunSummary s = runner.summary();
+  EXPECT_EQ(s.num_joints, 4);
+  EXPECT_GE(s.target_penetration_max_mm, 10.0);
+  EXPECT_LE(s.tool_penetration_max_mm, 3.0);
+  EXPECT_LT(s.joint_drift_max_mm, 0.01);
+  EXPECT_LT(s.joint_angle_drift_max_mrad, 1.0);
+  EXPECT_FALSE(s.nan_detected);
+  // The sleeve stays on the trocar point: the spherical joint to the world.
+  const auto& d = runner.data();
+  EXPECT_LT((d.bodies[0].position - default_scene().device.trocar.point).norm(), 1e-5);
+  // The jaws follow the jaw encoder: each hinge at ±jaw/2 within a few mrad.
+  const double jaw = runner.device().last_sample().q(4);
+  EXPECT_NEAR(d.joints[2].coordinate, 0.5 * jaw, 5e-3);
+  EXPECT_NEAR(d.joints[3].coordinate, -0.5 * jaw, 5e-3);
+}
+
+TEST(RunArticulated, PhantomArmStopsOnTheDeskAndItsMotorsGetJointTorques) {
+  SceneRunner runner(phantom_scene(), 6000);
+  for (int k = 0; k < 6000; ++k) runner.period();
+  const RunSummary s = runner.summary();
+  EXPECT_GE(s.target_penetration_max_mm, 10.0) << "the hand goes through the desk";
+  EXPECT_LE(s.tool_penetration_max_mm, 3.0) << "the arm stays on it";
+  EXPECT_LT(s.joint_drift_max_mm, 0.05);
+  EXPECT_FALSE(s.nan_detected);
+  // Torques reach the three motors (turret, shoulder, elbow) only.
+  double arm = 0.0, gimbal = 0.0;
+  for (const TraceRecord& r : runner.trace().records()) {
+    ASSERT_EQ(r.num_axes, 6);
+    for (int a = 0; a < 3; ++a) arm = std::max(arm, std::abs(r.axis_torque[static_cast<std::size_t>(a)]));
+    for (int a = 3; a < 6; ++a) gimbal = std::max(gimbal, std::abs(r.axis_torque[static_cast<std::size_t>(a)]));
+  }
+  EXPECT_GT(arm, 0.1);
+  EXPECT_EQ(gimbal, 0.0);
+}
+
 // ---------------------------------------------------------------- determinism
 
 void expect_deterministic(const Scene& scene, std::int64_t n, const char* name) {
