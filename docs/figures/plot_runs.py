@@ -28,7 +28,7 @@ def default_run(trace, out):
     ax[0].plot(t, d["tool_penetration_mm"], lw=0.8, label="god-object")
     ax[0].set_ylabel("penetration (mm)")
     ax[0].legend(loc="upper right")
-    ax[0].set_title("Default scene: trocar instrument on recorded suturing motion (JIGSAWS, Gao et al. 2014)")
+    ax[0].set_title("Default scene: articulated trocar instrument (sleeve, tube, jaws) on recorded suturing motion (JIGSAWS, Gao et al. 2014)")
     sep = [((d["tool_x"][i] - d["target_x"][i]) ** 2 + (d["tool_y"][i] - d["target_y"][i]) ** 2
             + (d["tool_z"][i] - d["target_z"][i]) ** 2) ** 0.5 * 1e3 for i in range(len(t))]
     f = [(d["feedback_fx"][i] ** 2 + d["feedback_fy"][i] ** 2 + d["feedback_fz"][i] ** 2) ** 0.5 for i in range(len(t))]

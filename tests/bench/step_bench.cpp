@@ -8,7 +8,7 @@
 // time column is a mean). period_time reports the whole period including the
 // simulated bus and the run's measurements.
 //
-//   ./build/tests/numen_bench --benchmark_filter=Step --benchmark_repetitions=5
+//   ./build/tests/numen_bench --benchmark_filter=step_time --benchmark_repetitions=5
 
 #include <benchmark/benchmark.h>
 
@@ -67,6 +67,7 @@ void period_time(benchmark::State& state, const char* name) {
 
 BENCHMARK_CAPTURE(step_time, DefaultScene, "default.toml", nullptr)->UseManualTime()->Iterations(30000);
 BENCHMARK_CAPTURE(step_time, ConstructionGodObject, "construction.toml", nullptr)->UseManualTime()->Iterations(9000);
+BENCHMARK_CAPTURE(step_time, PhantomScene, "phantom.toml", nullptr)->UseManualTime()->Iterations(6000);
 BENCHMARK_CAPTURE(step_time, ConstructionDirect, "construction.toml", "direct")->UseManualTime()->Iterations(9000);
 BENCHMARK_CAPTURE(period_time, DefaultScene, "default.toml")->Iterations(30000);
 BENCHMARK_CAPTURE(period_time, ConstructionGodObject, "construction.toml")->Iterations(9000);
