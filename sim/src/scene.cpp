@@ -408,7 +408,12 @@ Scene load_scene(const std::string& path, const SceneOverrides& overrides) {
 
   scene.duration_s = root.number_in("duration", 1e-9, kInf, scene.trajectory.duration());
   const std::string err = core::finalize_model(scene.model);
-  if (!err.empty()) root.fail_at(nullptr, "", err);
+  if (!err.empty()) {
+    // Errors of the joint tree name the joint: point at its table.
+    for (const TomlTable& j : root.tables("joint"))
+      if (j.has("name") && err.rfind("joint '" + j.string("name") + "'", 0) == 0) j.fail("child", err);
+    root.fail_at(nullptr, "", err);
+  }
   return scene;
 }
 

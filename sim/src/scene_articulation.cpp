@@ -81,6 +81,9 @@ void parse_articulation(const TomlTable& root, const std::vector<TomlTable>& bod
     b->allow_only({"alpha_dt", "beta_dt2"});
     m.baumgarte.alpha_dt = b->number_in("alpha_dt", 0.0, kInf, m.baumgarte.alpha_dt);
     m.baumgarte.beta_dt2 = b->number_in("beta_dt2", 0.0, kInf, m.baumgarte.beta_dt2);
+    if (!(m.baumgarte.alpha_dt + m.baumgarte.beta_dt2 > 0.0))
+      b->fail(b->has("beta_dt2") ? "beta_dt2" : "alpha_dt",
+              "alpha_dt and beta_dt2 cannot both be 0: the joint error would drift unchecked");
   }
 
   const auto kin = hal::make_kinematics(scene.device);
@@ -101,6 +104,9 @@ void parse_articulation(const TomlTable& root, const std::vector<TomlTable>& bod
     scene.binding.links.push_back(lb);
     if (lb.body == m.initial_attached_body) attached_bound = true;
     if (!t.has("position")) {
+      if (t.has("orientation"))
+        t.fail("orientation", "a body bound to a link without a position starts at the link's pose; "
+                              "give both position and orientation, or neither");
       const Pose link = kin->link_pose(lb.link, q0);
       core::BodyModel& body = m.bodies[i];
       body.initial_pose.position = link.position + link.orientation * lb.body_in_link.position;

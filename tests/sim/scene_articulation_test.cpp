@@ -102,6 +102,7 @@ link = "trocar"
 [[body]]
 name = "tube"
 mass = 0.05
+inertia = [2.0e-5, 2.0e-5, 1.0e-6]
 material = "steel"
 link = "tube"
 link_offset = { position = [0.0, 0.0, -0.04] }
@@ -112,6 +113,7 @@ damping_ratio = 0.85
 [[body]]
 name = "jaw_1"
 mass = 0.005
+inertia = [1.0e-7, 1.0e-7, 1.0e-8]
 material = "steel"
 link = "jaw_1"
 link_offset = { position = [0.0, 0.001, 0.006], orientation = [0.9238795325112867, 0.3826834323650898, 0.0, 0.0] }
@@ -119,6 +121,7 @@ link_offset = { position = [0.0, 0.001, 0.006], orientation = [0.923879532511286
 [[body]]
 name = "jaw_2"
 mass = 0.005
+inertia = [1.0e-7, 1.0e-7, 1.0e-8]
 material = "steel"
 link = "jaw_2"
 link_offset = { position = [0.0, 0.0, 0.006] }
@@ -126,6 +129,7 @@ link_offset = { position = [0.0, 0.0, 0.006] }
 [[body]]
 name = "marker"
 mass = 0.01
+inertia = [1.0e-6, 1.0e-6, 1.0e-6]
 material = "steel"
 link = "tool"
 position = [0.3, 0.2, 0.1]
@@ -399,7 +403,7 @@ TEST(SceneArticulationErrors, WorldIsNotAChild) {
 TEST(SceneArticulationErrors, ChildEqualsParent) {
   TempDir dir;
   const std::string t = replace(art_scene(), "child = \"tube\"", "child = \"sleeve\"");
-  expect_located(load_error(dir, t), line_of(t, "child = \"sleeve\""), "joint[1].child",
+  expect_located(load_error(dir, t), line_of(t, "child = \"sleeve\"", 2), "joint[1].child",
                  "two different bodies");
 }
 
@@ -495,17 +499,20 @@ TEST(SceneArticulationErrors, BodyThatIsTheChildOfTwoJoints) {
   EXPECT_NE(what.find("bad_art.toml:" + std::to_string(e.line()) + ":"), std::string::npos) << what;
   EXPECT_NE(e.message().find("joint 'jaw_2_hinge'"), std::string::npos) << e.message();
   EXPECT_NE(e.message().find("jaw_1"), std::string::npos) << e.message();
+  // Located at the offending joint's child key (the second `child = "jaw_1"`).
+  const std::size_t first = t.find("child = \"jaw_1\"");
+  const std::size_t second = t.find("child = \"jaw_1\"", first + 1);
+  ASSERT_NE(second, std::string::npos);
+  EXPECT_EQ(e.line(), static_cast<int>(std::count(t.begin(), t.begin() + static_cast<long>(second), '\n')) + 1)
+      << what;
+  EXPECT_NE(e.key().find("child"), std::string::npos) << e.key();
 }
 
 TEST(SceneArticulationErrors, BaumgarteBothZeroIsRejected) {
   TempDir dir;
   const std::string t = art_scene() + "\n[baumgarte]\nalpha_dt = 0.0\nbeta_dt2 = 0.0\n";
-  const InputError e = load_error(dir, t);
-  const std::string what = e.what();
-  EXPECT_NE(what.find("bad_art.toml"), std::string::npos) << what;
-  EXPECT_GT(e.line(), 0) << what;
-  EXPECT_NE(e.message().find("baumgarte"), std::string::npos) << e.message();
-  EXPECT_NE(e.message().find("cannot both be 0"), std::string::npos) << e.message();
+  expect_located(load_error(dir, t), line_of(t, "beta_dt2 = 0.0"), "baumgarte.beta_dt2",
+                 "cannot both be 0");
 }
 
 TEST(SceneArticulationErrors, BaumgarteNegativeAndUnknownKey) {
@@ -528,6 +535,19 @@ TEST(SceneArticulationErrors, JointWithoutChild) {
   const InputError e = load_error(dir, t);
   EXPECT_EQ(e.key(), "joint[1].child") << e.what();
   EXPECT_GT(e.line(), 0) << e.what();
+}
+
+}  // namespace
+
+namespace {
+
+TEST(SceneArticulationErrors, LinkedBodyWithOrientationButNoPosition) {
+  // The link gives the starting pose: an orientation alone would be dropped.
+  TempDir dir;
+  const std::string t =
+      replace(art_scene(), "link = \"jaw_1\"", "link = \"jaw_1\"\norientation = [1.0, 0.0, 0.0, 0.0]");
+  expect_located(load_error(dir, t), line_of(t, "orientation = [1.0, 0.0, 0.0, 0.0]"),
+                 "body[2].orientation", "give both position and orientation");
 }
 
 }  // namespace
