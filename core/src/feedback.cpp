@@ -3,6 +3,8 @@
 
 #include "numen/core/feedback.hpp"
 
+#include <algorithm>
+
 #include "numen/core/coupling.hpp"
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"
@@ -74,19 +76,28 @@ void compute_feedback(const Model& model, Data& data) noexcept {
     total.torque += carried.torque;
     any = true;
   }
-  if (!any || !attached) return;
-  // Saturate the composite; scale the per-body wrenches by the same ratios so
-  // that both views of the feedback stay consistent.
+  if (!any) return;
+  if (!attached) {
+    // Nothing held: no composite; each body's wrench is clamped on its own.
+    for (Wrench& w : data.body_feedback)
+      w = saturate_wrench(w, model.feedback.max_force, model.feedback.max_torque);
+    return;
+  }
+  // Saturate the composite by one ratio for force and torque, and scale the
+  // per-body wrenches by it: carried to the reference point (Eq. 9) they sum
+  // to the saturated composite exactly, so the motors (Σ J_lᵀ w_l) get the
+  // wrench that is logged.
   const Wrench sat = saturate_wrench(total, model.feedback.max_force, model.feedback.max_torque);
   const double fn = total.force.norm();
   const double tn = total.torque.norm();
   const double sf = fn > 0.0 ? sat.force.norm() / fn : 1.0;
   const double st = tn > 0.0 ? sat.torque.norm() / tn : 1.0;
-  data.feedback_wrench = sat;
-  if (sf < 1.0 || st < 1.0)
+  const double ratio = std::min(sf, st);
+  data.feedback_wrench = Wrench{ratio * total.force, ratio * total.torque};
+  if (ratio < 1.0)
     for (Wrench& w : data.body_feedback) {
-      w.force *= sf;
-      w.torque *= st;
+      w.force *= ratio;
+      w.torque *= ratio;
     }
 }
 

@@ -432,9 +432,10 @@ bool solve_constrained_system(const Model& model, Data& data) noexcept {
 
   if (s.num_cross_contacts > 0) {
     // Projected PCG on the null space of G: r = b − A x − Gᵀ y.
-    const double b_norm = std::sqrt(dot(b, b));
-    const double ref = b_norm > 0.0 ? b_norm : 1.0;
     apply_implicit_system(model, data, x, ap);
+    // Relative to ‖b‖, or to ‖A x0‖ when the joints' c drives the step.
+    const double b_norm = std::max(std::sqrt(dot(b, b)), std::sqrt(dot(ap, ap)));
+    const double ref = b_norm > 0.0 ? b_norm : 1.0;
     for (std::size_t i = 0; i < n; ++i) r[i] = s.in_solve[i] ? Vec6(b[i] - ap[i]) : Vec6::Zero();
     for (std::size_t i = 0; i < n; ++i) ap[i].setZero();
     add_joint_transpose(model, data, y, ap);
@@ -527,8 +528,10 @@ void set_first_order_velocity(const Model& model, Data& data, std::size_t i) noe
 
 /// Symplectic Euler with joints: the explicit impulses h(f + gyroscopic) go
 /// through the KKT system with A = M (paper Eq. 4 with the tendency and
-/// correction of Eq. 7 solved at once), then positions. Known bodies (kDirect,
-/// first-order) keep the twist they already have.
+/// correction of Eq. 7 solved at once), then positions. Imposed bodies
+/// (kDirect) keep their twist; a first-order body enters with the block
+/// h·diag(γ_t I, γ_r I) and the right-hand side that takes it to its
+/// first-order twist (the joints' force adds λ/γ to it).
 void integrate_symplectic_euler_constrained(const Model& model, Data& data) noexcept {
   SolverScratch& s = data.solver;
   ArticulationScratch& art = data.articulation;
@@ -536,16 +539,27 @@ void integrate_symplectic_euler_constrained(const Model& model, Data& data) noex
   for (std::size_t i = 0; i < data.bodies.size(); ++i) {
     const int b = static_cast<int>(i);
     BodyState& st = data.bodies[i];
-    const bool first_order = is_first_order(s, b);
-    if (first_order) set_first_order_velocity(model, data, i);
-    const bool known = first_order || s.imposed[i];
+    Mat6& blk = s.block[i];
+    const bool known = s.imposed[i] != 0;
     art.known[i] = known ? 1 : 0;
-    s.twist0[i] << st.linear_velocity, st.angular_velocity;
+    s.twist0[i] << st.linear_velocity, st.angular_velocity;  // the last step's twist
+    if (is_first_order(s, b)) {
+      // Massless body: its twist is the first-order law's u_fo, plus the
+      // joints' force through γ: u1 = u_fo + λ/γ. As a KKT block: B = h·diag(γ_t,
+      // γ_r), b = B (u_fo − u0), so that Δu = (u_fo − u0) + B⁻¹ h λ.
+      set_first_order_velocity(model, data, i);
+      const CouplingGains& g = model.bodies[i].coupling;
+      blk.setZero();
+      blk.topLeftCorner<3, 3>().diagonal().setConstant(h * g.gamma_t);
+      blk.bottomRightCorner<3, 3>().diagonal().setConstant(h * g.gamma_r);
+      s.rhs[i] << h * g.gamma_t * (st.linear_velocity - s.twist0[i].head<3>()),
+          h * g.gamma_r * (st.angular_velocity - s.twist0[i].tail<3>());
+      continue;
+    }
     if (known) continue;
     const BodyModel& bm = model.bodies[i];
     const Wrench& f = data.body_wrench[i];
     const Mat3 iw = world_inertia(st.orientation, bm.inertia_body);
-    Mat6& blk = s.block[i];
     blk.setZero();
     blk.topLeftCorner<3, 3>().diagonal().setConstant(bm.mass);
     blk.bottomRightCorner<3, 3>() = iw;

@@ -29,6 +29,14 @@ double prescribed_value(const JointModel& j, const Data& data, std::size_t index
   return j.prescribed ? data.joint_prescribed[index].value : 0.0;
 }
 
+constexpr double kPi = 3.14159265358979323846;
+
+/// Twist of body b for the free drift of the step: zero for a known body.
+Vec6 moving_twist(const ArticulationScratch& a, std::span<const Vec6> twist0, int b) noexcept {
+  const auto i = static_cast<std::size_t>(b);
+  return a.known[i] ? Vec6::Zero() : twist0[i];
+}
+
 }  // namespace
 
 void build_joint_rows(const Model& model, Data& data, std::span<const Vec6> twist0,
@@ -46,10 +54,12 @@ void build_joint_rows(const Model& model, Data& data, std::span<const Vec6> twis
     const double value = prescribed_value(jm, data, j);
     evaluate_joint(jm, parent, child, value, start);
 
-    // Ċ0 = G u0 − v_ref.
-    const Vec6& uc = twist0[static_cast<std::size_t>(jm.child)];
+    // Ċ0 = G u0 − v_ref. A known (imposed) body does not move during the
+    // step (its next pose is imposed at the next step): it counts as at rest.
+    const Vec6 uc = moving_twist(a, twist0, jm.child);
+    const Vec6 up = parent ? moving_twist(a, twist0, jm.parent) : Vec6::Zero();
     JointVector cdot0 = start.g_child * uc;
-    if (parent) cdot0.noalias() += start.g_parent * twist0[static_cast<std::size_t>(jm.parent)];
+    if (parent) cdot0.noalias() += start.g_parent * up;
     double rate = 0.0;
     if (jm.prescribed) {
       rate = data.joint_prescribed[j].rate;
@@ -65,8 +75,7 @@ void build_joint_rows(const Model& model, Data& data, std::span<const Vec6> twis
     JointRows predicted;
     const BodyState child_pred = drifted(child, uc, h);
     if (parent) {
-      const BodyState parent_pred =
-          drifted(*parent, twist0[static_cast<std::size_t>(jm.parent)], h);
+      const BodyState parent_pred = drifted(*parent, up, h);
       evaluate_joint(jm, &parent_pred, child_pred, value + h * rate, predicted);
     } else {
       evaluate_joint(jm, nullptr, child_pred, value + h * rate, predicted);
@@ -80,7 +89,13 @@ void build_joint_rows(const Model& model, Data& data, std::span<const Vec6> twis
     //   Ċ0 = G u0 − ½ h q = 2 (G u0 − v_ref) − (C_pred − C0)/h.
     // Using G u0 itself would leave a steady error h² q (centripetal).
     const JointVector& c0 = start.position_error;
-    const JointVector drift_rate = (predicted.position_error - c0) / h;
+    JointVector drift_rate = (predicted.position_error - c0) / h;
+    if (jm.prescribed && joint_row_is_angular(jm.type, start.count - 1)) {
+      // The prescribed twist row is wrapped to (−π, π] at each evaluation:
+      // wrap the difference too, or a lag near ±π would jump by 2π/h.
+      const int r = start.count - 1;
+      drift_rate(r) = std::remainder(predicted.position_error(r) - c0(r), 2.0 * kPi) / h;
+    }
     const JointVector cdot = 2.0 * cdot0 - drift_rate;
     const JointVector cdot1 = scale * (cdot - (beta_h2 / h) * c0);
     JointVector c = (c0 + h * cdot1 - predicted.position_error) / h;
@@ -128,7 +143,11 @@ void measure_joint_drift(const Model& model, Data& data) noexcept {
     const JointModel& jm = model.joints[j];
     const BodyState* parent = parent_state(jm, data.bodies);
     const BodyState& child = data.bodies[static_cast<std::size_t>(jm.child)];
-    evaluate_joint(jm, parent, child, prescribed_value(jm, data, j), rows);
+    // The prescribed value the step aimed at: φ* + h·rate (joint_system.hpp).
+    const double value = jm.prescribed
+                             ? data.joint_prescribed[j].value + model.dt * data.joint_prescribed[j].rate
+                             : 0.0;
+    evaluate_joint(jm, parent, child, value, rows);
     JointState& js = data.joints[j];
     js.position_error = rows.position_error;
     js.coordinate = joint_coordinate(jm, parent, child);

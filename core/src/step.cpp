@@ -21,11 +21,19 @@ void save_state(Data& data) noexcept {
 }
 
 /// Checks stage: rejects a non-finite result (rollback to the saved poses,
-/// zero twists, zero feedback). Returns true when the step was accepted.
+/// zero twists, zero feedback, and the solver's and joints' outputs cleared
+/// so that nothing non-finite is carried into the next step: Δu is the next
+/// step's Δu_prev, joint_system.hpp). Returns true when the step was accepted.
 bool check_finite(Data& data) noexcept {
   bool finite = data.feedback_wrench.force.allFinite() && data.feedback_wrench.torque.allFinite();
   for (const BodyState& s : data.bodies) finite = finite && state_is_finite(s);
+  for (const Vec6& d : data.solver.delta) finite = finite && d.allFinite();
   if (finite) return true;
+  for (Vec6& d : data.solver.delta) d.setZero();
+  for (Wrench& w : data.body_feedback) w = Wrench{};
+  for (JointState& j : data.joints) j = JointState{};
+  data.max_joint_drift = 0.0;
+  data.max_joint_angle_drift = 0.0;
   for (std::size_t i = 0; i < data.bodies.size(); ++i) {
     BodyState& s = data.bodies[i];
     s = data.solver.saved_state[i];

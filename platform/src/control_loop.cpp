@@ -32,6 +32,14 @@ ControlLoop::ControlLoop(const core::Model& model, core::Data& data, hal::Bus& b
     if (p.axis < 0 || p.axis >= device.num_axes())
       throw std::invalid_argument("device binding: axis " + std::to_string(p.axis) + " out of range");
   }
+  explicit_bound_.assign(static_cast<std::size_t>(model.num_bodies()), 0);
+  for (const LinkBinding& b : binding_.links) {
+    if (b.body < 0) continue;
+    if (explicit_bound_[static_cast<std::size_t>(b.body)])
+      throw std::invalid_argument("device binding: body " + std::to_string(b.body) +
+                                  " is bound to two links");
+    explicit_bound_[static_cast<std::size_t>(b.body)] = 1;
+  }
   link_origin_.assign(binding_.links.size(), core::Vec3::Zero());
   body_target_.assign(binding_.links.size(), core::Vec3::Zero());
   bound_body_.assign(binding_.links.size(), -1);
@@ -45,7 +53,10 @@ void ControlLoop::apply_targets(const hal::DeviceSample& sample) noexcept {
   }
   for (std::size_t k = 0; k < binding_.links.size(); ++k) {
     const LinkBinding& b = binding_.links[k];
-    const int body = b.body < 0 ? d.attached_body : b.body;
+    int body = b.body < 0 ? d.attached_body : b.body;
+    // The attached body follows its own link if it has one; the "attached"
+    // binding (body -1) serves only a held body without one (tool switching).
+    if (b.body < 0 && body >= 0 && explicit_bound_[static_cast<std::size_t>(body)]) body = -1;
     bound_body_[k] = body;
     const core::Pose& link = sample.link_targets[static_cast<std::size_t>(b.link)];
     const core::Twist& lt = sample.link_twists[static_cast<std::size_t>(b.link)];

@@ -91,7 +91,6 @@ void parse_articulation(const TomlTable& root, const std::vector<TomlTable>& bod
 
   // Body–link bindings and the starting poses they imply.
   scene.binding = platform::DeviceBinding{};
-  bool attached_bound = false;
   for (std::size_t i = 0; i < body_tables.size(); ++i) {
     const TomlTable& t = body_tables[i];
     if (t.has("link_offset") && !t.has("link"))
@@ -102,7 +101,6 @@ void parse_articulation(const TomlTable& root, const std::vector<TomlTable>& bod
     lb.body = static_cast<int>(i);
     if (auto off = t.table("link_offset")) lb.body_in_link = parse_frame(*off);
     scene.binding.links.push_back(lb);
-    if (lb.body == m.initial_attached_body) attached_bound = true;
     if (!t.has("position")) {
       if (t.has("orientation"))
         t.fail("orientation", "a body bound to a link without a position starts at the link's pose; "
@@ -113,11 +111,9 @@ void parse_articulation(const TomlTable& root, const std::vector<TomlTable>& bod
       body.initial_pose.orientation = link.orientation * lb.body_in_link.orientation;
     }
   }
-  if (scene.binding.links.empty()) {
-    scene.binding = platform::DeviceBinding::rigid();
-  } else if (!attached_bound) {
-    scene.binding.links.push_back(platform::LinkBinding{});  // link 0 → the attached body
-  }
+  // Link 0 → whichever body is held when that body has no link of its own
+  // (the rigid binding; after a tool switch to a body without a link).
+  scene.binding.links.push_back(platform::LinkBinding{});
 
   // Joints.
   for (const TomlTable& t : root.tables("joint")) {

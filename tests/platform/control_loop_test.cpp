@@ -583,6 +583,11 @@ TEST(ControlLoopLinks, ConstructorRejectsBindingsOutOfRange) {
     b.links[1].body = -1;  // whichever body is attached: valid
     EXPECT_NO_THROW(make(b));
   }
+  {
+    DeviceBinding b = linked_binding();
+    b.links[1].body = b.links[0].body;  // one body on two links: its torque would count twice
+    EXPECT_THROW(make(b), std::invalid_argument);
+  }
   for (int joint : {-1, 1}) {
     DeviceBinding b = linked_binding();
     b.prescriptions[0].joint = joint;
@@ -601,6 +606,51 @@ TEST(ControlLoopLinks, ConstructorRejectsBindingsOutOfRange) {
   DeviceBinding no_prescription = linked_binding();
   no_prescription.prescriptions.clear();
   EXPECT_NO_THROW(ControlLoop(free_model, free_data, bus.controller(), device, no_prescription));
+}
+
+}  // namespace
+
+namespace {
+
+TEST(ControlLoopLinks, TheHeldBodyFollowsItsOwnLinkAcrossToolSwitches) {
+  // Tool switching with link bindings: body 0 is bound to "tube"; a fallback
+  // binding (body -1, link 0) serves a held body without a link of its own.
+  LinkedRig rig;
+  DeviceBinding b = linked_binding();
+  b.links.push_back(numen::platform::LinkBinding{});  // link 0 → the held body
+  ControlLoop loop{rig.model, rig.data, rig.bus.controller(), rig.device, b};
+  const auto& kin = rig.device.kinematics();
+  const auto run = [&](std::int64_t k) {
+    const std::int64_t t = k * kMs;
+    rig.bus.set_time_ns(t);
+    loop.begin_period(t);
+    rig.bus.set_time_ns(t + kLatency);
+    rig.emulator.poll(rig.bus.device());
+    rig.bus.set_time_ns(t + kPhase);
+    loop.end_period(t + kPhase);
+    rig.bus.set_time_ns(t + kPhase + kLatency);
+    rig.emulator.poll(rig.bus.device());
+  };
+  run(0);
+  const AxisVector q = rig.device.last_sample().q;
+  // Held body 0 has its own link: the fallback binding is not used.
+  const Pose tube = kin.link_pose(TrocarKinematics::kLinkTube, q);
+  const Pose off = b.links[0].body_in_link;
+  EXPECT_LT((rig.data.target.position - (tube.position + tube.orientation * off.position)).norm(), 1e-12);
+  // Switch the hold to body 1: it keeps its own link ("jaw_1") and the target
+  // of the held body comes from that binding.
+  numen::core::set_attached_body(rig.model, rig.data, 1);
+  run(1);
+  const Pose jaw = kin.link_pose(TrocarKinematics::kLinkJaw1, rig.device.last_sample().q);
+  const Pose off1 = b.links[1].body_in_link;
+  EXPECT_LT((rig.data.target.position - (jaw.position + jaw.orientation * off1.position)).norm(), 1e-12);
+  // Nothing held: the held target is left alone, the bound bodies keep theirs.
+  const Pose held_before = rig.data.target;
+  numen::core::set_attached_body(rig.model, rig.data, -1);
+  run(2);
+  EXPECT_EQ(rig.data.target.position, held_before.position);
+  EXPECT_TRUE(rig.data.body_targets[0].enabled);
+  EXPECT_TRUE(rig.data.body_targets[1].enabled);
 }
 
 }  // namespace

@@ -295,7 +295,11 @@ TEST(SceneArticulation, BodiesBindToLinksByName) {
   TempDir dir;
   const Scene s = load_text(dir, art_scene());
   const auto kin = numen::hal::make_kinematics(s.device);
-  ASSERT_EQ(s.binding.links.size(), 5u) << "every body has a link; the attached one is bound";
+  // Every body has a link, plus the fallback link 0 → the held body (used only
+  // while the held body has no link of its own, e.g. after a tool switch).
+  ASSERT_EQ(s.binding.links.size(), 6u);
+  EXPECT_EQ(s.binding.links.back().link, 0);
+  EXPECT_EQ(s.binding.links.back().body, -1);
   const char* names[5] = {"trocar", "tube", "jaw_1", "jaw_2", "tool"};
   const int expected_links[5] = {TrocarKinematics::kLinkTrocar, TrocarKinematics::kLinkTube,
                                  TrocarKinematics::kLinkJaw1, TrocarKinematics::kLinkJaw2,

@@ -213,8 +213,9 @@ TEST(Scene, DefaultSceneLoadsWhatItsFileDescribes) {
   EXPECT_TRUE(s.model.joints[2].prescribed);
   EXPECT_TRUE(s.model.joints[3].prescribed);
   // Every body chases its own link (Eq. 6); both jaws follow the jaw axis.
-  ASSERT_EQ(s.binding.links.size(), 4u);
+  ASSERT_EQ(s.binding.links.size(), 5u);  // + the fallback link 0 → held body
   for (std::size_t b = 0; b < 4; ++b) EXPECT_EQ(s.binding.links[b].body, static_cast<int>(b));
+  EXPECT_EQ(s.binding.links[4].body, -1);
   ASSERT_EQ(s.binding.prescriptions.size(), 2u);
   EXPECT_EQ(s.binding.prescriptions[0].axis, 4);
   EXPECT_DOUBLE_EQ(s.binding.prescriptions[0].scale, 0.5);

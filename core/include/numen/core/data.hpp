@@ -32,22 +32,24 @@ struct BodyState {
 /// twist of its counterpart on the device, world frame, at the body's COM.
 /// Bodies without an enabled target are left to the simulation (partial control).
 struct BodyTarget {
-  Pose pose;
-  Twist twist;
-  bool enabled = false;
+  Pose pose;             ///< Target pose of the body's COM frame (m; world).
+  Twist twist;           ///< Target twist at the COM (m/s, rad/s; world).
+  bool enabled = false;  ///< false: no spring on this body (left to the simulation).
 };
 
 /// Imposed coordinate of a prescribed joint (JointModel::prescribed): angle
 /// (rad) and rate (rad/s) of a revolute, slide (m) and rate (m/s) of a prismatic.
 struct JointPrescription {
-  double value = 0.0;
-  double rate = 0.0;
+  double value = 0.0;  ///< Imposed coordinate at the step's start (rad or m).
+  double rate = 0.0;   ///< Its rate (rad/s or m/s); the step aims at value + dt·rate.
 };
 
 /// What the articulation solve did to one joint in the last step (observable
 /// drift, Baumgarte terms and reaction; paper Eq. 4–5).
 struct JointState {
-  JointVector position_error = JointVector::Zero();  ///< C at the step's end (m or rad per row).
+  /// C at the step's end (m or rad per row); a prescribed row holds the lag
+  /// behind value + dt·rate of Data::joint_prescribed.
+  JointVector position_error = JointVector::Zero();
   /// Right-hand side c of the joint's rows in G Δu = c (m/s or rad/s): the
   /// Baumgarte-stabilised velocity change the rows ask for this step.
   JointVector baumgarte_rhs = JointVector::Zero();

@@ -39,9 +39,11 @@ Wrench carry_wrench(const Wrench& w, const Vec3& from, const Vec3& to) noexcept;
 /// Data::body_targets): Data::body_feedback[i] = Eq. 8 about that body's
 /// target point. Data::feedback_wrench = Σ of these carried to the attached
 /// body's target point (Eq. 9: a child's feedback carried to its parent, up
-/// to the held body), saturated; the per-body wrenches are scaled by the same
-/// force and torque ratios. Zero composite when no body is attached or its
-/// target is not finite; all zero in CouplingMode::kDirect.
+/// to the held body), saturated by one ratio r = min(F_max/|F|, T_max/|T|, 1)
+/// that also scales every per-body wrench, so that the per-body wrenches
+/// carried to that point sum to the composite exactly. When no body is
+/// attached (or its target is not finite) the composite is zero and each
+/// per-body wrench is saturated on its own. All zero in CouplingMode::kDirect.
 void compute_feedback(const Model& model, Data& data) noexcept;
 
 }  // namespace numen::core

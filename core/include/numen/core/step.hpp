@@ -20,7 +20,8 @@ struct Data;
 ///      (measure_joint_drift) — models without joints skip both
 ///   4. feedback — Eq. 8 per targeted body, Eq. 9 composite, saturated
 ///   5. checks — non-finite results are rejected: every body goes back to its
-///      pose before the step with zero twist, the feedback is zeroed,
+///      pose before the step with zero twist, the feedback (composite and per
+///      body), the joint states and the solver's Δu are zeroed,
 ///      kNonFinite is set and Data::nonfinite_steps counted
 /// Data::status is cleared first (then detect_contacts may set
 /// kContactOverflow and count contact_overflow_steps);

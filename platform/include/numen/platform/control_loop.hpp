@@ -47,8 +47,10 @@ class ControlLoop {
   /// `binding` says which bodies the device's links drive and which prescribed
   /// joints its axes impose (copied; the default drives the attached body by
   /// link 0). Throws std::invalid_argument if a link, body, joint or axis index
-  /// of the binding is out of range or a prescription names a joint that is not
-  /// prescribed. Allocates (construction only).
+  /// of the binding is out of range, a body is bound to two links, or a
+  /// prescription names a joint that is not prescribed. The attached body
+  /// follows its own binding if it has one, else the binding with body = -1.
+  /// Allocates (construction only).
   ControlLoop(const core::Model& model, core::Data& data, hal::Bus& bus,
               hal::InstrumentDevice& device, DeviceBinding binding = DeviceBinding::rigid());
 
@@ -87,6 +89,7 @@ class ControlLoop {
   std::vector<core::Vec3> link_origin_;   // per binding: world origin of its link this period
   std::vector<core::Vec3> body_target_;   // per binding: target point of its body this period
   std::vector<int> bound_body_;           // per binding: body driven this period (-1: none)
+  std::vector<std::uint8_t> explicit_bound_;  // per body: 1 if a binding names it
   std::array<core::Wrench, hal::kMaxLinks> link_wrench_{};
   std::uint8_t sync_counter_ = 0;
   LatencyHistogram step_time_;
