@@ -13,6 +13,8 @@
 #include <benchmark/benchmark.h>
 
 #include <memory>
+#include <stdexcept>
+#include <vector>
 #include <string>
 
 #include "numen/platform/latency_histogram.hpp"
@@ -23,10 +25,40 @@ namespace {
 
 std::string scene_path(const char* name) { return std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/" + name; }
 
-void step_time(benchmark::State& state, const char* name, const char* coupling) {
+/// Refills the scene's sphere-set organ with a denser lattice of the same
+/// ellipsoid (semi-axes 35 × 25 × 20 mm in the organ's frame): spacing 4.4 mm,
+/// spheres of 3.9 mm (≥ spacing·√3/2, no hole) — about 500 spheres, the organ of
+/// issue 3's target. Re-finalizes the model (broad-phase grid).
+void densify_organ(numen::sim::Scene& scene) {
+  using numen::core::Vec3;
+  numen::core::Model& m = scene.model;
+  for (numen::core::Obstacle& o : m.obstacles) {
+    if (o.type != numen::core::ShapeType::kSphereSet) continue;
+    const Vec3 radii(0.035, 0.025, 0.020);
+    const double spacing = 0.0044, r = 0.0039;
+    const Vec3 inner = radii - Vec3::Constant(r);
+    std::vector<numen::core::Sphere> spheres;
+    for (double x = -inner.x(); x <= inner.x() + 1e-12; x += spacing)
+      for (double y = -inner.y(); y <= inner.y() + 1e-12; y += spacing)
+        for (double z = -inner.z(); z <= inner.z() + 1e-12; z += spacing) {
+          const Vec3 p(x, y, z);
+          if (p.cwiseQuotient(inner).squaredNorm() > 1.0) continue;
+          spheres.push_back({o.pose.position + o.pose.orientation * p, r});
+        }
+    m.static_spheres = spheres;  // the scene's only sphere set
+    o.sphere_begin = 0;
+    o.sphere_count = static_cast<int>(spheres.size());
+  }
+  const std::string err = numen::core::finalize_model(m);
+  if (!err.empty()) throw std::runtime_error(err);
+}
+
+void step_time(benchmark::State& state, const char* name, const char* coupling,
+               bool dense_organ = false) {
   numen::sim::SceneOverrides o;
   if (coupling) o.coupling = numen::sim::parse_coupling_mode(coupling);
-  const numen::sim::Scene scene = numen::sim::load_scene(scene_path(name), o);
+  numen::sim::Scene scene = numen::sim::load_scene(scene_path(name), o);
+  if (dense_organ) densify_organ(scene);
   const auto periods = static_cast<std::int64_t>(scene.duration_s / scene.model.dt);
   auto runner = std::make_unique<numen::sim::SceneRunner>(scene);
   std::int64_t contacts = 0;
@@ -45,6 +77,7 @@ void step_time(benchmark::State& state, const char* name, const char* coupling) 
   state.counters["contacts_per_step"] =
       benchmark::Counter(static_cast<double>(contacts), benchmark::Counter::kAvgIterations);
   state.counters["bodies"] = scene.model.num_bodies();
+  state.counters["static_spheres"] = static_cast<double>(scene.model.static_spheres.size());
   state.counters["step_p50_us"] = static_cast<double>(hist.quantile(0.5)) * 1e-3;
   state.counters["step_p99_us"] = static_cast<double>(hist.quantile(0.99)) * 1e-3;
 }
@@ -66,6 +99,9 @@ void period_time(benchmark::State& state, const char* name) {
 }  // namespace
 
 BENCHMARK_CAPTURE(step_time, DefaultScene, "default.toml", nullptr)->UseManualTime()->Iterations(30000);
+BENCHMARK_CAPTURE(step_time, DefaultSceneOrgan500, "default.toml", nullptr, true)
+    ->UseManualTime()
+    ->Iterations(30000);
 BENCHMARK_CAPTURE(step_time, ConstructionGodObject, "construction.toml", nullptr)->UseManualTime()->Iterations(9000);
 BENCHMARK_CAPTURE(step_time, PhantomScene, "phantom.toml", nullptr)->UseManualTime()->Iterations(6000);
 BENCHMARK_CAPTURE(step_time, ConstructionDirect, "construction.toml", "direct")->UseManualTime()->Iterations(9000);
