@@ -301,7 +301,8 @@ void build_implicit_system(const Model& model, Data& data) noexcept {
   for (std::size_t i = 0; i < n; ++i) {
     if (s.in_solve[i]) add_isotropic_part(s.isotropic_moments[i], s.block[i]);
     mirror_lower(s.block[i]);
-    factor_block(s.block[i], s.block_factor[i]);
+    // With joints the tree solve factors the blocks itself (articulation.hpp).
+    if (model.joints.empty()) factor_block(s.block[i], s.block_factor[i]);
   }
 }
 

@@ -153,7 +153,8 @@ void prepare_implicit_step(const Model& model, Data& data) noexcept;
 
 /// Builds the implicit system of the current step in Data::solver (after
 /// prepare_implicit_step()): contact weights (α, β of ContactTerm), the 6×6
-/// diagonal blocks of A = M − hD − h²K (exactly symmetric) and their Cholesky
+/// diagonal blocks of A = M − hD − h²K (exactly symmetric) and, for a model without
+/// joints (the block-Jacobi preconditioner; with joints the tree solve factors them), their Cholesky
 /// factors, the packed body–body contacts (SolverScratch::cross_contacts) with
 /// the `coupled` flags, and the right-hand side
 ///   b = h (f0 + h K u0) + M (u* − u0),
