@@ -277,8 +277,8 @@ void parse_device(const TomlTable& root, Scene& scene, const TomlTable*& body_ta
       std::ostringstream os;
       os << std::fixed << std::setprecision(1)
          << "trocar placed behind the recorded tip centroid along the mean approach axis, standoff "
-         << standoff * 1e3 << " mm (tip depths " << a.min_depth * 1e3 << "–" << a.max_depth * 1e3
-         << " mm)";
+         << standoff * 1e3 << " mm (recorded tip " << a.min_depth * 1e3 << "–" << a.max_depth * 1e3
+         << " mm from the trocar point)";
       scene.trocar_note = os.str();
     } else {
       cfg.trocar.point = tr->vec3("point");
