@@ -17,6 +17,8 @@
 
 #include "numen/core/articulation.hpp"
 
+#include "numen/core/block_cholesky.hpp"
+
 #include <cmath>
 #include <limits>
 #include <numeric>
@@ -30,63 +32,10 @@
 namespace numen::core {
 namespace {
 
-/// A pivot below this fraction of its diagonal entry counts as not positive.
-constexpr double kPivotTolerance = 1e-12;
 /// ArticulationScratch::reroot of an inner node of a reversed path.
 constexpr int kOnReversedPath = -2;
 
 std::size_t idx(int i) noexcept { return static_cast<std::size_t>(i); }
-
-/// In-place Cholesky factorisation P = L Lᵀ of a 6×6 SPD block (reads the
-/// lower triangle, writes L in the lower triangle and zeros above; Golub & Van
-/// Loan, Alg. 4.2.1). A pivot that is not positive fills the block with NaN
-/// and returns false.
-bool cholesky_in_place(Mat6& a) noexcept {
-#pragma GCC unroll 6
-  for (int j = 0; j < 6; ++j) {
-    const double diag = a(j, j);
-    double d = diag;
-#pragma GCC unroll 6
-    for (int k = 0; k < j; ++k) d -= a(j, k) * a(j, k);
-    if (!(d > kPivotTolerance * diag) || !(diag < std::numeric_limits<double>::infinity())) {
-      a.setConstant(std::numeric_limits<double>::quiet_NaN());
-      return false;
-    }
-    const double ljj = std::sqrt(d);
-    const double inv = 1.0 / ljj;
-    a(j, j) = ljj;
-#pragma GCC unroll 6
-    for (int i = j + 1; i < 6; ++i) {
-      double v = a(i, j);
-#pragma GCC unroll 6
-      for (int k = 0; k < j; ++k) v -= a(i, k) * a(j, k);
-      a(i, j) = v * inv;
-    }
-  }
-#pragma GCC unroll 6
-  for (int j = 1; j < 6; ++j)
-#pragma GCC unroll 6
-    for (int i = 0; i < j; ++i) a(i, j) = 0.0;
-  return true;
-}
-
-/// v ← P⁻¹ v = L⁻ᵀ L⁻¹ v with the lower factor L of P.
-void cholesky_solve(const Mat6& l, Vec6& v) noexcept {
-#pragma GCC unroll 6
-  for (int i = 0; i < 6; ++i) {
-    double s = v(i);
-#pragma GCC unroll 6
-    for (int k = 0; k < i; ++k) s -= l(i, k) * v(k);
-    v(i) = s / l(i, i);
-  }
-#pragma GCC unroll 6
-  for (int i = 5; i >= 0; --i) {
-    double s = v(i);
-#pragma GCC unroll 6
-    for (int k = i + 1; k < 6; ++k) s -= l(k, i) * v(k);
-    v(i) = s / l(i, i);
-  }
-}
 
 bool body_unknown(const ArticulationScratch& s, int body) noexcept {
   return body >= 0 && s.known[idx(body)] == 0;
@@ -369,7 +318,7 @@ void ArticulationScratch::resize(const Model& model) {
   known.assign(nb, 0);
   joint_active.assign(nj, 1);
   off_diagonal.assign(nn, Mat6::Zero());
-  factor.assign(nn, Mat6::Identity());
+  factor.assign(nn, BlockCholesky{});
   coupling.assign(nn, Mat6::Zero());
   work.assign(nn, Vec6::Zero());
   elimination_parent.assign(nn, -1);
@@ -385,7 +334,7 @@ bool factor_articulation(const Model& model, std::span<const Mat6> body_blocks,
   // and the identity for known bodies, disabled joints and padding.
   for (std::size_t i = 0; i < nodes.size(); ++i) {
     const ArticulationNode& n = nodes[i];
-    Mat6& p = s.factor[i];
+    Mat6& p = s.factor[i].lower;
     if (!n.is_joint) {
       if (body_unknown(s, n.index))
         p = body_blocks[idx(n.index)];
@@ -404,8 +353,8 @@ bool factor_articulation(const Model& model, std::span<const Mat6> body_blocks,
 
   bool ok = true;
   for_each_forward(model, s, [&](int i) {
-    Mat6& l = s.factor[idx(i)];
-    ok = cholesky_in_place(l) && ok;
+    BlockCholesky& l = s.factor[idx(i)];
+    ok = factor_block_in_place(l) && ok;
     const int e = s.elimination_parent[idx(i)];
     if (e < 0) return;
     const ArticulationNode& n = nodes[idx(i)];
@@ -417,11 +366,11 @@ bool factor_articulation(const Model& model, std::span<const Mat6> body_blocks,
     Mat6& c = s.coupling[idx(i)];
     for (int k = 0; k < cols; ++k) {
       Vec6 v = h.col(k);
-      cholesky_solve(l, v);
+      solve_block(l, v, v);
       c.col(k) = v;
     }
     // P_parent += Hᵀ P⁻¹ H (lower triangle is what the Cholesky reads).
-    s.factor[idx(e)].noalias() += h.transpose() * c;
+    s.factor[idx(e)].lower.noalias() += h.transpose() * c;
   });
   return ok;
 }
@@ -452,7 +401,7 @@ void solve_articulation(const Model& model, ArticulationScratch& s, std::span<co
     const double sk = sign(nodes[idx(k)]);
     const int e = s.elimination_parent[idx(k)];
     if (e >= 0) s.work[idx(e)].noalias() -= sk * (s.coupling[idx(k)].transpose() * r);
-    cholesky_solve(s.factor[idx(k)], r);
+    solve_block(s.factor[idx(k)], r, r);
     r *= sk;
   });
   // Backward: x_k = w_k − s_k E_k x_parent.

@@ -82,52 +82,6 @@ void mirror_lower(Mat6& block) noexcept {
     for (int i = 0; i < j; ++i) block(i, j) = block(j, i);
 }
 
-/// Cholesky factorisation A = L Lᵀ of a 6×6 symmetric positive definite block
-/// (reads the lower triangle; Golub & Van Loan, Matrix Computations, Alg.
-/// 4.2.1). A non-positive pivot gives NaN; solve_implicit_system() then
-/// returns a non-finite result, which step()'s checks roll back.
-void factor_block(const Mat6& a, BlockCholesky& f) noexcept {
-  Mat6& l = f.lower;
-#pragma GCC unroll 6
-  for (int j = 0; j < 6; ++j) {
-    double d = a(j, j);
-#pragma GCC unroll 6
-    for (int k = 0; k < j; ++k) d -= l(j, k) * l(j, k);
-    const double ljj = std::sqrt(d);
-    const double inv = 1.0 / ljj;
-    l(j, j) = ljj;
-    f.inv_diag(j) = inv;
-#pragma GCC unroll 6
-    for (int i = j + 1; i < 6; ++i) {
-      double v = a(i, j);
-#pragma GCC unroll 6
-      for (int k = 0; k < j; ++k) v -= l(i, k) * l(j, k);
-      l(i, j) = v * inv;
-    }
-  }
-}
-
-/// z = A⁻¹ r = L⁻ᵀ L⁻¹ r by forward and back substitution. The loops have
-/// compile-time bounds and are unrolled: this runs on every PCG iteration.
-void solve_block(const BlockCholesky& f, const Vec6& r, Vec6& z) noexcept {
-  const Mat6& l = f.lower;
-  Vec6 y;
-#pragma GCC unroll 6
-  for (int i = 0; i < 6; ++i) {
-    double v = r(i);
-#pragma GCC unroll 6
-    for (int k = 0; k < i; ++k) v -= l(i, k) * y(k);
-    y(i) = v * f.inv_diag(i);
-  }
-#pragma GCC unroll 6
-  for (int i = 5; i >= 0; --i) {
-    double v = y(i);
-#pragma GCC unroll 6
-    for (int k = i + 1; k < 6; ++k) v -= l(k, i) * z(k);
-    z(i) = v * f.inv_diag(i);
-  }
-}
-
 double dot(std::span<const Vec6> a, std::span<const Vec6> b) noexcept {
   double s = 0.0;
   for (std::size_t i = 0; i < a.size(); ++i) s += a[i].dot(b[i]);

@@ -43,6 +43,7 @@
 #include <string>
 #include <vector>
 
+#include "numen/core/block_cholesky.hpp"
 #include "numen/core/joint.hpp"
 #include "numen/core/types.hpp"
 
@@ -89,7 +90,7 @@ struct ArticulationScratch {
   /// Per node: H_{i,parent(i)} (dim_i × dim_parent, zero padded), parent(i)
   /// being this step's elimination_parent; zero for a root.
   std::vector<Mat6> off_diagonal;
-  std::vector<Mat6> factor;        ///< Per node: lower Cholesky factor of D_i (body) or −D_i (joint), padded with I.
+  std::vector<BlockCholesky> factor;  ///< Per node: Cholesky factor of D_i (body) or −D_i (joint), padded with I.
   /// Per node: P_i⁻¹ H_{i,parent(i)}, P_i = D_i (body) or −D_i (joint): Baraff's
   /// D_i⁻¹ H_{i,parent(i)} up to the node's sign. Zero for a root.
   std::vector<Mat6> coupling;

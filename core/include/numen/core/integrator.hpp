@@ -21,6 +21,7 @@
 
 #include <Eigen/Core>
 
+#include "numen/core/block_cholesky.hpp"
 #include "numen/core/joint.hpp"
 #include "numen/core/types.hpp"
 
@@ -66,14 +67,6 @@ struct IsotropicMoments {
   double sum = 0.0;               ///< Σ β (N·s/m).
   Vec3 first = Vec3::Zero();      ///< Σ β r (N·s).
   Mat3 second = Mat3::Zero();     ///< Σ β r rᵀ (N·s·m).
-};
-
-/// Cholesky factor A_i = L Lᵀ of a 6×6 symmetric positive definite block:
-/// the lower triangle of `lower` holds L (the strict upper triangle is not
-/// used), `inv_diag` holds 1 / L_kk. Applied by forward and back substitution.
-struct BlockCholesky {
-  Mat6 lower = Mat6::Identity();
-  Vec6 inv_diag = Vec6::Ones();
 };
 
 /// Scratch of the integrator, sized once by resize(). Fixed-size Eigen types
