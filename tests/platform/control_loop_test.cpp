@@ -403,9 +403,12 @@ struct LinkedRig {
   numen::hal::InstrumentDevice device{config};
   numen::core::Model model = linked_model(true);
   numen::core::Data data = numen::core::make_data(model);
-  ControlLoop loop{model, data, bus.controller(), device, linked_binding()};
+  ControlLoop loop;
 
-  LinkedRig() { emulator.set_axis_values(kQa); }
+  explicit LinkedRig(DeviceBinding binding = linked_binding())
+      : loop{model, data, bus.controller(), device, std::move(binding)} {
+    emulator.set_axis_values(kQa);
+  }
 
   const PeriodReport& period(std::int64_t k) {
     const std::int64_t t = k * kMs;
@@ -615,23 +618,11 @@ namespace {
 TEST(ControlLoopLinks, TheHeldBodyFollowsItsOwnLinkAcrossToolSwitches) {
   // Tool switching with link bindings: body 0 is bound to "tube"; a fallback
   // binding (body -1, link 0) serves a held body without a link of its own.
-  LinkedRig rig;
   DeviceBinding b = linked_binding();
   b.links.push_back(numen::platform::LinkBinding{});  // link 0 → the held body
-  ControlLoop loop{rig.model, rig.data, rig.bus.controller(), rig.device, b};
+  LinkedRig rig(b);
   const auto& kin = rig.device.kinematics();
-  const auto run = [&](std::int64_t k) {
-    const std::int64_t t = k * kMs;
-    rig.bus.set_time_ns(t);
-    loop.begin_period(t);
-    rig.bus.set_time_ns(t + kLatency);
-    rig.emulator.poll(rig.bus.device());
-    rig.bus.set_time_ns(t + kPhase);
-    loop.end_period(t + kPhase);
-    rig.bus.set_time_ns(t + kPhase + kLatency);
-    rig.emulator.poll(rig.bus.device());
-  };
-  run(0);
+  rig.period(0);
   const AxisVector q = rig.device.last_sample().q;
   // Held body 0 has its own link: the fallback binding is not used.
   const Pose tube = kin.link_pose(TrocarKinematics::kLinkTube, q);
@@ -640,14 +631,14 @@ TEST(ControlLoopLinks, TheHeldBodyFollowsItsOwnLinkAcrossToolSwitches) {
   // Switch the hold to body 1: it keeps its own link ("jaw_1") and the target
   // of the held body comes from that binding.
   numen::core::set_attached_body(rig.model, rig.data, 1);
-  run(1);
+  rig.period(1);
   const Pose jaw = kin.link_pose(TrocarKinematics::kLinkJaw1, rig.device.last_sample().q);
   const Pose off1 = b.links[1].body_in_link;
   EXPECT_LT((rig.data.target.position - (jaw.position + jaw.orientation * off1.position)).norm(), 1e-12);
   // Nothing held: the held target is left alone, the bound bodies keep theirs.
   const Pose held_before = rig.data.target;
   numen::core::set_attached_body(rig.model, rig.data, -1);
-  run(2);
+  rig.period(2);
   EXPECT_EQ(rig.data.target.position, held_before.position);
   EXPECT_TRUE(rig.data.body_targets[0].enabled);
   EXPECT_TRUE(rig.data.body_targets[1].enabled);
