@@ -3,6 +3,8 @@
 // `prescribed` axes compile into Model::joints and the DeviceBinding; errors
 // name the file, line and dotted key.
 #include <gtest/gtest.h>
+
+#include "temp_dir.hpp"
 #include <unistd.h>
 
 #include <algorithm>
@@ -42,27 +44,7 @@ double angle_between(const Quat& a, const Quat& b) {
   return 2.0 * std::acos(d);
 }
 
-class TempDir {
- public:
-  TempDir() {
-    static std::atomic<int> counter{0};
-    path_ = fs::temp_directory_path() /
-            ("numen_scene_art_test_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
-    fs::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  std::string write(const std::string& name, const std::string& content) const {
-    const fs::path p = path_ / name;
-    std::ofstream(p, std::ios::binary) << content;
-    return p.string();
-  }
-
- private:
-  fs::path path_;
-};
+using numen::test::TempDir;
 
 /// 1-based line of the `nth` (1-based) line of `text` containing `needle` (0: none).
 int line_of(const std::string& text, const std::string& needle, int nth = 1) {

@@ -6,6 +6,8 @@
 
 #include <gtest/gtest.h>
 
+#include "temp_dir.hpp"
+
 #include "numen/core/data.hpp"
 #include "numen/core/joint_system.hpp"
 #include <unistd.h>
@@ -50,32 +52,7 @@ double angle_between(const Quat& a, const Quat& b) {
   return 2.0 * std::acos(d);
 }
 
-/// A fresh directory under the system temp dir, removed with its contents.
-class TempDir {
- public:
-  TempDir() {
-    static std::atomic<int> counter{0};
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    const std::string test = info ? std::string(info->name()) : std::string("x");
-    path_ = fs::temp_directory_path() /
-            ("numen_scene_test_" + std::to_string(::getpid()) + "_" + std::to_string(counter++) + "_" + test);
-    fs::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  /// Writes `content` to `name` in this directory; returns its path.
-  std::string write(const std::string& name, const std::string& content) const {
-    const fs::path p = path_ / name;
-    std::ofstream(p, std::ios::binary) << content;
-    return p.string();
-  }
-  const fs::path& path() const { return path_; }
-
- private:
-  fs::path path_;
-};
+using numen::test::TempDir;
 
 /// 1-based line of the first line of `text` containing `needle` (0: none).
 int line_of(const std::string& text, const std::string& needle) {

@@ -5,6 +5,8 @@
 #include "numen/sim/trace.hpp"
 
 #include <gtest/gtest.h>
+
+#include "temp_dir.hpp"
 #include <unistd.h>
 
 #include <atomic>
@@ -26,23 +28,7 @@ using numen::core::Vec3;
 using numen::sim::Trace;
 using numen::sim::TraceRecord;
 
-class TempDir {
- public:
-  TempDir() {
-    static std::atomic<int> counter{0};
-    path_ = fs::temp_directory_path() /
-            ("numen_trace_test_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
-    fs::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  fs::path operator/(const std::string& name) const { return path_ / name; }
-
- private:
-  fs::path path_;
-};
+using numen::test::TempDir;
 
 std::vector<std::string> split(const std::string& line, char sep = ',') {
   std::vector<std::string> out;
