@@ -16,6 +16,7 @@ namespace numen::platform {
 ControlLoop::ControlLoop(const core::Model& model, core::Data& data, hal::Bus& bus,
                          hal::InstrumentDevice& device, DeviceBinding binding)
     : model_(&model), data_(&data), bus_(&bus), device_(&device), binding_(std::move(binding)) {
+  if (binding_.links.empty()) binding_.links = DeviceBinding::rigid().links;  // see DeviceBinding
   const int links = device.kinematics().num_links();
   for (const LinkBinding& b : binding_.links) {
     if (b.link < 0 || b.link >= links || b.link >= hal::kMaxLinks)
@@ -47,10 +48,6 @@ ControlLoop::ControlLoop(const core::Model& model, core::Data& data, hal::Bus& b
 
 void ControlLoop::apply_targets(const hal::DeviceSample& sample) noexcept {
   core::Data& d = *data_;
-  if (binding_.links.empty()) {
-    d.target = sample.target;
-    d.target_twist = sample.twist;
-  }
   for (std::size_t k = 0; k < binding_.links.size(); ++k) {
     const LinkBinding& b = binding_.links[k];
     int body = b.body < 0 ? d.attached_body : b.body;
@@ -88,11 +85,6 @@ void ControlLoop::apply_targets(const hal::DeviceSample& sample) noexcept {
 
 bool ControlLoop::send_feedback(std::int64_t now_ns) noexcept {
   const core::Data& d = *data_;
-  if (binding_.links.empty()) {
-    if (d.attached_body < 0) return false;
-    report_.command_status = device_->command(d.feedback_wrench, *bus_, now_ns);
-    return true;
-  }
   for (core::Wrench& w : link_wrench_) w = core::Wrench{};
   bool any = false;
   for (std::size_t k = 0; k < binding_.links.size(); ++k) {
