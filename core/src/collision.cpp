@@ -9,6 +9,7 @@
 #include <cmath>
 #include <limits>
 
+#include "collision_query.hpp"
 #include "numen/core/broadphase.hpp"
 #include "numen/core/capacity.hpp"
 #include "numen/core/data.hpp"
@@ -18,11 +19,10 @@
 namespace numen::core {
 namespace {
 
-/// Inflation of every broad-phase box (m): keeps the culling conservative with
-/// respect to rounding; the narrow phase decides.
-constexpr double kMargin = 1e-9;
-
-constexpr double kInf = std::numeric_limits<double>::infinity();
+using collision_detail::box_distance2;
+using collision_detail::boxes_overlap;
+using collision_detail::kInf;
+using collision_detail::kMargin;
 
 /// Writes contacts up to the capacity, counts the rest.
 struct ContactSink {
@@ -51,18 +51,6 @@ struct ContactSink {
     c.force.setZero();
   }
 };
-
-/// Squared distance from `p` to the box [lo, hi] (inf for an inverted box).
-inline double box_distance2(const Vec3& p, const Vec3& lo, const Vec3& hi) noexcept {
-  return (p - p.cwiseMax(lo).cwiseMin(hi)).squaredNorm();
-}
-
-inline bool boxes_overlap(const Vec3& amin, const Vec3& amax, const Vec3& bmin,
-                          const Vec3& bmax) noexcept {
-  return amin.x() <= bmax.x() + kMargin && amin.y() <= bmax.y() + kMargin &&
-         amin.z() <= bmax.z() + kMargin && bmin.x() <= amax.x() + kMargin &&
-         bmin.y() <= amax.y() + kMargin && bmin.z() <= amax.z() + kMargin;
-}
 
 /// Fallback normal direction for coincident centres: from b's reference point
 /// towards a's centre of mass (normalized by the narrow phase, +z if zero).
@@ -139,83 +127,25 @@ void collide_body_obstacle(const Model& model, const Data& data, int b, int o,
   }
 }
 
-/// Body `b` against every static sphere set, one grid query per sphere: a
-/// vectorized float prefilter over each row of cells collects candidates, a
-/// per-entry stamp drops the copies of spheres listed in several cells, and the
-/// exact double test (the one of the reference) decides.
+/// Body `b` against every static sphere set, one grid query per sphere
+/// (query_static_grid(): float prefilter, per-entry stamps); the exact double
+/// test (the one of the reference) decides.
 void collide_body_grid(const Model& model, Data& data, int b, ContactSink& sink) noexcept {
-  const StaticSphereGrid& grid = model.static_grid;
   CollisionScratch& cs = data.collision;
   const BodyModel& bm = model.bodies[static_cast<std::size_t>(b)];
   const Vec3& x = data.bodies[static_cast<std::size_t>(b)].position;
   const Vec3* sw = cs.sphere_world.data();
   const Sphere* bs = model.body_spheres.data();
-  const std::int32_t* cell_start = grid.cell_start.data();
-  const float* item_x = grid.item_x.data();
-  const float* item_y = grid.item_y.data();
-  const float* item_z = grid.item_z.data();
-  const float* item_r = grid.item_radius.data();
-  const std::int32_t* item_entry = grid.item_entry.data();
-  const GridEntry* entries = grid.entries.data();
-  std::uint32_t* stamps = cs.entry_stamp.data();
   const int mat_a = bm.material * model.num_materials();
-  constexpr int kChunk = 64;
-  std::int32_t candidates[kChunk];
-  float gap[kChunk];
   ContactGeometry g;
-
   for (int s = bm.sphere_begin; s < bm.sphere_begin + bm.sphere_count; ++s) {
     const Vec3& c = sw[s];
     const double r = bs[s].radius;
-    const Vec3 ext = Vec3::Constant(r + kMargin);
-    Eigen::Vector3i first, last;
-    if (!grid.cell_range(c - ext, c + ext, first, last)) continue;
-    if (++cs.stamp == 0) {  // wrapped: forget every stamp
-      std::fill(cs.entry_stamp.begin(), cs.entry_stamp.end(), 0u);
-      cs.stamp = 1;
-    }
-    const std::uint32_t stamp = cs.stamp;
-    const Vec3 rel = c - grid.origin;
-    const float qx = static_cast<float>(rel.x());
-    const float qy = static_cast<float>(rel.y());
-    const float qz = static_cast<float>(rel.z());
-    const float qr = static_cast<float>(r) * (1.0f + 1e-6f) + grid.float_slack;
-    for (int z = first.z(); z <= last.z(); ++z) {
-      for (int y = first.y(); y <= last.y(); ++y) {
-        // Cells first.x..last.x of a row are one contiguous range of items.
-        int k = cell_start[grid.cell_index(first.x(), y, z)];
-        const int k_end = cell_start[grid.cell_index(last.x(), y, z) + 1];
-        for (; k < k_end; k += kChunk) {
-          const int m = std::min(k_end - k, kChunk);
-          const float* ix = item_x + k;
-          const float* iy = item_y + k;
-          const float* iz = item_z + k;
-          const float* ir = item_r + k;
-          int hits = 0;
-          for (int i = 0; i < m; ++i) {  // vectorized: no branch, no dependency
-            const float dx = ix[i] - qx, dy = iy[i] - qy, dz = iz[i] - qz;
-            const float sr = ir[i] + qr;
-            gap[i] = dx * dx + dy * dy + dz * dz - sr * sr;
-            hits += gap[i] <= 0.0f ? 1 : 0;
-          }
-          if (hits == 0) continue;
-          int n = 0;
-          for (int i = 0; n < hits; ++i) {  // compaction, stops at the last hit
-            candidates[n] = k + i;
-            n += gap[i] <= 0.0f ? 1 : 0;
-          }
-          for (int i = 0; i < n; ++i) {
-            // Every copy of an entry gives the same answer: test it once.
-            const std::int32_t e = item_entry[candidates[i]];
-            if (stamps[e] == stamp) continue;
-            stamps[e] = stamp;
-            const GridEntry& en = entries[e];
-            if (sphere_sphere(c, r, en.center, en.radius, fallback_from(x, en.center), g))
-              sink.add(b, -1, en.obstacle, s, en.sphere, mat_a + en.material, g);
-          }
-        }
-      }
-    }
+    collision_detail::query_static_grid(
+        model.static_grid, c, r, cs.entry_stamp.data(), cs.stamp, [&](const GridEntry& en) {
+          if (sphere_sphere(c, r, en.center, en.radius, fallback_from(x, en.center), g))
+            sink.add(b, -1, en.obstacle, s, en.sphere, mat_a + en.material, g);
+        });
   }
 }
 
@@ -235,18 +165,9 @@ void collide_bodies(const Model& model, Data& data, int a, int b, ContactSink& s
       cs.body_aabb_min[static_cast<std::size_t>(b)]);
   const Vec3 hi = cs.body_aabb_max[static_cast<std::size_t>(a)].cwiseMin(
       cs.body_aabb_max[static_cast<std::size_t>(b)]);
-  const double lx = lo.x(), ly = lo.y(), lz = lo.z(), hx = hi.x(), hy = hi.y(), hz = hi.z();
   auto select = [&](const BodyModel& body, std::int32_t* out) noexcept {
-    int n = 0;
-    for (int s = body.sphere_begin; s < body.sphere_begin + body.sphere_count; ++s) {
-      // Distance of the centre outside the overlap box, per axis, against r.
-      const double dx = std::max(lx - X[s], X[s] - hx);
-      const double dy = std::max(ly - Y[s], Y[s] - hy);
-      const double dz = std::max(lz - Z[s], Z[s] - hz);
-      out[n] = s;
-      n += std::max(dx, std::max(dy, dz)) <= R[s] + kMargin ? 1 : 0;
-    }
-    return n;
+    return collision_detail::spheres_near_box(X, Y, Z, R, body.sphere_begin,
+                                              body.sphere_begin + body.sphere_count, lo, hi, out);
   };
   std::int32_t* near_a = cs.near_a.data();
   std::int32_t* near_b = cs.near_b.data();

@@ -3,14 +3,34 @@
 
 #include "numen/core/data.hpp"
 
+#include "numen/core/capacity.hpp"
 #include "numen/core/model.hpp"
 
 namespace numen::core {
+namespace {
+
+/// Nodes at their rest positions on their rigid component's current pose,
+/// moving with it (rigid-body point velocities); no warm start.
+void reset_nodes(const Model& model, Data& data) noexcept {
+  for (std::size_t i = 0; i < data.nodes.size(); ++i) {
+    const NetModel& net = model.nets[static_cast<std::size_t>(model.node_net[i])];
+    const BodyState& b = data.bodies[static_cast<std::size_t>(net.body)];
+    const Vec3 lever = b.orientation * model.node_rest[i];
+    data.nodes[i].position = b.position + lever;
+    data.nodes[i].velocity = b.linear_velocity + b.angular_velocity.cross(lever);
+  }
+  for (Vec3& d : data.net.delta) d.setZero();
+}
+
+}  // namespace
 
 Data make_data(const Model& model) {
   Data data;
   const auto n = static_cast<std::size_t>(model.num_bodies());
   data.bodies.resize(n);
+  data.nodes.resize(static_cast<std::size_t>(model.num_nodes()));
+  data.node_contacts.resize(model.num_nodes() > 0 ? static_cast<std::size_t>(kMaxNodeContacts) : 0);
+  data.nets.resize(static_cast<std::size_t>(model.num_nets()));
   data.applied_wrench.resize(n);
   data.body_wrench.resize(n);
   data.body_targets.resize(n);
@@ -20,6 +40,7 @@ Data make_data(const Model& model) {
   data.articulation.resize(model);
   data.collision.resize(model);
   data.solver.resize(model);
+  data.net.resize(model);
   reset_data(model, data);
   return data;
 }
@@ -39,6 +60,7 @@ void reset_data(const Model& model, Data& data) noexcept {
     data.body_targets[b] = BodyTarget{};
     data.body_feedback[b] = Wrench{};
   }
+  reset_nodes(model, data);
   for (JointPrescription& p : data.joint_prescribed) p = JointPrescription{};
   for (JointState& j : data.joints) j = JointState{};
   for (Vec6& v : data.solver.delta) v.setZero();  // Δu_prev of the joint rows (joint_system.hpp)
@@ -54,6 +76,8 @@ void reset_data(const Model& model, Data& data) noexcept {
     data.target_twist = Twist{};
   }
   data.num_contacts = 0;
+  data.num_node_contacts = 0;
+  for (NetOutput& o : data.nets) o = NetOutput{};
   data.contacts_dropped = 0;
   data.contact_overflow_steps = 0;
   data.max_penetration = 0.0;

@@ -13,6 +13,8 @@
 #include "numen/core/data.hpp"
 #include "numen/core/joint_system.hpp"
 #include "numen/core/model.hpp"
+#include "numen/core/net_forces.hpp"
+#include "numen/core/net_solve.hpp"
 #include "numen/core/rigid_body.hpp"
 
 namespace numen::core {
@@ -252,11 +254,13 @@ void build_implicit_system(const Model& model, Data& data) noexcept {
     }
   }
 
+  add_net_body_terms(model, data);  // ties and node contacts of the deformable nets
   for (std::size_t i = 0; i < n; ++i) {
     if (s.in_solve[i]) add_isotropic_part(s.isotropic_moments[i], s.block[i]);
     mirror_lower(s.block[i]);
-    // With joints the tree solve factors the blocks itself (articulation.hpp).
-    if (model.joints.empty()) factor_block(s.block[i], s.block_factor[i]);
+    // With joints the tree solve factors the blocks itself (articulation.hpp);
+    // with nets the preconditioner factors Schur blocks (net_solve.hpp).
+    if (model.joints.empty() && model.nets.empty()) factor_block(s.block[i], s.block_factor[i]);
   }
 }
 
@@ -451,8 +455,14 @@ void integrate_linearly_implicit_euler(const Model& model, Data& data) noexcept 
   const double h = model.dt;
   prepare_implicit_step(model, data);
   build_implicit_system(model, data);
-  const bool converged = model.joints.empty() ? solve_implicit_system(model, data)
-                                              : solve_constrained_system(model, data);
+  bool converged = false;
+  if (!model.nets.empty()) {
+    build_net_system(model, data);
+    converged = solve_net_system(model, data);
+  } else {
+    converged = model.joints.empty() ? solve_implicit_system(model, data)
+                                     : solve_constrained_system(model, data);
+  }
   if (!converged) data.status |= kSolverNotConverged;
   for (std::size_t i = 0; i < data.bodies.size(); ++i) {
     if (!s.in_solve[i]) continue;  // kDirect body: stays at the imposed target
@@ -463,6 +473,7 @@ void integrate_linearly_implicit_euler(const Model& model, Data& data) noexcept 
     st.position += h * st.linear_velocity;
     st.orientation = integrate_orientation(st.orientation, st.angular_velocity, h);
   }
+  integrate_nodes_implicit(model, data);
 }
 
 namespace {
@@ -541,6 +552,7 @@ void integrate_symplectic_euler_constrained(const Model& model, Data& data) noex
 void integrate_symplectic_euler(const Model& model, Data& data) noexcept {
   data.solver_iterations = 0;
   data.solver_residual = 0.0;
+  integrate_nodes_symplectic(model, data);  // forces of the step's start, like the bodies'
   if (!model.joints.empty()) {
     integrate_symplectic_euler_constrained(model, data);
     return;

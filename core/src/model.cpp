@@ -15,6 +15,52 @@ namespace {
 
 bool finite(const Vec3& v) { return v.allFinite(); }
 
+/// Consistency of the net arrays (filled by add_net(), or by hand in tests).
+std::string validate_nets(const Model& model) {
+  const std::size_t n = model.node_rest.size();
+  if (model.node_mass.size() != n || model.node_radius.size() != n || model.node_net.size() != n)
+    return "nets: node_rest, node_mass, node_radius and node_net must have the same size";
+  int next_node = 0;
+  int next_spring = 0;
+  for (int k = 0; k < model.num_nets(); ++k) {
+    const NetModel& net = model.nets[static_cast<std::size_t>(k)];
+    const std::string who = "net '" + net.name + "'";
+    if (net.body < 0 || net.body >= model.num_bodies()) return who + ": rigid component out of range";
+    if (net.material < 0 || net.material >= model.num_materials())
+      return who + ": material index out of range";
+    if (net.node_begin != next_node || net.node_count <= 0)
+      return who + ": node range must follow the previous net's and be non-empty";
+    if (net.spring_begin != next_spring || net.structural_count < 0 || net.bending_count < 0)
+      return who + ": spring range must follow the previous net's";
+    if (!(net.tie_stiffness > 0.0 && std::isfinite(net.tie_stiffness)) ||
+        !(net.tie_damping >= 0.0 && std::isfinite(net.tie_damping)))
+      return who + ": tie_stiffness must be finite and > 0, tie_damping finite and >= 0";
+    next_node += net.node_count;
+    next_spring += net.structural_count + net.bending_count;
+    for (int i = net.node_begin; i < next_node; ++i) {
+      const auto u = static_cast<std::size_t>(i);
+      if (model.node_net[u] != k || !finite(model.node_rest[u]) || !(model.node_mass[u] > 0.0) ||
+          !std::isfinite(model.node_mass[u]) || !(model.node_radius[u] > 0.0) ||
+          !std::isfinite(model.node_radius[u]))
+        return who + ": node " + std::to_string(i - net.node_begin) +
+               " needs a finite rest position, mass > 0 and radius > 0";
+    }
+    for (int s = net.spring_begin; s < next_spring; ++s) {
+      const NetSpring& sp = model.net_springs[static_cast<std::size_t>(s)];
+      if (sp.node_a < net.node_begin || sp.node_b < net.node_begin || sp.node_a >= next_node ||
+          sp.node_b >= next_node || sp.node_a == sp.node_b || !(sp.rest_length > 0.0) ||
+          !(sp.stiffness >= 0.0) || !(sp.damping >= 0.0) || !std::isfinite(sp.stiffness) ||
+          !std::isfinite(sp.damping) || !std::isfinite(sp.rest_length))
+        return who + ": spring " + std::to_string(s - net.spring_begin) +
+               " needs two distinct nodes of the net, rest length > 0, finite k, γ >= 0";
+    }
+  }
+  if (next_node != static_cast<int>(n) ||
+      next_spring != static_cast<int>(model.net_springs.size()))
+    return "nets: node or spring arrays hold entries no net owns";
+  return "";
+}
+
 }  // namespace
 
 double damping_from_ratio(double zeta, double mass, double stiffness) noexcept {
@@ -128,6 +174,7 @@ std::string finalize_model(Model& model) {
              to_string(j.type) + ")";
     j.num_rows = joint_row_count(j.type, j.prescribed);
   }
+  if (std::string e = validate_nets(model); !e.empty()) return e;
   if (std::string e = build_articulation_topology(model); !e.empty()) return e;
   build_collision_structures(model);
   return {};

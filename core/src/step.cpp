@@ -11,6 +11,8 @@
 #include "numen/core/integrator.hpp"
 #include "numen/core/joint_system.hpp"
 #include "numen/core/model.hpp"
+#include "numen/core/net_collision.hpp"
+#include "numen/core/net_forces.hpp"
 #include "numen/core/rigid_body.hpp"
 
 namespace numen::core {
@@ -18,18 +20,26 @@ namespace {
 
 void save_state(Data& data) noexcept {
   for (std::size_t i = 0; i < data.bodies.size(); ++i) data.solver.saved_state[i] = data.bodies[i];
+  for (std::size_t i = 0; i < data.nodes.size(); ++i) data.net.saved[i] = data.nodes[i];
 }
 
-/// Checks stage: rejects a non-finite result (rollback to the saved poses,
-/// zero twists, zero feedback, and the solver's and joints' outputs cleared
+/// Checks stage: rejects a non-finite result (rollback to the saved poses and
+/// node positions, zero twists and node velocities, zero feedback, and the solver's and joints' outputs cleared
 /// so that nothing non-finite is carried into the next step: Δu is the next
 /// step's Δu_prev, joint_system.hpp). Returns true when the step was accepted.
 bool check_finite(Data& data) noexcept {
   bool finite = data.feedback_wrench.force.allFinite() && data.feedback_wrench.torque.allFinite();
   for (const BodyState& s : data.bodies) finite = finite && state_is_finite(s);
   for (const Vec6& d : data.solver.delta) finite = finite && d.allFinite();
+  for (const NodeState& n : data.nodes)
+    finite = finite && n.position.allFinite() && n.velocity.allFinite();
   if (finite) return true;
   for (Vec6& d : data.solver.delta) d.setZero();
+  for (Vec3& d : data.net.delta) d.setZero();  // the next step's warm start
+  for (std::size_t i = 0; i < data.nodes.size(); ++i) {
+    data.nodes[i].position = data.net.saved[i].position;
+    data.nodes[i].velocity.setZero();
+  }
   for (Wrench& w : data.body_feedback) w = Wrench{};
   for (JointState& j : data.joints) j = JointState{};
   data.max_joint_drift = 0.0;
@@ -52,6 +62,7 @@ void compute_forces(const Model& model, Data& data) noexcept {
   apply_external_forces(model, data);
   apply_coupling(model, data);
   compute_contact_forces(model, data);
+  compute_net_forces(model, data);
 }
 
 void step(const Model& model, Data& data) noexcept {
@@ -59,11 +70,16 @@ void step(const Model& model, Data& data) noexcept {
   save_state(data);
   impose_direct_target(model, data);
   detect_contacts(model, data);  // may set kContactOverflow, counts contact_overflow_steps
+  if (!model.nets.empty()) detect_node_contacts(model, data);
   compute_forces(model, data);
   integrate(model, data);
   if (!model.joints.empty()) measure_joint_drift(model, data);
+  if (!model.nets.empty()) measure_nets(model, data);
   compute_feedback(model, data);
-  check_finite(data);
+  if (!check_finite(data) && !model.nets.empty()) {
+    for (NetOutput& o : data.nets) o.tie_wrench = Wrench{};
+    measure_nets(model, data);  // describe the restored net (finite, at rest)
+  }
   data.time += model.dt;
   ++data.step_count;
 }

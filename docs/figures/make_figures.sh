@@ -12,3 +12,4 @@ tmp=$(mktemp -d)
 rm -rf "$tmp"
 echo "wrote $out/default_run.png $out/construction.png"
 c=$(mktemp) && ./build/tests/numen_bench --benchmark_filter=Chain --benchmark_repetitions=3 --benchmark_report_aggregates_only=true --benchmark_out="$c" --benchmark_out_format=json > /dev/null && /usr/bin/python3 $out/plot_articulation_scaling.py "$c" $out/articulation_scaling.png && rm -f "$c"
+d=$(mktemp) && ./build/tests/numen_bench --benchmark_filter=DeformableBall --benchmark_repetitions=3 --benchmark_report_aggregates_only=true --benchmark_out="$d" --benchmark_out_format=json > /dev/null && /usr/bin/python3 $out/plot_deformable_scaling.py "$d" $out/deformable_scaling.png && rm -f "$d"

@@ -12,6 +12,7 @@
 
 #include "numen/core/collision.hpp"
 #include "numen/core/data.hpp"
+#include "numen/core/net_collision.hpp"
 #include "numen/core/step.hpp"
 #include "numen/hal/instrument_device.hpp"
 #include "numen/hal/sim_bus.hpp"
@@ -37,6 +38,39 @@ double deepest_contact_of(const core::Data& data, int body, int* count = nullptr
   }
   if (count) *count = n;
   return deepest;
+}
+
+/// Deepest node contact (m) of the nets whose rigid component belongs to
+/// articulation `tree`; 0 if none. `count` receives their number.
+double deepest_node_contact_of_tree(const core::Model& model, const core::Data& data, int tree,
+                                    int* count) {
+  double deepest = 0.0;
+  int n = 0;
+  for (int i = 0; i < data.num_node_contacts; ++i) {
+    const core::NodeContact& c = data.node_contacts[static_cast<std::size_t>(i)];
+    const int net = model.node_net[static_cast<std::size_t>(c.node)];
+    const int body = model.nets[static_cast<std::size_t>(net)].body;
+    if (model.articulation.body_tree[static_cast<std::size_t>(body)] != tree) continue;
+    deepest = std::max(deepest, c.depth);
+    ++n;
+  }
+  if (count) *count = n;
+  return deepest;
+}
+
+/// Puts the nodes of the nets whose rigid component belongs to articulation
+/// `tree` at their rest positions on that body's pose in `ghost` (the
+/// undeformed tool where the hand is).
+void place_tool_nets_at_rest(const core::Model& model, core::Data& ghost, int tree) {
+  for (const core::NetModel& net : model.nets) {
+    if (model.articulation.body_tree[static_cast<std::size_t>(net.body)] != tree) continue;
+    const core::BodyState& b = ghost.bodies[static_cast<std::size_t>(net.body)];
+    for (int i = net.node_begin; i < net.node_begin + net.node_count; ++i) {
+      const auto n = static_cast<std::size_t>(i);
+      ghost.nodes[n].position = b.position + b.orientation * model.node_rest[n];
+      ghost.nodes[n].velocity.setZero();
+    }
+  }
 }
 
 DurationSummary summarize_ns(const platform::LatencyHistogram& h) {
@@ -70,6 +104,8 @@ SceneRunner::SceneRunner(const Scene& scene, std::size_t trace_capacity)
   acc_.trocar_note = scene.trocar_note;
   acc_.num_bodies = scene.model.num_bodies();
   acc_.num_joints = scene.model.num_joints();
+  acc_.num_nets = scene.model.num_nets();
+  acc_.num_nodes = scene.model.num_nodes();
 }
 
 void SceneRunner::period() noexcept {
@@ -118,6 +154,17 @@ void SceneRunner::period() noexcept {
       tool_contacts += n;
       target_pen = std::max(target_pen, deepest_contact_of(ghost_, b));
     }
+    if (model.num_nets() > 0) {
+      // The tool's nets: as deformed (god-object), in their rest shape on the
+      // target poses (the hand).
+      ghost_.nodes = data_.nodes;  // same size: no allocation
+      place_tool_nets_at_rest(model, ghost_, tree);
+      core::detect_node_contacts(model, ghost_);
+      int n = 0;
+      tool_pen = std::max(tool_pen, deepest_node_contact_of_tree(model, data_, tree, &n));
+      tool_contacts += n;
+      target_pen = std::max(target_pen, deepest_node_contact_of_tree(model, ghost_, tree, nullptr));
+    }
     if (tool_contacts == 0) {
       const double e = (data_.bodies[h].position - data_.target.position).norm();
       free_sq_ += e * e;
@@ -142,6 +189,16 @@ void SceneRunner::period() noexcept {
           s.free_body_speed_max_mps, data_.bodies[static_cast<std::size_t>(b)].linear_velocity.norm());
   s.contacts_max = std::max(s.contacts_max, data_.num_contacts);
   s.solver_iterations_max = std::max(s.solver_iterations_max, data_.solver_iterations);
+  solver_iterations_sum_ += data_.solver_iterations;
+  s.solver_residual_max = std::max(s.solver_residual_max, data_.solver_residual);
+  if (data_.status & core::kSolverNotConverged) ++s.solver_not_converged_steps;
+  s.node_contacts_max = std::max(s.node_contacts_max, data_.num_node_contacts);
+  for (const core::NetOutput& net : data_.nets) {
+    s.net_penetration_max_mm = std::max(s.net_penetration_max_mm, net.max_penetration * 1e3);
+    s.net_tie_stretch_max_mm = std::max(s.net_tie_stretch_max_mm, net.max_tie_stretch * 1e3);
+    s.net_strain_max = std::max(s.net_strain_max, net.max_strain);
+    s.net_node_speed_max_mps = std::max(s.net_node_speed_max_mps, net.max_node_speed);
+  }
   trace_.push(make_trace_record(data_, held, tool_contacts, tool_pen, target_pen, report, tau));
 }
 
@@ -150,6 +207,8 @@ RunSummary SceneRunner::summary() const {
   s.steps = k_;
   s.sim_time_s = static_cast<double>(k_) * scene_->model.dt;
   s.step_time_us = summarize_ns(loop_.step_time());
+  s.solver_iterations_mean =
+      k_ > 0 ? static_cast<double>(solver_iterations_sum_) / static_cast<double>(k_) : 0.0;
   s.tracking_error_free_rms_mm = s.free_steps ? std::sqrt(free_sq_ / static_cast<double>(s.free_steps)) * 1e3 : 0.0;
   s.rejected_samples = static_cast<std::int64_t>(device_.counters().values_rejected);
   s.contact_overflow = data_.contact_overflow_steps;
@@ -157,6 +216,8 @@ RunSummary SceneRunner::summary() const {
   s.nan_detected = data_.nonfinite_steps > 0;
   for (const auto& b : data_.bodies)
     s.nan_detected = s.nan_detected || !b.position.allFinite() || !b.orientation.coeffs().allFinite();
+  for (const auto& n : data_.nodes)
+    s.nan_detected = s.nan_detected || !n.position.allFinite() || !n.velocity.allFinite();
   for (auto dir : {hal::SimBus::Direction::kControllerToDevice, hal::SimBus::Direction::kDeviceToController}) {
     s.bus_frames_dropped += static_cast<std::int64_t>(bus_.link_counters(dir).dropped);
     s.bus_frames_corrupted += static_cast<std::int64_t>(bus_.link_counters(dir).corrupted());
@@ -210,8 +271,17 @@ std::string format_summary(const RunSummary& s) {
     os << "  joints: " << s.num_joints << ", drift max " << s.joint_drift_max_mm << " mm, "
        << s.joint_angle_drift_max_mrad << " mrad\n";
   os << "  fastest body not held: " << s.free_body_speed_max_mps << " m/s\n";
+  if (s.num_nets > 0)
+    os << "  deformable: " << s.num_nets << " net(s), " << s.num_nodes
+       << " nodes; node contacts max " << s.node_contacts_max << ", net penetration max "
+       << s.net_penetration_max_mm << " mm, tie stretch max " << s.net_tie_stretch_max_mm
+       << " mm, strain max " << s.net_strain_max << ", node speed max " << s.net_node_speed_max_mps
+       << " m/s\n";
   os << "  contacts max " << s.contacts_max << ", overflow steps " << s.contact_overflow
-     << ", solver iterations max " << s.solver_iterations_max << "\n";
+     << ", solver iterations mean " << s.solver_iterations_mean << ", max "
+     << s.solver_iterations_max << ", residual max " << std::scientific << std::setprecision(2)
+     << s.solver_residual_max << std::fixed << std::setprecision(3) << ", not converged "
+     << s.solver_not_converged_steps << " steps\n";
   os << "  bus: rejected samples " << s.rejected_samples << ", invalid periods "
      << s.invalid_periods << ", frames dropped " << s.bus_frames_dropped << ", corrupted "
      << s.bus_frames_corrupted << "\n";
@@ -285,6 +355,16 @@ std::string format_summary_json(const RunSummary& s) {
   integer("contact_overflow", s.contact_overflow);
   integer("contacts_max", s.contacts_max);
   integer("solver_iterations_max", s.solver_iterations_max);
+  num("solver_iterations_mean", s.solver_iterations_mean);
+  num("solver_residual_max", s.solver_residual_max);
+  integer("solver_not_converged_steps", s.solver_not_converged_steps);
+  integer("num_nets", s.num_nets);
+  integer("num_nodes", s.num_nodes);
+  integer("node_contacts_max", s.node_contacts_max);
+  num("net_penetration_max_mm", s.net_penetration_max_mm);
+  num("net_tie_stretch_max_mm", s.net_tie_stretch_max_mm);
+  num("net_strain_max", s.net_strain_max);
+  num("net_node_speed_max_mps", s.net_node_speed_max_mps);
   integer("nonfinite_steps", s.nonfinite_steps);
   integer("bus_frames_dropped", s.bus_frames_dropped);
   integer("bus_frames_corrupted", s.bus_frames_corrupted);

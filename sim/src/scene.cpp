@@ -1,13 +1,14 @@
 /// @file scene.cpp
-/// Scene file → Scene: physics (scene_model.cpp), trajectory, device, bus, events.
+/// Scene file → Scene: physics (scene_model.cpp), trajectory, device, bus, events,
+/// articulations (scene_articulation.cpp), deformables (scene_deformable.cpp).
 
 #include "numen/sim/scene.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
-#include <limits>
 #include <iomanip>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 
@@ -17,6 +18,7 @@
 #include "numen/sim/simulated_instrument.hpp"
 #include "numen/sim/trocar_placement.hpp"
 #include "scene_articulation.hpp"
+#include "scene_deformable.hpp"
 #include "scene_model.hpp"
 #include "toml_reader.hpp"
 
@@ -354,9 +356,10 @@ Scene load_scene(const std::string& path, const SceneOverrides& overrides) {
   scene.file = path;
   const toml::table doc = parse_toml_file(path);
   const TomlTable root(doc, "", scene.file);
-  root.allow_only({"name", "description", "dt", "duration", "gravity", "integrator", "coupling",
-                   "solver", "material", "contact_default", "contact", "body", "obstacle", "device",
-                   "bus", "trajectory", "event", "joint", "baumgarte"});
+  root.allow_only({"name",       "description", "dt",       "duration",  "gravity",
+                   "integrator", "coupling",    "solver",   "material",  "contact_default",
+                   "contact",    "body",        "obstacle", "device",    "bus",
+                   "trajectory", "event",       "joint",    "baumgarte", "deformable"});
   scene.name = root.string_or("name", std::filesystem::path(path).stem().string());
   scene.description = root.string_or("description", "");
   scene.model = parse_scene_model(root, scene.warnings);
@@ -372,6 +375,8 @@ Scene load_scene(const std::string& path, const SceneOverrides& overrides) {
     b.initial_pose = first_device_pose(scene);
   }
   parse_articulation(root, body_tables, scene);
+  // Nets after the bodies' starting poses are known (their nodes start there).
+  parse_deformables(root, dir, scene.model);
 
   // Bus between controller and instrument.
   double latency = 100e-6;

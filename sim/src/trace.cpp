@@ -36,6 +36,13 @@ TraceRecord make_trace_record(const core::Data& data, int held, int tool_contact
     r.joint_reaction_max_n = std::max(r.joint_reaction_max_n, j.reaction.force.norm());
     r.baumgarte_rhs_max = std::max(r.baumgarte_rhs_max, j.baumgarte_rhs.cwiseAbs().maxCoeff());
   }
+  r.node_contacts = data.num_node_contacts;
+  for (const core::NetOutput& n : data.nets) {
+    r.net_penetration_mm = std::max(r.net_penetration_mm, n.max_penetration * 1e3);
+    r.net_tie_stretch_mm = std::max(r.net_tie_stretch_mm, n.max_tie_stretch * 1e3);
+    r.net_strain_max = std::max(r.net_strain_max, n.max_strain);
+  }
+  r.solver_residual = data.solver_residual;
   return r;
 }
 
@@ -50,7 +57,8 @@ void Trace::write_csv(const std::string& path) const {
          "feedback_fx,feedback_fy,feedback_fz,feedback_tx,feedback_ty,feedback_tz";
   for (int i = 0; i < axes; ++i) out << ",axis_torque_" << i;
   out << ",step_time_us,solver_iterations,joint_drift_mm,joint_angle_drift_mrad,"
-         "joint_reaction_max_n,baumgarte_rhs_max\n";
+         "joint_reaction_max_n,baumgarte_rhs_max,solver_residual,node_contacts,"
+         "net_penetration_mm,net_tie_stretch_mm,net_strain_max\n";
   out.precision(9);
   auto pose = [&](const core::Pose& p) {
     out << p.position.x() << ',' << p.position.y() << ',' << p.position.z() << ','
@@ -68,7 +76,8 @@ void Trace::write_csv(const std::string& path) const {
     for (int i = 0; i < axes; ++i) out << ',' << r.axis_torque[static_cast<std::size_t>(i)];
     out << ',' << r.step_time_us << ',' << r.solver_iterations << ',' << r.joint_drift_mm << ','
         << r.joint_angle_drift_mrad << ',' << r.joint_reaction_max_n << ',' << r.baumgarte_rhs_max
-        << '\n';
+        << ',' << r.solver_residual << ',' << r.node_contacts << ',' << r.net_penetration_mm << ','
+        << r.net_tie_stretch_mm << ',' << r.net_strain_max << '\n';
   }
   out.flush();  // a write error of the last buffered block must not pass silently
   if (!out) throw std::runtime_error(path + ": error while writing the trace");

@@ -65,6 +65,11 @@ TraceRecord record(int i) {
   r.axis_torque[2] = 0.3;
   r.step_time_us = 7.5;
   r.solver_iterations = 4 + i;
+  r.solver_residual = 2.5e-7 * (i + 1);
+  r.node_contacts = 10 + i;
+  r.net_penetration_mm = 0.125 * i;
+  r.net_tie_stretch_mm = 1.5 + i;
+  r.net_strain_max = 0.0625 * i;
   return r;
 }
 
@@ -86,7 +91,8 @@ TEST(Trace, WriteCsvHasAHeaderAndOneRowPerRecord) {
   ASSERT_EQ(lines.size(), 5u);
   const std::vector<std::string> header = split(lines[0]);
   EXPECT_EQ(header.front(), "time_s");
-  EXPECT_EQ(header.back(), "baumgarte_rhs_max");
+  EXPECT_EQ(header.back(), "net_strain_max");
+  EXPECT_EQ(column(header, "baumgarte_rhs_max") + 1, column(header, "solver_residual"));
   EXPECT_EQ(column(header, "solver_iterations") + 1, column(header, "joint_drift_mm"));
   // One column per axis torque, as many as the records have.
   EXPECT_EQ(column(header, "axis_torque_0") + 2, column(header, "axis_torque_2"));
@@ -106,6 +112,17 @@ TEST(Trace, WriteCsvHasAHeaderAndOneRowPerRecord) {
     EXPECT_DOUBLE_EQ(std::stod(row[static_cast<std::size_t>(column(header, "feedback_fz"))]), r.feedback.force.z());
     EXPECT_DOUBLE_EQ(std::stod(row[static_cast<std::size_t>(column(header, "axis_torque_1"))]), r.axis_torque[1]);
     EXPECT_EQ(std::stoi(row[static_cast<std::size_t>(column(header, "solver_iterations"))]), r.solver_iterations);
+    // Deformable nets.
+    EXPECT_DOUBLE_EQ(std::stod(row[static_cast<std::size_t>(column(header, "solver_residual"))]),
+                     r.solver_residual);
+    EXPECT_EQ(std::stoi(row[static_cast<std::size_t>(column(header, "node_contacts"))]),
+              r.node_contacts);
+    EXPECT_DOUBLE_EQ(std::stod(row[static_cast<std::size_t>(column(header, "net_penetration_mm"))]),
+                     r.net_penetration_mm);
+    EXPECT_DOUBLE_EQ(std::stod(row[static_cast<std::size_t>(column(header, "net_tie_stretch_mm"))]),
+                     r.net_tie_stretch_mm);
+    EXPECT_DOUBLE_EQ(std::stod(row[static_cast<std::size_t>(column(header, "net_strain_max"))]),
+                     r.net_strain_max);
   }
 }
 

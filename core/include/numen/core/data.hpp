@@ -13,6 +13,7 @@
 #include "numen/core/collision.hpp"
 #include "numen/core/contact.hpp"
 #include "numen/core/integrator.hpp"
+#include "numen/core/net_state.hpp"
 #include "numen/core/types.hpp"
 
 namespace numen::core {
@@ -73,6 +74,7 @@ struct Data {
   std::int64_t step_count = 0;
 
   std::vector<BodyState> bodies;   ///< Size Model::num_bodies().
+  std::vector<NodeState> nodes;    ///< Net nodes, size Model::num_nodes() (net_state.hpp).
 
   // ---- inputs (written by the caller before step) ----
   int attached_body = -1;          ///< Body the device drives; -1: none (tool switching).
@@ -103,7 +105,12 @@ struct Data {
   /// Largest |C| of an angular joint row at the step's end (rad); a prescribed
   /// joint's own row (its lag behind the device) is not drift and not counted.
   double max_joint_angle_drift = 0.0;
-  int solver_iterations = 0;       ///< Iterations of the implicit solve this step.
+  /// Node contacts of the nets, [0, num_node_contacts) valid; capacity
+  /// kMaxNodeContacts when the model has nets, else 0.
+  std::vector<NodeContact> node_contacts;
+  int num_node_contacts = 0;
+  std::vector<NetOutput> nets;     ///< Per net (Model::nets).
+  int solver_iterations = 0;       ///< Iterations of the implicit solve this step (bodies and nets).
   double solver_residual = 0.0;    ///< Relative residual reached.
   std::uint32_t status = kStepOk;  ///< StepStatus bits of the last step.
   std::int64_t nonfinite_steps = 0;  ///< Steps whose result was rejected as non-finite.
@@ -113,6 +120,7 @@ struct Data {
   CollisionScratch collision;
   SolverScratch solver;
   ArticulationScratch articulation;
+  NetScratch net;
 };
 
 /// Allocates a Data for a finalized `model` and resets it. Allocates.

@@ -12,6 +12,7 @@
 #include "numen/core/articulation.hpp"
 #include "numen/core/broadphase.hpp"
 #include "numen/core/joint.hpp"
+#include "numen/core/net_model.hpp"
 #include "numen/core/types.hpp"
 
 namespace numen::core {
@@ -141,6 +142,15 @@ struct Model {
   std::vector<JointModel> joints;      ///< Joints of the articulations (a forest; may be empty).
   BaumgarteSettings baumgarte;         ///< Joint drift correction (Eq. 5).
 
+  // Deformable nets (net_model.hpp; paper §4.2), appended by add_net(). Node
+  // arrays are indexed by the global node index; all empty without nets.
+  std::vector<NetModel> nets;
+  std::vector<NetSpring> net_springs;  ///< Springs of every net (structural, then bending, per net).
+  std::vector<Vec3> node_rest;         ///< Rest position in the rigid component's body frame (m).
+  std::vector<double> node_mass;       ///< kg, > 0 (lumped by vertex area).
+  std::vector<double> node_radius;     ///< Collision sphere radius (m), > 0.
+  std::vector<int> node_net;           ///< Net owning each node.
+
   std::vector<std::string> material_names;  ///< Size num_materials.
   std::vector<MaterialPair> material_pairs; ///< num_materials², symmetric, row-major.
 
@@ -158,6 +168,8 @@ struct Model {
   }
   int num_bodies() const noexcept { return static_cast<int>(bodies.size()); }
   int num_joints() const noexcept { return static_cast<int>(joints.size()); }
+  int num_nets() const noexcept { return static_cast<int>(nets.size()); }
+  int num_nodes() const noexcept { return static_cast<int>(node_rest.size()); }
 };
 
 /// Validates `model` and computes its derived fields (inverse inertias,

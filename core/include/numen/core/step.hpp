@@ -8,7 +8,8 @@ struct Model;
 struct Data;
 
 /// Advances `data` by model.dt. Stages, in order:
-///   1. detect_contacts — collision geometry (collision.hpp)
+///   1. detect_contacts — collision geometry (collision.hpp); with nets, then
+///      detect_node_contacts (net_collision.hpp)
 ///   2. forces — gravity, applied wrenches, coupling (Eq. 2) on the attached
 ///      body and (Eq. 6) on every body with its own target, penalty contact
 ///      forces (compute_forces); the gyroscopic term is applied by the
@@ -17,11 +18,15 @@ struct Data;
 ///      the imposed pose in CouplingMode::kDirect; with joints, the KKT
 ///      system of Eq. 4 with Baumgarte rows (Eq. 5) solved in linear time
 ///      (articulation.hpp), then the joint drift is measured
-///      (measure_joint_drift) — models without joints skip both
+///      (measure_joint_drift) — models without joints skip both; with nets
+///      the bodies and nodes are solved as one system (net_solve.hpp) and
+///      the nets' observables measured (measure_nets)
 ///   4. feedback — Eq. 8 per targeted body, Eq. 9 composite, saturated
 ///   5. checks — non-finite results are rejected: every body goes back to its
-///      pose before the step with zero twist, the feedback (composite and per
-///      body), the joint states and the solver's Δu are zeroed,
+///      pose before the step with zero twist, every node to its position with
+///      zero velocity, the feedback (composite and per body), the joint
+///      states and the solver's Δu and Δv are zeroed, the nets' outputs
+///      re-measured on the restored nodes (tie wrench zeroed),
 ///      kNonFinite is set and Data::nonfinite_steps counted
 /// Data::status is cleared first (then detect_contacts may set
 /// kContactOverflow and count contact_overflow_steps);
@@ -32,7 +37,8 @@ void step(const Model& model, Data& data) noexcept;
 
 /// Forces stage of step(): body_wrench := gravity + applied wrench
 /// (apply_external_forces), + coupling on the attached body (apply_coupling,
-/// Eq. 2), + penalty contact forces of data.contacts (compute_contact_forces).
+/// Eq. 2), + penalty contact forces of data.contacts (compute_contact_forces),
+/// + the nets' forces and their reactions (compute_net_forces).
 /// The gyroscopic term is handled by the integrator (implicit or explicit).
 /// Expects detect_contacts() (and impose_direct_target() in kDirect) to have
 /// run this step. No allocation.

@@ -38,9 +38,11 @@ struct DurationSummary {
 };
 
 /// What a run measured. Penetrations are the deepest overlap (mm) of the
-/// tool's spheres (the held body and the bodies jointed to it) with obstacles
-/// and other bodies; "target" is the same bodies placed at the device's
-/// target poses (where the hand is), "tool" the god-object itself.
+/// tool's spheres (the held body and the bodies jointed to it, and the node
+/// spheres of the deformable nets whose rigid component is one of them) with
+/// obstacles and other bodies; "target" is the same bodies placed at the
+/// device's target poses (where the hand is) with their nets in their rest
+/// shape, "tool" the god-object itself (its nets as deformed).
 struct RunSummary {
   std::string scene;
   std::string coupling;
@@ -67,8 +69,20 @@ struct RunSummary {
   std::int64_t rejected_samples = 0;       ///< Axis samples rejected by the checks.
   std::int64_t invalid_periods = 0;        ///< Periods whose sample was not valid (target held).
   std::int64_t contact_overflow = 0;       ///< Steps that ran out of contact capacity.
-  int contacts_max = 0;
-  int solver_iterations_max = 0;
+  int contacts_max = 0;           ///< Rigid sphere contacts in one step (node contacts apart).
+  int solver_iterations_max = 0;  ///< Iterations of the implicit solve in one step.
+  double solver_iterations_mean = 0.0;  ///< Mean over the steps.
+  double solver_residual_max = 0.0;  ///< Largest relative residual ‖r‖/‖b‖ reached by a step.
+  /// Steps whose implicit solve ended at max_iterations above the tolerance.
+  std::int64_t solver_not_converged_steps = 0;
+  // Deformable nets (paper §4.2); all zero without nets.
+  int num_nets = 0;
+  int num_nodes = 0;
+  int node_contacts_max = 0;            ///< Node contacts in one step (all nets).
+  double net_penetration_max_mm = 0.0;  ///< Deepest node contact of any net (mm).
+  double net_tie_stretch_max_mm = 0.0;  ///< Largest |x − a| of a node from its rest position (mm).
+  double net_strain_max = 0.0;  ///< Largest |l − L|/L of a structural spring (dimensionless).
+  double net_node_speed_max_mps = 0.0;  ///< Fastest node (m/s).
   bool nan_detected = false;
   std::int64_t nonfinite_steps = 0;
   std::int64_t bus_frames_dropped = 0;
@@ -124,6 +138,7 @@ class SceneRunner {
   std::int64_t phase_ns_;
   RunSummary acc_;     // running maxima and counts
   double free_sq_ = 0.0;
+  std::int64_t solver_iterations_sum_ = 0;
 };
 
 /// Runs `scene` for options.duration_s (or the scene's duration).

@@ -2,7 +2,9 @@
 /// @file trace.hpp
 /// Per-step trace of a run (`numen run --trace FILE.csv`): target pose (the
 /// device), god-object pose, contacts, penetrations, feedback wrench, axis
-/// torques, step time and the joints' drift, reactions and Baumgarte terms. Records go into storage reserved before the loop
+/// torques, step time, the implicit solve, the joints' drift, reactions and
+/// Baumgarte terms and the deformable nets' contacts, stretch and strain.
+/// Records go into storage reserved before the loop
 /// (push never allocates; a full trace counts the records it drops) and are
 /// written as CSV after the run.
 
@@ -38,6 +40,12 @@ struct TraceRecord {
   double joint_angle_drift_mrad = 0.0;    ///< Largest angular joint error |C| after the step.
   double joint_reaction_max_n = 0.0;      ///< Largest |reaction force| of a joint on its child (N).
   double baumgarte_rhs_max = 0.0;         ///< Largest |c| of a joint row (m/s or rad/s): the Baumgarte correction asked.
+  // Deformable nets (zero without nets), paper §4.2; all nets together.
+  int node_contacts = 0;            ///< Node contacts this step.
+  double net_penetration_mm = 0.0;  ///< Deepest node contact this step.
+  double net_tie_stretch_mm = 0.0;  ///< Largest |x − a| of a node from its rest position.
+  double net_strain_max = 0.0;      ///< Largest |l − L|/L of a structural spring.
+  double solver_residual = 0.0;     ///< Relative residual ‖r‖/‖b‖ of the implicit solve.
 };
 
 /// Builds a record from the state after a step.

@@ -1,0 +1,44 @@
+#pragma once
+/// @file net_forces.hpp
+/// Force stage of the deformable nets (paper §4.2; Meseure & Chaillou 2000)
+/// and their explicit node step. Spring law and symbols in net_model.hpp.
+
+namespace numen::core {
+
+struct Model;
+struct Data;
+
+/// Explicit forces on every node at the step's start, into NetScratch::force
+/// (N, world):
+///   gravity m g;
+///   structural and bending springs f_a = −f_b = k (l − L) d̂ + γ (d̂ · (v_b − v_a)) d̂;
+///   the tie of each node to its rest position on the rigid component,
+///   f = −k_tie (x − a) − γ_tie (v − v_a), a = x_b + R_b r (r: Model::node_rest),
+///   v_a = v_b + ω_b × (R_b r); its reaction (−f at a) is added to
+///   Data::body_wrench of the rigid component (at the COM) and summed in
+///   NetOutput::tie_wrench;
+///   each node contact's penalty force (contact_penalty_force(), the node on
+///   side a), its reaction added to body_b's wrench.
+/// Also stores the linearisation the implicit solve needs: spring directions
+/// and lengths (SpringTerm; a spring of zero length keeps its last
+/// direction), lever arms ρ = R_b r (NetScratch::lever), and each
+/// NodeContact's r_b, normal_velocity, active and force.
+/// Call after compute_contact_forces() (body_wrench is reset by
+/// apply_external_forces()) and after detect_node_contacts(). No allocation.
+void compute_net_forces(const Model& model, Data& data) noexcept;
+
+/// Symplectic Euler of the nodes: v1 = v0 + h f/m, x1 = x0 + h v1, with the
+/// forces of compute_net_forces(). Explicit in the ties and springs: stable
+/// for h √(k/m) < 2 with k the stiffest spring sum on a node.
+void integrate_nodes_symplectic(const Model& model, Data& data) noexcept;
+
+/// Node update of the implicit step: v1 = v0 + Δv (NetScratch::delta),
+/// x1 = x0 + h v1.
+void integrate_nodes_implicit(const Model& model, Data& data) noexcept;
+
+/// End-of-step observables of every net into Data::nets (NetOutput):
+/// largest tie stretch |x − a| against the rigid component's end pose,
+/// largest structural strain, kinetic energy, largest node speed.
+void measure_nets(const Model& model, Data& data) noexcept;
+
+}  // namespace numen::core

@@ -1,0 +1,81 @@
+#pragma once
+/// @file net_model.hpp
+/// Compiled description of a deformable god-object (paper §4.2, Fig. 4;
+/// Meseure & Chaillou, "Deformable body model for surgical simulation",
+/// J. Visualization and Computer Animation 11(4), 2000): a mass-spring surface
+/// net built from a triangle mesh — one node per vertex, a structural spring
+/// per edge, a bending spring across each pair of adjacent triangles — whose
+/// every node is tied by a zero-length damped spring to its rest position
+/// carried by a rigid component. The rigid component is an ordinary dynamic
+/// body of the Model (the paper's hidden rigid god-object following the
+/// device; give it no spheres so that it does not collide). Node spheres
+/// collide; the net's forces act back on the rigid component.
+
+#include <string>
+#include <vector>
+
+#include "numen/core/mesh.hpp"
+#include "numen/core/types.hpp"
+
+namespace numen::core {
+
+struct Model;
+
+/// A spring between two nodes of a net: f_a = −f_b = k (l − L) d̂ + γ (d̂·(v_b − v_a)) d̂
+/// with d = x_b − x_a, l = |d|, d̂ = d/l (damping along the spring only).
+struct NetSpring {
+  int node_a = -1;           ///< Global node index (Model::node_*), node_a < node_b.
+  int node_b = -1;           ///< Global node index.
+  double rest_length = 0.0;  ///< L (m), > 0: the mesh's rest distance.
+  double stiffness = 0.0;    ///< k (N/m), ≥ 0.
+  double damping = 0.0;      ///< γ (N·s/m), ≥ 0.
+};
+
+/// One net of a Model. Its nodes are [node_begin, node_begin + node_count) of
+/// the Model's node arrays, its springs [spring_begin, spring_begin +
+/// structural_count + bending_count) of Model::net_springs (structural first).
+struct NetModel {
+  std::string name;
+  int body = -1;              ///< Rigid component: index into Model::bodies.
+  int node_begin = 0;
+  int node_count = 0;
+  int spring_begin = 0;
+  int structural_count = 0;
+  int bending_count = 0;
+  /// Zero-length spring of every node to its rest position on the rigid
+  /// component (paper §4.2): f = −k_tie (x − a) − γ_tie (v − v_a), a = x_b + R_b r.
+  double tie_stiffness = 0.0;  ///< k_tie (N/m) per node, > 0.
+  double tie_damping = 0.0;    ///< γ_tie (N·s/m) per node, ≥ 0.
+  int material = 0;            ///< Contact material of the node spheres.
+  double mass = 0.0;           ///< Σ node masses (kg), derived.
+};
+
+/// Creation settings of a net (SI units). Per-spring and per-node constants
+/// as in a mass-spring model: a finer mesh with the same constants is
+/// stiffer in bending and in shape memory (not a continuum discretisation).
+struct NetSettings {
+  std::string name;
+  int body = -1;                 ///< Rigid component (index into Model::bodies).
+  int material = 0;              ///< Index into Model::material_names.
+  double mass = 0.0;             ///< Total mass (kg, > 0), lumped by vertex area.
+  double stiffness = 0.0;        ///< Structural spring k (N/m, ≥ 0), every edge.
+  double damping = 0.0;          ///< Structural spring γ (N·s/m, ≥ 0).
+  double bending_stiffness = 0.0;  ///< Bending spring k (N/m, ≥ 0).
+  double bending_damping = 0.0;    ///< Bending spring γ (N·s/m, ≥ 0).
+  double tie_stiffness = 0.0;    ///< Zero-length tie k (N/m, > 0), per node.
+  double tie_damping = 0.0;      ///< Zero-length tie γ (N·s/m, ≥ 0), per node.
+  /// Collision sphere radius of every node (m); 0: from the mesh, the mean
+  /// incident edge length over √3 (the circumradius of an equilateral
+  /// triangle of that side, so the spheres cover the surface).
+  double node_radius = 0.0;
+};
+
+/// Appends a net to `model` from `mesh`, given in the rigid component's body
+/// frame (origin at its COM; the rest shape). Nodes start at their rest
+/// positions at the body's initial pose with its initial point velocities.
+/// Call before finalize_model(). Returns "" on success, else a message naming
+/// the net and the offending setting or mesh element (validate_mesh()).
+/// Allocates: load time only.
+std::string add_net(Model& model, const TriangleMesh& mesh, const NetSettings& settings);
+
+}  // namespace numen::core

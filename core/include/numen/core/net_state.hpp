@@ -1,0 +1,94 @@
+#pragma once
+/// @file net_state.hpp
+/// Mutable state, per-step outputs and contacts of the deformable nets
+/// (net_model.hpp), held by core::Data. Sized once by make_data(); empty for
+/// a model without nets (a scene pays only for what it has).
+
+#include <cstdint>
+#include <vector>
+
+#include "numen/core/block_cholesky.hpp"
+#include "numen/core/types.hpp"
+
+namespace numen::core {
+
+struct Model;
+
+/// State of one net node: world position (m) and velocity (m/s).
+struct NodeState {
+  Vec3 position = Vec3::Zero();
+  Vec3 velocity = Vec3::Zero();
+};
+
+/// A penalty contact between a node's sphere and an obstacle or a dynamic
+/// body's sphere. Geometry from detect_node_contacts(); force and
+/// linearisation from compute_net_forces(); weights from the implicit solve.
+/// Same penalty law as core::Contact (contact_force.hpp), the node on side a.
+struct NodeContact {
+  int node = -1;           ///< Global node index, receives +force.
+  int body_b = -1;         ///< Dynamic body receiving −force, or -1 for a static obstacle.
+  int obstacle = -1;       ///< Obstacle index when body_b == -1, else -1.
+  int sphere_b = -1;       ///< body_spheres index (body_b ≥ 0) or static_spheres index, or -1.
+  int material_pair = 0;   ///< Index into Model::material_pairs.
+  Vec3 position = Vec3::Zero();  ///< Contact point (m, world): middle of the overlap.
+  Vec3 normal = Vec3::UnitZ();   ///< Unit, from b towards the node.
+  double depth = 0.0;            ///< Penetration depth (m), > 0.
+  Vec3 force = Vec3::Zero();     ///< Penalty force on the node (N, world); −force on body_b.
+  Vec3 r_b = Vec3::Zero();       ///< Contact point − COM of body_b (m, world); 0 when static.
+  double normal_velocity = 0.0;  ///< v_n = n · (v_node − v_b(point)) at the step's start (m/s).
+  bool active = false;           ///< f_n > 0.
+  double weight_normal = 0.0;    ///< α of the implicit weight W = α n nᵀ + β I (N·s/m).
+  double weight_isotropic = 0.0; ///< β (N·s/m).
+};
+
+/// What a net did in the last step (observable; traces and studies).
+struct NetOutput {
+  double max_tie_stretch = 0.0;    ///< Largest |x − a| of a node from its rest position (m), step's end.
+  double max_strain = 0.0;         ///< Largest |l − L|/L of a structural spring, step's end.
+  double kinetic_energy = 0.0;     ///< Σ ½ m |v|² of the nodes, step's end (J).
+  double max_node_speed = 0.0;     ///< Largest |v| of a node, step's end (m/s).
+  Wrench tie_wrench;               ///< Σ tie forces on the rigid component at its COM, step's start (N, N·m).
+  double max_penetration = 0.0;    ///< Deepest node contact this step (m).
+};
+
+/// Linearisation of one spring for the implicit solve (filled each step):
+/// its contribution to A = M − hD − h²K is S = α d̂d̂ᵀ + β I on the two
+/// diagonal blocks and −S off the diagonal.
+struct SpringTerm {
+  Vec3 direction = Vec3::UnitX();  ///< d̂ at the step's start.
+  double length = 0.0;             ///< l at the step's start (m).
+  double weight_axial = 0.0;       ///< α = h γ + h² k − β (N·s/m).
+  double weight_isotropic = 0.0;   ///< β = h² k max(0, 1 − L/l) (N·s/m).
+};
+
+/// Scratch of the nets' force stage and of the coupled implicit solve, sized
+/// once by resize() (everything empty without nets).
+struct NetScratch {
+  std::vector<NodeState> saved;     ///< Node states before the step (non-finite rollback).
+  std::vector<Vec3> force;          ///< Explicit force on each node this step (N).
+  std::vector<Vec3> lever;          ///< ρ = R_b r: anchor − COM of the rigid component (m, world).
+  std::vector<SpringTerm> springs;  ///< Per Model::net_springs.
+  std::vector<double> node_diagonal;  ///< m_i + c_tie: the isotropic part of A_ii (kg).
+  std::vector<Mat3> block;          ///< A_ii: 3×3 diagonal block of each node (all terms).
+  std::vector<Mat3> block_inverse;  ///< A_ii⁻¹ (preconditioner).
+  std::vector<Vec3> rhs;            ///< b of the node rows.
+  std::vector<Vec3> delta;          ///< Δv of the node rows (m/s); warm start of the next step.
+  std::vector<Vec3> residual, precond_residual, direction, a_direction;  ///< PCG vectors (nodes).
+  std::vector<Mat6> body_schur;     ///< Per body: Schur block S_b of the preconditioner.
+  std::vector<BlockCholesky> body_schur_factor;  ///< Per body: Cholesky of S_b (no joints).
+  std::vector<Vec6> body_tmp;       ///< Per body: reduced residual of the preconditioner.
+  // Collision stage (detect_node_contacts(), net_collision.hpp), rebuilt per
+  // net; sized by the Model's obstacles, bodies and body spheres.
+  /// Primitive obstacles whose bounds meet the net's AABB (index order).
+  std::vector<std::int32_t> near_obstacles;
+  std::vector<Vec3> obstacle_axis;      ///< Per near obstacle: plane normal or capsule axis.
+  std::vector<Mat3> obstacle_rotation;  ///< Per near obstacle: box rotation (box → world).
+  /// Bodies whose world AABB meets the net's AABB (index order), outside its articulation.
+  std::vector<std::int32_t> near_bodies;
+  std::vector<std::int32_t> near_sphere_end;  ///< Per near body: end of its run of near_spheres.
+  std::vector<std::int32_t> near_spheres;     ///< Body spheres near the net, by near body.
+  /// Sizes every buffer for `model` (all empty when it has no net). Allocates: make_data() only.
+  void resize(const Model& model);
+};
+
+}  // namespace numen::core

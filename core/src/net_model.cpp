@@ -1,0 +1,99 @@
+/// @file net_model.cpp
+/// Compiles a triangle mesh into a mass-spring net tied to a rigid component
+/// (paper §4.2; Meseure & Chaillou 2000).
+
+#include "numen/core/net_model.hpp"
+
+#include <cmath>
+
+#include "numen/core/model.hpp"
+
+namespace numen::core {
+namespace {
+
+bool finite_nonnegative(double v) noexcept { return std::isfinite(v) && v >= 0.0; }
+
+}  // namespace
+
+std::string add_net(Model& model, const TriangleMesh& mesh, const NetSettings& settings) {
+  const std::string where = "net '" + settings.name + "': ";
+  if (settings.body < 0 || settings.body >= model.num_bodies())
+    return where + "rigid component body index " + std::to_string(settings.body) +
+           " is not a body of the model";
+  if (settings.material < 0 || settings.material >= model.num_materials())
+    return where + "material index " + std::to_string(settings.material) + " out of range";
+  if (!(std::isfinite(settings.mass) && settings.mass > 0.0))
+    return where + "mass must be finite and > 0 kg";
+  if (!(std::isfinite(settings.tie_stiffness) && settings.tie_stiffness > 0.0))
+    return where + "tie_stiffness must be finite and > 0 N/m (the zero-length springs hold the rest shape)";
+  const struct {
+    const char* name;
+    double value;
+  } nonneg[] = {{"stiffness", settings.stiffness},
+                {"damping", settings.damping},
+                {"bending_stiffness", settings.bending_stiffness},
+                {"bending_damping", settings.bending_damping},
+                {"tie_damping", settings.tie_damping},
+                {"node_radius", settings.node_radius}};
+  for (const auto& p : nonneg)
+    if (!finite_nonnegative(p.value)) return where + p.name + " must be finite and >= 0";
+  if (const std::string err = validate_mesh(mesh); !err.empty()) return where + "mesh: " + err;
+
+  const MeshTopology topo = build_mesh_topology(mesh);
+  const std::vector<double> area = vertex_areas(mesh);
+  const std::vector<double> edge = mean_incident_edge_length(mesh, topo);
+  double total_area = 0.0;
+  for (double a : area) total_area += a;
+  if (!(total_area > 0.0)) return where + "mesh has zero area";
+
+  // Everything is built aside first, so that a rejected net leaves the model untouched.
+  NetModel net;
+  net.name = settings.name;
+  net.body = settings.body;
+  net.material = settings.material;
+  net.tie_stiffness = settings.tie_stiffness;
+  net.tie_damping = settings.tie_damping;
+  net.node_begin = model.num_nodes();
+  net.node_count = mesh.num_vertices();
+  net.spring_begin = static_cast<int>(model.net_springs.size());
+  std::vector<double> mass(area.size());
+  for (std::size_t i = 0; i < area.size(); ++i) {
+    mass[i] = settings.mass * area[i] / total_area;
+    net.mass += mass[i];
+  }
+  std::vector<NetSpring> springs;
+  const auto add_spring = [&](int a, int b, double k, double gamma) {
+    NetSpring s;
+    s.node_a = net.node_begin + a;
+    s.node_b = net.node_begin + b;
+    s.rest_length = (mesh.vertices[static_cast<std::size_t>(b)] -
+                     mesh.vertices[static_cast<std::size_t>(a)]).norm();
+    s.stiffness = k;
+    s.damping = gamma;
+    springs.push_back(s);
+    return s.rest_length > 0.0;
+  };
+  for (const auto& [a, b] : topo.edges)
+    if (!add_spring(a, b, settings.stiffness, settings.damping))
+      return where + "edge " + std::to_string(a) + "-" + std::to_string(b) + " has zero length";
+  net.structural_count = static_cast<int>(topo.edges.size());
+  for (const auto& [a, b] : topo.bending_pairs)
+    if (!add_spring(a, b, settings.bending_stiffness, settings.bending_damping))
+      return where + "bending pair " + std::to_string(a) + "-" + std::to_string(b) +
+             " has zero rest length (coincident vertices)";
+  net.bending_count = static_cast<int>(topo.bending_pairs.size());
+
+  const int net_index = model.num_nets();
+  for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
+    model.node_rest.push_back(mesh.vertices[i]);
+    model.node_mass.push_back(mass[i]);
+    model.node_radius.push_back(settings.node_radius > 0.0 ? settings.node_radius
+                                                           : edge[i] / std::sqrt(3.0));
+    model.node_net.push_back(net_index);
+  }
+  model.net_springs.insert(model.net_springs.end(), springs.begin(), springs.end());
+  model.nets.push_back(std::move(net));
+  return "";
+}
+
+}  // namespace numen::core

@@ -1,0 +1,409 @@
+/// @file net_solve.cpp
+/// Coupled linearly implicit Euler of the bodies and the deformable nets:
+/// system assembly on a fixed sparsity and an arrowhead-preconditioned
+/// (projected) conjugate gradient (net_solve.hpp).
+
+#include "numen/core/net_solve.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <span>
+
+#include "numen/core/articulation.hpp"
+#include "numen/core/data.hpp"
+#include "numen/core/integrator.hpp"
+#include "numen/core/joint_system.hpp"
+#include "numen/core/model.hpp"
+
+namespace numen::core {
+namespace {
+
+/// [v]×, the cross-product matrix: [v]× w = v × w.
+Mat3 skew(const Vec3& v) noexcept {
+  Mat3 m;
+  m << 0.0, -v.z(), v.y(), v.z(), 0.0, -v.x(), -v.y(), v.x(), 0.0;
+  return m;
+}
+
+/// c = h γ_tie + h² k_tie: a tie's weight in A (N·s/m).
+double tie_weight(const NetModel& net, double h) noexcept {
+  return h * net.tie_damping + h * h * net.tie_stiffness;
+}
+
+/// J u = v + ω × r: velocity of the point at lever arm r of a body with twist u.
+inline Vec3 point_velocity(const Vec6& u, const Vec3& r) noexcept {
+  return u.head<3>() + u.tail<3>().cross(r);
+}
+
+/// Jᵀ f = (f, r × f): generalized force of a force f at lever arm r.
+inline Vec6 generalized_force(const Vec3& f, const Vec3& r) noexcept {
+  Vec6 g;
+  g << f, r.cross(f);
+  return g;
+}
+
+/// W v = α n (n · v) + β v.
+inline Vec3 weight_times(double alpha, double beta, const Vec3& n, const Vec3& v) noexcept {
+  return (alpha * n.dot(v)) * n + beta * v;
+}
+
+/// Jᵀ J = [[I, −[r]×], [[r]×, |r|² I − r rᵀ]] summed over lever arms, from
+/// their count, Σ r and Σ r rᵀ; times `weight`, added to `block` (full).
+void add_lever_moments(double weight, double count, const Vec3& sum_r, const Mat3& sum_rr,
+                       Mat6& block) noexcept {
+  const Mat3 k = skew(sum_r);
+  block.topLeftCorner<3, 3>().diagonal().array() += weight * count;
+  block.topRightCorner<3, 3>() -= weight * k;
+  block.bottomLeftCorner<3, 3>() += weight * k;
+  block.bottomRightCorner<3, 3>() += weight * (sum_rr.trace() * Mat3::Identity() - sum_rr);
+}
+
+double dot6(std::span<const Vec6> a, std::span<const Vec6> b) noexcept {
+  double s = 0.0;
+  for (std::size_t i = 0; i < a.size(); ++i) s += a[i].dot(b[i]);
+  return s;
+}
+
+double dot3(std::span<const Vec3> a, std::span<const Vec3> b) noexcept {
+  double s = 0.0;
+  for (std::size_t i = 0; i < a.size(); ++i) s += a[i].dot(b[i]);
+  return s;
+}
+
+int node_contact_count(const Data& data) noexcept {
+  return std::clamp(data.num_node_contacts, 0, static_cast<int>(data.node_contacts.size()));
+}
+
+/// A node contact with a dynamic body in the solve: an off-diagonal block.
+bool couples_body(const SolverScratch& s, const NodeContact& c) noexcept {
+  return c.active && c.body_b >= 0 && s.in_solve[static_cast<std::size_t>(c.body_b)];
+}
+
+/// out = A · in over bodies and nodes (see net_solve.hpp for A).
+void apply_coupled(const Model& model, const Data& data, std::span<const Vec6> in_b,
+                   std::span<const Vec3> in_n, std::span<Vec6> out_b,
+                   std::span<Vec3> out_n) noexcept {
+  const SolverScratch& s = data.solver;
+  const NetScratch& ns = data.net;
+  apply_implicit_system(model, data, in_b, out_b);
+  // Node rows: (m + c) p_i, then each spring's S (p_a − p_b) (its diagonal and
+  // off-diagonal blocks at once), each node contact's W p_i, the ties' and
+  // node–body contacts' off-diagonal blocks.
+  for (std::size_t i = 0; i < in_n.size(); ++i) out_n[i] = ns.node_diagonal[i] * in_n[i];
+  const NetSpring* sp = model.net_springs.data();
+  const SpringTerm* st = ns.springs.data();
+  for (std::size_t e = 0; e < ns.springs.size(); ++e) {
+    const auto a = static_cast<std::size_t>(sp[e].node_a);
+    const auto b = static_cast<std::size_t>(sp[e].node_b);
+    const Vec3 w =
+        weight_times(st[e].weight_axial, st[e].weight_isotropic, st[e].direction, in_n[a] - in_n[b]);
+    out_n[a] += w;
+    out_n[b] -= w;
+  }
+  const double h = model.dt;
+  for (const NetModel& net : model.nets) {
+    const auto b = static_cast<std::size_t>(net.body);
+    if (!s.in_solve[b]) continue;
+    const double c = tie_weight(net, h);
+    Vec6 acc = Vec6::Zero();
+    for (int v = net.node_begin; v < net.node_begin + net.node_count; ++v) {
+      const auto i = static_cast<std::size_t>(v);
+      out_n[i] -= c * point_velocity(in_b[b], ns.lever[i]);
+      acc += generalized_force(in_n[i], ns.lever[i]);
+    }
+    out_b[b] -= c * acc;
+  }
+  const int nc = node_contact_count(data);
+  for (int k = 0; k < nc; ++k) {
+    const NodeContact& ct = data.node_contacts[static_cast<std::size_t>(k)];
+    if (!ct.active) continue;
+    const auto i = static_cast<std::size_t>(ct.node);
+    out_n[i] += weight_times(ct.weight_normal, ct.weight_isotropic, ct.normal, in_n[i]);
+    if (!couples_body(s, ct)) continue;
+    const auto b = static_cast<std::size_t>(ct.body_b);
+    out_n[i] -= weight_times(ct.weight_normal, ct.weight_isotropic, ct.normal,
+                             point_velocity(in_b[b], ct.r_b));
+    out_b[b] -= generalized_force(
+        weight_times(ct.weight_normal, ct.weight_isotropic, ct.normal, in_n[i]), ct.r_b);
+  }
+}
+
+}  // namespace
+
+void add_net_body_terms(const Model& model, Data& data) noexcept {
+  if (model.nets.empty()) return;
+  SolverScratch& s = data.solver;
+  NetScratch& ns = data.net;
+  const double h = model.dt;
+  const double h2 = h * h;
+  for (const NetModel& net : model.nets) {
+    const auto b = static_cast<std::size_t>(net.body);
+    if (!s.in_solve[b]) continue;
+    Vec3 sum_r = Vec3::Zero();
+    Mat3 sum_rr = Mat3::Zero();
+    Vec6 relative = Vec6::Zero();  // Σ Jᵀ (v_i0 − v_a0)
+    for (int v = net.node_begin; v < net.node_begin + net.node_count; ++v) {
+      const auto i = static_cast<std::size_t>(v);
+      const Vec3& r = ns.lever[i];
+      sum_r += r;
+      sum_rr.noalias() += r * r.transpose();
+      relative += generalized_force(data.nodes[i].velocity - point_velocity(s.twist0[b], r), r);
+    }
+    add_lever_moments(tie_weight(net, h), net.node_count, sum_r, sum_rr, s.block[b]);
+    s.rhs[b] += (h2 * net.tie_stiffness) * relative;
+  }
+  // Node contacts: weights (for the node rows too), then the body side.
+  const int nc = node_contact_count(data);
+  for (int k = 0; k < nc; ++k) {
+    NodeContact& ct = data.node_contacts[static_cast<std::size_t>(k)];
+    if (!ct.active) continue;
+    const MaterialPair& mp = model.material_pairs[static_cast<std::size_t>(ct.material_pair)];
+    ct.weight_isotropic = h * mp.friction;
+    ct.weight_normal = h * mp.damping + h2 * mp.stiffness - ct.weight_isotropic;
+    if (!couples_body(s, ct)) continue;
+    const auto b = static_cast<std::size_t>(ct.body_b);
+    Vec6 g;
+    g << ct.normal, ct.r_b.cross(ct.normal);
+    Mat6& blk = s.block[b];
+    blk.noalias() += ct.weight_normal * (g * g.transpose());
+    add_lever_moments(ct.weight_isotropic, 1.0, ct.r_b, ct.r_b * ct.r_b.transpose(), blk);
+    const double impulse = -h2 * mp.stiffness * ct.normal_velocity;  // on the node along n
+    s.rhs[b] -= impulse * g;
+  }
+}
+
+void build_net_system(const Model& model, Data& data) noexcept {
+  if (model.nets.empty()) return;
+  const SolverScratch& s = data.solver;
+  NetScratch& ns = data.net;
+  const double h = model.dt;
+  const double h2 = h * h;
+
+  for (const NetModel& net : model.nets) {
+    const auto b = static_cast<std::size_t>(net.body);
+    const double c = tie_weight(net, h);
+    for (int v = net.node_begin; v < net.node_begin + net.node_count; ++v) {
+      const auto i = static_cast<std::size_t>(v);
+      ns.node_diagonal[i] = model.node_mass[i] + c;
+      ns.block[i] = ns.node_diagonal[i] * Mat3::Identity();
+      const Vec3 relative = data.nodes[i].velocity - point_velocity(s.twist0[b], ns.lever[i]);
+      ns.rhs[i] = h * ns.force[i] - (h2 * net.tie_stiffness) * relative;
+    }
+  }
+  for (std::size_t e = 0; e < ns.springs.size(); ++e) {
+    const NetSpring& sp = model.net_springs[e];
+    SpringTerm& t = ns.springs[e];
+    const auto a = static_cast<std::size_t>(sp.node_a);
+    const auto b = static_cast<std::size_t>(sp.node_b);
+    // K̃ = (1 − τ) d̂d̂ᵀ + τ I, τ = max(0, 1 − L/l): −∂f_a/∂x_a / k.
+    const double tau = t.length > sp.rest_length ? 1.0 - sp.rest_length / t.length : 0.0;
+    const double hk = h2 * sp.stiffness;
+    t.weight_isotropic = hk * tau;
+    t.weight_axial = h * sp.damping + hk - t.weight_isotropic;
+    const Mat3 blk = t.weight_axial * (t.direction * t.direction.transpose()) +
+                     t.weight_isotropic * Mat3::Identity();
+    ns.block[a] += blk;
+    ns.block[b] += blk;
+    const Vec3 kv = weight_times(hk * (1.0 - tau), hk * tau, t.direction,
+                                 data.nodes[a].velocity - data.nodes[b].velocity);
+    ns.rhs[a] -= kv;
+    ns.rhs[b] += kv;
+  }
+  const int nc = node_contact_count(data);
+  for (int k = 0; k < nc; ++k) {
+    const NodeContact& ct = data.node_contacts[static_cast<std::size_t>(k)];
+    if (!ct.active) continue;
+    const auto i = static_cast<std::size_t>(ct.node);
+    const MaterialPair& mp = model.material_pairs[static_cast<std::size_t>(ct.material_pair)];
+    ns.block[i] += ct.weight_normal * (ct.normal * ct.normal.transpose()) +
+                   ct.weight_isotropic * Mat3::Identity();
+    ns.rhs[i] += (-h2 * mp.stiffness * ct.normal_velocity) * ct.normal;
+  }
+  for (std::size_t i = 0; i < ns.block.size(); ++i) ns.block_inverse[i] = ns.block[i].inverse();
+
+  // Preconditioner: Schur blocks of the bodies, S_b = A_bb − Σ c² J_iᵀ A_ii⁻¹ J_i.
+  for (std::size_t b = 0; b < ns.body_schur.size(); ++b) ns.body_schur[b] = s.block[b];
+  for (const NetModel& net : model.nets) {
+    const auto b = static_cast<std::size_t>(net.body);
+    if (!s.in_solve[b]) continue;
+    const double c = tie_weight(net, h);
+    Mat6 reduction = Mat6::Zero();
+    for (int v = net.node_begin; v < net.node_begin + net.node_count; ++v) {
+      const auto i = static_cast<std::size_t>(v);
+      // c² Jᵀ X J with J = [I, −K], K = [ρ]×: [[X, −XK], [KX, −KXK]].
+      // Columns of X K: K e_0 = (0, ρz, −ρy), K e_1 = (−ρz, 0, ρx), K e_2 = (ρy, −ρx, 0).
+      const Mat3& x = ns.block_inverse[i];
+      const Vec3& r = ns.lever[i];
+      Mat3 xk;
+      xk.col(0) = r.z() * x.col(1) - r.y() * x.col(2);
+      xk.col(1) = r.x() * x.col(2) - r.z() * x.col(0);
+      xk.col(2) = r.y() * x.col(0) - r.x() * x.col(1);
+      // K (X K): row j of K times XK; K is skew: (K M)_j = (r × M_col)_j per column.
+      Mat3 kxk;
+      for (int j = 0; j < 3; ++j) kxk.col(j) = r.cross(xk.col(j));
+      reduction.topLeftCorner<3, 3>() += x;
+      reduction.topRightCorner<3, 3>() -= xk;
+      reduction.bottomLeftCorner<3, 3>() -= xk.transpose();
+      reduction.bottomRightCorner<3, 3>() -= kxk;
+    }
+    ns.body_schur[b] -= (c * c) * reduction;
+  }
+  if (model.joints.empty())
+    for (std::size_t b = 0; b < ns.body_schur.size(); ++b)
+      if (s.in_solve[b]) factor_block(ns.body_schur[b], ns.body_schur_factor[b]);
+}
+
+bool solve_net_system(const Model& model, Data& data) noexcept {
+  SolverScratch& s = data.solver;
+  NetScratch& ns = data.net;
+  ArticulationScratch& art = data.articulation;
+  const bool joints = !model.joints.empty();
+  const double h = model.dt;
+  const std::size_t nb = data.bodies.size();
+  data.solver_iterations = 0;
+  data.solver_residual = 0.0;
+
+  if (joints) {
+    for (std::size_t i = 0; i < nb; ++i) art.known[i] = s.in_solve[i] ? 0 : 1;
+    build_joint_rows(model, data, s.twist0, s.delta, s.joint_rhs);  // s.delta: Δu_prev
+    factor_articulation(model, ns.body_schur, art);  // a bad pivot leaves NaN: rejected below
+  }
+
+  const std::span<Vec6> xb(s.delta), rb(s.residual), zb(s.precond_residual), pb(s.direction),
+      apb(s.a_direction), tb(ns.body_tmp);
+  const std::span<const Vec6> bb(s.rhs);
+  const std::span<Vec3> xn(ns.delta), rn(ns.residual), zn(ns.precond_residual),
+      pn(ns.direction), apn(ns.a_direction);
+  const std::span<const Vec3> bn(ns.rhs);
+  const std::span<JointVector> y(s.joint_y), yz(s.joint_y_correction);
+  const std::span<Vec6> rp(s.projected_residual);
+
+  const auto poison = [&]() noexcept {
+    constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+    for (Vec6& v : xb) v.setConstant(kNaN);
+    for (Vec3& v : xn) v.setConstant(kNaN);
+    data.solver_residual = kNaN;
+    return false;
+  };
+
+  // z = P⁻¹ r with the arrowhead preconditioner: nodes eliminated onto the
+  // bodies, body part by Cholesky of S_b or by the tree solve with
+  // `constraint_rhs` (then yz holds the constraint part).
+  const auto precondition = [&](std::span<const JointVector> constraint_rhs) noexcept {
+    for (std::size_t i = 0; i < rn.size(); ++i) zn[i].noalias() = ns.block_inverse[i] * rn[i];
+    for (std::size_t b = 0; b < nb; ++b) tb[b] = rb[b];
+    for (const NetModel& net : model.nets) {
+      const auto b = static_cast<std::size_t>(net.body);
+      if (!s.in_solve[b]) continue;
+      Vec6 acc = Vec6::Zero();
+      for (int v = net.node_begin; v < net.node_begin + net.node_count; ++v) {
+        const auto i = static_cast<std::size_t>(v);
+        acc += generalized_force(zn[i], ns.lever[i]);
+      }
+      tb[b] += tie_weight(net, h) * acc;
+    }
+    if (joints) {
+      solve_articulation(model, art, tb, constraint_rhs, zb, yz);
+    } else {
+      for (std::size_t b = 0; b < nb; ++b) {
+        if (s.in_solve[b]) {
+          solve_block(ns.body_schur_factor[b], tb[b], zb[b]);
+        } else {
+          zb[b].setZero();
+        }
+      }
+    }
+    for (const NetModel& net : model.nets) {
+      const auto b = static_cast<std::size_t>(net.body);
+      if (!s.in_solve[b]) continue;
+      const double c = tie_weight(net, h);
+      for (int v = net.node_begin; v < net.node_begin + net.node_count; ++v) {
+        const auto i = static_cast<std::size_t>(v);
+        zn[i].noalias() += c * (ns.block_inverse[i] * point_velocity(zb[b], ns.lever[i]));
+      }
+    }
+  };
+  // With joints: r ← r − Gᵀ yz (same z, since P Gᵀ = 0) and y += yz
+  // (Gould, Hribar & Nocedal's residual update; see solve_constrained_system).
+  const auto update_residual = [&]() noexcept {
+    if (!joints) return;
+    for (std::size_t b = 0; b < nb; ++b) rp[b].setZero();
+    add_joint_transpose(model, data, yz, rp);
+    for (std::size_t b = 0; b < nb; ++b) rb[b] -= rp[b];
+    for (std::size_t j = 0; j < y.size(); ++j) y[j] += yz[j];
+  };
+  const auto residual_norm = [&]() noexcept {
+    return std::sqrt(dot6(rb, rb) + dot3(rn, rn));
+  };
+
+  // Start: bodies at 0, nodes at the last step's Δv (warm start).
+  for (Vec6& v : xb) v.setZero();
+  for (Vec3& v : xn)
+    if (!v.allFinite()) v.setZero();
+  for (JointVector& v : y) v.setZero();
+  apply_coupled(model, data, xb, xn, apb, apn);
+  for (std::size_t b = 0; b < nb; ++b) rb[b] = s.in_solve[b] ? Vec6(bb[b] - apb[b]) : Vec6::Zero();
+  for (std::size_t i = 0; i < rn.size(); ++i) rn[i] = bn[i] - apn[i];
+  double ref = std::sqrt(dot6(bb, bb) + dot3(bn, bn));
+  if (!std::isfinite(ref)) return poison();
+
+  if (joints) {
+    // Feasible start: x += P_KKT⁻¹ (r, c), so that G Δu = c from here on.
+    precondition(s.joint_rhs);
+    for (std::size_t j = 0; j < y.size(); ++j) y[j] = yz[j];
+    for (std::size_t b = 0; b < nb; ++b) xb[b] += zb[b];
+    for (std::size_t i = 0; i < xn.size(); ++i) xn[i] += zn[i];
+    apply_coupled(model, data, zb, zn, apb, apn);
+    ref = std::max(ref, std::sqrt(dot6(apb, apb) + dot3(apn, apn)));
+    for (std::size_t b = 0; b < nb; ++b) rb[b] -= apb[b];
+    for (std::size_t i = 0; i < rn.size(); ++i) rn[i] -= apn[i];
+    for (std::size_t b = 0; b < nb; ++b) rp[b].setZero();
+    add_joint_transpose(model, data, y, rp);
+    for (std::size_t b = 0; b < nb; ++b) rb[b] -= rp[b];
+    for (JointVector& v : s.joint_rhs) v.setZero();  // the iterations stay on G Δ = 0
+  }
+  if (!(ref > 0.0)) ref = 1.0;
+
+  precondition(s.joint_rhs);
+  update_residual();
+  double rel = residual_norm() / ref;
+  double rz = dot6(rb, zb) + dot3(rn, zn);
+  if (!std::isfinite(rel) || !std::isfinite(rz)) return poison();
+  for (std::size_t b = 0; b < nb; ++b) pb[b] = zb[b];
+  for (std::size_t i = 0; i < pn.size(); ++i) pn[i] = zn[i];
+  int it = 0;
+  const int max_it = std::max(1, model.solver.max_iterations);
+  while (rel > model.solver.tolerance && it < max_it) {
+    ++it;
+    apply_coupled(model, data, pb, pn, apb, apn);
+    const double pap = dot6(pb, apb) + dot3(pn, apn);
+    if (!std::isfinite(pap)) return poison();
+    if (!(pap > 0.0)) break;  // breakdown, or converged exactly
+    const double alpha = rz / pap;
+    for (std::size_t b = 0; b < nb; ++b) {
+      xb[b] += alpha * pb[b];
+      rb[b] -= alpha * apb[b];
+    }
+    for (std::size_t i = 0; i < xn.size(); ++i) {
+      xn[i] += alpha * pn[i];
+      rn[i] -= alpha * apn[i];
+    }
+    precondition(s.joint_rhs);
+    update_residual();
+    rel = residual_norm() / ref;
+    const double rz_new = dot6(rb, zb) + dot3(rn, zn);
+    if (!std::isfinite(rel) || !std::isfinite(rz_new)) return poison();
+    if (!(rz_new > 0.0)) break;  // converged to rounding
+    const double beta = rz_new / rz;
+    rz = rz_new;
+    for (std::size_t b = 0; b < nb; ++b) pb[b] = zb[b] + beta * pb[b];
+    for (std::size_t i = 0; i < pn.size(); ++i) pn[i] = zn[i] + beta * pn[i];
+  }
+  if (joints) store_joint_multipliers(model, data, y);
+  data.solver_iterations = it;
+  data.solver_residual = rel;
+  return rel <= model.solver.tolerance;
+}
+
+}  // namespace numen::core

@@ -1,0 +1,52 @@
+"""Step time of a deformable ball against its node count (docs/results.md,
+"Deformable god-objects"). Input: the JSON of
+  numen_bench --benchmark_filter=DeformableBall --benchmark_repetitions=3
+              --benchmark_report_aggregates_only=true
+              --benchmark_out=FILE --benchmark_out_format=json
+Left: median step time against nodes (log-log) with the n and n·log n
+references through the 642-node point and the 250 µs target; right: CG
+iterations per step and the time per node per (iteration + 1), the linear part.
+Usage: plot_deformable_scaling.py BENCH.json OUT.png"""
+import json
+import sys
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+import numpy as np
+
+runs = [r for r in json.load(open(sys.argv[1]))["benchmarks"]
+        if r["name"].startswith("DeformableBall/") and r.get("aggregate_name") == "median"]
+runs.sort(key=lambda r: r["nodes"])
+n = np.array([r["nodes"] for r in runs])
+t = np.array([r["real_time"] * 1e-3 for r in runs])  # ns -> µs
+it = np.array([r["cg_iterations"] for r in runs])
+per = np.array([r["ns_per_node_iteration"] for r in runs])
+
+fig, (a, b) = plt.subplots(1, 2, figsize=(10, 4))
+a.loglog(n, t, "o-", label="numen core::step (median)")
+k = int(np.argmin(abs(n - 642)))
+a.loglog(n, t[k] * n / n[k], ":", color="grey", label="∝ n through 642")
+a.loglog(n, t[k] * n * np.log(n) / (n[k] * np.log(n[k])), "--", color="grey",
+         label="∝ n log n through 642")
+a.axhline(250, color="C3", lw=1, label="target 250 µs @ 642 nodes")
+slope = np.polyfit(np.log(n), np.log(t), 1)[0]
+a.set_title(f"Deformable ball: step time vs nodes (log-log slope {slope:.2f})")
+a.set_xlabel("nodes (icosphere, subdivisions 1–4)")
+a.set_ylabel("µs per step")
+a.grid(alpha=0.3, which="both")
+a.legend(fontsize=8)
+b.plot(n, it, "s-", color="C1", label="CG iterations / step (mean)")
+b.set_xscale("log")
+b.set_xlabel("nodes")
+b.set_ylabel("iterations", color="C1")
+b2 = b.twinx()
+b2.plot(n, per, "o-", color="C2", label="ns per node per (iteration + 1)")
+b2.set_ylabel("ns / node / iteration", color="C2")
+b2.set_ylim(0, max(per) * 1.3)
+b.set_title("Iterations (conditioning) and linear work per iteration")
+b.grid(alpha=0.3)
+fig.tight_layout()
+fig.savefig(sys.argv[2], dpi=120)
+print("wrote", sys.argv[2])

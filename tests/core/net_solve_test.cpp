@@ -1,0 +1,572 @@
+// Tests of core/net_solve: the coupled linearly implicit system of bodies and
+// nodes (net_solve.hpp) assembled densely in the test from the header's
+// formulas — mass and inertia, coupling springs, gyroscopic split, ties
+// (c = hγ + h²k, J_i = [I, −[ρ]×]), springs (S = α d̂d̂ᵀ + β I), node contacts
+// on a plane and on a body (W = α n nᵀ + β I) — and solved with Eigen,
+// against the arrowhead-preconditioned CG: a free rigid component, the same
+// jointed to a parent body by a revolute joint (dense KKT solve), and an
+// imposed rigid component (kDirect: Δu = 0).
+#include "numen/core/net_solve.hpp"
+
+#include <Eigen/Dense>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <vector>
+
+#include "numen/core/collision.hpp"
+#include "numen/core/contact_force.hpp"
+#include "numen/core/coupling.hpp"
+#include "numen/core/data.hpp"
+#include "numen/core/integrator.hpp"
+#include "numen/core/joint_system.hpp"
+#include "numen/core/mesh.hpp"
+#include "numen/core/model.hpp"
+#include "numen/core/rigid_body.hpp"
+#include "numen/core/step.hpp"
+
+namespace core = numen::core;
+using core::Mat3;
+using core::Quat;
+using core::Vec3;
+using Eigen::MatrixXd;
+using Eigen::VectorXd;
+using Mat36 = Eigen::Matrix<double, 3, 6>;
+
+namespace {
+
+std::size_t at(int i) { return static_cast<std::size_t>(i); }
+
+Quat rot(double angle, const Vec3& axis) { return Quat(Eigen::AngleAxisd(angle, axis.normalized())); }
+
+Mat3 skew(const Vec3& v) {
+  Mat3 m;
+  m << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
+  return m;
+}
+
+/// J = [I, −[r]×]: velocity of the point at lever arm r from a twist.
+Mat36 point_jacobian(const Vec3& r) {
+  Mat36 j;
+  j << Mat3::Identity(), -skew(r);
+  return j;
+}
+
+enum class Variant { kFree, kJointed, kImposed, kThreeNets };
+
+/// Body 0: the rigid component of an icosphere net (no spheres), spinning;
+/// body 1: a free probe the net touches; with kJointed, body 2: a handle
+/// (the device's body) carrying body 0 on a revolute joint.
+core::Model scene(Variant v) {
+  core::Model m;
+  m.dt = 2e-3;
+  m.gravity = Vec3(0.0, 0.0, -9.81);
+  m.coupling_mode = v == Variant::kImposed ? core::CouplingMode::kDirect : core::CouplingMode::kGodObject;
+  m.solver.tolerance = 1e-12;
+  m.solver.max_iterations = 500;
+  m.material_names = {"hard", "net"};
+  m.material_pairs = {core::MaterialPair{1e4, 20.0, 0.5}, core::MaterialPair{3e3, 4.0, 0.3},
+                      core::MaterialPair{3e3, 4.0, 0.3}, core::MaterialPair{1e3, 1.0, 0.0}};
+  core::Obstacle floor;
+  floor.name = "floor";
+  floor.type = core::ShapeType::kPlane;
+  floor.pose.position = Vec3(0, 0, -1.0);  // far: the test writes the node contacts itself
+  m.obstacles = {floor};
+  core::BodyModel b;
+  b.name = "core";
+  b.mass = 0.2;
+  b.inertia_body = Vec3(2e-4, 3e-4, 4e-4).asDiagonal();
+  b.initial_pose = core::Pose{Vec3(0.01, -0.02, 0.1), rot(0.4, Vec3(1, 2, 3))};
+  b.initial_twist.linear = Vec3(0.05, -0.02, 0.01);
+  b.initial_twist.angular = Vec3(1.5, -0.7, 2.0);
+  b.coupling = {800.0, core::damping_from_ratio(0.8, 0.35, 800.0), 0.6, 0.02};
+  core::BodyModel probe;
+  probe.name = "probe";
+  probe.mass = 0.5;
+  probe.inertia_body = Vec3(1e-3, 1e-3, 2e-3).asDiagonal();
+  probe.initial_pose.position = Vec3(0.1, -0.02, 0.1);
+  probe.initial_twist.linear = Vec3(-0.03, 0.0, 0.02);
+  probe.initial_twist.angular = Vec3(0.0, 0.5, -0.3);
+  m.bodies = {b, probe};
+  m.initial_attached_body = 0;
+  if (v == Variant::kJointed) {
+    core::BodyModel handle = b;
+    handle.name = "handle";
+    handle.mass = 0.3;
+    // Joint anchors coincide at the start: core = handle + R (0, 0, −0.1).
+    handle.initial_pose = b.initial_pose;
+    handle.initial_pose.position = b.initial_pose.position + b.initial_pose.orientation * Vec3(0, 0, 0.1);
+    handle.initial_twist = b.initial_twist;
+    m.bodies.push_back(handle);
+    m.initial_attached_body = 2;
+    core::JointModel j;
+    j.name = "wrist";
+    j.type = core::JointType::kRevolute;
+    j.parent = 2;
+    j.child = 0;
+    j.frame_parent = core::Pose{Vec3(0, 0, -0.05), rot(0.3, Vec3::UnitX())};
+    j.frame_child = core::Pose{Vec3(0, 0, 0.05), rot(0.3, Vec3::UnitX())};
+    m.joints = {j};
+  }
+  core::NetSettings s;
+  s.name = "bag";
+  s.body = 0;
+  s.material = 1;
+  s.mass = 0.15;
+  s.stiffness = 60.0;
+  s.damping = 0.2;
+  s.bending_stiffness = 10.0;
+  s.bending_damping = 0.05;
+  s.tie_stiffness = 150.0;
+  s.tie_damping = 0.4;
+  EXPECT_EQ(core::add_net(m, core::make_icosphere(0.05, 1), s), "");
+  if (v == Variant::kThreeNets) {
+    // A second net on the same rigid component (a tip above the bag) and a
+    // third on the probe: several nets' ties on one body's Schur block.
+    core::TriangleMesh tip = core::make_icosphere(0.02, 0);
+    core::transform_mesh(tip, Vec3::Ones(), core::Pose{Vec3(0.0, 0.0, 0.08), Quat::Identity()});
+    core::NetSettings t = s;
+    t.name = "tip";
+    t.mass = 0.03;
+    t.tie_stiffness = 300.0;
+    t.tie_damping = 0.2;
+    EXPECT_EQ(core::add_net(m, tip, t), "");
+    core::NetSettings u = s;
+    u.name = "skin";
+    u.body = 1;
+    u.material = 0;
+    u.mass = 0.05;
+    u.tie_stiffness = 80.0;
+    EXPECT_EQ(core::add_net(m, core::make_icosphere(0.03, 0), u), "");
+  }
+  EXPECT_EQ(core::finalize_model(m), "");
+  return m;
+}
+
+/// Moves the nodes off their anchors (some springs stretched, some compressed).
+void perturb(core::Data& d, double dx, double dv) {
+  for (std::size_t i = 0; i < d.nodes.size(); ++i) {
+    const double s = static_cast<double>(i) + 1.0;
+    d.nodes[i].position += dx * Vec3(std::sin(1.3 * s), std::cos(2.1 * s), std::sin(0.7 * s + 1.0));
+    d.nodes[i].velocity += dv * Vec3(std::cos(1.7 * s), std::sin(2.9 * s), std::cos(0.3 * s));
+  }
+}
+
+/// Two node contacts on a plane (the two lowest nodes) and one with body 1
+/// (the node nearest to it), written by hand in place of detect_node_contacts.
+void write_node_contacts(const core::Model& m, core::Data& d) {
+  int low0 = -1, low1 = -1, near = -1;
+  for (int i = 0; i < m.num_nodes(); ++i) {
+    const double z = d.nodes[at(i)].position.z();
+    if (low0 < 0 || z < d.nodes[at(low0)].position.z()) {
+      low1 = low0;
+      low0 = i;
+    } else if (low1 < 0 || z < d.nodes[at(low1)].position.z()) {
+      low1 = i;
+    }
+    if (near < 0 || (d.nodes[at(i)].position - d.bodies[1].position).norm() <
+                        (d.nodes[at(near)].position - d.bodies[1].position).norm())
+      near = i;
+  }
+  d.num_node_contacts = 3;
+  for (int k = 0; k < 2; ++k) {
+    core::NodeContact& c = d.node_contacts[at(k)];
+    c = core::NodeContact{};
+    c.node = k == 0 ? low0 : low1;
+    c.obstacle = 0;
+    c.material_pair = 1;
+    c.normal = k == 0 ? Vec3::UnitZ() : Vec3(0.1, 0.0, 1.0).normalized();
+    c.depth = k == 0 ? 2e-3 : 1e-3;
+    c.position = d.nodes[at(c.node)].position - 0.01 * c.normal;
+  }
+  core::NodeContact& c = d.node_contacts[2];
+  c = core::NodeContact{};
+  c.node = near;
+  c.body_b = 1;
+  c.sphere_b = 0;
+  c.material_pair = 3;
+  c.normal = (d.nodes[at(near)].position - d.bodies[1].position).normalized();
+  c.depth = 1.5e-3;
+  c.position = d.nodes[at(near)].position - 0.005 * c.normal;
+}
+
+/// States and inputs the dense reference is built from (after the imposed
+/// pose of kDirect, before the forces stage).
+struct Snapshot {
+  std::vector<core::BodyState> bodies;
+  std::vector<core::NodeState> nodes;
+  std::vector<core::NodeContact> contacts;
+  std::vector<std::uint8_t> imposed;
+  core::Pose target;
+  core::Twist target_twist;
+  int attached = -1;
+};
+
+/// The stages of one implicit step up to the solve, with hand-written node
+/// contacts. Returns the snapshot; the solve's result is in d.
+Snapshot staged_solve(const core::Model& m, core::Data& d, bool* converged) {
+  d.status = core::kStepOk;
+  core::impose_direct_target(m, d);
+  core::detect_contacts(m, d);
+  write_node_contacts(m, d);
+  Snapshot s;
+  s.bodies = d.bodies;
+  s.nodes = d.nodes;
+  s.contacts.assign(d.node_contacts.begin(), d.node_contacts.begin() + d.num_node_contacts);
+  s.imposed = d.solver.imposed;
+  s.target = d.target;
+  s.target_twist = d.target_twist;
+  s.attached = d.attached_body;
+  core::compute_forces(m, d);
+  core::prepare_implicit_step(m, d);
+  core::build_implicit_system(m, d);
+  core::build_net_system(m, d);
+  *converged = core::solve_net_system(m, d);
+  return s;
+}
+
+/// The dense A = M − hD − h²K and b = h (f0 + h K u0) + M (u* − u0) over
+/// [Δu bodies (6 each); Δv nodes (3 each)] from net_solve.hpp and
+/// integrator.hpp, computed from the snapshot only (no solver scratch).
+/// Rows of imposed bodies are identity with b = 0.
+struct Dense {
+  MatrixXd a;
+  VectorXd b;
+  std::vector<double> spring_alpha, spring_beta;  // for a cross-check of SpringTerm
+};
+
+Dense dense_system(const core::Model& m, const Snapshot& s) {
+  const double h = m.dt, h2 = h * h;
+  const int nb = m.num_bodies(), nn = m.num_nodes();
+  const int dim = 6 * nb + 3 * nn;
+  Dense out;
+  out.a = MatrixXd::Zero(dim, dim);
+  out.b = VectorXd::Zero(dim);
+  MatrixXd& a = out.a;
+  VectorXd& b = out.b;
+  const auto bi = [](int body) { return 6 * body; };
+  const auto ni = [nb](int node) { return 6 * nb + 3 * node; };
+  std::vector<Eigen::Matrix<double, 6, 1>> fb(at(nb), Eigen::Matrix<double, 6, 1>::Zero());
+  std::vector<Vec3> fn(at(nn), Vec3::Zero());
+  const auto in_solve = [&](int body) { return body >= 0 && !s.imposed[at(body)]; };
+
+  for (int k = 0; k < nb; ++k) {
+    const core::BodyModel& bm = m.bodies[at(k)];
+    const core::BodyState& st = s.bodies[at(k)];
+    const Mat3 r = st.orientation.toRotationMatrix();
+    const Mat3 iw = r * bm.inertia_body * r.transpose();
+    a.block<3, 3>(bi(k), bi(k)) = bm.mass * Mat3::Identity();
+    a.block<3, 3>(bi(k) + 3, bi(k) + 3) = iw;
+    const Vec3 w_star = core::implicit_gyroscopic_velocity(r, bm.inertia_body, st.angular_velocity, h);
+    b.segment<3>(bi(k) + 3) += iw * (w_star - st.angular_velocity);
+    fb[at(k)].head<3>() += bm.mass * m.gravity;
+    if (k == s.attached && m.coupling_mode == core::CouplingMode::kGodObject) {
+      const core::CouplingGains& g = bm.coupling;
+      const core::Wrench w = core::coupling_wrench(g, s.target, s.target_twist, st);
+      fb[at(k)] += (Eigen::Matrix<double, 6, 1>() << w.force, w.torque).finished();
+      a.block<3, 3>(bi(k), bi(k)) += (h * g.gamma_t + h2 * g.k_t) * Mat3::Identity();
+      a.block<3, 3>(bi(k) + 3, bi(k) + 3) += (h * g.gamma_r + h2 * g.k_r) * Mat3::Identity();
+      b.segment<3>(bi(k)) -= h2 * g.k_t * st.linear_velocity;
+      b.segment<3>(bi(k) + 3) -= h2 * g.k_r * st.angular_velocity;
+    }
+  }
+  for (int i = 0; i < nn; ++i) {
+    a.block<3, 3>(ni(i), ni(i)) = m.node_mass[at(i)] * Mat3::Identity();
+    fn[at(i)] = m.node_mass[at(i)] * m.gravity;
+  }
+  // Springs: S = h γ d̂d̂ᵀ + h² k K̃, K̃ = (1 − τ) d̂d̂ᵀ + τ I, τ = max(0, 1 − L/l).
+  for (const core::NetSpring& sp : m.net_springs) {
+    const core::NodeState& na = s.nodes[at(sp.node_a)];
+    const core::NodeState& nbs = s.nodes[at(sp.node_b)];
+    const Vec3 dx = nbs.position - na.position;
+    const double l = dx.norm();
+    const Vec3 n = dx / l;
+    const double tau = std::max(0.0, 1.0 - sp.rest_length / l);
+    const Mat3 kt = (1.0 - tau) * n * n.transpose() + tau * Mat3::Identity();
+    const Mat3 sm = h * sp.damping * n * n.transpose() + h2 * sp.stiffness * kt;
+    out.spring_beta.push_back(h2 * sp.stiffness * tau);
+    out.spring_alpha.push_back(h * sp.damping + h2 * sp.stiffness - h2 * sp.stiffness * tau);
+    const Vec3 f = (sp.stiffness * (l - sp.rest_length) + sp.damping * n.dot(nbs.velocity - na.velocity)) * n;
+    fn[at(sp.node_a)] += f;
+    fn[at(sp.node_b)] -= f;
+    const int ia = ni(sp.node_a), ib = ni(sp.node_b);
+    a.block<3, 3>(ia, ia) += sm;
+    a.block<3, 3>(ib, ib) += sm;
+    a.block<3, 3>(ia, ib) -= sm;
+    a.block<3, 3>(ib, ia) -= sm;
+    const Vec3 kv = h2 * sp.stiffness * kt * (na.velocity - nbs.velocity);
+    b.segment<3>(ia) -= kv;
+    b.segment<3>(ib) += kv;
+  }
+  // Ties: c = h γ + h² k; A_ii += c I, A_ib = −c J_i, A_bb += c J_iᵀ J_i.
+  for (const core::NetModel& net : m.nets) {
+    const core::BodyState& body = s.bodies[at(net.body)];
+    const double c = h * net.tie_damping + h2 * net.tie_stiffness;
+    const int ib = bi(net.body);
+    for (int i = net.node_begin; i < net.node_begin + net.node_count; ++i) {
+      const Vec3 rho = body.orientation * m.node_rest[at(i)];
+      const Vec3 anchor = body.position + rho;
+      const Vec3 va = body.linear_velocity + body.angular_velocity.cross(rho);
+      const core::NodeState& nd = s.nodes[at(i)];
+      const Vec3 f = -net.tie_stiffness * (nd.position - anchor) - net.tie_damping * (nd.velocity - va);
+      fn[at(i)] += f;
+      fb[at(net.body)].head<3>() -= f;
+      fb[at(net.body)].tail<3>() -= rho.cross(f);
+      a.block<3, 3>(ni(i), ni(i)) += c * Mat3::Identity();
+      b.segment<3>(ni(i)) -= h2 * net.tie_stiffness * (nd.velocity - va);
+      if (!in_solve(net.body)) continue;
+      const Mat36 j = point_jacobian(rho);
+      a.block<3, 6>(ni(i), ib) -= c * j;
+      a.block<6, 3>(ib, ni(i)) -= c * j.transpose();
+      a.block<6, 6>(ib, ib) += c * j.transpose() * j;
+      b.segment<6>(ib) += h2 * net.tie_stiffness * j.transpose() * (nd.velocity - va);
+    }
+  }
+  // Node contacts: the penalty law and W = (h c + h² k) n nᵀ + h μ (I − n nᵀ).
+  for (const core::NodeContact& ct : s.contacts) {
+    const core::MaterialPair& mp = m.material_pairs[at(ct.material_pair)];
+    const core::NodeState& nd = s.nodes[at(ct.node)];
+    Vec3 v_rel = nd.velocity;
+    Vec3 r_b = Vec3::Zero();
+    if (ct.body_b >= 0) {
+      const core::BodyState& bb = s.bodies[at(ct.body_b)];
+      r_b = ct.position - bb.position;
+      v_rel -= bb.linear_velocity + bb.angular_velocity.cross(r_b);
+    }
+    const Vec3& n = ct.normal;
+    const double vn = n.dot(v_rel);
+    const double fnorm = mp.stiffness * ct.depth - mp.damping * vn;
+    if (!(fnorm > 0.0)) continue;
+    const Vec3 f = fnorm * n - mp.friction * (v_rel - vn * n);
+    fn[at(ct.node)] += f;
+    const Mat3 w = (h * mp.damping + h2 * mp.stiffness) * n * n.transpose() +
+                   h * mp.friction * (Mat3::Identity() - n * n.transpose());
+    const int ii = ni(ct.node);
+    a.block<3, 3>(ii, ii) += w;
+    b.segment<3>(ii) -= h2 * mp.stiffness * vn * n;
+    if (ct.body_b < 0) continue;
+    fb[at(ct.body_b)].head<3>() -= f;
+    fb[at(ct.body_b)].tail<3>() -= r_b.cross(f);
+    if (!in_solve(ct.body_b)) continue;
+    const Mat36 j = point_jacobian(r_b);
+    const int ib = bi(ct.body_b);
+    a.block<3, 6>(ii, ib) -= w * j;
+    a.block<6, 3>(ib, ii) -= j.transpose() * w;
+    a.block<6, 6>(ib, ib) += j.transpose() * w * j;
+    b.segment<6>(ib) += h2 * mp.stiffness * vn * j.transpose() * n;
+  }
+  for (int k = 0; k < nb; ++k) b.segment<6>(bi(k)) += h * fb[at(k)];
+  for (int i = 0; i < nn; ++i) b.segment<3>(ni(i)) += h * fn[at(i)];
+  for (int k = 0; k < nb; ++k) {
+    if (in_solve(k)) continue;
+    a.middleRows(bi(k), 6).setZero();
+    a.middleCols(bi(k), 6).setZero();
+    a.block<6, 6>(bi(k), bi(k)).setIdentity();
+    b.segment<6>(bi(k)).setZero();
+  }
+  return out;
+}
+
+VectorXd solver_unknowns(const core::Model& m, const core::Data& d) {
+  VectorXd x(6 * m.num_bodies() + 3 * m.num_nodes());
+  for (int k = 0; k < m.num_bodies(); ++k) x.segment<6>(6 * k) = d.solver.delta[at(k)];
+  for (int i = 0; i < m.num_nodes(); ++i) x.segment<3>(6 * m.num_bodies() + 3 * i) = d.net.delta[at(i)];
+  return x;
+}
+
+/// Checks shared by the three variants: the solver's spring and contact
+/// weights, the body blocks of A (SolverScratch::block), convergence.
+void check_scratch(const core::Model& m, const core::Data& d, const Dense& ref, bool converged) {
+  EXPECT_TRUE(converged);
+  EXPECT_GT(d.solver_iterations, 0);
+  EXPECT_LE(d.solver_residual, m.solver.tolerance);
+  EXPECT_EQ(d.status & core::kSolverNotConverged, 0u);
+  ASSERT_EQ(d.net.springs.size(), ref.spring_alpha.size());
+  for (std::size_t e = 0; e < ref.spring_alpha.size(); ++e) {
+    EXPECT_NEAR(d.net.springs[e].weight_axial, ref.spring_alpha[e], 1e-15) << e;
+    EXPECT_NEAR(d.net.springs[e].weight_isotropic, ref.spring_beta[e], 1e-15) << e;
+  }
+  int stretched = 0, compressed = 0;
+  for (std::size_t e = 0; e < ref.spring_beta.size(); ++e) (ref.spring_beta[e] > 0.0 ? stretched : compressed)++;
+  EXPECT_GT(stretched, 10);
+  EXPECT_GT(compressed, 10);
+  for (int c = 0; c < d.num_node_contacts; ++c) EXPECT_TRUE(d.node_contacts[at(c)].active) << c;
+  // Diagonal body blocks of A (with the ties' and node–body contacts' terms).
+  for (int k = 0; k < m.num_bodies(); ++k) {
+    if (d.solver.imposed[at(k)]) continue;
+    const Eigen::Matrix<double, 6, 6> blk = ref.a.block<6, 6>(6 * k, 6 * k);
+    EXPECT_LT((d.solver.block[at(k)] - blk).norm(), 1e-12 * blk.norm()) << "body " << k << "\n"
+                                                                        << d.solver.block[at(k)] << "\n"
+                                                                        << blk;
+  }
+  // Node diagonal blocks.
+  for (int i = 0; i < m.num_nodes(); ++i) {
+    const int r = 6 * m.num_bodies() + 3 * i;
+    const Mat3 blk = ref.a.block<3, 3>(r, r);
+    EXPECT_LT((d.net.block[at(i)] - blk).norm(), 1e-12 * blk.norm()) << "node " << i;
+  }
+}
+
+}  // namespace
+
+TEST(NetSolve, FreeRigidComponentMatchesTheDenseSolve) {
+  const core::Model m = scene(Variant::kFree);
+  core::Data d = core::make_data(m);
+  perturb(d, 3e-3, 0.05);
+  d.target = core::Pose{Vec3(0.02, 0.0, 0.12), rot(0.5, Vec3(1, 2, 2.5))};
+  d.target_twist = core::Twist{Vec3(0.1, 0.0, 0.0), Vec3(0.0, 0.3, 0.0)};
+  bool converged = false;
+  const Snapshot s = staged_solve(m, d, &converged);
+  const Dense ref = dense_system(m, s);
+  check_scratch(m, d, ref, converged);
+  EXPECT_LT((ref.a - ref.a.transpose()).norm(), 1e-14 * ref.a.norm());
+  const Eigen::LLT<MatrixXd> llt(ref.a);
+  ASSERT_EQ(llt.info(), Eigen::Success) << "A must be symmetric positive definite";
+  const VectorXd x_ref = llt.solve(ref.b);
+  const VectorXd x = solver_unknowns(m, d);
+  const double err = (x - x_ref).norm() / x_ref.norm();
+  std::printf("[net solve free] %d iterations, residual %.2e, |x - x_dense|/|x| %.2e, |A x - b|/|b| %.2e\n",
+              d.solver_iterations, d.solver_residual, err, (ref.a * x - ref.b).norm() / ref.b.norm());
+  EXPECT_LT(err, 1e-9);
+  EXPECT_LT((ref.a * x - ref.b).norm(), 1e-11 * ref.b.norm());
+  // Both parts of the solution matter: the body moves, the nodes deform.
+  EXPECT_GT(x_ref.head<6>().norm(), 1e-4);
+  EXPECT_GT(x_ref.tail(3 * m.num_nodes()).norm(), 1e-4);
+}
+
+TEST(NetSolve, WarmStartedSolveAfterRealStepsMatchesTheDenseSolve) {
+  const core::Model m = scene(Variant::kFree);
+  core::Data d = core::make_data(m);
+  perturb(d, 2e-3, 0.05);
+  for (int k = 0; k < 30; ++k) {
+    d.target.position.x() += 2e-4;
+    core::step(m, d);
+    ASSERT_EQ(d.status, core::kStepOk) << k;
+  }
+  bool any_warm = false;
+  for (const Vec3& v : d.net.delta) any_warm = any_warm || !v.isZero(0.0);
+  EXPECT_TRUE(any_warm);
+  bool converged = false;
+  const Snapshot s = staged_solve(m, d, &converged);
+  const Dense ref = dense_system(m, s);
+  check_scratch(m, d, ref, converged);
+  const VectorXd x_ref = ref.a.llt().solve(ref.b);
+  const double err = (solver_unknowns(m, d) - x_ref).norm() / x_ref.norm();
+  std::printf("[net solve warm] %d iterations, |x - x_dense|/|x| %.2e\n", d.solver_iterations, err);
+  EXPECT_LT(err, 1e-9);
+}
+
+TEST(NetSolve, JointedRigidComponentMatchesTheDenseKktSolve) {
+  const core::Model m = scene(Variant::kJointed);
+  core::Data d = core::make_data(m);
+  // A few real steps first: joint rows with a previous Δu, warm start, drift.
+  for (int k = 0; k < 10; ++k) {
+    d.target.position.z() += 1e-4;
+    core::step(m, d);
+    ASSERT_EQ(d.status, core::kStepOk) << k;
+  }
+  perturb(d, 3e-3, 0.05);
+  bool converged = false;
+  const Snapshot s = staged_solve(m, d, &converged);
+  const Dense ref = dense_system(m, s);
+  check_scratch(m, d, ref, converged);
+  // KKT: [A Gᵀ; G 0] [Δ; y] = [b; c] with G = the joint rows at the step's
+  // start (Data::articulation.rows) and c their Baumgarte right-hand side.
+  const core::JointModel& jm = m.joints[0];
+  const core::JointRows& rows = d.articulation.rows[0];
+  const int nr = jm.num_rows;
+  ASSERT_EQ(nr, 5);
+  const int n = static_cast<int>(ref.b.size());
+  MatrixXd g = MatrixXd::Zero(nr, n);
+  g.block(0, 6 * jm.child, nr, 6) = rows.g_child.topRows(nr);
+  g.block(0, 6 * jm.parent, nr, 6) = rows.g_parent.topRows(nr);
+  const VectorXd c = d.joints[0].baumgarte_rhs.head(nr);
+  MatrixXd kkt = MatrixXd::Zero(n + nr, n + nr);
+  kkt.topLeftCorner(n, n) = ref.a;
+  kkt.topRightCorner(n, nr) = g.transpose();
+  kkt.bottomLeftCorner(nr, n) = g;
+  VectorXd rhs(n + nr);
+  rhs << ref.b, c;
+  const VectorXd sol = kkt.fullPivLu().solve(rhs);
+  const VectorXd x_ref = sol.head(n);
+  const VectorXd y_ref = sol.tail(nr);
+  const VectorXd x = solver_unknowns(m, d);
+  const double err = (x - x_ref).norm() / x_ref.norm();
+  const VectorXd lambda_ref = -y_ref / m.dt;
+  const VectorXd lambda = d.joints[0].multiplier.head(nr);
+  std::printf("[net solve jointed] %d iterations, residual %.2e, |x - x_kkt|/|x| %.2e, |G x - c| %.2e, "
+              "|λ - λ_kkt|/|λ| %.2e\n",
+              d.solver_iterations, d.solver_residual, err, (g * x - c).norm(),
+              (lambda - lambda_ref).norm() / lambda_ref.norm());
+  EXPECT_LT(err, 1e-9);
+  EXPECT_LT((g * x - c).norm(), 1e-10 * (1.0 + c.norm()));
+  EXPECT_GT(c.norm(), 0.0);
+  EXPECT_LT((lambda - lambda_ref).norm(), 1e-7 * lambda_ref.norm());
+  // Stationarity of the KKT system with the solver's own multipliers.
+  const VectorXd y = -m.dt * lambda;
+  EXPECT_LT((ref.a * x + g.transpose() * y - ref.b).norm(), 1e-9 * ref.b.norm());
+}
+
+TEST(NetSolve, ImposedRigidComponentHasNoUnknownAndTheNodesMatchTheDenseSolve) {
+  const core::Model m = scene(Variant::kImposed);
+  core::Data d = core::make_data(m);
+  perturb(d, 3e-3, 0.05);
+  d.target = core::Pose{Vec3(0.02, -0.01, 0.11), rot(0.5, Vec3(1, 2, 2.5))};
+  d.target_twist = core::Twist{Vec3(0.2, 0.0, -0.1), Vec3(0.5, 0.3, 0.0)};
+  bool converged = false;
+  const Snapshot s = staged_solve(m, d, &converged);
+  ASSERT_TRUE(d.solver.imposed[0]);
+  EXPECT_FALSE(d.solver.in_solve[0]);
+  EXPECT_TRUE(d.solver.delta[0].isZero(0.0)) << d.solver.delta[0].transpose();
+  EXPECT_EQ(s.bodies[0].position, d.target.position);
+  const Dense ref = dense_system(m, s);
+  check_scratch(m, d, ref, converged);
+  const VectorXd x_ref = ref.a.llt().solve(ref.b);
+  const VectorXd x = solver_unknowns(m, d);
+  const double err = (x - x_ref).norm() / x_ref.norm();
+  std::printf("[net solve imposed] %d iterations, |x - x_dense|/|x| %.2e\n", d.solver_iterations, err);
+  EXPECT_LT(err, 1e-9);
+  // A whole step keeps the imposed body at the target.
+  core::Data d2 = core::make_data(m);
+  d2.target = d.target;
+  d2.target_twist = d.target_twist;
+  core::step(m, d2);
+  EXPECT_EQ(d2.bodies[0].position, d.target.position);
+  EXPECT_TRUE(d2.solver.delta[0].isZero(0.0));
+}
+
+TEST(NetSolve, ReportsNonConvergenceAtMaxIterations) {
+  core::Model m = scene(Variant::kFree);
+  m.solver.max_iterations = 1;
+  ASSERT_EQ(core::finalize_model(m), "");
+  core::Data d = core::make_data(m);
+  perturb(d, 3e-3, 0.05);
+  bool converged = true;
+  staged_solve(m, d, &converged);
+  EXPECT_FALSE(converged);
+  EXPECT_EQ(d.solver_iterations, 1);
+  EXPECT_GT(d.solver_residual, m.solver.tolerance);
+  // Through step(): the status bit, and the iterate is still used (finite).
+  core::Data d2 = core::make_data(m);
+  perturb(d2, 3e-3, 0.05);
+  core::step(m, d2);
+  EXPECT_TRUE(d2.status & core::kSolverNotConverged);
+  EXPECT_EQ(d2.status & core::kNonFinite, 0u);
+}
+
+TEST(NetSolve, SeveralNetsOnOneBodyAndOnTheProbeMatchTheDenseSolve) {
+  const core::Model m = scene(Variant::kThreeNets);
+  ASSERT_EQ(m.num_nets(), 3);
+  core::Data d = core::make_data(m);
+  perturb(d, 3e-3, 0.05);
+  d.target = core::Pose{Vec3(0.02, 0.0, 0.12), rot(0.5, Vec3(1, 2, 2.5))};
+  bool converged = false;
+  const Snapshot s = staged_solve(m, d, &converged);
+  const Dense ref = dense_system(m, s);
+  check_scratch(m, d, ref, converged);
+  const VectorXd x_ref = ref.a.llt().solve(ref.b);
+  const double err = (solver_unknowns(m, d) - x_ref).norm() / x_ref.norm();
+  std::printf("[net solve three nets] %d iterations, |x - x_dense|/|x| %.2e\n", d.solver_iterations, err);
+  EXPECT_LT(err, 1e-9);
+}
