@@ -4,6 +4,7 @@
 // name the file, line and dotted key.
 #include <gtest/gtest.h>
 
+#include "scene_text.hpp"
 #include "temp_dir.hpp"
 #include <unistd.h>
 
@@ -25,6 +26,11 @@
 
 namespace {
 
+using numen::test::column_of;
+using numen::test::line_of;
+using numen::test::load_error;
+using numen::test::replace;
+
 namespace fs = std::filesystem;
 using numen::core::JointType;
 using numen::core::Pose;
@@ -45,24 +51,6 @@ double angle_between(const Quat& a, const Quat& b) {
 }
 
 using numen::test::TempDir;
-
-/// 1-based line of the `nth` (1-based) line of `text` containing `needle` (0: none).
-int line_of(const std::string& text, const std::string& needle, int nth = 1) {
-  std::istringstream in(text);
-  std::string line;
-  for (int n = 1; std::getline(in, line); ++n)
-    if (line.find(needle) != std::string::npos && --nth == 0) return n;
-  return 0;
-}
-
-/// Replaces the `nth` occurrence of `from` in `text` (which must exist).
-std::string replace(std::string text, const std::string& from, const std::string& to, int nth = 1) {
-  std::size_t at = text.find(from);
-  while (at != std::string::npos && --nth > 0) at = text.find(from, at + 1);
-  EXPECT_NE(at, std::string::npos) << "test bug: '" << from << "' not in the template";
-  if (at != std::string::npos) text.replace(at, from.size(), to);
-  return text;
-}
 
 // The articulated trocar instrument of default.toml, on one second of the
 // shipped excerpt, plus a body bound to link "tool" with a given position.
@@ -171,29 +159,14 @@ end_time = 1.0
 
 Scene load_text(const TempDir& dir, const std::string& text) { return load_scene(dir.write("art.toml", text)); }
 
-InputError load_error(const TempDir& dir, const std::string& text) {
-  const std::string path = dir.write("bad_art.toml", text);
-  try {
-    (void)load_scene(path);
-  } catch (const InputError& e) {
-    std::printf("[   info   ] %s\n", e.what());
-    return e;
-  } catch (const std::exception& e) {
-    ADD_FAILURE() << "expected InputError, got another exception: " << e.what();
-    return InputError(path, 0, 0, "", "wrong exception type");
-  }
-  ADD_FAILURE() << "expected InputError, the scene loaded";
-  return InputError(path, 0, 0, "", "no error");
-}
-
 /// what() names the file, the line, the key (if given) and contains `message`.
 void expect_located(const InputError& e, int line, const std::string& key, const std::string& message) {
   const std::string what = e.what();
   SCOPED_TRACE(what);
-  EXPECT_NE(what.find("bad_art.toml"), std::string::npos) << "file name";
+  EXPECT_NE(what.find("bad.toml"), std::string::npos) << "file name";
   EXPECT_GT(line, 0) << "test bug: line not found";
   EXPECT_EQ(e.line(), line);
-  EXPECT_NE(what.find("bad_art.toml:" + std::to_string(line) + ":"), std::string::npos) << "file:line";
+  EXPECT_NE(what.find("bad.toml:" + std::to_string(line) + ":"), std::string::npos) << "file:line";
   if (!key.empty()) {
     EXPECT_EQ(e.key(), key);
     EXPECT_NE(what.find(key + ": "), std::string::npos) << "dotted key";
@@ -480,9 +453,9 @@ TEST(SceneArticulationErrors, BodyThatIsTheChildOfTwoJoints) {
   const std::string t = replace(art_scene(), "child = \"jaw_2\"", "child = \"jaw_1\"");
   const InputError e = load_error(dir, t);
   const std::string what = e.what();
-  EXPECT_NE(what.find("bad_art.toml"), std::string::npos) << what;
+  EXPECT_NE(what.find("bad.toml"), std::string::npos) << what;
   EXPECT_GT(e.line(), 0) << what;
-  EXPECT_NE(what.find("bad_art.toml:" + std::to_string(e.line()) + ":"), std::string::npos) << what;
+  EXPECT_NE(what.find("bad.toml:" + std::to_string(e.line()) + ":"), std::string::npos) << what;
   EXPECT_NE(e.message().find("joint 'jaw_2_hinge'"), std::string::npos) << e.message();
   EXPECT_NE(e.message().find("jaw_1"), std::string::npos) << e.message();
   // Located at the offending joint's child key (the second `child = "jaw_1"`).

@@ -20,9 +20,15 @@
 #include "numen/sim/input_error.hpp"
 #include "numen/sim/scene.hpp"
 #include "numen/sim/simulated_instrument.hpp"
+#include "scene_text.hpp"
 #include "temp_dir.hpp"
 
 namespace {
+
+using numen::test::column_of;
+using numen::test::line_of;
+using numen::test::load_error;
+using numen::test::replace;
 
 using numen::core::Model;
 using numen::core::NetModel;
@@ -221,35 +227,6 @@ TEST(DeformableShippedScene, RecordedTargetGoesThroughThePost) {
 
 // ---------------------------------------------------------------- loader
 
-/// 1-based line of the first line of `text` containing `needle` (0: none).
-int line_of(const std::string& text, const std::string& needle) {
-  std::istringstream in(text);
-  std::string line;
-  for (int n = 1; std::getline(in, line); ++n)
-    if (line.find(needle) != std::string::npos) return n;
-  return 0;
-}
-/// 1-based column of `value` in the first line containing `needle` at or after it (0: none).
-int column_of(const std::string& text, const std::string& needle, const std::string& value) {
-  std::istringstream in(text);
-  std::string line;
-  while (std::getline(in, line)) {
-    const auto at = line.find(needle);
-    if (at == std::string::npos) continue;
-    const auto c = line.find(value, at);
-    return c == std::string::npos ? 0 : static_cast<int>(c) + 1;
-  }
-  return 0;
-}
-
-/// Replaces the first occurrence of `from` in `text` (which must exist).
-std::string replace(std::string text, const std::string& from, const std::string& to) {
-  const auto at = text.find(from);
-  EXPECT_NE(at, std::string::npos) << "test bug: '" << from << "' not in the template";
-  if (at != std::string::npos) text.replace(at, from.size(), to);
-  return text;
-}
-
 // A small valid scene: a held tool with a sphere, a hidden core body and one
 // deformable on it. Every error test changes one thing.
 const std::string kMini = R"(name = "mini"
@@ -312,21 +289,6 @@ std::string with_deformable(const std::string& table) {
   const auto begin = kMini.find("[[deformable]]");
   const auto end = kMini.find("[[obstacle]]");
   return kMini.substr(0, begin) + table + "\n" + kMini.substr(end);
-}
-
-InputError load_error(const TempDir& dir, const std::string& text) {
-  const std::string path = dir.write("bad.toml", text);
-  try {
-    (void)load_scene(path);
-  } catch (const InputError& e) {
-    std::printf("[   info   ] %s\n", e.what());
-    return e;
-  } catch (const std::exception& e) {
-    ADD_FAILURE() << "expected InputError, got another exception: " << e.what();
-    return InputError(path, 0, 0, "", "wrong exception type");
-  }
-  ADD_FAILURE() << "expected InputError, the scene loaded:\n" << text;
-  return InputError(path, 0, 0, "", "no error");
 }
 
 /// Expects the error of `text` at the value of the first line containing

@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include "scene_text.hpp"
 #include "temp_dir.hpp"
 
 #include "numen/core/data.hpp"
@@ -30,6 +31,11 @@
 
 namespace {
 
+using numen::test::column_of;
+using numen::test::line_of;
+using numen::test::load_error;
+using numen::test::replace;
+
 namespace fs = std::filesystem;
 using numen::core::CouplingMode;
 using numen::core::Quat;
@@ -53,34 +59,6 @@ double angle_between(const Quat& a, const Quat& b) {
 }
 
 using numen::test::TempDir;
-
-/// 1-based line of the first line of `text` containing `needle` (0: none).
-int line_of(const std::string& text, const std::string& needle) {
-  std::istringstream in(text);
-  std::string line;
-  for (int n = 1; std::getline(in, line); ++n)
-    if (line.find(needle) != std::string::npos) return n;
-  return 0;
-}
-/// 1-based column of `value` in the first line containing `needle` (0: none).
-int column_of(const std::string& text, const std::string& needle, const std::string& value) {
-  std::istringstream in(text);
-  std::string line;
-  while (std::getline(in, line)) {
-    if (line.find(needle) == std::string::npos) continue;
-    const auto c = line.find(value, line.find(needle));
-    return c == std::string::npos ? 0 : static_cast<int>(c) + 1;
-  }
-  return 0;
-}
-
-/// Replaces the first occurrence of `from` in `text` (which must exist).
-std::string replace(std::string text, const std::string& from, const std::string& to) {
-  const auto at = text.find(from);
-  EXPECT_NE(at, std::string::npos) << "test bug: '" << from << "' not in the template";
-  if (at != std::string::npos) text.replace(at, from.size(), to);
-  return text;
-}
 
 // A small valid scene (pose tracker, scripted path). Every error test below
 // changes one thing in it, so that the error can only come from that change.
@@ -123,23 +101,6 @@ duration = 0.5
 type = "hold"
 duration = 0.25
 )";
-
-/// Loads `text` written as `name` in a temp dir; returns the InputError thrown
-/// (fails the test if none is).
-InputError load_error(const TempDir& dir, const std::string& text, const std::string& name = "bad.toml") {
-  const std::string path = dir.write(name, text);
-  try {
-    (void)load_scene(path);
-  } catch (const InputError& e) {
-    std::printf("[   info   ] %s\n", e.what());
-    return e;
-  } catch (const std::exception& e) {
-    ADD_FAILURE() << "expected InputError, got another exception: " << e.what();
-    return InputError(path, 0, 0, "", "wrong exception type");
-  }
-  ADD_FAILURE() << "expected InputError, the scene loaded:\n" << text;
-  return InputError(path, 0, 0, "", "no error");
-}
 
 /// what() must contain the scene file's name, the line (and column), the key and `message`.
 void expect_located(const InputError& e, const std::string& file, int line, int column,

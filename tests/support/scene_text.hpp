@@ -1,0 +1,74 @@
+#pragma once
+/// @file scene_text.hpp
+/// Helpers of the scene-file tests (tests/sim/scene*_test.cpp): locate a
+/// needle in a scene text (1-based line and column, as InputError reports
+/// them), edit a template scene, and load a text expecting an InputError.
+/// Header-only; include from numen::sim test files only.
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <exception>
+#include <sstream>
+#include <string>
+
+#include "numen/sim/input_error.hpp"
+#include "numen/sim/scene.hpp"
+#include "temp_dir.hpp"
+
+namespace numen::test {
+
+/// 1-based line of the `nth` (1-based) line of `text` containing `needle` (0: none).
+inline int line_of(const std::string& text, const std::string& needle, int nth = 1) {
+  std::istringstream in(text);
+  std::string line;
+  for (int n = 1; std::getline(in, line); ++n)
+    if (line.find(needle) != std::string::npos && --nth == 0) return n;
+  return 0;
+}
+
+/// 1-based column of `value` at or after `needle` in the first line
+/// containing `needle` (0: none).
+inline int column_of(const std::string& text, const std::string& needle, const std::string& value) {
+  std::istringstream in(text);
+  std::string line;
+  while (std::getline(in, line)) {
+    const auto at = line.find(needle);
+    if (at == std::string::npos) continue;
+    const auto c = line.find(value, at);
+    return c == std::string::npos ? 0 : static_cast<int>(c) + 1;
+  }
+  return 0;
+}
+
+/// Replaces the `nth` occurrence of `from` in `text` (which must exist: a
+/// missing one fails the test as a bug of the test's template).
+inline std::string replace(std::string text, const std::string& from, const std::string& to,
+                           int nth = 1) {
+  std::size_t at = text.find(from);
+  while (at != std::string::npos && --nth > 0) at = text.find(from, at + 1);
+  EXPECT_NE(at, std::string::npos) << "test bug: '" << from << "' not in the template";
+  if (at != std::string::npos) text.replace(at, from.size(), to);
+  return text;
+}
+
+/// Writes `text` as `name` in `dir`, loads it and returns the InputError
+/// thrown (printed as info); fails the test if the scene loads or another
+/// exception is thrown.
+inline sim::InputError load_error(const TempDir& dir, const std::string& text,
+                                  const std::string& name = "bad.toml") {
+  const std::string path = dir.write(name, text);
+  try {
+    (void)sim::load_scene(path);
+  } catch (const sim::InputError& e) {
+    std::printf("[   info   ] %s\n", e.what());
+    return e;
+  } catch (const std::exception& e) {
+    ADD_FAILURE() << "expected InputError, got another exception: " << e.what();
+    return sim::InputError(path, 0, 0, "", "wrong exception type");
+  }
+  ADD_FAILURE() << "expected InputError, the scene loaded:\n" << text;
+  return sim::InputError(path, 0, 0, "", "no error");
+}
+
+}  // namespace numen::test
