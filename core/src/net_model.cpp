@@ -4,6 +4,7 @@
 
 #include "numen/core/net_model.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "numen/core/model.hpp"
@@ -20,7 +21,8 @@ std::string add_net(Model& model, const TriangleMesh& mesh, const NetSettings& s
   if (settings.body < 0 || settings.body >= model.num_bodies())
     return where + "rigid component body index " + std::to_string(settings.body) +
            " is not a body of the model";
-  if (settings.material < 0 || settings.material >= model.num_materials())
+  // A model without materials yet gets "default" from finalize_model(): material 0.
+  if (settings.material < 0 || settings.material >= std::max(1, model.num_materials()))
     return where + "material index " + std::to_string(settings.material) + " out of range";
   if (!(std::isfinite(settings.mass) && settings.mass > 0.0))
     return where + "mass must be finite and > 0 kg";

@@ -29,7 +29,14 @@ void compute_net_forces(const Model& model, Data& data) noexcept;
 
 /// Symplectic Euler of the nodes: v1 = v0 + h f/m, x1 = x0 + h v1, with the
 /// forces of compute_net_forces(). Explicit in the ties and springs: stable
-/// for h √(k/m) < 2 with k the stiffest spring sum on a node.
+/// for h √(k/m) < 2 with k the stiffest spring sum on a node — and, for the
+/// rigid component, for its rotation against the net it carries: with the
+/// ties' total damping and stiffness seen about the COM,
+/// h Σγ_tie |ρ⊥|² / I + h² Σk_tie |ρ⊥|² / (2 I) < 2 (a light rigid component
+/// with a heavy net spins up: tests/core/step_deformable_test.cpp). A
+/// first-order rigid component (CouplingMode::kFirstOrder) takes the ties'
+/// damping explicitly: it needs γ_t > Σγ_tie and γ_r > Σγ_tie |ρ⊥|².
+/// Prefer the linearly implicit integrator for nets.
 void integrate_nodes_symplectic(const Model& model, Data& data) noexcept;
 
 /// Node update of the implicit step: v1 = v0 + Δv (NetScratch::delta),
