@@ -46,7 +46,8 @@ std::string add_net(Model& model, const TriangleMesh& mesh, const NetSettings& s
   const std::vector<double> edge = mean_incident_edge_length(mesh, topo);
   double total_area = 0.0;
   for (double a : area) total_area += a;
-  if (!(total_area > 0.0)) return where + "mesh has zero area";
+  if (!(total_area > 0.0) || !std::isfinite(total_area))
+    return where + "mesh area must be finite and > 0 (coordinates too large?)";
 
   // Everything is built aside first, so that a rejected net leaves the model untouched.
   NetModel net;
@@ -61,6 +62,10 @@ std::string add_net(Model& model, const TriangleMesh& mesh, const NetSettings& s
   std::vector<double> mass(area.size());
   for (std::size_t i = 0; i < area.size(); ++i) {
     mass[i] = settings.mass * area[i] / total_area;
+    const double radius = settings.node_radius > 0.0 ? settings.node_radius : edge[i] / std::sqrt(3.0);
+    if (!(mass[i] > 0.0) || !std::isfinite(mass[i]) || !(radius > 0.0) || !std::isfinite(radius))
+      return where + "vertex " + std::to_string(i) +
+             " gets a mass or sphere radius that is not finite and > 0";
     net.mass += mass[i];
   }
   std::vector<NetSpring> springs;
@@ -70,6 +75,7 @@ std::string add_net(Model& model, const TriangleMesh& mesh, const NetSettings& s
     s.node_b = net.node_begin + b;
     s.rest_length = (mesh.vertices[static_cast<std::size_t>(b)] -
                      mesh.vertices[static_cast<std::size_t>(a)]).norm();
+    if (!std::isfinite(s.rest_length)) s.rest_length = 0.0;  // refused below
     s.stiffness = k;
     s.damping = gamma;
     springs.push_back(s);
@@ -77,7 +83,7 @@ std::string add_net(Model& model, const TriangleMesh& mesh, const NetSettings& s
   };
   for (const auto& [a, b] : topo.edges)
     if (!add_spring(a, b, settings.stiffness, settings.damping))
-      return where + "edge " + std::to_string(a) + "-" + std::to_string(b) + " has zero length";
+      return where + "edge " + std::to_string(a) + "-" + std::to_string(b) + " has zero or non-finite length";
   net.structural_count = static_cast<int>(topo.edges.size());
   for (const auto& [a, b] : topo.bending_pairs)
     if (!add_spring(a, b, settings.bending_stiffness, settings.bending_damping))

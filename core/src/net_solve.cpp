@@ -26,7 +26,7 @@ Mat3 skew(const Vec3& v) noexcept {
   return m;
 }
 
-/// c = h γ_tie + h² k_tie: a tie's weight in A (N·s/m).
+/// c = h γ_tie + h² k_tie: a tie's weight in A (kg = N·s²/m).
 double tie_weight(const NetModel& net, double h) noexcept {
   return h * net.tie_damping + h * h * net.tie_stiffness;
 }

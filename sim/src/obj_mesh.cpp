@@ -7,8 +7,11 @@
 
 #include <array>
 #include <cctype>
+#include <cmath>
+#include <cstdlib>
 #include <cstddef>
 #include <fstream>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -76,11 +79,44 @@ std::string with_loader_text(const std::string& message, const std::string& warn
   return w.empty() ? message : message + " (tinyobjloader: " + w + ")";
 }
 
+
+/// Checks every vertex line ("v x y z [w | r g b]") before the loader reads
+/// it: tinyobjloader reads a missing or malformed coordinate as 0, which
+/// would silently give another mesh. Throws InputError at the line.
+void check_vertex_lines(const std::string& path, std::istream& in) {
+  std::string line;
+  for (int n = 1; std::getline(in, line); ++n) {
+    std::size_t i = line.find_first_not_of(" \t");
+    if (i == std::string::npos || line.compare(i, 2, "v ") != 0) {
+      if (i == std::string::npos || line.compare(i, 2, "v\t") != 0) continue;
+    }
+    std::istringstream fields(line.substr(i + 2));
+    std::string token;
+    int count = 0;
+    while (fields >> token) {
+      if (token[0] == '#') break;
+      char* end = nullptr;
+      const double v = std::strtod(token.c_str(), &end);
+      if (end == token.c_str() || *end != '\0' || !std::isfinite(v))
+        throw InputError(path, n, 0, "",
+                         "vertex coordinate \"" + token + "\" is not a finite number");
+      ++count;
+    }
+    if (count != 3 && count != 4 && count != 6 && count != 7)
+      throw InputError(path, n, 0, "",
+                       "a vertex needs x y z (optionally w, or r g b): got " +
+                           std::to_string(count) + " numbers");
+  }
+  in.clear();
+  in.seekg(0);
+}
+
 }  // namespace
 
 core::TriangleMesh load_obj_mesh(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path, 0, 0, "", "cannot open the OBJ file");
+  check_vertex_lines(path, in);
 
   tinyobj::attrib_t attrib;
   std::vector<tinyobj::shape_t> shapes;

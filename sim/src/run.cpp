@@ -190,7 +190,9 @@ void SceneRunner::period() noexcept {
   s.contacts_max = std::max(s.contacts_max, data_.num_contacts);
   s.solver_iterations_max = std::max(s.solver_iterations_max, data_.solver_iterations);
   solver_iterations_sum_ += data_.solver_iterations;
-  s.solver_residual_max = std::max(s.solver_residual_max, data_.solver_residual);
+  // A NaN residual (a rejected solve) is kept, not dropped by std::max.
+  if (std::isnan(data_.solver_residual) || data_.solver_residual > s.solver_residual_max)
+    if (!std::isnan(s.solver_residual_max)) s.solver_residual_max = data_.solver_residual;
   if (data_.status & core::kSolverNotConverged) ++s.solver_not_converged_steps;
   s.node_contacts_max = std::max(s.node_contacts_max, data_.num_node_contacts);
   for (const core::NetOutput& net : data_.nets) {

@@ -71,7 +71,20 @@ int net_material(const TomlTable& t, const core::Model& m, int body) {
 /// π r / (2 rings) of its hemispheres (near-equilateral triangles).
 int default_cylinder_rings(double radius, double half_length, int rings) {
   const double spacing = std::numbers::pi * radius / (2.0 * rings);
-  return std::max(0, static_cast<int>(std::lround(2.0 * half_length / spacing)) - 1);
+  const double n = std::min(2.0 * half_length / spacing, 1e6);  // clamped before the cast
+  return std::max(0, static_cast<int>(std::lround(n)) - 1);
+}
+
+/// Largest net a scene may declare (nodes): far above the 2562-node
+/// benchmark, far below what would exhaust memory at load.
+constexpr double kMaxNetNodes = 65536.0;
+
+/// Fails at `key` when a built-in mesh would have more than kMaxNetNodes nodes.
+void check_node_count(const TomlTable& t, const char* key, double nodes) {
+  if (nodes > kMaxNetNodes)
+    t.fail(key, "this mesh would have " + std::to_string(static_cast<long long>(nodes)) +
+                    " nodes, more than the " + std::to_string(static_cast<int>(kMaxNetNodes)) +
+                    " a net may have");
 }
 
 /// The mesh of one [[deformable]] in its own frame (before scale and placement).
@@ -91,25 +104,33 @@ core::TriangleMesh parse_mesh(const TomlTable& t, const std::filesystem::path& s
     const int rings = integer_in(t, "rings", 1, 256, 4);
     const int cylinder_rings =
         integer_in(t, "cylinder_rings", 0, 100000, default_cylinder_rings(r, h, rings));
+    check_node_count(t, "mesh", 2.0 + segments * (2.0 * rings + cylinder_rings));
     return core::make_capsule(r, h, segments, rings, cylinder_rings);
   }
   if (kind == "box") {
     t.allow_only({NUMEN_DEFORMABLE_COMMON_KEYS, "half_extents", "subdivisions"});
     const Vec3 h = t.vec3("half_extents");
     if (!(h.minCoeff() > 0.0)) t.fail("half_extents", "must all be > 0");
-    return core::make_box(h, integer_in(t, "subdivisions", 0, 256, 2));
+    const int n = integer_in(t, "subdivisions", 0, 256, 2);
+    const double side = n + 2.0;
+    check_node_count(t, "subdivisions", 6.0 * side * side - 12.0 * side + 8.0);
+    return core::make_box(h, n);
   }
   t.allow_only({NUMEN_DEFORMABLE_COMMON_KEYS, "file"});
   std::filesystem::path file = t.string("file");
   if (file.is_relative()) file = scene_dir / file;
-  if (!std::filesystem::is_regular_file(file))
-    t.fail("file", "mesh file not found: " + file.string());
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(file, ec))
+    t.fail("file", "mesh file not found: " + file.string() + (ec ? " (" + ec.message() + ")" : ""));
+  core::TriangleMesh mesh;
   try {
-    return load_obj_mesh(file.string());
+    mesh = load_obj_mesh(file.string());
   } catch (const InputError& e) {
     if (e.line() > 0) throw;  // a place in the OBJ file itself
     t.fail("file", e.what());
   }
+  check_node_count(t, "file", mesh.num_vertices());
+  return mesh;
 }
 
 /// Scale of the mesh: [x, y, z], each finite and non-zero (a negative product mirrors it).

@@ -191,3 +191,27 @@ TEST(ObjMesh, ParseErrorCarriesTheLine) {
 }
 
 }  // namespace
+
+namespace {
+
+TEST(ObjMesh, MalformedVertexCoordinatesAreRefusedAtTheirLine) {
+  // tinyobjloader reads a bad or missing coordinate as 0: checked before it.
+  numen::test::TempDir dir;
+  const std::string faces = "f 1 2 3\n";
+  const std::string bad = dir.write("bad_v.obj", "v 0 0 0\nv 1 0 0\nv 0 1 abc\n" + faces);
+  const InputError e1 = load_error(bad);
+  EXPECT_EQ(e1.line(), 3) << e1.what();
+  EXPECT_NE(std::string(e1.what()).find("abc"), std::string::npos) << e1.what();
+  const std::string short_v = dir.write("short_v.obj", "v 0 0 0\nv 1 0\nv 0 1 0\n" + faces);
+  const InputError e2 = load_error(short_v);
+  EXPECT_EQ(e2.line(), 2) << e2.what();
+  const std::string inf_v = dir.write("inf_v.obj", "v 0 0 0\nv inf 0 0\nv 0 1 0\n" + faces);
+  EXPECT_EQ(load_error(inf_v).line(), 2);
+  // Colours after the coordinates and comments are fine.
+  EXPECT_EQ(numen::sim::load_obj_mesh(dir.write(
+                "ok.obj", "v 0 0 0 1 0 0\nv 1 0 0 # corner\nv 0 1 0\n" + faces))
+                .num_vertices(),
+            3);
+}
+
+}  // namespace

@@ -454,6 +454,15 @@ TEST(DeformableLoaderErrors, UnknownMeshKind) {
                   "\"icosphere\", \"capsule\", \"box\", \"obj\"");
 }
 
+TEST(DeformableLoaderErrors, MeshTooLargeIsRefusedBeforeItIsBuilt) {
+  const std::string text =
+      replace(kMini, "mesh = \"icosphere\"\nradius = 0.01\nsubdivisions = 1",
+              "mesh = \"capsule\"\nradius = 0.01\nhalf_length = 0.02\nsegments = 1024\n"
+              "rings = 256\ncylinder_rings = 100000");
+  expect_error_at(text, "mesh = \"capsule\"", "\"capsule\"", "deformable[0].mesh",
+                  "more than the 65536");
+}
+
 TEST(DeformableLoaderErrors, MissingObjFile) {
   const std::string text = replace(kMini, "mesh = \"icosphere\"\nradius = 0.01\nsubdivisions = 1",
                                    "mesh = \"obj\"\nfile = \"nowhere/probe.obj\"");

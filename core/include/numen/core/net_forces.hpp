@@ -32,7 +32,8 @@ void compute_net_forces(const Model& model, Data& data) noexcept;
 /// for h √(k/m) < 2 with k the stiffest spring sum on a node — and, for the
 /// rigid component, for its rotation against the net it carries: with the
 /// ties' total damping and stiffness seen about the COM,
-/// h Σγ_tie |ρ⊥|² / I + h² Σk_tie |ρ⊥|² / (2 I) < 2 (a light rigid component
+/// h Σγ_tie |ρ⊥|² / I_r + h² Σk_tie |ρ⊥|² / (2 I_r) < 2, I_r = I I_net / (I + I_net)
+/// the reduced inertia of the body and the net (I_net = Σ m_i |ρ⊥|²) (a light rigid component
 /// with a heavy net spins up: tests/core/step_deformable_test.cpp). A
 /// first-order rigid component (CouplingMode::kFirstOrder) takes the ties'
 /// damping explicitly: it needs γ_t > Σγ_tie and γ_r > Σγ_tie |ρ⊥|².

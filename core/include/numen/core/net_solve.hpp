@@ -39,7 +39,7 @@ void add_net_body_terms(const Model& model, Data& data) noexcept;
 
 /// Builds the node rows: 3×3 diagonal blocks (mass, ties, springs, contacts)
 /// and their inverses, spring and node-contact weights, right-hand side
-///   b_i = h f_i − h² k_tie (v_i0 − v_a0) − h² Σ_springs K̃ (v_i0 − v_j0) − h² k_c v_n n,
+///   b_i = h f_i − h² k_tie (v_i0 − v_a0) − h² Σ_springs k K̃ (v_i0 − v_j0) − h² k_c v_n n,
 /// and the bodies' Schur blocks of the preconditioner (NetScratch). Call
 /// after build_implicit_system().
 void build_net_system(const Model& model, Data& data) noexcept;

@@ -37,8 +37,8 @@ struct NodeContact {
   Vec3 r_b = Vec3::Zero();       ///< Contact point − COM of body_b (m, world); 0 when static.
   double normal_velocity = 0.0;  ///< v_n = n · (v_node − v_b(point)) at the step's start (m/s).
   bool active = false;           ///< f_n > 0.
-  double weight_normal = 0.0;    ///< α of the implicit weight W = α n nᵀ + β I (N·s/m).
-  double weight_isotropic = 0.0; ///< β (N·s/m).
+  double weight_normal = 0.0;    ///< α of the implicit weight W = α n nᵀ + β I (kg = N·s²/m).
+  double weight_isotropic = 0.0; ///< β (kg).
 };
 
 /// What a net did in the last step (observable; traces and studies).
@@ -57,8 +57,8 @@ struct NetOutput {
 struct SpringTerm {
   Vec3 direction = Vec3::UnitX();  ///< d̂ at the step's start.
   double length = 0.0;             ///< l at the step's start (m).
-  double weight_axial = 0.0;       ///< α = h γ + h² k − β (N·s/m).
-  double weight_isotropic = 0.0;   ///< β = h² k max(0, 1 − L/l) (N·s/m).
+  double weight_axial = 0.0;       ///< α = h γ + h² k − β (kg = N·s²/m).
+  double weight_isotropic = 0.0;   ///< β = h² k max(0, 1 − L/l) (kg).
 };
 
 /// Scratch of the nets' force stage and of the coupled implicit solve, sized
