@@ -6,7 +6,9 @@
 // a hidden rigid component (50 g) held by the device through the coupling
 // springs (Eq. 2). The target circles at 1 Hz with a 2 cm radius, 5 mm below
 // the ball's resting height on a plane, so a patch of nodes is in contact
-// all the time. Implicit integrator, dt 1 ms, CG tolerance 1e-4 (docs/deformable.md, "Solver tolerance").
+// all the time (model: tests/support/deformable_ball.hpp, shared with the
+// solver-tolerance test). Implicit integrator, dt 1 ms, CG tolerance 1e-4
+// (docs/deformable.md, "Solver tolerance").
 // 300 warm-up steps, then each iteration times one core::step (manual time).
 // Counters: nodes, springs, cg_iterations (mean per step), node_contacts
 // (mean), ns_per_node (step time / nodes), ns_per_node_iteration (step time /
@@ -20,78 +22,25 @@
 
 #include <chrono>
 #include <cmath>
-#include <stdexcept>
-#include <string>
 
 #include "numen/core/data.hpp"
-#include "numen/core/mesh.hpp"
-#include "numen/core/model.hpp"
-#include "numen/core/net_model.hpp"
 #include "numen/core/step.hpp"
+#include "deformable_ball.hpp"
 
 namespace {
 
 namespace core = numen::core;
-using core::Vec3;
 
-constexpr double kRadius = 0.03;  // m
-constexpr double kCoreMass = 0.05;  // kg
-
-core::Model make_ball(int subdivisions) {
-  core::Model m;
-  m.dt = 1e-3;
-  m.material_names = {"default"};
-  core::MaterialPair contact;
-  contact.stiffness = 2000.0;
-  contact.damping = 2.0;
-  contact.friction = 0.5;
-  m.material_pairs = {contact};
-  m.solver.tolerance = 1e-4;
-  m.solver.max_iterations = 100;
-  core::BodyModel b;
-  b.name = "core";
-  b.mass = kCoreMass;
-  b.inertia_body = core::Mat3::Identity() * (0.4 * kCoreMass * kRadius * kRadius);
-  b.initial_pose.position = Vec3(0.02, 0.0, kRadius);
-  b.coupling.k_t = 300.0;
-  b.coupling.gamma_t = core::damping_from_ratio(1.0, kCoreMass + 0.1, b.coupling.k_t);
-  b.coupling.k_r = 1.0;
-  b.coupling.gamma_r = 0.02;
-  m.bodies.push_back(b);
-  m.initial_attached_body = 0;
-  core::Obstacle floor;
-  floor.name = "floor";
-  m.obstacles.push_back(floor);
-  core::NetSettings s;
-  s.name = "ball";
-  s.body = 0;
-  s.mass = 0.1;
-  s.stiffness = 200.0;
-  s.damping = 0.05;
-  s.bending_stiffness = 20.0;
-  s.bending_damping = 0.01;
-  s.tie_stiffness = 5.0;
-  s.tie_damping = 0.05;
-  std::string err = core::add_net(m, core::make_icosphere(kRadius, subdivisions), s);
-  if (err.empty()) err = core::finalize_model(m);
-  if (!err.empty()) throw std::runtime_error(err);
-  return m;
-}
-
-/// Target: a 2 cm circle at 1 Hz, 5 mm below the resting height (pressed).
-void set_target(const core::Model& m, core::Data& d, std::int64_t k) {
-  const double w = 2.0 * M_PI, t = static_cast<double>(k) * m.dt;
-  d.target.position = Vec3(0.02 * std::cos(w * t), 0.02 * std::sin(w * t), kRadius - 0.005);
-  d.target_twist.linear = 0.02 * w * Vec3(-std::sin(w * t), std::cos(w * t), 0.0);
-}
+using numen::test::make_deformable_ball;
+using numen::test::set_deformable_ball_target;
 
 void DeformableBall(benchmark::State& state) {
   const int sub = static_cast<int>(state.range(0));
-  const core::Model m = make_ball(sub);
+  const core::Model m = make_deformable_ball(sub);
   core::Data d = core::make_data(m);
   std::int64_t k = 0;
   for (; k < 300; ++k) {  // warm-up: settle onto the floor
-    set_target(m, d, k);
+    set_deformable_ball_target(m, d, k);
     core::step(m, d);
   }
   double total_s = 0.0;
@@ -99,7 +48,7 @@ void DeformableBall(benchmark::State& state) {
   double contacts = 0.0;
   std::int64_t steps = 0;
   for (auto _ : state) {
-    set_target(m, d, k++);
+    set_deformable_ball_target(m, d, k++);
     const auto t0 = std::chrono::steady_clock::now();
     core::step(m, d);
     const auto t1 = std::chrono::steady_clock::now();

@@ -252,6 +252,12 @@ TEST(NetModel, EachErrorNamesTheNetAndTheSettingAndLeavesTheModelUntouched) {
        "mesh: "},
       {"unused vertex", [](core::NetSettings&, core::TriangleMesh& m) { m.vertices.push_back(Vec3(1, 1, 1)); },
        "mesh: "},
+      // Each triangle's area is finite, their sum is not: the masses would be NaN.
+      {"area overflow",
+       [](core::NetSettings&, core::TriangleMesh& m) {
+         for (Vec3& v : m.vertices) v *= 1.3e154;
+       },
+       "area must be finite"},
   };
   for (const Case& c : cases) {
     SCOPED_TRACE(c.what);

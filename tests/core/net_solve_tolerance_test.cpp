@@ -9,10 +9,9 @@
 #include <vector>
 
 #include "numen/core/data.hpp"
-#include "numen/core/mesh.hpp"
 #include "numen/core/model.hpp"
-#include "numen/core/net_model.hpp"
 #include "numen/core/step.hpp"
+#include "deformable_ball.hpp"
 
 namespace {
 
@@ -24,47 +23,15 @@ struct BallRun {
   double iterations = 0.0;   // mean CG iterations per step
 };
 
-/// A 162-node ball net (the benchmark's settings) on a god-object pressed
-/// 5 mm onto a floor while the target circles at 1 Hz; 1 s.
+/// The benchmark's ball (tests/support/deformable_ball.hpp) with 162 nodes,
+/// pressed on the floor while the target circles; 1 s.
 BallRun run_ball(double tolerance, double dt) {
-  core::Model m;
-  m.dt = dt;
-  m.material_names = {"default"};
-  core::MaterialPair contact;
-  contact.stiffness = 2000.0;
-  contact.damping = 2.0;
-  contact.friction = 0.5;
-  m.material_pairs = {contact};
-  m.solver.tolerance = tolerance;
-  m.solver.max_iterations = 1000;
-  core::BodyModel b;
-  b.name = "core";
-  b.mass = 0.05;
-  b.inertia_body = core::Mat3::Identity() * (0.4 * 0.05 * 0.03 * 0.03);
-  b.initial_pose.position = Vec3(0.02, 0.0, 0.03);
-  b.coupling = {300.0, core::damping_from_ratio(1.0, 0.15, 300.0), 1.0, 0.02};
-  m.bodies.push_back(b);
-  m.initial_attached_body = 0;
-  m.obstacles.push_back(core::Obstacle{});  // floor plane z = 0
-  core::NetSettings s;
-  s.name = "ball";
-  s.body = 0;
-  s.mass = 0.1;
-  s.stiffness = 200.0;
-  s.damping = 0.05;
-  s.bending_stiffness = 20.0;
-  s.bending_damping = 0.01;
-  s.tie_stiffness = 5.0;
-  s.tie_damping = 0.05;
-  EXPECT_EQ(core::add_net(m, core::make_icosphere(0.03, 2), s), "");
-  EXPECT_EQ(core::finalize_model(m), "");
+  const core::Model m = numen::test::make_deformable_ball(2, dt, tolerance, 1000);
   core::Data d = core::make_data(m);
   const long steps = std::lround(1.0 / dt);
   BallRun r;
   for (long k = 0; k < steps; ++k) {
-    const double w = 2.0 * M_PI, t = static_cast<double>(k) * dt;
-    d.target.position = Vec3(0.02 * std::cos(w * t), 0.02 * std::sin(w * t), 0.025);
-    d.target_twist.linear = 0.02 * w * Vec3(-std::sin(w * t), std::cos(w * t), 0.0);
+    numen::test::set_deformable_ball_target(m, d, k);
     core::step(m, d);
     EXPECT_EQ(d.status & core::kNonFinite, 0u);
     r.iterations += d.solver_iterations;
