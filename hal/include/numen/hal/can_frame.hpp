@@ -55,13 +55,13 @@ struct CanFrame {
   std::int64_t timestamp_ns = 0;
 
   /// True if the identifier is 29 bits.
-  bool extended() const noexcept { return (flags & CanFlag::kExtendedId) != 0; }
+  constexpr bool extended() const noexcept { return (flags & CanFlag::kExtendedId) != 0; }
   /// True for a remote transmission request.
-  bool remote() const noexcept { return (flags & CanFlag::kRemote) != 0; }
+  constexpr bool remote() const noexcept { return (flags & CanFlag::kRemote) != 0; }
   /// True for a CAN FD frame.
-  bool fd() const noexcept { return (flags & CanFlag::kFd) != 0; }
+  constexpr bool fd() const noexcept { return (flags & CanFlag::kFd) != 0; }
   /// True for a controller error report.
-  bool error_frame() const noexcept { return (flags & CanFlag::kErrorFrame) != 0; }
+  constexpr bool error_frame() const noexcept { return (flags & CanFlag::kErrorFrame) != 0; }
 };
 
 /// Why a CanFrame is not a well-formed frame (check_frame()).
