@@ -1,0 +1,170 @@
+#pragma once
+/// @file bus_recorder.hpp
+/// Recording a run's bus traffic in can-utils' candump log format (candump_log.hpp) without
+/// blocking the control loop:
+///  - RecordingBus wraps any Bus; every frame read from or written to it with kOk is pushed,
+///    with its timestamp, into the lock-free single-producer/single-consumer queue of a
+///    CandumpWriter (boost::lockfree::spsc_queue, capacity fixed at construction);
+///  - the CandumpWriter's own thread pops the records, formats them and writes the lines to
+///    the log file through buffered stdio.
+/// A full queue drops the record and counts it; the control loop never waits for the disk.
+///
+/// Time base: a line's timestamp is the frame's timestamp_ns, i.e. the bus clock — receive
+/// time for frames read, the caller's intended send time for frames written (CanFrame) —
+/// plus CandumpWriterSettings::time_offset_ns (0 by default). For
+/// SimBus that is simulated time from 0; for a transport on the loop's clock it is
+/// CLOCK_MONOTONIC (time since boot). candump writes wall-clock time instead (SO_TIMESTAMP);
+/// canplayer and log2asc only use the differences between lines (canplayer waits
+/// line[i] − line[i−1]), so a log on the bus clock replays with the same timing. Only the
+/// absolute date log2asc prints in its header is meaningless.
+///
+/// Direction: lines carry candump -x's marker, " R" for frames read and " T" for frames
+/// written (CandumpWriterSettings::mark_direction), which canplayer ignores and LogBus can
+/// filter on (LogBusSettings::received_only).
+
+#include <atomic>
+#include <condition_variable>
+#include <cstdint>
+#include <cstdio>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <string_view>
+#include <thread>
+
+#include "numen/hal/bus.hpp"
+#include "numen/hal/can_frame.hpp"
+#include "numen/hal/candump_log.hpp"
+
+namespace numen::hal {
+
+/// Creation settings of a CandumpWriter. Checked by its constructor.
+struct CandumpWriterSettings {
+  /// Records the queue holds, >= 1; allocated once at construction (104 bytes each). Size it
+  /// for the frames of one poll_period_ns and the disk's worst stall: at 5 frames per 1 ms
+  /// period, 8192 records cover 1.6 s.
+  std::size_t queue_capacity = 8192;
+  /// How long the writer thread sleeps when the queue is empty, ns, > 0.
+  std::int64_t poll_period_ns = 2'000'000;
+  /// Append " R" (read) / " T" (written) to each line (candump -x).
+  bool mark_direction = true;
+  /// Added to every frame's timestamp_ns on its line, ns. 0 writes the bus clock as it is.
+  /// (CLOCK_REALTIME − bus clock), taken once at setup, writes wall-clock time like candump.
+  /// Give runs whose bus clock starts at 0 (SimBus) an offset >= 1 s: log2asc (can-utils
+  /// 2020.11) takes a start second of 0 for "no start yet" and restarts its output on every
+  /// line. A line whose time would be negative or overflow is not written (format_errors).
+  std::int64_t time_offset_ns = 0;
+};
+
+/// Counters of a CandumpWriter since construction. Read with relaxed atomics: consistent
+/// each, not with each other while the writer runs.
+struct CandumpWriterCounters {
+  std::uint64_t queued = 0;         ///< Records accepted by push().
+  std::uint64_t dropped = 0;        ///< Records refused by push(): queue full.
+  std::uint64_t written = 0;        ///< Lines written to the file.
+  std::uint64_t format_errors = 0;  ///< Records not written: format_candump_line() refused
+                                    ///< them (negative timestamp, malformed frame).
+  std::uint64_t io_errors = 0;      ///< Failed fwrite/fflush calls (disk full, I/O error).
+};
+
+/// Owner of a candump log file, of the record queue and of the thread that writes it.
+/// push() is the producer side: one thread at a time (the control loop), noexcept, no
+/// allocation, no lock, never blocks. start()/stop() and the destructor belong to the setup
+/// thread. Not copyable or movable.
+class CandumpWriter {
+ public:
+  /// Opens (truncates) `path` and allocates the queue; the thread is not started. Throws
+  /// std::runtime_error "path: cannot open for writing: <errno text>", or
+  /// std::invalid_argument naming the setting (queue_capacity 0, poll_period_ns <= 0).
+  explicit CandumpWriter(const std::string& path, const CandumpWriterSettings& settings = {});
+  /// stop(), then writes what is still queued and closes the file.
+  ~CandumpWriter();
+  CandumpWriter(const CandumpWriter&) = delete;
+  CandumpWriter& operator=(const CandumpWriter&) = delete;
+  CandumpWriter(CandumpWriter&&) = delete;
+  CandumpWriter& operator=(CandumpWriter&&) = delete;
+
+  /// Starts the writer thread. Throws std::logic_error if it is running; may throw
+  /// std::system_error if the thread cannot be created.
+  void start();
+  /// Stops the writer thread (wakes it, joins it), writes the records still queued and
+  /// flushes the file. Idempotent. Records pushed afterwards wait in the queue for the next
+  /// start() or the destructor.
+  void stop();
+  /// True between start() and stop().
+  bool running() const noexcept { return thread_.joinable(); }
+
+  /// Queues one record: `frame` (its timestamp_ns is the line's time) seen on `iface` in
+  /// `direction`. False if the queue is full: the record is dropped and counted.
+  bool push(const CanFrame& frame, const CandumpIface& iface, CandumpDirection direction) noexcept;
+
+  /// Counters (see CandumpWriterCounters).
+  CandumpWriterCounters counters() const noexcept;
+  /// Path of the log file.
+  const std::string& path() const noexcept { return path_; }
+  /// The settings the writer was built with.
+  const CandumpWriterSettings& settings() const noexcept { return settings_; }
+
+ private:
+  struct Queue;  // boost::lockfree::spsc_queue, kept out of this header
+
+  void run() noexcept;
+  std::size_t drain() noexcept;
+
+  std::string path_;
+  CandumpWriterSettings settings_;
+  std::unique_ptr<Queue> queue_;
+  std::FILE* file_ = nullptr;
+  std::thread thread_;
+  std::mutex wake_mutex_;  // stop request only; push() never touches it
+  std::condition_variable wake_;
+  std::atomic<bool> stop_requested_{false};  // set under wake_mutex_
+  std::atomic<std::uint64_t> queued_{0};
+  std::atomic<std::uint64_t> dropped_{0};
+  std::atomic<std::uint64_t> written_{0};
+  std::atomic<std::uint64_t> format_errors_{0};
+  std::atomic<std::uint64_t> io_errors_{0};
+};
+
+/// Counters of one RecordingBus since construction.
+struct RecordingCounters {
+  std::uint64_t recorded = 0;  ///< Frames queued for the log.
+  std::uint64_t dropped = 0;   ///< Frames not recorded: the writer's queue was full.
+};
+
+/// A Bus decorator that records the traffic of `inner` into a CandumpWriter. read() and
+/// write() forward to `inner` and, on kOk, push the frame (read: kReceived, written:
+/// kTransmitted) under interface name `iface`; kWouldBlock / kError results are not
+/// recorded. state() and counters() are the inner bus's. Several RecordingBus may share one
+/// writer (one log file, told apart by iface) if they are all driven from one thread.
+/// read/write never allocate, throw, lock or block (given that `inner`'s do not).
+class RecordingBus final : public Bus {
+ public:
+  /// Wraps `inner` (not owned; must outlive this). Throws std::invalid_argument if `iface`
+  /// is not a valid interface name (CandumpIface).
+  RecordingBus(Bus& inner, CandumpWriter& writer, std::string_view iface = "can0");
+
+  /// inner.read(); on kOk the frame is recorded as received.
+  IoStatus read(CanFrame& frame) noexcept override;
+  /// inner.write(); on kOk the frame is recorded as transmitted.
+  IoStatus write(const CanFrame& frame) noexcept override;
+  /// inner.state().
+  BusState state() const noexcept override { return inner_->state(); }
+  /// inner.counters() (recording losses are in recording_counters(), not in `dropped`).
+  BusCounters counters() const noexcept override { return inner_->counters(); }
+
+  /// Frames recorded and dropped by this bus.
+  const RecordingCounters& recording_counters() const noexcept { return counters_; }
+  /// The interface name written on this bus's lines.
+  const CandumpIface& iface() const noexcept { return iface_; }
+
+ private:
+  void record(const CanFrame& frame, CandumpDirection direction) noexcept;
+
+  Bus* inner_;
+  CandumpWriter* writer_;
+  CandumpIface iface_;
+  RecordingCounters counters_{};
+};
+
+}  // namespace numen::hal
