@@ -91,15 +91,27 @@ void apply_coupled(const Model& model, const Data& data, std::span<const Vec6> i
   // off-diagonal blocks at once), each node contact's W p_i, the ties' and
   // node–body contacts' off-diagonal blocks.
   for (std::size_t i = 0; i < in_n.size(); ++i) out_n[i] = ns.node_diagonal[i] * in_n[i];
-  const NetSpring* sp = model.net_springs.data();
-  const SpringTerm* st = ns.springs.data();
-  for (std::size_t e = 0; e < ns.springs.size(); ++e) {
-    const auto a = static_cast<std::size_t>(sp[e].node_a);
-    const auto b = static_cast<std::size_t>(sp[e].node_b);
-    const Vec3 w =
-        weight_times(st[e].weight_axial, st[e].weight_isotropic, st[e].direction, in_n[a] - in_n[b]);
-    out_n[a] += w;
-    out_n[b] -= w;
+  // The hot loop of the solve (about half of a step): plain scalar code over
+  // one array, w = α d̂ (d̂ · δ) + β δ with δ = p_a − p_b.
+  const Vec3* x = in_n.data();
+  Vec3* y = out_n.data();
+  for (const SpringTerm& t : ns.springs) {
+    const Vec3& xa = x[t.node_a];
+    const Vec3& xb = x[t.node_b];
+    const double dx = xa.x() - xb.x(), dy = xa.y() - xb.y(), dz = xa.z() - xb.z();
+    const Vec3& n = t.direction;
+    const double s_axial = t.weight_axial * (n.x() * dx + n.y() * dy + n.z() * dz);
+    const double wx = s_axial * n.x() + t.weight_isotropic * dx;
+    const double wy = s_axial * n.y() + t.weight_isotropic * dy;
+    const double wz = s_axial * n.z() + t.weight_isotropic * dz;
+    Vec3& ya = y[t.node_a];
+    Vec3& yb = y[t.node_b];
+    ya.x() += wx;
+    ya.y() += wy;
+    ya.z() += wz;
+    yb.x() -= wx;
+    yb.y() -= wy;
+    yb.z() -= wz;
   }
   const double h = model.dt;
   for (const NetModel& net : model.nets) {

@@ -14,6 +14,10 @@ void NetScratch::resize(const Model& model) {
   force.assign(n, Vec3::Zero());
   lever.assign(n, Vec3::Zero());
   springs.assign(n > 0 ? model.net_springs.size() : 0, SpringTerm{});
+  for (std::size_t e = 0; e < springs.size(); ++e) {
+    springs[e].node_a = model.net_springs[e].node_a;
+    springs[e].node_b = model.net_springs[e].node_b;
+  }
   node_diagonal.assign(n, 1.0);
   block.assign(n, Mat3::Identity());
   block_inverse.assign(n, Mat3::Identity());

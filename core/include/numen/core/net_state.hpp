@@ -55,6 +55,8 @@ struct NetOutput {
 /// its contribution to A = M − hD − h²K is S = α d̂d̂ᵀ + β I on the two
 /// diagonal blocks and −S off the diagonal.
 struct SpringTerm {
+  int node_a = 0;                  ///< NetSpring::node_a (copied so the solve reads one array).
+  int node_b = 0;                  ///< NetSpring::node_b.
   Vec3 direction = Vec3::UnitX();  ///< d̂ at the step's start.
   double length = 0.0;             ///< l at the step's start (m).
   double weight_axial = 0.0;       ///< α = h γ + h² k − β (kg = N·s²/m).
