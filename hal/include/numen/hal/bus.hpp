@@ -1,7 +1,7 @@
 #pragma once
 /// @file bus.hpp
-/// Bus: the non-blocking CAN port interface every transport implements (SimBus now; SocketCAN
-/// and serial/SLCAN backends later). Called from the control period: no call blocks, locks,
+/// Bus: the non-blocking CAN port interface every transport implements (SimBus, SocketCanBus,
+/// SerialBus, LogBus replay, and the RecordingBus decorator). Called from the control period: no call blocks, locks,
 /// allocates or throws. Modelled on ros2_control's read/write returning OK/ERROR and on
 /// SocketCAN's O_NONBLOCK semantics (EAGAIN -> kWouldBlock, ENOBUFS -> kWouldBlock).
 

@@ -3,7 +3,7 @@
 /// CanFrame: one classic CAN 2.0 or CAN FD data/remote/error frame as it crosses a
 /// numen::hal::Bus. The fields map one to one onto Linux SocketCAN's `struct canfd_frame`
 /// (linux/can.h: can_id with CAN_EFF_FLAG / CAN_RTR_FLAG / CAN_ERR_FLAG, len, flags with
-/// CANFD_BRS / CANFD_ESI) plus a receive timestamp (SO_TIMESTAMPNS), so the later SocketCAN
+/// CANFD_BRS / CANFD_ESI) plus a receive timestamp (SO_TIMESTAMPNS), so the SocketCAN
 /// backend converts without loss. Frame rules: ISO 11898-1:2015.
 
 #include <array>

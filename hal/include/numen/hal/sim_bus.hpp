@@ -3,7 +3,7 @@
 /// SimBus: a deterministic in-process CAN bus between a controller and a device, with
 /// latency, loss and corruption, on a simulated clock. It stands in for a real bus in tests
 /// and in simulated instruments; its two ports are ordinary Bus objects, so code written
-/// against Bus runs unchanged on SocketCAN later.
+/// against Bus runs unchanged on SocketCAN (socketcan_bus.hpp).
 
 #include <cstddef>
 #include <cstdint>
