@@ -1,6 +1,7 @@
 /// @file main.cpp
 /// The `numen` command.
 ///   numen run [SCENE] [--duration S] [--trace FILE.csv] [--json] [--realtime] [--coupling MODE]
+///             [--bus sim|log:FILE] [--record FILE.log]
 
 #include <cstdio>
 #include <iostream>
@@ -30,6 +31,17 @@ int main(int argc, char** argv) {
   run->add_option("--trace", trace_path, "Write a per-step CSV trace to this file");
   run->add_flag("--json", json, "Print exactly one JSON object on stdout (summary to stderr)");
   run->add_flag("--realtime", realtime, "Pace the loop to wall-clock time");
+  std::string bus = "sim", record_path;
+  run->add_option("--bus", bus,
+                  "The controller's bus: sim (simulated instrument, default) or log:FILE "
+                  "(replay a candump log's encoder frames)")
+      ->check([](const std::string& v) {
+        return v == "sim" || (v.rfind("log:", 0) == 0 && v.size() > 4)
+                   ? std::string()
+                   : std::string("expected sim or log:FILE");
+      });
+  run->add_option("--record", record_path,
+                  "Record the controller's bus traffic into this candump log (can-utils format)");
   run->add_option("--coupling", coupling, "Override the scene's coupling mode")
       ->check(CLI::IsMember({"god-object", "first-order", "direct"}));
 
@@ -45,6 +57,8 @@ int main(int argc, char** argv) {
       options.duration_s = duration;
       options.realtime = realtime;
       options.trace_path = trace_path;
+      options.bus.spec = bus;
+      options.bus.record_path = record_path;
       const numen::sim::RunSummary summary = numen::sim::run_scene(scene, options);
       if (json) {
         std::cerr << numen::sim::format_summary(summary);

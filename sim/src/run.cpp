@@ -85,17 +85,50 @@ DurationSummary summarize_ns(const platform::LatencyHistogram& h) {
 
 }  // namespace
 
-SceneRunner::SceneRunner(const Scene& scene, std::size_t trace_capacity)
+namespace {
+
+constexpr std::string_view kLogPrefix = "log:";
+
+/// The LogBus of `choice`, or nullptr for "sim". Throws for anything else.
+std::unique_ptr<hal::LogBus> make_log_bus(const Scene& scene, const BusChoice& choice) {
+  if (choice.spec == "sim") return nullptr;
+  if (choice.spec.rfind(kLogPrefix, 0) != 0 || choice.spec.size() == kLogPrefix.size()) {
+    throw std::invalid_argument("--bus '" + choice.spec + "': expected sim or log:FILE");
+  }
+  hal::LogBusSettings settings;
+  for (const hal::AxisConfig& axis : scene.device.axes) {
+    settings.filters.push_back(hal::exact_standard_filter(axis.encoder_cob_id));
+  }
+  settings.received_only = true;
+  return std::make_unique<hal::LogBus>(
+      hal::load_candump_log(choice.spec.substr(kLogPrefix.size())), settings);
+}
+
+}  // namespace
+
+SceneRunner::SceneRunner(const Scene& scene, std::size_t trace_capacity, const BusChoice& bus)
     : scene_(&scene),
       bus_(scene.bus),
+      log_bus_(make_log_bus(scene, bus)),
+      writer_(bus.record_path.empty() ? nullptr
+                                      : std::make_unique<hal::CandumpWriter>(bus.record_path)),
+      recorder_(writer_ ? std::make_unique<hal::RecordingBus>(
+                              log_bus_ ? static_cast<hal::Bus&>(*log_bus_) : bus_.controller(),
+                              *writer_, "sim0")
+                        : nullptr),
+      port_(recorder_   ? static_cast<hal::Bus*>(recorder_.get())
+            : log_bus_ ? static_cast<hal::Bus*>(log_bus_.get())
+                       : static_cast<hal::Bus*>(&bus_.controller())),
       instrument_(scene.device, scene.trajectory),
       device_(scene.device),
       data_(core::make_data(scene.model)),
       ghost_(core::make_data(scene.model)),
-      loop_(scene.model, data_, bus_.controller(), device_, scene.binding),
+      loop_(scene.model, data_, *port_, device_, scene.binding),
       period_ns_(static_cast<std::int64_t>(std::llround(scene.model.dt * 1e9))),
       phase_ns_(static_cast<std::int64_t>(std::llround(scene.compute_phase_s * 1e9))) {
   trace_.reserve(trace_capacity);
+  if (writer_) writer_->start();
+  acc_.bus = bus.spec;
   acc_.scene = scene.name;
   acc_.coupling = to_string(scene.model.coupling_mode);
   acc_.integrator = to_string(scene.model.integrator);
@@ -116,12 +149,21 @@ void SceneRunner::period() noexcept {
     core::set_attached_body(model, data_, scene_->events[next_event_].body);
     ++next_event_;
   }
-  bus_.set_time_ns(t);
-  loop_.begin_period(t);
-  bus_.set_time_ns(t + scene_->bus.latency_ns);
-  instrument_.poll(bus_.device());  // encoders latch at SYNC and answer
-  bus_.set_time_ns(t + phase_ns_);
-  const platform::PeriodReport& report = loop_.end_period(t + phase_ns_);
+  const platform::PeriodReport* report_ptr = nullptr;
+  if (log_bus_) {  // the recorded instrument's frames arrive at their logged times
+    log_bus_->set_time_ns(t);
+    loop_.begin_period(t);
+    log_bus_->set_time_ns(t + phase_ns_);
+    report_ptr = &loop_.end_period(t + phase_ns_);
+  } else {
+    bus_.set_time_ns(t);
+    loop_.begin_period(t);
+    bus_.set_time_ns(t + scene_->bus.latency_ns);
+    instrument_.poll(bus_.device());  // encoders latch at SYNC and answer
+    bus_.set_time_ns(t + phase_ns_);
+    report_ptr = &loop_.end_period(t + phase_ns_);
+  }
+  const platform::PeriodReport& report = *report_ptr;
   ++k_;
 
   // ---- measurements (outside the timed step) ----
@@ -224,13 +266,19 @@ RunSummary SceneRunner::summary() const {
     s.bus_frames_dropped += static_cast<std::int64_t>(bus_.link_counters(dir).dropped);
     s.bus_frames_corrupted += static_cast<std::int64_t>(bus_.link_counters(dir).corrupted());
   }
+  if (log_bus_) s.bus_frames_replayed = static_cast<std::int64_t>(log_bus_->log_counters().replayed);
+  if (recorder_) {
+    s.bus_frames_recorded = static_cast<std::int64_t>(recorder_->recording_counters().recorded);
+    s.bus_record_dropped = static_cast<std::int64_t>(recorder_->recording_counters().dropped);
+  }
   return s;
 }
 
 RunSummary run_scene(const Scene& scene, const RunOptions& options) {
   const double duration = options.duration_s >= 0.0 ? options.duration_s : scene.duration_s;
   const auto steps = static_cast<std::int64_t>(std::llround(duration / scene.model.dt));
-  SceneRunner runner(scene, options.trace_path.empty() ? 0 : static_cast<std::size_t>(steps));
+  SceneRunner runner(scene, options.trace_path.empty() ? 0 : static_cast<std::size_t>(steps),
+                     options.bus);
   std::int64_t overruns = 0, missed = 0;
   platform::LatencyHistogram wakeup;
   const std::int64_t wall0 = platform::monotonic_now_ns();
@@ -287,6 +335,10 @@ std::string format_summary(const RunSummary& s) {
   os << "  bus: rejected samples " << s.rejected_samples << ", invalid periods "
      << s.invalid_periods << ", frames dropped " << s.bus_frames_dropped << ", corrupted "
      << s.bus_frames_corrupted << "\n";
+  if (s.bus != "sim") os << "  bus " << s.bus << ": " << s.bus_frames_replayed << " frames replayed\n";
+  if (s.bus_frames_recorded > 0 || s.bus_record_dropped > 0)
+    os << "  recorded " << s.bus_frames_recorded << " frames, " << s.bus_record_dropped
+       << " dropped by the recorder\n";
   os << "  nan detected: " << (s.nan_detected ? "YES" : "no");
   if (s.wakeup_latency_us.max > 0.0)
     os << "\n  realtime: wake-up latency us median " << s.wakeup_latency_us.median << ", p99 "
@@ -370,6 +422,10 @@ std::string format_summary_json(const RunSummary& s) {
   integer("nonfinite_steps", s.nonfinite_steps);
   integer("bus_frames_dropped", s.bus_frames_dropped);
   integer("bus_frames_corrupted", s.bus_frames_corrupted);
+  os << "\"bus\":" << json_string(s.bus) << ",";
+  integer("bus_frames_replayed", s.bus_frames_replayed);
+  integer("bus_frames_recorded", s.bus_frames_recorded);
+  integer("bus_record_dropped", s.bus_record_dropped);
   integer("realtime_overruns", s.realtime_overruns);
   integer("realtime_missed_periods", s.realtime_missed_periods);
   os << "\"wakeup_latency_us\":{\"median\":" << json_number(s.wakeup_latency_us.median)

@@ -12,7 +12,9 @@
 #include <memory>
 
 #include "numen/core/data.hpp"
+#include "numen/hal/bus_recorder.hpp"
 #include "numen/hal/instrument_device.hpp"
+#include "numen/hal/log_bus.hpp"
 #include "numen/hal/sim_bus.hpp"
 #include "numen/platform/control_loop.hpp"
 #include "numen/sim/scene.hpp"
@@ -21,11 +23,28 @@
 
 namespace numen::sim {
 
+/// The bus the controller talks to in a run (`numen run --bus`, `--record`).
+struct BusChoice {
+  /// "sim" (default): the scene's SimBus with the simulated instrument on its
+  /// device port. "log:FILE": a candump log (can-utils `candump -l` format,
+  /// docs/protocol.md §12) replayed as the controller's input — no simulated
+  /// instrument; only the encoder TPDOs of the scene's axes are read (exact
+  /// CanFilter per COB-ID) and records marked transmitted (" T") are skipped,
+  /// so a log recorded with `record_path` replays the controller's input
+  /// exactly; the first record of the log is due at bus time 0 and the others
+  /// keep their relative times. Anything else: std::invalid_argument.
+  std::string spec = "sim";
+  /// Record the controller port (frames read: " R", written: " T") into this
+  /// candump log through a lock-free queue and a writer thread; empty: none.
+  std::string record_path;
+};
+
 /// How to run a scene.
 struct RunOptions {
   double duration_s = -1.0;  ///< Simulated time (s); < 0: the scene's duration.
   bool realtime = false;     ///< Pace each period to CLOCK_MONOTONIC (clock_nanosleep).
   std::string trace_path;    ///< Per-step CSV trace; empty: none.
+  BusChoice bus;             ///< The controller's bus (default: the simulated bus).
 };
 
 /// Percentiles of a duration distribution (µs).
@@ -87,6 +106,10 @@ struct RunSummary {
   std::int64_t nonfinite_steps = 0;
   std::int64_t bus_frames_dropped = 0;
   std::int64_t bus_frames_corrupted = 0;
+  std::string bus = "sim";                 ///< BusChoice::spec of the run.
+  std::int64_t bus_frames_replayed = 0;    ///< log: records read by the controller.
+  std::int64_t bus_frames_recorded = 0;    ///< --record: frames queued for the log.
+  std::int64_t bus_record_dropped = 0;     ///< --record: frames lost to a full queue (must be 0).
   std::int64_t realtime_overruns = 0;      ///< Paced periods (--realtime) that began after their deadline.
   std::int64_t realtime_missed_periods = 0;  ///< Whole periods skipped to re-phase after overruns.
   DurationSummary wakeup_latency_us;       ///< Paced runs: wake-up time − deadline (µs).
@@ -102,7 +125,12 @@ struct RunSummary {
 class SceneRunner {
  public:
   /// `scene` must outlive the runner. `trace_capacity` records are reserved.
-  explicit SceneRunner(const Scene& scene, std::size_t trace_capacity = 0);
+  /// `bus` chooses the controller's bus; a log is loaded and a recording
+  /// opened (its writer thread started) here. Throws std::invalid_argument
+  /// for an unknown bus spec, std::runtime_error ("file:line:column: what")
+  /// for a log that cannot be read or a recording that cannot be written.
+  explicit SceneRunner(const Scene& scene, std::size_t trace_capacity = 0,
+                       const BusChoice& bus = {});
 
   /// Runs control period k (bus time k·dt): tool-switching events due,
   /// SYNC, the instrument's answer, the controller's read–check–step–write,
@@ -126,6 +154,10 @@ class SceneRunner {
  private:
   const Scene* scene_;
   hal::SimBus bus_;
+  std::unique_ptr<hal::LogBus> log_bus_;          // --bus log:FILE
+  std::unique_ptr<hal::CandumpWriter> writer_;    // --record FILE
+  std::unique_ptr<hal::RecordingBus> recorder_;   // --record FILE, around the controller port
+  hal::Bus* port_;                                // what the control loop reads and writes
   SimulatedInstrument instrument_;
   hal::InstrumentDevice device_;
   core::Data data_;
