@@ -20,39 +20,19 @@
 #include <vector>
 
 #include "alloc_counter.hpp"
+#include "can_test_frames.hpp"
 #include "numen/hal/socketcan_bus.hpp"
 
 namespace numen::hal {
 namespace {
 
+using test::error_frame;
+using test::expect_same;
+using test::make;
+using test::mono_ns;
+
 constexpr const char* kFdIf = "vcan0";
 constexpr const char* kClassicIf = "vcan1";
-
-std::int64_t mono_ns() {
-  timespec ts{};
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
-}
-
-CanFrame make(std::uint32_t id, std::uint8_t flags, std::uint8_t len, std::uint8_t seed = 1) {
-  CanFrame f;
-  f.id = id;
-  f.flags = flags;
-  f.len = len;
-  if ((flags & CanFlag::kRemote) == 0) {
-    for (std::uint8_t i = 0; i < len; ++i) f.data[i] = static_cast<std::uint8_t>(seed + 31 * i);
-  }
-  return f;
-}
-
-CanFrame error_frame(std::uint32_t classes, std::uint8_t ctrl = 0) {
-  CanFrame f;
-  f.id = classes;
-  f.flags = CanFlag::kErrorFrame;
-  f.len = CAN_ERR_DLC;
-  f.data[1] = ctrl;
-  return f;
-}
 
 // Sets or clears IFF_UP like `ip link set dev NAME up|down` (the guest runs as root).
 void set_up(const char* name, bool up) {
