@@ -183,6 +183,12 @@ DeviceSample InstrumentDevice::sample(std::int64_t now_ns) noexcept {
     }
     s.q[i] = st.has_value ? st.last.value : hold_[i];
     s.qdot[i] = (st.has_rate && !held_stale) ? st.rate : 0.0;
+    if (accepted) {
+      st.periods_since_accepted = 0;
+    } else if (st.periods_since_accepted < UINT32_MAX) {
+      ++st.periods_since_accepted;
+    }
+    s.periods_since_accepted[k] = st.periods_since_accepted;
     s.axis_faults[k] = f;
     s.faults |= f;
   }

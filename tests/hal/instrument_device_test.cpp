@@ -593,3 +593,31 @@ TEST(InstrumentDeviceLinks, RejectsKinematicsWithTooManyLinks) {
 }
 
 }  // namespace
+
+TEST(InstrumentDevice, PeriodsSinceAcceptedIsTheEncoderWatchdogInput) {
+  InstrumentDevice dev(trocar_config());
+  // Never accepted: counts sample() calls (with kNoData).
+  EXPECT_EQ(dev.sample(0).periods_since_accepted[0], 1u);
+  EXPECT_EQ(dev.sample(kMs).periods_since_accepted[0], 2u);
+  feed(dev, kQ0, 2 * kMs);
+  DeviceSample s = dev.sample(2 * kMs);
+  ASSERT_TRUE(s.valid);
+  for (int i = 0; i < 5; ++i) EXPECT_EQ(s.periods_since_accepted[static_cast<std::size_t>(i)], 0u);
+  // No frame: the held value is not stale yet (no fault bit), but the count goes on.
+  s = dev.sample(3 * kMs);
+  EXPECT_EQ(s.axis_faults[0], SampleFault::kNone);
+  EXPECT_EQ(s.periods_since_accepted[0], 1u);
+  // Axis 0 gets a frame, the others do not; a rejected frame does not reset the count.
+  const AxisConfig& a0 = dev.config().axes[0];
+  dev.on_frame(encode_position_pdo(a0.encoder_cob_id, value_to_counts(a0, kQ0[0]), 4 * kMs));
+  const AxisConfig& a2 = dev.config().axes[2];
+  dev.on_frame(encode_position_pdo(a2.encoder_cob_id, value_to_counts(a2, 1e3), 4 * kMs));
+  s = dev.sample(4 * kMs);
+  EXPECT_EQ(s.periods_since_accepted[0], 0u);
+  EXPECT_EQ(s.periods_since_accepted[1], 2u);
+  EXPECT_TRUE(s.axis_faults[2] & SampleFault::kOutOfRange);
+  EXPECT_EQ(s.periods_since_accepted[2], 2u);
+  EXPECT_EQ(s.periods_since_accepted[5], 0u);  // past n
+  dev.reset();
+  EXPECT_EQ(dev.sample(5 * kMs).periods_since_accepted[0], 1u);
+}

@@ -53,6 +53,11 @@ struct DeviceSample {
   FaultMask faults = SampleFault::kNone;
   /// Failed checks per axis this period (entries >= n are 0).
   std::array<FaultMask, kMaxAxes> axis_faults{};
+  /// Per axis: sample() calls since the axis last accepted a value — 0 if it accepted one in
+  /// this call; counted from construction / reset() while it has none (saturates at 2³²−1).
+  /// An axis holding a not-yet-stale value still counts up: this is the encoder watchdog's
+  /// input (SafetyInputs::periods_since_fresh). Entries >= n are 0.
+  std::array<std::uint32_t, kMaxAxes> periods_since_accepted{};
   /// `now_ns` given to sample().
   std::int64_t time_ns = 0;
 };
@@ -169,6 +174,8 @@ class InstrumentDevice {
     bool has_rate = false;   // two accepted values exist
     AcceptedValue last;      // last accepted value
     double rate = 0.0;       // from the last two accepted values, units/s
+    // sample() calls since the last accepted value (DeviceSample::periods_since_accepted).
+    std::uint32_t periods_since_accepted = 0;
   };
 
   // Link targets, twists and Jacobians of `s` from s.q, s.qdot (link 0 from forward/jacobian).
