@@ -69,15 +69,6 @@ std::vector<CanFrame> drain(SocketCanBus& bus, std::size_t count, std::int64_t i
   return out;
 }
 
-void expect_same(const CanFrame& sent, const CanFrame& got) {
-  EXPECT_EQ(sent.id, got.id);
-  EXPECT_EQ(sent.flags, got.flags) << std::hex << sent.id;
-  ASSERT_EQ(sent.len, got.len) << std::hex << sent.id;
-  if (!sent.remote()) {
-    EXPECT_EQ(0, std::memcmp(sent.data.data(), got.data.data(), sent.len)) << std::hex << sent.id;
-  }
-}
-
 TEST(SocketCanHil, OpensAnExistingInterfaceAndNamesAMissingOne) {
   SocketCanBus bus(kFdIf);
   EXPECT_TRUE(bus.is_open());
