@@ -155,7 +155,7 @@ TEST(Cobs, EncodeRefusesAnOutputOneByteShort) {
 TEST(Cobs, DecodeErrors) {
   std::array<std::uint8_t, 16> out{};
   auto dec = [&](const Bytes& in) { return cobs_decode(in, out); };
-  EXPECT_EQ(dec({0x00}).error, CobsError::kZeroInInput);             // a zero code
+  EXPECT_EQ(dec({0x00}).error, CobsError::kZeroInInput);              // a zero code
   EXPECT_EQ(dec({0x03, 0x11, 0x00}).error, CobsError::kZeroInInput);  // a zero data byte
   EXPECT_EQ(dec({0x02, 0x11, 0x00, 0x01}).error, CobsError::kZeroInInput);
   EXPECT_EQ(dec({0x05, 0x11, 0x22}).error, CobsError::kCodeOverrun);  // cut inside a block

@@ -5,11 +5,11 @@
 #include "numen/hal/serial_bus.hpp"
 
 #include <fcntl.h>
+#include <gtest/gtest.h>
 #include <poll.h>
 #include <pty.h>
+#include <sys/ioctl.h>
 #include <unistd.h>
-
-#include <gtest/gtest.h>
 
 #include <array>
 #include <cerrno>
@@ -120,16 +120,54 @@ class SerialBusPty : public ::testing::Test {
     }
   }
 
-  // Reads from the master whatever arrives within `timeout_ms` of silence.
-  Bytes take(int timeout_ms = 50) {
+  // Reads from the master what is there now, after waiting up to `timeout_ms` for a first
+  // byte.
+  Bytes take(int timeout_ms) {
     Bytes out;
     std::array<std::uint8_t, 4096> buf{};
-    while (wait_readable(master_, timeout_ms)) {
+    while (wait_readable(master_, out.empty() ? timeout_ms : 0)) {
       const ssize_t n = ::read(master_, buf.data(), buf.size());
       if (n <= 0) break;
       out.insert(out.end(), buf.begin(), buf.begin() + n);
     }
     return out;
+  }
+
+  // Reads from the master until `n` bytes came (or 2 s passed).
+  Bytes take_n(std::size_t n) {
+    Bytes out;
+    const std::int64_t deadline = now_ns() + 2'000'000'000;
+    while (out.size() < n && now_ns() < deadline) {
+      const Bytes more = take(10);
+      out.insert(out.end(), more.begin(), more.end());
+    }
+    return out;
+  }
+
+  // Waits until the bus's descriptor has at least `n` unread bytes (a pseudo-terminal moves
+  // bytes through a kernel worker, so they are not there the moment put() returns).
+  bool wait_at_bus(std::size_t n) {
+    const std::int64_t deadline = now_ns() + 2'000'000'000;
+    for (;;) {
+      int queued = 0;
+      if (::ioctl(bus_->native_handle(), FIONREAD, &queued) != 0) return false;
+      if (static_cast<std::size_t>(queued) >= n) return true;
+      if (now_ns() > deadline) return false;
+      ::usleep(1000);
+    }
+  }
+
+  // Writes `line` to the master, waits until all of it reached the bus, then reads frames
+  // until the bus has none.
+  std::vector<CanFrame> deliver(const Bytes& line) {
+    put(line);
+    EXPECT_TRUE(wait_at_bus(line.size()));
+    std::vector<CanFrame> got;
+    CanFrame f;
+    IoStatus s;
+    while ((s = bus_->read(f)) == IoStatus::kOk) got.push_back(f);
+    EXPECT_EQ(s, IoStatus::kWouldBlock);
+    return got;
   }
 
   // bus_->read() until a frame comes (waiting on the descriptor), or a timeout.
@@ -139,13 +177,6 @@ class SerialBusPty : public ::testing::Test {
       if (s != IoStatus::kWouldBlock) return s;
       if (!wait_readable(bus_->native_handle(), timeout_ms)) return IoStatus::kWouldBlock;
     }
-  }
-
-  std::vector<CanFrame> read_all(int timeout_ms = 100) {
-    std::vector<CanFrame> got;
-    CanFrame f;
-    while (read_frame(f, timeout_ms) == IoStatus::kOk) got.push_back(f);
-    return got;
   }
 
   static std::vector<CanFrame> decode(const Bytes& line, SerialFrameDecoder& dec) {
@@ -201,7 +232,7 @@ TEST_F(SerialBusPty, FramesRoundTripOntoTheLine) {
     expected.insert(expected.end(), e.begin(), e.end());
   }
   EXPECT_EQ(bus_->tx_pending(), 0u);
-  const Bytes line = take();
+  const Bytes line = take_n(expected.size());
   EXPECT_EQ(line, expected);  // byte exact: no CR/LF or XON/XOFF processing
   SerialFrameDecoder dec;
   const std::vector<CanFrame> got = decode(line, dec);
@@ -213,8 +244,8 @@ TEST_F(SerialBusPty, FramesRoundTripOntoTheLine) {
 
 TEST_F(SerialBusPty, WorkedExampleGoesOnTheLineByteForByte) {
   ASSERT_EQ(bus_->write(make(0x181, 0, {0x34, 0x12, 0x00, 0x00})), IoStatus::kOk);
-  EXPECT_EQ(take(), (Bytes{0x01, 0x03, 0x81, 0x01, 0x01, 0x04, 0x04, 0x34, 0x12, 0x01, 0x03,
-                           0xB0, 0x66, 0x00}));
+  EXPECT_EQ(take_n(14), (Bytes{0x01, 0x03, 0x81, 0x01, 0x01, 0x04, 0x04, 0x34, 0x12, 0x01, 0x03,
+                               0xB0, 0x66, 0x00}));
 }
 
 // The line of the resynchronisation test: good frames with garbage, a torn frame and a
@@ -269,8 +300,7 @@ void expect_damage_counters(const SerialBus& bus, const DamagedLine& d) {
 
 TEST_F(SerialBusPty, DamageOnTheLineCostsOnlyTheDamagedFrames) {
   const DamagedLine d = damaged_line();
-  put(d.bytes);
-  const std::vector<CanFrame> got = read_all();
+  const std::vector<CanFrame> got = deliver(d.bytes);
   // 8 frames sent, 2 damaged (torn, flipped bit): exactly the other 6 arrive, in order.
   ASSERT_EQ(got.size(), d.survivors.size());
   for (std::size_t i = 0; i < got.size(); ++i) expect_same(got[i], d.survivors[i]);
@@ -322,14 +352,18 @@ TEST_F(SerialBusPty, FiltersDropFramesInUserSpaceAndCountThem) {
   reopen_with(filters);
   const std::vector<CanFrame> line{
       make(0x181, 0, {1}),
-      make(0x182, 0, {2}),                        // other id
-      make(0x181, CanFlag::kExtendedId, {3}),     // 29-bit with the same number
+      make(0x182, 0, {2}),                     // other id
+      make(0x181, CanFlag::kExtendedId, {3}),  // 29-bit with the same number
       make(0x701, 0, {0x05}),
       make(0x004, CanFlag::kErrorFrame, {0, 1}),  // error reports always pass
       make(0x181, CanFlag::kRemote, {}),          // remote request of 0x181
   };
-  for (const CanFrame& f : line) put(encode(f));
-  const std::vector<CanFrame> got = read_all();
+  Bytes bytes;
+  for (const CanFrame& f : line) {
+    const Bytes e = encode(f);
+    bytes.insert(bytes.end(), e.begin(), e.end());
+  }
+  const std::vector<CanFrame> got = deliver(bytes);
   ASSERT_EQ(got.size(), 3u);
   expect_same(got[0], line[0]);
   expect_same(got[1], line[3]);
@@ -345,7 +379,8 @@ TEST_F(SerialBusPty, FullDriverQueueKeepsPartialWritesPendingAndRefusesWhatDoesN
   std::vector<CanFrame> accepted;
   IoStatus s = IoStatus::kOk;
   for (std::uint32_t i = 0; i < 100000 && s == IoStatus::kOk; ++i) {
-    const CanFrame f = make(0x100 + (i % 0x600), CanFlag::kFd, Bytes(64, static_cast<std::uint8_t>(i)));
+    const CanFrame f =
+        make(0x100 + (i % 0x600), CanFlag::kFd, Bytes(64, static_cast<std::uint8_t>(i)));
     s = bus_->write(f);
     if (s == IoStatus::kOk) accepted.push_back(f);
   }
@@ -359,15 +394,16 @@ TEST_F(SerialBusPty, FullDriverQueueKeepsPartialWritesPendingAndRefusesWhatDoesN
   EXPECT_EQ(bus_->counters().frames_tx, accepted.size());
 
   // Drain the far end while flushing: every accepted frame arrives once, intact, in order.
+  const std::size_t expected = accepted.size() * kSerialMaxFrameOnLine;  // 74 bytes each
+  const std::int64_t deadline = now_ns() + 5'000'000'000;
   Bytes line;
-  for (int round = 0; round < 10000; ++round) {
+  while (line.size() < expected && now_ns() < deadline) {
     const Bytes got = take(5);
     line.insert(line.end(), got.begin(), got.end());
-    const IoStatus f = bus_->flush();
-    ASSERT_NE(f, IoStatus::kError);
-    if (f == IoStatus::kOk && got.empty()) break;
+    ASSERT_NE(bus_->flush(), IoStatus::kError);
   }
   EXPECT_EQ(bus_->tx_pending(), 0u);
+  EXPECT_EQ(line.size(), expected);
   SerialFrameDecoder dec;
   const std::vector<CanFrame> got = decode(line, dec);
   EXPECT_EQ(dec.counters().rejected(), 0u);
@@ -390,12 +426,14 @@ TEST_F(SerialBusPty, PendingBytesGoOutBeforeTheNextFrame) {
   ASSERT_GT(bus_->tx_pending(), 0u);
   Bytes line = take(5);  // room in the driver again
   ASSERT_EQ(bus_->write(make(0x7FF, 0, {0xEE})), IoStatus::kOk);
-  for (int round = 0; round < 100 && bus_->flush() != IoStatus::kOk; ++round) {
+  const std::size_t expected = i * kSerialMaxFrameOnLine + 11;
+  const std::int64_t deadline = now_ns() + 5'000'000'000;
+  while (line.size() < expected && now_ns() < deadline) {
     const Bytes more = take(5);
     line.insert(line.end(), more.begin(), more.end());
+    ASSERT_NE(bus_->flush(), IoStatus::kError);
   }
-  const Bytes rest = take(5);
-  line.insert(line.end(), rest.begin(), rest.end());
+  EXPECT_EQ(line.size(), expected);
   SerialFrameDecoder dec;
   const std::vector<CanFrame> got = decode(line, dec);
   EXPECT_EQ(dec.counters().rejected(), 0u);
@@ -412,6 +450,10 @@ TEST_F(SerialBusPty, MalformedFrameIsAnErrorAndNothingIsSent) {
   EXPECT_EQ(bus_->counters().errors, 2u);
   EXPECT_EQ(bus_->counters().frames_tx, 0u);
   EXPECT_EQ(bus_->state(), BusState::kOk);  // the line is fine
+  // The next good frame is the first thing on the line.
+  const Bytes good = encode(make(0x100, 0, {1}));
+  ASSERT_EQ(bus_->write(make(0x100, 0, {1})), IoStatus::kOk);
+  EXPECT_EQ(take_n(good.size()), good);
   EXPECT_TRUE(take(20).empty());
 }
 
@@ -460,7 +502,9 @@ TEST_F(SerialBusPty, ReadAndWriteLoopsDoNotAllocate) {
       IoStatus s = IoStatus::kWouldBlock;
       while (s == IoStatus::kWouldBlock) {
         s = bus_->read(f);
-        if (s == IoStatus::kWouldBlock) ASSERT_TRUE(wait_readable(bus_->native_handle(), 1000));
+        if (s == IoStatus::kWouldBlock) {
+          ASSERT_TRUE(wait_readable(bus_->native_handle(), 1000));
+        }
       }
       ASSERT_EQ(s, IoStatus::kOk);
       received += f.id == 0x123u;
@@ -477,8 +521,8 @@ TEST_F(SerialBusPty, ReadAndWriteLoopsDoNotAllocate) {
     }
     EXPECT_EQ(guard.count(), 0);
   }
-  Bytes tail = take(20);
-  echoed += decode(tail, far_end).size();
+  const std::int64_t deadline = now_ns() + 2'000'000'000;
+  while (echoed < 200 && now_ns() < deadline) echoed += decode(take(10), far_end).size();
   EXPECT_EQ(received, 200u);
   EXPECT_EQ(echoed, 200u);
   EXPECT_EQ(bus_->serial_counters().filtered, 200u);
@@ -516,8 +560,8 @@ std::string what_of(auto&& fn) {
 }
 
 TEST(SerialBus, OpenErrorsNameThePathAndTheCause) {
-  const std::string missing = what_of<std::runtime_error>(
-      [] { SerialBus bus("/nonexistent/ttyUSB9", 115200); });
+  const std::string missing =
+      what_of<std::runtime_error>([] { SerialBus bus("/nonexistent/ttyUSB9", 115200); });
   EXPECT_NE(missing.find("/nonexistent/ttyUSB9"), std::string::npos) << missing;
   EXPECT_NE(missing.find("open"), std::string::npos) << missing;
   EXPECT_NE(missing.find(std::strerror(ENOENT)), std::string::npos) << missing;
@@ -526,8 +570,8 @@ TEST(SerialBus, OpenErrorsNameThePathAndTheCause) {
   EXPECT_NE(not_tty.find("/dev/null"), std::string::npos) << not_tty;
   EXPECT_NE(not_tty.find(std::strerror(ENOTTY)), std::string::npos) << not_tty;
 
-  const std::string baud = what_of<std::invalid_argument>(
-      [] { SerialBus bus("/dev/ttyS0", 12345); });
+  const std::string baud =
+      what_of<std::invalid_argument>([] { SerialBus bus("/dev/ttyS0", 12345); });
   EXPECT_NE(baud.find("12345"), std::string::npos) << baud;
   EXPECT_NE(baud.find("/dev/ttyS0"), std::string::npos) << baud;
   EXPECT_NE(baud.find("115200"), std::string::npos) << baud;  // lists what is supported

@@ -112,8 +112,8 @@ TEST(SerialFrame, WorkedExampleBytesOnTheLine) {
 TEST(SerialFrame, ExtendedFrameWithoutZerosIsOneCobsBlock) {
   const CanFrame f =
       make(0x1ABCDEF1, CanFlag::kExtendedId, {0x11, 0x22, 0x33, 0x44, 0x55, 0x66, 0x77, 0x88});
-  const Bytes expected{0x11, 0x01, 0xF1, 0xDE, 0xBC, 0x1A, 0x08, 0x11, 0x22, 0x33,
-                       0x44, 0x55, 0x66, 0x77, 0x88, 0xD3, 0xE4, 0x00};
+  const Bytes expected{0x11, 0x01, 0xF1, 0xDE, 0xBC, 0x1A, 0x08, 0x11, 0x22,
+                       0x33, 0x44, 0x55, 0x66, 0x77, 0x88, 0xD3, 0xE4, 0x00};
   EXPECT_EQ(encode(f), expected);
 }
 
@@ -244,14 +244,17 @@ DamagedStream damaged_stream() {
 
   s.line = cat({
       encode(good[0]),
-      noise, Bytes{0x00},                                      // torn (too long): 100 bytes
+      noise,
+      Bytes{0x00},  // torn (too long): 100 bytes
       encode(good[1]),
-      Bytes(cut.begin(), cut.begin() + 5), Bytes{0x00},        // torn: 5 bytes
-      flipped,                                                 // crc error
+      Bytes(cut.begin(), cut.begin() + 5),
+      Bytes{0x00},  // torn: 5 bytes
+      flipped,      // crc error
       encode(good[4]),
-      Bytes(one_block_line.begin(), one_block_line.begin() + 12), Bytes{0x00},  // cobs: 12
-      Bytes{0xA5, 0x5A, 0x00},                                 // torn: 2 bytes of garbage
-      malformed,                                               // malformed
+      Bytes(one_block_line.begin(), one_block_line.begin() + 12),
+      Bytes{0x00},              // cobs: 12
+      Bytes{0xA5, 0x5A, 0x00},  // torn: 2 bytes of garbage
+      malformed,                // malformed
       encode(good[5]),
   });
   s.survivors = {good[0], good[1], good[4], good[5]};
@@ -300,8 +303,8 @@ TEST(SerialFrameDecoder, OverLongChunkIsRejectedAtOnceAndTheRestSkipped) {
   dec.feed(Bytes{0x01}, f);  // the 74th byte without a delimiter
   EXPECT_TRUE(dec.hunting());
   EXPECT_EQ(dec.buffered(), 0u);
-  expect_counters(dec.counters(), SerialCounters{.garbage_bytes = 74, .torn_frames = 1,
-                                                 .resyncs = 1});
+  expect_counters(dec.counters(),
+                  SerialCounters{.garbage_bytes = 74, .torn_frames = 1, .resyncs = 1});
   dec.feed(Bytes(10, 0x42), f);
   EXPECT_EQ(dec.counters().garbage_bytes, 84u);
   const std::vector<CanFrame> got = feed_all(dec, cat({Bytes{0x00}, encode(make(1, 0, {}))}), 0);
@@ -330,14 +333,14 @@ TEST(SerialFrameDecoder, ChunkOfEightBytesIsTornNineIsChecked) {
 
 TEST(SerialFrameDecoder, MalformedCausesAreAllCaught) {
   const std::vector<Bytes> payloads{
-      {0x40, 0x81, 0x01, 0x00, 0x00, 0x00},                // reserved flag bit 6
-      {0x00, 0x81, 0x01, 0x00, 0x00, 0x02, 0xAA},          // len 2, one data byte
-      {0x00, 0x81, 0x01, 0x00, 0x00, 0x00, 0xAA},          // len 0, one data byte
-      {0x00, 0x00, 0x08, 0x00, 0x00, 0x00},                // 11-bit id 0x800
+      {0x40, 0x81, 0x01, 0x00, 0x00, 0x00},                             // reserved flag bit 6
+      {0x00, 0x81, 0x01, 0x00, 0x00, 0x02, 0xAA},                       // len 2, one data byte
+      {0x00, 0x81, 0x01, 0x00, 0x00, 0x00, 0xAA},                       // len 0, one data byte
+      {0x00, 0x00, 0x08, 0x00, 0x00, 0x00},                             // 11-bit id 0x800
       {0x04, 0x81, 0x01, 0x00, 0x00, 0x09, 1, 2, 3, 4, 5, 6, 7, 8, 9},  // FD len 9
-      {0x06, 0x81, 0x01, 0x00, 0x00, 0x00},                // remote + FD
-      {0x08, 0x81, 0x01, 0x00, 0x00, 0x00},                // BRS on a classic frame
-      {0x02, 0x81, 0x01, 0x00, 0x00, 0x02, 0xAA, 0xBB},    // remote carrying data
+      {0x06, 0x81, 0x01, 0x00, 0x00, 0x00},                             // remote + FD
+      {0x08, 0x81, 0x01, 0x00, 0x00, 0x00},                             // BRS on a classic frame
+      {0x02, 0x81, 0x01, 0x00, 0x00, 0x02, 0xAA, 0xBB},                 // remote carrying data
   };
   SerialFrameDecoder dec;
   Bytes line;
@@ -361,7 +364,8 @@ TEST(SerialFrameDecoder, NoBitFlipYieldsAWrongFrame) {
       Bytes hit = v;
       hit[bit / 8] ^= static_cast<std::uint8_t>(1u << (bit % 8));
       SerialFrameDecoder dec;
-      const std::vector<CanFrame> got = feed_all(dec, cat({encode(c), hit, encode(c), encode(a)}), 0);
+      const std::vector<CanFrame> got =
+          feed_all(dec, cat({encode(c), hit, encode(c), encode(a)}), 0);
       const bool delimiter_hit = bit / 8 == v.size() - 1;
       ASSERT_GE(got.size(), delimiter_hit ? 2u : 3u) << "bit " << bit;
       ASSERT_LE(got.size(), 3u) << "bit " << bit;

@@ -32,7 +32,7 @@ enum class CobsError : std::uint8_t {
 /// Result of cobs_encode() / cobs_decode(): bytes written, or an error (length 0, output
 /// contents unspecified).
 struct CobsResult {
-  std::size_t length = 0;             ///< Bytes written to the output (0 on error).
+  std::size_t length = 0;              ///< Bytes written to the output (0 on error).
   CobsError error = CobsError::kNone;  ///< kNone on success.
   /// True on success.
   constexpr bool ok() const noexcept { return error == CobsError::kNone; }
@@ -50,13 +50,15 @@ std::size_t cobs_encoded_length(std::span<const std::uint8_t> input) noexcept;
 /// COBS-encodes `input` (any bytes, possibly empty) into `output`. The result holds no 0x00
 /// byte and is at least 1 byte long (the empty packet encodes as 0x01). kOutputTooSmall if
 /// `output` is shorter than cobs_encoded_length(input).
-CobsResult cobs_encode(std::span<const std::uint8_t> input, std::span<std::uint8_t> output) noexcept;
+CobsResult cobs_encode(std::span<const std::uint8_t> input,
+                       std::span<std::uint8_t> output) noexcept;
 
 /// Decodes the COBS bytes `input` (without the delimiter) into `output`. Errors, the first
 /// found scanning left to right: kZeroInInput (a 0x00 in `input`), kCodeOverrun (the last
 /// code byte announces more bytes than remain: the input was cut), kOutputTooSmall. An empty
 /// input decodes to an empty output (the encoder never produces it).
-CobsResult cobs_decode(std::span<const std::uint8_t> input, std::span<std::uint8_t> output) noexcept;
+CobsResult cobs_decode(std::span<const std::uint8_t> input,
+                       std::span<std::uint8_t> output) noexcept;
 
 /// Short English name of a CobsError (static string).
 const char* to_string(CobsError error) noexcept;

@@ -82,7 +82,9 @@ class SerialBus final : public Bus {
   IoStatus flush() noexcept;
 
   /// kOk, or kBusOff once the line is gone (see the file comment).
-  BusState state() const noexcept override { return line_gone_ ? BusState::kBusOff : BusState::kOk; }
+  BusState state() const noexcept override {
+    return line_gone_ ? BusState::kBusOff : BusState::kOk;
+  }
 
   /// Bus counters; dropped = serial_counters().rejected().
   BusCounters counters() const noexcept override;

@@ -57,7 +57,7 @@ enum class SerialEncodeError : std::uint8_t {
 
 /// Result of encode_serial_frame(): bytes written (delimiter included) or an error.
 struct SerialEncodeResult {
-  std::size_t length = 0;                           ///< Bytes written (0 on error).
+  std::size_t length = 0;                              ///< Bytes written (0 on error).
   SerialEncodeError error = SerialEncodeError::kNone;  ///< kNone on success.
   /// True on success.
   constexpr bool ok() const noexcept { return error == SerialEncodeError::kNone; }
