@@ -1,0 +1,114 @@
+#pragma once
+/// @file realtime_setup.hpp
+/// Making the calling thread a real-time thread on Linux, step by step, and saying what
+/// happened: SCHED_FIFO priority (pthread_setschedparam, POSIX.1-2017 "Scheduling Policies";
+/// sched(7)), memory locking (mlockall(2): MCL_CURRENT | MCL_FUTURE), stack prefaulting (the
+/// pages are touched once so the loop takes no page fault on them later), CPU affinity
+/// (sched_setaffinity(2) with pid 0: the calling thread). And whether the kernel itself is
+/// PREEMPT_RT (/sys/kernel/realtime, uname -v).
+///
+/// Lack of privilege is not an exception: every step is reported as not requested, applied
+/// or failed (errno and a message that says how to grant the privilege), and a non-real-time
+/// run goes on unless the caller asks for `strict`. All of this is setup code: it allocates
+/// (messages) and must run before the loop's first period, on the loop's own thread.
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace numen::platform {
+
+/// What the caller asks for. The default asks for nothing.
+struct RealtimeSettings {
+  /// 0: leave the thread's policy alone (normally SCHED_OTHER). 1–99: SCHED_FIFO at this
+  /// priority (sched(7); Linux's range is sched_get_priority_min/max(SCHED_FIFO) = 1..99).
+  /// Anything else is a configuration error (std::invalid_argument).
+  int fifo_priority = 0;
+  /// mlockall(MCL_CURRENT | MCL_FUTURE): every page of the process, now and later, stays in
+  /// RAM. Process-wide, not per thread. With MCL_FUTURE an unprivileged process whose
+  /// RLIMIT_MEMLOCK is then exhausted gets failing mmap/brk (allocations fail) — size the
+  /// limit for the whole process or run with CAP_IPC_LOCK.
+  bool lock_memory = false;
+  /// Bytes of the calling thread's stack (below the current frame) to touch now, so that
+  /// the loop's later stack use takes no page fault; 0: none. Done after mlockall, so the
+  /// pages are also locked. Refused (step failed) if the thread's stack has not that much
+  /// room left below the caller plus a 64 KiB margin.
+  std::size_t prefault_stack_bytes = 0;
+  /// CPUs (indices as in /sys/devices/system/cpu/cpuN) the thread may run on; empty: leave
+  /// the affinity alone. Every index must be present and allowed (cpuset/cgroup); otherwise
+  /// the step fails and the previous affinity is kept (the kernel would silently drop
+  /// unusable CPUs from a mask; this does not).
+  std::vector<int> cpu_affinity;
+  /// True: apply_realtime() throws std::runtime_error if any requested step failed (the
+  /// message is describe() of the report). False: failures are only reported.
+  bool strict = false;
+};
+
+/// Outcome of one step.
+enum class RealtimeStepStatus {
+  kNotRequested,  ///< The settings did not ask for this step.
+  kApplied,       ///< Done and checked.
+  kFailed,        ///< Asked for and not done; see error / message.
+};
+
+/// Result of one step of apply_realtime().
+struct RealtimeStep {
+  RealtimeStepStatus status = RealtimeStepStatus::kNotRequested;
+  int error = 0;        ///< errno (or the pthread error code) of the failure; 0 otherwise.
+  std::string message;  ///< One line: what was done, or what failed, why and what to do.
+  bool failed() const noexcept { return status == RealtimeStepStatus::kFailed; }
+};
+
+/// Whether the running kernel is a real-time (PREEMPT_RT) kernel.
+struct KernelRealtime {
+  bool sysfs_present = false;   ///< /sys/kernel/realtime exists (only PREEMPT_RT kernels have it).
+  bool sysfs_realtime = false;  ///< ... and reads "1".
+  bool uname_preempt_rt = false;  ///< uname -v (utsname.version) contains "PREEMPT_RT".
+  std::string uname_version;      ///< utsname.version as read, e.g. "#1 SMP PREEMPT_DYNAMIC ...".
+  /// Real-time kernel: either sign says so.
+  bool realtime() const noexcept { return sysfs_realtime || uname_preempt_rt; }
+};
+
+/// Everything apply_realtime() did, step by step, and the limits it saw.
+struct RealtimeReport {
+  RealtimeStep scheduling;      ///< SCHED_FIFO (fifo_priority).
+  RealtimeStep memory_lock;     ///< mlockall (lock_memory).
+  RealtimeStep stack_prefault;  ///< stack touch (prefault_stack_bytes).
+  RealtimeStep affinity;        ///< CPU affinity (cpu_affinity).
+  KernelRealtime kernel;        ///< The kernel check (always done).
+  /// RLIMIT_RTPRIO soft limit when the report was made (-1: unlimited).
+  std::int64_t rtprio_limit = 0;
+  /// RLIMIT_MEMLOCK soft limit in bytes (-1: unlimited).
+  std::int64_t memlock_limit_bytes = 0;
+  /// No requested step failed.
+  bool ok() const noexcept {
+    return !scheduling.failed() && !memory_lock.failed() && !stack_prefault.failed() &&
+           !affinity.failed();
+  }
+};
+
+/// Applies `settings` to the calling thread (scheduling, affinity, stack) and process
+/// (memory lock), in the order affinity → memory lock → stack prefault → scheduling (pages
+/// are faulted on the CPU the loop will run on; the thread becomes FIFO last), and
+/// checks the kernel. Never throws for lack of privilege or a CPU that cannot be used: those
+/// are failed steps. Throws std::invalid_argument if fifo_priority is outside 0..99, and —
+/// only with settings.strict — std::runtime_error when a step failed. Allocates.
+RealtimeReport apply_realtime(const RealtimeSettings& settings);
+
+/// Reads /sys/kernel/realtime and uname(2) (see KernelRealtime). Never throws for a missing
+/// file (that is the usual non-RT case).
+KernelRealtime check_kernel_realtime();
+
+/// The decision of check_kernel_realtime() from its inputs (for tests and other sources):
+/// `sysfs_text` is the content of /sys/kernel/realtime or nullptr if absent; `uname_version`
+/// is utsname.version.
+KernelRealtime classify_kernel(const char* sysfs_text, const std::string& uname_version);
+
+/// Human-readable lines: one per step, one for the kernel, one for the limits. Example:
+///   "scheduling: applied: SCHED_FIFO priority 80"
+///   "memory lock: FAILED: mlockall(MCL_CURRENT|MCL_FUTURE) refused: ..."
+///   "kernel: not real-time (no /sys/kernel/realtime; uname -v: #1 SMP PREEMPT_DYNAMIC ...)"
+std::vector<std::string> describe(const RealtimeReport& report);
+
+}  // namespace numen::platform
