@@ -2,6 +2,7 @@
 /// The `numen` command.
 ///   numen run [SCENE] [--duration S] [--trace FILE.csv] [--json] [--realtime] [--coupling MODE]
 ///             [--bus sim|log:FILE] [--record FILE.log]
+///             [--rt-priority N] [--lock-memory] [--prefault-stack BYTES] [--cpu LIST] [--rt-strict]
 
 #include <cstdio>
 #include <iostream>
@@ -40,6 +41,16 @@ int main(int argc, char** argv) {
                    ? std::string()
                    : std::string("expected sim or log:FILE");
       });
+  numen::platform::RealtimeSettings rt;
+  run->add_option("--rt-priority", rt.fifo_priority,
+                  "SCHED_FIFO priority 1-99 of the loop thread (0: leave the scheduler alone)")
+      ->check(CLI::Range(0, 99));
+  run->add_flag("--lock-memory", rt.lock_memory, "mlockall(MCL_CURRENT|MCL_FUTURE) before the loop");
+  run->add_option("--prefault-stack", rt.prefault_stack_bytes,
+                  "Bytes of the loop thread's stack to touch before the loop (e.g. 262144)");
+  run->add_option("--cpu", rt.cpu_affinity, "CPUs the loop thread may run on, e.g. --cpu 1 or --cpu 2,3")
+      ->delimiter(',');
+  run->add_flag("--rt-strict", rt.strict, "Fail instead of reporting when a real-time step fails");
   run->add_option("--record", record_path,
                   "Record the controller's bus traffic into this candump log (can-utils format)");
   run->add_option("--coupling", coupling, "Override the scene's coupling mode")
@@ -59,6 +70,7 @@ int main(int argc, char** argv) {
       options.trace_path = trace_path;
       options.bus.spec = bus;
       options.bus.record_path = record_path;
+      options.rt = rt;
       const numen::sim::RunSummary summary = numen::sim::run_scene(scene, options);
       if (json) {
         std::cerr << numen::sim::format_summary(summary);

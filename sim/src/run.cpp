@@ -279,6 +279,12 @@ RunSummary run_scene(const Scene& scene, const RunOptions& options) {
   const auto steps = static_cast<std::int64_t>(std::llround(duration / scene.model.dt));
   SceneRunner runner(scene, options.trace_path.empty() ? 0 : static_cast<std::size_t>(steps),
                      options.bus);
+  const platform::RealtimeSettings& rt = options.rt;
+  std::vector<std::string> rt_lines;
+  if (rt.fifo_priority != 0 || rt.lock_memory || rt.prefault_stack_bytes > 0 ||
+      !rt.cpu_affinity.empty()) {
+    rt_lines = platform::describe(platform::apply_realtime(rt));  // throws only if strict
+  }
   std::int64_t overruns = 0, missed = 0;
   platform::LatencyHistogram wakeup;
   const std::int64_t wall0 = platform::monotonic_now_ns();
@@ -297,6 +303,7 @@ RunSummary run_scene(const Scene& scene, const RunOptions& options) {
   s.realtime_overruns = overruns;
   s.realtime_missed_periods = missed;
   s.wakeup_latency_us = summarize_ns(wakeup);
+  s.realtime_setup = std::move(rt_lines);
   if (!options.trace_path.empty()) runner.trace().write_csv(options.trace_path);
   return s;
 }
@@ -340,6 +347,7 @@ std::string format_summary(const RunSummary& s) {
     os << "  recorded " << s.bus_frames_recorded << " frames, " << s.bus_record_dropped
        << " dropped by the recorder\n";
   os << "  nan detected: " << (s.nan_detected ? "YES" : "no");
+  for (const std::string& line : s.realtime_setup) os << "\n  realtime setup: " << line;
   if (s.wakeup_latency_us.max > 0.0)
     os << "\n  realtime: wake-up latency us median " << s.wakeup_latency_us.median << ", p99 "
        << s.wakeup_latency_us.p99 << ", max " << s.wakeup_latency_us.max << "; overruns "
@@ -431,6 +439,10 @@ std::string format_summary_json(const RunSummary& s) {
   os << "\"wakeup_latency_us\":{\"median\":" << json_number(s.wakeup_latency_us.median)
      << ",\"p99\":" << json_number(s.wakeup_latency_us.p99) << ",\"max\":" << json_number(s.wakeup_latency_us.max)
      << "},";
+  os << "\"realtime_setup\":[";
+  for (std::size_t i = 0; i < s.realtime_setup.size(); ++i)
+    os << (i ? "," : "") << json_string(s.realtime_setup[i]);
+  os << "],";
   os << "\"warnings\":[";
   for (std::size_t i = 0; i < s.warnings.size(); ++i) os << (i ? "," : "") << json_string(s.warnings[i]);
   os << "],";

@@ -17,6 +17,7 @@
 #include <cstring>
 #include <memory>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "alloc_counter.hpp"
@@ -689,4 +690,48 @@ TEST(RunBusLog, BadBusSpecAndBadLogAreClearErrors) {
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("bad.log:2:"), std::string::npos) << e.what();
   }
+}
+
+// RunOptions::rt (run.hpp): the real-time setup is applied on the running
+// thread and reported step by step; a step that fails (a CPU that does not
+// exist) is reported without stopping the run, unless strict. Run in its own
+// thread so the test runner's scheduling and affinity are left alone.
+TEST(RunRealtimeSetup, StepsAreReportedAndAFailureDoesNotStopTheRun) {
+  RunSummary s;
+  std::thread t([&] {
+    numen::sim::RunOptions opt;
+    opt.duration_s = 0.05;
+    opt.rt.cpu_affinity = {4095};  // no such CPU here
+    s = numen::sim::run_scene(default_scene(), opt);
+  });
+  t.join();
+  EXPECT_EQ(s.steps, 50);
+  ASSERT_FALSE(s.realtime_setup.empty());
+  bool affinity_failed = false;
+  for (const std::string& line : s.realtime_setup)
+    affinity_failed = affinity_failed || (line.find("affinity") != std::string::npos &&
+                                          line.find("FAILED") != std::string::npos);
+  EXPECT_TRUE(affinity_failed);
+  EXPECT_NE(numen::sim::format_summary_json(s).find("\"realtime_setup\":[\""), std::string::npos);
+
+  bool threw = false;
+  std::thread strict([&] {
+    numen::sim::RunOptions opt;
+    opt.duration_s = 0.05;
+    opt.rt.cpu_affinity = {4095};
+    opt.rt.strict = true;
+    try {
+      numen::sim::run_scene(default_scene(), opt);
+    } catch (const std::runtime_error&) {
+      threw = true;
+    }
+  });
+  strict.join();
+  EXPECT_TRUE(threw);
+}
+
+TEST(RunRealtimeSetup, NothingRequestedReportsNothing) {
+  numen::sim::RunOptions opt;
+  opt.duration_s = 0.01;
+  EXPECT_TRUE(numen::sim::run_scene(default_scene(), opt).realtime_setup.empty());
 }

@@ -17,6 +17,7 @@
 #include "numen/hal/log_bus.hpp"
 #include "numen/hal/sim_bus.hpp"
 #include "numen/platform/control_loop.hpp"
+#include "numen/platform/realtime_setup.hpp"
 #include "numen/sim/scene.hpp"
 #include "numen/sim/simulated_instrument.hpp"
 #include "numen/sim/trace.hpp"
@@ -45,6 +46,11 @@ struct RunOptions {
   bool realtime = false;     ///< Pace each period to CLOCK_MONOTONIC (clock_nanosleep).
   std::string trace_path;    ///< Per-step CSV trace; empty: none.
   BusChoice bus;             ///< The controller's bus (default: the simulated bus).
+  /// Real-time setup of the loop thread (SCHED_FIFO, mlockall, stack prefault, CPU
+  /// affinity), applied by run_scene() on the calling thread before the first period when
+  /// anything is requested; each step's outcome is in RunSummary::realtime_setup. Lack of
+  /// privilege is reported, not fatal, unless rt.strict.
+  platform::RealtimeSettings rt;
 };
 
 /// Percentiles of a duration distribution (µs).
@@ -113,6 +119,9 @@ struct RunSummary {
   std::int64_t realtime_overruns = 0;      ///< Paced periods (--realtime) that began after their deadline.
   std::int64_t realtime_missed_periods = 0;  ///< Whole periods skipped to re-phase after overruns.
   DurationSummary wakeup_latency_us;       ///< Paced runs: wake-up time − deadline (µs).
+  /// RunOptions::rt outcome, one line per step plus the kernel and the limits
+  /// (platform::describe()); empty when nothing was requested.
+  std::vector<std::string> realtime_setup;
   std::vector<std::string> warnings;
   std::string trocar_note;
 };
