@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Builds the hardware-in-the-loop guest: a Debian kernel (vmlinuz) and an initramfs
-# (initramfs.cpio.gz) holding busybox, the CAN kernel modules, can-utils, numen's HIL programs
+# (initramfs.cpio.gz) holding busybox, the CAN, evdev and uinput kernel modules, can-utils, numen's HIL programs
 # from BUILD_DIR and the scenario scripts. See docs/protocol.md, "Hardware in the loop".
 #
 # Usage: tests/hil/build_image.sh BUILD_DIR OUT_DIR
@@ -62,7 +62,8 @@ for applet in $("$root/bin/busybox" --list); do
   [ -e "$root/bin/$applet" ] || ln -s busybox "$root/bin/$applet"
 done
 
-# 2. Kernel modules: can, can-raw, can-dev, vcan and what they depend on (the `depends=` field
+# 2. Kernel modules: can, can-raw, can-dev, vcan, evdev (the /dev/input/eventN handler) and
+# uinput (user-space input devices; both CONFIG_*=m in Debian's kernel) and what they depend on (the `depends=` field
 # of each module's .modinfo section; the package ships no modules.dep, depmod runs at install).
 # Compressed modules are decompressed (busybox insmod reads plain .ko only).
 declare -A mod_path=()
@@ -94,7 +95,7 @@ add_module() {  # depth-first: dependencies first
   for dep in ${deps//,/ }; do add_module "$dep"; done
   order+=("$name")
 }
-for m in can can_raw can_dev vcan; do add_module "$m"; done
+for m in can can_raw can_dev vcan evdev uinput; do add_module "$m"; done
 printf '%s\n' "${order[@]}" >"$root/etc/hil-modules"
 
 # 3. can-utils (dynamically linked against libc).

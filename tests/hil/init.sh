@@ -1,7 +1,7 @@
 #!/bin/busybox sh
 # /init of the hardware-in-the-loop guest (tests/hil/build_image.sh puts it in the initramfs).
-# Mounts the kernel file systems, loads the CAN modules, creates the virtual CAN buses, runs
-# every /hil/scenarios/*.sh in name order and powers off. Console protocol (parsed by run.sh):
+# Mounts the kernel file systems, loads the modules of /etc/hil-modules (CAN, evdev, uinput),
+# creates the virtual CAN buses, runs every /hil/scenarios/*.sh in name order and powers off. Console protocol (parsed by run.sh):
 #   HIL-START uptime=S            scenarios are about to start (S: seconds since boot)
 #   HIL <name> PASS|FAIL detail   one line per scenario
 #   HIL-END scenarios=N uptime=S  all scenarios ran

@@ -1,7 +1,7 @@
 # Scenario: the SocketCanBus GoogleTest suite (tests/hil/socketcan_bus_hil_test.cpp) on vcan0
 # and vcan1.
 . /hil/lib.sh
-numen_hil_tests --gtest_color=no >/tmp/gtest.log 2>&1
+numen_hil_tests --gtest_color=no --gtest_filter='SocketCanHil*' >/tmp/gtest.log 2>&1
 rc=$?
 cat /tmp/gtest.log
 metrics="$(sed -n 's/^HIL-METRIC //p' /tmp/gtest.log | tr '\n' ' ')"
