@@ -31,6 +31,7 @@ constexpr double kPeriodS = 1e-3;
 
 DeviceConfig trocar_config() {
   DeviceConfig c = make_default_trocar_config(1);
+  c.canopen.managed = false;  // the minimal protocol (the managed stack: canopen_master_test)
   c.control_period_s = kPeriodS;
   c.trocar.point = Vec3(0.0, 0.0, 0.25);
   c.trocar.orientation = numen::core::Quat(Eigen::AngleAxisd(std::numbers::pi, Vec3::UnitX()));
@@ -389,6 +390,7 @@ TEST(DeviceEmulator, TenThousandPeriodsWithoutAllocation) {
 
 TEST(DeviceEmulator, PoseTrackerEndToEnd) {
   DeviceConfig c = make_default_pose_tracker_config(40);
+  c.canopen.managed = false;
   c.control_period_s = kPeriodS;
   Rig rig(latency_only(), c);
   const double q[6] = {0.1, -0.2, 0.3, 2.0, -0.4, -3.0};
@@ -407,6 +409,7 @@ TEST(DeviceEmulator, PoseTrackerEndToEnd) {
 TEST(DeviceEmulator, PhantomEndToEnd) {
   // A phantom arm: six encoders answer each SYNC, three drives receive the link torques.
   DeviceConfig c = make_default_phantom_config(50);
+  c.canopen.managed = false;
   c.control_period_s = kPeriodS;
   Rig rig(latency_only(), c);
   const double q[6] = {0.3, -0.2, 0.1, -1.0, 0.6, 2.5};

@@ -38,6 +38,7 @@ constexpr std::int64_t kPhase = 250'000;
 
 numen::hal::DeviceConfig trocar_config() {
   numen::hal::DeviceConfig c = numen::hal::make_default_trocar_config(1);
+  c.canopen.managed = false;  // the minimal protocol; managed_config() below for the full stack
   c.trocar.point = Vec3(0.0, 0.0, 0.2);
   c.trocar.orientation = Quat(Eigen::AngleAxisd(std::numbers::pi, Vec3::UnitX()));
   c.control_period_s = 1e-3;
@@ -645,3 +646,74 @@ TEST(ControlLoopLinks, TheHeldBodyFollowsItsOwnLinkAcrossToolSwitches) {
 }
 
 }  // namespace
+
+// ---------------------------------------------------------------- managed CANopen stack
+
+namespace managed {
+
+using numen::hal::FaultCause;
+using numen::hal::LifecycleState;
+using numen::hal::PowerState;
+using numen::hal::StartupPhase;
+
+numen::hal::DeviceConfig managed_config() {
+  numen::hal::DeviceConfig c = numen::hal::make_default_trocar_config(1);
+  c.trocar.point = Vec3(0.0, 0.0, 0.2);
+  c.trocar.orientation = Quat(Eigen::AngleAxisd(std::numbers::pi, Vec3::UnitX()));
+  c.control_period_s = 1e-3;
+  return c;
+}
+
+/// The full stack: SimBus, managed DeviceEmulator (NMT, heartbeats, CiA 402 drives), the loop.
+struct Rig {
+  numen::hal::DeviceConfig config = managed_config();
+  SimBus bus{bus_settings()};
+  numen::hal::DeviceEmulator emulator{config};
+  numen::hal::InstrumentDevice device{config};
+  numen::core::Model model = small_model();
+  numen::core::Data data = numen::core::make_data(model);
+  ControlLoop loop{model, data, bus.controller(), device};
+  std::int64_t k = 0;
+  bool controller_silent = false;
+
+  Rig() { emulator.set_axis_values(kQ); }
+
+  /// Period k as SceneRunner runs it: SYNC (+ NMT, heartbeat); the device answers and ticks;
+  /// the controller reads, supervises, steps and writes; the device takes the RPDOs.
+  const PeriodReport& period() {
+    const std::int64_t t = k * kMs;
+    ++k;
+    bus.set_time_ns(t);
+    if (!controller_silent) loop.begin_period(t);
+    bus.set_time_ns(t + kLatency);
+    emulator.poll(bus.device());
+    emulator.tick(t + kLatency, bus.device());
+    bus.set_time_ns(t + kPhase);
+    if (!controller_silent) loop.end_period(t + kPhase);
+    return loop.last_report();
+  }
+  /// Runs until the lifecycle is active and torque flows (at most `max` periods).
+  void run_to_torque(int max = 100) {
+    for (int i = 0; i < max && loop.first_torque_period() < 0; ++i) period();
+  }
+  const numen::hal::SafetySupervisor& sup() const { return *loop.supervisor(); }
+};
+
+TEST(ControlLoopManaged, StartUpReachesActiveInAnExactNumberOfPeriods) {
+  Rig rig;
+  ASSERT_TRUE(rig.loop.managed());
+  EXPECT_EQ(rig.sup().state(), LifecycleState::kInactive);  // configured at construction
+  for (int i = 0; i < 40; ++i) {
+    const PeriodReport& r = rig.period();
+    std::printf("[   info   ] k %lld: startup %s, lifecycle %s, valid %d, frames %d, torque %d\n",
+                static_cast<long long>(rig.k - 1), numen::hal::to_string(r.startup),
+                numen::hal::to_string(r.lifecycle), r.sample_valid, r.frames_read,
+                r.torque_commanded);
+  }
+  const auto& c = rig.emulator.counters();
+  std::printf("tpdos %llu drive %llu err %llu wb %llu\n", (unsigned long long)c.tpdos_sent, (unsigned long long)c.drive_tpdos_sent, (unsigned long long)c.tx_errors, (unsigned long long)c.tx_would_block);
+  const auto& d = rig.device.counters();
+  std::printf("decoded %llu wrong len %llu notdata %llu unknown %llu rejected %llu stale %llu range %llu jump %llu\n", (unsigned long long)d.frames_decoded, (unsigned long long)d.frames_wrong_length, (unsigned long long)d.frames_not_data, (unsigned long long)d.frames_unknown_id, (unsigned long long)d.values_rejected, (unsigned long long)d.rejected_stale, (unsigned long long)d.rejected_out_of_range, (unsigned long long)d.rejected_jump);
+}
+
+}  // namespace managed
