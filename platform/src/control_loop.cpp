@@ -8,6 +8,7 @@
 #include <string>
 
 #include "numen/core/feedback.hpp"
+#include "numen/core/joint.hpp"
 #include "numen/core/step.hpp"
 #include "numen/hal/canopen.hpp"
 #include "numen/platform/monotonic_clock.hpp"
@@ -85,6 +86,15 @@ ControlLoop::ControlLoop(const core::Model& model, core::Data& data, hal::Bus& b
   link_origin_.assign(binding_.links.size(), core::Vec3::Zero());
   body_target_.assign(binding_.links.size(), core::Vec3::Zero());
   bound_body_.assign(binding_.links.size(), -1);
+  // Until the device has a target, the prescribed joints hold their starting coordinates (the
+  // managed stack's start-up has no encoder values for its first periods).
+  for (const AxisPrescription& p : binding_.prescriptions) {
+    const core::JointModel& jm = model.joints[static_cast<std::size_t>(p.joint)];
+    const core::BodyState* parent =
+        jm.parent >= 0 ? &data.bodies[static_cast<std::size_t>(jm.parent)] : nullptr;
+    data.joint_prescribed[static_cast<std::size_t>(p.joint)] = core::JointPrescription{
+        core::joint_coordinate(jm, parent, data.bodies[static_cast<std::size_t>(jm.child)]), 0.0};
+  }
   tau_ = hal::AxisVector::Zero(device.num_axes());
   if (device.config().canopen.managed) {
     master_ = std::make_unique<hal::CanopenMaster>(device.config(), period_of(device),

@@ -129,9 +129,27 @@ TEST(RunDefaultScene, GodObjectStaysOnTheSurfaceWhileTheHandGoesThrough) {
   EXPECT_FALSE(s.nan_detected);
   EXPECT_EQ(s.nonfinite_steps, 0);
   EXPECT_EQ(s.rejected_samples, 0);
-  EXPECT_EQ(s.invalid_periods, 0);
+  // The managed CANopen start-up: periods 0 (reset communication, boot-ups) and 1 (start
+  // remote node) have no encoder TPDO yet, so their samples are not valid; every later one is.
+  EXPECT_EQ(s.invalid_periods, 2);
   EXPECT_EQ(s.bus_frames_corrupted, 0);
   EXPECT_EQ(s.bus_frames_dropped, 0);
+  // Lifecycle: operational and active at period 10 (first node heartbeats, 10 ms), torque
+  // from period 14 (CiA 402 shutdown → switch on → enable operation), no fault.
+  EXPECT_TRUE(s.managed);
+  EXPECT_EQ(s.startup, "operational");
+  EXPECT_EQ(s.periods_to_operational, 10);
+  EXPECT_EQ(s.periods_to_active, 10);
+  EXPECT_GE(s.periods_to_torque, 14);
+  EXPECT_EQ(s.lifecycle, "active");
+  EXPECT_EQ(s.faults, 0);
+  EXPECT_EQ(s.fault_records, 0);
+  EXPECT_EQ(s.first_fault, "");
+  EXPECT_EQ(s.emcys, 0);
+  EXPECT_EQ(s.heartbeat_losses, 0);
+  ASSERT_EQ(s.drive_states.size(), 3u);
+  EXPECT_EQ(s.drive_states[0], "pivot_x: operation enabled");
+  EXPECT_EQ(s.drive_states[2], "depth: operation enabled");
 
   // Free space: the god-object follows the hand closely.
   EXPECT_GT(s.free_steps, n / 10);
@@ -163,11 +181,16 @@ TEST(RunDefaultScene, GodObjectStaysOnTheSurfaceWhileTheHandGoesThrough) {
 }
 
 TEST(RunDefaultScene, NoJumpAtStart) {
-  // The instrument starts at the device's first target: after the first
-  // period, target and god-object agree to the encoder quantisation.
+  // The instrument starts at the device's first target: at the first valid
+  // sample (period 2, after the NMT start-up; the god-object held its starting
+  // pose until then), target and god-object agree to the encoder quantisation
+  // and 2 ms of hand motion.
   const Scene& scene = default_scene();
   SceneRunner runner(scene);
-  runner.period();
+  for (int k = 0; k < 3; ++k) {
+    runner.period();
+    EXPECT_EQ(runner.device().last_sample().valid, k == 2) << "period " << k;
+  }
   const auto& d = runner.data();
   ASSERT_TRUE(runner.device().last_sample().valid);
   const auto held = static_cast<std::size_t>(d.attached_body);
@@ -665,7 +688,10 @@ TEST(RunBusLog, RecordedRunReplaysBitIdentically) {
   }
   const RunSummary s = runner.summary();
   EXPECT_GT(s.bus_frames_replayed, kPeriods);
-  EXPECT_EQ(s.invalid_periods, 0);
+  EXPECT_EQ(s.invalid_periods, 2);  // the two start-up periods, as in the recorded run
+  // The replayed heartbeats and drive TPDOs take the controller through the same start-up.
+  EXPECT_EQ(s.periods_to_active, 10);
+  EXPECT_EQ(s.lifecycle, "active");
   ASSERT_EQ(recorded.size(), replayed.size());
   for (int k = 0; k < kPeriods; ++k) {
     ASSERT_EQ(recorded[static_cast<std::size_t>(k)], replayed[static_cast<std::size_t>(k)]) << "period " << k;
