@@ -649,6 +649,23 @@ TEST(RunBadBus, CorruptedAndLostFramesAreRejectedWithoutHarm) {
   EXPECT_LE(s.feedback_force_max_n, scene.model.feedback.max_force + 1e-9);
   EXPECT_LT(s.tracking_error_free_rms_mm, 2.0);
   for (const TraceRecord& r : runner.trace().records()) ASSERT_TRUE(all_finite(r)) << "t = " << r.time_s;
+  // The managed stack treats an implausible encoder value (a corrupted frame past the jump or
+  // range check) as a fault: the safe state latches, with the cause and the period, and no
+  // torque is commanded from then on (nobody re-arms in this run).
+  std::printf("[   info   ] bad bus: start-up %s, lifecycle %s, %lld safe stop(s), first %s (id %d) "
+              "at %.3f s, period %lld; %lld fault records\n",
+              s.startup.c_str(), s.lifecycle.c_str(), static_cast<long long>(s.faults),
+              s.first_fault.c_str(), s.first_fault_id, s.first_fault_time_s,
+              static_cast<long long>(s.first_fault_period), static_cast<long long>(s.fault_records));
+  EXPECT_EQ(s.faults, 1);
+  EXPECT_FALSE(s.first_fault.empty());
+  EXPECT_EQ(s.lifecycle, "fault");
+  std::int64_t torque_after_fault = 0;
+  for (const TraceRecord& r : runner.trace().records()) {
+    if (r.time_s * 1e3 <= static_cast<double>(s.first_fault_period) + 0.5) continue;
+    for (double tau : r.axis_torque) torque_after_fault += tau != 0.0 ? 1 : 0;
+  }
+  EXPECT_EQ(torque_after_fault, 0);
   // Positions stay near the recorded workspace (no wild jump from a bad frame).
   const Vec3 p = runner.data().bodies[static_cast<std::size_t>(runner.data().attached_body)].position;
   EXPECT_TRUE(p.allFinite());
