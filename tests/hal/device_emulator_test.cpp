@@ -453,3 +453,60 @@ TEST(DeviceEmulator, PhantomEndToEnd) {
 }
 
 }  // namespace
+
+// ---------------------------------------------------------------- managed stack
+
+namespace {
+using namespace numen::hal;
+
+TEST(DeviceEmulatorManaged, BootsAnswersNmtAndSendsPdosOnlyWhenOperational) {
+  DeviceConfig c = make_default_trocar_config(1);
+  SimBusSettings s;
+  s.latency_ns = 0;
+  SimBus bus(s);
+  numen::hal::DeviceEmulator emu(c);
+  CanFrame f;
+  emu.tick(0, bus.device());  // power-on: 5 boot-ups
+  int boot_ups = 0;
+  while (bus.controller().read(f) == IoStatus::kOk) boot_ups += (f.id > 0x700 && f.data[0] == 0) ? 1 : 0;
+  EXPECT_EQ(boot_ups, 5);
+  bus.controller().write(numen::hal::make_sync(1, 1));
+  emu.poll(bus.device());
+  EXPECT_EQ(bus.pending(SimBus::Direction::kDeviceToController), 0u) << "no PDO in pre-operational";
+  numen::hal::encode_nmt(numen::hal::NmtCommand::kStartRemoteNode, 0, 2, f);
+  bus.controller().write(f);
+  bus.controller().write(numen::hal::make_sync(3, 2));
+  emu.poll(bus.device());
+  EXPECT_EQ(bus.pending(SimBus::Direction::kDeviceToController), 8u);  // 5 encoders + 3 drives
+  while (bus.controller().read(f) == IoStatus::kOk) {
+  }
+  // Stop node 4 (roll): its encoder falls silent, its heartbeat says stopped.
+  numen::hal::encode_nmt(numen::hal::NmtCommand::kStopRemoteNode, 4, 4, f);
+  bus.controller().write(f);
+  bus.controller().write(numen::hal::make_sync(5, 3));
+  emu.poll(bus.device());
+  EXPECT_EQ(bus.pending(SimBus::Direction::kDeviceToController), 7u);
+  EXPECT_EQ(emu.node_state(3), numen::hal::NmtState::kStopped);
+  // An injected drive fault: EMCY at the next tick, drive in fault reaction, torque 0.
+  while (bus.controller().read(f) == IoStatus::kOk) {
+  }
+  ASSERT_TRUE(emu.inject_drive_fault(2, 0x4310));
+  EXPECT_FALSE(emu.inject_drive_fault(3, 0x4310));  // roll has no drive
+  emu.tick(6, bus.device());
+  ASSERT_EQ(bus.controller().read(f), IoStatus::kOk);
+  numen::hal::EmcyMessage m;
+  ASSERT_EQ(numen::hal::decode_emcy(f, m), numen::hal::EmcyDecodeStatus::kOk);
+  EXPECT_EQ(m.node_id, 3);
+  EXPECT_EQ(m.error_code, 0x4310);
+  EXPECT_EQ(m.error_register, 0x09);  // generic + temperature
+  EXPECT_EQ(emu.drive(2)->state(), numen::hal::PowerState::kFaultReactionActive);
+  // Killed: nothing read is answered, nothing is sent.
+  emu.kill(true);
+  bus.controller().write(numen::hal::make_sync(7, 4));
+  emu.poll(bus.device());
+  emu.tick(100 * 1'000'000, bus.device());
+  EXPECT_EQ(bus.pending(SimBus::Direction::kDeviceToController), 0u);
+  EXPECT_EQ(emu.counters().frames_while_killed, 1u);
+}
+
+}  // namespace
