@@ -18,7 +18,9 @@ IoStatus worst(IoStatus a, IoStatus b) noexcept {
   return IoStatus::kOk;
 }
 
-std::int64_t ms_to_ns(std::uint32_t ms) noexcept { return static_cast<std::int64_t>(ms) * 1'000'000; }
+std::int64_t ms_to_ns(std::uint32_t ms) noexcept {
+  return static_cast<std::int64_t>(ms) * 1'000'000;
+}
 
 }  // namespace
 
@@ -71,7 +73,14 @@ CanopenMaster::CanopenMaster(const DeviceConfig& config, std::int64_t period_ns,
                        dev + " axis '" + a.name + "' drive RPDO"),
             PdoMapping(std::span<const PdoEntry>(x.drive_tpdo.data(), x.drive_tpdo.size()),
                        dev + " axis '" + a.name + "' drive TPDO"),
-            -1, -1, -1, -1, -1, Cia402Master(drive_settings), 0, 0};
+            -1,
+            -1,
+            -1,
+            -1,
+            -1,
+            Cia402Master(drive_settings),
+            0,
+            0};
     d.cw_index = find_mapped(d.rpdo.entries(), PdoObject::kControlword);
     d.torque_index = find_mapped(d.rpdo.entries(), PdoObject::kTargetTorque);
     d.mode_index = find_mapped(d.rpdo.entries(), PdoObject::kModesOfOperation);
@@ -128,7 +137,8 @@ IoStatus CanopenMaster::begin_period(std::int64_t now_ns, Bus& bus) noexcept {
       for (std::size_t j = 0; j < num_nodes_; ++j) {
         NodeState& n = nodes_[j];
         if (n.booted || now_ns - n.last_command_ns < retry_ns_) continue;
-        status = worst(status, send_nmt(NmtCommand::kResetCommunication, node_ids_[j], now_ns, bus));
+        status =
+            worst(status, send_nmt(NmtCommand::kResetCommunication, node_ids_[j], now_ns, bus));
         n.last_command_ns = now_ns;
         ++counters_.nmt_retries;
       }

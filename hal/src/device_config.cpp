@@ -64,8 +64,8 @@ bool reserved_cob_id(std::uint32_t id) noexcept {
 
 // Builds the mapping (PdoMapping validates it) and checks its required objects.
 void check_mapping(const std::vector<PdoEntry>& entries, const std::string& where,
-                   std::initializer_list<PdoEntry> required, std::initializer_list<PdoEntry> allowed,
-                   bool position_either) {
+                   std::initializer_list<PdoEntry> required,
+                   std::initializer_list<PdoEntry> allowed, bool position_either) {
   try {
     const PdoMapping m(std::span<const PdoEntry>(entries.data(), entries.size()), where);
     (void)m;
@@ -128,7 +128,8 @@ void validate_canopen(const DeviceConfig& c) {
                                 ") must exceed the controller heartbeat period (" +
                                 std::to_string(co.controller_heartbeat_period_ms) + " ms)");
   }
-  if (co.startup_timeout_ms < 1) throw std::invalid_argument(dev + ".startup_timeout_ms must be >= 1");
+  if (co.startup_timeout_ms < 1)
+    throw std::invalid_argument(dev + ".startup_timeout_ms must be >= 1");
   if (co.startup_retry_ms < 1) throw std::invalid_argument(dev + ".startup_retry_ms must be >= 1");
   std::vector<std::uint32_t> ids;  // every PDO COB-ID, to find duplicates
   std::vector<std::string> owners;
@@ -148,16 +149,15 @@ void validate_canopen(const DeviceConfig& c) {
       throw std::invalid_argument(where + ": heartbeat_period_ms must be >= 1");
     }
     if (x.effective_heartbeat_timeout_ms() <= x.heartbeat_period_ms) {
-      throw std::invalid_argument(where + ": heartbeat_timeout_ms (" +
-                                  std::to_string(x.effective_heartbeat_timeout_ms()) +
-                                  ") must exceed heartbeat_period_ms (" +
-                                  std::to_string(x.heartbeat_period_ms) + ")");
+      throw std::invalid_argument(
+          where + ": heartbeat_timeout_ms (" + std::to_string(x.effective_heartbeat_timeout_ms()) +
+          ") must exceed heartbeat_period_ms (" + std::to_string(x.heartbeat_period_ms) + ")");
     }
     for (std::size_t j = 0; j < i; ++j) {
       const CanopenAxisConfig& y = co.axes[j];
-      if (y.node_id == x.node_id && (y.heartbeat_period_ms != x.heartbeat_period_ms ||
-                                     y.effective_heartbeat_timeout_ms() !=
-                                         x.effective_heartbeat_timeout_ms())) {
+      if (y.node_id == x.node_id &&
+          (y.heartbeat_period_ms != x.heartbeat_period_ms ||
+           y.effective_heartbeat_timeout_ms() != x.effective_heartbeat_timeout_ms())) {
         throw std::invalid_argument(where + ": node " + std::to_string(x.node_id) +
                                     " is shared with axes[" + std::to_string(j) +
                                     "] but its heartbeat period / timeout differ");
@@ -172,15 +172,14 @@ void validate_canopen(const DeviceConfig& c) {
     owners.push_back(where + " encoder TPDO");
     if (a.has_drive()) {
       if (x.drive_tpdo_cob_id == 0 || x.drive_tpdo_cob_id > kStandardIdMask) {
-        throw std::invalid_argument(where + ": drive_tpdo_cob_id must be an 11-bit COB-ID on a "
-                                            "driven axis (got " +
+        throw std::invalid_argument(where +
+                                    ": drive_tpdo_cob_id must be an 11-bit COB-ID on a "
+                                    "driven axis (got " +
                                     hex(x.drive_tpdo_cob_id) + ")");
       }
-      check_mapping(x.drive_rpdo, where + ".drive_rpdo",
-                    {PdoObject::kControlword, PdoObject::kTargetTorque},
-                    {PdoObject::kControlword, PdoObject::kTargetTorque,
-                     PdoObject::kModesOfOperation},
-                    false);
+      check_mapping(
+          x.drive_rpdo, where + ".drive_rpdo", {PdoObject::kControlword, PdoObject::kTargetTorque},
+          {PdoObject::kControlword, PdoObject::kTargetTorque, PdoObject::kModesOfOperation}, false);
       check_mapping(x.drive_tpdo, where + ".drive_tpdo", {PdoObject::kStatusword},
                     {PdoObject::kStatusword, PdoObject::kTorqueActualValue,
                      PdoObject::kModesOfOperationDisplay, PdoObject::kPositionActualValue},

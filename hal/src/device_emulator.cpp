@@ -85,18 +85,17 @@ DeviceEmulator::DeviceEmulator(DeviceConfig config) : config_(std::move(config))
       nodes_[node].controller = HeartbeatConsumer(co.controller_node_id, controller_timeout_ns);
     }
     node_of_axis_[k] = node;
-    encoder_maps_.emplace_back(std::span<const PdoEntry>(x.encoder_tpdo.data(), x.encoder_tpdo.size()),
-                               "encoder TPDO");
+    encoder_maps_.emplace_back(
+        std::span<const PdoEntry>(x.encoder_tpdo.data(), x.encoder_tpdo.size()), "encoder TPDO");
     if (a.has_drive()) {
       drive_of_axis_[k] = static_cast<int>(drives_.size());
-      drives_.push_back(Drive{i, node, Cia402Drive(drive_settings(a)),
-                              PdoMapping(std::span<const PdoEntry>(x.drive_rpdo.data(),
-                                                                   x.drive_rpdo.size()),
-                                         "drive RPDO"),
-                              PdoMapping(std::span<const PdoEntry>(x.drive_tpdo.data(),
-                                                                   x.drive_tpdo.size()),
-                                         "drive TPDO"),
-                              0, 0, PowerState::kNotReadyToSwitchOn});
+      drives_.push_back(
+          Drive{i, node, Cia402Drive(drive_settings(a)),
+                PdoMapping(std::span<const PdoEntry>(x.drive_rpdo.data(), x.drive_rpdo.size()),
+                           "drive RPDO"),
+                PdoMapping(std::span<const PdoEntry>(x.drive_tpdo.data(), x.drive_tpdo.size()),
+                           "drive TPDO"),
+                0, 0, PowerState::kNotReadyToSwitchOn});
     }
   }
 }

@@ -108,8 +108,8 @@ bool InstrumentDevice::on_frame(const CanFrame& frame) noexcept {
       switch (m.unpack(frame, std::span<std::int64_t>(v.data(), m.size()))) {
         case PdoStatus::kOk:
           // 0x6004 read as int32 (an UNSIGNED32 mapping wraps to the same 32 bits).
-          counts = static_cast<std::int32_t>(
-              static_cast<std::uint32_t>(v[static_cast<std::size_t>(encoder_position_[static_cast<std::size_t>(i)])]));
+          counts = static_cast<std::int32_t>(static_cast<std::uint32_t>(
+              v[static_cast<std::size_t>(encoder_position_[static_cast<std::size_t>(i)])]));
           break;
         case PdoStatus::kNotDataFrame:
           status = DecodeStatus::kNotDataFrame;

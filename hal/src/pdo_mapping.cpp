@@ -146,10 +146,13 @@ PdoMapping encoder_tpdo_mapping() {
 }
 
 bool find_known_pdo_object(std::uint32_t value, PdoEntry& out) noexcept {
-  constexpr PdoEntry kKnown[] = {PdoObject::kPositionValue,    PdoObject::kControlword,
-                                 PdoObject::kStatusword,       PdoObject::kModesOfOperation,
+  constexpr PdoEntry kKnown[] = {PdoObject::kPositionValue,
+                                 PdoObject::kControlword,
+                                 PdoObject::kStatusword,
+                                 PdoObject::kModesOfOperation,
                                  PdoObject::kModesOfOperationDisplay,
-                                 PdoObject::kPositionActualValue, PdoObject::kTargetTorque,
+                                 PdoObject::kPositionActualValue,
+                                 PdoObject::kTargetTorque,
                                  PdoObject::kTorqueActualValue};
   for (const PdoEntry& e : kKnown) {
     if (mapping_entry_value(e) == value) {

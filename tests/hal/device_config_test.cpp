@@ -223,8 +223,9 @@ TEST(DeviceConfigCanopen, ErrorsNameTheDeviceAxisAndField) {
   const DeviceConfig base = numen::hal::make_default_trocar_config(1);
   DeviceConfig c = base;
   c.canopen.axes[1].drive_tpdo_cob_id = 0x181;  // pivot_x's encoder TPDO
-  EXPECT_NE(canopen_error(c).find("axes[1] 'pivot_y' drive TPDO: COB-ID 0x181 is already used by the"),
-            std::string::npos)
+  EXPECT_NE(
+      canopen_error(c).find("axes[1] 'pivot_y' drive TPDO: COB-ID 0x181 is already used by the"),
+      std::string::npos)
       << canopen_error(c);
   c = base;
   c.canopen.axes[0].drive_rpdo = {numen::hal::PdoObject::kControlword};

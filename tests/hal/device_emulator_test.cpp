@@ -468,7 +468,8 @@ TEST(DeviceEmulatorManaged, BootsAnswersNmtAndSendsPdosOnlyWhenOperational) {
   CanFrame f;
   emu.tick(0, bus.device());  // power-on: 5 boot-ups
   int boot_ups = 0;
-  while (bus.controller().read(f) == IoStatus::kOk) boot_ups += (f.id > 0x700 && f.data[0] == 0) ? 1 : 0;
+  while (bus.controller().read(f) == IoStatus::kOk)
+    boot_ups += (f.id > 0x700 && f.data[0] == 0) ? 1 : 0;
   EXPECT_EQ(boot_ups, 5);
   bus.controller().write(numen::hal::make_sync(1, 1));
   emu.poll(bus.device());

@@ -736,7 +736,9 @@ TEST(ControlLoopManaged, StartUpReachesActiveInAnExactNumberOfPeriods) {
     bool allowed = true;
     for (const auto& out : m.drive_outputs()) allowed = allowed && out.torque_allowed;
     EXPECT_EQ(allowed, k >= 14);
-    if (k < 14) EXPECT_FALSE(any_torque(rig)) << "torque before the drives are enabled";
+    if (k < 14) {
+      EXPECT_FALSE(any_torque(rig)) << "torque before the drives are enabled";
+    }
   }
   EXPECT_EQ(rig.loop.first_active_period(), 10);
   EXPECT_EQ(rig.loop.first_torque_period(), 14);
@@ -974,7 +976,6 @@ TEST(ControlLoopManaged, TorquesAreSaturatedPerAxis) {
   EXPECT_DOUBLE_EQ(clamped_peak, low.config.axes[0].max_torque);
   EXPECT_GT(loop.supervisor()->saturations(0), 0u);
   EXPECT_EQ(loop.supervisor()->saturations(3), 0u);  // roll: no drive, τ = 0
-  // The drive applied the saturated value: 0.5 · peak / rated in per mille.
   EXPECT_EQ(loop.supervisor()->state(), LifecycleState::kActive);
 }
 
@@ -1000,7 +1001,9 @@ std::vector<std::int64_t> session(bool check_allocations) {
     std::memcpy(&bits, &x, sizeof bits);
     out.push_back(bits);
   }
-  if (check_allocations) EXPECT_EQ(guard.count(), 0) << "allocations in 300 managed periods";
+  if (check_allocations) {
+    EXPECT_EQ(guard.count(), 0) << "allocations in 300 managed periods";
+  }
   EXPECT_EQ(rig.sup().counters().latches, 2u);  // the drive fault, the kill
   return out;
 }

@@ -57,27 +57,28 @@ const char* to_string(StartupPhase phase) noexcept;
 /// What the last start-up did.
 struct StartupReport {
   StartupPhase phase = StartupPhase::kResetCommunication;  ///< Current phase.
-  std::uint64_t began_period = 0;   ///< update() index of the period the start-up began in.
-  std::int64_t began_ns = 0;        ///< Time the reset communication was sent, ns.
-  std::uint64_t done_period = 0;    ///< update() index at which kOperational / kFailed was reached.
-  std::int64_t done_ns = 0;         ///< Its time, ns.
-  std::uint8_t missing_node = 0;    ///< kFailed: the first node not booted / not operational.
-  std::uint32_t attempts = 0;       ///< Start-ups begun (1 after the first).
+  std::uint64_t began_period = 0;  ///< update() index of the period the start-up began in.
+  std::int64_t began_ns = 0;       ///< Time the reset communication was sent, ns.
+  std::uint64_t done_period = 0;   ///< update() index at which kOperational / kFailed was reached.
+  std::int64_t done_ns = 0;        ///< Its time, ns.
+  std::uint8_t missing_node = 0;   ///< kFailed: the first node not booted / not operational.
+  std::uint32_t attempts = 0;      ///< Start-ups begun (1 after the first).
 };
 
 /// Counters of a CanopenMaster since construction.
 struct CanopenMasterCounters {
-  std::uint64_t nmt_sent = 0;             ///< NMT commands written with kOk.
-  std::uint64_t nmt_retries = 0;          ///< NMT commands repeated to a node during a start-up.
-  std::uint64_t heartbeats_sent = 0;      ///< Controller heartbeats written with kOk.
-  std::uint64_t drive_tpdos = 0;          ///< Drive TPDOs unpacked.
-  std::uint64_t drive_tpdos_malformed = 0;  ///< Frames on a drive TPDO COB-ID refused by its mapping.
-  std::uint64_t rpdos_sent = 0;           ///< Drive RPDOs written with kOk.
-  std::uint64_t frames_before_boot = 0;   ///< Heartbeats of a node dropped while waiting for its
-                                          ///< boot-up after the reset.
-  std::uint64_t unknown_nodes = 0;        ///< Heartbeats of nodes the device does not have.
-  std::uint64_t write_would_block = 0;    ///< Writes refused (queue full).
-  std::uint64_t write_errors = 0;         ///< Writes that failed (kError).
+  std::uint64_t nmt_sent = 0;         ///< NMT commands written with kOk.
+  std::uint64_t nmt_retries = 0;      ///< NMT commands repeated to a node during a start-up.
+  std::uint64_t heartbeats_sent = 0;  ///< Controller heartbeats written with kOk.
+  std::uint64_t drive_tpdos = 0;      ///< Drive TPDOs unpacked.
+  std::uint64_t drive_tpdos_malformed =
+      0;                                 ///< Frames on a drive TPDO COB-ID refused by its mapping.
+  std::uint64_t rpdos_sent = 0;          ///< Drive RPDOs written with kOk.
+  std::uint64_t frames_before_boot = 0;  ///< Heartbeats of a node dropped while waiting for its
+                                         ///< boot-up after the reset.
+  std::uint64_t unknown_nodes = 0;       ///< Heartbeats of nodes the device does not have.
+  std::uint64_t write_would_block = 0;   ///< Writes refused (queue full).
+  std::uint64_t write_errors = 0;        ///< Writes that failed (kError).
 };
 
 /// Most nodes of one device (one per axis at most).
@@ -164,8 +165,8 @@ class CanopenMaster {
 
  private:
   struct NodeState {
-    bool booted = false;         // boot-up received since the last reset communication
-    bool restart = false;        // booted again while being started: start it again
+    bool booted = false;   // boot-up received since the last reset communication
+    bool restart = false;  // booted again while being started: start it again
     std::int64_t last_command_ns = 0;
   };
   struct Drive {

@@ -37,25 +37,26 @@ namespace numen::hal {
 
 /// Counters of a DeviceEmulator since construction.
 struct EmulatorCounters {
-  std::uint64_t syncs = 0;             ///< SYNC frames received.
-  std::uint64_t syncs_ignored = 0;     ///< SYNCs not answered by the encoders (set_responding(false)).
-  std::uint64_t tpdos_sent = 0;        ///< Encoder TPDOs written with kOk.
-  std::uint64_t tx_would_block = 0;    ///< Writes refused (queue full).
-  std::uint64_t tx_errors = 0;         ///< Writes that failed.
-  std::uint64_t rpdos = 0;             ///< Drive RPDOs decoded (torque RPDOs in the minimal protocol).
-  std::uint64_t frames_malformed = 0;  ///< Frames on the SYNC, NMT or a drive RPDO COB-ID that failed
-                                       ///< to decode (wrong length, not a data frame, bad command).
-  std::uint64_t frames_ignored = 0;    ///< Frames of other ids.
+  std::uint64_t syncs = 0;          ///< SYNC frames received.
+  std::uint64_t syncs_ignored = 0;  ///< SYNCs not answered by the encoders (set_responding(false)).
+  std::uint64_t tpdos_sent = 0;     ///< Encoder TPDOs written with kOk.
+  std::uint64_t tx_would_block = 0;  ///< Writes refused (queue full).
+  std::uint64_t tx_errors = 0;       ///< Writes that failed.
+  std::uint64_t rpdos = 0;  ///< Drive RPDOs decoded (torque RPDOs in the minimal protocol).
+  std::uint64_t frames_malformed =
+      0;                             ///< Frames on the SYNC, NMT or a drive RPDO COB-ID that failed
+                                     ///< to decode (wrong length, not a data frame, bad command).
+  std::uint64_t frames_ignored = 0;  ///< Frames of other ids.
   // Managed stack only.
-  std::uint64_t nmt_commands = 0;        ///< NMT commands applied by a node (per node).
-  std::uint64_t boot_ups_sent = 0;       ///< Boot-up messages written.
-  std::uint64_t heartbeats_sent = 0;     ///< Heartbeats written.
-  std::uint64_t drive_tpdos_sent = 0;    ///< Drive TPDOs written with kOk.
+  std::uint64_t nmt_commands = 0;           ///< NMT commands applied by a node (per node).
+  std::uint64_t boot_ups_sent = 0;          ///< Boot-up messages written.
+  std::uint64_t heartbeats_sent = 0;        ///< Heartbeats written.
+  std::uint64_t drive_tpdos_sent = 0;       ///< Drive TPDOs written with kOk.
   std::uint64_t rpdos_not_operational = 0;  ///< Drive RPDOs dropped: node not operational.
-  std::uint64_t emcys_sent = 0;          ///< EMCY messages written.
-  std::uint64_t emcys_dropped = 0;       ///< EMCY messages lost: queue full or EMCY not allowed.
-  std::uint64_t controller_losses = 0;   ///< Controller heartbeat losses seen by a node.
-  std::uint64_t frames_while_killed = 0;  ///< Frames read and discarded while killed.
+  std::uint64_t emcys_sent = 0;             ///< EMCY messages written.
+  std::uint64_t emcys_dropped = 0;          ///< EMCY messages lost: queue full or EMCY not allowed.
+  std::uint64_t controller_losses = 0;      ///< Controller heartbeat losses seen by a node.
+  std::uint64_t frames_while_killed = 0;    ///< Frames read and discarded while killed.
 };
 
 /// Emulated encoders and drives of one instrument. Not thread safe.
@@ -176,7 +177,7 @@ class DeviceEmulator {
   // Managed stack.
   std::vector<Node> nodes_;
   std::vector<Drive> drives_;
-  std::vector<PdoMapping> encoder_maps_;        // per axis
+  std::vector<PdoMapping> encoder_maps_;  // per axis
   std::array<std::size_t, kMaxAxes> node_of_axis_{};
   std::array<int, kMaxAxes> drive_of_axis_{};  // index into drives_, -1 without
   std::array<PendingEmcy, kEmcyQueue> emcy_{};

@@ -108,8 +108,8 @@ class InstrumentDevice {
   /// sample (the newest frame of an axis wins); a malformed one marks the axis malformed
   /// for this period. Minimal protocol: the 4-byte position PDO (decode_position_pdo());
   /// managed stack (config.canopen.managed): the axis's static encoder TPDO mapping
-  /// (PdoMapping::unpack(), exact length), position from 0x6004 or 0x6064. Returns true if the frame's id belongs to an axis. Frames of other
-  /// ids are counted as unknown.
+  /// (PdoMapping::unpack(), exact length), position from 0x6004 or 0x6064. Returns true if the
+  /// frame's id belongs to an axis. Frames of other ids are counted as unknown.
   bool on_frame(const CanFrame& frame) noexcept;
 
   /// Reads up to `max_frames` frames from `bus` and passes each to on_frame(). Returns the
@@ -205,7 +205,7 @@ class InstrumentDevice {
 
   DeviceConfig config_;
   std::unique_ptr<const Kinematics> kinematics_;
-  std::vector<PdoMapping> encoder_maps_;           // managed: one per axis
+  std::vector<PdoMapping> encoder_maps_;          // managed: one per axis
   std::array<int, kMaxAxes> encoder_position_{};  // managed: index of the position entry
   int n_ = 0;
   int num_links_ = 1;
