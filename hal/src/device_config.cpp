@@ -4,12 +4,16 @@
 #include "numen/hal/device_config.hpp"
 
 #include <cmath>
+#include <cstdio>
 #include <numbers>
 #include <stdexcept>
 #include <string>
 
 #include "geometry_check.hpp"
 #include "numen/hal/canopen.hpp"
+#include "numen/hal/emcy.hpp"
+#include "numen/hal/heartbeat.hpp"
+#include "numen/hal/nmt.hpp"
 
 namespace numen::hal {
 namespace {
@@ -46,7 +50,180 @@ void check_node_range(std::uint8_t first, int count, const char* what) {
   }
 }
 
+std::string hex(std::uint32_t v) {
+  char buf[16];
+  std::snprintf(buf, sizeof buf, "0x%03X", v);
+  return buf;
+}
+
+// A COB-ID a PDO must not use in the managed stack: NMT, SYNC / EMCY, heartbeat.
+bool reserved_cob_id(std::uint32_t id) noexcept {
+  return id == kNmtCobId || (id >= kSyncCobId && id <= kEmcyBaseCobId + kMaxNodeId) ||
+         (id >= kHeartbeatBaseCobId && id <= kHeartbeatBaseCobId + kMaxNodeId);
+}
+
+// Builds the mapping (PdoMapping validates it) and checks its required objects.
+void check_mapping(const std::vector<PdoEntry>& entries, const std::string& where,
+                   std::initializer_list<PdoEntry> required,
+                   std::initializer_list<PdoEntry> allowed, bool position_either) {
+  try {
+    const PdoMapping m(std::span<const PdoEntry>(entries.data(), entries.size()), where);
+    (void)m;
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(where + ": " + e.what());
+  }
+  auto name = [](const PdoEntry& e) {
+    char buf[24];
+    std::snprintf(buf, sizeof buf, "0x%04X:%02X", e.index, e.subindex);
+    return std::string(buf);
+  };
+  for (const PdoEntry& e : entries) {
+    bool ok = false;
+    for (const PdoEntry& a : allowed) ok = ok || mapping_entry_value(a) == mapping_entry_value(e);
+    if (!ok) {
+      throw std::invalid_argument(where + ": object " + name(e) + " (" +
+                                  std::to_string(e.bit_length) +
+                                  " bits) cannot be mapped here (see docs/scenes.md)");
+    }
+  }
+  const std::span<const PdoEntry> span(entries.data(), entries.size());
+  if (position_either) {
+    if (find_mapped(span, PdoObject::kPositionValue) < 0 &&
+        find_mapped(span, PdoObject::kPositionActualValue) < 0) {
+      throw std::invalid_argument(where +
+                                  ": must map the position value 0x6004:00 or the position "
+                                  "actual value 0x6064:00 (32 bits)");
+    }
+    if (find_mapped(span, PdoObject::kPositionValue) >= 0 &&
+        find_mapped(span, PdoObject::kPositionActualValue) >= 0) {
+      throw std::invalid_argument(where + ": maps both 0x6004:00 and 0x6064:00 (one position)");
+    }
+  }
+  for (const PdoEntry& r : required) {
+    if (find_mapped(span, r) < 0) {
+      throw std::invalid_argument(where + ": must map object " + name(r));
+    }
+  }
+}
+
+void validate_canopen(const DeviceConfig& c) {
+  const CanopenConfig& co = c.canopen;
+  if (!co.managed) return;
+  const std::string dev = device_name(c) + ": canopen";
+  if (co.axes.size() != c.axes.size()) {
+    throw std::invalid_argument(dev + ".axes must have one entry per axis (" +
+                                std::to_string(c.axes.size()) + "), got " +
+                                std::to_string(co.axes.size()));
+  }
+  if (co.controller_node_id < 1 || co.controller_node_id > kMaxNodeId) {
+    throw std::invalid_argument(dev + ".controller_node_id must be in 1..127 (got " +
+                                std::to_string(co.controller_node_id) + ")");
+  }
+  if (co.controller_heartbeat_period_ms < 1) {
+    throw std::invalid_argument(dev + ".controller_heartbeat_period_ms must be >= 1");
+  }
+  if (co.effective_drive_heartbeat_timeout_ms() <= co.controller_heartbeat_period_ms) {
+    throw std::invalid_argument(dev + ".drive_heartbeat_timeout_ms (" +
+                                std::to_string(co.effective_drive_heartbeat_timeout_ms()) +
+                                ") must exceed the controller heartbeat period (" +
+                                std::to_string(co.controller_heartbeat_period_ms) + " ms)");
+  }
+  if (co.startup_timeout_ms < 1)
+    throw std::invalid_argument(dev + ".startup_timeout_ms must be >= 1");
+  if (co.startup_retry_ms < 1) throw std::invalid_argument(dev + ".startup_retry_ms must be >= 1");
+  std::vector<std::uint32_t> ids;  // every PDO COB-ID, to find duplicates
+  std::vector<std::string> owners;
+  for (std::size_t i = 0; i < co.axes.size(); ++i) {
+    const CanopenAxisConfig& x = co.axes[i];
+    const AxisConfig& a = c.axes[i];
+    const std::string where = dev + ".axes[" + std::to_string(i) + "] '" + a.name + "'";
+    if (x.node_id < 1 || x.node_id > kMaxNodeId) {
+      throw std::invalid_argument(where + ": node_id must be in 1..127 (got " +
+                                  std::to_string(x.node_id) + ")");
+    }
+    if (x.node_id == co.controller_node_id) {
+      throw std::invalid_argument(where + ": node_id " + std::to_string(x.node_id) +
+                                  " is the controller's node id");
+    }
+    if (x.heartbeat_period_ms < 1) {
+      throw std::invalid_argument(where + ": heartbeat_period_ms must be >= 1");
+    }
+    if (x.effective_heartbeat_timeout_ms() <= x.heartbeat_period_ms) {
+      throw std::invalid_argument(
+          where + ": heartbeat_timeout_ms (" + std::to_string(x.effective_heartbeat_timeout_ms()) +
+          ") must exceed heartbeat_period_ms (" + std::to_string(x.heartbeat_period_ms) + ")");
+    }
+    for (std::size_t j = 0; j < i; ++j) {
+      const CanopenAxisConfig& y = co.axes[j];
+      if (y.node_id == x.node_id &&
+          (y.heartbeat_period_ms != x.heartbeat_period_ms ||
+           y.effective_heartbeat_timeout_ms() != x.effective_heartbeat_timeout_ms())) {
+        throw std::invalid_argument(where + ": node " + std::to_string(x.node_id) +
+                                    " is shared with axes[" + std::to_string(j) +
+                                    "] but its heartbeat period / timeout differ");
+      }
+    }
+    check_mapping(x.encoder_tpdo, where + ".encoder_tpdo", {},
+                  {PdoObject::kPositionValue, PdoObject::kPositionValueUnsigned,
+                   PdoObject::kPositionActualValue, PdoObject::kStatusword,
+                   PdoObject::kTorqueActualValue, PdoObject::kModesOfOperationDisplay},
+                  true);
+    ids.push_back(a.encoder_cob_id);
+    owners.push_back(where + " encoder TPDO");
+    if (a.has_drive()) {
+      if (x.drive_tpdo_cob_id == 0 || x.drive_tpdo_cob_id > kStandardIdMask) {
+        throw std::invalid_argument(where +
+                                    ": drive_tpdo_cob_id must be an 11-bit COB-ID on a "
+                                    "driven axis (got " +
+                                    hex(x.drive_tpdo_cob_id) + ")");
+      }
+      check_mapping(
+          x.drive_rpdo, where + ".drive_rpdo", {PdoObject::kControlword, PdoObject::kTargetTorque},
+          {PdoObject::kControlword, PdoObject::kTargetTorque, PdoObject::kModesOfOperation}, false);
+      check_mapping(x.drive_tpdo, where + ".drive_tpdo", {PdoObject::kStatusword},
+                    {PdoObject::kStatusword, PdoObject::kTorqueActualValue,
+                     PdoObject::kModesOfOperationDisplay, PdoObject::kPositionActualValue},
+                    false);
+      ids.push_back(a.drive_cob_id);
+      owners.push_back(where + " drive RPDO");
+      ids.push_back(x.drive_tpdo_cob_id);
+      owners.push_back(where + " drive TPDO");
+    } else if (x.drive_tpdo_cob_id != 0) {
+      throw std::invalid_argument(where + ": drive_tpdo_cob_id " + hex(x.drive_tpdo_cob_id) +
+                                  " on an axis without a drive (drive_cob_id = 0)");
+    }
+  }
+  for (std::size_t i = 0; i < ids.size(); ++i) {
+    if (reserved_cob_id(ids[i])) {
+      throw std::invalid_argument(owners[i] + ": COB-ID " + hex(ids[i]) +
+                                  " is reserved in the managed stack (NMT 0x000, SYNC/EMCY "
+                                  "0x080-0x0FF, heartbeat 0x700-0x77F)");
+    }
+    for (std::size_t j = 0; j < i; ++j) {
+      if (ids[i] == ids[j]) {
+        throw std::invalid_argument(owners[i] + ": COB-ID " + hex(ids[i]) +
+                                    " is already used by the " + owners[j]);
+      }
+    }
+  }
+}
+
 }  // namespace
+
+CanopenAxisConfig make_canopen_axis(std::uint8_t node_id, bool has_drive) {
+  CanopenAxisConfig x;
+  x.node_id = node_id;
+  const PdoMapping enc = encoder_tpdo_mapping();
+  x.encoder_tpdo.assign(enc.entries().begin(), enc.entries().end());
+  if (has_drive) {
+    x.drive_tpdo_cob_id = kTpdo2BaseCobId + node_id;
+    const PdoMapping rx = drive_rpdo_mapping();
+    const PdoMapping tx = drive_tpdo_mapping();
+    x.drive_rpdo.assign(rx.entries().begin(), rx.entries().end());
+    x.drive_tpdo.assign(tx.entries().begin(), tx.entries().end());
+  }
+  return x;
+}
 
 const char* to_string(DeviceKind kind) noexcept {
   switch (kind) {
@@ -135,7 +312,19 @@ void validate(const DeviceConfig& c) {
       }
       break;
   }
+  validate_canopen(c);
 }
+
+namespace {
+// One CANopen entry per axis: node first + i, drives where the axis has one.
+void add_canopen(DeviceConfig& c, std::uint8_t first) {
+  c.canopen.axes.clear();
+  for (std::size_t i = 0; i < c.axes.size(); ++i) {
+    c.canopen.axes.push_back(
+        make_canopen_axis(static_cast<std::uint8_t>(first + i), c.axes[i].has_drive()));
+  }
+}
+}  // namespace
 
 DeviceConfig make_default_trocar_config(std::uint8_t first) {
   check_node_range(first, TrocarKinematics::kNumAxes, "make_default_trocar_config");
@@ -151,6 +340,7 @@ DeviceConfig make_default_trocar_config(std::uint8_t first) {
   c.axes.push_back(axis("depth", n(2), true, per_m, 0.0, 0.35, 2.0, false, 5.0, 10.0));
   c.axes.push_back(axis("roll", n(3), false, per_rad, -kPi, kPi, 30.0, true, 1.0, 0.0));
   c.axes.push_back(axis("jaw", n(4), false, per_rad, 0.0, 1.2, 30.0, false, 1.0, 0.0));
+  add_canopen(c, first);
   return c;
 }
 
@@ -168,6 +358,7 @@ DeviceConfig make_default_pose_tracker_config(std::uint8_t first) {
   c.axes.push_back(axis("yaw", n(3), false, urad, -kPi, kPi, 30.0, true, 1.0, 0.0));
   c.axes.push_back(axis("pitch", n(4), false, urad, -kPi / 2, kPi / 2, 30.0, false, 1.0, 0.0));
   c.axes.push_back(axis("roll", n(5), false, urad, -kPi, kPi, 30.0, true, 1.0, 0.0));
+  add_canopen(c, first);
   return c;
 }
 
@@ -189,6 +380,7 @@ DeviceConfig make_default_phantom_config(std::uint8_t first) {
       axis("gimbal_pitch", n(4), false, per_rad_gimbal, -1.2, 1.2, 30.0, false, 1.0, 0.0));
   c.axes.push_back(
       axis("stylus_roll", n(5), false, per_rad_gimbal, -kPi, kPi, 30.0, true, 1.0, 0.0));
+  add_canopen(c, first);
   return c;
 }
 

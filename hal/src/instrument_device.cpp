@@ -54,6 +54,15 @@ InstrumentDevice::InstrumentDevice(DeviceConfig config,
     hold_[i] = std::clamp(0.0, a.min, a.max);
   }
   last_torques_ = AxisVector::Zero(n_);
+  if (config_.canopen.managed) {
+    for (int i = 0; i < n_; ++i) {
+      const auto& e = config_.canopen.axes[static_cast<std::size_t>(i)].encoder_tpdo;
+      encoder_maps_.emplace_back(std::span<const PdoEntry>(e.data(), e.size()), "encoder TPDO");
+      int p = find_mapped(encoder_maps_.back().entries(), PdoObject::kPositionValue);
+      if (p < 0) p = find_mapped(encoder_maps_.back().entries(), PdoObject::kPositionActualValue);
+      encoder_position_[static_cast<std::size_t>(i)] = p;
+    }
+  }
   reset();
 }
 
@@ -90,7 +99,27 @@ bool InstrumentDevice::on_frame(const CanFrame& frame) noexcept {
     if (frame.id != a.encoder_cob_id) continue;
     AxisState& st = axes_[static_cast<std::size_t>(i)];
     std::int32_t counts = 0;
-    switch (decode_position_pdo(frame, a.encoder_cob_id, counts)) {
+    DecodeStatus status = DecodeStatus::kOk;
+    if (encoder_maps_.empty()) {
+      status = decode_position_pdo(frame, a.encoder_cob_id, counts);
+    } else {
+      const PdoMapping& m = encoder_maps_[static_cast<std::size_t>(i)];
+      PdoValues v{};
+      switch (m.unpack(frame, std::span<std::int64_t>(v.data(), m.size()))) {
+        case PdoStatus::kOk:
+          // 0x6004 read as int32 (an UNSIGNED32 mapping wraps to the same 32 bits).
+          counts = static_cast<std::int32_t>(static_cast<std::uint32_t>(
+              v[static_cast<std::size_t>(encoder_position_[static_cast<std::size_t>(i)])]));
+          break;
+        case PdoStatus::kNotDataFrame:
+          status = DecodeStatus::kNotDataFrame;
+          break;
+        default:
+          status = DecodeStatus::kWrongLength;
+          break;
+      }
+    }
+    switch (status) {
       case DecodeStatus::kOk:
         ++counters_.frames_decoded;
         st.pending = true;
@@ -266,6 +295,51 @@ IoStatus InstrumentDevice::command_links(std::span<const core::Wrench> link_wren
     tau += torques_from_wrench(link_jacobians_[l], link_wrenches[l]);
   }
   return apply_torques(tau, bus, now_ns);
+}
+
+bool InstrumentDevice::torques_for(std::span<const core::Wrench> link_wrenches,
+                                   AxisVector& tau) noexcept {
+  ++counters_.commands;
+  tau = AxisVector::Zero(n_);
+  std::size_t used = link_wrenches.size();
+  if (used > static_cast<std::size_t>(num_links_)) {
+    ++counters_.extra_link_wrenches;
+    used = static_cast<std::size_t>(num_links_);
+  }
+  bool finite = true;
+  for (std::size_t l = 0; l < used; ++l) {
+    finite = finite && link_wrenches[l].force.allFinite() && link_wrenches[l].torque.allFinite();
+  }
+  if (!finite) ++counters_.non_finite_wrenches;
+  if (!finite || !last_sample_.ready) {
+    ++counters_.commands_zero;
+    return false;
+  }
+  for (std::size_t l = 0; l < used; ++l) {
+    tau += torques_from_wrench(link_jacobians_[l], link_wrenches[l]);
+  }
+  for (int i = 0; i < n_; ++i) {
+    if (!config_.axes[static_cast<std::size_t>(i)].has_drive()) tau[i] = 0.0;
+  }
+  return true;
+}
+
+const std::array<std::int16_t, kMaxAxes>& InstrumentDevice::encode_torques(
+    const AxisVector& tau) noexcept {
+  for (int i = 0; i < n_; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    const AxisConfig& a = config_.axes[k];
+    if (!a.has_drive() || i >= tau.size()) {
+      last_torques_[i] = 0.0;
+      last_per_mille_[k] = 0;
+      continue;
+    }
+    const TorqueCommand c = torque_to_per_mille(a, tau[i]);
+    if (c.saturated) ++counters_.torque_saturations;
+    last_torques_[i] = c.torque;
+    last_per_mille_[k] = c.per_mille;
+  }
+  return last_per_mille_;
 }
 
 IoStatus InstrumentDevice::command_zero(Bus& bus, std::int64_t now_ns) noexcept {

@@ -145,4 +145,29 @@ PdoMapping encoder_tpdo_mapping() {
   return PdoMapping({PdoObject::kPositionValue}, "encoder TPDO");
 }
 
+bool find_known_pdo_object(std::uint32_t value, PdoEntry& out) noexcept {
+  constexpr PdoEntry kKnown[] = {PdoObject::kPositionValue,
+                                 PdoObject::kControlword,
+                                 PdoObject::kStatusword,
+                                 PdoObject::kModesOfOperation,
+                                 PdoObject::kModesOfOperationDisplay,
+                                 PdoObject::kPositionActualValue,
+                                 PdoObject::kTargetTorque,
+                                 PdoObject::kTorqueActualValue};
+  for (const PdoEntry& e : kKnown) {
+    if (mapping_entry_value(e) == value) {
+      out = e;
+      return true;
+    }
+  }
+  return false;
+}
+
+int find_mapped(std::span<const PdoEntry> mapping, const PdoEntry& object) noexcept {
+  for (std::size_t i = 0; i < mapping.size(); ++i) {
+    if (same_object(mapping[i], object)) return static_cast<int>(i);
+  }
+  return -1;
+}
+
 }  // namespace numen::hal

@@ -15,6 +15,8 @@
 #include "numen/core/net_collision.hpp"
 #include "numen/core/step.hpp"
 #include "numen/hal/instrument_device.hpp"
+#include "numen/hal/emcy.hpp"
+#include "numen/hal/heartbeat.hpp"
 #include "numen/hal/sim_bus.hpp"
 #include "numen/platform/control_loop.hpp"
 #include "numen/platform/monotonic_clock.hpp"
@@ -99,6 +101,18 @@ std::unique_ptr<hal::LogBus> make_log_bus(const Scene& scene, const BusChoice& c
   for (const hal::AxisConfig& axis : scene.device.axes) {
     settings.filters.push_back(hal::exact_standard_filter(axis.encoder_cob_id));
   }
+  if (scene.device.canopen.managed) {
+    // Everything the device sends: drive TPDOs, heartbeats / boot-ups, EMCYs of its nodes.
+    std::vector<std::uint8_t> nodes;
+    for (const hal::CanopenAxisConfig& x : scene.device.canopen.axes) {
+      if (x.drive_tpdo_cob_id != 0)
+        settings.filters.push_back(hal::exact_standard_filter(x.drive_tpdo_cob_id));
+      if (std::find(nodes.begin(), nodes.end(), x.node_id) != nodes.end()) continue;
+      nodes.push_back(x.node_id);
+      settings.filters.push_back(hal::exact_standard_filter(hal::heartbeat_cob_id(x.node_id)));
+      settings.filters.push_back(hal::exact_standard_filter(hal::emcy_cob_id(x.node_id)));
+    }
+  }
   settings.received_only = true;
   return std::make_unique<hal::LogBus>(
       hal::load_candump_log(choice.spec.substr(kLogPrefix.size())), settings);
@@ -106,7 +120,16 @@ std::unique_ptr<hal::LogBus> make_log_bus(const Scene& scene, const BusChoice& c
 
 }  // namespace
 
-SceneRunner::SceneRunner(const Scene& scene, std::size_t trace_capacity, const BusChoice& bus)
+namespace {
+platform::ControlLoopSettings loop_settings(bool realtime) {
+  platform::ControlLoopSettings s;
+  s.supervise_overruns = realtime;
+  return s;
+}
+}  // namespace
+
+SceneRunner::SceneRunner(const Scene& scene, std::size_t trace_capacity, const BusChoice& bus,
+                         bool realtime)
     : scene_(&scene),
       bus_(scene.bus),
       log_bus_(make_log_bus(scene, bus)),
@@ -123,7 +146,7 @@ SceneRunner::SceneRunner(const Scene& scene, std::size_t trace_capacity, const B
       device_(scene.device),
       data_(core::make_data(scene.model)),
       ghost_(core::make_data(scene.model)),
-      loop_(scene.model, data_, *port_, device_, scene.binding),
+      loop_(scene.model, data_, *port_, device_, scene.binding, loop_settings(realtime)),
       period_ns_(static_cast<std::int64_t>(std::llround(scene.model.dt * 1e9))),
       phase_ns_(static_cast<std::int64_t>(std::llround(scene.compute_phase_s * 1e9))) {
   trace_.reserve(trace_capacity);
@@ -139,9 +162,10 @@ SceneRunner::SceneRunner(const Scene& scene, std::size_t trace_capacity, const B
   acc_.num_joints = scene.model.num_joints();
   acc_.num_nets = scene.model.num_nets();
   acc_.num_nodes = scene.model.num_nodes();
+  acc_.managed = loop_.managed();
 }
 
-void SceneRunner::period() noexcept {
+void SceneRunner::period(std::int64_t deadline_mono_ns, std::int64_t woke_mono_ns) noexcept {
   const core::Model& model = scene_->model;
   const std::int64_t t = k_ * period_ns_;
   while (next_event_ < scene_->events.size() &&
@@ -152,14 +176,14 @@ void SceneRunner::period() noexcept {
   const platform::PeriodReport* report_ptr = nullptr;
   if (log_bus_) {  // the recorded instrument's frames arrive at their logged times
     log_bus_->set_time_ns(t);
-    loop_.begin_period(t);
+    loop_.begin_period(t, deadline_mono_ns, woke_mono_ns);
     log_bus_->set_time_ns(t + phase_ns_);
     report_ptr = &loop_.end_period(t + phase_ns_);
   } else {
     bus_.set_time_ns(t);
-    loop_.begin_period(t);
+    loop_.begin_period(t, deadline_mono_ns, woke_mono_ns);
     bus_.set_time_ns(t + scene_->bus.latency_ns);
-    instrument_.poll(bus_.device());  // encoders latch at SYNC and answer
+    instrument_.poll(bus_.device(), t + scene_->bus.latency_ns);  // encoders latch at SYNC and answer
     bus_.set_time_ns(t + phase_ns_);
     report_ptr = &loop_.end_period(t + phase_ns_);
   }
@@ -169,6 +193,12 @@ void SceneRunner::period() noexcept {
   // ---- measurements (outside the timed step) ----
   RunSummary& s = acc_;
   if (!report.sample_valid) ++s.invalid_periods;
+  if (!report.torque_commanded) ++s.zero_torque_periods;
+  if (report.entered_safe_stop && !has_first_fault_ && loop_.supervisor() != nullptr &&
+      loop_.supervisor()->first_fault() != nullptr) {
+    first_fault_ = *loop_.supervisor()->first_fault();
+    has_first_fault_ = true;
+  }
   const int held = data_.attached_body;
   double tool_pen = 0.0, target_pen = 0.0;
   int tool_contacts = 0;
@@ -271,6 +301,36 @@ RunSummary SceneRunner::summary() const {
     s.bus_frames_recorded = static_cast<std::int64_t>(recorder_->recording_counters().recorded);
     s.bus_record_dropped = static_cast<std::int64_t>(recorder_->recording_counters().dropped);
   }
+  if (const hal::CanopenMaster* m = loop_.canopen()) {
+    const hal::SafetySupervisor& sup = *loop_.supervisor();
+    const hal::StartupReport& st = m->startup();
+    s.startup = hal::to_string(st.phase);
+    if (st.phase == hal::StartupPhase::kFailed)
+      s.startup += " (node " + std::to_string(st.missing_node) + ")";
+    if (st.phase == hal::StartupPhase::kOperational || st.attempts > 1)
+      s.periods_to_operational = static_cast<std::int64_t>(st.done_period);
+    s.periods_to_active = loop_.first_active_period();
+    s.periods_to_torque = loop_.first_torque_period();
+    s.lifecycle = hal::to_string(sup.state());
+    s.faults = static_cast<std::int64_t>(sup.counters().latches);
+    s.fault_records = static_cast<std::int64_t>(sup.counters().records);
+    if (has_first_fault_) {
+      s.first_fault = hal::to_string(first_fault_.cause);
+      s.first_fault_id = first_fault_.id;
+      s.first_fault_value = first_fault_.value;
+      s.first_fault_time_s = static_cast<double>(first_fault_.time_ns) * 1e-9;
+      s.first_fault_period = static_cast<std::int64_t>(first_fault_.period);
+    }
+    s.emcys = static_cast<std::int64_t>(m->emcy_log().counters().received);
+    s.emcy_faults = static_cast<std::int64_t>(m->emcy_log().counters().faults);
+    for (const hal::HeartbeatConsumer& c : m->heartbeats())
+      s.heartbeat_losses += static_cast<std::int64_t>(c.counters().losses);
+    for (std::size_t i = 0; i < m->num_drives(); ++i) {
+      const int axis = m->drive_axis(i);
+      s.drive_states.push_back(scene_->device.axes[static_cast<std::size_t>(axis)].name + ": " +
+                               hal::to_string(m->drive_outputs()[i].state));
+    }
+  }
   return s;
 }
 
@@ -278,7 +338,7 @@ RunSummary run_scene(const Scene& scene, const RunOptions& options) {
   const double duration = options.duration_s >= 0.0 ? options.duration_s : scene.duration_s;
   const auto steps = static_cast<std::int64_t>(std::llround(duration / scene.model.dt));
   SceneRunner runner(scene, options.trace_path.empty() ? 0 : static_cast<std::size_t>(steps),
-                     options.bus);
+                     options.bus, options.realtime);
   const platform::RealtimeSettings& rt = options.rt;
   std::vector<std::string> rt_lines;
   if (rt.fifo_priority != 0 || rt.lock_memory || rt.prefault_stack_bytes > 0 ||
@@ -295,6 +355,8 @@ RunSummary run_scene(const Scene& scene, const RunOptions& options) {
       overruns += w.overrun ? 1 : 0;
       missed += w.missed_periods;
       wakeup.record(w.latency_ns());
+      runner.period(w.deadline_ns, w.woke_ns);
+      continue;
     }
     runner.period();
   }
@@ -346,6 +408,26 @@ std::string format_summary(const RunSummary& s) {
   if (s.bus_frames_recorded > 0 || s.bus_record_dropped > 0)
     os << "  recorded " << s.bus_frames_recorded << " frames, " << s.bus_record_dropped
        << " dropped by the recorder\n";
+  if (s.managed) {
+    os << "  canopen: start-up " << s.startup << " at period " << s.periods_to_operational
+       << ", active at period " << s.periods_to_active << ", first torque at period "
+       << s.periods_to_torque << "; lifecycle " << s.lifecycle << "\n";
+    os << "  safety: " << s.faults << " safe stop(s), " << s.fault_records << " fault record(s)";
+    if (!s.first_fault.empty())
+      os << "; first: " << s.first_fault << " (id " << s.first_fault_id << ", value "
+         << s.first_fault_value << ") at " << s.first_fault_time_s << " s, period "
+         << s.first_fault_period;
+    os << "; EMCY " << s.emcys << " (" << s.emcy_faults << " faults), heartbeat losses "
+       << s.heartbeat_losses << ", zero-torque periods " << s.zero_torque_periods << "\n";
+    if (!s.drive_states.empty()) {
+      os << "  drives:";
+      for (std::size_t i = 0; i < s.drive_states.size(); ++i)
+        os << (i ? "," : "") << " " << s.drive_states[i];
+      os << "\n";
+    }
+  } else {
+    os << "  canopen: minimal protocol (no start-up, no lifecycle)\n";
+  }
   os << "  nan detected: " << (s.nan_detected ? "YES" : "no");
   for (const std::string& line : s.realtime_setup) os << "\n  realtime setup: " << line;
   if (s.wakeup_latency_us.max > 0.0)
@@ -442,6 +524,25 @@ std::string format_summary_json(const RunSummary& s) {
   os << "\"realtime_setup\":[";
   for (std::size_t i = 0; i < s.realtime_setup.size(); ++i)
     os << (i ? "," : "") << json_string(s.realtime_setup[i]);
+  os << "],";
+  os << "\"managed\":" << (s.managed ? "true" : "false") << ",";
+  os << "\"startup\":" << json_string(s.startup) << ",";
+  integer("periods_to_operational", s.periods_to_operational);
+  integer("periods_to_active", s.periods_to_active);
+  integer("periods_to_torque", s.periods_to_torque);
+  os << "\"lifecycle\":" << json_string(s.lifecycle) << ",";
+  integer("faults", s.faults);
+  integer("fault_records", s.fault_records);
+  os << "\"first_fault\":{\"cause\":" << json_string(s.first_fault) << ",\"id\":" << s.first_fault_id
+     << ",\"value\":" << json_number(s.first_fault_value)
+     << ",\"time_s\":" << json_number(s.first_fault_time_s) << ",\"period\":" << s.first_fault_period
+     << "},";
+  integer("emcys", s.emcys);
+  integer("emcy_faults", s.emcy_faults);
+  integer("heartbeat_losses", s.heartbeat_losses);
+  integer("zero_torque_periods", s.zero_torque_periods);
+  os << "\"drive_states\":[";
+  for (std::size_t i = 0; i < s.drive_states.size(); ++i) os << (i ? "," : "") << json_string(s.drive_states[i]);
   os << "],";
   os << "\"warnings\":[";
   for (std::size_t i = 0; i < s.warnings.size(); ++i) os << (i ? "," : "") << json_string(s.warnings[i]);

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <iomanip>
 #include <limits>
@@ -197,6 +198,123 @@ hal::AxisConfig parse_axis(const TomlTable& a, hal::AxisConfig axis) {
   return axis;
 }
 
+/// A static PDO mapping: a list of CiA 301 mapping entries (index << 16 | subindex << 8 | bits,
+/// e.g. 0x60710010), each one of the objects numen knows (find_known_pdo_object).
+std::vector<hal::PdoEntry> parse_mapping(const TomlTable& t, std::string_view key,
+                                         std::vector<hal::PdoEntry> fallback) {
+  const toml::node* n = t.node(key);
+  if (!n) return fallback;
+  const toml::array* arr = n->as_array();
+  if (!arr || arr->empty() || arr->size() > hal::kMaxPdoEntries)
+    t.fail(key, "expected a list of 1 to 8 mapping entries such as 0x60710010 (index:sub:bits)");
+  std::vector<hal::PdoEntry> out;
+  for (std::size_t i = 0; i < arr->size(); ++i) {
+    const std::string k = t.key_path(key) + "[" + std::to_string(i) + "]";
+    const auto* v = arr->get(i)->as_integer();
+    if (!v || v->get() < 0 || v->get() > 0xFFFFFFFF)
+      t.fail_at(arr->get(i), k, "expected a 32-bit mapping entry such as 0x60710010");
+    hal::PdoEntry e;
+    if (!hal::find_known_pdo_object(static_cast<std::uint32_t>(v->get()), e)) {
+      char buf[16];
+      std::snprintf(buf, sizeof buf, "0x%08llX", static_cast<unsigned long long>(v->get()));
+      t.fail_at(arr->get(i), k,
+                std::string(buf) +
+                    " is not an object numen maps (0x60040020 position value, 0x60640020 position "
+                    "actual value, 0x60400010 controlword, 0x60410010 statusword, 0x60710010 "
+                    "target torque, 0x60770010 torque actual value, 0x60600008 modes of "
+                    "operation, 0x60610008 modes of operation display)");
+    }
+    out.push_back(e);
+  }
+  return out;
+}
+
+std::uint16_t parse_ms(const TomlTable& t, std::string_view key, std::uint16_t fallback) {
+  const auto v = t.integer_or(key, fallback);
+  if (v < 1 || v > 65535) t.fail(key, "must be an integer number of ms in [1, 65535]");
+  return static_cast<std::uint16_t>(v);
+}
+
+/// [device.canopen] and its [[device.canopen.axis]] entries (docs/scenes.md).
+void parse_canopen(const TomlTable& dev, hal::DeviceConfig& cfg) {
+  hal::CanopenConfig& co = cfg.canopen;
+  // Reconcile the defaults with the [[device.axis]] drive COB-IDs (0 = no motor).
+  for (std::size_t i = 0; i < cfg.axes.size(); ++i) {
+    hal::CanopenAxisConfig& x = co.axes[i];
+    if (cfg.axes[i].has_drive() != (x.drive_tpdo_cob_id != 0)) {
+      const hal::CanopenAxisConfig d = hal::make_canopen_axis(x.node_id, cfg.axes[i].has_drive());
+      x.drive_tpdo_cob_id = d.drive_tpdo_cob_id;
+      x.drive_rpdo = d.drive_rpdo;
+      x.drive_tpdo = d.drive_tpdo;
+    }
+  }
+  auto c = dev.table("canopen");
+  if (!c) return;
+  c->allow_only({"managed", "controller_node_id", "controller_heartbeat_period",
+                 "drive_heartbeat_timeout", "node_heartbeat_period", "heartbeat_timeout",
+                 "startup_timeout", "startup_retry", "axis"});
+  co.managed = c->boolean_or("managed", co.managed);
+  const auto ctrl = c->integer_or("controller_node_id", co.controller_node_id);
+  if (ctrl < 1 || ctrl > 127) c->fail("controller_node_id", "must be a CANopen node id in [1, 127]");
+  co.controller_node_id = static_cast<std::uint8_t>(ctrl);
+  co.controller_heartbeat_period_ms =
+      parse_ms(*c, "controller_heartbeat_period", co.controller_heartbeat_period_ms);
+  if (c->has("drive_heartbeat_timeout"))
+    co.drive_heartbeat_timeout_ms = parse_ms(*c, "drive_heartbeat_timeout", 1);
+  const auto startup = c->integer_or("startup_timeout", co.startup_timeout_ms);
+  if (startup < 1 || startup > 600'000) c->fail("startup_timeout", "must be in [1, 600000] ms");
+  co.startup_timeout_ms = static_cast<std::uint32_t>(startup);
+  const auto retry = c->integer_or("startup_retry", co.startup_retry_ms);
+  if (retry < 1 || retry > 600'000) c->fail("startup_retry", "must be in [1, 600000] ms");
+  co.startup_retry_ms = static_cast<std::uint32_t>(retry);
+  const std::uint16_t period = parse_ms(*c, "node_heartbeat_period", 10);
+  const std::uint16_t timeout = c->has("heartbeat_timeout") ? parse_ms(*c, "heartbeat_timeout", 1) : 0;
+  for (hal::CanopenAxisConfig& x : co.axes) {
+    x.heartbeat_period_ms = period;
+    x.heartbeat_timeout_ms = timeout;
+  }
+  const std::vector<TomlTable> axes = c->tables("axis");
+  if (!axes.empty() && axes.size() != cfg.axes.size())
+    c->fail("axis", "the device has " + std::to_string(cfg.axes.size()) + " axes, " +
+                        std::to_string(axes.size()) + " given (give all or none)");
+  for (std::size_t i = 0; i < axes.size(); ++i) {
+    const TomlTable& a = axes[i];
+    hal::CanopenAxisConfig& x = co.axes[i];
+    a.allow_only({"node_id", "heartbeat_period", "heartbeat_timeout", "drive_tpdo_cob_id",
+                  "encoder_tpdo", "drive_rpdo", "drive_tpdo"});
+    const auto node = a.integer_or("node_id", x.node_id);
+    if (node < 1 || node > 127) a.fail("node_id", "must be a CANopen node id in [1, 127]");
+    x.node_id = static_cast<std::uint8_t>(node);
+    x.heartbeat_period_ms = parse_ms(a, "heartbeat_period", x.heartbeat_period_ms);
+    if (a.has("heartbeat_timeout")) x.heartbeat_timeout_ms = parse_ms(a, "heartbeat_timeout", 1);
+    const auto tpdo = a.integer_or("drive_tpdo_cob_id", x.drive_tpdo_cob_id);
+    if (tpdo < 0 || tpdo > 0x7FF) a.fail("drive_tpdo_cob_id", "must be an 11-bit COB-ID in [0, 0x7FF]");
+    x.drive_tpdo_cob_id = static_cast<std::uint32_t>(tpdo);
+    x.encoder_tpdo = parse_mapping(a, "encoder_tpdo", x.encoder_tpdo);
+    x.drive_rpdo = parse_mapping(a, "drive_rpdo", x.drive_rpdo);
+    x.drive_tpdo = parse_mapping(a, "drive_tpdo", x.drive_tpdo);
+    // Point a validation error of this axis at its table.
+    try {
+      hal::validate(cfg);
+    } catch (const std::invalid_argument& e) {
+      const std::string what = e.what();
+      if (what.find("canopen.axes[" + std::to_string(i) + "]") != std::string::npos) {
+        for (const char* key : {"drive_tpdo_cob_id", "drive_rpdo", "drive_tpdo", "encoder_tpdo",
+                                "heartbeat_timeout", "heartbeat_period", "node_id"}) {
+          if (what.find(key) != std::string::npos && a.has(key)) a.fail(key, what);
+        }
+        a.fail_at(nullptr, a.path(), what);
+      }
+    }
+  }
+  try {
+    hal::validate(cfg);
+  } catch (const std::invalid_argument& e) {
+    const std::string what = e.what();
+    if (what.find("canopen") != std::string::npos) c->fail_at(nullptr, c->path(), what);
+  }
+}
+
 void parse_feedback(const TomlTable& dev, core::FeedbackGains& f) {
   auto fb = dev.table("feedback");
   if (!fb) return;  // non-haptic: all zero
@@ -224,7 +342,7 @@ void parse_device(const TomlTable& root, Scene& scene, const TomlTable*& body_ta
   if (!dev) root.fail("device", "missing: a scene needs a [device] (the tracked instrument)");
   dev->allow_only({"kind", "name", "attach", "max_sample_age", "jump_tolerance_counts",
                    "first_node_id", "tool_offset", "trocar", "tracker", "phantom", "feedback",
-                   "axis"});
+                   "axis", "canopen"});
   const std::string kind =
       dev->choice("kind", {"trocar-instrument", "pose-tracker", "phantom"}, std::nullopt);
   const auto node = dev->integer_or("first_node_id", 1);
@@ -307,6 +425,7 @@ void parse_device(const TomlTable& root, Scene& scene, const TomlTable*& body_ta
       cfg.tracker.base.orientation = tk->quaternion_or("orientation", Quat::Identity());
     }
   }
+  parse_canopen(*dev, cfg);
   try {
     hal::validate(cfg);
   } catch (const std::invalid_argument& e) {

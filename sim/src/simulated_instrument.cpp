@@ -35,17 +35,22 @@ core::Pose SimulatedInstrument::controlled_pose_at(std::int64_t t_ns) const noex
   return kinematics_->forward(axes_at(t_ns));
 }
 
-int SimulatedInstrument::poll(hal::Bus& device_port) noexcept {
+int SimulatedInstrument::poll(hal::Bus& device_port, std::int64_t now_ns) noexcept {
   int handled = 0;
   hal::CanFrame frame;
   while (device_port.read(frame) == hal::IoStatus::kOk) {
     ++handled;
+    if (emulator_.killed()) {
+      emulator_.on_frame(frame, device_port);  // counted and discarded
+      continue;
+    }
     if (hal::is_sync(frame)) {
       const hal::AxisVector q = axes_at(frame.timestamp_ns);
       emulator_.set_axis_values(q.data());
     }
     emulator_.on_frame(frame, device_port);
   }
+  if (now_ns >= 0) emulator_.tick(now_ns, device_port);
   return handled;
 }
 

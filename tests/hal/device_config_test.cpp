@@ -196,3 +196,56 @@ TEST(DeviceConfig, PhantomKindBuildsPhantomKinematics) {
 }
 
 }  // namespace
+
+namespace {
+std::string canopen_error(const numen::hal::DeviceConfig& c) {
+  try {
+    numen::hal::validate(c);
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "";
+}
+}  // namespace
+
+TEST(DeviceConfigCanopen, DefaultsAreManagedAndValid) {
+  const numen::hal::DeviceConfig c = numen::hal::make_default_trocar_config(1);
+  EXPECT_TRUE(c.canopen.managed);
+  ASSERT_EQ(c.canopen.axes.size(), 5u);
+  EXPECT_EQ(c.canopen.axes[0].drive_tpdo_cob_id, 0x281u);
+  EXPECT_EQ(c.canopen.axes[3].drive_tpdo_cob_id, 0u);  // roll: no drive
+  EXPECT_EQ(c.canopen.axes[0].drive_rpdo.size(), 2u);
+  EXPECT_EQ(canopen_error(c), "");
+}
+
+TEST(DeviceConfigCanopen, ErrorsNameTheDeviceAxisAndField) {
+  using numen::hal::DeviceConfig;
+  const DeviceConfig base = numen::hal::make_default_trocar_config(1);
+  DeviceConfig c = base;
+  c.canopen.axes[1].drive_tpdo_cob_id = 0x181;  // pivot_x's encoder TPDO
+  EXPECT_NE(
+      canopen_error(c).find("axes[1] 'pivot_y' drive TPDO: COB-ID 0x181 is already used by the"),
+      std::string::npos)
+      << canopen_error(c);
+  c = base;
+  c.canopen.axes[0].drive_rpdo = {numen::hal::PdoObject::kControlword};
+  EXPECT_NE(canopen_error(c).find("drive_rpdo: must map object 0x6071:00"), std::string::npos)
+      << canopen_error(c);
+  c = base;
+  c.canopen.axes[2].heartbeat_timeout_ms = 10;
+  EXPECT_NE(canopen_error(c).find("heartbeat_timeout_ms (10) must exceed heartbeat_period_ms"),
+            std::string::npos)
+      << canopen_error(c);
+  c = base;
+  c.canopen.axes[4].node_id = 127;
+  EXPECT_NE(canopen_error(c).find("is the controller's node id"), std::string::npos);
+  c = base;
+  c.axes[0].encoder_cob_id = 0x701;  // a heartbeat COB-ID
+  EXPECT_NE(canopen_error(c).find("reserved in the managed stack"), std::string::npos)
+      << canopen_error(c);
+  c = base;
+  c.canopen.axes.pop_back();
+  EXPECT_NE(canopen_error(c).find("one entry per axis"), std::string::npos);
+  c.canopen.managed = false;  // the minimal protocol ignores the CANopen entries
+  EXPECT_EQ(canopen_error(c), "");
+}

@@ -31,6 +31,7 @@ constexpr double kPeriodS = 1e-3;
 
 DeviceConfig trocar_config() {
   DeviceConfig c = make_default_trocar_config(1);
+  c.canopen.managed = false;  // the minimal protocol (the managed stack: canopen_master_test)
   c.control_period_s = kPeriodS;
   c.trocar.point = Vec3(0.0, 0.0, 0.25);
   c.trocar.orientation = numen::core::Quat(Eigen::AngleAxisd(std::numbers::pi, Vec3::UnitX()));
@@ -389,6 +390,7 @@ TEST(DeviceEmulator, TenThousandPeriodsWithoutAllocation) {
 
 TEST(DeviceEmulator, PoseTrackerEndToEnd) {
   DeviceConfig c = make_default_pose_tracker_config(40);
+  c.canopen.managed = false;
   c.control_period_s = kPeriodS;
   Rig rig(latency_only(), c);
   const double q[6] = {0.1, -0.2, 0.3, 2.0, -0.4, -3.0};
@@ -407,6 +409,7 @@ TEST(DeviceEmulator, PoseTrackerEndToEnd) {
 TEST(DeviceEmulator, PhantomEndToEnd) {
   // A phantom arm: six encoders answer each SYNC, three drives receive the link torques.
   DeviceConfig c = make_default_phantom_config(50);
+  c.canopen.managed = false;
   c.control_period_s = kPeriodS;
   Rig rig(latency_only(), c);
   const double q[6] = {0.3, -0.2, 0.1, -1.0, 0.6, 2.5};
@@ -447,6 +450,64 @@ TEST(DeviceEmulator, PhantomEndToEnd) {
     }
   }
   EXPECT_GT(std::abs(rig.emulator.last_torques()[PhantomKinematics::kShoulder]), 0.1);
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------- managed stack
+
+namespace {
+using namespace numen::hal;
+
+TEST(DeviceEmulatorManaged, BootsAnswersNmtAndSendsPdosOnlyWhenOperational) {
+  DeviceConfig c = make_default_trocar_config(1);
+  SimBusSettings s;
+  s.latency_ns = 0;
+  SimBus bus(s);
+  numen::hal::DeviceEmulator emu(c);
+  CanFrame f;
+  emu.tick(0, bus.device());  // power-on: 5 boot-ups
+  int boot_ups = 0;
+  while (bus.controller().read(f) == IoStatus::kOk)
+    boot_ups += (f.id > 0x700 && f.data[0] == 0) ? 1 : 0;
+  EXPECT_EQ(boot_ups, 5);
+  bus.controller().write(numen::hal::make_sync(1, 1));
+  emu.poll(bus.device());
+  EXPECT_EQ(bus.pending(SimBus::Direction::kDeviceToController), 0u) << "no PDO in pre-operational";
+  numen::hal::encode_nmt(numen::hal::NmtCommand::kStartRemoteNode, 0, 2, f);
+  bus.controller().write(f);
+  bus.controller().write(numen::hal::make_sync(3, 2));
+  emu.poll(bus.device());
+  EXPECT_EQ(bus.pending(SimBus::Direction::kDeviceToController), 8u);  // 5 encoders + 3 drives
+  while (bus.controller().read(f) == IoStatus::kOk) {
+  }
+  // Stop node 4 (roll): its encoder falls silent, its heartbeat says stopped.
+  numen::hal::encode_nmt(numen::hal::NmtCommand::kStopRemoteNode, 4, 4, f);
+  bus.controller().write(f);
+  bus.controller().write(numen::hal::make_sync(5, 3));
+  emu.poll(bus.device());
+  EXPECT_EQ(bus.pending(SimBus::Direction::kDeviceToController), 7u);
+  EXPECT_EQ(emu.node_state(3), numen::hal::NmtState::kStopped);
+  // An injected drive fault: EMCY at the next tick, drive in fault reaction, torque 0.
+  while (bus.controller().read(f) == IoStatus::kOk) {
+  }
+  ASSERT_TRUE(emu.inject_drive_fault(2, 0x4310));
+  EXPECT_FALSE(emu.inject_drive_fault(3, 0x4310));  // roll has no drive
+  emu.tick(6, bus.device());
+  ASSERT_EQ(bus.controller().read(f), IoStatus::kOk);
+  numen::hal::EmcyMessage m;
+  ASSERT_EQ(numen::hal::decode_emcy(f, m), numen::hal::EmcyDecodeStatus::kOk);
+  EXPECT_EQ(m.node_id, 3);
+  EXPECT_EQ(m.error_code, 0x4310);
+  EXPECT_EQ(m.error_register, 0x09);  // generic + temperature
+  EXPECT_EQ(emu.drive(2)->state(), numen::hal::PowerState::kFaultReactionActive);
+  // Killed: nothing read is answered, nothing is sent.
+  emu.kill(true);
+  bus.controller().write(numen::hal::make_sync(7, 4));
+  emu.poll(bus.device());
+  emu.tick(100 * 1'000'000, bus.device());
+  EXPECT_EQ(bus.pending(SimBus::Direction::kDeviceToController), 0u);
+  EXPECT_EQ(emu.counters().frames_while_killed, 1u);
 }
 
 }  // namespace

@@ -298,3 +298,21 @@ TEST(PdoMapping, PackAndUnpackDoNotAllocate) {
 }
 
 }  // namespace
+
+TEST(PdoMapping, KnownObjectsAreFoundByTheirMappingEntry) {
+  numen::hal::PdoEntry e;
+  ASSERT_TRUE(numen::hal::find_known_pdo_object(0x60710010u, e));
+  EXPECT_EQ(e.index, 0x6071);
+  EXPECT_TRUE(e.is_signed);
+  ASSERT_TRUE(numen::hal::find_known_pdo_object(0x60410010u, e));
+  EXPECT_FALSE(e.is_signed);
+  ASSERT_TRUE(numen::hal::find_known_pdo_object(0x60040020u, e));
+  EXPECT_TRUE(e.is_signed);  // read as int32
+  const numen::hal::PdoEntry before = e;
+  EXPECT_FALSE(numen::hal::find_known_pdo_object(0x60710020u, e));  // wrong bit length
+  EXPECT_FALSE(numen::hal::find_known_pdo_object(0x60720010u, e));  // max torque: not mapped
+  EXPECT_EQ(e.index, before.index);
+  const numen::hal::PdoMapping m = numen::hal::drive_rpdo_mapping();
+  EXPECT_EQ(numen::hal::find_mapped(m.entries(), numen::hal::PdoObject::kTargetTorque), 1);
+  EXPECT_EQ(numen::hal::find_mapped(m.entries(), numen::hal::PdoObject::kStatusword), -1);
+}

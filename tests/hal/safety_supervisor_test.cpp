@@ -666,11 +666,17 @@ constexpr std::uint8_t kDriveNode = 0x30;
 constexpr std::uint32_t kDriveRpdo = 0x200 + kDriveNode;
 constexpr std::uint32_t kDriveTpdo = 0x180 + kDriveNode;
 
+// This rig drives its own drive and heartbeat: the emulator's encoders answer every SYNC.
+DeviceConfig minimal(DeviceConfig c) {
+  c.canopen.managed = false;
+  return c;
+}
+
 struct Loop {
   Loop()
       : bus(bus_settings()),
-        device(make_default_trocar_config(1)),
-        emulator(make_default_trocar_config(1)),
+        device(minimal(make_default_trocar_config(1))),
+        emulator(minimal(make_default_trocar_config(1))),
         producer(kDriveNode, 10 * kMs),
         sup(settings()) {
     monitor.add(kDriveNode, 25 * kMs);

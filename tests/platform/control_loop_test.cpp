@@ -8,7 +8,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <numbers>
+#include <string>
+#include <vector>
 
 #include "alloc_counter.hpp"
 #include "numen/core/data.hpp"
@@ -18,6 +21,8 @@
 #include "numen/hal/canopen.hpp"
 #include "numen/hal/device_config.hpp"
 #include "numen/hal/device_emulator.hpp"
+#include "numen/hal/emcy.hpp"
+#include "numen/hal/nmt.hpp"
 #include "numen/hal/instrument_device.hpp"
 #include "numen/hal/sim_bus.hpp"
 
@@ -38,6 +43,7 @@ constexpr std::int64_t kPhase = 250'000;
 
 numen::hal::DeviceConfig trocar_config() {
   numen::hal::DeviceConfig c = numen::hal::make_default_trocar_config(1);
+  c.canopen.managed = false;  // the minimal protocol; managed_config() below for the full stack
   c.trocar.point = Vec3(0.0, 0.0, 0.2);
   c.trocar.orientation = Quat(Eigen::AngleAxisd(std::numbers::pi, Vec3::UnitX()));
   c.control_period_s = 1e-3;
@@ -645,3 +651,370 @@ TEST(ControlLoopLinks, TheHeldBodyFollowsItsOwnLinkAcrossToolSwitches) {
 }
 
 }  // namespace
+
+// ---------------------------------------------------------------- managed CANopen stack
+
+namespace managed {
+
+using numen::hal::FaultCause;
+using numen::hal::LifecycleState;
+using numen::hal::PowerState;
+using numen::hal::StartupPhase;
+
+numen::hal::DeviceConfig managed_config() {
+  numen::hal::DeviceConfig c = numen::hal::make_default_trocar_config(1);
+  c.trocar.point = Vec3(0.0, 0.0, 0.2);
+  c.trocar.orientation = Quat(Eigen::AngleAxisd(std::numbers::pi, Vec3::UnitX()));
+  c.control_period_s = 1e-3;
+  return c;
+}
+
+/// The full stack: SimBus, managed DeviceEmulator (NMT, heartbeats, CiA 402 drives), the loop.
+struct Rig {
+  numen::hal::DeviceConfig config = managed_config();
+  SimBus bus{bus_settings()};
+  numen::hal::DeviceEmulator emulator{config};
+  numen::hal::InstrumentDevice device{config};
+  numen::core::Model model = small_model();
+  numen::core::Data data = numen::core::make_data(model);
+  ControlLoop loop{model, data, bus.controller(), device};
+  std::int64_t k = 0;
+  bool controller_silent = false;
+
+  Rig() { emulator.set_axis_values(kQ); }
+
+  /// Period k as SceneRunner runs it: SYNC (+ NMT, heartbeat); the device answers and ticks;
+  /// the controller reads, supervises, steps and writes; the device takes the RPDOs.
+  const PeriodReport& period() {
+    const std::int64_t t = k * kMs;
+    ++k;
+    bus.set_time_ns(t);
+    if (!controller_silent) loop.begin_period(t);
+    bus.set_time_ns(t + kLatency);
+    emulator.poll(bus.device());
+    emulator.tick(t + kLatency, bus.device());
+    bus.set_time_ns(t + kPhase);
+    if (!controller_silent) loop.end_period(t + kPhase);
+    return loop.last_report();
+  }
+  /// Runs until the lifecycle is active and torque flows (at most `max` periods).
+  void run_to_torque(int max = 100) {
+    for (int i = 0; i < max && loop.first_torque_period() < 0; ++i) period();
+  }
+  const numen::hal::SafetySupervisor& sup() const { return *loop.supervisor(); }
+};
+
+/// True if any drive RPDO of this period carried a non-zero target torque (emulator view).
+bool any_torque(const Rig& rig) {
+  for (int a = 0; a < 3; ++a) {
+    if (rig.device.last_torque_per_mille()[static_cast<std::size_t>(a)] != 0) return true;
+  }
+  return false;
+}
+
+TEST(ControlLoopManaged, StartUpReachesActiveInAnExactNumberOfPeriods) {
+  // 1 ms periods, 100 µs latency, node heartbeats every 10 ms. Period 0: SYNC + reset
+  // communication; the nodes boot (power-on) and their boot-ups are read in period 0. Period 1:
+  // start remote node. Period 2 on: TPDOs. Period 10: the first heartbeats (10 ms after the
+  // boot-ups) report operational → start-up complete, encoders fresh, drives disabled →
+  // activate. Periods 11–13: shutdown, switch on, enable operation (one statusword round trip
+  // each). Period 14: operation enabled → torque allowed.
+  Rig rig;
+  ASSERT_TRUE(rig.loop.managed());
+  EXPECT_EQ(rig.sup().state(), LifecycleState::kInactive);  // configured at construction
+  const numen::hal::CanopenMaster& m = *rig.loop.canopen();
+  for (int i = 0; i < 40; ++i) {
+    const PeriodReport& r = rig.period();
+    const std::int64_t k = rig.k - 1;
+    SCOPED_TRACE("period " + std::to_string(k));
+    EXPECT_EQ(r.startup, k == 0   ? StartupPhase::kStartNodes
+                         : k < 10 ? StartupPhase::kWaitOperational
+                                  : StartupPhase::kOperational);
+    EXPECT_EQ(r.lifecycle, k < 10 ? LifecycleState::kInactive : LifecycleState::kActive);
+    EXPECT_EQ(r.activated, k == 10);
+    EXPECT_EQ(r.sample_valid, k >= 2);
+    bool allowed = true;
+    for (const auto& out : m.drive_outputs()) allowed = allowed && out.torque_allowed;
+    EXPECT_EQ(allowed, k >= 14);
+    if (k < 14) {
+      EXPECT_FALSE(any_torque(rig)) << "torque before the drives are enabled";
+    }
+  }
+  EXPECT_EQ(rig.loop.first_active_period(), 10);
+  EXPECT_EQ(rig.loop.first_torque_period(), 14);
+  EXPECT_EQ(m.startup().done_period, 10u);
+  EXPECT_EQ(m.startup().attempts, 1u);
+  EXPECT_EQ(m.counters().nmt_retries, 0u);
+  for (int a = 0; a < 3; ++a) {
+    EXPECT_EQ(rig.emulator.drive(a)->state(), PowerState::kOperationEnabled);
+    EXPECT_EQ(rig.emulator.node_state(a), numen::hal::NmtState::kOperational);
+  }
+  EXPECT_EQ(rig.sup().fault_log_size(), 0u);
+  EXPECT_TRUE(any_torque(rig));
+  // The report carries LoopStatistics' stamps, in order.
+  const PeriodReport& r = rig.loop.last_report();
+  EXPECT_LE(r.deadline_ns, r.woke_ns);
+  EXPECT_LE(r.woke_ns, r.sync_sent_ns);
+  EXPECT_LE(r.sync_sent_ns, r.input_begin_ns);
+  EXPECT_LE(r.input_end_ns, r.step_begin_ns);
+  EXPECT_LE(r.step_end_ns, r.output_begin_ns);
+  EXPECT_LE(r.output_begin_ns, r.output_end_ns);
+  EXPECT_EQ(rig.loop.statistics().summary().periods, 40);
+  EXPECT_EQ(rig.loop.statistics().summary().invalid_periods, 0);
+}
+
+TEST(ControlLoopManaged, DeviceKilledZeroTorqueWithinThreePeriodsReportedWithThePeriod) {
+  Rig rig;
+  rig.run_to_torque();
+  for (int i = 0; i < 7; ++i) rig.period();
+  ASSERT_TRUE(any_torque(rig));
+  rig.emulator.kill(true);  // the device stops answering anything
+  const std::int64_t killed_at = rig.k;
+  int zero_after = -1;
+  for (int i = 0; i < 3; ++i) {
+    rig.period();
+    if (zero_after < 0 && !any_torque(rig)) zero_after = i;
+  }
+  // The third period without an encoder frame latches (encoder timeout N = 3): zero torque in
+  // that very period.
+  EXPECT_EQ(zero_after, 2);
+  EXPECT_EQ(rig.sup().state(), LifecycleState::kSafeStop);
+  const numen::hal::FaultRecord* f = rig.sup().first_fault();
+  ASSERT_NE(f, nullptr);
+  EXPECT_EQ(f->cause, FaultCause::kEncoderTimeout);
+  EXPECT_EQ(f->id, 0);      // axis 0 is the first axis found
+  EXPECT_EQ(f->value, 3.0);  // periods without an accepted frame
+  EXPECT_EQ(f->period, static_cast<std::uint64_t>(killed_at + 2));
+  EXPECT_EQ(f->time_ns, (killed_at + 2) * kMs + kPhase);
+  // The heartbeats stop too: each node is reported lost (not latching again) once its consumer
+  // time (30 ms) has passed; the drives cannot confirm "disabled": kFault by the safe stop
+  // timeout (100 periods).
+  for (int i = 0; i < 120; ++i) rig.period();
+  EXPECT_FALSE(any_torque(rig));
+  EXPECT_EQ(rig.sup().state(), LifecycleState::kFault);
+  EXPECT_TRUE(rig.sup().lifecycle().safe_stop_timed_out());
+  int lost = 0;
+  for (std::size_t i = 0; i < rig.sup().fault_log_size(); ++i) {
+    const numen::hal::FaultRecord* r = rig.sup().fault_log_at(i);
+    if (r->cause == FaultCause::kHeartbeatLost) {
+      ++lost;
+      EXPECT_FALSE(r->latched);
+      EXPECT_GE(r->value, 0.030);  // s silent
+      EXPECT_LT(r->value, 0.032);
+    }
+  }
+  EXPECT_EQ(lost, 5);
+  EXPECT_EQ(rig.sup().counters().latches, 1u);
+}
+
+TEST(ControlLoopManaged, DriveFaultEmcyReportedSafeStateDrivesDisabledLatchedRearmActiveAgain) {
+  Rig rig;
+  rig.run_to_torque();
+  for (int i = 0; i < 5; ++i) rig.period();
+  ASSERT_TRUE(any_torque(rig));
+  ASSERT_TRUE(rig.emulator.inject_drive_fault(1, 0x2310));  // pivot_y over-current
+  const std::int64_t fault_at = rig.k;
+  const PeriodReport& r = rig.period();
+  // EMCY and fault statusword are read in this period: latched, zero torque now.
+  EXPECT_TRUE(r.entered_safe_stop);
+  EXPECT_FALSE(r.torque_commanded);
+  EXPECT_FALSE(any_torque(rig));
+  const numen::hal::FaultRecord* f = rig.sup().first_fault();
+  ASSERT_NE(f, nullptr);
+  EXPECT_EQ(f->cause, FaultCause::kEmcy);
+  EXPECT_EQ(f->id, 2);  // node 2
+  EXPECT_EQ(f->value, 0x2310);
+  EXPECT_EQ(f->period, static_cast<std::uint64_t>(fault_at));
+  const numen::hal::EmcyRecord* e = rig.loop.canopen()->emcy_log().newest();
+  ASSERT_NE(e, nullptr);
+  EXPECT_EQ(e->message.node_id, 2);
+  EXPECT_EQ(e->message.error_code, 0x2310);
+  EXPECT_EQ(e->message.error_register, 0x03);  // generic + current
+  ASSERT_EQ(rig.sup().fault_log_size(), 2u);
+  EXPECT_EQ(rig.sup().newest_fault()->cause, FaultCause::kDriveFault);
+  EXPECT_EQ(rig.sup().newest_fault()->id, 1);  // drive index 1
+  // Disable voltage reaches the healthy drives in the next periods: kFault once all disabled.
+  for (int i = 0; i < 4; ++i) rig.period();
+  EXPECT_EQ(rig.sup().state(), LifecycleState::kFault);
+  EXPECT_FALSE(rig.sup().lifecycle().safe_stop_timed_out());
+  EXPECT_EQ(rig.emulator.drive(0)->state(), PowerState::kSwitchOnDisabled);
+  EXPECT_EQ(rig.emulator.drive(1)->state(), PowerState::kFault);
+  EXPECT_EQ(rig.emulator.drive(2)->state(), PowerState::kSwitchOnDisabled);
+  // Latched: nothing re-enables it on its own.
+  for (int i = 0; i < 50; ++i) {
+    rig.period();
+    ASSERT_FALSE(any_torque(rig));
+    ASSERT_EQ(rig.sup().state(), LifecycleState::kFault);
+  }
+  // Re-arm: fault reset of drive 1, then inactive, then the automatic activation.
+  EXPECT_EQ(rig.loop.rearm(), numen::platform::RearmResult::kAccepted);
+  EXPECT_TRUE(rig.loop.rearm_pending());
+  int periods = 0;
+  while (!any_torque(rig) && periods < 50) {
+    rig.period();
+    ++periods;
+  }
+  std::printf("[   info   ] rearm to torque: %d periods\n", periods);
+  EXPECT_LT(periods, 20);
+  EXPECT_FALSE(rig.loop.rearm_pending());
+  EXPECT_EQ(rig.sup().state(), LifecycleState::kActive);
+  for (int a = 0; a < 3; ++a) EXPECT_EQ(rig.emulator.drive(a)->state(), PowerState::kOperationEnabled);
+  EXPECT_EQ(rig.sup().counters().latches, 1u);
+  EXPECT_EQ(rig.sup().lifecycle().counters().rearms, 1u);
+  EXPECT_EQ(rig.loop.canopen()->emcy_log().counters().resets, 1u);  // 0x0000 after the reset
+  EXPECT_EQ(rig.loop.rearm(), numen::platform::RearmResult::kNotLatched);
+}
+
+TEST(ControlLoopManaged, ControllerSilentEmulatedDrivesFaultOnTheirOwn) {
+  // The drives watch the controller's heartbeat (10 ms, consumer time 30 ms): when the
+  // controller stops, they fault by themselves (EMCY 0x8130) and apply zero torque.
+  Rig rig;
+  rig.run_to_torque();
+  for (int i = 0; i < 3; ++i) rig.period();
+  ASSERT_NE(rig.emulator.drive(0)->applied_torque_per_mille(), 0);
+  const std::int64_t silent_from = rig.k;
+  const std::int64_t last_heartbeat = ((silent_from - 1) / 10) * 10;  // period of the last one
+  rig.controller_silent = true;
+  while (rig.k < last_heartbeat + 30) {
+    rig.period();
+    ASSERT_EQ(rig.emulator.drive(0)->state(), PowerState::kOperationEnabled) << rig.k;
+  }
+  rig.period();  // period last_heartbeat + 30: 30 ms since the last heartbeat arrived
+  for (int a = 0; a < 3; ++a) {
+    const numen::hal::Cia402Drive* d = rig.emulator.drive(a);
+    EXPECT_NE(d->state(), PowerState::kOperationEnabled);
+    EXPECT_EQ(d->applied_torque_per_mille(), 0);
+    EXPECT_EQ(d->error_code(), 0x8130);
+  }
+  EXPECT_EQ(rig.emulator.counters().controller_losses, 3u);  // nodes 1, 2, 3 carry drives
+  // Their EMCYs wait on the controller's port.
+  int emcys = 0;
+  CanFrame frame;
+  rig.bus.set_time_ns(rig.k * kMs);
+  while (rig.bus.controller().read(frame) == IoStatus::kOk) {
+    numen::hal::EmcyMessage msg;
+    if (numen::hal::decode_emcy(frame, msg) == numen::hal::EmcyDecodeStatus::kOk) {
+      EXPECT_EQ(msg.error_code, 0x8130);
+      ++emcys;
+    }
+  }
+  EXPECT_EQ(emcys, 3);
+}
+
+TEST(ControlLoopManaged, NmtStopStopsTheTpdosAndTheEncoderTimesOut) {
+  Rig rig;
+  rig.run_to_torque();
+  for (int i = 0; i < 3; ++i) rig.period();
+  ASSERT_TRUE(rig.loop.canopen()->request_nmt(numen::hal::NmtCommand::kStopRemoteNode, 3));
+  const std::int64_t p = rig.k;
+  rig.period();  // period p: SYNC answered, then the stop command
+  EXPECT_EQ(rig.emulator.node_state(2), numen::hal::NmtState::kStopped);
+  // The drive of the stopped node faults (abort connection): never keeps the last torque.
+  EXPECT_EQ(rig.emulator.drive(2)->applied_torque_per_mille(), 0);
+  rig.period();
+  rig.period();
+  EXPECT_EQ(rig.sup().state(), LifecycleState::kActive);
+  rig.period();  // period p + 3: the third without a depth TPDO
+  EXPECT_EQ(rig.sup().state(), LifecycleState::kSafeStop);
+  const numen::hal::FaultRecord* f = rig.sup().first_fault();
+  ASSERT_NE(f, nullptr);
+  EXPECT_EQ(f->cause, FaultCause::kEncoderTimeout);
+  EXPECT_EQ(f->id, 2);  // depth
+  EXPECT_EQ(f->period, static_cast<std::uint64_t>(p + 3));
+  EXPECT_FALSE(any_torque(rig));
+}
+
+TEST(ControlLoopManaged, TorquesAreSaturatedPerAxis) {
+  Rig rig;
+  rig.run_to_torque();
+  // Move the hand (ramp within the speed limits): the god-object lags, the feedback grows.
+  double q[5] = {kQ[0], kQ[1], kQ[2], kQ[3], kQ[4]};
+  double peak[3] = {0.0, 0.0, 0.0};
+  for (int i = 0; i < 60; ++i) {
+    q[0] += 0.004;
+    q[1] -= 0.004;
+    q[2] += 0.0005;
+    rig.emulator.set_axis_values(q);
+    rig.period();
+    for (int a = 0; a < 3; ++a) {
+      const double tau = rig.device.last_torques()[a];
+      const double lim = rig.config.axes[static_cast<std::size_t>(a)].max_torque;
+      ASSERT_LE(std::abs(tau), lim + 1e-12) << "axis " << a;
+      peak[a] = std::max(peak[a], std::abs(tau));
+    }
+  }
+  ASSERT_EQ(rig.sup().state(), LifecycleState::kActive);
+  std::printf("[   info   ] peak |tau|: %.4f %.4f %.4f\n", peak[0], peak[1], peak[2]);
+  // A second rig whose pivot_x limit is below that peak clamps exactly there.
+  Rig low;
+  low.config.axes[0].max_torque = 0.5 * peak[0];
+  ASSERT_GT(peak[0], 0.0);
+  numen::hal::InstrumentDevice device(low.config);
+  numen::core::Data data = numen::core::make_data(low.model);
+  ControlLoop loop(low.model, data, low.bus.controller(), device);
+  numen::hal::DeviceEmulator emulator(low.config);
+  emulator.set_axis_values(kQ);
+  double q2[5] = {kQ[0], kQ[1], kQ[2], kQ[3], kQ[4]};
+  double clamped_peak = 0.0;
+  for (std::int64_t k = 0; k < 200; ++k) {
+    if (k >= 20 && k < 80) {
+      q2[0] += 0.004;
+      q2[1] -= 0.004;
+      q2[2] += 0.0005;
+      emulator.set_axis_values(q2);
+    }
+    const std::int64_t t = k * kMs;
+    low.bus.set_time_ns(t);
+    loop.begin_period(t);
+    low.bus.set_time_ns(t + kLatency);
+    emulator.poll(low.bus.device());
+    emulator.tick(t + kLatency, low.bus.device());
+    low.bus.set_time_ns(t + kPhase);
+    loop.end_period(t + kPhase);
+    clamped_peak = std::max(clamped_peak, std::abs(device.last_torques()[0]));
+  }
+  EXPECT_DOUBLE_EQ(clamped_peak, low.config.axes[0].max_torque);
+  EXPECT_GT(loop.supervisor()->saturations(0), 0u);
+  EXPECT_EQ(loop.supervisor()->saturations(3), 0u);  // roll: no drive, τ = 0
+  EXPECT_EQ(loop.supervisor()->state(), LifecycleState::kActive);
+}
+
+/// Runs a scripted session (start-up, torque, drive fault, re-arm, kill) and returns every
+/// period's per-mille commands and the body position, for the determinism test.
+std::vector<std::int64_t> session(bool check_allocations) {
+  Rig rig;
+  std::vector<std::int64_t> out;
+  out.reserve(400 * 4);
+  rig.run_to_torque();
+  numen::test::AllocationGuard guard;
+  double q[5] = {kQ[0], kQ[1], kQ[2], kQ[3], kQ[4]};
+  for (int i = 0; i < 300; ++i) {
+    q[0] = kQ[0] + 0.05 * std::sin(0.02 * i);
+    rig.emulator.set_axis_values(q);
+    if (i == 100) rig.emulator.inject_drive_fault(0, 0x4310);
+    if (i == 150) rig.loop.rearm();
+    if (i == 250) rig.emulator.kill(true);
+    rig.period();
+    for (int a = 0; a < 3; ++a) out.push_back(rig.device.last_torque_per_mille()[static_cast<std::size_t>(a)]);
+    std::int64_t bits = 0;
+    const double x = rig.data.bodies[0].position.x();
+    std::memcpy(&bits, &x, sizeof bits);
+    out.push_back(bits);
+  }
+  if (check_allocations) {
+    EXPECT_EQ(guard.count(), 0) << "allocations in 300 managed periods";
+  }
+  EXPECT_EQ(rig.sup().counters().latches, 2u);  // the drive fault, the kill
+  return out;
+}
+
+TEST(ControlLoopManaged, PeriodsNeverAllocateWithTheFullStack) { session(true); }
+
+TEST(ControlLoopManaged, RerunsAreBitIdentical) {
+  const std::vector<std::int64_t> a = session(false);
+  const std::vector<std::int64_t> b = session(false);
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t i = 0; i < a.size(); ++i) ASSERT_EQ(a[i], b[i]) << "entry " << i;
+}
+
+}  // namespace managed

@@ -130,9 +130,27 @@ TEST(RunDefaultScene, GodObjectStaysOnTheSurfaceWhileTheHandGoesThrough) {
   EXPECT_FALSE(s.nan_detected);
   EXPECT_EQ(s.nonfinite_steps, 0);
   EXPECT_EQ(s.rejected_samples, 0);
-  EXPECT_EQ(s.invalid_periods, 0);
+  // The managed CANopen start-up: periods 0 (reset communication, boot-ups) and 1 (start
+  // remote node) have no encoder TPDO yet, so their samples are not valid; every later one is.
+  EXPECT_EQ(s.invalid_periods, 2);
   EXPECT_EQ(s.bus_frames_corrupted, 0);
   EXPECT_EQ(s.bus_frames_dropped, 0);
+  // Lifecycle: operational and active at period 10 (first node heartbeats, 10 ms), torque
+  // from period 14 (CiA 402 shutdown → switch on → enable operation), no fault.
+  EXPECT_TRUE(s.managed);
+  EXPECT_EQ(s.startup, "operational");
+  EXPECT_EQ(s.periods_to_operational, 10);
+  EXPECT_EQ(s.periods_to_active, 10);
+  EXPECT_GE(s.periods_to_torque, 14);
+  EXPECT_EQ(s.lifecycle, "active");
+  EXPECT_EQ(s.faults, 0);
+  EXPECT_EQ(s.fault_records, 0);
+  EXPECT_EQ(s.first_fault, "");
+  EXPECT_EQ(s.emcys, 0);
+  EXPECT_EQ(s.heartbeat_losses, 0);
+  ASSERT_EQ(s.drive_states.size(), 3u);
+  EXPECT_EQ(s.drive_states[0], "pivot_x: operation enabled");
+  EXPECT_EQ(s.drive_states[2], "depth: operation enabled");
 
   // Free space: the god-object follows the hand closely.
   EXPECT_GT(s.free_steps, n / 10);
@@ -164,11 +182,16 @@ TEST(RunDefaultScene, GodObjectStaysOnTheSurfaceWhileTheHandGoesThrough) {
 }
 
 TEST(RunDefaultScene, NoJumpAtStart) {
-  // The instrument starts at the device's first target: after the first
-  // period, target and god-object agree to the encoder quantisation.
+  // The instrument starts at the device's first target: at the first valid
+  // sample (period 2, after the NMT start-up; the god-object held its starting
+  // pose until then), target and god-object agree to the encoder quantisation
+  // and 2 ms of hand motion.
   const Scene& scene = default_scene();
   SceneRunner runner(scene);
-  runner.period();
+  for (int k = 0; k < 3; ++k) {
+    runner.period();
+    EXPECT_EQ(runner.device().last_sample().valid, k == 2) << "period " << k;
+  }
   const auto& d = runner.data();
   ASSERT_TRUE(runner.device().last_sample().valid);
   const auto held = static_cast<std::size_t>(d.attached_body);
@@ -627,6 +650,23 @@ TEST(RunBadBus, CorruptedAndLostFramesAreRejectedWithoutHarm) {
   EXPECT_LE(s.feedback_force_max_n, scene.model.feedback.max_force + 1e-9);
   EXPECT_LT(s.tracking_error_free_rms_mm, 2.0);
   for (const TraceRecord& r : runner.trace().records()) ASSERT_TRUE(all_finite(r)) << "t = " << r.time_s;
+  // The managed stack treats an implausible encoder value (a corrupted frame past the jump or
+  // range check) as a fault: the safe state latches, with the cause and the period, and no
+  // torque is commanded from then on (nobody re-arms in this run).
+  std::printf("[   info   ] bad bus: start-up %s, lifecycle %s, %lld safe stop(s), first %s (id %d) "
+              "at %.3f s, period %lld; %lld fault records\n",
+              s.startup.c_str(), s.lifecycle.c_str(), static_cast<long long>(s.faults),
+              s.first_fault.c_str(), s.first_fault_id, s.first_fault_time_s,
+              static_cast<long long>(s.first_fault_period), static_cast<long long>(s.fault_records));
+  EXPECT_EQ(s.faults, 1);
+  EXPECT_FALSE(s.first_fault.empty());
+  EXPECT_EQ(s.lifecycle, "fault");
+  std::int64_t torque_after_fault = 0;
+  for (const TraceRecord& r : runner.trace().records()) {
+    if (r.time_s * 1e3 <= static_cast<double>(s.first_fault_period) + 0.5) continue;
+    for (double tau : r.axis_torque) torque_after_fault += tau != 0.0 ? 1 : 0;
+  }
+  EXPECT_EQ(torque_after_fault, 0);
   // Positions stay near the recorded workspace (no wild jump from a bad frame).
   const Vec3 p = runner.data().bodies[static_cast<std::size_t>(runner.data().attached_body)].position;
   EXPECT_TRUE(p.allFinite());
@@ -666,7 +706,10 @@ TEST(RunBusLog, RecordedRunReplaysBitIdentically) {
   }
   const RunSummary s = runner.summary();
   EXPECT_GT(s.bus_frames_replayed, kPeriods);
-  EXPECT_EQ(s.invalid_periods, 0);
+  EXPECT_EQ(s.invalid_periods, 2);  // the two start-up periods, as in the recorded run
+  // The replayed heartbeats and drive TPDOs take the controller through the same start-up.
+  EXPECT_EQ(s.periods_to_active, 10);
+  EXPECT_EQ(s.lifecycle, "active");
   ASSERT_EQ(recorded.size(), replayed.size());
   for (int k = 0; k < kPeriods; ++k) {
     ASSERT_EQ(recorded[static_cast<std::size_t>(k)], replayed[static_cast<std::size_t>(k)]) << "period " << k;

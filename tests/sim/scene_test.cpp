@@ -808,3 +808,73 @@ TEST(DefaultSceneGeometry, RecordedTipGoesAtLeast10mmBelowTheUnionOfTheOrgansSph
 }
 
 }  // namespace
+
+// ---------------------------------------------------------------- [device.canopen]
+
+TEST(SceneCanopen, DefaultsAreTheManagedStackAndKeysAreRead) {
+  TempDir dir;
+  const Scene d = load_scene(dir.write("mini.toml", kMini));
+  EXPECT_TRUE(d.device.canopen.managed);
+  ASSERT_EQ(d.device.canopen.axes.size(), 6u);
+  EXPECT_EQ(d.device.canopen.axes[0].node_id, 1);
+  EXPECT_EQ(d.device.canopen.axes[5].node_id, 6);
+  EXPECT_EQ(d.device.canopen.axes[0].effective_heartbeat_timeout_ms(), 30u);
+  EXPECT_EQ(d.device.canopen.axes[0].drive_tpdo_cob_id, 0u);  // a pose tracker has no drives
+
+  const std::string text = replace(kMini, "attach = \"tool\"\n", R"(attach = "tool"
+
+[device.canopen]
+controller_node_id = 100
+node_heartbeat_period = 20
+heartbeat_timeout = 50
+startup_timeout = 500
+)");
+  const Scene s = load_scene(dir.write("canopen.toml", text));
+  EXPECT_EQ(s.device.canopen.controller_node_id, 100);
+  EXPECT_EQ(s.device.canopen.startup_timeout_ms, 500u);
+  EXPECT_EQ(s.device.canopen.axes[3].heartbeat_period_ms, 20);
+  EXPECT_EQ(s.device.canopen.axes[3].effective_heartbeat_timeout_ms(), 50u);
+
+  const Scene m = load_scene(dir.write(
+      "minimal.toml", replace(kMini, "attach = \"tool\"\n", "attach = \"tool\"\ncanopen = { managed = false }\n")));
+  EXPECT_FALSE(m.device.canopen.managed);
+}
+
+TEST(SceneCanopen, MappingsAreListedAndErrorsAreLocated) {
+  TempDir dir;
+  const std::string axis = R"(
+[[device.canopen.axis]]
+encoder_tpdo = [0x60040020, 0x60410010]
+[[device.canopen.axis]]
+[[device.canopen.axis]]
+[[device.canopen.axis]]
+[[device.canopen.axis]]
+[[device.canopen.axis]]
+node_id = 9
+)";
+  const std::string text = replace(kMini, "attach = \"tool\"\n", "attach = \"tool\"\n" + axis);
+  const Scene s = load_scene(dir.write("map.toml", text));
+  ASSERT_EQ(s.device.canopen.axes[0].encoder_tpdo.size(), 2u);
+  EXPECT_EQ(s.device.canopen.axes[0].encoder_tpdo[1].index, 0x6041);
+  EXPECT_EQ(s.device.canopen.axes[5].node_id, 9);
+
+  // An object numen does not map: located at the list element.
+  const std::string bad = replace(text, "[0x60040020, 0x60410010]", "[0x60040020, 0x60720010]");
+  const InputError e = load_error(dir, bad, "badmap.toml");
+  expect_located(e, (dir.path() / "badmap.toml").string(), line_of(bad, "0x60720010"),
+                 column_of(bad, "encoder_tpdo", "0x60720010"),
+                 "device.canopen.axis[0].encoder_tpdo[1]", "is not an object numen maps");
+  // No position object: the whole mapping is refused, at its key.
+  const std::string nopos = replace(text, "[0x60040020, 0x60410010]", "[0x60410010]");
+  const InputError e2 = load_error(dir, nopos, "nopos.toml");
+  EXPECT_EQ(e2.line(), line_of(nopos, "[0x60410010]"));
+  EXPECT_NE(std::string(e2.what()).find("must map the position value 0x6004:00"), std::string::npos);
+  // A node id used by the controller.
+  const std::string clash = replace(text, "node_id = 9", "node_id = 127");
+  const InputError e3 = load_error(dir, clash, "clash.toml");
+  EXPECT_EQ(e3.line(), line_of(clash, "node_id = 127"));
+  EXPECT_NE(std::string(e3.what()).find("controller's node id"), std::string::npos);
+  // An unknown key.
+  const InputError e4 = load_error(dir, replace(kMini, "attach = \"tool\"\n", "attach = \"tool\"\ncanopen = { manged = true }\n"), "typo.toml");
+  EXPECT_NE(std::string(e4.what()).find("manged"), std::string::npos);
+}

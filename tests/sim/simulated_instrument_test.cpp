@@ -45,6 +45,7 @@ double angle_between(const Quat& a, const Quat& b) {
 /// A trocar above the origin pointing down (−z), controlled frame 40 mm behind the tip.
 DeviceConfig trocar_config() {
   DeviceConfig c = numen::hal::make_default_trocar_config(1);
+  c.canopen.managed = false;  // SYNC answered at once (no NMT start-up)
   c.trocar.point = Vec3(0.0, 0.0, 0.2);
   c.trocar.orientation = rx(std::numbers::pi);
   c.tool_offset.position = Vec3(0.0, 0.0, -0.04);

@@ -12,12 +12,14 @@
 #include <cstdint>
 #include <memory>
 #include <span>
+#include <vector>
 
 #include "numen/core/types.hpp"
 #include "numen/hal/bus.hpp"
 #include "numen/hal/can_frame.hpp"
 #include "numen/hal/device_config.hpp"
 #include "numen/hal/kinematics.hpp"
+#include "numen/hal/pdo_mapping.hpp"
 #include "numen/hal/sample_check.hpp"
 
 namespace numen::hal {
@@ -104,8 +106,10 @@ class InstrumentDevice {
 
   /// Handles one received frame: an encoder TPDO of an axis becomes that axis's pending
   /// sample (the newest frame of an axis wins); a malformed one marks the axis malformed
-  /// for this period. Returns true if the frame's id belongs to an axis. Frames of other
-  /// ids are counted as unknown.
+  /// for this period. Minimal protocol: the 4-byte position PDO (decode_position_pdo());
+  /// managed stack (config.canopen.managed): the axis's static encoder TPDO mapping
+  /// (PdoMapping::unpack(), exact length), position from 0x6004 or 0x6064. Returns true if the
+  /// frame's id belongs to an axis. Frames of other ids are counted as unknown.
   bool on_frame(const CanFrame& frame) noexcept;
 
   /// Reads up to `max_frames` frames from `bus` and passes each to on_frame(). Returns the
@@ -136,6 +140,19 @@ class InstrumentDevice {
 
   /// Safe state: sends zero torque to every drive. Same return as command().
   IoStatus command_zero(Bus& bus, std::int64_t now_ns) noexcept;
+
+  /// The managed stack's first half of command_links(): τ = Σ_l J_lᵀ w_l at the axis values
+  /// of the last sample() into `tau` (n entries), unsaturated, 0 on axes without a drive —
+  /// nothing is sent (the caller saturates, gates and packs τ into its drive RPDOs, then calls
+  /// encode_torques()). Returns false and sets `tau` to 0 before the device is ready or if a
+  /// used wrench is not finite. Same counters as command_links().
+  bool torques_for(std::span<const core::Wrench> link_wrenches, AxisVector& tau) noexcept;
+
+  /// The managed stack's second half: converts `tau` (n entries, N·m or N) per driven axis with
+  /// torque_to_per_mille() (clamp to ±max_torque, int16), stores it as the last command
+  /// (last_torques(), last_torque_per_mille(); 0 on axes without a drive) and returns the per
+  /// mille values to put in the drive RPDOs. Nothing is sent.
+  const std::array<std::int16_t, kMaxAxes>& encode_torques(const AxisVector& tau) noexcept;
 
   /// Torques of the last command, N·m or N per axis after saturation (0 for axes without a
   /// drive), n entries.
@@ -188,6 +205,8 @@ class InstrumentDevice {
 
   DeviceConfig config_;
   std::unique_ptr<const Kinematics> kinematics_;
+  std::vector<PdoMapping> encoder_maps_;          // managed: one per axis
+  std::array<int, kMaxAxes> encoder_position_{};  // managed: index of the position entry
   int n_ = 0;
   int num_links_ = 1;
   std::array<AxisCheckLimits, kMaxAxes> limits_{};

@@ -75,6 +75,18 @@ struct PdoObject {
   static constexpr PdoEntry kModesOfOperationDisplay{0x6061, 0x00, 8, true};
 };
 
+/// The standard object a mapping parameter sub-entry `value` (index << 16 | subindex << 8 |
+/// bit length, CiA 301 §7.4.8) names, with its signedness, if it is one of the PdoObject
+/// entries numen knows (0x6004, 0x6040, 0x6041, 0x6060, 0x6061, 0x6064, 0x6071, 0x6077; 0x6004
+/// is returned signed, as numen reads it). Returns false and leaves `out` unchanged for any
+/// other object or a bit length that does not match the object's data type. Used by the scene
+/// loader to turn `[device.canopen]` mapping lists into PdoEntry values.
+bool find_known_pdo_object(std::uint32_t value, PdoEntry& out) noexcept;
+
+/// Index of the first entry of `mapping` naming the same object as `object` (same_object()),
+/// or -1 if it is not mapped.
+int find_mapped(std::span<const PdoEntry> mapping, const PdoEntry& object) noexcept;
+
 /// Most objects in one PDO (CiA 301: mapping parameter sub 0 = 0…64; numen: whole bytes of a
 /// classic frame, so at most 8).
 inline constexpr std::size_t kMaxPdoEntries = 8;

@@ -1,42 +1,117 @@
 #pragma once
 /// @file control_loop.hpp
-/// One control period of numen (DESIGN.md, "One control period"):
-///   begin_period: SYNC on the bus;
+/// One control period of numen (DESIGN.md, "One control period"; docs/protocol.md §3):
+///   begin_period: SYNC on the bus; managed stack: NMT commands due (start-up), the
+///                 controller's heartbeat when due;
 ///   end_period:   read every pending frame → decode → check → forward kinematics
+///                 (managed: drive TPDOs → Cia402Master, heartbeats → HeartbeatMonitor,
+///                 EMCY → EmcyLog; SafetySupervisor update; lifecycle activation / re-arm)
 ///                 → core::Data target → core::step → feedback wrench (Eq. 8)
-///                 → axis torques Jᵀ w → saturate → torque PDOs on the bus.
-/// The same object runs against SimBus in simulation and, later, SocketCAN.
-/// Construction may allocate; begin_period/end_period never allocate, throw,
+///                 → axis torques Jᵀ w → saturate → torque PDOs on the bus (managed:
+///                 controlword + target torque RPDOs, zero unless the lifecycle is active and
+///                 the drive's master allows torque).
+/// Two protocols, chosen by DeviceConfig::canopen.managed (see device_config.hpp). The same
+/// object runs against SimBus in simulation and SocketCAN on hardware.
+/// Construction may allocate; begin_period/end_period/rearm never allocate, throw,
 /// lock or block.
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"
 #include "numen/hal/bus.hpp"
+#include "numen/hal/canopen_master.hpp"
+#include "numen/hal/cia402.hpp"
+#include "numen/hal/device_lifecycle.hpp"
 #include "numen/hal/instrument_device.hpp"
+#include "numen/hal/safety_supervisor.hpp"
 #include "numen/platform/device_binding.hpp"
 #include "numen/platform/latency_histogram.hpp"
+#include "numen/platform/loop_statistics.hpp"
 
 namespace numen::platform {
 
-/// What one end_period() did.
+/// What one period did (begin_period() + end_period()). The *_ns stamps are CLOCK_MONOTONIC
+/// (monotonic_now_ns()), in the order of PeriodTimes (loop_statistics.hpp); times() gives
+/// that struct.
 struct PeriodReport {
   int frames_read = 0;              ///< Frames taken from the bus this period.
   bool sample_valid = false;        ///< Every axis fresh and plausible this period.
   bool target_ready = false;        ///< The device has a target (possibly held from earlier).
   std::int64_t step_ns = 0;         ///< Wall time of core::step (ns, CLOCK_MONOTONIC).
   hal::IoStatus command_status = hal::IoStatus::kOk;  ///< Result of the torque writes.
+  /// Non-zero torque was commanded on at least one drive this period.
+  bool torque_commanded = false;
+  // Timestamps (CLOCK_MONOTONIC ns).
+  std::int64_t deadline_ns = 0;      ///< The period's deadline (begin_period's argument, or
+                                     ///< its start when none was given).
+  std::int64_t woke_ns = 0;          ///< When the thread resumed (idem).
+  std::int64_t sync_sent_ns = 0;     ///< SYNC (+ NMT, heartbeat) written.
+  std::int64_t input_begin_ns = 0;   ///< Reading the frames started.
+  std::int64_t input_end_ns = 0;     ///< The frames were read.
+  std::int64_t step_begin_ns = 0;    ///< core::step started.
+  std::int64_t step_end_ns = 0;      ///< core::step returned.
+  std::int64_t output_begin_ns = 0;  ///< The torque writes started.
+  std::int64_t output_end_ns = 0;    ///< The torque writes returned.
+  bool overrun = false;              ///< LoopStatistics found this period overran.
+  // Managed stack (defaults in the minimal protocol).
+  hal::LifecycleState lifecycle = hal::LifecycleState::kUnconfigured;  ///< After this period.
+  hal::StartupPhase startup = hal::StartupPhase::kResetCommunication;  ///< After this period.
+  /// The safe state latched in this period (the supervisor's first_fault() says why).
+  bool entered_safe_stop = false;
+  /// The lifecycle entered kActive in this period.
+  bool activated = false;
+
+  /// The stamps as LoopStatistics takes them.
+  PeriodTimes times() const noexcept {
+    return PeriodTimes{deadline_ns,    woke_ns,     sync_sent_ns,    input_begin_ns, input_end_ns,
+                       step_begin_ns,  step_end_ns, output_begin_ns, output_end_ns,  0};
+  }
 };
+
+/// Creation settings of a ControlLoop (the managed stack's supervision; the minimal protocol
+/// uses none of them but the statistics).
+struct ControlLoopSettings {
+  /// SafetySettings::encoder_timeout_periods: periods without an accepted encoder frame that
+  /// latch the safe state, >= 1.
+  std::uint32_t encoder_timeout_periods = 3;
+  /// SafetySettings::overrun_limit: consecutive overruns that latch, >= 1.
+  std::uint32_t overrun_limit = 3;
+  /// SafetySettings::safe_stop_timeout_periods, >= 1.
+  std::uint32_t safe_stop_timeout_periods = 100;
+  /// Feed LoopStatistics' overrun verdict to the supervisor. Only meaningful when periods are
+  /// paced to a clock (a simulation run as fast as possible has no deadlines).
+  bool supervise_overruns = false;
+  /// Activate the lifecycle on its own once the start-up is complete and no fault cause is
+  /// present (encoders fresh, heartbeats alive, drives disabled and not in fault). false: the
+  /// caller calls activate().
+  bool auto_activate = true;
+  /// Settings of each drive's Cia402Master.
+  hal::Cia402MasterSettings drive_settings;
+};
+
+/// Result of ControlLoop::rearm().
+enum class RearmResult : std::uint8_t {
+  kAccepted,         ///< Fault resets requested (and the start-up rerun if a node needs it):
+                     ///< the loop re-arms the lifecycle as soon as no cause is present.
+  kNotLatched,       ///< Nothing to re-arm: no safe state latched and the start-up did not fail.
+  kMinimalProtocol,  ///< The device runs the minimal protocol: no lifecycle.
+};
+
+/// Short English name of a RearmResult (static string).
+const char* to_string(RearmResult result) noexcept;
 
 /// Counters since construction.
 struct ControlLoopCounters {
   std::uint64_t periods = 0;          ///< end_period() calls.
   std::uint64_t sync_write_failures = 0;  ///< SYNC writes not accepted by the bus.
   std::uint64_t command_failures = 0;     ///< Periods whose torque writes did not all succeed.
-  std::uint64_t periods_zero_torque = 0;  ///< Periods that sent zero torque (no body held, or no valid sample).
+  std::uint64_t periods_zero_torque = 0;  ///< Periods that sent zero torque (no body held, no
+                                          ///< valid sample, or — managed — not active).
+  std::uint64_t read_errors = 0;          ///< Bus reads that returned kError.
 };
 
 /// The control loop of one instrument driving one core::Data.
@@ -51,11 +126,20 @@ class ControlLoop {
   /// prescription names a joint that is not prescribed. The attached body
   /// follows its own binding if it has one, else the binding with body = -1.
   /// Allocates (construction only).
+  /// Managed stack (device.config().canopen.managed): also builds the CanopenMaster, the
+  /// SafetySupervisor (torque limits = the axes' max_torque, 0 on axes without a drive) and
+  /// configures the lifecycle (kUnconfigured → kInactive); throws std::invalid_argument for
+  /// bad settings. The LoopStatistics period is the device's control period.
   ControlLoop(const core::Model& model, core::Data& data, hal::Bus& bus,
-              hal::InstrumentDevice& device, DeviceBinding binding = DeviceBinding::rigid());
+              hal::InstrumentDevice& device, DeviceBinding binding = DeviceBinding::rigid(),
+              const ControlLoopSettings& settings = {});
 
-  /// Starts period k: writes a SYNC (CANopen COB-ID 0x080) stamped `now_ns`.
-  void begin_period(std::int64_t now_ns) noexcept;
+  /// Starts period k: writes a SYNC (CANopen COB-ID 0x080) stamped `now_ns` (bus clock);
+  /// managed stack: then the NMT command due and the controller's heartbeat when due.
+  /// `deadline_mono_ns` / `woke_mono_ns` (CLOCK_MONOTONIC, from PeriodicTimer::wait_next()) stamp
+  /// the period for LoopStatistics; < 0: the time of this call.
+  void begin_period(std::int64_t now_ns, std::int64_t deadline_mono_ns = -1,
+                    std::int64_t woke_mono_ns = -1) noexcept;
 
   /// Ends the period at bus time `now_ns` (after the encoders answered): reads the
   /// frames, checks the sample and, when the device is ready (a rejected sample
@@ -68,7 +152,43 @@ class ControlLoop {
   /// carried to their link's origin (Eq. 9) — zero torque while no bound body
   /// is driven or this period's sample is not valid (stale, rejected, or the
   /// device not ready).
+  ///
+  /// Managed stack, after the reads: the CanopenMaster takes drive TPDOs, heartbeats and EMCYs,
+  /// the InstrumentDevice the encoder TPDOs; sample(); CanopenMaster::update(); the
+  /// SafetySupervisor's update (encoder timeout / jump / range, heartbeat lost, node reset,
+  /// EMCY, drive fault / stuck, overruns, bus off, I/O errors) — a fault latches the safe state
+  /// in this very period —; a pending re-arm or an automatic activation; the drives' CiA 402
+  /// target from the lifecycle; step; τ saturated per axis by the supervisor
+  /// (saturate_torques: zero unless active), zeroed on a drive whose master does not allow
+  /// torque and in a period whose sample is not valid; controlword + target torque RPDOs.
   const PeriodReport& end_period(std::int64_t now_ns) noexcept;
+
+  /// Re-arms after a latched fault or a failed start-up (for the CLI and tests): asks every
+  /// drive's master for a fault reset, reruns the NMT start-up if a node is not operational (or
+  /// the start-up failed), and re-arms the lifecycle (kFault → kInactive) in the first period
+  /// in which no cause is present; the automatic activation then follows. Never blocks.
+  RearmResult rearm() noexcept;
+  /// A re-arm was accepted and has not happened yet.
+  bool rearm_pending() const noexcept { return rearm_pending_; }
+  /// Managed stack: kInactive → kActive now (SafetySupervisor::activate()); kNotInactive in the
+  /// minimal protocol.
+  hal::LifecycleResult activate() noexcept;
+
+  /// True for the managed stack.
+  bool managed() const noexcept { return master_ != nullptr; }
+  /// The CANopen master (nullptr in the minimal protocol).
+  const hal::CanopenMaster* canopen() const noexcept { return master_.get(); }
+  /// The CANopen master, e.g. to queue an NMT command (nullptr in the minimal protocol).
+  hal::CanopenMaster* canopen() noexcept { return master_.get(); }
+  /// The safety supervisor and lifecycle (nullptr in the minimal protocol).
+  const hal::SafetySupervisor* supervisor() const noexcept { return supervisor_.get(); }
+  /// Timing statistics of the periods (wake-up, step, bus I/O, end-to-end, overruns).
+  const LoopStatistics& statistics() const noexcept { return *stats_; }
+  /// Period index (0-based end_period() count) at which the lifecycle first became active;
+  /// -1 if never.
+  std::int64_t first_active_period() const noexcept { return first_active_period_; }
+  /// Period index at which non-zero torque was first commanded; -1 if never.
+  std::int64_t first_torque_period() const noexcept { return first_torque_period_; }
 
   /// Wall time of core::step per period (ns).
   const LatencyHistogram& step_time() const noexcept { return step_time_; }
@@ -79,7 +199,12 @@ class ControlLoop {
 
  private:
   void apply_targets(const hal::DeviceSample& sample) noexcept;
+  // Σ of the bound bodies' Eq. 8 wrenches per link into link_wrench_; false if no body is bound.
+  bool gather_link_wrenches() noexcept;
   bool send_feedback(std::int64_t now_ns) noexcept;
+  void end_period_minimal(std::int64_t now_ns, const hal::DeviceSample& sample) noexcept;
+  void end_period_managed(std::int64_t now_ns, const hal::DeviceSample& sample) noexcept;
+  void step_model() noexcept;
 
   const core::Model* model_;
   core::Data* data_;
@@ -95,6 +220,18 @@ class ControlLoop {
   LatencyHistogram step_time_;
   ControlLoopCounters counters_;
   PeriodReport report_;
+  PeriodReport begin_;  // stamps of begin_period()
+  ControlLoopSettings settings_;
+  std::unique_ptr<LoopStatistics> stats_;
+  // Managed stack.
+  std::unique_ptr<hal::CanopenMaster> master_;
+  std::unique_ptr<hal::SafetySupervisor> supervisor_;
+  hal::AxisVector tau_;
+  bool io_error_ = false;      // a read or write returned kError since the last update
+  bool last_overrun_ = false;  // the previous period overran (LoopStatistics)
+  bool rearm_pending_ = false;
+  std::int64_t first_active_period_ = -1;
+  std::int64_t first_torque_period_ = -1;
 };
 
 }  // namespace numen::platform

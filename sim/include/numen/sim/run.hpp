@@ -122,6 +122,28 @@ struct RunSummary {
   /// RunOptions::rt outcome, one line per step plus the kernel and the limits
   /// (platform::describe()); empty when nothing was requested.
   std::vector<std::string> realtime_setup;
+  // Device lifecycle and safety (managed CANopen stack; docs/safety.md). Minimal protocol:
+  // managed = false and the rest at their defaults.
+  bool managed = false;                    ///< The device ran the managed CANopen stack.
+  std::string startup;                     ///< Start-up phase at the end ("operational",
+                                           ///< "failed (node 3)", ...).
+  std::int64_t periods_to_operational = -1;  ///< Period index at which every node was heard
+                                             ///< operational (-1: never).
+  std::int64_t periods_to_active = -1;     ///< Period index at which the lifecycle became active.
+  std::int64_t periods_to_torque = -1;     ///< Period index of the first non-zero torque command.
+  std::string lifecycle;                   ///< Lifecycle state at the end.
+  std::int64_t faults = 0;                 ///< Safe states latched.
+  std::int64_t fault_records = 0;          ///< Fault records written (latching or not).
+  std::string first_fault;                 ///< Cause of the first latched fault ("" if none).
+  int first_fault_id = 0;                  ///< Its axis / node / drive (FaultRecord::id).
+  double first_fault_value = 0.0;          ///< Its value (FaultRecord::value).
+  double first_fault_time_s = 0.0;         ///< Its bus time, s.
+  std::int64_t first_fault_period = -1;    ///< Its period index.
+  std::int64_t emcys = 0;                  ///< EMCY messages received.
+  std::int64_t emcy_faults = 0;            ///< ... of which reported a fault.
+  std::int64_t heartbeat_losses = 0;       ///< Heartbeat losses over all nodes.
+  std::int64_t zero_torque_periods = 0;    ///< Periods that commanded zero torque on every drive.
+  std::vector<std::string> drive_states;   ///< "axis: CiA 402 state" per drive at the end.
   std::vector<std::string> warnings;
   std::string trocar_note;
 };
@@ -138,13 +160,18 @@ class SceneRunner {
   /// opened (its writer thread started) here. Throws std::invalid_argument
   /// for an unknown bus spec, std::runtime_error ("file:line:column: what")
   /// for a log that cannot be read or a recording that cannot be written.
+  /// `realtime`: the periods are paced to CLOCK_MONOTONIC (run_scene with
+  /// RunOptions::realtime), so overruns are supervised (ControlLoopSettings::
+  /// supervise_overruns).
   explicit SceneRunner(const Scene& scene, std::size_t trace_capacity = 0,
-                       const BusChoice& bus = {});
+                       const BusChoice& bus = {}, bool realtime = false);
 
   /// Runs control period k (bus time k·dt): tool-switching events due,
-  /// SYNC, the instrument's answer, the controller's read–check–step–write,
-  /// then the measurements and one trace record.
-  void period() noexcept;
+  /// SYNC (and the managed stack's NMT / heartbeat), the instrument's answer,
+  /// the controller's read–check–supervise–step–write, then the measurements
+  /// and one trace record. `deadline_mono_ns` / `woke_mono_ns`: the paced
+  /// timer's wake-up (CLOCK_MONOTONIC), -1 when not paced.
+  void period(std::int64_t deadline_mono_ns = -1, std::int64_t woke_mono_ns = -1) noexcept;
   /// Periods run so far.
   std::int64_t periods() const noexcept { return k_; }
 
@@ -155,6 +182,11 @@ class SceneRunner {
   const core::Data& data() const noexcept { return data_; }
   const hal::InstrumentDevice& device() const noexcept { return device_; }
   const SimulatedInstrument& instrument() const noexcept { return instrument_; }
+  /// The simulated instrument, for fault injection in tests.
+  SimulatedInstrument& instrument() noexcept { return instrument_; }
+  /// The control loop (lifecycle, supervisor, CANopen master, statistics, rearm()).
+  const platform::ControlLoop& loop() const noexcept { return loop_; }
+  platform::ControlLoop& loop() noexcept { return loop_; }
   hal::SimBus& bus() noexcept { return bus_; }
   const Trace& trace() const noexcept { return trace_; }
   /// What the control loop did in the last period (step wall time included).
@@ -180,6 +212,8 @@ class SceneRunner {
   RunSummary acc_;     // running maxima and counts
   double free_sq_ = 0.0;
   std::int64_t solver_iterations_sum_ = 0;
+  hal::FaultRecord first_fault_;  // the first latched fault of the run (kept across re-arms)
+  bool has_first_fault_ = false;
 };
 
 /// Runs `scene` for options.duration_s (or the scene's duration).

@@ -39,8 +39,11 @@ class SimulatedInstrument {
 
   /// Handles every frame pending on `device_port`: a SYNC latches the axis
   /// values of the trajectory at the SYNC's timestamp and is answered by the
-  /// encoders; torque PDOs update last_torques(). Returns frames handled.
-  int poll(hal::Bus& device_port) noexcept;
+  /// encoders (and, managed stack, the drives); torque / drive RPDOs update
+  /// last_torques(). Then, if `now_ns` >= 0 (bus time), the managed stack's
+  /// time-driven part (DeviceEmulator::tick(): boot-ups, heartbeats, the
+  /// drives' watch of the controller's heartbeat, EMCYs). Returns frames handled.
+  int poll(hal::Bus& device_port, std::int64_t now_ns = -1) noexcept;
 
   /// Axis values of the trajectory at bus time `t_ns` (m or rad).
   hal::AxisVector axes_at(std::int64_t t_ns) const noexcept;
