@@ -12,11 +12,6 @@
 namespace numen::hal {
 namespace {
 
-IoStatus worst(IoStatus a, IoStatus b) noexcept {
-  if (a == IoStatus::kError || b == IoStatus::kError) return IoStatus::kError;
-  if (a == IoStatus::kWouldBlock || b == IoStatus::kWouldBlock) return IoStatus::kWouldBlock;
-  return IoStatus::kOk;
-}
 
 std::int64_t ms_to_ns(std::uint32_t ms) noexcept {
   return static_cast<std::int64_t>(ms) * 1'000'000;

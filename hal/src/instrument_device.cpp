@@ -15,12 +15,6 @@
 namespace numen::hal {
 namespace {
 
-// Combines two write outcomes: an error dominates, then would-block.
-IoStatus worst(IoStatus a, IoStatus b) noexcept {
-  if (a == IoStatus::kError || b == IoStatus::kError) return IoStatus::kError;
-  if (a == IoStatus::kWouldBlock || b == IoStatus::kWouldBlock) return IoStatus::kWouldBlock;
-  return IoStatus::kOk;
-}
 
 }  // namespace
 
@@ -274,26 +268,8 @@ IoStatus InstrumentDevice::command(const core::Wrench& wrench, Bus& bus,
 
 IoStatus InstrumentDevice::command_links(std::span<const core::Wrench> link_wrenches, Bus& bus,
                                          std::int64_t now_ns) noexcept {
-  ++counters_.commands;
-  std::size_t used = link_wrenches.size();
-  if (used > static_cast<std::size_t>(num_links_)) {
-    ++counters_.extra_link_wrenches;
-    used = static_cast<std::size_t>(num_links_);
-  }
-  bool finite = true;
-  for (std::size_t l = 0; l < used; ++l) {
-    finite = finite && link_wrenches[l].force.allFinite() && link_wrenches[l].torque.allFinite();
-  }
-  if (!finite) ++counters_.non_finite_wrenches;
-  if (!finite || !last_sample_.ready) {
-    ++counters_.commands_zero;
-    return send_zero(bus, now_ns);
-  }
-  // τ = Σ_l J_lᵀ w_l (virtual work: each wrench at its link's origin).
-  AxisVector tau = AxisVector::Zero(n_);
-  for (std::size_t l = 0; l < used; ++l) {
-    tau += torques_from_wrench(link_jacobians_[l], link_wrenches[l]);
-  }
+  AxisVector tau;
+  if (!torques_for(link_wrenches, tau)) return send_zero(bus, now_ns);
   return apply_torques(tau, bus, now_ns);
 }
 

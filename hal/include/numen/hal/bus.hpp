@@ -65,6 +65,14 @@ class Bus {
   Bus& operator=(const Bus&) = default;
 };
 
+/// The more severe of two outcomes, for combining several writes into one status: kError,
+/// then kWouldBlock, then kOk.
+constexpr IoStatus worst(IoStatus a, IoStatus b) noexcept {
+  if (a == IoStatus::kError || b == IoStatus::kError) return IoStatus::kError;
+  if (a == IoStatus::kWouldBlock || b == IoStatus::kWouldBlock) return IoStatus::kWouldBlock;
+  return IoStatus::kOk;
+}
+
 /// Short English name of an IoStatus (static string).
 const char* to_string(IoStatus status) noexcept;
 /// Short English name of a BusState (static string).
