@@ -195,7 +195,7 @@ void ControlLoop::end_period_minimal(std::int64_t now_ns, const hal::DeviceSampl
   // Torque only from a sample checked this period: a stale or rejected sample
   // keeps the last good target for the god-object, but the drives get zero
   // torque until fresh plausible data arrive (no "hold the last command").
-  if (!(sample.valid && send_feedback(now_ns))) {
+  if (!(sample.valid && !shutting_down_ && send_feedback(now_ns))) {
     ++counters_.periods_zero_torque;
     report_.command_status = device_->command_zero(*bus_, now_ns);
   }
@@ -225,7 +225,7 @@ void ControlLoop::end_period_managed(std::int64_t now_ns, const hal::DeviceSampl
       sup.rearm() == hal::LifecycleResult::kOk) {
     rearm_pending_ = false;
   }
-  if (settings_.auto_activate && sup.state() == hal::LifecycleState::kInactive &&
+  if (!shutting_down_ && settings_.auto_activate && sup.state() == hal::LifecycleState::kInactive &&
       m.operational() && sup.blocking().cause == hal::FaultCause::kNone) {
     report_.activated = sup.activate() == hal::LifecycleResult::kOk;
   }
@@ -313,6 +313,29 @@ hal::LifecycleResult ControlLoop::activate() noexcept {
     first_active_period_ = static_cast<std::int64_t>(counters_.periods) - 1;
   }
   return r;
+}
+
+void ControlLoop::shutdown() noexcept {
+  shutting_down_ = true;
+  rearm_pending_ = false;
+  if (supervisor_ && supervisor_->state() == hal::LifecycleState::kActive)
+    (void)supervisor_->deactivate();
+}
+
+bool ControlLoop::drives_disabled() const noexcept {
+  if (!master_) return true;
+  for (const hal::Cia402MasterOutput& d : master_->drive_outputs()) {
+    switch (d.state) {
+      case hal::PowerState::kSwitchOnDisabled:
+      case hal::PowerState::kReadyToSwitchOn:
+      case hal::PowerState::kNotReadyToSwitchOn:
+      case hal::PowerState::kFault:
+        break;
+      default:
+        return false;
+    }
+  }
+  return true;
 }
 
 }  // namespace numen::platform

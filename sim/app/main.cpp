@@ -1,9 +1,13 @@
 /// @file main.cpp
 /// The `numen` command.
 ///   numen run [SCENE] [--duration S] [--trace FILE.csv] [--json] [--realtime] [--coupling MODE]
-///             [--bus sim|log:FILE] [--record FILE.log]
+///             [--bus sim|log:FILE|can:IFACE|serial:PATH[@BAUD]] [--record FILE.log] [--phase S]
 ///             [--rt-priority N] [--lock-memory] [--prefault-stack BYTES] [--cpu LIST] [--rt-strict]
+///   numen device [SCENE] --bus can:IFACE|serial:PATH[@BAUD] [--duration S] [--ready]
+/// SIGINT / SIGTERM end either cleanly (run: zero torque, drives disabled; both: summary).
 
+#include <atomic>
+#include <csignal>
 #include <cstdio>
 #include <iostream>
 #include <optional>
@@ -11,9 +15,32 @@
 
 #include <CLI/CLI.hpp>
 
+#include "numen/sim/bus_spec.hpp"
+#include "numen/sim/device_process.hpp"
 #include "numen/sim/input_error.hpp"
 #include "numen/sim/run.hpp"
 #include "numen/sim/scene.hpp"
+
+namespace {
+std::atomic<bool> g_stop{false};  // lock-free: safe to store from a signal handler
+extern "C" void on_signal(int) { g_stop.store(true, std::memory_order_relaxed); }
+void install_signal_handlers() {
+  struct sigaction sa {};
+  sa.sa_handler = on_signal;
+  sigemptyset(&sa.sa_mask);
+  sigaction(SIGINT, &sa, nullptr);
+  sigaction(SIGTERM, &sa, nullptr);
+}
+std::string check_bus(const std::string& v, bool real_only) {
+  try {
+    const numen::sim::BusSpec spec = numen::sim::parse_bus_spec(v);
+    if (real_only && !spec.real()) return "expected can:IFACE or serial:PATH[@BAUD]";
+    return {};
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+}
+}  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"numen — real-time control core for generalized dynamic god-objects"};
@@ -34,13 +61,15 @@ int main(int argc, char** argv) {
   run->add_flag("--realtime", realtime, "Pace the loop to wall-clock time");
   std::string bus = "sim", record_path;
   run->add_option("--bus", bus,
-                  "The controller's bus: sim (simulated instrument, default) or log:FILE "
-                  "(replay a candump log's encoder frames)")
-      ->check([](const std::string& v) {
-        return v == "sim" || (v.rfind("log:", 0) == 0 && v.size() > 4)
-                   ? std::string()
-                   : std::string("expected sim or log:FILE");
-      });
+                  "The controller's bus: sim (simulated instrument, default), log:FILE "
+                  "(replay a candump log's encoder frames), can:IFACE (SocketCAN) or "
+                  "serial:PATH[@BAUD] (serial line); a real bus is paced to CLOCK_MONOTONIC")
+      ->check([](const std::string& v) { return check_bus(v, false); });
+  double phase = -1.0;
+  run->add_option("--phase", phase,
+                  "Real bus: seconds after the SYNC to read the device's answers (default: the "
+                  "scene's [bus] compute_phase)")
+      ->check(CLI::NonNegativeNumber);
   numen::platform::RealtimeSettings rt;
   run->add_option("--rt-priority", rt.fifo_priority,
                   "SCHED_FIFO priority 1-99 of the loop thread (0: leave the scheduler alone)")
@@ -56,7 +85,40 @@ int main(int argc, char** argv) {
   run->add_option("--coupling", coupling, "Override the scene's coupling mode")
       ->check(CLI::IsMember({"god-object", "first-order", "direct"}));
 
+  CLI::App* dev = app.add_subcommand("device", "Run a scene's simulated instrument on a real bus");
+  std::string dev_scene, dev_bus;
+  double dev_duration = -1.0;
+  bool dev_ready = false;
+  dev->add_option("scene", dev_scene, "Scene file (TOML); default: the shipped default scene");
+  dev->add_option("--bus", dev_bus, "can:IFACE or serial:PATH[@BAUD]")
+      ->required()
+      ->check([](const std::string& v) { return check_bus(v, true); });
+  dev->add_option("--duration", dev_duration, "Seconds to run (default: until SIGINT/SIGTERM)")
+      ->check(CLI::NonNegativeNumber);
+  dev->add_flag("--ready", dev_ready, "Print READY on stdout once the bus is open");
+
   CLI11_PARSE(app, argc, argv);
+  install_signal_handlers();
+
+  if (dev->parsed()) {
+    try {
+      const std::string path = dev_scene.empty() ? numen::sim::default_scene_path() : dev_scene;
+      const numen::sim::Scene scene = numen::sim::load_scene(path);
+      numen::sim::DeviceOptions options;
+      options.bus = dev_bus;
+      options.duration_s = dev_duration;
+      options.stop = &g_stop;
+      options.announce_ready = dev_ready;
+      std::cout << numen::sim::format_device_summary(numen::sim::run_device(scene, options));
+    } catch (const numen::sim::InputError& e) {
+      std::cerr << "numen: " << e.what() << "\n";
+      return 2;
+    } catch (const std::exception& e) {
+      std::cerr << "numen: " << e.what() << "\n";
+      return 1;
+    }
+    return 0;
+  }
 
   if (run->parsed()) {
     try {
@@ -71,6 +133,8 @@ int main(int argc, char** argv) {
       options.bus.spec = bus;
       options.bus.record_path = record_path;
       options.rt = rt;
+      options.stop = &g_stop;
+      options.compute_phase_s = phase;
       const numen::sim::RunSummary summary = numen::sim::run_scene(scene, options);
       if (json) {
         std::cerr << numen::sim::format_summary(summary);

@@ -3,7 +3,10 @@
 
 #include "numen/sim/run.hpp"
 
+#include <time.h>
+
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <fstream>
 #include <iomanip>
@@ -89,33 +92,14 @@ DurationSummary summarize_ns(const platform::LatencyHistogram& h) {
 
 namespace {
 
-constexpr std::string_view kLogPrefix = "log:";
-
-/// The LogBus of `choice`, or nullptr for "sim". Throws for anything else.
-std::unique_ptr<hal::LogBus> make_log_bus(const Scene& scene, const BusChoice& choice) {
-  if (choice.spec == "sim") return nullptr;
-  if (choice.spec.rfind(kLogPrefix, 0) != 0 || choice.spec.size() == kLogPrefix.size()) {
-    throw std::invalid_argument("--bus '" + choice.spec + "': expected sim or log:FILE");
-  }
+/// The LogBus of a "log:FILE" spec, or nullptr for any other bus.
+std::unique_ptr<hal::LogBus> make_log_bus(const Scene& scene, const BusSpec& spec) {
+  if (spec.kind != BusKind::kLog) return nullptr;
   hal::LogBusSettings settings;
-  for (const hal::AxisConfig& axis : scene.device.axes) {
-    settings.filters.push_back(hal::exact_standard_filter(axis.encoder_cob_id));
-  }
-  if (scene.device.canopen.managed) {
-    // Everything the device sends: drive TPDOs, heartbeats / boot-ups, EMCYs of its nodes.
-    std::vector<std::uint8_t> nodes;
-    for (const hal::CanopenAxisConfig& x : scene.device.canopen.axes) {
-      if (x.drive_tpdo_cob_id != 0)
-        settings.filters.push_back(hal::exact_standard_filter(x.drive_tpdo_cob_id));
-      if (std::find(nodes.begin(), nodes.end(), x.node_id) != nodes.end()) continue;
-      nodes.push_back(x.node_id);
-      settings.filters.push_back(hal::exact_standard_filter(hal::heartbeat_cob_id(x.node_id)));
-      settings.filters.push_back(hal::exact_standard_filter(hal::emcy_cob_id(x.node_id)));
-    }
-  }
+  settings.filters = controller_filters(scene.device);
   settings.received_only = true;
   return std::make_unique<hal::LogBus>(
-      hal::load_candump_log(choice.spec.substr(kLogPrefix.size())), settings);
+      hal::load_candump_log(spec.target), settings);
 }
 
 }  // namespace
@@ -131,22 +115,28 @@ platform::ControlLoopSettings loop_settings(bool realtime) {
 SceneRunner::SceneRunner(const Scene& scene, std::size_t trace_capacity, const BusChoice& bus,
                          bool realtime)
     : scene_(&scene),
+      spec_(parse_bus_spec(bus.spec)),
       bus_(scene.bus),
-      log_bus_(make_log_bus(scene, bus)),
+      real_bus_(spec_.real() ? open_real_bus(spec_, controller_filters(scene.device)) : nullptr),
+      log_bus_(make_log_bus(scene, spec_)),
       writer_(bus.record_path.empty() ? nullptr
                                       : std::make_unique<hal::CandumpWriter>(bus.record_path)),
       recorder_(writer_ ? std::make_unique<hal::RecordingBus>(
-                              log_bus_ ? static_cast<hal::Bus&>(*log_bus_) : bus_.controller(),
-                              *writer_, "sim0")
+                              real_bus_  ? *real_bus_
+                              : log_bus_ ? static_cast<hal::Bus&>(*log_bus_)
+                                         : bus_.controller(),
+                              *writer_, spec_.kind == BusKind::kCan ? spec_.target : "sim0")
                         : nullptr),
       port_(recorder_   ? static_cast<hal::Bus*>(recorder_.get())
-            : log_bus_ ? static_cast<hal::Bus*>(log_bus_.get())
-                       : static_cast<hal::Bus*>(&bus_.controller())),
+            : real_bus_ ? real_bus_.get()
+            : log_bus_  ? static_cast<hal::Bus*>(log_bus_.get())
+                        : static_cast<hal::Bus*>(&bus_.controller())),
       instrument_(scene.device, scene.trajectory),
       device_(scene.device),
       data_(core::make_data(scene.model)),
       ghost_(core::make_data(scene.model)),
-      loop_(scene.model, data_, *port_, device_, scene.binding, loop_settings(realtime)),
+      loop_(scene.model, data_, *port_, device_, scene.binding,
+            loop_settings(realtime || spec_.real())),
       period_ns_(static_cast<std::int64_t>(std::llround(scene.model.dt * 1e9))),
       phase_ns_(static_cast<std::int64_t>(std::llround(scene.compute_phase_s * 1e9))) {
   trace_.reserve(trace_capacity);
@@ -163,6 +153,21 @@ SceneRunner::SceneRunner(const Scene& scene, std::size_t trace_capacity, const B
   acc_.num_nets = scene.model.num_nets();
   acc_.num_nodes = scene.model.num_nodes();
   acc_.managed = loop_.managed();
+  acc_.real_bus = spec_.real();
+}
+
+void SceneRunner::stream_trace(const std::string& path) {
+  std::vector<std::string> columns = {"frames_read", "sample_valid", "torque_commanded",
+                                      "lifecycle",   "target_x",     "target_y",
+                                      "target_z",    "tool_x",       "tool_y",
+                                      "tool_z",      "force_x",      "force_y",
+                                      "force_z"};
+  for (const hal::AxisConfig& a : scene_->device.axes) columns.push_back("tau_" + a.name);
+  columns.push_back("step_us");
+  columns.push_back("end_to_end_us");
+  columns.push_back("wakeup_us");
+  trace_writer_ = std::make_unique<platform::TraceWriter>(path, std::move(columns));
+  trace_writer_->start();
 }
 
 void SceneRunner::period(std::int64_t deadline_mono_ns, std::int64_t woke_mono_ns) noexcept {
@@ -174,7 +179,16 @@ void SceneRunner::period(std::int64_t deadline_mono_ns, std::int64_t woke_mono_n
     ++next_event_;
   }
   const platform::PeriodReport* report_ptr = nullptr;
-  if (log_bus_) {  // the recorded instrument's frames arrive at their logged times
+  if (real_bus_) {  // bus time = CLOCK_MONOTONIC; the device answers in another process
+    const std::int64_t now = platform::monotonic_now_ns();
+    loop_.begin_period(now, deadline_mono_ns, woke_mono_ns);
+    const std::int64_t read_at = (deadline_mono_ns >= 0 ? deadline_mono_ns : now) + phase_ns_;
+    const timespec ts{static_cast<time_t>(read_at / 1'000'000'000),
+                      static_cast<long>(read_at % 1'000'000'000)};
+    while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
+    }
+    report_ptr = &loop_.end_period(platform::monotonic_now_ns());
+  } else if (log_bus_) {  // the recorded instrument's frames arrive at their logged times
     log_bus_->set_time_ns(t);
     loop_.begin_period(t, deadline_mono_ns, woke_mono_ns);
     log_bus_->set_time_ns(t + phase_ns_);
@@ -189,6 +203,11 @@ void SceneRunner::period(std::int64_t deadline_mono_ns, std::int64_t woke_mono_n
   }
   const platform::PeriodReport& report = *report_ptr;
   ++k_;
+  if (report.frames_read > 0) acc_.last_device_frame_period = k_ - 1;
+  if (last_torque_ && !report.torque_commanded) acc_.last_torque_stop_period = k_ - 1;
+  last_torque_ = report.torque_commanded;
+  if (port_->state() != hal::BusState::kOk || report.command_status == hal::IoStatus::kError)
+    ++acc_.bus_error_periods;
 
   // ---- measurements (outside the timed step) ----
   RunSummary& s = acc_;
@@ -273,7 +292,30 @@ void SceneRunner::period(std::int64_t deadline_mono_ns, std::int64_t woke_mono_n
     s.net_strain_max = std::max(s.net_strain_max, net.max_strain);
     s.net_node_speed_max_mps = std::max(s.net_node_speed_max_mps, net.max_node_speed);
   }
-  trace_.push(make_trace_record(data_, held, tool_contacts, tool_pen, target_pen, report, tau));
+  const TraceRecord rec =
+      make_trace_record(data_, held, tool_contacts, tool_pen, target_pen, report, tau);
+  if (trace_writer_) {
+    platform::TraceRecord r;
+    r.period = static_cast<std::uint64_t>(k_ - 1);
+    r.time_ns = report.deadline_ns;
+    r.flags = (report.sample_valid ? 1u : 0u) | (report.torque_commanded ? 2u : 0u) |
+              (report.overrun ? 4u : 0u);
+    std::size_t c = 0;
+    r.values[c++] = report.frames_read;
+    r.values[c++] = report.sample_valid ? 1.0 : 0.0;
+    r.values[c++] = report.torque_commanded ? 1.0 : 0.0;
+    r.values[c++] = static_cast<double>(report.lifecycle);
+    for (int i = 0; i < 3; ++i) r.values[c++] = rec.target.position[i];
+    for (int i = 0; i < 3; ++i) r.values[c++] = rec.tool.position[i];
+    for (int i = 0; i < 3; ++i) r.values[c++] = rec.feedback.force[i];
+    for (std::size_t a = 0; a < scene_->device.axes.size(); ++a)
+      r.values[c++] = a < static_cast<std::size_t>(tau.size()) ? tau[static_cast<Eigen::Index>(a)] : 0.0;
+    r.values[c++] = static_cast<double>(report.step_ns) * 1e-3;
+    r.values[c++] = static_cast<double>(report.output_end_ns - report.sync_sent_ns) * 1e-3;
+    r.values[c++] = static_cast<double>(report.woke_ns - report.deadline_ns) * 1e-3;
+    trace_writer_->push(r);
+  }
+  trace_.push(rec);
 }
 
 RunSummary SceneRunner::summary() const {
@@ -295,6 +337,29 @@ RunSummary SceneRunner::summary() const {
   for (auto dir : {hal::SimBus::Direction::kControllerToDevice, hal::SimBus::Direction::kDeviceToController}) {
     s.bus_frames_dropped += static_cast<std::int64_t>(bus_.link_counters(dir).dropped);
     s.bus_frames_corrupted += static_cast<std::int64_t>(bus_.link_counters(dir).corrupted());
+  }
+  if (real_bus_) {
+    s.port = port_->counters();
+    s.transport = describe_transport_counters(*real_bus_);
+    s.bus_state = hal::to_string(port_->state());
+    s.loop = loop_.statistics().summary();
+  }
+  s.read_errors = static_cast<std::int64_t>(loop_.counters().read_errors);
+  s.sync_write_failures = static_cast<std::int64_t>(loop_.counters().sync_write_failures);
+  s.command_failures = static_cast<std::int64_t>(loop_.counters().command_failures);
+  {
+    const hal::DeviceCounters& d = device_.counters();
+    s.frames_unknown_id = static_cast<std::int64_t>(d.frames_unknown_id);
+    s.frames_rejected = static_cast<std::int64_t>(d.frames_wrong_length + d.frames_not_data);
+    s.values_out_of_range = static_cast<std::int64_t>(d.rejected_out_of_range);
+    s.values_jump = static_cast<std::int64_t>(d.rejected_jump);
+    if (const hal::CanopenMaster* m = loop_.canopen())
+      s.frames_rejected += static_cast<std::int64_t>(m->counters().drive_tpdos_malformed);
+  }
+  if (trace_writer_) {
+    const platform::TraceWriterCounters c = trace_writer_->counters();
+    s.trace_pushed = static_cast<std::int64_t>(c.pushed);
+    s.trace_dropped = static_cast<std::int64_t>(c.dropped);
   }
   if (log_bus_) s.bus_frames_replayed = static_cast<std::int64_t>(log_bus_->log_counters().replayed);
   if (recorder_) {
@@ -337,28 +402,64 @@ RunSummary SceneRunner::summary() const {
 RunSummary run_scene(const Scene& scene, const RunOptions& options) {
   const double duration = options.duration_s >= 0.0 ? options.duration_s : scene.duration_s;
   const auto steps = static_cast<std::int64_t>(std::llround(duration / scene.model.dt));
-  SceneRunner runner(scene, options.trace_path.empty() ? 0 : static_cast<std::size_t>(steps),
+  const bool real = parse_bus_spec(options.bus.spec).real();
+  // A real bus streams its trace through the TraceWriter; the in-memory trace is for sim runs.
+  SceneRunner runner(scene,
+                     options.trace_path.empty() || real ? 0 : static_cast<std::size_t>(steps),
                      options.bus, options.realtime);
+  if (options.compute_phase_s >= 0.0) {
+    if (!(options.compute_phase_s < scene.model.dt))
+      throw std::invalid_argument("--phase " + std::to_string(options.compute_phase_s) +
+                                  " s: must be below the period dt");
+    runner.set_compute_phase_ns(static_cast<std::int64_t>(std::llround(options.compute_phase_s * 1e9)));
+  }
+  // The writer thread is started before the real-time setup pins and promotes this thread.
+  if (real && !options.trace_path.empty()) runner.stream_trace(options.trace_path);
   const platform::RealtimeSettings& rt = options.rt;
   std::vector<std::string> rt_lines;
   if (rt.fifo_priority != 0 || rt.lock_memory || rt.prefault_stack_bytes > 0 ||
       !rt.cpu_affinity.empty()) {
     rt_lines = platform::describe(platform::apply_realtime(rt));  // throws only if strict
   }
+  const bool paced = options.realtime || real;
   std::int64_t overruns = 0, missed = 0;
   platform::LatencyHistogram wakeup;
   const std::int64_t wall0 = platform::monotonic_now_ns();
   platform::PeriodicTimer timer(static_cast<std::int64_t>(std::llround(scene.model.dt * 1e9)), wall0);
-  for (std::int64_t k = 0; k < steps; ++k) {
-    if (options.realtime) {
+  auto stop_requested = [&] {
+    return options.stop != nullptr && options.stop->load(std::memory_order_relaxed);
+  };
+  auto one_period = [&] {
+    if (paced) {
       const platform::Wakeup w = timer.wait_next();
       overruns += w.overrun ? 1 : 0;
       missed += w.missed_periods;
       wakeup.record(w.latency_ns());
       runner.period(w.deadline_ns, w.woke_ns);
-      continue;
+    } else {
+      runner.period();
     }
-    runner.period();
+  };
+  bool stopped = false;
+  for (std::int64_t k = 0; k < steps; ++k) {
+    if (stop_requested()) {
+      stopped = true;
+      break;
+    }
+    one_period();
+  }
+  // Orderly end on a real bus: zero torque, drives disabled, a few periods for the
+  // controlwords to go out (the device keeps answering SYNCs meanwhile).
+  std::int64_t shutdown = 0;
+  if (real) {
+    runner.loop().shutdown();
+    for (; shutdown < options.shutdown_periods; ++shutdown) {
+      one_period();
+      if (runner.loop().drives_disabled() && shutdown >= 2) {
+        ++shutdown;
+        break;
+      }
+    }
   }
   RunSummary s = runner.summary();
   s.wall_time_s = static_cast<double>(platform::monotonic_now_ns() - wall0) * 1e-9;
@@ -366,7 +467,15 @@ RunSummary run_scene(const Scene& scene, const RunOptions& options) {
   s.realtime_missed_periods = missed;
   s.wakeup_latency_us = summarize_ns(wakeup);
   s.realtime_setup = std::move(rt_lines);
-  if (!options.trace_path.empty()) runner.trace().write_csv(options.trace_path);
+  s.stopped = stopped;
+  s.shutdown_periods = shutdown;
+  s.drives_disabled = runner.loop().drives_disabled();
+  if (platform::TraceWriter* w = runner.trace_writer()) {
+    w->stop();
+    s.trace_pushed = static_cast<std::int64_t>(w->counters().pushed);
+    s.trace_dropped = static_cast<std::int64_t>(w->counters().dropped);
+  }
+  if (!options.trace_path.empty() && !real) runner.trace().write_csv(options.trace_path);
   return s;
 }
 
@@ -404,7 +513,26 @@ std::string format_summary(const RunSummary& s) {
   os << "  bus: rejected samples " << s.rejected_samples << ", invalid periods "
      << s.invalid_periods << ", frames dropped " << s.bus_frames_dropped << ", corrupted "
      << s.bus_frames_corrupted << "\n";
-  if (s.bus != "sim") os << "  bus " << s.bus << ": " << s.bus_frames_replayed << " frames replayed\n";
+  if (s.bus.rfind("log:", 0) == 0)
+    os << "  bus " << s.bus << ": " << s.bus_frames_replayed << " frames replayed\n";
+  if (s.real_bus) {
+    os << "  bus " << s.bus << ": frames rx " << s.port.frames_rx << ", tx " << s.port.frames_tx
+       << ", dropped " << s.port.dropped << ", errors " << s.port.errors << ", would-block "
+       << s.port.tx_would_block << "; state " << s.bus_state << ", error periods "
+       << s.bus_error_periods << "\n";
+    if (!s.transport.empty()) os << "  " << s.transport << "\n";
+    os << "  loop: read errors " << s.read_errors << ", SYNC write failures "
+       << s.sync_write_failures << ", command failures " << s.command_failures
+       << "; frames rejected " << s.frames_rejected << " (unknown id " << s.frames_unknown_id
+       << "), values out of range " << s.values_out_of_range << ", jumps " << s.values_jump
+       << "\n";
+    for (const std::string& line : platform::describe(s.loop)) os << "  loop " << line << "\n";
+    os << "  device frames: last at period " << s.last_device_frame_period
+       << "; last torque stop at period " << s.last_torque_stop_period << "\n";
+    os << "  end: " << (s.stopped ? "stopped by signal" : "duration reached") << ", shutdown "
+       << s.shutdown_periods << " periods, drives " << (s.drives_disabled ? "disabled" : "NOT disabled")
+       << "; trace records " << s.trace_pushed << ", dropped " << s.trace_dropped << "\n";
+  }
   if (s.bus_frames_recorded > 0 || s.bus_record_dropped > 0)
     os << "  recorded " << s.bus_frames_recorded << " frames, " << s.bus_record_dropped
        << " dropped by the recorder\n";
@@ -516,6 +644,44 @@ std::string format_summary_json(const RunSummary& s) {
   integer("bus_frames_replayed", s.bus_frames_replayed);
   integer("bus_frames_recorded", s.bus_frames_recorded);
   integer("bus_record_dropped", s.bus_record_dropped);
+  os << "\"real_bus\":" << (s.real_bus ? "true" : "false") << ",";
+  integer("port_frames_rx", static_cast<std::int64_t>(s.port.frames_rx));
+  integer("port_frames_tx", static_cast<std::int64_t>(s.port.frames_tx));
+  integer("port_dropped", static_cast<std::int64_t>(s.port.dropped));
+  integer("port_errors", static_cast<std::int64_t>(s.port.errors));
+  integer("port_would_block", static_cast<std::int64_t>(s.port.tx_would_block));
+  os << "\"transport\":" << json_string(s.transport) << ",";
+  os << "\"bus_state\":" << json_string(s.bus_state) << ",";
+  integer("bus_error_periods", s.bus_error_periods);
+  integer("read_errors", s.read_errors);
+  integer("sync_write_failures", s.sync_write_failures);
+  integer("command_failures", s.command_failures);
+  integer("frames_rejected", s.frames_rejected);
+  integer("frames_unknown_id", s.frames_unknown_id);
+  integer("values_out_of_range", s.values_out_of_range);
+  integer("values_jump", s.values_jump);
+  auto hist = [&](const char* k, const platform::HistogramSummary& h) {
+    os << "\"" << k << "\":{\"count\":" << h.count << ",\"min\":" << h.min
+       << ",\"median\":" << h.median << ",\"p99\":" << h.p99 << ",\"p999\":" << h.p999
+       << ",\"max\":" << h.max << "},";
+  };
+  os << "\"loop\":{\"periods\":" << s.loop.periods << ",\"overruns\":" << s.loop.overruns
+     << ",\"longest_overrun_streak\":" << s.loop.longest_overrun_streak
+     << ",\"skipped_periods\":" << s.loop.skipped_periods << ",";
+  hist("wakeup_ns", s.loop.wakeup);
+  hist("step_ns", s.loop.step);
+  hist("bus_io_ns", s.loop.bus_io);
+  os << "\"end_to_end_ns\":{\"count\":" << s.loop.end_to_end.count << ",\"min\":"
+     << s.loop.end_to_end.min << ",\"median\":" << s.loop.end_to_end.median
+     << ",\"p99\":" << s.loop.end_to_end.p99 << ",\"p999\":" << s.loop.end_to_end.p999
+     << ",\"max\":" << s.loop.end_to_end.max << "}},";
+  integer("last_device_frame_period", s.last_device_frame_period);
+  integer("last_torque_stop_period", s.last_torque_stop_period);
+  integer("trace_pushed", s.trace_pushed);
+  integer("trace_dropped", s.trace_dropped);
+  os << "\"stopped\":" << (s.stopped ? "true" : "false") << ",";
+  integer("shutdown_periods", s.shutdown_periods);
+  os << "\"drives_disabled\":" << (s.drives_disabled ? "true" : "false") << ",";
   integer("realtime_overruns", s.realtime_overruns);
   integer("realtime_missed_periods", s.realtime_missed_periods);
   os << "\"wakeup_latency_us\":{\"median\":" << json_number(s.wakeup_latency_us.median)

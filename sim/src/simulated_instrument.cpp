@@ -45,6 +45,10 @@ int SimulatedInstrument::poll(hal::Bus& device_port, std::int64_t now_ns) noexce
       continue;
     }
     if (hal::is_sync(frame)) {
+      if (start_at_sync_) {
+        start_ns_ = frame.timestamp_ns;
+        start_at_sync_ = false;
+      }
       const hal::AxisVector q = axes_at(frame.timestamp_ns);
       emulator_.set_axis_values(q.data());
     }

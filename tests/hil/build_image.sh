@@ -31,6 +31,7 @@ kver="${vmlinuz##*/vmlinuz-}"
 moddir="$kroot/lib/modules/$kver"
 [ -d "$moddir" ] || die "no modules for $kver in $moddir"
 
+[ -x "$build/numen" ] || die "$build/numen missing (build the numen target)"
 for prog in numen_hil_tests numen_hil_can; do
   [ -x "$build/tests/$prog" ] || die "$build/tests/$prog missing (configure with -DNUMEN_BUILD_HIL=ON and build it)"
 done
@@ -120,6 +121,15 @@ for prog in numen_hil_tests numen_hil_can; do
   strip --strip-unneeded "$root/hil/bin/$prog" 2>/dev/null || true
   copy_libs "$build/tests/$prog"
 done
+
+# 5b. The numen command (numen run / numen device) with the default scene and its trajectory
+# data at the same relative paths (the scene names ../data/...).
+cp "$build/numen" "$root/hil/bin/numen"
+strip --strip-unneeded "$root/hil/bin/numen" 2>/dev/null || true
+copy_libs "$build/numen"
+mkdir -p "$root/hil/sim/scenes" "$root/hil/sim/data"
+cp "$repo/sim/scenes/default.toml" "$root/hil/sim/scenes/"
+cp "$repo"/sim/data/*.txt "$root/hil/sim/data/"
 
 # 6. /init, the scenario library and the scenarios.
 cp "$here/init.sh" "$root/init"

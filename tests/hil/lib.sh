@@ -15,3 +15,31 @@ wait_for_line() {
   done
   return 1
 }
+
+# numen run / numen device helpers (scenarios 70+). The scene and its data are in /hil/sim.
+HIL_SCENE=/hil/sim/scenes/default.toml
+
+# field FILE REGEX: the first number after REGEX (an extended regex) on the first line that
+# matches it, e.g. field run.txt 'frames rx ' -> 10342.
+field() {
+  grep -E -o -m1 "$2[-0-9.]+" "$1" | head -n 1 | sed -E 's/.*[^-0-9.]([-0-9.]+)$/\1/' 
+}
+
+# start_device LOG [EXTRA...]: starts `numen device` on vcan0 in the background (pid in
+# DEVICE_PID) and waits for READY.
+start_device() {
+  local log="$1"
+  shift
+  numen device "$HIL_SCENE" --bus can:vcan0 --ready "$@" >"$log" 2>&1 &
+  DEVICE_PID=$!
+  wait_for_line "$log" READY 30 || fail "device not ready: $(cat "$log")"
+}
+
+# e2e_histogram TRACE.csv: bins the end_to_end_us column of a real-bus trace into 20 us bins
+# and prints "HIL-CSV <scenario>,<bin lower edge us>,<count>" lines (docs/figures/ reads them).
+e2e_histogram() {
+  awk -F, -v name="$HIL_NAME" '
+    NR == 1 { for (i = 1; i <= NF; i++) if ($i == "end_to_end_us") c = i; next }
+    c { b = int($c / 20) * 20; n[b]++; if (b > m) m = b }
+    END { for (b = 0; b <= m; b += 20) if (n[b]) printf "HIL-CSV %s,%d,%d\n", name, b, n[b] }' "$1"
+}

@@ -22,10 +22,10 @@ elapsed() { awk -v a="$1" -v b="$(date +%s.%N)" 'BEGIN {printf "%.1f", b - a}'; 
 bash "$here/deps" || die "tests/hil/deps could not install or download what the guest needs"
 
 # 2. numen's HIL programs.
-echo "hil: building numen_hil_tests and numen_hil_can in $build"
+echo "hil: building numen_hil_tests, numen_hil_can and numen in $build"
 cmake -S "$repo" -B "$build" -DNUMEN_BUILD_HIL=ON -DNUMEN_BUILD_BENCHMARKS=OFF >/dev/null ||
   die "cmake configure of $build failed"
-cmake --build "$build" --target numen_hil_tests numen_hil_can -j"$jobs" >"$build/hil-build.log" 2>&1 ||
+cmake --build "$build" --target numen_hil_tests numen_hil_can numen -j"$jobs" >"$build/hil-build.log" 2>&1 ||
   { tail -n 40 "$build/hil-build.log" >&2; die "build failed (log: $build/hil-build.log)"; }
 
 # 3. The guest image.
@@ -40,7 +40,7 @@ log="$build/hil-console.log"
 echo "hil: booting $(cat "$image/kernel-version") under qemu (TCG), limit ${limit}s, console: $log"
 t_boot=$(date +%s.%N)
 set +e
-timeout --kill-after=10 "$limit" qemu-system-x86_64 -accel tcg -nographic -no-reboot -m 512M \
+timeout --kill-after=10 "$limit" qemu-system-x86_64 -accel tcg -nographic -no-reboot -m 512M -smp 2 \
   -kernel "$image/vmlinuz" -initrd "$image/initramfs.cpio.gz" \
   -append "console=ttyS0 panic=-1 quiet loglevel=3" </dev/null 2>&1 |
   while IFS= read -r line; do

@@ -174,6 +174,18 @@ class ControlLoop {
   /// minimal protocol.
   hal::LifecycleResult activate() noexcept;
 
+  /// Orderly stop (Ctrl-C / SIGTERM, the end of a run on a real bus): from now on no automatic
+  /// activation or pending re-arm, and the lifecycle leaves kActive for kInactive (managed:
+  /// SafetySupervisor::deactivate()), so every following period sends zero torque and the
+  /// drives' masters are asked for kDisabled (disable voltage, CiA 402 §6.3). The caller then
+  /// runs periods until drives_disabled() (or a bound) so the controlwords go out. The minimal
+  /// protocol has no lifecycle: its periods send zero torque from now on. Never blocks.
+  void shutdown() noexcept;
+  /// shutdown() was called.
+  bool shutting_down() const noexcept { return shutting_down_; }
+  /// Managed: every drive's master reports a disabled state (not energised: switch on
+  /// disabled, ready to switch on, not ready, fault); minimal protocol: true.
+  bool drives_disabled() const noexcept;
   /// True for the managed stack.
   bool managed() const noexcept { return master_ != nullptr; }
   /// The CANopen master (nullptr in the minimal protocol).
@@ -230,6 +242,7 @@ class ControlLoop {
   bool io_error_ = false;      // a read or write returned kError since the last update
   bool last_overrun_ = false;  // the previous period overran (LoopStatistics)
   bool rearm_pending_ = false;
+  bool shutting_down_ = false;
   std::int64_t first_active_period_ = -1;
   std::int64_t first_torque_period_ = -1;
 };

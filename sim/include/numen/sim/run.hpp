@@ -5,11 +5,11 @@
 /// loop (as fast as possible, or paced to wall-clock time), the measurements of
 /// the summary and an optional per-step trace.
 
+#include <atomic>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
-
-#include <memory>
 
 #include "numen/core/data.hpp"
 #include "numen/hal/bus_recorder.hpp"
@@ -17,7 +17,10 @@
 #include "numen/hal/log_bus.hpp"
 #include "numen/hal/sim_bus.hpp"
 #include "numen/platform/control_loop.hpp"
+#include "numen/platform/loop_statistics.hpp"
 #include "numen/platform/realtime_setup.hpp"
+#include "numen/platform/trace_queue.hpp"
+#include "numen/sim/bus_spec.hpp"
 #include "numen/sim/scene.hpp"
 #include "numen/sim/simulated_instrument.hpp"
 #include "numen/sim/trace.hpp"
@@ -33,7 +36,11 @@ struct BusChoice {
   /// CanFilter per COB-ID) and records marked transmitted (" T") are skipped,
   /// so a log recorded with `record_path` replays the controller's input
   /// exactly; the first record of the log is due at bus time 0 and the others
-  /// keep their relative times. Anything else: std::invalid_argument.
+  /// keep their relative times. "can:IFACE" (SocketCAN, kernel filters from
+  /// controller_filters()) or "serial:PATH[@BAUD]" (SerialBus, user-space
+  /// filters): a real bus with the instrument (`numen device`, hardware) at the
+  /// other end — bus time is CLOCK_MONOTONIC and the run is paced (see
+  /// SceneRunner::period()). Anything else: std::invalid_argument.
   std::string spec = "sim";
   /// Record the controller port (frames read: " R", written: " T") into this
   /// candump log through a lock-free queue and a writer thread; empty: none.
@@ -51,6 +58,16 @@ struct RunOptions {
   /// anything is requested; each step's outcome is in RunSummary::realtime_setup. Lack of
   /// privilege is reported, not fatal, unless rt.strict.
   platform::RealtimeSettings rt;
+  /// Set (e.g. by a SIGINT / SIGTERM handler) to end the run early and cleanly: the loop
+  /// shuts down (ControlLoop::shutdown(): zero torque, drives disabled) over at most
+  /// shutdown_periods more periods and the summary is returned. nullptr: none.
+  const std::atomic<bool>* stop = nullptr;
+  /// Periods run after the end (duration reached or stop) to send zero torque and disable
+  /// the drives (stops early once every drive reports disabled). Real buses only.
+  int shutdown_periods = 50;
+  /// Compute phase override, s (< 0: the scene's [bus] compute_phase): how long after the
+  /// SYNC a paced period on a real bus waits before reading the device's answers.
+  double compute_phase_s = -1.0;
 };
 
 /// Percentiles of a duration distribution (µs).
@@ -144,6 +161,32 @@ struct RunSummary {
   std::int64_t heartbeat_losses = 0;       ///< Heartbeat losses over all nodes.
   std::int64_t zero_torque_periods = 0;    ///< Periods that commanded zero torque on every drive.
   std::vector<std::string> drive_states;   ///< "axis: CiA 402 state" per drive at the end.
+  // Real buses (can:, serial:) — zeros / empty otherwise.
+  bool real_bus = false;                   ///< The controller ran on a real bus, paced.
+  hal::BusCounters port;                   ///< Counters of the controller's port (rx, tx,
+                                           ///< dropped, errors, would-block).
+  std::string transport;                   ///< describe_transport_counters() of the port.
+  std::string bus_state;                   ///< Port state at the end (hal::to_string(BusState)).
+  std::int64_t bus_error_periods = 0;      ///< Periods whose port state was not kOk or that
+                                           ///< saw a read / write error (link down, bus off).
+  std::int64_t read_errors = 0;            ///< ControlLoopCounters::read_errors.
+  std::int64_t sync_write_failures = 0;    ///< ControlLoopCounters::sync_write_failures.
+  std::int64_t command_failures = 0;       ///< ControlLoopCounters::command_failures.
+  std::int64_t frames_rejected = 0;        ///< Encoder frames of a wrong length / kind, frames of
+                                           ///< no known id, malformed drive TPDOs (InstrumentDevice
+                                           ///< and CanopenMaster counters).
+  std::int64_t frames_unknown_id = 0;      ///< ... of which of an id no axis has.
+  std::int64_t values_out_of_range = 0;    ///< Axis values rejected as out of [min, max].
+  std::int64_t values_jump = 0;            ///< Axis values rejected as implausible jumps.
+  platform::LoopSummary loop;              ///< LoopStatistics of the periods (paced runs).
+  std::int64_t last_device_frame_period = -1;  ///< Last period that read a frame (-1: none).
+  std::int64_t last_torque_stop_period = -1;   ///< Last period whose torque was zero after a
+                                               ///< period with torque (the last safe stop).
+  std::int64_t trace_pushed = 0;           ///< Real-bus trace (TraceWriter): records queued.
+  std::int64_t trace_dropped = 0;          ///< ... refused by a full queue (must be 0).
+  bool stopped = false;                    ///< Ended early by RunOptions::stop (signal).
+  std::int64_t shutdown_periods = 0;       ///< Periods run to shut down.
+  bool drives_disabled = false;            ///< Every drive disabled at the end of the shutdown.
   std::vector<std::string> warnings;
   std::string trocar_note;
 };
@@ -171,7 +214,27 @@ class SceneRunner {
   /// the controller's read–check–supervise–step–write, then the measurements
   /// and one trace record. `deadline_mono_ns` / `woke_mono_ns`: the paced
   /// timer's wake-up (CLOCK_MONOTONIC), -1 when not paced.
+  ///
+  /// Real bus (can:, serial:): bus time is CLOCK_MONOTONIC. The SYNC goes out at once
+  /// (stamped now), then the thread sleeps until deadline + compute phase (clock_nanosleep,
+  /// TIMER_ABSTIME; `deadline_mono_ns` < 0: from now) while the device answers, then
+  /// end_period reads, checks, steps and writes the torques at that time. This sleep is the
+  /// only blocking call; nothing allocates, throws or locks.
   void period(std::int64_t deadline_mono_ns = -1, std::int64_t woke_mono_ns = -1) noexcept;
+  /// True when the controller's port is a real bus (can:, serial:).
+  bool real_bus() const noexcept { return spec_.real(); }
+  /// The controller's port (the real bus, the log replay, the recorder, or the SimBus port).
+  const hal::Bus& port() const noexcept { return *port_; }
+  /// Streams one record per period into a CSV through platform::TraceWriter (lock-free queue,
+  /// writer thread started here; setup only). Columns: frames_read, sample_valid,
+  /// torque_commanded, lifecycle, target_{x,y,z}, tool_{x,y,z}, force_{x,y,z},
+  /// tau_<axis name> per axis, step_us, end_to_end_us, wakeup_us; flags bit 0 sample valid,
+  /// bit 1 torque commanded, bit 2 overrun. Throws like TraceWriter's constructor.
+  void stream_trace(const std::string& path);
+  /// The streaming trace writer (nullptr unless stream_trace() was called).
+  platform::TraceWriter* trace_writer() noexcept { return trace_writer_.get(); }
+  /// Overrides the scene's compute phase (ns, >= 0).
+  void set_compute_phase_ns(std::int64_t ns) noexcept { phase_ns_ = ns; }
   /// Periods run so far.
   std::int64_t periods() const noexcept { return k_; }
 
@@ -194,7 +257,9 @@ class SceneRunner {
 
  private:
   const Scene* scene_;
+  BusSpec spec_;
   hal::SimBus bus_;
+  std::unique_ptr<hal::Bus> real_bus_;            // --bus can:IFACE / serial:PATH
   std::unique_ptr<hal::LogBus> log_bus_;          // --bus log:FILE
   std::unique_ptr<hal::CandumpWriter> writer_;    // --record FILE
   std::unique_ptr<hal::RecordingBus> recorder_;   // --record FILE, around the controller port
@@ -212,6 +277,8 @@ class SceneRunner {
   RunSummary acc_;     // running maxima and counts
   double free_sq_ = 0.0;
   std::int64_t solver_iterations_sum_ = 0;
+  std::unique_ptr<platform::TraceWriter> trace_writer_;  // real-bus --trace
+  bool last_torque_ = false;
   hal::FaultRecord first_fault_;  // the first latched fault of the run (kept across re-arms)
   bool has_first_fault_ = false;
 };

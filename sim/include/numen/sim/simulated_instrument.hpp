@@ -44,6 +44,12 @@ class SimulatedInstrument {
   /// time-driven part (DeviceEmulator::tick(): boot-ups, heartbeats, the
   /// drives' watch of the controller's heartbeat, EMCYs). Returns frames handled.
   int poll(hal::Bus& device_port, std::int64_t now_ns = -1) noexcept;
+  /// Makes trajectory time 0 the timestamp of the next SYNC received (a device process on a
+  /// real bus, `numen device`: the controller starts whenever it starts; bus time is
+  /// CLOCK_MONOTONIC). Until that SYNC, axes_at() uses the start given at construction.
+  void start_at_next_sync() noexcept { start_at_sync_ = true; }
+  /// Bus time (ns) at which the trajectory starts.
+  std::int64_t start_ns() const noexcept { return start_ns_; }
 
   /// Axis values of the trajectory at bus time `t_ns` (m or rad).
   hal::AxisVector axes_at(std::int64_t t_ns) const noexcept;
@@ -61,6 +67,7 @@ class SimulatedInstrument {
   hal::DeviceConfig config_;
   const Trajectory* trajectory_;
   std::int64_t start_ns_;
+  bool start_at_sync_ = false;
   std::unique_ptr<hal::Kinematics> kinematics_;
   hal::DeviceEmulator emulator_;
 };

@@ -1,0 +1,75 @@
+#pragma once
+/// @file bus_spec.hpp
+/// The real buses of `numen run --bus` and `numen device --bus`: parsing of the spec
+/// ("can:IFACE", "serial:PATH[@BAUD]"), the acceptance filters each end of the link needs
+/// (from the device's COB-IDs, docs/protocol.md §2, §9, §13), opening the port (SocketCanBus,
+/// docs/protocol.md §11; SerialBus, §16) and waiting on it without spinning.
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "numen/hal/bus.hpp"
+#include "numen/hal/can_filter.hpp"
+#include "numen/hal/device_config.hpp"
+
+namespace numen::sim {
+
+/// What a `--bus` spec names.
+enum class BusKind : std::uint8_t {
+  kSim,     ///< "sim": the scene's SimBus (numen run only).
+  kLog,     ///< "log:FILE": a candump log replayed (numen run only).
+  kCan,     ///< "can:IFACE": a SocketCAN interface (can0, vcan0, ...).
+  kSerial,  ///< "serial:PATH[@BAUD]": a serial line (tty, USB adapter, pseudo-terminal).
+};
+
+/// A parsed `--bus` spec.
+struct BusSpec {
+  BusKind kind = BusKind::kSim;
+  /// kLog: the file; kCan: the interface name; kSerial: the device path.
+  std::string target;
+  /// kSerial: line speed, bit/s (default 1 000 000; one of hal::serial_supported_bauds()).
+  std::uint32_t baud = 1'000'000;
+  /// True for kCan and kSerial: a bus shared with a device in another process (or real
+  /// hardware), on which time is CLOCK_MONOTONIC and the periods are paced.
+  bool real() const noexcept { return kind == BusKind::kCan || kind == BusKind::kSerial; }
+};
+
+/// Parses "sim", "log:FILE", "can:IFACE" or "serial:PATH[@BAUD]" (BAUD decimal bit/s). Throws
+/// std::invalid_argument naming the spec and what is wrong (empty target, unknown prefix, a
+/// baud that is not a number or not a supported termios speed).
+BusSpec parse_bus_spec(const std::string& spec);
+
+/// Exact 11-bit filters for every frame the controller reads from the device of `config`:
+/// each axis's encoder TPDO; managed stack: each drive TPDO, and each node's heartbeat
+/// (0x700 + node, also its boot-up) and EMCY (0x080 + node). Ids are deduplicated.
+std::vector<hal::CanFilter> controller_filters(const hal::DeviceConfig& config);
+
+/// Exact 11-bit filters for every frame the device of `config` reads: SYNC (0x080), each
+/// driven axis's drive / torque RPDO; managed stack: NMT (0x000) and the controller's heartbeat
+/// (0x700 + controller_node_id).
+std::vector<hal::CanFilter> device_filters(const hal::DeviceConfig& config);
+
+/// Opens the port of a real `spec` (kCan: SocketCanBus with kernel filters, loopback on,
+/// own messages off; kSerial: SerialBus with user-space filters). Throws
+/// std::invalid_argument for a spec that is not real, std::runtime_error from the transport
+/// (naming the interface or path and the failing call).
+std::unique_ptr<hal::Bus> open_real_bus(const BusSpec& spec,
+                                        const std::vector<hal::CanFilter>& filters);
+
+/// Waits up to `timeout_ns` (>= 0) for `bus` to have something to read: poll(2) on its file
+/// descriptor (SocketCanBus::native_handle(), SerialBus::native_handle()). Returns true if
+/// readable (or hung up / in error: read() then reports it), false on timeout or EINTR. Other
+/// buses: sleeps for the timeout and returns true. Blocks: not for the control period.
+bool wait_bus(hal::Bus& bus, std::int64_t timeout_ns) noexcept;
+
+/// Counters of a real bus beyond hal::BusCounters, as summary text: SocketCAN (error frames,
+/// bus off, restarts, link down, malformed, reopens, last errno) or serial (frames decoded,
+/// chunks rejected, bytes discarded, filtered). Empty for other buses. Not real-time.
+std::string describe_transport_counters(const hal::Bus& bus);
+
+/// Transport-level events that a run should count as "link trouble" (SocketCAN: link-down
+/// transitions; serial: 0 until the line is gone, then 1). For summaries.
+std::uint64_t link_down_events(const hal::Bus& bus) noexcept;
+
+}  // namespace numen::sim

@@ -1,0 +1,47 @@
+# Scenario (a): `numen run --bus can:vcan0` (the controller, paced at the scene's 1 kHz) and
+# `numen device --bus can:vcan0` (the simulated instrument: CANopen nodes, heartbeats, CiA 402
+# drives, encoders playing the trajectory) as two processes on one vcan, recorded by candump.
+# Pass: the start-up reaches active, torque flows (the device applied non-zero torque), no
+# frame lost (SocketCAN drops 0 on both ports, every SYNC answered by the device, the
+# controller read every period's sample), candump's SYNC period median 1 ms +- 0.1 ms, the
+# log holds only the device's and the controller's ids. Prints the latency figures and the
+# end-to-end histogram as HIL-CSV lines.
+. /hil/lib.sh
+candump -L vcan0 >/tmp/pair.log 2>/tmp/candump.err &
+dump=$!
+start_device /tmp/dev.txt
+numen run "$HIL_SCENE" --bus can:vcan0 --duration 10 --trace /tmp/pair.csv >/tmp/run.txt 2>&1
+rc=$?
+usleep 200000
+kill -TERM "$DEVICE_PID"
+wait "$DEVICE_PID"
+kill "$dump"
+cat /tmp/run.txt /tmp/dev.txt
+[ "$rc" -eq 0 ] || fail "numen run exited with $rc"
+rx_drop=$(field /tmp/run.txt 'frames rx [0-9]+, tx [0-9]+, dropped ')
+active=$(field /tmp/run.txt 'active at period ')
+invalid=$(field /tmp/run.txt 'invalid periods ')
+faults=$(field /tmp/run.txt 'safety: ')
+trace_drop=$(field /tmp/run.txt 'trace records [0-9]+, dropped ')
+syncs=$(field /tmp/dev.txt 'SYNCs ')
+answered=$(field /tmp/dev.txt 'answered ')
+nonzero=$(field /tmp/dev.txt 'non-zero torque ')
+dev_drop=$(field /tmp/dev.txt 'port: rx [0-9]+, tx [0-9]+, dropped ')
+overruns=$(field /tmp/run.txt 'loop overruns: ')
+e2e=$(grep 'end-to-end (SYNC' /tmp/run.txt | sed 's/.*us: //')
+ctl_syncs=$(grep -c '^([0-9.]*) vcan0 080#' /tmp/pair.log)
+# SYNC period median from candump's timestamps (us).
+sync_median=$(grep ' vcan0 080#' /tmp/pair.log | sed 's/^(\([0-9]*\)\.\([0-9]*\)).*/\1\2/' |
+  awk 'NR > 1 { print $1 - p } { p = $1 }' | sort -n | awk '{ a[NR] = $1 } END { print a[int((NR + 1) / 2)] }')
+ids=$(sed 's/^([0-9.]*) vcan0 \([0-9A-F]*\)#.*/\1/' /tmp/pair.log | sort -u | tr '\n' ' ')
+unexpected=$(echo "$ids" | tr ' ' '\n' | grep -v -E '^(000|080|08[1-5]|18[1-5]|20[1-3]|28[1-3]|70[1-5]|77F)$' | grep -c . )
+e2e_histogram /tmp/pair.csv
+detail="syncs sent $ctl_syncs (candump), device SYNCs $syncs answered $answered, drops ctl $rx_drop dev $dev_drop, invalid periods $invalid, active at period $active, device non-zero torque RPDO periods $nonzero, overruns $overruns, safe stops $faults, trace dropped $trace_drop, SYNC period median ${sync_median} us, ids $ids; end-to-end us: $e2e"
+[ "$rx_drop" = 0 ] && [ "$dev_drop" = 0 ] || fail "SocketCAN dropped frames: $detail"
+[ "$syncs" -gt 9000 ] && [ "$syncs" = "$answered" ] && [ "$syncs" = "$ctl_syncs" ] || fail "SYNCs lost or unanswered: $detail"
+[ -n "$active" ] && [ "$active" -ge 0 ] || fail "lifecycle never active: $detail"
+[ "$nonzero" -gt 0 ] || fail "no torque reached the device: $detail"
+[ "$unexpected" = 0 ] || fail "unexpected ids on the bus: $detail"
+[ "$trace_drop" = 0 ] || fail "trace records dropped: $detail"
+[ "$sync_median" -ge 900 ] && [ "$sync_median" -le 1100 ] || fail "SYNC period off: $detail"
+pass "$detail"
