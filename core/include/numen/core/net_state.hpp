@@ -75,10 +75,19 @@ struct NetScratch {
   std::vector<Mat3> block_inverse;  ///< A_ii⁻¹ (preconditioner).
   std::vector<Vec3> rhs;            ///< b of the node rows.
   std::vector<Vec3> delta;          ///< Δv of the node rows (m/s); warm start of the next step.
-  std::vector<Vec3> residual, precond_residual, direction, a_direction;  ///< PCG vectors (nodes).
-  std::vector<Mat6> body_schur;     ///< Per body: Schur block S_b of the preconditioner.
-  std::vector<BlockCholesky> body_schur_factor;  ///< Per body: Cholesky of S_b (no joints).
-  std::vector<Vec6> body_tmp;       ///< Per body: reduced residual of the preconditioner.
+  /// PCG vectors of the nodes. Without joints (Eisenstat's CG, net_solve.hpp):
+  /// w, t, q and K q; with joints: r, z, p and A p.
+  std::vector<Vec3> residual, precond_residual, direction, a_direction;
+  std::vector<Vec3> sweep;          ///< Nodes: g = q + (D − 2D̃) t of the Eisenstat product.
+  std::vector<Mat6> body_schur;     ///< Per body: Schur block S_b of the arrowhead preconditioner (joints).
+  std::vector<Vec6> body_tmp;       ///< Per body: reduced residual (joints) or g (no joints).
+  /// Springs grouped by their smaller node, for the backward sweep: those of
+  /// node i are spring_low[spring_low_begin[i] .. spring_low_begin[i + 1]),
+  /// indices into Model::net_springs, ascending. Size num_nodes + 1 and
+  /// num_springs; set by resize() (fixed topology).
+  std::vector<std::int32_t> spring_low_begin, spring_low;
+  /// The same grouped by the larger node, for the forward sweep.
+  std::vector<std::int32_t> spring_high_begin, spring_high;
   // Collision stage (detect_node_contacts(), net_collision.hpp), rebuilt per
   // net; sized by the Model's obstacles, bodies and body spheres.
   /// Primitive obstacles whose bounds meet the net's AABB (index order).
