@@ -142,9 +142,9 @@ void apply_coupled(const Model& model, const Data& data, std::span<const Vec6> i
 }
 
 
-/// W_e v = α d̂ (d̂ · v) + β v for a spring term, in plain scalar code (the
-/// inner loop of both sweeps).
-inline Vec3 spring_times(const SpringTerm& t, const Vec3& v) noexcept {
+/// W_e v = α d̂ (d̂ · v) + β v for a spring, in plain scalar code (the inner
+/// loop of both sweeps).
+inline Vec3 spring_times(const SweepSpring& t, const Vec3& v) noexcept {
   const Vec3& n = t.direction;
   const double s = t.weight_axial * (n.x() * v.x() + n.y() * v.y() + n.z() * v.z());
   return Vec3(s * n.x() + t.weight_isotropic * v.x(), s * n.y() + t.weight_isotropic * v.y(),
@@ -249,6 +249,10 @@ void build_net_system(const Model& model, Data& data) noexcept {
                      t.weight_isotropic * Mat3::Identity();
     ns.block[a] += blk;
     ns.block[b] += blk;
+    SweepSpring& w = ns.sweep_springs[static_cast<std::size_t>(ns.spring_slot[e])];
+    w.direction = t.direction;
+    w.weight_axial = t.weight_axial;
+    w.weight_isotropic = t.weight_isotropic;
     const Vec3 kv = weight_times(hk * (1.0 - tau), hk * tau, t.direction,
                                  data.nodes[a].velocity - data.nodes[b].velocity);
     ns.rhs[a] -= kv;
@@ -482,20 +486,28 @@ bool solve_eisenstat(const Model& model, Data& data) noexcept {
   const int max_it = std::max(1, model.solver.max_iterations);
   while (rel > model.solver.tolerance && it < max_it) {
     ++it;
-    apply_net_preconditioned(model, data, qb, qn, tb, tn, kqb, kqn);
-    const double qkq = dot6(qb, kqb) + dot3(qn, kqn);
+    const double qkq = apply_net_preconditioned(model, data, qb, qn, tb, tn, kqb, kqn);
     if (!std::isfinite(qkq)) return poison();
     if (!(qkq > 0.0)) break;  // breakdown, or converged exactly
     const double alpha = rho / qkq;
+    // x += α t, w −= α K q, g = D̃ w, ρ' = wᵀ D̃ w in one pass.
+    double rho_new = 0.0;
     for (std::size_t b = 0; b < nb; ++b) {
+      if (!s.in_solve[b]) {  // x and w stay 0
+        gb[b].setZero();
+        continue;
+      }
       xb[b] += alpha * tb[b];
       wb[b] -= alpha * kqb[b];
+      gb[b].noalias() = s.block[b] * wb[b];
+      rho_new += wb[b].dot(gb[b]);
     }
     for (std::size_t i = 0; i < nn; ++i) {
       xn[i] += alpha * tn[i];
       wn[i] -= alpha * kqn[i];
+      gn[i].noalias() = ns.block[i] * wn[i];
+      rho_new += wn[i].dot(gn[i]);
     }
-    const double rho_new = apply_block_diagonal(data, wb, wn, gb, gn);  // g = D̃ w
     rel = std::sqrt(rho_new / ref);
     if (!std::isfinite(rel)) return poison();
     if (rel <= model.solver.tolerance || !(rho_new > 0.0)) break;
@@ -518,13 +530,13 @@ void net_backward_sweep(const Model& model, const Data& data, std::span<const Ve
   const NetScratch& ns = data.net;
   const double h = model.dt;
   const std::size_t nb = q_b.size();
-  const SpringTerm* springs = ns.springs.data();
-  const std::int32_t* low = ns.spring_low.data();
+  const SweepSpring* springs = ns.sweep_springs.data();
   const std::int32_t* low_begin = ns.spring_low_begin.data();
   for (Vec6& v : g_b) v.setZero();
   // Nodes, last to first: (D̃+Lᵀ) has, in node k's row, −W_e towards every
   // larger node of a spring (and nothing towards the bodies, which come
-  // first): t_k = A_kk⁻¹ (q_k + Σ W_e t_j), g_k = (Lᵀ t)_k = −Σ W_e t_j.
+  // first): t_k = A_kk⁻¹ (q_k + Σ W_e t_j), g_k = (Lᵀ t)_k = −Σ W_e t_j,
+  // gathered over node k's springs (grouped by their smaller node).
   // Nets share no spring, so they are swept one after the other.
   for (auto net = model.nets.rbegin(); net != model.nets.rend(); ++net) {
     const auto body = static_cast<std::size_t>(net->body);
@@ -533,10 +545,8 @@ void net_backward_sweep(const Model& model, const Data& data, std::span<const Ve
     for (int v = net->node_begin + net->node_count - 1; v >= net->node_begin; --v) {
       const auto k = static_cast<std::size_t>(v);
       Vec3 sum = Vec3::Zero();
-      for (std::int32_t j = low_begin[k]; j < low_begin[k + 1]; ++j) {
-        const SpringTerm& t = springs[low[j]];
-        sum += spring_times(t, t_n[static_cast<std::size_t>(t.node_a + t.node_b - v)]);
-      }
+      for (std::int32_t j = low_begin[k]; j < low_begin[k + 1]; ++j)
+        sum += spring_times(springs[j], t_n[static_cast<std::size_t>(springs[j].high)]);
       g_n[k] = -sum;
       t_n[k].noalias() = ns.block_inverse[k] * (q_n[k] + sum);
       if (tied) tie += generalized_force(t_n[k], ns.lever[k]);
@@ -570,9 +580,8 @@ void net_forward_sweep(const Model& model, const Data& data, std::span<const Vec
   const NetScratch& ns = data.net;
   const double h = model.dt;
   const std::size_t nb = g_b.size();
-  const SpringTerm* springs = ns.springs.data();
-  const std::int32_t* high = ns.spring_high.data();
-  const std::int32_t* high_begin = ns.spring_high_begin.data();
+  const SweepSpring* springs = ns.sweep_springs.data();
+  const std::int32_t* low_begin = ns.spring_low_begin.data();
   // Bodies first: no block of (D̃+L) left of their diagonal.
   for (std::size_t b = 0; b < nb; ++b) {
     if (s.in_solve[b]) {
@@ -593,7 +602,8 @@ void net_forward_sweep(const Model& model, const Data& data, std::span<const Vec
                      point_velocity(y_b[static_cast<std::size_t>(ct.body_b)], ct.r_b));
   }
   // Nodes, first to last: y_k = A_kk⁻¹ (g_k + c J_k y_b + Σ W_e y_j) over the
-  // springs to smaller nodes j.
+  // springs to smaller nodes j, each of which has already added its W_e y_j
+  // to y_k (scattered over its springs, grouped by their smaller node).
   for (const NetModel& net : model.nets) {
     const auto body = static_cast<std::size_t>(net.body);
     const bool tied = s.in_solve[body] != 0;
@@ -602,25 +612,32 @@ void net_forward_sweep(const Model& model, const Data& data, std::span<const Vec
       const auto k = static_cast<std::size_t>(v);
       Vec3 acc = y_n[k];
       if (tied) acc += c * point_velocity(y_b[body], ns.lever[k]);
-      for (std::int32_t j = high_begin[k]; j < high_begin[k + 1]; ++j) {
-        const SpringTerm& t = springs[high[j]];
-        acc += spring_times(t, y_n[static_cast<std::size_t>(t.node_a + t.node_b - v)]);
-      }
-      y_n[k].noalias() = ns.block_inverse[k] * acc;
+      const Vec3 y = ns.block_inverse[k] * acc;
+      y_n[k] = y;
+      for (std::int32_t j = low_begin[k]; j < low_begin[k + 1]; ++j)
+        y_n[static_cast<std::size_t>(springs[j].high)] += spring_times(springs[j], y);
     }
   }
 }
 
-void apply_net_preconditioned(const Model& model, Data& data, std::span<const Vec6> q_b,
-                              std::span<const Vec3> q_n, std::span<Vec6> t_b, std::span<Vec3> t_n,
-                              std::span<Vec6> kq_b, std::span<Vec3> kq_n) noexcept {
+double apply_net_preconditioned(const Model& model, Data& data, std::span<const Vec6> q_b,
+                                std::span<const Vec3> q_n, std::span<Vec6> t_b, std::span<Vec3> t_n,
+                                std::span<Vec6> kq_b, std::span<Vec3> kq_n) noexcept {
   NetScratch& ns = data.net;
   const std::span<Vec6> g_b(ns.body_tmp);
   const std::span<Vec3> g_n(ns.sweep);
   net_backward_sweep(model, data, q_b, q_n, t_b, t_n, g_b, g_n);
   net_forward_sweep(model, data, g_b, g_n, kq_b, kq_n);
-  for (std::size_t b = 0; b < kq_b.size(); ++b) kq_b[b] += t_b[b];
-  for (std::size_t i = 0; i < kq_n.size(); ++i) kq_n[i] += t_n[i];
+  double qkq = 0.0;
+  for (std::size_t b = 0; b < kq_b.size(); ++b) {
+    kq_b[b] += t_b[b];
+    qkq += q_b[b].dot(kq_b[b]);
+  }
+  for (std::size_t i = 0; i < kq_n.size(); ++i) {
+    kq_n[i] += t_n[i];
+    qkq += q_n[i].dot(kq_n[i]);
+  }
+  return qkq;
 }
 
 bool solve_net_system(const Model& model, Data& data) noexcept {

@@ -32,23 +32,22 @@ void NetScratch::resize(const Model& model) {
   sweep.assign(n, Vec3::Zero());
   body_schur.assign(nb, Mat6::Identity());
   body_tmp.assign(nb, Vec6::Zero());
-  // Springs by their smaller and by their larger node (counting sort: stable,
-  // so each node's springs stay in Model::net_springs order).
-  const auto group = [&](bool high, std::vector<std::int32_t>& begin, std::vector<std::int32_t>& index) {
-    begin.assign(n > 0 ? n + 1 : 0, 0);
-    index.assign(springs.size(), 0);
-    if (n == 0) return;
-    const auto key = [&](const SpringTerm& t) {
-      return static_cast<std::size_t>(high ? std::max(t.node_a, t.node_b) : std::min(t.node_a, t.node_b));
-    };
-    for (const SpringTerm& t : springs) ++begin[key(t) + 1];
-    for (std::size_t i = 0; i < n; ++i) begin[i + 1] += begin[i];
-    std::vector<std::int32_t> next(begin.begin(), begin.end() - 1);
-    for (std::size_t e = 0; e < springs.size(); ++e)
-      index[static_cast<std::size_t>(next[key(springs[e])]++)] = static_cast<std::int32_t>(e);
-  };
-  group(false, spring_low_begin, spring_low);
-  group(true, spring_high_begin, spring_high);
+  // Springs by their smaller node (counting sort: stable, so each node's
+  // springs stay in Model::net_springs order).
+  sweep_springs.assign(springs.size(), SweepSpring{});
+  spring_low_begin.assign(n > 0 ? n + 1 : 0, 0);
+  spring_slot.assign(springs.size(), 0);
+  if (n > 0) {
+    const auto low = [](const SpringTerm& t) { return static_cast<std::size_t>(std::min(t.node_a, t.node_b)); };
+    for (const SpringTerm& t : springs) ++spring_low_begin[low(t) + 1];
+    for (std::size_t i = 0; i < n; ++i) spring_low_begin[i + 1] += spring_low_begin[i];
+    std::vector<std::int32_t> next(spring_low_begin.begin(), spring_low_begin.end() - 1);
+    for (std::size_t e = 0; e < springs.size(); ++e) {
+      const std::int32_t slot = next[low(springs[e])]++;
+      spring_slot[e] = slot;
+      sweep_springs[static_cast<std::size_t>(slot)].high = std::max(springs[e].node_a, springs[e].node_b);
+    }
+  }
   const auto no = n > 0 ? model.obstacles.size() : 0;
   near_obstacles.assign(no, 0);
   obstacle_axis.assign(no, Vec3::UnitZ());

@@ -96,9 +96,9 @@ void net_forward_sweep(const Model& model, const Data& data, std::span<const Vec
 
 /// Eisenstat's preconditioned product (model without joints, after
 /// build_net_system()): t = (D̃+Lᵀ)⁻¹ q and K q = (D̃+L)⁻¹ A (D̃+Lᵀ)⁻¹ q =
-/// t + (D̃+L)⁻¹ (q + (D − 2D̃) t). Uses NetScratch::body_tmp and sweep as
-/// scratch; the spans must not alias each other or those.
-void apply_net_preconditioned(const Model& model, Data& data, std::span<const Vec6> q_b,
+/// t + (D̃+L)⁻¹ (q + (D − 2D̃) t). Returns qᵀ K q. Uses NetScratch::body_tmp
+/// and sweep as scratch; the spans must not alias each other or those.
+double apply_net_preconditioned(const Model& model, Data& data, std::span<const Vec6> q_b,
                               std::span<const Vec3> q_n, std::span<Vec6> t_b, std::span<Vec3> t_n,
                               std::span<Vec6> kq_b, std::span<Vec3> kq_n) noexcept;
 
