@@ -59,6 +59,39 @@ void add_lever_moments(double weight, double count, const Vec3& sum_r, const Mat
   block.bottomRightCorner<3, 3>() += weight * (sum_rr.trace() * Mat3::Identity() - sum_rr);
 }
 
+/// block += α n nᵀ + β I, exactly symmetric (each product computed once).
+inline void add_weight(double alpha, double beta, const Vec3& n, Mat3& block) noexcept {
+  const double ax = alpha * n.x(), ay = alpha * n.y(), az = alpha * n.z();
+  const double xy = ax * n.y(), xz = ax * n.z(), yz = ay * n.z();
+  block(0, 0) += ax * n.x() + beta;
+  block(1, 1) += ay * n.y() + beta;
+  block(2, 2) += az * n.z() + beta;
+  block(0, 1) += xy;
+  block(1, 0) += xy;
+  block(0, 2) += xz;
+  block(2, 0) += xz;
+  block(1, 2) += yz;
+  block(2, 1) += yz;
+}
+
+/// out = m⁻¹ for a symmetric 3×3 m (its upper triangle is read) by the
+/// adjugate; exactly symmetric. A singular m gives non-finite entries.
+inline void inverse_symmetric(const Mat3& m, Mat3& out) noexcept {
+  const double a = m(0, 0), b = m(0, 1), c = m(0, 2), d = m(1, 1), e = m(1, 2), f = m(2, 2);
+  const double c00 = d * f - e * e, c01 = c * e - b * f, c02 = b * e - c * d;
+  const double inv = 1.0 / (a * c00 + b * c01 + c * c02);
+  const double i01 = c01 * inv, i02 = c02 * inv, i12 = (b * c - a * e) * inv;
+  out(0, 0) = c00 * inv;
+  out(1, 1) = (a * f - c * c) * inv;
+  out(2, 2) = (a * d - b * b) * inv;
+  out(0, 1) = i01;
+  out(1, 0) = i01;
+  out(0, 2) = i02;
+  out(2, 0) = i02;
+  out(1, 2) = i12;
+  out(2, 1) = i12;
+}
+
 double dot6(std::span<const Vec6> a, std::span<const Vec6> b) noexcept {
   double s = 0.0;
   for (std::size_t i = 0; i < a.size(); ++i) s += a[i].dot(b[i]);
@@ -245,10 +278,8 @@ void build_net_system(const Model& model, Data& data) noexcept {
     const double hk = h2 * sp.stiffness;
     t.weight_isotropic = hk * tau;
     t.weight_axial = h * sp.damping + hk - t.weight_isotropic;
-    const Mat3 blk = t.weight_axial * (t.direction * t.direction.transpose()) +
-                     t.weight_isotropic * Mat3::Identity();
-    ns.block[a] += blk;
-    ns.block[b] += blk;
+    add_weight(t.weight_axial, t.weight_isotropic, t.direction, ns.block[a]);
+    add_weight(t.weight_axial, t.weight_isotropic, t.direction, ns.block[b]);
     SweepSpring& w = ns.sweep_springs[static_cast<std::size_t>(ns.spring_slot[e])];
     w.direction = t.direction;
     w.weight_axial = t.weight_axial;
@@ -264,11 +295,10 @@ void build_net_system(const Model& model, Data& data) noexcept {
     if (!ct.active) continue;
     const auto i = static_cast<std::size_t>(ct.node);
     const MaterialPair& mp = model.material_pairs[static_cast<std::size_t>(ct.material_pair)];
-    ns.block[i] += ct.weight_normal * (ct.normal * ct.normal.transpose()) +
-                   ct.weight_isotropic * Mat3::Identity();
+    add_weight(ct.weight_normal, ct.weight_isotropic, ct.normal, ns.block[i]);
     ns.rhs[i] += (-h2 * mp.stiffness * ct.normal_velocity) * ct.normal;
   }
-  for (std::size_t i = 0; i < ns.block.size(); ++i) ns.block_inverse[i] = ns.block[i].inverse();
+  for (std::size_t i = 0; i < ns.block.size(); ++i) inverse_symmetric(ns.block[i], ns.block_inverse[i]);
 
   // The arrowhead preconditioner of the jointed solve: Schur blocks of the
   // bodies, S_b = A_bb − Σ c² J_iᵀ A_ii⁻¹ J_i (without joints the bodies' D̃
