@@ -268,26 +268,36 @@ void build_net_system(const Model& model, Data& data) noexcept {
       ns.rhs[i] = h * ns.force[i] - (h2 * net.tie_stiffness) * relative;
     }
   }
+  // Raw pointers: the stores below would otherwise make the compiler reload
+  // every vector's data pointer per spring.
+  const NetSpring* model_springs = model.net_springs.data();
+  SpringTerm* terms = ns.springs.data();
+  SweepSpring* sweep = ns.sweep_springs.data();
+  const std::int32_t* slot = ns.spring_slot.data();
+  const NodeState* nodes = data.nodes.data();
+  Mat3* blocks = ns.block.data();
+  Vec3* rhs = ns.rhs.data();
   for (std::size_t e = 0; e < ns.springs.size(); ++e) {
-    const NetSpring& sp = model.net_springs[e];
-    SpringTerm& t = ns.springs[e];
+    const NetSpring& sp = model_springs[e];
+    SpringTerm& t = terms[e];
     const auto a = static_cast<std::size_t>(sp.node_a);
     const auto b = static_cast<std::size_t>(sp.node_b);
     // K̃ = (1 − τ) d̂d̂ᵀ + τ I, τ = max(0, 1 − L/l): −∂f_a/∂x_a / k.
     const double tau = t.length > sp.rest_length ? 1.0 - sp.rest_length / t.length : 0.0;
     const double hk = h2 * sp.stiffness;
-    t.weight_isotropic = hk * tau;
-    t.weight_axial = h * sp.damping + hk - t.weight_isotropic;
-    add_weight(t.weight_axial, t.weight_isotropic, t.direction, ns.block[a]);
-    add_weight(t.weight_axial, t.weight_isotropic, t.direction, ns.block[b]);
-    SweepSpring& w = ns.sweep_springs[static_cast<std::size_t>(ns.spring_slot[e])];
+    const double beta = hk * tau;
+    const double alpha = h * sp.damping + hk - beta;
+    t.weight_isotropic = beta;
+    t.weight_axial = alpha;
+    add_weight(alpha, beta, t.direction, blocks[a]);
+    add_weight(alpha, beta, t.direction, blocks[b]);
+    SweepSpring& w = sweep[static_cast<std::size_t>(slot[e])];
     w.direction = t.direction;
-    w.weight_axial = t.weight_axial;
-    w.weight_isotropic = t.weight_isotropic;
-    const Vec3 kv = weight_times(hk * (1.0 - tau), hk * tau, t.direction,
-                                 data.nodes[a].velocity - data.nodes[b].velocity);
-    ns.rhs[a] -= kv;
-    ns.rhs[b] += kv;
+    w.weight_axial = alpha;
+    w.weight_isotropic = beta;
+    const Vec3 kv = weight_times(hk - beta, beta, t.direction, nodes[a].velocity - nodes[b].velocity);
+    rhs[a] -= kv;
+    rhs[b] += kv;
   }
   const int nc = node_contact_count(data);
   for (int k = 0; k < nc; ++k) {
