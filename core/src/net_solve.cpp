@@ -174,7 +174,6 @@ void apply_coupled(const Model& model, const Data& data, std::span<const Vec6> i
   }
 }
 
-
 /// W_e v = α d̂ (d̂ · v) + β v for a spring, in plain scalar code (the inner
 /// loop of both sweeps).
 inline Vec3 spring_times(const SweepSpring& t, const Vec3& v) noexcept {
@@ -295,7 +294,8 @@ void build_net_system(const Model& model, Data& data) noexcept {
     w.direction = t.direction;
     w.weight_axial = alpha;
     w.weight_isotropic = beta;
-    const Vec3 kv = weight_times(hk - beta, beta, t.direction, nodes[a].velocity - nodes[b].velocity);
+    const Vec3 kv =
+        weight_times(hk - beta, beta, t.direction, nodes[a].velocity - nodes[b].velocity);
     rhs[a] -= kv;
     rhs[b] += kv;
   }
@@ -308,7 +308,8 @@ void build_net_system(const Model& model, Data& data) noexcept {
     add_weight(ct.weight_normal, ct.weight_isotropic, ct.normal, ns.block[i]);
     ns.rhs[i] += (-h2 * mp.stiffness * ct.normal_velocity) * ct.normal;
   }
-  for (std::size_t i = 0; i < ns.block.size(); ++i) inverse_symmetric(ns.block[i], ns.block_inverse[i]);
+  for (std::size_t i = 0; i < ns.block.size(); ++i)
+    inverse_symmetric(ns.block[i], ns.block_inverse[i]);
 
   // The arrowhead preconditioner of the jointed solve: Schur blocks of the
   // bodies, S_b = A_bb − Σ c² J_iᵀ A_ii⁻¹ J_i (without joints the bodies' D̃
@@ -360,8 +361,8 @@ bool solve_arrowhead(const Model& model, Data& data) noexcept {
   const std::span<Vec6> xb(s.delta), rb(s.residual), zb(s.precond_residual), pb(s.direction),
       apb(s.a_direction), tb(ns.body_tmp);
   const std::span<const Vec6> bb(s.rhs);
-  const std::span<Vec3> xn(ns.delta), rn(ns.residual), zn(ns.precond_residual),
-      pn(ns.direction), apn(ns.a_direction);
+  const std::span<Vec3> xn(ns.delta), rn(ns.residual), zn(ns.precond_residual), pn(ns.direction),
+      apn(ns.a_direction);
   const std::span<const Vec3> bn(ns.rhs);
   const std::span<JointVector> y(s.joint_y), yz(s.joint_y_correction);
   const std::span<Vec6> rp(s.projected_residual);
@@ -409,9 +410,7 @@ bool solve_arrowhead(const Model& model, Data& data) noexcept {
     for (std::size_t b = 0; b < nb; ++b) rb[b] -= rp[b];
     for (std::size_t j = 0; j < y.size(); ++j) y[j] += yz[j];
   };
-  const auto residual_norm = [&]() noexcept {
-    return std::sqrt(dot6(rb, rb) + dot3(rn, rn));
-  };
+  const auto residual_norm = [&]() noexcept { return std::sqrt(dot6(rb, rb) + dot3(rn, rn)); };
 
   // Start: bodies at 0, nodes at the last step's Δv (warm start).
   for (Vec6& v : xb) v.setZero();
@@ -481,7 +480,6 @@ bool solve_arrowhead(const Model& model, Data& data) noexcept {
   data.solver_residual = rel;
   return rel <= model.solver.tolerance;
 }
-
 
 /// Eisenstat's CG with the SSOR preconditioner (models without joints; see
 /// net_solve.hpp).
@@ -615,7 +613,8 @@ void net_backward_sweep(const Model& model, const Data& data, std::span<const Ve
 }
 
 void net_forward_sweep(const Model& model, const Data& data, std::span<const Vec6> g_b,
-                       std::span<const Vec3> g_n, std::span<Vec6> y_b, std::span<Vec3> y_n) noexcept {
+                       std::span<const Vec3> g_n, std::span<Vec6> y_b,
+                       std::span<Vec3> y_n) noexcept {
   const SolverScratch& s = data.solver;
   const NetScratch& ns = data.net;
   const double h = model.dt;

@@ -227,7 +227,8 @@ struct Snapshot {
 
 /// The stages of one implicit step up to the solve, with hand-written node
 /// contacts. Returns the snapshot; the solve's result is in d.
-Snapshot staged_solve(const core::Model& m, core::Data& d, bool* converged, bool body_contact = false) {
+Snapshot staged_solve(const core::Model& m, core::Data& d, bool* converged,
+                      bool body_contact = false) {
   d.status = core::kStepOk;
   core::impose_direct_target(m, d);
   core::detect_contacts(m, d);
@@ -657,7 +658,8 @@ Splitting dense_splitting(const core::Model& m, const MatrixXd& a) {
   const int nb6 = 6 * m.num_bodies();
   const int dim = static_cast<int>(a.rows());
   Splitting s{MatrixXd::Zero(dim, dim), MatrixXd::Zero(dim, dim), MatrixXd::Zero(dim, dim)};
-  for (int k = 0; k < m.num_bodies(); ++k) s.d_tilde.block<6, 6>(6 * k, 6 * k) = a.block<6, 6>(6 * k, 6 * k);
+  for (int k = 0; k < m.num_bodies(); ++k)
+    s.d_tilde.block<6, 6>(6 * k, 6 * k) = a.block<6, 6>(6 * k, 6 * k);
   for (int r = nb6; r < dim; r += 3) s.d_tilde.block<3, 3>(r, r) = a.block<3, 3>(r, r);
   s.d = s.d_tilde;
   s.d.topLeftCorner(nb6, nb6) = a.topLeftCorner(nb6, nb6);
@@ -700,9 +702,9 @@ TEST(NetSolve, EisenstatSplittingAndPreconditionedProductMatchTheDenseMatrix) {
   const Splitting sp = dense_splitting(m, a);
   EXPECT_GT(sp.l.norm(), 0.0);
   EXPECT_GT((sp.d - sp.d_tilde).norm(), 0.0);
-  const MatrixXd lower = sp.d_tilde + sp.l;                      // D̃ + L
-  const MatrixXd upper = lower.transpose();                       // D̃ + Lᵀ
-  const MatrixXd rest = sp.d - 2.0 * sp.d_tilde;                  // D − 2D̃
+  const MatrixXd lower = sp.d_tilde + sp.l;                        // D̃ + L
+  const MatrixXd upper = lower.transpose();                        // D̃ + Lᵀ
+  const MatrixXd rest = sp.d - 2.0 * sp.d_tilde;                   // D − 2D̃
   EXPECT_LT((lower + upper + rest - a).norm(), 1e-15 * a.norm());  // the splitting itself
 
   // The sweeps column by column: (D̃+L)⁻¹, (D̃+Lᵀ)⁻¹ and G = I + (D − 2D̃)(D̃+Lᵀ)⁻¹.
@@ -724,9 +726,10 @@ TEST(NetSolve, EisenstatSplittingAndPreconditionedProductMatchTheDenseMatrix) {
   const double e_upper = (upper_sweep - upper).norm() / scale;
   const double e_rest = (rest_sweep - rest).norm() / scale;
   const double e_sum = (lower_sweep + upper_sweep + rest_sweep - a).norm() / scale;
-  std::printf("[eisenstat splitting] |(D+L) - dense| %.1e, |(D+L') - dense| %.1e, |D-2D~ - dense| %.1e, "
-              "|sum - A| %.1e (relative to |A|)\n",
-              e_lower, e_upper, e_rest, e_sum);
+  std::printf(
+      "[eisenstat splitting] |(D+L) - dense| %.1e, |(D+L') - dense| %.1e, |D-2D~ - dense| %.1e, "
+      "|sum - A| %.1e (relative to |A|)\n",
+      e_lower, e_upper, e_rest, e_sum);
   EXPECT_LT(e_lower, 1e-12);
   EXPECT_LT(e_upper, 1e-12);
   EXPECT_LT(e_rest, 1e-12);
@@ -764,8 +767,9 @@ TEST(NetSolve, ReportsTheResidualInTheNormOfThePreconditioner) {
   const VectorXd r = b - a * solver_unknowns(m, d);
   const double rel_m = std::sqrt(r.dot(llt.solve(r)) / b.dot(llt.solve(b)));
   const double rel_2 = r.norm() / b.norm();
-  std::printf("[net solve residual] %d iterations, reported %.4e, |r|_M^-1/|b|_M^-1 %.4e, |r|/|b| %.4e\n",
-              d.solver_iterations, d.solver_residual, rel_m, rel_2);
+  std::printf(
+      "[net solve residual] %d iterations, reported %.4e, |r|_M^-1/|b|_M^-1 %.4e, |r|/|b| %.4e\n",
+      d.solver_iterations, d.solver_residual, rel_m, rel_2);
   EXPECT_LE(d.solver_residual, m.solver.tolerance);
   EXPECT_GT(d.solver_residual, 0.0);
   EXPECT_NEAR(d.solver_residual, rel_m, 1e-6 * rel_m);
@@ -781,7 +785,8 @@ TEST(NetSolve, BodyContactAndNodeContactWithAProbeMatchTheDenseSolve) {
   const VectorXd x_ref = st.ref.a.llt().solve(st.ref.b);
   const VectorXd x = solver_unknowns(m, d);
   const double err = (x - x_ref).norm() / x_ref.norm();
-  std::printf("[net solve body contact] %d iterations, |x - x_dense|/|x| %.2e\n", d.solver_iterations, err);
+  std::printf("[net solve body contact] %d iterations, |x - x_dense|/|x| %.2e\n",
+              d.solver_iterations, err);
   EXPECT_LT(err, 1e-9);
   EXPECT_LT((st.ref.a * x - st.ref.b).norm(), 1e-11 * st.ref.b.norm());
   EXPECT_GT(x_ref.segment<6>(6).norm(), 1e-4);  // the probe moves

@@ -92,14 +92,15 @@ void net_backward_sweep(const Model& model, const Data& data, std::span<const Ve
 /// build_net_system()): y = (D̃+L)⁻¹ g, bodies first, then the nodes from first
 /// to last. y may be g itself (in place); otherwise they must not overlap.
 void net_forward_sweep(const Model& model, const Data& data, std::span<const Vec6> g_b,
-                       std::span<const Vec3> g_n, std::span<Vec6> y_b, std::span<Vec3> y_n) noexcept;
+                       std::span<const Vec3> g_n, std::span<Vec6> y_b,
+                       std::span<Vec3> y_n) noexcept;
 
 /// Eisenstat's preconditioned product (model without joints, after
 /// build_net_system()): t = (D̃+Lᵀ)⁻¹ q and K q = (D̃+L)⁻¹ A (D̃+Lᵀ)⁻¹ q =
 /// t + (D̃+L)⁻¹ (q + (D − 2D̃) t). Returns qᵀ K q. Uses NetScratch::body_tmp
 /// and sweep as scratch; the spans must not alias each other or those.
 double apply_net_preconditioned(const Model& model, Data& data, std::span<const Vec6> q_b,
-                              std::span<const Vec3> q_n, std::span<Vec6> t_b, std::span<Vec3> t_n,
-                              std::span<Vec6> kq_b, std::span<Vec3> kq_n) noexcept;
+                                std::span<const Vec3> q_n, std::span<Vec6> t_b, std::span<Vec3> t_n,
+                                std::span<Vec6> kq_b, std::span<Vec3> kq_n) noexcept;
 
 }  // namespace numen::core
