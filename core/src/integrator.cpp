@@ -106,10 +106,10 @@ double apply_preconditioner(const SolverScratch& s, std::span<const Vec6> r,
   return rz;
 }
 
-/// Adds the off-diagonal blocks of A to out: for each cross contact,
-/// out_a −= G_aᵀ W G_b in_b and out_b −= G_bᵀ W G_a in_a.
-void add_cross_terms(const SolverScratch& s, std::span<const Vec6> in,
-                     std::span<Vec6> out) noexcept {
+}  // namespace
+
+void add_cross_contact_terms(const SolverScratch& s, std::span<const Vec6> in,
+                             std::span<Vec6> out) noexcept {
   for (int c = 0; c < s.num_cross_contacts; ++c) {
     const CrossContact& x = s.cross_contacts[static_cast<std::size_t>(c)];
     const auto a = static_cast<std::size_t>(x.body_a);
@@ -126,8 +126,6 @@ void add_cross_terms(const SolverScratch& s, std::span<const Vec6> in,
     out[b].tail<3>() -= x.r_b.cross(wa);
   }
 }
-
-}  // namespace
 
 void SolverScratch::resize(const Model& model) {
   const auto n = static_cast<std::size_t>(model.num_bodies());
@@ -258,9 +256,10 @@ void build_implicit_system(const Model& model, Data& data) noexcept {
   for (std::size_t i = 0; i < n; ++i) {
     if (s.in_solve[i]) add_isotropic_part(s.isotropic_moments[i], s.block[i]);
     mirror_lower(s.block[i]);
-    // With joints the tree solve factors the blocks itself (articulation.hpp);
-    // with nets the preconditioner factors Schur blocks (net_solve.hpp).
-    if (model.joints.empty() && model.nets.empty()) factor_block(s.block[i], s.block_factor[i]);
+    // With joints the tree solve factors the blocks itself (articulation.hpp;
+    // with nets, Schur blocks: net_solve.hpp). Without joints the factors are
+    // the block-Jacobi preconditioner, or the bodies' D̃ of the nets' solve.
+    if (model.joints.empty()) factor_block(s.block[i], s.block_factor[i]);
   }
 }
 
@@ -280,7 +279,7 @@ void apply_implicit_system(const Model& /*model*/, const Data& data, std::span<c
       out[i].setZero();
     }
   }
-  add_cross_terms(s, in, out);
+  add_cross_contact_terms(s, in, out);
 }
 
 bool solve_implicit_system(const Model& model, Data& data) noexcept {
@@ -324,7 +323,7 @@ bool solve_implicit_system(const Model& model, Data& data) noexcept {
     // ap = A p on the coupled bodies; the others' ap is kept by recurrence.
     for (std::size_t i = 0; i < p.size(); ++i)
       if (s.coupled[i]) block_times(s.block[i], p[i], ap[i]);
-    add_cross_terms(s, p, ap);
+    add_cross_contact_terms(s, p, ap);
     const double pap = dot(p, ap);
     if (!std::isfinite(pap)) return poison();
     if (!(pap > 0.0)) break;  // breakdown (A not SPD numerically, or converged exactly)

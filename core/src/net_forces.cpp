@@ -36,7 +36,7 @@ void compute_net_forces(const Model& model, Data& data) noexcept {
     const auto b = static_cast<std::size_t>(sp.node_b);
     const Vec3 d = data.nodes[b].position - data.nodes[a].position;
     const double l = d.norm();
-    if (l > 1e-12 * sp.rest_length) t.direction = d / l;  // else: keep the last direction
+    if (l > 1e-12 * sp.rest_length) t.direction = d * (1.0 / l);  // else: keep the last direction
     t.length = l;
     const Vec3 dv = data.nodes[b].velocity - data.nodes[a].velocity;
     const Vec3 f =

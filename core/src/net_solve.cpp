@@ -59,6 +59,39 @@ void add_lever_moments(double weight, double count, const Vec3& sum_r, const Mat
   block.bottomRightCorner<3, 3>() += weight * (sum_rr.trace() * Mat3::Identity() - sum_rr);
 }
 
+/// block += α n nᵀ + β I, exactly symmetric (each product computed once).
+inline void add_weight(double alpha, double beta, const Vec3& n, Mat3& block) noexcept {
+  const double ax = alpha * n.x(), ay = alpha * n.y(), az = alpha * n.z();
+  const double xy = ax * n.y(), xz = ax * n.z(), yz = ay * n.z();
+  block(0, 0) += ax * n.x() + beta;
+  block(1, 1) += ay * n.y() + beta;
+  block(2, 2) += az * n.z() + beta;
+  block(0, 1) += xy;
+  block(1, 0) += xy;
+  block(0, 2) += xz;
+  block(2, 0) += xz;
+  block(1, 2) += yz;
+  block(2, 1) += yz;
+}
+
+/// out = m⁻¹ for a symmetric 3×3 m (its upper triangle is read) by the
+/// adjugate; exactly symmetric. A singular m gives non-finite entries.
+inline void inverse_symmetric(const Mat3& m, Mat3& out) noexcept {
+  const double a = m(0, 0), b = m(0, 1), c = m(0, 2), d = m(1, 1), e = m(1, 2), f = m(2, 2);
+  const double c00 = d * f - e * e, c01 = c * e - b * f, c02 = b * e - c * d;
+  const double inv = 1.0 / (a * c00 + b * c01 + c * c02);
+  const double i01 = c01 * inv, i02 = c02 * inv, i12 = (b * c - a * e) * inv;
+  out(0, 0) = c00 * inv;
+  out(1, 1) = (a * f - c * c) * inv;
+  out(2, 2) = (a * d - b * b) * inv;
+  out(0, 1) = i01;
+  out(1, 0) = i01;
+  out(0, 2) = i02;
+  out(2, 0) = i02;
+  out(1, 2) = i12;
+  out(2, 1) = i12;
+}
+
 double dot6(std::span<const Vec6> a, std::span<const Vec6> b) noexcept {
   double s = 0.0;
   for (std::size_t i = 0; i < a.size(); ++i) s += a[i].dot(b[i]);
@@ -141,6 +174,37 @@ void apply_coupled(const Model& model, const Data& data, std::span<const Vec6> i
   }
 }
 
+/// W_e v = α d̂ (d̂ · v) + β v for a spring, in plain scalar code (the inner
+/// loop of both sweeps).
+inline Vec3 spring_times(const SweepSpring& t, const Vec3& v) noexcept {
+  const Vec3& n = t.direction;
+  const double s = t.weight_axial * (n.x() * v.x() + n.y() * v.y() + n.z() * v.z());
+  return Vec3(s * n.x() + t.weight_isotropic * v.x(), s * n.y() + t.weight_isotropic * v.y(),
+              s * n.z() + t.weight_isotropic * v.z());
+}
+
+/// D̃ v: blockdiag(SolverScratch::block, NetScratch::block) times v, into
+/// out; returns vᵀ D̃ v. Bodies not in the solve give 0.
+double apply_block_diagonal(const Data& data, std::span<const Vec6> v_b, std::span<const Vec3> v_n,
+                            std::span<Vec6> out_b, std::span<Vec3> out_n) noexcept {
+  const SolverScratch& s = data.solver;
+  const NetScratch& ns = data.net;
+  double vdv = 0.0;
+  for (std::size_t b = 0; b < v_b.size(); ++b) {
+    if (s.in_solve[b]) {
+      out_b[b].noalias() = s.block[b] * v_b[b];
+      vdv += v_b[b].dot(out_b[b]);
+    } else {
+      out_b[b].setZero();
+    }
+  }
+  for (std::size_t i = 0; i < v_n.size(); ++i) {
+    out_n[i].noalias() = ns.block[i] * v_n[i];
+    vdv += v_n[i].dot(out_n[i]);
+  }
+  return vdv;
+}
+
 }  // namespace
 
 void add_net_body_terms(const Model& model, Data& data) noexcept {
@@ -203,24 +267,37 @@ void build_net_system(const Model& model, Data& data) noexcept {
       ns.rhs[i] = h * ns.force[i] - (h2 * net.tie_stiffness) * relative;
     }
   }
+  // Raw pointers: the stores below would otherwise make the compiler reload
+  // every vector's data pointer per spring.
+  const NetSpring* model_springs = model.net_springs.data();
+  SpringTerm* terms = ns.springs.data();
+  SweepSpring* sweep = ns.sweep_springs.data();
+  const std::int32_t* slot = ns.spring_slot.data();
+  const NodeState* nodes = data.nodes.data();
+  Mat3* blocks = ns.block.data();
+  Vec3* rhs = ns.rhs.data();
   for (std::size_t e = 0; e < ns.springs.size(); ++e) {
-    const NetSpring& sp = model.net_springs[e];
-    SpringTerm& t = ns.springs[e];
+    const NetSpring& sp = model_springs[e];
+    SpringTerm& t = terms[e];
     const auto a = static_cast<std::size_t>(sp.node_a);
     const auto b = static_cast<std::size_t>(sp.node_b);
     // K̃ = (1 − τ) d̂d̂ᵀ + τ I, τ = max(0, 1 − L/l): −∂f_a/∂x_a / k.
     const double tau = t.length > sp.rest_length ? 1.0 - sp.rest_length / t.length : 0.0;
     const double hk = h2 * sp.stiffness;
-    t.weight_isotropic = hk * tau;
-    t.weight_axial = h * sp.damping + hk - t.weight_isotropic;
-    const Mat3 blk = t.weight_axial * (t.direction * t.direction.transpose()) +
-                     t.weight_isotropic * Mat3::Identity();
-    ns.block[a] += blk;
-    ns.block[b] += blk;
-    const Vec3 kv = weight_times(hk * (1.0 - tau), hk * tau, t.direction,
-                                 data.nodes[a].velocity - data.nodes[b].velocity);
-    ns.rhs[a] -= kv;
-    ns.rhs[b] += kv;
+    const double beta = hk * tau;
+    const double alpha = h * sp.damping + hk - beta;
+    t.weight_isotropic = beta;
+    t.weight_axial = alpha;
+    add_weight(alpha, beta, t.direction, blocks[a]);
+    add_weight(alpha, beta, t.direction, blocks[b]);
+    SweepSpring& w = sweep[static_cast<std::size_t>(slot[e])];
+    w.direction = t.direction;
+    w.weight_axial = alpha;
+    w.weight_isotropic = beta;
+    const Vec3 kv =
+        weight_times(hk - beta, beta, t.direction, nodes[a].velocity - nodes[b].velocity);
+    rhs[a] -= kv;
+    rhs[b] += kv;
   }
   const int nc = node_contact_count(data);
   for (int k = 0; k < nc; ++k) {
@@ -228,13 +305,16 @@ void build_net_system(const Model& model, Data& data) noexcept {
     if (!ct.active) continue;
     const auto i = static_cast<std::size_t>(ct.node);
     const MaterialPair& mp = model.material_pairs[static_cast<std::size_t>(ct.material_pair)];
-    ns.block[i] += ct.weight_normal * (ct.normal * ct.normal.transpose()) +
-                   ct.weight_isotropic * Mat3::Identity();
+    add_weight(ct.weight_normal, ct.weight_isotropic, ct.normal, ns.block[i]);
     ns.rhs[i] += (-h2 * mp.stiffness * ct.normal_velocity) * ct.normal;
   }
-  for (std::size_t i = 0; i < ns.block.size(); ++i) ns.block_inverse[i] = ns.block[i].inverse();
+  for (std::size_t i = 0; i < ns.block.size(); ++i)
+    inverse_symmetric(ns.block[i], ns.block_inverse[i]);
 
-  // Preconditioner: Schur blocks of the bodies, S_b = A_bb − Σ c² J_iᵀ A_ii⁻¹ J_i.
+  // The arrowhead preconditioner of the jointed solve: Schur blocks of the
+  // bodies, S_b = A_bb − Σ c² J_iᵀ A_ii⁻¹ J_i (without joints the bodies' D̃
+  // blocks are SolverScratch::block, factored by build_implicit_system()).
+  if (model.joints.empty()) return;
   for (std::size_t b = 0; b < ns.body_schur.size(); ++b) ns.body_schur[b] = s.block[b];
   for (const NetModel& net : model.nets) {
     const auto b = static_cast<std::size_t>(net.body);
@@ -261,32 +341,28 @@ void build_net_system(const Model& model, Data& data) noexcept {
     }
     ns.body_schur[b] -= (c * c) * reduction;
   }
-  if (model.joints.empty())
-    for (std::size_t b = 0; b < ns.body_schur.size(); ++b)
-      if (s.in_solve[b]) factor_block(ns.body_schur[b], ns.body_schur_factor[b]);
 }
 
-bool solve_net_system(const Model& model, Data& data) noexcept {
+namespace {
+
+/// The arrowhead-preconditioned projected CG (models with joints; see
+/// net_solve.hpp).
+bool solve_arrowhead(const Model& model, Data& data) noexcept {
   SolverScratch& s = data.solver;
   NetScratch& ns = data.net;
   ArticulationScratch& art = data.articulation;
-  const bool joints = !model.joints.empty();
   const double h = model.dt;
   const std::size_t nb = data.bodies.size();
-  data.solver_iterations = 0;
-  data.solver_residual = 0.0;
 
-  if (joints) {
-    for (std::size_t i = 0; i < nb; ++i) art.known[i] = s.in_solve[i] ? 0 : 1;
-    build_joint_rows(model, data, s.twist0, s.delta, s.joint_rhs);  // s.delta: Δu_prev
-    factor_articulation(model, ns.body_schur, art);  // a bad pivot leaves NaN: rejected below
-  }
+  for (std::size_t i = 0; i < nb; ++i) art.known[i] = s.in_solve[i] ? 0 : 1;
+  build_joint_rows(model, data, s.twist0, s.delta, s.joint_rhs);  // s.delta: Δu_prev
+  factor_articulation(model, ns.body_schur, art);  // a bad pivot leaves NaN: rejected below
 
   const std::span<Vec6> xb(s.delta), rb(s.residual), zb(s.precond_residual), pb(s.direction),
       apb(s.a_direction), tb(ns.body_tmp);
   const std::span<const Vec6> bb(s.rhs);
-  const std::span<Vec3> xn(ns.delta), rn(ns.residual), zn(ns.precond_residual),
-      pn(ns.direction), apn(ns.a_direction);
+  const std::span<Vec3> xn(ns.delta), rn(ns.residual), zn(ns.precond_residual), pn(ns.direction),
+      apn(ns.a_direction);
   const std::span<const Vec3> bn(ns.rhs);
   const std::span<JointVector> y(s.joint_y), yz(s.joint_y_correction);
   const std::span<Vec6> rp(s.projected_residual);
@@ -300,8 +376,8 @@ bool solve_net_system(const Model& model, Data& data) noexcept {
   };
 
   // z = P⁻¹ r with the arrowhead preconditioner: nodes eliminated onto the
-  // bodies, body part by Cholesky of S_b or by the tree solve with
-  // `constraint_rhs` (then yz holds the constraint part).
+  // bodies, body part by the tree solve with the Schur blocks S_b and
+  // `constraint_rhs` (yz holds the constraint part).
   const auto precondition = [&](std::span<const JointVector> constraint_rhs) noexcept {
     for (std::size_t i = 0; i < rn.size(); ++i) zn[i].noalias() = ns.block_inverse[i] * rn[i];
     for (std::size_t b = 0; b < nb; ++b) tb[b] = rb[b];
@@ -315,17 +391,7 @@ bool solve_net_system(const Model& model, Data& data) noexcept {
       }
       tb[b] += tie_weight(net, h) * acc;
     }
-    if (joints) {
-      solve_articulation(model, art, tb, constraint_rhs, zb, yz);
-    } else {
-      for (std::size_t b = 0; b < nb; ++b) {
-        if (s.in_solve[b]) {
-          solve_block(ns.body_schur_factor[b], tb[b], zb[b]);
-        } else {
-          zb[b].setZero();
-        }
-      }
-    }
+    solve_articulation(model, art, tb, constraint_rhs, zb, yz);
     for (const NetModel& net : model.nets) {
       const auto b = static_cast<std::size_t>(net.body);
       if (!s.in_solve[b]) continue;
@@ -336,18 +402,15 @@ bool solve_net_system(const Model& model, Data& data) noexcept {
       }
     }
   };
-  // With joints: r ← r − Gᵀ yz (same z, since P Gᵀ = 0) and y += yz
-  // (Gould, Hribar & Nocedal's residual update; see solve_constrained_system).
+  // r ← r − Gᵀ yz (same z, since P Gᵀ = 0) and y += yz (Gould, Hribar &
+  // Nocedal's residual update; see solve_constrained_system).
   const auto update_residual = [&]() noexcept {
-    if (!joints) return;
     for (std::size_t b = 0; b < nb; ++b) rp[b].setZero();
     add_joint_transpose(model, data, yz, rp);
     for (std::size_t b = 0; b < nb; ++b) rb[b] -= rp[b];
     for (std::size_t j = 0; j < y.size(); ++j) y[j] += yz[j];
   };
-  const auto residual_norm = [&]() noexcept {
-    return std::sqrt(dot6(rb, rb) + dot3(rn, rn));
-  };
+  const auto residual_norm = [&]() noexcept { return std::sqrt(dot6(rb, rb) + dot3(rn, rn)); };
 
   // Start: bodies at 0, nodes at the last step's Δv (warm start).
   for (Vec6& v : xb) v.setZero();
@@ -360,7 +423,7 @@ bool solve_net_system(const Model& model, Data& data) noexcept {
   double ref = std::sqrt(dot6(bb, bb) + dot3(bn, bn));
   if (!std::isfinite(ref)) return poison();
 
-  if (joints) {
+  {
     // Feasible start: x += P_KKT⁻¹ (r, c), so that G Δu = c from here on.
     precondition(s.joint_rhs);
     for (std::size_t j = 0; j < y.size(); ++j) y[j] = yz[j];
@@ -412,10 +475,214 @@ bool solve_net_system(const Model& model, Data& data) noexcept {
     for (std::size_t b = 0; b < nb; ++b) pb[b] = zb[b] + beta * pb[b];
     for (std::size_t i = 0; i < pn.size(); ++i) pn[i] = zn[i] + beta * pn[i];
   }
-  if (joints) store_joint_multipliers(model, data, y);
+  store_joint_multipliers(model, data, y);
   data.solver_iterations = it;
   data.solver_residual = rel;
   return rel <= model.solver.tolerance;
+}
+
+/// Eisenstat's CG with the SSOR preconditioner (models without joints; see
+/// net_solve.hpp).
+bool solve_eisenstat(const Model& model, Data& data) noexcept {
+  SolverScratch& s = data.solver;
+  NetScratch& ns = data.net;
+  const std::span<Vec6> xb(s.delta), wb(s.residual), tb(s.precond_residual), qb(s.direction),
+      kqb(s.a_direction), gb(ns.body_tmp);
+  const std::span<const Vec6> bb(s.rhs);
+  const std::span<Vec3> xn(ns.delta), wn(ns.residual), tn(ns.precond_residual), qn(ns.direction),
+      kqn(ns.a_direction), gn(ns.sweep);
+  const std::span<const Vec3> bn(ns.rhs);
+  const std::size_t nb = xb.size(), nn = xn.size();
+
+  const auto poison = [&]() noexcept {
+    constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+    for (Vec6& v : xb) v.setConstant(kNaN);
+    for (Vec3& v : xn) v.setConstant(kNaN);
+    data.solver_residual = kNaN;
+    return false;
+  };
+
+  // Start: bodies at 0, nodes at the last step's Δv (warm start); r = b − A x0
+  // (in g), w = (D̃+L)⁻¹ r, and the reference ‖b‖²_{M⁻¹} = w_bᵀ D̃ w_b with
+  // w_b = (D̃+L)⁻¹ b (t and K q serve as scratch).
+  for (Vec6& v : xb) v.setZero();
+  for (Vec3& v : xn)
+    if (!v.allFinite()) v.setZero();
+  apply_coupled(model, data, xb, xn, kqb, kqn);
+  for (std::size_t b = 0; b < nb; ++b) gb[b] = s.in_solve[b] ? Vec6(bb[b] - kqb[b]) : Vec6::Zero();
+  for (std::size_t i = 0; i < nn; ++i) gn[i] = bn[i] - kqn[i];
+  net_forward_sweep(model, data, gb, gn, wb, wn);
+  net_forward_sweep(model, data, bb, bn, tb, tn);
+  double ref = apply_block_diagonal(data, tb, tn, kqb, kqn);
+  if (!std::isfinite(ref)) return poison();
+  if (!(ref > 0.0)) ref = 1.0;
+  double rho = apply_block_diagonal(data, wb, wn, qb, qn);  // q = D̃ w
+  double rel = std::sqrt(rho / ref);
+  if (!std::isfinite(rel)) return poison();
+
+  int it = 0;
+  const int max_it = std::max(1, model.solver.max_iterations);
+  while (rel > model.solver.tolerance && it < max_it) {
+    ++it;
+    const double qkq = apply_net_preconditioned(model, data, qb, qn, tb, tn, kqb, kqn);
+    if (!std::isfinite(qkq)) return poison();
+    if (!(qkq > 0.0)) break;  // breakdown, or converged exactly
+    const double alpha = rho / qkq;
+    // x += α t, w −= α K q, g = D̃ w, ρ' = wᵀ D̃ w in one pass.
+    double rho_new = 0.0;
+    for (std::size_t b = 0; b < nb; ++b) {
+      if (!s.in_solve[b]) {  // x and w stay 0
+        gb[b].setZero();
+        continue;
+      }
+      xb[b] += alpha * tb[b];
+      wb[b] -= alpha * kqb[b];
+      gb[b].noalias() = s.block[b] * wb[b];
+      rho_new += wb[b].dot(gb[b]);
+    }
+    for (std::size_t i = 0; i < nn; ++i) {
+      xn[i] += alpha * tn[i];
+      wn[i] -= alpha * kqn[i];
+      gn[i].noalias() = ns.block[i] * wn[i];
+      rho_new += wn[i].dot(gn[i]);
+    }
+    rel = std::sqrt(rho_new / ref);
+    if (!std::isfinite(rel)) return poison();
+    if (rel <= model.solver.tolerance || !(rho_new > 0.0)) break;
+    const double beta = rho_new / rho;
+    rho = rho_new;
+    for (std::size_t b = 0; b < nb; ++b) qb[b] = gb[b] + beta * qb[b];
+    for (std::size_t i = 0; i < nn; ++i) qn[i] = gn[i] + beta * qn[i];
+  }
+  data.solver_iterations = it;
+  data.solver_residual = rel;
+  return rel <= model.solver.tolerance;
+}
+
+}  // namespace
+
+void net_backward_sweep(const Model& model, const Data& data, std::span<const Vec6> q_b,
+                        std::span<const Vec3> q_n, std::span<Vec6> t_b, std::span<Vec3> t_n,
+                        std::span<Vec6> g_b, std::span<Vec3> g_n) noexcept {
+  const SolverScratch& s = data.solver;
+  const NetScratch& ns = data.net;
+  const double h = model.dt;
+  const std::size_t nb = q_b.size();
+  const SweepSpring* springs = ns.sweep_springs.data();
+  const std::int32_t* low_begin = ns.spring_low_begin.data();
+  for (Vec6& v : g_b) v.setZero();
+  // Nodes, last to first: (D̃+Lᵀ) has, in node k's row, −W_e towards every
+  // larger node of a spring (and nothing towards the bodies, which come
+  // first): t_k = A_kk⁻¹ (q_k + Σ W_e t_j), g_k = (Lᵀ t)_k = −Σ W_e t_j,
+  // gathered over node k's springs (grouped by their smaller node).
+  // Nets share no spring, so they are swept one after the other.
+  for (auto net = model.nets.rbegin(); net != model.nets.rend(); ++net) {
+    const auto body = static_cast<std::size_t>(net->body);
+    const bool tied = s.in_solve[body] != 0;
+    Vec6 tie = Vec6::Zero();  // Σ J_iᵀ t_i
+    for (int v = net->node_begin + net->node_count - 1; v >= net->node_begin; --v) {
+      const auto k = static_cast<std::size_t>(v);
+      Vec3 sum = Vec3::Zero();
+      for (std::int32_t j = low_begin[k]; j < low_begin[k + 1]; ++j)
+        sum += spring_times(springs[j], t_n[static_cast<std::size_t>(springs[j].high)]);
+      g_n[k] = -sum;
+      t_n[k].noalias() = ns.block_inverse[k] * (q_n[k] + sum);
+      if (tied) tie += generalized_force(t_n[k], ns.lever[k]);
+    }
+    if (tied) g_b[body] -= tie_weight(*net, h) * tie;  // A_bi = −c J_iᵀ
+  }
+  // Node contacts with a body: A_bi = −J_rᵀ W.
+  const int nc = node_contact_count(data);
+  for (int c = 0; c < nc; ++c) {
+    const NodeContact& ct = data.node_contacts[static_cast<std::size_t>(c)];
+    if (!couples_body(s, ct)) continue;
+    const auto i = static_cast<std::size_t>(ct.node);
+    g_b[static_cast<std::size_t>(ct.body_b)] -= generalized_force(
+        weight_times(ct.weight_normal, ct.weight_isotropic, ct.normal, t_n[i]), ct.r_b);
+  }
+  // Bodies: their D̃ blocks, then the body–body contacts' blocks of D − D̃.
+  for (std::size_t b = 0; b < nb; ++b) {
+    if (s.in_solve[b]) {
+      solve_block(s.block_factor[b], Vec6(q_b[b] - g_b[b]), t_b[b]);
+    } else {
+      t_b[b].setZero();
+      g_b[b].setZero();
+    }
+  }
+  add_cross_contact_terms(s, t_b, g_b);
+}
+
+void net_forward_sweep(const Model& model, const Data& data, std::span<const Vec6> g_b,
+                       std::span<const Vec3> g_n, std::span<Vec6> y_b,
+                       std::span<Vec3> y_n) noexcept {
+  const SolverScratch& s = data.solver;
+  const NetScratch& ns = data.net;
+  const double h = model.dt;
+  const std::size_t nb = g_b.size();
+  const SweepSpring* springs = ns.sweep_springs.data();
+  const std::int32_t* low_begin = ns.spring_low_begin.data();
+  // Bodies first: no block of (D̃+L) left of their diagonal.
+  for (std::size_t b = 0; b < nb; ++b) {
+    if (s.in_solve[b]) {
+      solve_block(s.block_factor[b], g_b[b], y_b[b]);
+    } else {
+      y_b[b].setZero();
+    }
+  }
+  // Node rows' right-hand sides: g_i − A_ib y_b for the node–body contacts
+  // (the ties' are added in the sweep).
+  for (std::size_t i = 0; i < y_n.size(); ++i) y_n[i] = g_n[i];
+  const int nc = node_contact_count(data);
+  for (int c = 0; c < nc; ++c) {
+    const NodeContact& ct = data.node_contacts[static_cast<std::size_t>(c)];
+    if (!couples_body(s, ct)) continue;
+    y_n[static_cast<std::size_t>(ct.node)] +=
+        weight_times(ct.weight_normal, ct.weight_isotropic, ct.normal,
+                     point_velocity(y_b[static_cast<std::size_t>(ct.body_b)], ct.r_b));
+  }
+  // Nodes, first to last: y_k = A_kk⁻¹ (g_k + c J_k y_b + Σ W_e y_j) over the
+  // springs to smaller nodes j, each of which has already added its W_e y_j
+  // to y_k (scattered over its springs, grouped by their smaller node).
+  for (const NetModel& net : model.nets) {
+    const auto body = static_cast<std::size_t>(net.body);
+    const bool tied = s.in_solve[body] != 0;
+    const double c = tie_weight(net, h);
+    for (int v = net.node_begin; v < net.node_begin + net.node_count; ++v) {
+      const auto k = static_cast<std::size_t>(v);
+      Vec3 acc = y_n[k];
+      if (tied) acc += c * point_velocity(y_b[body], ns.lever[k]);
+      const Vec3 y = ns.block_inverse[k] * acc;
+      y_n[k] = y;
+      for (std::int32_t j = low_begin[k]; j < low_begin[k + 1]; ++j)
+        y_n[static_cast<std::size_t>(springs[j].high)] += spring_times(springs[j], y);
+    }
+  }
+}
+
+double apply_net_preconditioned(const Model& model, Data& data, std::span<const Vec6> q_b,
+                                std::span<const Vec3> q_n, std::span<Vec6> t_b, std::span<Vec3> t_n,
+                                std::span<Vec6> kq_b, std::span<Vec3> kq_n) noexcept {
+  NetScratch& ns = data.net;
+  const std::span<Vec6> g_b(ns.body_tmp);
+  const std::span<Vec3> g_n(ns.sweep);
+  net_backward_sweep(model, data, q_b, q_n, t_b, t_n, g_b, g_n);
+  net_forward_sweep(model, data, g_b, g_n, kq_b, kq_n);
+  double qkq = 0.0;
+  for (std::size_t b = 0; b < kq_b.size(); ++b) {
+    kq_b[b] += t_b[b];
+    qkq += q_b[b].dot(kq_b[b]);
+  }
+  for (std::size_t i = 0; i < kq_n.size(); ++i) {
+    kq_n[i] += t_n[i];
+    qkq += q_n[i].dot(kq_n[i]);
+  }
+  return qkq;
+}
+
+bool solve_net_system(const Model& model, Data& data) noexcept {
+  data.solver_iterations = 0;
+  data.solver_residual = 0.0;
+  return model.joints.empty() ? solve_eisenstat(model, data) : solve_arrowhead(model, data);
 }
 
 }  // namespace numen::core

@@ -3,6 +3,8 @@
 
 #include "numen/core/net_state.hpp"
 
+#include <algorithm>
+
 #include "numen/core/model.hpp"
 
 namespace numen::core {
@@ -27,9 +29,28 @@ void NetScratch::resize(const Model& model) {
   precond_residual.assign(n, Vec3::Zero());
   direction.assign(n, Vec3::Zero());
   a_direction.assign(n, Vec3::Zero());
+  sweep.assign(n, Vec3::Zero());
   body_schur.assign(nb, Mat6::Identity());
-  body_schur_factor.assign(nb, BlockCholesky{});
   body_tmp.assign(nb, Vec6::Zero());
+  // Springs by their smaller node (counting sort: stable, so each node's
+  // springs stay in Model::net_springs order).
+  sweep_springs.assign(springs.size(), SweepSpring{});
+  spring_low_begin.assign(n > 0 ? n + 1 : 0, 0);
+  spring_slot.assign(springs.size(), 0);
+  if (n > 0) {
+    const auto low = [](const SpringTerm& t) {
+      return static_cast<std::size_t>(std::min(t.node_a, t.node_b));
+    };
+    for (const SpringTerm& t : springs) ++spring_low_begin[low(t) + 1];
+    for (std::size_t i = 0; i < n; ++i) spring_low_begin[i + 1] += spring_low_begin[i];
+    std::vector<std::int32_t> next(spring_low_begin.begin(), spring_low_begin.end() - 1);
+    for (std::size_t e = 0; e < springs.size(); ++e) {
+      const std::int32_t slot = next[low(springs[e])]++;
+      spring_slot[e] = slot;
+      sweep_springs[static_cast<std::size_t>(slot)].high =
+          std::max(springs[e].node_a, springs[e].node_b);
+    }
+  }
   const auto no = n > 0 ? model.obstacles.size() : 0;
   near_obstacles.assign(no, 0);
   obstacle_axis.assign(no, Vec3::UnitZ());

@@ -6,7 +6,9 @@
 Left: median step time against nodes (log-log) with the n and n·log n
 references through the 642-node point and the 250 µs target; right: CG
 iterations per step and the time per node per (iteration + 1), the linear part.
-Usage: plot_deformable_scaling.py BENCH.json OUT.png"""
+An optional BEFORE.json (same benchmark, an earlier build) is drawn dashed
+for comparison.
+Usage: plot_deformable_scaling.py BENCH.json OUT.png [BEFORE.json]"""
 import json
 import sys
 
@@ -16,16 +18,25 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 
-runs = [r for r in json.load(open(sys.argv[1]))["benchmarks"]
-        if r["name"].startswith("DeformableBall/") and r.get("aggregate_name") == "median"]
-runs.sort(key=lambda r: r["nodes"])
-n = np.array([r["nodes"] for r in runs])
-t = np.array([r["real_time"] * 1e-3 for r in runs])  # ns -> µs
-it = np.array([r["cg_iterations"] for r in runs])
-per = np.array([r["ns_per_node_iteration"] for r in runs])
+def load(path):
+    runs = [r for r in json.load(open(path))["benchmarks"]
+            if r["name"].startswith("DeformableBall/") and r.get("aggregate_name") == "median"]
+    runs.sort(key=lambda r: r["nodes"])
+    return (np.array([r["nodes"] for r in runs]),
+            np.array([r["real_time"] * 1e-3 for r in runs]),  # ns -> µs
+            np.array([r["cg_iterations"] for r in runs]),
+            np.array([r["ns_per_node_iteration"] for r in runs]))
+
+
+n, t, it, per = load(sys.argv[1])
+before = load(sys.argv[3]) if len(sys.argv) > 3 else None
 
 fig, (a, b) = plt.subplots(1, 2, figsize=(10, 4))
 a.loglog(n, t, "o-", label="numen core::step (median)")
+if before is not None:
+    slope_b = np.polyfit(np.log(before[0]), np.log(before[1]), 1)[0]
+    a.loglog(before[0], before[1], "o--", color="C0", alpha=0.45,
+             label=f"before (slope {slope_b:.2f})")
 k = int(np.argmin(abs(n - 642)))
 a.loglog(n, t[k] * n / n[k], ":", color="grey", label="∝ n through 642")
 a.loglog(n, t[k] * n * np.log(n) / (n[k] * np.log(n[k])), "--", color="grey",
@@ -38,6 +49,8 @@ a.set_ylabel("µs per step")
 a.grid(alpha=0.3, which="both")
 a.legend(fontsize=8)
 b.plot(n, it, "s-", color="C1", label="CG iterations / step (mean)")
+if before is not None:
+    b.plot(before[0], before[2], "s--", color="C1", alpha=0.45, label="before")
 b.set_xscale("log")
 b.set_xlabel("nodes")
 b.set_ylabel("iterations", color="C1")

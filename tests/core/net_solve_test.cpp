@@ -3,9 +3,12 @@
 // formulas — mass and inertia, coupling springs, gyroscopic split, ties
 // (c = hγ + h²k, J_i = [I, −[ρ]×]), springs (S = α d̂d̂ᵀ + β I), node contacts
 // on a plane and on a body (W = α n nᵀ + β I) — and solved with Eigen,
-// against the arrowhead-preconditioned CG: a free rigid component, the same
-// jointed to a parent body by a revolute joint (dense KKT solve), and an
-// imposed rigid component (kDirect: Δu = 0).
+// against the solver: without joints Eisenstat's SSOR-preconditioned CG (a
+// free rigid component, warm-started after real steps, an imposed rigid
+// component (kDirect: Δu = 0), several nets, a body–body contact next to a
+// node–body contact), whose splitting A = (D̃+L) + (D̃+Lᵀ) + (D − 2D̃) and
+// preconditioned product are checked against the dense matrix; with a
+// revolute joint the arrowhead-preconditioned projected CG (dense KKT solve).
 #include "numen/core/net_solve.hpp"
 
 #include <Eigen/Dense>
@@ -191,12 +194,31 @@ void write_node_contacts(const core::Model& m, core::Data& d) {
   c.position = d.nodes[at(near)].position - 0.005 * c.normal;
 }
 
+/// A body–body contact between the probe (body 1, side a) and the net's rigid
+/// component (body 0), written by hand in place of detect_contacts (the
+/// rigid component has no spheres): off-diagonal body blocks in A.
+void write_body_contact(core::Data& d) {
+  const Vec3 pa = d.bodies[1].position, pb = d.bodies[0].position;
+  d.num_contacts = 1;
+  core::Contact& c = d.contacts[0];
+  c = core::Contact{};
+  c.body_a = 1;
+  c.body_b = 0;
+  c.sphere_a = 0;
+  c.sphere_b = 0;
+  c.material_pair = 0;
+  c.normal = (pa - pb).normalized();
+  c.depth = 1e-3;
+  c.position = 0.5 * (pa + pb) + Vec3(0.0, 0.01, -0.005);  // off the line of centres: torques
+}
+
 /// States and inputs the dense reference is built from (after the imposed
 /// pose of kDirect, before the forces stage).
 struct Snapshot {
   std::vector<core::BodyState> bodies;
   std::vector<core::NodeState> nodes;
   std::vector<core::NodeContact> contacts;
+  std::vector<core::Contact> body_contacts;
   std::vector<std::uint8_t> imposed;
   core::Pose target;
   core::Twist target_twist;
@@ -205,15 +227,18 @@ struct Snapshot {
 
 /// The stages of one implicit step up to the solve, with hand-written node
 /// contacts. Returns the snapshot; the solve's result is in d.
-Snapshot staged_solve(const core::Model& m, core::Data& d, bool* converged) {
+Snapshot staged_solve(const core::Model& m, core::Data& d, bool* converged,
+                      bool body_contact = false) {
   d.status = core::kStepOk;
   core::impose_direct_target(m, d);
   core::detect_contacts(m, d);
+  if (body_contact) write_body_contact(d);
   write_node_contacts(m, d);
   Snapshot s;
   s.bodies = d.bodies;
   s.nodes = d.nodes;
   s.contacts.assign(d.node_contacts.begin(), d.node_contacts.begin() + d.num_node_contacts);
+  s.body_contacts.assign(d.contacts.begin(), d.contacts.begin() + d.num_contacts);
   s.imposed = d.solver.imposed;
   s.target = d.target;
   s.target_twist = d.target_twist;
@@ -355,6 +380,32 @@ Dense dense_system(const core::Model& m, const Snapshot& s) {
     a.block<6, 3>(ib, ii) -= j.transpose() * w;
     a.block<6, 6>(ib, ib) += j.transpose() * w * j;
     b.segment<6>(ib) += h2 * mp.stiffness * vn * j.transpose() * n;
+  }
+  // Body–body contacts: the same law, W between the two bodies' points.
+  for (const core::Contact& ct : s.body_contacts) {
+    const core::MaterialPair& mp = m.material_pairs[at(ct.material_pair)];
+    const core::BodyState& ba = s.bodies[at(ct.body_a)];
+    const core::BodyState& bb = s.bodies[at(ct.body_b)];
+    const Vec3 r_a = ct.position - ba.position, r_b = ct.position - bb.position;
+    const Vec3 v_rel = ba.linear_velocity + ba.angular_velocity.cross(r_a) - bb.linear_velocity -
+                       bb.angular_velocity.cross(r_b);
+    const Vec3& n = ct.normal;
+    const double vn = n.dot(v_rel);
+    const double fnorm = mp.stiffness * ct.depth - mp.damping * vn;
+    if (!(fnorm > 0.0)) continue;
+    const Vec3 f = fnorm * n - mp.friction * (v_rel - vn * n);
+    fb[at(ct.body_a)] += (Eigen::Matrix<double, 6, 1>() << f, r_a.cross(f)).finished();
+    fb[at(ct.body_b)] -= (Eigen::Matrix<double, 6, 1>() << f, r_b.cross(f)).finished();
+    const Mat3 w = (h * mp.damping + h2 * mp.stiffness) * n * n.transpose() +
+                   h * mp.friction * (Mat3::Identity() - n * n.transpose());
+    const Mat36 ja = point_jacobian(r_a), jb = point_jacobian(r_b);
+    const int ia = bi(ct.body_a), ib = bi(ct.body_b);
+    a.block<6, 6>(ia, ia) += ja.transpose() * w * ja;
+    a.block<6, 6>(ib, ib) += jb.transpose() * w * jb;
+    a.block<6, 6>(ia, ib) -= ja.transpose() * w * jb;
+    a.block<6, 6>(ib, ia) -= jb.transpose() * w * ja;
+    b.segment<6>(ia) -= h2 * mp.stiffness * vn * ja.transpose() * n;
+    b.segment<6>(ib) += h2 * mp.stiffness * vn * jb.transpose() * n;
   }
   for (int k = 0; k < nb; ++k) b.segment<6>(bi(k)) += h * fb[at(k)];
   for (int i = 0; i < nn; ++i) b.segment<3>(ni(i)) += h * fn[at(i)];
@@ -569,4 +620,174 @@ TEST(NetSolve, SeveralNetsOnOneBodyAndOnTheProbeMatchTheDenseSolve) {
   const double err = (solver_unknowns(m, d) - x_ref).norm() / x_ref.norm();
   std::printf("[net solve three nets] %d iterations, |x - x_dense|/|x| %.2e\n", d.solver_iterations, err);
   EXPECT_LT(err, 1e-9);
+}
+
+namespace {
+
+using Vec6 = Eigen::Matrix<double, 6, 1>;
+
+/// A dense vector over [bodies; nodes] split into the solver's spans.
+struct Split {
+  std::vector<Vec6> b;
+  std::vector<Vec3> n;
+};
+
+Split split(const core::Model& m, const VectorXd& v) {
+  Split s{std::vector<Vec6>(at(m.num_bodies())), std::vector<Vec3>(at(m.num_nodes()))};
+  for (int k = 0; k < m.num_bodies(); ++k) s.b[at(k)] = v.segment<6>(6 * k);
+  for (int i = 0; i < m.num_nodes(); ++i) s.n[at(i)] = v.segment<3>(6 * m.num_bodies() + 3 * i);
+  return s;
+}
+
+VectorXd join(const Split& s) {
+  VectorXd v(6 * static_cast<int>(s.b.size()) + 3 * static_cast<int>(s.n.size()));
+  for (std::size_t k = 0; k < s.b.size(); ++k) v.segment<6>(6 * static_cast<int>(k)) = s.b[k];
+  for (std::size_t i = 0; i < s.n.size(); ++i)
+    v.segment<3>(6 * static_cast<int>(s.b.size()) + 3 * static_cast<int>(i)) = s.n[i];
+  return v;
+}
+
+/// The splitting of net_solve.hpp from the dense A: D̃ (6×6 body and 3×3
+/// node diagonal blocks), D (D̃ plus the body–body off-diagonal blocks), L
+/// (strictly lower blocks below the body–body part).
+struct Splitting {
+  MatrixXd d_tilde, d, l;
+};
+
+Splitting dense_splitting(const core::Model& m, const MatrixXd& a) {
+  const int nb6 = 6 * m.num_bodies();
+  const int dim = static_cast<int>(a.rows());
+  Splitting s{MatrixXd::Zero(dim, dim), MatrixXd::Zero(dim, dim), MatrixXd::Zero(dim, dim)};
+  for (int k = 0; k < m.num_bodies(); ++k)
+    s.d_tilde.block<6, 6>(6 * k, 6 * k) = a.block<6, 6>(6 * k, 6 * k);
+  for (int r = nb6; r < dim; r += 3) s.d_tilde.block<3, 3>(r, r) = a.block<3, 3>(r, r);
+  s.d = s.d_tilde;
+  s.d.topLeftCorner(nb6, nb6) = a.topLeftCorner(nb6, nb6);
+  for (int r = nb6; r < dim; r += 3) s.l.block(r, 0, 3, r) = a.block(r, 0, 3, r);
+  return s;
+}
+
+/// The free scene with a body–body contact (probe on the rigid component)
+/// and a node contact with the probe, staged up to the solve.
+struct Staged {
+  core::Model m;
+  core::Data d;
+  Snapshot snap;
+  Dense ref;
+  bool converged = false;
+};
+
+Staged staged_body_contact(double tolerance = 1e-12) {
+  Staged st{scene(Variant::kFree), {}, {}, {}, false};
+  st.m.solver.tolerance = tolerance;
+  st.d = core::make_data(st.m);
+  perturb(st.d, 3e-3, 0.05);
+  st.d.target = core::Pose{Vec3(0.02, 0.0, 0.12), rot(0.5, Vec3(1, 2, 2.5))};
+  st.snap = staged_solve(st.m, st.d, &st.converged, true);
+  st.ref = dense_system(st.m, st.snap);
+  return st;
+}
+
+}  // namespace
+
+TEST(NetSolve, EisenstatSplittingAndPreconditionedProductMatchTheDenseMatrix) {
+  Staged st = staged_body_contact();
+  const core::Model& m = st.m;
+  core::Data& d = st.d;
+  ASSERT_EQ(d.solver.num_cross_contacts, 1);  // a body–body block in D
+  ASSERT_TRUE(d.node_contacts[2].active);
+  ASSERT_EQ(d.node_contacts[2].body_b, 1);  // a node–body block in L
+  const MatrixXd& a = st.ref.a;
+  const int dim = static_cast<int>(a.rows());
+  const Splitting sp = dense_splitting(m, a);
+  EXPECT_GT(sp.l.norm(), 0.0);
+  EXPECT_GT((sp.d - sp.d_tilde).norm(), 0.0);
+  const MatrixXd lower = sp.d_tilde + sp.l;                        // D̃ + L
+  const MatrixXd upper = lower.transpose();                        // D̃ + Lᵀ
+  const MatrixXd rest = sp.d - 2.0 * sp.d_tilde;                   // D − 2D̃
+  EXPECT_LT((lower + upper + rest - a).norm(), 1e-15 * a.norm());  // the splitting itself
+
+  // The sweeps column by column: (D̃+L)⁻¹, (D̃+Lᵀ)⁻¹ and G = I + (D − 2D̃)(D̃+Lᵀ)⁻¹.
+  MatrixXd forward(dim, dim), backward(dim, dim), g(dim, dim);
+  for (int j = 0; j < dim; ++j) {
+    const Split e = split(m, VectorXd::Unit(dim, j));
+    Split y = e, t = e, gs = e;
+    core::net_forward_sweep(m, d, e.b, e.n, y.b, y.n);
+    core::net_backward_sweep(m, d, e.b, e.n, t.b, t.n, gs.b, gs.n);
+    forward.col(j) = join(y);
+    backward.col(j) = join(t);
+    g.col(j) = join(gs);
+  }
+  const double scale = a.norm();
+  const MatrixXd lower_sweep = forward.inverse();
+  const MatrixXd upper_sweep = backward.inverse();
+  const MatrixXd rest_sweep = (g - MatrixXd::Identity(dim, dim)) * upper_sweep;
+  const double e_lower = (lower_sweep - lower).norm() / scale;
+  const double e_upper = (upper_sweep - upper).norm() / scale;
+  const double e_rest = (rest_sweep - rest).norm() / scale;
+  const double e_sum = (lower_sweep + upper_sweep + rest_sweep - a).norm() / scale;
+  std::printf(
+      "[eisenstat splitting] |(D+L) - dense| %.1e, |(D+L') - dense| %.1e, |D-2D~ - dense| %.1e, "
+      "|sum - A| %.1e (relative to |A|)\n",
+      e_lower, e_upper, e_rest, e_sum);
+  EXPECT_LT(e_lower, 1e-12);
+  EXPECT_LT(e_upper, 1e-12);
+  EXPECT_LT(e_rest, 1e-12);
+  EXPECT_LT(e_sum, 1e-12);
+
+  // K q = (D̃+L)⁻¹ A (D̃+Lᵀ)⁻¹ q and t = (D̃+Lᵀ)⁻¹ q for a generic q.
+  VectorXd q(dim);
+  for (int j = 0; j < dim; ++j) q(j) = std::sin(0.37 * j + 0.2) * (j < 12 ? 0.1 : 1e-3);
+  const Split qs = split(m, q);
+  Split t = qs, kq = qs;
+  core::apply_net_preconditioned(m, d, qs.b, qs.n, t.b, t.n, kq.b, kq.n);
+  const VectorXd t_ref = upper.partialPivLu().solve(q);
+  const VectorXd kq_ref = lower.partialPivLu().solve(a * t_ref);
+  const double e_t = (join(t) - t_ref).norm() / t_ref.norm();
+  const double e_kq = (join(kq) - kq_ref).norm() / kq_ref.norm();
+  std::printf("[eisenstat product] |t - t_dense|/|t| %.1e, |Kq - Kq_dense|/|Kq| %.1e\n", e_t, e_kq);
+  EXPECT_LT(e_t, 1e-12);
+  EXPECT_LT(e_kq, 1e-12);
+}
+
+TEST(NetSolve, ReportsTheResidualInTheNormOfThePreconditioner) {
+  // At a loose tolerance, so that the recurrence's residual is the true one.
+  Staged st = staged_body_contact(1e-4);
+  const core::Model& m = st.m;
+  const core::Data& d = st.d;
+  EXPECT_TRUE(st.converged);
+  const MatrixXd& a = st.ref.a;
+  const Splitting sp = dense_splitting(m, a);
+  const MatrixXd lower = sp.d_tilde + sp.l;
+  // M = (D̃+L) D̃⁻¹ (D̃+Lᵀ), symmetric positive definite.
+  const MatrixXd precond = lower * sp.d_tilde.inverse() * lower.transpose();
+  const Eigen::LLT<MatrixXd> llt(precond);
+  ASSERT_EQ(llt.info(), Eigen::Success);
+  const VectorXd& b = st.ref.b;
+  const VectorXd r = b - a * solver_unknowns(m, d);
+  const double rel_m = std::sqrt(r.dot(llt.solve(r)) / b.dot(llt.solve(b)));
+  const double rel_2 = r.norm() / b.norm();
+  std::printf(
+      "[net solve residual] %d iterations, reported %.4e, |r|_M^-1/|b|_M^-1 %.4e, |r|/|b| %.4e\n",
+      d.solver_iterations, d.solver_residual, rel_m, rel_2);
+  EXPECT_LE(d.solver_residual, m.solver.tolerance);
+  EXPECT_GT(d.solver_residual, 0.0);
+  EXPECT_NEAR(d.solver_residual, rel_m, 1e-6 * rel_m);
+}
+
+TEST(NetSolve, BodyContactAndNodeContactWithAProbeMatchTheDenseSolve) {
+  Staged st = staged_body_contact();
+  const core::Model& m = st.m;
+  const core::Data& d = st.d;
+  ASSERT_EQ(d.solver.num_cross_contacts, 1);
+  ASSERT_TRUE(d.node_contacts[2].active);
+  check_scratch(m, d, st.ref, st.converged);
+  const VectorXd x_ref = st.ref.a.llt().solve(st.ref.b);
+  const VectorXd x = solver_unknowns(m, d);
+  const double err = (x - x_ref).norm() / x_ref.norm();
+  std::printf("[net solve body contact] %d iterations, |x - x_dense|/|x| %.2e\n",
+              d.solver_iterations, err);
+  EXPECT_LT(err, 1e-9);
+  EXPECT_LT((st.ref.a * x - st.ref.b).norm(), 1e-11 * st.ref.b.norm());
+  EXPECT_GT(x_ref.segment<6>(6).norm(), 1e-4);  // the probe moves
 }

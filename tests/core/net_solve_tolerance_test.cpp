@@ -1,7 +1,8 @@
 // The coupled solve's tolerance against the integrator's own error
 // (net_solve.hpp; docs/deformable.md, "Solver tolerance"): a relative residual
-// of 1e-4 — the shipped deformable scenes' setting — must move the nodes far
-// less than halving the time step does.
+// ‖r‖_{M⁻¹}/‖b‖_{M⁻¹} of 1e-3 — the setting of the shipped deformable scene
+// without joints and of the benchmark — must move the nodes far less (below
+// 1e-3 of it) than halving the time step does.
 
 #include <gtest/gtest.h>
 
@@ -51,7 +52,7 @@ double max_distance(const BallRun& a, const BallRun& b) {
 TEST(NetSolveTolerance, SolverErrorIsFarBelowTheIntegratorError) {
   const BallRun reference = run_ball(1e-12, 1e-3);
   const BallRun half_step = run_ball(1e-12, 5e-4);
-  const BallRun loose = run_ball(1e-4, 1e-3);
+  const BallRun loose = run_ball(1e-3, 1e-3);
   const double integrator_error = max_distance(reference, half_step);
   const double solver_error = max_distance(reference, loose);
   RecordProperty("integrator_error_m", std::to_string(integrator_error));

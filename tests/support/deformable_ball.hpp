@@ -26,9 +26,10 @@ inline constexpr double kBallRadius = 0.03;   ///< m
 inline constexpr double kBallCoreMass = 0.05; ///< kg, the hidden rigid component
 
 /// The ball model with `subdivisions` (1–4: 42–2562 nodes), time step `dt`
-/// (s) and CG `tolerance`. Throws std::runtime_error if the model is refused.
+/// (s) and CG `tolerance` (default: the shipped setting of a net without
+/// joints, docs/deformable.md "Solver tolerance"). Throws std::runtime_error if the model is refused.
 inline core::Model make_deformable_ball(int subdivisions, double dt = 1e-3,
-                                        double tolerance = 1e-4, int max_iterations = 100) {
+                                        double tolerance = 1e-3, int max_iterations = 100) {
   core::Model m;
   m.dt = dt;
   m.material_names = {"default"};

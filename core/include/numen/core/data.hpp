@@ -111,7 +111,9 @@ struct Data {
   int num_node_contacts = 0;
   std::vector<NetOutput> nets;     ///< Per net (Model::nets).
   int solver_iterations = 0;       ///< Iterations of the implicit solve this step (bodies and nets).
-  double solver_residual = 0.0;    ///< Relative residual reached.
+  /// Relative residual reached: ‖r‖/‖b‖, or ‖r‖_{M⁻¹}/‖b‖_{M⁻¹} for a model with
+  /// nets and no joints (SSOR preconditioner M; net_solve.hpp).
+  double solver_residual = 0.0;
   std::uint32_t status = kStepOk;  ///< StepStatus bits of the last step.
   std::int64_t nonfinite_steps = 0;  ///< Steps whose result was rejected as non-finite.
 

@@ -167,6 +167,15 @@ void build_implicit_system(const Model& model, Data& data) noexcept;
 void apply_implicit_system(const Model& model, const Data& data, std::span<const Vec6> in,
                            std::span<Vec6> out) noexcept;
 
+/// Adds the off-diagonal body–body blocks of A = M − hD − h²K times `in` to
+/// `out`: for each packed cross contact (SolverScratch::cross_contacts, both
+/// bodies in the solve), out_a −= G_aᵀ W G_b in_b and out_b −= G_bᵀ W G_a in_a
+/// (G_a = [I, −[r_a]×], W = α n nᵀ + β I). With the diagonal blocks
+/// (SolverScratch::block) this is apply_implicit_system(). Spans: one Vec6
+/// (linear; angular) per body.
+void add_cross_contact_terms(const SolverScratch& s, std::span<const Vec6> in,
+                             std::span<Vec6> out) noexcept;
+
 /// Joint-constrained solve of the implicit step (paper Eq. 4, Eq. 7):
 ///   [A  Gᵀ] [Δu]   [b]
 ///   [G  0 ] [y ] = [c],   c from build_joint_rows() (Baumgarte, Eq. 5),

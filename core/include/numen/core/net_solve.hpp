@@ -14,16 +14,40 @@
 ///
 /// Solved by a preconditioned conjugate gradient on that fixed sparsity
 /// (matrix-free: one 3×3 weight per spring, per node contact and per node),
-/// warm-started from the last step's Δv. Preconditioner: the "arrowhead" part
-/// of A — every body block, every node's 3×3 block and the tie blocks between
-/// a net and its rigid component — inverted exactly by eliminating the nodes
-/// onto the bodies (Schur blocks S_b = A_bb − Σ c² J_iᵀ A_ii⁻¹ J_i), so the
-/// stiff tie coupling of a net to its rigid component costs no iteration;
-/// only net springs, node–body contacts and body–body contacts are left to
-/// the iteration. With joints, the body part of the preconditioner is the
-/// tree solve (articulation.hpp) with the Schur blocks, used as a constraint
+/// warm-started from the last step's Δv.
+///
+/// Without joints: SSOR (block symmetric Gauss–Seidel) preconditioning with
+/// Eisenstat's trick. Unknowns ordered bodies first (6 each, those in the
+/// solve), then nodes in index order; A = L + D + Lᵀ with D the body–body
+/// part A_BB (diagonal blocks and body–body contact cross terms) and the
+/// node blocks A_ii, L the strictly lower blocks (node–body: ties −c J_i and
+/// node contacts −W J_r; node–node: springs −W_e, W_e = α d̂d̂ᵀ + β I). With
+/// D̃ = blockdiag(body blocks, A_ii) (D without the cross terms), the
+/// preconditioner M = (D̃+L) D̃⁻¹ (D̃+Lᵀ) is symmetric positive definite. CG on
+/// Â = G̃ᵀ (D̃+L)⁻¹ A (D̃+Lᵀ)⁻¹ G̃ (D̃ = G̃G̃ᵀ), written without square roots
+/// (q = G̃ p̂, r̂ = G̃ᵀ w) and with
+///   A = (D̃+L) + (D̃+Lᵀ) + (D − 2D̃)   (Eisenstat 1981):
+///   K q := (D̃+L)⁻¹ A (D̃+Lᵀ)⁻¹ q = t + (D̃+L)⁻¹ (q + (D − 2D̃) t),  t = (D̃+Lᵀ)⁻¹ q,
+/// one backward and one forward block sweep per iteration — the price of
+/// one product with A. Since (D̃+Lᵀ) t = q, q + (D − 2D̃) t = Lᵀ t + (D − D̃) t,
+/// which the backward sweep gathers as it goes (no block product). Iteration:
+///   w = (D̃+L)⁻¹ (b − A x0), q = D̃ w, ρ = wᵀ D̃ w;
+///   α = ρ / qᵀ K q, x += α t, w −= α K q, ρ' = wᵀ D̃ w, q = D̃ w + (ρ'/ρ) q.
+/// wᵀ D̃ w = rᵀ M⁻¹ r: it stops on ‖r‖_{M⁻¹} / ‖b‖_{M⁻¹} ≤ tolerance (the
+/// norm of the preconditioned residual, not the Euclidean ‖r‖ / ‖b‖).
+///
+/// With joints: the "arrowhead" part of A — every body block, every node's
+/// 3×3 block and the tie blocks between a net and its rigid component —
+/// inverted exactly by eliminating the nodes onto the bodies (Schur blocks
+/// S_b = A_bb − Σ c² J_iᵀ A_ii⁻¹ J_i), the body part by the tree solve
+/// (articulation.hpp) with the Schur blocks, used as a constraint
 /// preconditioner in a projected CG with Gould, Hribar & Nocedal's residual
-/// update, as solve_constrained_system() does (integrator.hpp).
+/// update, as solve_constrained_system() does (integrator.hpp); it stops on
+/// the Euclidean ‖r‖ / ‖b‖.
+
+#include <span>
+
+#include "numen/core/types.hpp"
 
 namespace numen::core {
 
@@ -40,16 +64,43 @@ void add_net_body_terms(const Model& model, Data& data) noexcept;
 /// Builds the node rows: 3×3 diagonal blocks (mass, ties, springs, contacts)
 /// and their inverses, spring and node-contact weights, right-hand side
 ///   b_i = h f_i − h² k_tie (v_i0 − v_a0) − h² Σ_springs k K̃ (v_i0 − v_j0) − h² k_c v_n n,
-/// and the bodies' Schur blocks of the preconditioner (NetScratch). Call
-/// after build_implicit_system().
+/// and, with joints, the bodies' Schur blocks of the arrowhead
+/// preconditioner (NetScratch). Call after build_implicit_system() (whose
+/// Cholesky factors of the body blocks are the bodies' D̃ without joints).
 void build_net_system(const Model& model, Data& data) noexcept;
 
 /// Solves the coupled system (see file comment). Writes SolverScratch::delta
 /// (Δu), NetScratch::delta (Δv), the joint multipliers when the model has
-/// joints, Data::solver_iterations and Data::solver_residual (‖r‖/‖b‖).
+/// joints, Data::solver_iterations and Data::solver_residual: without joints
+/// ‖r‖_{M⁻¹} / ‖b‖_{M⁻¹} (M the SSOR preconditioner), with joints ‖r‖ / ‖b‖.
 /// Returns true when converged to Model::solver.tolerance within
 /// Model::solver.max_iterations. A non-finite system gives NaN unknowns
 /// (rejected by step()'s checks). Deterministic; no allocation.
 bool solve_net_system(const Model& model, Data& data) noexcept;
+
+/// Backward sweep of the SSOR preconditioner (model without joints, after
+/// build_net_system()): t = (D̃+Lᵀ)⁻¹ q and g = q + (D − 2D̃) t (computed as
+/// Lᵀ t + (D − D̃) t), nodes from last to first, then the bodies. Spans: one
+/// Vec6 (linear; angular) per body, one Vec3 per node, in the units of Δu,
+/// Δv (t) and of b (q, g). Bodies not in the solve get t = g = 0. The output
+/// spans must not alias the inputs.
+void net_backward_sweep(const Model& model, const Data& data, std::span<const Vec6> q_b,
+                        std::span<const Vec3> q_n, std::span<Vec6> t_b, std::span<Vec3> t_n,
+                        std::span<Vec6> g_b, std::span<Vec3> g_n) noexcept;
+
+/// Forward sweep of the SSOR preconditioner (model without joints, after
+/// build_net_system()): y = (D̃+L)⁻¹ g, bodies first, then the nodes from first
+/// to last. y may be g itself (in place); otherwise they must not overlap.
+void net_forward_sweep(const Model& model, const Data& data, std::span<const Vec6> g_b,
+                       std::span<const Vec3> g_n, std::span<Vec6> y_b,
+                       std::span<Vec3> y_n) noexcept;
+
+/// Eisenstat's preconditioned product (model without joints, after
+/// build_net_system()): t = (D̃+Lᵀ)⁻¹ q and K q = (D̃+L)⁻¹ A (D̃+Lᵀ)⁻¹ q =
+/// t + (D̃+L)⁻¹ (q + (D − 2D̃) t). Returns qᵀ K q. Uses NetScratch::body_tmp
+/// and sweep as scratch; the spans must not alias each other or those.
+double apply_net_preconditioned(const Model& model, Data& data, std::span<const Vec6> q_b,
+                                std::span<const Vec3> q_n, std::span<Vec6> t_b, std::span<Vec3> t_n,
+                                std::span<Vec6> kq_b, std::span<Vec3> kq_n) noexcept;
 
 }  // namespace numen::core

@@ -63,6 +63,15 @@ struct SpringTerm {
   double weight_isotropic = 0.0;   ///< β = h² k max(0, 1 − L/l) (kg).
 };
 
+/// A spring's weight W_e = α d̂d̂ᵀ + β I (SpringTerm) packed for the SSOR
+/// sweeps of the implicit solve (net_solve.hpp), with its larger node.
+struct SweepSpring {
+  Vec3 direction = Vec3::UnitX();  ///< d̂.
+  double weight_axial = 0.0;       ///< α (kg).
+  double weight_isotropic = 0.0;   ///< β (kg).
+  std::int32_t high = 0;           ///< The larger of the spring's two nodes (global index).
+};
+
 /// Scratch of the nets' force stage and of the coupled implicit solve, sized
 /// once by resize() (everything empty without nets).
 struct NetScratch {
@@ -75,10 +84,21 @@ struct NetScratch {
   std::vector<Mat3> block_inverse;  ///< A_ii⁻¹ (preconditioner).
   std::vector<Vec3> rhs;            ///< b of the node rows.
   std::vector<Vec3> delta;          ///< Δv of the node rows (m/s); warm start of the next step.
-  std::vector<Vec3> residual, precond_residual, direction, a_direction;  ///< PCG vectors (nodes).
-  std::vector<Mat6> body_schur;     ///< Per body: Schur block S_b of the preconditioner.
-  std::vector<BlockCholesky> body_schur_factor;  ///< Per body: Cholesky of S_b (no joints).
-  std::vector<Vec6> body_tmp;       ///< Per body: reduced residual of the preconditioner.
+  /// PCG vectors of the nodes. Without joints (Eisenstat's CG, net_solve.hpp):
+  /// w, t, q and K q; with joints: r, z, p and A p.
+  std::vector<Vec3> residual, precond_residual, direction, a_direction;
+  std::vector<Vec3> sweep;          ///< Nodes: g = q + (D − 2D̃) t of the Eisenstat product.
+  std::vector<Mat6> body_schur;     ///< Per body: Schur block S_b of the arrowhead preconditioner (joints).
+  std::vector<Vec6> body_tmp;       ///< Per body: reduced residual (joints) or g (no joints).
+  /// The springs' weights in the order of the SSOR sweeps (grouped by their
+  /// smaller node, ascending; Model::net_springs order within a node),
+  /// written by build_net_system(): node i's are
+  /// sweep_springs[spring_low_begin[i] .. spring_low_begin[i + 1]). The
+  /// backward sweep gathers them into node i's row, the forward sweep
+  /// scatters node i's value through them to the larger nodes.
+  std::vector<SweepSpring> sweep_springs;
+  std::vector<std::int32_t> spring_low_begin;  ///< Size num_nodes + 1 (fixed topology, resize()).
+  std::vector<std::int32_t> spring_slot;       ///< Per Model::net_springs: its index in sweep_springs.
   // Collision stage (detect_node_contacts(), net_collision.hpp), rebuilt per
   // net; sized by the Model's obstacles, bodies and body spheres.
   /// Primitive obstacles whose bounds meet the net's AABB (index order).
