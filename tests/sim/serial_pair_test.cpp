@@ -136,16 +136,17 @@ bool is_timing_fault(const std::string& cause) {
 
 TEST(SerialPair, FullRunOverPseudoTerminals) {
   const PairResult r = run_pair(0, nullptr);
+  const bool timing_latched = r.run.faults > 0 && is_timing_fault(r.run.first_fault);
   EXPECT_TRUE(r.run.real_bus);
   EXPECT_EQ(r.run.startup, "operational");
-  EXPECT_GE(r.run.periods_to_active, 0);
+  EXPECT_TRUE(r.run.periods_to_active >= 0 || timing_latched);
   // Torque flowed, unless a timing fault of the machine latched first (reported below).
-  EXPECT_TRUE(r.run.periods_to_torque >= 0 || is_timing_fault(r.run.first_fault));
+  EXPECT_TRUE(r.run.periods_to_torque >= 0 || timing_latched);
   EXPECT_EQ(r.run.port.dropped, 0u);  // no chunk rejected on a clean line
   EXPECT_EQ(r.run.port.errors, 0u);
   EXPECT_GE(r.device.syncs, 1900);
   EXPECT_GE(r.device.syncs_answered + 5, r.device.syncs);  // the last SYNCs meet the shutdown
-  EXPECT_GT(r.device.rpdos_nonzero, 0);
+  EXPECT_TRUE(r.device.rpdos_nonzero > 0 || timing_latched);
   EXPECT_TRUE(r.run.drives_disabled);
   if (r.run.faults > 0) {
     EXPECT_TRUE(is_timing_fault(r.run.first_fault)) << r.run.first_fault;
@@ -155,13 +156,14 @@ TEST(SerialPair, FullRunOverPseudoTerminals) {
 TEST(SerialPair, GarbageOnTheLineIsRejectedAndResynchronised) {
   std::uint64_t bursts = 0;
   const PairResult r = run_pair(50, &bursts);
+  const bool timing_latched = r.run.faults > 0 && is_timing_fault(r.run.first_fault);
   ASSERT_GE(bursts, 20u);
   // Garbage is rejected and counted, frames after it decode again (resynchronisation at the
   // next 0x00 delimiter), torque keeps flowing.
   EXPECT_GT(r.run.port.dropped, 0u);
   EXPECT_NE(r.run.transport.find("resyncs"), std::string::npos);
   // Torque flowed, unless a timing fault of the machine latched first (reported below).
-  EXPECT_TRUE(r.run.periods_to_torque >= 0 || is_timing_fault(r.run.first_fault));
+  EXPECT_TRUE(r.run.periods_to_torque >= 0 || timing_latched);
   EXPECT_GE(r.device.syncs, 1900);
   // A burst tears at most the frame it lands in: isolated garbage costs a period's sample now
   // and then; it latches nothing by itself (a timing fault of the machine may still latch).
