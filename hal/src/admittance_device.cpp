@@ -29,28 +29,31 @@ AdmittanceConfig make_admittance_config(const DeviceConfig& device) {
 void validate(const DeviceConfig& device, const AdmittanceConfig& admittance) {
   const std::string name = device.name + ": admittance";
   if (admittance.rpdo_cob_ids.size() != device.axes.size())
-    throw std::invalid_argument(name + ": rpdo_cob_ids has " +
-                                std::to_string(admittance.rpdo_cob_ids.size()) + " entries, the device " +
-                                std::to_string(device.axes.size()) + " axes");
+    throw std::invalid_argument(
+        name + ": rpdo_cob_ids has " + std::to_string(admittance.rpdo_cob_ids.size()) +
+        " entries, the device " + std::to_string(device.axes.size()) + " axes");
   validate(admittance.sensor, name + " force_sensor");
   const std::uint32_t f = admittance.sensor.effective_force_cob_id();
   const std::uint32_t t = admittance.sensor.effective_torque_cob_id();
   for (std::size_t i = 0; i < admittance.rpdo_cob_ids.size(); ++i) {
     const std::uint32_t id = admittance.rpdo_cob_ids[i];
-    const std::string where = name + ": axis " + device.axes[i].name + " rpdo_cob_id " + std::to_string(id);
+    const std::string where =
+        name + ": axis " + device.axes[i].name + " rpdo_cob_id " + std::to_string(id);
     if (reserved_cob_id(id))
       throw std::invalid_argument(where + " is not a free 11-bit PDO COB-ID");
     if (id == f || id == t) throw std::invalid_argument(where + " is a force sensor COB-ID");
     for (std::size_t j = 0; j < device.axes.size(); ++j) {
       if (id == device.axes[j].encoder_cob_id)
-        throw std::invalid_argument(where + " is the encoder COB-ID of axis " + device.axes[j].name);
+        throw std::invalid_argument(where + " is the encoder COB-ID of axis " +
+                                    device.axes[j].name);
       if (j < i && id == admittance.rpdo_cob_ids[j])
         throw std::invalid_argument(where + " is used twice");
     }
   }
   for (const AxisConfig& axis : device.axes)
     if (axis.encoder_cob_id == f || axis.encoder_cob_id == t)
-      throw std::invalid_argument(name + ": force sensor COB-ID is the encoder COB-ID of axis " + axis.name);
+      throw std::invalid_argument(name + ": force sensor COB-ID is the encoder COB-ID of axis " +
+                                  axis.name);
 }
 
 AdmittanceDevice::AdmittanceDevice(DeviceConfig device, AdmittanceConfig admittance,
@@ -67,7 +70,9 @@ AdmittanceDevice::AdmittanceDevice(DeviceConfig device, AdmittanceConfig admitta
                                 std::to_string(q0.size()) + " entries, the device " +
                                 std::to_string(n) + " axes");
   q_ = q0.size() == 0 ? AxisVector::Zero(n) : q0;
-  for (int i = 0; i < n; ++i) counts_[static_cast<std::size_t>(i)] = value_to_counts(device_.axes[static_cast<std::size_t>(i)], q_[i]);
+  for (int i = 0; i < n; ++i)
+    counts_[static_cast<std::size_t>(i)] =
+        value_to_counts(device_.axes[static_cast<std::size_t>(i)], q_[i]);
 }
 
 core::Wrench AdmittanceDevice::world_wrench(const core::Wrench& sensor_wrench,

@@ -52,7 +52,8 @@ void AdmittanceEmulator::set_hand(const core::Pose& pose, const core::Twist& twi
 }
 
 void AdmittanceEmulator::on_sync(const CanFrame& frame, Bus& port) noexcept {
-  const double dt = had_sync_ ? static_cast<double>(frame.timestamp_ns - last_sync_ns_) * 1e-9 : 0.0;
+  const double dt =
+      had_sync_ ? static_cast<double>(frame.timestamp_ns - last_sync_ns_) * 1e-9 : 0.0;
   last_sync_ns_ = frame.timestamp_ns;
   had_sync_ = true;
   const double alpha = settings_.lag_s > 0.0 ? 1.0 - std::exp(-dt / settings_.lag_s) : 1.0;
@@ -85,7 +86,8 @@ void AdmittanceEmulator::on_sync(const CanFrame& frame, Bus& port) noexcept {
   const core::Vec3 origin = dev.position + dev.orientation * s.position;
   core::Wrench in_sensor;
   in_sensor.force = r.conjugate() * hand_wrench_.force;
-  in_sensor.torque = r.conjugate() * (hand_wrench_.torque + (dev.position - origin).cross(hand_wrench_.force));
+  in_sensor.torque =
+      r.conjugate() * (hand_wrench_.torque + (dev.position - origin).cross(hand_wrench_.force));
   CanFrame f, t;
   encode_force_tpdos(admittance_.sensor, in_sensor, frame.timestamp_ns, f, t);
   if (port.write(f) != IoStatus::kOk) ++counters_.tx_failed;
@@ -110,7 +112,8 @@ void AdmittanceEmulator::on_frame(const CanFrame& frame, Bus& device_port) noexc
     const bool enable = decode_controlword(cw) == ControlCommand::kEnableOperation;
     enabled_[i] = enable ? 1 : 0;
     if (enable)
-      target_[static_cast<int>(i)] = counts_to_value(device_.axes[i], static_cast<std::int32_t>(v[1]));
+      target_[static_cast<int>(i)] =
+          counts_to_value(device_.axes[i], static_cast<std::int32_t>(v[1]));
     return;
   }
 }

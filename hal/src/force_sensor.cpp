@@ -38,21 +38,20 @@ bool saturated(const std::array<std::int64_t, 3>& c) noexcept {
 }  // namespace
 
 PdoMapping force_tpdo_mapping() {
-  return PdoMapping({ForceSensorObject::kForceX, ForceSensorObject::kForceY,
-                     ForceSensorObject::kForceZ},
-                    "force TPDO");
+  return PdoMapping(
+      {ForceSensorObject::kForceX, ForceSensorObject::kForceY, ForceSensorObject::kForceZ},
+      "force TPDO");
 }
 
 PdoMapping torque_tpdo_mapping() {
-  return PdoMapping({ForceSensorObject::kTorqueX, ForceSensorObject::kTorqueY,
-                     ForceSensorObject::kTorqueZ},
-                    "torque TPDO");
+  return PdoMapping(
+      {ForceSensorObject::kTorqueX, ForceSensorObject::kTorqueY, ForceSensorObject::kTorqueZ},
+      "torque TPDO");
 }
 
 void validate(const ForceSensorConfig& c, const std::string& name) {
   if (c.node_id < 1 || c.node_id > 127)
-    throw std::invalid_argument(name + ": node_id " + std::to_string(c.node_id) +
-                                " outside 1–127");
+    throw std::invalid_argument(name + ": node_id " + std::to_string(c.node_id) + " outside 1–127");
   check_cob_id(c.effective_force_cob_id(), name, "force_cob_id");
   check_cob_id(c.effective_torque_cob_id(), name, "torque_cob_id");
   if (c.effective_force_cob_id() == c.effective_torque_cob_id())
@@ -62,7 +61,8 @@ void validate(const ForceSensorConfig& c, const std::string& name) {
   if (!positive(c.max_force)) throw std::invalid_argument(name + ": max_force must be > 0");
   if (!positive(c.max_torque)) throw std::invalid_argument(name + ": max_torque must be > 0");
   if (!positive(c.max_age_s)) throw std::invalid_argument(name + ": max_age must be > 0");
-  if (!c.sensor_in_tool.position.allFinite() || !c.sensor_in_tool.orientation.coeffs().allFinite() ||
+  if (!c.sensor_in_tool.position.allFinite() ||
+      !c.sensor_in_tool.orientation.coeffs().allFinite() ||
       std::abs(c.sensor_in_tool.orientation.norm() - 1.0) > 1e-6)
     throw std::invalid_argument(name + ": sensor_in_tool must be finite with a unit quaternion");
 }
@@ -134,8 +134,10 @@ ForceSample ForceSensor::sample(std::int64_t now_ns) noexcept {
     } else {
       core::Wrench w;
       for (int i = 0; i < 3; ++i) {
-        w.force[i] = static_cast<double>(force_counts_[static_cast<std::size_t>(i)]) * config_.force_scale;
-        w.torque[i] = static_cast<double>(torque_counts_[static_cast<std::size_t>(i)]) * config_.torque_scale;
+        w.force[i] =
+            static_cast<double>(force_counts_[static_cast<std::size_t>(i)]) * config_.force_scale;
+        w.torque[i] =
+            static_cast<double>(torque_counts_[static_cast<std::size_t>(i)]) * config_.torque_scale;
       }
       if (saturated(force_counts_) || saturated(torque_counts_) ||
           !(w.force.norm() <= config_.max_force) || !(w.torque.norm() <= config_.max_torque)) {

@@ -55,7 +55,8 @@ void AdmittanceLoop::brake_held_body() noexcept {
   const core::BodyState& s = d.bodies[static_cast<std::size_t>(a)];
   const double k = 0.5 / model_->dt;
   d.device_wrench.force = -k * bm.mass * s.linear_velocity;
-  d.device_wrench.torque = -k * (core::world_inertia(s.orientation, bm.inertia_body) * s.angular_velocity);
+  d.device_wrench.torque =
+      -k * (core::world_inertia(s.orientation, bm.inertia_body) * s.angular_velocity);
 }
 
 const AdmittanceReport& AdmittanceLoop::end_period(std::int64_t now_ns) noexcept {
@@ -92,8 +93,8 @@ const AdmittanceReport& AdmittanceLoop::end_period(std::int64_t now_ns) noexcept
   const bool held = a >= 0 && a < model_->num_bodies();
   if (active && held) {
     // The last accepted reading (held up to the timeout), in the world, about the COM.
-    d.device_wrench = device_->world_wrench(
-        sample.wrench, d.bodies[static_cast<std::size_t>(a)].position);
+    d.device_wrench =
+        device_->world_wrench(sample.wrench, d.bodies[static_cast<std::size_t>(a)].position);
     report_.measured = d.device_wrench;
     report_.driven = true;
   } else {

@@ -3,10 +3,10 @@
 // the set-points, a force sensor measuring the simulated hand).
 #include "numen/hal/admittance_device.hpp"
 
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <stdexcept>
-
-#include <gtest/gtest.h>
 
 #include "alloc_counter.hpp"
 #include "numen/hal/admittance_emulator.hpp"
@@ -98,7 +98,7 @@ TEST(AdmittanceDevice, SetPointsAreClampedToTheRangeAndRateLimited) {
   EXPECT_EQ(dev.counters().rate_limited, 1u);
   for (int i = 0; i < 30; ++i) dev.set_pose(p);
   EXPECT_NEAR(dev.setpoints()[0], 0.1, 1e-12);  // reached after 20 periods and stays
-  p.position = Vec3(1.5, 0.0, 0.0);  // beyond max = 1 m: clamped (and rate limited)
+  p.position = Vec3(1.5, 0.0, 0.0);             // beyond max = 1 m: clamped (and rate limited)
   hal::AxisVector q = zeros();
   q[0] = 0.999;
   dev.reset_setpoints(q);

@@ -2,9 +2,9 @@
 // device-side encoding and the controller-side decoder with its checks.
 #include "numen/hal/force_sensor.hpp"
 
-#include <stdexcept>
-
 #include <gtest/gtest.h>
+
+#include <stdexcept>
 
 #include "alloc_counter.hpp"
 
@@ -130,7 +130,8 @@ TEST(ForceSensor, SaturatedOrTooLargeReadingsAreOutOfRange) {
   EXPECT_FALSE(r.valid);
   EXPECT_NEAR(r.wrench.force.x(), 60.0, 1e-12);  // the last accepted one
   // A NaN component is sent saturated.
-  hal::encode_force_tpdos(config(), wrench(Vec3(0.0, 0.0, 0.0), Vec3(0.0, std::nan(""), 0.0)), 0, f, t);
+  hal::encode_force_tpdos(config(), wrench(Vec3(0.0, 0.0, 0.0), Vec3(0.0, std::nan(""), 0.0)), 0, f,
+                          t);
   s.on_frame(f);
   s.on_frame(t);
   EXPECT_EQ(s.sample(0).faults, hal::SampleFault::kOutOfRange);
@@ -189,8 +190,8 @@ TEST(ForceSensor, PeriodicCallsDoNotAllocate) {
   hal::CanFrame f, t;
   numen::test::AllocationGuard guard;
   for (int i = 0; i < 1000; ++i) {
-    hal::encode_force_tpdos(config(), wrench(Vec3(0.01 * i, 0.0, 1.0), Vec3::Zero()),
-                            i * 1'000'000, f, t);
+    hal::encode_force_tpdos(config(), wrench(Vec3(0.01 * i, 0.0, 1.0), Vec3::Zero()), i * 1'000'000,
+                            f, t);
     s.on_frame(f);
     s.on_frame(t);
     (void)s.sample(i * 1'000'000 + 200'000);

@@ -3,10 +3,10 @@
 // the device is commanded its pose, a silent sensor latches the safe state.
 #include "numen/platform/admittance_loop.hpp"
 
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <stdexcept>
-
-#include <gtest/gtest.h>
 
 #include "alloc_counter.hpp"
 #include "numen/hal/admittance_emulator.hpp"
@@ -137,7 +137,7 @@ TEST(AdmittanceLoop, SilentSensorLatchesTheSafeStateAndRearmRecovers) {
   EXPECT_FALSE(rig.emulator.enabled(0));  // the drives got shutdown
   const double x_held = rig.emulator.q()[0];
   for (int i = 0; i < 100; ++i) rig.period();
-  EXPECT_EQ(rig.emulator.q()[0], x_held);  // holds
+  EXPECT_EQ(rig.emulator.q()[0], x_held);                             // holds
   EXPECT_NEAR(rig.data.bodies[0].linear_velocity.norm(), 0.0, 1e-9);  // god-object braked
   // Rearm refused while the sensor is silent; accepted once it is back.
   EXPECT_EQ(rig.loop.rearm(), hal::LifecycleResult::kCausePresent);

@@ -43,11 +43,11 @@ void validate(const DeviceConfig& device, const AdmittanceConfig& admittance);
 
 /// Counters since construction.
 struct AdmittanceDeviceCounters {
-  std::uint64_t rpdos_written = 0;    ///< csp RPDOs accepted by the bus.
-  std::uint64_t write_failures = 0;   ///< csp RPDOs the bus did not take.
-  std::uint64_t clamped_to_range = 0; ///< Set-points clamped to an axis's [min, max].
-  std::uint64_t rate_limited = 0;     ///< Set-points limited to max_speed · control period.
-  std::uint64_t ik_rejected = 0;      ///< Poses whose inverse kinematics was not finite (held).
+  std::uint64_t rpdos_written = 0;     ///< csp RPDOs accepted by the bus.
+  std::uint64_t write_failures = 0;    ///< csp RPDOs the bus did not take.
+  std::uint64_t clamped_to_range = 0;  ///< Set-points clamped to an axis's [min, max].
+  std::uint64_t rate_limited = 0;      ///< Set-points limited to max_speed · control period.
+  std::uint64_t ik_rejected = 0;       ///< Poses whose inverse kinematics was not finite (held).
 };
 
 /// An admittance device as the controller drives it.
@@ -69,7 +69,8 @@ class AdmittanceDevice {
   /// kinematics of the current set-points · sensor_in_tool: the device is assumed to be where
   /// it was commanded (csp drives track within their following error; this protocol reads no
   /// position back).
-  core::Wrench world_wrench(const core::Wrench& sensor_wrench, const core::Vec3& about) const noexcept;
+  core::Wrench world_wrench(const core::Wrench& sensor_wrench,
+                            const core::Vec3& about) const noexcept;
 
   /// New set-points for the controlled frame at `pose` (world): inverse kinematics seeded with
   /// the current set-points, each axis clamped to [min, max] and its change limited to

@@ -31,10 +31,10 @@ namespace numen::hal {
 
 /// The simulated user's hand and the drives' tracking (scene `[device.hand]`, `[device.drive]`).
 struct AdmittanceEmulatorSettings {
-  double k_hand = 200.0;       ///< N/m, >= 0.
-  double c_hand = 5.0;         ///< N·s/m, >= 0.
-  double k_hand_rot = 0.5;     ///< N·m/rad, >= 0.
-  double c_hand_rot = 0.01;    ///< N·m·s/rad, >= 0.
+  double k_hand = 200.0;     ///< N/m, >= 0.
+  double c_hand = 5.0;       ///< N·s/m, >= 0.
+  double k_hand_rot = 0.5;   ///< N·m/rad, >= 0.
+  double c_hand_rot = 0.01;  ///< N·m·s/rad, >= 0.
   /// Time constant of each axis's tracking of its target, s, >= 0: per SYNC interval Δt the
   /// axis moves by (1 − exp(−Δt/τ)) of its remaining error; 0 = ideal (reaches it at once).
   double lag_s = 0.002;

@@ -39,14 +39,14 @@ struct AdmittanceLoopSettings {
 
 /// What one period did.
 struct AdmittanceReport {
-  int frames_read = 0;             ///< Frames taken from the bus.
-  bool sample_valid = false;       ///< The force reading was fresh and in range this period.
-  hal::FaultMask faults = 0;       ///< The reading's SampleFault bits.
-  core::Wrench measured;           ///< The wrench given to the god-object (world, about its COM).
-  bool driven = false;             ///< The measured wrench drove the held body this period.
-  std::uint16_t controlword = 0;   ///< Sent with the set-points.
+  int frames_read = 0;            ///< Frames taken from the bus.
+  bool sample_valid = false;      ///< The force reading was fresh and in range this period.
+  hal::FaultMask faults = 0;      ///< The reading's SampleFault bits.
+  core::Wrench measured;          ///< The wrench given to the god-object (world, about its COM).
+  bool driven = false;            ///< The measured wrench drove the held body this period.
+  std::uint16_t controlword = 0;  ///< Sent with the set-points.
   hal::IoStatus command_status = hal::IoStatus::kOk;  ///< Result of the RPDO writes.
-  std::int64_t step_ns = 0;        ///< Wall time of core::step (CLOCK_MONOTONIC ns).
+  std::int64_t step_ns = 0;  ///< Wall time of core::step (CLOCK_MONOTONIC ns).
   hal::LifecycleState lifecycle = hal::LifecycleState::kUnconfigured;  ///< After this period.
   bool entered_safe_stop = false;  ///< The safe state latched in this period.
   bool activated = false;          ///< kInactive → kActive in this period.
