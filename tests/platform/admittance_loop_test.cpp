@@ -9,6 +9,7 @@
 #include <stdexcept>
 
 #include "alloc_counter.hpp"
+#include "numen/core/rigid_body.hpp"
 #include "numen/hal/admittance_emulator.hpp"
 #include "numen/hal/cia402.hpp"
 #include "numen/hal/sim_bus.hpp"
@@ -114,6 +115,33 @@ TEST(AdmittanceLoop, TheHandPullsTheGodObjectAndTheDeviceFollowsIt) {
   EXPECT_LT(rig.loop.last_report().measured.force.norm(), 0.05);
   EXPECT_EQ(rig.loop.counters().invalid_periods, 0u);
   EXPECT_EQ(rig.data.feedback_wrench.force.norm(), 0.0);
+}
+
+TEST(AdmittanceLoop, TheHandTurnsTheGodObjectThroughTheMeasuredTorque) {
+  // Rotation path: hand torque → sensor frame → world about the COM → god-object → IK
+  // (yaw, pitch, roll set-points) → the device turns with it.
+  Rig rig(hand_settings());
+  rig.hand.orientation = core::Quat(Eigen::AngleAxisd(0.3, Vec3::UnitZ())) *
+                         core::Quat(Eigen::AngleAxisd(0.2, Vec3::UnitX()));
+  const platform::AdmittanceReport& first = rig.period();
+  // T = k_rot θu with θu the rotation vector from the device (identity) to the hand.
+  const Vec3 theta_u = numen::core::quat_log(rig.hand.orientation);
+  const double count = 1e-4;  // default torque_scale, N·m per count
+  EXPECT_LT((first.measured.torque - 0.05 * theta_u).norm(), count) << first.measured.torque;
+  EXPECT_GT(first.measured.torque.norm(), 0.015);
+  for (int i = 0; i < 1500; ++i) rig.period();
+  const double body_err =
+      numen::core::quat_log(rig.hand.orientation * rig.data.bodies[0].orientation.conjugate())
+          .norm();
+  const double dev_err =
+      numen::core::quat_log(rig.hand.orientation * rig.emulator.pose().orientation.conjugate())
+          .norm();
+  // At rest the residual is the sensor's dead band: below half a count per axis the torque
+  // reads 0, i.e. |θ| <= √3 · 0.5 count / k_rot = 1.73 mrad.
+  const double dead_band = std::sqrt(3.0) * 0.5 * count / 0.05;
+  EXPECT_LT(body_err, dead_band);
+  EXPECT_LT(dev_err, dead_band + 1e-5);
+  EXPECT_LT(rig.loop.last_report().measured.torque.norm(), count);
 }
 
 TEST(AdmittanceLoop, SilentSensorLatchesTheSafeStateAndRearmRecovers) {
