@@ -92,6 +92,28 @@ TEST(AdmittanceScene, PeriodsDoNotAllocate) {
   EXPECT_EQ(guard.count(), 0);
 }
 
+TEST(AdmittanceScene, LostFramesAreRiddenThroughWithoutASafeStop) {
+  // 2 % of the frames dropped both ways: a lost sensor TPDO leaves the other half and the
+  // previous one fresh (max age 3 periods), a lost csp RPDO leaves the drive on its last
+  // target; the contact is the same.
+  numen::test::TempDir dir;
+  std::ifstream in(std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/admittance.toml");
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string from = "latency = 0.0001";
+  text.replace(text.find(from), from.size(), from + "\ndrop_probability = 0.02\nseed = 3");
+  const std::string path = (dir.path() / "lossy.toml").string();
+  std::ofstream(path) << text;
+  const sim::Scene s = sim::load_scene(path);
+  sim::RunOptions o;
+  const sim::RunSummary sum = sim::run_scene(s, o);
+  EXPECT_GT(sum.bus_frames_dropped, 500);
+  EXPECT_EQ(sum.faults, 0);
+  EXPECT_EQ(sum.lifecycle, "active");
+  EXPECT_LT(sum.tool_penetration_max_mm, 1.0);
+  EXPECT_GT(sum.target_penetration_max_mm, 24.0);
+  EXPECT_NEAR(sum.admittance.measured_force_max_n, 5.26, 0.3);
+}
+
 TEST(AdmittanceScene, KeysAreCheckedWithTheirPlace) {
   numen::test::TempDir dir;
   const std::string base = std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/admittance.toml";
