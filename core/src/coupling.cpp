@@ -66,6 +66,20 @@ bool has_own_target(const Data& data, std::size_t i) noexcept {
 
 }  // namespace
 
+void apply_device_wrench(const Model& model, Data& data) noexcept {
+  if (model.coupling_mode != CouplingMode::kAdmittance || !valid_body(model, data.attached_body))
+    return;
+  const Wrench& w = data.device_wrench;
+  if (!(w.force.allFinite() && w.torque.allFinite())) {
+    data.status |= kInvalidTarget;
+    return;
+  }
+  const auto i = static_cast<std::size_t>(data.attached_body);
+  data.coupling_wrench = w;
+  data.body_wrench[i].force += w.force;
+  data.body_wrench[i].torque += w.torque;
+}
+
 void impose_direct_target(const Model& model, Data& data) noexcept {
   for (auto& v : data.solver.imposed) v = 0;
   if (model.coupling_mode != CouplingMode::kDirect) return;
@@ -83,7 +97,9 @@ void apply_coupling(const Model& model, Data& data) noexcept {
   s.first_order = false;
   for (auto& v : s.target_coupled) v = 0;
   if (model.coupling_mode == CouplingMode::kDirect) return;
-  if (valid_body(model, data.attached_body)) {
+  if (model.coupling_mode == CouplingMode::kAdmittance) {
+    apply_device_wrench(model, data);
+  } else if (valid_body(model, data.attached_body)) {
     if (!target_is_finite(data.target, data.target_twist)) {
       data.status |= kInvalidTarget;
     } else {

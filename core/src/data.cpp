@@ -60,6 +60,7 @@ void reset_data(const Model& model, Data& data) noexcept {
     data.body_targets[b] = BodyTarget{};
     data.body_feedback[b] = Wrench{};
   }
+  data.device_wrench = Wrench{};
   reset_nodes(model, data);
   for (JointPrescription& p : data.joint_prescribed) p = JointPrescription{};
   for (JointState& j : data.joints) j = JointState{};

@@ -49,7 +49,9 @@ Wrench carry_wrench(const Wrench& w, const Vec3& from, const Vec3& to) noexcept 
 void compute_feedback(const Model& model, Data& data) noexcept {
   data.feedback_wrench = Wrench{};
   for (Wrench& w : data.body_feedback) w = Wrench{};
-  if (model.coupling_mode == CouplingMode::kDirect) return;
+  if (model.coupling_mode == CouplingMode::kDirect ||
+      model.coupling_mode == CouplingMode::kAdmittance)
+    return;  // no spring to feed back: the device is position controlled (admittance)
   const int a = data.attached_body;
   const bool attached = a >= 0 && a < model.num_bodies() &&
                         target_is_finite(data.target, data.target_twist);

@@ -137,6 +137,10 @@ PdoMapping drive_rpdo_mapping() {
   return PdoMapping({PdoObject::kControlword, PdoObject::kTargetTorque}, "drive RPDO");
 }
 
+PdoMapping csp_drive_rpdo_mapping() {
+  return PdoMapping({PdoObject::kControlword, PdoObject::kTargetPosition}, "csp drive RPDO");
+}
+
 PdoMapping drive_tpdo_mapping() {
   return PdoMapping({PdoObject::kStatusword, PdoObject::kTorqueActualValue}, "drive TPDO");
 }

@@ -24,6 +24,7 @@
 #include "numen/platform/control_loop.hpp"
 #include "numen/platform/monotonic_clock.hpp"
 #include "numen/platform/periodic_timer.hpp"
+#include "numen/sim/admittance_run.hpp"
 #include "numen/sim/simulated_instrument.hpp"
 #include "numen/sim/trace.hpp"
 
@@ -400,6 +401,7 @@ RunSummary SceneRunner::summary() const {
 }
 
 RunSummary run_scene(const Scene& scene, const RunOptions& options) {
+  if (scene.admittance) return run_admittance_scene(scene, options);  // admittance_run.cpp
   const double duration = options.duration_s >= 0.0 ? options.duration_s : scene.duration_s;
   const auto steps = static_cast<std::int64_t>(std::llround(duration / scene.model.dt));
   const bool real = parse_bus_spec(options.bus.spec).real();
@@ -491,8 +493,21 @@ std::string format_summary(const RunSummary& s) {
      << ", p99.9 " << s.step_time_us.p999 << ", max " << s.step_time_us.max << "\n";
   os << "  penetration max: target (the hand) " << s.target_penetration_max_mm
      << " mm, god-object " << s.tool_penetration_max_mm << " mm\n";
-  os << "  tracking error in free space: rms " << s.tracking_error_free_rms_mm << " mm, max "
+  if (!s.admittance.enabled)
+    os << "  tracking error in free space: rms " << s.tracking_error_free_rms_mm << " mm, max "
      << s.tracking_error_free_max_mm << " mm over " << s.free_steps << " steps\n";
+  if (s.admittance.enabled) {
+    const AdmittanceSummary& a = s.admittance;
+    os << "  admittance: measured force max " << a.measured_force_max_n << " N (torque "
+       << a.measured_torque_max_nm << " N·m), final " << a.final_measured_force_n
+       << " N at hand–device separation " << a.final_hand_separation_mm << " mm (k_hand × sep = "
+       << a.k_hand * a.final_hand_separation_mm * 1e-3 << " N)\n";
+    os << "  admittance: device vs god-object error max " << a.device_error_max_mm << " mm, rms "
+       << a.device_error_rms_mm << " mm; sensor frames " << a.sensor_frames
+       << ", rejected periods " << a.sensor_rejected_periods << ", csp RPDOs " << a.csp_rpdos
+       << ", set-points clamped " << a.setpoints_clamped << ", rate limited "
+       << a.setpoints_rate_limited << ", hold periods " << a.hold_periods << "\n";
+  }
   os << "  feedback: force max " << s.feedback_force_max_n << " N, torque max "
      << s.feedback_torque_max_nm << " N·m, axis torque max " << s.axis_torque_max << "\n";
   if (s.num_joints > 0)
@@ -553,6 +568,9 @@ std::string format_summary(const RunSummary& s) {
         os << (i ? "," : "") << " " << s.drive_states[i];
       os << "\n";
     }
+  } else if (s.admittance.enabled) {
+    os << "  admittance protocol: SYNC, force/torque TPDOs, csp RPDOs (docs/protocol.md §18); lifecycle "
+       << s.lifecycle << ", " << s.faults << " safe stop(s)\n";
   } else {
     os << "  canopen: minimal protocol (no start-up, no lifecycle)\n";
   }
@@ -713,6 +731,19 @@ std::string format_summary_json(const RunSummary& s) {
   os << "\"warnings\":[";
   for (std::size_t i = 0; i < s.warnings.size(); ++i) os << (i ? "," : "") << json_string(s.warnings[i]);
   os << "],";
+  if (s.admittance.enabled) {
+    const AdmittanceSummary& a = s.admittance;
+    os << "\"admittance\":{\"measured_force_max_n\":" << json_number(a.measured_force_max_n)
+       << ",\"measured_torque_max_nm\":" << json_number(a.measured_torque_max_nm)
+       << ",\"device_error_max_mm\":" << json_number(a.device_error_max_mm)
+       << ",\"device_error_rms_mm\":" << json_number(a.device_error_rms_mm)
+       << ",\"hand_separation_max_mm\":" << json_number(a.hand_separation_max_mm)
+       << ",\"final_measured_force_n\":" << json_number(a.final_measured_force_n)
+       << ",\"final_hand_separation_mm\":" << json_number(a.final_hand_separation_mm)
+       << ",\"k_hand\":" << json_number(a.k_hand) << ",\"sensor_frames\":" << a.sensor_frames
+       << ",\"sensor_rejected_periods\":" << a.sensor_rejected_periods
+       << ",\"csp_rpdos\":" << a.csp_rpdos << ",\"hold_periods\":" << a.hold_periods << "},";
+  }
   os << "\"nan_detected\":" << (s.nan_detected ? "true" : "false");
   os << "}";
   return os.str();

@@ -336,13 +336,71 @@ int body_index(const TomlTable& t, std::string_view key, const core::Model& m) {
   t.fail(key, "no body named \"" + name + "\" (use a [[body]] name or \"none\")");
 }
 
+/// `[device.admittance]` (docs/scenes.md): required with coupling = "admittance", refused
+/// otherwise.
+void parse_admittance(const TomlTable& dev, Scene& scene, const hal::DeviceConfig& cfg) {
+  const bool admittance = scene.model.coupling_mode == core::CouplingMode::kAdmittance;
+  auto ad = dev.table("admittance");
+  if (!ad) {
+    if (admittance)
+      dev.fail("admittance", "missing: coupling = \"admittance\" needs [device.admittance] (force sensor, hand)");
+    return;
+  }
+  if (!admittance)
+    ad->fail_at(nullptr, ad->path(), "[device.admittance] needs coupling = \"admittance\"");
+  ad->allow_only({"drive_lag", "rpdo_cob_ids", "force_sensor", "hand"});
+  AdmittanceScene a;
+  a.config = hal::make_admittance_config(cfg);
+  if (ad->has("rpdo_cob_ids")) {
+    const std::vector<double> ids = ad->numbers("rpdo_cob_ids", static_cast<int>(cfg.axes.size()));
+    for (std::size_t i = 0; i < ids.size(); ++i) {
+      if (!(ids[i] >= 1 && ids[i] <= 0x7FF && ids[i] == std::floor(ids[i])))
+        ad->fail("rpdo_cob_ids", "entries must be 11-bit COB-IDs");
+      a.config.rpdo_cob_ids[i] = static_cast<std::uint32_t>(ids[i]);
+    }
+  }
+  a.emulator.lag_s = ad->number_in("drive_lag", 0.0, 1.0, a.emulator.lag_s);
+  if (auto fs = ad->table("force_sensor")) {
+    fs->allow_only({"node_id", "force_cob_id", "torque_cob_id", "force_scale", "torque_scale",
+                    "max_force", "max_torque", "max_age", "position", "orientation"});
+    hal::ForceSensorConfig& c = a.config.sensor;
+    const auto node = fs->integer_or("node_id", c.node_id);
+    if (node < 1 || node > 127) fs->fail("node_id", "must be a CANopen node id in [1, 127]");
+    c.node_id = static_cast<std::uint8_t>(node);
+    c.force_cob_id = static_cast<std::uint32_t>(fs->number_in("force_cob_id", 1, 0x7FF, 0.0));
+    c.torque_cob_id = static_cast<std::uint32_t>(fs->number_in("torque_cob_id", 1, 0x7FF, 0.0));
+    c.force_scale = fs->number_in("force_scale", 1e-9, kInf, c.force_scale);
+    c.torque_scale = fs->number_in("torque_scale", 1e-9, kInf, c.torque_scale);
+    c.max_force = fs->number_in("max_force", 1e-9, kInf, c.max_force);
+    c.max_torque = fs->number_in("max_torque", 1e-9, kInf, c.max_torque);
+    c.max_age_s = fs->number_in("max_age", 1e-9, kInf, 3.0 * cfg.control_period_s);
+    c.sensor_in_tool.position = fs->vec3_or("position", Vec3::Zero());
+    c.sensor_in_tool.orientation = fs->quaternion_or("orientation", Quat::Identity());
+  } else {
+    a.config.sensor.max_age_s = 3.0 * cfg.control_period_s;
+  }
+  if (auto h = ad->table("hand")) {
+    h->allow_only({"stiffness", "damping", "rotational_stiffness", "rotational_damping"});
+    a.emulator.k_hand = h->number_in("stiffness", 0.0, kInf, a.emulator.k_hand);
+    a.emulator.c_hand = h->number_in("damping", 0.0, kInf, a.emulator.c_hand);
+    a.emulator.k_hand_rot = h->number_in("rotational_stiffness", 0.0, kInf, a.emulator.k_hand_rot);
+    a.emulator.c_hand_rot = h->number_in("rotational_damping", 0.0, kInf, a.emulator.c_hand_rot);
+  }
+  try {
+    hal::validate(cfg, a.config);
+  } catch (const std::invalid_argument& e) {
+    ad->fail_at(nullptr, ad->path(), e.what());
+  }
+  scene.admittance = std::move(a);
+}
+
 void parse_device(const TomlTable& root, Scene& scene, const TomlTable*& body_table_of_attached,
                   const std::vector<TomlTable>& body_tables) {
   auto dev = root.table("device");
   if (!dev) root.fail("device", "missing: a scene needs a [device] (the tracked instrument)");
   dev->allow_only({"kind", "name", "attach", "max_sample_age", "jump_tolerance_counts",
                    "first_node_id", "tool_offset", "trocar", "tracker", "phantom", "feedback",
-                   "axis", "canopen"});
+                   "axis", "canopen", "admittance"});
   const std::string kind =
       dev->choice("kind", {"trocar-instrument", "pose-tracker", "phantom"}, std::nullopt);
   const auto node = dev->integer_or("first_node_id", 1);
@@ -432,6 +490,7 @@ void parse_device(const TomlTable& root, Scene& scene, const TomlTable*& body_ta
     dev->fail("axis", e.what());
   }
   parse_feedback(*dev, scene.model.feedback);
+  parse_admittance(*dev, scene, cfg);
   scene.model.initial_attached_body = dev->has("attach") ? body_index(*dev, "attach", scene.model) : -1;
   body_table_of_attached = nullptr;
   if (scene.model.initial_attached_body >= 0)
@@ -451,8 +510,9 @@ core::CouplingMode parse_coupling_mode(const std::string& name) {
   if (name == "god-object") return core::CouplingMode::kGodObject;
   if (name == "first-order") return core::CouplingMode::kFirstOrder;
   if (name == "direct") return core::CouplingMode::kDirect;
+  if (name == "admittance") return core::CouplingMode::kAdmittance;
   throw InputError("", 0, 0, "coupling",
-                   "unknown coupling mode \"" + name + "\" (god-object, first-order, direct)");
+                   "unknown coupling mode \"" + name + "\" (god-object, first-order, direct, admittance)");
 }
 
 const char* to_string(core::CouplingMode mode) noexcept {
@@ -460,6 +520,7 @@ const char* to_string(core::CouplingMode mode) noexcept {
     case core::CouplingMode::kGodObject: return "god-object";
     case core::CouplingMode::kFirstOrder: return "first-order";
     case core::CouplingMode::kDirect: return "direct";
+    case core::CouplingMode::kAdmittance: return "admittance";
   }
   return "?";
 }

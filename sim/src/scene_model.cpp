@@ -363,10 +363,11 @@ core::Model parse_scene_model(const TomlTable& root, std::vector<std::string>& w
   m.integrator = integrator == "implicit-euler" ? core::Integrator::kLinearlyImplicitEuler
                                                 : core::Integrator::kSymplecticEuler;
   const std::string coupling =
-      root.choice("coupling", {"god-object", "first-order", "direct"}, "god-object");
+      root.choice("coupling", {"god-object", "first-order", "direct", "admittance"}, "god-object");
   m.coupling_mode = coupling == "god-object"    ? core::CouplingMode::kGodObject
                     : coupling == "first-order" ? core::CouplingMode::kFirstOrder
-                                                : core::CouplingMode::kDirect;
+                    : coupling == "direct"      ? core::CouplingMode::kDirect
+                                                : core::CouplingMode::kAdmittance;
   if (auto s = root.table("solver")) {
     s->allow_only({"max_iterations", "tolerance"});
     const auto it = s->integer_or("max_iterations", m.solver.max_iterations);

@@ -14,6 +14,7 @@
 #include "numen/core/model.hpp"
 #include "numen/core/rigid_body.hpp"
 #include "numen/core/step.hpp"
+#include "alloc_counter.hpp"
 
 namespace core = numen::core;
 using core::Mat3;
@@ -320,4 +321,109 @@ TEST(Coupling, DirectBodyPushesOthersAndIsNotPushedBack) {
   }
   EXPECT_GT(d.bodies[1].linear_velocity.x(), 0.05);  // pushed along +x
   EXPECT_EQ(max_iterations, 1);  // the imposed body is out of the solve: block diagonal
+}
+
+// ---------------------------------------------------------------- admittance (paper Fig. 2 note)
+
+namespace {
+
+/// One ball (r = 10 mm, m = 0.05 kg) held by an admittance device, no gravity; with `wall`, the
+/// plane x = 0 (solid for x > 0) with penalty stiffness k_c and damping c_c.
+core::Model admittance_model(core::Integrator integrator, bool wall, double k_c = 2e4,
+                             double c_c = 20.0) {
+  core::Model m;
+  m.gravity = Vec3::Zero();
+  m.integrator = integrator;
+  m.coupling_mode = core::CouplingMode::kAdmittance;
+  m.material_pairs = {core::MaterialPair{k_c, c_c, 0.0}};
+  if (wall) {
+    core::Obstacle w;
+    w.name = "wall";
+    w.type = core::ShapeType::kPlane;
+    w.pose.orientation = Quat::FromTwoVectors(Vec3::UnitZ(), -Vec3::UnitX());  // normal −x
+    m.obstacles = {w};
+  }
+  m.body_spheres = {core::Sphere{Vec3::Zero(), 0.01}};
+  core::BodyModel b;
+  b.name = "tool";
+  b.mass = 0.05;
+  b.inertia_body = Vec3(2e-6, 3e-6, 4e-6).asDiagonal();
+  b.sphere_count = 1;
+  b.coupling = {1000.0, 10.0, 1.0, 0.1};  // must have no effect in admittance
+  b.initial_pose.position = Vec3(-0.05, 0.0, 0.0);
+  m.bodies = {b};
+  m.feedback = {400.0, 2.0, 0.5, 0.01, 10.0, 1.0};  // must have no effect either
+  m.initial_attached_body = 0;
+  EXPECT_EQ(core::finalize_model(m), "");
+  return m;
+}
+
+}  // namespace
+
+TEST(CouplingAdmittance, ConstantMeasuredForceAcceleratesAsFOverMInBothIntegrators) {
+  // Explicit external wrench, no spring: v_n = n h F/m, x_n = x_0 + h² (F/m) n(n+1)/2 for
+  // both schemes (no stiffness or damping term enters the implicit solve); ω_z = n h T_z/I_z
+  // (ω along a principal axis: no gyroscopic term).
+  for (auto integ : {core::Integrator::kLinearlyImplicitEuler, core::Integrator::kSymplecticEuler}) {
+    const core::Model m = admittance_model(integ, false);
+    core::Data d = core::make_data(m);
+    const Vec3 f(0.3, -0.2, 0.1);
+    const double t_z = 2e-5;
+    d.device_wrench.force = f;
+    d.device_wrench.torque = Vec3(0.0, 0.0, t_z);
+    d.target.position = Vec3(5.0, 5.0, 5.0);  // a target far away: ignored in admittance
+    const int n = 500;
+    const double h = m.dt;
+    for (int i = 0; i < n; ++i) core::step(m, d);
+    const Vec3 v = n * h * f / m.bodies[0].mass;
+    const Vec3 x = Vec3(-0.05, 0.0, 0.0) + h * h * f / m.bodies[0].mass * (n * (n + 1) / 2.0);
+    EXPECT_TRUE(d.bodies[0].linear_velocity.isApprox(v, 1e-10)) << static_cast<int>(integ);
+    EXPECT_TRUE(d.bodies[0].position.isApprox(x, 1e-10)) << static_cast<int>(integ);
+    EXPECT_NEAR(d.bodies[0].angular_velocity.z(), n * h * t_z / 4e-6, 1e-9);
+    EXPECT_TRUE(d.coupling_wrench.force.isApprox(f));  // the wrench that drove the body
+    EXPECT_EQ(d.feedback_wrench.force.norm(), 0.0);    // position-controlled device: no feedback
+    EXPECT_EQ(d.status, core::kStepOk);
+  }
+}
+
+TEST(CouplingAdmittance, PushedIntoAWallTheBodyStopsAtThePenaltyEquilibrium) {
+  // The hand pushes with F = 2 N along +x; the ball comes to rest with k_c δ = F.
+  const double k_c = 2e4, f = 2.0;
+  for (auto integ : {core::Integrator::kLinearlyImplicitEuler, core::Integrator::kSymplecticEuler}) {
+    const core::Model m = admittance_model(integ, true, k_c);
+    core::Data d = core::make_data(m);
+    d.device_wrench.force = Vec3(f, 0.0, 0.0);
+    for (int i = 0; i < 4000; ++i) core::step(m, d);
+    EXPECT_NEAR(d.max_penetration, f / k_c, 1e-3 * f / k_c) << static_cast<int>(integ);
+    EXPECT_NEAR(d.bodies[0].linear_velocity.norm(), 0.0, 1e-6);
+    EXPECT_LT(d.bodies[0].position.x(), 0.0);
+  }
+}
+
+TEST(CouplingAdmittance, NonFiniteMeasuredWrenchIsIgnoredAndFlagged) {
+  const core::Model m = admittance_model(core::Integrator::kLinearlyImplicitEuler, false);
+  core::Data d = core::make_data(m);
+  d.device_wrench.force = Vec3(std::numeric_limits<double>::quiet_NaN(), 0.0, 0.0);
+  core::step(m, d);
+  EXPECT_TRUE(d.status & core::kInvalidTarget);
+  EXPECT_TRUE(d.bodies[0].position.isApprox(Vec3(-0.05, 0.0, 0.0)));
+  // Another mode ignores the device wrench altogether.
+  core::Model g = admittance_model(core::Integrator::kLinearlyImplicitEuler, false);
+  g.coupling_mode = core::CouplingMode::kGodObject;
+  core::Data dg = core::make_data(g);
+  dg.target.position = Vec3(-0.05, 0.0, 0.0);
+  dg.device_wrench.force = Vec3(100.0, 0.0, 0.0);
+  for (int i = 0; i < 10; ++i) core::step(g, dg);
+  EXPECT_NEAR(dg.bodies[0].position.x(), -0.05, 1e-12);
+}
+
+TEST(CouplingAdmittance, StepsDoNotAllocate) {
+  const core::Model m = admittance_model(core::Integrator::kLinearlyImplicitEuler, true);
+  core::Data d = core::make_data(m);
+  numen::test::AllocationGuard guard;
+  for (int i = 0; i < 10000; ++i) {
+    d.device_wrench.force = Vec3(2.0 * std::sin(1e-3 * i), 0.1, 0.0);
+    core::step(m, d);
+  }
+  EXPECT_EQ(guard.count(), 0);
 }

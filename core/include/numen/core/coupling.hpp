@@ -10,7 +10,8 @@
 /// target are left to the simulation). Modes
 /// (Model::coupling_mode): kGodObject (this wrench on a body with mass),
 /// kFirstOrder (massless limit, handled by the integrator), kDirect (pose and
-/// twist imposed: impose_direct_target()).
+/// twist imposed: impose_direct_target()), kAdmittance (no spring: the measured
+/// device wrench Data::device_wrench on the attached body, apply_device_wrench()).
 
 #include "numen/core/types.hpp"
 
@@ -52,12 +53,20 @@ bool first_order_applicable(const CouplingGains& gains) noexcept;
 /// Call before detect_contacts() so that contacts see the imposed pose.
 void impose_direct_target(const Model& model, Data& data) noexcept;
 
+/// kAdmittance only (no-op otherwise, and without an attached body): adds Data::device_wrench
+/// (world; N at, N·m about, the attached body's COM) to the attached body's explicit wrench
+/// and copies it to Data::coupling_wrench (the wrench that drives the god-object). A
+/// non-finite device wrench is ignored for the step and sets kInvalidTarget. Called by
+/// apply_coupling().
+void apply_device_wrench(const Model& model, Data& data) noexcept;
+
 /// Coupling stage (Eq. 2, Eq. 6): computes Data::coupling_wrench for the
 /// attached body and adds it to body_wrench, adds the springs of every other
 /// body with an enabled Data::body_targets entry (always second order), and
 /// records in Data::solver which bodies are coupled (target_coupled,
 /// coupled_body) and whether the attached one is first order (first_order).
-/// Nothing in kDirect mode; a body whose target is not finite gets no spring
+/// Nothing in kDirect mode; in kAdmittance the attached body gets apply_device_wrench()
+/// instead of the spring (the other bodies' Eq. 6 springs are kept); a body whose target is not finite gets no spring
 /// this step and kInvalidTarget is set in Data::status. Call after
 /// apply_external_forces().
 void apply_coupling(const Model& model, Data& data) noexcept;

@@ -80,7 +80,13 @@ struct Data {
   int attached_body = -1;          ///< Body the device drives; -1: none (tool switching).
   Pose target;                     ///< Device target pose of the attached body's COM frame (world).
   Twist target_twist;              ///< Device target twist (world).
-  std::vector<Wrench> applied_wrench;  ///< Per body, world, at the COM (admittance input, N, N·m).
+  std::vector<Wrench> applied_wrench;  ///< Per body, world, at the COM (N, N·m): explicit external wrench.
+  /// CouplingMode::kAdmittance only: the wrench the user applies to the device, as measured by
+  /// its force/torque sensor, carried to the attached body (world frame; N at, and N·m about,
+  /// the attached body's COM). Added to the attached body as an explicit external wrench in both
+  /// integrators (no spring, no Jacobian term). A non-finite value is ignored for the step
+  /// (kInvalidTarget). Ignored in the other modes.
+  Wrench device_wrench;
   /// Per body: its own device target (Eq. 6) besides the attached body's
   /// `target`. An enabled entry of the attached body itself is ignored.
   std::vector<BodyTarget> body_targets;

@@ -30,6 +30,10 @@ enum class CouplingMode : std::uint8_t {
   kFirstOrder,  ///< Massless limit of Eq. 2: γ(v_t − v) + k e + F_ext = 0, i.e. velocity
                 ///< proportional to the error (the paper's footnote).
   kDirect,      ///< Pose and twist imposed from the device (paper Fig. 5): no god-object.
+  kAdmittance,  ///< Admittance device (paper Fig. 2 note): no coupling spring; the attached
+                ///< body is driven by the force the user applies to the device
+                ///< (Data::device_wrench, explicit external wrench) and the device is
+                ///< commanded the body's pose. No feedback wrench (docs/dynamics.md).
 };
 
 /// A sphere of a sphere set. `center` is in the body frame for dynamic bodies

@@ -69,6 +69,9 @@ struct PdoObject {
   static constexpr PdoEntry kPositionValue{0x6004, 0x00, 32, true};
   /// 0x6004:00 position value as CiA 406 types it, UNSIGNED32 counts.
   static constexpr PdoEntry kPositionValueUnsigned{0x6004, 0x00, 32, false};
+  /// 0x607A:00 target position, INTEGER32, position units (CiA 402-2; the cyclic set-point in
+  /// cyclic synchronous position mode, modes of operation 8).
+  static constexpr PdoEntry kTargetPosition{0x607A, 0x00, 32, true};
   /// 0x6060:00 modes of operation, INTEGER8 (10 = cyclic synchronous torque).
   static constexpr PdoEntry kModesOfOperation{0x6060, 0x00, 8, true};
   /// 0x6061:00 modes of operation display, INTEGER8.
@@ -153,6 +156,11 @@ class PdoMapping {
 /// The drive RPDO numen sends to a CiA 402 drive in cst mode: controlword 0x6040 (bytes 0–1),
 /// target torque 0x6071 (bytes 2–3); 4 bytes. Mapping 0x1600: 0x60400010, 0x60710010.
 PdoMapping drive_rpdo_mapping();
+/// The drive RPDO numen sends to a CiA 402 drive in cyclic synchronous position mode (csp,
+/// modes of operation 8; CiA 402-2 §"Cyclic synchronous position mode"): controlword 0x6040
+/// (bytes 0–1), target position 0x607A (bytes 2–5, INTEGER32 counts); 6 bytes. Mapping 0x1600:
+/// 0x60400010, 0x607A0020. Used for admittance devices (docs/protocol.md §18).
+PdoMapping csp_drive_rpdo_mapping();
 /// The drive TPDO a CiA 402 drive sends on SYNC: statusword 0x6041 (bytes 0–1), torque actual
 /// value 0x6077 (bytes 2–3); 4 bytes. Mapping 0x1A00: 0x60410010, 0x60770010.
 PdoMapping drive_tpdo_mapping();

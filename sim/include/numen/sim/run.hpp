@@ -79,6 +79,27 @@ struct DurationSummary {
   double mean = 0.0;
 };
 
+/// What a run of an admittance device measured (AdmittanceRunner; docs/scenes.md). Positions
+/// are the controlled frame's origin (world): "device" where the emulated device is, "hand"
+/// where the simulated hand wants it (the scene trajectory), "god-object" the held body's COM.
+struct AdmittanceSummary {
+  bool enabled = false;                  ///< The run was an admittance run.
+  double measured_force_max_n = 0.0;     ///< Largest |measured force| that drove the god-object.
+  double measured_torque_max_nm = 0.0;   ///< Largest |measured torque| (about the COM).
+  double device_error_max_mm = 0.0;      ///< Largest |x_device − x_god-object|.
+  double device_error_rms_mm = 0.0;      ///< Its RMS over the periods.
+  double hand_separation_max_mm = 0.0;   ///< Largest |x_hand − x_device|.
+  double final_measured_force_n = 0.0;   ///< |measured force| in the last period.
+  double final_hand_separation_mm = 0.0; ///< |x_hand − x_device| in the last period.
+  double k_hand = 0.0;                   ///< The hand's stiffness (N/m), for k_hand × separation.
+  std::int64_t sensor_frames = 0;        ///< Force sensor TPDOs received.
+  std::int64_t sensor_rejected_periods = 0;  ///< Periods whose reading was rejected.
+  std::int64_t csp_rpdos = 0;            ///< csp RPDOs written.
+  std::int64_t setpoints_clamped = 0;    ///< Set-points clamped to an axis range.
+  std::int64_t setpoints_rate_limited = 0;  ///< Set-points limited to max_speed · dt.
+  std::int64_t hold_periods = 0;         ///< Periods not active (drives disabled, god-object braked).
+};
+
 /// What a run measured. Penetrations are the deepest overlap (mm) of the
 /// tool's spheres (the held body and the bodies jointed to it, and the node
 /// spheres of the deformable nets whose rigid component is one of them) with
@@ -189,6 +210,8 @@ struct RunSummary {
   bool drives_disabled = false;            ///< Every drive disabled at the end of the shutdown.
   std::vector<std::string> warnings;
   std::string trocar_note;
+  /// Admittance device runs only (enabled = true); the impedance-only fields above stay 0.
+  AdmittanceSummary admittance;
 };
 
 /// A scene wired for a run: SimBus, simulated instrument on its device port,

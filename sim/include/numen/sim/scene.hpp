@@ -11,6 +11,8 @@
 #include <vector>
 
 #include "numen/core/model.hpp"
+#include "numen/hal/admittance_device.hpp"
+#include "numen/hal/admittance_emulator.hpp"
 #include "numen/hal/device_config.hpp"
 #include "numen/hal/sim_bus.hpp"
 #include "numen/platform/device_binding.hpp"
@@ -23,6 +25,13 @@ namespace numen::sim {
 struct AttachEvent {
   double time_s = 0.0;
   int body = -1;
+};
+
+/// An admittance device (scene `[device.admittance]`, with `coupling = "admittance"`; paper
+/// Fig. 2 note): the force sensor and csp RPDOs, and the emulated device's hand and drives.
+struct AdmittanceScene {
+  hal::AdmittanceConfig config;               ///< Validated against Scene::device.
+  hal::AdmittanceEmulatorSettings emulator;   ///< The simulated hand (k_hand, c_hand, ...) and drive lag.
 };
 
 /// Everything a run of a scene needs.
@@ -44,6 +53,8 @@ struct Scene {
   /// world, sampled at model.dt.
   Trajectory trajectory;
   std::vector<AttachEvent> events;  ///< Sorted by time.
+  /// Set exactly when model.coupling_mode is kAdmittance (the loader requires both or neither).
+  std::optional<AdmittanceScene> admittance;
   double duration_s = 0.0;          ///< Default run length (s).
   std::vector<std::string> warnings;  ///< Non-fatal remarks of the loader.
   /// How the trocar point was placed (for the summary), empty if not a trocar.

@@ -1,0 +1,105 @@
+#pragma once
+/// @file admittance_loop.hpp
+/// One control period of an admittance device (paper Fig. 2 note; docs/dynamics.md
+/// "Admittance devices", docs/protocol.md §18):
+///   begin_period: SYNC on the bus;
+///   end_period:   read every pending frame → force sensor TPDOs → check (fresh, in range)
+///                 → DeviceLifecycle (a force reading missing or rejected for
+///                 force_timeout_periods, or out of range, latches the safe state)
+///                 → data.device_wrench = the measured wrench in the world, about the held
+///                 body's COM (sensor frame → world through the forward kinematics of the
+///                 set-points) → core::step (CouplingMode::kAdmittance)
+///                 → the held body's pose → inverse kinematics → csp RPDOs (controlword
+///                 enable operation + target position) on the bus.
+/// Outside kActive the drives get controlword shutdown (0x0006, CiA 402: operation disabled)
+/// with the set-points held, and the god-object is braked to rest (no measured force drives
+/// it). Construction may allocate and throws; begin_period / end_period / rearm never
+/// allocate, throw, lock or block.
+
+#include <cstdint>
+
+#include "numen/core/data.hpp"
+#include "numen/core/model.hpp"
+#include "numen/hal/admittance_device.hpp"
+#include "numen/hal/bus.hpp"
+#include "numen/hal/device_lifecycle.hpp"
+
+namespace numen::platform {
+
+/// Creation settings of an AdmittanceLoop.
+struct AdmittanceLoopSettings {
+  /// Consecutive periods without a valid force reading that latch the safe state, >= 1 (the
+  /// last accepted reading drives the god-object meanwhile).
+  std::uint32_t force_timeout_periods = 3;
+  /// LifecycleSettings::safe_stop_timeout_periods, >= 1.
+  std::uint32_t safe_stop_timeout_periods = 100;
+  /// Activate on its own in the first period with a valid reading (else call activate()).
+  bool auto_activate = true;
+};
+
+/// What one period did.
+struct AdmittanceReport {
+  int frames_read = 0;            ///< Frames taken from the bus.
+  bool sample_valid = false;      ///< The force reading was fresh and in range this period.
+  hal::FaultMask faults = 0;      ///< The reading's SampleFault bits.
+  core::Wrench measured;          ///< The wrench given to the god-object (world, about its COM).
+  bool driven = false;            ///< The measured wrench drove the held body this period.
+  std::uint16_t controlword = 0;  ///< Sent with the set-points.
+  hal::IoStatus command_status = hal::IoStatus::kOk;  ///< Result of the RPDO writes.
+  std::int64_t step_ns = 0;  ///< Wall time of core::step (CLOCK_MONOTONIC ns).
+  hal::LifecycleState lifecycle = hal::LifecycleState::kUnconfigured;  ///< After this period.
+  bool entered_safe_stop = false;  ///< The safe state latched in this period.
+  bool activated = false;          ///< kInactive → kActive in this period.
+};
+
+/// Counters since construction.
+struct AdmittanceLoopCounters {
+  std::uint64_t periods = 0;              ///< end_period() calls.
+  std::uint64_t sync_write_failures = 0;  ///< SYNC writes not accepted.
+  std::uint64_t read_errors = 0;          ///< Bus reads that returned kError.
+  std::uint64_t ignored_frames = 0;       ///< Frames that were not the sensor's.
+  std::uint64_t invalid_periods = 0;      ///< Periods without a valid reading.
+  std::uint64_t command_failures = 0;     ///< Periods whose RPDO writes did not all succeed.
+  std::uint64_t hold_periods = 0;         ///< Periods not in kActive (drives disabled, braked).
+};
+
+/// The control loop of one admittance device driving one core::Data.
+/// Not thread safe: one real-time thread owns it.
+class AdmittanceLoop {
+ public:
+  /// Keeps references (all must outlive the loop). Throws std::invalid_argument if the model's
+  /// coupling mode is not kAdmittance or a setting is 0. Configures the lifecycle
+  /// (kUnconfigured → kInactive). The device's set-points are not touched.
+  AdmittanceLoop(const core::Model& model, core::Data& data, hal::Bus& bus,
+                 hal::AdmittanceDevice& device, const AdmittanceLoopSettings& settings = {});
+
+  /// Starts a period: SYNC (COB-ID 0x080, counter 1..240) stamped `now_ns` (bus clock).
+  void begin_period(std::int64_t now_ns) noexcept;
+  /// Ends the period at bus time `now_ns` (see the file comment).
+  const AdmittanceReport& end_period(std::int64_t now_ns) noexcept;
+
+  /// kInactive → kActive now (refused while the reading is invalid).
+  hal::LifecycleResult activate() noexcept { return lifecycle_.activate(); }
+  /// kFault → kInactive once the reading is valid again; auto_activate then follows.
+  hal::LifecycleResult rearm() noexcept { return lifecycle_.rearm(); }
+
+  const hal::DeviceLifecycle& lifecycle() const noexcept { return lifecycle_; }
+  const AdmittanceLoopCounters& counters() const noexcept { return counters_; }
+  const AdmittanceReport& last_report() const noexcept { return report_; }
+
+ private:
+  void brake_held_body() noexcept;
+
+  const core::Model* model_;
+  core::Data* data_;
+  hal::Bus* bus_;
+  hal::AdmittanceDevice* device_;
+  AdmittanceLoopSettings settings_;
+  hal::DeviceLifecycle lifecycle_;
+  bool disable_sent_ = false;  // controlword shutdown sent since the last kActive period
+  std::uint8_t sync_counter_ = 0;
+  AdmittanceReport report_;
+  AdmittanceLoopCounters counters_;
+};
+
+}  // namespace numen::platform

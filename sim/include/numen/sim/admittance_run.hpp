@@ -1,0 +1,83 @@
+#pragma once
+/// @file admittance_run.hpp
+/// The run harness of a scene with an admittance device (`coupling = "admittance"`,
+/// `[device.admittance]`; paper Fig. 2 note): a SimBus, a hal::AdmittanceEmulator on its
+/// device port (the position-controlled device and its force sensor, pushed by a simulated
+/// hand that follows the scene trajectory), a hal::AdmittanceDevice and a
+/// platform::AdmittanceLoop on its controller port. run_scene() dispatches here.
+/// One period (bus time t = k·dt):
+///   t            controller: SYNC
+///   t + latency  device: the drives advance to their targets, the hand's wrench is measured,
+///                two sensor TPDOs
+///   t + phase    controller: read, check, measured wrench → core::step → IK → csp RPDOs
+///                (taken by the drives before the next SYNC)
+/// The constructor allocates; period() never allocates, throws or locks (tested).
+
+#include <cstdint>
+
+#include "numen/core/data.hpp"
+#include "numen/hal/admittance_device.hpp"
+#include "numen/hal/admittance_emulator.hpp"
+#include "numen/hal/sim_bus.hpp"
+#include "numen/platform/admittance_loop.hpp"
+#include "numen/platform/latency_histogram.hpp"
+#include "numen/sim/run.hpp"
+#include "numen/sim/scene.hpp"
+
+namespace numen::sim {
+
+/// A scene with an admittance device wired for a run.
+class AdmittanceRunner {
+ public:
+  /// `scene` (with Scene::admittance set) must outlive the runner. The device starts at the
+  /// held body's initial pose (inverse kinematics), the hand at the trajectory's first sample.
+  /// Throws std::invalid_argument if the scene has no admittance device.
+  explicit AdmittanceRunner(const Scene& scene);
+
+  /// Runs control period k (see the file comment) and its measurements.
+  void period() noexcept;
+  /// Periods run so far.
+  std::int64_t periods() const noexcept { return k_; }
+  /// The summary of the periods run so far (RunSummary::admittance filled in; wall time is the
+  /// caller's).
+  RunSummary summary() const;
+
+  const core::Data& data() const noexcept { return data_; }
+  const hal::AdmittanceEmulator& emulator() const noexcept { return emulator_; }
+  hal::AdmittanceEmulator& emulator() noexcept { return emulator_; }
+  const hal::AdmittanceDevice& device() const noexcept { return device_; }
+  const platform::AdmittanceLoop& loop() const noexcept { return loop_; }
+  platform::AdmittanceLoop& loop() noexcept { return loop_; }
+  /// Where the hand was at the last period (the controlled frame's target, world).
+  const core::Pose& hand_pose() const noexcept { return hand_; }
+  /// Deepest contact of the held body at the hand's pose in the last period (m).
+  double hand_penetration() const noexcept { return hand_pen_; }
+  /// Deepest contact of the held body (the god-object) in the last period (m).
+  double tool_penetration() const noexcept { return tool_pen_; }
+
+ private:
+  const Scene* scene_;
+  hal::SimBus bus_;
+  hal::AdmittanceEmulator emulator_;
+  hal::AdmittanceDevice device_;
+  core::Data data_;
+  core::Data ghost_;  // the held body placed at the hand, for measurement
+  platform::AdmittanceLoop loop_;
+  platform::LatencyHistogram step_time_;
+  std::int64_t k_ = 0;
+  std::int64_t period_ns_;
+  std::int64_t phase_ns_;
+  core::Pose hand_;
+  double hand_pen_ = 0.0;
+  double tool_pen_ = 0.0;
+  double error_sq_ = 0.0;
+  double solver_iterations_sum_ = 0.0;
+  RunSummary acc_;
+};
+
+/// Runs an admittance scene for `options.duration_s` (or the scene's duration): as fast as
+/// possible, or paced with options.realtime. A trace or another bus is not supported for
+/// admittance scenes (reported as a warning).
+RunSummary run_admittance_scene(const Scene& scene, const RunOptions& options);
+
+}  // namespace numen::sim

@@ -1,0 +1,189 @@
+/// @file admittance_run.cpp
+
+#include "numen/sim/admittance_run.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "numen/core/collision.hpp"
+#include "numen/hal/kinematics_factory.hpp"
+#include "numen/platform/monotonic_clock.hpp"
+#include "numen/platform/periodic_timer.hpp"
+#include "numen/sim/simulated_instrument.hpp"
+
+namespace numen::sim {
+namespace {
+
+const AdmittanceScene& admittance_of(const Scene& scene) {
+  if (!scene.admittance)
+    throw std::invalid_argument(scene.name +
+                                ": not an admittance scene (coupling = \"admittance\")");
+  return *scene.admittance;
+}
+
+/// Deepest contact (m) of `body` among data's contacts; 0 if none.
+double deepest_of(const core::Data& data, int body) noexcept {
+  double deepest = 0.0;
+  for (int i = 0; i < data.num_contacts; ++i) {
+    const core::Contact& c = data.contacts[static_cast<std::size_t>(i)];
+    if (c.body_a == body || c.body_b == body) deepest = std::max(deepest, c.depth);
+  }
+  return deepest;
+}
+
+/// Axis values that put the device's controlled frame at the held body's initial pose.
+hal::AxisVector initial_axes(const Scene& scene) {
+  const auto kin = hal::make_kinematics(scene.device);
+  const int held = scene.model.initial_attached_body;
+  const core::Pose pose = held >= 0
+                              ? scene.model.bodies[static_cast<std::size_t>(held)].initial_pose
+                              : kin->forward(hal::AxisVector::Zero(kin->num_axes()));
+  return kin->inverse(pose, hal::AxisVector::Zero(kin->num_axes()));
+}
+
+DurationSummary step_summary(const platform::LatencyHistogram& h) {
+  DurationSummary d;
+  d.median = static_cast<double>(h.quantile(0.5)) * 1e-3;
+  d.p99 = static_cast<double>(h.quantile(0.99)) * 1e-3;
+  d.p999 = static_cast<double>(h.quantile(0.999)) * 1e-3;
+  d.max = static_cast<double>(h.max()) * 1e-3;
+  d.mean = h.mean() * 1e-3;
+  return d;
+}
+
+}  // namespace
+
+AdmittanceRunner::AdmittanceRunner(const Scene& scene)
+    : scene_(&scene),
+      bus_(scene.bus),
+      emulator_(scene.device, admittance_of(scene).config, admittance_of(scene).emulator),
+      device_(scene.device, admittance_of(scene).config, initial_axes(scene)),
+      data_(core::make_data(scene.model)),
+      ghost_(core::make_data(scene.model)),
+      loop_(scene.model, data_, bus_.controller(), device_),
+      period_ns_(static_cast<std::int64_t>(std::llround(scene.model.dt * 1e9))),
+      phase_ns_(static_cast<std::int64_t>(std::llround(scene.compute_phase_s * 1e9))) {
+  emulator_.set_axis_values(device_.setpoints());
+  acc_.scene = scene.name;
+  acc_.coupling = to_string(scene.model.coupling_mode);
+  acc_.integrator = to_string(scene.model.integrator);
+  acc_.dt_s = scene.model.dt;
+  acc_.warnings = scene.warnings;
+  acc_.trocar_note = scene.trocar_note;
+  acc_.num_bodies = scene.model.num_bodies();
+  acc_.num_joints = scene.model.num_joints();
+  acc_.admittance.enabled = true;
+  acc_.admittance.k_hand = scene.admittance->emulator.k_hand;
+  acc_.managed = false;
+  acc_.startup = "admittance: SYNC, force TPDOs, csp RPDOs (no NMT start-up)";
+}
+
+void AdmittanceRunner::period() noexcept {
+  const core::Model& model = scene_->model;
+  const std::int64_t t = k_ * period_ns_;
+  const double ts = static_cast<double>(t) * 1e-9;
+  // The hand: where the trajectory puts the controlled frame (through the device's constraint).
+  const hal::Kinematics& kin = device_.kinematics();
+  hand_ = kin.forward(instrument_axes(scene_->device, kin, scene_->trajectory.at(ts)));
+  emulator_.set_hand(hand_, scene_->trajectory.twist_at(ts));
+
+  bus_.set_time_ns(t);
+  loop_.begin_period(t);
+  bus_.set_time_ns(t + scene_->bus.latency_ns);
+  emulator_.poll(bus_.device());
+  bus_.set_time_ns(t + phase_ns_);
+  const platform::AdmittanceReport& r = loop_.end_period(t + phase_ns_);
+  step_time_.record(r.step_ns);
+  ++k_;
+
+  // ---- measurements ----
+  RunSummary& s = acc_;
+  AdmittanceSummary& a = s.admittance;
+  const int held = data_.attached_body;
+  hand_pen_ = tool_pen_ = 0.0;
+  const core::Vec3 x_dev = emulator_.pose().position;
+  if (held >= 0) {
+    const auto h = static_cast<std::size_t>(held);
+    tool_pen_ = deepest_of(data_, held);
+    ghost_.bodies = data_.bodies;  // same size: no allocation
+    ghost_.bodies[h].position = hand_.position;
+    ghost_.bodies[h].orientation = hand_.orientation;
+    core::detect_contacts(model, ghost_);
+    hand_pen_ = deepest_of(ghost_, held);
+    const double e = (x_dev - data_.bodies[h].position).norm();
+    error_sq_ += e * e;
+    a.device_error_max_mm = std::max(a.device_error_max_mm, e * 1e3);
+  }
+  if (!r.sample_valid) {
+    ++s.invalid_periods;
+    ++a.sensor_rejected_periods;
+  }
+  const double sep = (hand_.position - x_dev).norm();
+  a.hand_separation_max_mm = std::max(a.hand_separation_max_mm, sep * 1e3);
+  a.final_hand_separation_mm = sep * 1e3;
+  a.final_measured_force_n = r.measured.force.norm();
+  a.measured_force_max_n = std::max(a.measured_force_max_n, r.measured.force.norm());
+  a.measured_torque_max_nm = std::max(a.measured_torque_max_nm, r.measured.torque.norm());
+  s.tool_penetration_max_mm = std::max(s.tool_penetration_max_mm, tool_pen_ * 1e3);
+  s.target_penetration_max_mm = std::max(s.target_penetration_max_mm, hand_pen_ * 1e3);
+  s.any_penetration_max_mm = std::max(s.any_penetration_max_mm, data_.max_penetration * 1e3);
+  s.contacts_max = std::max(s.contacts_max, data_.num_contacts);
+  s.solver_iterations_max = std::max(s.solver_iterations_max, data_.solver_iterations);
+  solver_iterations_sum_ += data_.solver_iterations;
+  if (data_.solver_residual > s.solver_residual_max) s.solver_residual_max = data_.solver_residual;
+  if (data_.status & core::kSolverNotConverged) ++s.solver_not_converged_steps;
+  if (r.entered_safe_stop) ++s.faults;
+}
+
+RunSummary AdmittanceRunner::summary() const {
+  RunSummary s = acc_;
+  s.steps = k_;
+  s.sim_time_s = static_cast<double>(k_) * scene_->model.dt;
+  s.step_time_us = step_summary(step_time_);
+  s.solver_iterations_mean = k_ > 0 ? solver_iterations_sum_ / static_cast<double>(k_) : 0.0;
+  s.nonfinite_steps = data_.nonfinite_steps;
+  s.nan_detected = data_.nonfinite_steps > 0;
+  s.contact_overflow = data_.contact_overflow_steps;
+  for (auto dir :
+       {hal::SimBus::Direction::kControllerToDevice, hal::SimBus::Direction::kDeviceToController}) {
+    s.bus_frames_dropped += static_cast<std::int64_t>(bus_.link_counters(dir).dropped);
+    s.bus_frames_corrupted += static_cast<std::int64_t>(bus_.link_counters(dir).corrupted());
+  }
+  s.lifecycle = hal::to_string(loop_.lifecycle().state());
+  s.zero_torque_periods = 0;
+  AdmittanceSummary& a = s.admittance;
+  a.device_error_rms_mm = k_ > 0 ? std::sqrt(error_sq_ / static_cast<double>(k_)) * 1e3 : 0.0;
+  a.sensor_frames = static_cast<std::int64_t>(device_.sensor().counters().frames);
+  a.csp_rpdos = static_cast<std::int64_t>(device_.counters().rpdos_written);
+  a.setpoints_clamped = static_cast<std::int64_t>(device_.counters().clamped_to_range);
+  a.setpoints_rate_limited = static_cast<std::int64_t>(device_.counters().rate_limited);
+  a.hold_periods = static_cast<std::int64_t>(loop_.counters().hold_periods);
+  s.rejected_samples = a.sensor_rejected_periods;
+  return s;
+}
+
+RunSummary run_admittance_scene(const Scene& scene, const RunOptions& options) {
+  const double duration = options.duration_s >= 0.0 ? options.duration_s : scene.duration_s;
+  const auto steps = static_cast<std::int64_t>(std::llround(duration / scene.model.dt));
+  AdmittanceRunner runner(scene);
+  const std::int64_t wall0 = platform::monotonic_now_ns();
+  platform::PeriodicTimer timer(static_cast<std::int64_t>(std::llround(scene.model.dt * 1e9)),
+                                wall0);
+  std::int64_t overruns = 0;
+  for (std::int64_t k = 0; k < steps; ++k) {
+    if (options.realtime) overruns += timer.wait_next().overrun ? 1 : 0;
+    runner.period();
+  }
+  RunSummary s = runner.summary();
+  s.wall_time_s = static_cast<double>(platform::monotonic_now_ns() - wall0) * 1e-9;
+  s.realtime_overruns = overruns;
+  if (!options.trace_path.empty())
+    s.warnings.push_back("--trace is not supported for admittance scenes: no trace written");
+  if (options.bus.spec != "sim" || !options.bus.record_path.empty())
+    s.warnings.push_back(
+        "--bus / --record are not supported for admittance scenes: ran on the simulated bus");
+  return s;
+}
+
+}  // namespace numen::sim

@@ -1,0 +1,149 @@
+// Tests of sim/admittance_run and the shipped admittance scene: the hand goes 25 mm into the
+// organ, the god-object and the device stop on its surface, the measured force is the hand's
+// spring over the hand–device separation; scene keys and their errors.
+#include "numen/sim/admittance_run.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <string>
+
+#include "alloc_counter.hpp"
+#include "numen/sim/input_error.hpp"
+#include "numen/sim/scene.hpp"
+#include "temp_dir.hpp"
+
+namespace sim = numen::sim;
+
+namespace {
+
+const sim::Scene& admittance_scene() {
+  static const sim::Scene s =
+      sim::load_scene(std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/admittance.toml");
+  return s;
+}
+
+}  // namespace
+
+TEST(AdmittanceScene, LoadsTheSensorTheHandAndTheDrives) {
+  const sim::Scene& s = admittance_scene();
+  ASSERT_TRUE(s.admittance.has_value());
+  EXPECT_EQ(s.model.coupling_mode, numen::core::CouplingMode::kAdmittance);
+  EXPECT_EQ(s.admittance->config.sensor.effective_force_cob_id(), 0x1A0u);
+  EXPECT_DOUBLE_EQ(s.admittance->config.sensor.force_scale, 0.001);
+  EXPECT_DOUBLE_EQ(s.admittance->emulator.k_hand, 200.0);
+  EXPECT_DOUBLE_EQ(s.admittance->emulator.lag_s, 0.002);
+  EXPECT_EQ(s.admittance->config.rpdo_cob_ids.front(), 0x201u);
+}
+
+TEST(AdmittanceScene, GodObjectStaysOutsideWhileTheHandGoesThrough) {
+  const sim::Scene& s = admittance_scene();
+  sim::AdmittanceRunner r(s);
+  const double k_hand = s.admittance->emulator.k_hand;
+  double hand_deepest = 0.0, tool_deepest = 0.0;
+  // 2.7 s: the end of the hold, 25 mm inside.
+  for (int k = 0; k < 2700; ++k) {
+    r.period();
+    hand_deepest = std::max(hand_deepest, r.hand_penetration());
+    tool_deepest = std::max(tool_deepest, r.tool_penetration());
+  }
+  EXPECT_GT(hand_deepest, 0.024);  // the hand: 25 mm into the organ
+  EXPECT_LT(tool_deepest, 0.001);  // the god-object: on the surface (k_c δ = F: ~0.25 mm)
+  const numen::core::Vec3 x_dev = r.emulator().pose().position;
+  const numen::core::Vec3 x_go = r.data().bodies[0].position;
+  EXPECT_LT((x_dev - x_go).norm(), 1e-4);  // the device is where the god-object is
+  EXPECT_NEAR(x_go.norm(), 0.045, 1e-3);   // on the organ's surface (r 40 mm + probe 5 mm)
+  // Quasi-static contact: the measured force is k_hand × the hand–device separation.
+  const double sep = (r.hand_pose().position - x_dev).norm();
+  const double f = r.loop().last_report().measured.force.norm();
+  EXPECT_NEAR(f, k_hand * sep, 0.02 * k_hand * sep);
+  EXPECT_GT(f, 4.0);
+  // Force balance with the penalty contact: δ = F / k_c.
+  EXPECT_NEAR(r.tool_penetration(), f / 2.0e4, 0.05 * f / 2.0e4);
+  const sim::RunSummary sum = r.summary();
+  EXPECT_TRUE(sum.admittance.enabled);
+  EXPECT_EQ(sum.admittance.sensor_rejected_periods, 0);
+  EXPECT_EQ(sum.admittance.hold_periods, 0);
+  EXPECT_FALSE(sum.nan_detected);
+}
+
+TEST(AdmittanceScene, TheWholeRunComesBackOutAndReleases) {
+  const sim::Scene& s = admittance_scene();
+  sim::RunOptions o;
+  const sim::RunSummary sum = sim::run_scene(s, o);  // dispatched to the admittance runner
+  EXPECT_TRUE(sum.admittance.enabled);
+  EXPECT_EQ(sum.steps, 4300);
+  EXPECT_LT(sum.tool_penetration_max_mm, 1.0);
+  EXPECT_GT(sum.target_penetration_max_mm, 24.0);
+  EXPECT_GT(sum.admittance.measured_force_max_n, 4.0);
+  EXPECT_LT(sum.admittance.measured_force_max_n, 8.0);
+  EXPECT_LT(sum.admittance.final_measured_force_n, 0.1);  // back in free space, at rest
+  EXPECT_EQ(sum.lifecycle, "active");
+  EXPECT_NE(sim::format_summary(sum).find("admittance: measured force max"), std::string::npos);
+  EXPECT_NE(sim::format_summary_json(sum).find("\"admittance\":{"), std::string::npos);
+}
+
+TEST(AdmittanceScene, PeriodsDoNotAllocate) {
+  sim::AdmittanceRunner r(admittance_scene());
+  r.period();
+  numen::test::AllocationGuard guard;
+  for (int k = 0; k < 3000; ++k) r.period();
+  EXPECT_EQ(guard.count(), 0);
+}
+
+TEST(AdmittanceScene, LostFramesAreRiddenThroughWithoutASafeStop) {
+  // 2 % of the frames dropped both ways: a lost sensor TPDO leaves the other half and the
+  // previous one fresh (max age 3 periods), a lost csp RPDO leaves the drive on its last
+  // target; the contact is the same.
+  numen::test::TempDir dir;
+  std::ifstream in(std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/admittance.toml");
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string from = "latency = 0.0001";
+  text.replace(text.find(from), from.size(), from + "\ndrop_probability = 0.02\nseed = 3");
+  const std::string path = (dir.path() / "lossy.toml").string();
+  std::ofstream(path) << text;
+  const sim::Scene s = sim::load_scene(path);
+  sim::RunOptions o;
+  const sim::RunSummary sum = sim::run_scene(s, o);
+  EXPECT_GT(sum.bus_frames_dropped, 500);
+  EXPECT_EQ(sum.faults, 0);
+  EXPECT_EQ(sum.lifecycle, "active");
+  EXPECT_LT(sum.tool_penetration_max_mm, 1.0);
+  EXPECT_GT(sum.target_penetration_max_mm, 24.0);
+  EXPECT_NEAR(sum.admittance.measured_force_max_n, 5.26, 0.3);
+}
+
+TEST(AdmittanceScene, KeysAreCheckedWithTheirPlace) {
+  numen::test::TempDir dir;
+  const std::string base = std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/admittance.toml";
+  std::ifstream in(base);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const auto load_with = [&](std::string t) {
+    const std::string path = (dir.path() / "a.toml").string();
+    std::ofstream(path) << t;
+    return sim::load_scene(path);
+  };
+  const auto replace = [&](const std::string& from, const std::string& to) {
+    std::string t = text;
+    const auto at = t.find(from);
+    EXPECT_NE(at, std::string::npos) << from;
+    return t.replace(at, from.size(), to);
+  };
+  // coupling admittance without [device.admittance], and the reverse.
+  EXPECT_THROW(load_with(replace("[device.admittance]", "[device.feedback]")), sim::InputError);
+  EXPECT_THROW(load_with(replace("coupling = \"admittance\"", "coupling = \"god-object\"")),
+               sim::InputError);
+  try {
+    load_with(replace("force_scale = 0.001", "force_scale = 0.001\nbogus = 1"));
+    ADD_FAILURE() << "no throw";
+  } catch (const sim::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("bogus"), std::string::npos) << e.what();
+  }
+  try {
+    load_with(replace("node_id = 32", "node_id = 1"));  // force TPDO 0x181 = axis x's encoder
+    ADD_FAILURE() << "no throw";
+  } catch (const sim::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("force sensor"), std::string::npos) << e.what();
+  }
+}
