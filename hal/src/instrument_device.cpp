@@ -245,19 +245,7 @@ IoStatus InstrumentDevice::send_zero(Bus& bus, std::int64_t now_ns) noexcept {
 
 IoStatus InstrumentDevice::apply_torques(const AxisVector& tau, Bus& bus,
                                          std::int64_t now_ns) noexcept {
-  for (int i = 0; i < n_; ++i) {
-    const auto k = static_cast<std::size_t>(i);
-    const AxisConfig& a = config_.axes[k];
-    if (!a.has_drive()) {
-      last_torques_[i] = 0.0;
-      last_per_mille_[k] = 0;
-      continue;
-    }
-    const TorqueCommand c = torque_to_per_mille(a, tau[i]);
-    if (c.saturated) ++counters_.torque_saturations;
-    last_torques_[i] = c.torque;
-    last_per_mille_[k] = c.per_mille;
-  }
+  encode_torques(tau);
   return send_torques(bus, now_ns);
 }
 
