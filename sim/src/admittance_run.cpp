@@ -42,16 +42,6 @@ hal::AxisVector initial_axes(const Scene& scene) {
   return kin->inverse(pose, hal::AxisVector::Zero(kin->num_axes()));
 }
 
-DurationSummary step_summary(const platform::LatencyHistogram& h) {
-  DurationSummary d;
-  d.median = static_cast<double>(h.quantile(0.5)) * 1e-3;
-  d.p99 = static_cast<double>(h.quantile(0.99)) * 1e-3;
-  d.p999 = static_cast<double>(h.quantile(0.999)) * 1e-3;
-  d.max = static_cast<double>(h.max()) * 1e-3;
-  d.mean = h.mean() * 1e-3;
-  return d;
-}
-
 }  // namespace
 
 AdmittanceRunner::AdmittanceRunner(const Scene& scene)
@@ -140,7 +130,7 @@ RunSummary AdmittanceRunner::summary() const {
   RunSummary s = acc_;
   s.steps = k_;
   s.sim_time_s = static_cast<double>(k_) * scene_->model.dt;
-  s.step_time_us = step_summary(step_time_);
+  s.step_time_us = summarize_ns(step_time_);
   s.solver_iterations_mean = k_ > 0 ? solver_iterations_sum_ / static_cast<double>(k_) : 0.0;
   s.nonfinite_steps = data_.nonfinite_steps;
   s.nan_detected = data_.nonfinite_steps > 0;

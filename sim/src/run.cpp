@@ -79,6 +79,8 @@ void place_tool_nets_at_rest(const core::Model& model, core::Data& ghost, int tr
   }
 }
 
+}  // namespace
+
 DurationSummary summarize_ns(const platform::LatencyHistogram& h) {
   DurationSummary d;
   d.median = static_cast<double>(h.quantile(0.5)) * 1e-3;
@@ -88,8 +90,6 @@ DurationSummary summarize_ns(const platform::LatencyHistogram& h) {
   d.mean = h.mean() * 1e-3;
   return d;
 }
-
-}  // namespace
 
 namespace {
 

@@ -22,26 +22,14 @@
 
 #include "alloc_counter.hpp"
 
+#include "serial_test_frames.hpp"
+
 namespace numen::hal {
 namespace {
 
-using Bytes = std::vector<std::uint8_t>;
-
-CanFrame make(std::uint32_t id, std::uint8_t flags, Bytes data) {
-  CanFrame f;
-  f.id = id;
-  f.flags = flags;
-  f.len = static_cast<std::uint8_t>(data.size());
-  for (std::size_t i = 0; i < data.size(); ++i) f.data[i] = data[i];
-  return f;
-}
-
-Bytes encode(const CanFrame& f) {
-  std::array<std::uint8_t, kSerialMaxFrameOnLine> buf{};
-  const SerialEncodeResult r = encode_serial_frame(f, buf);
-  EXPECT_TRUE(r.ok());
-  return Bytes(buf.begin(), buf.begin() + static_cast<std::ptrdiff_t>(r.length));
-}
+using test::Bytes;
+using test::encode;
+using test::make;
 
 void expect_same(const CanFrame& a, const CanFrame& b) {
   EXPECT_EQ(a.id, b.id);

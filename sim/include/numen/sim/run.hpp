@@ -17,6 +17,7 @@
 #include "numen/hal/log_bus.hpp"
 #include "numen/hal/sim_bus.hpp"
 #include "numen/platform/control_loop.hpp"
+#include "numen/platform/latency_histogram.hpp"
 #include "numen/platform/loop_statistics.hpp"
 #include "numen/platform/realtime_setup.hpp"
 #include "numen/platform/trace_queue.hpp"
@@ -78,6 +79,9 @@ struct DurationSummary {
   double max = 0.0;
   double mean = 0.0;
 };
+
+/// The percentiles of a histogram of durations in ns, converted to µs.
+DurationSummary summarize_ns(const platform::LatencyHistogram& h);
 
 /// What a run of an admittance device measured (AdmittanceRunner; docs/scenes.md). Positions
 /// are the controlled frame's origin (world): "device" where the emulated device is, "hand"

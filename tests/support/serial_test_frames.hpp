@@ -1,0 +1,38 @@
+#pragma once
+/// @file serial_test_frames.hpp
+/// Frames and their bytes on the line for the serial tests (tests/hal/serial_frame_test.cpp,
+/// tests/hal/serial_bus_test.cpp). Header-only.
+
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "numen/hal/can_frame.hpp"
+#include "numen/hal/serial_frame.hpp"
+
+namespace numen::test {
+
+using Bytes = std::vector<std::uint8_t>;
+
+/// A frame `id` with CanFlag `flags` carrying `data` (len = data.size()).
+inline hal::CanFrame make(std::uint32_t id, std::uint8_t flags, Bytes data) {
+  hal::CanFrame f;
+  f.id = id;
+  f.flags = flags;
+  f.len = static_cast<std::uint8_t>(data.size());
+  for (std::size_t i = 0; i < data.size(); ++i) f.data[i] = data[i];
+  return f;
+}
+
+/// The bytes of `f` on the line (encode_serial_frame(); expects success).
+inline Bytes encode(const hal::CanFrame& f) {
+  std::array<std::uint8_t, hal::kSerialMaxFrameOnLine> buf{};
+  const hal::SerialEncodeResult r = hal::encode_serial_frame(f, buf);
+  EXPECT_TRUE(r.ok());
+  return Bytes(buf.begin(), buf.begin() + static_cast<std::ptrdiff_t>(r.length));
+}
+
+}  // namespace numen::test
