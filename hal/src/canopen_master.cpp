@@ -211,8 +211,16 @@ bool CanopenMaster::on_frame(const CanFrame& frame) noexcept {
         return true;
       }
       n.booted = true;
-    } else if (boot_up && startup_.phase == StartupPhase::kWaitOperational) {
-      n.restart = true;  // it reset again while being started: start it again
+    } else if (boot_up && waiting) {
+      // A second boot-up while the nodes boot: the answer to a repeated reset (the first
+      // answer was late, e.g. a slow device process). Expected, not a reset fault.
+      monitor_.expect_boot_up(node);
+    } else if (boot_up && (startup_.phase == StartupPhase::kStartNodes ||
+                          startup_.phase == StartupPhase::kWaitOperational)) {
+      // It reset again while being started: start it again. The start-up handles it, so
+      // the consumer does not report it as a fault.
+      n.restart = true;
+      monitor_.expect_boot_up(node);
     }
     monitor_.on_frame(frame);
     return true;

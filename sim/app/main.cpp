@@ -82,6 +82,10 @@ int main(int argc, char** argv) {
   run->add_flag("--rt-strict", rt.strict, "Fail instead of reporting when a real-time step fails");
   run->add_option("--record", record_path,
                   "Record the controller's bus traffic into this candump log (can-utils format)");
+  std::uint32_t overrun_limit = 3;
+  run->add_option("--overrun-limit", overrun_limit,
+                  "Paced run: consecutive overruns that latch the safe state (default 3); 0 counts "
+                  "and reports overruns without latching (a host that cannot hold the period)");
   run->add_option("--coupling", coupling, "Override the scene's coupling mode")
       ->check(CLI::IsMember({"god-object", "first-order", "direct"}));
 
@@ -135,6 +139,7 @@ int main(int argc, char** argv) {
       options.rt = rt;
       options.stop = &g_stop;
       options.compute_phase_s = phase;
+      options.overrun_limit = overrun_limit;
       const numen::sim::RunSummary summary = numen::sim::run_scene(scene, options);
       if (json) {
         std::cerr << numen::sim::format_summary(summary);

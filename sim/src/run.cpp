@@ -105,16 +105,15 @@ std::unique_ptr<hal::LogBus> make_log_bus(const Scene& scene, const BusSpec& spe
 
 }  // namespace
 
-namespace {
-platform::ControlLoopSettings loop_settings(bool realtime) {
+platform::ControlLoopSettings control_loop_settings(bool paced, std::uint32_t overrun_limit) noexcept {
   platform::ControlLoopSettings s;
-  s.supervise_overruns = realtime;
+  s.supervise_overruns = paced && overrun_limit > 0;
+  if (overrun_limit > 0) s.overrun_limit = overrun_limit;
   return s;
 }
-}  // namespace
 
 SceneRunner::SceneRunner(const Scene& scene, std::size_t trace_capacity, const BusChoice& bus,
-                         bool realtime)
+                         bool realtime, std::uint32_t overrun_limit)
     : scene_(&scene),
       spec_(parse_bus_spec(bus.spec)),
       bus_(scene.bus),
@@ -137,7 +136,7 @@ SceneRunner::SceneRunner(const Scene& scene, std::size_t trace_capacity, const B
       data_(core::make_data(scene.model)),
       ghost_(core::make_data(scene.model)),
       loop_(scene.model, data_, *port_, device_, scene.binding,
-            loop_settings(realtime || spec_.real())),
+            control_loop_settings(realtime || spec_.real(), overrun_limit)),
       period_ns_(static_cast<std::int64_t>(std::llround(scene.model.dt * 1e9))),
       phase_ns_(static_cast<std::int64_t>(std::llround(scene.compute_phase_s * 1e9))) {
   trace_.reserve(trace_capacity);
@@ -408,7 +407,7 @@ RunSummary run_scene(const Scene& scene, const RunOptions& options) {
   // A real bus streams its trace through the TraceWriter; the in-memory trace is for sim runs.
   SceneRunner runner(scene,
                      options.trace_path.empty() || real ? 0 : static_cast<std::size_t>(steps),
-                     options.bus, options.realtime);
+                     options.bus, options.realtime, options.overrun_limit);
   if (options.compute_phase_s >= 0.0) {
     if (!(options.compute_phase_s < scene.model.dt))
       throw std::invalid_argument("--phase " + std::to_string(options.compute_phase_s) +
@@ -467,6 +466,7 @@ RunSummary run_scene(const Scene& scene, const RunOptions& options) {
   s.wall_time_s = static_cast<double>(platform::monotonic_now_ns() - wall0) * 1e-9;
   s.realtime_overruns = overruns;
   s.realtime_missed_periods = missed;
+  s.overrun_limit = options.overrun_limit;
   s.wakeup_latency_us = summarize_ns(wakeup);
   s.realtime_setup = std::move(rt_lines);
   s.stopped = stopped;
@@ -579,7 +579,9 @@ std::string format_summary(const RunSummary& s) {
   if (s.wakeup_latency_us.max > 0.0)
     os << "\n  realtime: wake-up latency us median " << s.wakeup_latency_us.median << ", p99 "
        << s.wakeup_latency_us.p99 << ", max " << s.wakeup_latency_us.max << "; overruns "
-       << s.realtime_overruns << ", missed periods " << s.realtime_missed_periods;
+       << s.realtime_overruns << ", missed periods " << s.realtime_missed_periods
+       << (s.overrun_limit > 0 ? "; overrun policy: latch after " + std::to_string(s.overrun_limit)
+                               : std::string("; overrun policy: count only"));
   os << "\n";
   for (const auto& w : s.warnings) os << "  warning: " << w << "\n";
   return os.str();

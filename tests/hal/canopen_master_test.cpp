@@ -120,6 +120,40 @@ TEST(CanopenMaster, ALostStartCommandIsRepeatedToTheNodes) {
   EXPECT_EQ(rig.master.startup().done_period, 60u);
 }
 
+TEST(CanopenMaster, ABootUpWhileStartingRestartsTheNodeWithoutAFault) {
+  // The start command is lost, so the nodes heartbeat in pre-operational (alive) while the
+  // master waits; then node 1 boots again (a late answer to a reset, or a node reset during
+  // the start-up). The master starts it again at once and its consumer does not report a
+  // reset fault; after the start-up, a boot-up is a fault.
+  Rig rig;
+  rig.period();
+  rig.emulator.kill(true);  // period 1: the start command is lost
+  rig.period();
+  rig.emulator.kill(false);
+  while (rig.k < 30) rig.period();
+  ASSERT_EQ(rig.master.startup().phase, StartupPhase::kWaitOperational);
+  ASSERT_EQ(rig.master.monitor().find(1)->status(), numen::hal::HeartbeatStatus::kAlive);
+  CanFrame boot;
+  ASSERT_TRUE(numen::hal::encode_heartbeat(1, NmtState::kBootUp, rig.k * kMs, boot));
+  rig.bus.set_time_ns(rig.k * kMs);
+  ASSERT_EQ(rig.bus.device().write(boot), IoStatus::kOk);
+  const std::uint64_t retries = rig.master.counters().nmt_retries;
+  rig.period();  // 30: the boot-up is read
+  EXPECT_EQ(rig.master.monitor().find(1)->counters().unexpected_boot_ups, 0u);
+  EXPECT_FALSE(rig.master.monitor().any_fault());
+  rig.period();  // 31: node 1 is started again, before the 50 ms retry of the others
+  EXPECT_EQ(rig.master.counters().nmt_retries, retries + 1);
+  EXPECT_EQ(rig.emulator.node_state(0), NmtState::kOperational);
+  while (rig.k < 80 && !rig.master.operational()) rig.period();
+  ASSERT_TRUE(rig.master.operational());
+  rig.bus.set_time_ns(rig.k * kMs);
+  ASSERT_TRUE(numen::hal::encode_heartbeat(1, NmtState::kBootUp, rig.k * kMs, boot));
+  ASSERT_EQ(rig.bus.device().write(boot), IoStatus::kOk);
+  rig.period();
+  EXPECT_EQ(rig.master.monitor().find(1)->counters().unexpected_boot_ups, 1u);
+  EXPECT_TRUE(rig.master.monitor().any_fault());
+}
+
 TEST(CanopenMaster, StartUpFailsAtItsDeadlineNamingTheMissingNode) {
   DeviceConfig c = config();
   c.canopen.startup_timeout_ms = 20;

@@ -310,6 +310,29 @@ TEST(HeartbeatConsumer, UnexpectedBootUpIsAFault) {
   EXPECT_EQ(d.status(), HeartbeatStatus::kBootedUnexpectedly);
 }
 
+TEST(HeartbeatConsumer, BootUpAnsweringTheMastersResetIsNotAFault) {
+  HeartbeatConsumer c(4, 100 * kMs);
+  c.on_frame(heartbeat(4, NmtState::kBootUp, 0));
+  c.on_frame(heartbeat(4, NmtState::kPreOperational, 50 * kMs));
+  ASSERT_EQ(c.status(), HeartbeatStatus::kAlive);
+  c.expect_boot_up();  // the master sent NMT reset communication
+  EXPECT_EQ(c.status(), HeartbeatStatus::kWaiting);
+  EXPECT_EQ(c.poll(1'000 * kMs), HeartbeatStatus::kWaiting);  // no loss while waiting
+  c.on_frame(heartbeat(4, NmtState::kBootUp, 1'010 * kMs));
+  EXPECT_EQ(c.status(), HeartbeatStatus::kWaiting);
+  EXPECT_EQ(c.counters().faults(), 0u);
+  EXPECT_EQ(c.counters().boot_ups, 2u);
+  c.on_frame(heartbeat(4, NmtState::kPreOperational, 1'020 * kMs));
+  EXPECT_EQ(c.status(), HeartbeatStatus::kAlive);
+  // Only the boot-up that answers the reset is expected: the next one is a fault again.
+  c.on_frame(heartbeat(4, NmtState::kBootUp, 1'030 * kMs));
+  EXPECT_EQ(c.status(), HeartbeatStatus::kBootedUnexpectedly);
+  EXPECT_EQ(c.counters().unexpected_boot_ups, 1u);
+  // A fault already reported is left as it is.
+  c.expect_boot_up();
+  EXPECT_EQ(c.status(), HeartbeatStatus::kBootedUnexpectedly);
+}
+
 TEST(HeartbeatConsumer, TimestampsOutOfOrder) {
   const std::int64_t timeout = 100 * kMs;
   HeartbeatConsumer c(5, timeout);

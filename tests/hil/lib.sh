@@ -19,6 +19,25 @@ wait_for_line() {
 # numen run / numen device helpers (scenarios 70+). The scene and its data are in /hil/sim.
 HIL_SCENE=/hil/sim/scenes/default.toml
 
+# pair_scene PERIOD_US: writes /hil/sim/scenes/pair.toml, the default scene with its control
+# period (dt: the SYNC period and step of both processes) set to PERIOD_US microseconds, the
+# encoder sample age left to its default of 3 periods, and the CANopen heartbeats every 10
+# periods (at least 10 ms; consumer timeout 3 heartbeats); points HIL_SCENE at it.
+pair_scene() {
+  local us="$1" out=/hil/sim/scenes/pair.toml
+  local dt hb
+  dt=$(awk -v u="$us" 'BEGIN { printf "%.6f", u * 1e-6 }')
+  hb=$((us / 100))
+  [ "$hb" -ge 10 ] || hb=10
+  sed -e "s/^dt = 0\.001\$/dt = $dt/" -e '/^max_sample_age = /d' \
+    /hil/sim/scenes/default.toml >"$out"
+  grep -q "^dt = $dt\$" "$out" || fail "pair_scene: no 'dt = 0.001' line to replace in default.toml"
+  ! grep -q '^\[device\.canopen\]' "$out" || fail "pair_scene: default.toml already has [device.canopen]"
+  printf '\n[device.canopen]\ncontroller_heartbeat_period = %d\nnode_heartbeat_period = %d\n' \
+    "$hb" "$hb" >>"$out"
+  HIL_SCENE="$out"
+}
+
 # field FILE REGEX: the first number after REGEX (an extended regex) on the first line that
 # matches it, e.g. field run.txt 'frames rx ' -> 10342.
 field() {

@@ -778,3 +778,22 @@ TEST(RunRealtimeSetup, NothingRequestedReportsNothing) {
   opt.duration_s = 0.01;
   EXPECT_TRUE(numen::sim::run_scene(default_scene(), opt).realtime_setup.empty());
 }
+
+TEST(RunOverrunPolicy, PacedRunsLatchAfterTheLimitAndZeroOnlyCounts) {
+  const auto paced = numen::sim::control_loop_settings(true, 5);
+  EXPECT_TRUE(paced.supervise_overruns);
+  EXPECT_EQ(paced.overrun_limit, 5u);
+  const auto count_only = numen::sim::control_loop_settings(true, 0);
+  EXPECT_FALSE(count_only.supervise_overruns);
+  EXPECT_GE(count_only.overrun_limit, 1u);  // a valid setting even when unused
+  // A run as fast as possible has no deadlines, whatever the limit.
+  EXPECT_FALSE(numen::sim::control_loop_settings(false, 3).supervise_overruns);
+  // The policy in effect is reported in the summary.
+  numen::sim::RunOptions opt;
+  opt.duration_s = 0.01;
+  opt.realtime = true;
+  opt.overrun_limit = 0;
+  const RunSummary s = numen::sim::run_scene(default_scene(), opt);
+  EXPECT_EQ(s.overrun_limit, 0u);
+  EXPECT_NE(numen::sim::format_summary(s).find("overrun policy: count only"), std::string::npos);
+}

@@ -192,6 +192,15 @@ class HeartbeatConsumer {
   /// than the last heartbeat counts as no time elapsed. Returns the status.
   HeartbeatStatus poll(std::int64_t now_ns) noexcept;
 
+  /// The NMT master has reset this node (NMT reset node / reset communication, CiA 301
+  /// §7.2.8.3.2.1): its next boot-up message answers the command and is not a fault. An alive
+  /// or lost node returns to kWaiting (counters and the last fault are kept); monitoring
+  /// resumes with the next heartbeat. Any other status is left as it is.
+  void expect_boot_up() noexcept {
+    if (status_ == HeartbeatStatus::kAlive || status_ == HeartbeatStatus::kLost)
+      status_ = HeartbeatStatus::kWaiting;
+  }
+
   /// The node id (0 for an unused slot).
   std::uint8_t node_id() const noexcept { return node_id_; }
   /// The consumer heartbeat time, ns.
@@ -280,6 +289,12 @@ class HeartbeatMonitor {
     if (node_id > kMaxNodeId || slot_of_node_[node_id] == kNoSlot) return nullptr;
     return &consumers_[slot_of_node_[node_id]];
   }
+  /// HeartbeatConsumer::expect_boot_up() of node `node_id`; no effect for a node not watched.
+  void expect_boot_up(std::uint8_t node_id) noexcept {
+    if (node_id <= kMaxNodeId && slot_of_node_[node_id] != kNoSlot)
+      consumers_[slot_of_node_[node_id]].expect_boot_up();
+  }
+
   /// The consumers, in add() order.
   std::span<const HeartbeatConsumer> consumers() const noexcept {
     return std::span<const HeartbeatConsumer>(consumers_.data(), size_);

@@ -69,6 +69,11 @@ struct RunOptions {
   /// Compute phase override, s (< 0: the scene's [bus] compute_phase): how long after the
   /// SYNC a paced period on a real bus waits before reading the device's answers.
   double compute_phase_s = -1.0;
+  /// Overrun policy of a paced run (platform::ControlLoopSettings::overrun_limit): this many
+  /// consecutive overruns latch the safe state (docs/safety.md); 0: overruns are counted and
+  /// reported in the summary but never latch (for a host that cannot hold the period, such as
+  /// the HIL guest under qemu's TCG emulation, docs/hil.md).
+  std::uint32_t overrun_limit = 3;
 };
 
 /// Percentiles of a duration distribution (µs).
@@ -82,6 +87,12 @@ struct DurationSummary {
 
 /// The percentiles of a histogram of durations in ns, converted to µs.
 DurationSummary summarize_ns(const platform::LatencyHistogram& h);
+
+/// The ControlLoop settings of a run: `paced` (real bus, or RunOptions::realtime) periods have
+/// deadlines, so consecutive overruns are supervised and `overrun_limit` of them latch the safe
+/// state; `overrun_limit` 0 or an unpaced run: overruns are only counted (LoopStatistics). The
+/// other settings are ControlLoopSettings' defaults (encoder timeout 3 periods, docs/safety.md).
+platform::ControlLoopSettings control_loop_settings(bool paced, std::uint32_t overrun_limit) noexcept;
 
 /// What a run of an admittance device measured (AdmittanceRunner; docs/scenes.md). Positions
 /// are the controlled frame's origin (world): "device" where the emulated device is, "hand"
@@ -160,6 +171,8 @@ struct RunSummary {
   std::int64_t bus_record_dropped = 0;     ///< --record: frames lost to a full queue (must be 0).
   std::int64_t realtime_overruns = 0;      ///< Paced periods (--realtime) that began after their deadline.
   std::int64_t realtime_missed_periods = 0;  ///< Whole periods skipped to re-phase after overruns.
+  /// RunOptions::overrun_limit in effect: consecutive overruns that latch (0: counted only).
+  std::uint32_t overrun_limit = 3;
   DurationSummary wakeup_latency_us;       ///< Paced runs: wake-up time − deadline (µs).
   /// RunOptions::rt outcome, one line per step plus the kernel and the limits
   /// (platform::describe()); empty when nothing was requested.
@@ -231,10 +244,11 @@ class SceneRunner {
   /// for an unknown bus spec, std::runtime_error ("file:line:column: what")
   /// for a log that cannot be read or a recording that cannot be written.
   /// `realtime`: the periods are paced to CLOCK_MONOTONIC (run_scene with
-  /// RunOptions::realtime), so overruns are supervised (ControlLoopSettings::
-  /// supervise_overruns).
+  /// RunOptions::realtime), so overruns are supervised (control_loop_settings()) with
+  /// `overrun_limit` (RunOptions::overrun_limit; 0: counted, never latched).
   explicit SceneRunner(const Scene& scene, std::size_t trace_capacity = 0,
-                       const BusChoice& bus = {}, bool realtime = false);
+                       const BusChoice& bus = {}, bool realtime = false,
+                       std::uint32_t overrun_limit = 3);
 
   /// Runs control period k (bus time k·dt): tool-switching events due,
   /// SYNC (and the managed stack's NMT / heartbeat), the instrument's answer,
