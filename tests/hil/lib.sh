@@ -54,11 +54,12 @@ start_device() {
   wait_for_line "$log" READY 30 || fail "device not ready: $(cat "$log")"
 }
 
-# e2e_histogram TRACE.csv: bins the end_to_end_us column of a real-bus trace into 20 us bins
-# and prints "HIL-CSV <scenario>,<bin lower edge us>,<count>" lines (docs/figures/ reads them).
+# e2e_histogram TRACE.csv BIN_US: bins the end_to_end_us column of a real-bus trace into BIN_US
+# bins and prints "HIL-CSV <scenario>,<bin lower edge us>,<count>" lines
+# (docs/figures/plot_hil_latency.py reads them from the console log).
 e2e_histogram() {
-  awk -F, -v name="$HIL_NAME" '
+  awk -F, -v name="$HIL_NAME" -v w="${2:-20}" '
     NR == 1 { for (i = 1; i <= NF; i++) if ($i == "end_to_end_us") c = i; next }
-    c { b = int($c / 20) * 20; n[b]++; if (b > m) m = b }
-    END { for (b = 0; b <= m; b += 20) if (n[b]) printf "HIL-CSV %s,%d,%d\n", name, b, n[b] }' "$1"
+    c { b = int($c / w) * w; n[b]++; if (b > m) m = b }
+    END { for (b = 0; b <= m; b += w) if (n[b]) printf "HIL-CSV %s,%d,%d\n", name, b, n[b] }' "$1"
 }

@@ -40,7 +40,7 @@ sync_median=$(grep ' vcan0 080#' /tmp/pair.log | sed 's/^(\([0-9]*\)\.\([0-9]*\)
   awk 'NR > 1 { print $1 - p } { p = $1 }' | sort -n | awk '{ a[NR] = $1 } END { print a[int((NR + 1) / 2)] }')
 ids=$(sed 's/^([0-9.]*) vcan0 \([0-9A-F]*\)#.*/\1/' /tmp/pair.log | sort -u | tr '\n' ' ')
 unexpected=$(echo "$ids" | tr ' ' '\n' | grep -v -E '^(000|080|08[1-5]|18[1-5]|20[1-3]|28[1-3]|70[1-5]|77F)$' | grep -c . )
-e2e_histogram /tmp/pair.csv
+e2e_histogram /tmp/pair.csv $((period_us / 40))
 detail="period $period_us us; syncs sent $ctl_syncs (candump), device SYNCs $syncs answered $answered, drops ctl $rx_drop dev $dev_drop, invalid periods $invalid, active at period $active, periods with torque commanded $torque_periods, device non-zero torque RPDO periods $nonzero, overruns $overruns, safe stops $faults ${first_fault:+($first_fault)}, trace dropped $trace_drop, SYNC period median ${sync_median} us, ids $ids; end-to-end us: $e2e"
 [ "$rx_drop" = 0 ] && [ "$dev_drop" = 0 ] || fail "SocketCAN dropped frames: $detail"
 [ -n "$active" ] && [ "$active" -ge 0 ] || fail "lifecycle never active: $detail"
