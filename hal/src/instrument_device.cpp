@@ -116,6 +116,10 @@ bool InstrumentDevice::on_frame(const CanFrame& frame) noexcept {
     switch (status) {
       case DecodeStatus::kOk:
         ++counters_.frames_decoded;
+        if (st.pending) {
+          st.superseded |= check_range(limits_[static_cast<std::size_t>(i)],
+                                       counts_to_value(a, st.pending_counts));
+        }
         st.pending = true;
         st.malformed = false;
         st.pending_counts = counts;
@@ -168,7 +172,8 @@ DeviceSample InstrumentDevice::sample(std::int64_t now_ns) noexcept {
     } else if (st.pending) {
       const double v = counts_to_value(a, st.pending_counts);
       const FaultMask c =
-          check_sample(lim, v, st.pending_stamp_ns, now_ns, st.has_value ? &st.last : nullptr);
+          check_sample(lim, v, st.pending_stamp_ns, now_ns, st.has_value ? &st.last : nullptr) |
+          st.superseded;
       if (c == SampleFault::kNone) {
         if (st.has_value) {
           const double dt = static_cast<double>(st.pending_stamp_ns - st.last.time_ns) * 1e-9;
@@ -182,6 +187,10 @@ DeviceSample InstrumentDevice::sample(std::int64_t now_ns) noexcept {
       }
       f |= c;
     }
+    // A value that this period's newest frame replaced was out of range: the period's value is
+    // rejected with it (the check above saw only the newest).
+    f |= st.superseded;
+    st.superseded = SampleFault::kNone;
     st.pending = false;
     st.malformed = false;
 

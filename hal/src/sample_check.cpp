@@ -51,11 +51,15 @@ FaultMask check_fresh(const AxisCheckLimits& limits, std::int64_t stamp_ns,
                                                                : SampleFault::kNone;
 }
 
+FaultMask check_range(const AxisCheckLimits& limits, double value) noexcept {
+  if (!std::isfinite(value)) return SampleFault::kNonFinite;
+  return (value < limits.min || value > limits.max) ? SampleFault::kOutOfRange : SampleFault::kNone;
+}
+
 FaultMask check_sample(const AxisCheckLimits& limits, double value, std::int64_t stamp_ns,
                        std::int64_t now_ns, const AcceptedValue* last) noexcept {
   if (!std::isfinite(value)) return SampleFault::kNonFinite;
-  FaultMask f = SampleFault::kNone;
-  if (value < limits.min || value > limits.max) f |= SampleFault::kOutOfRange;
+  FaultMask f = check_range(limits, value);
   f |= check_fresh(limits, stamp_ns, now_ns);
   if (last != nullptr && std::isfinite(limits.max_speed)) {
     const double dt =

@@ -23,13 +23,20 @@
 
 namespace {
 std::atomic<bool> g_stop{false};  // lock-free: safe to store from a signal handler
+static_assert(std::atomic<bool>::is_always_lock_free, "signal handlers store to std::atomic<bool>");
+std::atomic<bool> g_rearm{false};  // SIGUSR1: the operator's re-arm (RunOptions::rearm)
 extern "C" void on_signal(int) { g_stop.store(true, std::memory_order_relaxed); }
+extern "C" void on_rearm_signal(int) { g_rearm.store(true, std::memory_order_relaxed); }
 void install_signal_handlers() {
   struct sigaction sa {};
   sa.sa_handler = on_signal;
   sigemptyset(&sa.sa_mask);
   sigaction(SIGINT, &sa, nullptr);
   sigaction(SIGTERM, &sa, nullptr);
+  struct sigaction rearm {};
+  rearm.sa_handler = on_rearm_signal;
+  sigemptyset(&rearm.sa_mask);
+  sigaction(SIGUSR1, &rearm, nullptr);
 }
 std::string check_bus(const std::string& v, bool real_only) {
   try {
@@ -47,6 +54,9 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
 
   CLI::App* run = app.add_subcommand("run", "Run a scene on the simulated bus and print a summary");
+  run->footer(
+      "Signals: SIGINT / SIGTERM end the run cleanly (zero torque, drives disabled); SIGUSR1 "
+      "re-arms after a latched safe state (docs/safety.md).");
   std::string scene_path;
   double duration = -1.0;
   std::string trace_path;
@@ -140,6 +150,7 @@ int main(int argc, char** argv) {
       options.stop = &g_stop;
       options.compute_phase_s = phase;
       options.overrun_limit = overrun_limit;
+      options.rearm = &g_rearm;
       const numen::sim::RunSummary summary = numen::sim::run_scene(scene, options);
       if (json) {
         std::cerr << numen::sim::format_summary(summary);

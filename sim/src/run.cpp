@@ -441,11 +441,17 @@ RunSummary run_scene(const Scene& scene, const RunOptions& options) {
       runner.period();
     }
   };
+  std::int64_t rearm_requests = 0, rearms_accepted = 0, rearm_first = -1;
   bool stopped = false;
   for (std::int64_t k = 0; k < steps; ++k) {
     if (stop_requested()) {
       stopped = true;
       break;
+    }
+    if (options.rearm != nullptr && options.rearm->exchange(false, std::memory_order_relaxed)) {
+      ++rearm_requests;
+      if (rearm_first < 0) rearm_first = k;
+      if (runner.loop().rearm() == platform::RearmResult::kAccepted) ++rearms_accepted;
     }
     one_period();
   }
@@ -467,6 +473,9 @@ RunSummary run_scene(const Scene& scene, const RunOptions& options) {
   s.realtime_overruns = overruns;
   s.realtime_missed_periods = missed;
   s.overrun_limit = options.overrun_limit;
+  s.rearm_requests = rearm_requests;
+  s.rearms_accepted = rearms_accepted;
+  s.rearm_first_period = rearm_first;
   s.wakeup_latency_us = summarize_ns(wakeup);
   s.realtime_setup = std::move(rt_lines);
   s.stopped = stopped;
@@ -562,6 +571,9 @@ std::string format_summary(const RunSummary& s) {
          << s.first_fault_period;
     os << "; EMCY " << s.emcys << " (" << s.emcy_faults << " faults), heartbeat losses "
        << s.heartbeat_losses << ", zero-torque periods " << s.zero_torque_periods << "\n";
+    if (s.rearm_requests > 0)
+      os << "  re-arm: " << s.rearm_requests << " request(s), " << s.rearms_accepted
+         << " accepted, first before period " << s.rearm_first_period << "\n";
     if (!s.drive_states.empty()) {
       os << "  drives:";
       for (std::size_t i = 0; i < s.drive_states.size(); ++i)

@@ -121,6 +121,26 @@ TEST(InstrumentDevice, OutOfRangeIsRejectedAndTheTargetHeld) {
   EXPECT_EQ(dev.counters().values_rejected, 1u);
 }
 
+TEST(InstrumentDevice, AnOutOfRangeValueFollowedByAGoodOneInThePeriodIsStillRejected) {
+  InstrumentDevice dev(trocar_config());
+  feed(dev, kQ0, 0);
+  const DeviceSample good = dev.sample(0);
+  double bad[5];
+  std::copy(kQ0, kQ0 + 5, bad);
+  bad[TK::kDepth] = 0.5;  // max 0.35 m
+  feed(dev, bad, 1 * kMs);
+  feed(dev, kQ0, 1 * kMs + kMs / 4);  // a good frame supersedes it before the sample
+  const DeviceSample s = dev.sample(1 * kMs + kMs / 2);
+  EXPECT_FALSE(s.valid);
+  EXPECT_TRUE(s.axis_faults[TK::kDepth] & SampleFault::kOutOfRange);
+  EXPECT_EQ(s.q[TK::kDepth], good.q[TK::kDepth]);
+  EXPECT_EQ(dev.counters().rejected_out_of_range, 1u);
+  // The next period is clean again.
+  feed(dev, kQ0, 2 * kMs);
+  EXPECT_TRUE(dev.sample(2 * kMs).valid);
+  EXPECT_EQ(dev.counters().rejected_out_of_range, 1u);
+}
+
 TEST(InstrumentDevice, JumpIsRejectedUntilTimeMakesItPlausible) {
   InstrumentDevice dev(trocar_config());
   feed(dev, kQ0, 0);

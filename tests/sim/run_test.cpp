@@ -8,6 +8,8 @@
 
 #include <gtest/gtest.h>
 
+#include <atomic>
+
 #include <algorithm>
 #include <bit>
 #include <chrono>
@@ -796,4 +798,17 @@ TEST(RunOverrunPolicy, PacedRunsLatchAfterTheLimitAndZeroOnlyCounts) {
   const RunSummary s = numen::sim::run_scene(default_scene(), opt);
   EXPECT_EQ(s.overrun_limit, 0u);
   EXPECT_NE(numen::sim::format_summary(s).find("overrun policy: count only"), std::string::npos);
+}
+
+TEST(RunRearm, ARequestIsTakenOnceBeforeThePeriodAndReported) {
+  std::atomic<bool> rearm{true};
+  numen::sim::RunOptions opt;
+  opt.duration_s = 0.02;
+  opt.rearm = &rearm;
+  const RunSummary s = numen::sim::run_scene(default_scene(), opt);
+  EXPECT_FALSE(rearm.load());
+  EXPECT_EQ(s.rearm_requests, 1);
+  EXPECT_EQ(s.rearm_first_period, 0);
+  EXPECT_EQ(s.rearms_accepted, 0);  // nothing latched at period 0: ControlLoop says kNotLatched
+  EXPECT_NE(numen::sim::format_summary(s).find("re-arm: 1 request(s), 0 accepted"), std::string::npos);
 }

@@ -185,6 +185,9 @@ class InstrumentDevice {
   struct AxisState {
     bool pending = false;    // a well-formed frame arrived since the last sample()
     bool malformed = false;  // the newest frame since the last sample() was malformed
+    // Range faults of values overwritten by a newer frame before sample() read them: a bad
+    // value is a fault even if a good one follows within the period (docs/safety.md).
+    FaultMask superseded = SampleFault::kNone;
     std::int32_t pending_counts = 0;
     std::int64_t pending_stamp_ns = 0;
     bool has_value = false;  // an accepted value exists

@@ -60,6 +60,9 @@ struct AcceptedValue {
 FaultMask check_fresh(const AxisCheckLimits& limits, std::int64_t stamp_ns,
                       std::int64_t now_ns) noexcept;
 
+/// Range alone: kNonFinite for a non-finite value, kOutOfRange outside [min, max], else kNone.
+FaultMask check_range(const AxisCheckLimits& limits, double value) noexcept;
+
 /// All checks of a newly decoded `value` stamped `stamp_ns`, at time `now_ns`, against the
 /// last accepted value `last` (nullptr before the first): non-finite (then nothing else is
 /// checked), out of range, stale, jump (Δt = max(0, stamp − last.time)). Returns the union of

@@ -63,6 +63,11 @@ struct RunOptions {
   /// shuts down (ControlLoop::shutdown(): zero torque, drives disabled) over at most
   /// shutdown_periods more periods and the summary is returned. nullptr: none.
   const std::atomic<bool>* stop = nullptr;
+  /// Set (e.g. by a SIGUSR1 handler: `kill -USR1 PID`) to re-arm after a latched safe state:
+  /// taken (exchanged to false) before the next period, which calls ControlLoop::rearm()
+  /// (fault resets, start-up rerun if needed; the lifecycle re-arms once no cause is
+  /// present). The operator's explicit re-arm of docs/safety.md. nullptr: none.
+  std::atomic<bool>* rearm = nullptr;
   /// Periods run after the end (duration reached or stop) to send zero torque and disable
   /// the drives (stops early once every drive reports disabled). Real buses only.
   int shutdown_periods = 50;
@@ -223,6 +228,9 @@ struct RunSummary {
   std::int64_t trace_pushed = 0;           ///< Real-bus trace (TraceWriter): records queued.
   std::int64_t trace_dropped = 0;          ///< ... refused by a full queue (must be 0).
   bool stopped = false;                    ///< Ended early by RunOptions::stop (signal).
+  std::int64_t rearm_requests = 0;         ///< RunOptions::rearm requests taken.
+  std::int64_t rearms_accepted = 0;        ///< Of these, ControlLoop::rearm() kAccepted.
+  std::int64_t rearm_first_period = -1;    ///< Period before which the first request was taken.
   std::int64_t shutdown_periods = 0;       ///< Periods run to shut down.
   bool drives_disabled = false;            ///< Every drive disabled at the end of the shutdown.
   std::vector<std::string> warnings;
