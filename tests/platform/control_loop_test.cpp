@@ -865,6 +865,40 @@ TEST(ControlLoopManaged, DriveFaultEmcyReportedSafeStateDrivesDisabledLatchedRea
   EXPECT_EQ(rig.loop.rearm(), numen::platform::RearmResult::kNotLatched);
 }
 
+TEST(ControlLoopManaged, ShutdownZeroTorqueAtOnceThenDrivesDisabledWithoutAFault) {
+  // The orderly end of a run (numen run on a real bus, Ctrl-C): from the period after
+  // shutdown() no torque, the drives are disabled through CiA 402 (controlword) within a few
+  // periods, and this is not a fault: nothing is latched, nothing re-enables them.
+  Rig rig;
+  rig.run_to_torque();
+  for (int i = 0; i < 5; ++i) rig.period();
+  ASSERT_TRUE(any_torque(rig));
+  ASSERT_FALSE(rig.loop.drives_disabled());
+  rig.loop.shutdown();
+  EXPECT_TRUE(rig.loop.shutting_down());
+  int periods = 0;
+  while (!rig.loop.drives_disabled() && periods < 50) {
+    const PeriodReport& r = rig.period();
+    ++periods;
+    ASSERT_FALSE(r.torque_commanded) << "period " << periods;
+    ASSERT_FALSE(any_torque(rig)) << "period " << periods;
+  }
+  std::printf("[   info   ] shutdown to drives disabled: %d periods\n", periods);
+  EXPECT_TRUE(rig.loop.drives_disabled());
+  EXPECT_LE(periods, 5);
+  for (int a = 0; a < 3; ++a) {
+    const PowerState st = rig.emulator.drive(a)->state();
+    EXPECT_TRUE(st == PowerState::kSwitchOnDisabled || st == PowerState::kReadyToSwitchOn) << a;
+  }
+  for (int i = 0; i < 30; ++i) {
+    rig.period();
+    ASSERT_FALSE(any_torque(rig));
+    ASSERT_TRUE(rig.loop.drives_disabled());
+  }
+  EXPECT_EQ(rig.sup().counters().latches, 0u);
+  EXPECT_EQ(rig.loop.rearm(), numen::platform::RearmResult::kNotLatched);
+}
+
 TEST(ControlLoopManaged, ControllerSilentEmulatedDrivesFaultOnTheirOwn) {
   // The drives watch the controller's heartbeat (10 ms, consumer time 30 ms): when the
   // controller stops, they fault by themselves (EMCY 0x8130) and apply zero torque.
