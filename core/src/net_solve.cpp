@@ -113,6 +113,15 @@ bool couples_body(const SolverScratch& s, const NodeContact& c) noexcept {
   return c.active && c.body_b >= 0 && s.in_solve[static_cast<std::size_t>(c.body_b)];
 }
 
+/// W_e v = α d̂ (d̂ · v) + β v for a spring, in plain scalar code (the inner
+/// loop of both sweeps).
+inline Vec3 spring_times(const SweepSpring& t, const Vec3& v) noexcept {
+  const Vec3& n = t.direction;
+  const double s = t.weight_axial * (n.x() * v.x() + n.y() * v.y() + n.z() * v.z());
+  return Vec3(s * n.x() + t.weight_isotropic * v.x(), s * n.y() + t.weight_isotropic * v.y(),
+              s * n.z() + t.weight_isotropic * v.z());
+}
+
 /// out = A · in over bodies and nodes (see net_solve.hpp for A).
 void apply_coupled(const Model& model, const Data& data, std::span<const Vec6> in_b,
                    std::span<const Vec3> in_n, std::span<Vec6> out_b,
@@ -124,27 +133,20 @@ void apply_coupled(const Model& model, const Data& data, std::span<const Vec6> i
   // off-diagonal blocks at once), each node contact's W p_i, the ties' and
   // node–body contacts' off-diagonal blocks.
   for (std::size_t i = 0; i < in_n.size(); ++i) out_n[i] = ns.node_diagonal[i] * in_n[i];
-  // The hot loop of the solve (about half of a step): plain scalar code over
-  // one array, w = α d̂ (d̂ · δ) + β δ with δ = p_a − p_b.
+  // Springs by their smaller node k: w = W_e (p_k − p_high), + on row k, − on row high.
   const Vec3* x = in_n.data();
   Vec3* y = out_n.data();
-  for (const SpringTerm& t : ns.springs) {
-    const Vec3& xa = x[t.node_a];
-    const Vec3& xb = x[t.node_b];
-    const double dx = xa.x() - xb.x(), dy = xa.y() - xb.y(), dz = xa.z() - xb.z();
-    const Vec3& n = t.direction;
-    const double s_axial = t.weight_axial * (n.x() * dx + n.y() * dy + n.z() * dz);
-    const double wx = s_axial * n.x() + t.weight_isotropic * dx;
-    const double wy = s_axial * n.y() + t.weight_isotropic * dy;
-    const double wz = s_axial * n.z() + t.weight_isotropic * dz;
-    Vec3& ya = y[t.node_a];
-    Vec3& yb = y[t.node_b];
-    ya.x() += wx;
-    ya.y() += wy;
-    ya.z() += wz;
-    yb.x() -= wx;
-    yb.y() -= wy;
-    yb.z() -= wz;
+  const SweepSpring* springs = ns.sweep_springs.data();
+  const std::int32_t* low_begin = ns.spring_low_begin.data();
+  for (std::size_t k = 0; k < in_n.size(); ++k) {
+    Vec3 acc = Vec3::Zero();
+    for (std::int32_t j = low_begin[k]; j < low_begin[k + 1]; ++j) {
+      const auto hi = static_cast<std::size_t>(springs[j].high);
+      const Vec3 w = spring_times(springs[j], x[k] - x[hi]);
+      acc += w;
+      y[hi] -= w;
+    }
+    y[k] += acc;
   }
   const double h = model.dt;
   for (const NetModel& net : model.nets) {
@@ -172,15 +174,6 @@ void apply_coupled(const Model& model, const Data& data, std::span<const Vec6> i
     out_b[b] -= generalized_force(
         weight_times(ct.weight_normal, ct.weight_isotropic, ct.normal, in_n[i]), ct.r_b);
   }
-}
-
-/// W_e v = α d̂ (d̂ · v) + β v for a spring, in plain scalar code (the inner
-/// loop of both sweeps).
-inline Vec3 spring_times(const SweepSpring& t, const Vec3& v) noexcept {
-  const Vec3& n = t.direction;
-  const double s = t.weight_axial * (n.x() * v.x() + n.y() * v.y() + n.z() * v.z());
-  return Vec3(s * n.x() + t.weight_isotropic * v.x(), s * n.y() + t.weight_isotropic * v.y(),
-              s * n.z() + t.weight_isotropic * v.z());
 }
 
 /// D̃ v: blockdiag(SolverScratch::block, NetScratch::block) times v, into
@@ -256,48 +249,19 @@ void build_net_system(const Model& model, Data& data) noexcept {
   const double h = model.dt;
   const double h2 = h * h;
 
+  // The springs' weights, their sum in the blocks and their part of the
+  // right-hand side are already there (compute_net_forces()).
   for (const NetModel& net : model.nets) {
     const auto b = static_cast<std::size_t>(net.body);
     const double c = tie_weight(net, h);
     for (int v = net.node_begin; v < net.node_begin + net.node_count; ++v) {
       const auto i = static_cast<std::size_t>(v);
-      ns.node_diagonal[i] = model.node_mass[i] + c;
-      ns.block[i] = ns.node_diagonal[i] * Mat3::Identity();
+      const double diagonal = model.node_mass[i] + c;
+      ns.node_diagonal[i] = diagonal;
+      ns.block[i].diagonal().array() += diagonal;
       const Vec3 relative = data.nodes[i].velocity - point_velocity(s.twist0[b], ns.lever[i]);
-      ns.rhs[i] = h * ns.force[i] - (h2 * net.tie_stiffness) * relative;
+      ns.rhs[i] += h * ns.force[i] - (h2 * net.tie_stiffness) * relative;
     }
-  }
-  // Raw pointers: the stores below would otherwise make the compiler reload
-  // every vector's data pointer per spring.
-  const NetSpring* model_springs = model.net_springs.data();
-  SpringTerm* terms = ns.springs.data();
-  SweepSpring* sweep = ns.sweep_springs.data();
-  const std::int32_t* slot = ns.spring_slot.data();
-  const NodeState* nodes = data.nodes.data();
-  Mat3* blocks = ns.block.data();
-  Vec3* rhs = ns.rhs.data();
-  for (std::size_t e = 0; e < ns.springs.size(); ++e) {
-    const NetSpring& sp = model_springs[e];
-    SpringTerm& t = terms[e];
-    const auto a = static_cast<std::size_t>(sp.node_a);
-    const auto b = static_cast<std::size_t>(sp.node_b);
-    // K̃ = (1 − τ) d̂d̂ᵀ + τ I, τ = max(0, 1 − L/l): −∂f_a/∂x_a / k.
-    const double tau = t.length > sp.rest_length ? 1.0 - sp.rest_length / t.length : 0.0;
-    const double hk = h2 * sp.stiffness;
-    const double beta = hk * tau;
-    const double alpha = h * sp.damping + hk - beta;
-    t.weight_isotropic = beta;
-    t.weight_axial = alpha;
-    add_weight(alpha, beta, t.direction, blocks[a]);
-    add_weight(alpha, beta, t.direction, blocks[b]);
-    SweepSpring& w = sweep[static_cast<std::size_t>(slot[e])];
-    w.direction = t.direction;
-    w.weight_axial = alpha;
-    w.weight_isotropic = beta;
-    const Vec3 kv =
-        weight_times(hk - beta, beta, t.direction, nodes[a].velocity - nodes[b].velocity);
-    rhs[a] -= kv;
-    rhs[b] += kv;
   }
   const int nc = node_contact_count(data);
   for (int k = 0; k < nc; ++k) {
@@ -481,6 +445,106 @@ bool solve_arrowhead(const Model& model, Data& data) noexcept {
   return rel <= model.solver.tolerance;
 }
 
+/// The start of Eisenstat's CG in one forward sweep, for x0 = (0 on the
+/// bodies, x0_n on the nodes): w = (D̃+L)⁻¹ (b − A x0) and y = (D̃+L)⁻¹ b;
+/// returns ‖b‖²_{M⁻¹} = yᵀ D̃ y. Since A = (D̃+L) + (Lᵀ + D − D̃),
+///   (D̃+L)⁻¹ (b − A x0) = (D̃+L)⁻¹ (b − (Lᵀ + D − D̃) x0) − x0,
+/// and (Lᵀ + D − D̃) x0 needs no product with A: its body rows are the node
+/// columns of Lᵀ (ties −c J_iᵀ, node contacts −J_rᵀ W; the body–body cross
+/// terms of D − D̃ meet x0_b = 0), its node rows −Σ W_e x0_j over the springs
+/// to larger nodes j — gathered in the sweep over the same springs that
+/// scatter. Both right-hand sides share the sweep (each spring read once);
+/// yᵀ D̃ y is summed as y_k · (D̃ y)_k, (D̃ y)_k being the row's right-hand
+/// side that y_k solves.
+double net_start_sweep(const Model& model, Data& data, std::span<const Vec3> x0_n,
+                       std::span<Vec6> w_b, std::span<Vec3> w_n, std::span<Vec6> y_b,
+                       std::span<Vec3> y_n) noexcept {
+  const SolverScratch& s = data.solver;
+  NetScratch& ns = data.net;
+  const double h = model.dt;
+  const std::size_t nb = w_b.size();
+  const SweepSpring* springs = ns.sweep_springs.data();
+  const std::int32_t* low_begin = ns.spring_low_begin.data();
+  const std::span<Vec6> g_b(ns.body_tmp);
+  // Body rows: g_b = b_b − (Lᵀ x0)_b.
+  for (std::size_t b = 0; b < nb; ++b) g_b[b] = s.in_solve[b] ? s.rhs[b] : Vec6::Zero();
+  for (const NetModel& net : model.nets) {
+    const auto body = static_cast<std::size_t>(net.body);
+    if (!s.in_solve[body]) continue;
+    Vec6 tie = Vec6::Zero();
+    for (int v = net.node_begin; v < net.node_begin + net.node_count; ++v) {
+      const auto i = static_cast<std::size_t>(v);
+      tie += generalized_force(x0_n[i], ns.lever[i]);
+    }
+    g_b[body] += tie_weight(net, h) * tie;
+  }
+  const int nc = node_contact_count(data);
+  for (int c = 0; c < nc; ++c) {
+    const NodeContact& ct = data.node_contacts[static_cast<std::size_t>(c)];
+    if (!couples_body(s, ct)) continue;
+    g_b[static_cast<std::size_t>(ct.body_b)] += generalized_force(
+        weight_times(ct.weight_normal, ct.weight_isotropic, ct.normal,
+                     x0_n[static_cast<std::size_t>(ct.node)]),
+        ct.r_b);
+  }
+  double ref = 0.0;
+  for (std::size_t b = 0; b < nb; ++b) {
+    if (s.in_solve[b]) {
+      solve_block(s.block_factor[b], g_b[b], w_b[b]);  // x0_b = 0: w_b = y'_b
+      solve_block(s.block_factor[b], s.rhs[b], y_b[b]);
+      ref += y_b[b].dot(s.rhs[b]);
+    } else {
+      w_b[b].setZero();
+      y_b[b].setZero();
+    }
+  }
+  // Node rows: b_i, minus the node–body contacts' A_ib times the bodies' values.
+  for (std::size_t i = 0; i < w_n.size(); ++i) {
+    w_n[i] = ns.rhs[i];
+    y_n[i] = ns.rhs[i];
+  }
+  for (int c = 0; c < nc; ++c) {
+    const NodeContact& ct = data.node_contacts[static_cast<std::size_t>(c)];
+    if (!couples_body(s, ct)) continue;
+    const auto i = static_cast<std::size_t>(ct.node);
+    const auto b = static_cast<std::size_t>(ct.body_b);
+    w_n[i] += weight_times(ct.weight_normal, ct.weight_isotropic, ct.normal,
+                           point_velocity(w_b[b], ct.r_b));
+    y_n[i] += weight_times(ct.weight_normal, ct.weight_isotropic, ct.normal,
+                           point_velocity(y_b[b], ct.r_b));
+  }
+  Vec3* w = w_n.data();
+  Vec3* y = y_n.data();
+  const Vec3* x0 = x0_n.data();
+  for (const NetModel& net : model.nets) {
+    const auto body = static_cast<std::size_t>(net.body);
+    const bool tied = s.in_solve[body] != 0;
+    const double c = tie_weight(net, h);
+    for (int v = net.node_begin; v < net.node_begin + net.node_count; ++v) {
+      const auto k = static_cast<std::size_t>(v);
+      Vec3 acc_w = w[k];
+      Vec3 acc_y = y[k];
+      if (tied) {
+        acc_w += c * point_velocity(w_b[body], ns.lever[k]);
+        acc_y += c * point_velocity(y_b[body], ns.lever[k]);
+      }
+      for (std::int32_t j = low_begin[k]; j < low_begin[k + 1]; ++j)
+        acc_w += spring_times(springs[j], x0[static_cast<std::size_t>(springs[j].high)]);
+      const Vec3 wk = ns.block_inverse[k] * acc_w;  // before subtracting x0_k
+      const Vec3 yk = ns.block_inverse[k] * acc_y;
+      ref += yk.dot(acc_y);
+      w[k] = wk - x0[k];
+      y[k] = yk;
+      for (std::int32_t j = low_begin[k]; j < low_begin[k + 1]; ++j) {
+        const auto hi = static_cast<std::size_t>(springs[j].high);
+        w[hi] += spring_times(springs[j], wk);
+        y[hi] += spring_times(springs[j], yk);
+      }
+    }
+  }
+  return ref;
+}
+
 /// Eisenstat's CG with the SSOR preconditioner (models without joints; see
 /// net_solve.hpp).
 bool solve_eisenstat(const Model& model, Data& data) noexcept {
@@ -502,18 +566,13 @@ bool solve_eisenstat(const Model& model, Data& data) noexcept {
     return false;
   };
 
-  // Start: bodies at 0, nodes at the last step's Δv (warm start); r = b − A x0
-  // (in g), w = (D̃+L)⁻¹ r, and the reference ‖b‖²_{M⁻¹} = w_bᵀ D̃ w_b with
-  // w_b = (D̃+L)⁻¹ b (t and K q serve as scratch).
+  // Start: bodies at 0, nodes at the last step's Δv (warm start);
+  // w = (D̃+L)⁻¹ (b − A x0) and the reference ‖b‖²_{M⁻¹} in one forward sweep
+  // (t serves as scratch for (D̃+L)⁻¹ b).
   for (Vec6& v : xb) v.setZero();
   for (Vec3& v : xn)
     if (!v.allFinite()) v.setZero();
-  apply_coupled(model, data, xb, xn, kqb, kqn);
-  for (std::size_t b = 0; b < nb; ++b) gb[b] = s.in_solve[b] ? Vec6(bb[b] - kqb[b]) : Vec6::Zero();
-  for (std::size_t i = 0; i < nn; ++i) gn[i] = bn[i] - kqn[i];
-  net_forward_sweep(model, data, gb, gn, wb, wn);
-  net_forward_sweep(model, data, bb, bn, tb, tn);
-  double ref = apply_block_diagonal(data, tb, tn, kqb, kqn);
+  double ref = net_start_sweep(model, data, xn, wb, wn, tb, tn);
   if (!std::isfinite(ref)) return poison();
   if (!(ref > 0.0)) ref = 1.0;
   double rho = apply_block_diagonal(data, wb, wn, qb, qn);  // q = D̃ w
