@@ -211,30 +211,37 @@ void measure_nets(const Model& model, Data& data) noexcept {
     const NetModel& net = model.nets[k];
     NetOutput& out = data.nets[k];
     const BodyState& body = data.bodies[static_cast<std::size_t>(net.body)];
+    const Mat3 rot = body.orientation.toRotationMatrix();
     double stretch2 = 0.0;
     double speed2 = 0.0;
     double kinetic = 0.0;
     for (int v = net.node_begin; v < net.node_begin + net.node_count; ++v) {
       const auto i = static_cast<std::size_t>(v);
       const NodeState& st = data.nodes[i];
-      const Vec3 anchor = body.position + body.orientation * model.node_rest[i];
+      const Vec3 anchor = body.position + rot * model.node_rest[i];
       raise_max(stretch2, (st.position - anchor).squaredNorm());
       const double v2 = st.velocity.squaredNorm();
       raise_max(speed2, v2);
       kinetic += 0.5 * model.node_mass[i] * v2;
     }
-    double strain = 0.0;
+    // |l − L| / L = |√(l²/L²) − 1| is largest at the largest or the smallest
+    // l²/L²: one square root per net, not per spring.
+    double ratio2_max = 1.0;
+    double ratio2_min = 1.0;
     for (int e = net.spring_begin; e < net.spring_begin + net.structural_count; ++e) {
       const NetSpring& sp = model.net_springs[static_cast<std::size_t>(e)];
-      const double l = (data.nodes[static_cast<std::size_t>(sp.node_b)].position -
-                        data.nodes[static_cast<std::size_t>(sp.node_a)].position)
-                           .norm();
-      raise_max(strain, std::abs(l - sp.rest_length) / sp.rest_length);
+      const double l2 = (data.nodes[static_cast<std::size_t>(sp.node_b)].position -
+                         data.nodes[static_cast<std::size_t>(sp.node_a)].position)
+                            .squaredNorm();
+      const double ratio2 = l2 / (sp.rest_length * sp.rest_length);
+      raise_max(ratio2_max, ratio2);
+      if (ratio2 < ratio2_min) ratio2_min = ratio2;
     }
     out.max_tie_stretch = std::sqrt(stretch2);
     out.max_node_speed = std::sqrt(speed2);
     out.kinetic_energy = kinetic;
-    out.max_strain = strain;
+    out.max_strain = std::max(std::sqrt(ratio2_max) - 1.0, 1.0 - std::sqrt(ratio2_min));
+    if (std::isnan(ratio2_max)) out.max_strain = ratio2_max;  // a NaN met is kept (raise_max)
   }
 }
 

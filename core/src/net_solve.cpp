@@ -445,6 +445,133 @@ bool solve_arrowhead(const Model& model, Data& data) noexcept {
   return rel <= model.solver.tolerance;
 }
 
+/// The backward sweep of net_backward_sweep(). With kUpdateQ it first makes
+/// each node's q the CG direction, q_k ← d_k + β q_k (d = D̃ w, in place),
+/// as it reaches the node (the bodies' q are updated by the caller).
+template <bool kUpdateQ>
+void backward_sweep(const Model& model, const Data& data, double beta, const Vec3* d_n,
+                    std::span<const Vec6> q_b, Vec3* q_n, std::span<Vec6> t_b, Vec3* t_n,
+                    std::span<Vec6> g_b, Vec3* g_n) noexcept {
+  const SolverScratch& s = data.solver;
+  const NetScratch& ns = data.net;
+  const double h = model.dt;
+  const std::size_t nb = q_b.size();
+  const SweepSpring* springs = ns.sweep_springs.data();
+  const std::int32_t* low_begin = ns.spring_low_begin.data();
+  const Mat3* block_inverse = ns.block_inverse.data();
+  const Vec3* lever = ns.lever.data();
+  for (Vec6& v : g_b) v.setZero();
+  // Nodes, last to first: (D̃+Lᵀ) has, in node k's row, −W_e towards every
+  // larger node of a spring (and nothing towards the bodies, which come
+  // first): t_k = A_kk⁻¹ (q_k + Σ W_e t_j), g_k = (Lᵀ t)_k = −Σ W_e t_j,
+  // gathered over node k's springs (grouped by their smaller node).
+  // Nets share no spring, so they are swept one after the other.
+  for (auto net = model.nets.rbegin(); net != model.nets.rend(); ++net) {
+    const auto body = static_cast<std::size_t>(net->body);
+    const bool tied = s.in_solve[body] != 0;
+    Vec6 tie = Vec6::Zero();  // Σ J_iᵀ t_i
+    for (int v = net->node_begin + net->node_count - 1; v >= net->node_begin; --v) {
+      const auto k = static_cast<std::size_t>(v);
+      Vec3 sum = Vec3::Zero();
+      for (std::int32_t j = low_begin[k]; j < low_begin[k + 1]; ++j)
+        sum += spring_times(springs[j], t_n[static_cast<std::size_t>(springs[j].high)]);
+      g_n[k] = -sum;
+      if constexpr (kUpdateQ) q_n[k] = d_n[k] + beta * q_n[k];
+      const Vec3 t = block_inverse[k] * (q_n[k] + sum);
+      t_n[k] = t;
+      if (tied) tie += generalized_force(t, lever[k]);
+    }
+    if (tied) g_b[body] -= tie_weight(*net, h) * tie;  // A_bi = −c J_iᵀ
+  }
+  // Node contacts with a body: A_bi = −J_rᵀ W.
+  const int nc = node_contact_count(data);
+  for (int c = 0; c < nc; ++c) {
+    const NodeContact& ct = data.node_contacts[static_cast<std::size_t>(c)];
+    if (!couples_body(s, ct)) continue;
+    const auto i = static_cast<std::size_t>(ct.node);
+    g_b[static_cast<std::size_t>(ct.body_b)] -= generalized_force(
+        weight_times(ct.weight_normal, ct.weight_isotropic, ct.normal, t_n[i]), ct.r_b);
+  }
+  // Bodies: their D̃ blocks, then the body–body contacts' blocks of D − D̃.
+  for (std::size_t b = 0; b < nb; ++b) {
+    if (s.in_solve[b]) {
+      solve_block(s.block_factor[b], Vec6(q_b[b] - g_b[b]), t_b[b]);
+    } else {
+      t_b[b].setZero();
+      g_b[b].setZero();
+    }
+  }
+  add_cross_contact_terms(s, t_b, g_b);
+}
+
+/// The forward sweep of net_forward_sweep(), y = (D̃+L)⁻¹ g; y_n may be g_n
+/// (in place). With kAddT it writes K q = y + t instead of y (Eisenstat's
+/// product) and returns qᵀ K q; otherwise it returns 0.
+template <bool kAddT>
+double forward_sweep(const Model& model, const Data& data, std::span<const Vec6> g_b,
+                     const Vec3* g_n, std::span<Vec6> y_b, Vec3* y_n, std::span<const Vec6> t_b,
+                     const Vec3* t_n, std::span<const Vec6> q_b, const Vec3* q_n) noexcept {
+  const SolverScratch& s = data.solver;
+  const NetScratch& ns = data.net;
+  const double h = model.dt;
+  const std::size_t nb = g_b.size();
+  const SweepSpring* springs = ns.sweep_springs.data();
+  const std::int32_t* low_begin = ns.spring_low_begin.data();
+  const Mat3* block_inverse = ns.block_inverse.data();
+  const Vec3* lever = ns.lever.data();
+  // Bodies first: no block of (D̃+L) left of their diagonal.
+  for (std::size_t b = 0; b < nb; ++b) {
+    if (s.in_solve[b]) {
+      solve_block(s.block_factor[b], g_b[b], y_b[b]);
+    } else {
+      y_b[b].setZero();
+    }
+  }
+  // Node rows' right-hand sides: g_i − A_ib y_b for the node–body contacts
+  // (the ties' are added in the sweep).
+  if (y_n != g_n)
+    for (std::size_t i = 0; i < ns.block_inverse.size(); ++i) y_n[i] = g_n[i];
+  const int nc = node_contact_count(data);
+  for (int c = 0; c < nc; ++c) {
+    const NodeContact& ct = data.node_contacts[static_cast<std::size_t>(c)];
+    if (!couples_body(s, ct)) continue;
+    y_n[static_cast<std::size_t>(ct.node)] +=
+        weight_times(ct.weight_normal, ct.weight_isotropic, ct.normal,
+                     point_velocity(y_b[static_cast<std::size_t>(ct.body_b)], ct.r_b));
+  }
+  // Nodes, first to last: y_k = A_kk⁻¹ (g_k + c J_k y_b + Σ W_e y_j) over the
+  // springs to smaller nodes j, each of which has already added its W_e y_j
+  // to y_k (scattered over its springs, grouped by their smaller node).
+  double qkq = 0.0;
+  for (const NetModel& net : model.nets) {
+    const auto body = static_cast<std::size_t>(net.body);
+    const bool tied = s.in_solve[body] != 0;
+    const double c = tie_weight(net, h);
+    for (int v = net.node_begin; v < net.node_begin + net.node_count; ++v) {
+      const auto k = static_cast<std::size_t>(v);
+      Vec3 acc = y_n[k];
+      if (tied) acc += c * point_velocity(y_b[body], lever[k]);
+      const Vec3 y = block_inverse[k] * acc;
+      if constexpr (kAddT) {
+        const Vec3 kq = y + t_n[k];
+        y_n[k] = kq;
+        qkq += q_n[k].dot(kq);
+      } else {
+        y_n[k] = y;
+      }
+      for (std::int32_t j = low_begin[k]; j < low_begin[k + 1]; ++j)
+        y_n[static_cast<std::size_t>(springs[j].high)] += spring_times(springs[j], y);
+    }
+  }
+  if constexpr (kAddT) {
+    for (std::size_t b = 0; b < nb; ++b) {
+      y_b[b] += t_b[b];
+      qkq += q_b[b].dot(y_b[b]);
+    }
+  }
+  return qkq;
+}
+
 /// The start of Eisenstat's CG in one forward sweep, for x0 = (0 on the
 /// bodies, x0_n on the nodes): w = (D̃+L)⁻¹ (b − A x0) and y = (D̃+L)⁻¹ b;
 /// returns ‖b‖²_{M⁻¹} = yᵀ D̃ y. Since A = (D̃+L) + (Lᵀ + D − D̃),
@@ -579,39 +706,48 @@ bool solve_eisenstat(const Model& model, Data& data) noexcept {
   double rel = std::sqrt(rho / ref);
   if (!std::isfinite(rel)) return poison();
 
+  // One iteration: the backward sweep (which first makes q = D̃ w + β q, node
+  // by node, after the first iteration), the forward sweep (K q = y + t and
+  // qᵀ K q as it goes; g_n is swept in place in K q's storage), then
+  // x += α t, w −= α K q, d = D̃ w and ρ' = wᵀ D̃ w in one pass.
   int it = 0;
+  double beta = 0.0;
   const int max_it = std::max(1, model.solver.max_iterations);
   while (rel > model.solver.tolerance && it < max_it) {
+    if (it == 0) {
+      backward_sweep<false>(model, data, 0.0, nullptr, qb, qn.data(), tb, tn.data(), gb,
+                            kqn.data());
+    } else {
+      for (std::size_t b = 0; b < nb; ++b)  // D̃ w recomputed: a few bodies, no array for it
+        qb[b] = s.in_solve[b] ? Vec6(s.block[b] * wb[b] + beta * qb[b]) : Vec6::Zero();
+      backward_sweep<true>(model, data, beta, gn.data(), qb, qn.data(), tb, tn.data(), gb,
+                           kqn.data());
+    }
     ++it;
-    const double qkq = apply_net_preconditioned(model, data, qb, qn, tb, tn, kqb, kqn);
+    const double qkq = forward_sweep<true>(model, data, gb, kqn.data(), kqb, kqn.data(), tb,
+                                           tn.data(), qb, qn.data());
     if (!std::isfinite(qkq)) return poison();
     if (!(qkq > 0.0)) break;  // breakdown, or converged exactly
     const double alpha = rho / qkq;
-    // x += α t, w −= α K q, g = D̃ w, ρ' = wᵀ D̃ w in one pass.
     double rho_new = 0.0;
     for (std::size_t b = 0; b < nb; ++b) {
-      if (!s.in_solve[b]) {  // x and w stay 0
-        gb[b].setZero();
-        continue;
-      }
+      if (!s.in_solve[b]) continue;  // x and w stay 0
       xb[b] += alpha * tb[b];
       wb[b] -= alpha * kqb[b];
-      gb[b].noalias() = s.block[b] * wb[b];
-      rho_new += wb[b].dot(gb[b]);
+      rho_new += wb[b].dot(s.block[b] * wb[b]);
     }
+    const Mat3* block = ns.block.data();
     for (std::size_t i = 0; i < nn; ++i) {
       xn[i] += alpha * tn[i];
       wn[i] -= alpha * kqn[i];
-      gn[i].noalias() = ns.block[i] * wn[i];
+      gn[i].noalias() = block[i] * wn[i];
       rho_new += wn[i].dot(gn[i]);
     }
     rel = std::sqrt(rho_new / ref);
     if (!std::isfinite(rel)) return poison();
     if (rel <= model.solver.tolerance || !(rho_new > 0.0)) break;
-    const double beta = rho_new / rho;
+    beta = rho_new / rho;
     rho = rho_new;
-    for (std::size_t b = 0; b < nb; ++b) qb[b] = gb[b] + beta * qb[b];
-    for (std::size_t i = 0; i < nn; ++i) qn[i] = gn[i] + beta * qn[i];
   }
   data.solver_iterations = it;
   data.solver_residual = rel;
@@ -623,99 +759,15 @@ bool solve_eisenstat(const Model& model, Data& data) noexcept {
 void net_backward_sweep(const Model& model, const Data& data, std::span<const Vec6> q_b,
                         std::span<const Vec3> q_n, std::span<Vec6> t_b, std::span<Vec3> t_n,
                         std::span<Vec6> g_b, std::span<Vec3> g_n) noexcept {
-  const SolverScratch& s = data.solver;
-  const NetScratch& ns = data.net;
-  const double h = model.dt;
-  const std::size_t nb = q_b.size();
-  const SweepSpring* springs = ns.sweep_springs.data();
-  const std::int32_t* low_begin = ns.spring_low_begin.data();
-  for (Vec6& v : g_b) v.setZero();
-  // Nodes, last to first: (D̃+Lᵀ) has, in node k's row, −W_e towards every
-  // larger node of a spring (and nothing towards the bodies, which come
-  // first): t_k = A_kk⁻¹ (q_k + Σ W_e t_j), g_k = (Lᵀ t)_k = −Σ W_e t_j,
-  // gathered over node k's springs (grouped by their smaller node).
-  // Nets share no spring, so they are swept one after the other.
-  for (auto net = model.nets.rbegin(); net != model.nets.rend(); ++net) {
-    const auto body = static_cast<std::size_t>(net->body);
-    const bool tied = s.in_solve[body] != 0;
-    Vec6 tie = Vec6::Zero();  // Σ J_iᵀ t_i
-    for (int v = net->node_begin + net->node_count - 1; v >= net->node_begin; --v) {
-      const auto k = static_cast<std::size_t>(v);
-      Vec3 sum = Vec3::Zero();
-      for (std::int32_t j = low_begin[k]; j < low_begin[k + 1]; ++j)
-        sum += spring_times(springs[j], t_n[static_cast<std::size_t>(springs[j].high)]);
-      g_n[k] = -sum;
-      t_n[k].noalias() = ns.block_inverse[k] * (q_n[k] + sum);
-      if (tied) tie += generalized_force(t_n[k], ns.lever[k]);
-    }
-    if (tied) g_b[body] -= tie_weight(*net, h) * tie;  // A_bi = −c J_iᵀ
-  }
-  // Node contacts with a body: A_bi = −J_rᵀ W.
-  const int nc = node_contact_count(data);
-  for (int c = 0; c < nc; ++c) {
-    const NodeContact& ct = data.node_contacts[static_cast<std::size_t>(c)];
-    if (!couples_body(s, ct)) continue;
-    const auto i = static_cast<std::size_t>(ct.node);
-    g_b[static_cast<std::size_t>(ct.body_b)] -= generalized_force(
-        weight_times(ct.weight_normal, ct.weight_isotropic, ct.normal, t_n[i]), ct.r_b);
-  }
-  // Bodies: their D̃ blocks, then the body–body contacts' blocks of D − D̃.
-  for (std::size_t b = 0; b < nb; ++b) {
-    if (s.in_solve[b]) {
-      solve_block(s.block_factor[b], Vec6(q_b[b] - g_b[b]), t_b[b]);
-    } else {
-      t_b[b].setZero();
-      g_b[b].setZero();
-    }
-  }
-  add_cross_contact_terms(s, t_b, g_b);
+  // kUpdateQ = false: q is only read.
+  backward_sweep<false>(model, data, 0.0, nullptr, q_b, const_cast<Vec3*>(q_n.data()), t_b,
+                        t_n.data(), g_b, g_n.data());
 }
 
 void net_forward_sweep(const Model& model, const Data& data, std::span<const Vec6> g_b,
                        std::span<const Vec3> g_n, std::span<Vec6> y_b,
                        std::span<Vec3> y_n) noexcept {
-  const SolverScratch& s = data.solver;
-  const NetScratch& ns = data.net;
-  const double h = model.dt;
-  const std::size_t nb = g_b.size();
-  const SweepSpring* springs = ns.sweep_springs.data();
-  const std::int32_t* low_begin = ns.spring_low_begin.data();
-  // Bodies first: no block of (D̃+L) left of their diagonal.
-  for (std::size_t b = 0; b < nb; ++b) {
-    if (s.in_solve[b]) {
-      solve_block(s.block_factor[b], g_b[b], y_b[b]);
-    } else {
-      y_b[b].setZero();
-    }
-  }
-  // Node rows' right-hand sides: g_i − A_ib y_b for the node–body contacts
-  // (the ties' are added in the sweep).
-  for (std::size_t i = 0; i < y_n.size(); ++i) y_n[i] = g_n[i];
-  const int nc = node_contact_count(data);
-  for (int c = 0; c < nc; ++c) {
-    const NodeContact& ct = data.node_contacts[static_cast<std::size_t>(c)];
-    if (!couples_body(s, ct)) continue;
-    y_n[static_cast<std::size_t>(ct.node)] +=
-        weight_times(ct.weight_normal, ct.weight_isotropic, ct.normal,
-                     point_velocity(y_b[static_cast<std::size_t>(ct.body_b)], ct.r_b));
-  }
-  // Nodes, first to last: y_k = A_kk⁻¹ (g_k + c J_k y_b + Σ W_e y_j) over the
-  // springs to smaller nodes j, each of which has already added its W_e y_j
-  // to y_k (scattered over its springs, grouped by their smaller node).
-  for (const NetModel& net : model.nets) {
-    const auto body = static_cast<std::size_t>(net.body);
-    const bool tied = s.in_solve[body] != 0;
-    const double c = tie_weight(net, h);
-    for (int v = net.node_begin; v < net.node_begin + net.node_count; ++v) {
-      const auto k = static_cast<std::size_t>(v);
-      Vec3 acc = y_n[k];
-      if (tied) acc += c * point_velocity(y_b[body], ns.lever[k]);
-      const Vec3 y = ns.block_inverse[k] * acc;
-      y_n[k] = y;
-      for (std::int32_t j = low_begin[k]; j < low_begin[k + 1]; ++j)
-        y_n[static_cast<std::size_t>(springs[j].high)] += spring_times(springs[j], y);
-    }
-  }
+  forward_sweep<false>(model, data, g_b, g_n.data(), y_b, y_n.data(), {}, nullptr, {}, nullptr);
 }
 
 double apply_net_preconditioned(const Model& model, Data& data, std::span<const Vec6> q_b,
@@ -723,19 +775,9 @@ double apply_net_preconditioned(const Model& model, Data& data, std::span<const 
                                 std::span<Vec6> kq_b, std::span<Vec3> kq_n) noexcept {
   NetScratch& ns = data.net;
   const std::span<Vec6> g_b(ns.body_tmp);
-  const std::span<Vec3> g_n(ns.sweep);
-  net_backward_sweep(model, data, q_b, q_n, t_b, t_n, g_b, g_n);
-  net_forward_sweep(model, data, g_b, g_n, kq_b, kq_n);
-  double qkq = 0.0;
-  for (std::size_t b = 0; b < kq_b.size(); ++b) {
-    kq_b[b] += t_b[b];
-    qkq += q_b[b].dot(kq_b[b]);
-  }
-  for (std::size_t i = 0; i < kq_n.size(); ++i) {
-    kq_n[i] += t_n[i];
-    qkq += q_n[i].dot(kq_n[i]);
-  }
-  return qkq;
+  net_backward_sweep(model, data, q_b, q_n, t_b, t_n, g_b, kq_n);  // g_n in K q's place
+  return forward_sweep<true>(model, data, g_b, kq_n.data(), kq_b, kq_n.data(), t_b, t_n.data(),
+                             q_b, q_n.data());
 }
 
 bool solve_net_system(const Model& model, Data& data) noexcept {
