@@ -1,7 +1,8 @@
 /// @file net_solve.cpp
 /// Coupled linearly implicit Euler of the bodies and the deformable nets:
-/// system assembly on a fixed sparsity and an arrowhead-preconditioned
-/// (projected) conjugate gradient (net_solve.hpp).
+/// system assembly on a fixed sparsity and a preconditioned conjugate
+/// gradient — SSOR with Eisenstat's trick without joints, the arrowhead
+/// preconditioner in a projected CG with joints (net_solve.hpp).
 
 #include "numen/core/net_solve.hpp"
 
@@ -677,12 +678,11 @@ double net_start_sweep(const Model& model, Data& data, std::span<const Vec3> x0_
 bool solve_eisenstat(const Model& model, Data& data) noexcept {
   SolverScratch& s = data.solver;
   NetScratch& ns = data.net;
+  // g: the backward sweep's output (bodies); d = D̃ w (nodes).
   const std::span<Vec6> xb(s.delta), wb(s.residual), tb(s.precond_residual), qb(s.direction),
       kqb(s.a_direction), gb(ns.body_tmp);
-  const std::span<const Vec6> bb(s.rhs);
   const std::span<Vec3> xn(ns.delta), wn(ns.residual), tn(ns.precond_residual), qn(ns.direction),
-      kqn(ns.a_direction), gn(ns.sweep);
-  const std::span<const Vec3> bn(ns.rhs);
+      kqn(ns.a_direction), dn(ns.sweep);
   const std::size_t nb = xb.size(), nn = xn.size();
 
   const auto poison = [&]() noexcept {
@@ -720,7 +720,7 @@ bool solve_eisenstat(const Model& model, Data& data) noexcept {
     } else {
       for (std::size_t b = 0; b < nb; ++b)  // D̃ w recomputed: a few bodies, no array for it
         qb[b] = s.in_solve[b] ? Vec6(s.block[b] * wb[b] + beta * qb[b]) : Vec6::Zero();
-      backward_sweep<true>(model, data, beta, gn.data(), qb, qn.data(), tb, tn.data(), gb,
+      backward_sweep<true>(model, data, beta, dn.data(), qb, qn.data(), tb, tn.data(), gb,
                            kqn.data());
     }
     ++it;
@@ -740,8 +740,8 @@ bool solve_eisenstat(const Model& model, Data& data) noexcept {
     for (std::size_t i = 0; i < nn; ++i) {
       xn[i] += alpha * tn[i];
       wn[i] -= alpha * kqn[i];
-      gn[i].noalias() = block[i] * wn[i];
-      rho_new += wn[i].dot(gn[i]);
+      dn[i].noalias() = block[i] * wn[i];
+      rho_new += wn[i].dot(dn[i]);
     }
     rel = std::sqrt(rho_new / ref);
     if (!std::isfinite(rel)) return poison();
