@@ -1,7 +1,8 @@
 /// @file net_solve.cpp
 /// Coupled linearly implicit Euler of the bodies and the deformable nets:
-/// system assembly on a fixed sparsity and an arrowhead-preconditioned
-/// (projected) conjugate gradient (net_solve.hpp).
+/// system assembly on a fixed sparsity and a preconditioned conjugate
+/// gradient — SSOR with Eisenstat's trick without joints, the arrowhead
+/// preconditioner in a projected CG with joints (net_solve.hpp).
 
 #include "numen/core/net_solve.hpp"
 
@@ -113,6 +114,15 @@ bool couples_body(const SolverScratch& s, const NodeContact& c) noexcept {
   return c.active && c.body_b >= 0 && s.in_solve[static_cast<std::size_t>(c.body_b)];
 }
 
+/// W_e v = α d̂ (d̂ · v) + β v for a spring, in plain scalar code (the inner
+/// loop of both sweeps).
+inline Vec3 spring_times(const SweepSpring& t, const Vec3& v) noexcept {
+  const Vec3& n = t.direction;
+  const double s = t.weight_axial * (n.x() * v.x() + n.y() * v.y() + n.z() * v.z());
+  return Vec3(s * n.x() + t.weight_isotropic * v.x(), s * n.y() + t.weight_isotropic * v.y(),
+              s * n.z() + t.weight_isotropic * v.z());
+}
+
 /// out = A · in over bodies and nodes (see net_solve.hpp for A).
 void apply_coupled(const Model& model, const Data& data, std::span<const Vec6> in_b,
                    std::span<const Vec3> in_n, std::span<Vec6> out_b,
@@ -124,27 +134,20 @@ void apply_coupled(const Model& model, const Data& data, std::span<const Vec6> i
   // off-diagonal blocks at once), each node contact's W p_i, the ties' and
   // node–body contacts' off-diagonal blocks.
   for (std::size_t i = 0; i < in_n.size(); ++i) out_n[i] = ns.node_diagonal[i] * in_n[i];
-  // The hot loop of the solve (about half of a step): plain scalar code over
-  // one array, w = α d̂ (d̂ · δ) + β δ with δ = p_a − p_b.
+  // Springs by their smaller node k: w = W_e (p_k − p_high), + on row k, − on row high.
   const Vec3* x = in_n.data();
   Vec3* y = out_n.data();
-  for (const SpringTerm& t : ns.springs) {
-    const Vec3& xa = x[t.node_a];
-    const Vec3& xb = x[t.node_b];
-    const double dx = xa.x() - xb.x(), dy = xa.y() - xb.y(), dz = xa.z() - xb.z();
-    const Vec3& n = t.direction;
-    const double s_axial = t.weight_axial * (n.x() * dx + n.y() * dy + n.z() * dz);
-    const double wx = s_axial * n.x() + t.weight_isotropic * dx;
-    const double wy = s_axial * n.y() + t.weight_isotropic * dy;
-    const double wz = s_axial * n.z() + t.weight_isotropic * dz;
-    Vec3& ya = y[t.node_a];
-    Vec3& yb = y[t.node_b];
-    ya.x() += wx;
-    ya.y() += wy;
-    ya.z() += wz;
-    yb.x() -= wx;
-    yb.y() -= wy;
-    yb.z() -= wz;
+  const SweepSpring* springs = ns.sweep_springs.data();
+  const std::int32_t* low_begin = ns.spring_low_begin.data();
+  for (std::size_t k = 0; k < in_n.size(); ++k) {
+    Vec3 acc = Vec3::Zero();
+    for (std::int32_t j = low_begin[k]; j < low_begin[k + 1]; ++j) {
+      const auto hi = static_cast<std::size_t>(springs[j].high);
+      const Vec3 w = spring_times(springs[j], x[k] - x[hi]);
+      acc += w;
+      y[hi] -= w;
+    }
+    y[k] += acc;
   }
   const double h = model.dt;
   for (const NetModel& net : model.nets) {
@@ -172,15 +175,6 @@ void apply_coupled(const Model& model, const Data& data, std::span<const Vec6> i
     out_b[b] -= generalized_force(
         weight_times(ct.weight_normal, ct.weight_isotropic, ct.normal, in_n[i]), ct.r_b);
   }
-}
-
-/// W_e v = α d̂ (d̂ · v) + β v for a spring, in plain scalar code (the inner
-/// loop of both sweeps).
-inline Vec3 spring_times(const SweepSpring& t, const Vec3& v) noexcept {
-  const Vec3& n = t.direction;
-  const double s = t.weight_axial * (n.x() * v.x() + n.y() * v.y() + n.z() * v.z());
-  return Vec3(s * n.x() + t.weight_isotropic * v.x(), s * n.y() + t.weight_isotropic * v.y(),
-              s * n.z() + t.weight_isotropic * v.z());
 }
 
 /// D̃ v: blockdiag(SolverScratch::block, NetScratch::block) times v, into
@@ -256,48 +250,19 @@ void build_net_system(const Model& model, Data& data) noexcept {
   const double h = model.dt;
   const double h2 = h * h;
 
+  // The springs' weights, their sum in the blocks and their part of the
+  // right-hand side are already there (compute_net_forces()).
   for (const NetModel& net : model.nets) {
     const auto b = static_cast<std::size_t>(net.body);
     const double c = tie_weight(net, h);
     for (int v = net.node_begin; v < net.node_begin + net.node_count; ++v) {
       const auto i = static_cast<std::size_t>(v);
-      ns.node_diagonal[i] = model.node_mass[i] + c;
-      ns.block[i] = ns.node_diagonal[i] * Mat3::Identity();
+      const double diagonal = model.node_mass[i] + c;
+      ns.node_diagonal[i] = diagonal;
+      ns.block[i].diagonal().array() += diagonal;
       const Vec3 relative = data.nodes[i].velocity - point_velocity(s.twist0[b], ns.lever[i]);
-      ns.rhs[i] = h * ns.force[i] - (h2 * net.tie_stiffness) * relative;
+      ns.rhs[i] += h * ns.force[i] - (h2 * net.tie_stiffness) * relative;
     }
-  }
-  // Raw pointers: the stores below would otherwise make the compiler reload
-  // every vector's data pointer per spring.
-  const NetSpring* model_springs = model.net_springs.data();
-  SpringTerm* terms = ns.springs.data();
-  SweepSpring* sweep = ns.sweep_springs.data();
-  const std::int32_t* slot = ns.spring_slot.data();
-  const NodeState* nodes = data.nodes.data();
-  Mat3* blocks = ns.block.data();
-  Vec3* rhs = ns.rhs.data();
-  for (std::size_t e = 0; e < ns.springs.size(); ++e) {
-    const NetSpring& sp = model_springs[e];
-    SpringTerm& t = terms[e];
-    const auto a = static_cast<std::size_t>(sp.node_a);
-    const auto b = static_cast<std::size_t>(sp.node_b);
-    // K̃ = (1 − τ) d̂d̂ᵀ + τ I, τ = max(0, 1 − L/l): −∂f_a/∂x_a / k.
-    const double tau = t.length > sp.rest_length ? 1.0 - sp.rest_length / t.length : 0.0;
-    const double hk = h2 * sp.stiffness;
-    const double beta = hk * tau;
-    const double alpha = h * sp.damping + hk - beta;
-    t.weight_isotropic = beta;
-    t.weight_axial = alpha;
-    add_weight(alpha, beta, t.direction, blocks[a]);
-    add_weight(alpha, beta, t.direction, blocks[b]);
-    SweepSpring& w = sweep[static_cast<std::size_t>(slot[e])];
-    w.direction = t.direction;
-    w.weight_axial = alpha;
-    w.weight_isotropic = beta;
-    const Vec3 kv =
-        weight_times(hk - beta, beta, t.direction, nodes[a].velocity - nodes[b].velocity);
-    rhs[a] -= kv;
-    rhs[b] += kv;
   }
   const int nc = node_contact_count(data);
   for (int k = 0; k < nc; ++k) {
@@ -481,95 +446,21 @@ bool solve_arrowhead(const Model& model, Data& data) noexcept {
   return rel <= model.solver.tolerance;
 }
 
-/// Eisenstat's CG with the SSOR preconditioner (models without joints; see
-/// net_solve.hpp).
-bool solve_eisenstat(const Model& model, Data& data) noexcept {
-  SolverScratch& s = data.solver;
-  NetScratch& ns = data.net;
-  const std::span<Vec6> xb(s.delta), wb(s.residual), tb(s.precond_residual), qb(s.direction),
-      kqb(s.a_direction), gb(ns.body_tmp);
-  const std::span<const Vec6> bb(s.rhs);
-  const std::span<Vec3> xn(ns.delta), wn(ns.residual), tn(ns.precond_residual), qn(ns.direction),
-      kqn(ns.a_direction), gn(ns.sweep);
-  const std::span<const Vec3> bn(ns.rhs);
-  const std::size_t nb = xb.size(), nn = xn.size();
-
-  const auto poison = [&]() noexcept {
-    constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-    for (Vec6& v : xb) v.setConstant(kNaN);
-    for (Vec3& v : xn) v.setConstant(kNaN);
-    data.solver_residual = kNaN;
-    return false;
-  };
-
-  // Start: bodies at 0, nodes at the last step's Δv (warm start); r = b − A x0
-  // (in g), w = (D̃+L)⁻¹ r, and the reference ‖b‖²_{M⁻¹} = w_bᵀ D̃ w_b with
-  // w_b = (D̃+L)⁻¹ b (t and K q serve as scratch).
-  for (Vec6& v : xb) v.setZero();
-  for (Vec3& v : xn)
-    if (!v.allFinite()) v.setZero();
-  apply_coupled(model, data, xb, xn, kqb, kqn);
-  for (std::size_t b = 0; b < nb; ++b) gb[b] = s.in_solve[b] ? Vec6(bb[b] - kqb[b]) : Vec6::Zero();
-  for (std::size_t i = 0; i < nn; ++i) gn[i] = bn[i] - kqn[i];
-  net_forward_sweep(model, data, gb, gn, wb, wn);
-  net_forward_sweep(model, data, bb, bn, tb, tn);
-  double ref = apply_block_diagonal(data, tb, tn, kqb, kqn);
-  if (!std::isfinite(ref)) return poison();
-  if (!(ref > 0.0)) ref = 1.0;
-  double rho = apply_block_diagonal(data, wb, wn, qb, qn);  // q = D̃ w
-  double rel = std::sqrt(rho / ref);
-  if (!std::isfinite(rel)) return poison();
-
-  int it = 0;
-  const int max_it = std::max(1, model.solver.max_iterations);
-  while (rel > model.solver.tolerance && it < max_it) {
-    ++it;
-    const double qkq = apply_net_preconditioned(model, data, qb, qn, tb, tn, kqb, kqn);
-    if (!std::isfinite(qkq)) return poison();
-    if (!(qkq > 0.0)) break;  // breakdown, or converged exactly
-    const double alpha = rho / qkq;
-    // x += α t, w −= α K q, g = D̃ w, ρ' = wᵀ D̃ w in one pass.
-    double rho_new = 0.0;
-    for (std::size_t b = 0; b < nb; ++b) {
-      if (!s.in_solve[b]) {  // x and w stay 0
-        gb[b].setZero();
-        continue;
-      }
-      xb[b] += alpha * tb[b];
-      wb[b] -= alpha * kqb[b];
-      gb[b].noalias() = s.block[b] * wb[b];
-      rho_new += wb[b].dot(gb[b]);
-    }
-    for (std::size_t i = 0; i < nn; ++i) {
-      xn[i] += alpha * tn[i];
-      wn[i] -= alpha * kqn[i];
-      gn[i].noalias() = ns.block[i] * wn[i];
-      rho_new += wn[i].dot(gn[i]);
-    }
-    rel = std::sqrt(rho_new / ref);
-    if (!std::isfinite(rel)) return poison();
-    if (rel <= model.solver.tolerance || !(rho_new > 0.0)) break;
-    const double beta = rho_new / rho;
-    rho = rho_new;
-    for (std::size_t b = 0; b < nb; ++b) qb[b] = gb[b] + beta * qb[b];
-    for (std::size_t i = 0; i < nn; ++i) qn[i] = gn[i] + beta * qn[i];
-  }
-  data.solver_iterations = it;
-  data.solver_residual = rel;
-  return rel <= model.solver.tolerance;
-}
-
-}  // namespace
-
-void net_backward_sweep(const Model& model, const Data& data, std::span<const Vec6> q_b,
-                        std::span<const Vec3> q_n, std::span<Vec6> t_b, std::span<Vec3> t_n,
-                        std::span<Vec6> g_b, std::span<Vec3> g_n) noexcept {
+/// The backward sweep of net_backward_sweep(). With kUpdateQ it first makes
+/// each node's q the CG direction, q_k ← d_k + β q_k (d = D̃ w, in place),
+/// as it reaches the node (the bodies' q are updated by the caller).
+template <bool kUpdateQ>
+void backward_sweep(const Model& model, const Data& data, double beta, const Vec3* d_n,
+                    std::span<const Vec6> q_b, Vec3* q_n, std::span<Vec6> t_b, Vec3* t_n,
+                    std::span<Vec6> g_b, Vec3* g_n) noexcept {
   const SolverScratch& s = data.solver;
   const NetScratch& ns = data.net;
   const double h = model.dt;
   const std::size_t nb = q_b.size();
   const SweepSpring* springs = ns.sweep_springs.data();
   const std::int32_t* low_begin = ns.spring_low_begin.data();
+  const Mat3* block_inverse = ns.block_inverse.data();
+  const Vec3* lever = ns.lever.data();
   for (Vec6& v : g_b) v.setZero();
   // Nodes, last to first: (D̃+Lᵀ) has, in node k's row, −W_e towards every
   // larger node of a spring (and nothing towards the bodies, which come
@@ -586,8 +477,10 @@ void net_backward_sweep(const Model& model, const Data& data, std::span<const Ve
       for (std::int32_t j = low_begin[k]; j < low_begin[k + 1]; ++j)
         sum += spring_times(springs[j], t_n[static_cast<std::size_t>(springs[j].high)]);
       g_n[k] = -sum;
-      t_n[k].noalias() = ns.block_inverse[k] * (q_n[k] + sum);
-      if (tied) tie += generalized_force(t_n[k], ns.lever[k]);
+      if constexpr (kUpdateQ) q_n[k] = d_n[k] + beta * q_n[k];
+      const Vec3 t = block_inverse[k] * (q_n[k] + sum);
+      t_n[k] = t;
+      if (tied) tie += generalized_force(t, lever[k]);
     }
     if (tied) g_b[body] -= tie_weight(*net, h) * tie;  // A_bi = −c J_iᵀ
   }
@@ -612,15 +505,21 @@ void net_backward_sweep(const Model& model, const Data& data, std::span<const Ve
   add_cross_contact_terms(s, t_b, g_b);
 }
 
-void net_forward_sweep(const Model& model, const Data& data, std::span<const Vec6> g_b,
-                       std::span<const Vec3> g_n, std::span<Vec6> y_b,
-                       std::span<Vec3> y_n) noexcept {
+/// The forward sweep of net_forward_sweep(), y = (D̃+L)⁻¹ g; y_n may be g_n
+/// (in place). With kAddT it writes K q = y + t instead of y (Eisenstat's
+/// product) and returns qᵀ K q; otherwise it returns 0.
+template <bool kAddT>
+double forward_sweep(const Model& model, const Data& data, std::span<const Vec6> g_b,
+                     const Vec3* g_n, std::span<Vec6> y_b, Vec3* y_n, std::span<const Vec6> t_b,
+                     const Vec3* t_n, std::span<const Vec6> q_b, const Vec3* q_n) noexcept {
   const SolverScratch& s = data.solver;
   const NetScratch& ns = data.net;
   const double h = model.dt;
   const std::size_t nb = g_b.size();
   const SweepSpring* springs = ns.sweep_springs.data();
   const std::int32_t* low_begin = ns.spring_low_begin.data();
+  const Mat3* block_inverse = ns.block_inverse.data();
+  const Vec3* lever = ns.lever.data();
   // Bodies first: no block of (D̃+L) left of their diagonal.
   for (std::size_t b = 0; b < nb; ++b) {
     if (s.in_solve[b]) {
@@ -631,7 +530,8 @@ void net_forward_sweep(const Model& model, const Data& data, std::span<const Vec
   }
   // Node rows' right-hand sides: g_i − A_ib y_b for the node–body contacts
   // (the ties' are added in the sweep).
-  for (std::size_t i = 0; i < y_n.size(); ++i) y_n[i] = g_n[i];
+  if (y_n != g_n)
+    for (std::size_t i = 0; i < ns.block_inverse.size(); ++i) y_n[i] = g_n[i];
   const int nc = node_contact_count(data);
   for (int c = 0; c < nc; ++c) {
     const NodeContact& ct = data.node_contacts[static_cast<std::size_t>(c)];
@@ -643,6 +543,7 @@ void net_forward_sweep(const Model& model, const Data& data, std::span<const Vec
   // Nodes, first to last: y_k = A_kk⁻¹ (g_k + c J_k y_b + Σ W_e y_j) over the
   // springs to smaller nodes j, each of which has already added its W_e y_j
   // to y_k (scattered over its springs, grouped by their smaller node).
+  double qkq = 0.0;
   for (const NetModel& net : model.nets) {
     const auto body = static_cast<std::size_t>(net.body);
     const bool tied = s.in_solve[body] != 0;
@@ -650,13 +551,223 @@ void net_forward_sweep(const Model& model, const Data& data, std::span<const Vec
     for (int v = net.node_begin; v < net.node_begin + net.node_count; ++v) {
       const auto k = static_cast<std::size_t>(v);
       Vec3 acc = y_n[k];
-      if (tied) acc += c * point_velocity(y_b[body], ns.lever[k]);
-      const Vec3 y = ns.block_inverse[k] * acc;
-      y_n[k] = y;
+      if (tied) acc += c * point_velocity(y_b[body], lever[k]);
+      const Vec3 y = block_inverse[k] * acc;
+      if constexpr (kAddT) {
+        const Vec3 kq = y + t_n[k];
+        y_n[k] = kq;
+        qkq += q_n[k].dot(kq);
+      } else {
+        y_n[k] = y;
+      }
       for (std::int32_t j = low_begin[k]; j < low_begin[k + 1]; ++j)
         y_n[static_cast<std::size_t>(springs[j].high)] += spring_times(springs[j], y);
     }
   }
+  if constexpr (kAddT) {
+    for (std::size_t b = 0; b < nb; ++b) {
+      y_b[b] += t_b[b];
+      qkq += q_b[b].dot(y_b[b]);
+    }
+  }
+  return qkq;
+}
+
+/// The start of Eisenstat's CG in one forward sweep, for x0 = (0 on the
+/// bodies, x0_n on the nodes): w = (D̃+L)⁻¹ (b − A x0) and y = (D̃+L)⁻¹ b;
+/// returns ‖b‖²_{M⁻¹} = yᵀ D̃ y. Since A = (D̃+L) + (Lᵀ + D − D̃),
+///   (D̃+L)⁻¹ (b − A x0) = (D̃+L)⁻¹ (b − (Lᵀ + D − D̃) x0) − x0,
+/// and (Lᵀ + D − D̃) x0 needs no product with A: its body rows are the node
+/// columns of Lᵀ (ties −c J_iᵀ, node contacts −J_rᵀ W; the body–body cross
+/// terms of D − D̃ meet x0_b = 0), its node rows −Σ W_e x0_j over the springs
+/// to larger nodes j — gathered in the sweep over the same springs that
+/// scatter. Both right-hand sides share the sweep (each spring read once);
+/// yᵀ D̃ y is summed as y_k · (D̃ y)_k, (D̃ y)_k being the row's right-hand
+/// side that y_k solves.
+double net_start_sweep(const Model& model, Data& data, std::span<const Vec3> x0_n,
+                       std::span<Vec6> w_b, std::span<Vec3> w_n, std::span<Vec6> y_b,
+                       std::span<Vec3> y_n) noexcept {
+  const SolverScratch& s = data.solver;
+  NetScratch& ns = data.net;
+  const double h = model.dt;
+  const std::size_t nb = w_b.size();
+  const SweepSpring* springs = ns.sweep_springs.data();
+  const std::int32_t* low_begin = ns.spring_low_begin.data();
+  const std::span<Vec6> g_b(ns.body_tmp);
+  // Body rows: g_b = b_b − (Lᵀ x0)_b.
+  for (std::size_t b = 0; b < nb; ++b) g_b[b] = s.in_solve[b] ? s.rhs[b] : Vec6::Zero();
+  for (const NetModel& net : model.nets) {
+    const auto body = static_cast<std::size_t>(net.body);
+    if (!s.in_solve[body]) continue;
+    Vec6 tie = Vec6::Zero();
+    for (int v = net.node_begin; v < net.node_begin + net.node_count; ++v) {
+      const auto i = static_cast<std::size_t>(v);
+      tie += generalized_force(x0_n[i], ns.lever[i]);
+    }
+    g_b[body] += tie_weight(net, h) * tie;
+  }
+  const int nc = node_contact_count(data);
+  for (int c = 0; c < nc; ++c) {
+    const NodeContact& ct = data.node_contacts[static_cast<std::size_t>(c)];
+    if (!couples_body(s, ct)) continue;
+    g_b[static_cast<std::size_t>(ct.body_b)] += generalized_force(
+        weight_times(ct.weight_normal, ct.weight_isotropic, ct.normal,
+                     x0_n[static_cast<std::size_t>(ct.node)]),
+        ct.r_b);
+  }
+  double ref = 0.0;
+  for (std::size_t b = 0; b < nb; ++b) {
+    if (s.in_solve[b]) {
+      solve_block(s.block_factor[b], g_b[b], w_b[b]);  // x0_b = 0: w_b = y'_b
+      solve_block(s.block_factor[b], s.rhs[b], y_b[b]);
+      ref += y_b[b].dot(s.rhs[b]);
+    } else {
+      w_b[b].setZero();
+      y_b[b].setZero();
+    }
+  }
+  // Node rows: b_i, minus the node–body contacts' A_ib times the bodies' values.
+  for (std::size_t i = 0; i < w_n.size(); ++i) {
+    w_n[i] = ns.rhs[i];
+    y_n[i] = ns.rhs[i];
+  }
+  for (int c = 0; c < nc; ++c) {
+    const NodeContact& ct = data.node_contacts[static_cast<std::size_t>(c)];
+    if (!couples_body(s, ct)) continue;
+    const auto i = static_cast<std::size_t>(ct.node);
+    const auto b = static_cast<std::size_t>(ct.body_b);
+    w_n[i] += weight_times(ct.weight_normal, ct.weight_isotropic, ct.normal,
+                           point_velocity(w_b[b], ct.r_b));
+    y_n[i] += weight_times(ct.weight_normal, ct.weight_isotropic, ct.normal,
+                           point_velocity(y_b[b], ct.r_b));
+  }
+  Vec3* w = w_n.data();
+  Vec3* y = y_n.data();
+  const Vec3* x0 = x0_n.data();
+  for (const NetModel& net : model.nets) {
+    const auto body = static_cast<std::size_t>(net.body);
+    const bool tied = s.in_solve[body] != 0;
+    const double c = tie_weight(net, h);
+    for (int v = net.node_begin; v < net.node_begin + net.node_count; ++v) {
+      const auto k = static_cast<std::size_t>(v);
+      Vec3 acc_w = w[k];
+      Vec3 acc_y = y[k];
+      if (tied) {
+        acc_w += c * point_velocity(w_b[body], ns.lever[k]);
+        acc_y += c * point_velocity(y_b[body], ns.lever[k]);
+      }
+      for (std::int32_t j = low_begin[k]; j < low_begin[k + 1]; ++j)
+        acc_w += spring_times(springs[j], x0[static_cast<std::size_t>(springs[j].high)]);
+      const Vec3 wk = ns.block_inverse[k] * acc_w;  // before subtracting x0_k
+      const Vec3 yk = ns.block_inverse[k] * acc_y;
+      ref += yk.dot(acc_y);
+      w[k] = wk - x0[k];
+      y[k] = yk;
+      for (std::int32_t j = low_begin[k]; j < low_begin[k + 1]; ++j) {
+        const auto hi = static_cast<std::size_t>(springs[j].high);
+        w[hi] += spring_times(springs[j], wk);
+        y[hi] += spring_times(springs[j], yk);
+      }
+    }
+  }
+  return ref;
+}
+
+/// Eisenstat's CG with the SSOR preconditioner (models without joints; see
+/// net_solve.hpp).
+bool solve_eisenstat(const Model& model, Data& data) noexcept {
+  SolverScratch& s = data.solver;
+  NetScratch& ns = data.net;
+  // g: the backward sweep's output (bodies); d = D̃ w (nodes).
+  const std::span<Vec6> xb(s.delta), wb(s.residual), tb(s.precond_residual), qb(s.direction),
+      kqb(s.a_direction), gb(ns.body_tmp);
+  const std::span<Vec3> xn(ns.delta), wn(ns.residual), tn(ns.precond_residual), qn(ns.direction),
+      kqn(ns.a_direction), dn(ns.sweep);
+  const std::size_t nb = xb.size(), nn = xn.size();
+
+  const auto poison = [&]() noexcept {
+    constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+    for (Vec6& v : xb) v.setConstant(kNaN);
+    for (Vec3& v : xn) v.setConstant(kNaN);
+    data.solver_residual = kNaN;
+    return false;
+  };
+
+  // Start: bodies at 0, nodes at the last step's Δv (warm start);
+  // w = (D̃+L)⁻¹ (b − A x0) and the reference ‖b‖²_{M⁻¹} in one forward sweep
+  // (t serves as scratch for (D̃+L)⁻¹ b).
+  for (Vec6& v : xb) v.setZero();
+  for (Vec3& v : xn)
+    if (!v.allFinite()) v.setZero();
+  double ref = net_start_sweep(model, data, xn, wb, wn, tb, tn);
+  if (!std::isfinite(ref)) return poison();
+  if (!(ref > 0.0)) ref = 1.0;
+  double rho = apply_block_diagonal(data, wb, wn, qb, qn);  // q = D̃ w
+  double rel = std::sqrt(rho / ref);
+  if (!std::isfinite(rel)) return poison();
+
+  // One iteration: the backward sweep (which first makes q = D̃ w + β q, node
+  // by node, after the first iteration), the forward sweep (K q = y + t and
+  // qᵀ K q as it goes; g_n is swept in place in K q's storage), then
+  // x += α t, w −= α K q, d = D̃ w and ρ' = wᵀ D̃ w in one pass.
+  int it = 0;
+  double beta = 0.0;
+  const int max_it = std::max(1, model.solver.max_iterations);
+  while (rel > model.solver.tolerance && it < max_it) {
+    if (it == 0) {
+      backward_sweep<false>(model, data, 0.0, nullptr, qb, qn.data(), tb, tn.data(), gb,
+                            kqn.data());
+    } else {
+      for (std::size_t b = 0; b < nb; ++b)  // D̃ w recomputed: a few bodies, no array for it
+        qb[b] = s.in_solve[b] ? Vec6(s.block[b] * wb[b] + beta * qb[b]) : Vec6::Zero();
+      backward_sweep<true>(model, data, beta, dn.data(), qb, qn.data(), tb, tn.data(), gb,
+                           kqn.data());
+    }
+    ++it;
+    const double qkq = forward_sweep<true>(model, data, gb, kqn.data(), kqb, kqn.data(), tb,
+                                           tn.data(), qb, qn.data());
+    if (!std::isfinite(qkq)) return poison();
+    if (!(qkq > 0.0)) break;  // breakdown, or converged exactly
+    const double alpha = rho / qkq;
+    double rho_new = 0.0;
+    for (std::size_t b = 0; b < nb; ++b) {
+      if (!s.in_solve[b]) continue;  // x and w stay 0
+      xb[b] += alpha * tb[b];
+      wb[b] -= alpha * kqb[b];
+      rho_new += wb[b].dot(s.block[b] * wb[b]);
+    }
+    const Mat3* block = ns.block.data();
+    for (std::size_t i = 0; i < nn; ++i) {
+      xn[i] += alpha * tn[i];
+      wn[i] -= alpha * kqn[i];
+      dn[i].noalias() = block[i] * wn[i];
+      rho_new += wn[i].dot(dn[i]);
+    }
+    rel = std::sqrt(rho_new / ref);
+    if (!std::isfinite(rel)) return poison();
+    if (rel <= model.solver.tolerance || !(rho_new > 0.0)) break;
+    beta = rho_new / rho;
+    rho = rho_new;
+  }
+  data.solver_iterations = it;
+  data.solver_residual = rel;
+  return rel <= model.solver.tolerance;
+}
+
+}  // namespace
+
+void net_backward_sweep(const Model& model, const Data& data, std::span<const Vec6> q_b,
+                        std::span<const Vec3> q_n, std::span<Vec6> t_b, std::span<Vec3> t_n,
+                        std::span<Vec6> g_b, std::span<Vec3> g_n) noexcept {
+  // kUpdateQ = false: q is only read.
+  backward_sweep<false>(model, data, 0.0, nullptr, q_b, const_cast<Vec3*>(q_n.data()), t_b,
+                        t_n.data(), g_b, g_n.data());
+}
+
+void net_forward_sweep(const Model& model, const Data& data, std::span<const Vec6> g_b,
+                       std::span<const Vec3> g_n, std::span<Vec6> y_b,
+                       std::span<Vec3> y_n) noexcept {
+  forward_sweep<false>(model, data, g_b, g_n.data(), y_b, y_n.data(), {}, nullptr, {}, nullptr);
 }
 
 double apply_net_preconditioned(const Model& model, Data& data, std::span<const Vec6> q_b,
@@ -664,19 +775,9 @@ double apply_net_preconditioned(const Model& model, Data& data, std::span<const 
                                 std::span<Vec6> kq_b, std::span<Vec3> kq_n) noexcept {
   NetScratch& ns = data.net;
   const std::span<Vec6> g_b(ns.body_tmp);
-  const std::span<Vec3> g_n(ns.sweep);
-  net_backward_sweep(model, data, q_b, q_n, t_b, t_n, g_b, g_n);
-  net_forward_sweep(model, data, g_b, g_n, kq_b, kq_n);
-  double qkq = 0.0;
-  for (std::size_t b = 0; b < kq_b.size(); ++b) {
-    kq_b[b] += t_b[b];
-    qkq += q_b[b].dot(kq_b[b]);
-  }
-  for (std::size_t i = 0; i < kq_n.size(); ++i) {
-    kq_n[i] += t_n[i];
-    qkq += q_n[i].dot(kq_n[i]);
-  }
-  return qkq;
+  net_backward_sweep(model, data, q_b, q_n, t_b, t_n, g_b, kq_n);  // g_n in K q's place
+  return forward_sweep<true>(model, data, g_b, kq_n.data(), kq_b, kq_n.data(), t_b, t_n.data(),
+                             q_b, q_n.data());
 }
 
 bool solve_net_system(const Model& model, Data& data) noexcept {

@@ -15,11 +15,7 @@ void NetScratch::resize(const Model& model) {
   saved.assign(n, NodeState{});
   force.assign(n, Vec3::Zero());
   lever.assign(n, Vec3::Zero());
-  springs.assign(n > 0 ? model.net_springs.size() : 0, SpringTerm{});
-  for (std::size_t e = 0; e < springs.size(); ++e) {
-    springs[e].node_a = model.net_springs[e].node_a;
-    springs[e].node_b = model.net_springs[e].node_b;
-  }
+  const std::size_t num_springs = n > 0 ? model.net_springs.size() : 0;
   node_diagonal.assign(n, 1.0);
   block.assign(n, Mat3::Identity());
   block_inverse.assign(n, Mat3::Identity());
@@ -34,21 +30,25 @@ void NetScratch::resize(const Model& model) {
   body_tmp.assign(nb, Vec6::Zero());
   // Springs by their smaller node (counting sort: stable, so each node's
   // springs stay in Model::net_springs order).
-  sweep_springs.assign(springs.size(), SweepSpring{});
+  sweep_springs.assign(num_springs, SweepSpring{});
+  spring_constants.assign(num_springs, SweepSpringConstants{});
+  spring_length.assign(num_springs, 0.0);
   spring_low_begin.assign(n > 0 ? n + 1 : 0, 0);
-  spring_slot.assign(springs.size(), 0);
+  spring_slot.assign(num_springs, 0);
   if (n > 0) {
-    const auto low = [](const SpringTerm& t) {
-      return static_cast<std::size_t>(std::min(t.node_a, t.node_b));
+    const auto low = [](const NetSpring& sp) {
+      return static_cast<std::size_t>(std::min(sp.node_a, sp.node_b));
     };
-    for (const SpringTerm& t : springs) ++spring_low_begin[low(t) + 1];
+    for (std::size_t e = 0; e < num_springs; ++e) ++spring_low_begin[low(model.net_springs[e]) + 1];
     for (std::size_t i = 0; i < n; ++i) spring_low_begin[i + 1] += spring_low_begin[i];
     std::vector<std::int32_t> next(spring_low_begin.begin(), spring_low_begin.end() - 1);
-    for (std::size_t e = 0; e < springs.size(); ++e) {
-      const std::int32_t slot = next[low(springs[e])]++;
+    for (std::size_t e = 0; e < num_springs; ++e) {
+      const NetSpring& sp = model.net_springs[e];
+      const std::int32_t slot = next[low(sp)]++;
       spring_slot[e] = slot;
-      sweep_springs[static_cast<std::size_t>(slot)].high =
-          std::max(springs[e].node_a, springs[e].node_b);
+      const auto j = static_cast<std::size_t>(slot);
+      sweep_springs[j].high = std::max(sp.node_a, sp.node_b);
+      spring_constants[j] = SweepSpringConstants{sp.rest_length, sp.stiffness, sp.damping};
     }
   }
   const auto no = n > 0 ? model.obstacles.size() : 0;

@@ -32,6 +32,14 @@ namespace {
 
 std::size_t at(int i) { return static_cast<std::size_t>(i); }
 
+/// The linearisation of spring e of Model::net_springs (stored in the sweep order).
+const core::SweepSpring& spring_term(const core::Data& d, int e) {
+  return d.net.sweep_springs[at(d.net.spring_slot[at(e)])];
+}
+
+/// The length of spring e of Model::net_springs at the last compute_net_forces().
+double spring_length(const core::Data& d, int e) { return d.net.spring_length[at(d.net.spring_slot[at(e)])]; }
+
 /// Equilateral triangle of side `side` in the body's x–y plane, centred on its COM.
 core::TriangleMesh triangle(double side) {
   core::TriangleMesh m;
@@ -162,8 +170,8 @@ TEST(NetForces, SpringAndTieForcesAgainstHandValues) {
   EXPECT_TRUE(d.nets[0].tie_wrench.force.isApprox(-tie1, 1e-12));
   EXPECT_TRUE(d.nets[0].tie_wrench.torque.isApprox(a1.cross(-tie1), 1e-12));
   EXPECT_TRUE(d.body_wrench[0].force.isApprox(-tie1, 1e-12));
-  EXPECT_NEAR(d.net.springs[0].length, 0.12, 1e-15);  // edge 0–1, sorted first
-  EXPECT_TRUE(d.net.springs[0].direction.isApprox(u, 1e-14));
+  EXPECT_NEAR(spring_length(d, 0), 0.12, 1e-15);  // edge 0–1, sorted first
+  EXPECT_TRUE(spring_term(d, 0).direction.isApprox(u, 1e-14));
 }
 
 TEST(NetForces, GeneralStateMatchesTheHeaderFormulasAndTheReactionBalances) {
@@ -283,13 +291,13 @@ TEST(NetForces, NodeContactForceIsThePenaltyLawWithItsReactionOnTheBody) {
 namespace {
 
 /// The solve's spring linearisation: S / h² = k K̃ (γ = 0), from the
-/// SpringTerm weights after build_net_system (S = α d̂d̂ᵀ + β I).
+/// SweepSpring weights after build_net_system (S = α d̂d̂ᵀ + β I).
 Mat3 solver_spring_stiffness(const core::Model& m, core::Data& d, int spring) {
   core::compute_forces(m, d);
   core::prepare_implicit_step(m, d);
   core::build_implicit_system(m, d);
   core::build_net_system(m, d);
-  const core::SpringTerm& t = d.net.springs[at(spring)];
+  const core::SweepSpring& t = spring_term(d, spring);
   const double h2 = m.dt * m.dt;
   return (t.weight_axial * t.direction * t.direction.transpose() + t.weight_isotropic * Mat3::Identity()) / h2;
 }
@@ -333,7 +341,7 @@ TEST(NetForces, SpringStiffnessOfTheSolveMatchesFiniteDifferencesWhenStretched) 
   core::Data dd = d;
   const Mat3 solver = solver_spring_stiffness(m, dd, 0);
   EXPECT_LT((solver - documented).norm(), 1e-9 * documented.norm()) << solver;
-  EXPECT_NEAR(dd.net.springs[0].weight_isotropic, m.dt * m.dt * k * tau, 1e-15);
+  EXPECT_NEAR(spring_term(dd, 0).weight_isotropic, m.dt * m.dt * k * tau, 1e-15);
   // The transverse stiffness is really there: a sideways push is resisted by k τ.
   const Vec3 side = n.cross(Vec3::UnitX()).normalized();
   EXPECT_NEAR(side.dot(fd * side), k * tau, 1e-5 * k);
@@ -357,7 +365,7 @@ TEST(NetForces, UnderCompressionTheSolveDropsTheNegativeTransverseTerm) {
   const Mat3 solver = solver_spring_stiffness(m, dd, 0);
   const Mat3 axial = k * n * n.transpose();
   EXPECT_LT((solver - axial).norm(), 1e-9 * k) << solver;
-  EXPECT_EQ(dd.net.springs[0].weight_isotropic, 0.0);
+  EXPECT_EQ(spring_term(dd, 0).weight_isotropic, 0.0);
   // Same axial stiffness as the exact Jacobian; transverse 0 instead of k τ < 0.
   EXPECT_NEAR(n.dot(fd * n), k, 1e-5 * k);
   EXPECT_NEAR(n.dot(solver * n), k, 1e-9 * k);
@@ -410,11 +418,11 @@ TEST(NetForces, ZeroLengthSpringKeepsItsLastDirection) {
   const core::Model m = scene(triangle(0.1), 50.0, 0.0);
   core::Data d = core::make_data(m);
   core::compute_forces(m, d);
-  const Vec3 dir = d.net.springs[0].direction;
+  const Vec3 dir = spring_term(d, 0).direction;
   d.nodes[1].position = d.nodes[0].position;  // spring 0–1 collapses
   core::compute_forces(m, d);
-  EXPECT_EQ(d.net.springs[0].direction, dir);
-  EXPECT_EQ(d.net.springs[0].length, 0.0);
+  EXPECT_EQ(spring_term(d, 0).direction, dir);
+  EXPECT_EQ(spring_length(d, 0), 0.0);
   for (const Vec3& f : d.net.force) EXPECT_TRUE(f.allFinite());
   // f_0 = k (0 − L) d̂ + ties + other spring + gravity: the collapsed spring pushes node 0 back along −d̂.
   const double push = -50.0 * 0.1;

@@ -258,7 +258,7 @@ Snapshot staged_solve(const core::Model& m, core::Data& d, bool* converged,
 struct Dense {
   MatrixXd a;
   VectorXd b;
-  std::vector<double> spring_alpha, spring_beta;  // for a cross-check of SpringTerm
+  std::vector<double> spring_alpha, spring_beta;  // for a cross-check of SweepSpring
 };
 
 Dense dense_system(const core::Model& m, const Snapshot& s) {
@@ -433,10 +433,11 @@ void check_scratch(const core::Model& m, const core::Data& d, const Dense& ref, 
   EXPECT_GT(d.solver_iterations, 0);
   EXPECT_LE(d.solver_residual, m.solver.tolerance);
   EXPECT_EQ(d.status & core::kSolverNotConverged, 0u);
-  ASSERT_EQ(d.net.springs.size(), ref.spring_alpha.size());
+  ASSERT_EQ(d.net.sweep_springs.size(), ref.spring_alpha.size());
   for (std::size_t e = 0; e < ref.spring_alpha.size(); ++e) {
-    EXPECT_NEAR(d.net.springs[e].weight_axial, ref.spring_alpha[e], 1e-15) << e;
-    EXPECT_NEAR(d.net.springs[e].weight_isotropic, ref.spring_beta[e], 1e-15) << e;
+    const core::SweepSpring& t = d.net.sweep_springs[at(d.net.spring_slot[e])];
+    EXPECT_NEAR(t.weight_axial, ref.spring_alpha[e], 1e-15) << e;
+    EXPECT_NEAR(t.weight_isotropic, ref.spring_beta[e], 1e-15) << e;
   }
   int stretched = 0, compressed = 0;
   for (std::size_t e = 0; e < ref.spring_beta.size(); ++e) (ref.spring_beta[e] > 0.0 ? stretched : compressed)++;

@@ -20,9 +20,15 @@ struct Data;
 ///   each node contact's penalty force (contact_penalty_force(), the node on
 ///   side a), its reaction added to body_b's wrench.
 /// Also stores the linearisation the implicit solve needs: spring directions
-/// and lengths (SpringTerm; a spring of zero length keeps its last
-/// direction), lever arms ρ = R_b r (NetScratch::lever), and each
-/// NodeContact's r_b, normal_velocity, active and force.
+/// (SweepSpring; a spring of zero length keeps its last direction) and
+/// lengths (NetScratch::spring_length), lever arms ρ = R_b r
+/// (NetScratch::lever), and each NodeContact's r_b, normal_velocity, active
+/// and force. With the linearly implicit integrator, the same pass over the
+/// springs (in the sweep order, NetScratch::sweep_springs) also writes their
+/// weights W_e = α d̂d̂ᵀ + β I (SweepSpring), their sum into the node blocks
+/// (NetScratch::block, from 0) and the springs' part of the node rows'
+/// right-hand side, −h² Σ k K̃ (v_i − v_j) (NetScratch::rhs, from 0), which
+/// build_net_system() completes (net_solve.hpp).
 /// Call after compute_contact_forces() (body_wrench is reset by
 /// apply_external_forces()) and after detect_node_contacts(). No allocation.
 void compute_net_forces(const Model& model, Data& data) noexcept;

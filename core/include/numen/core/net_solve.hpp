@@ -6,7 +6,7 @@
 ///   (M − h D − h² K) [Δu; Δv] = h (f0 + h K [u0; v0]) + [M (u* − u0); 0],
 /// with the stiffness and damping Jacobians of the coupling springs, the
 /// contacts (bodies and nodes), the net springs (S = α d̂d̂ᵀ + β I per spring,
-/// net_state.hpp SpringTerm; the transverse term max(0, 1 − L/l) is dropped
+/// net_state.hpp SweepSpring; the transverse term max(0, 1 − L/l) is dropped
 /// under compression so that S stays positive semidefinite, Choi & Ko 2002)
 /// and the zero-length ties (c = h γ_tie + h² k_tie per node:
 /// A_ii += c I, A_ib = −c J_i, A_bb += c J_iᵀ J_i, J_i = [I, −[ρ_i]×]).
@@ -62,11 +62,14 @@ struct Data;
 void add_net_body_terms(const Model& model, Data& data) noexcept;
 
 /// Builds the node rows: 3×3 diagonal blocks (mass, ties, springs, contacts)
-/// and their inverses, spring and node-contact weights, right-hand side
+/// and their inverses, node-contact weights, right-hand side
 ///   b_i = h f_i − h² k_tie (v_i0 − v_a0) − h² Σ_springs k K̃ (v_i0 − v_j0) − h² k_c v_n n,
 /// and, with joints, the bodies' Schur blocks of the arrowhead
-/// preconditioner (NetScratch). Call after build_implicit_system() (whose
-/// Cholesky factors of the body blocks are the bodies' D̃ without joints).
+/// preconditioner (NetScratch). The springs' terms (their weights, their sum
+/// in the blocks and in b) come from compute_net_forces() with the linearly
+/// implicit integrator; this adds the rest. Call after compute_net_forces()
+/// and build_implicit_system() (whose Cholesky factors of the body blocks
+/// are the bodies' D̃ without joints), once per compute_net_forces().
 void build_net_system(const Model& model, Data& data) noexcept;
 
 /// Solves the coupled system (see file comment). Writes SolverScratch::delta
@@ -98,7 +101,8 @@ void net_forward_sweep(const Model& model, const Data& data, std::span<const Vec
 /// Eisenstat's preconditioned product (model without joints, after
 /// build_net_system()): t = (D̃+Lᵀ)⁻¹ q and K q = (D̃+L)⁻¹ A (D̃+Lᵀ)⁻¹ q =
 /// t + (D̃+L)⁻¹ (q + (D − 2D̃) t). Returns qᵀ K q. Uses NetScratch::body_tmp
-/// and sweep as scratch; the spans must not alias each other or those.
+/// as scratch and kq_n for the intermediate g_n (the forward sweep runs in
+/// place); the spans must not alias each other or body_tmp.
 double apply_net_preconditioned(const Model& model, Data& data, std::span<const Vec6> q_b,
                                 std::span<const Vec3> q_n, std::span<Vec6> t_b, std::span<Vec3> t_n,
                                 std::span<Vec6> kq_b, std::span<Vec3> kq_n) noexcept;

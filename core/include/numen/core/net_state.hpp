@@ -51,25 +51,27 @@ struct NetOutput {
   double max_penetration = 0.0;    ///< Deepest node contact this step (m).
 };
 
-/// Linearisation of one spring for the implicit solve (filled each step):
-/// its contribution to A = M − hD − h²K is S = α d̂d̂ᵀ + β I on the two
-/// diagonal blocks and −S off the diagonal.
-struct SpringTerm {
-  int node_a = 0;                  ///< NetSpring::node_a (copied so the solve reads one array).
-  int node_b = 0;                  ///< NetSpring::node_b.
-  Vec3 direction = Vec3::UnitX();  ///< d̂ at the step's start.
-  double length = 0.0;             ///< l at the step's start (m).
+/// Linearisation of one spring for the implicit solve, stored in the order
+/// of the SSOR sweeps (NetScratch::sweep_springs; net_solve.hpp) and
+/// written by compute_net_forces() (direction always, the weights with the
+/// linearly implicit integrator): the spring's contribution to
+/// A = M − hD − h²K is W_e = α d̂d̂ᵀ + β I on the two diagonal blocks and −W_e
+/// off the diagonal.
+struct SweepSpring {
+  /// d̂ = d / l, d = x_high − x_low (from the smaller node to the larger) at the
+  /// step's start; a spring of zero length keeps its last direction.
+  Vec3 direction = Vec3::UnitX();
   double weight_axial = 0.0;       ///< α = h γ + h² k − β (kg = N·s²/m).
   double weight_isotropic = 0.0;   ///< β = h² k max(0, 1 − L/l) (kg).
+  std::int32_t high = 0;           ///< The larger of the spring's two nodes (global index).
 };
 
-/// A spring's weight W_e = α d̂d̂ᵀ + β I (SpringTerm) packed for the SSOR
-/// sweeps of the implicit solve (net_solve.hpp), with its larger node.
-struct SweepSpring {
-  Vec3 direction = Vec3::UnitX();  ///< d̂.
-  double weight_axial = 0.0;       ///< α (kg).
-  double weight_isotropic = 0.0;   ///< β (kg).
-  std::int32_t high = 0;           ///< The larger of the spring's two nodes (global index).
+/// A spring's constants (NetSpring) copied in the sweep order by
+/// NetScratch::resize(), so that the force pass reads one array in order.
+struct SweepSpringConstants {
+  double rest_length = 0.0;  ///< L (m).
+  double stiffness = 0.0;    ///< k (N/m).
+  double damping = 0.0;      ///< γ (N·s/m).
 };
 
 /// Scratch of the nets' force stage and of the coupled implicit solve, sized
@@ -78,7 +80,6 @@ struct NetScratch {
   std::vector<NodeState> saved;     ///< Node states before the step (non-finite rollback).
   std::vector<Vec3> force;          ///< Explicit force on each node this step (N).
   std::vector<Vec3> lever;          ///< ρ = R_b r: anchor − COM of the rigid component (m, world).
-  std::vector<SpringTerm> springs;  ///< Per Model::net_springs.
   std::vector<double> node_diagonal;  ///< m_i + c_tie: the isotropic part of A_ii (kg).
   std::vector<Mat3> block;          ///< A_ii: 3×3 diagonal block of each node (all terms).
   std::vector<Mat3> block_inverse;  ///< A_ii⁻¹ (preconditioner).
@@ -90,13 +91,16 @@ struct NetScratch {
   std::vector<Vec3> sweep;          ///< Nodes: g = q + (D − 2D̃) t of the Eisenstat product.
   std::vector<Mat6> body_schur;     ///< Per body: Schur block S_b of the arrowhead preconditioner (joints).
   std::vector<Vec6> body_tmp;       ///< Per body: reduced residual (joints) or g (no joints).
-  /// The springs' weights in the order of the SSOR sweeps (grouped by their
-  /// smaller node, ascending; Model::net_springs order within a node),
-  /// written by build_net_system(): node i's are
-  /// sweep_springs[spring_low_begin[i] .. spring_low_begin[i + 1]). The
-  /// backward sweep gathers them into node i's row, the forward sweep
-  /// scatters node i's value through them to the larger nodes.
+  /// The springs in the order of the SSOR sweeps (grouped by their smaller
+  /// node, ascending; Model::net_springs order within a node): node i's are
+  /// [spring_low_begin[i], spring_low_begin[i + 1]). compute_net_forces()
+  /// goes through them in that order (forces and linearisation in one
+  /// pass); the backward sweep gathers them into node i's row, the forward
+  /// sweep scatters node i's value through them to the larger nodes.
+  /// Spring e of Model::net_springs is at spring_slot[e].
   std::vector<SweepSpring> sweep_springs;
+  std::vector<SweepSpringConstants> spring_constants;  ///< Sweep order (fixed, resize()).
+  std::vector<double> spring_length;  ///< l at the step's start (m), sweep order.
   std::vector<std::int32_t> spring_low_begin;  ///< Size num_nodes + 1 (fixed topology, resize()).
   std::vector<std::int32_t> spring_slot;       ///< Per Model::net_springs: its index in sweep_springs.
   // Collision stage (detect_node_contacts(), net_collision.hpp), rebuilt per
