@@ -24,6 +24,15 @@ std::string num(double v) {
   return buf;
 }
 
+/// `prefix` + index + "_" + `name` (element names unique per index).
+std::string indexed(const char* prefix, std::size_t i, const std::string& name) {
+  std::string s(prefix);
+  s += std::to_string(i);
+  s += '_';
+  s += name;
+  return s;
+}
+
 std::string vec(const Vec3& v) { return num(v.x()) + " " + num(v.y()) + " " + num(v.z()); }
 
 /// MuJoCo quaternion order: w x y z.
@@ -52,8 +61,9 @@ const char* to_string(Drive drive) noexcept {
 MjcfTranslation translate_to_mjcf(const core::Model& model, Drive drive,
                                   const std::vector<int>& held_bodies) {
   if (model.num_nets() > 0)
-    throw std::invalid_argument("mjcf: deformable nets have no translation (MuJoCo 2.2 has no "
-                                "mass-spring shell tied to a rigid body)");
+    throw std::invalid_argument(
+        "mjcf: deformable nets have no translation (MuJoCo 2.2 has no "
+        "mass-spring shell tied to a rigid body)");
   const int nb = model.num_bodies();
   MjcfTranslation out;
   out.body_names.resize(static_cast<std::size_t>(nb));
@@ -62,14 +72,16 @@ MjcfTranslation translate_to_mjcf(const core::Model& model, Drive drive,
   out.prescribed_names.resize(static_cast<std::size_t>(model.num_joints()));
   out.coordinate_offset.assign(static_cast<std::size_t>(model.num_joints()), 0.0);
   for (int b = 0; b < nb; ++b)
-    out.body_names[static_cast<std::size_t>(b)] = "b" + std::to_string(b) + "_" + model.bodies[static_cast<std::size_t>(b)].name;
+    out.body_names[static_cast<std::size_t>(b)] =
+        indexed("b", static_cast<std::size_t>(b), model.bodies[static_cast<std::size_t>(b)].name);
 
   // Contact parameters: one set per body geom (its material against the obstacles').
   int obstacle_material = -1;
   for (const core::Obstacle& o : model.obstacles) {
-    if (obstacle_material >= 0 &&
-        (model.material_pair(0, o.material).stiffness != model.material_pair(0, obstacle_material).stiffness ||
-         model.material_pair(0, o.material).damping != model.material_pair(0, obstacle_material).damping))
+    if (obstacle_material >= 0 && (model.material_pair(0, o.material).stiffness !=
+                                       model.material_pair(0, obstacle_material).stiffness ||
+                                   model.material_pair(0, o.material).damping !=
+                                       model.material_pair(0, obstacle_material).damping))
       throw std::invalid_argument("mjcf: obstacle '" + o.name +
                                   "' has other contact parameters than the first obstacle; a "
                                   "MuJoCo geom carries one set (use <pair> per geom pair)");
@@ -85,13 +97,16 @@ MjcfTranslation translate_to_mjcf(const core::Model& model, Drive drive,
   for (int b = 0; b < nb; ++b) {
     const int j = parent_joint[static_cast<std::size_t>(b)];
     const int p = j >= 0 ? model.joints[static_cast<std::size_t>(j)].parent : -1;
-    if (p >= 0) children[static_cast<std::size_t>(p)].push_back(b);
-    else roots.push_back(b);
+    if (p >= 0)
+      children[static_cast<std::size_t>(p)].push_back(b);
+    else
+      roots.push_back(b);
   }
 
   std::ostringstream x;
   x << "<mujoco model=\"numen_peer\">\n";
-  x << "  <compiler angle=\"radian\" inertiafromgeom=\"false\" boundmass=\"0\" boundinertia=\"0\"/>\n";
+  x << "  <compiler angle=\"radian\" inertiafromgeom=\"false\" boundmass=\"0\" "
+       "boundinertia=\"0\"/>\n";
   x << "  <option timestep=\"" << num(model.dt) << "\" gravity=\"" << vec(model.gravity)
     << "\" integrator=\"Euler\"/>\n";
   x << "  <size njmax=\"6000\" nconmax=\"2000\"/>\n";
@@ -100,17 +115,20 @@ MjcfTranslation translate_to_mjcf(const core::Model& model, Drive drive,
   // Static obstacles (priority 0: the body geoms' parameters are used in every contact).
   for (std::size_t i = 0; i < model.obstacles.size(); ++i) {
     const core::Obstacle& o = model.obstacles[i];
-    const std::string name = "o" + std::to_string(i) + "_" + o.name;
-    const std::string pose = "pos=\"" + vec(o.pose.position) + "\" quat=\"" + quat(o.pose.orientation) + "\"";
+    const std::string name = indexed("o", i, o.name);
+    const std::string pose =
+        "pos=\"" + vec(o.pose.position) + "\" quat=\"" + quat(o.pose.orientation) + "\"";
     switch (o.type) {
       case core::ShapeType::kPlane:
         x << "    <geom name=\"" << name << "\" type=\"plane\" size=\"0 0 1\" " << pose << "/>\n";
         break;
       case core::ShapeType::kBox:
-        x << "    <geom name=\"" << name << "\" type=\"box\" size=\"" << vec(o.half_extents) << "\" " << pose << "/>\n";
+        x << "    <geom name=\"" << name << "\" type=\"box\" size=\"" << vec(o.half_extents)
+          << "\" " << pose << "/>\n";
         break;
       case core::ShapeType::kSphere:
-        x << "    <geom name=\"" << name << "\" type=\"sphere\" size=\"" << num(o.radius) << "\" " << pose << "/>\n";
+        x << "    <geom name=\"" << name << "\" type=\"sphere\" size=\"" << num(o.radius) << "\" "
+          << pose << "/>\n";
         break;
       case core::ShapeType::kCapsule:
         x << "    <geom name=\"" << name << "\" type=\"capsule\" size=\"" << num(o.radius) << " "
@@ -119,8 +137,9 @@ MjcfTranslation translate_to_mjcf(const core::Model& model, Drive drive,
       case core::ShapeType::kSphereSet:
         for (int s = o.sphere_begin; s < o.sphere_begin + o.sphere_count; ++s) {
           const core::Sphere& sp = model.static_spheres[static_cast<std::size_t>(s)];
-          x << "    <geom name=\"" << name << "_" << (s - o.sphere_begin) << "\" type=\"sphere\" size=\""
-            << num(sp.radius) << "\" pos=\"" << vec(sp.center) << "\"/>\n";
+          x << "    <geom name=\"" << name << "_" << (s - o.sphere_begin)
+            << "\" type=\"sphere\" size=\"" << num(sp.radius) << "\" pos=\"" << vec(sp.center)
+            << "\"/>\n";
         }
         break;
     }
@@ -140,15 +159,15 @@ MjcfTranslation translate_to_mjcf(const core::Model& model, Drive drive,
       pos = qp.conjugate() * (bm.initial_pose.position - pm.initial_pose.position);
       q = qp.conjugate() * q;
     }
-    x << ind << "<body name=\"" << out.body_names[static_cast<std::size_t>(b)] << "\" pos=\"" << vec(pos)
-      << "\" quat=\"" << quat(q) << "\">\n";
+    x << ind << "<body name=\"" << out.body_names[static_cast<std::size_t>(b)] << "\" pos=\""
+      << vec(pos) << "\" quat=\"" << quat(q) << "\">\n";
     if (j < 0) {
       x << ind << "  <freejoint name=\"free_" << b << "\"/>\n";
     } else {
       const core::JointModel& jm = model.joints[static_cast<std::size_t>(j)];
       const std::string at = "pos=\"" + vec(jm.frame_child.position) + "\" axis=\"" +
                              vec(jm.frame_child.orientation.normalized() * Vec3::UnitZ()) + "\"";
-      const std::string jn = "j" + std::to_string(j) + "_" + jm.name;
+      const std::string jn = indexed("j", static_cast<std::size_t>(j), jm.name);
       switch (jm.type) {
         case core::JointType::kFixed:
           break;
@@ -163,7 +182,8 @@ MjcfTranslation translate_to_mjcf(const core::Model& model, Drive drive,
           x << ind << "  <joint name=\"" << jn << "\" type=\"hinge\" " << at << "/>\n";
           break;
         case core::JointType::kSpherical:
-          x << ind << "  <joint name=\"" << jn << "\" type=\"ball\" pos=\"" << vec(jm.frame_child.position) << "\"/>\n";
+          x << ind << "  <joint name=\"" << jn << "\" type=\"ball\" pos=\""
+            << vec(jm.frame_child.position) << "\"/>\n";
           break;
         case core::JointType::kTrocar:
           throw std::invalid_argument("mjcf: joint '" + jm.name +
@@ -180,9 +200,9 @@ MjcfTranslation translate_to_mjcf(const core::Model& model, Drive drive,
       }
     }
     const Eigen::Matrix3d& I = bm.inertia_body;
-    x << ind << "  <inertial pos=\"0 0 0\" mass=\"" << num(bm.mass) << "\" fullinertia=\"" << num(I(0, 0))
-      << " " << num(I(1, 1)) << " " << num(I(2, 2)) << " " << num(I(0, 1)) << " " << num(I(0, 2)) << " "
-      << num(I(1, 2)) << "\"/>\n";
+    x << ind << "  <inertial pos=\"0 0 0\" mass=\"" << num(bm.mass) << "\" fullinertia=\""
+      << num(I(0, 0)) << " " << num(I(1, 1)) << " " << num(I(2, 2)) << " " << num(I(0, 1)) << " "
+      << num(I(0, 2)) << " " << num(I(1, 2)) << "\"/>\n";
     if (bm.sphere_count > 0) {
       const int mat_b = obstacle_material >= 0 ? obstacle_material : bm.material;
       const core::MaterialPair& mp = model.material_pair(bm.material, mat_b);
@@ -192,8 +212,8 @@ MjcfTranslation translate_to_mjcf(const core::Model& model, Drive drive,
                                  : "condim=\"1\"";
       for (int s = bm.sphere_begin; s < bm.sphere_begin + bm.sphere_count; ++s) {
         const core::Sphere& sp = model.body_spheres[static_cast<std::size_t>(s)];
-        x << ind << "  <geom type=\"sphere\" size=\"" << num(sp.radius) << "\" pos=\"" << vec(sp.center)
-          << "\" priority=\"1\" " << fr << " " << soft_attrs(sc) << "/>\n";
+        x << ind << "  <geom type=\"sphere\" size=\"" << num(sp.radius) << "\" pos=\""
+          << vec(sp.center) << "\" priority=\"1\" " << fr << " " << soft_attrs(sc) << "/>\n";
       }
     }
     for (int c : children[static_cast<std::size_t>(b)]) write_body(c, depth + 1);
@@ -206,11 +226,13 @@ MjcfTranslation translate_to_mjcf(const core::Model& model, Drive drive,
     for (int b : held_bodies) {
       if (b < 0 || b >= nb) continue;
       const core::BodyModel& bm = model.bodies[static_cast<std::size_t>(b)];
-      out.mocap_names[static_cast<std::size_t>(b)] = "mocap_" + std::to_string(b);
-      out.weld_names[static_cast<std::size_t>(b)] = "weld_" + std::to_string(b);
-      x << "    <body name=\"" << out.mocap_names[static_cast<std::size_t>(b)] << "\" mocap=\"true\" pos=\""
-        << vec(bm.initial_pose.position) << "\" quat=\"" << quat(bm.initial_pose.orientation.normalized())
-        << "\"/>\n";
+      out.mocap_names[static_cast<std::size_t>(b)] =
+          indexed("mocap", static_cast<std::size_t>(b), bm.name);
+      out.weld_names[static_cast<std::size_t>(b)] =
+          indexed("weld", static_cast<std::size_t>(b), bm.name);
+      x << "    <body name=\"" << out.mocap_names[static_cast<std::size_t>(b)]
+        << "\" mocap=\"true\" pos=\"" << vec(bm.initial_pose.position) << "\" quat=\""
+        << quat(bm.initial_pose.orientation.normalized()) << "\"/>\n";
     }
   }
   x << "  </worldbody>\n";
@@ -231,12 +253,15 @@ MjcfTranslation translate_to_mjcf(const core::Model& model, Drive drive,
       if (b < 0 || b >= nb) continue;
       const core::BodyModel& bm = model.bodies[static_cast<std::size_t>(b)];
       if (!(bm.coupling.k_t > 0.0))
-        throw std::invalid_argument("mjcf: body '" + bm.name + "' is held but has no coupling stiffness");
-      const SoftConstraint sc = match_spring(bm.coupling.k_t, bm.coupling.gamma_t, bm.mass, model.dt);
+        throw std::invalid_argument("mjcf: body '" + bm.name +
+                                    "' is held but has no coupling stiffness");
+      const SoftConstraint sc =
+          match_spring(bm.coupling.k_t, bm.coupling.gamma_t, bm.mass, model.dt);
       x << "    <weld name=\"" << out.weld_names[static_cast<std::size_t>(b)] << "\" body1=\""
-        << out.body_names[static_cast<std::size_t>(b)] << "\" body2=\"" << out.mocap_names[static_cast<std::size_t>(b)]
-        << "\" relpose=\"0 0 0 1 0 0 0\" active=\"" << (b == model.initial_attached_body ? "true" : "false")
-        << "\" " << soft_attrs(sc) << "/>\n";
+        << out.body_names[static_cast<std::size_t>(b)] << "\" body2=\""
+        << out.mocap_names[static_cast<std::size_t>(b)] << "\" relpose=\"0 0 0 1 0 0 0\" active=\""
+        << (b == model.initial_attached_body ? "true" : "false") << "\" " << soft_attrs(sc)
+        << "/>\n";
     }
   }
   for (int j = 0; j < model.num_joints(); ++j) {
@@ -244,8 +269,9 @@ MjcfTranslation translate_to_mjcf(const core::Model& model, Drive drive,
     if (!jm.prescribed) continue;
     // numen holds a prescribed row with Baumgarte terms at ω = 1/Δt (hard); MuJoCo's stiffest
     // safe reference is timeconst = 2Δt, critically damped.
-    x << "    <joint name=\"" << out.prescribed_names[static_cast<std::size_t>(j)] << "\" joint1=\"j" << j << "_"
-      << jm.name << "\" polycoef=\"0 0 0 0 0\" solref=\"" << num(2.0 * model.dt) << " 1\"/>\n";
+    x << "    <joint name=\"" << out.prescribed_names[static_cast<std::size_t>(j)]
+      << "\" joint1=\"j" << j << "_" << jm.name << "\" polycoef=\"0 0 0 0 0\" solref=\""
+      << num(2.0 * model.dt) << " 1\"/>\n";
   }
   x << "  </equality>\n";
   x << "</mujoco>\n";
@@ -256,26 +282,35 @@ MjcfTranslation translate_to_mjcf(const core::Model& model, Drive drive,
       "contact softness per body geom: rest stiffness and damping ratio of numen's penalty "
       "spring, impedance d from MuJoCo's time-constant rule (docs/peer.md)");
   bool friction = false;
-  for (const core::MaterialPair& mp : model.material_pairs) friction = friction || mp.friction > 0.0;
+  for (const core::MaterialPair& mp : model.material_pairs)
+    friction = friction || mp.friction > 0.0;
   if (friction)
-    out.differences.push_back("tangential friction: numen viscous (N·s/m), MuJoCo Coulomb cone with the same number as coefficient");
+    out.differences.push_back(
+        "tangential friction: numen viscous (N·s/m), MuJoCo Coulomb cone with the same number as "
+        "coefficient");
   if (model.articulation.num_trees > 1 && nb > 1)
-    out.differences.push_back("body-body contacts use each body's own mass in the mapping (A = 1/m): "
-                              "for two equal bodies MuJoCo's rest stiffness is half numen's");
+    out.differences.push_back(
+        "body-body contacts use each body's own mass in the mapping (A = 1/m): "
+        "for two equal bodies MuJoCo's rest stiffness is half numen's");
   if (model.num_joints() > 0)
-    out.differences.push_back("joints: MuJoCo reduced coordinates (exact), numen maximal coordinates with "
-                              "Baumgarte drift correction");
+    out.differences.push_back(
+        "joints: MuJoCo reduced coordinates (exact), numen maximal coordinates with "
+        "Baumgarte drift correction");
   if (drive == Drive::kMocapWeld) {
-    out.differences.push_back("mocap weld: translation matched to the coupling k_t, γ_t; the rotation rows "
-                              "share the same solref (numen's k_r, γ_r are not used)");
+    out.differences.push_back(
+        "mocap weld: translation matched to the coupling k_t, γ_t; the rotation rows "
+        "share the same solref (numen's k_r, γ_r are not used)");
     bool others = false;
     for (int b = 0; b < nb; ++b)
-      for (int h : held_bodies) others = others || (h != b && model.bodies[static_cast<std::size_t>(b)].coupling.k_r > 0.0 &&
-                                                    model.articulation.body_tree[static_cast<std::size_t>(b)] ==
-                                                        model.articulation.body_tree[static_cast<std::size_t>(h)]);
+      for (int h : held_bodies)
+        others =
+            others || (h != b && model.bodies[static_cast<std::size_t>(b)].coupling.k_r > 0.0 &&
+                       model.articulation.body_tree[static_cast<std::size_t>(b)] ==
+                           model.articulation.body_tree[static_cast<std::size_t>(h)]);
     if (others)
-      out.differences.push_back("mocap weld: only the held body is welded; the other bodies' own targets "
-                                "(Eq. 6) are not used (their joints carry them)");
+      out.differences.push_back(
+          "mocap weld: only the held body is welded; the other bodies' own targets "
+          "(Eq. 6) are not used (their joints carry them)");
   }
   return out;
 }

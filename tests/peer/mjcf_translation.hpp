@@ -45,11 +45,11 @@ const char* to_string(Drive drive) noexcept;
 
 /// The MJCF text and the names that tie it back to the numen model.
 struct MjcfTranslation {
-  std::string xml;                          ///< A complete <mujoco> document.
-  std::vector<std::string> body_names;      ///< MuJoCo body name of each numen body.
+  std::string xml;                      ///< A complete <mujoco> document.
+  std::vector<std::string> body_names;  ///< MuJoCo body name of each numen body.
   /// Per numen body: the weld equality to its mocap body ("" if the body is never held).
   std::vector<std::string> weld_names;
-  std::vector<std::string> mocap_names;     ///< Per numen body: its mocap body ("" if none).
+  std::vector<std::string> mocap_names;  ///< Per numen body: its mocap body ("" if none).
   /// Per numen joint: the equality constraint holding a prescribed joint ("" if not prescribed).
   std::vector<std::string> prescribed_names;
   /// Per numen joint: numen's joint coordinate at the initial poses, i.e. MuJoCo's q = 0

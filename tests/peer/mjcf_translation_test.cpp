@@ -2,12 +2,12 @@
 // same bodies (count, masses, inertias, spheres), joints and obstacles.
 #include "mjcf_translation.hpp"
 
-#include <algorithm>
-#include <stdexcept>
-
-#include <Eigen/Eigenvalues>
 #include <gtest/gtest.h>
 #include <mujoco/mujoco.h>
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <stdexcept>
 
 #include "mujoco_engine.hpp"
 #include "peer_run.hpp"
@@ -26,8 +26,10 @@ void expect_same_bodies(const core::Model& model, const peer::MujocoEngine& engi
     const int id = engine.body_id(b);
     ASSERT_GT(id, 0) << bm.name;
     EXPECT_DOUBLE_EQ(m->body_mass[id], bm.mass) << bm.name;
-    Eigen::Vector3d numen_moments = Eigen::SelfAdjointEigenSolver<core::Mat3>(bm.inertia_body).eigenvalues();
-    Eigen::Vector3d mj_moments(m->body_inertia[3 * id], m->body_inertia[3 * id + 1], m->body_inertia[3 * id + 2]);
+    Eigen::Vector3d numen_moments =
+        Eigen::SelfAdjointEigenSolver<core::Mat3>(bm.inertia_body).eigenvalues();
+    Eigen::Vector3d mj_moments(m->body_inertia[3 * id], m->body_inertia[3 * id + 1],
+                               m->body_inertia[3 * id + 2]);
     std::sort(mj_moments.data(), mj_moments.data() + 3);
     EXPECT_LT((mj_moments - numen_moments).norm(), 1e-12 + 1e-9 * numen_moments.norm()) << bm.name;
     EXPECT_EQ(m->body_geomnum[id], bm.sphere_count) << bm.name;
@@ -37,8 +39,11 @@ void expect_same_bodies(const core::Model& model, const peer::MujocoEngine& engi
       EXPECT_EQ(m->geom_type[gid], mjGEOM_SPHERE);
       EXPECT_DOUBLE_EQ(m->geom_size[3 * gid], s.radius);
       // geom_pos is in the body frame, which is numen's COM frame (inertial pos 0).
-      EXPECT_LT((core::Vec3(m->geom_pos[3 * gid], m->geom_pos[3 * gid + 1], m->geom_pos[3 * gid + 2]) - s.center).norm(),
-                1e-12);
+      EXPECT_LT(
+          (core::Vec3(m->geom_pos[3 * gid], m->geom_pos[3 * gid + 1], m->geom_pos[3 * gid + 2]) -
+           s.center)
+              .norm(),
+          1e-12);
     }
   }
 }
@@ -46,7 +51,8 @@ void expect_same_bodies(const core::Model& model, const peer::MujocoEngine& engi
 }  // namespace
 
 TEST(MjcfTranslation, TheInstrumentHasTheSameBodiesJointsAndObstacles) {
-  const peer::PeerScene s = peer::load_recorded_scene("instrument", "sim/scenes/default.toml", 0.01);
+  const peer::PeerScene s =
+      peer::load_recorded_scene("instrument", "sim/scenes/default.toml", 0.01);
   peer::MujocoEngine engine(s.model, peer::Drive::kMocapWeld, peer::held_bodies(s.inputs));
   const mjModel* m = engine.mj_model();
   // world + sleeve, tube, two jaws + the tube's mocap body.
@@ -73,12 +79,15 @@ TEST(MjcfTranslation, TheInstrumentHasTheSameBodiesJointsAndObstacles) {
   for (int b = 0; b < s.model.num_bodies(); ++b) {
     const core::Pose& p = s.model.bodies[static_cast<std::size_t>(b)].initial_pose;
     EXPECT_LT((states[static_cast<std::size_t>(b)].position - p.position).norm(), 1e-12);
-    EXPECT_GT(std::abs(states[static_cast<std::size_t>(b)].orientation.dot(p.orientation.normalized())), 1.0 - 1e-12);
+    EXPECT_GT(
+        std::abs(states[static_cast<std::size_t>(b)].orientation.dot(p.orientation.normalized())),
+        1.0 - 1e-12);
   }
 }
 
 TEST(MjcfTranslation, TheConstructionGameHasTwelveFreeBlocksAndAWeldPerHeldBlock) {
-  const peer::PeerScene s = peer::load_recorded_scene("construction", "sim/scenes/construction.toml", -1.0);
+  const peer::PeerScene s =
+      peer::load_recorded_scene("construction", "sim/scenes/construction.toml", -1.0);
   const std::vector<int> held = peer::held_bodies(s.inputs);
   ASSERT_EQ(held.size(), 2u);  // "held", then "loose_1" after the tool switch
   peer::MujocoEngine engine(s.model, peer::Drive::kMocapWeld, held);

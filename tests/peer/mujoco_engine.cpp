@@ -10,7 +10,8 @@
 
 namespace numen::peer {
 
-MujocoEngine::MujocoEngine(const core::Model& model, Drive drive, const std::vector<int>& held_bodies)
+MujocoEngine::MujocoEngine(const core::Model& model, Drive drive,
+                           const std::vector<int>& held_bodies)
     : model_(&model), drive_(drive), tr_(translate_to_mjcf(model, drive, held_bodies)) {
   // The MJCF lives in a virtual file system (mjVFS is ~2 MB of fixed arrays: on the heap).
   auto vfs = std::make_unique<mjVFS>();
@@ -87,13 +88,15 @@ void MujocoEngine::apply(const StepInput& in) noexcept {
     std::memset(d_->xfrc_applied, 0, sizeof(mjtNum) * 6 * static_cast<std::size_t>(m_->nbody));
     for (int b = 0; b < nb; ++b) {
       const auto i = static_cast<std::size_t>(b);
-      const core::BodyTarget* own = i < in.body_targets.size() && in.body_targets[i].enabled ? &in.body_targets[i] : nullptr;
+      const core::BodyTarget* own =
+          i < in.body_targets.size() && in.body_targets[i].enabled ? &in.body_targets[i] : nullptr;
       const bool held = b == in.attached_body;
       if (!held && !own) continue;
       core::BodyState s;
       read_state(b, s);
-      const core::Wrench w = held ? core::coupling_wrench(model.bodies[i].coupling, in.target, in.target_twist, s)
-                                  : core::coupling_wrench(model.bodies[i].coupling, own->pose, own->twist, s);
+      const core::Wrench w =
+          held ? core::coupling_wrench(model.bodies[i].coupling, in.target, in.target_twist, s)
+               : core::coupling_wrench(model.bodies[i].coupling, own->pose, own->twist, s);
       mjtNum* f = d_->xfrc_applied + 6 * body_id_[i];
       for (int k = 0; k < 3; ++k) f[k] = w.force[k], f[3 + k] = w.torque[k];
     }
@@ -102,7 +105,8 @@ void MujocoEngine::apply(const StepInput& in) noexcept {
     const int e = prescribed_id_[static_cast<std::size_t>(j)];
     if (e < 0 || static_cast<std::size_t>(j) >= in.joint_prescribed.size()) continue;
     const core::JointPrescription& jp = in.joint_prescribed[static_cast<std::size_t>(j)];
-    m_->eq_data[mjNEQDATA * e] = jp.value + model.dt * jp.rate - tr_.coordinate_offset[static_cast<std::size_t>(j)];
+    m_->eq_data[mjNEQDATA * e] =
+        jp.value + model.dt * jp.rate - tr_.coordinate_offset[static_cast<std::size_t>(j)];
   }
 }
 

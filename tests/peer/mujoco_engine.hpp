@@ -5,11 +5,11 @@
 /// period, and read back as numen body states (COM frames, world twists) so that both engines
 /// are measured by the same code (peer_metrics.hpp).
 
+#include <mujoco/mujoco.h>
+
 #include <memory>
 #include <string>
 #include <vector>
-
-#include <mujoco/mujoco.h>
 
 #include "mjcf_translation.hpp"
 #include "numen/core/data.hpp"
@@ -69,9 +69,9 @@ class MujocoEngine {
   MjcfTranslation tr_;
   mjModel* m_ = nullptr;
   mjData* d_ = nullptr;
-  std::vector<int> body_id_;     // per numen body
-  std::vector<int> weld_id_;     // per numen body: equality id, -1
-  std::vector<int> mocap_id_;    // per numen body: mocap index, -1
+  std::vector<int> body_id_;        // per numen body
+  std::vector<int> weld_id_;        // per numen body: equality id, -1
+  std::vector<int> mocap_id_;       // per numen body: mocap index, -1
   std::vector<int> prescribed_id_;  // per numen joint: equality id, -1
   bool stale_ = false;              // a step ran since the last refresh()
 };

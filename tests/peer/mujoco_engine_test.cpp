@@ -3,9 +3,9 @@
 // their prescription.
 #include "mujoco_engine.hpp"
 
-#include <cmath>
-
 #include <gtest/gtest.h>
+
+#include <cmath>
 
 #include "numen/core/step.hpp"
 #include "peer_metrics.hpp"
@@ -38,7 +38,7 @@ TEST(MujocoEngine, BothDrivesTrackTheTargetInFreeSpaceWithinTheirBounds) {
   const peer::PeerRow pd = peer::run_mujoco(s, peer::Drive::kPdForce);
   const peer::PeerRow weld = peer::run_mujoco(s, peer::Drive::kMocapWeld);
   for (const peer::PeerRow* r : {&pd, &weld}) {
-    EXPECT_EQ(r->metrics.free_steps, r->steps) << r->variant;  // never touched the wall
+    EXPECT_EQ(r->metrics.free_steps, r->steps) << r->variant;   // never touched the wall
     EXPECT_GT(r->metrics.tracking_max_mm, 0.05) << r->variant;  // it did lag: the error is measured
     EXPECT_EQ(r->divergences, 0) << r->variant;
   }
@@ -87,12 +87,16 @@ TEST(MujocoEngine, PrescribedJawsFollowTheRecordedJawAngle) {
   int checked = 0;
   for (int j = 0; j < s.model.num_joints(); ++j) {
     if (!s.model.joints[static_cast<std::size_t>(j)].prescribed) continue;
-    const std::string name = "j" + std::to_string(j) + "_" + s.model.joints[static_cast<std::size_t>(j)].name;
+    const std::string name =
+        "j" + std::to_string(j) + "_" + s.model.joints[static_cast<std::size_t>(j)].name;
     const int jid = mj_name2id(m, mjOBJ_JOINT, name.c_str());
     ASSERT_GE(jid, 0) << name;
     const double q = engine.mj_data()->qpos[m->jnt_qposadr[jid]];
-    const core::JointPrescription& p = s.inputs.back().joint_prescribed[static_cast<std::size_t>(j)];
-    EXPECT_NEAR(q, p.value - engine.translation().coordinate_offset[static_cast<std::size_t>(j)], 5e-3) << name;
+    const core::JointPrescription& p =
+        s.inputs.back().joint_prescribed[static_cast<std::size_t>(j)];
+    EXPECT_NEAR(q, p.value - engine.translation().coordinate_offset[static_cast<std::size_t>(j)],
+                5e-3)
+        << name;
     ++checked;
   }
   EXPECT_EQ(checked, 2);

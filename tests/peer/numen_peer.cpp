@@ -3,13 +3,14 @@
 /// three comparison scenes, runs numen (core::step) and MuJoCo (mocap weld; PD through
 /// xfrc_applied) on the same recorded device inputs, and prints the table (and a CSV).
 ///
-///   ./build/numen_peer                         # full scenes: wall 3 s, construction 9 s, instrument 30 s
+///   ./build/numen_peer                         # full scenes: wall 3 s, construction 9 s,
+///   instrument 30 s
 ///   ./build/numen_peer --duration 1 --csv peer.csv
 ///   ./build/numen_peer --scene wall --print-mjcf   # the translated MJCF of a scene
 
-#include <CLI/CLI.hpp>
 #include <mujoco/mujoco.h>
 
+#include <CLI/CLI.hpp>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
@@ -24,20 +25,25 @@ int main(int argc, char** argv) {
   double duration = -1.0;
   std::string csv, only;
   bool print_mjcf = false;
-  app.add_option("--duration", duration, "Simulated seconds per scene (default: each scene's full length)")
+  app.add_option("--duration", duration,
+                 "Simulated seconds per scene (default: each scene's full length)")
       ->check(CLI::PositiveNumber);
   app.add_option("--csv", csv, "Also write the rows to this CSV file");
-  app.add_option("--scene", only, "Only this scene")->check(CLI::IsMember({"wall", "construction", "instrument"}));
-  app.add_flag("--print-mjcf", print_mjcf, "Print the MJCF translation of the scene(s) (mocap weld) and exit");
+  app.add_option("--scene", only, "Only this scene")
+      ->check(CLI::IsMember({"wall", "construction", "instrument"}));
+  app.add_flag("--print-mjcf", print_mjcf,
+               "Print the MJCF translation of the scene(s) (mocap weld) and exit");
   CLI11_PARSE(app, argc, argv);
 
   try {
     std::vector<numen::peer::PeerScene> scenes;
     if (only.empty() || only == "wall") scenes.push_back(numen::peer::make_wall_scene(duration));
     if (only.empty() || only == "construction")
-      scenes.push_back(numen::peer::load_recorded_scene("construction", "sim/scenes/construction.toml", duration));
+      scenes.push_back(numen::peer::load_recorded_scene("construction",
+                                                        "sim/scenes/construction.toml", duration));
     if (only.empty() || only == "instrument")
-      scenes.push_back(numen::peer::load_recorded_scene("instrument", "sim/scenes/default.toml", duration));
+      scenes.push_back(
+          numen::peer::load_recorded_scene("instrument", "sim/scenes/default.toml", duration));
     if (print_mjcf) {
       for (const auto& s : scenes)
         std::cout << numen::peer::translate_to_mjcf(s.model, numen::peer::Drive::kMocapWeld,
@@ -49,7 +55,8 @@ int main(int argc, char** argv) {
     for (const auto& s : scenes) std::cerr << " " << s.name << " (" << s.inputs.size() << " steps)";
     std::cerr << "\n";
     const auto rows = numen::peer::run_comparison(scenes, [](const numen::peer::PeerRow& r) {
-      std::fprintf(stderr, "  done: %s %s / %s\n", r.scene.c_str(), r.engine.c_str(), r.variant.c_str());
+      std::fprintf(stderr, "  done: %s %s / %s\n", r.scene.c_str(), r.engine.c_str(),
+                   r.variant.c_str());
     });
     std::cout << numen::peer::format_table(rows);
     for (const auto& s : scenes) {

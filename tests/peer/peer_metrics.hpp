@@ -22,12 +22,13 @@ namespace numen::peer {
 
 /// Accuracy over a run.
 struct PeerMetrics {
-  double penetration_max_mm = 0.0;  ///< Deepest tool sphere overlap.
-  double tracking_rms_mm = 0.0;     ///< Free-space tracking error, RMS over free_steps.
-  double tracking_max_mm = 0.0;     ///< Its maximum.
-  std::int64_t free_steps = 0;      ///< Periods with a held body and no tool contact.
-  std::int64_t steps = 0;           ///< Periods measured.
-  std::int64_t nonfinite_steps = 0; ///< Periods whose states were not finite (not measured).
+  double penetration_max_mm = 0.0;      ///< Deepest tool sphere overlap.
+  double tracking_rms_mm = 0.0;         ///< Free-space tracking error, RMS over free_steps.
+  double tracking_max_mm = 0.0;         ///< Its maximum.
+  std::int64_t tracking_max_step = -1;  ///< Period (0-based) of that maximum; -1 if none.
+  std::int64_t free_steps = 0;          ///< Periods with a held body and no tool contact.
+  std::int64_t steps = 0;               ///< Periods measured.
+  std::int64_t nonfinite_steps = 0;     ///< Periods whose states were not finite (not measured).
 };
 
 /// Accumulates PeerMetrics period by period.

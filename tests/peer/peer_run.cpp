@@ -29,7 +29,8 @@ void percentiles_us(std::vector<std::int64_t>& ns, double& median_us, double& p9
 std::vector<int> held_bodies(const InputRecording& inputs) {
   std::vector<int> held;
   for (const StepInput& in : inputs)
-    if (in.attached_body >= 0 && std::find(held.begin(), held.end(), in.attached_body) == held.end())
+    if (in.attached_body >= 0 &&
+        std::find(held.begin(), held.end(), in.attached_body) == held.end())
       held.push_back(in.attached_body);
   std::sort(held.begin(), held.end());
   return held;
@@ -44,7 +45,8 @@ PeerRow run_numen(const PeerScene& scene) {
   PeerRow row;
   row.scene = scene.name;
   row.engine = "numen";
-  row.variant = std::string(sim::to_string(model.integrator)) + ", " + sim::to_string(model.coupling_mode);
+  row.variant =
+      std::string(sim::to_string(model.integrator)) + ", " + sim::to_string(model.coupling_mode);
   for (const StepInput& in : scene.inputs) {
     apply_step_input(model, in, data);
     const std::int64_t t0 = platform::monotonic_now_ns();

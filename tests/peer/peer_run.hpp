@@ -27,8 +27,8 @@ struct PeerRow {
   /// target of numen at most half of MuJoCo's time).
   double ratio_numen_over_this = 1.0;
   PeerMetrics metrics;
-  int divergences = 0;  ///< MuJoCo: resets after a bad qacc; numen: non-finite steps rolled back.
-  int contacts_max = 0; ///< Most contacts the engine itself detected in one step.
+  int divergences = 0;   ///< MuJoCo: resets after a bad qacc; numen: non-finite steps rolled back.
+  int contacts_max = 0;  ///< Most contacts the engine itself detected in one step.
 };
 
 /// Median and 99th percentile (µs) of step durations in ns (nearest rank). Reorders `ns`.

@@ -2,13 +2,13 @@
 // every scene, the figures are finite, numen's replay is the run of `numen run`.
 #include "peer_run.hpp"
 
+#include <gtest/gtest.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <memory>
 #include <sstream>
-
-#include <gtest/gtest.h>
 
 #include "numen/core/step.hpp"
 #include "numen/sim/run.hpp"
@@ -37,7 +37,8 @@ TEST(PeerRun, BothEnginesStepEveryScene) {
     }
     EXPECT_GT(r.ratio_numen_over_this, 0.0);
   }
-  // numen and the mocap weld stay finite on every scene (the explicit PD may not: see docs/peer.md).
+  // numen and the mocap weld stay finite on every scene (the explicit PD may not: see
+  // docs/peer.md).
   for (const peer::PeerRow& r : rows) {
     if (r.variant != to_string(peer::Drive::kPdForce)) {
       EXPECT_EQ(r.divergences, 0) << r.scene << " " << r.variant;
@@ -53,23 +54,28 @@ TEST(PeerRun, NumensReplayIsTheRunOfTheSceneRunnerBitForBit) {
   // The recording holds every input core::step reads: replaying it on a fresh Data reproduces
   // the SceneRunner's bodies exactly (construction: 3 s through the tower, the instrument: 1 s).
   for (const char* file : {"sim/scenes/construction.toml", "sim/scenes/default.toml"}) {
-    const numen::sim::Scene scene = numen::sim::load_scene(std::string(NUMEN_SOURCE_DIR) + "/" + file);
+    const numen::sim::Scene scene =
+        numen::sim::load_scene(std::string(NUMEN_SOURCE_DIR) + "/" + file);
     const int steps = file[11] == 'c' ? 3000 : 1000;
     auto runner = std::make_unique<numen::sim::SceneRunner>(scene);
     core::Data d = core::make_data(scene.model);
     for (int k = 0; k < steps; ++k) {
       runner->period();
       const core::Data& r = runner->data();
-      peer::StepInput in{r.attached_body, r.target, r.target_twist, r.body_targets, r.joint_prescribed};
+      peer::StepInput in{r.attached_body, r.target, r.target_twist, r.body_targets,
+                         r.joint_prescribed};
       peer::apply_step_input(scene.model, in, d);
       core::step(scene.model, d);
     }
     for (std::size_t b = 0; b < d.bodies.size(); ++b) {
-      EXPECT_EQ(std::memcmp(d.bodies[b].position.data(), runner->data().bodies[b].position.data(), 3 * sizeof(double)), 0)
-          << file << " body " << b;
-      EXPECT_EQ(std::memcmp(d.bodies[b].orientation.coeffs().data(),
-                            runner->data().bodies[b].orientation.coeffs().data(), 4 * sizeof(double)),
+      EXPECT_EQ(std::memcmp(d.bodies[b].position.data(), runner->data().bodies[b].position.data(),
+                            3 * sizeof(double)),
                 0)
+          << file << " body " << b;
+      EXPECT_EQ(
+          std::memcmp(d.bodies[b].orientation.coeffs().data(),
+                      runner->data().bodies[b].orientation.coeffs().data(), 4 * sizeof(double)),
+          0)
           << file << " body " << b;
     }
   }

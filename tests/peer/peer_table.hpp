@@ -4,8 +4,8 @@
 ///
 /// CSV columns (one header line, then one line per PeerRow, '.' decimal point):
 ///   scene, engine, variant, steps, step_median_us, step_p99_us, ratio_numen_over_this,
-///   penetration_max_mm, tracking_rms_mm, tracking_max_mm, free_steps, nonfinite_steps,
-///   divergences, contacts_max
+///   penetration_max_mm, tracking_rms_mm, tracking_max_mm, tracking_max_step, free_steps,
+///   nonfinite_steps, divergences, contacts_max
 
 #include <string>
 #include <vector>

@@ -13,10 +13,14 @@
 namespace numen::peer {
 
 SoftConstraint match_spring(double k, double c, double mass, double dt) {
-  if (!(k > 0.0) || !std::isfinite(k)) throw std::invalid_argument("match_spring: stiffness k = " + std::to_string(k));
-  if (!(c >= 0.0) || !std::isfinite(c)) throw std::invalid_argument("match_spring: damping c = " + std::to_string(c));
-  if (!(mass > 0.0) || !std::isfinite(mass)) throw std::invalid_argument("match_spring: mass = " + std::to_string(mass));
-  if (!(dt > 0.0) || !std::isfinite(dt)) throw std::invalid_argument("match_spring: dt = " + std::to_string(dt));
+  if (!(k > 0.0) || !std::isfinite(k))
+    throw std::invalid_argument("match_spring: stiffness k = " + std::to_string(k));
+  if (!(c >= 0.0) || !std::isfinite(c))
+    throw std::invalid_argument("match_spring: damping c = " + std::to_string(c));
+  if (!(mass > 0.0) || !std::isfinite(mass))
+    throw std::invalid_argument("match_spring: mass = " + std::to_string(mass));
+  if (!(dt > 0.0) || !std::isfinite(dt))
+    throw std::invalid_argument("match_spring: dt = " + std::to_string(dt));
   const double omega2 = k / mass;
   SoftConstraint s;
   s.impedance = std::clamp(1.0 - 1.0 / (4.0 * omega2 * dt * dt), kMinImpedance, mjMAXIMP);

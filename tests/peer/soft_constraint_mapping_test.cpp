@@ -2,11 +2,11 @@
 // on a mapped contact at numen's penalty depth.
 #include "soft_constraint_mapping.hpp"
 
-#include <cmath>
-#include <stdexcept>
-
 #include <gtest/gtest.h>
 #include <mujoco/mujoco.h>
+
+#include <cmath>
+#include <stdexcept>
 
 #include "mujoco_engine.hpp"
 #include "numen/core/data.hpp"
@@ -14,7 +14,8 @@
 namespace peer = numen::peer;
 namespace core = numen::core;
 
-TEST(SoftConstraintMapping, ASoftSpringGetsTheImpedanceFloorWithNumensRestStiffnessAndDampingRatio) {
+TEST(SoftConstraintMapping,
+     ASoftSpringGetsTheImpedanceFloorWithNumensRestStiffnessAndDampingRatio) {
   // Construction game: k = 5000 N/m, c = 2 N·s/m on 50 g: ω Δt = 0.32 ≤ ½, so the time-constant
   // rule asks for nothing and the floor kMinImpedance applies: K = (1 − d) k/m.
   const double k = 5000.0, c = 2.0, m = 0.05;

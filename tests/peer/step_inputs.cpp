@@ -30,7 +30,8 @@ InputRecording record_scene_inputs(const sim::Scene& scene, int steps) {
 }
 
 void apply_step_input(const core::Model& model, const StepInput& input, core::Data& data) noexcept {
-  if (data.attached_body != input.attached_body) core::set_attached_body(model, data, input.attached_body);
+  if (data.attached_body != input.attached_body)
+    core::set_attached_body(model, data, input.attached_body);
   data.target = input.target;
   data.target_twist = input.target_twist;
   std::copy(input.body_targets.begin(), input.body_targets.end(), data.body_targets.begin());

@@ -15,9 +15,9 @@ namespace numen::peer {
 
 /// What core::step reads from the device in one period (the inputs of core::Data).
 struct StepInput {
-  int attached_body = -1;      ///< Body the device holds (-1: none); tool switching.
-  core::Pose target;           ///< Target of the attached body's COM frame (world, m).
-  core::Twist target_twist;    ///< Its twist (world; m/s, rad/s).
+  int attached_body = -1;    ///< Body the device holds (-1: none); tool switching.
+  core::Pose target;         ///< Target of the attached body's COM frame (world, m).
+  core::Twist target_twist;  ///< Its twist (world; m/s, rad/s).
   /// Per body: its own target (Eq. 6), disabled for bodies the device does not measure.
   std::vector<core::BodyTarget> body_targets;
   /// Per joint: the imposed coordinate of a prescribed joint (rad or m) and its rate.
