@@ -21,6 +21,9 @@
 #include "peer_table.hpp"
 
 int main(int argc, char** argv) {
+  // MuJoCo's warnings (e.g. a diverged state) go to stderr, not to MUJOCO_LOG.TXT in the
+  // working directory.
+  mju_user_warning = [](const char* msg) { std::fprintf(stderr, "MuJoCo warning: %s\n", msg); };
   CLI::App app{"numen and MuJoCo side by side: per-step time, penetration, free-space tracking"};
   double duration = -1.0;
   std::string csv, only;
