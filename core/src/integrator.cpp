@@ -1,6 +1,7 @@
 /// @file integrator.cpp
 /// Linearly implicit Euler (Baraff & Witkin 1998) with a block-Jacobi
-/// preconditioned conjugate gradient, and symplectic Euler (paper Eq. 1, §5).
+/// preconditioned conjugate gradient, the linearised trapezoidal rule on the
+/// same system, and symplectic Euler (paper Eq. 1, §5).
 
 #include "numen/core/integrator.hpp"
 
@@ -152,6 +153,7 @@ void SolverScratch::resize(const Model& model) {
   joint_y_correction.assign(nj, JointVector::Zero());
   projected_residual.assign(nj > 0 ? n : 0, Vec6::Zero());
   target_coupled.assign(n, 0);
+  system_step = model.dt;
   coupled_body = -1;
   first_order = false;
   imposed.assign(n, 0);
@@ -159,7 +161,7 @@ void SolverScratch::resize(const Model& model) {
 
 void prepare_implicit_step(const Model& model, Data& data) noexcept {
   SolverScratch& s = data.solver;
-  const double h = model.dt;
+  const double h = s.system_step;
   for (std::size_t i = 0; i < data.bodies.size(); ++i) {
     BodyState& st = data.bodies[i];
     const BodyModel& bm = model.bodies[i];
@@ -174,7 +176,7 @@ void prepare_implicit_step(const Model& model, Data& data) noexcept {
 
 void build_implicit_system(const Model& model, Data& data) noexcept {
   SolverScratch& s = data.solver;
-  const double h = model.dt;
+  const double h = s.system_step;
   const double h2 = h * h;
   const std::size_t n = data.bodies.size();
 
@@ -449,9 +451,18 @@ bool solve_constrained_system(const Model& model, Data& data) noexcept {
   return converged;
 }
 
-void integrate_linearly_implicit_euler(const Model& model, Data& data) noexcept {
+namespace {
+
+/// One linearised step of length h = model.dt through the system of step h_s
+/// (SolverScratch::system_step): Δu solves (M − h_s D − h_s² K) Δu = h_s (f0 +
+/// h_s K u0) + M (u* − u0); positions move over h with u0 + Δu, twists become
+/// u0 + (h / h_s) Δu. h_s = h: the linearly implicit Euler; h_s = h/2: the
+/// trapezoidal rule (u0 + Δu is the midpoint twist). h / h_s is 1 or 2 exactly.
+void integrate_linearized(const Model& model, Data& data, double system_step) noexcept {
   SolverScratch& s = data.solver;
   const double h = model.dt;
+  s.system_step = system_step;
+  const double scale = h / system_step;
   prepare_implicit_step(model, data);
   build_implicit_system(model, data);
   bool converged = false;
@@ -466,13 +477,24 @@ void integrate_linearly_implicit_euler(const Model& model, Data& data) noexcept 
   for (std::size_t i = 0; i < data.bodies.size(); ++i) {
     if (!s.in_solve[i]) continue;  // kDirect body: stays at the imposed target
     BodyState& st = data.bodies[i];
-    const Vec6 u1 = s.twist0[i] + s.delta[i];
+    const Vec6 u_move = s.twist0[i] + s.delta[i];  // u1 (Euler) or u½ (trapezoidal)
+    st.position += h * u_move.head<3>();
+    st.orientation = integrate_orientation(st.orientation, u_move.tail<3>(), h);
+    const Vec6 u1 = s.twist0[i] + scale * s.delta[i];
     st.linear_velocity = u1.head<3>();
     st.angular_velocity = u1.tail<3>();
-    st.position += h * st.linear_velocity;
-    st.orientation = integrate_orientation(st.orientation, st.angular_velocity, h);
   }
   integrate_nodes_implicit(model, data);
+}
+
+}  // namespace
+
+void integrate_linearly_implicit_euler(const Model& model, Data& data) noexcept {
+  integrate_linearized(model, data, model.dt);
+}
+
+void integrate_trapezoidal(const Model& model, Data& data) noexcept {
+  integrate_linearized(model, data, 0.5 * model.dt);
 }
 
 namespace {
@@ -549,6 +571,7 @@ void integrate_symplectic_euler_constrained(const Model& model, Data& data) noex
 }  // namespace
 
 void integrate_symplectic_euler(const Model& model, Data& data) noexcept {
+  data.solver.system_step = model.dt;
   data.solver_iterations = 0;
   data.solver_residual = 0.0;
   integrate_nodes_symplectic(model, data);  // forces of the step's start, like the bodies'
@@ -582,6 +605,9 @@ void integrate(const Model& model, Data& data) noexcept {
   switch (model.integrator) {
     case Integrator::kSymplecticEuler:
       integrate_symplectic_euler(model, data);
+      break;
+    case Integrator::kTrapezoidal:
+      integrate_trapezoidal(model, data);
       break;
     case Integrator::kLinearlyImplicitEuler:
     default:

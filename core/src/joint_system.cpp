@@ -125,7 +125,7 @@ void add_joint_transpose(const Model& model, const Data& data, std::span<const J
 }
 
 void store_joint_multipliers(const Model& model, Data& data, std::span<const JointVector> y) noexcept {
-  const double inv_h = 1.0 / model.dt;
+  const double inv_h = 1.0 / data.solver.system_step;  // h_s: the step of the KKT system
   for (std::size_t j = 0; j < model.joints.size(); ++j) {
     JointState& js = data.joints[j];
     js.multiplier = -inv_h * y[j];

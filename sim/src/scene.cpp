@@ -526,7 +526,12 @@ const char* to_string(core::CouplingMode mode) noexcept {
 }
 
 const char* to_string(core::Integrator integrator) noexcept {
-  return integrator == core::Integrator::kLinearlyImplicitEuler ? "implicit-euler" : "symplectic-euler";
+  switch (integrator) {
+    case core::Integrator::kSymplecticEuler: return "symplectic-euler";
+    case core::Integrator::kTrapezoidal: return "trapezoidal";
+    case core::Integrator::kLinearlyImplicitEuler:
+    default: return "implicit-euler";
+  }
 }
 
 std::string default_scene_path() { return std::string(NUMEN_SOURCE_SIM_DIR) + "/scenes/default.toml"; }
@@ -597,6 +602,8 @@ Scene load_scene(const std::string& path, const SceneOverrides& overrides) {
     // Errors of the joint tree name the joint: point at its table.
     for (const TomlTable& j : root.tables("joint"))
       if (j.has("name") && err.rfind("joint '" + j.string("name") + "'", 0) == 0) j.fail("child", err);
+    // An integrator that cannot run the coupling mode: point at the integrator key.
+    if (err.rfind("integrator ", 0) == 0 && root.has("integrator")) root.fail("integrator", err);
     root.fail_at(nullptr, "", err);
   }
   return scene;

@@ -50,8 +50,9 @@ void build_joint_rows(const Model& model, Data& data, std::span<const Vec6> twis
 void add_joint_transpose(const Model& model, const Data& data, std::span<const JointVector> y,
                          std::span<Vec6> out) noexcept;
 
-/// From the solution y of the KKT system (H [Δu; y] = [b; c]) over a step h:
-/// λ = −y / h (N or N·m per row) into Data::joints[j].multiplier, and the
+/// From the solution y of the KKT system (H [Δu; y] = [b; c]) of the step h_s
+/// = SolverScratch::system_step (Model::dt, or dt/2 for the trapezoidal rule):
+/// λ = −y / h_s (N or N·m per row) into Data::joints[j].multiplier, and the
 /// reaction on the child G_childᵀ λ into Data::joints[j].reaction.
 void store_joint_multipliers(const Model& model, Data& data, std::span<const JointVector> y) noexcept;
 
