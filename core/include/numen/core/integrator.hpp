@@ -155,7 +155,8 @@ void integrate_linearly_implicit_euler(const Model& model, Data& data) noexcept;
 /// order when K and D are the exact Jacobians and the explicit forces are evaluated at
 /// the step's middle; Hairer & Wanner, Solving ODEs II, §IV.7). Same builders and
 /// solvers as the implicit Euler (bodies, joints with Baumgarte rows built over the full
-/// step h, deformable nets); A-stable but not L-stable: a mode with h ω ≫ 1 is kept
+/// step h and RATTLE's velocity projection onto the joints' rows at the step's end — one
+/// more linear-time tree solve, docs/dynamics.md — deformable nets); A-stable but not L-stable: a mode with h ω ≫ 1 is kept
 /// bounded but not damped (amplification → −1). Sets kSolverNotConverged like the
 /// implicit Euler.
 void integrate_trapezoidal(const Model& model, Data& data) noexcept;

@@ -24,6 +24,9 @@
 /// error's mean rate by ½ h Ġu (the centripetal term); taking it as Ċ0 leaves
 /// a steady error h² Ġu. With α = 2/h, β = 1/h² (the paper's defaults) the
 /// error contracts by 1/2 per step, critically damped, for any h.
+/// With Integrator::kTrapezoidal the twists u0 are node velocities (projected onto
+/// G u = v_ref at the end of the last step, integrator.hpp), not chords: Ċ0 = G0 u0 − v_ref,
+/// and Δu is the half step's Δu½ (positions move over h with u0 + Δu½).
 
 #include <span>
 
