@@ -6,7 +6,8 @@ Reads DIR/accuracy.csv (schema in docs/results.md) and writes
 OUT_DIR/accuracy_work_precision.png (position and orientation error max against CPU time per
 simulated second, one panel per case, one line per integrator) and
 OUT_DIR/accuracy_convergence.png (position error max against the time step, with the
-slopes 1 and 2 for reference). Diverged runs are drawn as crosses at the top of the panel.
+slopes 1 and 2 for reference). Diverged runs are drawn as crosses above the panel's largest
+finite error (at their CPU time or step).
 """
 import csv
 import math
@@ -43,6 +44,12 @@ def load(path):
     return rows
 
 
+def panel_top(rows, case, y):
+    vals = [r[y] for r in rows if r["case"] == case and not r["diverged"] and r[y] > 0
+            and math.isfinite(r[y])]
+    return 3 * max(vals or [1.0])
+
+
 def series(rows, case, integ, x, y):
     ok = [(r[x], r[y]) for r in rows if r["case"] == case and r["integrator"] == integ
           and not r["diverged"] and r[y] > 0 and math.isfinite(r[y])]
@@ -70,8 +77,7 @@ def main():
                     ax.loglog([p[0] for p in ok], [p[1] for p in ok], color=st["color"],
                               marker=st["marker"], ms=4, label=st["label"])
                 if bad:
-                    top = max([p[1] for p in ok] or [1.0])
-                    ax.scatter(bad, [top * 3] * len(bad), color=st["color"], marker="x")
+                    ax.scatter(bad, [panel_top(rows, case, y)] * len(bad), color=st["color"], marker="x")
             ax.grid(True, which="both", alpha=0.3)
             if i == 0:
                 ax.set_title(TITLES.get(case, case), fontsize=9)
@@ -94,8 +100,8 @@ def main():
                 ax.loglog([p[0] for p in ok], [p[1] for p in ok], color=st["color"],
                           marker=st["marker"], ms=4, label=st["label"])
             if bad:
-                top = max([p[1] for p in ok] or [1.0])
-                ax.scatter(bad, [top * 3] * len(bad), color=st["color"], marker="x")
+                ax.scatter(bad, [panel_top(rows, case, "position_error_max_mm")] * len(bad),
+                           color=st["color"], marker="x")
         # slope guides through the middle of the panel
         xs = [r["dt_s"] for r in rows if r["case"] == case]
         ys = [r["position_error_max_mm"] for r in rows if r["case"] == case and not r["diverged"]
