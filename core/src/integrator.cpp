@@ -502,7 +502,8 @@ void project_joint_velocities(const Model& model, Data& data) noexcept {
   };
   for (std::size_t j = 0; j < model.joints.size(); ++j) {
     const JointModel& jm = model.joints[j];
-    const BodyState* parent = jm.parent >= 0 ? &data.bodies[static_cast<std::size_t>(jm.parent)] : nullptr;
+    const BodyState* parent =
+        jm.parent >= 0 ? &data.bodies[static_cast<std::size_t>(jm.parent)] : nullptr;
     const BodyState& child = data.bodies[static_cast<std::size_t>(jm.child)];
     const JointPrescription& jp = data.joint_prescribed[j];
     JointRows& rows = art.rows[j];

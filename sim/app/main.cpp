@@ -104,7 +104,8 @@ int main(int argc, char** argv) {
   CLI::App* study = app.add_subcommand("study", "Measure the integrators (docs/results.md)");
   study->require_subcommand(1);
   CLI::App* accuracy = study->add_subcommand(
-      "accuracy", "Work-precision data per integrator: error against CPU time per simulated second");
+      "accuracy",
+      "Work-precision data per integrator: error against CPU time per simulated second");
   std::string accuracy_out = "accuracy";
   bool accuracy_quick = false;
   std::vector<std::string> accuracy_cases;

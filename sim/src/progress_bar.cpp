@@ -39,8 +39,9 @@ std::string ProgressBar::render(double fraction, double elapsed_s, double remain
   std::string bar(static_cast<std::size_t>(filled), '#');
   bar.append(static_cast<std::size_t>(width - filled), '.');
   char buf[96];
-  std::snprintf(buf, sizeof buf, "] %3d%% %s elapsed, %s left  ", static_cast<int>(std::floor(f * 100.0)),
-                duration_text(elapsed_s).c_str(), duration_text(remaining_s).c_str());
+  std::snprintf(buf, sizeof buf, "] %3d%% %s elapsed, %s left  ",
+                static_cast<int>(std::floor(f * 100.0)), duration_text(elapsed_s).c_str(),
+                duration_text(remaining_s).c_str());
   return "[" + bar + buf + label;
 }
 

@@ -51,7 +51,7 @@ using accuracy::kSamplePeriod;
 using accuracy::Samples;
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-constexpr double kClosedFormFloorMm = 1e-9;    // rounding of positions of ~0.1 m over 1e5 steps
+constexpr double kClosedFormFloorMm = 1e-9;  // rounding of positions of ~0.1 m over 1e5 steps
 constexpr double kClosedFormFloorMrad = 1e-9;
 constexpr double kDivergedMm = 1000.0;
 // Windows of the recording (trajectory time, s) for the scene cases: where the tool meets
@@ -78,7 +78,8 @@ Comparison compare(const Samples& a, const Samples& b) {
   Comparison c;
   const std::size_t pp = static_cast<std::size_t>(a.points_per_sample);
   const std::size_t fp = static_cast<std::size_t>(a.frames_per_sample);
-  const std::size_t n = pp > 0 ? a.points.size() / pp : a.frames.size() / std::max<std::size_t>(fp, 1);
+  const std::size_t n =
+      pp > 0 ? a.points.size() / pp : a.frames.size() / std::max<std::size_t>(fp, 1);
   if (a.points.size() != b.points.size() || a.frames.size() != b.frames.size() || n == 0)
     throw std::logic_error("accuracy study: runs with different samples");
   double sp = 0.0, sr = 0.0;
@@ -188,10 +189,9 @@ AccuracyResult run_accuracy_study(const AccuracyOptions& options) {
   }
   if (options.reference_dt > 0.0) check_step(options.reference_dt, "reference_dt");
 
-  const std::string dir =
-      options.scene_dir.empty()
-          ? std::filesystem::path(default_scene_path()).parent_path().string()
-          : options.scene_dir;
+  const std::string dir = options.scene_dir.empty()
+                              ? std::filesystem::path(default_scene_path()).parent_path().string()
+                              : options.scene_dir;
   std::vector<CaseSetup> cases;
   for (const std::string& n : names) {
     CaseSetup s;
@@ -212,7 +212,8 @@ AccuracyResult run_accuracy_study(const AccuracyOptions& options) {
   }
 
   const auto horizon_of = [&](const AccuracyCase& c) {
-    if (options.horizon_s > 0.0) return whole_samples(std::min(options.horizon_s, c.default_horizon()));
+    if (options.horizon_s > 0.0)
+      return whole_samples(std::min(options.horizon_s, c.default_horizon()));
     return whole_samples(options.quick ? 0.3 * c.default_horizon() : c.default_horizon());
   };
   // Work estimate (steps × relative cost) for the progress callback.
@@ -239,8 +240,10 @@ AccuracyResult run_accuracy_study(const AccuracyOptions& options) {
     } else {
       reference = s.c->simulate(core::Integrator::kTrapezoidal, s.reference_dt, horizon);
       report(s, horizon, s.reference_dt, "reference dt=" + dt_label(s.reference_dt));
-      const Samples half = s.c->simulate(core::Integrator::kTrapezoidal, 0.5 * s.reference_dt, horizon);
-      report(s, horizon, 0.5 * s.reference_dt, "reference check dt=" + dt_label(0.5 * s.reference_dt));
+      const Samples half =
+          s.c->simulate(core::Integrator::kTrapezoidal, 0.5 * s.reference_dt, horizon);
+      report(s, horizon, 0.5 * s.reference_dt,
+             "reference check dt=" + dt_label(0.5 * s.reference_dt));
       const Comparison c = compare(reference, half);
       ReferenceCheck rc;
       rc.case_name = s.name;
@@ -291,8 +294,8 @@ AccuracyResult run_accuracy_study(const AccuracyOptions& options) {
         div.push_back(row.diverged);
         result.rows.push_back(row);
       }
-      fit.observed_order = fit_order(dts, pos, div, options.fit_max_dt, 10.0 * floor_mm, &fit.points,
-                                     &fit.fit_dt_min, &fit.fit_dt_max);
+      fit.observed_order = fit_order(dts, pos, div, options.fit_max_dt, 10.0 * floor_mm,
+                                     &fit.points, &fit.fit_dt_min, &fit.fit_dt_max);
       fit.observed_order_rotation = fit_order(dts, rot, div, options.fit_max_dt, 10.0 * floor_mrad);
       result.fits.push_back(fit);
     }
@@ -304,7 +307,8 @@ void write_accuracy_csv(const AccuracyResult& r, const std::string& dir) {
   std::filesystem::create_directories(dir);
   const auto open = [&](const std::string& name) {
     std::ofstream f(std::filesystem::path(dir) / name);
-    if (!f) throw std::runtime_error("cannot write " + (std::filesystem::path(dir) / name).string());
+    if (!f)
+      throw std::runtime_error("cannot write " + (std::filesystem::path(dir) / name).string());
     f.precision(6);
     return f;
   };
@@ -314,8 +318,8 @@ void write_accuracy_csv(const AccuracyResult& r, const std::string& dir) {
          "orientation_error_max_mrad,orientation_error_rms_mrad,cpu_s_per_sim_s,diverged,"
          "nonfinite_steps,reference\n";
     for (const AccuracyRow& x : r.rows)
-      f << x.case_name << ',' << x.integrator << ',' << x.dt_s << ',' << x.steps << ',' << x.horizon_s
-        << ',' << x.position_error_max_mm << ',' << x.position_error_rms_mm << ','
+      f << x.case_name << ',' << x.integrator << ',' << x.dt_s << ',' << x.steps << ','
+        << x.horizon_s << ',' << x.position_error_max_mm << ',' << x.position_error_rms_mm << ','
         << x.orientation_error_max_mrad << ',' << x.orientation_error_rms_mrad << ','
         << x.cpu_s_per_sim_s << ',' << (x.diverged ? 1 : 0) << ',' << x.nonfinite_steps << ','
         << x.reference << '\n';
@@ -351,14 +355,16 @@ std::string format_accuracy_table(const AccuracyResult& r) {
         "theoretical | error max at 1 ms (mm) | CPU s per simulated s at 1 ms |\n"
         "| --- | --- | --- | --- | --- | --- | --- |\n";
   for (const AccuracyFit& f : r.fits) {
-    std::snprintf(buf, sizeof buf, "| %s | %s | %.2f (%d steps, %.0e–%.0e s) | %.2f | %.0f | %.3g | %.3g |\n",
+    std::snprintf(buf, sizeof buf,
+                  "| %s | %s | %.2f (%d steps, %.0e–%.0e s) | %.2f | %.0f | %.3g | %.3g |\n",
                   f.case_name.c_str(), f.integrator.c_str(), f.observed_order, f.points,
                   f.fit_dt_min, f.fit_dt_max, f.observed_order_rotation, f.theoretical_order,
                   f.error_at_1ms_mm, f.cpu_at_1ms);
     os << buf;
   }
   if (!r.references.empty()) {
-    os << "\n| case | reference | difference to dt/2: position max (mm) | orientation max (mrad) |\n"
+    os << "\n| case | reference | difference to dt/2: position max (mm) | orientation max (mrad) "
+          "|\n"
           "| --- | --- | --- | --- |\n";
     for (const ReferenceCheck& c : r.references) {
       std::snprintf(buf, sizeof buf, "| %s | trapezoidal, dt = %.0e s | %.3g | %.3g |\n",

@@ -27,7 +27,7 @@ struct Samples {
   int frames_per_sample = 0;
   std::vector<core::Vec3> points;
   std::vector<core::Quat> frames;
-  double cpu_s = 0.0;                ///< Thread CPU time of the stepping loop (s).
+  double cpu_s = 0.0;  ///< Thread CPU time of the stepping loop (s).
   std::int64_t steps = 0;
   std::int64_t nonfinite_steps = 0;  ///< core::Data::nonfinite_steps at the end.
 };

@@ -8,9 +8,8 @@
 /// torque k_r θu is linear in θ about a fixed axis, and ω × Iω = 0 for ω along a principal
 /// axis). Both are underdamped: ζ_t = 0.7, ζ_r = 0.3.
 
-#include <cmath>
-
 #include <Eigen/Geometry>
+#include <cmath>
 
 #include "numen/core/data.hpp"
 #include "numen/core/rigid_body.hpp"
@@ -22,13 +21,13 @@ namespace {
 using core::Quat;
 using core::Vec3;
 
-constexpr double kMass = 0.1;                // kg
-constexpr double kInertiaZ = 4e-5;           // kg·m², principal axis z
-constexpr double kStiffness = 200.0;         // N/m (ω_n = 44.7 rad/s)
+constexpr double kMass = 0.1;         // kg
+constexpr double kInertiaZ = 4e-5;    // kg·m², principal axis z
+constexpr double kStiffness = 200.0;  // N/m (ω_n = 44.7 rad/s)
 constexpr double kDampingRatio = 0.7;
-constexpr double kRotStiffness = 0.05;       // N·m/rad (ω_n = 35.4 rad/s)
+constexpr double kRotStiffness = 0.05;  // N·m/rad (ω_n = 35.4 rad/s)
 constexpr double kRotDampingRatio = 0.3;
-constexpr double kAngle0 = 0.05;             // rad
+constexpr double kAngle0 = 0.05;  // rad
 
 /// x(t) of m ẍ + γ ẋ + k x = 0, x(0) = x0, ẋ(0) = 0, underdamped (ζ < 1).
 double oscillator(double m, double k, double zeta, double x0, double t) noexcept {
@@ -84,7 +83,8 @@ class FreeBodyCase final : public AccuracyCase {
     for (int k = 1; k <= n; ++k) {
       const double t = k * kSamplePeriod;
       Vec3 x;
-      for (int j = 0; j < 3; ++j) x(j) = oscillator(kMass, kStiffness, kDampingRatio, offset_(j), t);
+      for (int j = 0; j < 3; ++j)
+        x(j) = oscillator(kMass, kStiffness, kDampingRatio, offset_(j), t);
       const double th = oscillator(kInertiaZ, kRotStiffness, kRotDampingRatio, kAngle0, t);
       s.points.push_back(target_.position + x);
       s.frames.push_back(Quat(Eigen::AngleAxisd(th, axis_)) * target_.orientation);

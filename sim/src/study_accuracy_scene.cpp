@@ -93,7 +93,8 @@ class SceneCase final : public AccuracyCase {
             s.points.push_back(d.bodies[static_cast<std::size_t>(i)].position);
             s.frames.push_back(d.bodies[static_cast<std::size_t>(i)].orientation);
           }
-          for (int i = 0; i < nn; ++i) s.points.push_back(d.nodes[static_cast<std::size_t>(i)].position);
+          for (int i = 0; i < nn; ++i)
+            s.points.push_back(d.nodes[static_cast<std::size_t>(i)].position);
         },
         nb + nn, nb);
   }
@@ -110,7 +111,8 @@ class SceneCase final : public AccuracyCase {
     const hal::AxisVector m0 = 0.5 * (q1 - knots_[static_cast<std::size_t>(k - 1)]);
     const hal::AxisVector m1 = 0.5 * (knots_[static_cast<std::size_t>(k + 2)] - q0);
     const double u2 = u * u, u3 = u2 * u;
-    q = (2 * u3 - 3 * u2 + 1) * q0 + (u3 - 2 * u2 + u) * m0 + (-2 * u3 + 3 * u2) * q1 + (u3 - u2) * m1;
+    q = (2 * u3 - 3 * u2 + 1) * q0 + (u3 - 2 * u2 + u) * m0 + (-2 * u3 + 3 * u2) * q1 +
+        (u3 - u2) * m1;
     qdot = ((6 * u2 - 6 * u) * q0 + (3 * u2 - 4 * u + 1) * m0 + (-6 * u2 + 6 * u) * q1 +
             (3 * u2 - 2 * u) * m1) /
            kKnotSpacing;

@@ -4,14 +4,14 @@
 // allocation-free stage calls.
 #include "numen/core/integrator.hpp"
 
-#include <cmath>
-#include <limits>
-#include <string>
-#include <cstdio>
-#include <vector>
+#include <gtest/gtest.h>
 
 #include <Eigen/Dense>
-#include <gtest/gtest.h>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <string>
+#include <vector>
 
 #include "alloc_counter.hpp"
 #include "numen/core/contact_force.hpp"
@@ -158,7 +158,8 @@ TEST(Integrator, ObservedOrderIsTwoForTheTrapezoidalRuleAndOneForTheEulerSchemes
         if (prev > 0.0) {
           std::printf("[order %-11s %s] dt %.1e: err %.3e, ratio %.3f\n", name(integ),
                       kind == 0 ? "transl" : "rot   ", h, e, prev / e);
-          EXPECT_NEAR(prev / e, expected, 0.1 * expected) << name(integ) << " h " << h << " kind " << kind;
+          EXPECT_NEAR(prev / e, expected, 0.1 * expected)
+              << name(integ) << " h " << h << " kind " << kind;
         }
         prev = e;
       }
@@ -171,8 +172,8 @@ TEST(Integrator, TrapezoidalStepIsCrankNicolsonOnTheLinearOscillator) {
   // trapezoidal rule: Δv = (h f0 − ½ h² k v0) / (m + ½ h γ + ¼ h² k),
   // f0 = −k x0 − γ v0, v1 = v0 + Δv, x1 = x0 + ½ h (v0 + v1).
   const double m = 0.3, k = 250.0, gamma = 1.7, h = 2e-3;
-  core::Model model =
-      single_body(core::Integrator::kTrapezoidal, h, m, 0.01 * Mat3::Identity(), {k, gamma, 0.0, 0.0});
+  core::Model model = single_body(core::Integrator::kTrapezoidal, h, m, 0.01 * Mat3::Identity(),
+                                  {k, gamma, 0.0, 0.0});
   core::Data d = core::make_data(model);
   d.target = core::Pose{};
   double x = 0.04, v = -0.3;
@@ -180,8 +181,8 @@ TEST(Integrator, TrapezoidalStepIsCrankNicolsonOnTheLinearOscillator) {
   d.bodies[0].linear_velocity.x() = v;
   for (int i = 0; i < 500; ++i) {
     core::step(model, d);
-    const double dv = (h * (-k * x - gamma * v) - 0.5 * h * h * k * v) /
-                      (m + 0.5 * h * gamma + 0.25 * h * h * k);
+    const double dv =
+        (h * (-k * x - gamma * v) - 0.5 * h * h * k * v) / (m + 0.5 * h * gamma + 0.25 * h * h * k);
     x += 0.5 * h * (2.0 * v + dv);
     v += dv;
     ASSERT_NEAR(d.bodies[0].position.x(), x, 1e-14) << i;
@@ -190,7 +191,8 @@ TEST(Integrator, TrapezoidalStepIsCrankNicolsonOnTheLinearOscillator) {
 }
 
 TEST(Integrator, TrapezoidalFreeFallIsExact) {
-  core::Model m = single_body(core::Integrator::kTrapezoidal, 1e-3, 2.0, 0.01 * Mat3::Identity(), {});
+  core::Model m =
+      single_body(core::Integrator::kTrapezoidal, 1e-3, 2.0, 0.01 * Mat3::Identity(), {});
   m.gravity = Vec3(0.0, 0.0, -9.81);
   m.initial_attached_body = -1;
   core::Data d = core::make_data(m);
@@ -207,8 +209,8 @@ TEST(Integrator, TrapezoidalNeverGainsEnergyOnAStiffCoupling) {
   // (R = (1 + z)/(1 − z), z = ½ h λ), against ≈ 0.03 for backward Euler.
   const double m = 0.01, k = 1e7, gamma = core::damping_from_ratio(0.7, m, k);
   const double k_r = 1e3, i0 = 1e-6, gamma_r = core::damping_from_ratio(0.7, i0, k_r);
-  const core::Model model = single_body(core::Integrator::kTrapezoidal, 1e-3, m, i0 * Mat3::Identity(),
-                                        {k, gamma, k_r, gamma_r});
+  const core::Model model = single_body(core::Integrator::kTrapezoidal, 1e-3, m,
+                                        i0 * Mat3::Identity(), {k, gamma, k_r, gamma_r});
   core::Data d = core::make_data(model);
   d.bodies[0].position = Vec3(0.01, -0.02, 0.005);
   d.bodies[0].orientation = rot(0.05, Vec3(1, 1, 0));

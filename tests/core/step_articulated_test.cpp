@@ -2,13 +2,13 @@
 // pendulum (drift, energy), the trocar joint under stiff coupling and contact,
 // partial control (Eq. 6), the constrained solve against a dense KKT solve
 // with body–body contacts, and allocation-free articulated steps.
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <vector>
-
-#include <Eigen/Dense>
-#include <gtest/gtest.h>
 
 #include "alloc_counter.hpp"
 #include "numen/core/coupling.hpp"
@@ -128,7 +128,8 @@ TEST(StepArticulated, TrapezoidalDoublePendulumConvergesAtSecondOrder) {
     return d.bodies[1].position;
   };
   const Vec3 ref = lower_at(core::Integrator::kTrapezoidal, 1e-3 / 16);
-  for (core::Integrator integ : {core::Integrator::kTrapezoidal, core::Integrator::kLinearlyImplicitEuler}) {
+  for (core::Integrator integ :
+       {core::Integrator::kTrapezoidal, core::Integrator::kLinearlyImplicitEuler}) {
     const double e1 = (lower_at(integ, 2e-3) - ref).norm();
     const double e2 = (lower_at(integ, 1e-3) - ref).norm();
     const double e3 = (lower_at(integ, 5e-4) - ref).norm();
@@ -388,11 +389,13 @@ TEST(StepArticulated, ConstrainedSolveWithBodyContactsMatchesADenseKktSolve) {
 }
 
 TEST(StepArticulated, ArticulatedStepsAreAllocationFreeInEveryModeAndDeterministic) {
-  for (core::Integrator integ : {core::Integrator::kLinearlyImplicitEuler, core::Integrator::kSymplecticEuler,
-                                 core::Integrator::kTrapezoidal}) {
+  for (core::Integrator integ :
+       {core::Integrator::kLinearlyImplicitEuler, core::Integrator::kSymplecticEuler,
+        core::Integrator::kTrapezoidal}) {
     for (core::CouplingMode mode : {core::CouplingMode::kGodObject, core::CouplingMode::kFirstOrder,
                                     core::CouplingMode::kDirect}) {
-      if (integ == core::Integrator::kTrapezoidal && mode == core::CouplingMode::kFirstOrder) continue;  // refused
+      if (integ == core::Integrator::kTrapezoidal && mode == core::CouplingMode::kFirstOrder)
+        continue;  // refused
       core::Model m = trocar_tool(integ == core::Integrator::kSymplecticEuler ? 500.0 : 5e3, true);
       m.integrator = integ;
       m.coupling_mode = mode;
@@ -445,10 +448,12 @@ TEST(StepArticulated, ANonFiniteStepIsRolledBackAndTheNextStepsRecover) {
 }
 
 TEST(StepArticulated, TrocarHoldsInEveryCouplingModeAndIntegrator) {
-  for (core::Integrator integ : {core::Integrator::kLinearlyImplicitEuler, core::Integrator::kSymplecticEuler,
-                                 core::Integrator::kTrapezoidal}) {
+  for (core::Integrator integ :
+       {core::Integrator::kLinearlyImplicitEuler, core::Integrator::kSymplecticEuler,
+        core::Integrator::kTrapezoidal}) {
     for (core::CouplingMode mode : {core::CouplingMode::kGodObject, core::CouplingMode::kFirstOrder}) {
-      if (integ == core::Integrator::kTrapezoidal && mode == core::CouplingMode::kFirstOrder) continue;  // refused
+      if (integ == core::Integrator::kTrapezoidal && mode == core::CouplingMode::kFirstOrder)
+        continue;  // refused
       const bool implicit = integ != core::Integrator::kSymplecticEuler;
       core::Model m = trocar_tool(implicit ? 5e3 : 500.0, false);
       m.integrator = integ;

@@ -286,9 +286,12 @@ TEST(StepDeformable, TiesReturnADisplacedNetAtSecondOrderWithTheTrapezoidalRule)
   const double e1 = tie_oscillator_error(core::Integrator::kTrapezoidal, 1e-3, &strain);
   const double e2 = tie_oscillator_error(core::Integrator::kTrapezoidal, 5e-4, &strain);
   const double e3 = tie_oscillator_error(core::Integrator::kTrapezoidal, 2.5e-4, &strain);
-  const double implicit = tie_oscillator_error(core::Integrator::kLinearlyImplicitEuler, 1e-3, &strain);
-  std::printf("[tie oscillator trapezoidal] max rel err dt=1ms %.3e  0.5ms %.3e  0.25ms %.3e  ratios %.3f %.3f\n",
-              e1, e2, e3, e1 / e2, e2 / e3);
+  const double implicit =
+      tie_oscillator_error(core::Integrator::kLinearlyImplicitEuler, 1e-3, &strain);
+  std::printf(
+      "[tie oscillator trapezoidal] max rel err dt=1ms %.3e  0.5ms %.3e  0.25ms %.3e  ratios %.3f "
+      "%.3f\n",
+      e1, e2, e3, e1 / e2, e2 / e3);
   EXPECT_NEAR(e1 / e2, 4.0, 0.4);
   EXPECT_NEAR(e2 / e3, 4.0, 0.4);
   EXPECT_LT(100.0 * e1, implicit);

@@ -10,8 +10,10 @@
 TEST(ProgressBar, RenderShowsFractionTimesAndLabel) {
   EXPECT_EQ(numen::sim::ProgressBar::render(0.5, 10.0, 10.0, "wall trapezoidal", 10),
             "[#####.....]  50% 10s elapsed, 10s left  wall trapezoidal");
-  EXPECT_EQ(numen::sim::ProgressBar::render(1.0, 75.0, 0.0, "done", 4), "[####] 100% 1m15s elapsed, 0s left  done");
-  EXPECT_EQ(numen::sim::ProgressBar::render(0.0, 0.0, -1.0, "", 3), "[...]   0% 0s elapsed, ? left  ");
+  EXPECT_EQ(numen::sim::ProgressBar::render(1.0, 75.0, 0.0, "done", 4),
+            "[####] 100% 1m15s elapsed, 0s left  done");
+  EXPECT_EQ(numen::sim::ProgressBar::render(0.0, 0.0, -1.0, "", 3),
+            "[...]   0% 0s elapsed, ? left  ");
   EXPECT_EQ(numen::sim::ProgressBar::render(2.0, 1.0, 0.0, "", 2).substr(0, 4), "[##]");  // clamped
 }
 

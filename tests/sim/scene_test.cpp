@@ -348,8 +348,8 @@ TEST(Scene, TrapezoidalIntegratorIsSelectedByName) {
 
 TEST(SceneErrors, TrapezoidalWithFirstOrderCouplingNamesTheIntegratorKey) {
   TempDir dir;
-  const std::string text =
-      replace(kMini, "dt = 0.001", "dt = 0.001\nintegrator = \"trapezoidal\"\ncoupling = \"first-order\"");
+  const std::string text = replace(
+      kMini, "dt = 0.001", "dt = 0.001\nintegrator = \"trapezoidal\"\ncoupling = \"first-order\"");
   const InputError e = load_error(dir, text);
   expect_located(e, (dir.path() / "bad.toml").string(), line_of(text, "integrator = "),
                  column_of(text, "integrator = ", "\"trapezoidal\""), "integrator", "first-order");

@@ -58,7 +58,8 @@ TEST(StudyAccuracy, FreeBodyErrorsAreFiniteAndDecreaseWithTheStep) {
     EXPECT_EQ(row.reference, "closed-form");
     EXPECT_FALSE(row.diverged);
     EXPECT_TRUE(std::isfinite(row.position_error_max_mm) && row.position_error_max_mm > 0.0);
-    EXPECT_TRUE(std::isfinite(row.orientation_error_max_mrad) && row.orientation_error_max_mrad > 0.0);
+    EXPECT_TRUE(std::isfinite(row.orientation_error_max_mrad) &&
+                row.orientation_error_max_mrad > 0.0);
     EXPECT_LE(row.position_error_rms_mm, row.position_error_max_mm);
     EXPECT_GT(row.cpu_s_per_sim_s, 0.0);
     EXPECT_EQ(row.steps, std::llround(0.5 / row.dt_s));

@@ -156,9 +156,9 @@ void integrate_linearly_implicit_euler(const Model& model, Data& data) noexcept;
 /// the step's middle; Hairer & Wanner, Solving ODEs II, §IV.7). Same builders and
 /// solvers as the implicit Euler (bodies, joints with Baumgarte rows built over the full
 /// step h and RATTLE's velocity projection onto the joints' rows at the step's end — one
-/// more linear-time tree solve, docs/dynamics.md — deformable nets); A-stable but not L-stable: a mode with h ω ≫ 1 is kept
-/// bounded but not damped (amplification → −1). Sets kSolverNotConverged like the
-/// implicit Euler.
+/// more linear-time tree solve, docs/dynamics.md — deformable nets); A-stable but not L-stable: a
+/// mode with h ω ≫ 1 is kept bounded but not damped (amplification → −1). Sets kSolverNotConverged
+/// like the implicit Euler.
 void integrate_trapezoidal(const Model& model, Data& data) noexcept;
 
 /// First part of the implicit step: stores u0 (SolverScratch::twist0) and the
@@ -171,10 +171,10 @@ void prepare_implicit_step(const Model& model, Data& data) noexcept;
 
 /// Builds the implicit system of the current step in Data::solver (after
 /// prepare_implicit_step()): contact weights (α, β of ContactTerm), the 6×6
-/// diagonal blocks of A = M − hD − h²K, h = SolverScratch::system_step (exactly symmetric) and, for a model without
-/// joints (the block-Jacobi preconditioner; with joints the tree solve factors them), their Cholesky
-/// factors, the packed body–body contacts (SolverScratch::cross_contacts) with
-/// the `coupled` flags, and the right-hand side
+/// diagonal blocks of A = M − hD − h²K, h = SolverScratch::system_step (exactly symmetric) and, for
+/// a model without joints (the block-Jacobi preconditioner; with joints the tree solve factors
+/// them), their Cholesky factors, the packed body–body contacts (SolverScratch::cross_contacts)
+/// with the `coupled` flags, and the right-hand side
 ///   b = h (f0 + h K u0) + M (u* − u0),
 /// where u* is Data::bodies' twist after the implicit gyroscopic step (apply
 /// that to the state first), f0 = Data::body_wrench, K and D from the coupling

@@ -2,9 +2,10 @@
 /// @file progress_bar.hpp
 /// A one-line progress bar for the long studies (`numen study …`) on a terminal: fraction
 /// done, elapsed and estimated remaining wall time (linear extrapolation of the work done),
-/// and what runs (no estimate before 2 %). On a terminal the line is redrawn in place (carriage return, at most every
-/// 0.1 s); otherwise (a log file, CI) one line is printed per 10 % so that logs stay short.
-/// No Debian package offers one for C++ (indicators is not packaged). Not real-time code.
+/// and what runs (no estimate before 2 %). On a terminal the line is redrawn in place (carriage
+/// return, at most every 0.1 s); otherwise (a log file, CI) one line is printed per 10 % so that
+/// logs stay short. No Debian package offers one for C++ (indicators is not packaged). Not
+/// real-time code.
 
 #include <chrono>
 #include <cstdio>

@@ -68,32 +68,33 @@ struct AccuracyOptions {
 /// One run: a case, an integrator, a step. One line of accuracy.csv.
 struct AccuracyRow {
   std::string case_name;
-  std::string integrator;           ///< Scene-file name ("implicit-euler", …).
+  std::string integrator;  ///< Scene-file name ("implicit-euler", …).
   double dt_s = 0.0;
   std::int64_t steps = 0;
-  double horizon_s = 0.0;           ///< Simulated time (s).
+  double horizon_s = 0.0;  ///< Simulated time (s).
   double position_error_max_mm = 0.0;
-  double position_error_rms_mm = 0.0;   ///< RMS over the 10 ms samples of the per-sample max.
+  double position_error_rms_mm = 0.0;  ///< RMS over the 10 ms samples of the per-sample max.
   double orientation_error_max_mrad = 0.0;
   double orientation_error_rms_mrad = 0.0;
-  double cpu_s_per_sim_s = 0.0;     ///< Thread CPU time of the stepping loop / simulated time.
-  bool diverged = false;            ///< Non-finite steps rolled back, or an error above 1 m.
+  double cpu_s_per_sim_s = 0.0;  ///< Thread CPU time of the stepping loop / simulated time.
+  bool diverged = false;         ///< Non-finite steps rolled back, or an error above 1 m.
   std::int64_t nonfinite_steps = 0;
-  std::string reference;            ///< "closed-form" or "trapezoidal dt=…".
+  std::string reference;  ///< "closed-form" or "trapezoidal dt=…".
 };
 
 /// The observed order of one case and integrator.
 struct AccuracyFit {
   std::string case_name;
   std::string integrator;
-  double observed_order = 0.0;      ///< Least-squares slope of log(position error max) vs log(h); NaN: < 3 points.
+  double observed_order =
+      0.0;  ///< Least-squares slope of log(position error max) vs log(h); NaN: < 3 points.
   double observed_order_rotation = 0.0;  ///< Same for the orientation error (NaN: < 3 points).
-  double theoretical_order = 1.0;   ///< 1 (Euler schemes) or 2 (trapezoidal).
-  int points = 0;                   ///< Steps used by the position fit.
-  double fit_dt_min = 0.0;          ///< Smallest and largest step of the position fit (s).
+  double theoretical_order = 1.0;        ///< 1 (Euler schemes) or 2 (trapezoidal).
+  int points = 0;                        ///< Steps used by the position fit.
+  double fit_dt_min = 0.0;               ///< Smallest and largest step of the position fit (s).
   double fit_dt_max = 0.0;
-  double error_at_1ms_mm = 0.0;     ///< Position error max at h = 1 ms (NaN: not on the grid).
-  double cpu_at_1ms = 0.0;          ///< CPU s per simulated s at h = 1 ms (NaN: not on the grid).
+  double error_at_1ms_mm = 0.0;  ///< Position error max at h = 1 ms (NaN: not on the grid).
+  double cpu_at_1ms = 0.0;       ///< CPU s per simulated s at h = 1 ms (NaN: not on the grid).
 };
 
 /// How far a reference run is from the exact solution: its difference with the same run at
@@ -103,7 +104,7 @@ struct ReferenceCheck {
   double reference_dt = 0.0;
   double position_difference_max_mm = 0.0;
   double orientation_difference_max_mrad = 0.0;
-  double cpu_s = 0.0;               ///< CPU time of both reference runs (s).
+  double cpu_s = 0.0;  ///< CPU time of both reference runs (s).
 };
 
 /// Everything the study measured.
