@@ -353,12 +353,14 @@ TEST(Scene, TrapezoidalWithADeformableNetIsWarnedAbout) {
   std::ifstream in(std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/deformable.toml");
   std::stringstream text;
   text << in.rdbuf();
-  std::string toml = replace(text.str(), "integrator = \"implicit-euler\"", "integrator = \"trapezoidal\"");
+  std::string toml =
+      replace(text.str(), "integrator = \"implicit-euler\"", "integrator = \"trapezoidal\"");
   toml = replace(toml, "\"../data/", "\"" + std::string(NUMEN_SOURCE_DIR) + "/sim/data/");
   const Scene s = load_scene(dir.write("trap_deformable.toml", toml));
   EXPECT_EQ(s.model.integrator, numen::core::Integrator::kTrapezoidal);
   bool warned = false;
-  for (const std::string& w : s.warnings) warned = warned || w.find("L-stable") != std::string::npos;
+  for (const std::string& w : s.warnings)
+    warned = warned || w.find("L-stable") != std::string::npos;
   EXPECT_TRUE(warned);
 }
 
