@@ -199,10 +199,12 @@ void integrate_nodes_symplectic(const Model& model, Data& data) noexcept {
 
 void integrate_nodes_implicit(const Model& model, Data& data) noexcept {
   const double h = model.dt;
+  const double scale = h / data.solver.system_step;  // 1 (Euler) or 2 (trapezoidal), exact
   for (std::size_t i = 0; i < data.nodes.size(); ++i) {
     NodeState& st = data.nodes[i];
-    st.velocity += data.net.delta[i];
-    st.position += h * st.velocity;
+    const Vec3 v_move = st.velocity + data.net.delta[i];  // v1 (Euler) or v½ (trapezoidal)
+    st.position += h * v_move;
+    st.velocity += scale * data.net.delta[i];
   }
 }
 

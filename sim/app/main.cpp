@@ -4,6 +4,7 @@
 ///             [--bus sim|log:FILE|can:IFACE|serial:PATH[@BAUD]] [--record FILE.log] [--phase S]
 ///             [--rt-priority N] [--lock-memory] [--prefault-stack BYTES] [--cpu LIST] [--rt-strict]
 ///   numen device [SCENE] --bus can:IFACE|serial:PATH[@BAUD] [--duration S] [--ready]
+///   numen study accuracy [--out DIR] [--quick] [--case NAME]...
 /// SIGINT / SIGTERM end either cleanly (run: zero torque, drives disabled; both: summary).
 
 #include <atomic>
@@ -12,14 +13,17 @@
 #include <iostream>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include <CLI/CLI.hpp>
 
 #include "numen/sim/bus_spec.hpp"
 #include "numen/sim/device_process.hpp"
 #include "numen/sim/input_error.hpp"
+#include "numen/sim/progress_bar.hpp"
 #include "numen/sim/run.hpp"
 #include "numen/sim/scene.hpp"
+#include "numen/sim/study_accuracy.hpp"
 
 namespace {
 std::atomic<bool> g_stop{false};  // lock-free: safe to store from a signal handler
@@ -111,7 +115,48 @@ int main(int argc, char** argv) {
       ->check(CLI::NonNegativeNumber);
   dev->add_flag("--ready", dev_ready, "Print READY on stdout once the bus is open");
 
+  CLI::App* study = app.add_subcommand("study", "Measure the integrators (docs/results.md)");
+  study->require_subcommand(1);
+  CLI::App* accuracy = study->add_subcommand(
+      "accuracy",
+      "Work-precision data per integrator: error against CPU time per simulated second");
+  std::string accuracy_out = "accuracy";
+  bool accuracy_quick = false;
+  std::vector<std::string> accuracy_cases;
+  accuracy->add_option("--out", accuracy_out,
+                       "Directory of accuracy.csv, accuracy_orders.csv, accuracy_references.csv "
+                       "(plots: docs/figures/plot_accuracy.py DIR)");
+  accuracy->add_flag("--quick", accuracy_quick,
+                     "Coarser grid (1e-2 … 1e-4 s), horizons × 0.3, references at 2e-5 s: seconds");
+  accuracy->add_option("--case", accuracy_cases, "Run only these cases (repeatable)")
+      ->check(CLI::IsMember(numen::sim::accuracy_case_names()));
+
   CLI11_PARSE(app, argc, argv);
+
+  if (accuracy->parsed()) {
+    try {
+      numen::sim::AccuracyOptions options;
+      options.quick = accuracy_quick;
+      options.cases = accuracy_cases;
+      numen::sim::ProgressBar bar;
+      options.progress = [&bar](double done, double total, const std::string& label) {
+        bar.update(done, total, label);
+      };
+      const numen::sim::AccuracyResult result = numen::sim::run_accuracy_study(options);
+      bar.finish();
+      numen::sim::write_accuracy_csv(result, accuracy_out);
+      std::cout << numen::sim::format_accuracy_table(result);
+      std::cout << "wrote " << accuracy_out << "/accuracy.csv, accuracy_orders.csv, "
+                << "accuracy_references.csv\n";
+    } catch (const numen::sim::InputError& e) {
+      std::cerr << "numen: " << e.what() << "\n";
+      return 2;
+    } catch (const std::exception& e) {
+      std::cerr << "numen: " << e.what() << "\n";
+      return 1;
+    }
+    return 0;
+  }
   install_signal_handlers();
 
   if (dev->parsed()) {
