@@ -14,6 +14,7 @@
 #include <map>
 #include <sstream>
 #include <stdexcept>
+#include <tuple>
 
 #include "numen/sim/input_error.hpp"
 #include "numen/sim/scene.hpp"
@@ -223,22 +224,61 @@ std::string format_stability_tables(const StabilityResult& r) {
       os << "\n";
     }
   }
-  bool header = false;
+  // Extreme cases: one line per case, stiffness and integrator, one column per time step.
+  std::vector<double> steps;
+  std::vector<std::tuple<std::string, double, std::string>> cases;
   for (const StabilityRow& row : r.rows) {
     if (row.family != "extreme") continue;
-    if (!header) {
-      os << "\n| case | integrator | h (s) | stiffness | verdict | E/(E₀+W) max | penetration "
-            "max / bound (mm) | note |\n| --- | --- | --- | --- | --- | --- | --- | --- |\n";
-      header = true;
+    if (std::find(steps.begin(), steps.end(), row.dt_s) == steps.end()) steps.push_back(row.dt_s);
+    const auto c = std::make_tuple(row.case_name, row.stiffness, row.integrator);
+    if (std::find(cases.begin(), cases.end(), c) == cases.end()) cases.push_back(c);
+  }
+  auto same = [](double a, double b) { return a == b || (std::isnan(a) && std::isnan(b)); };
+  if (!cases.empty()) {
+    std::sort(steps.begin(), steps.end());
+    os << "\n| case | stiffness | integrator |";
+    for (double h : steps) os << " h = " << num(h) << " s |";
+    os << "\n| --- | --- | --- |";
+    for (std::size_t i = 0; i < steps.size(); ++i) os << " --- |";
+    os << "\n";
+    for (const auto& [name, stiffness, integrator] : cases) {
+      std::snprintf(buf, sizeof buf, "| %s | %s | %s |", name.c_str(),
+                    std::isnan(stiffness) ? "—" : num(stiffness).c_str(), integrator.c_str());
+      os << buf;
+      for (double h : steps) {
+        const StabilityRow* hit = nullptr;
+        for (const StabilityRow& row : r.rows)
+          if (row.family == "extreme" && row.case_name == name && same(row.stiffness, stiffness) &&
+              row.integrator == integrator && row.dt_s == h)
+            hit = &row;
+        if (hit == nullptr) {
+          os << " |";
+        } else if (hit->stable) {
+          if (std::isnan(hit->energy_ratio_max))
+            os << " stable |";
+          else {
+            std::snprintf(buf, sizeof buf, " stable, E %.2g |", hit->energy_ratio_max);
+            os << buf;
+          }
+        } else {
+          std::snprintf(buf, sizeof buf, " **diverged** at %lld (%s) |",
+                        static_cast<long long>(hit->diverged_step), hit->reason.c_str());
+          os << buf;
+        }
+      }
+      os << "\n";
     }
-    std::string verdict = row.stable ? "stable"
-                                     : "diverged at step " + std::to_string(row.diverged_step) +
-                                           " (" + row.reason + ")";
-    std::snprintf(buf, sizeof buf, "| %s | %s | %.0e | %.3g | %s | %.3g | %.3g / %.3g | %s |\n",
-                  row.case_name.c_str(), row.integrator.c_str(), row.dt_s, row.stiffness,
-                  verdict.c_str(), row.energy_ratio_max, 1e3 * row.penetration_max_m,
-                  1e3 * row.penetration_bound_m, row.note.c_str());
-    os << buf;
+    os << "\nNotes (h = 1 ms unless only another step ran):\n\n";
+    for (const auto& [name, stiffness, integrator] : cases) {
+      const StabilityRow* pick = nullptr;
+      for (const StabilityRow& row : r.rows)
+        if (row.family == "extreme" && row.case_name == name && same(row.stiffness, stiffness) &&
+            row.integrator == integrator && (pick == nullptr || row.dt_s == 1e-3))
+          pick = &row;
+      if (pick != nullptr && !pick->note.empty())
+        os << "- " << name << (std::isnan(stiffness) ? "" : " (stiffness " + num(stiffness) + ")")
+           << ", " << integrator << ", h = " << num(pick->dt_s) << " s: " << pick->note << "\n";
+    }
   }
   if (!r.boundaries.empty()) {
     os << "\n| ζ | theory: largest stable ω h | measured (no energy growth) | error | verdict "

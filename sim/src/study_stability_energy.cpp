@@ -148,15 +148,15 @@ bool Monitor::observe(std::int64_t step, double energy, double work_in, double p
   bound_now_ = penetration_bound_;
   if (travel_mass_ > 0.0)
     bound_now_ += dt_ * std::sqrt(2.0 * std::max(0.0, energy_ref_) / travel_mass_);
-  if (energy_ref_ > 0.0 && std::isfinite(energy))
-    ratio_max_ = std::max(ratio_max_, energy / energy_ref_);
+  if (std::isfinite(energy))
+    ratio_max_ = std::max(ratio_max_, energy / std::max(energy_ref_, limits_.energy_floor_j));
   if (std::isfinite(penetration)) penetration_max_ = std::max(penetration_max_, penetration);
   if (std::isfinite(drift)) drift_max_ = std::max(drift_max_, drift);
   if (4 * step > planned_ && 4 * step <= 2 * planned_) q2_max_ = std::max(q2_max_, energy);
   if (4 * step > 3 * planned_) q4_max_ = std::max(q4_max_, energy);
   if (nonfinite_steps > 0 || !std::isfinite(energy)) {
     fail(step, "non-finite");
-  } else if (energy > limits_.energy_factor * energy_ref_) {
+  } else if (energy > limits_.energy_factor * std::max(energy_ref_, limits_.energy_floor_j)) {
     fail(step, "energy");
   } else if (!(penetration <= bound_now_)) {
     fail(step, "penetration");

@@ -238,7 +238,8 @@ std::vector<StabilityRow> rigid_extreme_cases(const StabilityOptions& o, const T
         rows.push_back(spin_run(integrator, h, k_r, o.limits, horizon));
         if (tick) tick("spin" + at);
       }
-      rows.push_back(capacity_run(integrator, h, o.limits, o.quick ? 20 : 100));
+      rows.push_back(capacity_run(integrator, h, o.limits,
+                                  o.quick ? 20 : std::max<std::int64_t>(100, steps_for(0.5, h))));
       if (tick) tick("capacity" + at);
     }
   return rows;

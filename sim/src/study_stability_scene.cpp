@@ -21,6 +21,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <tuple>
 
 #include "numen/hal/axis.hpp"
 #include "numen/hal/canopen.hpp"
@@ -94,6 +95,49 @@ StabilityRow scene_row(const char* name, core::Integrator integrator, double h) 
 
 // ---- deformable probe, 10 cm jump ----
 
+/// The symplectic Euler's two limits for a net (docs/deformable.md, "Symplectic Euler"): the
+/// largest h √(λ/m) of a node with the Gershgorin bound λ ≤ k_tie + 2 Σ k of its springs, and
+/// h Σγ_tie |ρ⊥|² / I_r + h² Σk_tie |ρ⊥|² / (2 I_r) of the rigid component turning against its net
+/// about each principal axis (I_r = I I_net / (I + I_net)), and the explicit damping of a node,
+/// h (γ_tie + 2 Σ γ of its springs) / m (Gershgorin bound; v ← v (1 − h γ/m) needs h γ/m < 2);
+/// all must stay below 2.
+std::tuple<double, double, double> symplectic_net_limits(const core::Model& model, double h) {
+  std::vector<double> k_sum(static_cast<std::size_t>(model.num_nodes()), 0.0);
+  std::vector<double> g_sum(k_sum.size(), 0.0);
+  for (const core::NetSpring& sp : model.net_springs) {
+    k_sum[static_cast<std::size_t>(sp.node_a)] += sp.stiffness;
+    k_sum[static_cast<std::size_t>(sp.node_b)] += sp.stiffness;
+    g_sum[static_cast<std::size_t>(sp.node_a)] += sp.damping;
+    g_sum[static_cast<std::size_t>(sp.node_b)] += sp.damping;
+  }
+  double node = 0.0, turn = 0.0, damp = 0.0;
+  for (const core::NetModel& net : model.nets) {
+    const core::BodyModel& body = model.bodies[static_cast<std::size_t>(net.body)];
+    for (int axis = 0; axis < 3; ++axis) {
+      const Vec3 e = Vec3::Unit(axis);
+      double i_net = 0.0, s_k = 0.0, s_g = 0.0;
+      for (int i = net.node_begin; i < net.node_begin + net.node_count; ++i) {
+        const auto k = static_cast<std::size_t>(i);
+        const Vec3 rho = model.node_rest[k];
+        const double r2 = (rho - rho.dot(e) * e).squaredNorm();
+        i_net += model.node_mass[k] * r2;
+        s_k += net.tie_stiffness * r2;
+        s_g += net.tie_damping * r2;
+      }
+      const double inertia = body.inertia_body(axis, axis);
+      const double i_r = inertia * i_net / (inertia + i_net);
+      if (i_r > 0.0) turn = std::max(turn, h * s_g / i_r + h * h * s_k / (2.0 * i_r));
+    }
+    for (int i = net.node_begin; i < net.node_begin + net.node_count; ++i) {
+      const auto k = static_cast<std::size_t>(i);
+      node =
+          std::max(node, h * std::sqrt((net.tie_stiffness + 2.0 * k_sum[k]) / model.node_mass[k]));
+      damp = std::max(damp, h * (net.tie_damping + 2.0 * g_sum[k]) / model.node_mass[k]);
+    }
+  }
+  return {node, turn, damp};
+}
+
 StabilityRow deformable_run(const Scene& scene, core::Integrator integrator, double h,
                             const StabilityLimits& limits, double horizon) {
   core::Model base = scene.model;
@@ -119,8 +163,6 @@ StabilityRow deformable_run(const Scene& scene, core::Integrator integrator, dou
   const core::Model model = study::with_scheme(base, integrator, h, "stability study");
   core::Data data = core::make_data(model);
   const core::BodyState start = data.bodies[static_cast<std::size_t>(held)];
-  double node_radius = kInf;
-  for (double r : model.node_radius) node_radius = std::min(node_radius, r);
   // Static penetration F/k with the whole coupling force of the jump, k_t · 10 cm, on one node
   // contact (an upper bound: it spreads over several).
   double k_contact = kInf;
@@ -149,10 +191,13 @@ StabilityRow deformable_run(const Scene& scene, core::Integrator integrator, dou
   monitor.fill(r);
   double strain = 0.0;
   for (const core::NetOutput& o : data.nets) strain = std::max(strain, o.max_strain);
-  char note[128];
-  std::snprintf(note, sizeof note,
-                "%d node contacts at the end, max strain %.3g, node radius %.3g m",
-                data.num_node_contacts, strain, node_radius);
+  const auto [node_limit, turn_limit, damping_limit] = symplectic_net_limits(model, h);
+  char note[256];
+  std::snprintf(
+      note, sizeof note,
+      "%d node contacts at the end, max strain %.3g; symplectic limits (< 2): node "
+      "omega h <= %.2g, core turning against the net %.2g, node damping h gamma/m <= %.2g",
+      data.num_node_contacts, strain, node_limit, turn_limit, damping_limit);
   r.note = note;
   return r;
 }

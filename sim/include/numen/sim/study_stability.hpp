@@ -25,13 +25,13 @@
 ///  - stable: every step finite and accepted (core::Data::nonfinite_steps stays 0: the core's
 ///    rollback guard never fired), the energy E (kinetic + coupling, net-spring and tie potentials;
 ///    stored_energy(); the contacts' potential is bounded through the penetration) never above
-///    energy_factor × (E₀ + W_in), with E₀ the energy at the start and W_in the positive work the
-///    moving target put in (input_work()), every penetration at most penetration_factor × the
-///    case's static penetration F/k plus one step of travel at the fastest speed the energy allows,
-///    h √(2 (E₀ + W_in) / m) (contacts are found at the step's start: a body reaching a surface
-///    goes one step deep before it is pushed), joint drift below the case's bound; the loop cases
-///    also check torques (finite, within the drives' limits, zero while the input is invalid) and
-///    that nothing non-finite reached core::Data;
+///    energy_factor × max(E₀ + W_in, energy_floor_j), with E₀ the energy at the start and W_in the
+///    positive work the moving target put in (input_work()), every penetration at most
+///    penetration_factor × the case's static penetration F/k plus one step of travel at the fastest
+///    speed the energy allows, h √(2 (E₀ + W_in) / m) (contacts are found at the step's start: a
+///    body reaching a surface goes one step deep before it is pushed), joint drift below the case's
+///    bound; the loop cases also check torques (finite, within the drives' limits, zero while the
+///    input is invalid) and that nothing non-finite reached core::Data;
 ///  - otherwise "diverged at step N" with the first criterion that failed.
 /// Study code: allocates, throws InputError for a bad option; not real-time.
 
@@ -52,6 +52,9 @@ struct StabilityLimits {
   /// Euler's bounded oscillation of an undamped spring reaches E₀ / (1 − ω h / 2) (its invariant
   /// ellipse), so the verdict's limit for it is ω h = 2 (1 − 1 / energy_factor) = 1.98.
   double energy_factor = 100.0;
+  /// Floor of the reference energy (J): a body at rest on unstretched springs has E₀ = 0 and
+  /// rounding-level energy (< 1e-20 J) must not count as growth; every case puts in > 1e-4 J.
+  double energy_floor_j = 1e-9;
   /// Penetration may reach penetration_factor × the static penetration F/k of the case (an
   /// undamped contact loaded suddenly reaches 2 ×).
   double penetration_factor = 3.0;
