@@ -18,6 +18,7 @@
 
 namespace numen::sim::stability {
 
+/// +∞ and quiet NaN, for "no bound" and "not applicable".
 inline constexpr double kInf = std::numeric_limits<double>::infinity();
 inline constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
@@ -98,6 +99,7 @@ StabilityRow coupling_run(core::Integrator integrator, double h, double m, doubl
                           Monitor* monitor_out = nullptr);
 /// "contact": the k_c × h × m sweep (study_stability_rigid.cpp).
 std::vector<StabilityRow> contact_family(const StabilityOptions& o, const Tick& tick);
+/// Number of runs contact_family() makes (for the progress bar).
 std::int64_t contact_runs(const StabilityOptions& o);
 /// One contact run: sphere of mass m on a plane of stiffness k_c and damping ratio zeta_c.
 StabilityRow contact_run(core::Integrator integrator, double h, double m, double k_c, double zeta_c,
@@ -106,14 +108,17 @@ StabilityRow contact_run(core::Integrator integrator, double h, double m, double
 std::vector<StabilityBoundary> boundary_family(const StabilityOptions& o, const Tick& tick);
 /// Teleport, spin and capacity cases of "extreme" (study_stability_extreme.cpp).
 std::vector<StabilityRow> rigid_extreme_cases(const StabilityOptions& o, const Tick& tick);
+/// Number of runs rigid_extreme_cases() makes (for the progress bar).
 std::int64_t rigid_extreme_runs(const StabilityOptions& o);
 /// "articulation": mass ratios in a revolute pair (study_stability_articulation.cpp).
 std::vector<StabilityRow> articulation_family(const StabilityOptions& o, const Tick& tick);
+/// Number of runs articulation_family() makes (for the progress bar).
 std::int64_t articulation_runs(const StabilityOptions& o);
 /// The deformable jump, the trocar at zero insertion and the non-finite bus input of
 /// "extreme" (study_stability_scene.cpp). `scene_dir`: the shipped scenes.
 std::vector<StabilityRow> scene_extreme_cases(const StabilityOptions& o,
                                               const std::string& scene_dir, const Tick& tick);
+/// Progress ticks scene_extreme_cases() makes: 20 per deformable run, 5 per loop run.
 std::int64_t scene_extreme_runs(const StabilityOptions& o);
 
 /// The integrators of `o` (all three when empty).
