@@ -210,6 +210,17 @@ TEST(StudyStability, MonitorCriteriaAndGrowth) {
     EXPECT_EQ(r.reason, "penetration");
   }
   {
+    // One step of travel at the fastest speed the energy allows: 0.1 s · √(2 · 2 J / 1 kg) = 0.2 m.
+    Monitor mon(limits, 0.001, kInf, 8, 1.0, 0.1);
+    mon.start(1.0);
+    EXPECT_TRUE(mon.observe(1, 1.0, 1.0, 0.2009, 0.0, 0));
+    EXPECT_FALSE(mon.observe(2, 1.0, 1.0, 0.2011, 0.0, 0));
+    StabilityRow r;
+    mon.fill(r);
+    EXPECT_EQ(r.reason, "penetration");
+    EXPECT_NEAR(r.penetration_bound_m, 0.201, 1e-12);
+  }
+  {
     Monitor mon(limits, kInf, 0.002, 8);
     mon.start(1.0);
     EXPECT_FALSE(mon.observe(1, 1.0, 0.0, 0.0, 0.003, 0));
