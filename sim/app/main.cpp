@@ -5,6 +5,7 @@
 ///             [--rt-priority N] [--lock-memory] [--prefault-stack BYTES] [--cpu LIST] [--rt-strict]
 ///   numen device [SCENE] --bus can:IFACE|serial:PATH[@BAUD] [--duration S] [--ready]
 ///   numen study accuracy [--out DIR] [--quick] [--case NAME]...
+///   numen study stability [--out DIR] [--quick] [--family NAME]...
 /// SIGINT / SIGTERM end either cleanly (run: zero torque, drives disabled; both: summary).
 
 #include <atomic>
@@ -24,6 +25,7 @@
 #include "numen/sim/run.hpp"
 #include "numen/sim/scene.hpp"
 #include "numen/sim/study_accuracy.hpp"
+#include "numen/sim/study_stability.hpp"
 
 namespace {
 std::atomic<bool> g_stop{false};  // lock-free: safe to store from a signal handler
@@ -131,7 +133,44 @@ int main(int argc, char** argv) {
   accuracy->add_option("--case", accuracy_cases, "Run only these cases (repeatable)")
       ->check(CLI::IsMember(numen::sim::accuracy_case_names()));
 
+  CLI::App* stability = study->add_subcommand(
+      "stability", "Stiff and extreme cases: a verdict per run (stable, or diverged at step N)");
+  std::string stability_out = "stability";
+  bool stability_quick = false;
+  std::vector<std::string> stability_families;
+  stability->add_option("--out", stability_out,
+                        "Directory of stability_<family>.csv and stability_boundary.csv "
+                        "(maps: docs/figures/plot_stability.py DIR)");
+  stability->add_flag("--quick", stability_quick, "Coarse grids, short runs: seconds");
+  stability->add_option("--family", stability_families, "Run only these families (repeatable)")
+      ->check(CLI::IsMember(numen::sim::stability_family_names()));
+
   CLI11_PARSE(app, argc, argv);
+
+  if (stability->parsed()) {
+    try {
+      numen::sim::StabilityOptions options;
+      options.quick = stability_quick;
+      options.families = stability_families;
+      numen::sim::ProgressBar bar;
+      options.progress = [&bar](double done, double total, const std::string& label) {
+        bar.update(done, total, label);
+      };
+      const numen::sim::StabilityResult result = numen::sim::run_stability_study(options);
+      bar.finish();
+      numen::sim::write_stability_csv(result, stability_out);
+      std::cout << numen::sim::format_stability_tables(result);
+      std::printf("%zu runs in %.1f s; wrote %s/stability_*.csv\n", result.rows.size(),
+                  result.wall_s, stability_out.c_str());
+    } catch (const numen::sim::InputError& e) {
+      std::cerr << "numen: " << e.what() << "\n";
+      return 2;
+    } catch (const std::exception& e) {
+      std::cerr << "numen: " << e.what() << "\n";
+      return 1;
+    }
+    return 0;
+  }
 
   if (accuracy->parsed()) {
     try {

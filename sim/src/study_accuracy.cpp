@@ -4,8 +4,6 @@
 
 #include "numen/sim/study_accuracy.hpp"
 
-#include <time.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -18,6 +16,7 @@
 
 #include "numen/sim/input_error.hpp"
 #include "numen/sim/scene.hpp"
+#include "numen/sim/study_common.hpp"
 #include "study_accuracy_cases.hpp"
 
 namespace numen::sim {
@@ -28,19 +27,10 @@ double input_time(core::Integrator integrator, double t, double dt) noexcept {
 }
 
 core::Model with_scheme(const core::Model& model, core::Integrator integrator, double dt) {
-  core::Model m = model;
-  m.integrator = integrator;
-  m.dt = dt;
-  const std::string err = core::finalize_model(m);
-  if (!err.empty()) throw std::runtime_error("accuracy study: " + err);
-  return m;
+  return study::with_scheme(model, integrator, dt, "accuracy study");
 }
 
-double thread_cpu_seconds() noexcept {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
-}
+double thread_cpu_seconds() noexcept { return study::thread_cpu_seconds(); }
 
 }  // namespace accuracy
 
