@@ -567,7 +567,7 @@ void integrate_linearly_implicit_euler(const Model& model, Data& data) noexcept 
 }
 
 void integrate_trapezoidal(const Model& model, Data& data) noexcept {
-  integrate_linearized(model, data, 0.5 * model.dt);
+  integrate_linearized(model, data, 0.5 * model.dt);  // = linearized_system_step() of a trapezoidal model
 }
 
 namespace {
@@ -672,6 +672,10 @@ void integrate_symplectic_euler(const Model& model, Data& data) noexcept {
     st.position += h * st.linear_velocity;
     st.orientation = integrate_orientation(st.orientation, st.angular_velocity, h);
   }
+}
+
+double linearized_system_step(const Model& model) noexcept {
+  return model.integrator == Integrator::kTrapezoidal ? 0.5 * model.dt : model.dt;
 }
 
 void integrate(const Model& model, Data& data) noexcept {

@@ -35,7 +35,7 @@ namespace {
 template <bool kImplicit>
 void spring_pass(const Model& model, Data& data) noexcept {
   NetScratch& s = data.net;
-  const double h = model.dt;
+  const double h = data.solver.system_step;  // h_s of the linearised system (integrator.hpp)
   const double h2 = h * h;
   // Raw pointers: the stores below would otherwise make the compiler reload
   // every vector's data pointer per spring.
@@ -123,7 +123,8 @@ void spring_pass(const Model& model, Data& data) noexcept {
 void compute_net_forces(const Model& model, Data& data) noexcept {
   if (model.nets.empty()) return;
   NetScratch& s = data.net;
-  const bool implicit = model.integrator == Integrator::kLinearlyImplicitEuler;
+  // The linearised schemes (implicit Euler, trapezoidal) need the springs' Jacobian blocks too.
+  const bool implicit = model.integrator != Integrator::kSymplecticEuler;
 
   // Gravity, and the zero-length ties to the rigid component with their
   // reaction on it.

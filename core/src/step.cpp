@@ -71,6 +71,7 @@ void step(const Model& model, Data& data) noexcept {
   impose_direct_target(model, data);
   detect_contacts(model, data);  // may set kContactOverflow, counts contact_overflow_steps
   if (!model.nets.empty()) detect_node_contacts(model, data);
+  data.solver.system_step = linearized_system_step(model);  // the net spring pass needs h_s
   compute_forces(model, data);
   integrate(model, data);
   if (!model.joints.empty()) measure_joint_drift(model, data);

@@ -120,6 +120,12 @@ struct SolverScratch {
   void resize(const Model& model);
 };
 
+/// h_s of Model::integrator (SolverScratch::system_step): Model::dt for the linearly implicit
+/// and the symplectic Euler, Model::dt / 2 for the trapezoidal rule. step() sets
+/// SolverScratch::system_step to it before the forces stage, whose net spring pass already
+/// linearises with it (net_forces.hpp).
+double linearized_system_step(const Model& model) noexcept;
+
 /// Integrate stage: dispatches on Model::integrator to
 /// integrate_linearly_implicit_euler(), integrate_trapezoidal() or
 /// integrate_symplectic_euler(). Needs
