@@ -589,7 +589,7 @@ double net_start_sweep(const Model& model, Data& data, std::span<const Vec3> x0_
                        std::span<Vec3> y_n) noexcept {
   const SolverScratch& s = data.solver;
   NetScratch& ns = data.net;
-  const double h = model.dt;
+  const double h = data.solver.system_step;  // h_s of the linearised system (integrator.hpp)
   const std::size_t nb = w_b.size();
   const SweepSpring* springs = ns.sweep_springs.data();
   const std::int32_t* low_begin = ns.spring_low_begin.data();
