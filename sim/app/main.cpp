@@ -44,6 +44,21 @@ void install_signal_handlers() {
   sigemptyset(&rearm.sa_mask);
   sigaction(SIGUSR1, &rearm, nullptr);
 }
+/// Runs a subcommand's body: exit status 0, or 2 for bad input (InputError: scene, trajectory,
+/// option values) and 1 for any other error, each printed as "numen: what".
+template <typename Body>
+int run_guarded(Body&& body) {
+  try {
+    body();
+    return 0;
+  } catch (const numen::sim::InputError& e) {
+    std::cerr << "numen: " << e.what() << "\n";
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << "numen: " << e.what() << "\n";
+    return 1;
+  }
+}
 std::string check_bus(const std::string& v, bool real_only) {
   try {
     const numen::sim::BusSpec spec = numen::sim::parse_bus_spec(v);
@@ -148,7 +163,7 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
 
   if (stability->parsed()) {
-    try {
+    return run_guarded([&] {
       numen::sim::StabilityOptions options;
       options.quick = stability_quick;
       options.families = stability_families;
@@ -162,18 +177,11 @@ int main(int argc, char** argv) {
       std::cout << numen::sim::format_stability_tables(result);
       std::printf("%zu runs in %.1f s; wrote %s/stability_*.csv\n", result.rows.size(),
                   result.wall_s, stability_out.c_str());
-    } catch (const numen::sim::InputError& e) {
-      std::cerr << "numen: " << e.what() << "\n";
-      return 2;
-    } catch (const std::exception& e) {
-      std::cerr << "numen: " << e.what() << "\n";
-      return 1;
-    }
-    return 0;
+    });
   }
 
   if (accuracy->parsed()) {
-    try {
+    return run_guarded([&] {
       numen::sim::AccuracyOptions options;
       options.quick = accuracy_quick;
       options.cases = accuracy_cases;
@@ -187,19 +195,12 @@ int main(int argc, char** argv) {
       std::cout << numen::sim::format_accuracy_table(result);
       std::cout << "wrote " << accuracy_out << "/accuracy.csv, accuracy_orders.csv, "
                 << "accuracy_references.csv\n";
-    } catch (const numen::sim::InputError& e) {
-      std::cerr << "numen: " << e.what() << "\n";
-      return 2;
-    } catch (const std::exception& e) {
-      std::cerr << "numen: " << e.what() << "\n";
-      return 1;
-    }
-    return 0;
+    });
   }
   install_signal_handlers();
 
   if (dev->parsed()) {
-    try {
+    return run_guarded([&] {
       const std::string path = dev_scene.empty() ? numen::sim::default_scene_path() : dev_scene;
       const numen::sim::Scene scene = numen::sim::load_scene(path);
       numen::sim::DeviceOptions options;
@@ -208,18 +209,11 @@ int main(int argc, char** argv) {
       options.stop = &g_stop;
       options.announce_ready = dev_ready;
       std::cout << numen::sim::format_device_summary(numen::sim::run_device(scene, options));
-    } catch (const numen::sim::InputError& e) {
-      std::cerr << "numen: " << e.what() << "\n";
-      return 2;
-    } catch (const std::exception& e) {
-      std::cerr << "numen: " << e.what() << "\n";
-      return 1;
-    }
-    return 0;
+    });
   }
 
   if (run->parsed()) {
-    try {
+    return run_guarded([&] {
       numen::sim::SceneOverrides overrides;
       if (!coupling.empty()) overrides.coupling = numen::sim::parse_coupling_mode(coupling);
       const std::string path = scene_path.empty() ? numen::sim::default_scene_path() : scene_path;
@@ -243,13 +237,7 @@ int main(int argc, char** argv) {
         std::cout << numen::sim::format_summary(summary);
         if (!trace_path.empty()) std::cout << "  trace: " << trace_path << "\n";
       }
-    } catch (const numen::sim::InputError& e) {
-      std::cerr << "numen: " << e.what() << "\n";
-      return 2;
-    } catch (const std::exception& e) {
-      std::cerr << "numen: " << e.what() << "\n";
-      return 1;
-    }
+    });
   }
   return 0;
 }
