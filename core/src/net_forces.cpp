@@ -24,96 +24,233 @@ inline void raise_max(double& m, double x) noexcept {
 
 namespace {
 
+/// Raw pointers to the arrays of the springs' pass (the stores would
+/// otherwise make the compiler reload every vector's data pointer per spring).
+struct SpringPass {
+  const NodeState* nodes;
+  const double* rest_length;
+  const double* stiffness;
+  const double* damping;
+  double* dir_x;
+  double* dir_y;
+  double* dir_z;
+  double* weight_axial;
+  double* weight_isotropic;
+  const std::int32_t* high;
+  double* length;
+  Vec3* force;
+  Mat3* block;
+  Vec3* rhs;
+  double h;   ///< h_s of the linearised system (integrator.hpp).
+  double h2;  ///< h_s².
+};
+
+/// Node k's sums over its springs in the sweep order: force, the weights'
+/// sum (symmetric, upper triangle) and the right-hand side.
+struct NodeSums {
+  Vec3 force = Vec3::Zero();
+  Vec3 rhs = Vec3::Zero();
+  double w00 = 0.0, w01 = 0.0, w02 = 0.0, w11 = 0.0, w12 = 0.0, w22 = 0.0;
+};
+
+/// Adds the symmetric 3×3 with upper triangle (a, b, c; d, e; f) to m.
+inline void add_symmetric(Mat3& m, double a, double b, double c, double d, double e,
+                          double f) noexcept {
+  m(0, 0) += a;
+  m(0, 1) += b;
+  m(0, 2) += c;
+  m(1, 0) += b;
+  m(1, 1) += d;
+  m(1, 2) += e;
+  m(2, 0) += c;
+  m(2, 1) += e;
+  m(2, 2) += f;
+}
+
+/// Spring j of node k (position xk, velocity vk) in scalar code: the law of
+/// spring_pass(), for a node's odd spring out.
+template <bool kImplicit>
+inline void one_spring(const SpringPass& a, std::int32_t j, const Vec3& xk, const Vec3& vk,
+                       NodeSums& sum) noexcept {
+  const auto hi = static_cast<std::size_t>(a.high[j]);
+  const double rest = a.rest_length[j];
+  const Vec3 d = a.nodes[hi].position - xk;
+  const double l = d.norm();
+  const double inv_l = 1.0 / l;
+  if (l > 1e-12 * rest) {  // else: keep the last direction
+    a.dir_x[j] = d.x() * inv_l;
+    a.dir_y[j] = d.y() * inv_l;
+    a.dir_z[j] = d.z() * inv_l;
+  }
+  a.length[j] = l;
+  const Vec3 n(a.dir_x[j], a.dir_y[j], a.dir_z[j]);
+  const Vec3 dv = a.nodes[hi].velocity - vk;
+  const double n_dv = n.dot(dv);
+  const Vec3 f = (a.stiffness[j] * (l - rest) + a.damping[j] * n_dv) * n;
+  sum.force += f;
+  a.force[hi] -= f;
+  if constexpr (kImplicit) {
+    // K̃ = (1 − τ) d̂d̂ᵀ + τ I, τ = max(0, 1 − L/l): −∂f_k/∂x_k / k.
+    const double hk = a.h2 * a.stiffness[j];
+    const double beta = l > rest ? hk * (1.0 - rest * inv_l) : 0.0;
+    const double alpha = a.h * a.damping[j] + hk - beta;
+    a.weight_axial[j] = alpha;
+    a.weight_isotropic[j] = beta;
+    const double ax = alpha * n.x(), ay = alpha * n.y(), az = alpha * n.z();
+    const double w00 = ax * n.x() + beta, w11 = ay * n.y() + beta, w22 = az * n.z() + beta;
+    const double w01 = ax * n.y(), w02 = ax * n.z(), w12 = ay * n.z();
+    sum.w00 += w00;
+    sum.w01 += w01;
+    sum.w02 += w02;
+    sum.w11 += w11;
+    sum.w12 += w12;
+    sum.w22 += w22;
+    add_symmetric(a.block[hi], w00, w01, w02, w11, w12, w22);
+    // h² k K̃ (v_h − v_k) = (hk − β) d̂ (d̂ · dv) + β dv: + on row k, − on row h.
+    const Vec3 kv = ((hk - beta) * n_dv) * n + beta * dv;
+    sum.rhs += kv;
+    a.rhs[hi] -= kv;
+  }
+}
+
+/// One component of two consecutive springs (one SSE2 register).
+using Pair = Eigen::Array2d;
+
+inline Pair load_pair(const double* p) noexcept { return Eigen::Map<const Pair>(p); }
+inline void store_pair(double* p, const Pair& v) noexcept {
+  Eigen::Map<Pair> m(p);
+  m = v;
+}
+
 /// The springs' pass of compute_net_forces(), in the sweep order (grouped by
-/// their smaller node k, whose sums stay in registers): forces, and with
-/// kImplicit the linearisation of the implicit solve — the weights
-/// W_e = α d̂d̂ᵀ + β I (SweepSpring), their sum into both nodes' diagonal
+/// their earlier node k in NetScratch::sweep_order, whose sums stay in
+/// registers), two springs of a node at a time (the same law as
+/// one_spring(), lane by lane: the same operations and roundings): forces,
+/// and with kImplicit the linearisation of the implicit solve — the weights
+/// W_e = α d̂d̂ᵀ + β I (SweepSprings), their sum into both nodes' diagonal
 /// blocks, and the spring part of the node rows' right-hand side,
 /// −h² k K̃ (v_i − v_j) with k K̃ = (h² k − β)/h² d̂d̂ᵀ + β/h² I
 /// (net_solve.hpp). Expects force = gravity + ties and, with kImplicit,
 /// block = 0 and rhs = 0 on entry.
 template <bool kImplicit>
-void spring_pass(const Model& model, Data& data) noexcept {
+void spring_pass(Data& data) noexcept {
   NetScratch& s = data.net;
-  const double h = data.solver.system_step;  // h_s of the linearised system (integrator.hpp)
-  const double h2 = h * h;
-  // Raw pointers: the stores below would otherwise make the compiler reload
-  // every vector's data pointer per spring.
-  const NodeState* nodes = data.nodes.data();
-  const SweepSpringConstants* constants = s.spring_constants.data();
+  SweepSprings& sw = s.sweep_springs;
+  const double h = data.solver.system_step;
+  const SpringPass a{data.nodes.data(),
+                     s.spring_constants.rest_length.data(),
+                     s.spring_constants.stiffness.data(),
+                     s.spring_constants.damping.data(),
+                     sw.direction_x.data(),
+                     sw.direction_y.data(),
+                     sw.direction_z.data(),
+                     sw.weight_axial.data(),
+                     sw.weight_isotropic.data(),
+                     sw.high.data(),
+                     s.spring_length.data(),
+                     s.force.data(),
+                     s.block.data(),
+                     s.rhs.data(),
+                     h,
+                     h * h};
   const std::int32_t* low_begin = s.spring_low_begin.data();
-  SweepSpring* springs = s.sweep_springs.data();
-  double* lengths = s.spring_length.data();
-  Vec3* force = s.force.data();
-  Mat3* block = s.block.data();
-  Vec3* rhs = s.rhs.data();
+  const std::int32_t* order = s.sweep_order.data();
+  const Pair hp = Pair::Constant(a.h), h2p = Pair::Constant(a.h2);
   const std::size_t n = data.nodes.size();
-  for (std::size_t k = 0; k < n; ++k) {
-    const Vec3 xk = nodes[k].position;
-    const Vec3 vk = nodes[k].velocity;
-    Vec3 fk = Vec3::Zero();
-    Vec3 bk = Vec3::Zero();
-    double s00 = 0.0, s01 = 0.0, s02 = 0.0, s11 = 0.0, s12 = 0.0, s22 = 0.0;
-    for (std::int32_t j = low_begin[k]; j < low_begin[k + 1]; ++j) {
-      const SweepSpringConstants& c = constants[j];
-      SweepSpring& sp = springs[j];
-      const auto hi = static_cast<std::size_t>(sp.high);
-      const Vec3 d = nodes[hi].position - xk;
-      const double l = d.norm();
-      const double inv_l = 1.0 / l;
-      if (l > 1e-12 * c.rest_length) sp.direction = d * inv_l;  // else: keep the last direction
-      lengths[j] = l;
-      const Vec3 n_ = sp.direction;
-      const Vec3 dv = nodes[hi].velocity - vk;
-      const double n_dv = n_.dot(dv);
-      const Vec3 f = (c.stiffness * (l - c.rest_length) + c.damping * n_dv) * n_;
-      fk += f;
-      force[hi] -= f;
+  for (std::size_t p = 0; p < n; ++p) {
+    const auto k = static_cast<std::size_t>(order[p]);
+    const Vec3 xk = a.nodes[k].position;
+    const Vec3 vk = a.nodes[k].velocity;
+    const Pair xx = Pair::Constant(xk.x()), xy = Pair::Constant(xk.y()),
+               xz = Pair::Constant(xk.z());
+    const Pair vx = Pair::Constant(vk.x()), vy = Pair::Constant(vk.y()),
+               vz = Pair::Constant(vk.z());
+    Pair fx = Pair::Zero(), fy = Pair::Zero(), fz = Pair::Zero();
+    Pair bx = Pair::Zero(), by = Pair::Zero(), bz = Pair::Zero();
+    Pair s00 = Pair::Zero(), s01 = Pair::Zero(), s02 = Pair::Zero(), s11 = Pair::Zero(),
+         s12 = Pair::Zero(), s22 = Pair::Zero();
+    std::int32_t j = low_begin[p];
+    const std::int32_t end = low_begin[p + 1];
+    for (; j + 1 < end; j += 2) {
+      const auto h0 = static_cast<std::size_t>(a.high[j]);
+      const auto h1 = static_cast<std::size_t>(a.high[j + 1]);
+      const NodeState& n0 = a.nodes[h0];
+      const NodeState& n1 = a.nodes[h1];
+      const Pair dx = Pair(n0.position.x(), n1.position.x()) - xx;
+      const Pair dy = Pair(n0.position.y(), n1.position.y()) - xy;
+      const Pair dz = Pair(n0.position.z(), n1.position.z()) - xz;
+      const Pair l = (dx * dx + dy * dy + dz * dz).sqrt();
+      const Pair inv_l = l.inverse();
+      const Pair rest = load_pair(a.rest_length + j);
+      if (l(0) > 1e-12 * rest(0) && l(1) > 1e-12 * rest(1)) {
+        store_pair(a.dir_x + j, dx * inv_l);
+        store_pair(a.dir_y + j, dy * inv_l);
+        store_pair(a.dir_z + j, dz * inv_l);
+      } else {  // a spring of zero length keeps its last direction
+        for (int e = 0; e < 2; ++e) {
+          if (!(l(e) > 1e-12 * rest(e))) continue;
+          a.dir_x[j + e] = dx(e) * inv_l(e);
+          a.dir_y[j + e] = dy(e) * inv_l(e);
+          a.dir_z[j + e] = dz(e) * inv_l(e);
+        }
+      }
+      const Pair nx = load_pair(a.dir_x + j), ny = load_pair(a.dir_y + j),
+                 nz = load_pair(a.dir_z + j);
+      store_pair(a.length + j, l);
+      const Pair dvx = Pair(n0.velocity.x(), n1.velocity.x()) - vx;
+      const Pair dvy = Pair(n0.velocity.y(), n1.velocity.y()) - vy;
+      const Pair dvz = Pair(n0.velocity.z(), n1.velocity.z()) - vz;
+      const Pair n_dv = nx * dvx + ny * dvy + nz * dvz;
+      const Pair stiffness = load_pair(a.stiffness + j), damping = load_pair(a.damping + j);
+      const Pair fs = stiffness * (l - rest) + damping * n_dv;
+      const Pair gx = fs * nx, gy = fs * ny, gz = fs * nz;
+      fx += gx;
+      fy += gy;
+      fz += gz;
+      a.force[h0] -= Vec3(gx(0), gy(0), gz(0));
+      a.force[h1] -= Vec3(gx(1), gy(1), gz(1));
       if constexpr (kImplicit) {
-        // K̃ = (1 − τ) d̂d̂ᵀ + τ I, τ = max(0, 1 − L/l): −∂f_k/∂x_k / k.
-        const double hk = h2 * c.stiffness;
-        const double beta = l > c.rest_length ? hk * (1.0 - c.rest_length * inv_l) : 0.0;
-        const double alpha = h * c.damping + hk - beta;
-        sp.weight_axial = alpha;
-        sp.weight_isotropic = beta;
-        const double ax = alpha * n_.x(), ay = alpha * n_.y(), az = alpha * n_.z();
-        const double w00 = ax * n_.x() + beta, w11 = ay * n_.y() + beta, w22 = az * n_.z() + beta;
-        const double w01 = ax * n_.y(), w02 = ax * n_.z(), w12 = ay * n_.z();
+        const Pair hk = h2p * stiffness;
+        // β = hk (1 − L/l) if l > L else 0, as max(0, ·) (SSE2 maxpd; Eigen's pmax(a, b)
+        // returns a when b is NaN: 0 for l = 0, as the comparison gives).
+        const Pair beta = Pair::Zero().max(hk * (1.0 - rest * inv_l));
+        const Pair alpha = hp * damping + hk - beta;
+        store_pair(a.weight_axial + j, alpha);
+        store_pair(a.weight_isotropic + j, beta);
+        const Pair ax = alpha * nx, ay = alpha * ny, az = alpha * nz;
+        const Pair w00 = ax * nx + beta, w11 = ay * ny + beta, w22 = az * nz + beta;
+        const Pair w01 = ax * ny, w02 = ax * nz, w12 = ay * nz;
         s00 += w00;
         s01 += w01;
         s02 += w02;
         s11 += w11;
         s12 += w12;
         s22 += w22;
-        Mat3& bh = block[hi];
-        bh(0, 0) += w00;
-        bh(0, 1) += w01;
-        bh(0, 2) += w02;
-        bh(1, 0) += w01;
-        bh(1, 1) += w11;
-        bh(1, 2) += w12;
-        bh(2, 0) += w02;
-        bh(2, 1) += w12;
-        bh(2, 2) += w22;
-        // h² k K̃ (v_h − v_k) = (hk − β) d̂ (d̂ · dv) + β dv: + on row k, − on row h.
-        const Vec3 kv = ((hk - beta) * n_dv) * n_ + beta * dv;
-        bk += kv;
-        rhs[hi] -= kv;
+        add_symmetric(a.block[h0], w00(0), w01(0), w02(0), w11(0), w12(0), w22(0));
+        add_symmetric(a.block[h1], w00(1), w01(1), w02(1), w11(1), w12(1), w22(1));
+        const Pair c = (hk - beta) * n_dv;
+        const Pair kx = c * nx + beta * dvx, ky = c * ny + beta * dvy, kz = c * nz + beta * dvz;
+        bx += kx;
+        by += ky;
+        bz += kz;
+        a.rhs[h0] -= Vec3(kx(0), ky(0), kz(0));
+        a.rhs[h1] -= Vec3(kx(1), ky(1), kz(1));
       }
     }
-    force[k] += fk;
+    NodeSums sum;
+    sum.force = Vec3(fx(0) + fx(1), fy(0) + fy(1), fz(0) + fz(1));
+    sum.rhs = Vec3(bx(0) + bx(1), by(0) + by(1), bz(0) + bz(1));
+    sum.w00 = s00(0) + s00(1);
+    sum.w01 = s01(0) + s01(1);
+    sum.w02 = s02(0) + s02(1);
+    sum.w11 = s11(0) + s11(1);
+    sum.w12 = s12(0) + s12(1);
+    sum.w22 = s22(0) + s22(1);
+    if (j < end) one_spring<kImplicit>(a, j, xk, vk, sum);
+    a.force[k] += sum.force;
     if constexpr (kImplicit) {
-      rhs[k] += bk;
-      Mat3& b = block[k];
-      b(0, 0) += s00;
-      b(0, 1) += s01;
-      b(0, 2) += s02;
-      b(1, 0) += s01;
-      b(1, 1) += s11;
-      b(1, 2) += s12;
-      b(2, 0) += s02;
-      b(2, 1) += s12;
-      b(2, 2) += s22;
+      a.rhs[k] += sum.rhs;
+      add_symmetric(a.block[k], sum.w00, sum.w01, sum.w02, sum.w11, sum.w12, sum.w22);
     }
   }
 }
@@ -157,9 +294,9 @@ void compute_net_forces(const Model& model, Data& data) noexcept {
 
   // Structural and bending springs (and their linearisation).
   if (implicit) {
-    spring_pass<true>(model, data);
+    spring_pass<true>(data);
   } else {
-    spring_pass<false>(model, data);
+    spring_pass<false>(data);
   }
 
   // Node contacts (penalty law of contact_force.hpp, the node on side a).

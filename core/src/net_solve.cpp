@@ -114,13 +114,118 @@ bool couples_body(const SolverScratch& s, const NodeContact& c) noexcept {
   return c.active && c.body_b >= 0 && s.in_solve[static_cast<std::size_t>(c.body_b)];
 }
 
-/// W_e v = α d̂ (d̂ · v) + β v for a spring, in plain scalar code (the inner
-/// loop of both sweeps).
-inline Vec3 spring_times(const SweepSpring& t, const Vec3& v) noexcept {
-  const Vec3& n = t.direction;
-  const double s = t.weight_axial * (n.x() * v.x() + n.y() * v.y() + n.z() * v.z());
-  return Vec3(s * n.x() + t.weight_isotropic * v.x(), s * n.y() + t.weight_isotropic * v.y(),
-              s * n.z() + t.weight_isotropic * v.z());
+/// The springs of NetScratch::sweep_springs as raw pointers (the sweeps'
+/// stores would otherwise make the compiler reload the vectors' data
+/// pointers) and their grouping by earlier node in the sweep order.
+struct SpringView {
+  const double* nx;
+  const double* ny;
+  const double* nz;
+  const double* alpha;
+  const double* beta;
+  const std::int32_t* high;
+  const std::int32_t* low_begin;
+  explicit SpringView(const NetScratch& ns) noexcept
+      : nx(ns.sweep_springs.direction_x.data()),
+        ny(ns.sweep_springs.direction_y.data()),
+        nz(ns.sweep_springs.direction_z.data()),
+        alpha(ns.sweep_springs.weight_axial.data()),
+        beta(ns.sweep_springs.weight_isotropic.data()),
+        high(ns.sweep_springs.high.data()),
+        low_begin(ns.spring_low_begin.data()) {}
+};
+
+/// W_j v = α d̂ (d̂ · v) + β v for spring j, in plain scalar code.
+inline Vec3 spring_times(const SpringView& s, std::int32_t j, const Vec3& v) noexcept {
+  const double nx = s.nx[j], ny = s.ny[j], nz = s.nz[j], b = s.beta[j];
+  const double t = s.alpha[j] * (nx * v.x() + ny * v.y() + nz * v.z());
+  return Vec3(t * nx + b * v.x(), t * ny + b * v.y(), t * nz + b * v.z());
+}
+
+/// A_kk⁻¹ v from a sweep node's 6 entries (the same products and sums as
+/// the full 3×3 product).
+inline Vec3 inverse_times(const SweepNode& nd, const Vec3& v) noexcept {
+  const double* m = nd.inverse;
+  return Vec3(m[0] * v.x() + m[1] * v.y() + m[2] * v.z(), m[1] * v.x() + m[3] * v.y() + m[4] * v.z(),
+              m[2] * v.x() + m[4] * v.y() + m[5] * v.z());
+}
+
+/// One component of two consecutive springs (one SSE2 register): the sweeps
+/// handle a node's springs two at a time, lane by lane.
+using Pair = Eigen::Array2d;
+
+inline Pair load_pair(const double* p) noexcept { return Eigen::Map<const Pair>(p); }
+
+/// Σ_j W_j v_high(j) over springs [begin, end) (the backward sweep's gather).
+/// Always inlined: called once per node, its set-up must be hoisted.
+[[gnu::always_inline]] inline Vec3 gather_springs(const SpringView& s, std::int32_t begin,
+                                                  std::int32_t end, const Vec3* v) noexcept {
+  Pair ax = Pair::Zero(), ay = Pair::Zero(), az = Pair::Zero();
+  std::int32_t j = begin;
+  for (; j + 1 < end; j += 2) {
+    const Vec3& a = v[s.high[j]];
+    const Vec3& b = v[s.high[j + 1]];
+    const Pair vx(a.x(), b.x()), vy(a.y(), b.y()), vz(a.z(), b.z());
+    const Pair nx = load_pair(s.nx + j), ny = load_pair(s.ny + j), nz = load_pair(s.nz + j);
+    const Pair t = load_pair(s.alpha + j) * (nx * vx + ny * vy + nz * vz);
+    const Pair beta = load_pair(s.beta + j);
+    ax += t * nx + beta * vx;
+    ay += t * ny + beta * vy;
+    az += t * nz + beta * vz;
+  }
+  Vec3 sum(ax(0) + ax(1), ay(0) + ay(1), az(0) + az(1));
+  if (j < end) sum += spring_times(s, j, v[s.high[j]]);
+  return sum;
+}
+
+/// out_high(j) += W_j y over springs [begin, end) (the forward sweep's scatter).
+[[gnu::always_inline]] inline void scatter_springs(const SpringView& s, std::int32_t begin,
+                                                   std::int32_t end, const Vec3& y,
+                                                   Vec3* out) noexcept {
+  const Pair yx = Pair::Constant(y.x()), yy = Pair::Constant(y.y()), yz = Pair::Constant(y.z());
+  std::int32_t j = begin;
+  for (; j + 1 < end; j += 2) {
+    const Pair nx = load_pair(s.nx + j), ny = load_pair(s.ny + j), nz = load_pair(s.nz + j);
+    const Pair t = load_pair(s.alpha + j) * (nx * yx + ny * yy + nz * yz);
+    const Pair beta = load_pair(s.beta + j);
+    const Pair wx = t * nx + beta * yx, wy = t * ny + beta * yy, wz = t * nz + beta * yz;
+    Vec3& a = out[s.high[j]];
+    a.x() += wx(0);
+    a.y() += wy(0);
+    a.z() += wz(0);
+    Vec3& b = out[s.high[j + 1]];
+    b.x() += wx(1);
+    b.y() += wy(1);
+    b.z() += wz(1);
+  }
+  if (j < end) out[s.high[j]] += spring_times(s, j, y);
+}
+
+/// scatter_springs() of two values at once (each spring read once):
+/// out1_high(j) += W_j y1, out2_high(j) += W_j y2.
+[[gnu::always_inline]] inline void scatter_springs2(const SpringView& s, std::int32_t begin,
+                                                    std::int32_t end, const Vec3& y1, Vec3* out1,
+                                                    const Vec3& y2, Vec3* out2) noexcept {
+  const Pair ux = Pair::Constant(y1.x()), uy = Pair::Constant(y1.y()), uz = Pair::Constant(y1.z());
+  const Pair vx = Pair::Constant(y2.x()), vy = Pair::Constant(y2.y()), vz = Pair::Constant(y2.z());
+  std::int32_t j = begin;
+  for (; j + 1 < end; j += 2) {
+    const Pair nx = load_pair(s.nx + j), ny = load_pair(s.ny + j), nz = load_pair(s.nz + j);
+    const Pair alpha = load_pair(s.alpha + j), beta = load_pair(s.beta + j);
+    const Pair tu = alpha * (nx * ux + ny * uy + nz * uz);
+    const Pair tv = alpha * (nx * vx + ny * vy + nz * vz);
+    const Pair wx = tu * nx + beta * ux, wy = tu * ny + beta * uy, wz = tu * nz + beta * uz;
+    const Pair zx = tv * nx + beta * vx, zy = tv * ny + beta * vy, zz = tv * nz + beta * vz;
+    const auto h0 = s.high[j], h1 = s.high[j + 1];
+    out1[h0] += Vec3(wx(0), wy(0), wz(0));
+    out1[h1] += Vec3(wx(1), wy(1), wz(1));
+    out2[h0] += Vec3(zx(0), zy(0), zz(0));
+    out2[h1] += Vec3(zx(1), zy(1), zz(1));
+  }
+  if (j < end) {
+    out1[s.high[j]] += spring_times(s, j, y1);
+    out2[s.high[j]] += spring_times(s, j, y2);
+  }
 }
 
 /// out = A · in over bodies and nodes (see net_solve.hpp for A).
@@ -134,16 +239,18 @@ void apply_coupled(const Model& model, const Data& data, std::span<const Vec6> i
   // off-diagonal blocks at once), each node contact's W p_i, the ties' and
   // node–body contacts' off-diagonal blocks.
   for (std::size_t i = 0; i < in_n.size(); ++i) out_n[i] = ns.node_diagonal[i] * in_n[i];
-  // Springs by their smaller node k: w = W_e (p_k − p_high), + on row k, − on row high.
+  // Springs by their earlier node k in the sweep order: w = W_e (p_k − p_high), + on row k,
+  // − on row high.
   const Vec3* x = in_n.data();
   Vec3* y = out_n.data();
-  const SweepSpring* springs = ns.sweep_springs.data();
-  const std::int32_t* low_begin = ns.spring_low_begin.data();
-  for (std::size_t k = 0; k < in_n.size(); ++k) {
+  const SpringView sp(ns);
+  const std::int32_t* order = ns.sweep_order.data();
+  for (std::size_t p = 0; p < in_n.size(); ++p) {
+    const auto k = static_cast<std::size_t>(order[p]);
     Vec3 acc = Vec3::Zero();
-    for (std::int32_t j = low_begin[k]; j < low_begin[k + 1]; ++j) {
-      const auto hi = static_cast<std::size_t>(springs[j].high);
-      const Vec3 w = spring_times(springs[j], x[k] - x[hi]);
+    for (std::int32_t j = sp.low_begin[p]; j < sp.low_begin[p + 1]; ++j) {
+      const auto hi = static_cast<std::size_t>(sp.high[j]);
+      const Vec3 w = spring_times(sp, j, x[k] - x[hi]);
       acc += w;
       y[hi] -= w;
     }
@@ -275,6 +382,20 @@ void build_net_system(const Model& model, Data& data) noexcept {
   }
   for (std::size_t i = 0; i < ns.block.size(); ++i)
     inverse_symmetric(ns.block[i], ns.block_inverse[i]);
+  if (model.joints.empty()) {  // the SSOR sweeps' copy, in their order
+    for (std::size_t p = 0; p < ns.sweep_nodes.size(); ++p) {
+      const auto k = static_cast<std::size_t>(ns.sweep_order[p]);
+      const Mat3& x = ns.block_inverse[k];
+      SweepNode& nd = ns.sweep_nodes[p];
+      nd.inverse[0] = x(0, 0);
+      nd.inverse[1] = x(0, 1);
+      nd.inverse[2] = x(0, 2);
+      nd.inverse[3] = x(1, 1);
+      nd.inverse[4] = x(1, 2);
+      nd.inverse[5] = x(2, 2);
+      nd.lever = ns.lever[k];
+    }
+  }
 
   // The arrowhead preconditioner of the jointed solve: Schur blocks of the
   // bodies, S_b = A_bb − Σ c² J_iᵀ A_ii⁻¹ J_i (without joints the bodies' D̃
@@ -457,10 +578,9 @@ void backward_sweep(const Model& model, const Data& data, double beta, const Vec
   const NetScratch& ns = data.net;
   const double h = data.solver.system_step;  // h_s of the linearised system (integrator.hpp)
   const std::size_t nb = q_b.size();
-  const SweepSpring* springs = ns.sweep_springs.data();
-  const std::int32_t* low_begin = ns.spring_low_begin.data();
-  const Mat3* block_inverse = ns.block_inverse.data();
-  const Vec3* lever = ns.lever.data();
+  const SpringView sp(ns);
+  const std::int32_t* order = ns.sweep_order.data();
+  const SweepNode* nodes = ns.sweep_nodes.data();
   for (Vec6& v : g_b) v.setZero();
   // Nodes, last to first: (D̃+Lᵀ) has, in node k's row, −W_e towards every
   // larger node of a spring (and nothing towards the bodies, which come
@@ -471,16 +591,14 @@ void backward_sweep(const Model& model, const Data& data, double beta, const Vec
     const auto body = static_cast<std::size_t>(net->body);
     const bool tied = s.in_solve[body] != 0;
     Vec6 tie = Vec6::Zero();  // Σ J_iᵀ t_i
-    for (int v = net->node_begin + net->node_count - 1; v >= net->node_begin; --v) {
-      const auto k = static_cast<std::size_t>(v);
-      Vec3 sum = Vec3::Zero();
-      for (std::int32_t j = low_begin[k]; j < low_begin[k + 1]; ++j)
-        sum += spring_times(springs[j], t_n[static_cast<std::size_t>(springs[j].high)]);
+    for (int p = net->node_begin + net->node_count - 1; p >= net->node_begin; --p) {
+      const auto k = static_cast<std::size_t>(order[p]);
+      const Vec3 sum = gather_springs(sp, sp.low_begin[p], sp.low_begin[p + 1], t_n);
       g_n[k] = -sum;
       if constexpr (kUpdateQ) q_n[k] = d_n[k] + beta * q_n[k];
-      const Vec3 t = block_inverse[k] * (q_n[k] + sum);
+      const Vec3 t = inverse_times(nodes[p], q_n[k] + sum);
       t_n[k] = t;
-      if (tied) tie += generalized_force(t, lever[k]);
+      if (tied) tie += generalized_force(t, nodes[p].lever);
     }
     if (tied) g_b[body] -= tie_weight(*net, h) * tie;  // A_bi = −c J_iᵀ
   }
@@ -516,10 +634,9 @@ double forward_sweep(const Model& model, const Data& data, std::span<const Vec6>
   const NetScratch& ns = data.net;
   const double h = data.solver.system_step;  // h_s of the linearised system (integrator.hpp)
   const std::size_t nb = g_b.size();
-  const SweepSpring* springs = ns.sweep_springs.data();
-  const std::int32_t* low_begin = ns.spring_low_begin.data();
-  const Mat3* block_inverse = ns.block_inverse.data();
-  const Vec3* lever = ns.lever.data();
+  const SpringView sp(ns);
+  const std::int32_t* order = ns.sweep_order.data();
+  const SweepNode* nodes = ns.sweep_nodes.data();
   // Bodies first: no block of (D̃+L) left of their diagonal.
   for (std::size_t b = 0; b < nb; ++b) {
     if (s.in_solve[b]) {
@@ -531,7 +648,7 @@ double forward_sweep(const Model& model, const Data& data, std::span<const Vec6>
   // Node rows' right-hand sides: g_i − A_ib y_b for the node–body contacts
   // (the ties' are added in the sweep).
   if (y_n != g_n)
-    for (std::size_t i = 0; i < ns.block_inverse.size(); ++i) y_n[i] = g_n[i];
+    for (std::size_t i = 0; i < ns.sweep_nodes.size(); ++i) y_n[i] = g_n[i];
   const int nc = node_contact_count(data);
   for (int c = 0; c < nc; ++c) {
     const NodeContact& ct = data.node_contacts[static_cast<std::size_t>(c)];
@@ -547,12 +664,14 @@ double forward_sweep(const Model& model, const Data& data, std::span<const Vec6>
   for (const NetModel& net : model.nets) {
     const auto body = static_cast<std::size_t>(net.body);
     const bool tied = s.in_solve[body] != 0;
-    const double c = tie_weight(net, h);
-    for (int v = net.node_begin; v < net.node_begin + net.node_count; ++v) {
-      const auto k = static_cast<std::size_t>(v);
+    // c J_k y_b = c v_b + (c ω_b) × ρ_k.
+    const double c = tied ? tie_weight(net, h) : 0.0;
+    const Vec3 cv = c * y_b[body].head<3>(), cw = c * y_b[body].tail<3>();
+    for (int p = net.node_begin; p < net.node_begin + net.node_count; ++p) {
+      const auto k = static_cast<std::size_t>(order[p]);
       Vec3 acc = y_n[k];
-      if (tied) acc += c * point_velocity(y_b[body], lever[k]);
-      const Vec3 y = block_inverse[k] * acc;
+      if (tied) acc += cv + cw.cross(nodes[p].lever);
+      const Vec3 y = inverse_times(nodes[p], acc);
       if constexpr (kAddT) {
         const Vec3 kq = y + t_n[k];
         y_n[k] = kq;
@@ -560,8 +679,7 @@ double forward_sweep(const Model& model, const Data& data, std::span<const Vec6>
       } else {
         y_n[k] = y;
       }
-      for (std::int32_t j = low_begin[k]; j < low_begin[k + 1]; ++j)
-        y_n[static_cast<std::size_t>(springs[j].high)] += spring_times(springs[j], y);
+      scatter_springs(sp, sp.low_begin[p], sp.low_begin[p + 1], y, y_n);
     }
   }
   if constexpr (kAddT) {
@@ -591,8 +709,9 @@ double net_start_sweep(const Model& model, Data& data, std::span<const Vec3> x0_
   NetScratch& ns = data.net;
   const double h = data.solver.system_step;  // h_s of the linearised system (integrator.hpp)
   const std::size_t nb = w_b.size();
-  const SweepSpring* springs = ns.sweep_springs.data();
-  const std::int32_t* low_begin = ns.spring_low_begin.data();
+  const SpringView sp(ns);
+  const std::int32_t* order = ns.sweep_order.data();
+  const SweepNode* nodes = ns.sweep_nodes.data();
   const std::span<Vec6> g_b(ns.body_tmp);
   // Body rows: g_b = b_b − (Lᵀ x0)_b.
   for (std::size_t b = 0; b < nb; ++b) g_b[b] = s.in_solve[b] ? s.rhs[b] : Vec6::Zero();
@@ -648,26 +767,21 @@ double net_start_sweep(const Model& model, Data& data, std::span<const Vec3> x0_
     const auto body = static_cast<std::size_t>(net.body);
     const bool tied = s.in_solve[body] != 0;
     const double c = tie_weight(net, h);
-    for (int v = net.node_begin; v < net.node_begin + net.node_count; ++v) {
-      const auto k = static_cast<std::size_t>(v);
+    for (int p = net.node_begin; p < net.node_begin + net.node_count; ++p) {
+      const auto k = static_cast<std::size_t>(order[p]);
       Vec3 acc_w = w[k];
       Vec3 acc_y = y[k];
       if (tied) {
-        acc_w += c * point_velocity(w_b[body], ns.lever[k]);
-        acc_y += c * point_velocity(y_b[body], ns.lever[k]);
+        acc_w += c * point_velocity(w_b[body], nodes[p].lever);
+        acc_y += c * point_velocity(y_b[body], nodes[p].lever);
       }
-      for (std::int32_t j = low_begin[k]; j < low_begin[k + 1]; ++j)
-        acc_w += spring_times(springs[j], x0[static_cast<std::size_t>(springs[j].high)]);
-      const Vec3 wk = ns.block_inverse[k] * acc_w;  // before subtracting x0_k
-      const Vec3 yk = ns.block_inverse[k] * acc_y;
+      acc_w += gather_springs(sp, sp.low_begin[p], sp.low_begin[p + 1], x0);
+      const Vec3 wk = inverse_times(nodes[p], acc_w);  // before subtracting x0_k
+      const Vec3 yk = inverse_times(nodes[p], acc_y);
       ref += yk.dot(acc_y);
       w[k] = wk - x0[k];
       y[k] = yk;
-      for (std::int32_t j = low_begin[k]; j < low_begin[k + 1]; ++j) {
-        const auto hi = static_cast<std::size_t>(springs[j].high);
-        w[hi] += spring_times(springs[j], wk);
-        y[hi] += spring_times(springs[j], yk);
-      }
+      scatter_springs2(sp, sp.low_begin[p], sp.low_begin[p + 1], wk, w, yk, y);
     }
   }
   return ref;

@@ -4,10 +4,23 @@
 #include "numen/core/net_state.hpp"
 
 #include <algorithm>
+#include <cstddef>
+
+#include <boost/graph/adjacency_list.hpp>
+#include <boost/graph/cuthill_mckee_ordering.hpp>
 
 #include "numen/core/model.hpp"
 
 namespace numen::core {
+
+void SweepSprings::assign(std::size_t n) {
+  direction_x.assign(n, 1.0);
+  direction_y.assign(n, 0.0);
+  direction_z.assign(n, 0.0);
+  weight_axial.assign(n, 0.0);
+  weight_isotropic.assign(n, 0.0);
+  high.assign(n, 0);
+}
 
 void NetScratch::resize(const Model& model) {
   const auto n = static_cast<std::size_t>(model.num_nodes());
@@ -28,16 +41,45 @@ void NetScratch::resize(const Model& model) {
   sweep.assign(n, Vec3::Zero());
   body_schur.assign(nb, Mat6::Identity());
   body_tmp.assign(nb, Vec6::Zero());
-  // Springs by their smaller node (counting sort: stable, so each node's
-  // springs stay in Model::net_springs order).
-  sweep_springs.assign(num_springs, SweepSpring{});
-  spring_constants.assign(num_springs, SweepSpringConstants{});
+  // Sweep order: reverse Cuthill–McKee per net (Boost.Graph), positions kept per net.
+  sweep_order.assign(n, 0);
+  sweep_position.assign(n, 0);
+  sweep_nodes.assign(n, SweepNode{});
+  for (const NetModel& net : model.nets) {
+    using Graph = boost::adjacency_list<
+        boost::vecS, boost::vecS, boost::undirectedS,
+        boost::property<boost::vertex_color_t, boost::default_color_type,
+                        boost::property<boost::vertex_degree_t, int>>>;
+    Graph g(static_cast<std::size_t>(net.node_count));
+    for (int e = net.spring_begin; e < net.spring_begin + net.structural_count + net.bending_count;
+         ++e) {
+      const NetSpring& sp = model.net_springs[static_cast<std::size_t>(e)];
+      boost::add_edge(static_cast<std::size_t>(sp.node_a - net.node_begin),
+                      static_cast<std::size_t>(sp.node_b - net.node_begin), g);
+    }
+    std::vector<std::size_t> order(static_cast<std::size_t>(net.node_count));
+    boost::cuthill_mckee_ordering(g, order.rbegin(), boost::get(boost::vertex_color, g),
+                                  boost::make_degree_map(g));
+    for (std::size_t p = 0; p < order.size(); ++p) {
+      const auto node = static_cast<std::int32_t>(order[p]) + net.node_begin;
+      const auto pos = static_cast<std::int32_t>(p) + net.node_begin;
+      sweep_order[static_cast<std::size_t>(pos)] = node;
+      sweep_position[static_cast<std::size_t>(node)] = pos;
+    }
+  }
+  // Springs by their earlier node in the sweep order (counting sort: stable,
+  // so each node's springs stay in Model::net_springs order).
+  sweep_springs.assign(num_springs);
+  spring_constants.rest_length.assign(num_springs, 0.0);
+  spring_constants.stiffness.assign(num_springs, 0.0);
+  spring_constants.damping.assign(num_springs, 0.0);
   spring_length.assign(num_springs, 0.0);
   spring_low_begin.assign(n > 0 ? n + 1 : 0, 0);
   spring_slot.assign(num_springs, 0);
   if (n > 0) {
-    const auto low = [](const NetSpring& sp) {
-      return static_cast<std::size_t>(std::min(sp.node_a, sp.node_b));
+    const auto pos = [&](int node) { return sweep_position[static_cast<std::size_t>(node)]; };
+    const auto low = [&](const NetSpring& sp) {
+      return static_cast<std::size_t>(std::min(pos(sp.node_a), pos(sp.node_b)));
     };
     for (std::size_t e = 0; e < num_springs; ++e) ++spring_low_begin[low(model.net_springs[e]) + 1];
     for (std::size_t i = 0; i < n; ++i) spring_low_begin[i + 1] += spring_low_begin[i];
@@ -47,8 +89,10 @@ void NetScratch::resize(const Model& model) {
       const std::int32_t slot = next[low(sp)]++;
       spring_slot[e] = slot;
       const auto j = static_cast<std::size_t>(slot);
-      sweep_springs[j].high = std::max(sp.node_a, sp.node_b);
-      spring_constants[j] = SweepSpringConstants{sp.rest_length, sp.stiffness, sp.damping};
+      sweep_springs.high[j] = pos(sp.node_a) < pos(sp.node_b) ? sp.node_b : sp.node_a;
+      spring_constants.rest_length[j] = sp.rest_length;
+      spring_constants.stiffness[j] = sp.stiffness;
+      spring_constants.damping[j] = sp.damping;
     }
   }
   const auto no = n > 0 ? model.obstacles.size() : 0;

@@ -33,7 +33,7 @@ namespace {
 std::size_t at(int i) { return static_cast<std::size_t>(i); }
 
 /// The linearisation of spring e of Model::net_springs (stored in the sweep order).
-const core::SweepSpring& spring_term(const core::Data& d, int e) {
+core::SweepSpring spring_term(const core::Data& d, int e) {
   return d.net.sweep_springs[at(d.net.spring_slot[at(e)])];
 }
 

@@ -650,12 +650,14 @@ VectorXd join(const Split& s) {
 
 /// The splitting of net_solve.hpp from the dense A: D̃ (6×6 body and 3×3
 /// node diagonal blocks), D (D̃ plus the body–body off-diagonal blocks), L
-/// (strictly lower blocks below the body–body part).
+/// (strictly lower blocks below the body–body part, the nodes taken in the
+/// sweep order NetScratch::sweep_order: node i's row holds the node–body
+/// blocks and the blocks of the nodes before i in that order).
 struct Splitting {
   MatrixXd d_tilde, d, l;
 };
 
-Splitting dense_splitting(const core::Model& m, const MatrixXd& a) {
+Splitting dense_splitting(const core::Model& m, const core::Data& data, const MatrixXd& a) {
   const int nb6 = 6 * m.num_bodies();
   const int dim = static_cast<int>(a.rows());
   Splitting s{MatrixXd::Zero(dim, dim), MatrixXd::Zero(dim, dim), MatrixXd::Zero(dim, dim)};
@@ -664,7 +666,13 @@ Splitting dense_splitting(const core::Model& m, const MatrixXd& a) {
   for (int r = nb6; r < dim; r += 3) s.d_tilde.block<3, 3>(r, r) = a.block<3, 3>(r, r);
   s.d = s.d_tilde;
   s.d.topLeftCorner(nb6, nb6) = a.topLeftCorner(nb6, nb6);
-  for (int r = nb6; r < dim; r += 3) s.l.block(r, 0, 3, r) = a.block(r, 0, 3, r);
+  const auto position = [&](int node) { return data.net.sweep_position[at(node)]; };
+  for (int i = 0; i < m.num_nodes(); ++i) {
+    const int r = nb6 + 3 * i;
+    s.l.block(r, 0, 3, nb6) = a.block(r, 0, 3, nb6);
+    for (int j = 0; j < m.num_nodes(); ++j)
+      if (position(j) < position(i)) s.l.block<3, 3>(r, nb6 + 3 * j) = a.block<3, 3>(r, nb6 + 3 * j);
+  }
   return s;
 }
 
@@ -700,7 +708,7 @@ TEST(NetSolve, EisenstatSplittingAndPreconditionedProductMatchTheDenseMatrix) {
   ASSERT_EQ(d.node_contacts[2].body_b, 1);  // a node–body block in L
   const MatrixXd& a = st.ref.a;
   const int dim = static_cast<int>(a.rows());
-  const Splitting sp = dense_splitting(m, a);
+  const Splitting sp = dense_splitting(m, d, a);
   EXPECT_GT(sp.l.norm(), 0.0);
   EXPECT_GT((sp.d - sp.d_tilde).norm(), 0.0);
   const MatrixXd lower = sp.d_tilde + sp.l;                        // D̃ + L
@@ -758,7 +766,7 @@ TEST(NetSolve, ReportsTheResidualInTheNormOfThePreconditioner) {
   const core::Data& d = st.d;
   EXPECT_TRUE(st.converged);
   const MatrixXd& a = st.ref.a;
-  const Splitting sp = dense_splitting(m, a);
+  const Splitting sp = dense_splitting(m, d, a);
   const MatrixXd lower = sp.d_tilde + sp.l;
   // M = (D̃+L) D̃⁻¹ (D̃+Lᵀ), symmetric positive definite.
   const MatrixXd precond = lower * sp.d_tilde.inverse() * lower.transpose();

@@ -4,6 +4,7 @@
 /// (net_model.hpp), held by core::Data. Sized once by make_data(); empty for
 /// a model without nets (a scene pays only for what it has).
 
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
@@ -51,27 +52,59 @@ struct NetOutput {
   double max_penetration = 0.0;    ///< Deepest node contact this step (m).
 };
 
-/// Linearisation of one spring for the implicit solve, stored in the order
-/// of the SSOR sweeps (NetScratch::sweep_springs; net_solve.hpp) and
-/// written by compute_net_forces() (direction always, the weights with the
-/// linearly implicit integrator): the spring's contribution to
+/// Linearisation of one spring for the implicit solve (a copy of one entry
+/// of SweepSprings; tests and diagnostics): the spring's contribution to
 /// A = M − hD − h²K is W_e = α d̂d̂ᵀ + β I on the two diagonal blocks and −W_e
 /// off the diagonal.
 struct SweepSpring {
-  /// d̂ = d / l, d = x_high − x_low (from the smaller node to the larger) at the
-  /// step's start; a spring of zero length keeps its last direction.
+  /// d̂ = d / l, d = x_high − x_low (from the spring's node earlier in the
+  /// sweep order to the later one, NetScratch::sweep_order) at the step's
+  /// start; a spring of zero length keeps its last direction.
   Vec3 direction = Vec3::UnitX();
   double weight_axial = 0.0;       ///< α = h γ + h² k − β (kg = N·s²/m).
   double weight_isotropic = 0.0;   ///< β = h² k max(0, 1 − L/l) (kg).
-  std::int32_t high = 0;           ///< The larger of the spring's two nodes (global index).
+  std::int32_t high = 0;           ///< The spring's node later in the sweep order (global index).
 };
 
-/// A spring's constants (NetSpring) copied in the sweep order by
-/// NetScratch::resize(), so that the force pass reads one array in order.
+/// The springs' linearisation in the order of the SSOR sweeps
+/// (NetScratch::sweep_springs; net_solve.hpp), as a structure of arrays —
+/// one array per component, so that the sweeps load two consecutive springs'
+/// components with one SIMD load and handle two springs at once. Written by
+/// compute_net_forces() (directions always, the weights with the linearly
+/// implicit integrator); the fields are those of SweepSpring.
+struct SweepSprings {
+  std::vector<double> direction_x, direction_y, direction_z;  ///< d̂ (unit, world).
+  std::vector<double> weight_axial;      ///< α (kg).
+  std::vector<double> weight_isotropic;  ///< β (kg).
+  std::vector<std::int32_t> high;        ///< Node later in the sweep order (global index).
+  /// Number of springs.
+  std::size_t size() const noexcept { return high.size(); }
+  /// Spring j (< size()) as one value.
+  SweepSpring operator[](std::size_t j) const noexcept {
+    return SweepSpring{Vec3(direction_x[j], direction_y[j], direction_z[j]), weight_axial[j],
+                       weight_isotropic[j], high[j]};
+  }
+  /// Sizes every array for `n` springs (direction d̂ = x, weights 0, high 0). Allocates.
+  void assign(std::size_t n);
+};
+
+/// The springs' constants (NetSpring) copied in the sweep order by
+/// NetScratch::resize(), one array each, so that the force pass reads them
+/// in order, two springs per load.
 struct SweepSpringConstants {
-  double rest_length = 0.0;  ///< L (m).
-  double stiffness = 0.0;    ///< k (N/m).
-  double damping = 0.0;      ///< γ (N·s/m).
+  std::vector<double> rest_length;  ///< L (m).
+  std::vector<double> stiffness;    ///< k (N/m).
+  std::vector<double> damping;      ///< γ (N·s/m).
+};
+
+/// A node's part of the SSOR sweeps (net_solve.hpp), stored by sweep
+/// position (NetScratch::sweep_nodes) so that the sweeps read it in order:
+/// A_kk⁻¹ as its 6 distinct entries (it is symmetric) and the lever arm.
+/// Written by build_net_system() (model without joints).
+struct SweepNode {
+  /// A_kk⁻¹ (1/kg): entries (0,0), (0,1), (0,2), (1,1), (1,2), (2,2).
+  double inverse[6] = {1.0, 0.0, 0.0, 1.0, 0.0, 1.0};
+  Vec3 lever = Vec3::Zero();  ///< ρ = R_b r of the node (m, world), as NetScratch::lever.
 };
 
 /// Scratch of the nets' force stage and of the coupled implicit solve, sized
@@ -91,17 +124,31 @@ struct NetScratch {
   std::vector<Vec3> sweep;          ///< Nodes: g = q + (D − 2D̃) t of the Eisenstat product.
   std::vector<Mat6> body_schur;     ///< Per body: Schur block S_b of the arrowhead preconditioner (joints).
   std::vector<Vec6> body_tmp;       ///< Per body: reduced residual (joints) or g (no joints).
-  /// The springs in the order of the SSOR sweeps (grouped by their smaller
-  /// node, ascending; Model::net_springs order within a node): node i's are
-  /// [spring_low_begin[i], spring_low_begin[i + 1]). compute_net_forces()
-  /// goes through them in that order (forces and linearisation in one
-  /// pass); the backward sweep gathers them into node i's row, the forward
-  /// sweep scatters node i's value through them to the larger nodes.
-  /// Spring e of Model::net_springs is at spring_slot[e].
-  std::vector<SweepSpring> sweep_springs;
-  std::vector<SweepSpringConstants> spring_constants;  ///< Sweep order (fixed, resize()).
+  /// The order in which the SSOR sweeps visit the nodes (net_solve.hpp):
+  /// sweep_order[p] is the node at position p. Each net's nodes keep its
+  /// range [node_begin, node_begin + node_count) of positions, in reverse
+  /// Cuthill–McKee order of the net's spring graph (Cuthill & McKee 1969,
+  /// George & Liu 1981; Boost.Graph's cuthill_mckee_ordering from a
+  /// pseudo-peripheral node): a level-set ordering, along which Gauss–Seidel
+  /// carries a change across the net in one sweep — on an icosphere it takes
+  /// ~11 % fewer CG iterations than the mesh's vertex order, whose refinement
+  /// levels interleave (docs/deformable.md). Fixed topology: resize().
+  std::vector<std::int32_t> sweep_order;
+  std::vector<std::int32_t> sweep_position;  ///< Inverse of sweep_order: node -> position.
+  std::vector<SweepNode> sweep_nodes;  ///< Per sweep position: A_kk⁻¹ and ρ of node sweep_order[p].
+  /// The springs in the order of the SSOR sweeps, grouped by their earlier
+  /// node in sweep_order ("low"; ascending positions; Model::net_springs
+  /// order within a node); the other node is SweepSprings::high. Position
+  /// p's springs are [spring_low_begin[p], spring_low_begin[p + 1]).
+  /// compute_net_forces() goes through them in that order (forces and
+  /// linearisation in one pass); the backward sweep gathers them into the
+  /// earlier node's row, the forward sweep scatters the earlier node's value
+  /// through them to the later nodes. Spring e of Model::net_springs is at
+  /// spring_slot[e].
+  SweepSprings sweep_springs;
+  SweepSpringConstants spring_constants;  ///< Sweep order (fixed, resize()).
   std::vector<double> spring_length;  ///< l at the step's start (m), sweep order.
-  std::vector<std::int32_t> spring_low_begin;  ///< Size num_nodes + 1 (fixed topology, resize()).
+  std::vector<std::int32_t> spring_low_begin;  ///< Per position, size num_nodes + 1 (fixed topology, resize()).
   std::vector<std::int32_t> spring_slot;       ///< Per Model::net_springs: its index in sweep_springs.
   // Collision stage (detect_node_contacts(), net_collision.hpp), rebuilt per
   // net; sized by the Model's obstacles, bodies and body spheres.
