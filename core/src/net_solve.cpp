@@ -582,10 +582,10 @@ void backward_sweep(const Model& model, const Data& data, double beta, const Vec
   const std::int32_t* order = ns.sweep_order.data();
   const SweepNode* nodes = ns.sweep_nodes.data();
   for (Vec6& v : g_b) v.setZero();
-  // Nodes, last to first: (D̃+Lᵀ) has, in node k's row, −W_e towards every
-  // larger node of a spring (and nothing towards the bodies, which come
-  // first): t_k = A_kk⁻¹ (q_k + Σ W_e t_j), g_k = (Lᵀ t)_k = −Σ W_e t_j,
-  // gathered over node k's springs (grouped by their smaller node).
+  // Nodes, last to first in the sweep order: (D̃+Lᵀ) has, in node k's row,
+  // −W_e towards every later node of a spring (and nothing towards the
+  // bodies, which come first): t_k = A_kk⁻¹ (q_k + Σ W_e t_j), g_k = (Lᵀ t)_k
+  // = −Σ W_e t_j, gathered over node k's springs (grouped by their earlier node).
   // Nets share no spring, so they are swept one after the other.
   for (auto net = model.nets.rbegin(); net != model.nets.rend(); ++net) {
     const auto body = static_cast<std::size_t>(net->body);
@@ -657,9 +657,10 @@ double forward_sweep(const Model& model, const Data& data, std::span<const Vec6>
         weight_times(ct.weight_normal, ct.weight_isotropic, ct.normal,
                      point_velocity(y_b[static_cast<std::size_t>(ct.body_b)], ct.r_b));
   }
-  // Nodes, first to last: y_k = A_kk⁻¹ (g_k + c J_k y_b + Σ W_e y_j) over the
-  // springs to smaller nodes j, each of which has already added its W_e y_j
-  // to y_k (scattered over its springs, grouped by their smaller node).
+  // Nodes, first to last in the sweep order: y_k = A_kk⁻¹ (g_k + c J_k y_b +
+  // Σ W_e y_j) over the springs to earlier nodes j, each of which has already
+  // added its W_e y_j to y_k (scattered over its springs, grouped by their
+  // earlier node).
   double qkq = 0.0;
   for (const NetModel& net : model.nets) {
     const auto body = static_cast<std::size_t>(net.body);
@@ -698,7 +699,7 @@ double forward_sweep(const Model& model, const Data& data, std::span<const Vec6>
 /// and (Lᵀ + D − D̃) x0 needs no product with A: its body rows are the node
 /// columns of Lᵀ (ties −c J_iᵀ, node contacts −J_rᵀ W; the body–body cross
 /// terms of D − D̃ meet x0_b = 0), its node rows −Σ W_e x0_j over the springs
-/// to larger nodes j — gathered in the sweep over the same springs that
+/// to later nodes j (sweep order) — gathered in the sweep over the same springs that
 /// scatter. Both right-hand sides share the sweep (each spring read once);
 /// yᵀ D̃ y is summed as y_k · (D̃ y)_k, (D̃ y)_k being the row's right-hand
 /// side that y_k solves.

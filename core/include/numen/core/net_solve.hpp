@@ -18,7 +18,9 @@
 ///
 /// Without joints: SSOR (block symmetric Gauss–Seidel) preconditioning with
 /// Eisenstat's trick. Unknowns ordered bodies first (6 each, those in the
-/// solve), then nodes in index order; A = L + D + Lᵀ with D the body–body
+/// solve), then nodes in the sweep order (NetScratch::sweep_order: reverse
+/// Cuthill–McKee per net, ~11 % fewer iterations than the vertex order on
+/// an icosphere); A = L + D + Lᵀ with D the body–body
 /// part A_BB (diagonal blocks and body–body contact cross terms) and the
 /// node blocks A_ii, L the strictly lower blocks (node–body: ties −c J_i and
 /// node contacts −W J_r; node–node: springs −W_e, W_e = α d̂d̂ᵀ + β I). With
@@ -83,8 +85,9 @@ bool solve_net_system(const Model& model, Data& data) noexcept;
 
 /// Backward sweep of the SSOR preconditioner (model without joints, after
 /// build_net_system()): t = (D̃+Lᵀ)⁻¹ q and g = q + (D − 2D̃) t (computed as
-/// Lᵀ t + (D − D̃) t), nodes from last to first, then the bodies. Spans: one
-/// Vec6 (linear; angular) per body, one Vec3 per node, in the units of Δu,
+/// Lᵀ t + (D − D̃) t), nodes from last to first in the sweep order, then the
+/// bodies. Spans: one Vec6 (linear; angular) per body, one Vec3 per node
+/// (indexed by node, not by sweep position), in the units of Δu,
 /// Δv (t) and of b (q, g). Bodies not in the solve get t = g = 0. The output
 /// spans must not alias the inputs.
 void net_backward_sweep(const Model& model, const Data& data, std::span<const Vec6> q_b,
@@ -93,7 +96,8 @@ void net_backward_sweep(const Model& model, const Data& data, std::span<const Ve
 
 /// Forward sweep of the SSOR preconditioner (model without joints, after
 /// build_net_system()): y = (D̃+L)⁻¹ g, bodies first, then the nodes from first
-/// to last. y may be g itself (in place); otherwise they must not overlap.
+/// to last in the sweep order. y may be g itself (in place); otherwise they
+/// must not overlap.
 void net_forward_sweep(const Model& model, const Data& data, std::span<const Vec6> g_b,
                        std::span<const Vec3> g_n, std::span<Vec6> y_b,
                        std::span<Vec3> y_n) noexcept;
