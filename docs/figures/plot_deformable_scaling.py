@@ -1,10 +1,11 @@
 """Step time of a deformable ball against its node count (docs/results.md,
 "Deformable god-objects"). Input: the JSON of
-  numen_bench --benchmark_filter=DeformableBall --benchmark_repetitions=3
+  numen_bench --benchmark_filter=DeformableBall --benchmark_repetitions=5
               --benchmark_report_aggregates_only=true
               --benchmark_out=FILE --benchmark_out_format=json
-Left: median step time against nodes (log-log) with the n and n·log n
-references through the 642-node point and the 250 µs target; right: CG
+Left: median step time against nodes (log-log), and the fastest step
+(min_step_us, median over the repetitions) when the JSON has it, with the n
+and n·log n references through the 642-node point and the 250 µs target; right: CG
 iterations per step and the time per node per (iteration + 1), the linear part.
 An optional BEFORE.json (same benchmark, an earlier build) is drawn dashed
 for comparison.
@@ -25,18 +26,23 @@ def load(path):
     return (np.array([r["nodes"] for r in runs]),
             np.array([r["real_time"] * 1e-3 for r in runs]),  # ns -> µs
             np.array([r["cg_iterations"] for r in runs]),
-            np.array([r["ns_per_node_iteration"] for r in runs]))
+            np.array([r["ns_per_node_iteration"] for r in runs]),
+            np.array([r.get("min_step_us", np.nan) for r in runs]))
 
 
-n, t, it, per = load(sys.argv[1])
+n, t, it, per, tmin = load(sys.argv[1])
 before = load(sys.argv[3]) if len(sys.argv) > 3 else None
 
 fig, (a, b) = plt.subplots(1, 2, figsize=(10, 4))
 a.loglog(n, t, "o-", label="numen core::step (median)")
+if np.all(np.isfinite(tmin)):
+    a.loglog(n, tmin, "v-", color="C4", label="fastest step (min_step_us)")
 if before is not None:
     slope_b = np.polyfit(np.log(before[0]), np.log(before[1]), 1)[0]
     a.loglog(before[0], before[1], "o--", color="C0", alpha=0.45,
-             label=f"before (slope {slope_b:.2f})")
+             label=f"before, median (slope {slope_b:.2f})")
+    if np.all(np.isfinite(before[4])):
+        a.loglog(before[0], before[4], "v--", color="C4", alpha=0.45, label="before, fastest step")
 k = int(np.argmin(abs(n - 642)))
 a.loglog(n, t[k] * n / n[k], ":", color="grey", label="∝ n through 642")
 a.loglog(n, t[k] * n * np.log(n) / (n[k] * np.log(n[k])), "--", color="grey",
