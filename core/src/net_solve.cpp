@@ -146,7 +146,8 @@ inline Vec3 spring_times(const SpringView& s, std::int32_t j, const Vec3& v) noe
 /// the full 3×3 product).
 inline Vec3 inverse_times(const SweepNode& nd, const Vec3& v) noexcept {
   const double* m = nd.inverse;
-  return Vec3(m[0] * v.x() + m[1] * v.y() + m[2] * v.z(), m[1] * v.x() + m[3] * v.y() + m[4] * v.z(),
+  return Vec3(m[0] * v.x() + m[1] * v.y() + m[2] * v.z(),
+              m[1] * v.x() + m[3] * v.y() + m[4] * v.z(),
               m[2] * v.x() + m[4] * v.y() + m[5] * v.z());
 }
 

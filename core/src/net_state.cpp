@@ -4,10 +4,9 @@
 #include "numen/core/net_state.hpp"
 
 #include <algorithm>
-#include <cstddef>
-
 #include <boost/graph/adjacency_list.hpp>
 #include <boost/graph/cuthill_mckee_ordering.hpp>
+#include <cstddef>
 
 #include "numen/core/model.hpp"
 
@@ -46,10 +45,10 @@ void NetScratch::resize(const Model& model) {
   sweep_position.assign(n, 0);
   sweep_nodes.assign(n, SweepNode{});
   for (const NetModel& net : model.nets) {
-    using Graph = boost::adjacency_list<
-        boost::vecS, boost::vecS, boost::undirectedS,
-        boost::property<boost::vertex_color_t, boost::default_color_type,
-                        boost::property<boost::vertex_degree_t, int>>>;
+    using Graph =
+        boost::adjacency_list<boost::vecS, boost::vecS, boost::undirectedS,
+                              boost::property<boost::vertex_color_t, boost::default_color_type,
+                                              boost::property<boost::vertex_degree_t, int>>>;
     Graph g(static_cast<std::size_t>(net.node_count));
     for (int e = net.spring_begin; e < net.spring_begin + net.structural_count + net.bending_count;
          ++e) {

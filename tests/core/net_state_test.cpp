@@ -102,8 +102,9 @@ TEST(NetState, ReverseCuthillMcKeeNarrowsTheSpringGraphsBandwidth) {
   const std::vector<int> position(d.net.sweep_position.begin(), d.net.sweep_position.end());
   const int vertex_order = bandwidth(m, m.nets[0], identity);
   const int sweep_order = bandwidth(m, m.nets[0], position);
-  std::printf("[sweep order] icosphere 642 nodes: bandwidth %d (vertex order) -> %d (sweep order)\n",
-              vertex_order, sweep_order);
+  std::printf(
+      "[sweep order] icosphere 642 nodes: bandwidth %d (vertex order) -> %d (sweep order)\n",
+      vertex_order, sweep_order);
   EXPECT_LT(4 * sweep_order, vertex_order);  // 633 -> 81 when written
   // A spring of a level-set order joins two consecutive levels, so the
   // bandwidth is below the size of two levels; the widest level of a
