@@ -11,6 +11,7 @@
 #include "numen/core/capacity.hpp"
 #include "numen/core/coupling.hpp"
 #include "numen/core/data.hpp"
+#include "numen/core/features.hpp"
 #include "numen/core/joint_system.hpp"
 #include "numen/core/model.hpp"
 #include "numen/core/net_forces.hpp"
@@ -142,8 +143,8 @@ void SolverScratch::resize(const Model& model) {
   isotropic_moments.assign(n, IsotropicMoments{});
   block_factor.assign(n, BlockCholesky{});
   in_solve.assign(n, 1);
-  contact_terms.assign(static_cast<std::size_t>(kMaxContacts), ContactTerm{});
-  cross_contacts.assign(static_cast<std::size_t>(kMaxContacts), CrossContact{});
+  contact_terms.assign(static_cast<std::size_t>(contact_capacity(model)), ContactTerm{});
+  cross_contacts.assign(static_cast<std::size_t>(cross_contact_capacity(model)), CrossContact{});
   num_cross_contacts = 0;
   coupled.assign(n, 0);
   const auto nj = static_cast<std::size_t>(model.num_joints());
@@ -358,6 +359,7 @@ bool solve_implicit_system(const Model& model, Data& data) noexcept {
   return rel <= model.solver.tolerance;
 }
 
+#if NUMEN_WITH_ARTICULATION
 bool solve_constrained_system(const Model& model, Data& data) noexcept {
   SolverScratch& s = data.solver;
   ArticulationScratch& art = data.articulation;
@@ -448,6 +450,7 @@ bool solve_constrained_system(const Model& model, Data& data) noexcept {
   store_joint_multipliers(model, data, y);
   return converged;
 }
+#endif  // NUMEN_WITH_ARTICULATION
 
 void integrate_linearly_implicit_euler(const Model& model, Data& data) noexcept {
   SolverScratch& s = data.solver;
@@ -455,13 +458,17 @@ void integrate_linearly_implicit_euler(const Model& model, Data& data) noexcept 
   prepare_implicit_step(model, data);
   build_implicit_system(model, data);
   bool converged = false;
-  if (!model.nets.empty()) {
-    build_net_system(model, data);
-    converged = solve_net_system(model, data);
-  } else {
-    converged = model.joints.empty() ? solve_implicit_system(model, data)
-                                     : solve_constrained_system(model, data);
+  // Optional parts (features.hpp): compiled out, their models are refused by finalize_model().
+  if constexpr (kWithDeformable) {
+    if (!model.nets.empty()) {
+      build_net_system(model, data);
+      converged = solve_net_system(model, data);
+    }
   }
+#if NUMEN_WITH_ARTICULATION
+  if (model.nets.empty() && !model.joints.empty()) converged = solve_constrained_system(model, data);
+#endif
+  if (model.nets.empty() && model.joints.empty()) converged = solve_implicit_system(model, data);
   if (!converged) data.status |= kSolverNotConverged;
   for (std::size_t i = 0; i < data.bodies.size(); ++i) {
     if (!s.in_solve[i]) continue;  // kDirect body: stays at the imposed target
@@ -472,7 +479,7 @@ void integrate_linearly_implicit_euler(const Model& model, Data& data) noexcept 
     st.position += h * st.linear_velocity;
     st.orientation = integrate_orientation(st.orientation, st.angular_velocity, h);
   }
-  integrate_nodes_implicit(model, data);
+  if constexpr (kWithDeformable) integrate_nodes_implicit(model, data);
 }
 
 namespace {
@@ -497,6 +504,7 @@ void set_first_order_velocity(const Model& model, Data& data, std::size_t i) noe
 /// (kDirect) keep their twist; a first-order body enters with the block
 /// h·diag(γ_t I, γ_r I) and the right-hand side that takes it to its
 /// first-order twist (the joints' force adds λ/γ to it).
+#if NUMEN_WITH_ARTICULATION
 void integrate_symplectic_euler_constrained(const Model& model, Data& data) noexcept {
   SolverScratch& s = data.solver;
   ArticulationScratch& art = data.articulation;
@@ -545,17 +553,21 @@ void integrate_symplectic_euler_constrained(const Model& model, Data& data) noex
     st.orientation = integrate_orientation(st.orientation, st.angular_velocity, h);
   }
 }
+#endif  // NUMEN_WITH_ARTICULATION
 
 }  // namespace
 
 void integrate_symplectic_euler(const Model& model, Data& data) noexcept {
   data.solver_iterations = 0;
   data.solver_residual = 0.0;
-  integrate_nodes_symplectic(model, data);  // forces of the step's start, like the bodies'
+  if constexpr (kWithDeformable)
+    integrate_nodes_symplectic(model, data);  // forces of the step's start, like the bodies'
+#if NUMEN_WITH_ARTICULATION
   if (!model.joints.empty()) {
     integrate_symplectic_euler_constrained(model, data);
     return;
   }
+#endif
   const SolverScratch& s = data.solver;
   const double h = model.dt;
   for (std::size_t i = 0; i < data.bodies.size(); ++i) {

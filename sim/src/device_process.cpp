@@ -13,7 +13,10 @@
 
 #include "numen/hal/cia402.hpp"
 #include "numen/hal/nmt.hpp"
+#include "numen/hal/features.hpp"
+#if NUMEN_WITH_SERIAL
 #include "numen/hal/serial_bus.hpp"
+#endif
 #include "numen/platform/monotonic_clock.hpp"
 #include "numen/sim/bus_spec.hpp"
 #include "numen/sim/simulated_instrument.hpp"
@@ -60,7 +63,9 @@ DeviceSummary run_device(const Scene& scene, const DeviceOptions& options) {
       next_tick += options.tick_ns;
       if (next_tick <= now) next_tick = now + options.tick_ns;  // re-phase after a stall
     }
+#if NUMEN_WITH_SERIAL
     if (auto* serial = dynamic_cast<hal::SerialBus*>(port.get())) serial->flush();
+#endif
     const hal::EmulatorCounters& after = emu.counters();
     const auto syncs = static_cast<std::int64_t>(after.syncs - before.syncs);
     const auto tpdos = static_cast<std::int64_t>(after.tpdos_sent - before.tpdos_sent);

@@ -28,6 +28,7 @@
 #include "numen/core/model.hpp"
 #include "numen/core/rigid_body.hpp"
 #include "numen/core/step.hpp"
+#include "build_features.hpp"
 
 namespace core = numen::core;
 using core::Mat3;
@@ -463,6 +464,7 @@ void check_scratch(const core::Model& m, const core::Data& d, const Dense& ref, 
 }  // namespace
 
 TEST(NetSolve, FreeRigidComponentMatchesTheDenseSolve) {
+  NUMEN_REQUIRE_ARTICULATION();
   const core::Model m = scene(Variant::kFree);
   core::Data d = core::make_data(m);
   perturb(d, 3e-3, 0.05);
@@ -488,6 +490,7 @@ TEST(NetSolve, FreeRigidComponentMatchesTheDenseSolve) {
 }
 
 TEST(NetSolve, WarmStartedSolveAfterRealStepsMatchesTheDenseSolve) {
+  NUMEN_REQUIRE_ARTICULATION();
   const core::Model m = scene(Variant::kFree);
   core::Data d = core::make_data(m);
   perturb(d, 2e-3, 0.05);
@@ -510,6 +513,7 @@ TEST(NetSolve, WarmStartedSolveAfterRealStepsMatchesTheDenseSolve) {
 }
 
 TEST(NetSolve, JointedRigidComponentMatchesTheDenseKktSolve) {
+  NUMEN_REQUIRE_ARTICULATION();
   const core::Model m = scene(Variant::kJointed);
   core::Data d = core::make_data(m);
   // A few real steps first: joint rows with a previous Δu, warm start, drift.
@@ -561,6 +565,7 @@ TEST(NetSolve, JointedRigidComponentMatchesTheDenseKktSolve) {
 }
 
 TEST(NetSolve, ImposedRigidComponentHasNoUnknownAndTheNodesMatchTheDenseSolve) {
+  NUMEN_REQUIRE_ARTICULATION();
   const core::Model m = scene(Variant::kImposed);
   core::Data d = core::make_data(m);
   perturb(d, 3e-3, 0.05);
@@ -589,6 +594,7 @@ TEST(NetSolve, ImposedRigidComponentHasNoUnknownAndTheNodesMatchTheDenseSolve) {
 }
 
 TEST(NetSolve, ReportsNonConvergenceAtMaxIterations) {
+  NUMEN_REQUIRE_ARTICULATION();
   core::Model m = scene(Variant::kFree);
   m.solver.max_iterations = 1;
   ASSERT_EQ(core::finalize_model(m), "");
@@ -608,6 +614,7 @@ TEST(NetSolve, ReportsNonConvergenceAtMaxIterations) {
 }
 
 TEST(NetSolve, SeveralNetsOnOneBodyAndOnTheProbeMatchTheDenseSolve) {
+  NUMEN_REQUIRE_ARTICULATION();
   const core::Model m = scene(Variant::kThreeNets);
   ASSERT_EQ(m.num_nets(), 3);
   core::Data d = core::make_data(m);
@@ -692,6 +699,7 @@ Staged staged_body_contact(double tolerance = 1e-12) {
 }  // namespace
 
 TEST(NetSolve, EisenstatSplittingAndPreconditionedProductMatchTheDenseMatrix) {
+  NUMEN_REQUIRE_ARTICULATION();
   Staged st = staged_body_contact();
   const core::Model& m = st.m;
   core::Data& d = st.d;
@@ -752,6 +760,7 @@ TEST(NetSolve, EisenstatSplittingAndPreconditionedProductMatchTheDenseMatrix) {
 }
 
 TEST(NetSolve, ReportsTheResidualInTheNormOfThePreconditioner) {
+  NUMEN_REQUIRE_ARTICULATION();
   // At a loose tolerance, so that the recurrence's residual is the true one.
   Staged st = staged_body_contact(1e-4);
   const core::Model& m = st.m;
@@ -777,6 +786,7 @@ TEST(NetSolve, ReportsTheResidualInTheNormOfThePreconditioner) {
 }
 
 TEST(NetSolve, BodyContactAndNodeContactWithAProbeMatchTheDenseSolve) {
+  NUMEN_REQUIRE_ARTICULATION();
   Staged st = staged_body_contact();
   const core::Model& m = st.m;
   const core::Data& d = st.d;

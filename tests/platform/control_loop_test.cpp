@@ -302,6 +302,7 @@ TEST(ControlLoop, PeriodsNeverAllocate) {
 // and the jaw axis imposes a prescribed revolute joint between them.
 
 #include "numen/hal/trocar_kinematics.hpp"
+#include "build_features.hpp"
 
 namespace {
 
@@ -566,6 +567,7 @@ TEST(ControlLoopLinks, ZeroTorqueWhileTheSampleIsNotValid) {
 }
 
 TEST(ControlLoopLinks, ConstructorRejectsBindingsOutOfRange) {
+  NUMEN_REQUIRE_ARTICULATION();
   numen::hal::DeviceConfig config = trocar_config();
   SimBus bus{bus_settings()};
   numen::hal::InstrumentDevice device{config};
