@@ -310,10 +310,9 @@ std::string build_articulation_topology(Model& model) {
 }
 
 void ArticulationScratch::resize(const Model& model) {
-  // Without joints no tree solve runs (step_stages.hpp): nothing to hold.
+  const auto nb = idx(model.num_bodies());
   const auto nj = idx(model.num_joints());
-  const auto nb = nj > 0 ? idx(model.num_bodies()) : 0;
-  const auto nn = nj > 0 ? model.articulation.nodes.size() : 0;
+  const auto nn = model.articulation.nodes.size();
   rows.assign(nj, JointRows{});
   for (std::size_t j = 0; j < nj; ++j) rows[j].count = model.joints[j].num_rows;
   known.assign(nb, 0);

@@ -8,19 +8,12 @@
 namespace numen::core {
 namespace {
 
-bool any_body_has_spheres(const Model& model) noexcept {
-  for (const BodyModel& b : model.bodies)
-    if (b.sphere_count > 0) return true;
-  return false;
-}
-
-/// True if two bodies with spheres lie in different articulations (bodies of
-/// one articulation never collide with each other: ArticulationTopology::body_tree).
+/// True if two bodies lie in different articulations (bodies of one
+/// articulation never collide with each other: ArticulationTopology::body_tree).
 bool body_pair_can_collide(const Model& model) noexcept {
   const std::vector<int>& tree = model.articulation.body_tree;
   int first_tree = -1;
   for (std::size_t b = 0; b < model.bodies.size(); ++b) {
-    if (model.bodies[b].sphere_count <= 0) continue;
     const int t = b < tree.size() ? tree[b] : static_cast<int>(b);
     if (first_tree < 0) first_tree = t;
     else if (t != first_tree) return true;
@@ -31,9 +24,7 @@ bool body_pair_can_collide(const Model& model) noexcept {
 }  // namespace
 
 int contact_capacity(const Model& model) noexcept {
-  const bool possible = any_body_has_spheres(model) &&
-                        (!model.obstacles.empty() || body_pair_can_collide(model));
-  return possible ? kMaxContacts : 0;
+  return !model.obstacles.empty() || body_pair_can_collide(model) ? kMaxContacts : 0;
 }
 
 int cross_contact_capacity(const Model& model) noexcept {

@@ -38,7 +38,9 @@ Data make_data(const Model& model) {
   data.body_feedback.resize(n);
   data.joint_prescribed.resize(static_cast<std::size_t>(model.num_joints()));
   data.joints.resize(static_cast<std::size_t>(model.num_joints()));
-  if constexpr (kWithArticulation) data.articulation.resize(model);  // empty without joints
+  // Tree-solve scratch only with joints: without, step() runs no tree solve.
+  if constexpr (kWithArticulation)
+    if (model.num_joints() > 0) data.articulation.resize(model);
   data.collision.resize(model);
   data.solver.resize(model);
   if constexpr (kWithDeformable) data.net.resize(model);  // empty without nets

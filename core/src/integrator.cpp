@@ -22,8 +22,8 @@ namespace numen::core {
 namespace {
 
 
-int active_contact_count(const Data& data) noexcept {
-  return std::clamp(data.num_contacts, 0, kMaxContacts);
+int active_contact_count(const Data& data) noexcept {  // within the scratch (capacity.hpp)
+  return std::clamp(data.num_contacts, 0, static_cast<int>(data.solver.contact_terms.size()));
 }
 
 bool is_first_order(const SolverScratch& s, int body) noexcept {

@@ -15,6 +15,7 @@
 
 #include "numen/core/collision.hpp"
 #include "numen/core/data.hpp"
+#include "numen/core/features.hpp"
 #include "numen/core/net_collision.hpp"
 #include "numen/core/step.hpp"
 #include "numen/hal/instrument_device.hpp"

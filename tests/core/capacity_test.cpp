@@ -5,7 +5,9 @@
 
 #include "build_features.hpp"
 #include "lean_scenes.hpp"
+#include "numen/core/data.hpp"
 #include "numen/core/model.hpp"
+#include "numen/core/step.hpp"
 
 namespace core = numen::core;
 using numen::test::LeanPart;
@@ -38,8 +40,20 @@ TEST(Capacity, TwoFreeBodiesWithSpheresCanCollide) {
   ASSERT_EQ(core::finalize_model(m), "");
   EXPECT_EQ(core::contact_capacity(m), core::kMaxContacts);
   EXPECT_EQ(core::cross_contact_capacity(m), core::kMaxContacts);
-  // Without spheres on the second body, no pair is left.
-  m.bodies[1].sphere_count = 0;
-  ASSERT_EQ(core::finalize_model(m), "");
-  EXPECT_EQ(core::contact_capacity(m), 0);
+}
+
+TEST(Capacity, ContactsBeyondTheRoomAreAnOverflowNotAnOutOfBoundsWrite) {
+  // A caller of the stage functions may write contacts itself; a model in which
+  // nothing can collide has no room for them: they are dropped and reported.
+  const core::Model m = make_lean_model(LeanPart::kNone);
+  core::Data d = core::make_data(m);
+  d.num_contacts = 2;
+  d.contacts[0].body_a = d.contacts[1].body_a = 0;
+  d.contacts[0].body_b = d.contacts[1].body_b = -1;
+  d.contacts[0].normal = d.contacts[1].normal = core::Vec3::UnitZ();
+  d.contacts[0].depth = d.contacts[1].depth = 0.001;
+  core::compute_forces(m, d);
+  EXPECT_EQ(d.num_contacts, 0);
+  EXPECT_EQ(d.contacts_dropped, 2);
+  EXPECT_NE(d.status & core::kContactOverflow, 0u);
 }

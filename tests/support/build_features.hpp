@@ -9,7 +9,9 @@
 #include <gtest/gtest.h>
 
 #include "numen/core/features.hpp"
+#if __has_include("numen/hal/features.hpp")  // not in the core suite, which links numen::core only
 #include "numen/hal/features.hpp"
+#endif
 
 /// First statement of a test that needs joints (e.g. loads the default scene).
 #define NUMEN_REQUIRE_ARTICULATION()                                  \
@@ -25,7 +27,7 @@
       GTEST_SKIP() << "this build has NUMEN_WITH_DEFORMABLE=OFF";     \
   } while (0)
 
-/// First statement of a test that needs the serial backend (SerialBus).
+/// First statement of a test that needs the serial backend (SerialBus); hal and above.
 #define NUMEN_REQUIRE_SERIAL()                                        \
   do {                                                                \
     if (!::numen::hal::kWithSerial)                                   \

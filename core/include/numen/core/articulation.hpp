@@ -107,8 +107,7 @@ struct ArticulationScratch {
 
   /// Sizes every buffer for `model` (finalized): rows (count set to
   /// JointModel::num_rows, zero rows), known (all 0), joint_active (all 1),
-  /// and the per-node buffers; all empty for a model without joints (no tree
-  /// solve runs). Allocates: make_data() only.
+  /// and the per-node buffers. Allocates: make_data() only.
   void resize(const Model& model);
 };
 

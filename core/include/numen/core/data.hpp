@@ -134,7 +134,10 @@ struct Data {
   NetScratch net;
 };
 
-/// Allocates a Data for a finalized `model` and resets it. Allocates.
+/// Allocates a Data for a finalized `model` and resets it: only what the model
+/// needs — no joint buffers or tree-solve scratch without joints, no node or net
+/// buffers without nets, no contact scratch when nothing can collide
+/// (capacity.hpp; sizes in data_size.hpp). Allocates.
 Data make_data(const Model& model);
 
 /// Puts every body back at its initial pose and twist, clears inputs, outputs
