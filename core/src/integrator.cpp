@@ -253,7 +253,8 @@ void build_implicit_system(const Model& model, Data& data) noexcept {
     }
   }
 
-  add_net_body_terms(model, data);  // ties and node contacts of the deformable nets
+  if constexpr (kWithDeformable)
+    add_net_body_terms(model, data);  // ties and node contacts of the deformable nets
   for (std::size_t i = 0; i < n; ++i) {
     if (s.in_solve[i]) add_isotropic_part(s.isotropic_moments[i], s.block[i]);
     mirror_lower(s.block[i]);
