@@ -1,6 +1,7 @@
 /// @file integrator.cpp
 /// Linearly implicit Euler (Baraff & Witkin 1998) with a block-Jacobi
-/// preconditioned conjugate gradient, and symplectic Euler (paper Eq. 1, §5).
+/// preconditioned conjugate gradient, the linearised trapezoidal rule on the
+/// same system, and symplectic Euler (paper Eq. 1, §5).
 
 #include "numen/core/integrator.hpp"
 
@@ -8,6 +9,7 @@
 #include <cmath>
 #include <limits>
 
+#include "numen/core/articulation.hpp"
 #include "numen/core/capacity.hpp"
 #include "numen/core/coupling.hpp"
 #include "numen/core/data.hpp"
@@ -153,6 +155,7 @@ void SolverScratch::resize(const Model& model) {
   joint_y_correction.assign(nj, JointVector::Zero());
   projected_residual.assign(nj > 0 ? n : 0, Vec6::Zero());
   target_coupled.assign(n, 0);
+  system_step = model.dt;
   coupled_body = -1;
   first_order = false;
   imposed.assign(n, 0);
@@ -160,7 +163,7 @@ void SolverScratch::resize(const Model& model) {
 
 void prepare_implicit_step(const Model& model, Data& data) noexcept {
   SolverScratch& s = data.solver;
-  const double h = model.dt;
+  const double h = s.system_step;
   for (std::size_t i = 0; i < data.bodies.size(); ++i) {
     BodyState& st = data.bodies[i];
     const BodyModel& bm = model.bodies[i];
@@ -175,7 +178,7 @@ void prepare_implicit_step(const Model& model, Data& data) noexcept {
 
 void build_implicit_system(const Model& model, Data& data) noexcept {
   SolverScratch& s = data.solver;
-  const double h = model.dt;
+  const double h = s.system_step;
   const double h2 = h * h;
   const std::size_t n = data.bodies.size();
 
@@ -451,11 +454,95 @@ bool solve_constrained_system(const Model& model, Data& data) noexcept {
   store_joint_multipliers(model, data, y);
   return converged;
 }
+
+namespace {
+
+/// Velocity step of RATTLE (Andersen 1983; Hairer, Lubich & Wanner, "Geometric Numerical
+/// Integration", §VII.1.4) for the trapezoidal rule with joints: the extrapolated twist
+/// u1 = 2 u½ − u0 + A⁻¹ G0ᵀ y (one half-step joint impulse, not two) is projected onto the
+/// joints' velocity constraint at the step's end, G1 u1 = v_ref, in the metric of the step's
+/// diagonal blocks of A = M − h/2 D − h²/4 K (M where no spring or contact acts, as in
+/// RATTLE; with stiff springs and contacts A, so that the second half's joint impulse meets
+/// the same implicit resistance as the first's — measured on the instrument against the
+/// tissue: M there doubles the error and leaves the reference unconverged):
+///   [A  G1ᵀ] [δ]   [0            ]
+///   [G1  0 ] [y] = [v_ref − G1 u1],   u1 ← u1 + δ,
+/// solved in linear time by the tree solve (articulation.hpp) with the rows evaluated at the
+/// new configuration. Without it u1 keeps a constraint velocity G1 u1 ≈ −G0 u0 that
+/// alternates in sign and feeds the next step's Baumgarte rows: the free double pendulum
+/// then converges at order 1 only. Known (imposed) bodies count as at rest, as in
+/// build_joint_rows(). Reads SolverScratch::block (A) and joint_y; uses block_factor,
+/// projected_residual, residual, a_direction, joint_rhs and joint_y_correction as scratch
+/// (the step's solve is done).
+void project_joint_velocities(const Model& model, Data& data) noexcept {
+  SolverScratch& s = data.solver;
+  ArticulationScratch& art = data.articulation;
+  const double h = model.dt;
+  // Second half of the step without the first half's joint impulse: u0 + 2Δu½ counts the
+  // impulse −Gᵀy of the half step (along the rows at the step's start) twice; RATTLE gives the
+  // second half its own impulse along the rows at the end (the projection below). Remove one
+  // copy, A⁻¹ G0ᵀ y per body with its diagonal block of A (exact without body–body contacts
+  // and nets; the cross terms of those are left out of this correction).
+  for (std::size_t i = 0; i < data.bodies.size(); ++i) s.projected_residual[i].setZero();
+  add_joint_transpose(model, data, s.joint_y, s.projected_residual);
+  for (std::size_t i = 0; i < data.bodies.size(); ++i) {
+    if (art.known[i]) continue;
+    factor_block(s.block[i], s.block_factor[i]);
+    Vec6 z;
+    solve_block(s.block_factor[i], s.projected_residual[i], z);
+    data.bodies[i].linear_velocity += z.head<3>();
+    data.bodies[i].angular_velocity += z.tail<3>();
+  }
+  const auto twist = [&](int b) noexcept {
+    const auto i = static_cast<std::size_t>(b);
+    Vec6 u;
+    if (art.known[i]) {
+      u.setZero();
+    } else {
+      u << data.bodies[i].linear_velocity, data.bodies[i].angular_velocity;
+    }
+    return u;
+  };
+  for (std::size_t j = 0; j < model.joints.size(); ++j) {
+    const JointModel& jm = model.joints[j];
+    const BodyState* parent =
+        jm.parent >= 0 ? &data.bodies[static_cast<std::size_t>(jm.parent)] : nullptr;
+    const BodyState& child = data.bodies[static_cast<std::size_t>(jm.child)];
+    const JointPrescription& jp = data.joint_prescribed[j];
+    JointRows& rows = art.rows[j];
+    evaluate_joint(jm, parent, child, jm.prescribed ? jp.value + h * jp.rate : 0.0, rows);
+    JointVector rate = rows.g_child * twist(jm.child);
+    if (parent) rate.noalias() += rows.g_parent * twist(jm.parent);
+    if (jm.prescribed) rate(rows.count - 1) -= jp.rate;
+    JointVector c = -rate;
+    for (int r = rows.count; r < kMaxJointRows; ++r) c(r) = 0.0;
+    s.joint_rhs[j] = c;
+  }
+  for (std::size_t i = 0; i < data.bodies.size(); ++i) s.residual[i].setZero();
+  factor_articulation(model, s.block, art);  // a failed pivot gives NaN: rolled back by step()
+  solve_articulation(model, art, s.residual, s.joint_rhs, s.a_direction, s.joint_y_correction);
+  for (std::size_t i = 0; i < data.bodies.size(); ++i) {
+    if (art.known[i]) continue;
+    data.bodies[i].linear_velocity += s.a_direction[i].head<3>();
+    data.bodies[i].angular_velocity += s.a_direction[i].tail<3>();
+  }
+}
+
+}  // namespace
 #endif  // NUMEN_WITH_ARTICULATION
 
-void integrate_linearly_implicit_euler(const Model& model, Data& data) noexcept {
+namespace {
+
+/// One linearised step of length h = model.dt through the system of step h_s
+/// (SolverScratch::system_step): Δu solves (M − h_s D − h_s² K) Δu = h_s (f0 +
+/// h_s K u0) + M (u* − u0); positions move over h with u0 + Δu, twists become
+/// u0 + (h / h_s) Δu. h_s = h: the linearly implicit Euler; h_s = h/2: the
+/// trapezoidal rule (u0 + Δu is the midpoint twist). h / h_s is 1 or 2 exactly.
+void integrate_linearized(const Model& model, Data& data, double system_step) noexcept {
   SolverScratch& s = data.solver;
   const double h = model.dt;
+  s.system_step = system_step;
+  const double scale = h / system_step;
   prepare_implicit_step(model, data);
   build_implicit_system(model, data);
   bool converged = false;
@@ -474,13 +561,27 @@ void integrate_linearly_implicit_euler(const Model& model, Data& data) noexcept 
   for (std::size_t i = 0; i < data.bodies.size(); ++i) {
     if (!s.in_solve[i]) continue;  // kDirect body: stays at the imposed target
     BodyState& st = data.bodies[i];
-    const Vec6 u1 = s.twist0[i] + s.delta[i];
+    const Vec6 u_move = s.twist0[i] + s.delta[i];  // u1 (Euler) or u½ (trapezoidal)
+    st.position += h * u_move.head<3>();
+    st.orientation = integrate_orientation(st.orientation, u_move.tail<3>(), h);
+    const Vec6 u1 = s.twist0[i] + scale * s.delta[i];
     st.linear_velocity = u1.head<3>();
     st.angular_velocity = u1.tail<3>();
-    st.position += h * st.linear_velocity;
-    st.orientation = integrate_orientation(st.orientation, st.angular_velocity, h);
   }
+#if NUMEN_WITH_ARTICULATION
+  if (scale != 1.0 && !model.joints.empty()) project_joint_velocities(model, data);
+#endif
   if constexpr (kWithDeformable) integrate_nodes_implicit(model, data);
+}
+
+}  // namespace
+
+void integrate_linearly_implicit_euler(const Model& model, Data& data) noexcept {
+  integrate_linearized(model, data, model.dt);
+}
+
+void integrate_trapezoidal(const Model& model, Data& data) noexcept {
+  integrate_linearized(model, data, 0.5 * model.dt);  // = linearized_system_step() of a trapezoidal model
 }
 
 namespace {
@@ -559,6 +660,7 @@ void integrate_symplectic_euler_constrained(const Model& model, Data& data) noex
 }  // namespace
 
 void integrate_symplectic_euler(const Model& model, Data& data) noexcept {
+  data.solver.system_step = model.dt;
   data.solver_iterations = 0;
   data.solver_residual = 0.0;
   if constexpr (kWithDeformable)
@@ -591,10 +693,17 @@ void integrate_symplectic_euler(const Model& model, Data& data) noexcept {
   }
 }
 
+double linearized_system_step(const Model& model) noexcept {
+  return model.integrator == Integrator::kTrapezoidal ? 0.5 * model.dt : model.dt;
+}
+
 void integrate(const Model& model, Data& data) noexcept {
   switch (model.integrator) {
     case Integrator::kSymplecticEuler:
       integrate_symplectic_euler(model, data);
+      break;
+    case Integrator::kTrapezoidal:
+      integrate_trapezoidal(model, data);
       break;
     case Integrator::kLinearlyImplicitEuler:
     default:

@@ -45,6 +45,7 @@ void build_joint_rows(const Model& model, Data& data, std::span<const Vec6> twis
   const double alpha_h = model.baumgarte.alpha_dt;        // h α
   const double beta_h2 = model.baumgarte.beta_dt2;        // h² β
   const double scale = 1.0 / (1.0 + alpha_h + beta_h2);
+  const bool chord_velocities = model.integrator != Integrator::kTrapezoidal;
   ArticulationScratch& a = data.articulation;
   for (std::size_t j = 0; j < model.joints.size(); ++j) {
     const JointModel& jm = model.joints[j];
@@ -96,7 +97,9 @@ void build_joint_rows(const Model& model, Data& data, std::span<const Vec6> twis
       const int r = start.count - 1;
       drift_rate(r) = std::remainder(predicted.position_error(r) - c0(r), 2.0 * kPi) / h;
     }
-    const JointVector cdot = 2.0 * cdot0 - drift_rate;
+    // The trapezoidal rule's u0 is a node velocity, not a chord, and its end-of-step
+    // projection (integrator.cpp, RATTLE) makes G0 u0 = v_ref: there Ċ0 = G0 u0 − v_ref.
+    const JointVector cdot = chord_velocities ? JointVector(2.0 * cdot0 - drift_rate) : cdot0;
     const JointVector cdot1 = scale * (cdot - (beta_h2 / h) * c0);
     JointVector c = (c0 + h * cdot1 - predicted.position_error) / h;
     c.noalias() -= (predicted.g_child - start.g_child) * delta_prev[static_cast<std::size_t>(jm.child)];
@@ -125,7 +128,7 @@ void add_joint_transpose(const Model& model, const Data& data, std::span<const J
 }
 
 void store_joint_multipliers(const Model& model, Data& data, std::span<const JointVector> y) noexcept {
-  const double inv_h = 1.0 / model.dt;
+  const double inv_h = 1.0 / data.solver.system_step;  // h_s: the step of the KKT system
   for (std::size_t j = 0; j < model.joints.size(); ++j) {
     JointState& js = data.joints[j];
     js.multiplier = -inv_h * y[j];

@@ -90,6 +90,11 @@ std::string finalize_model(Model& model) {
     return err.str();
   }
   if (!finite(model.gravity)) return "gravity must be finite";
+  if (model.integrator == Integrator::kTrapezoidal &&
+      model.coupling_mode == CouplingMode::kFirstOrder)
+    return "integrator trapezoidal cannot run coupling first-order: the rule is not L-stable, "
+           "so the massless body's twist (an algebraic unknown) would alternate sign from step "
+           "to step; use implicit-euler";
   if (model.material_names.empty()) model.material_names.push_back("default");
   const auto nm = static_cast<std::size_t>(model.num_materials());
   if (model.material_pairs.size() != nm * nm) {

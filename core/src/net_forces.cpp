@@ -35,7 +35,7 @@ namespace {
 template <bool kImplicit>
 void spring_pass(const Model& model, Data& data) noexcept {
   NetScratch& s = data.net;
-  const double h = model.dt;
+  const double h = data.solver.system_step;  // h_s of the linearised system (integrator.hpp)
   const double h2 = h * h;
   // Raw pointers: the stores below would otherwise make the compiler reload
   // every vector's data pointer per spring.
@@ -123,7 +123,8 @@ void spring_pass(const Model& model, Data& data) noexcept {
 void compute_net_forces(const Model& model, Data& data) noexcept {
   if (model.nets.empty()) return;
   NetScratch& s = data.net;
-  const bool implicit = model.integrator == Integrator::kLinearlyImplicitEuler;
+  // The linearised schemes (implicit Euler, trapezoidal) need the springs' Jacobian blocks too.
+  const bool implicit = model.integrator != Integrator::kSymplecticEuler;
 
   // Gravity, and the zero-length ties to the rigid component with their
   // reaction on it.
@@ -199,10 +200,12 @@ void integrate_nodes_symplectic(const Model& model, Data& data) noexcept {
 
 void integrate_nodes_implicit(const Model& model, Data& data) noexcept {
   const double h = model.dt;
+  const double scale = h / data.solver.system_step;  // 1 (Euler) or 2 (trapezoidal), exact
   for (std::size_t i = 0; i < data.nodes.size(); ++i) {
     NodeState& st = data.nodes[i];
-    st.velocity += data.net.delta[i];
-    st.position += h * st.velocity;
+    const Vec3 v_move = st.velocity + data.net.delta[i];  // v1 (Euler) or v½ (trapezoidal)
+    st.position += h * v_move;
+    st.velocity += scale * data.net.delta[i];
   }
 }
 

@@ -150,7 +150,7 @@ void apply_coupled(const Model& model, const Data& data, std::span<const Vec6> i
     }
     y[k] += acc;
   }
-  const double h = model.dt;
+  const double h = data.solver.system_step;  // h_s of the linearised system (integrator.hpp)
   for (const NetModel& net : model.nets) {
     const auto b = static_cast<std::size_t>(net.body);
     if (!s.in_solve[b]) continue;
@@ -206,7 +206,7 @@ void add_net_body_terms(const Model& model, Data& data) noexcept {
   if (model.nets.empty()) return;
   SolverScratch& s = data.solver;
   NetScratch& ns = data.net;
-  const double h = model.dt;
+  const double h = data.solver.system_step;  // h_s of the linearised system (integrator.hpp)
   const double h2 = h * h;
   for (const NetModel& net : model.nets) {
     const auto b = static_cast<std::size_t>(net.body);
@@ -248,7 +248,7 @@ void build_net_system(const Model& model, Data& data) noexcept {
   if (model.nets.empty()) return;
   const SolverScratch& s = data.solver;
   NetScratch& ns = data.net;
-  const double h = model.dt;
+  const double h = data.solver.system_step;  // h_s of the linearised system (integrator.hpp)
   const double h2 = h * h;
 
   // The springs' weights, their sum in the blocks and their part of the
@@ -318,7 +318,7 @@ bool solve_arrowhead(const Model& model, Data& data) noexcept {
   SolverScratch& s = data.solver;
   NetScratch& ns = data.net;
   ArticulationScratch& art = data.articulation;
-  const double h = model.dt;
+  const double h = data.solver.system_step;  // h_s of the linearised system (integrator.hpp)
   const std::size_t nb = data.bodies.size();
 
   for (std::size_t i = 0; i < nb; ++i) art.known[i] = s.in_solve[i] ? 0 : 1;
@@ -458,7 +458,7 @@ void backward_sweep(const Model& model, const Data& data, double beta, const Vec
                     std::span<Vec6> g_b, Vec3* g_n) noexcept {
   const SolverScratch& s = data.solver;
   const NetScratch& ns = data.net;
-  const double h = model.dt;
+  const double h = data.solver.system_step;  // h_s of the linearised system (integrator.hpp)
   const std::size_t nb = q_b.size();
   const SweepSpring* springs = ns.sweep_springs.data();
   const std::int32_t* low_begin = ns.spring_low_begin.data();
@@ -517,7 +517,7 @@ double forward_sweep(const Model& model, const Data& data, std::span<const Vec6>
                      const Vec3* t_n, std::span<const Vec6> q_b, const Vec3* q_n) noexcept {
   const SolverScratch& s = data.solver;
   const NetScratch& ns = data.net;
-  const double h = model.dt;
+  const double h = data.solver.system_step;  // h_s of the linearised system (integrator.hpp)
   const std::size_t nb = g_b.size();
   const SweepSpring* springs = ns.sweep_springs.data();
   const std::int32_t* low_begin = ns.spring_low_begin.data();
@@ -592,7 +592,7 @@ double net_start_sweep(const Model& model, Data& data, std::span<const Vec3> x0_
                        std::span<Vec3> y_n) noexcept {
   const SolverScratch& s = data.solver;
   NetScratch& ns = data.net;
-  const double h = model.dt;
+  const double h = data.solver.system_step;  // h_s of the linearised system (integrator.hpp)
   const std::size_t nb = w_b.size();
   const SweepSpring* springs = ns.sweep_springs.data();
   const std::int32_t* low_begin = ns.spring_low_begin.data();

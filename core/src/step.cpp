@@ -93,6 +93,7 @@ void step(const Model& model, Data& data) noexcept {
   if (nets) {
     ran |= kStageNodeContacts | kStageNetForces | kStageNetSolve | kStageMeasureNets;
   }
+  data.solver.system_step = linearized_system_step(model);  // the net spring pass needs h_s
   compute_forces(model, data);
   integrate(model, data);  // with nets: net_solve; else with joints: the KKT tree solve
   if constexpr (kWithArticulation) {

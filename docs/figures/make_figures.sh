@@ -13,3 +13,7 @@ rm -rf "$tmp"
 echo "wrote $out/default_run.png $out/construction.png"
 c=$(mktemp) && ./build/tests/numen_bench --benchmark_filter=Chain --benchmark_repetitions=3 --benchmark_report_aggregates_only=true --benchmark_out="$c" --benchmark_out_format=json > /dev/null && /usr/bin/python3 $out/plot_articulation_scaling.py "$c" $out/articulation_scaling.png && rm -f "$c"
 d=$(mktemp) && ./build/tests/numen_bench --benchmark_filter=DeformableBall --benchmark_repetitions=3 --benchmark_report_aggregates_only=true --benchmark_out="$d" --benchmark_out_format=json > /dev/null && /usr/bin/python3 $out/plot_deformable_scaling.py "$d" $out/deformable_scaling.png && rm -f "$d"
+# Accuracy: error against run time (docs/results.md; ~5 minutes; --quick for a look in seconds)
+a=$(mktemp -d) && ./build/numen study accuracy --out "$a" && /usr/bin/python3 $out/plot_accuracy.py "$a" $out && rm -rf "$a"
+# Stability: stiff and extreme cases (docs/results.md; ~1 minute; --quick for a look in seconds)
+s=$(mktemp -d) && ./build/numen study stability --out "$s" > /dev/null && /usr/bin/python3 $out/plot_stability.py "$s" $out && rm -rf "$s"

@@ -5,6 +5,8 @@
 ///             [--rt-priority N] [--lock-memory] [--prefault-stack BYTES] [--cpu LIST] [--rt-strict]
 ///   numen device [SCENE] --bus can:IFACE|serial:PATH[@BAUD] [--duration S] [--ready]
 ///   numen info [SCENE] [--json]
+///   numen study accuracy [--out DIR] [--quick] [--case NAME]...
+///   numen study stability [--out DIR] [--quick] [--family NAME]...
 /// SIGINT / SIGTERM end either cleanly (run: zero torque, drives disabled; both: summary).
 
 #include <atomic>
@@ -13,15 +15,19 @@
 #include <iostream>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include <CLI/CLI.hpp>
 
 #include "numen/sim/bus_spec.hpp"
 #include "numen/sim/device_process.hpp"
 #include "numen/sim/input_error.hpp"
+#include "numen/sim/progress_bar.hpp"
 #include "numen/sim/run.hpp"
 #include "numen/sim/scene.hpp"
 #include "numen/sim/scene_info.hpp"
+#include "numen/sim/study_accuracy.hpp"
+#include "numen/sim/study_stability.hpp"
 
 namespace {
 std::atomic<bool> g_stop{false};  // lock-free: safe to store from a signal handler
@@ -40,6 +46,22 @@ void install_signal_handlers() {
   sigemptyset(&rearm.sa_mask);
   sigaction(SIGUSR1, &rearm, nullptr);
 }
+/// Runs a subcommand's body: exit status 0, or 2 for bad input (InputError: scene, trajectory,
+/// option values) and 1 for any other error, each printed as "numen: what".
+template <typename Body>
+int run_guarded(Body&& body) {
+  try {
+    body();
+    return 0;
+  } catch (const numen::sim::InputError& e) {
+    std::cerr << "numen: " << e.what() << "\n";
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << "numen: " << e.what() << "\n";
+    return 1;
+  }
+}
+
 std::string check_bus(const std::string& v, bool real_only) {
   try {
     const numen::sim::BusSpec spec = numen::sim::parse_bus_spec(v);
@@ -120,29 +142,86 @@ int main(int argc, char** argv) {
   info->add_option("scene", info_scene, "Scene file (TOML); default: the shipped default scene");
   info->add_flag("--json", info_json, "Print one JSON object instead of the report");
 
+  CLI::App* study = app.add_subcommand("study", "Measure the integrators (docs/results.md)");
+  study->require_subcommand(1);
+  CLI::App* accuracy = study->add_subcommand(
+      "accuracy",
+      "Work-precision data per integrator: error against CPU time per simulated second");
+  std::string accuracy_out = "accuracy";
+  bool accuracy_quick = false;
+  std::vector<std::string> accuracy_cases;
+  accuracy->add_option("--out", accuracy_out,
+                       "Directory of accuracy.csv, accuracy_orders.csv, accuracy_references.csv "
+                       "(plots: docs/figures/plot_accuracy.py DIR)");
+  accuracy->add_flag("--quick", accuracy_quick,
+                     "Coarser grid (1e-2 … 1e-4 s), horizons × 0.3, references at 2e-5 s: seconds");
+  accuracy->add_option("--case", accuracy_cases, "Run only these cases (repeatable)")
+      ->check(CLI::IsMember(numen::sim::accuracy_case_names()));
+
+  CLI::App* stability = study->add_subcommand(
+      "stability", "Stiff and extreme cases: a verdict per run (stable, or diverged at step N)");
+  std::string stability_out = "stability";
+  bool stability_quick = false;
+  std::vector<std::string> stability_families;
+  stability->add_option("--out", stability_out,
+                        "Directory of stability_<family>.csv and stability_boundary.csv "
+                        "(maps: docs/figures/plot_stability.py DIR)");
+  stability->add_flag("--quick", stability_quick, "Coarse grids, short runs: seconds");
+  stability->add_option("--family", stability_families, "Run only these families (repeatable)")
+      ->check(CLI::IsMember(numen::sim::stability_family_names()));
+
   CLI11_PARSE(app, argc, argv);
+
+  if (stability->parsed()) {
+    return run_guarded([&] {
+      numen::sim::StabilityOptions options;
+      options.quick = stability_quick;
+      options.families = stability_families;
+      numen::sim::ProgressBar bar;
+      options.progress = [&bar](double done, double total, const std::string& label) {
+        bar.update(done, total, label);
+      };
+      const numen::sim::StabilityResult result = numen::sim::run_stability_study(options);
+      bar.finish();
+      numen::sim::write_stability_csv(result, stability_out);
+      std::cout << numen::sim::format_stability_tables(result);
+      std::printf("%zu runs in %.1f s; wrote %s/stability_*.csv\n", result.rows.size(),
+                  result.wall_s, stability_out.c_str());
+    });
+  }
+
+  if (accuracy->parsed()) {
+    return run_guarded([&] {
+      numen::sim::AccuracyOptions options;
+      options.quick = accuracy_quick;
+      options.cases = accuracy_cases;
+      numen::sim::ProgressBar bar;
+      options.progress = [&bar](double done, double total, const std::string& label) {
+        bar.update(done, total, label);
+      };
+      const numen::sim::AccuracyResult result = numen::sim::run_accuracy_study(options);
+      bar.finish();
+      numen::sim::write_accuracy_csv(result, accuracy_out);
+      std::cout << numen::sim::format_accuracy_table(result);
+      std::cout << "wrote " << accuracy_out << "/accuracy.csv, accuracy_orders.csv, "
+                << "accuracy_references.csv\n";
+    });
+  }
   install_signal_handlers();
 
   if (info->parsed()) {
-    try {
+    return run_guarded([&] {
       const std::string path = info_scene.empty() ? numen::sim::default_scene_path() : info_scene;
       const numen::sim::SceneInfo si = numen::sim::describe_scene(numen::sim::load_scene(path));
       if (info_json)
         std::cout << numen::sim::format_scene_info_json(si) << std::endl;
       else
         std::cout << numen::sim::format_scene_info(si);
-    } catch (const numen::sim::InputError& e) {
-      std::cerr << "numen: " << e.what() << "\n";
-      return 2;
-    } catch (const std::exception& e) {
-      std::cerr << "numen: " << e.what() << "\n";
-      return 1;
-    }
-    return 0;
+    });
   }
 
   if (dev->parsed()) {
-    try {
+    return run_guarded([&] {
       const std::string path = dev_scene.empty() ? numen::sim::default_scene_path() : dev_scene;
       const numen::sim::Scene scene = numen::sim::load_scene(path);
       numen::sim::DeviceOptions options;
@@ -151,18 +230,11 @@ int main(int argc, char** argv) {
       options.stop = &g_stop;
       options.announce_ready = dev_ready;
       std::cout << numen::sim::format_device_summary(numen::sim::run_device(scene, options));
-    } catch (const numen::sim::InputError& e) {
-      std::cerr << "numen: " << e.what() << "\n";
-      return 2;
-    } catch (const std::exception& e) {
-      std::cerr << "numen: " << e.what() << "\n";
-      return 1;
-    }
-    return 0;
+    });
   }
 
   if (run->parsed()) {
-    try {
+    return run_guarded([&] {
       numen::sim::SceneOverrides overrides;
       if (!coupling.empty()) overrides.coupling = numen::sim::parse_coupling_mode(coupling);
       const std::string path = scene_path.empty() ? numen::sim::default_scene_path() : scene_path;
@@ -186,13 +258,7 @@ int main(int argc, char** argv) {
         std::cout << numen::sim::format_summary(summary);
         if (!trace_path.empty()) std::cout << "  trace: " << trace_path << "\n";
       }
-    } catch (const numen::sim::InputError& e) {
-      std::cerr << "numen: " << e.what() << "\n";
-      return 2;
-    } catch (const std::exception& e) {
-      std::cerr << "numen: " << e.what() << "\n";
-      return 1;
-    }
+    });
   }
   return 0;
 }

@@ -358,10 +358,11 @@ core::Model parse_scene_model(const TomlTable& root, std::vector<std::string>& w
   core::Model m;
   m.dt = root.number_in("dt", 1e-7, 1.0, 1e-3);
   m.gravity = root.vec3_or("gravity", Vec3(0.0, 0.0, -9.81));
-  const std::string integrator =
-      root.choice("integrator", {"implicit-euler", "symplectic-euler"}, "implicit-euler");
-  m.integrator = integrator == "implicit-euler" ? core::Integrator::kLinearlyImplicitEuler
-                                                : core::Integrator::kSymplecticEuler;
+  const std::string integrator = root.choice(
+      "integrator", {"implicit-euler", "symplectic-euler", "trapezoidal"}, "implicit-euler");
+  m.integrator = integrator == "implicit-euler"     ? core::Integrator::kLinearlyImplicitEuler
+                 : integrator == "symplectic-euler" ? core::Integrator::kSymplecticEuler
+                                                    : core::Integrator::kTrapezoidal;
   const std::string coupling =
       root.choice("coupling", {"god-object", "first-order", "direct", "admittance"}, "god-object");
   m.coupling_mode = coupling == "god-object"    ? core::CouplingMode::kGodObject

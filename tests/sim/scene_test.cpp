@@ -343,6 +343,43 @@ TEST(SceneErrors, TheTemplateIsValid) {
   EXPECT_TRUE(s.warnings.empty());
 }
 
+TEST(Scene, TrapezoidalIntegratorIsSelectedByName) {
+  TempDir dir;
+  const std::string text = replace(kMini, "dt = 0.001", "dt = 0.001\nintegrator = \"trapezoidal\"");
+  const Scene s = load_scene(dir.write("trap.toml", text));
+  EXPECT_EQ(s.model.integrator, numen::core::Integrator::kTrapezoidal);
+  EXPECT_STREQ(numen::sim::to_string(s.model.integrator), "trapezoidal");
+}
+
+TEST(Scene, TrapezoidalWithADeformableNetIsWarnedAbout) {
+  NUMEN_REQUIRE_DEFORMABLE();
+  const Scene plain = load_scene(std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/deformable.toml");
+  for (const std::string& w : plain.warnings) EXPECT_EQ(w.find("L-stable"), std::string::npos) << w;
+  TempDir dir;
+  std::ifstream in(std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/deformable.toml");
+  std::stringstream text;
+  text << in.rdbuf();
+  std::string toml =
+      replace(text.str(), "integrator = \"implicit-euler\"", "integrator = \"trapezoidal\"");
+  toml = replace(toml, "\"../data/", "\"" + std::string(NUMEN_SOURCE_DIR) + "/sim/data/");
+  const Scene s = load_scene(dir.write("trap_deformable.toml", toml));
+  EXPECT_EQ(s.model.integrator, numen::core::Integrator::kTrapezoidal);
+  bool warned = false;
+  for (const std::string& w : s.warnings)
+    warned = warned || w.find("L-stable") != std::string::npos;
+  EXPECT_TRUE(warned);
+}
+
+TEST(SceneErrors, TrapezoidalWithFirstOrderCouplingNamesTheIntegratorKey) {
+  TempDir dir;
+  const std::string text = replace(
+      kMini, "dt = 0.001", "dt = 0.001\nintegrator = \"trapezoidal\"\ncoupling = \"first-order\"");
+  const InputError e = load_error(dir, text);
+  expect_located(e, (dir.path() / "bad.toml").string(), line_of(text, "integrator = "),
+                 column_of(text, "integrator = ", "\"trapezoidal\""), "integrator", "first-order");
+  EXPECT_NE(e.message().find("L-stable"), std::string::npos) << e.what();
+}
+
 TEST(SceneErrors, MissingSceneFile) {
   const std::string path = (fs::temp_directory_path() / "numen_no_such_scene_file.toml").string();
   try {

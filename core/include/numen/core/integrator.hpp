@@ -2,7 +2,8 @@
 /// @file integrator.hpp
 /// Time integration of the rigid bodies (paper Eq. 1, §5): linearly implicit
 /// Euler with the stiffness and damping Jacobians of coupling springs and
-/// contacts, and symplectic Euler as the explicit baseline.
+/// contacts, the linearised trapezoidal rule (second order) on the same
+/// systems, and symplectic Euler as the explicit baseline.
 ///
 /// Linearly implicit (backward) Euler, Baraff & Witkin 1998 ("Large steps in
 /// cloth simulation", §2.3), on the stacked twists u = (v_0, ω_0, v_1, ω_1, …):
@@ -103,6 +104,12 @@ struct SolverScratch {
   /// enter the body's block of A.
   std::vector<std::uint8_t> target_coupled;
 
+  /// h_s, the step of the linearised system A = M − h_s D − h_s² K built this step (s):
+  /// Model::dt for the linearly implicit and the symplectic Euler, Model::dt / 2 for the
+  /// trapezoidal rule (its half step to the midpoint). Every Jacobian weight, the gyroscopic
+  /// step and the joint multipliers (λ = −y / h_s) use it; positions always move over Model::dt.
+  double system_step = 0.0;
+
   int coupled_body = -1;     ///< Body whose coupling springs act this step (-1: none).
   bool first_order = false;  ///< coupled_body uses the massless (first-order) model this step.
   /// Per body: 1 if its pose and twist are imposed from the device this step
@@ -113,8 +120,15 @@ struct SolverScratch {
   void resize(const Model& model);
 };
 
+/// h_s of Model::integrator (SolverScratch::system_step): Model::dt for the linearly implicit
+/// and the symplectic Euler, Model::dt / 2 for the trapezoidal rule. step() sets
+/// SolverScratch::system_step to it before the forces stage, whose net spring pass already
+/// linearises with it (net_forces.hpp).
+double linearized_system_step(const Model& model) noexcept;
+
 /// Integrate stage: dispatches on Model::integrator to
-/// integrate_linearly_implicit_euler() or integrate_symplectic_euler(). Needs
+/// integrate_linearly_implicit_euler(), integrate_trapezoidal() or
+/// integrate_symplectic_euler(). Needs
 /// Data::body_wrench (explicit forces: gravity, applied, coupling, contacts)
 /// and the ContactTerm lever arms and normal velocities of this step.
 /// Advances Data::bodies by dt.
@@ -137,19 +151,36 @@ void integrate_symplectic_euler(const Model& model, Data& data) noexcept;
 /// ends at max_iterations above the tolerance (the best iterate is still used).
 void integrate_linearly_implicit_euler(const Model& model, Data& data) noexcept;
 
+/// Linearised trapezoidal rule (Integrator::kTrapezoidal; docs/dynamics.md): with
+/// h_s = h/2, the linearly implicit Euler system of a half step
+///   (M − h/2 D − h²/4 K) Δu½ = h/2 (f0 + h/2 K u0) + M (u* − u0)
+/// gives the midpoint twist u½ = u0 + Δu½ (u* from the implicit gyroscopic step over
+/// h/2), then x1 = x0 + h v½, q1 = exp(½ h ω½) ⊗ q0, u1 = u0 + 2 Δu½. Equivalently
+/// (M − h/2 D − h²/4 K) Δu = h f0 + h²/2 K u0 with Δu = 2 Δu½: the trapezoidal rule
+/// applied to the linearisation (a one-stage Rosenbrock method with γ = 1/2, second
+/// order when K and D are the exact Jacobians and the explicit forces are evaluated at
+/// the step's middle; Hairer & Wanner, Solving ODEs II, §IV.7). Same builders and
+/// solvers as the implicit Euler (bodies, joints with Baumgarte rows built over the full
+/// step h and RATTLE's velocity projection onto the joints' rows at the step's end — one
+/// more linear-time tree solve, docs/dynamics.md — deformable nets); A-stable but not L-stable: a
+/// mode with h ω ≫ 1 is kept bounded but not damped (amplification → −1). Sets kSolverNotConverged
+/// like the implicit Euler.
+void integrate_trapezoidal(const Model& model, Data& data) noexcept;
+
 /// First part of the implicit step: stores u0 (SolverScratch::twist0) and the
 /// world inertias at the step's start, then replaces the angular velocity of
 /// every body in the solve (not kDirect, not a first-order coupled body) by
 /// the implicit gyroscopic update implicit_gyroscopic_velocity() (Catto, GDC
-/// 2015). Call after the forces stage, before build_implicit_system().
+/// 2015) over SolverScratch::system_step. Call after the forces stage, before
+/// build_implicit_system().
 void prepare_implicit_step(const Model& model, Data& data) noexcept;
 
 /// Builds the implicit system of the current step in Data::solver (after
 /// prepare_implicit_step()): contact weights (α, β of ContactTerm), the 6×6
-/// diagonal blocks of A = M − hD − h²K (exactly symmetric) and, for a model without
-/// joints (the block-Jacobi preconditioner; with joints the tree solve factors them), their Cholesky
-/// factors, the packed body–body contacts (SolverScratch::cross_contacts) with
-/// the `coupled` flags, and the right-hand side
+/// diagonal blocks of A = M − hD − h²K, h = SolverScratch::system_step (exactly symmetric) and, for
+/// a model without joints (the block-Jacobi preconditioner; with joints the tree solve factors
+/// them), their Cholesky factors, the packed body–body contacts (SolverScratch::cross_contacts)
+/// with the `coupled` flags, and the right-hand side
 ///   b = h (f0 + h K u0) + M (u* − u0),
 /// where u* is Data::bodies' twist after the implicit gyroscopic step (apply
 /// that to the state first), f0 = Data::body_wrench, K and D from the coupling

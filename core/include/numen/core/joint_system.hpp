@@ -19,11 +19,13 @@
 /// step's velocity change: C(q1) ≈ C_pred + h G_pred Δu = C1* up to
 /// O(h² |Δu − Δu_prev| |u|). The KKT system and the reactions use G0 (the
 /// impulse along the start configuration's rows, as in SHAKE: no numerical
-/// damping of the articulation's energy). v_ref is a prescribed joint's rate. Why Ċ0 is not just G0 u0: with chord
-/// velocities, (C_pred − C0)/h = G0 u0 + ½ h Ġu, so G0 u0 overstates the
-/// error's mean rate by ½ h Ġu (the centripetal term); taking it as Ċ0 leaves
-/// a steady error h² Ġu. With α = 2/h, β = 1/h² (the paper's defaults) the
-/// error contracts by 1/2 per step, critically damped, for any h.
+/// damping of the articulation's energy). v_ref is a prescribed joint's rate. Why Ċ0 is not just G0
+/// u0: with chord velocities, (C_pred − C0)/h = G0 u0 + ½ h Ġu, so G0 u0 overstates the error's
+/// mean rate by ½ h Ġu (the centripetal term); taking it as Ċ0 leaves a steady error h² Ġu. With α
+/// = 2/h, β = 1/h² (the paper's defaults) the error contracts by 1/2 per step, critically damped,
+/// for any h. With Integrator::kTrapezoidal the twists u0 are node velocities (projected onto G u =
+/// v_ref at the end of the last step, integrator.hpp), not chords: Ċ0 = G0 u0 − v_ref, and Δu is
+/// the half step's Δu½ (positions move over h with u0 + Δu½).
 
 #include <span>
 
@@ -50,8 +52,9 @@ void build_joint_rows(const Model& model, Data& data, std::span<const Vec6> twis
 void add_joint_transpose(const Model& model, const Data& data, std::span<const JointVector> y,
                          std::span<Vec6> out) noexcept;
 
-/// From the solution y of the KKT system (H [Δu; y] = [b; c]) over a step h:
-/// λ = −y / h (N or N·m per row) into Data::joints[j].multiplier, and the
+/// From the solution y of the KKT system (H [Δu; y] = [b; c]) of the step h_s
+/// = SolverScratch::system_step (Model::dt, or dt/2 for the trapezoidal rule):
+/// λ = −y / h_s (N or N·m per row) into Data::joints[j].multiplier, and the
 /// reaction on the child G_childᵀ λ into Data::joints[j].reaction.
 void store_joint_multipliers(const Model& model, Data& data, std::span<const JointVector> y) noexcept;
 

@@ -22,6 +22,13 @@ enum class Integrator : std::uint8_t {
   kLinearlyImplicitEuler,  ///< Backward Euler linearised with the stiffness and
                            ///< damping Jacobians (Baraff & Witkin 1998) — paper's choice.
   kSymplecticEuler,        ///< Semi-implicit Euler: v += h M⁻¹ f(x, v); x += h v. Explicit baseline.
+  /// Linearised trapezoidal rule (implicit midpoint / Crank–Nicolson on the velocity-level
+  /// system; second order, A-stable, not L-stable): the linearly implicit Euler system
+  /// of a half step h/2 gives the midpoint twist u½, then x1 = x0 + h v½, q1 =
+  /// exp(h ω½) q0, u1 = 2 u½ − u0 (docs/dynamics.md derives it; Hairer & Wanner,
+  /// "Solving ODEs II", §IV.7, one-stage Rosenbrock method with γ = 1/2). Not with
+  /// CouplingMode::kFirstOrder (refused by finalize_model()).
+  kTrapezoidal,
 };
 
 /// How the attached body follows the device target (paper §3, Fig. 5, footnote).

@@ -46,8 +46,11 @@ void compute_net_forces(const Model& model, Data& data) noexcept;
 /// Prefer the linearly implicit integrator for nets.
 void integrate_nodes_symplectic(const Model& model, Data& data) noexcept;
 
-/// Node update of the implicit step: v1 = v0 + Δv (NetScratch::delta),
-/// x1 = x0 + h v1.
+/// Node update of the linearised step (integrator.hpp), h = Model::dt, Δv =
+/// NetScratch::delta solved with h_s = SolverScratch::system_step:
+/// x1 = x0 + h (v0 + Δv), v1 = v0 + (h / h_s) Δv — the implicit Euler's
+/// v1 = v0 + Δv, x1 = x0 + h v1 (h_s = h), or the trapezoidal rule's midpoint
+/// positions and v1 = v0 + 2 Δv½ (h_s = h/2).
 void integrate_nodes_implicit(const Model& model, Data& data) noexcept;
 
 /// End-of-step observables of every net into Data::nets (NetOutput):
