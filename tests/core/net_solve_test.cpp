@@ -464,7 +464,6 @@ void check_scratch(const core::Model& m, const core::Data& d, const Dense& ref, 
 }  // namespace
 
 TEST(NetSolve, FreeRigidComponentMatchesTheDenseSolve) {
-  NUMEN_REQUIRE_ARTICULATION();
   const core::Model m = scene(Variant::kFree);
   core::Data d = core::make_data(m);
   perturb(d, 3e-3, 0.05);
@@ -490,7 +489,6 @@ TEST(NetSolve, FreeRigidComponentMatchesTheDenseSolve) {
 }
 
 TEST(NetSolve, WarmStartedSolveAfterRealStepsMatchesTheDenseSolve) {
-  NUMEN_REQUIRE_ARTICULATION();
   const core::Model m = scene(Variant::kFree);
   core::Data d = core::make_data(m);
   perturb(d, 2e-3, 0.05);
@@ -565,7 +563,6 @@ TEST(NetSolve, JointedRigidComponentMatchesTheDenseKktSolve) {
 }
 
 TEST(NetSolve, ImposedRigidComponentHasNoUnknownAndTheNodesMatchTheDenseSolve) {
-  NUMEN_REQUIRE_ARTICULATION();
   const core::Model m = scene(Variant::kImposed);
   core::Data d = core::make_data(m);
   perturb(d, 3e-3, 0.05);
@@ -594,7 +591,6 @@ TEST(NetSolve, ImposedRigidComponentHasNoUnknownAndTheNodesMatchTheDenseSolve) {
 }
 
 TEST(NetSolve, ReportsNonConvergenceAtMaxIterations) {
-  NUMEN_REQUIRE_ARTICULATION();
   core::Model m = scene(Variant::kFree);
   m.solver.max_iterations = 1;
   ASSERT_EQ(core::finalize_model(m), "");
@@ -614,7 +610,6 @@ TEST(NetSolve, ReportsNonConvergenceAtMaxIterations) {
 }
 
 TEST(NetSolve, SeveralNetsOnOneBodyAndOnTheProbeMatchTheDenseSolve) {
-  NUMEN_REQUIRE_ARTICULATION();
   const core::Model m = scene(Variant::kThreeNets);
   ASSERT_EQ(m.num_nets(), 3);
   core::Data d = core::make_data(m);
@@ -699,7 +694,6 @@ Staged staged_body_contact(double tolerance = 1e-12) {
 }  // namespace
 
 TEST(NetSolve, EisenstatSplittingAndPreconditionedProductMatchTheDenseMatrix) {
-  NUMEN_REQUIRE_ARTICULATION();
   Staged st = staged_body_contact();
   const core::Model& m = st.m;
   core::Data& d = st.d;
@@ -760,7 +754,6 @@ TEST(NetSolve, EisenstatSplittingAndPreconditionedProductMatchTheDenseMatrix) {
 }
 
 TEST(NetSolve, ReportsTheResidualInTheNormOfThePreconditioner) {
-  NUMEN_REQUIRE_ARTICULATION();
   // At a loose tolerance, so that the recurrence's residual is the true one.
   Staged st = staged_body_contact(1e-4);
   const core::Model& m = st.m;
@@ -786,7 +779,6 @@ TEST(NetSolve, ReportsTheResidualInTheNormOfThePreconditioner) {
 }
 
 TEST(NetSolve, BodyContactAndNodeContactWithAProbeMatchTheDenseSolve) {
-  NUMEN_REQUIRE_ARTICULATION();
   Staged st = staged_body_contact();
   const core::Model& m = st.m;
   const core::Data& d = st.d;
