@@ -77,6 +77,14 @@ void contact_stiffness_damping(const Vec3& normal, const Vec3& r_a, const Vec3& 
 void compute_contact_forces(const Model& model, Data& data) noexcept {
   const int nb = model.num_bodies();
   const int np = static_cast<int>(model.material_pairs.size());
+  // The contact scratch has room for what the model can produce (contact_capacity());
+  // contacts beyond it (written by a caller, not by detect_contacts) are an overflow.
+  const int room = static_cast<int>(data.solver.contact_terms.size());
+  if (data.num_contacts > room) {
+    data.contacts_dropped += data.num_contacts - room;
+    data.status |= kContactOverflow;
+    data.num_contacts = room;
+  }
   const int nc = std::clamp(data.num_contacts, 0, kMaxContacts);
   for (int i = 0; i < nc; ++i) {
     Contact& c = data.contacts[static_cast<std::size_t>(i)];

@@ -4,6 +4,7 @@
 #include "numen/core/data.hpp"
 
 #include "numen/core/capacity.hpp"
+#include "numen/core/features.hpp"
 #include "numen/core/model.hpp"
 
 namespace numen::core {
@@ -37,10 +38,12 @@ Data make_data(const Model& model) {
   data.body_feedback.resize(n);
   data.joint_prescribed.resize(static_cast<std::size_t>(model.num_joints()));
   data.joints.resize(static_cast<std::size_t>(model.num_joints()));
-  data.articulation.resize(model);
+  // Tree-solve scratch only with joints: without, step() runs no tree solve.
+  if constexpr (kWithArticulation)
+    if (model.num_joints() > 0) data.articulation.resize(model);
   data.collision.resize(model);
   data.solver.resize(model);
-  data.net.resize(model);
+  if constexpr (kWithDeformable) data.net.resize(model);  // empty without nets
   reset_data(model, data);
   return data;
 }
@@ -87,6 +90,7 @@ void reset_data(const Model& model, Data& data) noexcept {
   data.solver_iterations = 0;
   data.solver_residual = 0.0;
   data.status = kStepOk;
+  data.stages_run = 0;
   data.nonfinite_steps = 0;
 }
 

@@ -13,6 +13,7 @@
 #include "numen/core/capacity.hpp"
 #include "numen/core/coupling.hpp"
 #include "numen/core/data.hpp"
+#include "numen/core/features.hpp"
 #include "numen/core/joint_system.hpp"
 #include "numen/core/model.hpp"
 #include "numen/core/net_forces.hpp"
@@ -23,8 +24,8 @@ namespace numen::core {
 namespace {
 
 
-int active_contact_count(const Data& data) noexcept {
-  return std::clamp(data.num_contacts, 0, kMaxContacts);
+int active_contact_count(const Data& data) noexcept {  // within the scratch (capacity.hpp)
+  return std::clamp(data.num_contacts, 0, static_cast<int>(data.solver.contact_terms.size()));
 }
 
 bool is_first_order(const SolverScratch& s, int body) noexcept {
@@ -144,8 +145,8 @@ void SolverScratch::resize(const Model& model) {
   isotropic_moments.assign(n, IsotropicMoments{});
   block_factor.assign(n, BlockCholesky{});
   in_solve.assign(n, 1);
-  contact_terms.assign(static_cast<std::size_t>(kMaxContacts), ContactTerm{});
-  cross_contacts.assign(static_cast<std::size_t>(kMaxContacts), CrossContact{});
+  contact_terms.assign(static_cast<std::size_t>(contact_capacity(model)), ContactTerm{});
+  cross_contacts.assign(static_cast<std::size_t>(cross_contact_capacity(model)), CrossContact{});
   num_cross_contacts = 0;
   coupled.assign(n, 0);
   const auto nj = static_cast<std::size_t>(model.num_joints());
@@ -255,7 +256,8 @@ void build_implicit_system(const Model& model, Data& data) noexcept {
     }
   }
 
-  add_net_body_terms(model, data);  // ties and node contacts of the deformable nets
+  if constexpr (kWithDeformable)
+    add_net_body_terms(model, data);  // ties and node contacts of the deformable nets
   for (std::size_t i = 0; i < n; ++i) {
     if (s.in_solve[i]) add_isotropic_part(s.isotropic_moments[i], s.block[i]);
     mirror_lower(s.block[i]);
@@ -361,6 +363,7 @@ bool solve_implicit_system(const Model& model, Data& data) noexcept {
   return rel <= model.solver.tolerance;
 }
 
+#if NUMEN_WITH_ARTICULATION
 bool solve_constrained_system(const Model& model, Data& data) noexcept {
   SolverScratch& s = data.solver;
   ArticulationScratch& art = data.articulation;
@@ -525,6 +528,11 @@ void project_joint_velocities(const Model& model, Data& data) noexcept {
   }
 }
 
+}  // namespace
+#endif  // NUMEN_WITH_ARTICULATION
+
+namespace {
+
 /// One linearised step of length h = model.dt through the system of step h_s
 /// (SolverScratch::system_step): Δu solves (M − h_s D − h_s² K) Δu = h_s (f0 +
 /// h_s K u0) + M (u* − u0); positions move over h with u0 + Δu, twists become
@@ -538,13 +546,17 @@ void integrate_linearized(const Model& model, Data& data, double system_step) no
   prepare_implicit_step(model, data);
   build_implicit_system(model, data);
   bool converged = false;
-  if (!model.nets.empty()) {
-    build_net_system(model, data);
-    converged = solve_net_system(model, data);
-  } else {
-    converged = model.joints.empty() ? solve_implicit_system(model, data)
-                                     : solve_constrained_system(model, data);
+  // Optional parts (features.hpp): compiled out, their models are refused by finalize_model().
+  if constexpr (kWithDeformable) {
+    if (!model.nets.empty()) {
+      build_net_system(model, data);
+      converged = solve_net_system(model, data);
+    }
   }
+#if NUMEN_WITH_ARTICULATION
+  if (model.nets.empty() && !model.joints.empty()) converged = solve_constrained_system(model, data);
+#endif
+  if (model.nets.empty() && model.joints.empty()) converged = solve_implicit_system(model, data);
   if (!converged) data.status |= kSolverNotConverged;
   for (std::size_t i = 0; i < data.bodies.size(); ++i) {
     if (!s.in_solve[i]) continue;  // kDirect body: stays at the imposed target
@@ -556,8 +568,10 @@ void integrate_linearized(const Model& model, Data& data, double system_step) no
     st.linear_velocity = u1.head<3>();
     st.angular_velocity = u1.tail<3>();
   }
+#if NUMEN_WITH_ARTICULATION
   if (scale != 1.0 && !model.joints.empty()) project_joint_velocities(model, data);
-  integrate_nodes_implicit(model, data);
+#endif
+  if constexpr (kWithDeformable) integrate_nodes_implicit(model, data);
 }
 
 }  // namespace
@@ -592,6 +606,7 @@ void set_first_order_velocity(const Model& model, Data& data, std::size_t i) noe
 /// (kDirect) keep their twist; a first-order body enters with the block
 /// h·diag(γ_t I, γ_r I) and the right-hand side that takes it to its
 /// first-order twist (the joints' force adds λ/γ to it).
+#if NUMEN_WITH_ARTICULATION
 void integrate_symplectic_euler_constrained(const Model& model, Data& data) noexcept {
   SolverScratch& s = data.solver;
   ArticulationScratch& art = data.articulation;
@@ -640,6 +655,7 @@ void integrate_symplectic_euler_constrained(const Model& model, Data& data) noex
     st.orientation = integrate_orientation(st.orientation, st.angular_velocity, h);
   }
 }
+#endif  // NUMEN_WITH_ARTICULATION
 
 }  // namespace
 
@@ -647,11 +663,14 @@ void integrate_symplectic_euler(const Model& model, Data& data) noexcept {
   data.solver.system_step = model.dt;
   data.solver_iterations = 0;
   data.solver_residual = 0.0;
-  integrate_nodes_symplectic(model, data);  // forces of the step's start, like the bodies'
+  if constexpr (kWithDeformable)
+    integrate_nodes_symplectic(model, data);  // forces of the step's start, like the bodies'
+#if NUMEN_WITH_ARTICULATION
   if (!model.joints.empty()) {
     integrate_symplectic_euler_constrained(model, data);
     return;
   }
+#endif
   const SolverScratch& s = data.solver;
   const double h = model.dt;
   for (std::size_t i = 0; i < data.bodies.size(); ++i) {

@@ -9,9 +9,26 @@
 #include <Eigen/Eigenvalues>
 
 #include "numen/core/collision.hpp"
+#include "numen/core/features.hpp"
+#include "numen/core/net_model.hpp"
 
 namespace numen::core {
 namespace {
+
+/// Model::articulation of a build without the articulation solve
+/// (NUMEN_WITH_ARTICULATION=OFF): what build_articulation_topology() derives
+/// for a model without joints — every body a one-node tree of its own.
+[[maybe_unused]] void set_unjointed_topology(Model& model) {
+  ArticulationTopology& t = model.articulation;
+  const int nb = model.num_bodies();
+  t = ArticulationTopology{};
+  for (int b = 0; b < nb; ++b) {
+    t.nodes.push_back(ArticulationNode{false, b, -1});
+    t.body_node.push_back(b);
+    t.body_tree.push_back(b);
+  }
+  t.num_trees = nb;
+}
 
 bool finite(const Vec3& v) { return v.allFinite(); }
 
@@ -180,7 +197,16 @@ std::string finalize_model(Model& model) {
     j.num_rows = joint_row_count(j.type, j.prescribed);
   }
   if (std::string e = validate_nets(model); !e.empty()) return e;
-  if (std::string e = build_articulation_topology(model); !e.empty()) return e;
+  if (!kWithDeformable && !model.nets.empty())
+    return "nets: this build has NUMEN_WITH_DEFORMABLE=OFF (no deformable nets)";
+  if constexpr (kWithDeformable) order_net_nodes(model);  // Model::node_sweep_order
+  if constexpr (kWithArticulation) {
+    if (std::string e = build_articulation_topology(model); !e.empty()) return e;
+  } else {
+    if (!model.joints.empty())
+      return "joints: this build has NUMEN_WITH_ARTICULATION=OFF (no joints)";
+    set_unjointed_topology(model);
+  }
   build_collision_structures(model);
   return {};
 }

@@ -5,6 +5,8 @@
 #include "numen/core/net_model.hpp"
 
 #include <algorithm>
+#include <boost/graph/adjacency_list.hpp>
+#include <boost/graph/cuthill_mckee_ordering.hpp>
 #include <cmath>
 
 #include "numen/core/model.hpp"
@@ -102,6 +104,29 @@ std::string add_net(Model& model, const TriangleMesh& mesh, const NetSettings& s
   model.net_springs.insert(model.net_springs.end(), springs.begin(), springs.end());
   model.nets.push_back(std::move(net));
   return "";
+}
+
+void order_net_nodes(Model& model) {
+  model.node_sweep_order.assign(static_cast<std::size_t>(model.num_nodes()), 0);
+  using Graph =
+      boost::adjacency_list<boost::vecS, boost::vecS, boost::undirectedS,
+                            boost::property<boost::vertex_color_t, boost::default_color_type,
+                                            boost::property<boost::vertex_degree_t, int>>>;
+  for (const NetModel& net : model.nets) {
+    Graph g(static_cast<std::size_t>(net.node_count));
+    for (int e = net.spring_begin; e < net.spring_begin + net.structural_count + net.bending_count;
+         ++e) {
+      const NetSpring& sp = model.net_springs[static_cast<std::size_t>(e)];
+      boost::add_edge(static_cast<std::size_t>(sp.node_a - net.node_begin),
+                      static_cast<std::size_t>(sp.node_b - net.node_begin), g);
+    }
+    std::vector<std::size_t> order(static_cast<std::size_t>(net.node_count));
+    boost::cuthill_mckee_ordering(g, order.rbegin(), boost::get(boost::vertex_color, g),
+                                  boost::make_degree_map(g));
+    for (std::size_t p = 0; p < order.size(); ++p)
+      model.node_sweep_order[static_cast<std::size_t>(net.node_begin) + p] =
+          static_cast<std::int32_t>(order[p]) + net.node_begin;
+  }
 }
 
 }  // namespace numen::core

@@ -12,6 +12,7 @@
 #include <span>
 
 #include "numen/core/articulation.hpp"
+#include "numen/core/features.hpp"
 #include "numen/core/data.hpp"
 #include "numen/core/integrator.hpp"
 #include "numen/core/joint_system.hpp"
@@ -432,6 +433,7 @@ void build_net_system(const Model& model, Data& data) noexcept {
 
 namespace {
 
+#if NUMEN_WITH_ARTICULATION
 /// The arrowhead-preconditioned projected CG (models with joints; see
 /// net_solve.hpp).
 bool solve_arrowhead(const Model& model, Data& data) noexcept {
@@ -567,6 +569,7 @@ bool solve_arrowhead(const Model& model, Data& data) noexcept {
   data.solver_residual = rel;
   return rel <= model.solver.tolerance;
 }
+#endif  // NUMEN_WITH_ARTICULATION
 
 /// The backward sweep of net_backward_sweep(). With kUpdateQ it first makes
 /// each node's q the CG direction, q_k ← d_k + β q_k (d = D̃ w, in place),
@@ -899,7 +902,10 @@ double apply_net_preconditioned(const Model& model, Data& data, std::span<const 
 bool solve_net_system(const Model& model, Data& data) noexcept {
   data.solver_iterations = 0;
   data.solver_residual = 0.0;
-  return model.joints.empty() ? solve_eisenstat(model, data) : solve_arrowhead(model, data);
+#if NUMEN_WITH_ARTICULATION
+  if (!model.joints.empty()) return solve_arrowhead(model, data);
+#endif
+  return solve_eisenstat(model, data);
 }
 
 }  // namespace numen::core

@@ -4,8 +4,6 @@
 #include "numen/core/net_state.hpp"
 
 #include <algorithm>
-#include <boost/graph/adjacency_list.hpp>
-#include <boost/graph/cuthill_mckee_ordering.hpp>
 #include <cstddef>
 
 #include "numen/core/model.hpp"
@@ -40,31 +38,14 @@ void NetScratch::resize(const Model& model) {
   sweep.assign(n, Vec3::Zero());
   body_schur.assign(nb, Mat6::Identity());
   body_tmp.assign(nb, Vec6::Zero());
-  // Sweep order: reverse Cuthill–McKee per net (Boost.Graph), positions kept per net.
+  // Sweep order: Model::node_sweep_order (reverse Cuthill–McKee per net).
   sweep_order.assign(n, 0);
   sweep_position.assign(n, 0);
   sweep_nodes.assign(n, SweepNode{});
-  for (const NetModel& net : model.nets) {
-    using Graph =
-        boost::adjacency_list<boost::vecS, boost::vecS, boost::undirectedS,
-                              boost::property<boost::vertex_color_t, boost::default_color_type,
-                                              boost::property<boost::vertex_degree_t, int>>>;
-    Graph g(static_cast<std::size_t>(net.node_count));
-    for (int e = net.spring_begin; e < net.spring_begin + net.structural_count + net.bending_count;
-         ++e) {
-      const NetSpring& sp = model.net_springs[static_cast<std::size_t>(e)];
-      boost::add_edge(static_cast<std::size_t>(sp.node_a - net.node_begin),
-                      static_cast<std::size_t>(sp.node_b - net.node_begin), g);
-    }
-    std::vector<std::size_t> order(static_cast<std::size_t>(net.node_count));
-    boost::cuthill_mckee_ordering(g, order.rbegin(), boost::get(boost::vertex_color, g),
-                                  boost::make_degree_map(g));
-    for (std::size_t p = 0; p < order.size(); ++p) {
-      const auto node = static_cast<std::int32_t>(order[p]) + net.node_begin;
-      const auto pos = static_cast<std::int32_t>(p) + net.node_begin;
-      sweep_order[static_cast<std::size_t>(pos)] = node;
-      sweep_position[static_cast<std::size_t>(node)] = pos;
-    }
+  for (std::size_t p = 0; p < n; ++p) {
+    const std::int32_t node = model.node_sweep_order[p];
+    sweep_order[p] = node;
+    sweep_position[static_cast<std::size_t>(node)] = static_cast<std::int32_t>(p);
   }
   // Springs by their earlier node in the sweep order (counting sort: stable,
   // so each node's springs stay in Model::net_springs order).

@@ -7,6 +7,7 @@
 #include "numen/core/contact_force.hpp"
 #include "numen/core/coupling.hpp"
 #include "numen/core/data.hpp"
+#include "numen/core/features.hpp"
 #include "numen/core/feedback.hpp"
 #include "numen/core/integrator.hpp"
 #include "numen/core/joint_system.hpp"
@@ -14,6 +15,7 @@
 #include "numen/core/net_collision.hpp"
 #include "numen/core/net_forces.hpp"
 #include "numen/core/rigid_body.hpp"
+#include "numen/core/step_stages.hpp"
 
 namespace numen::core {
 namespace {
@@ -62,25 +64,54 @@ void compute_forces(const Model& model, Data& data) noexcept {
   apply_external_forces(model, data);
   apply_coupling(model, data);
   compute_contact_forces(model, data);
-  compute_net_forces(model, data);
+  if constexpr (kWithDeformable)
+    if (!model.nets.empty()) compute_net_forces(model, data);
 }
 
 void step(const Model& model, Data& data) noexcept {
+  // Stages a model does not need are skipped here, at the stage boundary, on
+  // counts fixed by the model (step_stages.hpp); their buffers are empty.
+  // A part compiled out (features.hpp) has no model: finalize_model() refuses it.
+  const bool nets = kWithDeformable && !model.nets.empty();
+  const bool joints = kWithArticulation && !model.joints.empty();
+  std::uint32_t ran = kStageBodyForces | kStageIntegrate | kStageFeedback | kStageChecks;
   data.status = kStepOk;
   save_state(data);
-  impose_direct_target(model, data);
-  detect_contacts(model, data);  // may set kContactOverflow, counts contact_overflow_steps
-  if (!model.nets.empty()) detect_node_contacts(model, data);
+  impose_direct_target(model, data);  // clears SolverScratch::imposed; imposes in kDirect only
+  if (model.coupling_mode == CouplingMode::kDirect) ran |= kStageDirectTarget;
+  if (!data.solver.contact_terms.empty()) {  // room only if something can collide (capacity.hpp)
+    detect_contacts(model, data);  // may set kContactOverflow, counts contact_overflow_steps
+    ran |= kStageContacts;
+  } else {
+    data.num_contacts = 0;
+    data.contacts_dropped = 0;
+    data.max_penetration = 0.0;
+  }
+  if constexpr (kWithDeformable) {
+    if (nets) detect_node_contacts(model, data);
+  }
+  if (nets) {
+    ran |= kStageNodeContacts | kStageNetForces | kStageNetSolve | kStageMeasureNets;
+  }
   data.solver.system_step = linearized_system_step(model);  // the net spring pass needs h_s
   compute_forces(model, data);
-  integrate(model, data);
-  if (!model.joints.empty()) measure_joint_drift(model, data);
-  if (!model.nets.empty()) measure_nets(model, data);
-  compute_feedback(model, data);
-  if (!check_finite(data) && !model.nets.empty()) {
-    for (NetOutput& o : data.nets) o.tie_wrench = Wrench{};
-    measure_nets(model, data);  // describe the restored net (finite, at rest)
+  integrate(model, data);  // with nets: net_solve; else with joints: the KKT tree solve
+  if constexpr (kWithArticulation) {
+    if (joints) measure_joint_drift(model, data);
   }
+  if (joints) ran |= kStageJointDrift | (nets ? 0u : kStageJointSolve);
+  if constexpr (kWithDeformable) {
+    if (nets) measure_nets(model, data);
+  }
+  compute_feedback(model, data);
+  const bool accepted = check_finite(data);
+  if constexpr (kWithDeformable) {
+    if (!accepted && nets) {
+      for (NetOutput& o : data.nets) o.tie_wrench = Wrench{};
+      measure_nets(model, data);  // describe the restored net (finite, at rest)
+    }
+  }
+  data.stages_run = ran;
   data.time += model.dt;
   ++data.step_count;
 }

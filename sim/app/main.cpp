@@ -4,6 +4,7 @@
 ///             [--bus sim|log:FILE|can:IFACE|serial:PATH[@BAUD]] [--record FILE.log] [--phase S]
 ///             [--rt-priority N] [--lock-memory] [--prefault-stack BYTES] [--cpu LIST] [--rt-strict]
 ///   numen device [SCENE] --bus can:IFACE|serial:PATH[@BAUD] [--duration S] [--ready]
+///   numen info [SCENE] [--json]
 ///   numen study accuracy [--out DIR] [--quick] [--case NAME]...
 ///   numen study stability [--out DIR] [--quick] [--family NAME]...
 /// SIGINT / SIGTERM end either cleanly (run: zero torque, drives disabled; both: summary).
@@ -24,6 +25,7 @@
 #include "numen/sim/progress_bar.hpp"
 #include "numen/sim/run.hpp"
 #include "numen/sim/scene.hpp"
+#include "numen/sim/scene_info.hpp"
 #include "numen/sim/study_accuracy.hpp"
 #include "numen/sim/study_stability.hpp"
 
@@ -59,11 +61,12 @@ int run_guarded(Body&& body) {
     return 1;
   }
 }
+
 std::string check_bus(const std::string& v, bool real_only) {
   try {
     const numen::sim::BusSpec spec = numen::sim::parse_bus_spec(v);
     if (real_only && !spec.real()) return "expected can:IFACE or serial:PATH[@BAUD]";
-    return {};
+    return numen::sim::missing_backend(spec);  // a backend this build left out
   } catch (const std::invalid_argument& e) {
     return e.what();
   }
@@ -132,6 +135,13 @@ int main(int argc, char** argv) {
       ->check(CLI::NonNegativeNumber);
   dev->add_flag("--ready", dev_ready, "Print READY on stdout once the bus is open");
 
+  CLI::App* info = app.add_subcommand(
+      "info", "Print what a scene compiles to: sizes, the stages step() runs, capacities, bytes");
+  std::string info_scene;
+  bool info_json = false;
+  info->add_option("scene", info_scene, "Scene file (TOML); default: the shipped default scene");
+  info->add_flag("--json", info_json, "Print one JSON object instead of the report");
+
   CLI::App* study = app.add_subcommand("study", "Measure the integrators (docs/results.md)");
   study->require_subcommand(1);
   CLI::App* accuracy = study->add_subcommand(
@@ -198,6 +208,17 @@ int main(int argc, char** argv) {
     });
   }
   install_signal_handlers();
+
+  if (info->parsed()) {
+    return run_guarded([&] {
+      const std::string path = info_scene.empty() ? numen::sim::default_scene_path() : info_scene;
+      const numen::sim::SceneInfo si = numen::sim::describe_scene(numen::sim::load_scene(path));
+      if (info_json)
+        std::cout << numen::sim::format_scene_info_json(si) << std::endl;
+      else
+        std::cout << numen::sim::format_scene_info(si);
+    });
+  }
 
   if (dev->parsed()) {
     return run_guarded([&] {

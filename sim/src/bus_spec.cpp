@@ -16,8 +16,13 @@
 #include "numen/hal/emcy.hpp"
 #include "numen/hal/heartbeat.hpp"
 #include "numen/hal/nmt.hpp"
+#include "numen/hal/features.hpp"
+#if NUMEN_WITH_SERIAL
 #include "numen/hal/serial_bus.hpp"
+#endif
+#if NUMEN_WITH_SOCKETCAN
 #include "numen/hal/socketcan_bus.hpp"
+#endif
 
 namespace numen::sim {
 namespace {
@@ -58,9 +63,11 @@ BusSpec parse_bus_spec(const std::string& spec) {
       const auto r = std::from_chars(b.data(), b.data() + b.size(), baud);
       if (b.empty() || r.ec != std::errc() || r.ptr != b.data() + b.size())
         throw bad("baud '" + b + "' is not a decimal number of bit/s");
+#if NUMEN_WITH_SERIAL  // else refused whole by missing_backend()
       const auto bauds = hal::serial_supported_bauds();
       if (std::find(bauds.begin(), bauds.end(), baud) == bauds.end())
         throw bad("baud " + b + " is not a supported termios speed (9600 ... 4000000)");
+#endif
       out.baud = baud;
       rest.resize(at);
     }
@@ -97,23 +104,44 @@ std::vector<hal::CanFilter> device_filters(const hal::DeviceConfig& config) {
   return out;
 }
 
+std::string missing_backend(const BusSpec& spec) {
+  const std::string scheme = spec.kind == BusKind::kCan ? "can:" : "serial:";
+  if (spec.kind == BusKind::kCan && !hal::kWithSocketCan)
+    return "bus '" + scheme + spec.target + "' needs SocketCAN: this build has NUMEN_WITH_SOCKETCAN=OFF";
+  if (spec.kind == BusKind::kSerial && !hal::kWithSerial)
+    return "bus '" + scheme + spec.target + "' needs the serial backend: this build has NUMEN_WITH_SERIAL=OFF";
+  return {};
+}
+
 std::unique_ptr<hal::Bus> open_real_bus(const BusSpec& spec,
                                         const std::vector<hal::CanFilter>& filters) {
+  if (const std::string missing = missing_backend(spec); !missing.empty())
+    throw std::invalid_argument(missing);
+#if NUMEN_WITH_SOCKETCAN
   if (spec.kind == BusKind::kCan) {
     hal::SocketCanOptions options;
     options.fd_frames = false;  // the protocol uses classic frames; works on MTU 16 and 72
     return std::make_unique<hal::SocketCanBus>(spec.target, filters, options);
   }
+#endif
+#if NUMEN_WITH_SERIAL
   if (spec.kind == BusKind::kSerial) {
     return std::make_unique<hal::SerialBus>(spec.target, spec.baud, filters);
   }
+#endif
+  (void)filters;
   throw std::invalid_argument("open_real_bus: '" + spec.target + "' is not a can: or serial: bus");
 }
 
 bool wait_bus(hal::Bus& bus, std::int64_t timeout_ns) noexcept {
   int fd = -1;
+#if NUMEN_WITH_SOCKETCAN
   if (auto* c = dynamic_cast<hal::SocketCanBus*>(&bus)) fd = c->native_handle();
+#endif
+#if NUMEN_WITH_SERIAL
   if (auto* s = dynamic_cast<hal::SerialBus*>(&bus)) fd = s->native_handle();
+#endif
+  (void)bus;
   if (timeout_ns < 0) timeout_ns = 0;
   const timespec ts{static_cast<time_t>(timeout_ns / 1'000'000'000),
                     static_cast<long>(timeout_ns % 1'000'000'000)};
@@ -128,13 +156,18 @@ bool wait_bus(hal::Bus& bus, std::int64_t timeout_ns) noexcept {
 
 std::string describe_transport_counters(const hal::Bus& bus) {
   std::ostringstream os;
+#if NUMEN_WITH_SOCKETCAN
   if (const auto* c = dynamic_cast<const hal::SocketCanBus*>(&bus)) {
     const hal::SocketCanCounters& x = c->socketcan_counters();
     os << "socketcan " << c->name() << ": error frames " << x.error_frames << ", bus off "
        << x.bus_off << ", restarts " << x.restarts << ", link down " << x.link_down
        << ", malformed " << x.malformed_rx << ", tx retries " << x.tx_retries << ", reopens "
        << x.reopens << ", last errno " << x.last_errno;
-  } else if (const auto* s = dynamic_cast<const hal::SerialBus*>(&bus)) {
+    return os.str();
+  }
+#endif
+#if NUMEN_WITH_SERIAL
+  if (const auto* s = dynamic_cast<const hal::SerialBus*>(&bus)) {
     const hal::SerialCounters x = s->serial_counters();
     os << "serial " << s->path() << " @" << s->baud() << ": frames " << x.frames
        << ", rejected " << x.rejected() << " (torn " << x.torn_frames << ", cobs "
@@ -142,14 +175,21 @@ std::string describe_transport_counters(const hal::Bus& bus) {
        << "), garbage bytes " << x.garbage_bytes << ", resyncs " << x.resyncs << ", filtered "
        << x.filtered;
   }
+#endif
+  (void)bus;
   return os.str();
 }
 
 std::uint64_t link_down_events(const hal::Bus& bus) noexcept {
+#if NUMEN_WITH_SOCKETCAN
   if (const auto* c = dynamic_cast<const hal::SocketCanBus*>(&bus))
     return c->socketcan_counters().link_down;
+#endif
+#if NUMEN_WITH_SERIAL
   if (const auto* s = dynamic_cast<const hal::SerialBus*>(&bus))
     return s->state() == hal::BusState::kBusOff ? 1 : 0;
+#endif
+  (void)bus;
   return 0;
 }
 

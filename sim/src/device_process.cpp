@@ -12,8 +12,11 @@
 #include <stdexcept>
 
 #include "numen/hal/cia402.hpp"
+#include "numen/hal/features.hpp"
 #include "numen/hal/nmt.hpp"
+#if NUMEN_WITH_SERIAL
 #include "numen/hal/serial_bus.hpp"
+#endif
 #include "numen/platform/monotonic_clock.hpp"
 #include "numen/sim/bus_spec.hpp"
 #include "numen/sim/simulated_instrument.hpp"
@@ -45,22 +48,8 @@ DeviceSummary run_device(const Scene& scene, const DeviceOptions& options) {
   const std::int64_t end =
       options.duration_s >= 0.0 ? t0 + static_cast<std::int64_t>(options.duration_s * 1e9) : -1;
   std::int64_t next_tick = t0;
-  while (!(options.stop != nullptr && options.stop->load(std::memory_order_relaxed))) {
-    std::int64_t now = platform::monotonic_now_ns();
-    if (end >= 0 && now >= end) break;
-    if (now < next_tick) {
-      wait_bus(*port, std::min(next_tick - now, end >= 0 ? end - now : next_tick - now));
-      ++s.wakeups;
-      now = platform::monotonic_now_ns();
-    }
-    const hal::EmulatorCounters before = emu.counters();
-    const bool tick = now >= next_tick;
-    instrument.poll(*port, tick ? now : -1);
-    if (tick) {
-      next_tick += options.tick_ns;
-      if (next_tick <= now) next_tick = now + options.tick_ns;  // re-phase after a stall
-    }
-    if (auto* serial = dynamic_cast<hal::SerialBus*>(port.get())) serial->flush();
+  // Counts of one pass of the loop: SYNCs answered, torque maxima, drive states.
+  const auto account = [&](const hal::EmulatorCounters& before) {
     const hal::EmulatorCounters& after = emu.counters();
     const auto syncs = static_cast<std::int64_t>(after.syncs - before.syncs);
     const auto tpdos = static_cast<std::int64_t>(after.tpdos_sent - before.tpdos_sent);
@@ -77,6 +66,37 @@ DeviceSummary run_device(const Scene& scene, const DeviceOptions& options) {
       }
     }
     if (after.rpdos > before.rpdos && nonzero) ++s.rpdos_nonzero;
+  };
+  while (!(options.stop != nullptr && options.stop->load(std::memory_order_relaxed))) {
+    std::int64_t now = platform::monotonic_now_ns();
+    if (end >= 0 && now >= end) break;
+    if (now < next_tick) {
+      wait_bus(*port, std::min(next_tick - now, end >= 0 ? end - now : next_tick - now));
+      ++s.wakeups;
+      now = platform::monotonic_now_ns();
+    }
+    const hal::EmulatorCounters before = emu.counters();
+    const bool tick = now >= next_tick;
+    instrument.poll(*port, tick ? now : -1);
+    if (tick) {
+      next_tick += options.tick_ns;
+      if (next_tick <= now) next_tick = now + options.tick_ns;  // re-phase after a stall
+    }
+#if NUMEN_WITH_SERIAL
+    if (auto* serial = dynamic_cast<hal::SerialBus*>(port.get())) serial->flush();
+#endif
+    account(before);
+  }
+  // Frames already queued when the run ended (a device that lags the bus, e.g. a stalled
+  // guest, may hold the last periods' SYNCs): handled before the summary, so that its
+  // counts cover everything the controller sent. No tick: nothing is sent unasked.
+  {
+    const hal::EmulatorCounters before = emu.counters();
+    instrument.poll(*port, -1);
+#if NUMEN_WITH_SERIAL
+    if (auto* serial = dynamic_cast<hal::SerialBus*>(port.get())) serial->flush();
+#endif
+    account(before);
   }
   s.wall_time_s = static_cast<double>(platform::monotonic_now_ns() - t0) * 1e-9;
   const hal::EmulatorCounters& c = emu.counters();
@@ -101,7 +121,8 @@ DeviceSummary run_device(const Scene& scene, const DeviceOptions& options) {
   s.transport = describe_transport_counters(*port);
   for (std::size_t a = 0; a < n; ++a) {
     const std::string& name = scene.device.axes[a].name;
-    if (s.managed) s.node_states.push_back(name + ": " + hal::to_string(emu.node_state(static_cast<int>(a))));
+    if (s.managed)
+      s.node_states.push_back(name + ": " + hal::to_string(emu.node_state(static_cast<int>(a))));
     if (scene.device.axes[a].drive_cob_id == 0) continue;
     std::ostringstream t;
     t << std::setprecision(4) << name << ": " << torque_max[a];
@@ -127,10 +148,9 @@ std::string format_device_summary(const DeviceSummary& s) {
   os << "  SYNCs " << s.syncs << ", answered " << s.syncs_answered << "; encoder TPDOs "
      << s.encoder_tpdos << ", drive TPDOs " << s.drive_tpdos << "; RPDOs " << s.rpdos
      << " (non-zero torque " << s.rpdos_nonzero << ")\n";
-  os << "  NMT commands " << s.nmt_commands << ", boot-ups " << s.boot_ups_sent
-     << ", heartbeats " << s.heartbeats_sent << ", EMCY " << s.emcys_sent
-     << ", controller heartbeat losses " << s.controller_losses << ", drive faults "
-     << s.drive_faults << "\n";
+  os << "  NMT commands " << s.nmt_commands << ", boot-ups " << s.boot_ups_sent << ", heartbeats "
+     << s.heartbeats_sent << ", EMCY " << s.emcys_sent << ", controller heartbeat losses "
+     << s.controller_losses << ", drive faults " << s.drive_faults << "\n";
   os << "  frames malformed " << s.frames_malformed << ", ignored " << s.frames_ignored
      << "; writes would-block " << s.tx_would_block << ", errors " << s.tx_errors << "\n";
   os << "  port: rx " << s.port_rx << ", tx " << s.port_tx << ", dropped " << s.port_dropped

@@ -15,6 +15,7 @@
 
 #include "numen/core/collision.hpp"
 #include "numen/core/data.hpp"
+#include "numen/core/features.hpp"
 #include "numen/core/net_collision.hpp"
 #include "numen/core/step.hpp"
 #include "numen/hal/instrument_device.hpp"
@@ -250,7 +251,7 @@ void SceneRunner::period(std::int64_t deadline_mono_ns, std::int64_t woke_mono_n
       // target poses (the hand).
       ghost_.nodes = data_.nodes;  // same size: no allocation
       place_tool_nets_at_rest(model, ghost_, tree);
-      core::detect_node_contacts(model, ghost_);
+      if constexpr (core::kWithDeformable) core::detect_node_contacts(model, ghost_);
       int n = 0;
       tool_pen = std::max(tool_pen, deepest_node_contact_of_tree(model, data_, tree, &n));
       tool_contacts += n;

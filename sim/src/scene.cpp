@@ -13,6 +13,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "numen/core/features.hpp"
 #include "numen/hal/kinematics_factory.hpp"
 #include "numen/sim/jigsaws.hpp"
 #include "numen/sim/scripted_path.hpp"
@@ -547,6 +548,13 @@ Scene load_scene(const std::string& path, const SceneOverrides& overrides) {
                    "trajectory", "event",       "joint",    "baumgarte", "deformable"});
   scene.name = root.string_or("name", std::filesystem::path(path).stem().string());
   scene.description = root.string_or("description", "");
+  // Parts this build left out (features.hpp): refused before anything else is read.
+  if (!core::kWithArticulation && root.has("joint"))
+    root.fail("joint", "scene \"" + scene.name +
+                           "\" needs joints: this build has NUMEN_WITH_ARTICULATION=OFF");
+  if (!core::kWithDeformable && root.has("deformable"))
+    root.fail("deformable", "scene \"" + scene.name +
+                                "\" needs deformable nets: this build has NUMEN_WITH_DEFORMABLE=OFF");
   scene.model = parse_scene_model(root, scene.warnings);
   if (overrides.coupling) scene.model.coupling_mode = *overrides.coupling;
   const std::filesystem::path dir = std::filesystem::path(path).parent_path();
@@ -561,7 +569,7 @@ Scene load_scene(const std::string& path, const SceneOverrides& overrides) {
   }
   parse_articulation(root, body_tables, scene);
   // Nets after the bodies' starting poses are known (their nodes start there).
-  parse_deformables(root, dir, scene.model);
+  if constexpr (core::kWithDeformable) parse_deformables(root, dir, scene.model);
 
   // Bus between controller and instrument.
   double latency = 100e-6;

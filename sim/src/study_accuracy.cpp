@@ -177,6 +177,15 @@ AccuracyResult run_accuracy_study(const AccuracyOptions& options) {
       throw InputError("", 0, 0, "case",
                        "unknown case \"" + n + "\" (free-body, wall, articulated, deformable)");
   }
+  AccuracyResult result;
+  std::erase_if(names, [&](const std::string& n) {
+    const std::string missing = study::missing_parts(n == "articulated", n == "deformable");
+    if (missing.empty()) return false;
+    if (!options.cases.empty())
+      throw InputError("", 0, 0, "case", "case \"" + n + "\" " + missing);
+    result.skipped.push_back(n + ": " + missing);
+    return true;
+  });
   if (options.reference_dt > 0.0) check_step(options.reference_dt, "reference_dt");
 
   const std::string dir = options.scene_dir.empty()
@@ -219,7 +228,6 @@ AccuracyResult run_accuracy_study(const AccuracyOptions& options) {
     if (options.progress) options.progress(done, total, s.name + " " + label);
   };
 
-  AccuracyResult result;
   for (const CaseSetup& s : cases) {
     const double horizon = horizon_of(*s.c);
     Samples reference;
@@ -363,6 +371,7 @@ std::string format_accuracy_table(const AccuracyResult& r) {
       os << buf;
     }
   }
+  for (const std::string& s : r.skipped) os << "\nskipped: " << s << "\n";
   return os.str();
 }
 

@@ -7,6 +7,8 @@
 
 #include <stdexcept>
 
+#include "numen/core/features.hpp"
+
 namespace numen::sim::study {
 
 core::Model with_scheme(const core::Model& model, core::Integrator integrator, double dt,
@@ -23,6 +25,14 @@ double thread_cpu_seconds() noexcept {
   timespec ts{};
   clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
   return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
+
+std::string missing_parts(bool joints, bool nets) {
+  if (joints && !core::kWithArticulation)
+    return "needs joints: this build has NUMEN_WITH_ARTICULATION=OFF";
+  if (nets && !core::kWithDeformable)
+    return "needs deformable nets: this build has NUMEN_WITH_DEFORMABLE=OFF";
+  return "";
 }
 
 const std::vector<core::Integrator>& all_integrators() {

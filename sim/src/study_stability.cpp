@@ -18,6 +18,7 @@
 
 #include "numen/sim/input_error.hpp"
 #include "numen/sim/scene.hpp"
+#include "numen/sim/study_common.hpp"
 #include "numen/sim/study_stability_cases.hpp"
 
 namespace numen::sim {
@@ -64,6 +65,14 @@ StabilityResult run_stability_study(const StabilityOptions& options) {
           "", 0, 0, "family",
           "unknown family \"" + f + "\" (coupling, contact, articulation, extreme, boundary)");
   }
+  StabilityResult result;
+  const std::string no_joints = study::missing_parts(true, false);
+  const bool articulation = wanted(options, "articulation") && no_joints.empty();
+  if (wanted(options, "articulation") && !no_joints.empty()) {
+    if (!options.families.empty())
+      throw InputError("", 0, 0, "family", "family \"articulation\" " + no_joints);
+    result.skipped.push_back("articulation: " + no_joints);
+  }
   const std::string dir = options.scene_dir.empty()
                               ? std::filesystem::path(default_scene_path()).parent_path().string()
                               : options.scene_dir;
@@ -73,7 +82,7 @@ StabilityResult run_stability_study(const StabilityOptions& options) {
   if (wanted(options, "coupling"))
     total += kGridWeight * static_cast<double>(coupling_runs(options));
   if (wanted(options, "contact")) total += kGridWeight * static_cast<double>(contact_runs(options));
-  if (wanted(options, "articulation"))
+  if (articulation)
     total += kArticulationWeight * static_cast<double>(articulation_runs(options));
   if (wanted(options, "extreme"))
     total += kExtremeWeight * static_cast<double>(rigid_extreme_runs(options)) +
@@ -87,17 +96,16 @@ StabilityResult run_stability_study(const StabilityOptions& options) {
     };
   };
 
-  StabilityResult result;
   auto append = [&](std::vector<StabilityRow> rows) {
     for (StabilityRow& r : rows) result.rows.push_back(std::move(r));
   };
   if (wanted(options, "coupling")) append(coupling_family(options, tick_of(kGridWeight)));
   if (wanted(options, "contact")) append(contact_family(options, tick_of(kGridWeight)));
-  if (wanted(options, "articulation"))
+  if (articulation)
     append(articulation_family(options, tick_of(kArticulationWeight)));
   if (wanted(options, "extreme")) {
     append(rigid_extreme_cases(options, tick_of(kExtremeWeight)));
-    append(scene_extreme_cases(options, dir, tick_of(kSceneWeight / 5.0)));
+    append(scene_extreme_cases(options, dir, tick_of(kSceneWeight / 5.0), result.skipped));
   }
   if (wanted(options, "boundary"))
     result.boundaries = boundary_family(options, tick_of(kBoundaryWeight));
@@ -294,6 +302,7 @@ std::string format_stability_tables(const StabilityResult& r) {
       os << buf;
     }
   }
+  for (const std::string& s : r.skipped) os << "\nskipped: " << s << "\n";
   return os.str();
 }
 

@@ -277,6 +277,9 @@ PushResult push_into_plane(core::Integrator integ, double z_target) {
   b.coupling = {kt, core::damping_from_ratio(0.8, m, kt), 0.01, 1e-3};
   b.initial_pose.position = Vec3(0.0, 0.0, 0.2);
   model.bodies = {b};
+  core::Obstacle plane;  // the plane z = 0 whose contact the loop below writes by hand
+  plane.name = "plane";  // (it gives the model its contact room: capacity.hpp)
+  model.obstacles = {plane};
   model.feedback = {kt, 0.0, 0.01, 0.0};
   EXPECT_EQ(core::finalize_model(model), "");
   core::Data d = core::make_data(model);

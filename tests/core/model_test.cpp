@@ -7,6 +7,8 @@
 
 #include <gtest/gtest.h>
 
+#include "numen/core/features.hpp"
+
 namespace core = numen::core;
 using core::Vec3;
 
@@ -79,4 +81,22 @@ TEST(Model, RejectsBadObstaclesAndStaticSpheres) {
 
 TEST(Model, DampingFromRatioIsTwoZetaSqrtMk) {
   EXPECT_NEAR(core::damping_from_ratio(0.85, 0.05, 1000.0), 2.0 * 0.85 * std::sqrt(50.0), 1e-12);
+}
+
+TEST(Model, JointsAndNetsNeedTheirBuildOptions) {
+  // A build without a part refuses a model that has it (features.hpp), by name.
+  core::Model m;
+  m.material_names = {"default"};
+  m.material_pairs = {core::MaterialPair{}};
+  m.bodies.resize(2);
+  core::JointModel j;
+  j.name = "hinge";
+  j.parent = 0;
+  j.child = 1;
+  m.joints.push_back(j);
+  const std::string e = core::finalize_model(m);
+  if (core::kWithArticulation)
+    EXPECT_EQ(e, "");
+  else
+    EXPECT_EQ(e, "joints: this build has NUMEN_WITH_ARTICULATION=OFF (no joints)");
 }

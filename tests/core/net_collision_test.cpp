@@ -23,6 +23,7 @@
 #include "numen/core/mesh.hpp"
 #include "numen/core/model.hpp"
 #include "numen/core/narrowphase.hpp"
+#include "build_features.hpp"
 
 namespace numen::core {
 namespace {
@@ -302,6 +303,7 @@ void scramble(const Model& m, Data& d, std::mt19937& rng) {
 }
 
 TEST(NetCollision, EqualsBruteForceOnRandomScenes) {
+  NUMEN_REQUIRE_ARTICULATION();
   int by_kind[6] = {0, 0, 0, 0, 0, 0};  // plane, box, sphere, capsule, sphere set, body
   for (std::uint32_t seed : {1u, 2u, 3u, 4u}) {
     const Model m = random_scene(seed);
@@ -403,6 +405,7 @@ TEST(NetCollision, NodeAgainstAnotherBodysSpheres) {
 }
 
 TEST(NetCollision, IgnoresItsRigidComponentAndItsArticulation) {
+  NUMEN_REQUIRE_ARTICULATION();
   Model m = net_model_base(1);
   // The rigid component itself carries a sphere overlapping its own net.
   m.bodies[0].sphere_begin = 0;
@@ -575,6 +578,7 @@ TEST(NetCollision, NothingToDoWithoutNetsOrWithNonFiniteNodes) {
 // ---- real-time properties -------------------------------------------------------
 
 TEST(NetCollisionRealTime, NoHeapAllocation) {
+  NUMEN_REQUIRE_ARTICULATION();
   const Model m = random_scene(7);
   Data d = make_data(m);
   std::mt19937 rng(11);
@@ -595,6 +599,7 @@ TEST(NetCollisionRealTime, NoHeapAllocation) {
 }
 
 TEST(NetCollisionRealTime, DeterministicWhateverTheScratchHistory) {
+  NUMEN_REQUIRE_ARTICULATION();
   const Model m = random_scene(5);
   Data d1 = make_data(m);
   Data d2 = make_data(m);

@@ -28,6 +28,7 @@
 #include "numen/core/model.hpp"
 #include "numen/core/rigid_body.hpp"
 #include "numen/core/step.hpp"
+#include "build_features.hpp"
 
 namespace core = numen::core;
 using core::Mat3;
@@ -510,6 +511,7 @@ TEST(NetSolve, WarmStartedSolveAfterRealStepsMatchesTheDenseSolve) {
 }
 
 TEST(NetSolve, JointedRigidComponentMatchesTheDenseKktSolve) {
+  NUMEN_REQUIRE_ARTICULATION();
   const core::Model m = scene(Variant::kJointed);
   core::Data d = core::make_data(m);
   // A few real steps first: joint rows with a previous Δu, warm start, drift.

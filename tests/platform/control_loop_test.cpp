@@ -302,6 +302,7 @@ TEST(ControlLoop, PeriodsNeverAllocate) {
 // and the jaw axis imposes a prescribed revolute joint between them.
 
 #include "numen/hal/trocar_kinematics.hpp"
+#include "build_features.hpp"
 
 namespace {
 
@@ -448,6 +449,7 @@ Twist link_twist(const numen::hal::Kinematics& kin, int link, const AxisVector& 
 }
 
 TEST(ControlLoopLinks, BoundBodiesGetTheirLinkTargetsAndPrescribedJointsTheirAxis) {
+  NUMEN_REQUIRE_ARTICULATION();  // the trocar instrument's jointed model
   LinkedRig rig;
   const auto& kin = rig.device.kinematics();
   ASSERT_EQ(kin.num_links(), TrocarKinematics::kNumLinks);
@@ -514,6 +516,7 @@ TEST(ControlLoopLinks, BoundBodiesGetTheirLinkTargetsAndPrescribedJointsTheirAxi
 }
 
 TEST(ControlLoopLinks, TorquesAreTheSumOfTheLinkJacobiansTransposedTimesTheBodyWrenches) {
+  NUMEN_REQUIRE_ARTICULATION();  // the trocar instrument's jointed model
   LinkedRig rig;
   const auto& kin = rig.device.kinematics();
   for (int k = 0; k < 3; ++k) {
@@ -555,6 +558,7 @@ TEST(ControlLoopLinks, TorquesAreTheSumOfTheLinkJacobiansTransposedTimesTheBodyW
 }
 
 TEST(ControlLoopLinks, ZeroTorqueWhileTheSampleIsNotValid) {
+  NUMEN_REQUIRE_ARTICULATION();  // the trocar instrument's jointed model
   LinkedRig rig;
   rig.period(0);
   ASSERT_GT(rig.device.last_torques().cwiseAbs().maxCoeff(), 0.0);
@@ -566,6 +570,7 @@ TEST(ControlLoopLinks, ZeroTorqueWhileTheSampleIsNotValid) {
 }
 
 TEST(ControlLoopLinks, ConstructorRejectsBindingsOutOfRange) {
+  NUMEN_REQUIRE_ARTICULATION();
   numen::hal::DeviceConfig config = trocar_config();
   SimBus bus{bus_settings()};
   numen::hal::InstrumentDevice device{config};
@@ -622,6 +627,7 @@ TEST(ControlLoopLinks, ConstructorRejectsBindingsOutOfRange) {
 namespace {
 
 TEST(ControlLoopLinks, TheHeldBodyFollowsItsOwnLinkAcrossToolSwitches) {
+  NUMEN_REQUIRE_ARTICULATION();  // the trocar instrument's jointed model
   // Tool switching with link bindings: body 0 is bound to "tube"; a fallback
   // binding (body -1, link 0) serves a held body without a link of its own.
   DeviceBinding b = linked_binding();

@@ -26,6 +26,7 @@
 #include "temp_dir.hpp"
 #include "numen/core/data.hpp"
 #include "numen/sim/scene.hpp"
+#include "build_features.hpp"
 
 namespace {
 
@@ -106,6 +107,7 @@ void print_summary(const char* what, const RunSummary& s, double wall) {
 // ---------------------------------------------------------------- default scene end to end
 
 TEST(RunDefaultScene, GodObjectStaysOnTheSurfaceWhileTheHandGoesThrough) {
+  NUMEN_REQUIRE_ARTICULATION();
   const Scene& scene = default_scene();
   const std::int64_t n = periods_for(scene, 15.0);
   SceneRunner runner(scene, static_cast<std::size_t>(n));
@@ -184,6 +186,7 @@ TEST(RunDefaultScene, GodObjectStaysOnTheSurfaceWhileTheHandGoesThrough) {
 }
 
 TEST(RunDefaultScene, NoJumpAtStart) {
+  NUMEN_REQUIRE_ARTICULATION();
   // The instrument starts at the device's first target: at the first valid
   // sample (period 2, after the NMT start-up; the god-object held its starting
   // pose until then), target and god-object agree to the encoder quantisation
@@ -207,6 +210,7 @@ TEST(RunDefaultScene, NoJumpAtStart) {
 }
 
 TEST(RunDefaultScene, RealtimeRunIsPacedToTheClock) {
+  NUMEN_REQUIRE_ARTICULATION();
   numen::sim::RunOptions opt;
   opt.duration_s = 0.1;
   opt.realtime = true;
@@ -219,6 +223,7 @@ TEST(RunDefaultScene, RealtimeRunIsPacedToTheClock) {
 }
 
 TEST(RunDefaultScene, RunSceneRunsTheRequestedDuration) {
+  NUMEN_REQUIRE_ARTICULATION();
   numen::sim::RunOptions opt;
   opt.duration_s = 0.5;
   const RunSummary s = numen::sim::run_scene(default_scene(), opt);
@@ -329,7 +334,10 @@ void expect_no_allocation(const Scene& scene, const char* name) {
   EXPECT_FALSE(s.nan_detected);
 }
 
-TEST(RunAllocations, DefaultScenePeriodNeverAllocates) { expect_no_allocation(default_scene(), "default"); }
+TEST(RunAllocations, DefaultScenePeriodNeverAllocates) {
+  NUMEN_REQUIRE_ARTICULATION();
+  expect_no_allocation(default_scene(), "default");
+}
 
 TEST(RunAllocations, ConstructionScenePeriodNeverAllocates) {
   expect_no_allocation(construction_scene(), "construction");
@@ -341,6 +349,7 @@ const Scene& phantom_scene() {
 }
 
 TEST(RunAllocations, PhantomScenePeriodNeverAllocates) {
+  NUMEN_REQUIRE_ARTICULATION();
   expect_no_allocation(phantom_scene(), "phantom");  // 6 s scene: the trajectory holds its end
 }
 
@@ -356,10 +365,13 @@ const Scene& endobag_scene() {
 }
 
 TEST(RunAllocations, DeformableScenePeriodNeverAllocates) {
+  NUMEN_REQUIRE_DEFORMABLE();
   expect_no_allocation(deformable_scene(), "deformable");  // the post contact is at 2.7–3.2 s
 }
 
 TEST(RunAllocations, EndobagScenePeriodNeverAllocates) {
+  NUMEN_REQUIRE_DEFORMABLE();
+  NUMEN_REQUIRE_ARTICULATION();
   expect_no_allocation(endobag_scene(), "endobag");
 }
 
@@ -408,6 +420,7 @@ RunSummary run_traced(SceneRunner& runner, const Scene& scene, double seconds, c
 }
 
 TEST(RunDeformable, ProbeDeformsThenSlidesAroundThePost) {
+  NUMEN_REQUIRE_DEFORMABLE();
   // Paper Fig. 8: the hand sweeps the probe through the post (2.7–3.2 s);
   // the net deforms on contact, the god-object is held outside and then
   // slides around the post, the hand going straight through it.
@@ -476,6 +489,8 @@ TEST(RunDeformable, ProbeDeformsThenSlidesAroundThePost) {
 }
 
 TEST(RunDeformable, EndobagSquashesOnTheOrganWhileTheHandGoesThrough) {
+  NUMEN_REQUIRE_DEFORMABLE();
+  NUMEN_REQUIRE_ARTICULATION();
   const Scene& scene = endobag_scene();
   SceneRunner runner(scene, static_cast<std::size_t>(periods_for(scene, 10.0)));
   const RunSummary s = run_traced(runner, scene, 10.0, "endobag 10 s");
@@ -509,6 +524,8 @@ TEST(RunDeformable, EndobagSquashesOnTheOrganWhileTheHandGoesThrough) {
 }
 
 TEST(RunDeformable, SummaryReportsTheNets) {
+  NUMEN_REQUIRE_DEFORMABLE();
+  NUMEN_REQUIRE_ARTICULATION();
   numen::sim::RunOptions opt;
   opt.duration_s = 0.2;
   const RunSummary s = numen::sim::run_scene(deformable_scene(), opt);
@@ -531,6 +548,7 @@ TEST(RunDeformable, SummaryReportsTheNets) {
 // ---------------------------------------------------------------- articulated scenes
 
 TEST(RunArticulated, DefaultInstrumentStaysOutsideWhileTheJointsHold) {
+  NUMEN_REQUIRE_ARTICULATION();
   // Paper Fig. 7: the articulated tool (sleeve, tube, jaws) stays on the
   // organ and tissue while the recorded tip goes through; the joints hold.
   SceneRunner runner(default_scene());
@@ -552,6 +570,7 @@ TEST(RunArticulated, DefaultInstrumentStaysOutsideWhileTheJointsHold) {
 }
 
 TEST(RunArticulated, PhantomArmStopsOnTheDeskAndItsMotorsGetJointTorques) {
+  NUMEN_REQUIRE_ARTICULATION();
   SceneRunner runner(phantom_scene(), 6000);
   for (int k = 0; k < 6000; ++k) runner.period();
   const RunSummary s = runner.summary();
@@ -611,6 +630,7 @@ void expect_deterministic(const Scene& scene, std::int64_t n, const char* name) 
 }
 
 TEST(RunDeterminism, DefaultSceneTwoRunnersAreBitIdentical) {
+  NUMEN_REQUIRE_ARTICULATION();
   expect_deterministic(default_scene(), periods_for(default_scene(), 12.0), "default");
 }
 
@@ -619,16 +639,20 @@ TEST(RunDeterminism, ConstructionSceneTwoRunnersAreBitIdentical) {
 }
 
 TEST(RunDeterminism, DeformableSceneTwoRunnersAreBitIdentical) {
+  NUMEN_REQUIRE_DEFORMABLE();
   expect_deterministic(deformable_scene(), periods_for(deformable_scene(), 10.0), "deformable");
 }
 
 TEST(RunDeterminism, EndobagSceneTwoRunnersAreBitIdentical) {
+  NUMEN_REQUIRE_DEFORMABLE();
+  NUMEN_REQUIRE_ARTICULATION();
   expect_deterministic(endobag_scene(), periods_for(endobag_scene(), 10.0), "endobag");
 }
 
 // ---------------------------------------------------------------- bad bus frames
 
 TEST(RunBadBus, CorruptedAndLostFramesAreRejectedWithoutHarm) {
+  NUMEN_REQUIRE_ARTICULATION();
   Scene scene = default_scene();  // a copy
   scene.bus.corruption_probability = 0.05;
   scene.bus.drop_probability = 0.02;
@@ -680,6 +704,7 @@ TEST(RunBadBus, CorruptedAndLostFramesAreRejectedWithoutHarm) {
 // --record and --bus log: (run.hpp BusChoice): a recorded run replayed from
 // its own candump log drives the controller to the same result, bit for bit.
 TEST(RunBusLog, RecordedRunReplaysBitIdentically) {
+  NUMEN_REQUIRE_ARTICULATION();
   const Scene& scene = default_scene();
   const numen::test::TempDir dir;
   const std::string log = (dir / "run.log").string();
@@ -721,6 +746,7 @@ TEST(RunBusLog, RecordedRunReplaysBitIdentically) {
 }
 
 TEST(RunBusLog, BadBusSpecAndBadLogAreClearErrors) {
+  NUMEN_REQUIRE_ARTICULATION();
   const Scene& scene = default_scene();
   numen::sim::BusChoice bus;
   bus.spec = "can0";
@@ -742,6 +768,7 @@ TEST(RunBusLog, BadBusSpecAndBadLogAreClearErrors) {
 // exist) is reported without stopping the run, unless strict. Run in its own
 // thread so the test runner's scheduling and affinity are left alone.
 TEST(RunRealtimeSetup, StepsAreReportedAndAFailureDoesNotStopTheRun) {
+  NUMEN_REQUIRE_ARTICULATION();
   RunSummary s;
   std::thread t([&] {
     numen::sim::RunOptions opt;
@@ -776,12 +803,14 @@ TEST(RunRealtimeSetup, StepsAreReportedAndAFailureDoesNotStopTheRun) {
 }
 
 TEST(RunRealtimeSetup, NothingRequestedReportsNothing) {
+  NUMEN_REQUIRE_ARTICULATION();
   numen::sim::RunOptions opt;
   opt.duration_s = 0.01;
   EXPECT_TRUE(numen::sim::run_scene(default_scene(), opt).realtime_setup.empty());
 }
 
 TEST(RunOverrunPolicy, PacedRunsLatchAfterTheLimitAndZeroOnlyCounts) {
+  NUMEN_REQUIRE_ARTICULATION();
   const auto paced = numen::sim::control_loop_settings(true, 5);
   EXPECT_TRUE(paced.supervise_overruns);
   EXPECT_EQ(paced.overrun_limit, 5u);
@@ -801,6 +830,7 @@ TEST(RunOverrunPolicy, PacedRunsLatchAfterTheLimitAndZeroOnlyCounts) {
 }
 
 TEST(RunRearm, ARequestIsTakenOnceBeforeThePeriodAndReported) {
+  NUMEN_REQUIRE_ARTICULATION();
   std::atomic<bool> rearm{true};
   numen::sim::RunOptions opt;
   opt.duration_s = 0.02;

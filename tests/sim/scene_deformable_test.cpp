@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "build_features.hpp"
 #include "numen/core/mesh.hpp"
 #include "numen/hal/kinematics_factory.hpp"
 #include "numen/sim/input_error.hpp"
@@ -117,6 +118,7 @@ TEST(DeformableShippedScene, ProbeIsACapsuleNetOnAHiddenCore) {
 }
 
 TEST(DeformableShippedScene, EndobagIsAnIcosphereNetJointedToTheTube) {
+  NUMEN_REQUIRE_ARTICULATION();
   const Scene& s = endobag_scene();
   const Model& m = s.model;
   ASSERT_EQ(m.num_nets(), 1);

@@ -28,6 +28,7 @@
 #include "numen/hal/device_config.hpp"
 #include "numen/sim/input_error.hpp"
 #include "numen/sim/simulated_instrument.hpp"
+#include "build_features.hpp"
 
 namespace {
 
@@ -128,6 +129,7 @@ void expect_located(const InputError& e, const std::string& file, int line, int 
 // ---------------------------------------------------------------- shipped scenes
 
 TEST(Scene, DefaultSceneLoadsWhatItsFileDescribes) {
+  NUMEN_REQUIRE_ARTICULATION();
   const Scene s = load_scene(numen::sim::default_scene_path());
   EXPECT_EQ(s.name, "default");
   EXPECT_EQ(s.model.dt, 0.001);
@@ -160,7 +162,8 @@ TEST(Scene, DefaultSceneLoadsWhatItsFileDescribes) {
   EXPECT_DOUBLE_EQ(s.binding.prescriptions[1].scale, -0.5);
   // Every body starts where its link puts it: the joints hold at t = 0.
   numen::core::Data d = numen::core::make_data(s.model);
-  numen::core::measure_joint_drift(s.model, d);
+  if constexpr (numen::core::kWithArticulation)  // not linked without it (test skipped)
+    numen::core::measure_joint_drift(s.model, d);
   EXPECT_LT(d.max_joint_drift, 1e-9);
   ASSERT_EQ(s.model.num_materials(), 2);
   EXPECT_EQ(s.model.material_names[0], "steel");
@@ -242,6 +245,7 @@ TEST(Scene, ConstructionSceneLoadsWhatItsFileDescribes) {
 }
 
 TEST(Scene, AttachedBodyStartsAtTheDevicesFirstTarget) {
+  NUMEN_REQUIRE_ARTICULATION();
   // Default scene: the instrument's position is omitted, so it starts at the
   // device's first controlled pose (no jump at start).
   const Scene s = load_scene(numen::sim::default_scene_path());
@@ -268,6 +272,7 @@ TEST(Scene, AttachedBodyStartsAtTheDevicesFirstTarget) {
 }
 
 TEST(Scene, CouplingOverrideChangesTheMode) {
+  NUMEN_REQUIRE_ARTICULATION();
   const Scene god = load_scene(construction_path());
   EXPECT_EQ(god.model.coupling_mode, CouplingMode::kGodObject);
   const Scene direct = load_scene(construction_path(), SceneOverrides{CouplingMode::kDirect});
@@ -347,6 +352,7 @@ TEST(Scene, TrapezoidalIntegratorIsSelectedByName) {
 }
 
 TEST(Scene, TrapezoidalWithADeformableNetIsWarnedAbout) {
+  NUMEN_REQUIRE_DEFORMABLE();
   const Scene plain = load_scene(std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/deformable.toml");
   for (const std::string& w : plain.warnings) EXPECT_EQ(w.find("L-stable"), std::string::npos) << w;
   TempDir dir;
@@ -757,6 +763,7 @@ const std::vector<std::pair<double, Vec3>>& organ_tips() {
 }
 
 TEST(DefaultSceneGeometry, RecordedTipGoesAtLeast10mmIntoTheTissue) {
+  NUMEN_REQUIRE_ARTICULATION();
   const Scene& s = default_scene();
   const numen::core::Obstacle* tissue = obstacle(s, "tissue");
   ASSERT_NE(tissue, nullptr);
@@ -771,6 +778,7 @@ TEST(DefaultSceneGeometry, RecordedTipGoesAtLeast10mmIntoTheTissue) {
 }
 
 TEST(DefaultSceneGeometry, RecordedTipGoesAtLeast10mmIntoTheOrgan) {
+  NUMEN_REQUIRE_ARTICULATION();
   // Depth inside the solid the organ's spheres bound: distance to the nearest
   // point outside the union's outer surface.
   const Scene& s = default_scene();
@@ -789,6 +797,7 @@ TEST(DefaultSceneGeometry, RecordedTipGoesAtLeast10mmIntoTheOrgan) {
 }
 
 TEST(DefaultSceneGeometry, RecordedTipGoesAtLeast10mmBelowTheUnionOfTheOrgansSpheres) {
+  NUMEN_REQUIRE_ARTICULATION();
   // Depth below the union itself: distance to the nearest point that no
   // sphere covers (enclosed voids count), marched along 26 + 400 directions.
   const Scene& s = default_scene();
@@ -913,4 +922,35 @@ node_id = 9
   // An unknown key.
   const InputError e4 = load_error(dir, replace(kMini, "attach = \"tool\"\n", "attach = \"tool\"\ncanopen = { manged = true }\n"), "typo.toml");
   EXPECT_NE(std::string(e4.what()).find("manged"), std::string::npos);
+}
+
+TEST(Scene, APartThisBuildLeftOutIsRefusedByName) {
+  // default.toml has [[joint]] tables, deformable.toml [[deformable]] ones.
+  const std::string dir = std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/";
+  const auto error_of = [](const std::string& path) -> std::string {
+    try {
+      numen::sim::load_scene(path);
+    } catch (const numen::sim::InputError& e) {
+      return e.what();
+    }
+    return {};
+  };
+  const std::string joints = error_of(dir + "default.toml");
+  if (numen::core::kWithArticulation) {
+    EXPECT_EQ(joints, "");
+  } else {
+    EXPECT_NE(joints.find("default.toml:"), std::string::npos) << joints;  // file:line
+    EXPECT_NE(joints.find("needs joints: this build has NUMEN_WITH_ARTICULATION=OFF"),
+              std::string::npos)
+        << joints;
+  }
+  const std::string nets = error_of(dir + "deformable.toml");
+  if (numen::core::kWithDeformable) {
+    EXPECT_EQ(nets, "");
+  } else {
+    EXPECT_NE(nets.find("deformable.toml:"), std::string::npos) << nets;
+    EXPECT_NE(nets.find("needs deformable nets: this build has NUMEN_WITH_DEFORMABLE=OFF"),
+              std::string::npos)
+        << nets;
+  }
 }

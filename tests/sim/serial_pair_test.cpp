@@ -20,6 +20,7 @@
 #include <string>
 #include <thread>
 
+#include "build_features.hpp"
 #include "numen/sim/device_process.hpp"
 #include "numen/sim/run.hpp"
 #include "numen/sim/scene.hpp"
@@ -135,6 +136,7 @@ bool is_timing_fault(const std::string& cause) {
 }
 
 TEST(SerialPair, FullRunOverPseudoTerminals) {
+  NUMEN_REQUIRE_ARTICULATION();  // the default scene's instrument
   const PairResult r = run_pair(0, nullptr);
   const bool timing_latched = r.run.faults > 0 && is_timing_fault(r.run.first_fault);
   EXPECT_TRUE(r.run.real_bus);
@@ -159,6 +161,7 @@ TEST(SerialPair, FullRunOverPseudoTerminals) {
 }
 
 TEST(SerialPair, GarbageOnTheLineIsRejectedAndResynchronised) {
+  NUMEN_REQUIRE_ARTICULATION();  // the default scene's instrument
   std::uint64_t bursts = 0;
   const PairResult r = run_pair(50, &bursts);
   const bool timing_latched = r.run.faults > 0 && is_timing_fault(r.run.first_fault);

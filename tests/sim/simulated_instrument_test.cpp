@@ -17,6 +17,7 @@
 #include "numen/hal/sim_bus.hpp"
 #include "numen/hal/trocar_kinematics.hpp"
 #include "numen/sim/scene.hpp"
+#include "build_features.hpp"
 
 namespace {
 
@@ -119,6 +120,7 @@ TEST(SimulatedInstrument, StartTimeShiftsTheTrajectory) {
 }
 
 TEST(SimulatedInstrument, DefaultSceneReportsTheRecordedTip) {
+  NUMEN_REQUIRE_ARTICULATION();
   const numen::sim::Scene scene = numen::sim::load_scene(numen::sim::default_scene_path());
   const SimulatedInstrument inst(scene.device, scene.trajectory);
   const auto& kin = static_cast<const TrocarKinematics&>(inst.kinematics());

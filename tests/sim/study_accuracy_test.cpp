@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "build_features.hpp"
 #include "numen/sim/input_error.hpp"
 #include "temp_dir.hpp"
 
@@ -111,6 +112,8 @@ TEST(StudyAccuracy, CsvFilesHaveTheDocumentedColumns) {
 }
 
 TEST(StudyAccuracy, EveryCaseRunsAndIsComparedWithItsReference) {
+  NUMEN_REQUIRE_ARTICULATION();
+  NUMEN_REQUIRE_DEFORMABLE();
   AccuracyOptions o;
   o.steps = {1e-2, 5e-3};
   o.horizon_s = 0.02;
@@ -145,6 +148,30 @@ TEST(StudyAccuracy, EveryCaseRunsAndIsComparedWithItsReference) {
     }
   }
   EXPECT_EQ(cases.size(), 4u);
+}
+
+TEST(StudyAccuracy, CasesThisBuildLeftOutAreSkippedAndNamed) {
+  const bool lean = !numen::core::kWithArticulation || !numen::core::kWithDeformable;
+  AccuracyOptions o;
+  o.steps = {1e-2};
+  o.horizon_s = 0.02;
+  o.reference_dt = 1e-3;
+  o.integrators = {numen::core::Integrator::kLinearlyImplicitEuler};
+  const AccuracyResult r = numen::sim::run_accuracy_study(o);
+  std::set<std::string> ran;
+  for (const auto& row : r.rows) ran.insert(row.case_name);
+  EXPECT_EQ(ran.size() + r.skipped.size(), numen::sim::accuracy_case_names().size());
+  EXPECT_EQ(ran.count("articulated"), numen::core::kWithArticulation ? 1u : 0u);
+  EXPECT_EQ(ran.count("deformable"), numen::core::kWithDeformable ? 1u : 0u);
+  EXPECT_EQ(r.skipped.empty(), !lean);
+  for (const std::string& s : r.skipped) {
+    EXPECT_NE(s.find("this build has NUMEN_WITH_"), std::string::npos) << s;
+    EXPECT_NE(numen::sim::format_accuracy_table(r).find("skipped: " + s), std::string::npos);
+  }
+  if (!numen::core::kWithArticulation) {  // named explicitly: an error, not a silent skip
+    o.cases = {"articulated"};
+    EXPECT_THROW(numen::sim::run_accuracy_study(o), numen::sim::InputError);
+  }
 }
 
 TEST(StudyAccuracy, FitOrderIsTheLeastSquaresSlopeOverTheSelectedPoints) {

@@ -20,6 +20,7 @@
 #include "alloc_counter.hpp"
 #include "numen/sim/run.hpp"
 #include "numen/sim/scene.hpp"
+#include "build_features.hpp"
 
 namespace {
 
@@ -236,6 +237,7 @@ TEST(Trace, MakeTraceRecordReadsTheStateAfterTheStep) {
 }
 
 TEST(Trace, RunSceneWritesOneRowPerStep) {
+  NUMEN_REQUIRE_ARTICULATION();
   const numen::sim::Scene scene = numen::sim::load_scene(numen::sim::default_scene_path());
   TempDir dir;
   numen::sim::RunOptions opt;

@@ -19,35 +19,37 @@ void __libc_free(void*);
 namespace {
 thread_local std::int64_t g_count = 0;
 thread_local int g_depth = 0;
-inline void note() noexcept {
+thread_local std::int64_t g_bytes = 0;  // every request on this thread, guard or not
+inline void note(std::size_t n) noexcept {
+  g_bytes += static_cast<std::int64_t>(n);
   if (g_depth > 0) ++g_count;
 }
 }  // namespace
 
 extern "C" {
 void* malloc(std::size_t n) {
-  note();
+  note(n);
   return __libc_malloc(n);
 }
 void* calloc(std::size_t a, std::size_t b) {
-  note();
+  note(a * b);
   return __libc_calloc(a, b);
 }
 void* realloc(void* p, std::size_t n) {
-  note();
+  note(n);
   return __libc_realloc(p, n);
 }
 void free(void* p) { __libc_free(p); }
 void* aligned_alloc(std::size_t al, std::size_t n) {
-  note();
+  note(n);
   return __libc_memalign(al, n);
 }
 void* memalign(std::size_t al, std::size_t n) {
-  note();
+  note(n);
   return __libc_memalign(al, n);
 }
 int posix_memalign(void** out, std::size_t al, std::size_t n) {
-  note();
+  note(n);
   void* p = __libc_memalign(al, n);
   if (p == nullptr) return 12;  // ENOMEM
   *out = p;
@@ -57,13 +59,13 @@ int posix_memalign(void** out, std::size_t al, std::size_t n) {
 
 namespace {
 void* checked(std::size_t n) {
-  note();
+  note(n);
   void* p = __libc_malloc(n == 0 ? 1 : n);
   if (p == nullptr) throw std::bad_alloc();
   return p;
 }
 void* checked_aligned(std::size_t n, std::align_val_t al) {
-  note();
+  note(n);
   void* p = __libc_memalign(static_cast<std::size_t>(al), n == 0 ? 1 : n);
   if (p == nullptr) throw std::bad_alloc();
   return p;
@@ -73,11 +75,11 @@ void* checked_aligned(std::size_t n, std::align_val_t al) {
 void* operator new(std::size_t n) { return checked(n); }
 void* operator new[](std::size_t n) { return checked(n); }
 void* operator new(std::size_t n, const std::nothrow_t&) noexcept {
-  note();
+  note(n);
   return __libc_malloc(n == 0 ? 1 : n);
 }
 void* operator new[](std::size_t n, const std::nothrow_t&) noexcept {
-  note();
+  note(n);
   return __libc_malloc(n == 0 ? 1 : n);
 }
 void* operator new(std::size_t n, std::align_val_t al) { return checked_aligned(n, al); }
@@ -94,6 +96,8 @@ void operator delete[](void* p, std::size_t, std::align_val_t) noexcept { __libc
 namespace numen::test {
 
 std::int64_t allocation_count() noexcept { return g_count; }
+
+std::int64_t allocated_bytes() noexcept { return g_bytes; }
 
 AllocationGuard::AllocationGuard() noexcept
     : start_(g_count), eigen_was_allowed_(Eigen::internal::is_malloc_allowed()) {

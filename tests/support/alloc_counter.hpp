@@ -13,6 +13,12 @@ namespace numen::test {
 /// Allocations counted on this thread since the last reset.
 std::int64_t allocation_count() noexcept;
 
+/// Bytes requested from the heap by this thread since it started (every form
+/// above; realloc counts its new size, frees are not subtracted), counted with
+/// or without a guard. Take differences: allocated_bytes() after − before is
+/// what the code in between asked for.
+std::int64_t allocated_bytes() noexcept;
+
 /// Scope in which allocations are counted (and Eigen allocations forbidden).
 class AllocationGuard {
  public:

@@ -67,7 +67,10 @@ void contact_stiffness_damping(const Vec3& normal, const Vec3& r_a, const Vec3& 
 /// and (−F, −r_b × F) to body_wrench[body_b] (at the COMs, world). Contacts
 /// with an out-of-range body or material_pair index are ignored (force 0,
 /// inactive). Forces on a kDirect body are computed but have no effect (its
-/// motion is imposed). Fixed contact order. No allocation.
+/// motion is imposed). Contacts beyond the room of the contact scratch
+/// (contact_capacity(model): 0 for a model in which nothing can collide) are
+/// dropped as an overflow: num_contacts is cut to the room, contacts_dropped
+/// counts them and kContactOverflow is set. Fixed contact order. No allocation.
 void compute_contact_forces(const Model& model, Data& data) noexcept;
 
 }  // namespace numen::core

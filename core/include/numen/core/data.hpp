@@ -121,6 +121,9 @@ struct Data {
   /// nets and no joints (SSOR preconditioner M; net_solve.hpp).
   double solver_residual = 0.0;
   std::uint32_t status = kStepOk;  ///< StepStatus bits of the last step.
+  /// StepStage bits (step_stages.hpp) of the stages the last step ran; equal to
+  /// compiled_stages(model) after any step. 0 before the first step.
+  std::uint32_t stages_run = 0;
   std::int64_t nonfinite_steps = 0;  ///< Steps whose result was rejected as non-finite.
 
   // ---- scratch (sized once) ----
@@ -131,7 +134,10 @@ struct Data {
   NetScratch net;
 };
 
-/// Allocates a Data for a finalized `model` and resets it. Allocates.
+/// Allocates a Data for a finalized `model` and resets it: only what the model
+/// needs — no joint buffers or tree-solve scratch without joints, no node or net
+/// buffers without nets, no contact scratch when nothing can collide
+/// (capacity.hpp; sizes in data_size.hpp). Allocates.
 Data make_data(const Model& model);
 
 /// Puts every body back at its initial pose and twist, clears inputs, outputs

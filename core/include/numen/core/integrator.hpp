@@ -86,8 +86,8 @@ struct SolverScratch {
   std::vector<IsotropicMoments> isotropic_moments;  ///< Per body, this step's contacts.
   std::vector<BlockCholesky> block_factor;  ///< Cholesky factors of `block` (preconditioner).
   std::vector<std::uint8_t> in_solve;   ///< 1: body's twist is unknown; 0: known (kDirect body).
-  std::vector<ContactTerm> contact_terms;   ///< Size kMaxContacts, parallel to Data::contacts.
-  std::vector<CrossContact> cross_contacts;  ///< Size kMaxContacts; [0, num_cross_contacts) valid.
+  std::vector<ContactTerm> contact_terms;   ///< Size contact_capacity(), parallel to Data::contacts.
+  std::vector<CrossContact> cross_contacts;  ///< Size cross_contact_capacity(); [0, num_cross_contacts) valid.
   int num_cross_contacts = 0;  ///< Active body–body contacts in the solve this step.
   /// 1: the body has a cross contact this step (off-diagonal blocks in its rows
   /// of A); 0: its rows of A are its diagonal block only.

@@ -161,6 +161,12 @@ struct Model {
   std::vector<double> node_mass;       ///< kg, > 0 (lumped by vertex area).
   std::vector<double> node_radius;     ///< Collision sphere radius (m), > 0.
   std::vector<int> node_net;           ///< Net owning each node.
+  /// Order in which the solver's SSOR sweeps visit the nodes (net_solve.hpp):
+  /// node_sweep_order[p] is the global node at sweep position p, a reverse
+  /// Cuthill–McKee order of each net's spring graph within the net's own index
+  /// range (Cuthill & McKee 1969; George 1971: neighbours close together, so a
+  /// sweep reads recent values). Derived by finalize_model() (order_net_nodes()).
+  std::vector<std::int32_t> node_sweep_order;
 
   std::vector<std::string> material_names;  ///< Size num_materials.
   std::vector<MaterialPair> material_pairs; ///< num_materials², symmetric, row-major.

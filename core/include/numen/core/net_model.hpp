@@ -78,4 +78,11 @@ struct NetSettings {
 /// Allocates: load time only.
 std::string add_net(Model& model, const TriangleMesh& mesh, const NetSettings& settings);
 
+/// Fills Model::node_sweep_order: per net, the reverse Cuthill–McKee order of
+/// its spring graph (structural and bending springs as edges; Boost.Graph's
+/// cuthill_mckee_ordering), as global node indices within the net's range.
+/// Called by finalize_model() after the nets are validated. Allocates: load
+/// time only.
+void order_net_nodes(Model& model);
+
 }  // namespace numen::core

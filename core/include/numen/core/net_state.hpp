@@ -132,7 +132,8 @@ struct NetScratch {
   /// pseudo-peripheral node): a level-set ordering, along which Gauss–Seidel
   /// carries a change across the net in one sweep — on an icosphere it takes
   /// ~11 % fewer CG iterations than the mesh's vertex order, whose refinement
-  /// levels interleave (docs/deformable.md). Fixed topology: resize().
+  /// levels interleave (docs/deformable.md). A copy of Model::node_sweep_order
+  /// (computed once by finalize_model()): resize().
   std::vector<std::int32_t> sweep_order;
   std::vector<std::int32_t> sweep_position;  ///< Inverse of sweep_order: node -> position.
   std::vector<SweepNode> sweep_nodes;  ///< Per sweep position: A_kk⁻¹ and ρ of node sweep_order[p].

@@ -8,8 +8,9 @@ struct Model;
 struct Data;
 
 /// Advances `data` by model.dt. Stages, in order:
-///   1. detect_contacts — collision geometry (collision.hpp); with nets, then
-///      detect_node_contacts (net_collision.hpp)
+///   1. detect_contacts — collision geometry (collision.hpp), skipped when
+///      nothing can collide (contact_capacity() == 0: no contact scratch);
+///      with nets, then detect_node_contacts (net_collision.hpp)
 ///   2. forces — gravity, applied wrenches, coupling (Eq. 2) on the attached
 ///      body and (Eq. 6) on every body with its own target, penalty contact
 ///      forces (compute_forces); the gyroscopic term is applied by the
@@ -30,7 +31,8 @@ struct Data;
 ///      kNonFinite is set and Data::nonfinite_steps counted
 /// Data::status is cleared first (then detect_contacts may set
 /// kContactOverflow and count contact_overflow_steps);
-/// time += dt and ++step_count at the end. In kDirect the attached body's
+/// Data::stages_run records the stages run (step_stages.hpp: a model without
+/// joints or nets runs no pass for them); time += dt and ++step_count at the end. In kDirect the attached body's
 /// pose/twist are imposed before detect_contacts.
 /// Never allocates, throws, locks or calls the OS. Deterministic.
 void step(const Model& model, Data& data) noexcept;

@@ -50,10 +50,16 @@ std::vector<hal::CanFilter> controller_filters(const hal::DeviceConfig& config);
 /// (0x700 + controller_node_id).
 std::vector<hal::CanFilter> device_filters(const hal::DeviceConfig& config);
 
+/// Empty if this build has the backend `spec` needs (hal/features.hpp), else the error:
+/// "bus 'can:vcan0' needs SocketCAN: this build has NUMEN_WITH_SOCKETCAN=OFF" (likewise
+/// serial: with NUMEN_WITH_SERIAL). Always empty for sim and log: specs.
+std::string missing_backend(const BusSpec& spec);
+
 /// Opens the port of a real `spec` (kCan: SocketCanBus with kernel filters, loopback on,
 /// own messages off; kSerial: SerialBus with user-space filters). Throws
-/// std::invalid_argument for a spec that is not real, std::runtime_error from the transport
-/// (naming the interface or path and the failing call).
+/// std::invalid_argument for a spec that is not real or whose backend this build left out
+/// (missing_backend()), std::runtime_error from the transport (naming the interface or path
+/// and the failing call).
 std::unique_ptr<hal::Bus> open_real_bus(const BusSpec& spec,
                                         const std::vector<hal::CanFilter>& filters);
 

@@ -112,13 +112,17 @@ struct AccuracyResult {
   std::vector<AccuracyRow> rows;
   std::vector<AccuracyFit> fits;
   std::vector<ReferenceCheck> references;
+  /// Cases of the default list this build cannot run, "case: reason" (study::missing_parts()).
+  std::vector<std::string> skipped;
 };
 
 /// The four case names, in the order they run.
 const std::vector<std::string>& accuracy_case_names();
 
-/// Runs the study. Throws InputError for an unknown case or a step that does not divide
-/// 10 ms, and what load_scene() throws for the scene cases.
+/// Runs the study. Throws InputError for an unknown case, a case named in
+/// AccuracyOptions::cases that this build left out (NUMEN_WITH_* options), or a step that
+/// does not divide 10 ms, and what load_scene() throws for the scene cases. Cases of the
+/// default list that this build left out are skipped and listed in AccuracyResult::skipped.
 AccuracyResult run_accuracy_study(const AccuracyOptions& options);
 
 /// Least-squares slope of log(error) against log(dt) over the points with dt ≤ max_dt,

@@ -20,6 +20,11 @@ core::Model with_scheme(const core::Model& model, core::Integrator integrator, d
 /// Thread CPU time (s), CLOCK_THREAD_CPUTIME_ID.
 double thread_cpu_seconds() noexcept;
 
+/// Why a study case cannot run in this build (CMake options NUMEN_WITH_*, features.hpp):
+/// "" when it can, else e.g. "needs joints: this build has NUMEN_WITH_ARTICULATION=OFF".
+/// `joints`, `nets`: whether the case's model has joints / deformable nets.
+std::string missing_parts(bool joints, bool nets);
+
 /// The core's integrators in the order the studies report them: linearly implicit Euler,
 /// symplectic Euler, linearised trapezoidal rule.
 const std::vector<core::Integrator>& all_integrators();

@@ -122,14 +122,18 @@ struct StabilityBoundary {
 struct StabilityResult {
   std::vector<StabilityRow> rows;
   std::vector<StabilityBoundary> boundaries;
+  /// Cases this build cannot run (NUMEN_WITH_* options), "case: reason" (study::missing_parts()).
+  std::vector<std::string> skipped;
   double wall_s = 0.0;  ///< Wall time of the study (s).
 };
 
 /// "coupling", "contact", "articulation", "extreme", "boundary".
 const std::vector<std::string>& stability_family_names();
 
-/// Runs the study. Throws InputError for an unknown family, what load_scene() throws for the
-/// shipped scenes.
+/// Runs the study. Throws InputError for an unknown family or for "articulation" named in
+/// StabilityOptions::families in a build without joints, what load_scene() throws for the
+/// shipped scenes. Cases this build left out (NUMEN_WITH_* options) are otherwise skipped and
+/// listed in StabilityResult::skipped.
 StabilityResult run_stability_study(const StabilityOptions& options);
 
 /// Energy of the verdict (J), gravity left out (the study runs without gravity): Σ ½ m v² +

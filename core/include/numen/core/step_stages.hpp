@@ -1,0 +1,47 @@
+#pragma once
+/// @file step_stages.hpp
+/// The stages of core::step() (step.hpp) as data: which of them a given model
+/// runs, in step order, and why a stage is skipped. step() records the stages
+/// it ran in Data::stages_run, so a test (and `numen info`) can check that a
+/// scene without joints, nets or anything to collide runs no pass for them.
+
+#include <cstdint>
+#include <span>
+
+namespace numen::core {
+
+struct Model;
+
+/// One stage of step(), as a bit of Data::stages_run.
+enum StepStage : std::uint32_t {
+  kStageDirectTarget = 1u << 0,   ///< impose_direct_target (CouplingMode::kDirect only).
+  kStageContacts = 1u << 1,       ///< detect_contacts: broad and narrow phase, bodies.
+  kStageNodeContacts = 1u << 2,   ///< detect_node_contacts: net nodes against everything.
+  kStageBodyForces = 1u << 3,     ///< gravity, applied wrenches, coupling, contact forces.
+  kStageNetForces = 1u << 4,      ///< compute_net_forces: springs, tie, node contacts.
+  kStageIntegrate = 1u << 5,      ///< integrate: the bodies' (and nodes') time step.
+  kStageJointSolve = 1u << 6,     ///< integrate's KKT tree solve of the joints (Eq. 4–5).
+  kStageNetSolve = 1u << 7,       ///< integrate's one system of bodies and nodes (net_solve).
+  kStageJointDrift = 1u << 8,     ///< measure_joint_drift.
+  kStageMeasureNets = 1u << 9,    ///< measure_nets: strain, tie wrench.
+  kStageFeedback = 1u << 10,      ///< compute_feedback: Eq. 8–9.
+  kStageChecks = 1u << 11,        ///< check_finite: rollback of a non-finite result.
+};
+
+/// A stage of step() and the scene property it depends on.
+struct StageDescription {
+  StepStage stage;
+  const char* name;         ///< Short name, e.g. "joint solve".
+  const char* skipped_why;  ///< Why a model skips it ("no joints"); nullptr: always runs.
+};
+
+/// Every stage of step(), in the order step() runs them (static table).
+std::span<const StageDescription> step_stage_table() noexcept;
+
+/// Bits of the stages step() runs for `model` (finalized): what Data::stages_run
+/// holds after any step of this model. The integrate stage's variants:
+/// kStageNetSolve with nets (bodies and nodes as one system, with or without
+/// joints), else kStageJointSolve with joints, else the bodies alone. No allocation.
+std::uint32_t compiled_stages(const Model& model) noexcept;
+
+}  // namespace numen::core

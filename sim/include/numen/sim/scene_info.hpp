@@ -1,0 +1,54 @@
+#pragma once
+/// @file scene_info.hpp
+/// `numen info SCENE`: what a scene compiles to — its sizes, the stages step()
+/// runs for it in step order (and why the others are skipped), the contact
+/// capacities and the bytes of its Model and Data by buffer group
+/// (core/step_stages.hpp, core/capacity.hpp, core/data_size.hpp).
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "numen/core/data_size.hpp"
+
+namespace numen::sim {
+
+struct Scene;
+
+/// One stage of step() for the scene.
+struct StageLine {
+  std::string name;         ///< StageDescription::name.
+  bool runs = false;        ///< Compiled for this scene (core::compiled_stages()).
+  std::string skipped_why;  ///< Why not, when !runs (e.g. "no joints").
+};
+
+/// What a scene compiles to.
+struct SceneInfo {
+  std::string name;
+  std::string file;
+  std::string integrator;  ///< Scene-file name of the integrator.
+  std::string coupling;    ///< Scene-file name of the coupling mode.
+  double dt_s = 0.0;
+  int bodies = 0, joints = 0, joint_rows = 0, nets = 0, nodes = 0, net_springs = 0;
+  int obstacles = 0, body_spheres = 0, static_spheres = 0, materials = 0;
+  std::vector<StageLine> stages;  ///< Every stage of step(), in step order.
+  int max_contacts = 0;            ///< kMaxContacts (compile time).
+  int contact_capacity = 0;        ///< core::contact_capacity(): room of the contact scratch.
+  int cross_contact_capacity = 0;  ///< core::cross_contact_capacity().
+  int node_contact_capacity = 0;   ///< Data::node_contacts.size(): kMaxNodeContacts with nets, else 0.
+  core::ModelFootprint model_bytes;
+  core::DataFootprint data_bytes;  ///< Of a Data made by make_data() for the scene.
+};
+
+/// Describes a loaded scene (makes one Data to measure it). Load time only: allocates.
+SceneInfo describe_scene(const Scene& scene);
+
+/// Human-readable report, several lines ending in '\n'.
+std::string format_scene_info(const SceneInfo& info);
+
+/// The same as one JSON object (no trailing newline): keys name, file,
+/// integrator, coupling, dt_s, sizes{...}, stages[{name, runs, skipped_why}],
+/// capacities{...}, model_bytes{sizeof, heap, groups{...}}, data_bytes{...}.
+std::string format_scene_info_json(const SceneInfo& info);
+
+}  // namespace numen::sim

@@ -1,0 +1,152 @@
+/// @file scene_info.cpp
+/// `numen info`: a scene's stages, sizes, capacities and bytes (scene_info.hpp).
+
+#include "numen/sim/scene_info.hpp"
+
+#include <cstdio>
+#include <iomanip>
+#include <sstream>
+
+#include "numen/core/capacity.hpp"
+#include "numen/core/data.hpp"
+#include "numen/core/step_stages.hpp"
+#include "numen/sim/scene.hpp"
+
+namespace numen::sim {
+namespace {
+
+std::string json_string(const std::string& in) {
+  std::string out = "\"";
+  for (const char c : in) {
+    if (c == '"' || c == '\\') {
+      out += '\\';
+      out += c;
+    } else if (static_cast<unsigned char>(c) < 0x20) {
+      char buf[8];
+      std::snprintf(buf, sizeof buf, "\\u%04x", static_cast<unsigned>(static_cast<unsigned char>(c)));
+      out += buf;
+    } else {
+      out += c;
+    }
+  }
+  return out + "\"";
+}
+
+/// "12.3 KiB" style, with the exact byte count.
+std::string bytes(std::size_t n) {
+  std::ostringstream os;
+  os << n << " B";
+  if (n >= 1024) os << " (" << std::fixed << std::setprecision(1) << n / 1024.0 << " KiB)";
+  return os.str();
+}
+
+template <std::size_t N>
+void json_groups(std::ostringstream& os, const std::array<core::BufferGroupBytes, N>& groups) {
+  os << "\"groups\":{";
+  for (std::size_t i = 0; i < N; ++i)
+    os << (i ? "," : "") << json_string(groups[i].group) << ":" << groups[i].heap_bytes;
+  os << "}";
+}
+
+}  // namespace
+
+SceneInfo describe_scene(const Scene& scene) {
+  const core::Model& m = scene.model;
+  SceneInfo info;
+  info.name = scene.name;
+  info.file = scene.file;
+  info.integrator = to_string(m.integrator);
+  info.coupling = to_string(m.coupling_mode);
+  info.dt_s = m.dt;
+  info.bodies = m.num_bodies();
+  info.joints = m.num_joints();
+  info.joint_rows = m.articulation.num_rows;
+  info.nets = m.num_nets();
+  info.nodes = m.num_nodes();
+  info.net_springs = static_cast<int>(m.net_springs.size());
+  info.obstacles = static_cast<int>(m.obstacles.size());
+  info.body_spheres = static_cast<int>(m.body_spheres.size());
+  info.static_spheres = static_cast<int>(m.static_spheres.size());
+  info.materials = m.num_materials();
+  const std::uint32_t compiled = core::compiled_stages(m);
+  for (const core::StageDescription& s : core::step_stage_table()) {
+    const bool runs = (compiled & s.stage) != 0;
+    std::string why;
+    if (!runs) why = s.skipped_why != nullptr ? s.skipped_why : "";
+    // With nets the joints go through the net solve (net_solve.hpp), not the tree solve.
+    if (!runs && s.stage == core::kStageJointSolve && info.joints > 0) why = "joints solved with the nets";
+    info.stages.push_back(StageLine{s.name, runs, why});
+  }
+  info.max_contacts = core::kMaxContacts;
+  info.contact_capacity = core::contact_capacity(m);
+  info.cross_contact_capacity = core::cross_contact_capacity(m);
+  const core::Data data = core::make_data(m);
+  info.node_contact_capacity = static_cast<int>(data.node_contacts.size());
+  info.model_bytes = core::model_footprint(m);
+  info.data_bytes = core::data_footprint(data);
+  return info;
+}
+
+std::string format_scene_info(const SceneInfo& i) {
+  std::ostringstream os;
+  os << "scene " << i.name << " (" << i.file << ")\n";
+  os << "  integrator " << i.integrator << ", coupling " << i.coupling << ", dt " << i.dt_s * 1e3
+     << " ms\n";
+  os << "  sizes: " << i.bodies << " bodies (" << i.body_spheres << " spheres), " << i.joints
+     << " joints (" << i.joint_rows << " rows), " << i.nets << " nets (" << i.nodes << " nodes, "
+     << i.net_springs << " springs), " << i.obstacles << " obstacles (" << i.static_spheres
+     << " static spheres), " << i.materials << " materials\n";
+  os << "  stages of step(), in order:\n";
+  int k = 1;
+  for (const StageLine& s : i.stages) {
+    os << "    " << std::setw(2) << k++ << ". " << s.name;
+    if (!s.runs) os << "  -- skipped: " << s.skipped_why;
+    os << "\n";
+  }
+  os << "  capacities: contacts " << i.contact_capacity << " (compiled max " << i.max_contacts
+     << "), body-body contacts " << i.cross_contact_capacity << ", node contacts "
+     << i.node_contact_capacity << "\n";
+  os << "  Model: sizeof " << bytes(i.model_bytes.sizeof_model) << ", heap "
+     << bytes(i.model_bytes.heap_bytes()) << "\n";
+  for (const core::BufferGroupBytes& g : i.model_bytes.groups)
+    os << "    " << std::left << std::setw(24) << g.group << std::right << bytes(g.heap_bytes) << "\n";
+  os << "  Data: sizeof " << bytes(i.data_bytes.sizeof_data) << " (contact array "
+     << i.max_contacts << " x " << sizeof(core::Contact) << " B inside), heap "
+     << bytes(i.data_bytes.heap_bytes()) << "\n";
+  for (const core::BufferGroupBytes& g : i.data_bytes.groups)
+    os << "    " << std::left << std::setw(24) << g.group << std::right << bytes(g.heap_bytes) << "\n";
+  return os.str();
+}
+
+std::string format_scene_info_json(const SceneInfo& i) {
+  std::ostringstream os;
+  os << std::setprecision(17);
+  os << "{\"name\":" << json_string(i.name) << ",\"file\":" << json_string(i.file)
+     << ",\"integrator\":" << json_string(i.integrator) << ",\"coupling\":" << json_string(i.coupling)
+     << ",\"dt_s\":" << i.dt_s;
+  os << ",\"sizes\":{\"bodies\":" << i.bodies << ",\"body_spheres\":" << i.body_spheres
+     << ",\"joints\":" << i.joints << ",\"joint_rows\":" << i.joint_rows << ",\"nets\":" << i.nets
+     << ",\"nodes\":" << i.nodes << ",\"net_springs\":" << i.net_springs
+     << ",\"obstacles\":" << i.obstacles << ",\"static_spheres\":" << i.static_spheres
+     << ",\"materials\":" << i.materials << "}";
+  os << ",\"stages\":[";
+  for (std::size_t k = 0; k < i.stages.size(); ++k) {
+    const StageLine& s = i.stages[k];
+    os << (k ? "," : "") << "{\"name\":" << json_string(s.name)
+       << ",\"runs\":" << (s.runs ? "true" : "false")
+       << ",\"skipped_why\":" << json_string(s.skipped_why) << "}";
+  }
+  os << "],\"capacities\":{\"max_contacts\":" << i.max_contacts
+     << ",\"contacts\":" << i.contact_capacity << ",\"body_contacts\":" << i.cross_contact_capacity
+     << ",\"node_contacts\":" << i.node_contact_capacity << "}";
+  os << ",\"model_bytes\":{\"sizeof\":" << i.model_bytes.sizeof_model
+     << ",\"heap\":" << i.model_bytes.heap_bytes() << ",";
+  json_groups(os, i.model_bytes.groups);
+  os << "},\"data_bytes\":{\"sizeof\":" << i.data_bytes.sizeof_data
+     << ",\"heap\":" << i.data_bytes.heap_bytes() << ",";
+  json_groups(os, i.data_bytes.groups);
+  os << "}}";
+  return os.str();
+}
+
+}  // namespace numen::sim

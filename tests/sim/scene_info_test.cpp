@@ -1,0 +1,111 @@
+// Tests of sim/scene_info: `numen info` on the shipped scenes — sizes from the
+// Model, stages equal to those step() runs, bytes equal to what make_data()
+// asked the allocator for.
+#include "numen/sim/scene_info.hpp"
+
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "alloc_counter.hpp"
+#include "numen/core/capacity.hpp"
+#include "numen/core/data.hpp"
+#include "numen/core/features.hpp"
+#include "numen/core/step.hpp"
+#include "numen/core/step_stages.hpp"
+#include "numen/sim/scene.hpp"
+
+namespace core = numen::core;
+namespace sim = numen::sim;
+
+namespace {
+
+/// The shipped scenes this build can load (default, phantom and endobag have
+/// joints; deformable and endobag nets).
+std::vector<std::string> shipped_scenes() {
+  std::vector<std::string> out{"construction", "admittance"};
+  if (core::kWithArticulation) out.insert(out.end(), {"default", "phantom"});
+  if (core::kWithDeformable) out.push_back("deformable");
+  if (core::kWithArticulation && core::kWithDeformable) out.push_back("endobag");
+  return out;
+}
+
+std::string shipped(const std::string& name) {
+  return std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/" + name + ".toml";
+}
+
+}  // namespace
+
+TEST(SceneInfo, SizesAreTheModelsCounts) {
+  for (const std::string& name : shipped_scenes()) {
+    const sim::Scene scene = sim::load_scene(shipped(name));
+    const core::Model& m = scene.model;
+    const sim::SceneInfo i = sim::describe_scene(scene);
+    EXPECT_EQ(i.name, scene.name);
+    EXPECT_EQ(i.bodies, m.num_bodies()) << name;
+    EXPECT_EQ(i.joints, m.num_joints()) << name;
+    EXPECT_EQ(i.nets, m.num_nets()) << name;
+    EXPECT_EQ(i.nodes, m.num_nodes()) << name;
+    EXPECT_EQ(i.obstacles, static_cast<int>(m.obstacles.size())) << name;
+    EXPECT_EQ(i.body_spheres, static_cast<int>(m.body_spheres.size())) << name;
+    EXPECT_EQ(i.contact_capacity, core::contact_capacity(m)) << name;
+    EXPECT_EQ(i.node_contact_capacity, m.num_nodes() > 0 ? core::kMaxNodeContacts : 0) << name;
+  }
+}
+
+TEST(SceneInfo, StagesAreThoseStepRuns) {
+  for (const std::string& name : shipped_scenes()) {
+    const sim::Scene scene = sim::load_scene(shipped(name));
+    const sim::SceneInfo i = sim::describe_scene(scene);
+    core::Data d = core::make_data(scene.model);
+    core::step(scene.model, d);
+    const auto table = core::step_stage_table();
+    ASSERT_EQ(i.stages.size(), table.size());
+    for (std::size_t k = 0; k < table.size(); ++k) {
+      EXPECT_EQ(i.stages[k].name, table[k].name);
+      EXPECT_EQ(i.stages[k].runs, (d.stages_run & table[k].stage) != 0) << name << ": " << table[k].name;
+      EXPECT_EQ(i.stages[k].skipped_why.empty(), i.stages[k].runs) << name << ": " << table[k].name;
+    }
+  }
+}
+
+TEST(SceneInfo, DataBytesAreWhatMakeDataAllocated) {
+  for (const std::string& name : shipped_scenes()) {
+    const sim::Scene scene = sim::load_scene(shipped(name));
+    const sim::SceneInfo i = sim::describe_scene(scene);
+    const std::int64_t before = numen::test::allocated_bytes();
+    const core::Data d = core::make_data(scene.model);
+    const auto allocated = static_cast<std::size_t>(numen::test::allocated_bytes() - before);
+    EXPECT_EQ(i.data_bytes.sizeof_data, sizeof(core::Data));
+    // Nets sort their springs with one temporary array of num_nodes ints (NetScratch::resize).
+    const std::size_t temporary =
+        static_cast<std::size_t>(scene.model.num_nodes()) * sizeof(std::int32_t);
+    EXPECT_EQ(allocated, i.data_bytes.heap_bytes() + temporary) << name;
+  }
+}
+
+TEST(SceneInfo, ReportAndJsonNameEveryStageAndGroup) {
+  const sim::SceneInfo i = sim::describe_scene(sim::load_scene(shipped("construction")));
+  const std::string text = sim::format_scene_info(i);
+  const std::string json = sim::format_scene_info_json(i);
+  for (const sim::StageLine& s : i.stages) {
+    EXPECT_NE(text.find(s.name), std::string::npos) << s.name;
+    EXPECT_NE(json.find("\"" + s.name + "\""), std::string::npos) << s.name;
+    if (!s.runs) {
+      std::string line = "skipped: ";
+      line += s.skipped_why;
+      EXPECT_NE(text.find(line), std::string::npos) << s.name;
+    }
+  }
+  for (const core::BufferGroupBytes& g : i.data_bytes.groups) {
+    std::string key = "\"";
+    key += g.group;
+    key += "\":";
+    key += std::to_string(g.heap_bytes);
+    EXPECT_NE(json.find(key), std::string::npos) << g.group;
+  }
+  EXPECT_EQ(json.front(), '{');
+  EXPECT_EQ(json.back(), '}');
+  EXPECT_NE(json.find("\"heap\":" + std::to_string(i.data_bytes.heap_bytes())), std::string::npos);
+}
