@@ -51,6 +51,23 @@ std::string field(const std::string& s) {
 
 }  // namespace
 
+StabilityRow stability::make_row(const char* family, const char* case_name,
+                                 core::Integrator integrator, double h, double mass_kg,
+                                 double stiffness, double parameter, const char* parameter_name,
+                                 double omega_dt) {
+  StabilityRow r;
+  r.family = family;
+  r.case_name = case_name;
+  r.integrator = to_string(integrator);
+  r.dt_s = h;
+  r.mass_kg = mass_kg;
+  r.stiffness = stiffness;
+  r.parameter = parameter;
+  r.parameter_name = parameter_name;
+  r.omega_dt = omega_dt;
+  return r;
+}
+
 const std::vector<std::string>& stability_family_names() {
   static const std::vector<std::string> names = {"coupling", "contact", "articulation", "extreme",
                                                  "boundary"};
@@ -82,8 +99,7 @@ StabilityResult run_stability_study(const StabilityOptions& options) {
   if (wanted(options, "coupling"))
     total += kGridWeight * static_cast<double>(coupling_runs(options));
   if (wanted(options, "contact")) total += kGridWeight * static_cast<double>(contact_runs(options));
-  if (articulation)
-    total += kArticulationWeight * static_cast<double>(articulation_runs(options));
+  if (articulation) total += kArticulationWeight * static_cast<double>(articulation_runs(options));
   if (wanted(options, "extreme"))
     total += kExtremeWeight * static_cast<double>(rigid_extreme_runs(options)) +
              kSceneWeight / 5.0 * static_cast<double>(scene_extreme_runs(options));
@@ -101,8 +117,7 @@ StabilityResult run_stability_study(const StabilityOptions& options) {
   };
   if (wanted(options, "coupling")) append(coupling_family(options, tick_of(kGridWeight)));
   if (wanted(options, "contact")) append(contact_family(options, tick_of(kGridWeight)));
-  if (articulation)
-    append(articulation_family(options, tick_of(kArticulationWeight)));
+  if (articulation) append(articulation_family(options, tick_of(kArticulationWeight)));
   if (wanted(options, "extreme")) {
     append(rigid_extreme_cases(options, tick_of(kExtremeWeight)));
     append(scene_extreme_cases(options, dir, tick_of(kSceneWeight / 5.0), result.skipped));

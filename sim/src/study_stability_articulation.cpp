@@ -76,16 +76,8 @@ StabilityRow articulation_run(core::Integrator integrator, double h, double rati
         d.target_twist.angular = Vec3(0.0, 0.0, kSpin);
       },
       monitor);
-  StabilityRow r;
-  r.family = "articulation";
-  r.case_name = "revolute-pair";
-  r.integrator = to_string(integrator);
-  r.dt_s = h;
-  r.mass_kg = kRootMass;
-  r.stiffness = 200.0;
-  r.parameter = ratio;
-  r.parameter_name = "mass_ratio";
-  r.omega_dt = std::sqrt(200.0 / kRootMass) * h;
+  StabilityRow r = make_row("articulation", "revolute-pair", integrator, h, kRootMass, 200.0, ratio,
+                            "mass_ratio", std::sqrt(200.0 / kRootMass) * h);
   monitor.fill(r);
   char note[96];
   std::snprintf(note, sizeof note, "final body rate %.2f rad/s, angle drift %.3g rad at the end",

@@ -30,22 +30,6 @@ std::int64_t steps_for(double horizon, double h) {
   return std::max<std::int64_t>(1, std::llround(horizon / h));
 }
 
-StabilityRow make_row(const char* name, core::Integrator integrator, double h, double m,
-                      double stiffness, double parameter, const char* parameter_name,
-                      double omega_dt) {
-  StabilityRow r;
-  r.family = "extreme";
-  r.case_name = name;
-  r.integrator = to_string(integrator);
-  r.dt_s = h;
-  r.mass_kg = m;
-  r.stiffness = stiffness;
-  r.parameter = parameter;
-  r.parameter_name = parameter_name;
-  r.omega_dt = omega_dt;
-  return r;
-}
-
 /// Teleport: a 0.1 kg, 10 mm sphere held by k_t (ζ = 0.85; k_r = 1e-3 k_t/200, ζ = 0.85); at
 /// t = 50 ms the target jumps from the origin to (1, 0, 0) m and turns by π − 0.1 rad about z.
 /// `wall`: the half-space x > 50 mm is solid (k_c = 1e4 N/m, c = 10 N·s/m), so the target ends
@@ -94,8 +78,9 @@ StabilityRow teleport_run(core::Integrator integrator, double h, double k_t, boo
         }
       },
       monitor);
-  StabilityRow r = make_row(wall ? "teleport-wall" : "teleport-free", integrator, h, kM, k_t, 1.0,
-                            "jump_m", std::sqrt(std::max(k_t, wall ? kKc + k_t : 0.0) / kM) * h);
+  StabilityRow r =
+      make_row("extreme", wall ? "teleport-wall" : "teleport-free", integrator, h, kM, k_t, 1.0,
+               "jump_m", std::sqrt(std::max(k_t, wall ? kKc + k_t : 0.0) / kM) * h);
   monitor.fill(r);
   return r;
 }
@@ -130,8 +115,8 @@ StabilityRow spin_run(core::Integrator integrator, double h, double k_r,
         d.target_twist.angular = kW * axis;
       },
       monitor);
-  StabilityRow r = make_row("spin-100rad/s", integrator, h, kM, k_r, kW, "target_rate_rad_s",
-                            std::sqrt(k_r / 1e-5) * h);
+  StabilityRow r = make_row("extreme", "spin-100rad/s", integrator, h, kM, k_r, kW,
+                            "target_rate_rad_s", std::sqrt(k_r / 1e-5) * h);
   monitor.fill(r);
   char note[96];
   std::snprintf(note, sizeof note, "final body rate %.1f rad/s",
@@ -203,8 +188,8 @@ StabilityRow capacity_run(core::Integrator integrator, double h, const Stability
   if (!monitor.diverged() &&
       (inconsistent > 0 || flagged == 0 || data.contact_overflow_steps != flagged))
     monitor.fail(ran, "overflow-not-counted");
-  StabilityRow r = make_row("contact-capacity", integrator, h, kM, kKc, spheres, "spheres",
-                            std::sqrt(core::kMaxContacts * kKc / kM) * h);
+  StabilityRow r = make_row("extreme", "contact-capacity", integrator, h, kM, kKc, spheres,
+                            "spheres", std::sqrt(core::kMaxContacts * kKc / kM) * h);
   monitor.fill(r);
   char note[200];
   std::snprintf(

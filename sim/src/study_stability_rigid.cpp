@@ -71,16 +71,8 @@ StabilityRow coupling_run(core::Integrator integrator, double h, double m, doubl
   Monitor monitor(limits, kInf, kInf, steps);
   drive(
       model, data, steps, [](std::int64_t, core::Data&) noexcept {}, monitor);
-  StabilityRow row;
-  row.family = "coupling";
-  row.case_name = zeta == 0.0 ? "coupling-undamped" : "coupling-damped";
-  row.integrator = to_string(integrator);
-  row.dt_s = h;
-  row.mass_kg = m;
-  row.stiffness = k;
-  row.parameter = zeta;
-  row.parameter_name = "zeta";
-  row.omega_dt = std::sqrt(k / m) * h;
+  StabilityRow row = make_row("coupling", zeta == 0.0 ? "coupling-undamped" : "coupling-damped",
+                              integrator, h, m, k, zeta, "zeta", std::sqrt(k / m) * h);
   monitor.fill(row);
   if (monitor_out) *monitor_out = monitor;
   return row;
@@ -136,16 +128,9 @@ StabilityRow contact_run(core::Integrator integrator, double h, double m, double
   Monitor monitor(limits, limits.penetration_factor * static_depth, kInf, steps, m, h);
   drive(
       model, data, steps, [](std::int64_t, core::Data&) noexcept {}, monitor);
-  StabilityRow row;
-  row.family = "contact";
-  row.case_name = zeta_c == 0.0 ? "contact-undamped" : "contact-damped";
-  row.integrator = to_string(integrator);
-  row.dt_s = h;
-  row.mass_kg = m;
-  row.stiffness = k_c;
-  row.parameter = zeta_c;
-  row.parameter_name = "contact_zeta";
-  row.omega_dt = std::sqrt((k_c + k_t) / m) * h;
+  StabilityRow row =
+      make_row("contact", zeta_c == 0.0 ? "contact-undamped" : "contact-damped", integrator, h, m,
+               k_c, zeta_c, "contact_zeta", std::sqrt((k_c + k_t) / m) * h);
   monitor.fill(row);
   return row;
 }

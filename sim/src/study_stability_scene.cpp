@@ -81,15 +81,7 @@ std::string stiffest(const core::Model& model) {
 }
 
 StabilityRow scene_row(const char* name, core::Integrator integrator, double h) {
-  StabilityRow r;
-  r.family = "extreme";
-  r.case_name = name;
-  r.integrator = to_string(integrator);
-  r.dt_s = h;
-  r.mass_kg = kNaN;
-  r.stiffness = kNaN;
-  r.parameter = kNaN;
-  r.omega_dt = kNaN;
+  StabilityRow r = make_row("extreme", name, integrator, h, kNaN, kNaN, kNaN, "", kNaN);
   r.energy_ratio_max = kNaN;
   return r;
 }

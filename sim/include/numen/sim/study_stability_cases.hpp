@@ -22,6 +22,12 @@ namespace numen::sim::stability {
 inline constexpr double kInf = std::numeric_limits<double>::infinity();
 inline constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
+/// A row with the run's identity filled in (family, case, integrator name, step, mass,
+/// stiffness, parameter and its name, ω h); Monitor::fill() adds the verdict.
+StabilityRow make_row(const char* family, const char* case_name, core::Integrator integrator,
+                      double h, double mass_kg, double stiffness, double parameter,
+                      const char* parameter_name, double omega_dt);
+
 /// Watches one run and finds its first failing step (the verdict of study_stability.hpp).
 class Monitor {
  public:
