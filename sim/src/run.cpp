@@ -28,6 +28,7 @@
 #include "numen/sim/admittance_run.hpp"
 #include "numen/sim/simulated_instrument.hpp"
 #include "numen/sim/trace.hpp"
+#include "json_text.hpp"
 
 namespace numen::sim {
 namespace {
@@ -601,22 +602,8 @@ std::string format_summary(const RunSummary& s) {
 }
 
 namespace {
-std::string json_string(const std::string& in) {
-  std::string out = "\"";
-  for (unsigned char c : in) {
-    if (c == '"' || c == '\\') {
-      out += '\\';
-      out += static_cast<char>(c);
-    } else if (c < 0x20) {
-      char buf[8];
-      std::snprintf(buf, sizeof buf, "\\u%04x", c);
-      out += buf;
-    } else {
-      out += static_cast<char>(c);
-    }
-  }
-  return out + "\"";
-}
+using detail::json_string;
+
 std::string json_number(double v) {
   if (!std::isfinite(v)) return "null";
   std::ostringstream os;

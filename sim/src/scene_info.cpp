@@ -11,26 +11,12 @@
 #include "numen/core/data.hpp"
 #include "numen/core/step_stages.hpp"
 #include "numen/sim/scene.hpp"
+#include "json_text.hpp"
 
 namespace numen::sim {
 namespace {
 
-std::string json_string(const std::string& in) {
-  std::string out = "\"";
-  for (const char c : in) {
-    if (c == '"' || c == '\\') {
-      out += '\\';
-      out += c;
-    } else if (static_cast<unsigned char>(c) < 0x20) {
-      char buf[8];
-      std::snprintf(buf, sizeof buf, "\\u%04x", static_cast<unsigned>(static_cast<unsigned char>(c)));
-      out += buf;
-    } else {
-      out += c;
-    }
-  }
-  return out + "\"";
-}
+using detail::json_string;
 
 /// "12.3 KiB" style, with the exact byte count.
 std::string bytes(std::size_t n) {
