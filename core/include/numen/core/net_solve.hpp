@@ -14,7 +14,9 @@
 ///
 /// Solved by a preconditioned conjugate gradient on that fixed sparsity
 /// (matrix-free: one 3×3 weight per spring, per node contact and per node),
-/// warm-started from the last step's Δv.
+/// started from 0 without joints (one forward sweep gives the start and the
+/// reference norm; docs/deformable.md, "Cold start"), warm-started from the
+/// last step's Δv with joints.
 ///
 /// Without joints: SSOR (block symmetric Gauss–Seidel) preconditioning with
 /// Eisenstat's trick. Unknowns ordered bodies first (6 each, those in the

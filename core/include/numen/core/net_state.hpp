@@ -117,7 +117,7 @@ struct NetScratch {
   std::vector<Mat3> block;          ///< A_ii: 3×3 diagonal block of each node (all terms).
   std::vector<Mat3> block_inverse;  ///< A_ii⁻¹ (preconditioner).
   std::vector<Vec3> rhs;            ///< b of the node rows.
-  std::vector<Vec3> delta;          ///< Δv of the node rows (m/s); warm start of the next step.
+  std::vector<Vec3> delta;          ///< Δv of the node rows (m/s); with joints, the next step's warm start.
   /// PCG vectors of the nodes. Without joints (Eisenstat's CG, net_solve.hpp):
   /// w, t, q and K q; with joints: r, z, p and A p.
   std::vector<Vec3> residual, precond_residual, direction, a_direction;
