@@ -95,8 +95,9 @@ TEST(BusSpec, BadSpecsNameTheSpecAndTheProblem) {
   EXPECT_NE(error_of("serial:/dev/ttyS0@115200x").find("baud '115200x'"), std::string::npos);
   EXPECT_NE(error_of("serial:/dev/ttyS0@-1").find("baud '-1'"), std::string::npos);
   EXPECT_NE(error_of("serial:/dev/ttyS0@99999999999").find("baud '99999999999'"), std::string::npos);
-  if (numen::hal::kWithSerial)  // the termios speeds belong to the serial backend
+  if (numen::hal::kWithSerial) {  // the termios speeds belong to the serial backend
     EXPECT_NE(error_of("serial:/dev/ttyS0@12345").find("not a supported termios speed"), std::string::npos);
+  }
 }
 
 TEST(BusSpec, ManagedFiltersAreExactlyTheIdsEachEndReads) {
@@ -153,11 +154,13 @@ TEST(BusSpec, ABackendLeftOutIsAClearError) {
   const std::string serial = numen::sim::missing_backend(parse_bus_spec("serial:/dev/ttyS0"));
   EXPECT_EQ(can.empty(), numen::hal::kWithSocketCan) << can;
   EXPECT_EQ(serial.empty(), numen::hal::kWithSerial) << serial;
-  if (!can.empty())
+  if (!can.empty()) {
     EXPECT_EQ(can, "bus 'can:vcan0' needs SocketCAN: this build has NUMEN_WITH_SOCKETCAN=OFF");
-  if (!serial.empty())
+  }
+  if (!serial.empty()) {
     EXPECT_EQ(serial,
               "bus 'serial:/dev/ttyS0' needs the serial backend: this build has NUMEN_WITH_SERIAL=OFF");
+  }
   EXPECT_EQ(numen::sim::missing_backend(parse_bus_spec("sim")), "");
   EXPECT_EQ(numen::sim::missing_backend(parse_bus_spec("log:x.log")), "");
 }
