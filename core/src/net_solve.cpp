@@ -316,21 +316,14 @@ void add_net_body_terms(const Model& model, Data& data) noexcept {
   NetScratch& ns = data.net;
   const double h = data.solver.system_step;  // h_s of the linearised system (integrator.hpp)
   const double h2 = h * h;
-  for (const NetModel& net : model.nets) {
+  // Ties: their sums over the nodes come from compute_net_forces()'s tie loop.
+  for (std::size_t k = 0; k < model.nets.size(); ++k) {
+    const NetModel& net = model.nets[k];
     const auto b = static_cast<std::size_t>(net.body);
     if (!s.in_solve[b]) continue;
-    Vec3 sum_r = Vec3::Zero();
-    Mat3 sum_rr = Mat3::Zero();
-    Vec6 relative = Vec6::Zero();  // Σ Jᵀ (v_i0 − v_a0)
-    for (int v = net.node_begin; v < net.node_begin + net.node_count; ++v) {
-      const auto i = static_cast<std::size_t>(v);
-      const Vec3& r = ns.lever[i];
-      sum_r += r;
-      sum_rr.noalias() += r * r.transpose();
-      relative += generalized_force(data.nodes[i].velocity - point_velocity(s.twist0[b], r), r);
-    }
-    add_lever_moments(tie_weight(net, h), net.node_count, sum_r, sum_rr, s.block[b]);
-    s.rhs[b] += (h2 * net.tie_stiffness) * relative;
+    const NetTieSums& t = ns.tie_sums[k];
+    add_lever_moments(tie_weight(net, h), net.node_count, t.lever_sum, t.lever_moment, s.block[b]);
+    s.rhs[b] += (h2 * net.tie_stiffness) * t.relative;  // Σ Jᵀ (v_i0 − v_a0)
   }
   // Node contacts: weights (for the node rows too), then the body side.
   const int nc = node_contact_count(data);
@@ -359,8 +352,8 @@ void build_net_system(const Model& model, Data& data) noexcept {
   const double h = data.solver.system_step;  // h_s of the linearised system (integrator.hpp)
   const double h2 = h * h;
 
-  // The springs' weights, their sum in the blocks and their part of the
-  // right-hand side are already there (compute_net_forces()).
+  // The springs' weights, their sum at each node (spring_block) and their
+  // part of the right-hand side are already there (compute_net_forces()).
   for (const NetModel& net : model.nets) {
     const auto b = static_cast<std::size_t>(net.body);
     const double c = tie_weight(net, h);
@@ -368,7 +361,9 @@ void build_net_system(const Model& model, Data& data) noexcept {
       const auto i = static_cast<std::size_t>(v);
       const double diagonal = model.node_mass[i] + c;
       ns.node_diagonal[i] = diagonal;
-      ns.block[i].diagonal().array() += diagonal;
+      const double* w = ns.spring_block[i].entry;
+      ns.block[i] << w[0] + diagonal, w[1], w[2], w[1], w[3] + diagonal, w[4], w[2], w[4],
+          w[5] + diagonal;
       const Vec3 relative = data.nodes[i].velocity - point_velocity(s.twist0[b], ns.lever[i]);
       ns.rhs[i] += h * ns.force[i] - (h2 * net.tie_stiffness) * relative;
     }
@@ -382,12 +377,11 @@ void build_net_system(const Model& model, Data& data) noexcept {
     add_weight(ct.weight_normal, ct.weight_isotropic, ct.normal, ns.block[i]);
     ns.rhs[i] += (-h2 * mp.stiffness * ct.normal_velocity) * ct.normal;
   }
-  for (std::size_t i = 0; i < ns.block.size(); ++i)
-    inverse_symmetric(ns.block[i], ns.block_inverse[i]);
-  if (model.joints.empty()) {  // the SSOR sweeps' copy, in their order
+  if (model.joints.empty()) {  // the SSOR sweeps' A_kk⁻¹, in their order
     for (std::size_t p = 0; p < ns.sweep_nodes.size(); ++p) {
       const auto k = static_cast<std::size_t>(ns.sweep_order[p]);
-      const Mat3& x = ns.block_inverse[k];
+      Mat3 x;
+      inverse_symmetric(ns.block[k], x);
       SweepNode& nd = ns.sweep_nodes[p];
       nd.inverse[0] = x(0, 0);
       nd.inverse[1] = x(0, 1);
@@ -397,6 +391,9 @@ void build_net_system(const Model& model, Data& data) noexcept {
       nd.inverse[5] = x(2, 2);
       nd.lever = ns.lever[k];
     }
+  } else {
+    for (std::size_t i = 0; i < ns.block.size(); ++i)
+      inverse_symmetric(ns.block[i], ns.block_inverse[i]);
   }
 
   // The arrowhead preconditioner of the jointed solve: Schur blocks of the
