@@ -262,7 +262,16 @@ void compute_net_forces(const Model& model, Data& data) noexcept {
   // Gravity, and the zero-length ties to the rigid component with their
   // reaction on it; for the linearised schemes also the ties' sums of the
   // rigid component's rows (NetTieSums; the anchor's velocity at the step's
-  // start is that of the twist u0 the integrator starts from).
+  // start is that of the twist u0 the integrator starts from). Raw pointers:
+  // the stores would otherwise make the compiler reload the vectors' data
+  // pointers per node.
+  const Vec3* rest = model.node_rest.data();
+  const double* mass = model.node_mass.data();
+  const NodeState* nodes = data.nodes.data();
+  Vec3* lever_out = s.lever.data();
+  Vec3* force = s.force.data();
+  Vec3* rhs = s.rhs.data();
+  SymmetricBlock* spring_block = s.spring_block.data();
   for (std::size_t k = 0; k < model.nets.size(); ++k) {
     const NetModel& net = model.nets[k];
     const auto bi = static_cast<std::size_t>(net.body);
@@ -274,18 +283,18 @@ void compute_net_forces(const Model& model, Data& data) noexcept {
     Vec3 sum_dv = Vec3::Zero(), sum_r_dv = Vec3::Zero();
     for (int v = net.node_begin; v < net.node_begin + net.node_count; ++v) {
       const auto i = static_cast<std::size_t>(v);
-      const Vec3 lever = rot * model.node_rest[i];
-      s.lever[i] = lever;
+      const Vec3 lever = rot * rest[i];
+      lever_out[i] = lever;
       const Vec3 anchor = body.position + lever;
       const Vec3 anchor_velocity = body.linear_velocity + body.angular_velocity.cross(lever);
-      const Vec3 dv = data.nodes[i].velocity - anchor_velocity;
-      const Vec3 f = -net.tie_stiffness * (data.nodes[i].position - anchor) - net.tie_damping * dv;
-      s.force[i] = model.node_mass[i] * model.gravity + f;
+      const Vec3 dv = nodes[i].velocity - anchor_velocity;
+      const Vec3 f = -net.tie_stiffness * (nodes[i].position - anchor) - net.tie_damping * dv;
+      force[i] = mass[i] * model.gravity + f;
       reaction.force -= f;
       reaction.torque -= lever.cross(f);
       if (implicit) {
-        s.spring_block[i] = SymmetricBlock{};
-        s.rhs[i].setZero();
+        spring_block[i] = SymmetricBlock{};
+        rhs[i].setZero();
         sum_r += lever;
         rr00 += lever.x() * lever.x();
         rr01 += lever.x() * lever.y();

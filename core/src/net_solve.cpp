@@ -354,18 +354,27 @@ void build_net_system(const Model& model, Data& data) noexcept {
 
   // The springs' weights, their sum at each node (spring_block) and their
   // part of the right-hand side are already there (compute_net_forces()).
+  // Raw pointers: the stores would otherwise make the compiler reload every
+  // vector's data pointer per node.
+  const SymmetricBlock* spring_block = ns.spring_block.data();
+  const Vec3* force = ns.force.data();
+  const Vec3* lever = ns.lever.data();
+  const NodeState* nodes = data.nodes.data();
+  Mat3* block = ns.block.data();
+  Vec3* rhs = ns.rhs.data();
   for (const NetModel& net : model.nets) {
-    const auto b = static_cast<std::size_t>(net.body);
+    const Vec6 u0 = s.twist0[static_cast<std::size_t>(net.body)];
     const double c = tie_weight(net, h);
+    const double hk = h2 * net.tie_stiffness;
     for (int v = net.node_begin; v < net.node_begin + net.node_count; ++v) {
       const auto i = static_cast<std::size_t>(v);
       const double diagonal = model.node_mass[i] + c;
       ns.node_diagonal[i] = diagonal;
-      const double* w = ns.spring_block[i].entry;
-      ns.block[i] << w[0] + diagonal, w[1], w[2], w[1], w[3] + diagonal, w[4], w[2], w[4],
-          w[5] + diagonal;
-      const Vec3 relative = data.nodes[i].velocity - point_velocity(s.twist0[b], ns.lever[i]);
-      ns.rhs[i] += h * ns.force[i] - (h2 * net.tie_stiffness) * relative;
+      const SymmetricBlock w = spring_block[i];
+      block[i] << w.entry[0] + diagonal, w.entry[1], w.entry[2], w.entry[1],
+          w.entry[3] + diagonal, w.entry[4], w.entry[2], w.entry[4], w.entry[5] + diagonal;
+      const Vec3 relative = nodes[i].velocity - point_velocity(u0, lever[i]);
+      rhs[i] += h * force[i] - hk * relative;
     }
   }
   const int nc = node_contact_count(data);
@@ -378,18 +387,21 @@ void build_net_system(const Model& model, Data& data) noexcept {
     ns.rhs[i] += (-h2 * mp.stiffness * ct.normal_velocity) * ct.normal;
   }
   if (model.joints.empty()) {  // the SSOR sweeps' A_kk⁻¹, in their order
-    for (std::size_t p = 0; p < ns.sweep_nodes.size(); ++p) {
-      const auto k = static_cast<std::size_t>(ns.sweep_order[p]);
+    const std::int32_t* order = ns.sweep_order.data();
+    SweepNode* sweep_nodes = ns.sweep_nodes.data();
+    const std::size_t n = ns.sweep_nodes.size();
+    for (std::size_t p = 0; p < n; ++p) {
+      const auto k = static_cast<std::size_t>(order[p]);
       Mat3 x;
-      inverse_symmetric(ns.block[k], x);
-      SweepNode& nd = ns.sweep_nodes[p];
+      inverse_symmetric(block[k], x);
+      SweepNode& nd = sweep_nodes[p];
       nd.inverse[0] = x(0, 0);
       nd.inverse[1] = x(0, 1);
       nd.inverse[2] = x(0, 2);
       nd.inverse[3] = x(1, 1);
       nd.inverse[4] = x(1, 2);
       nd.inverse[5] = x(2, 2);
-      nd.lever = ns.lever[k];
+      nd.lever = lever[k];
     }
   } else {
     for (std::size_t i = 0; i < ns.block.size(); ++i)
