@@ -371,8 +371,8 @@ void build_net_system(const Model& model, Data& data) noexcept {
       const double diagonal = model.node_mass[i] + c;
       ns.node_diagonal[i] = diagonal;
       const SymmetricBlock w = spring_block[i];
-      block[i] << w.entry[0] + diagonal, w.entry[1], w.entry[2], w.entry[1],
-          w.entry[3] + diagonal, w.entry[4], w.entry[2], w.entry[4], w.entry[5] + diagonal;
+      block[i] << w.entry[0] + diagonal, w.entry[1], w.entry[2], w.entry[1], w.entry[3] + diagonal,
+          w.entry[4], w.entry[2], w.entry[4], w.entry[5] + diagonal;
       const Vec3 relative = nodes[i].velocity - point_velocity(u0, lever[i]);
       rhs[i] += h * force[i] - hk * relative;
     }
