@@ -39,7 +39,7 @@ struct SpringPass {
   const std::int32_t* high;
   double* length;
   Vec3* force;
-  SymmetricBlock* block;
+  SymmetricBlock* spring_block;
   Vec3* rhs;
   double h;   ///< h_s of the linearised system (integrator.hpp).
   double h2;  ///< h_s².
@@ -111,7 +111,7 @@ inline void one_spring(const SpringPass& a, std::int32_t j, const Vec3& xk, cons
     sum.w11 += w11;
     sum.w12 += w12;
     sum.w22 += w22;
-    add_symmetric(a.block[hi], w00, w01, w02, w11, w12, w22);
+    add_symmetric(a.spring_block[hi], w00, w01, w02, w11, w12, w22);
     // h² k K̃ (v_h − v_k) = (hk − β) d̂ (d̂ · dv) + β dv: + on row k, − on row h.
     const Vec3 kv = ((hk - beta) * n_dv) * n + beta * dv;
     sum.rhs += kv;
@@ -222,8 +222,8 @@ void spring_pass(Data& data) noexcept {
         s11 += w11;
         s12 += w12;
         s22 += w22;
-        add_symmetric(a.block[h0], w00(0), w01(0), w02(0), w11(0), w12(0), w22(0));
-        add_symmetric(a.block[h1], w00(1), w01(1), w02(1), w11(1), w12(1), w22(1));
+        add_symmetric(a.spring_block[h0], w00(0), w01(0), w02(0), w11(0), w12(0), w22(0));
+        add_symmetric(a.spring_block[h1], w00(1), w01(1), w02(1), w11(1), w12(1), w22(1));
         const Pair c = (hk - beta) * n_dv;
         const Pair kx = c * nx + beta * dvx, ky = c * ny + beta * dvy, kz = c * nz + beta * dvz;
         bx += kx;
@@ -246,7 +246,7 @@ void spring_pass(Data& data) noexcept {
     a.force[k] += sum.force;
     if constexpr (kImplicit) {
       a.rhs[k] += sum.rhs;
-      add_symmetric(a.block[k], sum.w00, sum.w01, sum.w02, sum.w11, sum.w12, sum.w22);
+      add_symmetric(a.spring_block[k], sum.w00, sum.w01, sum.w02, sum.w11, sum.w12, sum.w22);
     }
   }
 }
