@@ -55,7 +55,8 @@ DataFootprint data_footprint(const Data& d) noexcept {
                                 a.joint_active, a.off_diagonal, a.factor, a.coupling, a.work,
                                 a.elimination_parent, a.reroot)};
   f.groups[5] = {"nets", heap(d.nodes, d.node_contacts, d.nets, n.saved, n.force, n.lever,
-                              n.node_diagonal, n.block, n.block_inverse, n.rhs, n.delta,
+                              n.node_diagonal, n.block, n.block_inverse, n.spring_block,
+                              n.tie_sums, n.rhs, n.delta,
                               n.residual, n.precond_residual, n.direction, n.a_direction,
                               n.sweep, n.body_schur, n.body_tmp, n.sweep_order,
                               n.sweep_position, n.sweep_nodes, n.sweep_springs.direction_x,

@@ -39,7 +39,7 @@ struct SpringPass {
   const std::int32_t* high;
   double* length;
   Vec3* force;
-  Mat3* block;
+  SymmetricBlock* spring_block;
   Vec3* rhs;
   double h;   ///< h_s of the linearised system (integrator.hpp).
   double h2;  ///< h_s².
@@ -53,18 +53,24 @@ struct NodeSums {
   double w00 = 0.0, w01 = 0.0, w02 = 0.0, w11 = 0.0, w12 = 0.0, w22 = 0.0;
 };
 
-/// Adds the symmetric 3×3 with upper triangle (a, b, c; d, e; f) to m.
-inline void add_symmetric(Mat3& m, double a, double b, double c, double d, double e,
+/// One component of two consecutive springs (one SSE2 register), or two
+/// consecutive entries of a node's SymmetricBlock.
+using Pair = Eigen::Array2d;
+
+inline Pair load_pair(const double* p) noexcept { return Eigen::Map<const Pair>(p); }
+inline void store_pair(double* p, const Pair& v) noexcept {
+  Eigen::Map<Pair> m(p);
+  m = v;
+}
+
+/// Adds the symmetric 3×3 with upper triangle (a, b, c; d, e; f) to m, two
+/// entries per SIMD addition (each entry gets the same one addition as in
+/// scalar code).
+inline void add_symmetric(SymmetricBlock& m, double a, double b, double c, double d, double e,
                           double f) noexcept {
-  m(0, 0) += a;
-  m(0, 1) += b;
-  m(0, 2) += c;
-  m(1, 0) += b;
-  m(1, 1) += d;
-  m(1, 2) += e;
-  m(2, 0) += c;
-  m(2, 1) += e;
-  m(2, 2) += f;
+  Eigen::Map<Pair>(m.entry) += Pair(a, b);
+  Eigen::Map<Pair>(m.entry + 2) += Pair(c, d);
+  Eigen::Map<Pair>(m.entry + 4) += Pair(e, f);
 }
 
 /// Spring j of node k (position xk, velocity vk) in scalar code: the law of
@@ -105,7 +111,7 @@ inline void one_spring(const SpringPass& a, std::int32_t j, const Vec3& xk, cons
     sum.w11 += w11;
     sum.w12 += w12;
     sum.w22 += w22;
-    add_symmetric(a.block[hi], w00, w01, w02, w11, w12, w22);
+    add_symmetric(a.spring_block[hi], w00, w01, w02, w11, w12, w22);
     // h² k K̃ (v_h − v_k) = (hk − β) d̂ (d̂ · dv) + β dv: + on row k, − on row h.
     const Vec3 kv = ((hk - beta) * n_dv) * n + beta * dv;
     sum.rhs += kv;
@@ -113,25 +119,17 @@ inline void one_spring(const SpringPass& a, std::int32_t j, const Vec3& xk, cons
   }
 }
 
-/// One component of two consecutive springs (one SSE2 register).
-using Pair = Eigen::Array2d;
-
-inline Pair load_pair(const double* p) noexcept { return Eigen::Map<const Pair>(p); }
-inline void store_pair(double* p, const Pair& v) noexcept {
-  Eigen::Map<Pair> m(p);
-  m = v;
-}
-
 /// The springs' pass of compute_net_forces(), in the sweep order (grouped by
 /// their earlier node k in NetScratch::sweep_order, whose sums stay in
 /// registers), two springs of a node at a time (the same law as
 /// one_spring(), lane by lane: the same operations and roundings): forces,
 /// and with kImplicit the linearisation of the implicit solve — the weights
-/// W_e = α d̂d̂ᵀ + β I (SweepSprings), their sum into both nodes' diagonal
-/// blocks, and the spring part of the node rows' right-hand side,
+/// W_e = α d̂d̂ᵀ + β I (SweepSprings), their sum at both nodes
+/// (NetScratch::spring_block: 6 entries, the later node's scattered two at a
+/// time), and the spring part of the node rows' right-hand side,
 /// −h² k K̃ (v_i − v_j) with k K̃ = (h² k − β)/h² d̂d̂ᵀ + β/h² I
 /// (net_solve.hpp). Expects force = gravity + ties and, with kImplicit,
-/// block = 0 and rhs = 0 on entry.
+/// spring_block = 0 and rhs = 0 on entry.
 template <bool kImplicit>
 void spring_pass(Data& data) noexcept {
   NetScratch& s = data.net;
@@ -149,7 +147,7 @@ void spring_pass(Data& data) noexcept {
                      sw.high.data(),
                      s.spring_length.data(),
                      s.force.data(),
-                     s.block.data(),
+                     s.spring_block.data(),
                      s.rhs.data(),
                      h,
                      h * h};
@@ -182,20 +180,18 @@ void spring_pass(Data& data) noexcept {
       const Pair l = (dx * dx + dy * dy + dz * dz).sqrt();
       const Pair inv_l = l.inverse();
       const Pair rest = load_pair(a.rest_length + j);
-      if (l(0) > 1e-12 * rest(0) && l(1) > 1e-12 * rest(1)) {
-        store_pair(a.dir_x + j, dx * inv_l);
-        store_pair(a.dir_y + j, dy * inv_l);
-        store_pair(a.dir_z + j, dz * inv_l);
-      } else {  // a spring of zero length keeps its last direction
-        for (int e = 0; e < 2; ++e) {
-          if (!(l(e) > 1e-12 * rest(e))) continue;
-          a.dir_x[j + e] = dx(e) * inv_l(e);
-          a.dir_y[j + e] = dy(e) * inv_l(e);
-          a.dir_z[j + e] = dz(e) * inv_l(e);
+      Pair nx = dx * inv_l, ny = dy * inv_l, nz = dz * inv_l;
+      if (!(l(0) > 1e-12 * rest(0) && l(1) > 1e-12 * rest(1))) {
+        for (int e = 0; e < 2; ++e) {  // a spring of zero length keeps its last direction
+          if (l(e) > 1e-12 * rest(e)) continue;
+          nx(e) = a.dir_x[j + e];
+          ny(e) = a.dir_y[j + e];
+          nz(e) = a.dir_z[j + e];
         }
       }
-      const Pair nx = load_pair(a.dir_x + j), ny = load_pair(a.dir_y + j),
-                 nz = load_pair(a.dir_z + j);
+      store_pair(a.dir_x + j, nx);
+      store_pair(a.dir_y + j, ny);
+      store_pair(a.dir_z + j, nz);
       store_pair(a.length + j, l);
       const Pair dvx = Pair(n0.velocity.x(), n1.velocity.x()) - vx;
       const Pair dvy = Pair(n0.velocity.y(), n1.velocity.y()) - vy;
@@ -226,8 +222,8 @@ void spring_pass(Data& data) noexcept {
         s11 += w11;
         s12 += w12;
         s22 += w22;
-        add_symmetric(a.block[h0], w00(0), w01(0), w02(0), w11(0), w12(0), w22(0));
-        add_symmetric(a.block[h1], w00(1), w01(1), w02(1), w11(1), w12(1), w22(1));
+        add_symmetric(a.spring_block[h0], w00(0), w01(0), w02(0), w11(0), w12(0), w22(0));
+        add_symmetric(a.spring_block[h1], w00(1), w01(1), w02(1), w11(1), w12(1), w22(1));
         const Pair c = (hk - beta) * n_dv;
         const Pair kx = c * nx + beta * dvx, ky = c * ny + beta * dvy, kz = c * nz + beta * dvz;
         bx += kx;
@@ -250,7 +246,7 @@ void spring_pass(Data& data) noexcept {
     a.force[k] += sum.force;
     if constexpr (kImplicit) {
       a.rhs[k] += sum.rhs;
-      add_symmetric(a.block[k], sum.w00, sum.w01, sum.w02, sum.w11, sum.w12, sum.w22);
+      add_symmetric(a.spring_block[k], sum.w00, sum.w01, sum.w02, sum.w11, sum.w12, sum.w22);
     }
   }
 }
@@ -264,32 +260,61 @@ void compute_net_forces(const Model& model, Data& data) noexcept {
   const bool implicit = model.integrator != Integrator::kSymplecticEuler;
 
   // Gravity, and the zero-length ties to the rigid component with their
-  // reaction on it.
+  // reaction on it; for the linearised schemes also the ties' sums of the
+  // rigid component's rows (NetTieSums; the anchor's velocity at the step's
+  // start is that of the twist u0 the integrator starts from). Raw pointers:
+  // the stores would otherwise make the compiler reload the vectors' data
+  // pointers per node.
+  const Vec3* rest = model.node_rest.data();
+  const double* mass = model.node_mass.data();
+  const NodeState* nodes = data.nodes.data();
+  Vec3* lever_out = s.lever.data();
+  Vec3* force = s.force.data();
+  Vec3* rhs = s.rhs.data();
+  SymmetricBlock* spring_block = s.spring_block.data();
   for (std::size_t k = 0; k < model.nets.size(); ++k) {
     const NetModel& net = model.nets[k];
     const auto bi = static_cast<std::size_t>(net.body);
     const BodyState& body = data.bodies[bi];
     const Mat3 rot = body.orientation.toRotationMatrix();
     Wrench reaction;
+    Vec3 sum_r = Vec3::Zero();
+    double rr00 = 0.0, rr01 = 0.0, rr02 = 0.0, rr11 = 0.0, rr12 = 0.0, rr22 = 0.0;
+    Vec3 sum_dv = Vec3::Zero(), sum_r_dv = Vec3::Zero();
     for (int v = net.node_begin; v < net.node_begin + net.node_count; ++v) {
       const auto i = static_cast<std::size_t>(v);
-      const Vec3 lever = rot * model.node_rest[i];
-      s.lever[i] = lever;
+      const Vec3 lever = rot * rest[i];
+      lever_out[i] = lever;
       const Vec3 anchor = body.position + lever;
       const Vec3 anchor_velocity = body.linear_velocity + body.angular_velocity.cross(lever);
-      const Vec3 f = -net.tie_stiffness * (data.nodes[i].position - anchor) -
-                     net.tie_damping * (data.nodes[i].velocity - anchor_velocity);
-      s.force[i] = model.node_mass[i] * model.gravity + f;
-      if (implicit) {
-        s.block[i].setZero();
-        s.rhs[i].setZero();
-      }
+      const Vec3 dv = nodes[i].velocity - anchor_velocity;
+      const Vec3 f = -net.tie_stiffness * (nodes[i].position - anchor) - net.tie_damping * dv;
+      force[i] = mass[i] * model.gravity + f;
       reaction.force -= f;
       reaction.torque -= lever.cross(f);
+      if (implicit) {
+        spring_block[i] = SymmetricBlock{};
+        rhs[i].setZero();
+        sum_r += lever;
+        rr00 += lever.x() * lever.x();
+        rr01 += lever.x() * lever.y();
+        rr02 += lever.x() * lever.z();
+        rr11 += lever.y() * lever.y();
+        rr12 += lever.y() * lever.z();
+        rr22 += lever.z() * lever.z();
+        sum_dv += dv;
+        sum_r_dv += lever.cross(dv);
+      }
     }
     data.body_wrench[bi].force += reaction.force;
     data.body_wrench[bi].torque += reaction.torque;
     data.nets[k].tie_wrench = reaction;
+    if (implicit) {
+      NetTieSums& t = s.tie_sums[k];
+      t.lever_sum = sum_r;
+      t.lever_moment << rr00, rr01, rr02, rr01, rr11, rr12, rr02, rr12, rr22;
+      t.relative << sum_dv, sum_r_dv;
+    }
   }
 
   // Structural and bending springs (and their linearisation).

@@ -267,21 +267,14 @@ void add_net_body_terms(const Model& model, Data& data) noexcept {
   NetScratch& ns = data.net;
   const double h = data.solver.system_step;  // h_s of the linearised system (integrator.hpp)
   const double h2 = h * h;
-  for (const NetModel& net : model.nets) {
+  // Ties: their sums over the nodes come from compute_net_forces()'s tie loop.
+  for (std::size_t k = 0; k < model.nets.size(); ++k) {
+    const NetModel& net = model.nets[k];
     const auto b = static_cast<std::size_t>(net.body);
     if (!s.in_solve[b]) continue;
-    Vec3 sum_r = Vec3::Zero();
-    Mat3 sum_rr = Mat3::Zero();
-    Vec6 relative = Vec6::Zero();  // Σ Jᵀ (v_i0 − v_a0)
-    for (int v = net.node_begin; v < net.node_begin + net.node_count; ++v) {
-      const auto i = static_cast<std::size_t>(v);
-      const Vec3& r = ns.lever[i];
-      sum_r += r;
-      sum_rr.noalias() += r * r.transpose();
-      relative += generalized_force(data.nodes[i].velocity - point_velocity(s.twist0[b], r), r);
-    }
-    add_lever_moments(tie_weight(net, h), net.node_count, sum_r, sum_rr, s.block[b]);
-    s.rhs[b] += (h2 * net.tie_stiffness) * relative;
+    const NetTieSums& t = ns.tie_sums[k];
+    add_lever_moments(tie_weight(net, h), net.node_count, t.lever_sum, t.lever_moment, s.block[b]);
+    s.rhs[b] += (h2 * net.tie_stiffness) * t.relative;  // Σ Jᵀ (v_i0 − v_a0)
   }
   // Node contacts: weights (for the node rows too), then the body side.
   const int nc = node_contact_count(data);
@@ -310,18 +303,29 @@ void build_net_system(const Model& model, Data& data) noexcept {
   const double h = data.solver.system_step;  // h_s of the linearised system (integrator.hpp)
   const double h2 = h * h;
 
-  // The springs' weights, their sum in the blocks and their part of the
-  // right-hand side are already there (compute_net_forces()).
+  // The springs' weights, their sum at each node (spring_block) and their
+  // part of the right-hand side are already there (compute_net_forces()).
+  // Raw pointers: the stores would otherwise make the compiler reload every
+  // vector's data pointer per node.
+  const SymmetricBlock* spring_block = ns.spring_block.data();
+  const Vec3* force = ns.force.data();
+  const Vec3* lever = ns.lever.data();
+  const NodeState* nodes = data.nodes.data();
+  Mat3* block = ns.block.data();
+  Vec3* rhs = ns.rhs.data();
   for (const NetModel& net : model.nets) {
-    const auto b = static_cast<std::size_t>(net.body);
+    const Vec6 u0 = s.twist0[static_cast<std::size_t>(net.body)];
     const double c = tie_weight(net, h);
+    const double hk = h2 * net.tie_stiffness;
     for (int v = net.node_begin; v < net.node_begin + net.node_count; ++v) {
       const auto i = static_cast<std::size_t>(v);
       const double diagonal = model.node_mass[i] + c;
       ns.node_diagonal[i] = diagonal;
-      ns.block[i].diagonal().array() += diagonal;
-      const Vec3 relative = data.nodes[i].velocity - point_velocity(s.twist0[b], ns.lever[i]);
-      ns.rhs[i] += h * ns.force[i] - (h2 * net.tie_stiffness) * relative;
+      const SymmetricBlock w = spring_block[i];
+      block[i] << w.entry[0] + diagonal, w.entry[1], w.entry[2], w.entry[1], w.entry[3] + diagonal,
+          w.entry[4], w.entry[2], w.entry[4], w.entry[5] + diagonal;
+      const Vec3 relative = nodes[i].velocity - point_velocity(u0, lever[i]);
+      rhs[i] += h * force[i] - hk * relative;
     }
   }
   const int nc = node_contact_count(data);
@@ -333,21 +337,26 @@ void build_net_system(const Model& model, Data& data) noexcept {
     add_weight(ct.weight_normal, ct.weight_isotropic, ct.normal, ns.block[i]);
     ns.rhs[i] += (-h2 * mp.stiffness * ct.normal_velocity) * ct.normal;
   }
-  for (std::size_t i = 0; i < ns.block.size(); ++i)
-    inverse_symmetric(ns.block[i], ns.block_inverse[i]);
-  if (model.joints.empty()) {  // the SSOR sweeps' copy, in their order
-    for (std::size_t p = 0; p < ns.sweep_nodes.size(); ++p) {
-      const auto k = static_cast<std::size_t>(ns.sweep_order[p]);
-      const Mat3& x = ns.block_inverse[k];
-      SweepNode& nd = ns.sweep_nodes[p];
+  if (model.joints.empty()) {  // the SSOR sweeps' A_kk⁻¹, in their order
+    const std::int32_t* order = ns.sweep_order.data();
+    SweepNode* sweep_nodes = ns.sweep_nodes.data();
+    const std::size_t n = ns.sweep_nodes.size();
+    for (std::size_t p = 0; p < n; ++p) {
+      const auto k = static_cast<std::size_t>(order[p]);
+      Mat3 x;
+      inverse_symmetric(block[k], x);
+      SweepNode& nd = sweep_nodes[p];
       nd.inverse[0] = x(0, 0);
       nd.inverse[1] = x(0, 1);
       nd.inverse[2] = x(0, 2);
       nd.inverse[3] = x(1, 1);
       nd.inverse[4] = x(1, 2);
       nd.inverse[5] = x(2, 2);
-      nd.lever = ns.lever[k];
+      nd.lever = lever[k];
     }
+  } else {
+    for (std::size_t i = 0; i < ns.block.size(); ++i)
+      inverse_symmetric(ns.block[i], ns.block_inverse[i]);
   }
 
   // The arrowhead preconditioner of the jointed solve: Schur blocks of the

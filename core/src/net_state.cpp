@@ -29,6 +29,8 @@ void NetScratch::resize(const Model& model) {
   node_diagonal.assign(n, 1.0);
   block.assign(n, Mat3::Identity());
   block_inverse.assign(n, Mat3::Identity());
+  spring_block.assign(n, SymmetricBlock{});
+  tie_sums.assign(n > 0 ? model.nets.size() : 0, NetTieSums{});
   rhs.assign(n, Vec3::Zero());
   delta.assign(n, Vec3::Zero());
   residual.assign(n, Vec3::Zero());

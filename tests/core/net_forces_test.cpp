@@ -209,6 +209,55 @@ TEST(NetForces, GeneralStateMatchesTheHeaderFormulasAndTheReactionBalances) {
   EXPECT_TRUE(total.isApprox(m.nets[0].mass * m.gravity, 1e-10));
 }
 
+TEST(NetForces, SpringBlockAndTieSumsMatchTheirDefinitions) {
+  // The sums compute_net_forces() leaves for the implicit system: Σ W_e over
+  // each node's springs (both ends, 6 entries) and the ties' Σ ρ, Σ ρρᵀ,
+  // Σ Jᵀ (v − v_a) of the rigid component's rows (NetTieSums).
+  const core::Model m = scene(core::make_icosphere(0.04, 1));
+  ASSERT_NE(m.integrator, core::Integrator::kSymplecticEuler);
+  core::Data d = core::make_data(m);
+  perturb(d, 3e-3, 0.2);
+  forces(m, d);
+  std::vector<Mat3> ref(d.nodes.size(), Mat3::Zero());
+  for (std::size_t e = 0; e < m.net_springs.size(); ++e) {
+    const core::SweepSpring w = spring_term(d, static_cast<int>(e));
+    const Mat3 we = w.weight_axial * w.direction * w.direction.transpose() +
+                    w.weight_isotropic * Mat3::Identity();
+    ref[at(m.net_springs[e].node_a)] += we;
+    ref[at(m.net_springs[e].node_b)] += we;
+  }
+  double scale = 0.0;
+  for (const Mat3& r : ref) scale = std::max(scale, r.norm());
+  ASSERT_GT(scale, 0.0);
+  for (std::size_t i = 0; i < ref.size(); ++i) {
+    const double* s = d.net.spring_block[i].entry;
+    const double got[6] = {s[0], s[1], s[2], s[3], s[4], s[5]};
+    const double want[6] = {ref[i](0, 0), ref[i](0, 1), ref[i](0, 2),
+                            ref[i](1, 1), ref[i](1, 2), ref[i](2, 2)};
+    for (int c = 0; c < 6; ++c) EXPECT_NEAR(got[c], want[c], 1e-14 * scale) << i << " " << c;
+  }
+  const core::BodyState& b = d.bodies[0];
+  Vec3 sum_r = Vec3::Zero(), sum_dv = Vec3::Zero(), sum_r_dv = Vec3::Zero();
+  Mat3 sum_rr = Mat3::Zero();
+  double sum_abs_r = 0.0;  // Σ ρ is ~0 on the icosphere: compared against Σ |ρ|
+  for (std::size_t i = 0; i < d.nodes.size(); ++i) {
+    const Vec3 rho = b.orientation * m.node_rest[i];
+    const Vec3 dv = d.nodes[i].velocity - (b.linear_velocity + b.angular_velocity.cross(rho));
+    sum_abs_r += rho.norm();
+    sum_r += rho;
+    sum_rr += rho * rho.transpose();
+    sum_dv += dv;
+    sum_r_dv += rho.cross(dv);
+  }
+  const core::NetTieSums& t = d.net.tie_sums[0];
+  EXPECT_LT((t.lever_sum - sum_r).norm(), 1e-14 * sum_abs_r) << t.lever_sum.transpose();
+  EXPECT_TRUE(t.lever_moment.isApprox(sum_rr, 1e-12));
+  EXPECT_EQ(t.lever_moment, t.lever_moment.transpose());  // exactly symmetric
+  EXPECT_TRUE(t.relative.head<3>().isApprox(sum_dv, 1e-12)) << t.relative.transpose();
+  EXPECT_TRUE(t.relative.tail<3>().isApprox(sum_r_dv, 1e-12)) << t.relative.transpose();
+  EXPECT_GT(sum_r_dv.norm(), 1e-4);  // the perturbed velocities make every sum non-trivial
+}
+
 TEST(NetForces, AtRestOnTheRigidComponentOnlyGravityActs) {
   const core::Model m = scene(core::make_icosphere(0.04, 1));
   core::Data d = core::make_data(m);

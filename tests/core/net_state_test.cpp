@@ -78,6 +78,8 @@ TEST(NetState, SweepOrderIsAPermutationThatKeepsEachNetsRange) {
   ASSERT_EQ(ns.sweep_order.size(), at(m.num_nodes()));
   ASSERT_EQ(ns.sweep_position.size(), at(m.num_nodes()));
   ASSERT_EQ(ns.sweep_nodes.size(), at(m.num_nodes()));
+  EXPECT_EQ(ns.spring_block.size(), at(m.num_nodes()));  // per node
+  EXPECT_EQ(ns.tie_sums.size(), m.nets.size());          // per net
   std::vector<int> seen(at(m.num_nodes()), 0);
   for (const core::NetModel& net : m.nets) {
     for (int p = net.node_begin; p < net.node_begin + net.node_count; ++p) {
@@ -177,4 +179,6 @@ TEST(NetState, NoNetsNoScratch) {
   EXPECT_TRUE(d.net.sweep_nodes.empty());
   EXPECT_EQ(d.net.sweep_springs.size(), 0u);
   EXPECT_TRUE(d.net.spring_low_begin.empty());
+  EXPECT_TRUE(d.net.spring_block.empty());
+  EXPECT_TRUE(d.net.tie_sums.empty());
 }

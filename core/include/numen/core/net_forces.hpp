@@ -25,10 +25,12 @@ struct Data;
 /// (NetScratch::lever), and each NodeContact's r_b, normal_velocity, active
 /// and force. With the linearly implicit integrator, the same pass over the
 /// springs (in the sweep order, NetScratch::sweep_springs) also writes their
-/// weights W_e = α d̂d̂ᵀ + β I (SweepSpring), their sum into the node blocks
-/// (NetScratch::block, from 0) and the springs' part of the node rows'
+/// weights W_e = α d̂d̂ᵀ + β I (SweepSpring), their sum at each node
+/// (NetScratch::spring_block, from 0) and the springs' part of the node rows'
 /// right-hand side, −h² Σ k K̃ (v_i − v_j) (NetScratch::rhs, from 0), which
-/// build_net_system() completes (net_solve.hpp).
+/// build_net_system() completes (net_solve.hpp); and the tie loop the ties'
+/// sums over each net's nodes for its rigid component's rows
+/// (NetScratch::tie_sums, read by add_net_body_terms()).
 /// Call after compute_contact_forces() (body_wrench is reset by
 /// apply_external_forces()) and after detect_node_contacts(). No allocation.
 void compute_net_forces(const Model& model, Data& data) noexcept;

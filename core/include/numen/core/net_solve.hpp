@@ -61,17 +61,22 @@ struct Data;
 /// Adds the nets' terms to the diagonal blocks and right-hand sides of the
 /// bodies (SolverScratch::block, rhs) — ties c Σ J_iᵀ J_i and
 /// h² k_tie Σ J_iᵀ (v_i0 − v_a0), node–body contacts J_bᵀ W J_b and their
-/// impulse — for bodies in the solve. Called by build_implicit_system()
-/// before it mirrors and factors the blocks. No-op without nets.
+/// impulse — for bodies in the solve; the ties' sums over the nodes come
+/// from compute_net_forces() (NetScratch::tie_sums). Called by
+/// build_implicit_system() before it mirrors and factors the blocks. No-op
+/// without nets.
 void add_net_body_terms(const Model& model, Data& data) noexcept;
 
-/// Builds the node rows: 3×3 diagonal blocks (mass, ties, springs, contacts)
-/// and their inverses, node-contact weights, right-hand side
+/// Builds the node rows: 3×3 diagonal blocks (mass, ties, springs, contacts;
+/// NetScratch::block) and their inverses (in the sweep order into
+/// NetScratch::sweep_nodes without joints, NetScratch::block_inverse with
+/// joints), node-contact weights, right-hand side
 ///   b_i = h f_i − h² k_tie (v_i0 − v_a0) − h² Σ_springs k K̃ (v_i0 − v_j0) − h² k_c v_n n,
 /// and, with joints, the bodies' Schur blocks of the arrowhead
 /// preconditioner (NetScratch). The springs' terms (their weights, their sum
-/// in the blocks and in b) come from compute_net_forces() with the linearly
-/// implicit integrator; this adds the rest. Call after compute_net_forces()
+/// per node in NetScratch::spring_block, their part of b) come from
+/// compute_net_forces() with the linearly implicit integrator; this adds the
+/// rest. Call after compute_net_forces()
 /// and build_implicit_system() (whose Cholesky factors of the body blocks
 /// are the bodies' D̃ without joints), once per compute_net_forces().
 void build_net_system(const Model& model, Data& data) noexcept;

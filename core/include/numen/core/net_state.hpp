@@ -107,6 +107,26 @@ struct SweepNode {
   Vec3 lever = Vec3::Zero();  ///< ρ = R_b r of the node (m, world), as NetScratch::lever.
 };
 
+/// A symmetric 3×3 matrix as its 6 distinct entries (upper triangle, row by
+/// row), so that a sum of symmetric blocks adds 6 entries instead of 9 and
+/// two consecutive entries in one SIMD operation.
+struct SymmetricBlock {
+  /// Entries (0,0), (0,1), (0,2), (1,1), (1,2), (2,2).
+  double entry[6] = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
+};
+
+/// A net's sums over its nodes i of the tie terms that enter its rigid
+/// component's rows of the implicit system (net_solve.hpp): Σ ρ_i, Σ ρ_i ρ_iᵀ
+/// and Σ J_iᵀ (v_i − v_a,i) with J_i = [I, −[ρ_i]×], ρ_i = R_b r_i (m, world)
+/// and v_a,i the anchor's velocity at the step's start. Written by
+/// compute_net_forces() in its tie loop (linearly implicit integrators),
+/// read by add_net_body_terms().
+struct NetTieSums {
+  Vec3 lever_sum = Vec3::Zero();     ///< Σ ρ_i (m).
+  Mat3 lever_moment = Mat3::Zero();  ///< Σ ρ_i ρ_iᵀ (m²), full and exactly symmetric.
+  Vec6 relative = Vec6::Zero();      ///< Σ J_iᵀ (v_i − v_a,i): (Σ Δv (m/s), Σ ρ × Δv (m²/s)).
+};
+
 /// Scratch of the nets' force stage and of the coupled implicit solve, sized
 /// once by resize() (everything empty without nets).
 struct NetScratch {
@@ -115,7 +135,13 @@ struct NetScratch {
   std::vector<Vec3> lever;          ///< ρ = R_b r: anchor − COM of the rigid component (m, world).
   std::vector<double> node_diagonal;  ///< m_i + c_tie: the isotropic part of A_ii (kg).
   std::vector<Mat3> block;          ///< A_ii: 3×3 diagonal block of each node (all terms).
-  std::vector<Mat3> block_inverse;  ///< A_ii⁻¹ (preconditioner).
+  /// Σ_e W_e over the springs e at each node (the springs' part of A_ii, kg),
+  /// summed by compute_net_forces() and added into `block` by build_net_system().
+  std::vector<SymmetricBlock> spring_block;
+  std::vector<NetTieSums> tie_sums;  ///< Per net (Model::nets order): the ties' sums.
+  /// A_ii⁻¹ (the arrowhead preconditioner; written by build_net_system() for a
+  /// model with joints only — without joints the sweeps read sweep_nodes).
+  std::vector<Mat3> block_inverse;
   std::vector<Vec3> rhs;            ///< b of the node rows.
   std::vector<Vec3> delta;          ///< Δv of the node rows (m/s); with joints, the next step's warm start.
   /// PCG vectors of the nodes. Without joints (Eisenstat's CG, net_solve.hpp):
