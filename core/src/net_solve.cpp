@@ -115,6 +115,23 @@ bool couples_body(const SolverScratch& s, const NodeContact& c) noexcept {
   return c.active && c.body_b >= 0 && s.in_solve[static_cast<std::size_t>(c.body_b)];
 }
 
+/// out_b += c Σ_i J_iᵀ v_i over each net's nodes, for the rigid components
+/// in the solve (−A_bi v_i summed over a net's ties, A_bi = −c J_iᵀ).
+void add_tie_transpose(const Model& model, const Data& data, std::span<const Vec3> v_n,
+                       std::span<Vec6> out_b) noexcept {
+  const double h = data.solver.system_step;  // h_s of the linearised system (integrator.hpp)
+  for (const NetModel& net : model.nets) {
+    const auto b = static_cast<std::size_t>(net.body);
+    if (!data.solver.in_solve[b]) continue;
+    Vec6 acc = Vec6::Zero();
+    for (int v = net.node_begin; v < net.node_begin + net.node_count; ++v) {
+      const auto i = static_cast<std::size_t>(v);
+      acc += generalized_force(v_n[i], data.net.lever[i]);
+    }
+    out_b[b] += tie_weight(net, h) * acc;
+  }
+}
+
 /// The springs of NetScratch::sweep_springs as raw pointers (the sweeps'
 /// stores would otherwise make the compiler reload the vectors' data
 /// pointers) and their grouping by earlier node in the sweep order.
@@ -257,6 +274,28 @@ void apply_coupled(const Model& model, const Data& data, std::span<const Vec6> i
     out_b[b] -= generalized_force(
         weight_times(ct.weight_normal, ct.weight_isotropic, ct.normal, in_n[i]), ct.r_b);
   }
+}
+
+/// D̃ v: blockdiag(SolverScratch::block, NetScratch::block) times v, into
+/// out; returns vᵀ D̃ v. Bodies not in the solve give 0.
+double apply_block_diagonal(const Data& data, std::span<const Vec6> v_b, std::span<const Vec3> v_n,
+                            std::span<Vec6> out_b, std::span<Vec3> out_n) noexcept {
+  const SolverScratch& s = data.solver;
+  const NetScratch& ns = data.net;
+  double vdv = 0.0;
+  for (std::size_t b = 0; b < v_b.size(); ++b) {
+    if (s.in_solve[b]) {
+      out_b[b].noalias() = s.block[b] * v_b[b];
+      vdv += v_b[b].dot(out_b[b]);
+    } else {
+      out_b[b].setZero();
+    }
+  }
+  for (std::size_t i = 0; i < v_n.size(); ++i) {
+    out_n[i].noalias() = ns.block[i] * v_n[i];
+    vdv += v_n[i].dot(out_n[i]);
+  }
+  return vdv;
 }
 
 }  // namespace
@@ -430,16 +469,7 @@ bool solve_arrowhead(const Model& model, Data& data) noexcept {
   const auto precondition = [&](std::span<const JointVector> constraint_rhs) noexcept {
     for (std::size_t i = 0; i < rn.size(); ++i) zn[i].noalias() = ns.block_inverse[i] * rn[i];
     for (std::size_t b = 0; b < nb; ++b) tb[b] = rb[b];
-    for (const NetModel& net : model.nets) {
-      const auto b = static_cast<std::size_t>(net.body);
-      if (!s.in_solve[b]) continue;
-      Vec6 acc = Vec6::Zero();
-      for (int v = net.node_begin; v < net.node_begin + net.node_count; ++v) {
-        const auto i = static_cast<std::size_t>(v);
-        acc += generalized_force(zn[i], ns.lever[i]);
-      }
-      tb[b] += tie_weight(net, h) * acc;
-    }
+    add_tie_transpose(model, data, zn, tb);
     solve_articulation(model, art, tb, constraint_rhs, zb, yz);
     for (const NetModel& net : model.nets) {
       const auto b = static_cast<std::size_t>(net.body);
@@ -587,21 +617,13 @@ void backward_sweep(const Model& model, const Data& data, double beta, const Vec
   add_cross_contact_terms(s, t_b, g_b);
 }
 
-/// What forward_sweep() writes besides y = (D̃+L)⁻¹ g.
-enum class ForwardSweep {
-  kPlain,      ///< y only; returns 0.
-  kEisenstat,  ///< K q = y + t in y's place (Eisenstat's product); returns qᵀ K q.
-  kStart,      ///< y, and D̃ y into d; returns yᵀ D̃ y (the CG's start, w = y, q = D̃ w).
-};
-
 /// The forward sweep of net_forward_sweep(), y = (D̃+L)⁻¹ g; y_n may be g_n
-/// (in place). `kMode` says what else it writes (t, q with kEisenstat; d
-/// with kStart; the other pointers and spans may be empty).
-template <ForwardSweep kMode>
+/// (in place). With kAddT it writes K q = y + t instead of y (Eisenstat's
+/// product) and returns qᵀ K q; otherwise it returns 0.
+template <bool kAddT>
 double forward_sweep(const Model& model, const Data& data, std::span<const Vec6> g_b,
                      const Vec3* g_n, std::span<Vec6> y_b, Vec3* y_n, std::span<const Vec6> t_b,
-                     const Vec3* t_n, std::span<const Vec6> q_b, const Vec3* q_n,
-                     std::span<Vec6> d_b = {}, Vec3* d_n = nullptr) noexcept {
+                     const Vec3* t_n, std::span<const Vec6> q_b, const Vec3* q_n) noexcept {
   const SolverScratch& s = data.solver;
   const NetScratch& ns = data.net;
   const double h = data.solver.system_step;  // h_s of the linearised system (integrator.hpp)
@@ -609,18 +631,12 @@ double forward_sweep(const Model& model, const Data& data, std::span<const Vec6>
   const SpringView sp(ns);
   const std::int32_t* order = ns.sweep_order.data();
   const SweepNode* nodes = ns.sweep_nodes.data();
-  double sum = 0.0;  // qᵀ K q (kEisenstat) or yᵀ D̃ y (kStart)
   // Bodies first: no block of (D̃+L) left of their diagonal.
   for (std::size_t b = 0; b < nb; ++b) {
     if (s.in_solve[b]) {
       solve_block(s.block_factor[b], g_b[b], y_b[b]);
-      if constexpr (kMode == ForwardSweep::kStart) {
-        d_b[b] = g_b[b];  // D̃_b y_b
-        sum += y_b[b].dot(g_b[b]);
-      }
     } else {
       y_b[b].setZero();
-      if constexpr (kMode == ForwardSweep::kStart) d_b[b].setZero();
     }
   }
   // Node rows' right-hand sides: g_i − A_ib y_b for the node–body contacts
@@ -638,7 +654,8 @@ double forward_sweep(const Model& model, const Data& data, std::span<const Vec6>
   // Nodes, first to last in the sweep order: y_k = A_kk⁻¹ (g_k + c J_k y_b +
   // Σ W_e y_j) over the springs to earlier nodes j, each of which has already
   // added its W_e y_j to y_k (scattered over its springs, grouped by their
-  // earlier node); the sum in brackets is (D̃ y)_k.
+  // earlier node).
+  double qkq = 0.0;
   for (const NetModel& net : model.nets) {
     const auto body = static_cast<std::size_t>(net.body);
     const bool tied = s.in_solve[body] != 0;
@@ -650,27 +667,96 @@ double forward_sweep(const Model& model, const Data& data, std::span<const Vec6>
       Vec3 acc = y_n[k];
       if (tied) acc += cv + cw.cross(nodes[p].lever);
       const Vec3 y = inverse_times(nodes[p], acc);
-      if constexpr (kMode == ForwardSweep::kEisenstat) {
+      if constexpr (kAddT) {
         const Vec3 kq = y + t_n[k];
         y_n[k] = kq;
-        sum += q_n[k].dot(kq);
+        qkq += q_n[k].dot(kq);
       } else {
         y_n[k] = y;
-        if constexpr (kMode == ForwardSweep::kStart) {
-          d_n[k] = acc;
-          sum += y.dot(acc);
-        }
       }
       scatter_springs(sp, sp.low_begin[p], sp.low_begin[p + 1], y, y_n);
     }
   }
-  if constexpr (kMode == ForwardSweep::kEisenstat) {
+  if constexpr (kAddT) {
     for (std::size_t b = 0; b < nb; ++b) {
       y_b[b] += t_b[b];
-      sum += q_b[b].dot(y_b[b]);
+      qkq += q_b[b].dot(y_b[b]);
     }
   }
-  return sum;
+  return qkq;
+}
+
+/// The start of Eisenstat's CG in one forward sweep, for x0 = (0 on the
+/// bodies, x0_n on the nodes): w = (D̃+L)⁻¹ (b − A x0); returns the stopping
+/// test's reference ‖b‖²_{D̃⁻¹} = bᵀ D̃⁻¹ b. Since A = (D̃+L) + (Lᵀ + D − D̃),
+///   (D̃+L)⁻¹ (b − A x0) = (D̃+L)⁻¹ (b − (Lᵀ + D − D̃) x0) − x0,
+/// and (Lᵀ + D − D̃) x0 needs no product with A: its body rows are the node
+/// columns of Lᵀ (ties −c J_iᵀ, node contacts −J_rᵀ W; the body–body cross
+/// terms of D − D̃ meet x0_b = 0), its node rows −Σ W_e x0_j over the springs
+/// to later nodes j (sweep order) — gathered in the sweep over the same springs that
+/// scatter. `y_b` is scratch (D̃_b⁻¹ b_b).
+double net_start_sweep(const Model& model, Data& data, std::span<const Vec3> x0_n,
+                       std::span<Vec6> w_b, std::span<Vec3> w_n, std::span<Vec6> y_b) noexcept {
+  const SolverScratch& s = data.solver;
+  NetScratch& ns = data.net;
+  const double h = data.solver.system_step;  // h_s of the linearised system (integrator.hpp)
+  const std::size_t nb = w_b.size();
+  const SpringView sp(ns);
+  const std::int32_t* order = ns.sweep_order.data();
+  const SweepNode* nodes = ns.sweep_nodes.data();
+  const std::span<Vec6> g_b(ns.body_tmp);
+  // Body rows: g_b = b_b − (Lᵀ x0)_b.
+  for (std::size_t b = 0; b < nb; ++b) g_b[b] = s.in_solve[b] ? s.rhs[b] : Vec6::Zero();
+  add_tie_transpose(model, data, x0_n, g_b);
+  const int nc = node_contact_count(data);
+  for (int c = 0; c < nc; ++c) {
+    const NodeContact& ct = data.node_contacts[static_cast<std::size_t>(c)];
+    if (!couples_body(s, ct)) continue;
+    g_b[static_cast<std::size_t>(ct.body_b)] += generalized_force(
+        weight_times(ct.weight_normal, ct.weight_isotropic, ct.normal,
+                     x0_n[static_cast<std::size_t>(ct.node)]),
+        ct.r_b);
+  }
+  double ref = 0.0;
+  for (std::size_t b = 0; b < nb; ++b) {
+    if (s.in_solve[b]) {
+      solve_block(s.block_factor[b], g_b[b], w_b[b]);  // x0_b = 0: w_b = y'_b
+      solve_block(s.block_factor[b], s.rhs[b], y_b[b]);
+      ref += y_b[b].dot(s.rhs[b]);
+    } else {
+      w_b[b].setZero();
+      y_b[b].setZero();
+    }
+  }
+  // Node rows: b_i, minus the node–body contacts' A_ib times the bodies' values.
+  for (std::size_t i = 0; i < w_n.size(); ++i) w_n[i] = ns.rhs[i];
+  for (int c = 0; c < nc; ++c) {
+    const NodeContact& ct = data.node_contacts[static_cast<std::size_t>(c)];
+    if (!couples_body(s, ct)) continue;
+    const auto i = static_cast<std::size_t>(ct.node);
+    const auto b = static_cast<std::size_t>(ct.body_b);
+    w_n[i] += weight_times(ct.weight_normal, ct.weight_isotropic, ct.normal,
+                           point_velocity(w_b[b], ct.r_b));
+  }
+  Vec3* w = w_n.data();
+  const Vec3* rhs = ns.rhs.data();
+  const Vec3* x0 = x0_n.data();
+  for (const NetModel& net : model.nets) {
+    const auto body = static_cast<std::size_t>(net.body);
+    const bool tied = s.in_solve[body] != 0;
+    const double c = tie_weight(net, h);
+    for (int p = net.node_begin; p < net.node_begin + net.node_count; ++p) {
+      const auto k = static_cast<std::size_t>(order[p]);
+      Vec3 acc_w = w[k];
+      if (tied) acc_w += c * point_velocity(w_b[body], nodes[p].lever);
+      acc_w += gather_springs(sp, sp.low_begin[p], sp.low_begin[p + 1], x0);
+      const Vec3 wk = inverse_times(nodes[p], acc_w);  // before subtracting x0_k
+      ref += rhs[k].dot(inverse_times(nodes[p], rhs[k]));
+      w[k] = wk - x0[k];
+      scatter_springs(sp, sp.low_begin[p], sp.low_begin[p + 1], wk, w);
+    }
+  }
+  return ref;
 }
 
 /// Eisenstat's CG with the SSOR preconditioner (models without joints; see
@@ -693,20 +779,18 @@ bool solve_eisenstat(const Model& model, Data& data) noexcept {
     return false;
   };
 
-  // Start from x0 = 0 (a cold start): w = (D̃+L)⁻¹ b, q = D̃ w and
-  // ρ = wᵀ D̃ w = ‖b‖²_{M⁻¹}, the reference of the stopping test, in one
-  // forward sweep (in place in w's storage). The last step's Δv as x0 took
-  // 0.14 fewer iterations per step on the benchmark's ball, but its start
-  // needed a second right-hand side and a gather in that sweep: 6.5 % more
-  // instructions per step (docs/deformable.md).
+  // Start: bodies at 0, nodes at the last step's Δv (warm start);
+  // w = (D̃+L)⁻¹ (b − A x0) and the reference ‖b‖²_{D̃⁻¹} in one forward
+  // sweep (t serves as scratch for the bodies' D̃_b⁻¹ b_b).
   for (Vec6& v : xb) v.setZero();
-  for (Vec3& v : xn) v.setZero();
-  for (std::size_t i = 0; i < nn; ++i) wn[i] = ns.rhs[i];
-  double rho = forward_sweep<ForwardSweep::kStart>(model, data, s.rhs, wn.data(), wb, wn.data(),
-                                                   {}, nullptr, {}, nullptr, qb, qn.data());
-  if (!std::isfinite(rho)) return poison();
-  const double ref = rho > 0.0 ? rho : 1.0;
+  for (Vec3& v : xn)
+    if (!v.allFinite()) v.setZero();
+  double ref = net_start_sweep(model, data, xn, wb, wn, tb);
+  if (!std::isfinite(ref)) return poison();
+  if (!(ref > 0.0)) ref = 1.0;
+  double rho = apply_block_diagonal(data, wb, wn, qb, qn);  // q = D̃ w
   double rel = std::sqrt(rho / ref);
+  if (!std::isfinite(rel)) return poison();
 
   // One iteration: the backward sweep (which first makes q = D̃ w + β q, node
   // by node, after the first iteration), the forward sweep (K q = y + t and
@@ -726,7 +810,7 @@ bool solve_eisenstat(const Model& model, Data& data) noexcept {
                            kqn.data());
     }
     ++it;
-    const double qkq = forward_sweep<ForwardSweep::kEisenstat>(model, data, gb, kqn.data(), kqb, kqn.data(), tb,
+    const double qkq = forward_sweep<true>(model, data, gb, kqn.data(), kqb, kqn.data(), tb,
                                            tn.data(), qb, qn.data());
     if (!std::isfinite(qkq)) return poison();
     if (!(qkq > 0.0)) break;  // breakdown, or converged exactly
@@ -769,7 +853,7 @@ void net_backward_sweep(const Model& model, const Data& data, std::span<const Ve
 void net_forward_sweep(const Model& model, const Data& data, std::span<const Vec6> g_b,
                        std::span<const Vec3> g_n, std::span<Vec6> y_b,
                        std::span<Vec3> y_n) noexcept {
-  forward_sweep<ForwardSweep::kPlain>(model, data, g_b, g_n.data(), y_b, y_n.data(), {}, nullptr, {}, nullptr);
+  forward_sweep<false>(model, data, g_b, g_n.data(), y_b, y_n.data(), {}, nullptr, {}, nullptr);
 }
 
 double apply_net_preconditioned(const Model& model, Data& data, std::span<const Vec6> q_b,
@@ -778,7 +862,7 @@ double apply_net_preconditioned(const Model& model, Data& data, std::span<const 
   NetScratch& ns = data.net;
   const std::span<Vec6> g_b(ns.body_tmp);
   net_backward_sweep(model, data, q_b, q_n, t_b, t_n, g_b, kq_n);  // g_n in K q's place
-  return forward_sweep<ForwardSweep::kEisenstat>(model, data, g_b, kq_n.data(), kq_b, kq_n.data(), t_b, t_n.data(),
+  return forward_sweep<true>(model, data, g_b, kq_n.data(), kq_b, kq_n.data(), t_b, t_n.data(),
                              q_b, q_n.data());
 }
 

@@ -37,7 +37,7 @@ bool check_finite(Data& data) noexcept {
     finite = finite && n.position.allFinite() && n.velocity.allFinite();
   if (finite) return true;
   for (Vec6& d : data.solver.delta) d.setZero();
-  for (Vec3& d : data.net.delta) d.setZero();  // the next step's warm start (joints)
+  for (Vec3& d : data.net.delta) d.setZero();  // the next step's warm start
   for (std::size_t i = 0; i < data.nodes.size(); ++i) {
     data.nodes[i].position = data.net.saved[i].position;
     data.nodes[i].velocity.setZero();

@@ -8,7 +8,7 @@
 // the ball's resting height on a plane, so a patch of nodes is in contact
 // all the time (model: tests/support/deformable_ball.hpp, shared with the
 // solver-tolerance test). Implicit integrator, dt 1 ms, CG tolerance 1e-3 on
-// ‖r‖_{M⁻¹}/‖b‖_{M⁻¹} (SSOR–Eisenstat; docs/deformable.md, "Solver tolerance").
+// ‖r‖_{M⁻¹}/‖b‖_{D̃⁻¹} (SSOR–Eisenstat; docs/deformable.md, "Solver tolerance").
 // 300 warm-up steps, then each iteration times one core::step (manual time).
 // Counters: nodes, springs, cg_iterations (mean per step), node_contacts
 // (mean), ns_per_node (step time / nodes), ns_per_node_iteration (step time /

@@ -1,6 +1,6 @@
 // The coupled solve's tolerance against the integrator's own error
 // (net_solve.hpp; docs/deformable.md, "Solver tolerance"): a relative residual
-// ‖r‖_{M⁻¹}/‖b‖_{M⁻¹} of 1e-3 — the setting of the shipped deformable scene
+// ‖r‖_{M⁻¹}/‖b‖_{D̃⁻¹} of 1e-3 — the setting of the shipped deformable scene
 // without joints and of the benchmark — must move the nodes far less (below
 // 1e-3 of it) than halving the time step does.
 

@@ -117,8 +117,8 @@ struct Data {
   int num_node_contacts = 0;
   std::vector<NetOutput> nets;     ///< Per net (Model::nets).
   int solver_iterations = 0;       ///< Iterations of the implicit solve this step (bodies and nets).
-  /// Relative residual reached: ‖r‖/‖b‖, or ‖r‖_{M⁻¹}/‖b‖_{M⁻¹} for a model with
-  /// nets and no joints (SSOR preconditioner M; net_solve.hpp).
+  /// Relative residual reached: ‖r‖/‖b‖, or ‖r‖_{M⁻¹}/‖b‖_{D̃⁻¹} for a model with
+  /// nets and no joints (SSOR preconditioner M, its block diagonal D̃; net_solve.hpp).
   double solver_residual = 0.0;
   std::uint32_t status = kStepOk;  ///< StepStatus bits of the last step.
   /// StepStage bits (step_stages.hpp) of the stages the last step ran; equal to

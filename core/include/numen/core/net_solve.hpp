@@ -14,9 +14,7 @@
 ///
 /// Solved by a preconditioned conjugate gradient on that fixed sparsity
 /// (matrix-free: one 3×3 weight per spring, per node contact and per node),
-/// started from 0 without joints (one forward sweep gives the start and the
-/// reference norm; docs/deformable.md, "Cold start"), warm-started from the
-/// last step's Δv with joints.
+/// warm-started from the last step's Δv.
 ///
 /// Without joints: SSOR (block symmetric Gauss–Seidel) preconditioning with
 /// Eisenstat's trick. Unknowns ordered bodies first (6 each, those in the
@@ -37,8 +35,10 @@
 /// which the backward sweep gathers as it goes (no block product). Iteration:
 ///   w = (D̃+L)⁻¹ (b − A x0), q = D̃ w, ρ = wᵀ D̃ w;
 ///   α = ρ / qᵀ K q, x += α t, w −= α K q, ρ' = wᵀ D̃ w, q = D̃ w + (ρ'/ρ) q.
-/// wᵀ D̃ w = rᵀ M⁻¹ r: it stops on ‖r‖_{M⁻¹} / ‖b‖_{M⁻¹} ≤ tolerance (the
-/// norm of the preconditioned residual, not the Euclidean ‖r‖ / ‖b‖).
+/// wᵀ D̃ w = rᵀ M⁻¹ r: it stops on ‖r‖_{M⁻¹} / ‖b‖_{D̃⁻¹} ≤ tolerance (the
+/// norm of the preconditioned residual against b's size in the block-Jacobi
+/// norm, bᵀ D̃⁻¹ b, which costs no sweep — ‖b‖_{M⁻¹} would need a second
+/// right-hand side in the start's sweep; not the Euclidean ‖r‖ / ‖b‖).
 ///
 /// With joints: the "arrowhead" part of A — every body block, every node's
 /// 3×3 block and the tie blocks between a net and its rigid component —
@@ -84,7 +84,8 @@ void build_net_system(const Model& model, Data& data) noexcept;
 /// Solves the coupled system (see file comment). Writes SolverScratch::delta
 /// (Δu), NetScratch::delta (Δv), the joint multipliers when the model has
 /// joints, Data::solver_iterations and Data::solver_residual: without joints
-/// ‖r‖_{M⁻¹} / ‖b‖_{M⁻¹} (M the SSOR preconditioner), with joints ‖r‖ / ‖b‖.
+/// ‖r‖_{M⁻¹} / ‖b‖_{D̃⁻¹} (M the SSOR preconditioner, D̃ its block diagonal),
+/// with joints ‖r‖ / ‖b‖.
 /// Returns true when converged to Model::solver.tolerance within
 /// Model::solver.max_iterations. A non-finite system gives NaN unknowns
 /// (rejected by step()'s checks). Deterministic; no allocation.

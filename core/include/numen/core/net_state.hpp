@@ -143,7 +143,7 @@ struct NetScratch {
   /// model with joints only — without joints the sweeps read sweep_nodes).
   std::vector<Mat3> block_inverse;
   std::vector<Vec3> rhs;            ///< b of the node rows.
-  std::vector<Vec3> delta;          ///< Δv of the node rows (m/s); with joints, the next step's warm start.
+  std::vector<Vec3> delta;          ///< Δv of the node rows (m/s); warm start of the next step.
   /// PCG vectors of the nodes. Without joints (Eisenstat's CG, net_solve.hpp):
   /// w, t, q and K q; with joints: r, z, p and A p.
   std::vector<Vec3> residual, precond_residual, direction, a_direction;
