@@ -28,7 +28,7 @@ void NetScratch::resize(const Model& model) {
   const std::size_t num_springs = n > 0 ? model.net_springs.size() : 0;
   node_diagonal.assign(n, 1.0);
   block.assign(n, Mat3::Identity());
-  block_inverse.assign(n, Mat3::Identity());
+  block_inverse.assign(model.joints.empty() ? 0 : n, Mat3::Identity());  // arrowhead only
   spring_block.assign(n, SymmetricBlock{});
   tie_sums.assign(n > 0 ? model.nets.size() : 0, NetTieSums{});
   rhs.assign(n, Vec3::Zero());

@@ -67,6 +67,19 @@ DeviceSummary run_device(const Scene& scene, const DeviceOptions& options) {
     }
     if (after.rpdos > before.rpdos && nonzero) ++s.rpdos_nonzero;
   };
+#if NUMEN_WITH_SERIAL
+  auto* const serial = dynamic_cast<hal::SerialBus*>(port.get());
+#endif
+  // One pass: the queued frames handled (and, for `tick_at` ≥ 0, the period's frames sent at
+  // that time), a serial port's output flushed, the counts taken.
+  const auto pump = [&](std::int64_t tick_at) {
+    const hal::EmulatorCounters before = emu.counters();
+    instrument.poll(*port, tick_at);
+#if NUMEN_WITH_SERIAL
+    if (serial != nullptr) serial->flush();
+#endif
+    account(before);
+  };
   while (!(options.stop != nullptr && options.stop->load(std::memory_order_relaxed))) {
     std::int64_t now = platform::monotonic_now_ns();
     if (end >= 0 && now >= end) break;
@@ -75,29 +88,17 @@ DeviceSummary run_device(const Scene& scene, const DeviceOptions& options) {
       ++s.wakeups;
       now = platform::monotonic_now_ns();
     }
-    const hal::EmulatorCounters before = emu.counters();
     const bool tick = now >= next_tick;
-    instrument.poll(*port, tick ? now : -1);
+    pump(tick ? now : -1);
     if (tick) {
       next_tick += options.tick_ns;
       if (next_tick <= now) next_tick = now + options.tick_ns;  // re-phase after a stall
     }
-#if NUMEN_WITH_SERIAL
-    if (auto* serial = dynamic_cast<hal::SerialBus*>(port.get())) serial->flush();
-#endif
-    account(before);
   }
   // Frames already queued when the run ended (a device that lags the bus, e.g. a stalled
   // guest, may hold the last periods' SYNCs): handled before the summary, so that its
   // counts cover everything the controller sent. No tick: nothing is sent unasked.
-  {
-    const hal::EmulatorCounters before = emu.counters();
-    instrument.poll(*port, -1);
-#if NUMEN_WITH_SERIAL
-    if (auto* serial = dynamic_cast<hal::SerialBus*>(port.get())) serial->flush();
-#endif
-    account(before);
-  }
+  pump(-1);
   s.wall_time_s = static_cast<double>(platform::monotonic_now_ns() - t0) * 1e-9;
   const hal::EmulatorCounters& c = emu.counters();
   s.syncs = static_cast<std::int64_t>(c.syncs);

@@ -12,6 +12,7 @@
 #include <cstdlib>
 #include <vector>
 
+#include "deformable_ball.hpp"
 #include "numen/core/data.hpp"
 #include "numen/core/mesh.hpp"
 #include "numen/core/model.hpp"
@@ -38,16 +39,7 @@ core::Model two_nets() {
     body.initial_pose.position = Vec3(0.1 * b, 0.0, 0.05);
     m.bodies.push_back(body);
   }
-  core::NetSettings s;
-  s.mass = 0.1;
-  s.stiffness = 200.0;
-  s.damping = 0.05;
-  s.bending_stiffness = 20.0;
-  s.bending_damping = 0.01;
-  s.tie_stiffness = 5.0;
-  s.tie_damping = 0.05;
-  s.name = "ball";
-  s.body = 0;
+  core::NetSettings s = numen::test::ball_net_settings();
   EXPECT_EQ(core::add_net(m, core::make_icosphere(0.03, 3), s), "");
   s.name = "probe";
   s.body = 1;

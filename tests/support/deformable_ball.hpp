@@ -22,14 +22,31 @@
 
 namespace numen::test {
 
-inline constexpr double kBallRadius = 0.03;   ///< m
-inline constexpr double kBallCoreMass = 0.05; ///< kg, the hidden rigid component
+inline constexpr double kBallRadius = 0.03;    ///< m
+inline constexpr double kBallCoreMass = 0.05;  ///< kg, the hidden rigid component
+
+/// The ball's net constants (0.1 kg; structural 200 N/m, γ 0.05 N·s/m;
+/// bending 20 N/m, γ 0.01; ties 5 N/m, γ 0.05), named "ball" on body 0.
+inline core::NetSettings ball_net_settings() {
+  core::NetSettings s;
+  s.name = "ball";
+  s.body = 0;
+  s.mass = 0.1;
+  s.stiffness = 200.0;
+  s.damping = 0.05;
+  s.bending_stiffness = 20.0;
+  s.bending_damping = 0.01;
+  s.tie_stiffness = 5.0;
+  s.tie_damping = 0.05;
+  return s;
+}
 
 /// The ball model with `subdivisions` (1–4: 42–2562 nodes), time step `dt`
 /// (s) and CG `tolerance` (default: the shipped setting of a net without
-/// joints, docs/deformable.md "Solver tolerance"). Throws std::runtime_error if the model is refused.
-inline core::Model make_deformable_ball(int subdivisions, double dt = 1e-3,
-                                        double tolerance = 1e-3, int max_iterations = 100) {
+/// joints, docs/deformable.md "Solver tolerance"). Throws std::runtime_error if the model is
+/// refused.
+inline core::Model make_deformable_ball(int subdivisions, double dt = 1e-3, double tolerance = 1e-3,
+                                        int max_iterations = 100) {
   core::Model m;
   m.dt = dt;
   m.material_names = {"default"};
@@ -54,17 +71,8 @@ inline core::Model make_deformable_ball(int subdivisions, double dt = 1e-3,
   core::Obstacle floor;
   floor.name = "floor";
   m.obstacles.push_back(floor);
-  core::NetSettings s;
-  s.name = "ball";
-  s.body = 0;
-  s.mass = 0.1;
-  s.stiffness = 200.0;
-  s.damping = 0.05;
-  s.bending_stiffness = 20.0;
-  s.bending_damping = 0.01;
-  s.tie_stiffness = 5.0;
-  s.tie_damping = 0.05;
-  std::string err = core::add_net(m, core::make_icosphere(kBallRadius, subdivisions), s);
+  std::string err =
+      core::add_net(m, core::make_icosphere(kBallRadius, subdivisions), ball_net_settings());
   if (err.empty()) err = core::finalize_model(m);
   if (!err.empty()) throw std::runtime_error(err);
   return m;

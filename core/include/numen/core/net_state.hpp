@@ -139,8 +139,9 @@ struct NetScratch {
   /// summed by compute_net_forces() and added into `block` by build_net_system().
   std::vector<SymmetricBlock> spring_block;
   std::vector<NetTieSums> tie_sums;  ///< Per net (Model::nets order): the ties' sums.
-  /// A_ii⁻¹ (the arrowhead preconditioner; written by build_net_system() for a
-  /// model with joints only — without joints the sweeps read sweep_nodes).
+  /// A_ii⁻¹ (the arrowhead preconditioner): sized by resize() and written by
+  /// build_net_system() for a model with joints only, empty without (the
+  /// sweeps read sweep_nodes).
   std::vector<Mat3> block_inverse;
   std::vector<Vec3> rhs;            ///< b of the node rows.
   std::vector<Vec3> delta;          ///< Δv of the node rows (m/s); warm start of the next step.
