@@ -561,6 +561,33 @@ bool solve_arrowhead(const Model& model, Data& data) noexcept {
 }
 #endif  // NUMEN_WITH_ARTICULATION
 
+/// The node loop of backward_sweep() over one net's sweep positions
+/// [begin, end), last to first: g_k = −Σ W_e t_j over node k's springs to
+/// later nodes, (with kUpdateQ) q_k ← d_k + β q_k, t_k = A_kk⁻¹ (q_k − g_k).
+/// Returns Σ J_kᵀ t_k over the net when kTied (else 0). A function of its
+/// own, as forward_nodes().
+template <bool kUpdateQ, bool kTied>
+Vec6 backward_nodes(const SpringView& sp, const std::int32_t* order, const SweepNode* nodes,
+                    int begin, int end, double beta, const Vec3* d_n, Vec3* q_n, Vec3* t_n,
+                    Vec3* g_n) noexcept {
+  Vec3 force = Vec3::Zero(), torque = Vec3::Zero();  // Σ J_iᵀ t_i = (Σ t_i, Σ ρ_i × t_i)
+  for (int p = end - 1; p >= begin; --p) {
+    const auto k = static_cast<std::size_t>(order[p]);
+    const Vec3 sum = gather_springs(sp, sp.low_begin[p], sp.low_begin[p + 1], t_n);
+    g_n[k] = -sum;
+    if constexpr (kUpdateQ) q_n[k] = d_n[k] + beta * q_n[k];
+    const Vec3 t = inverse_times(nodes[p], q_n[k] + sum);
+    t_n[k] = t;
+    if constexpr (kTied) {
+      force += t;
+      torque += nodes[p].lever.cross(t);
+    }
+  }
+  Vec6 tie;
+  tie << force, torque;
+  return tie;
+}
+
 /// The backward sweep of net_backward_sweep(). With kUpdateQ it first makes
 /// each node's q the CG direction, q_k ← d_k + β q_k (d = D̃ w, in place),
 /// as it reaches the node (the bodies' q are updated by the caller).
@@ -583,18 +610,14 @@ void backward_sweep(const Model& model, const Data& data, double beta, const Vec
   // Nets share no spring, so they are swept one after the other.
   for (auto net = model.nets.rbegin(); net != model.nets.rend(); ++net) {
     const auto body = static_cast<std::size_t>(net->body);
-    const bool tied = s.in_solve[body] != 0;
-    Vec6 tie = Vec6::Zero();  // Σ J_iᵀ t_i
-    for (int p = net->node_begin + net->node_count - 1; p >= net->node_begin; --p) {
-      const auto k = static_cast<std::size_t>(order[p]);
-      const Vec3 sum = gather_springs(sp, sp.low_begin[p], sp.low_begin[p + 1], t_n);
-      g_n[k] = -sum;
-      if constexpr (kUpdateQ) q_n[k] = d_n[k] + beta * q_n[k];
-      const Vec3 t = inverse_times(nodes[p], q_n[k] + sum);
-      t_n[k] = t;
-      if (tied) tie += generalized_force(t, nodes[p].lever);
+    const int begin = net->node_begin, end = net->node_begin + net->node_count;
+    if (s.in_solve[body] != 0) {
+      const Vec6 tie = backward_nodes<kUpdateQ, true>(sp, order, nodes, begin, end, beta, d_n,
+                                                      q_n, t_n, g_n);
+      g_b[body] -= tie_weight(*net, h) * tie;  // A_bi = −c J_iᵀ
+    } else {
+      backward_nodes<kUpdateQ, false>(sp, order, nodes, begin, end, beta, d_n, q_n, t_n, g_n);
     }
-    if (tied) g_b[body] -= tie_weight(*net, h) * tie;  // A_bi = −c J_iᵀ
   }
   // Node contacts with a body: A_bi = −J_rᵀ W.
   const int nc = node_contact_count(data);
@@ -615,6 +638,34 @@ void backward_sweep(const Model& model, const Data& data, double beta, const Vec
     }
   }
   add_cross_contact_terms(s, t_b, g_b);
+}
+
+/// The node loop of forward_sweep() over one net's sweep positions
+/// [begin, end): y_k = A_kk⁻¹ (y_k + c J_k y_b) with c J_k y_b = cv + cw × ρ_k
+/// when kTied, then the scatter of W_e y_k to the later nodes; with kAddT
+/// y_k ← y_k + t_k and the return is Σ q_k · y_k over the net (else 0).
+/// A function of its own, the net's constants hoisted: the node loop's
+/// pointers stay in registers.
+template <bool kAddT, bool kTied>
+double forward_nodes(const SpringView& sp, const std::int32_t* order, const SweepNode* nodes,
+                     int begin, int end, const Vec3 cv, const Vec3 cw, Vec3* y_n,
+                     const Vec3* t_n, const Vec3* q_n) noexcept {
+  double qkq = 0.0;
+  for (int p = begin; p < end; ++p) {
+    const auto k = static_cast<std::size_t>(order[p]);
+    Vec3 acc = y_n[k];
+    if constexpr (kTied) acc += cv + cw.cross(nodes[p].lever);
+    const Vec3 y = inverse_times(nodes[p], acc);
+    if constexpr (kAddT) {
+      const Vec3 kq = y + t_n[k];
+      y_n[k] = kq;
+      qkq += q_n[k].dot(kq);
+    } else {
+      y_n[k] = y;
+    }
+    scatter_springs(sp, sp.low_begin[p], sp.low_begin[p + 1], y, y_n);
+  }
+  return qkq;
 }
 
 /// The forward sweep of net_forward_sweep(), y = (D̃+L)⁻¹ g; y_n may be g_n
@@ -658,23 +709,15 @@ double forward_sweep(const Model& model, const Data& data, std::span<const Vec6>
   double qkq = 0.0;
   for (const NetModel& net : model.nets) {
     const auto body = static_cast<std::size_t>(net.body);
-    const bool tied = s.in_solve[body] != 0;
-    // c J_k y_b = c v_b + (c ω_b) × ρ_k.
-    const double c = tied ? tie_weight(net, h) : 0.0;
-    const Vec3 cv = c * y_b[body].head<3>(), cw = c * y_b[body].tail<3>();
-    for (int p = net.node_begin; p < net.node_begin + net.node_count; ++p) {
-      const auto k = static_cast<std::size_t>(order[p]);
-      Vec3 acc = y_n[k];
-      if (tied) acc += cv + cw.cross(nodes[p].lever);
-      const Vec3 y = inverse_times(nodes[p], acc);
-      if constexpr (kAddT) {
-        const Vec3 kq = y + t_n[k];
-        y_n[k] = kq;
-        qkq += q_n[k].dot(kq);
-      } else {
-        y_n[k] = y;
-      }
-      scatter_springs(sp, sp.low_begin[p], sp.low_begin[p + 1], y, y_n);
+    const int begin = net.node_begin, end = net.node_begin + net.node_count;
+    if (s.in_solve[body] != 0) {
+      // c J_k y_b = c v_b + (c ω_b) × ρ_k.
+      const double c = tie_weight(net, h);
+      const Vec3 cv = c * y_b[body].head<3>(), cw = c * y_b[body].tail<3>();
+      qkq += forward_nodes<kAddT, true>(sp, order, nodes, begin, end, cv, cw, y_n, t_n, q_n);
+    } else {
+      qkq += forward_nodes<kAddT, false>(sp, order, nodes, begin, end, Vec3::Zero(), Vec3::Zero(),
+                                         y_n, t_n, q_n);
     }
   }
   if constexpr (kAddT) {
