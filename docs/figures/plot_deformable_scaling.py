@@ -9,8 +9,10 @@ step time of a repetition — and the fastest step
 (min_step_us, median over the repetitions) when the JSON has it, with the n
 and n·log n references through the 642-node point and the 250 µs target; right: CG
 iterations per step and the time per node per (iteration + 1), the linear part.
-An optional BEFORE.json (same benchmark, an earlier build) is drawn dashed
-for comparison.
+DeformableBallTight runs in the JSON (the same ball at tolerance 3e-4, which
+keeps the solver-tolerance rule at 2562 nodes where 1e-3 does not) are drawn
+as separate markers: the cost of equal accuracy. An optional BEFORE.json
+(same benchmark, an earlier build) is drawn dashed for comparison.
 Usage: plot_deformable_scaling.py BENCH.json OUT.png [BEFORE.json]"""
 import json
 import sys
@@ -21,9 +23,9 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 
-def load(path):
+def load(path, prefix="DeformableBall/"):
     runs = [r for r in json.load(open(path))["benchmarks"]
-            if r["name"].startswith("DeformableBall/") and r.get("aggregate_name") == "median"]
+            if r["name"].startswith(prefix) and r.get("aggregate_name") == "median"]
     runs.sort(key=lambda r: r["nodes"])
     return (np.array([r["nodes"] for r in runs]),
             np.array([r.get("median_step_us", r["real_time"] * 1e-3) for r in runs]),  # µs
@@ -33,12 +35,15 @@ def load(path):
 
 
 n, t, it, per, tmin = load(sys.argv[1])
+tight = load(sys.argv[1], "DeformableBallTight/")
 before = load(sys.argv[3]) if len(sys.argv) > 3 else None
 
 fig, (a, b) = plt.subplots(1, 2, figsize=(10, 4))
 a.loglog(n, t, "o-", label="numen core::step (median)")
 if np.all(np.isfinite(tmin)):
     a.loglog(n, tmin, "v-", color="C4", label="fastest step (min_step_us)")
+if len(tight[0]):
+    a.loglog(tight[0], tight[1], "D", color="C1", label="tolerance 3e-4 (median)")
 if before is not None:
     slope_b = np.polyfit(np.log(before[0]), np.log(before[1]), 1)[0]
     a.loglog(before[0], before[1], "o--", color="C0", alpha=0.45,
@@ -57,6 +62,8 @@ a.set_ylabel("µs per step")
 a.grid(alpha=0.3, which="both")
 a.legend(fontsize=8)
 b.plot(n, it, "s-", color="C1", label="CG iterations / step (mean)")
+if len(tight[0]):
+    b.plot(tight[0], tight[2], "D", color="C1", label="at tolerance 3e-4")
 if before is not None:
     b.plot(before[0], before[2], "s--", color="C1", alpha=0.45, label="before")
 b.set_xscale("log")
