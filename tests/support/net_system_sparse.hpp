@@ -24,7 +24,6 @@
 /// Header-only; needs numen::core (with NUMEN_WITH_DEFORMABLE) and Eigen.
 
 #include <Eigen/Sparse>
-
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
@@ -47,14 +46,14 @@ namespace numen::test {
 /// detect_node_contacts) and before the forces stage (compute_forces), which
 /// is when step() has them.
 struct NetSystemInputs {
-  std::vector<core::BodyState> bodies;        ///< the bodies' states at the step's start
-  std::vector<core::NodeState> nodes;         ///< the nodes' states at the step's start
-  std::vector<core::NodeContact> contacts;    ///< the node contacts found this step
-  std::vector<core::Contact> body_contacts;   ///< the body–body and body–obstacle contacts
-  std::vector<std::uint8_t> imposed;          ///< SolverScratch::imposed (kDirect bodies)
-  core::Pose target;                          ///< the device's target pose (world)
-  core::Twist target_twist;                   ///< its twist (world)
-  int attached = -1;                          ///< Data::attached_body
+  std::vector<core::BodyState> bodies;       ///< the bodies' states at the step's start
+  std::vector<core::NodeState> nodes;        ///< the nodes' states at the step's start
+  std::vector<core::NodeContact> contacts;   ///< the node contacts found this step
+  std::vector<core::Contact> body_contacts;  ///< the body–body and body–obstacle contacts
+  std::vector<std::uint8_t> imposed;         ///< SolverScratch::imposed (kDirect bodies)
+  core::Pose target;                         ///< the device's target pose (world)
+  core::Twist target_twist;                  ///< its twist (world)
+  int attached = -1;                         ///< Data::attached_body
 };
 
 /// Copies the inputs of the system from `data` (see NetSystemInputs for when).
@@ -62,7 +61,8 @@ inline NetSystemInputs take_net_system_inputs(const core::Data& data) {
   NetSystemInputs s;
   s.bodies = data.bodies;
   s.nodes = data.nodes;
-  s.contacts.assign(data.node_contacts.begin(), data.node_contacts.begin() + data.num_node_contacts);
+  s.contacts.assign(data.node_contacts.begin(),
+                    data.node_contacts.begin() + data.num_node_contacts);
   s.body_contacts.assign(data.contacts.begin(), data.contacts.begin() + data.num_contacts);
   s.imposed = data.solver.imposed;
   s.target = data.target;
@@ -157,7 +157,8 @@ inline NetSystem assemble_net_system(const core::Model& m, const NetSystemInputs
     const Mat3 r = st.orientation.toRotationMatrix();
     const Mat3 iw = r * bm.inertia_body * r.transpose();
     Mat3 lin = bm.mass * Mat3::Identity(), ang = iw;
-    const Vec3 w_star = core::implicit_gyroscopic_velocity(r, bm.inertia_body, st.angular_velocity, h);
+    const Vec3 w_star =
+        core::implicit_gyroscopic_velocity(r, bm.inertia_body, st.angular_velocity, h);
     b.segment<3>(bi(k) + 3) += iw * (w_star - st.angular_velocity);
     fb[at(k)].head<3>() += bm.mass * m.gravity;
     if (k == s.attached && m.coupling_mode == core::CouplingMode::kGodObject) {
@@ -211,7 +212,8 @@ inline NetSystem assemble_net_system(const core::Model& m, const NetSystemInputs
       const Vec3 anchor = body.position + rho;
       const Vec3 va = body.linear_velocity + body.angular_velocity.cross(rho);
       const core::NodeState& nd = s.nodes[at(i)];
-      const Vec3 f = -net.tie_stiffness * (nd.position - anchor) - net.tie_damping * (nd.velocity - va);
+      const Vec3 f =
+          -net.tie_stiffness * (nd.position - anchor) - net.tie_damping * (nd.velocity - va);
       fn[at(i)] += f;
       fb[at(net.body)].head<3>() -= f;
       fb[at(net.body)].tail<3>() -= rho.cross(f);
