@@ -664,8 +664,9 @@ TEST(NetSolve, BallSystemAssembledSparselyMatchesTheSolverAndEigensLdlt) {
   ASSERT_EQ(sys.b.size(), dim);
   const Eigen::SparseMatrix<double> asym = sys.a - Eigen::SparseMatrix<double>(sys.a.transpose());
   EXPECT_LT(asym.norm(), 1e-14 * sys.a.norm());
-  // Sparse: the blocks of bodies, nodes and springs only (3 nodes' ties to
-  // the body, 2 × 9 per spring, 9 per node, 36 for the body, both triangles).
+  // Sparse, both triangles stored: the body's 6×6 block, per node its 3×3
+  // block and its tie blocks with the body (2 × 18), per spring its two
+  // off-diagonal 3×3 blocks; the floor contacts only add to node blocks.
   EXPECT_EQ(sys.a.nonZeros(), 36 + 2 * 18 * m.num_nodes() + 9 * m.num_nodes() +
                                   18 * static_cast<int>(m.net_springs.size()));
   // The solver's weights and diagonal blocks, and its solution of this A x = b.
