@@ -1,17 +1,22 @@
 // Tests of core/net_solve: the coupled linearly implicit system of bodies and
-// nodes (net_solve.hpp) assembled densely in the test from the header's
-// formulas — mass and inertia, coupling springs, gyroscopic split, ties
-// (c = hγ + h²k, J_i = [I, −[ρ]×]), springs (S = α d̂d̂ᵀ + β I), node contacts
-// on a plane and on a body (W = α n nᵀ + β I) — and solved with Eigen,
+// nodes (net_solve.hpp) assembled from the header's formulas and the step's
+// states (tests/support/net_system_sparse.hpp, shared with the peer
+// benchmark; densified here) — mass and inertia, coupling springs, gyroscopic
+// split, ties (c = hγ + h²k, J_i = [I, −[ρ]×]), springs (S = α d̂d̂ᵀ + β I),
+// node contacts on a plane and on a body (W = α n nᵀ + β I) — and solved with Eigen,
 // against the solver: without joints Eisenstat's SSOR-preconditioned CG (a
 // free rigid component, warm-started after real steps, an imposed rigid
 // component (kDirect: Δu = 0), several nets, a body–body contact next to a
 // node–body contact), whose splitting A = (D̃+L) + (D̃+Lᵀ) + (D − 2D̃) and
 // preconditioned product are checked against the dense matrix; with a
-// revolute joint the arrowhead-preconditioned projected CG (dense KKT solve).
+// revolute joint the arrowhead-preconditioned projected CG (dense KKT solve);
+// on the benchmark's ball with the contacts step() finds, the sparse system
+// against the solver and Eigen's sparse LDLᵀ, and a repeated solve from the
+// restored warm start (what the peer benchmark times) bit for bit.
 #include "numen/core/net_solve.hpp"
 
 #include <Eigen/Dense>
+#include <Eigen/SparseCholesky>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -29,6 +34,8 @@
 #include "numen/core/rigid_body.hpp"
 #include "numen/core/step.hpp"
 #include "build_features.hpp"
+#include "deformable_ball.hpp"
+#include "net_system_sparse.hpp"
 
 namespace core = numen::core;
 using core::Mat3;
@@ -36,26 +43,12 @@ using core::Quat;
 using core::Vec3;
 using Eigen::MatrixXd;
 using Eigen::VectorXd;
-using Mat36 = Eigen::Matrix<double, 3, 6>;
 
 namespace {
 
 std::size_t at(int i) { return static_cast<std::size_t>(i); }
 
 Quat rot(double angle, const Vec3& axis) { return Quat(Eigen::AngleAxisd(angle, axis.normalized())); }
-
-Mat3 skew(const Vec3& v) {
-  Mat3 m;
-  m << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
-  return m;
-}
-
-/// J = [I, −[r]×]: velocity of the point at lever arm r from a twist.
-Mat36 point_jacobian(const Vec3& r) {
-  Mat36 j;
-  j << Mat3::Identity(), -skew(r);
-  return j;
-}
 
 enum class Variant { kFree, kJointed, kImposed, kThreeNets };
 
@@ -213,18 +206,9 @@ void write_body_contact(core::Data& d) {
   c.position = 0.5 * (pa + pb) + Vec3(0.0, 0.01, -0.005);  // off the line of centres: torques
 }
 
-/// States and inputs the dense reference is built from (after the imposed
-/// pose of kDirect, before the forces stage).
-struct Snapshot {
-  std::vector<core::BodyState> bodies;
-  std::vector<core::NodeState> nodes;
-  std::vector<core::NodeContact> contacts;
-  std::vector<core::Contact> body_contacts;
-  std::vector<std::uint8_t> imposed;
-  core::Pose target;
-  core::Twist target_twist;
-  int attached = -1;
-};
+/// The step's inputs the reference system is built from (after the imposed
+/// pose of kDirect, before the forces stage): net_system_sparse.hpp.
+using Snapshot = numen::test::NetSystemInputs;
 
 /// The stages of one implicit step up to the solve, with hand-written node
 /// contacts. Returns the snapshot; the solve's result is in d.
@@ -235,15 +219,7 @@ Snapshot staged_solve(const core::Model& m, core::Data& d, bool* converged,
   core::detect_contacts(m, d);
   if (body_contact) write_body_contact(d);
   write_node_contacts(m, d);
-  Snapshot s;
-  s.bodies = d.bodies;
-  s.nodes = d.nodes;
-  s.contacts.assign(d.node_contacts.begin(), d.node_contacts.begin() + d.num_node_contacts);
-  s.body_contacts.assign(d.contacts.begin(), d.contacts.begin() + d.num_contacts);
-  s.imposed = d.solver.imposed;
-  s.target = d.target;
-  s.target_twist = d.target_twist;
-  s.attached = d.attached_body;
+  Snapshot s = numen::test::take_net_system_inputs(d);
   core::compute_forces(m, d);
   core::prepare_implicit_step(m, d);
   core::build_implicit_system(m, d);
@@ -254,8 +230,9 @@ Snapshot staged_solve(const core::Model& m, core::Data& d, bool* converged,
 
 /// The dense A = M − hD − h²K and b = h (f0 + h K u0) + M (u* − u0) over
 /// [Δu bodies (6 each); Δv nodes (3 each)] from net_solve.hpp and
-/// integrator.hpp, computed from the snapshot only (no solver scratch).
-/// Rows of imposed bodies are identity with b = 0.
+/// integrator.hpp, computed from the snapshot only (no solver scratch):
+/// numen::test::assemble_net_system() (the formulas, shared with the peer
+/// benchmark), densified. Rows of imposed bodies are identity with b = 0.
 struct Dense {
   MatrixXd a;
   VectorXd b;
@@ -263,168 +240,13 @@ struct Dense {
 };
 
 Dense dense_system(const core::Model& m, const Snapshot& s) {
-  const double h = m.dt, h2 = h * h;
-  const int nb = m.num_bodies(), nn = m.num_nodes();
-  const int dim = 6 * nb + 3 * nn;
-  Dense out;
-  out.a = MatrixXd::Zero(dim, dim);
-  out.b = VectorXd::Zero(dim);
-  MatrixXd& a = out.a;
-  VectorXd& b = out.b;
-  const auto bi = [](int body) { return 6 * body; };
-  const auto ni = [nb](int node) { return 6 * nb + 3 * node; };
-  std::vector<Eigen::Matrix<double, 6, 1>> fb(at(nb), Eigen::Matrix<double, 6, 1>::Zero());
-  std::vector<Vec3> fn(at(nn), Vec3::Zero());
-  const auto in_solve = [&](int body) { return body >= 0 && !s.imposed[at(body)]; };
-
-  for (int k = 0; k < nb; ++k) {
-    const core::BodyModel& bm = m.bodies[at(k)];
-    const core::BodyState& st = s.bodies[at(k)];
-    const Mat3 r = st.orientation.toRotationMatrix();
-    const Mat3 iw = r * bm.inertia_body * r.transpose();
-    a.block<3, 3>(bi(k), bi(k)) = bm.mass * Mat3::Identity();
-    a.block<3, 3>(bi(k) + 3, bi(k) + 3) = iw;
-    const Vec3 w_star = core::implicit_gyroscopic_velocity(r, bm.inertia_body, st.angular_velocity, h);
-    b.segment<3>(bi(k) + 3) += iw * (w_star - st.angular_velocity);
-    fb[at(k)].head<3>() += bm.mass * m.gravity;
-    if (k == s.attached && m.coupling_mode == core::CouplingMode::kGodObject) {
-      const core::CouplingGains& g = bm.coupling;
-      const core::Wrench w = core::coupling_wrench(g, s.target, s.target_twist, st);
-      fb[at(k)] += (Eigen::Matrix<double, 6, 1>() << w.force, w.torque).finished();
-      a.block<3, 3>(bi(k), bi(k)) += (h * g.gamma_t + h2 * g.k_t) * Mat3::Identity();
-      a.block<3, 3>(bi(k) + 3, bi(k) + 3) += (h * g.gamma_r + h2 * g.k_r) * Mat3::Identity();
-      b.segment<3>(bi(k)) -= h2 * g.k_t * st.linear_velocity;
-      b.segment<3>(bi(k) + 3) -= h2 * g.k_r * st.angular_velocity;
-    }
-  }
-  for (int i = 0; i < nn; ++i) {
-    a.block<3, 3>(ni(i), ni(i)) = m.node_mass[at(i)] * Mat3::Identity();
-    fn[at(i)] = m.node_mass[at(i)] * m.gravity;
-  }
-  // Springs: S = h γ d̂d̂ᵀ + h² k K̃, K̃ = (1 − τ) d̂d̂ᵀ + τ I, τ = max(0, 1 − L/l).
-  for (const core::NetSpring& sp : m.net_springs) {
-    const core::NodeState& na = s.nodes[at(sp.node_a)];
-    const core::NodeState& nbs = s.nodes[at(sp.node_b)];
-    const Vec3 dx = nbs.position - na.position;
-    const double l = dx.norm();
-    const Vec3 n = dx / l;
-    const double tau = std::max(0.0, 1.0 - sp.rest_length / l);
-    const Mat3 kt = (1.0 - tau) * n * n.transpose() + tau * Mat3::Identity();
-    const Mat3 sm = h * sp.damping * n * n.transpose() + h2 * sp.stiffness * kt;
-    out.spring_beta.push_back(h2 * sp.stiffness * tau);
-    out.spring_alpha.push_back(h * sp.damping + h2 * sp.stiffness - h2 * sp.stiffness * tau);
-    const Vec3 f = (sp.stiffness * (l - sp.rest_length) + sp.damping * n.dot(nbs.velocity - na.velocity)) * n;
-    fn[at(sp.node_a)] += f;
-    fn[at(sp.node_b)] -= f;
-    const int ia = ni(sp.node_a), ib = ni(sp.node_b);
-    a.block<3, 3>(ia, ia) += sm;
-    a.block<3, 3>(ib, ib) += sm;
-    a.block<3, 3>(ia, ib) -= sm;
-    a.block<3, 3>(ib, ia) -= sm;
-    const Vec3 kv = h2 * sp.stiffness * kt * (na.velocity - nbs.velocity);
-    b.segment<3>(ia) -= kv;
-    b.segment<3>(ib) += kv;
-  }
-  // Ties: c = h γ + h² k; A_ii += c I, A_ib = −c J_i, A_bb += c J_iᵀ J_i.
-  for (const core::NetModel& net : m.nets) {
-    const core::BodyState& body = s.bodies[at(net.body)];
-    const double c = h * net.tie_damping + h2 * net.tie_stiffness;
-    const int ib = bi(net.body);
-    for (int i = net.node_begin; i < net.node_begin + net.node_count; ++i) {
-      const Vec3 rho = body.orientation * m.node_rest[at(i)];
-      const Vec3 anchor = body.position + rho;
-      const Vec3 va = body.linear_velocity + body.angular_velocity.cross(rho);
-      const core::NodeState& nd = s.nodes[at(i)];
-      const Vec3 f = -net.tie_stiffness * (nd.position - anchor) - net.tie_damping * (nd.velocity - va);
-      fn[at(i)] += f;
-      fb[at(net.body)].head<3>() -= f;
-      fb[at(net.body)].tail<3>() -= rho.cross(f);
-      a.block<3, 3>(ni(i), ni(i)) += c * Mat3::Identity();
-      b.segment<3>(ni(i)) -= h2 * net.tie_stiffness * (nd.velocity - va);
-      if (!in_solve(net.body)) continue;
-      const Mat36 j = point_jacobian(rho);
-      a.block<3, 6>(ni(i), ib) -= c * j;
-      a.block<6, 3>(ib, ni(i)) -= c * j.transpose();
-      a.block<6, 6>(ib, ib) += c * j.transpose() * j;
-      b.segment<6>(ib) += h2 * net.tie_stiffness * j.transpose() * (nd.velocity - va);
-    }
-  }
-  // Node contacts: the penalty law and W = (h c + h² k) n nᵀ + h μ (I − n nᵀ).
-  for (const core::NodeContact& ct : s.contacts) {
-    const core::MaterialPair& mp = m.material_pairs[at(ct.material_pair)];
-    const core::NodeState& nd = s.nodes[at(ct.node)];
-    Vec3 v_rel = nd.velocity;
-    Vec3 r_b = Vec3::Zero();
-    if (ct.body_b >= 0) {
-      const core::BodyState& bb = s.bodies[at(ct.body_b)];
-      r_b = ct.position - bb.position;
-      v_rel -= bb.linear_velocity + bb.angular_velocity.cross(r_b);
-    }
-    const Vec3& n = ct.normal;
-    const double vn = n.dot(v_rel);
-    const double fnorm = mp.stiffness * ct.depth - mp.damping * vn;
-    if (!(fnorm > 0.0)) continue;
-    const Vec3 f = fnorm * n - mp.friction * (v_rel - vn * n);
-    fn[at(ct.node)] += f;
-    const Mat3 w = (h * mp.damping + h2 * mp.stiffness) * n * n.transpose() +
-                   h * mp.friction * (Mat3::Identity() - n * n.transpose());
-    const int ii = ni(ct.node);
-    a.block<3, 3>(ii, ii) += w;
-    b.segment<3>(ii) -= h2 * mp.stiffness * vn * n;
-    if (ct.body_b < 0) continue;
-    fb[at(ct.body_b)].head<3>() -= f;
-    fb[at(ct.body_b)].tail<3>() -= r_b.cross(f);
-    if (!in_solve(ct.body_b)) continue;
-    const Mat36 j = point_jacobian(r_b);
-    const int ib = bi(ct.body_b);
-    a.block<3, 6>(ii, ib) -= w * j;
-    a.block<6, 3>(ib, ii) -= j.transpose() * w;
-    a.block<6, 6>(ib, ib) += j.transpose() * w * j;
-    b.segment<6>(ib) += h2 * mp.stiffness * vn * j.transpose() * n;
-  }
-  // Body–body contacts: the same law, W between the two bodies' points.
-  for (const core::Contact& ct : s.body_contacts) {
-    const core::MaterialPair& mp = m.material_pairs[at(ct.material_pair)];
-    const core::BodyState& ba = s.bodies[at(ct.body_a)];
-    const core::BodyState& bb = s.bodies[at(ct.body_b)];
-    const Vec3 r_a = ct.position - ba.position, r_b = ct.position - bb.position;
-    const Vec3 v_rel = ba.linear_velocity + ba.angular_velocity.cross(r_a) - bb.linear_velocity -
-                       bb.angular_velocity.cross(r_b);
-    const Vec3& n = ct.normal;
-    const double vn = n.dot(v_rel);
-    const double fnorm = mp.stiffness * ct.depth - mp.damping * vn;
-    if (!(fnorm > 0.0)) continue;
-    const Vec3 f = fnorm * n - mp.friction * (v_rel - vn * n);
-    fb[at(ct.body_a)] += (Eigen::Matrix<double, 6, 1>() << f, r_a.cross(f)).finished();
-    fb[at(ct.body_b)] -= (Eigen::Matrix<double, 6, 1>() << f, r_b.cross(f)).finished();
-    const Mat3 w = (h * mp.damping + h2 * mp.stiffness) * n * n.transpose() +
-                   h * mp.friction * (Mat3::Identity() - n * n.transpose());
-    const Mat36 ja = point_jacobian(r_a), jb = point_jacobian(r_b);
-    const int ia = bi(ct.body_a), ib = bi(ct.body_b);
-    a.block<6, 6>(ia, ia) += ja.transpose() * w * ja;
-    a.block<6, 6>(ib, ib) += jb.transpose() * w * jb;
-    a.block<6, 6>(ia, ib) -= ja.transpose() * w * jb;
-    a.block<6, 6>(ib, ia) -= jb.transpose() * w * ja;
-    b.segment<6>(ia) -= h2 * mp.stiffness * vn * ja.transpose() * n;
-    b.segment<6>(ib) += h2 * mp.stiffness * vn * jb.transpose() * n;
-  }
-  for (int k = 0; k < nb; ++k) b.segment<6>(bi(k)) += h * fb[at(k)];
-  for (int i = 0; i < nn; ++i) b.segment<3>(ni(i)) += h * fn[at(i)];
-  for (int k = 0; k < nb; ++k) {
-    if (in_solve(k)) continue;
-    a.middleRows(bi(k), 6).setZero();
-    a.middleCols(bi(k), 6).setZero();
-    a.block<6, 6>(bi(k), bi(k)).setIdentity();
-    b.segment<6>(bi(k)).setZero();
-  }
-  return out;
+  numen::test::NetSystem sys = numen::test::assemble_net_system(m, s);
+  return Dense{MatrixXd(sys.a), std::move(sys.b), std::move(sys.spring_alpha),
+               std::move(sys.spring_beta)};
 }
 
 VectorXd solver_unknowns(const core::Model& m, const core::Data& d) {
-  VectorXd x(6 * m.num_bodies() + 3 * m.num_nodes());
-  for (int k = 0; k < m.num_bodies(); ++k) x.segment<6>(6 * k) = d.solver.delta[at(k)];
-  for (int i = 0; i < m.num_nodes(); ++i) x.segment<3>(6 * m.num_bodies() + 3 * i) = d.net.delta[at(i)];
-  return x;
+  return numen::test::net_system_unknowns(m, d);
 }
 
 /// Checks shared by the three variants: the solver's spring and contact
@@ -802,4 +624,87 @@ TEST(NetSolve, BodyContactAndNodeContactWithAProbeMatchTheDenseSolve) {
   EXPECT_LT(err, 1e-9);
   EXPECT_LT((st.ref.a * x - st.ref.b).norm(), 1e-11 * st.ref.b.norm());
   EXPECT_GT(x_ref.segment<6>(6).norm(), 1e-4);  // the probe moves
+}
+
+namespace {
+
+/// The benchmark's ball (162 nodes, tolerance 1e-12) after 300 steps of its
+/// circling target (contacts with the floor active), staged up to the solve
+/// of step 300.
+struct StagedBall {
+  core::Model m;
+  core::Data d;
+  Snapshot snap;
+};
+
+StagedBall staged_ball() {
+  StagedBall st{numen::test::make_deformable_ball(2, 1e-3, 1e-12, 1000), {}, {}};
+  st.d = core::make_data(st.m);
+  std::int64_t k = 0;
+  for (; k < 300; ++k) {
+    numen::test::set_deformable_ball_target(st.m, st.d, k);
+    core::step(st.m, st.d);
+  }
+  numen::test::set_deformable_ball_target(st.m, st.d, k);
+  st.snap = numen::test::stage_net_system(st.m, st.d);
+  return st;
+}
+
+}  // namespace
+
+TEST(NetSolve, BallSystemAssembledSparselyMatchesTheSolverAndEigensLdlt) {
+  StagedBall st = staged_ball();
+  const core::Model& m = st.m;
+  core::Data& d = st.d;
+  ASSERT_GT(d.num_node_contacts, 3);  // pressed on the floor: contact blocks in A
+  const bool converged = core::solve_net_system(m, d);
+  const numen::test::NetSystem sys = numen::test::assemble_net_system(m, st.snap);
+  const int dim = 6 * m.num_bodies() + 3 * m.num_nodes();
+  ASSERT_EQ(sys.a.rows(), dim);
+  ASSERT_EQ(sys.b.size(), dim);
+  const Eigen::SparseMatrix<double> asym = sys.a - Eigen::SparseMatrix<double>(sys.a.transpose());
+  EXPECT_LT(asym.norm(), 1e-14 * sys.a.norm());
+  // Sparse, both triangles stored: the body's 6×6 block, per node its 3×3
+  // block and its tie blocks with the body (2 × 18), per spring its two
+  // off-diagonal 3×3 blocks; the floor contacts only add to node blocks.
+  EXPECT_EQ(sys.a.nonZeros(), 36 + 2 * 18 * m.num_nodes() + 9 * m.num_nodes() +
+                                  18 * static_cast<int>(m.net_springs.size()));
+  // The solver's weights and diagonal blocks, and its solution of this A x = b.
+  check_scratch(m, d, dense_system(m, st.snap), converged);
+  const VectorXd x = solver_unknowns(m, d);
+  const double res = (sys.a * x - sys.b).norm() / sys.b.norm();
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(sys.a);
+  ASSERT_EQ(ldlt.info(), Eigen::Success);
+  EXPECT_GT(ldlt.vectorD().minCoeff(), 0.0);  // positive definite
+  const VectorXd x_ldlt = ldlt.solve(sys.b);
+  const double err = (x - x_ldlt).norm() / x_ldlt.norm();
+  std::printf("[net solve ball 162] %d contacts, %d iterations, |A x - b|/|b| %.2e, "
+              "|x - x_ldlt|/|x| %.2e\n",
+              d.num_node_contacts, d.solver_iterations, res, err);
+  EXPECT_LT(res, 1e-12);
+  EXPECT_LT(err, 1e-10);
+  EXPECT_LT((sys.a * x_ldlt - sys.b).norm(), 1e-13 * sys.b.norm());
+}
+
+TEST(NetSolve, RepeatedSolveFromTheRestoredWarmStartIsBitIdentical) {
+  StagedBall st = staged_ball();
+  core::Model m = st.m;
+  m.solver.tolerance = 1e-3;  // the shipped setting: the warm start matters
+  core::Data& d = st.d;
+  const std::vector<Vec3> warm = d.net.delta;
+  bool any_warm = false;
+  for (const Vec3& v : warm) any_warm = any_warm || !v.isZero(0.0);
+  ASSERT_TRUE(any_warm);
+  ASSERT_TRUE(core::solve_net_system(m, d));
+  const VectorXd first = solver_unknowns(m, d);
+  const int iterations = d.solver_iterations;
+  // A solve from zero takes more iterations: the warm start is used.
+  for (Vec3& v : d.net.delta) v.setZero();
+  ASSERT_TRUE(core::solve_net_system(m, d));
+  EXPECT_GT(d.solver_iterations, iterations);
+  d.net.delta = warm;
+  ASSERT_TRUE(core::solve_net_system(m, d));
+  EXPECT_EQ(d.solver_iterations, iterations);
+  const VectorXd second = solver_unknowns(m, d);
+  for (Eigen::Index j = 0; j < first.size(); ++j) EXPECT_EQ(first(j), second(j)) << j;
 }
