@@ -377,8 +377,14 @@ TEST_F(SerialBusPty, FullDriverQueueKeepsPartialWritesPendingAndRefusesWhatDoesN
   EXPECT_GT(bus_->tx_pending() + max_line, SerialBus::kTxBufferSize);  // really full
   EXPECT_LE(bus_->tx_pending(), SerialBus::kTxBufferSize);
   EXPECT_EQ(bus_->counters().tx_would_block, 1u);
-  EXPECT_EQ(bus_->write(accepted.back()), IoStatus::kWouldBlock);
-  EXPECT_EQ(bus_->counters().tx_would_block, 2u);
+  // The same frame again: refused again and counted — unless the kernel made room in
+  // between, which it may do with nobody reading: the pty hands queued bytes on to the
+  // master's side asynchronously, from a kernel worker (seen once in CI: the second write
+  // was taken, counted and delivered). Either way nothing is lost or counted twice.
+  const IoStatus again = bus_->write(accepted.back());
+  ASSERT_NE(again, IoStatus::kError);
+  if (again == IoStatus::kOk) accepted.push_back(accepted.back());
+  EXPECT_EQ(bus_->counters().tx_would_block, again == IoStatus::kWouldBlock ? 2u : 1u);
   EXPECT_EQ(bus_->counters().frames_tx, accepted.size());
 
   // Drain the far end while flushing: every accepted frame arrives once, intact, in order.
