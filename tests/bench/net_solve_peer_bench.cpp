@@ -137,31 +137,48 @@ double tolerance_of(const benchmark::State& state) {
   return std::pow(10.0, -static_cast<double>(state.range(1)));
 }
 
+/// Per benchmark iteration: `prepare()` (untimed), then `factorize()` and
+/// `solve()` timed (the iteration's manual time: both); each returns whether
+/// it succeeded. Sets the counters median_us, min_us and median_factorize_us
+/// and returns whether every call succeeded.
+template <class Prepare, class Factorize, class Solve>
+bool time_solves(benchmark::State& state, Prepare prepare, Factorize factorize, Solve solve) {
+  std::vector<double> times, factor_times;
+  times.reserve(1 << 16);
+  factor_times.reserve(1 << 16);
+  bool ok = true;
+  for (auto _ : state) {
+    prepare();
+    const auto t0 = Clock::now();
+    ok = factorize() && ok;
+    const auto t1 = Clock::now();
+    ok = solve() && ok;
+    const auto t2 = Clock::now();
+    const double s = std::chrono::duration<double>(t2 - t0).count();
+    times.push_back(s);
+    factor_times.push_back(std::chrono::duration<double>(t1 - t0).count());
+    state.SetIterationTime(s);
+  }
+  state.counters["median_us"] = median(times) * 1e6;
+  state.counters["min_us"] =
+      times.empty() ? 0.0 : *std::min_element(times.begin(), times.end()) * 1e6;
+  state.counters["median_factorize_us"] = median(factor_times) * 1e6;
+  return ok;
+}
+
 void NetPeerNumen(benchmark::State& state) {
   FrozenSystem& f = frozen(static_cast<int>(state.range(0)));
   const double tol = tolerance_of(state);
   f.model.solver.tolerance = tol;
-  std::vector<double> times;
-  times.reserve(1 << 16);
-  bool converged = true;
-  for (auto _ : state) {
-    std::copy(f.warm.begin(), f.warm.end(), f.data.net.delta.begin());
-    const auto t0 = Clock::now();
-    converged = core::solve_net_system(f.model, f.data) && converged;
-    const auto t1 = Clock::now();
-    const double s = std::chrono::duration<double>(t1 - t0).count();
-    times.push_back(s);
-    state.SetIterationTime(s);
-  }
+  const bool converged = time_solves(
+      state, [&] { std::copy(f.warm.begin(), f.warm.end(), f.data.net.delta.begin()); },
+      [] { return true; }, [&] { return core::solve_net_system(f.model, f.data); });
   const VectorXd x = numen::test::net_system_unknowns(f.model, f.data);
   report_error(state, f, x);
   state.counters["tolerance"] = tol;
   state.counters["iterations"] = f.data.solver_iterations;
   state.counters["converged"] = converged ? 1.0 : 0.0;
-  state.counters["median_us"] = median(times) * 1e6;
-  state.counters["min_us"] =
-      times.empty() ? 0.0 : *std::min_element(times.begin(), times.end()) * 1e6;
-  state.counters["median_factorize_us"] = 0.0;
+  state.counters["median_factorize_us"] = 0.0;  // nothing to factorize
 }
 
 template <class Preconditioner>
@@ -173,30 +190,20 @@ void NetPeerEigenCg(benchmark::State& state) {
   cg.setMaxIterations(100000);
   cg.analyzePattern(f.system.a);  // the ordering (IncompleteCholesky): once
   VectorXd x(f.system.b.size());
-  std::vector<double> times, factor_times;
-  times.reserve(1 << 16);
-  factor_times.reserve(1 << 16);
-  bool converged = true;
-  for (auto _ : state) {
-    const auto t0 = Clock::now();
-    cg.factorize(f.system.a);
-    const auto t1 = Clock::now();
-    x = cg.solveWithGuess(f.system.b, f.guess);
-    const auto t2 = Clock::now();
-    converged = cg.info() == Eigen::Success && converged;
-    const double s = std::chrono::duration<double>(t2 - t0).count();
-    times.push_back(s);
-    factor_times.push_back(std::chrono::duration<double>(t1 - t0).count());
-    state.SetIterationTime(s);
-  }
+  const bool converged = time_solves(
+      state, [] {},
+      [&] {
+        cg.factorize(f.system.a);
+        return true;
+      },
+      [&] {
+        x = cg.solveWithGuess(f.system.b, f.guess);
+        return cg.info() == Eigen::Success;
+      });
   report_error(state, f, x);
   state.counters["tolerance"] = tol;
   state.counters["iterations"] = static_cast<double>(cg.iterations());
   state.counters["converged"] = converged ? 1.0 : 0.0;
-  state.counters["median_us"] = median(times) * 1e6;
-  state.counters["min_us"] =
-      times.empty() ? 0.0 : *std::min_element(times.begin(), times.end()) * 1e6;
-  state.counters["median_factorize_us"] = median(factor_times) * 1e6;
 }
 
 void NetPeerEigenCgDiagonal(benchmark::State& state) {
@@ -212,22 +219,16 @@ void NetPeerEigenLdlt(benchmark::State& state) {
   Eigen::SimplicialLDLT<SpMat> ldlt;
   ldlt.analyzePattern(f.system.a);  // AMD ordering and elimination tree: once
   VectorXd x(f.system.b.size());
-  std::vector<double> times, factor_times;
-  times.reserve(1 << 16);
-  factor_times.reserve(1 << 16);
-  bool ok = true;
-  for (auto _ : state) {
-    const auto t0 = Clock::now();
-    ldlt.factorize(f.system.a);
-    const auto t1 = Clock::now();
-    x = ldlt.solve(f.system.b);
-    const auto t2 = Clock::now();
-    ok = ldlt.info() == Eigen::Success && ok;
-    const double s = std::chrono::duration<double>(t2 - t0).count();
-    times.push_back(s);
-    factor_times.push_back(std::chrono::duration<double>(t1 - t0).count());
-    state.SetIterationTime(s);
-  }
+  const bool ok = time_solves(
+      state, [] {},
+      [&] {
+        ldlt.factorize(f.system.a);
+        return true;
+      },
+      [&] {
+        x = ldlt.solve(f.system.b);
+        return ldlt.info() == Eigen::Success;
+      });
   report_error(state, f, x);
   state.counters["factor_nonzeros"] =
       static_cast<double>(ldlt.matrixL().nestedExpression().nonZeros());
@@ -235,10 +236,6 @@ void NetPeerEigenLdlt(benchmark::State& state) {
   state.counters["tolerance"] = 0.0;
   state.counters["iterations"] = 0.0;
   state.counters["converged"] = ok ? 1.0 : 0.0;
-  state.counters["median_us"] = median(times) * 1e6;
-  state.counters["min_us"] =
-      times.empty() ? 0.0 : *std::min_element(times.begin(), times.end()) * 1e6;
-  state.counters["median_factorize_us"] = median(factor_times) * 1e6;
 }
 
 void IterativeArgs(benchmark::internal::Benchmark* b) {

@@ -245,10 +245,6 @@ Dense dense_system(const core::Model& m, const Snapshot& s) {
                std::move(sys.spring_beta)};
 }
 
-VectorXd solver_unknowns(const core::Model& m, const core::Data& d) {
-  return numen::test::net_system_unknowns(m, d);
-}
-
 /// Checks shared by the three variants: the solver's spring and contact
 /// weights, the body blocks of A (SolverScratch::block), convergence.
 void check_scratch(const core::Model& m, const core::Data& d, const Dense& ref, bool converged) {
@@ -299,7 +295,7 @@ TEST(NetSolve, FreeRigidComponentMatchesTheDenseSolve) {
   const Eigen::LLT<MatrixXd> llt(ref.a);
   ASSERT_EQ(llt.info(), Eigen::Success) << "A must be symmetric positive definite";
   const VectorXd x_ref = llt.solve(ref.b);
-  const VectorXd x = solver_unknowns(m, d);
+  const VectorXd x = numen::test::net_system_unknowns(m, d);
   const double err = (x - x_ref).norm() / x_ref.norm();
   std::printf("[net solve free] %d iterations, residual %.2e, |x - x_dense|/|x| %.2e, |A x - b|/|b| %.2e\n",
               d.solver_iterations, d.solver_residual, err, (ref.a * x - ref.b).norm() / ref.b.norm());
@@ -327,7 +323,7 @@ TEST(NetSolve, WarmStartedSolveAfterRealStepsMatchesTheDenseSolve) {
   const Dense ref = dense_system(m, s);
   check_scratch(m, d, ref, converged);
   const VectorXd x_ref = ref.a.llt().solve(ref.b);
-  const double err = (solver_unknowns(m, d) - x_ref).norm() / x_ref.norm();
+  const double err = (numen::test::net_system_unknowns(m, d) - x_ref).norm() / x_ref.norm();
   std::printf("[net solve warm] %d iterations, |x - x_dense|/|x| %.2e\n", d.solver_iterations, err);
   EXPECT_LT(err, 1e-9);
 }
@@ -367,7 +363,7 @@ TEST(NetSolve, JointedRigidComponentMatchesTheDenseKktSolve) {
   const VectorXd sol = kkt.fullPivLu().solve(rhs);
   const VectorXd x_ref = sol.head(n);
   const VectorXd y_ref = sol.tail(nr);
-  const VectorXd x = solver_unknowns(m, d);
+  const VectorXd x = numen::test::net_system_unknowns(m, d);
   const double err = (x - x_ref).norm() / x_ref.norm();
   const VectorXd lambda_ref = -y_ref / m.dt;
   const VectorXd lambda = d.joints[0].multiplier.head(nr);
@@ -399,7 +395,7 @@ TEST(NetSolve, ImposedRigidComponentHasNoUnknownAndTheNodesMatchTheDenseSolve) {
   const Dense ref = dense_system(m, s);
   check_scratch(m, d, ref, converged);
   const VectorXd x_ref = ref.a.llt().solve(ref.b);
-  const VectorXd x = solver_unknowns(m, d);
+  const VectorXd x = numen::test::net_system_unknowns(m, d);
   const double err = (x - x_ref).norm() / x_ref.norm();
   std::printf("[net solve imposed] %d iterations, |x - x_dense|/|x| %.2e\n", d.solver_iterations, err);
   EXPECT_LT(err, 1e-9);
@@ -442,7 +438,7 @@ TEST(NetSolve, SeveralNetsOnOneBodyAndOnTheProbeMatchTheDenseSolve) {
   const Dense ref = dense_system(m, s);
   check_scratch(m, d, ref, converged);
   const VectorXd x_ref = ref.a.llt().solve(ref.b);
-  const double err = (solver_unknowns(m, d) - x_ref).norm() / x_ref.norm();
+  const double err = (numen::test::net_system_unknowns(m, d) - x_ref).norm() / x_ref.norm();
   std::printf("[net solve three nets] %d iterations, |x - x_dense|/|x| %.2e\n", d.solver_iterations, err);
   EXPECT_LT(err, 1e-9);
 }
@@ -597,7 +593,7 @@ TEST(NetSolve, ReportsTheResidualInTheNormOfThePreconditioner) {
   const Eigen::LLT<MatrixXd> llt(precond);
   ASSERT_EQ(llt.info(), Eigen::Success);
   const VectorXd& b = st.ref.b;
-  const VectorXd r = b - a * solver_unknowns(m, d);
+  const VectorXd r = b - a * numen::test::net_system_unknowns(m, d);
   // The reference is b's size in the block-Jacobi norm ‖b‖_{D̃⁻¹} (net_solve.hpp).
   const double rel_m = std::sqrt(r.dot(llt.solve(r)) / b.dot(sp.d_tilde.llt().solve(b)));
   const double rel_2 = r.norm() / b.norm();
@@ -617,7 +613,7 @@ TEST(NetSolve, BodyContactAndNodeContactWithAProbeMatchTheDenseSolve) {
   ASSERT_TRUE(d.node_contacts[2].active);
   check_scratch(m, d, st.ref, st.converged);
   const VectorXd x_ref = st.ref.a.llt().solve(st.ref.b);
-  const VectorXd x = solver_unknowns(m, d);
+  const VectorXd x = numen::test::net_system_unknowns(m, d);
   const double err = (x - x_ref).norm() / x_ref.norm();
   std::printf("[net solve body contact] %d iterations, |x - x_dense|/|x| %.2e\n",
               d.solver_iterations, err);
@@ -671,7 +667,7 @@ TEST(NetSolve, BallSystemAssembledSparselyMatchesTheSolverAndEigensLdlt) {
                                   18 * static_cast<int>(m.net_springs.size()));
   // The solver's weights and diagonal blocks, and its solution of this A x = b.
   check_scratch(m, d, dense_system(m, st.snap), converged);
-  const VectorXd x = solver_unknowns(m, d);
+  const VectorXd x = numen::test::net_system_unknowns(m, d);
   const double res = (sys.a * x - sys.b).norm() / sys.b.norm();
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(sys.a);
   ASSERT_EQ(ldlt.info(), Eigen::Success);
@@ -696,7 +692,7 @@ TEST(NetSolve, RepeatedSolveFromTheRestoredWarmStartIsBitIdentical) {
   for (const Vec3& v : warm) any_warm = any_warm || !v.isZero(0.0);
   ASSERT_TRUE(any_warm);
   ASSERT_TRUE(core::solve_net_system(m, d));
-  const VectorXd first = solver_unknowns(m, d);
+  const VectorXd first = numen::test::net_system_unknowns(m, d);
   const int iterations = d.solver_iterations;
   // A solve from zero takes more iterations: the warm start is used.
   for (Vec3& v : d.net.delta) v.setZero();
@@ -705,6 +701,6 @@ TEST(NetSolve, RepeatedSolveFromTheRestoredWarmStartIsBitIdentical) {
   d.net.delta = warm;
   ASSERT_TRUE(core::solve_net_system(m, d));
   EXPECT_EQ(d.solver_iterations, iterations);
-  const VectorXd second = solver_unknowns(m, d);
+  const VectorXd second = numen::test::net_system_unknowns(m, d);
   for (Eigen::Index j = 0; j < first.size(); ++j) EXPECT_EQ(first(j), second(j)) << j;
 }
