@@ -54,20 +54,17 @@ DataFootprint data_footprint(const Data& d) noexcept {
                                 s.joint_y_correction, s.projected_residual, a.rows, a.known,
                                 a.joint_active, a.off_diagonal, a.factor, a.coupling, a.work,
                                 a.elimination_parent, a.reroot)};
-  f.groups[5] = {"nets", heap(d.nodes, d.node_contacts, d.nets, n.saved, n.force, n.lever,
-                              n.node_diagonal, n.block, n.block_inverse, n.spring_block,
-                              n.tie_sums, n.rhs, n.delta,
-                              n.residual, n.precond_residual, n.direction, n.a_direction,
-                              n.sweep, n.body_schur, n.body_tmp, n.sweep_order,
-                              n.sweep_position, n.sweep_nodes, n.sweep_springs.direction_x,
-                              n.sweep_springs.direction_y, n.sweep_springs.direction_z,
-                              n.sweep_springs.weight_axial, n.sweep_springs.weight_isotropic,
-                              n.sweep_springs.high, n.spring_constants.rest_length,
-                              n.spring_constants.stiffness, n.spring_constants.damping,
-                              n.spring_length, n.spring_low_begin,
-                              n.spring_slot, n.near_obstacles, n.obstacle_axis,
-                              n.obstacle_rotation, n.near_bodies, n.near_sphere_end,
-                              n.near_spheres)};
+  f.groups[5] = {
+      "nets",
+      heap(d.nodes, d.node_contacts, d.nets, n.saved, n.force, n.lever, n.node_diagonal, n.block,
+           n.block_inverse, n.spring_block, n.tie_sums, n.rhs, n.delta, n.residual,
+           n.precond_residual, n.direction, n.a_direction, n.sweep, n.body_schur, n.body_tmp,
+           n.sweep_position, n.sweep_nodes, n.sweep_springs.direction_x,
+           n.sweep_springs.direction_y, n.sweep_springs.direction_z, n.sweep_springs.weight_axial,
+           n.sweep_springs.weight_isotropic, n.sweep_springs.high, n.spring_constants.rest_length,
+           n.spring_constants.stiffness, n.spring_constants.damping, n.spring_length,
+           n.spring_low_begin, n.spring_slot, n.near_obstacles, n.obstacle_axis,
+           n.obstacle_rotation, n.near_bodies, n.near_sphere_end, n.near_spheres)};
   return f;
 }
 

@@ -120,7 +120,7 @@ inline void one_spring(const SpringPass& a, std::int32_t j, const Vec3& xk, cons
 }
 
 /// The springs' pass of compute_net_forces(), in the sweep order (grouped by
-/// their earlier node k in NetScratch::sweep_order, whose sums stay in
+/// their earlier node k in Model::node_sweep_order, whose sums stay in
 /// registers), two springs of a node at a time (the same law as
 /// one_spring(), lane by lane: the same operations and roundings): forces,
 /// and with kImplicit the linearisation of the implicit solve — the weights
@@ -131,7 +131,7 @@ inline void one_spring(const SpringPass& a, std::int32_t j, const Vec3& xk, cons
 /// (net_solve.hpp). Expects force = gravity + ties and, with kImplicit,
 /// spring_block = 0 and rhs = 0 on entry.
 template <bool kImplicit>
-void spring_pass(Data& data) noexcept {
+void spring_pass(const Model& model, Data& data) noexcept {
   NetScratch& s = data.net;
   SweepSprings& sw = s.sweep_springs;
   const double h = data.solver.system_step;
@@ -152,7 +152,7 @@ void spring_pass(Data& data) noexcept {
                      h,
                      h * h};
   const std::int32_t* low_begin = s.spring_low_begin.data();
-  const std::int32_t* order = s.sweep_order.data();
+  const std::int32_t* order = model.node_sweep_order.data();
   const Pair hp = Pair::Constant(a.h), h2p = Pair::Constant(a.h2);
   const std::size_t n = data.nodes.size();
   for (std::size_t p = 0; p < n; ++p) {
@@ -319,9 +319,9 @@ void compute_net_forces(const Model& model, Data& data) noexcept {
 
   // Structural and bending springs (and their linearisation).
   if (implicit) {
-    spring_pass<true>(data);
+    spring_pass<true>(model, data);
   } else {
-    spring_pass<false>(data);
+    spring_pass<false>(model, data);
   }
 
   // Node contacts (penalty law of contact_force.hpp, the node on side a).

@@ -12,21 +12,15 @@
 #include <span>
 
 #include "numen/core/articulation.hpp"
-#include "numen/core/features.hpp"
 #include "numen/core/data.hpp"
+#include "numen/core/features.hpp"
 #include "numen/core/integrator.hpp"
 #include "numen/core/joint_system.hpp"
 #include "numen/core/model.hpp"
+#include "numen/core/rigid_body.hpp"
 
 namespace numen::core {
 namespace {
-
-/// [v]×, the cross-product matrix: [v]× w = v × w.
-Mat3 skew(const Vec3& v) noexcept {
-  Mat3 m;
-  m << 0.0, -v.z(), v.y(), v.z(), 0.0, -v.x(), -v.y(), v.x(), 0.0;
-  return m;
-}
 
 /// c = h γ_tie + h² k_tie: a tie's weight in A (kg = N·s²/m).
 double tie_weight(const NetModel& net, double h) noexcept {
@@ -236,7 +230,7 @@ void apply_coupled(const Model& model, const Data& data, std::span<const Vec6> i
   const Vec3* x = in_n.data();
   Vec3* y = out_n.data();
   const SpringView sp(ns);
-  const std::int32_t* order = ns.sweep_order.data();
+  const std::int32_t* order = model.node_sweep_order.data();
   for (std::size_t p = 0; p < in_n.size(); ++p) {
     const auto k = static_cast<std::size_t>(order[p]);
     Vec3 acc = Vec3::Zero();
@@ -377,7 +371,7 @@ void build_net_system(const Model& model, Data& data) noexcept {
     ns.rhs[i] += (-h2 * mp.stiffness * ct.normal_velocity) * ct.normal;
   }
   if (model.joints.empty()) {  // the SSOR sweeps' A_kk⁻¹, in their order
-    const std::int32_t* order = ns.sweep_order.data();
+    const std::int32_t* order = model.node_sweep_order.data();
     SweepNode* sweep_nodes = ns.sweep_nodes.data();
     const std::size_t n = ns.sweep_nodes.size();
     for (std::size_t p = 0; p < n; ++p) {
@@ -600,7 +594,7 @@ void backward_sweep(const Model& model, const Data& data, double beta, const Vec
   const double h = data.solver.system_step;  // h_s of the linearised system (integrator.hpp)
   const std::size_t nb = q_b.size();
   const SpringView sp(ns);
-  const std::int32_t* order = ns.sweep_order.data();
+  const std::int32_t* order = model.node_sweep_order.data();
   const SweepNode* nodes = ns.sweep_nodes.data();
   for (Vec6& v : g_b) v.setZero();
   // Nodes, last to first in the sweep order: (D̃+Lᵀ) has, in node k's row,
@@ -680,7 +674,7 @@ double forward_sweep(const Model& model, const Data& data, std::span<const Vec6>
   const double h = data.solver.system_step;  // h_s of the linearised system (integrator.hpp)
   const std::size_t nb = g_b.size();
   const SpringView sp(ns);
-  const std::int32_t* order = ns.sweep_order.data();
+  const std::int32_t* order = model.node_sweep_order.data();
   const SweepNode* nodes = ns.sweep_nodes.data();
   // Bodies first: no block of (D̃+L) left of their diagonal.
   for (std::size_t b = 0; b < nb; ++b) {
@@ -745,7 +739,7 @@ double net_start_sweep(const Model& model, Data& data, std::span<const Vec3> x0_
   const double h = data.solver.system_step;  // h_s of the linearised system (integrator.hpp)
   const std::size_t nb = w_b.size();
   const SpringView sp(ns);
-  const std::int32_t* order = ns.sweep_order.data();
+  const std::int32_t* order = model.node_sweep_order.data();
   const SweepNode* nodes = ns.sweep_nodes.data();
   const std::span<Vec6> g_b(ns.body_tmp);
   // Body rows: g_b = b_b − (Lᵀ x0)_b.

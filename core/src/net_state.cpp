@@ -40,13 +40,11 @@ void NetScratch::resize(const Model& model) {
   sweep.assign(n, Vec3::Zero());
   body_schur.assign(nb, Mat6::Identity());
   body_tmp.assign(nb, Vec6::Zero());
-  // Sweep order: Model::node_sweep_order (reverse Cuthill–McKee per net).
-  sweep_order.assign(n, 0);
+  // Positions in the sweep order Model::node_sweep_order (reverse Cuthill–McKee per net).
   sweep_position.assign(n, 0);
   sweep_nodes.assign(n, SweepNode{});
   for (std::size_t p = 0; p < n; ++p) {
     const std::int32_t node = model.node_sweep_order[p];
-    sweep_order[p] = node;
     sweep_position[static_cast<std::size_t>(node)] = static_cast<std::int32_t>(p);
   }
   // Springs by their earlier node in the sweep order (counting sort: stable,

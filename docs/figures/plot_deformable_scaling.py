@@ -11,7 +11,10 @@ and n·log n references through the 642-node point and the 250 µs target; right
 iterations per step and the time per node per (iteration + 1), the linear part.
 DeformableBallTight runs in the JSON (the same ball at tolerance 3e-4, which
 keeps the solver-tolerance rule at 2562 nodes where 1e-3 does not) are drawn
-as separate markers: the cost of equal accuracy. An optional BEFORE.json
+as separate markers: the cost of equal accuracy. DeformableBallFrozen runs
+(the same step repeated on the same input) are drawn as a vertical bar from
+their fastest step to their median: the part of the spread that is the
+machine's, not the trajectory's. An optional BEFORE.json
 (same benchmark, an earlier build) is drawn dashed for comparison.
 Usage: plot_deformable_scaling.py BENCH.json OUT.png [BEFORE.json]"""
 import json
@@ -36,6 +39,8 @@ def load(path, prefix="DeformableBall/"):
 
 n, t, it, per, tmin = load(sys.argv[1])
 tight = load(sys.argv[1], "DeformableBallTight/")
+frozen = [r for r in json.load(open(sys.argv[1]))["benchmarks"]
+          if r["name"].startswith("DeformableBallFrozen/") and r.get("aggregate_name") == "median"]
 before = load(sys.argv[3]) if len(sys.argv) > 3 else None
 
 fig, (a, b) = plt.subplots(1, 2, figsize=(10, 4))
@@ -44,6 +49,9 @@ if np.all(np.isfinite(tmin)):
     a.loglog(n, tmin, "v-", color="C4", label="fastest step (min_step_us)")
 if len(tight[0]):
     a.loglog(tight[0], tight[1], "D", color="C1", label="tolerance 3e-4 (median)")
+for i, r in enumerate(frozen):
+    a.plot([r["nodes"]] * 2, [r["frozen_min_us"], r["frozen_median_us"]], "_-", color="k", ms=10,
+           label="same step, frozen input: fastest to median" if i == 0 else None)
 if before is not None:
     slope_b = np.polyfit(np.log(before[0]), np.log(before[1]), 1)[0]
     a.loglog(before[0], before[1], "o--", color="C0", alpha=0.45,
@@ -56,7 +64,7 @@ a.loglog(n, t[k] * n * np.log(n) / (n[k] * np.log(n[k])), "--", color="grey",
          label="∝ n log n through 642")
 a.axhline(250, color="C3", lw=1, label="target 250 µs @ 642 nodes")
 slope = np.polyfit(np.log(n), np.log(t), 1)[0]
-a.set_title(f"Deformable ball: step time vs nodes (log-log slope {slope:.2f})")
+a.set_title(f"Step time vs nodes (log-log slope {slope:.2f})", fontsize=10)
 a.set_xlabel("nodes (icosphere, subdivisions 1–4)")
 a.set_ylabel("µs per step")
 a.grid(alpha=0.3, which="both")
@@ -73,7 +81,7 @@ b2 = b.twinx()
 b2.plot(n, per, "o-", color="C2", label="ns per node per (iteration + 1)")
 b2.set_ylabel("ns / node / iteration", color="C2")
 b2.set_ylim(0, max(per) * 1.3)
-b.set_title("Iterations (conditioning) and linear work per iteration")
+b.set_title("Iterations (conditioning) and linear work per iteration", fontsize=10)
 b.grid(alpha=0.3)
 fig.tight_layout()
 fig.savefig(sys.argv[2], dpi=120)

@@ -13,6 +13,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include <nlohmann/json.hpp>
+
 #include "numen/core/collision.hpp"
 #include "numen/core/data.hpp"
 #include "numen/core/features.hpp"
@@ -28,7 +30,6 @@
 #include "numen/sim/admittance_run.hpp"
 #include "numen/sim/simulated_instrument.hpp"
 #include "numen/sim/trace.hpp"
-#include "json_text.hpp"
 
 namespace numen::sim {
 namespace {
@@ -601,154 +602,135 @@ std::string format_summary(const RunSummary& s) {
   return os.str();
 }
 
-namespace {
-using detail::json_string;
-
-std::string json_number(double v) {
-  if (!std::isfinite(v)) return "null";
-  std::ostringstream os;
-  os << std::setprecision(9) << v;
-  return os.str();
-}
-}  // namespace
-
 std::string format_summary_json(const RunSummary& s) {
-  std::ostringstream os;
-  auto num = [&](const char* k, double v) { os << "\"" << k << "\":" << json_number(v) << ","; };
-  auto integer = [&](const char* k, std::int64_t v) { os << "\"" << k << "\":" << v << ","; };
-  os << "{";
-  os << "\"scene\":" << json_string(s.scene) << ",";
-  os << "\"coupling\":" << json_string(s.coupling) << ",";
-  os << "\"integrator\":" << json_string(s.integrator) << ",";
-  integer("steps", s.steps);
-  num("dt_s", s.dt_s);
-  num("sim_time_s", s.sim_time_s);
-  num("wall_time_s", s.wall_time_s);
-  os << "\"step_time_us\":{\"median\":" << json_number(s.step_time_us.median)
-     << ",\"p99\":" << json_number(s.step_time_us.p99) << ",\"p999\":" << json_number(s.step_time_us.p999)
-     << ",\"max\":" << json_number(s.step_time_us.max) << ",\"mean\":" << json_number(s.step_time_us.mean)
-     << "},";
-  num("target_penetration_max_mm", s.target_penetration_max_mm);
-  num("tool_penetration_max_mm", s.tool_penetration_max_mm);
-  num("any_penetration_max_mm", s.any_penetration_max_mm);
-  num("tracking_error_free_rms_mm", s.tracking_error_free_rms_mm);
-  num("tracking_error_free_max_mm", s.tracking_error_free_max_mm);
-  integer("free_steps", s.free_steps);
-  num("feedback_force_max_n", s.feedback_force_max_n);
-  num("feedback_torque_max_nm", s.feedback_torque_max_nm);
-  num("axis_torque_max", s.axis_torque_max);
-  num("free_body_speed_max_mps", s.free_body_speed_max_mps);
-  integer("num_bodies", s.num_bodies);
-  integer("num_joints", s.num_joints);
-  num("joint_drift_max_mm", s.joint_drift_max_mm);
-  num("joint_angle_drift_max_mrad", s.joint_angle_drift_max_mrad);
-  integer("rejected_samples", s.rejected_samples);
-  integer("invalid_periods", s.invalid_periods);
-  integer("contact_overflow", s.contact_overflow);
-  integer("contacts_max", s.contacts_max);
-  integer("solver_iterations_max", s.solver_iterations_max);
-  num("solver_iterations_mean", s.solver_iterations_mean);
-  num("solver_residual_max", s.solver_residual_max);
-  integer("solver_not_converged_steps", s.solver_not_converged_steps);
-  integer("num_nets", s.num_nets);
-  integer("num_nodes", s.num_nodes);
-  integer("node_contacts_max", s.node_contacts_max);
-  num("net_penetration_max_mm", s.net_penetration_max_mm);
-  num("net_tie_stretch_max_mm", s.net_tie_stretch_max_mm);
-  num("net_strain_max", s.net_strain_max);
-  num("net_node_speed_max_mps", s.net_node_speed_max_mps);
-  integer("nonfinite_steps", s.nonfinite_steps);
-  integer("bus_frames_dropped", s.bus_frames_dropped);
-  integer("bus_frames_corrupted", s.bus_frames_corrupted);
-  os << "\"bus\":" << json_string(s.bus) << ",";
-  integer("bus_frames_replayed", s.bus_frames_replayed);
-  integer("bus_frames_recorded", s.bus_frames_recorded);
-  integer("bus_record_dropped", s.bus_record_dropped);
-  os << "\"real_bus\":" << (s.real_bus ? "true" : "false") << ",";
-  integer("port_frames_rx", static_cast<std::int64_t>(s.port.frames_rx));
-  integer("port_frames_tx", static_cast<std::int64_t>(s.port.frames_tx));
-  integer("port_dropped", static_cast<std::int64_t>(s.port.dropped));
-  integer("port_errors", static_cast<std::int64_t>(s.port.errors));
-  integer("port_would_block", static_cast<std::int64_t>(s.port.tx_would_block));
-  os << "\"transport\":" << json_string(s.transport) << ",";
-  os << "\"bus_state\":" << json_string(s.bus_state) << ",";
-  integer("bus_error_periods", s.bus_error_periods);
-  integer("read_errors", s.read_errors);
-  integer("sync_write_failures", s.sync_write_failures);
-  integer("command_failures", s.command_failures);
-  integer("frames_rejected", s.frames_rejected);
-  integer("frames_unknown_id", s.frames_unknown_id);
-  integer("values_out_of_range", s.values_out_of_range);
-  integer("values_jump", s.values_jump);
-  auto hist = [&](const char* k, const platform::HistogramSummary& h) {
-    os << "\"" << k << "\":{\"count\":" << h.count << ",\"min\":" << h.min
-       << ",\"median\":" << h.median << ",\"p99\":" << h.p99 << ",\"p999\":" << h.p999
-       << ",\"max\":" << h.max << "},";
+  nlohmann::ordered_json j;  // keys in insertion order; non-finite numbers are written as null
+  j["scene"] = s.scene;
+  j["coupling"] = s.coupling;
+  j["integrator"] = s.integrator;
+  j["steps"] = s.steps;
+  j["dt_s"] = s.dt_s;
+  j["sim_time_s"] = s.sim_time_s;
+  j["wall_time_s"] = s.wall_time_s;
+  j["step_time_us"] = {{"median", s.step_time_us.median},
+                       {"p99", s.step_time_us.p99},
+                       {"p999", s.step_time_us.p999},
+                       {"max", s.step_time_us.max},
+                       {"mean", s.step_time_us.mean}};
+  j["target_penetration_max_mm"] = s.target_penetration_max_mm;
+  j["tool_penetration_max_mm"] = s.tool_penetration_max_mm;
+  j["any_penetration_max_mm"] = s.any_penetration_max_mm;
+  j["tracking_error_free_rms_mm"] = s.tracking_error_free_rms_mm;
+  j["tracking_error_free_max_mm"] = s.tracking_error_free_max_mm;
+  j["free_steps"] = s.free_steps;
+  j["feedback_force_max_n"] = s.feedback_force_max_n;
+  j["feedback_torque_max_nm"] = s.feedback_torque_max_nm;
+  j["axis_torque_max"] = s.axis_torque_max;
+  j["free_body_speed_max_mps"] = s.free_body_speed_max_mps;
+  j["num_bodies"] = s.num_bodies;
+  j["num_joints"] = s.num_joints;
+  j["joint_drift_max_mm"] = s.joint_drift_max_mm;
+  j["joint_angle_drift_max_mrad"] = s.joint_angle_drift_max_mrad;
+  j["rejected_samples"] = s.rejected_samples;
+  j["invalid_periods"] = s.invalid_periods;
+  j["contact_overflow"] = s.contact_overflow;
+  j["contacts_max"] = s.contacts_max;
+  j["solver_iterations_max"] = s.solver_iterations_max;
+  j["solver_iterations_mean"] = s.solver_iterations_mean;
+  j["solver_residual_max"] = s.solver_residual_max;
+  j["solver_not_converged_steps"] = s.solver_not_converged_steps;
+  j["num_nets"] = s.num_nets;
+  j["num_nodes"] = s.num_nodes;
+  j["node_contacts_max"] = s.node_contacts_max;
+  j["net_penetration_max_mm"] = s.net_penetration_max_mm;
+  j["net_tie_stretch_max_mm"] = s.net_tie_stretch_max_mm;
+  j["net_strain_max"] = s.net_strain_max;
+  j["net_node_speed_max_mps"] = s.net_node_speed_max_mps;
+  j["nonfinite_steps"] = s.nonfinite_steps;
+  j["bus_frames_dropped"] = s.bus_frames_dropped;
+  j["bus_frames_corrupted"] = s.bus_frames_corrupted;
+  j["bus"] = s.bus;
+  j["bus_frames_replayed"] = s.bus_frames_replayed;
+  j["bus_frames_recorded"] = s.bus_frames_recorded;
+  j["bus_record_dropped"] = s.bus_record_dropped;
+  j["real_bus"] = s.real_bus;
+  j["port_frames_rx"] = s.port.frames_rx;
+  j["port_frames_tx"] = s.port.frames_tx;
+  j["port_dropped"] = s.port.dropped;
+  j["port_errors"] = s.port.errors;
+  j["port_would_block"] = s.port.tx_would_block;
+  j["transport"] = s.transport;
+  j["bus_state"] = s.bus_state;
+  j["bus_error_periods"] = s.bus_error_periods;
+  j["read_errors"] = s.read_errors;
+  j["sync_write_failures"] = s.sync_write_failures;
+  j["command_failures"] = s.command_failures;
+  j["frames_rejected"] = s.frames_rejected;
+  j["frames_unknown_id"] = s.frames_unknown_id;
+  j["values_out_of_range"] = s.values_out_of_range;
+  j["values_jump"] = s.values_jump;
+  const auto hist = [](const platform::HistogramSummary& h) {
+    return nlohmann::ordered_json{{"count", h.count}, {"min", h.min},   {"median", h.median},
+                                  {"p99", h.p99},     {"p999", h.p999}, {"max", h.max}};
   };
-  os << "\"loop\":{\"periods\":" << s.loop.periods << ",\"overruns\":" << s.loop.overruns
-     << ",\"longest_overrun_streak\":" << s.loop.longest_overrun_streak
-     << ",\"skipped_periods\":" << s.loop.skipped_periods << ",";
-  hist("wakeup_ns", s.loop.wakeup);
-  hist("step_ns", s.loop.step);
-  hist("bus_io_ns", s.loop.bus_io);
-  os << "\"end_to_end_ns\":{\"count\":" << s.loop.end_to_end.count << ",\"min\":"
-     << s.loop.end_to_end.min << ",\"median\":" << s.loop.end_to_end.median
-     << ",\"p99\":" << s.loop.end_to_end.p99 << ",\"p999\":" << s.loop.end_to_end.p999
-     << ",\"max\":" << s.loop.end_to_end.max << "}},";
-  integer("last_device_frame_period", s.last_device_frame_period);
-  integer("last_torque_stop_period", s.last_torque_stop_period);
-  integer("trace_pushed", s.trace_pushed);
-  integer("trace_dropped", s.trace_dropped);
-  os << "\"stopped\":" << (s.stopped ? "true" : "false") << ",";
-  integer("shutdown_periods", s.shutdown_periods);
-  os << "\"drives_disabled\":" << (s.drives_disabled ? "true" : "false") << ",";
-  integer("realtime_overruns", s.realtime_overruns);
-  integer("realtime_missed_periods", s.realtime_missed_periods);
-  os << "\"wakeup_latency_us\":{\"median\":" << json_number(s.wakeup_latency_us.median)
-     << ",\"p99\":" << json_number(s.wakeup_latency_us.p99) << ",\"max\":" << json_number(s.wakeup_latency_us.max)
-     << "},";
-  os << "\"realtime_setup\":[";
-  for (std::size_t i = 0; i < s.realtime_setup.size(); ++i)
-    os << (i ? "," : "") << json_string(s.realtime_setup[i]);
-  os << "],";
-  os << "\"managed\":" << (s.managed ? "true" : "false") << ",";
-  os << "\"startup\":" << json_string(s.startup) << ",";
-  integer("periods_to_operational", s.periods_to_operational);
-  integer("periods_to_active", s.periods_to_active);
-  integer("periods_to_torque", s.periods_to_torque);
-  os << "\"lifecycle\":" << json_string(s.lifecycle) << ",";
-  integer("faults", s.faults);
-  integer("fault_records", s.fault_records);
-  os << "\"first_fault\":{\"cause\":" << json_string(s.first_fault) << ",\"id\":" << s.first_fault_id
-     << ",\"value\":" << json_number(s.first_fault_value)
-     << ",\"time_s\":" << json_number(s.first_fault_time_s) << ",\"period\":" << s.first_fault_period
-     << "},";
-  integer("emcys", s.emcys);
-  integer("emcy_faults", s.emcy_faults);
-  integer("heartbeat_losses", s.heartbeat_losses);
-  integer("zero_torque_periods", s.zero_torque_periods);
-  os << "\"drive_states\":[";
-  for (std::size_t i = 0; i < s.drive_states.size(); ++i) os << (i ? "," : "") << json_string(s.drive_states[i]);
-  os << "],";
-  os << "\"warnings\":[";
-  for (std::size_t i = 0; i < s.warnings.size(); ++i) os << (i ? "," : "") << json_string(s.warnings[i]);
-  os << "],";
+  j["loop"] = {{"periods", s.loop.periods},
+               {"overruns", s.loop.overruns},
+               {"longest_overrun_streak", s.loop.longest_overrun_streak},
+               {"skipped_periods", s.loop.skipped_periods},
+               {"wakeup_ns", hist(s.loop.wakeup)},
+               {"step_ns", hist(s.loop.step)},
+               {"bus_io_ns", hist(s.loop.bus_io)},
+               {"end_to_end_ns", hist(s.loop.end_to_end)}};
+  j["last_device_frame_period"] = s.last_device_frame_period;
+  j["last_torque_stop_period"] = s.last_torque_stop_period;
+  j["trace_pushed"] = s.trace_pushed;
+  j["trace_dropped"] = s.trace_dropped;
+  j["stopped"] = s.stopped;
+  j["shutdown_periods"] = s.shutdown_periods;
+  j["drives_disabled"] = s.drives_disabled;
+  j["realtime_overruns"] = s.realtime_overruns;
+  j["realtime_missed_periods"] = s.realtime_missed_periods;
+  j["wakeup_latency_us"] = {{"median", s.wakeup_latency_us.median},
+                            {"p99", s.wakeup_latency_us.p99},
+                            {"max", s.wakeup_latency_us.max}};
+  j["realtime_setup"] = s.realtime_setup;
+  j["managed"] = s.managed;
+  j["startup"] = s.startup;
+  j["periods_to_operational"] = s.periods_to_operational;
+  j["periods_to_active"] = s.periods_to_active;
+  j["periods_to_torque"] = s.periods_to_torque;
+  j["lifecycle"] = s.lifecycle;
+  j["faults"] = s.faults;
+  j["fault_records"] = s.fault_records;
+  j["first_fault"] = {{"cause", s.first_fault},
+                      {"id", s.first_fault_id},
+                      {"value", s.first_fault_value},
+                      {"time_s", s.first_fault_time_s},
+                      {"period", s.first_fault_period}};
+  j["emcys"] = s.emcys;
+  j["emcy_faults"] = s.emcy_faults;
+  j["heartbeat_losses"] = s.heartbeat_losses;
+  j["zero_torque_periods"] = s.zero_torque_periods;
+  j["drive_states"] = s.drive_states;
+  j["warnings"] = s.warnings;
   if (s.admittance.enabled) {
     const AdmittanceSummary& a = s.admittance;
-    os << "\"admittance\":{\"measured_force_max_n\":" << json_number(a.measured_force_max_n)
-       << ",\"measured_torque_max_nm\":" << json_number(a.measured_torque_max_nm)
-       << ",\"device_error_max_mm\":" << json_number(a.device_error_max_mm)
-       << ",\"device_error_rms_mm\":" << json_number(a.device_error_rms_mm)
-       << ",\"hand_separation_max_mm\":" << json_number(a.hand_separation_max_mm)
-       << ",\"final_measured_force_n\":" << json_number(a.final_measured_force_n)
-       << ",\"final_hand_separation_mm\":" << json_number(a.final_hand_separation_mm)
-       << ",\"k_hand\":" << json_number(a.k_hand) << ",\"sensor_frames\":" << a.sensor_frames
-       << ",\"sensor_rejected_periods\":" << a.sensor_rejected_periods
-       << ",\"csp_rpdos\":" << a.csp_rpdos << ",\"hold_periods\":" << a.hold_periods << "},";
+    j["admittance"] = {{"measured_force_max_n", a.measured_force_max_n},
+                       {"measured_torque_max_nm", a.measured_torque_max_nm},
+                       {"device_error_max_mm", a.device_error_max_mm},
+                       {"device_error_rms_mm", a.device_error_rms_mm},
+                       {"hand_separation_max_mm", a.hand_separation_max_mm},
+                       {"final_measured_force_n", a.final_measured_force_n},
+                       {"final_hand_separation_mm", a.final_hand_separation_mm},
+                       {"k_hand", a.k_hand},
+                       {"sensor_frames", a.sensor_frames},
+                       {"sensor_rejected_periods", a.sensor_rejected_periods},
+                       {"csp_rpdos", a.csp_rpdos},
+                       {"hold_periods", a.hold_periods}};
   }
-  os << "\"nan_detected\":" << (s.nan_detected ? "true" : "false");
-  os << "}";
-  return os.str();
+  j["nan_detected"] = s.nan_detected;
+  // Scene names, paths and messages may hold bytes that are not UTF-8: replaced by U+FFFD
+  // instead of throwing.
+  return j.dump(-1, ' ', false, nlohmann::ordered_json::error_handler_t::replace);
 }
 
 }  // namespace numen::sim

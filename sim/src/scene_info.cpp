@@ -7,16 +7,15 @@
 #include <iomanip>
 #include <sstream>
 
+#include <nlohmann/json.hpp>
+
 #include "numen/core/capacity.hpp"
 #include "numen/core/data.hpp"
 #include "numen/core/step_stages.hpp"
 #include "numen/sim/scene.hpp"
-#include "json_text.hpp"
 
 namespace numen::sim {
 namespace {
-
-using detail::json_string;
 
 /// "12.3 KiB" style, with the exact byte count.
 std::string bytes(std::size_t n) {
@@ -26,12 +25,12 @@ std::string bytes(std::size_t n) {
   return os.str();
 }
 
+/// {group: heap bytes, ...} in the groups' order.
 template <std::size_t N>
-void json_groups(std::ostringstream& os, const std::array<core::BufferGroupBytes, N>& groups) {
-  os << "\"groups\":{";
-  for (std::size_t i = 0; i < N; ++i)
-    os << (i ? "," : "") << json_string(groups[i].group) << ":" << groups[i].heap_bytes;
-  os << "}";
+nlohmann::ordered_json json_groups(const std::array<core::BufferGroupBytes, N>& groups) {
+  nlohmann::ordered_json j = nlohmann::ordered_json::object();
+  for (const core::BufferGroupBytes& g : groups) j[g.group] = g.heap_bytes;
+  return j;
 }
 
 }  // namespace
@@ -105,34 +104,38 @@ std::string format_scene_info(const SceneInfo& i) {
 }
 
 std::string format_scene_info_json(const SceneInfo& i) {
-  std::ostringstream os;
-  os << std::setprecision(17);
-  os << "{\"name\":" << json_string(i.name) << ",\"file\":" << json_string(i.file)
-     << ",\"integrator\":" << json_string(i.integrator) << ",\"coupling\":" << json_string(i.coupling)
-     << ",\"dt_s\":" << i.dt_s;
-  os << ",\"sizes\":{\"bodies\":" << i.bodies << ",\"body_spheres\":" << i.body_spheres
-     << ",\"joints\":" << i.joints << ",\"joint_rows\":" << i.joint_rows << ",\"nets\":" << i.nets
-     << ",\"nodes\":" << i.nodes << ",\"net_springs\":" << i.net_springs
-     << ",\"obstacles\":" << i.obstacles << ",\"static_spheres\":" << i.static_spheres
-     << ",\"materials\":" << i.materials << "}";
-  os << ",\"stages\":[";
-  for (std::size_t k = 0; k < i.stages.size(); ++k) {
-    const StageLine& s = i.stages[k];
-    os << (k ? "," : "") << "{\"name\":" << json_string(s.name)
-       << ",\"runs\":" << (s.runs ? "true" : "false")
-       << ",\"skipped_why\":" << json_string(s.skipped_why) << "}";
-  }
-  os << "],\"capacities\":{\"max_contacts\":" << i.max_contacts
-     << ",\"contacts\":" << i.contact_capacity << ",\"body_contacts\":" << i.cross_contact_capacity
-     << ",\"node_contacts\":" << i.node_contact_capacity << "}";
-  os << ",\"model_bytes\":{\"sizeof\":" << i.model_bytes.sizeof_model
-     << ",\"heap\":" << i.model_bytes.heap_bytes() << ",";
-  json_groups(os, i.model_bytes.groups);
-  os << "},\"data_bytes\":{\"sizeof\":" << i.data_bytes.sizeof_data
-     << ",\"heap\":" << i.data_bytes.heap_bytes() << ",";
-  json_groups(os, i.data_bytes.groups);
-  os << "}}";
-  return os.str();
+  nlohmann::ordered_json j;  // keys in insertion order
+  j["name"] = i.name;
+  j["file"] = i.file;
+  j["integrator"] = i.integrator;
+  j["coupling"] = i.coupling;
+  j["dt_s"] = i.dt_s;
+  j["sizes"] = {{"bodies", i.bodies},
+                {"body_spheres", i.body_spheres},
+                {"joints", i.joints},
+                {"joint_rows", i.joint_rows},
+                {"nets", i.nets},
+                {"nodes", i.nodes},
+                {"net_springs", i.net_springs},
+                {"obstacles", i.obstacles},
+                {"static_spheres", i.static_spheres},
+                {"materials", i.materials}};
+  nlohmann::ordered_json stages = nlohmann::ordered_json::array();
+  for (const StageLine& s : i.stages)
+    stages.push_back({{"name", s.name}, {"runs", s.runs}, {"skipped_why", s.skipped_why}});
+  j["stages"] = std::move(stages);
+  j["capacities"] = {{"max_contacts", i.max_contacts},
+                     {"contacts", i.contact_capacity},
+                     {"body_contacts", i.cross_contact_capacity},
+                     {"node_contacts", i.node_contact_capacity}};
+  j["model_bytes"] = {{"sizeof", i.model_bytes.sizeof_model},
+                      {"heap", i.model_bytes.heap_bytes()},
+                      {"groups", json_groups(i.model_bytes.groups)}};
+  j["data_bytes"] = {{"sizeof", i.data_bytes.sizeof_data},
+                     {"heap", i.data_bytes.heap_bytes()},
+                     {"groups", json_groups(i.data_bytes.groups)}};
+  // A scene's file name may hold bytes that are not UTF-8: replaced by U+FFFD instead of throwing.
+  return j.dump(-1, ' ', false, nlohmann::ordered_json::error_handler_t::replace);
 }
 
 }  // namespace numen::sim

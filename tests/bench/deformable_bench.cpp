@@ -11,6 +11,12 @@
 // ‖r‖_{M⁻¹}/‖b‖_{D̃⁻¹} (SSOR–Eisenstat; docs/deformable.md, "Solver tolerance");
 // DeformableBallTight: 642 and 2562 nodes at 3e-4, the tolerance that keeps
 // the solver-tolerance rule at 2562 nodes (equal accuracy).
+// DeformableBallFrozen: the machine's share of the spread. Each iteration
+// times one step of the trajectory and then the same step on the same input
+// (Data restored from a snapshot taken after the warm-up, untimed): identical
+// instructions and data every time, so whatever spreads the frozen step's
+// times is the machine (the other tenants of the host's core, frequency),
+// measured at the same moments as the trajectory's steps.
 // 300 warm-up steps, then each iteration times one core::step (manual time).
 // Counters: nodes, springs, tolerance, cg_iterations (mean per step), node_contacts
 // (mean), ns_per_node (step time / nodes), ns_per_node_iteration (step time /
@@ -31,17 +37,22 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <utility>
 #include <vector>
 
+#include "deformable_ball.hpp"
 #include "numen/core/data.hpp"
 #include "numen/core/step.hpp"
-#include "deformable_ball.hpp"
+#include "sample_median.hpp"
 
 namespace {
 
 namespace core = numen::core;
 
+using numen::test::kBallWarmUpSteps;
 using numen::test::make_deformable_ball;
+using numen::test::run_deformable_ball;
+using numen::test::sample_median;
 using numen::test::set_deformable_ball_target;
 
 /// Times core::step on the ball of `sub` subdivisions solved to `tolerance`
@@ -49,11 +60,7 @@ using numen::test::set_deformable_ball_target;
 void run_ball(benchmark::State& state, int sub, double tolerance) {
   const core::Model m = make_deformable_ball(sub, 1e-3, tolerance);
   core::Data d = core::make_data(m);
-  std::int64_t k = 0;
-  for (; k < 300; ++k) {  // warm-up: settle onto the floor
-    set_deformable_ball_target(m, d, k);
-    core::step(m, d);
-  }
+  std::int64_t k = run_deformable_ball(m, d, 0, kBallWarmUpSteps);  // settle onto the floor
   double total_s = 0.0;
   double min_s = std::numeric_limits<double>::infinity();
   double iterations = 0.0;
@@ -85,12 +92,10 @@ void run_ball(benchmark::State& state, int sub, double tolerance) {
   state.counters["node_contacts"] = contacts / static_cast<double>(steps);
   state.counters["ns_per_node"] =
       benchmark::Counter(total_s * 1e9 / n, benchmark::Counter::kAvgIterations);
-  state.counters["ns_per_node_iteration"] = benchmark::Counter(
-      total_s * 1e9 / (n * (mean_it + 1.0)), benchmark::Counter::kAvgIterations);
+  state.counters["ns_per_node_iteration"] =
+      benchmark::Counter(total_s * 1e9 / (n * (mean_it + 1.0)), benchmark::Counter::kAvgIterations);
   state.counters["min_step_us"] = min_s * 1e6;
-  const auto mid = step_s.begin() + static_cast<std::ptrdiff_t>(step_s.size() / 2);
-  std::nth_element(step_s.begin(), mid, step_s.end());
-  state.counters["median_step_us"] = step_s.empty() ? 0.0 : *mid * 1e6;
+  state.counters["median_step_us"] = sample_median(std::move(step_s)) * 1e6;
   state.counters["max_strain"] = d.nets[0].max_strain;
   state.counters["tolerance"] = tolerance;
 }
@@ -107,7 +112,66 @@ void DeformableBallTight(benchmark::State& state) {
   run_ball(state, static_cast<int>(state.range(0)), 3e-4);
 }
 
+/// Interleaves trajectory steps with one frozen step (see the header).
+/// Counters: median_step_us (trajectory, interleaved), frozen_median_us,
+/// frozen_min_us, frozen_spread (frozen median / frozen min: 1 on a quiet
+/// machine), frozen_iterations; manual time is the frozen step's. Fails if a
+/// frozen step's nodes differ in any bit from the first one's, or if its
+/// status is not ok.
+/// Argument: subdivisions; tolerance 1e-3.
+void DeformableBallFrozen(benchmark::State& state) {
+  const core::Model m = make_deformable_ball(static_cast<int>(state.range(0)));
+  core::Data d = core::make_data(m);
+  const std::int64_t k_frozen = run_deformable_ball(m, d, 0, kBallWarmUpSteps);
+  std::int64_t k = k_frozen;
+  const core::Data snapshot = d;
+  core::Data frozen = d;
+  core::Data first = d;  // the first frozen step's result
+  bool have_first = false;
+  bool identical = true;
+  std::vector<double> trajectory_s, frozen_s;
+  trajectory_s.reserve(1 << 16);
+  frozen_s.reserve(1 << 16);
+  using clock = std::chrono::steady_clock;
+  for (auto _ : state) {
+    set_deformable_ball_target(m, d, k++);
+    auto t0 = clock::now();
+    core::step(m, d);
+    auto t1 = clock::now();
+    trajectory_s.push_back(std::chrono::duration<double>(t1 - t0).count());
+    frozen = snapshot;  // same size: copies, does not allocate
+    set_deformable_ball_target(m, frozen, k_frozen);
+    t0 = clock::now();
+    core::step(m, frozen);
+    t1 = clock::now();
+    const double frozen_step_s = std::chrono::duration<double>(t1 - t0).count();
+    frozen_s.push_back(frozen_step_s);
+    state.SetIterationTime(frozen_step_s);
+    if (!have_first) {
+      first = frozen;
+      have_first = true;
+    } else {
+      for (std::size_t i = 0; i < frozen.nodes.size(); ++i)
+        identical = identical && frozen.nodes[i].position == first.nodes[i].position &&
+                    frozen.nodes[i].velocity == first.nodes[i].velocity;
+    }
+  }
+  if (!identical) state.SkipWithError("frozen steps differ: the step is not deterministic");
+  if (frozen_s.empty()) return;
+  if ((first.status & ~static_cast<std::uint32_t>(core::kSolverNotConverged)) != core::kStepOk)
+    state.SkipWithError("frozen step status not ok");
+  const double frozen_min = *std::min_element(frozen_s.begin(), frozen_s.end());
+  const double frozen_median = sample_median(frozen_s);
+  state.counters["nodes"] = m.num_nodes();
+  state.counters["median_step_us"] = sample_median(std::move(trajectory_s)) * 1e6;
+  state.counters["frozen_median_us"] = frozen_median * 1e6;
+  state.counters["frozen_min_us"] = frozen_min * 1e6;
+  state.counters["frozen_spread"] = frozen_median / frozen_min;
+  state.counters["frozen_iterations"] = first.solver_iterations;
+}
+
 }  // namespace
 
 BENCHMARK(DeformableBall)->DenseRange(1, 4)->UseManualTime()->MinTime(0.5);
 BENCHMARK(DeformableBallTight)->DenseRange(3, 4)->UseManualTime()->MinTime(0.5);
+BENCHMARK(DeformableBallFrozen)->Arg(3)->UseManualTime()->MinTime(0.5);

@@ -60,6 +60,7 @@
 #include "numen/core/model.hpp"
 #include "numen/core/net_solve.hpp"
 #include "numen/core/step.hpp"
+#include "sample_median.hpp"
 
 namespace {
 
@@ -91,11 +92,8 @@ FrozenSystem& frozen(int subdivisions) {
   // the tight tolerances' iterations.
   f.model = numen::test::make_deformable_ball(subdivisions, 1e-3, 1e-3, 100);
   f.data = core::make_data(f.model);
-  std::int64_t k = 0;
-  for (; k < 300; ++k) {
-    numen::test::set_deformable_ball_target(f.model, f.data, k);
-    core::step(f.model, f.data);
-  }
+  const std::int64_t k =
+      numen::test::run_deformable_ball(f.model, f.data, 0, numen::test::kBallWarmUpSteps);
   f.model.solver.max_iterations = 100000;
   numen::test::set_deformable_ball_target(f.model, f.data, k);
   const numen::test::NetSystemInputs in = numen::test::stage_net_system(f.model, f.data);
@@ -126,13 +124,6 @@ void report_error(benchmark::State& state, const FrozenSystem& f, const VectorXd
   state.counters["contacts"] = f.contacts;
 }
 
-double median(std::vector<double> v) {
-  if (v.empty()) return 0.0;
-  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
-  std::nth_element(v.begin(), mid, v.end());
-  return *mid;
-}
-
 double tolerance_of(const benchmark::State& state) {
   return std::pow(10.0, -static_cast<double>(state.range(1)));
 }
@@ -159,10 +150,10 @@ bool time_solves(benchmark::State& state, Prepare prepare, Factorize factorize, 
     factor_times.push_back(std::chrono::duration<double>(t1 - t0).count());
     state.SetIterationTime(s);
   }
-  state.counters["median_us"] = median(times) * 1e6;
+  state.counters["median_us"] = numen::test::sample_median(times) * 1e6;
   state.counters["min_us"] =
       times.empty() ? 0.0 : *std::min_element(times.begin(), times.end()) * 1e6;
-  state.counters["median_factorize_us"] = median(factor_times) * 1e6;
+  state.counters["median_factorize_us"] = numen::test::sample_median(factor_times) * 1e6;
   return ok;
 }
 

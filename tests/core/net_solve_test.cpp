@@ -15,14 +15,17 @@
 // restored warm start (what the peer benchmark times) bit for bit.
 #include "numen/core/net_solve.hpp"
 
-#include <Eigen/Dense>
-#include <Eigen/SparseCholesky>
 #include <gtest/gtest.h>
 
+#include <Eigen/Dense>
+#include <Eigen/SparseCholesky>
 #include <cmath>
 #include <cstdio>
 #include <vector>
 
+#include "build_features.hpp"
+#include "deformable_ball.hpp"
+#include "net_system_sparse.hpp"
 #include "numen/core/collision.hpp"
 #include "numen/core/contact_force.hpp"
 #include "numen/core/coupling.hpp"
@@ -33,9 +36,6 @@
 #include "numen/core/model.hpp"
 #include "numen/core/rigid_body.hpp"
 #include "numen/core/step.hpp"
-#include "build_features.hpp"
-#include "deformable_ball.hpp"
-#include "net_system_sparse.hpp"
 
 namespace core = numen::core;
 using core::Mat3;
@@ -48,7 +48,9 @@ namespace {
 
 std::size_t at(int i) { return static_cast<std::size_t>(i); }
 
-Quat rot(double angle, const Vec3& axis) { return Quat(Eigen::AngleAxisd(angle, axis.normalized())); }
+Quat rot(double angle, const Vec3& axis) {
+  return Quat(Eigen::AngleAxisd(angle, axis.normalized()));
+}
 
 enum class Variant { kFree, kJointed, kImposed, kThreeNets };
 
@@ -59,7 +61,8 @@ core::Model scene(Variant v) {
   core::Model m;
   m.dt = 2e-3;
   m.gravity = Vec3(0.0, 0.0, -9.81);
-  m.coupling_mode = v == Variant::kImposed ? core::CouplingMode::kDirect : core::CouplingMode::kGodObject;
+  m.coupling_mode =
+      v == Variant::kImposed ? core::CouplingMode::kDirect : core::CouplingMode::kGodObject;
   m.solver.tolerance = 1e-12;
   m.solver.max_iterations = 500;
   m.material_names = {"hard", "net"};
@@ -93,7 +96,8 @@ core::Model scene(Variant v) {
     handle.mass = 0.3;
     // Joint anchors coincide at the start: core = handle + R (0, 0, −0.1).
     handle.initial_pose = b.initial_pose;
-    handle.initial_pose.position = b.initial_pose.position + b.initial_pose.orientation * Vec3(0, 0, 0.1);
+    handle.initial_pose.position =
+        b.initial_pose.position + b.initial_pose.orientation * Vec3(0, 0, 0.1);
     handle.initial_twist = b.initial_twist;
     m.bodies.push_back(handle);
     m.initial_attached_body = 2;
@@ -220,6 +224,7 @@ Snapshot staged_solve(const core::Model& m, core::Data& d, bool* converged,
   if (body_contact) write_body_contact(d);
   write_node_contacts(m, d);
   Snapshot s = numen::test::take_net_system_inputs(d);
+  d.solver.system_step = core::linearized_system_step(m);  // as stage_net_system()
   core::compute_forces(m, d);
   core::prepare_implicit_step(m, d);
   core::build_implicit_system(m, d);
@@ -259,7 +264,8 @@ void check_scratch(const core::Model& m, const core::Data& d, const Dense& ref, 
     EXPECT_NEAR(t.weight_isotropic, ref.spring_beta[e], 1e-15) << e;
   }
   int stretched = 0, compressed = 0;
-  for (std::size_t e = 0; e < ref.spring_beta.size(); ++e) (ref.spring_beta[e] > 0.0 ? stretched : compressed)++;
+  for (std::size_t e = 0; e < ref.spring_beta.size(); ++e)
+    (ref.spring_beta[e] > 0.0 ? stretched : compressed)++;
   EXPECT_GT(stretched, 10);
   EXPECT_GT(compressed, 10);
   for (int c = 0; c < d.num_node_contacts; ++c) EXPECT_TRUE(d.node_contacts[at(c)].active) << c;
@@ -267,9 +273,10 @@ void check_scratch(const core::Model& m, const core::Data& d, const Dense& ref, 
   for (int k = 0; k < m.num_bodies(); ++k) {
     if (d.solver.imposed[at(k)]) continue;
     const Eigen::Matrix<double, 6, 6> blk = ref.a.block<6, 6>(6 * k, 6 * k);
-    EXPECT_LT((d.solver.block[at(k)] - blk).norm(), 1e-12 * blk.norm()) << "body " << k << "\n"
-                                                                        << d.solver.block[at(k)] << "\n"
-                                                                        << blk;
+    EXPECT_LT((d.solver.block[at(k)] - blk).norm(), 1e-12 * blk.norm())
+        << "body " << k << "\n"
+        << d.solver.block[at(k)] << "\n"
+        << blk;
   }
   // Node diagonal blocks.
   for (int i = 0; i < m.num_nodes(); ++i) {
@@ -297,8 +304,9 @@ TEST(NetSolve, FreeRigidComponentMatchesTheDenseSolve) {
   const VectorXd x_ref = llt.solve(ref.b);
   const VectorXd x = numen::test::net_system_unknowns(m, d);
   const double err = (x - x_ref).norm() / x_ref.norm();
-  std::printf("[net solve free] %d iterations, residual %.2e, |x - x_dense|/|x| %.2e, |A x - b|/|b| %.2e\n",
-              d.solver_iterations, d.solver_residual, err, (ref.a * x - ref.b).norm() / ref.b.norm());
+  std::printf(
+      "[net solve free] %d iterations, residual %.2e, |x - x_dense|/|x| %.2e, |A x - b|/|b| %.2e\n",
+      d.solver_iterations, d.solver_residual, err, (ref.a * x - ref.b).norm() / ref.b.norm());
   EXPECT_LT(err, 1e-9);
   EXPECT_LT((ref.a * x - ref.b).norm(), 1e-11 * ref.b.norm());
   // Both parts of the solution matter: the body moves, the nodes deform.
@@ -367,10 +375,11 @@ TEST(NetSolve, JointedRigidComponentMatchesTheDenseKktSolve) {
   const double err = (x - x_ref).norm() / x_ref.norm();
   const VectorXd lambda_ref = -y_ref / m.dt;
   const VectorXd lambda = d.joints[0].multiplier.head(nr);
-  std::printf("[net solve jointed] %d iterations, residual %.2e, |x - x_kkt|/|x| %.2e, |G x - c| %.2e, "
-              "|λ - λ_kkt|/|λ| %.2e\n",
-              d.solver_iterations, d.solver_residual, err, (g * x - c).norm(),
-              (lambda - lambda_ref).norm() / lambda_ref.norm());
+  std::printf(
+      "[net solve jointed] %d iterations, residual %.2e, |x - x_kkt|/|x| %.2e, |G x - c| %.2e, "
+      "|λ - λ_kkt|/|λ| %.2e\n",
+      d.solver_iterations, d.solver_residual, err, (g * x - c).norm(),
+      (lambda - lambda_ref).norm() / lambda_ref.norm());
   EXPECT_LT(err, 1e-9);
   EXPECT_LT((g * x - c).norm(), 1e-10 * (1.0 + c.norm()));
   EXPECT_GT(c.norm(), 0.0);
@@ -397,7 +406,8 @@ TEST(NetSolve, ImposedRigidComponentHasNoUnknownAndTheNodesMatchTheDenseSolve) {
   const VectorXd x_ref = ref.a.llt().solve(ref.b);
   const VectorXd x = numen::test::net_system_unknowns(m, d);
   const double err = (x - x_ref).norm() / x_ref.norm();
-  std::printf("[net solve imposed] %d iterations, |x - x_dense|/|x| %.2e\n", d.solver_iterations, err);
+  std::printf("[net solve imposed] %d iterations, |x - x_dense|/|x| %.2e\n", d.solver_iterations,
+              err);
   EXPECT_LT(err, 1e-9);
   // A whole step keeps the imposed body at the target.
   core::Data d2 = core::make_data(m);
@@ -439,7 +449,8 @@ TEST(NetSolve, SeveralNetsOnOneBodyAndOnTheProbeMatchTheDenseSolve) {
   check_scratch(m, d, ref, converged);
   const VectorXd x_ref = ref.a.llt().solve(ref.b);
   const double err = (numen::test::net_system_unknowns(m, d) - x_ref).norm() / x_ref.norm();
-  std::printf("[net solve three nets] %d iterations, |x - x_dense|/|x| %.2e\n", d.solver_iterations, err);
+  std::printf("[net solve three nets] %d iterations, |x - x_dense|/|x| %.2e\n", d.solver_iterations,
+              err);
   EXPECT_LT(err, 1e-9);
 }
 
@@ -471,7 +482,7 @@ VectorXd join(const Split& s) {
 /// The splitting of net_solve.hpp from the dense A: D̃ (6×6 body and 3×3
 /// node diagonal blocks), D (D̃ plus the body–body off-diagonal blocks), L
 /// (strictly lower blocks below the body–body part, the nodes taken in the
-/// sweep order NetScratch::sweep_order: node i's row holds the node–body
+/// sweep order Model::node_sweep_order: node i's row holds the node–body
 /// blocks and the blocks of the nodes before i in that order).
 struct Splitting {
   MatrixXd d_tilde, d, l;
@@ -491,7 +502,8 @@ Splitting dense_splitting(const core::Model& m, const core::Data& data, const Ma
     const int r = nb6 + 3 * i;
     s.l.block(r, 0, 3, nb6) = a.block(r, 0, 3, nb6);
     for (int j = 0; j < m.num_nodes(); ++j)
-      if (position(j) < position(i)) s.l.block<3, 3>(r, nb6 + 3 * j) = a.block<3, 3>(r, nb6 + 3 * j);
+      if (position(j) < position(i))
+        s.l.block<3, 3>(r, nb6 + 3 * j) = a.block<3, 3>(r, nb6 + 3 * j);
   }
   return s;
 }
@@ -636,11 +648,8 @@ struct StagedBall {
 StagedBall staged_ball() {
   StagedBall st{numen::test::make_deformable_ball(2, 1e-3, 1e-12, 1000), {}, {}};
   st.d = core::make_data(st.m);
-  std::int64_t k = 0;
-  for (; k < 300; ++k) {
-    numen::test::set_deformable_ball_target(st.m, st.d, k);
-    core::step(st.m, st.d);
-  }
+  const std::int64_t k =
+      numen::test::run_deformable_ball(st.m, st.d, 0, numen::test::kBallWarmUpSteps);
   numen::test::set_deformable_ball_target(st.m, st.d, k);
   st.snap = numen::test::stage_net_system(st.m, st.d);
   return st;
@@ -674,9 +683,10 @@ TEST(NetSolve, BallSystemAssembledSparselyMatchesTheSolverAndEigensLdlt) {
   EXPECT_GT(ldlt.vectorD().minCoeff(), 0.0);  // positive definite
   const VectorXd x_ldlt = ldlt.solve(sys.b);
   const double err = (x - x_ldlt).norm() / x_ldlt.norm();
-  std::printf("[net solve ball 162] %d contacts, %d iterations, |A x - b|/|b| %.2e, "
-              "|x - x_ldlt|/|x| %.2e\n",
-              d.num_node_contacts, d.solver_iterations, res, err);
+  std::printf(
+      "[net solve ball 162] %d contacts, %d iterations, |A x - b|/|b| %.2e, "
+      "|x - x_ldlt|/|x| %.2e\n",
+      d.num_node_contacts, d.solver_iterations, res, err);
   EXPECT_LT(res, 1e-12);
   EXPECT_LT(err, 1e-10);
   EXPECT_LT((sys.a * x_ldlt - sys.b).norm(), 1e-13 * sys.b.norm());

@@ -67,7 +67,7 @@ TEST(NetState, SweepOrderIsAPermutationThatKeepsEachNetsRange) {
   const core::Model m = two_nets();
   const core::Data d = core::make_data(m);
   const core::NetScratch& ns = d.net;
-  ASSERT_EQ(ns.sweep_order.size(), at(m.num_nodes()));
+  ASSERT_EQ(m.node_sweep_order.size(), at(m.num_nodes()));
   ASSERT_EQ(ns.sweep_position.size(), at(m.num_nodes()));
   ASSERT_EQ(ns.sweep_nodes.size(), at(m.num_nodes()));
   EXPECT_EQ(ns.spring_block.size(), at(m.num_nodes()));  // per node
@@ -75,7 +75,7 @@ TEST(NetState, SweepOrderIsAPermutationThatKeepsEachNetsRange) {
   std::vector<int> seen(at(m.num_nodes()), 0);
   for (const core::NetModel& net : m.nets) {
     for (int p = net.node_begin; p < net.node_begin + net.node_count; ++p) {
-      const int node = ns.sweep_order[at(p)];
+      const int node = m.node_sweep_order[at(p)];
       ASSERT_GE(node, net.node_begin) << net.name << " position " << p;
       ASSERT_LT(node, net.node_begin + net.node_count) << net.name << " position " << p;
       ++seen[at(node)];
@@ -167,7 +167,8 @@ TEST(NetState, NoNetsNoScratch) {
   m.bodies.push_back(body);
   ASSERT_EQ(core::finalize_model(m), "");
   const core::Data d = core::make_data(m);
-  EXPECT_TRUE(d.net.sweep_order.empty());
+  EXPECT_TRUE(m.node_sweep_order.empty());
+  EXPECT_TRUE(d.net.sweep_position.empty());
   EXPECT_TRUE(d.net.sweep_nodes.empty());
   EXPECT_EQ(d.net.sweep_springs.size(), 0u);
   EXPECT_TRUE(d.net.spring_low_begin.empty());

@@ -4,6 +4,35 @@
 
 pass() { echo "HIL $HIL_NAME PASS $*"; exit 0; }
 fail() { echo "HIL $HIL_NAME FAIL $*"; exit 1; }
+# inconclusive REASON: the scenario's premise did not hold for a cause outside what it tests
+# (the emulator stalled the guest long enough for a timing safe stop before the torque the
+# scenario acts on flowed). /init runs the scenario again, at most 5 attempts, and reports a
+# FAIL if none was conclusive; a PASS or FAIL is never run again.
+inconclusive() { echo "HIL $HIL_NAME INCONCLUSIVE $*"; exit 3; }
+
+# fail_timing RUN_TXT MESSAGE: fails a check that holds only while the guest runs in real time
+# (socket drops, SYNC pacing, frames read in time): inconclusive instead if the numen run whose
+# summary is RUN_TXT got less than 0.8 of real time ("(0.371x real time)": the host starved the
+# emulator; a local HIL run on 2026-11-22: a 5 s replay run took 13.6 s and its socket dropped 467
+# frames).
+fail_timing() {
+  local f
+  f=$(grep -o -m1 '([0-9.]*x real time)' "$1" | tr -d '(x' | cut -d' ' -f1)
+  awk -v f="$f" 'BEGIN { exit !(f != "" && f < 0.8) }' &&
+    inconclusive "$2 (the guest ran at ${f}x real time)"
+  fail "$2"
+}
+
+# first_fault RUN_TXT: the summary's first safe-stop cause, "first: <cause>" (empty if none).
+first_fault() { grep -o 'first: [a-z ]*' "$1" | head -n 1 | sed 's/ *$//'; }
+
+# timing_cause FIRST: true if FIRST (a summary's "first: <cause>") is a safe-stop cause the
+# guest's timing explains (a stalled emulator: encoder timeout, overruns, heartbeat loss, or the
+# encoder jump of the samples a stall skipped), not the protocol (bad input, EMCY, drive fault,
+# range, non-finite values).
+timing_cause() {
+  echo "$1" | grep -q -E '^first: (encoder timeout|overruns|heartbeat lost|encoder jump)'
+}
 
 # Waits until FILE contains LINE (a whole line), at most SECONDS (integer) seconds.
 wait_for_line() {

@@ -4,7 +4,8 @@
 #
 # Usage: tests/hil/run.sh [BUILD_DIR]       (default BUILD_DIR: <repo>/build-hil/build)
 # Environment: NUMEN_HIL_JOBS (build jobs, default 2), NUMEN_HIL_TIMEOUT (seconds for the whole
-# qemu run, default 600), NUMEN_HIL_CACHE (downloaded packages, default <repo>/build-hil/deps),
+# qemu run, default 1500: room for inconclusive attempts), NUMEN_HIL_CACHE (downloaded
+# packages, default <repo>/build-hil/deps),
 # NUMEN_HIL_PAIR_PERIOD_US (control period of the controller + device scenarios, default 10000),
 # NUMEN_HIL_OVERRUN_LIMIT (their numen run --overrun-limit, default 0: overruns counted only).
 # Output: the guest console, then one line per scenario and "hil: N passed, M failed".
@@ -16,7 +17,7 @@ here="$(cd "$(dirname "$0")" && pwd)"
 repo="$(cd "$here/../.." && pwd)"
 build="${1:-$repo/build-hil/build}"
 jobs="${NUMEN_HIL_JOBS:-2}"
-limit="${NUMEN_HIL_TIMEOUT:-600}"
+limit="${NUMEN_HIL_TIMEOUT:-1500}"
 die() { echo "hil: FAIL: $*" >&2; exit 1; }
 elapsed() { awk -v a="$1" -v b="$(date +%s.%N)" 'BEGIN {printf "%.1f", b - a}'; }
 
@@ -47,6 +48,10 @@ pair_period_us="${NUMEN_HIL_PAIR_PERIOD_US:-10000}"
 overrun_limit="${NUMEN_HIL_OVERRUN_LIMIT:-0}"
 echo "hil: booting $(cat "$image/kernel-version") under qemu (TCG), limit ${limit}s, console: $log"
 t_boot=$(date +%s.%N)
+# This machine's CPU time and the part the hypervisor stole (/proc/stat's cpu line: user..steal,
+# steal 8th), jiffies: a host that starves this machine starves the emulator with it.
+cpu_times() { awk '/^cpu / { t = 0; for (i = 2; i <= 9; i++) t += $i; print t, $9 }' /proc/stat; }
+read -r cpu0 steal0 < <(cpu_times)
 set +e
 timeout --kill-after=10 "$limit" qemu-system-x86_64 -accel tcg -nographic -no-reboot -m 512M -smp 2 \
   -kernel "$image/vmlinuz" -initrd "$image/initramfs.cpio.gz" \
@@ -61,6 +66,8 @@ timeout --kill-after=10 "$limit" qemu-system-x86_64 -accel tcg -nographic -no-re
 qemu_rc=${PIPESTATUS[0]}
 set -e
 t_run=$(elapsed "$t_boot")
+read -r cpu1 steal1 < <(cpu_times)
+steal_pct=$(awk -v c="$((cpu1 - cpu0))" -v s="$((steal1 - steal0))" 'BEGIN { printf "%.0f", (c > 0 ? 100 * s / c : 0) }')
 
 # 5. Verdict.
 [ "$qemu_rc" -ne 124 ] && [ "$qemu_rc" -ne 137 ] || echo "hil: qemu killed after ${limit}s" >&2
@@ -81,6 +88,8 @@ for script in "$here"/scenarios/*.sh; do
   if [ -z "$result" ]; then
     result="HIL $name FAIL no result on the console"
   fi
+  inconclusive="$(grep -E "^HIL $name INCONCLUSIVE" "$log" | sed "s/^HIL $name INCONCLUSIVE //" | paste -sd ';' || true)"
+  [ -z "$inconclusive" ] || result="$result [inconclusive attempts before: $inconclusive]"
   case "$result" in
     "HIL $name PASS"*) passed=$((passed + 1)) ;;
     *) failed=$((failed + 1)) ;;
@@ -92,6 +101,6 @@ boot_line="$(grep '^HIL-START' "$log" | head -n 1)"
 echo
 echo "hil: results"
 printf '  %s\n' "${summary[@]}"
-echo "hil: image $image_kib KiB (kernel + initramfs); ${boot_line#HIL-START }; qemu run ${t_run}s; total $(elapsed "$t_start")s"
+echo "hil: image $image_kib KiB (kernel + initramfs); ${boot_line#HIL-START }; qemu run ${t_run}s (host steal ${steal_pct} % of this machine's CPU time); total $(elapsed "$t_start")s"
 echo "hil: $passed passed, $failed failed"
 [ "$failed" -eq 0 ] && [ "$passed" -gt 0 ]

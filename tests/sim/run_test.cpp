@@ -8,6 +8,8 @@
 
 #include <gtest/gtest.h>
 
+#include <nlohmann/json.hpp>
+
 #include <atomic>
 
 #include <algorithm>
@@ -232,11 +234,17 @@ TEST(RunDefaultScene, RunSceneRunsTheRequestedDuration) {
   EXPECT_GT(s.wall_time_s, 0.0);
   EXPECT_EQ(s.realtime_overruns, 0);
   EXPECT_FALSE(s.nan_detected);
-  // JSON summary: one object, numbers present.
+  // JSON summary: one object that parses, with the summary's values.
   const std::string json = numen::sim::format_summary_json(s);
-  EXPECT_EQ(json.front(), '{');
-  EXPECT_EQ(json.back(), '}');
-  EXPECT_NE(json.find("\"steps\":500,"), std::string::npos) << json;
+  ASSERT_TRUE(nlohmann::json::accept(json)) << json;
+  const nlohmann::json j = nlohmann::json::parse(json);
+  EXPECT_EQ(j.at("steps"), 500);
+  EXPECT_EQ(j.at("dt_s"), s.dt_s);  // round-trips exactly
+  EXPECT_EQ(j.at("scene"), s.scene);
+  EXPECT_EQ(j.at("nan_detected"), false);
+  EXPECT_EQ(j.at("loop").at("step_ns").at("count"), s.loop.step.count);
+  EXPECT_EQ(j.at("step_time_us").at("median"), s.step_time_us.median);
+  EXPECT_EQ(json.substr(0, 10), "{\"scene\":\"") << "keys keep their order";
   EXPECT_NE(numen::sim::format_summary(s).find("500 steps"), std::string::npos);
 }
 
@@ -529,13 +537,15 @@ TEST(RunDeformable, SummaryReportsTheNets) {
   numen::sim::RunOptions opt;
   opt.duration_s = 0.2;
   const RunSummary s = numen::sim::run_scene(deformable_scene(), opt);
-  const std::string json = numen::sim::format_summary_json(s);
-  for (const char* key :
-       {"\"num_nets\":1,", "\"num_nodes\":306,", "\"node_contacts_max\":",
-        "\"net_penetration_max_mm\":", "\"net_tie_stretch_max_mm\":", "\"net_strain_max\":",
-        "\"net_node_speed_max_mps\":", "\"solver_iterations_mean\":", "\"solver_iterations_max\":",
-        "\"solver_residual_max\":", "\"solver_not_converged_steps\":0,"})
-    EXPECT_NE(json.find(key), std::string::npos) << key << " in " << json;
+  const nlohmann::json json = nlohmann::json::parse(numen::sim::format_summary_json(s));
+  EXPECT_EQ(json.at("num_nets"), 1);
+  EXPECT_EQ(json.at("num_nodes"), 306);
+  EXPECT_EQ(json.at("solver_not_converged_steps"), 0);
+  EXPECT_EQ(json.at("net_strain_max"), s.net_strain_max);
+  for (const char* key : {"node_contacts_max", "net_penetration_max_mm", "net_tie_stretch_max_mm",
+                          "net_node_speed_max_mps", "solver_iterations_mean",
+                          "solver_iterations_max", "solver_residual_max"})
+    EXPECT_TRUE(json.at(key).is_number()) << key << " in " << json.dump();
   const std::string text = numen::sim::format_summary(s);
   EXPECT_NE(text.find("deformable: 1 net(s), 306 nodes"), std::string::npos) << text;
   EXPECT_NE(text.find("solver iterations mean"), std::string::npos) << text;
@@ -784,7 +794,10 @@ TEST(RunRealtimeSetup, StepsAreReportedAndAFailureDoesNotStopTheRun) {
     affinity_failed = affinity_failed || (line.find("affinity") != std::string::npos &&
                                           line.find("FAILED") != std::string::npos);
   EXPECT_TRUE(affinity_failed);
-  EXPECT_NE(numen::sim::format_summary_json(s).find("\"realtime_setup\":[\""), std::string::npos);
+  const nlohmann::json setup =
+      nlohmann::json::parse(numen::sim::format_summary_json(s)).at("realtime_setup");
+  ASSERT_EQ(setup.size(), s.realtime_setup.size());
+  EXPECT_EQ(setup.at(0), s.realtime_setup[0]);
 
   bool threw = false;
   std::thread strict([&] {

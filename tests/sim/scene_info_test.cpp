@@ -8,6 +8,8 @@
 
 #include <gtest/gtest.h>
 
+#include <nlohmann/json.hpp>
+
 #include "alloc_counter.hpp"
 #include "numen/core/capacity.hpp"
 #include "numen/core/data.hpp"
@@ -88,24 +90,32 @@ TEST(SceneInfo, DataBytesAreWhatMakeDataAllocated) {
 TEST(SceneInfo, ReportAndJsonNameEveryStageAndGroup) {
   const sim::SceneInfo i = sim::describe_scene(sim::load_scene(shipped("construction")));
   const std::string text = sim::format_scene_info(i);
-  const std::string json = sim::format_scene_info_json(i);
-  for (const sim::StageLine& s : i.stages) {
+  const nlohmann::json json = nlohmann::json::parse(sim::format_scene_info_json(i));
+  ASSERT_EQ(json.at("stages").size(), i.stages.size());
+  for (std::size_t k = 0; k < i.stages.size(); ++k) {
+    const sim::StageLine& s = i.stages[k];
     EXPECT_NE(text.find(s.name), std::string::npos) << s.name;
-    EXPECT_NE(json.find("\"" + s.name + "\""), std::string::npos) << s.name;
+    EXPECT_EQ(json.at("stages").at(k).at("name"), s.name);
+    EXPECT_EQ(json.at("stages").at(k).at("runs"), s.runs) << s.name;
+    EXPECT_EQ(json.at("stages").at(k).at("skipped_why"), s.skipped_why) << s.name;
     if (!s.runs) {
       std::string line = "skipped: ";
       line += s.skipped_why;
       EXPECT_NE(text.find(line), std::string::npos) << s.name;
     }
   }
-  for (const core::BufferGroupBytes& g : i.data_bytes.groups) {
-    std::string key = "\"";
-    key += g.group;
-    key += "\":";
-    key += std::to_string(g.heap_bytes);
-    EXPECT_NE(json.find(key), std::string::npos) << g.group;
-  }
-  EXPECT_EQ(json.front(), '{');
-  EXPECT_EQ(json.back(), '}');
-  EXPECT_NE(json.find("\"heap\":" + std::to_string(i.data_bytes.heap_bytes())), std::string::npos);
+  for (const core::BufferGroupBytes& g : i.data_bytes.groups)
+    EXPECT_EQ(json.at("data_bytes").at("groups").at(g.group), g.heap_bytes) << g.group;
+  EXPECT_EQ(json.at("data_bytes").at("heap"), i.data_bytes.heap_bytes());
+  EXPECT_EQ(json.at("sizes").at("bodies"), i.bodies);
+  EXPECT_EQ(json.at("name"), i.name);
+}
+
+TEST(SceneInfo, JsonEscapesNamesAndReplacesBytesThatAreNotUtf8) {
+  sim::SceneInfo i = sim::describe_scene(sim::load_scene(shipped("construction")));
+  i.name = "quote \" backslash \\ tab \t bad \xff end";
+  const std::string out = sim::format_scene_info_json(i);
+  ASSERT_TRUE(nlohmann::json::accept(out)) << out;
+  EXPECT_EQ(nlohmann::json::parse(out).at("name"),
+            "quote \" backslash \\ tab \t bad \xef\xbf\xbd end");
 }

@@ -1,8 +1,9 @@
 #pragma once
 /// @file deformable_ball.hpp
-/// The deformable ball of the net benchmark (tests/bench/deformable_bench.cpp)
-/// and of the solver-tolerance test (tests/core/net_solve_tolerance_test.cpp),
-/// so that both measure the same model: a 0.1 kg icosphere net of radius 3 cm
+/// The deformable ball of the net benchmarks (tests/bench/deformable_bench.cpp,
+/// net_solve_peer_bench.cpp) and of the solver tests (tests/core/
+/// net_solve_tolerance_test.cpp, net_solve_test.cpp), so that all measure the
+/// same model: a 0.1 kg icosphere net of radius 3 cm
 /// (structural springs 200 N/m, γ 0.05 N·s/m; bending 20 N/m, γ 0.01; ties
 /// 5 N/m, γ 0.05, per node) on a 50 g hidden rigid component held through
 /// the coupling springs (k_t 300 N/m, critically damped for 0.15 kg), over a
@@ -19,6 +20,7 @@
 #include "numen/core/mesh.hpp"
 #include "numen/core/model.hpp"
 #include "numen/core/net_model.hpp"
+#include "numen/core/step.hpp"
 
 namespace numen::test {
 
@@ -84,6 +86,21 @@ inline void set_deformable_ball_target(const core::Model& m, core::Data& d, std:
   d.target.position =
       core::Vec3(0.02 * std::cos(w * t), 0.02 * std::sin(w * t), kBallRadius - 0.005);
   d.target_twist.linear = 0.02 * w * core::Vec3(-std::sin(w * t), std::cos(w * t), 0.0);
+}
+
+/// Steps the benchmark's warm-up takes before it measures: the ball has
+/// settled onto the floor and a patch of nodes is in contact.
+inline constexpr std::int64_t kBallWarmUpSteps = 300;
+
+/// Steps [from, to) of the ball's trajectory, each with its target
+/// (set_deformable_ball_target) then core::step. Returns `to`, the next step.
+inline std::int64_t run_deformable_ball(const core::Model& m, core::Data& d, std::int64_t from,
+                                        std::int64_t to) {
+  for (std::int64_t k = from; k < to; ++k) {
+    set_deformable_ball_target(m, d, k);
+    core::step(m, d);
+  }
+  return to;
 }
 
 }  // namespace numen::test

@@ -117,14 +117,9 @@ inline NetSystem assemble_net_system(const core::Model& m, const NetSystemInputs
   using Mat36 = Eigen::Matrix<double, 3, 6>;
   using Vec6 = Eigen::Matrix<double, 6, 1>;
   const auto at = [](int i) { return static_cast<std::size_t>(i); };
-  const auto skew = [](const Vec3& v) {
-    Mat3 r;
-    r << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
-    return r;
-  };
-  const auto point_jacobian = [&](const Vec3& r) {  // J = [I, −[r]×]
+  const auto point_jacobian = [](const Vec3& r) {  // J = [I, −[r]×]
     Mat36 j;
-    j << Mat3::Identity(), -skew(r);
+    j << Mat3::Identity(), -core::skew(r);
     return j;
   };
   const double h = m.dt, h2 = h * h;

@@ -32,9 +32,13 @@ after=$(awk -F, -v a="$at" 'NR > 1 && $1 >= a && $6 == 1 { n++ } END { print n +
 first_after=$(awk -F, -v a="$at" 'NR > 1 && $1 >= a && $6 == 1 { print $1; exit }' /tmp/rearm.csv)
 detail="period $period_us us; values out of range $range; torque in $before periods before the re-arm (last at period $last_before); re-arm requests $requests, accepted $accepted, taken before period $at; torque again from period $first_after, in $after periods"
 [ "$range" -ge 1 ] || fail "the out-of-range value was not counted: $detail"
-[ "$before" -gt 0 ] || fail "no torque before the bad value: $detail"
+if [ "$before" -eq 0 ]; then
+  timing_cause "$(first_fault /tmp/run.txt)" &&
+    inconclusive "no torque before the bad value: a timing safe stop came first: $detail"
+  fail "no torque before the bad value: $detail"
+fi
 [ -n "$at" ] && [ $((at - last_before)) -ge $((1000000 / period_us)) ] ||
-  fail "torque did not stop for the bad value: $detail"
-[ "$requests" = 1 ] && [ "$accepted" = 1 ] || fail "the re-arm was not accepted: $detail"
-[ "$after" -ge $((500000 / period_us)) ] || fail "no torque after the re-arm: $detail"
+  fail_timing /tmp/run.txt "torque did not stop for the bad value: $detail"
+[ "$requests" = 1 ] && [ "$accepted" = 1 ] || fail_timing /tmp/run.txt "the re-arm was not accepted: $detail"
+[ "$after" -ge $((500000 / period_us)) ] || fail_timing /tmp/run.txt "no torque after the re-arm: $detail"
 pass "$detail"

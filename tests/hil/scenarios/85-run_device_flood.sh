@@ -42,10 +42,10 @@ sync_median=$(grep ' vcan0 080#' /tmp/flood.log | sed 's/^(\([0-9]*\)\.\([0-9]*\
 detail="period $period_us us; flood frames on the bus $flood, unknown ids in the loop $unknown, rejected $rejected, drops ctl $rx_drop dev $dev_drop, SYNCs sent $ctl_syncs, device SYNCs $syncs answered $answered (active at period $active), device wall $dev_wall s, run wall $ctl_wall s, SYNC period median $sync_median us"
 [ "$flood" -ge 1000 ] || fail "the flood did not reach the bus: $detail"
 [ "$unknown" = 0 ] && [ "$rejected" = 0 ] || fail "flood frames reached the loop: $detail"
-[ "$rx_drop" = 0 ] && [ "$dev_drop" = 0 ] || fail "SocketCAN dropped frames: $detail"
-[ -n "$active" ] && [ "$active" -ge 0 ] || fail "lifecycle never active: $detail"
+[ "$rx_drop" = 0 ] && [ "$dev_drop" = 0 ] || fail_timing /tmp/run.txt "SocketCAN dropped frames: $detail"
+[ -n "$active" ] && [ "$active" -ge 0 ] || fail_timing /tmp/run.txt "lifecycle never active: $detail"
 [ "$syncs" -le "$ctl_syncs" ] && [ "$syncs" -ge $((ctl_syncs - ctl_syncs / 10)) ] &&
-  [ "$answered" -ge $((syncs - active)) ] || fail "SYNCs lost or unanswered: $detail"
+  [ "$answered" -ge $((syncs - active)) ] || fail_timing /tmp/run.txt "SYNCs lost or unanswered: $detail"
 [ "$sync_median" -ge $((period_us * 9 / 10)) ] && [ "$sync_median" -le $((period_us * 11 / 10)) ] ||
-  fail "SYNC period off: $detail"
+  fail_timing /tmp/run.txt "SYNC period off: $detail"
 pass "$detail"

@@ -39,7 +39,8 @@ read_after=$(awk -F, -v e="$resumed" 'NR > 1 && $1 >= e && $4 > 0 { n++ } END { 
 detail="period $period_us us; link down reported $link_down, SYNC write failures $sync_fail, safe stops $faults (first: $first); longest gap without device frames $outage periods, frames read again from period $resumed in $read_after periods; SYNCs on the bus after the link came up $syncs_after"
 [ "$link_down" -ge 1 ] || [ "$sync_fail" -ge 1 ] || fail "the link loss was not reported: $detail"
 [ "$faults" -ge 1 ] || fail "no safe stop for the lost link: $detail"
-[ "$outage" -ge $((500000 / period_us)) ] || fail "no outage in the trace: $detail"
-[ "$read_after" -ge $((1000000 / period_us)) ] || fail "frames did not flow again: $detail"
-[ "$syncs_after" -ge $((1000000 / period_us)) ] || fail "no SYNC on the bus after the link came up: $detail"
+[ "$outage" -ge $((500000 / period_us)) ] || fail_timing /tmp/run.txt "no outage in the trace: $detail"
+[ "$read_after" -ge $((1000000 / period_us)) ] || fail_timing /tmp/run.txt "frames did not flow again: $detail"
+[ "$syncs_after" -ge $((1000000 / period_us)) ] ||
+  fail_timing /tmp/run.txt "no SYNC on the bus after the link came up: $detail"
 pass "$detail"

@@ -47,7 +47,8 @@ gap_mm=$(echo "$last_rec $last_play" | awk '{ m = 0; for (i = 1; i <= 3; i++) { 
   if (d < 0) d = -d; if (d > m) m = d } printf "%.4f", m * 1000 }')
 detail="period $period_us us; replayed $replayed frames ($encoders encoder TPDOs), controller read $rx, active at period $active; last target recorded ($last_rec) replayed ($last_play) m: $gap_mm mm apart (largest coordinate)"
 [ "$replayed" -gt 0 ] || fail "nothing to replay: $detail"
-[ -n "$active" ] && [ "$active" -ge 0 ] || fail "the controller never went active on the replay: $detail"
-[ "$rx" -ge $((replayed * 9 / 10)) ] || fail "replayed frames not read: $detail"
+[ -n "$active" ] && [ "$active" -ge 0 ] ||
+  fail_timing /tmp/play.txt "the controller never went active on the replay: $detail"
+[ "$rx" -ge $((replayed * 9 / 10)) ] || fail_timing /tmp/play.txt "replayed frames not read: $detail"
 awk -v g="$gap_mm" 'BEGIN { exit !(g != "" && g <= 1.0) }' || fail "the replayed pose differs: $detail"
 pass "$detail"

@@ -18,7 +18,7 @@
 ///
 /// Without joints: SSOR (block symmetric Gauss–Seidel) preconditioning with
 /// Eisenstat's trick. Unknowns ordered bodies first (6 each, those in the
-/// solve), then nodes in the sweep order (NetScratch::sweep_order: reverse
+/// solve), then nodes in the sweep order (Model::node_sweep_order: reverse
 /// Cuthill–McKee per net, ~11 % fewer iterations than the vertex order on
 /// an icosphere); A = L + D + Lᵀ with D the body–body
 /// part A_BB (diagonal blocks and body–body contact cross terms) and the

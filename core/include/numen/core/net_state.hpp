@@ -58,7 +58,7 @@ struct NetOutput {
 /// off the diagonal.
 struct SweepSpring {
   /// d̂ = d / l, d = x_high − x_low (from the spring's node earlier in the
-  /// sweep order to the later one, NetScratch::sweep_order) at the step's
+  /// sweep order to the later one, Model::node_sweep_order) at the step's
   /// start; a spring of zero length keeps its last direction.
   Vec3 direction = Vec3::UnitX();
   double weight_axial = 0.0;       ///< α = h γ + h² k − β (kg = N·s²/m).
@@ -151,21 +151,14 @@ struct NetScratch {
   std::vector<Vec3> sweep;          ///< Nodes: g = q + (D − 2D̃) t of the Eisenstat product.
   std::vector<Mat6> body_schur;     ///< Per body: Schur block S_b of the arrowhead preconditioner (joints).
   std::vector<Vec6> body_tmp;       ///< Per body: reduced residual (joints) or g (no joints).
-  /// The order in which the SSOR sweeps visit the nodes (net_solve.hpp):
-  /// sweep_order[p] is the node at position p. Each net's nodes keep its
-  /// range [node_begin, node_begin + node_count) of positions, in reverse
-  /// Cuthill–McKee order of the net's spring graph (Cuthill & McKee 1969,
-  /// George & Liu 1981; Boost.Graph's cuthill_mckee_ordering from a
-  /// pseudo-peripheral node): a level-set ordering, along which Gauss–Seidel
-  /// carries a change across the net in one sweep — on an icosphere it takes
-  /// ~11 % fewer CG iterations than the mesh's vertex order, whose refinement
-  /// levels interleave (docs/deformable.md). A copy of Model::node_sweep_order
-  /// (computed once by finalize_model()): resize().
-  std::vector<std::int32_t> sweep_order;
-  std::vector<std::int32_t> sweep_position;  ///< Inverse of sweep_order: node -> position.
-  std::vector<SweepNode> sweep_nodes;  ///< Per sweep position: A_kk⁻¹ and ρ of node sweep_order[p].
+  /// The SSOR sweeps (net_solve.hpp) visit the nodes in the order
+  /// Model::node_sweep_order (reverse Cuthill–McKee per net, computed once by
+  /// finalize_model()); sweep_position is its inverse: node -> position.
+  std::vector<std::int32_t> sweep_position;
+  /// Per sweep position p: A_kk⁻¹ and ρ of node Model::node_sweep_order[p].
+  std::vector<SweepNode> sweep_nodes;
   /// The springs in the order of the SSOR sweeps, grouped by their earlier
-  /// node in sweep_order ("low"; ascending positions; Model::net_springs
+  /// node in Model::node_sweep_order ("low"; ascending positions; Model::net_springs
   /// order within a node); the other node is SweepSprings::high. Position
   /// p's springs are [spring_low_begin[p], spring_low_begin[p + 1]).
   /// compute_net_forces() goes through them in that order (forces and
