@@ -4,6 +4,7 @@
 
 #include "numen/hal/bus_recorder.hpp"
 
+#include <algorithm>
 #include <boost/lockfree/spsc_queue.hpp>
 #include <cerrno>
 #include <chrono>
@@ -61,7 +62,13 @@ void CandumpWriter::start() {
     std::lock_guard<std::mutex> lock(wake_mutex_);
     stop_requested_.store(false);
   }
-  thread_ = std::thread([this] { run(); });
+  draining_.store(true);
+  try {
+    thread_ = std::thread([this] { run(); });
+  } catch (...) {
+    draining_.store(false);
+    throw;
+  }
 }
 
 void CandumpWriter::stop() {
@@ -72,6 +79,7 @@ void CandumpWriter::stop() {
   }
   wake_.notify_one();
   thread_.join();
+  draining_.store(false);
   // The thread drained the queue before it ended; this picks up what arrived meanwhile.
   drain();
   if (std::fflush(file_) != 0) io_errors_.fetch_add(1, std::memory_order_relaxed);
@@ -84,8 +92,23 @@ bool CandumpWriter::push(const CanFrame& frame, const CandumpIface& iface,
   entry.iface = iface;
   entry.direction = direction;
   if (!queue_->ring.push(entry)) {
-    dropped_.fetch_add(1, std::memory_order_relaxed);
-    return false;
+    bool queued = false;
+    if (settings_.full_queue == FullQueuePolicy::kWait && draining_.load()) {
+      waits_.fetch_add(1, std::memory_order_relaxed);
+      const auto step =
+          std::chrono::nanoseconds(std::max<std::int64_t>(settings_.poll_period_ns / 8, 1));
+      // The thread drains until stop() joins it; draining_ turns false only after that. The
+      // writer may be in its poll sleep: wake it rather than wait out poll_period_ns.
+      while (!(queued = queue_->ring.push(entry)) && draining_.load()) {
+        room_wanted_.store(true);
+        wake_.notify_one();
+        std::this_thread::sleep_for(step);
+      }
+    }
+    if (!queued) {
+      dropped_.fetch_add(1, std::memory_order_relaxed);
+      return false;
+    }
   }
   queued_.fetch_add(1, std::memory_order_relaxed);
   return true;
@@ -95,6 +118,7 @@ CandumpWriterCounters CandumpWriter::counters() const noexcept {
   CandumpWriterCounters c;
   c.queued = queued_.load(std::memory_order_relaxed);
   c.dropped = dropped_.load(std::memory_order_relaxed);
+  c.waits = waits_.load(std::memory_order_relaxed);
   c.written = written_.load(std::memory_order_relaxed);
   c.format_errors = format_errors_.load(std::memory_order_relaxed);
   c.io_errors = io_errors_.load(std::memory_order_relaxed);
@@ -132,10 +156,11 @@ std::size_t CandumpWriter::drain() noexcept {
 void CandumpWriter::run() noexcept {
   const auto period = std::chrono::nanoseconds(settings_.poll_period_ns);
   while (!stop_requested_.load()) {
+    room_wanted_.store(false);
     if (drain() > 0) continue;  // keep up while frames arrive
     if (std::fflush(file_) != 0) io_errors_.fetch_add(1, std::memory_order_relaxed);
     std::unique_lock<std::mutex> lock(wake_mutex_);
-    wake_.wait_for(lock, period, [this] { return stop_requested_.load(); });
+    wake_.wait_for(lock, period, [this] { return stop_requested_.load() || room_wanted_.load(); });
   }
   drain();
 }

@@ -115,6 +115,12 @@ platform::ControlLoopSettings control_loop_settings(bool paced, std::uint32_t ov
   return s;
 }
 
+hal::CandumpWriterSettings recorder_settings(bool paced) noexcept {
+  hal::CandumpWriterSettings s;
+  s.full_queue = paced ? hal::FullQueuePolicy::kDrop : hal::FullQueuePolicy::kWait;
+  return s;
+}
+
 SceneRunner::SceneRunner(const Scene& scene, std::size_t trace_capacity, const BusChoice& bus,
                          bool realtime, std::uint32_t overrun_limit)
     : scene_(&scene),
@@ -122,8 +128,10 @@ SceneRunner::SceneRunner(const Scene& scene, std::size_t trace_capacity, const B
       bus_(scene.bus),
       real_bus_(spec_.real() ? open_real_bus(spec_, controller_filters(scene.device)) : nullptr),
       log_bus_(make_log_bus(scene, spec_)),
-      writer_(bus.record_path.empty() ? nullptr
-                                      : std::make_unique<hal::CandumpWriter>(bus.record_path)),
+      writer_(bus.record_path.empty()
+                  ? nullptr
+                  : std::make_unique<hal::CandumpWriter>(
+                        bus.record_path, recorder_settings(realtime || spec_.real()))),
       recorder_(writer_ ? std::make_unique<hal::RecordingBus>(
                               real_bus_  ? *real_bus_
                               : log_bus_ ? static_cast<hal::Bus&>(*log_bus_)

@@ -1,6 +1,7 @@
 // Tests of numen/hal/bus_recorder.hpp: a RecordingBus over a SimBus writes a candump log that
 // load_candump_log reads back identical; no allocation on the loop side; a full queue drops
-// and counts without blocking; writer lifecycle and errors; recording a LogBus replay.
+// and counts without blocking, or waits for room when asked to (offline runs); writer
+// lifecycle and errors; recording a LogBus replay.
 #include "numen/hal/bus_recorder.hpp"
 
 #include <gtest/gtest.h>
@@ -249,6 +250,67 @@ TEST(BusRecorder, EveryRecordIsWrittenOrCountedUnderLoad) {
     EXPECT_GT(counts, previous);
     previous = counts;
   }
+}
+
+TEST(BusRecorder, WaitPolicyLosesNothingWhenTheWriterFallsBehind) {
+  // An offline run's recorder (FullQueuePolicy::kWait): room for 64 records, a writer that
+  // polls every 5 ms, a producer pushing 20 000 records back to back — far faster than the
+  // writer drains. Nothing is dropped: the producer waits for room, and every record is
+  // written whole and in order.
+  numen::test::TempDir dir;
+  const std::string path = (dir / "run.log").string();
+  CandumpWriterSettings ws;
+  ws.queue_capacity = 64;
+  ws.poll_period_ns = 5'000'000;
+  ws.full_queue = numen::hal::FullQueuePolicy::kWait;
+  const numen::hal::CandumpIface can0 = numen::hal::make_candump_iface("can0");
+  constexpr int kFrames = 20'000;
+  {
+    CandumpWriter writer(path, ws);
+    writer.start();
+    for (int k = 0; k < kFrames; ++k) {
+      const CanFrame f = numen::hal::encode_position_pdo(0x181, k, 1000LL * k);
+      ASSERT_TRUE(writer.push(f, can0, CandumpDirection::kReceived)) << "record " << k;
+    }
+    writer.stop();
+    const auto c = writer.counters();
+    EXPECT_EQ(c.dropped, 0u);
+    EXPECT_EQ(c.queued, static_cast<std::uint64_t>(kFrames));
+    EXPECT_EQ(c.written, c.queued);
+    EXPECT_GT(c.waits, 0u);  // the queue did fill: the policy was exercised
+  }
+  const std::vector<CandumpRecord> log = numen::hal::load_candump_log(path);
+  ASSERT_EQ(log.size(), static_cast<std::size_t>(kFrames));
+  for (int k = 0; k < kFrames; ++k) {
+    std::int32_t counts = -1;
+    ASSERT_EQ(
+        numen::hal::decode_position_pdo(log[static_cast<std::size_t>(k)].frame, 0x181, counts),
+        numen::hal::DecodeStatus::kOk);
+    ASSERT_EQ(counts, k);
+  }
+}
+
+TEST(BusRecorder, WaitPolicyDropsWhileTheWriterIsNotRunning) {
+  // kWait must not hang a producer that nobody drains: before start() and after stop() a
+  // full queue drops and counts, as under kDrop.
+  numen::test::TempDir dir;
+  CandumpWriterSettings ws;
+  ws.queue_capacity = 2;
+  ws.full_queue = numen::hal::FullQueuePolicy::kWait;
+  CandumpWriter writer((dir / "run.log").string(), ws);
+  const numen::hal::CandumpIface can0 = numen::hal::make_candump_iface("can0");
+  for (int k = 0; k < 5; ++k)
+    writer.push(numen::hal::make_sync(k), can0, CandumpDirection::kTransmitted);
+  EXPECT_EQ(writer.counters().queued, 2u);
+  EXPECT_EQ(writer.counters().dropped, 3u);
+  writer.start();
+  writer.stop();  // writes the two
+  for (int k = 0; k < 5; ++k)
+    writer.push(numen::hal::make_sync(k), can0, CandumpDirection::kTransmitted);
+  EXPECT_EQ(writer.counters().queued, 4u);
+  EXPECT_EQ(writer.counters().dropped, 6u);
+  EXPECT_EQ(writer.counters().waits, 0u);
+  EXPECT_EQ(writer.counters().written, 2u);
 }
 
 TEST(BusRecorder, UnformattableRecordsAreCountedNotWritten) {

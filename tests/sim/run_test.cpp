@@ -755,6 +755,14 @@ TEST(RunBusLog, RecordedRunReplaysBitIdentically) {
   EXPECT_GT((recorded.back() - recorded.front()).norm(), 1e-3);
 }
 
+// recorder_settings(): a paced run never waits for its recorder's disk; an offline run has no
+// deadline and waits, so its log is complete on a starved machine (the replay above needs
+// every frame).
+TEST(RunBusLog, PacedRecorderDropsOfflineRecorderWaits) {
+  EXPECT_EQ(numen::sim::recorder_settings(true).full_queue, numen::hal::FullQueuePolicy::kDrop);
+  EXPECT_EQ(numen::sim::recorder_settings(false).full_queue, numen::hal::FullQueuePolicy::kWait);
+}
+
 TEST(RunBusLog, BadBusSpecAndBadLogAreClearErrors) {
   NUMEN_REQUIRE_ARTICULATION();
   const Scene& scene = default_scene();

@@ -7,7 +7,9 @@
 ///    CandumpWriter (boost::lockfree::spsc_queue, capacity fixed at construction);
 ///  - the CandumpWriter's own thread pops the records, formats them and writes the lines to
 ///    the log file through buffered stdio.
-/// A full queue drops the record and counts it; the control loop never waits for the disk.
+/// A full queue drops the record and counts it, so a paced control loop never waits for the
+/// disk (FullQueuePolicy::kDrop). An offline run, which has no deadline, may instead wait for
+/// the writer to make room (kWait), so that a starved writer thread loses nothing.
 ///
 /// Time base: a line's timestamp is the frame's timestamp_ns, i.e. the bus clock — receive
 /// time for frames read, the caller's intended send time for frames written (CanFrame) —
@@ -38,6 +40,18 @@
 
 namespace numen::hal {
 
+/// What CandumpWriter::push() does when the queue is full.
+enum class FullQueuePolicy {
+  /// Drop the record and count it (CandumpWriterCounters::dropped); push() never blocks.
+  /// For paced runs: the control loop never waits for the disk.
+  kDrop,
+  /// Wake the writer thread and sleep in steps of CandumpWriterSettings::poll_period_ns / 8
+  /// until it has made room, so nothing is lost however far the writer falls behind. push()
+  /// then blocks: for offline (unpaced) runs only, which have no deadline. While the thread is not
+  /// running (before start(), after stop()) a full queue drops as with kDrop.
+  kWait,
+};
+
 /// Creation settings of a CandumpWriter. Checked by its constructor.
 struct CandumpWriterSettings {
   /// Records the queue holds, >= 1; allocated once at construction (104 bytes each). Size it
@@ -54,6 +68,8 @@ struct CandumpWriterSettings {
   /// 2020.11) takes a start second of 0 for "no start yet" and restarts its output on every
   /// line. A line whose time would be negative or overflow is not written (format_errors).
   std::int64_t time_offset_ns = 0;
+  /// A full queue drops (paced runs, the default) or waits for the writer (offline runs).
+  FullQueuePolicy full_queue = FullQueuePolicy::kDrop;
 };
 
 /// Counters of a CandumpWriter since construction. Read with relaxed atomics: consistent
@@ -61,6 +77,7 @@ struct CandumpWriterSettings {
 struct CandumpWriterCounters {
   std::uint64_t queued = 0;         ///< Records accepted by push().
   std::uint64_t dropped = 0;        ///< Records refused by push(): queue full.
+  std::uint64_t waits = 0;          ///< kWait: pushes that found the queue full and waited.
   std::uint64_t written = 0;        ///< Lines written to the file.
   std::uint64_t format_errors = 0;  ///< Records not written: format_candump_line() refused
                                     ///< them (negative timestamp, malformed frame).
@@ -69,7 +86,8 @@ struct CandumpWriterCounters {
 
 /// Owner of a candump log file, of the record queue and of the thread that writes it.
 /// push() is the producer side: one thread at a time (the control loop), noexcept, no
-/// allocation, no lock, never blocks. start()/stop() and the destructor belong to the setup
+/// allocation, no lock; it never blocks under FullQueuePolicy::kDrop. start()/stop() and the
+/// destructor belong to the setup thread, which must not stop() while push() runs on another
 /// thread. Not copyable or movable.
 class CandumpWriter {
  public:
@@ -95,7 +113,9 @@ class CandumpWriter {
   bool running() const noexcept { return thread_.joinable(); }
 
   /// Queues one record: `frame` (its timestamp_ns is the line's time) seen on `iface` in
-  /// `direction`. False if the queue is full: the record is dropped and counted.
+  /// `direction`. False if the queue is full and the record is dropped and counted: always
+  /// under kDrop; under kWait only while the writer thread is not running (kWait sleeps
+  /// until there is room instead).
   bool push(const CanFrame& frame, const CandumpIface& iface, CandumpDirection direction) noexcept;
 
   /// Counters (see CandumpWriterCounters).
@@ -116,11 +136,14 @@ class CandumpWriter {
   std::unique_ptr<Queue> queue_;
   std::FILE* file_ = nullptr;
   std::thread thread_;
-  std::mutex wake_mutex_;  // stop request only; push() never touches it
+  std::mutex wake_mutex_;  // stop request only; push() never takes it (kWait notifies wake_)
   std::condition_variable wake_;
   std::atomic<bool> stop_requested_{false};  // set under wake_mutex_
+  std::atomic<bool> draining_{false};        // the thread runs and drains: kWait may wait
+  std::atomic<bool> room_wanted_{false};     // kWait: a push found the queue full
   std::atomic<std::uint64_t> queued_{0};
   std::atomic<std::uint64_t> dropped_{0};
+  std::atomic<std::uint64_t> waits_{0};
   std::atomic<std::uint64_t> written_{0};
   std::atomic<std::uint64_t> format_errors_{0};
   std::atomic<std::uint64_t> io_errors_{0};

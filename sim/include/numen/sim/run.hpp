@@ -45,6 +45,7 @@ struct BusChoice {
   std::string spec = "sim";
   /// Record the controller port (frames read: " R", written: " T") into this
   /// candump log through a lock-free queue and a writer thread; empty: none.
+  /// Paced runs drop what the queue has no room for, offline runs wait (recorder_settings()).
   std::string record_path;
 };
 
@@ -98,6 +99,13 @@ DurationSummary summarize_ns(const platform::LatencyHistogram& h);
 /// state; `overrun_limit` 0 or an unpaced run: overruns are only counted (LoopStatistics). The
 /// other settings are ControlLoopSettings' defaults (encoder timeout 3 periods, docs/safety.md).
 platform::ControlLoopSettings control_loop_settings(bool paced, std::uint32_t overrun_limit) noexcept;
+
+/// The bus recorder's (BusChoice::record_path) writer settings of a run: a `paced` run drops
+/// records its writer thread has no room for (hal::FullQueuePolicy::kDrop, counted in
+/// RunSummary::bus_record_dropped; the loop never waits for the disk); an offline run has no
+/// deadline and waits for room (kWait), so its log is complete however starved the writer
+/// thread is. The other settings are CandumpWriterSettings' defaults.
+hal::CandumpWriterSettings recorder_settings(bool paced) noexcept;
 
 /// What a run of an admittance device measured (AdmittanceRunner; docs/scenes.md). Positions
 /// are the controlled frame's origin (world): "device" where the emulated device is, "hand"
@@ -173,7 +181,7 @@ struct RunSummary {
   std::string bus = "sim";                 ///< BusChoice::spec of the run.
   std::int64_t bus_frames_replayed = 0;    ///< log: records read by the controller.
   std::int64_t bus_frames_recorded = 0;    ///< --record: frames queued for the log.
-  std::int64_t bus_record_dropped = 0;     ///< --record: frames lost to a full queue (must be 0).
+  std::int64_t bus_record_dropped = 0;     ///< --record: lost to a full queue (paced runs).
   std::int64_t realtime_overruns = 0;      ///< Paced periods (--realtime) that began after their deadline.
   std::int64_t realtime_missed_periods = 0;  ///< Whole periods skipped to re-phase after overruns.
   /// RunOptions::overrun_limit in effect: consecutive overruns that latch (0: counted only).
