@@ -115,7 +115,9 @@ int main(int argc, char** argv) {
       ->delimiter(',');
   run->add_flag("--rt-strict", rt.strict, "Fail instead of reporting when a real-time step fails");
   run->add_option("--record", record_path,
-                  "Record the controller's bus traffic into this candump log (can-utils format)");
+                  "Record the controller's bus traffic into this candump log (can-utils format); "
+                  "a paced run drops (and counts) what its writer cannot keep up with, an offline "
+                  "run waits for it");
   std::uint32_t overrun_limit = 3;
   run->add_option("--overrun-limit", overrun_limit,
                   "Paced run: consecutive overruns that latch the safe state (default 3); 0 counts "
