@@ -74,10 +74,14 @@ field() {
 }
 
 # start_device LOG [EXTRA...]: starts `numen device` on vcan0 in the background (pid in
-# DEVICE_PID) and waits for READY.
+# DEVICE_PID) and waits for READY. LOG is removed first: the background shell truncates it
+# only when it gets to run, and a READY left by an earlier scenario (or attempt) would
+# otherwise let the caller start the controller while the device is still loading its scene,
+# with its socket not yet open (the flood scenario's missing SYNCs, docs/hil.md).
 start_device() {
   local log="$1"
   shift
+  rm -f "$log"
   numen device "$HIL_SCENE" --bus can:vcan0 --ready "$@" >"$log" 2>&1 &
   DEVICE_PID=$!
   wait_for_line "$log" READY 30 || fail "device not ready: $(cat "$log")"

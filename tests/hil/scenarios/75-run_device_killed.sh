@@ -21,6 +21,7 @@ torque_rpdos() {
 }
 
 start_device /tmp/dev.txt
+rm -f /tmp/rpdo.log  # polled below: no RPDOs of an earlier attempt (cf. start_device)
 candump -L vcan0,200:7F0 >/tmp/rpdo.log 2>/tmp/candump.err &
 dump=$!
 numen run "$HIL_SCENE" --bus can:vcan0 --duration 30 --overrun-limit "${HIL_OVERRUN_LIMIT:-3}" \
