@@ -160,7 +160,8 @@ struct RecordingCounters {
 /// kTransmitted) under interface name `iface`; kWouldBlock / kError results are not
 /// recorded. state() and counters() are the inner bus's. Several RecordingBus may share one
 /// writer (one log file, told apart by iface) if they are all driven from one thread.
-/// read/write never allocate, throw, lock or block (given that `inner`'s do not).
+/// read/write never allocate, throw or lock, and never block with a FullQueuePolicy::kDrop
+/// writer (given that `inner`'s do not); a kWait writer may make them wait for room.
 class RecordingBus final : public Bus {
  public:
   /// Wraps `inner` (not owned; must outlive this). Throws std::invalid_argument if `iface`
