@@ -34,6 +34,14 @@ timing_cause() {
   echo "$1" | grep -q -E '^first: (encoder timeout|overruns|heartbeat lost|encoder jump)'
 }
 
+# fail_premise FIRST MESSAGE: the scenario's premise (torque flowing before the act it checks)
+# did not hold. Inconclusive if FIRST, the safe stop that came first ("first: <cause>"), has a
+# timing cause (timing_cause); FAIL otherwise.
+fail_premise() {
+  timing_cause "$1" && inconclusive "$2 (a timing safe stop came first: $1)"
+  fail "$2"
+}
+
 # Waits until FILE contains LINE (a whole line), at most SECONDS (integer) seconds.
 wait_for_line() {
   local file="$1" line="$2" left=$(( $3 * 10 ))

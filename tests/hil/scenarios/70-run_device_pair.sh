@@ -52,10 +52,7 @@ detail="period $period_us us; syncs sent $ctl_syncs (candump), device SYNCs $syn
 if [ "$faults" != 0 ]; then
   timing_cause "$first_fault" || fail "safe stop not caused by timing: $first_fault; $detail"
 fi
-if [ "$nonzero" -eq 0 ]; then
-  [ "$faults" != 0 ] && inconclusive "no torque reached the device: a timing safe stop came first: $detail"
-  fail "no torque reached the device: $detail"
-fi
+[ "$nonzero" -gt 0 ] || fail_premise "$first_fault" "no torque reached the device: $detail"
 [ "$unexpected" = 0 ] || fail "unexpected ids on the bus: $detail"
 [ "$trace_drop" = 0 ] || fail_timing /tmp/run.txt "trace records dropped: $detail"
 [ "$sync_median" -ge $((period_us * 9 / 10)) ] && [ "$sync_median" -le $((period_us * 11 / 10)) ] || fail_timing /tmp/run.txt "SYNC period off: $detail"

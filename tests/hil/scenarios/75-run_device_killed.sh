@@ -60,9 +60,11 @@ trace_check=$(awk -F, 'NR > 1 { if ($4 > 0) last = $1; t[$1] = $6 }
 torque_before=$(echo "$trace_check" | awk '{ print $3 }')
 detail="period $period_us us; device killed $waited into the run, after $rpdos non-zero torque RPDOs; last device frame at period $last_frame, zero torque from period $stop ($((stop - last_frame)) periods), trace: $trace_check; heartbeat losses $hb; $first_fault at period $first_period"
 if [ "$torque_before" != 1 ]; then
-  [ -n "$first_period" ] && [ -n "$last_frame" ] && [ "$first_period" -le "$last_frame" ] &&
-    timing_cause "$first_fault" && inconclusive "no torque before the kill: a timing safe stop came first: $detail"
-  fail "no torque commanded in the periods before the kill: $detail"
+  msg="no torque commanded in the periods before the kill: $detail"
+  # Only a safe stop at or before the last device frame can have stopped the torque.
+  [ -n "$first_period" ] && [ -n "$last_frame" ] && [ "$first_period" -le "$last_frame" ] ||
+    fail "$msg"
+  fail_premise "$first_fault" "$msg"
 fi
 [ -n "$stop" ] && [ -n "$last_frame" ] && [ "$stop" -gt "$last_frame" ] ||
   fail "torque did not go to zero after the last device frame: $detail"

@@ -44,10 +44,6 @@ detail="period $period_us us; injected frames on the bus $on_bus/3; unknown ids 
 [ "$rejected" -ge 1 ] || fail "the short encoder frame was not rejected: $detail"
 [ "$range" -ge 1 ] || fail "the out-of-range value was not counted: $detail"
 [ "$faults" -ge 1 ] || fail "no safe stop: $detail"
-if [ "$last_torque" -eq 0 ]; then
-  timing_cause "first: $causes" &&
-    inconclusive "torque never flowed: a timing safe stop came before the injections: $detail"
-  fail "torque never flowed: $detail"
-fi
+[ "$last_torque" -gt 0 ] || fail_premise "first: $causes" "torque never flowed: $detail"
 [ $((last_period - last_torque)) -ge "$quiet" ] || fail "torque still commanded after the bad values: $detail"
 pass "$detail"
