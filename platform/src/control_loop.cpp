@@ -95,6 +95,20 @@ ControlLoop::ControlLoop(const core::Model& model, core::Data& data, hal::Bus& b
     data.joint_prescribed[static_cast<std::size_t>(p.joint)] = core::JointPrescription{
         core::joint_coordinate(jm, parent, data.bodies[static_cast<std::size_t>(jm.child)]), 0.0};
   }
+  // ... and a body bound to a link holds its starting pose (a target at rest where it is).
+  // Without one, such a body other than the held one has no target before the first sample: in
+  // direct coupling it is then left to its joints alone, and a body jointed both to the world and
+  // to the imposed held body (the default scene's trocar sleeve) is over-constrained — a singular
+  // solve and a rolled-back, non-finite step in every period before the first sample.
+  for (const LinkBinding& b : binding_.links) {
+    if (b.body < 0 || b.body == data.attached_body) continue;
+    const core::BodyState& start = data.bodies[static_cast<std::size_t>(b.body)];
+    core::BodyTarget& t = data.body_targets[static_cast<std::size_t>(b.body)];
+    t.pose.position = start.position;
+    t.pose.orientation = start.orientation;
+    t.twist = core::Twist{};
+    t.enabled = true;
+  }
   tau_ = hal::AxisVector::Zero(device.num_axes());
   if (device.config().canopen.managed) {
     master_ = std::make_unique<hal::CanopenMaster>(device.config(), period_of(device),

@@ -7,12 +7,17 @@
 ///   numen info [SCENE] [--json]
 ///   numen study accuracy [--out DIR] [--quick] [--case NAME]...
 ///   numen study stability [--out DIR] [--quick] [--family NAME]...
-/// SIGINT / SIGTERM end either cleanly (run: zero torque, drives disabled; both: summary).
+/// SIGINT / SIGTERM: while the input loads, the process ends at once (status 128 + signal;
+/// nothing is open on a bus yet); once a run or device has started, it ends cleanly (run: zero
+/// torque, drives disabled; both: summary). Exit statuses: docs/inputs.md.
+
+#include <unistd.h>
 
 #include <atomic>
 #include <csignal>
 #include <cstdio>
 #include <iostream>
+#include <new>
 #include <optional>
 #include <string>
 #include <vector>
@@ -24,6 +29,7 @@
 #include "numen/sim/input_error.hpp"
 #include "numen/sim/progress_bar.hpp"
 #include "numen/sim/run.hpp"
+#include "numen/sim/run_verdict.hpp"
 #include "numen/sim/scene.hpp"
 #include "numen/sim/scene_info.hpp"
 #include "numen/sim/study_accuracy.hpp"
@@ -32,8 +38,23 @@
 namespace {
 std::atomic<bool> g_stop{false};  // lock-free: safe to store from a signal handler
 static_assert(std::atomic<bool>::is_always_lock_free, "signal handlers store to std::atomic<bool>");
+std::atomic<int> g_stop_signal{0};  // the signal that set g_stop
 std::atomic<bool> g_rearm{false};  // SIGUSR1: the operator's re-arm (RunOptions::rearm)
-extern "C" void on_signal(int) { g_stop.store(true, std::memory_order_relaxed); }
+/// True while the command loads its input (scene, trajectory, logs): nothing is open on a bus
+/// and nothing was commanded, so a stop signal ends the process at once (loading a large file
+/// must not make SIGINT / SIGTERM wait). Cleared just before the bus is opened.
+std::atomic<bool> g_loading{true};
+static_assert(std::atomic<int>::is_always_lock_free, "signal handlers store to std::atomic<int>");
+extern "C" void on_signal(int sig) {
+  if (g_loading.load(std::memory_order_relaxed)) {
+    // Async-signal-safe: write(2) and _exit(2) only.
+    static const char msg[] = "numen: stopped by a signal while loading (nothing was commanded)\n";
+    [[maybe_unused]] const ssize_t n = ::write(STDERR_FILENO, msg, sizeof msg - 1);
+    ::_exit(128 + sig);
+  }
+  g_stop_signal.store(sig, std::memory_order_relaxed);
+  g_stop.store(true, std::memory_order_relaxed);
+}
 extern "C" void on_rearm_signal(int) { g_rearm.store(true, std::memory_order_relaxed); }
 void install_signal_handlers() {
   struct sigaction sa {};
@@ -46,19 +67,23 @@ void install_signal_handlers() {
   sigemptyset(&rearm.sa_mask);
   sigaction(SIGUSR1, &rearm, nullptr);
 }
-/// Runs a subcommand's body: exit status 0, or 2 for bad input (InputError: scene, trajectory,
-/// option values) and 1 for any other error, each printed as "numen: what".
+/// Runs a subcommand's body, which returns its exit status (docs/inputs.md, "Exit statuses");
+/// an exception ends it with 2 for bad input (InputError: scene, trajectory, option values) or
+/// 1 for any other error (I/O, out of memory, internal), printed as "numen: what".
 template <typename Body>
 int run_guarded(Body&& body) {
   try {
-    body();
-    return 0;
+    return body();
   } catch (const numen::sim::InputError& e) {
     std::cerr << "numen: " << e.what() << "\n";
-    return 2;
+    return numen::sim::code(numen::sim::ExitStatus::kInputRejected);
+  } catch (const std::bad_alloc&) {
+    std::cerr << "numen: out of memory (the scene, its trajectory or a log is too large for "
+                 "this machine)\n";
+    return numen::sim::code(numen::sim::ExitStatus::kError);
   } catch (const std::exception& e) {
     std::cerr << "numen: " << e.what() << "\n";
-    return 1;
+    return numen::sim::code(numen::sim::ExitStatus::kError);
   }
 }
 
@@ -172,7 +197,13 @@ int main(int argc, char** argv) {
   stability->add_option("--family", stability_families, "Run only these families (repeatable)")
       ->check(CLI::IsMember(numen::sim::stability_family_names()));
 
-  CLI11_PARSE(app, argc, argv);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    // --help and --version exit 0; every refused value or option is input rejected.
+    const int status = app.exit(e);
+    return status == 0 ? 0 : numen::sim::code(numen::sim::ExitStatus::kInputRejected);
+  }
 
   if (stability->parsed()) {
     return run_guarded([&] {
@@ -189,6 +220,7 @@ int main(int argc, char** argv) {
       std::cout << numen::sim::format_stability_tables(result);
       std::printf("%zu runs in %.1f s; wrote %s/stability_*.csv\n", result.rows.size(),
                   result.wall_s, stability_out.c_str());
+      return 0;
     });
   }
 
@@ -207,9 +239,10 @@ int main(int argc, char** argv) {
       std::cout << numen::sim::format_accuracy_table(result);
       std::cout << "wrote " << accuracy_out << "/accuracy.csv, accuracy_orders.csv, "
                 << "accuracy_references.csv\n";
+      return 0;
     });
   }
-  install_signal_handlers();
+  install_signal_handlers();  // the studies keep the default: a signal ends them at once
 
   if (info->parsed()) {
     return run_guarded([&] {
@@ -219,6 +252,7 @@ int main(int argc, char** argv) {
         std::cout << numen::sim::format_scene_info_json(si) << std::endl;
       else
         std::cout << numen::sim::format_scene_info(si);
+      return 0;
     });
   }
 
@@ -231,7 +265,9 @@ int main(int argc, char** argv) {
       options.duration_s = dev_duration;
       options.stop = &g_stop;
       options.announce_ready = dev_ready;
+      g_loading.store(false, std::memory_order_relaxed);
       std::cout << numen::sim::format_device_summary(numen::sim::run_device(scene, options));
+      return 0;
     });
   }
 
@@ -252,6 +288,7 @@ int main(int argc, char** argv) {
       options.compute_phase_s = phase;
       options.overrun_limit = overrun_limit;
       options.rearm = &g_rearm;
+      g_loading.store(false, std::memory_order_relaxed);  // from here a signal ends the run cleanly
       const numen::sim::RunSummary summary = numen::sim::run_scene(scene, options);
       if (json) {
         std::cerr << numen::sim::format_summary(summary);
@@ -260,6 +297,10 @@ int main(int argc, char** argv) {
         std::cout << numen::sim::format_summary(summary);
         if (!trace_path.empty()) std::cout << "  trace: " << trace_path << "\n";
       }
+      // A run stopped by a signal and otherwise clean exits 128 + the signal (shell convention).
+      if (summary.exit_status == 0 && summary.stopped)
+        return 128 + g_stop_signal.load(std::memory_order_relaxed);
+      return summary.exit_status;
     });
   }
   return 0;

@@ -29,6 +29,7 @@
 #include "numen/platform/periodic_timer.hpp"
 #include "numen/sim/admittance_run.hpp"
 #include "numen/sim/simulated_instrument.hpp"
+#include "numen/sim/run_verdict.hpp"
 #include "numen/sim/trace.hpp"
 
 namespace numen::sim {
@@ -371,11 +372,17 @@ RunSummary SceneRunner::summary() const {
     const platform::TraceWriterCounters c = trace_writer_->counters();
     s.trace_pushed = static_cast<std::int64_t>(c.pushed);
     s.trace_dropped = static_cast<std::int64_t>(c.dropped);
+    s.trace_written = static_cast<std::int64_t>(c.written);
+    s.trace_io_errors = static_cast<std::int64_t>(c.io_errors);
   }
   if (log_bus_) s.bus_frames_replayed = static_cast<std::int64_t>(log_bus_->log_counters().replayed);
   if (recorder_) {
     s.bus_frames_recorded = static_cast<std::int64_t>(recorder_->recording_counters().recorded);
     s.bus_record_dropped = static_cast<std::int64_t>(recorder_->recording_counters().dropped);
+    const hal::CandumpWriterCounters w = writer_->counters();
+    s.bus_record_written = static_cast<std::int64_t>(w.written);
+    s.bus_record_io_errors = static_cast<std::int64_t>(w.io_errors);
+    s.bus_record_format_errors = static_cast<std::int64_t>(w.format_errors);
   }
   if (const hal::CanopenMaster* m = loop_.canopen()) {
     const hal::SafetySupervisor& sup = *loop_.supervisor();
@@ -410,8 +417,14 @@ RunSummary SceneRunner::summary() const {
   return s;
 }
 
-RunSummary run_scene(const Scene& scene, const RunOptions& options) {
-  if (scene.admittance) return run_admittance_scene(scene, options);  // admittance_run.cpp
+void SceneRunner::finish() {
+  if (writer_) writer_->stop();
+  if (trace_writer_) trace_writer_->stop();
+}
+
+namespace {
+
+RunSummary run_impedance_scene(const Scene& scene, const RunOptions& options) {
   const double duration = options.duration_s >= 0.0 ? options.duration_s : scene.duration_s;
   const auto steps = static_cast<std::int64_t>(std::llround(duration / scene.model.dt));
   const bool real = parse_bus_spec(options.bus.spec).real();
@@ -479,6 +492,7 @@ RunSummary run_scene(const Scene& scene, const RunOptions& options) {
       }
     }
   }
+  runner.finish();
   RunSummary s = runner.summary();
   s.wall_time_s = static_cast<double>(platform::monotonic_now_ns() - wall0) * 1e-9;
   s.realtime_overruns = overruns;
@@ -492,12 +506,18 @@ RunSummary run_scene(const Scene& scene, const RunOptions& options) {
   s.stopped = stopped;
   s.shutdown_periods = shutdown;
   s.drives_disabled = runner.loop().drives_disabled();
-  if (platform::TraceWriter* w = runner.trace_writer()) {
-    w->stop();
-    s.trace_pushed = static_cast<std::int64_t>(w->counters().pushed);
-    s.trace_dropped = static_cast<std::int64_t>(w->counters().dropped);
-  }
   if (!options.trace_path.empty() && !real) runner.trace().write_csv(options.trace_path);
+  return s;
+}
+
+}  // namespace
+
+RunSummary run_scene(const Scene& scene, const RunOptions& options) {
+  RunSummary s = scene.admittance ? run_admittance_scene(scene, options)  // admittance_run.cpp
+                                  : run_impedance_scene(scene, options);
+  RunVerdict verdict = run_verdict(s);
+  s.exit_status = code(verdict.status);
+  s.exit_reasons = std::move(verdict.reasons);
   return s;
 }
 
@@ -566,11 +586,13 @@ std::string format_summary(const RunSummary& s) {
        << "; last torque stop at period " << s.last_torque_stop_period << "\n";
     os << "  end: " << (s.stopped ? "stopped by signal" : "duration reached") << ", shutdown "
        << s.shutdown_periods << " periods, drives " << (s.drives_disabled ? "disabled" : "NOT disabled")
-       << "; trace records " << s.trace_pushed << ", dropped " << s.trace_dropped << "\n";
+       << "; trace records " << s.trace_pushed << ", dropped " << s.trace_dropped << ", written "
+       << s.trace_written << ", I/O errors " << s.trace_io_errors << "\n";
   }
   if (s.bus_frames_recorded > 0 || s.bus_record_dropped > 0)
     os << "  recorded " << s.bus_frames_recorded << " frames, " << s.bus_record_dropped
-       << " dropped by the recorder\n";
+       << " dropped by the recorder, " << s.bus_record_written << " written, "
+       << s.bus_record_io_errors << " I/O errors\n";
   if (s.managed) {
     os << "  canopen: start-up " << s.startup << " at period " << s.periods_to_operational
        << ", active at period " << s.periods_to_active << ", first torque at period "
@@ -607,6 +629,11 @@ std::string format_summary(const RunSummary& s) {
                                : std::string("; overrun policy: count only"));
   os << "\n";
   for (const auto& w : s.warnings) os << "  warning: " << w << "\n";
+  os << "  exit status " << s.exit_status << " ("
+     << to_string(static_cast<ExitStatus>(s.exit_status)) << ")";
+  for (std::size_t i = 0; i < s.exit_reasons.size(); ++i)
+    os << (i ? "; " : ": ") << s.exit_reasons[i];
+  os << "\n";
   return os.str();
 }
 
@@ -660,6 +687,9 @@ std::string format_summary_json(const RunSummary& s) {
   j["bus_frames_replayed"] = s.bus_frames_replayed;
   j["bus_frames_recorded"] = s.bus_frames_recorded;
   j["bus_record_dropped"] = s.bus_record_dropped;
+  j["bus_record_written"] = s.bus_record_written;
+  j["bus_record_io_errors"] = s.bus_record_io_errors;
+  j["bus_record_format_errors"] = s.bus_record_format_errors;
   j["real_bus"] = s.real_bus;
   j["port_frames_rx"] = s.port.frames_rx;
   j["port_frames_tx"] = s.port.frames_tx;
@@ -692,6 +722,8 @@ std::string format_summary_json(const RunSummary& s) {
   j["last_torque_stop_period"] = s.last_torque_stop_period;
   j["trace_pushed"] = s.trace_pushed;
   j["trace_dropped"] = s.trace_dropped;
+  j["trace_written"] = s.trace_written;
+  j["trace_io_errors"] = s.trace_io_errors;
   j["stopped"] = s.stopped;
   j["shutdown_periods"] = s.shutdown_periods;
   j["drives_disabled"] = s.drives_disabled;
@@ -736,6 +768,8 @@ std::string format_summary_json(const RunSummary& s) {
                        {"hold_periods", a.hold_periods}};
   }
   j["nan_detected"] = s.nan_detected;
+  j["exit_status"] = s.exit_status;
+  j["exit_reasons"] = s.exit_reasons;
   // Scene names, paths and messages may hold bytes that are not UTF-8: replaced by U+FFFD
   // instead of throwing.
   return j.dump(-1, ' ', false, nlohmann::ordered_json::error_handler_t::replace);

@@ -162,7 +162,9 @@ Trajectory parse_trajectory(const TomlTable& root, double dt, const std::filesys
     }
   }
   try {
-    return resample(transformed(recorded, parse_placement(*t)), dt);
+    // No resampling at dt: the loop interpolates the knots at each period's time
+    // (memory independent of dt and of the run's duration).
+    return transformed(recorded, parse_placement(*t));
   } catch (const InputError& e) {
     if (e.line() > 0) throw;
     t->fail("placement", e.message());
@@ -440,7 +442,7 @@ void parse_device(const TomlTable& root, Scene& scene, const TomlTable*& body_ta
     const std::string placement = tr->choice("placement", {"explicit", "approach"},
                                              tr->has("point") ? "explicit" : "approach");
     Vec3 centroid = Vec3::Zero();
-    for (const auto& s : scene.trajectory.samples()) centroid += s.pose.position;
+    for (std::size_t i = 0; i < scene.trajectory.size(); ++i) centroid += scene.trajectory[i].pose.position;
     centroid /= static_cast<double>(std::max<std::size_t>(1, scene.trajectory.size()));
     if (placement == "approach") {
       if (tr->has("point")) tr->fail("point", "give either point or placement = \"approach\"");

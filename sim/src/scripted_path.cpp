@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <numbers>
 #include <sstream>
 
@@ -228,14 +229,11 @@ Trajectory ScriptedPath::sample(double dt) const {
     throw InputError("", 0, 0, key_prefix_ + ".dt", "gives more than 1e9 samples; dt is too small");
   }
   const std::size_t n = static_cast<std::size_t>(std::max(0.0, intervals)) + 1;
-  std::vector<core::Pose> poses(n);
-  std::vector<double> jaw(n);
-  for (std::size_t k = 0; k < n; ++k) {
-    const TrajectorySample s = evaluate(std::min(static_cast<double>(k) * dt, total));
-    poses[k] = s.pose;
-    jaw[k] = s.jaw;
-  }
-  return Trajectory(dt, std::move(poses), std::move(jaw));
+  return Trajectory(std::make_shared<const ScriptedPath>(*this), dt, n);
+}
+
+std::size_t ScriptedPath::memory_bytes() const noexcept {
+  return sizeof(*this) + segments_.capacity() * sizeof(Resolved) + key_prefix_.capacity();
 }
 
 }  // namespace numen::sim

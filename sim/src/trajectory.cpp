@@ -1,6 +1,6 @@
 /// @file trajectory.cpp
-/// Uniformly sampled target motion: interpolation, finite-difference twist,
-/// placement and resampling (see trajectory.hpp).
+/// Target motion with uniform knots, stored or computed from a scripted path:
+/// interpolation, finite-difference twist and placement (see trajectory.hpp).
 
 #include "numen/sim/trajectory.hpp"
 
@@ -9,12 +9,10 @@
 #include <string>
 
 #include "numen/sim/input_error.hpp"
+#include "numen/sim/scripted_path.hpp"
 
 namespace numen::sim {
 namespace {
-
-/// Below this norm of the quaternion's vector part (≈ half the angle, rad)
-/// the series forms are used; their error is O(n²) relative, i.e. < 1e-16.
 
 /// A time within this fraction of a period of a sample instant is that
 /// instant, so that at(i · period) returns sample i bit for bit.
@@ -45,6 +43,7 @@ Trajectory::Trajectory(double period, std::vector<core::Pose> poses, std::vector
                                std::to_string(poses.size()) + " poses");
   }
   period_ = period;
+  size_ = poses.size();
   samples_.resize(poses.size());
   for (std::size_t i = 0; i < poses.size(); ++i) {
     const std::string where = "trajectory.samples[" + std::to_string(i) + "]";
@@ -68,35 +67,59 @@ Trajectory::Trajectory(double period, std::vector<core::Pose> poses, std::vector
   }
 }
 
+Trajectory::Trajectory(std::shared_ptr<const ScriptedPath> path, double period, std::size_t count) {
+  if (!std::isfinite(period) || period <= 0.0) {
+    fail("trajectory.period", "must be finite and > 0 s, got " + std::to_string(period));
+  }
+  if (count == 0 || !path) fail("trajectory.samples", "a trajectory needs at least one sample");
+  period_ = period;
+  size_ = count;
+  path_ = std::move(path);
+}
+
 double Trajectory::duration() const noexcept {
-  return samples_.size() <= 1 ? 0.0 : static_cast<double>(samples_.size() - 1) * period_;
+  return size_ <= 1 ? 0.0 : static_cast<double>(size_ - 1) * period_;
+}
+
+TrajectorySample Trajectory::operator[](std::size_t i) const noexcept {
+  if (!path_) return samples_[i];
+  const double t = static_cast<double>(i) * period_;
+  TrajectorySample s = path_->evaluate(std::min(t, path_->duration()));
+  s.time = t;
+  s.pose.position = apply(placement_, s.pose.position);
+  s.pose.orientation = (placement_.pose.orientation * s.pose.orientation).normalized();
+  return s;
+}
+
+std::size_t Trajectory::memory_bytes() const noexcept {
+  return samples_.capacity() * sizeof(TrajectorySample) + (path_ ? path_->memory_bytes() : 0);
 }
 
 TrajectorySample Trajectory::at(double t) const noexcept {
-  if (samples_.empty()) return TrajectorySample{};
-  const std::size_t last = samples_.size() - 1;
+  if (size_ == 0) return TrajectorySample{};
+  const std::size_t last = size_ - 1;
   if (!(t > 0.0) || last == 0) {  // also NaN
-    TrajectorySample s = samples_.front();
+    TrajectorySample s = (*this)[0];
     s.time = 0.0;
     return s;
   }
   const double u = t / period_;
   if (u >= static_cast<double>(last)) {
-    TrajectorySample s = samples_.back();
+    TrajectorySample s = (*this)[last];
     s.time = duration();
     return s;
   }
   const double nearest = std::round(u);
   if (std::abs(u - nearest) <= kSnap) {
-    TrajectorySample s = samples_[static_cast<std::size_t>(nearest)];
+    TrajectorySample s = (*this)[static_cast<std::size_t>(nearest)];
     s.time = t;
     return s;
   }
   std::size_t i = static_cast<std::size_t>(std::floor(u));
   if (i >= last) i = last - 1;
   const double f = u - static_cast<double>(i);
-  const TrajectorySample& a = samples_[i];
-  const TrajectorySample& b = samples_[i + 1];
+  const TrajectorySample a = (*this)[i];
+  const TrajectorySample b = (*this)[i + 1];
   TrajectorySample s;
   s.time = t;
   s.pose.position = a.pose.position + f * (b.pose.position - a.pose.position);
@@ -107,16 +130,16 @@ TrajectorySample Trajectory::at(double t) const noexcept {
 
 core::Twist Trajectory::twist_at(double t) const noexcept {
   core::Twist twist;
-  if (samples_.size() < 2 || !(t >= 0.0)) return twist;
-  const std::size_t last = samples_.size() - 1;
+  if (size_ < 2 || !(t >= 0.0)) return twist;
+  const std::size_t last = size_ - 1;
   const double u = t / period_;
   if (u > static_cast<double>(last) + kSnap) return twist;
   const double nearest = std::round(u);
   double fi = std::abs(u - nearest) <= kSnap ? nearest : std::floor(u);
   std::size_t i = static_cast<std::size_t>(fi);
   if (i >= last) i = last - 1;
-  const TrajectorySample& a = samples_[i];
-  const TrajectorySample& b = samples_[i + 1];
+  const TrajectorySample a = (*this)[i];
+  const TrajectorySample b = (*this)[i + 1];
   const double inv = 1.0 / period_;
   twist.linear = (b.pose.position - a.pose.position) * inv;
   twist.angular = core::quat_log(b.pose.orientation * a.pose.orientation.conjugate()) * inv;
@@ -141,33 +164,25 @@ Trajectory transformed(const Trajectory& trajectory, const Placement& placement)
   }
   if (trajectory.empty()) return Trajectory{};
   const core::Quat r = placement.pose.orientation.normalized();
+  if (trajectory.path_) {
+    // Compose: p'' = P2 + R2 s2 (P1 + R1 s1 (p - o1) - o2) = [P2 + R2 s2 (P1 - o2)] + R2 R1 s2 s1 (p - o1).
+    Trajectory moved = trajectory;
+    const Placement& inner = trajectory.placement_;
+    moved.placement_.origin = inner.origin;
+    moved.placement_.pose.position = apply(placement, inner.pose.position);
+    moved.placement_.pose.orientation = (r * inner.pose.orientation.normalized()).normalized();
+    moved.placement_.scale = placement.scale * inner.scale;
+    return moved;
+  }
   std::vector<core::Pose> poses(trajectory.size());
   std::vector<double> jaw(trajectory.size());
   for (std::size_t i = 0; i < trajectory.size(); ++i) {
-    poses[i].position = apply(placement, trajectory[i].pose.position);
-    poses[i].orientation = r * trajectory[i].pose.orientation;
-    jaw[i] = trajectory[i].jaw;
+    const TrajectorySample s = trajectory[i];
+    poses[i].position = apply(placement, s.pose.position);
+    poses[i].orientation = r * s.pose.orientation;
+    jaw[i] = s.jaw;
   }
   return Trajectory(trajectory.period(), std::move(poses), std::move(jaw));
-}
-
-Trajectory resample(const Trajectory& trajectory, double dt) {
-  if (!std::isfinite(dt) || dt <= 0.0) {
-    fail("resample.dt", "must be finite and > 0 s, got " + std::to_string(dt));
-  }
-  if (trajectory.empty()) fail("resample.trajectory", "cannot resample an empty trajectory");
-  const double m = trajectory.duration() / dt;
-  const double last = std::floor(m + kSnap * std::max(1.0, m));
-  if (!(last < 1e9)) fail("resample.dt", "gives more than 1e9 samples; dt is too small");
-  const std::size_t n = static_cast<std::size_t>(last) + 1;
-  std::vector<core::Pose> poses(n);
-  std::vector<double> jaw(n);
-  for (std::size_t k = 0; k < n; ++k) {
-    const TrajectorySample s = trajectory.at(static_cast<double>(k) * dt);
-    poses[k] = s.pose;
-    jaw[k] = s.jaw;
-  }
-  return Trajectory(dt, std::move(poses), std::move(jaw));
 }
 
 }  // namespace numen::sim

@@ -21,7 +21,7 @@ namespace {
 
 core::Vec3 centroid_of(const Trajectory& trajectory) {
   core::Vec3 c = core::Vec3::Zero();
-  for (const TrajectorySample& s : trajectory.samples()) c += s.pose.position;
+  for (std::size_t i = 0; i < trajectory.size(); ++i) c += trajectory[i].pose.position;
   return c / static_cast<double>(trajectory.size());
 }
 
@@ -43,7 +43,8 @@ AxisIntersection least_squares_axis_intersection(const Trajectory& trajectory, i
   const core::Vec3 c = centroid_of(trajectory);
   core::Mat3 a = core::Mat3::Zero();
   core::Vec3 b = core::Vec3::Zero();
-  for (const TrajectorySample& s : trajectory.samples()) {
+  for (std::size_t i = 0; i < trajectory.size(); ++i) {
+    const TrajectorySample s = trajectory[i];
     const core::Vec3 d = s.pose.orientation.toRotationMatrix().col(axis_column);
     const core::Mat3 projector = core::Mat3::Identity() - d * d.transpose();
     a += projector;
@@ -67,7 +68,8 @@ AxisIntersection least_squares_axis_intersection(const Trajectory& trajectory, i
       ((eig.eigenvectors().transpose() * b).array() / eig.eigenvalues().array()).matrix();
   out.point = c + y;
   double sum_sq = 0.0;
-  for (const TrajectorySample& s : trajectory.samples()) {
+  for (std::size_t i = 0; i < trajectory.size(); ++i) {
+    const TrajectorySample s = trajectory[i];
     const core::Vec3 d = s.pose.orientation.toRotationMatrix().col(axis_column);
     const double r = line_distance(out.point, s.pose.position, d);
     sum_sq += r * r;
@@ -86,7 +88,8 @@ ApproachTrocar trocar_from_approach(const Trajectory& trajectory, double standof
   ApproachTrocar out;
   out.centroid = centroid_of(trajectory);
   core::Vec3 mean_z = core::Vec3::Zero();
-  for (const TrajectorySample& s : trajectory.samples()) {
+  for (std::size_t i = 0; i < trajectory.size(); ++i) {
+    const TrajectorySample s = trajectory[i];
     mean_z += s.pose.orientation.toRotationMatrix().col(2);
   }
   mean_z /= static_cast<double>(n);
@@ -98,7 +101,8 @@ ApproachTrocar trocar_from_approach(const Trajectory& trajectory, double standof
   out.point = out.centroid - standoff_m * out.approach;
   double sum_sq = 0.0;
   out.min_depth = std::numeric_limits<double>::infinity();
-  for (const TrajectorySample& s : trajectory.samples()) {
+  for (std::size_t i = 0; i < trajectory.size(); ++i) {
+    const TrajectorySample s = trajectory[i];
     const core::Vec3 d = s.pose.orientation.toRotationMatrix().col(2);
     const double r = line_distance(out.point, s.pose.position, d);
     sum_sq += r * r;

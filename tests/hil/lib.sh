@@ -42,6 +42,18 @@ fail_premise() {
   fail "$2"
 }
 
+# expect_status RC RUN_TXT STATUS...: the numen run's exit status RC is the one its summary
+# RUN_TXT states ("exit status N (...)") and one of STATUS..., the statuses this scenario may
+# end with (docs/inputs.md: 0 clean, 3 safety stop, 6 samples rejected, ...).
+expect_status() {
+  local rc="$1" txt="$2" stated s
+  shift 2
+  stated=$(field "$txt" 'exit status ')
+  [ "$rc" = "$stated" ] || fail "numen run exited with $rc but its summary says exit status ${stated:-(none)}"
+  for s in "$@"; do [ "$rc" = "$s" ] && return 0; done
+  fail "numen run exited with $rc ($(grep -o -m1 'exit status .*' "$txt")); expected one of: $*"
+}
+
 # Waits until FILE contains LINE (a whole line), at most SECONDS (integer) seconds.
 wait_for_line() {
   local file="$1" line="$2" left=$(( $3 * 10 ))

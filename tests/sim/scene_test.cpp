@@ -201,9 +201,10 @@ TEST(Scene, DefaultSceneLoadsWhatItsFileDescribes) {
   EXPECT_FALSE(s.trocar_note.empty());
   EXPECT_DOUBLE_EQ(s.model.feedback.max_force, 8.0);
 
-  // 900 rows at 30 Hz → 899/30 s, resampled at dt.
-  EXPECT_NEAR(s.trajectory.period(), 0.001, 1e-15);
-  EXPECT_NEAR(s.trajectory.duration(), 899.0 / 30.0, 1.5e-3);
+  // 900 rows at 30 Hz → 899/30 s, kept as recorded (interpolated at each period's time).
+  EXPECT_EQ(s.trajectory.size(), 900u);
+  EXPECT_NEAR(s.trajectory.period(), 1.0 / 30.0, 1e-15);
+  EXPECT_NEAR(s.trajectory.duration(), 899.0 / 30.0, 1e-12);
   EXPECT_NEAR(s.duration_s, 30.0, 0.1);
   EXPECT_EQ(s.duration_s, s.trajectory.duration());
   EXPECT_TRUE(s.events.empty());
@@ -751,8 +752,8 @@ const std::vector<std::pair<double, Vec3>>& organ_tips() {
     const SphereUnion u = organ_union(s);
     const std::vector<Vec3> coarse = cube_directions();
     std::vector<std::pair<double, Vec3>> out;
-    for (std::size_t i = 0; i < s.trajectory.size(); i += 10) {
-      const Vec3 p = s.trajectory[i].pose.position;
+    for (int k = 0; k * 0.01 <= s.trajectory.duration(); ++k) {
+      const Vec3 p = s.trajectory.at(k * 0.01).pose.position;
       const double d = depth_to_exterior(u, p, coarse);
       if (d > 0.0) out.emplace_back(d, p);
     }
@@ -771,8 +772,10 @@ TEST(DefaultSceneGeometry, RecordedTipGoesAtLeast10mmIntoTheTissue) {
   // The solid is below the plane (against the normal).
   const Vec3 n = tissue->pose.orientation * Vec3::UnitZ();
   double depth = 0.0;
-  for (const auto& sample : s.trajectory.samples())
+  for (std::size_t idx = 0; idx < s.trajectory.size(); ++idx) {
+    const auto sample = s.trajectory[idx];
     depth = std::max(depth, -(sample.pose.position - tissue->pose.position).dot(n));
+  }
   std::printf("[   info   ] recorded tip depth below the tissue plane: max %.2f mm\n", depth * 1e3);
   EXPECT_GE(depth, 0.010);
 }
@@ -792,7 +795,7 @@ TEST(DefaultSceneGeometry, RecordedTipGoesAtLeast10mmIntoTheOrgan) {
   std::printf("[   info   ] recorded tip depth inside the organ's outer surface (%zu spheres): max %.2f mm "
               "(26 directions: %.2f mm; %zu of %zu sampled positions inside)\n",
               u.spheres().size(), depth * 1e3, inside.front().first * 1e3, inside.size(),
-              (s.trajectory.size() + 9) / 10);
+              static_cast<std::size_t>(s.trajectory.duration() / 0.01) + 1);
   EXPECT_GE(depth, 0.010);
 }
 

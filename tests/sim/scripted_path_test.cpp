@@ -119,7 +119,8 @@ TEST(ScriptedPath, CircleRadiusPeriodPhaseAndDirection) {
   EXPECT_NEAR((path.evaluate(period).pose.position - path.evaluate(0.0).pose.position).norm(), 0.0,
               1e-15);
   const auto tr = path.sample(1e-3);
-  for (const auto& s : tr.samples()) {
+  for (std::size_t idx = 0; idx < tr.size(); ++idx) {
+    const auto s = tr[idx];
     EXPECT_NEAR((s.pose.position - c).norm(), r, 1e-15);
     EXPECT_NEAR(s.pose.position.z(), c.z(), 1e-15);
   }

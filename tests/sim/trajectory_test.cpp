@@ -195,55 +195,53 @@ TEST(Trajectory, TwistIsTheDerivativeOfAt) {
   EXPECT_NEAR((bent.twist_at(0.1).angular - Vec3(3.0, 0.0, 0.0)).norm(), 0.0, 1e-12);
 }
 
-TEST(Resample, EqualsTheRecordedPosesAtSampleInstants) {
+// The control loop samples a trajectory at each period's time with at(): no resampling at dt.
+TEST(Interpolation, EqualsTheRecordedPosesAtSampleInstantsOfA1kHzLoop) {
   const Trajectory rec = constant_rate(Vec3(0.01, 0.02, -0.03), Vec3(0.3, -0.2, 1.1),
                                        about(Vec3(1, 2, 3), 0.7), 31, 1.0 / 30);
-  const Trajectory fine = numen::sim::resample(rec, 1e-3);
-  ASSERT_EQ(fine.size(), 1001u);  // 0 .. 1 s every 1 ms
-  EXPECT_DOUBLE_EQ(fine.period(), 1e-3);
   for (std::size_t i = 0; i < rec.size(); ++i) {
     const std::size_t k =
         static_cast<std::size_t>(std::lround(static_cast<double>(i) * 1000.0 / 30.0));
     if (std::abs(static_cast<double>(k) * 30.0 - static_cast<double>(i) * 1000.0) > 1e-9) continue;
-    EXPECT_NEAR((fine[k].pose.position - rec[i].pose.position).norm(), 0.0, 1e-15) << i;
-    EXPECT_NEAR(angle_between(fine[k].pose.orientation, rec[i].pose.orientation), 0.0, 1e-15) << i;
+    const auto s = rec.at(static_cast<double>(k) * 1e-3);
+    EXPECT_NEAR((s.pose.position - rec[i].pose.position).norm(), 0.0, 1e-15) << i;
+    EXPECT_NEAR(angle_between(s.pose.orientation, rec[i].pose.orientation), 0.0, 1e-15) << i;
   }
-  EXPECT_NEAR((fine[1000].pose.position - rec[30].pose.position).norm(), 0.0, 1e-15);
+  EXPECT_NEAR((rec.at(1.0).pose.position - rec[30].pose.position).norm(), 0.0, 1e-15);
 }
 
-TEST(Resample, InterpolatesBetweenRecordedSamples) {
+TEST(Interpolation, InterpolatesBetweenRecordedSamples) {
   std::vector<Pose> poses(2);
   poses[1].position = Vec3(0.03, 0.0, 0.0);
   poses[1].orientation = about(Vec3::UnitY(), 0.6);
   const Trajectory rec(1.0 / 30, poses, {0.0, 0.3});
-  const Trajectory fine = numen::sim::resample(rec, 1.0 / 600);  // 20 per recorded interval
-  ASSERT_EQ(fine.size(), 21u);
-  // Sample 10 is the midpoint: 1.5 cm, 0.3 rad about y, jaw 0.15.
-  EXPECT_NEAR((fine[10].pose.position - Vec3(0.015, 0.0, 0.0)).norm(), 0.0, 1e-15);
+  // The midpoint: 1.5 cm, 0.3 rad about y, jaw 0.15.
+  const auto mid = rec.at(10.0 / 600);
+  EXPECT_NEAR((mid.pose.position - Vec3(0.015, 0.0, 0.0)).norm(), 0.0, 1e-15);
   const Quat half(std::cos(0.15), 0.0, std::sin(0.15), 0.0);
-  EXPECT_NEAR((fine[10].pose.orientation.coeffs() - half.coeffs()).norm(), 0.0, 1e-15);
-  EXPECT_NEAR(fine[10].jaw, 0.15, 1e-15);
-  // Sample 5: a quarter.
-  EXPECT_NEAR(angle_between(fine[5].pose.orientation, about(Vec3::UnitY(), 0.15)), 0.0, 1e-15);
+  EXPECT_NEAR((mid.pose.orientation.coeffs() - half.coeffs()).norm(), 0.0, 1e-15);
+  EXPECT_NEAR(mid.jaw, 0.15, 1e-15);
+  // A quarter.
+  EXPECT_NEAR(angle_between(rec.at(5.0 / 600).pose.orientation, about(Vec3::UnitY(), 0.15)), 0.0,
+              1e-15);
 }
 
-TEST(Resample, RecoversTheAngularVelocityOfAConstantRateRotation) {
+TEST(Interpolation, RecoversTheAngularVelocityOfAConstantRateRotation) {
   const Vec3 w(-0.8, 0.5, 2.0);  // rad/s
   const Trajectory rec = constant_rate(Vec3::Zero(), w, about(Vec3(0, 1, 1), 1.0), 91, 1.0 / 30);
-  const Trajectory fine = numen::sim::resample(rec, 1e-3);
   double worst = 0.0;
-  for (double t = 0.0; t < fine.duration(); t += 0.0123) {
-    worst = std::max(worst, (fine.twist_at(t).angular - w).norm());
+  for (double t = 0.0; t < rec.duration(); t += 0.0123) {
+    worst = std::max(worst, (rec.twist_at(t).angular - w).norm());
   }
   EXPECT_LT(worst, 1e-9);
 }
 
-TEST(Resample, DropsATailShorterThanDtAndRejectsBadDt) {
-  const Trajectory rec = constant_rate(Vec3::UnitX(), Vec3::Zero(), Quat::Identity(), 4, 0.1);
-  EXPECT_EQ(numen::sim::resample(rec, 0.07).size(), 5u);  // 0, .07, .14, .21, .28 (< .3)
-  EXPECT_THROW(numen::sim::resample(rec, 0.0), InputError);
-  EXPECT_THROW(numen::sim::resample(rec, -1.0), InputError);
-  EXPECT_THROW(numen::sim::resample(Trajectory{}, 1e-3), InputError);
+// Issue 17, defect 1: a 30 s recording at 30 Hz keeps its 900 knots whatever the control
+// period; it used to be resampled at dt up front (497 MB at dt = 1e-5, ~23 GB at 1e-7).
+TEST(Interpolation, KeepsTheRecordedKnotsOnly) {
+  const Trajectory rec = constant_rate(Vec3::UnitX(), Vec3::Zero(), Quat::Identity(), 900, 1.0 / 30);
+  EXPECT_EQ(rec.size(), 900u);
+  EXPECT_LE(rec.memory_bytes(), 900 * sizeof(numen::sim::TrajectorySample));
 }
 
 TEST(Placement, MovesRotatesAndScalesTheWholeTrajectory) {
@@ -280,14 +278,12 @@ TEST(Placement, MovesRotatesAndScalesTheWholeTrajectory) {
 TEST(Trajectory, AtAndTwistAtAllocateNothing) {
   const Trajectory rec =
       constant_rate(Vec3(0.01, 0.02, -0.03), Vec3(0.3, -0.2, 1.1), Quat::Identity(), 300, 1.0 / 30);
-  const Trajectory fine = numen::sim::resample(rec, 1e-3);
   double sink = 0.0;
   numen::test::AllocationGuard guard;
-  for (double t = -0.5; t < fine.duration() + 0.5; t += 0.000731) {
-    const auto s = fine.at(t);
-    const auto tw = fine.twist_at(t);
-    const auto r = rec.at(t);
-    sink += s.pose.position.x() + s.pose.orientation.w() + tw.angular.z() + r.jaw;
+  for (double t = -0.5; t < rec.duration() + 0.5; t += 0.000731) {
+    const auto s = rec.at(t);
+    const auto tw = rec.twist_at(t);
+    sink += s.pose.position.x() + s.pose.orientation.w() + tw.angular.z() + s.jaw;
   }
   EXPECT_EQ(guard.count(), 0);
   EXPECT_TRUE(std::isfinite(sink));

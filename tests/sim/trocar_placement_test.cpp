@@ -75,7 +75,8 @@ TEST(TrocarPlacement, LeastSquaresToleratesNoise) {
   const Trajectory clean = pivoting(trocar, Vec3(0, 0, -1), 2, 500, 3u);
   std::mt19937 rng(11);
   std::normal_distribution<double> noise(0.0, 1e-3);  // 1 mm on the tip
-  for (const auto& s : clean.samples()) {
+  for (std::size_t idx = 0; idx < clean.size(); ++idx) {
+    const auto s = clean[idx];
     Pose p = s.pose;
     p.position += Vec3(noise(rng), noise(rng), noise(rng));
     poses.push_back(p);
@@ -90,7 +91,8 @@ TEST(TrocarPlacement, FromApproachFollowsItsFormula) {
   const Vec3 trocar(0.1, -0.05, 0.2);
   const Trajectory tr = pivoting(trocar, Vec3(0.3, -0.5, -0.8), 2, 300, 5u);
   Vec3 centroid = Vec3::Zero(), mean_z = Vec3::Zero();
-  for (const auto& s : tr.samples()) {
+  for (std::size_t idx = 0; idx < tr.size(); ++idx) {
+    const auto s = tr[idx];
     centroid += s.pose.position / 300.0;
     mean_z += s.pose.orientation.toRotationMatrix().col(2) / 300.0;
   }

@@ -20,7 +20,7 @@ kill -TERM "$DEVICE_PID"
 wait "$DEVICE_PID"
 kill "$dump"
 cat /tmp/run.txt /tmp/dev.txt
-[ "$rc" -eq 0 ] || fail "numen run exited with $rc"
+expect_status "$rc" /tmp/run.txt 0 3 6
 rx_drop=$(field /tmp/run.txt 'frames rx [0-9]+, tx [0-9]+, dropped ')
 active=$(field /tmp/run.txt 'active at period ')
 invalid=$(field /tmp/run.txt 'invalid periods ')

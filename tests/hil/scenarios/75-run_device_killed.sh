@@ -44,7 +44,7 @@ rc=$?
 kill "$dump"
 wait "$dump"
 cat /tmp/run.txt
-[ "$rc" -eq 0 ] || fail "numen run exited with $rc"
+expect_status "$rc" /tmp/run.txt 3
 last_frame=$(field /tmp/run.txt 'last at period ')
 stop=$(field /tmp/run.txt 'last torque stop at period ')
 hb=$(field /tmp/run.txt 'heartbeat losses ')

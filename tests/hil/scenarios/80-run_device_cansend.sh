@@ -25,7 +25,7 @@ kill -TERM "$DEVICE_PID"
 wait "$DEVICE_PID"
 kill "$dump"
 cat /tmp/run.txt
-[ "$rc" -eq 0 ] || fail "numen run exited with $rc"
+expect_status "$rc" /tmp/run.txt 3
 grep -q 'nan detected: no' /tmp/run.txt || fail "NaN in the run"
 unknown=$(field /tmp/run.txt 'unknown id ')
 rejected=$(field /tmp/run.txt 'frames rejected ')

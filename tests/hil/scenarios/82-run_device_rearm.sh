@@ -19,7 +19,7 @@ rc=$?
 kill -TERM "$DEVICE_PID"
 wait "$DEVICE_PID"
 cat /tmp/run.txt
-[ "$rc" -eq 0 ] || fail "numen run exited with $rc"
+expect_status "$rc" /tmp/run.txt 3
 grep -q 'nan detected: no' /tmp/run.txt || fail "NaN in the run"
 range=$(field /tmp/run.txt 'values out of range ')
 requests=$(field /tmp/run.txt 're-arm: ')

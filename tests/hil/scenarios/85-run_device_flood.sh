@@ -25,7 +25,7 @@ kill -TERM "$DEVICE_PID"
 wait "$DEVICE_PID"
 kill "$dump"
 cat /tmp/run.txt /tmp/dev.txt
-[ "$rc" -eq 0 ] || fail "numen run exited with $rc"
+expect_status "$rc" /tmp/run.txt 0 3 6
 flood=$(grep -c ' vcan0 555#' /tmp/flood.log)
 unknown=$(field /tmp/run.txt 'unknown id ')
 rejected=$(field /tmp/run.txt 'frames rejected ')

@@ -23,7 +23,7 @@ kill -TERM "$DEVICE_PID"
 wait "$DEVICE_PID"
 kill "$dump"
 cat /tmp/run.txt /tmp/dev.txt
-[ "$rc" -eq 0 ] || fail "numen run exited with $rc"
+expect_status "$rc" /tmp/run.txt 3
 grep -q 'nan detected: no' /tmp/run.txt || fail "NaN in the run"
 link_down=$(field /tmp/run.txt 'link down ')
 sync_fail=$(field /tmp/run.txt 'SYNC write failures ')

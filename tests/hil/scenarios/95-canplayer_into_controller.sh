@@ -14,7 +14,9 @@ candump -L vcan0 >/tmp/rec.log 2>/tmp/candump.err &
 dump=$!
 start_device /tmp/dev.txt
 numen run "$HIL_SCENE" --bus can:vcan0 --duration 4 --overrun-limit "${HIL_OVERRUN_LIMIT:-3}" \
-  --trace /tmp/rec.csv >/tmp/rec.txt 2>&1 || fail "recording run failed: $(tail -n 5 /tmp/rec.txt)"
+  --trace /tmp/rec.csv >/tmp/rec.txt 2>&1
+rc=$?
+expect_status "$rc" /tmp/rec.txt 0 3 6
 usleep 200000
 kill -TERM "$DEVICE_PID"
 wait "$DEVICE_PID"
@@ -34,7 +36,7 @@ canplayer -I /tmp/replay.log
 wait "$run"
 rc=$?
 cat /tmp/play.txt
-[ "$rc" -eq 0 ] || fail "numen run exited with $rc"
+expect_status "$rc" /tmp/play.txt 0 3 6
 grep -q 'nan detected: no' /tmp/play.txt || fail "NaN in the run"
 rx=$(field /tmp/play.txt 'frames rx ')
 active=$(field /tmp/play.txt 'active at period ')

@@ -182,6 +182,9 @@ struct RunSummary {
   std::int64_t bus_frames_replayed = 0;    ///< log: records read by the controller.
   std::int64_t bus_frames_recorded = 0;    ///< --record: frames queued for the log.
   std::int64_t bus_record_dropped = 0;     ///< --record: lost to a full queue (paced runs).
+  std::int64_t bus_record_written = 0;     ///< --record: lines the writer thread wrote.
+  std::int64_t bus_record_io_errors = 0;   ///< --record: failed writes / flushes (disk full).
+  std::int64_t bus_record_format_errors = 0;  ///< --record: records that could not be formatted.
   std::int64_t realtime_overruns = 0;      ///< Paced periods (--realtime) that began after their deadline.
   std::int64_t realtime_missed_periods = 0;  ///< Whole periods skipped to re-phase after overruns.
   /// RunOptions::overrun_limit in effect: consecutive overruns that latch (0: counted only).
@@ -235,6 +238,8 @@ struct RunSummary {
                                                ///< period with torque (the last safe stop).
   std::int64_t trace_pushed = 0;           ///< Real-bus trace (TraceWriter): records queued.
   std::int64_t trace_dropped = 0;          ///< ... refused by a full queue (must be 0).
+  std::int64_t trace_written = 0;          ///< ... lines written to the file.
+  std::int64_t trace_io_errors = 0;        ///< ... failed writes / flushes (disk full).
   bool stopped = false;                    ///< Ended early by RunOptions::stop (signal).
   std::int64_t rearm_requests = 0;         ///< RunOptions::rearm requests taken.
   std::int64_t rearms_accepted = 0;        ///< Of these, ControlLoop::rearm() kAccepted.
@@ -245,6 +250,10 @@ struct RunSummary {
   std::string trocar_note;
   /// Admittance device runs only (enabled = true); the impedance-only fields above stay 0.
   AdmittanceSummary admittance;
+  /// The run's exit status (run_verdict(): ExitStatus as int, 0 clean) and every condition
+  /// behind it, most severe first; set by run_scene().
+  int exit_status = 0;
+  std::vector<std::string> exit_reasons;
 };
 
 /// A scene wired for a run: SimBus, simulated instrument on its device port,
@@ -294,6 +303,10 @@ class SceneRunner {
   void set_compute_phase_ns(std::int64_t ns) noexcept { phase_ns_ = ns; }
   /// Periods run so far.
   std::int64_t periods() const noexcept { return k_; }
+  /// Ends the run's streams: stops the bus recorder's and the trace's writer threads, which
+  /// write what is still queued and flush, so that summary() reports what reached the files.
+  /// Idempotent; call it after the last period() (setup thread).
+  void finish();
 
   /// The summary of the periods run so far (wall time and realtime overruns
   /// are the caller's, see run_scene).
@@ -340,7 +353,8 @@ class SceneRunner {
   bool has_first_fault_ = false;
 };
 
-/// Runs `scene` for options.duration_s (or the scene's duration).
+/// Runs `scene` for options.duration_s (or the scene's duration) and judges it
+/// (RunSummary::exit_status, run_verdict()).
 /// Throws std::runtime_error if the trace cannot be written.
 RunSummary run_scene(const Scene& scene, const RunOptions& options);
 

@@ -112,13 +112,16 @@ class ScriptedPath {
   /// is at B from step_time on. Real-time safe (noexcept, no allocation).
   TrajectorySample evaluate(double t) const noexcept;
 
-  /// The path sampled at period `dt` (s) into a Trajectory: sample k is
+  /// The path sampled at period `dt` (s) into a Trajectory: knot k is
   /// evaluate(min(k dt, duration())), k = 0 .. ceil(duration / dt) (the last
-  /// sample holds the end). Throws InputError for dt not finite and > 0
+  /// knot holds the end). The knots are computed on demand from a copy of
+  /// this path (memory independent of dt and of the duration). Throws InputError for dt not finite and > 0
   /// (key "<prefix>.dt"), a spin turning π or more per sample (key
   /// "<prefix>[i].angular_velocity") or a circle of period <= 2 dt (key
   /// "<prefix>[i].period"): the samples could not represent them.
   Trajectory sample(double dt) const;
+  /// Bytes this path keeps (segments), for memory reports.
+  std::size_t memory_bytes() const noexcept;
 
  private:
   enum class Kind { line, circle, hold, step };

@@ -1,16 +1,21 @@
 #pragma once
 /// @file trajectory.hpp
-/// A target motion sampled uniformly in time: the pose of an instrument's tool
-/// tip frame in the world and its jaw (gripper) angle. It is what a recorded
-/// or scripted "tracked instrument" feeds to the control loop in place of a
-/// device. Building one allocates and may throw InputError (load time);
+/// A target motion given by knots uniform in time: the pose of an instrument's
+/// tool tip frame in the world and its jaw (gripper) angle. It is what a
+/// recorded or scripted "tracked instrument" feeds to the control loop in place
+/// of a device. Building one allocates and may throw InputError (load time);
 /// sampling it (`at`, `twist_at`) is real-time safe: noexcept, no allocation.
 ///
+/// Memory: a recorded motion keeps its recorded knots (30 Hz for JIGSAWS); a
+/// scripted path keeps its segments and computes its knots on demand. Neither
+/// depends on the control period dt or on the run's duration: the loop
+/// interpolates at each period's time, nothing is resampled up front.
+///
 /// Interpolation between samples: linear position, slerp orientation on the
-/// shortest arc, linear jaw (DESIGN.md, "Real input"). Units SI (s, m, rad).
+/// shortest arc, linear jaw (docs/architecture.md). Units SI (s, m, rad).
 
 #include <cstddef>
-#include <span>
+#include <memory>
 #include <vector>
 
 #include "numen/core/rigid_body.hpp"
@@ -36,11 +41,26 @@ struct TrajectorySample {
 /// hemisphere of `q0` (sign continuity).
 core::Quat slerp_shortest(const core::Quat& q0, const core::Quat& q1, double s) noexcept;
 
-/// A target motion sampled every `period()` seconds from time 0 to
-/// `duration()`. Invariants (established by the constructor): period > 0 and
-/// finite, at least one sample, every value finite, unit quaternions with sign
-/// continuity (consecutive quaternions have a non-negative dot product, so
-/// there is no q → -q flip between samples), sample i at time i · period.
+class ScriptedPath;
+
+/// How to place a motion recorded in its own frame into a scene's world:
+/// a point p of the recording goes to
+///   p' = pose.position + R (scale · (p - origin)),   R = pose.orientation,
+/// and an orientation q goes to R q. Jaw angles and times are unchanged.
+struct Placement {
+  core::Vec3 origin =
+      core::Vec3::Zero();  ///< Point of the recording frame (m) sent to pose.position.
+  core::Pose pose;         ///< Where `origin` lands (m) and the rotation recording → world.
+  double scale = 1.0;      ///< Uniform scale of positions about `origin` (> 0, unitless).
+};
+
+/// A target motion with a knot every `period()` seconds from time 0 to
+/// `duration()`, knot i at time i · period. Invariants (established by the
+/// constructors): period > 0 and finite, at least one knot, every value
+/// finite, unit quaternions. Stored knots (recorded motion) also have sign
+/// continuity (consecutive quaternions have a non-negative dot product);
+/// computed knots (scripted path) may differ in sign, which changes nothing:
+/// interpolation and twist take the shortest arc (core::quat_log) either way.
 class Trajectory {
  public:
   /// An empty trajectory (no sample). `at()` returns the identity pose at the
@@ -55,18 +75,25 @@ class Trajectory {
   /// quaternion has (near) zero norm.
   Trajectory(double period, std::vector<core::Pose> poses, std::vector<double> jaw = {});
 
-  /// Number of samples.
-  std::size_t size() const noexcept { return samples_.size(); }
-  /// True if there is no sample (default-constructed).
-  bool empty() const noexcept { return samples_.empty(); }
-  /// Sampling period (s); 0 for an empty trajectory.
+  /// Knots computed on demand from `path` (ScriptedPath::sample()): knot k is
+  /// path->evaluate(min(k · period, path->duration())) for k = 0 .. count - 1,
+  /// quaternion normalised. Keeps only the path (its segments), never the
+  /// knots. Throws InputError (key "trajectory.period" / "trajectory.samples")
+  /// if period is not finite and > 0, count is 0 or path is null.
+  Trajectory(std::shared_ptr<const ScriptedPath> path, double period, std::size_t count);
+
+  /// Number of knots.
+  std::size_t size() const noexcept { return size_; }
+  /// True if there is no knot (default-constructed).
+  bool empty() const noexcept { return size_ == 0; }
+  /// Knot period (s); 0 for an empty trajectory.
   double period() const noexcept { return period_; }
-  /// Time of the last sample (s): (size() - 1) · period(); 0 if size() <= 1.
+  /// Time of the last knot (s): (size() - 1) · period(); 0 if size() <= 1.
   double duration() const noexcept;
-  /// Sample `i` (precondition i < size()).
-  const TrajectorySample& operator[](std::size_t i) const noexcept { return samples_[i]; }
-  /// All samples, in time order.
-  std::span<const TrajectorySample> samples() const noexcept { return samples_; }
+  /// Knot `i`, at time i · period() (precondition i < size()). Real-time safe.
+  TrajectorySample operator[](std::size_t i) const noexcept;
+  /// Bytes this trajectory keeps (knots or path segments), for memory reports.
+  std::size_t memory_bytes() const noexcept;
 
   /// Target at time `t` (s): linear position, shortest-arc slerp orientation
   /// and linear jaw between the two samples around `t`; clamped to the first
@@ -84,20 +111,15 @@ class Trajectory {
   /// trajectory of fewer than two samples. Real-time safe.
   core::Twist twist_at(double t) const noexcept;
 
+  /// This trajectory moved by `placement` (see transformed()).
+  friend Trajectory transformed(const Trajectory& trajectory, const Placement& placement);
+
  private:
   double period_ = 0.0;
-  std::vector<TrajectorySample> samples_;
-};
-
-/// How to place a motion recorded in its own frame into a scene's world:
-/// a point p of the recording goes to
-///   p' = pose.position + R (scale · (p - origin)),   R = pose.orientation,
-/// and an orientation q goes to R q. Jaw angles and times are unchanged.
-struct Placement {
-  core::Vec3 origin =
-      core::Vec3::Zero();  ///< Point of the recording frame (m) sent to pose.position.
-  core::Pose pose;         ///< Where `origin` lands (m) and the rotation recording → world.
-  double scale = 1.0;      ///< Uniform scale of positions about `origin` (> 0, unitless).
+  std::size_t size_ = 0;
+  std::vector<TrajectorySample> samples_;  // stored knots (empty for a path)
+  std::shared_ptr<const ScriptedPath> path_;  // computed knots (null for stored ones)
+  Placement placement_;  // applied to the path's knots
 };
 
 /// Image of the point `p` (m, recording frame) under `placement` (world frame).
@@ -105,17 +127,11 @@ core::Vec3 apply(const Placement& placement, const core::Vec3& p) noexcept;
 
 /// The whole trajectory moved by `placement`: every position p → p', every
 /// orientation q → R q (velocities follow: linear scaled then rotated,
-/// angular rotated). Throws InputError (key "placement.scale" or
+/// angular rotated). Stored knots are transformed; a path's placement is
+/// composed with it (still computed on demand). Throws InputError (key "placement.scale" or
 /// "placement.orientation") if the scale is not finite and > 0 or the
 /// orientation is not finite or has zero norm (it is normalised otherwise).
 Trajectory transformed(const Trajectory& trajectory, const Placement& placement);
 
-/// The trajectory resampled at period `dt` (s), e.g. 1e-3 for a 1 kHz control
-/// loop, by at(): linear position, shortest-arc slerp orientation, linear jaw.
-/// Samples at k · dt for k = 0 .. floor(duration / dt) (a tail shorter than
-/// dt is dropped; a relative tolerance of 1e-9 keeps the last sample when the
-/// duration is a multiple of dt). Throws InputError (key "resample.dt") if dt
-/// is not finite and > 0 or the trajectory is empty.
-Trajectory resample(const Trajectory& trajectory, double dt);
 
 }  // namespace numen::sim

@@ -1,0 +1,50 @@
+#pragma once
+/// @file run_verdict.hpp
+/// The exit status of `numen run`: what a finished run's summary says about it, so that a
+/// run that produced non-finite state, latched a safety stop, lost recorded records or was fed
+/// rejected input never ends with status 0 (docs/inputs.md, "Exit statuses"). A script, a CI
+/// job or the HIL suite reads the status; `--json` carries the same verdict.
+
+#include <string>
+#include <vector>
+
+namespace numen::sim {
+
+struct RunSummary;
+
+/// Exit statuses of the `numen` command. When several conditions hold, the most severe one is
+/// the status (the order below, non-finite first) and every one is listed in the reasons.
+enum class ExitStatus : int {
+  kClean = 0,             ///< The run ended as asked, nothing was lost or rejected.
+  kError = 1,             ///< An error that is not the input's (I/O, resources, internal).
+  kInputRejected = 2,     ///< The input was refused before the run: scene, trajectory, bus log,
+                          ///< command-line value (located message on stderr).
+  kSafetyStop = 3,        ///< The safety supervisor latched a safe state (docs/safety.md) or
+                          ///< the managed start-up failed.
+  kNonFinite = 4,         ///< A step produced non-finite state (core::Data::nonfinite_steps),
+                          ///< or the final state is not finite.
+  kLostRecords = 5,       ///< Records of --record / --trace were dropped or not written.
+  kSamplesRejected = 6,   ///< Input samples were rejected during the run (encoder values out
+                          ///< of range, jumps, non-finite), no sample was ever valid, or a
+                          ///< replayed bus log gave no frame.
+};
+
+/// Numeric value of `s` (the process exit status).
+constexpr int code(ExitStatus s) noexcept { return static_cast<int>(s); }
+
+/// Short name of `s` ("clean", "safety stop", ...).
+const char* to_string(ExitStatus s) noexcept;
+
+/// A run's status and every condition that holds, most severe first, as readable lines
+/// ("non-finite state: 22 013 steps", ...); empty for kClean.
+struct RunVerdict {
+  ExitStatus status = ExitStatus::kClean;
+  std::vector<std::string> reasons;
+};
+
+/// The verdict on a finished run from its summary. A run ended early by a signal
+/// (RunSummary::stopped) is judged on what it ran; the command adds 128 + the signal number
+/// when that verdict is clean.
+RunVerdict run_verdict(const RunSummary& summary);
+
+}  // namespace numen::sim

@@ -1,0 +1,69 @@
+/// @file run_verdict.cpp
+/// The exit status of a finished run (see run_verdict.hpp).
+
+#include "numen/sim/run_verdict.hpp"
+
+#include <string>
+
+#include "numen/sim/run.hpp"
+
+namespace numen::sim {
+
+const char* to_string(ExitStatus s) noexcept {
+  switch (s) {
+    case ExitStatus::kClean: return "clean";
+    case ExitStatus::kError: return "error";
+    case ExitStatus::kInputRejected: return "input rejected";
+    case ExitStatus::kSafetyStop: return "safety stop";
+    case ExitStatus::kNonFinite: return "non-finite state";
+    case ExitStatus::kLostRecords: return "lost records";
+    case ExitStatus::kSamplesRejected: return "samples rejected";
+  }
+  return "?";
+}
+
+RunVerdict run_verdict(const RunSummary& s) {
+  RunVerdict v;
+  auto add = [&v](ExitStatus status, const std::string& why) {
+    v.reasons.push_back(std::string(to_string(status)) + ": " + why);
+    // Severity order: non-finite, safety stop, lost records, samples rejected.
+    auto rank = [](ExitStatus x) {
+      switch (x) {
+        case ExitStatus::kNonFinite: return 4;
+        case ExitStatus::kSafetyStop: return 3;
+        case ExitStatus::kLostRecords: return 2;
+        case ExitStatus::kSamplesRejected: return 1;
+        default: return 0;
+      }
+    };
+    if (rank(status) > rank(v.status)) v.status = status;
+  };
+  const auto n = [](std::int64_t x) { return std::to_string(x); };
+  if (s.nonfinite_steps > 0) add(ExitStatus::kNonFinite, n(s.nonfinite_steps) + " steps");
+  else if (s.nan_detected) add(ExitStatus::kNonFinite, "the final state is not finite");
+  if (s.faults > 0)
+    add(ExitStatus::kSafetyStop, n(s.faults) + " safe state(s) latched, first: " + s.first_fault);
+  if (s.managed && s.startup.rfind("failed", 0) == 0)
+    add(ExitStatus::kSafetyStop, "start-up " + s.startup);
+  if (s.bus_record_dropped > 0)
+    add(ExitStatus::kLostRecords, "--record: " + n(s.bus_record_dropped) + " frames dropped");
+  if (s.bus_record_io_errors > 0 || s.bus_record_format_errors > 0 ||
+      s.bus_record_written < s.bus_frames_recorded)
+    add(ExitStatus::kLostRecords,
+        "--record: " + n(s.bus_record_written) + " of " + n(s.bus_frames_recorded) +
+            " frames written (" + n(s.bus_record_io_errors) + " I/O errors, " +
+            n(s.bus_record_format_errors) + " not formattable)");
+  if (s.trace_dropped > 0 || s.trace_io_errors > 0 || s.trace_written < s.trace_pushed)
+    add(ExitStatus::kLostRecords, "--trace: " + n(s.trace_written) + " of " +
+                                      n(s.trace_pushed + s.trace_dropped) + " records written (" +
+                                      n(s.trace_io_errors) + " I/O errors)");
+  if (s.rejected_samples > 0)
+    add(ExitStatus::kSamplesRejected, n(s.rejected_samples) + " axis samples rejected");
+  if (s.steps > 0 && s.invalid_periods >= s.steps)
+    add(ExitStatus::kSamplesRejected, "no period had a valid sample");
+  if (s.bus.rfind("log:", 0) == 0 && s.bus_frames_replayed == 0)
+    add(ExitStatus::kSamplesRejected, "the bus log gave no frame");
+  return v;
+}
+
+}  // namespace numen::sim

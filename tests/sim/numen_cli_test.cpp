@@ -1,0 +1,162 @@
+// End-to-end tests of the `numen` command (sim/app/main.cpp) run as a child process: exit
+// statuses (docs/inputs.md), signals at each phase, and resident memory that depends neither
+// on the control period nor on the run's duration (issue 17, defects 1 and 4).
+
+#include <gtest/gtest.h>
+#include <sys/stat.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "build_features.hpp"
+#include "child_process.hpp"
+#include "numen/sim/scene.hpp"
+#include "scene_text.hpp"
+#include "temp_dir.hpp"
+
+namespace {
+
+using numen::test::ChildResult;
+using numen::test::ChildSignal;
+using numen::test::run_child;
+using numen::test::TempDir;
+
+const std::string kNumen = NUMEN_CLI;
+
+std::string default_scene_text() { return numen::test::read_file(numen::sim::default_scene_path()); }
+
+const std::string kExcerptLine = "file = \"../data/jigsaws_suturing_b002_excerpt.txt\"";
+
+/// The default scene with `edits` applied (from → to, each must match) and its trajectory file
+/// given as an absolute path (the copy lives in a temporary directory).
+std::string default_scene_copy(const std::vector<std::pair<std::string, std::string>>& edits) {
+  std::string text = default_scene_text();
+  for (const auto& [from, to] : edits) text = numen::test::replace(text, from, to);
+  const std::string dir =
+      std::filesystem::path(numen::sim::default_scene_path()).parent_path().string() + "/";
+  if (text.find(kExcerptLine) != std::string::npos)
+    text = numen::test::replace(text, "file = \"../data/", "file = \"" + dir + "../data/");
+  return text;
+}
+
+/// The default scene at control period `dt` (s): the simulated bus's latency and compute
+/// phase are scaled so that a SYNC round trip fits in the period.
+std::string default_scene_at(const std::string& dt) {
+  return default_scene_copy({{"dt = 0.001", "dt = " + dt},
+                             {"latency = 0.0001", "latency = 1e-6\ncompute_phase = 5e-6"}});
+}
+
+// Defect 1: a 30 s recording used to be resampled at dt up front (497 MB at dt = 1e-5, ~23 GB
+// at 1e-7). Now the trajectory keeps its 30 Hz knots: the peak RSS of a run does not depend on dt.
+TEST(NumenCli, PeakMemoryDoesNotDependOnTheControlPeriod) {
+  NUMEN_REQUIRE_ARTICULATION();
+  TempDir dir;
+  const std::string coarse = dir.write("coarse.toml", default_scene_at("0.001"));
+  const std::string fine = dir.write("fine.toml", default_scene_at("1e-5"));
+  const ChildResult a = run_child({kNumen, "run", coarse, "--duration", "0.05"}, dir.path(), 120);
+  const ChildResult b = run_child({kNumen, "run", fine, "--duration", "0.05"}, dir.path(), 120);
+  ASSERT_EQ(a.status, 0) << a.out << a.err;
+  ASSERT_EQ(b.status, 0) << b.out << b.err;
+  std::printf("[   info   ] peak RSS: dt 1e-3 %ld KiB, dt 1e-5 %ld KiB\n", a.max_rss_kib,
+              b.max_rss_kib);
+  EXPECT_LT(b.max_rss_kib - a.max_rss_kib, 20 * 1024);
+}
+
+// ... nor on the run's duration: nothing per step is kept (without --trace).
+TEST(NumenCli, PeakMemoryDoesNotGrowWithTheDuration) {
+  NUMEN_REQUIRE_ARTICULATION();
+  TempDir dir;
+  const ChildResult a = run_child({kNumen, "run", "--duration", "0.5"}, dir.path(), 120);
+  const ChildResult b = run_child({kNumen, "run", "--duration", "8"}, dir.path(), 300);
+  ASSERT_EQ(a.status, 0) << a.out << a.err;
+  ASSERT_EQ(b.status, 0) << b.out << b.err;
+  std::printf("[   info   ] peak RSS: 0.5 s %ld KiB, 8 s %ld KiB\n", a.max_rss_kib, b.max_rss_kib);
+  EXPECT_LT(b.max_rss_kib - a.max_rss_kib, 2 * 1024);
+}
+
+// Defect 1: SIGTERM while the input loads (here a trajectory file that is a FIFO nobody writes:
+// the loader blocks in open()) ends the process at once, with a message and 128 + SIGTERM.
+TEST(NumenCli, StopSignalWhileLoadingEndsTheProcessAtOnce) {
+  TempDir dir;
+  const std::string fifo = (dir / "trajectory.txt").string();
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  const std::string scene =
+      dir.write("scene.toml", default_scene_copy({{kExcerptLine, "file = \"" + fifo + "\""}}));
+  // A non-blocking open for writing succeeds once the child has the FIFO open for reading; the
+  // write end stays open (and empty), so the child then waits in read(): still loading.
+  int writer = -1;
+  ChildSignal term;
+  term.signal = SIGTERM;
+  term.ready = [&] {
+    writer = ::open(fifo.c_str(), O_WRONLY | O_NONBLOCK);
+    return writer >= 0;
+  };
+  const ChildResult r = run_child({kNumen, "run", scene}, dir.path(), 20, term);
+  if (writer >= 0) ::close(writer);
+  EXPECT_FALSE(r.timed_out) << "SIGTERM was ignored while loading";
+  EXPECT_EQ(r.status, 128 + SIGTERM) << r.out << r.err;
+  EXPECT_NE(r.err.find("stopped by a signal while loading"), std::string::npos) << r.err;
+}
+
+// Once running, SIGTERM ends the run cleanly: the summary is printed and the status is
+// 128 + SIGTERM (the run did not do what was asked). The recorder's log file exists once the
+// runner is built, i.e. once loading is over.
+TEST(NumenCli, StopSignalWhileRunningPrintsTheSummary) {
+  NUMEN_REQUIRE_ARTICULATION();
+  TempDir dir;
+  const std::string log = (dir / "run.log").string();
+  ChildSignal term;
+  term.signal = SIGTERM;
+  term.ready = [&log] { return std::filesystem::exists(log); };
+  const ChildResult r =
+      run_child({kNumen, "run", "--realtime", "--duration", "60", "--record", log}, dir.path(), 30, term);
+  EXPECT_FALSE(r.timed_out);
+  EXPECT_EQ(r.status, 128 + SIGTERM) << r.out << r.err;
+  EXPECT_NE(r.out.find("exit status 0 (clean)"), std::string::npos) << r.out;
+  EXPECT_LT(r.wall_s, 20.0);
+}
+
+// Defect 4: --record to a full disk used to report "recorded N frames, 0 dropped" and exit 0.
+TEST(NumenCli, RecordingThatLosesFramesExitsWithLostRecords) {
+  NUMEN_REQUIRE_ARTICULATION();
+  TempDir dir;
+  const ChildResult r =
+      run_child({kNumen, "run", "--duration", "0.5", "--record", "/dev/full"}, dir.path(), 120);
+  EXPECT_EQ(r.status, 5) << r.out << r.err;
+  EXPECT_NE(r.out.find("lost records: --record"), std::string::npos) << r.out;
+}
+
+// Defect 4: --json carries the verdict; a clean run of the default scene exits 0.
+TEST(NumenCli, JsonCarriesTheExitStatus) {
+  NUMEN_REQUIRE_ARTICULATION();
+  TempDir dir;
+  const ChildResult r = run_child({kNumen, "run", "--duration", "0.5", "--json"}, dir.path(), 120);
+  EXPECT_EQ(r.status, 0) << r.out << r.err;
+  EXPECT_NE(r.out.find("\"exit_status\":0"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("\"exit_reasons\":[]"), std::string::npos) << r.out;
+}
+
+// Defect 4: a refused command-line value is "input rejected" (2), not CLI11's own codes.
+TEST(NumenCli, RefusedOptionValueExitsWithInputRejected) {
+  TempDir dir;
+  const ChildResult r = run_child({kNumen, "run", "--duration", "abc"}, dir.path(), 30);
+  EXPECT_EQ(r.status, 2) << r.out << r.err;
+  const ChildResult help = run_child({kNumen, "run", "--help"}, dir.path(), 30);
+  EXPECT_EQ(help.status, 0) << help.err;
+}
+
+// Defect 4: a replayed bus log that holds no frame of the scene's encoders replays nothing:
+// the run says so and exits "samples rejected" (6) instead of 0.
+TEST(NumenCli, ReplayOfALogWithoutEncoderFramesExitsWithSamplesRejected) {
+  NUMEN_REQUIRE_ARTICULATION();
+  TempDir dir;
+  const std::string log = dir.write("other.log", "(0.000100) vcan0 7FF#0102\n(0.000200) vcan0 7FF#0304\n");
+  const ChildResult r =
+      run_child({kNumen, "run", "--duration", "0.2", "--bus", "log:" + log}, dir.path(), 60);
+  EXPECT_EQ(r.status, 6) << r.out << r.err;
+  EXPECT_NE(r.out.find("the bus log gave no frame"), std::string::npos) << r.out;
+}
+
+}  // namespace
