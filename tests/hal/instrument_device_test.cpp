@@ -273,6 +273,32 @@ TEST(InstrumentDevice, ExtendedAndFdFramesAreNotEncoderTpdos) {
   EXPECT_EQ(n.rejected_malformed, 1u);
 }
 
+// The acceptance paths (error report, 29-bit, FD, remote) stay allocation free.
+TEST(InstrumentDevice, OnFrameOfEveryKindDoesNotAllocate) {
+  InstrumentDevice dev(trocar_config());
+  const std::uint32_t id = dev.config().axes[0].encoder_cob_id;
+  std::array<CanFrame, 5> frames{};
+  const std::array<std::uint8_t, 5> flags = {0, CanFlag::kErrorFrame, CanFlag::kExtendedId,
+                                             CanFlag::kFd, CanFlag::kRemote};
+  for (std::size_t k = 0; k < frames.size(); ++k) {
+    frames[k] = encode_position_pdo(id, 100, kMs);
+    frames[k].flags = flags[k];
+  }
+  std::int64_t allocations = 0;
+  {
+    numen::test::AllocationGuard guard;
+    for (int rep = 0; rep < 100; ++rep) {
+      for (const CanFrame& f : frames) dev.on_frame(f);
+    }
+    allocations = guard.count();
+  }
+  EXPECT_EQ(allocations, 0);
+  EXPECT_EQ(dev.counters().frames_error, 100u);
+  EXPECT_EQ(dev.counters().frames_unknown_id, 100u);
+  EXPECT_EQ(dev.counters().frames_not_data, 200u);
+  EXPECT_EQ(dev.counters().frames_decoded, 100u);
+}
+
 TEST(InstrumentDevice, NewestFrameOfAnAxisWins) {
   InstrumentDevice dev(trocar_config());
   feed(dev, kQ0, 0);
