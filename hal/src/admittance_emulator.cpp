@@ -99,9 +99,8 @@ void AdmittanceEmulator::on_frame(const CanFrame& frame, Bus& device_port) noexc
     on_sync(frame, device_port);
     return;
   }
-  if (frame.extended()) return;
   for (std::size_t i = 0; i < admittance_.rpdo_cob_ids.size(); ++i) {
-    if (frame.id != admittance_.rpdo_cob_ids[i]) continue;
+    if (!has_standard_id(frame, admittance_.rpdo_cob_ids[i])) continue;
     std::array<std::int64_t, 2> v{};
     if (rpdo_map_.unpack(frame, std::span<std::int64_t>(v.data(), v.size())) != PdoStatus::kOk) {
       ++counters_.rpdos_rejected;

@@ -4,6 +4,7 @@
 #include "numen/hal/candump_log.hpp"
 
 #include <cerrno>
+#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <limits>
@@ -382,7 +383,71 @@ const char* to_string(CandumpFormatError error) noexcept {
   return "unknown candump format error";
 }
 
-std::vector<CandumpRecord> load_candump_log(const std::string& path, CandumpLoadStats* stats) {
+namespace {
+
+// "SECONDS.MICROSECONDS" of a non-negative time or duration in ns (the log's own notation).
+std::string log_seconds(std::int64_t ns) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%lld.%06lld", static_cast<long long>(ns / 1'000'000'000),
+                static_cast<long long>(ns % 1'000'000'000 / 1000));
+  return buf;
+}
+
+const char* direction_name(CandumpDirection d) noexcept {
+  switch (d) {
+    case CandumpDirection::kReceived:
+      return "received";
+    case CandumpDirection::kTransmitted:
+      return "transmitted";
+    case CandumpDirection::kUnmarked:
+      break;
+  }
+  return "unmarked";
+}
+
+// Lines a candump log may hold besides records: blank, '#' comment, DROPCOUNT note.
+bool is_blank_line(std::string_view line) noexcept {
+  for (char c : line) {
+    if (!is_blank(c) && c != '\r') return false;
+  }
+  return true;
+}
+
+constexpr std::string_view kDropNote = "DROPCOUNT:";
+
+// N of candump's "DROPCOUNT: dropped N CAN frame(s) on 'IF' socket (total drops T)"; 0 if
+// the note does not have that shape (it is still counted as a note).
+std::uint64_t dropped_in_note(std::string_view line) noexcept {
+  constexpr std::string_view kDropped = "dropped ";
+  std::size_t i = kDropNote.size();
+  while (i < line.size() && is_blank(line[i])) ++i;
+  if (line.substr(i, kDropped.size()) != kDropped) return 0;
+  i += kDropped.size();
+  std::uint64_t n = 0;
+  for (; i < line.size() && is_digit(line[i]); ++i) {
+    if (n > (std::numeric_limits<std::uint64_t>::max() - 9) / 10) return n;
+    n = n * 10 + static_cast<std::uint64_t>(line[i] - '0');
+  }
+  return n;
+}
+
+// The latest record time of one interface and direction so far.
+struct StreamTime {
+  CandumpIface iface;
+  CandumpDirection direction = CandumpDirection::kUnmarked;
+  std::int64_t time_ns = 0;
+  std::size_t line = 0;
+};
+
+}  // namespace
+
+std::vector<CandumpRecord> load_candump_log(const std::string& path, CandumpLoadStats* stats,
+                                            const CandumpLoadLimits& limits) {
+  if (limits.max_gap_ns <= 0 || limits.max_backward_ns < 0) {
+    throw std::invalid_argument("CandumpLoadLimits: max_gap_ns must be > 0 and max_backward_ns "
+                                ">= 0 (got " + std::to_string(limits.max_gap_ns) + ", " +
+                                std::to_string(limits.max_backward_ns) + ")");
+  }
   std::ifstream in(path, std::ios::binary);
   if (!in) {
     const int err = errno;
@@ -390,18 +455,74 @@ std::vector<CandumpRecord> load_candump_log(const std::string& path, CandumpLoad
   }
   std::vector<CandumpRecord> records;
   CandumpLoadStats counts;
+  std::vector<StreamTime> streams;
+  std::int64_t latest_ns = 0;
+  std::size_t latest_line = 0;
   std::string line;
+  const auto fail = [&](std::size_t column, const std::string& what) {
+    return std::runtime_error(path + ":" + std::to_string(counts.lines) + ":" +
+                              std::to_string(column) + ": " + what);
+  };
   while (std::getline(in, line)) {
     ++counts.lines;
-    if (line.empty() || line[0] != '(') {  // canplayer: every other line is a comment
+    const std::string_view text(line);
+    if (is_blank_line(text) || text[0] == '#') {
       ++counts.skipped;
       continue;
     }
+    if (text.substr(0, kDropNote.size()) == kDropNote) {
+      ++counts.skipped;
+      ++counts.drop_notes;
+      counts.dropped_frames += dropped_in_note(text);
+      continue;
+    }
+    if (text[0] != '(') {
+      throw fail(1, "not a candump log line: a record starts with '(' (besides records, only "
+                    "blank lines, '#' comments and DROPCOUNT notes)");
+    }
     CandumpRecord rec;
     const CandumpParseResult r = parse_candump_line(line, rec);
-    if (!r.ok()) {
-      throw std::runtime_error(path + ":" + std::to_string(counts.lines) + ":" +
-                               std::to_string(r.column) + ": " + to_string(r.error));
+    if (!r.ok()) throw fail(r.column, to_string(r.error));
+
+    // Time plausibility. Column 2: where the timestamp starts.
+    const std::int64_t t = rec.timestamp_ns;
+    if (latest_line != 0) {
+      const bool ahead = t > latest_ns;
+      const std::int64_t step = ahead ? t - latest_ns : latest_ns - t;
+      if (step > limits.max_gap_ns) {
+        throw fail(2, "timestamp " + log_seconds(t) + " s is " + log_seconds(step) + " s " +
+                          (ahead ? "after" : "before") + " the latest record (line " +
+                          std::to_string(latest_line) + ", " + log_seconds(latest_ns) +
+                          " s): more than the " + log_seconds(limits.max_gap_ns) +
+                          " s allowed between records");
+      }
+    }
+    StreamTime* stream = nullptr;
+    for (StreamTime& s : streams) {
+      if (s.iface == rec.iface && s.direction == rec.direction) stream = &s;
+    }
+    if (stream != nullptr && t < stream->time_ns) {
+      if (stream->time_ns - t > limits.max_backward_ns) {
+        throw fail(2, "timestamp " + log_seconds(t) + " s goes back " +
+                          log_seconds(stream->time_ns - t) + " s against line " +
+                          std::to_string(stream->line) + " (" + log_seconds(stream->time_ns) +
+                          " s) of the same interface '" + std::string(rec.iface.view()) +
+                          "' and direction (" + direction_name(rec.direction) +
+                          "): a recording's times never decrease there");
+      }
+      ++counts.out_of_order;
+    } else if (latest_line != 0 && t < latest_ns) {
+      ++counts.out_of_order;
+    }
+    if (stream == nullptr) {
+      streams.push_back(StreamTime{rec.iface, rec.direction, t, counts.lines});
+    } else if (t >= stream->time_ns) {
+      stream->time_ns = t;
+      stream->line = counts.lines;
+    }
+    if (latest_line == 0 || t >= latest_ns) {
+      latest_ns = t;
+      latest_line = counts.lines;
     }
     records.push_back(rec);
   }
@@ -409,6 +530,11 @@ std::vector<CandumpRecord> load_candump_log(const std::string& path, CandumpLoad
     const int err = errno;
     throw std::runtime_error(path + ":" + std::to_string(counts.lines + 1) +
                              ": read error: " + std::strerror(err));
+  }
+  if (records.empty()) {
+    throw std::runtime_error(path + ": no frame records (" + std::to_string(counts.lines) +
+                             " lines: blank, '#' comments or DROPCOUNT notes): nothing to "
+                             "replay");
   }
   counts.records = records.size();
   if (stats != nullptr) *stats = counts;

@@ -8,10 +8,8 @@ namespace {
 
 // Common checks of a PDO expected on `cob_id` with `len` bytes.
 DecodeStatus check_pdo(const CanFrame& frame, std::uint32_t cob_id, std::uint8_t len) noexcept {
-  if (frame.id != cob_id) return DecodeStatus::kWrongId;
-  if ((frame.flags & (CanFlag::kRemote | CanFlag::kErrorFrame | CanFlag::kExtendedId)) != 0) {
-    return DecodeStatus::kNotDataFrame;
-  }
+  if (!has_standard_id(frame, cob_id)) return DecodeStatus::kWrongId;
+  if (!is_classic_data_frame(frame)) return DecodeStatus::kNotDataFrame;
   if (frame.len != len) return DecodeStatus::kWrongLength;
   return DecodeStatus::kOk;
 }
@@ -44,9 +42,7 @@ CanFrame make_sync(std::int64_t timestamp_ns, std::uint8_t counter) noexcept {
 }
 
 bool is_sync(const CanFrame& frame) noexcept {
-  return frame.id == kSyncCobId &&
-         (frame.flags & (CanFlag::kRemote | CanFlag::kErrorFrame | CanFlag::kExtendedId)) == 0 &&
-         frame.len <= 1;
+  return matches_classic_id(frame, kSyncCobId) && frame.len <= 1;
 }
 
 CanFrame encode_position_pdo(std::uint32_t cob_id, std::int32_t counts,

@@ -1,7 +1,7 @@
 #pragma once
 /// @file canopen_frame_check.hpp
-/// Internal (not installed): the frame-type rule shared by the CiA 301 service decoders
-/// (NMT, heartbeat, EMCY) and helpers on int64 ns times.
+/// Internal (not installed): helpers on int64 ns times shared by the CiA 301 service code
+/// (NMT, heartbeat, EMCY). The frame acceptance rule is can_frame.hpp's (is_classic_data_frame).
 
 #include <cstdint>
 #include <limits>
@@ -9,13 +9,6 @@
 #include "numen/hal/can_frame.hpp"
 
 namespace numen::hal::detail {
-
-/// True if `frame` is a classic CAN data frame with an 11-bit identifier: not remote, not an
-/// error report, not 29-bit, not CAN FD (CiA 301 services are defined on classic CAN).
-constexpr bool is_classic_standard_data_frame(const CanFrame& frame) noexcept {
-  return (frame.flags &
-          (CanFlag::kRemote | CanFlag::kErrorFrame | CanFlag::kExtendedId | CanFlag::kFd)) == 0;
-}
 
 /// a + b for b >= 0, saturated at INT64_MAX.
 constexpr std::int64_t saturating_add(std::int64_t a, std::int64_t b) noexcept {

@@ -178,7 +178,7 @@ IoStatus CanopenMaster::begin_period(std::int64_t now_ns, Bus& bus) noexcept {
 
 bool CanopenMaster::on_frame(const CanFrame& frame) noexcept {
   for (Drive& d : drives_) {
-    if (frame.id != d.tpdo_cob_id) continue;
+    if (!has_standard_id(frame, d.tpdo_cob_id)) continue;
     PdoValues v{};
     if (d.tpdo.unpack(frame, std::span<std::int64_t>(v.data(), d.tpdo.size())) != PdoStatus::kOk) {
       ++counters_.drive_tpdos_malformed;
@@ -191,6 +191,8 @@ bool CanopenMaster::on_frame(const CanFrame& frame) noexcept {
     }
     return true;
   }
+  // Error reports and 29-bit frames are no CANopen traffic of ours (can_frame.hpp).
+  if (!is_standard_frame(frame)) return false;
   if (frame.id > kHeartbeatBaseCobId && frame.id <= kHeartbeatBaseCobId + kMaxNodeId) {
     const int j = node_index(static_cast<std::uint8_t>(frame.id - kHeartbeatBaseCobId));
     if (j < 0) {

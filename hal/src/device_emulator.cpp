@@ -140,7 +140,7 @@ void DeviceEmulator::write(Bus& port, const CanFrame& frame, std::uint64_t* sent
 }
 
 void DeviceEmulator::on_frame_minimal(const CanFrame& frame, Bus& device_port) noexcept {
-  if (frame.id == kSyncCobId) {
+  if (has_standard_id(frame, kSyncCobId)) {
     if (!is_sync(frame)) {
       ++counters_.frames_malformed;
       return;
@@ -162,7 +162,7 @@ void DeviceEmulator::on_frame_minimal(const CanFrame& frame, Bus& device_port) n
   for (int i = 0; i < n_; ++i) {
     const auto k = static_cast<std::size_t>(i);
     const AxisConfig& a = config_.axes[k];
-    if (!a.has_drive() || frame.id != a.drive_cob_id) continue;
+    if (!a.has_drive() || !has_standard_id(frame, a.drive_cob_id)) continue;
     std::int16_t pm = 0;
     if (decode_torque_pdo(frame, a.drive_cob_id, pm) == DecodeStatus::kOk) {
       ++counters_.rpdos;
@@ -285,11 +285,11 @@ void DeviceEmulator::on_frame(const CanFrame& frame, Bus& device_port) noexcept 
     on_frame_minimal(frame, device_port);
     return;
   }
-  if (frame.id == kNmtCobId) {
+  if (has_standard_id(frame, kNmtCobId)) {
     on_nmt(frame);
     return;
   }
-  if (frame.id == kSyncCobId) {
+  if (has_standard_id(frame, kSyncCobId)) {
     if (!is_sync(frame)) {
       ++counters_.frames_malformed;
       return;
@@ -297,7 +297,7 @@ void DeviceEmulator::on_frame(const CanFrame& frame, Bus& device_port) noexcept 
     on_sync_managed(frame, device_port);
     return;
   }
-  if (frame.id == heartbeat_cob_id(config_.canopen.controller_node_id)) {
+  if (has_standard_id(frame, heartbeat_cob_id(config_.canopen.controller_node_id))) {
     for (Node& node : nodes_) {
       if (node.controller.node_id() != 0 && node.nmt.state() != NmtState::kBootUp) {
         node.controller.on_frame(frame);
@@ -307,7 +307,7 @@ void DeviceEmulator::on_frame(const CanFrame& frame, Bus& device_port) noexcept 
   }
   for (Drive& d : drives_) {
     const AxisConfig& a = config_.axes[static_cast<std::size_t>(d.axis)];
-    if (frame.id != a.drive_cob_id) continue;
+    if (!has_standard_id(frame, a.drive_cob_id)) continue;
     if (!nodes_[d.node].nmt.allows(CommObject::kPdo)) {
       ++counters_.rpdos_not_operational;
       return;

@@ -3,7 +3,6 @@
 
 #include "numen/hal/emcy.hpp"
 
-#include "canopen_frame_check.hpp"
 
 namespace numen::hal {
 namespace {
@@ -78,10 +77,11 @@ bool encode_emcy(const EmcyMessage& msg, std::int64_t timestamp_ns, CanFrame& ou
 }
 
 EmcyDecodeStatus decode_emcy(const CanFrame& frame, EmcyMessage& out) noexcept {
-  if (frame.id <= kEmcyBaseCobId || frame.id > kEmcyBaseCobId + kMaxNodeId) {
+  if (!is_standard_frame(frame) || frame.id <= kEmcyBaseCobId ||
+      frame.id > kEmcyBaseCobId + kMaxNodeId) {
     return EmcyDecodeStatus::kWrongId;
   }
-  if (!detail::is_classic_standard_data_frame(frame)) return EmcyDecodeStatus::kNotDataFrame;
+  if (!is_classic_data_frame(frame)) return EmcyDecodeStatus::kNotDataFrame;
   if (frame.len != kEmcyLen) return EmcyDecodeStatus::kWrongLength;
   out.node_id = static_cast<std::uint8_t>(frame.id - kEmcyBaseCobId);
   out.error_code = static_cast<std::uint16_t>(frame.data[0] | (frame.data[1] << 8));

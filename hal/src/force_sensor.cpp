@@ -96,8 +96,8 @@ ForceSensor::ForceSensor(const ForceSensorConfig& config)
 }
 
 bool ForceSensor::on_frame(const CanFrame& frame) noexcept {
-  const bool is_force = frame.id == force_id_ && !frame.extended();
-  const bool is_torque = frame.id == torque_id_ && !frame.extended();
+  const bool is_force = has_standard_id(frame, force_id_);
+  const bool is_torque = has_standard_id(frame, torque_id_);
   if (!is_force && !is_torque) return false;
   ++counters_.frames;
   std::array<std::int64_t, 3> v{};

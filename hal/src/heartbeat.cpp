@@ -66,10 +66,11 @@ bool encode_heartbeat(std::uint8_t node_id, NmtState state, std::int64_t timesta
 
 HeartbeatDecodeStatus decode_heartbeat(const CanFrame& frame, std::uint8_t& node_id,
                                        NmtState& state) noexcept {
-  if (frame.id <= kHeartbeatBaseCobId || frame.id > kHeartbeatBaseCobId + kMaxNodeId) {
+  if (!is_standard_frame(frame) || frame.id <= kHeartbeatBaseCobId ||
+      frame.id > kHeartbeatBaseCobId + kMaxNodeId) {
     return HeartbeatDecodeStatus::kWrongId;
   }
-  if (!detail::is_classic_standard_data_frame(frame)) return HeartbeatDecodeStatus::kNotDataFrame;
+  if (!is_classic_data_frame(frame)) return HeartbeatDecodeStatus::kNotDataFrame;
   if (frame.len != kHeartbeatLen) return HeartbeatDecodeStatus::kWrongLength;
   if (!is_nmt_state(frame.data[0])) return HeartbeatDecodeStatus::kUnknownState;
   node_id = static_cast<std::uint8_t>(frame.id - kHeartbeatBaseCobId);
@@ -146,7 +147,7 @@ void HeartbeatConsumer::record_loss(std::int64_t detected_ns) noexcept {
 }
 
 HeartbeatDecodeStatus HeartbeatConsumer::on_frame(const CanFrame& frame) noexcept {
-  if (node_id_ == 0 || frame.id != heartbeat_cob_id(node_id_)) {
+  if (node_id_ == 0 || !has_standard_id(frame, heartbeat_cob_id(node_id_))) {
     return HeartbeatDecodeStatus::kWrongId;
   }
   std::uint8_t node = 0;

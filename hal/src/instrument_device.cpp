@@ -88,9 +88,13 @@ void InstrumentDevice::evaluate_links(DeviceSample& s) noexcept {
 }
 
 bool InstrumentDevice::on_frame(const CanFrame& frame) noexcept {
+  if (frame.error_frame()) {  // bus-state information (Bus::state()), not an axis's message
+    ++counters_.frames_error;
+    return false;
+  }
   for (int i = 0; i < n_; ++i) {
     const AxisConfig& a = config_.axes[static_cast<std::size_t>(i)];
-    if (frame.id != a.encoder_cob_id) continue;
+    if (!has_standard_id(frame, a.encoder_cob_id)) continue;
     AxisState& st = axes_[static_cast<std::size_t>(i)];
     std::int32_t counts = 0;
     DecodeStatus status = DecodeStatus::kOk;

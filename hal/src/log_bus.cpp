@@ -34,6 +34,11 @@ LogBus::LogBus(std::vector<CandumpRecord> records, LogBusSettings settings)
   }
   pass_base_ns_ = settings_.offset_ns;
   latest_due_ns_ = pass_base_ns_;
+  for (const CandumpRecord& r : records_) {
+    if (!accepts(r)) continue;
+    ++matching_;
+    if (r.frame.error_frame()) ++matching_errors_;
+  }
 }
 
 std::int64_t LogBus::next_due_ns() const noexcept {

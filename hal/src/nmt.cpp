@@ -6,7 +6,6 @@
 #include <stdexcept>
 #include <string>
 
-#include "canopen_frame_check.hpp"
 #include "numen/hal/heartbeat.hpp"
 
 namespace numen::hal {
@@ -122,8 +121,8 @@ bool encode_nmt(NmtCommand command, std::uint8_t node_id, std::int64_t timestamp
 }
 
 NmtDecodeStatus decode_nmt(const CanFrame& frame, NmtMessage& out) noexcept {
-  if (frame.id != kNmtCobId) return NmtDecodeStatus::kWrongId;
-  if (!detail::is_classic_standard_data_frame(frame)) return NmtDecodeStatus::kNotDataFrame;
+  if (!has_standard_id(frame, kNmtCobId)) return NmtDecodeStatus::kWrongId;
+  if (!is_classic_data_frame(frame)) return NmtDecodeStatus::kNotDataFrame;
   if (frame.len != kNmtLen) return NmtDecodeStatus::kWrongLength;
   if (!is_nmt_command(frame.data[0])) return NmtDecodeStatus::kUnknownCommand;
   if (frame.data[1] > kMaxNodeId) return NmtDecodeStatus::kNodeIdOutOfRange;

@@ -112,9 +112,7 @@ PdoStatus PdoMapping::pack(std::span<const std::int64_t> values, CanFrame& frame
 
 PdoStatus PdoMapping::unpack(const CanFrame& frame, std::span<std::int64_t> values) const noexcept {
   if (values.size() != size_) return PdoStatus::kWrongValueCount;
-  if ((frame.flags & (CanFlag::kRemote | CanFlag::kErrorFrame | CanFlag::kExtendedId)) != 0) {
-    return PdoStatus::kNotDataFrame;
-  }
+  if (!is_classic_data_frame(frame)) return PdoStatus::kNotDataFrame;
   if (frame.len != length_) return PdoStatus::kWrongLength;
   for (std::size_t i = 0; i < size_; ++i) {
     const PdoEntry& e = entries_[i];

@@ -20,6 +20,37 @@ TEST(CanFrame, DefaultIsAnEmptyStandardDataFrame) {
   EXPECT_EQ(sizeof(CanFrame), 80u);
 }
 
+// Frame acceptance (can_frame.hpp): which frames are "on" an 11-bit COB-ID, and which of
+// those are classic data frames.
+TEST(CanFrame, AcceptanceOnAClassicElevenBitId) {
+  CanFrame f;
+  f.id = 0x181;
+  f.len = 4;
+  EXPECT_TRUE(numen::hal::is_standard_frame(f));
+  EXPECT_TRUE(numen::hal::has_standard_id(f, 0x181));
+  EXPECT_FALSE(numen::hal::has_standard_id(f, 0x182));
+  EXPECT_TRUE(numen::hal::is_classic_data_frame(f));
+  EXPECT_TRUE(numen::hal::matches_classic_id(f, 0x181));
+  EXPECT_FALSE(numen::hal::matches_classic_id(f, 0x182));
+  // Remote and FD frames are on the identifier but are not classic data frames.
+  for (std::uint8_t flags : {CanFlag::kRemote, CanFlag::kFd,
+                             static_cast<std::uint8_t>(CanFlag::kFd | CanFlag::kBitRateSwitch)}) {
+    f.flags = flags;
+    EXPECT_TRUE(numen::hal::has_standard_id(f, 0x181)) << int(flags);
+    EXPECT_FALSE(numen::hal::is_classic_data_frame(f)) << int(flags);
+    EXPECT_FALSE(numen::hal::matches_classic_id(f, 0x181)) << int(flags);
+  }
+  // 29-bit frames (classic or FD) and error reports are not on it, whatever their number.
+  for (std::uint8_t flags : {CanFlag::kExtendedId, CanFlag::kErrorFrame,
+                             static_cast<std::uint8_t>(CanFlag::kExtendedId | CanFlag::kFd)}) {
+    f.flags = flags;
+    EXPECT_FALSE(numen::hal::is_standard_frame(f)) << int(flags);
+    EXPECT_FALSE(numen::hal::has_standard_id(f, 0x181)) << int(flags);
+    EXPECT_FALSE(numen::hal::matches_classic_id(f, 0x181)) << int(flags);
+  }
+  static_assert(numen::hal::matches_classic_id(CanFrame{}, 0));  // usable in constant expressions
+}
+
 TEST(CanFrame, StandardIdIs11BitsExtendedIs29) {
   CanFrame f;
   f.id = 0x7FF;

@@ -370,7 +370,7 @@ TEST(CandumpLog, EveryErrorHasADescription) {
 
 // --- file loading --------------------------------------------------------------------------
 
-TEST(CandumpLog, LoadSkipsWhatCanplayerSkips) {
+TEST(CandumpLog, LoadSkipsCommentsBlankLinesAndCountsDropNotes) {
   numen::test::TempDir dir;
   const std::string path = dir.write("run.log",
                                      "# numen bus recording\n"
@@ -394,6 +394,9 @@ TEST(CandumpLog, LoadSkipsWhatCanplayerSkips) {
   EXPECT_EQ(stats.lines, 6u);
   EXPECT_EQ(stats.records, 3u);
   EXPECT_EQ(stats.skipped, 3u);
+  EXPECT_EQ(stats.drop_notes, 1u);
+  EXPECT_EQ(stats.dropped_frames, 2u);  // the recording lost frames: said, not hidden
+  EXPECT_EQ(stats.out_of_order, 0u);
   ASSERT_EQ(log.size(), 3u);
   EXPECT_EQ(log[0].timestamp_ns, 1436509052249713000);
   EXPECT_EQ(log[0].iface.view(), "vcan0");
@@ -402,6 +405,117 @@ TEST(CandumpLog, LoadSkipsWhatCanplayerSkips) {
   EXPECT_TRUE(log[1].frame.remote());
   EXPECT_TRUE(log[2].frame.fd());
   EXPECT_EQ(log[2].frame.len, 2);
+}
+
+// The message of the exception load_candump_log(path, nullptr, limits) throws ("" if none).
+std::string load_error(const std::string& path, const numen::hal::CandumpLoadLimits& limits = {}) {
+  try {
+    numen::hal::load_candump_log(path, nullptr, limits);
+  } catch (const std::runtime_error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+// Issue 17 #5: a step back in time within one interface and direction is a located error.
+TEST(CandumpLog, TimestampGoingBackOnOneInterfaceIsALocatedError) {
+  numen::test::TempDir dir;
+  const std::string path = dir.write("back.log",
+                                     "(1.000000) can0 181#01020304\n"
+                                     "(1.001000) can0 181#01020304\n"
+                                     "# a comment\n"
+                                     "(1.000500) can0 181#01020304\n");
+  EXPECT_EQ(load_error(path), path +
+                                  ":4:2: timestamp 1.000500 s goes back 0.000500 s against line "
+                                  "2 (1.001000 s) of the same interface 'can0' and direction "
+                                  "(unmarked): a recording's times never decrease there");
+  // A tolerance for such steps (a wall-clock step during a candump recording) loads it and
+  // counts the record.
+  numen::hal::CandumpLoadLimits tolerant;
+  tolerant.max_backward_ns = 1'000'000;
+  numen::hal::CandumpLoadStats stats;
+  EXPECT_EQ(numen::hal::load_candump_log(path, &stats, tolerant).size(), 3u);
+  EXPECT_EQ(stats.out_of_order, 1u);
+  tolerant.max_backward_ns = 499'000;
+  EXPECT_NE(load_error(path, tolerant), "");
+}
+
+// Streams of their own (another interface, the other direction) may interleave slightly out of
+// order: loaded, and counted.
+TEST(CandumpLog, OtherInterfacesAndDirectionsMayInterleaveOutOfOrder) {
+  numen::test::TempDir dir;
+  const std::string path = dir.write("mixed.log",
+                                     "(2.000000) can0 080# T\n"
+                                     "(1.999900) can0 181#01020304 R\n"  // received before
+                                     "(1.999950) can1 185#01020304\n"
+                                     "(2.000200) can0 201#6400 T\n");
+  numen::hal::CandumpLoadStats stats;
+  EXPECT_EQ(numen::hal::load_candump_log(path, &stats).size(), 4u);
+  EXPECT_EQ(stats.out_of_order, 2u);
+}
+
+// Issue 17 #5: a jump of 9e9 s (or any step of more than 1 h, forward or back) between records.
+TEST(CandumpLog, TimestampJumpBeyondTheLimitIsALocatedError) {
+  numen::test::TempDir dir;
+  const std::string ahead = dir.write("ahead.log",
+                                      "(1.000000) can0 181#01020304\n"
+                                      "(1.001000) can0 181#01020304\n"
+                                      "(9000000001.002000) can0 181#01020304\n");
+  EXPECT_EQ(load_error(ahead), ahead +
+                                   ":3:2: timestamp 9000000001.002000 s is 9000000000.001000 s "
+                                   "after the latest record (line 2, 1.001000 s): more than the "
+                                   "3600.000000 s allowed between records");
+  // Back by more than the limit on another interface (a splice of two recordings).
+  const std::string back = dir.write("back.log",
+                                     "(7200.000000) can0 181#01020304\n"
+                                     "(1.000000) can1 181#01020304\n");
+  EXPECT_NE(load_error(back).find(back + ":2:2: timestamp 1.000000 s is 7199.000000 s before "
+                                         "the latest record (line 1, 7200.000000 s)"),
+            std::string::npos)
+      << load_error(back);
+  // Exactly the limit is allowed; the limit is configurable.
+  const std::string hour = dir.write("hour.log",
+                                     "(1.000000) can0 181#01020304\n"
+                                     "(3601.000000) can0 181#01020304\n");
+  EXPECT_EQ(load_error(hour), "");
+  numen::hal::CandumpLoadLimits strict;
+  strict.max_gap_ns = 1'000'000'000;
+  EXPECT_NE(load_error(hour, strict).find(hour + ":2:2: "), std::string::npos);
+  strict.max_gap_ns = 0;
+  EXPECT_THROW(numen::hal::load_candump_log(hour, nullptr, strict), std::invalid_argument);
+}
+
+// Issue 17 #5: an empty log, or one of comments only, replays nothing: an error.
+TEST(CandumpLog, EmptyLogIsAnError) {
+  numen::test::TempDir dir;
+  const std::string empty = dir.write("empty.log", "");
+  EXPECT_EQ(load_error(empty), empty +
+                                   ": no frame records (0 lines: blank, '#' comments or "
+                                   "DROPCOUNT notes): nothing to replay");
+  const std::string comments = dir.write("comments.log", "# nothing\n\n   \n");
+  EXPECT_EQ(load_error(comments), comments +
+                                      ": no frame records (3 lines: blank, '#' comments or "
+                                      "DROPCOUNT notes): nothing to replay");
+}
+
+// Issue 17 #5: garbage is not skipped as canplayer would (it would replay 0 frames): the first
+// line that is neither a record, blank, a '#' comment nor a DROPCOUNT note is an error.
+TEST(CandumpLog, GarbageIsALocatedError) {
+  numen::test::TempDir dir;
+  const std::string text = dir.write("text.log",
+                                     "# candump without -l prints another format:\n"
+                                     "  can0  181   [4]  01 02 03 04\n");
+  const std::string what =
+      ":1: not a candump log line: a record starts with '(' (besides records, only blank "
+      "lines, '#' comments and DROPCOUNT notes)";
+  EXPECT_EQ(load_error(text), text + ":2" + what);
+  const std::string binary = dir.write("binary.log", std::string("\x7f" "ELF\x02\x01\x00\x00", 8));
+  EXPECT_EQ(load_error(binary), binary + ":1" + what);
+  // Garbage after good records is refused too, not dropped.
+  const std::string tail = dir.write("tail.log",
+                                     "(1.000000) can0 181#01020304\n"
+                                     "garbage\n");
+  EXPECT_EQ(load_error(tail), tail + ":2" + what);
 }
 
 TEST(CandumpLog, LoadErrorNamesFileLineAndColumn) {

@@ -201,6 +201,33 @@ TEST(CanopenMaster, RoutesFramesAndCountsMalformedOnes) {
   EXPECT_FALSE(rig.master.request_nmt(numen::hal::NmtCommand::kStartRemoteNode, 2));  // one queued
 }
 
+// Issue 17 #7: error reports and 29-bit frames whose numbers are a drive TPDO, heartbeat or
+// EMCY COB-ID are not the master's; a CAN FD frame on the drive TPDO's id is malformed.
+TEST(CanopenMaster, ErrorAndExtendedFramesAreNotCanopenTraffic) {
+  Rig rig;
+  for (std::uint32_t id : {0x281u, 0x701u, 0x082u}) {
+    for (std::uint8_t flag : {numen::hal::CanFlag::kErrorFrame, numen::hal::CanFlag::kExtendedId}) {
+      CanFrame f;
+      f.id = id;
+      f.flags = flag;
+      f.len = 8;
+      EXPECT_FALSE(rig.master.on_frame(f)) << std::hex << id << " flags " << int(flag);
+    }
+  }
+  const auto& c = rig.master.counters();
+  EXPECT_EQ(c.drive_tpdos_malformed, 0u);
+  EXPECT_EQ(c.frames_before_boot, 0u);
+  EXPECT_EQ(c.unknown_nodes, 0u);
+  EXPECT_EQ(rig.master.emcy_log().counters().not_data, 0u);
+  CanFrame fd;
+  fd.id = 0x281;
+  fd.flags = numen::hal::CanFlag::kFd;
+  fd.len = 4;  // the drive TPDO's length (statusword + torque actual)
+  EXPECT_TRUE(rig.master.on_frame(fd));
+  EXPECT_EQ(rig.master.counters().drive_tpdos_malformed, 1u);
+  EXPECT_EQ(rig.master.counters().drive_tpdos, 0u);
+}
+
 TEST(CanopenMaster, PeriodsDoNotAllocate) {
   Rig rig;
   numen::test::AllocationGuard guard;

@@ -24,6 +24,13 @@ TEST(Canopen, SyncWithAndWithoutCounter) {
   s.len = 0;
   s.flags = CanFlag::kRemote;
   EXPECT_FALSE(is_sync(s));
+  // Not a SYNC either: a CAN FD frame on 0x080, a 29-bit 0x00000080, an error report whose
+  // class bits read 0x080 (CAN_ERR_BUSERROR).
+  for (std::uint8_t flag : {CanFlag::kFd, CanFlag::kExtendedId, CanFlag::kErrorFrame}) {
+    s = make_sync(0, 3);
+    s.flags = flag;
+    EXPECT_FALSE(is_sync(s)) << int(flag);
+  }
 }
 
 TEST(Canopen, DefaultCobIds) {
@@ -66,8 +73,13 @@ TEST(Canopen, PositionDecodeChecksIdFrameTypeAndLength) {
   f.len = 4;
   f.flags = CanFlag::kRemote;
   EXPECT_EQ(decode_position_pdo(f, 0x181, out), DecodeStatus::kNotDataFrame);
-  f.flags = CanFlag::kExtendedId;
+  f.flags = CanFlag::kFd;  // a CAN FD frame on the classic COB-ID: ours, but wrong
   EXPECT_EQ(decode_position_pdo(f, 0x181, out), DecodeStatus::kNotDataFrame);
+  // A 29-bit frame 0x00000181 is another identifier; an error report is no frame on the wire.
+  f.flags = CanFlag::kExtendedId;
+  EXPECT_EQ(decode_position_pdo(f, 0x181, out), DecodeStatus::kWrongId);
+  f.flags = CanFlag::kErrorFrame;
+  EXPECT_EQ(decode_position_pdo(f, 0x181, out), DecodeStatus::kWrongId);
   EXPECT_EQ(out, 7);  // untouched on failure
 }
 

@@ -116,11 +116,16 @@ TEST(Emcy, DecodeRejections) {
   }
   // A SYNC with a counter byte at 0x080 is still not an EMCY.
   EXPECT_EQ(status(raw(0x080, {5})), EmcyDecodeStatus::kWrongId);
-  for (std::uint8_t flag :
-       {CanFlag::kRemote, CanFlag::kExtendedId, CanFlag::kErrorFrame, CanFlag::kFd}) {
+  for (std::uint8_t flag : {CanFlag::kRemote, CanFlag::kFd}) {
     f = good;
     f.flags = flag;
     EXPECT_EQ(status(f), EmcyDecodeStatus::kNotDataFrame);
+  }
+  // 29-bit frames and error reports are not on an EMCY COB-ID, whatever their number.
+  for (std::uint8_t flag : {CanFlag::kExtendedId, CanFlag::kErrorFrame}) {
+    f = good;
+    f.flags = flag;
+    EXPECT_EQ(status(f), EmcyDecodeStatus::kWrongId);
   }
   f = good;
   f.flags = CanFlag::kFd;

@@ -155,6 +155,33 @@ TEST(ForceSensor, MalformedFramesAreCountedAndSpoilThePeriod) {
   EXPECT_TRUE(s.sample(0).valid);  // the good halves are still fresh next period
 }
 
+// Issue 17 #7: an error report whose class bits read the torque COB-ID (0x2A0 for node 32)
+// does not spoil the admittance scene's force sample; a CAN FD frame on a sensor id does.
+TEST(ForceSensor, ErrorFramesAreIgnoredFdFramesAreMalformed) {
+  hal::ForceSensor s(config());
+  hal::CanFrame f, t;
+  hal::encode_force_tpdos(config(), wrench(Vec3(1.0, 0.0, 0.0), Vec3::Zero()), 0, f, t);
+  s.on_frame(f);
+  s.on_frame(t);
+  hal::CanFrame err;
+  err.id = config().effective_torque_cob_id();
+  err.flags = hal::CanFlag::kErrorFrame;
+  err.len = 8;
+  EXPECT_FALSE(s.on_frame(err));
+  err.id = config().effective_force_cob_id();
+  EXPECT_FALSE(s.on_frame(err));
+  hal::CanFrame ext = f;
+  ext.flags = hal::CanFlag::kExtendedId;
+  EXPECT_FALSE(s.on_frame(ext));
+  EXPECT_EQ(s.counters().malformed, 0u);
+  EXPECT_TRUE(s.sample(0).valid);
+  hal::CanFrame fd = f;  // 6 bytes: a valid FD length, right mapping length
+  fd.flags = hal::CanFlag::kFd;
+  EXPECT_TRUE(s.on_frame(fd));
+  EXPECT_EQ(s.counters().malformed, 1u);
+  EXPECT_EQ(s.sample(0).faults, hal::SampleFault::kMalformed);
+}
+
 TEST(ForceSensor, ValidateNamesTheField) {
   const auto throws_with = [](hal::ForceSensorConfig c, const char* what) {
     try {

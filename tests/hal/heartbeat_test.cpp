@@ -83,11 +83,17 @@ TEST(Heartbeat, DecodeRoundTripAndRejections) {
     f.len = len;
     EXPECT_EQ(status(f), HeartbeatDecodeStatus::kWrongLength);
   }
-  for (std::uint8_t flag :
-       {CanFlag::kRemote, CanFlag::kExtendedId, CanFlag::kErrorFrame, CanFlag::kFd}) {
+  for (std::uint8_t flag : {CanFlag::kRemote, CanFlag::kFd}) {
     f = heartbeat(3, NmtState::kOperational, 0);
     f.flags = flag;
     EXPECT_EQ(status(f), HeartbeatDecodeStatus::kNotDataFrame);
+  }
+  // A 29-bit frame 0x00000703 and an error report whose class bits read 0x703 are not on
+  // node 3's heartbeat COB-ID (can_frame.hpp, frame acceptance).
+  for (std::uint8_t flag : {CanFlag::kExtendedId, CanFlag::kErrorFrame}) {
+    f = heartbeat(3, NmtState::kOperational, 0);
+    f.flags = flag;
+    EXPECT_EQ(status(f), HeartbeatDecodeStatus::kWrongId);
   }
   // Node-guarding style toggle bit, and bytes that are no NMT state.
   for (std::uint8_t b : {0x85, 0x01, 0x7E, 0xFF}) {

@@ -222,6 +222,83 @@ TEST(InstrumentDevice, MalformedAndUnknownFramesAreCounted) {
   EXPECT_EQ(n.rejected_malformed, 2u);
 }
 
+// Issue 17 #7: an error report whose error-class bits read an encoder COB-ID is bus-state
+// information, not a malformed TPDO of that axis.
+TEST(InstrumentDevice, ErrorFrameWithAnEncoderIdIsNotAMalformedSample) {
+  InstrumentDevice dev(trocar_config());
+  feed(dev, kQ0, 0);
+  ASSERT_TRUE(dev.sample(0).valid);
+  feed(dev, kQ0, kMs);
+  CanFrame err;
+  err.id = dev.config().axes[0].encoder_cob_id;  // class bits 0x181: TX timeout|bus error|restarted
+  err.flags = CanFlag::kErrorFrame;
+  err.len = 8;
+  err.timestamp_ns = kMs;
+  EXPECT_FALSE(dev.on_frame(err));
+  const DeviceSample s = dev.sample(kMs);
+  EXPECT_TRUE(s.valid);
+  EXPECT_EQ(s.axis_faults[0], SampleFault::kNone);
+  const DeviceCounters& n = dev.counters();
+  EXPECT_EQ(n.frames_error, 1u);
+  EXPECT_EQ(n.frames_not_data, 0u);
+  EXPECT_EQ(n.frames_unknown_id, 0u);
+  EXPECT_EQ(n.rejected_malformed, 0u);
+  EXPECT_EQ(n.values_rejected, 0u);
+}
+
+// A 29-bit frame with an encoder's number is another identifier (unknown, axis untouched); a
+// CAN FD frame on the classic encoder id is the axis's but the wrong kind (rejected, counted).
+TEST(InstrumentDevice, ExtendedAndFdFramesAreNotEncoderTpdos) {
+  InstrumentDevice dev(trocar_config());
+  feed(dev, kQ0, 0);
+  const DeviceSample good = dev.sample(0);
+  ASSERT_TRUE(good.valid);
+  feed(dev, kQ0, kMs);
+  const AxisConfig& a0 = dev.config().axes[0];
+  const AxisConfig& a1 = dev.config().axes[1];
+  CanFrame ext = encode_position_pdo(a0.encoder_cob_id, value_to_counts(a0, 0.11), kMs);
+  ext.flags = CanFlag::kExtendedId;
+  EXPECT_FALSE(dev.on_frame(ext));
+  CanFrame fd = encode_position_pdo(a1.encoder_cob_id, value_to_counts(a1, -0.19), kMs);
+  fd.flags = CanFlag::kFd;
+  EXPECT_TRUE(dev.on_frame(fd));
+  const DeviceSample s = dev.sample(kMs);
+  EXPECT_EQ(s.axis_faults[0], SampleFault::kNone);
+  EXPECT_EQ(s.q[0], good.q[0]);  // the 29-bit value was not taken
+  EXPECT_EQ(s.axis_faults[1], SampleFault::kMalformed);
+  EXPECT_EQ(s.q[1], good.q[1]);  // held: the FD value was not taken
+  const DeviceCounters& n = dev.counters();
+  EXPECT_EQ(n.frames_unknown_id, 1u);
+  EXPECT_EQ(n.frames_not_data, 1u);
+  EXPECT_EQ(n.rejected_malformed, 1u);
+}
+
+// The acceptance paths (error report, 29-bit, FD, remote) stay allocation free.
+TEST(InstrumentDevice, OnFrameOfEveryKindDoesNotAllocate) {
+  InstrumentDevice dev(trocar_config());
+  const std::uint32_t id = dev.config().axes[0].encoder_cob_id;
+  std::array<CanFrame, 5> frames{};
+  const std::array<std::uint8_t, 5> flags = {0, CanFlag::kErrorFrame, CanFlag::kExtendedId,
+                                             CanFlag::kFd, CanFlag::kRemote};
+  for (std::size_t k = 0; k < frames.size(); ++k) {
+    frames[k] = encode_position_pdo(id, 100, kMs);
+    frames[k].flags = flags[k];
+  }
+  std::int64_t allocations = 0;
+  {
+    numen::test::AllocationGuard guard;
+    for (int rep = 0; rep < 100; ++rep) {
+      for (const CanFrame& f : frames) dev.on_frame(f);
+    }
+    allocations = guard.count();
+  }
+  EXPECT_EQ(allocations, 0);
+  EXPECT_EQ(dev.counters().frames_error, 100u);
+  EXPECT_EQ(dev.counters().frames_unknown_id, 100u);
+  EXPECT_EQ(dev.counters().frames_not_data, 200u);
+  EXPECT_EQ(dev.counters().frames_decoded, 100u);
+}
+
 TEST(InstrumentDevice, NewestFrameOfAnAxisWins) {
   InstrumentDevice dev(trocar_config());
   feed(dev, kQ0, 0);

@@ -155,6 +155,8 @@ TEST(LogBus, InterfaceFilterAndExtendedFilter) {
   EXPECT_TRUE(got.error_frame());
   EXPECT_EQ(bus.read(got), IoStatus::kWouldBlock);
   EXPECT_EQ(bus.log_counters().filtered, 3u);  // can0, 29-bit, remote
+  EXPECT_EQ(bus.matching_records(), 2u);        // known before the replay
+  EXPECT_EQ(bus.matching_error_reports(), 1u);
 
   LogBusSettings ext;
   ext.filters = {CanFilter{0x181 | numen::hal::kFilterExtendedBit,
@@ -232,9 +234,24 @@ TEST(LogBus, SettingsAreChecked) {
   EXPECT_THROW((LogBus{controller_log(), offset}), std::invalid_argument);
 }
 
+// A log holding nothing for the controller's ids says so before the replay (the run harness
+// turns matching_records() == 0 into an error).
+TEST(LogBus, MatchingRecordsCountsWhatTheFiltersLeave) {
+  LogBusSettings s;
+  s.filters = {exact_standard_filter(numen::hal::encoder_tpdo_cob_id(5))};
+  LogBus other(controller_log(), s);
+  EXPECT_EQ(other.size(), 9u);
+  EXPECT_EQ(other.matching_records(), 0u);
+  LogBusSettings received;
+  received.received_only = true;
+  EXPECT_EQ(LogBus(controller_log(), received).matching_records(), 3u);
+  EXPECT_EQ(LogBus(controller_log()).matching_records(), 9u);
+}
+
 TEST(LogBus, EmptyLogIsFinishedAtOnce) {
   LogBus bus(std::vector<CandumpRecord>{});
   CanFrame got;
+  EXPECT_EQ(bus.matching_records(), 0u);
   EXPECT_TRUE(bus.finished());
   EXPECT_EQ(bus.read(got), IoStatus::kWouldBlock);
   LogBusSettings loop;

@@ -103,12 +103,17 @@ TEST(Nmt, DecodeRejections) {
   // Node id above 127.
   expect(nmt_frame(0x01, 128), NmtDecodeStatus::kNodeIdOutOfRange);
   expect(nmt_frame(0x81, 255), NmtDecodeStatus::kNodeIdOutOfRange);
-  // Remote request, 29-bit id 0, error report, CAN FD: not a CiA 301 NMT message.
-  for (std::uint8_t flag :
-       {CanFlag::kRemote, CanFlag::kExtendedId, CanFlag::kErrorFrame, CanFlag::kFd}) {
+  // Remote request, CAN FD on COB-ID 0: not a CiA 301 NMT message.
+  for (std::uint8_t flag : {CanFlag::kRemote, CanFlag::kFd}) {
     f = nmt_frame(0x01, 5);
     f.flags = flag;
     expect(f, NmtDecodeStatus::kNotDataFrame);
+  }
+  // 29-bit id 0 and an error report with class bits 0 are not on COB-ID 0 at all.
+  for (std::uint8_t flag : {CanFlag::kExtendedId, CanFlag::kErrorFrame}) {
+    f = nmt_frame(0x01, 5);
+    f.flags = flag;
+    expect(f, NmtDecodeStatus::kWrongId);
   }
   // The order of the checks: a remote frame of wrong length is "not a data frame".
   f = nmt_frame(0x01, 5, 0);

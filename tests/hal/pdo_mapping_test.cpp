@@ -160,10 +160,11 @@ TEST(PdoMapping, WrongLengthIsAMalformedPdoAndValuesAreKept) {
   }
 }
 
-TEST(PdoMapping, RemoteErrorAndExtendedFramesAreNotPdos) {
+TEST(PdoMapping, RemoteErrorExtendedAndFdFramesAreNotPdos) {
   const PdoMapping m = drive_tpdo_mapping();
   std::array<std::int64_t, 2> v = {7, 8};
-  for (std::uint8_t flag : {CanFlag::kRemote, CanFlag::kErrorFrame, CanFlag::kExtendedId}) {
+  for (std::uint8_t flag :
+       {CanFlag::kRemote, CanFlag::kErrorFrame, CanFlag::kExtendedId, CanFlag::kFd}) {
     CanFrame f = frame_of({0x37, 0x02, 0, 0});
     f.flags = flag;
     EXPECT_EQ(m.unpack(f, v), PdoStatus::kNotDataFrame) << int(flag);

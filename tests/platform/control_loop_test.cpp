@@ -280,6 +280,41 @@ TEST(ControlLoop, BusOffIsCountedAndStaleSamplesGetZeroTorque) {
   EXPECT_TRUE(rig.loop.last_report().sample_valid);
 }
 
+// Issue 17 #7, end to end: controller error reports (as SocketCanBus::read returns them) whose
+// class bits read encoder COB-IDs, and 29-bit frames with those numbers, arriving after the
+// encoder TPDOs of each period: the samples stay valid and torque keeps flowing.
+TEST(ControlLoop, ErrorAndExtendedFramesWithEncoderIdsDoNotSpoilTheSample) {
+  Rig rig;
+  rig.period(0);
+  for (std::int64_t k = 1; k <= 5; ++k) {
+    const std::int64_t t = k * kMs;
+    rig.bus.set_time_ns(t);
+    rig.loop.begin_period(t);
+    rig.bus.set_time_ns(t + kLatency);
+    rig.emulator.poll(rig.bus.device());  // the TPDOs go out first
+    CanFrame err;
+    err.id = 0x181;  // CAN_ERR_TX_TIMEOUT | CAN_ERR_BUSERROR | CAN_ERR_RESTARTED
+    err.flags = numen::hal::CanFlag::kErrorFrame;
+    err.len = 8;
+    ASSERT_EQ(rig.bus.device().write(err), IoStatus::kOk);
+    CanFrame ext = numen::hal::encode_position_pdo(0x182, 7, t);
+    ext.flags = numen::hal::CanFlag::kExtendedId;
+    ASSERT_EQ(rig.bus.device().write(ext), IoStatus::kOk);
+    rig.bus.set_time_ns(t + kPhase);
+    const PeriodReport& r = rig.loop.end_period(t + kPhase);
+    EXPECT_EQ(r.frames_read, 7) << k;
+    EXPECT_TRUE(r.sample_valid) << k;
+    rig.bus.set_time_ns(t + kPhase + kLatency);
+    rig.emulator.poll(rig.bus.device());
+  }
+  const numen::hal::DeviceCounters& c = rig.device.counters();
+  EXPECT_EQ(c.rejected_malformed, 0u);
+  EXPECT_EQ(c.values_rejected, 0u);
+  EXPECT_EQ(c.frames_error, 5u);
+  EXPECT_EQ(c.frames_unknown_id, 5u);
+  EXPECT_EQ(rig.loop.counters().periods_zero_torque, 0u);
+}
+
 TEST(ControlLoop, PeriodsNeverAllocate) {
   Rig rig;
   rig.period(0);  // warm-up outside the guard

@@ -64,6 +64,43 @@ struct CanFrame {
   constexpr bool error_frame() const noexcept { return (flags & CanFlag::kErrorFrame) != 0; }
 };
 
+// Frame acceptance: the one place that says which frames a protocol decoder (PDO, SYNC, NMT,
+// heartbeat, EMCY) takes as "its" frame. A decoder asks two questions, in this order:
+//  1. Is the frame on my 11-bit identifier? (has_standard_id) An error report is not a frame
+//     on the wire (its id holds error-class bits, linux/can/error.h) and a 29-bit frame with
+//     the same number is a different identifier (ISO 11898-1 IDE bit): both are "not mine"
+//     (kWrongId, counted as unknown), never a malformed message of mine.
+//  2. Is it the kind of frame my protocol is defined on? (is_classic_data_frame) A remote
+//     request or a CAN FD frame on my identifier is mine but wrong (kNotDataFrame: rejected
+//     and counted as malformed). CANopen CiA 301 services and numen's PDOs are classic CAN.
+// matches_classic_id() is both at once. Error reports go to bus-state handling only
+// (SocketCanBus::state(), decode_error_frame()).
+
+/// True if `frame` carries an 11-bit identifier on the wire: not an error report
+/// (CanFlag::kErrorFrame) and not 29-bit (CanFlag::kExtendedId). Classic or FD, data or remote.
+constexpr bool is_standard_frame(const CanFrame& frame) noexcept {
+  return (frame.flags & (CanFlag::kErrorFrame | CanFlag::kExtendedId)) == 0;
+}
+
+/// True if `frame` is on the 11-bit identifier `id` (a CANopen COB-ID): is_standard_frame()
+/// and frame.id == id. Data, remote or FD frame alike; see is_classic_data_frame() for the kind.
+constexpr bool has_standard_id(const CanFrame& frame, std::uint32_t id) noexcept {
+  return is_standard_frame(frame) && frame.id == id;
+}
+
+/// True if `frame` is a classic CAN data frame with an 11-bit identifier: not remote, not
+/// CAN FD, not an error report, not 29-bit. The only kind CiA 301 services and numen's PDOs use.
+constexpr bool is_classic_data_frame(const CanFrame& frame) noexcept {
+  return (frame.flags & (CanFlag::kRemote | CanFlag::kErrorFrame | CanFlag::kExtendedId |
+                         CanFlag::kFd)) == 0;
+}
+
+/// True if `frame` is a classic CAN data frame on the 11-bit identifier `id`:
+/// has_standard_id(frame, id) && is_classic_data_frame(frame).
+constexpr bool matches_classic_id(const CanFrame& frame, std::uint32_t id) noexcept {
+  return frame.id == id && is_classic_data_frame(frame);
+}
+
 /// Why a CanFrame is not a well-formed frame (check_frame()).
 enum class FrameError : std::uint8_t {
   kNone,             ///< Well formed.

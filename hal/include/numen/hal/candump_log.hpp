@@ -172,16 +172,46 @@ const char* to_string(CandumpFormatError error) noexcept;
 struct CandumpLoadStats {
   std::size_t lines = 0;    ///< Lines in the file.
   std::size_t records = 0;  ///< Frame lines loaded.
-  std::size_t skipped = 0;  ///< Lines not starting with '(' (comments, candump's DROPCOUNT
-                            ///< notes, blank lines), skipped like canplayer does.
+  std::size_t skipped = 0;  ///< Blank lines, '#' comments and DROPCOUNT notes.
+  /// candump's "DROPCOUNT: dropped N CAN frame(s) ..." notes: the recording itself lost
+  /// frames (the socket's receive queue overflowed while candump wrote the log).
+  std::size_t drop_notes = 0;
+  /// Sum of N over the DROPCOUNT notes: frames the recording lost.
+  std::uint64_t dropped_frames = 0;
+  /// Records earlier than the latest record before them, on another interface or direction
+  /// (a stream of its own; within the allowed CandumpLoadLimits::max_gap_ns), or on the same
+  /// one by at most CandumpLoadLimits::max_backward_ns. LogBus replays each such record
+  /// together with its predecessor.
+  std::size_t out_of_order = 0;
 };
 
-/// Reads a whole candump log into memory (setup code). Lines whose first character is not
-/// '(' are skipped, as canplayer skips them (blank lines, '#' comments, the "DROPCOUNT: ..."
-/// notes candump writes into its log). Every other line must parse. Throws
-/// std::runtime_error "path: cannot open: <errno text>" or "path:line:column: <what>" for
-/// the first bad line. Memory: sizeof(CandumpRecord) (~112 bytes) per frame.
+/// Plausibility limits of the record times of a log (load_candump_log()).
+struct CandumpLoadLimits {
+  /// Largest step, ns (> 0), of a record's time away from the latest record time before it,
+  /// forward or back. Default 1 h: a recording with an hour of silence between two frames,
+  /// or a timestamp 9e9 s ahead, is a broken or spliced log (replay would stall), not a
+  /// control session.
+  std::int64_t max_gap_ns = 3'600'000'000'000;
+  /// Largest step back, ns (>= 0), of a record's time against the previous record of the same
+  /// interface and direction (a stream). Default 0: can-utils' candump writes each
+  /// interface's frames in kernel receive order, and numen's recorder each direction in call
+  /// order, so a stream's times never decrease; a step back means an edited or spliced log,
+  /// or a wall-clock step during a candump recording (raise the limit to load such a log).
+  std::int64_t max_backward_ns = 0;
+};
+
+/// Reads a whole candump log into memory (setup code). Stricter than canplayer, which
+/// silently skips every line not starting with '(': only blank lines, '#' comments and the
+/// "DROPCOUNT: ..." notes candump writes into its log are skipped (the notes are counted in
+/// `stats`); every other line must parse as a record. The record times are checked against
+/// `limits` (CandumpLoadLimits): a step of more than max_gap_ns from the latest time so far,
+/// or a step back within one interface and direction of more than max_backward_ns, is an
+/// error at the offending line. A log without any record (empty, only comments) is an error.
+/// Throws std::runtime_error "path: cannot open: <errno text>", "path: no frame records ..."
+/// or "path:line:column: <what>" for the first bad line. Memory: sizeof(CandumpRecord)
+/// (~112 bytes) per frame. Throws std::invalid_argument if `limits` are out of range.
 std::vector<CandumpRecord> load_candump_log(const std::string& path,
-                                            CandumpLoadStats* stats = nullptr);
+                                            CandumpLoadStats* stats = nullptr,
+                                            const CandumpLoadLimits& limits = {});
 
 }  // namespace numen::hal

@@ -39,9 +39,10 @@ constexpr std::uint32_t drive_rpdo_cob_id(std::uint8_t node_id) noexcept {
 /// Outcome of decoding a PDO.
 enum class DecodeStatus : std::uint8_t {
   kOk,            ///< Value decoded.
-  kWrongId,       ///< The frame's COB-ID is not the one expected.
+  kWrongId,       ///< Not on the expected 11-bit COB-ID (also: a 29-bit frame with its number,
+                  ///< an error report whatever its class bits; has_standard_id()).
   kWrongLength,   ///< Right COB-ID, wrong payload length: a malformed PDO.
-  kNotDataFrame,  ///< Right COB-ID but a remote request, error report or 29-bit frame.
+  kNotDataFrame,  ///< Right COB-ID but a remote request or a CAN FD frame.
 };
 
 /// Short English name of a DecodeStatus (static string).

@@ -102,8 +102,9 @@ class CanopenMaster {
   IoStatus begin_period(std::int64_t now_ns, Bus& bus) noexcept;
 
   /// Takes one received frame if it is a drive TPDO, a heartbeat / boot-up message (0x701–
-  /// 0x77F) or an EMCY (0x081–0x0FF); returns false for any other frame (e.g. an encoder TPDO,
-  /// for the InstrumentDevice).
+  /// 0x77F) or an EMCY (0x081–0x0FF) on its 11-bit identifier (can_frame.hpp, frame
+  /// acceptance); returns false for any other frame (e.g. an encoder TPDO, for the
+  /// InstrumentDevice), and for every error report and 29-bit frame.
   bool on_frame(const CanFrame& frame) noexcept;
 
   /// After the period's frames, at `now_ns`: polls the heartbeat consumers, advances the

@@ -49,7 +49,8 @@ struct EmcyMessage {
 enum class EmcyDecodeStatus : std::uint8_t {
   kOk,            ///< Decoded.
   kWrongId,       ///< COB-ID is not 0x081–0x0FF: not an EMCY message (0x080 is SYNC).
-  kNotDataFrame,  ///< EMCY COB-ID but remote, error report, 29-bit or CAN FD frame.
+  kNotDataFrame,  ///< EMCY COB-ID but remote or CAN FD frame. (Error reports and 29-bit
+                  ///< frames are not on it: kWrongId.)
   kWrongLength,   ///< Payload length is not 8 (a length-0 frame is not a valid EMCY).
 };
 
@@ -141,7 +142,7 @@ struct EmcyLogCounters {
   std::uint64_t resets = 0;        ///< Of which emcy_reports_fault() was false (all clear).
   std::uint64_t overwritten = 0;   ///< Records pushed out of the full ring.
   std::uint64_t wrong_length = 0;  ///< Frames on an EMCY COB-ID with length != 8.
-  std::uint64_t not_data = 0;      ///< Remote / error / 29-bit / FD frames on an EMCY COB-ID.
+  std::uint64_t not_data = 0;      ///< Remote / FD frames on an EMCY COB-ID.
 };
 
 /// Default capacity of an EmcyLog (records).

@@ -108,7 +108,7 @@ struct ForceSample {
 /// Counters since construction.
 struct ForceSensorCounters {
   std::uint64_t frames = 0;        ///< Frames with either COB-ID.
-  std::uint64_t malformed = 0;     ///< ... rejected by the mapping (length, remote, 29-bit).
+  std::uint64_t malformed = 0;     ///< ... rejected by the mapping (length, remote, CAN FD).
   std::uint64_t out_of_range = 0;  ///< Periods rejected for saturation or |F|, |T| too large.
   std::uint64_t stale = 0;         ///< Periods rejected because a half was too old or missing.
   std::uint64_t accepted = 0;      ///< Periods with a valid reading.
@@ -123,8 +123,10 @@ class ForceSensor {
   /// Validates (throws std::invalid_argument, see validate()).
   explicit ForceSensor(const ForceSensorConfig& config);
 
-  /// Takes `frame` if it has one of the sensor's COB-IDs (returns true, even when malformed:
-  /// rejected and counted); false for any other frame.
+  /// Takes `frame` if it is on one of the sensor's 11-bit COB-IDs (has_standard_id(); returns
+  /// true, even when malformed — wrong length, remote, CAN FD: rejected and counted); false
+  /// for any other frame, error reports and 29-bit frames included (they never mark the
+  /// reading malformed).
   bool on_frame(const CanFrame& frame) noexcept;
 
   /// The checked reading at bus time `now_ns` (see ForceSample). Call once per period.

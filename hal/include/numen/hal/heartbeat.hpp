@@ -43,8 +43,8 @@ constexpr std::int64_t heartbeat_ms_to_ns(std::uint16_t ms) noexcept {
 enum class HeartbeatDecodeStatus : std::uint8_t {
   kOk,            ///< Decoded.
   kWrongId,       ///< COB-ID is not 0x701–0x77F: not a heartbeat.
-  kNotDataFrame,  ///< Heartbeat COB-ID but remote (a node-guarding request), error report,
-                  ///< 29-bit or CAN FD frame.
+  kNotDataFrame,  ///< Heartbeat COB-ID but remote (a node-guarding request) or CAN FD frame.
+                  ///< (Error reports and 29-bit frames are not on it: kWrongId.)
   kWrongLength,   ///< Payload length is not 1.
   kUnknownState,  ///< The state byte is not 0x00, 0x04, 0x05 or 0x7F (bit 7 set included).
 };
@@ -154,7 +154,7 @@ struct HeartbeatConsumerCounters {
   std::uint64_t recoveries = 0;           ///< kLost -> kAlive (a heartbeat after a loss).
   std::uint64_t out_of_order = 0;         ///< Frames stamped before the last one heard.
   std::uint64_t wrong_length = 0;         ///< Frames on the COB-ID with length != 1.
-  std::uint64_t not_data = 0;             ///< Remote / error / 29-bit / FD frames on the COB-ID.
+  std::uint64_t not_data = 0;             ///< Remote / FD frames on the COB-ID.
   std::uint64_t unknown_state = 0;        ///< Frames with a state byte not in NmtState.
   /// Faults (losses + unexpected boot-ups): compare with a previous value to see every
   /// fault, even one that has already cleared (kLost -> kAlive) between two looks.
@@ -271,7 +271,8 @@ class HeartbeatMonitor {
   /// unrouted()) if the frame is not on the heartbeat COB-ID of a watched node; otherwise the
   /// consumer's result.
   HeartbeatDecodeStatus on_frame(const CanFrame& frame) noexcept {
-    if (frame.id > kHeartbeatBaseCobId && frame.id <= kHeartbeatBaseCobId + kMaxNodeId) {
+    if (is_standard_frame(frame) && frame.id > kHeartbeatBaseCobId &&
+        frame.id <= kHeartbeatBaseCobId + kMaxNodeId) {
       const std::uint8_t slot = slot_of_node_[frame.id - kHeartbeatBaseCobId];
       if (slot != kNoSlot) return consumers_[slot].on_frame(frame);
     }

@@ -69,8 +69,15 @@ struct DeviceCounters {
   // Frames seen by on_frame().
   std::uint64_t frames_decoded = 0;       ///< Encoder TPDOs decoded.
   std::uint64_t frames_wrong_length = 0;  ///< TPDOs of an axis with a wrong length.
-  std::uint64_t frames_not_data = 0;      ///< Remote/error/29-bit frames on an axis's COB-ID.
-  std::uint64_t frames_unknown_id = 0;    ///< Frames whose id belongs to no axis.
+  /// Remote requests and CAN FD frames on an axis's 11-bit COB-ID (the axis is marked
+  /// malformed for the period).
+  std::uint64_t frames_not_data = 0;
+  /// Frames whose identifier belongs to no axis, 29-bit frames included (even with the number
+  /// of an axis's COB-ID: a different identifier).
+  std::uint64_t frames_unknown_id = 0;
+  /// Controller error reports (CanFlag::kErrorFrame) given to on_frame(): ignored, whatever
+  /// their error-class bits read; the bus state is the transport's (Bus::state()).
+  std::uint64_t frames_error = 0;
   // Samples (one per axis per sample() call).
   std::uint64_t samples = 0;                ///< sample() calls.
   std::uint64_t samples_valid = 0;          ///< sample() calls that returned valid.
@@ -108,8 +115,11 @@ class InstrumentDevice {
   /// sample (the newest frame of an axis wins); a malformed one marks the axis malformed
   /// for this period. Minimal protocol: the 4-byte position PDO (decode_position_pdo());
   /// managed stack (config.canopen.managed): the axis's static encoder TPDO mapping
-  /// (PdoMapping::unpack(), exact length), position from 0x6004 or 0x6064. Returns true if the
-  /// frame's id belongs to an axis. Frames of other ids are counted as unknown.
+  /// (PdoMapping::unpack(), exact length), position from 0x6004 or 0x6064. Acceptance
+  /// (can_frame.hpp): a frame belongs to an axis if it is on the axis's 11-bit COB-ID
+  /// (has_standard_id()); a remote or CAN FD frame there is malformed. Returns true if the
+  /// frame belongs to an axis. Other frames are counted as unknown (29-bit ones too) and
+  /// error reports as frames_error; neither touches an axis.
   bool on_frame(const CanFrame& frame) noexcept;
 
   /// Reads up to `max_frames` frames from `bus` and passes each to on_frame(). Returns the

@@ -51,7 +51,8 @@ struct LogBusCounters {
 /// Records out of time order in the log (a clock step) are due right after their
 /// predecessor, never earlier — canplayer sends those at once too. Error reports in the log
 /// (CanFlag::kErrorFrame) are returned like frames and pass the filters (can_filter.hpp);
-/// state() stays kOk.
+/// state() stays kOk. The log's plausibility (time order, gaps, an empty log) is checked by
+/// load_candump_log(); matching_records() says whether the filters leave anything to replay.
 ///
 /// write() does not go anywhere: it accepts a well-formed frame (kOk, counted as frames_tx)
 /// and refuses a malformed one (kError), like a bus with no other node listening. To keep
@@ -95,6 +96,15 @@ class LogBus final : public Bus {
   std::int64_t span_ns() const noexcept { return span_ns_; }
   /// Number of records in the log.
   std::size_t size() const noexcept { return records_.size(); }
+  /// Records of one pass that pass the filters, `iface` and `received_only`: what read() can
+  /// ever return per pass. 0 means the replay feeds the controller nothing (an empty log, or
+  /// a log of another device's ids or interface); callers report it as an error (the run
+  /// harness: before the first period). Counted at construction.
+  std::size_t matching_records() const noexcept { return matching_; }
+  /// Records of one pass that are controller error reports (CanFlag::kErrorFrame) and pass
+  /// the filters. They are returned by read() like frames (state() is not driven by them);
+  /// the protocol decoders ignore them (can_frame.hpp, frame acceptance).
+  std::size_t matching_error_reports() const noexcept { return matching_errors_; }
   /// The settings the bus was built with.
   const LogBusSettings& settings() const noexcept { return settings_; }
 
@@ -109,6 +119,8 @@ class LogBus final : public Bus {
   std::int64_t pass_base_ns_ = 0;   // due time of the first record of the current pass
   std::int64_t latest_due_ns_ = 0;  // due time of the last record taken (monotonic release)
   std::size_t cursor_ = 0;
+  std::size_t matching_ = 0;
+  std::size_t matching_errors_ = 0;
   std::int64_t now_ns_ = 0;
   BusCounters counters_{};
   LogBusCounters log_counters_{};

@@ -9,7 +9,8 @@
 /// Pure protocol logic: no I/O, every function and member below except the NmtNodeModel
 /// constructor is noexcept and allocation free. See docs/protocol.md.
 /// Only classic CAN data frames with an 11-bit identifier are CiA 301 NMT messages; remote
-/// requests, error reports, 29-bit and CAN FD frames are refused.
+/// requests and CAN FD frames on COB-ID 0x000 are refused; error reports and 29-bit frames
+/// are not on it (can_frame.hpp, frame acceptance).
 
 #include <cstdint>
 
@@ -72,7 +73,8 @@ struct NmtMessage {
 enum class NmtDecodeStatus : std::uint8_t {
   kOk,                ///< Decoded.
   kWrongId,           ///< COB-ID is not 0x000: not an NMT message.
-  kNotDataFrame,      ///< COB-ID 0x000 but remote, error report, 29-bit or CAN FD frame.
+  kNotDataFrame,      ///< COB-ID 0x000 but remote or CAN FD frame. (Error reports and
+                      ///< 29-bit frames are not on COB-ID 0x000: kWrongId.)
   kWrongLength,       ///< Payload length is not 2.
   kUnknownCommand,    ///< Byte 0 is not a CiA 301 command specifier.
   kNodeIdOutOfRange,  ///< Byte 1 is above 127.

@@ -103,7 +103,8 @@ using PdoValues = std::array<std::int64_t, kMaxPdoEntries>;
 enum class PdoStatus : std::uint8_t {
   kOk,               ///< Packed / unpacked.
   kWrongLength,      ///< unpack: the frame's length is not the mapping's length (malformed PDO).
-  kNotDataFrame,     ///< unpack: remote request, error report or 29-bit frame.
+  kNotDataFrame,     ///< unpack: not a classic 11-bit data frame (remote, CAN FD, error
+                     ///< report, 29-bit; is_classic_data_frame()).
   kWrongValueCount,  ///< The value span's size is not the number of mapped objects.
   kValueOutOfRange,  ///< pack: a value does not fit its object's type (e.g. 70000 as UNSIGNED16).
 };
@@ -142,7 +143,7 @@ class PdoMapping {
 
   /// Reads the values of `frame` into `values` (`values.size() == size()`), sign extending
   /// signed entries and zero extending unsigned ones. Checks, in order: value count, an 11-bit
-  /// data frame (not remote, not an error report: kNotDataFrame), length exactly length()
+  /// classic 11-bit data frame (not remote, CAN FD, 29-bit or an error report: kNotDataFrame), length exactly length()
   /// (kWrongLength). The COB-ID is the caller's to check. `values` is unchanged unless kOk.
   PdoStatus unpack(const CanFrame& frame, std::span<std::int64_t> values) const noexcept;
 
