@@ -29,6 +29,7 @@
 #include "numen/platform/periodic_timer.hpp"
 #include "numen/sim/admittance_run.hpp"
 #include "numen/sim/simulated_instrument.hpp"
+#include "numen/sim/input_error.hpp"
 #include "numen/sim/run_verdict.hpp"
 #include "numen/sim/trace.hpp"
 
@@ -97,14 +98,34 @@ DurationSummary summarize_ns(const platform::LatencyHistogram& h) {
 
 namespace {
 
-/// The LogBus of a "log:FILE" spec, or nullptr for any other bus.
-std::unique_ptr<hal::LogBus> make_log_bus(const Scene& scene, const BusSpec& spec) {
+/// The LogBus of a "log:FILE" spec, or nullptr for any other bus; `stats` gets what the loader
+/// counted. A log that the loader refuses (located error) or whose records hold no frame the
+/// controller reads (another device's ids) is input rejected: InputError naming the file.
+std::unique_ptr<hal::LogBus> make_log_bus(const Scene& scene, const BusSpec& spec,
+                                          hal::CandumpLoadStats& stats) {
   if (spec.kind != BusKind::kLog) return nullptr;
   hal::LogBusSettings settings;
   settings.filters = controller_filters(scene.device);
   settings.received_only = true;
-  return std::make_unique<hal::LogBus>(
-      hal::load_candump_log(spec.target), settings);
+  std::vector<hal::CandumpRecord> records;
+  try {
+    records = hal::load_candump_log(spec.target, &stats);
+  } catch (const std::runtime_error& e) {
+    throw InputError("", 0, 0, "", e.what());  // the message is "file:line:column: what"
+  }
+  auto bus = std::make_unique<hal::LogBus>(std::move(records), settings);
+  if (bus->matching_records() == 0) {
+    std::string ids;
+    for (const hal::AxisConfig& a : scene.device.axes) {
+      char buf[16];
+      std::snprintf(buf, sizeof buf, "%s0x%03X", ids.empty() ? "" : ", ", a.encoder_cob_id);
+      ids += buf;
+    }
+    throw InputError(spec.target, 0, 0, "",
+                     std::to_string(stats.records) + " records, none that the controller reads "
+                     "(received frames of the scene's encoder COB-IDs " + ids + "): nothing to replay");
+  }
+  return bus;
 }
 
 }  // namespace
@@ -128,7 +149,7 @@ SceneRunner::SceneRunner(const Scene& scene, std::size_t trace_capacity, const B
       spec_(parse_bus_spec(bus.spec)),
       bus_(scene.bus),
       real_bus_(spec_.real() ? open_real_bus(spec_, controller_filters(scene.device)) : nullptr),
-      log_bus_(make_log_bus(scene, spec_)),
+      log_bus_(make_log_bus(scene, spec_, log_stats_)),
       writer_(bus.record_path.empty()
                   ? nullptr
                   : std::make_unique<hal::CandumpWriter>(
@@ -362,6 +383,7 @@ RunSummary SceneRunner::summary() const {
   {
     const hal::DeviceCounters& d = device_.counters();
     s.frames_unknown_id = static_cast<std::int64_t>(d.frames_unknown_id);
+    s.error_frames = static_cast<std::int64_t>(d.frames_error);
     s.frames_rejected = static_cast<std::int64_t>(d.frames_wrong_length + d.frames_not_data);
     s.values_out_of_range = static_cast<std::int64_t>(d.rejected_out_of_range);
     s.values_jump = static_cast<std::int64_t>(d.rejected_jump);
@@ -375,7 +397,16 @@ RunSummary SceneRunner::summary() const {
     s.trace_written = static_cast<std::int64_t>(c.written);
     s.trace_io_errors = static_cast<std::int64_t>(c.io_errors);
   }
-  if (log_bus_) s.bus_frames_replayed = static_cast<std::int64_t>(log_bus_->log_counters().replayed);
+  if (log_bus_) {
+    s.bus_frames_replayed = static_cast<std::int64_t>(log_bus_->log_counters().replayed);
+    s.bus_log_records = static_cast<std::int64_t>(log_stats_.records);
+    s.bus_log_lost_frames = static_cast<std::int64_t>(log_stats_.dropped_frames);
+    s.bus_log_out_of_order = static_cast<std::int64_t>(log_stats_.out_of_order);
+    if (log_stats_.dropped_frames > 0)
+      s.warnings.push_back("the replayed log says its recording lost " +
+                           std::to_string(log_stats_.dropped_frames) + " frames (" +
+                           std::to_string(log_stats_.drop_notes) + " DROPCOUNT notes)");
+  }
   if (recorder_) {
     s.bus_frames_recorded = static_cast<std::int64_t>(recorder_->recording_counters().recorded);
     s.bus_record_dropped = static_cast<std::int64_t>(recorder_->recording_counters().dropped);
@@ -569,7 +600,9 @@ std::string format_summary(const RunSummary& s) {
      << s.invalid_periods << ", frames dropped " << s.bus_frames_dropped << ", corrupted "
      << s.bus_frames_corrupted << "\n";
   if (s.bus.rfind("log:", 0) == 0)
-    os << "  bus " << s.bus << ": " << s.bus_frames_replayed << " frames replayed\n";
+    os << "  bus " << s.bus << ": " << s.bus_frames_replayed << " frames replayed of "
+       << s.bus_log_records << " records; lost by the recording " << s.bus_log_lost_frames
+       << ", out of order " << s.bus_log_out_of_order << "\n";
   if (s.real_bus) {
     os << "  bus " << s.bus << ": frames rx " << s.port.frames_rx << ", tx " << s.port.frames_tx
        << ", dropped " << s.port.dropped << ", errors " << s.port.errors << ", would-block "
@@ -579,7 +612,7 @@ std::string format_summary(const RunSummary& s) {
     os << "  loop: read errors " << s.read_errors << ", SYNC write failures "
        << s.sync_write_failures << ", command failures " << s.command_failures
        << "; frames rejected " << s.frames_rejected << " (unknown id " << s.frames_unknown_id
-       << "), values out of range " << s.values_out_of_range << ", jumps " << s.values_jump
+       << "), error frames ignored " << s.error_frames << ", values out of range " << s.values_out_of_range << ", jumps " << s.values_jump
        << "\n";
     for (const std::string& line : platform::describe(s.loop)) os << "  loop " << line << "\n";
     os << "  device frames: last at period " << s.last_device_frame_period
@@ -685,6 +718,9 @@ std::string format_summary_json(const RunSummary& s) {
   j["bus_frames_corrupted"] = s.bus_frames_corrupted;
   j["bus"] = s.bus;
   j["bus_frames_replayed"] = s.bus_frames_replayed;
+  j["bus_log_records"] = s.bus_log_records;
+  j["bus_log_lost_frames"] = s.bus_log_lost_frames;
+  j["bus_log_out_of_order"] = s.bus_log_out_of_order;
   j["bus_frames_recorded"] = s.bus_frames_recorded;
   j["bus_record_dropped"] = s.bus_record_dropped;
   j["bus_record_written"] = s.bus_record_written;
@@ -704,6 +740,7 @@ std::string format_summary_json(const RunSummary& s) {
   j["command_failures"] = s.command_failures;
   j["frames_rejected"] = s.frames_rejected;
   j["frames_unknown_id"] = s.frames_unknown_id;
+  j["error_frames"] = s.error_frames;
   j["values_out_of_range"] = s.values_out_of_range;
   j["values_jump"] = s.values_jump;
   const auto hist = [](const platform::HistogramSummary& h) {

@@ -147,16 +147,28 @@ TEST(NumenCli, RefusedOptionValueExitsWithInputRejected) {
   EXPECT_EQ(help.status, 0) << help.err;
 }
 
-// Defect 4: a replayed bus log that holds no frame of the scene's encoders replays nothing:
-// the run says so and exits "samples rejected" (6) instead of 0.
-TEST(NumenCli, ReplayOfALogWithoutEncoderFramesExitsWithSamplesRejected) {
+// Defect 4: a replayed bus log that holds no frame of the scene's encoders replayed nothing and
+// exited 0; it is now refused before the run (input rejected), naming the file and the ids.
+TEST(NumenCli, ReplayOfALogWithoutEncoderFramesIsInputRejected) {
   NUMEN_REQUIRE_ARTICULATION();
   TempDir dir;
   const std::string log = dir.write("other.log", "(0.000100) vcan0 7FF#0102\n(0.000200) vcan0 7FF#0304\n");
   const ChildResult r =
       run_child({kNumen, "run", "--duration", "0.2", "--bus", "log:" + log}, dir.path(), 60);
-  EXPECT_EQ(r.status, 6) << r.out << r.err;
-  EXPECT_NE(r.out.find("the bus log gave no frame"), std::string::npos) << r.out;
+  EXPECT_EQ(r.status, 2) << r.out << r.err;
+  EXPECT_NE(r.err.find(log + ": 2 records, none that the controller reads"), std::string::npos)
+      << r.err;
+  EXPECT_NE(r.err.find("0x181"), std::string::npos) << r.err;
+}
+
+// ... and a log that is not a candump log at all is refused at its first bad line.
+TEST(NumenCli, ReplayOfGarbageIsALocatedInputError) {
+  TempDir dir;
+  const std::string log = dir.write("garbage.log", "(0.000100) vcan0 181#00000000\nhello\n");
+  const ChildResult r =
+      run_child({kNumen, "run", "--duration", "0.2", "--bus", "log:" + log}, dir.path(), 60);
+  EXPECT_EQ(r.status, 2) << r.out << r.err;
+  EXPECT_EQ(r.err.rfind("numen: " + log + ":2:1: ", 0), 0u) << r.err;
 }
 
 }  // namespace

@@ -1,6 +1,6 @@
 # Scenario (c): while the controller and `numen device` run on vcan0, cansend injects an unknown
 # id, an encoder TPDO of the wrong length and an encoder value out of the axis's range.
-# Pass: the controller runs to its end (exit 0, no NaN); the unknown id never reaches the loop
+# Pass: the controller runs to its end (exit status 3, safety stop; no NaN); the unknown id never reaches the loop
 # (kernel filter: unknown-id count 0) though candump saw it on the bus; the short frame is
 # rejected and counted; the out-of-range value is counted and the safe state is latched (zero
 # torque to the end of the run); the three frames were on the bus (candump).

@@ -3,7 +3,7 @@
 /// Load-time error of a user input file (scene, trajectory). Thrown only while
 /// loading, never in the real-time path; what() reads
 ///   "<file>:<line>:<column>: <key>: <message>"
-/// with the parts that are unknown left out.
+/// with the parts that are unknown left out (and their separators).
 
 #include <sstream>
 #include <stdexcept>
@@ -34,7 +34,7 @@ class InputError : public std::runtime_error {
     os << file;
     if (line > 0) os << ':' << line;
     if (line > 0 && column > 0) os << ':' << column;
-    os << ": ";
+    if (!file.empty() || line > 0) os << ": ";
     if (!key.empty()) os << key << ": ";
     os << message;
     return os.str();

@@ -180,6 +180,10 @@ struct RunSummary {
   std::int64_t bus_frames_corrupted = 0;
   std::string bus = "sim";                 ///< BusChoice::spec of the run.
   std::int64_t bus_frames_replayed = 0;    ///< log: records read by the controller.
+  std::int64_t bus_log_records = 0;        ///< log: frame records in the file.
+  std::int64_t bus_log_lost_frames = 0;    ///< log: frames the recording itself lost (DROPCOUNT notes).
+  std::int64_t bus_log_out_of_order = 0;   ///< log: records earlier than a record before them
+                                           ///< (another interface or direction).
   std::int64_t bus_frames_recorded = 0;    ///< --record: frames queued for the log.
   std::int64_t bus_record_dropped = 0;     ///< --record: lost to a full queue (paced runs).
   std::int64_t bus_record_written = 0;     ///< --record: lines the writer thread wrote.
@@ -230,6 +234,8 @@ struct RunSummary {
                                            ///< no known id, malformed drive TPDOs (InstrumentDevice
                                            ///< and CanopenMaster counters).
   std::int64_t frames_unknown_id = 0;      ///< ... of which of an id no axis has.
+  std::int64_t error_frames = 0;           ///< Controller error reports the device ignored
+                                           ///< (never decoded as PDOs; docs/protocol.md).
   std::int64_t values_out_of_range = 0;    ///< Axis values rejected as out of [min, max].
   std::int64_t values_jump = 0;            ///< Axis values rejected as implausible jumps.
   platform::LoopSummary loop;              ///< LoopStatistics of the periods (paced runs).
@@ -330,6 +336,7 @@ class SceneRunner {
   BusSpec spec_;
   hal::SimBus bus_;
   std::unique_ptr<hal::Bus> real_bus_;            // --bus can:IFACE / serial:PATH
+  hal::CandumpLoadStats log_stats_;               // --bus log:FILE, what the loader counted
   std::unique_ptr<hal::LogBus> log_bus_;          // --bus log:FILE
   std::unique_ptr<hal::CandumpWriter> writer_;    // --record FILE
   std::unique_ptr<hal::RecordingBus> recorder_;   // --record FILE, around the controller port
