@@ -197,7 +197,8 @@ TEST(Scene, DefaultSceneLoadsWhatItsFileDescribes) {
   EXPECT_EQ(s.device.name, "laparoscopic_trainer");
   EXPECT_EQ(s.device.control_period_s, s.model.dt);
   EXPECT_EQ(s.device.axes[0].encoder_cob_id, 0x181u);
-  EXPECT_DOUBLE_EQ(s.device.axes[4].min, -1.0);
+  EXPECT_DOUBLE_EQ(s.device.axes[4].min, -std::numbers::pi);  // the jaw: one encoder turn
+  EXPECT_DOUBLE_EQ(s.device.axes[4].max, std::numbers::pi);
   EXPECT_FALSE(s.trocar_note.empty());
   EXPECT_DOUBLE_EQ(s.model.feedback.max_force, 8.0);
 
