@@ -37,7 +37,7 @@ core::Quat slerp_shortest(const core::Quat& q0, const core::Quat& q1, double s) 
 
 Trajectory::Trajectory(double period, std::vector<core::Pose> poses, std::vector<double> jaw) {
   if (!std::isfinite(period) || period <= 0.0) {
-    fail("trajectory.period", "must be finite and > 0 s, got " + std::to_string(period));
+    fail("trajectory.period", "must be finite and > 0 s, got " + format_input_number(period));
   }
   if (poses.empty()) fail("trajectory.samples", "a trajectory needs at least one sample");
   if (!jaw.empty() && jaw.size() != poses.size()) {
@@ -52,6 +52,13 @@ Trajectory::Trajectory(double period, std::vector<core::Pose> poses, std::vector
     s.time = static_cast<double>(i) * period;
     s.pose.position = poses[i].position;
     if (!finite(s.pose.position)) fail(where + ".position", "is not finite");
+    if (s.pose.position.stableNorm() > kMaxTargetDistance) {
+      fail(where + ".position", "the target at " + format_input_number(s.time) + " s is " +
+                                    format_input_number(s.pose.position.stableNorm()) +
+                                    " m from the origin; a target beyond " +
+                                    format_input_number(kMaxTargetDistance) +
+                                    " m is not instrument motion (a wrong unit or a corrupt input?)");
+    }
     core::Quat q = poses[i].orientation;
     const double norm = q.norm();
     if (!std::isfinite(norm) || norm < 1e-9) {
@@ -130,7 +137,7 @@ core::Vec3 apply(const Placement& placement, const core::Vec3& p) noexcept {
 
 Trajectory transformed(const Trajectory& trajectory, const Placement& placement) {
   if (!std::isfinite(placement.scale) || placement.scale <= 0.0) {
-    fail("placement.scale", "must be finite and > 0, got " + std::to_string(placement.scale));
+    fail("placement.scale", "must be finite and > 0, got " + format_input_number(placement.scale));
   }
   const double norm = placement.pose.orientation.norm();
   if (!std::isfinite(norm) || norm < 1e-9) {
@@ -153,7 +160,7 @@ Trajectory transformed(const Trajectory& trajectory, const Placement& placement)
 
 Trajectory resample(const Trajectory& trajectory, double dt) {
   if (!std::isfinite(dt) || dt <= 0.0) {
-    fail("resample.dt", "must be finite and > 0 s, got " + std::to_string(dt));
+    fail("resample.dt", "must be finite and > 0 s, got " + format_input_number(dt));
   }
   if (trajectory.empty()) fail("resample.trajectory", "cannot resample an empty trajectory");
   const double m = trajectory.duration() / dt;
