@@ -936,13 +936,24 @@ std::string scene_on_trial(const fs::path& scene, const fs::path& trial, const s
   return text;
 }
 
-/// One axis value out of its range or faster than its max_speed.
+/// The samples where one axis leaves its range (or exceeds its max_speed).
 struct AxisViolation {
   std::string axis;
-  double time_s = 0.0;
-  double value = 0.0;  ///< Axis value (range) or speed (max_speed).
-  bool speed = false;
+  bool speed = false;         ///< max_speed (else [min, max]).
+  double first_time_s = 0.0;  ///< First such sample (s).
+  double worst = 0.0;         ///< Farthest value (range) or highest speed.
+  std::int64_t samples = 0;   ///< Number of such samples.
 };
+
+/// Records one bad sample of `axis` in `out` (one entry per axis and kind).
+void note_violation(std::vector<AxisViolation>& out, const std::string& axis, bool speed,
+                    double t, double value, double limit) {
+  auto it = std::find_if(out.begin(), out.end(),
+                         [&](const AxisViolation& v) { return v.axis == axis && v.speed == speed; });
+  if (it == out.end()) it = out.insert(out.end(), AxisViolation{axis, speed, t, value, 0});
+  if (std::abs(value - limit) > std::abs(it->worst - limit)) it->worst = value;
+  ++it->samples;
+}
 
 /// Walks the whole trajectory of `s` at dt and returns where the instrument's axes (inverse
 /// kinematics of each target) leave [min, max] or move faster than max_speed; `closest` gets
@@ -960,7 +971,8 @@ std::vector<AxisViolation> axis_violations(const Scene& s, double* closest) {
       const numen::hal::AxisConfig& a = s.device.axes[i];
       const double v = q[static_cast<Eigen::Index>(i)];
       if (!a.wraps) {
-        if (!(v >= a.min && v <= a.max) && out.size() < 20) out.push_back({a.name, t, v, false});
+        if (v < a.min) note_violation(out, a.name, false, t, v, a.min);
+        if (v > a.max) note_violation(out, a.name, false, t, v, a.max);
         const double margin = std::min(v - a.min, a.max - v) / (a.max - a.min);
         if (best < 0.0 || 0.5 - margin > best) {
           best = 0.5 - margin;
@@ -971,7 +983,7 @@ std::vector<AxisViolation> axis_violations(const Scene& s, double* closest) {
         double d = v - last[static_cast<Eigen::Index>(i)];
         if (a.wraps) d = std::remainder(d, 2.0 * std::numbers::pi);
         const double speed = std::abs(d) / s.model.dt;
-        if (speed > a.max_speed && out.size() < 20) out.push_back({a.name, t, speed, true});
+        if (speed > a.max_speed) note_violation(out, a.name, true, t, speed, a.max_speed);
       }
     }
     last = q;
@@ -996,9 +1008,9 @@ TEST(RunRecordedTrials, EveryAxisOfEveryTrialStaysInItsRangeInEveryJigsawsScene)
       double closest = 0.0;
       const std::vector<AxisViolation> bad = axis_violations(s, &closest);
       for (const AxisViolation& v : bad)
-        ADD_FAILURE() << v.axis << (v.speed ? " speed " : " = ") << v.value << " at " << v.time_s
-                      << " s is outside the axis's " << (v.speed ? "max_speed" : "[min, max]");
-      EXPECT_TRUE(bad.empty());
+        ADD_FAILURE() << v.axis << ": " << v.samples << " samples beyond its "
+                      << (v.speed ? "max_speed" : "[min, max]") << " from " << v.first_time_s
+                      << " s on, up to " << v.worst << (v.speed ? " per s" : "");
     }
   }
 }
