@@ -1108,3 +1108,23 @@ TEST(SceneErrors, ANulByteInAMessageDoesNotCutIt) {
   const std::string what(e.what());  // up to the first NUL, as a terminal prints it
   EXPECT_EQ(what, "scene.toml:3:7: body[0].name: bad \\x00byte here");
 }
+
+TEST(SceneErrors, ASceneFileThatIsADirectoryIsNamedAsSuch) {
+  TempDir dir;
+  try {
+    (void)load_scene(dir.path().string());
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.file(), dir.path().string());
+    EXPECT_NE(e.message().find("is a directory"), std::string::npos) << e.what();
+  }
+}
+
+TEST(SceneErrors, AByteOrderMarkStartsASceneButIsNamedElsewhere) {
+  TempDir dir;
+  EXPECT_EQ(load_scene(dir.write("bom.toml", "\xEF\xBB\xBF" + kMini)).name, "mini");
+  const std::string text = replace(kMini, "dt = 0.001", "\xEF\xBB\xBF" "dt = 0.001");
+  const InputError e = load_error(dir, text);
+  EXPECT_EQ(e.line(), line_of(text, "dt = 0.001")) << e.what();
+  EXPECT_NE(e.message().find("byte order mark"), std::string::npos) << e.what();
+}

@@ -96,7 +96,9 @@ class ScriptedPath {
   /// Throws InputError (file and line 0, key "<prefix>[i].<field>") for an
   /// empty list, a duration not finite and > 0, a radius or period not finite
   /// and > 0, a zero or non-finite axis, a step_time outside [0, duration], a
-  /// quaternion of zero norm, or any non-finite number.
+  /// quaternion of zero norm, any non-finite number, or a position (start,
+  /// from, to, position, centre; a circle's centre distance + radius) farther
+  /// than kMaxTargetDistance (10 m) from the world origin.
   explicit ScriptedPath(std::vector<PathSegment> segments, const TrajectorySample& start = {},
                         std::string key_prefix = "path");
 
