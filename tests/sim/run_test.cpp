@@ -30,6 +30,7 @@
 #include <vector>
 
 #include "alloc_counter.hpp"
+#include "scene_text.hpp"
 #include "temp_dir.hpp"
 #include "numen/core/data.hpp"
 #include "numen/core/features.hpp"
@@ -1067,37 +1068,11 @@ TEST(RunRecordedTrials, EveryTrialRunsThroughEveryJigsawsSceneWithoutASafetyStop
 
 // ---------------------------------------------------------------- summary figures (issue 17)
 
-/// A ball held by a pose tracker above a floor (z = -0.1 m); `path` is its [trajectory].
+/// numen::test::kMiniScene (a ball held by a pose tracker over a floor at z = -0.1 m) with the
+/// scripted trajectory `path` (the lines after source = "scripted").
 std::string ball_over_floor(const std::string& path) {
-  return R"(name = "ball"
-dt = 0.001
-gravity = [0.0, 0.0, 0.0]
-
-[[material]]
-name = "steel"
-
-[[body]]
-name = "tool"
-mass = 0.1
-material = "steel"
-spheres = [[0.0, 0.0, 0.0, 0.01]]
-[body.coupling]
-stiffness = 100.0
-damping_ratio = 0.85
-
-[[obstacle]]
-name = "floor"
-type = "plane"
-point = [0.0, 0.0, -0.1]
-normal = [0.0, 0.0, 1.0]
-
-[device]
-kind = "pose-tracker"
-attach = "tool"
-
-[trajectory]
-source = "scripted"
-)" + path;
+  const std::string& mini = numen::test::kMiniScene;
+  return mini.substr(0, mini.find("[trajectory]")) + "[trajectory]\nsource = \"scripted\"\n" + path;
 }
 
 TEST(RunSummaryFigures, AToolSpawnedInsideAnObstacleIsAStartUpReportedApartWithAWarning) {

@@ -62,47 +62,9 @@ double angle_between(const Quat& a, const Quat& b) {
 
 using numen::test::TempDir;
 
-// A small valid scene (pose tracker, scripted path). Every error test below
-// changes one thing in it, so that the error can only come from that change.
-const std::string kMini = R"(name = "mini"
-dt = 0.001
-gravity = [0.0, 0.0, 0.0]
-
-[[material]]
-name = "steel"
-
-[[body]]
-name = "tool"
-mass = 0.1
-material = "steel"
-spheres = [[0.0, 0.0, 0.0, 0.01]]
-[body.coupling]
-stiffness = 100.0
-damping_ratio = 0.85
-
-[[obstacle]]
-name = "floor"
-type = "plane"
-point = [0.0, 0.0, -0.1]
-normal = [0.0, 0.0, 1.0]
-
-[device]
-kind = "pose-tracker"
-attach = "tool"
-
-[trajectory]
-source = "scripted"
-start = { position = [0.0, 0.0, 0.0] }
-
-[[trajectory.segment]]
-type = "line"
-to = [0.01, 0.0, 0.0]
-duration = 0.5
-
-[[trajectory.segment]]
-type = "hold"
-duration = 0.25
-)";
+// A small valid scene (pose tracker, scripted path; tests/support/scene_text.hpp). Every error
+// test below changes one thing in it, so that the error can only come from that change.
+const std::string& kMini = numen::test::kMiniScene;
 
 /// what() must contain the scene file's name, the line (and column), the key and `message`.
 void expect_located(const InputError& e, const std::string& file, int line, int column,
@@ -479,6 +441,32 @@ file = "no_such_recording.txt")");
   EXPECT_NE(e.message().find("no_such_recording.txt"), std::string::npos) << e.what();
 }
 
+namespace {
+
+/// A trocar-instrument scene reading the JIGSAWS file `data` (absolute path), with `extra`
+/// lines in its [trajectory].
+std::string jigsaws_scene(const std::string& data, const std::string& extra = "") {
+  std::string text = R"(name = "jig"
+[[body]]
+name = "tool"
+mass = 0.05
+spheres = [[0.0, 0.0, 0.0, 0.0025]]
+[device]
+kind = "trocar-instrument"
+attach = "tool"
+[device.trocar]
+placement = "approach"
+[trajectory]
+source = "jigsaws"
+file = ")";
+  text += data;
+  text += "\"\nmanipulator = \"slave_right\"\n";
+  text += extra;
+  return text;
+}
+
+}  // namespace
+
 TEST(SceneErrors, JigsawsTrajectoryWithAMalformedLineNamesTheDataFile) {
   TempDir dir;
   // A copy of the shipped excerpt with one token of line 7 replaced.
@@ -502,21 +490,7 @@ TEST(SceneErrors, JigsawsTrajectoryWithAMalformedLineNamesTheDataFile) {
     data << line << '\n';
   }
   const std::string data_path = dir.write("recording.txt", data.str());
-  const std::string text = R"(name = "jig"
-[[body]]
-name = "tool"
-mass = 0.05
-spheres = [[0.0, 0.0, 0.0, 0.0025]]
-[device]
-kind = "trocar-instrument"
-attach = "tool"
-[device.trocar]
-placement = "approach"
-[trajectory]
-source = "jigsaws"
-file = ")" + data_path + R"("
-manipulator = "slave_right"
-)";
+  const std::string text = jigsaws_scene(data_path);
   const std::string scene_path = dir.write("jig.toml", text);
   try {
     (void)load_scene(scene_path);
@@ -960,26 +934,6 @@ TEST(Scene, APartThisBuildLeftOutIsRefusedByName) {
 // ---------------------------------------------------------------- input plausibility (issue 17)
 
 namespace {
-
-/// A trocar-instrument scene reading the JIGSAWS file `data` (absolute path), with `extra`
-/// lines in its [trajectory].
-std::string jigsaws_scene(const std::string& data, const std::string& extra = "") {
-  return R"(name = "jig"
-[[body]]
-name = "tool"
-mass = 0.05
-spheres = [[0.0, 0.0, 0.0, 0.0025]]
-[device]
-kind = "trocar-instrument"
-attach = "tool"
-[device.trocar]
-placement = "approach"
-[trajectory]
-source = "jigsaws"
-file = ")" + data + R"("
-manipulator = "slave_right"
-)" + extra;
-}
 
 /// The first `rows` lines of the shipped excerpt, with `edit` applied to line `line` (1-based).
 std::string excerpt_lines(int rows, int line = 0,
