@@ -339,7 +339,8 @@ DeviceConfig make_default_trocar_config(std::uint8_t first) {
   c.axes.push_back(axis("pivot_y", n(1), true, per_rad, -1.2, 1.2, 10.0, false, 0.5, 1.0));
   c.axes.push_back(axis("depth", n(2), true, per_m, 0.0, 0.35, 2.0, false, 5.0, 10.0));
   c.axes.push_back(axis("roll", n(3), false, per_rad, -kPi, kPi, 30.0, true, 1.0, 0.0));
-  c.axes.push_back(axis("jaw", n(4), false, per_rad, 0.0, 1.2, 30.0, false, 1.0, 0.0));
+  // jaw: one turn of its single-turn encoder; recorded gripper angles go negative (squeeze).
+  c.axes.push_back(axis("jaw", n(4), false, per_rad, -kPi, kPi, 30.0, false, 1.0, 0.0));
   add_canopen(c, first);
   return c;
 }

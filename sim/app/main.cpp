@@ -25,6 +25,7 @@
 #include <CLI/CLI.hpp>
 
 #include "numen/sim/bus_spec.hpp"
+#include "numen/sim/cli_values.hpp"
 #include "numen/sim/device_process.hpp"
 #include "numen/sim/input_error.hpp"
 #include "numen/sim/progress_bar.hpp"
@@ -87,6 +88,13 @@ int run_guarded(Body&& body) {
   }
 }
 
+/// CLI11 check of a time in seconds (numen::sim::check_seconds): finite, in [lo, hi] or (lo, hi].
+CLI::Validator seconds_check(double lo, double hi, bool lo_exclusive) {
+  return CLI::Validator(
+      [=](const std::string& v) { return numen::sim::check_seconds(v, lo, hi, lo_exclusive); },
+      "SECONDS");
+}
+
 std::string check_bus(const std::string& v, bool real_only) {
   try {
     const numen::sim::BusSpec spec = numen::sim::parse_bus_spec(v);
@@ -114,7 +122,7 @@ int main(int argc, char** argv) {
   std::string coupling;
   run->add_option("scene", scene_path, "Scene file (TOML); default: the shipped default scene");
   run->add_option("--duration", duration, "Simulated time in seconds (default: the scene's)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(seconds_check(0.0, numen::sim::kMaxRunDuration, true));
   run->add_option("--trace", trace_path, "Write a per-step CSV trace to this file");
   run->add_flag("--json", json, "Print exactly one JSON object on stdout (summary to stderr)");
   run->add_flag("--realtime", realtime, "Pace the loop to wall-clock time");
@@ -128,7 +136,7 @@ int main(int argc, char** argv) {
   run->add_option("--phase", phase,
                   "Real bus: seconds after the SYNC to read the device's answers (default: the "
                   "scene's [bus] compute_phase)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(seconds_check(0.0, 1.0, false));
   numen::platform::RealtimeSettings rt;
   run->add_option("--rt-priority", rt.fifo_priority,
                   "SCHED_FIFO priority 1-99 of the loop thread (0: leave the scheduler alone)")
@@ -159,7 +167,7 @@ int main(int argc, char** argv) {
       ->required()
       ->check([](const std::string& v) { return check_bus(v, true); });
   dev->add_option("--duration", dev_duration, "Seconds to run (default: until SIGINT/SIGTERM)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(seconds_check(0.0, numen::sim::kMaxRunDuration, true));
   dev->add_flag("--ready", dev_ready, "Print READY on stdout once the bus is open");
 
   CLI::App* info = app.add_subcommand(

@@ -40,11 +40,22 @@ std::string column_key(int column) {
 
 bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
 
+/// UTF-8 encoding of U+FEFF, the byte order mark some editors put at the start of a file.
+constexpr std::string_view kUtf8Bom = "\xEF\xBB\xBF";
+
+/// `token` in quotes, at most 40 bytes, with every byte that is not printable
+/// ASCII written as \xNN (a number never holds one: the reader must see it),
+/// and a note naming a byte order mark or a NUL byte if the token holds one.
 std::string quoted(std::string_view token) {
   constexpr std::size_t kMax = 40;
-  std::string s(token.substr(0, kMax));
+  std::string s = "'" + InputError::visible(token.substr(0, kMax), true);
   if (token.size() > kMax) s += "...";
-  return "'" + s + "'";
+  s += "'";
+  if (token.find(kUtf8Bom) != std::string_view::npos)
+    s += " (it holds a UTF-8 byte order mark, U+FEFF)";
+  else if (token.find('\0') != std::string_view::npos)
+    s += " (it holds a NUL byte)";
+  return s;
 }
 
 /// One data row, as parsed.
@@ -59,6 +70,26 @@ std::string format_number(double v) {
   os.precision(6);
   os << v;
   return os.str();
+}
+
+/// Refuses a recorded tip position (data columns `first_column` + 0..2, 0-based) farther than
+/// kMaxTargetDistance from the origin of the recording frame, located at its largest coordinate.
+void check_tip(const std::string& file, int line, int first_column, const std::array<double, 3>& tip,
+               const std::array<int, 3>& columns) {
+  const core::Vec3 p(tip[0], tip[1], tip[2]);
+  const double distance = p.stableNorm();  // no overflow for coordinates near DBL_MAX
+  if (!(distance > kMaxTargetDistance)) return;
+  Eigen::Index largest = 0;
+  p.cwiseAbs().maxCoeff(&largest);
+  const int column = first_column + static_cast<int>(largest);
+  throw InputError(file, line, columns[static_cast<std::size_t>(largest)], column_key(column),
+                   "data columns " + std::to_string(first_column + 1) + "-" +
+                       std::to_string(first_column + 3) + " of 76: tip position (" +
+                       format_number(tip[0]) + ", " + format_number(tip[1]) + ", " +
+                       format_number(tip[2]) + ") m is " + format_number(distance) +
+                       " m from the origin of the recording frame; beyond " +
+                       format_number(kMaxTargetDistance) +
+                       " m it is not instrument motion (a wrong unit or a corrupt file?)");
 }
 
 }  // namespace
@@ -123,9 +154,17 @@ JigsawsRecording load_jigsaws(const std::filesystem::path& path, JigsawsManipula
     last_row = first_row + options.max_rows - 1;
   }
 
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec))
+    throw InputError(file, 0, 0, "", "is a directory, not a JIGSAWS kinematics file");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(file, 0, 0, "", "cannot open the file");
-  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::string text;
+  try {
+    text.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  } catch (const std::ios_base::failure&) {  // a read error (EIO, ...) thrown by the filebuf
+    throw InputError(file, 0, 0, "", "cannot read the file");
+  }
   if (in.bad()) throw InputError(file, 0, 0, "", "cannot read the file");
 
   const int group_begin = static_cast<int>(manipulator) * kGroupColumns;
@@ -133,7 +172,12 @@ JigsawsRecording load_jigsaws(const std::filesystem::path& path, JigsawsManipula
   std::size_t file_rows = 0;
   int line_number = 0;
   int first_blank_line = 0;  // first blank line seen after the last data row
-  std::size_t pos = 0;
+  // A UTF-8 byte order mark at the start of the file is an encoding marker, not data: skipped
+  // (columns of line 1 are counted after it, as an editor shows them).
+  std::size_t pos = text.compare(0, kUtf8Bom.size(), kUtf8Bom) == 0 ? kUtf8Bom.size() : 0;
+  // The tip position (columns 1-3 of each group) of the row being read, and their columns.
+  std::array<double, 3> tip{};
+  std::array<int, 3> tip_columns{};
   while (pos < text.size()) {
     std::size_t end = text.find('\n', pos);
     if (end == std::string::npos) end = text.size();
@@ -183,6 +227,11 @@ JigsawsRecording load_jigsaws(const std::filesystem::path& path, JigsawsManipula
       if (ec == std::errc::result_out_of_range || !std::isfinite(value)) {
         throw InputError(file, line_number, column, column_key(count),
                          where + quoted(token) + " is not a finite number");
+      }
+      if (const int field = count % kGroupColumns; field < 3) {
+        tip[static_cast<std::size_t>(field)] = value;
+        tip_columns[static_cast<std::size_t>(field)] = column;
+        if (field == 2) check_tip(file, line_number, count - 2, tip, tip_columns);
       }
       if (taken && count >= group_begin && count < group_begin + kGroupColumns) {
         row.group[static_cast<std::size_t>(count - group_begin)] = value;

@@ -37,12 +37,15 @@ namespace numen::sim {
 namespace {
 
 /// Deepest contact (m) involving `body` among data's contacts; 0 if none.
-double deepest_contact_of(const core::Data& data, int body, int* count = nullptr) {
+/// `count` receives their number, `deepest_index` the index of the deepest (unchanged if none).
+double deepest_contact_of(const core::Data& data, int body, int* count = nullptr,
+                          int* deepest_index = nullptr) {
   double deepest = 0.0;
   int n = 0;
   for (int i = 0; i < data.num_contacts; ++i) {
     const core::Contact& c = data.contacts[static_cast<std::size_t>(i)];
     if (c.body_a == body || c.body_b == body) {
+      if (c.depth > deepest && deepest_index) *deepest_index = i;
       deepest = std::max(deepest, c.depth);
       ++n;
     }
@@ -171,7 +174,9 @@ SceneRunner::SceneRunner(const Scene& scene, std::size_t trace_capacity, const B
       loop_(scene.model, data_, *port_, device_, scene.binding,
             control_loop_settings(realtime || spec_.real(), overrun_limit)),
       period_ns_(static_cast<std::int64_t>(std::llround(scene.model.dt * 1e9))),
-      phase_ns_(static_cast<std::int64_t>(std::llround(scene.compute_phase_s * 1e9))) {
+      phase_ns_(static_cast<std::int64_t>(std::llround(scene.compute_phase_s * 1e9))),
+      startup_settle_periods_(
+          std::max<std::int64_t>(1, std::llround(kStartupSettle / scene.model.dt))) {
   trace_.reserve(trace_capacity);
   if (writer_) writer_->start();
   acc_.bus = bus.spec;
@@ -253,7 +258,8 @@ void SceneRunner::period(std::int64_t deadline_mono_ns, std::int64_t woke_mono_n
   }
   const int held = data_.attached_body;
   double tool_pen = 0.0, target_pen = 0.0;
-  int tool_contacts = 0;
+  int tool_contacts = 0, target_contacts = 0;
+  int deepest_tool_contact = -1, deepest_tool_body = -1;  // rigid contacts only
   if (held >= 0) {
     const auto h = static_cast<std::size_t>(held);
     // The tool: every body of the held body's articulation (the held body
@@ -273,10 +279,16 @@ void SceneRunner::period(std::int64_t deadline_mono_ns, std::int64_t woke_mono_n
     core::detect_contacts(model, ghost_);
     for (int b = 0; b < model.num_bodies(); ++b) {
       if (model.articulation.body_tree[static_cast<std::size_t>(b)] != tree) continue;
-      int n = 0;
-      tool_pen = std::max(tool_pen, deepest_contact_of(data_, b, &n));
+      int n = 0, m = 0, deepest = -1;
+      const double pen = deepest_contact_of(data_, b, &n, &deepest);
+      if (pen > tool_pen) {
+        deepest_tool_contact = deepest;
+        deepest_tool_body = b;
+      }
+      tool_pen = std::max(tool_pen, pen);
       tool_contacts += n;
-      target_pen = std::max(target_pen, deepest_contact_of(ghost_, b));
+      target_pen = std::max(target_pen, deepest_contact_of(ghost_, b, &m));
+      target_contacts += m;
     }
     if (model.num_nets() > 0) {
       // The tool's nets: as deformed (god-object), in their rest shape on the
@@ -287,9 +299,14 @@ void SceneRunner::period(std::int64_t deadline_mono_ns, std::int64_t woke_mono_n
       int n = 0;
       tool_pen = std::max(tool_pen, deepest_node_contact_of_tree(model, data_, tree, &n));
       tool_contacts += n;
-      target_pen = std::max(target_pen, deepest_node_contact_of_tree(model, ghost_, tree, nullptr));
+      int m = 0;
+      target_pen = std::max(target_pen, deepest_node_contact_of_tree(model, ghost_, tree, &m));
+      target_contacts += m;
     }
-    if (tool_contacts == 0) {
+    // Free space: neither the tool nor the hand touches anything. A step where the tool has
+    // come off a surface while the hand is still inside the obstacle is not free-space
+    // tracking: the error there is the god-object's constraint, not its lag.
+    if (tool_contacts == 0 && target_contacts == 0) {
       const double e = (data_.bodies[h].position - data_.target.position).norm();
       free_sq_ += e * e;
       s.tracking_error_free_max_mm = std::max(s.tracking_error_free_max_mm, e * 1e3);
@@ -299,7 +316,36 @@ void SceneRunner::period(std::int64_t deadline_mono_ns, std::int64_t woke_mono_n
   s.joint_drift_max_mm = std::max(s.joint_drift_max_mm, data_.max_joint_drift * 1e3);
   s.joint_angle_drift_max_mrad =
       std::max(s.joint_angle_drift_max_mrad, data_.max_joint_angle_drift * 1e3);
-  s.tool_penetration_max_mm = std::max(s.tool_penetration_max_mm, tool_pen * 1e3);
+  // Start-up (RunSummary): the tool was spawned where the hand is, inside an obstacle, and the
+  // contact forces push it out. It runs from the first period through the last period that
+  // lowers the tool's penetration to a new minimum before kStartupSettle without one (or a
+  // period without contact); the periods after that minimum count as the god-object's again.
+  if (k_ == 1 && tool_contacts > 0) {
+    in_startup_ = true;
+    startup_min_ = tool_pen;
+    startup_window_max_ = 0.0;
+    s.startup_steps = 1;
+    s.startup_tool_penetration_mm = tool_pen * 1e3;
+    if (deepest_tool_contact >= 0) {
+      const core::Contact& c = data_.contacts[static_cast<std::size_t>(deepest_tool_contact)];
+      startup_obstacle_ = c.obstacle;
+      startup_other_body_ = c.body_a == deepest_tool_body ? c.body_b : c.body_a;
+    }
+  } else if (in_startup_) {
+    if (tool_contacts > 0 && tool_pen < startup_min_) {  // still being pushed out
+      startup_min_ = tool_pen;
+      startup_window_max_ = 0.0;
+      s.startup_steps = k_;
+    } else {
+      startup_window_max_ = std::max(startup_window_max_, tool_pen);
+      if (tool_contacts == 0 || k_ - s.startup_steps >= startup_settle_periods_) {
+        in_startup_ = false;
+        s.tool_penetration_max_mm = std::max(s.tool_penetration_max_mm, startup_window_max_ * 1e3);
+      }
+    }
+  }
+  if (!in_startup_)
+    s.tool_penetration_max_mm = std::max(s.tool_penetration_max_mm, tool_pen * 1e3);
   s.target_penetration_max_mm = std::max(s.target_penetration_max_mm, target_pen * 1e3);
   s.any_penetration_max_mm = std::max(s.any_penetration_max_mm, data_.max_penetration * 1e3);
   s.feedback_force_max_n = std::max(s.feedback_force_max_n, data_.feedback_wrench.force.norm());
@@ -359,6 +405,24 @@ RunSummary SceneRunner::summary() const {
   s.solver_iterations_mean =
       k_ > 0 ? static_cast<double>(solver_iterations_sum_) / static_cast<double>(k_) : 0.0;
   s.tracking_error_free_rms_mm = s.free_steps ? std::sqrt(free_sq_ / static_cast<double>(s.free_steps)) * 1e3 : 0.0;
+  // A run that ends inside the start-up: the periods after its last minimum are the god-object's.
+  if (in_startup_)
+    s.tool_penetration_max_mm = std::max(s.tool_penetration_max_mm, startup_window_max_ * 1e3);
+  if (s.startup_steps > 0) {
+    const core::Model& model = scene_->model;
+    std::string what = "an obstacle";
+    if (startup_obstacle_ >= 0)
+      what = "obstacle '" + model.obstacles[static_cast<std::size_t>(startup_obstacle_)].name + "'";
+    else if (startup_other_body_ >= 0)
+      what = "body '" + model.bodies[static_cast<std::size_t>(startup_other_body_)].name + "'";
+    std::ostringstream os;
+    os << std::fixed << std::setprecision(1) << "the tool started inside " << what << ", "
+       << s.startup_tool_penetration_mm << " mm deep (the god-object is spawned where the hand "
+       << "is): the " << s.startup_steps << " start-up steps (" << std::setprecision(3)
+       << static_cast<double>(s.startup_steps) * model.dt
+       << " s) that pushed it out are reported apart, not in the god-object penetration max";
+    s.warnings.push_back(os.str());
+  }
   s.rejected_samples = static_cast<std::int64_t>(device_.counters().values_rejected);
   s.contact_overflow = data_.contact_overflow_steps;
   s.nonfinite_steps = data_.nonfinite_steps;
@@ -563,10 +627,15 @@ std::string format_summary(const RunSummary& s) {
   os << "  step time us: median " << s.step_time_us.median << ", p99 " << s.step_time_us.p99
      << ", p99.9 " << s.step_time_us.p999 << ", max " << s.step_time_us.max << "\n";
   os << "  penetration max: target (the hand) " << s.target_penetration_max_mm
-     << " mm, god-object " << s.tool_penetration_max_mm << " mm\n";
+     << " mm, god-object " << s.tool_penetration_max_mm << " mm";
+  if (s.startup_steps > 0)
+    os << " after a start-up of " << s.startup_steps << " steps from "
+       << s.startup_tool_penetration_mm << " mm (the tool started inside)";
+  os << "\n";
   if (!s.admittance.enabled)
-    os << "  tracking error in free space: rms " << s.tracking_error_free_rms_mm << " mm, max "
-     << s.tracking_error_free_max_mm << " mm over " << s.free_steps << " steps\n";
+    os << "  tracking error in free space (tool and hand out of contact): rms "
+       << s.tracking_error_free_rms_mm << " mm, max " << s.tracking_error_free_max_mm
+       << " mm over " << s.free_steps << " steps\n";
   if (s.admittance.enabled) {
     const AdmittanceSummary& a = s.admittance;
     os << "  admittance: measured force max " << a.measured_force_max_n << " N (torque "
@@ -679,6 +748,7 @@ std::string format_summary_json(const RunSummary& s) {
   j["dt_s"] = s.dt_s;
   j["sim_time_s"] = s.sim_time_s;
   j["wall_time_s"] = s.wall_time_s;
+  j["trocar_note"] = s.trocar_note;
   j["step_time_us"] = {{"median", s.step_time_us.median},
                        {"p99", s.step_time_us.p99},
                        {"p999", s.step_time_us.p999},
@@ -686,6 +756,8 @@ std::string format_summary_json(const RunSummary& s) {
                        {"mean", s.step_time_us.mean}};
   j["target_penetration_max_mm"] = s.target_penetration_max_mm;
   j["tool_penetration_max_mm"] = s.tool_penetration_max_mm;
+  j["startup_tool_penetration_mm"] = s.startup_tool_penetration_mm;
+  j["startup_steps"] = s.startup_steps;
   j["any_penetration_max_mm"] = s.any_penetration_max_mm;
   j["tracking_error_free_rms_mm"] = s.tracking_error_free_rms_mm;
   j["tracking_error_free_max_mm"] = s.tracking_error_free_max_mm;
@@ -766,6 +838,7 @@ std::string format_summary_json(const RunSummary& s) {
   j["drives_disabled"] = s.drives_disabled;
   j["realtime_overruns"] = s.realtime_overruns;
   j["realtime_missed_periods"] = s.realtime_missed_periods;
+  j["overrun_limit"] = s.overrun_limit;
   j["wakeup_latency_us"] = {{"median", s.wakeup_latency_us.median},
                             {"p99", s.wakeup_latency_us.p99},
                             {"max", s.wakeup_latency_us.max}};
@@ -787,6 +860,9 @@ std::string format_summary_json(const RunSummary& s) {
   j["emcy_faults"] = s.emcy_faults;
   j["heartbeat_losses"] = s.heartbeat_losses;
   j["zero_torque_periods"] = s.zero_torque_periods;
+  j["rearm_requests"] = s.rearm_requests;
+  j["rearms_accepted"] = s.rearms_accepted;
+  j["rearm_first_period"] = s.rearm_first_period;
   j["drive_states"] = s.drive_states;
   j["warnings"] = s.warnings;
   if (s.admittance.enabled) {
@@ -802,6 +878,8 @@ std::string format_summary_json(const RunSummary& s) {
                        {"sensor_frames", a.sensor_frames},
                        {"sensor_rejected_periods", a.sensor_rejected_periods},
                        {"csp_rpdos", a.csp_rpdos},
+                       {"setpoints_clamped", a.setpoints_clamped},
+                       {"setpoints_rate_limited", a.setpoints_rate_limited},
                        {"hold_periods", a.hold_periods}};
   }
   j["nan_detected"] = s.nan_detected;

@@ -130,6 +130,8 @@ Trajectory parse_trajectory(const TomlTable& root, double dt, const std::filesys
     if (file.is_relative()) file = scene_dir / file;
     if (!std::filesystem::exists(file))
       t->fail("file", "trajectory file not found: " + file.string());
+    if (std::filesystem::is_directory(file))
+      t->fail("file", "is a directory, not a JIGSAWS kinematics file: " + file.string());
     JigsawsManipulator arm;
     try {
       arm = parse_jigsaws_manipulator(t->string_or("manipulator", "slave_right"), t->key_path("manipulator"));
@@ -140,12 +142,22 @@ Trajectory parse_trajectory(const TomlTable& root, double dt, const std::filesys
     if (t->has("start_time")) opt.start_time = t->number_in("start_time", 0.0, kInf, std::nullopt);
     if (t->has("end_time")) opt.end_time = t->number_in("end_time", 0.0, kInf, std::nullopt);
     recorded = load_jigsaws(file, arm, opt).trajectory;  // errors name the data file and line
+    if (recorded.size() < 2) {  // no motion and no duration: the run would have no step
+      const std::string why = " holds one row of " + file.filename().string() +
+                              "; a trajectory needs at least two (1/30 s)";
+      if (t->has("end_time")) t->fail("end_time", "the window from start_time to end_time" + why);
+      t->fail("file", "the recording" + why);
+    }
   } else {
     t->allow_only({"source", "start", "segment", "placement"});
     TrajectorySample start;
     if (auto s = t->table("start")) {
       s->allow_only({"position", "orientation", "jaw"});
       start.pose.position = s->vec3_or("position", Vec3::Zero());
+      if (start.pose.position.stableNorm() > kMaxTargetDistance)
+        s->fail("position", "is " + format_input_number(start.pose.position.stableNorm()) +
+                                " m from the world origin; a target beyond " +
+                                format_input_number(kMaxTargetDistance) + " m is not instrument motion (a wrong unit?)");
       start.pose.orientation = s->quaternion_or("orientation", Quat::Identity());
       start.jaw = s->number_or("jaw", 0.0);
     }
@@ -606,7 +618,14 @@ Scene load_scene(const std::string& path, const SceneOverrides& overrides) {
   std::stable_sort(scene.events.begin(), scene.events.end(),
                    [](const AttachEvent& a, const AttachEvent& b) { return a.time_s < b.time_s; });
 
-  scene.duration_s = root.number_in("duration", 1e-9, kInf, scene.trajectory.duration());
+  scene.duration_s = root.number_in("duration", 1e-9, kMaxRunDuration, scene.trajectory.duration());
+  if (std::llround(scene.duration_s / scene.model.dt) < 1) {  // a run of this scene has no step
+    const std::string why = format_input_number(scene.duration_s) +
+                            " s is shorter than one period (dt = " +
+                            format_input_number(scene.model.dt) + " s): a run would have no step";
+    if (root.has("duration")) root.fail("duration", why);
+    root.fail("trajectory", "the trajectory lasts " + why);
+  }
   const std::string err = core::finalize_model(scene.model);
   if (!err.empty()) {
     // Errors of the joint tree name the joint: point at its table.

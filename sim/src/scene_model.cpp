@@ -300,6 +300,8 @@ void parse_obstacles(const TomlTable& root, core::Model& m, std::vector<std::str
   for (const TomlTable& t : root.tables("obstacle")) {
     core::Obstacle o;
     o.name = t.string("name");
+    for (const auto& other : m.obstacles)
+      if (other.name == o.name) t.fail("name", "obstacle \"" + o.name + "\" declared twice");
     const std::string type =
         t.choice("type", {"plane", "box", "sphere", "capsule", "sphere-set"}, std::nullopt);
     o.material = material_index(t, "material", m);

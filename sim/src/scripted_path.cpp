@@ -25,6 +25,12 @@ std::string number(double v) {
   return os.str();
 }
 
+/// Message for a position `distance` m from the origin, beyond kMaxTargetDistance.
+std::string too_far(double distance) {
+  return "is " + number(distance) + " m from the world origin; a target beyond " +
+         number(kMaxTargetDistance) + " m is not instrument motion (a wrong unit?)";
+}
+
 /// Builds "<prefix>[i].<field>" keys and throws InputError.
 class Checker {
  public:
@@ -39,6 +45,11 @@ class Checker {
   }
   void finite(const std::string& field, const core::Vec3& v) const {
     if (!v.allFinite()) fail(field, "must be finite");
+  }
+  /// A position (m, world): finite and within kMaxTargetDistance of the origin.
+  void position(const std::string& field, const core::Vec3& v) const {
+    finite(field, v);
+    if (v.stableNorm() > kMaxTargetDistance) fail(field, too_far(v.stableNorm()));
   }
   void positive(const std::string& field, double v, const char* unit) const {
     if (!std::isfinite(v) || v <= 0.0) {
@@ -66,6 +77,8 @@ ScriptedPath::ScriptedPath(std::vector<PathSegment> segments, const TrajectorySa
   if (!start.pose.position.allFinite() || !std::isfinite(start.jaw)) {
     throw InputError("", 0, 0, key_prefix_ + ".start", "start pose and jaw must be finite");
   }
+  if (start.pose.position.stableNorm() > kMaxTargetDistance)
+    throw InputError("", 0, 0, key_prefix_ + ".start", "start " + too_far(start.pose.position.stableNorm()));
   TrajectorySample previous = start;
   const double start_norm = start.pose.orientation.norm();
   if (!std::isfinite(start_norm) || start_norm < 1e-9) {
@@ -92,8 +105,8 @@ ScriptedPath::ScriptedPath(std::vector<PathSegment> segments, const TrajectorySa
       check.positive("duration", line->duration, "s");
       s.duration = line->duration;
       s.a = line->from.value_or(previous.pose.position);
-      check.finite("from", s.a);
-      check.finite("to", line->to);
+      check.position("from", s.a);
+      check.position("to", line->to);
       s.b = line->to;
     } else if (const auto* circle = std::get_if<CircleSegment>(&in.shape)) {
       s.kind = Kind::circle;
@@ -114,25 +127,29 @@ ScriptedPath::ScriptedPath(std::vector<PathSegment> segments, const TrajectorySa
       s.phase0 = circle->start_phase;
       const core::Vec3 radial = std::cos(s.phase0) * s.e1 + std::sin(s.phase0) * s.e2;
       if (circle->centre) {
-        check.finite("centre", *circle->centre);
+        check.position("centre", *circle->centre);
         s.centre = *circle->centre;
       } else {
         s.centre = previous.pose.position - s.radius * radial;
       }
+      if (s.centre.stableNorm() + s.radius > kMaxTargetDistance)
+        check.fail("radius", "takes the circle up to " + number(s.centre.stableNorm() + s.radius) +
+                                 " m from the world origin; a target beyond " +
+                                 number(kMaxTargetDistance) + " m is not instrument motion");
     } else if (const auto* hold = std::get_if<HoldSegment>(&in.shape)) {
       s.kind = Kind::hold;
       check.positive("duration", hold->duration, "s");
       s.duration = hold->duration;
       s.a = hold->position.value_or(previous.pose.position);
-      check.finite("position", s.a);
+      check.position("position", s.a);
     } else {
       const auto& step = std::get<StepSegment>(in.shape);
       s.kind = Kind::step;
       check.positive("duration", step.duration, "s");
       s.duration = step.duration;
       s.a = step.from.value_or(previous.pose.position);
-      check.finite("from", s.a);
-      check.finite("to", step.to);
+      check.position("from", s.a);
+      check.position("to", step.to);
       s.b = step.to;
       if (!std::isfinite(step.step_time) || step.step_time < 0.0 ||
           step.step_time > step.duration) {
@@ -230,6 +247,28 @@ Trajectory ScriptedPath::sample(double dt) const {
   }
   const std::size_t n = static_cast<std::size_t>(std::max(0.0, intervals)) + 1;
   return Trajectory(std::make_shared<const ScriptedPath>(*this), dt, n);
+}
+
+ScriptedPath::FarthestPoint ScriptedPath::farthest_point(const Placement& placement) const noexcept {
+  FarthestPoint far;
+  auto consider = [&](const core::Vec3& p, double t) {
+    const double d = apply(placement, p).norm();
+    if (d > far.distance || !std::isfinite(d)) far = {d, t};
+  };
+  for (const Resolved& s : segments_) {
+    if (s.kind == Kind::circle) {
+      const double swept = std::min(s.rate * s.duration, 2.0 * std::numbers::pi);
+      const int n = static_cast<int>(std::ceil(swept / (std::numbers::pi / 180.0)));
+      for (int k = 0; k <= n; ++k) {
+        const double tau = std::min(s.duration, (swept * k / std::max(n, 1)) / s.rate);
+        consider(evaluate_segment(s, tau).pose.position, s.t0 + tau);
+      }
+    } else {
+      consider(s.a, s.t0);
+      if (s.kind != Kind::hold) consider(s.b, s.t0 + s.duration);
+    }
+  }
+  return far;
 }
 
 std::size_t ScriptedPath::memory_bytes() const noexcept {

@@ -3,6 +3,8 @@
 #include "toml_reader.hpp"
 
 #include <cmath>
+#include <filesystem>
+#include <system_error>
 #include <sstream>
 
 namespace numen::sim {
@@ -197,12 +199,18 @@ void TomlTable::allow_only(std::initializer_list<std::string_view> keys) const {
 }
 
 toml::table parse_toml_file(const std::string& path) {
+  std::error_code ec;
+  // toml++ reads a directory as an empty document: the error would be a missing [trajectory].
+  if (std::filesystem::is_directory(path, ec))
+    throw InputError(path, 0, 0, "", "is a directory, not a scene file");
   try {
     return toml::parse_file(path);
   } catch (const toml::parse_error& e) {
-    const std::string desc(e.description());
+    std::string desc(e.description());
     if (desc.find("File could not be opened") != std::string::npos)
       throw InputError(path, 0, 0, "", "cannot open the scene file");
+    // A byte order mark is only allowed at the start; elsewhere toml++ shows it as '\uFEFF'.
+    if (desc.find("\\uFEFF") != std::string::npos) desc += " (a UTF-8 byte order mark)";
     throw InputError(path, static_cast<int>(e.source().begin.line),
                      static_cast<int>(e.source().begin.column), "", "TOML syntax: " + desc);
   }

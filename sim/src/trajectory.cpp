@@ -35,7 +35,7 @@ core::Quat slerp_shortest(const core::Quat& q0, const core::Quat& q1, double s) 
 
 Trajectory::Trajectory(double period, std::vector<core::Pose> poses, std::vector<double> jaw) {
   if (!std::isfinite(period) || period <= 0.0) {
-    fail("trajectory.period", "must be finite and > 0 s, got " + std::to_string(period));
+    fail("trajectory.period", "must be finite and > 0 s, got " + format_input_number(period));
   }
   if (poses.empty()) fail("trajectory.samples", "a trajectory needs at least one sample");
   if (!jaw.empty() && jaw.size() != poses.size()) {
@@ -51,6 +51,13 @@ Trajectory::Trajectory(double period, std::vector<core::Pose> poses, std::vector
     s.time = static_cast<double>(i) * period;
     s.pose.position = poses[i].position;
     if (!finite(s.pose.position)) fail(where + ".position", "is not finite");
+    if (s.pose.position.stableNorm() > kMaxTargetDistance) {
+      fail(where + ".position", "the target at " + format_input_number(s.time) + " s is " +
+                                    format_input_number(s.pose.position.stableNorm()) +
+                                    " m from the origin; a target beyond " +
+                                    format_input_number(kMaxTargetDistance) +
+                                    " m is not instrument motion (a wrong unit or a corrupt input?)");
+    }
     core::Quat q = poses[i].orientation;
     const double norm = q.norm();
     if (!std::isfinite(norm) || norm < 1e-9) {
@@ -153,7 +160,7 @@ core::Vec3 apply(const Placement& placement, const core::Vec3& p) noexcept {
 
 Trajectory transformed(const Trajectory& trajectory, const Placement& placement) {
   if (!std::isfinite(placement.scale) || placement.scale <= 0.0) {
-    fail("placement.scale", "must be finite and > 0, got " + std::to_string(placement.scale));
+    fail("placement.scale", "must be finite and > 0, got " + format_input_number(placement.scale));
   }
   const double norm = placement.pose.orientation.norm();
   if (!std::isfinite(norm) || norm < 1e-9) {
@@ -172,6 +179,14 @@ Trajectory transformed(const Trajectory& trajectory, const Placement& placement)
     moved.placement_.pose.position = apply(placement, inner.pose.position);
     moved.placement_.pose.orientation = (r * inner.pose.orientation.normalized()).normalized();
     moved.placement_.scale = placement.scale * inner.scale;
+    const ScriptedPath::FarthestPoint far = moved.path_->farthest_point(moved.placement_);
+    if (!(far.distance <= kMaxTargetDistance)) {
+      fail("trajectory.placement",
+           "the target at " + format_input_number(far.time) + " s is " +
+               format_input_number(far.distance) + " m from the origin; a target beyond " +
+               format_input_number(kMaxTargetDistance) +
+               " m is not instrument motion (a wrong unit or a corrupt input?)");
+    }
     return moved;
   }
   std::vector<core::Pose> poses(trajectory.size());

@@ -9,6 +9,7 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -446,3 +447,76 @@ TEST(Jigsaws, ManipulatorNames) {
 }
 
 }  // namespace
+
+// ---------------------------------------------------------------- plausibility and messages (issue 17)
+
+TEST(JigsawsMalformed, ATipFartherThan10mIsLocatedAtItsColumn) {
+  for (const char* far : {"1000", "1e100", "1e308", "-1.79e308"}) {
+    SCOPED_TRACE(far);
+    auto t = tokens(make_row(1, identity_rotations()));
+    t[58] = far;  // data column 59: slave right tip y
+    const TempFile f("far.txt", valid_lines(2) + join(t) + valid_lines(1));
+    const InputError e = expect_error(f.path(), 3);
+    EXPECT_EQ(e.column(), column_of(t, 58));
+    EXPECT_EQ(e.key(), "slave_right.tip_y");
+    const std::string what = e.what();
+    EXPECT_NE(what.find("data columns 58-60 of 76: tip position"), std::string::npos) << what;
+    EXPECT_NE(what.find("beyond 10 m"), std::string::npos) << what;
+    EXPECT_LT(what.size(), 400u) << "no number printed in full: " << what;
+  }
+  // An arm that is not taken is checked too: a corrupt row is a corrupt file.
+  auto t = tokens(make_row(0, identity_rotations()));
+  t[0] = "-20";  // master left tip x
+  const TempFile g("far_master.txt", join(t) + valid_lines(1));
+  EXPECT_EQ(expect_error(g.path(), 1).key(), "master_left.tip_x");
+  // 10 m exactly is still accepted (the limit is inclusive), 9.9 m anywhere too.
+  t[0] = "9.9";
+  const TempFile h("near.txt", join(t) + valid_lines(1));
+  EXPECT_EQ(load_jigsaws(h.path(), JigsawsManipulator::master_left).trajectory.size(), 2u);
+}
+
+TEST(JigsawsMalformed, ADirectoryIsNamedAsSuchWithoutLibraryInternals) {
+  const fs::path dir = fs::temp_directory_path() / ("numen_jigsaws_dir_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  try {
+    load_jigsaws(dir, JigsawsManipulator::slave_right);
+    ADD_FAILURE() << "no InputError";
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_EQ(e.file(), dir.string());
+    EXPECT_NE(what.find("is a directory"), std::string::npos) << what;
+    EXPECT_EQ(what.find("basic_filebuf"), std::string::npos) << what;
+  } catch (const std::exception& e) {
+    ADD_FAILURE() << "not an InputError: " << e.what();
+  }
+  fs::remove(dir);
+}
+
+TEST(JigsawsMalformed, ANulByteIsShownAndDoesNotCutTheMessage) {
+  auto t = tokens(make_row(0, identity_rotations()));
+  t[60] = std::string("0.1\0" "2", 5);  // data column 61: slave right R11
+  const TempFile f("nul.txt", join(t) + valid_lines(1));
+  const InputError e = expect_error(f.path(), 1);
+  const std::string what = e.what();
+  // what() is a C string: everything up to the end of the message must be before its NUL.
+  EXPECT_EQ(std::string(e.what(), std::strlen(e.what())), what);
+  EXPECT_EQ(what.find('\0'), std::string::npos);
+  EXPECT_NE(what.find("'0.1\\x002' (it holds a NUL byte) is not a number"), std::string::npos) << what;
+}
+
+TEST(Jigsaws, AUtf8ByteOrderMarkAtTheStartIsSkipped) {
+  const std::string text = valid_lines(3);
+  const TempFile f("bom.txt", "\xEF\xBB\xBF" + text);
+  const TempFile g("plain.txt", text);
+  const auto a = load_jigsaws(f.path(), JigsawsManipulator::slave_right).trajectory;
+  const auto b = load_jigsaws(g.path(), JigsawsManipulator::slave_right).trajectory;
+  ASSERT_EQ(a.size(), 3u);
+  EXPECT_EQ(a[0].pose.position, b[0].pose.position);
+  // Anywhere else it is named, not shown as an invisible character.
+  const TempFile h("bom_inside.txt", text + "\xEF\xBB\xBF" + text);
+  const InputError e = expect_error(h.path(), 4);
+  const std::string what = e.what();
+  EXPECT_EQ(e.column(), 1);
+  EXPECT_NE(what.find("'\\xEF\\xBB\\xBF"), std::string::npos) << what;
+  EXPECT_NE(what.find("UTF-8 byte order mark"), std::string::npos) << what;
+}

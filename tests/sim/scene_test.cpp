@@ -19,6 +19,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <numbers>
 #include <sstream>
 #include <string>
@@ -61,47 +62,9 @@ double angle_between(const Quat& a, const Quat& b) {
 
 using numen::test::TempDir;
 
-// A small valid scene (pose tracker, scripted path). Every error test below
-// changes one thing in it, so that the error can only come from that change.
-const std::string kMini = R"(name = "mini"
-dt = 0.001
-gravity = [0.0, 0.0, 0.0]
-
-[[material]]
-name = "steel"
-
-[[body]]
-name = "tool"
-mass = 0.1
-material = "steel"
-spheres = [[0.0, 0.0, 0.0, 0.01]]
-[body.coupling]
-stiffness = 100.0
-damping_ratio = 0.85
-
-[[obstacle]]
-name = "floor"
-type = "plane"
-point = [0.0, 0.0, -0.1]
-normal = [0.0, 0.0, 1.0]
-
-[device]
-kind = "pose-tracker"
-attach = "tool"
-
-[trajectory]
-source = "scripted"
-start = { position = [0.0, 0.0, 0.0] }
-
-[[trajectory.segment]]
-type = "line"
-to = [0.01, 0.0, 0.0]
-duration = 0.5
-
-[[trajectory.segment]]
-type = "hold"
-duration = 0.25
-)";
+// A small valid scene (pose tracker, scripted path; tests/support/scene_text.hpp). Every error
+// test below changes one thing in it, so that the error can only come from that change.
+const std::string& kMini = numen::test::kMiniScene;
 
 /// what() must contain the scene file's name, the line (and column), the key and `message`.
 void expect_located(const InputError& e, const std::string& file, int line, int column,
@@ -197,7 +160,8 @@ TEST(Scene, DefaultSceneLoadsWhatItsFileDescribes) {
   EXPECT_EQ(s.device.name, "laparoscopic_trainer");
   EXPECT_EQ(s.device.control_period_s, s.model.dt);
   EXPECT_EQ(s.device.axes[0].encoder_cob_id, 0x181u);
-  EXPECT_DOUBLE_EQ(s.device.axes[4].min, -1.0);
+  EXPECT_DOUBLE_EQ(s.device.axes[4].min, -std::numbers::pi);  // the jaw: one encoder turn
+  EXPECT_DOUBLE_EQ(s.device.axes[4].max, std::numbers::pi);
   EXPECT_FALSE(s.trocar_note.empty());
   EXPECT_DOUBLE_EQ(s.model.feedback.max_force, 8.0);
 
@@ -478,6 +442,32 @@ file = "no_such_recording.txt")");
   EXPECT_NE(e.message().find("no_such_recording.txt"), std::string::npos) << e.what();
 }
 
+namespace {
+
+/// A trocar-instrument scene reading the JIGSAWS file `data` (absolute path), with `extra`
+/// lines in its [trajectory].
+std::string jigsaws_scene(const std::string& data, const std::string& extra = "") {
+  std::string text = R"(name = "jig"
+[[body]]
+name = "tool"
+mass = 0.05
+spheres = [[0.0, 0.0, 0.0, 0.0025]]
+[device]
+kind = "trocar-instrument"
+attach = "tool"
+[device.trocar]
+placement = "approach"
+[trajectory]
+source = "jigsaws"
+file = ")";
+  text += data;
+  text += "\"\nmanipulator = \"slave_right\"\n";
+  text += extra;
+  return text;
+}
+
+}  // namespace
+
 TEST(SceneErrors, JigsawsTrajectoryWithAMalformedLineNamesTheDataFile) {
   TempDir dir;
   // A copy of the shipped excerpt with one token of line 7 replaced.
@@ -501,21 +491,7 @@ TEST(SceneErrors, JigsawsTrajectoryWithAMalformedLineNamesTheDataFile) {
     data << line << '\n';
   }
   const std::string data_path = dir.write("recording.txt", data.str());
-  const std::string text = R"(name = "jig"
-[[body]]
-name = "tool"
-mass = 0.05
-spheres = [[0.0, 0.0, 0.0, 0.0025]]
-[device]
-kind = "trocar-instrument"
-attach = "tool"
-[device.trocar]
-placement = "approach"
-[trajectory]
-source = "jigsaws"
-file = ")" + data_path + R"("
-manipulator = "slave_right"
-)";
+  const std::string text = jigsaws_scene(data_path);
   const std::string scene_path = dir.write("jig.toml", text);
   try {
     (void)load_scene(scene_path);
@@ -956,4 +932,156 @@ TEST(Scene, APartThisBuildLeftOutIsRefusedByName) {
               std::string::npos)
         << nets;
   }
+}
+
+// ---------------------------------------------------------------- input plausibility (issue 17)
+
+namespace {
+
+/// The first `rows` lines of the shipped excerpt, with `edit` applied to line `line` (1-based).
+std::string excerpt_lines(int rows, int line = 0,
+                          const std::function<void(std::string&)>& edit = nullptr) {
+  std::ifstream in(excerpt_path());
+  std::string out, l;
+  for (int n = 1; n <= rows && std::getline(in, l); ++n) {
+    if (n == line && edit) edit(l);
+    out += l + "\n";
+  }
+  return out;
+}
+
+}  // namespace
+
+TEST(SceneErrors, ObstacleNameDeclaredTwice) {
+  TempDir dir;
+  const std::string text = replace(kMini, "[device]", R"([[obstacle]]
+name = "floor"
+type = "sphere"
+radius = 0.01
+position = [0.0, 0.5, 0.0]
+
+[device])");
+  const InputError e = load_error(dir, text);
+  expect_located(e, (dir.path() / "bad.toml").string(), line_of(text, "name = \"floor\"", 2),
+                 8 /* the value of name = "floor" */, "obstacle[1].name",
+                 "obstacle \"floor\" declared twice");
+}
+
+TEST(SceneErrors, ScriptedTargetsFartherThan10mAreLocated) {
+  TempDir dir;
+  {  // The start of the path.
+    const std::string text = replace(kMini, "start = { position = [0.0, 0.0, 0.0] }",
+                                     "start = { position = [1000.0, 0.0, 0.0] }");
+    const InputError e = load_error(dir, text);
+    expect_located(e, (dir.path() / "bad.toml").string(), line_of(text, "start = {"),
+                   column_of(text, "start = {", "[1000"), "trajectory.start.position", "1000 m");
+    EXPECT_NE(e.message().find("beyond 10 m"), std::string::npos) << e.what();
+  }
+  {  // A segment's end point.
+    const std::string text = replace(kMini, "to = [0.01, 0.0, 0.0]", "to = [0.01, 1e100, 0.0]");
+    const InputError e = load_error(dir, text);
+    expect_located(e, (dir.path() / "bad.toml").string(), line_of(text, "to = [0.01, 1e100"),
+                   column_of(text, "to = [0.01, 1e100", "["), "trajectory.segment[0].to", "1e+100 m");
+  }
+  {  // A placement that scales the path out of the room.
+    const std::string text = replace(kMini, "start = { position = [0.0, 0.0, 0.0] }",
+                                     "start = { position = [0.5, 0.0, 0.0] }\nplacement = { scale = 100.0 }");
+    const InputError e = load_error(dir, text);
+    EXPECT_EQ(e.key(), "trajectory.placement") << e.what();
+    EXPECT_EQ(e.line(), line_of(text, "placement = {")) << e.what();
+    EXPECT_NE(e.message().find("50 m from the origin"), std::string::npos) << e.what();
+  }
+}
+
+TEST(SceneErrors, AJigsawsTipAt1e308IsBlamedOnTheDataFileNotOnTheDevice) {
+  TempDir dir;
+  int column = 0;
+  const std::string data = dir.write("tip.txt", excerpt_lines(40, 12, [&](std::string& l) {
+    // Data column 58 (slave right tip x) is the 58th token.
+    std::size_t c = 0;
+    for (int tok = 0; tok < 58; ++tok) {
+      c = l.find_first_not_of(" \t", c);
+      if (tok < 57) c = l.find_first_of(" \t", c);
+    }
+    l.replace(c, l.find_first_of(" \t", c) - c, "1e308");
+    column = static_cast<int>(c) + 1;
+  }));
+  const InputError e = load_error(dir, jigsaws_scene(data));
+  EXPECT_EQ(e.file(), data);
+  EXPECT_EQ(e.line(), 12);
+  EXPECT_EQ(e.column(), column);
+  EXPECT_EQ(e.key(), "slave_right.tip_x");
+  EXPECT_NE(e.message().find("beyond 10 m"), std::string::npos) << e.what();
+}
+
+TEST(SceneErrors, AJigsawsTrajectoryOfOneRowIsRefused) {
+  TempDir dir;
+  {  // start_time == end_time: one row.
+    const std::string text =
+        jigsaws_scene(excerpt_path(), "start_time = 2.0\nend_time = 2.0\n");
+    const InputError e = load_error(dir, text);
+    expect_located(e, (dir.path() / "bad.toml").string(), line_of(text, "end_time"),
+                   column_of(text, "end_time", "2.0"), "trajectory.end_time", "holds one row");
+    EXPECT_NE(e.message().find("at least two"), std::string::npos) << e.what();
+  }
+  {  // A file of one row.
+    const std::string data = dir.write("one.txt", excerpt_lines(1));
+    const std::string text = jigsaws_scene(data);
+    const InputError e = load_error(dir, text);
+    expect_located(e, (dir.path() / "bad.toml").string(), line_of(text, "file = "),
+                   column_of(text, "file = ", "\""), "trajectory.file", "holds one row of one.txt");
+  }
+  {  // Two rows (1/30 s) are enough.
+    const std::string data = dir.write("two.txt", excerpt_lines(2));
+    const Scene s = load_scene(dir.write("two.toml", jigsaws_scene(data)));
+    EXPECT_NEAR(s.duration_s, 1.0 / 30.0, 1e-3);
+  }
+}
+
+TEST(SceneErrors, ATrajectoryFileThatIsADirectoryIsLocated) {
+  TempDir dir;
+  fs::create_directories(dir.path() / "recording");
+  const std::string text = jigsaws_scene((dir.path() / "recording").string());
+  const InputError e = load_error(dir, text);
+  expect_located(e, (dir.path() / "bad.toml").string(), line_of(text, "file = "),
+                 column_of(text, "file = ", "\""), "trajectory.file", "is a directory");
+  EXPECT_EQ(std::string(e.what()).find("basic_filebuf"), std::string::npos) << e.what();
+}
+
+TEST(SceneErrors, ADurationShorterThanOnePeriodIsRefused) {
+  TempDir dir;
+  const std::string text = replace(kMini, "dt = 0.001", "dt = 0.001\nduration = 0.0001");
+  const InputError e = load_error(dir, text);
+  expect_located(e, (dir.path() / "bad.toml").string(), line_of(text, "duration = 0.0001"),
+                 column_of(text, "duration = 0.0001", "0.0001"), "duration", "no step");
+  const std::string huge = replace(kMini, "dt = 0.001", "dt = 0.001\nduration = 1e300");
+  const InputError h = load_error(dir, huge);
+  EXPECT_EQ(h.key(), "duration");
+  EXPECT_LT(std::string(h.what()).size(), 300u) << h.what();
+}
+
+TEST(SceneErrors, ANulByteInAMessageDoesNotCutIt) {
+  const InputError e("scene.toml", 3, 7, "body[0].name", std::string("bad \0byte here", 14));
+  const std::string what(e.what());  // up to the first NUL, as a terminal prints it
+  EXPECT_EQ(what, "scene.toml:3:7: body[0].name: bad \\x00byte here");
+}
+
+TEST(SceneErrors, ASceneFileThatIsADirectoryIsNamedAsSuch) {
+  TempDir dir;
+  try {
+    (void)load_scene(dir.path().string());
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.file(), dir.path().string());
+    EXPECT_NE(e.message().find("is a directory"), std::string::npos) << e.what();
+  }
+}
+
+TEST(SceneErrors, AByteOrderMarkStartsASceneButIsNamedElsewhere) {
+  TempDir dir;
+  EXPECT_EQ(load_scene(dir.write("bom.toml", "\xEF\xBB\xBF" + kMini)).name, "mini");
+  const std::string text = replace(kMini, "dt = 0.001", "\xEF\xBB\xBF" "dt = 0.001");
+  const InputError e = load_error(dir, text);
+  EXPECT_EQ(e.line(), line_of(text, "dt = 0.001")) << e.what();
+  EXPECT_NE(e.message().find("byte order mark"), std::string::npos) << e.what();
 }

@@ -18,6 +18,51 @@
 
 namespace numen::test {
 
+/// A small valid scene: a 0.1 kg ball (one 10 mm sphere, coupling 100 N/m, damping ratio 0.85)
+/// held by a pose tracker over a floor plane at z = -0.1 m, on a scripted path (10 mm line in
+/// 0.5 s, hold 0.25 s). The scene-file tests change one thing in it; the run tests replace its
+/// [trajectory] (everything from "[trajectory]" on).
+inline const std::string kMiniScene = R"(name = "mini"
+dt = 0.001
+gravity = [0.0, 0.0, 0.0]
+
+[[material]]
+name = "steel"
+
+[[body]]
+name = "tool"
+mass = 0.1
+material = "steel"
+spheres = [[0.0, 0.0, 0.0, 0.01]]
+[body.coupling]
+stiffness = 100.0
+damping_ratio = 0.85
+
+[[obstacle]]
+name = "floor"
+type = "plane"
+point = [0.0, 0.0, -0.1]
+normal = [0.0, 0.0, 1.0]
+
+[device]
+kind = "pose-tracker"
+attach = "tool"
+
+[trajectory]
+source = "scripted"
+start = { position = [0.0, 0.0, 0.0] }
+
+[[trajectory.segment]]
+type = "line"
+to = [0.01, 0.0, 0.0]
+duration = 0.5
+
+[[trajectory.segment]]
+type = "hold"
+duration = 0.25
+)";
+
+
 /// 1-based line of the `nth` (1-based) line of `text` containing `needle` (0: none).
 inline int line_of(const std::string& text, const std::string& needle, int nth = 1) {
   std::istringstream in(text);

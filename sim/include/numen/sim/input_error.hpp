@@ -3,11 +3,15 @@
 /// Load-time error of a user input file (scene, trajectory). Thrown only while
 /// loading, never in the real-time path; what() reads
 ///   "<file>:<line>:<column>: <key>: <message>"
-/// with the parts that are unknown left out (and their separators).
+/// with the parts that are unknown left out (and their separators). Control bytes (a NUL, a carriage
+/// return, an escape ...) in any part are written as \xNN in what(), so that a
+/// stray byte of a user's file can neither cut the message nor garble the terminal.
 
+#include <cstdio>
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 
 namespace numen::sim {
 
@@ -27,6 +31,26 @@ class InputError : public std::runtime_error {
   const std::string& key() const noexcept { return key_; }
   const std::string& message() const noexcept { return message_; }
 
+  /// `text` with every byte below 0x20 and 0x7F (DEL) — and with `non_ascii`, every byte
+  /// above 0x7F too — written as \xNN. what() is built with it; also for quoting user
+  /// text in messages (a token that should be a number: `non_ascii` shows a stray BOM).
+  static std::string visible(std::string_view text, bool non_ascii = false) {
+    static constexpr char kHex[] = "0123456789ABCDEF";
+    std::string out;
+    out.reserve(text.size());
+    for (const char ch : text) {
+      const auto b = static_cast<unsigned char>(ch);
+      if (b >= 0x20 && b != 0x7F && !(non_ascii && b > 0x7F)) {
+        out += ch;
+      } else {
+        out += "\\x";
+        out += kHex[b >> 4];
+        out += kHex[b & 0xF];
+      }
+    }
+    return out;
+  }
+
  private:
   static std::string format(const std::string& file, int line, int column,
                             const std::string& key, const std::string& message) {
@@ -37,7 +61,7 @@ class InputError : public std::runtime_error {
     if (!file.empty() || line > 0) os << ": ";
     if (!key.empty()) os << key << ": ";
     os << message;
-    return os.str();
+    return visible(os.str());
   }
   std::string file_;
   int line_;
@@ -45,5 +69,13 @@ class InputError : public std::runtime_error {
   std::string key_;
   std::string message_;
 };
+
+/// `v` as an input message quotes it: 6 significant digits (printf %g), e.g.
+/// 1000, 1e+308, 0.0333333, -1, nan — never the 309 digits of std::to_string(DBL_MAX).
+inline std::string format_input_number(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%g", v);
+  return buf;
+}
 
 }  // namespace numen::sim

@@ -96,16 +96,21 @@ core::Mat3 nearest_rotation(const core::Mat3& m) noexcept;
 
 /// Reads the samples of `manipulator` from the JIGSAWS kinematics file `path`.
 /// Every row of the file is checked (not only those taken): it must hold
-/// exactly 76 finite numbers; blank lines are allowed only at the end of the
-/// file; a rotation matrix must be within 0.1 of a rotation (singular values)
-/// with det > 0. Each rotation is replaced by nearest_rotation() and converted
-/// to a quaternion; quaternion signs are made continuous.
+/// exactly 76 finite numbers; the tip position of every arm must lie within
+/// kMaxTargetDistance (10 m) of the recording frame's origin; blank lines are
+/// allowed only at the end of the file; a rotation matrix must be within 0.1
+/// of a rotation (singular values) with det > 0. A UTF-8 byte order mark at
+/// the start of the file is skipped (columns of line 1 count after it). Each
+/// rotation is replaced by nearest_rotation() and converted to a quaternion;
+/// quaternion signs are made continuous. Tokens quoted in messages show every
+/// byte that is not printable ASCII as \xNN and name a BOM or a NUL byte.
 /// Throws InputError with the file, the 1-based line and character column, the
 /// key "<manipulator>.<field>" of the bad column (e.g. "slave_right.R21") and
 /// a message naming the 1-based data column and what is wrong — for a missing
-/// or unreadable file, an empty file, a wrong column count, a token that is
-/// not a number or not finite, a matrix far from a rotation, and options out
-/// of range (key "options.<field>").
+/// or unreadable file, a directory, an empty file, a wrong column count, a
+/// token that is not a number or not finite, a tip beyond 10 m (key
+/// "<manipulator>.tip_<x|y|z>" of its largest coordinate), a matrix far from
+/// a rotation, and options out of range (key "options.<field>").
 JigsawsRecording load_jigsaws(const std::filesystem::path& path, JigsawsManipulator manipulator,
                               const JigsawsOptions& options = {});
 

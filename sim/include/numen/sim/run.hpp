@@ -28,6 +28,10 @@
 
 namespace numen::sim {
 
+/// Start-up of a run whose tool starts inside an obstacle (RunSummary): it ends when the
+/// tool's penetration has set no new minimum for this long (s).
+inline constexpr double kStartupSettle = 0.02;
+
 /// The bus the controller talks to in a run (`numen run --bus`, `--record`).
 struct BusChoice {
   /// "sim" (default): the scene's SimBus with the simulated instrument on its
@@ -134,6 +138,16 @@ struct AdmittanceSummary {
 /// obstacles and other bodies; "target" is the same bodies placed at the
 /// device's target poses (where the hand is) with their nets in their rest
 /// shape, "tool" the god-object itself (its nets as deformed).
+///
+/// Start-up: the god-object starts where the hand is. When the hand starts
+/// inside an obstacle, so does the tool, and the contact forces first push it
+/// out. The start-up runs from the first period through the last period that
+/// lowers the tool's penetration to a new minimum before kStartupSettle
+/// passes without a new minimum (or before a period without contact): the
+/// push-out, whose pauses last a few periods (the default instrument spawned
+/// 21 mm into the tissue: 90 periods, pauses of up to 6). Its depth is
+/// startup_tool_penetration_mm (with a warning naming the obstacle), and
+/// tool_penetration_max_mm covers every period after it.
 struct RunSummary {
   std::string scene;
   std::string coupling;
@@ -144,10 +158,16 @@ struct RunSummary {
   double wall_time_s = 0.0;
   DurationSummary step_time_us;            ///< Wall time of core::step per period.
   double target_penetration_max_mm = 0.0;
-  double tool_penetration_max_mm = 0.0;
+  double tool_penetration_max_mm = 0.0;    ///< God-object, after the start-up (see above).
+  /// The god-object's penetration at the first period when it starts inside an obstacle (mm;
+  /// the deepest of the start-up); 0 when it starts free.
+  double startup_tool_penetration_mm = 0.0;
+  std::int64_t startup_steps = 0;          ///< Periods of the start-up (0: the tool started free).
   double any_penetration_max_mm = 0.0;     ///< Deepest contact of any body this run.
-  double tracking_error_free_rms_mm = 0.0; ///< |x_tool − x_target| RMS over steps without tool contact.
-  double tracking_error_free_max_mm = 0.0;
+  /// |x_tool − x_target| (held body's origin) RMS over the free-space steps: steps where
+  /// neither the tool nor the target (the hand) touches anything.
+  double tracking_error_free_rms_mm = 0.0;
+  double tracking_error_free_max_mm = 0.0; ///< Largest of the same (mm).
   std::int64_t free_steps = 0;             ///< Steps counted in the free-space error.
   double feedback_force_max_n = 0.0;       ///< Largest |feedback force| sent (after saturation).
   double feedback_torque_max_nm = 0.0;
@@ -356,6 +376,12 @@ class SceneRunner {
   std::int64_t solver_iterations_sum_ = 0;
   std::unique_ptr<platform::TraceWriter> trace_writer_;  // real-bus --trace
   bool last_torque_ = false;
+  std::int64_t startup_settle_periods_;  // kStartupSettle in periods (>= 1)
+  bool in_startup_ = false;       // the spawned tool is being pushed out (RunSummary::startup_steps)
+  double startup_min_ = 0.0;      // lowest tool penetration of the start-up so far (m)
+  double startup_window_max_ = 0.0;  // deepest tool penetration since that minimum (m)
+  int startup_obstacle_ = -1;     // obstacle of the deepest start-up contact (-1: none)
+  int startup_other_body_ = -1;   // ... or the other body
   hal::FaultRecord first_fault_;  // the first latched fault of the run (kept across re-arms)
   bool has_first_fault_ = false;
 };

@@ -20,6 +20,11 @@
 
 namespace numen::sim {
 
+/// Longest run a scene's `duration` or `numen run --duration` may ask for (s):
+/// 1e7 s, about 116 days of simulated or paced time. Beyond it the step count
+/// duration / dt no longer fits the run's arithmetic; no experiment needs it.
+inline constexpr double kMaxRunDuration = 1e7;
+
 /// At `time_s`, the device lets go of its body and holds `body` (-1: none).
 /// The paper's construction game picks which block the hand holds.
 struct AttachEvent {

@@ -96,7 +96,9 @@ class ScriptedPath {
   /// Throws InputError (file and line 0, key "<prefix>[i].<field>") for an
   /// empty list, a duration not finite and > 0, a radius or period not finite
   /// and > 0, a zero or non-finite axis, a step_time outside [0, duration], a
-  /// quaternion of zero norm, or any non-finite number.
+  /// quaternion of zero norm, any non-finite number, or a position (start,
+  /// from, to, position, centre; a circle's centre distance + radius) farther
+  /// than kMaxTargetDistance (10 m) from the world origin.
   explicit ScriptedPath(std::vector<PathSegment> segments, const TrajectorySample& start = {},
                         std::string key_prefix = "path");
 
@@ -122,6 +124,15 @@ class ScriptedPath {
   Trajectory sample(double dt) const;
   /// Bytes this path keeps (segments), for memory reports.
   std::size_t memory_bytes() const noexcept;
+
+  /// The position of the path farthest from the origin once moved by `placement`: its
+  /// distance (m) and time (s). Exact for lines, holds and steps (their end points); a
+  /// circle is evaluated every degree of the arc it sweeps (≤ 0.008 % low).
+  struct FarthestPoint {
+    double distance = 0.0;  ///< m
+    double time = 0.0;      ///< s
+  };
+  FarthestPoint farthest_point(const Placement& placement) const noexcept;
 
  private:
   enum class Kind { line, circle, hold, step };

@@ -23,6 +23,15 @@
 
 namespace numen::sim {
 
+/// Largest distance (m) of a target position from the origin of its frame
+/// (the scene's world, or a recording's own frame) that an input may hold.
+/// The instruments numen drives reach well under a metre (the shipped trocar
+/// instrument: 0.35 m of insertion; the Phantom arm: 0.3 m); 10 m leaves room
+/// for any bench or room-scale tracker while a position of 1e3 m or 1e100 m —
+/// a wrong unit, a corrupt file — is refused at load time instead of reaching
+/// the device's inverse kinematics (docs/scenes.md, "Input checks").
+inline constexpr double kMaxTargetDistance = 10.0;
+
 /// One sample of a target motion.
 struct TrajectorySample {
   double time = 0.0;  ///< Time since the start of the trajectory (s).
@@ -71,8 +80,9 @@ class Trajectory {
   /// seconds, the first at time 0, and jaw angles `jaw` (rad; empty = all 0,
   /// otherwise one per pose). Quaternions are normalised and their signs made
   /// continuous. Throws InputError (key "trajectory.<field>") if period is not
-  /// finite and > 0, poses is empty, sizes differ, a value is not finite or a
-  /// quaternion has (near) zero norm.
+  /// finite and > 0, poses is empty, sizes differ, a value is not finite, a
+  /// position is farther than kMaxTargetDistance from the origin (key
+  /// "trajectory.samples[i].position") or a quaternion has (near) zero norm.
   Trajectory(double period, std::vector<core::Pose> poses, std::vector<double> jaw = {});
 
   /// Knots computed on demand from `path` (ScriptedPath::sample()): knot k is
