@@ -16,7 +16,7 @@ start_device /tmp/dev.txt
 numen run "$HIL_SCENE" --bus can:vcan0 --duration 4 --overrun-limit "${HIL_OVERRUN_LIMIT:-3}" \
   --trace /tmp/rec.csv >/tmp/rec.txt 2>&1
 rc=$?
-expect_status "$rc" /tmp/rec.txt 0 3 6
+expect_status "$rc" /tmp/rec.txt 0 3 5 6  # 5: its --trace lost records (a starved guest); not what this checks
 usleep 200000
 kill -TERM "$DEVICE_PID"
 wait "$DEVICE_PID"
@@ -36,7 +36,7 @@ canplayer -I /tmp/replay.log
 wait "$run"
 rc=$?
 cat /tmp/play.txt
-expect_status "$rc" /tmp/play.txt 0 3 6
+expect_status "$rc" /tmp/play.txt 0 3 5 6  # 5: as above
 grep -q 'nan detected: no' /tmp/play.txt || fail "NaN in the run"
 rx=$(field /tmp/play.txt 'frames rx ')
 active=$(field /tmp/play.txt 'active at period ')
