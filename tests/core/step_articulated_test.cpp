@@ -8,9 +8,11 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <vector>
 
 #include "alloc_counter.hpp"
+#include "numen/core/contact_force.hpp"
 #include "numen/core/coupling.hpp"
 #include "numen/core/data.hpp"
 #include "numen/core/feedback.hpp"
@@ -505,3 +507,95 @@ TEST(StepArticulated, PerBodyFeedbackSumsToTheSaturatedComposite) {
 }
 
 }  // namespace
+
+// ---- stiff contacts (issue 17, defect 2): the time-constant floor keeps the step bounded ----
+
+namespace {
+
+/// The tube of trocar_tool() with a 5 g, 12 mm jaw hinged at its tip (revolute about the tube's
+/// x axis, free), both carrying spheres, above a tissue plane (z = −0.22, solid below) and a
+/// lattice of 4.5 mm tissue spheres at 5 mm spacing lying on it (the default scene's organ in
+/// small). No gravity; contact stiffness k_c.
+core::Model stiff_tool(double k_c) {
+  core::Model m = trocar_tool(1000.0, true, k_c);
+  m.gravity = Vec3::Zero();
+  m.material_pairs = {core::MaterialPair{k_c, 10.0, 0.5}};
+  core::BodyModel jaw;
+  jaw.name = "jaw";
+  jaw.mass = 0.005;
+  jaw.inertia_body = Vec3(6e-8, 6e-8, 6e-9).asDiagonal();
+  jaw.sphere_begin = static_cast<int>(m.body_spheres.size());
+  for (int i = 0; i < 4; ++i) m.body_spheres.push_back(core::Sphere{Vec3(0, 0, -0.004 + 0.003 * i), 0.0015});
+  jaw.sphere_count = 4;
+  jaw.initial_pose = core::Pose{Vec3(0, 0, -0.206), rot(M_PI, Vec3::UnitX())};
+  m.bodies.push_back(jaw);
+  const Quat z_to_x = rot(M_PI / 2, Vec3::UnitY());
+  core::JointModel hinge;
+  hinge.name = "hinge";
+  hinge.type = core::JointType::kRevolute;
+  hinge.parent = 0;
+  hinge.child = 1;
+  hinge.frame_parent = core::Pose{Vec3(0, 0, 0.15), z_to_x};
+  hinge.frame_child = core::Pose{Vec3(0, 0, -0.006), z_to_x};
+  m.joints.push_back(hinge);
+  core::Obstacle organ;
+  organ.name = "organ";
+  organ.type = core::ShapeType::kSphereSet;
+  organ.sphere_begin = 0;
+  for (int i = -4; i <= 4; ++i)
+    for (int j = -4; j <= 4; ++j)
+      for (int l = 0; l < 2; ++l)
+        m.static_spheres.push_back(core::Sphere{Vec3(0.005 * i, 0.005 * j, -0.2205 - 0.005 * l), 0.0045});
+  organ.sphere_count = static_cast<int>(m.static_spheres.size());
+  m.obstacles.push_back(organ);
+  EXPECT_EQ(core::finalize_model(m), "");
+  return m;
+}
+
+}  // namespace
+
+TEST(StepArticulated, StiffContactsUpToOneTeraNewtonPerMetreStayFiniteAndBounded) {
+  // The hand drives the tube 30 mm into the organ and the plane behind it and circles there
+  // (radius 15 mm, 1 Hz), turning the shaft: the jaw's spheres and the tube's hit the lattice and
+  // the plane at changing normals. Without the time-constant floor, k_c = 1e9 and 1e12 N/m threw
+  // the tool away (non-finite steps, penetration of metres). With it every step is finite and
+  // the penetration stays within the static bound of the softest contact the floor allows: the
+  // coupling's largest force F = k_t · 45 mm on one contact of the lightest effective mass,
+  // F / k_min (k_min = body_contact_stiffness_limit() over the bodies, the smallest stiffness a
+  // clamped contact acts with), times 3 (a suddenly loaded undamped contact reaches 2×), plus one
+  // step of travel at the hand's fastest speed (contacts are found at the step's start).
+  for (double k_c : {1e9, 1e12}) {
+    SCOPED_TRACE(k_c);
+    const core::Model m = stiff_tool(k_c);
+    core::Data d = core::make_data(m);
+    const double k_t = m.bodies[0].coupling.k_t;
+    double k_min = std::numeric_limits<double>::infinity();
+    for (int b = 0; b < m.num_bodies(); ++b) k_min = std::min(k_min, core::body_contact_stiffness_limit(m, b));
+    ASSERT_LT(k_min, k_c);
+    const double speed = 0.1;  // m/s: the hand's fastest (descent 0.05 m/s, circle 2π · 15 mm/s)
+    const double bound = 3.0 * k_t * 0.045 / k_min + speed * m.dt;
+    double deepest = 0.0, fastest = 0.0;
+    int contact_steps = 0;
+    std::int64_t clamped = 0;
+    for (int i = 0; i < 3000; ++i) {
+      const double t = 1e-3 * i;
+      const double depth = std::min(0.05 * t, 0.03);
+      d.target.position = Vec3(0.015 * std::sin(2 * M_PI * t), 0.015 * (1 - std::cos(2 * M_PI * t)),
+                               -0.05 - depth);
+      d.target.orientation = rot(0.3 * std::sin(2 * M_PI * t), Vec3(1, 1, 0)) * rot(M_PI, Vec3::UnitX());
+      d.target_twist = core::Twist{};
+      core::step(m, d);
+      ASSERT_EQ(d.nonfinite_steps, 0) << "step " << i;
+      deepest = std::max(deepest, d.max_penetration);
+      for (const core::BodyState& s : d.bodies) fastest = std::max(fastest, s.linear_velocity.norm());
+      contact_steps += d.num_contacts > 0 ? 1 : 0;
+      clamped += d.contacts_clamped;
+    }
+    EXPECT_GT(contact_steps, 1500) << "the tool must be pressed into the organ";
+    EXPECT_GT(clamped, 0);
+    EXPECT_EQ(d.contact_clamped_steps > 0, true);
+    EXPECT_LT(deepest, bound) << "k_min " << k_min;
+    EXPECT_LT(fastest, 1.0) << "m/s: the hand moves at 0.1 m/s";
+    EXPECT_LT(d.max_joint_drift, 1e-4);
+  }
+}
