@@ -555,15 +555,16 @@ core::Model stiff_tool(double k_c) {
 }  // namespace
 
 TEST(StepArticulated, StiffContactsUpToOneTeraNewtonPerMetreStayFiniteAndBounded) {
-  // The hand drives the tube 30 mm into the organ and the plane behind it and circles there
-  // (radius 15 mm, 1 Hz), turning the shaft: the jaw's spheres and the tube's hit the lattice and
-  // the plane at changing normals. Without the time-constant floor, k_c = 1e9 and 1e12 N/m threw
-  // the tool away (non-finite steps, penetration of metres). With it every step is finite and
-  // the penetration stays within the static bound of the softest contact the floor allows: the
-  // coupling's largest force F = k_t · 45 mm on one contact of the lightest effective mass,
-  // F / k_min (k_min = body_contact_stiffness_limit() over the bodies, the smallest stiffness a
-  // clamped contact acts with), times 3 (a suddenly loaded undamped contact reaches 2×), plus one
-  // step of travel at the hand's fastest speed (contacts are found at the step's start).
+  // The hand drives the tube 30 mm into the lattice and the plane behind it and circles there
+  // (radius 20 mm, 4 Hz: 0.5 m/s), turning the shaft: the free jaw's spheres and the tube's hit
+  // the lattice and the plane at changing normals. Without the time-constant floor, k_c = 1e9
+  // and 1e12 N/m threw the tool away within 1–2 s (about 4100 non-finite steps of 5000,
+  // "penetration" of metres). With it every step is finite and the penetration stays within the
+  // static bound of the softest contact the floor allows: the coupling's largest force
+  // F = k_t · 50 mm (depth and circle) on one contact of the lightest effective mass, F / k_min
+  // (k_min = body_contact_stiffness_limit() over the bodies, the smallest stiffness a clamped
+  // contact acts with), times 3 (a suddenly loaded undamped contact reaches 2×), plus one step of
+  // travel at the hand's fastest speed (contacts are found at the step's start).
   for (double k_c : {1e9, 1e12}) {
     SCOPED_TRACE(k_c);
     const core::Model m = stiff_tool(k_c);
@@ -572,17 +573,19 @@ TEST(StepArticulated, StiffContactsUpToOneTeraNewtonPerMetreStayFiniteAndBounded
     double k_min = std::numeric_limits<double>::infinity();
     for (int b = 0; b < m.num_bodies(); ++b) k_min = std::min(k_min, core::body_contact_stiffness_limit(m, b));
     ASSERT_LT(k_min, k_c);
-    const double speed = 0.1;  // m/s: the hand's fastest (descent 0.05 m/s, circle 2π · 15 mm/s)
-    const double bound = 3.0 * k_t * 0.045 / k_min + speed * m.dt;
+    const double f = 4.0, radius = 0.02;
+    const double speed = 2 * M_PI * f * radius + 0.05;  // m/s: the hand's fastest
+    const double bound = 3.0 * k_t * 0.05 / k_min + speed * m.dt;
     double deepest = 0.0, fastest = 0.0;
     int contact_steps = 0;
     std::int64_t clamped = 0;
-    for (int i = 0; i < 3000; ++i) {
+    for (int i = 0; i < 5000; ++i) {
       const double t = 1e-3 * i;
       const double depth = std::min(0.05 * t, 0.03);
-      d.target.position = Vec3(0.015 * std::sin(2 * M_PI * t), 0.015 * (1 - std::cos(2 * M_PI * t)),
-                               -0.05 - depth);
-      d.target.orientation = rot(0.3 * std::sin(2 * M_PI * t), Vec3(1, 1, 0)) * rot(M_PI, Vec3::UnitX());
+      d.target.position = Vec3(radius * std::sin(2 * M_PI * f * t),
+                               radius * (1 - std::cos(2 * M_PI * f * t)), -0.05 - depth);
+      d.target.orientation =
+          rot(0.3 * std::sin(2 * M_PI * f * t), Vec3(1, 1, 0)) * rot(M_PI, Vec3::UnitX());
       d.target_twist = core::Twist{};
       core::step(m, d);
       ASSERT_EQ(d.nonfinite_steps, 0) << "step " << i;
@@ -591,11 +594,12 @@ TEST(StepArticulated, StiffContactsUpToOneTeraNewtonPerMetreStayFiniteAndBounded
       contact_steps += d.num_contacts > 0 ? 1 : 0;
       clamped += d.contacts_clamped;
     }
-    EXPECT_GT(contact_steps, 1500) << "the tool must be pressed into the organ";
+    EXPECT_GT(contact_steps, 2500) << "the tool must be pressed into the lattice";
     EXPECT_GT(clamped, 0);
-    EXPECT_EQ(d.contact_clamped_steps > 0, true);
+    EXPECT_GT(d.contact_clamped_steps, 0);
     EXPECT_LT(deepest, bound) << "k_min " << k_min;
-    EXPECT_LT(fastest, 1.0) << "m/s: the hand moves at 0.1 m/s";
+    // The free jaw flaps on its hinge at a few m/s (measured 3.0); thrown away it went at 1e5+.
+    EXPECT_LT(fastest, 10.0) << "m/s";
     EXPECT_LT(d.max_joint_drift, 1e-4);
   }
 }

@@ -23,7 +23,7 @@
 ///  - "boundary": the symplectic Euler on the undamped (and ζ = 0.85) spring swept in ω h and
 ///    bisected: its measured stability limit against theory (ω h = 2; 2(√(1+ζ²) − ζ) damped).
 ///  - "scenes": every shipped scene (sim/scenes/*.toml) through run_scene(), its contact stiffness
-///    and, separately, its coupling stiffness k_t swept 1e4…1e12 N/m (quick: 1e8, 1e12); verdict
+///    and, separately, its coupling stiffness k_t swept 1e4…1e12 N/m (quick: 1e12); verdict
 ///    from the run's summary (study_stability_scenes.cpp): no rollback, the tool and every body at
 ///    most penetration_factor × as deep as the hand went plus 1 mm, free bodies below 10 m/s,
 ///    joint drift below 5 mm.
