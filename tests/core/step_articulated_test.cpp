@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "alloc_counter.hpp"
+#include "stiff_contact_fixture.hpp"
 #include "numen/core/contact_force.hpp"
 #include "numen/core/coupling.hpp"
 #include "numen/core/data.hpp"
@@ -538,16 +539,8 @@ core::Model stiff_tool(double k_c) {
   hinge.frame_parent = core::Pose{Vec3(0, 0, 0.15), z_to_x};
   hinge.frame_child = core::Pose{Vec3(0, 0, -0.006), z_to_x};
   m.joints.push_back(hinge);
-  core::Obstacle organ;
-  organ.name = "organ";
-  organ.type = core::ShapeType::kSphereSet;
-  organ.sphere_begin = 0;
-  for (int i = -4; i <= 4; ++i)
-    for (int j = -4; j <= 4; ++j)
-      for (int l = 0; l < 2; ++l)
-        m.static_spheres.push_back(core::Sphere{Vec3(0.005 * i, 0.005 * j, -0.2205 - 0.005 * l), 0.0045});
-  organ.sphere_count = static_cast<int>(m.static_spheres.size());
-  m.obstacles.push_back(organ);
+  m.obstacles.clear();  // trocar_tool()'s wall: the lattice's plane replaces it
+  numen::test::add_tissue_lattice(m);
   EXPECT_EQ(core::finalize_model(m), "");
   return m;
 }
@@ -576,30 +569,14 @@ TEST(StepArticulated, StiffContactsUpToOneTeraNewtonPerMetreStayFiniteAndBounded
     const double f = 4.0, radius = 0.02;
     const double speed = 2 * M_PI * f * radius + 0.05;  // m/s: the hand's fastest
     const double bound = 3.0 * k_t * 0.05 / k_min + speed * m.dt;
-    double deepest = 0.0, fastest = 0.0;
-    int contact_steps = 0;
-    std::int64_t clamped = 0;
-    for (int i = 0; i < 5000; ++i) {
-      const double t = 1e-3 * i;
-      const double depth = std::min(0.05 * t, 0.03);
-      d.target.position = Vec3(radius * std::sin(2 * M_PI * f * t),
-                               radius * (1 - std::cos(2 * M_PI * f * t)), -0.05 - depth);
-      d.target.orientation =
-          rot(0.3 * std::sin(2 * M_PI * f * t), Vec3(1, 1, 0)) * rot(M_PI, Vec3::UnitX());
-      d.target_twist = core::Twist{};
-      core::step(m, d);
-      ASSERT_EQ(d.nonfinite_steps, 0) << "step " << i;
-      deepest = std::max(deepest, d.max_penetration);
-      for (const core::BodyState& s : d.bodies) fastest = std::max(fastest, s.linear_velocity.norm());
-      contact_steps += d.num_contacts > 0 ? 1 : 0;
-      clamped += d.contacts_clamped;
-    }
-    EXPECT_GT(contact_steps, 2500) << "the tool must be pressed into the lattice";
-    EXPECT_GT(clamped, 0);
+    const numen::test::PressedRun r = numen::test::press_and_circle(m, d, 5000, f, radius);
+    if (HasFailure()) return;
+    EXPECT_GT(r.contact_steps, 2500) << "the tool must be pressed into the lattice";
+    EXPECT_GT(r.clamped, 0);
     EXPECT_GT(d.contact_clamped_steps, 0);
-    EXPECT_LT(deepest, bound) << "k_min " << k_min;
+    EXPECT_LT(r.deepest, bound) << "k_min " << k_min;
     // The free jaw flaps on its hinge at a few m/s (measured 3.0); thrown away it went at 1e5+.
-    EXPECT_LT(fastest, 10.0) << "m/s";
+    EXPECT_LT(r.fastest, 10.0) << "m/s";
     EXPECT_LT(d.max_joint_drift, 1e-4);
   }
 }

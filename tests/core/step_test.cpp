@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include "alloc_counter.hpp"
+#include "stiff_contact_fixture.hpp"
 #include "numen/core/contact_force.hpp"
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"
@@ -310,19 +311,7 @@ core::Model stiff_rod(double k_c) {
   core::Model m;
   m.gravity = Vec3::Zero();
   m.material_pairs = {core::MaterialPair{k_c, 10.0, 0.5}};
-  core::Obstacle plane;
-  plane.name = "plane";
-  plane.type = core::ShapeType::kPlane;
-  plane.pose.position = Vec3(0, 0, -0.22);
-  core::Obstacle lattice;
-  lattice.name = "lattice";
-  lattice.type = core::ShapeType::kSphereSet;
-  for (int i = -4; i <= 4; ++i)
-    for (int j = -4; j <= 4; ++j)
-      for (int l = 0; l < 2; ++l)
-        m.static_spheres.push_back(core::Sphere{Vec3(0.005 * i, 0.005 * j, -0.2205 - 0.005 * l), 0.0045});
-  lattice.sphere_count = static_cast<int>(m.static_spheres.size());
-  m.obstacles = {plane, lattice};
+  numen::test::add_tissue_lattice(m);
   for (int i = 0; i < 10; ++i) m.body_spheres.push_back(core::Sphere{Vec3(0, 0, 0.15 - 0.02 * i), 0.004});
   for (int i = 0; i < 4; ++i) m.body_spheres.push_back(core::Sphere{Vec3(0, 0.002, 0.156 + 0.003 * i), 0.0015});
   core::BodyModel rod;
@@ -352,24 +341,11 @@ TEST(StepBehaviour, StiffContactsUpToOneTeraNewtonPerMetreStayFiniteAndBoundedOn
     const double k_min = core::body_contact_stiffness_limit(m, 0);
     ASSERT_LT(k_min, k_c);
     const double bound = 3.0 * m.bodies[0].coupling.k_t * 0.045 / k_min + 0.1 * m.dt;
-    double deepest = 0.0, fastest = 0.0;
-    int contact_steps = 0;
-    for (int i = 0; i < 3000; ++i) {
-      const double t = 1e-3 * i;
-      const double depth = std::min(0.05 * t, 0.03);
-      d.target.position = Vec3(0.015 * std::sin(2 * M_PI * t), 0.015 * (1 - std::cos(2 * M_PI * t)),
-                               -0.05 - depth);
-      d.target.orientation = rot(0.3 * std::sin(2 * M_PI * t), Vec3(1, 1, 0)) * rot(M_PI, Vec3::UnitX());
-      d.target_twist = core::Twist{};
-      core::step(m, d);
-      ASSERT_EQ(d.nonfinite_steps, 0) << "step " << i;
-      deepest = std::max(deepest, d.max_penetration);
-      fastest = std::max(fastest, d.bodies[0].linear_velocity.norm());
-      contact_steps += d.num_contacts > 0 ? 1 : 0;
-    }
-    EXPECT_GT(contact_steps, 1500) << "the rod must be pressed into the lattice";
+    const numen::test::PressedRun r = numen::test::press_and_circle(m, d, 3000, 1.0, 0.015);
+    if (HasFailure()) return;
+    EXPECT_GT(r.contact_steps, 1500) << "the rod must be pressed into the lattice";
     EXPECT_GT(d.contact_clamped_steps, 0);
-    EXPECT_LT(deepest, bound) << "k_min " << k_min;
-    EXPECT_LT(fastest, 1.0) << "m/s: the hand moves at 0.1 m/s";
+    EXPECT_LT(r.deepest, bound) << "k_min " << k_min;
+    EXPECT_LT(r.fastest, 1.0) << "m/s: the hand moves at 0.1 m/s";
   }
 }
