@@ -49,6 +49,16 @@ std::string field(const std::string& s) {
   return q + "\"";
 }
 
+/// A Markdown table header on a new line: `lead` (two columns, "| a | b |"), one column per label,
+/// and the separator line.
+void table_header(std::ostringstream& os, const char* lead, const std::vector<std::string>& labels) {
+  os << "\n" << lead;
+  for (const std::string& l : labels) os << " " << l << " |";
+  os << "\n| --- | --- |";
+  for (std::size_t i = 0; i < labels.size(); ++i) os << " --- |";
+  os << "\n";
+}
+
 /// Family "scenes": one line per swept stiffness, scene and integrator, one column per
 /// stiffness: "stable, <tool penetration> mm" or "**diverged** (<reason>)".
 std::string format_scene_stiffness_table(const StabilityResult& r) {
@@ -64,11 +74,9 @@ std::string format_scene_stiffness_table(const StabilityResult& r) {
   std::sort(ks.begin(), ks.end());
   std::ostringstream os;
   char buf[160];
-  os << "\n| swept, scene | integrator |";
-  for (double k : ks) os << " " << num(k) << " N/m |";
-  os << "\n| --- | --- |";
-  for (std::size_t i = 0; i < ks.size(); ++i) os << " --- |";
-  os << "\n";
+  std::vector<std::string> labels;
+  for (double k : ks) labels.push_back(num(k) + " N/m");
+  table_header(os, "| swept, scene | integrator |", labels);
   for (const auto& [name, integrator] : lines) {
     os << "| " << name << " | " << integrator << " |";
     for (double k : ks) {
@@ -271,11 +279,9 @@ std::string format_stability_tables(const StabilityResult& r) {
   }
   if (!lines.empty()) {
     std::sort(ratios.begin(), ratios.end());
-    os << "\n| integrator | h (s) |";
-    for (double q : ratios) os << " ratio " << num(q) << " |";
-    os << "\n| --- | --- |";
-    for (std::size_t i = 0; i < ratios.size(); ++i) os << " --- |";
-    os << "\n";
+    std::vector<std::string> labels;
+    for (double q : ratios) labels.push_back("ratio " + num(q));
+    table_header(os, "| integrator | h (s) |", labels);
     for (const auto& [integrator, h] : lines) {
       std::snprintf(buf, sizeof buf, "| %s | %.0e |", integrator.c_str(), h);
       os << buf;
