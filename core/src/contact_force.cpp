@@ -4,6 +4,9 @@
 #include "numen/core/contact_force.hpp"
 
 #include <algorithm>
+#include <limits>
+
+#include <Eigen/Eigenvalues>
 
 #include "numen/core/contact.hpp"
 #include "numen/core/data.hpp"
@@ -37,7 +40,43 @@ inline ContactForceResult penalty_force(const Vec3& normal, double depth, const 
   return out;
 }
 
+/// 1/m + (r × n)ᵀ I_w⁻¹ (r × n) of one body, with I_w⁻¹ = R I_b⁻¹ Rᵀ: w = Rᵀ (r × n).
+inline double inverse_mass_along(const BodyModel& body, const BodyState& state, const Vec3& r,
+                                 const Vec3& n) noexcept {
+  const Vec3 w = state.orientation.conjugate() * r.cross(n);
+  return 1.0 / body.mass + w.dot(body.inertia_body_inv * w);
+}
+
 }  // namespace
+
+double contact_effective_mass(const BodyModel& a, const BodyState& sa, const Vec3& r_a,
+                              bool a_imposed, const BodyModel* b, const BodyState* sb,
+                              const Vec3& r_b, bool b_imposed, const Vec3& normal) noexcept {
+  double inv = a_imposed ? 0.0 : inverse_mass_along(a, sa, r_a, normal);
+  if (b != nullptr && sb != nullptr && !b_imposed) inv += inverse_mass_along(*b, *sb, r_b, normal);
+  return inv > 0.0 ? 1.0 / inv : std::numeric_limits<double>::infinity();
+}
+
+double contact_stiffness_limit(double effective_mass, double dt, double max_omega_dt) noexcept {
+  const double w = max_omega_dt / dt;  // ω_c (rad/s); +∞ when the floor is off
+  return effective_mass * w * w;
+}
+
+double body_contact_stiffness_limit(const Model& model, int body) {
+  const BodyModel& bm = model.bodies[static_cast<std::size_t>(body)];
+  double limit = std::numeric_limits<double>::infinity();
+  for (int i = bm.sphere_begin; i < bm.sphere_begin + bm.sphere_count; ++i) {
+    const Mat3 rx = skew(model.body_spheres[static_cast<std::size_t>(i)].center);
+    // max over unit n of (r × n)ᵀ I⁻¹ (r × n) = λ_max([r]×ᵀ I⁻¹ [r]×) (body frame).
+    const Mat3 s = rx.transpose() * bm.inertia_body_inv * rx;
+    const double lambda = Eigen::SelfAdjointEigenSolver<Mat3>(s, Eigen::EigenvaluesOnly)
+                              .eigenvalues()
+                              .maxCoeff();
+    limit = std::min(limit, contact_stiffness_limit(1.0 / (1.0 / bm.mass + lambda), model.dt,
+                                                    model.solver.contact_max_omega_dt));
+  }
+  return limit;
+}
 
 Vec3 contact_relative_velocity(const BodyState& a, const Vec3& r_a, const BodyState* b,
                                const Vec3& r_b) noexcept {
@@ -86,6 +125,9 @@ void compute_contact_forces(const Model& model, Data& data) noexcept {
     data.num_contacts = room;
   }
   const int nc = std::clamp(data.num_contacts, 0, kMaxContacts);
+  const double max_omega_dt = model.solver.contact_max_omega_dt;
+  const std::vector<std::uint8_t>& imposed = data.solver.imposed;
+  data.contacts_clamped = 0;
   for (int i = 0; i < nc; ++i) {
     Contact& c = data.contacts[static_cast<std::size_t>(i)];
     ContactTerm& t = data.solver.contact_terms[static_cast<std::size_t>(i)];
@@ -94,6 +136,8 @@ void compute_contact_forces(const Model& model, Data& data) noexcept {
     t.normal_velocity = 0.0;
     t.r_a.setZero();
     t.r_b.setZero();
+    t.stiffness = 0.0;
+    t.clamped = false;
     c.force.setZero();
     if (c.body_a < 0 || c.body_a >= nb || c.body_b >= nb || c.body_b == c.body_a ||
         c.material_pair < 0 || c.material_pair >= np)
@@ -104,8 +148,24 @@ void compute_contact_forces(const Model& model, Data& data) noexcept {
     t.r_a = c.position - a.position;
     if (b != nullptr) t.r_b = c.position - b->position;
     const Vec3 v_rel = relative_velocity(a, t.r_a, b, t.r_b);
-    const ContactForceResult f = penalty_force(
-        c.normal, c.depth, v_rel, model.material_pairs[static_cast<std::size_t>(c.material_pair)]);
+    // The time-constant floor: k_eff = min(k, m_eff (ω_c h / h)²) (SolverSettings).
+    MaterialPair material = model.material_pairs[static_cast<std::size_t>(c.material_pair)];
+    if (material.stiffness > 0.0 && max_omega_dt < std::numeric_limits<double>::infinity()) {
+      const auto ia = static_cast<std::size_t>(c.body_a);
+      const bool b_imposed = b != nullptr && imposed[static_cast<std::size_t>(c.body_b)] != 0;
+      const double m_eff = contact_effective_mass(
+          model.bodies[ia], a, t.r_a, imposed[ia] != 0,
+          b != nullptr ? &model.bodies[static_cast<std::size_t>(c.body_b)] : nullptr, b, t.r_b,
+          b_imposed, c.normal);
+      const double limit = contact_stiffness_limit(m_eff, model.dt, max_omega_dt);
+      if (material.stiffness > limit) {
+        material.stiffness = limit;
+        t.clamped = true;
+        ++data.contacts_clamped;
+      }
+    }
+    t.stiffness = material.stiffness;
+    const ContactForceResult f = penalty_force(c.normal, c.depth, v_rel, material);
     if (!f.active) continue;
     t.active = true;
     t.normal_force = f.normal_force;

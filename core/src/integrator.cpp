@@ -228,10 +228,11 @@ void build_implicit_system(const Model& model, Data& data) noexcept {
     const Contact& ct = data.contacts[static_cast<std::size_t>(c)];
     const MaterialPair& mp = model.material_pairs[static_cast<std::size_t>(ct.material_pair)];
     const double beta = h * mp.friction;
-    const double alpha = (h * mp.damping + h2 * mp.stiffness) - beta;
+    // t.stiffness: the material's, or its clamp by the time-constant floor (contact_force.hpp).
+    const double alpha = (h * mp.damping + h2 * t.stiffness) - beta;
     t.weight_normal = alpha;
     t.weight_isotropic = beta;
-    const double impulse = -h2 * mp.stiffness * t.normal_velocity;  // b_a += Gᵀ_a (impulse n)
+    const double impulse = -h2 * t.stiffness * t.normal_velocity;  // b_a += Gᵀ_a (impulse n)
     const auto a = static_cast<std::size_t>(ct.body_a);
     if (s.in_solve[a])
       add_contact_terms(alpha, beta, impulse, ct.normal, t.r_a, s.block[a], s.rhs[a],

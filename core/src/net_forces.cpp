@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "numen/core/contact_force.hpp"
 #include "numen/core/data.hpp"
@@ -336,7 +337,25 @@ void compute_net_forces(const Model& model, Data& data) noexcept {
       ct.r_b = ct.position - b.position;
       v_rel -= b.linear_velocity + b.angular_velocity.cross(ct.r_b);
     }
-    const MaterialPair& mp = model.material_pairs[static_cast<std::size_t>(ct.material_pair)];
+    // The time-constant floor (contact_force.hpp, SolverSettings::node_contact_max_omega_dt):
+    // the node is a point mass; a body on the
+    // other side adds its mobility along n at the contact point (imposed: none).
+    MaterialPair mp = model.material_pairs[static_cast<std::size_t>(ct.material_pair)];
+    if (mp.stiffness > 0.0 && model.solver.node_contact_max_omega_dt < std::numeric_limits<double>::infinity()) {
+      double inv_mass = 1.0 / model.node_mass[i];
+      if (ct.body_b >= 0 && data.solver.imposed[static_cast<std::size_t>(ct.body_b)] == 0) {
+        const auto b = static_cast<std::size_t>(ct.body_b);
+        inv_mass += 1.0 / contact_effective_mass(model.bodies[b], data.bodies[b], ct.r_b, false,
+                                                 nullptr, nullptr, ct.r_b, false, ct.normal);
+      }
+      const double limit =
+          contact_stiffness_limit(1.0 / inv_mass, model.dt, model.solver.node_contact_max_omega_dt);
+      if (mp.stiffness > limit) {
+        mp.stiffness = limit;
+        ++data.contacts_clamped;
+      }
+    }
+    ct.stiffness = mp.stiffness;
     const ContactForceResult r = contact_penalty_force(ct.normal, ct.depth, v_rel, mp);
     ct.force = r.force;
     ct.active = r.active;

@@ -316,7 +316,7 @@ void add_net_body_terms(const Model& model, Data& data) noexcept {
     if (!ct.active) continue;
     const MaterialPair& mp = model.material_pairs[static_cast<std::size_t>(ct.material_pair)];
     ct.weight_isotropic = h * mp.friction;
-    ct.weight_normal = h * mp.damping + h2 * mp.stiffness - ct.weight_isotropic;
+    ct.weight_normal = h * mp.damping + h2 * ct.stiffness - ct.weight_isotropic;  // k_eff
     if (!couples_body(s, ct)) continue;
     const auto b = static_cast<std::size_t>(ct.body_b);
     Vec6 g;
@@ -324,7 +324,7 @@ void add_net_body_terms(const Model& model, Data& data) noexcept {
     Mat6& blk = s.block[b];
     blk.noalias() += ct.weight_normal * (g * g.transpose());
     add_lever_moments(ct.weight_isotropic, 1.0, ct.r_b, ct.r_b * ct.r_b.transpose(), blk);
-    const double impulse = -h2 * mp.stiffness * ct.normal_velocity;  // on the node along n
+    const double impulse = -h2 * ct.stiffness * ct.normal_velocity;  // on the node along n
     s.rhs[b] -= impulse * g;
   }
 }
@@ -366,9 +366,8 @@ void build_net_system(const Model& model, Data& data) noexcept {
     const NodeContact& ct = data.node_contacts[static_cast<std::size_t>(k)];
     if (!ct.active) continue;
     const auto i = static_cast<std::size_t>(ct.node);
-    const MaterialPair& mp = model.material_pairs[static_cast<std::size_t>(ct.material_pair)];
     add_weight(ct.weight_normal, ct.weight_isotropic, ct.normal, ns.block[i]);
-    ns.rhs[i] += (-h2 * mp.stiffness * ct.normal_velocity) * ct.normal;
+    ns.rhs[i] += (-h2 * ct.stiffness * ct.normal_velocity) * ct.normal;  // k_eff
   }
   if (model.joints.empty()) {  // the SSOR sweeps' A_kk⁻¹, in their order
     const std::int32_t* order = model.node_sweep_order.data();

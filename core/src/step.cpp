@@ -95,6 +95,7 @@ void step(const Model& model, Data& data) noexcept {
   }
   data.solver.system_step = linearized_system_step(model);  // the net spring pass needs h_s
   compute_forces(model, data);
+  if (data.contacts_clamped > 0) ++data.contact_clamped_steps;  // body and node contacts
   integrate(model, data);  // with nets: net_solve; else with joints: the KKT tree solve
   if constexpr (kWithArticulation) {
     if (joints) measure_joint_drift(model, data);

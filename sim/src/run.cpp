@@ -425,6 +425,7 @@ RunSummary SceneRunner::summary() const {
   }
   s.rejected_samples = static_cast<std::int64_t>(device_.counters().values_rejected);
   s.contact_overflow = data_.contact_overflow_steps;
+  s.contact_clamped_steps = data_.contact_clamped_steps;
   s.nonfinite_steps = data_.nonfinite_steps;
   s.nan_detected = data_.nonfinite_steps > 0;
   for (const auto& b : data_.bodies)
@@ -665,6 +666,9 @@ std::string format_summary(const RunSummary& s) {
      << s.solver_iterations_max << ", residual max " << std::scientific << std::setprecision(2)
      << s.solver_residual_max << std::fixed << std::setprecision(3) << ", not converged "
      << s.solver_not_converged_steps << " steps\n";
+  if (s.contact_clamped_steps > 0)
+    os << "  stiff contacts: stiffness clamped to the time-constant floor in "
+       << s.contact_clamped_steps << " steps (docs/dynamics.md, \"Stiff contacts\")\n";
   os << "  bus: rejected samples " << s.rejected_samples << ", invalid periods "
      << s.invalid_periods << ", frames dropped " << s.bus_frames_dropped << ", corrupted "
      << s.bus_frames_corrupted << "\n";
@@ -773,6 +777,7 @@ std::string format_summary_json(const RunSummary& s) {
   j["rejected_samples"] = s.rejected_samples;
   j["invalid_periods"] = s.invalid_periods;
   j["contact_overflow"] = s.contact_overflow;
+  j["contact_clamped_steps"] = s.contact_clamped_steps;
   j["contacts_max"] = s.contacts_max;
   j["solver_iterations_max"] = s.solver_iterations_max;
   j["solver_iterations_mean"] = s.solver_iterations_mean;

@@ -13,6 +13,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "numen/core/contact_force.hpp"
 #include "numen/core/features.hpp"
 #include "numen/hal/kinematics_factory.hpp"
 #include "numen/sim/jigsaws.hpp"
@@ -551,6 +552,39 @@ const char* to_string(core::Integrator integrator) noexcept {
 
 std::string default_scene_path() { return std::string(NUMEN_SOURCE_SIM_DIR) + "/scenes/default.toml"; }
 
+
+namespace {
+
+/// Load-time note of the contact time-constant floor (core::SolverSettings::contact_max_omega_dt):
+/// one warning per body whose stiffest material pair is above the smallest stiffness a contact of
+/// it can act with at this dt (core::body_contact_stiffness_limit()).
+void warn_clamped_contacts(const core::Model& m, std::vector<std::string>& warnings) {
+  for (int b = 0; b < m.num_bodies(); ++b) {
+    const core::BodyModel& body = m.bodies[static_cast<std::size_t>(b)];
+    if (body.sphere_count == 0) continue;
+    int stiffest = 0;
+    for (int j = 1; j < m.num_materials(); ++j)
+      if (m.material_pair(body.material, j).stiffness >
+          m.material_pair(body.material, stiffest).stiffness)
+        stiffest = j;
+    const double k = m.material_pair(body.material, stiffest).stiffness;
+    const double limit = core::body_contact_stiffness_limit(m, b);
+    if (!(k > limit)) continue;
+    std::ostringstream os;
+    os << std::setprecision(3) << "body \"" << body.name << "\": contact stiffness " << k
+       << " N/m (materials \"" << m.material_names[static_cast<std::size_t>(body.material)]
+       << "\"/\"" << m.material_names[static_cast<std::size_t>(stiffest)]
+       << "\") is above what dt = " << m.dt << " s resolves on its effective mass: its contacts will be clamped, "
+       << "down to about " << limit << " N/m (time-constant "
+       << "floor omega h <= " << m.solver.contact_max_omega_dt
+       << ", [solver] contact_max_omega_dt; docs/dynamics.md, \"Stiff contacts\"), so they "
+       << "penetrate more; the run counts the clamped contacts";
+    warnings.push_back(os.str());
+  }
+}
+
+}  // namespace
+
 Scene load_scene(const std::string& path, const SceneOverrides& overrides) {
   Scene scene;
   scene.file = path;
@@ -641,6 +675,7 @@ Scene load_scene(const std::string& path, const SceneOverrides& overrides) {
         "modes (light nodes on penalty contacts and ties) ring instead of being damped; at 1 ms "
         "the shipped probe's nodes went 2.1 mm into the post instead of 0.2 mm "
         "(docs/results.md, accuracy). implicit-euler is the integrator for nets");
+  warn_clamped_contacts(scene.model, scene.warnings);
   return scene;
 }
 

@@ -372,11 +372,16 @@ core::Model parse_scene_model(const TomlTable& root, std::vector<std::string>& w
                     : coupling == "direct"      ? core::CouplingMode::kDirect
                                                 : core::CouplingMode::kAdmittance;
   if (auto s = root.table("solver")) {
-    s->allow_only({"max_iterations", "tolerance"});
+    s->allow_only(
+        {"max_iterations", "tolerance", "contact_max_omega_dt", "node_contact_max_omega_dt"});
     const auto it = s->integer_or("max_iterations", m.solver.max_iterations);
     if (it < 1 || it > 100000) s->fail("max_iterations", "must be in [1, 100000]");
     m.solver.max_iterations = static_cast<int>(it);
     m.solver.tolerance = s->number_in("tolerance", 1e-300, 1.0, m.solver.tolerance);
+    m.solver.contact_max_omega_dt =
+        s->number_in("contact_max_omega_dt", 1e-3, kInf, m.solver.contact_max_omega_dt);
+    m.solver.node_contact_max_omega_dt = s->number_in("node_contact_max_omega_dt", 1e-3, kInf,
+                                                      m.solver.node_contact_max_omega_dt);
   }
   parse_materials(root, m);
   parse_bodies(root, m, warnings);

@@ -26,7 +26,7 @@ namespace {
 
 /// Work units of one run of each family (≈ its CPU cost relative to a 2000-step grid run).
 constexpr double kGridWeight = 1.0, kExtremeWeight = 5.0, kArticulationWeight = 10.0,
-                 kSceneWeight = 20.0, kBoundaryWeight = 1500.0;
+                 kSceneWeight = 20.0, kBoundaryWeight = 1500.0, kStiffSceneWeight = 40.0;
 
 bool wanted(const StabilityOptions& o, const char* family) {
   return o.families.empty() ||
@@ -47,6 +47,55 @@ std::string field(const std::string& s) {
   std::string q = "\"";
   for (char c : s) q += c == '"' ? std::string("\"\"") : std::string(1, c);
   return q + "\"";
+}
+
+/// A Markdown table header on a new line: `lead` (two columns, "| a | b |"), one column per label,
+/// and the separator line.
+void table_header(std::ostringstream& os, const char* lead, const std::vector<std::string>& labels) {
+  os << "\n" << lead;
+  for (const std::string& l : labels) os << " " << l << " |";
+  os << "\n| --- | --- |";
+  for (std::size_t i = 0; i < labels.size(); ++i) os << " --- |";
+  os << "\n";
+}
+
+/// Family "scenes": one line per swept stiffness, scene and integrator, one column per
+/// stiffness: "stable, <tool penetration> mm" or "**diverged** (<reason>)".
+std::string format_scene_stiffness_table(const StabilityResult& r) {
+  std::vector<double> ks;
+  std::vector<std::pair<std::string, std::string>> lines;  // (case, integrator)
+  for (const StabilityRow& row : r.rows) {
+    if (row.family != "scenes") continue;
+    if (std::find(ks.begin(), ks.end(), row.stiffness) == ks.end()) ks.push_back(row.stiffness);
+    const auto line = std::make_pair(row.case_name, row.integrator);
+    if (std::find(lines.begin(), lines.end(), line) == lines.end()) lines.push_back(line);
+  }
+  if (lines.empty()) return "";
+  std::sort(ks.begin(), ks.end());
+  std::ostringstream os;
+  char buf[160];
+  std::vector<std::string> labels;
+  for (double k : ks) labels.push_back(num(k) + " N/m");
+  table_header(os, "| swept, scene | integrator |", labels);
+  for (const auto& [name, integrator] : lines) {
+    os << "| " << name << " | " << integrator << " |";
+    for (double k : ks) {
+      const StabilityRow* hit = nullptr;
+      for (const StabilityRow& row : r.rows)
+        if (row.family == "scenes" && row.case_name == name && row.integrator == integrator &&
+            row.stiffness == k)
+          hit = &row;
+      if (hit == nullptr)
+        std::snprintf(buf, sizeof buf, " |");
+      else if (hit->stable)
+        std::snprintf(buf, sizeof buf, " stable, %.2g mm |", 1e3 * hit->penetration_max_m);
+      else
+        std::snprintf(buf, sizeof buf, " **diverged** (%s) |", hit->reason.c_str());
+      os << buf;
+    }
+    os << "\n";
+  }
+  return os.str();
 }
 
 }  // namespace
@@ -70,7 +119,7 @@ StabilityRow stability::make_row(const char* family, const char* case_name,
 
 const std::vector<std::string>& stability_family_names() {
   static const std::vector<std::string> names = {"coupling", "contact", "articulation", "extreme",
-                                                 "boundary"};
+                                                 "boundary", "scenes"};
   return names;
 }
 
@@ -80,7 +129,8 @@ StabilityResult run_stability_study(const StabilityOptions& options) {
     if (std::find(all.begin(), all.end(), f) == all.end())
       throw InputError(
           "", 0, 0, "family",
-          "unknown family \"" + f + "\" (coupling, contact, articulation, extreme, boundary)");
+          "unknown family \"" + f +
+              "\" (coupling, contact, articulation, extreme, boundary, scenes)");
   }
   StabilityResult result;
   const std::string no_joints = study::missing_parts(true, false);
@@ -104,6 +154,8 @@ StabilityResult run_stability_study(const StabilityOptions& options) {
     total += kExtremeWeight * static_cast<double>(rigid_extreme_runs(options)) +
              kSceneWeight / 5.0 * static_cast<double>(scene_extreme_runs(options));
   if (wanted(options, "boundary")) total += 2.0 * kBoundaryWeight;
+  if (wanted(options, "scenes"))
+    total += kStiffSceneWeight * static_cast<double>(scene_stiffness_runs(options, dir));
   auto tick_of = [&](double weight) -> Tick {
     if (!options.progress) return {};
     return [&, weight](const std::string& label) {
@@ -124,6 +176,8 @@ StabilityResult run_stability_study(const StabilityOptions& options) {
   }
   if (wanted(options, "boundary"))
     result.boundaries = boundary_family(options, tick_of(kBoundaryWeight));
+  if (wanted(options, "scenes"))
+    append(scene_stiffness_family(options, dir, tick_of(kStiffSceneWeight), result.skipped));
   result.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return result;
 }
@@ -185,7 +239,7 @@ std::string format_stability_tables(const StabilityResult& r) {
   std::map<std::pair<std::string, std::string>, Count> counts;
   std::vector<std::pair<std::string, std::string>> order;
   for (const StabilityRow& row : r.rows) {
-    if (row.family == "extreme") continue;
+    if (row.family == "extreme" || row.family == "scenes") continue;
     const auto key = std::make_pair(row.case_name, row.integrator);
     if (counts.find(key) == counts.end()) order.push_back(key);
     Count& c = counts[key];
@@ -225,11 +279,9 @@ std::string format_stability_tables(const StabilityResult& r) {
   }
   if (!lines.empty()) {
     std::sort(ratios.begin(), ratios.end());
-    os << "\n| integrator | h (s) |";
-    for (double q : ratios) os << " ratio " << num(q) << " |";
-    os << "\n| --- | --- |";
-    for (std::size_t i = 0; i < ratios.size(); ++i) os << " --- |";
-    os << "\n";
+    std::vector<std::string> labels;
+    for (double q : ratios) labels.push_back("ratio " + num(q));
+    table_header(os, "| integrator | h (s) |", labels);
     for (const auto& [integrator, h] : lines) {
       std::snprintf(buf, sizeof buf, "| %s | %.0e |", integrator.c_str(), h);
       os << buf;
@@ -303,6 +355,7 @@ std::string format_stability_tables(const StabilityResult& r) {
            << ", " << integrator << ", h = " << num(pick->dt_s) << " s: " << pick->note << "\n";
     }
   }
+  os << format_scene_stiffness_table(r);
   if (!r.boundaries.empty()) {
     os << "\n| ζ | theory: largest stable ω h | measured (no energy growth) | error | verdict "
           "limit 2 (1 − 1/energy_factor): theory | measured by the verdict |\n| --- | --- | --- | "

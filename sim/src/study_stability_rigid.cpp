@@ -2,9 +2,11 @@
 /// Families "coupling", "contact" and "boundary" of `numen study stability`: one rigid body on
 /// the coupling spring of Eq. 2, alone or pushed onto a penalty plane (study_stability.hpp).
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
+#include "numen/core/contact_force.hpp"
 #include "numen/sim/scene.hpp"
 #include "numen/sim/study_common.hpp"
 #include "numen/sim/study_stability_cases.hpp"
@@ -124,7 +126,11 @@ StabilityRow contact_run(core::Integrator integrator, double h, double m, double
   core::Data data = core::make_data(model);
   data.target.position = Vec3(0.0, 0.0, kRadius - kPush);
   const double k_t = b.coupling.k_t;
-  const double static_depth = k_t * kPush / (k_t + k_c);
+  // The stiffness the contact acts with: k_c, or its clamp by the core's time-constant floor
+  // (the lever arm is along the normal: the effective mass is m).
+  const double k_eff =
+      std::min(k_c, core::contact_stiffness_limit(m, h, model.solver.contact_max_omega_dt));
+  const double static_depth = k_t * kPush / (k_t + k_eff);
   Monitor monitor(limits, limits.penetration_factor * static_depth, kInf, steps, m, h);
   drive(
       model, data, steps, [](std::int64_t, core::Data&) noexcept {}, monitor);

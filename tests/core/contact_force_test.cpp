@@ -3,6 +3,7 @@
 #include "numen/core/contact_force.hpp"
 
 #include <cmath>
+#include <limits>
 
 #include <Eigen/Eigenvalues>
 #include <gtest/gtest.h>
@@ -361,4 +362,108 @@ TEST(ContactForce, PushIntoPlaneThroughTheCollisionStage) {
   ASSERT_GT(contact_steps, 0) << "the collision stage must report the plane contact";
   const double z_eq = (kt * zt + kc * rho) / (kt + kc);
   EXPECT_NEAR(d.bodies[0].position.z(), z_eq, 1e-6);
+}
+
+// ---- the contact time-constant floor (SolverSettings::contact_max_omega_dt) ----
+
+TEST(ContactForce, EffectiveMassIsTheInverseOfTheContactsMobility) {
+  // m_eff = 1 / Σ gᵀ M⁻¹ g, g = (n, r × n), M = diag(m I, I_w) per body: checked against the
+  // dense 6×6 mass matrices of two rotated bodies.
+  core::BodyModel a, b;
+  a.mass = 0.05;
+  a.inertia_body = Vec3(4e-4, 3e-4, 2e-5).asDiagonal();
+  a.inertia_body_inv = a.inertia_body.inverse();
+  b.mass = 0.2;
+  b.inertia_body = Vec3(1e-3, 2e-3, 3e-3).asDiagonal();
+  b.inertia_body_inv = b.inertia_body.inverse();
+  core::BodyState sa, sb;
+  sa.orientation = rot(0.7, Vec3(1, 2, 3));
+  sb.orientation = rot(-1.1, Vec3(0, 1, -1));
+  const Vec3 n = Vec3(0.2, -0.3, 1.0).normalized(), r_a(0.01, -0.12, 0.03), r_b(-0.02, 0.04, 0.05);
+  auto mobility = [&](const core::BodyModel& bm, const core::BodyState& s, const Vec3& r) {
+    Eigen::Matrix<double, 6, 6> mm = Eigen::Matrix<double, 6, 6>::Zero();
+    mm.topLeftCorner<3, 3>() = bm.mass * Mat3::Identity();
+    mm.bottomRightCorner<3, 3>() = core::world_inertia(s.orientation, bm.inertia_body);
+    Eigen::Matrix<double, 6, 1> g;
+    g << n, r.cross(n);
+    return g.dot(mm.inverse() * g);
+  };
+  const double both = 1.0 / (mobility(a, sa, r_a) + mobility(b, sb, r_b));
+  EXPECT_NEAR(core::contact_effective_mass(a, sa, r_a, false, &b, &sb, r_b, false, n), both,
+              1e-12 * both);
+  EXPECT_NEAR(core::contact_effective_mass(a, sa, r_a, false, nullptr, nullptr, r_b, false, n),
+              1.0 / mobility(a, sa, r_a), 1e-12);
+  // An imposed (kDirect) body is infinitely heavy.
+  EXPECT_NEAR(core::contact_effective_mass(a, sa, r_a, false, &b, &sb, r_b, true, n),
+              1.0 / mobility(a, sa, r_a), 1e-12);
+  EXPECT_TRUE(std::isinf(core::contact_effective_mass(a, sa, r_a, true, nullptr, nullptr, r_b, false, n)));
+  // Lever arm along the normal: no rotation, the body's mass.
+  EXPECT_NEAR(core::contact_effective_mass(a, sa, 0.1 * n, false, nullptr, nullptr, r_b, false, n),
+              a.mass, 1e-15);
+  EXPECT_DOUBLE_EQ(core::contact_stiffness_limit(0.05, 1e-3, 10.0), 0.05 * 1e8);
+  EXPECT_TRUE(std::isinf(core::contact_stiffness_limit(0.05, 1e-3, std::numeric_limits<double>::infinity())));
+}
+
+namespace {
+
+/// One 50 g ball (r = 10 mm, contact lever arm along the normal: m_eff = m) 1 mm into the plane
+/// z = 0, moving down at 0.1 m/s, contact stiffness k; one step.
+core::Data ball_step(double k, double max_omega_dt, core::Model* out = nullptr) {
+  core::Model m;
+  m.gravity = Vec3::Zero();
+  m.material_pairs = {core::MaterialPair{k, 5.0, 0.5}};
+  m.solver.contact_max_omega_dt = max_omega_dt;
+  core::Obstacle plane;
+  plane.name = "floor";
+  plane.type = core::ShapeType::kPlane;
+  m.obstacles = {plane};
+  m.body_spheres = {core::Sphere{Vec3::Zero(), 0.01}};
+  core::BodyModel b;
+  b.mass = 0.05;
+  b.inertia_body = 2e-6 * Mat3::Identity();
+  b.sphere_count = 1;
+  b.initial_pose.position = Vec3(0.0, 0.0, 0.009);
+  b.initial_twist.linear = Vec3(0.02, 0.0, -0.1);
+  m.bodies = {b};
+  m.initial_attached_body = -1;
+  EXPECT_EQ(core::finalize_model(m), "");
+  core::Data d = core::make_data(m);
+  core::step(m, d);
+  if (out) *out = m;
+  return d;
+}
+
+}  // namespace
+
+TEST(ContactForce, StiffnessBelowTheFloorActsAsDeclaredBitForBit) {
+  // ω h = √(k/m) h = 1.41 at k = 1e5 N/m: below the default floor. The step is bit-identical
+  // to the one without a floor (+∞), and nothing is counted.
+  const core::Data with = ball_step(1e5, core::SolverSettings{}.contact_max_omega_dt);
+  const core::Data without = ball_step(1e5, std::numeric_limits<double>::infinity());
+  EXPECT_EQ(with.bodies[0].position, without.bodies[0].position);
+  EXPECT_EQ(with.bodies[0].linear_velocity, without.bodies[0].linear_velocity);
+  EXPECT_EQ(with.contacts[0].force, without.contacts[0].force);
+  EXPECT_EQ(with.contacts_clamped, 0);
+  EXPECT_EQ(with.contact_clamped_steps, 0);
+  EXPECT_EQ(with.solver.contact_terms[0].stiffness, 1e5);
+  EXPECT_FALSE(with.solver.contact_terms[0].clamped);
+}
+
+TEST(ContactForce, StiffnessAboveTheFloorIsClampedToTheEffectiveMassAndCounted) {
+  // k = 1e12 N/m on m_eff = 0.05 kg at h = 1 ms: clamped to m_eff (ω_c h / h)²; the step is the
+  // one of a material of exactly that stiffness.
+  const double w = core::SolverSettings{}.contact_max_omega_dt;
+  const double k_eff = 0.05 * (w / 1e-3) * (w / 1e-3);
+  const core::Data clamped = ball_step(1e12, w);
+  const core::Data declared = ball_step(k_eff, std::numeric_limits<double>::infinity());
+  EXPECT_DOUBLE_EQ(clamped.solver.contact_terms[0].stiffness, k_eff);
+  EXPECT_TRUE(clamped.solver.contact_terms[0].clamped);
+  EXPECT_EQ(clamped.contacts_clamped, 1);
+  EXPECT_EQ(clamped.contact_clamped_steps, 1);
+  EXPECT_NEAR((clamped.bodies[0].position - declared.bodies[0].position).norm(), 0.0, 1e-15);
+  EXPECT_NEAR(clamped.contacts[0].force.z(), k_eff * 1e-3 + 5.0 * 0.1, 1e-6 * k_eff * 1e-3);
+  // The body–plane bound of a body: its smallest effective mass (here m) times (ω_c / h)².
+  core::Model m;
+  ball_step(1e12, w, &m);
+  EXPECT_NEAR(core::body_contact_stiffness_limit(m, 0), k_eff, 1e-9 * k_eff);
 }

@@ -8,9 +8,12 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <vector>
 
 #include "alloc_counter.hpp"
+#include "stiff_contact_fixture.hpp"
+#include "numen/core/contact_force.hpp"
 #include "numen/core/coupling.hpp"
 #include "numen/core/data.hpp"
 #include "numen/core/feedback.hpp"
@@ -505,3 +508,75 @@ TEST(StepArticulated, PerBodyFeedbackSumsToTheSaturatedComposite) {
 }
 
 }  // namespace
+
+// ---- stiff contacts (issue 17, defect 2): the time-constant floor keeps the step bounded ----
+
+namespace {
+
+/// The tube of trocar_tool() with a 5 g, 12 mm jaw hinged at its tip (revolute about the tube's
+/// x axis, free), both carrying spheres, above a tissue plane (z = −0.22, solid below) and a
+/// lattice of 4.5 mm tissue spheres at 5 mm spacing lying on it (the default scene's organ in
+/// small). No gravity; contact stiffness k_c.
+core::Model stiff_tool(double k_c) {
+  core::Model m = trocar_tool(1000.0, true, k_c);
+  m.gravity = Vec3::Zero();
+  m.material_pairs = {core::MaterialPair{k_c, 10.0, 0.5}};
+  core::BodyModel jaw;
+  jaw.name = "jaw";
+  jaw.mass = 0.005;
+  jaw.inertia_body = Vec3(6e-8, 6e-8, 6e-9).asDiagonal();
+  jaw.sphere_begin = static_cast<int>(m.body_spheres.size());
+  for (int i = 0; i < 4; ++i) m.body_spheres.push_back(core::Sphere{Vec3(0, 0, -0.004 + 0.003 * i), 0.0015});
+  jaw.sphere_count = 4;
+  jaw.initial_pose = core::Pose{Vec3(0, 0, -0.206), rot(M_PI, Vec3::UnitX())};
+  m.bodies.push_back(jaw);
+  const Quat z_to_x = rot(M_PI / 2, Vec3::UnitY());
+  core::JointModel hinge;
+  hinge.name = "hinge";
+  hinge.type = core::JointType::kRevolute;
+  hinge.parent = 0;
+  hinge.child = 1;
+  hinge.frame_parent = core::Pose{Vec3(0, 0, 0.15), z_to_x};
+  hinge.frame_child = core::Pose{Vec3(0, 0, -0.006), z_to_x};
+  m.joints.push_back(hinge);
+  m.obstacles.clear();  // trocar_tool()'s wall: the lattice's plane replaces it
+  numen::test::add_tissue_lattice(m);
+  EXPECT_EQ(core::finalize_model(m), "");
+  return m;
+}
+
+}  // namespace
+
+TEST(StepArticulated, StiffContactsUpToOneTeraNewtonPerMetreStayFiniteAndBounded) {
+  // The hand drives the tube 30 mm into the lattice and the plane behind it and circles there
+  // (radius 20 mm, 4 Hz: 0.5 m/s), turning the shaft: the free jaw's spheres and the tube's hit
+  // the lattice and the plane at changing normals. Without the time-constant floor, k_c = 1e9
+  // and 1e12 N/m threw the tool away within 1–2 s (about 4100 non-finite steps of 5000,
+  // "penetration" of metres). With it every step is finite and the penetration stays within the
+  // static bound of the softest contact the floor allows: the coupling's largest force
+  // F = k_t · 50 mm (depth and circle) on one contact of the lightest effective mass, F / k_min
+  // (k_min = body_contact_stiffness_limit() over the bodies, the smallest stiffness a clamped
+  // contact acts with), times 3 (a suddenly loaded undamped contact reaches 2×), plus one step of
+  // travel at the hand's fastest speed (contacts are found at the step's start).
+  for (double k_c : {1e9, 1e12}) {
+    SCOPED_TRACE(k_c);
+    const core::Model m = stiff_tool(k_c);
+    core::Data d = core::make_data(m);
+    const double k_t = m.bodies[0].coupling.k_t;
+    double k_min = std::numeric_limits<double>::infinity();
+    for (int b = 0; b < m.num_bodies(); ++b) k_min = std::min(k_min, core::body_contact_stiffness_limit(m, b));
+    ASSERT_LT(k_min, k_c);
+    const double f = 4.0, radius = 0.02;
+    const double speed = 2 * M_PI * f * radius + 0.05;  // m/s: the hand's fastest
+    const double bound = 3.0 * k_t * 0.05 / k_min + speed * m.dt;
+    const numen::test::PressedRun r = numen::test::press_and_circle(m, d, 5000, f, radius);
+    if (HasFailure()) return;
+    EXPECT_GT(r.contact_steps, 2500) << "the tool must be pressed into the lattice";
+    EXPECT_GT(r.clamped, 0);
+    EXPECT_GT(d.contact_clamped_steps, 0);
+    EXPECT_LT(r.deepest, bound) << "k_min " << k_min;
+    // The free jaw flaps on its hinge at a few m/s (measured 3.0); thrown away it went at 1e5+.
+    EXPECT_LT(r.fastest, 10.0) << "m/s";
+    EXPECT_LT(d.max_joint_drift, 1e-4);
+  }
+}

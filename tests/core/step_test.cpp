@@ -10,6 +10,8 @@
 #include <gtest/gtest.h>
 
 #include "alloc_counter.hpp"
+#include "stiff_contact_fixture.hpp"
+#include "numen/core/contact_force.hpp"
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"
 #include "numen/core/rigid_body.hpp"
@@ -296,4 +298,54 @@ TEST(StepBehaviour, GodObjectPushedIntoAWallStaysOutsideWithinThePenaltyBound) {
   EXPECT_LT(deepest, 1.2 * d_static);  // approaching at 0.2 m/s adds little
   EXPECT_LT(d.bodies[0].position.x(), 0.0);  // the centre never crosses the wall
   EXPECT_NEAR(d.feedback_wrench.force.norm(), 0.0, 1e-12);  // no device gains in this model
+}
+
+// ---- stiff contacts (issue 17, defect 2): the time-constant floor keeps the step bounded ----
+
+namespace {
+
+/// A rigid 50 g rod of 10 spheres (r = 4 mm, 20 mm apart) along its z axis and a 5 g head of
+/// 4 smaller spheres beyond its tip, one body, coupled in 6 DOF, above a tissue plane (z = −0.22,
+/// solid below) under a lattice of 4.5 mm spheres at 5 mm spacing; contact stiffness k_c.
+core::Model stiff_rod(double k_c) {
+  core::Model m;
+  m.gravity = Vec3::Zero();
+  m.material_pairs = {core::MaterialPair{k_c, 10.0, 0.5}};
+  numen::test::add_tissue_lattice(m);
+  for (int i = 0; i < 10; ++i) m.body_spheres.push_back(core::Sphere{Vec3(0, 0, 0.15 - 0.02 * i), 0.004});
+  for (int i = 0; i < 4; ++i) m.body_spheres.push_back(core::Sphere{Vec3(0, 0.002, 0.156 + 0.003 * i), 0.0015});
+  core::BodyModel rod;
+  rod.name = "rod";
+  rod.mass = 0.055;
+  rod.inertia_body = Vec3(4e-4, 4e-4, 2e-5).asDiagonal();
+  rod.sphere_count = 14;
+  rod.coupling = {1000.0, core::damping_from_ratio(0.85, rod.mass, 1000.0), 1.0, 2e-3};
+  rod.initial_pose = core::Pose{Vec3(0, 0, -0.05), rot(M_PI, Vec3::UnitX())};
+  m.bodies = {rod};
+  m.initial_attached_body = 0;
+  EXPECT_EQ(core::finalize_model(m), "");
+  return m;
+}
+
+}  // namespace
+
+TEST(StepBehaviour, StiffContactsUpToOneTeraNewtonPerMetreStayFiniteAndBoundedOnARigidBody) {
+  // As StepArticulated.StiffContactsUpToOneTeraNewtonPerMetreStayFiniteAndBounded, on one rigid
+  // body: the hand drives the rod's tip 30 mm into the lattice and the plane and circles there.
+  // Bound: the coupling's largest force k_t · 45 mm on the softest contact the floor allows
+  // (body_contact_stiffness_limit()), times 3, plus one step of travel at the hand's speed.
+  for (double k_c : {1e9, 1e12}) {
+    SCOPED_TRACE(k_c);
+    const core::Model m = stiff_rod(k_c);
+    core::Data d = core::make_data(m);
+    const double k_min = core::body_contact_stiffness_limit(m, 0);
+    ASSERT_LT(k_min, k_c);
+    const double bound = 3.0 * m.bodies[0].coupling.k_t * 0.045 / k_min + 0.1 * m.dt;
+    const numen::test::PressedRun r = numen::test::press_and_circle(m, d, 3000, 1.0, 0.015);
+    if (HasFailure()) return;
+    EXPECT_GT(r.contact_steps, 1500) << "the rod must be pressed into the lattice";
+    EXPECT_GT(d.contact_clamped_steps, 0);
+    EXPECT_LT(r.deepest, bound) << "k_min " << k_min;
+    EXPECT_LT(r.fastest, 1.0) << "m/s: the hand moves at 0.1 m/s";
+  }
 }

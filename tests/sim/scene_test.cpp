@@ -545,6 +545,30 @@ name = "y"
   EXPECT_EQ(e.line(), line_of(text, "[[device.axis]]"));
 }
 
+TEST(SceneErrors, AContactStiffnessTheStepCannotResolveIsAWarningNamingTheBody) {
+  // The mini scene's tool: 0.1 kg, its sphere at the COM (effective mass 0.1 kg); at dt = 1 ms the
+  // time-constant floor ω h ≤ 5 lets a contact act with at most 0.1 · (5 / 1 ms)² = 2.5e6 N/m.
+  TempDir dir;
+  const std::string stiff = kMini + "\n[contact_default]\nstiffness = 1e9\n";
+  const Scene s = load_scene(dir.write("stiff.toml", stiff));
+  ASSERT_EQ(s.warnings.size(), 1u);
+  const std::string& w = s.warnings[0];
+  EXPECT_NE(w.find("body \"tool\""), std::string::npos) << w;
+  EXPECT_NE(w.find("1e+09 N/m"), std::string::npos) << w;
+  EXPECT_NE(w.find("2.5e+06 N/m"), std::string::npos) << w;
+  EXPECT_NE(w.find("contact_max_omega_dt"), std::string::npos) << w;
+  // Below the floor, or with the floor raised in [solver]: no warning.
+  const Scene soft = load_scene(dir.write("soft.toml", kMini + "\n[contact_default]\nstiffness = 2e6\n"));
+  EXPECT_TRUE(soft.warnings.empty());
+  const Scene raised = load_scene(
+      dir.write("raised.toml", kMini + "\n[contact_default]\nstiffness = 1e9\n[solver]\ncontact_max_omega_dt = 100.0\n"));
+  EXPECT_TRUE(raised.warnings.empty()) << raised.warnings.front();
+  EXPECT_DOUBLE_EQ(raised.model.solver.contact_max_omega_dt, 100.0);
+  // Out of range: an error naming the key.
+  const InputError e = load_error(dir, kMini + "\n[solver]\ncontact_max_omega_dt = 0.0\n");
+  EXPECT_EQ(e.key(), "solver.contact_max_omega_dt");
+}
+
 TEST(SceneErrors, DampingOutsideThePapersRuleIsAWarningNotAnError) {
   TempDir dir;
   // ζ = 0.5 → γ/√(mk) = 1.0 < 1.4.

@@ -22,6 +22,7 @@ struct Data;
 struct Contact;
 struct MaterialPair;
 struct BodyState;
+struct BodyModel;
 
 using Vec12 = Eigen::Matrix<double, 12, 1>;     ///< Stacked (v_a, ω_a, v_b, ω_b).
 using Mat3x12 = Eigen::Matrix<double, 3, 12>;   ///< Twists of a pair → a 3-vector.
@@ -60,6 +61,27 @@ void contact_stiffness_damping(const Vec3& normal, const Vec3& r_a, const Vec3& 
                                const MaterialPair& material, Mat12& stiffness,
                                Mat12& damping) noexcept;
 
+/// Effective mass (kg) of a contact along its unit `normal`: 1 / Σ (1/m + (r × n)ᵀ I_w⁻¹ (r × n))
+/// over the contact's dynamic bodies (a, and b when not null), r the lever arm (contact point −
+/// COM, world), I_w the world inertia from the body's orientation; the mass a unit normal impulse
+/// at the contact point meets. A body whose motion is imposed (`*_imposed`: kDirect) counts as
+/// infinitely heavy; +∞ when both are. Joints are left out: a jointed body's contact meets at
+/// least this mass, so the floor below clamps on the safe side.
+double contact_effective_mass(const BodyModel& a, const BodyState& sa, const Vec3& r_a,
+                              bool a_imposed, const BodyModel* b, const BodyState* sb,
+                              const Vec3& r_b, bool b_imposed, const Vec3& normal) noexcept;
+
+/// The contact time-constant floor (SolverSettings::contact_max_omega_dt): the largest stiffness
+/// (N/m) a contact of effective mass `effective_mass` (kg) acts with at step `dt` (s),
+/// m_eff (ω_c h / dt)²; +∞ when the floor is off or the mass infinite.
+double contact_stiffness_limit(double effective_mass, double dt, double max_omega_dt) noexcept;
+
+/// Smallest contact_stiffness_limit() a contact of `body` can get (N/m): the effective mass at
+/// each of its spheres' centres, minimised over the normal direction (the largest eigenvalue of
+/// [r]×ᵀ I⁻¹ [r]×), without joints and at Model::dt. A material stiffness above it is clamped on
+/// some contacts of the body; for scene loaders' warnings. +∞ for a body without spheres.
+double body_contact_stiffness_limit(const Model& model, int body);
+
 /// Contact force stage: for each contact in data.contacts[0, num_contacts)
 /// (filled by detect_contacts), computes the penalty force into
 /// Contact::force, the lever arms, normal velocity v_n and activity into
@@ -70,7 +92,11 @@ void contact_stiffness_damping(const Vec3& normal, const Vec3& r_a, const Vec3& 
 /// motion is imposed). Contacts beyond the room of the contact scratch
 /// (contact_capacity(model): 0 for a model in which nothing can collide) are
 /// dropped as an overflow: num_contacts is cut to the room, contacts_dropped
-/// counts them and kContactOverflow is set. Fixed contact order. No allocation.
+/// counts them and kContactOverflow is set. The stiffness of each contact is the material's, clamped
+/// to contact_stiffness_limit() of its effective mass (the time-constant floor; stored in
+/// ContactTerm::stiffness; Data::contacts_clamped is reset here and counts them, with the node
+/// contacts' of compute_net_forces(); step() counts the steps in Data::contact_clamped_steps).
+/// Fixed contact order. No allocation.
 void compute_contact_forces(const Model& model, Data& data) noexcept;
 
 }  // namespace numen::core

@@ -98,6 +98,10 @@ struct Data {
   int contacts_dropped = 0;        ///< Contacts lost to the capacity this step.
   std::int64_t contact_overflow_steps = 0;  ///< Steps with an overflow since reset.
   double max_penetration = 0.0;    ///< Deepest contact this step (m).
+  /// Contacts whose stiffness the time-constant floor lowered this step
+  /// (SolverSettings::contact_max_omega_dt; they act with k_eff < k, so penetrate more).
+  int contacts_clamped = 0;
+  std::int64_t contact_clamped_steps = 0;  ///< Steps with a clamped contact since reset.
   Wrench coupling_wrench;          ///< Coupling (Eq. 2) on the attached body, at its COM.
   /// Device feedback, world, about the attached body's target point: Eq. 8 of
   /// the attached body plus, by Eq. 9, every other targeted body's Eq. 8

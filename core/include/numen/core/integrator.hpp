@@ -41,6 +41,10 @@ struct ContactTerm {
   double normal_force = 0.0; ///< f_n (N), ≥ 0.
   double normal_velocity = 0.0;  ///< v_n = n · v_rel at the step's start (m/s).
   bool active = false;       ///< f_n > 0: the contact contributes forces and Jacobians.
+  /// k_eff (N/m): the material pair's stiffness, clamped by the contact time-constant floor
+  /// (SolverSettings::contact_max_omega_dt); the force and the Jacobian of the step use it.
+  double stiffness = 0.0;
+  bool clamped = false;      ///< k_eff < the material pair's stiffness this step.
   /// Weight W = (h c + h² k) n nᵀ + h μ (I − n nᵀ) = α n nᵀ + β I (N·s/m),
   /// stored as its two scalars: the contact's contribution to A = M − hD − h²K
   /// is Gᵀ W G (G: contact_velocity_jacobian).

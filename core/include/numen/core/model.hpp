@@ -125,6 +125,23 @@ struct MaterialPair {
 struct SolverSettings {
   int max_iterations = 64;   ///< Preconditioned conjugate gradient iterations, at most.
   double tolerance = 1e-10;  ///< Relative residual ‖r‖/‖b‖ that ends the iteration.
+  /// Contact time-constant floor, as ω_c h (dimensionless, > 0; +∞ switches it off): a penalty
+  /// contact acts with the stiffness k_eff = min(k, m_eff (ω_c h / h)²), h = Model::dt, m_eff its
+  /// effective mass along the normal (contact_effective_mass(); a net node's mass for node
+  /// contacts), i.e. its time constant 1/ω = √(m_eff / k_eff) never falls below h / (ω_c h)
+  /// (the role of MuJoCo's solref clamp, timeconst ≥ 2 h). The linearised step is stable on its
+  /// own linearisation at any stiffness, but not on what it freezes for the step (the depth found
+  /// at the step's start, the normal, the lever arms): far above ω h = 5 those errors, ∝ k h²/m,
+  /// threw the shipped articulated tool away (docs/dynamics.md, "Stiff contacts"). Every shipped
+  /// scene stays below it (largest: the default scene's jaws, ω h = 3.47 at 2e4 N/m), so it
+  /// changes nothing there.
+  double contact_max_omega_dt = 5.0;
+  /// The same floor for the node contacts of deformable nets (ω h on 1 / (1/m_node + the body's
+  /// mobility)). A node is a point mass: no lever arm of its own, so only the onset and a sphere
+  /// pair's normal are frozen, and the shipped nets run their light nodes on 2e4 N/m at ω h up to
+  /// 30–50 without harm; at 1e12 N/m the nets stay bounded with a floor of 50–200 and the
+  /// endobag diverges without one. 100 keeps every shipped node contact unclamped.
+  double node_contact_max_omega_dt = 100.0;
 };
 
 /// Baumgarte stabilisation of the joint constraints (paper Eq. 5): the

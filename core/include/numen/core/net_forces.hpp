@@ -18,7 +18,10 @@ struct Data;
 ///   Data::body_wrench of the rigid component (at the COM) and summed in
 ///   NetOutput::tie_wrench;
 ///   each node contact's penalty force (contact_penalty_force(), the node on
-///   side a), its reaction added to body_b's wrench.
+///   side a), its reaction added to body_b's wrench; its stiffness clamped by the
+///   contact time-constant floor (SolverSettings::node_contact_max_omega_dt) on the effective mass 1 / (1/m_node + the body's
+///   mobility along n, contact_effective_mass()) into NodeContact::stiffness, and
+///   counted in Data::contacts_clamped (contact_force.hpp).
 /// Also stores the linearisation the implicit solve needs: spring directions
 /// (SweepSpring; a spring of zero length keeps its last direction) and
 /// lengths (NetScratch::spring_length), lever arms ρ = R_b r

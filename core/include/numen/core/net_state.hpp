@@ -38,6 +38,9 @@ struct NodeContact {
   Vec3 r_b = Vec3::Zero();       ///< Contact point − COM of body_b (m, world); 0 when static.
   double normal_velocity = 0.0;  ///< v_n = n · (v_node − v_b(point)) at the step's start (m/s).
   bool active = false;           ///< f_n > 0.
+  /// k_eff (N/m): the material pair's stiffness, clamped by the contact time-constant floor
+  /// (SolverSettings::node_contact_max_omega_dt) on the node's mass and the body's effective mass.
+  double stiffness = 0.0;
   double weight_normal = 0.0;    ///< α of the implicit weight W = α n nᵀ + β I (kg = N·s²/m).
   double weight_isotropic = 0.0; ///< β (kg).
 };

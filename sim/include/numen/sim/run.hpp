@@ -180,6 +180,9 @@ struct RunSummary {
   std::int64_t rejected_samples = 0;       ///< Axis samples rejected by the checks.
   std::int64_t invalid_periods = 0;        ///< Periods whose sample was not valid (target held).
   std::int64_t contact_overflow = 0;       ///< Steps that ran out of contact capacity.
+  /// Steps with a contact whose stiffness the time-constant floor lowered
+  /// (core::Data::contact_clamped_steps; core::SolverSettings::contact_max_omega_dt).
+  std::int64_t contact_clamped_steps = 0;
   int contacts_max = 0;           ///< Rigid sphere contacts in one step (node contacts apart).
   int solver_iterations_max = 0;  ///< Iterations of the implicit solve in one step.
   double solver_iterations_mean = 0.0;  ///< Mean over the steps.

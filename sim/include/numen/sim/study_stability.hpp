@@ -8,7 +8,9 @@
 ///    time step h 1e-4…1e-2 s, undamped (ζ = 0) and with the scenes' damping ζ = 0.85;
 ///  - "contact": a 10 mm sphere at rest on a plane, its target 20 mm inside; contact stiffness
 ///    1e2…1e8 N/m × h × mass (coupling scaled with the mass: ω_t = √(k_t/m) = 44.7 rad/s, ζ =
-///    0.85), undamped contact and contact damping ratio 0.5;
+///    0.85), undamped contact and contact damping ratio 0.5; its static penetration F/k uses the
+///    stiffness the contact acts with, k_c clamped by the core's time-constant floor
+///    (core::contact_stiffness_limit());
 ///  - "articulation": two bodies joined by a revolute joint (Eq. 4–5), the held one 0.1 kg, the
 ///    other 0.1 kg × ratio, ratio 1e-4…1e4, target 20 mm aside;
 ///  - "extreme": a target teleporting 1 m (and half a turn) in one period, free and into a wall;
@@ -20,6 +22,11 @@
 ///    check and core::Data given NaN/Inf directly.
 ///  - "boundary": the symplectic Euler on the undamped (and ζ = 0.85) spring swept in ω h and
 ///    bisected: its measured stability limit against theory (ω h = 2; 2(√(1+ζ²) − ζ) damped).
+///  - "scenes": every shipped scene (sim/scenes/*.toml) through run_scene(), its contact stiffness
+///    and, separately, its coupling stiffness k_t swept 1e4…1e12 N/m (quick: 1e12); verdict
+///    from the run's summary (study_stability_scenes.cpp): no rollback, the tool and every body at
+///    most penetration_factor × as deep as the hand went plus 1 mm, free bodies below 10 m/s,
+///    joint drift below 5 mm.
 ///
 /// Verdict of a run (StabilityLimits; docs/results.md gives the reasons):
 ///  - stable: every step finite and accepted (core::Data::nonfinite_steps stays 0: the core's
@@ -79,7 +86,7 @@ struct StabilityOptions {
 
 /// One run and its verdict: one line of stability_<family>.csv.
 struct StabilityRow {
-  std::string family;      ///< "coupling", "contact", "articulation", "extreme".
+  std::string family;      ///< "coupling", "contact", "articulation", "extreme", "scenes".
   std::string case_name;   ///< e.g. "coupling-undamped", "teleport-wall", "bus-nonfinite".
   std::string integrator;  ///< Scene-file name ("implicit-euler", …).
   double dt_s = 0.0;
@@ -127,7 +134,7 @@ struct StabilityResult {
   double wall_s = 0.0;  ///< Wall time of the study (s).
 };
 
-/// "coupling", "contact", "articulation", "extreme", "boundary".
+/// "coupling", "contact", "articulation", "extreme", "boundary", "scenes".
 const std::vector<std::string>& stability_family_names();
 
 /// Runs the study. Throws InputError for an unknown family or for "articulation" named in

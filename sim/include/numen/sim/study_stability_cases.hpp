@@ -130,6 +130,16 @@ std::vector<StabilityRow> scene_extreme_cases(const StabilityOptions& o,
 /// Progress ticks scene_extreme_cases() makes: 20 per deformable run, 5 per loop run.
 std::int64_t scene_extreme_runs(const StabilityOptions& o);
 
+/// "scenes": every shipped scene (`scene_dir`/*.toml) through run_scene() with its contact
+/// stiffness and, separately, its coupling stiffness swept to 1e12 N/m (study_stability_scenes.cpp).
+/// A scene this build cannot load (NUMEN_WITH_* options) gets one "scenes <name>: reason" line in
+/// `skipped`.
+std::vector<StabilityRow> scene_stiffness_family(const StabilityOptions& o,
+                                                 const std::string& scene_dir, const Tick& tick,
+                                                 std::vector<std::string>& skipped);
+/// Number of runs scene_stiffness_family() makes (for the progress bar).
+std::int64_t scene_stiffness_runs(const StabilityOptions& o, const std::string& scene_dir);
+
 /// The integrators of `o` (all three when empty).
 const std::vector<core::Integrator>& integrators_of(const StabilityOptions& o);
 
