@@ -3,8 +3,8 @@
 /// driven by its recorded trajectory, straight into core::step (no bus, no encoder
 /// quantisation: the integrator's error alone).
 ///
-/// Input. The recording gives tool poses (sim/data, JIGSAWS at 30 Hz, resampled linearly by the
-/// scene): piecewise linear, so its velocity jumps at every sample and the coupling damping
+/// Input. The recording gives tool poses (sim/data, JIGSAWS at 30 Hz, interpolated linearly by the
+/// trajectory): piecewise linear, so its velocity jumps at every sample and the coupling damping
 /// force γ (v_t − v) with it — a jump a one-step method integrates with an O(h) error whatever
 /// its order. The case therefore takes the instrument's axis values (instrument_axes(), the
 /// encoder values of the simulated instrument) every 40 ms and joins them by a C¹ cubic

@@ -45,7 +45,7 @@ struct TrajectorySample {
 /// Rotation between `q0` (s = 0) and `q1` (s = 1) on the shortest arc:
 /// exp(s · log(q1 q0⁻¹)) q0, i.e. a rotation about a fixed world axis at a
 /// constant rate. Same result as Eigen's slerp, computed with atan2 instead of
-/// acos so that it stays accurate for the tiny steps of a 1 kHz resampling.
+/// acos so that it stays accurate for the tiny steps between the periods of a 1 kHz loop.
 /// Both inputs must be unit quaternions; the result is unit and lies in the
 /// hemisphere of `q0` (sign continuity).
 core::Quat slerp_shortest(const core::Quat& q0, const core::Quat& q1, double s) noexcept;
