@@ -13,7 +13,8 @@
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   FuzzedDataProvider in(data, size);
-  numen::hal::DeviceEmulator emulator(numen::fuzz::device_config(in.ConsumeIntegral<std::uint8_t>()));
+  numen::hal::DeviceEmulator emulator(
+      numen::fuzz::device_config(in.ConsumeIntegral<std::uint8_t>()));
   numen::hal::SimBus bus{numen::hal::SimBusSettings{}};
   static const std::vector<std::uint32_t> ids = numen::fuzz::canopen_cob_ids(8, {0x77F});
   numen::fuzz::run_events(

@@ -5,8 +5,6 @@
 /// and within the configured ranges.
 
 #include <cstdint>
-#include <cstdio>
-#include <cstdlib>
 
 #include "fuzz_input.hpp"
 #include "numen/hal/force_sensor.hpp"
@@ -25,8 +23,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         if (s.valid && !(s.wrench.force.allFinite() && s.wrench.torque.allFinite() &&
                          s.wrench.force.norm() <= config.max_force &&
                          s.wrench.torque.norm() <= config.max_torque)) {
-          std::fprintf(stderr, "force_sensor_fuzz: a valid sample out of range or not finite\n");
-          std::abort();
+          numen::fuzz::finding("force_sensor: a valid sample out of range or not finite");
         }
       });
   return 0;

@@ -6,16 +6,17 @@
 /// from the end of the input, bytes from the front). Harness code only: allocates, not
 /// real-time.
 
+#include <fuzzer/FuzzedDataProvider.h>
 #include <unistd.h>
 
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <stdexcept>
 #include <string>
+#include <string_view>
 #include <vector>
-
-#include <fuzzer/FuzzedDataProvider.h>
 
 #include "numen/hal/bus.hpp"
 #include "numen/hal/can_frame.hpp"
@@ -44,6 +45,42 @@ inline const std::string& input_file(const std::uint8_t* data, std::size_t size,
     std::abort();
   }
   return path;
+}
+
+/// Reports a finding that is not a sanitizer's (a broken invariant): prints `what` and
+/// `detail` to stderr and aborts, which libFuzzer saves as a crash input.
+[[noreturn]] inline void finding(const char* what, std::string_view detail = {}) {
+  std::fprintf(stderr, "fuzz finding: %s: '%.*s'\n", what, static_cast<int>(detail.size()),
+               detail.data());
+  std::abort();
+}
+
+/// Calls `f(line)` for every '\n'-separated line of `text`, the line feed excluded (a text
+/// ending in '\n' ends with an empty line).
+template <class F>
+void for_each_line(std::string_view text, F f) {
+  std::size_t start = 0;
+  while (start <= text.size()) {
+    std::size_t end = text.find('\n', start);
+    if (end == std::string_view::npos) end = text.size();
+    f(text.substr(start, end - start));
+    start = end + 1;
+  }
+}
+
+/// For a line-based format: runs `load(path)` on the input written as a file (input_file())
+/// when its size is divisible by 8, so that an input always takes the same path; writing the
+/// file costs more than parsing the lines, and the loader's own code is the line loop. The
+/// loader's located error, std::runtime_error, is the expected failure.
+template <class Load>
+void load_file_sometimes(const std::uint8_t* data, std::size_t size, const char* suffix,
+                         Load load) {
+  if (size % 8 != 0) return;
+  try {
+    (void)load(input_file(data, size, suffix));
+  } catch (const std::runtime_error&) {
+    // a located error: the expected outcome for a bad file
+  }
 }
 
 /// COB-IDs a CANopen network of nodes 1..max_node uses (CiA 301 predefined connection set):

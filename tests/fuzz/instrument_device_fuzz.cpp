@@ -7,8 +7,6 @@
 
 #include <cmath>
 #include <cstdint>
-#include <cstdio>
-#include <cstdlib>
 
 #include "fuzz_input.hpp"
 #include "numen/hal/instrument_device.hpp"
@@ -22,7 +20,8 @@ bool finite(const numen::core::Pose& p) {
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   FuzzedDataProvider in(data, size);
-  numen::hal::InstrumentDevice device(numen::fuzz::device_config(in.ConsumeIntegral<std::uint8_t>()));
+  numen::hal::InstrumentDevice device(
+      numen::fuzz::device_config(in.ConsumeIntegral<std::uint8_t>()));
   numen::hal::SimBus bus{numen::hal::SimBusSettings{}};
   static const std::vector<std::uint32_t> ids = numen::fuzz::canopen_cob_ids(8);
   numen::fuzz::run_events(
@@ -30,10 +29,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       [&](std::int64_t now_ns) {
         bus.set_time_ns(now_ns);
         const numen::hal::DeviceSample s = device.sample(now_ns);
-        if (!finite(s.target)) {
-          std::fprintf(stderr, "instrument_device_fuzz: non-finite target pose\n");
-          std::abort();
-        }
+        if (!finite(s.target)) numen::fuzz::finding("instrument_device: non-finite target pose");
         numen::core::Wrench w;
         w.force = numen::core::Vec3(1.0, -2.0, 0.5);
         (void)device.command(w, bus.controller(), now_ns);

@@ -8,22 +8,16 @@
 #include <algorithm>
 #include <array>
 #include <cstdint>
-#include <cstdio>
-#include <cstdlib>
 #include <span>
 #include <vector>
 
+#include "fuzz_input.hpp"
 #include "numen/hal/cobs.hpp"
 #include "numen/hal/serial_frame.hpp"
 
 namespace {
 
 using numen::hal::CanFrame;
-
-[[noreturn]] void fail(const char* what) {
-  std::fprintf(stderr, "serial_fuzz: %s\n", what);
-  std::abort();
-}
 
 bool same(const CanFrame& a, const CanFrame& b) {
   if (a.id != b.id || a.flags != b.flags || a.len != b.len) return false;
@@ -32,15 +26,16 @@ bool same(const CanFrame& a, const CanFrame& b) {
 
 void check_round_trip(const CanFrame& frame) {
   if (numen::hal::check_frame(frame) != numen::hal::FrameError::kNone)
-    fail("the decoder returned a malformed frame");
+    numen::fuzz::finding("serial: the decoder returned a malformed frame");
   std::array<std::uint8_t, numen::hal::kSerialMaxFrameOnLine> line{};
   const auto encoded = numen::hal::encode_serial_frame(frame, line);
-  if (!encoded.ok()) fail("a decoded frame does not encode");
+  if (!encoded.ok()) numen::fuzz::finding("serial: a decoded frame does not encode");
   numen::hal::SerialFrameDecoder decoder;
   CanFrame again;
   const auto r = decoder.feed(std::span(line.data(), encoded.length), again);
-  if (!r.frame_ready || r.consumed != encoded.length) fail("an encoded frame does not decode");
-  if (!same(frame, again)) fail("decode(encode(frame)) differs");
+  if (!r.frame_ready || r.consumed != encoded.length)
+    numen::fuzz::finding("serial: an encoded frame does not decode");
+  if (!same(frame, again)) numen::fuzz::finding("serial: decode(encode(frame)) differs");
 }
 
 }  // namespace
@@ -59,7 +54,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     while (!rest.empty()) {
       CanFrame frame;
       const auto r = decoder.feed(rest, frame);
-      if (r.consumed == 0 || r.consumed > rest.size()) fail("feed() consumed nothing or too much");
+      if (r.consumed == 0 || r.consumed > rest.size())
+        numen::fuzz::finding("serial: feed() consumed nothing or too much");
       if (r.frame_ready) {
         ++frames;
         check_round_trip(frame);
@@ -69,19 +65,22 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     }
     piece = 1 + (piece * 37 + 11) % 64;
   }
-  if (decoder.counters().frames != frames) fail("counters().frames != frames returned");
-  if (decoder.buffered() > numen::hal::kSerialMaxEncoded) fail("buffered() over the chunk size");
+  if (decoder.counters().frames != frames)
+    numen::fuzz::finding("serial: counters().frames != frames returned");
+  if (decoder.buffered() > numen::hal::kSerialMaxEncoded)
+    numen::fuzz::finding("serial: buffered() over the chunk size");
 
   // COBS on its own: any packet round-trips.
   std::vector<std::uint8_t> encoded(numen::hal::cobs_max_encoded_length(size));
   const auto e = numen::hal::cobs_encode(input, encoded);
-  if (!e.ok() || e.length != numen::hal::cobs_encoded_length(input)) fail("cobs_encode failed");
+  if (!e.ok() || e.length != numen::hal::cobs_encoded_length(input))
+    numen::fuzz::finding("serial: cobs_encode failed");
   if (std::find(encoded.begin(), encoded.begin() + e.length, 0) != encoded.begin() + e.length)
-    fail("a COBS encoding holds a zero");
+    numen::fuzz::finding("serial: a COBS encoding holds a zero");
   std::vector<std::uint8_t> decoded(size);
   const auto d = numen::hal::cobs_decode(std::span(encoded.data(), e.length), decoded);
   if (!d.ok() || d.length != size || !std::equal(decoded.begin(), decoded.end(), data))
-    fail("cobs_decode(cobs_encode(x)) != x");
+    numen::fuzz::finding("serial: cobs_decode(cobs_encode(x)) != x");
   // And any input as COBS bytes: decodes or fails cleanly, never past the output.
   std::vector<std::uint8_t> out(size);
   (void)numen::hal::cobs_decode(input, out);

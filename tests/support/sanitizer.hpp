@@ -4,9 +4,9 @@
 /// "Build options"), and NUMEN_SKIP_UNDER_SANITIZER for the few tests that cannot run there.
 /// Header-only, for test files and tests/support.
 
-#include <string_view>
-
 #include <gtest/gtest.h>
+
+#include <string_view>
 
 // A sanitizer that brings its own heap and shadow memory (ASan, TSan, MSan): it intercepts
 // malloc and operator new, and ignores mlock/mlockall.
@@ -61,18 +61,18 @@ constexpr bool under_sanitizer(std::string_view name = {}) {
 /// Skips the current test in a sanitizer build (any NUMEN_SANITIZE) with `reason`, which ctest
 /// and the gtest output show; in a normal build it does nothing. For tests that a sanitizer
 /// makes too slow or cannot run at all; name the reason (what the sanitizer changes).
-#define NUMEN_SKIP_UNDER_SANITIZER(reason)                                                \
-  do {                                                                                    \
-    if constexpr (::numen::test::under_sanitizer())                                       \
+#define NUMEN_SKIP_UNDER_SANITIZER(reason)                                              \
+  do {                                                                                  \
+    if constexpr (::numen::test::under_sanitizer())                                     \
       GTEST_SKIP() << "skipped under -fsanitize=" << ::numen::test::kSanitizers << ": " \
-                   << (reason);                                                           \
+                   << (reason);                                                         \
   } while (false)
 
 /// Skips the current test under a sanitizer with its own heap and shadow memory (ASan, TSan,
 /// MSan: NUMEN_SANITIZER_HEAP) with `reason`; does nothing in other builds, UBSan alone included.
-#define NUMEN_SKIP_UNDER_SANITIZER_HEAP(reason)                                            \
-  do {                                                                                    \
-    if constexpr (NUMEN_SANITIZER_HEAP)                                                   \
+#define NUMEN_SKIP_UNDER_SANITIZER_HEAP(reason)                                         \
+  do {                                                                                  \
+    if constexpr (NUMEN_SANITIZER_HEAP)                                                 \
       GTEST_SKIP() << "skipped under -fsanitize=" << ::numen::test::kSanitizers << ": " \
-                   << (reason);                                                           \
+                   << (reason);                                                         \
   } while (false)
