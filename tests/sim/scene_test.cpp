@@ -369,6 +369,33 @@ TEST(SceneErrors, TomlSyntaxError) {
   EXPECT_NE(e.message().find("TOML syntax"), std::string::npos) << what;
 }
 
+// toml++ 3.3.0 (upstream marzer/tomlplusplus#295, fixed by PR #305) reaches TOML_UNREACHABLE,
+// undefined behaviour, on a non-ASCII character in U+00A1..U+0499 where the parser skips
+// whitespace; sim/CMakeLists.txt compiles the parser with that fix. The 2-byte file is the
+// fuzz corpus's regression input (tests/fuzz/corpus/scene); under UBSan the unfixed parser aborts.
+TEST(SceneErrors, NonAsciiCharacterInABarePositionIsALocatedSyntaxError) {
+  const std::string path =
+      std::string(NUMEN_SOURCE_DIR) + "/tests/fuzz/corpus/scene/toml-issue-295-middle-dot";
+  try {
+    (void)load_scene(path);
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.file(), path);
+    EXPECT_EQ(e.line(), 1) << e.what();
+    EXPECT_EQ(e.column(), 1) << e.what();
+    EXPECT_NE(e.message().find("TOML syntax"), std::string::npos) << e.what();
+  }
+  // The same character class after a value and as a key on a later line (U+00E9, U+0416).
+  TempDir dir;
+  for (const std::string bad : {"\xC3\xA9", "\xD0\x96"}) {
+    const std::string text = replace(kMini, "mass = 0.1", "mass = 0.1 " + bad + "\n" + bad + " = 1");
+    const InputError e = load_error(dir, text, "non_ascii.toml");
+    EXPECT_EQ(e.line(), line_of(text, "mass = 0.1")) << e.what();
+    EXPECT_GT(e.column(), 0) << e.what();
+    EXPECT_NE(e.message().find("TOML syntax"), std::string::npos) << e.what();
+  }
+}
+
 TEST(SceneErrors, UnknownTopLevelKeyIsATypo) {
   TempDir dir;
   const std::string text = replace(kMini, "gravity = [", "gravitty = [");

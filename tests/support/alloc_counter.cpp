@@ -1,20 +1,16 @@
 /// @file alloc_counter.cpp
-/// Global allocation hooks for the zero-allocation tests (DESIGN.md, core).
+/// Global allocation hooks for the zero-allocation tests (DESIGN.md, core): replacements of the
+/// allocation functions in a normal build, the sanitizer's malloc hooks under ASan/TSan.
 
 #include "alloc_counter.hpp"
 
+#include <cstdio>
 #include <cstdlib>
 #include <new>
 
 #include <Eigen/Core>
 
-extern "C" {
-void* __libc_malloc(std::size_t);
-void* __libc_calloc(std::size_t, std::size_t);
-void* __libc_realloc(void*, std::size_t);
-void* __libc_memalign(std::size_t, std::size_t);
-void __libc_free(void*);
-}
+#include "sanitizer.hpp"
 
 namespace {
 thread_local std::int64_t g_count = 0;
@@ -25,6 +21,40 @@ inline void note(std::size_t n) noexcept {
   if (g_depth > 0) ++g_count;
 }
 }  // namespace
+
+#if NUMEN_SANITIZER_HEAP
+// Under ASan/TSan the sanitizer's allocator must serve every allocation (its redzones and
+// quarantine are what detect heap errors; replacing malloc here would put the tests on glibc's
+// heap, unchecked, and mix the two heaps). The sanitizer's own malloc hooks count instead: they
+// run for malloc, calloc, realloc, the aligned forms and every operator new, in the allocating
+// thread. (Declared here: GCC does not ship <sanitizer/allocator_interface.h>.)
+extern "C" int __sanitizer_install_malloc_and_free_hooks(
+    void (*malloc_hook)(const volatile void*, std::size_t),
+    void (*free_hook)(const volatile void*));
+
+namespace {
+void on_malloc(const volatile void*, std::size_t n) { note(n); }
+void on_free(const volatile void*) {}
+// Installed before main(); the sanitizer holds a few hooks: if none is left, no test may pass
+// by counting nothing.
+[[maybe_unused]] const bool g_hooks_installed = [] {
+  if (__sanitizer_install_malloc_and_free_hooks(&on_malloc, &on_free) == 0) {
+    std::fputs("alloc_counter: __sanitizer_install_malloc_and_free_hooks failed\n", stderr);
+    std::abort();
+  }
+  return true;
+}();
+}  // namespace
+
+#else  // no sanitizer heap: replace the allocation functions and forward them to glibc
+
+extern "C" {
+void* __libc_malloc(std::size_t);
+void* __libc_calloc(std::size_t, std::size_t);
+void* __libc_realloc(void*, std::size_t);
+void* __libc_memalign(std::size_t, std::size_t);
+void __libc_free(void*);
+}
 
 extern "C" {
 void* malloc(std::size_t n) {
@@ -92,6 +122,8 @@ void operator delete(void* p, std::align_val_t) noexcept { __libc_free(p); }
 void operator delete[](void* p, std::align_val_t) noexcept { __libc_free(p); }
 void operator delete(void* p, std::size_t, std::align_val_t) noexcept { __libc_free(p); }
 void operator delete[](void* p, std::size_t, std::align_val_t) noexcept { __libc_free(p); }
+
+#endif  // NUMEN_SANITIZER_HEAP
 
 namespace numen::test {
 

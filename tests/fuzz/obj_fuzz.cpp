@@ -1,0 +1,19 @@
+/// @file obj_fuzz.cpp
+/// libFuzzer harness of the OBJ mesh loader (sim/obj_mesh.hpp, tinyobjloader): the input as
+/// an .obj file through load_obj_mesh(). The only accepted failure is sim::InputError; any
+/// other exception is a finding.
+
+#include <cstdint>
+
+#include "fuzz_input.hpp"
+#include "numen/sim/input_error.hpp"
+#include "numen/sim/obj_mesh.hpp"
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  try {
+    (void)numen::sim::load_obj_mesh(numen::fuzz::input_file(data, size, ".obj"));
+  } catch (const numen::sim::InputError&) {
+    // a located error: the expected outcome for a bad mesh
+  }
+  return 0;
+}
