@@ -524,14 +524,28 @@ RunSummary run_impedance_scene(const Scene& scene, const RunOptions& options) {
   const double duration = options.duration_s >= 0.0 ? options.duration_s : scene.duration_s;
   const auto steps = static_cast<std::int64_t>(std::llround(duration / scene.model.dt));
   const bool real = parse_bus_spec(options.bus.spec).real();
-  // A real bus streams its trace through the TraceWriter; the in-memory trace is for sim runs.
+  // A real bus streams its trace through the TraceWriter; the in-memory trace is for sim runs,
+  // one record per period kept until the run ends: refused before anything is allocated when
+  // it would not fit the budget (a long --duration with --trace).
+  if (!options.trace_path.empty() && !real) {
+    const double bytes = static_cast<double>(steps) * static_cast<double>(sizeof(TraceRecord));
+    if (bytes > static_cast<double>(kMaxInMemoryTraceBytes))
+      throw InputError("", 0, 0, "--trace",
+                       "a simulated run keeps one trace record (" +
+                           std::to_string(sizeof(TraceRecord)) + " bytes) per period until it "
+                           "ends: " + std::to_string(steps) + " periods need " +
+                           std::to_string(static_cast<long long>(bytes / (1 << 20))) +
+                           " MiB, more than the " + std::to_string(kMaxInMemoryTraceBytes >> 20) +
+                           " MiB a trace may take; shorten --duration");
+  }
   SceneRunner runner(scene,
                      options.trace_path.empty() || real ? 0 : static_cast<std::size_t>(steps),
                      options.bus, options.realtime, options.overrun_limit);
   if (options.compute_phase_s >= 0.0) {
     if (!(options.compute_phase_s < scene.model.dt))
-      throw std::invalid_argument("--phase " + std::to_string(options.compute_phase_s) +
-                                  " s: must be below the period dt");
+      throw InputError("", 0, 0, "--phase",
+                       format_input_number(options.compute_phase_s) +
+                           " s must be below the period dt = " + format_input_number(scene.model.dt) + " s");
     runner.set_compute_phase_ns(static_cast<std::int64_t>(std::llround(options.compute_phase_s * 1e9)));
   }
   // The writer thread is started before the real-time setup pins and promotes this thread.

@@ -13,6 +13,7 @@
 #include "build_features.hpp"
 #include "child_process.hpp"
 #include "numen/sim/scene.hpp"
+#include "sanitizer.hpp"
 #include "scene_text.hpp"
 #include "temp_dir.hpp"
 
@@ -111,7 +112,8 @@ TEST(NumenCli, StopSignalWhileRunningPrintsTheSummary) {
   term.signal = SIGTERM;
   term.ready = [&log] { return std::filesystem::exists(log); };
   const ChildResult r =
-      run_child({kNumen, "run", "--realtime", "--duration", "60", "--record", log}, dir.path(), 30, term);
+      run_child({kNumen, "run", "--realtime", "--overrun-limit", "0", "--duration", "60", "--record", log},
+                dir.path(), 30, term);  // overruns on a loaded machine count, never latch
   EXPECT_FALSE(r.timed_out);
   EXPECT_EQ(r.status, 128 + SIGTERM) << r.out << r.err;
   EXPECT_NE(r.out.find("exit status 0 (clean)"), std::string::npos) << r.out;
@@ -169,6 +171,32 @@ TEST(NumenCli, ReplayOfGarbageIsALocatedInputError) {
       run_child({kNumen, "run", "--duration", "0.2", "--bus", "log:" + log}, dir.path(), 60);
   EXPECT_EQ(r.status, 2) << r.out << r.err;
   EXPECT_EQ(r.err.rfind("numen: " + log + ":2:1: ", 0), 0u) << r.err;
+}
+
+// Defect 1: --trace of a simulated run keeps one record per period; a run whose trace would
+// outgrow the budget (kMaxInMemoryTraceBytes) is refused before anything is allocated.
+TEST(NumenCli, TraceThatWouldOutgrowItsBudgetIsRefusedBeforeTheRun) {
+  TempDir dir;
+  const ChildResult r = run_child(
+      {kNumen, "run", "--duration", "1e6", "--trace", (dir / "t.csv").string()}, dir.path(), 60);
+  EXPECT_EQ(r.status, 2) << r.out << r.err;
+  EXPECT_NE(r.err.find("--trace: a simulated run keeps one trace record"), std::string::npos)
+      << r.err;
+  EXPECT_LT(r.max_rss_kib, 100 * 1024);
+}
+
+// Defect 6: out of memory printed "std::bad_alloc"; it now says what ran out (status 1). The
+// process gets 400 MB of address space and a trace of ~1.7 million periods (~600 MB, within
+// the trace budget) to reserve.
+TEST(NumenCli, OutOfMemoryIsNamed) {
+  NUMEN_SKIP_UNDER_SANITIZER_HEAP("the sanitizer reserves terabytes of address space: ulimit -v stops it first");
+  NUMEN_REQUIRE_ARTICULATION();
+  TempDir dir;
+  const std::string cmd = "ulimit -v 400000; exec " + kNumen + " run --duration 1700 --trace " +
+                          (dir / "t.csv").string();
+  const ChildResult r = run_child({"/bin/sh", "-c", cmd}, dir.path(), 60);
+  EXPECT_EQ(r.status, 1) << r.out << r.err;
+  EXPECT_NE(r.err.find("numen: out of memory"), std::string::npos) << r.err;
 }
 
 }  // namespace

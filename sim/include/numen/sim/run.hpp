@@ -53,6 +53,11 @@ struct BusChoice {
   std::string record_path;
 };
 
+/// Largest in-memory trace of a simulated run (`--trace` without a real bus): one TraceRecord per
+/// period is kept until the run ends, so run_scene() refuses (InputError, key "--trace") a run
+/// whose trace would take more, before allocating it. 1 GiB: ~3 million periods, 50 min at 1 kHz.
+inline constexpr std::size_t kMaxInMemoryTraceBytes = std::size_t{1} << 30;
+
 /// How to run a scene.
 struct RunOptions {
   double duration_s = -1.0;  ///< Simulated time (s); < 0: the scene's duration.
