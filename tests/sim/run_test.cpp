@@ -39,8 +39,17 @@
 #include "numen/sim/scene.hpp"
 #include "numen/sim/simulated_instrument.hpp"
 #include "build_features.hpp"
+#include "sanitizer.hpp"
 
 namespace {
+
+/// Why the whole-scene runs of the deformable scenes skip under a sanitizer (CI time, issue 17):
+/// thousands of periods of a 162–642-node net take 1–3 min each under ASan; the net's code
+/// paths run under the sanitizers in StepDeformable.* (10 000 steps each), and these tests run
+/// in the default build.
+constexpr const char* kDeformableRunTooSlow =
+    "thousands of deformable-scene periods take minutes here; StepDeformable.* covers the net "
+    "code under the sanitizer";
 
 using numen::core::CouplingMode;
 using numen::core::Vec3;
@@ -423,11 +432,13 @@ const Scene& endobag_scene() {
 }
 
 TEST(RunAllocations, DeformableScenePeriodNeverAllocates) {
+  NUMEN_SKIP_UNDER_SANITIZER(kDeformableRunTooSlow);
   NUMEN_REQUIRE_DEFORMABLE();
   expect_no_allocation(deformable_scene(), "deformable");  // the post contact is at 2.7–3.2 s
 }
 
 TEST(RunAllocations, EndobagScenePeriodNeverAllocates) {
+  NUMEN_SKIP_UNDER_SANITIZER(kDeformableRunTooSlow);
   NUMEN_REQUIRE_DEFORMABLE();
   NUMEN_REQUIRE_ARTICULATION();
   expect_no_allocation(endobag_scene(), "endobag");
@@ -478,6 +489,7 @@ RunSummary run_traced(SceneRunner& runner, const Scene& scene, double seconds, c
 }
 
 TEST(RunDeformable, ProbeDeformsThenSlidesAroundThePost) {
+  NUMEN_SKIP_UNDER_SANITIZER(kDeformableRunTooSlow);
   NUMEN_REQUIRE_DEFORMABLE();
   // Paper Fig. 8: the hand sweeps the probe through the post (2.7–3.2 s);
   // the net deforms on contact, the god-object is held outside and then
@@ -547,6 +559,7 @@ TEST(RunDeformable, ProbeDeformsThenSlidesAroundThePost) {
 }
 
 TEST(RunDeformable, EndobagSquashesOnTheOrganWhileTheHandGoesThrough) {
+  NUMEN_SKIP_UNDER_SANITIZER(kDeformableRunTooSlow);
   NUMEN_REQUIRE_DEFORMABLE();
   NUMEN_REQUIRE_ARTICULATION();
   const Scene& scene = endobag_scene();
@@ -699,11 +712,13 @@ TEST(RunDeterminism, ConstructionSceneTwoRunnersAreBitIdentical) {
 }
 
 TEST(RunDeterminism, DeformableSceneTwoRunnersAreBitIdentical) {
+  NUMEN_SKIP_UNDER_SANITIZER(kDeformableRunTooSlow);
   NUMEN_REQUIRE_DEFORMABLE();
   expect_deterministic(deformable_scene(), periods_for(deformable_scene(), 10.0), "deformable");
 }
 
 TEST(RunDeterminism, EndobagSceneTwoRunnersAreBitIdentical) {
+  NUMEN_SKIP_UNDER_SANITIZER(kDeformableRunTooSlow);
   NUMEN_REQUIRE_DEFORMABLE();
   NUMEN_REQUIRE_ARTICULATION();
   expect_deterministic(endobag_scene(), periods_for(endobag_scene(), 10.0), "endobag");
@@ -1057,6 +1072,7 @@ TEST(RunRecordedTrials, EveryAxisOfEveryTrialStaysInItsRangeInEveryJigsawsScene)
 }
 
 TEST(RunRecordedTrials, EveryTrialRunsThroughEveryJigsawsSceneWithoutASafetyStop) {
+  NUMEN_SKIP_UNDER_SANITIZER(kDeformableRunTooSlow);
   NUMEN_REQUIRE_ARTICULATION();
   std::string note;
   const std::vector<fs::path> trials = recorded_trials(&note);
