@@ -59,7 +59,8 @@ RunVerdict run_verdict(const RunSummary& s) {
                                       n(s.trace_io_errors) + " I/O errors)");
   if (s.rejected_samples > 0)
     add(ExitStatus::kSamplesRejected, n(s.rejected_samples) + " axis samples rejected");
-  if (s.steps > 0 && s.invalid_periods >= s.steps)
+  // A run a signal ended (perhaps before the first sample arrived) is not judged on this.
+  if (s.steps > 0 && s.invalid_periods >= s.steps && !s.stopped)
     add(ExitStatus::kSamplesRejected, "no period had a valid sample");
   if (s.bus.rfind("log:", 0) == 0 && s.bus_frames_replayed == 0)
     add(ExitStatus::kSamplesRejected, "the bus log gave no frame");

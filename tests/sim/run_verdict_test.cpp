@@ -63,6 +63,8 @@ TEST(RunVerdict, EachConditionHasItsStatus) {
   s = clean();
   s.invalid_periods = s.steps;
   EXPECT_EQ(run_verdict(s).status, ExitStatus::kSamplesRejected);
+  s.stopped = true;  // a signal ended it before the first sample: not the input's fault
+  EXPECT_EQ(run_verdict(s).status, ExitStatus::kClean);
   s = clean();
   s.bus = "log:x.log";
   s.bus_frames_replayed = 0;

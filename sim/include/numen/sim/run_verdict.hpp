@@ -25,8 +25,8 @@ enum class ExitStatus : int {
                           ///< or the final state is not finite.
   kLostRecords = 5,       ///< Records of --record / --trace were dropped or not written.
   kSamplesRejected = 6,   ///< Input samples were rejected during the run (encoder values out
-                          ///< of range, jumps, non-finite), no sample was ever valid, or a
-                          ///< replayed bus log gave no frame.
+                          ///< of range, jumps, non-finite), no sample was ever valid in a run
+                          ///< that was not stopped by a signal, or a replayed bus log gave no frame.
 };
 
 /// Numeric value of `s` (the process exit status).
