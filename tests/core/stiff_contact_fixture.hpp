@@ -10,6 +10,7 @@
 
 #include <gtest/gtest.h>
 
+#include "alloc_counter.hpp"
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"
 #include "numen/core/step.hpp"
@@ -43,6 +44,7 @@ struct PressedRun {
   double fastest = 0.0;     ///< Largest body speed (m/s).
   int contact_steps = 0;    ///< Steps with a contact.
   std::int64_t clamped = 0; ///< Σ Data::contacts_clamped.
+  std::int64_t allocations = 0;  ///< Heap allocations inside core::step (must stay 0).
 };
 
 /// Runs `steps` steps of 1 ms: the hand (the attached body's target, its COM starting at
@@ -60,7 +62,11 @@ inline PressedRun press_and_circle(const core::Model& m, core::Data& d, int step
     d.target.orientation =
         core::Quat(Eigen::AngleAxisd(0.3 * std::sin(w), core::Vec3(1, 1, 0).normalized())) * down;
     d.target_twist = core::Twist{};
-    core::step(m, d);
+    {
+      numen::test::AllocationGuard guard;  // the clamped contacts' path allocates nothing either
+      core::step(m, d);
+      r.allocations += guard.count();
+    }
     EXPECT_EQ(d.nonfinite_steps, 0) << "step " << i;
     if (d.nonfinite_steps > 0) break;
     r.deepest = std::max(r.deepest, d.max_penetration);
@@ -68,6 +74,7 @@ inline PressedRun press_and_circle(const core::Model& m, core::Data& d, int step
     r.contact_steps += d.num_contacts > 0 ? 1 : 0;
     r.clamped += d.contacts_clamped;
   }
+  EXPECT_EQ(r.allocations, 0);
   return r;
 }
 
