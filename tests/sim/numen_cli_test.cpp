@@ -80,6 +80,7 @@ TEST(NumenCli, PeakMemoryDoesNotGrowWithTheDuration) {
 // Defect 1: SIGTERM while the input loads (here a trajectory file that is a FIFO nobody writes:
 // the loader blocks in open()) ends the process at once, with a message and 128 + SIGTERM.
 TEST(NumenCli, StopSignalWhileLoadingEndsTheProcessAtOnce) {
+  NUMEN_REQUIRE_ARTICULATION();  // the default scene has joints
   TempDir dir;
   const std::string fifo = (dir / "trajectory.txt").string();
   ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
@@ -165,6 +166,7 @@ TEST(NumenCli, ReplayOfALogWithoutEncoderFramesIsInputRejected) {
 
 // ... and a log that is not a candump log at all is refused at its first bad line.
 TEST(NumenCli, ReplayOfGarbageIsALocatedInputError) {
+  NUMEN_REQUIRE_ARTICULATION();  // the default scene has joints
   TempDir dir;
   const std::string log = dir.write("garbage.log", "(0.000100) vcan0 181#00000000\nhello\n");
   const ChildResult r =
@@ -176,6 +178,7 @@ TEST(NumenCli, ReplayOfGarbageIsALocatedInputError) {
 // Defect 1: --trace of a simulated run keeps one record per period; a run whose trace would
 // outgrow the budget (kMaxInMemoryTraceBytes) is refused before anything is allocated.
 TEST(NumenCli, TraceThatWouldOutgrowItsBudgetIsRefusedBeforeTheRun) {
+  NUMEN_REQUIRE_ARTICULATION();  // the default scene has joints
   TempDir dir;
   const ChildResult r = run_child(
       {kNumen, "run", "--duration", "1e6", "--trace", (dir / "t.csv").string()}, dir.path(), 60);
