@@ -1,28 +1,19 @@
 /// @file trace_queue.cpp
-/// Non-blocking per-period traces: a lock-free SPSC queue from the loop to a writer thread
-/// that formats CSV lines into a stdio-buffered file.
+/// Non-blocking per-period traces: CSV lines formatted on the consumer thread of an
+/// hal::AsyncRecordWriter.
 
 #include "numen/platform/trace_queue.hpp"
 
 #include <pthread.h>
 #include <sched.h>
 
-#include <boost/lockfree/spsc_queue.hpp>
-#include <cerrno>
 #include <charconv>
-#include <chrono>
-#include <cstring>
 #include <future>
 #include <stdexcept>
-#include <type_traits>
 #include <unordered_set>
 
 namespace numen::platform {
 namespace {
-
-static_assert(std::is_trivially_copyable_v<TraceRecord>, "records are copied, never built");
-static_assert(std::atomic<std::uint64_t>::is_always_lock_free,
-              "the producer's counters must not take a lock");
 
 // Longest line: three integers (20 digits + sign) and kTraceMaxColumns doubles (to_chars
 // shortest form: at most 24 characters), each with its separator, and the newline.
@@ -53,62 +44,44 @@ void check_column(const std::vector<std::string>& columns, std::size_t i) {
     throw std::invalid_argument(where + " '" + name + "': reserved for the fixed columns");
 }
 
-}  // namespace
+std::vector<std::string> checked_columns(std::vector<std::string> columns) {
+  if (columns.empty() || columns.size() > kTraceMaxColumns)
+    throw std::invalid_argument("TraceWriter: 1.." + std::to_string(kTraceMaxColumns) +
+                                " columns required (got " + std::to_string(columns.size()) + ")");
+  std::unordered_set<std::string> seen;
+  for (std::size_t i = 0; i < columns.size(); ++i) {
+    check_column(columns, i);
+    if (!seen.insert(columns[i]).second)
+      throw std::invalid_argument("TraceWriter column " + std::to_string(i) + " '" + columns[i] +
+                                  "': duplicate name");
+  }
+  return columns;
+}
 
-struct TraceWriter::Queue {
-  explicit Queue(std::size_t capacity) : ring(capacity) {}
-  boost::lockfree::spsc_queue<TraceRecord> ring;  // runtime capacity: one allocation, here
-};
+}  // namespace
 
 TraceWriter::TraceWriter(const std::string& path, std::vector<std::string> columns,
                          const TraceWriterSettings& settings)
-    : path_(path), columns_(std::move(columns)), settings_(settings) {
-  if (columns_.empty() || columns_.size() > kTraceMaxColumns)
-    throw std::invalid_argument("TraceWriter: 1.." + std::to_string(kTraceMaxColumns) +
-                                " columns required (got " + std::to_string(columns_.size()) + ")");
-  std::unordered_set<std::string> seen;
-  for (std::size_t i = 0; i < columns_.size(); ++i) {
-    check_column(columns_, i);
-    if (!seen.insert(columns_[i]).second)
-      throw std::invalid_argument("TraceWriter column " + std::to_string(i) + " '" + columns_[i] +
-                                  "': duplicate name");
-  }
-  if (settings.queue_capacity == 0)
-    throw std::invalid_argument("TraceWriterSettings.queue_capacity must be >= 1 (got 0)");
-  if (settings.poll_period_ns <= 0)
-    throw std::invalid_argument("TraceWriterSettings.poll_period_ns must be > 0 (got " +
-                                std::to_string(settings.poll_period_ns) + ")");
-  queue_ = std::make_unique<Queue>(settings.queue_capacity);
-  file_ = std::fopen(path.c_str(), "w");
-  if (file_ == nullptr) {
-    const int err = errno;
-    throw std::runtime_error(path + ": cannot open for writing: " + std::strerror(err));
-  }
+    : columns_(checked_columns(std::move(columns))),
+      writer_(*this, settings, "TraceWriterSettings"),
+      file_(path) {
   std::string header = "period,time_ns,flags";
   for (const std::string& c : columns_) header += ',' + c;
   header += '\n';
-  if (std::fwrite(header.data(), 1, header.size(), file_) != header.size()) {
-    const int err = errno;
-    std::fclose(file_);
-    file_ = nullptr;
-    throw std::runtime_error(path + ": cannot write the header: " + std::strerror(err));
-  }
+  if (!file_.write(header.data(), header.size()))
+    throw std::runtime_error(path + ": cannot write the header");
 }
 
 TraceWriter::~TraceWriter() {
-  stop();
-  if (file_ != nullptr) {
-    drain();
-    if (std::fclose(file_) != 0) io_errors_.fetch_add(1, std::memory_order_relaxed);
-  }
+  writer_.stop();
+  writer_.drain();
+  if (!file_.close()) writer_.count_io_error();
 }
 
 RealtimeStep TraceWriter::start(const std::vector<int>& writer_cpus) {
-  if (thread_.joinable()) throw std::logic_error("TraceWriter " + path_ + ": already running");
-  stop_requested_.store(false);
   std::promise<RealtimeStep> ready;
   std::future<RealtimeStep> step = ready.get_future();
-  thread_ = std::thread([this, &ready, &writer_cpus] {
+  writer_.start([&ready, &writer_cpus] {
     // Never compete with the loop: drop an inherited real-time policy (always permitted).
     sched_param param{};
     param.sched_priority = 0;
@@ -124,78 +97,20 @@ RealtimeStep TraceWriter::start(const std::vector<int>& writer_cpus) {
       affinity = RealtimeStep{RealtimeStepStatus::kFailed, 0, e.what()};
     }
     ready.set_value(std::move(affinity));  // `ready` and `writer_cpus` are not used after this
-    run();
   });
   return step.get();
 }
 
-void TraceWriter::stop() {
-  if (!thread_.joinable()) return;
-  {
-    std::lock_guard<std::mutex> lock(wake_mutex_);
-    stop_requested_.store(true);
-  }
-  wake_.notify_one();
-  thread_.join();
-  // The thread drained the queue before it ended; this picks up what arrived meanwhile.
-  drain();
-  if (std::fflush(file_) != 0) io_errors_.fetch_add(1, std::memory_order_relaxed);
-}
-
-bool TraceWriter::push(const TraceRecord& record) noexcept {
-  if (!queue_->ring.push(record)) {
-    dropped_.fetch_add(1, std::memory_order_relaxed);
-    return false;
-  }
-  pushed_.fetch_add(1, std::memory_order_relaxed);
-  return true;
-}
-
-TraceWriterCounters TraceWriter::counters() const noexcept {
-  TraceWriterCounters c;
-  c.pushed = pushed_.load(std::memory_order_relaxed);
-  c.dropped = dropped_.load(std::memory_order_relaxed);
-  c.written = written_.load(std::memory_order_relaxed);
-  c.io_errors = io_errors_.load(std::memory_order_relaxed);
-  return c;
-}
-
-std::size_t TraceWriter::drain() noexcept {
+hal::SinkResult TraceWriter::write(const TraceRecord& r) noexcept {
   char line[kLineBufferSize];
   char* const end = line + sizeof(line);
-  const std::size_t n = columns_.size();
-  std::size_t count = 0;
-  TraceRecord r;
-  while (queue_->ring.pop(r)) {
-    ++count;
-    char* p = line;
-    bool ok =
-        put(p, end, r.period, '\0') && put(p, end, r.time_ns, ',') && put(p, end, r.flags, ',');
-    for (std::size_t i = 0; ok && i < n; ++i) ok = put(p, end, r.values[i], ',');
-    if (!ok || p == end) {  // cannot happen with kLineBufferSize; never write a cut line
-      io_errors_.fetch_add(1, std::memory_order_relaxed);
-      continue;
-    }
-    *p++ = '\n';
-    const auto len = static_cast<std::size_t>(p - line);
-    if (std::fwrite(line, 1, len, file_) != len) {
-      io_errors_.fetch_add(1, std::memory_order_relaxed);
-      continue;
-    }
-    written_.fetch_add(1, std::memory_order_relaxed);
-  }
-  return count;
-}
-
-void TraceWriter::run() noexcept {
-  const auto period = std::chrono::nanoseconds(settings_.poll_period_ns);
-  while (!stop_requested_.load()) {
-    if (drain() > 0) continue;  // keep up while records arrive
-    if (std::fflush(file_) != 0) io_errors_.fetch_add(1, std::memory_order_relaxed);
-    std::unique_lock<std::mutex> lock(wake_mutex_);
-    wake_.wait_for(lock, period, [this] { return stop_requested_.load(); });
-  }
-  drain();
+  char* p = line;
+  bool ok = put(p, end, r.period, '\0') && put(p, end, r.time_ns, ',') && put(p, end, r.flags, ',');
+  for (std::size_t i = 0; ok && i < columns_.size(); ++i) ok = put(p, end, r.values[i], ',');
+  if (!ok || p == end) return hal::SinkResult::kFormatError;  // not with kLineBufferSize; never a cut line
+  *p++ = '\n';
+  return file_.write(line, static_cast<std::size_t>(p - line)) ? hal::SinkResult::kWritten
+                                                               : hal::SinkResult::kIoError;
 }
 
 }  // namespace numen::platform

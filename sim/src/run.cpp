@@ -457,7 +457,7 @@ RunSummary SceneRunner::summary() const {
   }
   if (trace_writer_) {
     const platform::TraceWriterCounters c = trace_writer_->counters();
-    s.trace_pushed = static_cast<std::int64_t>(c.pushed);
+    s.trace_pushed = static_cast<std::int64_t>(c.queued);
     s.trace_dropped = static_cast<std::int64_t>(c.dropped);
     s.trace_written = static_cast<std::int64_t>(c.written);
     s.trace_io_errors = static_cast<std::int64_t>(c.io_errors);

@@ -100,7 +100,7 @@ TEST(TraceWriter, FullQueueDropsExactlyTheExcessAndCountsIt) {
     TraceWriter writer(path, {"a"}, settings);
     for (std::uint64_t k = 0; k < 20; ++k) EXPECT_EQ(writer.push(record(k)), k < 16) << k;
     auto c = writer.counters();
-    EXPECT_EQ(c.pushed, 16u);
+    EXPECT_EQ(c.queued, 16u);
     EXPECT_EQ(c.dropped, 4u);
     EXPECT_EQ(c.written, 0u);
     writer.start();
@@ -163,7 +163,7 @@ TEST(TraceWriter, NoDropAt10kHzIntoARealFile) {
     const auto c = writer.counters();
     EXPECT_EQ(pushes_failed, 0);
     EXPECT_EQ(c.dropped, 0u);
-    EXPECT_EQ(c.pushed, static_cast<std::uint64_t>(kRecords));
+    EXPECT_EQ(c.queued, static_cast<std::uint64_t>(kRecords));
     EXPECT_EQ(c.written, static_cast<std::uint64_t>(kRecords));
     EXPECT_EQ(c.io_errors, 0u);
   }

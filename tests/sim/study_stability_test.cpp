@@ -280,7 +280,9 @@ TEST(StudyStability, ShippedScenesStayBoundedWithAContactStiffnessOfOneTeraNewto
       ++coupling;
       const bool known = row.case_name == "coupling-stiffness construction" ||
                          row.case_name == "coupling-stiffness endobag";
-      if (!known) EXPECT_TRUE(row.stable) << describe(row) << " " << row.note;
+      if (!known) {
+        EXPECT_TRUE(row.stable) << describe(row) << " " << row.note;
+      }
     }
     if (row.case_name == "contact-stiffness default")
       default_clamped = row.note.find("; 0 steps with clamped") == std::string::npos;
@@ -288,11 +290,14 @@ TEST(StudyStability, ShippedScenesStayBoundedWithAContactStiffnessOfOneTeraNewto
   const std::size_t skipped = r.skipped.size();
   EXPECT_EQ(contact + skipped, 6u);
   EXPECT_EQ(coupling + skipped, 6u);
-  if (core::kWithArticulation) EXPECT_TRUE(default_clamped);
-  if (core::kWithArticulation)
+  if (core::kWithArticulation) {
+    EXPECT_TRUE(default_clamped);
+  }
+  if (core::kWithArticulation) {
     EXPECT_NE(format_stability_tables(r).find("| contact-stiffness default | implicit-euler | stable"),
               std::string::npos)
         << format_stability_tables(r);
+  }
 }
 
 TEST(StudyStability, CsvSchemaAndTables) {

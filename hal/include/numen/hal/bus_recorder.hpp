@@ -24,33 +24,17 @@
 /// written (CandumpWriterSettings::mark_direction), which canplayer ignores and LogBus can
 /// filter on (LogBusSettings::received_only).
 
-#include <atomic>
-#include <condition_variable>
 #include <cstdint>
-#include <cstdio>
-#include <memory>
-#include <mutex>
 #include <string>
 #include <string_view>
-#include <thread>
 
+#include "numen/hal/async_record_writer.hpp"
 #include "numen/hal/bus.hpp"
 #include "numen/hal/can_frame.hpp"
 #include "numen/hal/candump_log.hpp"
+#include "numen/hal/line_file.hpp"
 
 namespace numen::hal {
-
-/// What CandumpWriter::push() does when the queue is full.
-enum class FullQueuePolicy {
-  /// Drop the record and count it (CandumpWriterCounters::dropped); push() never blocks.
-  /// For paced runs: the control loop never waits for the disk.
-  kDrop,
-  /// Wake the writer thread and sleep in steps of CandumpWriterSettings::poll_period_ns / 8
-  /// until it has made room, so nothing is lost however far the writer falls behind. push()
-  /// then blocks: for offline (unpaced) runs only, which have no deadline. While the thread is not
-  /// running (before start(), after stop()) a full queue drops as with kDrop.
-  kWait,
-};
 
 /// Creation settings of a CandumpWriter. Checked by its constructor.
 struct CandumpWriterSettings {
@@ -72,31 +56,23 @@ struct CandumpWriterSettings {
   FullQueuePolicy full_queue = FullQueuePolicy::kDrop;
 };
 
-/// Counters of a CandumpWriter since construction. Read with relaxed atomics: consistent
-/// each, not with each other while the writer runs.
-struct CandumpWriterCounters {
-  std::uint64_t queued = 0;         ///< Records accepted by push().
-  std::uint64_t dropped = 0;        ///< Records refused by push(): queue full.
-  std::uint64_t waits = 0;          ///< kWait: pushes that found the queue full and waited.
-  std::uint64_t written = 0;        ///< Lines written to the file.
-  std::uint64_t format_errors = 0;  ///< Records not written: format_candump_line() refused
-                                    ///< them (negative timestamp, malformed frame).
-  std::uint64_t io_errors = 0;      ///< Failed fwrite/fflush calls (disk full, I/O error).
-};
+/// Counters of a CandumpWriter (queued, dropped, waits, lines written, records refused by
+/// format_candump_line(), failed fwrite/fflush/fclose calls).
+using CandumpWriterCounters = RecordWriterCounters;
 
-/// Owner of a candump log file, of the record queue and of the thread that writes it.
+/// Owner of a candump log file and of the AsyncRecordWriter that fills it from the loop.
 /// push() is the producer side: one thread at a time (the control loop), noexcept, no
 /// allocation, no lock; it never blocks under FullQueuePolicy::kDrop. start()/stop() and the
 /// destructor belong to the setup thread, which must not stop() while push() runs on another
 /// thread. Not copyable or movable.
-class CandumpWriter {
+class CandumpWriter final : private RecordSink<CandumpRecord> {
  public:
   /// Opens (truncates) `path` and allocates the queue; the thread is not started. Throws
   /// std::runtime_error "path: cannot open for writing: <errno text>", or
   /// std::invalid_argument naming the setting (queue_capacity 0, poll_period_ns <= 0).
   explicit CandumpWriter(const std::string& path, const CandumpWriterSettings& settings = {});
   /// stop(), then writes what is still queued and closes the file.
-  ~CandumpWriter();
+  ~CandumpWriter() override;
   CandumpWriter(const CandumpWriter&) = delete;
   CandumpWriter& operator=(const CandumpWriter&) = delete;
   CandumpWriter(CandumpWriter&&) = delete;
@@ -104,49 +80,36 @@ class CandumpWriter {
 
   /// Starts the writer thread. Throws std::logic_error if it is running; may throw
   /// std::system_error if the thread cannot be created.
-  void start();
+  void start() { writer_.start(); }
   /// Stops the writer thread (wakes it, joins it), writes the records still queued and
   /// flushes the file. Idempotent. Records pushed afterwards wait in the queue for the next
   /// start() or the destructor.
-  void stop();
+  void stop() { writer_.stop(); }
   /// True between start() and stop().
-  bool running() const noexcept { return thread_.joinable(); }
+  bool running() const noexcept { return writer_.running(); }
 
   /// Queues one record: `frame` (its timestamp_ns is the line's time) seen on `iface` in
   /// `direction`. False if the queue is full and the record is dropped and counted: always
   /// under kDrop; under kWait only while the writer thread is not running (kWait sleeps
   /// until there is room instead).
-  bool push(const CanFrame& frame, const CandumpIface& iface, CandumpDirection direction) noexcept;
+  bool push(const CanFrame& frame, const CandumpIface& iface, CandumpDirection direction) noexcept {
+    return writer_.push(CandumpRecord{frame.timestamp_ns, iface, frame, direction});
+  }
 
   /// Counters (see CandumpWriterCounters).
-  CandumpWriterCounters counters() const noexcept;
+  CandumpWriterCounters counters() const noexcept { return writer_.counters(); }
   /// Path of the log file.
-  const std::string& path() const noexcept { return path_; }
+  const std::string& path() const noexcept { return file_.path(); }
   /// The settings the writer was built with.
   const CandumpWriterSettings& settings() const noexcept { return settings_; }
 
  private:
-  struct Queue;  // boost::lockfree::spsc_queue, kept out of this header
+  SinkResult write(const CandumpRecord& record) noexcept override;
+  bool flush() noexcept override { return file_.flush(); }
 
-  void run() noexcept;
-  std::size_t drain() noexcept;
-
-  std::string path_;
   CandumpWriterSettings settings_;
-  std::unique_ptr<Queue> queue_;
-  std::FILE* file_ = nullptr;
-  std::thread thread_;
-  std::mutex wake_mutex_;  // stop request only; push() never takes it (kWait notifies wake_)
-  std::condition_variable wake_;
-  std::atomic<bool> stop_requested_{false};  // set under wake_mutex_
-  std::atomic<bool> draining_{false};        // the thread runs and drains: kWait may wait
-  std::atomic<bool> room_wanted_{false};     // kWait: a push found the queue full
-  std::atomic<std::uint64_t> queued_{0};
-  std::atomic<std::uint64_t> dropped_{0};
-  std::atomic<std::uint64_t> waits_{0};
-  std::atomic<std::uint64_t> written_{0};
-  std::atomic<std::uint64_t> format_errors_{0};
-  std::atomic<std::uint64_t> io_errors_{0};
+  AsyncRecordWriter<CandumpRecord> writer_;  // first: bad settings throw before the file opens
+  LineFile file_;
 };
 
 /// Counters of one RecordingBus since construction.

@@ -1,10 +1,10 @@
 #pragma once
 /// @file trace_queue.hpp
 /// Per-period traces leaving the real-time loop without blocking it: the loop pushes a
-/// fixed-size POD TraceRecord into a lock-free single-producer/single-consumer queue
-/// (boost::lockfree::spsc_queue, capacity fixed at construction); a TraceWriter thread pops
-/// the records and writes them as CSV through buffered stdio. A full queue drops the record
-/// and counts it; the loop never waits for the disk.
+/// fixed-size POD TraceRecord into the lock-free single-producer/single-consumer queue of an
+/// hal::AsyncRecordWriter (async_record_writer.hpp, the same mechanism as the bus recorder);
+/// its thread pops the records and writes them as CSV through buffered stdio. A full queue
+/// drops the record and counts it; the loop never waits for the disk.
 ///
 /// The record is generic: period index, time, flags and up to kTraceMaxColumns doubles whose
 /// meaning (target / god-object positions, feedback wrench, contact count, solver
@@ -16,16 +16,12 @@
 /// back to the same value (std::to_chars), "nan"/"inf"/"-inf" for non-finite values.
 
 #include <array>
-#include <atomic>
-#include <condition_variable>
 #include <cstdint>
-#include <cstdio>
-#include <memory>
-#include <mutex>
 #include <string>
-#include <thread>
 #include <vector>
 
+#include "numen/hal/async_record_writer.hpp"
+#include "numen/hal/line_file.hpp"
 #include "numen/platform/realtime_setup.hpp"
 
 namespace numen::platform {
@@ -42,23 +38,14 @@ struct TraceRecord {
   std::array<double, kTraceMaxColumns> values{};  ///< Column values, in the setup order.
 };
 
-/// Creation settings of a TraceWriter. Checked by its constructor.
-struct TraceWriterSettings {
-  /// Records the queue holds, >= 1; allocated once at construction (sizeof(TraceRecord)
-  /// each). At 1 kHz the default 4096 covers a 4 s disk stall.
-  std::size_t queue_capacity = 4096;
-  /// How long the writer thread sleeps when the queue is empty, ns, > 0.
-  std::int64_t poll_period_ns = 2'000'000;
-};
+/// Creation settings of a TraceWriter, checked by its constructor: queue_capacity records
+/// (>= 1, sizeof(TraceRecord) each, allocated once; at 1 kHz the default 4096 covers a 4 s disk
+/// stall), poll_period_ns (> 0) and the full-queue policy (drop, the default, for paced runs).
+using TraceWriterSettings = hal::RecordWriterSettings;
 
-/// Counters of a TraceWriter since construction. Read with relaxed atomics: consistent
-/// each, not with each other while the writer runs.
-struct TraceWriterCounters {
-  std::uint64_t pushed = 0;     ///< Records accepted by push().
-  std::uint64_t dropped = 0;    ///< Records refused by push(): queue full. Must stay 0.
-  std::uint64_t written = 0;    ///< Lines written to the file.
-  std::uint64_t io_errors = 0;  ///< Failed fwrite/fflush/fclose calls (disk full, I/O error).
-};
+/// Counters of a TraceWriter (records queued, dropped, lines written; format_errors: a line
+/// that did not fit its buffer, which cannot happen; io_errors: failed fwrite/fflush/fclose).
+using TraceWriterCounters = hal::RecordWriterCounters;
 
 /// Owner of a CSV trace file, of the record queue and of the thread that writes it.
 /// push() is the producer side: one thread (the loop), noexcept, no allocation, no lock,
@@ -68,7 +55,7 @@ struct TraceWriterCounters {
 /// created after apply_realtime() would otherwise inherit SCHED_FIFO (and the CPU affinity)
 /// of its creator and compete with the loop. Start the writer before pinning the loop
 /// thread, or pass the CPUs it may use in `writer_cpus`.
-class TraceWriter {
+class TraceWriter final : private hal::RecordSink<TraceRecord> {
  public:
   /// Checks the column names (1..kTraceMaxColumns of them, each non-empty, unique, no comma,
   /// quote, CR or LF, not "period"/"time_ns"/"flags"), opens (truncates) `path`, writes the
@@ -78,7 +65,7 @@ class TraceWriter {
   TraceWriter(const std::string& path, std::vector<std::string> columns,
               const TraceWriterSettings& settings = {});
   /// stop(), then writes what is still queued and closes the file.
-  ~TraceWriter();
+  ~TraceWriter() override;
   TraceWriter(const TraceWriter&) = delete;
   TraceWriter& operator=(const TraceWriter&) = delete;
   TraceWriter(TraceWriter&&) = delete;
@@ -93,41 +80,29 @@ class TraceWriter {
   /// Stops the writer thread (wakes it, joins it), writes the records still queued and
   /// flushes the file. Idempotent. Records pushed afterwards wait for the next start() or
   /// the destructor.
-  void stop();
+  void stop() { writer_.stop(); }
   /// True between start() and stop().
-  bool running() const noexcept { return thread_.joinable(); }
+  bool running() const noexcept { return writer_.running(); }
 
   /// Queues one record. False if the queue is full: the record is dropped and counted.
-  bool push(const TraceRecord& record) noexcept;
+  bool push(const TraceRecord& record) noexcept { return writer_.push(record); }
 
   /// Counters (see TraceWriterCounters).
-  TraceWriterCounters counters() const noexcept;
+  TraceWriterCounters counters() const noexcept { return writer_.counters(); }
   /// Number of value columns (the names given at construction).
   std::size_t num_columns() const noexcept { return columns_.size(); }
   /// The column names.
   const std::vector<std::string>& columns() const noexcept { return columns_; }
   /// Path of the CSV file.
-  const std::string& path() const noexcept { return path_; }
+  const std::string& path() const noexcept { return file_.path(); }
 
  private:
-  struct Queue;  // boost::lockfree::spsc_queue, kept out of this header
+  hal::SinkResult write(const TraceRecord& record) noexcept override;
+  bool flush() noexcept override { return file_.flush(); }
 
-  void run() noexcept;
-  std::size_t drain() noexcept;
-
-  std::string path_;
   std::vector<std::string> columns_;
-  TraceWriterSettings settings_;
-  std::unique_ptr<Queue> queue_;
-  std::FILE* file_ = nullptr;
-  std::thread thread_;
-  std::mutex wake_mutex_;  // stop request only; push() never touches it
-  std::condition_variable wake_;
-  std::atomic<bool> stop_requested_{false};
-  std::atomic<std::uint64_t> pushed_{0};
-  std::atomic<std::uint64_t> dropped_{0};
-  std::atomic<std::uint64_t> written_{0};
-  std::atomic<std::uint64_t> io_errors_{0};
+  hal::AsyncRecordWriter<TraceRecord> writer_;  // before the file: bad settings throw first
+  hal::LineFile file_;
 };
 
 }  // namespace numen::platform
