@@ -1,5 +1,5 @@
 /// @file alloc_counter.cpp
-/// Global allocation hooks for the zero-allocation tests (DESIGN.md, core): replacements of the
+/// Global allocation hooks for the zero-allocation tests (docs/architecture.md, Conventions: real time): replacements of the
 /// allocation functions in a normal build, the sanitizer's malloc hooks under ASan/TSan.
 
 #include "alloc_counter.hpp"

@@ -17,7 +17,7 @@
 /// events come in (within a report the kernel gives no order). Only reports that begin and
 /// end with the clutch engaged move the target.
 ///
-/// Frames (numen conventions, DESIGN.md): the target pose is in the world frame. With
+/// Frames (docs/architecture.md, Conventions): the target pose is in the world frame. With
 /// MotionFrame::kWorld, the translation increment (dx, dy, dz) is added in world axes and the
 /// rotation increment turns about world axes (q ← Δq · q). With MotionFrame::kTool, both are
 /// in the tool frame at the start of the report (p ← p + R Δp, q ← q · Δq). The rotation
