@@ -398,4 +398,21 @@ const RunFigure* find_run_figure(std::string_view name) noexcept {
   return nullptr;
 }
 
+std::string format_run_figures_markdown() {
+  std::string out = "| figure | unit | what it measures |\n| --- | --- | --- |\n";
+  for (const RunFigure& f : kFigures) {
+    out += "| `";
+    out += f.name;
+    out += "` | ";
+    out += f.unit;
+    out += " | ";
+    for (const char c : f.description) {
+      if (c == '|') out += '\\';
+      out += c;
+    }
+    out += " |\n";
+  }
+  return out;
+}
+
 }  // namespace numen::sim

@@ -62,4 +62,9 @@ std::span<const RunFigure> run_figures() noexcept;
 /// The figure called `name`, or nullptr.
 const RunFigure* find_run_figure(std::string_view name) noexcept;
 
+/// The table as Markdown (`numen figures`; docs/scenes.md holds it verbatim, tested): a
+/// header "| figure | unit | what it measures |", a rule and one row per figure, '|' in
+/// descriptions escaped.
+std::string format_run_figures_markdown();
+
 }  // namespace numen::sim
