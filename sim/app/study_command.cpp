@@ -10,6 +10,16 @@
 #include "numen/sim/study_stability.hpp"
 
 namespace numen::app {
+namespace {
+
+/// The progress callback of a study, drawn on `bar` (stderr).
+std::function<void(double, double, const std::string&)> progress_on(sim::ProgressBar& bar) {
+  return [&bar](double done, double total, const std::string& label) {
+    bar.update(done, total, label);
+  };
+}
+
+}  // namespace
 
 AccuracyStudyCommand::AccuracyStudyCommand(CLI::App& study)
     : cli_(study.add_subcommand(
@@ -29,9 +39,7 @@ int AccuracyStudyCommand::execute() const {
   options.quick = quick_;
   options.cases = cases_;
   sim::ProgressBar bar;
-  options.progress = [&bar](double done, double total, const std::string& label) {
-    bar.update(done, total, label);
-  };
+  options.progress = progress_on(bar);
   const sim::AccuracyResult result = sim::run_accuracy_study(options);
   bar.finish();
   sim::write_accuracy_csv(result, out_);
@@ -57,9 +65,7 @@ int StabilityStudyCommand::execute() const {
   options.quick = quick_;
   options.families = families_;
   sim::ProgressBar bar;
-  options.progress = [&bar](double done, double total, const std::string& label) {
-    bar.update(done, total, label);
-  };
+  options.progress = progress_on(bar);
   const sim::StabilityResult result = sim::run_stability_study(options);
   bar.finish();
   sim::write_stability_csv(result, out_);

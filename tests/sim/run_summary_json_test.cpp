@@ -18,7 +18,8 @@ using nlohmann::json;
 
 /// "a.b.c" as a JSON pointer "/a/b/c".
 json::json_pointer pointer(std::string_view name) {
-  std::string p = "/" + std::string(name);
+  std::string p(1, '/');
+  p.append(name);
   for (char& c : p)
     if (c == '.') c = '/';
   return json::json_pointer(p);

@@ -21,8 +21,9 @@ TEST(RunSummaryText, LayoutNamesOnlyFiguresOfTheTable) {
     for (const RunSummaryCondition& c : {seg.when, seg.and_when, seg.and_also}) {
       if (c.test == RunSummaryCondition::Test::kAlways) continue;
       EXPECT_NE(numen::sim::find_run_figure(c.figure), nullptr) << c.figure << " in " << seg.text;
-      if (!c.or_figure.empty())
+      if (!c.or_figure.empty()) {
         EXPECT_NE(numen::sim::find_run_figure(c.or_figure), nullptr) << c.or_figure;
+      }
     }
     if (!seg.each.empty()) {
       const numen::sim::RunFigure* f = numen::sim::find_run_figure(seg.each);

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "alloc_counter.hpp"
+#include "csv_lines.hpp"
 #include "numen/sim/run.hpp"
 #include "numen/sim/scene.hpp"
 #include "temp_dir.hpp"
@@ -25,20 +26,8 @@ namespace {
 namespace fs = std::filesystem;
 using numen::sim::TraceRecord;
 
-std::vector<std::string> split(const std::string& line) {
-  std::vector<std::string> out;
-  std::stringstream ss(line);
-  std::string cell;
-  while (std::getline(ss, cell, ',')) out.push_back(cell);
-  return out;
-}
-
-std::vector<std::string> read_lines(const fs::path& p) {
-  std::ifstream in(p);
-  std::vector<std::string> lines;
-  for (std::string line; std::getline(in, line);) lines.push_back(line);
-  return lines;
-}
+using numen::test::read_lines;
+const auto split = [](const std::string& line) { return numen::test::split_csv(line); };
 
 /// A record whose every field has its own value, exact in 9 significant digits.
 TraceRecord distinct_record() {
