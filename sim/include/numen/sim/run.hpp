@@ -431,9 +431,11 @@ class SceneRunner {
 /// Throws std::runtime_error if the trace cannot be written.
 RunSummary run_scene(const Scene& scene, const RunOptions& options);
 
-/// Readable multi-line summary.
+/// Readable multi-line summary: the layout of run_summary_text.hpp, whose placeholders are
+/// figures of run_figures() (run_summary_text.cpp).
 std::string format_summary(const RunSummary& s);
-/// Exactly one JSON object (no trailing newline).
+/// Exactly one JSON object (no trailing newline): every figure of run_figures() in the table's
+/// order, dotted names as nested objects, non-finite numbers as null (run_summary_json.cpp).
 std::string format_summary_json(const RunSummary& s);
 
 }  // namespace numen::sim

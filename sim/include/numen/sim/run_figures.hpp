@@ -3,7 +3,8 @@
 /// The one list of a run's figures (RunSummary): name, unit, description and accessor of each.
 /// The JSON summary (`numen run --json`), the text summary (run_summary_text.hpp) and the
 /// docs table (docs/scenes.md, "Summary figures") are written from it; a figure added here
-/// appears in all of them, and a test checks that none is missing from any.
+/// appears in all of them, and a test checks that none is missing from any. The accessors
+/// never allocate, so a periodic state stream can read the same table.
 
 #include <cstdint>
 #include <span>
