@@ -10,10 +10,9 @@
 #include <cmath>
 #include <fstream>
 #include <iomanip>
+#include <span>
 #include <sstream>
 #include <stdexcept>
-
-#include <nlohmann/json.hpp>
 
 #include "numen/core/collision.hpp"
 #include "numen/core/data.hpp"
@@ -32,6 +31,7 @@
 #include "numen/sim/input_error.hpp"
 #include "numen/sim/run_verdict.hpp"
 #include "numen/sim/trace.hpp"
+#include "numen/sim/trace_columns.hpp"
 
 namespace numen::sim {
 namespace {
@@ -195,28 +195,37 @@ SceneRunner::SceneRunner(const Scene& scene, std::size_t trace_capacity, const B
 }
 
 void SceneRunner::stream_trace(const std::string& path) {
-  std::vector<std::string> columns = {"frames_read", "sample_valid", "torque_commanded",
-                                      "lifecycle",   "target_x",     "target_y",
-                                      "target_z",    "tool_x",       "tool_y",
-                                      "tool_z",      "force_x",      "force_y",
-                                      "force_z"};
-  for (const hal::AxisConfig& a : scene_->device.axes) columns.push_back("tau_" + a.name);
-  columns.push_back("step_us");
-  columns.push_back("end_to_end_us");
-  columns.push_back("wakeup_us");
-  trace_writer_ = std::make_unique<platform::TraceWriter>(path, std::move(columns));
+  std::vector<std::string> axis_names;
+  for (const hal::AxisConfig& a : scene_->device.axes) axis_names.push_back(a.name);
+  trace_writer_ = std::make_unique<platform::TraceWriter>(
+      path, trace_column_names(trace_stream_columns(), std::span(axis_names)));
   trace_writer_->start();
 }
 
 void SceneRunner::period(std::int64_t deadline_mono_ns, std::int64_t woke_mono_ns) noexcept {
-  const core::Model& model = scene_->model;
   const std::int64_t t = k_ * period_ns_;
+  apply_due_events(t);
+  const platform::PeriodReport& report = exchange(t, deadline_mono_ns, woke_mono_ns);
+  ++k_;
+  // ---- measurements (outside the timed step) ----
+  count_period(report);
+  const PeriodContacts contacts = measure_contacts();
+  track_free_space(contacts);
+  track_startup(contacts);
+  accumulate_step_figures(contacts);
+  record(report, contacts);
+}
+
+void SceneRunner::apply_due_events(std::int64_t t_ns) noexcept {
   while (next_event_ < scene_->events.size() &&
-         scene_->events[next_event_].time_s * 1e9 <= static_cast<double>(t) + 0.5) {
-    core::set_attached_body(model, data_, scene_->events[next_event_].body);
+         scene_->events[next_event_].time_s * 1e9 <= static_cast<double>(t_ns) + 0.5) {
+    core::set_attached_body(scene_->model, data_, scene_->events[next_event_].body);
     ++next_event_;
   }
-  const platform::PeriodReport* report_ptr = nullptr;
+}
+
+const platform::PeriodReport& SceneRunner::exchange(std::int64_t t, std::int64_t deadline_mono_ns,
+                                                    std::int64_t woke_mono_ns) noexcept {
   if (real_bus_) {  // bus time = CLOCK_MONOTONIC; the device answers in another process
     const std::int64_t now = platform::monotonic_now_ns();
     loop_.begin_period(now, deadline_mono_ns, woke_mono_ns);
@@ -225,30 +234,29 @@ void SceneRunner::period(std::int64_t deadline_mono_ns, std::int64_t woke_mono_n
                       static_cast<long>(read_at % 1'000'000'000)};
     while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
     }
-    report_ptr = &loop_.end_period(platform::monotonic_now_ns());
-  } else if (log_bus_) {  // the recorded instrument's frames arrive at their logged times
+    return loop_.end_period(platform::monotonic_now_ns());
+  }
+  if (log_bus_) {  // the recorded instrument's frames arrive at their logged times
     log_bus_->set_time_ns(t);
     loop_.begin_period(t, deadline_mono_ns, woke_mono_ns);
     log_bus_->set_time_ns(t + phase_ns_);
-    report_ptr = &loop_.end_period(t + phase_ns_);
-  } else {
-    bus_.set_time_ns(t);
-    loop_.begin_period(t, deadline_mono_ns, woke_mono_ns);
-    bus_.set_time_ns(t + scene_->bus.latency_ns);
-    instrument_.poll(bus_.device(), t + scene_->bus.latency_ns);  // encoders latch at SYNC and answer
-    bus_.set_time_ns(t + phase_ns_);
-    report_ptr = &loop_.end_period(t + phase_ns_);
+    return loop_.end_period(t + phase_ns_);
   }
-  const platform::PeriodReport& report = *report_ptr;
-  ++k_;
-  if (report.frames_read > 0) acc_.last_device_frame_period = k_ - 1;
-  if (last_torque_ && !report.torque_commanded) acc_.last_torque_stop_period = k_ - 1;
+  bus_.set_time_ns(t);
+  loop_.begin_period(t, deadline_mono_ns, woke_mono_ns);
+  bus_.set_time_ns(t + scene_->bus.latency_ns);
+  instrument_.poll(bus_.device(), t + scene_->bus.latency_ns);  // encoders latch at SYNC and answer
+  bus_.set_time_ns(t + phase_ns_);
+  return loop_.end_period(t + phase_ns_);
+}
+
+void SceneRunner::count_period(const platform::PeriodReport& report) noexcept {
+  RunSummary& s = acc_;
+  if (report.frames_read > 0) s.last_device_frame_period = k_ - 1;
+  if (last_torque_ && !report.torque_commanded) s.last_torque_stop_period = k_ - 1;
   last_torque_ = report.torque_commanded;
   if (port_->state() != hal::BusState::kOk || report.command_status == hal::IoStatus::kError)
-    ++acc_.bus_error_periods;
-
-  // ---- measurements (outside the timed step) ----
-  RunSummary& s = acc_;
+    ++s.bus_error_periods;
   if (!report.sample_valid) ++s.invalid_periods;
   if (!report.torque_commanded) ++s.zero_torque_periods;
   if (report.entered_safe_stop && !has_first_fault_ && loop_.supervisor() != nullptr &&
@@ -256,102 +264,119 @@ void SceneRunner::period(std::int64_t deadline_mono_ns, std::int64_t woke_mono_n
     first_fault_ = *loop_.supervisor()->first_fault();
     has_first_fault_ = true;
   }
+}
+
+SceneRunner::PeriodContacts SceneRunner::measure_contacts() noexcept {
+  const core::Model& model = scene_->model;
+  PeriodContacts c;
   const int held = data_.attached_body;
-  double tool_pen = 0.0, target_pen = 0.0;
-  int tool_contacts = 0, target_contacts = 0;
-  int deepest_tool_contact = -1, deepest_tool_body = -1;  // rigid contacts only
-  if (held >= 0) {
-    const auto h = static_cast<std::size_t>(held);
-    // The tool: every body of the held body's articulation (the held body
-    // alone for a rigid tool). The target: the same bodies placed where the
-    // device puts them (held body at data.target, the others at their own
-    // targets, Eq. 6).
-    const int tree = model.articulation.body_tree[h];
-    ghost_.bodies = data_.bodies;  // same size: no allocation
-    ghost_.bodies[h].position = data_.target.position;
-    ghost_.bodies[h].orientation = data_.target.orientation;
-    for (std::size_t b = 0; b < data_.bodies.size(); ++b) {
-      const core::BodyTarget& bt = data_.body_targets[b];
-      if (b == h || !bt.enabled) continue;
-      ghost_.bodies[b].position = bt.pose.position;
-      ghost_.bodies[b].orientation = bt.pose.orientation;
-    }
-    core::detect_contacts(model, ghost_);
-    for (int b = 0; b < model.num_bodies(); ++b) {
-      if (model.articulation.body_tree[static_cast<std::size_t>(b)] != tree) continue;
-      int n = 0, m = 0, deepest = -1;
-      const double pen = deepest_contact_of(data_, b, &n, &deepest);
-      if (pen > tool_pen) {
-        deepest_tool_contact = deepest;
-        deepest_tool_body = b;
-      }
-      tool_pen = std::max(tool_pen, pen);
-      tool_contacts += n;
-      target_pen = std::max(target_pen, deepest_contact_of(ghost_, b, &m));
-      target_contacts += m;
-    }
-    if (model.num_nets() > 0) {
-      // The tool's nets: as deformed (god-object), in their rest shape on the
-      // target poses (the hand).
-      ghost_.nodes = data_.nodes;  // same size: no allocation
-      place_tool_nets_at_rest(model, ghost_, tree);
-      if constexpr (core::kWithDeformable) core::detect_node_contacts(model, ghost_);
-      int n = 0;
-      tool_pen = std::max(tool_pen, deepest_node_contact_of_tree(model, data_, tree, &n));
-      tool_contacts += n;
-      int m = 0;
-      target_pen = std::max(target_pen, deepest_node_contact_of_tree(model, ghost_, tree, &m));
-      target_contacts += m;
-    }
-    // Free space: neither the tool nor the hand touches anything. A step where the tool has
-    // come off a surface while the hand is still inside the obstacle is not free-space
-    // tracking: the error there is the god-object's constraint, not its lag.
-    if (tool_contacts == 0 && target_contacts == 0) {
-      const double e = (data_.bodies[h].position - data_.target.position).norm();
-      free_sq_ += e * e;
-      s.tracking_error_free_max_mm = std::max(s.tracking_error_free_max_mm, e * 1e3);
-      ++s.free_steps;
-    }
+  if (held < 0) return c;
+  c.held = true;
+  const auto h = static_cast<std::size_t>(held);
+  // The tool: every body of the held body's articulation (the held body
+  // alone for a rigid tool). The target: the same bodies placed where the
+  // device puts them (held body at data.target, the others at their own
+  // targets, Eq. 6).
+  const int tree = model.articulation.body_tree[h];
+  ghost_.bodies = data_.bodies;  // same size: no allocation
+  ghost_.bodies[h].position = data_.target.position;
+  ghost_.bodies[h].orientation = data_.target.orientation;
+  for (std::size_t b = 0; b < data_.bodies.size(); ++b) {
+    const core::BodyTarget& bt = data_.body_targets[b];
+    if (b == h || !bt.enabled) continue;
+    ghost_.bodies[b].position = bt.pose.position;
+    ghost_.bodies[b].orientation = bt.pose.orientation;
   }
-  s.joint_drift_max_mm = std::max(s.joint_drift_max_mm, data_.max_joint_drift * 1e3);
-  s.joint_angle_drift_max_mrad =
-      std::max(s.joint_angle_drift_max_mrad, data_.max_joint_angle_drift * 1e3);
+  core::detect_contacts(model, ghost_);
+  for (int b = 0; b < model.num_bodies(); ++b) {
+    if (model.articulation.body_tree[static_cast<std::size_t>(b)] != tree) continue;
+    int n = 0, m = 0, deepest = -1;
+    const double pen = deepest_contact_of(data_, b, &n, &deepest);
+    if (pen > c.tool_pen) {
+      c.deepest_tool_contact = deepest;
+      c.deepest_tool_body = b;
+    }
+    c.tool_pen = std::max(c.tool_pen, pen);
+    c.tool_contacts += n;
+    c.target_pen = std::max(c.target_pen, deepest_contact_of(ghost_, b, &m));
+    c.target_contacts += m;
+  }
+  if (model.num_nets() > 0) {
+    // The tool's nets: as deformed (god-object), in their rest shape on the
+    // target poses (the hand).
+    ghost_.nodes = data_.nodes;  // same size: no allocation
+    place_tool_nets_at_rest(model, ghost_, tree);
+    if constexpr (core::kWithDeformable) core::detect_node_contacts(model, ghost_);
+    int n = 0;
+    c.tool_pen = std::max(c.tool_pen, deepest_node_contact_of_tree(model, data_, tree, &n));
+    c.tool_contacts += n;
+    int m = 0;
+    c.target_pen = std::max(c.target_pen, deepest_node_contact_of_tree(model, ghost_, tree, &m));
+    c.target_contacts += m;
+  }
+  return c;
+}
+
+void SceneRunner::track_free_space(const PeriodContacts& c) noexcept {
+  // Free space: neither the tool nor the hand touches anything. A step where the tool has
+  // come off a surface while the hand is still inside the obstacle is not free-space
+  // tracking: the error there is the god-object's constraint, not its lag.
+  if (!c.held || c.tool_contacts != 0 || c.target_contacts != 0) return;
+  const double e =
+      (data_.bodies[static_cast<std::size_t>(data_.attached_body)].position - data_.target.position)
+          .norm();
+  free_sq_ += e * e;
+  acc_.tracking_error_free_max_mm = std::max(acc_.tracking_error_free_max_mm, e * 1e3);
+  ++acc_.free_steps;
+}
+
+void SceneRunner::track_startup(const PeriodContacts& c) noexcept {
+  RunSummary& s = acc_;
   // Start-up (RunSummary): the tool was spawned where the hand is, inside an obstacle, and the
   // contact forces push it out. It runs from the first period through the last period that
   // lowers the tool's penetration to a new minimum before kStartupSettle without one (or a
   // period without contact); the periods after that minimum count as the god-object's again.
-  if (k_ == 1 && tool_contacts > 0) {
+  if (k_ == 1 && c.tool_contacts > 0) {
     in_startup_ = true;
-    startup_min_ = tool_pen;
+    startup_min_ = c.tool_pen;
     startup_window_max_ = 0.0;
     s.startup_steps = 1;
-    s.startup_tool_penetration_mm = tool_pen * 1e3;
-    if (deepest_tool_contact >= 0) {
-      const core::Contact& c = data_.contacts[static_cast<std::size_t>(deepest_tool_contact)];
-      startup_obstacle_ = c.obstacle;
-      startup_other_body_ = c.body_a == deepest_tool_body ? c.body_b : c.body_a;
+    s.startup_tool_penetration_mm = c.tool_pen * 1e3;
+    if (c.deepest_tool_contact >= 0) {
+      const core::Contact& d = data_.contacts[static_cast<std::size_t>(c.deepest_tool_contact)];
+      startup_obstacle_ = d.obstacle;
+      startup_other_body_ = d.body_a == c.deepest_tool_body ? d.body_b : d.body_a;
     }
   } else if (in_startup_) {
-    if (tool_contacts > 0 && tool_pen < startup_min_) {  // still being pushed out
-      startup_min_ = tool_pen;
+    if (c.tool_contacts > 0 && c.tool_pen < startup_min_) {  // still being pushed out
+      startup_min_ = c.tool_pen;
       startup_window_max_ = 0.0;
       s.startup_steps = k_;
     } else {
-      startup_window_max_ = std::max(startup_window_max_, tool_pen);
-      if (tool_contacts == 0 || k_ - s.startup_steps >= startup_settle_periods_) {
+      startup_window_max_ = std::max(startup_window_max_, c.tool_pen);
+      if (c.tool_contacts == 0 || k_ - s.startup_steps >= startup_settle_periods_) {
         in_startup_ = false;
         s.tool_penetration_max_mm = std::max(s.tool_penetration_max_mm, startup_window_max_ * 1e3);
       }
     }
   }
   if (!in_startup_)
-    s.tool_penetration_max_mm = std::max(s.tool_penetration_max_mm, tool_pen * 1e3);
-  s.target_penetration_max_mm = std::max(s.target_penetration_max_mm, target_pen * 1e3);
+    s.tool_penetration_max_mm = std::max(s.tool_penetration_max_mm, c.tool_pen * 1e3);
+}
+
+void SceneRunner::accumulate_step_figures(const PeriodContacts& c) noexcept {
+  const core::Model& model = scene_->model;
+  RunSummary& s = acc_;
+  s.joint_drift_max_mm = std::max(s.joint_drift_max_mm, data_.max_joint_drift * 1e3);
+  s.joint_angle_drift_max_mrad =
+      std::max(s.joint_angle_drift_max_mrad, data_.max_joint_angle_drift * 1e3);
+  s.target_penetration_max_mm = std::max(s.target_penetration_max_mm, c.target_pen * 1e3);
   s.any_penetration_max_mm = std::max(s.any_penetration_max_mm, data_.max_penetration * 1e3);
   s.feedback_force_max_n = std::max(s.feedback_force_max_n, data_.feedback_wrench.force.norm());
   s.feedback_torque_max_nm = std::max(s.feedback_torque_max_nm, data_.feedback_wrench.torque.norm());
   const hal::AxisVector& tau = device_.last_torques();
   if (tau.size() > 0) s.axis_torque_max = std::max(s.axis_torque_max, tau.cwiseAbs().maxCoeff());
+  const int held = data_.attached_body;
   const int held_tree = held >= 0 ? model.articulation.body_tree[static_cast<std::size_t>(held)] : -1;
   for (int b = 0; b < model.num_bodies(); ++b)
     if (model.articulation.body_tree[static_cast<std::size_t>(b)] != held_tree)
@@ -371,27 +396,20 @@ void SceneRunner::period(std::int64_t deadline_mono_ns, std::int64_t woke_mono_n
     s.net_strain_max = std::max(s.net_strain_max, net.max_strain);
     s.net_node_speed_max_mps = std::max(s.net_node_speed_max_mps, net.max_node_speed);
   }
-  const TraceRecord rec =
-      make_trace_record(data_, held, tool_contacts, tool_pen, target_pen, report, tau);
+}
+
+void SceneRunner::record(const platform::PeriodReport& report, const PeriodContacts& c) noexcept {
+  const TraceRecord rec = make_trace_record(data_, data_.attached_body, c.tool_contacts,
+                                            c.tool_pen, c.target_pen, report,
+                                            device_.last_torques());
   if (trace_writer_) {
     platform::TraceRecord r;
     r.period = static_cast<std::uint64_t>(k_ - 1);
     r.time_ns = report.deadline_ns;
     r.flags = (report.sample_valid ? 1u : 0u) | (report.torque_commanded ? 2u : 0u) |
               (report.overrun ? 4u : 0u);
-    std::size_t c = 0;
-    r.values[c++] = report.frames_read;
-    r.values[c++] = report.sample_valid ? 1.0 : 0.0;
-    r.values[c++] = report.torque_commanded ? 1.0 : 0.0;
-    r.values[c++] = static_cast<double>(report.lifecycle);
-    for (int i = 0; i < 3; ++i) r.values[c++] = rec.target.position[i];
-    for (int i = 0; i < 3; ++i) r.values[c++] = rec.tool.position[i];
-    for (int i = 0; i < 3; ++i) r.values[c++] = rec.feedback.force[i];
-    for (std::size_t a = 0; a < scene_->device.axes.size(); ++a)
-      r.values[c++] = a < static_cast<std::size_t>(tau.size()) ? tau[static_cast<Eigen::Index>(a)] : 0.0;
-    r.values[c++] = static_cast<double>(report.step_ns) * 1e-3;
-    r.values[c++] = static_cast<double>(report.output_end_ns - report.sync_sent_ns) * 1e-3;
-    r.values[c++] = static_cast<double>(report.woke_ns - report.deadline_ns) * 1e-3;
+    trace_column_values(trace_stream_columns(), StreamedPeriod{rec, report},
+                        static_cast<int>(scene_->device.axes.size()), std::span(r.values));
     trace_writer_->push(r);
   }
   trace_.push(rec);
@@ -629,284 +647,6 @@ RunSummary run_scene(const Scene& scene, const RunOptions& options) {
   s.exit_status = code(verdict.status);
   s.exit_reasons = std::move(verdict.reasons);
   return s;
-}
-
-std::string format_summary(const RunSummary& s) {
-  std::ostringstream os;
-  os << std::fixed << std::setprecision(3);
-  os << "scene " << s.scene << ": " << s.coupling << " coupling, " << s.integrator << ", dt "
-     << s.dt_s * 1e3 << " ms\n";
-  if (!s.trocar_note.empty()) os << "  " << s.trocar_note << "\n";
-  os << "  " << s.steps << " steps, " << s.sim_time_s << " s simulated in " << s.wall_time_s
-     << " s wall (" << (s.wall_time_s > 0 ? s.sim_time_s / s.wall_time_s : 0.0) << "x real time)\n";
-  os << "  step time us: median " << s.step_time_us.median << ", p99 " << s.step_time_us.p99
-     << ", p99.9 " << s.step_time_us.p999 << ", max " << s.step_time_us.max << "\n";
-  os << "  penetration max: target (the hand) " << s.target_penetration_max_mm
-     << " mm, god-object " << s.tool_penetration_max_mm << " mm";
-  if (s.startup_steps > 0)
-    os << " after a start-up of " << s.startup_steps << " steps from "
-       << s.startup_tool_penetration_mm << " mm (the tool started inside)";
-  os << "\n";
-  if (!s.admittance.enabled)
-    os << "  tracking error in free space (tool and hand out of contact): rms "
-       << s.tracking_error_free_rms_mm << " mm, max " << s.tracking_error_free_max_mm
-       << " mm over " << s.free_steps << " steps\n";
-  if (s.admittance.enabled) {
-    const AdmittanceSummary& a = s.admittance;
-    os << "  admittance: measured force max " << a.measured_force_max_n << " N (torque "
-       << a.measured_torque_max_nm << " N·m), final " << a.final_measured_force_n
-       << " N at hand–device separation " << a.final_hand_separation_mm << " mm (k_hand × sep = "
-       << a.k_hand * a.final_hand_separation_mm * 1e-3 << " N)\n";
-    os << "  admittance: device vs god-object error max " << a.device_error_max_mm << " mm, rms "
-       << a.device_error_rms_mm << " mm; sensor frames " << a.sensor_frames
-       << ", rejected periods " << a.sensor_rejected_periods << ", csp RPDOs " << a.csp_rpdos
-       << ", set-points clamped " << a.setpoints_clamped << ", rate limited "
-       << a.setpoints_rate_limited << ", hold periods " << a.hold_periods << "\n";
-  }
-  os << "  feedback: force max " << s.feedback_force_max_n << " N, torque max "
-     << s.feedback_torque_max_nm << " N·m, axis torque max " << s.axis_torque_max << "\n";
-  if (s.num_joints > 0)
-    os << "  joints: " << s.num_joints << ", drift max " << s.joint_drift_max_mm << " mm, "
-       << s.joint_angle_drift_max_mrad << " mrad\n";
-  os << "  fastest body not held: " << s.free_body_speed_max_mps << " m/s\n";
-  if (s.num_nets > 0)
-    os << "  deformable: " << s.num_nets << " net(s), " << s.num_nodes
-       << " nodes; node contacts max " << s.node_contacts_max << ", net penetration max "
-       << s.net_penetration_max_mm << " mm, tie stretch max " << s.net_tie_stretch_max_mm
-       << " mm, strain max " << s.net_strain_max << ", node speed max " << s.net_node_speed_max_mps
-       << " m/s\n";
-  os << "  contacts max " << s.contacts_max << ", overflow steps " << s.contact_overflow
-     << ", solver iterations mean " << s.solver_iterations_mean << ", max "
-     << s.solver_iterations_max << ", residual max " << std::scientific << std::setprecision(2)
-     << s.solver_residual_max << std::fixed << std::setprecision(3) << ", not converged "
-     << s.solver_not_converged_steps << " steps\n";
-  if (s.contact_clamped_steps > 0)
-    os << "  stiff contacts: stiffness clamped to the time-constant floor in "
-       << s.contact_clamped_steps << " steps (docs/dynamics.md, \"Stiff contacts\")\n";
-  os << "  bus: rejected samples " << s.rejected_samples << ", invalid periods "
-     << s.invalid_periods << ", frames dropped " << s.bus_frames_dropped << ", corrupted "
-     << s.bus_frames_corrupted << "\n";
-  if (s.bus.rfind("log:", 0) == 0)
-    os << "  bus " << s.bus << ": " << s.bus_frames_replayed << " frames replayed of "
-       << s.bus_log_records << " records; lost by the recording " << s.bus_log_lost_frames
-       << ", out of order " << s.bus_log_out_of_order << "\n";
-  if (s.real_bus) {
-    os << "  bus " << s.bus << ": frames rx " << s.port.frames_rx << ", tx " << s.port.frames_tx
-       << ", dropped " << s.port.dropped << ", errors " << s.port.errors << ", would-block "
-       << s.port.tx_would_block << "; state " << s.bus_state << ", error periods "
-       << s.bus_error_periods << "\n";
-    if (!s.transport.empty()) os << "  " << s.transport << "\n";
-    os << "  loop: read errors " << s.read_errors << ", SYNC write failures "
-       << s.sync_write_failures << ", command failures " << s.command_failures
-       << "; frames rejected " << s.frames_rejected << " (unknown id " << s.frames_unknown_id
-       << "), error frames ignored " << s.error_frames << ", values out of range " << s.values_out_of_range << ", jumps " << s.values_jump
-       << "\n";
-    for (const std::string& line : platform::describe(s.loop)) os << "  loop " << line << "\n";
-    os << "  device frames: last at period " << s.last_device_frame_period
-       << "; last torque stop at period " << s.last_torque_stop_period << "\n";
-    os << "  end: " << (s.stopped ? "stopped by signal" : "duration reached") << ", shutdown "
-       << s.shutdown_periods << " periods, drives " << (s.drives_disabled ? "disabled" : "NOT disabled")
-       << "; trace records " << s.trace_pushed << ", dropped " << s.trace_dropped << ", written "
-       << s.trace_written << ", I/O errors " << s.trace_io_errors << "\n";
-  }
-  if (s.bus_frames_recorded > 0 || s.bus_record_dropped > 0)
-    os << "  recorded " << s.bus_frames_recorded << " frames, " << s.bus_record_dropped
-       << " dropped by the recorder, " << s.bus_record_written << " written, "
-       << s.bus_record_io_errors << " I/O errors\n";
-  if (s.managed) {
-    os << "  canopen: start-up " << s.startup << " at period " << s.periods_to_operational
-       << ", active at period " << s.periods_to_active << ", first torque at period "
-       << s.periods_to_torque << "; lifecycle " << s.lifecycle << "\n";
-    os << "  safety: " << s.faults << " safe stop(s), " << s.fault_records << " fault record(s)";
-    if (!s.first_fault.empty())
-      os << "; first: " << s.first_fault << " (id " << s.first_fault_id << ", value "
-         << s.first_fault_value << ") at " << s.first_fault_time_s << " s, period "
-         << s.first_fault_period;
-    os << "; EMCY " << s.emcys << " (" << s.emcy_faults << " faults), heartbeat losses "
-       << s.heartbeat_losses << ", zero-torque periods " << s.zero_torque_periods << "\n";
-    if (s.rearm_requests > 0)
-      os << "  re-arm: " << s.rearm_requests << " request(s), " << s.rearms_accepted
-         << " accepted, first before period " << s.rearm_first_period << "\n";
-    if (!s.drive_states.empty()) {
-      os << "  drives:";
-      for (std::size_t i = 0; i < s.drive_states.size(); ++i)
-        os << (i ? "," : "") << " " << s.drive_states[i];
-      os << "\n";
-    }
-  } else if (s.admittance.enabled) {
-    os << "  admittance protocol: SYNC, force/torque TPDOs, csp RPDOs (docs/protocol.md §18); lifecycle "
-       << s.lifecycle << ", " << s.faults << " safe stop(s)\n";
-  } else {
-    os << "  canopen: minimal protocol (no start-up, no lifecycle)\n";
-  }
-  os << "  nan detected: " << (s.nan_detected ? "YES" : "no");
-  for (const std::string& line : s.realtime_setup) os << "\n  realtime setup: " << line;
-  if (s.wakeup_latency_us.max > 0.0)
-    os << "\n  realtime: wake-up latency us median " << s.wakeup_latency_us.median << ", p99 "
-       << s.wakeup_latency_us.p99 << ", max " << s.wakeup_latency_us.max << "; overruns "
-       << s.realtime_overruns << ", missed periods " << s.realtime_missed_periods
-       << (s.overrun_limit > 0 ? "; overrun policy: latch after " + std::to_string(s.overrun_limit)
-                               : std::string("; overrun policy: count only"));
-  os << "\n";
-  for (const auto& w : s.warnings) os << "  warning: " << w << "\n";
-  os << "  exit status " << s.exit_status << " ("
-     << to_string(static_cast<ExitStatus>(s.exit_status)) << ")";
-  for (std::size_t i = 0; i < s.exit_reasons.size(); ++i)
-    os << (i ? "; " : ": ") << s.exit_reasons[i];
-  os << "\n";
-  return os.str();
-}
-
-std::string format_summary_json(const RunSummary& s) {
-  nlohmann::ordered_json j;  // keys in insertion order; non-finite numbers are written as null
-  j["scene"] = s.scene;
-  j["coupling"] = s.coupling;
-  j["integrator"] = s.integrator;
-  j["steps"] = s.steps;
-  j["dt_s"] = s.dt_s;
-  j["sim_time_s"] = s.sim_time_s;
-  j["wall_time_s"] = s.wall_time_s;
-  j["trocar_note"] = s.trocar_note;
-  j["step_time_us"] = {{"median", s.step_time_us.median},
-                       {"p99", s.step_time_us.p99},
-                       {"p999", s.step_time_us.p999},
-                       {"max", s.step_time_us.max},
-                       {"mean", s.step_time_us.mean}};
-  j["target_penetration_max_mm"] = s.target_penetration_max_mm;
-  j["tool_penetration_max_mm"] = s.tool_penetration_max_mm;
-  j["startup_tool_penetration_mm"] = s.startup_tool_penetration_mm;
-  j["startup_steps"] = s.startup_steps;
-  j["any_penetration_max_mm"] = s.any_penetration_max_mm;
-  j["tracking_error_free_rms_mm"] = s.tracking_error_free_rms_mm;
-  j["tracking_error_free_max_mm"] = s.tracking_error_free_max_mm;
-  j["free_steps"] = s.free_steps;
-  j["feedback_force_max_n"] = s.feedback_force_max_n;
-  j["feedback_torque_max_nm"] = s.feedback_torque_max_nm;
-  j["axis_torque_max"] = s.axis_torque_max;
-  j["free_body_speed_max_mps"] = s.free_body_speed_max_mps;
-  j["num_bodies"] = s.num_bodies;
-  j["num_joints"] = s.num_joints;
-  j["joint_drift_max_mm"] = s.joint_drift_max_mm;
-  j["joint_angle_drift_max_mrad"] = s.joint_angle_drift_max_mrad;
-  j["rejected_samples"] = s.rejected_samples;
-  j["invalid_periods"] = s.invalid_periods;
-  j["contact_overflow"] = s.contact_overflow;
-  j["contact_clamped_steps"] = s.contact_clamped_steps;
-  j["contacts_max"] = s.contacts_max;
-  j["solver_iterations_max"] = s.solver_iterations_max;
-  j["solver_iterations_mean"] = s.solver_iterations_mean;
-  j["solver_residual_max"] = s.solver_residual_max;
-  j["solver_not_converged_steps"] = s.solver_not_converged_steps;
-  j["num_nets"] = s.num_nets;
-  j["num_nodes"] = s.num_nodes;
-  j["node_contacts_max"] = s.node_contacts_max;
-  j["net_penetration_max_mm"] = s.net_penetration_max_mm;
-  j["net_tie_stretch_max_mm"] = s.net_tie_stretch_max_mm;
-  j["net_strain_max"] = s.net_strain_max;
-  j["net_node_speed_max_mps"] = s.net_node_speed_max_mps;
-  j["nonfinite_steps"] = s.nonfinite_steps;
-  j["bus_frames_dropped"] = s.bus_frames_dropped;
-  j["bus_frames_corrupted"] = s.bus_frames_corrupted;
-  j["bus"] = s.bus;
-  j["bus_frames_replayed"] = s.bus_frames_replayed;
-  j["bus_log_records"] = s.bus_log_records;
-  j["bus_log_lost_frames"] = s.bus_log_lost_frames;
-  j["bus_log_out_of_order"] = s.bus_log_out_of_order;
-  j["bus_frames_recorded"] = s.bus_frames_recorded;
-  j["bus_record_dropped"] = s.bus_record_dropped;
-  j["bus_record_written"] = s.bus_record_written;
-  j["bus_record_io_errors"] = s.bus_record_io_errors;
-  j["bus_record_format_errors"] = s.bus_record_format_errors;
-  j["real_bus"] = s.real_bus;
-  j["port_frames_rx"] = s.port.frames_rx;
-  j["port_frames_tx"] = s.port.frames_tx;
-  j["port_dropped"] = s.port.dropped;
-  j["port_errors"] = s.port.errors;
-  j["port_would_block"] = s.port.tx_would_block;
-  j["transport"] = s.transport;
-  j["bus_state"] = s.bus_state;
-  j["bus_error_periods"] = s.bus_error_periods;
-  j["read_errors"] = s.read_errors;
-  j["sync_write_failures"] = s.sync_write_failures;
-  j["command_failures"] = s.command_failures;
-  j["frames_rejected"] = s.frames_rejected;
-  j["frames_unknown_id"] = s.frames_unknown_id;
-  j["error_frames"] = s.error_frames;
-  j["values_out_of_range"] = s.values_out_of_range;
-  j["values_jump"] = s.values_jump;
-  const auto hist = [](const platform::HistogramSummary& h) {
-    return nlohmann::ordered_json{{"count", h.count}, {"min", h.min},   {"median", h.median},
-                                  {"p99", h.p99},     {"p999", h.p999}, {"max", h.max}};
-  };
-  j["loop"] = {{"periods", s.loop.periods},
-               {"overruns", s.loop.overruns},
-               {"longest_overrun_streak", s.loop.longest_overrun_streak},
-               {"skipped_periods", s.loop.skipped_periods},
-               {"wakeup_ns", hist(s.loop.wakeup)},
-               {"step_ns", hist(s.loop.step)},
-               {"bus_io_ns", hist(s.loop.bus_io)},
-               {"end_to_end_ns", hist(s.loop.end_to_end)}};
-  j["last_device_frame_period"] = s.last_device_frame_period;
-  j["last_torque_stop_period"] = s.last_torque_stop_period;
-  j["trace_pushed"] = s.trace_pushed;
-  j["trace_dropped"] = s.trace_dropped;
-  j["trace_written"] = s.trace_written;
-  j["trace_io_errors"] = s.trace_io_errors;
-  j["stopped"] = s.stopped;
-  j["shutdown_periods"] = s.shutdown_periods;
-  j["drives_disabled"] = s.drives_disabled;
-  j["realtime_overruns"] = s.realtime_overruns;
-  j["realtime_missed_periods"] = s.realtime_missed_periods;
-  j["overrun_limit"] = s.overrun_limit;
-  j["wakeup_latency_us"] = {{"median", s.wakeup_latency_us.median},
-                            {"p99", s.wakeup_latency_us.p99},
-                            {"max", s.wakeup_latency_us.max}};
-  j["realtime_setup"] = s.realtime_setup;
-  j["managed"] = s.managed;
-  j["startup"] = s.startup;
-  j["periods_to_operational"] = s.periods_to_operational;
-  j["periods_to_active"] = s.periods_to_active;
-  j["periods_to_torque"] = s.periods_to_torque;
-  j["lifecycle"] = s.lifecycle;
-  j["faults"] = s.faults;
-  j["fault_records"] = s.fault_records;
-  j["first_fault"] = {{"cause", s.first_fault},
-                      {"id", s.first_fault_id},
-                      {"value", s.first_fault_value},
-                      {"time_s", s.first_fault_time_s},
-                      {"period", s.first_fault_period}};
-  j["emcys"] = s.emcys;
-  j["emcy_faults"] = s.emcy_faults;
-  j["heartbeat_losses"] = s.heartbeat_losses;
-  j["zero_torque_periods"] = s.zero_torque_periods;
-  j["rearm_requests"] = s.rearm_requests;
-  j["rearms_accepted"] = s.rearms_accepted;
-  j["rearm_first_period"] = s.rearm_first_period;
-  j["drive_states"] = s.drive_states;
-  j["warnings"] = s.warnings;
-  if (s.admittance.enabled) {
-    const AdmittanceSummary& a = s.admittance;
-    j["admittance"] = {{"measured_force_max_n", a.measured_force_max_n},
-                       {"measured_torque_max_nm", a.measured_torque_max_nm},
-                       {"device_error_max_mm", a.device_error_max_mm},
-                       {"device_error_rms_mm", a.device_error_rms_mm},
-                       {"hand_separation_max_mm", a.hand_separation_max_mm},
-                       {"final_measured_force_n", a.final_measured_force_n},
-                       {"final_hand_separation_mm", a.final_hand_separation_mm},
-                       {"k_hand", a.k_hand},
-                       {"sensor_frames", a.sensor_frames},
-                       {"sensor_rejected_periods", a.sensor_rejected_periods},
-                       {"csp_rpdos", a.csp_rpdos},
-                       {"setpoints_clamped", a.setpoints_clamped},
-                       {"setpoints_rate_limited", a.setpoints_rate_limited},
-                       {"hold_periods", a.hold_periods}};
-  }
-  j["nan_detected"] = s.nan_detected;
-  j["exit_status"] = s.exit_status;
-  j["exit_reasons"] = s.exit_reasons;
-  // Scene names, paths and messages may hold bytes that are not UTF-8: replaced by U+FFFD
-  // instead of throwing.
-  return j.dump(-1, ' ', false, nlohmann::ordered_json::error_handler_t::replace);
 }
 
 }  // namespace numen::sim

@@ -4,7 +4,11 @@
 
 #include <algorithm>
 #include <fstream>
+#include <span>
 #include <stdexcept>
+#include <vector>
+
+#include "numen/sim/trace_columns.hpp"
 
 namespace numen::sim {
 
@@ -50,34 +54,18 @@ void Trace::write_csv(const std::string& path) const {
   std::ofstream out(path);
   if (!out) throw std::runtime_error(path + ": cannot open the trace file for writing");
   const int axes = records_.empty() ? 0 : records_.front().num_axes;
-  out << "time_s,attached_body,sample_valid,"
-         "target_x,target_y,target_z,target_qw,target_qx,target_qy,target_qz,"
-         "tool_x,tool_y,tool_z,tool_qw,tool_qx,tool_qy,tool_qz,"
-         "contacts,tool_contacts,tool_penetration_mm,target_penetration_mm,"
-         "feedback_fx,feedback_fy,feedback_fz,feedback_tx,feedback_ty,feedback_tz";
-  for (int i = 0; i < axes; ++i) out << ",axis_torque_" << i;
-  out << ",step_time_us,solver_iterations,joint_drift_mm,joint_angle_drift_mrad,"
-         "joint_reaction_max_n,baumgarte_rhs_max,solver_residual,node_contacts,"
-         "net_penetration_mm,net_tie_stretch_mm,net_strain_max\n";
+  std::vector<std::string> axis_index;
+  for (int i = 0; i < axes; ++i) axis_index.push_back(std::to_string(i));
+  const std::span<const TraceColumn<TraceRecord>> columns = trace_csv_columns();
+  const std::vector<std::string> names = trace_column_names(columns, std::span(axis_index));
+  for (std::size_t c = 0; c < names.size(); ++c) out << (c ? "," : "") << names[c];
+  out << '\n';
   out.precision(9);
-  auto pose = [&](const core::Pose& p) {
-    out << p.position.x() << ',' << p.position.y() << ',' << p.position.z() << ','
-        << p.orientation.w() << ',' << p.orientation.x() << ',' << p.orientation.y() << ','
-        << p.orientation.z() << ',';
-  };
+  std::vector<double> row(names.size());
   for (const TraceRecord& r : records_) {
-    out << r.time_s << ',' << r.attached_body << ',' << (r.sample_valid ? 1 : 0) << ',';
-    pose(r.target);
-    pose(r.tool);
-    out << r.contacts << ',' << r.tool_contacts << ',' << r.tool_penetration_mm << ','
-        << r.target_penetration_mm << ',' << r.feedback.force.x() << ',' << r.feedback.force.y()
-        << ',' << r.feedback.force.z() << ',' << r.feedback.torque.x() << ','
-        << r.feedback.torque.y() << ',' << r.feedback.torque.z();
-    for (int i = 0; i < axes; ++i) out << ',' << r.axis_torque[static_cast<std::size_t>(i)];
-    out << ',' << r.step_time_us << ',' << r.solver_iterations << ',' << r.joint_drift_mm << ','
-        << r.joint_angle_drift_mrad << ',' << r.joint_reaction_max_n << ',' << r.baumgarte_rhs_max
-        << ',' << r.solver_residual << ',' << r.node_contacts << ',' << r.net_penetration_mm << ','
-        << r.net_tie_stretch_mm << ',' << r.net_strain_max << '\n';
+    const std::size_t n = trace_column_values(columns, r, axes, std::span(row));
+    for (std::size_t c = 0; c < n; ++c) out << (c ? "," : "") << row[c];
+    out << '\n';
   }
   out.flush();  // a write error of the last buffered block must not pass silently
   if (!out) throw std::runtime_error(path + ": error while writing the trace");

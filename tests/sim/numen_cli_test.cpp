@@ -1,4 +1,4 @@
-// End-to-end tests of the `numen` command (sim/app/main.cpp) run as a child process: exit
+// End-to-end tests of the `numen` command (sim/app/main.cpp and its *_command.cpp) run as a child process: exit
 // statuses (docs/inputs.md), signals at each phase, and resident memory that depends neither
 // on the control period nor on the run's duration (issue 17, defects 1 and 4).
 
@@ -12,6 +12,7 @@
 
 #include "build_features.hpp"
 #include "child_process.hpp"
+#include "numen/sim/run_figures.hpp"
 #include "numen/sim/scene.hpp"
 #include "sanitizer.hpp"
 #include "scene_text.hpp"
@@ -139,6 +140,24 @@ TEST(NumenCli, JsonCarriesTheExitStatus) {
   EXPECT_EQ(r.status, 0) << r.out << r.err;
   EXPECT_NE(r.out.find("\"exit_status\":0"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("\"exit_reasons\":[]"), std::string::npos) << r.out;
+}
+
+// Issue 18: one class per subcommand; each still answers --help, and `numen figures` prints the
+// figure table that docs/scenes.md holds.
+TEST(NumenCli, EverySubcommandParsesAndFiguresPrintsTheTable) {
+  TempDir dir;
+  for (const std::vector<std::string>& args :
+       {std::vector<std::string>{kNumen, "run", "--help"}, {kNumen, "device", "--help"},
+        {kNumen, "info", "--help"}, {kNumen, "figures", "--help"},
+        {kNumen, "study", "accuracy", "--help"}, {kNumen, "study", "stability", "--help"}}) {
+    const ChildResult r = run_child(args, dir.path(), 30);
+    EXPECT_EQ(r.status, 0) << args[1] << ": " << r.err;
+  }
+  const ChildResult r = run_child({kNumen, "figures"}, dir.path(), 30);
+  EXPECT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(r.out, numen::sim::format_run_figures_markdown());
+  const ChildResult none = run_child({kNumen}, dir.path(), 30);
+  EXPECT_EQ(none.status, 2) << "a subcommand is required: " << none.err;
 }
 
 // Defect 4: a refused command-line value is "input rejected" (2), not CLI11's own codes.

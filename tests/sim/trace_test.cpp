@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "alloc_counter.hpp"
+#include "csv_lines.hpp"
 #include "numen/sim/run.hpp"
 #include "numen/sim/scene.hpp"
 #include "build_features.hpp"
@@ -31,22 +32,8 @@ using numen::sim::TraceRecord;
 
 using numen::test::TempDir;
 
-std::vector<std::string> split(const std::string& line, char sep = ',') {
-  std::vector<std::string> out;
-  std::stringstream ss(line);
-  std::string cell;
-  while (std::getline(ss, cell, sep)) out.push_back(cell);
-  if (!line.empty() && line.back() == sep) out.push_back("");
-  return out;
-}
-
-std::vector<std::string> read_lines(const fs::path& p) {
-  std::ifstream in(p);
-  std::vector<std::string> lines;
-  std::string line;
-  while (std::getline(in, line)) lines.push_back(line);
-  return lines;
-}
+using numen::test::read_lines;
+std::vector<std::string> split(const std::string& line) { return numen::test::split_csv(line); }
 
 TraceRecord record(int i) {
   TraceRecord r;

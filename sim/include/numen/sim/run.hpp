@@ -309,10 +309,12 @@ class SceneRunner {
                        const BusChoice& bus = {}, bool realtime = false,
                        std::uint32_t overrun_limit = 3);
 
-  /// Runs control period k (bus time k·dt): tool-switching events due,
-  /// SYNC (and the managed stack's NMT / heartbeat), the instrument's answer,
-  /// the controller's read–check–supervise–step–write, then the measurements
-  /// and one trace record. `deadline_mono_ns` / `woke_mono_ns`: the paced
+  /// Runs control period k (bus time k·dt), in named parts: apply_due_events() (tool
+  /// switching), exchange() (SYNC and the managed stack's NMT / heartbeat, the instrument's
+  /// answer, the controller's read–check–supervise–step–write in platform::ControlLoop), then
+  /// the measurements outside the timed step — count_period(), measure_contacts(),
+  /// track_free_space(), track_startup(), accumulate_step_figures() — and record() (one trace
+  /// record). `deadline_mono_ns` / `woke_mono_ns`: the paced
   /// timer's wake-up (CLOCK_MONOTONIC), -1 when not paced.
   ///
   /// Real bus (can:, serial:): bus time is CLOCK_MONOTONIC. The SYNC goes out at once
@@ -326,9 +328,9 @@ class SceneRunner {
   /// The controller's port (the real bus, the log replay, the recorder, or the SimBus port).
   const hal::Bus& port() const noexcept { return *port_; }
   /// Streams one record per period into a CSV through platform::TraceWriter (lock-free queue,
-  /// writer thread started here; setup only). Columns: frames_read, sample_valid,
-  /// torque_commanded, lifecycle, target_{x,y,z}, tool_{x,y,z}, force_{x,y,z},
-  /// tau_<axis name> per axis, step_us, end_to_end_us, wakeup_us; flags bit 0 sample valid,
+  /// writer thread started here; setup only). Columns: trace_stream_columns() (frames_read,
+  /// sample_valid, torque_commanded, lifecycle, target_{x,y,z}, tool_{x,y,z}, force_{x,y,z},
+  /// tau_<axis name> per axis, step_us, end_to_end_us, wakeup_us); flags bit 0 sample valid,
   /// bit 1 torque commanded, bit 2 overrun. Throws like TraceWriter's constructor.
   void stream_trace(const std::string& path);
   /// The streaming trace writer (nullptr unless stream_trace() was called).
@@ -360,6 +362,36 @@ class SceneRunner {
   const platform::PeriodReport& last_report() const noexcept { return loop_.last_report(); }
 
  private:
+  /// What measure_contacts() found after a period's step (penetrations in m).
+  struct PeriodContacts {
+    bool held = false;              ///< A body is held (else everything below is zero).
+    double tool_pen = 0.0;          ///< Deepest contact of the tool (bodies and nets).
+    double target_pen = 0.0;        ///< Deepest contact of the target (where the hand is).
+    int tool_contacts = 0;          ///< Contacts of the tool.
+    int target_contacts = 0;        ///< Contacts of the target.
+    int deepest_tool_contact = -1;  ///< Index of the tool's deepest rigid contact (-1: none).
+    int deepest_tool_body = -1;     ///< Its tool body.
+  };
+  /// Attaches the bodies of the tool-switching events due at bus time `t_ns`.
+  void apply_due_events(std::int64_t t_ns) noexcept;
+  /// The bus side of the period at bus time `t` (ns): the simulated bus and instrument, the
+  /// log replay or the real bus around ControlLoop::begin_period / end_period.
+  const platform::PeriodReport& exchange(std::int64_t t, std::int64_t deadline_mono_ns,
+                                         std::int64_t woke_mono_ns) noexcept;
+  /// Counts of the period's report: frames, torque stops, bus errors, invalid and zero-torque
+  /// periods, the first latched fault.
+  void count_period(const platform::PeriodReport& report) noexcept;
+  /// The tool's and the target's contacts (the target detected on ghost_).
+  PeriodContacts measure_contacts() noexcept;
+  /// The free-space tracking error (RunSummary::tracking_error_free_rms_mm).
+  void track_free_space(const PeriodContacts& c) noexcept;
+  /// The start-up push-out and the god-object's penetration after it (RunSummary).
+  void track_startup(const PeriodContacts& c) noexcept;
+  /// Running maxima and sums of the step: penetrations, feedback, joints, solver, nets.
+  void accumulate_step_figures(const PeriodContacts& c) noexcept;
+  /// The period's trace record: in memory (trace_) and streamed (trace_writer_).
+  void record(const platform::PeriodReport& report, const PeriodContacts& c) noexcept;
+
   const Scene* scene_;
   BusSpec spec_;
   hal::SimBus bus_;
@@ -399,9 +431,11 @@ class SceneRunner {
 /// Throws std::runtime_error if the trace cannot be written.
 RunSummary run_scene(const Scene& scene, const RunOptions& options);
 
-/// Readable multi-line summary.
+/// Readable multi-line summary: the layout of run_summary_text.hpp, whose placeholders are
+/// figures of run_figures() (run_summary_text.cpp).
 std::string format_summary(const RunSummary& s);
-/// Exactly one JSON object (no trailing newline).
+/// Exactly one JSON object (no trailing newline): every figure of run_figures() in the table's
+/// order, dotted names as nested objects, non-finite numbers as null (run_summary_json.cpp).
 std::string format_summary_json(const RunSummary& s);
 
 }  // namespace numen::sim

@@ -1,0 +1,49 @@
+/// @file cli_support.cpp
+/// What the subcommands share: the guard that turns exceptions into exit statuses and the
+/// CLI11 checks of times and bus specs.
+
+#include <iostream>
+#include <new>
+#include <stdexcept>
+
+#include "commands.hpp"
+#include "numen/sim/bus_spec.hpp"
+#include "numen/sim/cli_values.hpp"
+#include "numen/sim/input_error.hpp"
+#include "numen/sim/run_verdict.hpp"
+
+namespace numen::app {
+
+int run_guarded(const std::function<int()>& body) {
+  try {
+    return body();
+  } catch (const sim::InputError& e) {
+    std::cerr << "numen: " << e.what() << "\n";
+    return sim::code(sim::ExitStatus::kInputRejected);
+  } catch (const std::bad_alloc&) {
+    std::cerr << "numen: out of memory (the scene, its trajectory or a log is too large for "
+                 "this machine)\n";
+    return sim::code(sim::ExitStatus::kError);
+  } catch (const std::exception& e) {
+    std::cerr << "numen: " << e.what() << "\n";
+    return sim::code(sim::ExitStatus::kError);
+  }
+}
+
+CLI::Validator seconds_check(double lo, double hi, bool lo_exclusive) {
+  return CLI::Validator(
+      [=](const std::string& v) { return sim::check_seconds(v, lo, hi, lo_exclusive); },
+      "SECONDS");
+}
+
+std::string check_bus(const std::string& v, bool real_only) {
+  try {
+    const sim::BusSpec spec = sim::parse_bus_spec(v);
+    if (real_only && !spec.real()) return "expected can:IFACE or serial:PATH[@BAUD]";
+    return sim::missing_backend(spec);  // a backend this build left out
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+}
+
+}  // namespace numen::app

@@ -1,0 +1,111 @@
+#pragma once
+/// @file commands.hpp
+/// The subcommands of `numen`, one class each (one file each: run_command.cpp,
+/// device_command.cpp, info_command.cpp, figures_command.cpp, study_command.cpp). A command
+/// declares its options on construction and does its work in execute(), which returns the
+/// exit status (docs/inputs.md, "Exit statuses") and may throw (run_guarded()). The options
+/// are bound to the command's members: construct it in place and keep it there.
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+
+#include "numen/platform/realtime_setup.hpp"
+
+namespace numen::app {
+
+/// Runs a subcommand's body, which returns its exit status; an exception ends it with 2 for
+/// bad input (InputError: scene, trajectory, option values) or 1 for any other error (I/O,
+/// out of memory, internal), printed as "numen: what".
+int run_guarded(const std::function<int()>& body);
+/// CLI11 check of a time in seconds (numen::sim::check_seconds): finite, in [lo, hi] or (lo, hi].
+CLI::Validator seconds_check(double lo, double hi, bool lo_exclusive);
+/// CLI11 check of a --bus spec; `real_only`: only can:IFACE or serial:PATH[@BAUD].
+std::string check_bus(const std::string& v, bool real_only);
+
+/// `numen run [SCENE] ...`: runs a scene and prints its summary (text, or --json).
+class RunCommand {
+ public:
+  explicit RunCommand(CLI::App& parent);
+  bool parsed() const { return cli_->parsed(); }
+  int execute() const;
+
+ private:
+  CLI::App* cli_;
+  std::string scene_path_, trace_path_, coupling_, bus_ = "sim", record_path_;
+  double duration_ = -1.0, phase_ = -1.0;
+  bool json_ = false, realtime_ = false;
+  platform::RealtimeSettings rt_;
+  std::uint32_t overrun_limit_ = 3;
+};
+
+/// `numen device [SCENE] --bus ...`: the scene's simulated instrument on a real bus.
+class DeviceCommand {
+ public:
+  explicit DeviceCommand(CLI::App& parent);
+  bool parsed() const { return cli_->parsed(); }
+  int execute() const;
+
+ private:
+  CLI::App* cli_;
+  std::string scene_, bus_;
+  double duration_ = -1.0;
+  bool ready_ = false;
+};
+
+/// `numen info [SCENE] [--json]`: what a scene compiles to.
+class InfoCommand {
+ public:
+  explicit InfoCommand(CLI::App& parent);
+  bool parsed() const { return cli_->parsed(); }
+  int execute() const;
+
+ private:
+  CLI::App* cli_;
+  std::string scene_;
+  bool json_ = false;
+};
+
+/// `numen figures`: the table of a run's summary figures (run_figures()) as Markdown.
+class FiguresCommand {
+ public:
+  explicit FiguresCommand(CLI::App& parent);
+  bool parsed() const { return cli_->parsed(); }
+  int execute() const;
+
+ private:
+  CLI::App* cli_;
+};
+
+/// `numen study accuracy ...`: work-precision data per integrator.
+class AccuracyStudyCommand {
+ public:
+  explicit AccuracyStudyCommand(CLI::App& study);
+  bool parsed() const { return cli_->parsed(); }
+  int execute() const;
+
+ private:
+  CLI::App* cli_;
+  std::string out_ = "accuracy";
+  bool quick_ = false;
+  std::vector<std::string> cases_;
+};
+
+/// `numen study stability ...`: stiff and extreme cases, a verdict per run.
+class StabilityStudyCommand {
+ public:
+  explicit StabilityStudyCommand(CLI::App& study);
+  bool parsed() const { return cli_->parsed(); }
+  int execute() const;
+
+ private:
+  CLI::App* cli_;
+  std::string out_ = "stability";
+  bool quick_ = false;
+  std::vector<std::string> families_;
+};
+
+}  // namespace numen::app

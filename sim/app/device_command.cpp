@@ -1,0 +1,38 @@
+/// @file device_command.cpp
+/// `numen device`: a scene's simulated instrument on a real bus, until the duration or a signal.
+
+#include <iostream>
+
+#include "commands.hpp"
+#include "numen/sim/cli_values.hpp"
+#include "numen/sim/device_process.hpp"
+#include "numen/sim/scene.hpp"
+#include "signals.hpp"
+
+namespace numen::app {
+
+DeviceCommand::DeviceCommand(CLI::App& parent)
+    : cli_(parent.add_subcommand("device", "Run a scene's simulated instrument on a real bus")) {
+  cli_->add_option("scene", scene_, "Scene file (TOML); default: the shipped default scene");
+  cli_->add_option("--bus", bus_, "can:IFACE or serial:PATH[@BAUD]")
+      ->required()
+      ->check([](const std::string& v) { return check_bus(v, true); });
+  cli_->add_option("--duration", duration_, "Seconds to run (default: until SIGINT/SIGTERM)")
+      ->check(seconds_check(0.0, sim::kMaxRunDuration, true));
+  cli_->add_flag("--ready", ready_, "Print READY on stdout once the bus is open");
+}
+
+int DeviceCommand::execute() const {
+  const std::string path = scene_.empty() ? sim::default_scene_path() : scene_;
+  const sim::Scene scene = sim::load_scene(path);
+  sim::DeviceOptions options;
+  options.bus = bus_;
+  options.duration_s = duration_;
+  options.stop = &stop_flag();
+  options.announce_ready = ready_;
+  loading_done();
+  std::cout << sim::format_device_summary(sim::run_device(scene, options));
+  return 0;
+}
+
+}  // namespace numen::app

@@ -1,0 +1,29 @@
+/// @file info_command.cpp
+/// `numen info`: what a scene compiles to (sizes, stages, capacities, bytes).
+
+#include <iostream>
+
+#include "commands.hpp"
+#include "numen/sim/scene.hpp"
+#include "numen/sim/scene_info.hpp"
+
+namespace numen::app {
+
+InfoCommand::InfoCommand(CLI::App& parent)
+    : cli_(parent.add_subcommand(
+          "info", "Print what a scene compiles to: sizes, the stages step() runs, capacities, bytes")) {
+  cli_->add_option("scene", scene_, "Scene file (TOML); default: the shipped default scene");
+  cli_->add_flag("--json", json_, "Print one JSON object instead of the report");
+}
+
+int InfoCommand::execute() const {
+  const std::string path = scene_.empty() ? sim::default_scene_path() : scene_;
+  const sim::SceneInfo si = sim::describe_scene(sim::load_scene(path));
+  if (json_)
+    std::cout << sim::format_scene_info_json(si) << std::endl;
+  else
+    std::cout << sim::format_scene_info(si);
+  return 0;
+}
+
+}  // namespace numen::app

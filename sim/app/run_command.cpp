@@ -1,0 +1,85 @@
+/// @file run_command.cpp
+/// `numen run`: loads a scene, runs it (run_scene) and prints its summary.
+
+#include <iostream>
+
+#include "commands.hpp"
+#include "numen/sim/cli_values.hpp"
+#include "numen/sim/run.hpp"
+#include "numen/sim/scene.hpp"
+#include "signals.hpp"
+
+namespace numen::app {
+
+RunCommand::RunCommand(CLI::App& parent)
+    : cli_(parent.add_subcommand("run", "Run a scene on the simulated bus and print a summary")) {
+  CLI::App* run = cli_;
+  run->footer(
+      "Signals: SIGINT / SIGTERM end the run cleanly (zero torque, drives disabled); SIGUSR1 "
+      "re-arms after a latched safe state (docs/safety.md).");
+  run->add_option("scene", scene_path_, "Scene file (TOML); default: the shipped default scene");
+  run->add_option("--duration", duration_, "Simulated time in seconds (default: the scene's)")
+      ->check(seconds_check(0.0, sim::kMaxRunDuration, true));
+  run->add_option("--trace", trace_path_, "Write a per-step CSV trace to this file");
+  run->add_flag("--json", json_, "Print exactly one JSON object on stdout (summary to stderr)");
+  run->add_flag("--realtime", realtime_, "Pace the loop to wall-clock time");
+  run->add_option("--bus", bus_,
+                  "The controller's bus: sim (simulated instrument, default), log:FILE "
+                  "(replay a candump log's encoder frames), can:IFACE (SocketCAN) or "
+                  "serial:PATH[@BAUD] (serial line); a real bus is paced to CLOCK_MONOTONIC")
+      ->check([](const std::string& v) { return check_bus(v, false); });
+  run->add_option("--phase", phase_,
+                  "Real bus: seconds after the SYNC to read the device's answers (default: the "
+                  "scene's [bus] compute_phase)")
+      ->check(seconds_check(0.0, 1.0, false));
+  run->add_option("--rt-priority", rt_.fifo_priority,
+                  "SCHED_FIFO priority 1-99 of the loop thread (0: leave the scheduler alone)")
+      ->check(CLI::Range(0, 99));
+  run->add_flag("--lock-memory", rt_.lock_memory, "mlockall(MCL_CURRENT|MCL_FUTURE) before the loop");
+  run->add_option("--prefault-stack", rt_.prefault_stack_bytes,
+                  "Bytes of the loop thread's stack to touch before the loop (e.g. 262144)");
+  run->add_option("--cpu", rt_.cpu_affinity, "CPUs the loop thread may run on, e.g. --cpu 1 or --cpu 2,3")
+      ->delimiter(',');
+  run->add_flag("--rt-strict", rt_.strict, "Fail instead of reporting when a real-time step fails");
+  run->add_option("--record", record_path_,
+                  "Record the controller's bus traffic into this candump log (can-utils format); "
+                  "a paced run drops (and counts) what its writer cannot keep up with, an offline "
+                  "run waits for it");
+  run->add_option("--overrun-limit", overrun_limit_,
+                  "Paced run: consecutive overruns that latch the safe state (default 3); 0 counts "
+                  "and reports overruns without latching (a host that cannot hold the period)");
+  run->add_option("--coupling", coupling_, "Override the scene's coupling mode")
+      ->check(CLI::IsMember({"god-object", "first-order", "direct"}));
+}
+
+int RunCommand::execute() const {
+  sim::SceneOverrides overrides;
+  if (!coupling_.empty()) overrides.coupling = sim::parse_coupling_mode(coupling_);
+  const std::string path = scene_path_.empty() ? sim::default_scene_path() : scene_path_;
+  const sim::Scene scene = sim::load_scene(path, overrides);
+  sim::RunOptions options;
+  options.duration_s = duration_;
+  options.realtime = realtime_;
+  options.trace_path = trace_path_;
+  options.bus.spec = bus_;
+  options.bus.record_path = record_path_;
+  options.rt = rt_;
+  options.stop = &stop_flag();
+  options.compute_phase_s = phase_;
+  options.overrun_limit = overrun_limit_;
+  options.rearm = &rearm_flag();
+  loading_done();  // from here a signal ends the run cleanly
+  const sim::RunSummary summary = sim::run_scene(scene, options);
+  if (json_) {
+    std::cerr << sim::format_summary(summary);
+    std::cout << sim::format_summary_json(summary) << std::endl;
+  } else {
+    std::cout << sim::format_summary(summary);
+    if (!trace_path_.empty()) std::cout << "  trace: " << trace_path_ << "\n";
+  }
+  // A run stopped by a signal and otherwise clean exits 128 + the signal (shell convention).
+  if (summary.exit_status == 0 && summary.stopped) return 128 + stop_signal();
+  return summary.exit_status;
+}
+
+}  // namespace numen::app
