@@ -348,9 +348,10 @@ void SceneRunner::period(std::int64_t deadline_mono_ns, std::int64_t woke_mono_n
     s.tool_penetration_max_mm = std::max(s.tool_penetration_max_mm, tool_pen * 1e3);
   s.target_penetration_max_mm = std::max(s.target_penetration_max_mm, target_pen * 1e3);
   s.any_penetration_max_mm = std::max(s.any_penetration_max_mm, data_.max_penetration * 1e3);
-  s.feedback_force_max_n = std::max(s.feedback_force_max_n, data_.feedback_wrench.force.norm());
-  s.feedback_torque_max_nm = std::max(s.feedback_torque_max_nm, data_.feedback_wrench.torque.norm());
-  const hal::AxisVector& tau = device_.last_torques();
+  // What the drives were sent (after the gate and clamp of hal::Device::write()).
+  s.feedback_force_max_n = std::max(s.feedback_force_max_n, report.feedback.force.norm());
+  s.feedback_torque_max_nm = std::max(s.feedback_torque_max_nm, report.feedback.torque.norm());
+  const hal::AxisVector& tau = loop_.device().sent_torques().torque;
   if (tau.size() > 0) s.axis_torque_max = std::max(s.axis_torque_max, tau.cwiseAbs().maxCoeff());
   const int held_tree = held >= 0 ? model.articulation.body_tree[static_cast<std::size_t>(held)] : -1;
   for (int b = 0; b < model.num_bodies(); ++b)
@@ -371,8 +372,8 @@ void SceneRunner::period(std::int64_t deadline_mono_ns, std::int64_t woke_mono_n
     s.net_strain_max = std::max(s.net_strain_max, net.max_strain);
     s.net_node_speed_max_mps = std::max(s.net_node_speed_max_mps, net.max_node_speed);
   }
-  const TraceRecord rec =
-      make_trace_record(data_, held, tool_contacts, tool_pen, target_pen, report, tau);
+  TraceRecord rec = make_trace_record(data_, held, tool_contacts, tool_pen, target_pen, report, tau);
+  rec.feedback = report.feedback;  // the wrench sent, not the core's composite
   if (trace_writer_) {
     platform::TraceRecord r;
     r.period = static_cast<std::uint64_t>(k_ - 1);

@@ -187,11 +187,11 @@ TEST(ControlLoop, TorqueFramesReachTheEmulator) {
   double largest = 0.0;
   for (int i = 0; i < 5; ++i) {
     const auto& a = rig.config.axes[static_cast<std::size_t>(i)];
-    const double sent = rig.device.last_torques()[i];
+    const double sent = rig.loop.device().sent_torques().torque[i];
     const double got = rig.emulator.last_torques()[i];
     EXPECT_NEAR(got, sent, a.has_drive() ? 0.5e-3 * a.rated_torque + 1e-12 : 0.0) << "axis " << i;
     EXPECT_EQ(rig.emulator.last_torque_per_mille()[static_cast<std::size_t>(i)],
-              rig.device.last_torque_per_mille()[static_cast<std::size_t>(i)]);
+              rig.loop.device().sent_torques().per_mille[static_cast<std::size_t>(i)]);
     largest = std::max(largest, std::abs(got));
   }
   EXPECT_GT(largest, 0.01) << "no torque reached the drives";
@@ -200,7 +200,7 @@ TEST(ControlLoop, TorqueFramesReachTheEmulator) {
       rig.device.kinematics().jacobian(rig.device.last_sample().q), rig.data.feedback_wrench);
   for (int i = 0; i < 3; ++i) {
     const auto& a = rig.config.axes[static_cast<std::size_t>(i)];
-    EXPECT_NEAR(rig.device.last_torques()[i], std::clamp(tau[i], -a.max_torque, a.max_torque),
+    EXPECT_NEAR(rig.loop.device().sent_torques().torque[i], std::clamp(tau[i], -a.max_torque, a.max_torque),
                 0.5e-3 * a.rated_torque + 1e-12)
         << "axis " << i;
   }
@@ -267,7 +267,7 @@ TEST(ControlLoop, BusOffIsCountedAndStaleSamplesGetZeroTorque) {
   }
   EXPECT_FALSE(rig.loop.last_report().sample_valid);
   EXPECT_GT(rig.device.counters().rejected_stale, 0u);
-  EXPECT_TRUE(rig.device.last_torques().isZero()) << "no torque from a stale sample";
+  EXPECT_TRUE(rig.loop.device().sent_torques().torque.isZero()) << "no torque from a stale sample";
   EXPECT_GT(rig.loop.counters().periods_zero_torque, 0u);
   EXPECT_EQ(rig.data.target.position, held_target);
   EXPECT_EQ(rig.loop.counters().sync_write_failures, 5u);
@@ -580,11 +580,11 @@ TEST(ControlLoopLinks, TorquesAreTheSumOfTheLinkJacobiansTransposedTimesTheBodyW
     for (int i = 0; i < 5; ++i) {
       const auto& a = rig.config.axes[static_cast<std::size_t>(i)];
       if (!a.has_drive()) {
-        EXPECT_EQ(rig.device.last_torques()[i], 0.0) << "axis " << i;
+        EXPECT_EQ(rig.loop.device().sent_torques().torque[i], 0.0) << "axis " << i;
         continue;
       }
       ASSERT_LT(std::abs(tau[i]), 0.5 * a.max_torque) << "test assumes no saturation, axis " << i;
-      EXPECT_NEAR(rig.device.last_torques()[i], tau[i], 0.5e-3 * a.rated_torque + 1e-12)
+      EXPECT_NEAR(rig.loop.device().sent_torques().torque[i], tau[i], 0.5e-3 * a.rated_torque + 1e-12)
           << "period " << k << " axis " << i;
     }
     EXPECT_GT(tau.head<3>().cwiseAbs().maxCoeff(), 0.02) << "torques too small to test";
@@ -596,11 +596,11 @@ TEST(ControlLoopLinks, ZeroTorqueWhileTheSampleIsNotValid) {
   NUMEN_REQUIRE_ARTICULATION();  // the trocar instrument's jointed model
   LinkedRig rig;
   rig.period(0);
-  ASSERT_GT(rig.device.last_torques().cwiseAbs().maxCoeff(), 0.0);
+  ASSERT_GT(rig.loop.device().sent_torques().torque.cwiseAbs().maxCoeff(), 0.0);
   rig.emulator.set_responding(false);
   for (int k = 1; k <= 5; ++k) rig.period(k);
   EXPECT_FALSE(rig.loop.last_report().sample_valid);
-  EXPECT_TRUE(rig.device.last_torques().isZero());
+  EXPECT_TRUE(rig.loop.device().sent_torques().torque.isZero());
   EXPECT_GT(rig.loop.counters().periods_zero_torque, 0u);
 }
 
@@ -748,7 +748,7 @@ struct Rig {
 /// True if any drive RPDO of this period carried a non-zero target torque (emulator view).
 bool any_torque(const Rig& rig) {
   for (int a = 0; a < 3; ++a) {
-    if (rig.device.last_torque_per_mille()[static_cast<std::size_t>(a)] != 0) return true;
+    if (rig.loop.device().sent_torques().per_mille[static_cast<std::size_t>(a)] != 0) return true;
   }
   return false;
 }
@@ -1012,7 +1012,7 @@ TEST(ControlLoopManaged, TorquesAreSaturatedPerAxis) {
     rig.emulator.set_axis_values(q);
     rig.period();
     for (int a = 0; a < 3; ++a) {
-      const double tau = rig.device.last_torques()[a];
+      const double tau = rig.loop.device().sent_torques().torque[a];
       const double lim = rig.config.axes[static_cast<std::size_t>(a)].max_torque;
       ASSERT_LE(std::abs(tau), lim + 1e-12) << "axis " << a;
       peak[a] = std::max(peak[a], std::abs(tau));
@@ -1046,11 +1046,11 @@ TEST(ControlLoopManaged, TorquesAreSaturatedPerAxis) {
     emulator.tick(t + kLatency, low.bus.device());
     low.bus.set_time_ns(t + kPhase);
     loop.end_period(t + kPhase);
-    clamped_peak = std::max(clamped_peak, std::abs(device.last_torques()[0]));
+    clamped_peak = std::max(clamped_peak, std::abs(loop.device().sent_torques().torque[0]));
   }
   EXPECT_DOUBLE_EQ(clamped_peak, low.config.axes[0].max_torque);
-  EXPECT_GT(loop.supervisor()->saturations(0), 0u);
-  EXPECT_EQ(loop.supervisor()->saturations(3), 0u);  // roll: no drive, τ = 0
+  EXPECT_GT(loop.device().torque_counters().axis_saturations[0], 0u);
+  EXPECT_EQ(loop.device().torque_counters().axis_saturations[3], 0u);  // roll: no drive, τ = 0
   EXPECT_EQ(loop.supervisor()->state(), LifecycleState::kActive);
 }
 
@@ -1070,7 +1070,7 @@ std::vector<std::int64_t> session(bool check_allocations) {
     if (i == 150) rig.loop.rearm();
     if (i == 250) rig.emulator.kill(true);
     rig.period();
-    for (int a = 0; a < 3; ++a) out.push_back(rig.device.last_torque_per_mille()[static_cast<std::size_t>(a)]);
+    for (int a = 0; a < 3; ++a) out.push_back(rig.loop.device().sent_torques().per_mille[static_cast<std::size_t>(a)]);
     std::int64_t bits = 0;
     const double x = rig.data.bodies[0].position.x();
     std::memcpy(&bits, &x, sizeof bits);
