@@ -999,6 +999,48 @@ TEST(ControlLoopManaged, NmtStopStopsTheTpdosAndTheEncoderTimesOut) {
   EXPECT_FALSE(any_torque(rig));
 }
 
+// What the period reports as feedback is what the drives get: zero while write() gates (the
+// start-up, before kActive, although the core's composite Data::feedback_wrench is not), and
+// once torque flows τ_sent = clamp(Jᵀ feedback) on the driven axes, 0 elsewhere, exactly the
+// per mille of the RPDO the emulated drives read.
+TEST(ControlLoopManaged, ReportedFeedbackIsTheWrenchWhoseTorquesWereSent) {
+  Rig rig;
+  int gated_with_core_feedback = 0;
+  int torque_periods = 0;
+  double q[5] = {kQ[0], kQ[1], kQ[2], kQ[3], kQ[4]};
+  for (int i = 0; i < 120; ++i) {
+    if (rig.loop.first_torque_period() >= 0) {  // move the hand: the feedback grows
+      q[0] += 0.004;
+      q[2] += 0.0005;
+      rig.emulator.set_axis_values(q);
+    }
+    const PeriodReport& r = rig.period();
+    const numen::hal::SentTorques& sent = rig.loop.device().sent_torques();
+    if (!r.torque_commanded) {
+      EXPECT_EQ(r.feedback.force.norm(), 0.0) << "period " << i;
+      EXPECT_EQ(r.feedback.torque.norm(), 0.0) << "period " << i;
+      if (rig.data.feedback_wrench.force.norm() > 0.1) ++gated_with_core_feedback;
+      continue;
+    }
+    ++torque_periods;
+    const AxisVector tau = numen::hal::torques_from_wrench(
+        rig.device.kinematics().jacobian(rig.device.last_sample().q), r.feedback);
+    for (int a = 0; a < 5; ++a) {
+      const auto& ax = rig.config.axes[static_cast<std::size_t>(a)];
+      const double want = ax.has_drive() ? std::clamp(tau[a], -ax.max_torque, ax.max_torque) : 0.0;
+      EXPECT_NEAR(sent.torque[a], want, 1e-12) << "period " << i << " axis " << a;
+      EXPECT_EQ(sent.per_mille[static_cast<std::size_t>(a)],
+                ax.has_drive() ? numen::hal::torque_per_mille(ax, want) : 0);
+    }
+  }
+  EXPECT_GT(gated_with_core_feedback, 0) << "the check is not vacuous: the core had feedback";
+  EXPECT_GT(torque_periods, 50);
+  // The drives read those RPDOs: after one more exchange each got the last per mille sent.
+  const std::array<std::int16_t, numen::hal::kMaxAxes> last = rig.loop.device().sent_torques().per_mille;
+  rig.period();  // the drives read the RPDOs, then apply them at this period's SYNC
+  for (std::size_t a = 0; a < 3; ++a) EXPECT_EQ(rig.emulator.last_torque_per_mille()[a], last[a]) << a;
+}
+
 TEST(ControlLoopManaged, TorquesAreSaturatedPerAxis) {
   Rig rig;
   rig.run_to_torque();
