@@ -16,6 +16,7 @@
 #include <stdexcept>
 
 #include "alloc_counter.hpp"
+#include "instrument_fixtures.hpp"
 #include "kinematics_check.hpp"
 #include "numen/hal/canopen.hpp"
 #include "numen/hal/phantom_kinematics.hpp"
@@ -28,24 +29,16 @@ using namespace numen::hal;
 using numen::core::Vec3;
 using numen::core::Wrench;
 using TK = TrocarKinematics;
+using numen::test::feed;
+using numen::test::kP0;
+using numen::test::kQ0;
+using numen::test::phantom_config;
+using numen::test::some_link_wrenches;
+using numen::test::trocar_config;
 constexpr std::int64_t kMs = 1'000'000;
 
-DeviceConfig trocar_config() {
-  DeviceConfig c = make_default_trocar_config(1);
-  c.trocar.point = Vec3(0, 0, 0.2);
-  c.trocar.orientation = numen::core::Quat(Eigen::AngleAxisd(std::numbers::pi, Vec3::UnitX()));
-  return c;
-}
 
-// Feeds one TPDO per axis for axis values q, stamped t.
-void feed(InstrumentDevice& dev, const double* q, std::int64_t t) {
-  for (int i = 0; i < dev.num_axes(); ++i) {
-    const AxisConfig& a = dev.config().axes[static_cast<std::size_t>(i)];
-    EXPECT_TRUE(dev.on_frame(encode_position_pdo(a.encoder_cob_id, value_to_counts(a, q[i]), t)));
-  }
-}
 
-const double kQ0[5] = {0.1, -0.2, 0.1, 0.5, 0.3};
 
 TEST(InstrumentDevice, NotValidBeforeEveryAxisHasASample) {
   InstrumentDevice dev(trocar_config());
@@ -335,22 +328,8 @@ using PK = PhantomKinematics;
 using numen::core::Pose;
 using numen::core::Quat;
 
-DeviceConfig phantom_config() {
-  DeviceConfig c = make_default_phantom_config(30);
-  c.phantom.base.position = Vec3(0.1, 0.0, 0.2);
-  c.phantom.base.orientation = Quat(Eigen::AngleAxisd(0.3, Vec3::UnitZ()));
-  c.tool_offset.position = Vec3(0.03, 0.0, 0.0);  // a tip ahead of the gimbal along the pen
-  return c;
-}
 
-const double kP0[6] = {0.2, -0.3, 0.4, 0.5, -0.4, 1.0};
 
-std::array<Wrench, PK::kNumLinks> some_link_wrenches(double scale) {
-  SplitMix64 rng(314);
-  std::array<Wrench, PK::kNumLinks> w;
-  for (Wrench& x : w) x = numen::test::random_wrench(rng, scale);
-  return w;
-}
 
 TEST(InstrumentDeviceLinks, LinkTargetsAreTheLinkPosesOfTheDecodedAxes) {
   InstrumentDevice dev(phantom_config());

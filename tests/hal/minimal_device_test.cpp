@@ -14,6 +14,7 @@
 #include <span>
 
 #include "alloc_counter.hpp"
+#include "instrument_fixtures.hpp"
 #include "kinematics_check.hpp"
 #include "numen/hal/canopen.hpp"
 #include "numen/hal/instrument_device.hpp"
@@ -27,6 +28,12 @@ using namespace numen::hal;
 using numen::core::Vec3;
 using numen::core::Wrench;
 using TK = TrocarKinematics;
+using numen::test::feed;
+using numen::test::kP0;
+using numen::test::kQ0;
+using numen::test::phantom_config;
+using numen::test::some_link_wrenches;
+using numen::test::trocar_config;
 constexpr std::int64_t kMs = 1'000'000;
 
 // A MinimalDevice on `bus`'s controller port around `inst`: map (torques_for), then write().
@@ -59,22 +66,8 @@ class Sender {
   MinimalDevice dev_;
 };
 
-DeviceConfig trocar_config() {
-  DeviceConfig c = make_default_trocar_config(1);
-  c.trocar.point = Vec3(0, 0, 0.2);
-  c.trocar.orientation = numen::core::Quat(Eigen::AngleAxisd(std::numbers::pi, Vec3::UnitX()));
-  return c;
-}
 
-// Feeds one TPDO per axis for axis values q, stamped t.
-void feed(InstrumentDevice& dev, const double* q, std::int64_t t) {
-  for (int i = 0; i < dev.num_axes(); ++i) {
-    const AxisConfig& a = dev.config().axes[static_cast<std::size_t>(i)];
-    EXPECT_TRUE(dev.on_frame(encode_position_pdo(a.encoder_cob_id, value_to_counts(a, q[i]), t)));
-  }
-}
 
-const double kQ0[5] = {0.1, -0.2, 0.1, 0.5, 0.3};
 
 TEST(MinimalDevice, CommandSendsJTransposeWrenchOnDrivenAxes) {
   DeviceConfig c = trocar_config();
@@ -174,15 +167,7 @@ using PK = PhantomKinematics;
 using numen::core::Pose;
 using numen::core::Quat;
 
-DeviceConfig phantom_config() {
-  DeviceConfig c = make_default_phantom_config(30);
-  c.phantom.base.position = Vec3(0.1, 0.0, 0.2);
-  c.phantom.base.orientation = Quat(Eigen::AngleAxisd(0.3, Vec3::UnitZ()));
-  c.tool_offset.position = Vec3(0.03, 0.0, 0.0);  // a tip ahead of the gimbal along the pen
-  return c;
-}
 
-const double kP0[6] = {0.2, -0.3, 0.4, 0.5, -0.4, 1.0};
 
 // Reads every frame waiting on the device side; returns how many, and the per mille of each
 // drive COB-ID 0x200 + node seen (indexed by axis).
@@ -206,12 +191,6 @@ int drain(SimBus& bus, const DeviceConfig& c, std::array<std::int16_t, kMaxAxes>
   return n;
 }
 
-std::array<Wrench, PK::kNumLinks> some_link_wrenches(double scale) {
-  SplitMix64 rng(314);
-  std::array<Wrench, PK::kNumLinks> w;
-  for (Wrench& x : w) x = numen::test::random_wrench(rng, scale);
-  return w;
-}
 
 TEST(MinimalDevice, CommandLinksDrivesOnlyTheMotorisedAxes) {
   const DeviceConfig c = phantom_config();
