@@ -322,7 +322,7 @@ TEST(InstrumentDevice, ResetForgetsAcceptedValues) {
   EXPECT_FALSE(dev.sample(0).ready);
 }
 
-// ---- Links and command_links (phantom: six axes, drives on turret, shoulder, elbow) ----
+// ---- Links and torques_for (phantom: six axes, drives on turret, shoulder, elbow) ----
 
 using PK = PhantomKinematics;
 using numen::core::Pose;
