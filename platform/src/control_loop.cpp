@@ -10,7 +10,6 @@
 #include "numen/core/feedback.hpp"
 #include "numen/core/joint.hpp"
 #include "numen/core/step.hpp"
-#include "numen/hal/canopen.hpp"
 #include "numen/platform/monotonic_clock.hpp"
 
 namespace numen::platform {
