@@ -3,6 +3,7 @@
 
 #include "numen/hal/axis.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -90,6 +91,18 @@ TorqueCommand torque_to_per_mille(const AxisConfig& axis, double torque) noexcep
   out.torque = t;
   out.per_mille = static_cast<std::int16_t>(pm);
   return out;
+}
+
+double torque_limit(const AxisConfig& axis) noexcept {
+  return std::min(axis.max_torque, 32.767 * axis.rated_torque);
+}
+
+std::int16_t torque_per_mille(const AxisConfig& axis, double torque) noexcept {
+  if (!std::isfinite(torque)) return 0;
+  const double pm = std::round(static_cast<double>(axis.sign) * 1000.0 * torque / axis.rated_torque);
+  constexpr double kLo = std::numeric_limits<std::int16_t>::min();
+  constexpr double kHi = std::numeric_limits<std::int16_t>::max();
+  return static_cast<std::int16_t>(std::clamp(pm, kLo, kHi));
 }
 
 double per_mille_to_torque(const AxisConfig& axis, std::int16_t per_mille) noexcept {

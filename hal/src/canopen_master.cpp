@@ -300,7 +300,7 @@ IoStatus CanopenMaster::write_drive_rpdos(std::int64_t now_ns,
     const Drive& d = drives_[i];
     const Cia402MasterOutput& out = outputs_[i];
     const auto axis = static_cast<std::size_t>(d.axis);
-    const std::int16_t torque = axis < per_mille.size() ? out.gate(per_mille[axis]) : 0;
+    const std::int16_t torque = axis < per_mille.size() ? per_mille[axis] : 0;
     PdoValues v{};
     v[static_cast<std::size_t>(d.cw_index)] = out.controlword;
     v[static_cast<std::size_t>(d.torque_index)] = torque;

@@ -1,6 +1,6 @@
 /// @file instrument_device.cpp
 /// Controller-side instrument driver: TPDOs -> checked target poses/twists per link;
-/// link wrenches -> τ = Σ J_lᵀ w_l -> RPDOs.
+/// link wrenches -> τ = Σ J_lᵀ w_l.
 
 #include "numen/hal/instrument_device.hpp"
 
@@ -47,7 +47,6 @@ InstrumentDevice::InstrumentDevice(DeviceConfig config,
     limits_[static_cast<std::size_t>(i)] = make_check_limits(a, age, config_.jump_tolerance_counts);
     hold_[i] = std::clamp(0.0, a.min, a.max);
   }
-  last_torques_ = AxisVector::Zero(n_);
   if (config_.canopen.managed) {
     for (int i = 0; i < n_; ++i) {
       const auto& e = config_.canopen.axes[static_cast<std::size_t>(i)].encoder_tpdo;
@@ -236,44 +235,6 @@ DeviceSample InstrumentDevice::sample(std::int64_t now_ns) noexcept {
   return s;
 }
 
-IoStatus InstrumentDevice::send_torques(Bus& bus, std::int64_t now_ns) noexcept {
-  IoStatus status = IoStatus::kOk;
-  for (int i = 0; i < n_; ++i) {
-    const AxisConfig& a = config_.axes[static_cast<std::size_t>(i)];
-    if (!a.has_drive()) continue;
-    const IoStatus w = bus.write(
-        encode_torque_pdo(a.drive_cob_id, last_per_mille_[static_cast<std::size_t>(i)], now_ns));
-    if (w == IoStatus::kWouldBlock) ++counters_.write_would_block;
-    if (w == IoStatus::kError) ++counters_.write_errors;
-    status = worst(status, w);
-  }
-  return status;
-}
-
-IoStatus InstrumentDevice::send_zero(Bus& bus, std::int64_t now_ns) noexcept {
-  last_torques_.setZero();
-  last_per_mille_ = {};
-  return send_torques(bus, now_ns);
-}
-
-IoStatus InstrumentDevice::apply_torques(const AxisVector& tau, Bus& bus,
-                                         std::int64_t now_ns) noexcept {
-  encode_torques(tau);
-  return send_torques(bus, now_ns);
-}
-
-IoStatus InstrumentDevice::command(const core::Wrench& wrench, Bus& bus,
-                                   std::int64_t now_ns) noexcept {
-  return command_links(std::span<const core::Wrench>(&wrench, 1), bus, now_ns);
-}
-
-IoStatus InstrumentDevice::command_links(std::span<const core::Wrench> link_wrenches, Bus& bus,
-                                         std::int64_t now_ns) noexcept {
-  AxisVector tau;
-  if (!torques_for(link_wrenches, tau)) return send_zero(bus, now_ns);
-  return apply_torques(tau, bus, now_ns);
-}
-
 bool InstrumentDevice::torques_for(std::span<const core::Wrench> link_wrenches,
                                    AxisVector& tau) noexcept {
   ++counters_.commands;
@@ -295,33 +256,7 @@ bool InstrumentDevice::torques_for(std::span<const core::Wrench> link_wrenches,
   for (std::size_t l = 0; l < used; ++l) {
     tau += torques_from_wrench(link_jacobians_[l], link_wrenches[l]);
   }
-  for (int i = 0; i < n_; ++i) {
-    if (!config_.axes[static_cast<std::size_t>(i)].has_drive()) tau[i] = 0.0;
-  }
   return true;
-}
-
-const std::array<std::int16_t, kMaxAxes>& InstrumentDevice::encode_torques(
-    const AxisVector& tau) noexcept {
-  for (int i = 0; i < n_; ++i) {
-    const auto k = static_cast<std::size_t>(i);
-    const AxisConfig& a = config_.axes[k];
-    if (!a.has_drive() || i >= tau.size()) {
-      last_torques_[i] = 0.0;
-      last_per_mille_[k] = 0;
-      continue;
-    }
-    const TorqueCommand c = torque_to_per_mille(a, tau[i]);
-    if (c.saturated) ++counters_.torque_saturations;
-    last_torques_[i] = c.torque;
-    last_per_mille_[k] = c.per_mille;
-  }
-  return last_per_mille_;
-}
-
-IoStatus InstrumentDevice::command_zero(Bus& bus, std::int64_t now_ns) noexcept {
-  ++counters_.commands_zero;
-  return send_zero(bus, now_ns);
 }
 
 }  // namespace numen::hal

@@ -35,16 +35,8 @@ const SafetySettings& validated(const SafetySettings& s) {
   if (s.encoder_timeout_periods == 0) fail("encoder_timeout_periods must be >= 1, got 0");
   if (s.overrun_limit == 0) fail("overrun_limit must be >= 1, got 0");
   if (s.safe_stop_timeout_periods == 0) fail("safe_stop_timeout_periods must be >= 1, got 0");
-  if (s.torque_limits.empty() || s.torque_limits.size() > static_cast<std::size_t>(kMaxAxes)) {
-    fail("torque_limits must have 1-" + std::to_string(kMaxAxes) + " entries (one per axis), got " +
-         std::to_string(s.torque_limits.size()));
-  }
-  for (std::size_t i = 0; i < s.torque_limits.size(); ++i) {
-    const double v = s.torque_limits[i];
-    if (!std::isfinite(v) || v < 0.0) {
-      fail("torque_limits[" + std::to_string(i) + "] must be finite and >= 0 (N·m or N), got " +
-           std::to_string(v));
-    }
+  if (s.num_axes == 0 || s.num_axes > static_cast<std::size_t>(kMaxAxes)) {
+    fail("num_axes must be 1-" + std::to_string(kMaxAxes) + ", got " + std::to_string(s.num_axes));
   }
   return s;
 }
@@ -93,8 +85,7 @@ const char* to_string(FaultCause cause) noexcept {
 
 SafetySupervisor::SafetySupervisor(const SafetySettings& settings)
     : settings_(validated(settings)), lifecycle_(lifecycle_settings(settings)) {
-  n_ = settings_.torque_limits.size();
-  std::copy(settings_.torque_limits.begin(), settings_.torque_limits.end(), limits_.begin());
+  n_ = settings_.num_axes;
 }
 
 const FaultRecord* SafetySupervisor::fault_log_at(std::size_t i) const noexcept {
@@ -295,35 +286,11 @@ LifecycleUpdate SafetySupervisor::update(std::int64_t now_ns, const SafetyInputs
   return u;
 }
 
-std::size_t SafetySupervisor::saturate_torques(std::span<double> torques) noexcept {
-  if (!lifecycle_.torque_allowed()) {
-    std::fill(torques.begin(), torques.end(), 0.0);
-    ++counters_.zeroed_commands;
-    return 0;
-  }
-  const std::size_t n = std::min(torques.size(), n_);
-  for (std::size_t i = 0; i < n; ++i) {
-    if (!std::isfinite(torques[i])) {
-      std::fill(torques.begin(), torques.end(), 0.0);
-      ++counters_.non_finite_torques;
-      latch_this_period_ = false;
-      record(FaultCause::kNonFiniteTorque, static_cast<std::uint8_t>(i), 0.0, true);
-      if (lifecycle_.trip().entered_safe_stop) ++counters_.latches;
-      return 0;
-    }
-  }
-  std::size_t clamped = 0;
-  for (std::size_t i = 0; i < n; ++i) {
-    const double lim = limits_[i];
-    if (torques[i] > lim || torques[i] < -lim) {
-      torques[i] = std::clamp(torques[i], -lim, lim);
-      ++saturations_[i];
-      ++clamped;
-    }
-  }
-  for (std::size_t i = n; i < torques.size(); ++i) torques[i] = 0.0;
-  counters_.torque_saturations += clamped;
-  return clamped;
+void SafetySupervisor::trip_non_finite_torque(std::size_t axis) noexcept {
+  ++counters_.non_finite_torques;
+  latch_this_period_ = false;
+  record(FaultCause::kNonFiniteTorque, static_cast<std::uint8_t>(axis), 0.0, true);
+  if (lifecycle_.trip().entered_safe_stop) ++counters_.latches;
 }
 
 }  // namespace numen::hal

@@ -10,7 +10,6 @@
 #include "numen/core/feedback.hpp"
 #include "numen/core/joint.hpp"
 #include "numen/core/step.hpp"
-#include "numen/hal/canopen.hpp"
 #include "numen/platform/monotonic_clock.hpp"
 
 namespace numen::platform {
@@ -22,39 +21,25 @@ std::int64_t period_of(const hal::InstrumentDevice& device) {
   return static_cast<std::int64_t>(std::llround(p * 1e9));
 }
 
-hal::SafetySettings safety_settings(const hal::InstrumentDevice& device,
-                                    const ControlLoopSettings& s) {
-  hal::SafetySettings out;
+hal::DeviceSettings device_settings(const ControlLoopSettings& s) {
+  hal::DeviceSettings out;
   out.encoder_timeout_periods = s.encoder_timeout_periods;
   out.overrun_limit = s.overrun_limit;
   out.safe_stop_timeout_periods = s.safe_stop_timeout_periods;
-  for (const hal::AxisConfig& a : device.config().axes) {
-    out.torque_limits.push_back(a.has_drive() ? a.max_torque : 0.0);
-  }
+  out.auto_activate = s.auto_activate;
+  out.drive_settings = s.drive_settings;
   return out;
 }
 
 }  // namespace
-
-const char* to_string(RearmResult result) noexcept {
-  switch (result) {
-    case RearmResult::kAccepted:
-      return "accepted";
-    case RearmResult::kNotLatched:
-      return "nothing to re-arm";
-    case RearmResult::kMinimalProtocol:
-      return "minimal protocol: no lifecycle";
-  }
-  return "unknown";
-}
 
 ControlLoop::ControlLoop(const core::Model& model, core::Data& data, hal::Bus& bus,
                          hal::InstrumentDevice& device, DeviceBinding binding,
                          const ControlLoopSettings& settings)
     : model_(&model),
       data_(&data),
-      bus_(&bus),
-      device_(&device),
+      instrument_(&device),
+      device_(hal::make_device(device, bus, period_of(device), device_settings(settings))),
       binding_(std::move(binding)),
       settings_(settings),
       stats_(std::make_unique<LoopStatistics>(period_of(device))) {
@@ -110,12 +95,6 @@ ControlLoop::ControlLoop(const core::Model& model, core::Data& data, hal::Bus& b
     t.enabled = true;
   }
   tau_ = hal::AxisVector::Zero(device.num_axes());
-  if (device.config().canopen.managed) {
-    master_ = std::make_unique<hal::CanopenMaster>(device.config(), period_of(device),
-                                                   settings_.drive_settings);
-    supervisor_ = std::make_unique<hal::SafetySupervisor>(safety_settings(device, settings_));
-    supervisor_->configure();  // kUnconfigured → kInactive: read and supervised, zero torque
-  }
 }
 
 void ControlLoop::apply_targets(const hal::DeviceSample& sample) noexcept {
@@ -172,12 +151,25 @@ bool ControlLoop::gather_link_wrenches() noexcept {
   return any;
 }
 
-bool ControlLoop::send_feedback(std::int64_t now_ns) noexcept {
-  if (!gather_link_wrenches()) return false;
-  const auto n = static_cast<std::size_t>(device_->kinematics().num_links());
-  report_.command_status =
-      device_->command_links(std::span<const core::Wrench>(link_wrench_.data(), n), *bus_, now_ns);
-  return true;
+void ControlLoop::map_feedback() noexcept {
+  report_.feedback = core::Wrench{};
+  const auto links = static_cast<std::size_t>(instrument_->num_links());
+  const bool mapped =
+      gather_link_wrenches() &&
+      instrument_->torques_for(std::span<const core::Wrench>(link_wrench_.data(), links), tau_);
+  if (!mapped) {
+    tau_.setZero();
+    return;
+  }
+  // The wrench the drives are asked to render, about link 0's origin (Eq. 9).
+  const hal::DeviceSample& sample = instrument_->last_sample();
+  const core::Vec3 origin0 = sample.link_targets[0].position;
+  for (std::size_t l = 0; l < links; ++l) {
+    const core::Wrench w =
+        core::carry_wrench(link_wrench_[l], sample.link_targets[l].position, origin0);
+    report_.feedback.force += w.force;
+    report_.feedback.torque += w.torque;
+  }
 }
 
 void ControlLoop::begin_period(std::int64_t now_ns, std::int64_t deadline_mono_ns,
@@ -186,12 +178,7 @@ void ControlLoop::begin_period(std::int64_t now_ns, std::int64_t deadline_mono_n
   begin_.woke_ns = woke_mono_ns >= 0 ? woke_mono_ns : t;
   begin_.deadline_ns = deadline_mono_ns >= 0 ? deadline_mono_ns : begin_.woke_ns;
   if (begin_.deadline_ns > begin_.woke_ns) begin_.deadline_ns = begin_.woke_ns;
-  // CiA 301 SYNC counter runs 1..240 when used.
-  sync_counter_ = static_cast<std::uint8_t>(sync_counter_ >= 240 ? 1 : sync_counter_ + 1);
-  const hal::IoStatus s = bus_->write(hal::make_sync(now_ns, sync_counter_));
-  if (s != hal::IoStatus::kOk) ++counters_.sync_write_failures;
-  if (s == hal::IoStatus::kError) io_error_ = true;
-  if (master_ && master_->begin_period(now_ns, *bus_) == hal::IoStatus::kError) io_error_ = true;
+  if (device_->begin_period(now_ns) != hal::IoStatus::kOk) ++counters_.sync_write_failures;
   begin_.sync_sent_ns = monotonic_now_ns();
 }
 
@@ -203,105 +190,41 @@ void ControlLoop::step_model() noexcept {
   step_time_.record(report_.step_ns);
 }
 
-void ControlLoop::end_period_minimal(std::int64_t now_ns, const hal::DeviceSample& sample) noexcept {
-  step_model();
-  report_.output_begin_ns = monotonic_now_ns();
-  // Torque only from a sample checked this period: a stale or rejected sample
-  // keeps the last good target for the god-object, but the drives get zero
-  // torque until fresh plausible data arrive (no "hold the last command").
-  if (!(sample.valid && !shutting_down_ && send_feedback(now_ns))) {
-    ++counters_.periods_zero_torque;
-    report_.command_status = device_->command_zero(*bus_, now_ns);
-  }
-  report_.output_end_ns = monotonic_now_ns();
-  for (std::int16_t pm : device_->last_torque_per_mille()) report_.torque_commanded |= pm != 0;
-}
-
-void ControlLoop::end_period_managed(std::int64_t now_ns, const hal::DeviceSample& sample) noexcept {
-  hal::CanopenMaster& m = *master_;
-  hal::SafetySupervisor& sup = *supervisor_;
-  m.update(now_ns);
-  hal::SafetyInputs in;
-  const auto n = static_cast<std::size_t>(device_->num_axes());
-  in.periods_since_fresh = std::span<const std::uint32_t>(sample.periods_since_accepted.data(), n);
-  in.axis_faults = std::span<const hal::FaultMask>(sample.axis_faults.data(), n);
-  in.heartbeats = m.heartbeats();
-  in.emcy_faults = m.emcy_log().counters().faults;
-  in.emcy_last_fault = hal::newest_emcy_fault(m.emcy_log());
-  in.drives = m.drive_outputs();
-  in.overrun = settings_.supervise_overruns && last_overrun_;
-  in.bus_state = bus_->state();
-  in.io_error = io_error_;
-  io_error_ = false;
-  const hal::LifecycleUpdate u = sup.update(now_ns, in);
-  report_.entered_safe_stop = u.entered_safe_stop;
-  if (rearm_pending_ && sup.state() == hal::LifecycleState::kFault && m.operational() &&
-      sup.rearm() == hal::LifecycleResult::kOk) {
-    rearm_pending_ = false;
-  }
-  if (!shutting_down_ && settings_.auto_activate && sup.state() == hal::LifecycleState::kInactive &&
-      m.operational() && sup.blocking().cause == hal::FaultCause::kNone) {
-    report_.activated = sup.activate() == hal::LifecycleResult::kOk;
-  }
-  if (report_.activated && first_active_period_ < 0) {
-    first_active_period_ = static_cast<std::int64_t>(counters_.periods) - 1;
-  }
-  m.request_drives(sup.drive_target());
-
-  step_model();
-
-  report_.output_begin_ns = monotonic_now_ns();
-  bool have = sample.valid && gather_link_wrenches();
-  if (have) {
-    const auto links = static_cast<std::size_t>(device_->kinematics().num_links());
-    have = device_->torques_for(std::span<const core::Wrench>(link_wrench_.data(), links), tau_);
-  }
-  if (!have) tau_.setZero();
-  sup.saturate_torques(std::span<double>(tau_.data(), n));  // zeros unless active; NaN trips
-  const std::span<const hal::Cia402MasterOutput> drives = m.drive_outputs();
-  for (std::size_t i = 0; i < drives.size(); ++i) {
-    if (!drives[i].torque_allowed) tau_[m.drive_axis(i)] = 0.0;
-  }
-  const std::array<std::int16_t, hal::kMaxAxes>& pm = device_->encode_torques(tau_);
-  report_.command_status =
-      m.write_drive_rpdos(now_ns, std::span<const std::int16_t>(pm.data(), n), *bus_);
-  report_.output_end_ns = monotonic_now_ns();
-  if (report_.command_status == hal::IoStatus::kError) io_error_ = true;
-  for (std::size_t a = 0; a < n; ++a) report_.torque_commanded |= pm[a] != 0;
-  if (!report_.torque_commanded) ++counters_.periods_zero_torque;
-  if (report_.torque_commanded && first_torque_period_ < 0) {
-    first_torque_period_ = static_cast<std::int64_t>(counters_.periods) - 1;
-  }
-  report_.lifecycle = sup.state();
-  report_.startup = m.startup().phase;
-}
-
 const PeriodReport& ControlLoop::end_period(std::int64_t now_ns) noexcept {
   report_ = begin_;
   ++counters_.periods;
+  const auto period = static_cast<std::int64_t>(counters_.periods) - 1;
+  // 1. read
   report_.input_begin_ns = monotonic_now_ns();
-  hal::CanFrame frame;
-  for (int i = 0; i < 1024; ++i) {
-    const hal::IoStatus s = bus_->read(frame);
-    if (s == hal::IoStatus::kError) {
-      ++counters_.read_errors;
-      io_error_ = true;
-    }
-    if (s != hal::IoStatus::kOk) break;
-    ++report_.frames_read;
-    if (!(master_ && master_->on_frame(frame))) device_->on_frame(frame);
-  }
+  const hal::DeviceRead& read = device_->read(now_ns);
   report_.input_end_ns = monotonic_now_ns();
-  const hal::DeviceSample sample = device_->sample(now_ns);
+  report_.frames_read = read.frames_read;
+  if (read.read_error) ++counters_.read_errors;
+  const hal::DeviceSample& sample = device_->sample();
   report_.sample_valid = sample.valid;
   report_.target_ready = sample.ready;
+  // 2. supervise
+  const hal::DeviceSupervision sup =
+      device_->supervise(now_ns, settings_.supervise_overruns && last_overrun_);
+  report_.entered_safe_stop = sup.entered_safe_stop;
+  report_.activated = sup.activated;
+  report_.startup = sup.startup;
+  if (report_.activated && first_active_period_ < 0) first_active_period_ = period;
+  // 3. targets, 4. step
   if (sample.ready) apply_targets(sample);
-
-  if (master_) {
-    end_period_managed(now_ns, sample);
-  } else {
-    end_period_minimal(now_ns, sample);
-  }
+  step_model();
+  // 5. map, 6. write
+  report_.output_begin_ns = monotonic_now_ns();
+  map_feedback();
+  report_.command_status = device_->write(
+      std::span<const double>(tau_.data(), static_cast<std::size_t>(tau_.size())), now_ns);
+  report_.output_end_ns = monotonic_now_ns();
+  const hal::SentTorques& sent = device_->sent_torques();
+  if (sent.gated) report_.feedback = core::Wrench{};
+  report_.torque_commanded = sent.any();
+  report_.lifecycle = device_->lifecycle();  // after write(): a non-finite τ trips it
+  if (!report_.torque_commanded) ++counters_.periods_zero_torque;
+  if (report_.torque_commanded && first_torque_period_ < 0) first_torque_period_ = period;
   if (report_.command_status != hal::IoStatus::kOk) ++counters_.command_failures;
   const PeriodVerdict v = stats_->record_period(report_.times());
   report_.overrun = v.overrun;
@@ -309,47 +232,18 @@ const PeriodReport& ControlLoop::end_period(std::int64_t now_ns) noexcept {
   return report_;
 }
 
-RearmResult ControlLoop::rearm() noexcept {
-  if (!master_) return RearmResult::kMinimalProtocol;
-  const bool failed = master_->startup().phase == hal::StartupPhase::kFailed;
-  const bool latched = supervisor_->lifecycle().latched();
-  if (!latched && !failed) return RearmResult::kNotLatched;
-  master_->request_fault_reset();
-  if (failed || !master_->all_nodes_operational()) master_->restart_startup();
-  rearm_pending_ = latched;
-  return RearmResult::kAccepted;
-}
+RearmResult ControlLoop::rearm() noexcept { return device_->rearm(); }
 
 hal::LifecycleResult ControlLoop::activate() noexcept {
-  if (!supervisor_) return hal::LifecycleResult::kNotInactive;
-  const hal::LifecycleResult r = supervisor_->activate();
+  const hal::LifecycleResult r = device_->activate();
   if (r == hal::LifecycleResult::kOk && first_active_period_ < 0) {
     first_active_period_ = static_cast<std::int64_t>(counters_.periods) - 1;
   }
   return r;
 }
 
-void ControlLoop::shutdown() noexcept {
-  shutting_down_ = true;
-  rearm_pending_ = false;
-  if (supervisor_ && supervisor_->state() == hal::LifecycleState::kActive)
-    (void)supervisor_->deactivate();
-}
+void ControlLoop::shutdown() noexcept { device_->shutdown(); }
 
-bool ControlLoop::drives_disabled() const noexcept {
-  if (!master_) return true;
-  for (const hal::Cia402MasterOutput& d : master_->drive_outputs()) {
-    switch (d.state) {
-      case hal::PowerState::kSwitchOnDisabled:
-      case hal::PowerState::kReadyToSwitchOn:
-      case hal::PowerState::kNotReadyToSwitchOn:
-      case hal::PowerState::kFault:
-        break;
-      default:
-        return false;
-    }
-  }
-  return true;
-}
+bool ControlLoop::drives_disabled() const noexcept { return device_->drives_disabled(); }
 
 }  // namespace numen::platform

@@ -212,7 +212,7 @@ void SceneRunner::period(std::int64_t deadline_mono_ns, std::int64_t woke_mono_n
   const PeriodContacts contacts = measure_contacts();
   track_free_space(contacts);
   track_startup(contacts);
-  accumulate_step_figures(contacts);
+  accumulate_step_figures(report, contacts);
   record(report, contacts);
 }
 
@@ -364,7 +364,8 @@ void SceneRunner::track_startup(const PeriodContacts& c) noexcept {
     s.tool_penetration_max_mm = std::max(s.tool_penetration_max_mm, c.tool_pen * 1e3);
 }
 
-void SceneRunner::accumulate_step_figures(const PeriodContacts& c) noexcept {
+void SceneRunner::accumulate_step_figures(const platform::PeriodReport& report,
+                                          const PeriodContacts& c) noexcept {
   const core::Model& model = scene_->model;
   RunSummary& s = acc_;
   s.joint_drift_max_mm = std::max(s.joint_drift_max_mm, data_.max_joint_drift * 1e3);
@@ -372,9 +373,10 @@ void SceneRunner::accumulate_step_figures(const PeriodContacts& c) noexcept {
       std::max(s.joint_angle_drift_max_mrad, data_.max_joint_angle_drift * 1e3);
   s.target_penetration_max_mm = std::max(s.target_penetration_max_mm, c.target_pen * 1e3);
   s.any_penetration_max_mm = std::max(s.any_penetration_max_mm, data_.max_penetration * 1e3);
-  s.feedback_force_max_n = std::max(s.feedback_force_max_n, data_.feedback_wrench.force.norm());
-  s.feedback_torque_max_nm = std::max(s.feedback_torque_max_nm, data_.feedback_wrench.torque.norm());
-  const hal::AxisVector& tau = device_.last_torques();
+  // What the drives were sent (after the gate and clamp of hal::Device::write()).
+  s.feedback_force_max_n = std::max(s.feedback_force_max_n, report.feedback.force.norm());
+  s.feedback_torque_max_nm = std::max(s.feedback_torque_max_nm, report.feedback.torque.norm());
+  const hal::AxisVector& tau = loop_.device().sent_torques().torque;
   if (tau.size() > 0) s.axis_torque_max = std::max(s.axis_torque_max, tau.cwiseAbs().maxCoeff());
   const int held = data_.attached_body;
   const int held_tree = held >= 0 ? model.articulation.body_tree[static_cast<std::size_t>(held)] : -1;
@@ -401,7 +403,7 @@ void SceneRunner::accumulate_step_figures(const PeriodContacts& c) noexcept {
 void SceneRunner::record(const platform::PeriodReport& report, const PeriodContacts& c) noexcept {
   const TraceRecord rec = make_trace_record(data_, data_.attached_body, c.tool_contacts,
                                             c.tool_pen, c.target_pen, report,
-                                            device_.last_torques());
+                                            loop_.device().sent_torques().torque);
   if (trace_writer_) {
     platform::TraceRecord r;
     r.period = static_cast<std::uint64_t>(k_ - 1);

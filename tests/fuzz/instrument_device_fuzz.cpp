@@ -1,15 +1,18 @@
 /// @file instrument_device_fuzz.cpp
 /// libFuzzer harness of the controller-side device driver (hal/instrument_device.hpp): frames
 /// of every CANopen object of nodes 1–8 (encoder TPDOs, drive TPDOs, NMT, SYNC, EMCY,
-/// heartbeats, SDO) and others through InstrumentDevice::on_frame(), with sample() and
-/// command() between them, for the trocar, pose-tracker and phantom devices, managed or
-/// minimal protocol. A valid sample must be finite.
+/// heartbeats, SDO) and others through InstrumentDevice::on_frame(), with sample(),
+/// torques_for() and MinimalDevice::write() between them, for the trocar, pose-tracker and
+/// phantom devices, managed or minimal protocol. A valid sample must be finite, and so must
+/// the torques sent.
 
 #include <cmath>
 #include <cstdint>
+#include <span>
 
 #include "fuzz_input.hpp"
 #include "numen/hal/instrument_device.hpp"
+#include "numen/hal/minimal_device.hpp"
 #include "numen/hal/sim_bus.hpp"
 
 namespace {
@@ -23,6 +26,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   numen::hal::InstrumentDevice device(
       numen::fuzz::device_config(in.ConsumeIntegral<std::uint8_t>()));
   numen::hal::SimBus bus{numen::hal::SimBusSettings{}};
+  numen::hal::MinimalDevice sender(device, bus.controller());
   static const std::vector<std::uint32_t> ids = numen::fuzz::canopen_cob_ids(8);
   numen::fuzz::run_events(
       in, ids, [&](const numen::hal::CanFrame& f) { (void)device.on_frame(f); },
@@ -32,7 +36,13 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         if (!finite(s.target)) numen::fuzz::finding("instrument_device: non-finite target pose");
         numen::core::Wrench w;
         w.force = numen::core::Vec3(1.0, -2.0, 0.5);
-        (void)device.command(w, bus.controller(), now_ns);
+        numen::hal::AxisVector tau;
+        if (!device.torques_for(std::span<const numen::core::Wrench>(&w, 1), tau))
+          tau = numen::hal::AxisVector::Zero(device.num_axes());
+        (void)sender.write(std::span<const double>(tau.data(), static_cast<std::size_t>(tau.size())),
+                           now_ns);
+        if (!sender.sent_torques().torque.allFinite())
+          numen::fuzz::finding("instrument_device: non-finite torque sent");
         numen::fuzz::drain(bus.device());
       });
   return 0;

@@ -11,11 +11,13 @@
 #include <cstring>
 #include <memory>
 #include <numbers>
+#include <span>
 #include <vector>
 
 #include "alloc_counter.hpp"
 #include "numen/hal/canopen.hpp"
 #include "numen/hal/instrument_device.hpp"
+#include "numen/hal/minimal_device.hpp"
 #include "numen/hal/phantom_kinematics.hpp"
 #include "numen/hal/sim_bus.hpp"
 #include "numen/hal/trocar_kinematics.hpp"
@@ -52,14 +54,22 @@ void trajectory(double t, double* q) {
 //   device, at t + P/2: read SYNC and RPDOs -> answer with TPDOs (delivered before t + P).
 struct Rig {
   explicit Rig(const SimBusSettings& s, const DeviceConfig& c = trocar_config())
-      : bus(s), device(c), emulator(c) {}
+      : bus(s), device(c), emulator(c), sender(device, bus.controller()) {}
+
+  // The controller's sending half: τ = Σ J_lᵀ w_l (torques_for), then MinimalDevice::write().
+  IoStatus command_links(std::span<const Wrench> w, std::int64_t t) {
+    AxisVector tau;
+    if (!device.torques_for(w, tau)) tau = AxisVector::Zero(device.num_axes());
+    return sender.write(std::span<const double>(tau.data(), static_cast<std::size_t>(tau.size())),
+                        t);
+  }
 
   DeviceSample period(std::int64_t k, const Wrench& w) {
     const std::int64_t t = k * kPeriodNs;
     bus.set_time_ns(t);
     device.poll(bus.controller());
     const DeviceSample s = device.sample(t);
-    device.command(w, bus.controller(), t);
+    command_links(std::span<const Wrench>(&w, 1), t);
     bus.controller().write(make_sync(t));
     bus.set_time_ns(t + kPeriodNs / 2);
     emulator.poll(bus.device());
@@ -69,6 +79,7 @@ struct Rig {
   SimBus bus;
   InstrumentDevice device;
   DeviceEmulator emulator;
+  MinimalDevice sender;
 };
 
 SimBusSettings latency_only() {
@@ -161,13 +172,13 @@ TEST(DeviceEmulator, TorquesRoundTripThroughRpdos) {
   w.force = Vec3(0.8, -0.4, 1.2);
   w.torque = Vec3(0.02, -0.01, 0.03);
   rig.period(3, w);  // command sent at t, read by the emulator at t + P/2
-  const AxisVector& sent = rig.device.last_torques();
+  const AxisVector& sent = rig.sender.sent_torques().torque;
   const AxisVector& got = rig.emulator.last_torques();
   EXPECT_GT(sent.norm(), 0.0);
   for (int i = 0; i < 5; ++i) {
     const AxisConfig& a = rig.device.config().axes[static_cast<std::size_t>(i)];
     EXPECT_EQ(rig.emulator.last_torque_per_mille()[static_cast<std::size_t>(i)],
-              rig.device.last_torque_per_mille()[static_cast<std::size_t>(i)]);
+              rig.sender.sent_torques().per_mille[static_cast<std::size_t>(i)]);
     EXPECT_NEAR(got[i], sent[i], 0.5e-3 * a.rated_torque + 1e-12) << i;
   }
   EXPECT_EQ(rig.emulator.counters().rpdos, 3u * 4u);
@@ -436,13 +447,13 @@ TEST(DeviceEmulator, PhantomEndToEnd) {
   rig.bus.set_time_ns(3 * kPeriodNs);
   rig.device.poll(rig.bus.controller());
   rig.device.sample(3 * kPeriodNs);
-  ASSERT_EQ(rig.device.command_links(w, rig.bus.controller(), 3 * kPeriodNs), IoStatus::kOk);
+  ASSERT_EQ(rig.command_links(w, 3 * kPeriodNs), IoStatus::kOk);
   rig.bus.set_time_ns(3 * kPeriodNs + kPeriodNs / 2);
   rig.emulator.poll(rig.bus.device());
   EXPECT_EQ(rig.emulator.counters().rpdos - rpdos, 3u);
   for (int i = 0; i < 6; ++i) {
     const AxisConfig& a = c.axes[static_cast<std::size_t>(i)];
-    EXPECT_NEAR(rig.emulator.last_torques()[i], rig.device.last_torques()[i],
+    EXPECT_NEAR(rig.emulator.last_torques()[i], rig.sender.sent_torques().torque[i],
                 0.5e-3 * a.rated_torque + 1e-12)
         << i;
     if (i >= 3) {

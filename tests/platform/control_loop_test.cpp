@@ -187,11 +187,11 @@ TEST(ControlLoop, TorqueFramesReachTheEmulator) {
   double largest = 0.0;
   for (int i = 0; i < 5; ++i) {
     const auto& a = rig.config.axes[static_cast<std::size_t>(i)];
-    const double sent = rig.device.last_torques()[i];
+    const double sent = rig.loop.device().sent_torques().torque[i];
     const double got = rig.emulator.last_torques()[i];
     EXPECT_NEAR(got, sent, a.has_drive() ? 0.5e-3 * a.rated_torque + 1e-12 : 0.0) << "axis " << i;
     EXPECT_EQ(rig.emulator.last_torque_per_mille()[static_cast<std::size_t>(i)],
-              rig.device.last_torque_per_mille()[static_cast<std::size_t>(i)]);
+              rig.loop.device().sent_torques().per_mille[static_cast<std::size_t>(i)]);
     largest = std::max(largest, std::abs(got));
   }
   EXPECT_GT(largest, 0.01) << "no torque reached the drives";
@@ -200,7 +200,7 @@ TEST(ControlLoop, TorqueFramesReachTheEmulator) {
       rig.device.kinematics().jacobian(rig.device.last_sample().q), rig.data.feedback_wrench);
   for (int i = 0; i < 3; ++i) {
     const auto& a = rig.config.axes[static_cast<std::size_t>(i)];
-    EXPECT_NEAR(rig.device.last_torques()[i], std::clamp(tau[i], -a.max_torque, a.max_torque),
+    EXPECT_NEAR(rig.loop.device().sent_torques().torque[i], std::clamp(tau[i], -a.max_torque, a.max_torque),
                 0.5e-3 * a.rated_torque + 1e-12)
         << "axis " << i;
   }
@@ -267,7 +267,7 @@ TEST(ControlLoop, BusOffIsCountedAndStaleSamplesGetZeroTorque) {
   }
   EXPECT_FALSE(rig.loop.last_report().sample_valid);
   EXPECT_GT(rig.device.counters().rejected_stale, 0u);
-  EXPECT_TRUE(rig.device.last_torques().isZero()) << "no torque from a stale sample";
+  EXPECT_TRUE(rig.loop.device().sent_torques().torque.isZero()) << "no torque from a stale sample";
   EXPECT_GT(rig.loop.counters().periods_zero_torque, 0u);
   EXPECT_EQ(rig.data.target.position, held_target);
   EXPECT_EQ(rig.loop.counters().sync_write_failures, 5u);
@@ -580,11 +580,11 @@ TEST(ControlLoopLinks, TorquesAreTheSumOfTheLinkJacobiansTransposedTimesTheBodyW
     for (int i = 0; i < 5; ++i) {
       const auto& a = rig.config.axes[static_cast<std::size_t>(i)];
       if (!a.has_drive()) {
-        EXPECT_EQ(rig.device.last_torques()[i], 0.0) << "axis " << i;
+        EXPECT_EQ(rig.loop.device().sent_torques().torque[i], 0.0) << "axis " << i;
         continue;
       }
       ASSERT_LT(std::abs(tau[i]), 0.5 * a.max_torque) << "test assumes no saturation, axis " << i;
-      EXPECT_NEAR(rig.device.last_torques()[i], tau[i], 0.5e-3 * a.rated_torque + 1e-12)
+      EXPECT_NEAR(rig.loop.device().sent_torques().torque[i], tau[i], 0.5e-3 * a.rated_torque + 1e-12)
           << "period " << k << " axis " << i;
     }
     EXPECT_GT(tau.head<3>().cwiseAbs().maxCoeff(), 0.02) << "torques too small to test";
@@ -596,11 +596,11 @@ TEST(ControlLoopLinks, ZeroTorqueWhileTheSampleIsNotValid) {
   NUMEN_REQUIRE_ARTICULATION();  // the trocar instrument's jointed model
   LinkedRig rig;
   rig.period(0);
-  ASSERT_GT(rig.device.last_torques().cwiseAbs().maxCoeff(), 0.0);
+  ASSERT_GT(rig.loop.device().sent_torques().torque.cwiseAbs().maxCoeff(), 0.0);
   rig.emulator.set_responding(false);
   for (int k = 1; k <= 5; ++k) rig.period(k);
   EXPECT_FALSE(rig.loop.last_report().sample_valid);
-  EXPECT_TRUE(rig.device.last_torques().isZero());
+  EXPECT_TRUE(rig.loop.device().sent_torques().torque.isZero());
   EXPECT_GT(rig.loop.counters().periods_zero_torque, 0u);
 }
 
@@ -748,7 +748,7 @@ struct Rig {
 /// True if any drive RPDO of this period carried a non-zero target torque (emulator view).
 bool any_torque(const Rig& rig) {
   for (int a = 0; a < 3; ++a) {
-    if (rig.device.last_torque_per_mille()[static_cast<std::size_t>(a)] != 0) return true;
+    if (rig.loop.device().sent_torques().per_mille[static_cast<std::size_t>(a)] != 0) return true;
   }
   return false;
 }
@@ -999,6 +999,48 @@ TEST(ControlLoopManaged, NmtStopStopsTheTpdosAndTheEncoderTimesOut) {
   EXPECT_FALSE(any_torque(rig));
 }
 
+// What the period reports as feedback is what the drives get: zero while write() gates (the
+// start-up, before kActive, although the core's composite Data::feedback_wrench is not), and
+// once torque flows τ_sent = clamp(Jᵀ feedback) on the driven axes, 0 elsewhere, exactly the
+// per mille of the RPDO the emulated drives read.
+TEST(ControlLoopManaged, ReportedFeedbackIsTheWrenchWhoseTorquesWereSent) {
+  Rig rig;
+  int gated_with_core_feedback = 0;
+  int torque_periods = 0;
+  double q[5] = {kQ[0], kQ[1], kQ[2], kQ[3], kQ[4]};
+  for (int i = 0; i < 120; ++i) {
+    if (rig.loop.first_torque_period() >= 0) {  // move the hand: the feedback grows
+      q[0] += 0.004;
+      q[2] += 0.0005;
+      rig.emulator.set_axis_values(q);
+    }
+    const PeriodReport& r = rig.period();
+    const numen::hal::SentTorques& sent = rig.loop.device().sent_torques();
+    if (!r.torque_commanded) {
+      EXPECT_EQ(r.feedback.force.norm(), 0.0) << "period " << i;
+      EXPECT_EQ(r.feedback.torque.norm(), 0.0) << "period " << i;
+      if (rig.data.feedback_wrench.force.norm() > 0.1) ++gated_with_core_feedback;
+      continue;
+    }
+    ++torque_periods;
+    const AxisVector tau = numen::hal::torques_from_wrench(
+        rig.device.kinematics().jacobian(rig.device.last_sample().q), r.feedback);
+    for (int a = 0; a < 5; ++a) {
+      const auto& ax = rig.config.axes[static_cast<std::size_t>(a)];
+      const double want = ax.has_drive() ? std::clamp(tau[a], -ax.max_torque, ax.max_torque) : 0.0;
+      EXPECT_NEAR(sent.torque[a], want, 1e-12) << "period " << i << " axis " << a;
+      EXPECT_EQ(sent.per_mille[static_cast<std::size_t>(a)],
+                ax.has_drive() ? numen::hal::torque_per_mille(ax, want) : 0);
+    }
+  }
+  EXPECT_GT(gated_with_core_feedback, 0) << "the check is not vacuous: the core had feedback";
+  EXPECT_GT(torque_periods, 50);
+  // The drives read those RPDOs: after one more exchange each got the last per mille sent.
+  const std::array<std::int16_t, numen::hal::kMaxAxes> last = rig.loop.device().sent_torques().per_mille;
+  rig.period();  // the drives read the RPDOs, then apply them at this period's SYNC
+  for (std::size_t a = 0; a < 3; ++a) EXPECT_EQ(rig.emulator.last_torque_per_mille()[a], last[a]) << a;
+}
+
 TEST(ControlLoopManaged, TorquesAreSaturatedPerAxis) {
   Rig rig;
   rig.run_to_torque();
@@ -1012,7 +1054,7 @@ TEST(ControlLoopManaged, TorquesAreSaturatedPerAxis) {
     rig.emulator.set_axis_values(q);
     rig.period();
     for (int a = 0; a < 3; ++a) {
-      const double tau = rig.device.last_torques()[a];
+      const double tau = rig.loop.device().sent_torques().torque[a];
       const double lim = rig.config.axes[static_cast<std::size_t>(a)].max_torque;
       ASSERT_LE(std::abs(tau), lim + 1e-12) << "axis " << a;
       peak[a] = std::max(peak[a], std::abs(tau));
@@ -1046,11 +1088,11 @@ TEST(ControlLoopManaged, TorquesAreSaturatedPerAxis) {
     emulator.tick(t + kLatency, low.bus.device());
     low.bus.set_time_ns(t + kPhase);
     loop.end_period(t + kPhase);
-    clamped_peak = std::max(clamped_peak, std::abs(device.last_torques()[0]));
+    clamped_peak = std::max(clamped_peak, std::abs(loop.device().sent_torques().torque[0]));
   }
   EXPECT_DOUBLE_EQ(clamped_peak, low.config.axes[0].max_torque);
-  EXPECT_GT(loop.supervisor()->saturations(0), 0u);
-  EXPECT_EQ(loop.supervisor()->saturations(3), 0u);  // roll: no drive, τ = 0
+  EXPECT_GT(loop.device().torque_counters().axis_saturations[0], 0u);
+  EXPECT_EQ(loop.device().torque_counters().axis_saturations[3], 0u);  // roll: no drive, τ = 0
   EXPECT_EQ(loop.supervisor()->state(), LifecycleState::kActive);
 }
 
@@ -1070,7 +1112,7 @@ std::vector<std::int64_t> session(bool check_allocations) {
     if (i == 150) rig.loop.rearm();
     if (i == 250) rig.emulator.kill(true);
     rig.period();
-    for (int a = 0; a < 3; ++a) out.push_back(rig.device.last_torque_per_mille()[static_cast<std::size_t>(a)]);
+    for (int a = 0; a < 3; ++a) out.push_back(rig.loop.device().sent_torques().per_mille[static_cast<std::size_t>(a)]);
     std::int64_t bits = 0;
     const double x = rig.data.bodies[0].position.x();
     std::memcpy(&bits, &x, sizeof bits);

@@ -254,6 +254,44 @@ TEST(RunDefaultScene, NoJumpAtStart) {
   EXPECT_LT(d.feedback_wrench.force.norm(), 0.05);
 }
 
+// The summary's feedback figures are what the drives were sent — after hal::Device::write()'s
+// gate and clamp — and what the simulated drives applied, not the core's composite wrench.
+TEST(RunDefaultScene, SummaryFeedbackFiguresAreTheOnesTheDrivesReceive) {
+  NUMEN_REQUIRE_ARTICULATION();
+  const Scene& scene = default_scene();
+  SceneRunner runner(scene);
+  double sent_max = 0.0, received_max = 0.0, feedback_max = 0.0, core_gated_max = 0.0;
+  std::array<std::int16_t, numen::hal::kMaxAxes> sent_before{};
+  const auto n = static_cast<int>(scene.device.axes.size());
+  for (std::int64_t k = 0; k < periods_for(scene, 3.0); ++k) {
+    runner.period();
+    const numen::hal::SentTorques& sent = runner.loop().device().sent_torques();
+    const numen::platform::PeriodReport& r = runner.last_report();
+    // The simulated drives applied, at this period's SYNC, the RPDOs of the period before.
+    for (int a = 0; a < n; ++a) {
+      const auto i = static_cast<std::size_t>(a);
+      ASSERT_EQ(runner.instrument().last_torques()[a],
+                numen::hal::per_mille_to_torque(scene.device.axes[i], sent_before[i]))
+          << "period " << k << " axis " << a;
+      received_max = std::max(received_max, std::abs(runner.instrument().last_torques()[a]));
+    }
+    sent_before = sent.per_mille;
+    sent_max = std::max(sent_max, sent.torque.cwiseAbs().maxCoeff());
+    feedback_max = std::max(feedback_max, r.feedback.force.norm());
+    if (!r.torque_commanded)
+      core_gated_max = std::max(core_gated_max, runner.data().feedback_wrench.force.norm());
+  }
+  const numen::sim::RunSummary s = runner.summary();
+  EXPECT_EQ(s.axis_torque_max, sent_max);
+  EXPECT_EQ(s.feedback_force_max_n, feedback_max);
+  EXPECT_GT(sent_max, 0.0);
+  double rated_max = 0.0;
+  for (const numen::hal::AxisConfig& a : scene.device.axes) rated_max = std::max(rated_max, a.rated_torque);
+  EXPECT_NEAR(received_max, sent_max, 0.5e-3 * rated_max + 1e-12);  // the RPDO's per mille
+  std::printf("[   info   ] sent |tau| max %.4f, received %.4f; feedback %.3f N; core's while gated %.3f N\n",
+              sent_max, received_max, feedback_max, core_gated_max);
+}
+
 TEST(RunDefaultScene, RealtimeRunIsPacedToTheClock) {
   NUMEN_REQUIRE_ARTICULATION();
   numen::sim::RunOptions opt;

@@ -70,6 +70,15 @@ std::int32_t value_to_counts(const AxisConfig& axis, double value) noexcept;
 /// apply sign, round to nearest, saturate to int16. Non-finite → 0, flagged saturated.
 TorqueCommand torque_to_per_mille(const AxisConfig& axis, double torque) noexcept;
 
+/// The torque bound of `axis`, N·m or N: min(max_torque, 32767 · rated_torque / 1000), the
+/// largest |τ| the axis allows and its RPDO can carry. Device::write() clamps to it.
+double torque_limit(const AxisConfig& axis) noexcept;
+
+/// Torque (N·m or N) to RPDO per mille without a clamp: sign · round(1000 · τ / rated_torque).
+/// For a τ already clamped to ±torque_limit() (Device::write()); a value outside the int16
+/// range (not reached then) is held at its end, non-finite gives 0.
+std::int16_t torque_per_mille(const AxisConfig& axis, double torque) noexcept;
+
 /// RPDO per mille to torque, N·m or N (inverse scaling, sign applied; no saturation).
 double per_mille_to_torque(const AxisConfig& axis, std::int16_t per_mille) noexcept;
 

@@ -17,8 +17,9 @@
 ///       so earlier heartbeats cannot read as an unexpected reset), EMCY (EmcyLog);
 ///     update(): heartbeat consumers polled, start-up progress, each Cia402Master updated with
 ///       its drive's newest statusword;
-///     write_drive_rpdos(): controlword (from the Cia402Master) + target torque (gated by that
-///       master's torque_allowed) in each drive's RPDO mapping.
+///     write_drive_rpdos(): controlword (from the Cia402Master) + the target torque it is given
+///       in each drive's RPDO mapping (gated and clamped before, by hal::Device::write(), which
+///       asks drive_outputs()[i].torque_allowed).
 ///
 /// Construction allocates and may throw std::invalid_argument (config not managed or invalid);
 /// every other member is noexcept, allocation free, lock free and never blocks.
@@ -116,9 +117,10 @@ class CanopenMaster {
   /// Asks every drive's master for a fault reset (Cia402Master::request_fault_reset()).
   void request_fault_reset() noexcept;
 
-  /// Writes each drive's RPDO stamped `now_ns`: the controlword of its master's last update()
-  /// and target torque per_mille[axis] if that master allows torque, else 0; modes of operation
-  /// (if mapped) 10. Returns as begin_period().
+  /// Writes each drive's RPDO stamped `now_ns`: the controlword of its master's last update(),
+  /// target torque per_mille[axis] as given (0 for an axis past the span; the caller gated it
+  /// with drive_outputs()[i].torque_allowed, see hal::Device::write()); modes of operation (if
+  /// mapped) 10. Returns as begin_period().
   IoStatus write_drive_rpdos(std::int64_t now_ns, std::span<const std::int16_t> per_mille,
                              Bus& bus) noexcept;
 

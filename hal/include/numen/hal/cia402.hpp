@@ -242,7 +242,8 @@ struct Cia402MasterOutput {
   /// Controlword (0x6040) to send this period.
   std::uint16_t controlword = Controlword::kDisableVoltage;
   /// True only when the target is kEnabled, the statusword reports operation enabled and no
-  /// fault is latched. Otherwise the target torque sent must be 0 (use gate()).
+  /// fault is latched. Otherwise the target torque sent must be 0 (hal::Device::write() gates
+  /// on it).
   bool torque_allowed = false;
   /// The state decoded from the statusword given to update().
   PowerState state = PowerState::kUnknown;
@@ -255,11 +256,6 @@ struct Cia402MasterOutput {
   /// The drive stayed in one state for transition_timeout_periods while the master waited
   /// for a transition. Cleared when the state changes or a new request is made.
   bool stuck = false;
-
-  /// `per_mille` if torque is allowed this period, 0 otherwise.
-  constexpr std::int16_t gate(std::int16_t per_mille) const noexcept {
-    return torque_allowed ? per_mille : std::int16_t{0};
-  }
 };
 
 /// Event counters of a Cia402Master since construction.

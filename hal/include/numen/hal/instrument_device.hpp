@@ -3,8 +3,10 @@
 /// InstrumentDevice: the controller-side driver of one tracked instrument on a CAN bus. Each
 /// control period it turns the encoder TPDOs received since the last period into a checked
 /// target pose and twist for the god-object (paper Eq. 2 inputs) — one per link of an
-/// articulated instrument (paper Eq. 6) — and feedback wrenches into saturated drive torques
-/// τ = Σ_l J_lᵀ w_l sent as RPDOs (paper Eq. 8 output, virtual coupling).
+/// articulated instrument (paper Eq. 6) — and maps feedback wrenches to axis torques
+/// τ = Σ_l J_lᵀ w_l (paper Eq. 8 output, virtual coupling) at the sample's axis values. It
+/// sends nothing: hal::Device (device.hpp) owns the bus side — it gates, clamps and encodes τ
+/// in the protocol's RPDOs.
 /// Construction allocates and may throw; every other member is noexcept, allocation free,
 /// lock free and never blocks. See docs/protocol.md for the order of one period.
 
@@ -88,20 +90,17 @@ struct DeviceCounters {
   std::uint64_t rejected_out_of_range = 0;  ///< ... outside [min, max].
   std::uint64_t rejected_stale = 0;         ///< ... stale (including periods with no frame).
   std::uint64_t rejected_jump = 0;          ///< ... implausible jump.
-  // Commands.
-  std::uint64_t commands = 0;             ///< command() and command_links() calls.
-  std::uint64_t commands_zero = 0;        ///< command_zero() calls (and commands before ready).
-  std::uint64_t torque_saturations = 0;   ///< Axis torques clamped (|τ| > max_torque, int16).
-  std::uint64_t non_finite_wrenches = 0;  ///< Commands with a NaN/inf wrench (sent 0).
-  /// command_links() calls given more wrenches than the instrument has links (the extra
+  // Mappings (torques_for()).
+  std::uint64_t commands = 0;             ///< torques_for() calls.
+  std::uint64_t commands_zero = 0;        ///< ... that returned false (not ready, non-finite).
+  std::uint64_t non_finite_wrenches = 0;  ///< ... given a NaN/inf wrench.
+  /// torques_for() calls given more wrenches than the instrument has links (the extra
   /// entries were ignored).
   std::uint64_t extra_link_wrenches = 0;
-  std::uint64_t write_would_block = 0;  ///< RPDO writes refused (queue full).
-  std::uint64_t write_errors = 0;       ///< RPDO writes that failed.
 };
 
-/// Controller-side driver of one instrument: encoder TPDOs in, checked target out; wrench in,
-/// torque RPDOs out. Not thread safe (one control loop owns it).
+/// Controller-side driver of one instrument: encoder TPDOs in, checked target out; link
+/// wrenches in, axis torques out. Not thread safe (one control loop owns it).
 class InstrumentDevice {
  public:
   /// Takes the configuration and the kinematics. Throws std::invalid_argument if
@@ -130,47 +129,16 @@ class InstrumentDevice {
   /// and returns the target. See DeviceSample and check_sample().
   DeviceSample sample(std::int64_t now_ns) noexcept;
 
-  /// Sends the torques balancing `wrench` (world frame, at the controlled frame's origin):
-  /// τ = Jᵀ [force; torque] at the axis values of the last sample(), each clamped to
-  /// ±max_torque, one torque RPDO per axis with a drive, stamped `now_ns`. Sends zeros before
-  /// the device is ready or if the wrench is not finite. Returns kOk if every write succeeded,
-  /// else kError if one failed, else kWouldBlock. Same as command_links({wrench}).
-  IoStatus command(const core::Wrench& wrench, Bus& bus, std::int64_t now_ns) noexcept;
-
-  /// Sends the torques balancing one wrench per link (paper Eq. 8 per body, mapped by virtual
-  /// work): τ = Σ_l J_lᵀ [force_l; torque_l], with w_l = link_wrenches[l] in world coordinates
-  /// about link l's origin and J_l = Kinematics::link_jacobian(l, q) at the axis values of the
-  /// last sample(). Links without an entry (l >= link_wrenches.size()) get a zero wrench;
-  /// entries beyond num_links() are ignored and counted (extra_link_wrenches). Then as
-  /// command(): each axis clamped to ±max_torque, one RPDO per axis with a drive (axes without
-  /// a drive get 0), zeros before ready or if a used wrench is not finite (counted once in
-  /// non_finite_wrenches). Same return as command().
-  IoStatus command_links(std::span<const core::Wrench> link_wrenches, Bus& bus,
-                         std::int64_t now_ns) noexcept;
-
-  /// Safe state: sends zero torque to every drive. Same return as command().
-  IoStatus command_zero(Bus& bus, std::int64_t now_ns) noexcept;
-
-  /// The managed stack's first half of command_links(): τ = Σ_l J_lᵀ w_l at the axis values
-  /// of the last sample() into `tau` (n entries), unsaturated, 0 on axes without a drive —
-  /// nothing is sent (the caller saturates, gates and packs τ into its drive RPDOs, then calls
-  /// encode_torques()). Returns false and sets `tau` to 0 before the device is ready or if a
-  /// used wrench is not finite. Same counters as command_links().
+  /// The map from link wrenches to axis torques (paper Eq. 8 per body, mapped by virtual
+  /// work): τ = Σ_l J_lᵀ [force_l; torque_l] into `tau` (n entries, N·m or N), with
+  /// w_l = link_wrenches[l] in world coordinates about link l's origin and
+  /// J_l = Kinematics::link_jacobian(l, q) at the axis values of the last sample(). Links
+  /// without an entry (l >= link_wrenches.size()) get a zero wrench; entries beyond
+  /// num_links() are ignored and counted (extra_link_wrenches). No gate and no clamp (that is
+  /// hal::Device::write()); every axis gets its Σ, with a drive or not. Returns false and sets
+  /// `tau` to 0 before the device is ready or if a used wrench is not finite (counted once in
+  /// non_finite_wrenches).
   bool torques_for(std::span<const core::Wrench> link_wrenches, AxisVector& tau) noexcept;
-
-  /// The managed stack's second half: converts `tau` (n entries, N·m or N) per driven axis with
-  /// torque_to_per_mille() (clamp to ±max_torque, int16), stores it as the last command
-  /// (last_torques(), last_torque_per_mille(); 0 on axes without a drive) and returns the per
-  /// mille values to put in the drive RPDOs. Nothing is sent.
-  const std::array<std::int16_t, kMaxAxes>& encode_torques(const AxisVector& tau) noexcept;
-
-  /// Torques of the last command, N·m or N per axis after saturation (0 for axes without a
-  /// drive), n entries.
-  const AxisVector& last_torques() const noexcept { return last_torques_; }
-  /// Per mille values of the last command's RPDOs (entries without a drive are 0).
-  const std::array<std::int16_t, kMaxAxes>& last_torque_per_mille() const noexcept {
-    return last_per_mille_;
-  }
 
   /// The last sample() result (default-constructed with q = 0 before the first call).
   const DeviceSample& last_sample() const noexcept { return last_sample_; }
@@ -210,11 +178,6 @@ class InstrumentDevice {
 
   // Link targets, twists and Jacobians of `s` from s.q, s.qdot (link 0 from forward/jacobian).
   void evaluate_links(DeviceSample& s) noexcept;
-  // Saturates `tau` per driven axis into last_torques_ / last_per_mille_ and sends them.
-  IoStatus apply_torques(const AxisVector& tau, Bus& bus, std::int64_t now_ns) noexcept;
-  // Zero torque on every drive.
-  IoStatus send_zero(Bus& bus, std::int64_t now_ns) noexcept;
-  IoStatus send_torques(Bus& bus, std::int64_t now_ns) noexcept;
 
   DeviceConfig config_;
   std::unique_ptr<const Kinematics> kinematics_;
@@ -227,8 +190,6 @@ class InstrumentDevice {
   AxisVector hold_;  // value used before an axis's first accepted value
   std::array<Jacobian, kMaxLinks> link_jacobians_{};  // at last_sample_.q; [0]: jacobian()
   DeviceSample last_sample_;
-  AxisVector last_torques_;
-  std::array<std::int16_t, kMaxAxes> last_per_mille_{};
   DeviceCounters counters_;
 };
 

@@ -1,7 +1,8 @@
 #pragma once
 /// @file safety_supervisor.hpp
-/// SafetySupervisor: the watchdogs and plausibility checks of one device, the fault log, the
-/// torque saturation, and the DeviceLifecycle they drive. Once per control period it is given
+/// SafetySupervisor: the watchdogs and plausibility checks of one device, the fault log, and
+/// the DeviceLifecycle they drive (whose torque_allowed() is the lifecycle part of the torque
+/// gate in hal::Device::write(), the one place that gates and clamps axis torques). Once per control period it is given
 /// what the period's reads found (encoder freshness and sample checks, heartbeat consumers,
 /// EMCY count, CiA 402 drive states, loop overrun, bus state) and decides whether the safe
 /// state latches. The rules (see docs/protocol.md, "Safety supervision"):
@@ -19,7 +20,7 @@
 ///    N-period timeout only rejects the sample (the InstrumentDevice holds the last accepted
 ///    value); an isolated overrun only counts. Counted in counters().
 ///  - Safe state sequence: period k detects → torque_allowed() is false from the same period
-///    (commanded_torque_zero(); saturate_torques() writes zeros) and drive_target() is
+///    (commanded_torque_zero(); Device::write() sends zeros) and drive_target() is
 ///    kDisabled (the caller requests it from its Cia402Master, whose next update sends disable
 ///    voltage) → kFault once every drive reports disabled, or after safe_stop_timeout_periods
 ///    (recorded as kSafeStopTimeout). Only rearm() leaves kFault, to kInactive, and only when
@@ -62,7 +63,8 @@ enum class FaultCause : std::uint8_t {
   kEncoderJump,      ///< An encoder value moved faster than the axis's max speed allows.
   kOutOfRange,       ///< An encoder value outside the axis's [min, max].
   kNonFinite,        ///< An encoder value that is NaN or infinite.
-  kNonFiniteTorque,  ///< saturate_torques() was given a NaN or infinite torque.
+  kNonFiniteTorque,  ///< A NaN or infinite axis torque reached the gate (Device::write(),
+                     ///< trip_non_finite_torque()).
   kSafeStopTimeout,  ///< The drives did not report disabled within safe_stop_timeout_periods.
 };
 
@@ -108,9 +110,8 @@ struct SafetySettings {
   /// Periods, >= 1, that kSafeStop waits for the drives to report disabled before it latches
   /// kFault anyway (LifecycleSettings::safe_stop_timeout_periods).
   std::uint32_t safe_stop_timeout_periods = 100;
-  /// Per-axis torque saturation |τ_i| <= torque_limits[i], N·m (revolute) or N (prismatic),
-  /// finite, >= 0. Its size is the number of axes n, 1..kMaxAxes.
-  std::vector<double> torque_limits;
+  /// Number of axes n of the device, 1..kMaxAxes (SafetyInputs carry n axis entries).
+  std::size_t num_axes = 0;
 };
 
 /// What one period's reads found (SafetySupervisor::update() input). Spans refer to the
@@ -149,10 +150,7 @@ struct SafetyCounters {
   std::uint64_t overruns = 0;             ///< Overrun periods (consecutive or not).
   std::uint64_t rejected_samples = 0;     ///< Axis-periods rejected as stale or malformed
                                           ///< without a latching cause (below the timeout).
-  std::uint64_t torque_saturations = 0;   ///< Axis torques clamped by saturate_torques().
-  std::uint64_t non_finite_torques = 0;   ///< saturate_torques() calls given a NaN / inf torque.
-  std::uint64_t zeroed_commands = 0;      ///< saturate_torques() calls that wrote zeros because
-                                          ///< torque was not allowed.
+  std::uint64_t non_finite_torques = 0;   ///< trip_non_finite_torque() calls.
 };
 
 /// The watchdogs and plausibility checks of one device, driving its DeviceLifecycle (see the
@@ -161,15 +159,16 @@ struct SafetyCounters {
 ///   frames → InstrumentDevice::sample(), HeartbeatMonitor::poll(), Cia402Master::update()
 ///   → supervisor.update(now, inputs)
 ///   → for each drive: master.request(supervisor.drive_target())
-///   → compute torques; supervisor.saturate_torques(tau)   (zeros unless torque_allowed())
-///   → send them in this period.
+///   → compute torques; Device::write(tau): zeros unless torque_allowed() (and the drive's
+///     master allows torque), each clamped to ±max_torque; a NaN trips
+///     trip_non_finite_torque()
+///   → sent in this period.
 ///
 /// Not thread safe: one control loop owns it.
 class SafetySupervisor {
  public:
   /// Validates `settings`: throws std::invalid_argument naming the field and value if a
-  /// period count is 0, torque_limits is empty or longer than kMaxAxes, or a limit is negative
-  /// or not finite.
+  /// period count is 0 or num_axes is outside 1..kMaxAxes.
   explicit SafetySupervisor(const SafetySettings& settings);
 
   /// Lifecycle transitions (DeviceLifecycle). activate() and rearm() refuse with
@@ -194,11 +193,9 @@ class SafetySupervisor {
   /// disabled, and updates the lifecycle. In kUnconfigured only the event baselines move.
   LifecycleUpdate update(std::int64_t now_ns, const SafetyInputs& inputs) noexcept;
 
-  /// Gates and saturates this period's torques in place (n axes; entries past n are set to 0):
-  /// all zero unless torque_allowed(); otherwise each clamped to ±torque_limits[i] (counted).
-  /// A NaN or infinite entry sets every entry to 0, records kNonFiniteTorque (id = its axis)
-  /// and latches the safe state at once. Returns the number of entries clamped.
-  std::size_t saturate_torques(std::span<double> torques) noexcept;
+  /// A NaN or infinite torque reached the torque gate on `axis` (Device::write(), which sends
+  /// zeros): records kNonFiniteTorque (id = axis) and latches the safe state at once.
+  void trip_non_finite_torque(std::size_t axis) noexcept;
 
   /// True only in kActive: torques may be sent (still gate each drive with its
   /// Cia402MasterOutput::torque_allowed). False: the caller must command zero this period.
@@ -227,10 +224,6 @@ class SafetySupervisor {
   const FaultRecord* newest_fault() const noexcept {
     return log_size_ == 0 ? nullptr : fault_log_at(log_size_ - 1);
   }
-  /// Per-axis clamp counts of saturate_torques() (axis < n; 0 otherwise).
-  std::uint64_t saturations(std::size_t axis) const noexcept {
-    return axis < n_ ? saturations_[axis] : 0;
-  }
   /// Consecutive overrun periods up to the last update().
   std::uint32_t consecutive_overruns() const noexcept { return consecutive_overruns_; }
   /// Index of the last update() (0 = first; 0 before any).
@@ -251,8 +244,6 @@ class SafetySupervisor {
   SafetySettings settings_;
   DeviceLifecycle lifecycle_;
   std::size_t n_ = 0;
-  std::array<double, kMaxAxes> limits_{};
-  std::array<std::uint64_t, kMaxAxes> saturations_{};
 
   // Edge memory (a cause is recorded again only after it cleared).
   std::array<FaultMask, kMaxAxes> prev_mask_{};

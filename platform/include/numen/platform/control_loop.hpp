@@ -1,19 +1,18 @@
 #pragma once
 /// @file control_loop.hpp
-/// One control period of numen (DESIGN.md, "One control period"; docs/protocol.md §3):
-///   begin_period: SYNC on the bus; managed stack: NMT commands due (start-up), the
-///                 controller's heartbeat when due;
-///   end_period:   read every pending frame → decode → check → forward kinematics
-///                 (managed: drive TPDOs → Cia402Master, heartbeats → HeartbeatMonitor,
-///                 EMCY → EmcyLog; SafetySupervisor update; lifecycle activation / re-arm)
-///                 → core::Data target → core::step → feedback wrench (Eq. 8)
-///                 → axis torques Jᵀ w → saturate → torque PDOs on the bus (managed:
-///                 controlword + target torque RPDOs, zero unless the lifecycle is active and
-///                 the drive's master allows torque).
-/// Two protocols, chosen by DeviceConfig::canopen.managed (see device_config.hpp). The same
-/// object runs against SimBus in simulation and SocketCAN on hardware.
-/// Construction may allocate; begin_period/end_period/rearm never allocate, throw,
-/// lock or block.
+/// One control period of numen (docs/architecture.md, "One encoder value, frame to torque
+/// frame"; docs/protocol.md §3), the same for every protocol, through hal::Device:
+///   begin_period: Device::begin_period — SYNC (+ the managed stack's NMT command due and
+///                 controller heartbeat);
+///   end_period:   Device::read (frames → decode → check → forward kinematics)
+///                 → Device::supervise (managed: watchdogs, lifecycle; a fault latches zero
+///                 torque now) → bound bodies' targets into core::Data → core::step
+///                 → map: the bound bodies' Eq. 8 wrenches carried to their links (Eq. 9),
+///                 τ = Σ_l J_lᵀ w_l → Device::write (gate and clamp, once; the torque frames).
+/// The protocol (DeviceConfig::canopen.managed) is chosen once, at construction
+/// (hal::make_device()); no period branches on it. The same object runs against SimBus in
+/// simulation and SocketCAN on hardware. Construction may allocate; begin_period / end_period /
+/// rearm never allocate, throw, lock or block.
 
 #include <array>
 #include <cstdint>
@@ -25,6 +24,7 @@
 #include "numen/hal/bus.hpp"
 #include "numen/hal/canopen_master.hpp"
 #include "numen/hal/cia402.hpp"
+#include "numen/hal/device.hpp"
 #include "numen/hal/device_lifecycle.hpp"
 #include "numen/hal/instrument_device.hpp"
 #include "numen/hal/safety_supervisor.hpp"
@@ -45,6 +45,11 @@ struct PeriodReport {
   hal::IoStatus command_status = hal::IoStatus::kOk;  ///< Result of the torque writes.
   /// Non-zero torque was commanded on at least one drive this period.
   bool torque_commanded = false;
+  /// The feedback wrench the drives were sent this period: the bound bodies' Eq. 8 wrenches
+  /// carried to their links (Eq. 9) and summed about link 0's origin (world, N and N·m) — the
+  /// wrench whose τ = Σ J_lᵀ w_l went to Device::write() — and zero when write() gated every
+  /// axis. Per-axis clamping acts on τ (hal::SentTorques::clamped counts it), not on this.
+  core::Wrench feedback;
   // Timestamps (CLOCK_MONOTONIC ns).
   std::int64_t deadline_ns = 0;      ///< The period's deadline (begin_period's argument, or
                                      ///< its start when none was given).
@@ -93,24 +98,18 @@ struct ControlLoopSettings {
   hal::Cia402MasterSettings drive_settings;
 };
 
-/// Result of ControlLoop::rearm().
-enum class RearmResult : std::uint8_t {
-  kAccepted,         ///< Fault resets requested (and the start-up rerun if a node needs it):
-                     ///< the loop re-arms the lifecycle as soon as no cause is present.
-  kNotLatched,       ///< Nothing to re-arm: no safe state latched and the start-up did not fail.
-  kMinimalProtocol,  ///< The device runs the minimal protocol: no lifecycle.
-};
-
-/// Short English name of a RearmResult (static string).
-const char* to_string(RearmResult result) noexcept;
+/// Result of ControlLoop::rearm() (hal::Device::rearm()).
+using RearmResult = hal::RearmResult;
+/// Short English name of a RearmResult (hal::to_string()).
+inline const char* to_string(RearmResult result) noexcept { return hal::to_string(result); }
 
 /// Counters since construction.
 struct ControlLoopCounters {
   std::uint64_t periods = 0;          ///< end_period() calls.
   std::uint64_t sync_write_failures = 0;  ///< SYNC writes not accepted by the bus.
   std::uint64_t command_failures = 0;     ///< Periods whose torque writes did not all succeed.
-  std::uint64_t periods_zero_torque = 0;  ///< Periods that sent zero torque (no body held, no
-                                          ///< valid sample, or — managed — not active).
+  std::uint64_t periods_zero_torque = 0;  ///< Periods that sent zero torque on every drive (no
+                                          ///< body held, no valid sample, gated, or a zero τ).
   std::uint64_t read_errors = 0;          ///< Bus reads that returned kError.
 };
 
@@ -126,10 +125,10 @@ class ControlLoop {
   /// prescription names a joint that is not prescribed. The attached body
   /// follows its own binding if it has one, else the binding with body = -1.
   /// Allocates (construction only).
-  /// Managed stack (device.config().canopen.managed): also builds the CanopenMaster, the
-  /// SafetySupervisor (torque limits = the axes' max_torque, 0 on axes without a drive) and
-  /// configures the lifecycle (kUnconfigured → kInactive); throws std::invalid_argument for
-  /// bad settings. The LoopStatistics period is the device's control period.
+  /// Builds the hal::Device of `device`'s protocol around `device` and `bus`
+  /// (hal::make_device(): managed — CanopenMaster, SafetySupervisor, lifecycle configured to
+  /// kInactive; or minimal); throws std::invalid_argument for bad settings. The
+  /// LoopStatistics period is the device's control period.
   ControlLoop(const core::Model& model, core::Data& data, hal::Bus& bus,
               hal::InstrumentDevice& device, DeviceBinding binding = DeviceBinding::rigid(),
               const ControlLoopSettings& settings = {});
@@ -141,26 +140,22 @@ class ControlLoop {
   void begin_period(std::int64_t now_ns, std::int64_t deadline_mono_ns = -1,
                     std::int64_t woke_mono_ns = -1) noexcept;
 
-  /// Ends the period at bus time `now_ns` (after the encoders answered): reads the
-  /// frames, checks the sample and, when the device is ready (a rejected sample
-  /// keeps the last good target inside the device), sets the bound bodies'
-  /// targets — body pose = link pose · body_in_link, twist carried to the body's
-  /// origin; the attached body's into data.target, the others into
-  /// data.body_targets (paper Eq. 6) — and the prescribed joints'
-  /// values; runs one core::step; then sends the torques
-  /// τ = Σ_l J_lᵀ w_l, w_l the bound bodies' Eq. 8 feedback (data.body_feedback)
-  /// carried to their link's origin (Eq. 9) — zero torque while no bound body
-  /// is driven or this period's sample is not valid (stale, rejected, or the
-  /// device not ready).
-  ///
-  /// Managed stack, after the reads: the CanopenMaster takes drive TPDOs, heartbeats and EMCYs,
-  /// the InstrumentDevice the encoder TPDOs; sample(); CanopenMaster::update(); the
-  /// SafetySupervisor's update (encoder timeout / jump / range, heartbeat lost, node reset,
-  /// EMCY, drive fault / stuck, overruns, bus off, I/O errors) — a fault latches the safe state
-  /// in this very period —; a pending re-arm or an automatic activation; the drives' CiA 402
-  /// target from the lifecycle; step; τ saturated per axis by the supervisor
-  /// (saturate_torques: zero unless active), zeroed on a drive whose master does not allow
-  /// torque and in a period whose sample is not valid; controlword + target torque RPDOs.
+  /// Ends the period at bus time `now_ns` (after the encoders answered), in this order:
+  ///  1. read: Device::read() — every pending frame, the checked sample;
+  ///  2. supervise: Device::supervise() (managed: CanopenMaster::update(), SafetySupervisor,
+  ///     re-arm, automatic activation, the drives' CiA 402 target; a fault latches the safe
+  ///     state in this very period);
+  ///  3. targets: when the device is ready (a rejected sample keeps the last good target),
+  ///     the bound bodies' targets — body pose = link pose · body_in_link, twist carried to the
+  ///     body's origin; the attached body's into data.target, the others into
+  ///     data.body_targets (paper Eq. 6) — and the prescribed joints' values;
+  ///  4. step: one core::step;
+  ///  5. map: w_l = the bound bodies' Eq. 8 feedback (data.body_feedback) carried to their
+  ///     link's origin (Eq. 9), τ = Σ_l J_lᵀ w_l (InstrumentDevice::torques_for(); 0 while no
+  ///     bound body is driven or the device is not ready);
+  ///  6. write: Device::write(τ) — gated (zero unless this period's sample is valid, no
+  ///     shutdown, and — managed — the lifecycle active and the drive's master allowing
+  ///     torque) and clamped to ±max_torque there, once; then the torque frames.
   const PeriodReport& end_period(std::int64_t now_ns) noexcept;
 
   /// Re-arms after a latched fault or a failed start-up (for the CLI and tests): asks every
@@ -169,7 +164,7 @@ class ControlLoop {
   /// in which no cause is present; the automatic activation then follows. Never blocks.
   RearmResult rearm() noexcept;
   /// A re-arm was accepted and has not happened yet.
-  bool rearm_pending() const noexcept { return rearm_pending_; }
+  bool rearm_pending() const noexcept { return device_->rearm_pending(); }
   /// Managed stack: kInactive → kActive now (SafetySupervisor::activate()); kNotInactive in the
   /// minimal protocol.
   hal::LifecycleResult activate() noexcept;
@@ -182,18 +177,20 @@ class ControlLoop {
   /// protocol has no lifecycle: its periods send zero torque from now on. Never blocks.
   void shutdown() noexcept;
   /// shutdown() was called.
-  bool shutting_down() const noexcept { return shutting_down_; }
+  bool shutting_down() const noexcept { return device_->shutting_down(); }
   /// Managed: every drive's master reports a disabled state (not energised: switch on
   /// disabled, ready to switch on, not ready, fault); minimal protocol: true.
   bool drives_disabled() const noexcept;
   /// True for the managed stack.
-  bool managed() const noexcept { return master_ != nullptr; }
+  bool managed() const noexcept { return device_->canopen() != nullptr; }
+  /// The device (protocol, supervision, the torques sent).
+  const hal::Device& device() const noexcept { return *device_; }
   /// The CANopen master (nullptr in the minimal protocol).
-  const hal::CanopenMaster* canopen() const noexcept { return master_.get(); }
+  const hal::CanopenMaster* canopen() const noexcept { return device_->canopen(); }
   /// The CANopen master, e.g. to queue an NMT command (nullptr in the minimal protocol).
-  hal::CanopenMaster* canopen() noexcept { return master_.get(); }
+  hal::CanopenMaster* canopen() noexcept { return device_->canopen(); }
   /// The safety supervisor and lifecycle (nullptr in the minimal protocol).
-  const hal::SafetySupervisor* supervisor() const noexcept { return supervisor_.get(); }
+  const hal::SafetySupervisor* supervisor() const noexcept { return device_->supervisor(); }
   /// Timing statistics of the periods (wake-up, step, bus I/O, end-to-end, overruns).
   const LoopStatistics& statistics() const noexcept { return *stats_; }
   /// Period index (0-based end_period() count) at which the lifecycle first became active;
@@ -213,36 +210,28 @@ class ControlLoop {
   void apply_targets(const hal::DeviceSample& sample) noexcept;
   // Σ of the bound bodies' Eq. 8 wrenches per link into link_wrench_; false if no body is bound.
   bool gather_link_wrenches() noexcept;
-  bool send_feedback(std::int64_t now_ns) noexcept;
-  void end_period_minimal(std::int64_t now_ns, const hal::DeviceSample& sample) noexcept;
-  void end_period_managed(std::int64_t now_ns, const hal::DeviceSample& sample) noexcept;
+  // Step 5: link_wrench_ → tau_ (τ = Σ J_lᵀ w_l) and report_.feedback; zero when nothing maps.
+  void map_feedback() noexcept;
   void step_model() noexcept;
 
   const core::Model* model_;
   core::Data* data_;
-  hal::Bus* bus_;
-  hal::InstrumentDevice* device_;
+  hal::InstrumentDevice* instrument_;
+  std::unique_ptr<hal::Device> device_;
   DeviceBinding binding_;
   std::vector<core::Vec3> link_origin_;   // per binding: world origin of its link this period
   std::vector<core::Vec3> body_target_;   // per binding: target point of its body this period
   std::vector<int> bound_body_;           // per binding: body driven this period (-1: none)
   std::vector<std::uint8_t> explicit_bound_;  // per body: 1 if a binding names it
   std::array<core::Wrench, hal::kMaxLinks> link_wrench_{};
-  std::uint8_t sync_counter_ = 0;
+  hal::AxisVector tau_;
   LatencyHistogram step_time_;
   ControlLoopCounters counters_;
   PeriodReport report_;
   PeriodReport begin_;  // stamps of begin_period()
   ControlLoopSettings settings_;
   std::unique_ptr<LoopStatistics> stats_;
-  // Managed stack.
-  std::unique_ptr<hal::CanopenMaster> master_;
-  std::unique_ptr<hal::SafetySupervisor> supervisor_;
-  hal::AxisVector tau_;
-  bool io_error_ = false;      // a read or write returned kError since the last update
   bool last_overrun_ = false;  // the previous period overran (LoopStatistics)
-  bool rearm_pending_ = false;
-  bool shutting_down_ = false;
   std::int64_t first_active_period_ = -1;
   std::int64_t first_torque_period_ = -1;
 };

@@ -388,7 +388,7 @@ class SceneRunner {
   /// The start-up push-out and the god-object's penetration after it (RunSummary).
   void track_startup(const PeriodContacts& c) noexcept;
   /// Running maxima and sums of the step: penetrations, feedback, joints, solver, nets.
-  void accumulate_step_figures(const PeriodContacts& c) noexcept;
+  void accumulate_step_figures(const platform::PeriodReport& report, const PeriodContacts& c) noexcept;
   /// The period's trace record: in memory (trace_) and streamed (trace_writer_).
   void record(const platform::PeriodReport& report, const PeriodContacts& c) noexcept;
 

@@ -48,7 +48,8 @@ struct TraceRecord {
   double solver_residual = 0.0;     ///< Relative residual ‖r‖/‖b‖ of the implicit solve.
 };
 
-/// Builds a record from the state after a step.
+/// Builds a record from the state after a step: `report.feedback` is the feedback wrench whose
+/// torques were sent (platform::PeriodReport), `axis_torques` the torques sent.
 TraceRecord make_trace_record(const core::Data& data, int held, int tool_contacts,
                               double tool_penetration_m, double target_penetration_m,
                               const platform::PeriodReport& report,
