@@ -6,8 +6,8 @@
 
 #include "numen/core/rigid_body.hpp"
 #include "numen/core/step.hpp"
-#include "numen/hal/canopen.hpp"
-#include "numen/hal/cia402.hpp"
+#include "numen/hal/canopen/canopen.hpp"
+#include "numen/hal/canopen/cia402.hpp"
 #include "numen/platform/monotonic_clock.hpp"
 
 namespace numen::platform {

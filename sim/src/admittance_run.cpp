@@ -7,7 +7,7 @@
 #include <stdexcept>
 
 #include "numen/core/collision.hpp"
-#include "numen/hal/kinematics_factory.hpp"
+#include "numen/hal/device/kinematics_factory.hpp"
 #include "numen/platform/monotonic_clock.hpp"
 #include "numen/platform/periodic_timer.hpp"
 #include "numen/sim/simulated_instrument.hpp"

@@ -12,16 +12,16 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "numen/hal/canopen.hpp"
-#include "numen/hal/emcy.hpp"
-#include "numen/hal/heartbeat.hpp"
-#include "numen/hal/nmt.hpp"
+#include "numen/hal/canopen/canopen.hpp"
+#include "numen/hal/canopen/emcy.hpp"
+#include "numen/hal/canopen/heartbeat.hpp"
+#include "numen/hal/canopen/nmt.hpp"
 #include "numen/hal/features.hpp"
 #if NUMEN_WITH_SERIAL
-#include "numen/hal/serial_bus.hpp"
+#include "numen/hal/transport/serial_bus.hpp"
 #endif
 #if NUMEN_WITH_SOCKETCAN
-#include "numen/hal/socketcan_bus.hpp"
+#include "numen/hal/transport/socketcan_bus.hpp"
 #endif
 
 namespace numen::sim {

@@ -11,11 +11,11 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "numen/hal/cia402.hpp"
+#include "numen/hal/canopen/cia402.hpp"
 #include "numen/hal/features.hpp"
-#include "numen/hal/nmt.hpp"
+#include "numen/hal/canopen/nmt.hpp"
 #if NUMEN_WITH_SERIAL
-#include "numen/hal/serial_bus.hpp"
+#include "numen/hal/transport/serial_bus.hpp"
 #endif
 #include "numen/platform/monotonic_clock.hpp"
 #include "numen/sim/bus_spec.hpp"

@@ -15,7 +15,7 @@
 
 #include "numen/core/contact_force.hpp"
 #include "numen/core/features.hpp"
-#include "numen/hal/kinematics_factory.hpp"
+#include "numen/hal/device/kinematics_factory.hpp"
 #include "numen/sim/jigsaws.hpp"
 #include "numen/sim/scripted_path.hpp"
 #include "numen/sim/simulated_instrument.hpp"

@@ -6,7 +6,7 @@
 #include <limits>
 #include <string>
 
-#include "numen/hal/kinematics_factory.hpp"
+#include "numen/hal/device/kinematics_factory.hpp"
 #include "numen/sim/simulated_instrument.hpp"
 
 namespace numen::sim {

@@ -2,9 +2,9 @@
 
 #include "numen/sim/simulated_instrument.hpp"
 
-#include "numen/hal/canopen.hpp"
-#include "numen/hal/kinematics_factory.hpp"
-#include "numen/hal/trocar_kinematics.hpp"
+#include "numen/hal/canopen/canopen.hpp"
+#include "numen/hal/device/kinematics_factory.hpp"
+#include "numen/hal/device/trocar_kinematics.hpp"
 
 namespace numen::sim {
 

@@ -25,8 +25,8 @@
 #include <utility>
 
 #include "numen/core/data.hpp"
-#include "numen/hal/kinematics.hpp"
-#include "numen/hal/kinematics_factory.hpp"
+#include "numen/hal/device/kinematics.hpp"
+#include "numen/hal/device/kinematics_factory.hpp"
 #include "numen/sim/scene.hpp"
 #include "numen/sim/simulated_instrument.hpp"
 #include "study_accuracy_cases.hpp"

@@ -24,9 +24,9 @@
 #include <optional>
 #include <tuple>
 
-#include "numen/hal/axis.hpp"
-#include "numen/hal/canopen.hpp"
-#include "numen/hal/sample_check.hpp"
+#include "numen/hal/device/axis.hpp"
+#include "numen/hal/canopen/canopen.hpp"
+#include "numen/hal/device/sample_check.hpp"
 #include "numen/sim/run.hpp"
 #include "numen/sim/scene.hpp"
 #include "numen/sim/study_common.hpp"

@@ -1,5 +1,5 @@
 /// @file candump_fuzz.cpp
-/// libFuzzer harness of the candump log parser (hal/candump_log.hpp): every line of the input
+/// libFuzzer harness of the candump log parser (hal/transport/candump_log.hpp): every line of the input
 /// through parse_candump_line(); a line that parses must format (format_candump_line()) and
 /// parse back to the same record. Inputs of a size divisible by 8 also go whole through
 /// load_candump_log() as a file, whose only accepted failure is std::runtime_error naming the
@@ -9,7 +9,7 @@
 #include <string_view>
 
 #include "fuzz_input.hpp"
-#include "numen/hal/candump_log.hpp"
+#include "numen/hal/transport/candump_log.hpp"
 
 namespace {
 

@@ -1,5 +1,5 @@
 /// @file device_emulator_fuzz.cpp
-/// libFuzzer harness of the device side (hal/device_emulator.hpp, the devices' CANopen
+/// libFuzzer harness of the device side (hal/emulation/device_emulator.hpp, the devices' CANopen
 /// stack: NMT, SYNC, the controller's heartbeat, CiA 402 drive RPDOs with controlword and
 /// target torque, the minimal torque RPDOs): frames of nodes 1–8 and the controller (127) and
 /// others through DeviceEmulator::on_frame(), with tick() between them, for the trocar,
@@ -8,8 +8,8 @@
 #include <cstdint>
 
 #include "fuzz_input.hpp"
-#include "numen/hal/device_emulator.hpp"
-#include "numen/hal/sim_bus.hpp"
+#include "numen/hal/emulation/device_emulator.hpp"
+#include "numen/hal/transport/sim_bus.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   FuzzedDataProvider in(data, size);

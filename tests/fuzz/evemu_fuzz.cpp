@@ -1,5 +1,5 @@
 /// @file evemu_fuzz.cpp
-/// libFuzzer harness of the evemu recording parser (hal/evemu_log.hpp): every line of the
+/// libFuzzer harness of the evemu recording parser (hal/input/evemu_log.hpp): every line of the
 /// input through parse_evemu_line() (an error's column must lie on the line, an event's type
 /// in range); inputs of a size divisible by 8 also go whole through load_evemu_recording() as
 /// a file, whose only accepted failure is std::runtime_error naming the place.
@@ -8,7 +8,7 @@
 #include <string_view>
 
 #include "fuzz_input.hpp"
-#include "numen/hal/evemu_log.hpp"
+#include "numen/hal/input/evemu_log.hpp"
 
 namespace {
 void check_line(std::string_view line) {

@@ -1,5 +1,5 @@
 /// @file force_sensor_fuzz.cpp
-/// libFuzzer harness of the force/torque sensor driver (hal/force_sensor.hpp): its force and
+/// libFuzzer harness of the force/torque sensor driver (hal/device/force_sensor.hpp): its force and
 /// torque TPDOs (node 32: 0x1A0, 0x2A0), the other CANopen objects of nodes 1–8 and others
 /// through ForceSensor::on_frame(), with sample() between them. A valid sample must be finite
 /// and within the configured ranges.
@@ -7,7 +7,7 @@
 #include <cstdint>
 
 #include "fuzz_input.hpp"
-#include "numen/hal/force_sensor.hpp"
+#include "numen/hal/device/force_sensor.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   FuzzedDataProvider in(data, size);

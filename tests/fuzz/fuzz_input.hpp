@@ -18,9 +18,9 @@
 #include <string_view>
 #include <vector>
 
-#include "numen/hal/bus.hpp"
-#include "numen/hal/can_frame.hpp"
-#include "numen/hal/device_config.hpp"
+#include "numen/hal/transport/bus.hpp"
+#include "numen/hal/transport/can_frame.hpp"
+#include "numen/hal/device/device_config.hpp"
 
 namespace numen::fuzz {
 
@@ -122,7 +122,7 @@ inline hal::CanFrame next_frame(FuzzedDataProvider& in, const std::vector<std::u
 }
 
 /// The device a frame-consumer harness runs: `choice` % 3 picks the default trocar
-/// instrument, pose tracker or phantom (hal/device_config.hpp, nodes from 1), (`choice` / 3) % 2
+/// instrument, pose tracker or phantom (hal/device/device_config.hpp, nodes from 1), (`choice` / 3) % 2
 /// the managed CANopen stack (0) or the minimal protocol (1). 1 ms period.
 inline hal::DeviceConfig device_config(std::uint8_t choice) {
   hal::DeviceConfig c = choice % 3 == 0   ? hal::make_default_trocar_config(1)

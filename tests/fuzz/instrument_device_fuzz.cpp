@@ -1,5 +1,5 @@
 /// @file instrument_device_fuzz.cpp
-/// libFuzzer harness of the controller-side device driver (hal/instrument_device.hpp): frames
+/// libFuzzer harness of the controller-side device driver (hal/device/instrument_device.hpp): frames
 /// of every CANopen object of nodes 1–8 (encoder TPDOs, drive TPDOs, NMT, SYNC, EMCY,
 /// heartbeats, SDO) and others through InstrumentDevice::on_frame(), with sample(),
 /// torques_for() and MinimalDevice::write() between them, for the trocar, pose-tracker and
@@ -11,9 +11,9 @@
 #include <span>
 
 #include "fuzz_input.hpp"
-#include "numen/hal/instrument_device.hpp"
-#include "numen/hal/minimal_device.hpp"
-#include "numen/hal/sim_bus.hpp"
+#include "numen/hal/device/instrument_device.hpp"
+#include "numen/hal/device/minimal_device.hpp"
+#include "numen/hal/transport/sim_bus.hpp"
 
 namespace {
 bool finite(const numen::core::Pose& p) {

@@ -1,5 +1,5 @@
 /// @file serial_fuzz.cpp
-/// libFuzzer harness of the serial-line framing (hal/serial_frame.hpp, hal/cobs.hpp): the
+/// libFuzzer harness of the serial-line framing (hal/transport/serial_frame.hpp, hal/transport/cobs.hpp): the
 /// input is a received byte stream, fed to SerialFrameDecoder in pieces of varying size.
 /// Every frame it returns must be well formed (check_frame()), encode again and decode from
 /// that encoding to the same frame; the decoder's frame counter must match. The input, as a
@@ -12,8 +12,8 @@
 #include <vector>
 
 #include "fuzz_input.hpp"
-#include "numen/hal/cobs.hpp"
-#include "numen/hal/serial_frame.hpp"
+#include "numen/hal/transport/cobs.hpp"
+#include "numen/hal/transport/serial_frame.hpp"
 
 namespace {
 

@@ -17,7 +17,7 @@
 #include <string>
 
 #include "alloc_counter.hpp"
-#include "numen/hal/evdev_pointer.hpp"
+#include "numen/hal/input/evdev_pointer.hpp"
 
 namespace numen::hal {
 namespace {

@@ -26,7 +26,7 @@
 #include <string>
 #include <vector>
 
-#include "numen/hal/socketcan_bus.hpp"
+#include "numen/hal/transport/socketcan_bus.hpp"
 
 namespace {
 

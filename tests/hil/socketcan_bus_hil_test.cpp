@@ -21,7 +21,7 @@
 
 #include "alloc_counter.hpp"
 #include "can_test_frames.hpp"
-#include "numen/hal/socketcan_bus.hpp"
+#include "numen/hal/transport/socketcan_bus.hpp"
 
 namespace numen::hal {
 namespace {

@@ -10,9 +10,9 @@
 
 #include "alloc_counter.hpp"
 #include "numen/core/rigid_body.hpp"
-#include "numen/hal/admittance_emulator.hpp"
-#include "numen/hal/cia402.hpp"
-#include "numen/hal/sim_bus.hpp"
+#include "numen/hal/emulation/admittance_emulator.hpp"
+#include "numen/hal/canopen/cia402.hpp"
+#include "numen/hal/transport/sim_bus.hpp"
 
 namespace core = numen::core;
 namespace hal = numen::hal;

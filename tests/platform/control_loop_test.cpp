@@ -17,14 +17,14 @@
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"
 #include "numen/core/step.hpp"
-#include "numen/hal/axis.hpp"
-#include "numen/hal/canopen.hpp"
-#include "numen/hal/device_config.hpp"
-#include "numen/hal/device_emulator.hpp"
-#include "numen/hal/emcy.hpp"
-#include "numen/hal/nmt.hpp"
-#include "numen/hal/instrument_device.hpp"
-#include "numen/hal/sim_bus.hpp"
+#include "numen/hal/device/axis.hpp"
+#include "numen/hal/canopen/canopen.hpp"
+#include "numen/hal/device/device_config.hpp"
+#include "numen/hal/emulation/device_emulator.hpp"
+#include "numen/hal/canopen/emcy.hpp"
+#include "numen/hal/canopen/nmt.hpp"
+#include "numen/hal/device/instrument_device.hpp"
+#include "numen/hal/transport/sim_bus.hpp"
 
 namespace {
 
@@ -336,7 +336,7 @@ TEST(ControlLoop, PeriodsNeverAllocate) {
 // body through an offset, link "jaw_1" another body through another offset,
 // and the jaw axis imposes a prescribed revolute joint between them.
 
-#include "numen/hal/trocar_kinematics.hpp"
+#include "numen/hal/device/trocar_kinematics.hpp"
 #include "build_features.hpp"
 
 namespace {

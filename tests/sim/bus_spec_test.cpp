@@ -18,7 +18,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "numen/hal/can_filter.hpp"
+#include "numen/hal/transport/can_filter.hpp"
 #include "numen/sim/scene.hpp"
 #include "build_features.hpp"
 

@@ -34,7 +34,7 @@
 #include "temp_dir.hpp"
 #include "numen/core/data.hpp"
 #include "numen/core/features.hpp"
-#include "numen/hal/kinematics_factory.hpp"
+#include "numen/hal/device/kinematics_factory.hpp"
 #include "numen/sim/jigsaws.hpp"
 #include "numen/sim/scene.hpp"
 #include "numen/sim/simulated_instrument.hpp"

@@ -18,8 +18,8 @@
 #include <string>
 
 #include "numen/core/joint.hpp"
-#include "numen/hal/kinematics_factory.hpp"
-#include "numen/hal/trocar_kinematics.hpp"
+#include "numen/hal/device/kinematics_factory.hpp"
+#include "numen/hal/device/trocar_kinematics.hpp"
 #include "numen/sim/input_error.hpp"
 #include "numen/sim/scene.hpp"
 #include "numen/sim/simulated_instrument.hpp"

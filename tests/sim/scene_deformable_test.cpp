@@ -17,7 +17,7 @@
 
 #include "build_features.hpp"
 #include "numen/core/mesh.hpp"
-#include "numen/hal/kinematics_factory.hpp"
+#include "numen/hal/device/kinematics_factory.hpp"
 #include "numen/sim/input_error.hpp"
 #include "numen/sim/scene.hpp"
 #include "numen/sim/simulated_instrument.hpp"

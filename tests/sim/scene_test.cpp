@@ -26,7 +26,7 @@
 #include <utility>
 #include <vector>
 
-#include "numen/hal/device_config.hpp"
+#include "numen/hal/device/device_config.hpp"
 #include "numen/sim/input_error.hpp"
 #include "numen/sim/simulated_instrument.hpp"
 #include "build_features.hpp"

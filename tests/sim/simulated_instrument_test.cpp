@@ -12,10 +12,10 @@
 #include <vector>
 
 #include "alloc_counter.hpp"
-#include "numen/hal/axis.hpp"
-#include "numen/hal/canopen.hpp"
-#include "numen/hal/sim_bus.hpp"
-#include "numen/hal/trocar_kinematics.hpp"
+#include "numen/hal/device/axis.hpp"
+#include "numen/hal/canopen/canopen.hpp"
+#include "numen/hal/transport/sim_bus.hpp"
+#include "numen/hal/device/trocar_kinematics.hpp"
 #include "numen/sim/scene.hpp"
 #include "build_features.hpp"
 

@@ -10,7 +10,7 @@
 
 #include <cstdint>
 
-#include "numen/hal/can_frame.hpp"
+#include "numen/hal/transport/can_frame.hpp"
 
 namespace numen::test {
 

@@ -11,11 +11,11 @@
 #include <gtest/gtest.h>
 
 #include "kinematics_check.hpp"
-#include "numen/hal/canopen.hpp"
-#include "numen/hal/device_config.hpp"
-#include "numen/hal/instrument_device.hpp"
-#include "numen/hal/phantom_kinematics.hpp"
-#include "numen/hal/splitmix64.hpp"
+#include "numen/hal/canopen/canopen.hpp"
+#include "numen/hal/device/device_config.hpp"
+#include "numen/hal/device/instrument_device.hpp"
+#include "numen/hal/device/phantom_kinematics.hpp"
+#include "numen/hal/transport/splitmix64.hpp"
 
 namespace numen::test {
 

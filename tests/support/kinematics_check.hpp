@@ -8,8 +8,8 @@
 #include <span>
 
 #include "numen/core/types.hpp"
-#include "numen/hal/kinematics.hpp"
-#include "numen/hal/splitmix64.hpp"
+#include "numen/hal/device/kinematics.hpp"
+#include "numen/hal/transport/splitmix64.hpp"
 
 namespace numen::test {
 

@@ -10,8 +10,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "numen/hal/can_frame.hpp"
-#include "numen/hal/serial_frame.hpp"
+#include "numen/hal/transport/can_frame.hpp"
+#include "numen/hal/transport/serial_frame.hpp"
 
 namespace numen::test {
 

@@ -20,9 +20,9 @@
 
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"
-#include "numen/hal/admittance_device.hpp"
-#include "numen/hal/bus.hpp"
-#include "numen/hal/device_lifecycle.hpp"
+#include "numen/hal/device/admittance_device.hpp"
+#include "numen/hal/transport/bus.hpp"
+#include "numen/hal/canopen/device_lifecycle.hpp"
 
 namespace numen::platform {
 

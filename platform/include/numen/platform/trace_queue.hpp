@@ -20,8 +20,8 @@
 #include <string>
 #include <vector>
 
-#include "numen/hal/async_record_writer.hpp"
-#include "numen/hal/line_file.hpp"
+#include "numen/hal/transport/async_record_writer.hpp"
+#include "numen/hal/transport/line_file.hpp"
 #include "numen/platform/realtime_setup.hpp"
 
 namespace numen::platform {

@@ -16,9 +16,9 @@
 #include <cstdint>
 
 #include "numen/core/data.hpp"
-#include "numen/hal/admittance_device.hpp"
-#include "numen/hal/admittance_emulator.hpp"
-#include "numen/hal/sim_bus.hpp"
+#include "numen/hal/device/admittance_device.hpp"
+#include "numen/hal/emulation/admittance_emulator.hpp"
+#include "numen/hal/transport/sim_bus.hpp"
 #include "numen/platform/admittance_loop.hpp"
 #include "numen/platform/latency_histogram.hpp"
 #include "numen/sim/run.hpp"

@@ -9,9 +9,9 @@
 #include <string>
 #include <vector>
 
-#include "numen/hal/bus.hpp"
-#include "numen/hal/can_filter.hpp"
-#include "numen/hal/device_config.hpp"
+#include "numen/hal/transport/bus.hpp"
+#include "numen/hal/transport/can_filter.hpp"
+#include "numen/hal/device/device_config.hpp"
 
 namespace numen::sim {
 

@@ -12,10 +12,10 @@
 #include <vector>
 
 #include "numen/core/data.hpp"
-#include "numen/hal/bus_recorder.hpp"
-#include "numen/hal/instrument_device.hpp"
-#include "numen/hal/log_bus.hpp"
-#include "numen/hal/sim_bus.hpp"
+#include "numen/hal/transport/bus_recorder.hpp"
+#include "numen/hal/device/instrument_device.hpp"
+#include "numen/hal/transport/log_bus.hpp"
+#include "numen/hal/transport/sim_bus.hpp"
 #include "numen/platform/control_loop.hpp"
 #include "numen/platform/latency_histogram.hpp"
 #include "numen/platform/loop_statistics.hpp"

@@ -11,10 +11,10 @@
 #include <vector>
 
 #include "numen/core/model.hpp"
-#include "numen/hal/admittance_device.hpp"
-#include "numen/hal/admittance_emulator.hpp"
-#include "numen/hal/device_config.hpp"
-#include "numen/hal/sim_bus.hpp"
+#include "numen/hal/device/admittance_device.hpp"
+#include "numen/hal/emulation/admittance_emulator.hpp"
+#include "numen/hal/device/device_config.hpp"
+#include "numen/hal/transport/sim_bus.hpp"
 #include "numen/platform/device_binding.hpp"
 #include "numen/sim/trajectory.hpp"
 

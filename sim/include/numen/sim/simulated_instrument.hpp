@@ -10,10 +10,10 @@
 #include <cstdint>
 #include <memory>
 
-#include "numen/hal/bus.hpp"
-#include "numen/hal/device_config.hpp"
-#include "numen/hal/device_emulator.hpp"
-#include "numen/hal/kinematics.hpp"
+#include "numen/hal/transport/bus.hpp"
+#include "numen/hal/device/device_config.hpp"
+#include "numen/hal/emulation/device_emulator.hpp"
+#include "numen/hal/device/kinematics.hpp"
 #include "numen/sim/trajectory.hpp"
 
 namespace numen::sim {

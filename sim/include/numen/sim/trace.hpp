@@ -14,7 +14,7 @@
 #include <vector>
 
 #include "numen/core/data.hpp"
-#include "numen/hal/kinematics.hpp"
+#include "numen/hal/device/kinematics.hpp"
 #include "numen/platform/control_loop.hpp"
 
 namespace numen::sim {

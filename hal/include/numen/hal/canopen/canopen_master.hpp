@@ -1,0 +1,215 @@
+#pragma once
+/// @file canopen_master.hpp
+/// CanopenMaster: the controller's side of the managed CANopen stack for one device's nodes
+/// (docs/protocol.md §3 and §9). It is the NMT master and heartbeat consumer of the nodes,
+/// the controller's heartbeat producer, the EMCY consumer and the CiA 402 master of each drive:
+///
+///   start-up (once, and again on restart_startup()):
+///     reset communication (000#8200) → every node's boot-up message (0x700 + id, 00)
+///     → start remote node (000#0100) → every node heard in operational → kOperational.
+///     NMT commands a node has not acted on are repeated to that node every startup_retry_ms;
+///     a node that boots again while being started is started again; past startup_timeout_ms
+///     the start-up has failed (kFailed, with the first missing node).
+///   every period:
+///     begin_period(): NMT commands due, the controller's heartbeat when due;
+///     on_frame(): drive TPDOs (statusword, torque actual) by their static mapping, heartbeats
+///       (HeartbeatMonitor; a node's frames reach it only from its boot-up after the reset on,
+///       so earlier heartbeats cannot read as an unexpected reset), EMCY (EmcyLog);
+///     update(): heartbeat consumers polled, start-up progress, each Cia402Master updated with
+///       its drive's newest statusword;
+///     write_drive_rpdos(): controlword (from the Cia402Master) + the target torque it is given
+///       in each drive's RPDO mapping (gated and clamped before, by hal::Device::write(), which
+///       asks drive_outputs()[i].torque_allowed).
+///
+/// Construction allocates and may throw std::invalid_argument (config not managed or invalid);
+/// every other member is noexcept, allocation free, lock free and never blocks.
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "numen/hal/transport/bus.hpp"
+#include "numen/hal/transport/can_frame.hpp"
+#include "numen/hal/canopen/cia402.hpp"
+#include "numen/hal/device/device_config.hpp"
+#include "numen/hal/canopen/emcy.hpp"
+#include "numen/hal/canopen/heartbeat.hpp"
+#include "numen/hal/device/kinematics.hpp"
+#include "numen/hal/canopen/nmt.hpp"
+#include "numen/hal/canopen/pdo_mapping.hpp"
+
+namespace numen::hal {
+
+/// Phases of the NMT start-up.
+enum class StartupPhase : std::uint8_t {
+  kResetCommunication,  ///< Reset communication (all nodes) is sent at the next begin_period().
+  kWaitBootUp,          ///< Waiting for every node's boot-up message.
+  kStartNodes,          ///< Start remote node (all nodes) is sent at the next begin_period().
+  kWaitOperational,     ///< Waiting for every node's heartbeat to report operational.
+  kOperational,         ///< Every node was heard operational: the start-up is complete.
+  kFailed,              ///< startup_timeout_ms passed first (StartupReport says which node).
+};
+
+/// Short English name of a StartupPhase (static string), e.g. "wait boot-up".
+const char* to_string(StartupPhase phase) noexcept;
+
+/// What the last start-up did.
+struct StartupReport {
+  StartupPhase phase = StartupPhase::kResetCommunication;  ///< Current phase.
+  std::uint64_t began_period = 0;  ///< update() index of the period the start-up began in.
+  std::int64_t began_ns = 0;       ///< Time the reset communication was sent, ns.
+  std::uint64_t done_period = 0;   ///< update() index at which kOperational / kFailed was reached.
+  std::int64_t done_ns = 0;        ///< Its time, ns.
+  std::uint8_t missing_node = 0;   ///< kFailed: the first node not booted / not operational.
+  std::uint32_t attempts = 0;      ///< Start-ups begun (1 after the first).
+};
+
+/// Counters of a CanopenMaster since construction.
+struct CanopenMasterCounters {
+  std::uint64_t nmt_sent = 0;         ///< NMT commands written with kOk.
+  std::uint64_t nmt_retries = 0;      ///< NMT commands repeated to a node during a start-up.
+  std::uint64_t heartbeats_sent = 0;  ///< Controller heartbeats written with kOk.
+  std::uint64_t drive_tpdos = 0;      ///< Drive TPDOs unpacked.
+  std::uint64_t drive_tpdos_malformed =
+      0;                                 ///< Frames on a drive TPDO COB-ID refused by its mapping.
+  std::uint64_t rpdos_sent = 0;          ///< Drive RPDOs written with kOk.
+  std::uint64_t frames_before_boot = 0;  ///< Heartbeats of a node dropped while waiting for its
+                                         ///< boot-up after the reset.
+  std::uint64_t unknown_nodes = 0;       ///< Heartbeats of nodes the device does not have.
+  std::uint64_t write_would_block = 0;   ///< Writes refused (queue full).
+  std::uint64_t write_errors = 0;        ///< Writes that failed (kError).
+};
+
+/// Most nodes of one device (one per axis at most).
+inline constexpr std::size_t kMaxDeviceNodes = static_cast<std::size_t>(kMaxAxes);
+
+/// The controller's side of the managed CANopen stack of one device (see the file comment).
+/// Not thread safe: one control loop owns it.
+class CanopenMaster {
+ public:
+  /// Builds the nodes, heartbeat consumers (timeout per node), drive mappings and CiA 402
+  /// masters from `config` (validated; must be managed). `period_ns` (> 0) is the control
+  /// period, used to turn the start-up times into periods. Throws std::invalid_argument naming
+  /// the device otherwise.
+  CanopenMaster(const DeviceConfig& config, std::int64_t period_ns,
+                const Cia402MasterSettings& drive_settings = {});
+
+  /// Start of a period at `now_ns`: the start-up's NMT command due (reset communication, start,
+  /// repeats), a command queued by request_nmt(), and the controller's heartbeat when due
+  /// (producer started at the first call). Write failures are counted; returns kError if a write
+  /// failed, else kWouldBlock if one was refused, else kOk.
+  IoStatus begin_period(std::int64_t now_ns, Bus& bus) noexcept;
+
+  /// Takes one received frame if it is a drive TPDO, a heartbeat / boot-up message (0x701–
+  /// 0x77F) or an EMCY (0x081–0x0FF) on its 11-bit identifier (can_frame.hpp, frame
+  /// acceptance); returns false for any other frame (e.g. an encoder TPDO, for the
+  /// InstrumentDevice), and for every error report and 29-bit frame.
+  bool on_frame(const CanFrame& frame) noexcept;
+
+  /// After the period's frames, at `now_ns`: polls the heartbeat consumers, advances the
+  /// start-up, updates every Cia402Master with its drive's newest statusword.
+  void update(std::int64_t now_ns) noexcept;
+
+  /// Sets the CiA 402 target of every drive (SafetySupervisor::drive_target()).
+  void request_drives(Cia402Target target) noexcept;
+  /// Asks every drive's master for a fault reset (Cia402Master::request_fault_reset()).
+  void request_fault_reset() noexcept;
+
+  /// Writes each drive's RPDO stamped `now_ns`: the controlword of its master's last update(),
+  /// target torque per_mille[axis] as given (0 for an axis past the span; the caller gated it
+  /// with drive_outputs()[i].torque_allowed, see hal::Device::write()); modes of operation (if
+  /// mapped) 10. Returns as begin_period().
+  IoStatus write_drive_rpdos(std::int64_t now_ns, std::span<const std::int16_t> per_mille,
+                             Bus& bus) noexcept;
+
+  /// Queues an NMT command for `node_id` (0 = all nodes), sent at the next begin_period(). One
+  /// command is queued at a time; false if one is already queued or the command is invalid.
+  bool request_nmt(NmtCommand command, std::uint8_t node_id) noexcept;
+  /// Runs the start-up again from reset communication (after a failure, or to bring back nodes
+  /// that reset or were stopped).
+  void restart_startup() noexcept;
+
+  /// True once every node has been heard operational (phase kOperational).
+  bool operational() const noexcept { return startup_.phase == StartupPhase::kOperational; }
+  /// True if every node's newest heartbeat reports operational and it is alive.
+  bool all_nodes_operational() const noexcept;
+  /// The start-up report.
+  const StartupReport& startup() const noexcept { return startup_; }
+  /// The heartbeat consumers, one per node (SafetyInputs::heartbeats).
+  std::span<const HeartbeatConsumer> heartbeats() const noexcept { return monitor_.consumers(); }
+  /// The heartbeat monitor.
+  const HeartbeatMonitor<kMaxDeviceNodes>& monitor() const noexcept { return monitor_; }
+  /// The EMCY log.
+  const EmcyLog<>& emcy_log() const noexcept { return emcy_; }
+  /// Each drive's Cia402Master output of the last update() (SafetyInputs::drives).
+  std::span<const Cia402MasterOutput> drive_outputs() const noexcept {
+    return {outputs_.data(), drives_.size()};
+  }
+  /// Number of drives.
+  std::size_t num_drives() const noexcept { return drives_.size(); }
+  /// Axis of drive `i` (i < num_drives()).
+  int drive_axis(std::size_t i) const noexcept { return drives_[i].axis; }
+  /// Newest statusword of drive `i` (0 before its first TPDO).
+  std::uint16_t drive_statusword(std::size_t i) const noexcept { return drives_[i].statusword; }
+  /// Newest torque actual value of drive `i`, per mille (0 if not mapped / not received).
+  std::int16_t drive_torque_actual(std::size_t i) const noexcept {
+    return drives_[i].torque_actual;
+  }
+  /// The master of drive `i`.
+  const Cia402Master& drive_master(std::size_t i) const noexcept { return drives_[i].master; }
+  /// Node ids, in first-axis order.
+  std::span<const std::uint8_t> node_ids() const noexcept { return {node_ids_.data(), num_nodes_}; }
+  /// update() calls so far.
+  std::uint64_t periods() const noexcept { return periods_; }
+  /// Counters.
+  const CanopenMasterCounters& counters() const noexcept { return counters_; }
+
+ private:
+  struct NodeState {
+    bool booted = false;   // boot-up received since the last reset communication
+    bool restart = false;  // booted again while being started: start it again
+    std::int64_t last_command_ns = 0;
+  };
+  struct Drive {
+    int axis = 0;
+    std::uint32_t rpdo_cob_id = 0;
+    std::uint32_t tpdo_cob_id = 0;
+    PdoMapping rpdo;
+    PdoMapping tpdo;
+    int cw_index = -1;      // in rpdo
+    int torque_index = -1;  // in rpdo
+    int mode_index = -1;    // in rpdo, -1 if not mapped
+    int sw_index = -1;      // in tpdo
+    int actual_index = -1;  // in tpdo, -1 if not mapped
+    Cia402Master master;
+    std::uint16_t statusword = 0;
+    std::int16_t torque_actual = 0;
+  };
+
+  IoStatus send_nmt(NmtCommand command, std::uint8_t node, std::int64_t now_ns, Bus& bus) noexcept;
+  IoStatus send(const CanFrame& frame, Bus& bus, std::uint64_t* sent) noexcept;
+  int node_index(std::uint8_t node_id) const noexcept;
+  void finish(StartupPhase phase, std::uint8_t missing, std::int64_t now_ns) noexcept;
+
+  std::int64_t retry_ns_ = 0;
+  std::int64_t timeout_ns_ = 0;
+  std::array<std::uint8_t, kMaxDeviceNodes> node_ids_{};
+  std::array<NodeState, kMaxDeviceNodes> nodes_{};
+  std::size_t num_nodes_ = 0;
+  std::vector<Drive> drives_;
+  std::array<Cia402MasterOutput, kMaxDeviceNodes> outputs_{};
+  HeartbeatMonitor<kMaxDeviceNodes> monitor_;
+  HeartbeatProducer producer_;
+  EmcyLog<> emcy_;
+  StartupReport startup_;
+  bool producer_started_ = false;
+  bool nmt_queued_ = false;
+  NmtMessage queued_{};
+  std::int64_t last_now_ns_ = 0;
+  std::uint64_t periods_ = 0;
+  CanopenMasterCounters counters_;
+};
+
+}  // namespace numen::hal

@@ -1,0 +1,179 @@
+#pragma once
+/// @file device_config.hpp
+/// DeviceConfig: everything the scene says about one tracked instrument on the bus — its kind,
+/// its axes (CANopen ids, scaling, limits, drives), the sample checks' limits, the tool offset
+/// and the kind's geometry. Built at load time (may allocate, may throw), read-only afterwards.
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "numen/core/types.hpp"
+#include "numen/hal/device/axis.hpp"
+#include "numen/hal/canopen/pdo_mapping.hpp"
+#include "numen/hal/device/phantom_kinematics.hpp"
+#include "numen/hal/device/pose_tracker_kinematics.hpp"
+#include "numen/hal/device/trocar_kinematics.hpp"
+
+namespace numen::hal {
+
+/// Which kinematics an instrument has.
+enum class DeviceKind : std::uint8_t {
+  kTrocarInstrument,  ///< Laparoscopic tool through a trocar: 5 axes (TrocarKinematics).
+  kPoseTracker,       ///< 6-DOF hand controller / pose tracker: 6 axes (PoseTrackerKinematics).
+  kPhantom,           ///< PHANToM-like haptic arm: 6 axes, 3 driven (PhantomKinematics).
+};
+
+/// Short English name of a DeviceKind (static string): "trocar instrument", "pose tracker",
+/// "phantom"; "unknown" for a value outside the enum.
+const char* to_string(DeviceKind kind) noexcept;
+
+/// Number of axes a device kind has (5 trocar instrument, 6 pose tracker, 6 phantom); 0 for a
+/// value outside the enum.
+int expected_axis_count(DeviceKind kind) noexcept;
+
+/// Base COB-ID of TPDO2 (0x280 + node id; CiA 301 predefined connection set): numen's default
+/// drive TPDO (statusword 0x6041 + torque actual value 0x6077) of a driven axis's node.
+inline constexpr std::uint32_t kTpdo2BaseCobId = 0x280;
+
+/// CANopen communication of one axis's node in the managed stack (docs/protocol.md §9): which
+/// node it is, its heartbeat, and its static PDO mappings (CiA 301 §7.4.8; the COB-IDs of the
+/// encoder TPDO and the drive RPDO are AxisConfig::encoder_cob_id / drive_cob_id).
+/// Several axes may share a node (a multi-axis module); they must then agree on the heartbeat.
+struct CanopenAxisConfig {
+  /// CANopen node id, 1–127.
+  std::uint8_t node_id = 0;
+  /// The node's producer heartbeat time (object 1017h), ms, >= 1.
+  std::uint16_t heartbeat_period_ms = 10;
+  /// The controller's consumer heartbeat time for this node (object 1016h on the controller),
+  /// ms; 0 = 3 × heartbeat_period_ms. Must exceed heartbeat_period_ms.
+  std::uint16_t heartbeat_timeout_ms = 0;
+  /// Driven axis: COB-ID of the drive TPDO (sent by the drive at every SYNC), default 0x280 +
+  /// node id (TPDO2). 0 for an axis without a drive.
+  std::uint32_t drive_tpdo_cob_id = 0;
+  /// Encoder TPDO mapping (0x1A00): must map the position value 0x6004 (or the position actual
+  /// value 0x6064) as 32 bits; the other known objects may be mapped and are ignored.
+  std::vector<PdoEntry> encoder_tpdo;
+  /// Drive RPDO mapping (0x1600), driven axes only: must map controlword 0x6040 and target
+  /// torque 0x6071; may map modes of operation 0x6060 (sent as 10, cst).
+  std::vector<PdoEntry> drive_rpdo;
+  /// Drive TPDO mapping (0x1A01), driven axes only: must map statusword 0x6041; may map torque
+  /// actual value 0x6077, modes of operation display 0x6061, position actual value 0x6064.
+  std::vector<PdoEntry> drive_tpdo;
+
+  /// The consumer heartbeat time in effect, ms: heartbeat_timeout_ms or 3 × the period.
+  std::uint32_t effective_heartbeat_timeout_ms() const noexcept {
+    return heartbeat_timeout_ms != 0 ? heartbeat_timeout_ms : 3u * heartbeat_period_ms;
+  }
+};
+
+/// How the controller talks CANopen to the device (scene section `[device.canopen]`).
+struct CanopenConfig {
+  /// true: the managed stack — NMT start-up, heartbeats both ways, EMCY, CiA 402 drives in cst
+  /// with controlword + target torque RPDOs and statusword TPDOs, the device lifecycle and the
+  /// safety supervisor (docs/protocol.md §3, §9; docs/safety.md). false: the minimal protocol
+  /// (SYNC, 4-byte encoder TPDOs, 2-byte torque RPDOs, no start-up) for encoders configured to
+  /// start on their own and drives without a CiA 402 state machine.
+  bool managed = true;
+  /// The controller's own node id (its heartbeat COB-ID is 0x700 + this), 1–127, not used by
+  /// the device.
+  std::uint8_t controller_node_id = 127;
+  /// The controller's producer heartbeat time, ms, >= 1.
+  std::uint16_t controller_heartbeat_period_ms = 10;
+  /// The drives' consumer heartbeat time for the controller (their object 1016h), ms; 0 = 3 ×
+  /// controller_heartbeat_period_ms. A drive that does not hear the controller for this long
+  /// faults on its own (EMCY 0x8130) and applies zero torque.
+  std::uint16_t drive_heartbeat_timeout_ms = 0;
+  /// Time the start-up (reset communication → boot-ups → start → every node operational) may
+  /// take, ms, >= 1; beyond it the start-up has failed (reported with the first missing node).
+  std::uint32_t startup_timeout_ms = 1000;
+  /// Interval between repeats of an NMT command a node has not acted on during the start-up,
+  /// ms, >= 1 (a lost frame is retried, a node that reset is started again).
+  std::uint32_t startup_retry_ms = 50;
+  /// One entry per DeviceConfig::axes entry, same order (managed stack only; ignored otherwise).
+  std::vector<CanopenAxisConfig> axes;
+
+  /// The drives' consumer heartbeat time in effect, ms.
+  std::uint32_t effective_drive_heartbeat_timeout_ms() const noexcept {
+    return drive_heartbeat_timeout_ms != 0 ? drive_heartbeat_timeout_ms
+                                           : 3u * controller_heartbeat_period_ms;
+  }
+};
+
+/// The default CANopen entry of an axis on node `node_id`: heartbeat 10 ms (timeout 30 ms), the
+/// typical mappings (encoder_tpdo_mapping(); with a drive: drive_rpdo_mapping(),
+/// drive_tpdo_mapping() and drive TPDO COB-ID 0x280 + node). No validation.
+CanopenAxisConfig make_canopen_axis(std::uint8_t node_id, bool has_drive);
+
+/// Configuration of one instrument. Checked by validate().
+struct DeviceConfig {
+  /// Name used in error messages and traces.
+  std::string name = "device";
+  /// Kinematic kind; fixes the number and meaning of the axes.
+  DeviceKind kind = DeviceKind::kTrocarInstrument;
+  /// Axes in the kind's order (TrocarKinematics::kPivotX.., PoseTrackerKinematics::kX..,
+  /// PhantomKinematics::kTurret..).
+  std::vector<AxisConfig> axes;
+  /// Control period, s, > 0 (used for the default max sample age).
+  double control_period_s = 1e-3;
+  /// Oldest acceptable encoder sample, s (now − frame timestamp); unset = 3 control periods.
+  std::optional<double> max_sample_age_s;
+  /// Allowance of the jump check on top of max_speed · Δt, encoder counts, >= 0
+  /// (quantisation and jitter).
+  double jump_tolerance_counts = 2.0;
+  /// Pose of the controlled frame in the tool frame (tool tip frame for a trocar instrument,
+  /// tracked frame for a pose tracker, stylus frame for a phantom). Identity: the controlled
+  /// frame is the tool frame.
+  core::Pose tool_offset;
+  /// Trocar point and frame in world (kTrocarInstrument only).
+  TrocarGeometry trocar;
+  /// Tracker base frame in world (kPoseTracker only).
+  PoseTrackerGeometry tracker;
+  /// Arm base frame in world and link lengths (kPhantom only).
+  PhantomGeometry phantom;
+  /// CANopen communication (managed stack or minimal protocol).
+  CanopenConfig canopen;
+
+  /// The max sample age in effect, s: max_sample_age_s or 3 · control_period_s.
+  double effective_max_sample_age_s() const noexcept {
+    return max_sample_age_s ? *max_sample_age_s : 3.0 * control_period_s;
+  }
+};
+
+/// Throws std::invalid_argument with a message naming the device and the field if `config`
+/// is invalid: wrong axis count for the kind, an invalid axis (validate_axis()), COB-IDs
+/// outside 0x001–0x7FF, equal to 0x080 (SYNC) or used twice, non-positive period or age,
+/// negative jump tolerance, non-finite positions, non-unit quaternions (|‖q‖ − 1| > 1e-6),
+/// phantom link lengths not finite and > 0. Only the geometry of the config's kind is checked.
+/// With canopen.managed also: one canopen.axes entry per axis; node ids 1–127 and not the
+/// controller's; heartbeat periods >= 1 ms and timeouts above them (axes of one node agreeing);
+/// drive TPDO COB-ID present exactly on driven axes; every PDO COB-ID (encoder, drive RPDO,
+/// drive TPDO) used once and outside NMT 0x000, SYNC/EMCY 0x080–0x0FF and heartbeat
+/// 0x700–0x77F; mappings valid (PdoMapping) and carrying their required objects (see
+/// CanopenAxisConfig); start-up times >= 1 ms. Messages name the device, axis and field.
+void validate(const DeviceConfig& config);
+
+/// A trocar instrument with typical trainer values; nodes first_node_id .. +4 for
+/// (pivot_x, pivot_y, depth, roll, jaw); drives on pivot_x, pivot_y and depth (0x200 + node).
+/// Resolutions: 2^14 counts/rev on angles, 10 µm on depth. Throws if the ids exceed 127.
+/// The make_default_* configs use the managed CANopen stack with make_canopen_axis() per axis.
+DeviceConfig make_default_trocar_config(std::uint8_t first_node_id = 1);
+
+/// A non-haptic pose tracker with typical values; nodes first_node_id .. +5 for
+/// (x, y, z, yaw, pitch, roll), 1 µm and 1 µrad resolution, no drives. Throws if the ids
+/// exceed 127.
+DeviceConfig make_default_pose_tracker_config(std::uint8_t first_node_id = 1);
+
+/// A PHANToM Premium 1.0-like haptic arm (l1 = l2 = 0.14 m, base at the world origin); nodes
+/// first_node_id .. +5 for (turret, shoulder, elbow, gimbal_yaw, gimbal_pitch, stylus_roll);
+/// drives (0x200 + node) on turret, shoulder and elbow only, as on a PHANToM (rated 0.25 N·m,
+/// saturated at 1.0 N·m: ~7 N at the 0.14 m gimbal); 2^16 counts/rev on the driven axes
+/// (motor encoders through the capstan), 2^14 on the gimbal. Plausibility ranges around the
+/// "L" home posture q = 0: turret ±1.0 rad, shoulder ±0.8 rad, elbow −1.0..0.7 rad (the
+/// gimbal centre stays in front of the turret axis), gimbal yaw ±2.6 rad, gimbal pitch
+/// ±1.2 rad (clear of the gimbal lock), stylus roll wraps; max speeds 10 rad/s on the arm,
+/// 30 rad/s on the gimbal. Throws if the ids exceed 127.
+DeviceConfig make_default_phantom_config(std::uint8_t first_node_id = 1);
+
+}  // namespace numen::hal

@@ -1,0 +1,196 @@
+#pragma once
+/// @file instrument_device.hpp
+/// InstrumentDevice: the controller-side driver of one tracked instrument on a CAN bus. Each
+/// control period it turns the encoder TPDOs received since the last period into a checked
+/// target pose and twist for the god-object (paper Eq. 2 inputs) — one per link of an
+/// articulated instrument (paper Eq. 6) — and maps feedback wrenches to axis torques
+/// τ = Σ_l J_lᵀ w_l (paper Eq. 8 output, virtual coupling) at the sample's axis values. It
+/// sends nothing: hal::Device (device.hpp) owns the bus side — it gates, clamps and encodes τ
+/// in the protocol's RPDOs.
+/// Construction allocates and may throw; every other member is noexcept, allocation free,
+/// lock free and never blocks. See docs/protocol.md for the order of one period.
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <vector>
+
+#include "numen/core/types.hpp"
+#include "numen/hal/transport/bus.hpp"
+#include "numen/hal/transport/can_frame.hpp"
+#include "numen/hal/device/device_config.hpp"
+#include "numen/hal/device/kinematics.hpp"
+#include "numen/hal/canopen/pdo_mapping.hpp"
+#include "numen/hal/device/sample_check.hpp"
+
+namespace numen::hal {
+
+/// The outcome of one InstrumentDevice::sample().
+struct DeviceSample {
+  /// True if every axis has an accepted value and no check failed this period: the target is
+  /// fresh and plausible.
+  bool valid = false;
+  /// True once every axis has had at least one accepted value (the target is meaningful; it
+  /// may be held from an earlier period if `valid` is false).
+  bool ready = false;
+  /// Controlled frame's target pose, world. Always finite; built from the last accepted axis
+  /// values (0 clamped into [min, max] for an axis without one).
+  core::Pose target;
+  /// Controlled frame's target twist, world: J(q) q̇. q̇ of an axis comes from its last two
+  /// accepted values; it is 0 before two values and while its held value is stale.
+  core::Twist twist;
+  /// Number of links of the kinematics (Kinematics::num_links(), 1..kMaxLinks): entries
+  /// [0, num_links) of link_targets and link_twists are valid, the others are left default.
+  int num_links = 1;
+  /// Target pose of each link, world: Kinematics::link_pose(l, q), from the same held axis
+  /// values as `target`. link_targets[0] == target.
+  std::array<core::Pose, kMaxLinks> link_targets{};
+  /// Target twist of each link, world, linear part at the link's origin: J_l(q) q̇ with
+  /// J_l = Kinematics::link_jacobian(l, q). link_twists[0] == twist.
+  std::array<core::Twist, kMaxLinks> link_twists{};
+  /// Axis values used for `target`, m or rad (n entries).
+  AxisVector q;
+  /// Axis rates used for `twist`, m/s or rad/s (n entries).
+  AxisVector qdot;
+  /// Union of the failed checks over all axes this period (SampleFault bits).
+  FaultMask faults = SampleFault::kNone;
+  /// Failed checks per axis this period (entries >= n are 0).
+  std::array<FaultMask, kMaxAxes> axis_faults{};
+  /// Per axis: sample() calls since the axis last accepted a value — 0 if it accepted one in
+  /// this call; counted from construction / reset() while it has none (saturates at 2³²−1).
+  /// An axis holding a not-yet-stale value still counts up: this is the encoder watchdog's
+  /// input (SafetyInputs::periods_since_fresh). Entries >= n are 0.
+  std::array<std::uint32_t, kMaxAxes> periods_since_accepted{};
+  /// `now_ns` given to sample().
+  std::int64_t time_ns = 0;
+};
+
+/// Monotonic counters of an InstrumentDevice since construction or reset_counters().
+struct DeviceCounters {
+  // Frames seen by on_frame().
+  std::uint64_t frames_decoded = 0;       ///< Encoder TPDOs decoded.
+  std::uint64_t frames_wrong_length = 0;  ///< TPDOs of an axis with a wrong length.
+  /// Remote requests and CAN FD frames on an axis's 11-bit COB-ID (the axis is marked
+  /// malformed for the period).
+  std::uint64_t frames_not_data = 0;
+  /// Frames whose identifier belongs to no axis, 29-bit frames included (even with the number
+  /// of an axis's COB-ID: a different identifier).
+  std::uint64_t frames_unknown_id = 0;
+  /// Controller error reports (CanFlag::kErrorFrame) given to on_frame(): ignored, whatever
+  /// their error-class bits read; the bus state is the transport's (Bus::state()).
+  std::uint64_t frames_error = 0;
+  // Samples (one per axis per sample() call).
+  std::uint64_t samples = 0;                ///< sample() calls.
+  std::uint64_t samples_valid = 0;          ///< sample() calls that returned valid.
+  std::uint64_t values_accepted = 0;        ///< Axis values accepted.
+  std::uint64_t values_rejected = 0;        ///< Axis-periods with a failed check.
+  std::uint64_t rejected_malformed = 0;     ///< ... of which the latest frame was malformed.
+  std::uint64_t rejected_non_finite = 0;    ///< ... non-finite value.
+  std::uint64_t rejected_out_of_range = 0;  ///< ... outside [min, max].
+  std::uint64_t rejected_stale = 0;         ///< ... stale (including periods with no frame).
+  std::uint64_t rejected_jump = 0;          ///< ... implausible jump.
+  // Mappings (torques_for()).
+  std::uint64_t commands = 0;             ///< torques_for() calls.
+  std::uint64_t commands_zero = 0;        ///< ... that returned false (not ready, non-finite).
+  std::uint64_t non_finite_wrenches = 0;  ///< ... given a NaN/inf wrench.
+  /// torques_for() calls given more wrenches than the instrument has links (the extra
+  /// entries were ignored).
+  std::uint64_t extra_link_wrenches = 0;
+};
+
+/// Controller-side driver of one instrument: encoder TPDOs in, checked target out; link
+/// wrenches in, axis torques out. Not thread safe (one control loop owns it).
+class InstrumentDevice {
+ public:
+  /// Takes the configuration and the kinematics. Throws std::invalid_argument if
+  /// validate(config) throws, `kinematics` is null, its num_axes() differs from
+  /// config.axes.size() or its num_links() is outside 1..kMaxLinks.
+  InstrumentDevice(DeviceConfig config, std::unique_ptr<const Kinematics> kinematics);
+  /// Same with make_kinematics(config).
+  explicit InstrumentDevice(DeviceConfig config);
+
+  /// Handles one received frame: an encoder TPDO of an axis becomes that axis's pending
+  /// sample (the newest frame of an axis wins); a malformed one marks the axis malformed
+  /// for this period. Minimal protocol: the 4-byte position PDO (decode_position_pdo());
+  /// managed stack (config.canopen.managed): the axis's static encoder TPDO mapping
+  /// (PdoMapping::unpack(), exact length), position from 0x6004 or 0x6064. Acceptance
+  /// (can_frame.hpp): a frame belongs to an axis if it is on the axis's 11-bit COB-ID
+  /// (has_standard_id()); a remote or CAN FD frame there is malformed. Returns true if the
+  /// frame belongs to an axis. Other frames are counted as unknown (29-bit ones too) and
+  /// error reports as frames_error; neither touches an axis.
+  bool on_frame(const CanFrame& frame) noexcept;
+
+  /// Reads up to `max_frames` frames from `bus` and passes each to on_frame(). Returns the
+  /// number read; stops at kWouldBlock or kError.
+  int poll(Bus& bus, int max_frames = 256) noexcept;
+
+  /// Checks the pending samples at time `now_ns` (bus clock), accepts or rejects each axis,
+  /// and returns the target. See DeviceSample and check_sample().
+  DeviceSample sample(std::int64_t now_ns) noexcept;
+
+  /// The map from link wrenches to axis torques (paper Eq. 8 per body, mapped by virtual
+  /// work): τ = Σ_l J_lᵀ [force_l; torque_l] into `tau` (n entries, N·m or N), with
+  /// w_l = link_wrenches[l] in world coordinates about link l's origin and
+  /// J_l = Kinematics::link_jacobian(l, q) at the axis values of the last sample(). Links
+  /// without an entry (l >= link_wrenches.size()) get a zero wrench; entries beyond
+  /// num_links() are ignored and counted (extra_link_wrenches). No gate and no clamp (that is
+  /// hal::Device::write()); every axis gets its Σ, with a drive or not. Returns false and sets
+  /// `tau` to 0 before the device is ready or if a used wrench is not finite (counted once in
+  /// non_finite_wrenches).
+  bool torques_for(std::span<const core::Wrench> link_wrenches, AxisVector& tau) noexcept;
+
+  /// The last sample() result (default-constructed with q = 0 before the first call).
+  const DeviceSample& last_sample() const noexcept { return last_sample_; }
+  /// Counters.
+  const DeviceCounters& counters() const noexcept { return counters_; }
+  /// Zeroes the counters.
+  void reset_counters() noexcept { counters_ = DeviceCounters{}; }
+  /// Forgets every accepted and pending value (e.g. after re-homing); the next samples are
+  /// not ready until each axis has a new accepted value.
+  void reset() noexcept;
+
+  /// The configuration (validated).
+  const DeviceConfig& config() const noexcept { return config_; }
+  /// The kinematics.
+  const Kinematics& kinematics() const noexcept { return *kinematics_; }
+  /// Number of axes n.
+  int num_axes() const noexcept { return n_; }
+  /// Number of links (Kinematics::num_links(), 1..kMaxLinks).
+  int num_links() const noexcept { return num_links_; }
+
+ private:
+  struct AxisState {
+    bool pending = false;    // a well-formed frame arrived since the last sample()
+    bool malformed = false;  // the newest frame since the last sample() was malformed
+    // Range faults of values overwritten by a newer frame before sample() read them: a bad
+    // value is a fault even if a good one follows within the period (docs/safety.md).
+    FaultMask superseded = SampleFault::kNone;
+    std::int32_t pending_counts = 0;
+    std::int64_t pending_stamp_ns = 0;
+    bool has_value = false;  // an accepted value exists
+    bool has_rate = false;   // two accepted values exist
+    AcceptedValue last;      // last accepted value
+    double rate = 0.0;       // from the last two accepted values, units/s
+    // sample() calls since the last accepted value (DeviceSample::periods_since_accepted).
+    std::uint32_t periods_since_accepted = 0;
+  };
+
+  // Link targets, twists and Jacobians of `s` from s.q, s.qdot (link 0 from forward/jacobian).
+  void evaluate_links(DeviceSample& s) noexcept;
+
+  DeviceConfig config_;
+  std::unique_ptr<const Kinematics> kinematics_;
+  std::vector<PdoMapping> encoder_maps_;          // managed: one per axis
+  std::array<int, kMaxAxes> encoder_position_{};  // managed: index of the position entry
+  int n_ = 0;
+  int num_links_ = 1;
+  std::array<AxisCheckLimits, kMaxAxes> limits_{};
+  std::array<AxisState, kMaxAxes> axes_{};
+  AxisVector hold_;  // value used before an axis's first accepted value
+  std::array<Jacobian, kMaxLinks> link_jacobians_{};  // at last_sample_.q; [0]: jacobian()
+  DeviceSample last_sample_;
+  DeviceCounters counters_;
+};
+
+}  // namespace numen::hal

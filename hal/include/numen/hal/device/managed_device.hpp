@@ -1,0 +1,69 @@
+#pragma once
+/// @file managed_device.hpp
+/// ManagedDevice: hal::Device for the managed CANopen stack (DeviceConfig::canopen.managed;
+/// docs/protocol.md §9–§16, docs/safety.md). It owns the CanopenMaster (NMT start-up,
+/// heartbeats both ways, EMCY log, one Cia402Master per drive) and the SafetySupervisor with
+/// its DeviceLifecycle, configured at construction (kUnconfigured → kInactive). One period:
+///   begin_period: SYNC, the NMT command due, the controller heartbeat;
+///   read:         drive TPDOs, heartbeats, EMCY → CanopenMaster; encoder TPDOs →
+///                 InstrumentDevice; the sample;
+///   supervise:    CanopenMaster::update(); SafetySupervisor::update() (encoder timeout /
+///                 jump / range, heartbeat lost, node reset, EMCY, drive fault / stuck,
+///                 overruns, bus off, I/O errors: a fault latches the safe state in this very
+///                 period); a pending re-arm; the automatic activation; the drives' CiA 402
+///                 target from the lifecycle;
+///   write:        Device::write() gates (torque_allowed(): lifecycle kActive and the axis's
+///                 drive master allows torque) and clamps; then each drive's RPDO
+///                 (controlword + that target torque).
+
+#include <array>
+#include <cstdint>
+#include <memory>
+
+#include "numen/hal/device/device.hpp"
+#include "numen/hal/device/safety_supervisor.hpp"
+
+namespace numen::hal {
+
+/// The managed CANopen stack behind hal::Device. Not thread safe.
+class ManagedDevice final : public Device {
+ public:
+  /// Keeps references: `instrument` and `bus` must outlive the device. Builds the
+  /// CanopenMaster (`period_ns` > 0, the control period) and the SafetySupervisor (one axis
+  /// per instrument axis) and configures the lifecycle. Throws std::invalid_argument for a
+  /// configuration that is not managed or bad settings.
+  ManagedDevice(InstrumentDevice& instrument, Bus& bus, std::int64_t period_ns,
+                const DeviceSettings& settings = {});
+
+  DeviceSupervision supervise(std::int64_t now_ns, bool overrun) noexcept override;
+
+  /// kInactive → kActive now (SafetySupervisor::activate()).
+  LifecycleResult activate() noexcept override { return supervisor_->activate(); }
+  RearmResult rearm() noexcept override;
+  LifecycleState lifecycle() const noexcept override { return supervisor_->state(); }
+  bool rearm_pending() const noexcept override { return rearm_pending_; }
+  bool drives_disabled() const noexcept override;
+
+  const CanopenMaster* canopen() const noexcept override { return master_.get(); }
+  CanopenMaster* canopen() noexcept override { return master_.get(); }
+  const SafetySupervisor* supervisor() const noexcept override { return supervisor_.get(); }
+
+ private:
+  bool take_frame(const CanFrame& frame) noexcept override { return master_->on_frame(frame); }
+  IoStatus begin_protocol(std::int64_t now_ns) noexcept override {
+    return master_->begin_period(now_ns, *bus_);
+  }
+  bool torque_allowed(int axis) const noexcept override;
+  void on_non_finite_torque(int axis) noexcept override;
+  void on_shutdown() noexcept override;
+  IoStatus send(const SentTorques& torques, std::int64_t now_ns) noexcept override;
+
+  std::unique_ptr<CanopenMaster> master_;
+  std::unique_ptr<SafetySupervisor> supervisor_;
+  DeviceSettings settings_;
+  // Per axis: index of its drive in the master (-1: no drive).
+  std::array<int, kMaxAxes> drive_of_axis_{};
+  bool rearm_pending_ = false;
+};
+
+}  // namespace numen::hal

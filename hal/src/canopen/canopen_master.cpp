@@ -1,0 +1,329 @@
+/// @file canopen_master.cpp
+/// The controller's side of the managed CANopen stack: NMT start-up, heartbeats, EMCY, CiA 402
+/// drive masters and their static PDOs.
+
+#include "numen/hal/canopen/canopen_master.hpp"
+
+#include <stdexcept>
+#include <string>
+
+#include "numen/hal/canopen/canopen.hpp"
+
+namespace numen::hal {
+namespace {
+
+
+std::int64_t ms_to_ns(std::uint32_t ms) noexcept {
+  return static_cast<std::int64_t>(ms) * 1'000'000;
+}
+
+}  // namespace
+
+const char* to_string(StartupPhase phase) noexcept {
+  switch (phase) {
+    case StartupPhase::kResetCommunication:
+      return "reset communication";
+    case StartupPhase::kWaitBootUp:
+      return "wait boot-up";
+    case StartupPhase::kStartNodes:
+      return "start nodes";
+    case StartupPhase::kWaitOperational:
+      return "wait operational";
+    case StartupPhase::kOperational:
+      return "operational";
+    case StartupPhase::kFailed:
+      return "failed";
+  }
+  return "unknown";
+}
+
+CanopenMaster::CanopenMaster(const DeviceConfig& config, std::int64_t period_ns,
+                             const Cia402MasterSettings& drive_settings)
+    : producer_(config.canopen.controller_node_id == 0 ? 1 : config.canopen.controller_node_id,
+                ms_to_ns(config.canopen.controller_heartbeat_period_ms)) {
+  validate(config);
+  const std::string dev = "device '" + config.name + "'";
+  if (!config.canopen.managed) {
+    throw std::invalid_argument(dev + ": CanopenMaster needs canopen.managed = true");
+  }
+  if (period_ns <= 0) {
+    throw std::invalid_argument(dev + ": CanopenMaster period_ns must be > 0 (got " +
+                                std::to_string(period_ns) + ")");
+  }
+  const CanopenConfig& co = config.canopen;
+  retry_ns_ = ms_to_ns(co.startup_retry_ms);
+  timeout_ns_ = ms_to_ns(co.startup_timeout_ms);
+  for (std::size_t i = 0; i < config.axes.size(); ++i) {
+    const CanopenAxisConfig& x = co.axes[i];
+    const AxisConfig& a = config.axes[i];
+    if (node_index(x.node_id) < 0) {
+      node_ids_[num_nodes_++] = x.node_id;
+      monitor_.add(x.node_id, ms_to_ns(x.effective_heartbeat_timeout_ms()));
+    }
+    if (!a.has_drive()) continue;
+    Drive d{static_cast<int>(i),
+            a.drive_cob_id,
+            x.drive_tpdo_cob_id,
+            PdoMapping(std::span<const PdoEntry>(x.drive_rpdo.data(), x.drive_rpdo.size()),
+                       dev + " axis '" + a.name + "' drive RPDO"),
+            PdoMapping(std::span<const PdoEntry>(x.drive_tpdo.data(), x.drive_tpdo.size()),
+                       dev + " axis '" + a.name + "' drive TPDO"),
+            -1,
+            -1,
+            -1,
+            -1,
+            -1,
+            Cia402Master(drive_settings),
+            0,
+            0};
+    d.cw_index = find_mapped(d.rpdo.entries(), PdoObject::kControlword);
+    d.torque_index = find_mapped(d.rpdo.entries(), PdoObject::kTargetTorque);
+    d.mode_index = find_mapped(d.rpdo.entries(), PdoObject::kModesOfOperation);
+    d.sw_index = find_mapped(d.tpdo.entries(), PdoObject::kStatusword);
+    d.actual_index = find_mapped(d.tpdo.entries(), PdoObject::kTorqueActualValue);
+    drives_.push_back(std::move(d));
+  }
+  restart_startup();
+  startup_.attempts = 0;
+}
+
+int CanopenMaster::node_index(std::uint8_t node_id) const noexcept {
+  for (std::size_t j = 0; j < num_nodes_; ++j) {
+    if (node_ids_[j] == node_id) return static_cast<int>(j);
+  }
+  return -1;
+}
+
+void CanopenMaster::restart_startup() noexcept {
+  startup_.phase = StartupPhase::kResetCommunication;
+  startup_.missing_node = 0;
+  for (std::size_t j = 0; j < num_nodes_; ++j) nodes_[j] = NodeState{};
+}
+
+IoStatus CanopenMaster::send(const CanFrame& frame, Bus& bus, std::uint64_t* sent) noexcept {
+  const IoStatus s = bus.write(frame);
+  if (s == IoStatus::kOk) ++*sent;
+  if (s == IoStatus::kWouldBlock) ++counters_.write_would_block;
+  if (s == IoStatus::kError) ++counters_.write_errors;
+  return s;
+}
+
+IoStatus CanopenMaster::send_nmt(NmtCommand command, std::uint8_t node, std::int64_t now_ns,
+                                 Bus& bus) noexcept {
+  CanFrame f;
+  if (!encode_nmt(command, node, now_ns, f)) return IoStatus::kError;
+  return send(f, bus, &counters_.nmt_sent);
+}
+
+IoStatus CanopenMaster::begin_period(std::int64_t now_ns, Bus& bus) noexcept {
+  IoStatus status = IoStatus::kOk;
+  last_now_ns_ = now_ns;
+  switch (startup_.phase) {
+    case StartupPhase::kResetCommunication:
+      status = worst(status, send_nmt(NmtCommand::kResetCommunication, kNmtAllNodes, now_ns, bus));
+      startup_.phase = StartupPhase::kWaitBootUp;
+      startup_.began_ns = now_ns;
+      startup_.began_period = periods_;
+      ++startup_.attempts;
+      for (std::size_t j = 0; j < num_nodes_; ++j) nodes_[j].last_command_ns = now_ns;
+      break;
+    case StartupPhase::kWaitBootUp:
+      // A node that has not booted after startup_retry_ms is reset again (a lost frame).
+      for (std::size_t j = 0; j < num_nodes_; ++j) {
+        NodeState& n = nodes_[j];
+        if (n.booted || now_ns - n.last_command_ns < retry_ns_) continue;
+        status =
+            worst(status, send_nmt(NmtCommand::kResetCommunication, node_ids_[j], now_ns, bus));
+        n.last_command_ns = now_ns;
+        ++counters_.nmt_retries;
+      }
+      break;
+    case StartupPhase::kStartNodes:
+      status = worst(status, send_nmt(NmtCommand::kStartRemoteNode, kNmtAllNodes, now_ns, bus));
+      startup_.phase = StartupPhase::kWaitOperational;
+      for (std::size_t j = 0; j < num_nodes_; ++j) nodes_[j].last_command_ns = now_ns;
+      break;
+    case StartupPhase::kWaitOperational:
+      for (std::size_t j = 0; j < num_nodes_; ++j) {
+        NodeState& n = nodes_[j];
+        const HeartbeatConsumer* c = monitor_.find(node_ids_[j]);
+        const bool op = c != nullptr && c->status() == HeartbeatStatus::kAlive &&
+                        c->last_state() == NmtState::kOperational;
+        if (op && !n.restart) continue;
+        if (!n.restart && now_ns - n.last_command_ns < retry_ns_) continue;
+        status = worst(status, send_nmt(NmtCommand::kStartRemoteNode, node_ids_[j], now_ns, bus));
+        n.last_command_ns = now_ns;
+        n.restart = false;
+        ++counters_.nmt_retries;
+      }
+      break;
+    case StartupPhase::kOperational:
+    case StartupPhase::kFailed:
+      break;
+  }
+  if (nmt_queued_) {
+    nmt_queued_ = false;
+    status = worst(status, send_nmt(queued_.command, queued_.node_id, now_ns, bus));
+  }
+  if (!producer_started_) {
+    producer_.start(now_ns);
+    producer_started_ = true;
+  }
+  CanFrame hb;
+  if (producer_.poll(now_ns, NmtState::kOperational, hb)) {
+    status = worst(status, send(hb, bus, &counters_.heartbeats_sent));
+  }
+  return status;
+}
+
+bool CanopenMaster::on_frame(const CanFrame& frame) noexcept {
+  for (Drive& d : drives_) {
+    if (!has_standard_id(frame, d.tpdo_cob_id)) continue;
+    PdoValues v{};
+    if (d.tpdo.unpack(frame, std::span<std::int64_t>(v.data(), d.tpdo.size())) != PdoStatus::kOk) {
+      ++counters_.drive_tpdos_malformed;
+      return true;
+    }
+    ++counters_.drive_tpdos;
+    d.statusword = static_cast<std::uint16_t>(v[static_cast<std::size_t>(d.sw_index)]);
+    if (d.actual_index >= 0) {
+      d.torque_actual = static_cast<std::int16_t>(v[static_cast<std::size_t>(d.actual_index)]);
+    }
+    return true;
+  }
+  // Error reports and 29-bit frames are no CANopen traffic of ours (can_frame.hpp).
+  if (!is_standard_frame(frame)) return false;
+  if (frame.id > kHeartbeatBaseCobId && frame.id <= kHeartbeatBaseCobId + kMaxNodeId) {
+    const int j = node_index(static_cast<std::uint8_t>(frame.id - kHeartbeatBaseCobId));
+    if (j < 0) {
+      ++counters_.unknown_nodes;
+      return true;
+    }
+    NodeState& n = nodes_[static_cast<std::size_t>(j)];
+    std::uint8_t node = 0;
+    NmtState state = NmtState::kBootUp;
+    const bool boot_up = decode_heartbeat(frame, node, state) == HeartbeatDecodeStatus::kOk &&
+                         state == NmtState::kBootUp;
+    const bool waiting = startup_.phase == StartupPhase::kResetCommunication ||
+                         startup_.phase == StartupPhase::kWaitBootUp;
+    if (!n.booted) {
+      // Only the boot-up message that follows our reset starts the node's monitoring.
+      if (!(waiting && boot_up && frame.timestamp_ns >= startup_.began_ns)) {
+        ++counters_.frames_before_boot;
+        return true;
+      }
+      n.booted = true;
+    } else if (boot_up && waiting) {
+      // A second boot-up while the nodes boot: the answer to a repeated reset (the first
+      // answer was late, e.g. a slow device process). Expected, not a reset fault.
+      monitor_.expect_boot_up(node);
+    } else if (boot_up && (startup_.phase == StartupPhase::kStartNodes ||
+                          startup_.phase == StartupPhase::kWaitOperational)) {
+      // It reset again while being started: start it again. The start-up handles it, so
+      // the consumer does not report it as a fault.
+      n.restart = true;
+      monitor_.expect_boot_up(node);
+    }
+    monitor_.on_frame(frame);
+    return true;
+  }
+  if (frame.id > kEmcyBaseCobId && frame.id <= kEmcyBaseCobId + kMaxNodeId) {
+    emcy_.on_frame(frame);
+    return true;
+  }
+  return false;
+}
+
+void CanopenMaster::finish(StartupPhase phase, std::uint8_t missing, std::int64_t now_ns) noexcept {
+  startup_.phase = phase;
+  startup_.missing_node = missing;
+  startup_.done_period = periods_;
+  startup_.done_ns = now_ns;
+}
+
+bool CanopenMaster::all_nodes_operational() const noexcept {
+  for (const HeartbeatConsumer& c : monitor_.consumers()) {
+    if (c.status() != HeartbeatStatus::kAlive || c.last_state() != NmtState::kOperational) {
+      return false;
+    }
+  }
+  return num_nodes_ > 0;
+}
+
+void CanopenMaster::update(std::int64_t now_ns) noexcept {
+  monitor_.poll(now_ns);
+  const bool timed_out = now_ns - startup_.began_ns >= timeout_ns_;
+  if (startup_.phase == StartupPhase::kWaitBootUp) {
+    std::uint8_t missing = 0;
+    for (std::size_t j = 0; j < num_nodes_ && missing == 0; ++j) {
+      if (!nodes_[j].booted) missing = node_ids_[j];
+    }
+    if (missing == 0) {
+      startup_.phase = StartupPhase::kStartNodes;
+    } else if (timed_out) {
+      finish(StartupPhase::kFailed, missing, now_ns);
+    }
+  } else if (startup_.phase == StartupPhase::kWaitOperational) {
+    std::uint8_t missing = 0;
+    for (std::size_t j = 0; j < num_nodes_ && missing == 0; ++j) {
+      const HeartbeatConsumer* c = monitor_.find(node_ids_[j]);
+      if (c == nullptr || c->status() != HeartbeatStatus::kAlive ||
+          c->last_state() != NmtState::kOperational || nodes_[j].restart) {
+        missing = node_ids_[j];
+      }
+    }
+    if (missing == 0) {
+      finish(StartupPhase::kOperational, 0, now_ns);
+    } else if (timed_out) {
+      finish(StartupPhase::kFailed, missing, now_ns);
+    }
+  }
+  for (std::size_t i = 0; i < drives_.size(); ++i) {
+    outputs_[i] = drives_[i].master.update(drives_[i].statusword);
+  }
+  ++periods_;
+}
+
+void CanopenMaster::request_drives(Cia402Target target) noexcept {
+  for (Drive& d : drives_) d.master.request(target);
+}
+
+void CanopenMaster::request_fault_reset() noexcept {
+  for (Drive& d : drives_) d.master.request_fault_reset();
+}
+
+IoStatus CanopenMaster::write_drive_rpdos(std::int64_t now_ns,
+                                          std::span<const std::int16_t> per_mille,
+                                          Bus& bus) noexcept {
+  IoStatus status = IoStatus::kOk;
+  for (std::size_t i = 0; i < drives_.size(); ++i) {
+    const Drive& d = drives_[i];
+    const Cia402MasterOutput& out = outputs_[i];
+    const auto axis = static_cast<std::size_t>(d.axis);
+    const std::int16_t torque = axis < per_mille.size() ? per_mille[axis] : 0;
+    PdoValues v{};
+    v[static_cast<std::size_t>(d.cw_index)] = out.controlword;
+    v[static_cast<std::size_t>(d.torque_index)] = torque;
+    if (d.mode_index >= 0) v[static_cast<std::size_t>(d.mode_index)] = kModeCyclicSynchronousTorque;
+    CanFrame f;
+    f.id = d.rpdo_cob_id;
+    f.timestamp_ns = now_ns;
+    if (d.rpdo.pack(std::span<const std::int64_t>(v.data(), d.rpdo.size()), f) != PdoStatus::kOk) {
+      status = IoStatus::kError;  // not reached: every value fits its mapped object
+      continue;
+    }
+    status = worst(status, send(f, bus, &counters_.rpdos_sent));
+  }
+  return status;
+}
+
+bool CanopenMaster::request_nmt(NmtCommand command, std::uint8_t node_id) noexcept {
+  if (nmt_queued_ || !is_nmt_command(static_cast<std::uint8_t>(command)) || node_id > kMaxNodeId) {
+    return false;
+  }
+  queued_ = NmtMessage{command, node_id};
+  nmt_queued_ = true;
+  return true;
+}
+
+}  // namespace numen::hal

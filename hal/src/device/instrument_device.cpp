@@ -1,0 +1,262 @@
+/// @file instrument_device.cpp
+/// Controller-side instrument driver: TPDOs -> checked target poses/twists per link;
+/// link wrenches -> τ = Σ J_lᵀ w_l.
+
+#include "numen/hal/device/instrument_device.hpp"
+
+#include <algorithm>
+#include <stdexcept>
+#include <string>
+#include <utility>
+
+#include "numen/hal/canopen/canopen.hpp"
+#include "numen/hal/device/kinematics_factory.hpp"
+
+namespace numen::hal {
+namespace {
+
+
+}  // namespace
+
+InstrumentDevice::InstrumentDevice(DeviceConfig config)
+    : InstrumentDevice(config, make_kinematics(config)) {}
+
+InstrumentDevice::InstrumentDevice(DeviceConfig config,
+                                   std::unique_ptr<const Kinematics> kinematics)
+    : config_(std::move(config)), kinematics_(std::move(kinematics)) {
+  validate(config_);
+  if (!kinematics_) {
+    throw std::invalid_argument("device '" + config_.name + "': kinematics must not be null");
+  }
+  n_ = static_cast<int>(config_.axes.size());
+  if (kinematics_->num_axes() != n_) {
+    throw std::invalid_argument("device '" + config_.name + "': kinematics has " +
+                                std::to_string(kinematics_->num_axes()) +
+                                " axes but config.axes has " + std::to_string(n_));
+  }
+  num_links_ = kinematics_->num_links();
+  if (num_links_ < 1 || num_links_ > kMaxLinks) {
+    throw std::invalid_argument("device '" + config_.name + "': kinematics has " +
+                                std::to_string(num_links_) + " links (must be 1.." +
+                                std::to_string(kMaxLinks) + ")");
+  }
+  const double age = config_.effective_max_sample_age_s();
+  hold_.resize(n_);
+  for (int i = 0; i < n_; ++i) {
+    const AxisConfig& a = config_.axes[static_cast<std::size_t>(i)];
+    limits_[static_cast<std::size_t>(i)] = make_check_limits(a, age, config_.jump_tolerance_counts);
+    hold_[i] = std::clamp(0.0, a.min, a.max);
+  }
+  if (config_.canopen.managed) {
+    for (int i = 0; i < n_; ++i) {
+      const auto& e = config_.canopen.axes[static_cast<std::size_t>(i)].encoder_tpdo;
+      encoder_maps_.emplace_back(std::span<const PdoEntry>(e.data(), e.size()), "encoder TPDO");
+      int p = find_mapped(encoder_maps_.back().entries(), PdoObject::kPositionValue);
+      if (p < 0) p = find_mapped(encoder_maps_.back().entries(), PdoObject::kPositionActualValue);
+      encoder_position_[static_cast<std::size_t>(i)] = p;
+    }
+  }
+  reset();
+}
+
+void InstrumentDevice::reset() noexcept {
+  axes_ = {};
+  last_sample_ = DeviceSample{};
+  last_sample_.q = hold_;
+  last_sample_.qdot = AxisVector::Zero(n_);
+  last_sample_.target = kinematics_->forward(hold_);
+  for (int i = 0; i < n_; ++i)
+    last_sample_.axis_faults[static_cast<std::size_t>(i)] = SampleFault::kNoData;
+  last_sample_.faults = n_ > 0 ? SampleFault::kNoData : SampleFault::kNone;
+  evaluate_links(last_sample_);
+}
+
+void InstrumentDevice::evaluate_links(DeviceSample& s) noexcept {
+  s.num_links = num_links_;
+  s.target = kinematics_->forward(s.q);
+  link_jacobians_[0] = kinematics_->jacobian(s.q);
+  s.twist = twist_from_rates(link_jacobians_[0], s.qdot);
+  s.link_targets[0] = s.target;
+  s.link_twists[0] = s.twist;
+  for (int l = 1; l < num_links_; ++l) {
+    const auto k = static_cast<std::size_t>(l);
+    s.link_targets[k] = kinematics_->link_pose(l, s.q);
+    link_jacobians_[k] = kinematics_->link_jacobian(l, s.q);
+    s.link_twists[k] = twist_from_rates(link_jacobians_[k], s.qdot);
+  }
+}
+
+bool InstrumentDevice::on_frame(const CanFrame& frame) noexcept {
+  if (frame.error_frame()) {  // bus-state information (Bus::state()), not an axis's message
+    ++counters_.frames_error;
+    return false;
+  }
+  for (int i = 0; i < n_; ++i) {
+    const AxisConfig& a = config_.axes[static_cast<std::size_t>(i)];
+    if (!has_standard_id(frame, a.encoder_cob_id)) continue;
+    AxisState& st = axes_[static_cast<std::size_t>(i)];
+    std::int32_t counts = 0;
+    DecodeStatus status = DecodeStatus::kOk;
+    if (encoder_maps_.empty()) {
+      status = decode_position_pdo(frame, a.encoder_cob_id, counts);
+    } else {
+      const PdoMapping& m = encoder_maps_[static_cast<std::size_t>(i)];
+      PdoValues v{};
+      switch (m.unpack(frame, std::span<std::int64_t>(v.data(), m.size()))) {
+        case PdoStatus::kOk:
+          // 0x6004 read as int32 (an UNSIGNED32 mapping wraps to the same 32 bits).
+          counts = static_cast<std::int32_t>(static_cast<std::uint32_t>(
+              v[static_cast<std::size_t>(encoder_position_[static_cast<std::size_t>(i)])]));
+          break;
+        case PdoStatus::kNotDataFrame:
+          status = DecodeStatus::kNotDataFrame;
+          break;
+        default:
+          status = DecodeStatus::kWrongLength;
+          break;
+      }
+    }
+    switch (status) {
+      case DecodeStatus::kOk:
+        ++counters_.frames_decoded;
+        if (st.pending) {
+          st.superseded |= check_range(limits_[static_cast<std::size_t>(i)],
+                                       counts_to_value(a, st.pending_counts));
+        }
+        st.pending = true;
+        st.malformed = false;
+        st.pending_counts = counts;
+        st.pending_stamp_ns = frame.timestamp_ns;
+        break;
+      case DecodeStatus::kWrongLength:
+        ++counters_.frames_wrong_length;
+        st.pending = false;
+        st.malformed = true;
+        break;
+      case DecodeStatus::kNotDataFrame:
+        ++counters_.frames_not_data;
+        st.pending = false;
+        st.malformed = true;
+        break;
+      case DecodeStatus::kWrongId:  // cannot happen: the id matched
+        break;
+    }
+    return true;
+  }
+  ++counters_.frames_unknown_id;
+  return false;
+}
+
+int InstrumentDevice::poll(Bus& bus, int max_frames) noexcept {
+  CanFrame frame;
+  int read = 0;
+  while (read < max_frames && bus.read(frame) == IoStatus::kOk) {
+    on_frame(frame);
+    ++read;
+  }
+  return read;
+}
+
+DeviceSample InstrumentDevice::sample(std::int64_t now_ns) noexcept {
+  DeviceSample& s = last_sample_;
+  s.time_ns = now_ns;
+  s.faults = SampleFault::kNone;
+  s.axis_faults = {};
+  bool ready = true;
+  for (int i = 0; i < n_; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    const AxisConfig& a = config_.axes[k];
+    const AxisCheckLimits& lim = limits_[k];
+    AxisState& st = axes_[k];
+    FaultMask f = SampleFault::kNone;
+    bool accepted = false;
+    if (st.malformed) {
+      f |= SampleFault::kMalformed;
+    } else if (st.pending) {
+      const double v = counts_to_value(a, st.pending_counts);
+      const FaultMask c =
+          check_sample(lim, v, st.pending_stamp_ns, now_ns, st.has_value ? &st.last : nullptr) |
+          st.superseded;
+      if (c == SampleFault::kNone) {
+        if (st.has_value) {
+          const double dt = static_cast<double>(st.pending_stamp_ns - st.last.time_ns) * 1e-9;
+          st.rate = dt > 0.0 ? axis_difference(v, st.last.value, a.wraps) / dt : 0.0;
+          st.has_rate = true;
+        }
+        st.last = AcceptedValue{v, st.pending_stamp_ns};
+        st.has_value = true;
+        accepted = true;
+        ++counters_.values_accepted;
+      }
+      f |= c;
+    }
+    // A value that this period's newest frame replaced was out of range: the period's value is
+    // rejected with it (the check above saw only the newest).
+    f |= st.superseded;
+    st.superseded = SampleFault::kNone;
+    st.pending = false;
+    st.malformed = false;
+
+    // The held value's own freshness: with no new accepted value it may have gone stale.
+    bool held_stale = false;
+    if (st.has_value) {
+      held_stale = check_fresh(lim, st.last.time_ns, now_ns) != SampleFault::kNone;
+      if (!accepted && held_stale) f |= SampleFault::kStale;
+    }
+
+    if (f != SampleFault::kNone) {
+      ++counters_.values_rejected;
+      if (f & SampleFault::kMalformed) ++counters_.rejected_malformed;
+      if (f & SampleFault::kNonFinite) ++counters_.rejected_non_finite;
+      if (f & SampleFault::kOutOfRange) ++counters_.rejected_out_of_range;
+      if (f & SampleFault::kStale) ++counters_.rejected_stale;
+      if (f & SampleFault::kJump) ++counters_.rejected_jump;
+    }
+    if (!st.has_value) {
+      f |= SampleFault::kNoData;
+      ready = false;
+    }
+    s.q[i] = st.has_value ? st.last.value : hold_[i];
+    s.qdot[i] = (st.has_rate && !held_stale) ? st.rate : 0.0;
+    if (accepted) {
+      st.periods_since_accepted = 0;
+    } else if (st.periods_since_accepted < UINT32_MAX) {
+      ++st.periods_since_accepted;
+    }
+    s.periods_since_accepted[k] = st.periods_since_accepted;
+    s.axis_faults[k] = f;
+    s.faults |= f;
+  }
+  s.ready = ready;
+  s.valid = ready && s.faults == SampleFault::kNone;
+  evaluate_links(s);
+  ++counters_.samples;
+  if (s.valid) ++counters_.samples_valid;
+  return s;
+}
+
+bool InstrumentDevice::torques_for(std::span<const core::Wrench> link_wrenches,
+                                   AxisVector& tau) noexcept {
+  ++counters_.commands;
+  tau = AxisVector::Zero(n_);
+  std::size_t used = link_wrenches.size();
+  if (used > static_cast<std::size_t>(num_links_)) {
+    ++counters_.extra_link_wrenches;
+    used = static_cast<std::size_t>(num_links_);
+  }
+  bool finite = true;
+  for (std::size_t l = 0; l < used; ++l) {
+    finite = finite && link_wrenches[l].force.allFinite() && link_wrenches[l].torque.allFinite();
+  }
+  if (!finite) ++counters_.non_finite_wrenches;
+  if (!finite || !last_sample_.ready) {
+    ++counters_.commands_zero;
+    return false;
+  }
+  for (std::size_t l = 0; l < used; ++l) {
+    tau += torques_from_wrench(link_jacobians_[l], link_wrenches[l]);
+  }
+  return true;
+}
+
+}  // namespace numen::hal

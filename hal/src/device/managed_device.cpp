@@ -1,0 +1,115 @@
+/// @file managed_device.cpp
+/// The managed CANopen stack behind hal::Device: CanopenMaster + SafetySupervisor.
+
+#include "numen/hal/device/managed_device.hpp"
+
+#include <span>
+
+namespace numen::hal {
+namespace {
+
+SafetySettings safety_settings(const InstrumentDevice& instrument, const DeviceSettings& s) {
+  SafetySettings out;
+  out.encoder_timeout_periods = s.encoder_timeout_periods;
+  out.overrun_limit = s.overrun_limit;
+  out.safe_stop_timeout_periods = s.safe_stop_timeout_periods;
+  out.num_axes = static_cast<std::size_t>(instrument.num_axes());
+  return out;
+}
+
+}  // namespace
+
+ManagedDevice::ManagedDevice(InstrumentDevice& instrument, Bus& bus, std::int64_t period_ns,
+                             const DeviceSettings& settings)
+    : Device(instrument, bus),
+      master_(std::make_unique<CanopenMaster>(instrument.config(), period_ns,
+                                              settings.drive_settings)),
+      supervisor_(std::make_unique<SafetySupervisor>(safety_settings(instrument, settings))),
+      settings_(settings) {
+  drive_of_axis_.fill(-1);
+  for (std::size_t i = 0; i < master_->num_drives(); ++i) {
+    drive_of_axis_[static_cast<std::size_t>(master_->drive_axis(i))] = static_cast<int>(i);
+  }
+  supervisor_->configure();  // kUnconfigured → kInactive: read and supervised, zero torque
+}
+
+DeviceSupervision ManagedDevice::supervise(std::int64_t now_ns, bool overrun) noexcept {
+  CanopenMaster& m = *master_;
+  SafetySupervisor& sup = *supervisor_;
+  const DeviceSample& sample = instrument_->last_sample();
+  m.update(now_ns);
+  SafetyInputs in;
+  const auto n = static_cast<std::size_t>(instrument_->num_axes());
+  in.periods_since_fresh = std::span<const std::uint32_t>(sample.periods_since_accepted.data(), n);
+  in.axis_faults = std::span<const FaultMask>(sample.axis_faults.data(), n);
+  in.heartbeats = m.heartbeats();
+  in.emcy_faults = m.emcy_log().counters().faults;
+  in.emcy_last_fault = newest_emcy_fault(m.emcy_log());
+  in.drives = m.drive_outputs();
+  in.overrun = overrun;
+  in.bus_state = bus_->state();
+  in.io_error = take_io_error();
+  DeviceSupervision out;
+  const LifecycleUpdate u = sup.update(now_ns, in);
+  out.entered_safe_stop = u.entered_safe_stop;
+  if (rearm_pending_ && sup.state() == LifecycleState::kFault && m.operational() &&
+      sup.rearm() == LifecycleResult::kOk) {
+    rearm_pending_ = false;
+  }
+  if (!shutting_down() && settings_.auto_activate && sup.state() == LifecycleState::kInactive &&
+      m.operational() && sup.blocking().cause == FaultCause::kNone) {
+    out.activated = sup.activate() == LifecycleResult::kOk;
+  }
+  m.request_drives(sup.drive_target());
+  out.lifecycle = sup.state();
+  out.startup = m.startup().phase;
+  return out;
+}
+
+bool ManagedDevice::torque_allowed(int axis) const noexcept {
+  const int d = drive_of_axis_[static_cast<std::size_t>(axis)];
+  return supervisor_->torque_allowed() && d >= 0 &&
+         master_->drive_outputs()[static_cast<std::size_t>(d)].torque_allowed;
+}
+
+void ManagedDevice::on_non_finite_torque(int axis) noexcept {
+  supervisor_->trip_non_finite_torque(static_cast<std::size_t>(axis));
+}
+
+void ManagedDevice::on_shutdown() noexcept {
+  rearm_pending_ = false;
+  if (supervisor_->state() == LifecycleState::kActive) (void)supervisor_->deactivate();
+}
+
+IoStatus ManagedDevice::send(const SentTorques& torques, std::int64_t now_ns) noexcept {
+  const auto n = static_cast<std::size_t>(instrument_->num_axes());
+  return master_->write_drive_rpdos(
+      now_ns, std::span<const std::int16_t>(torques.per_mille.data(), n), *bus_);
+}
+
+RearmResult ManagedDevice::rearm() noexcept {
+  const bool failed = master_->startup().phase == StartupPhase::kFailed;
+  const bool latched = supervisor_->lifecycle().latched();
+  if (!latched && !failed) return RearmResult::kNotLatched;
+  master_->request_fault_reset();
+  if (failed || !master_->all_nodes_operational()) master_->restart_startup();
+  rearm_pending_ = latched;
+  return RearmResult::kAccepted;
+}
+
+bool ManagedDevice::drives_disabled() const noexcept {
+  for (const Cia402MasterOutput& d : master_->drive_outputs()) {
+    switch (d.state) {
+      case PowerState::kSwitchOnDisabled:
+      case PowerState::kReadyToSwitchOn:
+      case PowerState::kNotReadyToSwitchOn:
+      case PowerState::kFault:
+        break;
+      default:
+        return false;
+    }
+  }
+  return true;
+}
+
+}  // namespace numen::hal

@@ -1,0 +1,450 @@
+/// @file device_emulator.cpp
+/// Device-side emulation of an instrument's encoder nodes and drives: the minimal protocol and
+/// the managed CANopen stack (NMT, heartbeats, EMCY, CiA 402 in cst, static PDO mappings).
+
+#include "numen/hal/emulation/device_emulator.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <utility>
+
+#include "numen/hal/canopen/canopen.hpp"
+
+namespace numen::hal {
+namespace {
+
+// CiA 301 emergency codes the emulated nodes send.
+constexpr std::uint16_t kEmcyHeartbeatError = 0x8130;  // life guard / heartbeat error
+constexpr std::uint16_t kEmcyCommunication = 0x8100;   // communication (abort connection)
+
+// Error register for an emergency code: generic bit + the class bit of CiA 301 §7.5.2.2.
+std::uint8_t register_for(std::uint16_t code) noexcept {
+  std::uint8_t r = ErrorRegisterBit::kGeneric;
+  switch (emcy_error_class(code)) {
+    case EmcyErrorClass::kCurrent:
+      r |= ErrorRegisterBit::kCurrent;
+      break;
+    case EmcyErrorClass::kVoltage:
+      r |= ErrorRegisterBit::kVoltage;
+      break;
+    case EmcyErrorClass::kTemperature:
+      r |= ErrorRegisterBit::kTemperature;
+      break;
+    case EmcyErrorClass::kMonitoring:
+      r |= ErrorRegisterBit::kCommunication;
+      break;
+    default:
+      break;
+  }
+  return r;
+}
+
+bool energised(PowerState s) noexcept {
+  return s == PowerState::kReadyToSwitchOn || s == PowerState::kSwitchedOn ||
+         s == PowerState::kOperationEnabled || s == PowerState::kQuickStopActive;
+}
+
+Cia402DriveSettings drive_settings(const AxisConfig& a) {
+  Cia402DriveSettings s;
+  // The drive's own max torque 0x6072 at numen's saturation (a second, independent limit).
+  const double pm = std::ceil(1000.0 * a.max_torque / a.rated_torque);
+  s.max_torque_per_mille = static_cast<std::int16_t>(std::clamp(pm, 1.0, 32767.0));
+  return s;
+}
+
+}  // namespace
+
+DeviceEmulator::DeviceEmulator(DeviceConfig config) : config_(std::move(config)) {
+  validate(config_);
+  n_ = static_cast<int>(config_.axes.size());
+  managed_ = config_.canopen.managed;
+  last_torques_ = AxisVector::Zero(n_);
+  drive_of_axis_.fill(-1);
+  for (int i = 0; i < n_; ++i) {
+    counts_[static_cast<std::size_t>(i)] =
+        value_to_counts(config_.axes[static_cast<std::size_t>(i)], 0.0);
+  }
+  if (!managed_) return;
+  const CanopenConfig& co = config_.canopen;
+  const std::int64_t controller_timeout_ns =
+      static_cast<std::int64_t>(co.effective_drive_heartbeat_timeout_ms()) * 1'000'000;
+  for (int i = 0; i < n_; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    const CanopenAxisConfig& x = co.axes[k];
+    const AxisConfig& a = config_.axes[k];
+    std::size_t node = nodes_.size();
+    for (std::size_t j = 0; j < nodes_.size(); ++j) {
+      if (nodes_[j].nmt.node_id() == x.node_id) node = j;
+    }
+    if (node == nodes_.size()) {
+      nodes_.push_back(Node{NmtNodeModel(x.node_id),
+                            HeartbeatProducer(x.node_id, heartbeat_ms_to_ns(x.heartbeat_period_ms)),
+                            HeartbeatConsumer(), 0});
+    }
+    if (a.has_drive() && nodes_[node].controller.node_id() == 0) {
+      nodes_[node].controller = HeartbeatConsumer(co.controller_node_id, controller_timeout_ns);
+    }
+    node_of_axis_[k] = node;
+    encoder_maps_.emplace_back(
+        std::span<const PdoEntry>(x.encoder_tpdo.data(), x.encoder_tpdo.size()), "encoder TPDO");
+    if (a.has_drive()) {
+      drive_of_axis_[k] = static_cast<int>(drives_.size());
+      drives_.push_back(
+          Drive{i, node, Cia402Drive(drive_settings(a)),
+                PdoMapping(std::span<const PdoEntry>(x.drive_rpdo.data(), x.drive_rpdo.size()),
+                           "drive RPDO"),
+                PdoMapping(std::span<const PdoEntry>(x.drive_tpdo.data(), x.drive_tpdo.size()),
+                           "drive TPDO"),
+                0, 0, PowerState::kNotReadyToSwitchOn});
+    }
+  }
+}
+
+void DeviceEmulator::set_axis_values(const double* q) noexcept {
+  for (int i = 0; i < n_; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    counts_[k] = value_to_counts(config_.axes[k], q[i]);
+  }
+}
+
+void DeviceEmulator::set_axis_counts(const std::int32_t* counts) noexcept {
+  for (int i = 0; i < n_; ++i) counts_[static_cast<std::size_t>(i)] = counts[i];
+}
+
+void DeviceEmulator::set_encoder_silent(int axis, bool silent) noexcept {
+  if (axis >= 0 && axis < n_) silent_[static_cast<std::size_t>(axis)] = silent;
+}
+
+DeviceEmulator::Drive* DeviceEmulator::drive_of(int axis) noexcept {
+  if (axis < 0 || axis >= n_) return nullptr;
+  const int d = drive_of_axis_[static_cast<std::size_t>(axis)];
+  return d < 0 ? nullptr : &drives_[static_cast<std::size_t>(d)];
+}
+
+const Cia402Drive* DeviceEmulator::drive(int axis) const noexcept {
+  if (axis < 0 || axis >= n_) return nullptr;
+  const int d = drive_of_axis_[static_cast<std::size_t>(axis)];
+  return d < 0 ? nullptr : &drives_[static_cast<std::size_t>(d)].drive;
+}
+
+NmtState DeviceEmulator::node_state(int axis) const noexcept {
+  if (!managed_ || axis < 0 || axis >= n_) return NmtState::kBootUp;
+  return nodes_[node_of_axis_[static_cast<std::size_t>(axis)]].nmt.state();
+}
+
+void DeviceEmulator::write(Bus& port, const CanFrame& frame, std::uint64_t* sent) noexcept {
+  const IoStatus s = port.write(frame);
+  if (s == IoStatus::kOk && sent != nullptr) ++*sent;
+  if (s == IoStatus::kWouldBlock) ++counters_.tx_would_block;
+  if (s == IoStatus::kError) ++counters_.tx_errors;
+}
+
+void DeviceEmulator::on_frame_minimal(const CanFrame& frame, Bus& device_port) noexcept {
+  if (has_standard_id(frame, kSyncCobId)) {
+    if (!is_sync(frame)) {
+      ++counters_.frames_malformed;
+      return;
+    }
+    ++counters_.syncs;
+    if (!responding_) {
+      ++counters_.syncs_ignored;
+      return;
+    }
+    for (int i = 0; i < n_; ++i) {
+      const auto k = static_cast<std::size_t>(i);
+      if (silent_[k]) continue;
+      write(device_port,
+            encode_position_pdo(config_.axes[k].encoder_cob_id, counts_[k], frame.timestamp_ns),
+            &counters_.tpdos_sent);
+    }
+    return;
+  }
+  for (int i = 0; i < n_; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    const AxisConfig& a = config_.axes[k];
+    if (!a.has_drive() || !has_standard_id(frame, a.drive_cob_id)) continue;
+    std::int16_t pm = 0;
+    if (decode_torque_pdo(frame, a.drive_cob_id, pm) == DecodeStatus::kOk) {
+      ++counters_.rpdos;
+      last_per_mille_[k] = pm;
+      last_torques_[i] = per_mille_to_torque(a, pm);
+    } else {
+      ++counters_.frames_malformed;
+    }
+    return;
+  }
+  ++counters_.frames_ignored;
+}
+
+void DeviceEmulator::update_torque(const Drive& d) noexcept {
+  const auto k = static_cast<std::size_t>(d.axis);
+  last_per_mille_[k] = d.drive.applied_torque_per_mille();
+  last_torques_[d.axis] = per_mille_to_torque(config_.axes[k], last_per_mille_[k]);
+}
+
+void DeviceEmulator::on_nmt(const CanFrame& frame) noexcept {
+  bool malformed = false;
+  for (std::size_t j = 0; j < nodes_.size(); ++j) {
+    Node& node = nodes_[j];
+    const NmtState before = node.nmt.state();
+    const NmtApplyResult r = node.nmt.on_frame(frame);
+    if (r == NmtApplyResult::kMalformed) malformed = true;
+    if (r != NmtApplyResult::kApplied) continue;
+    ++counters_.nmt_commands;
+    const NmtState after = node.nmt.state();
+    for (Drive& d : drives_) {
+      if (d.node != j) continue;
+      if (after == NmtState::kBootUp && node.nmt.last_reset() == NmtReset::kNode) {
+        // Reset node: the application (the drive) restarts at power-on values.
+        d.drive = Cia402Drive(d.drive.settings());
+        d.controlword = 0;
+        d.target = 0;
+        d.previous = PowerState::kNotReadyToSwitchOn;
+        update_torque(d);
+      } else if (before == NmtState::kOperational && after != NmtState::kOperational &&
+                 energised(d.drive.state())) {
+        // Abort connection option 0x6007 = 1: the drive stops receiving its RPDOs while
+        // energised → fault (never keeps applying the last target torque).
+        d.drive.inject_fault(kEmcyCommunication);
+        update_torque(d);
+        queue_emcy(j, kEmcyCommunication, register_for(kEmcyCommunication));
+      }
+    }
+    if (after == NmtState::kBootUp) node.losses_seen = node.controller.counters().losses;
+  }
+  if (malformed) ++counters_.frames_malformed;
+}
+
+void DeviceEmulator::on_sync_managed(const CanFrame& frame, Bus& port) noexcept {
+  ++counters_.syncs;
+  // Synchronous RPDOs take effect at SYNC: every drive steps with the controlword and target
+  // torque received since the previous SYNC (held if none came, as a real drive's objects).
+  for (Drive& d : drives_) {
+    d.drive.step(d.controlword, d.target);
+    update_torque(d);
+  }
+  if (!responding_) ++counters_.syncs_ignored;
+  for (int i = 0; i < n_; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    const Node& node = nodes_[node_of_axis_[k]];
+    if (!node.nmt.allows(CommObject::kPdo) || !responding_ || silent_[k]) continue;
+    const PdoMapping& m = encoder_maps_[k];
+    const Drive* d = drive_of(i);
+    PdoValues v{};
+    for (std::size_t e = 0; e < m.size(); ++e) {
+      const PdoEntry& entry = m.entries()[e];
+      if (same_object(entry, PdoObject::kPositionValue) ||
+          same_object(entry, PdoObject::kPositionActualValue)) {
+        v[e] = entry.is_signed ? static_cast<std::int64_t>(counts_[k])
+                               : static_cast<std::int64_t>(static_cast<std::uint32_t>(counts_[k]));
+      } else if (same_object(entry, PdoObject::kStatusword)) {
+        v[e] = d != nullptr ? d->drive.statusword() : 0;
+      } else if (same_object(entry, PdoObject::kTorqueActualValue)) {
+        v[e] = d != nullptr ? d->drive.applied_torque_per_mille() : 0;
+      } else if (same_object(entry, PdoObject::kModesOfOperationDisplay)) {
+        v[e] = d != nullptr ? d->drive.modes_of_operation_display() : 0;
+      }
+    }
+    CanFrame tx;
+    tx.id = config_.axes[k].encoder_cob_id;
+    tx.timestamp_ns = frame.timestamp_ns;
+    if (m.pack(std::span<const std::int64_t>(v.data(), m.size()), tx) == PdoStatus::kOk) {
+      write(port, tx, &counters_.tpdos_sent);
+    }
+  }
+  for (const Drive& d : drives_) {
+    if (!nodes_[d.node].nmt.allows(CommObject::kPdo)) continue;
+    const auto k = static_cast<std::size_t>(d.axis);
+    PdoValues v{};
+    for (std::size_t e = 0; e < d.tpdo.size(); ++e) {
+      const PdoEntry& entry = d.tpdo.entries()[e];
+      if (same_object(entry, PdoObject::kStatusword)) v[e] = d.drive.statusword();
+      if (same_object(entry, PdoObject::kTorqueActualValue)) {
+        v[e] = d.drive.applied_torque_per_mille();
+      }
+      if (same_object(entry, PdoObject::kModesOfOperationDisplay)) {
+        v[e] = d.drive.modes_of_operation_display();
+      }
+      if (same_object(entry, PdoObject::kPositionActualValue)) v[e] = counts_[k];  // INTEGER32
+    }
+    CanFrame tx;
+    tx.id = config_.canopen.axes[k].drive_tpdo_cob_id;
+    tx.timestamp_ns = frame.timestamp_ns;
+    if (d.tpdo.pack(std::span<const std::int64_t>(v.data(), d.tpdo.size()), tx) == PdoStatus::kOk) {
+      write(port, tx, &counters_.drive_tpdos_sent);
+    }
+  }
+}
+
+void DeviceEmulator::on_frame(const CanFrame& frame, Bus& device_port) noexcept {
+  if (killed_) {
+    ++counters_.frames_while_killed;
+    return;
+  }
+  if (!managed_) {
+    on_frame_minimal(frame, device_port);
+    return;
+  }
+  if (has_standard_id(frame, kNmtCobId)) {
+    on_nmt(frame);
+    return;
+  }
+  if (has_standard_id(frame, kSyncCobId)) {
+    if (!is_sync(frame)) {
+      ++counters_.frames_malformed;
+      return;
+    }
+    on_sync_managed(frame, device_port);
+    return;
+  }
+  if (has_standard_id(frame, heartbeat_cob_id(config_.canopen.controller_node_id))) {
+    for (Node& node : nodes_) {
+      if (node.controller.node_id() != 0 && node.nmt.state() != NmtState::kBootUp) {
+        node.controller.on_frame(frame);
+      }
+    }
+    return;
+  }
+  for (Drive& d : drives_) {
+    const AxisConfig& a = config_.axes[static_cast<std::size_t>(d.axis)];
+    if (!has_standard_id(frame, a.drive_cob_id)) continue;
+    if (!nodes_[d.node].nmt.allows(CommObject::kPdo)) {
+      ++counters_.rpdos_not_operational;
+      return;
+    }
+    PdoValues v{};
+    if (d.rpdo.unpack(frame, std::span<std::int64_t>(v.data(), d.rpdo.size())) != PdoStatus::kOk) {
+      ++counters_.frames_malformed;
+      return;
+    }
+    ++counters_.rpdos;
+    for (std::size_t e = 0; e < d.rpdo.size(); ++e) {
+      const PdoEntry& entry = d.rpdo.entries()[e];
+      if (same_object(entry, PdoObject::kControlword)) {
+        d.controlword = static_cast<std::uint16_t>(v[e]);
+      } else if (same_object(entry, PdoObject::kTargetTorque)) {
+        d.target = static_cast<std::int16_t>(v[e]);
+      } else if (same_object(entry, PdoObject::kModesOfOperation)) {
+        d.drive.set_modes_of_operation(static_cast<std::int8_t>(v[e]));
+      }
+    }
+    return;
+  }
+  ++counters_.frames_ignored;
+}
+
+int DeviceEmulator::poll(Bus& device_port, int max_frames) noexcept {
+  CanFrame frame;
+  int read = 0;
+  while (read < max_frames && device_port.read(frame) == IoStatus::kOk) {
+    ++read;
+    on_frame(frame, device_port);
+  }
+  return read;
+}
+
+void DeviceEmulator::queue_emcy(std::size_t node, std::uint16_t code,
+                                std::uint8_t error_register) noexcept {
+  if (emcy_count_ == kEmcyQueue) {
+    ++counters_.emcys_dropped;
+    return;
+  }
+  PendingEmcy& p = emcy_[emcy_count_++];
+  p.node = node;
+  p.message = EmcyMessage{};
+  p.message.node_id = nodes_[node].nmt.node_id();
+  p.message.error_code = code;
+  p.message.error_register = error_register;
+}
+
+bool DeviceEmulator::inject_drive_fault(int axis, std::uint16_t code, bool persistent) noexcept {
+  Drive* d = drive_of(axis);
+  if (d == nullptr) return false;
+  d->drive.inject_fault(code, persistent);
+  update_torque(*d);
+  queue_emcy(d->node, code, register_for(code));
+  return true;
+}
+
+void DeviceEmulator::clear_drive_fault_condition(int axis) noexcept {
+  if (Drive* d = drive_of(axis)) d->drive.clear_fault_condition();
+}
+
+void DeviceEmulator::power_cycle() noexcept {
+  if (!managed_) return;
+  for (Node& node : nodes_) {
+    node.nmt = NmtNodeModel(node.nmt.node_id());
+    node.producer = HeartbeatProducer(node.nmt.node_id(), node.producer.period_ns());
+    if (node.controller.node_id() != 0) {
+      node.controller = HeartbeatConsumer(node.controller.node_id(), node.controller.timeout_ns());
+    }
+    node.losses_seen = 0;
+  }
+  for (Drive& d : drives_) {
+    d.drive = Cia402Drive(d.drive.settings());
+    d.controlword = 0;
+    d.target = 0;
+    d.previous = PowerState::kNotReadyToSwitchOn;
+    update_torque(d);
+  }
+  emcy_count_ = 0;
+  killed_ = false;
+}
+
+void DeviceEmulator::tick(std::int64_t now_ns, Bus& port) noexcept {
+  if (!managed_ || killed_) return;
+  for (std::size_t j = 0; j < nodes_.size(); ++j) {
+    Node& node = nodes_[j];
+    CanFrame f;
+    if (node.nmt.take_boot_up(now_ns, f)) {
+      write(port, f, &counters_.boot_ups_sent);
+      node.producer.start(now_ns);
+    }
+    if (node.producer.poll(now_ns, node.nmt.state(), f)) write(port, f, &counters_.heartbeats_sent);
+    if (node.controller.node_id() != 0) {
+      node.controller.poll(now_ns);
+      const std::uint64_t losses = node.controller.counters().losses;
+      if (losses > node.losses_seen) {
+        // The node's consumer heartbeat time (1016h) for the controller expired: the drive's
+        // own protection — fault, zero torque, EMCY 0x8130 (CiA 301 error behaviour 1029h).
+        counters_.controller_losses += losses - node.losses_seen;
+        node.losses_seen = losses;
+        for (Drive& d : drives_) {
+          if (d.node != j) continue;
+          const PowerState s = d.drive.state();
+          if (s == PowerState::kFault || s == PowerState::kFaultReactionActive) continue;
+          d.drive.inject_fault(kEmcyHeartbeatError);
+          update_torque(d);
+        }
+        queue_emcy(j, kEmcyHeartbeatError, register_for(kEmcyHeartbeatError));
+      }
+    }
+  }
+  // A drive that left fault (fault reset, transition 15) reports "error reset / no error".
+  for (Drive& d : drives_) {
+    const PowerState s = d.drive.state();
+    if (d.previous == PowerState::kFault && s != PowerState::kFault &&
+        s != PowerState::kFaultReactionActive) {
+      queue_emcy(d.node, 0x0000, 0x00);
+    }
+    d.previous = s;
+  }
+  std::size_t kept = 0;
+  for (std::size_t i = 0; i < emcy_count_; ++i) {
+    const PendingEmcy& p = emcy_[i];
+    const Node& node = nodes_[p.node];
+    if (node.nmt.state() == NmtState::kBootUp) {
+      emcy_[kept++] = p;  // not yet booted: sent after the boot-up message
+      continue;
+    }
+    if (!node.nmt.allows(CommObject::kEmcy)) {
+      ++counters_.emcys_dropped;  // stopped: EMCY not allowed (CiA 301 §7.3.2.2)
+      continue;
+    }
+    CanFrame f;
+    if (encode_emcy(p.message, now_ns, f)) write(port, f, &counters_.emcys_sent);
+  }
+  emcy_count_ = kept;
+}
+
+}  // namespace numen::hal

@@ -1,0 +1,271 @@
+// Tests of numen/hal/device/device.hpp: the period's order through hal::Device (SYNC with its counter,
+// the protocol's frames read before the instrument's, read errors), the one gate and clamp of
+// Device::write() (no valid sample, shutdown, the implementation's per-axis permission, axes
+// without a drive, a non-finite torque, ±max_torque and the RPDO's range, the per mille sent),
+// make_device()'s choice, and no allocation in a period of either implementation.
+#include "numen/hal/device/device.hpp"
+
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cmath>
+#include <limits>
+#include <span>
+#include <vector>
+
+#include "alloc_counter.hpp"
+#include "numen/hal/canopen/canopen.hpp"
+#include "numen/hal/emulation/device_emulator.hpp"
+#include "numen/hal/device/instrument_device.hpp"
+#include "numen/hal/device/managed_device.hpp"
+#include "numen/hal/device/minimal_device.hpp"
+#include "numen/hal/device/safety_supervisor.hpp"
+#include "numen/hal/transport/sim_bus.hpp"
+#include "numen/hal/device/trocar_kinematics.hpp"
+
+namespace {
+
+using namespace numen::hal;
+constexpr std::int64_t kMs = 1'000'000;
+const double kQ0[5] = {0.1, -0.2, 0.1, 0.5, 0.3};
+
+// A protocol whose permission per axis the test sets, taking frames on one COB-ID for itself
+// and recording what it is asked to send.
+class TestDevice final : public Device {
+ public:
+  TestDevice(InstrumentDevice& instrument, Bus& bus) : Device(instrument, bus) {
+    allowed.fill(true);
+  }
+  DeviceSupervision supervise(std::int64_t, bool) noexcept override { return {}; }
+
+  std::array<bool, kMaxAxes> allowed{};
+  int non_finite_axis = -1;
+  int sends = 0;
+  int protocol_frames = 0;
+  SentTorques last;
+
+ private:
+  bool take_frame(const CanFrame& f) noexcept override {
+    if (f.id != 0x701) return false;
+    ++protocol_frames;
+    return true;
+  }
+  bool torque_allowed(int axis) const noexcept override {
+    return allowed[static_cast<std::size_t>(axis)];
+  }
+  void on_non_finite_torque(int axis) noexcept override { non_finite_axis = axis; }
+  IoStatus send(const SentTorques& t, std::int64_t) noexcept override {
+    ++sends;
+    last = t;
+    return IoStatus::kOk;
+  }
+};
+
+struct Rig {
+  Rig() : bus(SimBusSettings{}), instrument(make_default_trocar_config(1)), dev(instrument, bus.controller()) {}
+
+  // The encoders answer with kQ0 at t, then the device reads at t.
+  void answer_and_read(std::int64_t t) {
+    for (int i = 0; i < instrument.num_axes(); ++i) {
+      const AxisConfig& a = instrument.config().axes[static_cast<std::size_t>(i)];
+      bus.device().write(encode_position_pdo(a.encoder_cob_id, value_to_counts(a, kQ0[i]), t));
+    }
+    dev.read(t);
+  }
+  IoStatus write(std::vector<double> tau) {
+    return dev.write(std::span<const double>(tau.data(), tau.size()), 0);
+  }
+  const AxisConfig& axis(int i) const { return instrument.config().axes[static_cast<std::size_t>(i)]; }
+
+  SimBus bus;
+  InstrumentDevice instrument;
+  TestDevice dev;
+};
+
+TEST(Device, BeginPeriodWritesSyncWithItsCounter1To240) {
+  Rig r;
+  CanFrame f;
+  for (int k = 1; k <= 241; ++k) {
+    ASSERT_EQ(r.dev.begin_period(k * kMs), IoStatus::kOk);
+    ASSERT_EQ(r.bus.device().read(f), IoStatus::kOk);
+    ASSERT_TRUE(is_sync(f));
+    ASSERT_EQ(f.len, 1);
+    EXPECT_EQ(f.data[0], k <= 240 ? k : 1) << k;
+  }
+}
+
+TEST(Device, ReadGivesTheProtocolItsFramesFirstAndTheInstrumentTheRest) {
+  Rig r;
+  CanFrame hb;
+  encode_heartbeat(1, NmtState::kOperational, 0, hb);
+  r.bus.device().write(hb);
+  r.answer_and_read(0);
+  EXPECT_EQ(r.dev.protocol_frames, 1);
+  EXPECT_EQ(r.instrument.counters().frames_decoded, 5u);
+  EXPECT_EQ(r.instrument.counters().frames_unknown_id, 0u);
+  EXPECT_TRUE(r.dev.sample().valid);
+  r.bus.set_state(BusState::kBusOff);
+  EXPECT_TRUE(r.dev.read(kMs).read_error);
+}
+
+TEST(Device, WriteGatesEveryAxisWithoutAValidSampleOrAfterShutdown) {
+  Rig r;
+  r.dev.read(0);  // no encoder frame: not valid
+  ASSERT_FALSE(r.dev.sample().valid);
+  r.write({0.1, 0.1, 0.1, 0.1, 0.1});
+  EXPECT_TRUE(r.dev.sent_torques().gated);
+  EXPECT_TRUE(r.dev.sent_torques().torque.isZero());
+  EXPECT_FALSE(r.dev.sent_torques().any());
+  EXPECT_EQ(r.dev.sends, 1);  // zeros are still sent
+  r.answer_and_read(kMs);
+  r.write({0.1, 0.1, 0.1, 0.1, 0.1});
+  EXPECT_FALSE(r.dev.sent_torques().gated);
+  EXPECT_TRUE(r.dev.sent_torques().any());
+  r.dev.shutdown();
+  r.answer_and_read(2 * kMs);
+  r.write({0.1, 0.1, 0.1, 0.1, 0.1});
+  EXPECT_TRUE(r.dev.sent_torques().gated);
+  EXPECT_EQ(r.dev.torque_counters().gated_writes, 2u);
+  EXPECT_EQ(r.dev.torque_counters().writes, 3u);
+}
+
+TEST(Device, WriteGatesPerAxisOnThePermissionAndOnTheDrive) {
+  Rig r;
+  r.answer_and_read(0);
+  r.dev.allowed[TrocarKinematics::kPivotY] = false;
+  r.write({0.01, 0.02, 0.03, 0.04, 0.05});
+  const SentTorques& s = r.dev.sent_torques();
+  for (int i = 0; i < 5; ++i) {
+    const double asked = 0.01 * (i + 1);
+    const bool on = r.axis(i).has_drive() && i != TrocarKinematics::kPivotY;
+    EXPECT_EQ(s.torque[i], on ? asked : 0.0) << i;
+    EXPECT_EQ(s.per_mille[static_cast<std::size_t>(i)], on ? torque_per_mille(r.axis(i), asked) : 0)
+        << i;
+  }
+  EXPECT_FALSE(r.axis(TrocarKinematics::kRoll).has_drive());
+  EXPECT_FALSE(s.gated);
+  EXPECT_EQ(r.dev.last.per_mille, s.per_mille);  // the protocol encodes exactly this
+}
+
+TEST(Device, WriteClampsOnceToMaxTorqueAndCountsPerAxis) {
+  Rig r;
+  r.answer_and_read(0);
+  const double big = 1e3;
+  r.write({big, -big, 0.0, big, 0.0});
+  const SentTorques& s = r.dev.sent_torques();
+  int expected = 0;
+  for (int i = 0; i < 5; ++i) {
+    const AxisConfig& a = r.axis(i);
+    if (!a.has_drive()) continue;
+    const double want = i == 0 ? torque_limit(a) : i == 1 ? -torque_limit(a) : i == 3 ? torque_limit(a) : 0.0;
+    EXPECT_EQ(s.torque[i], want) << i;
+    EXPECT_LE(std::abs(s.torque[i]), a.max_torque) << i;
+    // What the drive gets back from the RPDO is the clamped torque, to the per mille.
+    EXPECT_NEAR(per_mille_to_torque(a, s.per_mille[static_cast<std::size_t>(i)]), s.torque[i],
+                0.5e-3 * a.rated_torque + 1e-12)
+        << i;
+    if (want != 0.0) {
+      ++expected;
+      EXPECT_EQ(r.dev.torque_counters().axis_saturations[static_cast<std::size_t>(i)], 1u) << i;
+    }
+  }
+  EXPECT_EQ(s.clamped, expected);
+  EXPECT_EQ(r.dev.torque_counters().saturations, static_cast<std::uint64_t>(expected));
+  EXPECT_GE(expected, 2);
+}
+
+TEST(Device, TorqueLimitIsTheRpdoRangeWhenMaxTorqueIsBeyondIt) {
+  AxisConfig a;
+  a.rated_torque = 0.01;
+  a.max_torque = 1.0;  // 100 000 per mille: beyond int16
+  EXPECT_DOUBLE_EQ(torque_limit(a), 0.32767);
+  EXPECT_EQ(torque_per_mille(a, torque_limit(a)), 32767);
+  a.sign = -1;
+  EXPECT_EQ(torque_per_mille(a, torque_limit(a)), -32767);
+  EXPECT_EQ(torque_per_mille(a, std::numeric_limits<double>::quiet_NaN()), 0);
+  a.max_torque = 0.2;
+  EXPECT_EQ(torque_limit(a), 0.2);
+}
+
+TEST(Device, NonFiniteTorqueOnAnAllowedAxisZeroesEveryAxisAndIsReported) {
+  Rig r;
+  r.answer_and_read(0);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  r.write({0.05, 0.05, nan, 0.05, 0.05});
+  EXPECT_TRUE(r.dev.sent_torques().gated);
+  EXPECT_TRUE(r.dev.sent_torques().torque.isZero());
+  EXPECT_EQ(r.dev.non_finite_axis, 2);
+  EXPECT_EQ(r.dev.torque_counters().non_finite, 1u);
+  // On an axis that is gated anyway (no drive: roll) it is not looked at.
+  r.dev.non_finite_axis = -1;
+  r.write({0.05, 0.05, 0.05, nan, 0.05});
+  EXPECT_FALSE(r.dev.sent_torques().gated);
+  EXPECT_EQ(r.dev.non_finite_axis, -1);
+  EXPECT_EQ(r.dev.sent_torques().torque[TrocarKinematics::kRoll], 0.0);
+}
+
+TEST(Device, MakeDeviceFollowsTheConfiguredProtocol) {
+  SimBus bus(SimBusSettings{});
+  DeviceConfig m = make_default_trocar_config(1);
+  m.canopen.managed = false;
+  InstrumentDevice minimal(m);
+  const auto a = make_device(minimal, bus.controller(), 1'000'000);
+  EXPECT_NE(dynamic_cast<MinimalDevice*>(a.get()), nullptr);
+  EXPECT_EQ(a->canopen(), nullptr);
+  EXPECT_EQ(a->supervisor(), nullptr);
+  EXPECT_EQ(a->rearm(), RearmResult::kMinimalProtocol);
+  EXPECT_EQ(a->activate(), LifecycleResult::kNotInactive);
+  DeviceConfig c = make_default_trocar_config(1);
+  c.canopen.managed = true;
+  InstrumentDevice managed(c);
+  const auto b = make_device(managed, bus.controller(), 1'000'000);
+  ASSERT_NE(dynamic_cast<ManagedDevice*>(b.get()), nullptr);
+  ASSERT_NE(b->canopen(), nullptr);
+  ASSERT_NE(b->supervisor(), nullptr);
+  EXPECT_EQ(b->lifecycle(), LifecycleState::kInactive);  // configured at construction
+  EXPECT_EQ(b->rearm(), RearmResult::kNotLatched);
+  EXPECT_THROW(make_device(managed, bus.controller(), 0), std::invalid_argument);
+}
+
+// Both protocols against the device emulator: begin_period, read, supervise, write over 2000
+// periods without one allocation; the managed stack reaches kActive and sends torque.
+TEST(Device, PeriodsOfBothProtocolsNeverAllocate) {
+  for (bool managed : {false, true}) {
+    DeviceConfig c = make_default_trocar_config(1);
+    c.canopen.managed = managed;
+    SimBusSettings bs;
+    bs.latency_ns = 100'000;
+    SimBus bus(bs);
+    InstrumentDevice instrument(c);
+    DeviceEmulator emulator(c);
+    emulator.set_axis_values(std::vector<double>(kQ0, kQ0 + 5).data());
+    const auto dev = make_device(instrument, bus.controller(), kMs);
+    std::vector<double> tau = {0.02, -0.02, 0.5, 0.0, 0.01};
+    int torque_periods = 0;
+    std::int64_t allocations = 0;
+    {
+      numen::test::AllocationGuard guard;
+      for (int k = 0; k < 2000; ++k) {
+        const std::int64_t t = k * kMs;
+        bus.set_time_ns(t);
+        dev->begin_period(t);
+        bus.set_time_ns(t + 200'000);
+        emulator.poll(bus.device());
+        emulator.tick(t + 200'000, bus.device());
+        bus.set_time_ns(t + 400'000);
+        dev->read(t + 400'000);
+        dev->supervise(t + 400'000, false);
+        dev->write(std::span<const double>(tau.data(), tau.size()), t + 400'000);
+        torque_periods += dev->sent_torques().any() ? 1 : 0;
+      }
+      allocations = guard.count();
+    }
+    EXPECT_EQ(allocations, 0) << (managed ? "managed" : "minimal");
+    EXPECT_GT(torque_periods, 1500) << (managed ? "managed" : "minimal");
+    if (managed) {
+      EXPECT_EQ(dev->lifecycle(), LifecycleState::kActive);
+    }
+  }
+}
+
+}  // namespace

@@ -1,0 +1,864 @@
+// Tests of numen/hal/device/safety_supervisor.hpp: every latching cause with its record (what, which,
+// when: the exact period), zero torque in the detection period, the encoder timeout at exactly
+// N periods, overruns only when consecutive, reject-only conditions, rearm refused while a
+// cause persists, the torque permission, a NaN torque reported, the fault log ring, no allocation per
+// period, and a closed loop over SimBus (InstrumentDevice + DeviceEmulator encoders, an
+// emulated CiA 402 drive with its Cia402Master, heartbeats and EMCY): drive fault → zero
+// torque → disabled → latched → rearm → enabled again.
+#include "numen/hal/device/safety_supervisor.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "alloc_counter.hpp"
+#include "numen/hal/canopen/canopen.hpp"
+#include "numen/hal/emulation/device_emulator.hpp"
+#include "numen/hal/device/instrument_device.hpp"
+#include "numen/hal/canopen/pdo_mapping.hpp"
+#include "numen/hal/transport/sim_bus.hpp"
+
+namespace {
+
+using namespace numen::hal;
+using LS = LifecycleState;
+using LR = LifecycleResult;
+using FC = FaultCause;
+using PS = PowerState;
+constexpr std::int64_t kMs = 1'000'000;
+constexpr std::uint8_t kNode = 5;  // the watched node (heartbeat, EMCY)
+
+SafetySettings two_axes() {
+  SafetySettings s;
+  s.num_axes = 2;
+  s.safe_stop_timeout_periods = 10;
+  return s;
+}
+
+// A supervisor with two axes, two drives and one heartbeat node, fed synthetic inputs once per
+// 1 ms period. By default everything is healthy: every axis accepted a frame this period, the
+// node sends a heartbeat every period, the drives follow the supervisor's drive target one
+// period later (operation enabled / switch on disabled).
+struct Rig {
+  explicit Rig(SafetySettings s = two_axes()) : sup(s) {
+    hb.add(kNode, 3 * kMs);
+    for (Cia402MasterOutput& d : drives) d.state = PS::kSwitchOnDisabled;
+  }
+
+  SafetySupervisor sup;
+  std::array<std::uint32_t, 2> age{};
+  std::array<FaultMask, 2> mask{};
+  HeartbeatMonitor<4> hb;
+  EmcyLog<8> emcy;
+  std::array<Cia402MasterOutput, 2> drives{};
+  bool overrun = false;
+  BusState bus = BusState::kOk;
+  bool io_error = false;
+  bool heartbeats_on = true;
+  bool drives_follow = true;
+  std::size_t axis_entries = 2;
+  std::int64_t t = 0;
+  std::uint64_t periods = 0;  // update() calls made = index of the next period
+
+  // One period; returns the lifecycle update.
+  LifecycleUpdate step() {
+    t += kMs;
+    if (heartbeats_on) {
+      CanFrame f;
+      encode_heartbeat(kNode, NmtState::kOperational, t, f);
+      hb.on_frame(f);
+    }
+    hb.poll(t);
+    SafetyInputs in;
+    in.periods_since_fresh = std::span<const std::uint32_t>(age.data(), axis_entries);
+    in.axis_faults = std::span<const FaultMask>(mask.data(), axis_entries);
+    in.heartbeats = hb.consumers();
+    in.emcy_faults = emcy.counters().faults;
+    in.emcy_last_fault = newest_emcy_fault(emcy);
+    in.drives = drives;
+    in.overrun = overrun;
+    in.bus_state = bus;
+    in.io_error = io_error;
+    const LifecycleUpdate u = sup.update(t, in);
+    ++periods;
+    if (drives_follow) {
+      for (Cia402MasterOutput& d : drives) {
+        d.state = sup.drive_target() == Cia402Target::kEnabled ? PS::kOperationEnabled
+                                                               : PS::kSwitchOnDisabled;
+      }
+    }
+    return u;
+  }
+
+  void run(int n) {
+    for (int i = 0; i < n; ++i) step();
+  }
+
+  // configure → one healthy period → activate → one period in kActive.
+  void bring_up() {
+    ASSERT_EQ(sup.configure(), LR::kOk);
+    step();
+    ASSERT_EQ(sup.activate(), LR::kOk) << to_string(sup.blocking().cause);
+    step();
+    ASSERT_EQ(sup.state(), LS::kActive);
+    ASSERT_TRUE(sup.torque_allowed());
+  }
+
+  // The torques this period would send (requested {1, -0.25}): hal::Device::write() gates them
+  // on torque_allowed().
+  std::array<double, 2> torques() const {
+    if (!sup.torque_allowed()) return {0.0, 0.0};
+    return {1.0, -0.25};
+  }
+};
+
+void expect_record(const FaultRecord* r, FC cause, std::uint8_t id, std::uint64_t period,
+                   std::int64_t time_ns, const std::string& what) {
+  ASSERT_NE(r, nullptr) << what;
+  EXPECT_EQ(r->cause, cause) << what << ": got " << to_string(r->cause);
+  EXPECT_EQ(r->id, id) << what;
+  EXPECT_EQ(r->period, period) << what;
+  EXPECT_EQ(r->time_ns, time_ns) << what;
+}
+
+// One injection: `inject` changes the rig before the period in which the cause must be
+// detected (called before every step from then on, so the condition persists).
+struct Case {
+  const char* name;
+  std::function<void(Rig&)> inject;
+  FC cause;
+  std::uint8_t id;
+  double value;  // NaN: not checked
+};
+
+const double kAny = std::numeric_limits<double>::quiet_NaN();
+
+std::vector<Case> latching_cases() {
+  return {
+      {"encoder jump",
+       [](Rig& r) {
+         r.mask[1] = SampleFault::kJump;
+         r.age[1] = 1;
+       },
+       FC::kEncoderJump, 1, SampleFault::kJump},
+      {"out of range",
+       [](Rig& r) {
+         r.mask[0] = SampleFault::kOutOfRange;
+         r.age[0] = 1;
+       },
+       FC::kOutOfRange, 0, SampleFault::kOutOfRange},
+      {"non-finite",
+       [](Rig& r) {
+         r.mask[1] = SampleFault::kNonFinite;
+         r.age[1] = 1;
+       },
+       FC::kNonFinite, 1, SampleFault::kNonFinite},
+      {"drive fault",
+       [](Rig& r) {
+         r.drives[1].fault = true;
+         r.drives[1].state = PS::kFault;
+       },
+       FC::kDriveFault, 1, static_cast<double>(PS::kFault)},
+      {"drive stuck", [](Rig& r) { r.drives[0].stuck = true; }, FC::kDriveStuck, 0, kAny},
+      {"bus off", [](Rig& r) { r.bus = BusState::kBusOff; }, FC::kBusOff, 0,
+       static_cast<double>(BusState::kBusOff)},
+      {"I/O error", [](Rig& r) { r.io_error = true; }, FC::kIoError, 0, 0.0},
+      {"bad input", [](Rig& r) { r.axis_entries = 1; }, FC::kBadInput, 0, 0.0},
+      {"node reset",
+       [](Rig& r) {
+         if (!r.heartbeats_on) return;  // one reset
+         CanFrame f;
+         encode_heartbeat(kNode, NmtState::kBootUp, r.t + kMs / 2, f);
+         r.hb.on_frame(f);
+         r.heartbeats_on = false;
+       },
+       FC::kNodeReset, kNode, kAny},
+      {"EMCY",
+       [](Rig& r) {
+         if (r.emcy.counters().received > 0) return;
+         EmcyMessage m;
+         m.node_id = kNode;
+         m.error_code = 0x4310;
+         m.error_register = ErrorRegisterBit::kGeneric | ErrorRegisterBit::kTemperature;
+         r.emcy.record(m, r.t);
+       },
+       FC::kEmcy, kNode, 0x4310},
+  };
+}
+
+TEST(SafetySupervisor, EveryCauseLatchesInItsDetectionPeriodWithZeroTorqueAtOnce) {
+  for (const Case& c : latching_cases()) {
+    Rig r;
+    r.bring_up();
+    r.run(5);
+    ASSERT_EQ(r.torques()[0], 1.0);
+    const std::uint64_t k = r.periods;  // the detection period
+    c.inject(r);
+    const LifecycleUpdate u = r.step();
+    EXPECT_TRUE(u.entered_safe_stop) << c.name;
+    EXPECT_EQ(r.sup.state(), LS::kSafeStop) << c.name;
+    EXPECT_TRUE(r.sup.commanded_torque_zero()) << c.name;
+    EXPECT_EQ(r.sup.drive_target(), Cia402Target::kDisabled) << c.name;
+    const std::array<double, 2> tau = r.torques();  // the same period's command
+    EXPECT_EQ(tau[0], 0.0) << c.name;
+    EXPECT_EQ(tau[1], 0.0) << c.name;
+    ASSERT_NO_FATAL_FAILURE(expect_record(r.sup.first_fault(), c.cause, c.id, k, r.t, c.name));
+    EXPECT_TRUE(r.sup.first_fault()->latched) << c.name;
+    if (!std::isnan(c.value)) {
+      EXPECT_EQ(r.sup.first_fault()->value, c.value) << c.name;
+    }
+    EXPECT_EQ(r.sup.counters().latches, 1u) << c.name;
+    // It stays latched: zero torque every later period, whatever happens.
+    for (int i = 0; i < 30; ++i) {
+      c.inject(r);
+      r.step();
+      ASSERT_TRUE(r.sup.commanded_torque_zero()) << c.name;
+      ASSERT_EQ(r.torques()[0], 0.0) << c.name;
+    }
+    EXPECT_EQ(r.sup.state(), LS::kFault) << c.name;
+    EXPECT_EQ(r.sup.first_fault()->period, k) << c.name;
+    // A persisting cause is one event: recorded once, not once per period.
+    int same = 0;
+    for (std::size_t i = 0; i < r.sup.fault_log_size(); ++i) {
+      same += r.sup.fault_log_at(i)->cause == c.cause ? 1 : 0;
+    }
+    EXPECT_EQ(same, 1) << c.name;
+  }
+}
+
+TEST(SafetySupervisor, HeartbeatLossLatchesInThePeriodTheConsumerDetectsIt) {
+  Rig r;  // consumer timeout 3 ms, one heartbeat per 1 ms period
+  r.bring_up();
+  r.run(3);
+  const std::int64_t last = r.t;
+  r.heartbeats_on = false;
+  // Lost at last + 3 ms: the periods at last + 1 ms and + 2 ms are fine.
+  r.step();
+  r.step();
+  EXPECT_EQ(r.sup.state(), LS::kActive);
+  const std::uint64_t k = r.periods;
+  r.step();
+  EXPECT_EQ(r.t, last + 3 * kMs);
+  EXPECT_EQ(r.sup.state(), LS::kSafeStop);
+  ASSERT_NO_FATAL_FAILURE(
+      expect_record(r.sup.first_fault(), FC::kHeartbeatLost, kNode, k, r.t, "heartbeat"));
+  EXPECT_DOUBLE_EQ(r.sup.first_fault()->value, 3e-3);  // silent for 3 ms
+}
+
+TEST(SafetySupervisor, HeartbeatLossThatRecoveredBeforeTheUpdateStillLatches) {
+  Rig r;
+  r.bring_up();
+  r.heartbeats_on = false;
+  // Between two updates the node is lost (poll at +4 ms) and heard again: the consumer is
+  // alive at the update, but its loss counter grew: faults are events.
+  CanFrame f;
+  r.hb.poll(r.t + 4 * kMs);
+  encode_heartbeat(kNode, NmtState::kOperational, r.t + 4 * kMs, f);
+  r.hb.on_frame(f);
+  r.t += 4 * kMs;
+  r.heartbeats_on = true;
+  ASSERT_EQ(r.hb.consumers()[0].status(), HeartbeatStatus::kAlive);
+  r.step();
+  EXPECT_EQ(r.sup.state(), LS::kSafeStop);
+  ASSERT_NE(r.sup.first_fault(), nullptr);
+  EXPECT_EQ(r.sup.first_fault()->cause, FC::kHeartbeatLost);
+}
+
+TEST(SafetySupervisor, EncoderTimeoutFiresAtExactlyNPeriodsWithoutAFreshFrame) {
+  for (std::uint32_t n : {1u, 3u, 5u}) {
+    SafetySettings s = two_axes();
+    s.encoder_timeout_periods = n;
+    Rig r(s);
+    r.bring_up();
+    // Axis 1 accepted a frame in the last period; from now on none. The held value is not
+    // stale for the first two periods (no fault bit), then stale.
+    for (std::uint32_t p = 1; p < n; ++p) {
+      r.age[1] = p;
+      r.mask[1] = p <= 2 ? SampleFault::kNone : SampleFault::kStale;
+      r.step();
+      ASSERT_EQ(r.sup.state(), LS::kActive) << "N=" << n << " period without frame " << p;
+      ASSERT_EQ(r.torques()[1], -0.25);
+    }
+    const std::uint64_t k = r.periods;
+    r.age[1] = n;
+    r.mask[1] = SampleFault::kStale;
+    r.step();
+    EXPECT_EQ(r.sup.state(), LS::kSafeStop) << "N=" << n;
+    ASSERT_NO_FATAL_FAILURE(
+        expect_record(r.sup.first_fault(), FC::kEncoderTimeout, 1, k, r.t, "timeout"));
+    EXPECT_EQ(r.sup.first_fault()->value, static_cast<double>(n));
+  }
+}
+
+TEST(SafetySupervisor, IsolatedStaleFramesOnlyRejectTheSample) {
+  Rig r;  // N = 3
+  r.bring_up();
+  for (int i = 0; i < 50; ++i) {
+    // Two periods without a frame (stale, malformed), then a fresh one: never N in a row.
+    const int phase = i % 3;
+    r.age[0] = static_cast<std::uint32_t>(phase == 2 ? 0 : phase + 1);
+    r.mask[0] = phase == 0 ? SampleFault::kMalformed
+                           : (phase == 1 ? SampleFault::kStale : SampleFault::kNone);
+    r.step();
+    ASSERT_EQ(r.sup.state(), LS::kActive) << i;
+  }
+  EXPECT_EQ(r.sup.fault_log_size(), 0u);
+  EXPECT_EQ(r.sup.counters().rejected_samples, 34u);  // phases 0 and 1 of 50 periods
+}
+
+TEST(SafetySupervisor, OverrunsLatchOnlyWhenConsecutive) {
+  Rig r;  // overrun_limit = 3
+  r.bring_up();
+  const bool pattern[] = {true, true, false, true, false, true, true, false, true, true};
+  for (bool o : pattern) {
+    r.overrun = o;
+    r.step();
+    ASSERT_EQ(r.sup.state(), LS::kActive);
+  }
+  EXPECT_EQ(r.sup.counters().overruns, 7u);
+  EXPECT_EQ(r.sup.consecutive_overruns(), 2u);
+  const std::uint64_t k = r.periods;
+  r.overrun = true;
+  r.step();  // third in a row
+  EXPECT_EQ(r.sup.state(), LS::kSafeStop);
+  ASSERT_NO_FATAL_FAILURE(expect_record(r.sup.first_fault(), FC::kOverruns, 0, k, r.t, "overruns"));
+  EXPECT_EQ(r.sup.first_fault()->value, 3.0);
+}
+
+TEST(SafetySupervisor, NothingHoldsTheLastCommand) {
+  Rig r;
+  // Unconfigured and inactive: zeros, whatever was asked.
+  EXPECT_EQ(r.torques()[0], 0.0);
+  ASSERT_EQ(r.sup.configure(), LR::kOk);
+  r.step();
+  EXPECT_EQ(r.torques()[0], 0.0);
+  ASSERT_EQ(r.sup.activate(), LR::kOk);
+  r.step();
+  EXPECT_EQ(r.torques()[0], 1.0);
+  // A fault: the command of the period before is not repeated, every entry is 0.
+  r.mask[0] = SampleFault::kOutOfRange;
+  r.step();
+  EXPECT_FALSE(r.sup.torque_allowed());
+  EXPECT_TRUE(r.sup.commanded_torque_zero());
+  r.mask[0] = SampleFault::kNone;
+  r.run(3);
+  ASSERT_EQ(r.sup.state(), LS::kFault);
+  ASSERT_EQ(r.sup.rearm(), LR::kOk);
+  r.step();
+  EXPECT_EQ(r.sup.state(), LS::kInactive);
+  EXPECT_EQ(r.torques()[0], 0.0);
+  // Deactivate is no fault but also zero.
+  ASSERT_EQ(r.sup.activate(), LR::kOk);
+  r.step();
+  EXPECT_EQ(r.torques()[0], 1.0);
+  ASSERT_EQ(r.sup.deactivate(), LR::kOk);
+  EXPECT_EQ(r.torques()[0], 0.0);
+}
+
+TEST(SafetySupervisor, RearmRefusedWhileTheCausePersistsAcceptedAfterThenActivateAgain) {
+  Rig r;
+  r.bring_up();
+  r.mask[1] = SampleFault::kOutOfRange;
+  r.age[1] = 1;
+  r.run(4);
+  ASSERT_EQ(r.sup.state(), LS::kFault);
+  EXPECT_EQ(r.sup.rearm(), LR::kCausePresent);
+  EXPECT_EQ(r.sup.blocking().cause, FC::kOutOfRange);
+  EXPECT_EQ(r.sup.blocking().id, 1);
+  EXPECT_EQ(r.sup.state(), LS::kFault);
+  // In range again, but no fresh frame for 3 periods: still blocked, now by the timeout.
+  r.mask[1] = SampleFault::kStale;
+  r.age[1] = 5;
+  r.step();
+  EXPECT_EQ(r.sup.rearm(), LR::kCausePresent);
+  EXPECT_EQ(r.sup.blocking().cause, FC::kEncoderTimeout);
+  // Fresh again.
+  r.mask[1] = SampleFault::kNone;
+  r.age[1] = 0;
+  r.step();
+  EXPECT_EQ(r.sup.blocking().cause, FC::kNone);
+  ASSERT_NE(r.sup.first_fault(), nullptr);
+  EXPECT_EQ(r.sup.rearm(), LR::kOk);
+  EXPECT_EQ(r.sup.first_fault(), nullptr);
+  EXPECT_EQ(r.sup.state(), LS::kInactive);
+  r.run(5);
+  EXPECT_FALSE(r.sup.torque_allowed());  // not re-activated by itself
+  EXPECT_EQ(r.sup.drive_target(), Cia402Target::kDisabled);
+  EXPECT_EQ(r.sup.activate(), LR::kOk);
+  r.step();
+  EXPECT_TRUE(r.sup.torque_allowed());
+  EXPECT_EQ(r.torques()[0], 1.0);
+}
+
+TEST(SafetySupervisor, ActivationWaitsForEncodersHeartbeatsAndDisabledDrives) {
+  Rig r;
+  r.heartbeats_on = false;
+  r.mask = {SampleFault::kNoData, SampleFault::kNoData};
+  r.age = {7, 7};
+  ASSERT_EQ(r.sup.configure(), LR::kOk);
+  r.run(10);  // no encoder data in kInactive: not a fault (the timeout is not armed yet)
+  EXPECT_EQ(r.sup.state(), LS::kInactive);
+  EXPECT_EQ(r.sup.activate(), LR::kCausePresent);
+  EXPECT_EQ(r.sup.blocking().cause, FC::kHeartbeatLost);  // never heard
+  r.heartbeats_on = true;
+  r.step();
+  EXPECT_EQ(r.sup.activate(), LR::kCausePresent);
+  EXPECT_EQ(r.sup.blocking().cause, FC::kEncoderTimeout);
+  r.mask = {};
+  r.age = {};
+  r.drives[0].state = PS::kSwitchedOn;
+  r.drives_follow = false;
+  r.step();
+  EXPECT_EQ(r.sup.activate(), LR::kCausePresent);
+  EXPECT_EQ(r.sup.blocking().cause, FC::kDriveEnergized);
+  r.drives_follow = true;
+  r.run(2);
+  EXPECT_EQ(r.sup.activate(), LR::kOk);
+  EXPECT_EQ(r.sup.fault_log_size(), 0u);
+}
+
+TEST(SafetySupervisor, SafeStopEndsInFaultWhenDrivesDisableOrRecordsTheTimeout) {
+  {
+    Rig r;
+    r.bring_up();
+    r.io_error = true;
+    r.step();  // trip; the drives follow kDisabled in the rig
+    r.io_error = false;
+    EXPECT_EQ(r.sup.state(), LS::kSafeStop);
+    r.step();
+    EXPECT_EQ(r.sup.state(), LS::kFault);
+    EXPECT_FALSE(r.sup.lifecycle().safe_stop_timed_out());
+  }
+  {
+    Rig r;  // safe_stop_timeout_periods = 10
+    r.bring_up();
+    r.drives_follow = false;  // drive 0 stays in operation enabled (not disabling)
+    r.bus = BusState::kBusOff;
+    r.step();
+    r.bus = BusState::kOk;
+    const std::uint64_t trip = r.periods - 1;
+    for (int i = 1; i < 10; ++i) {
+      r.step();
+      ASSERT_EQ(r.sup.state(), LS::kSafeStop) << i;
+    }
+    r.step();
+    EXPECT_EQ(r.sup.state(), LS::kFault);
+    EXPECT_TRUE(r.sup.lifecycle().safe_stop_timed_out());
+    ASSERT_NO_FATAL_FAILURE(
+        expect_record(r.sup.newest_fault(), FC::kSafeStopTimeout, 0, trip + 10, r.t, "timeout"));
+    EXPECT_EQ(r.sup.newest_fault()->value, 10.0);
+    EXPECT_FALSE(r.sup.newest_fault()->latched);
+    ASSERT_NE(r.sup.first_fault(), nullptr);
+    EXPECT_EQ(r.sup.first_fault()->cause, FC::kBusOff);
+    EXPECT_EQ(r.sup.rearm(), LR::kCausePresent);  // the drive is still not disabled
+    EXPECT_EQ(r.sup.blocking().cause, FC::kDriveEnergized);
+  }
+}
+
+TEST(SafetySupervisor, CausesAreRecordedOncePerEpisodeAndLaterFaultsDoNotReplaceTheFirst) {
+  Rig r;
+  r.bring_up();
+  r.mask[0] = SampleFault::kOutOfRange;
+  r.step();
+  ASSERT_NE(r.sup.first_fault(), nullptr);
+  const FaultRecord first = *r.sup.first_fault();
+  for (int i = 0; i < 20; ++i) r.step();  // persists: one record
+  EXPECT_EQ(r.sup.fault_log_size(), 1u);
+  r.mask[1] = SampleFault::kJump;  // a second cause while latched
+  r.step();
+  EXPECT_EQ(r.sup.fault_log_size(), 2u);
+  ASSERT_NE(r.sup.newest_fault(), nullptr);
+  EXPECT_EQ(r.sup.newest_fault()->cause, FC::kEncoderJump);
+  EXPECT_FALSE(r.sup.newest_fault()->latched);
+  ASSERT_NE(r.sup.first_fault(), nullptr);
+  EXPECT_EQ(r.sup.first_fault()->cause, first.cause);
+  EXPECT_EQ(r.sup.first_fault()->period, first.period);
+  r.mask[0] = SampleFault::kNone;  // clears, then comes back: a new record
+  r.step();
+  r.mask[0] = SampleFault::kOutOfRange;
+  r.step();
+  EXPECT_EQ(r.sup.fault_log_size(), 3u);
+  EXPECT_EQ(r.sup.counters().latches, 1u);
+}
+
+TEST(SafetySupervisor, SeveralCausesInOnePeriodAreAllRecordedTheFirstInOrderLatches) {
+  Rig r;
+  r.bring_up();
+  r.mask[1] = SampleFault::kJump;
+  r.overrun = true;
+  r.io_error = true;
+  r.step();
+  ASSERT_EQ(r.sup.fault_log_size(), 2u);
+  EXPECT_EQ(r.sup.fault_log_at(0)->cause, FC::kIoError);
+  EXPECT_TRUE(r.sup.fault_log_at(0)->latched);
+  EXPECT_EQ(r.sup.fault_log_at(1)->cause, FC::kEncoderJump);
+  EXPECT_FALSE(r.sup.fault_log_at(1)->latched);
+  EXPECT_EQ(r.sup.first_fault()->cause, FC::kIoError);
+}
+
+TEST(SafetySupervisor, FaultLogIsARingOfFixedCapacity) {
+  Rig r;
+  r.bring_up();
+  // Toggle an I/O error: one record per rising edge.
+  for (std::size_t i = 0; i < kFaultLogCapacity + 10; ++i) {
+    r.io_error = true;
+    r.step();
+    r.io_error = false;
+    r.step();
+  }
+  EXPECT_EQ(r.sup.fault_log_size(), kFaultLogCapacity);
+  EXPECT_EQ(r.sup.counters().records, kFaultLogCapacity + 10);
+  EXPECT_EQ(r.sup.counters().records_overwritten, 10u);
+  // Oldest held is the 11th; its period: bring_up took 2, each record 2 periods apart.
+  ASSERT_EQ(r.sup.fault_log_size(), kFaultLogCapacity);
+  EXPECT_EQ(r.sup.fault_log_at(0)->period, 2u + 2 * 10);
+  EXPECT_EQ(r.sup.fault_log_at(kFaultLogCapacity), nullptr);
+  ASSERT_NE(r.sup.first_fault(), nullptr);
+  EXPECT_EQ(r.sup.first_fault()->period, 2u);  // kept apart from the ring
+}
+
+// The clamp and the gate of the axis torques are hal::Device::write()'s (device_test.cpp); a
+// non-finite torque it finds is reported here and latches.
+TEST(SafetySupervisor, NonFiniteTorqueLatches) {
+  for (double bad :
+       {std::numeric_limits<double>::quiet_NaN(), -std::numeric_limits<double>::infinity()}) {
+    Rig r;
+    r.bring_up();
+    const std::uint64_t k = r.periods - 1;  // the period of the last update
+    (void)bad;  // what write() found; the supervisor is told the axis
+    r.sup.trip_non_finite_torque(1);
+    EXPECT_EQ(r.sup.state(), LS::kSafeStop);
+    EXPECT_FALSE(r.sup.torque_allowed());
+    ASSERT_NO_FATAL_FAILURE(
+        expect_record(r.sup.first_fault(), FC::kNonFiniteTorque, 1, k, r.t, "NaN torque"));
+    EXPECT_EQ(r.sup.counters().non_finite_torques, 1u);
+    EXPECT_EQ(r.sup.counters().latches, 1u);
+    r.step();
+    r.step();
+    EXPECT_EQ(r.sup.state(), LS::kFault);
+    EXPECT_EQ(r.sup.rearm(), LR::kOk);  // an event: nothing persists
+  }
+}
+
+TEST(SafetySupervisor, UnconfiguredAbsorbsEventsWithoutActing) {
+  Rig r;
+  EmcyMessage m;
+  m.node_id = kNode;
+  m.error_code = 0x5000;
+  r.emcy.record(m, 0);
+  r.io_error = true;
+  r.run(3);
+  EXPECT_EQ(r.sup.fault_log_size(), 0u);
+  r.io_error = false;
+  ASSERT_EQ(r.sup.configure(), LR::kOk);
+  r.step();
+  EXPECT_EQ(r.sup.state(), LS::kInactive);  // the old EMCY is not acted on after configure
+  EXPECT_EQ(r.sup.fault_log_size(), 0u);
+}
+
+TEST(SafetySupervisor, SettingsAreValidated) {
+  auto message = [](SafetySettings s) -> std::string {
+    try {
+      SafetySupervisor sup(s);
+    } catch (const std::invalid_argument& e) {
+      return e.what();
+    }
+    return "";
+  };
+  SafetySettings s = two_axes();
+  s.encoder_timeout_periods = 0;
+  EXPECT_NE(message(s).find("encoder_timeout_periods"), std::string::npos);
+  s = two_axes();
+  s.overrun_limit = 0;
+  EXPECT_NE(message(s).find("overrun_limit"), std::string::npos);
+  s = two_axes();
+  s.safe_stop_timeout_periods = 0;
+  EXPECT_NE(message(s).find("safe_stop_timeout_periods"), std::string::npos);
+  s = two_axes();
+  s.num_axes = 0;
+  EXPECT_NE(message(s).find("num_axes"), std::string::npos);
+  s.num_axes = 9;
+  EXPECT_NE(message(s).find("num_axes"), std::string::npos);
+  EXPECT_EQ(message(two_axes()), "");
+}
+
+TEST(SafetySupervisor, CauseNamesAreDistinct) {
+  std::vector<std::string> names;
+  for (int c = 0; c <= static_cast<int>(FC::kSafeStopTimeout); ++c) {
+    const std::string n = to_string(static_cast<FC>(c));
+    EXPECT_NE(n, "unknown");
+    for (const std::string& o : names) EXPECT_NE(n, o);
+    names.push_back(n);
+  }
+}
+
+TEST(SafetySupervisor, PerPeriodCallsDoNotAllocate) {
+  Rig r;
+  r.bring_up();
+  numen::test::AllocationGuard guard;
+  for (int i = 0; i < 200; ++i) {
+    r.overrun = i % 2 == 0;
+    r.mask[1] = i > 150 ? SampleFault::kJump : SampleFault::kNone;
+    r.io_error = i % 7 == 0 && i > 100;
+    r.step();
+  }
+  r.mask[1] = SampleFault::kNone;
+  r.io_error = false;
+  r.step();
+  r.sup.rearm();
+  r.sup.activate();
+  r.step();
+  r.sup.trip_non_finite_torque(1);
+  EXPECT_EQ(guard.count(), 0);
+  EXPECT_GT(r.sup.counters().records, 3u);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Closed loop over SimBus
+// ---------------------------------------------------------------------------------------------
+
+// Controller: InstrumentDevice (encoders), one Cia402Master, HeartbeatMonitor, EmcyLog and the
+// supervisor. Device: DeviceEmulator (encoders answering SYNC), an emulated Cia402Drive on node
+// kDriveNode with its RPDO / TPDO (drive_rpdo_mapping / drive_tpdo_mapping), a heartbeat
+// producer, and an EMCY when the drive faults. 1 ms periods, 100 µs bus latency.
+constexpr std::uint8_t kDriveNode = 0x30;
+constexpr std::uint32_t kDriveRpdo = 0x200 + kDriveNode;
+constexpr std::uint32_t kDriveTpdo = 0x180 + kDriveNode;
+
+// This rig drives its own drive and heartbeat: the emulator's encoders answer every SYNC.
+DeviceConfig minimal(DeviceConfig c) {
+  c.canopen.managed = false;
+  return c;
+}
+
+struct Loop {
+  Loop()
+      : bus(bus_settings()),
+        device(minimal(make_default_trocar_config(1))),
+        emulator(minimal(make_default_trocar_config(1))),
+        producer(kDriveNode, 10 * kMs),
+        sup(settings()) {
+    monitor.add(kDriveNode, 25 * kMs);
+    producer.start(0);
+    const double q[5] = {0.0, 0.0, 0.05, 0.0, 0.0};
+    emulator.set_axis_values(q);
+  }
+  static SimBusSettings bus_settings() {
+    SimBusSettings s;
+    s.latency_ns = 100'000;
+    return s;
+  }
+  static SafetySettings settings() {
+    SafetySettings s;
+    s.num_axes = 5;
+    s.safe_stop_timeout_periods = 50;
+    return s;
+  }
+
+  SimBus bus;
+  InstrumentDevice device;
+  DeviceEmulator emulator;
+  Cia402Drive drive;
+  Cia402Master master;
+  HeartbeatProducer producer;
+  HeartbeatMonitor<4> monitor;
+  EmcyLog<8> emcy;
+  SafetySupervisor sup;
+  PdoMapping rpdo = drive_rpdo_mapping();
+  PdoMapping tpdo = drive_tpdo_mapping();
+  std::uint16_t statusword = 0;
+  std::int64_t t = 0;
+  std::array<double, 5> tau{};
+  Cia402MasterOutput out;
+  bool emcy_pending = false;
+
+  // Device side at time t: answer SYNC (encoders and the drive's TPDO), heartbeat, EMCY,
+  // apply a received drive RPDO.
+  void device_side() {
+    CanFrame f;
+    while (bus.device().read(f) == IoStatus::kOk) {
+      if (f.id == kDriveRpdo) {
+        std::array<std::int64_t, 2> v{};
+        if (rpdo.unpack(f, v) == PdoStatus::kOk) {
+          drive.step(static_cast<std::uint16_t>(v[0]), static_cast<std::int16_t>(v[1]));
+        }
+        continue;
+      }
+      emulator.on_frame(f, bus.device());
+      if (is_sync(f)) {
+        CanFrame tx;
+        tx.id = kDriveTpdo;
+        const std::array<std::int64_t, 2> v = {drive.statusword(),
+                                               drive.applied_torque_per_mille()};
+        tpdo.pack(v, tx);
+        tx.timestamp_ns = t;
+        bus.device().write(tx);
+      }
+    }
+    if (producer.poll(t, NmtState::kOperational, f)) bus.device().write(f);
+    if (emcy_pending) {
+      EmcyMessage m;
+      m.node_id = kDriveNode;
+      m.error_code = 0x2310;  // continuous over-current
+      m.error_register = ErrorRegisterBit::kGeneric | ErrorRegisterBit::kCurrent;
+      encode_emcy(m, t, f);
+      bus.device().write(f);
+      emcy_pending = false;
+    }
+  }
+
+  // One 1 ms period.
+  void period(double torque_request) {
+    t += kMs;
+    bus.set_time_ns(t);
+    // Controller: the RPDO of the previous period has arrived at the drive by now.
+    device_side();
+    bus.controller().write(make_sync(t));
+    bus.set_time_ns(t + 200'000);  // the answers arrive
+    device_side();
+    bus.set_time_ns(t + 400'000);
+    CanFrame f;
+    while (bus.controller().read(f) == IoStatus::kOk) {
+      if (f.id == kDriveTpdo) {
+        std::array<std::int64_t, 2> v{};
+        if (tpdo.unpack(f, v) == PdoStatus::kOk) statusword = static_cast<std::uint16_t>(v[0]);
+      } else if (f.id > kHeartbeatBaseCobId) {
+        monitor.on_frame(f);
+      } else if (f.id > kEmcyBaseCobId && f.id < 0x100) {
+        emcy.on_frame(f);
+      } else {
+        device.on_frame(f);
+      }
+    }
+    const DeviceSample s = device.sample(t);
+    monitor.poll(t);
+    out = master.update(statusword);
+    SafetyInputs in;
+    in.periods_since_fresh = std::span<const std::uint32_t>(s.periods_since_accepted.data(), 5);
+    in.axis_faults = std::span<const FaultMask>(s.axis_faults.data(), 5);
+    in.heartbeats = monitor.consumers();
+    in.emcy_faults = emcy.counters().faults;
+    in.emcy_last_fault = newest_emcy_fault(emcy);
+    in.drives = std::span<const Cia402MasterOutput>(&out, 1);
+    in.bus_state = bus.controller().state();
+    sup.update(t, in);
+    master.request(sup.drive_target());
+    // What hal::Device::write() does: the lifecycle's gate, the clamp to 0.5 N·m.
+    tau.fill(sup.torque_allowed() ? std::clamp(torque_request, -0.5, 0.5) : 0.0);
+    // Drive 0 carries axis 0's torque; rated torque 1 N·m → per mille.
+    const auto per_mille = static_cast<std::int16_t>(std::lround(tau[0] * 1000.0));
+    CanFrame rx;
+    const std::array<std::int64_t, 2> v = {out.controlword,
+                                            out.torque_allowed ? per_mille : std::int16_t{0}};
+    rpdo.pack(v, rx);
+    rx.id = kDriveRpdo;
+    rx.timestamp_ns = t;
+    bus.controller().write(rx);
+  }
+};
+
+TEST(SafetySupervisor, ClosedLoopDriveFaultZeroTorqueDisabledLatchedRearmEnabled) {
+  Loop l;
+  ASSERT_EQ(l.sup.configure(), LR::kOk);
+  for (int i = 0; i < 30; ++i) l.period(0.2);
+  ASSERT_EQ(l.sup.state(), LS::kInactive);
+  ASSERT_EQ(l.sup.activate(), LR::kOk) << to_string(l.sup.blocking().cause);
+  int up = 0;
+  while (l.drive.applied_torque_per_mille() == 0 && up < 20) {
+    l.period(0.8);  // clamped to 0.5 N·m
+    ++up;
+  }
+  ASSERT_EQ(l.drive.state(), PS::kOperationEnabled);
+  l.period(0.8);
+  EXPECT_EQ(l.drive.applied_torque_per_mille(), 500);
+
+  // The drive faults (over-current) and sends an EMCY.
+  l.drive.inject_fault(0x2310);
+  l.emcy_pending = true;
+  l.period(0.8);
+  // The EMCY and the statusword of the fault are read in this period: latched (EMCY comes
+  // first in the evaluation order, the drive fault is recorded in the same period), zero
+  // torque sent now.
+  EXPECT_EQ(l.sup.state(), LS::kSafeStop);
+  ASSERT_NE(l.sup.first_fault(), nullptr);
+  EXPECT_EQ(l.sup.first_fault()->cause, FC::kEmcy);
+  EXPECT_EQ(l.sup.first_fault()->id, kDriveNode);
+  EXPECT_EQ(l.sup.first_fault()->value, 0x2310);
+  EXPECT_EQ(l.sup.first_fault()->time_ns, l.t);
+  ASSERT_EQ(l.sup.fault_log_size(), 2u);
+  EXPECT_EQ(l.sup.newest_fault()->cause, FC::kDriveFault);
+  EXPECT_EQ(l.sup.newest_fault()->period, l.sup.first_fault()->period);
+  EXPECT_FALSE(l.sup.newest_fault()->latched);
+  EXPECT_EQ(l.tau[0], 0.0);
+  EXPECT_FALSE(l.out.torque_allowed);
+  for (int i = 0; i < 10 && l.sup.state() != LS::kFault; ++i) l.period(0.8);
+  EXPECT_EQ(l.sup.state(), LS::kFault);
+  EXPECT_FALSE(l.sup.lifecycle().safe_stop_timed_out());
+  EXPECT_EQ(l.drive.applied_torque_per_mille(), 0);
+
+  // Latched: stays so while the drive is in fault.
+  for (int i = 0; i < 20; ++i) l.period(0.8);
+  EXPECT_EQ(l.sup.state(), LS::kFault);
+  EXPECT_EQ(l.sup.rearm(), LR::kCausePresent);
+  EXPECT_EQ(l.sup.blocking().cause, FC::kDriveFault);
+  EXPECT_EQ(l.drive.state(), PS::kFault);
+
+  // The operator resets the drive fault (the drive stays disabled: target kDisabled).
+  l.master.request_fault_reset();
+  for (int i = 0; i < 6; ++i) l.period(0.8);
+  EXPECT_EQ(l.drive.state(), PS::kSwitchOnDisabled);
+  EXPECT_EQ(l.sup.state(), LS::kFault);
+  EXPECT_EQ(l.drive.applied_torque_per_mille(), 0);
+  ASSERT_EQ(l.sup.rearm(), LR::kOk) << to_string(l.sup.blocking().cause);
+  EXPECT_EQ(l.sup.state(), LS::kInactive);
+  for (int i = 0; i < 10; ++i) l.period(0.8);
+  EXPECT_EQ(l.drive.state(), PS::kSwitchOnDisabled);  // not re-enabled without activate()
+  ASSERT_EQ(l.sup.activate(), LR::kOk);
+  for (int i = 0; i < 10; ++i) l.period(0.3);
+  EXPECT_EQ(l.drive.state(), PS::kOperationEnabled);
+  EXPECT_EQ(l.drive.applied_torque_per_mille(), 300);
+  EXPECT_EQ(l.sup.counters().latches, 1u);
+  EXPECT_EQ(l.device.counters().frames_unknown_id, 0u);
+}
+
+TEST(SafetySupervisor, ClosedLoopSilentEncodersTimeOutAtExactlyThreePeriods) {
+  Loop l;
+  ASSERT_EQ(l.sup.configure(), LR::kOk);
+  for (int i = 0; i < 15; ++i) l.period(0.0);  // the first heartbeat comes at 10 ms
+  ASSERT_EQ(l.sup.activate(), LR::kOk) << to_string(l.sup.blocking().cause);
+  for (int i = 0; i < 10; ++i) l.period(0.1);
+  ASSERT_TRUE(l.sup.torque_allowed());
+  l.emulator.set_responding(false);
+  l.period(0.1);
+  l.period(0.1);
+  EXPECT_EQ(l.sup.state(), LS::kActive);
+  const std::uint64_t k = l.sup.period() + 1;
+  l.period(0.1);
+  EXPECT_EQ(l.sup.state(), LS::kSafeStop);
+  ASSERT_NO_FATAL_FAILURE(
+      expect_record(l.sup.first_fault(), FC::kEncoderTimeout, 0, k, l.t, "closed loop timeout"));
+  EXPECT_EQ(l.tau[0], 0.0);
+}
+
+TEST(SafetySupervisor, ClosedLoopPeriodDoesNotAllocate) {
+  Loop l;
+  l.sup.configure();
+  for (int i = 0; i < 15; ++i) l.period(0.0);
+  ASSERT_EQ(l.sup.activate(), LR::kOk);
+  numen::test::AllocationGuard guard;
+  for (int i = 0; i < 30; ++i) l.period(0.4);
+  l.drive.inject_fault(0x2310);
+  l.emcy_pending = true;
+  for (int i = 0; i < 30; ++i) l.period(0.4);
+  EXPECT_EQ(guard.count(), 0);
+  EXPECT_EQ(l.sup.state(), LS::kFault);
+}
+
+}  // namespace
