@@ -19,6 +19,7 @@
 #include "numen/core/net_forces.hpp"
 #include "numen/core/net_solve.hpp"
 #include "numen/core/rigid_body.hpp"
+#include "numen/core/step_stages.hpp"
 
 namespace numen::core {
 namespace {
@@ -544,20 +545,30 @@ void integrate_linearized(const Model& model, Data& data, double system_step) no
   const double h = model.dt;
   s.system_step = system_step;
   const double scale = h / system_step;
+  // The solve this model runs (step_stages.hpp: the plan step() reports from).
+  const std::uint32_t plan = compiled_stages(model);
+  // Optional parts (features.hpp): compiled out, their models are refused by finalize_model().
+  if constexpr (kWithDeformable) {
+    // The nets' linearisation over h_s, before the gyroscopic step changes the bodies' ω.
+    if (plan & kStageNetSolve) linearize_nets(model, data, system_step);
+  }
   prepare_implicit_step(model, data);
   build_implicit_system(model, data);
   bool converged = false;
-  // Optional parts (features.hpp): compiled out, their models are refused by finalize_model().
-  if constexpr (kWithDeformable) {
-    if (!model.nets.empty()) {
+  if (plan & kStageNetSolve) {
+    if constexpr (kWithDeformable) {
       build_net_system(model, data);
       converged = solve_net_system(model, data);
+      data.stages_run |= kStageNetSolve;
     }
-  }
+  } else if (plan & kStageJointSolve) {
 #if NUMEN_WITH_ARTICULATION
-  if (model.nets.empty() && !model.joints.empty()) converged = solve_constrained_system(model, data);
+    converged = solve_constrained_system(model, data);
+    data.stages_run |= kStageJointSolve;
 #endif
-  if (model.nets.empty() && model.joints.empty()) converged = solve_implicit_system(model, data);
+  } else {
+    converged = solve_implicit_system(model, data);
+  }
   if (!converged) data.status |= kSolverNotConverged;
   for (std::size_t i = 0; i < data.bodies.size(); ++i) {
     if (!s.in_solve[i]) continue;  // kDirect body: stays at the imposed target
@@ -667,8 +678,9 @@ void integrate_symplectic_euler(const Model& model, Data& data) noexcept {
   if constexpr (kWithDeformable)
     integrate_nodes_symplectic(model, data);  // forces of the step's start, like the bodies'
 #if NUMEN_WITH_ARTICULATION
-  if (!model.joints.empty()) {
+  if (compiled_stages(model) & kStageJointSolve) {
     integrate_symplectic_euler_constrained(model, data);
+    data.stages_run |= kStageJointSolve;
     return;
   }
 #endif

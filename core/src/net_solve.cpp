@@ -300,7 +300,7 @@ void add_net_body_terms(const Model& model, Data& data) noexcept {
   NetScratch& ns = data.net;
   const double h = data.solver.system_step;  // h_s of the linearised system (integrator.hpp)
   const double h2 = h * h;
-  // Ties: their sums over the nodes come from compute_net_forces()'s tie loop.
+  // Ties: their sums over the nodes come from linearize_nets().
   for (std::size_t k = 0; k < model.nets.size(); ++k) {
     const NetModel& net = model.nets[k];
     const auto b = static_cast<std::size_t>(net.body);
@@ -337,7 +337,7 @@ void build_net_system(const Model& model, Data& data) noexcept {
   const double h2 = h * h;
 
   // The springs' weights, their sum at each node (spring_block) and their
-  // part of the right-hand side are already there (compute_net_forces()).
+  // part of the right-hand side are already there (linearize_nets()).
   // Raw pointers: the stores would otherwise make the compiler reload every
   // vector's data pointer per node.
   const SymmetricBlock* spring_block = ns.spring_block.data();

@@ -31,6 +31,7 @@
 #include "numen/core/coupling.hpp"
 #include "numen/core/data.hpp"
 #include "numen/core/integrator.hpp"
+#include "numen/core/net_forces.hpp"
 #include "numen/core/joint_system.hpp"
 #include "numen/core/mesh.hpp"
 #include "numen/core/model.hpp"
@@ -226,6 +227,7 @@ Snapshot staged_solve(const core::Model& m, core::Data& d, bool* converged,
   Snapshot s = numen::test::take_net_system_inputs(d);
   d.solver.system_step = core::linearized_system_step(m);  // as stage_net_system()
   core::compute_forces(m, d);
+  core::linearize_nets(m, d, d.solver.system_step);
   core::prepare_implicit_step(m, d);
   core::build_implicit_system(m, d);
   core::build_net_system(m, d);

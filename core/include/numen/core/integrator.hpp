@@ -125,14 +125,16 @@ struct SolverScratch {
 };
 
 /// h_s of Model::integrator (SolverScratch::system_step): Model::dt for the linearly implicit
-/// and the symplectic Euler, Model::dt / 2 for the trapezoidal rule. step() sets
-/// SolverScratch::system_step to it before the forces stage, whose net spring pass already
-/// linearises with it (net_forces.hpp).
+/// and the symplectic Euler, Model::dt / 2 for the trapezoidal rule. The integrate stage sets
+/// SolverScratch::system_step to it; the forces stage does not read it (the nets are
+/// linearised over it by the integrator: linearize_nets(), net_forces.hpp).
 double linearized_system_step(const Model& model) noexcept;
 
 /// Integrate stage: dispatches on Model::integrator to
 /// integrate_linearly_implicit_euler(), integrate_trapezoidal() or
-/// integrate_symplectic_euler(). Needs
+/// integrate_symplectic_euler(); the solve inside (net solve, joint solve or the
+/// bodies alone) is the one compiled_stages() names (step_stages.hpp), and sets
+/// its bit of Data::stages_run (kStageNetSolve, kStageJointSolve) when it runs. Needs
 /// Data::body_wrench (explicit forces: gravity, applied, coupling, contacts)
 /// and the ContactTerm lever arms and normal velocities of this step.
 /// Advances Data::bodies by dt.
