@@ -14,13 +14,14 @@
 #include "numen/core/coupling.hpp"
 #include "numen/core/data.hpp"
 #include "numen/core/features.hpp"
-#include "numen/core/joint_system.hpp"
 #include "numen/core/model.hpp"
 #include "numen/core/net_forces.hpp"
-#include "numen/core/net_solve.hpp"
 #include "numen/core/rigid_body.hpp"
 #include "numen/core/step_stages.hpp"
 
+#include "detail/implicit_system.hpp"
+#include "detail/joint_system.hpp"
+#include "detail/net_solve.hpp"
 #include "detail/pcg.hpp"
 #include "detail/solver_terms.hpp"
 

@@ -9,15 +9,16 @@
 #include <cmath>
 #include <span>
 
+#include "detail/implicit_system.hpp"
+#include "detail/joint_system.hpp"
+#include "detail/net_solve.hpp"
 #include "detail/net_terms.hpp"
 #include "detail/pcg.hpp"
 #include "numen/core/articulation.hpp"
 #include "numen/core/data.hpp"
 #include "numen/core/features.hpp"
 #include "numen/core/integrator.hpp"
-#include "numen/core/joint_system.hpp"
 #include "numen/core/model.hpp"
-#include "numen/core/net_solve.hpp"
 
 #if NUMEN_WITH_ARTICULATION
 namespace numen::core::detail {
@@ -160,10 +161,22 @@ bool solve_net_arrowhead(const Model& model, Data& data) noexcept {
   build_joint_rows(model, data, s.twist0, s.delta, s.joint_rhs);  // s.delta: Δu_prev
   factor_articulation(model, ns.body_schur, art);  // a bad pivot leaves NaN: rejected below
 
-  ArrowheadSystem sys{model,       data,           s.delta,       s.residual,
-                      s.precond_residual, s.direction, s.a_direction, ns.body_tmp,
-                      s.projected_residual, ns.delta, ns.residual,  ns.precond_residual,
-                      ns.direction, ns.a_direction, s.joint_y,     s.joint_y_correction};
+  ArrowheadSystem sys{model,
+                      data,
+                      s.delta,
+                      s.residual,
+                      s.precond_residual,
+                      s.direction,
+                      s.a_direction,
+                      ns.body_tmp,
+                      s.projected_residual,
+                      ns.delta,
+                      ns.residual,
+                      ns.precond_residual,
+                      ns.direction,
+                      ns.a_direction,
+                      s.joint_y,
+                      s.joint_y_correction};
   const std::span<const Vec6> bb(s.rhs);
   const std::span<const Vec3> bn(ns.rhs);
 

@@ -4,8 +4,8 @@
 /// sides, the node rows, their inverses in the sweep order and, with joints,
 /// the bodies' Schur blocks of the arrowhead preconditioner.
 
-#include "numen/core/net_solve.hpp"
-
+#include "detail/implicit_system.hpp"
+#include "detail/net_solve.hpp"
 #include "detail/net_terms.hpp"
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"

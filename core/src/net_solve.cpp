@@ -4,7 +4,7 @@
 /// joints (net_sweeps.cpp) or the arrowhead projected CG with joints
 /// (net_arrowhead.cpp). The system's assembly is net_assembly.cpp.
 
-#include "numen/core/net_solve.hpp"
+#include "detail/net_solve.hpp"
 
 #include "detail/net_terms.hpp"
 #include "numen/core/data.hpp"

@@ -7,12 +7,13 @@
 #include <cmath>
 #include <span>
 
+#include "detail/implicit_system.hpp"
+#include "detail/net_solve.hpp"
 #include "detail/net_terms.hpp"
 #include "detail/pcg.hpp"
 #include "numen/core/data.hpp"
 #include "numen/core/integrator.hpp"
 #include "numen/core/model.hpp"
-#include "numen/core/net_solve.hpp"
 
 namespace numen::core::detail {
 namespace {
@@ -90,8 +91,8 @@ void backward_sweep(const Model& model, const Data& data, double beta, const Vec
     const auto body = static_cast<std::size_t>(net->body);
     const int begin = net->node_begin, end = net->node_begin + net->node_count;
     if (s.in_solve[body] != 0) {
-      const Vec6 tie = backward_nodes<kUpdateQ, true>(sp, order, nodes, begin, end, beta, d_n,
-                                                      q_n, t_n, g_n);
+      const Vec6 tie =
+          backward_nodes<kUpdateQ, true>(sp, order, nodes, begin, end, beta, d_n, q_n, t_n, g_n);
       g_b[body] -= tie_weight(*net, h) * tie;  // A_bi = −c J_iᵀ
     } else {
       backward_nodes<kUpdateQ, false>(sp, order, nodes, begin, end, beta, d_n, q_n, t_n, g_n);
@@ -126,8 +127,8 @@ void backward_sweep(const Model& model, const Data& data, double beta, const Vec
 /// pointers stay in registers.
 template <bool kAddT, bool kTied>
 double forward_nodes(const SpringView& sp, const std::int32_t* order, const SweepNode* nodes,
-                     int begin, int end, const Vec3 cv, const Vec3 cw, Vec3* y_n,
-                     const Vec3* t_n, const Vec3* q_n) noexcept {
+                     int begin, int end, const Vec3 cv, const Vec3 cw, Vec3* y_n, const Vec3* t_n,
+                     const Vec3* q_n) noexcept {
   double qkq = 0.0;
   for (int p = begin; p < end; ++p) {
     const auto k = static_cast<std::size_t>(order[p]);
@@ -233,10 +234,10 @@ double net_start_sweep(const Model& model, Data& data, std::span<const Vec3> x0_
   for (int c = 0; c < nc; ++c) {
     const NodeContact& ct = data.node_contacts[static_cast<std::size_t>(c)];
     if (!couples_body(s, ct)) continue;
-    g_b[static_cast<std::size_t>(ct.body_b)] += generalized_force(
-        weight_times(ct.weight_normal, ct.weight_isotropic, ct.normal,
-                     x0_n[static_cast<std::size_t>(ct.node)]),
-        ct.r_b);
+    g_b[static_cast<std::size_t>(ct.body_b)] +=
+        generalized_force(weight_times(ct.weight_normal, ct.weight_isotropic, ct.normal,
+                                       x0_n[static_cast<std::size_t>(ct.node)]),
+                          ct.r_b);
   }
   double ref = 0.0;
   for (std::size_t b = 0; b < nb; ++b) {
@@ -344,10 +345,10 @@ struct EisenstatSystem {
 bool solve_net_eisenstat(const Model& model, Data& data) noexcept {
   SolverScratch& s = data.solver;
   NetScratch& ns = data.net;
-  EisenstatSystem sys{model,          data,          s.delta,       s.residual,
-                      s.precond_residual, s.direction, s.a_direction, ns.body_tmp,
-                      ns.delta,       ns.residual,   ns.precond_residual, ns.direction,
-                      ns.a_direction, ns.sweep};
+  EisenstatSystem sys{
+      model,          data,        s.delta,  s.residual,  s.precond_residual,  s.direction,
+      s.a_direction,  ns.body_tmp, ns.delta, ns.residual, ns.precond_residual, ns.direction,
+      ns.a_direction, ns.sweep};
 
   // Start: bodies at 0, nodes at the last step's Δv (warm start);
   // w = (D̃+L)⁻¹ (b − A x0) and the reference ‖b‖²_{D̃⁻¹} in one forward
@@ -396,8 +397,8 @@ double apply_net_preconditioned(const Model& model, Data& data, std::span<const 
   NetScratch& ns = data.net;
   const std::span<Vec6> g_b(ns.body_tmp);
   net_backward_sweep(model, data, q_b, q_n, t_b, t_n, g_b, kq_n);  // g_n in K q's place
-  return forward_sweep<true>(model, data, g_b, kq_n.data(), kq_b, kq_n.data(), t_b, t_n.data(),
-                             q_b, q_n.data());
+  return forward_sweep<true>(model, data, g_b, kq_n.data(), kq_b, kq_n.data(), t_b, t_n.data(), q_b,
+                             q_n.data());
 }
 
 }  // namespace numen::core

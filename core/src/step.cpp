@@ -10,12 +10,13 @@
 #include "numen/core/features.hpp"
 #include "numen/core/feedback.hpp"
 #include "numen/core/integrator.hpp"
-#include "numen/core/joint_system.hpp"
 #include "numen/core/model.hpp"
 #include "numen/core/net_collision.hpp"
 #include "numen/core/net_forces.hpp"
 #include "numen/core/rigid_body.hpp"
 #include "numen/core/step_stages.hpp"
+
+#include "detail/joint_system.hpp"
 
 namespace numen::core {
 namespace {

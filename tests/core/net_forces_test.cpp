@@ -19,9 +19,11 @@
 #include "numen/core/integrator.hpp"
 #include "numen/core/mesh.hpp"
 #include "numen/core/model.hpp"
-#include "numen/core/net_solve.hpp"
 #include "numen/core/rigid_body.hpp"
 #include "numen/core/step.hpp"
+
+#include "detail/implicit_system.hpp"
+#include "detail/net_solve.hpp"
 
 namespace core = numen::core;
 using core::Mat3;

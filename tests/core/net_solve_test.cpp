@@ -13,7 +13,6 @@
 // on the benchmark's ball with the contacts step() finds, the sparse system
 // against the solver and Eigen's sparse LDLᵀ, and a repeated solve from the
 // restored warm start (what the peer benchmark times) bit for bit.
-#include "numen/core/net_solve.hpp"
 
 #include <gtest/gtest.h>
 
@@ -32,11 +31,14 @@
 #include "numen/core/data.hpp"
 #include "numen/core/integrator.hpp"
 #include "numen/core/net_forces.hpp"
-#include "numen/core/joint_system.hpp"
 #include "numen/core/mesh.hpp"
 #include "numen/core/model.hpp"
 #include "numen/core/rigid_body.hpp"
 #include "numen/core/step.hpp"
+
+#include "detail/implicit_system.hpp"
+#include "detail/joint_system.hpp"
+#include "detail/net_solve.hpp"
 
 namespace core = numen::core;
 using core::Mat3;

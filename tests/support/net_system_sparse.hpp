@@ -36,9 +36,11 @@
 #include "numen/core/net_forces.hpp"
 #include "numen/core/model.hpp"
 #include "numen/core/net_collision.hpp"
-#include "numen/core/net_solve.hpp"
 #include "numen/core/rigid_body.hpp"
 #include "numen/core/step.hpp"
+
+#include "detail/implicit_system.hpp"
+#include "detail/net_solve.hpp"
 
 namespace numen::test {
 

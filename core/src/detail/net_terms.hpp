@@ -6,11 +6,10 @@
 /// (net_arrowhead.cpp): tie weights, contact weights, the springs' weights in
 /// the sweep order, and the two solves solve_net_system() dispatches to.
 
+#include <Eigen/Core>
 #include <algorithm>
 #include <cstdint>
 #include <span>
-
-#include <Eigen/Core>
 
 #include "detail/solver_terms.hpp"
 #include "numen/core/data.hpp"
@@ -18,7 +17,6 @@
 #include "numen/core/types.hpp"
 
 namespace numen::core::detail {
-
 
 /// c = h γ_tie + h² k_tie: a tie's weight in A (kg = N·s²/m).
 inline double tie_weight(const NetModel& net, double h) noexcept {
@@ -30,6 +28,7 @@ inline Vec3 weight_times(double alpha, double beta, const Vec3& n, const Vec3& v
   return (alpha * n.dot(v)) * n + beta * v;
 }
 
+/// Node contacts of this step within the scratch (Data::node_contacts).
 inline int node_contact_count(const Data& data) noexcept {
   return std::clamp(data.num_node_contacts, 0, static_cast<int>(data.node_contacts.size()));
 }
@@ -42,7 +41,7 @@ inline bool couples_body(const SolverScratch& s, const NodeContact& c) noexcept 
 /// out_b += c Σ_i J_iᵀ v_i over each net's nodes, for the rigid components
 /// in the solve (−A_bi v_i summed over a net's ties, A_bi = −c J_iᵀ).
 inline void add_tie_transpose(const Model& model, const Data& data, std::span<const Vec3> v_n,
-                       std::span<Vec6> out_b) noexcept {
+                              std::span<Vec6> out_b) noexcept {
   const double h = data.solver.system_step;  // h_s of the linearised system (integrator.hpp)
   for (const NetModel& net : model.nets) {
     const auto b = static_cast<std::size_t>(net.body);
