@@ -83,8 +83,7 @@ void step(const Model& model, Data& data) noexcept {
   data.status = kStepOk;
   data.stages_run = 0;
   save_state(data);
-  impose_direct_target(model, data);  // clears SolverScratch::imposed; imposes in kDirect only
-  if (model.coupling_mode == CouplingMode::kDirect) data.stages_run |= kStageDirectTarget;
+  impose_direct_target(model, data);  // clears SolverScratch::imposed; imposes in kDirect
   if ((plan & kStageContacts) && !data.solver.contact_terms.empty()) {  // capacity.hpp
     detect_contacts(model, data);  // may set kContactOverflow, counts contact_overflow_steps
     data.stages_run |= kStageContacts;
