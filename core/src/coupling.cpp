@@ -6,6 +6,7 @@
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"
 #include "numen/core/rigid_body.hpp"
+#include "numen/core/step_stages.hpp"
 
 namespace numen::core {
 namespace {
@@ -83,6 +84,7 @@ void apply_device_wrench(const Model& model, Data& data) noexcept {
 void impose_direct_target(const Model& model, Data& data) noexcept {
   for (auto& v : data.solver.imposed) v = 0;
   if (model.coupling_mode != CouplingMode::kDirect) return;
+  data.stages_run |= kStageDirectTarget;  // the stage report (step_stages.hpp)
   if (valid_body(model, data.attached_body))
     impose(data, static_cast<std::size_t>(data.attached_body), data.target, data.target_twist);
   for (std::size_t i = 0; i < data.bodies.size(); ++i)

@@ -14,14 +14,22 @@
 #include "numen/core/coupling.hpp"
 #include "numen/core/data.hpp"
 #include "numen/core/features.hpp"
-#include "numen/core/joint_system.hpp"
 #include "numen/core/model.hpp"
 #include "numen/core/net_forces.hpp"
-#include "numen/core/net_solve.hpp"
 #include "numen/core/rigid_body.hpp"
+#include "numen/core/step_stages.hpp"
+
+#include "detail/implicit_system.hpp"
+#include "detail/joint_system.hpp"
+#include "detail/net_solve.hpp"
+#include "detail/pcg.hpp"
+#include "detail/solver_terms.hpp"
 
 namespace numen::core {
 namespace {
+
+using detail::dot;
+using detail::point_velocity;
 
 
 int active_contact_count(const Data& data) noexcept {  // within the scratch (capacity.hpp)
@@ -30,11 +38,6 @@ int active_contact_count(const Data& data) noexcept {  // within the scratch (ca
 
 bool is_first_order(const SolverScratch& s, int body) noexcept {
   return s.first_order && body == s.coupled_body;
-}
-
-/// Velocity of the contact point of a body moving with twist u at lever arm r.
-Vec3 point_velocity(const Vec6& u, const Vec3& r) noexcept {
-  return u.head<3>() + u.tail<3>().cross(r);
 }
 
 /// Adds one body's share of a contact to its 6×6 block and right-hand side.
@@ -85,12 +88,6 @@ void block_times(const Mat6& blk, const Vec6& v, Vec6& out) noexcept {
 void mirror_lower(Mat6& block) noexcept {
   for (int j = 1; j < 6; ++j)
     for (int i = 0; i < j; ++i) block(i, j) = block(j, i);
-}
-
-double dot(std::span<const Vec6> a, std::span<const Vec6> b) noexcept {
-  double s = 0.0;
-  for (std::size_t i = 0; i < a.size(); ++i) s += a[i].dot(b[i]);
-  return s;
 }
 
 /// z = P⁻¹ r (block-Jacobi preconditioner; 0 for bodies not in the solve).
@@ -288,83 +285,137 @@ void apply_implicit_system(const Model& /*model*/, const Data& data, std::span<c
   add_cross_contact_terms(s, in, out);
 }
 
-bool solve_implicit_system(const Model& model, Data& data) noexcept {
-  SolverScratch& s = data.solver;
-  const std::span<Vec6> x(s.delta);
-  const std::span<Vec6> r(s.residual);
-  const std::span<Vec6> z(s.precond_residual);
-  const std::span<Vec6> p(s.direction);
-  const std::span<Vec6> ap(s.a_direction);
-  const std::span<const Vec6> b(s.rhs);
+namespace {
 
-  for (std::size_t i = 0; i < x.size(); ++i) {
-    x[i].setZero();
-    r[i] = b[i];
-  }
-  const double b_norm = std::sqrt(dot(b, b));
-  data.solver_iterations = 0;
-  data.solver_residual = 0.0;
-  // Non-finite forces or a non-positive pivot of a diagonal block (NaN in the
-  // factor): make the result non-finite so that step()'s checks roll the step
-  // back, rather than silently dropping every force of this step.
-  const auto poison = [&]() noexcept {
-    for (Vec6& v : x) v.setConstant(std::numeric_limits<double>::quiet_NaN());
-    data.solver_residual = std::numeric_limits<double>::quiet_NaN();
-    return false;
-  };
-  if (!std::isfinite(b_norm)) return poison();
-  if (b_norm == 0.0) return true;
+/// The bodies' system for detail::pcg(): A of build_implicit_system(), the
+/// block-Jacobi preconditioner of its factored diagonal blocks, ‖r‖ / ‖b‖. A body
+/// without cross contacts (SolverScratch::coupled = 0) keeps (A p)_i = B_i p_i
+/// and z_i = B_i⁻¹ r_i by their exact recurrences (solve_implicit_system()).
+struct BlockJacobiSystem {
+  const SolverScratch& s;
+  std::span<Vec6> x, r, z, p, ap;
+  double b_norm;
+  double alpha = 0.0;
 
-  double rz = apply_preconditioner(s, r, z);
-  if (!std::isfinite(rz)) return poison();
-  for (std::size_t i = 0; i < p.size(); ++i) {
-    p[i] = z[i];
-    if (!s.coupled[i]) ap[i] = r[i];  // B_i p_i = B_i B_i⁻¹ r_i
-  }
-  double rel = 1.0;
-  int it = 0;
-  const int max_it = std::max(1, model.solver.max_iterations);
-  while (it < max_it) {
-    ++it;
+  double apply() noexcept {
     // ap = A p on the coupled bodies; the others' ap is kept by recurrence.
     for (std::size_t i = 0; i < p.size(); ++i)
       if (s.coupled[i]) block_times(s.block[i], p[i], ap[i]);
     add_cross_contact_terms(s, p, ap);
-    const double pap = dot(p, ap);
-    if (!std::isfinite(pap)) return poison();
-    if (!(pap > 0.0)) break;  // breakdown (A not SPD numerically, or converged exactly)
-    const double alpha = rz / pap;
+    return dot(p, ap);
+  }
+  double advance(double a) noexcept {
+    alpha = a;
     double rr = 0.0;
     for (std::size_t i = 0; i < x.size(); ++i) {
-      x[i] += alpha * p[i];
-      r[i] -= alpha * ap[i];
+      x[i] += a * p[i];
+      r[i] -= a * ap[i];
       rr += r[i].squaredNorm();
     }
-    rel = std::sqrt(rr) / b_norm;
-    if (rel <= model.solver.tolerance) break;
-    double rz_new = 0.0;
+    return std::sqrt(rr) / b_norm;
+  }
+  double precondition() noexcept {
+    double rz = 0.0;
     for (std::size_t i = 0; i < r.size(); ++i) {
       if (s.coupled[i]) {
         solve_block(s.block_factor[i], r[i], z[i]);
       } else {
         z[i] -= alpha * p[i];  // B_i⁻¹ (r_i − α B_i p_i)
       }
-      rz_new += r[i].dot(z[i]);
+      rz += r[i].dot(z[i]);
     }
-    if (!std::isfinite(rz_new)) return poison();
-    const double beta = rz_new / rz;
-    rz = rz_new;
+    return rz;
+  }
+  void direction(double beta) noexcept {
     for (std::size_t i = 0; i < p.size(); ++i) {
       p[i] = z[i] + beta * p[i];
       if (!s.coupled[i]) ap[i] = r[i] + beta * ap[i];  // B_i (z_i + β p_i)
     }
   }
-  data.solver_iterations = it;
-  data.solver_residual = rel;
-  return rel <= model.solver.tolerance;
+};
+
+}  // namespace
+
+bool solve_implicit_system(const Model& model, Data& data) noexcept {
+  SolverScratch& s = data.solver;
+  BlockJacobiSystem sys{s, s.delta, s.residual, s.precond_residual, s.direction, s.a_direction, 0.0};
+  const std::span<const Vec6> b(s.rhs);
+  for (std::size_t i = 0; i < sys.x.size(); ++i) {
+    sys.x[i].setZero();
+    sys.r[i] = b[i];
+  }
+  sys.b_norm = std::sqrt(dot(b, b));
+  data.solver_iterations = 0;
+  data.solver_residual = 0.0;
+  // Non-finite forces or a non-positive pivot of a diagonal block (NaN in the
+  // factor): detail::pcg() reports it and the unknowns are poisoned.
+  if (!std::isfinite(sys.b_norm)) return detail::poison_solve(data);
+  if (sys.b_norm == 0.0) return true;
+  const double rz = apply_preconditioner(s, sys.r, sys.z);
+  for (std::size_t i = 0; i < sys.p.size(); ++i) {
+    sys.p[i] = sys.z[i];
+    if (!s.coupled[i]) sys.ap[i] = sys.r[i];  // B_i p_i = B_i B_i⁻¹ r_i
+  }
+  const detail::PcgStop stop{model.solver.tolerance, model.solver.max_iterations};
+  const detail::PcgResult res = detail::pcg(sys, 1.0, rz, stop);  // x0 = 0: ‖r0‖ / ‖b‖ = 1
+  if (!res.finite) return detail::poison_solve(data);
+  data.solver_iterations = res.iterations;
+  data.solver_residual = res.residual;
+  return res.converged(stop);
 }
 
 #if NUMEN_WITH_ARTICULATION
+namespace {
+
+/// The joints' projected system for detail::pcg() (solve_constrained_system()):
+/// A of build_implicit_system() on the null space of G, the tree solve as
+/// constraint preconditioner with Gould, Hribar & Nocedal's residual update,
+/// ‖r‖ / ref.
+struct ProjectedJointSystem {
+  const Model& model;
+  Data& data;
+  std::span<Vec6> x, r, z, p, ap, rp;
+  std::span<JointVector> y, yz;
+  double ref;
+
+  /// z = P r (tree solve with zero constraint right-hand side); then r is
+  /// replaced by r − Gᵀ yz, which has the same z (P Gᵀ = 0) and tends to 0
+  /// instead of to Gᵀ y (no cancellation, no loss of accuracy), and yz is added
+  /// to y. Returns ‖r‖ / ref.
+  double project() noexcept {
+    SolverScratch& s = data.solver;
+    const std::size_t n = r.size();
+    for (JointVector& v : s.joint_rhs) v.setZero();
+    solve_articulation(model, data.articulation, r, s.joint_rhs, z, yz);
+    for (std::size_t i = 0; i < n; ++i) rp[i].setZero();
+    add_joint_transpose(model, data, yz, rp);
+    double rr = 0.0;
+    for (std::size_t i = 0; i < n; ++i) {
+      r[i] -= rp[i];
+      rr += r[i].squaredNorm();
+    }
+    for (std::size_t j = 0; j < y.size(); ++j) y[j] += yz[j];
+    return std::sqrt(rr) / ref;
+  }
+  double apply() noexcept {
+    apply_implicit_system(model, data, p, ap);
+    return dot(p, ap);
+  }
+  double advance(double alpha) noexcept {
+    for (std::size_t i = 0; i < x.size(); ++i) {
+      x[i] += alpha * p[i];
+      r[i] -= alpha * ap[i];
+    }
+    return project();
+  }
+  double precondition() noexcept { return dot(r, z); }  // z: project()'s
+  void direction(double beta) noexcept {
+    for (std::size_t i = 0; i < p.size(); ++i) p[i] = z[i] + beta * p[i];
+  }
+};
+
+}  // namespace
+
 bool solve_constrained_system(const Model& model, Data& data) noexcept {
   SolverScratch& s = data.solver;
   ArticulationScratch& art = data.articulation;
@@ -374,85 +425,39 @@ bool solve_constrained_system(const Model& model, Data& data) noexcept {
   data.solver_iterations = 0;
   data.solver_residual = 0.0;
 
-  const std::span<Vec6> x(s.delta);
-  const std::span<Vec6> r(s.residual);
-  const std::span<Vec6> z(s.precond_residual);
-  const std::span<Vec6> p(s.direction);
-  const std::span<Vec6> ap(s.a_direction);
-  const std::span<Vec6> rp(s.projected_residual);
+  ProjectedJointSystem sys{model,          data,         s.delta,       s.residual,
+                           s.precond_residual, s.direction, s.a_direction, s.projected_residual,
+                           s.joint_y,      s.joint_y_correction, 1.0};
   const std::span<const Vec6> b(s.rhs);
-  const std::span<JointVector> y(s.joint_y);
-  const std::span<JointVector> yz(s.joint_y_correction);
-
-  const auto poison = [&]() noexcept {
-    for (Vec6& v : x) v.setConstant(std::numeric_limits<double>::quiet_NaN());
-    data.solver_residual = std::numeric_limits<double>::quiet_NaN();
-    return false;
-  };
 
   // Tree solve with the block-diagonal part of A: exact without cross contacts.
   factor_articulation(model, s.block, art);  // a bad pivot leaves NaN: rejected below / by step()
-  solve_articulation(model, art, b, s.joint_rhs, x, y);
+  solve_articulation(model, art, b, s.joint_rhs, sys.x, sys.y);
   bool converged = true;
 
   if (s.num_cross_contacts > 0) {
     // Projected PCG on the null space of G: r = b − A x − Gᵀ y.
-    apply_implicit_system(model, data, x, ap);
+    apply_implicit_system(model, data, sys.x, sys.ap);
     // Relative to ‖b‖, or to ‖A x0‖ when the joints' c drives the step.
-    const double b_norm = std::max(std::sqrt(dot(b, b)), std::sqrt(dot(ap, ap)));
-    const double ref = b_norm > 0.0 ? b_norm : 1.0;
-    for (std::size_t i = 0; i < n; ++i) r[i] = s.in_solve[i] ? Vec6(b[i] - ap[i]) : Vec6::Zero();
-    for (std::size_t i = 0; i < n; ++i) ap[i].setZero();
-    add_joint_transpose(model, data, y, ap);
-    for (std::size_t i = 0; i < n; ++i) r[i] -= ap[i];
+    const double b_norm = std::max(std::sqrt(dot(b, b)), std::sqrt(dot(sys.ap, sys.ap)));
+    sys.ref = b_norm > 0.0 ? b_norm : 1.0;
+    for (std::size_t i = 0; i < n; ++i)
+      sys.r[i] = s.in_solve[i] ? Vec6(b[i] - sys.ap[i]) : Vec6::Zero();
+    for (std::size_t i = 0; i < n; ++i) sys.ap[i].setZero();
+    add_joint_transpose(model, data, sys.y, sys.ap);
+    for (std::size_t i = 0; i < n; ++i) sys.r[i] -= sys.ap[i];
 
-    // z = P r (tree solve with zero constraint right-hand side); then r is
-    // replaced by r − Gᵀ yz, which has the same z (P Gᵀ = 0) and tends to 0
-    // instead of to Gᵀ y (Gould, Hribar & Nocedal's residual update: no
-    // cancellation, no loss of accuracy), and yz is added to y.
-    const auto precondition = [&]() noexcept {
-      for (JointVector& v : s.joint_rhs) v.setZero();
-      solve_articulation(model, art, r, s.joint_rhs, z, yz);
-      for (std::size_t i = 0; i < n; ++i) rp[i].setZero();
-      add_joint_transpose(model, data, yz, rp);
-      double rr = 0.0;
-      for (std::size_t i = 0; i < n; ++i) {
-        r[i] -= rp[i];
-        rr += r[i].squaredNorm();
-      }
-      for (std::size_t j = 0; j < y.size(); ++j) y[j] += yz[j];
-      return std::sqrt(rr) / ref;
-    };
-    double rel = precondition();
-    double rz = dot(r, z);
-    if (!std::isfinite(rel) || !std::isfinite(rz)) return poison();
-    for (std::size_t i = 0; i < n; ++i) p[i] = z[i];
-    int it = 0;
-    const int max_it = std::max(1, model.solver.max_iterations);
-    while (rel > model.solver.tolerance && it < max_it) {
-      ++it;
-      apply_implicit_system(model, data, p, ap);
-      const double pap = dot(p, ap);
-      if (!std::isfinite(pap)) return poison();
-      if (!(pap > 0.0)) break;
-      const double alpha = rz / pap;
-      for (std::size_t i = 0; i < n; ++i) {
-        x[i] += alpha * p[i];
-        r[i] -= alpha * ap[i];
-      }
-      rel = precondition();
-      const double rz_new = dot(r, z);
-      if (!std::isfinite(rel) || !std::isfinite(rz_new)) return poison();
-      if (!(rz_new > 0.0)) break;  // converged to rounding
-      const double beta = rz_new / rz;
-      rz = rz_new;
-      for (std::size_t i = 0; i < n; ++i) p[i] = z[i] + beta * p[i];
-    }
-    data.solver_iterations = it;
-    data.solver_residual = rel;
-    converged = rel <= model.solver.tolerance;
+    const double rel = sys.project();
+    const double rz = dot(sys.r, sys.z);
+    for (std::size_t i = 0; i < n; ++i) sys.p[i] = sys.z[i];
+    const detail::PcgStop stop{model.solver.tolerance, model.solver.max_iterations};
+    const detail::PcgResult res = detail::pcg(sys, rel, rz, stop);
+    if (!res.finite) return detail::poison_solve(data);
+    data.solver_iterations = res.iterations;
+    data.solver_residual = res.residual;
+    converged = res.converged(stop);
   }
-  store_joint_multipliers(model, data, y);
+  store_joint_multipliers(model, data, sys.y);
   return converged;
 }
 
@@ -544,20 +549,30 @@ void integrate_linearized(const Model& model, Data& data, double system_step) no
   const double h = model.dt;
   s.system_step = system_step;
   const double scale = h / system_step;
+  // The solve this model runs (step_stages.hpp: the plan step() reports from).
+  const std::uint32_t plan = compiled_stages(model);
+  // Optional parts (features.hpp): compiled out, their models are refused by finalize_model().
+  if constexpr (kWithDeformable) {
+    // The nets' linearisation over h_s, before the gyroscopic step changes the bodies' ω.
+    if (plan & kStageNetSolve) linearize_nets(model, data, system_step);
+  }
   prepare_implicit_step(model, data);
   build_implicit_system(model, data);
   bool converged = false;
-  // Optional parts (features.hpp): compiled out, their models are refused by finalize_model().
-  if constexpr (kWithDeformable) {
-    if (!model.nets.empty()) {
+  if (plan & kStageNetSolve) {
+    if constexpr (kWithDeformable) {
       build_net_system(model, data);
       converged = solve_net_system(model, data);
+      data.stages_run |= kStageNetSolve;
     }
-  }
+  } else if (plan & kStageJointSolve) {
 #if NUMEN_WITH_ARTICULATION
-  if (model.nets.empty() && !model.joints.empty()) converged = solve_constrained_system(model, data);
+    converged = solve_constrained_system(model, data);
+    data.stages_run |= kStageJointSolve;
 #endif
-  if (model.nets.empty() && model.joints.empty()) converged = solve_implicit_system(model, data);
+  } else {
+    converged = solve_implicit_system(model, data);
+  }
   if (!converged) data.status |= kSolverNotConverged;
   for (std::size_t i = 0; i < data.bodies.size(); ++i) {
     if (!s.in_solve[i]) continue;  // kDirect body: stays at the imposed target
@@ -667,8 +682,9 @@ void integrate_symplectic_euler(const Model& model, Data& data) noexcept {
   if constexpr (kWithDeformable)
     integrate_nodes_symplectic(model, data);  // forces of the step's start, like the bodies'
 #if NUMEN_WITH_ARTICULATION
-  if (!model.joints.empty()) {
+  if (compiled_stages(model) & kStageJointSolve) {
     integrate_symplectic_euler_constrained(model, data);
+    data.stages_run |= kStageJointSolve;
     return;
   }
 #endif

@@ -1,14 +1,14 @@
 /// @file joint_system.cpp
 /// Baumgarte-stabilised joint rows of one step (paper Eq. 4–5); see joint_system.hpp.
 
-#include "numen/core/joint_system.hpp"
-
 #include <algorithm>
 #include <cmath>
 
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"
 #include "numen/core/rigid_body.hpp"
+
+#include "detail/joint_system.hpp"
 
 namespace numen::core {
 namespace {

@@ -2,10 +2,10 @@
 /// Sphere against sphere, plane, box and capsule (paper §5, sphere-based
 /// collision). See narrowphase.hpp for the contact convention.
 
-#include "numen/core/narrowphase.hpp"
-
 #include <algorithm>
 #include <cmath>
+
+#include "detail/narrowphase.hpp"
 
 namespace numen::core {
 namespace {

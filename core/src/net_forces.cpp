@@ -76,7 +76,6 @@ inline void add_symmetric(SymmetricBlock& m, double a, double b, double c, doubl
 
 /// Spring j of node k (position xk, velocity vk) in scalar code: the law of
 /// spring_pass(), for a node's odd spring out.
-template <bool kImplicit>
 inline void one_spring(const SpringPass& a, std::int32_t j, const Vec3& xk, const Vec3& vk,
                        NodeSums& sum) noexcept {
   const auto hi = static_cast<std::size_t>(a.high[j]);
@@ -96,65 +95,76 @@ inline void one_spring(const SpringPass& a, std::int32_t j, const Vec3& xk, cons
   const Vec3 f = (a.stiffness[j] * (l - rest) + a.damping[j] * n_dv) * n;
   sum.force += f;
   a.force[hi] -= f;
-  if constexpr (kImplicit) {
-    // K̃ = (1 − τ) d̂d̂ᵀ + τ I, τ = max(0, 1 − L/l): −∂f_k/∂x_k / k.
-    const double hk = a.h2 * a.stiffness[j];
-    const double beta = l > rest ? hk * (1.0 - rest * inv_l) : 0.0;
-    const double alpha = a.h * a.damping[j] + hk - beta;
-    a.weight_axial[j] = alpha;
-    a.weight_isotropic[j] = beta;
-    const double ax = alpha * n.x(), ay = alpha * n.y(), az = alpha * n.z();
-    const double w00 = ax * n.x() + beta, w11 = ay * n.y() + beta, w22 = az * n.z() + beta;
-    const double w01 = ax * n.y(), w02 = ax * n.z(), w12 = ay * n.z();
-    sum.w00 += w00;
-    sum.w01 += w01;
-    sum.w02 += w02;
-    sum.w11 += w11;
-    sum.w12 += w12;
-    sum.w22 += w22;
-    add_symmetric(a.spring_block[hi], w00, w01, w02, w11, w12, w22);
-    // h² k K̃ (v_h − v_k) = (hk − β) d̂ (d̂ · dv) + β dv: + on row k, − on row h.
-    const Vec3 kv = ((hk - beta) * n_dv) * n + beta * dv;
-    sum.rhs += kv;
-    a.rhs[hi] -= kv;
-  }
+}
+
+/// Spring j of node k (velocity vk) in scalar code: the linearisation of
+/// linearization_pass(), for a node's odd spring out, from the direction and
+/// length the forces stage stored.
+inline void one_spring_linearization(const SpringPass& a, std::int32_t j, const Vec3& vk,
+                                     NodeSums& sum) noexcept {
+  const auto hi = static_cast<std::size_t>(a.high[j]);
+  const double rest = a.rest_length[j];
+  const double l = a.length[j];
+  const double inv_l = 1.0 / l;
+  const Vec3 n(a.dir_x[j], a.dir_y[j], a.dir_z[j]);
+  const Vec3 dv = a.nodes[hi].velocity - vk;
+  const double n_dv = n.dot(dv);
+  // K̃ = (1 − τ) d̂d̂ᵀ + τ I, τ = max(0, 1 − L/l): −∂f_k/∂x_k / k.
+  const double hk = a.h2 * a.stiffness[j];
+  const double beta = l > rest ? hk * (1.0 - rest * inv_l) : 0.0;
+  const double alpha = a.h * a.damping[j] + hk - beta;
+  a.weight_axial[j] = alpha;
+  a.weight_isotropic[j] = beta;
+  const double ax = alpha * n.x(), ay = alpha * n.y(), az = alpha * n.z();
+  const double w00 = ax * n.x() + beta, w11 = ay * n.y() + beta, w22 = az * n.z() + beta;
+  const double w01 = ax * n.y(), w02 = ax * n.z(), w12 = ay * n.z();
+  sum.w00 += w00;
+  sum.w01 += w01;
+  sum.w02 += w02;
+  sum.w11 += w11;
+  sum.w12 += w12;
+  sum.w22 += w22;
+  add_symmetric(a.spring_block[hi], w00, w01, w02, w11, w12, w22);
+  // h² k K̃ (v_h − v_k) = (hk − β) d̂ (d̂ · dv) + β dv: + on row k, − on row h.
+  const Vec3 kv = ((hk - beta) * n_dv) * n + beta * dv;
+  sum.rhs += kv;
+  a.rhs[hi] -= kv;
+}
+
+/// The arrays of the springs' passes for `h` (h_s of the linearised system; unused by the
+/// forces' pass).
+SpringPass spring_arrays(Data& data, double h) noexcept {
+  NetScratch& s = data.net;
+  SweepSprings& sw = s.sweep_springs;
+  return SpringPass{data.nodes.data(),
+                    s.spring_constants.rest_length.data(),
+                    s.spring_constants.stiffness.data(),
+                    s.spring_constants.damping.data(),
+                    sw.direction_x.data(),
+                    sw.direction_y.data(),
+                    sw.direction_z.data(),
+                    sw.weight_axial.data(),
+                    sw.weight_isotropic.data(),
+                    sw.high.data(),
+                    s.spring_length.data(),
+                    s.force.data(),
+                    s.spring_block.data(),
+                    s.rhs.data(),
+                    h,
+                    h * h};
 }
 
 /// The springs' pass of compute_net_forces(), in the sweep order (grouped by
 /// their earlier node k in Model::node_sweep_order, whose sums stay in
 /// registers), two springs of a node at a time (the same law as
 /// one_spring(), lane by lane: the same operations and roundings): forces,
-/// and with kImplicit the linearisation of the implicit solve — the weights
-/// W_e = α d̂d̂ᵀ + β I (SweepSprings), their sum at both nodes
-/// (NetScratch::spring_block: 6 entries, the later node's scattered two at a
-/// time), and the spring part of the node rows' right-hand side,
-/// −h² k K̃ (v_i − v_j) with k K̃ = (h² k − β)/h² d̂d̂ᵀ + β/h² I
-/// (net_solve.hpp). Expects force = gravity + ties and, with kImplicit,
-/// spring_block = 0 and rhs = 0 on entry.
-template <bool kImplicit>
+/// and the directions and lengths linearization_pass() starts from.
+/// Expects force = gravity + ties on entry.
 void spring_pass(const Model& model, Data& data) noexcept {
-  NetScratch& s = data.net;
-  SweepSprings& sw = s.sweep_springs;
-  const double h = data.solver.system_step;
-  const SpringPass a{data.nodes.data(),
-                     s.spring_constants.rest_length.data(),
-                     s.spring_constants.stiffness.data(),
-                     s.spring_constants.damping.data(),
-                     sw.direction_x.data(),
-                     sw.direction_y.data(),
-                     sw.direction_z.data(),
-                     sw.weight_axial.data(),
-                     sw.weight_isotropic.data(),
-                     sw.high.data(),
-                     s.spring_length.data(),
-                     s.force.data(),
-                     s.spring_block.data(),
-                     s.rhs.data(),
-                     h,
-                     h * h};
+  const NetScratch& s = data.net;
+  const SpringPass a = spring_arrays(data, 0.0);
   const std::int32_t* low_begin = s.spring_low_begin.data();
   const std::int32_t* order = model.node_sweep_order.data();
-  const Pair hp = Pair::Constant(a.h), h2p = Pair::Constant(a.h2);
   const std::size_t n = data.nodes.size();
   for (std::size_t p = 0; p < n; ++p) {
     const auto k = static_cast<std::size_t>(order[p]);
@@ -165,9 +175,6 @@ void spring_pass(const Model& model, Data& data) noexcept {
     const Pair vx = Pair::Constant(vk.x()), vy = Pair::Constant(vk.y()),
                vz = Pair::Constant(vk.z());
     Pair fx = Pair::Zero(), fy = Pair::Zero(), fz = Pair::Zero();
-    Pair bx = Pair::Zero(), by = Pair::Zero(), bz = Pair::Zero();
-    Pair s00 = Pair::Zero(), s01 = Pair::Zero(), s02 = Pair::Zero(), s11 = Pair::Zero(),
-         s12 = Pair::Zero(), s22 = Pair::Zero();
     std::int32_t j = low_begin[p];
     const std::int32_t end = low_begin[p + 1];
     for (; j + 1 < end; j += 2) {
@@ -206,36 +213,82 @@ void spring_pass(const Model& model, Data& data) noexcept {
       fz += gz;
       a.force[h0] -= Vec3(gx(0), gy(0), gz(0));
       a.force[h1] -= Vec3(gx(1), gy(1), gz(1));
-      if constexpr (kImplicit) {
-        const Pair hk = h2p * stiffness;
-        // β = hk (1 − L/l) if l > L else 0, as max(0, ·) (SSE2 maxpd; Eigen's pmax(a, b)
-        // returns a when b is NaN: 0 for l = 0, as the comparison gives).
-        const Pair beta = Pair::Zero().max(hk * (1.0 - rest * inv_l));
-        const Pair alpha = hp * damping + hk - beta;
-        store_pair(a.weight_axial + j, alpha);
-        store_pair(a.weight_isotropic + j, beta);
-        const Pair ax = alpha * nx, ay = alpha * ny, az = alpha * nz;
-        const Pair w00 = ax * nx + beta, w11 = ay * ny + beta, w22 = az * nz + beta;
-        const Pair w01 = ax * ny, w02 = ax * nz, w12 = ay * nz;
-        s00 += w00;
-        s01 += w01;
-        s02 += w02;
-        s11 += w11;
-        s12 += w12;
-        s22 += w22;
-        add_symmetric(a.spring_block[h0], w00(0), w01(0), w02(0), w11(0), w12(0), w22(0));
-        add_symmetric(a.spring_block[h1], w00(1), w01(1), w02(1), w11(1), w12(1), w22(1));
-        const Pair c = (hk - beta) * n_dv;
-        const Pair kx = c * nx + beta * dvx, ky = c * ny + beta * dvy, kz = c * nz + beta * dvz;
-        bx += kx;
-        by += ky;
-        bz += kz;
-        a.rhs[h0] -= Vec3(kx(0), ky(0), kz(0));
-        a.rhs[h1] -= Vec3(kx(1), ky(1), kz(1));
-      }
     }
     NodeSums sum;
     sum.force = Vec3(fx(0) + fx(1), fy(0) + fy(1), fz(0) + fz(1));
+    if (j < end) one_spring(a, j, xk, vk, sum);
+    a.force[k] += sum.force;
+  }
+}
+
+/// The springs' linearisation for the implicit solve (linearize_nets()), in the
+/// order of spring_pass() and two springs at a time (the same operations and
+/// roundings as one_spring_linearization(), lane by lane), from the directions
+/// and lengths spring_pass() stored: the weights W_e = α d̂d̂ᵀ + β I
+/// (SweepSprings), their sum at both nodes (NetScratch::spring_block: 6
+/// entries, the later node's scattered two at a time), and the spring part of
+/// the node rows' right-hand side, −h² k K̃ (v_i − v_j) with
+/// k K̃ = (h² k − β)/h² d̂d̂ᵀ + β/h² I (net_solve.hpp). Expects spring_block = 0
+/// and rhs = 0 on entry.
+void linearization_pass(const Model& model, Data& data, double h) noexcept {
+  const NetScratch& s = data.net;
+  const SpringPass a = spring_arrays(data, h);
+  const std::int32_t* low_begin = s.spring_low_begin.data();
+  const std::int32_t* order = model.node_sweep_order.data();
+  const Pair hp = Pair::Constant(a.h), h2p = Pair::Constant(a.h2);
+  const std::size_t n = data.nodes.size();
+  for (std::size_t p = 0; p < n; ++p) {
+    const auto k = static_cast<std::size_t>(order[p]);
+    const Vec3 vk = a.nodes[k].velocity;
+    const Pair vx = Pair::Constant(vk.x()), vy = Pair::Constant(vk.y()),
+               vz = Pair::Constant(vk.z());
+    Pair bx = Pair::Zero(), by = Pair::Zero(), bz = Pair::Zero();
+    Pair s00 = Pair::Zero(), s01 = Pair::Zero(), s02 = Pair::Zero(), s11 = Pair::Zero(),
+         s12 = Pair::Zero(), s22 = Pair::Zero();
+    std::int32_t j = low_begin[p];
+    const std::int32_t end = low_begin[p + 1];
+    for (; j + 1 < end; j += 2) {
+      const auto h0 = static_cast<std::size_t>(a.high[j]);
+      const auto h1 = static_cast<std::size_t>(a.high[j + 1]);
+      const NodeState& n0 = a.nodes[h0];
+      const NodeState& n1 = a.nodes[h1];
+      const Pair l = load_pair(a.length + j);
+      const Pair inv_l = l.inverse();
+      const Pair rest = load_pair(a.rest_length + j);
+      const Pair nx = load_pair(a.dir_x + j), ny = load_pair(a.dir_y + j),
+                 nz = load_pair(a.dir_z + j);
+      const Pair dvx = Pair(n0.velocity.x(), n1.velocity.x()) - vx;
+      const Pair dvy = Pair(n0.velocity.y(), n1.velocity.y()) - vy;
+      const Pair dvz = Pair(n0.velocity.z(), n1.velocity.z()) - vz;
+      const Pair n_dv = nx * dvx + ny * dvy + nz * dvz;
+      const Pair stiffness = load_pair(a.stiffness + j), damping = load_pair(a.damping + j);
+      const Pair hk = h2p * stiffness;
+      // β = hk (1 − L/l) if l > L else 0, as max(0, ·) (SSE2 maxpd; Eigen's pmax(a, b)
+      // returns a when b is NaN: 0 for l = 0, as the comparison gives).
+      const Pair beta = Pair::Zero().max(hk * (1.0 - rest * inv_l));
+      const Pair alpha = hp * damping + hk - beta;
+      store_pair(a.weight_axial + j, alpha);
+      store_pair(a.weight_isotropic + j, beta);
+      const Pair ax = alpha * nx, ay = alpha * ny, az = alpha * nz;
+      const Pair w00 = ax * nx + beta, w11 = ay * ny + beta, w22 = az * nz + beta;
+      const Pair w01 = ax * ny, w02 = ax * nz, w12 = ay * nz;
+      s00 += w00;
+      s01 += w01;
+      s02 += w02;
+      s11 += w11;
+      s12 += w12;
+      s22 += w22;
+      add_symmetric(a.spring_block[h0], w00(0), w01(0), w02(0), w11(0), w12(0), w22(0));
+      add_symmetric(a.spring_block[h1], w00(1), w01(1), w02(1), w11(1), w12(1), w22(1));
+      const Pair c = (hk - beta) * n_dv;
+      const Pair kx = c * nx + beta * dvx, ky = c * ny + beta * dvy, kz = c * nz + beta * dvz;
+      bx += kx;
+      by += ky;
+      bz += kz;
+      a.rhs[h0] -= Vec3(kx(0), ky(0), kz(0));
+      a.rhs[h1] -= Vec3(kx(1), ky(1), kz(1));
+    }
+    NodeSums sum;
     sum.rhs = Vec3(bx(0) + bx(1), by(0) + by(1), bz(0) + bz(1));
     sum.w00 = s00(0) + s00(1);
     sum.w01 = s01(0) + s01(1);
@@ -243,12 +296,9 @@ void spring_pass(const Model& model, Data& data) noexcept {
     sum.w11 = s11(0) + s11(1);
     sum.w12 = s12(0) + s12(1);
     sum.w22 = s22(0) + s22(1);
-    if (j < end) one_spring<kImplicit>(a, j, xk, vk, sum);
-    a.force[k] += sum.force;
-    if constexpr (kImplicit) {
-      a.rhs[k] += sum.rhs;
-      add_symmetric(a.spring_block[k], sum.w00, sum.w01, sum.w02, sum.w11, sum.w12, sum.w22);
-    }
+    if (j < end) one_spring_linearization(a, j, vk, sum);
+    a.rhs[k] += sum.rhs;
+    add_symmetric(a.spring_block[k], sum.w00, sum.w01, sum.w02, sum.w11, sum.w12, sum.w22);
   }
 }
 
@@ -257,31 +307,21 @@ void spring_pass(const Model& model, Data& data) noexcept {
 void compute_net_forces(const Model& model, Data& data) noexcept {
   if (model.nets.empty()) return;
   NetScratch& s = data.net;
-  // The linearised schemes (implicit Euler, trapezoidal) need the springs' Jacobian blocks too.
-  const bool implicit = model.integrator != Integrator::kSymplecticEuler;
 
   // Gravity, and the zero-length ties to the rigid component with their
-  // reaction on it; for the linearised schemes also the ties' sums of the
-  // rigid component's rows (NetTieSums; the anchor's velocity at the step's
-  // start is that of the twist u0 the integrator starts from). Raw pointers:
-  // the stores would otherwise make the compiler reload the vectors' data
-  // pointers per node.
+  // reaction on it. Raw pointers: the stores would otherwise make the
+  // compiler reload the vectors' data pointers per node.
   const Vec3* rest = model.node_rest.data();
   const double* mass = model.node_mass.data();
   const NodeState* nodes = data.nodes.data();
   Vec3* lever_out = s.lever.data();
   Vec3* force = s.force.data();
-  Vec3* rhs = s.rhs.data();
-  SymmetricBlock* spring_block = s.spring_block.data();
   for (std::size_t k = 0; k < model.nets.size(); ++k) {
     const NetModel& net = model.nets[k];
     const auto bi = static_cast<std::size_t>(net.body);
     const BodyState& body = data.bodies[bi];
     const Mat3 rot = body.orientation.toRotationMatrix();
     Wrench reaction;
-    Vec3 sum_r = Vec3::Zero();
-    double rr00 = 0.0, rr01 = 0.0, rr02 = 0.0, rr11 = 0.0, rr12 = 0.0, rr22 = 0.0;
-    Vec3 sum_dv = Vec3::Zero(), sum_r_dv = Vec3::Zero();
     for (int v = net.node_begin; v < net.node_begin + net.node_count; ++v) {
       const auto i = static_cast<std::size_t>(v);
       const Vec3 lever = rot * rest[i];
@@ -293,37 +333,14 @@ void compute_net_forces(const Model& model, Data& data) noexcept {
       force[i] = mass[i] * model.gravity + f;
       reaction.force -= f;
       reaction.torque -= lever.cross(f);
-      if (implicit) {
-        spring_block[i] = SymmetricBlock{};
-        rhs[i].setZero();
-        sum_r += lever;
-        rr00 += lever.x() * lever.x();
-        rr01 += lever.x() * lever.y();
-        rr02 += lever.x() * lever.z();
-        rr11 += lever.y() * lever.y();
-        rr12 += lever.y() * lever.z();
-        rr22 += lever.z() * lever.z();
-        sum_dv += dv;
-        sum_r_dv += lever.cross(dv);
-      }
     }
     data.body_wrench[bi].force += reaction.force;
     data.body_wrench[bi].torque += reaction.torque;
     data.nets[k].tie_wrench = reaction;
-    if (implicit) {
-      NetTieSums& t = s.tie_sums[k];
-      t.lever_sum = sum_r;
-      t.lever_moment << rr00, rr01, rr02, rr01, rr11, rr12, rr02, rr12, rr22;
-      t.relative << sum_dv, sum_r_dv;
-    }
   }
 
-  // Structural and bending springs (and their linearisation).
-  if (implicit) {
-    spring_pass<true>(model, data);
-  } else {
-    spring_pass<false>(model, data);
-  }
+  // Structural and bending springs.
+  spring_pass(model, data);
 
   // Node contacts (penalty law of contact_force.hpp, the node on side a).
   const int nc = std::clamp(data.num_node_contacts, 0, static_cast<int>(data.node_contacts.size()));
@@ -368,6 +385,49 @@ void compute_net_forces(const Model& model, Data& data) noexcept {
       w.torque -= ct.r_b.cross(r.force);
     }
   }
+}
+
+void linearize_nets(const Model& model, Data& data, double system_step) noexcept {
+  if (model.nets.empty()) return;
+  NetScratch& s = data.net;
+  // The ties' sums of the rigid component's rows (NetTieSums; the anchor's
+  // velocity at the step's start is that of the twist u0 the integrator
+  // starts from), and the node rows' accumulators cleared. Raw pointers, as
+  // in compute_net_forces().
+  const NodeState* nodes = data.nodes.data();
+  const Vec3* lever_in = s.lever.data();
+  Vec3* rhs = s.rhs.data();
+  SymmetricBlock* spring_block = s.spring_block.data();
+  for (std::size_t k = 0; k < model.nets.size(); ++k) {
+    const NetModel& net = model.nets[k];
+    const BodyState& body = data.bodies[static_cast<std::size_t>(net.body)];
+    Vec3 sum_r = Vec3::Zero();
+    double rr00 = 0.0, rr01 = 0.0, rr02 = 0.0, rr11 = 0.0, rr12 = 0.0, rr22 = 0.0;
+    Vec3 sum_dv = Vec3::Zero(), sum_r_dv = Vec3::Zero();
+    for (int v = net.node_begin; v < net.node_begin + net.node_count; ++v) {
+      const auto i = static_cast<std::size_t>(v);
+      const Vec3 lever = lever_in[i];
+      const Vec3 anchor_velocity = body.linear_velocity + body.angular_velocity.cross(lever);
+      const Vec3 dv = nodes[i].velocity - anchor_velocity;
+      spring_block[i] = SymmetricBlock{};
+      rhs[i].setZero();
+      sum_r += lever;
+      rr00 += lever.x() * lever.x();
+      rr01 += lever.x() * lever.y();
+      rr02 += lever.x() * lever.z();
+      rr11 += lever.y() * lever.y();
+      rr12 += lever.y() * lever.z();
+      rr22 += lever.z() * lever.z();
+      sum_dv += dv;
+      sum_r_dv += lever.cross(dv);
+    }
+    NetTieSums& t = s.tie_sums[k];
+    t.lever_sum = sum_r;
+    t.lever_moment << rr00, rr01, rr02, rr01, rr11, rr12, rr02, rr12, rr22;
+    t.relative << sum_dv, sum_r_dv;
+  }
+  // The springs' weights, their sums per node and their part of the node rows' b.
+  linearization_pass(model, data, system_step);
 }
 
 void integrate_nodes_symplectic(const Model& model, Data& data) noexcept {

@@ -10,12 +10,13 @@
 #include "numen/core/features.hpp"
 #include "numen/core/feedback.hpp"
 #include "numen/core/integrator.hpp"
-#include "numen/core/joint_system.hpp"
 #include "numen/core/model.hpp"
 #include "numen/core/net_collision.hpp"
 #include "numen/core/net_forces.hpp"
 #include "numen/core/rigid_body.hpp"
 #include "numen/core/step_stages.hpp"
+
+#include "detail/joint_system.hpp"
 
 namespace numen::core {
 namespace {
@@ -64,55 +65,65 @@ void compute_forces(const Model& model, Data& data) noexcept {
   apply_external_forces(model, data);
   apply_coupling(model, data);
   compute_contact_forces(model, data);
-  if constexpr (kWithDeformable)
-    if (!model.nets.empty()) compute_net_forces(model, data);
+  data.stages_run |= kStageBodyForces;
+  if constexpr (kWithDeformable) {
+    if (!model.nets.empty()) {
+      compute_net_forces(model, data);
+      data.stages_run |= kStageNetForces;
+    }
+  }
 }
 
 void step(const Model& model, Data& data) noexcept {
-  // Stages a model does not need are skipped here, at the stage boundary, on
-  // counts fixed by the model (step_stages.hpp); their buffers are empty.
+  // The stages this model runs, from the one source compiled_stages() reads
+  // (step_stages.cpp); every stage sets its own bit of Data::stages_run where it
+  // runs (the integrator's solves in integrator.cpp), so the report is what ran.
   // A part compiled out (features.hpp) has no model: finalize_model() refuses it.
-  const bool nets = kWithDeformable && !model.nets.empty();
-  const bool joints = kWithArticulation && !model.joints.empty();
-  std::uint32_t ran = kStageBodyForces | kStageIntegrate | kStageFeedback | kStageChecks;
+  const std::uint32_t plan = compiled_stages(model);
   data.status = kStepOk;
+  data.stages_run = 0;
   save_state(data);
-  impose_direct_target(model, data);  // clears SolverScratch::imposed; imposes in kDirect only
-  if (model.coupling_mode == CouplingMode::kDirect) ran |= kStageDirectTarget;
-  if (!data.solver.contact_terms.empty()) {  // room only if something can collide (capacity.hpp)
+  impose_direct_target(model, data);  // clears SolverScratch::imposed; imposes in kDirect
+  if ((plan & kStageContacts) && !data.solver.contact_terms.empty()) {  // capacity.hpp
     detect_contacts(model, data);  // may set kContactOverflow, counts contact_overflow_steps
-    ran |= kStageContacts;
+    data.stages_run |= kStageContacts;
   } else {
     data.num_contacts = 0;
     data.contacts_dropped = 0;
     data.max_penetration = 0.0;
   }
   if constexpr (kWithDeformable) {
-    if (nets) detect_node_contacts(model, data);
+    if (plan & kStageNodeContacts) {
+      detect_node_contacts(model, data);
+      data.stages_run |= kStageNodeContacts;
+    }
   }
-  if (nets) {
-    ran |= kStageNodeContacts | kStageNetForces | kStageNetSolve | kStageMeasureNets;
-  }
-  data.solver.system_step = linearized_system_step(model);  // the net spring pass needs h_s
   compute_forces(model, data);
   if (data.contacts_clamped > 0) ++data.contact_clamped_steps;  // body and node contacts
-  integrate(model, data);  // with nets: net_solve; else with joints: the KKT tree solve
+  integrate(model, data);  // sets kStageNetSolve or kStageJointSolve where it runs them
+  data.stages_run |= kStageIntegrate;
   if constexpr (kWithArticulation) {
-    if (joints) measure_joint_drift(model, data);
+    if (plan & kStageJointDrift) {
+      measure_joint_drift(model, data);
+      data.stages_run |= kStageJointDrift;
+    }
   }
-  if (joints) ran |= kStageJointDrift | (nets ? 0u : kStageJointSolve);
   if constexpr (kWithDeformable) {
-    if (nets) measure_nets(model, data);
+    if (plan & kStageMeasureNets) {
+      measure_nets(model, data);
+      data.stages_run |= kStageMeasureNets;
+    }
   }
   compute_feedback(model, data);
+  data.stages_run |= kStageFeedback;
   const bool accepted = check_finite(data);
+  data.stages_run |= kStageChecks;
   if constexpr (kWithDeformable) {
-    if (!accepted && nets) {
+    if (!accepted && (plan & kStageMeasureNets)) {
       for (NetOutput& o : data.nets) o.tie_wrench = Wrench{};
       measure_nets(model, data);  // describe the restored net (finite, at rest)
     }
   }
-  data.stages_run = ran;
   data.time += model.dt;
   ++data.step_count;
 }

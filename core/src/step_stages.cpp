@@ -18,8 +18,8 @@ constexpr std::array<StageDescription, 12> kStages{{
     {kStageBodyForces, "body forces (gravity, coupling, contacts)", nullptr},
     {kStageNetForces, "net forces", "no nets"},
     {kStageIntegrate, "integrate", nullptr},
-    {kStageJointSolve, "joint solve (KKT tree)", "no joints"},
-    {kStageNetSolve, "net solve (bodies + nodes)", "no nets"},
+    {kStageJointSolve, "joint solve (KKT tree)", "no joints, or in the net solve"},
+    {kStageNetSolve, "net solve (bodies + nodes)", "no nets, or symplectic Euler"},
     {kStageJointDrift, "joint drift", "no joints"},
     {kStageMeasureNets, "measure nets", "no nets"},
     {kStageFeedback, "feedback", nullptr},
@@ -31,14 +31,21 @@ constexpr std::array<StageDescription, 12> kStages{{
 std::span<const StageDescription> step_stage_table() noexcept { return kStages; }
 
 std::uint32_t compiled_stages(const Model& model) noexcept {
+  // The one source of the stage plan: step() gates its stages on these bits and
+  // the integrator picks its solve from them (integrator.cpp).
   std::uint32_t s = kStageBodyForces | kStageIntegrate | kStageFeedback | kStageChecks;
   if (model.coupling_mode == CouplingMode::kDirect) s |= kStageDirectTarget;
   if (contact_capacity(model) > 0) s |= kStageContacts;
   const bool nets = !model.nets.empty();
   const bool joints = !model.joints.empty();
-  if (nets) s |= kStageNodeContacts | kStageNetForces | kStageNetSolve | kStageMeasureNets;
+  // Symplectic Euler steps the nodes explicitly: no system of bodies and nodes.
+  const bool net_solve = nets && model.integrator != Integrator::kSymplecticEuler;
+  if (nets) s |= kStageNodeContacts | kStageNetForces | kStageMeasureNets;
+  if (net_solve) s |= kStageNetSolve;
   if (joints) s |= kStageJointDrift;
-  if (joints && !nets) s |= kStageJointSolve;
+  // The net solve takes the joints in its arrowhead preconditioner; otherwise the
+  // joints have their own KKT tree solve (implicit or symplectic).
+  if (joints && !net_solve) s |= kStageJointSolve;
   return s;
 }
 

@@ -58,8 +58,9 @@
 #include "net_system_sparse.hpp"
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"
-#include "numen/core/net_solve.hpp"
 #include "numen/core/step.hpp"
+
+#include "detail/net_solve.hpp"
 #include "sample_median.hpp"
 
 namespace {

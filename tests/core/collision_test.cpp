@@ -17,7 +17,8 @@
 #include "numen/core/capacity.hpp"
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"
-#include "numen/core/narrowphase.hpp"
+
+#include "detail/narrowphase.hpp"
 
 namespace numen::core {
 namespace {

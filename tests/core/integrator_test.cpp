@@ -21,6 +21,8 @@
 #include "numen/core/rigid_body.hpp"
 #include "numen/core/step.hpp"
 
+#include "detail/implicit_system.hpp"
+
 namespace core = numen::core;
 using core::Mat12;
 using core::Mat3;

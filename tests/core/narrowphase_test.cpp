@@ -2,11 +2,12 @@
 // against sphere, plane, box and capsule on hand-computed cases, including the
 // degenerate ones (coincident centres, centre inside a box, centre on a
 // capsule's axis), which must give a finite unit normal.
-#include "numen/core/narrowphase.hpp"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
+
+#include "detail/narrowphase.hpp"
 
 namespace numen::core {
 namespace {

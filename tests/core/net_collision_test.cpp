@@ -22,7 +22,8 @@
 #include "numen/core/data.hpp"
 #include "numen/core/mesh.hpp"
 #include "numen/core/model.hpp"
-#include "numen/core/narrowphase.hpp"
+
+#include "detail/narrowphase.hpp"
 #include "build_features.hpp"
 
 namespace numen::core {

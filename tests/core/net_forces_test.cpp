@@ -19,9 +19,11 @@
 #include "numen/core/integrator.hpp"
 #include "numen/core/mesh.hpp"
 #include "numen/core/model.hpp"
-#include "numen/core/net_solve.hpp"
 #include "numen/core/rigid_body.hpp"
 #include "numen/core/step.hpp"
+
+#include "detail/implicit_system.hpp"
+#include "detail/net_solve.hpp"
 
 namespace core = numen::core;
 using core::Mat3;
@@ -136,6 +138,8 @@ void perturb(core::Data& d, double dx, double dv) {
 /// Forces stage of step() for the current states.
 void forces(const core::Model& m, core::Data& d) {
   core::compute_forces(m, d);
+  // The implicit solve's linearisation (net_forces.hpp), for the tests that read it.
+  core::linearize_nets(m, d, core::linearized_system_step(m));
 }
 
 }  // namespace
@@ -343,6 +347,7 @@ namespace {
 /// SweepSpring weights after build_net_system (S = α d̂d̂ᵀ + β I).
 Mat3 solver_spring_stiffness(const core::Model& m, core::Data& d, int spring) {
   core::compute_forces(m, d);
+  core::linearize_nets(m, d, d.solver.system_step);
   core::prepare_implicit_step(m, d);
   core::build_implicit_system(m, d);
   core::build_net_system(m, d);

@@ -13,7 +13,6 @@
 // on the benchmark's ball with the contacts step() finds, the sparse system
 // against the solver and Eigen's sparse LDLᵀ, and a repeated solve from the
 // restored warm start (what the peer benchmark times) bit for bit.
-#include "numen/core/net_solve.hpp"
 
 #include <gtest/gtest.h>
 
@@ -31,11 +30,15 @@
 #include "numen/core/coupling.hpp"
 #include "numen/core/data.hpp"
 #include "numen/core/integrator.hpp"
-#include "numen/core/joint_system.hpp"
+#include "numen/core/net_forces.hpp"
 #include "numen/core/mesh.hpp"
 #include "numen/core/model.hpp"
 #include "numen/core/rigid_body.hpp"
 #include "numen/core/step.hpp"
+
+#include "detail/implicit_system.hpp"
+#include "detail/joint_system.hpp"
+#include "detail/net_solve.hpp"
 
 namespace core = numen::core;
 using core::Mat3;
@@ -226,6 +229,7 @@ Snapshot staged_solve(const core::Model& m, core::Data& d, bool* converged,
   Snapshot s = numen::test::take_net_system_inputs(d);
   d.solver.system_step = core::linearized_system_step(m);  // as stage_net_system()
   core::compute_forces(m, d);
+  core::linearize_nets(m, d, d.solver.system_step);
   core::prepare_implicit_step(m, d);
   core::build_implicit_system(m, d);
   core::build_net_system(m, d);

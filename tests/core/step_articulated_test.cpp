@@ -18,10 +18,12 @@
 #include "numen/core/data.hpp"
 #include "numen/core/feedback.hpp"
 #include "numen/core/integrator.hpp"
-#include "numen/core/joint_system.hpp"
 #include "numen/core/model.hpp"
 #include "numen/core/rigid_body.hpp"
 #include "numen/core/step.hpp"
+
+#include "detail/implicit_system.hpp"
+#include "detail/joint_system.hpp"
 
 namespace core = numen::core;
 using core::Quat;

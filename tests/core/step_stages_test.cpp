@@ -5,6 +5,7 @@
 #include <cstring>
 #include <set>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -86,4 +87,74 @@ TEST(StepStages, ContactsStillDetectedWhenPossible) {
   d.target.position = core::Vec3(0.0, 0.0, -0.02);
   for (int i = 0; i < 500; ++i) core::step(m, d);
   EXPECT_GT(d.num_contacts, 0);
+}
+
+namespace {
+
+/// Evidence, independent of Data::stages_run, of the integrate stage's solves
+/// after one step from make_data(): the net solve writes the nodes' Δv
+/// (NetScratch::delta, zero from make_data(); the symplectic node step never
+/// touches it) and reports its CG iterations; a solve that takes the joints — the
+/// joint solve (KKT tree, implicit or symplectic), or the net solve with its
+/// arrowhead preconditioner — writes their multipliers, which gravity on the
+/// hinged body makes non-zero.
+struct Ran {
+  bool net_solve = false;
+  bool joints_solved = false;
+};
+
+Ran what_ran(const core::Data& d) {
+  Ran r;
+  for (const core::Vec3& dv : d.net.delta) r.net_solve = r.net_solve || !dv.isZero(0.0);
+  r.net_solve = r.net_solve && d.solver_iterations > 0;
+  for (const core::JointState& j : d.joints)
+    r.joints_solved = r.joints_solved || !j.multiplier.isZero(0.0);
+  return r;
+}
+
+}  // namespace
+
+// Issue 18: with symplectic Euler and a net the report used to name a net solve that
+// did not run (0 iterations), and with symplectic Euler, a net and a joint the joint
+// solve ran unreported. Every integrator × (joints, nets): the report is what ran.
+TEST(StepStages, ReportIsWhatRanForEveryIntegratorJointsAndNets) {
+  std::vector<LeanPart> parts{LeanPart::kNone};
+  if (core::kWithArticulation) parts.push_back(LeanPart::kJoint);
+  if (core::kWithDeformable) parts.push_back(LeanPart::kNet);
+  if (core::kWithArticulation && core::kWithDeformable) parts.push_back(LeanPart::kJointAndNet);
+  for (LeanPart part : parts) {
+    for (auto integ : {core::Integrator::kLinearlyImplicitEuler, core::Integrator::kTrapezoidal,
+                       core::Integrator::kSymplecticEuler}) {
+      core::Model m = make_lean_model(part);
+      m.integrator = integ;
+      core::Data d = core::make_data(m);
+      {
+        numen::test::AllocationGuard guard;
+        core::step(m, d);
+        EXPECT_EQ(guard.count(), 0);
+      }
+      const std::string what = "part " + std::to_string(static_cast<int>(part)) +
+                               ", integrator " + std::to_string(static_cast<int>(integ));
+      ASSERT_EQ(d.status, core::kStepOk) << what;
+      const Ran ran = what_ran(d);
+      EXPECT_EQ((d.stages_run & core::kStageNetSolve) != 0, ran.net_solve) << what;
+      const bool joint_solve = (d.stages_run & core::kStageJointSolve) != 0;
+      const bool net_solve = (d.stages_run & core::kStageNetSolve) != 0;
+      EXPECT_FALSE(joint_solve && net_solve) << what;
+      EXPECT_EQ(joint_solve || (net_solve && !m.joints.empty()), ran.joints_solved) << what;
+      EXPECT_EQ(d.stages_run, core::compiled_stages(m)) << what;
+      const bool nets = !m.nets.empty(), joints = !m.joints.empty();
+      const bool symplectic = integ == core::Integrator::kSymplecticEuler;
+      EXPECT_EQ(ran.net_solve, nets && !symplectic) << what;
+      EXPECT_EQ(ran.joints_solved, joints) << what;
+      EXPECT_EQ(joint_solve, joints && !(nets && !symplectic)) << what;
+      // The stages every such model runs, and the parts' own passes.
+      for (auto s : {core::kStageBodyForces, core::kStageIntegrate, core::kStageFeedback,
+                     core::kStageChecks})
+        EXPECT_NE(d.stages_run & s, 0u) << what;
+      EXPECT_EQ((d.stages_run & core::kStageNetForces) != 0, nets) << what;
+      EXPECT_EQ((d.stages_run & core::kStageMeasureNets) != 0, nets) << what;
+      EXPECT_EQ((d.stages_run & core::kStageJointDrift) != 0, joints) << what;
+    }
+  }
 }

@@ -10,7 +10,6 @@
 #include "temp_dir.hpp"
 
 #include "numen/core/data.hpp"
-#include "numen/core/joint_system.hpp"
 #include <unistd.h>
 
 #include <algorithm>
@@ -29,6 +28,8 @@
 #include "numen/hal/device/device_config.hpp"
 #include "numen/sim/input_error.hpp"
 #include "numen/sim/simulated_instrument.hpp"
+
+#include "detail/joint_system.hpp"
 #include "build_features.hpp"
 
 namespace {

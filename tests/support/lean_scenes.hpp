@@ -18,7 +18,7 @@
 namespace numen::test {
 
 /// Optional part added to the rigid-only model.
-enum class LeanPart { kNone, kObstacle, kJoint, kNet };
+enum class LeanPart { kNone, kObstacle, kJoint, kNet, kJointAndNet };
 
 /// The parts this build has (NUMEN_WITH_ARTICULATION, NUMEN_WITH_DEFORMABLE).
 inline std::vector<LeanPart> lean_parts() {
@@ -28,7 +28,8 @@ inline std::vector<LeanPart> lean_parts() {
   return parts;
 }
 
-/// The rigid-only model (kNone) or it plus `part`, finalized. Throws
+/// The rigid-only model (kNone) or it plus `part` (kJointAndNet: the joint and the
+/// net), finalized. Throws
 /// std::runtime_error if the model is refused (a part this build left out).
 inline core::Model make_lean_model(LeanPart part) {
   core::Model m;
@@ -51,43 +52,38 @@ inline core::Model make_lean_model(LeanPart part) {
   m.initial_attached_body = 0;
   m.feedback = {400.0, 2.0, 0.5, 0.01, 10.0, 1.0};
   std::string err;
-  switch (part) {
-    case LeanPart::kNone:
-      break;
-    case LeanPart::kObstacle: {
-      core::Obstacle floor;
-      floor.name = "floor";
-      m.obstacles.push_back(floor);
-      break;
-    }
-    case LeanPart::kJoint: {
-      add_body(core::Vec3(0.0, 0.0, 0.2));
-      // Bodies of one articulation never collide with each other: no contact is possible.
-      core::JointModel j;
-      j.name = "hinge";
-      j.type = core::JointType::kRevolute;
-      j.parent = 0;
-      j.child = 1;
-      j.frame_parent.position = core::Vec3(0.0, 0.0, 0.05);
-      j.frame_child.position = core::Vec3(0.0, 0.0, -0.05);
-      m.joints.push_back(j);
-      break;
-    }
-    case LeanPart::kNet: {
-      core::NetSettings s;
-      s.name = "skin";
-      s.body = 0;
-      s.mass = 0.05;
-      s.stiffness = 200.0;
-      s.damping = 0.05;
-      s.tie_stiffness = 5.0;
-      s.tie_damping = 0.05;
-      if constexpr (core::kWithDeformable)
-        err = core::add_net(m, core::make_icosphere(0.03, 1), s);
-      else
-        err = "nets: this build has NUMEN_WITH_DEFORMABLE=OFF";
-      break;
-    }
+  const bool joint = part == LeanPart::kJoint || part == LeanPart::kJointAndNet;
+  const bool net = part == LeanPart::kNet || part == LeanPart::kJointAndNet;
+  if (part == LeanPart::kObstacle) {
+    core::Obstacle floor;
+    floor.name = "floor";
+    m.obstacles.push_back(floor);
+  }
+  if (joint) {
+    add_body(core::Vec3(0.0, 0.0, 0.2));
+    // Bodies of one articulation never collide with each other: no contact is possible.
+    core::JointModel j;
+    j.name = "hinge";
+    j.type = core::JointType::kRevolute;
+    j.parent = 0;
+    j.child = 1;
+    j.frame_parent.position = core::Vec3(0.0, 0.0, 0.05);
+    j.frame_child.position = core::Vec3(0.0, 0.0, -0.05);
+    m.joints.push_back(j);
+  }
+  if (net) {
+    core::NetSettings s;
+    s.name = "skin";
+    s.body = 0;
+    s.mass = 0.05;
+    s.stiffness = 200.0;
+    s.damping = 0.05;
+    s.tie_stiffness = 5.0;
+    s.tie_damping = 0.05;
+    if constexpr (core::kWithDeformable)
+      err = core::add_net(m, core::make_icosphere(0.03, 1), s);
+    else
+      err = "nets: this build has NUMEN_WITH_DEFORMABLE=OFF";
   }
   if (err.empty()) err = core::finalize_model(m);
   if (!err.empty()) throw std::runtime_error(err);

@@ -33,11 +33,14 @@
 #include "numen/core/coupling.hpp"
 #include "numen/core/data.hpp"
 #include "numen/core/integrator.hpp"
+#include "numen/core/net_forces.hpp"
 #include "numen/core/model.hpp"
 #include "numen/core/net_collision.hpp"
-#include "numen/core/net_solve.hpp"
 #include "numen/core/rigid_body.hpp"
 #include "numen/core/step.hpp"
+
+#include "detail/implicit_system.hpp"
+#include "detail/net_solve.hpp"
 
 namespace numen::test {
 
@@ -74,7 +77,7 @@ inline NetSystemInputs take_net_system_inputs(const core::Data& data) {
 /// The stages of core::step() up to the coupled solve (step.cpp, integrator.cpp's
 /// linearly implicit Euler): impose_direct_target, detect_contacts (when the
 /// model can collide), detect_node_contacts, the system's step h_s, the
-/// forces, prepare_implicit_step, build_implicit_system, build_net_system.
+/// forces, linearize_nets, prepare_implicit_step, build_implicit_system, build_net_system.
 /// Returns the inputs taken between the contact and force stages; after it,
 /// core::solve_net_system(model, data) solves the step's system (and may be
 /// called again on the same system after NetScratch::delta, its warm start,
@@ -88,6 +91,7 @@ inline NetSystemInputs stage_net_system(const core::Model& model, core::Data& da
   NetSystemInputs s = take_net_system_inputs(data);
   data.solver.system_step = core::linearized_system_step(model);
   core::compute_forces(model, data);
+  core::linearize_nets(model, data, data.solver.system_step);
   core::prepare_implicit_step(model, data);
   core::build_implicit_system(model, data);
   core::build_net_system(model, data);

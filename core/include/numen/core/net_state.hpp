@@ -73,8 +73,8 @@ struct SweepSpring {
 /// (NetScratch::sweep_springs; net_solve.hpp), as a structure of arrays —
 /// one array per component, so that the sweeps load two consecutive springs'
 /// components with one SIMD load and handle two springs at once. Written by
-/// compute_net_forces() (directions always, the weights with the linearly
-/// implicit integrator); the fields are those of SweepSpring.
+/// compute_net_forces() (directions) and linearize_nets() (the weights, linearly
+/// implicit integrators); the fields are those of SweepSpring.
 struct SweepSprings {
   std::vector<double> direction_x, direction_y, direction_z;  ///< d̂ (unit, world).
   std::vector<double> weight_axial;      ///< α (kg).
@@ -122,8 +122,7 @@ struct SymmetricBlock {
 /// component's rows of the implicit system (net_solve.hpp): Σ ρ_i, Σ ρ_i ρ_iᵀ
 /// and Σ J_iᵀ (v_i − v_a,i) with J_i = [I, −[ρ_i]×], ρ_i = R_b r_i (m, world)
 /// and v_a,i the anchor's velocity at the step's start. Written by
-/// compute_net_forces() in its tie loop (linearly implicit integrators),
-/// read by add_net_body_terms().
+/// linearize_nets() (linearly implicit integrators), read by add_net_body_terms().
 struct NetTieSums {
   Vec3 lever_sum = Vec3::Zero();     ///< Σ ρ_i (m).
   Mat3 lever_moment = Mat3::Zero();  ///< Σ ρ_i ρ_iᵀ (m²), full and exactly symmetric.
@@ -139,7 +138,7 @@ struct NetScratch {
   std::vector<double> node_diagonal;  ///< m_i + c_tie: the isotropic part of A_ii (kg).
   std::vector<Mat3> block;          ///< A_ii: 3×3 diagonal block of each node (all terms).
   /// Σ_e W_e over the springs e at each node (the springs' part of A_ii, kg),
-  /// summed by compute_net_forces() and added into `block` by build_net_system().
+  /// summed by linearize_nets() and added into `block` by build_net_system().
   std::vector<SymmetricBlock> spring_block;
   std::vector<NetTieSums> tie_sums;  ///< Per net (Model::nets order): the ties' sums.
   /// A_ii⁻¹ (the arrowhead preconditioner): sized by resize() and written by
@@ -164,8 +163,8 @@ struct NetScratch {
   /// node in Model::node_sweep_order ("low"; ascending positions; Model::net_springs
   /// order within a node); the other node is SweepSprings::high. Position
   /// p's springs are [spring_low_begin[p], spring_low_begin[p + 1]).
-  /// compute_net_forces() goes through them in that order (forces and
-  /// linearisation in one pass); the backward sweep gathers them into the
+  /// compute_net_forces() (forces) and linearize_nets() (linearisation) go
+  /// through them in that order; the backward sweep gathers them into the
   /// earlier node's row, the forward sweep scatters the earlier node's value
   /// through them to the later nodes. Spring e of Model::net_springs is at
   /// spring_slot[e].

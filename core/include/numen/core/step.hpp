@@ -20,8 +20,11 @@ struct Data;
 ///      system of Eq. 4 with Baumgarte rows (Eq. 5) solved in linear time
 ///      (articulation.hpp), then the joint drift is measured
 ///      (measure_joint_drift) — models without joints skip both; with nets
-///      the bodies and nodes are solved as one system (net_solve.hpp) and
-///      the nets' observables measured (measure_nets)
+///      and a linearised integrator the nets are linearised over h_s
+///      (linearize_nets, net_forces.hpp) and the bodies and nodes solved as
+///      one system (the net solve, which then takes the joints); with
+///      symplectic Euler the nodes are stepped explicitly; then the nets'
+///      observables are measured (measure_nets)
 ///   4. feedback — Eq. 8 per targeted body, Eq. 9 composite, saturated
 ///   5. checks — non-finite results are rejected: every body goes back to its
 ///      pose before the step with zero twist, every node to its position with
@@ -31,8 +34,9 @@ struct Data;
 ///      kNonFinite is set and Data::nonfinite_steps counted
 /// Data::status is cleared first (then detect_contacts may set
 /// kContactOverflow and count contact_overflow_steps);
-/// Data::stages_run records the stages run (step_stages.hpp: a model without
-/// joints or nets runs no pass for them); time += dt and ++step_count at the end. In kDirect the attached body's
+/// The stages are those compiled_stages(model) names (step_stages.hpp: a model
+/// without joints or nets runs no pass for them); each sets its own bit of
+/// Data::stages_run where it runs, so that field is what ran; time += dt and ++step_count at the end. In kDirect the attached body's
 /// pose/twist are imposed before detect_contacts.
 /// Never allocates, throws, locks or calls the OS. Deterministic.
 void step(const Model& model, Data& data) noexcept;

@@ -1,8 +1,8 @@
 #pragma once
 /// @file step_stages.hpp
 /// The stages of core::step() (step.hpp) as data: which of them a given model
-/// runs, in step order, and why a stage is skipped. step() records the stages
-/// it ran in Data::stages_run, so a test (and `numen info`) can check that a
+/// runs, in step order, and why a stage is skipped. Each stage records itself
+/// in Data::stages_run when it runs, so a test (and `numen info`) can check that a
 /// scene without joints, nets or anything to collide runs no pass for them.
 
 #include <cstdint>
@@ -39,9 +39,13 @@ struct StageDescription {
 std::span<const StageDescription> step_stage_table() noexcept;
 
 /// Bits of the stages step() runs for `model` (finalized): what Data::stages_run
-/// holds after any step of this model. The integrate stage's variants:
-/// kStageNetSolve with nets (bodies and nodes as one system, with or without
-/// joints), else kStageJointSolve with joints, else the bodies alone. No allocation.
+/// holds after any step of this model. The one source of the plan: step() gates
+/// its stages on these bits and the integrator picks its solve from them; each
+/// stage sets its own bit of Data::stages_run where it runs. The integrate
+/// stage's variants: kStageNetSolve with nets and a linearised integrator (bodies
+/// and nodes as one system, with or without joints; symplectic Euler steps the
+/// nodes explicitly), else kStageJointSolve with joints (the KKT tree solve,
+/// implicit or symplectic), else the bodies alone. No allocation.
 std::uint32_t compiled_stages(const Model& model) noexcept;
 
 }  // namespace numen::core

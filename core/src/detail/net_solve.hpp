@@ -1,5 +1,6 @@
 #pragma once
 /// @file net_solve.hpp
+/// Private to numen::core (core/src/detail; tests reach it through numen_core_internal).
 /// Linearly implicit Euler of the rigid bodies and the deformable nets as one
 /// system (paper §4.2, §5; Baraff & Witkin 1998): unknowns Δu per body (6)
 /// and Δv per node (3),
@@ -62,7 +63,7 @@ struct Data;
 /// bodies (SolverScratch::block, rhs) — ties c Σ J_iᵀ J_i and
 /// h² k_tie Σ J_iᵀ (v_i0 − v_a0), node–body contacts J_bᵀ W J_b and their
 /// impulse — for bodies in the solve; the ties' sums over the nodes come
-/// from compute_net_forces() (NetScratch::tie_sums). Called by
+/// from linearize_nets() (NetScratch::tie_sums). Called by
 /// build_implicit_system() before it mirrors and factors the blocks. No-op
 /// without nets.
 void add_net_body_terms(const Model& model, Data& data) noexcept;
@@ -75,10 +76,9 @@ void add_net_body_terms(const Model& model, Data& data) noexcept;
 /// and, with joints, the bodies' Schur blocks of the arrowhead
 /// preconditioner (NetScratch). The springs' terms (their weights, their sum
 /// per node in NetScratch::spring_block, their part of b) come from
-/// compute_net_forces() with the linearly implicit integrator; this adds the
-/// rest. Call after compute_net_forces()
+/// linearize_nets() (net_forces.hpp); this adds the rest. Call after linearize_nets()
 /// and build_implicit_system() (whose Cholesky factors of the body blocks
-/// are the bodies' D̃ without joints), once per compute_net_forces().
+/// are the bodies' D̃ without joints), once per linearize_nets().
 void build_net_system(const Model& model, Data& data) noexcept;
 
 /// Solves the coupled system (see file comment). Writes SolverScratch::delta

@@ -1,0 +1,197 @@
+/// @file net_assembly.cpp
+/// Assembly of the coupled system of the bodies and the deformable nets
+/// (net_solve.hpp): the nets' terms in the bodies' blocks and right-hand
+/// sides, the node rows, their inverses in the sweep order and, with joints,
+/// the bodies' Schur blocks of the arrowhead preconditioner.
+
+#include "detail/implicit_system.hpp"
+#include "detail/net_solve.hpp"
+#include "detail/net_terms.hpp"
+#include "numen/core/data.hpp"
+#include "numen/core/model.hpp"
+#include "numen/core/rigid_body.hpp"
+
+namespace numen::core {
+namespace {
+
+using detail::couples_body;
+using detail::node_contact_count;
+using detail::point_velocity;
+using detail::tie_weight;
+
+/// Jᵀ J = [[I, −[r]×], [[r]×, |r|² I − r rᵀ]] summed over lever arms, from
+/// their count, Σ r and Σ r rᵀ; times `weight`, added to `block` (full).
+void add_lever_moments(double weight, double count, const Vec3& sum_r, const Mat3& sum_rr,
+                       Mat6& block) noexcept {
+  const Mat3 k = skew(sum_r);
+  block.topLeftCorner<3, 3>().diagonal().array() += weight * count;
+  block.topRightCorner<3, 3>() -= weight * k;
+  block.bottomLeftCorner<3, 3>() += weight * k;
+  block.bottomRightCorner<3, 3>() += weight * (sum_rr.trace() * Mat3::Identity() - sum_rr);
+}
+
+/// block += α n nᵀ + β I, exactly symmetric (each product computed once).
+inline void add_weight(double alpha, double beta, const Vec3& n, Mat3& block) noexcept {
+  const double ax = alpha * n.x(), ay = alpha * n.y(), az = alpha * n.z();
+  const double xy = ax * n.y(), xz = ax * n.z(), yz = ay * n.z();
+  block(0, 0) += ax * n.x() + beta;
+  block(1, 1) += ay * n.y() + beta;
+  block(2, 2) += az * n.z() + beta;
+  block(0, 1) += xy;
+  block(1, 0) += xy;
+  block(0, 2) += xz;
+  block(2, 0) += xz;
+  block(1, 2) += yz;
+  block(2, 1) += yz;
+}
+
+/// out = m⁻¹ for a symmetric 3×3 m (its upper triangle is read) by the
+/// adjugate; exactly symmetric. A singular m gives non-finite entries.
+inline void inverse_symmetric(const Mat3& m, Mat3& out) noexcept {
+  const double a = m(0, 0), b = m(0, 1), c = m(0, 2), d = m(1, 1), e = m(1, 2), f = m(2, 2);
+  const double c00 = d * f - e * e, c01 = c * e - b * f, c02 = b * e - c * d;
+  const double inv = 1.0 / (a * c00 + b * c01 + c * c02);
+  const double i01 = c01 * inv, i02 = c02 * inv, i12 = (b * c - a * e) * inv;
+  out(0, 0) = c00 * inv;
+  out(1, 1) = (a * f - c * c) * inv;
+  out(2, 2) = (a * d - b * b) * inv;
+  out(0, 1) = i01;
+  out(1, 0) = i01;
+  out(0, 2) = i02;
+  out(2, 0) = i02;
+  out(1, 2) = i12;
+  out(2, 1) = i12;
+}
+
+}  // namespace
+
+void add_net_body_terms(const Model& model, Data& data) noexcept {
+  if (model.nets.empty()) return;
+  SolverScratch& s = data.solver;
+  NetScratch& ns = data.net;
+  const double h = data.solver.system_step;  // h_s of the linearised system (integrator.hpp)
+  const double h2 = h * h;
+  // Ties: their sums over the nodes come from linearize_nets().
+  for (std::size_t k = 0; k < model.nets.size(); ++k) {
+    const NetModel& net = model.nets[k];
+    const auto b = static_cast<std::size_t>(net.body);
+    if (!s.in_solve[b]) continue;
+    const NetTieSums& t = ns.tie_sums[k];
+    add_lever_moments(tie_weight(net, h), net.node_count, t.lever_sum, t.lever_moment, s.block[b]);
+    s.rhs[b] += (h2 * net.tie_stiffness) * t.relative;  // Σ Jᵀ (v_i0 − v_a0)
+  }
+  // Node contacts: weights (for the node rows too), then the body side.
+  const int nc = node_contact_count(data);
+  for (int k = 0; k < nc; ++k) {
+    NodeContact& ct = data.node_contacts[static_cast<std::size_t>(k)];
+    if (!ct.active) continue;
+    const MaterialPair& mp = model.material_pairs[static_cast<std::size_t>(ct.material_pair)];
+    ct.weight_isotropic = h * mp.friction;
+    ct.weight_normal = h * mp.damping + h2 * ct.stiffness - ct.weight_isotropic;  // k_eff
+    if (!couples_body(s, ct)) continue;
+    const auto b = static_cast<std::size_t>(ct.body_b);
+    Vec6 g;
+    g << ct.normal, ct.r_b.cross(ct.normal);
+    Mat6& blk = s.block[b];
+    blk.noalias() += ct.weight_normal * (g * g.transpose());
+    add_lever_moments(ct.weight_isotropic, 1.0, ct.r_b, ct.r_b * ct.r_b.transpose(), blk);
+    const double impulse = -h2 * ct.stiffness * ct.normal_velocity;  // on the node along n
+    s.rhs[b] -= impulse * g;
+  }
+}
+
+void build_net_system(const Model& model, Data& data) noexcept {
+  if (model.nets.empty()) return;
+  const SolverScratch& s = data.solver;
+  NetScratch& ns = data.net;
+  const double h = data.solver.system_step;  // h_s of the linearised system (integrator.hpp)
+  const double h2 = h * h;
+
+  // The springs' weights, their sum at each node (spring_block) and their
+  // part of the right-hand side are already there (linearize_nets()).
+  // Raw pointers: the stores would otherwise make the compiler reload every
+  // vector's data pointer per node.
+  const SymmetricBlock* spring_block = ns.spring_block.data();
+  const Vec3* force = ns.force.data();
+  const Vec3* lever = ns.lever.data();
+  const NodeState* nodes = data.nodes.data();
+  Mat3* block = ns.block.data();
+  Vec3* rhs = ns.rhs.data();
+  for (const NetModel& net : model.nets) {
+    const Vec6 u0 = s.twist0[static_cast<std::size_t>(net.body)];
+    const double c = tie_weight(net, h);
+    const double hk = h2 * net.tie_stiffness;
+    for (int v = net.node_begin; v < net.node_begin + net.node_count; ++v) {
+      const auto i = static_cast<std::size_t>(v);
+      const double diagonal = model.node_mass[i] + c;
+      ns.node_diagonal[i] = diagonal;
+      const SymmetricBlock w = spring_block[i];
+      block[i] << w.entry[0] + diagonal, w.entry[1], w.entry[2], w.entry[1], w.entry[3] + diagonal,
+          w.entry[4], w.entry[2], w.entry[4], w.entry[5] + diagonal;
+      const Vec3 relative = nodes[i].velocity - point_velocity(u0, lever[i]);
+      rhs[i] += h * force[i] - hk * relative;
+    }
+  }
+  const int nc = node_contact_count(data);
+  for (int k = 0; k < nc; ++k) {
+    const NodeContact& ct = data.node_contacts[static_cast<std::size_t>(k)];
+    if (!ct.active) continue;
+    const auto i = static_cast<std::size_t>(ct.node);
+    add_weight(ct.weight_normal, ct.weight_isotropic, ct.normal, ns.block[i]);
+    ns.rhs[i] += (-h2 * ct.stiffness * ct.normal_velocity) * ct.normal;  // k_eff
+  }
+  if (model.joints.empty()) {  // the SSOR sweeps' A_kk⁻¹, in their order
+    const std::int32_t* order = model.node_sweep_order.data();
+    SweepNode* sweep_nodes = ns.sweep_nodes.data();
+    const std::size_t n = ns.sweep_nodes.size();
+    for (std::size_t p = 0; p < n; ++p) {
+      const auto k = static_cast<std::size_t>(order[p]);
+      Mat3 x;
+      inverse_symmetric(block[k], x);
+      SweepNode& nd = sweep_nodes[p];
+      nd.inverse[0] = x(0, 0);
+      nd.inverse[1] = x(0, 1);
+      nd.inverse[2] = x(0, 2);
+      nd.inverse[3] = x(1, 1);
+      nd.inverse[4] = x(1, 2);
+      nd.inverse[5] = x(2, 2);
+      nd.lever = lever[k];
+    }
+  } else {
+    for (std::size_t i = 0; i < ns.block.size(); ++i)
+      inverse_symmetric(ns.block[i], ns.block_inverse[i]);
+  }
+
+  // The arrowhead preconditioner of the jointed solve: Schur blocks of the
+  // bodies, S_b = A_bb − Σ c² J_iᵀ A_ii⁻¹ J_i (without joints the bodies' D̃
+  // blocks are SolverScratch::block, factored by build_implicit_system()).
+  if (model.joints.empty()) return;
+  for (std::size_t b = 0; b < ns.body_schur.size(); ++b) ns.body_schur[b] = s.block[b];
+  for (const NetModel& net : model.nets) {
+    const auto b = static_cast<std::size_t>(net.body);
+    if (!s.in_solve[b]) continue;
+    const double c = tie_weight(net, h);
+    Mat6 reduction = Mat6::Zero();
+    for (int v = net.node_begin; v < net.node_begin + net.node_count; ++v) {
+      const auto i = static_cast<std::size_t>(v);
+      // c² Jᵀ X J with J = [I, −K], K = [ρ]×: [[X, −XK], [KX, −KXK]].
+      // Columns of X K: K e_0 = (0, ρz, −ρy), K e_1 = (−ρz, 0, ρx), K e_2 = (ρy, −ρx, 0).
+      const Mat3& x = ns.block_inverse[i];
+      const Vec3& r = ns.lever[i];
+      Mat3 xk;
+      xk.col(0) = r.z() * x.col(1) - r.y() * x.col(2);
+      xk.col(1) = r.x() * x.col(2) - r.z() * x.col(0);
+      xk.col(2) = r.y() * x.col(0) - r.x() * x.col(1);
+      // K (X K): row j of K times XK; K is skew: (K M)_j = (r × M_col)_j per column.
+      Mat3 kxk;
+      for (int j = 0; j < 3; ++j) kxk.col(j) = r.cross(xk.col(j));
+      reduction.topLeftCorner<3, 3>() += x;
+      reduction.topRightCorner<3, 3>() -= xk;
+      reduction.bottomLeftCorner<3, 3>() -= xk.transpose();
+      reduction.bottomRightCorner<3, 3>() -= kxk;
+    }
+    ns.body_schur[b] -= (c * c) * reduction;
+  }
+}
+
+}  // namespace numen::core
