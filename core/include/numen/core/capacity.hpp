@@ -3,7 +3,7 @@
 /// Capacities fixed at compile time (CMake cache variables NUMEN_MAX_CONTACTS,
 /// NUMEN_MAX_NODE_CONTACTS).
 /// Running out is a reported status (StepStatus::kContactOverflow), never a
-/// silent drop and never a heap fallback (DESIGN.md, core).
+/// silent drop and never a heap fallback (docs/architecture.md, Conventions).
 
 #ifndef NUMEN_MAX_CONTACTS
 #define NUMEN_MAX_CONTACTS 1024

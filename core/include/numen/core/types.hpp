@@ -2,7 +2,7 @@
 /// @file types.hpp
 /// Small fixed-size value types shared by every layer. SI units, world frame
 /// unless a name says otherwise. Quaternions are Hamilton (w, x, y, z), unit
-/// norm; q and -q are the same rotation (DESIGN.md, Conventions).
+/// norm; q and -q are the same rotation (docs/architecture.md, Conventions).
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>

@@ -1,8 +1,8 @@
 #pragma once
 /// @file kinematics.hpp
 /// Kinematics: the map between an instrument's axis values q and the pose of its controlled
-/// frame in the world (forward, inverse) and its geometric Jacobian (DESIGN.md: "instrument
-/// kinematics: encoder values <-> target poses, wrenches <-> joint torques"). Fixed capacity
+/// frame in the world (forward, inverse) and its geometric Jacobian: encoder values <-> target
+/// poses, wrenches <-> axis torques (docs/architecture.md, the period's walk). Fixed capacity
 /// kMaxAxes, no heap: vectors and Jacobians are Eigen matrices with a compile-time maximum
 /// size, so every call is allocation free.
 

@@ -1,7 +1,7 @@
 #pragma once
 /// @file sample_check.hpp
 /// The plausibility checks applied to every decoded encoder value before it becomes a target
-/// (DESIGN.md, one control period: "check (finite, in range, fresh, plausible jump)").
+/// (docs/architecture.md, the period's walk: finite, in range, fresh, plausible jump).
 /// A value that fails any check is rejected: the axis keeps its last accepted value.
 
 #include <cstdint>
