@@ -5,21 +5,10 @@
 #include "numen/hal/transport/bus_recorder.hpp"
 
 namespace numen::hal {
-namespace {
-
-RecordWriterSettings queue_settings(const CandumpWriterSettings& s) {
-  RecordWriterSettings q;
-  q.queue_capacity = s.queue_capacity;
-  q.poll_period_ns = s.poll_period_ns;
-  q.full_queue = s.full_queue;
-  return q;
-}
-
-}  // namespace
 
 CandumpWriter::CandumpWriter(const std::string& path, const CandumpWriterSettings& settings)
     : settings_(settings),
-      writer_(*this, queue_settings(settings), "CandumpWriterSettings"),
+      writer_(*this, settings, "CandumpWriterSettings"),
       file_(path) {}
 
 CandumpWriter::~CandumpWriter() {

@@ -37,13 +37,13 @@
 namespace numen::hal {
 
 /// Creation settings of a CandumpWriter. Checked by its constructor.
-struct CandumpWriterSettings {
-  /// Records the queue holds, >= 1; allocated once at construction (104 bytes each). Size it
-  /// for the frames of one poll_period_ns and the disk's worst stall: at 5 frames per 1 ms
-  /// period, 8192 records cover 1.6 s.
-  std::size_t queue_capacity = 8192;
-  /// How long the writer thread sleeps when the queue is empty, ns, > 0.
-  std::int64_t poll_period_ns = 2'000'000;
+struct CandumpWriterSettings : RecordWriterSettings {
+  /// The queue's settings (RecordWriterSettings: queue_capacity, poll_period_ns, full_queue,
+  /// checked by the constructor). queue_capacity defaults to 8192 records here (104 bytes
+  /// each): size it for the frames of one poll_period_ns and the disk's worst stall; at 5
+  /// frames per 1 ms period, 8192 records cover 1.6 s. full_queue: drop for paced runs (the
+  /// default), wait for the writer in offline runs.
+  CandumpWriterSettings() { queue_capacity = 8192; }
   /// Append " R" (read) / " T" (written) to each line (candump -x).
   bool mark_direction = true;
   /// Added to every frame's timestamp_ns on its line, ns. 0 writes the bus clock as it is.
@@ -52,8 +52,6 @@ struct CandumpWriterSettings {
   /// 2020.11) takes a start second of 0 for "no start yet" and restarts its output on every
   /// line. A line whose time would be negative or overflow is not written (format_errors).
   std::int64_t time_offset_ns = 0;
-  /// A full queue drops (paced runs, the default) or waits for the writer (offline runs).
-  FullQueuePolicy full_queue = FullQueuePolicy::kDrop;
 };
 
 /// Counters of a CandumpWriter (queued, dropped, waits, lines written, records refused by
