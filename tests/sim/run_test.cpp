@@ -403,8 +403,22 @@ TEST(RunConstructionScene, DirectCouplingPenetratesTenTimesMoreThanTheGodObject)
 
 // ---------------------------------------------------------------- zero allocations
 
+/// A state-stream consumer that only counts (stands in for a connected viewer).
+class CountingViewSink final : public numen::platform::StateFrameSink {
+ public:
+  bool write_frame(std::span<const std::byte> frame) noexcept override {
+    frames.fetch_add(1);
+    bytes.fetch_add(frame.size());
+    return true;
+  }
+  std::atomic<std::int64_t> frames{0}, bytes{0};
+};
+
 void expect_no_allocation(const Scene& scene, const char* name) {
   SceneRunner runner(scene, 10'000);  // construction allocates (trace storage too)
+  // A viewer is connected: the state stream publishes every period (1 kHz, its worst case).
+  CountingViewSink viewer;
+  runner.stream_view("", {&viewer}, 1.0 / scene.model.dt, false);
   std::int64_t count = -1;
   {
     numen::test::AllocationGuard guard;
@@ -414,7 +428,10 @@ void expect_no_allocation(const Scene& scene, const char* name) {
   EXPECT_EQ(count, 0) << name << ": heap allocations in 10,000 periods";
   EXPECT_EQ(runner.periods(), 10'000);
   EXPECT_EQ(runner.trace().records().size(), 10'000u);
+  runner.finish();
   const RunSummary s = runner.summary();
+  EXPECT_EQ(s.view_frames_published + s.view_frames_dropped, 10'000) << name;
+  EXPECT_EQ(viewer.frames.load(), s.view_frames_published) << name;
   EXPECT_GT(s.contacts_max + s.node_contacts_max, 0)
       << name << ": the contact path was not exercised";
   if (scene.model.num_nets() > 0) {
