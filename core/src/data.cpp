@@ -28,6 +28,8 @@ void reset_nodes(const Model& model, Data& data) noexcept {
 
 }  // namespace
 
+DataScratchPtr::DataScratchPtr() noexcept = default;
+
 DataScratchPtr::DataScratchPtr(std::unique_ptr<DataScratch> scratch) noexcept
     : scratch_(std::move(scratch)) {}
 

@@ -32,7 +32,7 @@ double linearized_system_step(const Model& model) noexcept;
 /// build_implicit_system().
 void prepare_implicit_step(const Model& model, Data& data) noexcept;
 
-/// Builds the implicit system of the current step in Data::solver (after
+/// Builds the implicit system of the current step in the solver scratch (Data::scratch, SolverScratch; after
 /// prepare_implicit_step()): contact weights (α, β of ContactTerm), the 6×6
 /// diagonal blocks of A = M − hD − h²K, h = SolverScratch::system_step (exactly symmetric) and, for
 /// a model without joints (the block-Jacobi preconditioner; with joints the tree solve factors

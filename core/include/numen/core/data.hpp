@@ -31,7 +31,7 @@ struct DataScratch;  // core/src/detail/data_scratch.hpp
 /// any stage runs on it.
 class DataScratchPtr {
  public:
-  DataScratchPtr() noexcept = default;
+  DataScratchPtr() noexcept;  ///< Null: no scratch (a Data not made by make_data()).
   /// Owns `scratch` (make_data()).
   explicit DataScratchPtr(std::unique_ptr<DataScratch> scratch) noexcept;
   /// Deep copy (allocates; null stays null).
@@ -39,17 +39,17 @@ class DataScratchPtr {
   /// Deep copy into the block already held if any (its buffers keep their capacity, so
   /// assigning a Data of the same model does not allocate), else into a new one.
   DataScratchPtr& operator=(const DataScratchPtr& other);
-  DataScratchPtr(DataScratchPtr&& other) noexcept;
-  DataScratchPtr& operator=(DataScratchPtr&& other) noexcept;
-  ~DataScratchPtr();
+  DataScratchPtr(DataScratchPtr&& other) noexcept;  ///< Takes the block; `other` becomes null.
+  DataScratchPtr& operator=(DataScratchPtr&& other) noexcept;  ///< Same; frees the block held.
+  ~DataScratchPtr();  ///< Frees the block.
 
-  DataScratch* get() noexcept { return scratch_.get(); }
+  DataScratch* get() noexcept { return scratch_.get(); }  ///< The block, or nullptr.
   const DataScratch* get() const noexcept { return scratch_.get(); }
   DataScratch* operator->() noexcept { return scratch_.get(); }
   const DataScratch* operator->() const noexcept { return scratch_.get(); }
   DataScratch& operator*() noexcept { return *scratch_; }
   const DataScratch& operator*() const noexcept { return *scratch_; }
-  explicit operator bool() const noexcept { return scratch_ != nullptr; }
+  explicit operator bool() const noexcept { return scratch_ != nullptr; }  ///< Holds a block.
 
  private:
   std::unique_ptr<DataScratch> scratch_;
