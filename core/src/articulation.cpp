@@ -29,6 +29,8 @@
 
 #include "numen/core/model.hpp"
 
+#include "detail/articulation_solve.hpp"
+
 namespace numen::core {
 namespace {
 

@@ -15,6 +15,7 @@
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"
 
+#include "detail/data_scratch.hpp"
 #include "detail/narrowphase.hpp"
 
 namespace numen::core {
@@ -66,7 +67,7 @@ void collide_body_obstacle(const Model& model, const Data& data, int b, int o,
   const BodyModel& bm = model.bodies[static_cast<std::size_t>(b)];
   const Obstacle& ob = model.obstacles[static_cast<std::size_t>(o)];
   const Vec3& x = data.bodies[static_cast<std::size_t>(b)].position;
-  const Vec3* sw = data.collision.sphere_world.data();
+  const Vec3* sw = data.scratch->collision.sphere_world.data();
   const Sphere* bs = model.body_spheres.data();
   const int s0 = bm.sphere_begin;
   const int s1 = bm.sphere_begin + bm.sphere_count;
@@ -78,7 +79,7 @@ void collide_body_obstacle(const Model& model, const Data& data, int b, int o,
       const Vec3 n = ob.pose.orientation * Vec3::UnitZ();
       const Vec3& p = ob.pose.position;
       if ((x - p).dot(n) >= bm.bounding_radius + kMargin) return;
-      const CollisionScratch& cs = data.collision;
+      const CollisionScratch& cs = data.scratch->collision;
       for (int s = s0; s < s1; ++s) {
         // Signed distance prefilter on the flat arrays; sphere_plane decides.
         const double dist = (cs.sphere_x[static_cast<std::size_t>(s)] - p.x()) * n.x() +
@@ -132,7 +133,7 @@ void collide_body_obstacle(const Model& model, const Data& data, int b, int o,
 /// (query_static_grid(): float prefilter, per-entry stamps); the exact double
 /// test (the one of the reference) decides.
 void collide_body_grid(const Model& model, Data& data, int b, ContactSink& sink) noexcept {
-  CollisionScratch& cs = data.collision;
+  CollisionScratch& cs = data.scratch->collision;
   const BodyModel& bm = model.bodies[static_cast<std::size_t>(b)];
   const Vec3& x = data.bodies[static_cast<std::size_t>(b)].position;
   const Vec3* sw = cs.sphere_world.data();
@@ -157,7 +158,7 @@ void collide_body_grid(const Model& model, Data& data, int b, ContactSink& sink)
 void collide_bodies(const Model& model, Data& data, int a, int b, ContactSink& sink) noexcept {
   const BodyModel& ba = model.bodies[static_cast<std::size_t>(a)];
   const BodyModel& bb = model.bodies[static_cast<std::size_t>(b)];
-  CollisionScratch& cs = data.collision;
+  CollisionScratch& cs = data.scratch->collision;
   const double* X = cs.sphere_x.data();
   const double* Y = cs.sphere_y.data();
   const double* Z = cs.sphere_z.data();
@@ -261,7 +262,7 @@ void build_collision_structures(Model& model) {
 }
 
 void detect_contacts(const Model& model, Data& data) noexcept {
-  CollisionScratch& cs = data.collision;
+  CollisionScratch& cs = data.scratch->collision;
   const int nb = model.num_bodies();
   const Sphere* bs = model.body_spheres.data();
   Vec3* sw = cs.sphere_world.data();

@@ -12,6 +12,8 @@
 #include "numen/core/broadphase.hpp"
 #include "numen/core/types.hpp"
 
+#include "detail/collision_scratch.hpp"
+
 namespace numen::core::collision_detail {
 
 /// Inflation of every broad-phase box (m): keeps the culling conservative with

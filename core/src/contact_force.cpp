@@ -13,6 +13,8 @@
 #include "numen/core/model.hpp"
 #include "numen/core/rigid_body.hpp"
 
+#include "detail/data_scratch.hpp"
+
 namespace numen::core {
 
 namespace {
@@ -118,7 +120,7 @@ void compute_contact_forces(const Model& model, Data& data) noexcept {
   const int np = static_cast<int>(model.material_pairs.size());
   // The contact scratch has room for what the model can produce (contact_capacity());
   // contacts beyond it (written by a caller, not by detect_contacts) are an overflow.
-  const int room = static_cast<int>(data.solver.contact_terms.size());
+  const int room = static_cast<int>(data.scratch->solver.contact_terms.size());
   if (data.num_contacts > room) {
     data.contacts_dropped += data.num_contacts - room;
     data.status |= kContactOverflow;
@@ -126,11 +128,11 @@ void compute_contact_forces(const Model& model, Data& data) noexcept {
   }
   const int nc = std::clamp(data.num_contacts, 0, kMaxContacts);
   const double max_omega_dt = model.solver.contact_max_omega_dt;
-  const std::vector<std::uint8_t>& imposed = data.solver.imposed;
+  const std::vector<std::uint8_t>& imposed = data.scratch->solver.imposed;
   data.contacts_clamped = 0;
   for (int i = 0; i < nc; ++i) {
     Contact& c = data.contacts[static_cast<std::size_t>(i)];
-    ContactTerm& t = data.solver.contact_terms[static_cast<std::size_t>(i)];
+    ContactTerm& t = data.scratch->solver.contact_terms[static_cast<std::size_t>(i)];
     t.active = false;
     t.normal_force = 0.0;
     t.normal_velocity = 0.0;

@@ -8,6 +8,8 @@
 #include "numen/core/rigid_body.hpp"
 #include "numen/core/step_stages.hpp"
 
+#include "detail/data_scratch.hpp"
+
 namespace numen::core {
 namespace {
 
@@ -47,7 +49,7 @@ namespace {
 /// body still and flags the step.
 void impose(Data& data, std::size_t i, const Pose& target, const Twist& twist) noexcept {
   BodyState& s = data.bodies[i];
-  data.solver.imposed[i] = 1;
+  data.scratch->solver.imposed[i] = 1;
   if (!target_is_finite(target, twist)) {
     data.status |= kInvalidTarget;
     s.linear_velocity.setZero();
@@ -82,7 +84,7 @@ void apply_device_wrench(const Model& model, Data& data) noexcept {
 }
 
 void impose_direct_target(const Model& model, Data& data) noexcept {
-  for (auto& v : data.solver.imposed) v = 0;
+  for (auto& v : data.scratch->solver.imposed) v = 0;
   if (model.coupling_mode != CouplingMode::kDirect) return;
   data.stages_run |= kStageDirectTarget;  // the stage report (step_stages.hpp)
   if (valid_body(model, data.attached_body))
@@ -93,7 +95,7 @@ void impose_direct_target(const Model& model, Data& data) noexcept {
 }
 
 void apply_coupling(const Model& model, Data& data) noexcept {
-  SolverScratch& s = data.solver;
+  SolverScratch& s = data.scratch->solver;
   data.coupling_wrench = Wrench{};
   s.coupled_body = -1;
   s.first_order = false;

@@ -3,6 +3,9 @@
 
 #include "numen/core/data.hpp"
 
+#include <utility>
+
+#include "detail/data_scratch.hpp"
 #include "numen/core/capacity.hpp"
 #include "numen/core/features.hpp"
 #include "numen/core/model.hpp"
@@ -20,13 +23,38 @@ void reset_nodes(const Model& model, Data& data) noexcept {
     data.nodes[i].position = b.position + lever;
     data.nodes[i].velocity = b.linear_velocity + b.angular_velocity.cross(lever);
   }
-  for (Vec3& d : data.net.delta) d.setZero();
+  for (Vec3& d : data.scratch->net.delta) d.setZero();
 }
 
 }  // namespace
 
+DataScratchPtr::DataScratchPtr() noexcept = default;
+
+DataScratchPtr::DataScratchPtr(std::unique_ptr<DataScratch> scratch) noexcept
+    : scratch_(std::move(scratch)) {}
+
+DataScratchPtr::DataScratchPtr(const DataScratchPtr& other)
+    : scratch_(other.scratch_ ? std::make_unique<DataScratch>(*other.scratch_) : nullptr) {}
+
+DataScratchPtr& DataScratchPtr::operator=(const DataScratchPtr& other) {
+  if (this == &other) return *this;
+  if (!other.scratch_)
+    scratch_.reset();
+  else if (scratch_)
+    *scratch_ = *other.scratch_;  // element-wise: the buffers keep their capacity
+  else
+    scratch_ = std::make_unique<DataScratch>(*other.scratch_);
+  return *this;
+}
+
+DataScratchPtr::DataScratchPtr(DataScratchPtr&& other) noexcept = default;
+DataScratchPtr& DataScratchPtr::operator=(DataScratchPtr&& other) noexcept = default;
+DataScratchPtr::~DataScratchPtr() = default;
+
 Data make_data(const Model& model) {
   Data data;
+  data.scratch = DataScratchPtr(std::make_unique<DataScratch>());
+  DataScratch& scratch = *data.scratch;
   const auto n = static_cast<std::size_t>(model.num_bodies());
   data.bodies.resize(n);
   data.nodes.resize(static_cast<std::size_t>(model.num_nodes()));
@@ -40,10 +68,10 @@ Data make_data(const Model& model) {
   data.joints.resize(static_cast<std::size_t>(model.num_joints()));
   // Tree-solve scratch only with joints: without, step() runs no tree solve.
   if constexpr (kWithArticulation)
-    if (model.num_joints() > 0) data.articulation.resize(model);
-  data.collision.resize(model);
-  data.solver.resize(model);
-  if constexpr (kWithDeformable) data.net.resize(model);  // empty without nets
+    if (model.num_joints() > 0) scratch.articulation.resize(model);
+  scratch.collision.resize(model);
+  scratch.solver.resize(model);
+  if constexpr (kWithDeformable) scratch.net.resize(model);  // empty without nets
   reset_data(model, data);
   return data;
 }
@@ -67,7 +95,7 @@ void reset_data(const Model& model, Data& data) noexcept {
   reset_nodes(model, data);
   for (JointPrescription& p : data.joint_prescribed) p = JointPrescription{};
   for (JointState& j : data.joints) j = JointState{};
-  for (Vec6& v : data.solver.delta) v.setZero();  // Δu_prev of the joint rows (joint_system.hpp)
+  for (Vec6& v : data.scratch->solver.delta) v.setZero();  // Δu_prev of the joint rows (joint_system.hpp)
   data.max_joint_drift = 0.0;
   data.max_joint_angle_drift = 0.0;
   data.attached_body = model.initial_attached_body;

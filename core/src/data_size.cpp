@@ -8,6 +8,8 @@
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"
 
+#include "detail/data_scratch.hpp"
+
 namespace numen::core {
 namespace {
 
@@ -32,10 +34,11 @@ std::size_t ModelFootprint::heap_bytes() const noexcept {
 }
 
 DataFootprint data_footprint(const Data& d) noexcept {
-  const CollisionScratch& c = d.collision;
-  const SolverScratch& s = d.solver;
-  const ArticulationScratch& a = d.articulation;
-  const NetScratch& n = d.net;
+  const DataScratch& scratch = *d.scratch;  // made by make_data(): never null
+  const CollisionScratch& c = scratch.collision;
+  const SolverScratch& s = scratch.solver;
+  const ArticulationScratch& a = scratch.articulation;
+  const NetScratch& n = scratch.net;
   DataFootprint f;
   f.sizeof_data = sizeof(Data);
   f.groups[0] = {"bodies", heap(d.bodies, d.applied_wrench, d.body_targets, d.body_feedback,
@@ -65,6 +68,7 @@ DataFootprint data_footprint(const Data& d) noexcept {
            n.spring_constants.stiffness, n.spring_constants.damping, n.spring_length,
            n.spring_low_begin, n.spring_slot, n.near_obstacles, n.obstacle_axis,
            n.obstacle_rotation, n.near_bodies, n.near_sphere_end, n.near_spheres)};
+  f.groups[6] = {"scratch block", sizeof(DataScratch)};
   return f;
 }
 

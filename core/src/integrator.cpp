@@ -19,6 +19,7 @@
 #include "numen/core/rigid_body.hpp"
 #include "numen/core/step_stages.hpp"
 
+#include "detail/data_scratch.hpp"
 #include "detail/implicit_system.hpp"
 #include "detail/joint_system.hpp"
 #include "detail/net_solve.hpp"
@@ -33,7 +34,7 @@ using detail::point_velocity;
 
 
 int active_contact_count(const Data& data) noexcept {  // within the scratch (capacity.hpp)
-  return std::clamp(data.num_contacts, 0, static_cast<int>(data.solver.contact_terms.size()));
+  return std::clamp(data.num_contacts, 0, static_cast<int>(data.scratch->solver.contact_terms.size()));
 }
 
 bool is_first_order(const SolverScratch& s, int body) noexcept {
@@ -159,7 +160,7 @@ void SolverScratch::resize(const Model& model) {
 }
 
 void prepare_implicit_step(const Model& model, Data& data) noexcept {
-  SolverScratch& s = data.solver;
+  SolverScratch& s = data.scratch->solver;
   const double h = s.system_step;
   for (std::size_t i = 0; i < data.bodies.size(); ++i) {
     BodyState& st = data.bodies[i];
@@ -174,7 +175,7 @@ void prepare_implicit_step(const Model& model, Data& data) noexcept {
 }
 
 void build_implicit_system(const Model& model, Data& data) noexcept {
-  SolverScratch& s = data.solver;
+  SolverScratch& s = data.scratch->solver;
   const double h = s.system_step;
   const double h2 = h * h;
   const std::size_t n = data.bodies.size();
@@ -273,7 +274,7 @@ void apply_implicit_system(const Model& /*model*/, const Data& data, std::span<c
   // body), the coupling terms and every contact's diagonal contribution
   // G_iᵀ W G_i, so only the cross terms −G_aᵀ W G_b remain per body–body
   // contact: static contacts cost nothing per iteration.
-  const SolverScratch& s = data.solver;
+  const SolverScratch& s = data.scratch->solver;
   const std::size_t n = data.bodies.size();
   for (std::size_t i = 0; i < n; ++i) {
     if (s.in_solve[i]) {
@@ -337,7 +338,7 @@ struct BlockJacobiSystem {
 }  // namespace
 
 bool solve_implicit_system(const Model& model, Data& data) noexcept {
-  SolverScratch& s = data.solver;
+  SolverScratch& s = data.scratch->solver;
   BlockJacobiSystem sys{s, s.delta, s.residual, s.precond_residual, s.direction, s.a_direction, 0.0};
   const std::span<const Vec6> b(s.rhs);
   for (std::size_t i = 0; i < sys.x.size(); ++i) {
@@ -383,10 +384,10 @@ struct ProjectedJointSystem {
   /// instead of to Gᵀ y (no cancellation, no loss of accuracy), and yz is added
   /// to y. Returns ‖r‖ / ref.
   double project() noexcept {
-    SolverScratch& s = data.solver;
+    SolverScratch& s = data.scratch->solver;
     const std::size_t n = r.size();
     for (JointVector& v : s.joint_rhs) v.setZero();
-    solve_articulation(model, data.articulation, r, s.joint_rhs, z, yz);
+    solve_articulation(model, data.scratch->articulation, r, s.joint_rhs, z, yz);
     for (std::size_t i = 0; i < n; ++i) rp[i].setZero();
     add_joint_transpose(model, data, yz, rp);
     double rr = 0.0;
@@ -417,8 +418,8 @@ struct ProjectedJointSystem {
 }  // namespace
 
 bool solve_constrained_system(const Model& model, Data& data) noexcept {
-  SolverScratch& s = data.solver;
-  ArticulationScratch& art = data.articulation;
+  SolverScratch& s = data.scratch->solver;
+  ArticulationScratch& art = data.scratch->articulation;
   const std::size_t n = data.bodies.size();
   for (std::size_t i = 0; i < n; ++i) art.known[i] = s.in_solve[i] ? 0 : 1;
   build_joint_rows(model, data, s.twist0, s.delta, s.joint_rhs);
@@ -481,8 +482,8 @@ namespace {
 /// projected_residual, residual, a_direction, joint_rhs and joint_y_correction as scratch
 /// (the step's solve is done).
 void project_joint_velocities(const Model& model, Data& data) noexcept {
-  SolverScratch& s = data.solver;
-  ArticulationScratch& art = data.articulation;
+  SolverScratch& s = data.scratch->solver;
+  ArticulationScratch& art = data.scratch->articulation;
   const double h = model.dt;
   // Second half of the step without the first half's joint impulse: u0 + 2Δu½ counts the
   // impulse −Gᵀy of the half step (along the rows at the step's start) twice; RATTLE gives the
@@ -545,7 +546,7 @@ namespace {
 /// u0 + (h / h_s) Δu. h_s = h: the linearly implicit Euler; h_s = h/2: the
 /// trapezoidal rule (u0 + Δu is the midpoint twist). h / h_s is 1 or 2 exactly.
 void integrate_linearized(const Model& model, Data& data, double system_step) noexcept {
-  SolverScratch& s = data.solver;
+  SolverScratch& s = data.scratch->solver;
   const double h = model.dt;
   s.system_step = system_step;
   const double scale = h / system_step;
@@ -624,8 +625,8 @@ void set_first_order_velocity(const Model& model, Data& data, std::size_t i) noe
 /// first-order twist (the joints' force adds λ/γ to it).
 #if NUMEN_WITH_ARTICULATION
 void integrate_symplectic_euler_constrained(const Model& model, Data& data) noexcept {
-  SolverScratch& s = data.solver;
-  ArticulationScratch& art = data.articulation;
+  SolverScratch& s = data.scratch->solver;
+  ArticulationScratch& art = data.scratch->articulation;
   const double h = model.dt;
   for (std::size_t i = 0; i < data.bodies.size(); ++i) {
     const int b = static_cast<int>(i);
@@ -676,7 +677,7 @@ void integrate_symplectic_euler_constrained(const Model& model, Data& data) noex
 }  // namespace
 
 void integrate_symplectic_euler(const Model& model, Data& data) noexcept {
-  data.solver.system_step = model.dt;
+  data.scratch->solver.system_step = model.dt;
   data.solver_iterations = 0;
   data.solver_residual = 0.0;
   if constexpr (kWithDeformable)
@@ -688,7 +689,7 @@ void integrate_symplectic_euler(const Model& model, Data& data) noexcept {
     return;
   }
 #endif
-  const SolverScratch& s = data.solver;
+  const SolverScratch& s = data.scratch->solver;
   const double h = model.dt;
   for (std::size_t i = 0; i < data.bodies.size(); ++i) {
     const int b = static_cast<int>(i);

@@ -8,6 +8,7 @@
 #include "numen/core/model.hpp"
 #include "numen/core/rigid_body.hpp"
 
+#include "detail/data_scratch.hpp"
 #include "detail/joint_system.hpp"
 
 namespace numen::core {
@@ -46,7 +47,7 @@ void build_joint_rows(const Model& model, Data& data, std::span<const Vec6> twis
   const double beta_h2 = model.baumgarte.beta_dt2;        // h² β
   const double scale = 1.0 / (1.0 + alpha_h + beta_h2);
   const bool chord_velocities = model.integrator != Integrator::kTrapezoidal;
-  ArticulationScratch& a = data.articulation;
+  ArticulationScratch& a = data.scratch->articulation;
   for (std::size_t j = 0; j < model.joints.size(); ++j) {
     const JointModel& jm = model.joints[j];
     const BodyState* parent = parent_state(jm, data.bodies);
@@ -114,7 +115,7 @@ void build_joint_rows(const Model& model, Data& data, std::span<const Vec6> twis
 
 void add_joint_transpose(const Model& model, const Data& data, std::span<const JointVector> y,
                          std::span<Vec6> out) noexcept {
-  const ArticulationScratch& a = data.articulation;
+  const ArticulationScratch& a = data.scratch->articulation;
   for (std::size_t j = 0; j < model.joints.size(); ++j) {
     const JointModel& jm = model.joints[j];
     const JointRows& rows = a.rows[j];
@@ -128,11 +129,11 @@ void add_joint_transpose(const Model& model, const Data& data, std::span<const J
 }
 
 void store_joint_multipliers(const Model& model, Data& data, std::span<const JointVector> y) noexcept {
-  const double inv_h = 1.0 / data.solver.system_step;  // h_s: the step of the KKT system
+  const double inv_h = 1.0 / data.scratch->solver.system_step;  // h_s: the step of the KKT system
   for (std::size_t j = 0; j < model.joints.size(); ++j) {
     JointState& js = data.joints[j];
     js.multiplier = -inv_h * y[j];
-    const Vec6 w = data.articulation.rows[j].g_child.transpose() * js.multiplier;
+    const Vec6 w = data.scratch->articulation.rows[j].g_child.transpose() * js.multiplier;
     js.reaction.force = w.head<3>();
     js.reaction.torque = w.tail<3>();
   }

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <span>
 
+#include "detail/data_scratch.hpp"
 #include "detail/implicit_system.hpp"
 #include "detail/joint_system.hpp"
 #include "detail/net_solve.hpp"
@@ -28,8 +29,8 @@ namespace {
 void apply_coupled(const Model& model, const Data& data, std::span<const Vec6> in_b,
                    std::span<const Vec3> in_n, std::span<Vec6> out_b,
                    std::span<Vec3> out_n) noexcept {
-  const SolverScratch& s = data.solver;
-  const NetScratch& ns = data.net;
+  const SolverScratch& s = data.scratch->solver;
+  const NetScratch& ns = data.scratch->net;
   apply_implicit_system(model, data, in_b, out_b);
   // Node rows: (m + c) p_i, then each spring's S (p_a − p_b) (its diagonal and
   // off-diagonal blocks at once), each node contact's W p_i, the ties' and
@@ -52,7 +53,7 @@ void apply_coupled(const Model& model, const Data& data, std::span<const Vec6> i
     }
     y[k] += acc;
   }
-  const double h = data.solver.system_step;  // h_s of the linearised system (integrator.hpp)
+  const double h = data.scratch->solver.system_step;  // h_s of the linearised system (integrator.hpp)
   for (const NetModel& net : model.nets) {
     const auto b = static_cast<std::size_t>(net.body);
     if (!s.in_solve[b]) continue;
@@ -96,13 +97,13 @@ struct ArrowheadSystem {
   /// bodies, body part by the tree solve with the Schur blocks S_b and
   /// `constraint_rhs` (yz holds the constraint part).
   void precondition_with(std::span<const JointVector> constraint_rhs) noexcept {
-    const SolverScratch& s = data.solver;
-    const NetScratch& ns = data.net;
+    const SolverScratch& s = data.scratch->solver;
+    const NetScratch& ns = data.scratch->net;
     const double h = s.system_step;  // h_s of the linearised system (integrator.hpp)
     for (std::size_t i = 0; i < rn.size(); ++i) zn[i].noalias() = ns.block_inverse[i] * rn[i];
     for (std::size_t b = 0; b < rb.size(); ++b) tb[b] = rb[b];
     add_tie_transpose(model, data, zn, tb);
-    solve_articulation(model, data.articulation, tb, constraint_rhs, zb, yz);
+    solve_articulation(model, data.scratch->articulation, tb, constraint_rhs, zb, yz);
     for (const NetModel& net : model.nets) {
       const auto b = static_cast<std::size_t>(net.body);
       if (!s.in_solve[b]) continue;
@@ -123,7 +124,7 @@ struct ArrowheadSystem {
   }
   /// The preconditioned and projected residual's measure ‖r‖ / ref.
   double project() noexcept {
-    precondition_with(data.solver.joint_rhs);
+    precondition_with(data.scratch->solver.joint_rhs);
     update_residual();
     return std::sqrt(dot(rb, rb) + dot(rn, rn)) / ref;
   }
@@ -152,9 +153,9 @@ struct ArrowheadSystem {
 }  // namespace
 
 bool solve_net_arrowhead(const Model& model, Data& data) noexcept {
-  SolverScratch& s = data.solver;
-  NetScratch& ns = data.net;
-  ArticulationScratch& art = data.articulation;
+  SolverScratch& s = data.scratch->solver;
+  NetScratch& ns = data.scratch->net;
+  ArticulationScratch& art = data.scratch->articulation;
   const std::size_t nb = data.bodies.size();
 
   for (std::size_t i = 0; i < nb; ++i) art.known[i] = s.in_solve[i] ? 0 : 1;

@@ -4,6 +4,7 @@
 /// sides, the node rows, their inverses in the sweep order and, with joints,
 /// the bodies' Schur blocks of the arrowhead preconditioner.
 
+#include "detail/data_scratch.hpp"
 #include "detail/implicit_system.hpp"
 #include "detail/net_solve.hpp"
 #include "detail/net_terms.hpp"
@@ -67,9 +68,9 @@ inline void inverse_symmetric(const Mat3& m, Mat3& out) noexcept {
 
 void add_net_body_terms(const Model& model, Data& data) noexcept {
   if (model.nets.empty()) return;
-  SolverScratch& s = data.solver;
-  NetScratch& ns = data.net;
-  const double h = data.solver.system_step;  // h_s of the linearised system (integrator.hpp)
+  SolverScratch& s = data.scratch->solver;
+  NetScratch& ns = data.scratch->net;
+  const double h = data.scratch->solver.system_step;  // h_s of the linearised system (integrator.hpp)
   const double h2 = h * h;
   // Ties: their sums over the nodes come from linearize_nets().
   for (std::size_t k = 0; k < model.nets.size(); ++k) {
@@ -102,9 +103,9 @@ void add_net_body_terms(const Model& model, Data& data) noexcept {
 
 void build_net_system(const Model& model, Data& data) noexcept {
   if (model.nets.empty()) return;
-  const SolverScratch& s = data.solver;
-  NetScratch& ns = data.net;
-  const double h = data.solver.system_step;  // h_s of the linearised system (integrator.hpp)
+  const SolverScratch& s = data.scratch->solver;
+  NetScratch& ns = data.scratch->net;
+  const double h = data.scratch->solver.system_step;  // h_s of the linearised system (integrator.hpp)
   const double h2 = h * h;
 
   // The springs' weights, their sum at each node (spring_block) and their

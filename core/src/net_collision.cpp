@@ -22,6 +22,7 @@
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"
 
+#include "detail/data_scratch.hpp"
 #include "detail/narrowphase.hpp"
 
 namespace numen::core {
@@ -132,7 +133,7 @@ int gather_obstacles(const Model& model, NetScratch& ns, const Vec3& lo, const V
 /// sphere centres, filled by detect_contacts() earlier in the step.
 int gather_bodies(const Model& model, const Data& data, NetScratch& ns, const NetModel& net,
                   const Vec3& lo, const Vec3& hi) noexcept {
-  const CollisionScratch& cs = data.collision;
+  const CollisionScratch& cs = data.scratch->collision;
   const int nb = model.num_bodies();
   const std::vector<int>& tree = model.articulation.body_tree;
   const bool has_tree = static_cast<int>(tree.size()) == nb;  // always after finalize_model()
@@ -199,7 +200,7 @@ inline void collide_node_obstacle(const Model& model, const NetScratch& ns, int 
 inline void collide_node_bodies(const Model& model, const Data& data, const NetScratch& ns,
                                 int num_near, int node, const Vec3& c, double r,
                                 const Vec3& fallback, int mat_net, NodeContactSink& sink) noexcept {
-  const CollisionScratch& cs = data.collision;
+  const CollisionScratch& cs = data.scratch->collision;
   const double* X = cs.sphere_x.data();
   const double* Y = cs.sphere_y.data();
   const double* Z = cs.sphere_z.data();
@@ -236,8 +237,8 @@ inline void collide_node_bodies(const Model& model, const Data& data, const NetS
 void detect_node_contacts(const Model& model, Data& data) noexcept {
   data.num_node_contacts = 0;
   if (model.nets.empty()) return;
-  NetScratch& ns = data.net;
-  CollisionScratch& cs = data.collision;
+  NetScratch& ns = data.scratch->net;
+  CollisionScratch& cs = data.scratch->collision;
   const StaticSphereGrid& grid = model.static_grid;
   const int num_materials = model.num_materials();
   NodeContactSink sink{data.node_contacts.data(),

@@ -12,6 +12,9 @@
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"
 
+#include "detail/data_scratch.hpp"
+#include "detail/net_solve.hpp"
+
 namespace numen::core {
 namespace {
 
@@ -134,7 +137,7 @@ inline void one_spring_linearization(const SpringPass& a, std::int32_t j, const 
 /// The arrays of the springs' passes for `h` (h_s of the linearised system; unused by the
 /// forces' pass).
 SpringPass spring_arrays(Data& data, double h) noexcept {
-  NetScratch& s = data.net;
+  NetScratch& s = data.scratch->net;
   SweepSprings& sw = s.sweep_springs;
   return SpringPass{data.nodes.data(),
                     s.spring_constants.rest_length.data(),
@@ -161,7 +164,7 @@ SpringPass spring_arrays(Data& data, double h) noexcept {
 /// and the directions and lengths linearization_pass() starts from.
 /// Expects force = gravity + ties on entry.
 void spring_pass(const Model& model, Data& data) noexcept {
-  const NetScratch& s = data.net;
+  const NetScratch& s = data.scratch->net;
   const SpringPass a = spring_arrays(data, 0.0);
   const std::int32_t* low_begin = s.spring_low_begin.data();
   const std::int32_t* order = model.node_sweep_order.data();
@@ -231,7 +234,7 @@ void spring_pass(const Model& model, Data& data) noexcept {
 /// k K̃ = (h² k − β)/h² d̂d̂ᵀ + β/h² I (net_solve.hpp). Expects spring_block = 0
 /// and rhs = 0 on entry.
 void linearization_pass(const Model& model, Data& data, double h) noexcept {
-  const NetScratch& s = data.net;
+  const NetScratch& s = data.scratch->net;
   const SpringPass a = spring_arrays(data, h);
   const std::int32_t* low_begin = s.spring_low_begin.data();
   const std::int32_t* order = model.node_sweep_order.data();
@@ -306,7 +309,7 @@ void linearization_pass(const Model& model, Data& data, double h) noexcept {
 
 void compute_net_forces(const Model& model, Data& data) noexcept {
   if (model.nets.empty()) return;
-  NetScratch& s = data.net;
+  NetScratch& s = data.scratch->net;
 
   // Gravity, and the zero-length ties to the rigid component with their
   // reaction on it. Raw pointers: the stores would otherwise make the
@@ -360,7 +363,7 @@ void compute_net_forces(const Model& model, Data& data) noexcept {
     MaterialPair mp = model.material_pairs[static_cast<std::size_t>(ct.material_pair)];
     if (mp.stiffness > 0.0 && model.solver.node_contact_max_omega_dt < std::numeric_limits<double>::infinity()) {
       double inv_mass = 1.0 / model.node_mass[i];
-      if (ct.body_b >= 0 && data.solver.imposed[static_cast<std::size_t>(ct.body_b)] == 0) {
+      if (ct.body_b >= 0 && data.scratch->solver.imposed[static_cast<std::size_t>(ct.body_b)] == 0) {
         const auto b = static_cast<std::size_t>(ct.body_b);
         inv_mass += 1.0 / contact_effective_mass(model.bodies[b], data.bodies[b], ct.r_b, false,
                                                  nullptr, nullptr, ct.r_b, false, ct.normal);
@@ -389,7 +392,7 @@ void compute_net_forces(const Model& model, Data& data) noexcept {
 
 void linearize_nets(const Model& model, Data& data, double system_step) noexcept {
   if (model.nets.empty()) return;
-  NetScratch& s = data.net;
+  NetScratch& s = data.scratch->net;
   // The ties' sums of the rigid component's rows (NetTieSums; the anchor's
   // velocity at the step's start is that of the twist u0 the integrator
   // starts from), and the node rows' accumulators cleared. Raw pointers, as
@@ -434,19 +437,19 @@ void integrate_nodes_symplectic(const Model& model, Data& data) noexcept {
   const double h = model.dt;
   for (std::size_t i = 0; i < data.nodes.size(); ++i) {
     NodeState& st = data.nodes[i];
-    st.velocity += (h / model.node_mass[i]) * data.net.force[i];
+    st.velocity += (h / model.node_mass[i]) * data.scratch->net.force[i];
     st.position += h * st.velocity;
   }
 }
 
 void integrate_nodes_implicit(const Model& model, Data& data) noexcept {
   const double h = model.dt;
-  const double scale = h / data.solver.system_step;  // 1 (Euler) or 2 (trapezoidal), exact
+  const double scale = h / data.scratch->solver.system_step;  // 1 (Euler) or 2 (trapezoidal), exact
   for (std::size_t i = 0; i < data.nodes.size(); ++i) {
     NodeState& st = data.nodes[i];
-    const Vec3 v_move = st.velocity + data.net.delta[i];  // v1 (Euler) or v½ (trapezoidal)
+    const Vec3 v_move = st.velocity + data.scratch->net.delta[i];  // v1 (Euler) or v½ (trapezoidal)
     st.position += h * v_move;
-    st.velocity += scale * data.net.delta[i];
+    st.velocity += scale * data.scratch->net.delta[i];
   }
 }
 

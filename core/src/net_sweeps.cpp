@@ -7,6 +7,7 @@
 #include <cmath>
 #include <span>
 
+#include "detail/data_scratch.hpp"
 #include "detail/implicit_system.hpp"
 #include "detail/net_solve.hpp"
 #include "detail/net_terms.hpp"
@@ -22,8 +23,8 @@ namespace {
 /// out; returns vᵀ D̃ v. Bodies not in the solve give 0.
 double apply_block_diagonal(const Data& data, std::span<const Vec6> v_b, std::span<const Vec3> v_n,
                             std::span<Vec6> out_b, std::span<Vec3> out_n) noexcept {
-  const SolverScratch& s = data.solver;
-  const NetScratch& ns = data.net;
+  const SolverScratch& s = data.scratch->solver;
+  const NetScratch& ns = data.scratch->net;
   double vdv = 0.0;
   for (std::size_t b = 0; b < v_b.size(); ++b) {
     if (s.in_solve[b]) {
@@ -74,9 +75,9 @@ template <bool kUpdateQ>
 void backward_sweep(const Model& model, const Data& data, double beta, const Vec3* d_n,
                     std::span<const Vec6> q_b, Vec3* q_n, std::span<Vec6> t_b, Vec3* t_n,
                     std::span<Vec6> g_b, Vec3* g_n) noexcept {
-  const SolverScratch& s = data.solver;
-  const NetScratch& ns = data.net;
-  const double h = data.solver.system_step;  // h_s of the linearised system (integrator.hpp)
+  const SolverScratch& s = data.scratch->solver;
+  const NetScratch& ns = data.scratch->net;
+  const double h = data.scratch->solver.system_step;  // h_s of the linearised system (integrator.hpp)
   const std::size_t nb = q_b.size();
   const SpringView sp(ns);
   const std::int32_t* order = model.node_sweep_order.data();
@@ -154,9 +155,9 @@ template <bool kAddT>
 double forward_sweep(const Model& model, const Data& data, std::span<const Vec6> g_b,
                      const Vec3* g_n, std::span<Vec6> y_b, Vec3* y_n, std::span<const Vec6> t_b,
                      const Vec3* t_n, std::span<const Vec6> q_b, const Vec3* q_n) noexcept {
-  const SolverScratch& s = data.solver;
-  const NetScratch& ns = data.net;
-  const double h = data.solver.system_step;  // h_s of the linearised system (integrator.hpp)
+  const SolverScratch& s = data.scratch->solver;
+  const NetScratch& ns = data.scratch->net;
+  const double h = data.scratch->solver.system_step;  // h_s of the linearised system (integrator.hpp)
   const std::size_t nb = g_b.size();
   const SpringView sp(ns);
   const std::int32_t* order = model.node_sweep_order.data();
@@ -219,9 +220,9 @@ double forward_sweep(const Model& model, const Data& data, std::span<const Vec6>
 /// scatter. `y_b` is scratch (D̃_b⁻¹ b_b).
 double net_start_sweep(const Model& model, Data& data, std::span<const Vec3> x0_n,
                        std::span<Vec6> w_b, std::span<Vec3> w_n, std::span<Vec6> y_b) noexcept {
-  const SolverScratch& s = data.solver;
-  NetScratch& ns = data.net;
-  const double h = data.solver.system_step;  // h_s of the linearised system (integrator.hpp)
+  const SolverScratch& s = data.scratch->solver;
+  NetScratch& ns = data.scratch->net;
+  const double h = data.scratch->solver.system_step;  // h_s of the linearised system (integrator.hpp)
   const std::size_t nb = w_b.size();
   const SpringView sp(ns);
   const std::int32_t* order = model.node_sweep_order.data();
@@ -301,7 +302,7 @@ struct EisenstatSystem {
   /// node by node), the forward sweep (K q = y + t and qᵀ K q as it goes; g_n is
   /// swept in place in K q's storage). Returns qᵀ K q.
   double apply() noexcept {
-    const SolverScratch& s = data.solver;
+    const SolverScratch& s = data.scratch->solver;
     if (first) {
       backward_sweep<false>(model, data, 0.0, nullptr, qb, qn.data(), tb, tn.data(), gb,
                             kqn.data());
@@ -315,7 +316,7 @@ struct EisenstatSystem {
                                qn.data());
   }
   double advance(double alpha) noexcept {
-    const SolverScratch& s = data.solver;
+    const SolverScratch& s = data.scratch->solver;
     double rho = 0.0;
     for (std::size_t b = 0; b < xb.size(); ++b) {
       if (!s.in_solve[b]) continue;  // x and w stay 0
@@ -323,7 +324,7 @@ struct EisenstatSystem {
       wb[b] -= alpha * kqb[b];
       rho += wb[b].dot(s.block[b] * wb[b]);
     }
-    const Mat3* block = data.net.block.data();
+    const Mat3* block = data.scratch->net.block.data();
     for (std::size_t i = 0; i < xn.size(); ++i) {
       xn[i] += alpha * tn[i];
       wn[i] -= alpha * kqn[i];
@@ -343,8 +344,8 @@ struct EisenstatSystem {
 }  // namespace
 
 bool solve_net_eisenstat(const Model& model, Data& data) noexcept {
-  SolverScratch& s = data.solver;
-  NetScratch& ns = data.net;
+  SolverScratch& s = data.scratch->solver;
+  NetScratch& ns = data.scratch->net;
   EisenstatSystem sys{
       model,          data,        s.delta,  s.residual,  s.precond_residual,  s.direction,
       s.a_direction,  ns.body_tmp, ns.delta, ns.residual, ns.precond_residual, ns.direction,
@@ -394,7 +395,7 @@ void net_forward_sweep(const Model& model, const Data& data, std::span<const Vec
 double apply_net_preconditioned(const Model& model, Data& data, std::span<const Vec6> q_b,
                                 std::span<const Vec3> q_n, std::span<Vec6> t_b, std::span<Vec3> t_n,
                                 std::span<Vec6> kq_b, std::span<Vec3> kq_n) noexcept {
-  NetScratch& ns = data.net;
+  NetScratch& ns = data.scratch->net;
   const std::span<Vec6> g_b(ns.body_tmp);
   net_backward_sweep(model, data, q_b, q_n, t_b, t_n, g_b, kq_n);  // g_n in K q's place
   return forward_sweep<true>(model, data, g_b, kq_n.data(), kq_b, kq_n.data(), t_b, t_n.data(), q_b,

@@ -16,14 +16,15 @@
 #include "numen/core/rigid_body.hpp"
 #include "numen/core/step_stages.hpp"
 
+#include "detail/data_scratch.hpp"
 #include "detail/joint_system.hpp"
 
 namespace numen::core {
 namespace {
 
 void save_state(Data& data) noexcept {
-  for (std::size_t i = 0; i < data.bodies.size(); ++i) data.solver.saved_state[i] = data.bodies[i];
-  for (std::size_t i = 0; i < data.nodes.size(); ++i) data.net.saved[i] = data.nodes[i];
+  for (std::size_t i = 0; i < data.bodies.size(); ++i) data.scratch->solver.saved_state[i] = data.bodies[i];
+  for (std::size_t i = 0; i < data.nodes.size(); ++i) data.scratch->net.saved[i] = data.nodes[i];
 }
 
 /// Checks stage: rejects a non-finite result (rollback to the saved poses and
@@ -33,14 +34,14 @@ void save_state(Data& data) noexcept {
 bool check_finite(Data& data) noexcept {
   bool finite = data.feedback_wrench.force.allFinite() && data.feedback_wrench.torque.allFinite();
   for (const BodyState& s : data.bodies) finite = finite && state_is_finite(s);
-  for (const Vec6& d : data.solver.delta) finite = finite && d.allFinite();
+  for (const Vec6& d : data.scratch->solver.delta) finite = finite && d.allFinite();
   for (const NodeState& n : data.nodes)
     finite = finite && n.position.allFinite() && n.velocity.allFinite();
   if (finite) return true;
-  for (Vec6& d : data.solver.delta) d.setZero();
-  for (Vec3& d : data.net.delta) d.setZero();  // the next step's warm start
+  for (Vec6& d : data.scratch->solver.delta) d.setZero();
+  for (Vec3& d : data.scratch->net.delta) d.setZero();  // the next step's warm start
   for (std::size_t i = 0; i < data.nodes.size(); ++i) {
-    data.nodes[i].position = data.net.saved[i].position;
+    data.nodes[i].position = data.scratch->net.saved[i].position;
     data.nodes[i].velocity.setZero();
   }
   for (Wrench& w : data.body_feedback) w = Wrench{};
@@ -49,7 +50,7 @@ bool check_finite(Data& data) noexcept {
   data.max_joint_angle_drift = 0.0;
   for (std::size_t i = 0; i < data.bodies.size(); ++i) {
     BodyState& s = data.bodies[i];
-    s = data.solver.saved_state[i];
+    s = data.scratch->solver.saved_state[i];
     s.linear_velocity.setZero();
     s.angular_velocity.setZero();
   }
@@ -84,7 +85,7 @@ void step(const Model& model, Data& data) noexcept {
   data.stages_run = 0;
   save_state(data);
   impose_direct_target(model, data);  // clears SolverScratch::imposed; imposes in kDirect
-  if ((plan & kStageContacts) && !data.solver.contact_terms.empty()) {  // capacity.hpp
+  if ((plan & kStageContacts) && !data.scratch->solver.contact_terms.empty()) {  // capacity.hpp
     detect_contacts(model, data);  // may set kContactOverflow, counts contact_overflow_steps
     data.stages_run |= kStageContacts;
   } else {

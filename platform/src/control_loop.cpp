@@ -21,16 +21,6 @@ std::int64_t period_of(const hal::InstrumentDevice& device) {
   return static_cast<std::int64_t>(std::llround(p * 1e9));
 }
 
-hal::DeviceSettings device_settings(const ControlLoopSettings& s) {
-  hal::DeviceSettings out;
-  out.encoder_timeout_periods = s.encoder_timeout_periods;
-  out.overrun_limit = s.overrun_limit;
-  out.safe_stop_timeout_periods = s.safe_stop_timeout_periods;
-  out.auto_activate = s.auto_activate;
-  out.drive_settings = s.drive_settings;
-  return out;
-}
-
 }  // namespace
 
 ControlLoop::ControlLoop(const core::Model& model, core::Data& data, hal::Bus& bus,
@@ -39,7 +29,7 @@ ControlLoop::ControlLoop(const core::Model& model, core::Data& data, hal::Bus& b
     : model_(&model),
       data_(&data),
       instrument_(&device),
-      device_(hal::make_device(device, bus, period_of(device), device_settings(settings))),
+      device_(hal::make_device(device, bus, period_of(device), static_cast<const hal::DeviceSettings&>(settings))),
       binding_(std::move(binding)),
       settings_(settings),
       stats_(std::make_unique<LoopStatistics>(period_of(device))) {

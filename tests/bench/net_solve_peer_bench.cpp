@@ -60,6 +60,7 @@
 #include "numen/core/model.hpp"
 #include "numen/core/step.hpp"
 
+#include "detail/data_scratch.hpp"
 #include "detail/net_solve.hpp"
 #include "sample_median.hpp"
 
@@ -98,7 +99,7 @@ FrozenSystem& frozen(int subdivisions) {
   f.model.solver.max_iterations = 100000;
   numen::test::set_deformable_ball_target(f.model, f.data, k);
   const numen::test::NetSystemInputs in = numen::test::stage_net_system(f.model, f.data);
-  f.warm = f.data.net.delta;
+  f.warm = f.data.scratch->net.delta;
   f.system = numen::test::assemble_net_system(f.model, in);
   for (int c = 0; c < f.data.num_node_contacts; ++c)
     f.contacts += f.data.node_contacts[static_cast<std::size_t>(c)].active ? 1 : 0;
@@ -163,7 +164,7 @@ void NetPeerNumen(benchmark::State& state) {
   const double tol = tolerance_of(state);
   f.model.solver.tolerance = tol;
   const bool converged = time_solves(
-      state, [&] { std::copy(f.warm.begin(), f.warm.end(), f.data.net.delta.begin()); },
+      state, [&] { std::copy(f.warm.begin(), f.warm.end(), f.data.scratch->net.delta.begin()); },
       [] { return true; }, [&] { return core::solve_net_system(f.model, f.data); });
   const VectorXd x = numen::test::net_system_unknowns(f.model, f.data);
   report_error(state, f, x);

@@ -23,6 +23,8 @@
 #include "numen/core/joint.hpp"
 #include "numen/core/model.hpp"
 
+#include "detail/articulation_solve.hpp"
+
 namespace core = numen::core;
 using core::JointVector;
 using core::Mat3;

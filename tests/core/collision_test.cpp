@@ -18,6 +18,7 @@
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"
 
+#include "detail/data_scratch.hpp"
 #include "detail/narrowphase.hpp"
 
 namespace numen::core {
@@ -278,8 +279,8 @@ TEST(CollisionBroadphase, EqualsBruteForceOnRandomScenes) {
     const Model& m = sc.model;
     Data d = make_data(m);
     if (seed == 3u) {  // wrap the query stamp, with stamps left from long ago
-      d.collision.stamp = std::numeric_limits<std::uint32_t>::max() - 50;
-      std::fill(d.collision.entry_stamp.begin(), d.collision.entry_stamp.end(), 1u);
+      d.scratch->collision.stamp = std::numeric_limits<std::uint32_t>::max() - 50;
+      std::fill(d.scratch->collision.entry_stamp.begin(), d.scratch->collision.entry_stamp.end(), 1u);
     }
     std::mt19937 rng(seed * 7919u);
     for (int t = 0; t < 60; ++t) {
@@ -365,8 +366,8 @@ TEST(CollisionBroadphase, ContactsFollowTheConvention) {
         EXPECT_LT(c.body_a, c.body_b);
         EXPECT_EQ(c.obstacle, -1);
         // Separating a along +normal reduces the overlap of the two spheres.
-        const Vec3 ca = d.collision.sphere_world[static_cast<std::size_t>(c.sphere_a)];
-        const Vec3 cb = d.collision.sphere_world[static_cast<std::size_t>(c.sphere_b)];
+        const Vec3 ca = d.scratch->collision.sphere_world[static_cast<std::size_t>(c.sphere_a)];
+        const Vec3 cb = d.scratch->collision.sphere_world[static_cast<std::size_t>(c.sphere_b)];
         EXPECT_GT((ca + 1e-6 * c.normal - cb).norm(), (ca - cb).norm());
       } else {
         EXPECT_GE(c.obstacle, 0);
@@ -385,8 +386,8 @@ TEST(CollisionStage, WorldCentresAndPlaneContactFields) {
   sc.finalize();
   Data d = make_data(sc.model);
   detect_contacts(sc.model, d);
-  EXPECT_LT((d.collision.sphere_world[0] - Vec3(1, 2.1, 0.05)).norm(), 1e-15);
-  EXPECT_LT((d.collision.sphere_world[1] - Vec3(1, 1.9, 0.55)).norm(), 1e-15);
+  EXPECT_LT((d.scratch->collision.sphere_world[0] - Vec3(1, 2.1, 0.05)).norm(), 1e-15);
+  EXPECT_LT((d.scratch->collision.sphere_world[1] - Vec3(1, 1.9, 0.55)).norm(), 1e-15);
   ASSERT_EQ(d.num_contacts, 1);
   const Contact& c = d.contacts[0];
   EXPECT_EQ(c.body_a, 0);
@@ -502,11 +503,11 @@ TEST(CollisionStage, StampWrapForgetsOldStamps) {
   sc.body(Vec3(0, 0, 0.15), Quat::Identity(), {{Vec3::Zero(), 0.1}});
   sc.finalize();
   Data d = make_data(sc.model);
-  d.collision.stamp = std::numeric_limits<std::uint32_t>::max();  // next query wraps to 1
-  std::fill(d.collision.entry_stamp.begin(), d.collision.entry_stamp.end(), 1u);  // hit long ago
+  d.scratch->collision.stamp = std::numeric_limits<std::uint32_t>::max();  // next query wraps to 1
+  std::fill(d.scratch->collision.entry_stamp.begin(), d.scratch->collision.entry_stamp.end(), 1u);  // hit long ago
   detect_contacts(sc.model, d);
   EXPECT_EQ(d.num_contacts, 2);
-  EXPECT_EQ(d.collision.stamp, 1u);
+  EXPECT_EQ(d.scratch->collision.stamp, 1u);
 }
 
 TEST(CollisionStage, ObstacleBoundsAreComputedAtFinalize) {

@@ -18,6 +18,8 @@
 #include "numen/core/rigid_body.hpp"
 #include "numen/core/step.hpp"
 
+#include "detail/data_scratch.hpp"
+
 namespace core = numen::core;
 using core::Mat12;
 using core::Mat3;
@@ -250,8 +252,8 @@ TEST(ContactForce, StageAppliesEqualAndOppositeWrenchesAboutEachCom) {
   const Vec3 total = d.body_wrench[0].torque + d.bodies[0].position.cross(d.body_wrench[0].force) +
                      d.body_wrench[1].torque + d.bodies[1].position.cross(d.body_wrench[1].force);
   EXPECT_LT(total.norm(), 1e-14);
-  EXPECT_TRUE(d.solver.contact_terms[0].active);
-  EXPECT_FALSE(d.solver.contact_terms[1].active);
+  EXPECT_TRUE(d.scratch->solver.contact_terms[0].active);
+  EXPECT_FALSE(d.scratch->solver.contact_terms[1].active);
 }
 
 namespace {
@@ -445,8 +447,8 @@ TEST(ContactForce, StiffnessBelowTheFloorActsAsDeclaredBitForBit) {
   EXPECT_EQ(with.contacts[0].force, without.contacts[0].force);
   EXPECT_EQ(with.contacts_clamped, 0);
   EXPECT_EQ(with.contact_clamped_steps, 0);
-  EXPECT_EQ(with.solver.contact_terms[0].stiffness, 1e5);
-  EXPECT_FALSE(with.solver.contact_terms[0].clamped);
+  EXPECT_EQ(with.scratch->solver.contact_terms[0].stiffness, 1e5);
+  EXPECT_FALSE(with.scratch->solver.contact_terms[0].clamped);
 }
 
 TEST(ContactForce, StiffnessAboveTheFloorIsClampedToTheEffectiveMassAndCounted) {
@@ -456,8 +458,8 @@ TEST(ContactForce, StiffnessAboveTheFloorIsClampedToTheEffectiveMassAndCounted) 
   const double k_eff = 0.05 * (w / 1e-3) * (w / 1e-3);
   const core::Data clamped = ball_step(1e12, w);
   const core::Data declared = ball_step(k_eff, std::numeric_limits<double>::infinity());
-  EXPECT_DOUBLE_EQ(clamped.solver.contact_terms[0].stiffness, k_eff);
-  EXPECT_TRUE(clamped.solver.contact_terms[0].clamped);
+  EXPECT_DOUBLE_EQ(clamped.scratch->solver.contact_terms[0].stiffness, k_eff);
+  EXPECT_TRUE(clamped.scratch->solver.contact_terms[0].clamped);
   EXPECT_EQ(clamped.contacts_clamped, 1);
   EXPECT_EQ(clamped.contact_clamped_steps, 1);
   EXPECT_NEAR((clamped.bodies[0].position - declared.bodies[0].position).norm(), 0.0, 1e-15);

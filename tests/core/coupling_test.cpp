@@ -16,6 +16,8 @@
 #include "numen/core/step.hpp"
 #include "alloc_counter.hpp"
 
+#include "detail/data_scratch.hpp"
+
 namespace core = numen::core;
 using core::Mat3;
 using core::Quat;
@@ -129,7 +131,7 @@ TEST(Coupling, StageCouplesOnlyTheAttachedBody) {
   core::apply_coupling(m, d);
   EXPECT_TRUE(d.body_wrench[0].force.isApprox(Vec3(0, 0, 100.0)));
   EXPECT_TRUE(d.body_wrench[1].force.isZero(0.0));
-  EXPECT_EQ(d.solver.coupled_body, 0);
+  EXPECT_EQ(d.scratch->solver.coupled_body, 0);
   core::set_attached_body(m, d, 1);  // tool switching
   core::apply_external_forces(m, d);
   core::apply_coupling(m, d);
@@ -142,7 +144,7 @@ TEST(Coupling, StageCouplesOnlyTheAttachedBody) {
   core::apply_coupling(m, d);
   EXPECT_TRUE(d.body_wrench[1].force.isZero(0.0));
   EXPECT_TRUE(d.coupling_wrench.force.isZero(0.0));
-  EXPECT_EQ(d.solver.coupled_body, -1);
+  EXPECT_EQ(d.scratch->solver.coupled_body, -1);
 }
 
 TEST(Coupling, NonFiniteTargetSkipsCouplingAndFlagsIt) {
@@ -253,8 +255,8 @@ TEST(Coupling, FirstOrderWithoutDampingFallsBackToGodObject) {
   core::Data d = core::make_data(m);
   d.target.position = Vec3(0.01, 0.0, 0.0);
   core::step(m, d);
-  EXPECT_FALSE(d.solver.first_order);
-  EXPECT_EQ(d.solver.coupled_body, 0);
+  EXPECT_FALSE(d.scratch->solver.first_order);
+  EXPECT_EQ(d.scratch->solver.coupled_body, 0);
   // God-object: starts from rest, so the first step moves by about h² k e / m.
   EXPECT_NEAR(d.bodies[0].position.x(), 1e-6 * 100.0 * 0.01 / (1.0 + 1e-6 * 100.0), 1e-12);
 }

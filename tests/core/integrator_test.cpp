@@ -21,6 +21,7 @@
 #include "numen/core/rigid_body.hpp"
 #include "numen/core/step.hpp"
 
+#include "detail/data_scratch.hpp"
 #include "detail/implicit_system.hpp"
 
 namespace core = numen::core;
@@ -409,7 +410,7 @@ TEST(Integrator, MatrixFreeOperatorEqualsDenseMassMinusHDMinusH2K) {
   ref.block<3, 3>(9, 9) += (h * g.gamma_r + h * h * g.k_r) * Mat3::Identity();
   for (int c = 0; c < d.num_contacts; ++c) {
     const core::Contact& ct = d.contacts[static_cast<std::size_t>(c)];
-    const core::ContactTerm& t = d.solver.contact_terms[static_cast<std::size_t>(c)];
+    const core::ContactTerm& t = d.scratch->solver.contact_terms[static_cast<std::size_t>(c)];
     ASSERT_TRUE(t.active);
     Mat12 k, dmp;
     core::contact_stiffness_damping(ct.normal, t.r_a, t.r_b, true, m.material_pairs[0], k, dmp);
@@ -428,7 +429,7 @@ TEST(Integrator, MatrixFreeOperatorEqualsDenseMassMinusHDMinusH2K) {
   EXPECT_LT((a - a.transpose()).norm(), 1e-14 * a.norm());
   // Preconditioner blocks are the diagonal blocks of A.
   for (int i = 0; i < m.num_bodies(); ++i)
-    EXPECT_LT((d.solver.block[static_cast<std::size_t>(i)] - a.block<6, 6>(6 * i, 6 * i)).norm(),
+    EXPECT_LT((d.scratch->solver.block[static_cast<std::size_t>(i)] - a.block<6, 6>(6 * i, 6 * i)).norm(),
               1e-13 * a.norm());
 }
 
@@ -443,8 +444,8 @@ TEST(Integrator, ConjugateGradientMatchesADenseSolveWithBodyBodyContacts) {
   const int n = 6 * m.num_bodies();
   Eigen::VectorXd b(n), x(n);
   for (int i = 0; i < m.num_bodies(); ++i) {
-    b.segment<6>(6 * i) = d.solver.rhs[static_cast<std::size_t>(i)];
-    x.segment<6>(6 * i) = d.solver.delta[static_cast<std::size_t>(i)];
+    b.segment<6>(6 * i) = d.scratch->solver.rhs[static_cast<std::size_t>(i)];
+    x.segment<6>(6 * i) = d.scratch->solver.delta[static_cast<std::size_t>(i)];
   }
   const Eigen::VectorXd ref = dense_operator(m, d).llt().solve(b);
   std::printf("[pcg] body-body contacts: %d iterations, residual %.2e, |x - x_dense|/|x| %.2e\n",
@@ -489,9 +490,9 @@ TEST(Integrator, BrokenDiagonalFactorGivesANonFiniteResultNotASilentlyForceFreeS
   core::compute_forces(m, d);
   core::prepare_implicit_step(m, d);
   core::build_implicit_system(m, d);
-  d.solver.block_factor[0].inv_diag(0) = std::numeric_limits<double>::quiet_NaN();
+  d.scratch->solver.block_factor[0].inv_diag(0) = std::numeric_limits<double>::quiet_NaN();
   EXPECT_FALSE(core::solve_implicit_system(m, d));
-  EXPECT_FALSE(d.solver.delta[0].allFinite());
+  EXPECT_FALSE(d.scratch->solver.delta[0].allFinite());
   EXPECT_TRUE(std::isnan(d.solver_residual));
 }
 

@@ -23,6 +23,7 @@
 #include "numen/core/mesh.hpp"
 #include "numen/core/model.hpp"
 
+#include "detail/data_scratch.hpp"
 #include "detail/narrowphase.hpp"
 #include "build_features.hpp"
 
@@ -310,8 +311,8 @@ TEST(NetCollision, EqualsBruteForceOnRandomScenes) {
     const Model m = random_scene(seed);
     Data d = make_data(m);
     if (seed == 2u) {  // wrap the grid query stamp, with stamps left from long ago
-      d.collision.stamp = std::numeric_limits<std::uint32_t>::max() - 100;
-      std::fill(d.collision.entry_stamp.begin(), d.collision.entry_stamp.end(), 1u);
+      d.scratch->collision.stamp = std::numeric_limits<std::uint32_t>::max() - 100;
+      std::fill(d.scratch->collision.entry_stamp.begin(), d.scratch->collision.entry_stamp.end(), 1u);
     }
     std::mt19937 rng(seed * 104729u);
     for (int t = 0; t < 40; ++t) {

@@ -22,6 +22,7 @@
 #include "numen/core/rigid_body.hpp"
 #include "numen/core/step.hpp"
 
+#include "detail/data_scratch.hpp"
 #include "detail/implicit_system.hpp"
 #include "detail/net_solve.hpp"
 
@@ -36,11 +37,11 @@ std::size_t at(int i) { return static_cast<std::size_t>(i); }
 
 /// The linearisation of spring e of Model::net_springs (stored in the sweep order).
 core::SweepSpring spring_term(const core::Data& d, int e) {
-  return d.net.sweep_springs[at(d.net.spring_slot[at(e)])];
+  return d.scratch->net.sweep_springs[at(d.scratch->net.spring_slot[at(e)])];
 }
 
 /// The length of spring e of Model::net_springs at the last compute_net_forces().
-double spring_length(const core::Data& d, int e) { return d.net.spring_length[at(d.net.spring_slot[at(e)])]; }
+double spring_length(const core::Data& d, int e) { return d.scratch->net.spring_length[at(d.scratch->net.spring_slot[at(e)])]; }
 
 /// Equilateral triangle of side `side` in the body's x–y plane, centred on its COM.
 core::TriangleMesh triangle(double side) {
@@ -167,9 +168,9 @@ TEST(NetForces, SpringAndTieForcesAgainstHandValues) {
   const Vec3 f12_on_1 = (50.0 * (l12 - 0.1) + 2.0 * u12.dot(-d.nodes[1].velocity)) * u12;
   // Tie on node 1: −200·0.02 u − 0.5 v1 = −4 u − 0.5 v1.
   const Vec3 tie1 = -4.0 * u - 0.5 * d.nodes[1].velocity;
-  EXPECT_TRUE(d.net.force[0].isApprox(1.6 * u, 1e-12)) << d.net.force[0].transpose();
-  EXPECT_TRUE(d.net.force[1].isApprox(-1.6 * u + f12_on_1 + tie1, 1e-12)) << d.net.force[1].transpose();
-  EXPECT_TRUE(d.net.force[2].isApprox(-f12_on_1, 1e-12));
+  EXPECT_TRUE(d.scratch->net.force[0].isApprox(1.6 * u, 1e-12)) << d.scratch->net.force[0].transpose();
+  EXPECT_TRUE(d.scratch->net.force[1].isApprox(-1.6 * u + f12_on_1 + tie1, 1e-12)) << d.scratch->net.force[1].transpose();
+  EXPECT_TRUE(d.scratch->net.force[2].isApprox(-f12_on_1, 1e-12));
   // The tie reaction on the rigid component: −tie1 at the anchor a1.
   EXPECT_TRUE(d.nets[0].tie_wrench.force.isApprox(-tie1, 1e-12));
   EXPECT_TRUE(d.nets[0].tie_wrench.torque.isApprox(a1.cross(-tie1), 1e-12));
@@ -190,7 +191,7 @@ TEST(NetForces, GeneralStateMatchesTheHeaderFormulasAndTheReactionBalances) {
   double scale = 0.0;
   for (const Vec3& f : ref) scale = std::max(scale, f.norm());
   for (std::size_t i = 0; i < ref.size(); ++i)
-    EXPECT_LT((d.net.force[i] - ref[i]).norm(), 1e-12 * scale) << i;
+    EXPECT_LT((d.scratch->net.force[i] - ref[i]).norm(), 1e-12 * scale) << i;
   // Rigid component: gravity + applied − Σ f_tie, torque −Σ ρ × f_tie about its COM.
   const core::BodyState& b = d.bodies[0];
   Vec3 fr = Vec3::Zero(), tr = Vec3::Zero();
@@ -198,7 +199,7 @@ TEST(NetForces, GeneralStateMatchesTheHeaderFormulasAndTheReactionBalances) {
     const Vec3 rho = b.orientation * m.node_rest[i];
     fr -= tie[i];
     tr -= rho.cross(tie[i]);
-    EXPECT_TRUE(d.net.lever[i].isApprox(rho, 1e-14)) << i;
+    EXPECT_TRUE(d.scratch->net.lever[i].isApprox(rho, 1e-14)) << i;
   }
   EXPECT_GT(fr.norm(), 0.1);
   EXPECT_TRUE(d.nets[0].tie_wrench.force.isApprox(fr, 1e-12));
@@ -209,7 +210,7 @@ TEST(NetForces, GeneralStateMatchesTheHeaderFormulasAndTheReactionBalances) {
   EXPECT_TRUE(d.body_wrench[0].torque.isApprox(t_body, 1e-12));
   // Internal forces cancel: Σ node forces + tie reaction = net gravity.
   Vec3 total = fr;
-  for (const Vec3& f : d.net.force) total += f;
+  for (const Vec3& f : d.scratch->net.force) total += f;
   EXPECT_TRUE(total.isApprox(m.nets[0].mass * m.gravity, 1e-10));
 }
 
@@ -234,7 +235,7 @@ TEST(NetForces, SpringBlockAndTieSumsMatchTheirDefinitions) {
   for (const Mat3& r : ref) scale = std::max(scale, r.norm());
   ASSERT_GT(scale, 0.0);
   for (std::size_t i = 0; i < ref.size(); ++i) {
-    const double* s = d.net.spring_block[i].entry;
+    const double* s = d.scratch->net.spring_block[i].entry;
     const double got[6] = {s[0], s[1], s[2], s[3], s[4], s[5]};
     const double want[6] = {ref[i](0, 0), ref[i](0, 1), ref[i](0, 2),
                             ref[i](1, 1), ref[i](1, 2), ref[i](2, 2)};
@@ -253,7 +254,7 @@ TEST(NetForces, SpringBlockAndTieSumsMatchTheirDefinitions) {
     sum_dv += dv;
     sum_r_dv += rho.cross(dv);
   }
-  const core::NetTieSums& t = d.net.tie_sums[0];
+  const core::NetTieSums& t = d.scratch->net.tie_sums[0];
   EXPECT_LT((t.lever_sum - sum_r).norm(), 1e-14 * sum_abs_r) << t.lever_sum.transpose();
   EXPECT_TRUE(t.lever_moment.isApprox(sum_rr, 1e-12));
   EXPECT_EQ(t.lever_moment, t.lever_moment.transpose());  // exactly symmetric
@@ -269,7 +270,7 @@ TEST(NetForces, AtRestOnTheRigidComponentOnlyGravityActs) {
   // Nodes on their anchors with the anchors' velocities: ties and springs vanish
   // (a rigid motion, including the spin, is not damped by the springs).
   for (std::size_t i = 0; i < d.nodes.size(); ++i)
-    EXPECT_LT((d.net.force[i] - m.node_mass[i] * m.gravity).norm(), 1e-12) << i;
+    EXPECT_LT((d.scratch->net.force[i] - m.node_mass[i] * m.gravity).norm(), 1e-12) << i;
   EXPECT_LT(d.nets[0].tie_wrench.force.norm(), 1e-12);
   EXPECT_LT(d.nets[0].tie_wrench.torque.norm(), 1e-12);
 }
@@ -314,7 +315,7 @@ TEST(NetForces, NodeContactForceIsThePenaltyLawWithItsReactionOnTheBody) {
   EXPECT_TRUE(c0.active);
   EXPECT_NEAR(c0.normal_velocity, c0.normal.dot(d.nodes[2].velocity), 1e-15);
   EXPECT_TRUE(c0.r_b.isZero(0.0));
-  EXPECT_TRUE(d.net.force[2].isApprox(without[2] + r0.force, 1e-12));
+  EXPECT_TRUE(d.scratch->net.force[2].isApprox(without[2] + r0.force, 1e-12));
   // By hand: f_n = k d − c v_n, friction −μ v_t.
   const Vec3 v2 = d.nodes[2].velocity;
   const double vn = c0.normal.dot(v2);
@@ -331,14 +332,14 @@ TEST(NetForces, NodeContactForceIsThePenaltyLawWithItsReactionOnTheBody) {
   EXPECT_EQ(c1.force, r1.force);
   EXPECT_TRUE(c1.r_b.isApprox(r_b, 1e-15));
   EXPECT_NEAR(c1.normal_velocity, c1.normal.dot(v_rel), 1e-15);
-  EXPECT_TRUE(d.net.force[5].isApprox(without[5] + r1.force, 1e-12));
+  EXPECT_TRUE(d.scratch->net.force[5].isApprox(without[5] + r1.force, 1e-12));
   EXPECT_TRUE(d.body_wrench[1].force.isApprox(m.bodies[1].mass * m.gravity - r1.force, 1e-12));
   EXPECT_TRUE(d.body_wrench[1].torque.isApprox(-r_b.cross(r1.force), 1e-12));
 
   // Pulling contact: inactive, no force anywhere.
   EXPECT_FALSE(c2.active);
   EXPECT_TRUE(c2.force.isZero(0.0));
-  EXPECT_TRUE(d.net.force[7].isApprox(without[7], 1e-12));
+  EXPECT_TRUE(d.scratch->net.force[7].isApprox(without[7], 1e-12));
 }
 
 namespace {
@@ -347,7 +348,7 @@ namespace {
 /// SweepSpring weights after build_net_system (S = α d̂d̂ᵀ + β I).
 Mat3 solver_spring_stiffness(const core::Model& m, core::Data& d, int spring) {
   core::compute_forces(m, d);
-  core::linearize_nets(m, d, d.solver.system_step);
+  core::linearize_nets(m, d, d.scratch->solver.system_step);
   core::prepare_implicit_step(m, d);
   core::build_implicit_system(m, d);
   core::build_net_system(m, d);
@@ -365,10 +366,10 @@ Mat3 finite_difference_coupling(const core::Model& m, core::Data& d, int a, int 
   for (int c = 0; c < 3; ++c) {
     d.nodes[at(a)].position = x + eps * Vec3::Unit(c);
     core::compute_forces(m, d);
-    const Vec3 fp = d.net.force[at(b)];
+    const Vec3 fp = d.scratch->net.force[at(b)];
     d.nodes[at(a)].position = x - eps * Vec3::Unit(c);
     core::compute_forces(m, d);
-    const Vec3 fm = d.net.force[at(b)];
+    const Vec3 fm = d.scratch->net.force[at(b)];
     jac.col(c) = (fp - fm) / (2.0 * eps);
   }
   d.nodes[at(a)].position = x;
@@ -445,17 +446,17 @@ TEST(NetForces, TieAndDampingJacobiansByFiniteDifferences) {
   for (int c = 0; c < 3; ++c) {
     d.nodes[0].position = x + eps * Vec3::Unit(c);
     core::compute_forces(m, d);
-    Vec3 fp = d.net.force[0];
+    Vec3 fp = d.scratch->net.force[0];
     d.nodes[0].position = x - eps * Vec3::Unit(c);
     core::compute_forces(m, d);
-    kx.col(c) = (fp - d.net.force[0]) / (2 * eps);
+    kx.col(c) = (fp - d.scratch->net.force[0]) / (2 * eps);
     d.nodes[0].position = x;
     d.nodes[0].velocity = v + eps * Vec3::Unit(c);
     core::compute_forces(m, d);
-    fp = d.net.force[0];
+    fp = d.scratch->net.force[0];
     d.nodes[0].velocity = v - eps * Vec3::Unit(c);
     core::compute_forces(m, d);
-    kv.col(c) = (fp - d.net.force[0]) / (2 * eps);
+    kv.col(c) = (fp - d.scratch->net.force[0]) / (2 * eps);
     d.nodes[0].velocity = v;
   }
   Mat3 ek = -k_tie * Mat3::Identity(), ev = -gamma_tie * Mat3::Identity();
@@ -477,7 +478,7 @@ TEST(NetForces, ZeroLengthSpringKeepsItsLastDirection) {
   core::compute_forces(m, d);
   EXPECT_EQ(spring_term(d, 0).direction, dir);
   EXPECT_EQ(spring_length(d, 0), 0.0);
-  for (const Vec3& f : d.net.force) EXPECT_TRUE(f.allFinite());
+  for (const Vec3& f : d.scratch->net.force) EXPECT_TRUE(f.allFinite());
   // f_0 = k (0 − L) d̂ + ties + other spring + gravity: the collapsed spring pushes node 0 back along −d̂.
   const double push = -50.0 * 0.1;
   // Remove everything but the collapsed spring from node 0's force.
@@ -488,7 +489,7 @@ TEST(NetForces, ZeroLengthSpringKeepsItsLastDirection) {
   const Vec3 ftie = -m.nets[0].tie_stiffness * (x0 - anchor) - m.nets[0].tie_damping * (d.nodes[0].velocity - va);
   const Vec3 d02 = d.nodes[2].position - x0;
   const Vec3 f02 = 50.0 * (d02.norm() - 0.1) * d02.normalized();
-  EXPECT_TRUE((d.net.force[0] - ftie - f02 - m.node_mass[0] * m.gravity).isApprox(push * dir, 1e-10));
+  EXPECT_TRUE((d.scratch->net.force[0] - ftie - f02 - m.node_mass[0] * m.gravity).isApprox(push * dir, 1e-10));
 }
 
 TEST(NetForces, NodeUpdatesSymplecticAndImplicit) {
@@ -500,15 +501,15 @@ TEST(NetForces, NodeUpdatesSymplecticAndImplicit) {
   core::integrate_nodes_symplectic(m, d);
   const double h = m.dt;
   for (std::size_t i = 0; i < d.nodes.size(); ++i) {
-    const Vec3 v1 = s0[i].velocity + (h / m.node_mass[i]) * d.net.force[i];
+    const Vec3 v1 = s0[i].velocity + (h / m.node_mass[i]) * d.scratch->net.force[i];
     EXPECT_TRUE(d.nodes[i].velocity.isApprox(v1, 1e-15));
     EXPECT_TRUE(d.nodes[i].position.isApprox(s0[i].position + h * v1, 1e-15));
   }
   d.nodes = s0;
-  for (std::size_t i = 0; i < d.nodes.size(); ++i) d.net.delta[i] = Vec3(0.01 * i, -0.02, 0.3);
+  for (std::size_t i = 0; i < d.nodes.size(); ++i) d.scratch->net.delta[i] = Vec3(0.01 * i, -0.02, 0.3);
   core::integrate_nodes_implicit(m, d);
   for (std::size_t i = 0; i < d.nodes.size(); ++i) {
-    const Vec3 v1 = s0[i].velocity + d.net.delta[i];
+    const Vec3 v1 = s0[i].velocity + d.scratch->net.delta[i];
     EXPECT_TRUE(d.nodes[i].velocity.isApprox(v1, 1e-15));
     EXPECT_TRUE(d.nodes[i].position.isApprox(s0[i].position + h * v1, 1e-15));
   }

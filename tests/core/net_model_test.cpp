@@ -16,6 +16,8 @@
 #include "numen/core/mesh.hpp"
 #include "numen/core/model.hpp"
 
+#include "detail/data_scratch.hpp"
+
 namespace core = numen::core;
 using core::Vec3;
 
@@ -212,8 +214,8 @@ TEST(NetModel, NodesStartAtTheirRestPositionsMovingWithTheRigidComponent) {
   const core::Data dp = core::make_data(plain);
   EXPECT_TRUE(dp.nodes.empty());
   EXPECT_TRUE(dp.node_contacts.empty());
-  EXPECT_TRUE(dp.net.force.empty());
-  EXPECT_TRUE(dp.net.body_schur.empty());
+  EXPECT_TRUE(dp.scratch->net.force.empty());
+  EXPECT_TRUE(dp.scratch->net.body_schur.empty());
 }
 
 TEST(NetModel, EachErrorNamesTheNetAndTheSettingAndLeavesTheModelUntouched) {

@@ -36,6 +36,7 @@
 #include "numen/core/rigid_body.hpp"
 #include "numen/core/step.hpp"
 
+#include "detail/data_scratch.hpp"
 #include "detail/implicit_system.hpp"
 #include "detail/joint_system.hpp"
 #include "detail/net_solve.hpp"
@@ -227,9 +228,9 @@ Snapshot staged_solve(const core::Model& m, core::Data& d, bool* converged,
   if (body_contact) write_body_contact(d);
   write_node_contacts(m, d);
   Snapshot s = numen::test::take_net_system_inputs(d);
-  d.solver.system_step = core::linearized_system_step(m);  // as stage_net_system()
+  d.scratch->solver.system_step = core::linearized_system_step(m);  // as stage_net_system()
   core::compute_forces(m, d);
-  core::linearize_nets(m, d, d.solver.system_step);
+  core::linearize_nets(m, d, d.scratch->solver.system_step);
   core::prepare_implicit_step(m, d);
   core::build_implicit_system(m, d);
   core::build_net_system(m, d);
@@ -261,9 +262,9 @@ void check_scratch(const core::Model& m, const core::Data& d, const Dense& ref, 
   EXPECT_GT(d.solver_iterations, 0);
   EXPECT_LE(d.solver_residual, m.solver.tolerance);
   EXPECT_EQ(d.status & core::kSolverNotConverged, 0u);
-  ASSERT_EQ(d.net.sweep_springs.size(), ref.spring_alpha.size());
+  ASSERT_EQ(d.scratch->net.sweep_springs.size(), ref.spring_alpha.size());
   for (std::size_t e = 0; e < ref.spring_alpha.size(); ++e) {
-    const core::SweepSpring& t = d.net.sweep_springs[at(d.net.spring_slot[e])];
+    const core::SweepSpring& t = d.scratch->net.sweep_springs[at(d.scratch->net.spring_slot[e])];
     EXPECT_NEAR(t.weight_axial, ref.spring_alpha[e], 1e-15) << e;
     EXPECT_NEAR(t.weight_isotropic, ref.spring_beta[e], 1e-15) << e;
   }
@@ -275,18 +276,18 @@ void check_scratch(const core::Model& m, const core::Data& d, const Dense& ref, 
   for (int c = 0; c < d.num_node_contacts; ++c) EXPECT_TRUE(d.node_contacts[at(c)].active) << c;
   // Diagonal body blocks of A (with the ties' and node–body contacts' terms).
   for (int k = 0; k < m.num_bodies(); ++k) {
-    if (d.solver.imposed[at(k)]) continue;
+    if (d.scratch->solver.imposed[at(k)]) continue;
     const Eigen::Matrix<double, 6, 6> blk = ref.a.block<6, 6>(6 * k, 6 * k);
-    EXPECT_LT((d.solver.block[at(k)] - blk).norm(), 1e-12 * blk.norm())
+    EXPECT_LT((d.scratch->solver.block[at(k)] - blk).norm(), 1e-12 * blk.norm())
         << "body " << k << "\n"
-        << d.solver.block[at(k)] << "\n"
+        << d.scratch->solver.block[at(k)] << "\n"
         << blk;
   }
   // Node diagonal blocks.
   for (int i = 0; i < m.num_nodes(); ++i) {
     const int r = 6 * m.num_bodies() + 3 * i;
     const Mat3 blk = ref.a.block<3, 3>(r, r);
-    EXPECT_LT((d.net.block[at(i)] - blk).norm(), 1e-12 * blk.norm()) << "node " << i;
+    EXPECT_LT((d.scratch->net.block[at(i)] - blk).norm(), 1e-12 * blk.norm()) << "node " << i;
   }
 }
 
@@ -328,7 +329,7 @@ TEST(NetSolve, WarmStartedSolveAfterRealStepsMatchesTheDenseSolve) {
     ASSERT_EQ(d.status, core::kStepOk) << k;
   }
   bool any_warm = false;
-  for (const Vec3& v : d.net.delta) any_warm = any_warm || !v.isZero(0.0);
+  for (const Vec3& v : d.scratch->net.delta) any_warm = any_warm || !v.isZero(0.0);
   EXPECT_TRUE(any_warm);
   bool converged = false;
   const Snapshot s = staged_solve(m, d, &converged);
@@ -358,7 +359,7 @@ TEST(NetSolve, JointedRigidComponentMatchesTheDenseKktSolve) {
   // KKT: [A Gᵀ; G 0] [Δ; y] = [b; c] with G = the joint rows at the step's
   // start (Data::articulation.rows) and c their Baumgarte right-hand side.
   const core::JointModel& jm = m.joints[0];
-  const core::JointRows& rows = d.articulation.rows[0];
+  const core::JointRows& rows = d.scratch->articulation.rows[0];
   const int nr = jm.num_rows;
   ASSERT_EQ(nr, 5);
   const int n = static_cast<int>(ref.b.size());
@@ -401,9 +402,9 @@ TEST(NetSolve, ImposedRigidComponentHasNoUnknownAndTheNodesMatchTheDenseSolve) {
   d.target_twist = core::Twist{Vec3(0.2, 0.0, -0.1), Vec3(0.5, 0.3, 0.0)};
   bool converged = false;
   const Snapshot s = staged_solve(m, d, &converged);
-  ASSERT_TRUE(d.solver.imposed[0]);
-  EXPECT_FALSE(d.solver.in_solve[0]);
-  EXPECT_TRUE(d.solver.delta[0].isZero(0.0)) << d.solver.delta[0].transpose();
+  ASSERT_TRUE(d.scratch->solver.imposed[0]);
+  EXPECT_FALSE(d.scratch->solver.in_solve[0]);
+  EXPECT_TRUE(d.scratch->solver.delta[0].isZero(0.0)) << d.scratch->solver.delta[0].transpose();
   EXPECT_EQ(s.bodies[0].position, d.target.position);
   const Dense ref = dense_system(m, s);
   check_scratch(m, d, ref, converged);
@@ -419,7 +420,7 @@ TEST(NetSolve, ImposedRigidComponentHasNoUnknownAndTheNodesMatchTheDenseSolve) {
   d2.target_twist = d.target_twist;
   core::step(m, d2);
   EXPECT_EQ(d2.bodies[0].position, d.target.position);
-  EXPECT_TRUE(d2.solver.delta[0].isZero(0.0));
+  EXPECT_TRUE(d2.scratch->solver.delta[0].isZero(0.0));
 }
 
 TEST(NetSolve, ReportsNonConvergenceAtMaxIterations) {
@@ -501,7 +502,7 @@ Splitting dense_splitting(const core::Model& m, const core::Data& data, const Ma
   for (int r = nb6; r < dim; r += 3) s.d_tilde.block<3, 3>(r, r) = a.block<3, 3>(r, r);
   s.d = s.d_tilde;
   s.d.topLeftCorner(nb6, nb6) = a.topLeftCorner(nb6, nb6);
-  const auto position = [&](int node) { return data.net.sweep_position[at(node)]; };
+  const auto position = [&](int node) { return data.scratch->net.sweep_position[at(node)]; };
   for (int i = 0; i < m.num_nodes(); ++i) {
     const int r = nb6 + 3 * i;
     s.l.block(r, 0, 3, nb6) = a.block(r, 0, 3, nb6);
@@ -539,7 +540,7 @@ TEST(NetSolve, EisenstatSplittingAndPreconditionedProductMatchTheDenseMatrix) {
   Staged st = staged_body_contact();
   const core::Model& m = st.m;
   core::Data& d = st.d;
-  ASSERT_EQ(d.solver.num_cross_contacts, 1);  // a body–body block in D
+  ASSERT_EQ(d.scratch->solver.num_cross_contacts, 1);  // a body–body block in D
   ASSERT_TRUE(d.node_contacts[2].active);
   ASSERT_EQ(d.node_contacts[2].body_b, 1);  // a node–body block in L
   const MatrixXd& a = st.ref.a;
@@ -625,7 +626,7 @@ TEST(NetSolve, BodyContactAndNodeContactWithAProbeMatchTheDenseSolve) {
   Staged st = staged_body_contact();
   const core::Model& m = st.m;
   const core::Data& d = st.d;
-  ASSERT_EQ(d.solver.num_cross_contacts, 1);
+  ASSERT_EQ(d.scratch->solver.num_cross_contacts, 1);
   ASSERT_TRUE(d.node_contacts[2].active);
   check_scratch(m, d, st.ref, st.converged);
   const VectorXd x_ref = st.ref.a.llt().solve(st.ref.b);
@@ -701,7 +702,7 @@ TEST(NetSolve, RepeatedSolveFromTheRestoredWarmStartIsBitIdentical) {
   core::Model m = st.m;
   m.solver.tolerance = 1e-3;  // the shipped setting: the warm start matters
   core::Data& d = st.d;
-  const std::vector<Vec3> warm = d.net.delta;
+  const std::vector<Vec3> warm = d.scratch->net.delta;
   bool any_warm = false;
   for (const Vec3& v : warm) any_warm = any_warm || !v.isZero(0.0);
   ASSERT_TRUE(any_warm);
@@ -709,10 +710,10 @@ TEST(NetSolve, RepeatedSolveFromTheRestoredWarmStartIsBitIdentical) {
   const VectorXd first = numen::test::net_system_unknowns(m, d);
   const int iterations = d.solver_iterations;
   // A solve from zero takes more iterations: the warm start is used.
-  for (Vec3& v : d.net.delta) v.setZero();
+  for (Vec3& v : d.scratch->net.delta) v.setZero();
   ASSERT_TRUE(core::solve_net_system(m, d));
   EXPECT_GT(d.solver_iterations, iterations);
-  d.net.delta = warm;
+  d.scratch->net.delta = warm;
   ASSERT_TRUE(core::solve_net_system(m, d));
   EXPECT_EQ(d.solver_iterations, iterations);
   const VectorXd second = numen::test::net_system_unknowns(m, d);

@@ -13,6 +13,7 @@
 
 #include "alloc_counter.hpp"
 #include "stiff_contact_fixture.hpp"
+#include "numen/core/collision.hpp"
 #include "numen/core/contact_force.hpp"
 #include "numen/core/coupling.hpp"
 #include "numen/core/data.hpp"
@@ -22,6 +23,7 @@
 #include "numen/core/rigid_body.hpp"
 #include "numen/core/step.hpp"
 
+#include "detail/data_scratch.hpp"
 #include "detail/implicit_system.hpp"
 #include "detail/joint_system.hpp"
 
@@ -345,7 +347,7 @@ TEST(StepArticulated, ConstrainedSolveWithBodyContactsMatchesADenseKktSolve) {
   core::compute_forces(m, d);
   core::prepare_implicit_step(m, d);
   core::build_implicit_system(m, d);
-  ASSERT_GT(d.solver.num_cross_contacts, 0);
+  ASSERT_GT(d.scratch->solver.num_cross_contacts, 0);
   ASSERT_TRUE(core::solve_constrained_system(m, d))
       << "iterations " << d.solver_iterations << " residual " << d.solver_residual;
   EXPECT_GT(d.solver_iterations, 0);
@@ -362,11 +364,11 @@ TEST(StepArticulated, ConstrainedSolveWithBodyContactsMatchesADenseKktSolve) {
     for (int r = 0; r < 6 * n; ++r) kkt(r, c) = ae[static_cast<std::size_t>(r / 6)](r % 6);
   }
   Eigen::VectorXd rhs = Eigen::VectorXd::Zero(6 * n + nr);
-  for (int b = 0; b < n; ++b) rhs.segment<6>(6 * b) = d.solver.rhs[static_cast<std::size_t>(b)];
+  for (int b = 0; b < n; ++b) rhs.segment<6>(6 * b) = d.scratch->solver.rhs[static_cast<std::size_t>(b)];
   int row = 6 * n;
   for (int j = 0; j < m.num_joints(); ++j) {
     const core::JointModel& jm = m.joints[static_cast<std::size_t>(j)];
-    const core::JointRows& jr = d.articulation.rows[static_cast<std::size_t>(j)];
+    const core::JointRows& jr = d.scratch->articulation.rows[static_cast<std::size_t>(j)];
     for (int r = 0; r < jm.num_rows; ++r, ++row) {
       kkt.block<1, 6>(row, 6 * jm.child) = jr.g_child.row(r);
       kkt.block<6, 1>(6 * jm.child, row) = jr.g_child.row(r).transpose();
@@ -380,7 +382,7 @@ TEST(StepArticulated, ConstrainedSolveWithBodyContactsMatchesADenseKktSolve) {
   const Eigen::VectorXd sol = kkt.fullPivLu().solve(rhs);
   for (int b = 0; b < n; ++b) {
     const core::Vec6 ref = sol.segment<6>(6 * b);
-    EXPECT_LT((d.solver.delta[static_cast<std::size_t>(b)] - ref).norm(), 1e-8 * (1.0 + ref.norm()))
+    EXPECT_LT((d.scratch->solver.delta[static_cast<std::size_t>(b)] - ref).norm(), 1e-8 * (1.0 + ref.norm()))
         << "body " << b;
   }
   row = 6 * n;

@@ -24,6 +24,8 @@
 #include "numen/core/rigid_body.hpp"
 #include "numen/core/step.hpp"
 
+#include "detail/data_scratch.hpp"
+
 namespace core = numen::core;
 using core::Mat3;
 using core::Quat;
@@ -828,12 +830,12 @@ TEST(StepDeformable, NonFiniteResultIsRolledBackWithTheNodes) {
       for (std::size_t i = 0; i < d.nodes.size(); ++i) {
         EXPECT_EQ(d.nodes[i].position, nodes_before[i].position) << i;
         EXPECT_TRUE(d.nodes[i].velocity.isZero(0.0)) << i;
-        EXPECT_TRUE(d.net.delta[i].isZero(0.0)) << i;  // the next warm start
+        EXPECT_TRUE(d.scratch->net.delta[i].isZero(0.0)) << i;  // the next warm start
       }
       for (std::size_t b = 0; b < d.bodies.size(); ++b) {
         EXPECT_EQ(d.bodies[b].position, bodies_before[b].position);
         EXPECT_TRUE(d.bodies[b].linear_velocity.isZero(0.0));
-        EXPECT_TRUE(d.solver.delta[b].isZero(0.0));
+        EXPECT_TRUE(d.scratch->solver.delta[b].isZero(0.0));
       }
       EXPECT_TRUE(d.feedback_wrench.force.isZero(0.0));
       // Recovers with a sane input; nothing non-finite is carried.

@@ -16,6 +16,8 @@
 #include "numen/core/model.hpp"
 #include "numen/core/step.hpp"
 
+#include "detail/data_scratch.hpp"
+
 namespace core = numen::core;
 using numen::test::LeanPart;
 using numen::test::make_lean_model;
@@ -105,7 +107,7 @@ struct Ran {
 
 Ran what_ran(const core::Data& d) {
   Ran r;
-  for (const core::Vec3& dv : d.net.delta) r.net_solve = r.net_solve || !dv.isZero(0.0);
+  for (const core::Vec3& dv : d.scratch->net.delta) r.net_solve = r.net_solve || !dv.isZero(0.0);
   r.net_solve = r.net_solve && d.solver_iterations > 0;
   for (const core::JointState& j : d.joints)
     r.joints_solved = r.joints_solved || !j.multiplier.isZero(0.0);

@@ -39,6 +39,7 @@
 #include "numen/core/rigid_body.hpp"
 #include "numen/core/step.hpp"
 
+#include "detail/data_scratch.hpp"
 #include "detail/implicit_system.hpp"
 #include "detail/net_solve.hpp"
 
@@ -67,7 +68,7 @@ inline NetSystemInputs take_net_system_inputs(const core::Data& data) {
   s.contacts.assign(data.node_contacts.begin(),
                     data.node_contacts.begin() + data.num_node_contacts);
   s.body_contacts.assign(data.contacts.begin(), data.contacts.begin() + data.num_contacts);
-  s.imposed = data.solver.imposed;
+  s.imposed = data.scratch->solver.imposed;
   s.target = data.target;
   s.target_twist = data.target_twist;
   s.attached = data.attached_body;
@@ -86,12 +87,12 @@ inline NetSystemInputs take_net_system_inputs(const core::Data& data) {
 inline NetSystemInputs stage_net_system(const core::Model& model, core::Data& data) {
   data.status = core::kStepOk;
   core::impose_direct_target(model, data);
-  if (!data.solver.contact_terms.empty()) core::detect_contacts(model, data);
+  if (!data.scratch->solver.contact_terms.empty()) core::detect_contacts(model, data);
   core::detect_node_contacts(model, data);
   NetSystemInputs s = take_net_system_inputs(data);
-  data.solver.system_step = core::linearized_system_step(model);
+  data.scratch->solver.system_step = core::linearized_system_step(model);
   core::compute_forces(model, data);
-  core::linearize_nets(model, data, data.solver.system_step);
+  core::linearize_nets(model, data, data.scratch->solver.system_step);
   core::prepare_implicit_step(model, data);
   core::build_implicit_system(model, data);
   core::build_net_system(model, data);
@@ -304,9 +305,9 @@ inline NetSystem assemble_net_system(const core::Model& m, const NetSystemInputs
 inline Eigen::VectorXd net_system_unknowns(const core::Model& m, const core::Data& d) {
   Eigen::VectorXd x(6 * m.num_bodies() + 3 * m.num_nodes());
   for (int k = 0; k < m.num_bodies(); ++k)
-    x.segment<6>(net_system_body_index(k)) = d.solver.delta[static_cast<std::size_t>(k)];
+    x.segment<6>(net_system_body_index(k)) = d.scratch->solver.delta[static_cast<std::size_t>(k)];
   for (int i = 0; i < m.num_nodes(); ++i)
-    x.segment<3>(net_system_node_index(m, i)) = d.net.delta[static_cast<std::size_t>(i)];
+    x.segment<3>(net_system_node_index(m, i)) = d.scratch->net.delta[static_cast<std::size_t>(i)];
   return x;
 }
 

@@ -9,6 +9,7 @@
 
 #include <span>
 
+#include "detail/solver_scratch.hpp"
 #include "numen/core/integrator.hpp"
 #include "numen/core/types.hpp"
 
@@ -16,6 +17,12 @@ namespace numen::core {
 
 struct Model;
 struct Data;
+
+/// h_s of Model::integrator (SolverScratch::system_step): Model::dt for the linearly implicit
+/// and the symplectic Euler, Model::dt / 2 for the trapezoidal rule. The integrate stage sets
+/// SolverScratch::system_step to it; the forces stage does not read it (the nets are
+/// linearised over it by the integrator: linearize_nets(), net_solve.hpp).
+double linearized_system_step(const Model& model) noexcept;
 
 /// First part of the implicit step: stores u0 (SolverScratch::twist0) and the
 /// world inertias at the step's start, then replaces the angular velocity of
@@ -25,7 +32,7 @@ struct Data;
 /// build_implicit_system().
 void prepare_implicit_step(const Model& model, Data& data) noexcept;
 
-/// Builds the implicit system of the current step in Data::solver (after
+/// Builds the implicit system of the current step in the solver scratch (Data::scratch, SolverScratch; after
 /// prepare_implicit_step()): contact weights (α, β of ContactTerm), the 6×6
 /// diagonal blocks of A = M − hD − h²K, h = SolverScratch::system_step (exactly symmetric) and, for
 /// a model without joints (the block-Jacobi preconditioner; with joints the tree solve factors

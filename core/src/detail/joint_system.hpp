@@ -39,7 +39,7 @@ struct Model;
 struct Data;
 
 /// Evaluates every joint's rows at the current body states (Data::bodies
-/// positions and orientations) into Data::articulation.rows and the
+/// positions and orientations) into ArticulationScratch::rows (Data::scratch) and the
 /// right-hand sides c into `rhs` (one JointVector per joint), using the step's
 /// start twists `twist0` (one Vec6 (v, ω) per body), the previous step's
 /// velocity changes `delta_prev` (one Vec6 per body, zero after a reset) and, for prescribed
@@ -49,7 +49,7 @@ void build_joint_rows(const Model& model, Data& data, std::span<const Vec6> twis
                       std::span<const Vec6> delta_prev, std::span<JointVector> rhs) noexcept;
 
 /// out_b += Σ_j G_j,bᵀ y_j for every body b that is not known
-/// (Data::articulation.known) — the generalized force of multipliers y.
+/// (ArticulationScratch::known) — the generalized force of multipliers y.
 void add_joint_transpose(const Model& model, const Data& data, std::span<const JointVector> y,
                          std::span<Vec6> out) noexcept;
 

@@ -59,6 +59,19 @@ namespace numen::core {
 struct Model;
 struct Data;
 
+/// Linearisation of the nets for the implicit solve of step h_s = `system_step`
+/// (SolverScratch::system_step, solver_scratch.hpp), from the directions, lengths and
+/// lever arms compute_net_forces() stored and the velocities of the step's start:
+/// the springs' weights W_e = α d̂d̂ᵀ + β I (SweepSpring, the sweep order), their
+/// sum at each node (NetScratch::spring_block, from 0) and the springs' part of
+/// the node rows' right-hand side, −h_s² Σ k K̃ (v_i − v_j) (NetScratch::rhs, from
+/// 0), which build_net_system() completes (net_solve.hpp); and the ties' sums
+/// over each net's nodes for its rigid component's rows (NetScratch::tie_sums,
+/// read by add_net_body_terms()). Part of the net solve's assembly: called by the
+/// linearised integrators after compute_net_forces() and before the body
+/// velocities change (prepare_implicit_step()). No-op without nets. No allocation.
+void linearize_nets(const Model& model, Data& data, double system_step) noexcept;
+
 /// Adds the nets' terms to the diagonal blocks and right-hand sides of the
 /// bodies (SolverScratch::block, rhs) — ties c Σ J_iᵀ J_i and
 /// h² k_tie Σ J_iᵀ (v_i0 − v_a0), node–body contacts J_bᵀ W J_b and their
@@ -76,7 +89,7 @@ void add_net_body_terms(const Model& model, Data& data) noexcept;
 /// and, with joints, the bodies' Schur blocks of the arrowhead
 /// preconditioner (NetScratch). The springs' terms (their weights, their sum
 /// per node in NetScratch::spring_block, their part of b) come from
-/// linearize_nets() (net_forces.hpp); this adds the rest. Call after linearize_nets()
+/// linearize_nets(); this adds the rest. Call after linearize_nets()
 /// and build_implicit_system() (whose Cholesky factors of the body blocks
 /// are the bodies' D̃ without joints), once per linearize_nets().
 void build_net_system(const Model& model, Data& data) noexcept;

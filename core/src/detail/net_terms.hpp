@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <span>
 
+#include "detail/data_scratch.hpp"
 #include "detail/solver_terms.hpp"
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"
@@ -42,14 +43,14 @@ inline bool couples_body(const SolverScratch& s, const NodeContact& c) noexcept 
 /// in the solve (−A_bi v_i summed over a net's ties, A_bi = −c J_iᵀ).
 inline void add_tie_transpose(const Model& model, const Data& data, std::span<const Vec3> v_n,
                               std::span<Vec6> out_b) noexcept {
-  const double h = data.solver.system_step;  // h_s of the linearised system (integrator.hpp)
+  const double h = data.scratch->solver.system_step;  // h_s of the linearised system (integrator.hpp)
   for (const NetModel& net : model.nets) {
     const auto b = static_cast<std::size_t>(net.body);
-    if (!data.solver.in_solve[b]) continue;
+    if (!data.scratch->solver.in_solve[b]) continue;
     Vec6 acc = Vec6::Zero();
     for (int v = net.node_begin; v < net.node_begin + net.node_count; ++v) {
       const auto i = static_cast<std::size_t>(v);
-      acc += generalized_force(v_n[i], data.net.lever[i]);
+      acc += generalized_force(v_n[i], data.scratch->net.lever[i]);
     }
     out_b[b] += tie_weight(net, h) * acc;
   }

@@ -11,6 +11,8 @@
 #include "numen/core/data.hpp"
 #include "numen/core/types.hpp"
 
+#include "detail/data_scratch.hpp"
+
 namespace numen::core::detail {
 
 /// J u = v + ω × r: velocity (m/s, world) of the point at lever arm r (m, world)
@@ -42,8 +44,8 @@ double dot(const A& a, const B& b) noexcept {
 /// silently dropping every force of the step. Returns false (not converged).
 inline bool poison_solve(Data& data) noexcept {
   constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-  for (Vec6& v : data.solver.delta) v.setConstant(kNaN);
-  for (Vec3& v : data.net.delta) v.setConstant(kNaN);
+  for (Vec6& v : data.scratch->solver.delta) v.setConstant(kNaN);
+  for (Vec3& v : data.scratch->net.delta) v.setConstant(kNaN);
   data.solver_residual = kNaN;
   return false;
 }

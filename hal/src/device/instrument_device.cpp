@@ -147,16 +147,6 @@ bool InstrumentDevice::on_frame(const CanFrame& frame) noexcept {
   return false;
 }
 
-int InstrumentDevice::poll(Bus& bus, int max_frames) noexcept {
-  CanFrame frame;
-  int read = 0;
-  while (read < max_frames && bus.read(frame) == IoStatus::kOk) {
-    on_frame(frame);
-    ++read;
-  }
-  return read;
-}
-
 DeviceSample InstrumentDevice::sample(std::int64_t now_ns) noexcept {
   DeviceSample& s = last_sample_;
   s.time_ns = now_ns;

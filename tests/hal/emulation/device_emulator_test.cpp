@@ -67,8 +67,7 @@ struct Rig {
   DeviceSample period(std::int64_t k, const Wrench& w) {
     const std::int64_t t = k * kPeriodNs;
     bus.set_time_ns(t);
-    device.poll(bus.controller());
-    const DeviceSample s = device.sample(t);
+    const DeviceSample s = (sender.read(t), sender.sample());  // frames -> on_frame, sample(t)
     command_links(std::span<const Wrench>(&w, 1), t);
     bus.controller().write(make_sync(t));
     bus.set_time_ns(t + kPeriodNs / 2);
@@ -445,8 +444,7 @@ TEST(DeviceEmulator, PhantomEndToEnd) {
   w[PhantomKinematics::kLinkForearm].torque = Vec3(0.0, 0.05, 0.0);
   const std::uint64_t rpdos = rig.emulator.counters().rpdos;
   rig.bus.set_time_ns(3 * kPeriodNs);
-  rig.device.poll(rig.bus.controller());
-  rig.device.sample(3 * kPeriodNs);
+  rig.sender.read(3 * kPeriodNs);
   ASSERT_EQ(rig.command_links(w, 3 * kPeriodNs), IoStatus::kOk);
   rig.bus.set_time_ns(3 * kPeriodNs + kPeriodNs / 2);
   rig.emulator.poll(rig.bus.device());

@@ -12,7 +12,8 @@
 ///      then the static sphere sets through the uniform grid
 ///      (Model::static_grid), one query per sphere;
 ///   3. body–body: sort-and-sweep on the world AABBs along x (insertion sort of
-///      CollisionScratch::sweep_order), then sphere–sphere between the spheres
+///      the scratch's sweep order, CollisionScratch::sweep_order in
+///      core/src/detail/collision_scratch.hpp), then sphere–sphere between the spheres
 ///      of the two bodies that meet the overlap of their AABBs. body_a is the
 ///      lower body index.
 /// The order of the contacts is a pure function of the model and the body
@@ -23,32 +24,10 @@
 /// body's centre of mass; between two bodies, from b's centre of mass to a's;
 /// +z when those coincide too.
 
-#include <cstdint>
-#include <vector>
-
-#include "numen/core/types.hpp"
-
 namespace numen::core {
 
 struct Model;
 struct Data;
-
-/// Scratch of the collision stage, sized once by resize().
-struct CollisionScratch {
-  std::vector<Vec3> sphere_world;                    ///< World centres of Model::body_spheres (m).
-  std::vector<double> sphere_x, sphere_y, sphere_z;  ///< Same centres as flat arrays (m).
-  std::vector<double> sphere_r;           ///< Radii of Model::body_spheres (m), copied by resize().
-  std::vector<Vec3> body_aabb_min;        ///< Tight world AABB of each body's spheres (m);
-  std::vector<Vec3> body_aabb_max;        ///< inverted (+inf, −inf) for a body without spheres.
-  std::vector<std::int32_t> sweep_order;  ///< Bodies with spheres, sorted by body_aabb_min.x;
-                                          ///< kept between steps (coherent insertion sort).
-  std::vector<std::int32_t> near_a;       ///< Body–body: spheres of each body near the other's
-  std::vector<std::int32_t> near_b;       ///< AABB; size = largest sphere count of a body.
-  std::vector<std::uint32_t> entry_stamp;  ///< Per static grid entry: last query that tested it.
-  std::uint32_t stamp = 0;  ///< Current query id (wraps: the stamps are then cleared).
-  /// Sizes every buffer for `model`. Allocates: make_data() only.
-  void resize(const Model& model);
-};
 
 /// Builds the broad-phase structures of `model`: the AABB of every obstacle
 /// (Obstacle::aabb_min/max; planes stay infinite, an empty sphere set gets an
@@ -63,7 +42,7 @@ void build_collision_structures(Model& model);
 /// counts the rest in data.contacts_dropped, ORs StepStatus::kContactOverflow
 /// into data.status and increments data.contact_overflow_steps (once per call).
 /// Clears only the kContactOverflow bit of data.status on entry. Requires
-/// data.collision sized for `model` (make_data). No allocation, no exception.
+/// a Data made by make_data() for `model`. No allocation, no exception.
 void detect_contacts(const Model& model, Data& data) noexcept;
 
 }  // namespace numen::core

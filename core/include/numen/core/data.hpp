@@ -2,23 +2,58 @@
 /// @file data.hpp
 /// core::Data: all mutable state, inputs, outputs and scratch of a scene,
 /// allocated once by make_data() from a finalized Model. Stage functions take
-/// (const Model&, Data&) and never allocate.
+/// (const Model&, Data&) and never allocate. The stages' scratch is private to
+/// numen::core: Data holds it behind an opaque, deep-copying pointer
+/// (Data::scratch; its type, DataScratch, in core/src/detail/data_scratch.hpp).
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
-#include "numen/core/articulation.hpp"
 #include "numen/core/capacity.hpp"
-#include "numen/core/collision.hpp"
 #include "numen/core/contact.hpp"
-#include "numen/core/integrator.hpp"
+#include "numen/core/joint.hpp"
 #include "numen/core/net_state.hpp"
 #include "numen/core/types.hpp"
 
 namespace numen::core {
 
 struct Model;
+struct DataScratch;  // core/src/detail/data_scratch.hpp
+
+/// Owner of a Data's stage scratch (DataScratch, private to numen::core): one heap
+/// block, allocated by make_data(), with value semantics — a copy of a Data holds a
+/// copy of its scratch (warm starts, sweep order and saved state included), so that it
+/// steps bit for bit like the original; a move takes the block along. Constness is
+/// deep: a const Data gives a const DataScratch. Null in a default-constructed or
+/// moved-from Data, which make_data() (or assigning a made Data) must replace before
+/// any stage runs on it.
+class DataScratchPtr {
+ public:
+  DataScratchPtr() noexcept;  ///< Null: no scratch (a Data not made by make_data()).
+  /// Owns `scratch` (make_data()).
+  explicit DataScratchPtr(std::unique_ptr<DataScratch> scratch) noexcept;
+  /// Deep copy (allocates; null stays null).
+  DataScratchPtr(const DataScratchPtr& other);
+  /// Deep copy into the block already held if any (its buffers keep their capacity, so
+  /// assigning a Data of the same model does not allocate), else into a new one.
+  DataScratchPtr& operator=(const DataScratchPtr& other);
+  DataScratchPtr(DataScratchPtr&& other) noexcept;  ///< Takes the block; `other` becomes null.
+  DataScratchPtr& operator=(DataScratchPtr&& other) noexcept;  ///< Same; frees the block held.
+  ~DataScratchPtr();  ///< Frees the block.
+
+  DataScratch* get() noexcept { return scratch_.get(); }  ///< The block, or nullptr.
+  const DataScratch* get() const noexcept { return scratch_.get(); }
+  DataScratch* operator->() noexcept { return scratch_.get(); }
+  const DataScratch* operator->() const noexcept { return scratch_.get(); }
+  DataScratch& operator*() noexcept { return *scratch_; }
+  const DataScratch& operator*() const noexcept { return *scratch_; }
+  explicit operator bool() const noexcept { return scratch_ != nullptr; }  ///< Holds a block.
+
+ private:
+  std::unique_ptr<DataScratch> scratch_;
+};
 
 /// State of a dynamic body: COM position and orientation (world), linear
 /// velocity of the COM and angular velocity, both in world coordinates.
@@ -132,14 +167,13 @@ struct Data {
 
   // ---- scratch (sized once) ----
   std::vector<Wrench> body_wrench; ///< Accumulated explicit wrench per body (N, N·m, at COM).
-  CollisionScratch collision;
-  SolverScratch solver;
-  ArticulationScratch articulation;
-  NetScratch net;
+  /// The stages' scratch (collision, solver, articulation, nets; DataScratch,
+  /// core/src/detail/data_scratch.hpp): private to numen::core and its tests.
+  DataScratchPtr scratch;
 };
 
-/// Allocates a Data for a finalized `model` and resets it: only what the model
-/// needs — no joint buffers or tree-solve scratch without joints, no node or net
+/// Allocates a Data for a finalized `model` (its scratch block included) and resets
+/// it: only what the model needs — no joint buffers or tree-solve scratch without joints, no node or net
 /// buffers without nets, no contact scratch when nothing can collide
 /// (capacity.hpp; sizes in data_size.hpp). Allocates.
 Data make_data(const Model& model);

@@ -28,8 +28,9 @@ struct DataFootprint {
   /// bodies (states, inputs, outputs, wrenches), collision scratch, contact
   /// solver scratch (capacity.hpp), body solver scratch, joints (states,
   /// prescriptions, joint rows, tree solve), nets (nodes, node contacts,
-  /// outputs, net scratch).
-  std::array<BufferGroupBytes, 6> groups{};
+  /// outputs, net scratch), and the scratch block itself: the one heap object
+  /// behind Data::scratch that holds the scratch buffers' headers (fixed size).
+  std::array<BufferGroupBytes, 7> groups{};
   std::size_t heap_bytes() const noexcept;  ///< Σ groups.
 };
 

@@ -31,19 +31,6 @@ struct Data;
 /// apply_external_forces()) and after detect_node_contacts(). No allocation.
 void compute_net_forces(const Model& model, Data& data) noexcept;
 
-/// Linearisation of the nets for the implicit solve of step h_s = `system_step`
-/// (SolverScratch::system_step, integrator.hpp), from the directions, lengths and
-/// lever arms compute_net_forces() stored and the velocities of the step's start:
-/// the springs' weights W_e = α d̂d̂ᵀ + β I (SweepSpring, the sweep order), their
-/// sum at each node (NetScratch::spring_block, from 0) and the springs' part of
-/// the node rows' right-hand side, −h_s² Σ k K̃ (v_i − v_j) (NetScratch::rhs, from
-/// 0), which build_net_system() completes (net_solve.hpp); and the ties' sums
-/// over each net's nodes for its rigid component's rows (NetScratch::tie_sums,
-/// read by add_net_body_terms()). Part of the net solve's assembly: called by the
-/// linearised integrators after compute_net_forces() and before the body
-/// velocities change (prepare_implicit_step()). No-op without nets. No allocation.
-void linearize_nets(const Model& model, Data& data, double system_step) noexcept;
-
 /// Symplectic Euler of the nodes: v1 = v0 + h f/m, x1 = x0 + h v1, with the
 /// forces of compute_net_forces(). Explicit in the ties and springs: stable
 /// for h √(k/m) < 2 with k the stiffest spring sum on a node — and, for the

@@ -79,23 +79,13 @@ struct PeriodReport {
 
 /// Creation settings of a ControlLoop (the managed stack's supervision; the minimal protocol
 /// uses none of them but the statistics).
-struct ControlLoopSettings {
-  /// SafetySettings::encoder_timeout_periods: periods without an accepted encoder frame that
-  /// latch the safe state, >= 1.
-  std::uint32_t encoder_timeout_periods = 3;
-  /// SafetySettings::overrun_limit: consecutive overruns that latch, >= 1.
-  std::uint32_t overrun_limit = 3;
-  /// SafetySettings::safe_stop_timeout_periods, >= 1.
-  std::uint32_t safe_stop_timeout_periods = 100;
+/// The device's supervision settings (hal::DeviceSettings: encoder timeout, overrun limit,
+/// safe-stop timeout, auto-activation, drive settings; kept there once and handed to
+/// hal::make_device() as they are) and the loop's own.
+struct ControlLoopSettings : hal::DeviceSettings {
   /// Feed LoopStatistics' overrun verdict to the supervisor. Only meaningful when periods are
   /// paced to a clock (a simulation run as fast as possible has no deadlines).
   bool supervise_overruns = false;
-  /// Activate the lifecycle on its own once the start-up is complete and no fault cause is
-  /// present (encoders fresh, heartbeats alive, drives disabled and not in fault). false: the
-  /// caller calls activate().
-  bool auto_activate = true;
-  /// Settings of each drive's Cia402Master.
-  hal::Cia402MasterSettings drive_settings;
 };
 
 /// Result of ControlLoop::rearm() (hal::Device::rearm()).

@@ -118,12 +118,9 @@ class InstrumentDevice {
   /// (can_frame.hpp): a frame belongs to an axis if it is on the axis's 11-bit COB-ID
   /// (has_standard_id()); a remote or CAN FD frame there is malformed. Returns true if the
   /// frame belongs to an axis. Other frames are counted as unknown (29-bit ones too) and
-  /// error reports as frames_error; neither touches an axis.
+  /// error reports as frames_error; neither touches an axis. The frames come from the bus
+  /// through Device::read() (device.hpp), the one frame-reading loop.
   bool on_frame(const CanFrame& frame) noexcept;
-
-  /// Reads up to `max_frames` frames from `bus` and passes each to on_frame(). Returns the
-  /// number read; stops at kWouldBlock or kError.
-  int poll(Bus& bus, int max_frames = 256) noexcept;
 
   /// Checks the pending samples at time `now_ns` (bus clock), accepts or rejects each axis,
   /// and returns the target. See DeviceSample and check_sample().

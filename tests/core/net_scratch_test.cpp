@@ -1,9 +1,9 @@
-// Tests of core/net_state: the sizing of the nets' scratch by
+// Tests of core/net_scratch: the sizing of the nets' scratch by
 // NetScratch::resize() — the SSOR sweep order (reverse Cuthill–McKee per net:
 // a permutation that keeps each net's range and narrows the spring graph's
 // bandwidth), the springs grouped by their earlier node in that order with
 // their constants copied, and the structure-of-arrays view of the springs.
-#include "numen/core/net_state.hpp"
+#include "detail/net_scratch.hpp"
 
 #include <gtest/gtest.h>
 
@@ -17,6 +17,7 @@
 #include "numen/core/mesh.hpp"
 #include "numen/core/model.hpp"
 #include "numen/core/net_model.hpp"
+#include "detail/data_scratch.hpp"
 
 namespace core = numen::core;
 using core::Vec3;
@@ -63,10 +64,10 @@ int bandwidth(const core::Model& m, const core::NetModel& net, const std::vector
 
 }  // namespace
 
-TEST(NetState, SweepOrderIsAPermutationThatKeepsEachNetsRange) {
+TEST(NetScratch, SweepOrderIsAPermutationThatKeepsEachNetsRange) {
   const core::Model m = two_nets();
   const core::Data d = core::make_data(m);
-  const core::NetScratch& ns = d.net;
+  const core::NetScratch& ns = d.scratch->net;
   ASSERT_EQ(m.node_sweep_order.size(), at(m.num_nodes()));
   ASSERT_EQ(ns.sweep_position.size(), at(m.num_nodes()));
   ASSERT_EQ(ns.sweep_nodes.size(), at(m.num_nodes()));
@@ -85,7 +86,7 @@ TEST(NetState, SweepOrderIsAPermutationThatKeepsEachNetsRange) {
   for (int i = 0; i < m.num_nodes(); ++i) EXPECT_EQ(seen[at(i)], 1) << "node " << i;
 }
 
-TEST(NetState, ReverseCuthillMcKeeNarrowsTheSpringGraphsBandwidth) {
+TEST(NetScratch, ReverseCuthillMcKeeNarrowsTheSpringGraphsBandwidth) {
   // The mesh's vertex order interleaves the icosphere's refinement levels (a
   // new vertex per edge, appended level by level): neighbours end up hundreds
   // of indices apart. The level-set order keeps them within a few rings.
@@ -93,7 +94,7 @@ TEST(NetState, ReverseCuthillMcKeeNarrowsTheSpringGraphsBandwidth) {
   const core::Data d = core::make_data(m);
   std::vector<int> identity(at(m.num_nodes()));
   for (int i = 0; i < m.num_nodes(); ++i) identity[at(i)] = i;
-  const std::vector<int> position(d.net.sweep_position.begin(), d.net.sweep_position.end());
+  const std::vector<int> position(d.scratch->net.sweep_position.begin(), d.scratch->net.sweep_position.end());
   const int vertex_order = bandwidth(m, m.nets[0], identity);
   const int sweep_order = bandwidth(m, m.nets[0], position);
   std::printf(
@@ -108,10 +109,10 @@ TEST(NetState, ReverseCuthillMcKeeNarrowsTheSpringGraphsBandwidth) {
   EXPECT_LE(bandwidth(m, m.nets[1], position), bandwidth(m, m.nets[1], identity));
 }
 
-TEST(NetState, SpringsAreGroupedByTheirEarlierNodeInTheSweepOrder) {
+TEST(NetScratch, SpringsAreGroupedByTheirEarlierNodeInTheSweepOrder) {
   const core::Model m = two_nets();
   const core::Data d = core::make_data(m);
-  const core::NetScratch& ns = d.net;
+  const core::NetScratch& ns = d.scratch->net;
   const std::size_t num_springs = m.net_springs.size();
   ASSERT_EQ(ns.sweep_springs.size(), num_springs);
   ASSERT_EQ(ns.spring_low_begin.size(), at(m.num_nodes()) + 1);
@@ -136,7 +137,7 @@ TEST(NetState, SpringsAreGroupedByTheirEarlierNodeInTheSweepOrder) {
   for (std::size_t j = 0; j < num_springs; ++j) EXPECT_EQ(slot_used[j], 1) << "slot " << j;
 }
 
-TEST(NetState, SweepSpringsViewReadsOneSpringAcrossTheArrays) {
+TEST(NetScratch, SweepSpringsViewReadsOneSpringAcrossTheArrays) {
   core::SweepSprings s;
   s.assign(3);
   ASSERT_EQ(s.size(), 3u);
@@ -157,7 +158,7 @@ TEST(NetState, SweepSpringsViewReadsOneSpringAcrossTheArrays) {
   EXPECT_EQ(t.high, 7);
 }
 
-TEST(NetState, NoNetsNoScratch) {
+TEST(NetScratch, NoNetsNoScratch) {
   core::Model m;
   m.material_names = {"default"};
   m.material_pairs = {core::MaterialPair{}};
@@ -168,10 +169,10 @@ TEST(NetState, NoNetsNoScratch) {
   ASSERT_EQ(core::finalize_model(m), "");
   const core::Data d = core::make_data(m);
   EXPECT_TRUE(m.node_sweep_order.empty());
-  EXPECT_TRUE(d.net.sweep_position.empty());
-  EXPECT_TRUE(d.net.sweep_nodes.empty());
-  EXPECT_EQ(d.net.sweep_springs.size(), 0u);
-  EXPECT_TRUE(d.net.spring_low_begin.empty());
-  EXPECT_TRUE(d.net.spring_block.empty());
-  EXPECT_TRUE(d.net.tie_sums.empty());
+  EXPECT_TRUE(d.scratch->net.sweep_position.empty());
+  EXPECT_TRUE(d.scratch->net.sweep_nodes.empty());
+  EXPECT_EQ(d.scratch->net.sweep_springs.size(), 0u);
+  EXPECT_TRUE(d.scratch->net.spring_low_begin.empty());
+  EXPECT_TRUE(d.scratch->net.spring_block.empty());
+  EXPECT_TRUE(d.scratch->net.tie_sums.empty());
 }

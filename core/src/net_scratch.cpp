@@ -1,7 +1,7 @@
-/// @file net_state.cpp
-/// Sizing of the nets' scratch (net_state.hpp).
+/// @file net_scratch.cpp
+/// Sizing of the nets' scratch (detail/net_scratch.hpp).
 
-#include "numen/core/net_state.hpp"
+#include "detail/net_scratch.hpp"
 
 #include <algorithm>
 #include <cstddef>
