@@ -36,6 +36,17 @@ CLI::Validator seconds_check(double lo, double hi, bool lo_exclusive) {
       "SECONDS");
 }
 
+CLI::Validator number_check(double lo, double hi, bool lo_exclusive) {
+  return CLI::Validator(
+      [=](const std::string& v) {
+        std::string e = sim::check_seconds(v, lo, hi, lo_exclusive);
+        // check_seconds words its message for seconds; the checks are the same.
+        if (const auto at = e.find(" of seconds"); at != std::string::npos) e.erase(at, 11);
+        return e;
+      },
+      "NUMBER");
+}
+
 std::string check_bus(const std::string& v, bool real_only) {
   try {
     const sim::BusSpec spec = sim::parse_bus_spec(v);

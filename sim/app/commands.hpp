@@ -23,6 +23,9 @@ namespace numen::app {
 int run_guarded(const std::function<int()>& body);
 /// CLI11 check of a time in seconds (numen::sim::check_seconds): finite, in [lo, hi] or (lo, hi].
 CLI::Validator seconds_check(double lo, double hi, bool lo_exclusive);
+/// CLI11 check of a plain number (a rate, a factor): finite, in [lo, hi] (or (lo, hi] when
+/// `lo_exclusive`); "nan" and "inf" are refused.
+CLI::Validator number_check(double lo, double hi, bool lo_exclusive);
 /// CLI11 check of a --bus spec; `real_only`: only can:IFACE or serial:PATH[@BAUD].
 std::string check_bus(const std::string& v, bool real_only);
 
@@ -35,8 +38,8 @@ class RunCommand {
 
  private:
   CLI::App* cli_;
-  std::string scene_path_, trace_path_, coupling_, bus_ = "sim", record_path_;
-  double duration_ = -1.0, phase_ = -1.0;
+  std::string scene_path_, trace_path_, coupling_, bus_ = "sim", record_path_, record_view_path_;
+  double duration_ = -1.0, phase_ = -1.0, view_rate_ = 60.0, speed_ = 0.0;
   bool json_ = false, realtime_ = false;
   platform::RealtimeSettings rt_;
   std::uint32_t overrun_limit_ = 3;

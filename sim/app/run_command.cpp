@@ -45,6 +45,16 @@ RunCommand::RunCommand(CLI::App& parent)
                   "Record the controller's bus traffic into this candump log (can-utils format); "
                   "a paced run drops (and counts) what its writer cannot keep up with, an offline "
                   "run waits for it");
+  run->add_option("--record-view", record_view_path_,
+                  "Write the run's state stream (scene message and frames, docs/viewer.md) to "
+                  "this view recording (.nmv), for `numen view`");
+  run->add_option("--view-rate", view_rate_,
+                  "Frames per second of simulated time in the state stream (default 60)")
+      ->check(number_check(0.0, 1e6, true));
+  run->add_option("--speed", speed_,
+                  "Pace an offline run at this factor of real time (e.g. 1 for a live viewer; "
+                  "default: as fast as it goes)")
+      ->check(number_check(0.0, 1e6, true));
   run->add_option("--overrun-limit", overrun_limit_,
                   "Paced run: consecutive overruns that latch the safe state (default 3); 0 counts "
                   "and reports overruns without latching (a host that cannot hold the period)");
@@ -68,6 +78,9 @@ int RunCommand::execute() const {
   options.compute_phase_s = phase_;
   options.overrun_limit = overrun_limit_;
   options.rearm = &rearm_flag();
+  options.record_view_path = record_view_path_;
+  options.view_rate_hz = view_rate_;
+  options.view_speed = speed_;
   loading_done();  // from here a signal ends the run cleanly
   const sim::RunSummary summary = sim::run_scene(scene, options);
   if (json_) {

@@ -32,6 +32,7 @@
 #include "numen/sim/run_verdict.hpp"
 #include "numen/sim/trace.hpp"
 #include "numen/sim/trace_columns.hpp"
+#include "numen/sim/view_scene.hpp"
 
 namespace numen::sim {
 namespace {
@@ -202,6 +203,22 @@ void SceneRunner::stream_trace(const std::string& path) {
   trace_writer_->start();
 }
 
+void SceneRunner::stream_view(const std::string& record_path,
+                              std::vector<platform::StateFrameSink*> sinks, double rate_hz,
+                              bool wait) {
+  const platform::StateFrameLayout layout = view_frame_layout(*scene_);
+  if (!record_path.empty()) {
+    view_writer_ = std::make_unique<ViewRecordingWriter>(
+        record_path, view_scene_message(*scene_, layout, rate_hz));
+    sinks.insert(sinks.begin(), view_writer_.get());
+  }
+  platform::StateStreamSettings settings;
+  settings.display_rate_hz = rate_hz;
+  settings.full_queue = wait ? hal::FullQueuePolicy::kWait : hal::FullQueuePolicy::kDrop;
+  view_stream_ = std::make_unique<platform::StateStream>(layout, std::move(sinks), settings);
+  view_stream_->start();
+}
+
 void SceneRunner::period(std::int64_t deadline_mono_ns, std::int64_t woke_mono_ns) noexcept {
   const std::int64_t t = k_ * period_ns_;
   apply_due_events(t);
@@ -214,6 +231,11 @@ void SceneRunner::period(std::int64_t deadline_mono_ns, std::int64_t woke_mono_n
   track_startup(contacts);
   accumulate_step_figures(report, contacts);
   record(report, contacts);
+  if (view_stream_)
+    view_stream_->publish(data_, report,
+                          std::span<const double>(loop_.device().sent_torques().torque.data(),
+                                                  static_cast<std::size_t>(loop_.device().sent_torques().torque.size())),
+                          {static_cast<std::uint64_t>(k_ - 1), contacts.tool_pen, contacts.target_pen});
 }
 
 void SceneRunner::apply_due_events(std::int64_t t_ns) noexcept {
@@ -482,6 +504,21 @@ RunSummary SceneRunner::summary() const {
     s.trace_written = static_cast<std::int64_t>(c.written);
     s.trace_io_errors = static_cast<std::int64_t>(c.io_errors);
   }
+  if (view_stream_) {
+    const platform::StateStreamCounters c = view_stream_->counters();
+    s.view_streamed = true;
+    s.view_frames_published = static_cast<std::int64_t>(c.published);
+    s.view_frames_decimated = static_cast<std::int64_t>(c.decimated);
+    s.view_frames_dropped = static_cast<std::int64_t>(c.dropped);
+    s.view_frames_delivered = static_cast<std::int64_t>(c.delivered);
+    s.view_bytes = static_cast<std::int64_t>(c.bytes);
+    s.view_sink_errors = static_cast<std::int64_t>(c.sink_errors);
+  }
+  if (view_writer_) {
+    s.view_recorded = true;
+    s.view_record_frames = static_cast<std::int64_t>(view_writer_->frames());
+    s.view_record_io_errors = static_cast<std::int64_t>(view_writer_->io_errors());
+  }
   if (log_bus_) {
     s.bus_frames_replayed = static_cast<std::int64_t>(log_bus_->log_counters().replayed);
     s.bus_log_records = static_cast<std::int64_t>(log_stats_.records);
@@ -536,6 +573,8 @@ RunSummary SceneRunner::summary() const {
 void SceneRunner::finish() {
   if (writer_) writer_->stop();
   if (trace_writer_) trace_writer_->stop();
+  if (view_stream_) view_stream_->stop();
+  if (view_writer_) view_writer_->close();
 }
 
 namespace {
@@ -568,8 +607,11 @@ RunSummary run_impedance_scene(const Scene& scene, const RunOptions& options) {
                            " s must be below the period dt = " + format_input_number(scene.model.dt) + " s");
     runner.set_compute_phase_ns(static_cast<std::int64_t>(std::llround(options.compute_phase_s * 1e9)));
   }
-  // The writer thread is started before the real-time setup pins and promotes this thread.
+  // The writer threads are started before the real-time setup pins and promotes this thread.
   if (real && !options.trace_path.empty()) runner.stream_trace(options.trace_path);
+  if (!options.record_view_path.empty() || !options.view_sinks.empty())
+    runner.stream_view(options.record_view_path, options.view_sinks, options.view_rate_hz,
+                       !(options.realtime || real));
   const platform::RealtimeSettings& rt = options.rt;
   std::vector<std::string> rt_lines;
   if (rt.fifo_priority != 0 || rt.lock_memory || rt.prefault_stack_bytes > 0 ||
@@ -584,7 +626,19 @@ RunSummary run_impedance_scene(const Scene& scene, const RunOptions& options) {
   auto stop_requested = [&] {
     return options.stop != nullptr && options.stop->load(std::memory_order_relaxed);
   };
+  // A live viewer of an unpaced run: one period every dt / view_speed of wall time.
+  const std::int64_t view_period_ns =
+      !paced && options.view_speed > 0.0
+          ? std::max<std::int64_t>(1, std::llround(scene.model.dt * 1e9 / options.view_speed))
+          : 0;
+  std::int64_t view_k = 0;
   auto one_period = [&] {
+    if (view_period_ns > 0) {
+      const std::int64_t at = wall0 + ++view_k * view_period_ns;
+      const timespec ts{static_cast<time_t>(at / 1'000'000'000), static_cast<long>(at % 1'000'000'000)};
+      while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
+      }
+    }
     if (paced) {
       const platform::Wakeup w = timer.wait_next();
       overruns += w.overrun ? 1 : 0;
@@ -643,6 +697,15 @@ RunSummary run_impedance_scene(const Scene& scene, const RunOptions& options) {
 }  // namespace
 
 RunSummary run_scene(const Scene& scene, const RunOptions& options) {
+  if (!(options.view_rate_hz > 0.0))
+    throw InputError("", 0, 0, "--view-rate", "must be > 0 frames per second (got " +
+                                                  format_input_number(options.view_rate_hz) + ")");
+  if (!(options.view_speed >= 0.0) || !std::isfinite(options.view_speed))
+    throw InputError("", 0, 0, "--speed", "must be a finite factor >= 0 (got " +
+                                              format_input_number(options.view_speed) + ")");
+  if (scene.admittance && (!options.record_view_path.empty() || !options.view_sinks.empty()))
+    throw InputError(scene.file, 0, 0, "--record-view",
+                     "the admittance scene's runner has no state stream yet (docs/viewer.md)");
   RunSummary s = scene.admittance ? run_admittance_scene(scene, options)  // admittance_run.cpp
                                   : run_impedance_scene(scene, options);
   RunVerdict verdict = run_verdict(s);

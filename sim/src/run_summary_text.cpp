@@ -129,6 +129,13 @@ constexpr RunSummarySegment kLayout[] = {
      "{bus_record_written} written, {bus_record_io_errors} I/O errors, "
      "{bus_record_format_errors} format errors\n",
      set("bus_frames_recorded", "bus_record_dropped")},
+    {"  state stream: {view_frames_published} frames published, {view_frames_decimated} "
+     "periods decimated, {view_frames_dropped} dropped, {view_frames_delivered} delivered "
+     "({view_bytes} B), {view_sink_errors} consumer errors\n",
+     set("view_streamed")},
+    {"  view recording: {view_record_frames} frames written, {view_record_io_errors} I/O "
+     "errors\n",
+     set("view_recorded")},
     // Device lifecycle and safety.
     {"  canopen: start-up {startup} at period {periods_to_operational}, active at period "
      "{periods_to_active}, first torque at period {periods_to_torque}; lifecycle {lifecycle}\n",

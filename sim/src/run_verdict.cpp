@@ -53,6 +53,12 @@ RunVerdict run_verdict(const RunSummary& s) {
         "--record: " + n(s.bus_record_written) + " of " + n(s.bus_frames_recorded) +
             " frames written (" + n(s.bus_record_io_errors) + " I/O errors, " +
             n(s.bus_record_format_errors) + " not formattable)");
+  if (s.view_recorded && (s.view_frames_dropped > 0 || s.view_record_io_errors > 0 ||
+                          s.view_record_frames < s.view_frames_published))
+    add(ExitStatus::kLostRecords, "--record-view: " + n(s.view_record_frames) + " of " +
+                                      n(s.view_frames_published + s.view_frames_dropped) +
+                                      " due frames written (" + n(s.view_frames_dropped) +
+                                      " dropped, " + n(s.view_record_io_errors) + " I/O errors)");
   if (s.trace_dropped > 0 || s.trace_io_errors > 0 || s.trace_written < s.trace_pushed)
     add(ExitStatus::kLostRecords, "--trace: " + n(s.trace_written) + " of " +
                                       n(s.trace_pushed + s.trace_dropped) + " records written (" +

@@ -23,6 +23,7 @@
 #include "scene_articulation.hpp"
 #include "scene_deformable.hpp"
 #include "scene_model.hpp"
+#include "scene_pointer.hpp"
 #include "toml_reader.hpp"
 
 #ifndef NUMEN_SOURCE_SIM_DIR
@@ -103,6 +104,22 @@ PathSegment parse_segment(const TomlTable& s) {
   return seg;
 }
 
+/// `[trajectory.start]` (scripted and pointer): the pose and jaw before the motion.
+TrajectorySample parse_start(const TomlTable& t) {
+  TrajectorySample start;
+  if (auto s = t.table("start")) {
+    s->allow_only({"position", "orientation", "jaw"});
+    start.pose.position = s->vec3_or("position", Vec3::Zero());
+    if (start.pose.position.stableNorm() > kMaxTargetDistance)
+      s->fail("position", "is " + format_input_number(start.pose.position.stableNorm()) +
+                              " m from the world origin; a target beyond " +
+                              format_input_number(kMaxTargetDistance) + " m is not instrument motion (a wrong unit?)");
+    start.pose.orientation = s->quaternion_or("orientation", Quat::Identity());
+    start.jaw = s->number_or("jaw", 0.0);
+  }
+  return start;
+}
+
 /// Re-throws an InputError of the trajectory code (which has no file/line) at
 /// the place in the scene its key points to.
 [[noreturn]] void relocate(const InputError& e, const TomlTable& traj,
@@ -120,12 +137,18 @@ PathSegment parse_segment(const TomlTable& s) {
   traj.fail_at(nullptr, e.key().empty() ? traj.path() : e.key(), e.message());
 }
 
-Trajectory parse_trajectory(const TomlTable& root, double dt, const std::filesystem::path& scene_dir) {
+Trajectory parse_trajectory(const TomlTable& root, double dt, const std::filesystem::path& scene_dir,
+                            std::vector<std::string>& warnings) {
   auto t = root.table("trajectory");
-  if (!t) root.fail("trajectory", "missing: a scene needs a [trajectory] (source = \"jigsaws\" or \"scripted\")");
-  const std::string source = t->choice("source", {"jigsaws", "scripted"}, std::nullopt);
+  if (!t)
+    root.fail("trajectory", "missing: a scene needs a [trajectory] (source = \"jigsaws\", \"scripted\" or \"pointer\")");
+  const std::string source = t->choice("source", {"jigsaws", "scripted", "pointer"}, std::nullopt);
   Trajectory recorded;
-  if (source == "jigsaws") {
+  if (source == "pointer") {
+    // The recording replayed through the relative-pose integrator (scene_pointer.cpp); the
+    // integrator's settings place it in the world, so there is no [trajectory.placement].
+    recorded = parse_pointer_trajectory(*t, dt, scene_dir, parse_start(*t), warnings);
+  } else if (source == "jigsaws") {
     t->allow_only({"source", "file", "manipulator", "start_time", "end_time", "placement"});
     std::filesystem::path file = t->string("file");
     if (file.is_relative()) file = scene_dir / file;
@@ -151,17 +174,7 @@ Trajectory parse_trajectory(const TomlTable& root, double dt, const std::filesys
     }
   } else {
     t->allow_only({"source", "start", "segment", "placement"});
-    TrajectorySample start;
-    if (auto s = t->table("start")) {
-      s->allow_only({"position", "orientation", "jaw"});
-      start.pose.position = s->vec3_or("position", Vec3::Zero());
-      if (start.pose.position.stableNorm() > kMaxTargetDistance)
-        s->fail("position", "is " + format_input_number(start.pose.position.stableNorm()) +
-                                " m from the world origin; a target beyond " +
-                                format_input_number(kMaxTargetDistance) + " m is not instrument motion (a wrong unit?)");
-      start.pose.orientation = s->quaternion_or("orientation", Quat::Identity());
-      start.jaw = s->number_or("jaw", 0.0);
-    }
+    const TrajectorySample start = parse_start(*t);
     const std::vector<TomlTable> segs = t->tables("segment");
     if (segs.empty()) t->fail("segment", "a scripted trajectory needs at least one [[trajectory.segment]]");
     try {
@@ -606,7 +619,7 @@ Scene load_scene(const std::string& path, const SceneOverrides& overrides) {
   scene.model = parse_scene_model(root, scene.warnings);
   if (overrides.coupling) scene.model.coupling_mode = *overrides.coupling;
   const std::filesystem::path dir = std::filesystem::path(path).parent_path();
-  scene.trajectory = parse_trajectory(root, scene.model.dt, dir);
+  scene.trajectory = parse_trajectory(root, scene.model.dt, dir, scene.warnings);
 
   const std::vector<TomlTable> body_tables = root.tables("body");
   const TomlTable* attached_table = nullptr;
@@ -617,7 +630,7 @@ Scene load_scene(const std::string& path, const SceneOverrides& overrides) {
   }
   parse_articulation(root, body_tables, scene);
   // Nets after the bodies' starting poses are known (their nodes start there).
-  if constexpr (core::kWithDeformable) parse_deformables(root, dir, scene.model);
+  if constexpr (core::kWithDeformable) parse_deformables(root, dir, scene.model, scene.net_triangles);
 
   // Bus between controller and instrument.
   double latency = 100e-6;

@@ -141,7 +141,8 @@ Vec3 parse_scale(const TomlTable& t) {
   return s;
 }
 
-void parse_deformable(const TomlTable& t, const std::filesystem::path& scene_dir, core::Model& m) {
+void parse_deformable(const TomlTable& t, const std::filesystem::path& scene_dir, core::Model& m,
+                      std::vector<NetTriangles>& triangles) {
   core::NetSettings settings;
   settings.name = t.string("name");
   for (const core::NetModel& other : m.nets)
@@ -167,6 +168,7 @@ void parse_deformable(const TomlTable& t, const std::filesystem::path& scene_dir
 
   const std::string err = core::add_net(m, mesh, settings);
   if (!err.empty()) t.fail_at(nullptr, t.path(), err);
+  triangles.push_back(std::move(mesh.triangles));  // node i of the net is vertex i of the mesh
 }
 
 #undef NUMEN_DEFORMABLE_COMMON_KEYS
@@ -174,8 +176,8 @@ void parse_deformable(const TomlTable& t, const std::filesystem::path& scene_dir
 }  // namespace
 
 void parse_deformables(const TomlTable& root, const std::filesystem::path& scene_dir,
-                       core::Model& model) {
-  for (const TomlTable& t : root.tables("deformable")) parse_deformable(t, scene_dir, model);
+                       core::Model& model, std::vector<NetTriangles>& triangles) {
+  for (const TomlTable& t : root.tables("deformable")) parse_deformable(t, scene_dir, model, triangles);
 }
 
 }  // namespace numen::sim

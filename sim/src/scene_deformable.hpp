@@ -10,6 +10,7 @@
 #include <filesystem>
 
 #include "numen/core/model.hpp"
+#include "numen/sim/scene.hpp"
 #include "toml_reader.hpp"
 
 namespace numen::sim {
@@ -19,8 +20,9 @@ namespace numen::sim {
 /// `scene_dir`. Throws InputError naming file, line, column and key: unknown
 /// keys, unknown body or material, a rigid component with spheres, unknown
 /// mesh kind, missing OBJ file, numbers out of range; core::add_net()'s own
-/// message is located at the deformable's table.
+/// message is located at the deformable's table. Appends each net's triangles (node indices
+/// local to the net) to `triangles`, in the order of model.nets.
 void parse_deformables(const TomlTable& root, const std::filesystem::path& scene_dir,
-                       core::Model& model);
+                       core::Model& model, std::vector<NetTriangles>& triangles);
 
 }  // namespace numen::sim

@@ -239,14 +239,7 @@ Trajectory ScriptedPath::sample(double dt) const {
       check.fail("period", "must be longer than two samples (2 dt = " + number(2.0 * dt) + " s)");
     }
   }
-  const double total = duration();
-  const double m = total / dt;
-  const double intervals = std::ceil(m - 1e-9 * std::max(1.0, m));
-  if (!(intervals < 1e9)) {
-    throw InputError("", 0, 0, key_prefix_ + ".dt", "gives more than 1e9 samples; dt is too small");
-  }
-  const std::size_t n = static_cast<std::size_t>(std::max(0.0, intervals)) + 1;
-  return Trajectory(std::make_shared<const ScriptedPath>(*this), dt, n);
+  return sample_motion(std::make_shared<const ScriptedPath>(*this), dt, key_prefix_ + ".dt");
 }
 
 ScriptedPath::FarthestPoint ScriptedPath::farthest_point(const Placement& placement) const noexcept {

@@ -1,5 +1,5 @@
 /// @file trajectory.cpp
-/// Target motion with uniform knots, stored or computed from a scripted path:
+/// Target motion with uniform knots, stored or computed from a ComputedMotion:
 /// interpolation, finite-difference twist and placement (see trajectory.hpp).
 
 #include "numen/sim/trajectory.hpp"
@@ -9,7 +9,7 @@
 #include <string>
 
 #include "numen/sim/input_error.hpp"
-#include "numen/sim/scripted_path.hpp"
+#include "numen/sim/computed_motion.hpp"
 
 namespace numen::sim {
 namespace {
@@ -74,7 +74,7 @@ Trajectory::Trajectory(double period, std::vector<core::Pose> poses, std::vector
   }
 }
 
-Trajectory::Trajectory(std::shared_ptr<const ScriptedPath> path, double period, std::size_t count) {
+Trajectory::Trajectory(std::shared_ptr<const ComputedMotion> path, double period, std::size_t count) {
   if (!std::isfinite(period) || period <= 0.0) {
     fail("trajectory.period", "must be finite and > 0 s, got " + std::to_string(period));
   }
@@ -158,6 +158,16 @@ core::Vec3 apply(const Placement& placement, const core::Vec3& p) noexcept {
          placement.pose.orientation.normalized() * (placement.scale * (p - placement.origin));
 }
 
+Trajectory sample_motion(std::shared_ptr<const ComputedMotion> motion, double dt,
+                         const std::string& dt_key) {
+  if (!std::isfinite(dt) || dt <= 0.0) fail(dt_key, "must be finite and > 0 s, got " + format_input_number(dt));
+  const double m = motion->duration() / dt;
+  const double intervals = std::ceil(m - 1e-9 * std::max(1.0, m));
+  if (!(intervals < 1e9)) fail(dt_key, "gives more than 1e9 samples; dt is too small");
+  const std::size_t n = static_cast<std::size_t>(std::max(0.0, intervals)) + 1;
+  return Trajectory(std::move(motion), dt, n);
+}
+
 Trajectory transformed(const Trajectory& trajectory, const Placement& placement) {
   if (!std::isfinite(placement.scale) || placement.scale <= 0.0) {
     fail("placement.scale", "must be finite and > 0, got " + format_input_number(placement.scale));
@@ -179,7 +189,7 @@ Trajectory transformed(const Trajectory& trajectory, const Placement& placement)
     moved.placement_.pose.position = apply(placement, inner.pose.position);
     moved.placement_.pose.orientation = (r * inner.pose.orientation.normalized()).normalized();
     moved.placement_.scale = placement.scale * inner.scale;
-    const ScriptedPath::FarthestPoint far = moved.path_->farthest_point(moved.placement_);
+    const ComputedMotion::FarthestPoint far = moved.path_->farthest_point(moved.placement_);
     if (!(far.distance <= kMaxTargetDistance)) {
       fail("trajectory.placement",
            "the target at " + format_input_number(far.time) + " s is " +

@@ -62,6 +62,16 @@ inline sim::RunSummary full_managed_summary() {
   s.bus_record_written = 19;
   s.bus_record_io_errors = 20;
   s.bus_record_format_errors = 21;
+  s.view_streamed = true;
+  s.view_recorded = true;
+  s.view_frames_published = 60;
+  s.view_frames_decimated = 940;
+  s.view_frames_dropped = 2;
+  s.view_frames_delivered = 58;
+  s.view_bytes = 33060;
+  s.view_sink_errors = 1;
+  s.view_record_frames = 57;
+  s.view_record_io_errors = 1;
   s.realtime_overruns = 22;
   s.realtime_missed_periods = 23;
   s.overrun_limit = 4;

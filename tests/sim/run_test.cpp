@@ -403,8 +403,22 @@ TEST(RunConstructionScene, DirectCouplingPenetratesTenTimesMoreThanTheGodObject)
 
 // ---------------------------------------------------------------- zero allocations
 
+/// A state-stream consumer that only counts (stands in for a connected viewer).
+class CountingViewSink final : public numen::platform::StateFrameSink {
+ public:
+  bool write_frame(std::span<const std::byte> frame) noexcept override {
+    frames.fetch_add(1);
+    bytes.fetch_add(frame.size());
+    return true;
+  }
+  std::atomic<std::int64_t> frames{0}, bytes{0};
+};
+
 void expect_no_allocation(const Scene& scene, const char* name) {
   SceneRunner runner(scene, 10'000);  // construction allocates (trace storage too)
+  // A viewer is connected: the state stream publishes every period (1 kHz, its worst case).
+  CountingViewSink viewer;
+  runner.stream_view("", {&viewer}, 1.0 / scene.model.dt, false);
   std::int64_t count = -1;
   {
     numen::test::AllocationGuard guard;
@@ -414,7 +428,10 @@ void expect_no_allocation(const Scene& scene, const char* name) {
   EXPECT_EQ(count, 0) << name << ": heap allocations in 10,000 periods";
   EXPECT_EQ(runner.periods(), 10'000);
   EXPECT_EQ(runner.trace().records().size(), 10'000u);
+  runner.finish();
   const RunSummary s = runner.summary();
+  EXPECT_EQ(s.view_frames_published + s.view_frames_dropped, 10'000) << name;
+  EXPECT_EQ(viewer.frames.load(), s.view_frames_published) << name;
   EXPECT_GT(s.contacts_max + s.node_contacts_max, 0)
       << name << ": the contact path was not exercised";
   if (scene.model.num_nets() > 0) {
@@ -480,6 +497,59 @@ TEST(RunAllocations, EndobagScenePeriodNeverAllocates) {
   NUMEN_REQUIRE_DEFORMABLE();
   NUMEN_REQUIRE_ARTICULATION();
   expect_no_allocation(endobag_scene(), "endobag");
+}
+
+const Scene& mouse_scene() {
+  static const Scene s = numen::sim::load_scene(std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/mouse.toml");
+  return s;
+}
+
+TEST(RunAllocations, MouseScenePeriodNeverAllocates) {
+  expect_no_allocation(mouse_scene(), "mouse");  // 5 s scene: the trajectory holds its end
+}
+
+// ---------------------------------------------------------------- the mouse scene (paper's mouse device)
+
+/// Target position (m) at time t (s) in the trace of a run of the mouse scene.
+Vec3 target_at(const std::vector<TraceRecord>& records, double dt, double t) {
+  return records[static_cast<std::size_t>(std::llround(t / dt))].target.position;
+}
+
+// The shipped recording (sim/scenes/mouse.toml's phases): the tool moves only while the left
+// button is held, stays while the mouse is moved back with the button up (indexing), follows
+// the mouse closely in free motion, and pushes the loose block along the board.
+TEST(RunMouseScene, TheToolFollowsTheMouseOnlyWhileTheClutchIsHeld) {
+  const Scene& scene = mouse_scene();
+  const std::int64_t n = periods_for(scene, scene.duration_s);
+  SceneRunner runner(scene, n);
+  for (std::int64_t k = 0; k < n; ++k) runner.period();
+  const RunSummary s = runner.summary();
+  const auto& rec = runner.trace().records();
+  const double dt = scene.model.dt;
+  const Vec3 start(-0.08, 0.0, 0.03);
+  // 0–0.3 s: the mouse moves, button up: the target stays at the start.
+  // (The trace's target is the device's measured pose: encoders of 1 µm.)
+  EXPECT_LT((target_at(rec, dt, 0.29) - start).norm(), 2e-6);
+  // 0.3–1.3 s: held: +x 49.6 mm (124 reports of 4 counts), wheel down 5 detents: -10 mm.
+  const Vec3 held = target_at(rec, dt, 1.32);
+  EXPECT_NEAR(held.x(), -0.08 + 0.0496, 2e-6);
+  EXPECT_NEAR(held.z(), 0.02, 2e-6);
+  // 1.3–1.8 s: button up, the mouse goes back -x: the target does not move.
+  EXPECT_LT((target_at(rec, dt, 1.79) - held).norm(), 2e-6);
+  // 1.8–3.0 s: held again: +x 60 mm.
+  EXPECT_NEAR(target_at(rec, dt, 3.05).x() - held.x(), 0.06, 0.002);
+  // Free motion (before the block): the held block follows the target within 3 mm.
+  for (const double t : {0.8, 1.2, 1.6}) {
+    const auto& r = rec[static_cast<std::size_t>(std::llround(t / dt))];
+    EXPECT_LT((r.tool.position - r.target.position).norm(), 0.003) << t << " s";
+  }
+  // The loose block (body 1) was pushed along +x, and stayed on the board.
+  const Vec3 loose = runner.data().bodies[1].position;
+  EXPECT_GT(loose.x(), 0.02) << "the held block pushed the loose one";
+  EXPECT_NEAR(loose.z(), 0.02, 0.003);
+  EXPECT_GT(s.contacts_max, 0);
+  EXPECT_FALSE(s.nan_detected);
+  EXPECT_EQ(s.rejected_samples, 0);
 }
 
 // ---------------------------------------------------------------- deformable scenes (paper §4.2)

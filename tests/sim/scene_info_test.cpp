@@ -26,7 +26,7 @@ namespace {
 /// The shipped scenes this build can load (default, phantom and endobag have
 /// joints; deformable and endobag nets).
 std::vector<std::string> shipped_scenes() {
-  std::vector<std::string> out{"construction", "admittance"};
+  std::vector<std::string> out{"construction", "admittance", "mouse"};
   if (core::kWithArticulation) out.insert(out.end(), {"default", "phantom"});
   if (core::kWithDeformable) out.push_back("deformable");
   if (core::kWithArticulation && core::kWithDeformable) out.push_back("endobag");

@@ -20,7 +20,9 @@
 #include "numen/platform/latency_histogram.hpp"
 #include "numen/platform/loop_statistics.hpp"
 #include "numen/platform/realtime_setup.hpp"
+#include "numen/platform/state_stream.hpp"
 #include "numen/platform/trace_queue.hpp"
+#include "numen/sim/view_recording.hpp"
 #include "numen/sim/bus_spec.hpp"
 #include "numen/sim/scene.hpp"
 #include "numen/sim/simulated_instrument.hpp"
@@ -89,6 +91,19 @@ struct RunOptions {
   /// reported in the summary but never latch (for a host that cannot hold the period, such as
   /// the HIL guest under qemu's TCG emulation, docs/hil.md).
   std::uint32_t overrun_limit = 3;
+  /// The state stream (docs/viewer.md): write a view recording (.nmv) of the run here; empty:
+  /// none. An offline run waits for the file (every due frame is written); a paced run drops
+  /// and counts, and the verdict reports lost records.
+  std::string record_view_path;
+  /// Further consumers of the state stream (a viewer server), not owned; they must outlive
+  /// the run. Frames they cannot take are theirs to drop.
+  std::vector<platform::StateFrameSink*> view_sinks;
+  /// Frames per second of simulated time the stream publishes, > 0.
+  double view_rate_hz = 60.0;
+  /// > 0: an unpaced run (simulated bus or log, no --realtime) is paced at view_speed × real
+  /// time so that a live viewer sees it move (sleeps between periods; no real-time
+  /// supervision). 0: as fast as it goes.
+  double view_speed = 0.0;
 };
 
 /// Percentiles of a duration distribution (µs).
@@ -217,6 +232,16 @@ struct RunSummary {
   std::int64_t bus_record_written = 0;     ///< --record: lines the writer thread wrote.
   std::int64_t bus_record_io_errors = 0;   ///< --record: failed writes / flushes (disk full).
   std::int64_t bus_record_format_errors = 0;  ///< --record: records that could not be formatted.
+  bool view_streamed = false;              ///< The state stream ran (--record-view, --view).
+  bool view_recorded = false;              ///< ... into a view recording (--record-view).
+  std::int64_t view_frames_published = 0;  ///< Frames queued by the loop.
+  std::int64_t view_frames_decimated = 0;  ///< Periods left out by the display rate.
+  std::int64_t view_frames_dropped = 0;    ///< Due frames lost: every buffer was in use.
+  std::int64_t view_frames_delivered = 0;  ///< Frames handed to the consumers.
+  std::int64_t view_bytes = 0;             ///< Bytes of the frames delivered.
+  std::int64_t view_sink_errors = 0;       ///< Consumer refusals (write or flush failures).
+  std::int64_t view_record_frames = 0;     ///< --record-view: frames in the file.
+  std::int64_t view_record_io_errors = 0;  ///< --record-view: failed writes / flushes / close.
   std::int64_t realtime_overruns = 0;      ///< Paced periods (--realtime) that began after their deadline.
   std::int64_t realtime_missed_periods = 0;  ///< Whole periods skipped to re-phase after overruns.
   /// RunOptions::overrun_limit in effect: consecutive overruns that latch (0: counted only).
@@ -333,6 +358,12 @@ class SceneRunner {
   /// tau_<axis name> per axis, step_us, end_to_end_us, wakeup_us); flags bit 0 sample valid,
   /// bit 1 torque commanded, bit 2 overrun. Throws like TraceWriter's constructor.
   void stream_trace(const std::string& path);
+  /// Publishes the run's state stream (docs/viewer.md) to a view recording at `record_path`
+  /// (empty: none) and to `sinks`, at `rate_hz` frames per simulated second; `wait`: the loop
+  /// waits for the consumers (offline runs), else drops. Starts the stream's thread. Throws
+  /// InputError at --record-view when the file cannot be created.
+  void stream_view(const std::string& record_path, std::vector<platform::StateFrameSink*> sinks,
+                   double rate_hz, bool wait);
   /// The streaming trace writer (nullptr unless stream_trace() was called).
   platform::TraceWriter* trace_writer() noexcept { return trace_writer_.get(); }
   /// Overrides the scene's compute phase (ns, >= 0).
@@ -415,6 +446,8 @@ class SceneRunner {
   double free_sq_ = 0.0;
   std::int64_t solver_iterations_sum_ = 0;
   std::unique_ptr<platform::TraceWriter> trace_writer_;  // real-bus --trace
+  std::unique_ptr<ViewRecordingWriter> view_writer_;     // --record-view
+  std::unique_ptr<platform::StateStream> view_stream_;   // --record-view, --view
   bool last_torque_ = false;
   std::int64_t startup_settle_periods_;  // kStartupSettle in periods (>= 1)
   bool in_startup_ = false;       // the spawned tool is being pushed out (RunSummary::startup_steps)

@@ -6,6 +6,7 @@
 /// the tool-switching events. Load time only: allocates, throws InputError
 /// naming file, line, column and key.
 
+#include <array>
 #include <optional>
 #include <string>
 #include <vector>
@@ -39,6 +40,10 @@ struct AdmittanceScene {
   hal::AdmittanceEmulatorSettings emulator;   ///< The simulated hand (k_hand, c_hand, ...) and drive lag.
 };
 
+/// Triangles of one net's surface, as node indices local to the net (0 .. node_count − 1),
+/// counter-clockwise seen from outside: for display (the dynamics use the springs).
+using NetTriangles = std::vector<std::array<int, 3>>;
+
 /// Everything a run of a scene needs.
 struct Scene {
   std::string file;          ///< Path of the scene file, as given.
@@ -58,6 +63,8 @@ struct Scene {
   /// world, sampled at model.dt.
   Trajectory trajectory;
   std::vector<AttachEvent> events;  ///< Sorted by time.
+  /// Per net (model.nets order): its surface triangles (the viewer draws them).
+  std::vector<NetTriangles> net_triangles;
   /// Set exactly when model.coupling_mode is kAdmittance (the loader requires both or neither).
   std::optional<AdmittanceScene> admittance;
   double duration_s = 0.0;          ///< Default run length (s).

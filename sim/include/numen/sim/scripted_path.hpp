@@ -26,6 +26,7 @@
 #include <vector>
 
 #include "numen/core/types.hpp"
+#include "numen/sim/computed_motion.hpp"
 #include "numen/sim/trajectory.hpp"
 
 namespace numen::sim {
@@ -87,8 +88,8 @@ struct PathSegment {
   std::optional<double> jaw;  ///< Jaw angle over the segment (rad); none = the previous one.
 };
 
-/// A validated sequence of segments with their starts resolved.
-class ScriptedPath {
+/// A validated sequence of segments with their starts resolved; a ComputedMotion.
+class ScriptedPath final : public ComputedMotion {
  public:
   /// Validates `segments` and resolves where each starts. `start` is the
   /// pose and jaw before the first segment (time ignored); `key_prefix` names
@@ -103,7 +104,7 @@ class ScriptedPath {
                         std::string key_prefix = "path");
 
   /// Total duration (s): the sum of the segment durations.
-  double duration() const noexcept;
+  double duration() const noexcept override;
   /// Number of segments.
   std::size_t size() const noexcept { return segments_.size(); }
   /// Time at which segment `i` starts (s; precondition i < size()).
@@ -112,7 +113,7 @@ class ScriptedPath {
   /// Exact target at time `t` (s), clamped to [0, duration()] (NaN → 0). At a
   /// boundary between segments (within 1 ps) the later segment is used; a step
   /// is at B from step_time on. Real-time safe (noexcept, no allocation).
-  TrajectorySample evaluate(double t) const noexcept;
+  TrajectorySample evaluate(double t) const noexcept override;
 
   /// The path sampled at period `dt` (s) into a Trajectory: knot k is
   /// evaluate(min(k dt, duration())), k = 0 .. ceil(duration / dt) (the last
@@ -123,16 +124,12 @@ class ScriptedPath {
   /// "<prefix>[i].period"): the samples could not represent them.
   Trajectory sample(double dt) const;
   /// Bytes this path keeps (segments), for memory reports.
-  std::size_t memory_bytes() const noexcept;
+  std::size_t memory_bytes() const noexcept override;
 
   /// The position of the path farthest from the origin once moved by `placement`: its
   /// distance (m) and time (s). Exact for lines, holds and steps (their end points); a
   /// circle is evaluated every degree of the arc it sweeps (≤ 0.008 % low).
-  struct FarthestPoint {
-    double distance = 0.0;  ///< m
-    double time = 0.0;      ///< s
-  };
-  FarthestPoint farthest_point(const Placement& placement) const noexcept;
+  FarthestPoint farthest_point(const Placement& placement) const noexcept override;
 
  private:
   enum class Kind { line, circle, hold, step };

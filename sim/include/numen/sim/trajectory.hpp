@@ -7,7 +7,9 @@
 /// sampling it (`at`, `twist_at`) is real-time safe: noexcept, no allocation.
 ///
 /// Memory: a recorded motion keeps its recorded knots (30 Hz for JIGSAWS); a
-/// scripted path keeps its segments and computes its knots on demand. Neither
+/// computed motion (computed_motion.hpp: a scripted path keeps its segments, a
+/// replayed pointer recording its poses at the recording's report times)
+/// computes its knots on demand. Neither
 /// depends on the control period dt or on the run's duration: the loop
 /// interpolates at each period's time, nothing is resampled up front.
 ///
@@ -50,7 +52,7 @@ struct TrajectorySample {
 /// hemisphere of `q0` (sign continuity).
 core::Quat slerp_shortest(const core::Quat& q0, const core::Quat& q1, double s) noexcept;
 
-class ScriptedPath;
+class ComputedMotion;
 
 /// How to place a motion recorded in its own frame into a scene's world:
 /// a point p of the recording goes to
@@ -68,7 +70,7 @@ struct Placement {
 /// constructors): period > 0 and finite, at least one knot, every value
 /// finite, unit quaternions. Stored knots (recorded motion) also have sign
 /// continuity (consecutive quaternions have a non-negative dot product);
-/// computed knots (scripted path) may differ in sign, which changes nothing:
+/// computed knots (ComputedMotion) may differ in sign, which changes nothing:
 /// interpolation and twist take the shortest arc (core::quat_log) either way.
 class Trajectory {
  public:
@@ -85,12 +87,13 @@ class Trajectory {
   /// "trajectory.samples[i].position") or a quaternion has (near) zero norm.
   Trajectory(double period, std::vector<core::Pose> poses, std::vector<double> jaw = {});
 
-  /// Knots computed on demand from `path` (ScriptedPath::sample()): knot k is
-  /// path->evaluate(min(k · period, path->duration())) for k = 0 .. count - 1,
-  /// quaternion normalised. Keeps only the path (its segments), never the
-  /// knots. Throws InputError (key "trajectory.period" / "trajectory.samples")
-  /// if period is not finite and > 0, count is 0 or path is null.
-  Trajectory(std::shared_ptr<const ScriptedPath> path, double period, std::size_t count);
+  /// Knots computed on demand from `path` (sample_motion(), ScriptedPath::sample(),
+  /// PointerPath::sample()): knot k is path->evaluate(min(k · period,
+  /// path->duration())) for k = 0 .. count - 1, quaternion normalised. Keeps
+  /// only the motion (segments, report poses), never the knots. Throws
+  /// InputError (key "trajectory.period" / "trajectory.samples") if period is
+  /// not finite and > 0, count is 0 or path is null.
+  Trajectory(std::shared_ptr<const ComputedMotion> path, double period, std::size_t count);
 
   /// Number of knots.
   std::size_t size() const noexcept { return size_; }
@@ -128,7 +131,7 @@ class Trajectory {
   double period_ = 0.0;
   std::size_t size_ = 0;
   std::vector<TrajectorySample> samples_;  // stored knots (empty for a path)
-  std::shared_ptr<const ScriptedPath> path_;  // computed knots (null for stored ones)
+  std::shared_ptr<const ComputedMotion> path_;  // computed knots (null for stored ones)
   Placement placement_;  // applied to the path's knots
 };
 
@@ -137,7 +140,7 @@ core::Vec3 apply(const Placement& placement, const core::Vec3& p) noexcept;
 
 /// The whole trajectory moved by `placement`: every position p → p', every
 /// orientation q → R q (velocities follow: linear scaled then rotated,
-/// angular rotated). Stored knots are transformed; a path's placement is
+/// angular rotated). Stored knots are transformed; a computed motion's placement is
 /// composed with it (still computed on demand). Throws InputError (key "placement.scale" or
 /// "placement.orientation") if the scale is not finite and > 0 or the
 /// orientation is not finite or has zero norm (it is normalised otherwise).
