@@ -4,13 +4,15 @@
 // draws them with three.js; plots with uPlot. Read-only: in live mode it sends nothing; in
 // replay mode only {"frame": I} requests.
 //
-// URL parameters: ?frame=I (replay: show frame I, paused: what the browser test uses).
+// URL parameters: ?frame=I (replay: show frame I, paused), ?w=W&h=H (the view's size in
+// pixels); the browser test uses both.
 // window.numenView exposes the state a test reads (also written to #probe as JSON).
 
 const errors = [];
 window.addEventListener('error', (e) => errors.push(String(e.message || e)));
 window.addEventListener('unhandledrejection', (e) => errors.push('unhandled: ' + String(e.reason)));
 
+const params = new URLSearchParams(location.search);
 const statusEl = document.getElementById('status');
 function fail(text) {
   errors.push(text);
@@ -107,7 +109,7 @@ function sphereSet(spheres, material) {
 }
 
 let scene = null, session = null, bodies = [], ghosts = [], nets = [], jointAxes = [];
-let contactPoints, contactLines, forceArrow, extent = 1;
+let contactPoints, contactLines, forceArrow, extent = 1, obstacleBox = null, fitted = false;
 const MAX_DRAWN_CONTACTS = 512;
 
 function buildScene(msg) {
@@ -150,7 +152,6 @@ function buildScene(msg) {
     scene3.add(g, gh);
     bodies.push(g);
     ghosts.push(gh);
-    for (const s of b.spheres) box.expandByPoint(v3(s).addScalar(s[3]));  // refined on the first frame
   });
   for (const n of msg.nets) {
     const geo = new THREE.BufferGeometry();
@@ -186,7 +187,7 @@ function buildScene(msg) {
   forceArrow = new THREE.ArrowHelper(new THREE.Vector3(0, 0, 1), new THREE.Vector3(), 1, 0xffee00);
   forceArrow.visible = false;
   scene3.add(contactPoints, contactLines, forceArrow);
-  fitCamera(box);
+  obstacleBox = box;  // the camera is fitted on the first frame, bodies included
 }
 
 function fitCamera(box) {
@@ -241,6 +242,20 @@ function showFrame(fr) {
     geo.attributes.position.needsUpdate = true;
     if (geo.index) geo.computeVertexNormals();
     geo.computeBoundingSphere();
+  }
+  if (!fitted) {  // the obstacles and where the bodies and their targets are now
+    fitted = true;
+    const box = obstacleBox.clone();
+    for (let b = 0; b < h.B; ++b) {
+      for (const g of ghosts[b].visible ? [bodies[b], ghosts[b]] : [bodies[b]]) {
+        g.updateMatrixWorld();
+        for (const sp of scene.bodies[b].spheres) {
+          const c = v3(sp).applyMatrix4(g.matrixWorld);
+          box.expandByPoint(c.clone().addScalar(sp[3])).expandByPoint(c.addScalar(-sp[3]));
+        }
+      }
+    }
+    fitCamera(box);
   }
   const showContacts = document.getElementById('contacts').checked;
   const nc = showContacts ? Math.min(h.C, MAX_DRAWN_CONTACTS) : 0;
@@ -335,7 +350,6 @@ setInterval(() => {
 }, 100);
 
 // ---- Connection, live and replay -----------------------------------------------------------
-const params = new URLSearchParams(location.search);
 const fixedFrame = params.has('frame') ? Number(params.get('frame')) : null;
 const ws = new WebSocket((location.protocol === 'https:' ? 'wss://' : 'ws://') + location.host + '/stream');
 ws.binaryType = 'arraybuffer';
@@ -418,6 +432,15 @@ ws.onclose = () => {
 ws.onerror = () => fail('WebSocket error (is the server running?)');
 
 // ---- Render loop and what a test reads -----------------------------------------------------
+// ?w=W&h=H fixes the view's size in pixels (the browser test: the same projection in every
+// Chromium run, whatever its window).
+const fixedSize = params.has('w') && params.has('h');
+if (fixedSize) {
+  container.style.right = 'auto';
+  container.style.bottom = 'auto';
+  container.style.width = Number(params.get('w')) + 'px';
+  container.style.height = Number(params.get('h')) + 'px';
+}
 function resize() {
   const w = container.clientWidth, h = container.clientHeight;
   renderer.setSize(w, h);

@@ -22,6 +22,7 @@ import json
 import os
 import re
 import shutil
+import struct
 import subprocess
 import sys
 import time
@@ -29,7 +30,8 @@ import time
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 FIGURE_SCENES = [("default", None), ("construction", "sim/scenes/construction.toml"),
                  ("deformable", "sim/scenes/deformable.toml")]
-WIDTH, HEIGHT = 1200, 760
+WIDTH, HEIGHT = 1200, 760  # the window
+VIEW_W, VIEW_H = 860, 760  # the 3D view in it (the rest: the side panel)
 
 
 def chromium_path():
@@ -42,7 +44,7 @@ def chromium_path():
 
 def chromium(exe, profile, url, extra):
     """Runs headless Chromium on `url`; returns (stdout, stderr)."""
-    cmd = [exe, "--headless", "--no-sandbox", "--use-gl=swiftshader", "--enable-unsafe-swiftshader",
+    cmd = [exe, "--headless", "--no-sandbox", "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
            "--no-first-run", "--disable-background-networking", "--disable-component-update",
            "--disable-sync", "--disable-quic", "--hide-scrollbars", "--force-device-scale-factor=1",
            "--user-data-dir=" + profile, "--window-size=%d,%d" % (WIDTH, HEIGHT),
@@ -78,6 +80,25 @@ def count_all(img, pred):
     return sum(1 for p in img.getdata() if pred(p))
 
 
+def deepest_hand_frame(path):
+    """Index of the frame of a view recording (docs/viewer.md "Recording file") where the hand
+    (target) goes deepest below the tool: hand penetration - tool penetration, the last two
+    float32 of each frame. There the ghost stands apart from the tool."""
+    with open(path, "rb") as f:
+        data = f.read()
+    assert data[:8] == b"NMVREC01", path
+    (n,) = struct.unpack_from("<I", data, 8)
+    off, best, best_i, i = 12 + n, -1.0, 0, 0
+    while off + 4 <= len(data):
+        (n,) = struct.unpack_from("<I", data, off)
+        tool, hand = struct.unpack_from("<ff", data, off + 4 + n - 8)
+        if hand - tool > best:
+            best, best_i = hand - tool, i
+        off += 4 + n
+        i += 1
+    return best_i
+
+
 def check_scene(numen, out, name, scene, duration, figure):
     """Records, serves, shoots and checks one scene; returns a list of failures."""
     from PIL import Image  # python3-pil
@@ -99,13 +120,19 @@ def check_scene(numen, out, name, scene, duration, figure):
         frames, url = int(m.group(1)), m.group(2)
         if frames == 0:
             return ["%s holds no frame" % rec]
-        url += "?frame=%d" % (frames - 1)  # the end of the run: the hand deepest in the scene
+        shown = deepest_hand_frame(rec)
+        url += "?frame=%d&w=%d&h=%d" % (shown, VIEW_W, VIEW_H)
         profile = os.path.join(out, "chromium-profile-" + name)
         shot = os.path.join(out, "viewer_%s.png" % name)
         if os.path.exists(shot):
             os.remove(shot)
+        # Two runs (a screenshot, then the DOM with the page's probe), each on a fresh profile:
+        # the same frame, paused, in a view of the same size, so the same projection.
+        shutil.rmtree(profile, ignore_errors=True)
         _, log1 = chromium(chromium_exe, profile, url, ["--screenshot=" + shot])
+        shutil.rmtree(profile, ignore_errors=True)
         dom, log2 = chromium(chromium_exe, profile, url, ["--dump-dom"])
+        shutil.rmtree(profile, ignore_errors=True)
     finally:
         view.terminate()
         try:
@@ -165,7 +192,7 @@ def main():
     ap.add_argument("--numen", required=True, help="the numen program")
     ap.add_argument("--out", required=True, help="folder for the recording, screenshot, profile")
     ap.add_argument("--scene", help="scene file (default: the default scene)")
-    ap.add_argument("--duration", type=float, default=1.0, help="seconds of the recorded run")
+    ap.add_argument("--duration", type=float, default=10.0, help="seconds of the recorded run")
     ap.add_argument("--figure", help="copy the screenshot here")
     ap.add_argument("--figures", help="folder: the screenshots of the three scenes of docs/viewer.md")
     a = ap.parse_args()
