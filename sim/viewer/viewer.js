@@ -193,7 +193,7 @@ function buildScene(msg) {
 function fitCamera(box) {
   if (box.isEmpty()) box.set(new THREE.Vector3(-0.1, -0.1, -0.1), new THREE.Vector3(0.1, 0.1, 0.1));
   const c = box.getCenter(new THREE.Vector3());
-  const r = Math.max(0.02, box.getSize(new THREE.Vector3()).length() / 2);
+  const r = Math.max(0.02, 0.65 * box.getSize(new THREE.Vector3()).length());
   extent = r;
   for (const o of scene.obstacles) {
     if (o.type !== 'plane') continue;
@@ -209,7 +209,7 @@ function fitCamera(box) {
     scene3.add(mesh);
   }
   const dir = new THREE.Vector3(1.0, -1.6, 0.9).normalize();
-  camera.position.copy(c.clone().add(dir.multiplyScalar(2.6 * r)));
+  camera.position.copy(c.clone().add(dir.multiplyScalar(2.2 * r)));
   camera.near = r / 100;
   camera.far = r * 100;
   controls.target.copy(c);
@@ -243,9 +243,10 @@ function showFrame(fr) {
     if (geo.index) geo.computeVertexNormals();
     geo.computeBoundingSphere();
   }
-  if (!fitted) {  // the obstacles and where the bodies and their targets are now
+  if (!fitted) {  // on where the bodies, their targets and the nets are now (else the obstacles)
     fitted = true;
-    const box = obstacleBox.clone();
+    const box = new THREE.Box3();
+    for (let n = 0; n < h.N; ++n) box.expandByPoint(new THREE.Vector3(fr.nodes[3 * n], fr.nodes[3 * n + 1], fr.nodes[3 * n + 2]));
     for (let b = 0; b < h.B; ++b) {
       for (const g of ghosts[b].visible ? [bodies[b], ghosts[b]] : [bodies[b]]) {
         g.updateMatrixWorld();
@@ -255,14 +256,14 @@ function showFrame(fr) {
         }
       }
     }
-    fitCamera(box);
+    fitCamera(box.isEmpty() ? obstacleBox : box);
   }
   const showContacts = document.getElementById('contacts').checked;
   const nc = showContacts ? Math.min(h.C, MAX_DRAWN_CONTACTS) : 0;
   let maxDepth = 1e-6;
   for (let c = 0; c < nc; ++c) maxDepth = Math.max(maxDepth, fr.contacts[10 * c + 6]);
   const lp = contactLines.geometry.attributes.position.array, lc = contactLines.geometry.attributes.color.array;
-  const dot = extent * 0.012, len = extent * 0.12;
+  const dot = extent * 0.01, len = extent * 0.06;
   for (let c = 0; c < nc; ++c) {
     const k = fr.contacts.subarray(10 * c, 10 * c + 10);
     depthColor.setHSL(0.33 * (1 - k[6] / maxDepth), 1, 0.5);  // green (shallow) to red (deepest)
