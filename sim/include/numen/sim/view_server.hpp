@@ -35,8 +35,8 @@
 
 namespace numen::sim {
 
-/// Where a replay's frames come from (a view recording, view_recording.hpp). Called only on
-/// the server's I/O thread, one call at a time.
+/// Where a replay's frames come from (a view recording, view_recording.hpp). Called by the
+/// server's constructor (the index) and then only on its I/O thread, one call at a time.
 class ViewFrameSource {
  public:
   virtual ~ViewFrameSource() = default;
