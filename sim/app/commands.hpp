@@ -1,7 +1,8 @@
 #pragma once
 /// @file commands.hpp
 /// The subcommands of `numen`, one class each (one file each: run_command.cpp,
-/// device_command.cpp, info_command.cpp, figures_command.cpp, study_command.cpp, view_command.cpp). A command
+/// device_command.cpp, info_command.cpp, figures_command.cpp, study_command.cpp,
+/// view_command.cpp). A command
 /// declares its options on construction and does its work in execute(), which returns the
 /// exit status (docs/inputs.md, "Exit statuses") and may throw (run_guarded()). The options
 /// are bound to the command's members: construct it in place and keep it there.
@@ -39,7 +40,7 @@ class RunCommand {
 
  private:
   CLI::App* cli_;
-  std::string scene_path_, trace_path_, coupling_, bus_ = "sim", record_path_, record_view_path_;
+  std::string scene_path_, trace_path_, coupling_, bus_ = "sim", record_path_, record_view_path_, view_;
   double duration_ = -1.0, phase_ = -1.0, view_rate_ = 60.0, speed_ = 0.0;
   bool json_ = false, realtime_ = false;
   platform::RealtimeSettings rt_;

@@ -194,6 +194,15 @@ TEST(NumenCli, ReplayOfGarbageIsALocatedInputError) {
   EXPECT_EQ(r.err.rfind("numen: " + log + ":2:1: ", 0), 0u) << r.err;
 }
 
+// `numen run --view` takes [HOST:]PORT only.
+TEST(NumenCli, ViewAddressThatIsNotHostPortIsInputRejected) {
+  TempDir dir;
+  for (const char* v : {"http://x", "8080x", "host:", ":8080", "99999"}) {
+    const ChildResult r = run_child({kNumen, "run", "--duration", "0.01", "--view", v}, dir.path(), 30);
+    EXPECT_EQ(r.status, 2) << v << ": " << r.err;
+  }
+}
+
 // `numen view` of a file that is not a view recording is input rejected, naming the file, and
 // nothing is served.
 TEST(NumenCli, ViewOfAFileThatIsNotARecordingIsInputRejected) {
