@@ -119,6 +119,13 @@ int RunCommand::execute() const {
     std::cout << sim::format_summary(summary);
     if (!trace_path_.empty()) std::cout << "  trace: " << trace_path_ << "\n";
   }
+  if (viewer) {
+    viewer->stop();
+    const sim::ViewServerCounters c = viewer->counters();
+    std::cerr << "  viewer: " << c.clients_total << " clients, " << c.frames_sent
+              << " frames sent, " << c.frames_dropped << " dropped (slow clients), "
+              << c.closed_bad_input << " connections closed for bad input\n";
+  }
   // A run stopped by a signal and otherwise clean exits 128 + the signal (shell convention).
   if (summary.exit_status == 0 && summary.stopped) return 128 + stop_signal();
   return summary.exit_status;
