@@ -1,13 +1,15 @@
 #pragma once
 /// @file commands.hpp
 /// The subcommands of `numen`, one class each (one file each: run_command.cpp,
-/// device_command.cpp, info_command.cpp, figures_command.cpp, study_command.cpp). A command
+/// device_command.cpp, info_command.cpp, figures_command.cpp, study_command.cpp,
+/// view_command.cpp). A command
 /// declares its options on construction and does its work in execute(), which returns the
 /// exit status (docs/inputs.md, "Exit statuses") and may throw (run_guarded()). The options
 /// are bound to the command's members: construct it in place and keep it there.
 
 #include <cstdint>
 #include <functional>
+#include <ostream>
 #include <string>
 #include <vector>
 
@@ -38,11 +40,29 @@ class RunCommand {
 
  private:
   CLI::App* cli_;
-  std::string scene_path_, trace_path_, coupling_, bus_ = "sim", record_path_, record_view_path_;
+  std::string scene_path_, trace_path_, coupling_, bus_ = "sim", record_path_, record_view_path_, view_;
   double duration_ = -1.0, phase_ = -1.0, view_rate_ = 60.0, speed_ = 0.0;
   bool json_ = false, realtime_ = false;
   platform::RealtimeSettings rt_;
   std::uint32_t overrun_limit_ = 3;
+};
+
+/// The viewer page's folder in the build tree (build/viewer, sim/CMakeLists.txt).
+std::string viewer_page_dir();
+/// Prints a warning on `err` when the viewer's `host` is not a loopback address.
+void warn_if_exposed(const std::string& host, std::ostream& err);
+
+/// `numen view FILE.nmv [--port P] [--host H]`: serves a view recording to the browser.
+class ViewCommand {
+ public:
+  explicit ViewCommand(CLI::App& parent);
+  bool parsed() const { return cli_->parsed(); }
+  int execute() const;
+
+ private:
+  CLI::App* cli_;
+  std::string file_, host_ = "127.0.0.1", page_dir_;
+  std::uint16_t port_ = 8080;
 };
 
 /// `numen device [SCENE] --bus ...`: the scene's simulated instrument on a real bus.

@@ -7,6 +7,7 @@
 ///   numen device [SCENE] --bus can:IFACE|serial:PATH[@BAUD] [--duration S] [--ready]
 ///   numen info [SCENE] [--json]
 ///   numen figures
+///   numen view FILE.nmv [--port P] [--host H] [--page DIR]
 ///   numen study accuracy [--out DIR] [--quick] [--case NAME]...
 ///   numen study stability [--out DIR] [--quick] [--family NAME]...
 /// SIGINT / SIGTERM: while the input loads, the process ends at once (status 128 + signal;
@@ -27,6 +28,7 @@ int main(int argc, char** argv) {
   const DeviceCommand device(app);
   const InfoCommand info(app);
   const FiguresCommand figures(app);
+  const ViewCommand view(app);
   CLI::App* study = app.add_subcommand("study", "Measure the integrators (docs/results.md)");
   study->require_subcommand(1);
   const AccuracyStudyCommand accuracy(*study);
@@ -44,6 +46,7 @@ int main(int argc, char** argv) {
   if (accuracy.parsed()) return run_guarded([&] { return accuracy.execute(); });
   if (figures.parsed()) return run_guarded([&] { return figures.execute(); });
   install_signal_handlers();  // the studies keep the default: a signal ends them at once
+  if (view.parsed()) return run_guarded([&] { return view.execute(); });
   if (info.parsed()) return run_guarded([&] { return info.execute(); });
   if (device.parsed()) return run_guarded([&] { return device.execute(); });
   if (run.parsed()) return run_guarded([&] { return run.execute(); });

@@ -7,6 +7,9 @@
 #include "numen/sim/cli_values.hpp"
 #include "numen/sim/run.hpp"
 #include "numen/sim/scene.hpp"
+#include "numen/sim/view_scene.hpp"
+#include "numen/sim/view_server.hpp"
+#include <memory>
 #include "signals.hpp"
 
 namespace numen::app {
@@ -48,6 +51,17 @@ RunCommand::RunCommand(CLI::App& parent)
   run->add_option("--record-view", record_view_path_,
                   "Write the run's state stream (scene message and frames, docs/viewer.md) to "
                   "this view recording (.nmv), for `numen view`");
+  run->add_option("--view", view_,
+                  "Serve the live 3D viewer on [HOST:]PORT (default host 127.0.0.1; docs/viewer.md); "
+                  "an offline run is then paced at real time (--speed to change)")
+      ->check([](const std::string& v) -> std::string {
+        const auto colon = v.rfind(':');
+        const std::string port = v.substr(colon == std::string::npos ? 0 : colon + 1);
+        if (port.empty() || port.size() > 5 || port.find_first_not_of("0123456789") != std::string::npos ||
+            std::stoi(port) > 65535 || (colon != std::string::npos && colon == 0))
+          return "expected [HOST:]PORT, PORT in 0-65535, got '" + v + "'";
+        return {};
+      });
   run->add_option("--view-rate", view_rate_,
                   "Frames per second of simulated time in the state stream (default 60)")
       ->check(number_check(0.0, 1e6, true));
@@ -81,6 +95,21 @@ int RunCommand::execute() const {
   options.record_view_path = record_view_path_;
   options.view_rate_hz = view_rate_;
   options.view_speed = speed_;
+  std::unique_ptr<sim::ViewServer> viewer;
+  if (!view_.empty()) {
+    sim::ViewServerSettings vs;
+    const auto colon = view_.rfind(':');
+    if (colon != std::string::npos) vs.host = view_.substr(0, colon);
+    vs.port = static_cast<std::uint16_t>(std::stoi(view_.substr(colon == std::string::npos ? 0 : colon + 1)));
+    vs.static_dir = viewer_page_dir();
+    warn_if_exposed(vs.host, std::cerr);
+    viewer = std::make_unique<sim::ViewServer>(
+        vs, sim::view_scene_message(scene, sim::view_frame_layout(scene), view_rate_));
+    viewer->start();
+    std::cerr << "numen: viewer on " << viewer->url() << std::endl;
+    options.view_sinks.push_back(viewer.get());
+    if (options.view_speed <= 0.0) options.view_speed = 1.0;
+  }
   loading_done();  // from here a signal ends the run cleanly
   const sim::RunSummary summary = sim::run_scene(scene, options);
   if (json_) {
@@ -89,6 +118,13 @@ int RunCommand::execute() const {
   } else {
     std::cout << sim::format_summary(summary);
     if (!trace_path_.empty()) std::cout << "  trace: " << trace_path_ << "\n";
+  }
+  if (viewer) {
+    viewer->stop();
+    const sim::ViewServerCounters c = viewer->counters();
+    std::cerr << "  viewer: " << c.clients_total << " clients, " << c.frames_sent
+              << " frames sent, " << c.frames_dropped << " dropped (slow clients), "
+              << c.closed_bad_input << " connections closed for bad input\n";
   }
   // A run stopped by a signal and otherwise clean exits 128 + the signal (shell convention).
   if (summary.exit_status == 0 && summary.stopped) return 128 + stop_signal();

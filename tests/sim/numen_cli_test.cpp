@@ -148,7 +148,7 @@ TEST(NumenCli, EverySubcommandParsesAndFiguresPrintsTheTable) {
   TempDir dir;
   for (const std::vector<std::string>& args :
        {std::vector<std::string>{kNumen, "run", "--help"}, {kNumen, "device", "--help"},
-        {kNumen, "info", "--help"}, {kNumen, "figures", "--help"},
+        {kNumen, "info", "--help"}, {kNumen, "figures", "--help"}, {kNumen, "view", "--help"},
         {kNumen, "study", "accuracy", "--help"}, {kNumen, "study", "stability", "--help"}}) {
     const ChildResult r = run_child(args, dir.path(), 30);
     EXPECT_EQ(r.status, 0) << args[1] << ": " << r.err;
@@ -192,6 +192,26 @@ TEST(NumenCli, ReplayOfGarbageIsALocatedInputError) {
       run_child({kNumen, "run", "--duration", "0.2", "--bus", "log:" + log}, dir.path(), 60);
   EXPECT_EQ(r.status, 2) << r.out << r.err;
   EXPECT_EQ(r.err.rfind("numen: " + log + ":2:1: ", 0), 0u) << r.err;
+}
+
+// `numen run --view` takes [HOST:]PORT only.
+TEST(NumenCli, ViewAddressThatIsNotHostPortIsInputRejected) {
+  TempDir dir;
+  for (const char* v : {"http://x", "8080x", "host:", ":8080", "99999"}) {
+    const ChildResult r = run_child({kNumen, "run", "--duration", "0.01", "--view", v}, dir.path(), 30);
+    EXPECT_EQ(r.status, 2) << v << ": " << r.err;
+  }
+}
+
+// `numen view` of a file that is not a view recording is input rejected, naming the file, and
+// nothing is served.
+TEST(NumenCli, ViewOfAFileThatIsNotARecordingIsInputRejected) {
+  TempDir dir;
+  const std::string file = dir.write("garbage.nmv", "hello, not a recording\n");
+  const ChildResult r = run_child({kNumen, "view", file, "--port", "0"}, dir.path(), 30);
+  EXPECT_EQ(r.status, 2) << r.out << r.err;
+  EXPECT_NE(r.err.find(file), std::string::npos) << r.err;
+  EXPECT_EQ(r.out.find("open http://"), std::string::npos) << r.out;
 }
 
 // Defect 1: --trace of a simulated run keeps one record per period; a run whose trace would

@@ -1,0 +1,76 @@
+/// @file view_command.cpp
+/// `numen view FILE.nmv`: serves a view recording to the browser (docs/viewer.md "Replay"):
+/// the page, the scene message, the frame index, and the frames the page asks for. Runs until
+/// SIGINT / SIGTERM.
+
+#include <chrono>
+#include <iostream>
+#include <thread>
+
+#include "commands.hpp"
+#include "numen/sim/view_recording.hpp"
+#include "numen/sim/view_server.hpp"
+#include "signals.hpp"
+
+namespace numen::app {
+namespace {
+
+/// A view recording as the server's frame source (I/O thread only).
+class RecordingSource final : public sim::ViewFrameSource {
+ public:
+  explicit RecordingSource(const sim::ViewRecordingReader& r) : r_(r) {}
+  std::size_t frame_count() const override { return r_.size(); }
+  std::int64_t frame_time_ns(std::size_t i) const override { return r_.time_ns(i); }
+  void read_frame(std::size_t i, std::vector<std::byte>& out) override { r_.frame(i, out); }
+
+ private:
+  const sim::ViewRecordingReader& r_;
+};
+
+}  // namespace
+
+std::string viewer_page_dir() { return NUMEN_VIEWER_DIR; }
+
+void warn_if_exposed(const std::string& host, std::ostream& err) {
+  if (!sim::ViewServer::is_loopback_address(host))
+    err << "numen: warning: the viewer listens on " << host
+        << ", reachable from the network; anyone who can reach it sees the run (read-only)\n";
+}
+
+ViewCommand::ViewCommand(CLI::App& parent)
+    : cli_(parent.add_subcommand("view", "Serve a view recording (--record-view) to the browser")) {
+  cli_->add_option("file", file_, "View recording written by `numen run --record-view FILE`")
+      ->required();
+  cli_->add_option("--port", port_, "TCP port (default 8080; 0: any free port, printed)");
+  cli_->add_option("--host", host_,
+                   "Address to listen on (default 127.0.0.1; any other is reachable from the "
+                   "network and is warned about)");
+  cli_->add_option("--page", page_dir_, "Folder of the viewer page (default: the build's)");
+}
+
+int ViewCommand::execute() const {
+  const sim::ViewRecordingReader reader(file_);
+  RecordingSource source(reader);
+  sim::ViewServerSettings settings;
+  settings.host = host_;
+  settings.port = port_;
+  settings.static_dir = page_dir_.empty() ? viewer_page_dir() : page_dir_;
+  warn_if_exposed(host_, std::cerr);
+  sim::ViewServer server(settings, reader.scene_message(), source);
+  loading_done();
+  server.start();
+  const double seconds =
+      reader.size() > 0 ? static_cast<double>(reader.time_ns(reader.size() - 1) - reader.time_ns(0)) * 1e-9
+                        : 0.0;
+  std::cout << "numen view: " << file_ << ": " << reader.size() << " frames, " << seconds
+            << " s; open " << server.url() << " (Ctrl-C ends)" << std::endl;
+  while (!stop_flag().load()) std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  server.stop();
+  const sim::ViewServerCounters c = server.counters();
+  std::cout << "numen view: " << c.clients_total << " viewers, " << c.requests
+            << " frames served, " << c.closed_bad_input << " connections closed for bad input"
+            << std::endl;
+  return 0;
+}
+
+}  // namespace numen::app

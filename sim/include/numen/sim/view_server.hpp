@@ -1,0 +1,137 @@
+#pragma once
+/// @file view_server.hpp
+/// ViewServer: the viewer's HTTP and WebSocket server (docs/viewer.md, "Server"). It serves the
+/// page's static files from a folder and, on one WebSocket path, the state stream: on connect
+/// the scene message (one text message, JSON), a session message (text, JSON: live or replay),
+/// then state frames as binary messages, each one frame exactly as encode_state_frame() wrote
+/// it (state_frame.hpp).
+///
+/// Live: the server is a platform::StateFrameSink of the run's StateStream. write_frame() is
+/// called on the stream's thread; it copies the frame once and queues it on each client's
+/// bounded queue, never waiting for a client: a client whose queue is full loses its oldest
+/// queued frame (counted per client and in total). The loop never sees the server at all.
+///
+/// Replay: the server is given a ViewFrameSource (a recording) instead, sends its frame index
+/// in the session message, and answers the page's frame requests (the only client message it
+/// accepts, "Replay" in docs/viewer.md); the page paces playback.
+///
+/// Read-only: nothing a client sends reaches the run. Live, a text message of valid JSON up to
+/// max_client_message_bytes is ignored; a binary message, text that is not JSON, a message
+/// above the limit, and in replay any message that is not a valid request, close that
+/// connection and are counted (closed_bad_input).
+///
+/// Threads: one I/O thread of its own (SCHED_OTHER) runs every socket; start(), stop() and
+/// the destructor belong to the setup thread; write_frame() to one producer thread (the
+/// stream's); counters() to any thread. Boost.Beast stays in view_server.cpp (pimpl).
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "numen/platform/state_stream.hpp"
+
+namespace numen::sim {
+
+/// Where a replay's frames come from (a view recording, view_recording.hpp). Called by the
+/// server's constructor (the index) and then only on its I/O thread, one call at a time.
+class ViewFrameSource {
+ public:
+  virtual ~ViewFrameSource() = default;
+  /// Frames available.
+  virtual std::size_t frame_count() const = 0;
+  /// Simulated time of frame i (i < frame_count()), ns.
+  virtual std::int64_t frame_time_ns(std::size_t i) const = 0;
+  /// Reads frame i (i < frame_count()) into `out` (resized). May throw on an I/O error: the
+  /// request's connection is then closed and the error counted (source_errors).
+  virtual void read_frame(std::size_t i, std::vector<std::byte>& out) = 0;
+};
+
+/// Settings of a ViewServer (checked by its constructor).
+struct ViewServerSettings {
+  /// Address to bind: an IPv4 or IPv6 literal. Default loopback only; any other address
+  /// exposes the viewer to the network (the caller warns: is_loopback_address()).
+  std::string host = "127.0.0.1";
+  /// TCP port; 0 picks a free one (port() tells which).
+  std::uint16_t port = 8080;
+  /// Folder of the page's static files (index.html, viewer.js, vendor/...). Empty: no files,
+  /// only the WebSocket (every other path answers 404).
+  std::string static_dir;
+  /// Path of the WebSocket.
+  std::string stream_path = "/stream";
+  /// Frames a client's queue holds at most, >= 1 (8 at 60 Hz: 133 ms of lag at most).
+  std::size_t client_queue_frames = 8;
+  /// Largest message a client may send, bytes, >= 16 (text commands are a few tens of bytes).
+  std::size_t max_client_message_bytes = 256;
+  /// Clients served at once, >= 1; a further WebSocket upgrade is answered 503.
+  std::size_t max_clients = 16;
+};
+
+/// Counters of a ViewServer since start() (relaxed atomics; each consistent on its own).
+struct ViewServerCounters {
+  std::uint64_t clients_connected = 0;  ///< WebSocket clients connected now.
+  std::uint64_t clients_total = 0;      ///< WebSocket clients accepted since start().
+  std::uint64_t clients_refused = 0;    ///< Upgrades refused (max_clients reached).
+  std::uint64_t http_requests = 0;      ///< HTTP requests answered (files, 404s, ...).
+  std::uint64_t frames_offered = 0;     ///< write_frame() calls (live).
+  std::uint64_t frames_sent = 0;        ///< Frames written to a client (summed over clients).
+  std::uint64_t frames_dropped = 0;     ///< Frames a full client queue lost (summed).
+  std::uint64_t closed_bad_input = 0;   ///< Connections closed for a bad or oversized message.
+  std::uint64_t requests = 0;           ///< Replay frame requests answered.
+  std::uint64_t source_errors = 0;      ///< Replay frames the source failed to read.
+};
+
+/// One connected client's counters (ViewServer::clients()).
+struct ViewClientCounters {
+  std::uint64_t id = 0;          ///< 1, 2, ... in order of connection.
+  std::string remote;            ///< Peer address:port.
+  std::uint64_t frames_sent = 0;
+  std::uint64_t frames_dropped = 0;
+};
+
+/// The server; see the file comment.
+class ViewServer final : public platform::StateFrameSink {
+ public:
+  /// Live server: sends `scene_message` (view_scene.hpp) to each client, then the frames given
+  /// to write_frame(). Throws std::invalid_argument naming a setting out of range.
+  ViewServer(const ViewServerSettings& settings, std::string scene_message);
+  /// Replay server: sends `scene_message`, the index of `source` (not owned; must outlive the
+  /// server), then the frames each client requests.
+  ViewServer(const ViewServerSettings& settings, std::string scene_message,
+             ViewFrameSource& source);
+  /// stop().
+  ~ViewServer() override;
+  ViewServer(const ViewServer&) = delete;
+  ViewServer& operator=(const ViewServer&) = delete;
+
+  /// Binds, listens and starts the I/O thread. Throws std::runtime_error naming the address
+  /// and the system's reason when the address is not an IP literal or cannot be bound.
+  void start();
+  /// Closes the listener and every connection and joins the I/O thread. Idempotent.
+  void stop();
+  /// The bound port (after start()).
+  std::uint16_t port() const noexcept;
+  /// http://HOST:PORT/ (after start()).
+  std::string url() const;
+
+  /// Live: copies `frame` once and queues it for every connected client (see the file comment).
+  /// Never waits for a client. False only when the copy could not be allocated.
+  bool write_frame(std::span<const std::byte> frame) noexcept override;
+
+  /// Counters (see ViewServerCounters).
+  ViewServerCounters counters() const noexcept;
+  /// The connected clients' counters (allocates; not for the loop).
+  std::vector<ViewClientCounters> clients() const;
+
+  /// True for 127.0.0.0/8, ::1 and "localhost": addresses that do not reach the network.
+  static bool is_loopback_address(const std::string& host);
+
+  struct Impl;
+
+ private:
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace numen::sim

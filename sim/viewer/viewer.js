@@ -1,0 +1,492 @@
+// The numen viewer (docs/viewer.md "Page"). Connects to the WebSocket of the server that served
+// it, reads the scene message (JSON), the session message (live, or replay with the frame
+// index) and then binary state frames (platform/include/numen/platform/state_frame.hpp), and
+// draws them with three.js; plots with uPlot. Read-only: in live mode it sends nothing; in
+// replay mode only {"frame": I} requests.
+//
+// URL parameters: ?frame=I (replay: show frame I, paused), ?w=W&h=H (the view's size in
+// pixels); the browser test uses both.
+// window.numenView exposes the state a test reads (also written to #probe as JSON).
+
+const errors = [];
+window.addEventListener('error', (e) => errors.push(String(e.message || e)));
+window.addEventListener('unhandledrejection', (e) => errors.push('unhandled: ' + String(e.reason)));
+
+const params = new URLSearchParams(location.search);
+const statusEl = document.getElementById('status');
+function fail(text) {
+  errors.push(text);
+  statusEl.textContent = text;
+  statusEl.className = 'error';
+  writeProbe();
+}
+
+function writeProbe() {
+  const probe = document.getElementById('probe');
+  probe.textContent = JSON.stringify(window.numenView ? window.numenView.probe() : { errors });
+}
+
+let THREE, OrbitControls;
+try {
+  THREE = await import('three');
+  ({ OrbitControls } = await import('three/addons/controls/OrbitControls.js'));
+} catch (e) {
+  let why = '';
+  try { why = await (await fetch('vendor/MISSING')).text(); } catch (_) { /* none */ }
+  fail('three.js could not be loaded: the build did not install the page\'s libraries.\n' +
+       (why || String(e)) + '\nInstall nodejs and npm, then rebuild (docs/viewer.md "Page").');
+  throw e;
+}
+
+// ---- State frames (state_frame.hpp, version 1) -------------------------------------------
+const HEADER = 64;
+function decodeFrame(buf) {
+  if (buf.byteLength < HEADER) throw new Error('frame shorter than its header');
+  const v = new DataView(buf);
+  const magic = String.fromCharCode(v.getUint8(0), v.getUint8(1), v.getUint8(2), v.getUint8(3));
+  if (magic !== 'NMVF') throw new Error('not a state frame (magic ' + magic + ')');
+  if (v.getUint16(4, true) !== 1) throw new Error('frame version ' + v.getUint16(4, true));
+  const h = {
+    bytes: v.getUint32(8, true), B: v.getUint32(12, true), N: v.getUint32(16, true),
+    C: v.getUint32(20, true), A: v.getUint32(24, true), attached: v.getInt32(28, true),
+    period: Number(v.getBigUint64(32, true)), time: Number(v.getBigInt64(40, true)) * 1e-9,
+    stepStatus: v.getUint32(48, true), flags: v.getUint32(52, true),
+    stepNs: v.getUint32(56, true), lifecycle: v.getUint8(60), startup: v.getUint8(61),
+  };
+  const need = HEADER + 4 * (15 * h.B + 3 * h.N + 10 * h.C + 6 + h.A + 2);
+  if (h.bytes !== buf.byteLength || need !== buf.byteLength)
+    throw new Error('frame of ' + buf.byteLength + ' bytes, header says ' + h.bytes + ', counts ' + need);
+  const f = new Float32Array(buf, HEADER, (buf.byteLength - HEADER) / 4);  // little-endian hosts
+  let o = 0;
+  const poses = f.subarray(o, o += 7 * h.B);
+  const targets = f.subarray(o, o += 8 * h.B);
+  const nodes = f.subarray(o, o += 3 * h.N);
+  const contacts = f.subarray(o, o += 10 * h.C);
+  const wrench = f.subarray(o, o += 6);
+  const torques = f.subarray(o, o += h.A);
+  return { h, poses, targets, nodes, contacts, wrench, torques,
+           toolPen: f[o], handPen: f[o + 1] };
+}
+
+const LIFECYCLE = ['unconfigured', 'inactive', 'active', 'safe stop', 'fault'];
+const STARTUP = ['reset communication', 'wait boot-up', 'start nodes', 'wait operational',
+                 'operational', 'failed'];
+const STEP = ['contact overflow', 'non-finite', 'solver not converged', 'invalid target'];
+const FLAGS = ['sample valid', 'torque', 'overrun', 'target ready', 'contacts truncated'];
+const bits = (x, names) => names.filter((_, i) => x & (1 << i)).join(', ') || '—';
+
+// ---- Scene -------------------------------------------------------------------------------
+const COLORS = { tool: 0xff8800, body: 0x9aa4b0, ghost: 0x00c8ff, obstacle: 0xc0504d,
+                 plane: 0x707a68, box: 0xb09060, net: 0x60c060 };
+const container = document.getElementById('view');
+const renderer = new THREE.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
+renderer.setPixelRatio(window.devicePixelRatio);
+container.appendChild(renderer.domElement);
+const scene3 = new THREE.Scene();
+scene3.background = new THREE.Color(0x20242a);
+const camera = new THREE.PerspectiveCamera(40, 1, 0.001, 100);
+camera.up.set(0, 0, 1);  // the shipped scenes are z up
+const controls = new OrbitControls(camera, renderer.domElement);
+scene3.add(new THREE.HemisphereLight(0xffffff, 0x404050, 1.6));
+const sun = new THREE.DirectionalLight(0xffffff, 1.6);
+sun.position.set(1, -2, 3);
+scene3.add(sun);
+
+const q = (a) => new THREE.Quaternion(a[0], a[1], a[2], a[3]);
+const v3 = (a) => new THREE.Vector3(a[0], a[1], a[2]);
+const sphereGeo = new THREE.SphereGeometry(1, 24, 16);
+
+/// One InstancedMesh of `spheres` ([x, y, z, r] in the parent's frame) in `material`.
+function sphereSet(spheres, material) {
+  const mesh = new THREE.InstancedMesh(sphereGeo, material, Math.max(1, spheres.length));
+  mesh.count = spheres.length;
+  const m = new THREE.Matrix4();
+  spheres.forEach((s, i) => {
+    m.compose(new THREE.Vector3(s[0], s[1], s[2]), new THREE.Quaternion(), new THREE.Vector3(s[3], s[3], s[3]));
+    mesh.setMatrixAt(i, m);
+  });
+  return mesh;
+}
+
+let scene = null, session = null, bodies = [], ghosts = [], nets = [], jointAxes = [];
+let contactPoints, contactLines, forceArrow, extent = 1, obstacleBox = null, fitted = false;
+const MAX_DRAWN_CONTACTS = 512;
+
+function buildScene(msg) {
+  if (msg.format !== 'numen-view') throw new Error('not a numen-view scene message');
+  scene = msg;
+  document.getElementById('title').textContent = 'numen view — ' + msg.scene;
+  const box = new THREE.Box3();
+  for (const o of msg.obstacles) {
+    let obj;
+    const mat = new THREE.MeshLambertMaterial({ color: o.type === 'plane' ? COLORS.plane : o.type === 'box' ? COLORS.box : COLORS.obstacle });
+    if (o.type === 'plane') continue;  // drawn once the extent is known
+    if (o.type === 'box') obj = new THREE.Mesh(new THREE.BoxGeometry(2 * o.half_extents[0], 2 * o.half_extents[1], 2 * o.half_extents[2]), mat);
+    else if (o.type === 'sphere') obj = new THREE.Mesh(new THREE.SphereGeometry(o.radius, 32, 20), mat);
+    else if (o.type === 'capsule') {
+      const g = new THREE.CapsuleGeometry(o.radius, 2 * o.half_length, 8, 24);
+      g.rotateX(Math.PI / 2);  // three's capsule is along y, numen's along z
+      obj = new THREE.Mesh(g, mat);
+    } else if (o.type === 'sphere_set') {
+      obj = sphereSet(o.spheres, mat);  // world coordinates already
+      for (const s of o.spheres) box.expandByPoint(v3(s).addScalar(s[3])).expandByPoint(v3(s).addScalar(-s[3]));
+    } else continue;
+    if (o.type !== 'sphere_set') {
+      obj.position.copy(v3(o.position));
+      obj.quaternion.copy(q(o.orientation));
+      obj.updateMatrixWorld();
+      box.expandByObject(obj);
+    }
+    obj.name = o.name;
+    scene3.add(obj);
+  }
+  msg.bodies.forEach((b, i) => {
+    const tool = i === msg.attached_body;
+    const solid = new THREE.MeshLambertMaterial({ color: tool ? COLORS.tool : COLORS.body, transparent: true, opacity: 1 });
+    const g = sphereSet(b.spheres, solid);
+    g.renderOrder = 2;  // after the ghosts: a ghost never hides its tool
+    const ghostMat = new THREE.MeshBasicMaterial({ color: COLORS.ghost, transparent: true, opacity: 0.45, depthTest: false, depthWrite: false });
+    const gh = sphereSet(b.spheres, ghostMat);
+    gh.renderOrder = 1;
+    gh.visible = false;
+    scene3.add(g, gh);
+    bodies.push(g);
+    ghosts.push(gh);
+  });
+  for (const n of msg.nets) {
+    const geo = new THREE.BufferGeometry();
+    geo.setAttribute('position', new THREE.BufferAttribute(new Float32Array(3 * n.node_count), 3));
+    const mat = new THREE.MeshLambertMaterial({ color: COLORS.net, side: THREE.DoubleSide });
+    let obj;
+    if (n.triangles.length) {
+      geo.setIndex(n.triangles.flat());
+      obj = new THREE.Mesh(geo, mat);
+    } else {
+      obj = new THREE.Points(geo, new THREE.PointsMaterial({ color: COLORS.net, size: 2 * n.node_radius }));
+    }
+    obj.frustumCulled = false;
+    scene3.add(obj);
+    nets.push({ net: n, obj, geo });
+  }
+  for (const j of msg.joints) {
+    const a = new THREE.AxesHelper(1);
+    a.visible = false;
+    a.userData = j;
+    scene3.add(a);
+    jointAxes.push(a);
+  }
+  // Contacts: points coloured by depth, normals as segments; the feedback force as an arrow.
+  contactPoints = new THREE.InstancedMesh(sphereGeo, new THREE.MeshBasicMaterial(), MAX_DRAWN_CONTACTS);
+  contactPoints.count = 0;
+  contactPoints.frustumCulled = false;
+  const lg = new THREE.BufferGeometry();
+  lg.setAttribute('position', new THREE.BufferAttribute(new Float32Array(6 * MAX_DRAWN_CONTACTS), 3));
+  lg.setAttribute('color', new THREE.BufferAttribute(new Float32Array(6 * MAX_DRAWN_CONTACTS), 3));
+  contactLines = new THREE.LineSegments(lg, new THREE.LineBasicMaterial({ vertexColors: true }));
+  contactLines.frustumCulled = false;
+  forceArrow = new THREE.ArrowHelper(new THREE.Vector3(0, 0, 1), new THREE.Vector3(), 1, 0xffee00);
+  forceArrow.visible = false;
+  scene3.add(contactPoints, contactLines, forceArrow);
+  obstacleBox = box;  // the camera is fitted on the first frame, bodies included
+}
+
+function fitCamera(box) {
+  if (box.isEmpty()) box.set(new THREE.Vector3(-0.1, -0.1, -0.1), new THREE.Vector3(0.1, 0.1, 0.1));
+  const c = box.getCenter(new THREE.Vector3());
+  const r = Math.max(0.02, 0.65 * box.getSize(new THREE.Vector3()).length());
+  extent = r;
+  for (const o of scene.obstacles) {
+    if (o.type !== 'plane') continue;
+    const g = new THREE.PlaneGeometry(8 * r, 8 * r);  // normal z, as numen's plane
+    const mesh = new THREE.Mesh(g, new THREE.MeshLambertMaterial({ color: COLORS.plane, side: THREE.DoubleSide }));
+    mesh.position.copy(v3(o.position));
+    mesh.quaternion.copy(q(o.orientation));
+    // Centre the square under the scene: move along the plane to the box centre's foot.
+    const n = new THREE.Vector3(0, 0, 1).applyQuaternion(mesh.quaternion);
+    const d = c.clone().sub(mesh.position);
+    mesh.position.add(d.sub(n.clone().multiplyScalar(d.dot(n))));
+    mesh.name = o.name;
+    scene3.add(mesh);
+  }
+  const dir = new THREE.Vector3(1.0, -1.6, 0.9).normalize();
+  camera.position.copy(c.clone().add(dir.multiplyScalar(2.2 * r)));
+  camera.near = r / 100;
+  camera.far = r * 100;
+  controls.target.copy(c);
+  controls.update();
+  for (const a of jointAxes) a.scale.setScalar(0.15 * r);
+}
+
+// ---- Drawing a frame -----------------------------------------------------------------------
+let last = null, framesShown = 0, framesReceived = 0, badFrames = 0, gaps = 0, lastPeriod = -1;
+const depthColor = new THREE.Color();
+const tmpM = new THREE.Matrix4(), tmpQ = new THREE.Quaternion(), tmpP = new THREE.Vector3(), tmpS = new THREE.Vector3();
+
+function showFrame(fr) {
+  const { h } = fr;
+  if (h.B !== bodies.length) throw new Error('frame has ' + h.B + ' bodies, scene ' + bodies.length);
+  for (let b = 0; b < h.B; ++b) {
+    const p = fr.poses.subarray(7 * b, 7 * b + 7);
+    bodies[b].position.set(p[0], p[1], p[2]);
+    bodies[b].quaternion.set(p[3], p[4], p[5], p[6]);
+    const t = fr.targets.subarray(8 * b, 8 * b + 8);
+    ghosts[b].visible = t[7] !== 0;
+    ghosts[b].position.set(t[0], t[1], t[2]);
+    ghosts[b].quaternion.set(t[3], t[4], t[5], t[6]);
+    const tool = b === h.attached;
+    bodies[b].material.color.setHex(tool ? COLORS.tool : COLORS.body);
+  }
+  for (const { net, geo } of nets) {
+    const pos = geo.attributes.position.array;
+    pos.set(fr.nodes.subarray(3 * net.node_begin, 3 * (net.node_begin + net.node_count)));
+    geo.attributes.position.needsUpdate = true;
+    if (geo.index) geo.computeVertexNormals();
+    geo.computeBoundingSphere();
+  }
+  if (!fitted) {  // on where the bodies, their targets and the nets are now (else the obstacles)
+    fitted = true;
+    const box = new THREE.Box3();
+    for (let n = 0; n < h.N; ++n) box.expandByPoint(new THREE.Vector3(fr.nodes[3 * n], fr.nodes[3 * n + 1], fr.nodes[3 * n + 2]));
+    for (let b = 0; b < h.B; ++b) {
+      for (const g of ghosts[b].visible ? [bodies[b], ghosts[b]] : [bodies[b]]) {
+        g.updateMatrixWorld();
+        for (const sp of scene.bodies[b].spheres) {
+          const c = v3(sp).applyMatrix4(g.matrixWorld);
+          box.expandByPoint(c.clone().addScalar(sp[3])).expandByPoint(c.addScalar(-sp[3]));
+        }
+      }
+    }
+    fitCamera(box.isEmpty() ? obstacleBox : box);
+  }
+  const showContacts = document.getElementById('contacts').checked;
+  const nc = showContacts ? Math.min(h.C, MAX_DRAWN_CONTACTS) : 0;
+  let maxDepth = 1e-6;
+  for (let c = 0; c < nc; ++c) maxDepth = Math.max(maxDepth, fr.contacts[10 * c + 6]);
+  const lp = contactLines.geometry.attributes.position.array, lc = contactLines.geometry.attributes.color.array;
+  const dot = extent * 0.01, len = extent * 0.06;
+  for (let c = 0; c < nc; ++c) {
+    const k = fr.contacts.subarray(10 * c, 10 * c + 10);
+    depthColor.setHSL(0.33 * (1 - k[6] / maxDepth), 1, 0.5);  // green (shallow) to red (deepest)
+    tmpM.compose(tmpP.set(k[0], k[1], k[2]), tmpQ.identity(), tmpS.setScalar(dot));
+    contactPoints.setMatrixAt(c, tmpM);
+    contactPoints.setColorAt(c, depthColor);
+    lp.set([k[0], k[1], k[2], k[0] + len * k[3], k[1] + len * k[4], k[2] + len * k[5]], 6 * c);
+    lc.set([depthColor.r, depthColor.g, depthColor.b, depthColor.r, depthColor.g, depthColor.b], 6 * c);
+  }
+  contactPoints.count = nc;
+  contactPoints.instanceMatrix.needsUpdate = true;
+  if (contactPoints.instanceColor) contactPoints.instanceColor.needsUpdate = true;
+  contactLines.geometry.setDrawRange(0, 2 * nc);
+  contactLines.geometry.attributes.position.needsUpdate = true;
+  contactLines.geometry.attributes.color.needsUpdate = true;
+  // Feedback force, drawn at the tool (world frame, N).
+  const F = new THREE.Vector3(fr.wrench[0], fr.wrench[1], fr.wrench[2]);
+  const fmag = F.length();
+  forceArrow.visible = fmag > 1e-3 && h.attached >= 0;
+  if (forceArrow.visible) {
+    forceArrow.position.copy(bodies[h.attached].position);
+    forceArrow.setDirection(F.clone().normalize());
+    const l = Math.min(1, fmag / 10) * extent * 0.8 + extent * 0.05;  // 10 N: 0.85 of the scene
+    forceArrow.setLength(l, 0.2 * l, 0.1 * l);
+  }
+  const axesOn = document.getElementById('axes').checked;
+  for (const a of jointAxes) {
+    const j = a.userData;
+    a.visible = axesOn;
+    if (!axesOn) continue;
+    // The joint frame in the child's frame, carried by the child's pose.
+    const child = bodies[j.child];
+    a.position.copy(v3(j.frame_child.position)).applyQuaternion(child.quaternion).add(child.position);
+    a.quaternion.copy(child.quaternion).multiply(q(j.frame_child.orientation));
+  }
+  if (lastPeriod >= 0 && session && session.mode === 'live' && h.period <= lastPeriod) gaps++;
+  lastPeriod = h.period;
+  last = fr;
+  framesShown++;
+  plotAdd(fr, fmag);
+  statusEl.className = '';
+  statusEl.textContent =
+    `t = ${h.time.toFixed(3)} s   period ${h.period}\n` +
+    `lifecycle: ${LIFECYCLE[h.lifecycle] ?? h.lifecycle}   start-up: ${STARTUP[h.startup] ?? h.startup}\n` +
+    `flags: ${bits(h.flags, FLAGS)}\nstep: ${h.stepStatus ? bits(h.stepStatus, STEP) : 'ok'}\n` +
+    `contacts: ${h.C}${h.C > nc && showContacts ? ` (${nc} drawn)` : ''}   |F| = ${fmag.toFixed(2)} N`;
+  updateCounters();
+}
+
+function updateCounters() {
+  document.getElementById('counters').textContent =
+    `mode: ${session ? session.mode : '…'}\nframes received: ${framesReceived}   shown: ${framesShown}\n` +
+    `bad frames: ${badFrames}   out of order: ${gaps}`;
+}
+
+// ---- Plots (uPlot): a rolling window of 10 s of simulated time ----------------------------
+const WINDOW_S = 10;
+const plotData = { t: [], tool: [], hand: [], force: [], step: [] };
+function makePlot(el, title, series) {
+  return new uPlot({ title, width: 318, height: 130, legend: { show: true },
+                     scales: { x: { time: false } }, axes: [{ size: 30 }, { size: 44 }],
+                     series: [{ label: 't (s)' }, ...series] },
+                   [[], ...series.map(() => [])], document.getElementById(el));
+}
+const plots = {
+  pen: makePlot('plot-pen', 'penetration (mm)', [{ label: 'tool', stroke: '#ff8800' }, { label: 'hand', stroke: '#00a0d0' }]),
+  force: makePlot('plot-force', 'feedback force |F| (N)', [{ label: '|F|', stroke: '#c0a000' }]),
+  step: makePlot('plot-step', 'step time (µs)', [{ label: 'step', stroke: '#6060c0' }]),
+};
+let plotDirty = false;
+function plotAdd(fr, fmag) {
+  const d = plotData, t = fr.h.time;
+  if (d.t.length && t < d.t[d.t.length - 1]) for (const k in d) d[k].length = 0;  // a seek back
+  d.t.push(t); d.tool.push(1e3 * fr.toolPen); d.hand.push(1e3 * fr.handPen);
+  d.force.push(fmag); d.step.push(fr.h.stepNs * 1e-3);
+  while (d.t.length && d.t[0] < t - WINDOW_S) for (const k in d) d[k].shift();
+  plotDirty = true;
+}
+setInterval(() => {
+  if (!plotDirty) return;
+  plotDirty = false;
+  plots.pen.setData([plotData.t, plotData.tool, plotData.hand]);
+  plots.force.setData([plotData.t, plotData.force]);
+  plots.step.setData([plotData.t, plotData.step]);
+}, 100);
+
+// ---- Connection, live and replay -----------------------------------------------------------
+const fixedFrame = params.has('frame') ? Number(params.get('frame')) : null;
+const ws = new WebSocket((location.protocol === 'https:' ? 'wss://' : 'ws://') + location.host + '/stream');
+ws.binaryType = 'arraybuffer';
+const replay = { index: 0, playing: false, speed: 1, clock: 0, pending: -1, sentAt: 0 };
+
+function request(i) {
+  i = Math.max(0, Math.min(session.frames - 1, i));
+  replay.pending = i;
+  replay.sentAt = performance.now();
+  ws.send(JSON.stringify({ frame: i }));
+}
+
+function setupReplay() {
+  document.getElementById('replay').hidden = false;
+  const slider = document.getElementById('slider');
+  slider.max = String(Math.max(0, session.frames - 1));
+  const play = document.getElementById('play');
+  const setPlaying = (p) => { replay.playing = p; play.textContent = p ? '❚❚' : '▶'; };
+  play.onclick = () => {
+    if (!replay.playing && replay.index >= session.frames - 1) replay.index = 0;
+    replay.clock = session.time_s[replay.index] ?? 0;
+    setPlaying(!replay.playing);
+  };
+  document.getElementById('back').onclick = () => { setPlaying(false); request(replay.index - 1); };
+  document.getElementById('fwd').onclick = () => { setPlaying(false); request(replay.index + 1); };
+  document.getElementById('speed').onchange = (e) => { replay.speed = Number(e.target.value); };
+  slider.oninput = () => { setPlaying(false); request(Number(slider.value)); };
+  if (session.frames === 0) { fail('the recording has no frame'); return; }
+  request(fixedFrame ?? 0);
+  setPlaying(fixedFrame === null);
+  let prev = performance.now();
+  const tick = (now) => {
+    const dt = (now - prev) * 1e-3;
+    prev = now;
+    if (replay.pending >= 0 && now - replay.sentAt > 1000) request(replay.pending);  // lost
+    if (replay.playing && replay.pending < 0) {
+      replay.clock += dt * replay.speed;
+      let i = replay.index;
+      while (i + 1 < session.frames && session.time_s[i + 1] <= replay.clock) ++i;
+      if (i !== replay.index) request(i);
+      else if (i >= session.frames - 1) setPlaying(false);
+    }
+    requestAnimationFrame(tick);
+  };
+  requestAnimationFrame(tick);
+}
+
+ws.onmessage = (ev) => {
+  try {
+    if (typeof ev.data === 'string') {
+      const m = JSON.parse(ev.data);
+      if (!scene) buildScene(m);
+      else if (m.type === 'session') {
+        session = m;
+        if (m.mode === 'replay') setupReplay();
+        statusEl.textContent = m.mode === 'live' ? 'live: waiting for frames…' : 'replay';
+        updateCounters();
+      }
+      return;
+    }
+    framesReceived++;
+    let fr;
+    try { fr = decodeFrame(ev.data); } catch (e) { badFrames++; errors.push(String(e)); return; }
+    if (session && session.mode === 'replay') {
+      replay.index = replay.pending >= 0 ? replay.pending : replay.index;
+      replay.pending = -1;
+      document.getElementById('slider').value = String(replay.index);
+      document.getElementById('clock').textContent =
+        `${fr.h.time.toFixed(3)} / ${(session.time_s[session.frames - 1] ?? 0).toFixed(3)} s`;
+    }
+    showFrame(fr);
+  } catch (e) {
+    fail('viewer error: ' + e.message);
+  }
+};
+ws.onclose = () => {
+  if (!errors.length) { statusEl.textContent += '\n(connection closed)'; }
+  window.numenView.closed = true;
+};
+ws.onerror = () => fail('WebSocket error (is the server running?)');
+
+// ---- Render loop and what a test reads -----------------------------------------------------
+// ?w=W&h=H fixes the view's size in pixels (the browser test: the same projection in every
+// Chromium run, whatever its window).
+const fixedSize = params.has('w') && params.has('h');
+if (fixedSize) {
+  container.style.right = 'auto';
+  container.style.bottom = 'auto';
+  container.style.width = Number(params.get('w')) + 'px';
+  container.style.height = Number(params.get('h')) + 'px';
+}
+function resize() {
+  const w = container.clientWidth, h = container.clientHeight;
+  renderer.setSize(w, h);
+  camera.aspect = w / h;
+  camera.updateProjectionMatrix();
+}
+window.addEventListener('resize', resize);
+resize();
+
+/// Sphere centres of body b (or of its ghost) projected to page pixels, with radii in pixels.
+function project(group, b) {
+  const out = [];
+  const rect = renderer.domElement.getBoundingClientRect();
+  for (const s of scene.bodies[b].spheres) {
+    const c = new THREE.Vector3(s[0], s[1], s[2]).applyMatrix4(group.matrixWorld);
+    const edge = c.clone().add(new THREE.Vector3().setFromMatrixColumn(camera.matrixWorld, 0).multiplyScalar(s[3]));
+    const pc = c.clone().project(camera), pe = edge.project(camera);
+    const px = (p) => [rect.left + (p.x + 1) / 2 * rect.width, rect.top + (1 - p.y) / 2 * rect.height];
+    const [x, y] = px(pc), [ex, ey] = px(pe);
+    out.push({ x, y, r: Math.hypot(ex - x, ey - y), inside: Math.abs(pc.x) < 1 && Math.abs(pc.y) < 1 && pc.z < 1 });
+  }
+  return out;
+}
+
+window.numenView = {
+  errors, closed: false,
+  get framesShown() { return framesShown; },
+  probe() {
+    const p = { errors, framesShown, framesReceived, mode: session?.mode ?? null,
+                period: last?.h.period ?? null, colors: { tool: COLORS.tool, ghost: COLORS.ghost } };
+    if (last && last.h.attached >= 0) {
+      const b = last.h.attached;
+      p.tool = project(bodies[b], b);
+      p.ghost = ghosts[b].visible ? project(ghosts[b], b) : [];
+      p.toolName = scene.bodies[b].name;
+    }
+    return p;
+  },
+};
+
+renderer.setAnimationLoop(() => {
+  controls.update();
+  renderer.render(scene3, camera);
+  if (last) {
+    if (!document.title.endsWith('ready')) document.title = 'numen view: ready';
+    writeProbe();
+  }
+});
