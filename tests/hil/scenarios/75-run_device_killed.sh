@@ -17,11 +17,16 @@ pair_scene "$period_us"
 # Non-zero torque RPDOs in a candump -L log: the target torque is the last 2 bytes (both the
 # managed stack's controlword + torque RPDO and the torque-only one).
 torque_rpdos() {
+  [ -r "$1" ] || { echo 0; return; }
   awk '$3 ~ /^20[0-9A-F]#/ && substr($3, length($3) - 3) != "0000" { n++ } END { print n + 0 }' "$1"
 }
 
 start_device /tmp/dev.txt
-rm -f /tmp/rpdo.log  # polled below: no RPDOs of an earlier attempt (cf. start_device)
+# Polled below: emptied here, before candump starts, so that the first poll reads an empty log
+# (no RPDOs of an earlier attempt, cf. start_device) and never a missing one. CI, 2026-11-23: the
+# poll ran before candump's shell had opened the file, awk printed nothing, the loop test failed
+# and the device was killed 0.0 s into the run.
+: >/tmp/rpdo.log
 candump -L vcan0,200:7F0 >/tmp/rpdo.log 2>/tmp/candump.err &
 dump=$!
 numen run "$HIL_SCENE" --bus can:vcan0 --duration 30 --overrun-limit "${HIL_OVERRUN_LIMIT:-3}" \
