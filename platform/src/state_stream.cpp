@@ -4,11 +4,9 @@
 #include <sched.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <stdexcept>
 #include <string>
-#include <thread>
 
 namespace numen::platform {
 namespace {
@@ -59,9 +57,9 @@ void StateStream::start(std::function<void()> on_thread_start) {
 }
 
 void StateStream::stop() {
-  queue_.stop();   // delivers what is queued and flushes, if the thread ran
-  queue_.drain();  // frames published while the thread was not running
-  flush();
+  queue_.stop();  // delivers what is queued and flushes the sinks, if the thread ran
+  // Frames published while the thread was not running: delivered here, then flushed.
+  if (queue_.drain() > 0 && !flush()) queue_.count_io_error();
 }
 
 bool StateStream::take_buffer(std::uint32_t& slot) noexcept {
@@ -70,15 +68,8 @@ bool StateStream::take_buffer(std::uint32_t& slot) noexcept {
     have_loop_slot_ = false;
     return true;
   }
-  if (free_.pop(slot)) return true;
-  if (settings_.full_queue != hal::FullQueuePolicy::kWait || !queue_.running()) return false;
-  waits_.fetch_add(1, std::memory_order_relaxed);
-  const auto step = std::chrono::nanoseconds(std::max<std::int64_t>(settings_.poll_period_ns / 8, 1));
-  while (!free_.pop(slot)) {
-    if (!queue_.running()) return false;
-    std::this_thread::sleep_for(step);
-  }
-  return true;
+  // kWait: the queue's own wait (it wakes the consumer, which refills the free list).
+  return free_.pop(slot) || queue_.wait_for_room([&]() noexcept { return free_.pop(slot); });
 }
 
 bool StateStream::publish(const core::Data& data, const PeriodReport& report,
@@ -127,7 +118,6 @@ hal::SinkResult StateStream::write(const std::uint32_t& slot) noexcept {
   for (StateFrameSink* sink : sinks_) ok = sink->write_frame(frame) && ok;
   delivered_.fetch_add(1, std::memory_order_relaxed);
   bytes_.fetch_add(frame.size(), std::memory_order_relaxed);
-  if (!ok) sink_errors_.fetch_add(1, std::memory_order_relaxed);
   free_.push(slot);
   return ok ? hal::SinkResult::kWritten : hal::SinkResult::kIoError;
 }
@@ -135,20 +125,21 @@ hal::SinkResult StateStream::write(const std::uint32_t& slot) noexcept {
 bool StateStream::flush() noexcept {
   bool ok = true;
   for (StateFrameSink* sink : sinks_) ok = sink->flush() && ok;
-  if (!ok) sink_errors_.fetch_add(1, std::memory_order_relaxed);
-  return ok;
+  return ok;  // a failure is counted by the queue (its io_errors: sink_errors)
 }
 
 StateStreamCounters StateStream::counters() const noexcept {
+  // The queue counts the kWait waits and the failed writes and flushes (once each).
+  const hal::RecordWriterCounters q = queue_.counters();
   StateStreamCounters c;
   c.periods = periods_.load(std::memory_order_relaxed);
   c.published = published_.load(std::memory_order_relaxed);
   c.decimated = decimated_.load(std::memory_order_relaxed);
   c.dropped = dropped_.load(std::memory_order_relaxed);
-  c.waits = waits_.load(std::memory_order_relaxed);
+  c.waits = q.waits;
   c.encode_failures = encode_failures_.load(std::memory_order_relaxed);
   c.delivered = delivered_.load(std::memory_order_relaxed);
-  c.sink_errors = sink_errors_.load(std::memory_order_relaxed);
+  c.sink_errors = q.io_errors;
   c.bytes = bytes_.load(std::memory_order_relaxed);
   return c;
 }

@@ -9,6 +9,7 @@
 #include "alloc_counter.hpp"
 #include "build_features.hpp"
 #include "deformable_ball.hpp"
+#include "free_bodies.hpp"
 #include "numen/core/model.hpp"
 #include "numen/core/rigid_body.hpp"
 #include "numen/core/step.hpp"
@@ -22,25 +23,11 @@ using numen::platform::StateFrameFigures;
 using numen::platform::StateFrameLayout;
 using numen::platform::StateFrameView;
 
+/// The two bodies of every frame here: "tool" (attached) at the origin, "block" at (0.1, 0.2, 0.3).
 numen::core::Model two_bodies() {
-  numen::core::Model m;
-  m.dt = 1e-3;
-  m.gravity = Vec3::Zero();
-  m.material_names = {"default"};
-  m.material_pairs = {numen::core::MaterialPair{}};
-  for (const char* name : {"tool", "block"}) {
-    numen::core::BodyModel b;
-    b.name = name;
-    b.mass = 0.1;
-    b.inertia_body = 1e-4 * numen::core::Mat3::Identity();
-    b.coupling.k_t = 100.0;
-    m.bodies.push_back(b);
-  }
-  m.bodies[1].initial_pose.position = Vec3(0.1, 0.2, 0.3);
-  m.initial_attached_body = 0;
-  const std::string err = numen::core::finalize_model(m);
-  EXPECT_TRUE(err.empty()) << err;
-  return m;
+  return numen::test::free_bodies_model({"tool", "block"}, [](numen::core::Model& m) {
+    m.bodies[1].initial_pose.position = Vec3(0.1, 0.2, 0.3);
+  });
 }
 
 /// A period of the two-body model with known values in every field of a frame.

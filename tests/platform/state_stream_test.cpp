@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "alloc_counter.hpp"
+#include "free_bodies.hpp"
 #include "numen/core/model.hpp"
 
 namespace {
@@ -19,20 +20,6 @@ using numen::platform::StateFrameLayout;
 using numen::platform::StateFrameView;
 using numen::platform::StateStream;
 using numen::platform::StateStreamSettings;
-
-numen::core::Model one_body() {
-  numen::core::Model m;
-  m.dt = 1e-3;
-  m.material_names = {"default"};
-  m.material_pairs = {numen::core::MaterialPair{}};
-  numen::core::BodyModel b;
-  b.name = "tool";
-  m.bodies.push_back(b);
-  m.initial_attached_body = 0;
-  const std::string err = numen::core::finalize_model(m);
-  EXPECT_TRUE(err.empty()) << err;
-  return m;
-}
 
 /// Keeps the period index and time of every frame it receives (checked as frames), optionally
 /// slow or failing.
@@ -55,7 +42,7 @@ class RecordingSink final : public numen::platform::StateFrameSink {
 };
 
 struct Loop {
-  numen::core::Model model = one_body();
+  numen::core::Model model = numen::test::free_bodies_model({"tool"});
   numen::core::Data data = numen::core::make_data(model);
   numen::platform::PeriodReport report;
   StateFrameLayout layout{1, 0, 0, 16};

@@ -223,7 +223,9 @@ TEST(ViewServer, SlowClientLosesFramesCountedAndNeverBlocksTheCaller) {
   std::uint64_t last = 0, got = 0;
   for (; got < expected; ++got) {
     const std::uint64_t seq = seq_of(slow.read());
-    if (got > 0) EXPECT_GT(seq, last);
+    if (got > 0) {
+      EXPECT_GT(seq, last);
+    }
     last = seq;
   }
   EXPECT_EQ(last, n - 1);  // the newest frame is never the one dropped

@@ -73,7 +73,8 @@ struct StateStreamCounters {
   std::uint64_t waits = 0;            ///< kWait: due frames that waited for a buffer.
   std::uint64_t encode_failures = 0;  ///< Data not matching the layout (cannot happen in a run).
   std::uint64_t delivered = 0;        ///< Frames handed to the sinks.
-  std::uint64_t sink_errors = 0;      ///< write_frame() or flush() calls that failed.
+  std::uint64_t sink_errors = 0;      ///< Frames some sink refused, plus failed flushes (each once,
+                                      ///< however many sinks failed).
   std::uint64_t bytes = 0;            ///< Bytes of the frames delivered.
 };
 
@@ -130,8 +131,8 @@ class StateStream final : private hal::RecordSink<std::uint32_t> {
   std::int64_t grid_index_ = 0;   // j of the next due instant t0 + j/rate
   std::int64_t next_due_ns_ = 0;  // that instant, ns
   double interval_s_ = 0.0;       // 1/display_rate_hz; 0: every period
-  std::atomic<std::uint64_t> periods_{0}, published_{0}, decimated_{0}, dropped_{0}, waits_{0},
-      encode_failures_{0}, delivered_{0}, sink_errors_{0}, bytes_{0};
+  std::atomic<std::uint64_t> periods_{0}, published_{0}, decimated_{0}, dropped_{0},
+      encode_failures_{0}, delivered_{0}, bytes_{0};  // waits, sink errors: queue_'s counters
 };
 
 }  // namespace numen::platform

@@ -157,27 +157,34 @@ class AsyncRecordWriter {
   /// always under kDrop; under kWait only while the consumer is not running (kWait sleeps
   /// until there is room instead).
   bool push(const Record& record) noexcept {
-    if (!ring_.push(record)) {
-      bool queued = false;
-      if (settings_.full_queue == FullQueuePolicy::kWait && draining_.load()) {
-        waits_.fetch_add(1, std::memory_order_relaxed);
-        const auto step =
-            std::chrono::nanoseconds(std::max<std::int64_t>(settings_.poll_period_ns / 8, 1));
-        // The thread drains until stop() joins it; draining_ turns false only after that. The
-        // consumer may be in its poll sleep: wake it rather than wait out poll_period_ns.
-        while (!(queued = ring_.push(record)) && draining_.load()) {
-          room_wanted_.store(true);
-          wake_.notify_one();
-          std::this_thread::sleep_for(step);
-        }
-      }
-      if (!queued) {
-        dropped_.fetch_add(1, std::memory_order_relaxed);
-        return false;
-      }
+    if (!ring_.push(record) && !wait_for_room([&] { return ring_.push(record); })) {
+      dropped_.fetch_add(1, std::memory_order_relaxed);
+      return false;
     }
     queued_.fetch_add(1, std::memory_order_relaxed);
     return true;
+  }
+
+  /// kWait's wait, for the producer, once `try_once()` has failed: under kWait and while the
+  /// consumer thread runs, counts one wait (RecordWriterCounters::waits), then wakes the
+  /// consumer and sleeps in steps of poll_period_ns / 8 until `try_once()` returns true (a
+  /// push into this queue, or a pop from a free list the consumer refills: StateStream) or
+  /// the thread stops. Returns false at once under kDrop or while the thread is not running,
+  /// without calling `try_once`. Blocks: offline runs only. `try_once` must be noexcept.
+  template <class TryOnce>
+  bool wait_for_room(TryOnce&& try_once) noexcept {
+    if (settings_.full_queue != FullQueuePolicy::kWait || !draining_.load()) return false;
+    waits_.fetch_add(1, std::memory_order_relaxed);
+    const auto step = std::chrono::nanoseconds(std::max<std::int64_t>(settings_.poll_period_ns / 8, 1));
+    // The thread drains until stop() joins it; draining_ turns false only after that. The
+    // consumer may be in its poll sleep: wake it rather than wait out poll_period_ns.
+    bool done = false;
+    while (!(done = try_once()) && draining_.load()) {
+      room_wanted_.store(true);
+      wake_.notify_one();
+      std::this_thread::sleep_for(step);
+    }
+    return done;
   }
 
   /// Hands every queued record to the sink, on the calling thread; returns how many. For the
