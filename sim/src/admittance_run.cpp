@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <utility>
 
 #include "numen/core/collision.hpp"
 #include "numen/hal/device/kinematics_factory.hpp"
@@ -67,6 +68,17 @@ AdmittanceRunner::AdmittanceRunner(const Scene& scene)
   acc_.admittance.k_hand = scene.admittance->emulator.k_hand;
   acc_.managed = false;
   acc_.startup = "admittance: SYNC, force TPDOs, csp RPDOs (no NMT start-up)";
+  view_axis_values_.assign(scene.device.axes.size(), 0.0);
+}
+
+void AdmittanceRunner::stream_view(const std::string& record_path,
+                                   std::vector<platform::StateFrameSink*> sinks, double rate_hz,
+                                   bool wait) {
+  view_ = std::make_unique<ViewOutput>(*scene_, record_path, std::move(sinks), rate_hz, wait);
+}
+
+void AdmittanceRunner::finish() {
+  if (view_) view_->finish();
 }
 
 void AdmittanceRunner::period() noexcept {
@@ -124,10 +136,23 @@ void AdmittanceRunner::period() noexcept {
   if (data_.solver_residual > s.solver_residual_max) s.solver_residual_max = data_.solver_residual;
   if (data_.status & core::kSolverNotConverged) ++s.solver_not_converged_steps;
   if (r.entered_safe_stop) ++s.faults;
+  if (view_) {
+    // The frame in an admittance run (docs/viewer.md, "Admittance runs"): the ghost is the
+    // hand, the wrench the measured one that drove the god-object, no axis torque.
+    data_.target = hand_;  // not read by the admittance coupling (core/src/coupling.cpp)
+    view_report_.sample_valid = r.sample_valid;
+    view_report_.target_ready = true;
+    view_report_.step_ns = r.step_ns;
+    view_report_.feedback = r.measured;
+    view_report_.lifecycle = r.lifecycle;
+    view_->publish(data_, view_report_, view_axis_values_,
+                   {static_cast<std::uint64_t>(k_ - 1), tool_pen_, hand_pen_});
+  }
 }
 
 RunSummary AdmittanceRunner::summary() const {
   RunSummary s = acc_;
+  if (view_) view_->summarize(s);
   s.steps = k_;
   s.sim_time_s = static_cast<double>(k_) * scene_->model.dt;
   s.step_time_us = summarize_ns(step_time_);
@@ -157,17 +182,29 @@ RunSummary run_admittance_scene(const Scene& scene, const RunOptions& options) {
   const double duration = options.duration_s >= 0.0 ? options.duration_s : scene.duration_s;
   const auto steps = static_cast<std::int64_t>(std::llround(duration / scene.model.dt));
   AdmittanceRunner runner(scene);
+  if (!options.record_view_path.empty() || !options.view_sinks.empty())
+    runner.stream_view(options.record_view_path, options.view_sinks, options.view_rate_hz,
+                       !options.realtime);
   const std::int64_t wall0 = platform::monotonic_now_ns();
   platform::PeriodicTimer timer(static_cast<std::int64_t>(std::llround(scene.model.dt * 1e9)),
                                 wall0);
+  ViewPacer view_pacer(scene.model.dt, options.realtime ? 0.0 : options.view_speed, wall0);
   std::int64_t overruns = 0;
+  bool stopped = false;
   for (std::int64_t k = 0; k < steps; ++k) {
+    if (options.stop != nullptr && options.stop->load(std::memory_order_relaxed)) {
+      stopped = true;  // SIGINT / SIGTERM (docs/inputs.md, "Signals")
+      break;
+    }
+    view_pacer.wait();
     if (options.realtime) overruns += timer.wait_next().overrun ? 1 : 0;
     runner.period();
   }
+  runner.finish();
   RunSummary s = runner.summary();
   s.wall_time_s = static_cast<double>(platform::monotonic_now_ns() - wall0) * 1e-9;
   s.realtime_overruns = overruns;
+  s.stopped = stopped;
   if (!options.trace_path.empty())
     s.warnings.push_back("--trace is not supported for admittance scenes: no trace written");
   if (options.bus.spec != "sim" || !options.bus.record_path.empty())

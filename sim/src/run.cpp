@@ -32,7 +32,7 @@
 #include "numen/sim/run_verdict.hpp"
 #include "numen/sim/trace.hpp"
 #include "numen/sim/trace_columns.hpp"
-#include "numen/sim/view_scene.hpp"
+#include "numen/sim/view_output.hpp"
 
 namespace numen::sim {
 namespace {
@@ -206,17 +206,7 @@ void SceneRunner::stream_trace(const std::string& path) {
 void SceneRunner::stream_view(const std::string& record_path,
                               std::vector<platform::StateFrameSink*> sinks, double rate_hz,
                               bool wait) {
-  const platform::StateFrameLayout layout = view_frame_layout(*scene_);
-  if (!record_path.empty()) {
-    view_writer_ = std::make_unique<ViewRecordingWriter>(
-        record_path, view_scene_message(*scene_, layout, rate_hz));
-    sinks.insert(sinks.begin(), view_writer_.get());
-  }
-  platform::StateStreamSettings settings;
-  settings.display_rate_hz = rate_hz;
-  settings.full_queue = wait ? hal::FullQueuePolicy::kWait : hal::FullQueuePolicy::kDrop;
-  view_stream_ = std::make_unique<platform::StateStream>(layout, std::move(sinks), settings);
-  view_stream_->start();
+  view_ = std::make_unique<ViewOutput>(*scene_, record_path, std::move(sinks), rate_hz, wait);
 }
 
 void SceneRunner::period(std::int64_t deadline_mono_ns, std::int64_t woke_mono_ns) noexcept {
@@ -231,8 +221,8 @@ void SceneRunner::period(std::int64_t deadline_mono_ns, std::int64_t woke_mono_n
   track_startup(contacts);
   accumulate_step_figures(report, contacts);
   record(report, contacts);
-  if (view_stream_)
-    view_stream_->publish(data_, report,
+  if (view_)
+    view_->publish(data_, report,
                           std::span<const double>(loop_.device().sent_torques().torque.data(),
                                                   static_cast<std::size_t>(loop_.device().sent_torques().torque.size())),
                           {static_cast<std::uint64_t>(k_ - 1), contacts.tool_pen, contacts.target_pen});
@@ -504,21 +494,7 @@ RunSummary SceneRunner::summary() const {
     s.trace_written = static_cast<std::int64_t>(c.written);
     s.trace_io_errors = static_cast<std::int64_t>(c.io_errors);
   }
-  if (view_stream_) {
-    const platform::StateStreamCounters c = view_stream_->counters();
-    s.view_streamed = true;
-    s.view_frames_published = static_cast<std::int64_t>(c.published);
-    s.view_frames_decimated = static_cast<std::int64_t>(c.decimated);
-    s.view_frames_dropped = static_cast<std::int64_t>(c.dropped);
-    s.view_frames_delivered = static_cast<std::int64_t>(c.delivered);
-    s.view_bytes = static_cast<std::int64_t>(c.bytes);
-    s.view_sink_errors = static_cast<std::int64_t>(c.sink_errors);
-  }
-  if (view_writer_) {
-    s.view_recorded = true;
-    s.view_record_frames = static_cast<std::int64_t>(view_writer_->frames());
-    s.view_record_io_errors = static_cast<std::int64_t>(view_writer_->io_errors());
-  }
+  if (view_) view_->summarize(s);
   if (log_bus_) {
     s.bus_frames_replayed = static_cast<std::int64_t>(log_bus_->log_counters().replayed);
     s.bus_log_records = static_cast<std::int64_t>(log_stats_.records);
@@ -573,8 +549,7 @@ RunSummary SceneRunner::summary() const {
 void SceneRunner::finish() {
   if (writer_) writer_->stop();
   if (trace_writer_) trace_writer_->stop();
-  if (view_stream_) view_stream_->stop();
-  if (view_writer_) view_writer_->close();
+  if (view_) view_->finish();
 }
 
 namespace {
@@ -627,18 +602,9 @@ RunSummary run_impedance_scene(const Scene& scene, const RunOptions& options) {
     return options.stop != nullptr && options.stop->load(std::memory_order_relaxed);
   };
   // A live viewer of an unpaced run: one period every dt / view_speed of wall time.
-  const std::int64_t view_period_ns =
-      !paced && options.view_speed > 0.0
-          ? std::max<std::int64_t>(1, std::llround(scene.model.dt * 1e9 / options.view_speed))
-          : 0;
-  std::int64_t view_k = 0;
+  ViewPacer view_pacer(scene.model.dt, paced ? 0.0 : options.view_speed, wall0);
   auto one_period = [&] {
-    if (view_period_ns > 0) {
-      const std::int64_t at = wall0 + ++view_k * view_period_ns;
-      const timespec ts{static_cast<time_t>(at / 1'000'000'000), static_cast<long>(at % 1'000'000'000)};
-      while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
-      }
-    }
+    view_pacer.wait();
     if (paced) {
       const platform::Wakeup w = timer.wait_next();
       overruns += w.overrun ? 1 : 0;
@@ -703,9 +669,6 @@ RunSummary run_scene(const Scene& scene, const RunOptions& options) {
   if (!(options.view_speed >= 0.0) || !std::isfinite(options.view_speed))
     throw InputError("", 0, 0, "--speed", "must be a finite factor >= 0 (got " +
                                               format_input_number(options.view_speed) + ")");
-  if (scene.admittance && (!options.record_view_path.empty() || !options.view_sinks.empty()))
-    throw InputError(scene.file, 0, 0, "--record-view",
-                     "the admittance scene's runner has no state stream yet (docs/viewer.md)");
   RunSummary s = scene.admittance ? run_admittance_scene(scene, options)  // admittance_run.cpp
                                   : run_impedance_scene(scene, options);
   RunVerdict verdict = run_verdict(s);

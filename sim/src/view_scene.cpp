@@ -121,7 +121,13 @@ std::string view_scene_message(const Scene& scene, const platform::StateFrameLay
       {"nets", std::move(nets)},
       {"joints", std::move(joints)},
       {"device",
-       {{"name", scene.device.name}, {"kind", hal::to_string(scene.device.kind)}, {"axes", std::move(axes)}}}};
+       {{"name", scene.device.name},
+        {"kind", hal::to_string(scene.device.kind)},
+        // What the frames' lifecycle, start-up and wrench fields mean (docs/viewer.md):
+        // "managed" CANopen (NMT start-up, CiA 402), "minimal" (no start-up), "admittance"
+        // (no start-up; the wrench is the measured one, no axis torque).
+        {"protocol", scene.admittance ? "admittance" : scene.device.canopen.managed ? "managed" : "minimal"},
+        {"axes", std::move(axes)}}}};
   // Non-finite numbers (an infinite plane has none, but a user's scene might) become null.
   return message.dump(-1, ' ', false, json::error_handler_t::replace);
 }

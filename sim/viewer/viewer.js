@@ -109,12 +109,16 @@ function sphereSet(spheres, material) {
 }
 
 let scene = null, session = null, bodies = [], ghosts = [], nets = [], jointAxes = [];
+// The device's protocol (scene message): only the managed stack has a start-up to show.
+let protocol = 'managed', managed = true;
 let contactPoints, contactLines, forceArrow, extent = 1, obstacleBox = null, fitted = false;
 const MAX_DRAWN_CONTACTS = 512;
 
 function buildScene(msg) {
   if (msg.format !== 'numen-view') throw new Error('not a numen-view scene message');
   scene = msg;
+  protocol = (msg.device && msg.device.protocol) || 'managed';
+  managed = protocol === 'managed';
   document.getElementById('title').textContent = 'numen view — ' + msg.scene;
   const box = new THREE.Box3();
   for (const o of msg.obstacles) {
@@ -307,7 +311,8 @@ function showFrame(fr) {
   statusEl.className = '';
   statusEl.textContent =
     `t = ${h.time.toFixed(3)} s   period ${h.period}\n` +
-    `lifecycle: ${LIFECYCLE[h.lifecycle] ?? h.lifecycle}   start-up: ${STARTUP[h.startup] ?? h.startup}\n` +
+    `lifecycle: ${LIFECYCLE[h.lifecycle] ?? h.lifecycle}` +
+    (managed ? `   start-up: ${STARTUP[h.startup] ?? h.startup}` : `   (${protocol} protocol)`) + '\n' +
     `flags: ${bits(h.flags, FLAGS)}\nstep: ${h.stepStatus ? bits(h.stepStatus, STEP) : 'ok'}\n` +
     `contacts: ${h.C}${h.C > nc && showContacts ? ` (${nc} drawn)` : ''}   |F| = ${fmag.toFixed(2)} N`;
   updateCounters();

@@ -10,10 +10,13 @@
 #include <cmath>
 #include <fstream>
 #include <string>
+#include <vector>
 
 #include "alloc_counter.hpp"
 #include "numen/sim/input_error.hpp"
 #include "numen/sim/scene.hpp"
+#include "numen/sim/view_recording.hpp"
+#include "numen/platform/state_frame.hpp"
 #include "temp_dir.hpp"
 
 namespace sim = numen::sim;
@@ -94,6 +97,56 @@ TEST(AdmittanceScene, PeriodsDoNotAllocate) {
   numen::test::AllocationGuard guard;
   for (int k = 0; k < 3000; ++k) r.period();
   EXPECT_EQ(guard.count(), 0);
+}
+
+TEST(AdmittanceScene, PeriodsDoNotAllocateWhileStreaming) {
+  numen::test::TempDir dir;
+  sim::AdmittanceRunner r(admittance_scene());
+  // Every period published (rate above 1/dt), to a recording on the stream's own thread.
+  r.stream_view((dir / "run.nmv").string(), {}, 1e6, true);
+  r.period();
+  numen::test::AllocationGuard guard;
+  for (int k = 0; k < 3000; ++k) r.period();
+  EXPECT_EQ(guard.count(), 0);
+  r.finish();
+  EXPECT_EQ(r.summary().view_record_frames, 3001);
+}
+
+// The state stream of an admittance run (docs/viewer.md, "Admittance runs"): the ghost is the
+// hand, the wrench is the measured one, the axis field is zero, the scene says "admittance".
+TEST(AdmittanceScene, RecordsTheHandAsGhostAndTheMeasuredWrench) {
+  numen::test::TempDir dir;
+  const sim::Scene& scene = admittance_scene();
+  sim::RunOptions options;
+  options.duration_s = 2.7;  // to the end of the hold, 25 mm inside
+  options.record_view_path = (dir / "run.nmv").string();
+  options.view_rate_hz = 1e6;  // every period
+  const sim::RunSummary s = sim::run_scene(scene, options);
+  EXPECT_EQ(s.exit_status, 0);
+  EXPECT_EQ(s.view_record_frames, 2700);
+  EXPECT_EQ(s.view_frames_dropped, 0);
+  const sim::ViewRecordingReader reader(options.record_view_path);
+  ASSERT_EQ(reader.size(), 2700u);
+  EXPECT_EQ(nlohmann::json::parse(reader.scene_message())["device"]["protocol"], "admittance");
+  // Replays the same run alongside: the last frame is its last period.
+  sim::AdmittanceRunner r(scene);
+  for (int k = 0; k < 2700; ++k) r.period();
+  std::vector<std::byte> bytes;
+  reader.frame(reader.size() - 1, bytes);
+  numen::platform::StateFrameView v;
+  ASSERT_TRUE(numen::platform::StateFrameDecoder::decode(bytes, v).ok());
+  EXPECT_EQ(v.header().period, 2699u);
+  const auto held = static_cast<std::uint32_t>(v.header().attached_body);
+  float ghost[7], wrench[6];
+  ASSERT_TRUE(v.target_pose(held, ghost));
+  for (int i = 0; i < 3; ++i) EXPECT_NEAR(ghost[i], r.hand_pose().position[i], 1e-6);
+  EXPECT_GT(v.target_penetration(), 0.024f);  // the hand, 25 mm inside
+  EXPECT_LT(v.tool_penetration(), 0.001f);    // the god-object on the surface
+  v.feedback(wrench);
+  const numen::core::Vec3 f(wrench[0], wrench[1], wrench[2]);
+  EXPECT_NEAR(f.norm(), r.loop().last_report().measured.force.norm(), 1e-3 * f.norm() + 1e-6);
+  EXPECT_GT(f.norm(), 1.0);
+  for (std::uint32_t a = 0; a < v.header().num_axes; ++a) EXPECT_EQ(v.axis_torque(a), 0.0f);
 }
 
 TEST(AdmittanceScene, LostFramesAreRiddenThroughWithoutASafeStop) {

@@ -164,6 +164,7 @@ TEST(ViewSceneMessage, DescribesTheNetsBodiesAndObstaclesOfTheDeformableScene) {
     }
   EXPECT_EQ(j["layout"]["nodes"].get<std::uint32_t>(), layout.num_nodes);
   EXPECT_EQ(j["device"]["axes"].size(), scene.device.axes.size());
+  EXPECT_EQ(j["device"]["protocol"], scene.device.canopen.managed ? "managed" : "minimal");
 }
 
 }  // namespace

@@ -14,6 +14,9 @@
 /// The constructor allocates; period() never allocates, throws or locks (tested).
 
 #include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
 
 #include "numen/core/data.hpp"
 #include "numen/hal/device/admittance_device.hpp"
@@ -23,6 +26,7 @@
 #include "numen/platform/latency_histogram.hpp"
 #include "numen/sim/run.hpp"
 #include "numen/sim/scene.hpp"
+#include "numen/sim/view_output.hpp"
 
 namespace numen::sim {
 
@@ -34,8 +38,17 @@ class AdmittanceRunner {
   /// Throws std::invalid_argument if the scene has no admittance device.
   explicit AdmittanceRunner(const Scene& scene);
 
-  /// Runs control period k (see the file comment) and its measurements.
+  /// Runs control period k (see the file comment) and its measurements, and publishes it to
+  /// the state stream if stream_view() was called.
   void period() noexcept;
+  /// Publishes the run's state stream (docs/viewer.md, "Admittance runs") to a view recording
+  /// at `record_path` (empty: none) and to `sinks` (not owned), at `rate_hz` frames per
+  /// simulated second; `wait`: the loop waits for the consumers, else drops. Setup only; throws
+  /// InputError at --record-view when the file cannot be created.
+  void stream_view(const std::string& record_path, std::vector<platform::StateFrameSink*> sinks,
+                   double rate_hz, bool wait);
+  /// Delivers and closes the state stream (if any). Idempotent.
+  void finish();
   /// Periods run so far.
   std::int64_t periods() const noexcept { return k_; }
   /// The summary of the periods run so far (RunSummary::admittance filled in; wall time is the
@@ -73,10 +86,14 @@ class AdmittanceRunner {
   double error_sq_ = 0.0;
   double solver_iterations_sum_ = 0.0;
   RunSummary acc_;
+  std::unique_ptr<ViewOutput> view_;      // --record-view, --view
+  platform::PeriodReport view_report_;    // the frame's header and wrench (admittance meaning)
+  std::vector<double> view_axis_values_;  // the frame's axis field: zeros (no torque is sent)
 };
 
 /// Runs an admittance scene for `options.duration_s` (or the scene's duration): as fast as
-/// possible, or paced with options.realtime. A trace or another bus is not supported for
+/// possible, paced with options.realtime, or at options.view_speed × real time for a live
+/// viewer; with the state stream of options.record_view_path / view_sinks. A trace or another bus is not supported for
 /// admittance scenes (reported as a warning).
 RunSummary run_admittance_scene(const Scene& scene, const RunOptions& options);
 

@@ -22,7 +22,7 @@
 #include "numen/platform/realtime_setup.hpp"
 #include "numen/platform/state_stream.hpp"
 #include "numen/platform/trace_queue.hpp"
-#include "numen/sim/view_recording.hpp"
+#include "numen/sim/view_output.hpp"
 #include "numen/sim/bus_spec.hpp"
 #include "numen/sim/scene.hpp"
 #include "numen/sim/simulated_instrument.hpp"
@@ -446,8 +446,7 @@ class SceneRunner {
   double free_sq_ = 0.0;
   std::int64_t solver_iterations_sum_ = 0;
   std::unique_ptr<platform::TraceWriter> trace_writer_;  // real-bus --trace
-  std::unique_ptr<ViewRecordingWriter> view_writer_;     // --record-view
-  std::unique_ptr<platform::StateStream> view_stream_;   // --record-view, --view
+  std::unique_ptr<ViewOutput> view_;                     // --record-view, --view
   bool last_torque_ = false;
   std::int64_t startup_settle_periods_;  // kStartupSettle in periods (>= 1)
   bool in_startup_ = false;       // the spawned tool is being pushed out (RunSummary::startup_steps)

@@ -25,7 +25,7 @@ platform::StateFrameLayout view_frame_layout(const Scene& scene);
 /// half_extents / radius / half_length / spheres in the world frame), nets (name, rigid body,
 /// node_begin, node_count, node radius, triangles as local node indices), joints (name, type,
 /// parent, child (−1: world), frame in the parent and in the child), the device (name, kind,
-/// axis names) and the initially attached body. Numbers are the model's doubles.
+/// protocol "managed" | "minimal" | "admittance", axis names) and the initially attached body. Numbers are the model's doubles.
 std::string view_scene_message(const Scene& scene, const platform::StateFrameLayout& layout,
                                double display_rate_hz);
 

@@ -1,0 +1,69 @@
+#pragma once
+/// @file view_output.hpp
+/// A run's state stream (docs/viewer.md), as both run harnesses use it (SceneRunner, run.cpp;
+/// AdmittanceRunner, admittance_run.cpp): the platform::StateStream, the view recording it
+/// feeds (`--record-view`), the further sinks (`--view`'s server), its figures in the run
+/// summary, and the pacing of an offline run that a live viewer watches (`--speed`).
+
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "numen/platform/state_stream.hpp"
+#include "numen/sim/scene.hpp"
+#include "numen/sim/view_recording.hpp"
+
+namespace numen::sim {
+
+struct RunSummary;
+
+/// The stream of one run: made and started on the setup thread, published on the loop's.
+class ViewOutput {
+ public:
+  /// Lays out the frames of `scene` (view_frame_layout), opens the view recording at
+  /// `record_path` unless empty (written first, then `sinks`, not owned, which must outlive
+  /// this), and starts the stream's thread at `rate_hz` frames per simulated second; `wait`:
+  /// the loop waits for the consumers (offline runs), else frames are dropped and counted.
+  /// Throws InputError at --record-view when the file cannot be created.
+  ViewOutput(const Scene& scene, const std::string& record_path,
+             std::vector<platform::StateFrameSink*> sinks, double rate_hz, bool wait);
+  /// finish().
+  ~ViewOutput();
+  ViewOutput(const ViewOutput&) = delete;
+  ViewOutput& operator=(const ViewOutput&) = delete;
+
+  /// The loop's side (after core::step): platform::StateStream::publish(). noexcept, no
+  /// allocation, no lock; waits only when made with `wait`.
+  void publish(const core::Data& data, const platform::PeriodReport& report,
+               std::span<const double> axis_values,
+               const platform::StateFrameFigures& figures) noexcept {
+    stream_.publish(data, report, axis_values, figures);
+  }
+  /// Delivers what is queued, stops the thread and closes the recording. Idempotent.
+  void finish();
+  /// Writes the stream's and the recording's figures into `s` (view_* fields).
+  void summarize(RunSummary& s) const;
+
+ private:
+  std::unique_ptr<ViewRecordingWriter> writer_;  // --record-view
+  platform::StateStream stream_;
+};
+
+/// Paces an unpaced run (simulated bus or log, no --realtime) for a live viewer: each wait
+/// sleeps until the next period is due at `speed` × real time (CLOCK_MONOTONIC, absolute
+/// deadlines from `wall0_ns`: no drift). `speed` <= 0: wait() returns at once.
+class ViewPacer {
+ public:
+  ViewPacer(double dt_s, double speed, std::int64_t wall0_ns) noexcept;
+  /// Sleeps until period k+1 of this pacer is due (EINTR resumed).
+  void wait() noexcept;
+
+ private:
+  std::int64_t period_ns_ = 0;  // 0: no pacing
+  std::int64_t wall0_ns_ = 0;
+  std::int64_t k_ = 0;
+};
+
+}  // namespace numen::sim
