@@ -56,14 +56,7 @@ AdmittanceRunner::AdmittanceRunner(const Scene& scene)
       period_ns_(static_cast<std::int64_t>(std::llround(scene.model.dt * 1e9))),
       phase_ns_(static_cast<std::int64_t>(std::llround(scene.compute_phase_s * 1e9))) {
   emulator_.set_axis_values(device_.setpoints());
-  acc_.scene = scene.name;
-  acc_.coupling = to_string(scene.model.coupling_mode);
-  acc_.integrator = to_string(scene.model.integrator);
-  acc_.dt_s = scene.model.dt;
-  acc_.warnings = scene.warnings;
-  acc_.trocar_note = scene.trocar_note;
-  acc_.num_bodies = scene.model.num_bodies();
-  acc_.num_joints = scene.model.num_joints();
+  describe_scene(scene, acc_);
   acc_.admittance.enabled = true;
   acc_.admittance.k_hand = scene.admittance->emulator.k_hand;
   acc_.managed = false;

@@ -181,16 +181,7 @@ SceneRunner::SceneRunner(const Scene& scene, std::size_t trace_capacity, const B
   trace_.reserve(trace_capacity);
   if (writer_) writer_->start();
   acc_.bus = bus.spec;
-  acc_.scene = scene.name;
-  acc_.coupling = to_string(scene.model.coupling_mode);
-  acc_.integrator = to_string(scene.model.integrator);
-  acc_.dt_s = scene.model.dt;
-  acc_.warnings = scene.warnings;
-  acc_.trocar_note = scene.trocar_note;
-  acc_.num_bodies = scene.model.num_bodies();
-  acc_.num_joints = scene.model.num_joints();
-  acc_.num_nets = scene.model.num_nets();
-  acc_.num_nodes = scene.model.num_nodes();
+  describe_scene(scene, acc_);
   acc_.managed = loop_.managed();
   acc_.real_bus = spec_.real();
 }
@@ -201,6 +192,19 @@ void SceneRunner::stream_trace(const std::string& path) {
   trace_writer_ = std::make_unique<platform::TraceWriter>(
       path, trace_column_names(trace_stream_columns(), std::span(axis_names)));
   trace_writer_->start();
+}
+
+void describe_scene(const Scene& scene, RunSummary& s) {
+  s.scene = scene.name;
+  s.coupling = to_string(scene.model.coupling_mode);
+  s.integrator = to_string(scene.model.integrator);
+  s.dt_s = scene.model.dt;
+  s.warnings = scene.warnings;
+  s.trocar_note = scene.trocar_note;
+  s.num_bodies = scene.model.num_bodies();
+  s.num_joints = scene.model.num_joints();
+  s.num_nets = scene.model.num_nets();
+  s.num_nodes = scene.model.num_nodes();
 }
 
 void SceneRunner::stream_view(const std::string& record_path,

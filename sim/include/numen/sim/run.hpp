@@ -458,6 +458,11 @@ class SceneRunner {
   bool has_first_fault_ = false;
 };
 
+/// Fills what a run's summary says of its scene, whichever runner runs it: name, coupling,
+/// integrator, dt, the scene's warnings and trocar note, the numbers of bodies, joints, nets
+/// and net nodes.
+void describe_scene(const Scene& scene, RunSummary& s);
+
 /// Runs `scene` for options.duration_s (or the scene's duration) and judges it
 /// (RunSummary::exit_status, run_verdict()).
 /// Throws std::runtime_error if the trace cannot be written.
