@@ -505,6 +505,7 @@ const Scene& mouse_scene() {
 }
 
 TEST(RunAllocations, MouseScenePeriodNeverAllocates) {
+  NUMEN_REQUIRE_EVDEV();  // the scene names its event codes
   expect_no_allocation(mouse_scene(), "mouse");  // 5 s scene: the trajectory holds its end
 }
 
@@ -519,6 +520,7 @@ Vec3 target_at(const std::vector<TraceRecord>& records, double dt, double t) {
 // button is held, stays while the mouse is moved back with the button up (indexing), follows
 // the mouse closely in free motion, and pushes the loose block along the board.
 TEST(RunMouseScene, TheToolFollowsTheMouseOnlyWhileTheClutchIsHeld) {
+  NUMEN_REQUIRE_EVDEV();  // the scene names its event codes
   const Scene& scene = mouse_scene();
   const std::int64_t n = periods_for(scene, scene.duration_s);
   SceneRunner runner(scene, n);

@@ -16,6 +16,7 @@
 #include "numen/core/features.hpp"
 #include "numen/core/step.hpp"
 #include "numen/core/step_stages.hpp"
+#include "numen/hal/features.hpp"
 #include "numen/sim/scene.hpp"
 
 namespace core = numen::core;
@@ -24,9 +25,10 @@ namespace sim = numen::sim;
 namespace {
 
 /// The shipped scenes this build can load (default, phantom and endobag have
-/// joints; deformable and endobag nets).
+/// joints; deformable and endobag nets; mouse names its event codes, which libevdev resolves).
 std::vector<std::string> shipped_scenes() {
-  std::vector<std::string> out{"construction", "admittance", "mouse"};
+  std::vector<std::string> out{"construction", "admittance"};
+  if (numen::hal::kWithEvdev) out.push_back("mouse");
   if (core::kWithArticulation) out.insert(out.end(), {"default", "phantom"});
   if (core::kWithDeformable) out.push_back("deformable");
   if (core::kWithArticulation && core::kWithDeformable) out.push_back("endobag");

@@ -217,11 +217,12 @@ TEST(ScenePointer, EveryBadNameIsALocatedError) {
     SCOPED_TRACE(c.what);
     const std::string text = replace(pointer_scene(), c.from, c.to);
     const InputError e = load_error(dir, text);
-    EXPECT_EQ(e.key(), c.key);
-    EXPECT_EQ(e.line(), line_of(text, c.needle)) << e.what();
     if (numen::hal::kWithEvdev) {
+      EXPECT_EQ(e.key(), c.key);
+      EXPECT_EQ(e.line(), line_of(text, c.needle)) << e.what();
       EXPECT_NE(e.message().find(c.message), std::string::npos) << e.what();
-    } else {
+    } else {  // without libevdev the first name the loader meets is refused, whatever it is
+      EXPECT_EQ(e.key(), "trajectory.pointer.axis[0].code") << e.what();
       EXPECT_NE(e.message().find("NUMEN_WITH_EVDEV=OFF"), std::string::npos) << e.what();
     }
   }

@@ -197,7 +197,11 @@ def main():
     ap.add_argument("--duration", type=float, default=10.0, help="seconds of the recorded run")
     ap.add_argument("--figure", help="copy the screenshot here")
     ap.add_argument("--figures", help="folder: the screenshots of the three scenes of docs/viewer.md")
+    ap.add_argument("--skip", help="skip the test with this reason (a build that cannot run it)")
     a = ap.parse_args()
+    if a.skip:
+        print("SKIPPED: " + a.skip)
+        return 77
     chromium_exe = chromium_path()
     if not chromium_exe:
         print("SKIPPED: chromium is not installed (Debian: apt-get install chromium; "

@@ -33,3 +33,11 @@
     if (!::numen::hal::kWithSerial)                                   \
       GTEST_SKIP() << "this build has NUMEN_WITH_SERIAL=OFF";         \
   } while (0)
+
+/// First statement of a test that needs libevdev (hal and above): the evdev pointer, and the
+/// event code names of a `[trajectory.pointer]` (the shipped mouse scene).
+#define NUMEN_REQUIRE_EVDEV()                                         \
+  do {                                                                \
+    if (!::numen::hal::kWithEvdev)                                    \
+      GTEST_SKIP() << "this build has NUMEN_WITH_EVDEV=OFF";          \
+  } while (0)
