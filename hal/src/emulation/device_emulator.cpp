@@ -5,6 +5,7 @@
 #include "numen/hal/emulation/device_emulator.hpp"
 
 #include <algorithm>
+#include <string>
 #include <cmath>
 #include <utility>
 
@@ -79,7 +80,7 @@ DeviceEmulator::DeviceEmulator(DeviceConfig config) : config_(std::move(config))
     if (node == nodes_.size()) {
       nodes_.push_back(Node{NmtNodeModel(x.node_id),
                             HeartbeatProducer(x.node_id, heartbeat_ms_to_ns(x.heartbeat_period_ms)),
-                            HeartbeatConsumer(), 0});
+                            HeartbeatConsumer(), 0, nullptr});
     }
     if (a.has_drive() && nodes_[node].controller.node_id() == 0) {
       nodes_[node].controller = HeartbeatConsumer(co.controller_node_id, controller_timeout_ns);
@@ -98,6 +99,42 @@ DeviceEmulator::DeviceEmulator(DeviceConfig config) : config_(std::move(config))
                 0, 0, PowerState::kNotReadyToSwitchOn});
     }
   }
+  // Each node's object dictionary (CiA 301 mandatory and identity objects), served over SDO.
+  for (Node& node : nodes_) {
+    const std::uint8_t id = node.nmt.node_id();
+    bool has_drive = false;
+    std::string axes;
+    std::uint16_t heartbeat_ms = 0;
+    for (int i = 0; i < n_; ++i) {
+      const auto k = static_cast<std::size_t>(i);
+      if (co.axes[k].node_id != id) continue;
+      has_drive = has_drive || config_.axes[k].has_drive();
+      axes += (axes.empty() ? "" : ", ") + config_.axes[k].name;
+      heartbeat_ms = static_cast<std::uint16_t>(co.axes[k].heartbeat_period_ms);
+    }
+    ObjectDictionary od;
+    // 0x1000 device type: profile in the low word (402 drive / 406 encoder), additional
+    // information high (0x0002 servo drive; 0x0002 multi-turn absolute rotary encoder).
+    od.add_unsigned({0x1000, 0}, OdAccess::kReadOnly, has_drive ? 0x00020192u : 0x00020196u, 4);
+    od.add_unsigned({0x1001, 0}, OdAccess::kReadOnly, 0, 1);
+    const std::string name = std::string("numen emulated ") + (has_drive ? "drive" : "encoder") +
+                             " (" + config_.name + ": " + axes + ")";
+    od.add_string({0x1008, 0}, OdAccess::kReadOnly, name, name.size());
+    od.add_string({0x100A, 0}, OdAccess::kReadOnly, "numen device emulator", 21);
+    od.add_unsigned({0x1017, 0}, OdAccess::kReadOnly, heartbeat_ms, 2);
+    od.add_unsigned({0x1018, 0}, OdAccess::kReadOnly, 4, 1);
+    od.add_unsigned({0x1018, 1}, OdAccess::kReadOnly, kEmulatorVendorId, 4);
+    od.add_unsigned({0x1018, 2}, OdAccess::kReadOnly, has_drive ? 0x402u : 0x406u, 4);
+    od.add_unsigned({0x1018, 3}, OdAccess::kReadOnly, 0x00010000u, 4);
+    od.add_unsigned({0x1018, 4}, OdAccess::kReadOnly, id, 4);
+    node.sdo = std::make_unique<NodeSdo>(id, std::move(od));
+  }
+}
+
+const ObjectDictionary* DeviceEmulator::object_dictionary(std::uint8_t node_id) const noexcept {
+  for (const Node& node : nodes_)
+    if (node.nmt.node_id() == node_id && node.sdo) return &node.sdo->dictionary;
+  return nullptr;
 }
 
 void DeviceEmulator::set_axis_values(const double* q) noexcept {
@@ -303,6 +340,18 @@ void DeviceEmulator::on_frame(const CanFrame& frame, Bus& device_port) noexcept 
         node.controller.on_frame(frame);
       }
     }
+    return;
+  }
+  for (Node& node : nodes_) {
+    if (!node.sdo || !has_standard_id(frame, sdo_request_cob_id(node.nmt.node_id()))) continue;
+    if (!node.nmt.allows(CommObject::kSdo)) {  // stopped, or not booted yet
+      ++counters_.sdo_not_allowed;
+      return;
+    }
+    ++counters_.sdo_requests;
+    node.sdo->server.on_frame(frame);
+    CanFrame response;
+    if (node.sdo->server.take_response(response, frame.timestamp_ns)) write(device_port, response, nullptr);
     return;
   }
   for (Drive& d : drives_) {

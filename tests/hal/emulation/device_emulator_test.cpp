@@ -16,6 +16,7 @@
 
 #include "alloc_counter.hpp"
 #include "numen/hal/canopen/canopen.hpp"
+#include "numen/hal/canopen/sdo.hpp"
 #include "numen/hal/device/instrument_device.hpp"
 #include "numen/hal/device/minimal_device.hpp"
 #include "numen/hal/device/phantom_kinematics.hpp"
@@ -517,6 +518,82 @@ TEST(DeviceEmulatorManaged, BootsAnswersNmtAndSendsPdosOnlyWhenOperational) {
   emu.tick(100 * 1'000'000, bus.device());
   EXPECT_EQ(bus.pending(SimBus::Direction::kDeviceToController), 0u);
   EXPECT_EQ(emu.counters().frames_while_killed, 1u);
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------- SDO (managed stack)
+
+namespace {
+using namespace numen::hal;
+
+/// Runs `client`'s transfer against the emulator over `bus` (no latency), up to 20 exchanges
+/// of 1 ms; the client's timeout decides for a silent node.
+SdoStatus sdo_exchange(SdoClient& client, DeviceEmulator& emu, SimBus& bus, std::int64_t& t) {
+  CanFrame f;
+  for (int i = 0; i < 20 && client.status() == SdoStatus::kPending; ++i, t += 1'000'000) {
+    bus.set_time_ns(t);
+    while (client.take_request(f, t)) bus.controller().write(f);
+    emu.poll(bus.device());
+    while (bus.controller().read(f) == IoStatus::kOk) client.on_frame(f);
+    client.poll(t);
+  }
+  return client.status();
+}
+
+TEST(DeviceEmulatorManaged, EveryNodeAnswersSdoWithItsIdentity) {
+  const DeviceConfig c = make_default_trocar_config(1);
+  SimBusSettings s;
+  s.latency_ns = 0;
+  SimBus bus(s);
+  DeviceEmulator emu(c);
+  std::int64_t t = 0;
+  // Before the boot-up (initialisation) a node takes no SDO: the client times out.
+  SdoClient early(1, 5'000'000);
+  std::array<std::uint8_t, 64> buf{};
+  ASSERT_TRUE(early.start_upload({0x1000, 0}, buf, t));
+  EXPECT_EQ(sdo_exchange(early, emu, bus, t), SdoStatus::kAborted);
+  EXPECT_EQ(early.abort_code(), SdoAbort::kTimeout);
+  EXPECT_EQ(emu.counters().sdo_not_allowed, 1u);
+  emu.tick(t, bus.device());  // boot-ups: every node pre-operational
+  CanFrame f;
+  while (bus.controller().read(f) == IoStatus::kOk) {
+  }
+  for (const CanopenAxisConfig& x : c.canopen.axes) {
+    SCOPED_TRACE(int(x.node_id));
+    SdoClient client(x.node_id);
+    const bool drive = emu.object_dictionary(x.node_id) != nullptr &&
+                       c.axes[static_cast<std::size_t>(&x - c.canopen.axes.data())].has_drive();
+    std::uint32_t v = 0;
+    ASSERT_TRUE(client.start_upload({0x1000, 0}, buf, t));
+    ASSERT_EQ(sdo_exchange(client, emu, bus, t), SdoStatus::kDone);
+    std::memcpy(&v, buf.data(), 4);
+    EXPECT_EQ(v & 0xFFFF, drive ? 402u : 406u);  // CiA profile number
+    ASSERT_TRUE(client.start_upload({0x1018, 4}, buf, t));
+    ASSERT_EQ(sdo_exchange(client, emu, bus, t), SdoStatus::kDone);
+    std::memcpy(&v, buf.data(), 4);
+    EXPECT_EQ(v, x.node_id);  // serial number
+    ASSERT_TRUE(client.start_upload({0x1008, 0}, buf, t));  // segmented
+    ASSERT_EQ(sdo_exchange(client, emu, bus, t), SdoStatus::kDone);
+    const std::string name(buf.begin(), buf.begin() + static_cast<std::ptrdiff_t>(client.transferred()));
+    EXPECT_NE(name.find(drive ? "drive" : "encoder"), std::string::npos) << name;
+    // Refusals by name: a read-only write, an object the node does not have.
+    ASSERT_TRUE(client.start_download({0x1000, 0}, std::span<const std::uint8_t>(buf.data(), 4), t));
+    EXPECT_EQ(sdo_exchange(client, emu, bus, t), SdoStatus::kAborted);
+    EXPECT_EQ(client.abort_code(), SdoAbort::kReadOnly);
+    ASSERT_TRUE(client.start_upload({0x2000, 0}, buf, t));
+    EXPECT_EQ(sdo_exchange(client, emu, bus, t), SdoStatus::kAborted);
+    EXPECT_EQ(client.abort_code(), SdoAbort::kNoObject);
+  }
+  EXPECT_EQ(emu.object_dictionary(99), nullptr);
+  // A stopped node does not answer.
+  encode_nmt(NmtCommand::kStopRemoteNode, 2, t, f);
+  bus.controller().write(f);
+  emu.poll(bus.device());
+  SdoClient stopped(2, 5'000'000);
+  ASSERT_TRUE(stopped.start_upload({0x1000, 0}, buf, t));
+  EXPECT_EQ(sdo_exchange(stopped, emu, bus, t), SdoStatus::kAborted);
+  EXPECT_EQ(stopped.abort_code(), SdoAbort::kTimeout);
 }
 
 }  // namespace

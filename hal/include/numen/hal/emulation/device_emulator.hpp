@@ -13,7 +13,10 @@
 ///    encoder TPDOs by the static mappings of the config; EMCY on a drive fault; a drive whose
 ///    node loses the controller's heartbeat faults on its own (EMCY 0x8130, zero torque), and
 ///    an energised drive whose node leaves operational faults (CiA 402 abort connection option
-///    0x6007 = 1, EMCY 0x8100).
+///    0x6007 = 1, EMCY 0x8100); every node answers SDO on its default channel (SdoServer, in
+///    pre-operational and operational) from an object dictionary of its identity
+///    (object_dictionary(): 0x1000 device type, 0x1001 error register, 0x1008 device name,
+///    0x100A software version, 0x1017 producer heartbeat time, 0x1018 identity).
 /// Fault-injection hooks for tests: kill() (the device stops reading and sending entirely),
 /// power_cycle(), inject_drive_fault(), set_encoder_silent() / set_responding().
 /// Construction allocates and may throw; every other member is noexcept and allocation free.
@@ -21,6 +24,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "numen/hal/transport/bus.hpp"
@@ -32,6 +36,8 @@
 #include "numen/hal/device/kinematics.hpp"
 #include "numen/hal/canopen/nmt.hpp"
 #include "numen/hal/canopen/pdo_mapping.hpp"
+#include "numen/hal/emulation/object_dictionary.hpp"
+#include "numen/hal/emulation/sdo_server.hpp"
 
 namespace numen::hal {
 
@@ -57,7 +63,14 @@ struct EmulatorCounters {
   std::uint64_t emcys_dropped = 0;          ///< EMCY messages lost: queue full or EMCY not allowed.
   std::uint64_t controller_losses = 0;      ///< Controller heartbeat losses seen by a node.
   std::uint64_t frames_while_killed = 0;    ///< Frames read and discarded while killed.
+  std::uint64_t sdo_requests = 0;           ///< SDO requests a node took (pre-op or operational).
+  std::uint64_t sdo_not_allowed = 0;        ///< SDO requests to a node in stopped or initialisation.
 };
+
+/// Identity the emulated nodes report in object 0x1018 (CiA 301 §7.5.2.21): vendor id 0 is
+/// reserved by CiA for tests and prototypes; product code 0x402 for a node with a drive,
+/// 0x406 for an encoder-only node; revision 0x00010000; serial number = the node id.
+inline constexpr std::uint32_t kEmulatorVendorId = 0x00000000;
 
 /// Emulated encoders and drives of one instrument. Not thread safe.
 class DeviceEmulator {
@@ -129,17 +142,29 @@ class DeviceEmulator {
   const Cia402Drive* drive(int axis) const noexcept;
   /// Managed stack: NMT state of the node of `axis` (kBootUp for a bad index / minimal).
   NmtState node_state(int axis) const noexcept;
+  /// Managed stack: the object dictionary node `node_id` serves over SDO; nullptr for a node
+  /// id the device does not have (or the minimal protocol).
+  const ObjectDictionary* object_dictionary(std::uint8_t node_id) const noexcept;
   /// Counters.
   const EmulatorCounters& counters() const noexcept { return counters_; }
   /// The configuration.
   const DeviceConfig& config() const noexcept { return config_; }
 
  private:
+  /// A node's dictionary and the server of it (heap: the server points into the dictionary,
+  /// and nodes_ may move).
+  struct NodeSdo {
+    ObjectDictionary dictionary;
+    SdoServer server;
+    NodeSdo(std::uint8_t node_id, ObjectDictionary od)
+        : dictionary(std::move(od)), server(node_id, dictionary) {}
+  };
   struct Node {
     NmtNodeModel nmt;
     HeartbeatProducer producer;
     HeartbeatConsumer controller;  // node id 0 (unused) on nodes without a drive
     std::uint64_t losses_seen = 0;
+    std::unique_ptr<NodeSdo> sdo;
   };
   struct Drive {
     int axis = 0;
