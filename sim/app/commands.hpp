@@ -2,7 +2,7 @@
 /// @file commands.hpp
 /// The subcommands of `numen`, one class each (one file each: run_command.cpp,
 /// device_command.cpp, info_command.cpp, figures_command.cpp, study_command.cpp,
-/// view_command.cpp). A command
+/// view_command.cpp, scan_command.cpp, sdo_command.cpp). A command
 /// declares its options on construction and does its work in execute(), which returns the
 /// exit status (docs/inputs.md, "Exit statuses") and may throw (run_guarded()). The options
 /// are bound to the command's members: construct it in place and keep it there.
@@ -77,6 +77,35 @@ class DeviceCommand {
   std::string scene_, bus_;
   double duration_ = -1.0;
   bool ready_ = false;
+};
+
+/// `numen scan --bus ...`: the CANopen nodes on a bus and their identities (SDO reads; never
+/// starts or stops a node).
+class ScanCommand {
+ public:
+  explicit ScanCommand(CLI::App& parent);
+  bool parsed() const { return cli_->parsed(); }
+  int execute() const;
+
+ private:
+  CLI::App* cli_;
+  std::string bus_;
+  double listen_s_ = 1.5, timeout_s_ = 0.5;
+  bool json_ = false;
+};
+
+/// `numen sdo --bus ... NODE read|write INDEX:SUB [VALUE] [--type T]`: one SDO transfer.
+class SdoCommand {
+ public:
+  explicit SdoCommand(CLI::App& parent);
+  bool parsed() const { return cli_->parsed(); }
+  int execute() const;
+
+ private:
+  CLI::App* cli_;
+  std::string bus_, action_, address_, value_, type_;
+  int node_ = 0;
+  double timeout_s_ = 0.5;
 };
 
 /// `numen info [SCENE] [--json]`: what a scene compiles to.

@@ -8,6 +8,8 @@
 ///   numen info [SCENE] [--json]
 ///   numen figures
 ///   numen view FILE.nmv [--port P] [--host H] [--page DIR]
+///   numen scan --bus can:IFACE|serial:PATH[@BAUD] [--listen S] [--timeout S] [--json]
+///   numen sdo --bus can:IFACE|serial:PATH[@BAUD] NODE read|write INDEX:SUB [VALUE] [--type T]
 ///   numen study accuracy [--out DIR] [--quick] [--case NAME]...
 ///   numen study stability [--out DIR] [--quick] [--family NAME]...
 /// SIGINT / SIGTERM: while the input loads, the process ends at once (status 128 + signal;
@@ -29,6 +31,8 @@ int main(int argc, char** argv) {
   const InfoCommand info(app);
   const FiguresCommand figures(app);
   const ViewCommand view(app);
+  const ScanCommand scan(app);
+  const SdoCommand sdo(app);
   CLI::App* study = app.add_subcommand("study", "Measure the integrators (docs/results.md)");
   study->require_subcommand(1);
   const AccuracyStudyCommand accuracy(*study);
@@ -47,6 +51,8 @@ int main(int argc, char** argv) {
   if (figures.parsed()) return run_guarded([&] { return figures.execute(); });
   install_signal_handlers();  // the studies keep the default: a signal ends them at once
   if (view.parsed()) return run_guarded([&] { return view.execute(); });
+  if (scan.parsed()) return run_guarded([&] { return scan.execute(); });
+  if (sdo.parsed()) return run_guarded([&] { return sdo.execute(); });
   if (info.parsed()) return run_guarded([&] { return info.execute(); });
   if (device.parsed()) return run_guarded([&] { return device.execute(); });
   if (run.parsed()) return run_guarded([&] { return run.execute(); });

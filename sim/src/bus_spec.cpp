@@ -16,6 +16,7 @@
 #include "numen/hal/canopen/emcy.hpp"
 #include "numen/hal/canopen/heartbeat.hpp"
 #include "numen/hal/canopen/nmt.hpp"
+#include "numen/hal/canopen/sdo.hpp"
 #include "numen/hal/features.hpp"
 #if NUMEN_WITH_SERIAL
 #include "numen/hal/transport/serial_bus.hpp"
@@ -100,6 +101,8 @@ std::vector<hal::CanFilter> device_filters(const hal::DeviceConfig& config) {
   if (config.canopen.managed) {
     add_unique(out, hal::kNmtCobId);
     add_unique(out, hal::heartbeat_cob_id(config.canopen.controller_node_id));
+    for (const hal::CanopenAxisConfig& x : config.canopen.axes)  // each node's SDO server
+      add_unique(out, hal::sdo_request_cob_id(x.node_id));
   }
   return out;
 }

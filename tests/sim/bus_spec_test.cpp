@@ -112,9 +112,11 @@ TEST(BusSpec, ManagedFiltersAreExactlyTheIdsEachEndReads) {
                                             0x701, 0x702, 0x703, 0x704, 0x705, 0x081, 0x082, 0x083,
                                             0x084, 0x085};
   EXPECT_EQ(ctl, want_ctl);
-  // Device: SYNC, drive RPDOs 0x201–0x203, NMT, the controller's heartbeat (node 127).
+  // Device: SYNC, drive RPDOs 0x201–0x203, NMT, the controller's heartbeat (node 127), SDO
+  // requests 0x601–0x605.
   const std::set<std::uint32_t> devf = exact_ids(numen::sim::device_filters(dev));
-  const std::set<std::uint32_t> want_dev = {0x080, 0x201, 0x202, 0x203, 0x000, 0x77F};
+  const std::set<std::uint32_t> want_dev = {0x080, 0x201, 0x202, 0x203, 0x000, 0x77F,
+                                            0x601, 0x602, 0x603, 0x604, 0x605};
   EXPECT_EQ(devf, want_dev);
 }
 

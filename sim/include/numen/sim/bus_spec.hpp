@@ -46,8 +46,8 @@ BusSpec parse_bus_spec(const std::string& spec);
 std::vector<hal::CanFilter> controller_filters(const hal::DeviceConfig& config);
 
 /// Exact 11-bit filters for every frame the device of `config` reads: SYNC (0x080), each
-/// driven axis's drive / torque RPDO; managed stack: NMT (0x000) and the controller's heartbeat
-/// (0x700 + controller_node_id).
+/// driven axis's drive / torque RPDO; managed stack: NMT (0x000), the controller's heartbeat
+/// (0x700 + controller_node_id) and each node's SDO requests (0x600 + node).
 std::vector<hal::CanFilter> device_filters(const hal::DeviceConfig& config);
 
 /// Empty if this build has the backend `spec` needs (hal/features.hpp), else the error:
