@@ -149,7 +149,8 @@ TEST(NumenCli, EverySubcommandParsesAndFiguresPrintsTheTable) {
   for (const std::vector<std::string>& args :
        {std::vector<std::string>{kNumen, "run", "--help"}, {kNumen, "device", "--help"},
         {kNumen, "info", "--help"}, {kNumen, "figures", "--help"}, {kNumen, "view", "--help"},
-        {kNumen, "study", "accuracy", "--help"}, {kNumen, "study", "stability", "--help"}}) {
+        {kNumen, "study", "accuracy", "--help"}, {kNumen, "study", "stability", "--help"},
+        {kNumen, "scan", "--help"}, {kNumen, "sdo", "--help"}}) {
     const ChildResult r = run_child(args, dir.path(), 30);
     EXPECT_EQ(r.status, 0) << args[1] << ": " << r.err;
   }
@@ -192,6 +193,34 @@ TEST(NumenCli, ReplayOfGarbageIsALocatedInputError) {
       run_child({kNumen, "run", "--duration", "0.2", "--bus", "log:" + log}, dir.path(), 60);
   EXPECT_EQ(r.status, 2) << r.out << r.err;
   EXPECT_EQ(r.err.rfind("numen: " + log + ":2:1: ", 0), 0u) << r.err;
+}
+
+// `numen sdo` and `numen scan`: bad nodes, addresses, types and values are refused (input
+// rejected) before any bus is opened (the interface named here does not exist).
+TEST(NumenCli, BadSdoArgumentsAreInputRejectedBeforeTheBusIsOpened) {
+  TempDir dir;
+  const std::string bus = "can:numen-no-such-if";
+  const std::vector<std::vector<std::string>> cases = {
+      {kNumen, "sdo", "--bus", bus, "0", "read", "1000:00"},                 // node 0
+      {kNumen, "sdo", "--bus", bus, "128", "read", "1000:00"},               // node 128
+      {kNumen, "sdo", "--bus", bus, "1", "peek", "1000:00"},                 // action
+      {kNumen, "sdo", "--bus", bus, "1", "read", "1000"},                    // no sub-index
+      {kNumen, "sdo", "--bus", bus, "1", "read", "10000:00"},                // index > 0xFFFF
+      {kNumen, "sdo", "--bus", bus, "1", "write", "1017:00", "10"},          // no --type
+      {kNumen, "sdo", "--bus", bus, "1", "write", "1017:00", "70000", "--type", "u16"},
+      {kNumen, "sdo", "--bus", bus, "1", "write", "1017:00", "-1", "--type", "u8"},
+      {kNumen, "sdo", "--bus", bus, "1", "write", "1017:00", "abc", "--type", "hex"},
+      {kNumen, "sdo", "--bus", bus, "1", "read", "1000:00", "5"},            // a value on a read
+      {kNumen, "sdo", "--bus", "sim", "1", "read", "1000:00"},               // not a real bus
+      {kNumen, "scan", "--bus", "sim"},
+      {kNumen, "scan", "--bus", bus, "--listen", "0"},
+  };
+  for (const auto& args : cases) {
+    const ChildResult r = run_child(args, dir.path(), 30);
+    std::string line;
+    for (const auto& a : args) line += a + " ";
+    EXPECT_EQ(r.status, 2) << line << ": " << r.err;
+  }
 }
 
 // `numen run --view` takes [HOST:]PORT only.
