@@ -6,6 +6,7 @@
 #include <time.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <cerrno>
 #include <cmath>
 #include <fstream>
@@ -539,6 +540,15 @@ RunSummary SceneRunner::summary() const {
     }
     s.emcys = static_cast<std::int64_t>(m->emcy_log().counters().received);
     s.emcy_faults = static_cast<std::int64_t>(m->emcy_log().counters().faults);
+    for (std::size_t i = 0; i < m->emcy_log().size(); ++i) {
+      const hal::EmcyRecord& r = *m->emcy_log().at(i);
+      char line[160];
+      std::snprintf(line, sizeof line, "node %d at %.3f s: 0x%04X %s (register 0x%02X)",
+                    r.message.node_id, static_cast<double>(r.timestamp_ns) * 1e-9,
+                    r.message.error_code, hal::describe_emcy_code(r.message.error_code),
+                    r.message.error_register);
+      s.emcy_messages.push_back(line);
+    }
     for (const hal::HeartbeatConsumer& c : m->heartbeats())
       s.heartbeat_losses += static_cast<std::int64_t>(c.counters().losses);
     for (std::size_t i = 0; i < m->num_drives(); ++i) {

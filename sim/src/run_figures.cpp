@@ -350,6 +350,8 @@ constexpr RunFigure kFigures[] = {
      K::kCount, [](const S& s) noexcept { return count(s.rearm_first_period); }},
     {"drive_states", "", "\"axis: CiA 402 state\" per drive at the end", K::kTextList,
      [](const S& s) noexcept { return list(s.drive_states); }},
+    {"emcy_messages", "", "EMCY messages held at the end (last 16), node, time, code and its CiA 301 name",
+     K::kTextList, [](const S& s) noexcept { return list(s.emcy_messages); }},
     {"warnings", "", "Warnings of the scene and the run", K::kTextList,
      [](const S& s) noexcept { return list(s.warnings); }},
     {"admittance.enabled", "", "The run was an admittance run", K::kFlag,

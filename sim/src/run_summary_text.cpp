@@ -150,6 +150,7 @@ constexpr RunSummarySegment kLayout[] = {
     {"  re-arm: {rearm_requests} request(s), {rearms_accepted} accepted, first before period "
      "{rearm_first_period}\n",
      set("managed"), set("rearm_requests")},
+    {"  EMCY: {*}\n", set("managed"), {}, {}, "emcy_messages"},
     {"  drives:", set("managed"), set("drive_states")},
     {", {*}", set("managed"), {}, {}, "drive_states", " {*}"},
     {"\n", set("managed"), set("drive_states")},

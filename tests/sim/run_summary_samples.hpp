@@ -95,6 +95,7 @@ inline sim::RunSummary full_managed_summary() {
   s.heartbeat_losses = 32;
   s.zero_torque_periods = 33;
   s.drive_states = {"yaw: operation enabled", "pitch: switch on disabled"};
+  s.emcy_messages = {"node 2 at 0.250 s: 0x4310 temperature: excess temperature device (register 0x09)"};
   s.real_bus = true;
   s.port.frames_rx = 34;
   s.port.frames_tx = 35;

@@ -39,6 +39,7 @@
 #include "numen/sim/scene.hpp"
 #include "numen/sim/simulated_instrument.hpp"
 #include "build_features.hpp"
+#include "numen/hal/canopen/emcy.hpp"
 #include "sanitizer.hpp"
 
 namespace {
@@ -228,6 +229,27 @@ TEST(RunDefaultScene, StiffContactsOfOneTeraNewtonPerMetreStayFiniteAndOutside) 
   EXPECT_GT(s.contact_clamped_steps, 0) << "the floor acted and was counted";
   EXPECT_NE(numen::sim::format_summary(s).find("stiff contacts: stiffness clamped"), std::string::npos);
   EXPECT_LT(s.joint_drift_max_mm, 0.05);
+}
+
+// Issue 22: an EMCY reaches the summary with its node, time, code and CiA 301 name (text and
+// --json: the figure emcy_messages).
+TEST(RunDefaultScene, AnInjectedDriveFaultIsReportedByItsEmcyName) {
+  NUMEN_REQUIRE_ARTICULATION();
+  const Scene& scene = default_scene();
+  SceneRunner runner(scene, 0);
+  for (int k = 0; k < 500; ++k) {
+    if (k == 300) ASSERT_TRUE(runner.instrument().emulator().inject_drive_fault(2, 0x4310));
+    runner.period();
+  }
+  const RunSummary s = runner.summary();
+  EXPECT_GE(s.emcy_faults, 1);
+  ASSERT_FALSE(s.emcy_messages.empty());
+  const std::string& m = s.emcy_messages.front();
+  EXPECT_EQ(m.rfind("node 3 at 0.30", 0), 0u) << m;  // depth's drive, node 3, at period 300
+  EXPECT_NE(m.find("0x4310 "), std::string::npos) << m;
+  EXPECT_NE(m.find(numen::hal::describe_emcy_code(0x4310)), std::string::npos) << m;
+  EXPECT_NE(numen::sim::format_summary(s).find("  EMCY: " + m), std::string::npos);
+  EXPECT_NE(numen::sim::format_summary_json(s).find("emcy_messages"), std::string::npos);
 }
 
 TEST(RunDefaultScene, NoJumpAtStart) {

@@ -272,6 +272,10 @@ struct RunSummary {
   std::int64_t heartbeat_losses = 0;       ///< Heartbeat losses over all nodes.
   std::int64_t zero_torque_periods = 0;    ///< Periods that commanded zero torque on every drive.
   std::vector<std::string> drive_states;   ///< "axis: CiA 402 state" per drive at the end.
+  /// The EMCY messages the master still holds at the end (its log keeps the last 16), oldest
+  /// first: "node 3 at 1.234 s: 0x4310 <CiA 301 name> (register 0x09)"; an error reset says
+  /// "no error / reset".
+  std::vector<std::string> emcy_messages;
   // Real buses (can:, serial:) — zeros / empty otherwise.
   bool real_bus = false;                   ///< The controller ran on a real bus, paced.
   hal::BusCounters port;                   ///< Counters of the controller's port (rx, tx,
