@@ -14,6 +14,7 @@
 #include "child_process.hpp"
 #include "numen/sim/run_figures.hpp"
 #include "numen/sim/scene.hpp"
+#include "numen/version.hpp"
 #include "sanitizer.hpp"
 #include "scene_text.hpp"
 #include "temp_dir.hpp"
@@ -245,3 +246,13 @@ TEST(NumenCli, OutOfMemoryIsNamed) {
 }
 
 }  // namespace
+
+// `numen --version` prints the project's version (numen/version.hpp, semantic versioning)
+// and exits 0 without a subcommand.
+TEST(NumenCli, VersionFlagPrintsTheProjectVersion) {
+  TempDir dir;
+  const ChildResult r = run_child({kNumen, "--version"}, dir.path(), 30);
+  ASSERT_EQ(r.status, 0) << r.out << r.err;
+  EXPECT_EQ(r.out, "numen 0.1.0\n");
+  EXPECT_EQ(r.out, std::string("numen ") + NUMEN_VERSION + "\n");
+}
