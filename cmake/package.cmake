@@ -59,7 +59,7 @@ file(CONFIGURE OUTPUT ${_pkg}/copyright CONTENT
 Upstream-Name: numen
 
 Files: *
-Copyright: the numen authors
+Copyright: 2026 the numen authors
 License: none-granted
  No license has been granted for numen yet; all rights reserved.
 
@@ -77,7 +77,7 @@ License: Expat
 " @ONLY)
 set(NUMEN_DEB_MAINTAINER "numen maintainers <numen-maintainers@example.org>" CACHE STRING
     "Maintainer field of the Debian package")
-# Debian's changelog of a native package (lintian: no-changelog), compressed as policy says.
+# The changelog of a native package (no Debian revision): changelog.gz (lintian).
 file(CONFIGURE OUTPUT ${_pkg}/changelog.Debian CONTENT
 "numen (${PROJECT_VERSION}) unstable; urgency=medium
 
@@ -85,29 +85,30 @@ file(CONFIGURE OUTPUT ${_pkg}/changelog.Debian CONTENT
 
  -- ${NUMEN_DEB_MAINTAINER}  Mon, 23 Nov 2026 12:00:00 +0000
 " @ONLY)
-execute_process(COMMAND gzip -9nc ${_pkg}/changelog.Debian OUTPUT_FILE ${_pkg}/changelog.Debian.gz)
+execute_process(COMMAND gzip -9nc ${_pkg}/changelog.Debian OUTPUT_FILE ${_pkg}/changelog.gz)
 
 install(FILES ${_pkg}/scene.toml DESTINATION /etc/numen COMPONENT system EXCLUDE_FROM_ALL)
 install(FILES ${_pkg}/limits.conf DESTINATION /etc/security/limits.d RENAME numen.conf
         COMPONENT system EXCLUDE_FROM_ALL)
 install(FILES ${_pkg}/numen.service DESTINATION /lib/systemd/system COMPONENT system EXCLUDE_FROM_ALL)
 install(FILES ${_pkg}/copyright DESTINATION ${CMAKE_INSTALL_DOCDIR} COMPONENT system EXCLUDE_FROM_ALL)
-install(FILES ${_pkg}/changelog.Debian.gz DESTINATION ${CMAKE_INSTALL_DOCDIR} COMPONENT system EXCLUDE_FROM_ALL)
+install(FILES ${_pkg}/changelog.gz DESTINATION ${CMAKE_INSTALL_DOCDIR} COMPONENT system EXCLUDE_FROM_ALL)
 
 set(CPACK_GENERATOR DEB)
 set(CPACK_PACKAGE_NAME numen)
 set(CPACK_PACKAGE_VENDOR "numen")
 set(CPACK_PACKAGE_VERSION ${PROJECT_VERSION})
 set(CPACK_PACKAGE_DESCRIPTION_SUMMARY "real-time control core for generalized dynamic god-objects")
-set(CPACK_DEBIAN_PACKAGE_DESCRIPTION "real-time control core for generalized dynamic god-objects
- numen pulls a simulated tool (the god-object) toward the pose of a tracked
- haptic instrument with damped springs, keeps it out of obstacles with penalty
- contacts and sends the spring stretch back to the instrument's motors over
- CANopen, at a fixed time step on a real-time Linux box.
- .
- This package holds the numen command, its systemd service and configuration,
- the shipped scenes, the viewer page, and the static libraries, headers and
- CMake package (find_package(numen)) for programs built on numen.")
+# The extended description (CPack puts CPACK_PACKAGE_DESCRIPTION_SUMMARY first, indents each
+# line and turns an empty line into " .").
+set(CPACK_DEBIAN_PACKAGE_DESCRIPTION "numen pulls a simulated tool (the god-object) toward the pose of a tracked
+haptic instrument with damped springs, keeps it out of obstacles with penalty
+contacts and sends the spring stretch back to the instrument's motors over
+CANopen, at a fixed time step on a real-time Linux box.
+
+This package holds the numen command, its systemd service and configuration,
+the shipped scenes, the viewer page, and the static libraries, headers and
+CMake package (find_package(numen)) for programs built on numen.")
 set(CPACK_DEBIAN_FILE_NAME DEB-DEFAULT)  # numen_<version>_<arch>.deb
 set(CPACK_DEBIAN_PACKAGE_SECTION science)
 set(CPACK_DEBIAN_PACKAGE_PRIORITY optional)

@@ -65,9 +65,9 @@ grep -q 'file = "/usr/share/numen/data/' "$root/etc/numen/scene.toml" \
 tail -n 3 "$work/run.log"
 # With no scene, the extracted numen finds the default scene relative to itself.
 if [ "$scene" = default.toml ]; then
-  (cd "$work" && "$root/usr/bin/numen" info) >"$work/info.log" 2>&1 \
-    || { cat "$work/info.log"; fail "numen info (default scene) from the extracted root"; }
-  grep -q "$root/usr/share/numen/scenes/default.toml\|share/numen/scenes/default.toml" "$work/info.log" \
-    || { head "$work/info.log"; fail "numen info did not load the extracted default scene"; }
+  (cd "$work" && "$root/usr/bin/numen" info --json) >"$work/info.json" 2>&1 \
+    || { cat "$work/info.json"; fail "numen info (default scene) from the extracted root"; }
+  grep -qF "\"file\":\"$root/usr/share/numen/scenes/default.toml\"" "$work/info.json" \
+    || { head -c 300 "$work/info.json"; fail "numen info did not load the extracted default scene"; }
 fi
 echo "debian_package: ok ($(( $(date +%s) - t0 )) s)"
