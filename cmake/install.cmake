@@ -21,6 +21,8 @@ endforeach()
 if(BUILD_SHARED_LIBS)
   file(RELATIVE_PATH _lib_from_bin ${CMAKE_INSTALL_FULL_BINDIR} ${CMAKE_INSTALL_FULL_LIBDIR})
   set_target_properties(numen PROPERTIES INSTALL_RPATH "$ORIGIN/${_lib_from_bin}")
+  # RUNPATH is not transitive: each layer finds the one below next to itself.
+  set_target_properties(numen_core numen_hal numen_platform numen_sim PROPERTIES INSTALL_RPATH "$ORIGIN")
 endif()
 
 install(TARGETS numen_core numen_hal numen_platform numen_sim
