@@ -17,7 +17,7 @@
 
 #include "numen/core/articulation.hpp"
 
-#include "numen/core/block_cholesky.hpp"
+#include "detail/block_cholesky.hpp"
 
 #include <cmath>
 #include <limits>

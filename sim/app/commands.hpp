@@ -47,7 +47,8 @@ class RunCommand {
   std::uint32_t overrun_limit_ = 3;
 };
 
-/// The viewer page's folder in the build tree (build/viewer, sim/CMakeLists.txt).
+/// The viewer page's folder: share/numen/viewer of the installed prefix, else the build
+/// tree's (build/viewer, sim/CMakeLists.txt); sim::shipped_viewer_dir().
 std::string viewer_page_dir();
 /// Prints a warning on `err` when the viewer's `host` is not a loopback address.
 void warn_if_exposed(const std::string& host, std::ostream& err);

@@ -1,6 +1,7 @@
 /// @file main.cpp
 /// The `numen` command: declares the subcommands (commands.hpp, one file each), parses the
 /// command line and runs the one given.
+///   numen --version
 ///   numen run [SCENE] [--duration S] [--trace FILE.csv] [--json] [--realtime] [--coupling MODE]
 ///             [--bus sim|log:FILE|can:IFACE|serial:PATH[@BAUD]] [--record FILE.log] [--phase S]
 ///             [--rt-priority N] [--lock-memory] [--prefault-stack BYTES] [--cpu LIST] [--rt-strict]
@@ -19,12 +20,15 @@
 #include <CLI/CLI.hpp>
 
 #include "commands.hpp"
+#include "numen/version.hpp"
 #include "numen/sim/run_verdict.hpp"
 #include "signals.hpp"
 
 int main(int argc, char** argv) {
   using namespace numen::app;
   CLI::App app{"numen — real-time control core for generalized dynamic god-objects"};
+  app.set_version_flag("--version", std::string("numen ") + NUMEN_VERSION,
+                       "Print the version (semantic versioning) and exit");
   app.require_subcommand(1);
   const RunCommand run(app);
   const DeviceCommand device(app);

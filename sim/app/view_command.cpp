@@ -9,6 +9,7 @@
 
 #include "commands.hpp"
 #include "numen/sim/view_recording.hpp"
+#include "numen/sim/shipped_files.hpp"
 #include "numen/sim/view_server.hpp"
 #include "signals.hpp"
 
@@ -29,7 +30,7 @@ class RecordingSource final : public sim::ViewFrameSource {
 
 }  // namespace
 
-std::string viewer_page_dir() { return NUMEN_VIEWER_DIR; }
+std::string viewer_page_dir() { return sim::shipped_viewer_dir(NUMEN_VIEWER_DIR).string(); }
 
 void warn_if_exposed(const std::string& host, std::ostream& err) {
   if (!sim::ViewServer::is_loopback_address(host))

@@ -15,6 +15,7 @@
 #include <sstream>
 
 #include "numen/sim/input_error.hpp"
+#include "numen/sim/shipped_files.hpp"
 
 namespace numen::sim {
 namespace {
@@ -116,7 +117,7 @@ core::Mat3 nearest_rotation(const core::Mat3& m) noexcept {
 }
 
 std::filesystem::path jigsaws_excerpt_path() {
-  return std::filesystem::path(NUMEN_SOURCE_SIM_DIR) / "data" / "jigsaws_suturing_b002_excerpt.txt";
+  return shipped_data_dir() / "data" / "jigsaws_suturing_b002_excerpt.txt";
 }
 
 JigsawsRecording load_jigsaws(const std::filesystem::path& path, JigsawsManipulator manipulator,

@@ -18,6 +18,7 @@
 #include "numen/hal/device/kinematics_factory.hpp"
 #include "numen/sim/jigsaws.hpp"
 #include "numen/sim/scripted_path.hpp"
+#include "numen/sim/shipped_files.hpp"
 #include "numen/sim/simulated_instrument.hpp"
 #include "numen/sim/trocar_placement.hpp"
 #include "scene_articulation.hpp"
@@ -25,10 +26,6 @@
 #include "scene_model.hpp"
 #include "scene_pointer.hpp"
 #include "toml_reader.hpp"
-
-#ifndef NUMEN_SOURCE_SIM_DIR
-#define NUMEN_SOURCE_SIM_DIR "sim"
-#endif
 
 namespace numen::sim {
 namespace {
@@ -563,7 +560,7 @@ const char* to_string(core::Integrator integrator) noexcept {
   }
 }
 
-std::string default_scene_path() { return std::string(NUMEN_SOURCE_SIM_DIR) + "/scenes/default.toml"; }
+std::string default_scene_path() { return (shipped_data_dir() / "scenes" / "default.toml").string(); }
 
 
 namespace {

@@ -14,6 +14,7 @@
 #include "child_process.hpp"
 #include "numen/sim/run_figures.hpp"
 #include "numen/sim/scene.hpp"
+#include "numen/version.hpp"
 #include "sanitizer.hpp"
 #include "scene_text.hpp"
 #include "temp_dir.hpp"
@@ -274,3 +275,35 @@ TEST(NumenCli, OutOfMemoryIsNamed) {
 }
 
 }  // namespace
+
+// `numen --version` prints the project's version (numen/version.hpp, semantic versioning)
+// and exits 0 without a subcommand.
+TEST(NumenCli, VersionFlagPrintsTheProjectVersion) {
+  TempDir dir;
+  const ChildResult r = run_child({kNumen, "--version"}, dir.path(), 30);
+  ASSERT_EQ(r.status, 0) << r.out << r.err;
+  EXPECT_EQ(r.out, "numen 0.1.0\n");
+  EXPECT_EQ(r.out, std::string("numen ") + NUMEN_VERSION + "\n");
+}
+
+// An installed numen (<prefix>/bin/numen) finds the shipped default scene in
+// <prefix>/share/numen relative to itself, not in the source tree it was built from
+// (sim/shipped_files.hpp; the Debian package and `cmake --install` rely on it).
+TEST(NumenCli, InstalledExecutableFindsTheDefaultSceneRelativeToItself) {
+  NUMEN_REQUIRE_ARTICULATION();
+  TempDir dir;
+  namespace fs = std::filesystem;
+  const fs::path prefix = dir / "prefix";
+  const fs::path source_scenes = fs::path(numen::sim::default_scene_path()).parent_path();
+  fs::create_directories(prefix / "bin");
+  fs::create_directories(prefix / "share/numen/scenes");
+  fs::create_directories(prefix / "share/numen/data");
+  fs::copy_file(kNumen, prefix / "bin/numen");
+  fs::copy_file(source_scenes / "default.toml", prefix / "share/numen/scenes/default.toml");
+  fs::copy_file(source_scenes / "../data/jigsaws_suturing_b002_excerpt.txt",
+                prefix / "share/numen/data/jigsaws_suturing_b002_excerpt.txt");
+  const ChildResult r = run_child({(prefix / "bin/numen").string(), "info", "--json"}, dir.path(), 60);
+  ASSERT_EQ(r.status, 0) << r.out << r.err;
+  const std::string expected = (prefix / "share/numen/scenes/default.toml").string();
+  EXPECT_NE(r.out.find("\"file\":\"" + expected + "\""), std::string::npos) << r.out.substr(0, 300);
+}

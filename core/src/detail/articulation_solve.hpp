@@ -47,8 +47,8 @@
 #include <span>
 #include <vector>
 
+#include "detail/block_cholesky.hpp"
 #include "numen/core/articulation.hpp"
-#include "numen/core/block_cholesky.hpp"
 #include "numen/core/joint.hpp"
 #include "numen/core/types.hpp"
 

@@ -8,7 +8,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "numen/core/block_cholesky.hpp"
+#include "detail/block_cholesky.hpp"
 #include "numen/core/data.hpp"
 #include "numen/core/joint.hpp"
 #include "numen/core/types.hpp"

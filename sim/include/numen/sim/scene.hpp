@@ -81,7 +81,9 @@ struct SceneOverrides {
 /// Loads and compiles `path`. Throws InputError.
 Scene load_scene(const std::string& path, const SceneOverrides& overrides = {});
 
-/// The shipped default scene (sim/scenes/default.toml of the source tree).
+/// The shipped default scene: share/numen/scenes/default.toml of the installed prefix the
+/// running executable belongs to, else sim/scenes/default.toml of the source tree
+/// (shipped_data_dir(), shipped_files.hpp).
 std::string default_scene_path();
 
 /// "god-object", "first-order", "direct" → mode; throws InputError (key

@@ -1,0 +1,146 @@
+# numen as an installed component (docs/architecture.md "Installed package"):
+#   cmake --install build --prefix P
+# installs the four libraries (static unless BUILD_SHARED_LIBS=ON), the public headers (the
+# curated lists below), the `numen` executable, the shipped scenes, data and viewer page under
+# share/numen, the docs under share/doc/numen, and the CMake package numen (targets numen::core,
+# numen::hal, numen::platform, numen::sim; lib/cmake/numen). Layout from GNUInstallDirs.
+# The system files of the Debian package (/etc/numen, the systemd unit, the limits file) are
+# the component `system`, left out of a plain install: cmake/package.cmake.
+include(CMakePackageConfigHelpers)
+
+set(NUMEN_INSTALL_CMAKEDIR ${CMAKE_INSTALL_LIBDIR}/cmake/numen CACHE STRING
+    "Where the CMake package numen (numenConfig.cmake) is installed, relative to the prefix")
+set(NUMEN_INSTALL_DATADIR ${CMAKE_INSTALL_DATADIR}/numen)  # scenes/, data/, viewer/
+
+# Shared libraries: versioned by MAJOR.MINOR (the API compatibility of 0.x, below), and the
+# installed `numen` finds them relative to itself.
+foreach(_lib numen_core numen_hal numen_platform numen_sim)
+  set_target_properties(${_lib} PROPERTIES
+    VERSION ${PROJECT_VERSION} SOVERSION ${PROJECT_VERSION_MAJOR}.${PROJECT_VERSION_MINOR})
+endforeach()
+if(BUILD_SHARED_LIBS)
+  file(RELATIVE_PATH _lib_from_bin ${CMAKE_INSTALL_FULL_BINDIR} ${CMAKE_INSTALL_FULL_LIBDIR})
+  set_target_properties(numen PROPERTIES INSTALL_RPATH "$ORIGIN/${_lib_from_bin}")
+  # RUNPATH is not transitive: each layer finds the one below next to itself.
+  set_target_properties(numen_core numen_hal numen_platform numen_sim PROPERTIES INSTALL_RPATH "$ORIGIN")
+endif()
+
+install(TARGETS numen_core numen_hal numen_platform numen_sim
+        EXPORT numenTargets
+        ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
+        LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
+        RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR}
+        INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
+install(TARGETS numen RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
+
+# --- Public headers: what a program built on numen calls. Each layer's list is curated; a
+# header of include/ that is not listed is an internal of that layer (used by its .cpp files,
+# its tests and the `numen` command) and is not installed. tests/install/ compiles every
+# installed header on its own against the installed prefix.
+function(numen_install_headers base_dir)
+  foreach(_h IN LISTS ARGN)
+    get_filename_component(_d ${_h} DIRECTORY)
+    install(FILES ${base_dir}/${_h} DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/${_d})
+  endforeach()
+endfunction()
+
+# core: the model, the state, one step and its stages, the laws a study calls on its own.
+# Internals live in core/src/detail (solver scratch, PCG, the nets' and joints' solves, the
+# 6×6 block Cholesky).
+numen_install_headers(${PROJECT_SOURCE_DIR}/core/include
+  numen/core/articulation.hpp numen/core/broadphase.hpp numen/core/capacity.hpp
+  numen/core/collision.hpp numen/core/contact.hpp numen/core/contact_force.hpp
+  numen/core/coupling.hpp numen/core/data.hpp numen/core/data_size.hpp numen/core/feedback.hpp
+  numen/core/integrator.hpp numen/core/joint.hpp numen/core/mesh.hpp numen/core/model.hpp
+  numen/core/net_collision.hpp numen/core/net_forces.hpp numen/core/net_model.hpp
+  numen/core/net_state.hpp numen/core/rigid_body.hpp numen/core/step.hpp
+  numen/core/step_stages.hpp numen/core/types.hpp)
+numen_install_headers(${PROJECT_BINARY_DIR}/core/include  # generated
+  numen/core/features.hpp numen/version.hpp)
+
+# hal: buses and frames, CANopen, devices and kinematics, inputs, emulators. Not installed:
+# cobs.hpp and crc16.hpp (the serial frame's byte stuffing and checksum, reached through
+# serial_frame.hpp), and the backends this build leaves out (NUMEN_WITH_*).
+set(_hal_headers
+  numen/hal/canopen/canopen.hpp numen/hal/canopen/canopen_master.hpp numen/hal/canopen/cia402.hpp
+  numen/hal/canopen/device_lifecycle.hpp numen/hal/canopen/emcy.hpp
+  numen/hal/canopen/heartbeat.hpp numen/hal/canopen/nmt.hpp numen/hal/canopen/pdo_mapping.hpp
+  numen/hal/device/admittance_device.hpp numen/hal/device/axis.hpp
+  numen/hal/device/device.hpp numen/hal/device/device_config.hpp
+  numen/hal/device/force_sensor.hpp numen/hal/device/instrument_device.hpp
+  numen/hal/device/kinematics.hpp numen/hal/device/kinematics_factory.hpp
+  numen/hal/device/managed_device.hpp numen/hal/device/minimal_device.hpp
+  numen/hal/device/phantom_kinematics.hpp numen/hal/device/pose_tracker_kinematics.hpp
+  numen/hal/device/safety_supervisor.hpp numen/hal/device/sample_check.hpp
+  numen/hal/device/trocar_kinematics.hpp
+  numen/hal/emulation/admittance_emulator.hpp numen/hal/emulation/device_emulator.hpp
+  numen/hal/input/event_code_name.hpp numen/hal/input/evemu_log.hpp
+  numen/hal/input/evemu_replay.hpp numen/hal/input/input_event.hpp
+  numen/hal/input/relative_pose_integrator.hpp
+  numen/hal/transport/async_record_writer.hpp numen/hal/transport/bus.hpp
+  numen/hal/transport/bus_recorder.hpp numen/hal/transport/can_filter.hpp
+  numen/hal/transport/can_frame.hpp numen/hal/transport/candump_log.hpp
+  numen/hal/transport/line_file.hpp numen/hal/transport/log_bus.hpp
+  numen/hal/transport/serial_frame.hpp numen/hal/transport/sim_bus.hpp
+  numen/hal/transport/splitmix64.hpp)
+if(NUMEN_WITH_SOCKETCAN)
+  list(APPEND _hal_headers numen/hal/transport/socketcan_bus.hpp)
+endif()
+if(NUMEN_WITH_SERIAL)
+  list(APPEND _hal_headers numen/hal/transport/serial_bus.hpp)
+endif()
+if(NUMEN_WITH_EVDEV)
+  list(APPEND _hal_headers numen/hal/input/evdev_pointer.hpp)
+endif()
+numen_install_headers(${PROJECT_SOURCE_DIR}/hal/include ${_hal_headers})
+numen_install_headers(${PROJECT_BINARY_DIR}/hal/include numen/hal/features.hpp)  # generated
+
+# platform: the control loops, real-time setup, clocks, timers, statistics, the state stream.
+numen_install_headers(${PROJECT_SOURCE_DIR}/platform/include
+  numen/platform/admittance_loop.hpp numen/platform/control_loop.hpp
+  numen/platform/device_binding.hpp numen/platform/latency_histogram.hpp
+  numen/platform/loop_statistics.hpp numen/platform/monotonic_clock.hpp
+  numen/platform/periodic_timer.hpp numen/platform/realtime_setup.hpp
+  numen/platform/state_frame.hpp numen/platform/state_stream.hpp
+  numen/platform/trace_queue.hpp)
+
+# sim: scenes (load_scene, run_scene), trajectories, simulated instruments, traces, studies,
+# view recordings and server. Not installed: the `numen` command's helpers (cli_values.hpp,
+# progress_bar.hpp, run_summary_text.hpp, trace_columns.hpp) and the studies' building blocks
+# (study_common.hpp, study_stability_cases.hpp).
+numen_install_headers(${PROJECT_SOURCE_DIR}/sim/include
+  numen/sim/admittance_run.hpp numen/sim/bus_spec.hpp numen/sim/computed_motion.hpp
+  numen/sim/device_process.hpp numen/sim/input_error.hpp numen/sim/jigsaws.hpp
+  numen/sim/obj_mesh.hpp numen/sim/pointer_path.hpp numen/sim/run.hpp
+  numen/sim/run_figures.hpp numen/sim/run_verdict.hpp numen/sim/scene.hpp
+  numen/sim/scene_info.hpp numen/sim/scripted_path.hpp numen/sim/shipped_files.hpp
+  numen/sim/simulated_instrument.hpp numen/sim/study_accuracy.hpp
+  numen/sim/study_stability.hpp numen/sim/trace.hpp numen/sim/trajectory.hpp
+  numen/sim/trocar_placement.hpp numen/sim/view_output.hpp numen/sim/view_recording.hpp
+  numen/sim/view_scene.hpp numen/sim/view_server.hpp)
+
+# --- Shipped files: scenes and data side by side (a scene's "../data/..." resolves), the
+# viewer page; found by an installed `numen` relative to itself (sim/src/shipped_files.cpp).
+install(DIRECTORY ${PROJECT_SOURCE_DIR}/sim/scenes ${PROJECT_SOURCE_DIR}/sim/data
+        DESTINATION ${NUMEN_INSTALL_DATADIR})
+install(DIRECTORY ${PROJECT_BINARY_DIR}/viewer/ DESTINATION ${NUMEN_INSTALL_DATADIR}/viewer)  # sim/CMakeLists.txt
+install(DIRECTORY ${PROJECT_SOURCE_DIR}/docs/ DESTINATION ${CMAKE_INSTALL_DOCDIR})
+install(FILES ${PROJECT_SOURCE_DIR}/README.md DESTINATION ${CMAKE_INSTALL_DOCDIR})
+
+# --- Python module (sim/python, pybind11): its install rule goes here, e.g.
+#   install(TARGETS <module target> LIBRARY DESTINATION <python dir>)
+# with <python dir> ${CMAKE_INSTALL_LIBDIR}/python3/dist-packages by default. The Debian
+# package (cmake/package.cmake) takes every file of the default install, the module included.
+
+# --- The CMake package: find_package(numen 0.1 CONFIG REQUIRED).
+install(EXPORT numenTargets NAMESPACE numen:: FILE numenTargets.cmake
+        DESTINATION ${NUMEN_INSTALL_CMAKEDIR})
+configure_package_config_file(${PROJECT_SOURCE_DIR}/cmake/numenConfig.cmake.in
+  ${PROJECT_BINARY_DIR}/numenConfig.cmake INSTALL_DESTINATION ${NUMEN_INSTALL_CMAKEDIR}
+  PATH_VARS NUMEN_INSTALL_DATADIR)
+# While MAJOR is 0, a MINOR release may change the API: a request for 0.1 accepts 0.1.x only
+# (semantic versioning; docs/architecture.md "Installed package"). From 1.0 on: SameMajorVersion.
+write_basic_package_version_file(${PROJECT_BINARY_DIR}/numenConfigVersion.cmake
+  VERSION ${PROJECT_VERSION} COMPATIBILITY SameMinorVersion)
+install(FILES ${PROJECT_BINARY_DIR}/numenConfig.cmake ${PROJECT_BINARY_DIR}/numenConfigVersion.cmake
+        DESTINATION ${NUMEN_INSTALL_CMAKEDIR})

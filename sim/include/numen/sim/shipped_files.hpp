@@ -1,0 +1,27 @@
+#pragma once
+/// @file shipped_files.hpp
+/// Where the files shipped with numen are found at run time: the scenes, their data
+/// (recordings) and the viewer page. An installed `numen` finds them relative to its own
+/// executable, `<prefix>/bin/../share/numen/...` (docs/architecture.md "Installed package");
+/// a program run from the build tree falls back to the source tree's sim/ and the build
+/// tree's viewer/.
+
+#include <filesystem>
+
+namespace numen::sim {
+
+/// Directory of the running executable (/proc/self/exe resolved); empty if it cannot be read.
+std::filesystem::path executable_dir();
+
+/// The root of the shipped scenes and data: `<executable dir>/<bin → share/numen>` (e.g.
+/// /usr/bin/../share/numen) when it holds scenes/default.toml, else the source tree's sim/
+/// this library was built from. Its scenes/ and data/ sit side by side there, so a scene's
+/// "../data/..." paths resolve in both layouts.
+std::filesystem::path shipped_data_dir();
+
+/// The viewer page directory (index.html, viewer.js, vendor/): `<shipped data dir>/viewer`
+/// of an installed prefix when it holds index.html, else `build_tree_dir` (the build tree's
+/// page, which the `numen` target passes).
+std::filesystem::path shipped_viewer_dir(const std::filesystem::path& build_tree_dir);
+
+}  // namespace numen::sim
