@@ -65,6 +65,7 @@ set(_hal_headers
   numen/hal/canopen/canopen.hpp numen/hal/canopen/canopen_master.hpp numen/hal/canopen/cia402.hpp
   numen/hal/canopen/device_lifecycle.hpp numen/hal/canopen/emcy.hpp
   numen/hal/canopen/heartbeat.hpp numen/hal/canopen/nmt.hpp numen/hal/canopen/pdo_mapping.hpp
+  numen/hal/canopen/sdo.hpp
   numen/hal/device/admittance_device.hpp numen/hal/device/axis.hpp
   numen/hal/device/device.hpp numen/hal/device/device_config.hpp
   numen/hal/device/force_sensor.hpp numen/hal/device/instrument_device.hpp
@@ -74,6 +75,7 @@ set(_hal_headers
   numen/hal/device/safety_supervisor.hpp numen/hal/device/sample_check.hpp
   numen/hal/device/trocar_kinematics.hpp
   numen/hal/emulation/admittance_emulator.hpp numen/hal/emulation/device_emulator.hpp
+  numen/hal/emulation/object_dictionary.hpp numen/hal/emulation/sdo_server.hpp
   numen/hal/input/event_code_name.hpp numen/hal/input/evemu_log.hpp
   numen/hal/input/evemu_replay.hpp numen/hal/input/input_event.hpp
   numen/hal/input/relative_pose_integrator.hpp
@@ -113,7 +115,8 @@ numen_install_headers(${PROJECT_SOURCE_DIR}/sim/include
   numen/sim/device_process.hpp numen/sim/input_error.hpp numen/sim/jigsaws.hpp
   numen/sim/obj_mesh.hpp numen/sim/pointer_path.hpp numen/sim/run.hpp
   numen/sim/run_figures.hpp numen/sim/run_verdict.hpp numen/sim/scene.hpp
-  numen/sim/scene_info.hpp numen/sim/scripted_path.hpp numen/sim/shipped_files.hpp
+  numen/sim/scene_info.hpp numen/sim/scripted_path.hpp numen/sim/sdo_session.hpp
+  numen/sim/shipped_files.hpp
   numen/sim/simulated_instrument.hpp numen/sim/study_accuracy.hpp
   numen/sim/study_stability.hpp numen/sim/trace.hpp numen/sim/trajectory.hpp
   numen/sim/trocar_placement.hpp numen/sim/view_output.hpp numen/sim/view_recording.hpp

@@ -238,7 +238,9 @@ TEST(RunDefaultScene, AnInjectedDriveFaultIsReportedByItsEmcyName) {
   const Scene& scene = default_scene();
   SceneRunner runner(scene, 0);
   for (int k = 0; k < 500; ++k) {
-    if (k == 300) ASSERT_TRUE(runner.instrument().emulator().inject_drive_fault(2, 0x4310));
+    if (k == 300) {
+      ASSERT_TRUE(runner.instrument().emulator().inject_drive_fault(2, 0x4310));
+    }
     runner.period();
   }
   const RunSummary s = runner.summary();
