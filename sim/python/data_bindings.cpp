@@ -53,6 +53,25 @@ py::array vec3_rows(const py::object& self, std::size_t n, const double* first) 
               {static_cast<py::ssize_t>(sizeof(Item)), sizeof(double)});
 }
 
+/// Getter of the (n, 3) view of the Vec3 `member` of every element of the Data vector `items`
+/// (bodies, nodes).
+template <typename Item>
+auto rows_of(std::vector<Item> core::Data::*items, core::Vec3 Item::*member) {
+  return [items, member](const py::object& self) {
+    const std::vector<Item>& v = handle(self).data.*items;
+    return vec3_rows<Item>(self, v.size(), v.empty() ? nullptr : (v[0].*member).data());
+  };
+}
+
+/// Getter of the (num_contacts, 3) view of the Vec3 `member` of Data::contacts.
+auto contact_rows(core::Vec3 core::Contact::*member) {
+  return [member](const py::object& self) {
+    const core::Data& d = handle(self).data;
+    return vec3_rows<core::Contact>(self, static_cast<std::size_t>(d.num_contacts),
+                                    (d.contacts[0].*member).data());
+  };
+}
+
 /// The model a step argument names: a numen.Scene (its model) or a numen.Model.
 const core::Model& model_of(const py::object& scene_or_model) {
   if (py::isinstance<sim::Scene>(scene_or_model)) return scene_or_model.cast<const sim::Scene&>().model;
@@ -209,12 +228,7 @@ void bind_data(py::module_& m) {
           },
           "View (4,) of the device target orientation (x, y, z, w).")
       .def_property_readonly(
-          "body_positions",
-          [](py::object self) {
-            const core::Data& d = handle(self).data;
-            return vec3_rows<core::BodyState>(
-                self, d.bodies.size(), d.bodies.empty() ? nullptr : d.bodies[0].position.data());
-          },
+          "body_positions", rows_of(&core::Data::bodies, &core::BodyState::position),
           "View (B, 3) of the bodies' COM positions (m, world); strided over core::BodyState.")
       .def_property_readonly(
           "body_orientations",
@@ -227,37 +241,17 @@ void bind_data(py::module_& m) {
           },
           "View (B, 4) of the bodies' orientations, unit quaternions (x, y, z, w), body to world.")
       .def_property_readonly(
-          "body_linear_velocities",
-          [](py::object self) {
-            const core::Data& d = handle(self).data;
-            return vec3_rows<core::BodyState>(
-                self, d.bodies.size(), d.bodies.empty() ? nullptr : d.bodies[0].linear_velocity.data());
-          },
+          "body_linear_velocities", rows_of(&core::Data::bodies, &core::BodyState::linear_velocity),
           "View (B, 3) of the COM linear velocities (m/s, world).")
       .def_property_readonly(
-          "body_angular_velocities",
-          [](py::object self) {
-            const core::Data& d = handle(self).data;
-            return vec3_rows<core::BodyState>(
-                self, d.bodies.size(), d.bodies.empty() ? nullptr : d.bodies[0].angular_velocity.data());
-          },
+          "body_angular_velocities", rows_of(&core::Data::bodies, &core::BodyState::angular_velocity),
           "View (B, 3) of the angular velocities (rad/s, world frame).")
       .def_property_readonly(
-          "node_positions",
-          [](py::object self) {
-            const core::Data& d = handle(self).data;
-            return vec3_rows<core::NodeState>(
-                self, d.nodes.size(), d.nodes.empty() ? nullptr : d.nodes[0].position.data());
-          },
+          "node_positions", rows_of(&core::Data::nodes, &core::NodeState::position),
           "View (N, 3) of the net nodes' positions (m, world); (0, 3) without nets (or in a "
           "build without deformable nets).")
       .def_property_readonly(
-          "node_velocities",
-          [](py::object self) {
-            const core::Data& d = handle(self).data;
-            return vec3_rows<core::NodeState>(
-                self, d.nodes.size(), d.nodes.empty() ? nullptr : d.nodes[0].velocity.data());
-          },
+          "node_velocities", rows_of(&core::Data::nodes, &core::NodeState::velocity),
           "View (N, 3) of the net nodes' velocities (m/s, world).")
       .def_property_readonly(
           "feedback_wrench",
@@ -276,29 +270,14 @@ void bind_data(py::module_& m) {
           "View (6,) of the coupling (Eq. 2) on the attached body: force (N), torque (N·m) at "
           "its COM, world.")
       .def_property_readonly(
-          "contact_points",
-          [](py::object self) {
-            const core::Data& d = handle(self).data;
-            return vec3_rows<core::Contact>(self, static_cast<std::size_t>(d.num_contacts),
-                                            d.contacts[0].position.data());
-          },
+          "contact_points", contact_rows(&core::Contact::position),
           "View (C, 3) of the last step's contact points (m, world), C = num_contacts when "
           "taken; strided over core::Contact.")
       .def_property_readonly(
-          "contact_normals",
-          [](py::object self) {
-            const core::Data& d = handle(self).data;
-            return vec3_rows<core::Contact>(self, static_cast<std::size_t>(d.num_contacts),
-                                            d.contacts[0].normal.data());
-          },
+          "contact_normals", contact_rows(&core::Contact::normal),
           "View (C, 3) of the contact normals (unit, from body_b/obstacle towards body_a).")
       .def_property_readonly(
-          "contact_forces",
-          [](py::object self) {
-            const core::Data& d = handle(self).data;
-            return vec3_rows<core::Contact>(self, static_cast<std::size_t>(d.num_contacts),
-                                            d.contacts[0].force.data());
-          },
+          "contact_forces", contact_rows(&core::Contact::force),
           "View (C, 3) of the penalty forces on body_a (N, world); -force on body_b.")
       .def_property_readonly(
           "contact_depths",

@@ -6,6 +6,7 @@
 
 #include <exception>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -149,9 +150,15 @@ void bind_scene(py::module_& m) {
 
   m.def(
       "load_scene",
-      [](const std::string& path) { return std::make_shared<sim::Scene>(sim::load_scene(path)); },
-      py::arg("path"),
-      "Loads and compiles the scene file at `path` (TOML, docs/scenes.md). Raises "
+      [](const std::string& path, const std::optional<std::string>& coupling) {
+        sim::SceneOverrides overrides;
+        if (coupling) overrides.coupling = sim::parse_coupling_mode(*coupling);
+        return std::make_shared<sim::Scene>(sim::load_scene(path, overrides));
+      },
+      py::arg("path"), py::arg("coupling") = py::none(),
+      "Loads and compiles the scene file at `path` (TOML, docs/scenes.md); `coupling` "
+      "('god-object', 'first-order', 'direct'; None: the scene's) overrides the scene's "
+      "coupling mode like `numen run --coupling`. Raises "
       "numen.InputError (a ValueError) with the located message 'file:line:column: key: "
       "message' and its parts as attributes.");
   m.def("default_scene_path", &sim::default_scene_path,

@@ -45,3 +45,15 @@ def test_missing_scene_raises_input_error(tmp_path):
     with pytest.raises(numen.InputError) as info:
         numen.load_scene(str(tmp_path / "none.toml"))
     assert info.value.file == str(tmp_path / "none.toml")
+
+
+def test_coupling_override():
+    path = numen.default_scene_path()
+    try:
+        direct = numen.load_scene(path, coupling="direct")
+    except numen.InputError as e:
+        pytest.skip(str(e))  # a build without articulation cannot load the default scene
+    assert direct.model.coupling == "direct"
+    with pytest.raises(numen.InputError) as info:
+        numen.load_scene(path, coupling="nonsense")
+    assert info.value.key == "coupling"
