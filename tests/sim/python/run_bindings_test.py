@@ -16,7 +16,7 @@ def test_run_scene_default_is_clean_and_has_the_json_figures(scene):
     # The dict is `numen run --json`'s object: the same keys, whatever they are.
     cli = os.environ.get("NUMEN_CLI")
     if cli:
-        out = subprocess.run([cli, "run", "--json", "--duration", "1"], check=True,
+        out = subprocess.run([cli, "run", scene.file, "--json", "--duration", "1"], check=True,
                              capture_output=True, text=True).stdout
         assert summary.keys() == json.loads(out).keys()
 
