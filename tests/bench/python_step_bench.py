@@ -55,7 +55,7 @@ def timer_cost_s(samples=200000):
 
 
 def cpp_benchmark(path):
-    out = subprocess.run([path, "--benchmark_filter=step_time/DefaultScene$",
+    out = subprocess.run([path, "--benchmark_filter=step_time/DefaultScene/",
                           "--benchmark_format=json"], check=True, capture_output=True,
                          text=True).stdout
     b = json.loads(out)["benchmarks"][0]
