@@ -130,10 +130,10 @@ install(DIRECTORY ${PROJECT_BINARY_DIR}/viewer/ DESTINATION ${NUMEN_INSTALL_DATA
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/docs/ DESTINATION ${CMAKE_INSTALL_DOCDIR})
 install(FILES ${PROJECT_SOURCE_DIR}/README.md DESTINATION ${CMAKE_INSTALL_DOCDIR})
 
-# --- Python module (sim/python, pybind11): its install rule goes here, e.g.
-#   install(TARGETS <module target> LIBRARY DESTINATION <python dir>)
-# with <python dir> ${CMAKE_INSTALL_LIBDIR}/python3/dist-packages by default. The Debian
-# package (cmake/package.cmake) takes every file of the default install, the module included.
+# --- Python module (sim/python, pybind11): installed by sim/python/CMakeLists.txt into
+# NUMEN_PYTHON_INSTALL_DIR (lib/python3/dist-packages, where Debian's python3 looks under /usr).
+# The Debian package (cmake/package.cmake) takes every file of the default install, the module
+# included.
 
 # --- The CMake package: find_package(numen 0.1 CONFIG REQUIRED).
 install(EXPORT numenTargets NAMESPACE numen:: FILE numenTargets.cmake

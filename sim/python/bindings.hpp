@@ -1,0 +1,34 @@
+#pragma once
+/// @file bindings.hpp
+/// The parts of the Python module `numen` (docs/python.md), one function per source file,
+/// called in this order by numen_module.cpp: scene_bindings.cpp (load_scene, Scene, Model,
+/// InputError), data_bindings.cpp (Data, its NumPy views, step), run_bindings.cpp (run_scene,
+/// the studies).
+
+#include <pybind11/pybind11.h>
+
+#include <memory>
+
+#include "numen/core/data.hpp"
+#include "numen/core/model.hpp"
+#include "numen/sim/scene.hpp"
+
+namespace numen::python {
+
+/// A core::Data made by core::make_data() for one Scene's model, and that Scene (kept alive
+/// while the Data lives: `model` points into it). Held by the Python object `numen.Data`, never
+/// moved: the NumPy views point into `data` and take the Python object as their base.
+struct DataHandle {
+  std::shared_ptr<const sim::Scene> scene;  ///< Owner of *model.
+  const core::Model* model = nullptr;       ///< The model `data` was made for.
+  core::Data data;
+};
+
+/// numen.InputError, load_scene, default_scene_path, Scene, Model.
+void bind_scene(pybind11::module_& m);
+/// numen.Data, numen.step, numen._testing.step_loop.
+void bind_data(pybind11::module_& m);
+/// numen.run_scene, numen.study_stability, numen.study_accuracy.
+void bind_run(pybind11::module_& m);
+
+}  // namespace numen::python

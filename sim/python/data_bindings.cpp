@@ -1,0 +1,320 @@
+/// @file data_bindings.cpp
+/// numen.Data (core::Data of a scene), its read-only NumPy views, numen.step, and
+/// numen._testing.step_loop (the same scripted loop in C++, for the tests and the benchmark).
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+
+#include <chrono>
+#include <cstddef>
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "bindings.hpp"
+#include "numen/core/step.hpp"
+
+namespace py = pybind11;
+
+namespace numen::python {
+namespace {
+
+// feedback_wrench / coupling_wrench are viewed as 6 contiguous doubles (force, then torque).
+static_assert(sizeof(core::Wrench) == 6 * sizeof(double), "Wrench is not 6 packed doubles");
+static_assert(sizeof(core::Vec3) == 3 * sizeof(double) && sizeof(core::Quat) == 4 * sizeof(double),
+              "Vec3 / Quat are not packed doubles");
+
+/// Bytes from `a` to `b` (two addresses inside one Data).
+py::ssize_t byte_offset(const void* a, const void* b) {
+  return static_cast<const char*>(b) - static_cast<const char*>(a);
+}
+
+/// A read-only NumPy array of `shape` over memory inside the Data of `self` starting at
+/// `first`, with byte `strides` (an array of structs: the stride is the struct's size): no copy;
+/// the array's base is `self` (the numen.Data), which therefore lives as long as the view.
+/// Data's vectors are sized once by make_data() and never reallocated, so the view stays valid
+/// and shows each new step. An empty view (a dimension 0) points at the Data itself.
+template <typename T>
+py::array view(const py::object& self, const T* first, std::vector<py::ssize_t> shape,
+               std::vector<py::ssize_t> strides) {
+  py::array a(py::dtype::of<T>(), std::move(shape), std::move(strides), first, self);
+  py::detail::array_proxy(a.ptr())->flags &= ~py::detail::npy_api::NPY_ARRAY_WRITEABLE_;
+  return a;
+}
+
+DataHandle& handle(const py::object& self) { return self.cast<DataHandle&>(); }
+
+/// (n, 3) view of one Vec3 member of `n` consecutive structs of type Item, whose first
+/// element's member starts at `first` (nullptr when n is 0; the view then points at `self`'s Data).
+template <typename Item>
+py::array vec3_rows(const py::object& self, std::size_t n, const double* first) {
+  const double* p = n > 0 ? first : reinterpret_cast<const double*>(&handle(self).data);
+  return view(self, p, {static_cast<py::ssize_t>(n), 3},
+              {static_cast<py::ssize_t>(sizeof(Item)), sizeof(double)});
+}
+
+/// Getter of the (n, 3) view of the Vec3 `member` of every element of the Data vector `items`
+/// (bodies, nodes).
+template <typename Item>
+auto rows_of(std::vector<Item> core::Data::*items, core::Vec3 Item::*member) {
+  return [items, member](const py::object& self) {
+    const std::vector<Item>& v = handle(self).data.*items;
+    return vec3_rows<Item>(self, v.size(), v.empty() ? nullptr : (v[0].*member).data());
+  };
+}
+
+/// Getter of the (num_contacts, 3) view of the Vec3 `member` of Data::contacts.
+auto contact_rows(core::Vec3 core::Contact::*member) {
+  return [member](const py::object& self) {
+    const core::Data& d = handle(self).data;
+    return vec3_rows<core::Contact>(self, static_cast<std::size_t>(d.num_contacts),
+                                    (d.contacts[0].*member).data());
+  };
+}
+
+/// The model a step argument names: a numen.Scene (its model) or a numen.Model.
+const core::Model& model_of(const py::object& scene_or_model) {
+  if (py::isinstance<sim::Scene>(scene_or_model)) return scene_or_model.cast<const sim::Scene&>().model;
+  return scene_or_model.cast<const core::Model&>();
+}
+
+/// core::step(model, data) after checking that `data` was made for `model` (a Data of another
+/// model has other sizes: stepping it would read out of bounds).
+void checked_step(const core::Model& model, DataHandle& h) {
+  if (&model != h.model)
+    throw py::value_error("numen.step: this Data was made for another model (use the Scene, "
+                          "or Scene.model, whose make_data() made it)");
+  core::step(model, h.data);
+}
+
+/// A (3,) or (4,) float vector argument into `out`; ValueError naming `what` otherwise.
+void read_vector(const py::handle& arg, double* out, py::ssize_t n, const char* what) {
+  const auto a = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(arg);
+  if (!a || a.ndim() != 1 || a.shape(0) != n)
+    throw py::value_error(std::string(what) + ": expected " + std::to_string(n) + " numbers");
+  for (py::ssize_t i = 0; i < n; ++i) out[i] = a.at(i);
+}
+
+/// The scripted loop of the tests and of the benchmark (docs/python.md), in C++: `steps` times,
+/// target := the scene trajectory's pose and twist at data.time, then core::step. Returns
+/// copies of the end state, the wall time of the loop and the summed time of the step calls
+/// (each bracketed by steady_clock, like the step_time benchmark's manual timing).
+py::dict step_loop(const sim::Scene& scene, std::int64_t steps) {
+  core::Data data = core::make_data(scene.model);
+  using Clock = std::chrono::steady_clock;
+  Clock::duration in_step{};
+  const Clock::time_point t0 = Clock::now();
+  for (std::int64_t k = 0; k < steps; ++k) {
+    data.target = scene.trajectory.at(data.time).pose;
+    data.target_twist = scene.trajectory.twist_at(data.time);
+    const Clock::time_point s0 = Clock::now();
+    core::step(scene.model, data);
+    in_step += Clock::now() - s0;
+  }
+  const Clock::time_point t1 = Clock::now();
+  const auto n = static_cast<py::ssize_t>(data.bodies.size());
+  py::array_t<double> pos({n, py::ssize_t{3}}), quat({n, py::ssize_t{4}}),
+      lin({n, py::ssize_t{3}}), ang({n, py::ssize_t{3}});
+  for (py::ssize_t i = 0; i < n; ++i) {
+    const core::BodyState& b = data.bodies[static_cast<std::size_t>(i)];
+    for (int c = 0; c < 3; ++c) {
+      pos.mutable_at(i, c) = b.position[c];
+      lin.mutable_at(i, c) = b.linear_velocity[c];
+      ang.mutable_at(i, c) = b.angular_velocity[c];
+    }
+    for (int c = 0; c < 4; ++c) quat.mutable_at(i, c) = b.orientation.coeffs()[c];
+  }
+  const auto nn = static_cast<py::ssize_t>(data.nodes.size());
+  py::array_t<double> nodes({nn, py::ssize_t{3}});
+  for (py::ssize_t i = 0; i < nn; ++i)
+    for (int c = 0; c < 3; ++c) nodes.mutable_at(i, c) = data.nodes[static_cast<std::size_t>(i)].position[c];
+  py::array_t<double> feedback(6);
+  for (int c = 0; c < 3; ++c) {
+    feedback.mutable_at(c) = data.feedback_wrench.force[c];
+    feedback.mutable_at(c + 3) = data.feedback_wrench.torque[c];
+  }
+  py::dict out;
+  out["time"] = data.time;
+  out["step_count"] = data.step_count;
+  out["body_positions"] = pos;
+  out["body_orientations"] = quat;
+  out["body_linear_velocities"] = lin;
+  out["body_angular_velocities"] = ang;
+  out["node_positions"] = nodes;
+  out["feedback_wrench"] = feedback;
+  out["num_contacts"] = data.num_contacts;
+  out["wall_s"] = std::chrono::duration<double>(t1 - t0).count();
+  out["step_s"] = std::chrono::duration<double>(in_step).count();
+  return out;
+}
+
+}  // namespace
+
+void bind_data(py::module_& m) {
+  py::class_<DataHandle>(
+      m, "Data",
+      "All mutable state of a scene (core::Data), made by Scene.make_data(). Inputs are set "
+      "with set_target() / attached_body; step() advances model.dt. The array properties are "
+      "read-only NumPy views of this Data's memory (no copy; the Data is their base and lives "
+      "as long as they do): a view taken once shows the values of every later step. Contact "
+      "views cover the contacts of the last step at the time they are taken. SI units, world "
+      "frame; quaternions (x, y, z, w), body to world; rows in body index order "
+      "(Model.body_names).")
+      .def("step", [](py::object self, const py::object& scene_or_model) {
+             checked_step(model_of(scene_or_model), handle(self));
+           },
+           py::arg("scene_or_model"),
+           "Advances the state by model.dt (core::step: contacts, forces, implicit solve, "
+           "feedback, non-finite checks). The Scene or Model must be the one whose make_data() "
+           "made this Data (ValueError otherwise). Never fails otherwise: problems are status bits.")
+      .def("reset", [](DataHandle& h) { core::reset_data(*h.model, h.data); },
+           "Back to the initial state (core::reset_data): bodies at their initial pose and "
+           "twist, inputs, outputs and counters cleared, device on the initial attached body.")
+      .def(
+          "set_target",
+          [](DataHandle& h, const py::handle& position, const py::handle& orientation,
+             const py::handle& linear_velocity, const py::handle& angular_velocity) {
+            core::Pose pose;
+            core::Twist twist;
+            read_vector(position, pose.position.data(), 3, "position");
+            read_vector(orientation, pose.orientation.coeffs().data(), 4, "orientation");
+            if (!linear_velocity.is_none())
+              read_vector(linear_velocity, twist.linear.data(), 3, "linear_velocity");
+            if (!angular_velocity.is_none())
+              read_vector(angular_velocity, twist.angular.data(), 3, "angular_velocity");
+            h.data.target = pose;
+            h.data.target_twist = twist;
+          },
+          py::arg("position"), py::arg("orientation"), py::arg("linear_velocity") = py::none(),
+          py::arg("angular_velocity") = py::none(),
+          "Sets the device target of the attached body's COM frame (Data::target, "
+          "target_twist; world): position (3,) m, orientation (4,) unit quaternion (x, y, z, "
+          "w), linear velocity (3,) m/s and angular velocity (3,) rad/s (default zero). Values "
+          "are taken as given (a non-finite target makes the next step skip the coupling and set "
+          "STATUS_INVALID_TARGET). ValueError for a wrong length.")
+      .def_property(
+          "attached_body", [](const DataHandle& h) { return h.data.attached_body; },
+          [](DataHandle& h, int body) { core::set_attached_body(*h.model, h.data, body); },
+          "Body the device drives (-1: none); setting an out-of-range index detaches "
+          "(core::set_attached_body: tool switching).")
+      .def_property_readonly("time", [](const DataHandle& h) { return h.data.time; },
+                             "Simulated time (s).")
+      .def_property_readonly("step_count", [](const DataHandle& h) { return h.data.step_count; })
+      .def_property_readonly("status", [](const DataHandle& h) { return h.data.status; },
+                             "StepStatus bits of the last step (numen.STATUS_*; 0: ok).")
+      .def_property_readonly("nonfinite_steps",
+                             [](const DataHandle& h) { return h.data.nonfinite_steps; },
+                             "Steps whose result was rejected as non-finite (rolled back).")
+      .def_property_readonly("num_contacts", [](const DataHandle& h) { return h.data.num_contacts; },
+                             "Contacts C of the last step.")
+      .def_property_readonly("max_penetration",
+                             [](const DataHandle& h) { return h.data.max_penetration; },
+                             "Deepest contact of the last step (m).")
+      .def_property_readonly("solver_iterations",
+                             [](const DataHandle& h) { return h.data.solver_iterations; },
+                             "Iterations of the implicit solve in the last step.")
+      .def_property_readonly(
+          "target_position",
+          [](py::object self) {
+            const core::Data& d = handle(self).data;
+            return view(self, d.target.position.data(), {3}, {sizeof(double)});
+          },
+          "View (3,) of the device target position (m, world).")
+      .def_property_readonly(
+          "target_orientation",
+          [](py::object self) {
+            const core::Data& d = handle(self).data;
+            return view(self, d.target.orientation.coeffs().data(), {4}, {sizeof(double)});
+          },
+          "View (4,) of the device target orientation (x, y, z, w).")
+      .def_property_readonly(
+          "body_positions", rows_of(&core::Data::bodies, &core::BodyState::position),
+          "View (B, 3) of the bodies' COM positions (m, world); strided over core::BodyState.")
+      .def_property_readonly(
+          "body_orientations",
+          [](py::object self) {
+            const core::Data& d = handle(self).data;
+            const double* p = d.bodies.empty() ? reinterpret_cast<const double*>(&d)
+                                               : d.bodies[0].orientation.coeffs().data();
+            return view(self, p, {static_cast<py::ssize_t>(d.bodies.size()), 4},
+                        {sizeof(core::BodyState), sizeof(double)});
+          },
+          "View (B, 4) of the bodies' orientations, unit quaternions (x, y, z, w), body to world.")
+      .def_property_readonly(
+          "body_linear_velocities", rows_of(&core::Data::bodies, &core::BodyState::linear_velocity),
+          "View (B, 3) of the COM linear velocities (m/s, world).")
+      .def_property_readonly(
+          "body_angular_velocities", rows_of(&core::Data::bodies, &core::BodyState::angular_velocity),
+          "View (B, 3) of the angular velocities (rad/s, world frame).")
+      .def_property_readonly(
+          "node_positions", rows_of(&core::Data::nodes, &core::NodeState::position),
+          "View (N, 3) of the net nodes' positions (m, world); (0, 3) without nets (or in a "
+          "build without deformable nets).")
+      .def_property_readonly(
+          "node_velocities", rows_of(&core::Data::nodes, &core::NodeState::velocity),
+          "View (N, 3) of the net nodes' velocities (m/s, world).")
+      .def_property_readonly(
+          "feedback_wrench",
+          [](py::object self) {
+            const core::Data& d = handle(self).data;
+            return view(self, d.feedback_wrench.force.data(), {6}, {sizeof(double)});
+          },
+          "View (6,) of the device feedback: force (N) then torque (N·m), world, about the "
+          "attached body's target point; saturated (paper Eq. 8-9).")
+      .def_property_readonly(
+          "coupling_wrench",
+          [](py::object self) {
+            const core::Data& d = handle(self).data;
+            return view(self, d.coupling_wrench.force.data(), {6}, {sizeof(double)});
+          },
+          "View (6,) of the coupling (Eq. 2) on the attached body: force (N), torque (N·m) at "
+          "its COM, world.")
+      .def_property_readonly(
+          "contact_points", contact_rows(&core::Contact::position),
+          "View (C, 3) of the last step's contact points (m, world), C = num_contacts when "
+          "taken; strided over core::Contact.")
+      .def_property_readonly(
+          "contact_normals", contact_rows(&core::Contact::normal),
+          "View (C, 3) of the contact normals (unit, from body_b/obstacle towards body_a).")
+      .def_property_readonly(
+          "contact_forces", contact_rows(&core::Contact::force),
+          "View (C, 3) of the penalty forces on body_a (N, world); -force on body_b.")
+      .def_property_readonly(
+          "contact_depths",
+          [](py::object self) {
+            const core::Data& d = handle(self).data;
+            return view(self, &d.contacts[0].depth, {static_cast<py::ssize_t>(d.num_contacts)},
+                        {static_cast<py::ssize_t>(sizeof(core::Contact))});
+          },
+          "View (C,) of the penetration depths (m, > 0).")
+      .def_property_readonly(
+          "contact_bodies",
+          [](py::object self) {
+            const core::Data& d = handle(self).data;
+            return view(self, &d.contacts[0].body_a, {static_cast<py::ssize_t>(d.num_contacts), 2},
+                        {static_cast<py::ssize_t>(sizeof(core::Contact)),
+                         byte_offset(&d.contacts[0].body_a, &d.contacts[0].body_b)});
+          },
+          "View (C, 2) int of (body_a, body_b) per contact; body_b -1: a static obstacle.");
+
+  m.def("step", [](const py::object& model, py::object data) {
+          checked_step(model_of(model), handle(data));
+        },
+        py::arg("model"), py::arg("data"),
+        "numen.step(model, data): data.step(model) (core::step), model a Model or a Scene.");
+
+  m.attr("STATUS_CONTACT_OVERFLOW") = static_cast<std::uint32_t>(core::kContactOverflow);
+  m.attr("STATUS_NON_FINITE") = static_cast<std::uint32_t>(core::kNonFinite);
+  m.attr("STATUS_SOLVER_NOT_CONVERGED") = static_cast<std::uint32_t>(core::kSolverNotConverged);
+  m.attr("STATUS_INVALID_TARGET") = static_cast<std::uint32_t>(core::kInvalidTarget);
+
+  py::module_ testing = m.def_submodule(
+      "_testing", "Helpers of the tests and the benchmark (not API).");
+  testing.def("step_loop", &step_loop, py::arg("scene"), py::arg("steps"),
+              "The scripted loop in C++: `steps` times, target := scene.target_at(data.time) "
+              "and its twist, then core::step, on a new Data. Returns a dict of copies of the end "
+              "state (same keys as the Data views), wall_s, the loop's wall time (s), and step_s, the "
+              "sum of the steady-clock time of each core::step call (s).");
+}
+
+}  // namespace numen::python

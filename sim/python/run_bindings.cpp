@@ -1,0 +1,184 @@
+/// @file run_bindings.cpp
+/// numen.run_scene (a run through the bus, its summary as a dict) and the studies
+/// (numen.study_stability, numen.study_accuracy: their rows as lists of dicts).
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "bindings.hpp"
+#include "numen/sim/run.hpp"
+#include "numen/sim/study_accuracy.hpp"
+#include "numen/sim/study_common.hpp"
+#include "numen/sim/study_stability.hpp"
+
+namespace py = pybind11;
+
+namespace numen::python {
+namespace {
+
+/// Integrators by their scene-file names ("implicit-euler", ...); empty: all (the studies'
+/// default). ValueError for an unknown name.
+std::vector<core::Integrator> integrators_named(const std::vector<std::string>& names) {
+  std::vector<core::Integrator> out;
+  for (const std::string& name : names) {
+    bool found = false;
+    for (const core::Integrator i : sim::study::all_integrators())
+      if (name == sim::to_string(i)) {
+        out.push_back(i);
+        found = true;
+      }
+    if (!found) throw py::value_error("unknown integrator '" + name + "'");
+  }
+  return out;
+}
+
+/// `name` if it is one of `known`, else ValueError listing them (the CLI's check).
+void check_member(const std::string& what, const std::string& name,
+                  const std::vector<std::string>& known) {
+  for (const std::string& k : known)
+    if (k == name) return;
+  std::string list;
+  for (const std::string& k : known) list += (list.empty() ? "" : ", ") + k;
+  throw py::value_error("unknown " + what + " '" + name + "' (one of: " + list + ")");
+}
+
+py::dict row_dict(const sim::StabilityRow& r) {
+  py::dict d;
+  d["family"] = r.family;
+  d["case"] = r.case_name;
+  d["integrator"] = r.integrator;
+  d["dt_s"] = r.dt_s;
+  d["mass_kg"] = r.mass_kg;
+  d["stiffness"] = r.stiffness;
+  d["parameter_name"] = r.parameter_name;
+  d["parameter"] = r.parameter;
+  d["omega_dt"] = r.omega_dt;
+  d["steps"] = r.steps;
+  d["stable"] = r.stable;
+  d["diverged_step"] = r.diverged_step;
+  d["reason"] = r.reason;
+  d["energy_ref_j"] = r.energy_ref_j;
+  d["energy_ratio_max"] = r.energy_ratio_max;
+  d["penetration_max_m"] = r.penetration_max_m;
+  d["penetration_bound_m"] = r.penetration_bound_m;
+  d["drift_max_m"] = r.drift_max_m;
+  d["nonfinite_steps"] = r.nonfinite_steps;
+  d["note"] = r.note;
+  return d;
+}
+
+py::dict row_dict(const sim::AccuracyRow& r) {
+  py::dict d;
+  d["case"] = r.case_name;
+  d["integrator"] = r.integrator;
+  d["dt_s"] = r.dt_s;
+  d["steps"] = r.steps;
+  d["horizon_s"] = r.horizon_s;
+  d["position_error_max_mm"] = r.position_error_max_mm;
+  d["position_error_rms_mm"] = r.position_error_rms_mm;
+  d["orientation_error_max_mrad"] = r.orientation_error_max_mrad;
+  d["orientation_error_rms_mrad"] = r.orientation_error_rms_mrad;
+  d["cpu_s_per_sim_s"] = r.cpu_s_per_sim_s;
+  d["diverged"] = r.diverged;
+  d["nonfinite_steps"] = r.nonfinite_steps;
+  d["reference"] = r.reference;
+  return d;
+}
+
+template <typename Row>
+py::list rows_list(const std::vector<Row>& rows) {
+  py::list out;
+  for (const Row& r : rows) out.append(row_dict(r));
+  return out;
+}
+
+}  // namespace
+
+void bind_run(py::module_& m) {
+  m.def(
+      "run_scene",
+      [](const sim::Scene& scene, std::optional<double> duration, const std::string& bus,
+         const std::string& trace, const std::string& record, const std::string& record_view) {
+        sim::RunOptions options;
+        if (duration) options.duration_s = *duration;
+        options.bus.spec = bus;
+        options.bus.record_path = record;
+        options.trace_path = trace;
+        options.record_view_path = record_view;
+        std::string json;
+        {
+          py::gil_scoped_release unlocked;  // a run takes seconds; other Python threads go on
+          json = sim::format_summary_json(sim::run_scene(scene, options));
+        }
+        return py::module_::import("json").attr("loads")(json);
+      },
+      py::arg("scene"), py::arg("duration") = py::none(), py::arg("bus") = "sim",
+      py::arg("trace") = "", py::arg("record") = "", py::arg("record_view") = "",
+      "Runs `scene` like `numen run`: the controller (platform::ControlLoop) over `bus` "
+      "('sim': the simulated bus and instrument; 'log:FILE', 'can:IFACE', 'serial:PATH' as "
+      "`numen run --bus`), for `duration` s of simulated time (None: the scene's), offline "
+      "(unpaced). trace / record / record_view: paths of the CSV trace, the candump recording "
+      "of the controller port and the view recording ('' : none). Returns the summary as the "
+      "dict of `numen run --json` (every figure, dotted names as nested dicts; exit_status 0: "
+      "clean, exit_reasons). Raises InputError, ValueError (bus spec), RuntimeError (files).");
+
+  m.def(
+      "study_stability",
+      [](bool quick, const std::vector<std::string>& families,
+         const std::vector<std::string>& integrators, int grid_steps) {
+        sim::StabilityOptions options;
+        options.quick = quick;
+        for (const std::string& f : families)
+          check_member("family", f, sim::stability_family_names());
+        options.families = families;
+        options.integrators = integrators_named(integrators);
+        options.grid_steps = grid_steps;
+        sim::StabilityResult result;
+        {
+          py::gil_scoped_release unlocked;
+          result = sim::run_stability_study(options);
+        }
+        return rows_list(result.rows);
+      },
+      py::arg("quick") = true, py::arg("families") = std::vector<std::string>{},
+      py::arg("integrators") = std::vector<std::string>{}, py::arg("grid_steps") = -1,
+      "The stability study (`numen study stability`, docs/results.md): stiff and extreme runs, "
+      "a verdict each. quick: coarse grids, short runs (seconds); families: subset of "
+      "'coupling', 'contact', 'articulation', 'extreme', 'boundary', 'scenes' (empty: all); "
+      "integrators: scene-file names (empty: all); grid_steps: steps per grid run (<= 0: the "
+      "study's). Returns one dict per run: family, case, integrator, dt_s, mass_kg, stiffness "
+      "(N/m), parameter_name, parameter, omega_dt, steps, stable, diverged_step, reason, "
+      "energy_ref_j, energy_ratio_max, penetration_max_m, penetration_bound_m, drift_max_m, "
+      "nonfinite_steps, note (the columns of stability_<family>.csv).");
+
+  m.def(
+      "study_accuracy",
+      [](bool quick, const std::vector<std::string>& cases,
+         const std::vector<std::string>& integrators) {
+        sim::AccuracyOptions options;
+        options.quick = quick;
+        for (const std::string& c : cases) check_member("case", c, sim::accuracy_case_names());
+        options.cases = cases;
+        options.integrators = integrators_named(integrators);
+        sim::AccuracyResult result;
+        {
+          py::gil_scoped_release unlocked;
+          result = sim::run_accuracy_study(options);
+        }
+        return rows_list(result.rows);
+      },
+      py::arg("quick") = true, py::arg("cases") = std::vector<std::string>{},
+      py::arg("integrators") = std::vector<std::string>{},
+      "The accuracy study (`numen study accuracy`, docs/results.md): error against a reference "
+      "over a grid of time steps. quick: coarse grid (1e-2 ... 1e-4 s), short horizons; cases: "
+      "subset of 'free-body', 'wall', 'articulated', 'deformable' (empty: all); integrators: "
+      "scene-file names (empty: all). Returns one dict per run: case, integrator, dt_s, steps, "
+      "horizon_s, position_error_max_mm, position_error_rms_mm, orientation_error_max_mrad, "
+      "orientation_error_rms_mrad, cpu_s_per_sim_s, diverged, nonfinite_steps, reference.");
+}
+
+}  // namespace numen::python

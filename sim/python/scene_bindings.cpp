@@ -1,0 +1,168 @@
+/// @file scene_bindings.cpp
+/// numen.InputError, numen.load_scene, numen.default_scene_path, numen.Scene, numen.Model.
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <exception>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "bindings.hpp"
+#include "numen/sim/input_error.hpp"
+
+namespace py = pybind11;
+
+namespace numen::python {
+namespace {
+
+/// A NumPy copy of a 3-vector or of a quaternion as (x, y, z, w) (Eigen's coefficient order).
+py::array_t<double> to_array(const core::Vec3& v) { return py::array_t<double>(3, v.data()); }
+py::array_t<double> to_array(const core::Quat& q) {
+  return py::array_t<double>(4, q.coeffs().data());
+}
+
+}  // namespace
+
+void bind_scene(py::module_& m) {
+  // numen.InputError(ValueError): raised for a bad scene or input file; str() is sim::InputError's
+  // located message "file:line:column: key: message"; attributes file, line, column (1-based,
+  // 0 unknown), key (dotted key path, may be empty) and message (what is wrong).
+  static py::exception<sim::InputError> input_error(m, "InputError", PyExc_ValueError);
+  input_error.doc() =
+      "A user input (scene file, trajectory) is wrong. A ValueError whose message is located "
+      "like numen's C++ error, 'file:line:column: key: message'; attributes file (str), "
+      "line and column (int, 1-based, 0: unknown), key (dotted key path, '' if none) and "
+      "message (str, what is wrong).";
+  py::register_exception_translator([](std::exception_ptr p) {
+    try {
+      if (p) std::rethrow_exception(p);
+    } catch (const sim::InputError& e) {
+      py::object error = py::reinterpret_borrow<py::object>(input_error.ptr())(e.what());
+      error.attr("file") = e.file();
+      error.attr("line") = e.line();
+      error.attr("column") = e.column();
+      error.attr("key") = e.key();
+      error.attr("message") = e.message();
+      PyErr_SetObject(input_error.ptr(), error.ptr());
+    }
+  });
+
+  py::class_<core::Model>(m, "Model",
+                          "The compiled, immutable model of a scene (core::Model), read-only. "
+                          "Lives as long as its Scene.")
+      .def_property_readonly("dt", [](const core::Model& mo) { return mo.dt; },
+                             "Fixed time step (s).")
+      .def_property_readonly("gravity", [](const core::Model& mo) { return to_array(mo.gravity); },
+                             "Gravity (m/s², world frame), shape (3,), a copy.")
+      .def_property_readonly("integrator",
+                             [](const core::Model& mo) { return sim::to_string(mo.integrator); },
+                             "Integrator, as named in scene files ('implicit-euler', ...).")
+      .def_property_readonly("coupling",
+                             [](const core::Model& mo) { return sim::to_string(mo.coupling_mode); },
+                             "Coupling mode, as named in scene files ('god-object', ...).")
+      .def_property_readonly("num_bodies", &core::Model::num_bodies, "Dynamic bodies B.")
+      .def_property_readonly("num_joints", &core::Model::num_joints, "Joints.")
+      .def_property_readonly("num_nets", &core::Model::num_nets, "Deformable nets.")
+      .def_property_readonly("num_nodes", &core::Model::num_nodes,
+                             "Net nodes N over all nets (0 without nets).")
+      .def_property_readonly(
+          "body_names",
+          [](const core::Model& mo) {
+            std::vector<std::string> names;
+            for (const core::BodyModel& b : mo.bodies) names.push_back(b.name);
+            return names;
+          },
+          "Body names, in body index order (the rows of the Data views).")
+      .def_property_readonly(
+          "body_masses",
+          [](const core::Model& mo) {
+            std::vector<double> masses;
+            for (const core::BodyModel& b : mo.bodies) masses.push_back(b.mass);
+            return masses;
+          },
+          "Body masses (kg), in body index order.")
+      .def_property_readonly(
+          "joint_names",
+          [](const core::Model& mo) {
+            std::vector<std::string> names;
+            for (const core::JointModel& j : mo.joints) names.push_back(j.name);
+            return names;
+          },
+          "Joint names, in joint index order.")
+      .def_property_readonly("initial_attached_body",
+                             [](const core::Model& mo) { return mo.initial_attached_body; },
+                             "Body the device holds after a reset (-1: none).");
+
+  py::class_<sim::Scene, std::shared_ptr<sim::Scene>>(
+      m, "Scene",
+      "A loaded scene (sim::Scene): the compiled model, the device, the simulated bus and the "
+      "target trajectory. Made by load_scene().")
+      .def_property_readonly("file", [](const sim::Scene& s) { return s.file; },
+                             "Path of the scene file, as given.")
+      .def_property_readonly("name", [](const sim::Scene& s) { return s.name; })
+      .def_property_readonly("description", [](const sim::Scene& s) { return s.description; })
+      .def_property_readonly("dt", [](const sim::Scene& s) { return s.model.dt; },
+                             "Fixed time step (s) of the model and of the control loop.")
+      .def_property_readonly("duration", [](const sim::Scene& s) { return s.duration_s; },
+                             "Default run length (s).")
+      .def_property_readonly("warnings", [](const sim::Scene& s) { return s.warnings; },
+                             "Non-fatal remarks of the loader.")
+      .def_property_readonly(
+          "model", [](const sim::Scene& s) -> const core::Model& { return s.model; },
+          py::return_value_policy::reference_internal,
+          "The compiled model (numen.Model, read-only; keeps the Scene alive).")
+      .def_property_readonly(
+          "trajectory_duration", [](const sim::Scene& s) { return s.trajectory.duration(); },
+          "Time (s) of the trajectory's last knot; target_at() holds the last pose after it.")
+      .def(
+          "target_at",
+          [](const sim::Scene& s, double t) {
+            const sim::TrajectorySample x = s.trajectory.at(t);
+            return py::make_tuple(to_array(x.pose.position), to_array(x.pose.orientation), x.jaw);
+          },
+          py::arg("t"),
+          "Target of the instrument's tool frame (trocar instrument: the tip) at time t (s) of "
+          "the scene's trajectory: (position (3,) m, orientation (4,) unit quaternion x, y, z, "
+          "w, jaw angle rad), world frame; copies.")
+      .def(
+          "target_twist_at",
+          [](const sim::Scene& s, double t) {
+            const core::Twist w = s.trajectory.twist_at(t);
+            return py::make_tuple(to_array(w.linear), to_array(w.angular));
+          },
+          py::arg("t"),
+          "Twist of the trajectory at time t (s): (linear (3,) m/s, angular (3,) rad/s), world "
+          "frame; copies.")
+      .def(
+          "make_data",
+          [](const std::shared_ptr<sim::Scene>& s) {
+            auto h = std::make_unique<DataHandle>();
+            h->scene = s;
+            h->model = &s->model;
+            h->data = core::make_data(s->model);
+            return h;
+          },
+          "A new numen.Data for this scene's model (core::make_data: allocated once, reset to "
+          "the initial state). It keeps the Scene alive.");
+
+  m.def(
+      "load_scene",
+      [](const std::string& path, const std::optional<std::string>& coupling) {
+        sim::SceneOverrides overrides;
+        if (coupling) overrides.coupling = sim::parse_coupling_mode(*coupling);
+        return std::make_shared<sim::Scene>(sim::load_scene(path, overrides));
+      },
+      py::arg("path"), py::arg("coupling") = py::none(),
+      "Loads and compiles the scene file at `path` (TOML, docs/scenes.md); `coupling` "
+      "('god-object', 'first-order', 'direct'; None: the scene's) overrides the scene's "
+      "coupling mode like `numen run --coupling`. Raises "
+      "numen.InputError (a ValueError) with the located message 'file:line:column: key: "
+      "message' and its parts as attributes.");
+  m.def("default_scene_path", &sim::default_scene_path,
+        "Path of the shipped default scene (sim/scenes/default.toml of the source tree).");
+}
+
+}  // namespace numen::python

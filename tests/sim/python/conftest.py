@@ -1,0 +1,39 @@
+"""Fixtures of the Python module's tests: the module (from PYTHONPATH, the build tree) and the
+shipped default scene, loaded once."""
+import os
+
+import pytest
+
+import numen
+
+
+def load_or_skip(name):
+    """The shipped scene sim/scenes/<name>, or the test is skipped when this build leaves out a
+    part the scene needs (NUMEN_WITH_ARTICULATION / NUMEN_WITH_DEFORMABLE off: the loader's
+    InputError names the option)."""
+    path = os.path.join(os.path.dirname(numen.default_scene_path()), name)
+    try:
+        return numen.load_scene(path)
+    except numen.InputError as e:
+        if "this build has NUMEN_WITH_" in str(e):
+            pytest.skip(str(e))
+        raise
+
+
+@pytest.fixture(scope="session")
+def scene():
+    """The default scene; in a build without articulation (its instrument has joints), the
+    construction scene (rigid blocks on a floor, no joints), so that the lean builds of
+    .ci/options-matrix still step, view and run a scene."""
+    if not numen.features["articulation"]:
+        return load_or_skip("construction.toml")
+    return load_or_skip("default.toml")
+
+
+def scripted_step(scene, data):
+    """One step of the scripted loop of numen._testing.step_loop: the device target is the
+    scene trajectory's pose and twist at data.time, then core::step."""
+    position, orientation, _jaw = scene.target_at(data.time)
+    linear, angular = scene.target_twist_at(data.time)
+    data.set_target(position, orientation, linear, angular)
+    data.step(scene)

@@ -1,0 +1,59 @@
+"""numen.load_scene, Scene, Model and numen.InputError (sim/python/scene_bindings.cpp)."""
+import os
+
+import numpy as np
+import pytest
+
+import numen
+
+
+def test_default_scene_loads(scene):
+    assert os.path.isfile(numen.default_scene_path())
+    assert scene.name
+    assert scene.dt == scene.model.dt > 0
+    assert scene.duration > 0
+    model = scene.model
+    assert model.num_bodies == len(model.body_names) == len(model.body_masses) > 0
+    assert model.num_joints == len(model.joint_names)
+    assert model.integrator in ("implicit-euler", "symplectic-euler", "trapezoidal")
+    assert model.gravity.shape == (3,)
+
+
+def test_target_at_is_a_unit_pose(scene):
+    position, orientation, jaw = scene.target_at(0.1)
+    assert position.shape == (3,) and orientation.shape == (4,)
+    assert np.isclose(np.linalg.norm(orientation), 1.0)
+    assert np.isfinite(jaw)
+    linear, angular = scene.target_twist_at(0.1)
+    assert linear.shape == (3,) and angular.shape == (3,)
+
+
+def test_bad_scene_raises_located_input_error(tmp_path):
+    path = tmp_path / "bad.toml"
+    path.write_text('name = "bad"\ndt = "fast"\n')
+    with pytest.raises(numen.InputError) as info:
+        numen.load_scene(str(path))
+    e = info.value
+    assert isinstance(e, ValueError)
+    assert e.file == str(path)
+    assert e.line == 2 and e.column >= 1
+    assert e.key == "dt"
+    assert str(e) == f"{path}:{e.line}:{e.column}: dt: {e.message}"
+
+
+def test_missing_scene_raises_input_error(tmp_path):
+    with pytest.raises(numen.InputError) as info:
+        numen.load_scene(str(tmp_path / "none.toml"))
+    assert info.value.file == str(tmp_path / "none.toml")
+
+
+def test_coupling_override():
+    path = numen.default_scene_path()
+    try:
+        direct = numen.load_scene(path, coupling="direct")
+    except numen.InputError as e:
+        pytest.skip(str(e))  # a build without articulation cannot load the default scene
+    assert direct.model.coupling == "direct"
+    with pytest.raises(numen.InputError) as info:
+        numen.load_scene(path, coupling="nonsense")
+    assert info.value.key == "coupling"
