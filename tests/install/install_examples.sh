@@ -60,6 +60,20 @@ awk '/^final penetration/ { p = $3; f = $7; ok = (p > 0 && p < 1e-3 && f > 0) }
      END { exit ok ? 0 : 1 }' "$work/minimal_core.out" \
   || fail "minimal_core: final penetration not in (0, 1 mm) or feedback not upward"
 
+# The Python module, when the build made it (NUMEN_PYTHON): imported from the prefix alone runs
+# the installed scene through the simulated bus.
+module=$(find "$prefix" -name 'numen*.so' -path '*dist-packages*' | head -n 1)
+if [ -n "$module" ]; then
+  PYTHONPATH=$(dirname "$module") /usr/bin/python3 -c "
+import numen, sys
+assert numen.__file__.startswith('$prefix'), numen.__file__
+s = numen.load_scene('$prefix/share/numen/scenes/$scene')
+r = numen.run_scene(s, duration=0.2)
+print('python: numen from the prefix, run exit status', r['exit_status'])
+sys.exit(r['exit_status'])" >"$work/python.out" 2>&1 || { cat "$work/python.out"; fail "import numen from $prefix"; }
+  cat "$work/python.out"
+fi
+
 configure_build header_check "$src/tests/install/header_check"
 grep 'header_check:' "$work/header_check.configure.log" || true
 echo "install_examples: ok ($(( $(date +%s) - t0 )) s)"
