@@ -115,6 +115,14 @@ set(CPACK_DEBIAN_PACKAGE_PRIORITY optional)
 set(CPACK_DEBIAN_PACKAGE_MAINTAINER "${NUMEN_DEB_MAINTAINER}")
 set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS ON)  # Depends of the executable from dpkg-shlibdeps
 set(CPACK_DEBIAN_PACKAGE_DEPENDS "adduser")  # postinst; the shlibdeps are appended
+# The Python module (sim/python) is built for one interpreter's ABI and imports NumPy: the
+# package then depends on that python3 minor version and on python3-numpy (Debian policy;
+# lintian's python-package-missing-depends-on-python).
+if(TARGET numen_python AND NUMEN_PYTHON_VERSION MATCHES "^([0-9]+)\\.([0-9]+)$")
+  math(EXPR _py_next "${CMAKE_MATCH_2} + 1")
+  string(APPEND CPACK_DEBIAN_PACKAGE_DEPENDS ", python3 (>= ${NUMEN_PYTHON_VERSION}),"
+         " python3 (<< ${CMAKE_MATCH_1}.${_py_next}), python3-numpy")
+endif()
 set(CPACK_DEBIAN_PACKAGE_RECOMMENDS "cmake, g++, libeigen3-dev, libboost-dev, libtinyobjloader-dev, libevdev-dev, pkg-config")
 set(CPACK_DEBIAN_PACKAGE_CONTROL_EXTRA "${_pkg}/conffiles;${_pkg}/postinst")
 set(CPACK_DEBIAN_PACKAGE_CONTROL_STRICT_PERMISSION ON)

@@ -70,4 +70,13 @@ if [ "$scene" = default.toml ]; then
   grep -qF "\"file\":\"$root/usr/share/numen/scenes/default.toml\"" "$work/info.json" \
     || { head -c 300 "$work/info.json"; fail "numen info did not load the extracted default scene"; }
 fi
+# The Python module, when the package holds it: where Debian's python3 looks under /usr.
+if [ -n "$(dpkg-deb -c "$deb" | grep 'usr/lib/python3/dist-packages/numen')" ]; then
+  PYTHONPATH="$root/usr/lib/python3/dist-packages" /usr/bin/python3 -c "
+import numen, sys
+s = numen.load_scene('$root/usr/share/numen/scenes/$scene')
+sys.exit(numen.run_scene(s, duration=0.2)['exit_status'])" >"$work/python.log" 2>&1 \
+    || { cat "$work/python.log"; fail "import numen from the extracted /usr/lib/python3/dist-packages"; }
+  echo "python: the packaged module runs the packaged scene"
+fi
 echo "debian_package: ok ($(( $(date +%s) - t0 )) s)"
