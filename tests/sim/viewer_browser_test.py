@@ -130,15 +130,17 @@ def check_scene(numen, out, name, scene, duration, figure):
         # the same frame, paused, in a view of the same size, so the same projection.
         # Headless Chromium's virtual time can run out before the WebSocket has delivered the
         # frame when the machine is loaded (seen at load average 7): then the DOM has no probe
-        # yet. Such an attempt says nothing about the page; it is repeated (3 attempts), and
+        # yet. Such an attempt says nothing about the page; it is repeated (5 attempts), and
         # said so. Any other outcome is judged below.
-        for attempt in range(1, 4):
+        for attempt in range(1, 6):
             shutil.rmtree(profile, ignore_errors=True)
             _, log1 = chromium(chromium_exe, profile, url, ["--screenshot=" + shot])
             shutil.rmtree(profile, ignore_errors=True)
             dom, log2 = chromium(chromium_exe, profile, url, ["--dump-dom"])
             shutil.rmtree(profile, ignore_errors=True)
-            if re.search(r'<pre id="probe"[^>]*>\s*\S', dom):
+            if re.search(r'<pre id="probe"[^>]*>\s*[^<\s]', dom):  # a probe with content
+                if attempt > 1:
+                    print("%s: attempt %d showed the frame" % (name, attempt))
                 break
             print("%s: attempt %d: the page had shown no frame when Chromium's virtual time ran out"
                   % (name, attempt))
