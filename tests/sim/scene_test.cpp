@@ -327,7 +327,10 @@ TEST(Scene, TrapezoidalWithADeformableNetIsWarnedAbout) {
   text << in.rdbuf();
   std::string toml =
       replace(text.str(), "integrator = \"implicit-euler\"", "integrator = \"trapezoidal\"");
-  toml = replace(toml, "\"../data/", "\"" + std::string(NUMEN_SOURCE_DIR) + "/sim/data/");
+  // (built as one std::string, not "\"" + std::string(...): g++ 12's -Wrestrict false positive,
+  // GCC bug 105329)
+  const std::string data_dir = std::string("\"") + NUMEN_SOURCE_DIR + "/sim/data/";
+  toml = replace(toml, "\"../data/", data_dir);
   const Scene s = load_scene(dir.write("trap_deformable.toml", toml));
   EXPECT_EQ(s.model.integrator, numen::core::Integrator::kTrapezoidal);
   bool warned = false;
