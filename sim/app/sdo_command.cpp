@@ -136,8 +136,7 @@ int SdoCommand::execute() const {
   } else {
     client.start_download(address, data, link.now_ns());
   }
-  char where[32];
-  std::snprintf(where, sizeof where, "node %d %04X:%02X", node_, address.index, address.subindex);
+  const std::string where = "node " + std::to_string(node_) + " " + hal::to_string(address);
   if (sim::run_sdo_transfer(link, client) != hal::SdoStatus::kDone) {
     char code[16];
     std::snprintf(code, sizeof code, "0x%08X", client.abort_code());

@@ -26,12 +26,6 @@ std::string hex(std::uint32_t v, int digits) {
   return buf;
 }
 
-std::string address_text(hal::SdoAddress a) {
-  char buf[16];
-  std::snprintf(buf, sizeof buf, "0x%04X:%02X", a.index, a.subindex);
-  return buf;
-}
-
 /// Reads `a` of `node` into `out` (at most out.size() bytes). Returns the bytes read, or -1
 /// and an error line in `errors`.
 int read_object(const BringUpLink& link, std::uint8_t node, hal::SdoAddress a,
@@ -41,7 +35,7 @@ int read_object(const BringUpLink& link, std::uint8_t node, hal::SdoAddress a,
   client.start_upload(a, out, link.now_ns());
   if (run_sdo_transfer(link, client) == hal::SdoStatus::kDone)
     return static_cast<int>(client.transferred());
-  errors.push_back(address_text(a) + ": " + hal::sdo_abort_name(client.abort_code()) +
+  errors.push_back(hal::to_string(a) + ": " + hal::sdo_abort_name(client.abort_code()) +
                    (client.aborted_by_server() ? "" : " (no answer or a bad one)"));
   return -1;
 }

@@ -1,9 +1,6 @@
 #include "numen/sim/view_output.hpp"
 
-#include <time.h>
-
 #include <algorithm>
-#include <cerrno>
 #include <cmath>
 #include <utility>
 
@@ -67,16 +64,13 @@ void ViewOutput::summarize(RunSummary& s) const {
   }
 }
 
-ViewPacer::ViewPacer(double dt_s, double speed, std::int64_t wall0_ns) noexcept
-    : period_ns_(speed > 0.0 ? std::max<std::int64_t>(1, std::llround(dt_s * 1e9 / speed)) : 0),
-      wall0_ns_(wall0_ns) {}
+ViewPacer::ViewPacer(double dt_s, double speed, std::int64_t wall0_ns) noexcept {
+  if (speed > 0.0)
+    timer_.emplace(std::max<std::int64_t>(1, std::llround(dt_s * 1e9 / speed)), wall0_ns);
+}
 
 void ViewPacer::wait() noexcept {
-  if (period_ns_ == 0) return;
-  const std::int64_t at = wall0_ns_ + ++k_ * period_ns_;
-  const timespec ts{static_cast<time_t>(at / 1'000'000'000), static_cast<long>(at % 1'000'000'000)};
-  while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
-  }
+  if (timer_) timer_->wait_next();
 }
 
 }  // namespace numen::sim

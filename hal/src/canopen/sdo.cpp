@@ -12,6 +12,7 @@
 #include "numen/hal/canopen/sdo.hpp"
 
 #include <algorithm>
+#include <cstdio>
 
 namespace numen::hal {
 namespace {
@@ -85,6 +86,12 @@ const char* sdo_abort_name(std::uint32_t code) noexcept {
     case SdoAbort::kNoData: return "no data available";
     default: return "unknown abort code";
   }
+}
+
+std::string to_string(SdoAddress address) {
+  char buf[16];
+  std::snprintf(buf, sizeof buf, "0x%04X:%02X", address.index, address.subindex);
+  return buf;
 }
 
 const char* to_string(SdoStatus status) noexcept {
@@ -271,7 +278,7 @@ void SdoClient::queue(const SdoFrame& f) noexcept {
   final_after_send_ = f.kind == SdoFrameKind::kAbort;
 }
 
-void SdoClient::abort_local(std::uint32_t code) noexcept {
+void SdoClient::abort_local(std::uint32_t code, std::uint64_t& counter) noexcept {
   SdoFrame f;
   f.kind = SdoFrameKind::kAbort;
   f.address = address_;
@@ -282,7 +289,7 @@ void SdoClient::abort_local(std::uint32_t code) noexcept {
   aborted_by_server_ = false;
   awaiting_ = false;
   phase_ = Phase::kNone;
-  ++counters_.client_aborts;
+  ++counter;
 }
 
 void SdoClient::finish() noexcept {
@@ -314,9 +321,7 @@ bool SdoClient::take_request(CanFrame& out, std::int64_t now_ns) noexcept {
 void SdoClient::poll(std::int64_t now_ns) noexcept {
   if (status_ != SdoStatus::kPending || !awaiting_) return;
   if (now_ns - sent_ns_ > timeout_ns_) {
-    abort_local(SdoAbort::kTimeout);
-    --counters_.client_aborts;  // counted as a timeout, not a protocol abort
-    ++counters_.timeouts;
+    abort_local(SdoAbort::kTimeout, counters_.timeouts);
   }
 }
 

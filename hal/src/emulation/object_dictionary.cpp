@@ -3,25 +3,18 @@
 #include "numen/hal/emulation/object_dictionary.hpp"
 
 #include <algorithm>
-#include <cstdio>
 #include <stdexcept>
 
 namespace numen::hal {
 namespace {
 
-std::string describe(SdoAddress a) {
-  char buf[16];
-  std::snprintf(buf, sizeof buf, "0x%04X:%02X", a.index, a.subindex);
-  return buf;
-}
-
 }  // namespace
 
 void ObjectDictionary::add(SdoAddress address, OdAccess access, std::span<const std::uint8_t> value) {
   if (value.empty())
-    throw std::invalid_argument("object dictionary: entry " + describe(address) + " has no bytes");
+    throw std::invalid_argument("object dictionary: entry " + to_string(address) + " has no bytes");
   if (find(address) != nullptr)
-    throw std::invalid_argument("object dictionary: entry " + describe(address) + " added twice");
+    throw std::invalid_argument("object dictionary: entry " + to_string(address) + " added twice");
   OdEntry e;
   e.address = address;
   e.access = access;
@@ -33,7 +26,7 @@ void ObjectDictionary::add(SdoAddress address, OdAccess access, std::span<const 
 void ObjectDictionary::add_unsigned(SdoAddress address, OdAccess access, std::uint32_t value,
                                     std::size_t bytes) {
   if (bytes != 1 && bytes != 2 && bytes != 4)
-    throw std::invalid_argument("object dictionary: entry " + describe(address) +
+    throw std::invalid_argument("object dictionary: entry " + to_string(address) +
                                 ": an unsigned number has 1, 2 or 4 bytes");
   std::uint8_t b[4];
   for (std::size_t i = 0; i < 4; ++i) b[i] = static_cast<std::uint8_t>(value >> (8 * i));
@@ -43,10 +36,10 @@ void ObjectDictionary::add_unsigned(SdoAddress address, OdAccess access, std::ui
 void ObjectDictionary::add_string(SdoAddress address, OdAccess access, const std::string& text,
                                   std::size_t capacity) {
   if (capacity < std::max<std::size_t>(1, text.size()))
-    throw std::invalid_argument("object dictionary: entry " + describe(address) +
+    throw std::invalid_argument("object dictionary: entry " + to_string(address) +
                                 ": capacity below the text's length");
   if (find(address) != nullptr)
-    throw std::invalid_argument("object dictionary: entry " + describe(address) + " added twice");
+    throw std::invalid_argument("object dictionary: entry " + to_string(address) + " added twice");
   OdEntry e;
   e.address = address;
   e.access = access;

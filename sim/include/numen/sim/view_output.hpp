@@ -7,10 +7,12 @@
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
 
+#include "numen/platform/periodic_timer.hpp"
 #include "numen/platform/state_stream.hpp"
 #include "numen/sim/scene.hpp"
 #include "numen/sim/view_recording.hpp"
@@ -52,18 +54,17 @@ class ViewOutput {
 };
 
 /// Paces an unpaced run (simulated bus or log, no --realtime) for a live viewer: each wait
-/// sleeps until the next period is due at `speed` × real time (CLOCK_MONOTONIC, absolute
-/// deadlines from `wall0_ns`: no drift). `speed` <= 0: wait() returns at once.
+/// sleeps until the next period is due at `speed` × real time, on platform::PeriodicTimer's
+/// absolute CLOCK_MONOTONIC deadlines from `wall0_ns` (no drift; a run that falls behind
+/// re-phases instead of bursting). `speed` <= 0: wait() returns at once.
 class ViewPacer {
  public:
   ViewPacer(double dt_s, double speed, std::int64_t wall0_ns) noexcept;
-  /// Sleeps until period k+1 of this pacer is due (EINTR resumed).
+  /// Sleeps until the next period of this pacer is due.
   void wait() noexcept;
 
  private:
-  std::int64_t period_ns_ = 0;  // 0: no pacing
-  std::int64_t wall0_ns_ = 0;
-  std::int64_t k_ = 0;
+  std::optional<platform::PeriodicTimer> timer_;  // none: no pacing
 };
 
 }  // namespace numen::sim

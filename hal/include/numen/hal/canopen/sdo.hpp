@@ -17,6 +17,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <span>
+#include <string>
 
 #include "numen/hal/transport/can_frame.hpp"
 
@@ -88,6 +89,9 @@ struct SdoAddress {
   std::uint8_t subindex = 0;  ///< Sub-index.
   friend constexpr bool operator==(SdoAddress, SdoAddress) = default;
 };
+
+/// "0x1018:01": an entry as messages and reports name it (allocates: setup and reports only).
+std::string to_string(SdoAddress address);
 
 /// What an SDO frame is, by its command specifier and direction.
 enum class SdoFrameKind : std::uint8_t {
@@ -218,7 +222,9 @@ class SdoClient {
   enum class Phase : std::uint8_t { kNone, kInitiateUpload, kUploadSegment, kInitiateDownload, kDownloadSegment };
   void begin(SdoAddress address, Phase phase, std::int64_t now_ns) noexcept;
   void queue(const SdoFrame& f) noexcept;
-  void abort_local(std::uint32_t code) noexcept;
+  /// Ends the transfer with `code`, queues the abort request, counts it in `counter`.
+  void abort_local(std::uint32_t code, std::uint64_t& counter) noexcept;
+  void abort_local(std::uint32_t code) noexcept { abort_local(code, counters_.client_aborts); }
   void finish() noexcept;
   void on_upload_response(const SdoFrame& f) noexcept;
   void on_download_response(const SdoFrame& f) noexcept;
