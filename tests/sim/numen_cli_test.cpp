@@ -197,30 +197,41 @@ TEST(NumenCli, ReplayOfGarbageIsALocatedInputError) {
 }
 
 // `numen sdo` and `numen scan`: bad nodes, addresses, types and values are refused (input
-// rejected) before any bus is opened (the interface named here does not exist).
+// rejected) with their message before any bus is opened (the port named here does not exist).
 TEST(NumenCli, BadSdoArgumentsAreInputRejectedBeforeTheBusIsOpened) {
+  // A bus spec this build accepts (a short name: IFNAMSIZ) whose port does not exist.
+  if (!numen::hal::kWithSocketCan && !numen::hal::kWithSerial)
+    GTEST_SKIP() << "this build has neither SocketCAN nor the serial backend";
   TempDir dir;
-  const std::string bus = "can:numen-no-such-if";
-  const std::vector<std::vector<std::string>> cases = {
-      {kNumen, "sdo", "--bus", bus, "0", "read", "1000:00"},                 // node 0
-      {kNumen, "sdo", "--bus", bus, "128", "read", "1000:00"},               // node 128
-      {kNumen, "sdo", "--bus", bus, "1", "peek", "1000:00"},                 // action
-      {kNumen, "sdo", "--bus", bus, "1", "read", "1000"},                    // no sub-index
-      {kNumen, "sdo", "--bus", bus, "1", "read", "10000:00"},                // index > 0xFFFF
-      {kNumen, "sdo", "--bus", bus, "1", "write", "1017:00", "10"},          // no --type
-      {kNumen, "sdo", "--bus", bus, "1", "write", "1017:00", "70000", "--type", "u16"},
-      {kNumen, "sdo", "--bus", bus, "1", "write", "1017:00", "-1", "--type", "u8"},
-      {kNumen, "sdo", "--bus", bus, "1", "write", "1017:00", "abc", "--type", "hex"},
-      {kNumen, "sdo", "--bus", bus, "1", "read", "1000:00", "5"},            // a value on a read
-      {kNumen, "sdo", "--bus", "sim", "1", "read", "1000:00"},               // not a real bus
-      {kNumen, "scan", "--bus", "sim"},
-      {kNumen, "scan", "--bus", bus, "--listen", "0"},
+  const std::string bus = numen::hal::kWithSocketCan ? "can:nosuchif0" : "serial:/nonexistent/tty";
+  struct Case {
+    std::vector<std::string> args;
+    std::string message;  // what stderr must say
   };
-  for (const auto& args : cases) {
-    const ChildResult r = run_child(args, dir.path(), 30);
+  const std::vector<Case> cases = {
+      {{kNumen, "sdo", "--bus", bus, "0", "read", "1000:00"}, "node"},
+      {{kNumen, "sdo", "--bus", bus, "128", "read", "1000:00"}, "node"},
+      {{kNumen, "sdo", "--bus", bus, "1", "peek", "1000:00"}, "action"},
+      {{kNumen, "sdo", "--bus", bus, "1", "read", "1000"}, "'1000' is not INDEX:SUB in hexadecimal"},
+      {{kNumen, "sdo", "--bus", bus, "1", "read", "10000:00"}, "'10000:00' is not INDEX:SUB"},
+      {{kNumen, "sdo", "--bus", bus, "1", "write", "1017:00", "10"}, "a write needs the value's --type"},
+      {{kNumen, "sdo", "--bus", bus, "1", "write", "1017:00", "70000", "--type", "u16"},
+       "'70000' does not fit u16 [0, 65535]"},
+      {{kNumen, "sdo", "--bus", bus, "1", "write", "1017:00", "-1", "--type", "u8"},
+       "'-1' does not fit u8 [0, 255]"},
+      {{kNumen, "sdo", "--bus", bus, "1", "write", "1017:00", "abc", "--type", "hex"},
+       "'abc' is not an even number of hex digits"},
+      {{kNumen, "sdo", "--bus", bus, "1", "read", "1000:00", "5"}, "a read takes no value"},
+      {{kNumen, "sdo", "--bus", "sim", "1", "read", "1000:00"}, "expected can:IFACE or serial:PATH"},
+      {{kNumen, "scan", "--bus", "sim"}, "expected can:IFACE or serial:PATH"},
+      {{kNumen, "scan", "--bus", bus, "--listen", "0"}, "--listen"},
+  };
+  for (const Case& c : cases) {
+    const ChildResult r = run_child(c.args, dir.path(), 30);
     std::string line;
-    for (const auto& a : args) line += a + " ";
+    for (const auto& a : c.args) line += a + " ";
     EXPECT_EQ(r.status, 2) << line << ": " << r.err;
+    EXPECT_NE(r.err.find(c.message), std::string::npos) << line << ": " << r.err;
   }
 }
 
