@@ -56,7 +56,8 @@ std::int64_t cases_of(const sim::Shard& s, std::int64_t cases) {
 /// The file of `shard` in `out`; prints that it is skipped and returns "" when it exists.
 std::string shard_path_or_skip(const std::string& study, const sim::Shard& shard,
                                const std::string& out) {
-  const std::filesystem::path path = std::filesystem::path(out) / sim::shard_file_name(study, shard);
+  const std::filesystem::path path =
+      std::filesystem::path(out) / sim::shard_file_name(study, shard);
   if (std::filesystem::exists(path)) {
     std::cout << shard_label(shard) << ": " << path.string() << " exists, skipped\n";
     return "";
@@ -174,21 +175,21 @@ int MergeStudyCommand::execute() const {
     const sim::StabilityResult result = sim::merge_stability_shards(dir_);
     sim::write_stability_csv(result, out);
     std::cout << sim::format_stability_tables(result);
-    std::printf("merged %zu runs of %lld cases; shards' wall time %.1f s in all; wrote "
-                "%s/stability_*.csv\n",
-                result.rows.size(), static_cast<long long>(result.cases), result.wall_s,
-                out.c_str());
+    std::printf(
+        "merged %zu runs of %lld cases; shards' wall time %.1f s in all; wrote "
+        "%s/stability_*.csv\n",
+        result.rows.size(), static_cast<long long>(result.cases), result.wall_s, out.c_str());
     return 0;
   }
   if (study == "accuracy") {
     const sim::AccuracyResult result = sim::merge_accuracy_shards(dir_);
     sim::write_accuracy_csv(result, out);
     std::cout << sim::format_accuracy_table(result);
-    std::printf("merged %zu runs of %lld study cases (CPU times as measured by each shard); "
-                "shards' wall time %.1f s in all; wrote %s/accuracy.csv, accuracy_orders.csv, "
-                "accuracy_references.csv\n",
-                result.rows.size(), static_cast<long long>(result.cases), result.wall_s,
-                out.c_str());
+    std::printf(
+        "merged %zu runs of %lld study cases (CPU times as measured by each shard); "
+        "shards' wall time %.1f s in all; wrote %s/accuracy.csv, accuracy_orders.csv, "
+        "accuracy_references.csv\n",
+        result.rows.size(), static_cast<long long>(result.cases), result.wall_s, out.c_str());
     return 0;
   }
   throw std::runtime_error(dir_ + ": shard files of an unknown study \"" + study + "\"");

@@ -5,8 +5,8 @@
 #include <string>
 #include <vector>
 
-#include "numen/sim/study_accuracy.hpp"
 #include "numen/sim/scene.hpp"
+#include "numen/sim/study_accuracy.hpp"
 #include "numen/version.hpp"
 #include "study_shard_json.hpp"
 
@@ -78,8 +78,7 @@ Json manifest(const AccuracyOptions& o, const AccuracyResult& r) {
 
 }  // namespace
 
-std::string accuracy_shard_document(const AccuracyResult& result,
-                                    const AccuracyOptions& options) {
+std::string accuracy_shard_document(const AccuracyResult& result, const AccuracyOptions& options) {
   shard::ResultsByCase results(result.shard, result.cases, {"rows", "fits", "references"});
   for (const AccuracyRow& r : result.rows)
     results.add(r.case_index, "rows",
@@ -102,13 +101,15 @@ AccuracyResult merge_accuracy_shards(const std::string& dir) {
   for (std::size_t k = 0; k < set.results.size(); ++k) {
     const std::string& file = set.files[k % set.files.size()];
     const auto index = static_cast<std::int64_t>(k);
-    shard::read_list(set.results[k], "rows", [](auto& x, auto&& v) { row_fields(x, v); }, index,
-                     file, result.rows);
-    shard::read_list(set.results[k], "fits", [](auto& x, auto&& v) { fit_fields(x, v); }, index,
-                     file, result.fits);
-    shard::read_list(set.results[k], "references",
-                     [](auto& x, auto&& v) { reference_fields(x, v); }, index, file,
-                     result.references);
+    shard::read_list(
+        set.results[k], "rows", [](auto& x, auto&& v) { row_fields(x, v); }, index, file,
+        result.rows);
+    shard::read_list(
+        set.results[k], "fits", [](auto& x, auto&& v) { fit_fields(x, v); }, index, file,
+        result.fits);
+    shard::read_list(
+        set.results[k], "references", [](auto& x, auto&& v) { reference_fields(x, v); }, index,
+        file, result.references);
   }
   for (double w : set.wall_s) result.wall_s += w;
   return result;

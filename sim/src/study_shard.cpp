@@ -42,8 +42,8 @@ std::string quoted(std::string_view text) { return "\"" + InputError::visible(te
 std::optional<std::pair<std::string, Shard>> parse_file_name(const std::string& name) {
   const std::string_view n(name);
   const std::size_t at = n.find("-shard-"), of = n.rfind("-of-");
-  if (at == std::string_view::npos || of == std::string_view::npos || of < at ||
-      n.size() < 5 || n.substr(n.size() - 5) != ".json")
+  if (at == std::string_view::npos || of == std::string_view::npos || of < at || n.size() < 5 ||
+      n.substr(n.size() - 5) != ".json")
     return std::nullopt;
   const auto i = whole_decimal(n.substr(at + 7, of - at - 7));
   const auto c = whole_decimal(n.substr(of + 4, n.size() - 5 - of - 4));
@@ -82,7 +82,9 @@ Shard parse_shard(std::string_view text, const std::string& key) {
     throw InputError("", 0, 0, key, quoted(text) + " has no '/'" + expected);
   const auto i = whole_decimal(text.substr(0, slash));
   const auto n = whole_decimal(text.substr(slash + 1));
-  if (!i) throw InputError("", 0, 0, key, "shard index in " + quoted(text) + " is not a whole number" + expected);
+  if (!i)
+    throw InputError("", 0, 0, key,
+                     "shard index in " + quoted(text) + " is not a whole number" + expected);
   if (!n || *n < 1)
     throw InputError("", 0, 0, key,
                      "shard count in " + quoted(text) + " is not a whole number from 1 to " +
@@ -94,29 +96,27 @@ Shard parse_shard(std::string_view text, const std::string& key) {
   return Shard{*i, *n};
 }
 
-std::optional<Shard> shard_from_environment(
-    const std::function<const char*(const char*)>& lookup) {
+std::optional<Shard> shard_from_environment(const std::function<const char*(const char*)>& lookup) {
   constexpr const char* kId = "SLURM_ARRAY_TASK_ID";
   constexpr const char* kCount = "SLURM_ARRAY_TASK_COUNT";
   const char* id = lookup(kId);
   const char* count = lookup(kCount);
   if (id == nullptr && count == nullptr) return std::nullopt;
-  if (id == nullptr)
-    throw InputError("", 0, 0, kId, std::string("not set, but ") + kCount + " is");
+  if (id == nullptr) throw InputError("", 0, 0, kId, std::string("not set, but ") + kCount + " is");
   if (count == nullptr)
     throw InputError("", 0, 0, kCount, std::string("not set, but ") + kId + " is");
   const auto n = whole_decimal(count);
   if (!n || *n < 1)
-    throw InputError("", 0, 0, kCount,
-                     quoted(count) + " is not a whole number from 1 to " +
-                         std::to_string(kMaxShards));
+    throw InputError(
+        "", 0, 0, kCount,
+        quoted(count) + " is not a whole number from 1 to " + std::to_string(kMaxShards));
   const auto i = whole_decimal(id);
   if (!i) throw InputError("", 0, 0, kId, quoted(id) + " is not a whole number");
   if (*i >= *n)
     throw InputError("", 0, 0, kId,
                      std::to_string(*i) + " is not below " + kCount + " = " + std::to_string(*n) +
-                         " (number the array from 0: sbatch --array=0-" +
-                         std::to_string(*n - 1) + ")");
+                         " (number the array from 0: sbatch --array=0-" + std::to_string(*n - 1) +
+                         ")");
   return Shard{*i, *n};
 }
 
@@ -193,7 +193,8 @@ double to_double(const Json& j, const std::string& file, const std::string& key)
   if (j.is_number()) return j.get<double>();
   if (j.is_string()) {
     const std::string& s = j.get_ref<const std::string&>();
-    if (s == "nan" || s == "-nan" || s == "inf" || s == "-inf") return std::strtod(s.c_str(), nullptr);
+    if (s == "nan" || s == "-nan" || s == "inf" || s == "-inf")
+      return std::strtod(s.c_str(), nullptr);
   }
   throw InputError(file, 0, 0, key, "not a number: " + j.dump());
 }
@@ -270,8 +271,8 @@ Json ResultsByCase::array() const {
   return a;
 }
 
-std::string document(const std::string& study, const Shard& s, const Json& manifest,
-                     double wall_s, const Json& results) {
+std::string document(const std::string& study, const Shard& s, const Json& manifest, double wall_s,
+                     const Json& results) {
   Json doc = Json::object();
   doc["format"] = kFormat;
   doc["study"] = study;
@@ -309,11 +310,12 @@ ShardSet read_shard_set(const std::filesystem::path& dir, const std::string& stu
     if (files.find(i) == files.end()) missing.push_back(i);
   if (!missing.empty()) {
     std::string names;
-    for (int i : missing) names += (names.empty() ? "" : ", ") + shard_file_name(study, {i, set.count});
+    for (int i : missing)
+      names += (names.empty() ? "" : ", ") + shard_file_name(study, {i, set.count});
     throw InputError(dir.string(), 0, 0, "",
                      "missing shard" + std::string(missing.size() > 1 ? "s " : " ") +
-                         join_indices(missing) + " of " + std::to_string(set.count) + " (" +
-                         names + ")");
+                         join_indices(missing) + " of " + std::to_string(set.count) + " (" + names +
+                         ")");
   }
   std::vector<Json> by_case;
   std::vector<bool> seen;
@@ -328,8 +330,7 @@ ShardSet read_shard_set(const std::filesystem::path& dir, const std::string& stu
     }
     const auto expect = [&](const char* key, const Json& want) {
       const Json& got = member(doc, key, path, "");
-      if (got != want)
-        throw InputError(path, 0, 0, key, got.dump() + ", expected " + want.dump());
+      if (got != want) throw InputError(path, 0, 0, key, got.dump() + ", expected " + want.dump());
     };
     expect("format", kFormat);
     expect("study", study);
@@ -372,7 +373,8 @@ ShardSet read_shard_set(const std::filesystem::path& dir, const std::string& stu
         throw InputError(path, 0, 0, where + "case",
                          "case " + std::to_string(c) + " belongs to shard " +
                              std::to_string(c % static_cast<std::size_t>(set.count)));
-      if (seen[c]) throw InputError(path, 0, 0, where + "case", "case " + std::to_string(c) + " twice");
+      if (seen[c])
+        throw InputError(path, 0, 0, where + "case", "case " + std::to_string(c) + " twice");
       seen[c] = true;
       by_case[c] = results[r];
     }

@@ -12,10 +12,9 @@
 #include <filesystem>
 #include <initializer_list>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "numen/sim/input_error.hpp"
 #include "numen/sim/study_shard.hpp"
@@ -52,8 +51,7 @@ void read(const Json& j, std::int64_t& out, const std::string& file, const std::
 void read(const Json& j, int& out, const std::string& file, const std::string& key);
 void read(const Json& j, bool& out, const std::string& file, const std::string& key);
 void read(const Json& j, std::string& out, const std::string& file, const std::string& key);
-void read(const Json& j, std::vector<double>& out, const std::string& file,
-          const std::string& key);
+void read(const Json& j, std::vector<double>& out, const std::string& file, const std::string& key);
 
 /// A record (`fields(record, visit)` calls visit(key, member) for each of its members) as a
 /// JSON object, and back; `where` prefixes the keys in error messages ("results[3].rows[0].").
@@ -67,7 +65,9 @@ template <class Record, class Fields>
 Record record_from(const Json& j, Fields&& fields, const std::string& file,
                    const std::string& where) {
   Record r;
-  fields(r, [&](const char* key, auto& v) { read(member(j, key, file, where), v, file, where + key); });
+  fields(r, [&](const char* key, auto& v) {
+    read(member(j, key, file, where), v, file, where + key);
+  });
   return r;
 }
 
@@ -107,11 +107,11 @@ std::string document(const std::string& study, const Shard& shard, const Json& m
 
 /// A complete, consistent set of shard files, read back.
 struct ShardSet {
-  int count = 0;                ///< N.
-  Json manifest;                ///< The manifest all N share.
-  std::vector<Json> results;    ///< Every case's result, by case index 0 … cases − 1.
-  std::vector<std::string> files;  ///< Path of shard 0 … N − 1.
-  std::vector<double> wall_s;   ///< Wall time of shard 0 … N − 1 (s).
+  int count = 0;                     ///< N.
+  Json manifest;                     ///< The manifest all N share.
+  std::vector<Json> results;         ///< Every case's result, by case index 0 … cases − 1.
+  std::vector<std::string> files;    ///< Path of shard 0 … N − 1.
+  std::vector<double> wall_s;        ///< Wall time of shard 0 … N − 1 (s).
   std::vector<std::string> skipped;  ///< The manifest's "skipped": cases this build left out.
 };
 

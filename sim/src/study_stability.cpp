@@ -200,12 +200,12 @@ StabilityResult run_stability_study(const StabilityOptions& options) {
     if (!options.shard.owns(c.info.index)) continue;
     const std::size_t rows = result.rows.size(), boundaries = result.boundaries.size();
     c.run(result);
-    for (std::size_t i = rows; i < result.rows.size(); ++i) result.rows[i].case_index = c.info.index;
+    for (std::size_t i = rows; i < result.rows.size(); ++i)
+      result.rows[i].case_index = c.info.index;
     for (std::size_t i = boundaries; i < result.boundaries.size(); ++i)
       result.boundaries[i].case_index = c.info.index;
     done = std::min(total, done + c.weight);
-    if (options.progress)
-      options.progress(done, total, c.info.name + " " + c.info.parameters);
+    if (options.progress) options.progress(done, total, c.info.name + " " + c.info.parameters);
   }
   result.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return result;

@@ -225,8 +225,9 @@ void plan_rigid_extreme(const StabilityOptions& o, Plan& plan) {
       const std::int64_t steps = quick ? 20 : std::max<std::int64_t>(100, steps_for(0.5, h));
       plan.add("extreme", "contact-capacity",
                case_parameters(integrator, {{"h", h}, {"steps", static_cast<double>(steps)}}),
-               kExtremeWeight,
-               [=](StabilityResult& r) { r.rows.push_back(capacity_run(integrator, h, limits, steps)); });
+               kExtremeWeight, [=](StabilityResult& r) {
+                 r.rows.push_back(capacity_run(integrator, h, limits, steps));
+               });
     }
 }
 

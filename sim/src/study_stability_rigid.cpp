@@ -140,13 +140,12 @@ void plan_contact(const StabilityOptions& o, Plan& plan) {
       for (double m : {1e-3, 1e-1, 1e1})
         for (double h : grid_steps_list(o))
           for (double k_c : log_grid(2, 8, per))
-            plan.add(
-                "contact", zeta_c == 0.0 ? "contact-undamped" : "contact-damped",
-                case_parameters(integrator,
-                                {{"m", m}, {"h", h}, {"k_c", k_c}, {"contact_zeta", zeta_c}}),
-                kGridWeight, [=](StabilityResult& r) {
-                  r.rows.push_back(contact_run(integrator, h, m, k_c, zeta_c, steps, limits));
-                });
+            plan.add("contact", zeta_c == 0.0 ? "contact-undamped" : "contact-damped",
+                     case_parameters(integrator,
+                                     {{"m", m}, {"h", h}, {"k_c", k_c}, {"contact_zeta", zeta_c}}),
+                     kGridWeight, [=](StabilityResult& r) {
+                       r.rows.push_back(contact_run(integrator, h, m, k_c, zeta_c, steps, limits));
+                     });
 }
 
 StabilityBoundary boundary_run(double zeta, bool quick, const StabilityLimits& limits) {
@@ -163,8 +162,8 @@ StabilityBoundary boundary_run(double zeta, bool quick, const StabilityLimits& l
   auto run = [&](double a, bool record) {
     const double k = kM * (a / kH) * (a / kH);
     Monitor growth(unbounded, kInf, kInf, kSteps);
-    const StabilityRow g = coupling_run(core::Integrator::kSymplecticEuler, kH, kM, k, zeta,
-                                        kSteps, unbounded, &growth);
+    const StabilityRow g = coupling_run(core::Integrator::kSymplecticEuler, kH, kM, k, zeta, kSteps,
+                                        unbounded, &growth);
     const StabilityRow v =
         coupling_run(core::Integrator::kSymplecticEuler, kH, kM, k, zeta, kSteps, limits);
     if (record) {
@@ -204,8 +203,9 @@ void plan_boundary(const StabilityOptions& o, Plan& plan) {
     plan.add("boundary", zeta == 0.0 ? "boundary-undamped" : "boundary-damped",
              case_parameters(core::Integrator::kSymplecticEuler,
                              {{"h", 1e-3}, {"m", 1.0}, {"zeta", zeta}}),
-             kBoundaryWeight,
-             [=](StabilityResult& r) { r.boundaries.push_back(boundary_run(zeta, quick, limits)); });
+             kBoundaryWeight, [=](StabilityResult& r) {
+               r.boundaries.push_back(boundary_run(zeta, quick, limits));
+             });
 }
 
 }  // namespace numen::sim::stability

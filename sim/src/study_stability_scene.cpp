@@ -25,8 +25,8 @@
 #include <optional>
 #include <tuple>
 
-#include "numen/hal/device/axis.hpp"
 #include "numen/hal/canopen/canopen.hpp"
+#include "numen/hal/device/axis.hpp"
 #include "numen/hal/device/sample_check.hpp"
 #include "numen/sim/run.hpp"
 #include "numen/sim/scene.hpp"
@@ -457,8 +457,9 @@ void plan_scene_extreme(const StabilityOptions& o, const std::string& dir, Plan&
                  r.rows.push_back(deformable_run(*deformable, integrator, h, limits, jump_s));
                });
     if (!trocar) continue;
-    plan.add("extreme", "trocar-zero-insertion", case_parameters(integrator, {}), kSceneWeight,
-             [=](StabilityResult& r) { r.rows.push_back(trocar_run(*trocar, integrator, trocar_s)); });
+    plan.add(
+        "extreme", "trocar-zero-insertion", case_parameters(integrator, {}), kSceneWeight,
+        [=](StabilityResult& r) { r.rows.push_back(trocar_run(*trocar, integrator, trocar_s)); });
     plan.add("extreme", "bus-nonfinite", case_parameters(integrator, {}), kSceneWeight,
              [=](StabilityResult& r) { r.rows.push_back(bus_run(*trocar, integrator, bus_s)); });
     plan.add("extreme", "core-target-nonfinite", case_parameters(integrator, {}), kSceneWeight,

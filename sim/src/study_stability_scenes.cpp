@@ -143,12 +143,13 @@ void plan_scene_stiffness(const StabilityOptions& o, const std::string& dir, Pla
                    r.rows.push_back(scene_run(with_contact_stiffness(*scene, k), name,
                                               "contact-stiffness", integrator, k, limits, seconds));
                  });
-        plan.add("scenes", "coupling-stiffness " + name,
-                 case_parameters(integrator, {{"k", k}, {"duration_s", seconds}}),
-                 kStiffSceneWeight, [=](StabilityResult& r) {
-                   r.rows.push_back(scene_run(with_coupling_stiffness(*scene, k), name,
-                                              "coupling-stiffness", integrator, k, limits, seconds));
-                 });
+        plan.add(
+            "scenes", "coupling-stiffness " + name,
+            case_parameters(integrator, {{"k", k}, {"duration_s", seconds}}), kStiffSceneWeight,
+            [=](StabilityResult& r) {
+              r.rows.push_back(scene_run(with_coupling_stiffness(*scene, k), name,
+                                         "coupling-stiffness", integrator, k, limits, seconds));
+            });
       }
   }
 }

@@ -5,9 +5,9 @@
 #include <string>
 #include <vector>
 
+#include "numen/sim/scene.hpp"
 #include "numen/sim/study_stability.hpp"
 #include "numen/sim/study_stability_cases.hpp"
-#include "numen/sim/scene.hpp"
 #include "numen/version.hpp"
 #include "study_shard_json.hpp"
 
@@ -96,11 +96,12 @@ StabilityResult merge_stability_shards(const std::string& dir) {
   for (std::size_t k = 0; k < set.results.size(); ++k) {
     const std::string& file = set.files[k % set.files.size()];
     const auto index = static_cast<std::int64_t>(k);
-    shard::read_list(set.results[k], "rows", [](auto& x, auto&& v) { row_fields(x, v); }, index,
-                     file, result.rows);
-    shard::read_list(set.results[k], "boundaries",
-                     [](auto& x, auto&& v) { boundary_fields(x, v); }, index, file,
-                     result.boundaries);
+    shard::read_list(
+        set.results[k], "rows", [](auto& x, auto&& v) { row_fields(x, v); }, index, file,
+        result.rows);
+    shard::read_list(
+        set.results[k], "boundaries", [](auto& x, auto&& v) { boundary_fields(x, v); }, index, file,
+        result.boundaries);
   }
   for (double w : set.wall_s) result.wall_s += w;
   return result;

@@ -44,14 +44,15 @@ std::vector<std::string> lines(const std::string& text) {
 
 TEST(StudyCommand, ListOfASlurmArrayTaskHasItsCasesOnly) {
   TempDir dir;
-  const std::vector<std::string> args = {"study", "stability", "--quick", "--family", "coupling",
-                                         "--list"};
+  const std::vector<std::string> args = {"study",    "stability", "--quick",
+                                         "--family", "coupling",  "--list"};
   const ChildResult all = numen(args, dir);
   ASSERT_EQ(all.status, 0) << all.err;
   const std::vector<std::string> every = lines(all.out);
   ASSERT_EQ(every.size(), 864u);  // 2 ζ × 3 integrators × 3 h × 6 m × 8 k
-  EXPECT_EQ(every[0], "0\tcoupling\tcoupling-undamped\tintegrator=implicit-euler h=0.0001 m=0.001 "
-                      "k=10 zeta=0");
+  EXPECT_EQ(every[0],
+            "0\tcoupling\tcoupling-undamped\tintegrator=implicit-euler h=0.0001 m=0.001 "
+            "k=10 zeta=0");
   const ChildResult task = numen(args, dir, "1", "4");
   ASSERT_EQ(task.status, 0) << task.err;
   std::vector<std::string> want;
@@ -88,8 +89,8 @@ TEST(StudyCommand, ShardWhoseFileExistsIsSkipped) {
   std::filesystem::create_directories(out);
   const std::string file = (out / "stability-shard-0-of-2.json").string();
   dir.write("out/stability-shard-0-of-2.json", "kept");
-  const ChildResult r = numen(
-      {"study", "stability", "--quick", "--shard", "0/2", "--out", out.string()}, dir);
+  const ChildResult r =
+      numen({"study", "stability", "--quick", "--shard", "0/2", "--out", out.string()}, dir);
   EXPECT_EQ(r.status, 0) << r.err;
   EXPECT_EQ(r.out, "shard 0/2: " + file + " exists, skipped\n");
   EXPECT_EQ(read_file(file), "kept");

@@ -87,16 +87,24 @@ TEST(StudyShard, MalformedSlurmArrayVariableIsNamed) {
     std::string key, message;
   };
   const std::vector<Bad> bad = {
-      {{{"SLURM_ARRAY_TASK_ID", "1"}}, "SLURM_ARRAY_TASK_COUNT", "not set, but SLURM_ARRAY_TASK_ID"},
-      {{{"SLURM_ARRAY_TASK_COUNT", "4"}}, "SLURM_ARRAY_TASK_ID", "not set, but SLURM_ARRAY_TASK_COUNT"},
-      {{{"SLURM_ARRAY_TASK_ID", "x"}, {"SLURM_ARRAY_TASK_COUNT", "4"}}, "SLURM_ARRAY_TASK_ID",
+      {{{"SLURM_ARRAY_TASK_ID", "1"}},
+       "SLURM_ARRAY_TASK_COUNT",
+       "not set, but SLURM_ARRAY_TASK_ID"},
+      {{{"SLURM_ARRAY_TASK_COUNT", "4"}},
+       "SLURM_ARRAY_TASK_ID",
+       "not set, but SLURM_ARRAY_TASK_COUNT"},
+      {{{"SLURM_ARRAY_TASK_ID", "x"}, {"SLURM_ARRAY_TASK_COUNT", "4"}},
+       "SLURM_ARRAY_TASK_ID",
        "\"x\" is not a whole number"},
-      {{{"SLURM_ARRAY_TASK_ID", "0"}, {"SLURM_ARRAY_TASK_COUNT", "0"}}, "SLURM_ARRAY_TASK_COUNT",
+      {{{"SLURM_ARRAY_TASK_ID", "0"}, {"SLURM_ARRAY_TASK_COUNT", "0"}},
+       "SLURM_ARRAY_TASK_COUNT",
        "\"0\" is not a whole number from 1"},
-      {{{"SLURM_ARRAY_TASK_ID", "0"}, {"SLURM_ARRAY_TASK_COUNT", "4 "}}, "SLURM_ARRAY_TASK_COUNT",
+      {{{"SLURM_ARRAY_TASK_ID", "0"}, {"SLURM_ARRAY_TASK_COUNT", "4 "}},
+       "SLURM_ARRAY_TASK_COUNT",
        "\"4 \" is not a whole number"},
       // An array numbered from 1 (--array=1-4): the last task is 4 of 4.
-      {{{"SLURM_ARRAY_TASK_ID", "4"}, {"SLURM_ARRAY_TASK_COUNT", "4"}}, "SLURM_ARRAY_TASK_ID",
+      {{{"SLURM_ARRAY_TASK_ID", "4"}, {"SLURM_ARRAY_TASK_COUNT", "4"}},
+       "SLURM_ARRAY_TASK_ID",
        "4 is not below SLURM_ARRAY_TASK_COUNT = 4 (number the array from 0: sbatch --array=0-3)"},
   };
   for (const Bad& b : bad) {
@@ -162,8 +170,9 @@ TEST(StudyShard, AtomicWriteIntoAMissingDirectoryNamesIt) {
 
 TEST(StudyShard, DirectoryTellsItsStudy) {
   TempDir dir;
-  EXPECT_NE(error_of([&] { (void)study_of_shard_dir(dir.path()); }).message().find("no shard files"),
-            std::string::npos);
+  EXPECT_NE(
+      error_of([&] { (void)study_of_shard_dir(dir.path()); }).message().find("no shard files"),
+      std::string::npos);
   dir.write("stability-shard-0-of-2.json", "{}");
   dir.write("notes-shard-0-of-2.json", "{}");      // not a study: ignored
   dir.write("stability-shard-2-of-2.json", "{}");  // index not below N: not a shard file name
@@ -173,7 +182,9 @@ TEST(StudyShard, DirectoryTellsItsStudy) {
                 .message()
                 .find("several studies (accuracy, stability)"),
             std::string::npos);
-  EXPECT_NE(error_of([&] { (void)study_of_shard_dir(dir / "nowhere"); }).message().find("not a directory"),
+  EXPECT_NE(error_of([&] { (void)study_of_shard_dir(dir / "nowhere"); })
+                .message()
+                .find("not a directory"),
             std::string::npos);
 }
 

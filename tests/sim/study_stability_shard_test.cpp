@@ -76,7 +76,8 @@ TEST(StudyStabilityShard, ShardsPartitionTheCasesAndRunOnlyTheirs) {
   const StabilityOptions o = small_grid();
   const std::vector<StudyCase> all = stability_cases(o);
   ASSERT_EQ(all.size(), 828u);
-  for (std::size_t k = 0; k < all.size(); ++k) EXPECT_EQ(all[k].index, static_cast<std::int64_t>(k));
+  for (std::size_t k = 0; k < all.size(); ++k)
+    EXPECT_EQ(all[k].index, static_cast<std::int64_t>(k));
   EXPECT_EQ(all[0].family, "coupling");
   EXPECT_EQ(all[0].name, "coupling-undamped");
   EXPECT_EQ(all[0].parameters, "integrator=implicit-euler h=0.0001 m=0.001 k=10 zeta=0");
@@ -228,7 +229,8 @@ TEST(StudyStabilityShard, DamagedShardFilesAreNamed) {
   // A case of shard 0 in the file of shard 1.
   const std::size_t at = text.find("\"case\": 1,");
   ASSERT_NE(at, std::string::npos);
-  dir.write("stability-shard-1-of-2.json", text.substr(0, at) + "\"case\": 2," + text.substr(at + 10));
+  dir.write("stability-shard-1-of-2.json",
+            text.substr(0, at) + "\"case\": 2," + text.substr(at + 10));
   e = merge_error(dir.path());
   EXPECT_EQ(e.file(), path);
   EXPECT_EQ(e.key(), "results[0].case");
@@ -236,8 +238,8 @@ TEST(StudyStabilityShard, DamagedShardFilesAreNamed) {
   // A row's number replaced by text.
   const std::size_t dt = text.find("\"dt_s\": ");
   ASSERT_NE(dt, std::string::npos);
-  dir.write("stability-shard-1-of-2.json", text.substr(0, dt) + "\"dt_s\": \"fast\"" +
-                                               text.substr(text.find(',', dt)));
+  dir.write("stability-shard-1-of-2.json",
+            text.substr(0, dt) + "\"dt_s\": \"fast\"" + text.substr(text.find(',', dt)));
   e = merge_error(dir.path());
   EXPECT_EQ(e.key(), "case 1.rows.dt_s");
   EXPECT_NE(e.message().find("not a number: \"fast\""), std::string::npos) << e.what();

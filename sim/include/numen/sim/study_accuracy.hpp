@@ -137,9 +137,9 @@ const std::vector<std::string>& accuracy_case_names();
 /// `options.shard`. Runs nothing. Throws what run_accuracy_study() throws before it runs.
 std::vector<StudyCase> accuracy_cases(const AccuracyOptions& options);
 
-/// Runs the study: the study cases of `options.shard`. Throws InputError for an unknown case, a case named in
-/// AccuracyOptions::cases that this build left out (NUMEN_WITH_* options), or a step that
-/// does not divide 10 ms, and what load_scene() throws for the scene cases. Cases of the
+/// Runs the study: the study cases of `options.shard`. Throws InputError for an unknown case, a
+/// case named in AccuracyOptions::cases that this build left out (NUMEN_WITH_* options), or a step
+/// that does not divide 10 ms, and what load_scene() throws for the scene cases. Cases of the
 /// default list that this build left out are skipped and listed in AccuracyResult::skipped.
 AccuracyResult run_accuracy_study(const AccuracyOptions& options);
 

@@ -22,8 +22,8 @@ namespace numen::sim {
 /// One case of a study: the unit a shard runs and `numen study … --list` prints.
 struct StudyCase {
   std::int64_t index = 0;  ///< Position in the one-process run (0-based).
-  std::string family;      ///< Stability: the family ("coupling", …); accuracy: the case ("wall").
-  std::string name;        ///< Stability: the row's case ("coupling-undamped"); accuracy: integrator.
+  std::string family;  ///< Stability: the family ("coupling", …); accuracy: the case ("wall").
+  std::string name;    ///< Stability: the row's case ("coupling-undamped"); accuracy: integrator.
   std::string parameters;  ///< "integrator=implicit-euler h=0.0001 m=0.001 k=10 zeta=0".
 };
 
@@ -46,8 +46,7 @@ Shard parse_shard(std::string_view text, const std::string& key = "--shard");
 /// through `lookup` (std::getenv in the CLI; nullptr = unset). std::nullopt when neither is set.
 /// Throws InputError whose key is the variable's name when only one is set, a value is not a
 /// decimal integer, N < 1 or I ≥ N (an array numbered from 1: submit with --array=0-(N-1)).
-std::optional<Shard> shard_from_environment(
-    const std::function<const char*(const char*)>& lookup);
+std::optional<Shard> shard_from_environment(const std::function<const char*(const char*)>& lookup);
 
 /// "<study>-shard-<I>-of-<N>.json", e.g. "stability-shard-2-of-4.json".
 std::string shard_file_name(const std::string& study, const Shard& shard);

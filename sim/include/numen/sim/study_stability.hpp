@@ -150,10 +150,10 @@ const std::vector<std::string>& stability_family_names();
 /// "extreme") but runs nothing. Throws what run_stability_study() throws before it runs.
 std::vector<StudyCase> stability_cases(const StabilityOptions& options);
 
-/// Runs the study: the cases of `options.shard`, in order. Throws InputError for an unknown family or for "articulation" named in
-/// StabilityOptions::families in a build without joints, what load_scene() throws for the
-/// shipped scenes. Cases this build left out (NUMEN_WITH_* options) are otherwise skipped and
-/// listed in StabilityResult::skipped.
+/// Runs the study: the cases of `options.shard`, in order. Throws InputError for an unknown family
+/// or for "articulation" named in StabilityOptions::families in a build without joints, what
+/// load_scene() throws for the shipped scenes. Cases this build left out (NUMEN_WITH_* options) are
+/// otherwise skipped and listed in StabilityResult::skipped.
 StabilityResult run_stability_study(const StabilityOptions& options);
 
 /// Energy of the verdict (J), gravity left out (the study runs without gravity): Σ ½ m v² +

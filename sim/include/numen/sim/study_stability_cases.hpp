@@ -154,9 +154,9 @@ void plan_articulation(const StabilityOptions& o, Plan& plan);
 /// gets one "case: reason" line in Plan::skipped.
 void plan_scene_extreme(const StabilityOptions& o, const std::string& scene_dir, Plan& plan);
 /// "scenes": every shipped scene (`scene_dir`/*.toml) through run_scene() with its contact
-/// stiffness and, separately, its coupling stiffness swept to 1e12 N/m (study_stability_scenes.cpp).
-/// A scene this build cannot load (NUMEN_WITH_* options) gets one "scenes <name>: reason" line in
-/// Plan::skipped.
+/// stiffness and, separately, its coupling stiffness swept to 1e12 N/m
+/// (study_stability_scenes.cpp). A scene this build cannot load (NUMEN_WITH_* options) gets one
+/// "scenes <name>: reason" line in Plan::skipped.
 void plan_scene_stiffness(const StabilityOptions& o, const std::string& scene_dir, Plan& plan);
 
 /// The integrators of `o` (all three when empty).
