@@ -200,11 +200,7 @@ AccuracyGrid accuracy_grid(const AccuracyOptions& options) {
     return true;
   });
   if (options.reference_dt > 0.0) check_step(options.reference_dt, "reference_dt");
-  if (options.shard.count < 1 || options.shard.index < 0 ||
-      options.shard.index >= options.shard.count)
-    throw InputError("", 0, 0, "shard",
-                     std::to_string(options.shard.index) + "/" +
-                         std::to_string(options.shard.count) + " is not a shard I/N, 0 <= I < N");
+  check_shard(options.shard);
   return {std::move(steps), std::move(integrators), std::move(names), std::move(skipped)};
 }
 

@@ -96,6 +96,13 @@ Shard parse_shard(std::string_view text, const std::string& key) {
   return Shard{*i, *n};
 }
 
+void check_shard(const Shard& s) {
+  if (s.count < 1 || s.index < 0 || s.index >= s.count)
+    throw InputError("", 0, 0, "shard",
+                     std::to_string(s.index) + "/" + std::to_string(s.count) +
+                         " is not a shard I/N, 0 <= I < N");
+}
+
 std::optional<Shard> shard_from_environment(const std::function<const char*(const char*)>& lookup) {
   constexpr const char* kId = "SLURM_ARRAY_TASK_ID";
   constexpr const char* kCount = "SLURM_ARRAY_TASK_COUNT";

@@ -151,11 +151,7 @@ stability::Plan stability::plan_study(const StabilityOptions& options) {
           "unknown family \"" + f +
               "\" (coupling, contact, articulation, extreme, boundary, scenes)");
   }
-  if (options.shard.count < 1 || options.shard.index < 0 ||
-      options.shard.index >= options.shard.count)
-    throw InputError("", 0, 0, "shard",
-                     std::to_string(options.shard.index) + "/" +
-                         std::to_string(options.shard.count) + " is not a shard I/N, 0 <= I < N");
+  check_shard(options.shard);
   Plan plan;
   const std::string no_joints = study::missing_parts(true, false);
   const bool articulation = wanted(options, "articulation") && no_joints.empty();

@@ -42,6 +42,10 @@ inline constexpr int kMaxShards = 1000000;
 /// space). Throws InputError (key `key`, e.g. "--shard") saying what is wrong.
 Shard parse_shard(std::string_view text, const std::string& key = "--shard");
 
+/// Throws InputError (key "shard") unless 1 ≤ shard.count and 0 ≤ shard.index < shard.count (a
+/// Shard built in code, e.g. through the Python bindings, rather than parsed).
+void check_shard(const Shard& shard);
+
 /// The shard of a Slurm array task: I = SLURM_ARRAY_TASK_ID, N = SLURM_ARRAY_TASK_COUNT, read
 /// through `lookup` (std::getenv in the CLI; nullptr = unset). std::nullopt when neither is set.
 /// Throws InputError whose key is the variable's name when only one is set, a value is not a
