@@ -146,7 +146,7 @@ int StabilityStudyCommand::execute() const {
   if (shard) {
     sim::write_file_atomically(path, sim::stability_shard_document(result, options));
     std::printf("%s: %zu runs, %lld of the %lld cases, in %.1f s; wrote %s\n",
-                shard_label(*shard).c_str(), result.rows.size() + result.boundaries.size(),
+                shard_label(*shard).c_str(), result.rows.size(),
                 static_cast<long long>(cases_of(*shard, result.cases)),
                 static_cast<long long>(result.cases), result.wall_s, path.c_str());
     return 0;

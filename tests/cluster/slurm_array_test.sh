@@ -113,8 +113,13 @@ done
 [ "$(sinfo -h -n "$host" -o %t 2>/dev/null)" = idle ] ||
   daemon_failed "node $host is not idle: $(sinfo -h -n "$host" -o '%t %E' 2>&1)" slurmd
 
+echo "Slurm up after ${SECONDS} s (node $host, $(nproc) CPUs)"
+
 # --- The one-process run.
+t0=$SECONDS
 "$numen" study stability --quick --out "$work/whole" >"$work/whole.out" 2>/dev/null
+echo "one-process run: $((SECONDS - t0)) s"
+t0=$SECONDS
 
 compare() {  # $1: directory of the merged CSV files, $2: what ran the shards
   local n=0
@@ -159,7 +164,8 @@ if [ "$(scontrol -o show job "$job" | grep -c 'JobState=COMPLETED.*ExitCode=0:0'
 fi
 grep -h "shard [0-3]/4" "$work"/slurm/task-*.log
 "$numen" study merge "$work/slurm" >"$work/slurm-merge.out"
-compare "$work/slurm" "Slurm array job (4 tasks)"
+compare "$work/slurm" "Slurm array job (4 tasks, $((SECONDS - t0)) s)"
+t0=$SECONDS
 
 # --- The same shards with GNU parallel (2 at a time).
 parallel --will-cite -j2 "$numen" study stability --quick --shard {}/4 --out "$work/parallel" \
@@ -170,4 +176,4 @@ parallel --will-cite -j2 "$numen" study stability --quick --shard {}/4 --out "$w
 [ "$(grep -c "exists, skipped" "$work/parallel-again.out")" -eq 4 ] ||
   { echo "FAIL: existing shards were not skipped:"; cat "$work/parallel-again.out"; exit 1; }
 "$numen" study merge "$work/parallel" >"$work/parallel-merge.out"
-compare "$work/parallel" "GNU parallel (4 shards)"
+compare "$work/parallel" "GNU parallel (4 shards, $((SECONDS - t0)) s with the skipped round)"
