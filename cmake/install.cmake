@@ -118,7 +118,8 @@ numen_install_headers(${PROJECT_SOURCE_DIR}/sim/include
   numen/sim/scene_info.hpp numen/sim/scripted_path.hpp numen/sim/sdo_session.hpp
   numen/sim/shipped_files.hpp
   numen/sim/simulated_instrument.hpp numen/sim/study_accuracy.hpp
-  numen/sim/study_stability.hpp numen/sim/trace.hpp numen/sim/trajectory.hpp
+  numen/sim/study_shard.hpp numen/sim/study_stability.hpp numen/sim/trace.hpp
+  numen/sim/trajectory.hpp
   numen/sim/trocar_placement.hpp numen/sim/view_output.hpp numen/sim/view_recording.hpp
   numen/sim/view_scene.hpp numen/sim/view_server.hpp)
 

@@ -145,6 +145,8 @@ class AccuracyStudyCommand {
   std::string out_ = "accuracy";
   bool quick_ = false;
   std::vector<std::string> cases_;
+  std::string shard_;  ///< "I/N" or "" (then SLURM_ARRAY_TASK_ID/COUNT, or the whole study).
+  bool list_ = false;
 };
 
 /// `numen study stability ...`: stiff and extreme cases, a verdict per run.
@@ -159,6 +161,22 @@ class StabilityStudyCommand {
   std::string out_ = "stability";
   bool quick_ = false;
   std::vector<std::string> families_;
+  std::string shard_;  ///< "I/N" or "" (then SLURM_ARRAY_TASK_ID/COUNT, or the whole study).
+  bool list_ = false;
+};
+
+/// `numen study merge DIR`: the shard files of a study (docs/studies.md) checked and merged
+/// into the one-process run's CSV files.
+class MergeStudyCommand {
+ public:
+  explicit MergeStudyCommand(CLI::App& study);
+  bool parsed() const { return cli_->parsed(); }
+  int execute() const;
+
+ private:
+  CLI::App* cli_;
+  std::string dir_;
+  std::string out_;  ///< "" = dir_.
 };
 
 }  // namespace numen::app

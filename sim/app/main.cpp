@@ -13,6 +13,8 @@
 ///   numen sdo --bus can:IFACE|serial:PATH[@BAUD] NODE read|write INDEX:SUB [VALUE] [--type T]
 ///   numen study accuracy [--out DIR] [--quick] [--case NAME]...
 ///   numen study stability [--out DIR] [--quick] [--family NAME]...
+///   numen study accuracy|stability ... [--shard I/N] [--list]
+///   numen study merge DIR [--out DIR]
 /// SIGINT / SIGTERM: while the input loads, the process ends at once (status 128 + signal;
 /// nothing is open on a bus yet); once a run or device has started, it ends cleanly (run: zero
 /// torque, drives disabled; both: summary). Exit statuses: docs/inputs.md.
@@ -41,6 +43,7 @@ int main(int argc, char** argv) {
   study->require_subcommand(1);
   const AccuracyStudyCommand accuracy(*study);
   const StabilityStudyCommand stability(*study);
+  const MergeStudyCommand merge(*study);
 
   try {
     app.parse(argc, argv);
@@ -52,6 +55,7 @@ int main(int argc, char** argv) {
 
   if (stability.parsed()) return run_guarded([&] { return stability.execute(); });
   if (accuracy.parsed()) return run_guarded([&] { return accuracy.execute(); });
+  if (merge.parsed()) return run_guarded([&] { return merge.execute(); });
   if (figures.parsed()) return run_guarded([&] { return figures.execute(); });
   install_signal_handlers();  // the studies keep the default: a signal ends them at once
   if (view.parsed()) return run_guarded([&] { return view.execute(); });

@@ -5,6 +5,7 @@
 #include "numen/sim/study_accuracy.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -124,6 +125,7 @@ double whole_samples(double horizon) {
 
 struct CaseSetup {
   std::string name;
+  std::size_t position = 0;  // in the list of cases run (study case = position × integrators + i)
   std::unique_ptr<AccuracyCase> c;
   double reference_dt = 1e-6;
 };
@@ -162,7 +164,18 @@ double fit_order(const std::vector<double>& dt, const std::vector<double>& error
   return den > 0.0 ? (n * sxy - sx * sy) / den : kNaN;
 }
 
-AccuracyResult run_accuracy_study(const AccuracyOptions& options) {
+namespace {
+
+/// What the options ask for, checked: the steps (largest first), the integrators, the cases
+/// this build can run and those it left out.
+struct AccuracyGrid {
+  std::vector<double> steps;
+  std::vector<core::Integrator> integrators;
+  std::vector<std::string> names;
+  std::vector<std::string> skipped;
+};
+
+AccuracyGrid accuracy_grid(const AccuracyOptions& options) {
   std::vector<double> steps = options.steps.empty() ? default_steps(options.quick) : options.steps;
   for (double dt : steps) check_step(dt, "steps");
   std::sort(steps.begin(), steps.end(), std::greater<>());
@@ -177,24 +190,67 @@ AccuracyResult run_accuracy_study(const AccuracyOptions& options) {
       throw InputError("", 0, 0, "case",
                        "unknown case \"" + n + "\" (free-body, wall, articulated, deformable)");
   }
-  AccuracyResult result;
+  std::vector<std::string> skipped;
   std::erase_if(names, [&](const std::string& n) {
     const std::string missing = study::missing_parts(n == "articulated", n == "deformable");
     if (missing.empty()) return false;
     if (!options.cases.empty())
       throw InputError("", 0, 0, "case", "case \"" + n + "\" " + missing);
-    result.skipped.push_back(n + ": " + missing);
+    skipped.push_back(n + ": " + missing);
     return true;
   });
   if (options.reference_dt > 0.0) check_step(options.reference_dt, "reference_dt");
+  check_shard(options.shard);
+  return {std::move(steps), std::move(integrators), std::move(names), std::move(skipped)};
+}
+
+}  // namespace
+
+std::vector<StudyCase> accuracy_cases(const AccuracyOptions& options) {
+  const AccuracyGrid g = accuracy_grid(options);
+  std::vector<StudyCase> out;
+  char buf[96];
+  std::snprintf(buf, sizeof buf, " steps=%zu dt=%g..%g", g.steps.size(), g.steps.front(),
+                g.steps.back());
+  for (std::size_t c = 0; c < g.names.size(); ++c)
+    for (std::size_t i = 0; i < g.integrators.size(); ++i) {
+      const auto k = static_cast<std::int64_t>(c * g.integrators.size() + i);
+      if (options.shard.owns(k))
+        out.push_back({k, g.names[c], to_string(g.integrators[i]),
+                       std::string("integrator=") + to_string(g.integrators[i]) + buf});
+    }
+  return out;
+}
+
+AccuracyResult run_accuracy_study(const AccuracyOptions& options) {
+  AccuracyGrid grid = accuracy_grid(options);
+  const std::vector<double>& steps = grid.steps;
+  const std::vector<core::Integrator>& integrators = grid.integrators;
+  AccuracyResult result;
+  result.skipped = std::move(grid.skipped);
+  result.cases = static_cast<std::int64_t>(grid.names.size() * integrators.size());
+  result.shard = options.shard;
+  const auto start = std::chrono::steady_clock::now();
+  // Study case k = case position × integrators + integrator position.
+  const auto study_case = [&](std::size_t c, std::size_t i) {
+    return static_cast<std::int64_t>(c * integrators.size() + i);
+  };
+  const auto case_wanted = [&](std::size_t c) {
+    for (std::size_t i = 0; i < integrators.size(); ++i)
+      if (options.shard.owns(study_case(c, i))) return true;
+    return false;
+  };
 
   const std::string dir = options.scene_dir.empty()
                               ? std::filesystem::path(default_scene_path()).parent_path().string()
                               : options.scene_dir;
   std::vector<CaseSetup> cases;
-  for (const std::string& n : names) {
+  for (std::size_t position = 0; position < grid.names.size(); ++position) {
+    if (!case_wanted(position)) continue;  // no integrator of it in this shard
+    const std::string& n = grid.names[position];
     CaseSetup s;
     s.name = n;
+    s.position = position;
     if (n == "free-body") {
       s.c = accuracy::make_free_body_case();
     } else if (n == "wall") {
@@ -219,7 +275,10 @@ AccuracyResult run_accuracy_study(const AccuracyOptions& options) {
   double total = 0.0;
   for (const CaseSetup& s : cases) {
     const double w = horizon_of(*s.c) * s.c->step_cost();
-    for (double dt : steps) total += w * static_cast<double>(integrators.size()) / dt;
+    double owned = 0.0;
+    for (std::size_t i = 0; i < integrators.size(); ++i)
+      owned += options.shard.owns(study_case(s.position, i)) ? 1.0 : 0.0;
+    for (double dt : steps) total += w * owned / dt;
     if (!s.c->has_closed_form()) total += w * 3.0 / s.reference_dt;
   }
   double done = 0.0;
@@ -249,12 +308,16 @@ AccuracyResult run_accuracy_study(const AccuracyOptions& options) {
       rc.position_difference_max_mm = c.pos_max;
       rc.orientation_difference_max_mrad = c.rot_max;
       rc.cpu_s = reference.cpu_s + half.cpu_s;
-      result.references.push_back(rc);
+      rc.case_index = study_case(s.position, 0);
+      if (options.shard.owns(rc.case_index)) result.references.push_back(rc);
       floor_mm = std::max(c.pos_max, kClosedFormFloorMm);
       floor_mrad = std::max(c.rot_max, kClosedFormFloorMrad);
       reference_name = "trapezoidal dt=" + dt_label(s.reference_dt);
     }
+    std::size_t integrator_position = 0;
     for (core::Integrator integ : integrators) {
+      const std::int64_t k = study_case(s.position, integrator_position++);
+      if (!options.shard.owns(k)) continue;
       std::vector<double> dts, pos, rot;
       std::vector<bool> div;
       AccuracyFit fit;
@@ -263,6 +326,7 @@ AccuracyResult run_accuracy_study(const AccuracyOptions& options) {
       fit.theoretical_order = integ == core::Integrator::kTrapezoidal ? 2.0 : 1.0;
       fit.error_at_1ms_mm = kNaN;
       fit.cpu_at_1ms = kNaN;
+      fit.case_index = k;
       for (double dt : steps) {
         const Samples run = s.c->simulate(integ, dt, horizon);
         report(s, horizon, dt, std::string(to_string(integ)) + " dt=" + dt_label(dt));
@@ -282,6 +346,7 @@ AccuracyResult run_accuracy_study(const AccuracyOptions& options) {
         row.diverged = run.nonfinite_steps > 0 || !std::isfinite(c.pos_max) ||
                        !std::isfinite(c.rot_max) || c.pos_max > kDivergedMm;
         row.reference = reference_name;
+        row.case_index = k;
         if (std::abs(dt - 1e-3) < 1e-12) {
           fit.error_at_1ms_mm = row.diverged ? kNaN : row.position_error_max_mm;
           fit.cpu_at_1ms = row.cpu_s_per_sim_s;
@@ -298,6 +363,7 @@ AccuracyResult run_accuracy_study(const AccuracyOptions& options) {
       result.fits.push_back(fit);
     }
   }
+  result.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return result;
 }
 

@@ -24,10 +24,6 @@
 namespace numen::sim {
 namespace {
 
-/// Work units of one run of each family (≈ its CPU cost relative to a 2000-step grid run).
-constexpr double kGridWeight = 1.0, kExtremeWeight = 5.0, kArticulationWeight = 10.0,
-                 kSceneWeight = 20.0, kBoundaryWeight = 1500.0, kStiffSceneWeight = 40.0;
-
 bool wanted(const StabilityOptions& o, const char* family) {
   return o.families.empty() ||
          std::find(o.families.begin(), o.families.end(), family) != o.families.end();
@@ -123,7 +119,30 @@ const std::vector<std::string>& stability_family_names() {
   return names;
 }
 
-StabilityResult run_stability_study(const StabilityOptions& options) {
+void stability::Plan::add(const char* family, std::string name, std::string parameters,
+                          double weight, std::function<void(StabilityResult&)> run) {
+  PlannedCase c;
+  c.info.index = static_cast<std::int64_t>(cases.size());
+  c.info.family = family;
+  c.info.name = std::move(name);
+  c.info.parameters = std::move(parameters);
+  c.weight = weight;
+  c.run = std::move(run);
+  cases.push_back(std::move(c));
+}
+
+std::string stability::case_parameters(
+    core::Integrator integrator, std::initializer_list<std::pair<const char*, double>> values) {
+  std::string s = std::string("integrator=") + to_string(integrator);
+  char buf[64];
+  for (const auto& [key, v] : values) {
+    std::snprintf(buf, sizeof buf, " %s=%.6g", key, v);
+    s += buf;
+  }
+  return s;
+}
+
+stability::Plan stability::plan_study(const StabilityOptions& options) {
   for (const std::string& f : options.families) {
     const auto& all = stability_family_names();
     if (std::find(all.begin(), all.end(), f) == all.end())
@@ -132,52 +151,58 @@ StabilityResult run_stability_study(const StabilityOptions& options) {
           "unknown family \"" + f +
               "\" (coupling, contact, articulation, extreme, boundary, scenes)");
   }
-  StabilityResult result;
+  check_shard(options.shard);
+  Plan plan;
   const std::string no_joints = study::missing_parts(true, false);
   const bool articulation = wanted(options, "articulation") && no_joints.empty();
   if (wanted(options, "articulation") && !no_joints.empty()) {
     if (!options.families.empty())
       throw InputError("", 0, 0, "family", "family \"articulation\" " + no_joints);
-    result.skipped.push_back("articulation: " + no_joints);
+    plan.skipped.push_back("articulation: " + no_joints);
   }
   const std::string dir = options.scene_dir.empty()
                               ? std::filesystem::path(default_scene_path()).parent_path().string()
                               : options.scene_dir;
-  const auto start = std::chrono::steady_clock::now();
-  using namespace stability;
-  double total = 0.0, done = 0.0;
-  if (wanted(options, "coupling"))
-    total += kGridWeight * static_cast<double>(coupling_runs(options));
-  if (wanted(options, "contact")) total += kGridWeight * static_cast<double>(contact_runs(options));
-  if (articulation) total += kArticulationWeight * static_cast<double>(articulation_runs(options));
-  if (wanted(options, "extreme"))
-    total += kExtremeWeight * static_cast<double>(rigid_extreme_runs(options)) +
-             kSceneWeight / 5.0 * static_cast<double>(scene_extreme_runs(options));
-  if (wanted(options, "boundary")) total += 2.0 * kBoundaryWeight;
-  if (wanted(options, "scenes"))
-    total += kStiffSceneWeight * static_cast<double>(scene_stiffness_runs(options, dir));
-  auto tick_of = [&](double weight) -> Tick {
-    if (!options.progress) return {};
-    return [&, weight](const std::string& label) {
-      done = std::min(total, done + weight);
-      options.progress(done, total, label);
-    };
-  };
-
-  auto append = [&](std::vector<StabilityRow> rows) {
-    for (StabilityRow& r : rows) result.rows.push_back(std::move(r));
-  };
-  if (wanted(options, "coupling")) append(coupling_family(options, tick_of(kGridWeight)));
-  if (wanted(options, "contact")) append(contact_family(options, tick_of(kGridWeight)));
-  if (articulation) append(articulation_family(options, tick_of(kArticulationWeight)));
+  if (wanted(options, "coupling")) plan_coupling(options, plan);
+  if (wanted(options, "contact")) plan_contact(options, plan);
+  if (articulation) plan_articulation(options, plan);
   if (wanted(options, "extreme")) {
-    append(rigid_extreme_cases(options, tick_of(kExtremeWeight)));
-    append(scene_extreme_cases(options, dir, tick_of(kSceneWeight / 5.0), result.skipped));
+    plan_rigid_extreme(options, plan);
+    plan_scene_extreme(options, dir, plan);
   }
-  if (wanted(options, "boundary"))
-    result.boundaries = boundary_family(options, tick_of(kBoundaryWeight));
-  if (wanted(options, "scenes"))
-    append(scene_stiffness_family(options, dir, tick_of(kStiffSceneWeight), result.skipped));
+  if (wanted(options, "boundary")) plan_boundary(options, plan);
+  if (wanted(options, "scenes")) plan_scene_stiffness(options, dir, plan);
+  return plan;
+}
+
+std::vector<StudyCase> stability_cases(const StabilityOptions& options) {
+  std::vector<StudyCase> out;
+  for (const stability::PlannedCase& c : stability::plan_study(options).cases)
+    if (options.shard.owns(c.info.index)) out.push_back(c.info);
+  return out;
+}
+
+StabilityResult run_stability_study(const StabilityOptions& options) {
+  stability::Plan plan = stability::plan_study(options);
+  StabilityResult result;
+  result.skipped = std::move(plan.skipped);
+  result.cases = static_cast<std::int64_t>(plan.cases.size());
+  result.shard = options.shard;
+  const auto start = std::chrono::steady_clock::now();
+  double total = 0.0, done = 0.0;
+  for (const stability::PlannedCase& c : plan.cases)
+    if (options.shard.owns(c.info.index)) total += c.weight;
+  for (const stability::PlannedCase& c : plan.cases) {
+    if (!options.shard.owns(c.info.index)) continue;
+    const std::size_t rows = result.rows.size(), boundaries = result.boundaries.size();
+    c.run(result);
+    for (std::size_t i = rows; i < result.rows.size(); ++i)
+      result.rows[i].case_index = c.info.index;
+    for (std::size_t i = boundaries; i < result.boundaries.size(); ++i)
+      result.boundaries[i].case_index = c.info.index;
+    done = std::min(total, done + c.weight);
+    if (options.progress) options.progress(done, total, c.info.name + " " + c.info.parameters);
+  }
   result.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return result;
 }

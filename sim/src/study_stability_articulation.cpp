@@ -88,21 +88,17 @@ StabilityRow articulation_run(core::Integrator integrator, double h, double rati
 
 }  // namespace
 
-std::int64_t articulation_runs(const StabilityOptions& o) {
-  return static_cast<std::int64_t>(articulation_steps(o).size() * ratios(o).size() *
-                                   integrators_of(o).size());
-}
-
-std::vector<StabilityRow> articulation_family(const StabilityOptions& o, const Tick& tick) {
-  std::vector<StabilityRow> rows;
+void plan_articulation(const StabilityOptions& o, Plan& plan) {
   const double horizon = o.quick ? 0.3 : 1.0;
+  const StabilityLimits limits = o.limits;
   for (core::Integrator integrator : integrators_of(o))
     for (double h : articulation_steps(o))
-      for (double ratio : ratios(o)) {
-        rows.push_back(articulation_run(integrator, h, ratio, o.limits, horizon));
-        if (tick) tick(std::string("articulation ") + to_string(integrator));
-      }
-  return rows;
+      for (double ratio : ratios(o))
+        plan.add("articulation", "revolute-pair",
+                 case_parameters(integrator, {{"h", h}, {"mass_ratio", ratio}}),
+                 kArticulationWeight, [=](StabilityResult& r) {
+                   r.rows.push_back(articulation_run(integrator, h, ratio, limits, horizon));
+                 });
 }
 
 }  // namespace numen::sim::stability

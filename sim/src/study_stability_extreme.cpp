@@ -204,30 +204,31 @@ StabilityRow capacity_run(core::Integrator integrator, double h, const Stability
 
 }  // namespace
 
-std::int64_t rigid_extreme_runs(const StabilityOptions& o) {
-  return static_cast<std::int64_t>(extreme_steps(o).size() * integrators_of(o).size() * 7);
-}
-
-std::vector<StabilityRow> rigid_extreme_cases(const StabilityOptions& o, const Tick& tick) {
+void plan_rigid_extreme(const StabilityOptions& o, Plan& plan) {
   const double horizon = o.quick ? 0.3 : 1.0;
-  std::vector<StabilityRow> rows;
+  const StabilityLimits limits = o.limits;
+  const bool quick = o.quick;
   for (core::Integrator integrator : integrators_of(o))
     for (double h : extreme_steps(o)) {
-      const std::string at = std::string(" ") + to_string(integrator);
       for (bool wall : {false, true})
-        for (double k_t : {200.0, 2e4}) {
-          rows.push_back(teleport_run(integrator, h, k_t, wall, o.limits, horizon));
-          if (tick) tick("teleport" + at);
-        }
-      for (double k_r : {0.05, 5.0}) {
-        rows.push_back(spin_run(integrator, h, k_r, o.limits, horizon));
-        if (tick) tick("spin" + at);
-      }
-      rows.push_back(capacity_run(integrator, h, o.limits,
-                                  o.quick ? 20 : std::max<std::int64_t>(100, steps_for(0.5, h))));
-      if (tick) tick("capacity" + at);
+        for (double k_t : {200.0, 2e4})
+          plan.add("extreme", wall ? "teleport-wall" : "teleport-free",
+                   case_parameters(integrator, {{"h", h}, {"k_t", k_t}}), kExtremeWeight,
+                   [=](StabilityResult& r) {
+                     r.rows.push_back(teleport_run(integrator, h, k_t, wall, limits, horizon));
+                   });
+      for (double k_r : {0.05, 5.0})
+        plan.add("extreme", "spin-100rad/s", case_parameters(integrator, {{"h", h}, {"k_r", k_r}}),
+                 kExtremeWeight, [=](StabilityResult& r) {
+                   r.rows.push_back(spin_run(integrator, h, k_r, limits, horizon));
+                 });
+      const std::int64_t steps = quick ? 20 : std::max<std::int64_t>(100, steps_for(0.5, h));
+      plan.add("extreme", "contact-capacity",
+               case_parameters(integrator, {{"h", h}, {"steps", static_cast<double>(steps)}}),
+               kExtremeWeight, [=](StabilityResult& r) {
+                 r.rows.push_back(capacity_run(integrator, h, limits, steps));
+               });
     }
-  return rows;
 }
 
 }  // namespace numen::sim::stability

@@ -46,12 +46,6 @@ core::BodyModel sphere_body(double m) {
   return b;
 }
 
-std::string label(const char* fmt, double a, double b, double c, core::Integrator i) {
-  char buf[96];
-  std::snprintf(buf, sizeof buf, fmt, a, b, c);
-  return std::string(buf) + " " + to_string(i);
-}
-
 }  // namespace
 
 const std::vector<core::Integrator>& integrators_of(const StabilityOptions& o) {
@@ -80,24 +74,20 @@ StabilityRow coupling_run(core::Integrator integrator, double h, double m, doubl
   return row;
 }
 
-std::int64_t coupling_runs(const StabilityOptions& o) {
+void plan_coupling(const StabilityOptions& o, Plan& plan) {
   const int per = o.quick ? 1 : 4;
-  return static_cast<std::int64_t>(2 * log_grid(1, 8, per).size() * log_grid(-3, 2, per).size() *
-                                   grid_steps_list(o).size() * integrators_of(o).size());
-}
-
-std::vector<StabilityRow> coupling_family(const StabilityOptions& o, const Tick& tick) {
-  const int per = o.quick ? 1 : 4;
-  std::vector<StabilityRow> rows;
+  const std::int64_t steps = grid_steps(o);
+  const StabilityLimits limits = o.limits;
   for (double zeta : {0.0, 0.85})
     for (core::Integrator integrator : integrators_of(o))
       for (double h : grid_steps_list(o))
         for (double m : log_grid(-3, 2, per))
-          for (double k : log_grid(1, 8, per)) {
-            rows.push_back(coupling_run(integrator, h, m, k, zeta, grid_steps(o), o.limits));
-            if (tick) tick(label("coupling zeta=%.2f h=%.0e m=%.0e", zeta, h, m, integrator));
-          }
-  return rows;
+          for (double k : log_grid(1, 8, per))
+            plan.add("coupling", zeta == 0.0 ? "coupling-undamped" : "coupling-damped",
+                     case_parameters(integrator, {{"h", h}, {"m", m}, {"k", k}, {"zeta", zeta}}),
+                     kGridWeight, [=](StabilityResult& r) {
+                       r.rows.push_back(coupling_run(integrator, h, m, k, zeta, steps, limits));
+                     });
 }
 
 StabilityRow contact_run(core::Integrator integrator, double h, double m, double k_c, double zeta_c,
@@ -141,77 +131,81 @@ StabilityRow contact_run(core::Integrator integrator, double h, double m, double
   return row;
 }
 
-std::int64_t contact_runs(const StabilityOptions& o) {
+void plan_contact(const StabilityOptions& o, Plan& plan) {
   const int per = o.quick ? 1 : 4;
-  return static_cast<std::int64_t>(2 * 3 * log_grid(2, 8, per).size() * grid_steps_list(o).size() *
-                                   integrators_of(o).size());
-}
-
-std::vector<StabilityRow> contact_family(const StabilityOptions& o, const Tick& tick) {
-  const int per = o.quick ? 1 : 4;
-  std::vector<StabilityRow> rows;
+  const std::int64_t steps = grid_steps(o);
+  const StabilityLimits limits = o.limits;
   for (double zeta_c : {0.0, 0.5})
     for (core::Integrator integrator : integrators_of(o))
       for (double m : {1e-3, 1e-1, 1e1})
         for (double h : grid_steps_list(o))
-          for (double k_c : log_grid(2, 8, per)) {
-            rows.push_back(contact_run(integrator, h, m, k_c, zeta_c, grid_steps(o), o.limits));
-            if (tick) tick(label("contact zeta_c=%.1f m=%.0e h=%.0e", zeta_c, m, h, integrator));
-          }
-  return rows;
+          for (double k_c : log_grid(2, 8, per))
+            plan.add("contact", zeta_c == 0.0 ? "contact-undamped" : "contact-damped",
+                     case_parameters(integrator,
+                                     {{"m", m}, {"h", h}, {"k_c", k_c}, {"contact_zeta", zeta_c}}),
+                     kGridWeight, [=](StabilityResult& r) {
+                       r.rows.push_back(contact_run(integrator, h, m, k_c, zeta_c, steps, limits));
+                     });
 }
 
-std::vector<StabilityBoundary> boundary_family(const StabilityOptions& o, const Tick& tick) {
+StabilityBoundary boundary_run(double zeta, bool quick, const StabilityLimits& limits) {
   constexpr double kH = 1e-3, kM = 1.0;
   constexpr std::int64_t kSteps = 4000;
-  std::vector<StabilityBoundary> out;
-  for (double zeta : {0.0, 0.85}) {
-    StabilityBoundary b;
-    b.zeta = zeta;
-    b.theory_omega_dt = 2.0 * (std::sqrt(1.0 + zeta * zeta) - zeta);
-    b.verdict_theory_omega_dt = zeta == 0.0 ? 2.0 * (1.0 - 1.0 / o.limits.energy_factor) : kNaN;
-    b.steps = kSteps;
-    StabilityLimits unbounded = o.limits;
-    unbounded.energy_factor = kInf;
-    // One run at ω h = a: (growth ratio, verdict stable).
-    auto run = [&](double a, bool record) {
-      const double k = kM * (a / kH) * (a / kH);
-      Monitor growth(unbounded, kInf, kInf, kSteps);
-      const StabilityRow g = coupling_run(core::Integrator::kSymplecticEuler, kH, kM, k, zeta,
-                                          kSteps, unbounded, &growth);
-      const StabilityRow v =
-          coupling_run(core::Integrator::kSymplecticEuler, kH, kM, k, zeta, kSteps, o.limits);
-      if (record) {
-        b.omega_dt.push_back(a);
-        b.energy_ratio.push_back(g.stable ? g.energy_ratio_max : kInf);
-        b.growth_ratio.push_back(growth.growth_ratio());
-      }
-      return std::pair<bool, bool>{growth.growth_ratio() <= 1.5, v.stable};
-    };
-    // Coarse sweep in ω h, then bisection of each criterion between its last pass and first fail.
-    const double step = o.quick ? 0.05 : 0.01;
-    double grow_lo = 0.0, grow_hi = kInf, ver_lo = 0.0, ver_hi = kInf;
-    for (double a = step; a <= 3.0 + 1e-12; a += step) {
-      const auto [bounded, stable] = run(a, true);
-      if (bounded && grow_hi == kInf) grow_lo = a;
-      if (!bounded && grow_hi == kInf) grow_hi = a;
-      if (stable && ver_hi == kInf) ver_lo = a;
-      if (!stable && ver_hi == kInf) ver_hi = a;
+  StabilityBoundary b;
+  b.zeta = zeta;
+  b.theory_omega_dt = 2.0 * (std::sqrt(1.0 + zeta * zeta) - zeta);
+  b.verdict_theory_omega_dt = zeta == 0.0 ? 2.0 * (1.0 - 1.0 / limits.energy_factor) : kNaN;
+  b.steps = kSteps;
+  StabilityLimits unbounded = limits;
+  unbounded.energy_factor = kInf;
+  // One run at ω h = a: (growth ratio, verdict stable).
+  auto run = [&](double a, bool record) {
+    const double k = kM * (a / kH) * (a / kH);
+    Monitor growth(unbounded, kInf, kInf, kSteps);
+    const StabilityRow g = coupling_run(core::Integrator::kSymplecticEuler, kH, kM, k, zeta, kSteps,
+                                        unbounded, &growth);
+    const StabilityRow v =
+        coupling_run(core::Integrator::kSymplecticEuler, kH, kM, k, zeta, kSteps, limits);
+    if (record) {
+      b.omega_dt.push_back(a);
+      b.energy_ratio.push_back(g.stable ? g.energy_ratio_max : kInf);
+      b.growth_ratio.push_back(growth.growth_ratio());
     }
-    for (int i = 0; i < 20 && grow_hi - grow_lo > 1e-5; ++i) {
-      const double mid = 0.5 * (grow_lo + grow_hi);
-      (run(mid, false).first ? grow_lo : grow_hi) = mid;
-    }
-    for (int i = 0; i < 20 && ver_hi - ver_lo > 1e-5; ++i) {
-      const double mid = 0.5 * (ver_lo + ver_hi);
-      (run(mid, false).second ? ver_lo : ver_hi) = mid;
-    }
-    b.measured_growth_omega_dt = grow_lo;
-    b.measured_verdict_omega_dt = ver_lo;
-    out.push_back(std::move(b));
-    if (tick) tick(zeta == 0.0 ? "boundary undamped" : "boundary damped");
+    return std::pair<bool, bool>{growth.growth_ratio() <= 1.5, v.stable};
+  };
+  // Coarse sweep in ω h, then bisection of each criterion between its last pass and first fail.
+  const double step = quick ? 0.05 : 0.01;
+  double grow_lo = 0.0, grow_hi = kInf, ver_lo = 0.0, ver_hi = kInf;
+  for (double a = step; a <= 3.0 + 1e-12; a += step) {
+    const auto [bounded, stable] = run(a, true);
+    if (bounded && grow_hi == kInf) grow_lo = a;
+    if (!bounded && grow_hi == kInf) grow_hi = a;
+    if (stable && ver_hi == kInf) ver_lo = a;
+    if (!stable && ver_hi == kInf) ver_hi = a;
   }
-  return out;
+  for (int i = 0; i < 20 && grow_hi - grow_lo > 1e-5; ++i) {
+    const double mid = 0.5 * (grow_lo + grow_hi);
+    (run(mid, false).first ? grow_lo : grow_hi) = mid;
+  }
+  for (int i = 0; i < 20 && ver_hi - ver_lo > 1e-5; ++i) {
+    const double mid = 0.5 * (ver_lo + ver_hi);
+    (run(mid, false).second ? ver_lo : ver_hi) = mid;
+  }
+  b.measured_growth_omega_dt = grow_lo;
+  b.measured_verdict_omega_dt = ver_lo;
+  return b;
+}
+
+void plan_boundary(const StabilityOptions& o, Plan& plan) {
+  const bool quick = o.quick;
+  const StabilityLimits limits = o.limits;
+  for (double zeta : {0.0, 0.85})
+    plan.add("boundary", zeta == 0.0 ? "boundary-undamped" : "boundary-damped",
+             case_parameters(core::Integrator::kSymplecticEuler,
+                             {{"h", 1e-3}, {"m", 1.0}, {"zeta", zeta}}),
+             kBoundaryWeight, [=](StabilityResult& r) {
+               r.boundaries.push_back(boundary_run(zeta, quick, limits));
+             });
 }
 
 }  // namespace numen::sim::stability

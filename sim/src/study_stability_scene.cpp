@@ -21,11 +21,12 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <memory>
 #include <optional>
 #include <tuple>
 
-#include "numen/hal/device/axis.hpp"
 #include "numen/hal/canopen/canopen.hpp"
+#include "numen/hal/device/axis.hpp"
 #include "numen/hal/device/sample_check.hpp"
 #include "numen/sim/run.hpp"
 #include "numen/sim/scene.hpp"
@@ -429,45 +430,41 @@ StabilityRow core_target_run(const Scene& scene, core::Integrator integrator) {
 
 }  // namespace
 
-std::int64_t scene_extreme_runs(const StabilityOptions& o) {
-  const std::int64_t deformable_steps =
-      study::missing_parts(false, true).empty() ? (o.quick ? 1 : 3) : 0;
-  const std::int64_t loop_runs = study::missing_parts(true, false).empty() ? 3 : 0;
-  return (deformable_steps * 20 + loop_runs * 5) *
-         static_cast<std::int64_t>(integrators_of(o).size());
-}
-
-std::vector<StabilityRow> scene_extreme_cases(const StabilityOptions& o, const std::string& dir,
-                                              const Tick& tick, std::vector<std::string>& skipped) {
-  std::vector<StabilityRow> rows;
+void plan_scene_extreme(const StabilityOptions& o, const std::string& dir, Plan& plan) {
   const std::string no_nets = study::missing_parts(false, true);
   const std::string no_joints = study::missing_parts(true, false);  // default.toml's trocar
-  if (!no_nets.empty()) skipped.push_back("deformable-jump: " + no_nets);
+  if (!no_nets.empty()) plan.skipped.push_back("deformable-jump: " + no_nets);
   if (!no_joints.empty()) {
     for (const char* c : {"trocar-zero-insertion", "bus-nonfinite", "core-target-nonfinite"})
-      skipped.push_back(std::string(c) + ": " + no_joints);
+      plan.skipped.push_back(std::string(c) + ": " + no_joints);
   }
-  const std::optional<Scene> deformable =
-      no_nets.empty() ? std::optional<Scene>(load_scene(dir + "/deformable.toml")) : std::nullopt;
-  const std::optional<Scene> trocar =
-      no_joints.empty() ? std::optional<Scene>(load_scene(dir + "/default.toml")) : std::nullopt;
+  // Loaded once, shared by the cases (each run copies what it changes).
+  const std::shared_ptr<const Scene> deformable =
+      no_nets.empty() ? std::make_shared<const Scene>(load_scene(dir + "/deformable.toml"))
+                      : nullptr;
+  const std::shared_ptr<const Scene> trocar =
+      no_joints.empty() ? std::make_shared<const Scene>(load_scene(dir + "/default.toml"))
+                        : nullptr;
   const std::vector<double> steps =
       o.quick ? std::vector<double>{1e-3} : std::vector<double>{1e-4, 1e-3, 1e-2};
+  const StabilityLimits limits = o.limits;
+  const double jump_s = o.quick ? 0.15 : 0.5, trocar_s = o.quick ? 2.0 : 3.0,
+               bus_s = o.quick ? 0.3 : 1.0;
   for (core::Integrator integrator : integrators_of(o)) {
-    const std::string at = std::string(" ") + to_string(integrator);
-    for (double h : deformable ? steps : std::vector<double>{}) {
-      rows.push_back(deformable_run(*deformable, integrator, h, o.limits, o.quick ? 0.15 : 0.5));
-      for (int i = 0; i < 20 && tick; ++i) tick("deformable jump" + at);
-    }
+    for (double h : deformable ? steps : std::vector<double>{})
+      plan.add("extreme", "deformable-jump", case_parameters(integrator, {{"h", h}}),
+               20.0 * kSceneWeight / 5.0, [=](StabilityResult& r) {
+                 r.rows.push_back(deformable_run(*deformable, integrator, h, limits, jump_s));
+               });
     if (!trocar) continue;
-    rows.push_back(trocar_run(*trocar, integrator, o.quick ? 2.0 : 3.0));
-    for (int i = 0; i < 5 && tick; ++i) tick("trocar zero insertion" + at);
-    rows.push_back(bus_run(*trocar, integrator, o.quick ? 0.3 : 1.0));
-    for (int i = 0; i < 5 && tick; ++i) tick("bus NaN/Inf" + at);
-    rows.push_back(core_target_run(*trocar, integrator));
-    for (int i = 0; i < 5 && tick; ++i) tick("core target NaN/Inf" + at);
+    plan.add(
+        "extreme", "trocar-zero-insertion", case_parameters(integrator, {}), kSceneWeight,
+        [=](StabilityResult& r) { r.rows.push_back(trocar_run(*trocar, integrator, trocar_s)); });
+    plan.add("extreme", "bus-nonfinite", case_parameters(integrator, {}), kSceneWeight,
+             [=](StabilityResult& r) { r.rows.push_back(bus_run(*trocar, integrator, bus_s)); });
+    plan.add("extreme", "core-target-nonfinite", case_parameters(integrator, {}), kSceneWeight,
+             [=](StabilityResult& r) { r.rows.push_back(core_target_run(*trocar, integrator)); });
   }
-  return rows;
 }
 
 }  // namespace numen::sim::stability

@@ -23,6 +23,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <memory>
 #include <optional>
 
 #include "numen/sim/run.hpp"
@@ -120,39 +121,37 @@ StabilityRow scene_run(const Scene& scene, const std::string& name, const char* 
 
 }  // namespace
 
-std::int64_t scene_stiffness_runs(const StabilityOptions& o, const std::string& dir) {
-  return 2 * static_cast<std::int64_t>(scene_files(dir).size() * stiffnesses(o).size() *
-                                       integrators_of(o).size());
-}
-
-std::vector<StabilityRow> scene_stiffness_family(const StabilityOptions& o, const std::string& dir,
-                                                 const Tick& tick,
-                                                 std::vector<std::string>& skipped) {
-  std::vector<StabilityRow> rows;
+void plan_scene_stiffness(const StabilityOptions& o, const std::string& dir, Plan& plan) {
+  const StabilityLimits limits = o.limits;
   for (const std::string& file : scene_files(dir)) {
     const std::string name = std::filesystem::path(file).stem().string();
-    std::optional<Scene> scene;
+    std::shared_ptr<const Scene> scene;
     try {
-      scene = load_scene(file);
+      scene = std::make_shared<const Scene>(load_scene(file));
     } catch (const std::exception& e) {  // a part this build left out (NUMEN_WITH_*)
       const std::string missing = study::missing_parts(true, true);
       if (missing.empty()) throw;
-      skipped.push_back("scenes " + name + ": " + e.what());
+      plan.skipped.push_back("scenes " + name + ": " + e.what());
       continue;
     }
-    for (core::Integrator integrator : integrators_of(o)) {
-      const std::string at = " " + name + " " + to_string(integrator);
+    const double seconds = duration(o, *scene);
+    for (core::Integrator integrator : integrators_of(o))
       for (double k : stiffnesses(o)) {
-        rows.push_back(scene_run(with_contact_stiffness(*scene, k), name, "contact-stiffness",
-                                 integrator, k, o.limits, duration(o, *scene)));
-        if (tick) tick("contact stiffness" + at);
-        rows.push_back(scene_run(with_coupling_stiffness(*scene, k), name, "coupling-stiffness",
-                                 integrator, k, o.limits, duration(o, *scene)));
-        if (tick) tick("coupling stiffness" + at);
+        plan.add("scenes", "contact-stiffness " + name,
+                 case_parameters(integrator, {{"k", k}, {"duration_s", seconds}}),
+                 kStiffSceneWeight, [=](StabilityResult& r) {
+                   r.rows.push_back(scene_run(with_contact_stiffness(*scene, k), name,
+                                              "contact-stiffness", integrator, k, limits, seconds));
+                 });
+        plan.add(
+            "scenes", "coupling-stiffness " + name,
+            case_parameters(integrator, {{"k", k}, {"duration_s", seconds}}), kStiffSceneWeight,
+            [=](StabilityResult& r) {
+              r.rows.push_back(scene_run(with_coupling_stiffness(*scene, k), name,
+                                         "coupling-stiffness", integrator, k, limits, seconds));
+            });
       }
-    }
   }
-  return rows;
 }
 
 }  // namespace numen::sim::stability

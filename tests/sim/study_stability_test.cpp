@@ -93,7 +93,8 @@ TEST(StudyStability, SymplecticEulerLimitWithDampingFollowsTheory) {
 TEST(StudyStability, BoundaryMeasuredAgainstTheory) {
   StabilityOptions o;
   o.quick = true;
-  const std::vector<StabilityBoundary> b = stability::boundary_family(o, {});
+  o.families = {"boundary"};
+  const std::vector<StabilityBoundary> b = run_stability_study(o).boundaries;
   ASSERT_EQ(b.size(), 2u);
   EXPECT_NEAR(b[0].measured_growth_omega_dt, 2.0, 1e-3);
   EXPECT_NEAR(b[0].measured_verdict_omega_dt, 2.0 * (1.0 - 1.0 / o.limits.energy_factor), 2e-3);

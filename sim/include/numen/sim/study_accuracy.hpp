@@ -35,6 +35,7 @@
 #include <vector>
 
 #include "numen/core/model.hpp"
+#include "numen/sim/study_shard.hpp"
 
 namespace numen::sim {
 
@@ -63,6 +64,10 @@ struct AccuracyOptions {
   /// Called after every run with the work done and the total (arbitrary units, ≈ CPU cost)
   /// and a label ("wall trapezoidal dt=1e-04"); may be empty.
   std::function<void(double done, double total, const std::string& label)> progress;
+  /// The cases to run: those of this shard (docs/studies.md); {0, 1}: all. A study case
+  /// (accuracy_cases()) is one case and integrator over the whole grid of steps; each shard
+  /// that runs a case computes the case's reference (and its check at half the step) itself.
+  Shard shard;
 };
 
 /// One run: a case, an integrator, a step. One line of accuracy.csv.
@@ -80,6 +85,7 @@ struct AccuracyRow {
   bool diverged = false;         ///< Non-finite steps rolled back, or an error above 1 m.
   std::int64_t nonfinite_steps = 0;
   std::string reference;  ///< "closed-form" or "trapezoidal dt=…".
+  std::int64_t case_index = -1;  ///< The study case (accuracy_cases()) of this run.
 };
 
 /// The observed order of one case and integrator.
@@ -95,6 +101,7 @@ struct AccuracyFit {
   double fit_dt_max = 0.0;
   double error_at_1ms_mm = 0.0;  ///< Position error max at h = 1 ms (NaN: not on the grid).
   double cpu_at_1ms = 0.0;       ///< CPU s per simulated s at h = 1 ms (NaN: not on the grid).
+  std::int64_t case_index = -1;  ///< The study case (accuracy_cases()) of this fit.
 };
 
 /// How far a reference run is from the exact solution: its difference with the same run at
@@ -105,6 +112,8 @@ struct ReferenceCheck {
   double position_difference_max_mm = 0.0;
   double orientation_difference_max_mrad = 0.0;
   double cpu_s = 0.0;  ///< CPU time of both reference runs (s).
+  /// The study case that reports it (accuracy_cases()): the case's first integrator.
+  std::int64_t case_index = -1;
 };
 
 /// Everything the study measured.
@@ -114,14 +123,23 @@ struct AccuracyResult {
   std::vector<ReferenceCheck> references;
   /// Cases of the default list this build cannot run, "case: reason" (study::missing_parts()).
   std::vector<std::string> skipped;
+  std::int64_t cases = 0;  ///< Study cases of the whole study (all shards).
+  Shard shard;             ///< The shard this result covers ({0, 1}: all, or a merge).
+  /// Wall time of the study (s); of a merge (merge_accuracy_shards()): the sum over the shards.
+  double wall_s = 0.0;
 };
 
 /// The four case names, in the order they run.
 const std::vector<std::string>& accuracy_case_names();
 
-/// Runs the study. Throws InputError for an unknown case, a case named in
-/// AccuracyOptions::cases that this build left out (NUMEN_WITH_* options), or a step that
-/// does not divide 10 ms, and what load_scene() throws for the scene cases. Cases of the
+/// The study's cases in the order of the one-process run, for `--list`: one per case and
+/// integrator (index = case position × integrators + integrator position), those of
+/// `options.shard`. Runs nothing. Throws what run_accuracy_study() throws before it runs.
+std::vector<StudyCase> accuracy_cases(const AccuracyOptions& options);
+
+/// Runs the study: the study cases of `options.shard`. Throws InputError for an unknown case, a
+/// case named in AccuracyOptions::cases that this build left out (NUMEN_WITH_* options), or a step
+/// that does not divide 10 ms, and what load_scene() throws for the scene cases. Cases of the
 /// default list that this build left out are skipped and listed in AccuracyResult::skipped.
 AccuracyResult run_accuracy_study(const AccuracyOptions& options);
 
@@ -135,6 +153,18 @@ double fit_order(const std::vector<double>& dt, const std::vector<double>& error
 /// Writes accuracy.csv (rows), accuracy_orders.csv (fits) and accuracy_references.csv
 /// into `dir` (created if missing). Throws std::runtime_error if a file cannot be written.
 void write_accuracy_csv(const AccuracyResult& result, const std::string& dir);
+
+/// The shard file of `result` (run with `options`; study_shard.hpp): the options and plan, per
+/// study case its rows, fit and (first integrator) reference check, numbers exact. The CPU times
+/// (cpu_s_per_sim_s, cpu_at_1ms, ReferenceCheck::cpu_s) are those measured by this shard.
+std::string accuracy_shard_document(const AccuracyResult& result, const AccuracyOptions& options);
+
+/// Reads the N shard files of the accuracy study in `dir` and puts their cases back in the
+/// one-process order: write_accuracy_csv() of the result writes what the one-process run writes
+/// except the CPU-time columns, which are measurements (they differ between any two runs).
+/// Throws InputError for a missing shard, mismatched N or options, a file that is not a complete
+/// shard file.
+AccuracyResult merge_accuracy_shards(const std::string& dir);
 
 /// The table of docs/results.md: case, integrator, observed and theoretical order, error
 /// and CPU time at 1 ms; then the reference checks. Markdown.

@@ -50,6 +50,7 @@
 
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"
+#include "numen/sim/study_shard.hpp"
 
 namespace numen::sim {
 
@@ -82,6 +83,8 @@ struct StabilityOptions {
   std::string scene_dir;
   /// Progress (work done, total, label of what ran); may be empty.
   std::function<void(double done, double total, const std::string& label)> progress;
+  /// The cases to run: those of this shard (docs/studies.md); {0, 1}: all.
+  Shard shard;
 };
 
 /// One run and its verdict: one line of stability_<family>.csv.
@@ -107,6 +110,7 @@ struct StabilityRow {
   double drift_max_m = 0.0;  ///< Largest joint position error |C| of a linear row over the run (m).
   std::int64_t nonfinite_steps = 0;  ///< core::Data::nonfinite_steps (rollbacks).
   std::string note;                  ///< Case-specific observations (overflow counts, torque, …).
+  std::int64_t case_index = -1;      ///< The case (stability_cases()) that made this row.
 };
 
 /// The symplectic Euler's measured stability limit on one spring.
@@ -123,6 +127,7 @@ struct StabilityBoundary {
   std::int64_t steps = 0;                ///< Steps per run.
   /// The sweep: ω h and the run's max E/E₀ and growth ratio (stability_boundary.csv).
   std::vector<double> omega_dt, energy_ratio, growth_ratio;
+  std::int64_t case_index = -1;  ///< The case (stability_cases()) that measured it.
 };
 
 /// Everything the study measured.
@@ -131,16 +136,24 @@ struct StabilityResult {
   std::vector<StabilityBoundary> boundaries;
   /// Cases this build cannot run (NUMEN_WITH_* options), "case: reason" (study::missing_parts()).
   std::vector<std::string> skipped;
-  double wall_s = 0.0;  ///< Wall time of the study (s).
+  /// Wall time of the study (s); of a merge (merge_stability_shards()): the sum over the shards.
+  double wall_s = 0.0;
+  std::int64_t cases = 0;  ///< Cases of the whole study (all shards).
+  Shard shard;             ///< The shard this result covers ({0, 1}: all, or a merge).
 };
 
 /// "coupling", "contact", "articulation", "extreme", "boundary", "scenes".
 const std::vector<std::string>& stability_family_names();
 
-/// Runs the study. Throws InputError for an unknown family or for "articulation" named in
-/// StabilityOptions::families in a build without joints, what load_scene() throws for the
-/// shipped scenes. Cases this build left out (NUMEN_WITH_* options) are otherwise skipped and
-/// listed in StabilityResult::skipped.
+/// The study's cases in the order of the one-process run (index k = position), for `--list`:
+/// those of `options.shard`. Loads the shipped scenes (family "scenes" and the scene cases of
+/// "extreme") but runs nothing. Throws what run_stability_study() throws before it runs.
+std::vector<StudyCase> stability_cases(const StabilityOptions& options);
+
+/// Runs the study: the cases of `options.shard`, in order. Throws InputError for an unknown family
+/// or for "articulation" named in StabilityOptions::families in a build without joints, what
+/// load_scene() throws for the shipped scenes. Cases this build left out (NUMEN_WITH_* options) are
+/// otherwise skipped and listed in StabilityResult::skipped.
 StabilityResult run_stability_study(const StabilityOptions& options);
 
 /// Energy of the verdict (J), gravity left out (the study runs without gravity): Σ ½ m v² +
@@ -171,6 +184,18 @@ double input_work(const core::Model& model, const core::Data& data, double energ
 /// Writes stability_<family>.csv for every family present and stability_boundary.csv into `dir`
 /// (created if missing). Throws std::runtime_error if a file cannot be written.
 void write_stability_csv(const StabilityResult& result, const std::string& dir);
+
+/// The shard file of `result` (run with `options`; study_shard.hpp): the options and plan (the
+/// manifest a merge compares), the wall time, and per case its rows or boundary, numbers exact.
+std::string stability_shard_document(const StabilityResult& result,
+                                     const StabilityOptions& options);
+
+/// Reads the N shard files of the stability study in `dir` (stability-shard-<I>-of-<N>.json) and
+/// puts their cases back in the one-process order: write_stability_csv() of the result writes
+/// the same bytes as the one-process run, format_stability_tables() the same tables. Throws
+/// InputError for a missing shard (listing the indices), mismatched N or options, a file that is
+/// not a complete shard file.
+StabilityResult merge_stability_shards(const std::string& dir);
 
 /// The CSV header line of stability_<family>.csv (no newline); schema in docs/results.md.
 const std::string& stability_csv_header();

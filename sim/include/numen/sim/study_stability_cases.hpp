@@ -7,13 +7,16 @@
 #include <algorithm>
 #include <cstdint>
 #include <functional>
+#include <initializer_list>
 #include <limits>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"
 #include "numen/core/step.hpp"
+#include "numen/sim/study_shard.hpp"
 #include "numen/sim/study_stability.hpp"
 
 namespace numen::sim::stability {
@@ -91,54 +94,70 @@ std::int64_t drive(const core::Model& model, core::Data& data, std::int64_t step
 /// A one-material model without gravity (materials: "default", `pair`).
 core::Model empty_model(const core::MaterialPair& pair = {});
 
-/// Case families. Each returns its rows; `progress(label)` is called after every run.
-using Tick = std::function<void(const std::string&)>;
+/// Work units of one case of each kind, ≈ its CPU cost relative to a 2000-step grid run (the
+/// progress bar's estimate).
+inline constexpr double kGridWeight = 1.0, kExtremeWeight = 5.0, kArticulationWeight = 10.0,
+                        kSceneWeight = 20.0, kBoundaryWeight = 1500.0, kStiffSceneWeight = 40.0;
+
+/// One case of the study's plan: what `--list` prints (StudyCase), its work units and the run,
+/// which appends its rows (or boundary) to a result. The run depends on the case only.
+struct PlannedCase {
+  StudyCase info;
+  double weight = 1.0;
+  std::function<void(StabilityResult&)> run;
+};
+
+/// The study's cases in the order of the one-process run (PlannedCase::info.index = position),
+/// and the cases this build left out, "case: reason" (study::missing_parts()).
+struct Plan {
+  std::vector<PlannedCase> cases;
+  std::vector<std::string> skipped;
+  /// Appends a case with the next index.
+  void add(const char* family, std::string name, std::string parameters, double weight,
+           std::function<void(StabilityResult&)> run);
+};
+
+/// "integrator=<name> key=value …" (values %.6g): StudyCase::parameters of a stability case.
+std::string case_parameters(core::Integrator integrator,
+                            std::initializer_list<std::pair<const char*, double>> values);
+
+/// The whole plan of `o`: its families in the order of stability_family_names(). Throws
+/// InputError for an unknown family or "articulation" asked for in a build without joints, and
+/// what load_scene() throws for the shipped scenes (`scene_dir`: o.scene_dir or the source
+/// tree's).
+Plan plan_study(const StabilityOptions& o);
 
 /// "coupling": the k × m × h grid, ζ = 0 and 0.85 (study_stability_rigid.cpp).
-std::vector<StabilityRow> coupling_family(const StabilityOptions& o, const Tick& tick);
-/// Number of runs coupling_family() makes (for the progress bar).
-std::int64_t coupling_runs(const StabilityOptions& o);
+void plan_coupling(const StabilityOptions& o, Plan& plan);
 /// One run of the coupling grid: body of mass m (kg) on a spring k (N/m) of damping ratio ζ,
 /// released at rest 10 mm from the target, `steps` steps of h.
 StabilityRow coupling_run(core::Integrator integrator, double h, double m, double k, double zeta,
                           std::int64_t steps, const StabilityLimits& limits,
                           Monitor* monitor_out = nullptr);
 /// "contact": the k_c × h × m sweep (study_stability_rigid.cpp).
-std::vector<StabilityRow> contact_family(const StabilityOptions& o, const Tick& tick);
-/// Number of runs contact_family() makes (for the progress bar).
-std::int64_t contact_runs(const StabilityOptions& o);
+void plan_contact(const StabilityOptions& o, Plan& plan);
 /// One contact run: sphere of mass m on a plane of stiffness k_c and damping ratio zeta_c.
 StabilityRow contact_run(core::Integrator integrator, double h, double m, double k_c, double zeta_c,
                          std::int64_t steps, const StabilityLimits& limits);
-/// "boundary": the symplectic Euler's limit for ζ = 0 and 0.85 (study_stability_rigid.cpp).
-std::vector<StabilityBoundary> boundary_family(const StabilityOptions& o, const Tick& tick);
+/// "boundary": the symplectic Euler's limit for ζ = 0 and 0.85, one case each
+/// (study_stability_rigid.cpp).
+void plan_boundary(const StabilityOptions& o, Plan& plan);
+/// The boundary measurement of one damping ratio ζ (a sweep in ω h, then bisection).
+StabilityBoundary boundary_run(double zeta, bool quick, const StabilityLimits& limits);
 /// Teleport, spin and capacity cases of "extreme" (study_stability_extreme.cpp).
-std::vector<StabilityRow> rigid_extreme_cases(const StabilityOptions& o, const Tick& tick);
-/// Number of runs rigid_extreme_cases() makes (for the progress bar).
-std::int64_t rigid_extreme_runs(const StabilityOptions& o);
+void plan_rigid_extreme(const StabilityOptions& o, Plan& plan);
 /// "articulation": mass ratios in a revolute pair (study_stability_articulation.cpp).
-std::vector<StabilityRow> articulation_family(const StabilityOptions& o, const Tick& tick);
-/// Number of runs articulation_family() makes (for the progress bar).
-std::int64_t articulation_runs(const StabilityOptions& o);
+void plan_articulation(const StabilityOptions& o, Plan& plan);
 /// The deformable jump, the trocar at zero insertion and the non-finite bus input of
 /// "extreme" (study_stability_scene.cpp). `scene_dir`: the shipped scenes. Cases whose part
-/// this build left out (the jump: nets; the others: the trocar's joints) are not run; each
-/// gets one "case: reason" line in `skipped`.
-std::vector<StabilityRow> scene_extreme_cases(const StabilityOptions& o,
-                                              const std::string& scene_dir, const Tick& tick,
-                                              std::vector<std::string>& skipped);
-/// Progress ticks scene_extreme_cases() makes: 20 per deformable run, 5 per loop run.
-std::int64_t scene_extreme_runs(const StabilityOptions& o);
-
+/// this build left out (the jump: nets; the others: the trocar's joints) are not planned; each
+/// gets one "case: reason" line in Plan::skipped.
+void plan_scene_extreme(const StabilityOptions& o, const std::string& scene_dir, Plan& plan);
 /// "scenes": every shipped scene (`scene_dir`/*.toml) through run_scene() with its contact
-/// stiffness and, separately, its coupling stiffness swept to 1e12 N/m (study_stability_scenes.cpp).
-/// A scene this build cannot load (NUMEN_WITH_* options) gets one "scenes <name>: reason" line in
-/// `skipped`.
-std::vector<StabilityRow> scene_stiffness_family(const StabilityOptions& o,
-                                                 const std::string& scene_dir, const Tick& tick,
-                                                 std::vector<std::string>& skipped);
-/// Number of runs scene_stiffness_family() makes (for the progress bar).
-std::int64_t scene_stiffness_runs(const StabilityOptions& o, const std::string& scene_dir);
+/// stiffness and, separately, its coupling stiffness swept to 1e12 N/m
+/// (study_stability_scenes.cpp). A scene this build cannot load (NUMEN_WITH_* options) gets one
+/// "scenes <name>: reason" line in Plan::skipped.
+void plan_scene_stiffness(const StabilityOptions& o, const std::string& scene_dir, Plan& plan);
 
 /// The integrators of `o` (all three when empty).
 const std::vector<core::Integrator>& integrators_of(const StabilityOptions& o);
