@@ -450,6 +450,19 @@ TEST(DeformableLoaderErrors, BodyWithSpheresIsRejected) {
   EXPECT_NE(e.message().find("spheres"), std::string::npos) << e.what();
 }
 
+TEST(DeformableLoaderErrors, SolverErrorEstimateDelayOutOfRange) {
+  const std::string solver = "[solver]\ntolerance = 1.0e-3\nerror_estimate_delay = ";
+  const std::string text = replace(kMini, "[[material]]", solver + "9\n\n[[material]]");
+  expect_error_at(text, "error_estimate_delay = 9", "9", "solver.error_estimate_delay",
+                  "must be in [0, 8]");
+  TempDir dir;
+  const Scene s = load_scene(
+      dir.write("delay.toml", replace(kMini, "[[material]]", solver + "0\n\n[[material]]")));
+  EXPECT_EQ(s.model.solver.error_estimate_delay, 0);  // the residual rule
+  EXPECT_EQ(load_scene(dir.write("mini.toml", kMini)).model.solver.error_estimate_delay,
+            numen::core::SolverSettings{}.error_estimate_delay);
+}
+
 TEST(DeformableLoaderErrors, UnknownMeshKind) {
   const std::string text = replace(kMini, "mesh = \"icosphere\"", "mesh = \"torus\"");
   expect_error_at(text, "mesh = \"torus\"", "\"torus\"", "deformable[0].mesh",
