@@ -2,13 +2,13 @@
 // kernel of the implicit solves, on a small system of its own.
 #include "detail/pcg.hpp"
 
+#include <gtest/gtest.h>
+
 #include <array>
 #include <cmath>
 #include <cstdio>
 #include <limits>
 #include <vector>
-
-#include <gtest/gtest.h>
 
 #include "alloc_counter.hpp"
 #include "numen/core/types.hpp"
@@ -126,7 +126,7 @@ TEST(Pcg, EveryNonFiniteQuantityEndsTheSolveAsNonFinite) {
 
 TEST(Pcg, BreaksDownWithoutPositiveCurvature) {
   JacobiSystem s = spd_system();
-  s.a = -s.a;  // negative definite: pᵀAp < 0 at once
+  s.a = -s.a;                        // negative definite: pᵀAp < 0 at once
   s.a.diagonal() = -s.a.diagonal();  // keep the preconditioner positive
   s.a(0, 0) = -100.0;
   s.start();
@@ -217,8 +217,8 @@ TEST(PcgErrorRule, EstimateIsHestenesStiefelsAndTracksTheTrueEnergyNormErrorAfte
       ASSERT_EQ(res.iterations, budget);
       const std::vector<double> e = energy_errors(s);
       const int k = budget - delay;  // the iterate the estimate is of
-      const double identity = (e[static_cast<std::size_t>(k)] - e[static_cast<std::size_t>(budget)]) /
-                              s.b.dot(s.x);
+      const double identity =
+          (e[static_cast<std::size_t>(k)] - e[static_cast<std::size_t>(budget)]) / s.b.dot(s.x);
       if (e[static_cast<std::size_t>(budget)] < 1e-20 * x_norm * x_norm) break;  // at rounding
       EXPECT_NEAR(res.residual * res.residual, identity, 1e-8 * identity) << delay << " " << k;
       const double truth = std::sqrt(e[static_cast<std::size_t>(k)]) / x_norm;

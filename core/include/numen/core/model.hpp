@@ -137,7 +137,7 @@ struct SolverSettings {
   double tolerance = 1e-10;
   /// d, the delay of the nets' error estimate (iterations run past the estimated iterate; the
   /// solve returns the later one): 1 … kMaxErrorEstimateDelay, or 0 for the residual ratio.
-  int error_estimate_delay = 2;
+  int error_estimate_delay = 1;
   /// Contact time-constant floor, as ω_c h (dimensionless, > 0; +∞ switches it off): a penalty
   /// contact acts with the stiffness k_eff = min(k, m_eff (ω_c h / h)²), h = Model::dt, m_eff its
   /// effective mass along the normal (contact_effective_mass(); a net node's mass for node
