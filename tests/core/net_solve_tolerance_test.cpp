@@ -88,9 +88,9 @@ void expect_rule(int subdivisions, double horizon) {
   const BallRun loose = run_ball(subdivisions, start, horizon, 1e-3, tolerance, delay);
   const double integrator_error = max_distance(reference, half_step);
   const double solver_error = max_distance(reference, loose);
-  RecordProperty("integrator_error_m", std::to_string(integrator_error));
-  RecordProperty("solver_error_m", std::to_string(solver_error));
-  RecordProperty("iterations_per_step", std::to_string(loose.iterations));
+  testing::Test::RecordProperty("integrator_error_m", std::to_string(integrator_error));
+  testing::Test::RecordProperty("solver_error_m", std::to_string(solver_error));
+  testing::Test::RecordProperty("iterations_per_step", std::to_string(loose.iterations));
   std::printf(
       "[net solve tolerance] %zu nodes, %.2f s after the warm-up: integrator error %.3e m, solver "
       "error %.3e m "

@@ -141,7 +141,7 @@ TEST(Pcg, BreaksDownWithoutPositiveCurvature) {
 
 namespace {
 
-/// A x = b with A n×n SPD (a 1-D Laplacian with a varying shift: κ ≈ 400),
+/// A x = b with A n×n SPD (a 1-D Laplacian with a varying shift: κ of a few hundred),
 /// Jacobi preconditioner, for the error rule: records every iterate so that the
 /// test can measure the true energy-norm error of each. All storage sized before
 /// the solve.
@@ -230,7 +230,7 @@ TEST(PcgErrorRule, EstimateIsHestenesStiefelsAndTracksTheTrueEnergyNormErrorAfte
     std::printf("[pcg error rule] delay %d: %d estimates, true error / estimate at most %.3f\n",
                 delay, checked, worst_ratio);
     EXPECT_GE(checked, 10);
-    EXPECT_LT(worst_ratio, delay == 1 ? 6.0 : delay == 2 ? 3.0 : 2.0) << delay;
+    EXPECT_LT(worst_ratio, delay == 1 ? 2.5 : delay == 2 ? 1.6 : 1.2) << delay;
   }
 }
 
@@ -271,14 +271,14 @@ TEST(PcgErrorRule, StopsAtTheFirstIterationWhoseEstimateMeetsTheToleranceAllocat
 TEST(PcgErrorRule, RunsTheDelaysIterationsAndReportsNoEstimateBefore) {
   {  // a loose tolerance still needs d iterations to know the estimate
     LaplacianSystem s;
-    const detail::PcgErrorStop stop{0.9, 50, 3};
+    const detail::PcgErrorStop stop{10.0, 50, 3};
     const detail::PcgResult res = detail::pcg(s, s.rz0(), stop);
     EXPECT_EQ(res.iterations, 3);
     EXPECT_TRUE(res.converged(stop));
   }
   {  // a budget below the delay: no estimate, not converged
     LaplacianSystem s;
-    const detail::PcgErrorStop stop{0.9, 2, 3};
+    const detail::PcgErrorStop stop{10.0, 2, 3};
     const detail::PcgResult res = detail::pcg(s, s.rz0(), stop);
     EXPECT_EQ(res.iterations, 2);
     EXPECT_TRUE(res.finite);
@@ -295,7 +295,7 @@ TEST(PcgErrorRule, RunsTheDelaysIterationsAndReportsNoEstimateBefore) {
   }
   {  // a delay above the ring's length is clamped to it
     LaplacianSystem s;
-    const detail::PcgErrorStop stop{0.9, 50, 100};
+    const detail::PcgErrorStop stop{10.0, 50, 100};
     EXPECT_EQ(detail::pcg(s, s.rz0(), stop).iterations, detail::kMaxPcgErrorDelay);
   }
   {  // the non-finite path is shared with the residual rule
