@@ -178,6 +178,10 @@ std::string finalize_model(Model& model) {
     return "initial attached body index out of range";
   if (model.solver.max_iterations < 1 || !(model.solver.tolerance > 0.0))
     return "solver needs max_iterations >= 1 and tolerance > 0";
+  if (model.solver.error_estimate_delay < 0 ||
+      model.solver.error_estimate_delay > kMaxErrorEstimateDelay)
+    return "solver error_estimate_delay must be in [0, " + std::to_string(kMaxErrorEstimateDelay) +
+           "]";
   if (!(model.solver.contact_max_omega_dt > 0.0) || !(model.solver.node_contact_max_omega_dt > 0.0))
     return "solver contact_max_omega_dt and node_contact_max_omega_dt must be > 0 (inf: no "
            "contact time-constant floor)";

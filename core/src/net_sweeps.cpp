@@ -286,7 +286,9 @@ double net_start_sweep(const Model& model, Data& data, std::span<const Vec3> x0_
 /// SSOR preconditioner (net_solve.hpp) on Â = G̃ᵀ (D̃+L)⁻¹ A (D̃+Lᵀ)⁻¹ G̃, with
 /// x += α t, w −= α K q, d = D̃ w and ρ' = wᵀ D̃ w in one pass (advance()); the
 /// new direction q = D̃ w + β q is formed node by node inside the next backward
-/// sweep (direction() only records β). Residual measure ‖r‖_{M⁻¹} / ‖b‖_{D̃⁻¹}.
+/// sweep (direction() only records β). Residual measure ‖r‖_{M⁻¹} / ‖b‖_{D̃⁻¹};
+/// bᵀ x for the error rule. The CG's Â-norm error of x̂ is the A-norm error of x
+/// (x̂ = G̃⁻¹ (D̃+Lᵀ) x), so the error rule bounds the error of Δu, Δv in A's norm.
 struct EisenstatSystem {
   const Model& model;
   Data& data;
@@ -335,6 +337,17 @@ struct EisenstatSystem {
     return std::sqrt(rho / ref);
   }
   double precondition() const noexcept { return rho_new; }  // wᵀ D̃ w = rᵀ M⁻¹ r
+  /// bᵀ x of the current iterate, x in the original unknowns (b̂ᵀ x̂ = bᵀ x):
+  /// the error rule's ‖x‖²_A to first order.
+  double solution_energy() const noexcept {
+    const SolverScratch& s = data.scratch->solver;
+    double e = 0.0;
+    for (std::size_t b = 0; b < xb.size(); ++b)
+      if (s.in_solve[b]) e += s.rhs[b].dot(xb[b]);
+    const Vec3* rhs = data.scratch->net.rhs.data();
+    for (std::size_t i = 0; i < xn.size(); ++i) e += rhs[i].dot(xn[i]);
+    return e;
+  }
   void direction(double b) noexcept {
     beta = b;
     first = false;
@@ -363,12 +376,25 @@ bool solve_net_eisenstat(const Model& model, Data& data) noexcept {
   const double rho = apply_block_diagonal(data, sys.wb, sys.wn, sys.qb, sys.qn);  // q = D̃ w
   const double rel = std::sqrt(rho / sys.ref);
 
-  const PcgStop stop{model.solver.tolerance, model.solver.max_iterations};
-  const PcgResult res = pcg(sys, rel, rho, stop);
+  // The stopping rule: the energy-norm error estimate (error_estimate_delay ≥ 1),
+  // or the residual ratio ‖r‖_{M⁻¹}/‖b‖_{D̃⁻¹} (0).
+  static_assert(kMaxErrorEstimateDelay <= kMaxPcgErrorDelay);
+  const SolverSettings& set = model.solver;
+  PcgResult res;
+  bool converged = false;
+  if (set.error_estimate_delay > 0) {
+    const PcgErrorStop stop{set.tolerance, set.max_iterations, set.error_estimate_delay};
+    res = pcg(sys, rho, stop);
+    converged = res.converged(stop);
+  } else {
+    const PcgStop stop{set.tolerance, set.max_iterations};
+    res = pcg(sys, rel, rho, stop);
+    converged = res.converged(stop);
+  }
   if (!res.finite) return poison_solve(data);
   data.solver_iterations = res.iterations;
   data.solver_residual = res.residual;
-  return res.converged(stop);
+  return converged;
 }
 
 }  // namespace numen::core::detail

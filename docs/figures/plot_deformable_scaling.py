@@ -9,9 +9,10 @@ step time of a repetition — and the fastest step
 (min_step_us, median over the repetitions) when the JSON has it, with the n
 and n·log n references through the 642-node point and the 250 µs target; right: CG
 iterations per step and the time per node per (iteration + 1), the linear part.
-DeformableBallTight runs in the JSON (the same ball at tolerance 3e-4, which
-keeps the solver-tolerance rule at 2562 nodes where 1e-3 does not) are drawn
-as separate markers: the cost of equal accuracy. DeformableBallFrozen runs
+DeformableBallResidual runs in the JSON (the same ball stopped on the residual
+ratio that the error estimate replaced, at 1e-3, which breaks the
+solver-tolerance rule at 2562 nodes, and 3e-4, which keeps it) are drawn as
+separate markers, one kind per tolerance: the old stopping test's cost. DeformableBallFrozen runs
 (the same step repeated on the same input) are drawn as a vertical bar from
 their fastest step to their median: the part of the spread that is the
 machine's, not the trajectory's. An optional BEFORE.json
@@ -38,7 +39,15 @@ def load(path, prefix="DeformableBall/"):
 
 
 n, t, it, per, tmin = load(sys.argv[1])
-tight = load(sys.argv[1], "DeformableBallTight/")
+residual_runs = [r for r in json.load(open(sys.argv[1]))["benchmarks"]
+                 if r["name"].startswith("DeformableBallResidual/")
+                 and r.get("aggregate_name") == "median"]
+residual = {}  # tolerance -> (nodes, median µs, CG iterations)
+for r in sorted(residual_runs, key=lambda r: r["nodes"]):
+    nodes, times, its = residual.setdefault(r["tolerance"], ([], [], []))
+    nodes.append(r["nodes"])
+    times.append(r.get("median_step_us", r["real_time"] * 1e-3))
+    its.append(r["cg_iterations"])
 frozen = [r for r in json.load(open(sys.argv[1]))["benchmarks"]
           if r["name"].startswith("DeformableBallFrozen/") and r.get("aggregate_name") == "median"]
 before = load(sys.argv[3]) if len(sys.argv) > 3 else None
@@ -47,8 +56,8 @@ fig, (a, b) = plt.subplots(1, 2, figsize=(10, 4))
 a.loglog(n, t, "o-", label="numen core::step (median)")
 if np.all(np.isfinite(tmin)):
     a.loglog(n, tmin, "v-", color="C4", label="fastest step (min_step_us)")
-if len(tight[0]):
-    a.loglog(tight[0], tight[1], "D", color="C1", label="tolerance 3e-4 (median)")
+for i, (tol, (rn, rt, _)) in enumerate(sorted(residual.items())):
+    a.loglog(rn, rt, "Dx"[i % 2], color="C1", label=f"residual rule {tol:.0e} (median)")
 for i, r in enumerate(frozen):
     a.plot([r["nodes"]] * 2, [r["frozen_min_us"], r["frozen_median_us"]], "_-", color="k", ms=10,
            label="same step, frozen input: fastest to median" if i == 0 else None)
@@ -70,8 +79,8 @@ a.set_ylabel("µs per step")
 a.grid(alpha=0.3, which="both")
 a.legend(fontsize=8)
 b.plot(n, it, "s-", color="C1", label="CG iterations / step (mean)")
-if len(tight[0]):
-    b.plot(tight[0], tight[2], "D", color="C1", label="at tolerance 3e-4")
+for i, (tol, (rn, _, ri)) in enumerate(sorted(residual.items())):
+    b.plot(rn, ri, "Dx"[i % 2], color="C1", label=f"residual rule {tol:.0e}")
 if before is not None:
     b.plot(before[0], before[2], "s--", color="C1", alpha=0.45, label="before")
 b.set_xscale("log")

@@ -140,7 +140,9 @@ constexpr RunFigure kFigures[] = {
      [](const S& s) noexcept { return count(s.solver_iterations_max); }},
     {"solver_iterations_mean", "", "Mean iterations over the steps", K::kReal,
      [](const S& s) noexcept { return real(s.solver_iterations_mean); }},
-    {"solver_residual_max", "1", "Largest relative residual ‖r‖/‖b‖ of a step's solve",
+    {"solver_residual_max", "1",
+     "Largest stopping measure of a step's solve (relative residual ‖r‖/‖b‖; nets without "
+     "joints: relative energy-norm error estimate)",
      K::kReal, [](const S& s) noexcept { return real(s.solver_residual_max); }},
     {"solver_not_converged_steps", "",
      "Steps whose implicit solve ended at max_iterations above the tolerance", K::kCount,

@@ -65,7 +65,9 @@ constexpr TraceColumn<R> kCsvColumns[] = {
      [](const R& r, int) noexcept { return r.joint_reaction_max_n; }},
     {"baumgarte_rhs_max", "m/s or rad/s", "Largest |c| of a joint row: the Baumgarte correction",
      [](const R& r, int) noexcept { return r.baumgarte_rhs_max; }},
-    {"solver_residual", "1", "Relative residual ‖r‖/‖b‖ of the implicit solve",
+    {"solver_residual", "1",
+     "Stopping measure of the implicit solve (relative residual ‖r‖/‖b‖; nets without joints: "
+     "relative energy-norm error estimate)",
      [](const R& r, int) noexcept { return r.solver_residual; }},
     {"node_contacts", "", "Node contacts of all nets",
      [](const R& r, int) noexcept { return static_cast<double>(r.node_contacts); }},

@@ -523,9 +523,14 @@ struct Staged {
   bool converged = false;
 };
 
-Staged staged_body_contact(double tolerance = 1e-12) {
+/// `delay`: SolverSettings::error_estimate_delay (0: the residual rule).
+Staged staged_body_contact(double tolerance = 1e-12,
+                           int delay = core::SolverSettings{}.error_estimate_delay,
+                           int max_iterations = 500) {
   Staged st{scene(Variant::kFree), {}, {}, {}, false};
   st.m.solver.tolerance = tolerance;
+  st.m.solver.error_estimate_delay = delay;
+  st.m.solver.max_iterations = max_iterations;
   st.d = core::make_data(st.m);
   perturb(st.d, 3e-3, 0.05);
   st.d.target = core::Pose{Vec3(0.02, 0.0, 0.12), rot(0.5, Vec3(1, 2, 2.5))};
@@ -597,8 +602,9 @@ TEST(NetSolve, EisenstatSplittingAndPreconditionedProductMatchTheDenseMatrix) {
 }
 
 TEST(NetSolve, ReportsTheResidualInTheNormOfThePreconditioner) {
-  // At a loose tolerance, so that the recurrence's residual is the true one.
-  Staged st = staged_body_contact(1e-4);
+  // The residual rule (error_estimate_delay 0), at a loose tolerance, so that the
+  // recurrence's residual is the true one.
+  Staged st = staged_body_contact(1e-4, 0);
   const core::Model& m = st.m;
   const core::Data& d = st.d;
   EXPECT_TRUE(st.converged);
@@ -620,6 +626,39 @@ TEST(NetSolve, ReportsTheResidualInTheNormOfThePreconditioner) {
   EXPECT_LE(d.solver_residual, m.solver.tolerance);
   EXPECT_GT(d.solver_residual, 0.0);
   EXPECT_NEAR(d.solver_residual, rel_m, 1e-6 * rel_m);
+}
+
+TEST(NetSolve, ReportsTheEnergyNormErrorEstimateOfTheIterateTheDelayBack) {
+  // The error rule: Data::solver_residual = η_k = √(Σ_{j=k}^{k+d−1} α_j ρ_j / bᵀx_{k+d}) of
+  // Eisenstat's CG, whose Â-norm is the A-norm of the original unknowns. Against the dense
+  // A and its solution: η_k² bᵀx_{k+d} = ‖x* − x_k‖²_A − ‖x* − x_{k+d}‖²_A, x_k from the same
+  // solve stopped d iterations earlier (deterministic: the same iterates).
+  constexpr int kDelay = 2;
+  constexpr double kTolerance = 1e-5;
+  Staged st = staged_body_contact(kTolerance, kDelay);
+  ASSERT_TRUE(st.converged);
+  const int iterations = st.d.solver_iterations;
+  ASSERT_GT(iterations, kDelay);
+  Staged early = staged_body_contact(kTolerance, kDelay, iterations - kDelay);
+  EXPECT_FALSE(early.converged);
+  const MatrixXd& a = st.ref.a;
+  const VectorXd& b = st.ref.b;
+  const VectorXd exact = a.llt().solve(b);
+  const VectorXd x = numen::test::net_system_unknowns(st.m, st.d);
+  const VectorXd x_k = numen::test::net_system_unknowns(early.m, early.d);
+  const auto energy = [&a](const VectorXd& v) { return v.dot(a * v); };
+  const double e_k = energy(exact - x_k), e_last = energy(exact - x);
+  const double eta = st.d.solver_residual;
+  const double x_norm = std::sqrt(energy(exact));
+  std::printf(
+      "[net solve error estimate] %d iterations, reported %.4e, |x*-x_k|_A/|x*|_A %.4e, "
+      "returned |x*-x_k+d|_A/|x*|_A %.4e\n",
+      iterations, eta, std::sqrt(e_k) / x_norm, std::sqrt(e_last) / x_norm);
+  EXPECT_LE(eta, kTolerance);
+  EXPECT_GT(eta, 0.0);
+  EXPECT_NEAR(eta * eta * b.dot(x), e_k - e_last, 1e-6 * (e_k - e_last));
+  EXPECT_LE(eta * x_norm, std::sqrt(e_k) * (1.0 + 1e-6));  // a lower bound of x_k's error
+  EXPECT_LE(std::sqrt(e_last), std::sqrt(e_k));             // the returned iterate is better
 }
 
 TEST(NetSolve, BodyContactAndNodeContactWithAProbeMatchTheDenseSolve) {

@@ -114,7 +114,8 @@ TEST(DeformableShippedScene, ProbeIsACapsuleNetOnAHiddenCore) {
   EXPECT_DOUBLE_EQ(m.net_springs[static_cast<std::size_t>(net.structural_count)].stiffness, 50.0);
   // The implicit solve's settings of the scene.
   EXPECT_EQ(m.solver.max_iterations, 100);
-  EXPECT_DOUBLE_EQ(m.solver.tolerance, 1e-3);
+  EXPECT_DOUBLE_EQ(m.solver.tolerance, 3e-4);
+  EXPECT_EQ(m.solver.error_estimate_delay, 1);  // the energy-norm error estimate
 }
 
 TEST(DeformableShippedScene, EndobagIsAnIcosphereNetJointedToTheTube) {
@@ -448,6 +449,19 @@ TEST(DeformableLoaderErrors, BodyWithSpheresIsRejected) {
   const InputError e = load_error(dir, text);
   EXPECT_NE(e.message().find("does not collide"), std::string::npos) << e.what();
   EXPECT_NE(e.message().find("spheres"), std::string::npos) << e.what();
+}
+
+TEST(DeformableLoaderErrors, SolverErrorEstimateDelayOutOfRange) {
+  const std::string solver = "[solver]\ntolerance = 1.0e-3\nerror_estimate_delay = ";
+  const std::string text = replace(kMini, "[[material]]", solver + "9\n\n[[material]]");
+  expect_error_at(text, "error_estimate_delay = 9", "9", "solver.error_estimate_delay",
+                  "must be in [0, 8]");
+  TempDir dir;
+  const Scene s = load_scene(
+      dir.write("delay.toml", replace(kMini, "[[material]]", solver + "0\n\n[[material]]")));
+  EXPECT_EQ(s.model.solver.error_estimate_delay, 0);  // the residual rule
+  EXPECT_EQ(load_scene(dir.write("mini.toml", kMini)).model.solver.error_estimate_delay,
+            numen::core::SolverSettings{}.error_estimate_delay);
 }
 
 TEST(DeformableLoaderErrors, UnknownMeshKind) {

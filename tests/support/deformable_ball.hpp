@@ -47,7 +47,7 @@ inline core::NetSettings ball_net_settings() {
 /// (s) and CG `tolerance` (default: the shipped setting of a net without
 /// joints, docs/deformable.md "Solver tolerance"). Throws std::runtime_error if the model is
 /// refused.
-inline core::Model make_deformable_ball(int subdivisions, double dt = 1e-3, double tolerance = 1e-3,
+inline core::Model make_deformable_ball(int subdivisions, double dt = 1e-3, double tolerance = 3e-4,
                                         int max_iterations = 100) {
   core::Model m;
   m.dt = dt;

@@ -36,10 +36,14 @@
 /// which the backward sweep gathers as it goes (no block product). Iteration:
 ///   w = (D̃+L)⁻¹ (b − A x0), q = D̃ w, ρ = wᵀ D̃ w;
 ///   α = ρ / qᵀ K q, x += α t, w −= α K q, ρ' = wᵀ D̃ w, q = D̃ w + (ρ'/ρ) q.
-/// wᵀ D̃ w = rᵀ M⁻¹ r: it stops on ‖r‖_{M⁻¹} / ‖b‖_{D̃⁻¹} ≤ tolerance (the
-/// norm of the preconditioned residual against b's size in the block-Jacobi
-/// norm, bᵀ D̃⁻¹ b, which costs no sweep — ‖b‖_{M⁻¹} would need a second
-/// right-hand side in the start's sweep; not the Euclidean ‖r‖ / ‖b‖).
+/// It stops on the error (Model::solver.error_estimate_delay = d ≥ 1,
+/// detail::PcgErrorStop): x̂ − x̂_k = G̃⁻¹ (D̃+Lᵀ) (x − x_k) gives
+/// ‖x̂ − x̂_k‖_Â = ‖x − x_k‖_A, so Hestenes & Stiefel's Σ_{j=k}^{k+d−1} α_j ρ_j
+/// estimates the energy-norm error of Δu, Δv; with bᵀx_{k+d} ≈ ‖x‖²_A it stops
+/// when η_k = √(Σ α_j ρ_j / bᵀx_{k+d}) ≤ tolerance and returns x_{k+d}. With
+/// d = 0 it stops on the residual instead: wᵀ D̃ w = rᵀ M⁻¹ r, and
+/// ‖r‖_{M⁻¹} / ‖b‖_{D̃⁻¹} ≤ tolerance (the norm of the preconditioned residual
+/// against b's size in the block-Jacobi norm, bᵀ D̃⁻¹ b, which costs no sweep).
 ///
 /// With joints: the "arrowhead" part of A — every body block, every node's
 /// 3×3 block and the tie blocks between a net and its rigid component —
@@ -97,8 +101,10 @@ void build_net_system(const Model& model, Data& data) noexcept;
 /// Solves the coupled system (see file comment). Writes SolverScratch::delta
 /// (Δu), NetScratch::delta (Δv), the joint multipliers when the model has
 /// joints, Data::solver_iterations and Data::solver_residual: without joints
-/// ‖r‖_{M⁻¹} / ‖b‖_{D̃⁻¹} (M the SSOR preconditioner, D̃ its block diagonal),
-/// with joints ‖r‖ / ‖b‖.
+/// the Hestenes–Stiefel estimate of the relative error ‖x − x_k‖_A / ‖x‖_A of the
+/// iterate Model::solver.error_estimate_delay = d iterations before the returned one
+/// (detail::PcgErrorStop), or with d = 0 ‖r‖_{M⁻¹} / ‖b‖_{D̃⁻¹} (M the SSOR
+/// preconditioner, D̃ its block diagonal); with joints ‖r‖ / ‖b‖.
 /// Returns true when converged to Model::solver.tolerance within
 /// Model::solver.max_iterations. A non-finite system gives NaN unknowns
 /// (rejected by step()'s checks). Deterministic; no allocation.

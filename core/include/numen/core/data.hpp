@@ -156,8 +156,12 @@ struct Data {
   int num_node_contacts = 0;
   std::vector<NetOutput> nets;     ///< Per net (Model::nets).
   int solver_iterations = 0;       ///< Iterations of the implicit solve this step (bodies and nets).
-  /// Relative residual reached: ‖r‖/‖b‖, or ‖r‖_{M⁻¹}/‖b‖_{D̃⁻¹} for a model with
-  /// nets and no joints (SSOR preconditioner M, its block diagonal D̃; net_solve.hpp).
+  /// The measure the solve stopped on (SolverSettings::tolerance): the relative residual
+  /// ‖r‖/‖b‖; for a model with nets and no joints the estimated relative energy-norm error
+  /// ‖x − x_k‖_A / ‖x‖_A of the iterate error_estimate_delay iterations before the returned
+  /// one (+∞ if the budget ended the solve before that many iterations), or with
+  /// error_estimate_delay 0 ‖r‖_{M⁻¹}/‖b‖_{D̃⁻¹} (SSOR preconditioner M, its block diagonal D̃;
+  /// net_solve.hpp). NaN when non-finite.
   double solver_residual = 0.0;
   std::uint32_t status = kStepOk;  ///< StepStatus bits of the last step.
   /// StepStage bits (step_stages.hpp) of the stages the last step ran; equal to

@@ -121,10 +121,23 @@ struct MaterialPair {
   double friction = 0.0;   ///< N·s/m, viscous.
 };
 
+/// Largest SolverSettings::error_estimate_delay.
+inline constexpr int kMaxErrorEstimateDelay = 8;
+
 /// Settings of the linear solve of the implicit integrator.
 struct SolverSettings {
-  int max_iterations = 64;   ///< Preconditioned conjugate gradient iterations, at most.
-  double tolerance = 1e-10;  ///< Relative residual ‖r‖/‖b‖ that ends the iteration.
+  int max_iterations = 64;  ///< Preconditioned conjugate gradient iterations, at most.
+  /// What ends the iteration. The bodies' and joints' solves and the nets' solve with joints:
+  /// the relative residual ‖r‖/‖b‖. The nets' solve without joints (SSOR CG, net_solve.hpp),
+  /// with error_estimate_delay d ≥ 1: the relative energy-norm error of the step's velocity
+  /// increments, ‖x − x_k‖_A / ‖x‖_A (x = [Δu; Δv], A the step's matrix), as estimated by
+  /// Hestenes & Stiefel's Σ α_j ρ_j over d further iterations (Strakoš & Tichý 2002;
+  /// docs/deformable.md, "The stopping test"); with d = 0 the residual ratio
+  /// ‖r‖_{M⁻¹}/‖b‖_{D̃⁻¹} instead.
+  double tolerance = 1e-10;
+  /// d, the delay of the nets' error estimate (iterations run past the estimated iterate; the
+  /// solve returns the later one): 1 … kMaxErrorEstimateDelay, or 0 for the residual ratio.
+  int error_estimate_delay = 1;
   /// Contact time-constant floor, as ω_c h (dimensionless, > 0; +∞ switches it off): a penalty
   /// contact acts with the stiffness k_eff = min(k, m_eff (ω_c h / h)²), h = Model::dt, m_eff its
   /// effective mass along the normal (contact_effective_mass(); a net node's mass for node

@@ -206,7 +206,7 @@ struct RunSummary {
   int contacts_max = 0;           ///< Rigid sphere contacts in one step (node contacts apart).
   int solver_iterations_max = 0;  ///< Iterations of the implicit solve in one step.
   double solver_iterations_mean = 0.0;  ///< Mean over the steps.
-  double solver_residual_max = 0.0;  ///< Largest relative residual ‖r‖/‖b‖ reached by a step.
+  double solver_residual_max = 0.0;  ///< Largest Data::solver_residual of a step.
   /// Steps whose implicit solve ended at max_iterations above the tolerance.
   std::int64_t solver_not_converged_steps = 0;
   // Deformable nets (paper §4.2); all zero without nets.

@@ -45,7 +45,7 @@ struct TraceRecord {
   double net_penetration_mm = 0.0;  ///< Deepest node contact this step.
   double net_tie_stretch_mm = 0.0;  ///< Largest |x − a| of a node from its rest position.
   double net_strain_max = 0.0;      ///< Largest |l − L|/L of a structural spring.
-  double solver_residual = 0.0;     ///< Relative residual ‖r‖/‖b‖ of the implicit solve.
+  double solver_residual = 0.0;     ///< Data::solver_residual: the solve's stopping measure.
 };
 
 /// Builds a record from the state after a step: `report.feedback` is the feedback wrench whose
