@@ -157,6 +157,7 @@ void SolverScratch::resize(const Model& model) {
   joint_drift_step = model.dt;
   joint_horizon = model.dt;
   joint_rate_from_stage_start = false;
+  joint_rows_at_drift_end = false;
   stage_start.assign(n, BodyState{});
   stage_move.assign(n, Vec6::Zero());
   stage_delta.assign(n, Vec6::Zero());
@@ -560,6 +561,7 @@ void integrate_linearized(const Model& model, Data& data, double system_step) no
   s.joint_drift_step = h;
   s.joint_horizon = h;
   s.joint_rate_from_stage_start = false;
+  s.joint_rows_at_drift_end = false;
   const double scale = h / system_step;
   // The solve this model runs (step_stages.hpp: the plan step() reports from).
   const std::uint32_t plan = compiled_stages(model);
@@ -680,6 +682,7 @@ void integrate_symplectic_euler(const Model& model, Data& data) noexcept {
   data.scratch->solver.joint_drift_step = model.dt;
   data.scratch->solver.joint_horizon = model.dt;
   data.scratch->solver.joint_rate_from_stage_start = false;
+  data.scratch->solver.joint_rows_at_drift_end = false;
   data.solver_iterations = 0;
   data.solver_residual = 0.0;
   if constexpr (kWithDeformable)

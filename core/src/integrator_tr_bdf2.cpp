@@ -123,6 +123,7 @@ void integrate_tr_bdf2(const Model& model, Data& data) noexcept {
   s.joint_drift_step = h_gamma;
   s.joint_horizon = h_gamma;
   s.joint_rate_from_stage_start = false;
+  s.joint_rows_at_drift_end = false;
   prepare_implicit_step(model, data);
   for (std::size_t i = 0; i < nb; ++i)
     s.stage_gyro[i] = data.bodies[i].angular_velocity - s.twist0[i].tail<3>();  // ω* − ω0
@@ -214,6 +215,7 @@ void integrate_tr_bdf2(const Model& model, Data& data) noexcept {
   s.joint_drift_step = hs;
   s.joint_horizon = h;
   s.joint_rate_from_stage_start = true;
+  s.joint_rows_at_drift_end = true;
   solve_linearized_system(model, data);
   data.solver_iterations += stage1_iterations;
   if (stage1_residual > data.solver_residual) data.solver_residual = stage1_residual;
@@ -244,6 +246,7 @@ void integrate_tr_bdf2(const Model& model, Data& data) noexcept {
   if (joints) project_joint_velocities(model, data, h, false);  // onto G(x1) u1 = v_ref
 #endif
   s.joint_rate_from_stage_start = false;
+  s.joint_rows_at_drift_end = false;
 }
 
 }  // namespace numen::core

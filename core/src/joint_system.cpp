@@ -120,10 +120,18 @@ void build_joint_rows(const Model& model, Data& data, std::span<const Vec6> twis
     const JointVector cdot = chord_velocities ? JointVector(2.0 * cdot0 - drift_rate) : cdot0;
     const JointVector cdot1 = scale * (cdot - (beta_h2 / horizon) * c0);
     JointVector c = (c0 + horizon * cdot1 - predicted.position_error) / h;
-    c.noalias() -= (predicted.g_child - start.g_child) * delta_prev[static_cast<std::size_t>(jm.child)];
-    if (parent)
+    if (s.joint_rows_at_drift_end) {
+      // The solve's rows are those of the drifted configuration (TR-BDF2's BDF2 stage: its
+      // constraint impulse acts at the step's end, G(x1) up to O(h²)): C(q_pred ⊕ h Δu) ≈
+      // C_pred + h G_pred Δu exactly to first order, no correction by Δu_prev.
+      start = predicted;
+    } else {
       c.noalias() -=
-          (predicted.g_parent - start.g_parent) * delta_prev[static_cast<std::size_t>(jm.parent)];
+          (predicted.g_child - start.g_child) * delta_prev[static_cast<std::size_t>(jm.child)];
+      if (parent)
+        c.noalias() -=
+            (predicted.g_parent - start.g_parent) * delta_prev[static_cast<std::size_t>(jm.parent)];
+    }
     for (int r = start.count; r < kMaxJointRows; ++r) c(r) = 0.0;
     rhs[j] = c;
     data.joints[j].baumgarte_rhs = c;

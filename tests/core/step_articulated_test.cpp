@@ -117,7 +117,7 @@ TEST(StepArticulated, DoublePendulumDriftStaysBelowOneMicrometreOverSixtySeconds
   }
 }
 
-TEST(StepArticulated, TrapezoidalDoublePendulumConvergesAtSecondOrder) {
+TEST(StepArticulated, TrapezoidalAndTrBdf2DoublePendulumConvergeAtSecondOrder) {
   // The lower rod's COM after 0.5 s of swinging from horizontal, against the
   // trapezoidal rule at h = 1/16 ms; implicit Euler alongside for the order 1.
   const auto lower_at = [](core::Integrator integ, double h) {

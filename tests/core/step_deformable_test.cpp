@@ -306,8 +306,7 @@ TEST(StepDeformable, TiesReturnADisplacedNetAtSecondOrderWithTheTrapezoidalRule)
 
 TEST(StepDeformable, TiesReturnADisplacedNetAtSecondOrderWithTrBdf2) {
   // Same oscillator through both stages of TR-BDF2's coupled node solve (one system step
-  // h_s = (1 − 1/√2) h): error ∝ h², and L-stable, so below the trapezoidal rule's damping-free
-  // ringing the error constant stays within a small factor of it.
+  // h_s = (1 − 1/√2) h for both): error ∝ h² (measured: about half the trapezoidal rule's).
   double strain = 0.0;
   const double e1 = tie_oscillator_error(core::Integrator::kTrBdf2, 1e-3, &strain);
   const double e2 = tie_oscillator_error(core::Integrator::kTrBdf2, 5e-4, &strain);
@@ -320,7 +319,7 @@ TEST(StepDeformable, TiesReturnADisplacedNetAtSecondOrderWithTrBdf2) {
       e1, e2, e3, e1 / e2, e2 / e3);
   EXPECT_NEAR(e1 / e2, 4.0, 0.4);
   EXPECT_NEAR(e2 / e3, 4.0, 0.4);
-  EXPECT_LT(30.0 * e1, implicit);
+  EXPECT_LT(100.0 * e1, implicit);
   EXPECT_LT(strain, 1e-12);
 }
 

@@ -114,6 +114,10 @@ struct SolverScratch {
   /// true: the joints' rate Ċ0 = G0 u0 − v_ref takes u0 from stage_start (TR-BDF2's BDF2 stage,
   /// whose twist0 is the drift twist ũ); false: from twist0.
   bool joint_rate_from_stage_start = false;
+  /// true: the joint solve's rows G are evaluated at the drifted configuration
+  /// x0 ⊕ joint_drift_step · twist0 instead of x0 (TR-BDF2's BDF2 stage, whose constraint
+  /// force acts at the step's end); false: at x0.
+  bool joint_rows_at_drift_end = false;
 
   // TR-BDF2 (integrator_tr_bdf2.cpp), sized for every model.
   std::vector<BodyState> stage_start;  ///< Body states at the step's start.

@@ -84,8 +84,10 @@ void integrate_trapezoidal(const Model& model, Data& data) noexcept;
 /// where K and D are the exact Jacobians and time-dependent inputs are fed at t + h/2, as for
 /// the trapezoidal rule. L-stable (amplification → 0 as h ω → ∞) and stiffly accurate, so it
 /// runs CouplingMode::kFirstOrder. Joints: the trapezoidal stage as integrate_trapezoidal()
-/// (Baumgarte rows over γh, RATTLE's projection at x_γ); the BDF2 stage's rows put x1 on the
-/// Baumgarte target over h from the step's start, then u1 is projected onto G(x1) u1 = v_ref.
+/// (Baumgarte rows over γh, RATTLE's projection at x_γ); the BDF2 stage's rows, evaluated at
+/// the drifted configuration x0 ⊕ h_s ũ (its constraint force acts at the step's end), put x1
+/// on the Baumgarte target over h from the step's start, then u1 is projected onto
+/// G(x1) u1 = v_ref.
 /// Nets: nodes are unknowns of both stages, v1 = v0 + Δv, x1 = x0 + a Δx_γ + h_s v1.
 /// Data::solver_iterations is the sum over both solves, solver_residual the larger. Sets
 /// kSolverNotConverged when either solve ends above the tolerance. No allocation.
