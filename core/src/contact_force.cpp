@@ -33,11 +33,35 @@ inline ContactForceResult penalty_force(const Vec3& normal, double depth, const 
                                         const MaterialPair& material) noexcept {
   ContactForceResult out;
   const double v_n = normal.dot(v_rel);
-  const double f_n = material.stiffness * depth - material.damping * v_n;
+  const double k = material.stiffness;
+  const double onset = material.onset_depth;
+  if (!(onset > 0.0) || depth >= onset) {
+    // The linear law, or the smoothed law past its onset: k (d − δ0/2) − c v_n.
+    const double elastic = onset > 0.0 ? k * (depth - 0.5 * onset) : k * depth;
+    const double f_n = elastic - material.damping * v_n;
+    if (f_n > 0.0) {
+      out.normal_force = f_n;
+      out.active = true;
+      out.force = f_n * normal - material.friction * (v_rel - v_n * normal);
+      out.stiffness = k;
+      out.damping = material.damping;
+      out.friction = material.friction;
+    }
+    return out;
+  }
+  if (!(depth > 0.0)) return out;
+  // The onset, 0 < d < δ0: e = k d²/(2δ0), s = 3t² − 2t³, t = d/δ0.
+  const double t = depth / onset;
+  const double fade = t * t * (3.0 - 2.0 * t);
+  const double fade_rate = 6.0 * t * (1.0 - t) / onset;  // s'(d)
+  const double f_n = 0.5 * k * depth * t - material.damping * fade * v_n;
   if (f_n > 0.0) {
     out.normal_force = f_n;
     out.active = true;
-    out.force = f_n * normal - material.friction * (v_rel - v_n * normal);
+    out.force = f_n * normal - (material.friction * fade) * (v_rel - v_n * normal);
+    out.stiffness = std::max(0.0, k * t - material.damping * fade_rate * v_n);
+    out.damping = material.damping * fade;
+    out.friction = material.friction * fade;
   }
   return out;
 }
@@ -170,6 +194,9 @@ void compute_contact_forces(const Model& model, Data& data) noexcept {
     const ContactForceResult f = penalty_force(c.normal, c.depth, v_rel, material);
     if (!f.active) continue;
     t.active = true;
+    t.stiffness = f.stiffness;  // the law's ∂f_n/∂d: k_eff for the linear law
+    t.damping = f.damping;
+    t.friction = f.friction;
     t.normal_force = f.normal_force;
     t.normal_velocity = c.normal.dot(v_rel);
     c.force = f.force;

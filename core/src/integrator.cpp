@@ -154,6 +154,14 @@ void SolverScratch::resize(const Model& model) {
   projected_residual.assign(nj > 0 ? n : 0, Vec6::Zero());
   target_coupled.assign(n, 0);
   system_step = model.dt;
+  joint_drift_step = model.dt;
+  joint_horizon = model.dt;
+  joint_rate_from_stage_start = false;
+  joint_rows_at_drift_end = false;
+  stage_start.assign(n, BodyState{});
+  stage_move.assign(n, Vec6::Zero());
+  stage_delta.assign(n, Vec6::Zero());
+  stage_gyro.assign(n, Vec3::Zero());
   coupled_body = -1;
   first_order = false;
   imposed.assign(n, 0);
@@ -224,10 +232,10 @@ void build_implicit_system(const Model& model, Data& data) noexcept {
     ContactTerm& t = s.contact_terms[static_cast<std::size_t>(c)];
     if (!t.active) continue;
     const Contact& ct = data.contacts[static_cast<std::size_t>(c)];
-    const MaterialPair& mp = model.material_pairs[static_cast<std::size_t>(ct.material_pair)];
-    const double beta = h * mp.friction;
-    // t.stiffness: the material's, or its clamp by the time-constant floor (contact_force.hpp).
-    const double alpha = (h * mp.damping + h2 * t.stiffness) - beta;
+    const double beta = h * t.friction;
+    // The law's Jacobian coefficients (contact_force.hpp): the material's, its stiffness
+    // clamped by the time-constant floor; faded in by a smoothed onset.
+    const double alpha = (h * t.damping + h2 * t.stiffness) - beta;
     t.weight_normal = alpha;
     t.weight_isotropic = beta;
     const double impulse = -h2 * t.stiffness * t.normal_velocity;  // b_a += Gᵀ_a (impulse n)
@@ -462,38 +470,21 @@ bool solve_constrained_system(const Model& model, Data& data) noexcept {
   return converged;
 }
 
-namespace {
-
-/// Velocity step of RATTLE (Andersen 1983; Hairer, Lubich & Wanner, "Geometric Numerical
-/// Integration", §VII.1.4) for the trapezoidal rule with joints: the extrapolated twist
-/// u1 = 2 u½ − u0 + A⁻¹ G0ᵀ y (one half-step joint impulse, not two) is projected onto the
-/// joints' velocity constraint at the step's end, G1 u1 = v_ref, in the metric of the step's
-/// diagonal blocks of A = M − h/2 D − h²/4 K (M where no spring or contact acts, as in
-/// RATTLE; with stiff springs and contacts A, so that the second half's joint impulse meets
-/// the same implicit resistance as the first's — measured on the instrument against the
-/// tissue: M there doubles the error and leaves the reference unconverged):
-///   [A  G1ᵀ] [δ]   [0            ]
-///   [G1  0 ] [y] = [v_ref − G1 u1],   u1 ← u1 + δ,
-/// solved in linear time by the tree solve (articulation.hpp) with the rows evaluated at the
-/// new configuration. Without it u1 keeps a constraint velocity G1 u1 ≈ −G0 u0 that
-/// alternates in sign and feeds the next step's Baumgarte rows: the free double pendulum
-/// then converges at order 1 only. Known (imposed) bodies count as at rest, as in
-/// build_joint_rows(). Reads SolverScratch::block (A) and joint_y; uses block_factor,
-/// projected_residual, residual, a_direction, joint_rhs and joint_y_correction as scratch
-/// (the step's solve is done).
-void project_joint_velocities(const Model& model, Data& data) noexcept {
+// RATTLE's velocity step (implicit_system.hpp).
+void project_joint_velocities(const Model& model, Data& data, double elapsed,
+                              bool remove_half_impulse) noexcept {
   SolverScratch& s = data.scratch->solver;
   ArticulationScratch& art = data.scratch->articulation;
-  const double h = model.dt;
+  const double h = elapsed;
   // Second half of the step without the first half's joint impulse: u0 + 2Δu½ counts the
   // impulse −Gᵀy of the half step (along the rows at the step's start) twice; RATTLE gives the
   // second half its own impulse along the rows at the end (the projection below). Remove one
   // copy, A⁻¹ G0ᵀ y per body with its diagonal block of A (exact without body–body contacts
   // and nets; the cross terms of those are left out of this correction).
   for (std::size_t i = 0; i < data.bodies.size(); ++i) s.projected_residual[i].setZero();
-  add_joint_transpose(model, data, s.joint_y, s.projected_residual);
+  if (remove_half_impulse) add_joint_transpose(model, data, s.joint_y, s.projected_residual);
   for (std::size_t i = 0; i < data.bodies.size(); ++i) {
-    if (art.known[i]) continue;
+    if (art.known[i] || !remove_half_impulse) continue;
     factor_block(s.block[i], s.block_factor[i]);
     Vec6 z;
     solve_block(s.block_factor[i], s.projected_residual[i], z);
@@ -534,35 +525,13 @@ void project_joint_velocities(const Model& model, Data& data) noexcept {
     data.bodies[i].angular_velocity += s.a_direction[i].tail<3>();
   }
 }
-
-}  // namespace
 #endif  // NUMEN_WITH_ARTICULATION
 
-namespace {
-
-/// One linearised step of length h = model.dt through the system of step h_s
-/// (SolverScratch::system_step): Δu solves (M − h_s D − h_s² K) Δu = h_s (f0 +
-/// h_s K u0) + M (u* − u0); positions move over h with u0 + Δu, twists become
-/// u0 + (h / h_s) Δu. h_s = h: the linearly implicit Euler; h_s = h/2: the
-/// trapezoidal rule (u0 + Δu is the midpoint twist). h / h_s is 1 or 2 exactly.
-void integrate_linearized(const Model& model, Data& data, double system_step) noexcept {
-  SolverScratch& s = data.scratch->solver;
-  const double h = model.dt;
-  s.system_step = system_step;
-  const double scale = h / system_step;
-  // The solve this model runs (step_stages.hpp: the plan step() reports from).
-  const std::uint32_t plan = compiled_stages(model);
-  // Optional parts (features.hpp): compiled out, their models are refused by finalize_model().
-  if constexpr (kWithDeformable) {
-    // The nets' linearisation over h_s, before the gyroscopic step changes the bodies' ω.
-    if (plan & kStageNetSolve) linearize_nets(model, data, system_step);
-  }
-  prepare_implicit_step(model, data);
-  build_implicit_system(model, data);
+bool solve_linearized_system(const Model& model, Data& data) noexcept {
+  const std::uint32_t plan = compiled_stages(model);  // the solve step() reports (step_stages.hpp)
   bool converged = false;
   if (plan & kStageNetSolve) {
     if constexpr (kWithDeformable) {
-      build_net_system(model, data);
       converged = solve_net_system(model, data);
       data.stages_run |= kStageNetSolve;
     }
@@ -575,6 +544,38 @@ void integrate_linearized(const Model& model, Data& data, double system_step) no
     converged = solve_implicit_system(model, data);
   }
   if (!converged) data.status |= kSolverNotConverged;
+  return converged;
+}
+
+namespace {
+
+/// One linearised step of length h = model.dt through the system of step h_s
+/// (SolverScratch::system_step): Δu solves (M − h_s D − h_s² K) Δu = h_s (f0 +
+/// h_s K u0) + M (u* − u0); positions move over h with u0 + Δu, twists become
+/// u0 + (h / h_s) Δu. h_s = h: the linearly implicit Euler; h_s = h/2: the
+/// trapezoidal rule (u0 + Δu is the midpoint twist). h / h_s is 1 or 2 exactly.
+void integrate_linearized(const Model& model, Data& data, double system_step) noexcept {
+  SolverScratch& s = data.scratch->solver;
+  const double h = model.dt;
+  s.system_step = system_step;
+  s.joint_drift_step = h;
+  s.joint_horizon = h;
+  s.joint_rate_from_stage_start = false;
+  s.joint_rows_at_drift_end = false;
+  const double scale = h / system_step;
+  // The solve this model runs (step_stages.hpp: the plan step() reports from).
+  const std::uint32_t plan = compiled_stages(model);
+  // Optional parts (features.hpp): compiled out, their models are refused by finalize_model().
+  if constexpr (kWithDeformable) {
+    // The nets' linearisation over h_s, before the gyroscopic step changes the bodies' ω.
+    if (plan & kStageNetSolve) linearize_nets(model, data, system_step);
+  }
+  prepare_implicit_step(model, data);
+  build_implicit_system(model, data);
+  if constexpr (kWithDeformable) {
+    if (plan & kStageNetSolve) build_net_system(model, data);
+  }
+  solve_linearized_system(model, data);
   for (std::size_t i = 0; i < data.bodies.size(); ++i) {
     if (!s.in_solve[i]) continue;  // kDirect body: stays at the imposed target
     BodyState& st = data.bodies[i];
@@ -586,7 +587,7 @@ void integrate_linearized(const Model& model, Data& data, double system_step) no
     st.angular_velocity = u1.tail<3>();
   }
 #if NUMEN_WITH_ARTICULATION
-  if (scale != 1.0 && !model.joints.empty()) project_joint_velocities(model, data);
+  if (scale != 1.0 && !model.joints.empty()) project_joint_velocities(model, data, h, true);
 #endif
   if constexpr (kWithDeformable) integrate_nodes_implicit(model, data);
 }
@@ -678,6 +679,10 @@ void integrate_symplectic_euler_constrained(const Model& model, Data& data) noex
 
 void integrate_symplectic_euler(const Model& model, Data& data) noexcept {
   data.scratch->solver.system_step = model.dt;
+  data.scratch->solver.joint_drift_step = model.dt;
+  data.scratch->solver.joint_horizon = model.dt;
+  data.scratch->solver.joint_rate_from_stage_start = false;
+  data.scratch->solver.joint_rows_at_drift_end = false;
   data.solver_iterations = 0;
   data.solver_residual = 0.0;
   if constexpr (kWithDeformable)
@@ -712,7 +717,11 @@ void integrate_symplectic_euler(const Model& model, Data& data) noexcept {
 }
 
 double linearized_system_step(const Model& model) noexcept {
-  return model.integrator == Integrator::kTrapezoidal ? 0.5 * model.dt : model.dt;
+  switch (model.integrator) {
+    case Integrator::kTrapezoidal: return 0.5 * model.dt;
+    case Integrator::kTrBdf2: return tr_bdf2::kStageStep * model.dt;
+    default: return model.dt;
+  }
 }
 
 void integrate(const Model& model, Data& data) noexcept {
@@ -722,6 +731,9 @@ void integrate(const Model& model, Data& data) noexcept {
       break;
     case Integrator::kTrapezoidal:
       integrate_trapezoidal(model, data);
+      break;
+    case Integrator::kTrBdf2:
+      integrate_tr_bdf2(model, data);
       break;
     case Integrator::kLinearlyImplicitEuler:
     default:

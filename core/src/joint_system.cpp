@@ -42,11 +42,16 @@ Vec6 moving_twist(const ArticulationScratch& a, std::span<const Vec6> twist0, in
 
 void build_joint_rows(const Model& model, Data& data, std::span<const Vec6> twist0,
                       std::span<const Vec6> delta_prev, std::span<JointVector> rhs) noexcept {
-  const double h = model.dt;
-  const double alpha_h = model.baumgarte.alpha_dt;        // h α
-  const double beta_h2 = model.baumgarte.beta_dt2;        // h² β
+  const SolverScratch& s = data.scratch->solver;
+  // Positions at the solve's end: x0 ⊕ h (twist0 + Δu), reached `horizon` after the step's
+  // start (both Model::dt but in TR-BDF2's stages, SolverScratch::joint_drift_step).
+  const double h = s.joint_drift_step;
+  const double horizon = s.joint_horizon;
+  const double alpha_h = model.baumgarte.alpha_dt;        // H α (H: the horizon)
+  const double beta_h2 = model.baumgarte.beta_dt2;        // H² β
   const double scale = 1.0 / (1.0 + alpha_h + beta_h2);
-  const bool chord_velocities = model.integrator != Integrator::kTrapezoidal;
+  const bool chord_velocities = model.integrator != Integrator::kTrapezoidal &&
+                                model.integrator != Integrator::kTrBdf2;
   ArticulationScratch& a = data.scratch->articulation;
   for (std::size_t j = 0; j < model.joints.size(); ++j) {
     const JointModel& jm = model.joints[j];
@@ -60,8 +65,20 @@ void build_joint_rows(const Model& model, Data& data, std::span<const Vec6> twis
     // step (its next pose is imposed at the next step): it counts as at rest.
     const Vec6 uc = moving_twist(a, twist0, jm.child);
     const Vec6 up = parent ? moving_twist(a, twist0, jm.parent) : Vec6::Zero();
-    JointVector cdot0 = start.g_child * uc;
-    if (parent) cdot0.noalias() += start.g_parent * up;
+    JointVector cdot0;
+    if (s.joint_rate_from_stage_start) {  // TR-BDF2's BDF2 stage: twist0 is its drift twist
+      const auto rate_twist = [&](int b) noexcept {
+        const BodyState& st = s.stage_start[static_cast<std::size_t>(b)];
+        Vec6 u;
+        u << st.linear_velocity, st.angular_velocity;
+        return a.known[static_cast<std::size_t>(b)] ? Vec6(Vec6::Zero()) : u;
+      };
+      cdot0 = start.g_child * rate_twist(jm.child);
+      if (parent) cdot0.noalias() += start.g_parent * rate_twist(jm.parent);
+    } else {
+      cdot0 = start.g_child * uc;
+      if (parent) cdot0.noalias() += start.g_parent * up;
+    }
     double rate = 0.0;
     if (jm.prescribed) {
       rate = data.joint_prescribed[j].rate;
@@ -78,9 +95,9 @@ void build_joint_rows(const Model& model, Data& data, std::span<const Vec6> twis
     const BodyState child_pred = drifted(child, uc, h);
     if (parent) {
       const BodyState parent_pred = drifted(*parent, up, h);
-      evaluate_joint(jm, &parent_pred, child_pred, value + h * rate, predicted);
+      evaluate_joint(jm, &parent_pred, child_pred, value + horizon * rate, predicted);
     } else {
-      evaluate_joint(jm, nullptr, child_pred, value + h * rate, predicted);
+      evaluate_joint(jm, nullptr, child_pred, value + horizon * rate, predicted);
     }
 
     // The error's rate over the last step, consistent with the positions.
@@ -101,12 +118,20 @@ void build_joint_rows(const Model& model, Data& data, std::span<const Vec6> twis
     // The trapezoidal rule's u0 is a node velocity, not a chord, and its end-of-step
     // projection (integrator.cpp, RATTLE) makes G0 u0 = v_ref: there Ċ0 = G0 u0 − v_ref.
     const JointVector cdot = chord_velocities ? JointVector(2.0 * cdot0 - drift_rate) : cdot0;
-    const JointVector cdot1 = scale * (cdot - (beta_h2 / h) * c0);
-    JointVector c = (c0 + h * cdot1 - predicted.position_error) / h;
-    c.noalias() -= (predicted.g_child - start.g_child) * delta_prev[static_cast<std::size_t>(jm.child)];
-    if (parent)
+    const JointVector cdot1 = scale * (cdot - (beta_h2 / horizon) * c0);
+    JointVector c = (c0 + horizon * cdot1 - predicted.position_error) / h;
+    if (s.joint_rows_at_drift_end) {
+      // The solve's rows are those of the drifted configuration (TR-BDF2's BDF2 stage: its
+      // constraint impulse acts at the step's end, G(x1) up to O(h²)): C(q_pred ⊕ h Δu) ≈
+      // C_pred + h G_pred Δu exactly to first order, no correction by Δu_prev.
+      start = predicted;
+    } else {
       c.noalias() -=
-          (predicted.g_parent - start.g_parent) * delta_prev[static_cast<std::size_t>(jm.parent)];
+          (predicted.g_child - start.g_child) * delta_prev[static_cast<std::size_t>(jm.child)];
+      if (parent)
+        c.noalias() -=
+            (predicted.g_parent - start.g_parent) * delta_prev[static_cast<std::size_t>(jm.parent)];
+    }
     for (int r = start.count; r < kMaxJointRows; ++r) c(r) = 0.0;
     rhs[j] = c;
     data.joints[j].baumgarte_rhs = c;

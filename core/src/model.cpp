@@ -111,6 +111,11 @@ std::string finalize_model(Model& model) {
           << model.material_names[i % nm] << "): stiffness, damping and friction must be finite and >= 0";
       return err.str();
     }
+    if (!(p.onset_depth >= 0.0) || !std::isfinite(p.onset_depth)) {
+      err << "material pair (" << model.material_names[i / nm] << ", "
+          << model.material_names[i % nm] << "): onset_depth must be finite and >= 0";
+      return err.str();
+    }
   }
   for (std::size_t b = 0; b < model.bodies.size(); ++b) {
     BodyModel& body = model.bodies[b];

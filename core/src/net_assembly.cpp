@@ -86,9 +86,8 @@ void add_net_body_terms(const Model& model, Data& data) noexcept {
   for (int k = 0; k < nc; ++k) {
     NodeContact& ct = data.node_contacts[static_cast<std::size_t>(k)];
     if (!ct.active) continue;
-    const MaterialPair& mp = model.material_pairs[static_cast<std::size_t>(ct.material_pair)];
-    ct.weight_isotropic = h * mp.friction;
-    ct.weight_normal = h * mp.damping + h2 * ct.stiffness - ct.weight_isotropic;  // k_eff
+    ct.weight_isotropic = h * ct.friction;  // the law's coefficients (contact_force.hpp)
+    ct.weight_normal = h * ct.damping + h2 * ct.stiffness - ct.weight_isotropic;
     if (!couples_body(s, ct)) continue;
     const auto b = static_cast<std::size_t>(ct.body_b);
     Vec6 g;

@@ -379,6 +379,11 @@ void compute_net_forces(const Model& model, Data& data) noexcept {
     const ContactForceResult r = contact_penalty_force(ct.normal, ct.depth, v_rel, mp);
     ct.force = r.force;
     ct.active = r.active;
+    if (r.active) {  // the law's Jacobian coefficients (k_eff, c, μ for the linear law)
+      ct.stiffness = r.stiffness;
+      ct.damping = r.damping;
+      ct.friction = r.friction;
+    }
     ct.normal_velocity = ct.normal.dot(v_rel);
     if (!r.active) continue;
     s.force[i] += r.force;

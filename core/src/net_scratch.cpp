@@ -33,6 +33,9 @@ void NetScratch::resize(const Model& model) {
   tie_sums.assign(n > 0 ? model.nets.size() : 0, NetTieSums{});
   rhs.assign(n, Vec3::Zero());
   delta.assign(n, Vec3::Zero());
+  stage_velocity.assign(n, Vec3::Zero());
+  stage_move.assign(n, Vec3::Zero());
+  stage_delta.assign(n, Vec3::Zero());
   residual.assign(n, Vec3::Zero());
   precond_residual.assign(n, Vec3::Zero());
   direction.assign(n, Vec3::Zero());

@@ -23,11 +23,13 @@ STYLE = {
     "implicit-euler": dict(color="tab:blue", marker="o", label="linearly implicit Euler (order 1)"),
     "symplectic-euler": dict(color="tab:orange", marker="s", label="symplectic Euler (order 1)"),
     "trapezoidal": dict(color="tab:green", marker="^", label="trapezoidal (order 2)"),
+    "tr-bdf2": dict(color="tab:red", marker="D", label="TR-BDF2 (order 2, L-stable)"),
 }
-CASES = ["free-body", "wall", "articulated", "deformable"]
+CASES = ["free-body", "wall", "wall-smoothed", "articulated", "deformable"]
 TITLES = {
     "free-body": "coupled body, free space\n(vs closed form)",
     "wall": "god-object pushed into a wall\n(vs reference)",
+    "wall-smoothed": "same, smoothed C\u00b9 contact onset\n(vs reference)",
     "articulated": "articulated instrument, recording\n(vs reference)",
     "deformable": "deformable probe into the post\n(vs reference)",
 }

@@ -22,7 +22,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-INTEGRATORS = ["implicit-euler", "symplectic-euler", "trapezoidal"]
+INTEGRATORS = ["implicit-euler", "symplectic-euler", "trapezoidal", "tr-bdf2"]
 COLOURS = {
     "stable": ("tab:green", "stable"),
     "energy": ("tab:red", "diverged: energy"),
@@ -58,7 +58,7 @@ def coupling_maps(rows, zeta, out):
     rows = [r for r in rows if abs(r["parameter"] - zeta) < 1e-9]
     dts = sorted({r["dt_s"] for r in rows})
     a = 2.0 * (math.sqrt(1.0 + zeta * zeta) - zeta)
-    fig, axes = plt.subplots(3, len(dts), figsize=(3.2 * len(dts), 9), sharex=True, sharey=True, squeeze=False)
+    fig, axes = plt.subplots(len(INTEGRATORS), len(dts), figsize=(3.2 * len(dts), 3 * len(INTEGRATORS)), sharex=True, sharey=True, squeeze=False)
     for i, integ in enumerate(INTEGRATORS):
         for j, h in enumerate(dts):
             ax = axes[i][j]
@@ -83,7 +83,7 @@ def coupling_maps(rows, zeta, out):
 def contact_maps(rows, zeta_c, out):
     rows = [r for r in rows if abs(r["parameter"] - zeta_c) < 1e-9]
     masses = sorted({r["mass_kg"] for r in rows})
-    fig, axes = plt.subplots(3, len(masses), figsize=(3.6 * len(masses), 9), sharex=True, sharey=True, squeeze=False)
+    fig, axes = plt.subplots(len(INTEGRATORS), len(masses), figsize=(3.6 * len(masses), 3 * len(INTEGRATORS)), sharex=True, sharey=True, squeeze=False)
     for i, integ in enumerate(INTEGRATORS):
         for j, m in enumerate(masses):
             ax = axes[i][j]

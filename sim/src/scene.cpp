@@ -555,6 +555,7 @@ const char* to_string(core::Integrator integrator) noexcept {
   switch (integrator) {
     case core::Integrator::kSymplecticEuler: return "symplectic-euler";
     case core::Integrator::kTrapezoidal: return "trapezoidal";
+    case core::Integrator::kTrBdf2: return "tr-bdf2";
     case core::Integrator::kLinearlyImplicitEuler:
     default: return "implicit-euler";
   }
@@ -684,7 +685,7 @@ Scene load_scene(const std::string& path, const SceneOverrides& overrides) {
         "integrator trapezoidal with deformable nets: the rule is not L-stable, so the stiff node "
         "modes (light nodes on penalty contacts and ties) ring instead of being damped; at 1 ms "
         "the shipped probe's nodes went 2.1 mm into the post instead of 0.2 mm "
-        "(docs/results.md, accuracy). implicit-euler is the integrator for nets");
+        "(docs/results.md, accuracy). implicit-euler or tr-bdf2 (L-stable) are the integrators for nets");
   warn_clamped_contacts(scene.model, scene.warnings);
   return scene;
 }

@@ -35,6 +35,7 @@ core::MaterialPair parse_pair(const TomlTable& t, const core::MaterialPair& fall
   p.stiffness = t.number_in("stiffness", 0.0, kInf, fallback.stiffness);
   p.damping = t.number_in("damping", 0.0, kInf, fallback.damping);
   p.friction = t.number_in("friction", 0.0, kInf, fallback.friction);
+  p.onset_depth = t.number_in("onset_depth", 0.0, kInf, fallback.onset_depth);
   return p;
 }
 
@@ -50,13 +51,13 @@ void parse_materials(const TomlTable& root, core::Model& m) {
   if (m.material_names.empty()) m.material_names.push_back("default");
   core::MaterialPair fallback;
   if (auto d = root.table("contact_default")) {
-    d->allow_only({"stiffness", "damping", "friction"});
+    d->allow_only({"stiffness", "damping", "friction", "onset_depth"});
     fallback = parse_pair(*d, fallback);
   }
   const auto n = static_cast<std::size_t>(m.num_materials());
   m.material_pairs.assign(n * n, fallback);
   for (const TomlTable& t : root.tables("contact")) {
-    t.allow_only({"materials", "stiffness", "damping", "friction"});
+    t.allow_only({"materials", "stiffness", "damping", "friction", "onset_depth"});
     const toml::node* node = t.node("materials");
     const toml::array* arr = node ? node->as_array() : nullptr;
     if (!arr || arr->size() != 2 || !arr->get(0)->is_string() || !arr->get(1)->is_string())
@@ -361,10 +362,12 @@ core::Model parse_scene_model(const TomlTable& root, std::vector<std::string>& w
   m.dt = root.number_in("dt", 1e-7, 1.0, 1e-3);
   m.gravity = root.vec3_or("gravity", Vec3(0.0, 0.0, -9.81));
   const std::string integrator = root.choice(
-      "integrator", {"implicit-euler", "symplectic-euler", "trapezoidal"}, "implicit-euler");
+      "integrator", {"implicit-euler", "symplectic-euler", "trapezoidal", "tr-bdf2"},
+      "implicit-euler");
   m.integrator = integrator == "implicit-euler"     ? core::Integrator::kLinearlyImplicitEuler
                  : integrator == "symplectic-euler" ? core::Integrator::kSymplecticEuler
-                                                    : core::Integrator::kTrapezoidal;
+                 : integrator == "trapezoidal"      ? core::Integrator::kTrapezoidal
+                                                    : core::Integrator::kTrBdf2;
   const std::string coupling =
       root.choice("coupling", {"god-object", "first-order", "direct", "admittance"}, "god-object");
   m.coupling_mode = coupling == "god-object"    ? core::CouplingMode::kGodObject

@@ -23,8 +23,12 @@
 namespace numen::sim {
 namespace accuracy {
 
+bool second_order(core::Integrator integrator) noexcept {
+  return integrator == core::Integrator::kTrapezoidal || integrator == core::Integrator::kTrBdf2;
+}
+
 double input_time(core::Integrator integrator, double t, double dt) noexcept {
-  return integrator == core::Integrator::kTrapezoidal ? t + 0.5 * dt : t;
+  return second_order(integrator) ? t + 0.5 * dt : t;
 }
 
 core::Model with_scheme(const core::Model& model, core::Integrator integrator, double dt) {
@@ -133,7 +137,8 @@ struct CaseSetup {
 }  // namespace
 
 const std::vector<std::string>& accuracy_case_names() {
-  static const std::vector<std::string> names = {"free-body", "wall", "articulated", "deformable"};
+  static const std::vector<std::string> names = {"free-body", "wall", "wall-smoothed",
+                                                  "articulated", "deformable"};
   return names;
 }
 
@@ -182,13 +187,14 @@ AccuracyGrid accuracy_grid(const AccuracyOptions& options) {
   std::vector<core::Integrator> integrators = options.integrators;
   if (integrators.empty())
     integrators = {core::Integrator::kLinearlyImplicitEuler, core::Integrator::kSymplecticEuler,
-                   core::Integrator::kTrapezoidal};
+                   core::Integrator::kTrapezoidal, core::Integrator::kTrBdf2};
   std::vector<std::string> names = options.cases.empty() ? accuracy_case_names() : options.cases;
   for (const std::string& n : names) {
     const auto& all = accuracy_case_names();
     if (std::find(all.begin(), all.end(), n) == all.end())
       throw InputError("", 0, 0, "case",
-                       "unknown case \"" + n + "\" (free-body, wall, articulated, deformable)");
+                       "unknown case \"" + n +
+                           "\" (free-body, wall, wall-smoothed, articulated, deformable)");
   }
   std::vector<std::string> skipped;
   std::erase_if(names, [&](const std::string& n) {
@@ -254,7 +260,9 @@ AccuracyResult run_accuracy_study(const AccuracyOptions& options) {
     if (n == "free-body") {
       s.c = accuracy::make_free_body_case();
     } else if (n == "wall") {
-      s.c = accuracy::make_wall_case();
+      s.c = accuracy::make_wall_case(0.0);
+    } else if (n == "wall-smoothed") {
+      s.c = accuracy::make_wall_case(accuracy::kWallOnsetDepth);
     } else if (n == "articulated") {
       s.c = accuracy::make_scene_case(dir + "/default.toml", kArticulatedStart, 0.6, 40.0);
     } else {
@@ -323,7 +331,7 @@ AccuracyResult run_accuracy_study(const AccuracyOptions& options) {
       AccuracyFit fit;
       fit.case_name = s.name;
       fit.integrator = to_string(integ);
-      fit.theoretical_order = integ == core::Integrator::kTrapezoidal ? 2.0 : 1.0;
+      fit.theoretical_order = accuracy::second_order(integ) ? 2.0 : 1.0;
       fit.error_at_1ms_mm = kNaN;
       fit.cpu_at_1ms = kNaN;
       fit.case_index = k;

@@ -50,15 +50,24 @@ class AccuracyCase {
 
 /// Case "free-body": closed-form damped oscillator (study_accuracy_free_body.cpp).
 std::unique_ptr<AccuracyCase> make_free_body_case();
-/// Case "wall": god-object pushed into a plane (study_accuracy_wall.cpp).
-std::unique_ptr<AccuracyCase> make_wall_case();
+/// Onset depth δ0 of case "wall-smoothed" (m): the wall's material with the smoothed C¹
+/// contact onset (core::MaterialPair::onset_depth), half the linear law's 0.2 mm rest depth.
+inline constexpr double kWallOnsetDepth = 1e-4;
+
+/// Cases "wall" (`onset_depth` 0: the linear penalty law) and "wall-smoothed" (kWallOnsetDepth):
+/// god-object pushed into a plane (study_accuracy_wall.cpp).
+std::unique_ptr<AccuracyCase> make_wall_case(double onset_depth);
 /// Cases "articulated" and "deformable": the scene at `scene_path` driven by its recorded
 /// trajectory, interpolated C¹ in axis space, from `t0` (s) on (study_accuracy_scene.cpp).
 std::unique_ptr<AccuracyCase> make_scene_case(const std::string& scene_path, double t0,
                                               double horizon, double step_cost);
 
+/// True for the second-order schemes: the trapezoidal rule and TR-BDF2.
+bool second_order(core::Integrator integrator) noexcept;
+
 /// Time at which a step starting at t feeds its time-dependent inputs: t + h/2 for the
-/// trapezoidal rule (second order needs the midpoint), t for the Euler schemes.
+/// trapezoidal rule and TR-BDF2 (both are applied to the step's linearisation with its inputs
+/// held: second order needs the midpoint), t for the Euler schemes.
 double input_time(core::Integrator integrator, double t, double dt) noexcept;
 
 /// `model` with `integrator` and step `dt`, finalized again. Throws std::runtime_error if

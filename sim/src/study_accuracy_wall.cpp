@@ -9,6 +9,8 @@
 /// to (30, 0, −10) mm along a quintic smoothstep over 0.6 s (C² input), then holds: the sphere
 /// touches at z = 10 mm and the target ends 20 mm inside the wall (the contact carries
 /// k_t · 20 mm = 4 N, about 0.2 mm of penetration). Compared with a reference run.
+/// Case "wall-smoothed": the same with the smoothed C¹ onset over δ0 = kWallOnsetDepth
+/// (core::MaterialPair::onset_depth; rest depth 0.25 mm).
 
 #include <algorithm>
 #include <cmath>
@@ -25,9 +27,9 @@ constexpr double kMove = 0.6;  // s
 
 class WallCase final : public AccuracyCase {
  public:
-  WallCase() {
+  explicit WallCase(double onset_depth) {
     model_.gravity = Vec3::Zero();
-    model_.material_pairs = {core::MaterialPair{2e4, 10.0, 0.5}};
+    model_.material_pairs = {core::MaterialPair{2e4, 10.0, 0.5, onset_depth}};
     model_.body_spheres = {core::Sphere{Vec3::Zero(), 0.01}};
     core::BodyModel b;
     b.name = "sphere";
@@ -81,6 +83,8 @@ class WallCase final : public AccuracyCase {
 
 }  // namespace
 
-std::unique_ptr<AccuracyCase> make_wall_case() { return std::make_unique<WallCase>(); }
+std::unique_ptr<AccuracyCase> make_wall_case(double onset_depth) {
+  return std::make_unique<WallCase>(onset_depth);
+}
 
 }  // namespace numen::sim::accuracy

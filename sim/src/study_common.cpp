@@ -38,7 +38,8 @@ std::string missing_parts(bool joints, bool nets) {
 const std::vector<core::Integrator>& all_integrators() {
   static const std::vector<core::Integrator> all = {core::Integrator::kLinearlyImplicitEuler,
                                                     core::Integrator::kSymplecticEuler,
-                                                    core::Integrator::kTrapezoidal};
+                                                    core::Integrator::kTrapezoidal,
+                                                    core::Integrator::kTrBdf2};
   return all;
 }
 

@@ -469,3 +469,90 @@ TEST(ContactForce, StiffnessAboveTheFloorIsClampedToTheEffectiveMassAndCounted) 
   ball_step(1e12, w, &m);
   EXPECT_NEAR(core::body_contact_stiffness_limit(m, 0), k_eff, 1e-9 * k_eff);
 }
+
+// The smoothed onset (MaterialPair::onset_depth δ0 > 0): the force and its derivatives are
+// continuous at d = 0 and d = δ0, the Jacobian coefficients the law reports are its own
+// derivatives, and the default (δ0 = 0) is the linear law bit for bit.
+TEST(ContactForce, SmoothedOnsetIsContinuouslyDifferentiableAndReportsItsOwnDerivatives) {
+  core::MaterialPair mat{2.0e4, 30.0, 4.0};
+  mat.onset_depth = 2e-4;
+  const double d0 = mat.onset_depth;
+  const Vec3 n = Vec3::UnitZ();
+  const auto fn = [&](double depth, double vn) {
+    return core::contact_penalty_force(n, depth, Vec3(0.01, 0.0, vn), mat);
+  };
+  for (double vn : {-0.05, 0.0, 0.002}) {
+    // Value and slope across the onset (d = 0) and the joint (d = δ0).
+    for (double at : {0.0, d0}) {
+      const double e = 1e-9;
+      const double below = fn(at - e, vn).normal_force, above = fn(at + e, vn).normal_force;
+      EXPECT_NEAR(below, above, 1e-4 * std::max(1.0, std::abs(above))) << at << " " << vn;
+      const double slope_below = (fn(at - e, vn).normal_force - fn(at - 2 * e, vn).normal_force) / e;
+      const double slope_above = (fn(at + 2 * e, vn).normal_force - fn(at + e, vn).normal_force) / e;
+      EXPECT_NEAR(slope_below, slope_above, 2e-3 * mat.stiffness) << at << " " << vn;
+    }
+    // Inside the onset the reported ∂f_n/∂d, c s(d), μ s(d) are the law's derivatives.
+    for (double depth : {0.2 * d0, 0.5 * d0, 0.9 * d0, 3.0 * d0}) {
+      const core::ContactForceResult r = fn(depth, vn);
+      if (!r.active) continue;
+      const double e = 1e-10;
+      const double dfdd = (fn(depth + e, vn).normal_force - fn(depth - e, vn).normal_force) / (2 * e);
+      EXPECT_NEAR(r.stiffness, std::max(0.0, dfdd), 1e-4 * mat.stiffness) << depth << " " << vn;
+      const double dfdv = (fn(depth, vn + 1e-7).normal_force - fn(depth, vn - 1e-7).normal_force) / 2e-7;
+      EXPECT_NEAR(r.damping, -dfdv, 1e-6 * mat.damping) << depth;
+      EXPECT_NEAR(-r.force.x() / 0.01, r.friction, 1e-9) << depth;  // f_t = −μ s v_t
+    }
+  }
+  // Past the onset: k (d − δ0/2) − c v_n with the material's coefficients.
+  const core::ContactForceResult deep = fn(5.0 * d0, -0.01);
+  EXPECT_NEAR(deep.normal_force, mat.stiffness * 4.5 * d0 + mat.damping * 0.01, 1e-9);
+  EXPECT_EQ(deep.stiffness, mat.stiffness);
+  EXPECT_EQ(deep.damping, mat.damping);
+  EXPECT_EQ(deep.friction, mat.friction);
+  // Approaching the surface from outside never pulls and never acts.
+  EXPECT_FALSE(fn(-1e-6, -1.0).active);
+  // δ0 = 0: the linear law, with the material's coefficients reported.
+  const core::ContactForceResult lin = core::contact_penalty_force(n, 1e-4, Vec3(0.0, 0.0, -0.01), kMat);
+  EXPECT_EQ(lin.normal_force, kMat.stiffness * 1e-4 - kMat.damping * -0.01);
+  EXPECT_EQ(lin.stiffness, kMat.stiffness);
+  EXPECT_EQ(lin.damping, kMat.damping);
+  EXPECT_EQ(lin.friction, kMat.friction);
+}
+
+TEST(ContactForce, SmoothedOnsetRestsDeeperByHalfItsOnsetDepth) {
+  // A coupled body pushed into the plane with the smoothed onset settles where
+  // k (d − δ0/2) balances the spring: δ0/2 deeper than with the linear law.
+  for (double onset : {0.0, 1e-4}) {  // the load 1.96 N is above k δ0 / 2 = 1 N
+    core::Model m;
+    m.dt = 1e-3;
+    m.gravity = Vec3(0.0, 0.0, -9.81);
+    core::MaterialPair mat{2.0e4, 30.0, 0.0};
+    mat.onset_depth = onset;
+    m.material_pairs = {mat};
+    m.body_spheres = {core::Sphere{Vec3::Zero(), 0.01}};
+    core::BodyModel b;
+    b.mass = 0.2;
+    b.inertia_body = 1e-5 * Mat3::Identity();
+    b.sphere_begin = 0;
+    b.sphere_count = 1;
+    b.initial_pose.position = Vec3(0.0, 0.0, 0.011);
+    m.bodies = {b};
+    core::Obstacle plane;
+    plane.type = core::ShapeType::kPlane;
+    m.obstacles = {plane};
+    ASSERT_EQ(core::finalize_model(m), "");
+    core::Data d = core::make_data(m);
+    for (int i = 0; i < 3000; ++i) core::step(m, d);
+    const double depth = 0.01 - d.bodies[0].position.z();
+    EXPECT_NEAR(depth, 0.2 * 9.81 / 2.0e4 + 0.5 * onset, 1e-8) << onset;
+  }
+}
+
+TEST(ContactForce, NegativeOnsetDepthIsRefused) {
+  core::Model m;
+  core::MaterialPair mat;
+  mat.onset_depth = -1e-4;
+  m.material_pairs = {mat};
+  const std::string err = core::finalize_model(m);
+  EXPECT_NE(err.find("onset_depth"), std::string::npos) << err;
+}

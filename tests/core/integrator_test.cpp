@@ -38,6 +38,7 @@ Quat rot(double angle, const Vec3& axis) { return Quat(Eigen::AngleAxisd(angle, 
 const char* name(core::Integrator i) {
   return i == core::Integrator::kSymplecticEuler ? "symplectic"
          : i == core::Integrator::kTrapezoidal   ? "trapezoidal"
+         : i == core::Integrator::kTrBdf2        ? "tr-bdf2"
                                                  : "implicit";
 }
 
@@ -148,11 +149,12 @@ TEST(Integrator, FreeSpaceRotationalCouplingMatchesTheDampedOscillatorAtFirstOrd
 
 // Observed order over a range of steps: e(h) / e(h/2) for h = 4, 2, 1 ms
 // (three ratios), translational (ζ = 0.7) and rotational about a principal
-// axis (ζ = 0.1). Theory: 2 for both Euler schemes, 4 for the trapezoidal rule.
-TEST(Integrator, ObservedOrderIsTwoForTheTrapezoidalRuleAndOneForTheEulerSchemes) {
+// axis (ζ = 0.1). Theory: 2 for both Euler schemes, 4 for the trapezoidal rule and TR-BDF2.
+TEST(Integrator, ObservedOrderIsTwoForTheTrapezoidalRuleAndTrBdf2AndOneForTheEulerSchemes) {
   for (auto integ : {core::Integrator::kLinearlyImplicitEuler, core::Integrator::kSymplecticEuler,
-                     core::Integrator::kTrapezoidal}) {
-    const double expected = integ == core::Integrator::kTrapezoidal ? 4.0 : 2.0;
+                     core::Integrator::kTrapezoidal, core::Integrator::kTrBdf2}) {
+    const bool second = integ == core::Integrator::kTrapezoidal || integ == core::Integrator::kTrBdf2;
+    const double expected = second ? 4.0 : 2.0;
     for (int kind = 0; kind < 2; ++kind) {
       double prev = 0.0;
       for (double h : {4e-3, 2e-3, 1e-3, 5e-4}) {

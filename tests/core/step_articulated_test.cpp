@@ -117,7 +117,7 @@ TEST(StepArticulated, DoublePendulumDriftStaysBelowOneMicrometreOverSixtySeconds
   }
 }
 
-TEST(StepArticulated, TrapezoidalDoublePendulumConvergesAtSecondOrder) {
+TEST(StepArticulated, TrapezoidalAndTrBdf2DoublePendulumConvergeAtSecondOrder) {
   // The lower rod's COM after 0.5 s of swinging from horizontal, against the
   // trapezoidal rule at h = 1/16 ms; implicit Euler alongside for the order 1.
   const auto lower_at = [](core::Integrator integ, double h) {
@@ -135,14 +135,17 @@ TEST(StepArticulated, TrapezoidalDoublePendulumConvergesAtSecondOrder) {
     return d.bodies[1].position;
   };
   const Vec3 ref = lower_at(core::Integrator::kTrapezoidal, 1e-3 / 16);
-  for (core::Integrator integ :
-       {core::Integrator::kTrapezoidal, core::Integrator::kLinearlyImplicitEuler}) {
+  for (core::Integrator integ : {core::Integrator::kTrapezoidal, core::Integrator::kTrBdf2,
+                                 core::Integrator::kLinearlyImplicitEuler}) {
     const double e1 = (lower_at(integ, 2e-3) - ref).norm();
     const double e2 = (lower_at(integ, 1e-3) - ref).norm();
     const double e3 = (lower_at(integ, 5e-4) - ref).norm();
-    const bool trap = integ == core::Integrator::kTrapezoidal;
+    const bool trap = integ != core::Integrator::kLinearlyImplicitEuler;  // second order
     std::printf("[pendulum %s] |x - ref| at 2, 1, 0.5 ms: %.3e %.3e %.3e, ratios %.2f %.2f\n",
-                trap ? "trapezoidal" : "implicit", e1, e2, e3, e1 / e2, e2 / e3);
+                integ == core::Integrator::kTrapezoidal ? "trapezoidal"
+                : trap                                  ? "tr-bdf2"
+                                                        : "implicit",
+                e1, e2, e3, e1 / e2, e2 / e3);
     EXPECT_NEAR(e2 / e3, trap ? 4.0 : 2.0, trap ? 0.6 : 0.3);
     EXPECT_NEAR(e1 / e2, trap ? 4.0 : 2.0, trap ? 0.8 : 0.3);
   }

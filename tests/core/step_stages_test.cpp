@@ -126,7 +126,7 @@ TEST(StepStages, ReportIsWhatRanForEveryIntegratorJointsAndNets) {
   if (core::kWithArticulation && core::kWithDeformable) parts.push_back(LeanPart::kJointAndNet);
   for (LeanPart part : parts) {
     for (auto integ : {core::Integrator::kLinearlyImplicitEuler, core::Integrator::kTrapezoidal,
-                       core::Integrator::kSymplecticEuler}) {
+                       core::Integrator::kTrBdf2, core::Integrator::kSymplecticEuler}) {
       core::Model m = make_lean_model(part);
       m.integrator = integ;
       core::Data d = core::make_data(m);

@@ -339,6 +339,47 @@ TEST(Scene, TrapezoidalWithADeformableNetIsWarnedAbout) {
   EXPECT_TRUE(warned);
 }
 
+TEST(Scene, TrBdf2IntegratorIsSelectedByNameAndRunsFirstOrderCoupling) {
+  TempDir dir;
+  const std::string text = replace(
+      kMini, "dt = 0.001", "dt = 0.001\nintegrator = \"tr-bdf2\"\ncoupling = \"first-order\"");
+  const Scene s = load_scene(dir.write("trbdf2.toml", text));
+  EXPECT_EQ(s.model.integrator, numen::core::Integrator::kTrBdf2);
+  EXPECT_EQ(s.model.coupling_mode, numen::core::CouplingMode::kFirstOrder);
+  EXPECT_STREQ(numen::sim::to_string(s.model.integrator), "tr-bdf2");
+}
+
+TEST(Scene, TrBdf2WithADeformableNetIsNotWarnedAbout) {
+  NUMEN_REQUIRE_DEFORMABLE();
+  TempDir dir;
+  std::ifstream in(std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/deformable.toml");
+  std::stringstream text;
+  text << in.rdbuf();
+  std::string toml = replace(text.str(), "integrator = \"implicit-euler\"", "integrator = \"tr-bdf2\"");
+  const std::string data_dir = std::string("\"") + NUMEN_SOURCE_DIR + "/sim/data/";
+  toml = replace(toml, "\"../data/", data_dir);
+  const Scene s = load_scene(dir.write("trbdf2_deformable.toml", toml));
+  EXPECT_EQ(s.model.integrator, numen::core::Integrator::kTrBdf2);
+  for (const std::string& w : s.warnings) EXPECT_EQ(w.find("L-stable"), std::string::npos) << w;
+}
+
+TEST(Scene, ContactOnsetDepthIsReadPerPairWithTheDefaultsFallback) {
+  TempDir dir;
+  const Scene plain = load_scene(dir.write("plain.toml", kMini));
+  for (const auto& p : plain.model.material_pairs) EXPECT_EQ(p.onset_depth, 0.0);
+  const Scene s = load_scene(
+      dir.write("onset.toml", kMini + "\n[contact_default]\nstiffness = 2e4\nonset_depth = 2e-4\n"));
+  for (const auto& p : s.model.material_pairs) EXPECT_EQ(p.onset_depth, 2e-4);
+}
+
+TEST(SceneErrors, NegativeContactOnsetDepthNamesTheKey) {
+  TempDir dir;
+  const std::string text = kMini + "\n[contact_default]\nonset_depth = -1e-4\n";
+  const InputError e = load_error(dir, text);
+  expect_located(e, (dir.path() / "bad.toml").string(), line_of(text, "onset_depth = "),
+                 column_of(text, "onset_depth = ", "-1e-4"), "contact_default.onset_depth", "");
+}
+
 TEST(SceneErrors, TrapezoidalWithFirstOrderCouplingNamesTheIntegratorKey) {
   TempDir dir;
   const std::string text = replace(

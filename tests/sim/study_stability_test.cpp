@@ -42,7 +42,8 @@ std::string describe(const StabilityRow& r) {
 TEST(StudyStability, ImplicitSchemesStableOnTheReducedCouplingGrid) {
   const StabilityLimits limits;
   int runs = 0;
-  for (Integrator integrator : {Integrator::kLinearlyImplicitEuler, Integrator::kTrapezoidal})
+  for (Integrator integrator :
+       {Integrator::kLinearlyImplicitEuler, Integrator::kTrapezoidal, Integrator::kTrBdf2})
     for (double zeta : {0.0, 0.85})
       for (double h : {1e-4, 1e-2})
         for (double m : {1e-3, 1.0, 1e2})
@@ -54,7 +55,7 @@ TEST(StudyStability, ImplicitSchemesStableOnTheReducedCouplingGrid) {
             EXPECT_LE(r.energy_ratio_max, 1.0 + 1e-6) << describe(r);
             ++runs;
           }
-  EXPECT_EQ(runs, 72);
+  EXPECT_EQ(runs, 108);
 }
 
 TEST(StudyStability, SymplecticEulerLimitIsOmegaDtTwoUndamped) {
@@ -106,7 +107,8 @@ TEST(StudyStability, BoundaryMeasuredAgainstTheory) {
 
 TEST(StudyStability, ContactReducedGrid) {
   const StabilityLimits limits;
-  for (Integrator integrator : {Integrator::kLinearlyImplicitEuler, Integrator::kTrapezoidal})
+  for (Integrator integrator :
+       {Integrator::kLinearlyImplicitEuler, Integrator::kTrapezoidal, Integrator::kTrBdf2})
     for (double zeta_c : {0.0, 0.5})
       for (double h : {1e-4, 1e-2})
         for (double k_c : {1e2, 1e5, 1e8}) {
@@ -159,6 +161,25 @@ TEST(StudyStability, ExtremeCasesImplicitStableAndLoopSafe) {
   EXPECT_EQ(capacity, 2);  // h = 1 ms and 10 ms
   EXPECT_EQ(spin, 4);
   EXPECT_EQ(teleport, 8);
+}
+
+TEST(StudyStability, TrBdf2NeverExceedsTheInputEnergyOnTheContactCapacityPlate) {
+  // 1225 spheres of 1e4 N/m under a 1 kg plate (ω h ≈ 3.2 at 1 ms, 32 at 10 ms): the
+  // trapezoidal rule is bounded but not passive there (E up to 10 × the input); TR-BDF2 is
+  // L-stable and must stay at or below the input, as the implicit Euler does.
+  StabilityOptions o;
+  o.quick = true;
+  o.families = {"extreme"};
+  o.integrators = {Integrator::kTrBdf2};
+  const StabilityResult r = run_stability_study(o);
+  int capacity = 0;
+  for (const StabilityRow& row : r.rows) {
+    EXPECT_TRUE(row.stable) << describe(row) << " " << row.note;
+    if (row.case_name != "contact-capacity") continue;
+    ++capacity;
+    EXPECT_LE(row.energy_ratio_max, 1.0 + 1e-6) << describe(row);
+  }
+  EXPECT_EQ(capacity, 2);  // h = 1 ms and 10 ms
 }
 
 TEST(StudyStability, StoredEnergyMatchesClosedForm) {

@@ -24,6 +24,17 @@ struct Data;
 /// linearised over it by the integrator: linearize_nets(), net_solve.hpp).
 double linearized_system_step(const Model& model) noexcept;
 
+/// Constants of TR-BDF2 (Integrator::kTrBdf2; Bank et al. 1985, Hosea & Shampine 1996).
+namespace tr_bdf2 {
+/// γ = 2 − √2: the trapezoidal stage ends at t + γh.
+inline constexpr double kGamma = 0.58578643762690495119831127579030192143;  // 2 − √2
+/// h_s / h of both stages: γ/2 (trapezoidal stage) = (1 − γ)/(2 − γ) (BDF2 stage) = 1 − 1/√2.
+inline constexpr double kStageStep = 0.29289321881345247559915563789515096072;
+/// a = 1/(γ (2 − γ)) = (1 + √2)/2: BDF2's weight of the stage value, y1 = a y_γ − (a − 1) y0
+/// + h_s F(y1).
+inline constexpr double kStageWeight = 1.20710678118654752440084436210484903928;
+}  // namespace tr_bdf2
+
 /// First part of the implicit step: stores u0 (SolverScratch::twist0) and the
 /// world inertias at the step's start, then replaces the angular velocity of
 /// every body in the solve (not kDirect, not a first-order coupled body) by
@@ -77,6 +88,39 @@ void add_cross_contact_terms(const SolverScratch& s, std::span<const Vec6> in,
 /// Writes SolverScratch::delta, joint_y, Data::solver_iterations/residual,
 /// Data::joints multipliers. Returns true when converged.
 bool solve_constrained_system(const Model& model, Data& data) noexcept;
+
+/// Velocity step of RATTLE (Andersen 1983; Hairer, Lubich & Wanner, "Geometric Numerical
+/// Integration", §VII.1.4) for the second-order schemes with joints (the trapezoidal rule, and
+/// both stages of TR-BDF2), after the bodies' poses and twists were moved to the end of the
+/// (stage) solve. With `remove_half_impulse` (the trapezoidal rule and TR-BDF2's trapezoidal
+/// stage), the extrapolated twist u1 = 2 u½ − u0 first loses one copy of the half step's joint
+/// impulse, A⁻¹ G0ᵀ y (SolverScratch::joint_y; per body with its diagonal block of A, so exact
+/// without body–body contacts and nets). Then u1 is projected onto the joints' velocity
+/// constraint at the new configuration, G1 u1 = v_ref, in the metric of the step's diagonal
+/// blocks of A = M − h_s D − h_s² K (M where no spring or contact acts, as in RATTLE; with stiff
+/// springs and contacts A, so that the second half's joint impulse meets the same implicit
+/// resistance as the first's — measured on the instrument against the tissue: M there doubles
+/// the error and leaves the reference unconverged):
+///   [A  G1ᵀ] [δ]   [0            ]
+///   [G1  0 ] [y] = [v_ref − G1 u1],   u1 ← u1 + δ,
+/// solved in linear time by the tree solve (articulation.hpp), the rows evaluated at the new
+/// configuration and a prescribed joint at value + `elapsed` · rate (`elapsed`: time from the
+/// step's start to the new configuration, s). Without it u1 keeps a constraint velocity
+/// G1 u1 ≈ −G0 u0 that alternates in sign and feeds the next step's Baumgarte rows: the free
+/// double pendulum then converges at order 1 only. Known (imposed) bodies count as at rest,
+/// as in build_joint_rows(). Reads SolverScratch::block (A) and joint_y; uses block_factor,
+/// projected_residual, residual, a_direction, joint_rhs and joint_y_correction as scratch
+/// (the step's solve is done). Only in builds with joints (NUMEN_WITH_ARTICULATION).
+void project_joint_velocities(const Model& model, Data& data, double elapsed,
+                              bool remove_half_impulse) noexcept;
+
+/// The solve of the linearised system built for this step (after build_implicit_system() and,
+/// for a model with nets, build_net_system()): the net solve, the joints' solve or the bodies'
+/// block-Jacobi CG, whichever compiled_stages() names (step_stages.hpp), setting its bit of
+/// Data::stages_run (kStageNetSolve, kStageJointSolve) and kSolverNotConverged when it ends
+/// above the tolerance. Writes SolverScratch::delta (Δu) and NetScratch::delta (Δv). Returns
+/// true when converged.
+bool solve_linearized_system(const Model& model, Data& data) noexcept;
 
 /// Preconditioned conjugate gradient on A Δu = b (SolverScratch::rhs) with the
 /// block-Jacobi preconditioner of the 6×6 body blocks; Δu starts at 0.

@@ -110,6 +110,9 @@ struct NetScratch {
   std::vector<Mat3> block_inverse;
   std::vector<Vec3> rhs;            ///< b of the node rows.
   std::vector<Vec3> delta;          ///< Δv of the node rows (m/s); warm start of the next step.
+  // TR-BDF2 (integrator_tr_bdf2.cpp), per node: v0, the trapezoidal stage's displacement
+  // Δx_γ = γh (v0 + Δv½) (m) and velocity change Δv_γ (m/s).
+  std::vector<Vec3> stage_velocity, stage_move, stage_delta;
   /// PCG vectors of the nodes. Without joints (Eisenstat's CG, net_solve.hpp):
   /// w, t, q and K q; with joints: r, z, p and A p.
   std::vector<Vec3> residual, precond_residual, direction, a_direction;

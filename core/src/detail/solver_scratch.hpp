@@ -27,8 +27,13 @@ struct ContactTerm {
   double normal_velocity = 0.0;  ///< v_n = n · v_rel at the step's start (m/s).
   bool active = false;       ///< f_n > 0: the contact contributes forces and Jacobians.
   /// k_eff (N/m): the material pair's stiffness, clamped by the contact time-constant floor
-  /// (SolverSettings::contact_max_omega_dt); the force and the Jacobian of the step use it.
+  /// (SolverSettings::contact_max_omega_dt); the force uses it. When active: the law's ∂f_n/∂d
+  /// (contact_penalty_force(): k_eff for the linear law), the Jacobian's stiffness.
   double stiffness = 0.0;
+  /// The law's damping and friction coefficients for the Jacobian D (N·s/m): the material
+  /// pair's, faded in by the smoothed onset (contact_penalty_force()); set when active.
+  double damping = 0.0;
+  double friction = 0.0;  ///< See damping (N·s/m).
   bool clamped = false;      ///< k_eff < the material pair's stiffness this step.
   /// Weight W = (h c + h² k) n nᵀ + h μ (I − n nᵀ) = α n nᵀ + β I (N·s/m),
   /// stored as its two scalars: the contact's contribution to A = M − hD − h²K
@@ -98,6 +103,29 @@ struct SolverScratch {
   /// trapezoidal rule (its half step to the midpoint). Every Jacobian weight, the gyroscopic
   /// step and the joint multipliers (λ = −y / h_s) use it; positions always move over Model::dt.
   double system_step = 0.0;
+
+  /// How build_joint_rows() (joint_system.hpp) maps the solve's Δu to the joints' positions:
+  /// the positions at the end of the (stage) solve are x0 ⊕ joint_drift_step · (twist0 + Δu),
+  /// reached joint_horizon after the step's start (s). Both Model::dt for the Euler schemes and
+  /// the trapezoidal rule; γh and γh for TR-BDF2's trapezoidal stage, h_s and h for its BDF2
+  /// stage (integrator_tr_bdf2.cpp). Set by every integrator before its solve.
+  double joint_drift_step = 0.0;
+  double joint_horizon = 0.0;  ///< See joint_drift_step (s).
+  /// true: the joints' rate Ċ0 = G0 u0 − v_ref takes u0 from stage_start (TR-BDF2's BDF2 stage,
+  /// whose twist0 is the drift twist ũ); false: from twist0.
+  bool joint_rate_from_stage_start = false;
+  /// true: the joint solve's rows G are evaluated at the drifted configuration
+  /// x0 ⊕ joint_drift_step · twist0 instead of x0 (TR-BDF2's BDF2 stage, whose constraint
+  /// force acts at the step's end); false: at x0.
+  bool joint_rows_at_drift_end = false;
+
+  // TR-BDF2 (integrator_tr_bdf2.cpp), sized for every model.
+  std::vector<BodyState> stage_start;  ///< Body states at the step's start.
+  /// Per body: the trapezoidal stage's displacement Δx_γ = γh (u0 + Δu½) (linear m; angular:
+  /// rotation vector, rad, world).
+  std::vector<Vec6> stage_move;
+  std::vector<Vec6> stage_delta;  ///< Per body: the trapezoidal stage's Δu_γ = u_γ − u0.
+  std::vector<Vec3> stage_gyro;   ///< Per body: ω* − ω0 of the implicit gyroscopic step over h_s.
 
   int coupled_body = -1;     ///< Body whose coupling springs act this step (-1: none).
   bool first_order = false;  ///< coupled_body uses the massless (first-order) model this step.

@@ -15,7 +15,7 @@ def test_default_scene_loads(scene):
     model = scene.model
     assert model.num_bodies == len(model.body_names) == len(model.body_masses) > 0
     assert model.num_joints == len(model.joint_names)
-    assert model.integrator in ("implicit-euler", "symplectic-euler", "trapezoidal")
+    assert model.integrator in ("implicit-euler", "symplectic-euler", "trapezoidal", "tr-bdf2")
     assert model.gravity.shape == (3,)
 
 

@@ -33,6 +33,13 @@ struct ContactForceResult {
   Vec3 force = Vec3::Zero();  ///< F on body_a at the contact point (N, world); −F on body_b.
   double normal_force = 0.0;  ///< f_n (N), ≥ 0.
   bool active = false;        ///< f_n > 0.
+  /// The law's Jacobian coefficients at this state, for the implicit step (K = −stiffness
+  /// Gᵀ n nᵀ G, D = −damping Gᵀ n nᵀ G − friction Gᵀ (I − n nᵀ) G): k, c, μ of the material
+  /// for the linear law; for the smoothed onset ∂f_n/∂d = k min(d/δ0, 1) − c s'(d) v_n
+  /// (floored at 0 so that K stays negative semidefinite), c s(d) and μ s(d). Set when active.
+  double stiffness = 0.0;  ///< N/m.
+  double damping = 0.0;    ///< N·s/m.
+  double friction = 0.0;   ///< N·s/m.
 };
 
 /// Relative velocity (m/s, world) of the contact point of a with respect to
@@ -43,6 +50,18 @@ Vec3 contact_relative_velocity(const BodyState& a, const Vec3& r_a, const BodySt
 /// Penalty law (see file comment) for a contact of `depth` (m, > 0 means
 /// penetrating) and unit `normal` (from b towards a), given the relative
 /// velocity `v_rel` (m/s) and the material pair. Never pulls: f_n ≥ 0.
+/// With MaterialPair::onset_depth δ0 > 0, the smoothed C¹ onset: with t = d/δ0 and the
+/// smoothstep s(d) = 3t² − 2t³ (t < 1), 1 (t ≥ 1),
+///   e(d) = k d² / (2 δ0) (d < δ0),  k (d − δ0/2) (d ≥ δ0),
+///   f_n = max(0, e(d) − c s(d) v_n),   f_t = −μ s(d) (v_rel − v_n n).
+/// e and s are C¹ in d (e(0) = e'(0) = 0, e and e' continuous at δ0; s'(0) = s'(δ0) = 0), so the
+/// force is C¹ in the state where f_n > 0 and at the onset d = 0 — the linear law's force jumps
+/// there in its derivative by k (and by c v_n, μ v_t in value), which caps a second-order
+/// scheme's order at a contact (docs/dynamics.md, "Why contacts cap the order"). The quadratic
+/// onset is the Hertz-like regularisation of a penalty contact (the force–depth law of
+/// Hunt & Crossley 1975 with exponent 2 over the onset), joined C¹ to the linear law so that deep
+/// contacts keep the stiffness k (and the time-constant floor acts on it as before); the rest
+/// depth under a load F > k δ0/2 is F/k + δ0/2.
 ContactForceResult contact_penalty_force(const Vec3& normal, double depth, const Vec3& v_rel,
                                          const MaterialPair& material) noexcept;
 

@@ -2,8 +2,8 @@
 /// @file integrator.hpp
 /// Time integration of the rigid bodies (paper Eq. 1, §5): linearly implicit
 /// Euler with the stiffness and damping Jacobians of coupling springs and
-/// contacts, the linearised trapezoidal rule (second order) on the same
-/// systems, and symplectic Euler as the explicit baseline.
+/// contacts, the linearised trapezoidal rule and TR-BDF2 (second order) on the
+/// same systems, and symplectic Euler as the explicit baseline.
 ///
 /// Linearly implicit (backward) Euler, Baraff & Witkin 1998 ("Large steps in
 /// cloth simulation", §2.3), on the stacked twists u = (v_0, ω_0, v_1, ω_1, …):
@@ -27,7 +27,7 @@ struct Model;
 struct Data;
 
 /// Integrate stage: dispatches on Model::integrator to
-/// integrate_linearly_implicit_euler(), integrate_trapezoidal() or
+/// integrate_linearly_implicit_euler(), integrate_trapezoidal(), integrate_tr_bdf2() or
 /// integrate_symplectic_euler(); the solve inside (net solve, joint solve or the
 /// bodies alone) is the one compiled_stages() names (step_stages.hpp), and sets
 /// its bit of Data::stages_run (kStageNetSolve, kStageJointSolve) when it runs. Needs
@@ -68,5 +68,29 @@ void integrate_linearly_implicit_euler(const Model& model, Data& data) noexcept;
 /// mode with h ω ≫ 1 is kept bounded but not damped (amplification → −1). Sets kSolverNotConverged
 /// like the implicit Euler.
 void integrate_trapezoidal(const Model& model, Data& data) noexcept;
+
+/// Linearised TR-BDF2 (Integrator::kTrBdf2; Bank et al. 1985, Hosea & Shampine 1996;
+/// docs/dynamics.md derives it): TR-BDF2 with γ = 2 − √2 applied to the step's linearisation
+/// y' = F0 + J (y − y0), a two-stage Rosenbrock-type method. Both stages solve the linearly
+/// implicit Euler system of one step h_s = γh/2 = (1 − γ)/(2 − γ) h (A = M − h_s D − h_s² K):
+///   trapezoidal stage to t + γh:  A Δu½ = h_s (f0 + h_s K u0) + M (u* − u0),
+///     Δu_γ = 2 Δu½,  Δx_γ = γh (u0 + Δu½);
+///   BDF2 stage to t + h:  A Δu = h_s (f0 + h_s K ũ) + a M Δu_γ + M (u* − u0),
+///     ũ = u0 + (a / h_s) Δx_γ,  a = 1/(γ (2 − γ)),
+///   u1 = u0 + Δu,  x1 = x0 + a Δx_γ + h_s v1,  q1 = exp(½ (a θ_γ + h_s ω1)) ⊗ q0 (unit),
+/// θ_γ the stage's rotation vector (Δx_γ's angular part), u* from the implicit gyroscopic step
+/// over h_s (kept constant over the step). The forces and the Jacobians are those of the step's
+/// start (one force evaluation; the contacts are not detected again at the stage): second order
+/// where K and D are the exact Jacobians and time-dependent inputs are fed at t + h/2, as for
+/// the trapezoidal rule. L-stable (amplification → 0 as h ω → ∞) and stiffly accurate, so it
+/// runs CouplingMode::kFirstOrder. Joints: the trapezoidal stage as integrate_trapezoidal()
+/// (Baumgarte rows over γh, RATTLE's projection at x_γ); the BDF2 stage's rows, evaluated at
+/// the drifted configuration x0 ⊕ h_s ũ (its constraint force acts at the step's end), put x1
+/// on the Baumgarte target over h from the step's start, then u1 is projected onto
+/// G(x1) u1 = v_ref.
+/// Nets: nodes are unknowns of both stages, v1 = v0 + Δv, x1 = x0 + a Δx_γ + h_s v1.
+/// Data::solver_iterations is the sum over both solves, solver_residual the larger. Sets
+/// kSolverNotConverged when either solve ends above the tolerance. No allocation.
+void integrate_tr_bdf2(const Model& model, Data& data) noexcept;
 
 }  // namespace numen::core

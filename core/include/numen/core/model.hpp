@@ -29,6 +29,12 @@ enum class Integrator : std::uint8_t {
   /// "Solving ODEs II", §IV.7, one-stage Rosenbrock method with γ = 1/2). Not with
   /// CouplingMode::kFirstOrder (refused by finalize_model()).
   kTrapezoidal,
+  /// Linearised TR-BDF2 (Bank et al. 1985; Hosea & Shampine 1996): a trapezoidal stage to
+  /// t + γh, γ = 2 − √2, then BDF2 to t + h, both applied to the step's linearisation (the
+  /// systems of the linearly implicit Euler at the one stage step h_s = γh/2 = (1−γ)/(2−γ) h,
+  /// shared by both stages). Second order, L-stable (amplification → 0 as h ω → ∞),
+  /// stiffly accurate: runs every coupling mode (docs/dynamics.md derives it).
+  kTrBdf2,
 };
 
 /// How the attached body follows the device target (paper §3, Fig. 5, footnote).
@@ -119,6 +125,11 @@ struct MaterialPair {
   double stiffness = 1e4;  ///< N/m.
   double damping = 10.0;   ///< N·s/m.
   double friction = 0.0;   ///< N·s/m, viscous.
+  /// Depth δ0 (m, ≥ 0) of the smoothed C¹ contact onset (contact_force.hpp,
+  /// contact_penalty_force()): 0 (default) is the linear penalty law max(0, k d − c v_n); δ0 > 0
+  /// a quadratic elastic onset k d²/(2 δ0) over 0 ≤ d < δ0 joined C¹ to k (d − δ0/2), with the
+  /// damping and friction faded in by the smoothstep of d/δ0.
+  double onset_depth = 0.0;
 };
 
 /// Largest SolverSettings::error_estimate_delay.

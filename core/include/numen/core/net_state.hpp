@@ -34,7 +34,13 @@ struct NodeContact {
   bool active = false;           ///< f_n > 0.
   /// k_eff (N/m): the material pair's stiffness, clamped by the contact time-constant floor
   /// (SolverSettings::node_contact_max_omega_dt) on the node's mass and the body's effective mass.
+  /// When active: the law's ∂f_n/∂d (contact_penalty_force(): k_eff for the linear law), the
+  /// Jacobian's stiffness.
   double stiffness = 0.0;
+  /// The law's damping and friction coefficients for the implicit step's Jacobian (N·s/m): the
+  /// material pair's, faded in by a smoothed onset (contact_penalty_force()); set when active.
+  double damping = 0.0;
+  double friction = 0.0;         ///< See damping (N·s/m).
   double weight_normal = 0.0;    ///< α of the implicit weight W = α n nᵀ + β I (kg = N·s²/m).
   double weight_isotropic = 0.0; ///< β (kg).
 };

@@ -2,7 +2,8 @@
 /// @file study_accuracy.hpp
 /// `numen study accuracy`: work-precision data per integrator (issue 6; docs/results.md
 /// "Accuracy"). For each time step h of a grid (default 1e-2 s … 1e-5 s, h = 10 ms / n),
-/// each integrator (linearly implicit Euler, symplectic Euler, linearised trapezoidal rule)
+/// each integrator (linearly implicit Euler, symplectic Euler, linearised trapezoidal rule,
+/// linearised TR-BDF2)
 /// and each case, the position error (max and RMS, mm) and the orientation error (max and
 /// RMS, mrad) against the CPU time per simulated second, and the observed order of
 /// convergence (slope of the log-log fit) next to the theoretical one. Cases:
@@ -11,6 +12,8 @@
 ///    axis (exact: the coupling torque is linear in the angle there and ω × Iω = 0);
 ///  - "wall": a sphere god-object pushed 20 mm into a plane while sliding along it (penalty
 ///    contact with damping and viscous friction), smooth (quintic) target motion;
+///  - "wall-smoothed": the same with the smoothed C¹ contact onset (core::MaterialPair::
+///    onset_depth = 0.1 mm): what the penalty law's onset costs the second-order schemes;
 ///  - "articulated": the articulated instrument of sim/scenes/default.toml following the shipped
 ///    recording (sim/data), its axis values interpolated by a C¹ cubic (Catmull–Rom) through
 ///    samples every 40 ms so that the input does not cap every scheme at first order;
@@ -19,12 +22,12 @@
 /// Windows of the recording: articulated 3.5–4.1 s (the jaws reach the tissue at 3.7 s),
 /// deformable 2.65–2.85 s (the probe's nodes reach the post at 2.65 s); the free body and the
 /// wall run 1 s. The scene cases' linear solves run to a relative residual of 1e-9.
-/// The last three are compared with a reference run of the trapezoidal rule at a much finer
+/// The last four are compared with a reference run of the trapezoidal rule at a much finer
 /// step (AccuracyOptions::reference_dt), itself checked against a run at half that step
 /// (ReferenceCheck). Errors are taken every 10 ms of simulated time (a multiple of every step
 /// of the grid): at each sample the largest error over the tool's points (bodies' centres of
-/// mass and net nodes) and frames (bodies' orientations). The trapezoidal rule is fed its
-/// time-dependent inputs (targets) at the step's middle t + h/2, the Euler schemes at the
+/// mass and net nodes) and frames (bodies' orientations). The trapezoidal rule and TR-BDF2 are
+/// fed their time-dependent inputs (targets) at the step's middle t + h/2, the Euler schemes at the
 /// step's start t (what the control loop does): docs/dynamics.md. Study code: allocates,
 /// throws InputError for a scene that cannot be loaded; not real-time.
 /// Schema of the CSV files: docs/results.md, "Accuracy: error against run time".
@@ -46,9 +49,9 @@ struct AccuracyOptions {
   std::vector<double> steps;
   /// Shorter horizons (×0.3), a coarser grid and references at 2e-5 s: a few seconds.
   bool quick = false;
-  /// Subset of "free-body", "wall", "articulated", "deformable"; empty: all four.
+  /// Subset of "free-body", "wall", "wall-smoothed", "articulated", "deformable"; empty: all.
   std::vector<std::string> cases;
-  /// Integrators to compare; empty: implicit Euler, symplectic Euler, trapezoidal.
+  /// Integrators to compare; empty: implicit Euler, symplectic Euler, trapezoidal, TR-BDF2.
   std::vector<core::Integrator> integrators;
   /// Simulated time of every case (s, a multiple of 10 ms); ≤ 0: each case's own horizon.
   double horizon_s = -1.0;
@@ -95,7 +98,7 @@ struct AccuracyFit {
   double observed_order =
       0.0;  ///< Least-squares slope of log(position error max) vs log(h); NaN: < 3 points.
   double observed_order_rotation = 0.0;  ///< Same for the orientation error (NaN: < 3 points).
-  double theoretical_order = 1.0;        ///< 1 (Euler schemes) or 2 (trapezoidal).
+  double theoretical_order = 1.0;        ///< 1 (Euler schemes) or 2 (trapezoidal, TR-BDF2).
   int points = 0;                        ///< Steps used by the position fit.
   double fit_dt_min = 0.0;               ///< Smallest and largest step of the position fit (s).
   double fit_dt_max = 0.0;

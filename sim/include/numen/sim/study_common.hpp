@@ -26,7 +26,7 @@ double thread_cpu_seconds() noexcept;
 std::string missing_parts(bool joints, bool nets);
 
 /// The core's integrators in the order the studies report them: linearly implicit Euler,
-/// symplectic Euler, linearised trapezoidal rule.
+/// symplectic Euler, linearised trapezoidal rule, linearised TR-BDF2.
 const std::vector<core::Integrator>& all_integrators();
 
 }  // namespace numen::sim::study
