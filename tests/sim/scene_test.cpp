@@ -500,6 +500,26 @@ TEST(SceneErrors, UnknownBodyInDeviceAttach) {
                  column_of(text, "attach = \"tol\"", "\"tol\""), "device.attach", "no body named \"tol\"");
 }
 
+TEST(Scene, DeviceVelocityCutoffIsReadInHertz) {
+  TempDir dir;
+  EXPECT_EQ(load_scene(dir.write("mini.toml", kMini)).device.velocity_cutoff_hz,
+            numen::hal::kDefaultVelocityCutoffHz);
+  const std::string text = replace(kMini, "attach = \"tool\"", "attach = \"tool\"\nvelocity_cutoff = 20.5");
+  EXPECT_EQ(load_scene(dir.write("cutoff.toml", text)).device.velocity_cutoff_hz, 20.5);
+}
+
+TEST(SceneErrors, ANonPositiveVelocityCutoffIsLocated) {
+  TempDir dir;
+  for (const std::string bad : {"0.0", "-50.0", "nan", "inf"}) {
+    const std::string line = "velocity_cutoff = " + bad;
+    const std::string text = replace(kMini, "attach = \"tool\"", "attach = \"tool\"\n" + line);
+    const InputError e = load_error(dir, text);
+    expect_located(e, (dir.path() / "bad.toml").string(), line_of(text, line),
+                   column_of(text, line, bad), "device.velocity_cutoff",
+                   bad == "nan" || bad == "inf" ? "must be finite" : "must be in");
+  }
+}
+
 TEST(SceneErrors, MissingTrajectoryFile) {
   TempDir dir;
   const std::string text = replace(kMini, R"(source = "scripted"

@@ -287,6 +287,10 @@ void validate(const DeviceConfig& c) {
     fail(c, "jump_tolerance_counts",
          "must be finite and >= 0 (got " + std::to_string(c.jump_tolerance_counts) + ")");
   }
+  if (std::isnan(c.velocity_cutoff_hz) || c.velocity_cutoff_hz <= 0.0) {
+    fail(c, "velocity_cutoff_hz",
+         "must be > 0 Hz (+inf: no filter) (got " + std::to_string(c.velocity_cutoff_hz) + ")");
+  }
   const std::string prefix = device_name(c) + ": ";
   detail::checked_position(c.tool_offset.position, prefix + "tool_offset.position");
   detail::checked_unit_quaternion(c.tool_offset.orientation, prefix + "tool_offset.orientation");

@@ -46,6 +46,7 @@ InstrumentDevice::InstrumentDevice(DeviceConfig config,
     const AxisConfig& a = config_.axes[static_cast<std::size_t>(i)];
     limits_[static_cast<std::size_t>(i)] = make_check_limits(a, age, config_.jump_tolerance_counts);
     hold_[i] = std::clamp(0.0, a.min, a.max);
+    rates_[static_cast<std::size_t>(i)] = RateEstimator(config_.velocity_cutoff_hz, a.max_speed, a.wraps);
   }
   if (config_.canopen.managed) {
     for (int i = 0; i < n_; ++i) {
@@ -61,6 +62,7 @@ InstrumentDevice::InstrumentDevice(DeviceConfig config,
 
 void InstrumentDevice::reset() noexcept {
   axes_ = {};
+  for (RateEstimator& r : rates_) r.reset();
   last_sample_ = DeviceSample{};
   last_sample_.q = hold_;
   last_sample_.qdot = AxisVector::Zero(n_);
@@ -168,11 +170,7 @@ DeviceSample InstrumentDevice::sample(std::int64_t now_ns) noexcept {
           check_sample(lim, v, st.pending_stamp_ns, now_ns, st.has_value ? &st.last : nullptr) |
           st.superseded;
       if (c == SampleFault::kNone) {
-        if (st.has_value) {
-          const double dt = static_cast<double>(st.pending_stamp_ns - st.last.time_ns) * 1e-9;
-          st.rate = dt > 0.0 ? axis_difference(v, st.last.value, a.wraps) / dt : 0.0;
-          st.has_rate = true;
-        }
+        rates_[k].update(v, st.pending_stamp_ns);
         st.last = AcceptedValue{v, st.pending_stamp_ns};
         st.has_value = true;
         accepted = true;
@@ -187,11 +185,18 @@ DeviceSample InstrumentDevice::sample(std::int64_t now_ns) noexcept {
     st.pending = false;
     st.malformed = false;
 
-    // The held value's own freshness: with no new accepted value it may have gone stale.
+    // The held value's own freshness: with no new accepted value it may have gone stale. A
+    // rejected or missing value holds the rate (the hand has not stopped; the next accepted
+    // difference spans the gap at its own Δt); a stale one zeroes it and restarts the filter
+    // from the next accepted value: the hand's motion is unknown, and a rate fed forward on a
+    // frozen target would drag the tool past it for as long as the encoder is silent.
     bool held_stale = false;
     if (st.has_value) {
       held_stale = check_fresh(lim, st.last.time_ns, now_ns) != SampleFault::kNone;
-      if (!accepted && held_stale) f |= SampleFault::kStale;
+      if (!accepted && held_stale) {
+        f |= SampleFault::kStale;
+        rates_[k].reset();
+      }
     }
 
     if (f != SampleFault::kNone) {
@@ -207,7 +212,7 @@ DeviceSample InstrumentDevice::sample(std::int64_t now_ns) noexcept {
       ready = false;
     }
     s.q[i] = st.has_value ? st.last.value : hold_[i];
-    s.qdot[i] = (st.has_rate && !held_stale) ? st.rate : 0.0;
+    s.qdot[i] = rates_[k].rate();
     if (accepted) {
       st.periods_since_accepted = 0;
     } else if (st.periods_since_accepted < UINT32_MAX) {

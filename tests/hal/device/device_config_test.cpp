@@ -91,6 +91,21 @@ TEST(DeviceConfig, ValidationNamesDeviceAndField) {
   EXPECT_NE(error_of(c).find("tool_offset.position"), std::string::npos);
 }
 
+TEST(DeviceConfig, VelocityCutoffMustBePositiveOrInfinite) {
+  DeviceConfig c = make_default_trocar_config();
+  EXPECT_EQ(c.velocity_cutoff_hz, kDefaultVelocityCutoffHz);
+  for (const double bad : {0.0, -50.0, std::numeric_limits<double>::quiet_NaN(),
+                           -std::numeric_limits<double>::infinity()}) {
+    c.velocity_cutoff_hz = bad;
+    const std::string e = error_of(c);
+    EXPECT_NE(e.find("velocity_cutoff_hz"), std::string::npos) << bad << ": " << e;
+  }
+  c.velocity_cutoff_hz = std::numeric_limits<double>::infinity();  // the bare difference
+  EXPECT_EQ(error_of(c), "");
+  c.velocity_cutoff_hz = 1e-3;
+  EXPECT_EQ(error_of(c), "");
+}
+
 TEST(DeviceConfig, KindDecidesTheKinematics) {
   const auto t = make_kinematics(make_default_trocar_config());
   EXPECT_EQ(t->num_axes(), 5);

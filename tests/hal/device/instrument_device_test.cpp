@@ -20,6 +20,7 @@
 #include "kinematics_check.hpp"
 #include "numen/hal/canopen/canopen.hpp"
 #include "numen/hal/device/phantom_kinematics.hpp"
+#include "numen/hal/device/rate_estimator.hpp"
 #include "numen/hal/transport/sim_bus.hpp"
 #include "numen/hal/device/trocar_kinematics.hpp"
 
@@ -78,8 +79,12 @@ TEST(InstrumentDevice, TargetIsTheForwardKinematicsOfTheDecodedAxes) {
   EXPECT_EQ(dev.counters().frames_decoded, 5u);
 }
 
+// Without a filter (f_c = +inf) the rate is the backward difference of the last two values;
+// the filter itself is RateEstimatorTest and the tests below.
 TEST(InstrumentDevice, TwistIsJacobianTimesRateOfTheLastTwoSamples) {
-  InstrumentDevice dev(trocar_config());
+  DeviceConfig c = trocar_config();
+  c.velocity_cutoff_hz = std::numeric_limits<double>::infinity();
+  InstrumentDevice dev(c);
   feed(dev, kQ0, 0);
   dev.sample(0);
   double q1[5];
@@ -95,6 +100,120 @@ TEST(InstrumentDevice, TwistIsJacobianTimesRateOfTheLastTwoSamples) {
   const numen::core::Twist expected = twist_from_rates(dev.kinematics().jacobian(s.q), s.qdot);
   EXPECT_TRUE(s.twist.linear.isApprox(expected.linear, 1e-12));
   EXPECT_TRUE(s.twist.angular.isApprox(expected.angular, 1e-12));
+}
+
+// With the default cutoff every axis's rate is the first-order response to the ramp,
+// r (1 − exp(−t/τ)), within the filtered quantisation bound α q / Δt, and the twist is J q̇.
+TEST(InstrumentDevice, RatesAreFilteredAtTheConfiguredCutoff) {
+  DeviceConfig c = trocar_config();
+  ASSERT_EQ(c.velocity_cutoff_hz, kDefaultVelocityCutoffHz);
+  InstrumentDevice dev(c);
+  const double rate[5] = {0.5, -0.3, 0.05, 1.0, 2.0};
+  const double tau = 1.0 / (2.0 * std::numbers::pi * kDefaultVelocityCutoffHz);
+  DeviceSample s;
+  for (int k = 0; k <= 20; ++k) {
+    double q[5];
+    for (int i = 0; i < 5; ++i) q[i] = kQ0[i] + rate[i] * 1e-3 * k;
+    feed(dev, q, k * kMs);
+    s = dev.sample(k * kMs);
+    ASSERT_TRUE(s.valid) << k;
+    for (int i = 0; i < 5; ++i) {
+      const double quant = 1.0 / c.axes[static_cast<std::size_t>(i)].counts_per_unit;
+      const double expected = rate[i] * -std::expm1(-1e-3 * k / tau);
+      EXPECT_NEAR(s.qdot[i], expected,
+                  RateEstimator::quantisation_bound(kDefaultVelocityCutoffHz, 1e-3, quant) + 1e-12)
+          << "axis " << i << " period " << k;
+    }
+  }
+  const numen::core::Twist expected = twist_from_rates(dev.kinematics().jacobian(s.q), s.qdot);
+  EXPECT_TRUE(s.twist.linear.isApprox(expected.linear, 1e-12));
+}
+
+// A jump that passes the checks (here a jump tolerance wide enough to let it through, as a
+// tracker glitch would) gives a rate bounded by the axis's max_speed, not jump / Δt.
+TEST(InstrumentDevice, RateIsBoundedByTheAxisMaxSpeed) {
+  DeviceConfig c = trocar_config();
+  c.jump_tolerance_counts = 1e5;  // 38 rad on the pivots, 1 m on the depth
+  for (const double cutoff : {kDefaultVelocityCutoffHz, std::numeric_limits<double>::infinity()}) {
+    c.velocity_cutoff_hz = cutoff;
+    InstrumentDevice dev(c);
+    feed(dev, kQ0, 0);
+    dev.sample(0);
+    double jumped[5];
+    std::copy(kQ0, kQ0 + 5, jumped);
+    jumped[TK::kPivotX] += 0.5;  // 500 rad/s over 1 ms; max_speed 10 rad/s
+    jumped[TK::kDepth] += 0.2;   // 200 m/s; max_speed 2 m/s
+    feed(dev, jumped, kMs);
+    const DeviceSample s = dev.sample(kMs);
+    ASSERT_TRUE(s.valid);
+    const double a = RateEstimator::smoothing(cutoff, 1e-3);
+    EXPECT_DOUBLE_EQ(s.qdot[TK::kPivotX], a * c.axes[TK::kPivotX].max_speed) << cutoff;
+    EXPECT_DOUBLE_EQ(s.qdot[TK::kDepth], a * c.axes[TK::kDepth].max_speed) << cutoff;
+  }
+}
+
+// The roll axis wraps: a turn across ±π is a small rate, not 2π / Δt.
+TEST(InstrumentDevice, AWrappingAxisRateUsesTheWrappedDifference) {
+  DeviceConfig c = trocar_config();
+  c.velocity_cutoff_hz = std::numeric_limits<double>::infinity();
+  ASSERT_TRUE(c.axes[TK::kRoll].wraps);
+  InstrumentDevice dev(c);
+  double q[5];
+  std::copy(kQ0, kQ0 + 5, q);
+  q[TK::kRoll] = std::numbers::pi - 0.005;
+  feed(dev, q, 0);
+  dev.sample(0);
+  q[TK::kRoll] = -std::numbers::pi + 0.005;
+  feed(dev, q, kMs);
+  const DeviceSample s = dev.sample(kMs);
+  ASSERT_TRUE(s.valid);
+  EXPECT_NEAR(s.qdot[TK::kRoll], 0.01 / 1e-3, 2.0 / c.axes[TK::kRoll].counts_per_unit / 1e-3);
+}
+
+// A rejected value holds the rate (the next accepted difference spans the gap at its own Δt);
+// a stale held value zeroes it and the filter restarts from the next accepted value.
+TEST(InstrumentDevice, RateIsHeldOverARejectedValueAndRestartedAfterStaleness) {
+  DeviceConfig c = trocar_config();
+  InstrumentDevice dev(c);
+  auto ramp = [](int k, double* q) {
+    for (int i = 0; i < 5; ++i) q[i] = kQ0[i] + 0.2 * 1e-3 * k;
+  };
+  double q[5];
+  for (int k = 0; k <= 5; ++k) {
+    ramp(k, q);
+    feed(dev, q, k * kMs);
+    dev.sample(k * kMs);
+  }
+  const double before = dev.last_sample().qdot[TK::kPivotX];
+  ASSERT_GT(before, 0.0);
+  // Period 6: pivot_x out of range, rejected: its rate is held, not zeroed nor decayed.
+  ramp(6, q);
+  q[TK::kPivotX] = 2.0;
+  feed(dev, q, 6 * kMs);
+  DeviceSample s = dev.sample(6 * kMs);
+  EXPECT_TRUE(s.axis_faults[TK::kPivotX] & SampleFault::kOutOfRange);
+  EXPECT_EQ(s.qdot[TK::kPivotX], before);
+  // Period 7: accepted; the difference spans 2 ms at the true 0.2 rad/s.
+  ramp(7, q);
+  feed(dev, q, 7 * kMs);
+  s = dev.sample(7 * kMs);
+  ASSERT_TRUE(s.valid);
+  const double a2 = RateEstimator::smoothing(kDefaultVelocityCutoffHz, 2e-3);
+  const double quant = 1.0 / c.axes[TK::kPivotX].counts_per_unit;
+  EXPECT_NEAR(s.qdot[TK::kPivotX], before + a2 * (0.2 - before), a2 * quant / 2e-3 + 1e-12);
+  // No frame for 4 periods: stale from the 4th (max age 3 ms): zero.
+  for (int k = 8; k <= 10; ++k) EXPECT_GT(dev.sample(k * kMs).qdot[TK::kPivotX], 0.0) << k;
+  s = dev.sample(11 * kMs);
+  EXPECT_TRUE(s.axis_faults[TK::kPivotX] & SampleFault::kStale);
+  EXPECT_EQ(s.qdot[TK::kPivotX], 0.0);
+  // The first value after staleness only restarts the filter; the second gives α × rate.
+  ramp(12, q);
+  feed(dev, q, 12 * kMs);
+  EXPECT_EQ(dev.sample(12 * kMs).qdot[TK::kPivotX], 0.0);
+  ramp(13, q);
+  feed(dev, q, 13 * kMs);
+  const double a1 = RateEstimator::smoothing(kDefaultVelocityCutoffHz, 1e-3);
+  EXPECT_NEAR(dev.sample(13 * kMs).qdot[TK::kPivotX], a1 * 0.2, a1 * quant / 1e-3 + 1e-12);
 }
 
 TEST(InstrumentDevice, OutOfRangeIsRejectedAndTheTargetHeld) {
@@ -318,8 +437,18 @@ TEST(InstrumentDevice, ResetForgetsAcceptedValues) {
   InstrumentDevice dev(trocar_config());
   feed(dev, kQ0, 0);
   EXPECT_TRUE(dev.sample(0).valid);
+  double q1[5];
+  for (int i = 0; i < 5; ++i) q1[i] = kQ0[i] + 1e-3;
+  feed(dev, q1, kMs);
+  ASSERT_NE(dev.sample(kMs).qdot[0], 0.0);
   dev.reset();
-  EXPECT_FALSE(dev.sample(0).ready);
+  EXPECT_FALSE(dev.sample(kMs).ready);
+  EXPECT_EQ(dev.last_sample().qdot.norm(), 0.0);
+  // The rates restart: no difference across the reset.
+  feed(dev, kQ0, 2 * kMs);
+  const DeviceSample s = dev.sample(2 * kMs);
+  EXPECT_TRUE(s.valid);
+  EXPECT_EQ(s.qdot.norm(), 0.0);
 }
 
 // ---- Links and torques_for (phantom: six axes, drives on turret, shoulder, elbow) ----

@@ -14,6 +14,7 @@
 #include "numen/hal/canopen/pdo_mapping.hpp"
 #include "numen/hal/device/phantom_kinematics.hpp"
 #include "numen/hal/device/pose_tracker_kinematics.hpp"
+#include "numen/hal/device/rate_estimator.hpp"
 #include "numen/hal/device/trocar_kinematics.hpp"
 
 namespace numen::hal {
@@ -122,6 +123,10 @@ struct DeviceConfig {
   /// Allowance of the jump check on top of max_speed · Δt, encoder counts, >= 0
   /// (quantisation and jitter).
   double jump_tolerance_counts = 2.0;
+  /// Cutoff f_c of every axis's velocity filter (RateEstimator, rate_estimator.hpp), Hz, > 0;
+  /// +infinity = the bare backward difference. The estimate lags the hand by about
+  /// 1/(2π f_c) (3.2 ms at the default 50 Hz) and is bounded by each axis's max_speed.
+  double velocity_cutoff_hz = kDefaultVelocityCutoffHz;
   /// Pose of the controlled frame in the tool frame (tool tip frame for a trocar instrument,
   /// tracked frame for a pose tracker, stylus frame for a phantom). Identity: the controlled
   /// frame is the tool frame.
@@ -144,8 +149,8 @@ struct DeviceConfig {
 /// Throws std::invalid_argument with a message naming the device and the field if `config`
 /// is invalid: wrong axis count for the kind, an invalid axis (validate_axis()), COB-IDs
 /// outside 0x001–0x7FF, equal to 0x080 (SYNC) or used twice, non-positive period or age,
-/// negative jump tolerance, non-finite positions, non-unit quaternions (|‖q‖ − 1| > 1e-6),
-/// phantom link lengths not finite and > 0. Only the geometry of the config's kind is checked.
+/// negative jump tolerance, a velocity cutoff that is NaN or <= 0, non-finite positions,
+/// non-unit quaternions (|‖q‖ − 1| > 1e-6), phantom link lengths not finite and > 0. Only the geometry of the config's kind is checked.
 /// With canopen.managed also: one canopen.axes entry per axis; node ids 1–127 and not the
 /// controller's; heartbeat periods >= 1 ms and timeouts above them (axes of one node agreeing);
 /// drive TPDO COB-ID present exactly on driven axes; every PDO COB-ID (encoder, drive RPDO,

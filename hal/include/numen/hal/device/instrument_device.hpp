@@ -22,6 +22,7 @@
 #include "numen/hal/device/device_config.hpp"
 #include "numen/hal/device/kinematics.hpp"
 #include "numen/hal/canopen/pdo_mapping.hpp"
+#include "numen/hal/device/rate_estimator.hpp"
 #include "numen/hal/device/sample_check.hpp"
 
 namespace numen::hal {
@@ -37,8 +38,11 @@ struct DeviceSample {
   /// Controlled frame's target pose, world. Always finite; built from the last accepted axis
   /// values (0 clamped into [min, max] for an axis without one).
   core::Pose target;
-  /// Controlled frame's target twist, world: J(q) q̇. q̇ of an axis comes from its last two
-  /// accepted values; it is 0 before two values and while its held value is stale.
+  /// Controlled frame's target twist, world: J(q) q̇. q̇ of an axis is its RateEstimator's
+  /// estimate (rate_estimator.hpp: the accepted values' backward difference, bounded by the
+  /// axis's max_speed, low-pass filtered at DeviceConfig::velocity_cutoff_hz). It is 0 before
+  /// two accepted values; held through a rejected or missing value while the held value is
+  /// fresh; 0 (and the filter restarted) once the held value is stale.
   core::Twist twist;
   /// Number of links of the kinematics (Kinematics::num_links(), 1..kMaxLinks): entries
   /// [0, num_links) of link_targets and link_twists are valid, the others are left default.
@@ -51,7 +55,8 @@ struct DeviceSample {
   std::array<core::Twist, kMaxLinks> link_twists{};
   /// Axis values used for `target`, m or rad (n entries).
   AxisVector q;
-  /// Axis rates used for `twist`, m/s or rad/s (n entries).
+  /// Axis rates used for `twist`, m/s or rad/s (n entries): the estimates described at
+  /// `twist`, |q̇_i| <= axes[i].max_speed.
   AxisVector qdot;
   /// Union of the failed checks over all axes this period (SampleFault bits).
   FaultMask faults = SampleFault::kNone;
@@ -166,9 +171,7 @@ class InstrumentDevice {
     std::int32_t pending_counts = 0;
     std::int64_t pending_stamp_ns = 0;
     bool has_value = false;  // an accepted value exists
-    bool has_rate = false;   // two accepted values exist
     AcceptedValue last;      // last accepted value
-    double rate = 0.0;       // from the last two accepted values, units/s
     // sample() calls since the last accepted value (DeviceSample::periods_since_accepted).
     std::uint32_t periods_since_accepted = 0;
   };
@@ -184,6 +187,8 @@ class InstrumentDevice {
   int num_links_ = 1;
   std::array<AxisCheckLimits, kMaxAxes> limits_{};
   std::array<AxisState, kMaxAxes> axes_{};
+  // Velocity of each axis from its accepted values (configured once; reset() restarts them).
+  std::array<RateEstimator, kMaxAxes> rates_{};
   AxisVector hold_;  // value used before an axis's first accepted value
   std::array<Jacobian, kMaxLinks> link_jacobians_{};  // at last_sample_.q; [0]: jacobian()
   DeviceSample last_sample_;
