@@ -336,18 +336,17 @@ void parse_canopen(const TomlTable& dev, hal::DeviceConfig& cfg) {
       parse_ms(*c, "controller_heartbeat_period", co.controller_heartbeat_period_ms);
   if (c->has("drive_heartbeat_timeout"))
     co.drive_heartbeat_timeout_ms = parse_ms(*c, "drive_heartbeat_timeout", 1);
-  const auto startup = c->integer_or("startup_timeout", co.startup_timeout_ms);
-  if (startup < 1 || startup > 600'000) c->fail("startup_timeout", "must be in [1, 600000] ms");
-  co.startup_timeout_ms = static_cast<std::uint32_t>(startup);
-  const auto retry = c->integer_or("startup_retry", co.startup_retry_ms);
-  if (retry < 1 || retry > 600'000) c->fail("startup_retry", "must be in [1, 600000] ms");
-  co.startup_retry_ms = static_cast<std::uint32_t>(retry);
-  const auto sdo_timeout = c->integer_or("sdo_timeout", co.sdo_timeout_ms);
-  if (sdo_timeout < 1 || sdo_timeout > 600'000) c->fail("sdo_timeout", "must be in [1, 600000] ms");
-  co.sdo_timeout_ms = static_cast<std::uint32_t>(sdo_timeout);
-  const auto poll = c->integer_or("sdo_poll_period", co.sdo_poll_period_ms);
-  if (poll < 0 || poll > 600'000) c->fail("sdo_poll_period", "must be in [0, 600000] ms (0: no reads)");
-  co.sdo_poll_period_ms = static_cast<std::uint32_t>(poll);
+  // A time in ms within [lo, 600000] ("what" the message adds).
+  const auto ms_in = [&](const char* key, std::uint32_t fallback, std::int64_t lo, const char* what) {
+    const auto v = c->integer_or(key, fallback);
+    if (v < lo || v > 600'000)
+      c->fail(key, "must be in [" + std::to_string(lo) + ", 600000] ms" + what);
+    return static_cast<std::uint32_t>(v);
+  };
+  co.startup_timeout_ms = ms_in("startup_timeout", co.startup_timeout_ms, 1, "");
+  co.startup_retry_ms = ms_in("startup_retry", co.startup_retry_ms, 1, "");
+  co.sdo_timeout_ms = ms_in("sdo_timeout", co.sdo_timeout_ms, 1, "");
+  co.sdo_poll_period_ms = ms_in("sdo_poll_period", co.sdo_poll_period_ms, 0, " (0: no reads)");
   const std::uint16_t period = parse_ms(*c, "node_heartbeat_period", 10);
   const std::uint16_t timeout = c->has("heartbeat_timeout") ? parse_ms(*c, "heartbeat_timeout", 1) : 0;
   for (hal::CanopenAxisConfig& x : co.axes) {

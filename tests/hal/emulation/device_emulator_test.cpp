@@ -612,17 +612,26 @@ std::uint32_t od_value(const DeviceEmulator& emu, std::uint8_t node, SdoAddress 
   return v;
 }
 
-TEST(DeviceEmulatorManaged, PdoParametersFollowTheCia301SequenceAndTakeEffect) {
-  const DeviceConfig c = make_default_trocar_config(1);
-  SimBusSettings s;
-  s.latency_ns = 0;
-  SimBus bus(s);
-  DeviceEmulator emu(c);
+/// The default trainer's emulator on a SimBus without latency, its nodes booted (pre-operational,
+/// boot-ups read away).
+struct BootedTrainer {
+  SimBus bus{SimBusSettings{0}};
+  DeviceEmulator emu{make_default_trocar_config(1)};
   std::int64_t t = 0;
-  emu.tick(t, bus.device());
-  CanFrame f;
-  while (bus.controller().read(f) == IoStatus::kOk) {
+  BootedTrainer() {
+    emu.tick(t, bus.device());
+    CanFrame f;
+    while (bus.controller().read(f) == IoStatus::kOk) {
+    }
   }
+};
+
+TEST(DeviceEmulatorManaged, PdoParametersFollowTheCia301SequenceAndTakeEffect) {
+  BootedTrainer rig;
+  DeviceEmulator& emu = rig.emu;
+  SimBus& bus = rig.bus;
+  std::int64_t& t = rig.t;
+  CanFrame f;
   // Node 1's drive TPDO2 (0x1801 / 0x1A01), as the configuration gives it.
   EXPECT_EQ(od_value(emu, 1, {0x1801, 1}), 0x281u);
   EXPECT_EQ(od_value(emu, 1, {0x1A01, 0}), 2u);
@@ -671,13 +680,10 @@ TEST(DeviceEmulatorManaged, PdoParametersFollowTheCia301SequenceAndTakeEffect) {
 }
 
 TEST(DeviceEmulatorManaged, HeartbeatSyncAndDriveObjectsRules) {
-  const DeviceConfig c = make_default_trocar_config(1);
-  SimBusSettings s;
-  s.latency_ns = 0;
-  SimBus bus(s);
-  DeviceEmulator emu(c);
-  std::int64_t t = 0;
-  emu.tick(t, bus.device());
+  BootedTrainer rig;
+  DeviceEmulator& emu = rig.emu;
+  SimBus& bus = rig.bus;
+  std::int64_t& t = rig.t;
   EXPECT_EQ(sdo_write(emu, bus, t, 1, {0x1005, 0}, 0x40000080u, 4), SdoAbort::kInvalidValue);  // producer
   EXPECT_EQ(sdo_write(emu, bus, t, 1, {0x1005, 0}, 0x80, 4), 0u);
   EXPECT_EQ(sdo_write(emu, bus, t, 1, {0x1016, 1}, 0x01000000u, 4), SdoAbort::kInvalidValue);
