@@ -26,9 +26,10 @@ string(REPLACE "# Install: cp platform/systemd/numen.service /etc/systemd/system
                "# Installed by the Debian package numen; the scene is /etc/numen/scene.toml.\n" _unit "${_unit}")
 file(CONFIGURE OUTPUT ${_pkg}/numen.service CONTENT "${_unit}" @ONLY)
 
-# /etc/numen/scene.toml: the default scene, its recording path made absolute.
+# /etc/numen/scene.toml: the default scene, its recording and DCF paths made absolute.
 file(READ ${PROJECT_SOURCE_DIR}/sim/scenes/default.toml _scene)
 string(REPLACE "file = \"../data/" "file = \"${NUMEN_DEB_PREFIX}/${NUMEN_INSTALL_DATADIR}/data/" _scene "${_scene}")
+string(REPLACE "dcf = \"devices/" "dcf = \"${NUMEN_DEB_PREFIX}/${NUMEN_INSTALL_DATADIR}/scenes/devices/" _scene "${_scene}")
 file(CONFIGURE OUTPUT ${_pkg}/scene.toml CONTENT
   "# The scene run by the numen service (numen.service); a copy of\n# ${NUMEN_DEB_PREFIX}/${NUMEN_INSTALL_DATADIR}/scenes/default.toml (docs/scenes.md).\n${_scene}" @ONLY)
 file(CONFIGURE OUTPUT ${_pkg}/limits.conf CONTENT
@@ -123,7 +124,7 @@ if(TARGET numen_python AND NUMEN_PYTHON_VERSION MATCHES "^([0-9]+)\\.([0-9]+)$")
   string(APPEND CPACK_DEBIAN_PACKAGE_DEPENDS ", python3 (>= ${NUMEN_PYTHON_VERSION}),"
          " python3 (<< ${CMAKE_MATCH_1}.${_py_next}), python3-numpy")
 endif()
-set(CPACK_DEBIAN_PACKAGE_RECOMMENDS "cmake, g++, libeigen3-dev, libboost-dev, libtinyobjloader-dev, libevdev-dev, pkg-config")
+set(CPACK_DEBIAN_PACKAGE_RECOMMENDS "cmake, g++, libeigen3-dev, libboost-dev, libtinyobjloader-dev, libinih-dev, libevdev-dev, pkg-config")
 set(CPACK_DEBIAN_PACKAGE_CONTROL_EXTRA "${_pkg}/conffiles;${_pkg}/postinst")
 set(CPACK_DEBIAN_PACKAGE_CONTROL_STRICT_PERMISSION ON)
 set(CPACK_PACKAGING_INSTALL_PREFIX ${NUMEN_DEB_PREFIX})

@@ -88,6 +88,9 @@ std::vector<hal::CanFilter> controller_filters(const hal::DeviceConfig& config) 
       if (x.drive_tpdo_cob_id != 0) add_unique(out, x.drive_tpdo_cob_id);
       add_unique(out, hal::heartbeat_cob_id(x.node_id));
       add_unique(out, hal::emcy_cob_id(x.node_id));
+      // SDO responses: the node's configuration from its DCF, the in-loop reads.
+      if (x.dcf || config.canopen.sdo_poll_period_ms > 0)
+        add_unique(out, hal::sdo_response_cob_id(x.node_id));
     }
   }
   return out;

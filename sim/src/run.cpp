@@ -524,6 +524,7 @@ RunSummary SceneRunner::summary() const {
     s.startup = hal::to_string(st.phase);
     if (st.phase == hal::StartupPhase::kFailed)
       s.startup += " (node " + std::to_string(st.missing_node) + ")";
+    if (st.configuration_failed) s.startup += ": " + m->configuration_error();
     if (st.phase == hal::StartupPhase::kOperational || st.attempts > 1)
       s.periods_to_operational = static_cast<std::int64_t>(st.done_period);
     s.periods_to_active = loop_.first_active_period();
@@ -540,12 +541,23 @@ RunSummary SceneRunner::summary() const {
     }
     s.emcys = static_cast<std::int64_t>(m->emcy_log().counters().received);
     s.emcy_faults = static_cast<std::int64_t>(m->emcy_log().counters().faults);
+    s.configured_nodes = static_cast<std::int64_t>(m->counters().configurations);
+    if (const hal::SdoPoller* p = m->sdo_poller()) {
+      s.sdo_reads = static_cast<std::int64_t>(p->counters().completed);
+      s.sdo_read_errors = static_cast<std::int64_t>(p->counters().aborted + p->counters().timeouts);
+    }
     for (std::size_t i = 0; i < m->emcy_log().size(); ++i) {
       const hal::EmcyRecord& r = *m->emcy_log().at(i);
-      char line[160];
+      // A drive node's codes by the CiA 402 table (its device profile), others by CiA 301's.
+      std::uint16_t profile = 301;
+      for (std::size_t d = 0; d < m->num_drives(); ++d) {
+        const auto axis = static_cast<std::size_t>(m->drive_axis(d));
+        if (scene_->device.canopen.axes[axis].node_id == r.message.node_id) profile = 402;
+      }
+      char line[200];
       std::snprintf(line, sizeof line, "node %d at %.3f s: 0x%04X %s (register 0x%02X)",
                     r.message.node_id, static_cast<double>(r.timestamp_ns) * 1e-9,
-                    r.message.error_code, hal::describe_emcy_code(r.message.error_code),
+                    r.message.error_code, hal::describe_emcy_code(r.message.error_code, profile),
                     r.message.error_register);
       s.emcy_messages.push_back(line);
     }

@@ -147,6 +147,9 @@ constexpr RunSummarySegment kLayout[] = {
     {"; EMCY {emcys} ({emcy_faults} faults), heartbeat losses {heartbeat_losses}, zero-torque "
      "periods {zero_torque_periods}\n",
      set("managed")},
+    {"  SDO: {configured_nodes} node configuration(s) from DCFs; in-loop reads {sdo_reads}, "
+     "errors {sdo_read_errors}\n",
+     set("managed")},
     {"  re-arm: {rearm_requests} request(s), {rearms_accepted} accepted, first before period "
      "{rearm_first_period}\n",
      set("managed"), set("rearm_requests")},

@@ -10,6 +10,8 @@
 #include <filesystem>
 #include <iomanip>
 #include <limits>
+#include <map>
+#include <memory>
 #include <sstream>
 #include <stdexcept>
 
@@ -261,6 +263,53 @@ std::uint16_t parse_ms(const TomlTable& t, std::string_view key, std::uint16_t f
   return static_cast<std::uint16_t>(v);
 }
 
+/// A DCF error as the scene's error: located in the DCF (file, line, "[section] key"), naming
+/// the scene key that referenced the file.
+InputError dcf_input_error(const hal::DcfError& e, const std::string& scene_key) {
+  const hal::DcfLocation& l = e.location();
+  std::string key = l.section.empty() ? "" : "[" + l.section + "]";
+  if (!l.key.empty()) key += (key.empty() ? "" : " ") + l.key;
+  return InputError(l.file, l.line, 0, key, e.message() + " (the DCF of " + scene_key + ")");
+}
+
+/// `dcf` of [device.canopen] (every node) and of each [[device.canopen.axis]] (its node):
+/// read relative to the scene file, resolved for the node id, checked against the axis's
+/// COB-IDs, mappings and heartbeat (hal::check_dcfs). Axes of one node share the parsed file.
+void parse_dcfs(const TomlTable& c, const std::vector<TomlTable>& axes, hal::DeviceConfig& cfg) {
+  const std::filesystem::path dir = std::filesystem::path(c.file()).parent_path();
+  std::map<std::pair<std::string, int>, std::shared_ptr<const hal::Dcf>> parsed;
+  std::vector<std::string> keys(cfg.axes.size());
+  for (std::size_t i = 0; i < cfg.axes.size(); ++i) {
+    const TomlTable* t = i < axes.size() && axes[i].has("dcf") ? &axes[i] : c.has("dcf") ? &c : nullptr;
+    if (t == nullptr) continue;
+    keys[i] = t->key_path("dcf");
+    if (!cfg.canopen.managed)
+      t->fail("dcf", "a DCF configures a node of the managed stack: set managed = true or remove it");
+    std::filesystem::path file = t->string("dcf");
+    if (file.empty()) t->fail("dcf", "is empty: give the path of the node's DCF (CiA 306)");
+    if (file.is_relative()) file = dir / file;
+    if (!std::filesystem::is_regular_file(file)) t->fail("dcf", "DCF file not found: " + file.string());
+    hal::CanopenAxisConfig& x = cfg.canopen.axes[i];
+    auto& slot = parsed[{file.string(), x.node_id}];
+    try {
+      if (!slot) slot = std::make_shared<const hal::Dcf>(hal::parse_dcf_file(file.string(), x.node_id));
+    } catch (const hal::DcfError& e) {
+      throw dcf_input_error(e, keys[i]);
+    }
+    x.dcf = slot;
+  }
+  try {
+    hal::check_dcfs(cfg);
+  } catch (const hal::DcfError& e) {
+    std::string key;
+    for (std::size_t i = 0; i < keys.size() && key.empty(); ++i)
+      if (cfg.canopen.axes[i].dcf && cfg.canopen.axes[i].dcf->path == e.location().file) key = keys[i];
+    throw dcf_input_error(e, key);
+  } catch (const std::invalid_argument& e) {
+    c.fail_at(nullptr, c.path(), e.what());
+  }
+}
+
 /// [device.canopen] and its [[device.canopen.axis]] entries (docs/scenes.md).
 void parse_canopen(const TomlTable& dev, hal::DeviceConfig& cfg) {
   hal::CanopenConfig& co = cfg.canopen;
@@ -278,7 +327,7 @@ void parse_canopen(const TomlTable& dev, hal::DeviceConfig& cfg) {
   if (!c) return;
   c->allow_only({"managed", "controller_node_id", "controller_heartbeat_period",
                  "drive_heartbeat_timeout", "node_heartbeat_period", "heartbeat_timeout",
-                 "startup_timeout", "startup_retry", "axis"});
+                 "startup_timeout", "startup_retry", "sdo_timeout", "sdo_poll_period", "dcf", "axis"});
   co.managed = c->boolean_or("managed", co.managed);
   const auto ctrl = c->integer_or("controller_node_id", co.controller_node_id);
   if (ctrl < 1 || ctrl > 127) c->fail("controller_node_id", "must be a CANopen node id in [1, 127]");
@@ -287,12 +336,17 @@ void parse_canopen(const TomlTable& dev, hal::DeviceConfig& cfg) {
       parse_ms(*c, "controller_heartbeat_period", co.controller_heartbeat_period_ms);
   if (c->has("drive_heartbeat_timeout"))
     co.drive_heartbeat_timeout_ms = parse_ms(*c, "drive_heartbeat_timeout", 1);
-  const auto startup = c->integer_or("startup_timeout", co.startup_timeout_ms);
-  if (startup < 1 || startup > 600'000) c->fail("startup_timeout", "must be in [1, 600000] ms");
-  co.startup_timeout_ms = static_cast<std::uint32_t>(startup);
-  const auto retry = c->integer_or("startup_retry", co.startup_retry_ms);
-  if (retry < 1 || retry > 600'000) c->fail("startup_retry", "must be in [1, 600000] ms");
-  co.startup_retry_ms = static_cast<std::uint32_t>(retry);
+  // A time in ms within [lo, 600000] ("what" the message adds).
+  const auto ms_in = [&](const char* key, std::uint32_t fallback, std::int64_t lo, const char* what) {
+    const auto v = c->integer_or(key, fallback);
+    if (v < lo || v > 600'000)
+      c->fail(key, "must be in [" + std::to_string(lo) + ", 600000] ms" + what);
+    return static_cast<std::uint32_t>(v);
+  };
+  co.startup_timeout_ms = ms_in("startup_timeout", co.startup_timeout_ms, 1, "");
+  co.startup_retry_ms = ms_in("startup_retry", co.startup_retry_ms, 1, "");
+  co.sdo_timeout_ms = ms_in("sdo_timeout", co.sdo_timeout_ms, 1, "");
+  co.sdo_poll_period_ms = ms_in("sdo_poll_period", co.sdo_poll_period_ms, 0, " (0: no reads)");
   const std::uint16_t period = parse_ms(*c, "node_heartbeat_period", 10);
   const std::uint16_t timeout = c->has("heartbeat_timeout") ? parse_ms(*c, "heartbeat_timeout", 1) : 0;
   for (hal::CanopenAxisConfig& x : co.axes) {
@@ -307,7 +361,7 @@ void parse_canopen(const TomlTable& dev, hal::DeviceConfig& cfg) {
     const TomlTable& a = axes[i];
     hal::CanopenAxisConfig& x = co.axes[i];
     a.allow_only({"node_id", "heartbeat_period", "heartbeat_timeout", "drive_tpdo_cob_id",
-                  "encoder_tpdo", "drive_rpdo", "drive_tpdo"});
+                  "encoder_tpdo", "drive_rpdo", "drive_tpdo", "dcf"});
     const auto node = a.integer_or("node_id", x.node_id);
     if (node < 1 || node > 127) a.fail("node_id", "must be a CANopen node id in [1, 127]");
     x.node_id = static_cast<std::uint8_t>(node);
@@ -339,6 +393,7 @@ void parse_canopen(const TomlTable& dev, hal::DeviceConfig& cfg) {
     const std::string what = e.what();
     if (what.find("canopen") != std::string::npos) c->fail_at(nullptr, c->path(), what);
   }
+  parse_dcfs(*c, axes, cfg);
 }
 
 void parse_feedback(const TomlTable& dev, core::FeedbackGains& f) {

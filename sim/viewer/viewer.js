@@ -70,7 +70,7 @@ function decodeFrame(buf) {
 
 const LIFECYCLE = ['unconfigured', 'inactive', 'active', 'safe stop', 'fault'];
 const STARTUP = ['reset communication', 'wait boot-up', 'start nodes', 'wait operational',
-                 'operational', 'failed'];
+                 'operational', 'failed', 'configure'];
 const STEP = ['contact overflow', 'non-finite', 'solver not converged', 'invalid target'];
 const FLAGS = ['sample valid', 'torque', 'overrun', 'target ready', 'contacts truncated'];
 const bits = (x, names) => names.filter((_, i) => x & (1 << i)).join(', ') || '—';

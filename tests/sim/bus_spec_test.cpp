@@ -108,9 +108,10 @@ TEST(BusSpec, ManagedFiltersAreExactlyTheIdsEachEndReads) {
   // Controller: encoder TPDOs 0x181–0x185, drive TPDOs 0x281–0x283, heartbeats 0x701–0x705,
   // EMCY 0x081–0x085 (docs/protocol.md §9).
   const std::set<std::uint32_t> ctl = exact_ids(numen::sim::controller_filters(dev));
+  // The shipped scene configures its nodes from DCFs: their SDO responses 0x581–0x585 too.
   const std::set<std::uint32_t> want_ctl = {0x181, 0x182, 0x183, 0x184, 0x185, 0x281, 0x282, 0x283,
                                             0x701, 0x702, 0x703, 0x704, 0x705, 0x081, 0x082, 0x083,
-                                            0x084, 0x085};
+                                            0x084, 0x085, 0x581, 0x582, 0x583, 0x584, 0x585};
   EXPECT_EQ(ctl, want_ctl);
   // Device: SYNC, drive RPDOs 0x201–0x203, NMT, the controller's heartbeat (node 127), SDO
   // requests 0x601–0x605.

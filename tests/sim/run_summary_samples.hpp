@@ -92,6 +92,9 @@ inline sim::RunSummary full_managed_summary() {
   s.first_fault_period = 29;
   s.emcys = 30;
   s.emcy_faults = 31;
+  s.configured_nodes = 71;
+  s.sdo_reads = 72;
+  s.sdo_read_errors = 73;
   s.heartbeat_losses = 32;
   s.zero_torque_periods = 33;
   s.drive_states = {"yaw: operation enabled", "pitch: switch on disabled"};

@@ -73,6 +73,7 @@ TEST(RunSummaryText, PrintsTheValuesInTheirFormats) {
            "dropped 56, written 57, I/O errors 58\n",
            "  safety: 27 safe stop(s), 28 fault record(s); first: encoder timeout (id 2, value "
            "0.500) at 0.250 s, period 29; EMCY 30",
+           "  SDO: 71 node configuration(s) from DCFs; in-loop reads 72, errors 73\n",
            "  re-arm: 2 request(s), 1 accepted, first before period 59\n",
            "  drives: yaw: operation enabled, pitch: switch on disabled\n",
            "  nan detected: YES (non-finite steps 14)\n  realtime setup: SCHED_FIFO 80: ok\n",

@@ -156,18 +156,22 @@ TEST(RunDefaultScene, GodObjectStaysOnTheSurfaceWhileTheHandGoesThrough) {
   EXPECT_FALSE(s.nan_detected);
   EXPECT_EQ(s.nonfinite_steps, 0);
   EXPECT_EQ(s.rejected_samples, 0);
-  // The managed CANopen start-up: periods 0 (reset communication, boot-ups) and 1 (start
-  // remote node) have no encoder TPDO yet, so their samples are not valid; every later one is.
-  EXPECT_EQ(s.invalid_periods, 2);
+  // The managed CANopen start-up: period 0 (reset communication, boot-ups), periods 1–47 (every
+  // node configured from its DCF over SDO, one transfer per node and period: the drive nodes'
+  // 47) and period 48 (start remote node) have no encoder TPDO yet, so their samples are not
+  // valid; every later one is.
+  EXPECT_EQ(s.invalid_periods, 49);
+  EXPECT_EQ(s.configured_nodes, 5);
   EXPECT_EQ(s.bus_frames_corrupted, 0);
   EXPECT_EQ(s.bus_frames_dropped, 0);
-  // Lifecycle: operational and active at period 10 (first node heartbeats, 10 ms), torque
-  // from period 14 (CiA 402 shutdown → switch on → enable operation), no fault.
+  // Lifecycle: operational and active at period 50 (the first node heartbeats after the start,
+  // on their 10 ms grid), torque from period 54 (CiA 402 shutdown → switch on → enable
+  // operation), no fault.
   EXPECT_TRUE(s.managed);
   EXPECT_EQ(s.startup, "operational");
-  EXPECT_EQ(s.periods_to_operational, 10);
-  EXPECT_EQ(s.periods_to_active, 10);
-  EXPECT_GE(s.periods_to_torque, 14);
+  EXPECT_EQ(s.periods_to_operational, 50);
+  EXPECT_EQ(s.periods_to_active, 50);
+  EXPECT_GE(s.periods_to_torque, 54);
   EXPECT_EQ(s.lifecycle, "active");
   EXPECT_EQ(s.faults, 0);
   EXPECT_EQ(s.fault_records, 0);
@@ -231,8 +235,8 @@ TEST(RunDefaultScene, StiffContactsOfOneTeraNewtonPerMetreStayFiniteAndOutside) 
   EXPECT_LT(s.joint_drift_max_mm, 0.05);
 }
 
-// Issue 22: an EMCY reaches the summary with its node, time, code and CiA 301 name (text and
-// --json: the figure emcy_messages).
+// Issue 22: an EMCY reaches the summary with its node, time, code and name — a drive's by the
+// CiA 402 table — (text and --json: the figure emcy_messages).
 TEST(RunDefaultScene, AnInjectedDriveFaultIsReportedByItsEmcyName) {
   NUMEN_REQUIRE_ARTICULATION();
   const Scene& scene = default_scene();
@@ -249,7 +253,7 @@ TEST(RunDefaultScene, AnInjectedDriveFaultIsReportedByItsEmcyName) {
   const std::string& m = s.emcy_messages.front();
   EXPECT_EQ(m.rfind("node 3 at 0.30", 0), 0u) << m;  // depth's drive, node 3, at period 300
   EXPECT_NE(m.find("0x4310 "), std::string::npos) << m;
-  EXPECT_NE(m.find(numen::hal::describe_emcy_code(0x4310)), std::string::npos) << m;
+  EXPECT_NE(m.find("0x4310 drive temperature too high (register"), std::string::npos) << m;
   EXPECT_NE(numen::sim::format_summary(s).find("  EMCY: " + m), std::string::npos);
   EXPECT_NE(numen::sim::format_summary_json(s).find("emcy_messages"), std::string::npos);
 }
@@ -942,9 +946,10 @@ TEST(RunBusLog, RecordedRunReplaysBitIdentically) {
   }
   const RunSummary s = runner.summary();
   EXPECT_GT(s.bus_frames_replayed, kPeriods);
-  EXPECT_EQ(s.invalid_periods, 2);  // the two start-up periods, as in the recorded run
-  // The replayed heartbeats and drive TPDOs take the controller through the same start-up.
-  EXPECT_EQ(s.periods_to_active, 10);
+  EXPECT_EQ(s.invalid_periods, 49);  // the start-up periods, as in the recorded run
+  // The replayed heartbeats, SDO responses and drive TPDOs take the controller through the
+  // same start-up, its configuration included.
+  EXPECT_EQ(s.periods_to_active, 50);
   EXPECT_EQ(s.lifecycle, "active");
   ASSERT_EQ(recorded.size(), replayed.size());
   for (int k = 0; k < kPeriods; ++k) {

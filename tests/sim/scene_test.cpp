@@ -1019,6 +1019,108 @@ node_id = 9
   EXPECT_NE(std::string(e4.what()).find("manged"), std::string::npos);
 }
 
+std::string shipped_dcf_text(const char* name) {
+  std::ifstream in(std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/devices/" + name);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+TEST(SceneCanopen, DcfsAreReadPerNodeRelativeToTheScene) {
+  TempDir dir;
+  const std::string dcf = shipped_dcf_text("encoder.dcf");
+  dir.write("enc.dcf", dcf);
+  const std::string text = replace(kMini, "attach = \"tool\"\n", R"(attach = "tool"
+
+[device.canopen]
+dcf = "enc.dcf"
+sdo_timeout = 50
+sdo_poll_period = 100
+)");
+  const Scene s = load_scene(dir.write("dcf.toml", text));
+  EXPECT_EQ(s.device.canopen.sdo_timeout_ms, 50u);
+  EXPECT_EQ(s.device.canopen.sdo_poll_period_ms, 100u);
+  for (std::size_t i = 0; i < 6; ++i) {
+    const numen::hal::CanopenAxisConfig& x = s.device.canopen.axes[i];
+    ASSERT_NE(x.dcf, nullptr);
+    EXPECT_EQ(x.dcf->resolved_node_id, x.node_id);
+    EXPECT_EQ(x.dcf->find({0x1800, 1})->value, 0x180u + x.node_id);  // $NODEID resolved per node
+    EXPECT_EQ(x.dcf->path, (dir.path() / "enc.dcf").string());
+  }
+  // One axis's own DCF wins over the device's.
+  const std::string own = replace(text, "sdo_poll_period = 100\n", "sdo_poll_period = 100\n" R"(
+[[device.canopen.axis]]
+dcf = "enc.dcf"
+[[device.canopen.axis]]
+[[device.canopen.axis]]
+[[device.canopen.axis]]
+[[device.canopen.axis]]
+[[device.canopen.axis]]
+node_id = 9
+)");
+  EXPECT_EQ(load_scene(dir.write("own.toml", own)).device.canopen.axes[5].dcf->find({0x1800, 1})->value, 0x189u);
+}
+
+TEST(SceneCanopen, DcfErrorsAreLocatedInTheSceneOrInTheDcf) {
+  TempDir dir;
+  const std::string dcf = shipped_dcf_text("encoder.dcf");
+  const std::string scene = replace(kMini, "attach = \"tool\"\n", "attach = \"tool\"\n\n[device.canopen]\ndcf = \"enc.dcf\"\n");
+  // No such file: at the scene's key.
+  const InputError missing = load_error(dir, scene, "missing.toml");
+  expect_located(missing, (dir.path() / "missing.toml").string(), line_of(scene, "dcf = "),
+                 column_of(scene, "dcf = ", "\"enc.dcf\""), "device.canopen.dcf", "DCF file not found");
+  // A malformed DCF: at its line, section and key, naming the scene key.
+  const std::string bad = replace(dcf, "AccessType=rw\nDefaultValue=10", "AccessType=rx\nDefaultValue=10");
+  dir.write("enc.dcf", bad);
+  const InputError e = load_error(dir, scene, "bad.toml");
+  EXPECT_EQ(e.file(), (dir.path() / "enc.dcf").string());
+  EXPECT_EQ(e.line(), line_of(bad, "AccessType=rx"));
+  EXPECT_EQ(e.key(), "[1017] AccessType");
+  EXPECT_NE(std::string(e.what()).find("is not ro, wo, rw, rwr, rww or const (the DCF of device.canopen.dcf)"),
+            std::string::npos);
+  // A DCF that disagrees with the scene: the heartbeat, at the DCF's value.
+  dir.write("enc.dcf", dcf);
+  const std::string hb = replace(scene, "dcf = \"enc.dcf\"\n", "dcf = \"enc.dcf\"\nnode_heartbeat_period = 20\n");
+  const InputError e2 = load_error(dir, hb, "hb.toml");
+  EXPECT_EQ(e2.line(), line_of(dcf, "ParameterValue=10"));
+  EXPECT_EQ(e2.key(), "[1017] ParameterValue");
+  EXPECT_NE(std::string(e2.what()).find("producer heartbeat time 10 ms, the axis 'x' node's heartbeat_period is 20 ms"),
+            std::string::npos) << e2.what();
+  // A COB-ID the DCF does not configure: at the file.
+  const std::string cob = replace(dcf, "ParameterValue=$NODEID+0x180", "ParameterValue=$NODEID+0x190");
+  dir.write("enc.dcf", cob);
+  const InputError e3 = load_error(dir, scene, "cob.toml");
+  EXPECT_EQ(e3.line(), 0);
+  EXPECT_NE(std::string(e3.what()).find("no enabled TPDO with COB-ID 0x181 (the encoder TPDO of axis 'x')"),
+            std::string::npos) << e3.what();
+  // Only the managed stack is configured.
+  dir.write("enc.dcf", dcf);
+  const InputError e4 = load_error(dir, replace(scene, "[device.canopen]\n", "[device.canopen]\nmanaged = false\n"), "minimal.toml");
+  EXPECT_NE(std::string(e4.what()).find("set managed = true"), std::string::npos);
+}
+
+TEST(SceneCanopen, ShippedScenesConfigureEveryNodeFromItsDcf) {
+  const std::string dir = std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/";
+  for (const char* name : {"construction.toml"}) {  // mouse.toml: needs libevdev for its codes
+    SCOPED_TRACE(name);
+    const Scene s = load_scene(dir + name);
+    for (const numen::hal::CanopenAxisConfig& x : s.device.canopen.axes) {
+      ASSERT_NE(x.dcf, nullptr);
+      EXPECT_NE(x.dcf->path.find("devices/encoder.dcf"), std::string::npos);
+    }
+  }
+  if (!numen::core::kWithArticulation) GTEST_SKIP() << "the trocar and arm scenes have joints: NUMEN_WITH_ARTICULATION=OFF";
+  for (const char* name : {"default.toml", "phantom.toml"}) {
+    SCOPED_TRACE(name);
+    const Scene s = load_scene(dir + name);
+    for (std::size_t i = 0; i < s.device.axes.size(); ++i) {
+      const numen::hal::CanopenAxisConfig& x = s.device.canopen.axes[i];
+      ASSERT_NE(x.dcf, nullptr);
+      EXPECT_EQ(x.dcf->find({0x1400, 1}) != nullptr, s.device.axes[i].has_drive());
+    }
+  }
+}
+
 TEST(Scene, APartThisBuildLeftOutIsRefusedByName) {
   // default.toml has [[joint]] tables, deformable.toml [[deformable]] ones.
   const std::string dir = std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/";

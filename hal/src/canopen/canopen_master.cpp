@@ -4,10 +4,12 @@
 
 #include "numen/hal/canopen/canopen_master.hpp"
 
+#include <algorithm>
 #include <stdexcept>
 #include <string>
 
 #include "numen/hal/canopen/canopen.hpp"
+#include "numen/hal/canopen/sdo.hpp"
 
 namespace numen::hal {
 namespace {
@@ -33,6 +35,8 @@ const char* to_string(StartupPhase phase) noexcept {
       return "operational";
     case StartupPhase::kFailed:
       return "failed";
+    case StartupPhase::kConfigure:
+      return "configure";
   }
   return "unknown";
 }
@@ -57,7 +61,12 @@ CanopenMaster::CanopenMaster(const DeviceConfig& config, std::int64_t period_ns,
     const CanopenAxisConfig& x = co.axes[i];
     const AxisConfig& a = config.axes[i];
     if (node_index(x.node_id) < 0) {
-      node_ids_[num_nodes_++] = x.node_id;
+      node_ids_[num_nodes_] = x.node_id;
+      if (x.dcf) {
+        nodes_[num_nodes_].configurator = static_cast<int>(plans_.size());
+        plans_.push_back(std::make_unique<DcfConfiguration>(x.dcf));
+      }
+      ++num_nodes_;
       monitor_.add(x.node_id, ms_to_ns(x.effective_heartbeat_timeout_ms()));
     }
     if (!a.has_drive()) continue;
@@ -83,6 +92,22 @@ CanopenMaster::CanopenMaster(const DeviceConfig& config, std::int64_t period_ns,
     d.actual_index = find_mapped(d.tpdo.entries(), PdoObject::kTorqueActualValue);
     drives_.push_back(std::move(d));
   }
+  configurators_.reserve(plans_.size());
+  for (std::size_t j = 0; j < num_nodes_; ++j) {
+    if (nodes_[j].configurator >= 0) {
+      configurators_.emplace_back(*plans_[static_cast<std::size_t>(nodes_[j].configurator)],
+                                  node_ids_[j], ms_to_ns(co.sdo_timeout_ms));
+    }
+  }
+  if (co.sdo_poll_period_ms > 0) {
+    // Every node's error register, every drive's statusword, at the period nearest the rate.
+    const auto every = static_cast<std::uint32_t>(std::max<std::int64_t>(
+        1, (ms_to_ns(co.sdo_poll_period_ms) + period_ns / 2) / period_ns));
+    std::vector<PeriodicRead> reads;
+    for (std::size_t j = 0; j < num_nodes_; ++j) reads.push_back({node_ids_[j], {0x1001, 0}, every});
+    for (const Drive& d : drives_) reads.push_back({co.axes[static_cast<std::size_t>(d.axis)].node_id, {0x6041, 0}, every});
+    poller_ = std::make_unique<SdoPoller>(reads, ms_to_ns(co.sdo_timeout_ms));
+  }
   restart_startup();
   startup_.attempts = 0;
 }
@@ -97,7 +122,60 @@ int CanopenMaster::node_index(std::uint8_t node_id) const noexcept {
 void CanopenMaster::restart_startup() noexcept {
   startup_.phase = StartupPhase::kResetCommunication;
   startup_.missing_node = 0;
-  for (std::size_t j = 0; j < num_nodes_; ++j) nodes_[j] = NodeState{};
+  startup_.configuration_failed = false;
+  startup_.configure_ns = 0;
+  for (std::size_t j = 0; j < num_nodes_; ++j) {
+    const int c = nodes_[j].configurator;
+    nodes_[j] = NodeState{};
+    nodes_[j].configurator = c;
+  }
+}
+
+const NodeConfigurator* CanopenMaster::configurator(std::uint8_t node_id) const noexcept {
+  const int j = node_index(node_id);
+  if (j < 0 || nodes_[static_cast<std::size_t>(j)].configurator < 0) return nullptr;
+  return &configurators_[static_cast<std::size_t>(nodes_[static_cast<std::size_t>(j)].configurator)];
+}
+
+std::string CanopenMaster::configuration_error() const {
+  for (const NodeConfigurator& c : configurators_) {
+    if (c.status() == ConfigurationStatus::kFailed) return c.error();
+  }
+  return {};
+}
+
+void CanopenMaster::enter_configure(std::int64_t now_ns) noexcept {
+  startup_.phase = StartupPhase::kConfigure;
+  configure_began_ns_ = now_ns;
+  for (NodeConfigurator& c : configurators_) c.start(now_ns);
+  for (std::size_t j = 0; j < num_nodes_; ++j) nodes_[j].reconfigure = false;
+}
+
+void CanopenMaster::update_configure(std::int64_t now_ns) noexcept {
+  bool all_done = true;
+  for (std::size_t j = 0; j < num_nodes_; ++j) {
+    NodeState& n = nodes_[j];
+    if (n.configurator < 0) continue;
+    NodeConfigurator& c = configurators_[static_cast<std::size_t>(n.configurator)];
+    if (n.reconfigure) {  // it booted again: its communication objects are back to defaults
+      n.reconfigure = false;
+      c.start(now_ns);
+    }
+    const bool was_done = c.status() == ConfigurationStatus::kDone;
+    c.poll(now_ns);
+    if (c.status() == ConfigurationStatus::kFailed) {
+      startup_.configuration_failed = true;
+      startup_.configure_ns += now_ns - configure_began_ns_;
+      finish(StartupPhase::kFailed, node_ids_[j], now_ns);
+      return;
+    }
+    if (c.status() == ConfigurationStatus::kDone && !was_done) ++counters_.configurations;
+    all_done = all_done && c.status() == ConfigurationStatus::kDone;
+  }
+  if (all_done) {
+    startup_.configure_ns += now_ns - configure_began_ns_;
+    startup_.phase = StartupPhase::kStartNodes;
+  }
 }
 
 IoStatus CanopenMaster::send(const CanFrame& frame, Bus& bus, std::uint64_t* sent) noexcept {
@@ -157,7 +235,15 @@ IoStatus CanopenMaster::begin_period(std::int64_t now_ns, Bus& bus) noexcept {
         ++counters_.nmt_retries;
       }
       break;
+    case StartupPhase::kConfigure:
+      for (NodeConfigurator& c : configurators_) {
+        CanFrame f;
+        while (c.take_request(f, now_ns)) status = worst(status, send(f, bus, &counters_.sdo_requests));
+      }
+      break;
     case StartupPhase::kOperational:
+      if (poller_) poller_->begin_period(now_ns, bus);
+      break;
     case StartupPhase::kFailed:
       break;
   }
@@ -193,6 +279,15 @@ bool CanopenMaster::on_frame(const CanFrame& frame) noexcept {
   }
   // Error reports and 29-bit frames are no CANopen traffic of ours (can_frame.hpp).
   if (!is_standard_frame(frame)) return false;
+  if (frame.id > kSdoResponseBaseCobId && frame.id <= kSdoResponseBaseCobId + kMaxNodeId) {
+    for (NodeConfigurator& c : configurators_) {
+      if (c.on_frame(frame)) {
+        ++counters_.sdo_responses;
+        return true;
+      }
+    }
+    return poller_ != nullptr && poller_->on_frame(frame);
+  }
   if (frame.id > kHeartbeatBaseCobId && frame.id <= kHeartbeatBaseCobId + kMaxNodeId) {
     const int j = node_index(static_cast<std::uint8_t>(frame.id - kHeartbeatBaseCobId));
     if (j < 0) {
@@ -217,7 +312,20 @@ bool CanopenMaster::on_frame(const CanFrame& frame) noexcept {
       // A second boot-up while the nodes boot: the answer to a repeated reset (the first
       // answer was late, e.g. a slow device process). Expected, not a reset fault.
       monitor_.expect_boot_up(node);
-    } else if (boot_up && (startup_.phase == StartupPhase::kStartNodes ||
+    } else if (boot_up && n.configurator >= 0 &&
+               (startup_.phase == StartupPhase::kConfigure ||
+                startup_.phase == StartupPhase::kStartNodes ||
+                startup_.phase == StartupPhase::kWaitOperational)) {
+      // A configured node reset again: its communication objects are back to their defaults
+      // (CiA 301 reset communication), so it is configured again before it is started.
+      n.reconfigure = true;
+      if (startup_.phase != StartupPhase::kConfigure) {
+        startup_.phase = StartupPhase::kConfigure;
+        configure_began_ns_ = frame.timestamp_ns;
+      }
+      monitor_.expect_boot_up(node);
+    } else if (boot_up && (startup_.phase == StartupPhase::kConfigure ||
+                          startup_.phase == StartupPhase::kStartNodes ||
                           startup_.phase == StartupPhase::kWaitOperational)) {
       // It reset again while being started: start it again. The start-up handles it, so
       // the consumer does not report it as a fault.
@@ -252,13 +360,17 @@ bool CanopenMaster::all_nodes_operational() const noexcept {
 
 void CanopenMaster::update(std::int64_t now_ns) noexcept {
   monitor_.poll(now_ns);
-  const bool timed_out = now_ns - startup_.began_ns >= timeout_ns_;
-  if (startup_.phase == StartupPhase::kWaitBootUp) {
+  const bool timed_out = now_ns - startup_.began_ns - startup_.configure_ns >= timeout_ns_;
+  if (startup_.phase == StartupPhase::kConfigure) {
+    update_configure(now_ns);
+  } else if (startup_.phase == StartupPhase::kWaitBootUp) {
     std::uint8_t missing = 0;
     for (std::size_t j = 0; j < num_nodes_ && missing == 0; ++j) {
       if (!nodes_[j].booted) missing = node_ids_[j];
     }
-    if (missing == 0) {
+    if (missing == 0 && !configurators_.empty()) {
+      enter_configure(now_ns);
+    } else if (missing == 0) {
       startup_.phase = StartupPhase::kStartNodes;
     } else if (timed_out) {
       finish(StartupPhase::kFailed, missing, now_ns);
@@ -278,6 +390,7 @@ void CanopenMaster::update(std::int64_t now_ns) noexcept {
       finish(StartupPhase::kFailed, missing, now_ns);
     }
   }
+  if (poller_ && startup_.phase == StartupPhase::kOperational) poller_->update(now_ns);
   for (std::size_t i = 0; i < drives_.size(); ++i) {
     outputs_[i] = drives_[i].master.update(drives_[i].statusword);
   }

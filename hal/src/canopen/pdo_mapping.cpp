@@ -48,42 +48,77 @@ PdoMapping::PdoMapping(std::initializer_list<PdoEntry> entries, std::string_view
     : PdoMapping(std::span<const PdoEntry>(entries.begin(), entries.size()), name) {}
 
 PdoMapping::PdoMapping(std::span<const PdoEntry> entries, std::string_view name) {
+  const MappingProblem p = assign(entries);
+  if (p.kind == MappingProblem::kNone) return;
+  const std::size_t pos = p.entry + 1;  // mapping parameter sub-index
+  switch (p.kind) {
+    case MappingProblem::kEmpty:
+      throw std::invalid_argument("PDO mapping '" + std::string(name) +
+                                  "': no mapped objects (at least 1 needed)");
+    case MappingProblem::kTooMany:
+      throw std::invalid_argument(where(name, kMaxPdoEntries + 1, entries[kMaxPdoEntries]) +
+                                  ": more than " + std::to_string(kMaxPdoEntries) +
+                                  " mapped objects (" + std::to_string(entries.size()) + ")");
+    case MappingProblem::kZeroIndex:
+      throw std::invalid_argument(where(name, pos, entries[p.entry]) + ": index 0 is not an object");
+    case MappingProblem::kBitLength:
+      throw std::invalid_argument(where(name, pos, entries[p.entry]) + ": bit length " +
+                                  std::to_string(entries[p.entry].bit_length) +
+                                  " is not 8, 16 or 32");
+    case MappingProblem::kDuplicate:
+      throw std::invalid_argument(where(name, pos, entries[p.entry]) +
+                                  ": object already mapped as entry " + std::to_string(p.other + 1));
+    case MappingProblem::kTooLong:
+      throw std::invalid_argument(where(name, pos, entries[p.entry]) + ": mapping reaches " +
+                                  std::to_string(p.bits) + " bits, more than " +
+                                  std::to_string(kMaxPdoBits) + " (one classic CAN frame)");
+    case MappingProblem::kNone:
+      break;
+  }
+}
+
+MappingProblem PdoMapping::assign(std::span<const PdoEntry> entries) noexcept {
+  MappingProblem p;
   if (entries.empty()) {
-    throw std::invalid_argument("PDO mapping '" + std::string(name) +
-                                "': no mapped objects (at least 1 needed)");
+    p.kind = MappingProblem::kEmpty;
+    return p;
   }
   if (entries.size() > kMaxPdoEntries) {
-    throw std::invalid_argument(where(name, kMaxPdoEntries + 1, entries[kMaxPdoEntries]) +
-                                ": more than " + std::to_string(kMaxPdoEntries) +
-                                " mapped objects (" + std::to_string(entries.size()) + ")");
+    p.kind = MappingProblem::kTooMany;
+    p.entry = kMaxPdoEntries;
+    return p;
   }
   unsigned bits = 0;
   for (std::size_t i = 0; i < entries.size(); ++i) {
     const PdoEntry& e = entries[i];
-    const std::size_t pos = i + 1;  // mapping parameter sub-index
-    if (e.index == 0)
-      throw std::invalid_argument(where(name, pos, e) + ": index 0 is not an object");
-    if (e.bit_length != 8 && e.bit_length != 16 && e.bit_length != 32) {
-      throw std::invalid_argument(where(name, pos, e) + ": bit length " +
-                                  std::to_string(e.bit_length) + " is not 8, 16 or 32");
-    }
-    for (std::size_t j = 0; j < i; ++j) {
+    p.entry = i;
+    if (e.index == 0) p.kind = MappingProblem::kZeroIndex;
+    else if (e.bit_length != 8 && e.bit_length != 16 && e.bit_length != 32) p.kind = MappingProblem::kBitLength;
+    for (std::size_t j = 0; j < i && p.kind == MappingProblem::kNone; ++j) {
       if (same_object(entries[j], e)) {
-        throw std::invalid_argument(where(name, pos, e) + ": object already mapped as entry " +
-                                    std::to_string(j + 1));
+        p.kind = MappingProblem::kDuplicate;
+        p.other = j;
       }
     }
-    if (bits + e.bit_length > kMaxPdoBits) {
-      throw std::invalid_argument(where(name, pos, e) + ": mapping reaches " +
-                                  std::to_string(bits + e.bit_length) + " bits, more than " +
-                                  std::to_string(kMaxPdoBits) + " (one classic CAN frame)");
+    if (p.kind == MappingProblem::kNone && bits + e.bit_length > kMaxPdoBits) {
+      p.kind = MappingProblem::kTooLong;
+      p.bits = bits + e.bit_length;
     }
+    if (p.kind != MappingProblem::kNone) return p;
     entries_[i] = e;
     offsets_[i] = static_cast<std::uint8_t>(bits / 8);
     bits += e.bit_length;
   }
   size_ = entries.size();
   length_ = static_cast<std::uint8_t>(bits / 8);
+  return p;
+}
+
+MappingProblem PdoMapping::try_assign(std::span<const PdoEntry> entries) noexcept {
+  PdoMapping m;
+  const MappingProblem p = m.assign(entries);
+  if (p.kind == MappingProblem::kNone) *this = m;
+  return p;
 }
 
 std::array<std::uint32_t, kMaxPdoEntries> PdoMapping::mapping_parameter() const noexcept {

@@ -131,6 +131,7 @@ void validate_canopen(const DeviceConfig& c) {
   if (co.startup_timeout_ms < 1)
     throw std::invalid_argument(dev + ".startup_timeout_ms must be >= 1");
   if (co.startup_retry_ms < 1) throw std::invalid_argument(dev + ".startup_retry_ms must be >= 1");
+  if (co.sdo_timeout_ms < 1) throw std::invalid_argument(dev + ".sdo_timeout_ms must be >= 1");
   std::vector<std::uint32_t> ids;  // every PDO COB-ID, to find duplicates
   std::vector<std::string> owners;
   for (std::size_t i = 0; i < co.axes.size(); ++i) {

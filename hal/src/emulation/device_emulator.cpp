@@ -10,6 +10,7 @@
 #include <utility>
 
 #include "numen/hal/canopen/canopen.hpp"
+#include "node_dictionary.hpp"
 
 namespace numen::hal {
 namespace {
@@ -86,21 +87,29 @@ DeviceEmulator::DeviceEmulator(DeviceConfig config) : config_(std::move(config))
       nodes_[node].controller = HeartbeatConsumer(co.controller_node_id, controller_timeout_ns);
     }
     node_of_axis_[k] = node;
-    encoder_maps_.emplace_back(
-        std::span<const PdoEntry>(x.encoder_tpdo.data(), x.encoder_tpdo.size()), "encoder TPDO");
+    encoder_pdos_.push_back(PdoSlot{
+        node, 0, a.encoder_cob_id, true,
+        PdoMapping(std::span<const PdoEntry>(x.encoder_tpdo.data(), x.encoder_tpdo.size()),
+                   "encoder TPDO")});
     if (a.has_drive()) {
       drive_of_axis_[k] = static_cast<int>(drives_.size());
-      drives_.push_back(
-          Drive{i, node, Cia402Drive(drive_settings(a)),
-                PdoMapping(std::span<const PdoEntry>(x.drive_rpdo.data(), x.drive_rpdo.size()),
-                           "drive RPDO"),
-                PdoMapping(std::span<const PdoEntry>(x.drive_tpdo.data(), x.drive_tpdo.size()),
-                           "drive TPDO"),
-                0, 0, PowerState::kNotReadyToSwitchOn});
+      std::size_t m = 0;
+      for (const Drive& d : drives_) m += d.node == node ? 1 : 0;
+      drives_.push_back(Drive{
+          i, node, m, Cia402Drive(drive_settings(a)),
+          PdoSlot{node, 0, a.drive_cob_id, true,
+                  PdoMapping(std::span<const PdoEntry>(x.drive_rpdo.data(), x.drive_rpdo.size()),
+                             "drive RPDO")},
+          PdoSlot{node, 0, x.drive_tpdo_cob_id, true,
+                  PdoMapping(std::span<const PdoEntry>(x.drive_tpdo.data(), x.drive_tpdo.size()),
+                             "drive TPDO")},
+          0, 0, PowerState::kNotReadyToSwitchOn});
     }
   }
-  // Each node's object dictionary (CiA 301 mandatory and identity objects), served over SDO.
-  for (Node& node : nodes_) {
+  // Each node's object dictionary (CiA 301 identity and communication objects, its PDOs, its
+  // drives' objects), served over SDO.
+  for (std::size_t j = 0; j < nodes_.size(); ++j) {
+    Node& node = nodes_[j];
     const std::uint8_t id = node.nmt.node_id();
     bool has_drive = false;
     std::string axes;
@@ -121,13 +130,93 @@ DeviceEmulator::DeviceEmulator(DeviceConfig config) : config_(std::move(config))
                              " (" + config_.name + ": " + axes + ")";
     od.add_string({0x1008, 0}, OdAccess::kReadOnly, name, name.size());
     od.add_string({0x100A, 0}, OdAccess::kReadOnly, "numen device emulator", 21);
-    od.add_unsigned({0x1017, 0}, OdAccess::kReadOnly, heartbeat_ms, 2);
+    emulation::add_communication(
+        od, heartbeat_ms, node.controller.node_id(),
+        static_cast<std::uint16_t>(std::min<std::uint32_t>(co.effective_drive_heartbeat_timeout_ms(), 0xFFFF)));
     od.add_unsigned({0x1018, 0}, OdAccess::kReadOnly, 4, 1);
     od.add_unsigned({0x1018, 1}, OdAccess::kReadOnly, kEmulatorVendorId, 4);
     od.add_unsigned({0x1018, 2}, OdAccess::kReadOnly, has_drive ? 0x402u : 0x406u, 4);
     od.add_unsigned({0x1018, 3}, OdAccess::kReadOnly, 0x00010000u, 4);
     od.add_unsigned({0x1018, 4}, OdAccess::kReadOnly, id, 4);
+    std::uint16_t tpdo = 0x1800;
+    std::uint16_t rpdo = 0x1400;
+    for (int i = 0; i < n_; ++i) {
+      const auto k = static_cast<std::size_t>(i);
+      if (node_of_axis_[k] != j) continue;
+      PdoSlot& enc = encoder_pdos_[k];
+      enc.comm = tpdo++;
+      emulation::add_pdo(od, enc.comm, enc.cob_id, enc.mapping);
+      if (Drive* d = drive_of(i)) {
+        d->tpdo.comm = tpdo++;
+        emulation::add_pdo(od, d->tpdo.comm, d->tpdo.cob_id, d->tpdo.mapping);
+        d->rpdo.comm = rpdo++;
+        emulation::add_pdo(od, d->rpdo.comm, d->rpdo.cob_id, d->rpdo.mapping);
+      }
+    }
+    emulation::add_position(od);
+    for (const Drive& d : drives_) {
+      if (d.node == j) {
+        emulation::add_drive(od, d.m, d.drive.settings().modes_of_operation,
+                             d.drive.settings().max_torque_per_mille);
+      }
+    }
+    od.save_defaults();
     node.sdo = std::make_unique<NodeSdo>(id, std::move(od));
+  }
+  update_process_values();
+}
+
+void DeviceEmulator::apply_dictionary(std::size_t j) noexcept {
+  Node& node = nodes_[j];
+  const ObjectDictionary& od = node.sdo->dictionary;
+  std::uint32_t v = 0;
+  if (od.read_unsigned({0x1017, 0}, v)) (void)node.producer.set_period(heartbeat_ms_to_ns(v));
+  if (node.controller.node_id() != 0 || od.find({0x1016, 1}) != nullptr) {
+    if (od.read_unsigned({0x1016, 1}, v)) {
+      const auto id = static_cast<std::uint8_t>(v >> 16);
+      const std::int64_t ns = static_cast<std::int64_t>(v & 0xFFFFu) * 1'000'000;
+      if (v == 0) {
+        node.controller = HeartbeatConsumer();
+        node.losses_seen = 0;
+      } else if (id != node.controller.node_id() || ns != node.controller.timeout_ns()) {
+        node.controller = HeartbeatConsumer(id, ns);  // the rules let only valid values in
+        node.losses_seen = 0;
+      }
+    }
+  }
+  for (PdoSlot& p : encoder_pdos_) {
+    if (p.node == j) emulation::read_pdo(od, p.comm, p.cob_id, p.enabled, p.mapping);
+  }
+  for (Drive& d : drives_) {
+    if (d.node != j) continue;
+    emulation::read_pdo(od, d.tpdo.comm, d.tpdo.cob_id, d.tpdo.enabled, d.tpdo.mapping);
+    emulation::read_pdo(od, d.rpdo.comm, d.rpdo.cob_id, d.rpdo.enabled, d.rpdo.mapping);
+    if (od.read_unsigned({emulation::drive_object(0x6060, d.m), 0}, v))
+      d.drive.set_modes_of_operation(static_cast<std::int8_t>(v));
+    if (od.read_unsigned({emulation::drive_object(0x6072, d.m), 0}, v))
+      (void)d.drive.set_max_torque_per_mille(static_cast<std::int32_t>(v));
+  }
+}
+
+void DeviceEmulator::update_process_values() noexcept {
+  for (std::size_t j = 0; j < nodes_.size(); ++j) {
+    ObjectDictionary& od = nodes_[j].sdo->dictionary;
+    for (int i = n_ - 1; i >= 0; --i) {  // a node of several axes shows its first one
+      const auto k = static_cast<std::size_t>(i);
+      if (node_of_axis_[k] != j) continue;
+      (void)od.set_unsigned({0x6004, 0}, static_cast<std::uint32_t>(counts_[k]));
+      (void)od.set_unsigned({0x6064, 0}, static_cast<std::uint32_t>(counts_[k]));
+    }
+  }
+  for (const Drive& d : drives_) {
+    ObjectDictionary& od = nodes_[d.node].sdo->dictionary;
+    (void)od.set_unsigned({emulation::drive_object(0x6041, d.m), 0}, d.drive.statusword());
+    (void)od.set_unsigned({emulation::drive_object(0x6061, d.m), 0},
+                          static_cast<std::uint8_t>(d.drive.modes_of_operation_display()));
+    (void)od.set_unsigned({emulation::drive_object(0x6077, d.m), 0},
+                          static_cast<std::uint16_t>(d.drive.applied_torque_per_mille()));
+    (void)od.set_unsigned({emulation::drive_object(0x6040, d.m), 0}, d.controlword);
+    (void)od.set_unsigned({emulation::drive_object(0x6071, d.m), 0}, static_cast<std::uint16_t>(d.target));
   }
 }
 
@@ -247,6 +336,13 @@ void DeviceEmulator::on_nmt(const CanFrame& frame) noexcept {
         queue_emcy(j, kEmcyCommunication, register_for(kEmcyCommunication));
       }
     }
+    if (after == NmtState::kBootUp && node.sdo) {
+      // CiA 301: reset communication restores the communication objects (0x1000–0x1FFF) to
+      // their power-on values, reset node every object; what a DCF configured is gone.
+      const bool all = node.nmt.last_reset() == NmtReset::kNode;
+      node.sdo->dictionary.restore_defaults(0x1000, all ? 0xFFFF : 0x1FFF);
+      apply_dictionary(j);
+    }
     if (after == NmtState::kBootUp) node.losses_seen = node.controller.counters().losses;
   }
   if (malformed) ++counters_.frames_malformed;
@@ -260,12 +356,14 @@ void DeviceEmulator::on_sync_managed(const CanFrame& frame, Bus& port) noexcept 
     d.drive.step(d.controlword, d.target);
     update_torque(d);
   }
+  update_process_values();
   if (!responding_) ++counters_.syncs_ignored;
   for (int i = 0; i < n_; ++i) {
     const auto k = static_cast<std::size_t>(i);
     const Node& node = nodes_[node_of_axis_[k]];
-    if (!node.nmt.allows(CommObject::kPdo) || !responding_ || silent_[k]) continue;
-    const PdoMapping& m = encoder_maps_[k];
+    const PdoSlot& slot = encoder_pdos_[k];
+    if (!node.nmt.allows(CommObject::kPdo) || !responding_ || silent_[k] || !slot.enabled) continue;
+    const PdoMapping& m = slot.mapping;
     const Drive* d = drive_of(i);
     PdoValues v{};
     for (std::size_t e = 0; e < m.size(); ++e) {
@@ -283,18 +381,19 @@ void DeviceEmulator::on_sync_managed(const CanFrame& frame, Bus& port) noexcept 
       }
     }
     CanFrame tx;
-    tx.id = config_.axes[k].encoder_cob_id;
+    tx.id = slot.cob_id;
     tx.timestamp_ns = frame.timestamp_ns;
     if (m.pack(std::span<const std::int64_t>(v.data(), m.size()), tx) == PdoStatus::kOk) {
       write(port, tx, &counters_.tpdos_sent);
     }
   }
   for (const Drive& d : drives_) {
-    if (!nodes_[d.node].nmt.allows(CommObject::kPdo)) continue;
+    if (!nodes_[d.node].nmt.allows(CommObject::kPdo) || !d.tpdo.enabled) continue;
     const auto k = static_cast<std::size_t>(d.axis);
+    const PdoMapping& m = d.tpdo.mapping;
     PdoValues v{};
-    for (std::size_t e = 0; e < d.tpdo.size(); ++e) {
-      const PdoEntry& entry = d.tpdo.entries()[e];
+    for (std::size_t e = 0; e < m.size(); ++e) {
+      const PdoEntry& entry = m.entries()[e];
       if (same_object(entry, PdoObject::kStatusword)) v[e] = d.drive.statusword();
       if (same_object(entry, PdoObject::kTorqueActualValue)) {
         v[e] = d.drive.applied_torque_per_mille();
@@ -305,9 +404,9 @@ void DeviceEmulator::on_sync_managed(const CanFrame& frame, Bus& port) noexcept 
       if (same_object(entry, PdoObject::kPositionActualValue)) v[e] = counts_[k];  // INTEGER32
     }
     CanFrame tx;
-    tx.id = config_.canopen.axes[k].drive_tpdo_cob_id;
+    tx.id = d.tpdo.cob_id;
     tx.timestamp_ns = frame.timestamp_ns;
-    if (d.tpdo.pack(std::span<const std::int64_t>(v.data(), d.tpdo.size()), tx) == PdoStatus::kOk) {
+    if (m.pack(std::span<const std::int64_t>(v.data(), m.size()), tx) == PdoStatus::kOk) {
       write(port, tx, &counters_.drive_tpdos_sent);
     }
   }
@@ -334,13 +433,16 @@ void DeviceEmulator::on_frame(const CanFrame& frame, Bus& device_port) noexcept 
     on_sync_managed(frame, device_port);
     return;
   }
-  if (has_standard_id(frame, heartbeat_cob_id(config_.canopen.controller_node_id))) {
+  if (is_standard_frame(frame) && frame.id > kHeartbeatBaseCobId &&
+      frame.id <= kHeartbeatBaseCobId + kMaxNodeId) {
+    bool consumed = false;
     for (Node& node : nodes_) {
-      if (node.controller.node_id() != 0 && node.nmt.state() != NmtState::kBootUp) {
-        node.controller.on_frame(frame);
+      if (node.controller.node_id() != 0 && has_standard_id(frame, heartbeat_cob_id(node.controller.node_id()))) {
+        consumed = true;
+        if (node.nmt.state() != NmtState::kBootUp) node.controller.on_frame(frame);
       }
     }
-    return;
+    if (consumed || has_standard_id(frame, heartbeat_cob_id(config_.canopen.controller_node_id))) return;
   }
   for (Node& node : nodes_) {
     if (!node.sdo || !has_standard_id(frame, sdo_request_cob_id(node.nmt.node_id()))) continue;
@@ -349,26 +451,29 @@ void DeviceEmulator::on_frame(const CanFrame& frame, Bus& device_port) noexcept 
       return;
     }
     ++counters_.sdo_requests;
+    const std::uint64_t downloads = node.sdo->server.counters().downloads;
     node.sdo->server.on_frame(frame);
+    if (node.sdo->server.counters().downloads != downloads)
+      apply_dictionary(static_cast<std::size_t>(&node - nodes_.data()));
     CanFrame response;
     if (node.sdo->server.take_response(response, frame.timestamp_ns)) write(device_port, response, nullptr);
     return;
   }
   for (Drive& d : drives_) {
-    const AxisConfig& a = config_.axes[static_cast<std::size_t>(d.axis)];
-    if (!has_standard_id(frame, a.drive_cob_id)) continue;
+    if (!d.rpdo.enabled || !has_standard_id(frame, d.rpdo.cob_id)) continue;
     if (!nodes_[d.node].nmt.allows(CommObject::kPdo)) {
       ++counters_.rpdos_not_operational;
       return;
     }
+    const PdoMapping& m = d.rpdo.mapping;
     PdoValues v{};
-    if (d.rpdo.unpack(frame, std::span<std::int64_t>(v.data(), d.rpdo.size())) != PdoStatus::kOk) {
+    if (m.unpack(frame, std::span<std::int64_t>(v.data(), m.size())) != PdoStatus::kOk) {
       ++counters_.frames_malformed;
       return;
     }
     ++counters_.rpdos;
-    for (std::size_t e = 0; e < d.rpdo.size(); ++e) {
-      const PdoEntry& entry = d.rpdo.entries()[e];
+    for (std::size_t e = 0; e < m.size(); ++e) {
+      const PdoEntry& entry = m.entries()[e];
       if (same_object(entry, PdoObject::kControlword)) {
         d.controlword = static_cast<std::uint16_t>(v[e]);
       } else if (same_object(entry, PdoObject::kTargetTorque)) {
@@ -428,6 +533,10 @@ void DeviceEmulator::power_cycle() noexcept {
       node.controller = HeartbeatConsumer(node.controller.node_id(), node.controller.timeout_ns());
     }
     node.losses_seen = 0;
+    if (node.sdo) {
+      node.sdo->dictionary.restore_defaults(0x0000, 0xFFFF);
+      apply_dictionary(static_cast<std::size_t>(&node - nodes_.data()));
+    }
   }
   for (Drive& d : drives_) {
     d.drive = Cia402Drive(d.drive.settings());

@@ -6,9 +6,6 @@
 #include <stdexcept>
 
 namespace numen::hal {
-namespace {
-
-}  // namespace
 
 void ObjectDictionary::add(SdoAddress address, OdAccess access, std::span<const std::uint8_t> value) {
   if (value.empty())
@@ -76,8 +73,40 @@ std::uint32_t ObjectDictionary::write(SdoAddress address, std::span<const std::u
   } else if (bytes.size() != e->value.size()) {
     return bytes.size() > e->value.size() ? SdoAbort::kLengthTooHigh : SdoAbort::kLengthTooLow;
   }
+  if (e->check != nullptr) {
+    const std::uint32_t code = e->check(*this, address, bytes);
+    if (code != 0) return code;
+  }
   e->value.assign(bytes.begin(), bytes.end());  // within the reserved capacity: no allocation
   return 0;
+}
+
+void ObjectDictionary::set_rules(SdoAddress address, OdWriteCheck check, bool pdo_mappable) {
+  OdEntry* e = find(address);
+  if (e == nullptr)
+    throw std::invalid_argument("object dictionary: no entry " + to_string(address) + " to give rules");
+  e->check = check;
+  e->pdo_mappable = pdo_mappable;
+}
+
+void ObjectDictionary::save_defaults() {
+  defaults_.clear();
+  for (const OdEntry& e : entries_) defaults_.push_back(e.value);
+}
+
+void ObjectDictionary::restore_defaults(std::uint16_t first, std::uint16_t last) noexcept {
+  for (std::size_t i = 0; i < entries_.size() && i < defaults_.size(); ++i) {
+    OdEntry& e = entries_[i];
+    if (e.address.index < first || e.address.index > last) continue;
+    e.value.assign(defaults_[i].begin(), defaults_[i].end());  // length ≤ capacity: no allocation
+  }
+}
+
+bool ObjectDictionary::set_unsigned(SdoAddress address, std::uint64_t value) noexcept {
+  OdEntry* e = find(address);
+  if (e == nullptr || e->value.empty() || e->value.size() > 8) return false;
+  for (std::size_t i = 0; i < e->value.size(); ++i) e->value[i] = static_cast<std::uint8_t>(value >> (8 * i));
+  return true;
 }
 
 bool ObjectDictionary::read_unsigned(SdoAddress address, std::uint32_t& out) const noexcept {

@@ -7,6 +7,8 @@
 
 #include <array>
 #include <cstdint>
+#include <memory>
+#include <string>
 
 #include "alloc_counter.hpp"
 #include "numen/hal/canopen/canopen.hpp"
@@ -246,6 +248,122 @@ TEST(CanopenMaster, ConstructionErrors) {
   c.canopen.managed = false;
   EXPECT_THROW(CanopenMaster(c, kMs), std::invalid_argument);
   EXPECT_THROW(CanopenMaster(config(), 0), std::invalid_argument);
+}
+
+// --- Configuration from DCFs (docs/protocol.md "DCF") ---------------------------------------
+
+std::shared_ptr<const numen::hal::Dcf> shipped_dcf(const char* name, std::uint8_t node) {
+  return std::make_shared<const numen::hal::Dcf>(numen::hal::parse_dcf_file(
+      std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/devices/" + name, node));
+}
+
+/// The trainer with the shipped DCFs: drives on nodes 1–3, encoders on 4–5.
+DeviceConfig config_with_dcfs() {
+  DeviceConfig c = config();
+  for (std::size_t i = 0; i < c.axes.size(); ++i) {
+    numen::hal::CanopenAxisConfig& x = c.canopen.axes[i];
+    x.dcf = shipped_dcf(c.axes[i].has_drive() ? "trocar_drive.dcf" : "encoder.dcf", x.node_id);
+  }
+  numen::hal::check_dcfs(c);
+  return c;
+}
+
+TEST(CanopenMaster, StartUpConfiguresEveryNodeFromItsDcfBeforeStartingIt) {
+  Rig rig(config_with_dcfs());
+  rig.period();  // 0: reset communication, boot-ups: every node booted → configure
+  EXPECT_EQ(rig.master.startup().phase, StartupPhase::kConfigure);
+  std::size_t longest = 0;
+  std::uint64_t transfers = 0;
+  for (const std::uint8_t id : rig.master.node_ids()) {
+    const numen::hal::NodeConfigurator* c = rig.master.configurator(id);
+    ASSERT_NE(c, nullptr);
+    longest = std::max(longest, c->plan().steps().size());
+    transfers += c->plan().steps().size();
+  }
+  // One transfer per node and period, all nodes in parallel; no node is started meanwhile.
+  while (rig.master.startup().phase == StartupPhase::kConfigure && rig.k < 500) {
+    for (int a = 0; a < 5; ++a) ASSERT_EQ(rig.emulator.node_state(a), NmtState::kPreOperational);
+    rig.period();
+  }
+  EXPECT_EQ(rig.master.startup().phase, StartupPhase::kStartNodes);
+  EXPECT_EQ(static_cast<std::size_t>(rig.k), 1 + longest);
+  EXPECT_EQ(rig.master.counters().configurations, 5u);
+  EXPECT_EQ(rig.master.counters().sdo_requests, transfers);  // every transfer expedited
+  EXPECT_EQ(rig.master.counters().sdo_responses, transfers);
+  EXPECT_EQ(rig.master.startup().configure_ns, static_cast<std::int64_t>(longest) * kMs);
+  while (!rig.master.operational() && rig.k < 500) rig.period();
+  ASSERT_TRUE(rig.master.operational());
+  EXPECT_EQ(rig.master.configuration_error(), "");
+  // The configured drives run as before: enabled, they apply the torque.
+  rig.master.request_drives(Cia402Target::kEnabled);
+  rig.torque[1] = -321;
+  for (int i = 0; i < 5; ++i) rig.period();
+  EXPECT_EQ(rig.emulator.drive(1)->applied_torque_per_mille(), -321);
+  EXPECT_EQ(rig.master.drive_torque_actual(1), -321);
+  EXPECT_EQ(rig.emulator.counters().frames_malformed, 0u);
+}
+
+TEST(CanopenMaster, ADcfTheNodeDisagreesWithStopsTheStartUpWithALocatedError) {
+  DeviceConfig c = config_with_dcfs();
+  c.canopen.axes[0].dcf = shipped_dcf("encoder.dcf", 1);  // node 1 is a drive, not an encoder
+  Rig rig(c);
+  while (rig.master.startup().phase != StartupPhase::kFailed && rig.k < 500) rig.period();
+  ASSERT_EQ(rig.master.startup().phase, StartupPhase::kFailed);
+  EXPECT_TRUE(rig.master.startup().configuration_failed);
+  EXPECT_EQ(rig.master.startup().missing_node, 1);
+  const std::string e = rig.master.configuration_error();
+  EXPECT_NE(e.find("/sim/scenes/devices/encoder.dcf:"), std::string::npos) << e;
+  EXPECT_NE(e.find(": [1000] ParameterValue: node 1 0x1000:00 read back 0x00020192, the DCF "
+                   "configures 0x00020196"),
+            std::string::npos)
+      << e;
+  // Refused to start: no node is ever started.
+  for (int i = 0; i < 100; ++i) rig.period();
+  for (int a = 0; a < 5; ++a) EXPECT_EQ(rig.emulator.node_state(a), NmtState::kPreOperational);
+  EXPECT_EQ(rig.master.counters().nmt_sent, 1u);  // the reset communication only
+}
+
+TEST(CanopenMaster, ANodeThatResetsWhileBeingConfiguredIsConfiguredAgain) {
+  Rig rig(config_with_dcfs());
+  for (int i = 0; i < 20; ++i) rig.period();
+  ASSERT_EQ(rig.master.startup().phase, StartupPhase::kConfigure);
+  rig.emulator.power_cycle();  // every node boots again: its configuration is gone
+  while (!rig.master.operational() && rig.k < 500) rig.period();
+  ASSERT_TRUE(rig.master.operational());
+  EXPECT_GE(rig.master.counters().configurations, 5u);
+  EXPECT_EQ(rig.master.monitor().consumers()[0].counters().faults(), 0u);
+}
+
+TEST(CanopenMaster, InLoopSdoReadsOnceOperationalWithoutAllocating) {
+  DeviceConfig c = config();
+  c.canopen.sdo_poll_period_ms = 20;
+  Rig rig(c);
+  ASSERT_NE(rig.master.sdo_poller(), nullptr);
+  EXPECT_EQ(rig.master.sdo_poller()->reads().size(), 5u + 3u);  // 0x1001 per node, 0x6041 per drive
+  numen::test::AllocationGuard guard;
+  while (!rig.master.operational()) {
+    ASSERT_EQ(rig.master.sdo_poller()->counters().started, 0u);  // nothing before operational
+    rig.period();
+  }
+  rig.master.request_drives(Cia402Target::kEnabled);
+  for (int i = 0; i < 200; ++i) rig.period();
+  EXPECT_EQ(guard.count(), 0);
+  const numen::hal::SdoPoller& p = *rig.master.sdo_poller();
+  for (const numen::hal::PeriodicReadResult& r : p.results()) {
+    EXPECT_EQ(r.reads, 10u);  // every 20 periods over 200
+    EXPECT_EQ(r.aborts, 0u);
+  }
+  EXPECT_EQ(p.results()[5].value, rig.master.drive_statusword(0));  // operation enabled, by SDO too
+  EXPECT_EQ(p.results()[0].value, 0u);                               // error register clear
+  EXPECT_EQ(rig.emulator.counters().frames_malformed, 0u);
+}
+
+TEST(CanopenMaster, ConfigurationPeriodsDoNotAllocate) {
+  Rig rig(config_with_dcfs());
+  numen::test::AllocationGuard guard;
+  while (!rig.master.operational() && rig.k < 500) rig.period();
+  EXPECT_EQ(guard.count(), 0);
+  EXPECT_TRUE(rig.master.operational());
 }
 
 }  // namespace

@@ -196,6 +196,21 @@ TEST(Emcy, ErrorCodeTable) {
   }
 }
 
+TEST(Emcy, Cia402DriveCodesByProfile) {
+  // CiA 402 (IEC 61800-7-201) names of drive codes; the profile decides which table speaks.
+  EXPECT_STREQ(describe_cia402_emcy_code(0x2310), "continuous over current (motor side)");
+  EXPECT_STREQ(describe_cia402_emcy_code(0x3210), "DC link over-voltage");
+  EXPECT_STREQ(describe_cia402_emcy_code(0x7121), "motor blocked");
+  EXPECT_STREQ(describe_cia402_emcy_code(0x8611), "following error");
+  EXPECT_STREQ(describe_cia402_emcy_code(0x630A), "data set error");
+  EXPECT_EQ(describe_cia402_emcy_code(0x8130), nullptr);  // CiA 301's own
+  EXPECT_EQ(describe_cia402_emcy_code(0x1000), nullptr);
+  EXPECT_STREQ(describe_emcy_code(0x7121, 402), "motor blocked");
+  EXPECT_STREQ(describe_emcy_code(0x7121, 406), describe_emcy_code(0x7121));
+  EXPECT_STREQ(describe_emcy_code(0x8130, 402), "life guard error or heartbeat error");
+  EXPECT_STREQ(describe_emcy_code(0x1000, 402), describe_emcy_code(0x1000));
+}
+
 TEST(Emcy, ErrorRegisterBits) {
   const char* want[8] = {"generic error",
                          "current",

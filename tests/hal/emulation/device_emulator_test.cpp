@@ -596,4 +596,117 @@ TEST(DeviceEmulatorManaged, EveryNodeAnswersSdoWithItsIdentity) {
   EXPECT_EQ(stopped.abort_code(), SdoAbort::kTimeout);
 }
 
+/// Writes `value` (`bytes` long) to `a` of node `node`; returns 0 or the abort code.
+std::uint32_t sdo_write(DeviceEmulator& emu, SimBus& bus, std::int64_t& t, std::uint8_t node,
+                        SdoAddress a, std::uint32_t value, std::size_t bytes) {
+  SdoClient client(node, 5'000'000);
+  std::array<std::uint8_t, 4> b{};
+  for (std::size_t i = 0; i < 4; ++i) b[i] = static_cast<std::uint8_t>(value >> (8 * i));
+  EXPECT_TRUE(client.start_download(a, std::span<const std::uint8_t>(b.data(), bytes), t));
+  return sdo_exchange(client, emu, bus, t) == SdoStatus::kDone ? 0 : client.abort_code();
+}
+
+std::uint32_t od_value(const DeviceEmulator& emu, std::uint8_t node, SdoAddress a) {
+  std::uint32_t v = 0;
+  EXPECT_TRUE(emu.object_dictionary(node)->read_unsigned(a, v));
+  return v;
+}
+
+/// The default trainer's emulator on a SimBus without latency, its nodes booted (pre-operational,
+/// boot-ups read away).
+struct BootedTrainer {
+  SimBus bus{SimBusSettings{0}};
+  DeviceEmulator emu{make_default_trocar_config(1)};
+  std::int64_t t = 0;
+  BootedTrainer() {
+    emu.tick(t, bus.device());
+    CanFrame f;
+    while (bus.controller().read(f) == IoStatus::kOk) {
+    }
+  }
+};
+
+TEST(DeviceEmulatorManaged, PdoParametersFollowTheCia301SequenceAndTakeEffect) {
+  BootedTrainer rig;
+  DeviceEmulator& emu = rig.emu;
+  SimBus& bus = rig.bus;
+  std::int64_t& t = rig.t;
+  CanFrame f;
+  // Node 1's drive TPDO2 (0x1801 / 0x1A01), as the configuration gives it.
+  EXPECT_EQ(od_value(emu, 1, {0x1801, 1}), 0x281u);
+  EXPECT_EQ(od_value(emu, 1, {0x1A01, 0}), 2u);
+  EXPECT_EQ(od_value(emu, 1, {0x1A01, 2}), 0x60770010u);
+  EXPECT_EQ(od_value(emu, 1, {0x1A01, 3}), 0u);
+  // Refused while the PDO exists: the mapping (count and entries), another COB-ID.
+  EXPECT_EQ(sdo_write(emu, bus, t, 1, {0x1A01, 0}, 0, 1), SdoAbort::kUnsupportedAccess);
+  EXPECT_EQ(sdo_write(emu, bus, t, 1, {0x1A01, 1}, 0x60410010, 4), SdoAbort::kUnsupportedAccess);
+  EXPECT_EQ(sdo_write(emu, bus, t, 1, {0x1801, 1}, 0x291, 4), SdoAbort::kInvalidValue);
+  EXPECT_EQ(sdo_write(emu, bus, t, 1, {0x1801, 1}, 0x701, 4), SdoAbort::kInvalidValue);  // reserved
+  EXPECT_EQ(sdo_write(emu, bus, t, 1, {0x1801, 1}, 0x20000281, 4), SdoAbort::kInvalidValue);  // 29-bit
+  EXPECT_EQ(sdo_write(emu, bus, t, 1, {0x1801, 2}, 0xFE, 1), SdoAbort::kInvalidValue);  // event-driven
+  // The sequence: disable, count 0, entries, count, re-enable on another COB-ID.
+  EXPECT_EQ(sdo_write(emu, bus, t, 1, {0x1801, 1}, 0x80000281u, 4), 0u);
+  EXPECT_EQ(sdo_write(emu, bus, t, 1, {0x1A01, 1}, 0x60410010, 4), SdoAbort::kUnsupportedAccess);
+  EXPECT_EQ(sdo_write(emu, bus, t, 1, {0x1A01, 0}, 0, 1), 0u);
+  EXPECT_EQ(sdo_write(emu, bus, t, 1, {0x1A01, 3}, 0x60720010, 4), SdoAbort::kNotMappable);  // not a PDO object
+  EXPECT_EQ(sdo_write(emu, bus, t, 1, {0x1A01, 3}, 0x60400010, 4), SdoAbort::kNotMappable);  // an RPDO object
+  EXPECT_EQ(sdo_write(emu, bus, t, 1, {0x1A01, 3}, 0x60410020, 4), SdoAbort::kNotMappable);  // wrong length
+  EXPECT_EQ(sdo_write(emu, bus, t, 1, {0x1A01, 3}, 0x60610008, 4), 0u);
+  EXPECT_EQ(sdo_write(emu, bus, t, 1, {0x1A01, 4}, 0x60640020, 4), 0u);
+  EXPECT_EQ(sdo_write(emu, bus, t, 1, {0x1A01, 5}, 0x60040020, 4), 0u);
+  EXPECT_EQ(sdo_write(emu, bus, t, 1, {0x1A01, 0}, 9, 1), SdoAbort::kValueTooHigh);
+  EXPECT_EQ(sdo_write(emu, bus, t, 1, {0x1A01, 0}, 5, 1), SdoAbort::kPdoLength);  // 15 bytes
+  EXPECT_EQ(sdo_write(emu, bus, t, 1, {0x1A01, 0}, 3, 1), 0u);
+  EXPECT_EQ(sdo_write(emu, bus, t, 1, {0x1801, 1}, 0x291, 4), 0u);
+  // Operational and synchronised: the drive TPDO goes out on 0x291 with its 5 bytes.
+  encode_nmt(NmtCommand::kStartRemoteNode, 0, t, f);
+  bus.controller().write(f);
+  bus.controller().write(make_sync(t));
+  emu.poll(bus.device());
+  int on_new = 0;
+  int on_old = 0;
+  while (bus.controller().read(f) == IoStatus::kOk) {
+    on_new += f.id == 0x291 && f.len == 5;
+    on_old += f.id == 0x281;
+  }
+  EXPECT_EQ(on_new, 1);
+  EXPECT_EQ(on_old, 0);
+  // Reset communication: the configuration's PDO again.
+  encode_nmt(NmtCommand::kResetCommunication, 1, t, f);
+  bus.controller().write(f);
+  emu.poll(bus.device());
+  EXPECT_EQ(od_value(emu, 1, {0x1801, 1}), 0x281u);
+  EXPECT_EQ(od_value(emu, 1, {0x1A01, 0}), 2u);
+}
+
+TEST(DeviceEmulatorManaged, HeartbeatSyncAndDriveObjectsRules) {
+  BootedTrainer rig;
+  DeviceEmulator& emu = rig.emu;
+  SimBus& bus = rig.bus;
+  std::int64_t& t = rig.t;
+  EXPECT_EQ(sdo_write(emu, bus, t, 1, {0x1005, 0}, 0x40000080u, 4), SdoAbort::kInvalidValue);  // producer
+  EXPECT_EQ(sdo_write(emu, bus, t, 1, {0x1005, 0}, 0x80, 4), 0u);
+  EXPECT_EQ(sdo_write(emu, bus, t, 1, {0x1016, 1}, 0x01000000u, 4), SdoAbort::kInvalidValue);
+  EXPECT_EQ(sdo_write(emu, bus, t, 4, {0x1016, 1}, 0x007F0032u, 4), SdoAbort::kNoObject);  // no drive
+  EXPECT_EQ(sdo_write(emu, bus, t, 1, {0x6072, 0}, 0, 2), SdoAbort::kValueTooLow);
+  EXPECT_EQ(sdo_write(emu, bus, t, 1, {0x6072, 0}, 40000, 2), SdoAbort::kValueTooHigh);
+  EXPECT_EQ(sdo_write(emu, bus, t, 4, {0x6072, 0}, 1000, 2), SdoAbort::kNoObject);
+  EXPECT_EQ(sdo_write(emu, bus, t, 1, {0x6072, 0}, 1200, 2), 0u);
+  EXPECT_EQ(emu.drive(0)->settings().max_torque_per_mille, 1200);
+  EXPECT_EQ(sdo_write(emu, bus, t, 1, {0x6060, 0}, 8, 1), 0u);  // csp: applies no torque
+  EXPECT_EQ(emu.drive(0)->modes_of_operation_display(), 8);
+  EXPECT_EQ(sdo_write(emu, bus, t, 1, {0x1017, 0}, 25, 2), 0u);
+  EXPECT_EQ(sdo_write(emu, bus, t, 1, {0x1016, 1}, 0x007F0064u, 4), 0u);
+  // Reset node: every object back to the configuration's values, and applied.
+  CanFrame f;
+  encode_nmt(NmtCommand::kResetNode, 1, t, f);
+  bus.controller().write(f);
+  emu.poll(bus.device());
+  EXPECT_EQ(od_value(emu, 1, {0x6072, 0}), 2000u);
+  EXPECT_EQ(emu.drive(0)->settings().max_torque_per_mille, 2000);
+  EXPECT_EQ(emu.drive(0)->modes_of_operation_display(), 10);
+  EXPECT_EQ(od_value(emu, 1, {0x1017, 0}), 10u);
+  EXPECT_EQ(od_value(emu, 1, {0x1016, 1}), 0x007F001Eu);
+}
+
 }  // namespace

@@ -269,6 +269,10 @@ struct RunSummary {
   std::int64_t first_fault_period = -1;    ///< Its period index.
   std::int64_t emcys = 0;                  ///< EMCY messages received.
   std::int64_t emcy_faults = 0;            ///< ... of which reported a fault.
+  std::int64_t configured_nodes = 0;       ///< Node configurations from a DCF completed (read back
+                                           ///< equal) at start-ups.
+  std::int64_t sdo_reads = 0;              ///< In-loop SDO reads completed (canopen.sdo_poll_period).
+  std::int64_t sdo_read_errors = 0;        ///< ... aborted by a node or timed out.
   std::int64_t heartbeat_losses = 0;       ///< Heartbeat losses over all nodes.
   std::int64_t zero_torque_periods = 0;    ///< Periods that commanded zero torque on every drive.
   std::vector<std::string> drive_states;   ///< "axis: CiA 402 state" per drive at the end.

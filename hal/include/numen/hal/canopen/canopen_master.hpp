@@ -6,8 +6,18 @@
 ///
 ///   start-up (once, and again on restart_startup()):
 ///     reset communication (000#8200) → every node's boot-up message (0x700 + id, 00)
+///     → [nodes with a DCF: configured over SDO and read back, kConfigure]
 ///     → start remote node (000#0100) → every node heard in operational → kOperational.
+///     The configuration (dcf_configuration.hpp) runs one SDO transfer per node at a time, all
+///     nodes in parallel, advanced once per period; a refused write, a silent node (the
+///     transfer's sdo_timeout_ms) or a read-back mismatch fails the start-up at once (kFailed,
+///     configuration_error() says where in which DCF). A node that boots again meanwhile, or
+///     while being started, is configured again. startup_timeout_ms does not count the time
+///     spent configuring.
 ///     NMT commands a node has not acted on are repeated to that node every startup_retry_ms;
+///   once operational, with canopen.sdo_poll_period_ms > 0: every node's error register
+///     0x1001 and every drive's statusword 0x6041 read over SDO at that rate (SdoPoller, one
+///     transfer per node, advanced in begin_period / on_frame / update like the rest);
 ///     a node that boots again while being started is started again; past startup_timeout_ms
 ///     the start-up has failed (kFailed, with the first missing node).
 ///   every period:
@@ -27,12 +37,16 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <span>
+#include <string>
 #include <vector>
 
 #include "numen/hal/transport/bus.hpp"
 #include "numen/hal/transport/can_frame.hpp"
 #include "numen/hal/canopen/cia402.hpp"
+#include "numen/hal/canopen/dcf_configuration.hpp"
+#include "numen/hal/canopen/sdo_poller.hpp"
 #include "numen/hal/device/device_config.hpp"
 #include "numen/hal/canopen/emcy.hpp"
 #include "numen/hal/canopen/heartbeat.hpp"
@@ -49,7 +63,11 @@ enum class StartupPhase : std::uint8_t {
   kStartNodes,          ///< Start remote node (all nodes) is sent at the next begin_period().
   kWaitOperational,     ///< Waiting for every node's heartbeat to report operational.
   kOperational,         ///< Every node was heard operational: the start-up is complete.
-  kFailed,              ///< startup_timeout_ms passed first (StartupReport says which node).
+  kFailed,              ///< startup_timeout_ms passed first, or a node's configuration failed
+                        ///< (StartupReport says which node).
+  kConfigure,           ///< Every node booted; the nodes with a DCF are being configured over
+                        ///< SDO (pre-operational), then kStartNodes. (Last in the enum only to
+                        ///< keep the other values, which state frames carry, unchanged.)
 };
 
 /// Short English name of a StartupPhase (static string), e.g. "wait boot-up".
@@ -62,7 +80,10 @@ struct StartupReport {
   std::int64_t began_ns = 0;       ///< Time the reset communication was sent, ns.
   std::uint64_t done_period = 0;   ///< update() index at which kOperational / kFailed was reached.
   std::int64_t done_ns = 0;        ///< Its time, ns.
-  std::uint8_t missing_node = 0;   ///< kFailed: the first node not booted / not operational.
+  std::uint8_t missing_node = 0;   ///< kFailed: the first node not booted / not operational /
+                                   ///< not configured.
+  bool configuration_failed = false;  ///< kFailed by a node's configuration (configuration_error()).
+  std::int64_t configure_ns = 0;   ///< Time spent in kConfigure in this start-up, ns.
   std::uint32_t attempts = 0;      ///< Start-ups begun (1 after the first).
 };
 
@@ -80,6 +101,9 @@ struct CanopenMasterCounters {
   std::uint64_t unknown_nodes = 0;       ///< Heartbeats of nodes the device does not have.
   std::uint64_t write_would_block = 0;   ///< Writes refused (queue full).
   std::uint64_t write_errors = 0;        ///< Writes that failed (kError).
+  std::uint64_t sdo_requests = 0;        ///< SDO requests written with kOk (configuration).
+  std::uint64_t sdo_responses = 0;       ///< SDO responses taken (configuration).
+  std::uint64_t configurations = 0;      ///< Node configurations completed (read back equal).
 };
 
 /// Most nodes of one device (one per axis at most).
@@ -131,6 +155,15 @@ class CanopenMaster {
   /// that reset or were stopped).
   void restart_startup() noexcept;
 
+  /// After a start-up failed by a node's configuration: the located error (DCF file, line,
+  /// section, key, node, what was refused or read back; NodeConfigurator::error()). Empty
+  /// otherwise. Allocates: reports only.
+  std::string configuration_error() const;
+  /// The in-loop SDO reads (canopen.sdo_poll_period_ms), nullptr when off.
+  const SdoPoller* sdo_poller() const noexcept { return poller_.get(); }
+  /// The configurator of node `node_id`, nullptr if the node has no DCF.
+  const NodeConfigurator* configurator(std::uint8_t node_id) const noexcept;
+
   /// True once every node has been heard operational (phase kOperational).
   bool operational() const noexcept { return startup_.phase == StartupPhase::kOperational; }
   /// True if every node's newest heartbeat reports operational and it is alive.
@@ -170,6 +203,8 @@ class CanopenMaster {
   struct NodeState {
     bool booted = false;   // boot-up received since the last reset communication
     bool restart = false;  // booted again while being started: start it again
+    bool reconfigure = false;  // booted again after its configuration began: configure again
+    int configurator = -1;     // index into configurators_, -1 without a DCF
     std::int64_t last_command_ns = 0;
   };
   struct Drive {
@@ -192,6 +227,8 @@ class CanopenMaster {
   IoStatus send(const CanFrame& frame, Bus& bus, std::uint64_t* sent) noexcept;
   int node_index(std::uint8_t node_id) const noexcept;
   void finish(StartupPhase phase, std::uint8_t missing, std::int64_t now_ns) noexcept;
+  void enter_configure(std::int64_t now_ns) noexcept;
+  void update_configure(std::int64_t now_ns) noexcept;
 
   std::int64_t retry_ns_ = 0;
   std::int64_t timeout_ns_ = 0;
@@ -199,6 +236,10 @@ class CanopenMaster {
   std::array<NodeState, kMaxDeviceNodes> nodes_{};
   std::size_t num_nodes_ = 0;
   std::vector<Drive> drives_;
+  std::vector<std::unique_ptr<DcfConfiguration>> plans_;  // one per node with a DCF
+  std::vector<NodeConfigurator> configurators_;          // same order
+  std::int64_t configure_began_ns_ = 0;
+  std::unique_ptr<SdoPoller> poller_;
   std::array<Cia402MasterOutput, kMaxDeviceNodes> outputs_{};
   HeartbeatMonitor<kMaxDeviceNodes> monitor_;
   HeartbeatProducer producer_;

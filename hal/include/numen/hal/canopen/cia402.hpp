@@ -404,6 +404,13 @@ class Cia402Drive {
   void set_warning(bool warning) noexcept { warning_ = warning; }
   /// Writes modes of operation (0x6060), as an SDO would.
   void set_modes_of_operation(std::int8_t mode) noexcept { settings_.modes_of_operation = mode; }
+  /// Writes max torque (0x6072), per mille, as an SDO would; false (unchanged) outside 1–32767.
+  /// Takes effect at the next step.
+  bool set_max_torque_per_mille(std::int32_t per_mille) noexcept {
+    if (per_mille < 1 || per_mille > 32767) return false;
+    settings_.max_torque_per_mille = static_cast<std::int16_t>(per_mille);
+    return true;
+  }
 
   /// The statusword (0x6041): the state bits (power_state_bits; quick stop bit 0 where it is
   /// don't-care), bit 4 voltage_present, bit 7 warning, bit 9 remote, and in operation enabled:

@@ -117,6 +117,17 @@ EmcyErrorClass emcy_error_class(std::uint16_t code) noexcept;
 /// device"; 0x0000 "error reset or no error".
 const char* describe_emcy_code(std::uint16_t code) noexcept;
 
+/// The name CiA 402 (IEC 61800-7-201, drive error codes, object 0x603F) gives `code` (static
+/// string), e.g. 0x2310 "continuous over current (motor side)", 0x7121 "motor blocked",
+/// 0x8611 "following error", 0x3210 "DC link over-voltage"; nullptr if CiA 402 does not
+/// define it.
+const char* describe_cia402_emcy_code(std::uint16_t code) noexcept;
+
+/// The name of `code` for a node of device profile `profile` (the low word of its 0x1000
+/// device type): a CiA 402 drive's code by the CiA 402 table when it has it, else (and for
+/// any other profile) describe_emcy_code(code).
+const char* describe_emcy_code(std::uint16_t code, std::uint16_t profile) noexcept;
+
 /// True if `code` is in the error reset / no error class 0x00xx (CiA 301: the producer sends
 /// it when an error has gone away).
 constexpr bool is_error_reset(std::uint16_t code) noexcept { return (code & 0xFF00u) == 0; }

@@ -112,6 +112,23 @@ enum class PdoStatus : std::uint8_t {
 /// Short English name of a PdoStatus (static string).
 const char* to_string(PdoStatus status) noexcept;
 
+/// Why a list of entries is not a valid mapping (PdoMapping::try_assign()).
+struct MappingProblem {
+  enum Kind : std::uint8_t {
+    kNone,       ///< Valid.
+    kEmpty,      ///< No entries.
+    kTooMany,    ///< More than kMaxPdoEntries.
+    kZeroIndex,  ///< Entry `entry` has index 0.
+    kBitLength,  ///< Entry `entry` is not 8, 16 or 32 bits.
+    kDuplicate,  ///< Entry `entry` maps the object of entry `other` again.
+    kTooLong,    ///< Entry `entry` brings the mapping to `bits` > 64.
+  };
+  Kind kind = kNone;
+  std::size_t entry = 0;  ///< 0-based position of the offending entry.
+  std::size_t other = 0;
+  unsigned bits = 0;
+};
+
 /// A static PDO mapping: up to 8 objects of 8/16/32 bits, at most 64 bits in all. Plain value
 /// type, no heap.
 class PdoMapping {
@@ -123,6 +140,11 @@ class PdoMapping {
   PdoMapping(std::span<const PdoEntry> entries, std::string_view name = "PDO");
   /// As above, from a braced list.
   PdoMapping(std::initializer_list<PdoEntry> entries, std::string_view name = "PDO");
+
+  /// Replaces this mapping by `entries` if they are valid (the constructor's rules), else
+  /// leaves it unchanged and says why. noexcept, no allocation: a device applying a mapping
+  /// written over SDO at run time.
+  MappingProblem try_assign(std::span<const PdoEntry> entries) noexcept;
 
   /// Number of mapped objects.
   std::size_t size() const noexcept { return size_; }
@@ -148,6 +170,9 @@ class PdoMapping {
   PdoStatus unpack(const CanFrame& frame, std::span<std::int64_t> values) const noexcept;
 
  private:
+  PdoMapping() noexcept = default;
+  MappingProblem assign(std::span<const PdoEntry> entries) noexcept;
+
   std::array<PdoEntry, kMaxPdoEntries> entries_{};
   std::array<std::uint8_t, kMaxPdoEntries> offsets_{};
   std::size_t size_ = 0;

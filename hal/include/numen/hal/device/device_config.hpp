@@ -5,12 +5,14 @@
 /// and the kind's geometry. Built at load time (may allocate, may throw), read-only afterwards.
 
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "numen/core/types.hpp"
 #include "numen/hal/device/axis.hpp"
+#include "numen/hal/canopen/dcf.hpp"
 #include "numen/hal/canopen/pdo_mapping.hpp"
 #include "numen/hal/device/phantom_kinematics.hpp"
 #include "numen/hal/device/pose_tracker_kinematics.hpp"
@@ -62,6 +64,11 @@ struct CanopenAxisConfig {
   /// Drive TPDO mapping (0x1A01), driven axes only: must map statusword 0x6041; may map torque
   /// actual value 0x6077, modes of operation display 0x6061, position actual value 0x6064.
   std::vector<PdoEntry> drive_tpdo;
+  /// The node's DCF (CiA 306, dcf.hpp), its values resolved for node_id, or null. With a DCF
+  /// the controller configures the node over SDO after its boot-up and before starting it
+  /// (dcf_configuration.hpp); without, the node must come configured. Axes of one node give
+  /// the same file. check_dcfs() checks it agrees with the fields above.
+  std::shared_ptr<const Dcf> dcf;
 
   /// The consumer heartbeat time in effect, ms: heartbeat_timeout_ms or 3 × the period.
   std::uint32_t effective_heartbeat_timeout_ms() const noexcept {
@@ -92,6 +99,13 @@ struct CanopenConfig {
   /// Interval between repeats of an NMT command a node has not acted on during the start-up,
   /// ms, >= 1 (a lost frame is retried, a node that reset is started again).
   std::uint32_t startup_retry_ms = 50;
+  /// Time an SDO transfer of a node's configuration (CanopenAxisConfig::dcf) may wait for the
+  /// node's response, ms, >= 1; beyond it the configuration, and so the start-up, fails.
+  std::uint32_t sdo_timeout_ms = 500;
+  /// Once every node is operational, read each node's error register 0x1001 and each drive's
+  /// statusword 0x6041 over SDO every this many ms (sdo_poller.hpp: one transfer per node at a
+  /// time, advanced once per period, never waiting); 0 = no reads.
+  std::uint32_t sdo_poll_period_ms = 0;
   /// One entry per DeviceConfig::axes entry, same order (managed stack only; ignored otherwise).
   std::vector<CanopenAxisConfig> axes;
 
@@ -158,6 +172,15 @@ struct DeviceConfig {
 /// 0x700–0x77F; mappings valid (PdoMapping) and carrying their required objects (see
 /// CanopenAxisConfig); start-up times >= 1 ms. Messages name the device, axis and field.
 void validate(const DeviceConfig& config);
+
+/// Throws DcfError, located at the line of the disagreeing DCF entry (or at the file when an
+/// object is missing), if a managed axis's DCF does not configure what the rest of its
+/// CanopenAxisConfig / AxisConfig says: an enabled TPDO with the encoder_cob_id mapping
+/// encoder_tpdo exactly; on a driven axis, an enabled RPDO with the drive_cob_id mapping
+/// drive_rpdo and an enabled TPDO with the drive_tpdo_cob_id mapping drive_tpdo; 0x1017 (if
+/// given) equal to heartbeat_period_ms. Values are the ParameterValue, else the DefaultValue.
+/// Axes of one node must give the same DCF file (std::invalid_argument otherwise).
+void check_dcfs(const DeviceConfig& config);
 
 /// A trocar instrument with typical trainer values; nodes first_node_id .. +4 for
 /// (pivot_x, pivot_y, depth, roll, jaw); drives on pivot_x, pivot_y and depth (0x200 + node).

@@ -14,9 +14,19 @@
 ///    node loses the controller's heartbeat faults on its own (EMCY 0x8130, zero torque), and
 ///    an energised drive whose node leaves operational faults (CiA 402 abort connection option
 ///    0x6007 = 1, EMCY 0x8100); every node answers SDO on its default channel (SdoServer, in
-///    pre-operational and operational) from an object dictionary of its identity
-///    (object_dictionary(): 0x1000 device type, 0x1001 error register, 0x1008 device name,
-///    0x100A software version, 0x1017 producer heartbeat time, 0x1018 identity).
+///    pre-operational and operational) from its object dictionary (object_dictionary()):
+///    0x1000 device type, 0x1001 error register, 0x1005 COB-ID SYNC, 0x1008 device name,
+///    0x100A software version, 0x1016 consumer heartbeat time (nodes with a drive), 0x1017
+///    producer heartbeat time, 0x1018 identity, the PDO communication and mapping parameters
+///    (per axis of the node, in axis order: TPDO encoder, then on a driven axis TPDO drive and
+///    RPDO drive; 0x1800 + n / 0x1A00 + n, 0x1400 + n / 0x1600 + n), 0x6004 / 0x6064
+///    position, and per drive (m-th of the node at + m · 0x800) 0x6040, 0x6041, 0x6060,
+///    0x6061, 0x6071, 0x6072, 0x6077 (process values kept current at each SYNC). Downloads
+///    into them take effect at once — PDO COB-IDs and mappings (CiA 301 sequence enforced),
+///    heartbeat period, the controller's consumer time, modes of operation, max torque — or are
+///    refused with their CiA 301 abort code (docs/protocol.md "The emulated nodes"). NMT reset
+///    communication restores 0x1000–0x1FFF to the values of the configuration, reset node
+///    every object.
 /// Fault-injection hooks for tests: kill() (the device stops reading and sending entirely),
 /// power_cycle(), inject_drive_fault(), set_encoder_silent() / set_responding().
 /// Construction allocates and may throw; every other member is noexcept and allocation free.
@@ -166,12 +176,21 @@ class DeviceEmulator {
     std::uint64_t losses_seen = 0;
     std::unique_ptr<NodeSdo> sdo;
   };
+  /// One PDO of a node as its dictionary configures it.
+  struct PdoSlot {
+    std::size_t node = 0;
+    std::uint16_t comm = 0;    // communication parameter index (0x1400 + n / 0x1800 + n)
+    std::uint32_t cob_id = 0;  // 11-bit
+    bool enabled = true;
+    PdoMapping mapping;
+  };
   struct Drive {
     int axis = 0;
     std::size_t node = 0;
+    std::size_t m = 0;  // drive number on its node (CiA 402 object offset m · 0x800)
     Cia402Drive drive;
-    PdoMapping rpdo;
-    PdoMapping tpdo;
+    PdoSlot rpdo;
+    PdoSlot tpdo;
     std::uint16_t controlword = 0;
     std::int16_t target = 0;
     PowerState previous = PowerState::kNotReadyToSwitchOn;
@@ -185,6 +204,8 @@ class DeviceEmulator {
   void on_frame_minimal(const CanFrame& frame, Bus& port) noexcept;
   void on_sync_managed(const CanFrame& frame, Bus& port) noexcept;
   void on_nmt(const CanFrame& frame) noexcept;
+  void apply_dictionary(std::size_t node) noexcept;
+  void update_process_values() noexcept;
   void queue_emcy(std::size_t node, std::uint16_t code, std::uint8_t error_register) noexcept;
   void write(Bus& port, const CanFrame& frame, std::uint64_t* sent) noexcept;
   void update_torque(const Drive& d) noexcept;
@@ -202,7 +223,7 @@ class DeviceEmulator {
   // Managed stack.
   std::vector<Node> nodes_;
   std::vector<Drive> drives_;
-  std::vector<PdoMapping> encoder_maps_;  // per axis
+  std::vector<PdoSlot> encoder_pdos_;  // per axis
   std::array<std::size_t, kMaxAxes> node_of_axis_{};
   std::array<int, kMaxAxes> drive_of_axis_{};  // index into drives_, -1 without
   std::array<PendingEmcy, kEmcyQueue> emcy_{};
