@@ -1,0 +1,327 @@
+'use strict';
+// numen against an independent CANopen stack (docs/protocol.md, "Interoperability with
+// node-canopen"). node-canopen plays the default scene's five nodes — CiA 402 drives with their
+// CiA 406 encoder on nodes 1-3, CiA 406 encoders on 4-5 — from the DCFs in dcf/, on numen's
+// serial framing over pseudo-terminals (pty_pairs.py); or, in device_server, node-canopen's SDO
+// client reads numen's own emulated device. Each scenario checks numen's output and what the
+// node-canopen side saw, prints both, and exits 0 (pass), 1 (fail) or 77 (skipped, with the
+// reason).
+//
+// Usage (through pty_pairs.py, which opens SCENARIOS[name].ptys pseudo-terminal pairs):
+//   node interop.js --numen PATH --scene DEFAULT_SCENE SCENARIO
+
+const fs = require('fs');
+const os = require('os');
+const path = require('path');
+const { spawn } = require('child_process');
+
+const BAUD = 1000000;  // numen's serial default; a pseudo-terminal ignores it
+
+// The default scene's nodes (sim/scenes/default.toml [[device.axis]]): node n is axis n - 1.
+const NODES = [1, 2, 3, 4, 5];
+const DRIVES = [1, 2, 3];
+
+// The hand behind each axis (plant_axis.js). Hold positions: the first sample of the default
+// scene's recording (the encoder frames of `numen run --record`), so that numen's god-object
+// starts where the shipped runs start; the hand then moves each axis by ±amplitude.
+// counts_per_unit as the scene: 2^14 counts per turn, 10 µm on depth.
+const ROTARY = 16384 / (2 * Math.PI);
+const PLANTS = {
+    1: { countsPerUnit: ROTARY, hold: -0.5377, amplitude: 0.05, frequency: 0.2, inertia: 2e-3, stiffness: 2, damping: 0.2 },
+    2: { countsPerUnit: ROTARY, hold: 0, amplitude: 0.05, frequency: 0.15, inertia: 2e-3, stiffness: 2, damping: 0.2 },
+    3: { countsPerUnit: 1e5, hold: 0.10579, amplitude: 0.005, frequency: 0.25, inertia: 0.5, stiffness: 400, damping: 40 },
+    4: { countsPerUnit: ROTARY, hold: 0, amplitude: 0.2, frequency: 0.1, inertia: 2e-3, stiffness: 2, damping: 0.2 },
+    5: { countsPerUnit: ROTARY, hold: 0, amplitude: 0.1, frequency: 0.3, inertia: 2e-3, stiffness: 2, damping: 0.2 },
+};
+
+// ---------------------------------------------------------------------------------------------
+
+const failures = [];
+function check(ok, what) {
+    console.log(`${ok ? 'ok  ' : 'FAIL'} ${what}`);
+    if (!ok)
+        failures.push(what);
+}
+
+function skip(reason) {
+    console.log(`SKIP: ${reason}`);
+    process.exit(77);
+}
+
+const sleep = (ms) => new Promise((resolve) => setTimeout(resolve, ms));
+
+/** Runs numen with `args` (asynchronously: this process's devices keep answering). Resolves
+ *  {code, signal, stdout, stderr, seconds}. */
+function numen(options, args, { killAfterMs = 60000, onStdout } = {}) {
+    return new Promise((resolve) => {
+        const t0 = process.hrtime.bigint();
+        const child = spawn(options.numen, args, { stdio: ['ignore', 'pipe', 'pipe'] });
+        let stdout = '';
+        let stderr = '';
+        child.stdout.on('data', (d) => {
+            stdout += d;
+            if (onStdout)
+                onStdout(stdout, child);
+        });
+        child.stderr.on('data', (d) => { stderr += d; });
+        const killer = setTimeout(() => child.kill('SIGKILL'), killAfterMs);
+        child.on('close', (code, signal) => {
+            clearTimeout(killer);
+            const seconds = Number(process.hrtime.bigint() - t0) * 1e-9;
+            console.log(`$ numen ${args.join(' ')}   (exit ${code}${signal ? ' ' + signal : ''}, ${seconds.toFixed(2)} s)`);
+            if (stdout)
+                console.log(stdout.trimEnd());
+            if (stderr)
+                console.log(stderr.trimEnd());
+            resolve({ code, signal, stdout, stderr, seconds });
+        });
+    });
+}
+
+/** node-canopen's nodes on pseudo-terminal `pty`, started (boot-up sent). */
+function startNodes(pty, dcfs) {
+    const { NodeSet } = require('./lib/node_set');
+    const { SerialLink } = require('./lib/serial_link');
+    const nodes = new NodeSet(dcfs, PLANTS, 0.001);
+    const link = new SerialLink(pty, (frame) => nodes.receive(frame));
+    nodes.attach(link);
+    nodes.start();
+    return { nodes, link };
+}
+
+const bus = (pty) => `serial:${pty.path}@${BAUD}`;
+const shippedDcfs = () => NODES.map((n) => ({ path: path.join(__dirname, 'dcf', `node${n}.dcf`), nodeId: n }));
+const hex = (v, digits = 8) => '0x' + (v >>> 0).toString(16).toUpperCase().padStart(digits, '0');
+
+// ---------------------------------------------------------------------------------------------
+// (a) numen scan lists the node-canopen nodes with the identity their DCF gives.
+
+async function scan(options, ptys) {
+    const { nodes, link } = startNodes(ptys[0], shippedDcfs());
+    await sleep(50);
+    const r = await numen(options, ['scan', '--bus', bus(ptys[0]), '--json']);
+    check(r.code === 0, 'numen scan exits 0');
+    let found = [];
+    try {
+        found = JSON.parse(r.stdout).nodes;
+    } catch (e) {
+        check(false, `numen scan --json prints JSON (${e.message})`);
+    }
+    check(found.length === NODES.length, `numen scan finds ${NODES.length} nodes (found ${found.length})`);
+    for (const node of nodes.nodes) {
+        const d = node.device;
+        const s = found.find((f) => f.node_id === node.id) || {};
+        const want = {
+            device_type: d.getValue(0x1000), vendor_id: d.getValueArray(0x1018, 1),
+            product_code: d.getValueArray(0x1018, 2), revision: d.getValueArray(0x1018, 3),
+            serial: d.getValueArray(0x1018, 4), name: d.getValue(0x1008),
+            software_version: d.getValue(0x100A), state: 'pre-operational',
+        };
+        for (const [key, value] of Object.entries(want))
+            check(s[key] === value, `node ${node.id} ${key}: numen ${JSON.stringify(s[key])}, DCF ${JSON.stringify(value)}`);
+        check(Array.isArray(s.errors) && s.errors.length === 0, `node ${node.id}: no SDO error (${JSON.stringify(s.errors)})`);
+        check(node.counters.sdoRequests >= 7, `node ${node.id} answered ${node.counters.sdoRequests} SDO requests (7 objects)`);
+    }
+    check(nodes.nmtCommands.length === 0, `numen scan sent no NMT command (${nodes.nmtCommands.length})`);
+    check(link.rejected === 0, `no chunk rejected by node's decoder (${link.rejected})`);
+    return { nodes };
+}
+
+// (b) numen sdo reads and writes node-canopen objects; node-canopen's aborts are reported by
+// their CiA 301 names.
+
+async function sdo(options, ptys) {
+    // One line per numen process (pty_pairs.py): the devices follow from line to line.
+    let line = 0;
+    const { nodes, link } = startNodes(ptys[line], shippedDcfs());
+    const node = (id) => nodes.nodes.find((n) => n.id === id);
+    const next = () => {
+        link.close();
+        const { SerialLink } = require('./lib/serial_link');
+        const l = new SerialLink(ptys[++line], (frame) => nodes.receive(frame));
+        nodes.attach(l);
+        return l;
+    };
+    await sleep(50);
+    const run = (args) => numen(options, ['sdo', '--bus', bus(ptys[line]), ...args]);
+
+    let r = await run(['4', 'read', '1008:00']);
+    const name = node(4).device.getValue(0x1008);
+    check(r.code === 0 && r.stdout.includes(`text: "${name}"`), `segmented upload of 0x1008 from node 4 reads "${name}"`);
+
+    next();
+    r = await run(['1', 'write', '1017:00', '25', '--type', 'u16']);
+    check(r.code === 0, 'expedited download of 0x1017 = 25 ms to node 1 exits 0');
+    check(node(1).device.getValue(0x1017) === 25, `node 1's dictionary holds 0x1017 = ${node(1).device.getValue(0x1017)}`);
+
+    next();
+    r = await run(['1', 'read', '1017:00']);
+    check(r.code === 0 && /\b25\b/.test(r.stdout), 'expedited upload of 0x1017 from node 1 reads 25');
+
+    next();
+    r = await run(['2', 'write', '1000:00', '1', '--type', 'u32']);
+    check(r.code === 1 && r.stdout.concat(r.stderr).includes('0x06010002')
+        && r.stdout.concat(r.stderr).includes('attempt to write a read only object'),
+    'write of the read-only 0x1000: abort 0x06010002 "attempt to write a read only object", exit 1');
+
+    next();
+    r = await run(['5', 'read', '2000:00']);
+    check(r.code === 1 && r.stdout.concat(r.stderr).includes('0x06020000')
+        && r.stdout.concat(r.stderr).includes('object does not exist in the object dictionary'),
+    'read of the missing 0x2000: abort 0x06020000 "object does not exist in the object dictionary", exit 1');
+
+    next();
+    r = await run(['3', 'read', '1018:07']);
+    check(r.code === 1 && r.stdout.concat(r.stderr).includes('0x06090011')
+        && r.stdout.concat(r.stderr).includes('sub-index does not exist'),
+    'read of the missing 0x1018:07: abort 0x06090011 "sub-index does not exist", exit 1');
+    return { nodes };
+}
+
+// (c) the default scene's loop against the node-canopen nodes: start-up (reset, boot-ups,
+// start, CiA 402 power-up), 10 s of torque, no fault.
+
+async function run(options, ptys) {
+    const { nodes, link } = startNodes(ptys[0], shippedDcfs());
+    await sleep(50);
+    let atExit = null;
+    const r = await numen(options, ['run', options.scene, '--bus', bus(ptys[0]), '--duration', '10',
+        '--phase', '0.0006', '--json']);
+    // The node side as numen left it: the drives' consumer of numen's heartbeat (30 ms) faults
+    // them once numen has gone (abort connection), which is not part of the run.
+    atExit = JSON.parse(JSON.stringify(nodes.report()));
+    let s = {};
+    try {
+        s = JSON.parse(r.stdout);
+    } catch (e) {
+        check(false, `numen run --json prints JSON (${e.message})`);
+    }
+    console.log(JSON.stringify(atExit));
+    check(r.code === 0 && s.exit_status === 0, `numen run exits 0 (${r.code}, summary ${s.exit_status})`);
+    check(s.safety && s.safety.faults === 0, `no safety stop (${JSON.stringify(s.safety)})`);
+    check(s.startup === 'operational', `start-up operational (${s.startup})`);
+    check(s.periods_to_torque >= 0, `torque flowed from period ${s.periods_to_torque}`);
+    check(atExit.syncs >= 9900, `node-canopen read ${atExit.syncs} SYNCs (10 s at 1 kHz)`);
+    check(atExit.nmt.includes('8200') && atExit.nmt.includes('0100'), `NMT reset communication then start all (${atExit.nmt})`);
+    for (const n of atExit.nodes) {
+        check(n.bootups >= 2 && n.resets >= 1, `node ${n.id}: boot-up after numen's reset (${n.bootups} boot-ups, ${n.resets} resets)`);
+        check(n.tpdos >= 9000, `node ${n.id}: ${n.tpdos} synchronous TPDOs`);
+        if (n.drive) {
+            check(n.drive.faults.length === 0, `drive ${n.id}: no fault (${JSON.stringify(n.drive.faults)})`);
+            check(n.rpdosNonzero > 0, `drive ${n.id}: ${n.rpdosNonzero} of ${n.rpdos} RPDOs with non-zero target torque`);
+        }
+    }
+    check(link.rejected === 0, `no chunk rejected by node's decoder (${link.rejected})`);
+    return { nodes };
+}
+
+// (d) the other direction: node-canopen's SDO client reads numen's emulated device (numen
+// device on the default scene) and gets numen's abort of a refused write.
+
+async function deviceServer(options, ptys) {
+    const { Device, SdoError } = require('canopen');
+    const { SerialLink } = require('./lib/serial_link');
+    const client = new Device({ id: 0x7e });
+    for (const n of NODES)
+        client.eds.addSdoClientParameter(n, 0x600 + n, 0x580 + n);
+    const link = new SerialLink(ptys[0], (frame) => client.receive(frame));
+    client.on('message', (m) => link.send(m));
+    client.start();
+
+    let ready;
+    const readyLine = new Promise((resolve) => { ready = resolve; });
+    const device = numen(options, ['device', options.scene, '--bus', bus(ptys[0]), '--ready'], {
+        onStdout: (out, child) => {
+            if (out.includes('READY')) {
+                options.deviceChild = child;
+                ready();
+            }
+        },
+    });
+    await Promise.race([readyLine, device]);
+    check(options.deviceChild !== undefined, 'numen device printed READY');
+    const up = (n, index, subIndex, dataType) => client.sdo.upload({ serverId: n, index, subIndex, dataType, timeout: 1000 });
+    const { DataType } = require('canopen');
+    for (const n of NODES) {
+        try {
+            const type = await up(n, 0x1000, 0, DataType.UNSIGNED32);
+            const want = DRIVES.includes(n) ? 402 : 406;
+            check((type & 0xffff) === want, `node ${n} 0x1000 device type ${hex(type)}: profile ${type & 0xffff}, want ${want}`);
+            const serial = await up(n, 0x1018, 4, DataType.UNSIGNED32);
+            check(serial === n, `node ${n} 0x1018:04 serial number ${serial}`);
+            const vendor = await up(n, 0x1018, 1, DataType.UNSIGNED32);
+            check(Number.isInteger(vendor), `node ${n} 0x1018:01 vendor-ID ${hex(vendor)}`);
+            const name = await up(n, 0x1008, 0, DataType.VISIBLE_STRING);
+            check(/^numen emulated (drive|encoder) \d$/.test(name), `node ${n} 0x1008 (segmented) "${name}"`);
+        } catch (e) {
+            check(false, `node ${n}: SDO upload failed: ${e.message}`);
+        }
+    }
+    try {
+        await client.sdo.download({ serverId: 2, index: 0x1000, subIndex: 0, data: 1, dataType: DataType.UNSIGNED32, timeout: 1000 });
+        check(false, 'numen refuses the write of the read-only 0x1000');
+    } catch (e) {
+        check(e instanceof SdoError && e.code === 0x06010002,
+            `numen's abort of the write of 0x1000 reaches node-canopen as ${e.code !== undefined ? hex(e.code) : e.message} (${e.message})`);
+    }
+    if (options.deviceChild)
+        options.deviceChild.kill('SIGTERM');
+    const r = await device;
+    check(r.code === 0, `numen device stops cleanly on SIGTERM (exit ${r.code})`);
+    link.close();
+    client.stop();
+    return {};
+}
+
+// ---------------------------------------------------------------------------------------------
+
+/** The scenarios: name → {ptys: pseudo-terminal pairs needed, run}. */
+const SCENARIOS = {
+    scan: { ptys: 1, run: scan },
+    sdo: { ptys: 6, run: sdo },
+    run: { ptys: 1, run },
+    device_server: { ptys: 1, run: deviceServer },
+};
+
+function parseArgs(argv) {
+    const options = {};
+    const rest = [];
+    for (let i = 0; i < argv.length; ++i) {
+        if (argv[i] === '--numen' || argv[i] === '--scene')
+            options[argv[i].slice(2)] = argv[++i];
+        else
+            rest.push(argv[i]);
+    }
+    if (rest.length !== 1 || !SCENARIOS[rest[0]] || !options.numen || !options.scene) {
+        console.error(`usage: interop.js --numen PATH --scene SCENE {${Object.keys(SCENARIOS).join(',')}}`);
+        process.exit(2);
+    }
+    options.scenario = rest[0];
+    return options;
+}
+
+async function main() {
+    const options = parseArgs(process.argv.slice(2));
+    try {
+        require.resolve('canopen');
+    } catch (e) {
+        skip('npm package canopen not installed (the interop_npm_ci fixture installs it with npm ci)');
+    }
+    const { inheritedPtys } = require('./lib/serial_link');
+    const ptys = inheritedPtys();
+    const scenario = SCENARIOS[options.scenario];
+    if (ptys.length < scenario.ptys)
+        throw new Error(`scenario ${options.scenario} needs ${scenario.ptys} pseudo-terminal pairs, got ${ptys.length}`);
+    const t0 = Date.now();
+    const { nodes } = await scenario.run(options, ptys);
+    if (nodes)
+        nodes.stop();
+    console.log(`scenario ${options.scenario}: ${failures.length === 0 ? 'pass' : failures.length + ' failed'} in ${((Date.now() - t0) / 1000).toFixed(2)} s`);
+    process.exit(failures.length === 0 ? 0 : 1);
+}
+
+main().catch((e) => {
+    console.error(e.stack || e);
+    process.exit(1);
+});
+
