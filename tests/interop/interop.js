@@ -78,15 +78,23 @@ function numen(options, args, { killAfterMs = 60000, onStdout } = {}) {
     });
 }
 
-/** node-canopen's nodes on pseudo-terminal `pty`, started (boot-up sent). */
-function startNodes(pty, dcfs) {
+/** node-canopen's nodes on pseudo-terminal `pty`, started (boot-up sent); `setup`: NodeSet's
+ *  options. */
+function startNodes(pty, dcfs, setup = {}) {
     const { NodeSet } = require('./lib/node_set');
     const { SerialLink } = require('./lib/serial_link');
-    const nodes = new NodeSet(dcfs, PLANTS, 0.001);
+    const nodes = new NodeSet(dcfs, PLANTS, 0.001, setup);
     const link = new SerialLink(pty, (frame) => nodes.receive(frame));
     nodes.attach(link);
     nodes.start();
     return { nodes, link };
+}
+
+/** What every scenario asks of the node-canopen side: no damaged chunk on the line, no frame
+ *  node-canopen's stack threw on. */
+function checkNodeSide(nodes, link) {
+    check(link.rejected === 0, `node side: no chunk rejected by the serial decoder (${link.rejected})`);
+    check(nodes.exceptions.length === 0, `node side: no exception in node-canopen (${JSON.stringify(nodes.exceptions)})`);
 }
 
 const bus = (pty) => `serial:${pty.path}@${BAUD}`;
@@ -123,7 +131,7 @@ async function scan(options, ptys) {
         check(node.counters.sdoRequests >= 7, `node ${node.id} answered ${node.counters.sdoRequests} SDO requests (7 objects)`);
     }
     check(nodes.nmtCommands.length === 0, `numen scan sent no NMT command (${nodes.nmtCommands.length})`);
-    check(link.rejected === 0, `no chunk rejected by node's decoder (${link.rejected})`);
+    checkNodeSide(nodes, link);
     return { nodes };
 }
 
@@ -133,14 +141,16 @@ async function scan(options, ptys) {
 async function sdo(options, ptys) {
     // One line per numen process (pty_pairs.py): the devices follow from line to line.
     let line = 0;
-    const { nodes, link } = startNodes(ptys[line], shippedDcfs());
+    const started = startNodes(ptys[line], shippedDcfs());
+    const { nodes } = started;
+    let { link } = started;
     const node = (id) => nodes.nodes.find((n) => n.id === id);
     const next = () => {
+        checkNodeSide(nodes, link);
         link.close();
         const { SerialLink } = require('./lib/serial_link');
-        const l = new SerialLink(ptys[++line], (frame) => nodes.receive(frame));
-        nodes.attach(l);
-        return l;
+        link = new SerialLink(ptys[++line], (frame) => nodes.receive(frame));
+        nodes.attach(link);
     };
     await sleep(50);
     const run = (args) => numen(options, ['sdo', '--bus', bus(ptys[line]), ...args]);
@@ -175,6 +185,7 @@ async function sdo(options, ptys) {
     check(r.code === 1 && r.stdout.concat(r.stderr).includes('0x06090011')
         && r.stdout.concat(r.stderr).includes('sub-index does not exist'),
     'read of the missing 0x1018:07: abort 0x06090011 "sub-index does not exist", exit 1');
+    checkNodeSide(nodes, link);
     return { nodes };
 }
 
@@ -211,7 +222,7 @@ async function run(options, ptys) {
             check(n.rpdosNonzero > 0, `drive ${n.id}: ${n.rpdosNonzero} of ${n.rpdos} RPDOs with non-zero target torque`);
         }
     }
-    check(link.rejected === 0, `no chunk rejected by node's decoder (${link.rejected})`);
+    checkNodeSide(nodes, link);
     return { nodes };
 }
 
@@ -273,6 +284,111 @@ async function deviceServer(options, ptys) {
     return {};
 }
 
+// The same loop without the boot-up message the script adds (node-canopen sends none): numen's
+// start-up must fail cleanly, naming a node, with no torque ever sent.
+
+async function startupWithoutBootUp(options, ptys) {
+    const { nodes, link } = startNodes(ptys[0], shippedDcfs(), { bootUp: false });
+    await sleep(50);
+    const r = await numen(options, ['run', options.scene, '--bus', bus(ptys[0]), '--duration', '2',
+        '--phase', '0.0006', '--json']);
+    let s = {};
+    try {
+        s = JSON.parse(r.stdout);
+    } catch (e) {
+        check(false, `numen run --json prints JSON (${e.message})`);
+    }
+    const report = nodes.report();
+    check(r.code !== 0 && s.exit_status === r.code, `numen run fails (exit ${r.code}, summary ${s.exit_status})`);
+    check(s.startup === 'failed', `start-up failed (${s.startup})`);
+    check(!(s.periods_to_torque >= 0), `no torque (${s.periods_to_torque})`);
+    const resets = report.nmt.filter((c) => c.startsWith('82')).length;
+    check(resets >= 2, `numen repeated its reset communication (${resets} of the first ${report.nmt.length} NMT commands)`);
+    for (const n of report.nodes)
+        check(n.bootups === 0 && n.rpdosNonzero === 0, `node ${n.id}: no boot-up, no torque`);
+    checkNodeSide(nodes, link);
+    return { nodes };
+}
+
+// (e) numen configures the node-canopen nodes from their DCFs by SDO and reads the values back
+// (the nodes start with their EDS defaults: PDOs disabled, no heartbeat); and a DCF that
+// disagrees with the device is refused with an error naming the DCF's file and line. Both need
+// numen's DCF configuration ([[device.canopen.axis]] dcf, docs/scenes.md); CMake registers them
+// when the source tree has it (hal/include/numen/hal/canopen/dcf.hpp).
+
+/** The default scene with a DCF per node, written to a temporary directory (the recording's
+ *  relative path made absolute). Returns the scene's path. */
+function sceneWithDcfs(options, dcfPaths) {
+    const dir = fs.mkdtempSync(path.join(os.tmpdir(), 'numen-interop-'));
+    const sceneDir = path.dirname(options.scene);
+    let text = fs.readFileSync(options.scene, 'utf-8').replace(/^(file\s*=\s*")(\.\.?\/[^"]*)"/m,
+        (_, key, rel) => `${key}${path.resolve(sceneDir, rel)}"`);
+    text += '\n' + NODES.map((n, i) => `[[device.canopen.axis]]\nnode_id = ${n}\ndcf = "${dcfPaths[i]}"\n`).join('\n');
+    const scene = path.join(dir, 'default_with_dcfs.toml');
+    fs.writeFileSync(scene, text);
+    return scene;
+}
+
+async function dcfConfigure(options, ptys) {
+    const dcfs = shippedDcfs();
+    const { nodes, link } = startNodes(ptys[0], dcfs, { configured: false });
+    await sleep(50);
+    const scene = sceneWithDcfs(options, dcfs.map((d) => d.path));
+    const r = await numen(options, ['run', scene, '--bus', bus(ptys[0]), '--duration', '3',
+        '--phase', '0.0006', '--json']);
+    const report = nodes.report();
+    let s = {};
+    try {
+        s = JSON.parse(r.stdout);
+    } catch (e) {
+        check(false, `numen run --json prints JSON (${e.message})`);
+    }
+    check(r.code === 0 && s.exit_status === 0, `numen run exits 0 (${r.code}, summary ${s.exit_status})`);
+    check(s.startup === 'operational', `start-up operational (${s.startup})`);
+    check(s.periods_to_torque >= 0, `torque flowed from period ${s.periods_to_torque}`);
+    for (const node of nodes.nodes) {
+        // Every configured value is now in the node's dictionary, written by numen.
+        for (const [index, sub, text] of node.dcf.parameterValues) {
+            const entry = sub === null ? node.dcf.eds.getEntry(index) : node.dcf.eds.getSubEntry(index, sub);
+            const want = typeof entry.value === 'number' ? Number(text) : text;
+            check(entry.value === want, `node ${node.id} [${index.toString(16).toUpperCase()}${sub === null ? '' : 'sub' + sub}] = ${entry.value}, DCF ${text}`);
+        }
+        check(node.counters.sdoRequests > 0, `node ${node.id}: ${node.counters.sdoRequests} SDO requests (writes and read-back)`);
+        if (node.drive)
+            check(node.counters.rpdosNonzero > 0, `drive ${node.id}: ${node.counters.rpdosNonzero} RPDOs with non-zero torque`);
+    }
+    check(report.exceptions.length === 0, `node side: no exception (${JSON.stringify(report.exceptions)})`);
+    checkNodeSide(nodes, link);
+    return { nodes };
+}
+
+async function dcfMismatch(options, ptys) {
+    // Node 2's DCF claims a product code the device does not have (0x1018:02 is read-only: it
+    // can only be read back, and disagrees).
+    const dcfs = shippedDcfs();
+    const dir = fs.mkdtempSync(path.join(os.tmpdir(), 'numen-interop-dcf-'));
+    const wrong = path.join(dir, 'node2_wrong_product.dcf');
+    const lines = fs.readFileSync(dcfs[1].path, 'utf-8').split('\n');
+    const section = lines.indexOf('[1018sub2]');
+    const at = lines.indexOf('PDOMapping=0', section);
+    lines.splice(at + 1, 0, 'ParameterValue=0x00000999');
+    fs.writeFileSync(wrong, lines.join('\n'));
+    const line = at + 2;  // 1-based line of the ParameterValue
+    const { nodes, link } = startNodes(ptys[0], dcfs);
+    await sleep(50);
+    const scene = sceneWithDcfs(options, dcfs.map((d, i) => (i === 1 ? wrong : d.path)));
+    const r = await numen(options, ['run', scene, '--bus', bus(ptys[0]), '--duration', '3',
+        '--phase', '0.0006']);
+    const out = r.stdout + r.stderr;
+    check(r.code !== 0, `numen run refuses the device (exit ${r.code})`);
+    check(out.includes(`${wrong}:${line}`), `the error names ${path.basename(wrong)}:${line}`);
+    check(/1018sub2/i.test(out), 'the error names [1018sub2]');
+    check(!nodes.nmtCommands.some((c) => c.startsWith('01')), `no node started (NMT ${nodes.nmtCommands})`);
+    check(nodes.nodes.every((n) => n.counters.rpdosNonzero === 0), 'no torque reached a drive');
+    checkNodeSide(nodes, link);
+    return { nodes };
+}
+
 // ---------------------------------------------------------------------------------------------
 
 /** The scenarios: name → {ptys: pseudo-terminal pairs needed, run}. */
@@ -280,7 +396,10 @@ const SCENARIOS = {
     scan: { ptys: 1, run: scan },
     sdo: { ptys: 6, run: sdo },
     run: { ptys: 1, run },
+    startup_without_boot_up: { ptys: 1, run: startupWithoutBootUp },
     device_server: { ptys: 1, run: deviceServer },
+    dcf_configure: { ptys: 1, run: dcfConfigure },
+    dcf_mismatch: { ptys: 1, run: dcfMismatch },
 };
 
 function parseArgs(argv) {

@@ -18,10 +18,11 @@ const { Eds } = require('canopen');
 /**
  * Loads `file` for node `nodeId` (1-127; may be omitted when the file's [DeviceComissioning]
  * gives NodeID, and must then agree with it). Returns {path, eds, nodeId, parameterValues:
- * [[index, subIndex|null, value text]]}. Throws naming the file for a bad or missing node id
- * and for a ParameterValue without an object.
+ * [[index, subIndex|null, value text]]}, the ParameterValues written into eds unless `apply`
+ * is false (the device as it leaves the factory: DefaultValues). Throws naming the file for a
+ * bad or missing node id and for a ParameterValue without an object.
  */
-function loadDcf(file, nodeId) {
+function loadDcf(file, nodeId, { apply = true } = {}) {
     const text = fs.readFileSync(file, 'utf-8');
     const parsed = ini.parse(text);
     const stated = parsed.DeviceComissioning && parsed.DeviceComissioning.NodeID;
@@ -56,7 +57,8 @@ function loadDcf(file, nodeId) {
             keys.ParameterValue]);
     }
     const dcf = { path: file, eds, nodeId, parameterValues };
-    applyParameterValues(dcf);
+    if (apply)
+        applyParameterValues(dcf);
     return dcf;
 }
 

@@ -46,18 +46,27 @@ class Node {
 }
 
 class NodeSet {
-    /** dcfs: one {path, nodeId} per node (nodeId may be omitted when the DCF's
-     *  [DeviceComissioning] gives it); plants: {nodeId: PlantAxis options} for the nodes with
-     *  an encoder (0x6004); syncPeriod: s, when the DCFs have no 0x1006. */
-    constructor(dcfs, plants, syncPeriod) {
+    /**
+     * dcfs: one {path, nodeId} per node (nodeId may be omitted when the DCF's
+     * [DeviceComissioning] gives it); plants: {nodeId: PlantAxis options} for the nodes with an
+     * encoder (0x6004); syncPeriod: s, when the DCFs have no 0x1006. Options: configured
+     * (default true): the nodes hold their DCF's configured values (ParameterValue), at power-on
+     * and after every NMT reset; false: they hold the EDS defaults (DefaultValue) until a
+     * master writes the configuration. bootUp (default true): the script sends the boot-up
+     * message node-canopen leaves out; false shows what a master sees without it.
+     */
+    constructor(dcfs, plants, syncPeriod, { configured = true, bootUp = true } = {}) {
+        this.configured = configured;
+        this.bootUp = bootUp;
         this.nodes = dcfs.map(({ path, nodeId }) => {
-            const dcf = loadDcf(path, nodeId);
+            const dcf = loadDcf(path, nodeId, { apply: configured });
             return new Node(dcf, plants[dcf.nodeId]);
         });
         this.link = null;
         this.syncs = 0;
         this.framesIn = 0;
         this.nmtCommands = [];
+        this.exceptions = [];
         const first = this.nodes[0].device;
         this.syncCobId = first.getValue(0x1005) & 0x7ff;
         const cycle = first.eds.getEntry(0x1006);  // communication cycle period, µs
@@ -75,7 +84,8 @@ class NodeSet {
             device.on('message', (m) => this.send(node, m));
             let previous = device.state;
             device.nmt.on('changeState', (state) => {
-                if (previous === NmtState.INITIALIZING && state === NmtState.PRE_OPERATIONAL) {
+                if (this.bootUp && previous === NmtState.INITIALIZING
+                    && state === NmtState.PRE_OPERATIONAL) {
                     device.nmt.send(0x700 + node.id, Buffer.from([0]));  // boot-up
                     ++node.counters.bootups;
                 }
@@ -93,7 +103,8 @@ class NodeSet {
             // DefaultValue) runs first, then this one restores the configuration.
             device.nmt.on('reset', () => {
                 ++node.counters.resets;
-                applyParameterValues(node.dcf);
+                if (this.configured)
+                    applyParameterValues(node.dcf);
             });
         }
     }
@@ -118,7 +129,14 @@ class NodeSet {
             const rpdo = node.operational && node.device.pdo.receiveMap[frame.id] !== undefined;
             if (frame.id === 0x600 + node.id)
                 ++node.counters.sdoRequests;
-            node.device.receive(frame);
+            try {
+                node.device.receive(frame);
+            } catch (e) {
+                // A frame node-canopen's stack throws on (e.g. an expedited SDO download shorter
+                // than the object): recorded, and the node goes on, as a device would.
+                this.exceptions.push(`node ${node.id}, frame ${frame.id.toString(16)}#`
+                    + `${Buffer.from(frame.data).toString('hex')}: ${e.message}`);
+            }
             if (rpdo) {
                 ++node.counters.rpdos;
                 if (node.device.getValue(0x6071) !== 0)
@@ -161,6 +179,7 @@ class NodeSet {
     report() {
         return {
             syncs: this.syncs, framesIn: this.framesIn, nmt: this.nmtCommands.slice(0, 8),
+            exceptions: this.exceptions,
             nodes: this.nodes.map((n) => ({ id: n.id, state: n.device.state,
                 drive: n.drive ? { state: n.drive.state, faults: n.drive.faults } : null,
                 ...n.counters })),
