@@ -125,9 +125,16 @@ class NodeSet {
                 if (node.operational)
                     this.latch(node);
         }
+        // Broadcasts (NMT, SYNC, heartbeats: every node may consume them) reach every node;
+        // the rest only the node that has the frame's RPDO or SDO channel (less work per
+        // period for node's event loop, which paces the answers to numen's SYNC).
+        const broadcast = frame.id === 0 || frame.id === this.syncCobId || (frame.id & 0x780) === 0x700;
         for (const node of this.nodes) {
             const rpdo = node.operational && node.device.pdo.receiveMap[frame.id] !== undefined;
-            if (frame.id === 0x600 + node.id)
+            const sdo = node.device.sdoServer.transfers[frame.id] !== undefined;
+            if (!broadcast && !rpdo && !sdo)
+                continue;
+            if (sdo)
                 ++node.counters.sdoRequests;
             try {
                 node.device.receive(frame);
@@ -159,6 +166,7 @@ class NodeSet {
         if (node.drive.state === 'fault' || node.drive.state === 'fault reaction active')
             return;
         node.drive.fault(code);
+        node.drive.faults[node.drive.faults.length - 1].afterSyncs = this.syncs;
         if (node.device.emcy.started)  // not in stopped
             node.device.emcy.write(code);  // positional form: write({code}) is broken in 6.2.1
     }

@@ -25,6 +25,7 @@ class SerialLink {
         this.path = pty.path;
         this.decoder = new SerialFrameDecoder();
         this.sent = 0;
+        this.pending = [];
         this.closed = false;
         this.reader = new tty.ReadStream(pty.master);
         this.reader.setRawMode(true);
@@ -42,11 +43,22 @@ class SerialLink {
         this.writer.on('error', (e) => { this.closed = true; this.error = e; });
     }
 
+    /** Queues one frame; the frames queued while one event is handled (e.g. every TPDO of a
+     *  SYNC) go out in one write(2), in order. */
     send(frame) {
         if (this.closed)
             return;
-        this.writer.write(encodeFrame(frame));
+        this.pending.push(encodeFrame(frame));
         ++this.sent;
+        if (this.pending.length === 1)
+            queueMicrotask(() => this.flush());
+    }
+
+    flush() {
+        if (this.closed || this.pending.length === 0)
+            return;
+        this.writer.write(Buffer.concat(this.pending));
+        this.pending = [];
     }
 
     get received() {
