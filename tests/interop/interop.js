@@ -28,11 +28,11 @@ const AXES = ['pivot_x', 'pivot_y', 'depth', 'roll', 'jaw'];
 // counts_per_unit as the scene: 2^14 counts per turn, 10 µm on depth.
 const ROTARY = 16384 / (2 * Math.PI);
 const PLANTS = {
-    1: { countsPerUnit: ROTARY, hold: -0.5373, amplitude: 0.05, frequency: 0.2, inertia: 2e-3, stiffness: 2, damping: 0.2 },
-    2: { countsPerUnit: ROTARY, hold: 0.0993, amplitude: 0.05, frequency: 0.15, inertia: 2e-3, stiffness: 2, damping: 0.2 },
-    3: { countsPerUnit: 1e5, hold: 0.10581, amplitude: 0.005, frequency: 0.25, inertia: 0.5, stiffness: 400, damping: 40 },
-    4: { countsPerUnit: ROTARY, hold: -1.6828, amplitude: 0.2, frequency: 0.1, inertia: 2e-3, stiffness: 2, damping: 0.2 },
-    5: { countsPerUnit: ROTARY, hold: -0.8878, amplitude: 0.1, frequency: 0.3, inertia: 2e-3, stiffness: 2, damping: 0.2 },
+    1: { countsPerUnit: ROTARY, hold: -0.5373, amplitude: 0.1, frequency: 0.5, inertia: 2e-3, stiffness: 10, damping: 0.5 },
+    2: { countsPerUnit: ROTARY, hold: 0.0993, amplitude: 0.1, frequency: 0.4, inertia: 2e-3, stiffness: 10, damping: 0.5 },
+    3: { countsPerUnit: 1e5, hold: 0.10581, amplitude: 0.01, frequency: 0.5, inertia: 0.5, stiffness: 400, damping: 40 },
+    4: { countsPerUnit: ROTARY, hold: -1.6828, amplitude: 0.2, frequency: 0.3, inertia: 2e-3, stiffness: 10, damping: 0.5 },
+    5: { countsPerUnit: ROTARY, hold: -0.8878, amplitude: 0.1, frequency: 0.3, inertia: 2e-3, stiffness: 10, damping: 0.5 },
 };
 
 // ---------------------------------------------------------------------------------------------

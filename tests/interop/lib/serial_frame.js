@@ -8,13 +8,19 @@
 // 0x00 delimiter, 10 + d bytes per frame. Only the classic 11-bit data frames node-canopen
 // sends and receives are built here; every decoded frame's flags are reported to the caller.
 
+// CRC-16/IBM-3740 table: the register after shifting each byte value through, MSB first.
+const CRC_TABLE = new Uint16Array(256);
+for (let b = 0; b < 256; ++b) {
+    let c = b << 8;
+    for (let i = 0; i < 8; ++i)
+        c = (c & 0x8000) ? ((c << 1) ^ 0x1021) & 0xffff : (c << 1) & 0xffff;
+    CRC_TABLE[b] = c;
+}
+
 /** CRC-16/IBM-3740 (poly 0x1021, init 0xFFFF, no reflection, xorout 0), check 0x29B1. */
 function crc16(bytes, crc = 0xffff) {
-    for (const b of bytes) {
-        crc ^= b << 8;
-        for (let i = 0; i < 8; ++i)
-            crc = (crc & 0x8000) ? ((crc << 1) ^ 0x1021) & 0xffff : (crc << 1) & 0xffff;
-    }
+    for (let i = 0; i < bytes.length; ++i)
+        crc = ((crc << 8) & 0xffff) ^ CRC_TABLE[((crc >> 8) ^ bytes[i]) & 0xff];
     return crc;
 }
 
@@ -66,13 +72,29 @@ function encodeFrame({ id, data }) {
         throw new RangeError(`serial frame: id ${id} is not an 11-bit CAN id`);
     if (data.length > 8)
         throw new RangeError(`serial frame: ${data.length} data bytes (at most 8)`);
-    const payload = Buffer.alloc(8 + data.length);
+    const n = 8 + data.length;  // payload: flags, id (4), len, data, CRC (2)
+    const payload = Buffer.allocUnsafe(n);
     payload[0] = 0;  // flags: 11-bit classic data frame
     payload.writeUInt32LE(id, 1);
     payload[5] = data.length;
-    Buffer.from(data).copy(payload, 6);
-    payload.writeUInt16BE(crc16(payload.subarray(0, 6 + data.length)), 6 + data.length);
-    return Buffer.concat([cobsEncode(payload), Buffer.from([0])]);
+    for (let i = 0; i < data.length; ++i)
+        payload[6 + i] = data[i];
+    payload.writeUInt16BE(crc16(payload.subarray(0, n - 2)), n - 2);
+    // COBS (a payload of at most 72 bytes never has a 0xFF block) and the delimiter.
+    const out = Buffer.allocUnsafe(n + 2);
+    let code = 0;
+    let o = 1;
+    for (let i = 0; i < n; ++i) {
+        if (payload[i] === 0) {
+            out[code] = o - code;
+            code = o++;
+        } else {
+            out[o++] = payload[i];
+        }
+    }
+    out[code] = o - code;
+    out[o] = 0;
+    return out;
 }
 
 /**
@@ -83,22 +105,27 @@ function encodeFrame({ id, data }) {
  */
 class SerialFrameDecoder {
     constructor() {
-        this.chunk = [];
+        this.chunk = Buffer.alloc(74);  // one byte more than the longest frame: marks it too long
+        this.length = 0;
         this.frames = 0;
         this.rejected = 0;
     }
 
     feed(bytes) {
         const frames = [];
-        for (const b of bytes) {
+        for (let i = 0; i < bytes.length; ++i) {
+            const b = bytes[i];
             if (b !== 0) {
-                this.chunk.push(b);
+                if (this.length < this.chunk.length)
+                    this.chunk[this.length] = b;
+                ++this.length;
                 continue;
             }
-            const chunk = Buffer.from(this.chunk);
-            this.chunk = [];
-            if (chunk.length === 0)
+            const length = this.length;
+            this.length = 0;
+            if (length === 0)
                 continue;  // idle fill
+            const chunk = this.chunk.subarray(0, Math.min(length, this.chunk.length));
             const frame = this._decodeChunk(chunk);
             if (frame) {
                 ++this.frames;
