@@ -5,7 +5,8 @@
 // target torque 0x6071 (per mille of rated torque 0x6076), clipped to max torque 0x6072,
 // reported in torque actual value 0x6077. Stepped once per SYNC with the values the last RPDO
 // wrote (node-canopen applies an RPDO when it arrives, whatever its transmission type; reading
-// them at SYNC makes the RPDO synchronous). Error code 0x603F holds the last fault.
+// them at SYNC makes the RPDO synchronous). Error code 0x603F, where the dictionary has it,
+// holds the last fault.
 
 const State = Object.freeze({
     NOT_READY: 'not ready to switch on',
@@ -46,11 +47,18 @@ function decodeControlword(cw) {
     return (cw & 0x08) ? 'enable operation' : 'switch on';
 }
 
+// Objects the state machine reads or writes; 0x603F (error code) is used when present.
+const REQUIRED = [0x6040, 0x6041, 0x6060, 0x6061, 0x6071, 0x6072, 0x6076, 0x6077];
+
 class Cia402Drive {
-    /** `device`: a node-canopen Device whose dictionary has 0x6040, 0x6041, 0x603F, 0x6060,
-     *  0x6061, 0x6071, 0x6072 and 0x6077. */
-    constructor(device) {
+    /** `device`: a node-canopen Device whose dictionary has the REQUIRED objects (throws naming
+     *  the missing ones and `source`, e.g. the DCF's path). */
+    constructor(device, source) {
+        const missing = REQUIRED.filter((i) => device.eds.getEntry(i) === undefined);
+        if (missing.length > 0)
+            throw new Error(`${source}: a CiA 402 drive needs ${missing.map((i) => '0x' + i.toString(16).toUpperCase()).join(', ')}`);
         this.device = device;
+        this.hasErrorCode = device.eds.getEntry(0x603f) !== undefined;
         this.state = State.NOT_READY;
         this.lastControlword = 0;
         this.faults = [];       // {code, state} of every fault, in order
@@ -68,7 +76,8 @@ class Cia402Drive {
         if (this.state === State.FAULT || this.state === State.FAULT_REACTION_ACTIVE)
             return;
         this.faults.push({ code, state: this.state });
-        this.device.setValue(0x603f, code);
+        if (this.hasErrorCode)
+            this.device.setValue(0x603f, code);
         this.go(State.FAULT_REACTION_ACTIVE);
         this.publish(0);
     }
@@ -106,7 +115,8 @@ class Cia402Drive {
         switch (command) {
             case 'fault reset':
                 if (s === State.FAULT && rising) {
-                    this.device.setValue(0x603f, 0);
+                    if (this.hasErrorCode)
+                        this.device.setValue(0x603f, 0);
                     this.go(State.SWITCH_ON_DISABLED);  // 15
                 }
                 break;

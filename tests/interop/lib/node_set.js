@@ -35,7 +35,7 @@ class Node {
         this.device = new Device({ eds: dcf.eds, id: dcf.nodeId });
         this.plant = plant ? new PlantAxis(plant) : null;
         // A CiA 402 drive where the dictionary has the drive objects (device type profile 402).
-        this.drive = (this.device.getValue(0x1000) & 0xffff) === 402 ? new Cia402Drive(this.device) : null;
+        this.drive = (this.device.getValue(0x1000) & 0xffff) === 402 ? new Cia402Drive(this.device, dcf.path) : null;
         this.counters = { rpdos: 0, rpdosNonzero: 0, tpdos: 0, sdoRequests: 0, bootups: 0,
             heartbeats: 0, emcys: 0, resets: 0 };
     }
