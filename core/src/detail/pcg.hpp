@@ -51,8 +51,8 @@ inline constexpr int kMaxPcgErrorDelay = 8;
 /// ‖x − x_j‖²_A − ‖x − x_{j+1}‖²_A = α_j ρ_j (Hestenes & Stiefel 1952, Thm. 6:1),
 /// so the sum is a lower bound of ‖x − x_k‖²_A that misses only
 /// ‖x − x_{k+d}‖²_A, which CG has made small by then; Strakoš & Tichý (2002)
-/// show the same identity holds to rounding in finite precision while the
-/// estimate is above √ε. bᵀx_{k+d} = x_{k+d}ᵀ A x to first order is ‖x‖²_A
+/// show that it stays valid, up to small rounding terms, in finite precision
+/// until the error reaches the iteration's attainable accuracy. bᵀx_{k+d} = x_{k+d}ᵀ A x to first order is ‖x‖²_A
 /// within a relative η: the test bounds ‖x − x_k‖_A / ‖x‖_A. The returned
 /// iterate x_{k+d} is at least as good as x_k (CG's A-norm error decreases
 /// monotonically), so η_k bounds the returned error up to the estimate's own
