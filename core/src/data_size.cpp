@@ -52,7 +52,8 @@ DataFootprint data_footprint(const Data& d) noexcept {
                  heap(s.saved_state, s.inertia_world, s.twist0, s.rhs, s.delta, s.residual,
                       s.precond_residual, s.direction, s.a_direction, s.block,
                       s.isotropic_moments, s.block_factor, s.in_solve, s.coupled,
-                      s.target_coupled, s.imposed)};
+                      s.target_coupled, s.imposed, s.stage_start, s.stage_move, s.stage_delta,
+                      s.stage_gyro)};
   f.groups[4] = {"joints", heap(d.joint_prescribed, d.joints, s.joint_rhs, s.joint_y,
                                 s.joint_y_correction, s.projected_residual, a.rows, a.known,
                                 a.joint_active, a.off_diagonal, a.factor, a.coupling, a.work,
@@ -60,7 +61,8 @@ DataFootprint data_footprint(const Data& d) noexcept {
   f.groups[5] = {
       "nets",
       heap(d.nodes, d.node_contacts, d.nets, n.saved, n.force, n.lever, n.node_diagonal, n.block,
-           n.block_inverse, n.spring_block, n.tie_sums, n.rhs, n.delta, n.residual,
+           n.block_inverse, n.spring_block, n.tie_sums, n.rhs, n.delta, n.stage_velocity,
+           n.stage_move, n.stage_delta, n.residual,
            n.precond_residual, n.direction, n.a_direction, n.sweep, n.body_schur, n.body_tmp,
            n.sweep_position, n.sweep_nodes, n.sweep_springs.direction_x,
            n.sweep_springs.direction_y, n.sweep_springs.direction_z, n.sweep_springs.weight_axial,

@@ -51,7 +51,7 @@ const AccuracyResult& free_body_result() {
 
 TEST(StudyAccuracy, FreeBodyErrorsAreFiniteAndDecreaseWithTheStep) {
   const AccuracyResult& r = free_body_result();
-  ASSERT_EQ(r.rows.size(), 15u);  // 3 integrators × 5 steps
+  ASSERT_EQ(r.rows.size(), 20u);  // 4 integrators × 5 steps
   EXPECT_TRUE(r.references.empty()) << "closed form: no reference run";
   for (std::size_t i = 0; i < r.rows.size(); ++i) {
     const auto& row = r.rows[i];
@@ -73,10 +73,11 @@ TEST(StudyAccuracy, FreeBodyErrorsAreFiniteAndDecreaseWithTheStep) {
 
 TEST(StudyAccuracy, FreeBodyObservedOrderIsTheTheoreticalOne) {
   const AccuracyResult& r = free_body_result();
-  ASSERT_EQ(r.fits.size(), 3u);
+  ASSERT_EQ(r.fits.size(), 4u);
   for (const auto& f : r.fits) {
     SCOPED_TRACE(f.integrator);
-    EXPECT_EQ(f.theoretical_order, f.integrator == "trapezoidal" ? 2.0 : 1.0);
+    EXPECT_EQ(f.theoretical_order,
+              f.integrator == "trapezoidal" || f.integrator == "tr-bdf2" ? 2.0 : 1.0);
     EXPECT_EQ(f.points, 5);
     EXPECT_NEAR(f.observed_order, f.theoretical_order, 0.3);
     EXPECT_NEAR(f.observed_order_rotation, f.theoretical_order, 0.3);
@@ -84,6 +85,8 @@ TEST(StudyAccuracy, FreeBodyObservedOrderIsTheTheoreticalOne) {
   }
   // What the second order buys at 1 ms on this oscillator: at least 100× smaller errors.
   EXPECT_LT(r.fits[2].error_at_1ms_mm * 100.0, r.fits[0].error_at_1ms_mm);
+  EXPECT_EQ(r.fits[3].integrator, "tr-bdf2");
+  EXPECT_LT(r.fits[3].error_at_1ms_mm * 100.0, r.fits[0].error_at_1ms_mm);
 }
 
 TEST(StudyAccuracy, CsvFilesHaveTheDocumentedColumns) {
@@ -91,7 +94,7 @@ TEST(StudyAccuracy, CsvFilesHaveTheDocumentedColumns) {
   const std::string out = (dir.path() / "acc").string();
   numen::sim::write_accuracy_csv(free_body_result(), out);
   const auto rows = read_lines(out + "/accuracy.csv");
-  ASSERT_EQ(rows.size(), 16u);
+  ASSERT_EQ(rows.size(), 21u);
   EXPECT_EQ(rows[0],
             "case,integrator,dt_s,steps,horizon_s,position_error_max_mm,position_error_rms_mm,"
             "orientation_error_max_mrad,orientation_error_rms_mrad,cpu_s_per_sim_s,diverged,"
@@ -99,7 +102,7 @@ TEST(StudyAccuracy, CsvFilesHaveTheDocumentedColumns) {
   for (const auto& l : rows) EXPECT_EQ(count_fields(l), 13u) << l;
   EXPECT_EQ(rows[1].rfind("free-body,implicit-euler,0.002,250,0.5,", 0), 0u) << rows[1];
   const auto orders = read_lines(out + "/accuracy_orders.csv");
-  ASSERT_EQ(orders.size(), 4u);
+  ASSERT_EQ(orders.size(), 5u);
   EXPECT_EQ(orders[0],
             "case,integrator,observed_order,observed_order_rotation,theoretical_order,points,"
             "fit_dt_min_s,fit_dt_max_s,position_error_max_at_1ms_mm,cpu_s_per_sim_s_at_1ms");
@@ -127,10 +130,10 @@ TEST(StudyAccuracy, EveryCaseRunsAndIsComparedWithItsReference) {
     ++calls;
   };
   const AccuracyResult r = numen::sim::run_accuracy_study(o);
-  EXPECT_EQ(r.rows.size(), 4u * 3u * 2u);
-  EXPECT_EQ(calls, 4 * 3 * 2 + 3 * 2);  // runs + two reference runs per non-closed case
+  EXPECT_EQ(r.rows.size(), 5u * 4u * 2u);  // cases × integrators × steps
+  EXPECT_EQ(calls, 5 * 4 * 2 + 4 * 2);  // runs + two reference runs per non-closed case
   EXPECT_NEAR(last_done, last_total, 1e-9 * last_total);
-  ASSERT_EQ(r.references.size(), 3u);
+  ASSERT_EQ(r.references.size(), 4u);
   std::set<std::string> cases;
   for (const auto& ref : r.references) {
     EXPECT_EQ(ref.reference_dt, 1e-3);
@@ -147,7 +150,7 @@ TEST(StudyAccuracy, EveryCaseRunsAndIsComparedWithItsReference) {
       EXPECT_EQ(row.reference, "trapezoidal dt=1e-03");
     }
   }
-  EXPECT_EQ(cases.size(), 4u);
+  EXPECT_EQ(cases.size(), 5u);
 }
 
 TEST(StudyAccuracy, CasesThisBuildLeftOutAreSkippedAndNamed) {
@@ -210,6 +213,6 @@ TEST(StudyAccuracy, BadCaseAndStepAreInputErrors) {
 TEST(StudyAccuracy, TableListsEveryFit) {
   const std::string t = numen::sim::format_accuracy_table(free_body_result());
   for (const char* s : {"| free-body | implicit-euler |", "| free-body | symplectic-euler |",
-                        "| free-body | trapezoidal |", "theoretical"})
+                        "| free-body | trapezoidal |", "| free-body | tr-bdf2 |", "theoretical"})
     EXPECT_NE(t.find(s), std::string::npos) << s << "\n" << t;
 }
