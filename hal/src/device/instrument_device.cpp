@@ -46,7 +46,8 @@ InstrumentDevice::InstrumentDevice(DeviceConfig config,
     const AxisConfig& a = config_.axes[static_cast<std::size_t>(i)];
     limits_[static_cast<std::size_t>(i)] = make_check_limits(a, age, config_.jump_tolerance_counts);
     hold_[i] = std::clamp(0.0, a.min, a.max);
-    rates_[static_cast<std::size_t>(i)] = RateEstimator(config_.velocity_cutoff_hz, a.max_speed, a.wraps);
+    rates_[static_cast<std::size_t>(i)] =
+        RateEstimator(config_.velocity_cutoff_hz, a.max_speed, a.wraps);
   }
   if (config_.canopen.managed) {
     for (int i = 0; i < n_; ++i) {
