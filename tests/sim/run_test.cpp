@@ -261,14 +261,14 @@ TEST(RunDefaultScene, AnInjectedDriveFaultIsReportedByItsEmcyName) {
 TEST(RunDefaultScene, NoJumpAtStart) {
   NUMEN_REQUIRE_ARTICULATION();
   // The instrument starts at the device's first target: at the first valid
-  // sample (period 2, after the NMT start-up; the god-object held its starting
-  // pose until then), target and god-object agree to the encoder quantisation
-  // and 2 ms of hand motion.
+  // sample (period 49, after the NMT start-up and the nodes' configuration from
+  // their DCFs; the god-object held its starting pose until then), target and
+  // god-object agree to the encoder quantisation and the hand motion meanwhile.
   const Scene& scene = default_scene();
   SceneRunner runner(scene);
-  for (int k = 0; k < 3; ++k) {
+  for (int k = 0; k < 50; ++k) {
     runner.period();
-    EXPECT_EQ(runner.device().last_sample().valid, k == 2) << "period " << k;
+    EXPECT_EQ(runner.device().last_sample().valid, k == 49) << "period " << k;
   }
   const auto& d = runner.data();
   ASSERT_TRUE(runner.device().last_sample().valid);
@@ -870,6 +870,9 @@ TEST(RunBadBus, CorruptedAndLostFramesAreRejectedWithoutHarm) {
   scene.bus.corruption_probability = 0.05;
   scene.bus.drop_probability = 0.02;
   scene.bus.seed = 20240611;
+  // The nodes come configured: on a bus that flips payload bits a configuration write can land
+  // altered, and the read-back then refuses the start-up, as it must (DcfConfiguration tests).
+  for (numen::hal::CanopenAxisConfig& x : scene.device.canopen.axes) x.dcf = nullptr;
   const std::int64_t n = periods_for(scene, 12.0);
   SceneRunner runner(scene, static_cast<std::size_t>(n));
   const auto t0 = std::chrono::steady_clock::now();
@@ -1100,6 +1103,7 @@ std::vector<fs::path> recorded_trials(std::string* note) {
 std::vector<fs::path> jigsaws_scenes() {
   std::vector<fs::path> out;
   for (const auto& e : fs::directory_iterator(fs::path(NUMEN_SOURCE_DIR) / "sim" / "scenes")) {
+    if (!e.is_regular_file() || e.path().extension() != ".toml") continue;  // devices/: the DCFs
     std::ifstream in(e.path());
     const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
     if (text.find("source = \"jigsaws\"") != std::string::npos) out.push_back(e.path());
