@@ -129,6 +129,7 @@ strip --strip-unneeded "$root/hil/bin/numen" 2>/dev/null || true
 copy_libs "$build/numen"
 mkdir -p "$root/hil/sim/scenes" "$root/hil/sim/data"
 cp "$repo/sim/scenes/default.toml" "$root/hil/sim/scenes/"
+cp -r "$repo/sim/scenes/devices" "$root/hil/sim/scenes/"  # the scene's node DCFs
 cp "$repo"/sim/data/*.txt "$root/hil/sim/data/"
 
 # 6. /init, the scenario library and the scenarios.

@@ -41,6 +41,9 @@ std::string default_scene_copy(const std::vector<std::pair<std::string, std::str
       std::filesystem::path(numen::sim::default_scene_path()).parent_path().string() + "/";
   if (text.find(kExcerptLine) != std::string::npos)
     text = numen::test::replace(text, "file = \"../data/", "file = \"" + dir + "../data/");
+  for (std::size_t at = text.find("dcf = \"devices/"); at != std::string::npos;
+       at = text.find("dcf = \"devices/", at + 1))
+    text.replace(at, 7, "dcf = \"" + dir);  // the node DCFs beside the shipped scene
   return text;
 }
 
@@ -311,6 +314,7 @@ TEST(NumenCli, InstalledExecutableFindsTheDefaultSceneRelativeToItself) {
   fs::create_directories(prefix / "share/numen/data");
   fs::copy_file(kNumen, prefix / "bin/numen");
   fs::copy_file(source_scenes / "default.toml", prefix / "share/numen/scenes/default.toml");
+  fs::copy(source_scenes / "devices", prefix / "share/numen/scenes/devices");  // its node DCFs
   fs::copy_file(source_scenes / "../data/jigsaws_suturing_b002_excerpt.txt",
                 prefix / "share/numen/data/jigsaws_suturing_b002_excerpt.txt");
   const ChildResult r = run_child({(prefix / "bin/numen").string(), "info", "--json"}, dir.path(), 60);

@@ -331,6 +331,9 @@ TEST(Scene, TrapezoidalWithADeformableNetIsWarnedAbout) {
   // GCC bug 105329)
   const std::string data_dir = std::string("\"") + NUMEN_SOURCE_DIR + "/sim/data/";
   toml = replace(toml, "\"../data/", data_dir);
+  const std::string devices_dir = std::string("\"") + NUMEN_SOURCE_DIR + "/sim/scenes/devices/";
+  for (std::size_t at = toml.find("\"devices/"); at != std::string::npos; at = toml.find("\"devices/", at))
+    toml.replace(at, 9, devices_dir);
   const Scene s = load_scene(dir.write("trap_deformable.toml", toml));
   EXPECT_EQ(s.model.integrator, numen::core::Integrator::kTrapezoidal);
   bool warned = false;
@@ -1048,17 +1051,19 @@ sdo_poll_period = 100
     EXPECT_EQ(x.dcf->path, (dir.path() / "enc.dcf").string());
   }
   // One axis's own DCF wins over the device's.
+  dir.write("own.dcf", dcf);
   const std::string own = replace(text, "sdo_poll_period = 100\n", "sdo_poll_period = 100\n" R"(
 [[device.canopen.axis]]
-dcf = "enc.dcf"
 [[device.canopen.axis]]
 [[device.canopen.axis]]
 [[device.canopen.axis]]
 [[device.canopen.axis]]
 [[device.canopen.axis]]
-node_id = 9
+dcf = "own.dcf"
 )");
-  EXPECT_EQ(load_scene(dir.write("own.toml", own)).device.canopen.axes[5].dcf->find({0x1800, 1})->value, 0x189u);
+  const Scene o = load_scene(dir.write("own.toml", own));
+  EXPECT_EQ(o.device.canopen.axes[5].dcf->path, (dir.path() / "own.dcf").string());
+  EXPECT_EQ(o.device.canopen.axes[4].dcf->path, (dir.path() / "enc.dcf").string());
 }
 
 TEST(SceneCanopen, DcfErrorsAreLocatedInTheSceneOrInTheDcf) {
