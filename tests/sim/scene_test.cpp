@@ -317,16 +317,14 @@ TEST(Scene, TrapezoidalIntegratorIsSelectedByName) {
   EXPECT_STREQ(numen::sim::to_string(s.model.integrator), "trapezoidal");
 }
 
-TEST(Scene, TrapezoidalWithADeformableNetIsWarnedAbout) {
-  NUMEN_REQUIRE_DEFORMABLE();
-  const Scene plain = load_scene(std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/deformable.toml");
-  for (const std::string& w : plain.warnings) EXPECT_EQ(w.find("L-stable"), std::string::npos) << w;
-  TempDir dir;
+/// The shipped deformable scene with `integrator`, its data and DCF paths made absolute so that
+/// it loads from a temporary directory.
+std::string deformable_scene_with(const std::string& integrator) {
   std::ifstream in(std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/deformable.toml");
   std::stringstream text;
   text << in.rdbuf();
   std::string toml =
-      replace(text.str(), "integrator = \"implicit-euler\"", "integrator = \"trapezoidal\"");
+      replace(text.str(), "integrator = \"implicit-euler\"", "integrator = \"" + integrator + "\"");
   // (built as one std::string, not "\"" + std::string(...): g++ 12's -Wrestrict false positive,
   // GCC bug 105329)
   const std::string data_dir = std::string("\"") + NUMEN_SOURCE_DIR + "/sim/data/";
@@ -334,7 +332,15 @@ TEST(Scene, TrapezoidalWithADeformableNetIsWarnedAbout) {
   const std::string devices_dir = std::string("\"") + NUMEN_SOURCE_DIR + "/sim/scenes/devices/";
   for (std::size_t at = toml.find("\"devices/"); at != std::string::npos; at = toml.find("\"devices/", at))
     toml.replace(at, 9, devices_dir);
-  const Scene s = load_scene(dir.write("trap_deformable.toml", toml));
+  return toml;
+}
+
+TEST(Scene, TrapezoidalWithADeformableNetIsWarnedAbout) {
+  NUMEN_REQUIRE_DEFORMABLE();
+  const Scene plain = load_scene(std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/deformable.toml");
+  for (const std::string& w : plain.warnings) EXPECT_EQ(w.find("L-stable"), std::string::npos) << w;
+  TempDir dir;
+  const Scene s = load_scene(dir.write("trap_deformable.toml", deformable_scene_with("trapezoidal")));
   EXPECT_EQ(s.model.integrator, numen::core::Integrator::kTrapezoidal);
   bool warned = false;
   for (const std::string& w : s.warnings)
@@ -355,13 +361,7 @@ TEST(Scene, TrBdf2IntegratorIsSelectedByNameAndRunsFirstOrderCoupling) {
 TEST(Scene, TrBdf2WithADeformableNetIsNotWarnedAbout) {
   NUMEN_REQUIRE_DEFORMABLE();
   TempDir dir;
-  std::ifstream in(std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/deformable.toml");
-  std::stringstream text;
-  text << in.rdbuf();
-  std::string toml = replace(text.str(), "integrator = \"implicit-euler\"", "integrator = \"tr-bdf2\"");
-  const std::string data_dir = std::string("\"") + NUMEN_SOURCE_DIR + "/sim/data/";
-  toml = replace(toml, "\"../data/", data_dir);
-  const Scene s = load_scene(dir.write("trbdf2_deformable.toml", toml));
+  const Scene s = load_scene(dir.write("trbdf2_deformable.toml", deformable_scene_with("tr-bdf2")));
   EXPECT_EQ(s.model.integrator, numen::core::Integrator::kTrBdf2);
   for (const std::string& w : s.warnings) EXPECT_EQ(w.find("L-stable"), std::string::npos) << w;
 }

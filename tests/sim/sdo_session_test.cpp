@@ -47,7 +47,7 @@ TEST(SdoSession, ATransferRunsToItsEndOrItsAbort) {
   ASSERT_EQ(sim::run_sdo_transfer(link, client), hal::SdoStatus::kDone);
   const std::string name(buf.begin(), buf.begin() + static_cast<std::ptrdiff_t>(client.transferred()));
   EXPECT_NE(name.find("drive"), std::string::npos) << name;
-  ASSERT_TRUE(client.start_upload({0x6040, 0}, buf, link.now_ns()));
+  ASSERT_TRUE(client.start_upload({0x2345, 0}, buf, link.now_ns()));  // no such object
   EXPECT_EQ(sim::run_sdo_transfer(link, client), hal::SdoStatus::kAborted);
   EXPECT_EQ(client.abort_code(), hal::SdoAbort::kNoObject);
   hal::SdoClient absent(42, 20'000'000);  // no such node: the timeout ends it
