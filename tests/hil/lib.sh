@@ -81,19 +81,14 @@ pair_scene() {
   sed -e "s/^dt = 0\.001\$/dt = $dt/" -e '/^max_sample_age = /d' \
     /hil/sim/scenes/default.toml >"$out"
   grep -q "^dt = $dt\$" "$out" || fail "pair_scene: no 'dt = 0.001' line to replace in default.toml"
-  # The heartbeat keys go into default.toml's [device.canopen] (which names the node DCFs); the
-  # DCFs' 0x1017 / 0x1016 follow the period (the scene refuses a DCF that disagrees with it).
+  # The heartbeat keys go into default.toml's [device.canopen]. The nodes come configured (the
+  # node DCF lines are dropped): these scenarios time the loop, torque and faults from the first
+  # periods on, and `numen device`'s nodes hold what the DCFs would write (the configuration
+  # over SDO is covered by scan_and_sdo's transfers and the DcfConfiguration/CanopenMaster tests).
   grep -q '^\[device\.canopen\]$' "$out" || fail "pair_scene: default.toml has no [device.canopen]"
   sed -i "s/^\[device\.canopen\]\$/[device.canopen]\ncontroller_heartbeat_period = $hb\nnode_heartbeat_period = $hb/" "$out"
-  mkdir -p /hil/sim/scenes/pair_devices
-  for f in /hil/sim/scenes/devices/*.dcf; do
-    awk -v hb="$hb" -v cons="$(printf '0x007F%04X' $((3 * hb)))" '
-      /^\[/ { sec = $0 }
-      sec == "[1017]" && /^(DefaultValue|ParameterValue)=/ { sub(/=.*/, "=" hb) }
-      sec == "[1016sub1]" && /^(DefaultValue|ParameterValue)=/ { sub(/=.*/, "=" cons) }
-      { print }' "$f" >"/hil/sim/scenes/pair_devices/$(basename "$f")"
-  done
-  sed -i 's#dcf = "devices/#dcf = "pair_devices/#' "$out"
+  sed -i '/^dcf = "devices\//d' "$out"
+  ! grep -q '^dcf = ' "$out" || fail "pair_scene: a dcf line is left in pair.toml"
   HIL_SCENE="$out"
 }
 
