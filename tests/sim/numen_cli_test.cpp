@@ -41,10 +41,7 @@ std::string default_scene_copy(const std::vector<std::pair<std::string, std::str
       std::filesystem::path(numen::sim::default_scene_path()).parent_path().string() + "/";
   if (text.find(kExcerptLine) != std::string::npos)
     text = numen::test::replace(text, "file = \"../data/", "file = \"" + dir + "../data/");
-  for (std::size_t at = text.find("dcf = \"devices/"); at != std::string::npos;
-       at = text.find("dcf = \"devices/", at + 1))
-    text.replace(at, 7, "dcf = \"" + dir);  // the node DCFs beside the shipped scene
-  return text;
+  return numen::test::with_absolute_dcf_paths(text, dir);
 }
 
 /// The default scene at control period `dt` (s): the simulated bus's latency and compute

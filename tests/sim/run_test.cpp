@@ -1132,9 +1132,7 @@ std::string scene_on_trial(const fs::path& scene, const fs::path& trial, const s
   EXPECT_NE(at, std::string::npos) << "test bug: " << scene << " does not read the excerpt";
   if (at != std::string::npos)
     text.replace(at, file_line.size(), "file = \"" + fs::absolute(trial).string() + "\"\n" + extra);
-  const std::string devices = "dcf = \"" + (fs::absolute(scene).parent_path() / "devices").string() + "/";
-  for (std::size_t d = text.find("dcf = \"devices/"); d != std::string::npos; d = text.find("dcf = \"devices/", d + 1))
-    text.replace(d, 15, devices);  // the node DCFs beside the shipped scene
+  text = numen::test::with_absolute_dcf_paths(text, fs::absolute(scene).parent_path().string());
   if (!trocar.empty()) {
     const std::string approach = "placement = \"approach\"";
     const auto p = text.find(approach);

@@ -329,10 +329,7 @@ std::string deformable_scene_with(const std::string& integrator) {
   // GCC bug 105329)
   const std::string data_dir = std::string("\"") + NUMEN_SOURCE_DIR + "/sim/data/";
   toml = replace(toml, "\"../data/", data_dir);
-  const std::string devices_dir = std::string("\"") + NUMEN_SOURCE_DIR + "/sim/scenes/devices/";
-  for (std::size_t at = toml.find("\"devices/"); at != std::string::npos; at = toml.find("\"devices/", at))
-    toml.replace(at, 9, devices_dir);
-  return toml;
+  return numen::test::with_absolute_dcf_paths(toml, std::string(NUMEN_SOURCE_DIR) + "/sim/scenes");
 }
 
 TEST(Scene, TrapezoidalWithADeformableNetIsWarnedAbout) {

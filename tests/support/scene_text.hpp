@@ -86,6 +86,18 @@ inline int column_of(const std::string& text, const std::string& needle, const s
   return 0;
 }
 
+/// `text` (a shipped scene's) with every `dcf = "devices/…"` made absolute under `scene_dir`
+/// (the shipped scene's directory, with or without a trailing slash), so that a copy of the
+/// scene loads from another directory with the node DCFs beside the shipped scene.
+inline std::string with_absolute_dcf_paths(std::string text, std::string scene_dir) {
+  if (!scene_dir.empty() && scene_dir.back() != '/') scene_dir += '/';
+  const std::string from = "dcf = \"devices/";
+  const std::string to = "dcf = \"" + scene_dir + "devices/";
+  for (std::size_t at = text.find(from); at != std::string::npos; at = text.find(from, at + to.size()))
+    text.replace(at, from.size(), to);
+  return text;
+}
+
 /// Replaces the `nth` occurrence of `from` in `text` (which must exist: a
 /// missing one fails the test as a bug of the test's template).
 inline std::string replace(std::string text, const std::string& from, const std::string& to,
