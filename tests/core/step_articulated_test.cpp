@@ -401,7 +401,7 @@ TEST(StepArticulated, ConstrainedSolveWithBodyContactsMatchesADenseKktSolve) {
 TEST(StepArticulated, ArticulatedStepsAreAllocationFreeInEveryModeAndDeterministic) {
   for (core::Integrator integ :
        {core::Integrator::kLinearlyImplicitEuler, core::Integrator::kSymplecticEuler,
-        core::Integrator::kTrapezoidal}) {
+        core::Integrator::kTrapezoidal, core::Integrator::kTrBdf2}) {
     for (core::CouplingMode mode : {core::CouplingMode::kGodObject, core::CouplingMode::kFirstOrder,
                                     core::CouplingMode::kDirect}) {
       if (integ == core::Integrator::kTrapezoidal && mode == core::CouplingMode::kFirstOrder)
@@ -460,7 +460,7 @@ TEST(StepArticulated, ANonFiniteStepIsRolledBackAndTheNextStepsRecover) {
 TEST(StepArticulated, TrocarHoldsInEveryCouplingModeAndIntegrator) {
   for (core::Integrator integ :
        {core::Integrator::kLinearlyImplicitEuler, core::Integrator::kSymplecticEuler,
-        core::Integrator::kTrapezoidal}) {
+        core::Integrator::kTrapezoidal, core::Integrator::kTrBdf2}) {
     for (core::CouplingMode mode : {core::CouplingMode::kGodObject, core::CouplingMode::kFirstOrder}) {
       if (integ == core::Integrator::kTrapezoidal && mode == core::CouplingMode::kFirstOrder)
         continue;  // refused

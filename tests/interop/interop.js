@@ -1,8 +1,10 @@
 'use strict';
 // numen against an independent CANopen stack (docs/protocol.md, "Interoperability with
 // node-canopen"). node-canopen plays the default scene's five nodes — CiA 402 drives with their
-// CiA 406 encoder on nodes 1-3, CiA 406 encoders on 4-5 — from the DCFs in dcf/, on numen's
-// serial framing over pseudo-terminals (pty_pairs.py); or, in device_server, node-canopen's SDO
+// CiA 406 encoder on nodes 1-3, CiA 406 encoders on 4-5 — each built from the DCF the scene
+// gives its node ([[device.canopen.axis]] dcf: sim/scenes/devices/trocar_drive.dcf and
+// encoder.dcf, the files numen configures the nodes from), on numen's serial framing over
+// pseudo-terminals (pty_pairs.py); or, in device_server, node-canopen's SDO
 // client reads numen's own emulated device. Each scenario checks numen's output and what the
 // node-canopen side saw, prints both, and exits 0 (pass), 1 (fail) or 77 (skipped, with the
 // reason).
@@ -17,7 +19,8 @@ const { spawn } = require('child_process');
 
 const BAUD = 1000000;  // numen's serial default; a pseudo-terminal ignores it
 
-// The default scene's nodes (sim/scenes/default.toml [[device.axis]]): node n is axis n - 1.
+// The default scene's nodes (sim/scenes/default.toml [[device.axis]]): node n is axis n - 1
+// (checked against the scene by sceneDcfs()).
 const NODES = [1, 2, 3, 4, 5];
 const DRIVES = [1, 2, 3];
 const AXES = ['pivot_x', 'pivot_y', 'depth', 'roll', 'jaw'];
@@ -79,8 +82,8 @@ function numen(options, args, { killAfterMs = 60000, onStdout } = {}) {
     });
 }
 
-/** node-canopen's nodes on pseudo-terminal `pty`, started (boot-up sent); `setup`: NodeSet's
- *  options. */
+/** node-canopen's nodes on pseudo-terminal `pty`, started (boot-up sent); `dcfs`: sceneDcfs();
+ *  `setup`: NodeSet's options. */
 function startNodes(pty, dcfs, setup = {}) {
     const { NodeSet } = require('./lib/node_set');
     const { SerialLink } = require('./lib/serial_link');
@@ -99,14 +102,25 @@ function checkNodeSide(nodes, link) {
 }
 
 const bus = (pty) => `serial:${pty.path}@${BAUD}`;
-const shippedDcfs = () => NODES.map((n) => ({ path: path.join(__dirname, 'dcf', `node${n}.dcf`), nodeId: n }));
+
+/** The DCF of each node as the scene gives it (lib/scene.js), one {path, nodeId, ratedTorque}
+ *  per node of NODES (ratedTorque: the axis's rated_torque, the drive's where its DCF has no
+ *  0x6076). Throws when the scene's nodes are not NODES. */
+function sceneDcfs(options) {
+    const { sceneNodes } = require('./lib/scene');
+    const nodes = sceneNodes(options.scene);
+    const ids = nodes.map((n) => n.nodeId);
+    if (ids.join() !== NODES.join())
+        throw new Error(`${options.scene}: CANopen nodes ${ids.join(', ')}, the scenarios play ${NODES.join(', ')}`);
+    return nodes.map((n) => ({ path: n.dcf, nodeId: n.nodeId, ratedTorque: n.ratedTorque }));
+}
 const hex = (v, digits = 8) => '0x' + (v >>> 0).toString(16).toUpperCase().padStart(digits, '0');
 
 // ---------------------------------------------------------------------------------------------
 // (a) numen scan lists the node-canopen nodes with the identity their DCF gives.
 
 async function scan(options, ptys) {
-    const { nodes, link } = startNodes(ptys[0], shippedDcfs());
+    const { nodes, link } = startNodes(ptys[0], sceneDcfs(options));
     await sleep(50);
     const r = await numen(options, ['scan', '--bus', bus(ptys[0]), '--json']);
     check(r.code === 0, 'numen scan exits 0');
@@ -142,7 +156,7 @@ async function scan(options, ptys) {
 async function sdo(options, ptys) {
     // One line per numen process (pty_pairs.py): the devices follow from line to line.
     let line = 0;
-    const started = startNodes(ptys[line], shippedDcfs());
+    const started = startNodes(ptys[line], sceneDcfs(options));
     const { nodes } = started;
     let { link } = started;
     const node = (id) => nodes.nodes.find((n) => n.id === id);
@@ -200,7 +214,7 @@ async function sdo(options, ptys) {
 const TIMING_CAUSES = ['overruns', 'heartbeat lost', 'encoder timeout'];
 
 async function runOnce(options, pty) {
-    const { nodes, link } = startNodes(pty, shippedDcfs());
+    const { nodes, link } = startNodes(pty, sceneDcfs(options));
     await sleep(50);
     const r = await numen(options, ['run', options.scene, '--bus', bus(pty), '--duration', '10',
         '--phase', '0.0006', '--json']);
@@ -318,7 +332,7 @@ async function deviceServer(options, ptys) {
 // start-up must fail cleanly, naming a node, with no torque ever sent.
 
 async function startupWithoutBootUp(options, ptys) {
-    const { nodes, link } = startNodes(ptys[0], shippedDcfs(), { bootUp: false });
+    const { nodes, link } = startNodes(ptys[0], sceneDcfs(options), { bootUp: false });
     await sleep(50);
     const r = await numen(options, ['run', options.scene, '--bus', bus(ptys[0]), '--duration', '2',
         '--phase', '0.0006', '--json']);
@@ -340,82 +354,174 @@ async function startupWithoutBootUp(options, ptys) {
     return { nodes };
 }
 
-// (e) numen configures the node-canopen nodes from their DCFs by SDO and reads the values back
-// (the nodes start with their EDS defaults: PDOs disabled, no heartbeat); and a DCF that
-// disagrees with the device is refused with an error naming the DCF's file and line. Both need
-// numen's DCF configuration ([[device.canopen.axis]] dcf, docs/scenes.md); CMake registers them
-// when the source tree has it (hal/include/numen/hal/canopen/dcf.hpp).
+// (e) numen configures the node-canopen nodes by SDO from the DCFs the scene names — the files
+// node-canopen built them from — and reads every configured value back. The nodes start
+// unconfigured (the DCFs' DefaultValues with the PDOs they configure switched off and no
+// heartbeat: lib/dcf.js applyUnconfigured; numen's shipped DCFs give DefaultValue =
+// ParameterValue, which would leave nothing to configure), so the loop runs only on what numen
+// wrote. And a DCF that disagrees with the device is refused with an error naming the DCF's
+// file and line, before any node is started.
 
-/** The default scene with a DCF per node, written to a temporary directory (the recording's
- *  relative path made absolute). Returns the scene's path. */
-function sceneWithDcfs(options, dcfPaths) {
+/** A copy of the scene in a temporary directory: its relative paths (the DCFs, the recording)
+ *  made absolute and node n's DCF replaced by dcfOverrides[n] (lib/scene.js; the scene's own
+ *  [[device.canopen.axis]] tables are edited, none added). Returns {scene, dir}. */
+function sceneWithDcfs(options, dcfOverrides = {}) {
+    const { sceneTextWithDcfs } = require('./lib/scene');
     const dir = fs.mkdtempSync(path.join(os.tmpdir(), 'numen-interop-'));
-    const sceneDir = path.dirname(options.scene);
-    let text = fs.readFileSync(options.scene, 'utf-8').replace(/^(file\s*=\s*")(\.\.?\/[^"]*)"/m,
-        (_, key, rel) => `${key}${path.resolve(sceneDir, rel)}"`);
-    text += '\n' + NODES.map((n, i) => `[[device.canopen.axis]]\nnode_id = ${n}\ndcf = "${dcfPaths[i]}"\n`).join('\n');
-    const scene = path.join(dir, 'default_with_dcfs.toml');
-    fs.writeFileSync(scene, text);
-    return scene;
+    const scene = path.join(dir, `${path.basename(options.scene, '.toml')}_with_dcfs.toml`);
+    fs.writeFileSync(scene, sceneTextWithDcfs(options.scene, dcfOverrides));
+    return { scene, dir };
 }
 
+const WRITABLE = ['rw', 'wo', 'rwr', 'rww'];  // CiA 306 access types numen writes (§20)
+const address = (index, sub) => `${index.toString(16).toUpperCase().padStart(4, '0')}:`
+    + `${(sub === null ? 0 : sub).toString(16).toUpperCase().padStart(2, '0')}`;
+const entryOf = (node, index, sub) => (sub === null ? node.dcf.eds.getEntry(index) : node.dcf.eds.getSubEntry(index, sub));
+const configuredValue = (entry, text) => (typeof entry.value === 'number' ? Number(text) : text);
+const isPdoCommunication = (i) => (i >= 0x1400 && i <= 0x15ff) || (i >= 0x1800 && i <= 0x19ff);
+
 async function dcfConfigure(options, ptys) {
-    const dcfs = shippedDcfs();
-    const { nodes, link } = startNodes(ptys[0], dcfs, { configured: false });
+    const { nodes, link } = startNodes(ptys[0], sceneDcfs(options), { configured: false });
+    for (const node of nodes.nodes) {
+        const differ = node.dcf.parameterValues.filter(([i, sub, text]) => {
+            const e = entryOf(node, i, sub);
+            return e.value !== configuredValue(e, text);
+        });
+        check(differ.length > 0, `node ${node.id} starts unconfigured: ${differ.length} of `
+            + `${node.dcf.parameterValues.length} configured values not held (${differ.map(([i, sub]) => address(i, sub)).join(' ')})`);
+    }
     await sleep(50);
-    const scene = sceneWithDcfs(options, dcfs.map((d) => d.path));
-    const r = await numen(options, ['run', scene, '--bus', bus(ptys[0]), '--duration', '3',
-        '--phase', '0.0006', '--json']);
+    const r = await numen(options, ['run', options.scene, '--bus', bus(ptys[0]), '--duration', '3',
+        '--phase', '0.0006', '--overrun-limit', '0', '--json']);
     const report = nodes.report();
+    console.log(JSON.stringify(report));
     let s = {};
     try {
         s = JSON.parse(r.stdout);
     } catch (e) {
         check(false, `numen run --json prints JSON (${e.message})`);
     }
-    check(r.code === 0 && s.exit_status === 0, `numen run exits 0 (${r.code}, summary ${s.exit_status})`);
     check(s.startup === 'operational', `start-up operational (${s.startup})`);
-    check(s.periods_to_torque >= 0, `torque flowed from period ${s.periods_to_torque}`);
-    for (const node of nodes.nodes) {
-        // Every configured value is now in the node's dictionary, written by numen.
-        for (const [index, sub, text] of node.dcf.parameterValues) {
-            const entry = sub === null ? node.dcf.eds.getEntry(index) : node.dcf.eds.getSubEntry(index, sub);
-            const want = typeof entry.value === 'number' ? Number(text) : text;
-            check(entry.value === want, `node ${node.id} [${index.toString(16).toUpperCase()}${sub === null ? '' : 'sub' + sub}] = ${entry.value}, DCF ${text}`);
-        }
-        check(node.counters.sdoRequests > 0, `node ${node.id}: ${node.counters.sdoRequests} SDO requests (writes and read-back)`);
-        if (node.drive)
-            check(node.counters.rpdosNonzero > 0, `drive ${node.id}: ${node.counters.rpdosNonzero} RPDOs with non-zero torque`);
+    check(s.configured_nodes === NODES.length, `numen configured ${s.configured_nodes} nodes from their DCF (${NODES.length})`);
+    // The loop after the start-up is interop_run's subject: a safe stop on a timing cause of a
+    // loaded machine (TIMING_CAUSES; numen runs with --overrun-limit 0, overruns counted, not
+    // latched) is reported, the torque then not required; any other safe stop fails.
+    const cause = s.first_fault && s.first_fault.cause;
+    const timing = s.faults > 0 && TIMING_CAUSES.includes(cause);
+    if (timing) {
+        console.log(`note: safe stop by '${cause}' at period ${s.first_fault.period}, a timing cause of this machine (interop_run's subject): torque not required`);
+        check(r.code === s.exit_status && s.exit_status !== 0, `numen run ends on the safe stop (${r.code}, summary ${s.exit_status})`);
+    } else {
+        check(r.code === 0 && s.exit_status === 0, `numen run exits 0 (${r.code}, summary ${s.exit_status})`);
+        check(s.faults === 0, `no safety stop (${s.faults}${s.first_fault ? ', first: ' + JSON.stringify(s.first_fault) : ''})`);
+        check(s.periods_to_torque >= 0, `torque flowed from period ${s.periods_to_torque}`);
     }
-    check(report.exceptions.length === 0, `node side: no exception (${JSON.stringify(report.exceptions)})`);
+    for (const node of nodes.nodes) {
+        const downloads = node.sdoLog.filter((x) => x.kind === 'download');
+        const uploads = node.sdoLog.filter((x) => x.kind === 'upload');
+        const lastDownload = downloads.length > 0 ? node.sdoLog.lastIndexOf(downloads[downloads.length - 1]) : -1;
+        // Every configured value is now in the node's dictionary; numen wrote the writable ones
+        // (its last download of each is the DCF's value) and read every one back after writing.
+        const notHeld = [];
+        const notWritten = [];
+        const notReadBack = [];
+        for (const [index, sub, text] of node.dcf.parameterValues) {
+            const entry = entryOf(node, index, sub);
+            const want = configuredValue(entry, text);
+            if (entry.value !== want)
+                notHeld.push(`${address(index, sub)} = ${entry.value}, DCF ${text}`);
+            const at = (x) => x.index === index && x.subIndex === (sub === null ? 0 : sub);
+            if (WRITABLE.includes(entry.accessType)) {
+                const written = downloads.filter(at);
+                if (written.length === 0 || written[written.length - 1].value !== want)
+                    notWritten.push(`${address(index, sub)} (${written.map((w) => hex(w.value)).join(', ') || 'never'})`);
+            }
+            if (entry.accessType !== 'wo' && !node.sdoLog.some((x, k) => at(x) && x.kind === 'upload' && k > lastDownload))
+                notReadBack.push(address(index, sub));
+        }
+        check(notHeld.length === 0, `node ${node.id}: its dictionary holds the ${node.dcf.parameterValues.length} configured values${notHeld.length ? ' — not: ' + notHeld.join('; ') : ''}`);
+        check(notWritten.length === 0, `node ${node.id}: numen wrote each writable configured value (${downloads.length} downloads)${notWritten.length ? ' — not: ' + notWritten.join('; ') : ''}`);
+        check(notReadBack.length === 0, `node ${node.id}: numen read every configured value back after its writes (${uploads.length} uploads)${notReadBack.length ? ' — not: ' + notReadBack.join(' ') : ''}`);
+        // Each PDO in CiA 301's sequence: COB-ID invalid, mapping count 0, entries, count, COB-ID.
+        for (const [comm, sub, text] of node.dcf.parameterValues) {
+            if (!isPdoCommunication(comm) || sub !== 1)
+                continue;
+            const cob = Number(text);
+            const map = comm + 0x200;
+            const seq = downloads.filter((x) => x.index === comm || x.index === map);
+            const first = seq[0] || {};
+            const last = seq[seq.length - 1] || {};
+            const counts = seq.filter((x) => x.index === map && x.subIndex === 0);
+            const entries = seq.map((x, k) => (x.index === map && x.subIndex > 0 ? k : -1)).filter((k) => k >= 0);
+            const countZeroAt = seq.findIndex((x) => x.index === map && x.subIndex === 0 && x.value === 0);
+            const countLastAt = seq.lastIndexOf(counts[counts.length - 1]);
+            const ok = first.index === comm && first.subIndex === 1 && first.value === ((cob | 0x80000000) >>> 0)
+                && last.index === comm && last.subIndex === 1 && last.value === cob
+                && (entries.length === 0 || (countZeroAt >= 0 && countZeroAt < entries[0] && countLastAt > entries[entries.length - 1]));
+            check(ok, `node ${node.id} PDO ${address(comm, null).slice(0, 4)}: CiA 301 sequence `
+                + `(${seq.map((x) => `${address(x.index, x.subIndex)}=${x.value === null ? '?' : x.value.toString(16)}`).join(' ')})`);
+        }
+        // What numen configured runs: the node's heartbeat and TPDOs (off until then), the
+        // drive's RPDO (node-canopen takes only RPDOs its dictionary has valid).
+        check(node.counters.heartbeats > 0 && node.counters.tpdos > 0,
+            `node ${node.id}: ${node.counters.heartbeats} heartbeats, ${node.counters.tpdos} TPDOs on the configured COB-IDs`);
+        if (node.drive) {
+            check(node.counters.rpdos > 0, `drive ${node.id}: ${node.counters.rpdos} RPDOs on the configured COB-ID`);
+            if (!timing) {
+                // Once numen has gone, the drive's consumer of its heartbeat faults it (0x8130):
+                // only faults followed by a SYNC happened during the run.
+                const during = node.drive.faults.filter((f) => f.afterSyncs < report.syncs);
+                check(during.length === 0, `drive ${node.id}: no fault during the run (${JSON.stringify(node.drive.faults)})`);
+                check(node.counters.rpdosNonzero > 0, `drive ${node.id}: ${node.counters.rpdosNonzero} RPDOs with non-zero torque`);
+            }
+        }
+    }
+    check(report.nmt.filter((c) => c.startsWith('01')).length >= 1, `the nodes were started after their configuration (NMT ${report.nmt})`);
     checkNodeSide(nodes, link);
     return { nodes };
 }
 
 async function dcfMismatch(options, ptys) {
     // Node 2's DCF claims a product code the device does not have (0x1018:02 is read-only: it
-    // can only be read back, and disagrees).
-    const dcfs = shippedDcfs();
+    // can only be read back, and disagrees). The node-canopen node is built from the scene's
+    // own DCF: it is the device, the edited copy is what numen is told about it.
+    const dcfs = sceneDcfs(options);
     const dir = fs.mkdtempSync(path.join(os.tmpdir(), 'numen-interop-dcf-'));
-    const wrong = path.join(dir, 'node2_wrong_product.dcf');
+    const wrong = path.join(dir, `node2_wrong_product_${path.basename(dcfs[1].path)}`);
     const lines = fs.readFileSync(dcfs[1].path, 'utf-8').split('\n');
-    const section = lines.indexOf('[1018sub2]');
-    const at = lines.indexOf('PDOMapping=0', section);
-    lines.splice(at + 1, 0, 'ParameterValue=0x00000999');
+    const section = lines.findIndex((l) => l.trim().toLowerCase() === '[1018sub2]');
+    let end = lines.findIndex((l, k) => k > section && l.trim().startsWith('['));
+    if (end < 0)
+        end = lines.length;
+    const given = lines.findIndex((l, k) => k > section && k < end && /^\s*ParameterValue\s*=/i.test(l));
+    let at;  // 0-based line of the ParameterValue
+    if (given >= 0) {
+        at = given;
+        lines[at] = 'ParameterValue=0x00000999';
+    } else {
+        at = lines.findIndex((l, k) => k > section && k < end && /^\s*DefaultValue\s*=/i.test(l)) + 1;
+        lines.splice(at, 0, 'ParameterValue=0x00000999');
+    }
     fs.writeFileSync(wrong, lines.join('\n'));
-    const line = at + 2;  // 1-based line of the ParameterValue
+    const line = at + 1;  // 1-based
     const { nodes, link } = startNodes(ptys[0], dcfs);
     await sleep(50);
-    const scene = sceneWithDcfs(options, dcfs.map((d, i) => (i === 1 ? wrong : d.path)));
+    const { scene, dir: sceneDir } = sceneWithDcfs(options, { 2: wrong });
     const r = await numen(options, ['run', scene, '--bus', bus(ptys[0]), '--duration', '3',
         '--phase', '0.0006']);
     const out = r.stdout + r.stderr;
     check(r.code !== 0, `numen run refuses the device (exit ${r.code})`);
     check(out.includes(`${wrong}:${line}`), `the error names ${path.basename(wrong)}:${line}`);
     check(/1018sub2/i.test(out), 'the error names [1018sub2]');
+    check(/read back 0x00000402/.test(out) && /configures 0x00000999/.test(out),
+        'the error gives the value read back (0x00000402) and the DCF\'s (0x00000999)');
+    check(nodes.nodes.find((n) => n.id === 2).sdoLog.some((x) => x.kind === 'upload' && x.index === 0x1018 && x.subIndex === 2),
+        'numen read node 2\'s 0x1018:02 back');
     check(!nodes.nmtCommands.some((c) => c.startsWith('01')), `no node started (NMT ${nodes.nmtCommands})`);
     check(nodes.nodes.every((n) => n.counters.rpdosNonzero === 0), 'no torque reached a drive');
     checkNodeSide(nodes, link);
+    for (const d of [dir, sceneDir])
+        fs.rmSync(d, { recursive: true, force: true });
     return { nodes };
 }
 

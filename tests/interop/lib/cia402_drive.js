@@ -2,8 +2,11 @@
 // A minimal CiA 402 power drive system state machine (CiA 402-2 / IEC 61800-7-201 §6.3, as
 // docs/protocol.md §14 reads it) on top of a node-canopen object dictionary: controlword
 // 0x6040 in, statusword 0x6041 out, cyclic synchronous torque (modes of operation 0x6060 = 10):
-// target torque 0x6071 (per mille of rated torque 0x6076), clipped to max torque 0x6072,
-// reported in torque actual value 0x6077. Stepped once per SYNC with the values the last RPDO
+// target torque 0x6071 (per mille of the rated torque), clipped to max torque 0x6072,
+// reported in torque actual value 0x6077. The rated torque is motor rated torque 0x6076 where
+// the dictionary has it; numen's shipped DCFs have none (numen takes the rated torque from the
+// scene's [[device.axis]] rated_torque, not from the drive), so the drive is then given it:
+// option ratedTorque, mN·m (mN), default 1000 (1 N·m or 1 N at 1000 per mille). Stepped once per SYNC with the values the last RPDO
 // wrote (node-canopen applies an RPDO when it arrives, whatever its transmission type; reading
 // them at SYNC makes the RPDO synchronous). Error code 0x603F, where the dictionary has it,
 // holds the last fault.
@@ -47,18 +50,24 @@ function decodeControlword(cw) {
     return (cw & 0x08) ? 'enable operation' : 'switch on';
 }
 
-// Objects the state machine reads or writes; 0x603F (error code) is used when present.
-const REQUIRED = [0x6040, 0x6041, 0x6060, 0x6061, 0x6071, 0x6072, 0x6076, 0x6077];
+// Objects the state machine reads or writes; 0x603F (error code) and 0x6076 (motor rated
+// torque) are used when present.
+const REQUIRED = [0x6040, 0x6041, 0x6060, 0x6061, 0x6071, 0x6072, 0x6077];
+
+const DEFAULT_RATED_TORQUE = 1000;  // mN·m (mN), where neither 0x6076 nor ratedTorque gives it
 
 class Cia402Drive {
     /** `device`: a node-canopen Device whose dictionary has the REQUIRED objects (throws naming
-     *  the missing ones and `source`, e.g. the DCF's path). */
-    constructor(device, source) {
+     *  the missing ones and `source`, e.g. the DCF's path). `ratedTorque`: mN·m (mN), used when
+     *  the dictionary has no 0x6076 (default DEFAULT_RATED_TORQUE). */
+    constructor(device, source, { ratedTorque = DEFAULT_RATED_TORQUE } = {}) {
         const missing = REQUIRED.filter((i) => device.eds.getEntry(i) === undefined);
         if (missing.length > 0)
             throw new Error(`${source}: a CiA 402 drive needs ${missing.map((i) => '0x' + i.toString(16).toUpperCase()).join(', ')}`);
         this.device = device;
         this.hasErrorCode = device.eds.getEntry(0x603f) !== undefined;
+        this.hasRatedTorque = device.eds.getEntry(0x6076) !== undefined;
+        this.ratedTorqueDefault = ratedTorque;
         this.state = State.NOT_READY;
         this.lastControlword = 0;
         this.faults = [];       // {code, state} of every fault, in order
@@ -83,7 +92,7 @@ class Cia402Drive {
     }
 
     /** One SYNC: automatic transitions, the controlword's command, then the output torque.
-     *  Returns the torque applied, N·m (or N), from rated torque 0x6076 (mN·m or mN). */
+     *  Returns the torque applied, N·m (or N), from the rated torque (mN·m or mN). */
     step() {
         // Automatic transitions 1 (initialisation done) and 14 (fault reaction completed).
         if (this.state === State.NOT_READY)
@@ -107,7 +116,12 @@ class Cia402Drive {
             perMille = Math.max(-max, Math.min(max, this.device.getValue(0x6071)));
         }
         this.publish(perMille);
-        return perMille / 1000 * this.device.getValue(0x6076) / 1000;
+        return perMille / 1000 * this.ratedTorque / 1000;
+    }
+
+    /** mN·m (mN): 0x6076 where the dictionary has it, else the one the drive was given. */
+    get ratedTorque() {
+        return this.hasRatedTorque ? this.device.getValue(0x6076) : this.ratedTorqueDefault;
     }
 
     apply(command, rising) {
@@ -160,4 +174,4 @@ class Cia402Drive {
     }
 }
 
-module.exports = { Cia402Drive, State, STATUSWORD, decodeControlword };
+module.exports = { Cia402Drive, State, STATUSWORD, decodeControlword, DEFAULT_RATED_TORQUE };

@@ -3,11 +3,13 @@
 //
 // node-canopen's Eds reads each object's DefaultValue and nothing of what makes a DCF a DCF:
 // it ignores ParameterValue (the configured value), [DeviceComissioning] (the node id) and
-// $NODEID expressions. loadDcf() therefore resolves "$NODEID+0x180"-style values to numbers
-// first (CiA 306 §4.6.3), lets Eds load that text, then writes every ParameterValue over the
-// object dictionary; applyParameterValues() does it again after an NMT reset, which in
-// node-canopen restores every DefaultValue (a configured device restores its stored
-// configuration).
+// $NODEID expressions, and reads a 0-prefixed number as decimal. loadDcf() therefore first
+// rewrites the values numen reads differently (docs/protocol.md §20: `$NODEID`, `$NODEID+N`,
+// `N+$NODEID`, octal `0NNN`) as plain numbers, lets Eds load that text, then writes every
+// ParameterValue over the object dictionary; applyParameterValues() does it again after an NMT
+// reset, which in node-canopen restores the DefaultValue of every VAR object (a configured
+// device restores its stored configuration). applyUnconfigured() gives a device as it leaves
+// the factory instead (see there).
 
 const fs = require('fs');
 const os = require('os');
@@ -34,8 +36,11 @@ function loadDcf(file, nodeId, { apply = true } = {}) {
         throw new Error(`${file}: node id '${nodeId}' is not 1-127 ([DeviceComissioning] NodeID)`);
 
     // Eds.fromFile() reads a path: the resolved text goes through a temporary file.
-    const resolved = text.replace(/^((?:DefaultValue|ParameterValue)\s*=\s*)\$NODEID\s*\+\s*(\S+)\s*$/gmi,
-        (_, key, offset) => `${key}0x${(nodeId + Number(offset)).toString(16)}`);
+    const resolved = text.replace(/^(\s*(?:DefaultValue|ParameterValue)\s*=\s*)(.*?)\s*$/gmi,
+        (line, key, v) => {
+            const n = integerExpression(v, nodeId);
+            return n === null ? line : `${key}${n}`;
+        });
     const dir = fs.mkdtempSync(path.join(os.tmpdir(), 'numen-dcf-'));
     const tmp = path.join(dir, path.basename(file));
     fs.writeFileSync(tmp, resolved);
@@ -73,10 +78,63 @@ function applyParameterValues(dcf) {
     }
 }
 
+/**
+ * Writes, over what the dictionary holds, the state of the device before any master has
+ * configured it: every PDO whose COB-ID the DCF configures switched off (COB-ID bit 31 set:
+ * the PDO does not exist, CiA 301 §7.5.2.35), every mapping whose count the DCF configures
+ * emptied (count 0), and no heartbeat where the DCF configures one (producer 0x1017 = 0,
+ * consumer 0x1016:n = 0). A DCF whose DefaultValues are the configuration (numen's shipped
+ * DCFs give DefaultValue = ParameterValue) would otherwise leave nothing for the master to
+ * configure. `heartbeat` false leaves 0x1016 and 0x1017 at the DCF's values.
+ */
+function applyUnconfigured(dcf, { heartbeat = true } = {}) {
+    for (const [index, subIndex] of dcf.parameterValues) {
+        const entry = subIndex === null ? dcf.eds.getEntry(index) : dcf.eds.getSubEntry(index, subIndex);
+        const pdoCommunication = (index >= 0x1400 && index <= 0x15ff) || (index >= 0x1800 && index <= 0x19ff);
+        const pdoMapping = (index >= 0x1600 && index <= 0x17ff) || (index >= 0x1a00 && index <= 0x1bff);
+        if (pdoCommunication && subIndex === 1)
+            entry.value = (entry.value | 0x80000000) >>> 0;
+        else if (pdoMapping && subIndex === 0)
+            entry.value = 0;
+        else if (heartbeat && (index === 0x1017 || (index === 0x1016 && subIndex > 0)))
+            entry.value = 0;
+    }
+}
+
+/**
+ * The number an integer value of a DCF stands for, as numen reads it (docs/protocol.md §20):
+ * decimal, 0x hexadecimal or 0-prefixed octal, optionally negative; `$NODEID`, `$NODEID+N`
+ * and `N+$NODEID` (case-insensitive) with the node's id. Returns null for any other text (a
+ * string value; node-canopen reads it as it is).
+ */
+function integerExpression(text, nodeId) {
+    const number = (t) => {
+        if (/^-?0[xX][0-9a-fA-F]+$/.test(t))
+            return (t.startsWith('-') ? -1 : 1) * parseInt(t.replace(/^-/, '').slice(2), 16);
+        if (/^-?0[0-7]+$/.test(t))
+            return (t.startsWith('-') ? -1 : 1) * parseInt(t.replace(/^-/, ''), 8);
+        if (/^-?[0-9]+$/.test(t))
+            return parseInt(t, 10);
+        return null;
+    };
+    const terms = text.replace(/\s+/g, '').split('+');
+    if (terms.length === 1 && terms[0].toLowerCase() !== '$nodeid') {
+        // Plain numbers are left to node-canopen but for octal, which it would read as decimal.
+        return /^-?0[0-7]+$/.test(terms[0]) ? number(terms[0]) : null;
+    }
+    if (terms.length > 2 || terms.filter((t) => t.toLowerCase() === '$nodeid').length !== 1)
+        return null;
+    const other = terms.find((t) => t.toLowerCase() !== '$nodeid');
+    if (other === undefined)
+        return nodeId;
+    const n = number(other);
+    return n === null || n < 0 ? null : nodeId + n;
+}
+
 // CiA 301 data types 0x01-0x08 and 0x10-0x1B are numbers; 0x09 visible string, 0x0A octet
 // string, 0x0B unicode string, 0x0F domain are not.
 function isNumericType(dataType) {
     return (dataType >= 0x01 && dataType <= 0x08) || (dataType >= 0x10 && dataType <= 0x1b);
 }
 
-module.exports = { loadDcf, applyParameterValues };
+module.exports = { loadDcf, applyParameterValues, applyUnconfigured, integerExpression };

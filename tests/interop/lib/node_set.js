@@ -6,7 +6,8 @@
 // master relies on (docs/protocol.md "Interoperability with node-canopen"):
 // - the boot-up message (0x700 + node, 00) on entering pre-operational, which node-canopen
 //   6.2 does not send;
-// - the configured values restored after an NMT reset (dcf.js);
+// - the configured values restored after an NMT reset (dcf.js), or, for nodes a master is to
+//   configure, the unconfigured state (PDOs off, no heartbeat: dcf.js applyUnconfigured);
 // - at each SYNC, before node-canopen sends its synchronous TPDOs: the CiA 402 drive stepped
 //   with the last RPDO's controlword and target torque (cia402_drive.js), the plant integrated
 //   under the applied torque (plant_axis.js), and the CiA 406 position value 0x6004 latched;
@@ -18,14 +19,15 @@
 
 const { NmtState } = require('canopen');
 const { Device } = require('canopen');
-const { loadDcf, applyParameterValues } = require('./dcf');
+const { loadDcf, applyParameterValues, applyUnconfigured } = require('./dcf');
 const { Cia402Drive } = require('./cia402_drive');
 const { PlantAxis } = require('./plant_axis');
 
 const CONTROLLER_NODE = 127;  // numen's heartbeat producer (0x77F)
 
 class Node {
-    constructor(dcf, plant) {
+    /** `ratedTorque`: the drive's rated torque, mN·m (mN), where the DCF has no 0x6076. */
+    constructor(dcf, plant, ratedTorque) {
         this.dcf = dcf;
         this.id = dcf.nodeId;
         if (dcf.eds.getSdoServerParameters().length === 0)
@@ -35,9 +37,13 @@ class Node {
         this.device = new Device({ eds: dcf.eds, id: dcf.nodeId });
         this.plant = plant ? new PlantAxis(plant) : null;
         // A CiA 402 drive where the dictionary has the drive objects (device type profile 402).
-        this.drive = (this.device.getValue(0x1000) & 0xffff) === 402 ? new Cia402Drive(this.device, dcf.path) : null;
+        this.drive = (this.device.getValue(0x1000) & 0xffff) === 402
+            ? new Cia402Drive(this.device, dcf.path, { ratedTorque }) : null;
         this.counters = { rpdos: 0, rpdosNonzero: 0, tpdos: 0, sdoRequests: 0, bootups: 0,
             heartbeats: 0, emcys: 0, resets: 0 };
+        // Every SDO initiate request the node received, in order: {kind: 'download' |
+        // 'upload', index, subIndex, value (expedited downloads; null otherwise)}.
+        this.sdoLog = [];
     }
 
     get operational() {
@@ -47,20 +53,27 @@ class Node {
 
 class NodeSet {
     /**
-     * dcfs: one {path, nodeId} per node (nodeId may be omitted when the DCF's
-     * [DeviceComissioning] gives it); plants: {nodeId: PlantAxis options} for the nodes with an
-     * encoder (0x6004); syncPeriod: s, when the DCFs have no 0x1006. Options: configured
-     * (default true): the nodes hold their DCF's configured values (ParameterValue), at power-on
-     * and after every NMT reset; false: they hold the EDS defaults (DefaultValue) until a
-     * master writes the configuration. bootUp (default true): the script sends the boot-up
-     * message node-canopen leaves out; false shows what a master sees without it.
+     * dcfs: one {path, nodeId, ratedTorque} per node (nodeId may be omitted when the DCF's
+     * [DeviceComissioning] gives it; ratedTorque, N·m or N, is the drive's where its DCF has no
+     * 0x6076: the scene's rated_torque); plants: {nodeId: PlantAxis options} for the nodes with
+     * an encoder (0x6004); syncPeriod: s, when the DCFs have no 0x1006. Options: configured
+     * (default true): the nodes hold their DCF's configured values (ParameterValue), at
+     * power-on and after every NMT reset; false: they hold the DCF's DefaultValues with the
+     * PDOs and heartbeats the DCF configures switched off (dcf.js applyUnconfigured), at
+     * power-on and after every NMT reset, until a master writes the configuration.
+     * unconfiguredHeartbeat (default true): with configured false, the heartbeats are off too.
+     * bootUp (default true): the script sends the boot-up message node-canopen leaves out;
+     * false shows what a master sees without it.
      */
-    constructor(dcfs, plants, syncPeriod, { configured = true, bootUp = true } = {}) {
+    constructor(dcfs, plants, syncPeriod, { configured = true, unconfiguredHeartbeat = true, bootUp = true } = {}) {
         this.configured = configured;
+        this.unconfiguredHeartbeat = unconfiguredHeartbeat;
         this.bootUp = bootUp;
-        this.nodes = dcfs.map(({ path, nodeId }) => {
+        this.nodes = dcfs.map(({ path, nodeId, ratedTorque }) => {
             const dcf = loadDcf(path, nodeId, { apply: configured });
-            return new Node(dcf, plants[dcf.nodeId]);
+            if (!configured)
+                applyUnconfigured(dcf, { heartbeat: unconfiguredHeartbeat });
+            return new Node(dcf, plants[dcf.nodeId], ratedTorque === undefined ? undefined : ratedTorque * 1000);
         });
         this.link = null;
         this.syncs = 0;
@@ -100,11 +113,14 @@ class NodeSet {
             });
             device.start();
             // After device.start(): node-canopen's own reset listener (which restores every
-            // DefaultValue) runs first, then this one restores the configuration.
+            // VAR object's DefaultValue) runs first, then this one restores the configuration,
+            // or the unconfigured state.
             device.nmt.on('reset', () => {
                 ++node.counters.resets;
                 if (this.configured)
                     applyParameterValues(node.dcf);
+                else
+                    applyUnconfigured(node.dcf, { heartbeat: this.unconfiguredHeartbeat });
             });
         }
     }
@@ -134,8 +150,10 @@ class NodeSet {
             const sdo = node.device.sdoServer.transfers[frame.id] !== undefined;
             if (!broadcast && !rpdo && !sdo)
                 continue;
-            if (sdo)
+            if (sdo) {
                 ++node.counters.sdoRequests;
+                logSdo(node, frame.data);
+            }
             try {
                 node.device.receive(frame);
             } catch (e) {
@@ -193,6 +211,25 @@ class NodeSet {
                 ...n.counters })),
         };
     }
+}
+
+/** Records an SDO initiate request (CiA 301 §7.2.4.3: client command specifier 1, download;
+ *  2, upload) in node.sdoLog. */
+function logSdo(node, data) {
+    const d = Buffer.from(data);
+    if (d.length < 4)
+        return;
+    const ccs = d[0] >> 5;
+    if (ccs !== 1 && ccs !== 2)
+        return;
+    const index = d.readUInt16LE(1);
+    const subIndex = d[3];
+    let value = null;
+    if (ccs === 1 && (d[0] & 0x02) && d.length === 8) {  // expedited
+        const size = (d[0] & 0x01) ? 4 - ((d[0] >> 2) & 0x03) : 4;
+        value = d.readUIntLE(4, size);
+    }
+    node.sdoLog.push({ kind: ccs === 1 ? 'download' : 'upload', index, subIndex, value });
 }
 
 module.exports = { NodeSet };
