@@ -513,7 +513,7 @@ TEST(ContactForce, SmoothedOnsetIsContinuouslyDifferentiableAndReportsItsOwnDeri
   EXPECT_FALSE(fn(-1e-6, -1.0).active);
   // δ0 = 0: the linear law, with the material's coefficients reported.
   const core::ContactForceResult lin = core::contact_penalty_force(n, 1e-4, Vec3(0.0, 0.0, -0.01), kMat);
-  EXPECT_EQ(lin.normal_force, kMat.stiffness * 1e-4 - kMat.damping * -0.01);
+  EXPECT_DOUBLE_EQ(lin.normal_force, kMat.stiffness * 1e-4 - kMat.damping * -0.01);  // clang: 1 ulp
   EXPECT_EQ(lin.stiffness, kMat.stiffness);
   EXPECT_EQ(lin.damping, kMat.damping);
   EXPECT_EQ(lin.friction, kMat.friction);

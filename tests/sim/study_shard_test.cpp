@@ -57,7 +57,8 @@ TEST(StudyShard, RefusesMalformedShardsNamingTheOption) {
       {"1/2/3", "shard count in \"1/2/3\""},
       {"0/99999999999", "shard count in \"0/99999999999\""},
   };
-  for (const auto& [text, message] : bad) {
+  for (const auto& [text_, message] : bad) {
+    const auto& text = text_;  // clang 14 cannot capture a structured binding (P1091)
     const InputError e = error_of([&] { (void)parse_shard(text, "--shard"); });
     EXPECT_EQ(e.key(), "--shard") << text;
     EXPECT_NE(e.message().find(message), std::string::npos) << text << ": " << e.what();
