@@ -327,7 +327,7 @@ ShardSet read_shard_set(const std::filesystem::path& dir, const std::string& stu
   std::vector<Json> by_case;
   std::vector<bool> seen;
   for (const auto& file : files) {
-    // Named copies, not a structured binding: the lambda below captures `path`, which
+    // Named variables, not a structured binding: the lambda below captures `path`, which
     // clang 14 (the fuzz and ASan builds) refuses for a binding (P1091, clang 16).
     const int index = file.first;
     const std::string& path = file.second;

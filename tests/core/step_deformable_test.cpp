@@ -764,7 +764,8 @@ bool same_bodies(const core::Data& a, const core::Data& b) {
 
 TEST(StepDeformable, RepeatedRunsAreBitIdentical) {
   NUMEN_SKIP_UNDER_SANITIZER(
-      "bit-identity is not what a sanitizer checks, and the 6 000 net steps take 38 s under ASan+UBSan with coverage");
+      "bit-identity is not what a sanitizer checks, and the 6 000 net steps take 38 s under"
+      " ASan+UBSan with coverage");
   for (auto integ : {core::Integrator::kLinearlyImplicitEuler, core::Integrator::kSymplecticEuler}) {
     for (bool joints : {false, true}) {
       if (joints && !core::kWithArticulation) continue;  // this build has no joints

@@ -850,14 +850,16 @@ void expect_deterministic(const Scene& scene, std::int64_t n, const char* name) 
 
 TEST(RunDeterminism, DefaultSceneTwoRunnersAreBitIdentical) {
   NUMEN_SKIP_UNDER_SANITIZER(
-      "bit-identity is not what a sanitizer checks; 12 s of the scene twice take 31 s under ASan+UBSan with coverage (RunDefaultScene.* runs it there)");
+      "bit-identity is not what a sanitizer checks; 12 s of the scene twice take 31 s under"
+      " ASan+UBSan with coverage (RunDefaultScene.* runs it there)");
   NUMEN_REQUIRE_ARTICULATION();
   expect_deterministic(default_scene(), periods_for(default_scene(), 12.0), "default");
 }
 
 TEST(RunDeterminism, ConstructionSceneTwoRunnersAreBitIdentical) {
   NUMEN_SKIP_UNDER_SANITIZER(
-      "bit-identity is not what a sanitizer checks; 9 s of the scene twice take 37 s under ASan+UBSan with coverage (RunConstructionScene.* runs it there)");
+      "bit-identity is not what a sanitizer checks; 9 s of the scene twice take 37 s under "
+      "ASan+UBSan with coverage (RunConstructionScene.* runs it there)");
   expect_deterministic(construction_scene(), periods_for(construction_scene(), 9.0), "construction");
 }
 

@@ -875,7 +875,8 @@ TEST(DefaultSceneGeometry, RecordedTipGoesAtLeast10mmIntoTheTissue) {
 
 TEST(DefaultSceneGeometry, RecordedTipGoesAtLeast10mmIntoTheOrgan) {
   NUMEN_SKIP_UNDER_SANITIZER(
-      "checks the shipped recording against the shipped organ (data, not code): 40 s under ASan+UBSan with coverage");
+      "checks the shipped recording against the shipped organ (data, not code): 40 s under "
+      "ASan+UBSan with coverage");
   NUMEN_REQUIRE_ARTICULATION();
   // Depth inside the solid the organ's spheres bound: distance to the nearest
   // point outside the union's outer surface.
@@ -896,7 +897,8 @@ TEST(DefaultSceneGeometry, RecordedTipGoesAtLeast10mmIntoTheOrgan) {
 
 TEST(DefaultSceneGeometry, RecordedTipGoesAtLeast10mmBelowTheUnionOfTheOrgansSpheres) {
   NUMEN_SKIP_UNDER_SANITIZER(
-      "checks the shipped recording against the shipped organ (data, not code): 60 s under ASan+UBSan with coverage");
+      "checks the shipped recording against the shipped organ (data, not code): 60 s under "
+      "ASan+UBSan with coverage");
   NUMEN_REQUIRE_ARTICULATION();
   // Depth below the union itself: distance to the nearest point that no
   // sphere covers (enclosed voids count), marched along 26 + 400 directions.

@@ -94,7 +94,8 @@ TEST(StudyStability, SymplecticEulerLimitWithDampingFollowsTheory) {
 
 TEST(StudyStability, BoundaryMeasuredAgainstTheory) {
   NUMEN_SKIP_UNDER_SANITIZER(
-      "a sweep and bisection of thousands of coupling runs: 35 s under ASan+UBSan with coverage; the same coupling runs are in StudyStability's other tests there");
+      "a sweep and bisection of thousands of coupling runs: 35 s under ASan+UBSan with "
+      "coverage; the same coupling runs are in StudyStability's other tests there");
   StabilityOptions o;
   o.quick = true;
   o.families = {"boundary"};
@@ -282,7 +283,9 @@ TEST(StudyStability, MonitorCriteriaAndGrowth) {
 
 TEST(StudyStability, ShippedScenesStayBoundedWithAContactStiffnessOfOneTeraNewtonPerMetre) {
   NUMEN_SKIP_UNDER_SANITIZER(
-      "every shipped scene for 6 s twice: 130 s under ASan+UBSan with coverage; the scenes' runs of RunDefaultScene.*, RunConstructionScene.* and the contact floor's tests (ContactForce.*) run there");
+      "every shipped scene for 6 s twice: 130 s under ASan+UBSan with coverage; the scenes'"
+      " runs of RunDefaultScene.*, RunConstructionScene.* and the contact floor's tests "
+      "(ContactForce.*) run there");
   // Family "scenes", quick: every shipped scene with its contact stiffness, then its coupling
   // stiffness, at 1e12 N/m; implicit Euler. Before the core's contact floor the default scene's
   // tool was thrown away at 7–8 s (non-finite steps) and the endobag's net diverged. Every
