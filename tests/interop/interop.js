@@ -378,7 +378,7 @@ const address = (index, sub) => `${index.toString(16).toUpperCase().padStart(4, 
     + `${(sub === null ? 0 : sub).toString(16).toUpperCase().padStart(2, '0')}`;
 const entryOf = (node, index, sub) => (sub === null ? node.dcf.eds.getEntry(index) : node.dcf.eds.getSubEntry(index, sub));
 const configuredValue = (entry, text) => (typeof entry.value === 'number' ? Number(text) : text);
-const isPdoCommunication = (i) => (i >= 0x1400 && i <= 0x15ff) || (i >= 0x1800 && i <= 0x19ff);
+const { isPdoCommunication } = require('./lib/dcf');
 
 async function dcfConfigure(options, ptys) {
     const { nodes, link } = startNodes(ptys[0], sceneDcfs(options), { configured: false });

@@ -174,4 +174,4 @@ class Cia402Drive {
     }
 }
 
-module.exports = { Cia402Drive, State, STATUSWORD, decodeControlword, DEFAULT_RATED_TORQUE };
+module.exports = { Cia402Drive, State, STATUSWORD, decodeControlword };

@@ -85,20 +85,28 @@ function applyParameterValues(dcf) {
  * emptied (count 0), and no heartbeat where the DCF configures one (producer 0x1017 = 0,
  * consumer 0x1016:n = 0). A DCF whose DefaultValues are the configuration (numen's shipped
  * DCFs give DefaultValue = ParameterValue) would otherwise leave nothing for the master to
- * configure. `heartbeat` false leaves 0x1016 and 0x1017 at the DCF's values.
+ * configure.
  */
-function applyUnconfigured(dcf, { heartbeat = true } = {}) {
+function applyUnconfigured(dcf) {
     for (const [index, subIndex] of dcf.parameterValues) {
         const entry = subIndex === null ? dcf.eds.getEntry(index) : dcf.eds.getSubEntry(index, subIndex);
-        const pdoCommunication = (index >= 0x1400 && index <= 0x15ff) || (index >= 0x1800 && index <= 0x19ff);
-        const pdoMapping = (index >= 0x1600 && index <= 0x17ff) || (index >= 0x1a00 && index <= 0x1bff);
-        if (pdoCommunication && subIndex === 1)
+        if (isPdoCommunication(index) && subIndex === 1)
             entry.value = (entry.value | 0x80000000) >>> 0;
-        else if (pdoMapping && subIndex === 0)
+        else if (isPdoMapping(index) && subIndex === 0)
             entry.value = 0;
-        else if (heartbeat && (index === 0x1017 || (index === 0x1016 && subIndex > 0)))
+        else if (index === 0x1017 || (index === 0x1016 && subIndex > 0))
             entry.value = 0;
     }
+}
+
+/** RPDO (0x1400-0x15FF) or TPDO (0x1800-0x19FF) communication parameter (CiA 301 §7.5.2.35). */
+function isPdoCommunication(index) {
+    return (index >= 0x1400 && index <= 0x15ff) || (index >= 0x1800 && index <= 0x19ff);
+}
+
+/** RPDO (0x1600-0x17FF) or TPDO (0x1A00-0x1BFF) mapping parameter (CiA 301 §7.5.2.36). */
+function isPdoMapping(index) {
+    return (index >= 0x1600 && index <= 0x17ff) || (index >= 0x1a00 && index <= 0x1bff);
 }
 
 /**
@@ -137,4 +145,4 @@ function isNumericType(dataType) {
     return (dataType >= 0x01 && dataType <= 0x08) || (dataType >= 0x10 && dataType <= 0x1b);
 }
 
-module.exports = { loadDcf, applyParameterValues, applyUnconfigured, integerExpression };
+module.exports = { loadDcf, applyParameterValues, applyUnconfigured, isPdoCommunication };

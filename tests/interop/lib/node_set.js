@@ -61,18 +61,16 @@ class NodeSet {
      * power-on and after every NMT reset; false: they hold the DCF's DefaultValues with the
      * PDOs and heartbeats the DCF configures switched off (dcf.js applyUnconfigured), at
      * power-on and after every NMT reset, until a master writes the configuration.
-     * unconfiguredHeartbeat (default true): with configured false, the heartbeats are off too.
      * bootUp (default true): the script sends the boot-up message node-canopen leaves out;
      * false shows what a master sees without it.
      */
-    constructor(dcfs, plants, syncPeriod, { configured = true, unconfiguredHeartbeat = true, bootUp = true } = {}) {
+    constructor(dcfs, plants, syncPeriod, { configured = true, bootUp = true } = {}) {
         this.configured = configured;
-        this.unconfiguredHeartbeat = unconfiguredHeartbeat;
         this.bootUp = bootUp;
         this.nodes = dcfs.map(({ path, nodeId, ratedTorque }) => {
             const dcf = loadDcf(path, nodeId, { apply: configured });
             if (!configured)
-                applyUnconfigured(dcf, { heartbeat: unconfiguredHeartbeat });
+                applyUnconfigured(dcf);
             return new Node(dcf, plants[dcf.nodeId], ratedTorque === undefined ? undefined : ratedTorque * 1000);
         });
         this.link = null;
@@ -120,7 +118,7 @@ class NodeSet {
                 if (this.configured)
                     applyParameterValues(node.dcf);
                 else
-                    applyUnconfigured(node.dcf, { heartbeat: this.unconfiguredHeartbeat });
+                    applyUnconfigured(node.dcf);
             });
         }
     }
