@@ -418,9 +418,19 @@ void SceneRunner::accumulate_step_figures(const platform::PeriodReport& report,
 }
 
 void SceneRunner::record(const platform::PeriodReport& report, const PeriodContacts& c) noexcept {
-  const TraceRecord rec = make_trace_record(data_, data_.attached_body, c.tool_contacts,
-                                            c.tool_pen, c.target_pen, report,
-                                            loop_.device().sent_torques().torque);
+  TraceRecord rec = make_trace_record(data_, data_.attached_body, c.tool_contacts, c.tool_pen,
+                                      c.target_pen, report, loop_.device().sent_torques().torque);
+  if (const hal::CanopenMaster* m = loop_.canopen()) {
+    const std::uint64_t received = m->emcy_log().counters().received;
+    if (received > emcys_traced_) {
+      rec.emcys = static_cast<int>(std::min<std::uint64_t>(received - emcys_traced_, 1'000'000));
+      if (const hal::EmcyRecord* e = m->emcy_log().newest()) {
+        rec.emcy_node = e->message.node_id;
+        rec.emcy_code = e->message.error_code;
+      }
+      emcys_traced_ = received;
+    }
+  }
   if (trace_writer_) {
     platform::TraceRecord r;
     r.period = static_cast<std::uint64_t>(k_ - 1);

@@ -77,6 +77,12 @@ constexpr TraceColumn<R> kCsvColumns[] = {
      [](const R& r, int) noexcept { return r.net_tie_stretch_mm; }},
     {"net_strain_max", "1", "Largest |l − L|/L of a structural spring",
      [](const R& r, int) noexcept { return r.net_strain_max; }},
+    {"emcys", "", "CANopen EMCY messages received this period",
+     [](const R& r, int) noexcept { return static_cast<double>(r.emcys); }},
+    {"emcy_node", "", "Node of the newest EMCY this period (0: none)",
+     [](const R& r, int) noexcept { return static_cast<double>(r.emcy_node); }},
+    {"emcy_code", "", "Its error code (0: none; named by CiA 301/402 in the summary's EMCY list)",
+     [](const R& r, int) noexcept { return static_cast<double>(r.emcy_code); }},
 };
 
 constexpr TraceColumn<P> kStreamColumns[] = {
@@ -115,6 +121,12 @@ constexpr TraceColumn<P> kStreamColumns[] = {
      [](const P& p, int) noexcept {
        return static_cast<double>(p.report.woke_ns - p.report.deadline_ns) * 1e-3;
      }},
+    {"emcys", "", "CANopen EMCY messages received this period",
+     [](const P& p, int) noexcept { return static_cast<double>(p.record.emcys); }},
+    {"emcy_node", "", "Node of the newest EMCY this period (0: none)",
+     [](const P& p, int) noexcept { return static_cast<double>(p.record.emcy_node); }},
+    {"emcy_code", "", "Its error code (0: none; named by CiA 301/402 in the summary's EMCY list)",
+     [](const P& p, int) noexcept { return static_cast<double>(p.record.emcy_code); }},
 };
 
 }  // namespace

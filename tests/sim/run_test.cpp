@@ -236,11 +236,12 @@ TEST(RunDefaultScene, StiffContactsOfOneTeraNewtonPerMetreStayFiniteAndOutside) 
 }
 
 // Issue 22: an EMCY reaches the summary with its node, time, code and name — a drive's by the
-// CiA 402 table — (text and --json: the figure emcy_messages).
+// CiA 402 table — (text and --json: the figure emcy_messages), and the trace's row of the period
+// it came in, with its node and code (columns emcys, emcy_node, emcy_code).
 TEST(RunDefaultScene, AnInjectedDriveFaultIsReportedByItsEmcyName) {
   NUMEN_REQUIRE_ARTICULATION();
   const Scene& scene = default_scene();
-  SceneRunner runner(scene, 0);
+  SceneRunner runner(scene, 500);
   for (int k = 0; k < 500; ++k) {
     if (k == 300) {
       ASSERT_TRUE(runner.instrument().emulator().inject_drive_fault(2, 0x4310));
@@ -256,6 +257,26 @@ TEST(RunDefaultScene, AnInjectedDriveFaultIsReportedByItsEmcyName) {
   EXPECT_NE(m.find("0x4310 drive temperature too high (register"), std::string::npos) << m;
   EXPECT_NE(numen::sim::format_summary(s).find("  EMCY: " + m), std::string::npos);
   EXPECT_NE(numen::sim::format_summary_json(s).find("emcy_messages"), std::string::npos);
+  // The trace: the EMCY in exactly one row, within the bus latency after the injection.
+  const std::vector<numen::sim::TraceRecord>& rows = runner.trace().records();
+  ASSERT_EQ(rows.size(), 500u);
+  int emcy_rows = 0;
+  int emcys = 0;
+  for (std::size_t k = 0; k < rows.size(); ++k) {
+    emcys += rows[k].emcys;
+    if (rows[k].emcys == 0) {
+      EXPECT_EQ(rows[k].emcy_node, 0) << "period " << k;
+      EXPECT_EQ(rows[k].emcy_code, 0) << "period " << k;
+      continue;
+    }
+    ++emcy_rows;
+    EXPECT_GE(k, 300u);
+    EXPECT_LE(k, 302u);
+    EXPECT_EQ(rows[k].emcy_node, 3);
+    EXPECT_EQ(rows[k].emcy_code, 0x4310);
+  }
+  EXPECT_EQ(emcy_rows, 1);
+  EXPECT_EQ(emcys, s.emcys);
 }
 
 TEST(RunDefaultScene, NoJumpAtStart) {

@@ -5,10 +5,13 @@
 //
 //   J·ẍ = τ_drive + k·(h(t) − x) − b·ẋ,   h(t) = h0 + A·sin(2π f t)
 //
-// integrated with semi-implicit Euler at each SYNC. x in rad (rotary) or m (linear); the
+// integrated with semi-implicit Euler at each SYNC, in sub-steps of at most MAX_STEP (the
+// damping term is explicit: b·h/J < 2 is needed; the rotary axes' b/J is 250 /s). x in rad (rotary) or m (linear); the
 // encoder reports round(x · counts_per_unit) counts, as numen's axis model (docs/protocol.md
 // §2) decodes them. numen's own emulator plays a recorded trajectory instead; this plant is
 // closed loop: the torque numen sends moves the encoders it reads.
+
+const MAX_STEP = 0.001;  // s: the longest integration sub-step
 
 class PlantAxis {
     /**
@@ -23,13 +26,18 @@ class PlantAxis {
         this.v = 0;
     }
 
-    /** Advances by dt seconds under `torque` (N·m or N); returns the encoder counts. */
+    /** Advances by dt seconds under `torque` (N·m or N, held over dt); returns the encoder
+     *  counts. */
     step(dt, torque) {
-        this.t += dt;
-        const h = this.hold + this.amplitude * Math.sin(2 * Math.PI * this.frequency * this.t);
-        const a = (torque + this.stiffness * (h - this.x) - this.damping * this.v) / this.inertia;
-        this.v += a * dt;
-        this.x += this.v * dt;
+        const n = Math.max(1, Math.ceil(dt / MAX_STEP - 1e-9));
+        const h = dt / n;
+        for (let i = 0; i < n; ++i) {
+            this.t += h;
+            const target = this.hold + this.amplitude * Math.sin(2 * Math.PI * this.frequency * this.t);
+            const a = (torque + this.stiffness * (target - this.x) - this.damping * this.v) / this.inertia;
+            this.v += a * h;
+            this.x += this.v * h;
+        }
         return this.counts();
     }
 

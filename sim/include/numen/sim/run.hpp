@@ -464,6 +464,7 @@ class SceneRunner {
   int startup_other_body_ = -1;   // ... or the other body
   hal::FaultRecord first_fault_;  // the first latched fault of the run (kept across re-arms)
   bool has_first_fault_ = false;
+  std::uint64_t emcys_traced_ = 0;  // EMCY messages received up to the last trace record
 };
 
 /// Fills what a run's summary says of its scene, whichever runner runs it: name, coupling,

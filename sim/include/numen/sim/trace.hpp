@@ -46,6 +46,10 @@ struct TraceRecord {
   double net_tie_stretch_mm = 0.0;  ///< Largest |x − a| of a node from its rest position.
   double net_strain_max = 0.0;      ///< Largest |l − L|/L of a structural spring.
   double solver_residual = 0.0;     ///< Data::solver_residual: the solve's stopping measure.
+  // CANopen EMCY (zero without a managed CANopen device), CiA 301 §7.2.7.
+  int emcys = 0;          ///< EMCY messages received this period.
+  int emcy_node = 0;      ///< Node id of the newest of them (0: none this period).
+  int emcy_code = 0;      ///< Its emergency error code (0: none); named in the summary's EMCY list.
 };
 
 /// Builds a record from the state after a step: `report.feedback` is the feedback wrench whose
