@@ -24,7 +24,9 @@ bool body_pair_can_collide(const Model& model) noexcept {
 }  // namespace
 
 int contact_capacity(const Model& model) noexcept {
-  return !model.obstacles.empty() || body_pair_can_collide(model) ? kMaxContacts : 0;
+  return model.caller_contacts || !model.obstacles.empty() || body_pair_can_collide(model)
+             ? kMaxContacts
+             : 0;
 }
 
 int cross_contact_capacity(const Model& model) noexcept {

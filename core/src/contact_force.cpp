@@ -168,12 +168,16 @@ void compute_contact_forces(const Model& model, Data& data) noexcept {
     if (c.body_a < 0 || c.body_a >= nb || c.body_b >= nb || c.body_b == c.body_a ||
         c.material_pair < 0 || c.material_pair >= np)
       continue;
+    if (data.passive_contact_body >= 0 &&
+        (c.body_a == data.passive_contact_body || c.body_b == data.passive_contact_body))
+      continue;  // rendered elsewhere (the multirate device loop)
     const BodyState& a = data.bodies[static_cast<std::size_t>(c.body_a)];
     const BodyState* b =
         c.body_b >= 0 ? &data.bodies[static_cast<std::size_t>(c.body_b)] : nullptr;
     t.r_a = c.position - a.position;
     if (b != nullptr) t.r_b = c.position - b->position;
-    const Vec3 v_rel = relative_velocity(a, t.r_a, b, t.r_b);
+    Vec3 v_rel = relative_velocity(a, t.r_a, b, t.r_b);
+    if (b == nullptr) v_rel -= c.surface_velocity;
     // The time-constant floor: k_eff = min(k, m_eff (ω_c h / h)²) (SolverSettings).
     MaterialPair material = model.material_pairs[static_cast<std::size_t>(c.material_pair)];
     if (material.stiffness > 0.0 && max_omega_dt < std::numeric_limits<double>::infinity()) {

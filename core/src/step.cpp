@@ -75,7 +75,10 @@ void compute_forces(const Model& model, Data& data) noexcept {
   }
 }
 
-void step(const Model& model, Data& data) noexcept {
+namespace {
+
+/// step() and step_with_contacts(): the contact stage is `write` when given, else detection.
+void run_step(const Model& model, Data& data, ContactWriter write, const void* context) noexcept {
   // The stages this model runs, from the one source compiled_stages() reads
   // (step_stages.cpp); every stage sets its own bit of Data::stages_run where it
   // runs (the integrator's solves in integrator.cpp), so the report is what ran.
@@ -86,7 +89,12 @@ void step(const Model& model, Data& data) noexcept {
   save_state(data);
   impose_direct_target(model, data);  // clears SolverScratch::imposed; imposes in kDirect
   if ((plan & kStageContacts) && !data.scratch->solver.contact_terms.empty()) {  // capacity.hpp
-    detect_contacts(model, data);  // may set kContactOverflow, counts contact_overflow_steps
+    data.contacts_dropped = 0;
+    if (write != nullptr) {
+      write(model, data, context);
+    } else {
+      detect_contacts(model, data);  // may set kContactOverflow, counts contact_overflow_steps
+    }
     data.stages_run |= kStageContacts;
   } else {
     data.num_contacts = 0;
@@ -127,6 +135,15 @@ void step(const Model& model, Data& data) noexcept {
   }
   data.time += model.dt;
   ++data.step_count;
+}
+
+}  // namespace
+
+void step(const Model& model, Data& data) noexcept { run_step(model, data, nullptr, nullptr); }
+
+void step_with_contacts(const Model& model, Data& data, ContactWriter write,
+                        const void* context) noexcept {
+  run_step(model, data, write, context);
 }
 
 void set_attached_body(const Model& model, Data& data, int body) noexcept {

@@ -28,7 +28,8 @@ inline constexpr int kMaxNodeContacts = NUMEN_MAX_NODE_CONTACTS;
 /// gives the per-contact solver scratch (SolverScratch::contact_terms):
 /// kMaxContacts when a body can touch an obstacle (at least one obstacle) or
 /// another body (two bodies in different articulations:
-/// ArticulationTopology::body_tree), else 0 — a scene without anything to
+/// ArticulationTopology::body_tree) or the caller writes the contacts
+/// (Model::caller_contacts), else 0 — a scene without anything to
 /// collide allocates no contact scratch and step() skips contact detection.
 /// Whether the bodies carry spheres is not looked at: contacts may also be
 /// written by a caller of the stage functions. Data::contacts itself is a fixed

@@ -20,6 +20,10 @@ struct Contact {
   Vec3 normal = Vec3::UnitZ();   ///< Unit normal from b towards a: pushes a out along +normal.
   double depth = 0.0;            ///< Penetration depth (m), > 0.
   Vec3 force = Vec3::Zero();     ///< Penalty force on body_a at `position` (N); −force on body_b.
+  /// body_b == -1: velocity of the static side's surface at the contact (m/s, world), taken
+  /// off body_a's point velocity in the penalty law. Zero for obstacles (detect_contacts); the
+  /// moving planes of the multirate intermediate model set it (multirate.hpp).
+  Vec3 surface_velocity = Vec3::Zero();
 };
 
 }  // namespace numen::core

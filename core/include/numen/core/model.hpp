@@ -218,6 +218,10 @@ struct Model {
 
   FeedbackGains feedback;          ///< Device virtual coupling (Eq. 8).
   int initial_attached_body = 0;   ///< Body the device holds at reset; -1 for none.
+  /// The contacts are written by the caller, not detected (the god-object model of the
+  /// multirate device loop, multirate.hpp): contact_capacity() gives the model the room of
+  /// kMaxContacts, step_with_contacts() steps it.
+  bool caller_contacts = false;
   SolverSettings solver;
 
   StaticSphereGrid static_grid;    ///< Derived by finalize_model() (broad phase).

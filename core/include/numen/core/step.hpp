@@ -41,6 +41,17 @@ struct Data;
 /// Never allocates, throws, locks or calls the OS. Deterministic.
 void step(const Model& model, Data& data) noexcept;
 
+/// Writes the contacts of one step into data.contacts / num_contacts (the caller's contact
+/// stage: step_with_contacts()). Must not allocate or throw.
+using ContactWriter = void (*)(const Model& model, Data& data, const void* context) noexcept;
+
+/// step() with stage 1 replaced by `write(model, data, context)`: the caller gives the contacts
+/// (the multirate device loop's planes, multirate.hpp) instead of detect_contacts; the node
+/// contacts are still detected for a model with nets. Everything else as step(). Never
+/// allocates, throws, locks or calls the OS (if `write` does not).
+void step_with_contacts(const Model& model, Data& data, ContactWriter write,
+                        const void* context) noexcept;
+
 /// Forces stage of step(): body_wrench := gravity + applied wrench
 /// (apply_external_forces), + coupling on the attached body (apply_coupling,
 /// Eq. 2), + penalty contact forces of data.contacts (compute_contact_forces),

@@ -1,0 +1,96 @@
+// The multirate god-object's device step against its intermediate model (core/multirate.hpp,
+// docs/multirate.md) beside the single-rate step, on the construction scene (a rigid tool among
+// twelve free blocks, the shipped scene the multirate core runs today). Each iteration is one
+// 1 kHz period: the single-rate SceneRunner steps the scene (the reference, and the source of
+// the hand's target), the MultirateGodObject gets the same target and steps — a device step,
+// and on every N-th period the scene step first (N = the benchmark's argument). The time
+// reported is the multirate period's (manual timing); the counters split it:
+//   device_p50_us, device_p99_us   periods without a scene step: what the device loop costs
+//   scene_p50_us                   periods with one: scene step + device step (on its own thread later)
+//   single_p50_us, single_p99_us   the single-rate core::step of the same periods
+//   device_vs_single               device_p50 / single_p50
+//   tool_pen_mm, single_tool_pen_mm  deepest tool contact, multirate (device) and single-rate
+//
+//   ./build/tests/numen_bench --benchmark_filter=multirate
+
+#include <benchmark/benchmark.h>
+
+#include <chrono>
+#include <memory>
+#include <stdexcept>
+#include <string>
+
+#include "numen/core/multirate.hpp"
+#include "numen/platform/latency_histogram.hpp"
+#include "numen/sim/run.hpp"
+#include "numen/sim/scene.hpp"
+
+namespace {
+
+std::int64_t now_ns() {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(
+             std::chrono::steady_clock::now().time_since_epoch())
+      .count();
+}
+
+void multirate_time(benchmark::State& state, const char* name) {
+  const int ratio = static_cast<int>(state.range(0));
+  numen::sim::Scene scene;
+  try {
+    scene = numen::sim::load_scene(std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/" + name);
+  } catch (const std::exception& e) {
+    state.SkipWithError(e.what());
+    return;
+  }
+  const int body = scene.model.initial_attached_body;
+  // The margin covers 2 m/s of tool travel over a scene period (docs/multirate.md).
+  const numen::core::MultirateSettings settings{ratio, 2.0 * scene.model.dt * ratio};
+  const auto periods = static_cast<std::int64_t>(scene.duration_s / scene.model.dt);
+  std::unique_ptr<numen::sim::SceneRunner> runner;
+  std::unique_ptr<numen::core::MultirateGodObject> mr;
+  const auto restart = [&] {
+    runner = std::make_unique<numen::sim::SceneRunner>(scene);
+    mr = std::make_unique<numen::core::MultirateGodObject>(scene.model, body, settings);
+  };
+  restart();
+  numen::platform::LatencyHistogram device, scene_periods, single;
+  double tool_pen = 0.0;
+  std::int64_t k = 0;
+  for (auto _ : state) {
+    if (runner->periods() >= periods) {
+      state.PauseTiming();
+      restart();
+      k = 0;
+      state.ResumeTiming();
+    }
+    runner->period();
+    single.record(runner->last_report().step_ns);
+    numen::core::Data& d = mr->device_data();
+    d.target = runner->data().target;
+    d.target_twist = runner->data().target_twist;
+    const std::int64_t t0 = now_ns();
+    mr->step();
+    const std::int64_t t = now_ns() - t0;
+    state.SetIterationTime(static_cast<double>(t) * 1e-9);
+    (k % ratio == 0 ? scene_periods : device).record(t);
+    tool_pen = std::max(tool_pen, d.max_penetration);
+    ++k;
+  }
+  if (runner->data().attached_body != body)
+    state.SkipWithError("the run switched tools: the multirate god-object holds one body");
+  const double single_p50 = static_cast<double>(single.quantile(0.5)) * 1e-3;
+  state.counters["device_p50_us"] = static_cast<double>(device.quantile(0.5)) * 1e-3;
+  state.counters["device_p99_us"] = static_cast<double>(device.quantile(0.99)) * 1e-3;
+  state.counters["scene_p50_us"] = static_cast<double>(scene_periods.quantile(0.5)) * 1e-3;
+  state.counters["single_p50_us"] = single_p50;
+  state.counters["single_p99_us"] = static_cast<double>(single.quantile(0.99)) * 1e-3;
+  state.counters["device_vs_single"] =
+      single_p50 > 0.0 ? static_cast<double>(device.quantile(0.5)) * 1e-3 / single_p50 : 0.0;
+  state.counters["tool_pen_mm"] = tool_pen * 1e3;
+  state.counters["single_tool_pen_mm"] = runner->summary().tool_penetration_max_mm;
+}
+
+}  // namespace
+
+BENCHMARK_CAPTURE(multirate_time, Construction, "construction.toml")
+    ->Arg(1)->Arg(10)->Arg(100)->UseManualTime()->Iterations(9000);
