@@ -168,9 +168,6 @@ void compute_contact_forces(const Model& model, Data& data) noexcept {
     if (c.body_a < 0 || c.body_a >= nb || c.body_b >= nb || c.body_b == c.body_a ||
         c.material_pair < 0 || c.material_pair >= np)
       continue;
-    if (data.passive_contact_body >= 0 &&
-        (c.body_a == data.passive_contact_body || c.body_b == data.passive_contact_body))
-      continue;  // rendered elsewhere (the multirate device loop)
     const BodyState& a = data.bodies[static_cast<std::size_t>(c.body_a)];
     const BodyState* b =
         c.body_b >= 0 ? &data.bodies[static_cast<std::size_t>(c.body_b)] : nullptr;

@@ -27,17 +27,60 @@ void write_planes(const Model& model, Data& data, const void* context) noexcept 
   write_plane_contacts(model, *c->planes, c->elapsed, data);
 }
 
-/// The scene loop's contact stage: detection, then the planes of the god-object's contacts
-/// (before any body moves).
+/// The scene loop's contact stage: detection, the planes of the god-object's contacts (before
+/// any body moves), then those contacts cut back to the god-object's true spheres (the
+/// proximity model grew them by the margin): depth − δ, the middle of the overlap δ/2 back
+/// towards the god-object; a contact left without depth is dropped.
 struct SampleContext {
   ContactPlaneSet* planes;
   int body;
+  double margin;
 };
 
 void detect_and_build_planes(const Model& model, Data& data, const void* context) noexcept {
   const auto* c = static_cast<const SampleContext*>(context);
   detect_contacts(model, data);
   build_contact_planes(model, data, c->body, *c->planes);
+  if (c->margin <= 0.0) return;
+  int kept = 0;
+  double deepest = 0.0;
+  const int n = std::clamp(data.num_contacts, 0, kMaxContacts);
+  for (int i = 0; i < n; ++i) {
+    Contact k = data.contacts[static_cast<std::size_t>(i)];
+    const bool on_a = k.body_a == c->body;
+    if (on_a != (k.body_b == c->body)) {
+      k.depth -= c->margin;
+      if (!(k.depth > 0.0)) continue;
+      k.position += (0.5 * c->margin) * (on_a ? k.normal : Vec3(-k.normal));
+    }
+    deepest = std::max(deepest, k.depth);
+    data.contacts[static_cast<std::size_t>(kept++)] = k;
+  }
+  data.num_contacts = kept;
+  data.max_penetration = deepest;
+}
+
+/// The force a contact of the last step applied to its body a over the step (N, world): for
+/// the linearly implicit Euler F₀ + K h v₁ + D Δv on the contact's relative velocity
+/// v = (v_a + ω_a × r_a) − (v_b + ω_b × r_b) − surface velocity (the linearisation the step
+/// solved, integrator.cpp: v₁'s normal part is the step's start value ContactTerm::
+/// normal_velocity plus its change; docs/multirate.md), for the symplectic Euler F₀. `a0`, `a1`,
+/// `b0`, `b1`: the bodies' states at the step's start and end (b null: static, its surface
+/// moving at a constant velocity).
+Vec3 effective_contact_force(const Contact& c, const ContactTerm& t, bool implicit, double h,
+                             const BodyState& a0, const BodyState& a1, const BodyState* b0,
+                             const BodyState* b1) noexcept {
+  Vec3 f = c.force;
+  if (!implicit) return f;
+  const auto point_velocity = [](const BodyState& s, const Vec3& r) {
+    return Vec3(s.linear_velocity + s.angular_velocity.cross(r));
+  };
+  Vec3 dv = point_velocity(a1, t.r_a) - point_velocity(a0, t.r_a);
+  if (b0 != nullptr && b1 != nullptr) dv -= point_velocity(*b1, t.r_b) - point_velocity(*b0, t.r_b);
+  const Vec3& n = c.normal;
+  f -= (t.stiffness * h * (t.normal_velocity + n.dot(dv)) + t.damping * n.dot(dv)) * n;
+  f -= t.friction * (dv - n.dot(dv) * n);
+  return f;
 }
 
 }  // namespace
@@ -180,7 +223,7 @@ void step_god_object(const Model& model, const ContactPlaneSet& planes, double e
 }
 
 MultirateGodObject::MultirateGodObject(const Model& scene, int body, const MultirateSettings& settings)
-    : body_(body), ratio_(settings.ratio) {
+    : body_(body), ratio_(settings.ratio), margin_(settings.margin) {
   if (settings.ratio < 1)
     throw std::invalid_argument("multirate: the rate ratio scene_dt / dt must be >= 1 (got " +
                                 std::to_string(settings.ratio) + ")");
@@ -188,31 +231,65 @@ MultirateGodObject::MultirateGodObject(const Model& scene, int body, const Multi
   if (error.empty()) error = make_proximity_model(scene, body, settings.margin, scene_model_);
   if (!error.empty()) throw std::invalid_argument(error);
   scene_model_.dt = scene.dt * settings.ratio;
+  // The god-object moves in the scene loop as the device loop moved it: imposed (kDirect, an
+  // infinitely heavy body for the scene's implicit solve).
+  scene_model_.coupling_mode = CouplingMode::kDirect;
+  scene_model_.initial_attached_body = body;
   error = finalize_model(scene_model_);
   if (!error.empty()) throw std::invalid_argument("multirate: scene-loop model: " + error);
   device_ = make_data(device_model_);
   scene_ = make_data(scene_model_);
-  scene_.passive_contact_body = body;
-  set_attached_body(scene_model_, scene_, -1);  // the device drives the god-object model only
   device_.bodies[0] = scene_.bodies[static_cast<std::size_t>(body)];
   pending_.assign(scene.bodies.size(), Wrench{});
   base_applied_.assign(scene.bodies.size(), Wrench{});
+  scene_before_.assign(scene.bodies.size(), BodyState{});
 }
 
 void MultirateGodObject::scene_step() noexcept {
   const auto g = static_cast<std::size_t>(body_);
-  scene_.bodies[g] = device_.bodies[0];
   const double h = scene_model_.dt;
+  // The god-object's pose and twist, imposed over the scene step.
+  scene_.target.position = device_.bodies[0].position;
+  scene_.target.orientation = device_.bodies[0].orientation;
+  scene_.target_twist.linear = device_.bodies[0].linear_velocity;
+  scene_.target_twist.angular = device_.bodies[0].angular_velocity;
+  scene_.bodies[g] = device_.bodies[0];
+  // What each scene body is owed (the device loop's impulses less what the scene's own contact
+  // with the god-object gave it), applied over this step.
   for (std::size_t b = 0; b < pending_.size(); ++b) {
     base_applied_[b] = scene_.applied_wrench[b];
     scene_.applied_wrench[b].force += pending_[b].force / h;
     scene_.applied_wrench[b].torque += pending_[b].torque / h;
     pending_[b] = Wrench{};
+    scene_before_[b] = scene_.bodies[b];
   }
-  SampleContext context{&planes_, body_};
+  SampleContext context{&planes_, body_, margin_};
   step_with_contacts(scene_model_, scene_, &detect_and_build_planes, &context);
   for (std::size_t b = 0; b < pending_.size(); ++b) scene_.applied_wrench[b] = base_applied_[b];
-  scene_.bodies[g] = device_.bodies[0];  // the scene loop does not move the god-object
+  // The impulse the scene step's god-object contacts gave each scene body: already received,
+  // so no longer owed.
+  if (!(scene_.status & kNonFinite)) {
+    const bool implicit = scene_model_.integrator == Integrator::kLinearlyImplicitEuler;
+    const int n = std::clamp(scene_.num_contacts, 0, kMaxContacts);
+    for (int i = 0; i < n; ++i) {
+      const Contact& c = scene_.contacts[static_cast<std::size_t>(i)];
+      const ContactTerm& t = scene_.scratch->solver.contact_terms[static_cast<std::size_t>(i)];
+      const bool on_a = c.body_a == body_;
+      if (!t.active || on_a == (c.body_b == body_) || c.body_a < 0 || c.body_b < 0) continue;
+      const auto a = static_cast<std::size_t>(c.body_a);
+      const auto b = static_cast<std::size_t>(c.body_b);
+      const Vec3 f = effective_contact_force(c, t, implicit, h, scene_before_[a], scene_.bodies[a],
+                                             &scene_before_[b], &scene_.bodies[b]);
+      // The other body's share: −f if it is b, +f if it is a.
+      const Vec3 on_other = on_a ? Vec3(-f) : f;
+      const Vec3& r = on_a ? t.r_b : t.r_a;
+      Wrench& w = pending_[on_a ? b : a];
+      w.force -= h * on_other;
+      w.torque -= h * r.cross(on_other);
+      ++counters_.scene_contacts;
+    }
+  }
+  scene_.bodies[g] = device_.bodies[0];
   ++counters_.scene_steps;
   counters_.planes_dropped += planes_.dropped;
   counters_.planes_max = std::max<std::int64_t>(counters_.planes_max, planes_.count);
@@ -222,7 +299,6 @@ void MultirateGodObject::hand_back(const BodyState& before) noexcept {
   if (device_.status & kNonFinite) return;  // rolled back: nothing was applied
   const double h = device_model_.dt;
   const double tau = h * static_cast<double>(period_ % ratio_);
-  const BodyState& after = device_.bodies[0];
   const bool implicit = device_model_.integrator == Integrator::kLinearlyImplicitEuler;
   const int n = std::clamp(device_.num_contacts, 0, kMaxContacts);
   for (int i = 0; i < n; ++i) {
@@ -231,14 +307,9 @@ void MultirateGodObject::hand_back(const BodyState& before) noexcept {
     if (!t.active || c.sphere_b < 0 || c.sphere_b >= planes_.count) continue;
     const ContactPlane& p = planes_.planes[static_cast<std::size_t>(c.sphere_b)];
     if (p.other_body < 0 || p.other_body >= static_cast<int>(pending_.size())) continue;
-    Vec3 f = c.force;
-    if (implicit) {  // F₀ + K h v₁ + D Δv at the contact point (docs/multirate.md)
-      const Vec3 v1 = after.linear_velocity + after.angular_velocity.cross(t.r_a);
-      const Vec3 dv = v1 - (before.linear_velocity + before.angular_velocity.cross(t.r_a));
-      const Vec3& nrm = c.normal;
-      f -= (t.stiffness * h * nrm.dot(v1) + t.damping * nrm.dot(dv)) * nrm;
-      f -= t.friction * (dv - nrm.dot(dv) * nrm);
-    }
+    // The plane's motion is prescribed over the period: the relative velocity's change is the
+    // god-object's alone.
+    const Vec3 f = effective_contact_force(c, t, implicit, h, before, device_.bodies[0], nullptr, nullptr);
     const BodyState& o = scene_.bodies[static_cast<std::size_t>(p.other_body)];
     const Vec3 com = o.position + tau * o.linear_velocity;
     Wrench& w = pending_[static_cast<std::size_t>(p.other_body)];

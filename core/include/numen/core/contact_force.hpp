@@ -106,8 +106,8 @@ double body_contact_stiffness_limit(const Model& model, int body);
 /// Contact::force, the lever arms, normal velocity v_n and activity into
 /// SolverScratch::contact_terms, and adds (F, r_a × F) to body_wrench[body_a]
 /// and (−F, −r_b × F) to body_wrench[body_b] (at the COMs, world). Contacts
-/// with an out-of-range body or material_pair index, and those of
-/// Data::passive_contact_body, are ignored (force 0, inactive). Forces on a kDirect body are computed but have no effect (its
+/// with an out-of-range body or material_pair index are ignored (force 0,
+/// inactive). Forces on a kDirect body are computed but have no effect (its
 /// motion is imposed). Contacts beyond the room of the contact scratch
 /// (contact_capacity(model): 0 for a model in which nothing can collide) are
 /// dropped as an overflow: num_contacts is cut to the room, contacts_dropped

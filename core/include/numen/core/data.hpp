@@ -126,10 +126,6 @@ struct Data {
   /// `target`. An enabled entry of the attached body itself is ignored.
   std::vector<BodyTarget> body_targets;
   std::vector<JointPrescription> joint_prescribed;  ///< Per joint; read for prescribed joints only.
-  /// A body whose contacts are detected but apply no force, to it or to the other side (-1:
-  /// none): the god-object in the scene loop of a multirate god-object, whose device loop
-  /// renders those contacts (multirate.hpp). Kept by reset_data().
-  int passive_contact_body = -1;
 
   // ---- outputs of the last step ----
   std::array<Contact, kMaxContacts> contacts{};  ///< [0, num_contacts) valid.

@@ -13,8 +13,8 @@
 /// proximity model the scene loop detects with (make_proximity_model: the god-object's spheres
 /// grown by a margin, so that a plane exists before its sphere reaches the surface), the planes
 /// (ContactPlaneSet, build_contact_planes), the device step against them (step_god_object), and
-/// the two loops interleaved on one thread with the impulse the device loop's planes put on
-/// scene bodies handed back to them (MultirateGodObject). Rigid god-objects without joints,
+/// the two loops interleaved on one thread, the scene bodies receiving the impulse the device
+/// loop's planes gave the god-object (MultirateGodObject). Rigid god-objects without joints,
 /// scenes without nets, the linearly implicit and symplectic Euler schemes; the threads and the
 /// scene file's [multirate] are docs/multirate.md's next steps.
 
@@ -109,29 +109,34 @@ struct MultirateCounters {
   std::int64_t scene_steps = 0;   ///< Scene periods stepped (samples taken).
   std::int64_t planes_dropped = 0;  ///< Contacts beyond kMaxContactPlanes, summed over samples.
   std::int64_t planes_max = 0;    ///< Most planes of one sample.
+  std::int64_t scene_contacts = 0;  ///< God-object contacts with scene bodies in scene steps.
 };
 
 /// The two loops of a multirate god-object interleaved on one thread in a fixed order
 /// (deterministic, bit-identical run to run; docs/multirate.md):
 ///   every N-th device period (the first included), the scene period:
-///     1. the god-object's state (from the device loop) into the scene-loop Data;
-///     2. the impulse the device loop's planes put on each scene body over the last scene
-///        period (J, and its moment L about the body's centre of mass) applied to it as the
-///        explicit wrench (J, L) / scene_dt of this scene step (Data::applied_wrench, added to
-///        the scene-loop Data's own, which is restored after the step);
+///     1. the god-object's pose and twist, as the device loop left them, imposed on it in the
+///        scene-loop model (CouplingMode::kDirect: an infinitely heavy body for the scene's
+///        implicit solve);
+///     2. what each scene body is owed (below) applied to it as the explicit wrench
+///        (J, L)/scene_dt of this step (Data::applied_wrench, added to the scene-loop Data's
+///        own, restored after the step);
 ///     3. step() of the scene-loop model (the proximity model at scene_dt = N·dt), whose
-///        contact stage detects the contacts and builds the planes from them before any body
-///        moves; the god-object's own contacts there apply no force
-///        (Data::passive_contact_body): the device loop renders them;
+///        contact stage detects the contacts, builds the planes from them before any body
+///        moves, then cuts the god-object's contacts back to its true spheres (depth − δ):
+///        the scene bodies feel the god-object implicitly, as in the single-rate step;
+///     4. the impulse those contacts gave each scene body (their effective force over the step,
+///        below) is subtracted from what it is owed;
 ///   then every device period:
-///     4. step_god_object() at dt, τ = (period mod N)·dt after the sample;
-///     5. the impulse handed back: for each contact of a plane on a scene body, the force the
-///        step really applied to the god-object — for the linearly implicit Euler
-///        F = F₀ + K h v₁ + D Δv at the contact point (the linearisation the step solved with,
-///        docs/dynamics.md), F₀ for the symplectic Euler — times −dt, into that body's J, its
-///        moment about the body's centre of mass (extrapolated by its velocity over τ) into L.
-/// Momentum: what the god-object receives from a scene body over a scene period, the body
-/// receives over the next one (one scene period late), to rounding.
+///     5. step_god_object() at dt, τ = (period mod N)·dt after the sample;
+///     6. the impulse each plane on a scene body gave the god-object, negated, added to what
+///        that body is owed (its moment about the body's centre of mass, extrapolated by its
+///        velocity over τ, to the moment owed).
+/// The effective force of a contact over a step is what the step applied: for the linearly
+/// implicit Euler F₀ + K h v₁ + D Δv on the contact's relative velocity, for the symplectic
+/// Euler F₀. Momentum: the scene bodies receive what the device loop gave the god-object, the
+/// part the scene's own contact did not give them in the same scene period arriving one scene
+/// period late; with the owed impulse counted, the total is conserved to the solves' tolerance.
 class MultirateGodObject {
  public:
   /// Builds the god-object model (dt = scene.dt), the scene-loop model (make_proximity_model()
@@ -152,8 +157,8 @@ class MultirateGodObject {
   const ContactPlaneSet& planes() const noexcept { return planes_; }
   int body() const noexcept { return body_; }            ///< The god-object in the scene.
   int ratio() const noexcept { return ratio_; }
-  /// Impulse (N·s) and its moment (N·m·s, about the body's centre of mass) handed back to each
-  /// scene body since the last scene step: applied at the next one.
+  /// Impulse (N·s) and its moment (N·m·s, about the body's centre of mass) each scene body is
+  /// owed: applied at the next scene step.
   const std::vector<Wrench>& pending_impulse() const noexcept { return pending_; }
   const MultirateCounters& counters() const noexcept { return counters_; }
 
@@ -163,6 +168,7 @@ class MultirateGodObject {
 
   int body_;
   int ratio_;
+  double margin_;
   Model device_model_;
   Model scene_model_;
   Data device_;
@@ -170,6 +176,7 @@ class MultirateGodObject {
   ContactPlaneSet planes_;
   std::vector<Wrench> pending_;  // per scene body
   std::vector<Wrench> base_applied_;  // the scene-loop Data's own applied wrenches
+  std::vector<BodyState> scene_before_;  // the scene bodies at the scene step's start
   std::int64_t period_ = 0;
   MultirateCounters counters_;
 };
