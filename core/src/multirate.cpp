@@ -265,10 +265,17 @@ void MultirateGodObject::scene_step() noexcept {
   }
   SampleContext context{&planes_, body_, margin_};
   step_with_contacts(scene_model_, scene_, &detect_and_build_planes, &context);
-  for (std::size_t b = 0; b < pending_.size(); ++b) scene_.applied_wrench[b] = base_applied_[b];
+  const bool rejected = (scene_.status & kNonFinite) != 0;
+  for (std::size_t b = 0; b < pending_.size(); ++b) {
+    if (rejected) {  // rolled back: what was owed is still owed
+      pending_[b].force = h * (scene_.applied_wrench[b].force - base_applied_[b].force);
+      pending_[b].torque = h * (scene_.applied_wrench[b].torque - base_applied_[b].torque);
+    }
+    scene_.applied_wrench[b] = base_applied_[b];
+  }
   // The impulse the scene step's god-object contacts gave each scene body: already received,
   // so no longer owed.
-  if (!(scene_.status & kNonFinite)) {
+  if (!rejected) {
     const bool implicit = scene_model_.integrator == Integrator::kLinearlyImplicitEuler;
     const int n = std::clamp(scene_.num_contacts, 0, kMaxContacts);
     for (int i = 0; i < n; ++i) {
@@ -310,7 +317,8 @@ void MultirateGodObject::hand_back(const BodyState& before) noexcept {
     // The plane's motion is prescribed over the period: the relative velocity's change is the
     // god-object's alone.
     const Vec3 f = effective_contact_force(c, t, implicit, h, before, device_.bodies[0], nullptr, nullptr);
-    const BodyState& o = scene_.bodies[static_cast<std::size_t>(p.other_body)];
+    // The other body at the sample (the scene step's start), moved on by τ.
+    const BodyState& o = scene_before_[static_cast<std::size_t>(p.other_body)];
     const Vec3 com = o.position + tau * o.linear_velocity;
     Wrench& w = pending_[static_cast<std::size_t>(p.other_body)];
     w.force -= h * f;
