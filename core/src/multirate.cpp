@@ -83,12 +83,17 @@ Vec3 effective_contact_force(const Contact& c, const ContactTerm& t, bool implic
   return f;
 }
 
+/// "" when `body` is a body of `scene`, else the message both model makers give.
+std::string body_error(const Model& scene, int body) {
+  if (body >= 0 && body < scene.num_bodies()) return "";
+  return "multirate: god-object body " + std::to_string(body) + " is not a body of the scene (" +
+         std::to_string(scene.num_bodies()) + " bodies)";
+}
+
 }  // namespace
 
 std::string make_god_object_model(const Model& scene, int body, double device_dt, Model& out) {
-  if (body < 0 || body >= scene.num_bodies())
-    return "multirate: god-object body " + std::to_string(body) + " is not a body of the scene (" +
-           std::to_string(scene.num_bodies()) + " bodies)";
+  if (std::string e = body_error(scene, body); !e.empty()) return e;
   if (!(device_dt > 0.0) || !std::isfinite(device_dt))
     return "multirate: the device period must be > 0 s and finite (got " + std::to_string(device_dt) + ")";
   for (const JointModel& j : scene.joints)
@@ -123,9 +128,7 @@ std::string make_god_object_model(const Model& scene, int body, double device_dt
 }
 
 std::string make_proximity_model(const Model& scene, int body, double margin, Model& out) {
-  if (body < 0 || body >= scene.num_bodies())
-    return "multirate: god-object body " + std::to_string(body) + " is not a body of the scene (" +
-           std::to_string(scene.num_bodies()) + " bodies)";
+  if (std::string e = body_error(scene, body); !e.empty()) return e;
   if (!(margin >= 0.0) || !std::isfinite(margin))
     return "multirate: the contact margin must be >= 0 m and finite (got " + std::to_string(margin) + ")";
   Model m = scene;
