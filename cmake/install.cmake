@@ -99,14 +99,16 @@ endif()
 numen_install_headers(${PROJECT_SOURCE_DIR}/hal/include ${_hal_headers})
 numen_install_headers(${PROJECT_BINARY_DIR}/hal/include numen/hal/features.hpp)  # generated
 
-# platform: the control loops, real-time setup, clocks, timers, statistics, the state stream.
+# platform: the control loops, real-time setup, clocks, timers, statistics, the state stream,
+# the multirate scene thread and its triple buffers.
 numen_install_headers(${PROJECT_SOURCE_DIR}/platform/include
   numen/platform/admittance_loop.hpp numen/platform/control_loop.hpp
   numen/platform/device_binding.hpp numen/platform/latency_histogram.hpp
   numen/platform/loop_statistics.hpp numen/platform/monotonic_clock.hpp
-  numen/platform/periodic_timer.hpp numen/platform/realtime_setup.hpp
-  numen/platform/state_frame.hpp numen/platform/state_stream.hpp
-  numen/platform/trace_queue.hpp)
+  numen/platform/multirate_threads.hpp numen/platform/periodic_timer.hpp
+  numen/platform/realtime_setup.hpp numen/platform/state_frame.hpp
+  numen/platform/state_stream.hpp numen/platform/trace_queue.hpp
+  numen/platform/triple_buffer.hpp)
 
 # sim: scenes (load_scene, run_scene), trajectories, simulated instruments, traces, studies,
 # view recordings and server. Not installed: the `numen` command's helpers (cli_values.hpp,

@@ -10,6 +10,7 @@
 #include "numen/core/collision.hpp"
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"
+#include "numen/core/rigid_body.hpp"
 #include "numen/core/step.hpp"
 
 #include "detail/data_scratch.hpp"
@@ -17,38 +18,47 @@
 namespace numen::core {
 namespace {
 
-struct PlaneContext {
-  const ContactPlaneSet* planes;
-  double elapsed;
-};
-
 void write_planes(const Model& model, Data& data, const void* context) noexcept {
-  const auto* c = static_cast<const PlaneContext*>(context);
-  write_plane_contacts(model, *c->planes, c->elapsed, data);
+  write_plane_contacts(model, *static_cast<const ContactPlaneSet*>(context), data);
 }
 
 /// The scene loop's contact stage: detection, the planes of the god-object's contacts (before
 /// any body moves), then those contacts cut back to the god-object's true spheres (the
 /// proximity model grew them by the margin): depth − δ, the middle of the overlap δ/2 back
-/// towards the god-object; a contact left without depth is dropped.
+/// towards the god-object; a contact left without depth is dropped, and so is one between two
+/// bodies of the god-object (the scene-loop model has not their joints).
 struct SampleContext {
   ContactPlaneSet* planes;
-  int body;
+  std::span<const int> device_body;  // per scene body: god-object model index or −1
   double margin;
+  double device_dt;
 };
+
+/// True when scene body `b` is a body of the god-object (`device_body`: see SampleContext).
+bool in_god_object(std::span<const int> device_body, int b) noexcept {
+  return b >= 0 && b < static_cast<int>(device_body.size()) && device_body[static_cast<std::size_t>(b)] >= 0;
+}
+
+/// True when exactly one side of `c` is a body of the god-object; `on_a` says which.
+bool god_object_contact(const Contact& c, std::span<const int> device_body, bool& on_a) noexcept {
+  on_a = in_god_object(device_body, c.body_a);
+  return on_a != in_god_object(device_body, c.body_b);
+}
 
 void detect_and_build_planes(const Model& model, Data& data, const void* context) noexcept {
   const auto* c = static_cast<const SampleContext*>(context);
   detect_contacts(model, data);
-  build_contact_planes(model, data, c->body, *c->planes);
-  if (c->margin <= 0.0) return;
+  build_contact_planes(model, data, c->device_body, c->device_dt, *c->planes);
   int kept = 0;
   double deepest = 0.0;
   const int n = std::clamp(data.num_contacts, 0, kMaxContacts);
   for (int i = 0; i < n; ++i) {
     Contact k = data.contacts[static_cast<std::size_t>(i)];
-    const bool on_a = k.body_a == c->body;
-    if (on_a != (k.body_b == c->body)) {
+    // Two bodies of the god-object's articulation: its joints are the device loop's, and one
+    // articulation never collides with itself (ArticulationTopology::body_tree).
+    if (in_god_object(c->device_body, k.body_a) && in_god_object(c->device_body, k.body_b)) continue;
+    bool on_a = false;
+    if (c->margin > 0.0 && god_object_contact(k, c->device_body, on_a)) {
       k.depth -= c->margin;
       if (!(k.depth > 0.0)) continue;
       k.position += (0.5 * c->margin) * (on_a ? k.normal : Vec3(-k.normal));
@@ -92,34 +102,52 @@ std::string body_error(const Model& scene, int body) {
 
 }  // namespace
 
+std::vector<int> god_object_bodies(const Model& scene, int body) {
+  std::vector<int> out;
+  if (body < 0 || body >= scene.num_bodies()) return out;
+  const std::vector<int>& tree = scene.articulation.body_tree;
+  if (tree.size() != scene.bodies.size()) return {body};
+  for (int b = 0; b < scene.num_bodies(); ++b)
+    if (tree[static_cast<std::size_t>(b)] == tree[static_cast<std::size_t>(body)]) out.push_back(b);
+  return out;
+}
+
 std::string make_god_object_model(const Model& scene, int body, double device_dt, Model& out) {
   if (std::string e = body_error(scene, body); !e.empty()) return e;
   if (!(device_dt > 0.0) || !std::isfinite(device_dt))
     return "multirate: the device period must be > 0 s and finite (got " + std::to_string(device_dt) + ")";
-  for (const JointModel& j : scene.joints)
-    if (j.parent == body || j.child == body)
-      return "multirate: god-object body '" + scene.bodies[static_cast<std::size_t>(body)].name +
-             "' is in a joint (articulated god-objects are not multirate yet)";
   if (!scene.nets.empty()) return "multirate: scenes with deformable nets are not multirate yet";
   if (scene.integrator != Integrator::kLinearlyImplicitEuler &&
       scene.integrator != Integrator::kSymplecticEuler)
     return "multirate: the god-object's integrator must be the linearly implicit or the "
            "symplectic Euler (the impulse hand-back needs the step's effective contact force)";
-  const BodyModel& b = scene.bodies[static_cast<std::size_t>(body)];
-  Model m;
+  const std::vector<int> bodies = god_object_bodies(scene, body);
+  std::vector<int> local(scene.bodies.size(), -1);
+  for (std::size_t i = 0; i < bodies.size(); ++i) local[static_cast<std::size_t>(bodies[i])] = static_cast<int>(i);
+  Model m = scene;  // the scene's settings; its bodies, joints and obstacles replaced below
   m.dt = device_dt;
-  m.gravity = scene.gravity;
-  m.integrator = scene.integrator;
-  m.coupling_mode = scene.coupling_mode;
-  m.bodies = {b};
-  m.bodies[0].sphere_begin = 0;
-  m.body_spheres.assign(scene.body_spheres.begin() + b.sphere_begin,
-                        scene.body_spheres.begin() + b.sphere_begin + b.sphere_count);
-  m.material_names = scene.material_names;
-  m.material_pairs = scene.material_pairs;
-  m.feedback = scene.feedback;
-  m.initial_attached_body = 0;
-  m.solver = scene.solver;
+  m.bodies.clear();
+  m.body_spheres.clear();
+  for (int b : bodies) {
+    BodyModel bm = scene.bodies[static_cast<std::size_t>(b)];
+    bm.sphere_begin = static_cast<int>(m.body_spheres.size());
+    m.body_spheres.insert(m.body_spheres.end(),
+                          scene.body_spheres.begin() + scene.bodies[static_cast<std::size_t>(b)].sphere_begin,
+                          scene.body_spheres.begin() + scene.bodies[static_cast<std::size_t>(b)].sphere_begin +
+                              bm.sphere_count);
+    m.bodies.push_back(bm);
+  }
+  m.joints.clear();
+  for (const JointModel& j : scene.joints) {
+    if (local[static_cast<std::size_t>(j.child)] < 0) continue;  // another articulation's
+    JointModel jm = j;
+    jm.child = local[static_cast<std::size_t>(j.child)];
+    jm.parent = j.parent < 0 ? -1 : local[static_cast<std::size_t>(j.parent)];
+    m.joints.push_back(jm);
+  }
+  m.obstacles.clear();
+  m.static_spheres.clear();
+  m.initial_attached_body = local[static_cast<std::size_t>(body)];
   m.caller_contacts = true;
   std::string error = finalize_model(m);
   if (!error.empty()) return "multirate: god-object model: " + error;
@@ -132,27 +160,31 @@ std::string make_proximity_model(const Model& scene, int body, double margin, Mo
   if (!(margin >= 0.0) || !std::isfinite(margin))
     return "multirate: the contact margin must be >= 0 m and finite (got " + std::to_string(margin) + ")";
   Model m = scene;
-  const BodyModel& b = m.bodies[static_cast<std::size_t>(body)];
-  for (int s = b.sphere_begin; s < b.sphere_begin + b.sphere_count; ++s)
-    m.body_spheres[static_cast<std::size_t>(s)].radius += margin;
+  for (int g : god_object_bodies(scene, body)) {
+    const BodyModel& b = m.bodies[static_cast<std::size_t>(g)];
+    for (int s = b.sphere_begin; s < b.sphere_begin + b.sphere_count; ++s)
+      m.body_spheres[static_cast<std::size_t>(s)].radius += margin;
+  }
   std::string error = finalize_model(m);
   if (!error.empty()) return "multirate: proximity model: " + error;
   out = std::move(m);
   return "";
 }
 
-void build_contact_planes(const Model& scene, const Data& data, int body, ContactPlaneSet& out) noexcept {
+void build_contact_planes(const Model& scene, const Data& data, std::span<const int> device_body,
+                          double device_dt, ContactPlaneSet& out) noexcept {
   out.count = 0;
+  out.carrier_count = 0;
   out.dropped = 0;
-  if (body < 0 || body >= scene.num_bodies()) return;
-  const BodyModel& bm = scene.bodies[static_cast<std::size_t>(body)];
-  const BodyState& g = data.bodies[static_cast<std::size_t>(body)];
+  if (device_body.size() != scene.bodies.size()) return;
   const int n = std::clamp(data.num_contacts, 0, kMaxContacts);
   for (int i = 0; i < n; ++i) {
     const Contact& c = data.contacts[static_cast<std::size_t>(i)];
-    const bool on_a = c.body_a == body;
-    const bool on_b = c.body_b == body;
-    if (on_a == on_b) continue;  // not the god-object's, or between two of its own spheres
+    bool on_a = false;
+    if (!god_object_contact(c, device_body, on_a)) continue;  // not the god-object's
+    const int body = on_a ? c.body_a : c.body_b;
+    const BodyModel& bm = scene.bodies[static_cast<std::size_t>(body)];
+    const BodyState& g = data.bodies[static_cast<std::size_t>(body)];
     const int sphere = on_a ? c.sphere_a : c.sphere_b;
     if (sphere < bm.sphere_begin || sphere >= bm.sphere_begin + bm.sphere_count) continue;
     if (out.count >= kMaxContactPlanes) {
@@ -163,53 +195,150 @@ void build_contact_planes(const Model& scene, const Data& data, int body, Contac
     const Vec3 centre = g.position + g.orientation * s.center;
     const Vec3 normal = on_a ? c.normal : Vec3(-c.normal);
     ContactPlane& p = out.planes[static_cast<std::size_t>(out.count++)];
+    p.body = device_body[static_cast<std::size_t>(body)];
     p.sphere = sphere - bm.sphere_begin;
     p.normal = normal;
     p.point = centre - (s.radius - c.depth) * normal;  // the other side's surface point
     p.material_pair = c.material_pair;
     p.other_body = on_a ? c.body_b : c.body_a;
+    p.obstacle = c.obstacle;
+    p.other_sphere = on_a ? c.sphere_b : c.sphere_a;
     p.velocity.setZero();
-    if (p.other_body >= 0) {
-      const BodyState& o = data.bodies[static_cast<std::size_t>(p.other_body)];
-      p.velocity = o.linear_velocity + o.angular_velocity.cross(p.point - o.position);
+    p.carrier = -1;
+    p.impulse.setZero();
+    p.impulse_point = p.point;
+    if (p.other_body < 0) continue;
+    const BodyState& o = data.bodies[static_cast<std::size_t>(p.other_body)];
+    p.velocity = o.linear_velocity + o.angular_velocity.cross(p.point - o.position);
+    for (int k = 0; k < out.carrier_count && p.carrier < 0; ++k)
+      if (out.carriers[static_cast<std::size_t>(k)].body == p.other_body) p.carrier = k;
+    if (p.carrier >= 0) continue;
+    const BodyModel& om = scene.bodies[static_cast<std::size_t>(p.other_body)];
+    bool moves = om.mass > 0.0 && !data.body_targets[static_cast<std::size_t>(p.other_body)].enabled;
+    for (const JointModel& j : scene.joints)
+      if (j.parent == p.other_body || j.child == p.other_body) moves = false;
+    if (!moves || out.carrier_count >= kMaxPlaneCarriers) continue;  // static
+    p.carrier = out.carrier_count++;
+    PlaneCarrier& k = out.carriers[static_cast<std::size_t>(p.carrier)];
+    k.body = p.other_body;
+    k.com = o.position;
+    k.displacement.setZero();
+    k.rotation.setZero();
+    k.linear_velocity = o.linear_velocity;
+    k.angular_velocity = o.angular_velocity;
+    const Mat3 r = o.orientation.toRotationMatrix();
+    k.mass.setZero();
+    k.mass.topLeftCorner<3, 3>() = om.mass * Mat3::Identity();
+    k.mass.bottomRightCorner<3, 3>() = r * om.inertia_body * r.transpose();
+    k.stiffness.setZero();
+    k.system_inverse.setZero();
+    k.wrench.setZero();
+    k.wrench.head<3>() = om.mass * scene.gravity;
+    k.impulse.setZero();
+    k.supports = 0;
+    k.inverse_mass = 1.0 / om.mass;
+  }
+  const int nc = out.carrier_count;
+  if (nc == 0) return;
+  // The carriers' own contacts (not with the god-object), linearised about the sample.
+  Mat6 damping[kMaxPlaneCarriers];
+  for (int k = 0; k < nc; ++k) damping[k].setZero();
+  const auto carrier_of = [&out, nc](int b) {
+    for (int k = 0; k < nc; ++k)
+      if (out.carriers[static_cast<std::size_t>(k)].body == b) return k;
+    return -1;
+  };
+  for (int i = 0; i < n; ++i) {
+    const Contact& c = data.contacts[static_cast<std::size_t>(i)];
+    bool on_a = false;
+    if (god_object_contact(c, device_body, on_a)) continue;  // the planes
+    if (c.material_pair < 0 || c.material_pair >= static_cast<int>(scene.material_pairs.size())) continue;
+    const MaterialPair& mp = scene.material_pairs[static_cast<std::size_t>(c.material_pair)];
+    for (int side = 0; side < 2; ++side) {
+      const int b = side == 0 ? c.body_a : c.body_b;
+      if (b < 0) continue;
+      const int k = carrier_of(b);
+      if (k < 0) continue;
+      PlaneCarrier& pc = out.carriers[static_cast<std::size_t>(k)];
+      const Vec3 nrm = side == 0 ? c.normal : Vec3(-c.normal);  // into the carrier
+      const Vec3 arm = c.position - pc.com;
+      Eigen::Matrix<double, 3, 6> g;
+      g.leftCols<3>() = Mat3::Identity();
+      g.rightCols<3>() = -skew(arm);
+      const Eigen::Matrix<double, 1, 6> gn = nrm.transpose() * g;
+      pc.stiffness += mp.stiffness * gn.transpose() * gn;
+      damping[k] += mp.damping * gn.transpose() * gn +
+                    mp.friction * (g.transpose() * g - gn.transpose() * gn);
+      const Vec3 f = mp.stiffness * c.depth * nrm;
+      pc.wrench.head<3>() += f;
+      pc.wrench.tail<3>() += arm.cross(f);
+      ++pc.supports;
     }
+  }
+  // The exchange with the god-object is explicit: Σk · h² / m' ≤ 1 (M scaled up by q ≥ 1).
+  const double h = device_dt;
+  for (int k = 0; k < nc; ++k) {
+    PlaneCarrier& c = out.carriers[static_cast<std::size_t>(k)];
+    double stiffness = 0.0;
+    for (int i = 0; i < out.count; ++i) {
+      const ContactPlane& p = out.planes[static_cast<std::size_t>(i)];
+      if (p.carrier == k && p.material_pair >= 0 &&
+          p.material_pair < static_cast<int>(scene.material_pairs.size()))
+        stiffness += scene.material_pairs[static_cast<std::size_t>(p.material_pair)].stiffness;
+    }
+    const double q = stiffness * c.inverse_mass * h * h;
+    if (q > 1.0) {
+      c.mass *= q;
+      c.inverse_mass /= q;
+    }
+    const Mat6 system = c.mass + h * damping[k] + (h * h) * c.stiffness;
+    c.system_inverse = system.inverse();
   }
 }
 
-void write_plane_contacts(const Model& model, const ContactPlaneSet& planes, double elapsed,
-                          Data& data) noexcept {
+void write_plane_contacts(const Model& model, const ContactPlaneSet& planes, Data& data) noexcept {
   data.num_contacts = 0;
   data.max_penetration = 0.0;
   data.contacts_dropped = 0;
-  if (model.num_bodies() < 1) return;
-  const BodyModel& bm = model.bodies[0];
-  const BodyState& g = data.bodies[0];
+  const int nbodies = model.num_bodies();
   const int np = static_cast<int>(model.material_pairs.size());
   const int n = std::clamp(planes.count, 0, kMaxContactPlanes);
+  const int nc = std::clamp(planes.carrier_count, 0, kMaxPlaneCarriers);
   for (int i = 0; i < n; ++i) {
     const ContactPlane& p = planes.planes[static_cast<std::size_t>(i)];
+    if (p.body < 0 || p.body >= nbodies) continue;
+    const BodyModel& bm = model.bodies[static_cast<std::size_t>(p.body)];
+    const BodyState& g = data.bodies[static_cast<std::size_t>(p.body)];
     if (p.sphere < 0 || p.sphere >= bm.sphere_count || p.material_pair < 0 || p.material_pair >= np)
       continue;
     const Sphere& s = model.body_spheres[static_cast<std::size_t>(bm.sphere_begin + p.sphere)];
     const Vec3 centre = g.position + g.orientation * s.center;
-    const Vec3 point = p.point + elapsed * p.velocity;
-    const double depth = p.normal.dot(point - centre) + s.radius;
+    Vec3 point = p.point;
+    Vec3 normal = p.normal;
+    Vec3 surface_velocity = Vec3::Zero();
+    if (p.carrier >= 0 && p.carrier < nc) {
+      const PlaneCarrier& k = planes.carriers[static_cast<std::size_t>(p.carrier)];
+      point += k.displacement + k.rotation.cross(p.point - k.com);
+      normal = (normal + k.rotation.cross(normal)).normalized();
+      surface_velocity = k.linear_velocity + k.angular_velocity.cross(point - (k.com + k.displacement));
+    }
+    const double depth = normal.dot(point - centre) + s.radius;
     if (!(depth > 0.0)) continue;
     if (data.num_contacts >= kMaxContacts) {
       ++data.contacts_dropped;
       continue;
     }
     Contact& c = data.contacts[static_cast<std::size_t>(data.num_contacts++)];
-    c.body_a = 0;
+    c.body_a = p.body;
     c.body_b = -1;
     c.obstacle = -1;
     c.sphere_a = bm.sphere_begin + p.sphere;
     c.material_pair = p.material_pair;
-    c.position = centre - (s.radius - 0.5 * depth) * p.normal;  // middle of the overlap
-    c.normal = p.normal;
+    c.position = centre - (s.radius - 0.5 * depth) * normal;  // middle of the overlap
+    c.normal = normal;
     c.depth = depth;
     c.force.setZero();
-    c.surface_velocity = p.velocity;
+    c.surface_velocity = surface_velocity;
     c.sphere_b = i;  // the plane
     data.max_penetration = std::max(data.max_penetration, depth);
   }
@@ -219,124 +348,517 @@ void write_plane_contacts(const Model& model, const ContactPlaneSet& planes, dou
   }
 }
 
-void step_god_object(const Model& model, const ContactPlaneSet& planes, double elapsed,
-                     Data& data) noexcept {
-  const PlaneContext context{&planes, elapsed};
-  step_with_contacts(model, data, &write_planes, &context);
+void step_god_object(const Model& model, ContactPlaneSet& planes, Data& data) noexcept {
+  step_with_contacts(model, data, &write_planes, &planes);
+  const std::vector<BodyState>& before = data.scratch->solver.saved_state;  // the step's start
+  const double h = model.dt;
+  const int np = std::clamp(planes.count, 0, kMaxContactPlanes);
+  const int nc = std::clamp(planes.carrier_count, 0, kMaxPlaneCarriers);
+  for (int i = 0; i < np; ++i) planes.planes[static_cast<std::size_t>(i)].impulse.setZero();
+  if ((data.status & kNonFinite) == 0) {
+    const bool implicit = model.integrator == Integrator::kLinearlyImplicitEuler;
+    const int n = std::clamp(data.num_contacts, 0, kMaxContacts);
+    for (int i = 0; i < n; ++i) {
+      const Contact& c = data.contacts[static_cast<std::size_t>(i)];
+      const ContactTerm& t = data.scratch->solver.contact_terms[static_cast<std::size_t>(i)];
+      if (!t.active || c.sphere_b < 0 || c.sphere_b >= np) continue;
+      ContactPlane& p = planes.planes[static_cast<std::size_t>(c.sphere_b)];
+      // The plane's motion is prescribed over the period: the relative velocity's change is
+      // the god-object's alone.
+      const auto a = static_cast<std::size_t>(c.body_a);
+      const Vec3 f = effective_contact_force(c, t, implicit, h, before[a], data.bodies[a], nullptr, nullptr);
+      p.impulse = h * f;
+      p.impulse_point = c.position;
+      if (p.carrier < 0 || p.carrier >= nc) continue;
+      PlaneCarrier& k = planes.carriers[static_cast<std::size_t>(p.carrier)];
+      const Vec3 j = -p.impulse;  // on the carrier
+      k.impulse.head<3>() += j;
+      k.impulse.tail<3>() += (c.position - (k.com + k.displacement)).cross(j);
+    }
+  }
+  for (int i = 0; i < nc; ++i) {
+    PlaneCarrier& k = planes.carriers[static_cast<std::size_t>(i)];
+    Vec6 q0, v0;
+    q0 << k.displacement, k.rotation;
+    v0 << k.linear_velocity, k.angular_velocity;
+    const Vec6 v1 = k.system_inverse * (k.mass * v0 + h * (k.wrench - k.stiffness * q0) + k.impulse);
+    k.linear_velocity = v1.head<3>();
+    k.angular_velocity = v1.tail<3>();
+    k.displacement += h * k.linear_velocity;
+    k.rotation += h * k.angular_velocity;
+    k.impulse.setZero();
+  }
 }
 
 MultirateGodObject::MultirateGodObject(const Model& scene, int body, const MultirateSettings& settings)
-    : body_(body), ratio_(settings.ratio), margin_(settings.margin) {
+    : ratio_(settings.ratio), margin_(settings.margin), body_(body) {
   if (settings.ratio < 1)
     throw std::invalid_argument("multirate: the rate ratio scene_dt / dt must be >= 1 (got " +
                                 std::to_string(settings.ratio) + ")");
-  std::string error = make_god_object_model(scene, body, scene.dt, device_model_);
-  if (error.empty()) error = make_proximity_model(scene, body, settings.margin, scene_model_);
-  if (!error.empty()) throw std::invalid_argument(error);
-  scene_model_.dt = scene.dt * settings.ratio;
-  // The god-object moves in the scene loop as the device loop moved it: imposed (kDirect, an
-  // infinitely heavy body for the scene's implicit solve).
-  scene_model_.coupling_mode = CouplingMode::kDirect;
-  scene_model_.initial_attached_body = body;
-  error = finalize_model(scene_model_);
-  if (!error.empty()) throw std::invalid_argument("multirate: scene-loop model: " + error);
-  device_ = make_data(device_model_);
-  scene_ = make_data(scene_model_);
-  device_.bodies[0] = scene_.bodies[static_cast<std::size_t>(body)];
-  pending_.assign(scene.bodies.size(), Wrench{});
-  base_applied_.assign(scene.bodies.size(), Wrench{});
-  scene_before_.assign(scene.bodies.size(), BodyState{});
+  if (!(settings.margin >= 0.0) || !std::isfinite(settings.margin))
+    throw std::invalid_argument("multirate: the contact margin must be >= 0 m and finite (got " +
+                                std::to_string(settings.margin) + ")");
+  std::vector<int> bodies;
+  if (body >= 0) bodies.push_back(body);
+  for (int t : settings.tools)
+    if (std::find(bodies.begin(), bodies.end(), t) == bodies.end()) bodies.push_back(t);
+  if (bodies.empty())
+    throw std::invalid_argument("multirate: no god-object: the device holds no body and has no tools");
+  std::size_t largest = 1;
+  for (int b : bodies) {
+    Slot s;
+    s.body = b;
+    std::string error = make_god_object_model(scene, b, scene.dt, s.device_model);
+    if (error.empty()) error = make_proximity_model(scene, b, settings.margin, s.scene_model);
+    if (!error.empty()) throw std::invalid_argument(error);
+    s.bodies = god_object_bodies(scene, b);
+    s.device_body.assign(scene.bodies.size(), -1);
+    for (std::size_t i = 0; i < s.bodies.size(); ++i)
+      s.device_body[static_cast<std::size_t>(s.bodies[i])] = static_cast<int>(i);
+    for (std::size_t j = 0; j < scene.joints.size(); ++j)
+      if (s.device_body[static_cast<std::size_t>(scene.joints[j].child)] >= 0)
+        s.joints.push_back(static_cast<int>(j));
+    largest = std::max(largest, s.bodies.size());
+    s.scene_model.dt = scene.dt * settings.ratio;
+    // The god-object moves in the scene loop as the device loop moved it: imposed (kDirect, an
+    // infinitely heavy body for the scene's implicit solve: the held body by the target, the
+    // rest of its articulation by their body targets), its joints left to the device loop.
+    s.scene_model.coupling_mode = CouplingMode::kDirect;
+    s.scene_model.initial_attached_body = b;
+    std::vector<JointModel> kept;
+    for (std::size_t j = 0; j < s.scene_model.joints.size(); ++j)
+      if (s.device_body[static_cast<std::size_t>(s.scene_model.joints[j].child)] < 0) {
+        kept.push_back(s.scene_model.joints[j]);
+        s.scene_joints.push_back(static_cast<int>(j));
+      }
+    s.scene_model.joints = std::move(kept);
+    error = finalize_model(s.scene_model);
+    if (!error.empty()) throw std::invalid_argument("multirate: scene-loop model: " + error);
+    s.device = make_data(s.device_model);
+    s.scene = make_data(s.scene_model);
+    slots_.push_back(std::move(s));
+  }
+  free_scene_model_ = scene;
+  free_scene_model_.dt = scene.dt * settings.ratio;
+  free_scene_model_.initial_attached_body = -1;
+  if (std::string error = finalize_model(free_scene_model_); !error.empty())
+    throw std::invalid_argument("multirate: scene-loop model: " + error);
+  free_scene_ = make_data(free_scene_model_);
+  for (std::size_t j = 0; j < scene.joints.size(); ++j) free_joints_.push_back(static_cast<int>(j));
+  scene_slot_ = slot_ = body >= 0 ? 0 : -1;
+  scene_ = body >= 0 ? &slots_[0].scene : &free_scene_;
+  scene_->attached_body = body;
+  for (Slot& s : slots_)
+    for (std::size_t i = 0; i < s.bodies.size(); ++i)
+      s.device.bodies[i] = scene_->bodies[static_cast<std::size_t>(s.bodies[i])];
+  const std::size_t nb = scene.bodies.size();
+  impulse_total_.assign(nb, Wrench{});
+  owed_.assign(nb, Wrench{});
+  seen_total_.assign(nb, Wrench{});
+  base_applied_.assign(nb, Wrench{});
+  released_states_.assign(largest, BodyState{});
+  snapshot_.bodies = scene_->bodies;
+  snapshot_.joints.assign(scene.joints.size(), JointState{});
+  report_ = make_report();
+  model_ = make_scene_model();
 }
 
-void MultirateGodObject::scene_step() noexcept {
-  const auto g = static_cast<std::size_t>(body_);
-  const double h = scene_model_.dt;
-  // The god-object's pose and twist, imposed over the scene step.
-  scene_.target.position = device_.bodies[0].position;
-  scene_.target.orientation = device_.bodies[0].orientation;
-  scene_.target_twist.linear = device_.bodies[0].linear_velocity;
-  scene_.target_twist.angular = device_.bodies[0].angular_velocity;
-  scene_.bodies[g] = device_.bodies[0];
+MultirateDeviceReport MultirateGodObject::make_report() const {
+  MultirateDeviceReport r;
+  r.impulse_total.assign(impulse_total_.size(), Wrench{});
+  r.states.assign(released_states_.size(), BodyState{});
+  r.released_states.assign(released_states_.size(), BodyState{});
+  write_report(r);
+  return r;
+}
+
+MultirateSceneModel MultirateGodObject::make_scene_model() const {
+  MultirateSceneModel m;
+  m.scene.bodies = snapshot_.bodies;
+  m.scene.joints = snapshot_.joints;
+  return m;
+}
+
+int MultirateGodObject::slot_of(int body) const noexcept {
+  for (std::size_t i = 0; i < slots_.size(); ++i)
+    if (slots_[i].body == body) return static_cast<int>(i);
+  return -1;
+}
+
+Wrench MultirateGodObject::owed_impulse(int b) const noexcept {
+  Wrench w;
+  if (b < 0 || b >= static_cast<int>(owed_.size())) return w;
+  const auto i = static_cast<std::size_t>(b);
+  w.force = owed_[i].force + impulse_total_[i].force - seen_total_[i].force;
+  w.torque = owed_[i].torque + impulse_total_[i].torque - seen_total_[i].torque;
+  return w;
+}
+
+std::span<const int> MultirateGodObject::god_object() const noexcept {
+  if (slot_ < 0) return {};
+  return std::span<const int>(slot().bodies);
+}
+
+void MultirateGodObject::take_targets(const Data& scene_data) noexcept {
+  if (slot_ < 0) return;
+  Slot& s = slot();
+  Data& d = s.device;
+  d.target = scene_data.target;
+  d.target_twist = scene_data.target_twist;
+  for (std::size_t i = 0; i < s.bodies.size(); ++i) {
+    const auto b = static_cast<std::size_t>(s.bodies[i]);
+    if (b < scene_data.body_targets.size()) d.body_targets[i] = scene_data.body_targets[b];
+  }
+  for (std::size_t j = 0; j < s.joints.size(); ++j) {
+    const auto sj = static_cast<std::size_t>(s.joints[j]);
+    if (sj < scene_data.joint_prescribed.size()) d.joint_prescribed[j] = scene_data.joint_prescribed[sj];
+  }
+}
+
+bool MultirateGodObject::select(int body) noexcept {
+  if (body == body_) return true;
+  const int next = body >= 0 ? slot_of(body) : -1;
+  if (body >= 0 && next < 0) return false;
+  released_body_ = body_;
+  if (slot_ >= 0) {
+    const Slot& old = slot();
+    for (std::size_t i = 0; i < old.bodies.size() && i < released_states_.size(); ++i)
+      released_states_[i] = old.device.bodies[i];
+  }
+  slot_ = next;
+  body_ = body;
+  if (slot_ >= 0) {
+    Slot& s = slot();
+    for (std::size_t i = 0; i < s.bodies.size(); ++i)
+      s.device.bodies[i] = snapshot_.bodies[static_cast<std::size_t>(s.bodies[i])];
+    s.device.num_contacts = 0;
+  }
+  planes_.count = 0;
+  planes_.carrier_count = 0;
+  period_ = 0;  // one thread: a scene period now, the new god-object's planes
+  ++switches_;
+  ++counters_.switches;
+  return true;
+}
+
+void MultirateGodObject::write_report(MultirateDeviceReport& out) const noexcept {
+  out.period = counters_.device_steps;
+  out.body = body_;
+  if (slot_ >= 0) {
+    const Slot& s = slot();
+    for (std::size_t i = 0; i < s.bodies.size() && i < out.states.size(); ++i) out.states[i] = s.device.bodies[i];
+  }
+  const std::size_t n = std::min(out.impulse_total.size(), impulse_total_.size());
+  for (std::size_t b = 0; b < n; ++b) out.impulse_total[b] = impulse_total_[b];
+  out.switches = switches_;
+  out.released_body = released_body_;
+  for (std::size_t i = 0; i < out.released_states.size() && i < released_states_.size(); ++i)
+    out.released_states[i] = released_states_[i];
+}
+
+void MultirateGodObject::scene_step(const MultirateDeviceReport& in, MultirateSceneModel& out) noexcept {
+  // A switch: the released god-object continues in the scene loop where the device left it.
+  if (in.switches != seen_switches_) {
+    seen_switches_ = in.switches;
+    const int released = in.released_body >= 0 ? slot_of(in.released_body) : -1;
+    if (released >= 0) {
+      const Slot& r = slots_[static_cast<std::size_t>(released)];
+      for (std::size_t i = 0; i < r.bodies.size() && i < in.released_states.size(); ++i) {
+        const auto b = static_cast<std::size_t>(r.bodies[i]);
+        scene_->bodies[b] = in.released_states[i];
+        scene_->body_targets[b].enabled = false;  // no longer imposed
+      }
+    }
+  }
+  const int body = in.body >= 0 && slot_of(in.body) >= 0 ? in.body : -1;
+  const int next_slot = body >= 0 ? slot_of(body) : -1;
+  if (next_slot != scene_slot_) {  // another scene-loop model: its Data takes the scene's state
+    Data& next = next_slot >= 0 ? slots_[static_cast<std::size_t>(next_slot)].scene : free_scene_;
+    for (std::size_t b = 0; b < next.bodies.size() && b < scene_->bodies.size(); ++b) {
+      next.bodies[b] = scene_->bodies[b];
+      next.applied_wrench[b] = scene_->applied_wrench[b];
+      next.body_targets[b] = scene_->body_targets[b];
+    }
+    next.time = scene_->time;
+    next.step_count = scene_->step_count;
+    scene_ = &next;
+    scene_slot_ = next_slot;
+  }
+  scene_->attached_body = body;
+  const std::vector<int>& scene_joints =
+      scene_slot_ >= 0 ? slots_[static_cast<std::size_t>(scene_slot_)].scene_joints : free_joints_;
+  static const std::vector<int> kNone;
+  const std::vector<int>& device_body = scene_slot_ >= 0 ? slots_[static_cast<std::size_t>(scene_slot_)].device_body : kNone;
+  const std::vector<int>& god = scene_slot_ >= 0 ? slots_[static_cast<std::size_t>(scene_slot_)].bodies : kNone;
+  const Model& model = scene_model();
+  const double h = model.dt;
+  const std::size_t nb = owed_.size();
+  // What the device loop's planes gave each body since the last scene step.
+  for (std::size_t b = 0; b < nb && b < in.impulse_total.size(); ++b) {
+    owed_[b].force += in.impulse_total[b].force - seen_total_[b].force;
+    owed_[b].torque += in.impulse_total[b].torque - seen_total_[b].torque;
+    seen_total_[b] = in.impulse_total[b];
+  }
+  // The god-object's poses and twists, imposed over the scene step: the held body by the
+  // target, the rest of its articulation by their body targets.
+  for (std::size_t i = 0; i < god.size() && i < in.states.size(); ++i) {
+    const auto b = static_cast<std::size_t>(god[i]);
+    const BodyState& g = in.states[i];
+    Pose pose;
+    pose.position = g.position;
+    pose.orientation = g.orientation;
+    Twist twist;
+    twist.linear = g.linear_velocity;
+    twist.angular = g.angular_velocity;
+    if (god[i] == body) {
+      scene_->target = pose;
+      scene_->target_twist = twist;
+    } else {
+      BodyTarget& t = scene_->body_targets[b];
+      t.pose = pose;
+      t.twist = twist;
+      t.enabled = true;
+    }
+    scene_->bodies[b] = g;
+  }
   // What each scene body is owed (the device loop's impulses less what the scene's own contact
   // with the god-object gave it), applied over this step.
-  for (std::size_t b = 0; b < pending_.size(); ++b) {
-    base_applied_[b] = scene_.applied_wrench[b];
-    scene_.applied_wrench[b].force += pending_[b].force / h;
-    scene_.applied_wrench[b].torque += pending_[b].torque / h;
-    pending_[b] = Wrench{};
-    scene_before_[b] = scene_.bodies[b];
+  for (std::size_t b = 0; b < nb; ++b) {
+    base_applied_[b] = scene_->applied_wrench[b];
+    scene_->applied_wrench[b].force += owed_[b].force / h;
+    scene_->applied_wrench[b].torque += owed_[b].torque / h;
+    owed_[b] = Wrench{};
   }
-  SampleContext context{&planes_, body_, margin_};
-  step_with_contacts(scene_model_, scene_, &detect_and_build_planes, &context);
-  const bool rejected = (scene_.status & kNonFinite) != 0;
-  for (std::size_t b = 0; b < pending_.size(); ++b) {
+  SampleContext context{&out.planes, std::span<const int>(device_body.data(), device_body.size()),
+                        body >= 0 ? margin_ : 0.0, slots_.front().device_model.dt};
+  step_with_contacts(model, *scene_, &detect_and_build_planes, &context);
+  const bool rejected = (scene_->status & kNonFinite) != 0;
+  for (std::size_t b = 0; b < nb; ++b) {
     if (rejected) {  // rolled back: what was owed is still owed
-      pending_[b].force = h * (scene_.applied_wrench[b].force - base_applied_[b].force);
-      pending_[b].torque = h * (scene_.applied_wrench[b].torque - base_applied_[b].torque);
+      owed_[b].force = h * (scene_->applied_wrench[b].force - base_applied_[b].force);
+      owed_[b].torque = h * (scene_->applied_wrench[b].torque - base_applied_[b].torque);
     }
-    scene_.applied_wrench[b] = base_applied_[b];
+    scene_->applied_wrench[b] = base_applied_[b];
   }
   // The impulse the scene step's god-object contacts gave each scene body: already received,
   // so no longer owed.
-  if (!rejected) {
-    const bool implicit = scene_model_.integrator == Integrator::kLinearlyImplicitEuler;
-    const int n = std::clamp(scene_.num_contacts, 0, kMaxContacts);
+  if (!rejected && body >= 0) {
+    const bool implicit = model.integrator == Integrator::kLinearlyImplicitEuler;
+    const int n = std::clamp(scene_->num_contacts, 0, kMaxContacts);
     for (int i = 0; i < n; ++i) {
-      const Contact& c = scene_.contacts[static_cast<std::size_t>(i)];
-      const ContactTerm& t = scene_.scratch->solver.contact_terms[static_cast<std::size_t>(i)];
-      const bool on_a = c.body_a == body_;
-      if (!t.active || on_a == (c.body_b == body_) || c.body_a < 0 || c.body_b < 0) continue;
+      const Contact& c = scene_->contacts[static_cast<std::size_t>(i)];
+      const ContactTerm& t = scene_->scratch->solver.contact_terms[static_cast<std::size_t>(i)];
+      bool on_a = false;
+      if (!t.active || !god_object_contact(c, device_body, on_a) || c.body_a < 0 || c.body_b < 0) continue;
       const auto a = static_cast<std::size_t>(c.body_a);
       const auto b = static_cast<std::size_t>(c.body_b);
-      const Vec3 f = effective_contact_force(c, t, implicit, h, scene_before_[a], scene_.bodies[a],
-                                             &scene_before_[b], &scene_.bodies[b]);
+      const std::vector<BodyState>& before = scene_->scratch->solver.saved_state;  // the step's start
+      const Vec3 f = effective_contact_force(c, t, implicit, h, before[a], scene_->bodies[a],
+                                             &before[b], &scene_->bodies[b]);
       // The other body's share: −f if it is b, +f if it is a.
       const Vec3 on_other = on_a ? Vec3(-f) : f;
       const Vec3& r = on_a ? t.r_b : t.r_a;
-      Wrench& w = pending_[on_a ? b : a];
+      Wrench& w = owed_[on_a ? b : a];
       w.force -= h * on_other;
       w.torque -= h * r.cross(on_other);
       ++counters_.scene_contacts;
     }
   }
-  scene_.bodies[g] = device_.bodies[0];
+  for (std::size_t i = 0; i < god.size() && i < in.states.size(); ++i)
+    scene_->bodies[static_cast<std::size_t>(god[i])] = in.states[i];
   ++counters_.scene_steps;
-  counters_.planes_dropped += planes_.dropped;
-  counters_.planes_max = std::max<std::int64_t>(counters_.planes_max, planes_.count);
+  counters_.planes_dropped += out.planes.dropped;
+  counters_.planes_max = std::max<std::int64_t>(counters_.planes_max, out.planes.count);
+  // The model: the planes (above), the tools' states, the snapshot of the scene.
+  out.body = body;
+  out.sample_period = in.period;
+  MultirateSceneSnapshot& snap = out.scene;
+  for (std::size_t b = 0; b < snap.bodies.size() && b < scene_->bodies.size(); ++b) snap.bodies[b] = scene_->bodies[b];
+  for (std::size_t j = 0; j < scene_joints.size() && j < scene_->joints.size(); ++j) {
+    const auto sj = static_cast<std::size_t>(scene_joints[j]);
+    if (sj < snap.joints.size()) snap.joints[sj] = scene_->joints[j];
+  }
+  int count = 0;
+  const int ns = std::clamp(scene_->num_contacts, 0, kMaxContacts);
+  for (int i = 0; i < ns; ++i) {
+    const Contact& c = scene_->contacts[static_cast<std::size_t>(i)];
+    bool on_a = false;
+    if (god_object_contact(c, device_body, on_a)) continue;  // the device loop's
+    snap.contacts[static_cast<std::size_t>(count++)] = c;
+  }
+  snap.num_contacts = count;
+  snap.contacts_dropped = scene_->contacts_dropped;
+  snap.contacts_clamped = scene_->contacts_clamped;
+  snap.contact_overflow_steps = scene_->contact_overflow_steps;
+  snap.contact_clamped_steps = scene_->contact_clamped_steps;
+  snap.nonfinite_steps = scene_->nonfinite_steps;
+  snap.status = scene_->status;
+  snap.stages_run = scene_->stages_run;
+  snap.solver_iterations = scene_->solver_iterations;
+  snap.solver_residual = scene_->solver_residual;
+  snap.max_joint_drift = scene_->max_joint_drift;
+  snap.max_joint_angle_drift = scene_->max_joint_angle_drift;
 }
 
-void MultirateGodObject::hand_back(const BodyState& before) noexcept {
-  if (device_.status & kNonFinite) return;  // rolled back: nothing was applied
-  const double h = device_model_.dt;
-  const double tau = h * static_cast<double>(period_ % ratio_);
-  const bool implicit = device_model_.integrator == Integrator::kLinearlyImplicitEuler;
-  const int n = std::clamp(device_.num_contacts, 0, kMaxContacts);
-  for (int i = 0; i < n; ++i) {
-    const Contact& c = device_.contacts[static_cast<std::size_t>(i)];
-    const ContactTerm& t = device_.scratch->solver.contact_terms[static_cast<std::size_t>(i)];
-    if (!t.active || c.sphere_b < 0 || c.sphere_b >= planes_.count) continue;
-    const ContactPlane& p = planes_.planes[static_cast<std::size_t>(c.sphere_b)];
-    if (p.other_body < 0 || p.other_body >= static_cast<int>(pending_.size())) continue;
-    // The plane's motion is prescribed over the period: the relative velocity's change is the
-    // god-object's alone.
-    const Vec3 f = effective_contact_force(c, t, implicit, h, before, device_.bodies[0], nullptr, nullptr);
-    // The other body at the sample (the scene step's start), moved on by τ.
-    const BodyState& o = scene_before_[static_cast<std::size_t>(p.other_body)];
-    const Vec3 com = o.position + tau * o.linear_velocity;
-    Wrench& w = pending_[static_cast<std::size_t>(p.other_body)];
-    w.force -= h * f;
-    w.torque -= h * (c.position - com).cross(f);
+void MultirateGodObject::take_model(const MultirateSceneModel& m) noexcept {
+  const MultirateSceneSnapshot& from = m.scene;
+  MultirateSceneSnapshot& to = snapshot_;
+  for (std::size_t b = 0; b < to.bodies.size() && b < from.bodies.size(); ++b) to.bodies[b] = from.bodies[b];
+  for (std::size_t j = 0; j < to.joints.size() && j < from.joints.size(); ++j) to.joints[j] = from.joints[j];
+  to.num_contacts = std::clamp(from.num_contacts, 0, kMaxContacts);
+  std::copy_n(from.contacts.begin(), to.num_contacts, to.contacts.begin());
+  to.contacts_dropped = from.contacts_dropped;
+  to.contacts_clamped = from.contacts_clamped;
+  to.contact_overflow_steps = from.contact_overflow_steps;
+  to.contact_clamped_steps = from.contact_clamped_steps;
+  to.nonfinite_steps = from.nonfinite_steps;
+  to.status = from.status;
+  to.stages_run = from.stages_run;
+  to.solver_iterations = from.solver_iterations;
+  to.solver_residual = from.solver_residual;
+  to.max_joint_drift = from.max_joint_drift;
+  to.max_joint_angle_drift = from.max_joint_angle_drift;
+  if (m.body != body_) return;  // sampled before a switch: not this god-object's planes
+  planes_.count = std::clamp(m.planes.count, 0, kMaxContactPlanes);
+  planes_.carrier_count = std::clamp(m.planes.carrier_count, 0, kMaxPlaneCarriers);
+  planes_.dropped = m.planes.dropped;
+  std::copy_n(m.planes.planes.begin(), planes_.count, planes_.planes.begin());
+  std::copy_n(m.planes.carriers.begin(), planes_.carrier_count, planes_.carriers.begin());
+  periods_since_model_ = 0;
+}
+
+void MultirateGodObject::hand_back() noexcept {
+  const int np = std::clamp(planes_.count, 0, kMaxContactPlanes);
+  for (int i = 0; i < np; ++i) {
+    const ContactPlane& p = planes_.planes[static_cast<std::size_t>(i)];
+    if (p.other_body < 0 || p.other_body >= static_cast<int>(impulse_total_.size()) ||
+        p.carrier < 0 || p.carrier >= planes_.carrier_count)
+      continue;
+    // About the body's centre of mass as the device loop moved it.
+    const PlaneCarrier& k = planes_.carriers[static_cast<std::size_t>(p.carrier)];
+    Wrench& w = impulse_total_[static_cast<std::size_t>(p.other_body)];
+    w.force -= p.impulse;
+    w.torque -= (p.impulse_point - (k.com + k.displacement)).cross(p.impulse);
   }
 }
 
-void MultirateGodObject::step() noexcept {
-  if (period_ % ratio_ == 0) scene_step();
-  const BodyState before = device_.bodies[0];
-  step_god_object(device_model_, planes_, device_model_.dt * static_cast<double>(period_ % ratio_),
-                  device_);
-  hand_back(before);
+void MultirateGodObject::device_step(const MultirateSceneModel* fresh) noexcept {
+  took_model_ = fresh != nullptr;
+  if (fresh != nullptr) take_model(*fresh);
+  if (slot_ >= 0) {
+    if (periods_since_model_ >= ratio_) ++counters_.stale_models;
+    step_god_object(device_model(), planes_, slot().device);
+    hand_back();
+  }
+  ++periods_since_model_;
   ++counters_.device_steps;
   ++period_;
+}
+
+void MultirateGodObject::step() noexcept {
+  const bool sample = period_ % ratio_ == 0;
+  if (sample) {
+    write_report(report_);
+    scene_step(report_, model_);
+  }
+  device_step(sample ? &model_ : nullptr);
+}
+
+void MultirateGodObject::write_feedback(Data& out) const noexcept {
+  if (slot_ < 0) return;
+  const Slot& s = slot();
+  const Data& d = s.device;
+  for (std::size_t i = 0; i < s.bodies.size(); ++i) {
+    const auto g = static_cast<std::size_t>(s.bodies[i]);
+    if (g < out.bodies.size()) out.bodies[g] = d.bodies[i];
+    if (g < out.body_feedback.size()) out.body_feedback[g] = d.body_feedback[i];
+  }
+  out.coupling_wrench = d.coupling_wrench;
+  out.device_wrench = d.device_wrench;
+  out.feedback_wrench = d.feedback_wrench;
+}
+
+void MultirateGodObject::view(Data& out) const noexcept {
+  const MultirateSceneSnapshot& snap = snapshot_;
+  const std::size_t nb = std::min(out.bodies.size(), snap.bodies.size());
+  for (std::size_t b = 0; b < nb; ++b) {
+    out.bodies[b] = snap.bodies[b];
+    if (b < out.body_feedback.size()) out.body_feedback[b] = Wrench{};
+  }
+  const std::size_t nj = std::min(out.joints.size(), snap.joints.size());
+  for (std::size_t j = 0; j < nj; ++j) out.joints[j] = snap.joints[j];
+  out.max_joint_drift = snap.max_joint_drift;
+  out.max_joint_angle_drift = snap.max_joint_angle_drift;
+  // The scene loop's contacts not on the god-object (those on it are the device loop's).
+  int count = 0;
+  double deepest = 0.0;
+  const std::span<const int> device_body =
+      slot_ >= 0 ? std::span<const int>(slot().device_body) : std::span<const int>();
+  for (int i = 0; i < snap.num_contacts; ++i) {
+    const Contact& c = snap.contacts[static_cast<std::size_t>(i)];
+    bool on_a = false;
+    if (god_object_contact(c, device_body, on_a)) continue;  // sampled before a switch
+    out.contacts[static_cast<std::size_t>(count++)] = c;
+    deepest = std::max(deepest, c.depth);
+  }
+  out.contacts_dropped = took_model_ ? snap.contacts_dropped : 0;
+  out.contacts_clamped = took_model_ ? snap.contacts_clamped : 0;
+  out.contact_overflow_steps = snap.contact_overflow_steps;
+  out.contact_clamped_steps = snap.contact_clamped_steps;
+  out.nonfinite_steps = snap.nonfinite_steps;
+  out.status = took_model_ ? snap.status : kStepOk;
+  out.stages_run = took_model_ ? snap.stages_run : 0u;
+  out.solver_iterations = took_model_ ? snap.solver_iterations : 0;
+  out.solver_residual = took_model_ ? snap.solver_residual : 0.0;
+  out.coupling_wrench = Wrench{};
+  out.device_wrench = Wrench{};
+  out.feedback_wrench = Wrench{};
+  for (const Slot& s : slots_) {
+    out.contact_overflow_steps += s.device.contact_overflow_steps;
+    out.contact_clamped_steps += s.device.contact_clamped_steps;
+    out.nonfinite_steps += s.device.nonfinite_steps;
+  }
+  if (slot_ >= 0) {
+    const Slot& s = slot();
+    const Data& d = s.device;
+    write_feedback(out);
+    for (std::size_t j = 0; j < s.joints.size(); ++j) {
+      const auto sj = static_cast<std::size_t>(s.joints[j]);
+      if (sj < out.joints.size()) out.joints[sj] = d.joints[j];
+    }
+    out.max_joint_drift = std::max(out.max_joint_drift, d.max_joint_drift);
+    out.max_joint_angle_drift = std::max(out.max_joint_angle_drift, d.max_joint_angle_drift);
+    const int nd = std::clamp(d.num_contacts, 0, kMaxContacts);
+    for (int i = 0; i < nd; ++i) {
+      if (count >= kMaxContacts) {
+        ++out.contacts_dropped;
+        continue;
+      }
+      Contact c = d.contacts[static_cast<std::size_t>(i)];
+      const ContactPlane& p =
+          planes_.planes[static_cast<std::size_t>(std::clamp(c.sphere_b, 0, kMaxContactPlanes - 1))];
+      const int local = std::clamp(c.body_a, 0, static_cast<int>(s.bodies.size()) - 1);
+      const int g = s.bodies[static_cast<std::size_t>(local)];
+      c.sphere_a = s.scene_model.bodies[static_cast<std::size_t>(g)].sphere_begin +
+                   (c.sphere_a - s.device_model.bodies[static_cast<std::size_t>(local)].sphere_begin);
+      c.body_a = g;
+      c.body_b = p.other_body;
+      c.obstacle = p.obstacle;
+      c.sphere_b = p.other_sphere;
+      out.contacts[static_cast<std::size_t>(count++)] = c;
+      deepest = std::max(deepest, c.depth);
+    }
+    out.contacts_dropped += d.contacts_dropped;
+    out.contacts_clamped += d.contacts_clamped;
+    out.status |= d.status;
+    out.stages_run |= d.stages_run;
+    out.solver_iterations = std::max(out.solver_iterations, d.solver_iterations);
+    out.solver_residual = std::max(out.solver_residual, d.solver_residual);
+  }
+  out.num_contacts = count;
+  out.max_penetration = deepest;
+  out.time = static_cast<double>(counters_.device_steps) * slots_.front().device_model.dt;
+  out.step_count = counters_.device_steps;
 }
 
 }  // namespace numen::core

@@ -174,7 +174,10 @@ void ControlLoop::begin_period(std::int64_t now_ns, std::int64_t deadline_mono_n
 
 void ControlLoop::step_model() noexcept {
   report_.step_begin_ns = monotonic_now_ns();
-  core::step(*model_, *data_);
+  if (step_function_ != nullptr)
+    step_function_(step_context_);
+  else
+    core::step(*model_, *data_);
   report_.step_end_ns = monotonic_now_ns();
   report_.step_ns = report_.step_end_ns - report_.step_begin_ns;
   step_time_.record(report_.step_ns);

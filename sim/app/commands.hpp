@@ -15,6 +15,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "numen/platform/multirate_threads.hpp"
 #include "numen/platform/realtime_setup.hpp"
 
 namespace numen::app {
@@ -44,6 +45,7 @@ class RunCommand {
   double duration_ = -1.0, phase_ = -1.0, view_rate_ = 60.0, speed_ = 0.0;
   bool json_ = false, realtime_ = false;
   platform::RealtimeSettings rt_;
+  platform::SceneThreadSettings scene_thread_;
   std::uint32_t overrun_limit_ = 3;
 };
 

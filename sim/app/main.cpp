@@ -5,6 +5,7 @@
 ///   numen run [SCENE] [--duration S] [--trace FILE.csv] [--json] [--realtime] [--coupling MODE]
 ///             [--bus sim|log:FILE|can:IFACE|serial:PATH[@BAUD]] [--record FILE.log] [--phase S]
 ///             [--rt-priority N] [--lock-memory] [--prefault-stack BYTES] [--cpu LIST] [--rt-strict]
+///             [--scene-rt-priority N] [--scene-cpu LIST]
 ///   numen device [SCENE] --bus can:IFACE|serial:PATH[@BAUD] [--duration S] [--ready]
 ///   numen info [SCENE] [--json]
 ///   numen figures

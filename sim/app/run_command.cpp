@@ -44,6 +44,13 @@ RunCommand::RunCommand(CLI::App& parent)
   run->add_option("--cpu", rt_.cpu_affinity, "CPUs the loop thread may run on, e.g. --cpu 1 or --cpu 2,3")
       ->delimiter(',');
   run->add_flag("--rt-strict", rt_.strict, "Fail instead of reporting when a real-time step fails");
+  run->add_option("--scene-rt-priority", scene_thread_.fifo_priority,
+                  "Multirate scene, paced run: SCHED_FIFO priority 1-99 of the scene thread (0: "
+                  "leave the scheduler alone; below the loop thread's)")
+      ->check(CLI::Range(0, 99));
+  run->add_option("--scene-cpu", scene_thread_.cpu_affinity,
+                  "Multirate scene, paced run: CPUs the scene thread may run on, e.g. --scene-cpu 0")
+      ->delimiter(',');
   run->add_option("--record", record_path_,
                   "Record the controller's bus traffic into this candump log (can-utils format); "
                   "a paced run drops (and counts) what its writer cannot keep up with, an offline "
@@ -88,6 +95,7 @@ int RunCommand::execute() const {
   options.bus.spec = bus_;
   options.bus.record_path = record_path_;
   options.rt = rt_;
+  options.scene_thread = scene_thread_;
   options.stop = &stop_flag();
   options.compute_phase_s = phase_;
   options.overrun_limit = overrun_limit_;

@@ -179,6 +179,13 @@ SceneRunner::SceneRunner(const Scene& scene, std::size_t trace_capacity, const B
       phase_ns_(static_cast<std::int64_t>(std::llround(scene.compute_phase_s * 1e9))),
       startup_settle_periods_(
           std::max<std::int64_t>(1, std::llround(kStartupSettle / scene.model.dt))) {
+  if (scene.multirate) {
+    core::MultirateSettings settings{scene.multirate->ratio, scene.multirate->margin_m,
+                                     scene.multirate->tools};
+    multirate_ = std::make_unique<core::MultirateGodObject>(
+        scene.model, scene.model.initial_attached_body, settings);
+    loop_.set_step_function(&SceneRunner::step_multirate, this);
+  }
   trace_.reserve(trace_capacity);
   if (writer_) writer_->start();
   acc_.bus = bus.spec;
@@ -206,6 +213,12 @@ void describe_scene(const Scene& scene, RunSummary& s) {
   s.num_joints = scene.model.num_joints();
   s.num_nets = scene.model.num_nets();
   s.num_nodes = scene.model.num_nodes();
+  if (scene.multirate) {
+    s.multirate.enabled = true;
+    s.multirate.scene_dt_s = scene.multirate->scene_dt_s;
+    s.multirate.ratio = scene.multirate->ratio;
+    s.multirate.margin_mm = scene.multirate->margin_m * 1e3;
+  }
 }
 
 void SceneRunner::stream_view(const std::string& record_path,
@@ -220,6 +233,7 @@ void SceneRunner::period(std::int64_t deadline_mono_ns, std::int64_t woke_mono_n
   const platform::PeriodReport& report = exchange(t, deadline_mono_ns, woke_mono_ns);
   ++k_;
   // ---- measurements (outside the timed step) ----
+  if (multirate_) multirate_->view(data_);  // both loops as one single-rate Data
   count_period(report);
   const PeriodContacts contacts = measure_contacts();
   track_free_space(contacts);
@@ -231,6 +245,25 @@ void SceneRunner::period(std::int64_t deadline_mono_ns, std::int64_t woke_mono_n
                           std::span<const double>(loop_.device().sent_torques().torque.data(),
                                                   static_cast<std::size_t>(loop_.device().sent_torques().torque.size())),
                           {static_cast<std::uint64_t>(k_ - 1), contacts.tool_pen, contacts.target_pen});
+}
+
+void SceneRunner::step_multirate(void* runner) noexcept {
+  SceneRunner& r = *static_cast<SceneRunner*>(runner);
+  core::MultirateGodObject& m = *r.multirate_;
+  m.select(r.data_.attached_body);  // every held body is one of the tools (parse_multirate)
+  m.take_targets(r.data_);
+  if (r.scene_thread_)
+    r.scene_thread_->device_step();
+  else
+    m.step();
+  m.write_feedback(r.data_);  // what the loop maps to torques; the rest of the view in period()
+}
+
+void SceneRunner::start_scene_thread(const platform::SceneThreadSettings& settings) {
+  if (!multirate_ || scene_thread_) return;
+  const auto period = static_cast<std::int64_t>(std::llround(scene_->multirate->scene_dt_s * 1e9));
+  scene_thread_ = std::make_unique<platform::MultirateThreads>(*multirate_, period, settings);
+  scene_thread_->start();
 }
 
 void SceneRunner::apply_due_events(std::int64_t t_ns) noexcept {
@@ -392,6 +425,14 @@ void SceneRunner::accumulate_step_figures(const platform::PeriodReport& report,
   s.any_penetration_max_mm = std::max(s.any_penetration_max_mm, data_.max_penetration * 1e3);
   // What the drives were sent (after the gate and clamp of hal::Device::write()).
   s.feedback_force_max_n = std::max(s.feedback_force_max_n, report.feedback.force.norm());
+  const double jump = (report.feedback.force - last_feedback_force_).norm();
+  last_feedback_force_ = report.feedback.force;
+  s.feedback_force_jump_max_n = std::max(s.feedback_force_jump_max_n, jump);
+  if (multirate_) {
+    double& at = multirate_->took_model() ? s.multirate.model_force_jump_max_n
+                                          : s.multirate.other_force_jump_max_n;
+    at = std::max(at, jump);
+  }
   s.feedback_torque_max_nm = std::max(s.feedback_torque_max_nm, report.feedback.torque.norm());
   const hal::AxisVector& tau = loop_.device().sent_torques().torque;
   if (tau.size() > 0) s.axis_torque_max = std::max(s.axis_torque_max, tau.cwiseAbs().maxCoeff());
@@ -474,6 +515,24 @@ RunSummary SceneRunner::summary() const {
   s.contact_overflow = data_.contact_overflow_steps;
   s.contact_clamped_steps = data_.contact_clamped_steps;
   s.nonfinite_steps = data_.nonfinite_steps;
+  if (multirate_) {
+    const core::MultirateCounters& c = multirate_->counters();
+    s.multirate.scene_steps = c.scene_steps;
+    s.multirate.planes_max = c.planes_max;
+    s.multirate.planes_dropped = c.planes_dropped;
+    s.multirate.switches = c.switches;
+    s.multirate.stale_models = c.stale_models;
+    if (scene_thread_) {
+      s.multirate.scene_thread = true;
+      s.multirate.scene_overruns = scene_thread_->counters().scene_overruns;
+      s.multirate.scene_step_us = summarize_ns(scene_thread_->scene_step_time());
+    }
+    if (c.planes_dropped > 0)
+      s.warnings.push_back("multirate: " + std::to_string(c.planes_dropped) +
+                           " contacts of the god-object found beyond the room for " +
+                           std::to_string(core::kMaxContactPlanes) +
+                           " planes: the device loop did not see those surfaces");
+  }
   s.nan_detected = data_.nonfinite_steps > 0;
   for (const auto& b : data_.bodies)
     s.nan_detected = s.nan_detected || !b.position.allFinite() || !b.orientation.coeffs().allFinite();
@@ -583,6 +642,7 @@ RunSummary SceneRunner::summary() const {
 }
 
 void SceneRunner::finish() {
+  if (scene_thread_) scene_thread_->stop();
   if (writer_) writer_->stop();
   if (trace_writer_) trace_writer_->stop();
   if (view_) view_->finish();
@@ -618,8 +678,10 @@ RunSummary run_impedance_scene(const Scene& scene, const RunOptions& options) {
                            " s must be below the period dt = " + format_input_number(scene.model.dt) + " s");
     runner.set_compute_phase_ns(static_cast<std::int64_t>(std::llround(options.compute_phase_s * 1e9)));
   }
-  // The writer threads are started before the real-time setup pins and promotes this thread.
+  // The writer threads and a multirate scene's scene thread are started before the real-time
+  // setup pins and promotes this thread.
   if (real && !options.trace_path.empty()) runner.stream_trace(options.trace_path);
+  if (options.realtime || real) runner.start_scene_thread(options.scene_thread);
   if (!options.record_view_path.empty() || !options.view_sinks.empty())
     runner.stream_view(options.record_view_path, options.view_sinks, options.view_rate_hz,
                        !(options.realtime || real));

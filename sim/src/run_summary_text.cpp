@@ -55,8 +55,20 @@ constexpr RunSummarySegment kLayout[] = {
      "clamped {admittance.setpoints_clamped}, rate limited {admittance.setpoints_rate_limited}, "
      "hold periods {admittance.hold_periods}\n",
      set("admittance.enabled")},
-    {"  feedback: force max {feedback_force_max_n} N, torque max {feedback_torque_max_nm} N·m, "
-     "axis torque max {axis_torque_max}\n"},
+    {"  multirate: scene loop every {multirate.scene_dt_s:ms} ms ({multirate.ratio} device "
+     "periods), margin {multirate.margin_mm} mm; {multirate.scene_steps} scene steps, planes max "
+     "{multirate.planes_max}, dropped {multirate.planes_dropped}, stale models "
+     "{multirate.stale_models}, tool switches {multirate.switches}; feedback force jump max "
+     "{multirate.model_force_jump_max_n} N at a new model, {multirate.other_force_jump_max_n} N "
+     "otherwise\n",
+     set("multirate.enabled")},
+    {"  multirate scene thread: {multirate.scene_overruns} overruns; scene step us: median "
+     "{multirate.scene_step_us.median}, p99 {multirate.scene_step_us.p99}, max "
+     "{multirate.scene_step_us.max}\n",
+     set("multirate.scene_thread")},
+    {"  feedback: force max {feedback_force_max_n} N (largest jump between periods "
+     "{feedback_force_jump_max_n} N), torque max {feedback_torque_max_nm} N·m, axis torque max "
+     "{axis_torque_max}\n"},
     {"  joints: {num_joints}, drift max {joint_drift_max_mm} mm, {joint_angle_drift_max_mrad} "
      "mrad\n",
      set("num_joints")},

@@ -24,6 +24,7 @@
 #include "numen/sim/simulated_instrument.hpp"
 #include "numen/sim/trocar_placement.hpp"
 #include "scene_articulation.hpp"
+#include "scene_multirate.hpp"
 #include "scene_deformable.hpp"
 #include "scene_model.hpp"
 #include "scene_pointer.hpp"
@@ -660,7 +661,8 @@ Scene load_scene(const std::string& path, const SceneOverrides& overrides) {
   root.allow_only({"name",       "description", "dt",       "duration",  "gravity",
                    "integrator", "coupling",    "solver",   "material",  "contact_default",
                    "contact",    "body",        "obstacle", "device",    "bus",
-                   "trajectory", "event",       "joint",    "baumgarte", "deformable"});
+                   "trajectory", "event",       "joint",    "baumgarte", "deformable",
+                   "multirate"});
   scene.name = root.string_or("name", std::filesystem::path(path).stem().string());
   scene.description = root.string_or("description", "");
   // Parts this build left out (features.hpp): refused before anything else is read.
@@ -743,6 +745,7 @@ Scene load_scene(const std::string& path, const SceneOverrides& overrides) {
         "the shipped probe's nodes went 2.1 mm into the post instead of 0.2 mm "
         "(docs/results.md, accuracy). implicit-euler or tr-bdf2 (L-stable) are the integrators for nets");
   warn_clamped_contacts(scene.model, scene.warnings);
+  parse_multirate(root, scene);
   return scene;
 }
 

@@ -1,7 +1,8 @@
 // The multirate god-object's device step against its intermediate model (core/multirate.hpp,
 // docs/multirate.md) beside the single-rate step, on the construction scene (a rigid tool among
-// twelve free blocks, the shipped scene the multirate core runs today; replayed up to its first
-// tool switch, since the multirate god-object holds one body). Each iteration is one
+// twelve free blocks; replayed up to its first tool switch, so that both hold the same body) and
+// the default scene (an articulated instrument: its whole articulation is the god-object). Each
+// iteration is one
 // 1 kHz period: the single-rate SceneRunner steps the scene (the reference, and the source of
 // the hand's target), the MultirateGodObject gets the same target and steps — a device step,
 // and on every N-th period the scene step first (N = the benchmark's argument). The time
@@ -19,6 +20,7 @@
 #include <algorithm>
 #include <chrono>
 #include <memory>
+#include <span>
 #include <stdexcept>
 #include <string>
 
@@ -46,7 +48,7 @@ void multirate_time(benchmark::State& state, const char* name) {
   }
   const int body = scene.model.initial_attached_body;
   // The margin covers 2 m/s of tool travel over a scene period (docs/multirate.md).
-  const numen::core::MultirateSettings settings{ratio, 2.0 * scene.model.dt * ratio};
+  const numen::core::MultirateSettings settings{ratio, 2.0 * scene.model.dt * ratio, {}};
   const auto periods = static_cast<std::int64_t>(scene.duration_s / scene.model.dt);
   std::unique_ptr<numen::sim::SceneRunner> runner;
   std::unique_ptr<numen::core::MultirateGodObject> mr;
@@ -72,12 +74,13 @@ void multirate_time(benchmark::State& state, const char* name) {
     single.record(runner->last_report().step_ns);
     numen::core::Data& d = mr->device_data();
     if (k == 0) {  // the runner starts the god-object at the hand (sim/run.hpp): so does this
-      d.bodies[0] = runner->data().bodies[static_cast<std::size_t>(body)];
+      const std::span<const int> god = mr->god_object();
+      for (std::size_t i = 0; i < god.size(); ++i)
+        d.bodies[i] = runner->data().bodies[static_cast<std::size_t>(god[i])];
       for (std::size_t b = 0; b < runner->data().bodies.size(); ++b)
         mr->scene_data().bodies[b] = runner->data().bodies[b];
     }
-    d.target = runner->data().target;
-    d.target_twist = runner->data().target_twist;
+    mr->take_targets(runner->data());
     const std::int64_t t0 = now_ns();
     mr->step();
     const std::int64_t t = now_ns() - t0;
@@ -103,3 +106,7 @@ void multirate_time(benchmark::State& state, const char* name) {
 
 BENCHMARK_CAPTURE(multirate_time, Construction, "construction.toml")
     ->Arg(1)->Arg(10)->Arg(100)->UseManualTime()->Iterations(9000);
+// The default scene: an articulated haptic instrument (4 bodies, 4 joints) on a recorded trial;
+// its first 9 s.
+BENCHMARK_CAPTURE(multirate_time, Default, "default.toml")
+    ->Arg(1)->Arg(10)->UseManualTime()->Iterations(9000);

@@ -29,6 +29,7 @@ inline sim::RunSummary full_managed_summary() {
   s.tracking_error_free_max_mm = 0.375;
   s.free_steps = 10;
   s.feedback_force_max_n = 4.5;
+  s.feedback_force_jump_max_n = 0.375;
   s.feedback_torque_max_nm = 0.0625;
   s.axis_torque_max = 0.75;
   s.free_body_speed_max_mps = 0.875;
@@ -142,6 +143,20 @@ inline sim::RunSummary full_managed_summary() {
   s.shutdown_periods = 60;
   s.drives_disabled = true;
   s.warnings = {"first warning", "second warning"};
+  s.multirate.enabled = true;
+  s.multirate.scene_dt_s = 0.01;
+  s.multirate.ratio = 10;
+  s.multirate.margin_mm = 12.5;
+  s.multirate.scene_steps = 81;
+  s.multirate.planes_max = 82;
+  s.multirate.planes_dropped = 83;
+  s.multirate.stale_models = 84;
+  s.multirate.switches = 85;
+  s.multirate.scene_thread = true;
+  s.multirate.scene_overruns = 86;
+  s.multirate.scene_step_us = {87.5, 88.5, 89.5, 90.5, 91.5};
+  s.multirate.model_force_jump_max_n = 0.25;
+  s.multirate.other_force_jump_max_n = 0.125;
   s.exit_status = 3;
   s.exit_reasons = {"first reason", "second reason"};
   return s;

@@ -9,6 +9,7 @@
 
 #include <cstdio>
 #include <exception>
+#include <fstream>
 #include <sstream>
 #include <string>
 
@@ -96,6 +97,16 @@ inline std::string with_absolute_dcf_paths(std::string text, std::string scene_d
   for (std::size_t at = text.find(from); at != std::string::npos; at = text.find(from, at + to.size()))
     text.replace(at, from.size(), to);
   return text;
+}
+
+/// The text of the shipped scene sim/scenes/`name`, its DCF paths made absolute
+/// (with_absolute_dcf_paths()) so that an edited copy loads from another directory.
+inline std::string shipped_scene_text(const std::string& name) {
+  const std::string dir = std::string(NUMEN_SOURCE_DIR) + "/sim/scenes";
+  std::ifstream in(dir + "/" + name);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return with_absolute_dcf_paths(text.str(), dir);
 }
 
 /// Replaces the `nth` occurrence of `from` in `text` (which must exist: a

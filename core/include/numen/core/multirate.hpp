@@ -14,11 +14,15 @@
 /// grown by a margin, so that a plane exists before its sphere reaches the surface), the planes
 /// (ContactPlaneSet, build_contact_planes), the device step against them (step_god_object), and
 /// the two loops interleaved on one thread, the scene bodies receiving the impulse the device
-/// loop's planes gave the god-object (MultirateGodObject). Rigid god-objects without joints,
-/// scenes without nets, the linearly implicit and symplectic Euler schemes; the threads and the
-/// scene file's [multirate] are docs/multirate.md's next steps.
+/// loop's planes gave the god-object (MultirateGodObject), with tool switching and a
+/// single-rate view of both loops for the run harness; the two loops on two threads are
+/// platform::MultirateThreads. The god-object is the held body with its articulation; scenes
+/// without nets; the linearly implicit and symplectic Euler schemes.
 
+#include <algorithm>
 #include <array>
+#include <cstdint>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -32,152 +36,380 @@ struct Model;
 struct Data;
 
 /// Room of a ContactPlaneSet (planes).
-inline constexpr int kMaxContactPlanes = 256;
+inline constexpr int kMaxContactPlanes = 1024;
 
-/// One constraint of the intermediate model: the half-space below a plane, acting on one
-/// sphere of the god-object. With c the sphere's centre (world), r its radius, the plane's
-/// point moving as p(τ) = point + velocity·τ (τ: time since the scene sample), the depth is
-///   d = n · (p(τ) − c) + r,
-/// and for d > 0 the penalty law of contact_force.hpp acts on the sphere's deepest point's
-/// neighbourhood (the middle of the overlap, c − (r − d/2) n) with the relative velocity taken
-/// against `velocity`.
-struct ContactPlane {
-  int sphere = -1;          ///< Sphere of the god-object model's body 0 (index from its first).
-  Vec3 point = Vec3::Zero();     ///< A point of the plane at the sample (m, world).
-  Vec3 normal = Vec3::UnitZ();   ///< Unit normal out of the other side, towards the god-object.
-  Vec3 velocity = Vec3::Zero();  ///< Velocity of the other side's surface point (m/s, world).
-  int material_pair = 0;    ///< Index into Model::material_pairs (the scene's table).
-  int other_body = -1;      ///< The scene body on the other side; -1: a static obstacle.
+/// Room of a ContactPlaneSet (carriers: scene bodies touching the god-object at once).
+inline constexpr int kMaxPlaneCarriers = 64;
+
+/// The local linearised model, in the device loop between two scene samples, of a scene body
+/// that carries planes (Otaduy & Lin 2006, §5: the intermediate model carries the other side's
+/// dynamics, not only its surface). With q = (u, θ) its centre of mass's displacement and its
+/// rotation vector since the sample and v = (v, ω) its twist (world):
+///   (M + h D + h² K) v₁ = M v₀ + h (F₀ − K q₀) + J,   q₁ = q₀ + h v₁       (implicit Euler)
+/// M = diag(m I, R I_body Rᵀ) its mass matrix at the sample; K, D the stiffness and damping of
+/// its own contacts at the sample (with the scene, not the god-object), linearised about the
+/// sample and their other side held still: Σ k Gᵀ n nᵀ G and Σ (c Gᵀ n nᵀ G + μ Gᵀ (I − n nᵀ) G)
+/// with G = [I, −[r]×] (r: the contact point from the centre of mass, n: into the body); F₀ its
+/// gravity plus those contacts' k d n at the sample (and their moments); J the impulse of the
+/// device period's plane contacts on it. A light block the tool pushes gives way within the
+/// scene period; a block resting on the board does not sink into it.
+struct PlaneCarrier {
+  int body = -1;                         ///< The scene body.
+  Vec3 com = Vec3::Zero();               ///< Its centre of mass at the sample (m, world).
+  Vec3 displacement = Vec3::Zero();      ///< u: of the centre of mass since the sample (m, world).
+  Vec3 rotation = Vec3::Zero();          ///< θ: rotation vector since the sample (rad, world; small).
+  Vec3 linear_velocity = Vec3::Zero();   ///< Now (m/s, world).
+  Vec3 angular_velocity = Vec3::Zero();  ///< Now (rad/s, world).
+  /// 1/m' (1/kg), m' = q m the body's mass scaled up (with all of M) by q ≥ 1 so that the
+  /// explicit exchange with the god-object is stable: Σk · dt² / m' ≤ 1 over its planes'
+  /// stiffnesses k (build_contact_planes()); q = 1 when that holds unscaled.
+  double inverse_mass = 0.0;
+  Mat6 mass = Mat6::Zero();              ///< M (kg, kg·m²), scaled as above.
+  Mat6 stiffness = Mat6::Zero();         ///< K (N/m, N/rad, N·m/m, N·m/rad).
+  Mat6 system_inverse = Mat6::Zero();    ///< (M + h D + h² K)⁻¹ for the device period h.
+  Vec6 wrench = Vec6::Zero();            ///< F₀ (N; N·m about the centre of mass).
+  Vec6 impulse = Vec6::Zero();           ///< J of the last device period (N·s; N·m·s).
+  int supports = 0;                      ///< Its own contacts in K and D.
 };
 
-/// The planes of one scene sample, [0, count) valid; `dropped` counts contacts beyond the room.
+/// One constraint of the intermediate model: the half-space below a plane, acting on one
+/// sphere of one body of the god-object. The plane moves rigidly with its carrier (none: a static
+/// obstacle): at the carrier's displacement u and rotation θ since the sample,
+///   p = point + u + θ × (point − com),   n' = normalised(n + θ × n),
+/// and with c the sphere's centre (world), r its radius, the depth is d = n' · (p − c) + r; for
+/// d > 0 the penalty law of contact_force.hpp acts at the middle of the overlap,
+/// c − (r − d/2) n', with the relative velocity taken against the carrier's point velocity
+/// (Contact::surface_velocity).
+struct ContactPlane {
+  int body = 0;             ///< The god-object model's body the plane acts on.
+  int sphere = -1;          ///< Its sphere (index from the body's first).
+  Vec3 point = Vec3::Zero();     ///< A point of the plane at the sample (m, world).
+  Vec3 normal = Vec3::UnitZ();   ///< Unit normal out of the other side, towards the god-object.
+  Vec3 velocity = Vec3::Zero();  ///< Velocity of that point at the sample (m/s, world).
+  int material_pair = 0;    ///< Index into Model::material_pairs (the scene's table).
+  int other_body = -1;      ///< The scene body on the other side; -1: a static obstacle.
+  int obstacle = -1;        ///< The obstacle on the other side (Model::obstacles); -1: a body.
+  int other_sphere = -1;    ///< The other side's sphere (Contact::sphere_b's meaning), or -1.
+  /// Index into ContactPlaneSet::carriers; -1: static (an obstacle, a body in a joint or with
+  /// an enabled body target, or beyond kMaxPlaneCarriers).
+  int carrier = -1;
+  /// Written by step_god_object(): the impulse this plane gave the god-object over the last
+  /// device period (N·s, world; its effective force times dt) and where it acted (m, world).
+  Vec3 impulse = Vec3::Zero();
+  Vec3 impulse_point = Vec3::Zero();
+};
+
+/// The planes of one scene sample, [0, count) valid, and their carriers, [0, carrier_count);
+/// `dropped` counts contacts beyond the room.
 struct ContactPlaneSet {
   std::array<ContactPlane, kMaxContactPlanes> planes{};
+  std::array<PlaneCarrier, kMaxPlaneCarriers> carriers{};
   int count = 0;
+  int carrier_count = 0;
   int dropped = 0;
 };
 
-/// The model the device loop steps: body `body` of `scene` alone (its mass, inertia, spheres,
-/// material and coupling gains), with the scene's materials, integrator, coupling mode,
-/// gravity, solver settings and device feedback, no obstacles, no joints, no nets, step
-/// `device_dt` (s, > 0), Model::caller_contacts set (its contacts are the planes'). Returns ""
-/// and fills `out`, or a message naming what refuses: a body out of range, a body in a joint,
-/// a scene with nets, an integrator other than the linearly implicit or symplectic Euler (the
-/// impulse hand-back needs the step's effective contact force, MultirateGodObject), a
-/// device_dt ≤ 0 or not finite. Load time: allocates.
+/// The god-object of held body `body` in `scene`: `body` and every body joined to it by joints
+/// (its articulation, ArticulationTopology::body_tree; the default scene's sleeve, tube and
+/// jaws), in index order — the god-object model's bodies in the same order. Empty for a body
+/// out of range. Load time: allocates.
+std::vector<int> god_object_bodies(const Model& scene, int body);
+
+/// The model the device loop steps: the god-object of `body` (god_object_bodies(): the held
+/// body and its articulation, with their masses, inertias, spheres, materials, coupling gains,
+/// and the joints among them and to the world, prescribed ones included), with the scene's
+/// materials, integrator, coupling mode, gravity, Baumgarte and solver settings and device
+/// feedback, no obstacles, no other body, no nets, step `device_dt` (s, > 0), the held body
+/// attached, Model::caller_contacts set (its contacts are the planes'). Returns "" and fills
+/// `out`, or a message naming what refuses: a body out of range, a scene with nets, an
+/// integrator other than the linearly implicit or symplectic Euler (the impulse hand-back needs
+/// the step's effective contact force, MultirateGodObject), a device_dt ≤ 0 or not finite.
+/// Load time: allocates.
 std::string make_god_object_model(const Model& scene, int body, double device_dt, Model& out);
 
-/// A copy of `scene` whose body `body` has every sphere's radius grown by `margin` (m, ≥ 0): the
-/// scene loop detects the god-object's contacts on it, so that a contact is found, and its plane
-/// built, while the sphere is still up to `margin` away from the surface. Returns "" and fills
-/// `out`, or a message (body out of range, margin < 0 or not finite). Load time: allocates.
+/// A copy of `scene` in which every sphere of the god-object of `body` (god_object_bodies())
+/// has its radius grown by `margin` (m, ≥ 0): the scene loop detects the god-object's contacts
+/// on it, so that a contact is found, and its plane built, while the sphere is still up to
+/// `margin` away from the surface. Returns "" and fills `out`, or a message (body out of range,
+/// margin < 0 or not finite). Load time: allocates.
 std::string make_proximity_model(const Model& scene, int body, double margin, Model& out);
 
-/// The planes of the god-object `body`'s contacts in `data` (after detect_contacts on the
-/// proximity model `scene`, whose spheres of `body` are the god-object's grown by `margin`):
-/// for a contact of sphere s (centre c, grown radius r + margin, depth d along n towards the
-/// god-object) the plane through c − (r + margin − d) n with normal n — the other side's surface
-/// point, whatever the margin — moving with the other body's velocity at that point (zero for
-/// an obstacle). Contacts between two spheres of `body` and node contacts are not planes.
-/// Fixed order (the contacts'); no allocation.
-void build_contact_planes(const Model& scene, const Data& data, int body, ContactPlaneSet& out) noexcept;
+/// The planes of the god-object's contacts in `data` (after detect_contacts on the proximity
+/// model `scene`, whose god-object spheres are grown by `margin`); `device_body[b]` is scene
+/// body b's index in the god-object model, −1 for a body not in it (size: the scene's bodies).
+/// For a contact of a god-object sphere s (centre c, grown radius r + margin, depth d along n
+/// towards the god-object) with anything not in the god-object, the plane through
+/// c − (r + margin − d) n with normal n — the other side's surface point, whatever the
+/// margin — carried by the other body (a PlaneCarrier per body, its model built from its state
+/// in `data`, its mass and inertia in `scene` and its other contacts in `data`, for the device
+/// period `device_dt`; static for a body in a joint or with an enabled body target, and for an
+/// obstacle). Node contacts are not planes. Fixed order (the contacts'); no allocation.
+void build_contact_planes(const Model& scene, const Data& data, std::span<const int> device_body,
+                          double device_dt, ContactPlaneSet& out) noexcept;
 
 /// Writes the contacts of `planes` at the god-object's pose in `data` (a Data of the god-object
-/// model `model`), `elapsed` seconds after the planes' sample: every plane with d > 0 (see
-/// ContactPlane) becomes a contact of body 0 against a static side moving with the plane's
-/// velocity (Contact::surface_velocity), its Contact::sphere_b the plane's index in `planes`.
-/// No allocation.
-void write_plane_contacts(const Model& model, const ContactPlaneSet& planes, double elapsed,
-                          Data& data) noexcept;
+/// model `model`), each plane moved by its carrier: every plane with d > 0 (see ContactPlane)
+/// becomes a contact of its body against a static side moving with the carrier's point velocity
+/// (Contact::surface_velocity), its Contact::sphere_b the plane's index in `planes`. No
+/// allocation.
+void write_plane_contacts(const Model& model, const ContactPlaneSet& planes, Data& data) noexcept;
 
 /// One device period of the god-object against the intermediate model: step() of `model` (a
 /// god-object model) with write_plane_contacts() as its contact stage — coupling (Eq. 2), the
 /// planes' penalty forces with their stiffness and damping implicit, integration, feedback
-/// (Eq. 8), checks. Never allocates, throws or locks.
-void step_god_object(const Model& model, const ContactPlaneSet& planes, double elapsed,
-                     Data& data) noexcept;
+/// (Eq. 8), checks; then each plane's impulse on the god-object over the period (its effective
+/// force, MultirateGodObject) into ContactPlane::impulse, its opposite summed into the plane's
+/// carrier's J, and every carrier stepped by dt (PlaneCarrier). A rolled-back step
+/// (non-finite) gives no impulse; the carriers still step. Never allocates, throws or locks.
+void step_god_object(const Model& model, ContactPlaneSet& planes, Data& data) noexcept;
 
 /// Settings of a MultirateGodObject.
 struct MultirateSettings {
   int ratio = 1;        ///< N = scene_dt / dt, ≥ 1: device periods per scene period.
   double margin = 0.0;  ///< δ (m, ≥ 0): the proximity model's growth of the god-object's spheres.
+  /// Other bodies the device may hold later (tool switching, select()): their god-object and
+  /// proximity models are built at construction. Duplicates and the first body are ignored.
+  std::vector<int> tools;
 };
 
-/// Counters of a MultirateGodObject.
+/// Counters of a MultirateGodObject. The device loop writes device_steps, stale_models and
+/// switches, the scene loop the others.
 struct MultirateCounters {
   std::int64_t device_steps = 0;  ///< Device periods stepped.
   std::int64_t scene_steps = 0;   ///< Scene periods stepped (samples taken).
   std::int64_t planes_dropped = 0;  ///< Contacts beyond kMaxContactPlanes, summed over samples.
   std::int64_t planes_max = 0;    ///< Most planes of one sample.
   std::int64_t scene_contacts = 0;  ///< God-object contacts with scene bodies in scene steps.
+  std::int64_t switches = 0;      ///< select() calls that changed the god-object.
+  /// Device periods stepped on a model older than one scene period: no new model for the held
+  /// body in the last N periods (a late scene step, or the first ones after a switch while the
+  /// scene loop has not sampled the new body). 0 when both loops share a thread.
+  std::int64_t stale_models = 0;
 };
 
-/// The two loops of a multirate god-object interleaved on one thread in a fixed order
-/// (deterministic, bit-identical run to run; docs/multirate.md):
-///   every N-th device period (the first included), the scene period:
-///     1. the god-object's pose and twist, as the device loop left them, imposed on it in the
-///        scene-loop model (CouplingMode::kDirect: an infinitely heavy body for the scene's
-///        implicit solve);
-///     2. what each scene body is owed (below) applied to it as the explicit wrench
-///        (J, L)/scene_dt of this step (Data::applied_wrench, added to the scene-loop Data's
-///        own, restored after the step);
-///     3. step() of the scene-loop model (the proximity model at scene_dt = N·dt), whose
-///        contact stage detects the contacts, builds the planes from them before any body
-///        moves, then cuts the god-object's contacts back to its true spheres (depth − δ):
-///        the scene bodies feel the god-object implicitly, as in the single-rate step;
-///     4. the impulse those contacts gave each scene body (their effective force over the step,
-///        below) is subtracted from what it is owed;
-///   then every device period:
-///     5. step_god_object() at dt, τ = (period mod N)·dt after the sample;
-///     6. the impulse each plane on a scene body gave the god-object, negated, added to what
-///        that body is owed (its moment about the body's centre of mass, extrapolated by its
-///        velocity over τ, to the moment owed).
+/// What the device loop hands the scene loop (MultirateGodObject::write_report()): the
+/// god-object's state, and the impulses its planes gave the scene bodies as running totals, so
+/// that a report the scene loop never read loses nothing.
+struct MultirateDeviceReport {
+  std::int64_t period = 0;   ///< Device periods stepped when written.
+  int body = -1;             ///< The held body (scene body index; −1: none held).
+  /// The states of the god-object's bodies (god_object_bodies() of `body`, in that order;
+  /// world); room for the largest god-object.
+  std::vector<BodyState> states;
+  /// Per scene body: Σ over all device periods of the impulse the planes gave it (N·s) and its
+  /// moment about its centre of mass as the device loop moved it (N·m·s).
+  std::vector<Wrench> impulse_total;
+  std::int64_t switches = 0;  ///< select() calls that changed the god-object so far.
+  int released_body = -1;     ///< The held body the last switch released (−1: none).
+  std::vector<BodyState> released_states;  ///< Its god-object's bodies' states at the switch.
+};
+
+/// The scene loop's state in a MultirateSceneModel: what the single-rate view needs
+/// (MultirateGodObject::view()), copied so that the device loop never reads the scene loop's
+/// Data.
+struct MultirateSceneSnapshot {
+  std::vector<BodyState> bodies;           ///< Every scene body at the scene step's end.
+  std::vector<JointState> joints;          ///< Every joint.
+  std::array<Contact, kMaxContacts> contacts{};  ///< [0, num_contacts): not on the god-object.
+  int num_contacts = 0;
+  int contacts_dropped = 0;
+  int contacts_clamped = 0;
+  std::int64_t contact_overflow_steps = 0;
+  std::int64_t contact_clamped_steps = 0;
+  std::int64_t nonfinite_steps = 0;
+  std::uint32_t status = 0;
+  std::uint32_t stages_run = 0;
+  int solver_iterations = 0;
+  double solver_residual = 0.0;
+  double max_joint_drift = 0.0;
+  double max_joint_angle_drift = 0.0;
+};
+
+/// What the scene loop hands the device loop (MultirateGodObject::scene_step()): the
+/// intermediate model for the god-object it sampled and the snapshot of the scene (where a
+/// switch starts the new god-object).
+struct MultirateSceneModel {
+  ContactPlaneSet planes;
+  int body = -1;                     ///< The god-object the planes are for (−1: none).
+  std::int64_t sample_period = -1;   ///< MultirateDeviceReport::period of the sample.
+  /// The scene at the scene step's end (where a switch starts the new god-object).
+  MultirateSceneSnapshot scene;
+};
+
+/// A multirate god-object: the device loop steps the held body (the god-object) at dt against
+/// the intermediate model; the scene loop steps everything else at scene_dt = N·dt and makes
+/// the model (docs/multirate.md). The two loops exchange a MultirateDeviceReport and a
+/// MultirateSceneModel; step() interleaves them on one thread in a fixed order (deterministic,
+/// bit-identical run to run), device_step() / scene_step() run them on two (the caller's
+/// threads and triple buffers: platform::MultirateThreads). One scene period:
+///   1. the god-object's poses and twists from the report imposed on its bodies in the
+///      scene-loop model (CouplingMode::kDirect: infinitely heavy bodies for the scene's
+///      implicit solve; the held body by the target, the others by their body targets; the
+///      scene-loop model has not the articulation's joints);
+///   2. what each scene body is owed (below) applied to it as the explicit wrench
+///      (J, L)/scene_dt of this step (Data::applied_wrench, added to the scene-loop Data's
+///      own, restored after the step);
+///   3. step() of the scene-loop model (the proximity model at scene_dt = N·dt), whose
+///      contact stage detects the contacts, builds the planes from them before any body
+///      moves, then cuts the god-object's contacts back to its true spheres (depth − δ):
+///      the scene bodies feel the god-object implicitly, as in the single-rate step;
+///   4. the impulse those contacts gave each scene body (their effective force over the step,
+///      below) is subtracted from what it is owed; the report's new impulses are added.
+/// One device period:
+///   5. a new model for the held body, if one came, replaces the planes (their carriers
+///      restart from the sample);
+///   6. step_god_object() at dt;
+///   7. the impulse each plane on a scene body gave the god-object, negated, added to that
+///      body's running total (its moment about the carrier's centre of mass).
 /// The effective force of a contact over a step is what the step applied: for the linearly
 /// implicit Euler F₀ + K h v₁ + D Δv on the contact's relative velocity, for the symplectic
 /// Euler F₀. Momentum: the scene bodies receive what the device loop gave the god-object, the
 /// part the scene's own contact did not give them in the same scene period arriving one scene
-/// period late; with the owed impulse counted, the total is conserved to the solves' tolerance.
+/// period late; with the owed impulse counted (owed_impulse()), the total is conserved to the
+/// solves' tolerance.
+///
+/// Tool switching (select(), device loop): the device holds one body at a time, or none. Each
+/// body it may hold has its own god-object model, device Data and proximity model, built at
+/// construction; with none held the scene loop steps the scene alone at scene_dt and the device
+/// loop steps nothing. A switch starts the new god-object from its state in the last model and
+/// hands the released one's state to the scene loop in the next report; on one thread the next
+/// step() starts with a scene period.
+///
+/// Threads: the device-loop members (device_step, write_report, select, view, device_data,
+/// planes) and the scene-loop members (scene_step, scene_data) touch disjoint state; each set
+/// from one thread at a time. step() is both.
 class MultirateGodObject {
  public:
-  /// Builds the god-object model (dt = scene.dt), the scene-loop model (make_proximity_model()
-  /// with dt = N·scene.dt) and their Data (reset). Throws std::invalid_argument with the message
-  /// of make_god_object_model() / make_proximity_model(), or for N < 1. Allocates (load time).
+  /// Builds, for `body` (−1: none held at the start) and each of settings.tools, the god-object
+  /// model (dt = scene.dt), its Data, the scene-loop model (make_proximity_model() with
+  /// dt = N·scene.dt, the articulation imposed: CouplingMode::kDirect, its joints removed) and
+  /// its Data; and the scene-loop model and Data without a god-object (all reset from `scene`). Throws std::invalid_argument with the
+  /// message of make_god_object_model() / make_proximity_model(), for N < 1, a margin < 0, or
+  /// no body at all (`body` −1 and no tools). Allocates (load time).
   MultirateGodObject(const Model& scene, int body, const MultirateSettings& settings);
 
-  /// One device period (the order above). The device Data's target, target_twist (Eq. 2) are
-  /// the caller's to set before. Never allocates, throws or locks.
+  /// One device period on one thread: every N-th (the first included, and the first after a
+  /// switch) runs the scene period first with this object's own report and model. The device
+  /// Data's target, target_twist (Eq. 2) are the caller's to set before. Never allocates,
+  /// throws or locks.
   void step() noexcept;
 
-  const Model& device_model() const noexcept { return device_model_; }
-  const Model& scene_model() const noexcept { return scene_model_; }
-  Data& device_data() noexcept { return device_; }       ///< The god-object (body 0).
-  Data& scene_data() noexcept { return scene_; }         ///< The scene loop's bodies.
-  const Data& device_data() const noexcept { return device_; }
-  const Data& scene_data() const noexcept { return scene_; }
+  /// Device loop: the device Data's targets from `scene_data`, a Data of the scene (the run's,
+  /// which the control loop fills): the attached body's target and target twist (Eq. 2), and
+  /// the body targets (Eq. 6) and prescribed joint values of the god-object's other bodies and
+  /// joints. Never allocates.
+  void take_targets(const Data& scene_data) noexcept;
+  /// The god-object's bodies (scene indices, god-object model order; empty: none held).
+  std::span<const int> god_object() const noexcept;
+
+  /// Device loop: one device period (5–7 above) with `fresh`, the scene loop's newest model if
+  /// one came since the last call (nullptr: none). Never allocates, throws, locks or blocks.
+  void device_step(const MultirateSceneModel* fresh) noexcept;
+  /// Device loop: the report of the device loop's state now. `out` from make_report(). Never
+  /// allocates.
+  void write_report(MultirateDeviceReport& out) const noexcept;
+  /// Scene loop: one scene period (1–4 above) from the device loop's newest report `in`; the
+  /// new model into `out` (from make_scene_model()). Never allocates, throws or locks.
+  void scene_step(const MultirateDeviceReport& in, MultirateSceneModel& out) noexcept;
+  /// A report and a model sized for this object (load time: allocates), holding the initial
+  /// state.
+  MultirateDeviceReport make_report() const;
+  MultirateSceneModel make_scene_model() const;
+
+  /// Device loop: makes `body` the god-object from the next period on (−1: none). The released
+  /// body continues in the scene loop from the god-object's pose and twist; the new one starts
+  /// from its state in the last model. Returns false, changing nothing, for a body that was not
+  /// one of the constructor's. Never allocates.
+  bool select(int body) noexcept;
+
+  /// Device loop: what a control loop reads of the device period, into `out` (a Data of the
+  /// scene): the god-object's bodies' states and Eq. 8 feedback wrenches (Data::body_feedback,
+  /// which platform::ControlLoop carries to the links, Eq. 9), its coupling, device and feedback
+  /// wrenches. Part of view(); the real-time step writes only this. Never allocates.
+  void write_feedback(Data& out) const noexcept;
+
+  /// Device loop: the single-rate view of both loops, in `out`, a Data of the `scene` the object
+  /// was built from (same bodies, joints): every scene body's state from the last model's
+  /// snapshot with the god-object's bodies' from the device loop; its coupling, device and
+  /// feedback wrenches (body_feedback of the god-object's bodies, zero for the others); the
+  /// snapshot's contacts
+  /// followed by the device loop's contacts against the planes (body_a the god-object, its
+  /// spheres' scene indices, body_b, obstacle and sphere_b the plane's other side); the depth
+  /// and counters of both (status: the device step's, or'ed with the scene step's in the period
+  /// that took its model; the *_steps counters summed); the joint states (the articulation's
+  /// from the device loop, the others from the snapshot) and the larger drift; time and
+  /// step_count of the device periods. Leaves the caller's fields (attached_body, targets,
+  /// applied wrenches) alone. Never allocates.
+  void view(Data& out) const noexcept;
+
+  const Model& device_model() const noexcept { return slot().device_model; }
+  /// The scene-loop model of the god-object the scene loop last sampled.
+  const Model& scene_model() const noexcept {
+    return scene_slot_ >= 0 ? slots_[static_cast<std::size_t>(scene_slot_)].scene_model
+                            : free_scene_model_;
+  }
+  Data& device_data() noexcept { return slot().device; }  ///< The god-object (body 0).
+  Data& scene_data() noexcept { return *scene_; }         ///< The scene loop's bodies.
+  const Data& device_data() const noexcept { return slot().device; }
+  const Data& scene_data() const noexcept { return *scene_; }
   const ContactPlaneSet& planes() const noexcept { return planes_; }
-  int body() const noexcept { return body_; }            ///< The god-object in the scene.
+  int body() const noexcept { return body_; }  ///< The god-object in the scene (−1: none).
   int ratio() const noexcept { return ratio_; }
-  /// Impulse (N·s) and its moment (N·m·s, about the body's centre of mass) each scene body is
-  /// owed: applied at the next scene step.
-  const std::vector<Wrench>& pending_impulse() const noexcept { return pending_; }
+  /// One thread: the impulse (N·s) and its moment (N·m·s, about the body's centre of mass)
+  /// scene body `b` is owed, to be applied at the next scene step.
+  Wrench owed_impulse(int b) const noexcept;
   const MultirateCounters& counters() const noexcept { return counters_; }
+  /// Device loop: the last device period took a new model (a scene-step boundary).
+  bool took_model() const noexcept { return took_model_; }
 
  private:
-  void scene_step() noexcept;
-  void hand_back(const BodyState& before) noexcept;
+  /// One body the device may hold: its god-object (bodies, joints), model and Data, its
+  /// scene-loop model.
+  struct Slot {
+    int body = -1;
+    std::vector<int> bodies;       // scene indices, god-object model order
+    std::vector<int> joints;       // scene joint indices, god-object model order
+    std::vector<int> device_body;  // per scene body: its god-object model index, or −1
+    Model device_model;
+    Data device;
+    Model scene_model;             // the proximity model, the god-object's joints removed
+    Data scene;                    // the scene loop's Data while this god-object is held
+    std::vector<int> scene_joints; // per scene_model joint: its scene joint index
+  };
+  Slot& slot() noexcept { return slots_[static_cast<std::size_t>(std::max(slot_, 0))]; }
+  const Slot& slot() const noexcept { return slots_[static_cast<std::size_t>(std::max(slot_, 0))]; }
+  int slot_of(int body) const noexcept;
+  void hand_back() noexcept;
+  void take_model(const MultirateSceneModel& model) noexcept;
 
-  int body_;
   int ratio_;
   double margin_;
-  Model device_model_;
-  Model scene_model_;
-  Data device_;
-  Data scene_;
+  std::vector<Slot> slots_;       // one per body the device may hold (at least one)
+  Model free_scene_model_;        // the scene loop without a god-object
+  // Device loop.
+  int body_;
+  int slot_ = -1;                 // the held body's slot; -1: none held
   ContactPlaneSet planes_;
-  std::vector<Wrench> pending_;  // per scene body
+  std::vector<Wrench> impulse_total_;   // per scene body, running totals (report)
+  MultirateSceneSnapshot snapshot_;     // from the last model
+  std::int64_t period_ = 0;       // device periods since construction or the last switch
+  std::int64_t periods_since_model_ = 0;
+  std::int64_t switches_ = 0;
+  int released_body_ = -1;
+  std::vector<BodyState> released_states_;
+  bool took_model_ = false;       // the last device period took a new model
+  // Scene loop.
+  Data free_scene_;               // the scene loop's Data while nothing is held
+  std::vector<int> free_joints_;  // identity: the free model's joints are the scene's
+  Data* scene_ = nullptr;         // the scene loop's current Data (its slot's, or free_scene_)
+  int scene_slot_ = -1;
+  std::int64_t seen_switches_ = 0;
+  std::vector<Wrench> owed_;          // per scene body
+  std::vector<Wrench> seen_total_;    // the report's impulse_total at the last scene step
   std::vector<Wrench> base_applied_;  // the scene-loop Data's own applied wrenches
-  std::vector<BodyState> scene_before_;  // the scene bodies at the scene step's start
-  std::int64_t period_ = 0;
+  // One thread (step()).
+  MultirateDeviceReport report_;
+  MultirateSceneModel model_;
   MultirateCounters counters_;
 };
 

@@ -189,6 +189,19 @@ class ControlLoop {
   /// Period index at which non-zero torque was first commanded; -1 if never.
   std::int64_t first_torque_period() const noexcept { return first_torque_period_; }
 
+  /// What end_period()'s step 4 calls instead of core::step(model, data): a function of
+  /// `context` that advances the loop's Data by one control period as core::step() would —
+  /// reads its targets (data.target, target_twist, body_targets, joint_prescribed), leaves the
+  /// bodies' states, contacts and body_feedback (Eq. 8) in it — e.g. the multirate god-object's
+  /// device period and its single-rate view (core::MultirateGodObject::step(), view()). Null
+  /// restores core::step. Must not allocate, throw, lock or block: it runs in the real-time
+  /// period. Not while end_period() runs.
+  using StepFunction = void (*)(void* context) noexcept;
+  void set_step_function(StepFunction step, void* context) noexcept {
+    step_function_ = step;
+    step_context_ = context;
+  }
+
   /// Wall time of core::step per period (ns).
   const LatencyHistogram& step_time() const noexcept { return step_time_; }
   /// Counters since construction.
@@ -224,6 +237,8 @@ class ControlLoop {
   bool last_overrun_ = false;  // the previous period overran (LoopStatistics)
   std::int64_t first_active_period_ = -1;
   std::int64_t first_torque_period_ = -1;
+  StepFunction step_function_ = nullptr;  // null: core::step(*model_, *data_)
+  void* step_context_ = nullptr;
 };
 
 }  // namespace numen::platform

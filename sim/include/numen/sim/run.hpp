@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "numen/core/data.hpp"
+#include "numen/core/multirate.hpp"
 #include "numen/hal/transport/bus_recorder.hpp"
 #include "numen/hal/device/instrument_device.hpp"
 #include "numen/hal/transport/log_bus.hpp"
@@ -19,6 +20,7 @@
 #include "numen/platform/control_loop.hpp"
 #include "numen/platform/latency_histogram.hpp"
 #include "numen/platform/loop_statistics.hpp"
+#include "numen/platform/multirate_threads.hpp"
 #include "numen/platform/realtime_setup.hpp"
 #include "numen/platform/state_stream.hpp"
 #include "numen/platform/trace_queue.hpp"
@@ -71,6 +73,9 @@ struct RunOptions {
   /// anything is requested; each step's outcome is in RunSummary::realtime_setup. Lack of
   /// privilege is reported, not fatal, unless rt.strict.
   platform::RealtimeSettings rt;
+  /// A multirate scene's scene thread in a paced run (scheduling, CPUs; docs/multirate.md):
+  /// paced runs step the scene loop on it, offline runs interleave both loops on one thread.
+  platform::SceneThreadSettings scene_thread;
   /// Set (e.g. by a SIGINT / SIGTERM handler) to end the run early and cleanly: the loop
   /// shuts down (ControlLoop::shutdown(): zero torque, drives disabled) over at most
   /// shutdown_periods more periods and the summary is returned. nullptr: none.
@@ -134,6 +139,31 @@ hal::CandumpWriterSettings recorder_settings(bool paced) noexcept;
 /// What a run of an admittance device measured (AdmittanceRunner; docs/scenes.md). Positions
 /// are the controlled frame's origin (world): "device" where the emulated device is, "hand"
 /// where the simulated hand wants it (the scene trajectory), "god-object" the held body's COM.
+/// The multirate god-object of a run (scene [multirate]; docs/multirate.md); all zero without.
+struct MultirateSummary {
+  bool enabled = false;          ///< The scene ran multirate.
+  double scene_dt_s = 0.0;       ///< The scene loop's period (s).
+  int ratio = 0;                 ///< Device periods per scene period.
+  double margin_mm = 0.0;        ///< Proximity margin δ (mm).
+  std::int64_t scene_steps = 0;  ///< Scene periods stepped.
+  std::int64_t planes_max = 0;   ///< Most contact planes handed to the device loop at once.
+  /// Contacts of the god-object the scene loop found beyond core::kMaxContactPlanes (summed
+  /// over scene periods): surfaces the device loop did not see.
+  std::int64_t planes_dropped = 0;
+  /// Device periods that used planes older than one scene period (a late scene step); 0 in
+  /// runs that interleave the loops on one thread.
+  std::int64_t stale_models = 0;
+  std::int64_t switches = 0;     ///< Tool switches the god-object followed.
+  bool scene_thread = false;     ///< The scene loop ran on its own thread (a paced run).
+  /// Scene periods on the scene thread that ended past the next deadline (a paced run).
+  std::int64_t scene_overruns = 0;
+  DurationSummary scene_step_us;  ///< Wall time of the scene steps on the scene thread (us).
+  /// Largest change of the feedback force sent (N) into a period that took a new scene model
+  /// (a scene-step boundary), and into any other period.
+  double model_force_jump_max_n = 0.0;
+  double other_force_jump_max_n = 0.0;
+};
+
 struct AdmittanceSummary {
   bool enabled = false;                  ///< The run was an admittance run.
   double measured_force_max_n = 0.0;     ///< Largest |measured force| that drove the god-object.
@@ -190,6 +220,8 @@ struct RunSummary {
   double tracking_error_free_max_mm = 0.0; ///< Largest of the same (mm).
   std::int64_t free_steps = 0;             ///< Steps counted in the free-space error.
   double feedback_force_max_n = 0.0;       ///< Largest |feedback force| sent (after saturation).
+  /// Largest |F_k − F_{k−1}| of the feedback force sent between consecutive periods (N).
+  double feedback_force_jump_max_n = 0.0;
   double feedback_torque_max_nm = 0.0;
   double axis_torque_max = 0.0;            ///< Largest |axis torque| commanded (N·m or N).
   double free_body_speed_max_mps = 0.0;    ///< Fastest body not part of the held tool (m/s): blocks thrown about.
@@ -317,6 +349,7 @@ struct RunSummary {
   std::string trocar_note;
   /// Admittance device runs only (enabled = true); the impedance-only fields above stay 0.
   AdmittanceSummary admittance;
+  MultirateSummary multirate;
   /// The run's exit status (run_verdict(): ExitStatus as int, 0 clean) and every condition
   /// behind it, most severe first; set by run_scene().
   int exit_status = 0;
@@ -378,6 +411,12 @@ class SceneRunner {
   void set_compute_phase_ns(std::int64_t ns) noexcept { phase_ns_ = ns; }
   /// Periods run so far.
   std::int64_t periods() const noexcept { return k_; }
+  /// A multirate scene in a paced run: steps the scene loop on its own thread from now on
+  /// (platform::MultirateThreads, `settings`) until finish(); nothing for a single-rate scene.
+  /// Allocates (call before the first period). Throws std::system_error if the thread cannot
+  /// start.
+  void start_scene_thread(const platform::SceneThreadSettings& settings);
+
   /// Ends the run's streams: stops the bus recorder's and the trace's writer threads, which
   /// write what is still queued and flush, so that summary() reports what reached the files.
   /// Idempotent; call it after the last period() (setup thread).
@@ -430,6 +469,12 @@ class SceneRunner {
   void accumulate_step_figures(const platform::PeriodReport& report, const PeriodContacts& c) noexcept;
   /// The period's trace record: in memory (trace_) and streamed (trace_writer_).
   void record(const platform::PeriodReport& report, const PeriodContacts& c) noexcept;
+  /// The loop's step in a multirate run: the device holds data_.attached_body (tool
+  /// switching), the device loop gets data_'s targets, the device period runs (and the scene
+  /// period on one thread), data_ gets the god-object's state and feedback
+  /// (core::MultirateGodObject::write_feedback()); period() writes the rest of the single-rate
+  /// view (view()) after the timed step, before measuring.
+  static void step_multirate(void* runner) noexcept;
 
   const Scene* scene_;
   BusSpec spec_;
@@ -445,6 +490,11 @@ class SceneRunner {
   core::Data data_;
   core::Data ghost_;  // the held body placed at the target, for measurement
   platform::ControlLoop loop_;
+  /// The multirate god-object (scene [multirate]), stepped in place of core::step by the
+  /// loop (ControlLoop::set_step_function); null in a single-rate run.
+  std::unique_ptr<core::MultirateGodObject> multirate_;
+  /// Its scene thread in a paced run (start_scene_thread()); null: one thread.
+  std::unique_ptr<platform::MultirateThreads> scene_thread_;
   Trace trace_;
   std::int64_t k_ = 0;
   std::size_t next_event_ = 0;
@@ -465,6 +515,7 @@ class SceneRunner {
   hal::FaultRecord first_fault_;  // the first latched fault of the run (kept across re-arms)
   bool has_first_fault_ = false;
   std::uint64_t emcys_traced_ = 0;  // EMCY messages received up to the last trace record
+  core::Vec3 last_feedback_force_ = core::Vec3::Zero();  // sent the period before (N)
 };
 
 /// Fills what a run's summary says of its scene, whichever runner runs it: name, coupling,

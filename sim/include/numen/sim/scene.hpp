@@ -44,6 +44,16 @@ struct AdmittanceScene {
 /// counter-clockwise seen from outside: for display (the dynamics use the springs).
 using NetTriangles = std::vector<std::array<int, 3>>;
 
+/// A multirate god-object (scene `[multirate]`; docs/multirate.md, core::MultirateGodObject):
+/// the device loop at the scene's dt, the scene loop at scene_dt_s = ratio · dt.
+struct MultirateScene {
+  double scene_dt_s = 0.0;  ///< The scene loop's period (s).
+  int ratio = 1;            ///< N = scene_dt / dt ≥ 1: device periods per scene period.
+  double margin_m = 0.0;    ///< Proximity margin δ (m): the god-object's spheres grown by it.
+  /// The bodies the device holds in the run (the attached one, then the events' in order).
+  std::vector<int> tools;
+};
+
 /// Everything a run of a scene needs.
 struct Scene {
   std::string file;          ///< Path of the scene file, as given.
@@ -67,6 +77,9 @@ struct Scene {
   std::vector<NetTriangles> net_triangles;
   /// Set exactly when model.coupling_mode is kAdmittance (the loader requires both or neither).
   std::optional<AdmittanceScene> admittance;
+  /// Set by a [multirate] table: the god-object runs at dt against an intermediate contact
+  /// model the scene loop refreshes every scene_dt (the run harness, SceneRunner).
+  std::optional<MultirateScene> multirate;
   double duration_s = 0.0;          ///< Default run length (s).
   std::vector<std::string> warnings;  ///< Non-fatal remarks of the loader.
   /// How the trocar point was placed (for the summary), empty if not a trocar.

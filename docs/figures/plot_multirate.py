@@ -1,0 +1,103 @@
+#!/usr/bin/python3
+"""Multirate quality against the rate ratio (docs/multirate.md): runs a shipped scene through
+`numen run --json` single-rate and with `[multirate] scene_dt = N·dt` for each ratio N, and plots
+the tool's deepest contact, the free-space tracking error, the fastest free body and the largest
+feedback-force jump (at a new scene model and otherwise) against N, the single-rate run as a
+line. Writes the figures and a JSON of the numbers beside them.
+
+    /usr/bin/python3 docs/figures/plot_multirate.py ./build/numen OUT_DIR
+
+(docs/figures/make_figures.sh runs it.) The scene copies are written to a temporary directory
+with their data and DCF paths made absolute. The margin is 10 mm for every ratio: it covers
+1 m/s of tool travel at 100 Hz. Needs Debian's python3-matplotlib (run with /usr/bin/python3).
+"""
+import json
+import os
+import subprocess
+import sys
+import tempfile
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+
+RATIOS = [1, 2, 5, 10, 20, 100]
+MARGIN = 0.01
+SCENES = ["construction", "default"]
+
+
+def scene_copy(root, name, ratio, tmp):
+    scenes = os.path.join(root, "sim", "scenes")
+    with open(os.path.join(scenes, name + ".toml")) as f:
+        text = f.read()
+    text = text.replace('"../data/', '"' + os.path.join(root, "sim", "data") + "/")
+    text = text.replace('dcf = "devices/', 'dcf = "' + os.path.join(scenes, "devices") + "/")
+    if ratio is not None:
+        dt = None
+        for line in text.splitlines():
+            if line.startswith("dt ="):
+                dt = float(line.split("=")[1].split("#")[0])
+        text += "\n[multirate]\nscene_dt = %r\nmargin = %r\n" % (dt * ratio, MARGIN)
+    path = os.path.join(tmp, "%s_%s.toml" % (name, ratio or "single"))
+    with open(path, "w") as f:
+        f.write(text)
+    return path
+
+
+def run(numen, path):
+    out = subprocess.run([numen, "run", path, "--json"], capture_output=True, text=True)
+    if out.returncode != 0:
+        sys.exit("%s failed (exit %d): %s" % (path, out.returncode, out.stderr[-2000:]))
+    return json.loads(out.stdout)
+
+
+def main():
+    numen, out_dir = sys.argv[1], sys.argv[2]
+    root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+    results = {}
+    with tempfile.TemporaryDirectory() as tmp:
+        for name in SCENES:
+            single = run(numen, scene_copy(root, name, None, tmp))
+            rows = [run(numen, scene_copy(root, name, n, tmp)) for n in RATIOS]
+            results[name] = {"single": single, "multirate": dict(zip(map(str, RATIOS), rows))}
+    with open(os.path.join(out_dir, "multirate_quality.json"), "w") as f:
+        json.dump({n: {"single": {k: r["single"][k] for k in keys(r["single"])},
+                       "multirate": {q: {k: v[k] for k in keys(v)} | {"multirate": v["multirate"]}
+                                     for q, v in r["multirate"].items()}}
+                   for n, r in results.items()}, f, indent=1)
+    panels = [("tool_penetration_max_mm", "tool's deepest contact (mm)"),
+              ("tracking_error_free_rms_mm", "free-space tracking rms (mm)"),
+              ("free_body_speed_max_mps", "fastest free body (m/s)"),
+              ("feedback_force_jump_max_n", "largest feedback-force jump (N)")]
+    fig, ax = plt.subplots(len(SCENES), len(panels), figsize=(16, 7))
+    for i, name in enumerate(SCENES):
+        r = results[name]
+        for j, (key, label) in enumerate(panels):
+            a = ax[i][j]
+            ys = [r["multirate"][str(n)][key] for n in RATIOS]
+            a.semilogx(RATIOS, ys, "o-", label="multirate (device 1 kHz)")
+            if key == "feedback_force_jump_max_n":
+                a.semilogx(RATIOS, [r["multirate"][str(n)]["multirate"]["model_force_jump_max_n"] for n in RATIOS],
+                           "s--", label="… into a period with a new model")
+            a.axhline(r["single"][key], color="k", lw=0.8, label="single-rate 1 kHz")
+            a.set_title("%s: %s" % (name, label), fontsize=9)
+            a.set_xlabel("rate ratio N = scene_dt / dt")
+            a.grid(True, which="both", alpha=0.3)
+            if i == 0 and j == 0:
+                a.legend(fontsize=8)
+            if key == "feedback_force_jump_max_n":
+                a.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(os.path.join(out_dir, "multirate_quality.png"), dpi=110)
+    print("wrote", os.path.join(out_dir, "multirate_quality.png"))
+
+
+def keys(summary):
+    return [k for k in ("tool_penetration_max_mm", "tracking_error_free_rms_mm", "free_body_speed_max_mps",
+                        "feedback_force_max_n", "feedback_force_jump_max_n", "any_penetration_max_mm",
+                        "nonfinite_steps") if k in summary]
+
+
+if __name__ == "__main__":
+    main()

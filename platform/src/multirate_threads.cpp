@@ -1,0 +1,89 @@
+/// @file multirate_threads.cpp
+/// The scene thread of a multirate god-object (multirate_threads.hpp).
+
+#include "numen/platform/multirate_threads.hpp"
+
+#include <time.h>
+
+#include <cerrno>
+#include <stdexcept>
+
+#include "numen/platform/monotonic_clock.hpp"
+#include "numen/platform/periodic_timer.hpp"
+
+namespace numen::platform {
+
+MultirateThreads::MultirateThreads(core::MultirateGodObject& god_object, std::int64_t scene_period_ns,
+                                   SceneThreadSettings settings)
+    : god_object_(god_object),
+      period_ns_(scene_period_ns),
+      settings_(std::move(settings)),
+      reports_(god_object.make_report()),
+      models_(god_object.make_scene_model()) {
+  if (scene_period_ns <= 0) throw std::invalid_argument("multirate: the scene period must be > 0 ns");
+}
+
+MultirateThreads::~MultirateThreads() { stop(); }
+
+void MultirateThreads::start() {
+  if (thread_.joinable()) throw std::logic_error("multirate: the scene thread is already running");
+  // The first model, on this thread, before the device loop's first period.
+  god_object_.write_report(reports_.back());
+  reports_.publish();
+  reports_.acquire();
+  god_object_.scene_step(reports_.front(), models_.back());
+  models_.publish();
+  stop_.store(false);
+  thread_ = std::thread([this] { run(); });
+}
+
+void MultirateThreads::stop() noexcept {
+  stop_.store(true);
+  if (thread_.joinable()) thread_.join();
+}
+
+void MultirateThreads::device_step() noexcept {
+  const core::MultirateSceneModel* fresh = models_.acquire() ? &models_.front() : nullptr;
+  god_object_.device_step(fresh);
+  god_object_.write_report(reports_.back());
+  reports_.publish();
+}
+
+SceneThreadCounters MultirateThreads::counters() const noexcept {
+  SceneThreadCounters c;
+  c.scene_steps = scene_steps_.load();
+  c.scene_overruns = scene_overruns_.load();
+  c.reports_taken = reports_taken_.load();
+  return c;
+}
+
+void MultirateThreads::run() noexcept {
+  RealtimeSettings rt;
+  rt.fifo_priority = settings_.fifo_priority;
+  rt.cpu_affinity = settings_.cpu_affinity;
+  try {
+    realtime_ = apply_realtime(rt);  // allocates: before the loop
+  } catch (const std::exception&) {
+    // An invalid priority: the caller's settings were checked; keep the thread as it is.
+  }
+  PeriodicTimer timer(period_ns_, monotonic_now_ns());
+  while (!stop_.load(std::memory_order_relaxed)) {
+    const Wakeup w = timer.wait_next();
+    if (w.overrun) scene_overruns_.fetch_add(1, std::memory_order_relaxed);
+    if (stop_.load(std::memory_order_relaxed)) break;
+    const std::int64_t t0 = monotonic_now_ns();
+    if (reports_.acquire()) reports_taken_.fetch_add(1, std::memory_order_relaxed);
+    god_object_.scene_step(reports_.front(), models_.back());
+    models_.publish();
+    scene_time_.record(monotonic_now_ns() - t0);
+    scene_steps_.fetch_add(1, std::memory_order_relaxed);
+    if (settings_.extra_scene_time_ns > 0) {  // test hook: a slow scene
+      const std::int64_t until = monotonic_now_ns() + settings_.extra_scene_time_ns;
+      const timespec ts{static_cast<time_t>(until / 1'000'000'000), static_cast<long>(until % 1'000'000'000)};
+      while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
+      }
+    }
+  }
+}
+
+}  // namespace numen::platform

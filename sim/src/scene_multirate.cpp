@@ -1,0 +1,100 @@
+/// @file scene_multirate.cpp
+/// The [multirate] table of a scene file (scene_multirate.hpp).
+
+#include "scene_multirate.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <iomanip>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "numen/core/model.hpp"
+#include "numen/core/multirate.hpp"
+
+namespace numen::sim {
+
+void parse_multirate(const TomlTable& root, Scene& scene) {
+  const auto table = root.table("multirate");
+  if (!table) return;
+  table->allow_only({"scene_dt", "margin"});
+  const double dt = scene.model.dt;
+  const double scene_dt = table->number_in("scene_dt", 0.0, 10.0, std::nullopt);
+  const double ratio = std::round(scene_dt / dt);
+  if (!(ratio >= 1.0) || !(std::abs(ratio * dt - scene_dt) <= 1e-9 * scene_dt) || ratio > 1e6)
+    table->fail("scene_dt", "must be a whole multiple of dt = " + format_input_number(dt) +
+                                " s (got " + format_input_number(scene_dt) + " s, " +
+                                format_input_number(scene_dt / dt) + " dt)");
+  MultirateScene m;
+  m.ratio = static_cast<int>(ratio);
+  m.scene_dt_s = ratio * dt;
+  if (m.ratio > 1 && !table->has("margin"))
+    table->fail("margin",
+                "missing: the proximity margin (m) — how far from a surface the scene loop "
+                "starts handing its plane to the device loop; it must cover the tool's travel "
+                "towards a surface in one scene period (docs/multirate.md, \"The margin\")");
+  m.margin_m = table->number_in("margin", 0.0, 1.0, 0.0);
+  const core::Model& model = scene.model;
+  if (model.coupling_mode == core::CouplingMode::kAdmittance)
+    table->fail("scene_dt", "the admittance coupling is not multirate");
+  std::vector<int> bodies;
+  if (model.initial_attached_body >= 0) bodies.push_back(model.initial_attached_body);
+  for (const AttachEvent& e : scene.events)
+    if (e.body >= 0 && std::find(bodies.begin(), bodies.end(), e.body) == bodies.end())
+      bodies.push_back(e.body);
+  if (bodies.empty()) table->fail("scene_dt", "the device holds no body, now or later: nothing to run at the device rate");
+  std::vector<char> in_god_object(model.bodies.size(), 0);
+  for (int b : bodies) {
+    core::Model device;
+    const std::string error = core::make_god_object_model(model, b, dt, device);
+    if (!error.empty()) table->fail("scene_dt", error);
+    for (int g : core::god_object_bodies(model, b)) in_god_object[static_cast<std::size_t>(g)] = 1;
+    m.tools.push_back(b);
+  }
+  // The device drives the god-object's bodies and joints only: the rest is the scene loop's.
+  for (const platform::LinkBinding& b : scene.binding.links)
+    if (b.body >= 0 && !in_god_object[static_cast<std::size_t>(b.body)])
+      table->fail("scene_dt", "body '" + model.bodies[static_cast<std::size_t>(b.body)].name +
+                                  "' is bound to a device link but is not in a held body's "
+                                  "articulation: the device loop steps only the god-object");
+  for (const platform::AxisPrescription& p : scene.binding.prescriptions)
+    if (!in_god_object[static_cast<std::size_t>(model.joints[static_cast<std::size_t>(p.joint)].child)])
+      table->fail("scene_dt", "joint '" + model.joints[static_cast<std::size_t>(p.joint)].name +
+                                  "' is prescribed by the device but is not in a held body's "
+                                  "articulation: the device loop steps only the god-object");
+  // The margin must cover the hand's travel towards a surface in one scene period: compare it
+  // with the target's largest travel over a scene period of the trajectory.
+  if (m.ratio > 1 && !scene.trajectory.empty()) {
+    // At most kScanPoints window starts, dt apart or evenly spread over a longer trajectory
+    // (a fuzzed scene may last 10^6 s at a microsecond dt: the scan stays bounded).
+    constexpr double kScanPoints = 200'000.0;
+    double travel = 0.0, at = 0.0;
+    const double span = scene.trajectory.duration() - m.scene_dt_s;
+    const double stride = std::max(dt, span / kScanPoints);
+    const auto starts = span >= 0.0 ? static_cast<std::int64_t>(std::floor(span / stride)) + 1 : 0;
+    for (std::int64_t k = 0; k < starts; ++k) {
+      const double t = static_cast<double>(k) * stride;
+      const double d = (scene.trajectory.at(t + m.scene_dt_s).pose.position -
+                        scene.trajectory.at(t).pose.position).norm();
+      if (d > travel) {
+        travel = d;
+        at = t;
+      }
+    }
+    if (travel > m.margin_m) {
+      std::ostringstream os;
+      os << std::setprecision(3) << "multirate: the hand travels up to " << travel * 1e3
+         << " mm in one scene period (" << m.scene_dt_s * 1e3 << " ms, from t = " << at
+         << " s) but the margin is " << m.margin_m * 1e3 << " mm: a surface the tool reaches "
+         << "between two scene samples has no plane until the next one, and the tool may go "
+         << "through it (docs/multirate.md, \"The margin\"); raise [multirate] margin or lower "
+         << "scene_dt";
+      scene.warnings.push_back(os.str());
+    }
+  }
+  scene.multirate = std::move(m);
+}
+
+}  // namespace numen::sim
