@@ -51,6 +51,9 @@ struct ContactSink {
     c.normal = g.normal;
     c.depth = g.depth;
     c.force.setZero();
+    c.surface_velocity.setZero();  // a static side stands still
+    c.stiffness_scale = 1.0;       // the material pair's own law
+    c.damping_scale = 1.0;
   }
 };
 

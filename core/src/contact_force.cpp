@@ -177,6 +177,8 @@ void compute_contact_forces(const Model& model, Data& data) noexcept {
     if (b == nullptr) v_rel -= c.surface_velocity;
     // The time-constant floor: k_eff = min(k, m_eff (ω_c h / h)²) (SolverSettings).
     MaterialPair material = model.material_pairs[static_cast<std::size_t>(c.material_pair)];
+    material.stiffness *= c.stiffness_scale;  // 1 but for multirate node planes (contact.hpp)
+    material.damping *= c.damping_scale;
     if (material.stiffness > 0.0 && max_omega_dt < std::numeric_limits<double>::infinity()) {
       const auto ia = static_cast<std::size_t>(c.body_a);
       const bool b_imposed = b != nullptr && imposed[static_cast<std::size_t>(c.body_b)] != 0;

@@ -9,11 +9,14 @@
 
 #include "numen/core/collision.hpp"
 #include "numen/core/data.hpp"
+#include "numen/core/features.hpp"
 #include "numen/core/model.hpp"
+#include "numen/core/net_collision.hpp"
 #include "numen/core/rigid_body.hpp"
 #include "numen/core/step.hpp"
 
 #include "detail/data_scratch.hpp"
+#include "detail/multirate_net.hpp"
 
 namespace numen::core {
 namespace {
@@ -26,12 +29,15 @@ void write_planes(const Model& model, Data& data, const void* context) noexcept 
 /// any body moves), then those contacts cut back to the god-object's true spheres (the
 /// proximity model grew them by the margin): depth − δ, the middle of the overlap δ/2 back
 /// towards the god-object; a contact left without depth is dropped, and so is one between two
-/// bodies of the god-object (the scene-loop model has not their joints).
+/// bodies of the god-object (the scene-loop model has not their joints). With nets
+/// (Model::caller_node_contacts), the node contacts likewise: detected, their node planes
+/// built, cut back.
 struct SampleContext {
   ContactPlaneSet* planes;
   std::span<const int> device_body;  // per scene body: god-object model index or −1
   double margin;
   double device_dt;
+  detail::NodePlaneScratch node_scratch;
 };
 
 /// True when scene body `b` is a body of the god-object (`device_body`: see SampleContext).
@@ -68,6 +74,13 @@ void detect_and_build_planes(const Model& model, Data& data, const void* context
   }
   data.num_contacts = kept;
   data.max_penetration = deepest;
+  if constexpr (kWithDeformable) {
+    if (model.caller_node_contacts) {
+      detect_node_contacts(model, data);
+      detail::build_node_planes(model, data, c->device_body, c->margin, c->node_scratch, *c->planes);
+      detail::cut_back_node_contacts(model, data, c->device_body, c->margin, deepest);
+    }
+  }
 }
 
 /// The force a contact of the last step applied to its body a over the step (N, world): for
@@ -116,7 +129,6 @@ std::string make_god_object_model(const Model& scene, int body, double device_dt
   if (std::string e = body_error(scene, body); !e.empty()) return e;
   if (!(device_dt > 0.0) || !std::isfinite(device_dt))
     return "multirate: the device period must be > 0 s and finite (got " + std::to_string(device_dt) + ")";
-  if (!scene.nets.empty()) return "multirate: scenes with deformable nets are not multirate yet";
   if (scene.integrator != Integrator::kLinearlyImplicitEuler &&
       scene.integrator != Integrator::kSymplecticEuler)
     return "multirate: the god-object's integrator must be the linearly implicit or the "
@@ -147,6 +159,15 @@ std::string make_god_object_model(const Model& scene, int body, double device_dt
   }
   m.obstacles.clear();
   m.static_spheres.clear();
+  // The nets are the scene loop's; those on the god-object ride on their components here.
+  if (std::string e = detail::lump_nets(scene, local, m); !e.empty()) return e;
+  m.nets.clear();
+  m.net_springs.clear();
+  m.node_rest.clear();
+  m.node_mass.clear();
+  m.node_radius.clear();
+  m.node_net.clear();
+  m.node_sweep_order.clear();
   m.initial_attached_body = local[static_cast<std::size_t>(body)];
   m.caller_contacts = true;
   std::string error = finalize_model(m);
@@ -160,11 +181,14 @@ std::string make_proximity_model(const Model& scene, int body, double margin, Mo
   if (!(margin >= 0.0) || !std::isfinite(margin))
     return "multirate: the contact margin must be >= 0 m and finite (got " + std::to_string(margin) + ")";
   Model m = scene;
+  std::vector<int> device_body(scene.bodies.size(), -1);
   for (int g : god_object_bodies(scene, body)) {
+    device_body[static_cast<std::size_t>(g)] = 0;
     const BodyModel& b = m.bodies[static_cast<std::size_t>(g)];
     for (int s = b.sphere_begin; s < b.sphere_begin + b.sphere_count; ++s)
       m.body_spheres[static_cast<std::size_t>(s)].radius += margin;
   }
+  detail::grow_god_object_nodes(device_body, margin, m);
   std::string error = finalize_model(m);
   if (!error.empty()) return "multirate: proximity model: " + error;
   out = std::move(m);
@@ -306,12 +330,13 @@ void write_plane_contacts(const Model& model, const ContactPlaneSet& planes, Dat
   const int nc = std::clamp(planes.carrier_count, 0, kMaxPlaneCarriers);
   for (int i = 0; i < n; ++i) {
     const ContactPlane& p = planes.planes[static_cast<std::size_t>(i)];
-    if (p.body < 0 || p.body >= nbodies) continue;
+    if (p.body < 0 || p.body >= nbodies || p.material_pair < 0 || p.material_pair >= np) continue;
     const BodyModel& bm = model.bodies[static_cast<std::size_t>(p.body)];
     const BodyState& g = data.bodies[static_cast<std::size_t>(p.body)];
-    if (p.sphere < 0 || p.sphere >= bm.sphere_count || p.material_pair < 0 || p.material_pair >= np)
-      continue;
-    const Sphere& s = model.body_spheres[static_cast<std::size_t>(bm.sphere_begin + p.sphere)];
+    const bool node = p.node >= 0;  // a node plane: its own sphere, through the node's compliance
+    if (!node && (p.sphere < 0 || p.sphere >= bm.sphere_count)) continue;
+    const Sphere s = node ? Sphere{p.local_point, p.radius}
+                          : model.body_spheres[static_cast<std::size_t>(bm.sphere_begin + p.sphere)];
     const Vec3 centre = g.position + g.orientation * s.center;
     Vec3 point = p.point;
     Vec3 normal = p.normal;
@@ -322,7 +347,7 @@ void write_plane_contacts(const Model& model, const ContactPlaneSet& planes, Dat
       normal = (normal + k.rotation.cross(normal)).normalized();
       surface_velocity = k.linear_velocity + k.angular_velocity.cross(point - (k.com + k.displacement));
     }
-    const double depth = normal.dot(point - centre) + s.radius;
+    const double depth = normal.dot(point - centre) + s.radius + (node ? p.depth_offset : 0.0);
     if (!(depth > 0.0)) continue;
     if (data.num_contacts >= kMaxContacts) {
       ++data.contacts_dropped;
@@ -332,8 +357,10 @@ void write_plane_contacts(const Model& model, const ContactPlaneSet& planes, Dat
     c.body_a = p.body;
     c.body_b = -1;
     c.obstacle = -1;
-    c.sphere_a = bm.sphere_begin + p.sphere;
+    c.sphere_a = node ? -1 : bm.sphere_begin + p.sphere;
     c.material_pair = p.material_pair;
+    c.stiffness_scale = node ? p.stiffness_scale : 1.0;
+    c.damping_scale = c.stiffness_scale * c.stiffness_scale;
     c.position = centre - (s.radius - 0.5 * depth) * normal;  // middle of the overlap
     c.normal = normal;
     c.depth = depth;
@@ -432,6 +459,8 @@ MultirateGodObject::MultirateGodObject(const Model& scene, int body, const Multi
         s.scene_joints.push_back(static_cast<int>(j));
       }
     s.scene_model.joints = std::move(kept);
+    // With nets, the scene loop's contact stage detects the node contacts itself (node planes).
+    s.scene_model.caller_node_contacts = s.scene_model.num_nets() > 0;
     error = finalize_model(s.scene_model);
     if (!error.empty()) throw std::invalid_argument("multirate: scene-loop model: " + error);
     s.device = make_data(s.device_model);
@@ -459,6 +488,15 @@ MultirateGodObject::MultirateGodObject(const Model& scene, int body, const Multi
   released_states_.assign(largest, BodyState{});
   snapshot_.bodies = scene_->bodies;
   snapshot_.joints.assign(scene.joints.size(), JointState{});
+  snapshot_.nodes = scene_->nodes;
+  snapshot_.node_contacts.assign(scene_->node_contacts.size(), NodeContact{});
+  snapshot_.nets = scene_->nets;
+  if (scene.num_nets() > 0) {
+    node_slot_.assign(static_cast<std::size_t>(scene.num_nodes()), -1);
+    slot_node_.assign(kMaxContactPlanes, -1);
+    node_stiffness_.assign(kMaxContactPlanes, Mat3::Zero());
+    plane_slot_.assign(kMaxContactPlanes, -1);
+  }
   report_ = make_report();
   model_ = make_scene_model();
 }
@@ -476,6 +514,9 @@ MultirateSceneModel MultirateGodObject::make_scene_model() const {
   MultirateSceneModel m;
   m.scene.bodies = snapshot_.bodies;
   m.scene.joints = snapshot_.joints;
+  m.scene.nodes = snapshot_.nodes;
+  m.scene.node_contacts = snapshot_.node_contacts;
+  m.scene.nets = snapshot_.nets;
   return m;
 }
 
@@ -630,7 +671,8 @@ void MultirateGodObject::scene_step(const MultirateDeviceReport& in, MultirateSc
     owed_[b] = Wrench{};
   }
   SampleContext context{&out.planes, std::span<const int>(device_body.data(), device_body.size()),
-                        body >= 0 ? margin_ : 0.0, slots_.front().device_model.dt};
+                        body >= 0 ? margin_ : 0.0, slots_.front().device_model.dt,
+                        detail::NodePlaneScratch{node_slot_, slot_node_, node_stiffness_, plane_slot_}};
   step_with_contacts(model, *scene_, &detect_and_build_planes, &context);
   const bool rejected = (scene_->status & kNonFinite) != 0;
   for (std::size_t b = 0; b < nb; ++b) {
@@ -698,6 +740,11 @@ void MultirateGodObject::scene_step(const MultirateDeviceReport& in, MultirateSc
   snap.solver_residual = scene_->solver_residual;
   snap.max_joint_drift = scene_->max_joint_drift;
   snap.max_joint_angle_drift = scene_->max_joint_angle_drift;
+  std::copy_n(scene_->nodes.begin(), std::min(snap.nodes.size(), scene_->nodes.size()), snap.nodes.begin());
+  snap.num_node_contacts = std::clamp(scene_->num_node_contacts, 0,
+                                      static_cast<int>(std::min(snap.node_contacts.size(), scene_->node_contacts.size())));
+  std::copy_n(scene_->node_contacts.begin(), snap.num_node_contacts, snap.node_contacts.begin());
+  std::copy_n(scene_->nets.begin(), std::min(snap.nets.size(), scene_->nets.size()), snap.nets.begin());
 }
 
 void MultirateGodObject::take_model(const MultirateSceneModel& m) noexcept {
@@ -718,6 +765,11 @@ void MultirateGodObject::take_model(const MultirateSceneModel& m) noexcept {
   to.solver_residual = from.solver_residual;
   to.max_joint_drift = from.max_joint_drift;
   to.max_joint_angle_drift = from.max_joint_angle_drift;
+  std::copy_n(from.nodes.begin(), std::min(to.nodes.size(), from.nodes.size()), to.nodes.begin());
+  to.num_node_contacts = std::clamp(from.num_node_contacts, 0,
+                                    static_cast<int>(std::min(to.node_contacts.size(), from.node_contacts.size())));
+  std::copy_n(from.node_contacts.begin(), to.num_node_contacts, to.node_contacts.begin());
+  std::copy_n(from.nets.begin(), std::min(to.nets.size(), from.nets.size()), to.nets.begin());
   if (m.body != body_) return;  // sampled before a switch: not this god-object's planes
   planes_.count = std::clamp(m.planes.count, 0, kMaxContactPlanes);
   planes_.carrier_count = std::clamp(m.planes.carrier_count, 0, kMaxPlaneCarriers);
@@ -801,6 +853,13 @@ void MultirateGodObject::view(Data& out) const noexcept {
     out.contacts[static_cast<std::size_t>(count++)] = c;
     deepest = std::max(deepest, c.depth);
   }
+  // The nets, the god-object's included, as the scene loop left them.
+  std::copy_n(snap.nodes.begin(), std::min(out.nodes.size(), snap.nodes.size()), out.nodes.begin());
+  out.num_node_contacts = std::clamp(snap.num_node_contacts, 0, static_cast<int>(out.node_contacts.size()));
+  std::copy_n(snap.node_contacts.begin(), out.num_node_contacts, out.node_contacts.begin());
+  for (int i = 0; i < out.num_node_contacts; ++i)
+    deepest = std::max(deepest, out.node_contacts[static_cast<std::size_t>(i)].depth);
+  std::copy_n(snap.nets.begin(), std::min(out.nets.size(), snap.nets.size()), out.nets.begin());
   out.contacts_dropped = took_model_ ? snap.contacts_dropped : 0;
   out.contacts_clamped = took_model_ ? snap.contacts_clamped : 0;
   out.contact_overflow_steps = snap.contact_overflow_steps;
@@ -837,6 +896,7 @@ void MultirateGodObject::view(Data& out) const noexcept {
       Contact c = d.contacts[static_cast<std::size_t>(i)];
       const ContactPlane& p =
           planes_.planes[static_cast<std::size_t>(std::clamp(c.sphere_b, 0, kMaxContactPlanes - 1))];
+      if (p.node >= 0) continue;  // the net's contact: the scene loop's node contact, above
       const int local = std::clamp(c.body_a, 0, static_cast<int>(s.bodies.size()) - 1);
       const int g = s.bodies[static_cast<std::size_t>(local)];
       c.sphere_a = s.scene_model.bodies[static_cast<std::size_t>(g)].sphere_begin +

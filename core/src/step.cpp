@@ -103,7 +103,7 @@ void run_step(const Model& model, Data& data, ContactWriter write, const void* c
   }
   if constexpr (kWithDeformable) {
     if (plan & kStageNodeContacts) {
-      detect_node_contacts(model, data);
+      if (write == nullptr || !model.caller_node_contacts) detect_node_contacts(model, data);
       data.stages_run |= kStageNodeContacts;
     }
   }

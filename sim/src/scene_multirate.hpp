@@ -16,7 +16,8 @@ namespace numen::sim {
 /// The tools are the held body and the events' bodies; each one's god-object is its
 /// articulation (core::god_object_bodies()). Refuses (located at the table) what a multirate
 /// god-object cannot run: the admittance coupling, a tool that make_god_object_model() refuses
-/// (nets in the scene, an integrator without an effective contact force), and a device binding
+/// (a net on it whose centre of mass is off its component's, an integrator without an
+/// effective contact force), and a device binding
 /// that drives a body or prescribes a joint outside every tool's articulation. Needs a finalized scene.model, scene.binding
 /// and scene.events. Throws InputError (file, line, column, key). Load time: allocates.
 void parse_multirate(const TomlTable& root, Scene& scene);

@@ -24,6 +24,13 @@ struct Contact {
   /// off body_a's point velocity in the penalty law. Zero for obstacles (detect_contacts); the
   /// moving planes of the multirate intermediate model set it (multirate.hpp).
   Vec3 surface_velocity = Vec3::Zero();
+  /// Scales of the material pair's stiffness and damping for this contact (1: the pair's own).
+  /// A multirate node plane (multirate.hpp) renders a net node's contact through the node's
+  /// compliance: the contact stiffness k in series with the node's stiffness k_n to its rigid
+  /// component gives k s with s = k_n / (k + k_n), the damping c s² (a Kelvin–Voigt element in
+  /// series with a spring, its low-frequency limit). Friction is not scaled.
+  double stiffness_scale = 1.0;
+  double damping_scale = 1.0;
 };
 
 }  // namespace numen::core

@@ -222,6 +222,11 @@ struct Model {
   /// multirate device loop, multirate.hpp): contact_capacity() gives the model the room of
   /// kMaxContacts, step_with_contacts() steps it.
   bool caller_contacts = false;
+  /// The contact writer of step_with_contacts() writes the nets' node contacts too, and the
+  /// node-contact stage does not detect them (the scene-loop model of a multirate god-object
+  /// with a net, multirate.hpp: the writer detects them on grown node spheres, builds the node
+  /// planes, then cuts the contacts back). Ignored by step().
+  bool caller_node_contacts = false;
   SolverSettings solver;
 
   StaticSphereGrid static_grid;    ///< Derived by finalize_model() (broad phase).

@@ -16,8 +16,10 @@
 /// the two loops interleaved on one thread, the scene bodies receiving the impulse the device
 /// loop's planes gave the god-object (MultirateGodObject), with tool switching and a
 /// single-rate view of both loops for the run harness; the two loops on two threads are
-/// platform::MultirateThreads. The god-object is the held body with its articulation; scenes
-/// without nets; the linearly implicit and symplectic Euler schemes.
+/// platform::MultirateThreads. The god-object is the held body with its articulation; a net on
+/// one of its bodies (paper §4.2) stays in the scene loop, its mass lumped onto its rigid
+/// component in the device loop, its node contacts handed over as node planes
+/// (ContactPlane::node); the linearly implicit and symplectic Euler schemes.
 
 #include <algorithm>
 #include <array>
@@ -93,6 +95,22 @@ struct ContactPlane {
   /// Index into ContactPlaneSet::carriers; -1: static (an obstacle, a body in a joint or with
   /// an enabled body target, or beyond kMaxPlaneCarriers).
   int carrier = -1;
+  /// A node plane (a net on the god-object, docs/multirate.md "Deformable god-objects"): the
+  /// scene's global node index; −1 for a plane of a body's sphere (`sphere`). A node plane acts
+  /// on a sphere of `radius` at `local_point` in body `body`'s frame — the node where the sample
+  /// found it, carried rigidly by the net's rigid component between samples (the paper's hidden
+  /// rigid god-object, §4.2) — through the node's compliance: with k the material pair's
+  /// stiffness and k_n = nᵀ K_n n the node's stiffness towards its rigid component (its tie
+  /// plus its springs to neighbours that move with the component, K_n = k_tie I + Σ k ê êᵀ at
+  /// the sample), the contact renders the series stiffness k s, s = k_n / (k + k_n)
+  /// (Contact::stiffness_scale), at the depth d + depth_offset, so that at the sample it gives
+  /// the node's own contact force k d₀ and releases where the node would leave the surface.
+  int node = -1;
+  Vec3 local_point = Vec3::Zero();  ///< Node plane: the sphere's centre (m, body frame).
+  double radius = 0.0;              ///< Node plane: the node's sphere radius (m).
+  double stiffness_scale = 1.0;     ///< Node plane: s (1 for a sphere plane).
+  /// Node plane: d₀ k / k_n (m), d₀ the node's true depth at the sample (0 without contact).
+  double depth_offset = 0.0;
   /// Written by step_god_object(): the impulse this plane gave the god-object over the last
   /// device period (N·s, world; its effective force times dt) and where it acted (m, world).
   Vec3 impulse = Vec3::Zero();
@@ -120,15 +138,18 @@ std::vector<int> god_object_bodies(const Model& scene, int body);
 /// and the joints among them and to the world, prescribed ones included), with the scene's
 /// materials, integrator, coupling mode, gravity, Baumgarte and solver settings and device
 /// feedback, no obstacles, no other body, no nets, step `device_dt` (s, > 0), the held body
-/// attached, Model::caller_contacts set (its contacts are the planes'). Returns "" and fills
-/// `out`, or a message naming what refuses: a body out of range, a scene with nets, an
-/// integrator other than the linearly implicit or symplectic Euler (the impulse hand-back needs
-/// the step's effective contact force, MultirateGodObject), a device_dt ≤ 0 or not finite.
+/// attached, Model::caller_contacts set (its contacts are the planes'). A net whose rigid
+/// component is a body of the god-object is lumped onto it: the body's mass and inertia gain the
+/// nodes' (at their rest positions); the net itself stays in the scene loop. Returns "" and
+/// fills `out`, or a message naming what refuses: a body out of range, a net on the god-object
+/// whose centre of mass is more than 0.1 mm from its component's, an integrator other than the
+/// linearly implicit or symplectic Euler (the impulse hand-back needs the step's effective
+/// contact force, MultirateGodObject), a device_dt ≤ 0 or not finite.
 /// Load time: allocates.
 std::string make_god_object_model(const Model& scene, int body, double device_dt, Model& out);
 
-/// A copy of `scene` in which every sphere of the god-object of `body` (god_object_bodies())
-/// has its radius grown by `margin` (m, ≥ 0): the scene loop detects the god-object's contacts
+/// A copy of `scene` in which every sphere of the god-object of `body` (god_object_bodies()),
+/// and every node sphere of a net on it, has its radius grown by `margin` (m, ≥ 0): the scene loop detects the god-object's contacts
 /// on it, so that a contact is found, and its plane built, while the sphere is still up to
 /// `margin` away from the surface. Returns "" and fills `out`, or a message (body out of range,
 /// margin < 0 or not finite). Load time: allocates.
@@ -143,12 +164,14 @@ std::string make_proximity_model(const Model& scene, int body, double margin, Mo
 /// margin — carried by the other body (a PlaneCarrier per body, its model built from its state
 /// in `data`, its mass and inertia in `scene` and its other contacts in `data`, for the device
 /// period `device_dt`; static for a body in a joint or with an enabled body target, and for an
-/// obstacle). Node contacts are not planes. Fixed order (the contacts'); no allocation.
+/// obstacle). Node contacts are not handled here: the scene loop's contact stage makes their
+/// node planes (ContactPlane::node) after these. Fixed order (the contacts'); no allocation.
 void build_contact_planes(const Model& scene, const Data& data, std::span<const int> device_body,
                           double device_dt, ContactPlaneSet& out) noexcept;
 
 /// Writes the contacts of `planes` at the god-object's pose in `data` (a Data of the god-object
-/// model `model`), each plane moved by its carrier: every plane with d > 0 (see ContactPlane)
+/// model `model`), each plane moved by its carrier: every plane with d > 0 (see ContactPlane;
+/// a node plane with d + depth_offset > 0, its Contact::stiffness_scale s and damping_scale s²)
 /// becomes a contact of its body against a static side moving with the carrier's point velocity
 /// (Contact::surface_velocity), its Contact::sphere_b the plane's index in `planes`. No
 /// allocation.
@@ -223,6 +246,11 @@ struct MultirateSceneSnapshot {
   double solver_residual = 0.0;
   double max_joint_drift = 0.0;
   double max_joint_angle_drift = 0.0;
+  /// The nets (whole: a god-object's net is the scene loop's), sized like the scene's Data.
+  std::vector<NodeState> nodes;
+  std::vector<NodeContact> node_contacts;  ///< [0, num_node_contacts) valid.
+  int num_node_contacts = 0;
+  std::vector<NetOutput> nets;
 };
 
 /// What the scene loop hands the device loop (MultirateGodObject::scene_step()): the
@@ -407,6 +435,11 @@ class MultirateGodObject {
   std::vector<Wrench> owed_;          // per scene body
   std::vector<Wrench> seen_total_;    // the report's impulse_total at the last scene step
   std::vector<Wrench> base_applied_;  // the scene-loop Data's own applied wrenches
+  // Scene loop, nets on the god-object: scratch of the node planes (detail::NodePlaneScratch).
+  std::vector<int> node_slot_;
+  std::vector<int> slot_node_;
+  std::vector<Mat3> node_stiffness_;
+  std::vector<int> plane_slot_;
   // One thread (step()).
   MultirateDeviceReport report_;
   MultirateSceneModel model_;

@@ -47,7 +47,8 @@ using ContactWriter = void (*)(const Model& model, Data& data, const void* conte
 
 /// step() with stage 1 replaced by `write(model, data, context)`: the caller gives the contacts
 /// (the multirate device loop's planes, multirate.hpp) instead of detect_contacts; the node
-/// contacts are still detected for a model with nets. Everything else as step(). Never
+/// contacts are still detected for a model with nets, unless Model::caller_node_contacts says
+/// that `write` writes them too. Everything else as step(). Never
 /// allocates, throws, locks or calls the OS (if `write` does not).
 void step_with_contacts(const Model& model, Data& data, ContactWriter write,
                         const void* context) noexcept;

@@ -1,0 +1,62 @@
+#pragma once
+/// @file multirate_net.hpp
+/// The nets of a multirate god-object (docs/multirate.md, "Deformable god-objects"): the net
+/// is the scene loop's; the device loop steps its rigid component (the paper's hidden rigid
+/// god-object, §4.2) with the net's mass lumped onto it, against node planes — one per node
+/// contact the scene loop found, rendered through the node's compliance (ContactPlane::node).
+/// Private to numen::core (multirate.cpp).
+
+#include <span>
+#include <string>
+
+#include "numen/core/data.hpp"
+#include "numen/core/model.hpp"
+#include "numen/core/multirate.hpp"
+
+namespace numen::core::detail {
+
+/// Scratch of build_node_planes(), sized at load time: `slot_of_node` one entry per scene node,
+/// all −1 between calls; `slot_node`, `stiffness` and `plane_slot` kMaxContactPlanes entries.
+struct NodePlaneScratch {
+  std::span<int> slot_of_node;  ///< Per scene node: its slot (a node with planes), or −1.
+  std::span<int> slot_node;     ///< Per slot: its node.
+  std::span<Mat3> stiffness;    ///< Per slot: K_n, the node's stiffness towards its component (N/m).
+  std::span<int> plane_slot;    ///< Per plane of the set: its node's slot, or −1.
+};
+
+/// True when the rigid component of scene net `net` is a body of the god-object
+/// (`device_body`: per scene body, its god-object model index or −1).
+bool net_on_god_object(const Model& scene, std::span<const int> device_body, int net) noexcept;
+
+/// Lumps every net of `scene` whose rigid component is a body of the god-object onto that body
+/// of the god-object model `out` (`device_body`: per scene body, its index in `out`, or −1):
+/// the body's mass += Σ m_i, its body-frame inertia += Σ m_i (|r_i|² I − r_i r_iᵀ) over the
+/// nodes' rest positions r_i (the net moves with its component at the device rate; its
+/// deformation is the scene loop's). Returns "" or a message naming a net whose centre of mass
+/// is more than 0.1 mm from its component's (the lumped body keeps the component's centre of
+/// mass). Load time.
+std::string lump_nets(const Model& scene, std::span<const int> device_body, Model& out);
+
+/// Grows by `margin` (m) the sphere radius of every node of a net on the god-object in `m` (the
+/// proximity model). Load time.
+void grow_god_object_nodes(std::span<const int> device_body, double margin, Model& m);
+
+/// Appends to `out` a node plane (ContactPlane::node) for every node contact in `data` (detected
+/// on the proximity model `scene`, node spheres grown by `margin`) of a net on the god-object
+/// against anything: point x − (r + δ − d) n (the other side's surface point), normal n, the
+/// node's centre in its component's frame, its true radius r, s = k_n / (k + k_n) with
+/// K_n = k_tie I + Σ over the node's springs k ê êᵀ (ê at the sample), and the depth offset
+/// (d − δ) k / k_n for a node in contact. Static planes (no carrier): the net renders its
+/// contacts on the scene's bodies in the scene loop. Counts planes beyond the room in
+/// out.dropped. No allocation.
+void build_node_planes(const Model& scene, const Data& data, std::span<const int> device_body,
+                       double margin, NodePlaneScratch scratch, ContactPlaneSet& out) noexcept;
+
+/// Cuts the node contacts of nets on the god-object in `data` back to the true node spheres
+/// (depth − δ, the middle of the overlap δ/2 towards the node; a contact left without depth is
+/// dropped), and re-measures those nets' NetOutput::max_penetration and data.max_penetration
+/// (`body_deepest`: the deepest body contact). No allocation.
+void cut_back_node_contacts(const Model& scene, Data& data, std::span<const int> device_body,
+                            double margin, double body_deepest) noexcept;
+
+}  // namespace numen::core::detail

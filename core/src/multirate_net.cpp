@@ -1,0 +1,180 @@
+/// @file multirate_net.cpp
+/// The nets of a multirate god-object (detail/multirate_net.hpp, docs/multirate.md).
+
+#include "detail/multirate_net.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+namespace numen::core::detail {
+
+bool net_on_god_object(const Model& scene, std::span<const int> device_body, int net) noexcept {
+  if (net < 0 || net >= scene.num_nets()) return false;
+  const int b = scene.nets[static_cast<std::size_t>(net)].body;
+  return b >= 0 && b < static_cast<int>(device_body.size()) &&
+         device_body[static_cast<std::size_t>(b)] >= 0;
+}
+
+std::string lump_nets(const Model& scene, std::span<const int> device_body, Model& out) {
+  for (int k = 0; k < scene.num_nets(); ++k) {
+    if (!net_on_god_object(scene, device_body, k)) continue;
+    const NetModel& net = scene.nets[static_cast<std::size_t>(k)];
+    BodyModel& bm = out.bodies[static_cast<std::size_t>(device_body[static_cast<std::size_t>(net.body)])];
+    double mass = 0.0;
+    Vec3 moment = Vec3::Zero();
+    Mat3 inertia = Mat3::Zero();
+    for (int i = net.node_begin; i < net.node_begin + net.node_count; ++i) {
+      const double m = scene.node_mass[static_cast<std::size_t>(i)];
+      const Vec3& r = scene.node_rest[static_cast<std::size_t>(i)];
+      mass += m;
+      moment += m * r;
+      inertia += m * (r.squaredNorm() * Mat3::Identity() - r * r.transpose());
+    }
+    const double offset = moment.norm() / (bm.mass + mass);
+    if (!(offset <= 1e-4)) {
+      std::ostringstream os;
+      os << "multirate: net '" << net.name << "' has its centre of mass " << offset * 1e3
+         << " mm from that of its rigid component '" << bm.name
+         << "' (the device loop lumps the net onto the component, which keeps its own centre "
+            "of mass: at most 0.1 mm)";
+      return os.str();
+    }
+    bm.mass += mass;
+    bm.inertia_body += inertia;
+  }
+  return "";
+}
+
+void grow_god_object_nodes(std::span<const int> device_body, double margin, Model& m) {
+  for (int i = 0; i < m.num_nodes(); ++i)
+    if (net_on_god_object(m, device_body, m.node_net[static_cast<std::size_t>(i)]))
+      m.node_radius[static_cast<std::size_t>(i)] += margin;
+}
+
+void build_node_planes(const Model& scene, const Data& data, std::span<const int> device_body,
+                       double margin, NodePlaneScratch scratch, ContactPlaneSet& out) noexcept {
+  const int first = out.count;
+  const int room = static_cast<int>(std::min(
+      {scratch.slot_node.size(), scratch.stiffness.size(), scratch.plane_slot.size()}));
+  const int num_nodes = std::min(scene.num_nodes(), static_cast<int>(scratch.slot_of_node.size()));
+  const int np = static_cast<int>(scene.material_pairs.size());
+  int slots = 0;
+  const int n = std::clamp(data.num_node_contacts, 0, static_cast<int>(data.node_contacts.size()));
+  for (int i = 0; i < n; ++i) {
+    const NodeContact& c = data.node_contacts[static_cast<std::size_t>(i)];
+    if (c.node < 0 || c.node >= num_nodes || c.material_pair < 0 || c.material_pair >= np) continue;
+    const int net = scene.node_net[static_cast<std::size_t>(c.node)];
+    if (!net_on_god_object(scene, device_body, net)) continue;
+    if (out.count >= kMaxContactPlanes || out.count >= room) {
+      ++out.dropped;
+      continue;
+    }
+    const NetModel& nm = scene.nets[static_cast<std::size_t>(net)];
+    const auto node = static_cast<std::size_t>(c.node);
+    int& slot = scratch.slot_of_node[node];
+    if (slot < 0) {  // a node's first plane: its tie (its springs below)
+      slot = slots++;
+      scratch.slot_node[static_cast<std::size_t>(slot)] = c.node;
+      scratch.stiffness[static_cast<std::size_t>(slot)] = nm.tie_stiffness * Mat3::Identity();
+    }
+    const BodyState& g = data.bodies[static_cast<std::size_t>(nm.body)];
+    const Vec3& x = data.nodes[node].position;
+    const double grown = scene.node_radius[node];
+    const int i_plane = out.count++;
+    scratch.plane_slot[static_cast<std::size_t>(i_plane)] = slot;
+    ContactPlane& p = out.planes[static_cast<std::size_t>(i_plane)];
+    p.body = device_body[static_cast<std::size_t>(nm.body)];
+    p.sphere = -1;
+    p.node = c.node;
+    p.local_point = g.orientation.conjugate() * (x - g.position);
+    p.radius = grown - margin;
+    p.normal = c.normal;
+    p.point = x - (grown - c.depth) * c.normal;  // the other side's surface point
+    p.material_pair = c.material_pair;
+    p.other_body = c.body_b;
+    p.obstacle = c.obstacle;
+    p.other_sphere = c.sphere_b;
+    p.velocity.setZero();
+    if (c.body_b >= 0) {
+      const BodyState& o = data.bodies[static_cast<std::size_t>(c.body_b)];
+      p.velocity = o.linear_velocity + o.angular_velocity.cross(p.point - o.position);
+    }
+    p.carrier = -1;  // the net renders the contact on a scene body in the scene loop
+    p.stiffness_scale = 1.0;
+    p.depth_offset = c.depth - margin;  // the true depth for now (below: its offset)
+    p.impulse.setZero();
+    p.impulse_point = p.point;
+  }
+  if (out.count == first) return;
+  // The springs of the nodes with planes, their neighbours moving with the component.
+  for (int k = 0; k < scene.num_nets(); ++k) {
+    if (!net_on_god_object(scene, device_body, k)) continue;
+    const NetModel& nm = scene.nets[static_cast<std::size_t>(k)];
+    const int end = nm.spring_begin + nm.structural_count + nm.bending_count;
+    for (int s = nm.spring_begin; s < end; ++s) {
+      const NetSpring& sp = scene.net_springs[static_cast<std::size_t>(s)];
+      const int sa = scratch.slot_of_node[static_cast<std::size_t>(sp.node_a)];
+      const int sb = scratch.slot_of_node[static_cast<std::size_t>(sp.node_b)];
+      if (sa < 0 && sb < 0) continue;
+      Vec3 e = data.nodes[static_cast<std::size_t>(sp.node_b)].position -
+               data.nodes[static_cast<std::size_t>(sp.node_a)].position;
+      const double l = e.norm();
+      if (!(l > 0.0)) continue;
+      e /= l;
+      const Mat3 k_e = sp.stiffness * (e * e.transpose());
+      if (sa >= 0) scratch.stiffness[static_cast<std::size_t>(sa)] += k_e;
+      if (sb >= 0) scratch.stiffness[static_cast<std::size_t>(sb)] += k_e;
+    }
+  }
+  for (int i = first; i < out.count; ++i) {
+    ContactPlane& p = out.planes[static_cast<std::size_t>(i)];
+    const Mat3& kn3 = scratch.stiffness[static_cast<std::size_t>(scratch.plane_slot[static_cast<std::size_t>(i)])];
+    const double k_n = p.normal.dot(kn3 * p.normal);
+    const double k = scene.material_pairs[static_cast<std::size_t>(p.material_pair)].stiffness;
+    p.stiffness_scale = k_n > 0.0 && k > 0.0 ? k_n / (k + k_n) : 1.0;
+    const double d0 = p.depth_offset;
+    p.depth_offset = 0.0;
+    if (!(d0 > 0.0) || !(k_n > 0.0) || !(k > 0.0)) continue;
+    // In contact: the node's deflection from its rest position on the component along n,
+    // e₀ ≥ 0, is what its tie and springs carried to the component (k_n e₀); the plane starts
+    // there: k s (d₀ + offset) = k_n e₀.
+    const NetModel& nm = scene.nets[static_cast<std::size_t>(scene.node_net[static_cast<std::size_t>(p.node)])];
+    const BodyState& g = data.bodies[static_cast<std::size_t>(nm.body)];
+    const auto node = static_cast<std::size_t>(p.node);
+    const Vec3 anchor = g.position + g.orientation * scene.node_rest[node];
+    const double e0 = std::max(0.0, p.normal.dot(data.nodes[node].position - anchor));
+    p.depth_offset = e0 * (k + k_n) / k - d0;
+  }
+  for (int s = 0; s < slots; ++s)
+    scratch.slot_of_node[static_cast<std::size_t>(scratch.slot_node[static_cast<std::size_t>(s)])] = -1;
+}
+
+void cut_back_node_contacts(const Model& scene, Data& data, std::span<const int> device_body,
+                            double margin, double body_deepest) noexcept {
+  if (margin > 0.0) {
+    for (int k = 0; k < scene.num_nets(); ++k)
+      if (net_on_god_object(scene, device_body, k)) data.nets[static_cast<std::size_t>(k)].max_penetration = 0.0;
+    int kept = 0;
+    const int n = std::clamp(data.num_node_contacts, 0, static_cast<int>(data.node_contacts.size()));
+    for (int i = 0; i < n; ++i) {
+      NodeContact c = data.node_contacts[static_cast<std::size_t>(i)];
+      const int net = c.node >= 0 && c.node < scene.num_nodes() ? scene.node_net[static_cast<std::size_t>(c.node)] : -1;
+      if (net_on_god_object(scene, device_body, net)) {
+        c.depth -= margin;
+        if (!(c.depth > 0.0)) continue;
+        c.position += (0.5 * margin) * c.normal;  // towards the node
+        if (c.body_b >= 0) c.r_b += (0.5 * margin) * c.normal;
+        double& deepest = data.nets[static_cast<std::size_t>(net)].max_penetration;
+        deepest = std::max(deepest, c.depth);
+      }
+      data.node_contacts[static_cast<std::size_t>(kept++)] = c;
+    }
+    data.num_node_contacts = kept;
+  }
+  double deepest = body_deepest;
+  for (const NetOutput& o : data.nets) deepest = std::max(deepest, o.max_penetration);
+  data.max_penetration = deepest;
+}
+
+}  // namespace numen::core::detail

@@ -1,0 +1,157 @@
+// Tests of the nets of a multirate god-object (core/src/multirate_net.cpp, docs/multirate.md
+// "Deformable god-objects"): the god-object model lumps a net onto its rigid component, the
+// proximity model grows its node spheres, and the node planes render the net's contacts on the
+// component — at the sample what the ties carried, and for a further push the net's own
+// quasi-static stiffness, both against the full net model.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <vector>
+
+#include "build_features.hpp"
+#include "deformable_ball.hpp"
+#include "numen/core/contact_force.hpp"
+#include "numen/core/data.hpp"
+#include "numen/core/model.hpp"
+#include "numen/core/multirate.hpp"
+#include "numen/core/net_collision.hpp"
+#include "numen/core/step.hpp"
+
+#include "detail/multirate_net.hpp"
+
+namespace core = numen::core;
+using core::Vec3;
+
+namespace {
+
+/// The benchmark ball (642 nodes, 200 N/m structural springs, 2000 N/m floor) with ties of
+/// `tie_stiffness` (N/m per node; the benchmark's are 5) and without gravity, held by its
+/// coupling 5 mm below its resting height until it is at rest on the floor (3 s).
+struct SettledBall {
+  core::Model model = numen::test::make_deformable_ball(3);
+  core::Data data;
+  explicit SettledBall(double tie_stiffness) {
+    model.gravity.setZero();
+    model.nets[0].tie_stiffness = tie_stiffness;
+    EXPECT_EQ(core::finalize_model(model), "");
+    data = core::make_data(model);
+    data.target.position = Vec3(0.02, 0.0, numen::test::kBallRadius - 0.005);
+    for (int k = 0; k < 3000; ++k) core::step(model, data);
+  }
+};
+
+/// The node planes of `ball`'s state (its component is the god-object, margin 0), written as
+/// contacts of the god-object model `device` at the component's pose shifted by `shift` (m),
+/// at rest; returns the planes' total force on the component (N).
+Vec3 plane_force(const SettledBall& ball, const core::Model& device, const Vec3& shift) {
+  core::Data pd = core::make_data(ball.model);
+  pd.bodies = ball.data.bodies;
+  pd.nodes = ball.data.nodes;
+  core::detect_node_contacts(ball.model, pd);
+  std::vector<int> slot_of_node(static_cast<std::size_t>(ball.model.num_nodes()), -1);
+  std::vector<int> slot_node(core::kMaxContactPlanes), plane_slot(core::kMaxContactPlanes);
+  std::vector<core::Mat3> stiffness(core::kMaxContactPlanes);
+  auto planes = std::make_unique<core::ContactPlaneSet>();
+  const std::vector<int> device_body = {0};
+  core::detail::build_node_planes(ball.model, pd, device_body, 0.0,
+                                  {slot_of_node, slot_node, stiffness, plane_slot}, *planes);
+  EXPECT_GT(planes->count, 10);
+  EXPECT_EQ(planes->dropped, 0);
+  core::Data d = core::make_data(device);
+  d.bodies[0] = ball.data.bodies[0];
+  d.bodies[0].position += shift;
+  d.bodies[0].linear_velocity.setZero();
+  d.bodies[0].angular_velocity.setZero();
+  core::write_plane_contacts(device, *planes, d);
+  d.body_wrench[0] = core::Wrench{};
+  core::compute_contact_forces(device, d);
+  return d.body_wrench[0].force;
+}
+
+}  // namespace
+
+TEST(MultirateNet, GodObjectModelLumpsTheNetAndTheProximityModelGrowsItsNodes) {
+  NUMEN_REQUIRE_DEFORMABLE();
+  const core::Model ball = numen::test::make_deformable_ball(2);
+  core::Model device, proximity;
+  ASSERT_EQ(core::make_god_object_model(ball, 0, 1e-4, device), "");
+  ASSERT_EQ(core::make_proximity_model(ball, 0, 0.004, proximity), "");
+  EXPECT_EQ(device.num_nets(), 0);
+  EXPECT_EQ(device.num_nodes(), 0);
+  // 50 g core + 0.1 kg net; the net's inertia is a thin shell's, (2/3) m r², about any axis.
+  EXPECT_NEAR(device.bodies[0].mass, 0.15, 1e-12);
+  const double shell = 2.0 / 3.0 * 0.1 * numen::test::kBallRadius * numen::test::kBallRadius;
+  for (int a = 0; a < 3; ++a)
+    EXPECT_NEAR(device.bodies[0].inertia_body(a, a) - ball.bodies[0].inertia_body(a, a), shell, 0.02 * shell);
+  ASSERT_EQ(proximity.num_nodes(), ball.num_nodes());
+  for (int i = 0; i < ball.num_nodes(); ++i)
+    EXPECT_DOUBLE_EQ(proximity.node_radius[static_cast<std::size_t>(i)],
+                     ball.node_radius[static_cast<std::size_t>(i)] + 0.004);
+}
+
+// A net off its component's centre of mass would need the lumped body's centre moved: refused.
+TEST(MultirateNet, ANetOffItsComponentsCentreOfMassIsRefused) {
+  NUMEN_REQUIRE_DEFORMABLE();
+  core::Model ball = numen::test::make_deformable_ball(1);
+  for (Vec3& r : ball.node_rest) r.x() += 0.01;
+  core::Model device;
+  const std::string error = core::make_god_object_model(ball, 0, 1e-3, device);
+  std::printf("%s\n", error.c_str());
+  EXPECT_NE(error.find("net 'ball'"), std::string::npos) << error;
+  EXPECT_NE(error.find("6.66"), std::string::npos) << error;  // 0.1 kg · 10 mm / 0.15 kg
+}
+
+namespace {
+
+/// The ball with ties of `tie_stiffness` settled on the floor: the force its ties carry to the
+/// core and the node planes' (N), and its stiffness for a further 0.2 mm push of the core, the
+/// full net's (settled again with the core imposed 0.2 mm lower, kDirect) and the node planes'
+/// (N/m).
+struct Carried {
+  double ties, planes, lateral, net_stiffness, plane_stiffness;
+};
+Carried carried(double tie_stiffness) {
+  const SettledBall ball(tie_stiffness);
+  core::Model device;
+  EXPECT_EQ(core::make_god_object_model(ball.model, 0, 1e-3, device), "");
+  const Vec3 f0 = plane_force(ball, device, Vec3::Zero());
+  const double push = 2e-4;
+  core::Model held = ball.model;
+  held.coupling_mode = core::CouplingMode::kDirect;
+  EXPECT_EQ(core::finalize_model(held), "");
+  core::Data d = core::make_data(held);
+  d.bodies = ball.data.bodies;
+  d.nodes = ball.data.nodes;
+  d.target.position = ball.data.bodies[0].position - Vec3(0, 0, push);
+  d.target.orientation = ball.data.bodies[0].orientation;
+  for (int k = 0; k < 3000; ++k) core::step(held, d);
+  const double ties = ball.data.nets[0].tie_wrench.force.z();
+  Carried c{ties, f0.z(), f0.head<2>().norm(), (d.nets[0].tie_wrench.force.z() - ties) / push,
+            (plane_force(ball, device, Vec3(0, 0, -push)).z() - f0.z()) / push};
+  std::printf("ties %.0f N/m: at rest the ties carry %.4f N, the node planes give %.4f N (lateral %.1e N); "
+              "0.2 mm further the net's stiffness is %.1f N/m, the node planes' %.1f N/m\n",
+              tie_stiffness, c.ties, c.planes, c.lateral, c.net_stiffness, c.plane_stiffness);
+  return c;
+}
+
+}  // namespace
+
+// The ball at rest on the floor: its ties carry the floor's push to the core. The node planes of
+// that sample model each contact node as its tie and its springs to neighbours held by the core,
+// in series with its contact: they give the core what those carried (k_n e₀), and for a further
+// push the series stiffness k k_n / (k + k_n). With ties as stiff as the shipped probe's
+// (400 N/m per node against 200 N/m springs) that is the full net's answer within 2 % (force;
+// 0.2 % measured) and 10 % (stiffness; 2.4 %). With the benchmark's 5 N/m ties the net is a membrane: the neighbours
+// are not held by the core, and the node planes overestimate the force by 34 % and the stiffness
+// 4.1× (docs/multirate.md: a limit of the local model, printed here, not asserted).
+TEST(MultirateNet, NodePlanesCarryWhatTheTiesCarriedAndTheNetsStiffness) {
+  NUMEN_REQUIRE_DEFORMABLE();
+  const Carried tied = carried(400.0);
+  ASSERT_GT(tied.ties, 0.01);
+  EXPECT_NEAR(tied.planes, tied.ties, 0.02 * tied.ties);
+  EXPECT_LT(tied.lateral, 0.05 * tied.planes);
+  EXPECT_GT(tied.net_stiffness, 0.0);
+  EXPECT_NEAR(tied.plane_stiffness, tied.net_stiffness, 0.1 * tied.net_stiffness);
+  const Carried membrane = carried(5.0);
+  EXPECT_GT(membrane.planes, membrane.ties);  // the limit of the local model (above)
+}
