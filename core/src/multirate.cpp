@@ -496,6 +496,8 @@ MultirateGodObject::MultirateGodObject(const Model& scene, int body, const Multi
     slot_node_.assign(kMaxContactPlanes, -1);
     node_stiffness_.assign(kMaxContactPlanes, Mat3::Zero());
     plane_slot_.assign(kMaxContactPlanes, -1);
+    planes_stiffness_.assign(kMaxContactPlanes, 0.0);
+    planes_depth_.assign(kMaxContactPlanes, 0.0);
   }
   report_ = make_report();
   model_ = make_scene_model();
@@ -672,7 +674,8 @@ void MultirateGodObject::scene_step(const MultirateDeviceReport& in, MultirateSc
   }
   SampleContext context{&out.planes, std::span<const int>(device_body.data(), device_body.size()),
                         body >= 0 ? margin_ : 0.0, slots_.front().device_model.dt,
-                        detail::NodePlaneScratch{node_slot_, slot_node_, node_stiffness_, plane_slot_}};
+                        detail::NodePlaneScratch{node_slot_, slot_node_, node_stiffness_, plane_slot_,
+                                                 planes_stiffness_, planes_depth_}};
   step_with_contacts(model, *scene_, &detect_and_build_planes, &context);
   const bool rejected = (scene_->status & kNonFinite) != 0;
   for (std::size_t b = 0; b < nb; ++b) {

@@ -8,12 +8,18 @@
 #include <sstream>
 
 namespace numen::core::detail {
+namespace {
+
+/// True when scene body `b` is a body of the god-object.
+bool on_god_object(std::span<const int> device_body, int b) noexcept {
+  return b >= 0 && b < static_cast<int>(device_body.size()) && device_body[static_cast<std::size_t>(b)] >= 0;
+}
+
+}  // namespace
 
 bool net_on_god_object(const Model& scene, std::span<const int> device_body, int net) noexcept {
   if (net < 0 || net >= scene.num_nets()) return false;
-  const int b = scene.nets[static_cast<std::size_t>(net)].body;
-  return b >= 0 && b < static_cast<int>(device_body.size()) &&
-         device_body[static_cast<std::size_t>(b)] >= 0;
+  return on_god_object(device_body, scene.nets[static_cast<std::size_t>(net)].body);
 }
 
 std::string lump_nets(const Model& scene, std::span<const int> device_body, Model& out) {
@@ -55,8 +61,9 @@ void grow_god_object_nodes(std::span<const int> device_body, double margin, Mode
 void build_node_planes(const Model& scene, const Data& data, std::span<const int> device_body,
                        double margin, NodePlaneScratch scratch, ContactPlaneSet& out) noexcept {
   const int first = out.count;
-  const int room = static_cast<int>(std::min(
-      {scratch.slot_node.size(), scratch.stiffness.size(), scratch.plane_slot.size()}));
+  const int room = static_cast<int>(std::min({scratch.slot_node.size(), scratch.stiffness.size(),
+                                               scratch.plane_slot.size(), scratch.planes_stiffness.size(),
+                                               scratch.planes_depth.size()}));
   const int num_nodes = std::min(scene.num_nodes(), static_cast<int>(scratch.slot_of_node.size()));
   const int np = static_cast<int>(scene.material_pairs.size());
   int slots = 0;
@@ -65,7 +72,7 @@ void build_node_planes(const Model& scene, const Data& data, std::span<const int
     const NodeContact& c = data.node_contacts[static_cast<std::size_t>(i)];
     if (c.node < 0 || c.node >= num_nodes || c.material_pair < 0 || c.material_pair >= np) continue;
     const int net = scene.node_net[static_cast<std::size_t>(c.node)];
-    if (!net_on_god_object(scene, device_body, net)) continue;
+    if (!net_on_god_object(scene, device_body, net) || on_god_object(device_body, c.body_b)) continue;
     if (out.count >= kMaxContactPlanes || out.count >= room) {
       ++out.dropped;
       continue;
@@ -77,6 +84,14 @@ void build_node_planes(const Model& scene, const Data& data, std::span<const int
       slot = slots++;
       scratch.slot_node[static_cast<std::size_t>(slot)] = c.node;
       scratch.stiffness[static_cast<std::size_t>(slot)] = nm.tie_stiffness * Mat3::Identity();
+      scratch.planes_stiffness[static_cast<std::size_t>(slot)] = 0.0;
+      scratch.planes_depth[static_cast<std::size_t>(slot)] = 0.0;
+    }
+    const double k = scene.material_pairs[static_cast<std::size_t>(c.material_pair)].stiffness;
+    const double d0 = c.depth - margin;  // the true depth
+    if (d0 > 0.0) {
+      scratch.planes_stiffness[static_cast<std::size_t>(slot)] += k;
+      scratch.planes_depth[static_cast<std::size_t>(slot)] += d0;
     }
     const BodyState& g = data.bodies[static_cast<std::size_t>(nm.body)];
     const Vec3& x = data.nodes[node].position;
@@ -102,7 +117,7 @@ void build_node_planes(const Model& scene, const Data& data, std::span<const int
     }
     p.carrier = -1;  // the net renders the contact on a scene body in the scene loop
     p.stiffness_scale = 1.0;
-    p.depth_offset = c.depth - margin;  // the true depth for now (below: its offset)
+    p.depth_offset = d0;  // for now (below: the offset)
     p.impulse.setZero();
     p.impulse_point = p.point;
   }
@@ -129,22 +144,28 @@ void build_node_planes(const Model& scene, const Data& data, std::span<const int
   }
   for (int i = first; i < out.count; ++i) {
     ContactPlane& p = out.planes[static_cast<std::size_t>(i)];
-    const Mat3& kn3 = scratch.stiffness[static_cast<std::size_t>(scratch.plane_slot[static_cast<std::size_t>(i)])];
-    const double k_n = p.normal.dot(kn3 * p.normal);
+    const auto slot = static_cast<std::size_t>(scratch.plane_slot[static_cast<std::size_t>(i)]);
+    const double k_n = p.normal.dot(scratch.stiffness[slot] * p.normal);
     const double k = scene.material_pairs[static_cast<std::size_t>(p.material_pair)].stiffness;
-    p.stiffness_scale = k_n > 0.0 && k > 0.0 ? k_n / (k + k_n) : 1.0;
+    // The node's planes in contact act in parallel (Σk), in series with the node: each one's
+    // share of the series stiffness Σk k_n / (Σk + k_n) is k s with s = k_n / (Σk + k_n); a
+    // plane not in contact at the sample joins them when it engages (Σk + k).
     const double d0 = p.depth_offset;
+    const double k_sum = scratch.planes_stiffness[slot] + (d0 > 0.0 ? 0.0 : k);
+    p.stiffness_scale = k_n > 0.0 && k_sum > 0.0 ? k_n / (k_sum + k_n) : 1.0;
     p.depth_offset = 0.0;
     if (!(d0 > 0.0) || !(k_n > 0.0) || !(k > 0.0)) continue;
     // In contact: the node's deflection from its rest position on the component along n,
-    // e₀ ≥ 0, is what its tie and springs carried to the component (k_n e₀); the plane starts
-    // there: k s (d₀ + offset) = k_n e₀.
+    // e₀ ≥ 0, is what its tie and springs carried to the component (k_n e₀), shared among the
+    // node's planes in contact by their depths (their share of the contact force, w = d₀/Σd₀);
+    // the plane starts there: k s (d₀ + offset) = w k_n e₀.
     const NetModel& nm = scene.nets[static_cast<std::size_t>(scene.node_net[static_cast<std::size_t>(p.node)])];
     const BodyState& g = data.bodies[static_cast<std::size_t>(nm.body)];
     const auto node = static_cast<std::size_t>(p.node);
     const Vec3 anchor = g.position + g.orientation * scene.node_rest[node];
     const double e0 = std::max(0.0, p.normal.dot(data.nodes[node].position - anchor));
-    p.depth_offset = e0 * (k + k_n) / k - d0;
+    const double w = d0 / scratch.planes_depth[slot];
+    p.depth_offset = w * k_n * e0 / (k * p.stiffness_scale) - d0;
   }
   for (int s = 0; s < slots; ++s)
     scratch.slot_of_node[static_cast<std::size_t>(scratch.slot_node[static_cast<std::size_t>(s)])] = -1;
@@ -152,7 +173,7 @@ void build_node_planes(const Model& scene, const Data& data, std::span<const int
 
 void cut_back_node_contacts(const Model& scene, Data& data, std::span<const int> device_body,
                             double margin, double body_deepest) noexcept {
-  if (margin > 0.0) {
+  {
     for (int k = 0; k < scene.num_nets(); ++k)
       if (net_on_god_object(scene, device_body, k)) data.nets[static_cast<std::size_t>(k)].max_penetration = 0.0;
     int kept = 0;
@@ -161,6 +182,7 @@ void cut_back_node_contacts(const Model& scene, Data& data, std::span<const int>
       NodeContact c = data.node_contacts[static_cast<std::size_t>(i)];
       const int net = c.node >= 0 && c.node < scene.num_nodes() ? scene.node_net[static_cast<std::size_t>(c.node)] : -1;
       if (net_on_god_object(scene, device_body, net)) {
+        if (on_god_object(device_body, c.body_b)) continue;  // see the header
         c.depth -= margin;
         if (!(c.depth > 0.0)) continue;
         c.position += (0.5 * margin) * c.normal;  // towards the node

@@ -51,10 +51,11 @@ Vec3 plane_force(const SettledBall& ball, const core::Model& device, const Vec3&
   std::vector<int> slot_of_node(static_cast<std::size_t>(ball.model.num_nodes()), -1);
   std::vector<int> slot_node(core::kMaxContactPlanes), plane_slot(core::kMaxContactPlanes);
   std::vector<core::Mat3> stiffness(core::kMaxContactPlanes);
+  std::vector<double> planes_stiffness(core::kMaxContactPlanes), planes_depth(core::kMaxContactPlanes);
   auto planes = std::make_unique<core::ContactPlaneSet>();
   const std::vector<int> device_body = {0};
   core::detail::build_node_planes(ball.model, pd, device_body, 0.0,
-                                  {slot_of_node, slot_node, stiffness, plane_slot}, *planes);
+                                  {slot_of_node, slot_node, stiffness, plane_slot, planes_stiffness, planes_depth}, *planes);
   EXPECT_GT(planes->count, 10);
   EXPECT_EQ(planes->dropped, 0);
   core::Data d = core::make_data(device);

@@ -22,6 +22,8 @@ struct NodePlaneScratch {
   std::span<int> slot_node;     ///< Per slot: its node.
   std::span<Mat3> stiffness;    ///< Per slot: K_n, the node's stiffness towards its component (N/m).
   std::span<int> plane_slot;    ///< Per plane of the set: its node's slot, or −1.
+  std::span<double> planes_stiffness;  ///< Per slot: Σ k over the node's planes in contact (N/m).
+  std::span<double> planes_depth;      ///< Per slot: Σ d₀ over its planes in contact (m).
 };
 
 /// True when the rigid component of scene net `net` is a body of the god-object
@@ -43,10 +45,13 @@ void grow_god_object_nodes(std::span<const int> device_body, double margin, Mode
 
 /// Appends to `out` a node plane (ContactPlane::node) for every node contact in `data` (detected
 /// on the proximity model `scene`, node spheres grown by `margin`) of a net on the god-object
-/// against anything: point x − (r + δ − d) n (the other side's surface point), normal n, the
-/// node's centre in its component's frame, its true radius r, s = k_n / (k + k_n) with
-/// K_n = k_tie I + Σ over the node's springs k ê êᵀ (ê at the sample), and the depth offset
-/// (d − δ) k / k_n for a node in contact. Static planes (no carrier): the net renders its
+/// against anything but the god-object's bodies: point x − (r + δ − d) n (the other side's surface point), normal n, the
+/// node's centre in its component's frame, its true radius r, s = k_n / (Σk + k_n) with
+/// K_n = k_tie I + Σ over the node's springs k ê êᵀ (ê at the sample) and Σk over the node's
+/// planes in contact at the sample (in parallel; a plane not in contact counted with them), and for a plane in contact (true depth d₀ = d − δ > 0) the depth
+/// offset that makes it start from its share w = d₀ / Σd₀ of what the node's tie and springs
+/// carried, k s (d₀ + offset) = w k_n e₀ (e₀ ≥ 0 the node's deflection from its rest position
+/// along n). Static planes (no carrier): the net renders its
 /// contacts on the scene's bodies in the scene loop. Counts planes beyond the room in
 /// out.dropped. No allocation.
 void build_node_planes(const Model& scene, const Data& data, std::span<const int> device_body,
@@ -54,7 +59,10 @@ void build_node_planes(const Model& scene, const Data& data, std::span<const int
 
 /// Cuts the node contacts of nets on the god-object in `data` back to the true node spheres
 /// (depth − δ, the middle of the overlap δ/2 towards the node; a contact left without depth is
-/// dropped), and re-measures those nets' NetOutput::max_penetration and data.max_penetration
+/// dropped), drops those with a body of the god-object (the scene-loop model has not the
+/// god-object's joints, so a net on one of its bodies is no longer in the same articulation as
+/// the others, with which it never collides in the scene: ArticulationTopology::body_tree),
+/// and re-measures those nets' NetOutput::max_penetration and data.max_penetration
 /// (`body_deepest`: the deepest body contact). No allocation.
 void cut_back_node_contacts(const Model& scene, Data& data, std::span<const int> device_body,
                             double margin, double body_deepest) noexcept;

@@ -440,6 +440,8 @@ class MultirateGodObject {
   std::vector<int> slot_node_;
   std::vector<Mat3> node_stiffness_;
   std::vector<int> plane_slot_;
+  std::vector<double> planes_stiffness_;
+  std::vector<double> planes_depth_;
   // One thread (step()).
   MultirateDeviceReport report_;
   MultirateSceneModel model_;
