@@ -367,7 +367,8 @@ void write_plane_contacts(const Model& model, const ContactPlaneSet& planes, Dat
     c.force.setZero();
     c.surface_velocity = surface_velocity;
     c.sphere_b = i;  // the plane
-    data.max_penetration = std::max(data.max_penetration, depth);
+    // The overlap itself (a node plane's depth holds the node's deflection too).
+    data.max_penetration = std::max(data.max_penetration, node ? depth - p.depth_offset : depth);
   }
   if (data.contacts_dropped > 0) {
     data.status |= kContactOverflow;
