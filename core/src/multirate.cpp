@@ -219,6 +219,7 @@ void build_contact_planes(const Model& scene, const Data& data, std::span<const 
     const Vec3 centre = g.position + g.orientation * s.center;
     const Vec3 normal = on_a ? c.normal : Vec3(-c.normal);
     ContactPlane& p = out.planes[static_cast<std::size_t>(out.count++)];
+    p = ContactPlane{};  // the set is reused: no field of an earlier sample's node plane stays
     p.body = device_body[static_cast<std::size_t>(body)];
     p.sphere = sphere - bm.sphere_begin;
     p.normal = normal;
@@ -468,6 +469,15 @@ MultirateGodObject::MultirateGodObject(const Model& scene, int body, const Multi
     s.scene = make_data(s.scene_model);
     slots_.push_back(std::move(s));
   }
+  for (const NetModel& net : scene.nets) {
+    bool held = false;
+    for (const Slot& s : slots_)
+      held = held || std::find(s.bodies.begin(), s.bodies.end(), net.body) != s.bodies.end();
+    if (!held)
+      throw std::invalid_argument("multirate: net '" + net.name +
+                                  "' is on a body in no god-object the device may hold: the "
+                                  "device loop would not feel it");
+  }
   free_scene_model_ = scene;
   free_scene_model_.dt = scene.dt * settings.ratio;
   free_scene_model_.initial_attached_body = -1;
@@ -623,6 +633,9 @@ void MultirateGodObject::scene_step(const MultirateDeviceReport& in, MultirateSc
       next.applied_wrench[b] = scene_->applied_wrench[b];
       next.body_targets[b] = scene_->body_targets[b];
     }
+    // The nets too (same sizes: the scene-loop models all have the scene's nets).
+    std::copy_n(scene_->nodes.begin(), std::min(next.nodes.size(), scene_->nodes.size()), next.nodes.begin());
+    std::copy_n(scene_->nets.begin(), std::min(next.nets.size(), scene_->nets.size()), next.nets.begin());
     next.time = scene_->time;
     next.step_count = scene_->step_count;
     scene_ = &next;

@@ -37,7 +37,7 @@ std::string lump_nets(const Model& scene, std::span<const int> device_body, Mode
       moment += m * r;
       inertia += m * (r.squaredNorm() * Mat3::Identity() - r * r.transpose());
     }
-    const double offset = moment.norm() / (bm.mass + mass);
+    const double offset = bm.mass + mass > 0.0 ? moment.norm() / (bm.mass + mass) : 0.0;
     if (!(offset <= 1e-4)) {
       std::ostringstream os;
       os << "multirate: net '" << net.name << "' has its centre of mass " << offset * 1e3
@@ -99,6 +99,7 @@ void build_node_planes(const Model& scene, const Data& data, std::span<const int
     const int i_plane = out.count++;
     scratch.plane_slot[static_cast<std::size_t>(i_plane)] = slot;
     ContactPlane& p = out.planes[static_cast<std::size_t>(i_plane)];
+    p = ContactPlane{};  // the set is reused
     p.body = device_body[static_cast<std::size_t>(nm.body)];
     p.sphere = -1;
     p.node = c.node;
@@ -129,6 +130,7 @@ void build_node_planes(const Model& scene, const Data& data, std::span<const int
     const int end = nm.spring_begin + nm.structural_count + nm.bending_count;
     for (int s = nm.spring_begin; s < end; ++s) {
       const NetSpring& sp = scene.net_springs[static_cast<std::size_t>(s)];
+      if (sp.node_a < 0 || sp.node_a >= num_nodes || sp.node_b < 0 || sp.node_b >= num_nodes) continue;
       const int sa = scratch.slot_of_node[static_cast<std::size_t>(sp.node_a)];
       const int sb = scratch.slot_of_node[static_cast<std::size_t>(sp.node_b)];
       if (sa < 0 && sb < 0) continue;
@@ -173,27 +175,30 @@ void build_node_planes(const Model& scene, const Data& data, std::span<const int
 
 void cut_back_node_contacts(const Model& scene, Data& data, std::span<const int> device_body,
                             double margin, double body_deepest) noexcept {
-  {
-    for (int k = 0; k < scene.num_nets(); ++k)
-      if (net_on_god_object(scene, device_body, k)) data.nets[static_cast<std::size_t>(k)].max_penetration = 0.0;
-    int kept = 0;
-    const int n = std::clamp(data.num_node_contacts, 0, static_cast<int>(data.node_contacts.size()));
-    for (int i = 0; i < n; ++i) {
-      NodeContact c = data.node_contacts[static_cast<std::size_t>(i)];
-      const int net = c.node >= 0 && c.node < scene.num_nodes() ? scene.node_net[static_cast<std::size_t>(c.node)] : -1;
-      if (net_on_god_object(scene, device_body, net)) {
-        if (on_god_object(device_body, c.body_b)) continue;  // see the header
-        c.depth -= margin;
-        if (!(c.depth > 0.0)) continue;
-        c.position += (0.5 * margin) * c.normal;  // towards the node
-        if (c.body_b >= 0) c.r_b += (0.5 * margin) * c.normal;
-        double& deepest = data.nets[static_cast<std::size_t>(net)].max_penetration;
-        deepest = std::max(deepest, c.depth);
-      }
-      data.node_contacts[static_cast<std::size_t>(kept++)] = c;
+  for (NetOutput& o : data.nets) o.max_penetration = 0.0;
+  int kept = 0;
+  const int n = std::clamp(data.num_node_contacts, 0, static_cast<int>(data.node_contacts.size()));
+  for (int i = 0; i < n; ++i) {
+    NodeContact c = data.node_contacts[static_cast<std::size_t>(i)];
+    const int net = c.node >= 0 && c.node < scene.num_nodes() ? scene.node_net[static_cast<std::size_t>(c.node)] : -1;
+    if (net < 0) continue;
+    if (net_on_god_object(scene, device_body, net)) {  // the node's sphere was grown
+      if (on_god_object(device_body, c.body_b)) continue;  // see the header
+      c.depth -= margin;
+      if (!(c.depth > 0.0)) continue;
+      c.position += (0.5 * margin) * c.normal;  // towards the node
+      if (c.body_b >= 0) c.r_b += (0.5 * margin) * c.normal;
+    } else if (on_god_object(device_body, c.body_b)) {  // the god-object's sphere was grown
+      c.depth -= margin;
+      if (!(c.depth > 0.0)) continue;
+      c.position -= (0.5 * margin) * c.normal;  // towards the god-object
+      c.r_b -= (0.5 * margin) * c.normal;
     }
-    data.num_node_contacts = kept;
+    double& deepest = data.nets[static_cast<std::size_t>(net)].max_penetration;
+    deepest = std::max(deepest, c.depth);
+    data.node_contacts[static_cast<std::size_t>(kept++)] = c;
   }
+  data.num_node_contacts = kept;
   double deepest = body_deepest;
   for (const NetOutput& o : data.nets) deepest = std::max(deepest, o.max_penetration);
   data.max_penetration = deepest;

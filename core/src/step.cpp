@@ -88,10 +88,12 @@ void run_step(const Model& model, Data& data, ContactWriter write, const void* c
   data.stages_run = 0;
   save_state(data);
   impose_direct_target(model, data);  // clears SolverScratch::imposed; imposes in kDirect
+  bool wrote = false;  // the caller's writer ran (and wrote the node contacts if it says so)
   if ((plan & kStageContacts) && !data.scratch->solver.contact_terms.empty()) {  // capacity.hpp
     data.contacts_dropped = 0;
     if (write != nullptr) {
       write(model, data, context);
+      wrote = true;
     } else {
       detect_contacts(model, data);  // may set kContactOverflow, counts contact_overflow_steps
     }
@@ -103,7 +105,7 @@ void run_step(const Model& model, Data& data, ContactWriter write, const void* c
   }
   if constexpr (kWithDeformable) {
     if (plan & kStageNodeContacts) {
-      if (write == nullptr || !model.caller_node_contacts) detect_node_contacts(model, data);
+      if (!wrote || !model.caller_node_contacts) detect_node_contacts(model, data);
       data.stages_run |= kStageNodeContacts;
     }
   }

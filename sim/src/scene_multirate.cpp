@@ -59,6 +59,13 @@ void parse_multirate(const TomlTable& root, Scene& scene) {
       table->fail("scene_dt", "body '" + model.bodies[static_cast<std::size_t>(b.body)].name +
                                   "' is bound to a device link but is not in a held body's "
                                   "articulation: the device loop steps only the god-object");
+  // A net is the scene loop's; the device loop feels it only as its god-object's own.
+  for (const core::NetModel& net : model.nets)
+    if (!in_god_object[static_cast<std::size_t>(net.body)])
+      table->fail("scene_dt", "net '" + net.name + "' is on body '" +
+                                  model.bodies[static_cast<std::size_t>(net.body)].name +
+                                  "', which is in no body's god-object the device holds: the "
+                                  "device loop would not feel it");
   for (const platform::AxisPrescription& p : scene.binding.prescriptions)
     if (!in_god_object[static_cast<std::size_t>(model.joints[static_cast<std::size_t>(p.joint)].child)])
       table->fail("scene_dt", "joint '" + model.joints[static_cast<std::size_t>(p.joint)].name +

@@ -18,7 +18,8 @@ namespace numen::sim {
 /// god-object cannot run: the admittance coupling, a tool that make_god_object_model() refuses
 /// (a net on it whose centre of mass is off its component's, an integrator without an
 /// effective contact force), and a device binding
-/// that drives a body or prescribes a joint outside every tool's articulation. Needs a finalized scene.model, scene.binding
+/// that drives a body or prescribes a joint outside every tool's articulation, and a net on a
+/// body outside them. Needs a finalized scene.model, scene.binding
 /// and scene.events. Throws InputError (file, line, column, key). Load time: allocates.
 void parse_multirate(const TomlTable& root, Scene& scene);
 

@@ -10,6 +10,7 @@
 
 #include "build_features.hpp"
 #include "deformable_ball.hpp"
+#include "numen/core/collision.hpp"
 #include "numen/core/contact_force.hpp"
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"
@@ -26,35 +27,41 @@ namespace {
 
 /// The benchmark ball (642 nodes, 200 N/m structural springs, 2000 N/m floor) with ties of
 /// `tie_stiffness` (N/m per node; the benchmark's are 5) and without gravity, held by its
-/// coupling 5 mm below its resting height until it is at rest on the floor (3 s).
+/// coupling 5 mm below its resting height until it is at rest on the floor (3 s); its core
+/// turned by `orientation` (the nets' rest positions are in the core's frame).
 struct SettledBall {
   core::Model model = numen::test::make_deformable_ball(3);
   core::Data data;
-  explicit SettledBall(double tie_stiffness) {
+  explicit SettledBall(double tie_stiffness, const core::Quat& orientation = core::Quat::Identity()) {
     model.gravity.setZero();
     model.nets[0].tie_stiffness = tie_stiffness;
+    model.bodies[0].initial_pose.orientation = orientation;
     EXPECT_EQ(core::finalize_model(model), "");
     data = core::make_data(model);
     data.target.position = Vec3(0.02, 0.0, numen::test::kBallRadius - 0.005);
+    data.target.orientation = orientation;
     for (int k = 0; k < 3000; ++k) core::step(model, data);
   }
 };
 
-/// The node planes of `ball`'s state (its component is the god-object, margin 0), written as
-/// contacts of the god-object model `device` at the component's pose shifted by `shift` (m),
-/// at rest; returns the planes' total force on the component (N).
-Vec3 plane_force(const SettledBall& ball, const core::Model& device, const Vec3& shift) {
-  core::Data pd = core::make_data(ball.model);
+/// The node planes of `ball`'s state (its component is the god-object; detected on the
+/// proximity model of `margin`, m), written as contacts of the god-object model `device` at the
+/// component's pose shifted by `shift` (m), at rest; returns the planes' total force on the
+/// component (N).
+Vec3 plane_force(const SettledBall& ball, const core::Model& device, const Vec3& shift, double margin = 0.0) {
+  core::Model proximity;
+  EXPECT_EQ(core::make_proximity_model(ball.model, 0, margin, proximity), "");
+  core::Data pd = core::make_data(proximity);
   pd.bodies = ball.data.bodies;
   pd.nodes = ball.data.nodes;
-  core::detect_node_contacts(ball.model, pd);
+  core::detect_node_contacts(proximity, pd);
   std::vector<int> slot_of_node(static_cast<std::size_t>(ball.model.num_nodes()), -1);
   std::vector<int> slot_node(core::kMaxContactPlanes), plane_slot(core::kMaxContactPlanes);
   std::vector<core::Mat3> stiffness(core::kMaxContactPlanes);
   std::vector<double> planes_stiffness(core::kMaxContactPlanes), planes_depth(core::kMaxContactPlanes);
   auto planes = std::make_unique<core::ContactPlaneSet>();
   const std::vector<int> device_body = {0};
-  core::detail::build_node_planes(ball.model, pd, device_body, 0.0,
+  core::detail::build_node_planes(proximity, pd, device_body, margin,
                                   {slot_of_node, slot_node, stiffness, plane_slot, planes_stiffness, planes_depth}, *planes);
   EXPECT_GT(planes->count, 10);
   EXPECT_EQ(planes->dropped, 0);
@@ -155,4 +162,59 @@ TEST(MultirateNet, NodePlanesCarryWhatTheTiesCarriedAndTheNetsStiffness) {
   EXPECT_NEAR(tied.plane_stiffness, tied.net_stiffness, 0.1 * tied.net_stiffness);
   const Carried membrane = carried(5.0);
   EXPECT_GT(membrane.planes, membrane.ties);  // the limit of the local model (above)
+}
+
+// The same at rest with the core turned (0.7 rad about (1, 1, 0): the nodes' centres and rest
+// positions are carried in the core's frame) and the planes found on node spheres grown by a
+// 1 mm margin (their points at the true surface, their radii the true ones): still what the ties
+// carried, within 2 %.
+TEST(MultirateNet, NodePlanesOfATurnedCoreFoundWithAMargin) {
+  NUMEN_REQUIRE_DEFORMABLE();
+  const core::Quat turn(Eigen::AngleAxisd(0.7, Vec3(1, 1, 0).normalized()));
+  const SettledBall ball(400.0, turn);
+  core::Model device;
+  ASSERT_EQ(core::make_god_object_model(ball.model, 0, 1e-3, device), "");
+  const double ties = ball.data.nets[0].tie_wrench.force.z();
+  const Vec3 f = plane_force(ball, device, Vec3::Zero(), 0.001);
+  std::printf("turned core, 1 mm margin: the ties carry %.4f N, the node planes give %.4f N\n", ties, f.z());
+  ASSERT_GT(ties, 0.01);
+  EXPECT_NEAR(f.z(), ties, 0.02 * ties);
+  EXPECT_LT(f.head<2>().norm(), 0.05 * f.z());
+}
+
+// A plane set is reused sample after sample: a sphere plane written where a node plane was has
+// none of its fields (the node, its scale, its offset).
+TEST(MultirateNet, ASpherePlaneKeepsNothingOfTheNodePlaneBeforeIt) {
+  core::Model m;
+  m.material_names = {"steel"};
+  m.material_pairs = {core::MaterialPair{}};
+  core::Obstacle floor;
+  floor.name = "floor";
+  m.obstacles = {floor};
+  m.body_spheres = {core::Sphere{Vec3::Zero(), 0.01}};
+  core::BodyModel tool;
+  tool.name = "tool";
+  tool.mass = 0.1;
+  tool.inertia_body = Vec3(1e-5, 1e-5, 1e-5).asDiagonal();
+  tool.sphere_count = 1;
+  tool.initial_pose.position = Vec3(0, 0, 0.009);  // 1 mm into the floor
+  m.bodies = {tool};
+  ASSERT_EQ(core::finalize_model(m), "");
+  core::Data d = core::make_data(m);
+  core::detect_contacts(m, d);
+  ASSERT_EQ(d.num_contacts, 1);
+  auto planes = std::make_unique<core::ContactPlaneSet>();
+  core::ContactPlane& p = planes->planes[0];
+  p.node = 7;
+  p.stiffness_scale = 0.1;
+  p.depth_offset = 0.004;
+  p.radius = 0.002;
+  const std::vector<int> device_body = {0};
+  core::build_contact_planes(m, d, device_body, 1e-3, *planes);
+  ASSERT_EQ(planes->count, 1);
+  EXPECT_EQ(p.node, -1);
+  EXPECT_EQ(p.sphere, 0);
+  EXPECT_EQ(p.stiffness_scale, 1.0);
+  EXPECT_EQ(p.depth_offset, 0.0);
+  EXPECT_EQ(p.radius, 0.0);
 }

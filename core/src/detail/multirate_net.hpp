@@ -61,9 +61,12 @@ void build_node_planes(const Model& scene, const Data& data, std::span<const int
 /// (depth − δ, the middle of the overlap δ/2 towards the node; a contact left without depth is
 /// dropped), drops those with a body of the god-object (the scene-loop model has not the
 /// god-object's joints, so a net on one of its bodies is no longer in the same articulation as
-/// the others, with which it never collides in the scene: ArticulationTopology::body_tree),
-/// and re-measures those nets' NetOutput::max_penetration and data.max_penetration
-/// (`body_deepest`: the deepest body contact). No allocation.
+/// the others, with which it never collides in the scene: ArticulationTopology::body_tree);
+/// cuts the contacts of the other nets with the god-object's grown spheres back the same way
+/// (the middle δ/2 towards the god-object); and re-measures every net's
+/// NetOutput::max_penetration from the contacts kept (contacts beyond kMaxNodeContacts no
+/// longer counted) and data.max_penetration (`body_deepest`: the deepest body contact). No
+/// allocation.
 void cut_back_node_contacts(const Model& scene, Data& data, std::span<const int> device_body,
                             double margin, double body_deepest) noexcept;
 

@@ -100,16 +100,19 @@ struct ContactPlane {
   /// on a sphere of `radius` at `local_point` in body `body`'s frame — the node where the sample
   /// found it, carried rigidly by the net's rigid component between samples (the paper's hidden
   /// rigid god-object, §4.2) — through the node's compliance: with k the material pair's
-  /// stiffness and k_n = nᵀ K_n n the node's stiffness towards its rigid component (its tie
-  /// plus its springs to neighbours that move with the component, K_n = k_tie I + Σ k ê êᵀ at
-  /// the sample), the contact renders the series stiffness k s, s = k_n / (k + k_n)
-  /// (Contact::stiffness_scale), at the depth d + depth_offset, so that at the sample it gives
-  /// the node's own contact force k d₀ and releases where the node would leave the surface.
+  /// stiffness, Σk that of the node's planes in contact at the sample (in parallel) and
+  /// k_n = nᵀ K_n n the node's stiffness towards its rigid component (its tie plus its springs
+  /// to neighbours that move with the component, K_n = k_tie I + Σ k ê êᵀ at the sample), the
+  /// contact renders k s, s = k_n / (Σk + k_n) (Contact::stiffness_scale), at the depth
+  /// d + depth_offset, so that at the sample it gives its share w = d₀/Σd₀ of what the node's
+  /// tie and springs carried, w k_n e₀ (e₀ the node's deflection along n), and releases where
+  /// the node would leave the surface (docs/multirate.md, "Deformable god-objects").
   int node = -1;
   Vec3 local_point = Vec3::Zero();  ///< Node plane: the sphere's centre (m, body frame).
   double radius = 0.0;              ///< Node plane: the node's sphere radius (m).
   double stiffness_scale = 1.0;     ///< Node plane: s (1 for a sphere plane).
-  /// Node plane: d₀ k / k_n (m), d₀ the node's true depth at the sample (0 without contact).
+  /// Node plane: w k_n e₀ / (k s) − d₀ (m), d₀ the node's true depth at the sample (0 for a
+  /// node not in contact then).
   double depth_offset = 0.0;
   /// Written by step_god_object(): the impulse this plane gave the god-object over the last
   /// device period (N·s, world; its effective force times dt) and where it acted (m, world).
@@ -312,8 +315,9 @@ class MultirateGodObject {
   /// model (dt = scene.dt), its Data, the scene-loop model (make_proximity_model() with
   /// dt = N·scene.dt, the articulation imposed: CouplingMode::kDirect, its joints removed) and
   /// its Data; and the scene-loop model and Data without a god-object (all reset from `scene`). Throws std::invalid_argument with the
-  /// message of make_god_object_model() / make_proximity_model(), for N < 1, a margin < 0, or
-  /// no body at all (`body` −1 and no tools). Allocates (load time).
+  /// message of make_god_object_model() / make_proximity_model(), for N < 1, a margin < 0, no
+  /// body at all (`body` −1 and no tools), or a net on a body in none of their god-objects
+  /// (the device loop feels a net only through its god-object's node planes). Allocates (load time).
   MultirateGodObject(const Model& scene, int body, const MultirateSettings& settings);
 
   /// One device period on one thread: every N-th (the first included, and the first after a
