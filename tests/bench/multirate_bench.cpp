@@ -1,11 +1,12 @@
 // The multirate god-object's device step against its intermediate model (core/multirate.hpp,
 // docs/multirate.md) beside the single-rate step, on the construction scene (a rigid tool among
-// twelve free blocks; replayed up to its first tool switch, so that both hold the same body) and
-// the default scene (an articulated instrument: its whole articulation is the god-object). Each
-// iteration is one
-// 1 kHz period: the single-rate SceneRunner steps the scene (the reference, and the source of
-// the hand's target), the MultirateGodObject gets the same target and steps — a device step,
-// and on every N-th period the scene step first (N = the benchmark's argument). The time
+// twelve free blocks; replayed up to its first tool switch, so that both hold the same body),
+// the default scene (an articulated instrument: its whole articulation is the god-object), the
+// deformable and endobag scenes (a net on the god-object: node planes), the mouse and phantom
+// scenes. Each iteration is one 1 kHz period: the single-rate SceneRunner steps the scene (the
+// reference, and the source of the hand's target), the MultirateGodObject gets the same target
+// and steps — a device step, and on every N-th period the scene step first (N = the
+// benchmark's argument). The time
 // reported is the multirate period's (manual timing); the counters split it:
 //   device_p50_us, device_p99_us   periods without a scene step: what the device loop costs
 //   scene_p50_us                   periods with one: scene step + device step (on its own thread later)
@@ -108,8 +109,8 @@ void multirate_time(benchmark::State& state, const char* name, double speed) {
 BENCHMARK_CAPTURE(multirate_time, Construction, "construction.toml", 2.0)
     ->Arg(1)->Arg(10)->Arg(100)->UseManualTime()->Iterations(9000);
 // The default scene: an articulated haptic instrument (4 bodies, 4 joints) on a recorded trial;
-// its first 9 s.
-BENCHMARK_CAPTURE(multirate_time, Default, "default.toml", 2.0)
+// its first 9 s; the margin covers 1 m/s (10 mm at 100 Hz, as docs/figures/plot_multirate.py).
+BENCHMARK_CAPTURE(multirate_time, Default, "default.toml", 1.0)
     ->Arg(1)->Arg(10)->UseManualTime()->Iterations(9000);
 // The deformable scene (a 306-node probe on its hidden core) and the endobag (a 162-node bag on
 // the articulated instrument), their first 9 s; the margin covers 0.2 m/s (2 mm at 100 Hz, the
@@ -118,6 +119,7 @@ BENCHMARK_CAPTURE(multirate_time, Deformable, "deformable.toml", 0.2)
     ->Arg(1)->Arg(2)->Arg(10)->UseManualTime()->Iterations(9000);
 BENCHMARK_CAPTURE(multirate_time, Endobag, "endobag.toml", 0.2)
     ->Arg(1)->Arg(2)->Arg(10)->UseManualTime()->Iterations(9000);
+// The mouse's puck and the phantom's stylus (rigid tools on short recordings: all of them).
 BENCHMARK_CAPTURE(multirate_time, Mouse, "mouse.toml", 0.2)
     ->Arg(1)->Arg(10)->UseManualTime()->Iterations(3800);
 BENCHMARK_CAPTURE(multirate_time, Phantom, "phantom.toml", 0.2)
