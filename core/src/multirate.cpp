@@ -40,10 +40,7 @@ struct SampleContext {
   detail::NodePlaneScratch node_scratch;
 };
 
-/// True when scene body `b` is a body of the god-object (`device_body`: see SampleContext).
-bool in_god_object(std::span<const int> device_body, int b) noexcept {
-  return b >= 0 && b < static_cast<int>(device_body.size()) && device_body[static_cast<std::size_t>(b)] >= 0;
-}
+using detail::in_god_object;
 
 /// True when exactly one side of `c` is a body of the god-object; `on_a` says which.
 bool god_object_contact(const Contact& c, std::span<const int> device_body, bool& on_a) noexcept {
@@ -633,9 +630,7 @@ void MultirateGodObject::scene_step(const MultirateDeviceReport& in, MultirateSc
       next.applied_wrench[b] = scene_->applied_wrench[b];
       next.body_targets[b] = scene_->body_targets[b];
     }
-    // The nets too (same sizes: the scene-loop models all have the scene's nets).
-    std::copy_n(scene_->nodes.begin(), std::min(next.nodes.size(), scene_->nodes.size()), next.nodes.begin());
-    std::copy_n(scene_->nets.begin(), std::min(next.nets.size(), scene_->nets.size()), next.nets.begin());
+    detail::copy_nets(*scene_, next);  // same sizes: the scene-loop models all have the scene's nets
     next.time = scene_->time;
     next.step_count = scene_->step_count;
     scene_ = &next;
@@ -757,11 +752,7 @@ void MultirateGodObject::scene_step(const MultirateDeviceReport& in, MultirateSc
   snap.solver_residual = scene_->solver_residual;
   snap.max_joint_drift = scene_->max_joint_drift;
   snap.max_joint_angle_drift = scene_->max_joint_angle_drift;
-  std::copy_n(scene_->nodes.begin(), std::min(snap.nodes.size(), scene_->nodes.size()), snap.nodes.begin());
-  snap.num_node_contacts = std::clamp(scene_->num_node_contacts, 0,
-                                      static_cast<int>(std::min(snap.node_contacts.size(), scene_->node_contacts.size())));
-  std::copy_n(scene_->node_contacts.begin(), snap.num_node_contacts, snap.node_contacts.begin());
-  std::copy_n(scene_->nets.begin(), std::min(snap.nets.size(), scene_->nets.size()), snap.nets.begin());
+  detail::copy_nets(*scene_, snap);
 }
 
 void MultirateGodObject::take_model(const MultirateSceneModel& m) noexcept {
@@ -782,11 +773,7 @@ void MultirateGodObject::take_model(const MultirateSceneModel& m) noexcept {
   to.solver_residual = from.solver_residual;
   to.max_joint_drift = from.max_joint_drift;
   to.max_joint_angle_drift = from.max_joint_angle_drift;
-  std::copy_n(from.nodes.begin(), std::min(to.nodes.size(), from.nodes.size()), to.nodes.begin());
-  to.num_node_contacts = std::clamp(from.num_node_contacts, 0,
-                                    static_cast<int>(std::min(to.node_contacts.size(), from.node_contacts.size())));
-  std::copy_n(from.node_contacts.begin(), to.num_node_contacts, to.node_contacts.begin());
-  std::copy_n(from.nets.begin(), std::min(to.nets.size(), from.nets.size()), to.nets.begin());
+  detail::copy_nets(from, to);
   if (m.body != body_) return;  // sampled before a switch: not this god-object's planes
   planes_.count = std::clamp(m.planes.count, 0, kMaxContactPlanes);
   planes_.carrier_count = std::clamp(m.planes.carrier_count, 0, kMaxPlaneCarriers);
@@ -871,12 +858,9 @@ void MultirateGodObject::view(Data& out) const noexcept {
     deepest = std::max(deepest, c.depth);
   }
   // The nets, the god-object's included, as the scene loop left them.
-  std::copy_n(snap.nodes.begin(), std::min(out.nodes.size(), snap.nodes.size()), out.nodes.begin());
-  out.num_node_contacts = std::clamp(snap.num_node_contacts, 0, static_cast<int>(out.node_contacts.size()));
-  std::copy_n(snap.node_contacts.begin(), out.num_node_contacts, out.node_contacts.begin());
+  detail::copy_nets(snap, out);
   for (int i = 0; i < out.num_node_contacts; ++i)
     deepest = std::max(deepest, out.node_contacts[static_cast<std::size_t>(i)].depth);
-  std::copy_n(snap.nets.begin(), std::min(out.nets.size(), snap.nets.size()), out.nets.begin());
   out.contacts_dropped = took_model_ ? snap.contacts_dropped : 0;
   out.contacts_clamped = took_model_ ? snap.contacts_clamped : 0;
   out.contact_overflow_steps = snap.contact_overflow_steps;

@@ -8,18 +8,10 @@
 #include <sstream>
 
 namespace numen::core::detail {
-namespace {
-
-/// True when scene body `b` is a body of the god-object.
-bool on_god_object(std::span<const int> device_body, int b) noexcept {
-  return b >= 0 && b < static_cast<int>(device_body.size()) && device_body[static_cast<std::size_t>(b)] >= 0;
-}
-
-}  // namespace
 
 bool net_on_god_object(const Model& scene, std::span<const int> device_body, int net) noexcept {
   if (net < 0 || net >= scene.num_nets()) return false;
-  return on_god_object(device_body, scene.nets[static_cast<std::size_t>(net)].body);
+  return in_god_object(device_body, scene.nets[static_cast<std::size_t>(net)].body);
 }
 
 std::string lump_nets(const Model& scene, std::span<const int> device_body, Model& out) {
@@ -72,7 +64,7 @@ void build_node_planes(const Model& scene, const Data& data, std::span<const int
     const NodeContact& c = data.node_contacts[static_cast<std::size_t>(i)];
     if (c.node < 0 || c.node >= num_nodes || c.material_pair < 0 || c.material_pair >= np) continue;
     const int net = scene.node_net[static_cast<std::size_t>(c.node)];
-    if (!net_on_god_object(scene, device_body, net) || on_god_object(device_body, c.body_b)) continue;
+    if (!net_on_god_object(scene, device_body, net) || in_god_object(device_body, c.body_b)) continue;
     if (out.count >= kMaxContactPlanes || out.count >= room) {
       ++out.dropped;
       continue;
@@ -183,12 +175,12 @@ void cut_back_node_contacts(const Model& scene, Data& data, std::span<const int>
     const int net = c.node >= 0 && c.node < scene.num_nodes() ? scene.node_net[static_cast<std::size_t>(c.node)] : -1;
     if (net < 0) continue;
     if (net_on_god_object(scene, device_body, net)) {  // the node's sphere was grown
-      if (on_god_object(device_body, c.body_b)) continue;  // see the header
+      if (in_god_object(device_body, c.body_b)) continue;  // see the header
       c.depth -= margin;
       if (!(c.depth > 0.0)) continue;
       c.position += (0.5 * margin) * c.normal;  // towards the node
       if (c.body_b >= 0) c.r_b += (0.5 * margin) * c.normal;
-    } else if (on_god_object(device_body, c.body_b)) {  // the god-object's sphere was grown
+    } else if (in_god_object(device_body, c.body_b)) {  // the god-object's sphere was grown
       c.depth -= margin;
       if (!(c.depth > 0.0)) continue;
       c.position -= (0.5 * margin) * c.normal;  // towards the god-object

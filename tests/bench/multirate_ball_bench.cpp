@@ -12,21 +12,15 @@
 
 #include <benchmark/benchmark.h>
 
-#include <chrono>
 #include <cstdint>
 
 #include "deformable_ball.hpp"
 #include "numen/core/multirate.hpp"
 #include "numen/core/step.hpp"
 #include "numen/platform/latency_histogram.hpp"
+#include "numen/platform/monotonic_clock.hpp"
 
 namespace {
-
-std::int64_t now_ns() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(
-             std::chrono::steady_clock::now().time_since_epoch())
-      .count();
-}
 
 /// The device step is the core's 6×6 step against the node planes, whatever the net's size.
 void multirate_ball(benchmark::State& state) {
@@ -39,13 +33,13 @@ void multirate_ball(benchmark::State& state) {
   std::int64_t k = 0;
   for (auto _ : state) {
     numen::test::set_deformable_ball_target(model, single_data, k);
-    std::int64_t t0 = now_ns();
+    std::int64_t t0 = numen::platform::monotonic_now_ns();
     numen::core::step(model, single_data);
-    single.record(now_ns() - t0);
+    single.record(numen::platform::monotonic_now_ns() - t0);
     numen::test::set_deformable_ball_target(model, mr.device_data(), k);
-    t0 = now_ns();
+    t0 = numen::platform::monotonic_now_ns();
     mr.step();
-    const std::int64_t t = now_ns() - t0;
+    const std::int64_t t = numen::platform::monotonic_now_ns() - t0;
     state.SetIterationTime(static_cast<double>(t) * 1e-9);
     (k % ratio == 0 ? scene_periods : device).record(t);
     ++k;

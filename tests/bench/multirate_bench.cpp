@@ -19,7 +19,6 @@
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
-#include <chrono>
 #include <memory>
 #include <span>
 #include <stdexcept>
@@ -27,16 +26,11 @@
 
 #include "numen/core/multirate.hpp"
 #include "numen/platform/latency_histogram.hpp"
+#include "numen/platform/monotonic_clock.hpp"
 #include "numen/sim/run.hpp"
 #include "numen/sim/scene.hpp"
 
 namespace {
-
-std::int64_t now_ns() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(
-             std::chrono::steady_clock::now().time_since_epoch())
-      .count();
-}
 
 /// `speed` (m/s): the margin is the travel at that speed over a scene period.
 void multirate_time(benchmark::State& state, const char* name, double speed) {
@@ -83,9 +77,9 @@ void multirate_time(benchmark::State& state, const char* name, double speed) {
         mr->scene_data().bodies[b] = runner->data().bodies[b];
     }
     mr->take_targets(runner->data());
-    const std::int64_t t0 = now_ns();
+    const std::int64_t t0 = numen::platform::monotonic_now_ns();
     mr->step();
-    const std::int64_t t = now_ns() - t0;
+    const std::int64_t t = numen::platform::monotonic_now_ns() - t0;
     state.SetIterationTime(static_cast<double>(t) * 1e-9);
     (k % ratio == 0 ? scene_periods : device).record(t);
     tool_pen = std::max(tool_pen, d.max_penetration);

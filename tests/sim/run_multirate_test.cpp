@@ -25,14 +25,24 @@ using numen::sim::RunSummary;
 using numen::sim::Scene;
 using numen::sim::SceneRunner;
 
+/// The shipped scene sim/scenes/`name` at step `dt` (s; its own is 1 ms), with [multirate]
+/// scene_dt, margin (m) when scene_dt > 0.
+Scene shipped_scene(numen::test::TempDir& dir, const char* name, double dt, double scene_dt, double margin) {
+  char table[128] = "";
+  if (scene_dt > 0.0)
+    std::snprintf(table, sizeof table, "\n[multirate]\nscene_dt = %.17g\nmargin = %.17g\n", scene_dt, margin);
+  char step[64];
+  std::snprintf(step, sizeof step, "dt = %.17g\n", dt);
+  std::string text = numen::test::shipped_scene_text(name) + table;
+  if (text.find("\"../data/") != std::string::npos)
+    text = numen::test::replace(text, "\"../data/", std::string("\"") + NUMEN_SOURCE_DIR + "/sim/data/");
+  text = numen::test::replace(text, "dt = 0.001\n", step);
+  return numen::sim::load_scene(dir.write(std::string("multirate_") + name, text));
+}
+
 /// The shipped construction scene with [multirate] scene_dt, margin (m).
 Scene construction_multirate(numen::test::TempDir& dir, double scene_dt, double margin) {
-  char table[128];
-  std::snprintf(table, sizeof table, "[multirate]\nscene_dt = %.17g\nmargin = %.17g\n", scene_dt, margin);
-  const std::string text = numen::test::replace(numen::test::shipped_scene_text("construction.toml"),
-                                                "coupling = \"god-object\"\n",
-                                                "coupling = \"god-object\"\n\n" + std::string(table));
-  return numen::sim::load_scene(dir.write("construction_multirate.toml", text));
+  return shipped_scene(dir, "construction.toml", 0.001, scene_dt, margin);
 }
 
 const Scene& construction_single() {
@@ -175,12 +185,7 @@ namespace {
 
 /// The shipped default scene with [multirate] scene_dt, margin (m).
 Scene default_multirate(numen::test::TempDir& dir, double scene_dt, double margin) {
-  char table[128];
-  std::snprintf(table, sizeof table, "\n[multirate]\nscene_dt = %.17g\nmargin = %.17g\n", scene_dt, margin);
-  const std::string data = std::string("\"") + NUMEN_SOURCE_DIR + "/sim/data/";
-  const std::string text = numen::test::replace(
-      numen::test::shipped_scene_text("default.toml") + table, "\"../data/", data);
-  return numen::sim::load_scene(dir.write("default_multirate.toml", text));
+  return shipped_scene(dir, "default.toml", 0.001, scene_dt, margin);
 }
 
 }  // namespace
@@ -226,21 +231,6 @@ TEST(RunMultirate, DefaultScenePeriodNeverAllocates) {
 }
 
 namespace {
-
-/// The shipped scene sim/scenes/`name` at step `dt` (s; its own is 1 ms), with [multirate]
-/// scene_dt, margin (m) when scene_dt > 0.
-Scene shipped_scene(numen::test::TempDir& dir, const char* name, double dt, double scene_dt, double margin) {
-  char table[128] = "";
-  if (scene_dt > 0.0)
-    std::snprintf(table, sizeof table, "\n[multirate]\nscene_dt = %.17g\nmargin = %.17g\n", scene_dt, margin);
-  char step[64];
-  std::snprintf(step, sizeof step, "dt = %.17g\n", dt);
-  std::string text = numen::test::shipped_scene_text(name) + table;
-  if (text.find("\"../data/") != std::string::npos)
-    text = numen::test::replace(text, "\"../data/", std::string("\"") + NUMEN_SOURCE_DIR + "/sim/data/");
-  text = numen::test::replace(text, "dt = 0.001\n", step);
-  return numen::sim::load_scene(dir.write(std::string("multirate_") + name, text));
-}
 
 /// The shipped deformable scene (a soft probe, a net on a hidden rigid core, swept into a post).
 Scene deformable_scene(numen::test::TempDir& dir, double dt, double scene_dt, double margin) {
@@ -326,8 +316,9 @@ TEST(RunMultirate, EndobagSceneNetOnAnArticulatedGodObjectAtRateRatiosOneFiveAnd
     EXPECT_NEAR(s.tracking_error_free_rms_mm, single.tracking_error_free_rms_mm,
                 0.05 * single.tracking_error_free_rms_mm) << scene_dt;
     EXPECT_LE(s.net_penetration_max_mm, slow.net_penetration_max_mm) << scene_dt;
-    if (scene_dt == 0.001)
+    if (scene_dt == 0.001) {
       EXPECT_NEAR(s.net_penetration_max_mm, single.net_penetration_max_mm, 0.25 * single.net_penetration_max_mm);
+    }
   }
 }
 

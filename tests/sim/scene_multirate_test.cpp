@@ -140,3 +140,20 @@ TEST(SceneMultirate, AMarginShorterThanTheHandsTravelIsWarnedAbout) {
       dir.write("fine.toml", construction_with("[multirate]\nscene_dt = 0.01\nmargin = 0.01")));
   EXPECT_FALSE(warned(fine));
 }
+
+// A net on a body the device never holds would be the scene loop's alone: the device loop would
+// not feel it. Refused at the table, naming the net and the body.
+TEST(SceneMultirate, ANetOnABodyNoGodObjectHoldsIsRefused) {
+  if (!numen::core::kWithDeformable) GTEST_SKIP() << "a build without nets";
+  TempDir dir;
+  std::string text = numen::test::shipped_scene_text("deformable.toml") +
+                     "\n[multirate]\nscene_dt = 0.01\nmargin = 0.002\n";
+  text = replace(text, "\"../data/", std::string("\"") + NUMEN_SOURCE_DIR + "/sim/data/");
+  text = replace(text, "[[deformable]]\nname = \"probe\"\nbody = \"core\"",
+                 "[[body]]\nname = \"spare\"\nmass = 0.05\ninertia = [1.0e-5, 1.0e-5, 1.0e-5]\n"
+                 "material = \"steel\"\n\n[[deformable]]\nname = \"probe\"\nbody = \"spare\"");
+  const InputError e = load_error(dir, text, "spare_net_mr.toml");
+  EXPECT_EQ(e.key(), "multirate.scene_dt");
+  EXPECT_NE(std::string(e.what()).find("net 'probe' is on body 'spare', which is in no body's god-object"),
+            std::string::npos) << e.what();
+}

@@ -6,6 +6,7 @@
 /// contact the scene loop found, rendered through the node's compliance (ContactPlane::node).
 /// Private to numen::core (multirate.cpp).
 
+#include <algorithm>
 #include <span>
 #include <string>
 
@@ -26,8 +27,13 @@ struct NodePlaneScratch {
   std::span<double> planes_depth;      ///< Per slot: Σ d₀ over its planes in contact (m).
 };
 
-/// True when the rigid component of scene net `net` is a body of the god-object
-/// (`device_body`: per scene body, its god-object model index or −1).
+/// True when scene body `b` is a body of the god-object (`device_body`: per scene body, its
+/// god-object model index or −1).
+inline bool in_god_object(std::span<const int> device_body, int b) noexcept {
+  return b >= 0 && b < static_cast<int>(device_body.size()) && device_body[static_cast<std::size_t>(b)] >= 0;
+}
+
+/// True when the rigid component of scene net `net` is a body of the god-object.
 bool net_on_god_object(const Model& scene, std::span<const int> device_body, int net) noexcept;
 
 /// Lumps every net of `scene` whose rigid component is a body of the god-object onto that body
@@ -38,6 +44,17 @@ bool net_on_god_object(const Model& scene, std::span<const int> device_body, int
 /// is more than 0.1 mm from its component's (the lumped body keeps the component's centre of
 /// mass). Load time.
 std::string lump_nets(const Model& scene, std::span<const int> device_body, Model& out);
+
+/// The nets' state — nodes, node contacts, per-net outputs — from `from` to `to` (each a Data
+/// or a MultirateSceneSnapshot: the same fields), within the smaller sizes. No allocation.
+template <typename From, typename To>
+void copy_nets(const From& from, To& to) noexcept {
+  std::copy_n(from.nodes.begin(), std::min(to.nodes.size(), from.nodes.size()), to.nodes.begin());
+  to.num_node_contacts = std::clamp(
+      from.num_node_contacts, 0, static_cast<int>(std::min(to.node_contacts.size(), from.node_contacts.size())));
+  std::copy_n(from.node_contacts.begin(), to.num_node_contacts, to.node_contacts.begin());
+  std::copy_n(from.nets.begin(), std::min(to.nets.size(), from.nets.size()), to.nets.begin());
+}
 
 /// Grows by `margin` (m) the sphere radius of every node of a net on the god-object in `m` (the
 /// proximity model). Load time.
