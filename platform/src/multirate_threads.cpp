@@ -63,8 +63,11 @@ void MultirateThreads::run() noexcept {
   rt.cpu_affinity = settings_.cpu_affinity;
   try {
     realtime_ = apply_realtime(rt);  // allocates: before the loop
-  } catch (const std::exception&) {
-    // An invalid priority: the caller's settings were checked; keep the thread as it is.
+  } catch (const std::exception& e) {
+    // An invalid priority (the caller's settings are checked before): the thread stays as it
+    // is, and the report says so.
+    realtime_.scheduling.status = RealtimeStepStatus::kFailed;
+    realtime_.scheduling.message = e.what();
   }
   PeriodicTimer timer(period_ns_, monotonic_now_ns());
   while (!stop_.load(std::memory_order_relaxed)) {

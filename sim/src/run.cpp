@@ -751,6 +751,14 @@ RunSummary run_impedance_scene(const Scene& scene, const RunOptions& options) {
   s.rearm_first_period = rearm_first;
   s.wakeup_latency_us = summarize_ns(wakeup);
   s.realtime_setup = std::move(rt_lines);
+  // The scene thread's own scheduling and CPUs (--scene-rt-priority, --scene-cpu), if asked.
+  if (const platform::MultirateThreads* t = runner.scene_thread()) {
+    const platform::SceneThreadSettings& st = options.scene_thread;
+    for (const std::string& line : platform::describe(t->realtime_report()))
+      if ((st.fifo_priority != 0 && line.rfind("scheduling:", 0) == 0) ||
+          (!st.cpu_affinity.empty() && line.rfind("cpu affinity:", 0) == 0))
+        s.realtime_setup.push_back("scene thread " + line);
+  }
   s.stopped = stopped;
   s.shutdown_periods = shutdown;
   s.drives_disabled = runner.loop().drives_disabled();

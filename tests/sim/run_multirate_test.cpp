@@ -342,3 +342,19 @@ TEST(RunMultirate, TheOtherShippedScenesNeverAllocate) {
     EXPECT_EQ(s.multirate.planes_dropped, 0) << name;
   }
 }
+
+// The scene thread's own CPU affinity (--scene-cpu) is reported in the summary's real-time
+// setup, as the loop thread's is: applied or failed, never silent.
+TEST(RunMultirate, TheSceneThreadsSetupIsReported) {
+  numen::test::TempDir dir;
+  numen::sim::RunOptions options;
+  options.realtime = true;
+  options.duration_s = 0.1;
+  options.overrun_limit = 0;
+  options.scene_thread.cpu_affinity = {0};
+  const RunSummary s = numen::sim::run_scene(construction_multirate(dir, 0.01, 0.01), options);
+  bool reported = false;
+  for (const std::string& line : s.realtime_setup)
+    reported = reported || line.rfind("scene thread cpu affinity: ", 0) == 0;
+  EXPECT_TRUE(reported) << (s.realtime_setup.empty() ? "no real-time setup lines" : s.realtime_setup.back());
+}

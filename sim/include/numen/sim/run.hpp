@@ -416,6 +416,8 @@ class SceneRunner {
   /// Allocates (call before the first period). Throws std::system_error if the thread cannot
   /// start.
   void start_scene_thread(const platform::SceneThreadSettings& settings);
+  /// The scene thread (null: none started); read its realtime_report() after finish().
+  const platform::MultirateThreads* scene_thread() const noexcept { return scene_thread_.get(); }
 
   /// Ends the run's streams: stops the bus recorder's and the trace's writer threads, which
   /// write what is still queued and flush, so that summary() reports what reached the files.
