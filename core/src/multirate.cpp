@@ -556,6 +556,7 @@ void MultirateGodObject::take_targets(const Data& scene_data) noexcept {
   Data& d = s.device;
   d.target = scene_data.target;
   d.target_twist = scene_data.target_twist;
+  d.device_wrench = scene_data.device_wrench;  // CouplingMode::kAdmittance (Data::device_wrench)
   for (std::size_t i = 0; i < s.bodies.size(); ++i) {
     const auto b = static_cast<std::size_t>(s.bodies[i]);
     if (b < scene_data.body_targets.size()) d.body_targets[i] = scene_data.body_targets[b];

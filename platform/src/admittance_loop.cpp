@@ -103,7 +103,10 @@ const AdmittanceReport& AdmittanceLoop::end_period(std::int64_t now_ns) noexcept
   }
 
   const std::int64_t t0 = monotonic_now_ns();
-  core::step(*model_, d);
+  if (step_function_ != nullptr)
+    step_function_(step_context_);
+  else
+    core::step(*model_, d);
   report_.step_ns = monotonic_now_ns() - t0;
 
   if (active) {

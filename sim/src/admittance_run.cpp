@@ -11,6 +11,7 @@
 #include "numen/hal/device/kinematics_factory.hpp"
 #include "numen/platform/monotonic_clock.hpp"
 #include "numen/platform/periodic_timer.hpp"
+#include "numen/platform/realtime_setup.hpp"
 #include "numen/sim/simulated_instrument.hpp"
 
 namespace numen::sim {
@@ -53,9 +54,17 @@ AdmittanceRunner::AdmittanceRunner(const Scene& scene)
       data_(core::make_data(scene.model)),
       ghost_(core::make_data(scene.model)),
       loop_(scene.model, data_, bus_.controller(), device_),
+      multirate_(scene),
       period_ns_(static_cast<std::int64_t>(std::llround(scene.model.dt * 1e9))),
       phase_ns_(static_cast<std::int64_t>(std::llround(scene.compute_phase_s * 1e9))) {
   emulator_.set_axis_values(device_.setpoints());
+  if (multirate_.enabled())
+    loop_.set_step_function(
+        [](void* self) noexcept {
+          auto& r = *static_cast<AdmittanceRunner*>(self);
+          r.multirate_.step(r.data_);
+        },
+        this);
   describe_scene(scene, acc_);
   acc_.admittance.enabled = true;
   acc_.admittance.k_hand = scene.admittance->emulator.k_hand;
@@ -70,7 +79,12 @@ void AdmittanceRunner::stream_view(const std::string& record_path,
   view_ = std::make_unique<ViewOutput>(*scene_, record_path, std::move(sinks), rate_hz, wait);
 }
 
+void AdmittanceRunner::start_scene_thread(const platform::SceneThreadSettings& settings) {
+  multirate_.start_scene_thread(settings);
+}
+
 void AdmittanceRunner::finish() {
+  multirate_.stop();
   if (view_) view_->finish();
 }
 
@@ -91,6 +105,7 @@ void AdmittanceRunner::period() noexcept {
   const platform::AdmittanceReport& r = loop_.end_period(t + phase_ns_);
   step_time_.record(r.step_ns);
   ++k_;
+  multirate_.view(data_);  // a multirate run: both loops as one single-rate Data
 
   // ---- measurements ----
   RunSummary& s = acc_;
@@ -168,6 +183,7 @@ RunSummary AdmittanceRunner::summary() const {
   a.setpoints_rate_limited = static_cast<std::int64_t>(device_.counters().rate_limited);
   a.hold_periods = static_cast<std::int64_t>(loop_.counters().hold_periods);
   s.rejected_samples = a.sensor_rejected_periods;
+  multirate_.summarize(s);
   return s;
 }
 
@@ -175,9 +191,17 @@ RunSummary run_admittance_scene(const Scene& scene, const RunOptions& options) {
   const double duration = options.duration_s >= 0.0 ? options.duration_s : scene.duration_s;
   const auto steps = static_cast<std::int64_t>(std::llround(duration / scene.model.dt));
   AdmittanceRunner runner(scene);
+  // A multirate scene's scene thread is started before the real-time setup pins and promotes
+  // this thread (as run_impedance_scene does).
+  if (options.realtime) runner.start_scene_thread(options.scene_thread);
   if (!options.record_view_path.empty() || !options.view_sinks.empty())
     runner.stream_view(options.record_view_path, options.view_sinks, options.view_rate_hz,
                        !options.realtime);
+  const platform::RealtimeSettings& rt = options.rt;
+  std::vector<std::string> rt_lines;
+  if (rt.fifo_priority != 0 || rt.lock_memory || rt.prefault_stack_bytes > 0 ||
+      !rt.cpu_affinity.empty())
+    rt_lines = platform::describe(platform::apply_realtime(rt));  // throws only if strict
   const std::int64_t wall0 = platform::monotonic_now_ns();
   platform::PeriodicTimer timer(static_cast<std::int64_t>(std::llround(scene.model.dt * 1e9)),
                                 wall0);
@@ -197,6 +221,8 @@ RunSummary run_admittance_scene(const Scene& scene, const RunOptions& options) {
   RunSummary s = runner.summary();
   s.wall_time_s = static_cast<double>(platform::monotonic_now_ns() - wall0) * 1e-9;
   s.realtime_overruns = overruns;
+  s.realtime_setup = std::move(rt_lines);
+  runner.multirate().describe_scene_thread(options.scene_thread, s.realtime_setup);
   s.stopped = stopped;
   if (!options.trace_path.empty())
     s.warnings.push_back("--trace is not supported for admittance scenes: no trace written");

@@ -175,17 +175,12 @@ SceneRunner::SceneRunner(const Scene& scene, std::size_t trace_capacity, const B
       ghost_(core::make_data(scene.model)),
       loop_(scene.model, data_, *port_, device_, scene.binding,
             control_loop_settings(realtime || spec_.real(), overrun_limit)),
+      multirate_(scene),
       period_ns_(static_cast<std::int64_t>(std::llround(scene.model.dt * 1e9))),
       phase_ns_(static_cast<std::int64_t>(std::llround(scene.compute_phase_s * 1e9))),
       startup_settle_periods_(
           std::max<std::int64_t>(1, std::llround(kStartupSettle / scene.model.dt))) {
-  if (scene.multirate) {
-    core::MultirateSettings settings{scene.multirate->ratio, scene.multirate->margin_m,
-                                     scene.multirate->tools};
-    multirate_ = std::make_unique<core::MultirateGodObject>(
-        scene.model, scene.model.initial_attached_body, settings);
-    loop_.set_step_function(&SceneRunner::step_multirate, this);
-  }
+  if (multirate_.enabled()) loop_.set_step_function(&SceneRunner::step_multirate, this);
   trace_.reserve(trace_capacity);
   if (writer_) writer_->start();
   acc_.bus = bus.spec;
@@ -233,7 +228,7 @@ void SceneRunner::period(std::int64_t deadline_mono_ns, std::int64_t woke_mono_n
   const platform::PeriodReport& report = exchange(t, deadline_mono_ns, woke_mono_ns);
   ++k_;
   // ---- measurements (outside the timed step) ----
-  if (multirate_) multirate_->view(data_);  // both loops as one single-rate Data
+  multirate_.view(data_);  // a multirate run: both loops as one single-rate Data
   count_period(report);
   const PeriodContacts contacts = measure_contacts();
   track_free_space(contacts);
@@ -249,21 +244,11 @@ void SceneRunner::period(std::int64_t deadline_mono_ns, std::int64_t woke_mono_n
 
 void SceneRunner::step_multirate(void* runner) noexcept {
   SceneRunner& r = *static_cast<SceneRunner*>(runner);
-  core::MultirateGodObject& m = *r.multirate_;
-  m.select(r.data_.attached_body);  // every held body is one of the tools (parse_multirate)
-  m.take_targets(r.data_);
-  if (r.scene_thread_)
-    r.scene_thread_->device_step();
-  else
-    m.step();
-  m.write_feedback(r.data_);  // what the loop maps to torques; the rest of the view in period()
+  r.multirate_.step(r.data_);
 }
 
 void SceneRunner::start_scene_thread(const platform::SceneThreadSettings& settings) {
-  if (!multirate_ || scene_thread_) return;
-  const auto period = static_cast<std::int64_t>(std::llround(scene_->multirate->scene_dt_s * 1e9));
-  scene_thread_ = std::make_unique<platform::MultirateThreads>(*multirate_, period, settings);
-  scene_thread_->start();
+  multirate_.start_scene_thread(settings);
 }
 
 void SceneRunner::apply_due_events(std::int64_t t_ns) noexcept {
@@ -428,8 +413,8 @@ void SceneRunner::accumulate_step_figures(const platform::PeriodReport& report,
   const double jump = (report.feedback.force - last_feedback_force_).norm();
   last_feedback_force_ = report.feedback.force;
   s.feedback_force_jump_max_n = std::max(s.feedback_force_jump_max_n, jump);
-  if (multirate_) {
-    double& at = multirate_->took_model() ? s.multirate.model_force_jump_max_n
+  if (multirate_.enabled()) {
+    double& at = multirate_.took_model() ? s.multirate.model_force_jump_max_n
                                           : s.multirate.other_force_jump_max_n;
     at = std::max(at, jump);
   }
@@ -515,24 +500,7 @@ RunSummary SceneRunner::summary() const {
   s.contact_overflow = data_.contact_overflow_steps;
   s.contact_clamped_steps = data_.contact_clamped_steps;
   s.nonfinite_steps = data_.nonfinite_steps;
-  if (multirate_) {
-    const core::MultirateCounters& c = multirate_->counters();
-    s.multirate.scene_steps = c.scene_steps;
-    s.multirate.planes_max = c.planes_max;
-    s.multirate.planes_dropped = c.planes_dropped;
-    s.multirate.switches = c.switches;
-    s.multirate.stale_models = c.stale_models;
-    if (scene_thread_) {
-      s.multirate.scene_thread = true;
-      s.multirate.scene_overruns = scene_thread_->counters().scene_overruns;
-      s.multirate.scene_step_us = summarize_ns(scene_thread_->scene_step_time());
-    }
-    if (c.planes_dropped > 0)
-      s.warnings.push_back("multirate: " + std::to_string(c.planes_dropped) +
-                           " contacts of the god-object found beyond the room for " +
-                           std::to_string(core::kMaxContactPlanes) +
-                           " planes: the device loop did not see those surfaces");
-  }
+  multirate_.summarize(s);
   s.nan_detected = data_.nonfinite_steps > 0;
   for (const auto& b : data_.bodies)
     s.nan_detected = s.nan_detected || !b.position.allFinite() || !b.orientation.coeffs().allFinite();
@@ -642,7 +610,7 @@ RunSummary SceneRunner::summary() const {
 }
 
 void SceneRunner::finish() {
-  if (scene_thread_) scene_thread_->stop();
+  multirate_.stop();
   if (writer_) writer_->stop();
   if (trace_writer_) trace_writer_->stop();
   if (view_) view_->finish();
@@ -752,13 +720,7 @@ RunSummary run_impedance_scene(const Scene& scene, const RunOptions& options) {
   s.wakeup_latency_us = summarize_ns(wakeup);
   s.realtime_setup = std::move(rt_lines);
   // The scene thread's own scheduling and CPUs (--scene-rt-priority, --scene-cpu), if asked.
-  if (const platform::MultirateThreads* t = runner.scene_thread()) {
-    const platform::SceneThreadSettings& st = options.scene_thread;
-    for (const std::string& line : platform::describe(t->realtime_report()))
-      if ((st.fifo_priority != 0 && line.rfind("scheduling:", 0) == 0) ||
-          (!st.cpu_affinity.empty() && line.rfind("cpu affinity:", 0) == 0))
-        s.realtime_setup.push_back("scene thread " + line);
-  }
+  runner.multirate().describe_scene_thread(options.scene_thread, s.realtime_setup);
   s.stopped = stopped;
   s.shutdown_periods = shutdown;
   s.drives_disabled = runner.loop().drives_disabled();

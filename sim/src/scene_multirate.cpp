@@ -37,8 +37,6 @@ void parse_multirate(const TomlTable& root, Scene& scene) {
                 "towards a surface in one scene period (docs/multirate.md, \"The margin\")");
   m.margin_m = table->number_in("margin", 0.0, 1.0, 0.0);
   const core::Model& model = scene.model;
-  if (model.coupling_mode == core::CouplingMode::kAdmittance)
-    table->fail("scene_dt", "the admittance coupling is not multirate");
   std::vector<int> bodies;
   if (model.initial_attached_body >= 0) bodies.push_back(model.initial_attached_body);
   for (const AttachEvent& e : scene.events)

@@ -3,8 +3,10 @@
 // twelve free blocks; replayed up to its first tool switch, so that both hold the same body),
 // the default scene (an articulated instrument: its whole articulation is the god-object), the
 // deformable and endobag scenes (a net on the god-object: node planes), the mouse and phantom
-// scenes. Each iteration is one 1 kHz period: the single-rate SceneRunner steps the scene (the
-// reference, and the source of the hand's target), the MultirateGodObject gets the same target
+// scenes, and the admittance scene (its measured wrench drives the god-object). Each iteration
+// is one 1 kHz period: the single-rate SceneRunner (AdmittanceRunner) steps the scene (the
+// reference, and the source of the hand's target or measured wrench), the MultirateGodObject
+// gets the same target
 // and steps — a device step, and on every N-th period the scene step first (N = the
 // benchmark's argument). The time
 // reported is the multirate period's (manual timing); the counters split it:
@@ -27,12 +29,19 @@
 #include "numen/core/multirate.hpp"
 #include "numen/platform/latency_histogram.hpp"
 #include "numen/platform/monotonic_clock.hpp"
+#include "numen/sim/admittance_run.hpp"
 #include "numen/sim/run.hpp"
 #include "numen/sim/scene.hpp"
 
 namespace {
 
-/// `speed` (m/s): the margin is the travel at that speed over a scene period.
+/// The single-rate step's wall time of the runner's last period (ns).
+std::int64_t step_ns(const numen::sim::SceneRunner& r) { return r.last_report().step_ns; }
+std::int64_t step_ns(const numen::sim::AdmittanceRunner& r) { return r.loop().last_report().step_ns; }
+
+/// `speed` (m/s): the margin is the travel at that speed over a scene period. `Runner`: the
+/// scene's single-rate run harness.
+template <class Runner>
 void multirate_time(benchmark::State& state, const char* name, double speed) {
   const int ratio = static_cast<int>(state.range(0));
   numen::sim::Scene scene;
@@ -46,10 +55,10 @@ void multirate_time(benchmark::State& state, const char* name, double speed) {
   // The margin covers `speed` of tool travel over a scene period (docs/multirate.md).
   const numen::core::MultirateSettings settings{ratio, speed * scene.model.dt * ratio, {}};
   const auto periods = static_cast<std::int64_t>(scene.duration_s / scene.model.dt);
-  std::unique_ptr<numen::sim::SceneRunner> runner;
+  std::unique_ptr<Runner> runner;
   std::unique_ptr<numen::core::MultirateGodObject> mr;
   const auto restart = [&] {
-    runner = std::make_unique<numen::sim::SceneRunner>(scene);
+    runner = std::make_unique<Runner>(scene);
     mr = std::make_unique<numen::core::MultirateGodObject>(scene.model, body, settings);
   };
   restart();
@@ -67,7 +76,7 @@ void multirate_time(benchmark::State& state, const char* name, double speed) {
       state.ResumeTiming();
     }
     runner->period();
-    single.record(runner->last_report().step_ns);
+    single.record(step_ns(*runner));
     numen::core::Data& d = mr->device_data();
     if (k == 0) {  // the runner starts the god-object at the hand (sim/run.hpp): so does this
       const std::span<const int> god = mr->god_object();
@@ -98,24 +107,36 @@ void multirate_time(benchmark::State& state, const char* name, double speed) {
       std::max(single_tool_pen, runner->summary().tool_penetration_max_mm);
 }
 
+/// The impedance scenes' and the admittance scene's benchmarks.
+void multirate_impedance(benchmark::State& state, const char* name, double speed) {
+  multirate_time<numen::sim::SceneRunner>(state, name, speed);
+}
+void multirate_admittance(benchmark::State& state, const char* name, double speed) {
+  multirate_time<numen::sim::AdmittanceRunner>(state, name, speed);
+}
+
 }  // namespace
 
-BENCHMARK_CAPTURE(multirate_time, Construction, "construction.toml", 2.0)
+BENCHMARK_CAPTURE(multirate_impedance, Construction, "construction.toml", 2.0)
     ->Arg(1)->Arg(10)->Arg(100)->UseManualTime()->Iterations(9000);
 // The default scene: an articulated haptic instrument (4 bodies, 4 joints) on a recorded trial;
 // its first 9 s; the margin covers 1 m/s (10 mm at 100 Hz, as docs/figures/plot_multirate.py).
-BENCHMARK_CAPTURE(multirate_time, Default, "default.toml", 1.0)
+BENCHMARK_CAPTURE(multirate_impedance, Default, "default.toml", 1.0)
     ->Arg(1)->Arg(10)->UseManualTime()->Iterations(9000);
 // The deformable scene (a 306-node probe on its hidden core) and the endobag (a 162-node bag on
 // the articulated instrument), their first 9 s; the margin covers 0.2 m/s (2 mm at 100 Hz, the
 // hand travels less: docs/multirate.md, "Deformable god-objects").
-BENCHMARK_CAPTURE(multirate_time, Deformable, "deformable.toml", 0.2)
+BENCHMARK_CAPTURE(multirate_impedance, Deformable, "deformable.toml", 0.2)
     ->Arg(1)->Arg(2)->Arg(10)->UseManualTime()->Iterations(9000);
-BENCHMARK_CAPTURE(multirate_time, Endobag, "endobag.toml", 0.2)
+BENCHMARK_CAPTURE(multirate_impedance, Endobag, "endobag.toml", 0.2)
     ->Arg(1)->Arg(2)->Arg(10)->UseManualTime()->Iterations(9000);
 // The mouse's puck and the phantom's stylus (rigid tools on short recordings: all of them).
-BENCHMARK_CAPTURE(multirate_time, Mouse, "mouse.toml", 0.2)
+BENCHMARK_CAPTURE(multirate_impedance, Mouse, "mouse.toml", 0.2)
     ->Arg(1)->Arg(10)->UseManualTime()->Iterations(3800);
-BENCHMARK_CAPTURE(multirate_time, Phantom, "phantom.toml", 0.2)
+BENCHMARK_CAPTURE(multirate_impedance, Phantom, "phantom.toml", 0.2)
     ->Arg(1)->Arg(10)->UseManualTime()->Iterations(4200);
 
+// The admittance scene (a 5 mm probe driven by the measured force, pressed into an organ), all
+// of its 4.3 s.
+BENCHMARK_CAPTURE(multirate_admittance, Admittance, "admittance.toml", 0.2)
+    ->Arg(1)->Arg(10)->UseManualTime()->Iterations(4300);

@@ -188,3 +188,39 @@ TEST(AdmittanceLoop, PeriodsDoNotAllocate) {
   }
   EXPECT_EQ(guard.count(), 0);
 }
+
+// set_step_function (the multirate device period, docs/multirate.md): the loop calls it once
+// per period instead of core::step, with the measured wrench in data.device_wrench, and
+// commands the device to where it left the held body; null restores core::step.
+TEST(AdmittanceLoop, AStepFunctionReplacesCoreStep) {
+  Rig rig(hand_settings());
+  struct Seen {
+    core::Data* data = nullptr;
+    int calls = 0;
+    Vec3 force = Vec3::Zero();
+  } seen;
+  seen.data = &rig.data;
+  rig.loop.set_step_function(
+      [](void* context) noexcept {
+        Seen& s = *static_cast<Seen*>(context);
+        ++s.calls;
+        s.force = s.data->device_wrench.force;
+        s.data->bodies[0].position = Vec3(0.0, 0.0, 0.004);  // not where a core::step would go
+      },
+      &seen);
+  rig.hand.position = Vec3(0.02, 0.0, 0.0);  // 200 N/m × 20 mm along x
+  const platform::AdmittanceReport& r = rig.period();
+  ASSERT_TRUE(r.driven);
+  EXPECT_EQ(seen.calls, 1);
+  EXPECT_NEAR(seen.force.x(), 4.0, 1e-3);
+  for (int i = 0; i < 10; ++i) rig.period();
+  EXPECT_EQ(seen.calls, 11);
+  EXPECT_EQ(rig.data.step_count, 0);               // core::step never ran
+  EXPECT_NEAR(rig.device.setpoints()[2], 0.004, 1e-9);  // the device follows the step's pose
+  EXPECT_NEAR(rig.device.setpoints()[0], 0.0, 1e-9);
+  rig.loop.set_step_function(nullptr, nullptr);
+  rig.period();
+  EXPECT_EQ(seen.calls, 11);
+  EXPECT_EQ(rig.data.step_count, 1);
+  EXPECT_GT(rig.data.bodies[0].position.x(), 0.0);  // the measured force moved it
+}

@@ -9,12 +9,16 @@
 #include <cstdio>
 #include <cstring>
 #include <string>
+#include <thread>
+#include <utility>
+#include <vector>
 
 #include "alloc_counter.hpp"
 #include "build_features.hpp"
 #include "sanitizer.hpp"
 #include "scene_text.hpp"
 #include "temp_dir.hpp"
+#include "numen/sim/admittance_run.hpp"
 #include "numen/sim/run.hpp"
 #include "numen/sim/run_verdict.hpp"
 #include "numen/sim/scene.hpp"
@@ -26,8 +30,9 @@ using numen::sim::Scene;
 using numen::sim::SceneRunner;
 
 /// The shipped scene sim/scenes/`name` at step `dt` (s; its own is 1 ms), with [multirate]
-/// scene_dt, margin (m) when scene_dt > 0.
-Scene shipped_scene(numen::test::TempDir& dir, const char* name, double dt, double scene_dt, double margin) {
+/// scene_dt, margin (m) when scene_dt > 0, and the text `edits` (from, to) made.
+Scene shipped_scene(numen::test::TempDir& dir, const char* name, double dt, double scene_dt, double margin,
+                    const std::vector<std::pair<std::string, std::string>>& edits = {}) {
   char table[128] = "";
   if (scene_dt > 0.0)
     std::snprintf(table, sizeof table, "\n[multirate]\nscene_dt = %.17g\nmargin = %.17g\n", scene_dt, margin);
@@ -37,6 +42,7 @@ Scene shipped_scene(numen::test::TempDir& dir, const char* name, double dt, doub
   if (text.find("\"../data/") != std::string::npos)
     text = numen::test::replace(text, "\"../data/", std::string("\"") + NUMEN_SOURCE_DIR + "/sim/data/");
   text = numen::test::replace(text, "dt = 0.001\n", step);
+  for (const auto& [from, to] : edits) text = numen::test::replace(text, from, to);
   return numen::sim::load_scene(dir.write(std::string("multirate_") + name, text));
 }
 
@@ -329,8 +335,8 @@ TEST(RunMultirate, DeformableScenePeriodNeverAllocates) {
   EXPECT_GT(s.node_contacts_max, 0);
 }
 
-// The other shipped scenes a multirate god-object runs (the admittance scene has its own runner,
-// which has no multirate step): the mouse's puck, the phantom's stylus, the endobag's articulated
+// The other shipped scenes a multirate god-object runs (the admittance scene has its own
+// runner: AdmittanceScene* below): the mouse's puck, the phantom's stylus, the endobag's articulated
 // instrument with a soft bag on a fixed mount (a net on a body of the articulation).
 TEST(RunMultirate, TheOtherShippedScenesNeverAllocate) {
   NUMEN_REQUIRE_ARTICULATION();
@@ -357,4 +363,134 @@ TEST(RunMultirate, TheSceneThreadsSetupIsReported) {
   for (const std::string& line : s.realtime_setup)
     reported = reported || line.rfind("scene thread cpu affinity: ", 0) == 0;
   EXPECT_TRUE(reported) << (s.realtime_setup.empty() ? "no real-time setup lines" : s.realtime_setup.back());
+}
+
+namespace {
+
+/// `periods` periods (default: the scene's duration) of an admittance scene through an
+/// AdmittanceRunner.
+RunSummary run_admittance(const Scene& scene, std::int64_t periods = -1) {
+  numen::sim::AdmittanceRunner runner(scene);
+  if (periods < 0) periods = std::llround(scene.duration_s / scene.model.dt);
+  for (std::int64_t k = 0; k < periods; ++k) runner.period();
+  runner.finish();
+  return runner.summary();
+}
+
+}  // namespace
+
+// The admittance scene (a force sensor drives the god-object, the device is commanded its pose;
+// the hand goes 25 mm into an organ and holds): with the device loop at 1 kHz and the scene loop
+// at 1 kHz, 200 Hz and 100 Hz the probe stops on the organ as in the single-rate run — the same
+// penetration (the penalty contact balances the same measured force), the device as close to
+// the god-object, the same largest measured force — and the scene loop steps every N-th period.
+TEST(RunMultirate, AdmittanceSceneAtRateRatiosOneFiveAndTen) {
+  numen::test::TempDir dir;
+  // As shipped, the hand presses along the organ's normal (the tangent plane is then exact), and
+  // a variant where it crosses the organ obliquely, 60 mm sideways, so that the probe slides over
+  // the surface on planes up to N periods old.
+  for (const bool oblique : {false, true}) {
+    auto scene = [&](double scene_dt, double margin) {
+      if (!oblique) return shipped_scene(dir, "admittance.toml", 0.001, scene_dt, margin);
+      return shipped_scene(dir, "admittance.toml", 0.001, scene_dt, margin,
+                           {{"start = { position = [0.0, 0.0, 0.075] }",
+                             "start = { position = [0.03, 0.0, 0.075] }"},
+                            {"to = [0.0, 0.0, 0.02]", "to = [-0.03, 0.0, 0.02]"}});
+    };
+    const RunSummary single = run_admittance(scene(0.0, 0.0));
+    ASSERT_FALSE(single.multirate.enabled);
+    std::printf("%s\n%-22s tool %.6f mm, hand %.2f mm, device error rms %.6f mm, force max %.6f N\n",
+                oblique ? "oblique" : "as shipped", "single-rate", single.tool_penetration_max_mm,
+                single.target_penetration_max_mm, single.admittance.device_error_rms_mm,
+                single.admittance.measured_force_max_n);
+    struct Case {
+      double scene_dt, margin;
+    };
+    for (const Case c : {Case{0.001, 0.0}, Case{0.005, 0.005}, Case{0.01, 0.005}}) {
+      const RunSummary s = run_admittance(scene(c.scene_dt, c.margin));
+      const int n = static_cast<int>(std::lround(c.scene_dt / 0.001));
+      std::printf("%-22s tool %.6f mm, hand %.2f mm, device error rms %.6f mm, force max %.6f N, "
+                  "scene steps %lld, planes max %lld\n",
+                  (std::string("multirate N = ") + std::to_string(n)).c_str(), s.tool_penetration_max_mm,
+                  s.target_penetration_max_mm, s.admittance.device_error_rms_mm,
+                  s.admittance.measured_force_max_n, static_cast<long long>(s.multirate.scene_steps),
+                  static_cast<long long>(s.multirate.planes_max));
+      EXPECT_TRUE(s.multirate.enabled);
+      EXPECT_EQ(s.steps, single.steps);
+      EXPECT_EQ(s.multirate.scene_steps, (single.steps + n - 1) / n) << n;
+      EXPECT_GT(s.multirate.planes_max, 0) << n;
+      EXPECT_NEAR(s.tool_penetration_max_mm, single.tool_penetration_max_mm,
+                  0.05 * single.tool_penetration_max_mm) << n;
+      EXPECT_NEAR(s.admittance.device_error_rms_mm, single.admittance.device_error_rms_mm,
+                  0.05 * single.admittance.device_error_rms_mm) << n;
+      EXPECT_NEAR(s.admittance.measured_force_max_n, single.admittance.measured_force_max_n,
+                  0.02 * single.admittance.measured_force_max_n) << n;
+      // The hand went into the organ (25 mm pressing, 10 mm crossing).
+      EXPECT_GT(s.target_penetration_max_mm, oblique ? 9.0 : 24.0) << n;
+      EXPECT_EQ(s.admittance.sensor_rejected_periods, 0) << n;
+      EXPECT_EQ(s.admittance.hold_periods, 0) << n;
+      EXPECT_EQ(s.nonfinite_steps, 0) << n;
+      EXPECT_FALSE(s.nan_detected) << n;
+    }
+  }
+}
+
+// 10 000 periods of the multirate admittance scene (past the end of its trajectory), 2 000 scene
+// steps: no heap allocation in either loop; two runs are bit-identical.
+TEST(RunMultirate, AdmittanceScenePeriodNeverAllocatesAndRepeats) {
+  numen::test::TempDir dir;
+  const Scene scene = shipped_scene(dir, "admittance.toml", 0.001, 0.005, 0.005);
+  numen::sim::AdmittanceRunner a(scene), b(scene);
+  a.period();
+  std::int64_t count = -1;
+  {
+    numen::test::AllocationGuard guard;
+    for (int k = 1; k < 10'000; ++k) a.period();
+    count = guard.count();
+  }
+  EXPECT_EQ(count, 0) << "heap allocations in 10 000 multirate admittance periods";
+  for (int k = 0; k < 10'000; ++k) b.period();
+  a.finish();
+  b.finish();
+  EXPECT_EQ(a.summary().multirate.scene_steps, 2000);
+  EXPECT_GT(a.summary().contacts_max, 0);
+  for (std::size_t i = 0; i < a.data().bodies.size(); ++i) {
+    EXPECT_EQ(std::memcmp(a.data().bodies[i].position.data(), b.data().bodies[i].position.data(),
+                          3 * sizeof(double)), 0);
+    EXPECT_EQ(std::memcmp(a.data().bodies[i].linear_velocity.data(),
+                          b.data().bodies[i].linear_velocity.data(), 3 * sizeof(double)), 0);
+  }
+  EXPECT_EQ(a.summary().admittance.measured_force_max_n, b.summary().admittance.measured_force_max_n);
+}
+
+// A paced admittance run (--realtime) steps the scene loop on its own thread, with its CPU
+// affinity reported like the impedance runs'; the loop thread's own setup (--cpu) is applied and
+// reported too (an admittance run used to ignore it).
+TEST(RunMultirate, APacedAdmittanceRunStepsTheSceneOnItsOwnThread) {
+  numen::test::TempDir dir;
+  numen::sim::RunOptions options;
+  options.realtime = true;
+  options.duration_s = 0.5;
+  options.scene_thread.cpu_affinity = {0};
+  options.rt.cpu_affinity = {4095};  // no such CPU here: reported as failed, the run goes on
+  const Scene scene = shipped_scene(dir, "admittance.toml", 0.001, 0.005, 0.005);
+  RunSummary s;
+  std::thread loop([&] { s = numen::sim::run_scene(scene, options); });  // not this thread's setup
+  loop.join();
+  std::printf("paced admittance: %lld scene steps, %lld stale of %lld, loop overruns %lld\n",
+              static_cast<long long>(s.multirate.scene_steps), static_cast<long long>(s.multirate.stale_models),
+              static_cast<long long>(s.steps), static_cast<long long>(s.realtime_overruns));
+  EXPECT_TRUE(s.admittance.enabled);
+  EXPECT_TRUE(s.multirate.scene_thread);
+  EXPECT_GE(s.multirate.scene_steps, 80);
+  EXPECT_LE(s.multirate.scene_steps, 110);
+  EXPECT_LT(s.multirate.stale_models, s.steps / 2);
+  EXPECT_FALSE(s.nan_detected);
+  bool scene_reported = false, loop_reported = false;
+  for (const std::string& line : s.realtime_setup) {
+    scene_reported = scene_reported || line.rfind("scene thread cpu affinity: ", 0) == 0;
+    loop_reported = loop_reported || line.rfind("cpu affinity: ", 0) == 0;
+  }
+  EXPECT_TRUE(scene_reported);
+  EXPECT_TRUE(loop_reported);
 }

@@ -327,9 +327,10 @@ class MultirateGodObject {
   void step() noexcept;
 
   /// Device loop: the device Data's targets from `scene_data`, a Data of the scene (the run's,
-  /// which the control loop fills): the attached body's target and target twist (Eq. 2), and
-  /// the body targets (Eq. 6) and prescribed joint values of the god-object's other bodies and
-  /// joints. Never allocates.
+  /// which the control loop fills): the attached body's target and target twist (Eq. 2), the
+  /// measured device wrench (Data::device_wrench, CouplingMode::kAdmittance), and the body
+  /// targets (Eq. 6) and prescribed joint values of the god-object's other bodies and joints.
+  /// Never allocates.
   void take_targets(const Data& scene_data) noexcept;
   /// The god-object's bodies (scene indices, god-object model order; empty: none held).
   std::span<const int> god_object() const noexcept;

@@ -8,7 +8,8 @@
 ///                 force_timeout_periods, or out of range, latches the safe state)
 ///                 → data.device_wrench = the measured wrench in the world, about the held
 ///                 body's COM (sensor frame → world through the forward kinematics of the
-///                 set-points) → core::step (CouplingMode::kAdmittance)
+///                 set-points) → core::step (CouplingMode::kAdmittance), or the step
+///                 function set_step_function() installed (the multirate device period)
 ///                 → the held body's pose → inverse kinematics → csp RPDOs (controlword
 ///                 enable operation + target position) on the bus.
 /// Outside kActive the drives get controlword shutdown (0x0006, CiA 402: operation disabled)
@@ -83,6 +84,19 @@ class AdmittanceLoop {
   /// kFault → kInactive once the reading is valid again; auto_activate then follows.
   hal::LifecycleResult rearm() noexcept { return lifecycle_.rearm(); }
 
+  /// What end_period() calls instead of core::step(model, data): a function of `context` that
+  /// advances the loop's Data by one control period as core::step() would — reads
+  /// data.device_wrench (the measured wrench or the brake), leaves the held body's state in
+  /// data.bodies — e.g. the multirate god-object's device period (core::MultirateGodObject::
+  /// take_targets(), step(), write_feedback(); docs/multirate.md). Null restores core::step.
+  /// Must not allocate, throw, lock or block: it runs in the real-time period. Not while
+  /// end_period() runs. (ControlLoop::set_step_function is the impedance loop's.)
+  using StepFunction = void (*)(void* context) noexcept;
+  void set_step_function(StepFunction step, void* context) noexcept {
+    step_function_ = step;
+    step_context_ = context;
+  }
+
   const hal::DeviceLifecycle& lifecycle() const noexcept { return lifecycle_; }
   const AdmittanceLoopCounters& counters() const noexcept { return counters_; }
   const AdmittanceReport& last_report() const noexcept { return report_; }
@@ -100,6 +114,8 @@ class AdmittanceLoop {
   std::uint8_t sync_counter_ = 0;
   AdmittanceReport report_;
   AdmittanceLoopCounters counters_;
+  StepFunction step_function_ = nullptr;  // null: core::step
+  void* step_context_ = nullptr;
 };
 
 }  // namespace numen::platform

@@ -11,6 +11,9 @@
 ///                two sensor TPDOs
 ///   t + phase    controller: read, check, measured wrench → core::step → IK → csp RPDOs
 ///                (taken by the drives before the next SYNC)
+/// With [multirate] (docs/multirate.md) the loop's core::step is the multirate god-object's
+/// device period (MultirateRun), the scene loop interleaved every N periods or, in a paced
+/// run, on its own thread (start_scene_thread()).
 /// The constructor allocates; period() never allocates, throws or locks (tested).
 
 #include <cstdint>
@@ -24,6 +27,8 @@
 #include "numen/hal/transport/sim_bus.hpp"
 #include "numen/platform/admittance_loop.hpp"
 #include "numen/platform/latency_histogram.hpp"
+#include "numen/platform/multirate_threads.hpp"
+#include "numen/sim/multirate_run.hpp"
 #include "numen/sim/run.hpp"
 #include "numen/sim/scene.hpp"
 #include "numen/sim/view_output.hpp"
@@ -47,7 +52,12 @@ class AdmittanceRunner {
   /// InputError at --record-view when the file cannot be created.
   void stream_view(const std::string& record_path, std::vector<platform::StateFrameSink*> sinks,
                    double rate_hz, bool wait);
-  /// Delivers and closes the state stream (if any). Idempotent.
+  /// A multirate scene in a paced run: steps the scene loop on its own thread from now on
+  /// (MultirateRun::start_scene_thread()) until finish(); nothing for a single-rate scene.
+  /// Allocates (call before the first period). Throws std::system_error if the thread cannot
+  /// start.
+  void start_scene_thread(const platform::SceneThreadSettings& settings);
+  /// Stops the scene thread (if any), delivers and closes the state stream (if any). Idempotent.
   void finish();
   /// Periods run so far.
   std::int64_t periods() const noexcept { return k_; }
@@ -61,6 +71,8 @@ class AdmittanceRunner {
   const hal::AdmittanceDevice& device() const noexcept { return device_; }
   const platform::AdmittanceLoop& loop() const noexcept { return loop_; }
   platform::AdmittanceLoop& loop() noexcept { return loop_; }
+  /// The multirate god-object (enabled() false in a single-rate run) and its scene thread.
+  const MultirateRun& multirate() const noexcept { return multirate_; }
   /// Where the hand was at the last period (the controlled frame's target, world).
   const core::Pose& hand_pose() const noexcept { return hand_; }
   /// Deepest contact of the held body at the hand's pose in the last period (m).
@@ -76,6 +88,9 @@ class AdmittanceRunner {
   core::Data data_;
   core::Data ghost_;  // the held body placed at the hand, for measurement
   platform::AdmittanceLoop loop_;
+  /// Stepped in place of core::step by the loop (AdmittanceLoop::set_step_function) with
+  /// [multirate]; not enabled in a single-rate run.
+  MultirateRun multirate_;
   platform::LatencyHistogram step_time_;
   std::int64_t k_ = 0;
   std::int64_t period_ns_;

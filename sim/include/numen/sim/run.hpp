@@ -21,6 +21,7 @@
 #include "numen/platform/latency_histogram.hpp"
 #include "numen/platform/loop_statistics.hpp"
 #include "numen/platform/multirate_threads.hpp"
+#include "numen/sim/multirate_run.hpp"
 #include "numen/platform/realtime_setup.hpp"
 #include "numen/platform/state_stream.hpp"
 #include "numen/platform/trace_queue.hpp"
@@ -416,8 +417,9 @@ class SceneRunner {
   /// Allocates (call before the first period). Throws std::system_error if the thread cannot
   /// start.
   void start_scene_thread(const platform::SceneThreadSettings& settings);
-  /// The scene thread (null: none started); read its realtime_report() after finish().
-  const platform::MultirateThreads* scene_thread() const noexcept { return scene_thread_.get(); }
+  /// The multirate god-object (MultirateRun::enabled() false in a single-rate run) and its
+  /// scene thread; read the thread's realtime_report() after finish().
+  const MultirateRun& multirate() const noexcept { return multirate_; }
 
   /// Ends the run's streams: stops the bus recorder's and the trace's writer threads, which
   /// write what is still queued and flush, so that summary() reports what reached the files.
@@ -471,11 +473,8 @@ class SceneRunner {
   void accumulate_step_figures(const platform::PeriodReport& report, const PeriodContacts& c) noexcept;
   /// The period's trace record: in memory (trace_) and streamed (trace_writer_).
   void record(const platform::PeriodReport& report, const PeriodContacts& c) noexcept;
-  /// The loop's step in a multirate run: the device holds data_.attached_body (tool
-  /// switching), the device loop gets data_'s targets, the device period runs (and the scene
-  /// period on one thread), data_ gets the god-object's state and feedback
-  /// (core::MultirateGodObject::write_feedback()); period() writes the rest of the single-rate
-  /// view (view()) after the timed step, before measuring.
+  /// The loop's step in a multirate run: MultirateRun::step(data_); period() writes the rest
+  /// of the single-rate view (MultirateRun::view()) after the timed step, before measuring.
   static void step_multirate(void* runner) noexcept;
 
   const Scene* scene_;
@@ -493,10 +492,8 @@ class SceneRunner {
   core::Data ghost_;  // the held body placed at the target, for measurement
   platform::ControlLoop loop_;
   /// The multirate god-object (scene [multirate]), stepped in place of core::step by the
-  /// loop (ControlLoop::set_step_function); null in a single-rate run.
-  std::unique_ptr<core::MultirateGodObject> multirate_;
-  /// Its scene thread in a paced run (start_scene_thread()); null: one thread.
-  std::unique_ptr<platform::MultirateThreads> scene_thread_;
+  /// loop (ControlLoop::set_step_function); not enabled in a single-rate run.
+  MultirateRun multirate_;
   Trace trace_;
   std::int64_t k_ = 0;
   std::size_t next_event_ = 0;
