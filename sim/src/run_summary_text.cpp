@@ -58,10 +58,13 @@ constexpr RunSummarySegment kLayout[] = {
     {"  multirate: scene loop every {multirate.scene_dt_s:ms} ms ({multirate.ratio} device "
      "periods), margin {multirate.margin_mm} mm; {multirate.scene_steps} scene steps, planes max "
      "{multirate.planes_max}, dropped {multirate.planes_dropped}, stale models "
-     "{multirate.stale_models}, tool switches {multirate.switches}; feedback force jump max "
-     "{multirate.model_force_jump_max_n} N at a new model, {multirate.other_force_jump_max_n} N "
-     "otherwise\n",
+     "{multirate.stale_models}, tool switches {multirate.switches}",
      set("multirate.enabled")},
+    // An admittance device is sent poses, not forces: no feedback force to jump.
+    {"; feedback force jump max {multirate.model_force_jump_max_n} N at a new model, "
+     "{multirate.other_force_jump_max_n} N otherwise",
+     set("multirate.enabled"), unset("admittance.enabled")},
+    {"\n", set("multirate.enabled")},
     {"  multirate scene thread: {multirate.scene_overruns} overruns; scene step us: median "
      "{multirate.scene_step_us.median}, p99 {multirate.scene_step_us.p99}, max "
      "{multirate.scene_step_us.max}\n",
