@@ -1,8 +1,10 @@
 // Tests of the multirate run (scene [multirate], SceneRunner with core::MultirateGodObject):
 // the construction scene — a held block carried through a tower, released, another picked up
-// (tool switching) — and the default scene — an articulated haptic instrument — run with the
-// device loop at 1 kHz and the scene loop slower: close to the single-rate run, clean,
-// deterministic, allocation-free; a paced run with the scene loop on its own thread.
+// (tool switching) —, the default scene — an articulated haptic instrument —, the deformable and
+// endobag scenes — nets on the god-object — and the admittance scene — a god-object driven by a
+// measured force (AdmittanceRunner) — run with the device loop at 1 kHz and the scene loop
+// slower: close to the single-rate run, clean, deterministic, allocation-free; paced runs with
+// the scene loop on its own thread.
 #include <gtest/gtest.h>
 
 #include <cmath>
