@@ -3,7 +3,9 @@
 
 #include "numen/sim/scene_info.hpp"
 
+#include <algorithm>
 #include <cstdio>
+#include <filesystem>
 #include <iomanip>
 #include <sstream>
 
@@ -69,6 +71,26 @@ SceneInfo describe_scene(const Scene& scene) {
   info.node_contact_capacity = static_cast<int>(data.node_contacts.size());
   info.model_bytes = core::model_footprint(m);
   info.data_bytes = core::data_footprint(data);
+  const hal::DeviceConfig& device = scene.device;
+  info.device_name = device.name;
+  info.device_kind = hal::to_string(device.kind);
+  info.device_managed = device.canopen.managed;
+  for (const hal::AxisConfig& a : device.axes) info.device_axes.push_back({a.name, a.rated_torque});
+  if (device.canopen.managed) {
+    for (std::size_t a = 0; a < device.canopen.axes.size(); ++a) {
+      const hal::CanopenAxisConfig& c = device.canopen.axes[a];
+      auto node = std::find_if(info.device_nodes.begin(), info.device_nodes.end(),
+                               [&](const DeviceNodeLine& n) { return n.node_id == c.node_id; });
+      if (node == info.device_nodes.end()) {
+        DeviceNodeLine n;
+        n.node_id = c.node_id;
+        if (c.dcf) n.dcf = std::filesystem::absolute(c.dcf->path).lexically_normal().string();
+        info.device_nodes.push_back(std::move(n));
+        node = info.device_nodes.end() - 1;
+      }
+      node->axes.push_back(static_cast<int>(a));
+    }
+  }
   return info;
 }
 
@@ -100,6 +122,13 @@ std::string format_scene_info(const SceneInfo& i) {
      << bytes(i.data_bytes.heap_bytes()) << "\n";
   for (const core::BufferGroupBytes& g : i.data_bytes.groups)
     os << "    " << std::left << std::setw(24) << g.group << std::right << bytes(g.heap_bytes) << "\n";
+  os << "  device " << i.device_name << ": " << i.device_kind << ", " << i.device_axes.size()
+     << " axes, " << (i.device_managed ? "managed CANopen stack" : "minimal protocol") << "\n";
+  for (const DeviceNodeLine& n : i.device_nodes) {
+    os << "    node " << n.node_id << ":";
+    for (int a : n.axes) os << " " << i.device_axes[static_cast<std::size_t>(a)].name;
+    os << (n.dcf.empty() ? " (no DCF)" : ", DCF " + n.dcf) << "\n";
+  }
   return os.str();
 }
 
@@ -134,6 +163,16 @@ std::string format_scene_info_json(const SceneInfo& i) {
   j["data_bytes"] = {{"sizeof", i.data_bytes.sizeof_data},
                      {"heap", i.data_bytes.heap_bytes()},
                      {"groups", json_groups(i.data_bytes.groups)}};
+  nlohmann::ordered_json axes = nlohmann::ordered_json::array();
+  for (const DeviceAxisLine& a : i.device_axes) axes.push_back({{"name", a.name}, {"rated_torque", a.rated_torque}});
+  nlohmann::ordered_json nodes = nlohmann::ordered_json::array();
+  for (const DeviceNodeLine& n : i.device_nodes)
+    nodes.push_back({{"node_id", n.node_id}, {"dcf", n.dcf}, {"axes", n.axes}});
+  j["device"] = {{"name", i.device_name},
+                 {"kind", i.device_kind},
+                 {"managed", i.device_managed},
+                 {"axes", std::move(axes)},
+                 {"nodes", std::move(nodes)}};
   // A scene's file name may hold bytes that are not UTF-8: replaced by U+FFFD instead of throwing.
   return j.dump(-1, ' ', false, nlohmann::ordered_json::error_handler_t::replace);
 }

@@ -109,7 +109,7 @@ const bus = (pty) => `serial:${pty.path}@${BAUD}`;
  *  0x6076). Throws when the scene's nodes are not NODES. */
 function sceneDcfs(options) {
     const { sceneNodes } = require('./lib/scene');
-    const nodes = sceneNodes(options.scene);
+    const nodes = sceneNodes(options.numen, options.scene);
     const ids = nodes.map((n) => n.nodeId);
     if (ids.join() !== NODES.join())
         throw new Error(`${options.scene}: CANopen nodes ${ids.join(', ')}, the scenarios play ${NODES.join(', ')}`);
@@ -234,17 +234,16 @@ const RUN_PHASE = 0.008;  // s after the SYNC numen reads the answers (--phase)
 const RUN_SECONDS = 10;
 const RUN_ATTEMPTS = 3;   // runs at most, on fresh lines and nodes (SCENARIOS.run.ptys)
 
-/** A copy of the scene (sceneWithDcfs) stepped at `dt` seconds: its `dt = 0.001` line replaced
- *  and its max_sample_age line dropped (the default, 3 periods, then applies), as the HIL
- *  suite's pair_scene does. Throws when the scene has no such lines. */
+/** A copy of the scene (sceneWithDcfs) stepped at `dt` seconds: its `dt` replaced and its
+ *  [device] max_sample_age dropped (the default, 3 periods, then applies), as the HIL suite's
+ *  pair_scene does. Throws when the scene has no such keys. */
 function sceneAtPeriod(options, dt) {
-    const { scene, dir } = sceneWithDcfs(options);
-    const text = fs.readFileSync(scene, 'utf-8');
-    const edited = text.replace(/^dt = 0\.001$/m, `dt = ${dt}`).replace(/^max_sample_age = .*\n/m, '');
-    if (!new RegExp(`^dt = ${dt}$`, 'm').test(edited) || edited.split('\n').length !== text.split('\n').length - 1)
-        throw new Error(`${options.scene}: no 'dt = 0.001' and 'max_sample_age = ' lines to replace`);
-    fs.writeFileSync(scene, edited);
-    return { scene, dir };
+    return sceneWithDcfs(options, {}, (doc) => {
+        if (doc.dt === undefined || doc.device?.max_sample_age === undefined)
+            throw new Error(`${options.scene}: no dt and [device] max_sample_age to replace`);
+        doc.dt = dt;
+        delete doc.device.max_sample_age;
+    });
 }
 
 async function runOnce(options, pty) {
@@ -403,13 +402,14 @@ async function startupWithoutBootUp(options, ptys) {
 // file and line, before any node is started.
 
 /** A copy of the scene in a temporary directory: its relative paths (the DCFs, the recording)
- *  made absolute and node n's DCF replaced by dcfOverrides[n] (lib/scene.js; the scene's own
- *  [[device.canopen.axis]] tables are edited, none added). Returns {scene, dir}. */
-function sceneWithDcfs(options, dcfOverrides = {}) {
+ *  made absolute, node n's DCF replaced by dcfOverrides[n] (lib/scene.js; the scene's own
+ *  [[device.canopen.axis]] tables are edited, none added) and `edit(doc)` applied to the parsed
+ *  scene. Returns {scene, dir}. */
+function sceneWithDcfs(options, dcfOverrides = {}, edit = undefined) {
     const { sceneTextWithDcfs } = require('./lib/scene');
     const dir = fs.mkdtempSync(path.join(os.tmpdir(), 'numen-interop-'));
     const scene = path.join(dir, `${path.basename(options.scene, '.toml')}_with_dcfs.toml`);
-    fs.writeFileSync(scene, sceneTextWithDcfs(options.scene, dcfOverrides));
+    fs.writeFileSync(scene, sceneTextWithDcfs(options.numen, options.scene, dcfOverrides, edit));
     return { scene, dir };
 }
 

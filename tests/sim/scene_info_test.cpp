@@ -1,8 +1,9 @@
 // Tests of sim/scene_info: `numen info` on the shipped scenes — sizes from the
 // Model, stages equal to those step() runs, bytes equal to what make_data()
-// asked the allocator for.
+// asked the allocator for, the device's CANopen nodes as the scene configures them.
 #include "numen/sim/scene_info.hpp"
 
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -120,4 +121,44 @@ TEST(SceneInfo, JsonEscapesNamesAndReplacesBytesThatAreNotUtf8) {
   ASSERT_TRUE(nlohmann::json::accept(out)) << out;
   EXPECT_EQ(nlohmann::json::parse(out).at("name"),
             "quote \" backslash \\ tab \t bad \xef\xbf\xbd end");
+}
+
+// The device part (what tests/interop/lib/scene.js reads instead of the scene file): every axis
+// of a managed-stack device is served by exactly one node, with the node id and the DCF (an
+// absolute path to a file that exists) the scene gave it; text and JSON agree.
+TEST(SceneInfo, DeviceNodesAreTheScenesCanopenAxes) {
+  for (const std::string& name : shipped_scenes()) {
+    const sim::Scene scene = sim::load_scene(shipped(name));
+    const sim::SceneInfo i = sim::describe_scene(scene);
+    const nlohmann::json device = nlohmann::json::parse(sim::format_scene_info_json(i)).at("device");
+    const std::string text = sim::format_scene_info(i);
+    EXPECT_EQ(device.at("name"), scene.device.name) << name;
+    EXPECT_EQ(device.at("managed"), scene.device.canopen.managed) << name;
+    ASSERT_EQ(device.at("axes").size(), scene.device.axes.size()) << name;
+    for (std::size_t a = 0; a < scene.device.axes.size(); ++a) {
+      EXPECT_EQ(device.at("axes").at(a).at("name"), scene.device.axes[a].name) << name;
+      EXPECT_EQ(device.at("axes").at(a).at("rated_torque"), scene.device.axes[a].rated_torque) << name;
+    }
+    if (!scene.device.canopen.managed) {
+      EXPECT_TRUE(device.at("nodes").empty()) << name;
+      continue;
+    }
+    std::vector<int> served(scene.device.canopen.axes.size(), 0);
+    for (const nlohmann::json& n : device.at("nodes")) {
+      const int id = n.at("node_id");
+      EXPECT_NE(text.find("node " + std::to_string(id) + ":"), std::string::npos) << name;
+      const std::string dcf = n.at("dcf");
+      for (int a : n.at("axes")) {
+        ++served.at(static_cast<std::size_t>(a));
+        const numen::hal::CanopenAxisConfig& c = scene.device.canopen.axes[static_cast<std::size_t>(a)];
+        EXPECT_EQ(c.node_id, id) << name << " axis " << a;
+        EXPECT_EQ(c.dcf != nullptr, !dcf.empty()) << name << " axis " << a;
+      }
+      if (!dcf.empty()) {
+        EXPECT_TRUE(std::filesystem::path(dcf).is_absolute()) << dcf;
+        EXPECT_TRUE(std::filesystem::exists(dcf)) << dcf;
+      }
+    }
+    for (std::size_t a = 0; a < served.size(); ++a) EXPECT_EQ(served[a], 1) << name << " axis " << a;
+  }
 }

@@ -22,6 +22,20 @@ struct StageLine {
   std::string skipped_why;  ///< Why not, when !runs (e.g. "no joints").
 };
 
+/// One axis of the scene's device ([[device.axis]]).
+struct DeviceAxisLine {
+  std::string name;
+  double rated_torque = 0.0;  ///< N·m or N: the drive's 1000 per mille (AxisConfig::rated_torque).
+};
+
+/// One CANopen node of the scene's device in the managed stack ([device.canopen],
+/// [[device.canopen.axis]]): the axes it serves, in node order of first appearance.
+struct DeviceNodeLine {
+  int node_id = 0;
+  std::string dcf;        ///< Its DCF, an absolute path; empty without one.
+  std::vector<int> axes;  ///< Indices into SceneInfo::device_axes.
+};
+
 /// What a scene compiles to.
 struct SceneInfo {
   std::string name;
@@ -38,6 +52,11 @@ struct SceneInfo {
   int node_contact_capacity = 0;   ///< Data::node_contacts.size(): kMaxNodeContacts with nets, else 0.
   core::ModelFootprint model_bytes;
   core::DataFootprint data_bytes;  ///< Of a Data made by make_data() for the scene.
+  std::string device_name;         ///< [device] name.
+  std::string device_kind;         ///< hal::to_string(DeviceKind).
+  bool device_managed = false;     ///< The managed CANopen stack ([device.canopen] managed).
+  std::vector<DeviceAxisLine> device_axes;
+  std::vector<DeviceNodeLine> device_nodes;  ///< Managed stack only; else empty.
 };
 
 /// Describes a loaded scene (makes one Data to measure it). Load time only: allocates.
@@ -48,7 +67,8 @@ std::string format_scene_info(const SceneInfo& info);
 
 /// The same as one JSON object (no trailing newline): keys name, file,
 /// integrator, coupling, dt_s, sizes{...}, stages[{name, runs, skipped_why}],
-/// capacities{...}, model_bytes{sizeof, heap, groups{...}}, data_bytes{...}.
+/// capacities{...}, model_bytes{sizeof, heap, groups{...}}, data_bytes{...},
+/// device{name, kind, managed, axes[{name, rated_torque}], nodes[{node_id, dcf, axes[]}]}.
 std::string format_scene_info_json(const SceneInfo& info);
 
 }  // namespace numen::sim
