@@ -12,6 +12,7 @@
 #include "numen/platform/monotonic_clock.hpp"
 #include "numen/platform/periodic_timer.hpp"
 #include "numen/platform/realtime_setup.hpp"
+#include "numen/sim/input_error.hpp"
 #include "numen/sim/simulated_instrument.hpp"
 
 namespace numen::sim {
@@ -24,13 +25,18 @@ const AdmittanceScene& admittance_of(const Scene& scene) {
   return *scene.admittance;
 }
 
-/// Deepest contact (m) of `body` among data's contacts; 0 if none.
-double deepest_of(const core::Data& data, int body) noexcept {
+/// Deepest contact (m) of `body` among data's contacts (0 if none); `count` (if given): how many.
+double deepest_of(const core::Data& data, int body, int* count = nullptr) noexcept {
   double deepest = 0.0;
+  int n = 0;
   for (int i = 0; i < data.num_contacts; ++i) {
     const core::Contact& c = data.contacts[static_cast<std::size_t>(i)];
-    if (c.body_a == body || c.body_b == body) deepest = std::max(deepest, c.depth);
+    if (c.body_a == body || c.body_b == body) {
+      deepest = std::max(deepest, c.depth);
+      ++n;
+    }
   }
+  if (count != nullptr) *count = n;
   return deepest;
 }
 
@@ -46,7 +52,7 @@ hal::AxisVector initial_axes(const Scene& scene) {
 
 }  // namespace
 
-AdmittanceRunner::AdmittanceRunner(const Scene& scene)
+AdmittanceRunner::AdmittanceRunner(const Scene& scene, std::size_t trace_capacity)
     : scene_(&scene),
       bus_(scene.bus),
       emulator_(scene.device, admittance_of(scene).config, admittance_of(scene).emulator),
@@ -71,6 +77,7 @@ AdmittanceRunner::AdmittanceRunner(const Scene& scene)
   acc_.managed = false;
   acc_.startup = "admittance: SYNC, force TPDOs, csp RPDOs (no NMT start-up)";
   view_axis_values_.assign(scene.device.axes.size(), 0.0);
+  trace_.reserve(trace_capacity);
 }
 
 void AdmittanceRunner::stream_view(const std::string& record_path,
@@ -112,10 +119,11 @@ void AdmittanceRunner::period() noexcept {
   AdmittanceSummary& a = s.admittance;
   const int held = data_.attached_body;
   hand_pen_ = tool_pen_ = 0.0;
+  int tool_contacts = 0;
   const core::Vec3 x_dev = emulator_.pose().position;
   if (held >= 0) {
     const auto h = static_cast<std::size_t>(held);
-    tool_pen_ = deepest_of(data_, held);
+    tool_pen_ = deepest_of(data_, held, &tool_contacts);
     ghost_.bodies = data_.bodies;  // same size: no allocation
     ghost_.bodies[h].position = hand_.position;
     ghost_.bodies[h].orientation = hand_.orientation;
@@ -144,18 +152,21 @@ void AdmittanceRunner::period() noexcept {
   if (data_.solver_residual > s.solver_residual_max) s.solver_residual_max = data_.solver_residual;
   if (data_.status & core::kSolverNotConverged) ++s.solver_not_converged_steps;
   if (r.entered_safe_stop) ++s.faults;
-  if (view_) {
-    // The frame in an admittance run (docs/viewer.md, "Admittance runs"): the ghost is the
-    // hand, the wrench the measured one that drove the god-object, no axis torque.
-    data_.target = hand_;  // not read by the admittance coupling (core/src/coupling.cpp)
-    view_report_.sample_valid = r.sample_valid;
-    view_report_.target_ready = true;
-    view_report_.step_ns = r.step_ns;
-    view_report_.feedback = r.measured;
-    view_report_.lifecycle = r.lifecycle;
+  // The frame and the trace record of an admittance period (docs/viewer.md, "Admittance
+  // runs"; docs/scenes.md): the target is the hand, the wrench the measured one that drove the
+  // god-object, no axis torque.
+  data_.target = hand_;  // not read by the admittance coupling (core/src/coupling.cpp)
+  view_report_.sample_valid = r.sample_valid;
+  view_report_.target_ready = true;
+  view_report_.step_ns = r.step_ns;
+  view_report_.feedback = r.measured;
+  view_report_.lifecycle = r.lifecycle;
+  if (trace_.records().capacity() > 0)
+    trace_.push(make_trace_record(data_, held, tool_contacts, tool_pen_, hand_pen_, view_report_,
+                                  hal::AxisVector()));
+  if (view_)
     view_->publish(data_, view_report_, view_axis_values_,
                    {static_cast<std::uint64_t>(k_ - 1), tool_pen_, hand_pen_});
-  }
 }
 
 RunSummary AdmittanceRunner::summary() const {
@@ -188,9 +199,19 @@ RunSummary AdmittanceRunner::summary() const {
 }
 
 RunSummary run_admittance_scene(const Scene& scene, const RunOptions& options) {
+  // The emulated device lives on the scene's SimBus: another bus, or a log of it, is refused.
+  if (options.bus.spec != "sim")
+    throw InputError("", 0, 0, "--bus",
+                     "'" + options.bus.spec + "': the admittance scene '" + scene.name +
+                         "' runs its emulated device on the simulated bus only (use --bus sim)");
+  if (!options.bus.record_path.empty())
+    throw InputError("", 0, 0, "--record",
+                     "the admittance scene '" + scene.name +
+                         "' does not record its simulated bus (use --trace or --record-view)");
   const double duration = options.duration_s >= 0.0 ? options.duration_s : scene.duration_s;
   const auto steps = static_cast<std::int64_t>(std::llround(duration / scene.model.dt));
-  AdmittanceRunner runner(scene);
+  AdmittanceRunner runner(scene,
+                          options.trace_path.empty() ? 0 : in_memory_trace_capacity(steps));
   // A multirate scene's scene thread is started before the real-time setup pins and promotes
   // this thread (as run_impedance_scene does).
   if (options.realtime) runner.start_scene_thread(options.scene_thread);
@@ -224,11 +245,7 @@ RunSummary run_admittance_scene(const Scene& scene, const RunOptions& options) {
   s.realtime_setup = std::move(rt_lines);
   runner.multirate().describe_scene_thread(options.scene_thread, s.realtime_setup);
   s.stopped = stopped;
-  if (!options.trace_path.empty())
-    s.warnings.push_back("--trace is not supported for admittance scenes: no trace written");
-  if (options.bus.spec != "sim" || !options.bus.record_path.empty())
-    s.warnings.push_back(
-        "--bus / --record are not supported for admittance scenes: ran on the simulated bus");
+  if (!options.trace_path.empty()) runner.trace().write_csv(options.trace_path);
   return s;
 }
 

@@ -616,6 +616,20 @@ void SceneRunner::finish() {
   if (view_) view_->finish();
 }
 
+std::size_t in_memory_trace_capacity(std::int64_t periods) {
+  // One record per period kept until the run ends: a long --duration with --trace.
+  const double bytes = static_cast<double>(periods) * static_cast<double>(sizeof(TraceRecord));
+  if (bytes > static_cast<double>(kMaxInMemoryTraceBytes))
+    throw InputError("", 0, 0, "--trace",
+                     "a simulated run keeps one trace record (" +
+                         std::to_string(sizeof(TraceRecord)) + " bytes) per period until it "
+                         "ends: " + std::to_string(periods) + " periods need " +
+                         std::to_string(static_cast<long long>(bytes / (1 << 20))) +
+                         " MiB, more than the " + std::to_string(kMaxInMemoryTraceBytes >> 20) +
+                         " MiB a trace may take; shorten --duration");
+  return static_cast<std::size_t>(std::max<std::int64_t>(periods, 0));
+}
+
 namespace {
 
 RunSummary run_impedance_scene(const Scene& scene, const RunOptions& options) {
@@ -623,22 +637,10 @@ RunSummary run_impedance_scene(const Scene& scene, const RunOptions& options) {
   const auto steps = static_cast<std::int64_t>(std::llround(duration / scene.model.dt));
   const bool real = parse_bus_spec(options.bus.spec).real();
   // A real bus streams its trace through the TraceWriter; the in-memory trace is for sim runs,
-  // one record per period kept until the run ends: refused before anything is allocated when
-  // it would not fit the budget (a long --duration with --trace).
-  if (!options.trace_path.empty() && !real) {
-    const double bytes = static_cast<double>(steps) * static_cast<double>(sizeof(TraceRecord));
-    if (bytes > static_cast<double>(kMaxInMemoryTraceBytes))
-      throw InputError("", 0, 0, "--trace",
-                       "a simulated run keeps one trace record (" +
-                           std::to_string(sizeof(TraceRecord)) + " bytes) per period until it "
-                           "ends: " + std::to_string(steps) + " periods need " +
-                           std::to_string(static_cast<long long>(bytes / (1 << 20))) +
-                           " MiB, more than the " + std::to_string(kMaxInMemoryTraceBytes >> 20) +
-                           " MiB a trace may take; shorten --duration");
-  }
-  SceneRunner runner(scene,
-                     options.trace_path.empty() || real ? 0 : static_cast<std::size_t>(steps),
-                     options.bus, options.realtime, options.overrun_limit);
+  // refused before anything is allocated when it would not fit the budget.
+  const std::size_t trace_capacity =
+      options.trace_path.empty() || real ? 0 : in_memory_trace_capacity(steps);
+  SceneRunner runner(scene, trace_capacity, options.bus, options.realtime, options.overrun_limit);
   if (options.compute_phase_s >= 0.0) {
     if (!(options.compute_phase_s < scene.model.dt))
       throw InputError("", 0, 0, "--phase",

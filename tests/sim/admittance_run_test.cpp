@@ -7,6 +7,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <string>
@@ -92,11 +93,12 @@ TEST(AdmittanceScene, TheWholeRunComesBackOutAndReleases) {
 }
 
 TEST(AdmittanceScene, PeriodsDoNotAllocate) {
-  sim::AdmittanceRunner r(admittance_scene());
+  sim::AdmittanceRunner r(admittance_scene(), 3001);  // with a trace (--trace)
   r.period();
   numen::test::AllocationGuard guard;
   for (int k = 0; k < 3000; ++k) r.period();
   EXPECT_EQ(guard.count(), 0);
+  EXPECT_EQ(r.trace().records().size(), 3001u);
 }
 
 TEST(AdmittanceScene, PeriodsDoNotAllocateWhileStreaming) {
@@ -147,6 +149,96 @@ TEST(AdmittanceScene, RecordsTheHandAsGhostAndTheMeasuredWrench) {
   EXPECT_NEAR(f.norm(), r.loop().last_report().measured.force.norm(), 1e-3 * f.norm() + 1e-6);
   EXPECT_GT(f.norm(), 1.0);
   for (std::uint32_t a = 0; a < v.header().num_axes; ++a) EXPECT_EQ(v.axis_torque(a), 0.0f);
+}
+
+// `numen run --trace` of an admittance run: one row per period, the target is the hand, the
+// feedback the measured wrench, the tool the god-object; no axis column (no torque is sent).
+TEST(AdmittanceScene, TracesTheHandTheGodObjectAndTheMeasuredWrench) {
+  numen::test::TempDir dir;
+  const sim::Scene& scene = admittance_scene();
+  sim::RunOptions options;
+  options.duration_s = 2.7;  // to the end of the hold, 25 mm inside
+  options.trace_path = (dir / "trace.csv").string();
+  const sim::RunSummary s = sim::run_scene(scene, options);
+  EXPECT_EQ(s.exit_status, 0);
+  EXPECT_TRUE(s.warnings.empty());
+  std::ifstream in(options.trace_path);
+  std::string line;
+  ASSERT_TRUE(std::getline(in, line));
+  auto split = [](const std::string& l) {
+    std::vector<std::string> fields;
+    for (std::size_t b = 0, e; b <= l.size(); b = e + 1) {
+      e = std::min(l.find(',', b), l.size());
+      fields.push_back(l.substr(b, e - b));
+    }
+    return fields;
+  };
+  const std::vector<std::string> header = split(line);
+  auto col = [&](const std::string& name) {
+    const auto it = std::find(header.begin(), header.end(), name);
+    EXPECT_NE(it, header.end()) << name;
+    return static_cast<std::size_t>(it - header.begin());
+  };
+  for (const std::string& h : header) EXPECT_NE(h.rfind("axis_torque_", 0), 0u) << h;
+  std::vector<std::vector<double>> rows;
+  while (std::getline(in, line)) {
+    std::vector<double> row;
+    for (const std::string& f : split(line)) row.push_back(std::stod(f));
+    ASSERT_EQ(row.size(), header.size());
+    rows.push_back(std::move(row));
+  }
+  ASSERT_EQ(rows.size(), 2700u);
+  // Replays the same run alongside: the last row is its last period.
+  sim::AdmittanceRunner r(scene);
+  for (int k = 0; k < 2700; ++k) r.period();
+  const std::vector<double>& last = rows.back();
+  EXPECT_NEAR(last[col("time_s")], 2.7, 1e-9);
+  EXPECT_EQ(last[col("sample_valid")], 1.0);
+  EXPECT_NEAR(last[col("target_z")], r.hand_pose().position.z(), 1e-9);
+  EXPECT_NEAR(last[col("tool_z")], r.data().bodies[0].position.z(), 1e-9);
+  EXPECT_NEAR(last[col("tool_penetration_mm")], r.tool_penetration() * 1e3, 1e-6);
+  EXPECT_GT(last[col("target_penetration_mm")], 24.0);  // the hand, 25 mm inside
+  EXPECT_GE(last[col("tool_contacts")], 1.0);
+  const numen::core::Vec3 f(last[col("feedback_fx")], last[col("feedback_fy")],
+                            last[col("feedback_fz")]);
+  EXPECT_NEAR(f.norm(), r.loop().last_report().measured.force.norm(), 1e-6);
+  EXPECT_GT(f.norm(), 4.0);
+  // The deepest row is the run's deepest god-object contact.
+  double deepest = 0.0;
+  for (const auto& row : rows) deepest = std::max(deepest, row[col("tool_penetration_mm")]);
+  EXPECT_NEAR(deepest, s.tool_penetration_max_mm, 1e-6);
+}
+
+// The emulated device lives on the scene's SimBus: another bus or a bus recording is refused
+// before the run, naming the option (it used to run on the SimBus with a warning).
+TEST(AdmittanceScene, RefusesAnotherBusAndABusRecording) {
+  const sim::Scene& scene = admittance_scene();
+  sim::RunOptions options;
+  options.bus.spec = "log:/nonexistent.log";
+  try {
+    sim::run_scene(scene, options);
+    ADD_FAILURE() << "--bus log: was accepted";
+  } catch (const sim::InputError& e) {
+    EXPECT_EQ(e.key(), "--bus");
+    EXPECT_NE(std::string(e.what()).find("simulated bus only"), std::string::npos) << e.what();
+  }
+  options.bus.spec = "sim";
+  options.bus.record_path = "/tmp/never-written.log";
+  try {
+    sim::run_scene(scene, options);
+    ADD_FAILURE() << "--record was accepted";
+  } catch (const sim::InputError& e) {
+    EXPECT_EQ(e.key(), "--record");
+  }
+  options.bus.record_path.clear();
+  options.trace_path = "/tmp/never-written.csv";
+  options.duration_s = 1e7;  // 10^10 periods of trace
+  try {
+    sim::run_scene(scene, options);
+    ADD_FAILURE() << "a trace over the budget was accepted";
+  } catch (const sim::InputError& e) {
+    EXPECT_EQ(e.key(), "--trace");
+  }
 }
 
 TEST(AdmittanceScene, LostFramesAreRiddenThroughWithoutASafeStop) {

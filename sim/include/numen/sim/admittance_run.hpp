@@ -31,6 +31,7 @@
 #include "numen/sim/multirate_run.hpp"
 #include "numen/sim/run.hpp"
 #include "numen/sim/scene.hpp"
+#include "numen/sim/trace.hpp"
 #include "numen/sim/view_output.hpp"
 
 namespace numen::sim {
@@ -40,8 +41,9 @@ class AdmittanceRunner {
  public:
   /// `scene` (with Scene::admittance set) must outlive the runner. The device starts at the
   /// held body's initial pose (inverse kinematics), the hand at the trajectory's first sample.
+  /// `trace_capacity` trace records are reserved (0: no trace; a full trace counts its drops).
   /// Throws std::invalid_argument if the scene has no admittance device.
-  explicit AdmittanceRunner(const Scene& scene);
+  explicit AdmittanceRunner(const Scene& scene, std::size_t trace_capacity = 0);
 
   /// Runs control period k (see the file comment) and its measurements, and publishes it to
   /// the state stream if stream_view() was called.
@@ -79,6 +81,10 @@ class AdmittanceRunner {
   double hand_penetration() const noexcept { return hand_pen_; }
   /// Deepest contact of the held body (the god-object) in the last period (m).
   double tool_penetration() const noexcept { return tool_pen_; }
+  /// One record per period (if a capacity was given): the target is the hand's pose, the
+  /// feedback the measured wrench that drove the god-object, no axis columns (no torque is
+  /// sent), step time that of the loop's step.
+  const Trace& trace() const noexcept { return trace_; }
 
  private:
   const Scene* scene_;
@@ -104,12 +110,15 @@ class AdmittanceRunner {
   std::unique_ptr<ViewOutput> view_;      // --record-view, --view
   platform::PeriodReport view_report_;    // the frame's header and wrench (admittance meaning)
   std::vector<double> view_axis_values_;  // the frame's axis field: zeros (no torque is sent)
+  Trace trace_;                           // --trace
 };
 
 /// Runs an admittance scene for `options.duration_s` (or the scene's duration): as fast as
 /// possible, paced with options.realtime, or at options.view_speed × real time for a live
-/// viewer; with the state stream of options.record_view_path / view_sinks. A trace or another bus is not supported for
-/// admittance scenes (reported as a warning).
+/// viewer; with the state stream of options.record_view_path / view_sinks and the CSV trace of
+/// options.trace_path (AdmittanceRunner::trace(), written after the run). Throws InputError
+/// (key "--bus" or "--record") for a bus other than "sim" or a bus recording: the emulated
+/// device lives on the scene's SimBus; key "--trace" for a trace over the in-memory budget.
 RunSummary run_admittance_scene(const Scene& scene, const RunOptions& options);
 
 }  // namespace numen::sim

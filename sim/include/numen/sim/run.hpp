@@ -63,6 +63,11 @@ struct BusChoice {
 /// whose trace would take more, before allocating it. 1 GiB: ~3 million periods, 50 min at 1 kHz.
 inline constexpr std::size_t kMaxInMemoryTraceBytes = std::size_t{1} << 30;
 
+/// The capacity (records) of the in-memory trace of a simulated run of `periods` periods, for
+/// run_scene() and run_admittance_scene(). Throws InputError (key "--trace", the periods and
+/// MiB asked for and the limit) if it would take more than kMaxInMemoryTraceBytes.
+std::size_t in_memory_trace_capacity(std::int64_t periods);
+
 /// How to run a scene.
 struct RunOptions {
   double duration_s = -1.0;  ///< Simulated time (s); < 0: the scene's duration.
