@@ -212,6 +212,8 @@ RunSummary run_admittance_scene(const Scene& scene, const RunOptions& options) {
   const auto steps = static_cast<std::int64_t>(std::llround(duration / scene.model.dt));
   AdmittanceRunner runner(scene,
                           options.trace_path.empty() ? 0 : in_memory_trace_capacity(steps));
+  if (const std::int64_t phase = compute_phase_override_ns(scene, options); phase >= 0)
+    runner.set_compute_phase_ns(phase);
   // A multirate scene's scene thread is started before the real-time setup pins and promotes
   // this thread (as run_impedance_scene does).
   if (options.realtime) runner.start_scene_thread(options.scene_thread);
@@ -227,25 +229,43 @@ RunSummary run_admittance_scene(const Scene& scene, const RunOptions& options) {
   platform::PeriodicTimer timer(static_cast<std::int64_t>(std::llround(scene.model.dt * 1e9)),
                                 wall0);
   ViewPacer view_pacer(scene.model.dt, options.realtime ? 0.0 : options.view_speed, wall0);
-  std::int64_t overruns = 0;
+  std::int64_t overruns = 0, missed = 0;
+  platform::LatencyHistogram wakeup;
+  std::int64_t rearm_requests = 0, rearms_accepted = 0, rearm_first = -1;
   bool stopped = false;
   for (std::int64_t k = 0; k < steps; ++k) {
     if (options.stop != nullptr && options.stop->load(std::memory_order_relaxed)) {
       stopped = true;  // SIGINT / SIGTERM (docs/inputs.md, "Signals")
       break;
     }
+    if (options.rearm != nullptr && options.rearm->exchange(false, std::memory_order_relaxed)) {
+      ++rearm_requests;  // SIGUSR1 (docs/safety.md, "Re-arming")
+      if (rearm_first < 0) rearm_first = k;
+      if (runner.loop().rearm() == hal::LifecycleResult::kOk) ++rearms_accepted;
+    }
     view_pacer.wait();
-    if (options.realtime) overruns += timer.wait_next().overrun ? 1 : 0;
+    if (options.realtime) {
+      const platform::Wakeup w = timer.wait_next();
+      overruns += w.overrun ? 1 : 0;
+      missed += w.missed_periods;
+      wakeup.record(w.latency_ns());
+    }
     runner.period();
   }
   runner.finish();
   RunSummary s = runner.summary();
   s.wall_time_s = static_cast<double>(platform::monotonic_now_ns() - wall0) * 1e-9;
   s.realtime_overruns = overruns;
+  s.realtime_missed_periods = missed;
+  s.overrun_limit = 0;  // the admittance loop counts overruns, never latches on them
+  s.wakeup_latency_us = summarize_ns(wakeup);
+  s.rearm_requests = rearm_requests;
+  s.rearms_accepted = rearms_accepted;
+  s.rearm_first_period = rearm_first;
   s.realtime_setup = std::move(rt_lines);
   runner.multirate().describe_scene_thread(options.scene_thread, s.realtime_setup);
   s.stopped = stopped;
-  if (!options.trace_path.empty()) runner.trace().write_csv(options.trace_path);
+  if (!options.trace_path.empty()) write_in_memory_trace(runner.trace(), options.trace_path, s);
   return s;
 }
 

@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <cerrno>
 #include <cmath>
+#include <cstring>
 #include <fstream>
 #include <iomanip>
 #include <span>
@@ -630,6 +631,44 @@ std::size_t in_memory_trace_capacity(std::int64_t periods) {
   return static_cast<std::size_t>(std::max<std::int64_t>(periods, 0));
 }
 
+void write_in_memory_trace(const Trace& trace, const std::string& path, RunSummary& s) {
+  const auto records = static_cast<std::int64_t>(trace.records().size());
+  s.trace_pushed = records;
+  s.trace_dropped = static_cast<std::int64_t>(trace.dropped());
+  try {
+    trace.write_csv(path);
+    s.trace_written = records;
+  } catch (const std::exception& e) {  // disk full, the file removed or made read-only meanwhile
+    s.trace_written = 0;
+    s.trace_io_errors = 1;
+    s.warnings.push_back(std::string("--trace: ") + e.what());
+  }
+}
+
+namespace {
+
+/// Refuses a --trace path that cannot be opened for writing before the run (InputError, key
+/// "--trace"), so that a long run does not end without its trace. Creates the file (empty).
+void check_trace_path(const std::string& path) {
+  std::FILE* f = std::fopen(path.c_str(), "w");
+  if (f == nullptr)
+    throw InputError("", 0, 0, "--trace",
+                     path + ": cannot be opened for writing (" + std::strerror(errno) + ")");
+  std::fclose(f);
+}
+
+}  // namespace
+
+std::int64_t compute_phase_override_ns(const Scene& scene, const RunOptions& options) {
+  if (options.compute_phase_s < 0.0) return -1;
+  if (!(options.compute_phase_s < scene.model.dt))
+    throw InputError("", 0, 0, "--phase",
+                     format_input_number(options.compute_phase_s) +
+                         " s must be below the period dt = " + format_input_number(scene.model.dt) +
+                         " s");
+  return static_cast<std::int64_t>(std::llround(options.compute_phase_s * 1e9));
+}
+
 namespace {
 
 RunSummary run_impedance_scene(const Scene& scene, const RunOptions& options) {
@@ -641,13 +680,8 @@ RunSummary run_impedance_scene(const Scene& scene, const RunOptions& options) {
   const std::size_t trace_capacity =
       options.trace_path.empty() || real ? 0 : in_memory_trace_capacity(steps);
   SceneRunner runner(scene, trace_capacity, options.bus, options.realtime, options.overrun_limit);
-  if (options.compute_phase_s >= 0.0) {
-    if (!(options.compute_phase_s < scene.model.dt))
-      throw InputError("", 0, 0, "--phase",
-                       format_input_number(options.compute_phase_s) +
-                           " s must be below the period dt = " + format_input_number(scene.model.dt) + " s");
-    runner.set_compute_phase_ns(static_cast<std::int64_t>(std::llround(options.compute_phase_s * 1e9)));
-  }
+  if (const std::int64_t phase = compute_phase_override_ns(scene, options); phase >= 0)
+    runner.set_compute_phase_ns(phase);
   // The writer threads and a multirate scene's scene thread are started before the real-time
   // setup pins and promotes this thread.
   if (real && !options.trace_path.empty()) runner.stream_trace(options.trace_path);
@@ -715,7 +749,9 @@ RunSummary run_impedance_scene(const Scene& scene, const RunOptions& options) {
   s.wall_time_s = static_cast<double>(platform::monotonic_now_ns() - wall0) * 1e-9;
   s.realtime_overruns = overruns;
   s.realtime_missed_periods = missed;
-  s.overrun_limit = options.overrun_limit;
+  // Only the managed stack's supervisor latches on overruns (MinimalDevice::supervise ignores
+  // them): a minimal-protocol run reports the policy it has, count only.
+  s.overrun_limit = s.managed ? options.overrun_limit : 0;
   s.rearm_requests = rearm_requests;
   s.rearms_accepted = rearms_accepted;
   s.rearm_first_period = rearm_first;
@@ -726,7 +762,8 @@ RunSummary run_impedance_scene(const Scene& scene, const RunOptions& options) {
   s.stopped = stopped;
   s.shutdown_periods = shutdown;
   s.drives_disabled = runner.loop().drives_disabled();
-  if (!options.trace_path.empty() && !real) runner.trace().write_csv(options.trace_path);
+  if (!options.trace_path.empty() && !real)
+    write_in_memory_trace(runner.trace(), options.trace_path, s);
   return s;
 }
 
@@ -739,6 +776,7 @@ RunSummary run_scene(const Scene& scene, const RunOptions& options) {
   if (!(options.view_speed >= 0.0) || !std::isfinite(options.view_speed))
     throw InputError("", 0, 0, "--speed", "must be a finite factor >= 0 (got " +
                                               format_input_number(options.view_speed) + ")");
+  if (!options.trace_path.empty()) check_trace_path(options.trace_path);
   RunSummary s = scene.admittance ? run_admittance_scene(scene, options)  // admittance_run.cpp
                                   : run_impedance_scene(scene, options);
   RunVerdict verdict = run_verdict(s);

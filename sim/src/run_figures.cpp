@@ -58,6 +58,10 @@ constexpr FigureValue list(const std::vector<std::string>& v) noexcept {
 }
 constexpr bool admittance_run(const S& s) noexcept { return s.admittance.enabled; }
 constexpr bool multirate_run(const S& s) noexcept { return s.multirate.enabled; }
+/// A multirate run that sends feedback forces (not an admittance run, which sends poses).
+constexpr bool multirate_force_run(const S& s) noexcept {
+  return s.multirate.enabled && !s.admittance.enabled;
+}
 
 // One row per figure: {name, unit, description, kind, accessor[, present]}.
 constexpr RunFigure kFigures[] = {
@@ -286,13 +290,13 @@ constexpr RunFigure kFigures[] = {
     {"last_torque_stop_period", "",
      "Last period whose torque was zero after a period with torque (-1: none)", K::kCount,
      [](const S& s) noexcept { return count(s.last_torque_stop_period); }},
-    {"trace_pushed", "", "Real-bus trace: records queued", K::kCount,
+    {"trace_pushed", "", "Trace (--trace): records taken (real bus: queued to the writer)", K::kCount,
      [](const S& s) noexcept { return count(s.trace_pushed); }},
-    {"trace_dropped", "", "Real-bus trace: records refused by a full queue (must be 0)",
+    {"trace_dropped", "", "Trace: records refused by a full queue or store (must be 0)",
      K::kCount, [](const S& s) noexcept { return count(s.trace_dropped); }},
-    {"trace_written", "", "Real-bus trace: lines written", K::kCount,
+    {"trace_written", "", "Trace: lines written", K::kCount,
      [](const S& s) noexcept { return count(s.trace_written); }},
-    {"trace_io_errors", "", "Real-bus trace: failed writes / flushes", K::kCount,
+    {"trace_io_errors", "", "Trace: failed opens, writes or flushes", K::kCount,
      [](const S& s) noexcept { return count(s.trace_io_errors); }},
     {"stopped", "", "Ended early by a stop signal", K::kFlag,
      [](const S& s) noexcept { return flag(s.stopped); }},
@@ -388,9 +392,11 @@ constexpr RunFigure kFigures[] = {
      [](const S& s) noexcept { return count(s.multirate.switches); }, multirate_run},
     {"multirate.model_force_jump_max_n", "N",
      "Largest change of the feedback force sent into a period that took a new scene model",
-     K::kReal, [](const S& s) noexcept { return real(s.multirate.model_force_jump_max_n); }, multirate_run},
+     K::kReal, [](const S& s) noexcept { return real(s.multirate.model_force_jump_max_n); },
+     multirate_force_run},
     {"multirate.other_force_jump_max_n", "N", "... into any other period", K::kReal,
-     [](const S& s) noexcept { return real(s.multirate.other_force_jump_max_n); }, multirate_run},
+     [](const S& s) noexcept { return real(s.multirate.other_force_jump_max_n); },
+     multirate_force_run},
     {"multirate.scene_thread", "", "The scene loop ran on its own thread (a paced run)", K::kFlag,
      [](const S& s) noexcept { return flag(s.multirate.scene_thread); }, multirate_run},
     {"multirate.scene_overruns", "", "Scene periods on the scene thread that ended past the next deadline",

@@ -167,7 +167,7 @@ constexpr RunSummarySegment kLayout[] = {
      set("managed")},
     {"  re-arm: {rearm_requests} request(s), {rearms_accepted} accepted, first before period "
      "{rearm_first_period}\n",
-     set("managed"), set("rearm_requests")},
+     set("rearm_requests")},  // any run that took a request (managed, minimal, admittance)
     {"  EMCY: {*}\n", set("managed"), {}, {}, "emcy_messages"},
     {"  drives:", set("managed"), set("drive_states")},
     {", {*}", set("managed"), {}, {}, "drive_states", " {*}"},

@@ -6,15 +6,19 @@
 // scenes, and the admittance scene (its measured wrench drives the god-object). Each iteration
 // is one 1 kHz period: the single-rate SceneRunner (AdmittanceRunner) steps the scene (the
 // reference, and the source of the hand's target or measured wrench), the MultirateGodObject
-// gets the same target
-// and steps — a device step, and on every N-th period the scene step first (N = the
-// benchmark's argument). The time
-// reported is the multirate period's (manual timing); the counters split it:
+// gets the same target and steps — a device step, and on every N-th period the scene step
+// first (N = the benchmark's argument). The time reported is the multirate period's (manual
+// timing); the counters split it:
 //   device_p50_us, device_p99_us   periods without a scene step: what the device loop costs
 //   scene_p50_us                   periods with one: scene step + device step (on its own thread later)
 //   single_p50_us, single_p99_us   the single-rate core::step of the same periods
 //   device_vs_single               device_p50 / single_p50
 //   tool_pen_mm, single_tool_pen_mm  deepest tool contact, multirate (device) and single-rate
+//                                    (admittance: the god-object is driven open-loop by the
+//                                    single-rate run's measured wrench, with no device of its
+//                                    own to close the loop, so its tool_pen_mm is a cost
+//                                    benchmark's by-product, not a quality figure: see
+//                                    RunMultirate.AdmittanceSceneAtRateRatiosOneFiveAndTen)
 //
 //   ./build/tests/numen_bench --benchmark_filter=multirate
 

@@ -8,12 +8,15 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <fstream>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "alloc_counter.hpp"
+#include "csv_lines.hpp"
 #include "numen/sim/input_error.hpp"
 #include "numen/sim/scene.hpp"
 #include "numen/sim/view_recording.hpp"
@@ -162,28 +165,19 @@ TEST(AdmittanceScene, TracesTheHandTheGodObjectAndTheMeasuredWrench) {
   const sim::RunSummary s = sim::run_scene(scene, options);
   EXPECT_EQ(s.exit_status, 0);
   EXPECT_TRUE(s.warnings.empty());
-  std::ifstream in(options.trace_path);
-  std::string line;
-  ASSERT_TRUE(std::getline(in, line));
-  auto split = [](const std::string& l) {
-    std::vector<std::string> fields;
-    for (std::size_t b = 0, e; b <= l.size(); b = e + 1) {
-      e = std::min(l.find(',', b), l.size());
-      fields.push_back(l.substr(b, e - b));
-    }
-    return fields;
-  };
-  const std::vector<std::string> header = split(line);
+  const std::vector<std::string> lines = numen::test::read_lines(options.trace_path);
+  ASSERT_EQ(lines.size(), 2701u);  // header + one row per period
+  const std::vector<std::string> header = numen::test::split_csv(lines.front());
+  for (const std::string& h : header) EXPECT_NE(h.rfind("axis_torque_", 0), 0u) << h;
   auto col = [&](const std::string& name) {
     const auto it = std::find(header.begin(), header.end(), name);
-    EXPECT_NE(it, header.end()) << name;
+    if (it == header.end()) throw std::runtime_error("no column " + name);
     return static_cast<std::size_t>(it - header.begin());
   };
-  for (const std::string& h : header) EXPECT_NE(h.rfind("axis_torque_", 0), 0u) << h;
   std::vector<std::vector<double>> rows;
-  while (std::getline(in, line)) {
+  for (std::size_t l = 1; l < lines.size(); ++l) {
     std::vector<double> row;
-    for (const std::string& f : split(line)) row.push_back(std::stod(f));
+    for (const std::string& f : numen::test::split_csv(lines[l])) row.push_back(std::stod(f));
     ASSERT_EQ(row.size(), header.size());
     rows.push_back(std::move(row));
   }
@@ -238,6 +232,37 @@ TEST(AdmittanceScene, RefusesAnotherBusAndABusRecording) {
     ADD_FAILURE() << "a trace over the budget was accepted";
   } catch (const sim::InputError& e) {
     EXPECT_EQ(e.key(), "--trace");
+  }
+}
+
+// `--phase` applies to an admittance run: read before the sensor's answers arrive (50 µs after
+// the SYNC, the bus latency is 100 µs) and the first period has no reading, the others read
+// the previous period's; a phase not below dt is refused. A SIGUSR1 re-arm request is taken and
+// reported (nothing latched: not accepted).
+TEST(AdmittanceScene, TakesTheComputePhaseAndReArmRequests) {
+  const sim::Scene& scene = admittance_scene();
+  ASSERT_NEAR(scene.bus.latency_ns, 100'000, 1);
+  sim::RunOptions options;
+  options.duration_s = 0.5;
+  const sim::RunSummary on_time = sim::run_scene(scene, options);
+  EXPECT_EQ(on_time.admittance.sensor_rejected_periods, 0);
+  options.compute_phase_s = 50e-6;
+  std::atomic<bool> rearm{true};
+  options.rearm = &rearm;
+  const sim::RunSummary early = sim::run_scene(scene, options);
+  EXPECT_EQ(early.admittance.sensor_rejected_periods, 1);
+  EXPECT_EQ(early.exit_status, 6);  // samples rejected
+  EXPECT_FALSE(rearm.load());
+  EXPECT_EQ(early.rearm_requests, 1);
+  EXPECT_EQ(early.rearm_first_period, 0);
+  EXPECT_EQ(early.rearms_accepted, 0);  // nothing latched: kNotFaulted
+  EXPECT_NE(sim::format_summary(early).find("re-arm: 1 request(s), 0 accepted"), std::string::npos);
+  options.compute_phase_s = scene.model.dt;
+  try {
+    sim::run_scene(scene, options);
+    ADD_FAILURE() << "a compute phase of one period was accepted";
+  } catch (const sim::InputError& e) {
+    EXPECT_EQ(e.key(), "--phase");
   }
 }
 

@@ -7,6 +7,8 @@
 // the scene loop on its own thread.
 #include <gtest/gtest.h>
 
+#include <nlohmann/json.hpp>
+
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -433,6 +435,11 @@ TEST(RunMultirate, AdmittanceSceneAtRateRatiosOneFiveAndTen) {
       EXPECT_EQ(s.admittance.hold_periods, 0) << n;
       EXPECT_EQ(s.nonfinite_steps, 0) << n;
       EXPECT_FALSE(s.nan_detected) << n;
+      // It sends poses, not forces: no feedback-force jumps in its JSON (nor in its text).
+      const nlohmann::json m = nlohmann::json::parse(numen::sim::format_summary_json(s)).at("multirate");
+      EXPECT_TRUE(m.contains("scene_steps")) << n;
+      EXPECT_FALSE(m.contains("model_force_jump_max_n")) << n;
+      EXPECT_FALSE(m.contains("other_force_jump_max_n")) << n;
     }
   }
 }
@@ -477,8 +484,16 @@ TEST(RunMultirate, APacedAdmittanceRunStepsTheSceneOnItsOwnThread) {
   options.rt.cpu_affinity = {4095};  // no such CPU here: reported as failed, the run goes on
   const Scene scene = shipped_scene(dir, "admittance.toml", 0.001, 0.005, 0.005);
   RunSummary s;
-  std::thread loop([&] { s = numen::sim::run_scene(scene, options); });  // not this thread's setup
+  std::string error;
+  std::thread loop([&] {  // not this thread's real-time setup
+    try {
+      s = numen::sim::run_scene(scene, options);
+    } catch (const std::exception& e) {
+      error = e.what();
+    }
+  });
   loop.join();
+  ASSERT_TRUE(error.empty()) << error;
   std::printf("paced admittance: %lld scene steps, %lld stale of %lld, loop overruns %lld\n",
               static_cast<long long>(s.multirate.scene_steps), static_cast<long long>(s.multirate.stale_models),
               static_cast<long long>(s.steps), static_cast<long long>(s.realtime_overruns));
@@ -495,4 +510,9 @@ TEST(RunMultirate, APacedAdmittanceRunStepsTheSceneOnItsOwnThread) {
   }
   EXPECT_TRUE(scene_reported);
   EXPECT_TRUE(loop_reported);
+  // Paced: its wake-ups are measured and printed with the overruns (never latched here).
+  EXPECT_GT(s.wakeup_latency_us.max, 0.0);
+  const std::string text = numen::sim::format_summary(s);
+  EXPECT_NE(text.find("realtime: wake-up latency us median"), std::string::npos) << text;
+  EXPECT_NE(text.find("overrun policy: count only"), std::string::npos) << text;
 }

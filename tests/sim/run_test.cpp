@@ -1090,6 +1090,17 @@ TEST(RunOverrunPolicy, PacedRunsLatchAfterTheLimitAndZeroOnlyCounts) {
   const RunSummary s = numen::sim::run_scene(default_scene(), opt);
   EXPECT_EQ(s.overrun_limit, 0u);
   EXPECT_NE(numen::sim::format_summary(s).find("overrun policy: count only"), std::string::npos);
+  // The minimal protocol has no supervisor to latch: its run reports count only, whatever the
+  // limit asked (it used to print "latch after 3").
+  Scene minimal = default_scene();
+  minimal.device.canopen.managed = false;
+  opt.overrun_limit = 3;
+  const RunSummary m = numen::sim::run_scene(minimal, opt);
+  EXPECT_FALSE(m.managed);
+  EXPECT_EQ(m.overrun_limit, 0u);
+  EXPECT_NE(numen::sim::format_summary(m).find("overrun policy: count only"), std::string::npos);
+  const RunSummary managed = numen::sim::run_scene(default_scene(), opt);
+  EXPECT_EQ(managed.overrun_limit, 3u);
 }
 
 TEST(RunRearm, ARequestIsTakenOnceBeforeThePeriodAndReported) {

@@ -146,8 +146,22 @@ TEST(SceneInfo, DeviceNodesAreTheScenesCanopenAxes) {
     std::vector<int> served(scene.device.canopen.axes.size(), 0);
     for (const nlohmann::json& n : device.at("nodes")) {
       const int id = n.at("node_id");
-      EXPECT_NE(text.find("node " + std::to_string(id) + ":"), std::string::npos) << name;
       const std::string dcf = n.at("dcf");
+      std::string line = "    node ";  // the text's line of the node
+      line += std::to_string(id);
+      line += ':';
+      for (int a : n.at("axes")) {
+        line += ' ';
+        line += device.at("axes").at(a).at("name").get<std::string>();
+      }
+      if (dcf.empty()) {
+        line += " (no DCF)\n";
+      } else {
+        line += ", DCF ";
+        line += dcf;
+        line += '\n';
+      }
+      EXPECT_NE(text.find(line), std::string::npos) << name << ": no line '" << line << "' in\n" << text;
       for (int a : n.at("axes")) {
         ++served.at(static_cast<std::size_t>(a));
         const numen::hal::CanopenAxisConfig& c = scene.device.canopen.axes[static_cast<std::size_t>(a)];

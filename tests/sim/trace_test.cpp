@@ -19,6 +19,7 @@
 
 #include "alloc_counter.hpp"
 #include "csv_lines.hpp"
+#include "numen/sim/input_error.hpp"
 #include "numen/sim/run.hpp"
 #include "numen/sim/scene.hpp"
 #include "build_features.hpp"
@@ -179,6 +180,41 @@ TEST(Trace, WriteErrorOfASmallTraceIsReported) {
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("/dev/full"), std::string::npos) << e.what();
   }
+}
+
+// A run's --trace path is checked before the run (a long run must not end without its trace),
+// and a trace that cannot be written after the run is counted, not thrown: the summary stays,
+// the verdict reports the lost records (exit status 5, "lost records").
+TEST(Trace, ARunChecksItsPathFirstAndCountsAFailedWrite) {
+  NUMEN_REQUIRE_ARTICULATION();
+  const numen::sim::Scene scene = numen::sim::load_scene(numen::sim::default_scene_path());
+  numen::sim::RunOptions opt;
+  opt.duration_s = 0.05;
+  TempDir dir;
+  opt.trace_path = (dir / "no_such_dir" / "trace.csv").string();
+  try {
+    (void)numen::sim::run_scene(scene, opt);
+    ADD_FAILURE() << "a trace path in a missing directory was accepted";
+  } catch (const numen::sim::InputError& e) {
+    EXPECT_EQ(e.key(), "--trace");
+    EXPECT_NE(std::string(e.what()).find(opt.trace_path), std::string::npos) << e.what();
+  }
+  if (!fs::exists("/dev/full")) GTEST_SKIP() << "no /dev/full";
+  opt.trace_path = "/dev/full";  // opens, every write fails (ENOSPC)
+  const numen::sim::RunSummary s = numen::sim::run_scene(scene, opt);
+  EXPECT_EQ(s.trace_pushed, s.steps);
+  EXPECT_EQ(s.trace_written, 0);
+  EXPECT_EQ(s.trace_io_errors, 1);
+  EXPECT_EQ(s.exit_status, 5);
+  ASSERT_FALSE(s.warnings.empty());
+  EXPECT_NE(s.warnings.back().find("/dev/full"), std::string::npos) << s.warnings.back();
+  // Written: every record counted as written.
+  opt.trace_path = (dir / "trace.csv").string();
+  const numen::sim::RunSummary ok = numen::sim::run_scene(scene, opt);
+  EXPECT_EQ(ok.trace_written, ok.steps);
+  EXPECT_EQ(ok.trace_io_errors, 0);
+  EXPECT_EQ(ok.exit_status, 0);
+  EXPECT_EQ(read_lines(opt.trace_path).size(), static_cast<std::size_t>(ok.steps) + 1);
 }
 
 TEST(Trace, MakeTraceRecordReadsTheStateAfterTheStep) {

@@ -84,14 +84,15 @@ class AdmittanceLoop {
   /// kFault → kInactive once the reading is valid again; auto_activate then follows.
   hal::LifecycleResult rearm() noexcept { return lifecycle_.rearm(); }
 
-  /// What end_period() calls instead of core::step(model, data): a function of `context` that
+  /// A function of a context pointer that advances the loop's Data by one control period.
+  using StepFunction = void (*)(void* context) noexcept;
+  /// What end_period() calls instead of core::step(model, data): `step(context)`, which
   /// advances the loop's Data by one control period as core::step() would — reads
   /// data.device_wrench (the measured wrench or the brake), leaves the held body's state in
   /// data.bodies — e.g. the multirate god-object's device period (core::MultirateGodObject::
   /// take_targets(), step(), write_feedback(); docs/multirate.md). Null restores core::step.
   /// Must not allocate, throw, lock or block: it runs in the real-time period. Not while
   /// end_period() runs. (ControlLoop::set_step_function is the impedance loop's.)
-  using StepFunction = void (*)(void* context) noexcept;
   void set_step_function(StepFunction step, void* context) noexcept {
     step_function_ = step;
     step_context_ = context;

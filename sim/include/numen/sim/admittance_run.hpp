@@ -61,6 +61,9 @@ class AdmittanceRunner {
   void start_scene_thread(const platform::SceneThreadSettings& settings);
   /// Stops the scene thread (if any), delivers and closes the state stream (if any). Idempotent.
   void finish();
+  /// Overrides the scene's compute phase (ns after the SYNC, >= 0): when the loop reads the
+  /// sensor's answers and steps (`numen run --phase`).
+  void set_compute_phase_ns(std::int64_t ns) noexcept { phase_ns_ = ns; }
   /// Periods run so far.
   std::int64_t periods() const noexcept { return k_; }
   /// The summary of the periods run so far (RunSummary::admittance filled in; wall time is the
@@ -118,7 +121,11 @@ class AdmittanceRunner {
 /// viewer; with the state stream of options.record_view_path / view_sinks and the CSV trace of
 /// options.trace_path (AdmittanceRunner::trace(), written after the run). Throws InputError
 /// (key "--bus" or "--record") for a bus other than "sim" or a bus recording: the emulated
-/// device lives on the scene's SimBus; key "--trace" for a trace over the in-memory budget.
+/// device lives on the scene's SimBus; key "--trace" for a trace over the in-memory budget;
+/// key "--phase" for a compute phase not below dt. options.rearm re-arms the loop after a latched
+/// safe state (AdmittanceLoop::rearm()); a paced run reports its overruns, missed periods and
+/// wake-up latency. options.overrun_limit does not apply: like the minimal protocol's devices,
+/// the admittance loop does not supervise overruns (docs/safety.md).
 RunSummary run_admittance_scene(const Scene& scene, const RunOptions& options);
 
 }  // namespace numen::sim

@@ -25,6 +25,7 @@ struct RunSummary;  // run.hpp
 /// scene; then every member does nothing.
 class MultirateRun {
  public:
+  /// The empty run of a single-rate scene (enabled() false).
   MultirateRun() = default;
   /// Builds the god-object for `scene` (must outlive this) if it has [multirate]: the device
   /// holds Model::initial_attached_body, may switch to any of MultirateScene::tools. Allocates;
@@ -34,6 +35,7 @@ class MultirateRun {
   MultirateRun(const MultirateRun&) = delete;
   MultirateRun& operator=(const MultirateRun&) = delete;
 
+  /// True when the scene has [multirate] (a god-object was built).
   bool enabled() const noexcept { return god_object_ != nullptr; }
 
   /// One device period in place of core::step(model, run_data), `run_data` the loop's Data of

@@ -65,7 +65,8 @@ inline constexpr std::size_t kMaxInMemoryTraceBytes = std::size_t{1} << 30;
 
 /// The capacity (records) of the in-memory trace of a simulated run of `periods` periods, for
 /// run_scene() and run_admittance_scene(). Throws InputError (key "--trace", the periods and
-/// MiB asked for and the limit) if it would take more than kMaxInMemoryTraceBytes.
+/// MiB asked for and the limit) if it would take more than kMaxInMemoryTraceBytes; 0 periods
+/// or fewer need none (0).
 std::size_t in_memory_trace_capacity(std::int64_t periods);
 
 /// How to run a scene.
@@ -116,6 +117,11 @@ struct RunOptions {
   /// supervision). 0: as fast as it goes.
   double view_speed = 0.0;
 };
+
+/// The compute phase (ns after the SYNC) that RunOptions::compute_phase_s asks of a run of
+/// `scene`, or -1 when it asks none (the scene's [bus] compute_phase then holds). Throws
+/// InputError (key "--phase") unless it is below the scene's period dt.
+std::int64_t compute_phase_override_ns(const Scene& scene, const RunOptions& options);
 
 /// Percentiles of a duration distribution (µs).
 struct DurationSummary {
@@ -282,7 +288,8 @@ struct RunSummary {
   std::int64_t view_record_io_errors = 0;  ///< --record-view: failed writes / flushes / close.
   std::int64_t realtime_overruns = 0;      ///< Paced periods (--realtime) that began after their deadline.
   std::int64_t realtime_missed_periods = 0;  ///< Whole periods skipped to re-phase after overruns.
-  /// RunOptions::overrun_limit in effect: consecutive overruns that latch (0: counted only).
+  /// RunOptions::overrun_limit in effect: consecutive overruns that latch (0: counted only, as
+  /// in a minimal-protocol or admittance run, whose loops do not supervise overruns).
   std::uint32_t overrun_limit = 3;
   DurationSummary wakeup_latency_us;       ///< Paced runs: wake-up time − deadline (µs).
   /// RunOptions::rt outcome, one line per step plus the kernel and the limits
@@ -341,7 +348,10 @@ struct RunSummary {
   std::int64_t last_device_frame_period = -1;  ///< Last period that read a frame (-1: none).
   std::int64_t last_torque_stop_period = -1;   ///< Last period whose torque was zero after a
                                                ///< period with torque (the last safe stop).
-  std::int64_t trace_pushed = 0;           ///< Real-bus trace (TraceWriter): records queued.
+  /// The trace (--trace): a real bus streams it (TraceWriter: records queued, refused by a full
+  /// queue, written, failed writes); a simulated run keeps it in memory and writes it after the
+  /// run (write_in_memory_trace(): records taken, refused by a full store, written, 1 failure).
+  std::int64_t trace_pushed = 0;           ///< Trace: records queued / taken.
   std::int64_t trace_dropped = 0;          ///< ... refused by a full queue (must be 0).
   std::int64_t trace_written = 0;          ///< ... lines written to the file.
   std::int64_t trace_io_errors = 0;        ///< ... failed writes / flushes (disk full).
@@ -361,6 +371,12 @@ struct RunSummary {
   int exit_status = 0;
   std::vector<std::string> exit_reasons;
 };
+
+/// Writes the in-memory trace of a simulated run to `path` after the run and accounts for it in
+/// `s` (trace_pushed, trace_dropped, trace_written, trace_io_errors): a file that cannot be
+/// written is not thrown but counted (1 I/O error, 0 written) with the error as a warning, so
+/// the run keeps its summary and its verdict reports the lost records (exit status 5).
+void write_in_memory_trace(const Trace& trace, const std::string& path, RunSummary& s);
 
 /// A scene wired for a run: SimBus, simulated instrument on its device port,
 /// InstrumentDevice and ControlLoop on its controller port, core Data, the

@@ -24,7 +24,7 @@ struct StageLine {
 
 /// One axis of the scene's device ([[device.axis]]).
 struct DeviceAxisLine {
-  std::string name;
+  std::string name;           ///< [[device.axis]] name.
   double rated_torque = 0.0;  ///< N·m or N: the drive's 1000 per mille (AxisConfig::rated_torque).
 };
 
@@ -55,7 +55,7 @@ struct SceneInfo {
   std::string device_name;         ///< [device] name.
   std::string device_kind;         ///< hal::to_string(DeviceKind).
   bool device_managed = false;     ///< The managed CANopen stack ([device.canopen] managed).
-  std::vector<DeviceAxisLine> device_axes;
+  std::vector<DeviceAxisLine> device_axes;   ///< Every axis, in the scene's order.
   std::vector<DeviceNodeLine> device_nodes;  ///< Managed stack only; else empty.
 };
 
