@@ -673,7 +673,18 @@ Scene load_scene(const std::string& path, const SceneOverrides& overrides) {
     root.fail("deformable", "scene \"" + scene.name +
                                 "\" needs deformable nets: this build has NUMEN_WITH_DEFORMABLE=OFF");
   scene.model = parse_scene_model(root, scene.warnings);
-  if (overrides.coupling) scene.model.coupling_mode = *overrides.coupling;
+  if (overrides.coupling) {
+    // An admittance device is position controlled (its own protocol, [device.admittance]):
+    // no override turns a scene into one or out of one.
+    const bool file_admittance = scene.model.coupling_mode == core::CouplingMode::kAdmittance;
+    if (file_admittance != (*overrides.coupling == core::CouplingMode::kAdmittance))
+      throw InputError(path, 0, 0, "--coupling",
+                       file_admittance
+                           ? "scene \"" + scene.name + "\" has an admittance device (coupling = "
+                             "\"admittance\"): its coupling cannot be overridden"
+                           : "an impedance scene cannot be overridden to the admittance coupling");
+    scene.model.coupling_mode = *overrides.coupling;
+  }
   const std::filesystem::path dir = std::filesystem::path(path).parent_path();
   scene.trajectory = parse_trajectory(root, scene.model.dt, dir, scene.warnings);
 

@@ -308,6 +308,20 @@ TEST(AdmittanceScene, KeysAreCheckedWithTheirPlace) {
   EXPECT_THROW(load_with(replace("[device.admittance]", "[device.feedback]")), sim::InputError);
   EXPECT_THROW(load_with(replace("coupling = \"admittance\"", "coupling = \"god-object\"")),
                sim::InputError);
+  // `numen run --coupling` cannot change an admittance scene's coupling, nor make another
+  // scene's admittance: the error names the option, not a line of the file.
+  for (const auto& [file, override] :
+       {std::pair{base, numen::core::CouplingMode::kDirect},
+        std::pair{sim::default_scene_path(), numen::core::CouplingMode::kAdmittance}}) {
+    sim::SceneOverrides o;
+    o.coupling = override;
+    try {
+      sim::load_scene(file, o);
+      ADD_FAILURE() << file << ": the coupling override was taken";
+    } catch (const sim::InputError& e) {
+      EXPECT_EQ(e.key(), "--coupling") << e.what();
+    }
+  }
   try {
     load_with(replace("force_scale = 0.001", "force_scale = 0.001\nbogus = 1"));
     ADD_FAILURE() << "no throw";

@@ -88,6 +88,9 @@ struct Scene {
 
 /// Changes a caller may impose on a scene at load time (command line).
 struct SceneOverrides {
+  /// Replaces the scene's coupling (`numen run --coupling`): god-object, first-order or direct
+  /// for an impedance scene; an admittance scene's coupling cannot be changed, nor another
+  /// scene's made admittance (InputError, key "--coupling").
   std::optional<core::CouplingMode> coupling;
 };
 
