@@ -34,7 +34,14 @@ void MultirateThreads::start() {
   god_object_.scene_step(reports_.front(), models_.back());
   models_.publish();
   stop_.store(false);
+  setup_done_.store(false);
+  setup_error_.clear();
   thread_ = std::thread([this] { run(); });
+  setup_done_.wait(false);  // setup time: the thread's scheduling and affinity applied
+  if (!setup_error_.empty()) {
+    thread_.join();  // it ended without a scene step
+    throw std::runtime_error("scene thread: " + setup_error_);
+  }
 }
 
 void MultirateThreads::stop() noexcept {
@@ -61,14 +68,19 @@ void MultirateThreads::run() noexcept {
   RealtimeSettings rt;
   rt.fifo_priority = settings_.fifo_priority;
   rt.cpu_affinity = settings_.cpu_affinity;
+  rt.strict = settings_.strict;
   try {
     realtime_ = apply_realtime(rt);  // allocates: before the loop
   } catch (const std::exception& e) {
-    // An invalid priority (the caller's settings are checked before): the thread stays as it
-    // is, and the report says so.
+    // Strict and a step failed, or an invalid priority (the caller's settings are checked
+    // before): the report says so; strict ends the thread and start() throws.
     realtime_.scheduling.status = RealtimeStepStatus::kFailed;
     realtime_.scheduling.message = e.what();
+    if (settings_.strict) setup_error_ = e.what();
   }
+  setup_done_.store(true);
+  setup_done_.notify_one();
+  if (!setup_error_.empty()) return;
   PeriodicTimer timer(period_ns_, monotonic_now_ns());
   while (!stop_.load(std::memory_order_relaxed)) {
     const Wakeup w = timer.wait_next();

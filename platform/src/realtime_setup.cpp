@@ -149,7 +149,7 @@ RealtimeStep apply_stack_prefault(std::size_t bytes) {
   const auto sp = reinterpret_cast<std::uintptr_t>(&here);
   const auto low = reinterpret_cast<std::uintptr_t>(base);
   const std::size_t room = sp > low ? sp - low : 0;
-  if (bytes + kStackMargin > room)
+  if (bytes > room || room - bytes < kStackMargin)  // not bytes + margin: it could wrap
     return failed(ENOMEM, "stack prefault of " + std::to_string(bytes) + " bytes refused: only " +
                               std::to_string(room) +
                               " bytes of stack are left below the caller (thread stack " +

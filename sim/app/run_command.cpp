@@ -1,9 +1,12 @@
 /// @file run_command.cpp
 /// `numen run`: loads a scene, runs it (run_scene) and prints its summary.
 
+#include <sched.h>
+
 #include <iostream>
 
 #include "commands.hpp"
+#include "numen/sim/bus_spec.hpp"
 #include "numen/sim/cli_values.hpp"
 #include "numen/sim/run.hpp"
 #include "numen/sim/scene.hpp"
@@ -32,25 +35,31 @@ RunCommand::RunCommand(CLI::App& parent)
                   "serial:PATH[@BAUD] (serial line); a real bus is paced to CLOCK_MONOTONIC")
       ->check([](const std::string& v) { return check_bus(v, false); });
   run->add_option("--phase", phase_,
-                  "Real bus: seconds after the SYNC to read the device's answers (default: the "
-                  "scene's [bus] compute_phase)")
+                  "Seconds after the SYNC to read the device's answers and step (any bus; "
+                  "default: the scene's [bus] compute_phase)")
       ->check(seconds_check(0.0, 1.0, false));
   run->add_option("--rt-priority", rt_.fifo_priority,
                   "SCHED_FIFO priority 1-99 of the loop thread (0: leave the scheduler alone)")
       ->check(CLI::Range(0, 99));
   run->add_flag("--lock-memory", rt_.lock_memory, "mlockall(MCL_CURRENT|MCL_FUTURE) before the loop");
   run->add_option("--prefault-stack", rt_.prefault_stack_bytes,
-                  "Bytes of the loop thread's stack to touch before the loop (e.g. 262144)");
+                  "Bytes of the loop thread's stack to touch before the loop (e.g. 262144), at "
+                  "most 1 GiB")
+      ->check(CLI::Range(0.0, 1073741824.0));  // checked as a number: "-1" would wrap to SIZE_MAX
   run->add_option("--cpu", rt_.cpu_affinity, "CPUs the loop thread may run on, e.g. --cpu 1 or --cpu 2,3")
-      ->delimiter(',');
-  run->add_flag("--rt-strict", rt_.strict, "Fail instead of reporting when a real-time step fails");
+      ->delimiter(',')
+      ->check(CLI::Range(0, CPU_SETSIZE - 1));
+  run->add_flag("--rt-strict", rt_.strict,
+                "Fail instead of reporting when a real-time step fails (the loop thread's and the "
+                "scene thread's)");
   run->add_option("--scene-rt-priority", scene_thread_.fifo_priority,
                   "Multirate scene, paced run: SCHED_FIFO priority 1-99 of the scene thread (0: "
                   "leave the scheduler alone; below the loop thread's)")
       ->check(CLI::Range(0, 99));
   run->add_option("--scene-cpu", scene_thread_.cpu_affinity,
                   "Multirate scene, paced run: CPUs the scene thread may run on, e.g. --scene-cpu 0")
-      ->delimiter(',');
+      ->delimiter(',')
+      ->check(CLI::Range(0, CPU_SETSIZE - 1));
   run->add_option("--record", record_path_,
                   "Record the controller's bus traffic into this candump log (can-utils format); "
                   "a paced run drops (and counts) what its writer cannot keep up with, an offline "
@@ -96,6 +105,7 @@ int RunCommand::execute() const {
   options.bus.record_path = record_path_;
   options.rt = rt_;
   options.scene_thread = scene_thread_;
+  options.scene_thread.strict = rt_.strict;
   options.stop = &stop_flag();
   options.compute_phase_s = phase_;
   options.overrun_limit = overrun_limit_;
@@ -116,7 +126,9 @@ int RunCommand::execute() const {
     viewer->start();
     std::cerr << "numen: viewer on " << viewer->url() << std::endl;
     options.view_sinks.push_back(viewer.get());
-    if (options.view_speed <= 0.0) options.view_speed = 1.0;
+    // An offline run is paced at real time for the viewer; a paced run already is.
+    if (options.view_speed <= 0.0 && !realtime_ && !sim::parse_bus_spec(bus_).real())
+      options.view_speed = 1.0;
   }
   loading_done();  // from here a signal ends the run cleanly
   const sim::RunSummary summary = sim::run_scene(scene, options);

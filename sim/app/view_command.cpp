@@ -4,10 +4,12 @@
 /// SIGINT / SIGTERM.
 
 #include <chrono>
+#include <filesystem>
 #include <iostream>
 #include <thread>
 
 #include "commands.hpp"
+#include "numen/sim/input_error.hpp"
 #include "numen/sim/view_recording.hpp"
 #include "numen/sim/shipped_files.hpp"
 #include "numen/sim/view_server.hpp"
@@ -56,6 +58,9 @@ int ViewCommand::execute() const {
   settings.host = host_;
   settings.port = port_;
   settings.static_dir = page_dir_.empty() ? viewer_page_dir() : page_dir_;
+  if (!page_dir_.empty() && !std::filesystem::is_regular_file(std::filesystem::path(page_dir_) / "index.html"))
+    throw sim::InputError("", 0, 0, "--page",
+                          page_dir_ + ": no index.html there (the folder of the viewer page)");
   warn_if_exposed(host_, std::cerr);
   sim::ViewServer server(settings, reader.scene_message(), source);
   loading_done();

@@ -19,11 +19,18 @@
 #endif
 #include "numen/platform/monotonic_clock.hpp"
 #include "numen/sim/bus_spec.hpp"
+#include "numen/sim/input_error.hpp"
 #include "numen/sim/simulated_instrument.hpp"
 
 namespace numen::sim {
 
 DeviceSummary run_device(const Scene& scene, const DeviceOptions& options) {
+  // This process emulates an impedance instrument (encoders, torque drives); an admittance
+  // device (force sensor, csp drives) is emulated inside `numen run` on the simulated bus only.
+  if (scene.admittance)
+    throw InputError(scene.file, 0, 0, "scene",
+                     "scene \"" + scene.name + "\" has an admittance device: numen device emulates "
+                     "impedance instruments only (run it with numen run on the simulated bus)");
   const BusSpec spec = parse_bus_spec(options.bus);
   if (!spec.real())
     throw std::invalid_argument("numen device --bus '" + options.bus +

@@ -647,12 +647,47 @@ void write_in_memory_trace(const Trace& trace, const std::string& path, RunSumma
 
 namespace {
 
-/// Refuses a --trace path that cannot be opened for writing before the run (InputError, key
-/// "--trace"), so that a long run does not end without its trace. Creates the file (empty).
-void check_trace_path(const std::string& path) {
+/// Refuses options that this run would not apply (InputError naming the option): nothing a
+/// user asks for is dropped without a word.
+void check_run_options(const Scene& scene, const RunOptions& options) {
+  const double duration = options.duration_s >= 0.0 ? options.duration_s : scene.duration_s;
+  if (std::llround(duration / scene.model.dt) < 1)
+    throw InputError("", 0, 0, "--duration",
+                     format_input_number(duration) + " s is less than half a period (dt = " +
+                         format_input_number(scene.model.dt) + " s): the run would have none");
+  // An admittance scene's real bus is refused by its runner (run_admittance_scene).
+  const bool paced =
+      options.realtime || (!scene.admittance && parse_bus_spec(options.bus.spec).real());
+  if (options.view_speed > 0.0 && paced)
+    throw InputError("", 0, 0, "--speed",
+                     "paces an offline run; this run is paced at real time already (--realtime "
+                     "or a real bus)");
+  const platform::SceneThreadSettings& st = options.scene_thread;
+  if (st.fifo_priority == 0 && st.cpu_affinity.empty()) return;
+  const std::string key = st.fifo_priority != 0 ? "--scene-rt-priority" : "--scene-cpu";
+  if (!scene.multirate)
+    throw InputError("", 0, 0, key,
+                     "scene \"" + scene.name + "\" has no [multirate]: there is no scene thread");
+  if (!paced)
+    throw InputError("", 0, 0, key,
+                     "an offline run steps both loops on one thread: the scene thread runs in "
+                     "paced runs only (--realtime or a real bus)");
+  if (st.fifo_priority != 0 && st.fifo_priority >= options.rt.fifo_priority)
+    throw InputError("", 0, 0, "--scene-rt-priority",
+                     std::to_string(st.fifo_priority) + " must be below the loop thread's " +
+                         (options.rt.fifo_priority == 0
+                              ? std::string("(--rt-priority not given: not real-time)")
+                              : "--rt-priority " + std::to_string(options.rt.fifo_priority)) +
+                         ": the scene thread would pre-empt the device loop");
+}
+
+/// Refuses an output path (--trace, --record) that cannot be opened for writing before the
+/// run (InputError, key `key`), so that a long run does not end without its file, and the
+/// error names the option. Creates the file (empty).
+void check_output_path(const std::string& path, const std::string& key) {
   std::FILE* f = std::fopen(path.c_str(), "w");
   if (f == nullptr)
-    throw InputError("", 0, 0, "--trace",
+    throw InputError("", 0, 0, key,
                      path + ": cannot be opened for writing (" + std::strerror(errno) + ")");
   std::fclose(f);
 }
@@ -750,8 +785,9 @@ RunSummary run_impedance_scene(const Scene& scene, const RunOptions& options) {
   s.realtime_overruns = overruns;
   s.realtime_missed_periods = missed;
   // Only the managed stack's supervisor latches on overruns (MinimalDevice::supervise ignores
-  // them): a minimal-protocol run reports the policy it has, count only.
-  s.overrun_limit = s.managed ? options.overrun_limit : 0;
+  // them), and only in a paced run (an offline run has no deadlines): any other run reports
+  // the policy it has, count only.
+  s.overrun_limit = s.managed && paced ? options.overrun_limit : 0;
   s.rearm_requests = rearm_requests;
   s.rearms_accepted = rearms_accepted;
   s.rearm_first_period = rearm_first;
@@ -776,7 +812,11 @@ RunSummary run_scene(const Scene& scene, const RunOptions& options) {
   if (!(options.view_speed >= 0.0) || !std::isfinite(options.view_speed))
     throw InputError("", 0, 0, "--speed", "must be a finite factor >= 0 (got " +
                                               format_input_number(options.view_speed) + ")");
-  if (!options.trace_path.empty()) check_trace_path(options.trace_path);
+  check_run_options(scene, options);
+  if (!options.trace_path.empty()) check_output_path(options.trace_path, "--trace");
+  // (an admittance run refuses --record: run_admittance_scene)
+  if (!options.bus.record_path.empty() && !scene.admittance)
+    check_output_path(options.bus.record_path, "--record");
   RunSummary s = scene.admittance ? run_admittance_scene(scene, options)  // admittance_run.cpp
                                   : run_impedance_scene(scene, options);
   RunVerdict verdict = run_verdict(s);

@@ -10,6 +10,8 @@
 #include <cmath>
 #include <cstdio>
 #include <memory>
+#include <stdexcept>
+#include <string>
 
 #include "alloc_counter.hpp"
 #include "numen/core/model.hpp"
@@ -138,6 +140,33 @@ TEST(MultirateThreads, ASceneThreadAtItsPaceKeepsTheModelFresh) {
   EXPECT_GT(contact_periods, 100) << "the tool pressed the block";
   EXPECT_LT(deepest, 5e-3) << "m: the planes held the tool";
   EXPECT_LT(g.counters().stale_models, 600) << "a shared machine delays some scene steps, not most";
+}
+
+// The scene thread's settings are applied before start() returns: a CPU that does not exist is
+// reported (the thread runs on) or, strict, ends the thread and start() throws naming the step.
+TEST(MultirateThreads, AFailedSetupIsReportedOrStrictlyRefused) {
+  const core::Model scene = press_scene(1e-3);
+  auto god = std::make_unique<core::MultirateGodObject>(scene, 0, core::MultirateSettings{10, 0.01, {}});
+  numen::platform::SceneThreadSettings settings;
+  settings.cpu_affinity = {4095};  // no such CPU here
+  {
+    numen::platform::MultirateThreads threads(*god, 10'000'000, settings);
+    threads.start();  // returns after the setup: the report is complete
+    EXPECT_EQ(threads.realtime_report().affinity.status, numen::platform::RealtimeStepStatus::kFailed);
+    EXPECT_TRUE(threads.running());
+    threads.stop();
+  }
+  settings.strict = true;
+  numen::platform::MultirateThreads threads(*god, 10'000'000, settings);
+  try {
+    threads.start();
+    ADD_FAILURE() << "a strict scene thread started on CPU 4095";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("scene thread"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("4095"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(threads.running());
+  EXPECT_EQ(threads.counters().scene_steps, 0);
 }
 
 }  // namespace

@@ -5,6 +5,8 @@
 
 #include <alloca.h>
 #include <gtest/gtest.h>
+
+#include <limits>
 #include <pthread.h>
 #include <sched.h>
 #include <sys/mman.h>
@@ -373,4 +375,11 @@ TEST(RealtimeSetup, StackPrefaultLargerThanTheStackIsRefused) {
   EXPECT_EQ(probe.step.message.rfind("stack prefault of 1048576 bytes refused: only ", 0), 0u)
       << probe.step.message;
   EXPECT_NE(probe.step.message.find("thread stack 262144 bytes"), std::string::npos);
+  // A size near SIZE_MAX (`--prefault-stack -1` through an unsigned parse) must not wrap
+  // around the margin check and reach alloca (it crashed with SIGSEGV).
+  FaultProbe huge;
+  huge.prefault = std::numeric_limits<std::size_t>::max() - 100;
+  run_on_fresh_stack(huge, 256 << 10);
+  EXPECT_EQ(huge.step.status, RealtimeStepStatus::kFailed);
+  EXPECT_EQ(huge.step.error, ENOMEM);
 }

@@ -17,6 +17,7 @@
 
 #include "alloc_counter.hpp"
 #include "csv_lines.hpp"
+#include "numen/sim/device_process.hpp"
 #include "numen/sim/input_error.hpp"
 #include "numen/sim/scene.hpp"
 #include "numen/sim/view_recording.hpp"
@@ -263,6 +264,19 @@ TEST(AdmittanceScene, TakesTheComputePhaseAndReArmRequests) {
     ADD_FAILURE() << "a compute phase of one period was accepted";
   } catch (const sim::InputError& e) {
     EXPECT_EQ(e.key(), "--phase");
+  }
+}
+
+// `numen device` emulates impedance instruments: an admittance scene is refused before a bus is
+// opened (it used to emulate an encoder instrument in its place).
+TEST(AdmittanceScene, TheDeviceProcessRefusesIt) {
+  sim::DeviceOptions o;
+  o.bus = "can:vcan0";
+  try {
+    (void)sim::run_device(admittance_scene(), o);
+    ADD_FAILURE() << "numen device took an admittance scene";
+  } catch (const sim::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("admittance device"), std::string::npos) << e.what();
   }
 }
 

@@ -255,6 +255,39 @@ TEST(NumenCli, ViewOfAFileThatIsNotARecordingIsInputRejected) {
   EXPECT_EQ(r.out.find("open http://"), std::string::npos) << r.out;
 }
 
+// Options a run would not apply, or values that do not fit them, are input rejected before
+// the run, naming the option (2026-11-25 audit): `--prefault-stack -1` wrapped to SIZE_MAX
+// and crashed (SIGSEGV in alloca); the others ran and dropped the option without a word.
+TEST(NumenCli, OptionsARunWouldNotApplyAreInputRejected) {
+  NUMEN_REQUIRE_ARTICULATION();  // the default scene has joints
+  TempDir dir;
+  const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
+      {{"--prefault-stack", "-1"}, "--prefault-stack"},
+      {{"--prefault-stack", "18446744073709551615"}, "--prefault-stack"},
+      {{"--cpu", "5000"}, "--cpu"},
+      {{"--scene-cpu", "-1"}, "--scene-cpu"},
+      {{"--duration", "0.0004"}, "--duration"},       // under half a period: no period
+      {{"--realtime", "--speed", "2"}, "--speed"},    // paced already
+      {{"--realtime", "--scene-cpu", "0"}, "--scene-cpu"},  // no [multirate]: no scene thread
+      {{"--record", (dir / "no_dir" / "x.log").string()}, "--record"},
+  };
+  for (const auto& [extra, key] : cases) {
+    std::vector<std::string> args = {kNumen, "run", "--duration", "0.05"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    const ChildResult r = run_child(args, dir.path(), 30);
+    EXPECT_EQ(r.status, 2) << extra.front() << ": " << r.out << r.err;
+    EXPECT_NE(r.err.find(key), std::string::npos) << extra.front() << ": " << r.err;
+  }
+  // `numen view --page` names a folder holding the page.
+  const std::string rec = (dir / "run.nmv").string();
+  ASSERT_EQ(run_child({kNumen, "run", "--duration", "0.05", "--record-view", rec}, dir.path(), 30).status, 0);
+  const ChildResult v =
+      run_child({kNumen, "view", rec, "--port", "0", "--page", (dir / "nowhere").string()}, dir.path(), 30);
+  EXPECT_EQ(v.status, 2) << v.out << v.err;
+  EXPECT_NE(v.err.find("--page"), std::string::npos) << v.err;
+  EXPECT_EQ(v.out.find("open http://"), std::string::npos) << v.out;
+}
+
 // Defect 1: --trace of a simulated run keeps one record per period; a run whose trace would
 // outgrow the budget (kMaxInMemoryTraceBytes) is refused before anything is allocated.
 TEST(NumenCli, TraceThatWouldOutgrowItsBudgetIsRefusedBeforeTheRun) {

@@ -23,6 +23,7 @@
 #include "scene_text.hpp"
 #include "temp_dir.hpp"
 #include "numen/sim/admittance_run.hpp"
+#include "numen/sim/input_error.hpp"
 #include "numen/sim/run.hpp"
 #include "numen/sim/run_verdict.hpp"
 #include "numen/sim/scene.hpp"
@@ -367,6 +368,31 @@ TEST(RunMultirate, TheSceneThreadsSetupIsReported) {
   for (const std::string& line : s.realtime_setup)
     reported = reported || line.rfind("scene thread cpu affinity: ", 0) == 0;
   EXPECT_TRUE(reported) << (s.realtime_setup.empty() ? "no real-time setup lines" : s.realtime_setup.back());
+}
+
+// The scene thread's options apply to a multirate scene in a paced run, below the loop's
+// priority; elsewhere they are refused, naming the option (they used to be dropped silently).
+TEST(RunMultirate, SceneThreadOptionsThatWouldNotApplyAreRefused) {
+  numen::test::TempDir dir;
+  const Scene scene = construction_multirate(dir, 0.01, 0.01);
+  auto refused = [&](const numen::sim::RunOptions& o) -> std::string {
+    try {
+      (void)numen::sim::run_scene(scene, o);
+    } catch (const numen::sim::InputError& e) {
+      return e.key();
+    }
+    return "(accepted)";
+  };
+  numen::sim::RunOptions options;
+  options.duration_s = 0.05;
+  options.scene_thread.cpu_affinity = {0};
+  EXPECT_EQ(refused(options), "--scene-cpu");  // offline: both loops on one thread
+  options.scene_thread.cpu_affinity.clear();
+  options.realtime = true;
+  options.scene_thread.fifo_priority = 10;
+  EXPECT_EQ(refused(options), "--scene-rt-priority");  // the loop thread is not real-time
+  options.rt.fifo_priority = 10;
+  EXPECT_EQ(refused(options), "--scene-rt-priority");  // not below the loop's
 }
 
 namespace {

@@ -1101,6 +1101,9 @@ TEST(RunOverrunPolicy, PacedRunsLatchAfterTheLimitAndZeroOnlyCounts) {
   EXPECT_NE(numen::sim::format_summary(m).find("overrun policy: count only"), std::string::npos);
   const RunSummary managed = numen::sim::run_scene(default_scene(), opt);
   EXPECT_EQ(managed.overrun_limit, 3u);
+  // Unpaced: no deadlines, nothing latches, whatever the limit (its JSON said 3).
+  opt.realtime = false;
+  EXPECT_EQ(numen::sim::run_scene(default_scene(), opt).overrun_limit, 0u);
 }
 
 TEST(RunRearm, ARequestIsTakenOnceBeforeThePeriodAndReported) {

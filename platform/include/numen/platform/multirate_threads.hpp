@@ -30,6 +30,9 @@ struct SceneThreadSettings {
   /// stack prefault are the device loop's, process-wide or its own: not applied here).
   int fifo_priority = 0;
   std::vector<int> cpu_affinity;
+  /// Like RealtimeSettings::strict: a step that fails stops the thread and start() throws
+  /// (else the failure is reported in realtime_report() and the thread runs on).
+  bool strict = false;
   /// Test hook: extra wall time (ns) the scene thread spends after each scene step (a scene
   /// made artificially slow). 0 in use.
   std::int64_t extra_scene_time_ns = 0;
@@ -55,7 +58,9 @@ class MultirateThreads {
 
   /// Runs one scene step on the calling thread (the first model, so that the device loop
   /// starts with planes), then starts the scene thread, first deadline one scene period from
-  /// now. Throws std::system_error if the thread cannot start, std::logic_error if started.
+  /// now. Returns once the thread has applied its settings. Throws std::system_error if the
+  /// thread cannot start, std::logic_error if started, std::runtime_error (the failed steps)
+  /// when SceneThreadSettings::strict and a step failed (the thread has then ended).
   void start();
   /// Stops and joins the scene thread (idempotent). After it the god-object's scene loop may be
   /// stepped on the calling thread again.
@@ -89,6 +94,8 @@ class MultirateThreads {
   std::atomic<std::int64_t> reports_taken_{0};
   LatencyHistogram scene_time_;
   RealtimeReport realtime_;
+  std::atomic<bool> setup_done_{false};  // the thread applied its settings (start() waits)
+  std::string setup_error_;              // strict and a step failed: why (written before setup_done_)
 };
 
 }  // namespace numen::platform

@@ -64,8 +64,9 @@ struct DeviceSummary {
 
 /// Runs the scene's device on `options.bus` until the duration or the stop flag, then handles
 /// the frames already queued on its port (answering their SYNCs) so that the summary counts
-/// everything sent before the end, however far the device lagged. Throws
-/// std::invalid_argument for a bus that is not real, std::runtime_error from the transport.
+/// everything sent before the end, however far the device lagged. Throws InputError for a
+/// scene with an admittance device (not emulated here), std::invalid_argument for a bus that
+/// is not real, std::runtime_error from the transport.
 DeviceSummary run_device(const Scene& scene, const DeviceOptions& options);
 
 /// Readable multi-line summary.
