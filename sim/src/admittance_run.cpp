@@ -239,7 +239,7 @@ RunSummary run_admittance_scene(const Scene& scene, const RunOptions& options) {
       break;
     }
     if (options.rearm != nullptr && options.rearm->exchange(false, std::memory_order_relaxed)) {
-      ++rearm_requests;  // SIGUSR1 (docs/safety.md, "Re-arming")
+      ++rearm_requests;  // SIGUSR1 (docs/safety.md, "How the control loop uses it")
       if (rearm_first < 0) rearm_first = k;
       if (runner.loop().rearm() == hal::LifecycleResult::kOk) ++rearms_accepted;
     }
