@@ -8,6 +8,7 @@
 #include "commands.hpp"
 #include "numen/sim/bus_spec.hpp"
 #include "numen/sim/cli_values.hpp"
+#include "numen/sim/input_error.hpp"
 #include "numen/sim/run.hpp"
 #include "numen/sim/scene.hpp"
 #include "numen/sim/view_scene.hpp"
@@ -93,6 +94,19 @@ RunCommand::RunCommand(CLI::App& parent)
 }
 
 int RunCommand::execute() const {
+  // Modifiers of something not asked for would do nothing: refused (status 2).
+  if (cli_->count("--view-rate") > 0 && view_.empty() && record_view_path_.empty())
+    throw sim::InputError("", 0, 0, "--view-rate",
+                          "sets the state stream's rate; without --view or --record-view there "
+                          "is no stream");
+  const bool rt_asked = rt_.fifo_priority != 0 || rt_.lock_memory || rt_.prefault_stack_bytes > 0 ||
+                        !rt_.cpu_affinity.empty() || scene_thread_.fifo_priority != 0 ||
+                        !scene_thread_.cpu_affinity.empty();
+  if (rt_.strict && !rt_asked)
+    throw sim::InputError("", 0, 0, "--rt-strict",
+                          "makes a failed real-time step fatal; no real-time step was asked "
+                          "(--rt-priority, --lock-memory, --prefault-stack, --cpu, "
+                          "--scene-rt-priority, --scene-cpu)");
   sim::SceneOverrides overrides;
   if (!coupling_.empty()) overrides.coupling = sim::parse_coupling_mode(coupling_);
   const std::string path = scene_path_.empty() ? sim::default_scene_path() : scene_path_;

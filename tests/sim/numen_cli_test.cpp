@@ -270,6 +270,8 @@ TEST(NumenCli, OptionsARunWouldNotApplyAreInputRejected) {
       {{"--realtime", "--speed", "2"}, "--speed"},    // paced already
       {{"--realtime", "--scene-cpu", "0"}, "--scene-cpu"},  // no [multirate]: no scene thread
       {{"--record", (dir / "no_dir" / "x.log").string()}, "--record"},
+      {{"--view-rate", "30"}, "--view-rate"},  // no stream to set the rate of
+      {{"--rt-strict"}, "--rt-strict"},        // no real-time step to make fatal
   };
   for (const auto& [extra, key] : cases) {
     std::vector<std::string> args = {kNumen, "run", "--duration", "0.05"};
