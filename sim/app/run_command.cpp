@@ -77,6 +77,8 @@ RunCommand::RunCommand(CLI::App& parent)
         if (port.empty() || port.size() > 5 || port.find_first_not_of("0123456789") != std::string::npos ||
             std::stoi(port) > 65535 || (colon != std::string::npos && colon == 0))
           return "expected [HOST:]PORT, PORT in 0-65535, got '" + v + "'";
+        if (colon != std::string::npos && !sim::ViewServer::is_address(v.substr(0, colon)))
+          return "HOST must be an IP address or localhost (names are not resolved), got '" + v + "'";
         return {};
       });
   run->add_option("--view-rate", view_rate_,
@@ -111,6 +113,9 @@ int RunCommand::execute() const {
   if (!coupling_.empty()) overrides.coupling = sim::parse_coupling_mode(coupling_);
   const std::string path = scene_path_.empty() ? sim::default_scene_path() : scene_path_;
   const sim::Scene scene = sim::load_scene(path, overrides);
+  if (cli_->count("--view-rate") > 0 && view_rate_ * scene.model.dt > 1.0)
+    std::cerr << "numen: --view-rate " << view_rate_ << " is above the device rate ("
+              << 1.0 / scene.model.dt << " Hz): the stream sends every period" << std::endl;
   sim::RunOptions options;
   options.duration_s = duration_;
   options.realtime = realtime_;

@@ -52,15 +52,19 @@ ViewCommand::ViewCommand(CLI::App& parent)
 }
 
 int ViewCommand::execute() const {
+  if (!sim::ViewServer::is_address(host_))
+    throw sim::InputError("", 0, 0, "--host",
+                          "'" + host_ + "' is not an IP address (e.g. 127.0.0.1, 0.0.0.0, ::1) or "
+                          "localhost; host names are not resolved");
+  if (!page_dir_.empty() && !std::filesystem::is_regular_file(std::filesystem::path(page_dir_) / "index.html"))
+    throw sim::InputError("", 0, 0, "--page",
+                          page_dir_ + ": no index.html there (the folder of the viewer page)");
   const sim::ViewRecordingReader reader(file_);
   RecordingSource source(reader);
   sim::ViewServerSettings settings;
   settings.host = host_;
   settings.port = port_;
   settings.static_dir = page_dir_.empty() ? viewer_page_dir() : page_dir_;
-  if (!page_dir_.empty() && !std::filesystem::is_regular_file(std::filesystem::path(page_dir_) / "index.html"))
-    throw sim::InputError("", 0, 0, "--page",
-                          page_dir_ + ": no index.html there (the folder of the viewer page)");
   warn_if_exposed(host_, std::cerr);
   sim::ViewServer server(settings, reader.scene_message(), source);
   loading_done();

@@ -1,5 +1,7 @@
 #include "numen/sim/view_scene.hpp"
 
+#include <algorithm>
+
 #include <nlohmann/json.hpp>
 
 #include "numen/core/capacity.hpp"
@@ -109,7 +111,8 @@ std::string view_scene_message(const Scene& scene, const platform::StateFrameLay
       {"scene", scene.name},
       {"description", scene.description},
       {"dt", m.dt},
-      {"display_rate_hz", display_rate_hz},
+      // The stream sends at most one frame per period: a faster rate asked is the period's.
+      {"display_rate_hz", std::min(display_rate_hz, 1.0 / m.dt)},
       {"layout",
        {{"bodies", layout.num_bodies},
         {"nodes", layout.num_nodes},

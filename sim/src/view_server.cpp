@@ -510,6 +510,13 @@ std::vector<ViewClientCounters> ViewServer::clients() const {
   return out;
 }
 
+bool ViewServer::is_address(const std::string& host) {
+  if (host == "localhost") return true;
+  beast::error_code ec;
+  asio::ip::make_address(host, ec);
+  return !ec;
+}
+
 bool ViewServer::is_loopback_address(const std::string& host) {
   if (host == "localhost") return true;
   beast::error_code ec;

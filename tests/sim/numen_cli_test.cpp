@@ -3,6 +3,7 @@
 // on the control period nor on the run's duration (issue 17, defects 1 and 4).
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 #include <sys/stat.h>
 
 #include <filesystem>
@@ -14,6 +15,7 @@
 #include "child_process.hpp"
 #include "numen/sim/run_figures.hpp"
 #include "numen/sim/scene.hpp"
+#include "numen/sim/view_recording.hpp"
 #include "numen/version.hpp"
 #include "sanitizer.hpp"
 #include "scene_text.hpp"
@@ -238,10 +240,36 @@ TEST(NumenCli, BadSdoArgumentsAreInputRejectedBeforeTheBusIsOpened) {
 // `numen run --view` takes [HOST:]PORT only.
 TEST(NumenCli, ViewAddressThatIsNotHostPortIsInputRejected) {
   TempDir dir;
-  for (const char* v : {"http://x", "8080x", "host:", ":8080", "99999"}) {
+  for (const char* v : {"http://x", "8080x", "host:", ":8080", "99999", "notahost:8080"}) {
     const ChildResult r = run_child({kNumen, "run", "--duration", "0.01", "--view", v}, dir.path(), 30);
     EXPECT_EQ(r.status, 2) << v << ": " << r.err;
   }
+  // `numen view --host`: a name is not resolved; refused before the file is read or served.
+  const ChildResult r =
+      run_child({kNumen, "view", "any.nmv", "--host", "notahost", "--port", "0"}, dir.path(), 30);
+  EXPECT_EQ(r.status, 2) << r.out << r.err;
+  EXPECT_NE(r.err.find("--host"), std::string::npos) << r.err;
+  EXPECT_EQ(r.out.find("open http://"), std::string::npos) << r.out;
+}
+
+// A view rate above the control rate publishes every period: said on stderr, and the
+// recording's scene message carries the rate it got (1/dt), not the one asked.
+TEST(NumenCli, ViewRateAboveTheControlRateIsSaidAndRecordedAsTheControlRate) {
+  NUMEN_REQUIRE_ARTICULATION();
+  TempDir dir;
+  const std::string file = (dir.path() / "run.nmv").string();
+  const ChildResult r = run_child({kNumen, "run", "--duration", "0.05", "--record-view", file,
+                                   "--view-rate", "5000"},
+                                  dir.path(), 120);
+  ASSERT_EQ(r.status, 0) << r.out << r.err;
+  EXPECT_NE(r.err.find("--view-rate 5000 is above the device rate (1000 Hz): the stream sends "
+                       "every period"),
+            std::string::npos)
+      << r.err;
+  const numen::sim::ViewRecordingReader recording(file);
+  EXPECT_EQ(recording.size(), 50u);
+  const auto message = nlohmann::json::parse(recording.scene_message());
+  EXPECT_DOUBLE_EQ(message["display_rate_hz"].get<double>(), 1000.0);
 }
 
 // `numen view` of a file that is not a view recording is input rejected, naming the file, and

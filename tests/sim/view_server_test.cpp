@@ -362,4 +362,11 @@ TEST(ViewServer, LoopbackAddressesAreKnown) {
     EXPECT_FALSE(ViewServer::is_loopback_address(h)) << h;
 }
 
+TEST(ViewServer, OnlyAddressLiteralsAreAddresses) {
+  for (const char* h : {"127.0.0.1", "0.0.0.0", "::", "::1", "192.168.1.10", "localhost"})
+    EXPECT_TRUE(ViewServer::is_address(h)) << h;
+  for (const char* h : {"", "notahost", "example.org", "300.1.1.1", "127.0.0.1:80"})
+    EXPECT_FALSE(ViewServer::is_address(h)) << h;
+}
+
 }  // namespace

@@ -20,12 +20,14 @@ inline constexpr int kViewSceneVersion = 1;
 platform::StateFrameLayout view_frame_layout(const Scene& scene);
 
 /// The scene message as compact JSON (UTF-8): format, version, scene name and description,
-/// dt (s), display rate (Hz), the frame layout, bodies (name, spheres [x, y, z, r] in the body
-/// frame, m), obstacles (name, type, position, orientation [x, y, z, w], and per type
-/// half_extents / radius / half_length / spheres in the world frame), nets (name, rigid body,
-/// node_begin, node_count, node radius, triangles as local node indices), joints (name, type,
-/// parent, child (−1: world), frame in the parent and in the child), the device (name, kind,
-/// protocol "managed" | "minimal" | "admittance", axis names) and the initially attached body. Numbers are the model's doubles.
+/// dt (s), display rate (Hz; at most 1/dt: the stream sends one frame per period at most),
+/// the frame layout, bodies (name, spheres [x, y, z, r] in the body frame, m), obstacles
+/// (name, type, position, orientation [x, y, z, w], and per type half_extents / radius /
+/// half_length / spheres in the world frame), nets (name, rigid body, node_begin, node_count,
+/// node radius, triangles as local node indices), joints (name, type, parent, child (−1:
+/// world), frame in the parent and in the child), the device (name, kind, protocol "managed" |
+/// "minimal" | "admittance", axis names) and the initially attached body. Numbers are the
+/// model's doubles.
 std::string view_scene_message(const Scene& scene, const platform::StateFrameLayout& layout,
                                double display_rate_hz);
 

@@ -127,6 +127,9 @@ class ViewServer final : public platform::StateFrameSink {
 
   /// True for 127.0.0.0/8, ::1 and "localhost": addresses that do not reach the network.
   static bool is_loopback_address(const std::string& host);
+  /// True for what start() can listen on: an IPv4 or IPv6 address literal, or "localhost"
+  /// (127.0.0.1). Host names are not resolved.
+  static bool is_address(const std::string& host);
 
   struct Impl;
 
