@@ -185,7 +185,9 @@ TEST(RunMultirate, APacedRunStepsTheSceneOnItsOwnThread) {
               s.multirate.scene_step_us.median, static_cast<long long>(s.realtime_overruns));
   EXPECT_TRUE(s.multirate.scene_thread);
   EXPECT_GE(s.multirate.scene_steps, 80);
-  EXPECT_LE(s.multirate.scene_steps, 110);
+  // The scene thread keeps its 10 ms in wall time: a loaded machine's overruns stretch the
+  // 1 000 periods past 1 s (1.25 s under ASan beside a build: 125 scene steps).
+  EXPECT_LE(s.multirate.scene_steps, std::llround(s.wall_time_s / 0.01) + 10) << s.wall_time_s;
   EXPECT_EQ(s.nonfinite_steps, 0);
   EXPECT_FALSE(s.nan_detected);
   EXPECT_LT(s.multirate.stale_models, s.steps / 2);
@@ -506,6 +508,7 @@ TEST(RunMultirate, APacedAdmittanceRunStepsTheSceneOnItsOwnThread) {
   numen::sim::RunOptions options;
   options.realtime = true;
   options.duration_s = 0.5;
+  options.overrun_limit = 0;  // a shared machine: overruns counted, not latched
   options.scene_thread.cpu_affinity = {0};
   options.rt.cpu_affinity = {4095};  // no such CPU here: reported as failed, the run goes on
   const Scene scene = shipped_scene(dir, "admittance.toml", 0.001, 0.005, 0.005);
@@ -526,7 +529,8 @@ TEST(RunMultirate, APacedAdmittanceRunStepsTheSceneOnItsOwnThread) {
   EXPECT_TRUE(s.admittance.enabled);
   EXPECT_TRUE(s.multirate.scene_thread);
   EXPECT_GE(s.multirate.scene_steps, 80);
-  EXPECT_LE(s.multirate.scene_steps, 110);
+  EXPECT_LE(s.multirate.scene_steps, std::llround(s.wall_time_s / 0.005) + 10)
+      << s.wall_time_s;  // 5 ms in wall time (above)
   EXPECT_LT(s.multirate.stale_models, s.steps / 2);
   EXPECT_FALSE(s.nan_detected);
   bool scene_reported = false, loop_reported = false;
