@@ -24,6 +24,16 @@ hal::LifecycleSettings lifecycle_settings(const AdmittanceLoopSettings& s) {
 
 }  // namespace
 
+const char* to_string(AdmittanceFaultCause cause) noexcept {
+  switch (cause) {
+    case AdmittanceFaultCause::kNone: return "none";
+    case AdmittanceFaultCause::kForceOutOfRange: return "force out of range";
+    case AdmittanceFaultCause::kForceTimeout: return "force reading timeout";
+    case AdmittanceFaultCause::kOverruns: return "overruns";
+  }
+  return "unknown";
+}
+
 AdmittanceLoop::AdmittanceLoop(const core::Model& model, core::Data& data, hal::Bus& bus,
                                hal::AdmittanceDevice& device,
                                const AdmittanceLoopSettings& settings)
@@ -59,9 +69,12 @@ void AdmittanceLoop::brake_held_body() noexcept {
       -k * (core::world_inertia(s.orientation, bm.inertia_body) * s.angular_velocity);
 }
 
-const AdmittanceReport& AdmittanceLoop::end_period(std::int64_t now_ns) noexcept {
+const AdmittanceReport& AdmittanceLoop::end_period(std::int64_t now_ns, bool overran) noexcept {
   report_ = AdmittanceReport{};
   ++counters_.periods;
+  report_.overran = overran;
+  if (overran) ++counters_.overruns;
+  overrun_streak_ = overran ? overrun_streak_ + 1 : 0;
   hal::CanFrame frame;
   for (int i = 0; i < 1024; ++i) {
     const hal::IoStatus s = bus_->read(frame);
@@ -75,13 +88,20 @@ const AdmittanceReport& AdmittanceLoop::end_period(std::int64_t now_ns) noexcept
   report_.faults = sample.faults;
   if (!sample.valid) ++counters_.invalid_periods;
 
+  const bool out_of_range = (sample.faults & hal::SampleFault::kOutOfRange) != 0;
+  const bool timed_out = sample.periods_since_valid >= settings_.force_timeout_periods;
+  const bool overruns =
+      settings_.overrun_limit > 0 && overrun_streak_ >= settings_.overrun_limit;
   hal::LifecycleInputs in;
-  in.fault = sample.periods_since_valid >= settings_.force_timeout_periods ||
-             (sample.faults & hal::SampleFault::kOutOfRange) != 0;
-  in.cause_present = !sample.valid;
+  in.fault = out_of_range || timed_out || overruns;
+  in.cause_present = !sample.valid || overruns;
   in.drives_disabled = disable_sent_;
   const hal::LifecycleUpdate u = lifecycle_.update(now_ns, in);
   report_.entered_safe_stop = u.entered_safe_stop;
+  if (u.entered_safe_stop)
+    report_.cause = out_of_range ? AdmittanceFaultCause::kForceOutOfRange
+                    : timed_out  ? AdmittanceFaultCause::kForceTimeout
+                                 : AdmittanceFaultCause::kOverruns;
   if (settings_.auto_activate && lifecycle_.state() == hal::LifecycleState::kInactive &&
       sample.valid) {
     report_.activated = lifecycle_.activate() == hal::LifecycleResult::kOk;

@@ -50,16 +50,23 @@ hal::AxisVector initial_axes(const Scene& scene) {
   return kin->inverse(pose, hal::AxisVector::Zero(kin->num_axes()));
 }
 
+platform::AdmittanceLoopSettings loop_settings(std::uint32_t overrun_limit) noexcept {
+  platform::AdmittanceLoopSettings s;
+  s.overrun_limit = overrun_limit;
+  return s;
+}
+
 }  // namespace
 
-AdmittanceRunner::AdmittanceRunner(const Scene& scene, std::size_t trace_capacity)
+AdmittanceRunner::AdmittanceRunner(const Scene& scene, std::size_t trace_capacity,
+                                   std::uint32_t overrun_limit)
     : scene_(&scene),
       bus_(scene.bus),
       emulator_(scene.device, admittance_of(scene).config, admittance_of(scene).emulator),
       device_(scene.device, admittance_of(scene).config, initial_axes(scene)),
       data_(core::make_data(scene.model)),
       ghost_(core::make_data(scene.model)),
-      loop_(scene.model, data_, bus_.controller(), device_),
+      loop_(scene.model, data_, bus_.controller(), device_, loop_settings(overrun_limit)),
       multirate_(scene),
       period_ns_(static_cast<std::int64_t>(std::llround(scene.model.dt * 1e9))),
       phase_ns_(static_cast<std::int64_t>(std::llround(scene.compute_phase_s * 1e9))) {
@@ -95,7 +102,7 @@ void AdmittanceRunner::finish() {
   if (view_) view_->finish();
 }
 
-void AdmittanceRunner::period() noexcept {
+void AdmittanceRunner::period(bool overran) noexcept {
   const core::Model& model = scene_->model;
   const std::int64_t t = k_ * period_ns_;
   const double ts = static_cast<double>(t) * 1e-9;
@@ -109,7 +116,7 @@ void AdmittanceRunner::period() noexcept {
   bus_.set_time_ns(t + scene_->bus.latency_ns);
   emulator_.poll(bus_.device());
   bus_.set_time_ns(t + phase_ns_);
-  const platform::AdmittanceReport& r = loop_.end_period(t + phase_ns_);
+  const platform::AdmittanceReport& r = loop_.end_period(t + phase_ns_, overran);
   step_time_.record(r.step_ns);
   ++k_;
   multirate_.view(data_);  // a multirate run: both loops as one single-rate Data
@@ -151,7 +158,14 @@ void AdmittanceRunner::period() noexcept {
   solver_iterations_sum_ += data_.solver_iterations;
   if (data_.solver_residual > s.solver_residual_max) s.solver_residual_max = data_.solver_residual;
   if (data_.status & core::kSolverNotConverged) ++s.solver_not_converged_steps;
-  if (r.entered_safe_stop) ++s.faults;
+  if (r.entered_safe_stop) {
+    if (s.faults == 0) {  // the first latched safe state of the run (kept across re-arms)
+      s.first_fault = platform::to_string(r.cause);
+      s.first_fault_time_s = static_cast<double>(t + phase_ns_) * 1e-9;
+      s.first_fault_period = k_ - 1;
+    }
+    ++s.faults;
+  }
   // The frame and the trace record of an admittance period (docs/viewer.md, "Admittance
   // runs"; docs/scenes.md): the target is the hand, the wrench the measured one that drove the
   // god-object, no axis torque.
@@ -210,8 +224,11 @@ RunSummary run_admittance_scene(const Scene& scene, const RunOptions& options) {
                          "' does not record its simulated bus (use --trace or --record-view)");
   const double duration = options.duration_s >= 0.0 ? options.duration_s : scene.duration_s;
   const auto steps = static_cast<std::int64_t>(std::llround(duration / scene.model.dt));
+  // Overruns latch only where there is a deadline to miss (a paced run).
+  const std::uint32_t overrun_limit = options.realtime ? options.overrun_limit : 0;
   AdmittanceRunner runner(scene,
-                          options.trace_path.empty() ? 0 : in_memory_trace_capacity(steps));
+                          options.trace_path.empty() ? 0 : in_memory_trace_capacity(steps),
+                          overrun_limit);
   if (const std::int64_t phase = compute_phase_override_ns(scene, options); phase >= 0)
     runner.set_compute_phase_ns(phase);
   // A multirate scene's scene thread is started before the real-time setup pins and promotes
@@ -244,20 +261,22 @@ RunSummary run_admittance_scene(const Scene& scene, const RunOptions& options) {
       if (runner.loop().rearm() == hal::LifecycleResult::kOk) ++rearms_accepted;
     }
     view_pacer.wait();
+    bool overran = false;
     if (options.realtime) {
       const platform::Wakeup w = timer.wait_next();
+      overran = w.overrun;
       overruns += w.overrun ? 1 : 0;
       missed += w.missed_periods;
       wakeup.record(w.latency_ns());
     }
-    runner.period();
+    runner.period(overran);
   }
   runner.finish();
   RunSummary s = runner.summary();
   s.wall_time_s = static_cast<double>(platform::monotonic_now_ns() - wall0) * 1e-9;
   s.realtime_overruns = overruns;
   s.realtime_missed_periods = missed;
-  s.overrun_limit = 0;  // the admittance loop counts overruns, never latches on them
+  s.overrun_limit = overrun_limit;
   s.wakeup_latency_us = summarize_ns(wakeup);
   s.rearm_requests = rearm_requests;
   s.rearms_accepted = rearms_accepted;

@@ -55,14 +55,16 @@ struct Rig {
   core::Pose hand;
   std::int64_t k = 0;
 
-  explicit Rig(const hal::AdmittanceEmulatorSettings& s)
+  explicit Rig(const hal::AdmittanceEmulatorSettings& s,
+               const platform::AdmittanceLoopSettings& loop_settings = {})
       : emulator(tracker(), hal::make_admittance_config(tracker()), s),
         device(tracker(), hal::make_admittance_config(tracker()), hal::AxisVector::Zero(6)),
-        loop(model, data, bus.controller(), device) {
+        loop(model, data, bus.controller(), device, loop_settings) {
     emulator.set_axis_values(hal::AxisVector::Zero(6));
   }
 
-  const platform::AdmittanceReport& period() {
+  /// One period; `overran`: told to end_period as a paced loop's overrun wake-up.
+  const platform::AdmittanceReport& period(bool overran = false) {
     const std::int64_t t = k++ * 1'000'000;
     emulator.set_hand(hand, core::Twist{});
     bus.set_time_ns(t);
@@ -70,7 +72,7 @@ struct Rig {
     bus.set_time_ns(t + 100'000);
     emulator.poll(bus.device());
     bus.set_time_ns(t + 300'000);
-    return loop.end_period(t + 300'000);
+    return loop.end_period(t + 300'000, overran);
   }
 };
 
@@ -176,6 +178,51 @@ TEST(AdmittanceLoop, SilentSensorLatchesTheSafeStateAndRearmRecovers) {
   EXPECT_EQ(rig.loop.lifecycle().state(), hal::LifecycleState::kActive);
   for (int i = 0; i < 1500; ++i) rig.period();
   EXPECT_NEAR(rig.emulator.q()[0], 0.01, 2e-4);
+}
+
+// overrun_limit consecutive overruns latch the safe state (cause kOverruns), as the impedance
+// loop's supervisor; fewer, or a streak broken by an on-time period, do not; the re-arm waits
+// for an on-time period. The sensor's own faults keep their cause.
+TEST(AdmittanceLoop, ConsecutiveOverrunsLatchTheSafeState) {
+  platform::AdmittanceLoopSettings settings;
+  settings.overrun_limit = 2;
+  Rig rig(hand_settings(), settings);
+  rig.hand.position = Vec3(0.01, 0.0, 0.0);
+  for (int i = 0; i < 50; ++i) rig.period();
+  ASSERT_EQ(rig.loop.lifecycle().state(), hal::LifecycleState::kActive);
+  for (int i = 0; i < 10; ++i) EXPECT_FALSE(rig.period(i % 2 == 0).entered_safe_stop) << i;
+  EXPECT_EQ(rig.loop.counters().overruns, 5u);
+  EXPECT_FALSE(rig.period(true).entered_safe_stop);
+  const platform::AdmittanceReport& r = rig.period(true);
+  EXPECT_TRUE(r.overran);
+  EXPECT_TRUE(r.entered_safe_stop);
+  EXPECT_EQ(r.cause, platform::AdmittanceFaultCause::kOverruns);
+  EXPECT_STREQ(platform::to_string(r.cause), "overruns");
+  EXPECT_EQ(r.controlword, hal::Controlword::kShutdown);
+  EXPECT_FALSE(r.driven);
+  rig.period(true);
+  rig.period(true);  // still late: the drives disabled, the cause present
+  EXPECT_EQ(rig.loop.lifecycle().state(), hal::LifecycleState::kFault);
+  EXPECT_EQ(rig.loop.rearm(), hal::LifecycleResult::kCausePresent);
+  rig.period();  // on time
+  EXPECT_EQ(rig.loop.rearm(), hal::LifecycleResult::kOk);
+  rig.period();
+  EXPECT_EQ(rig.loop.lifecycle().state(), hal::LifecycleState::kActive);
+
+  // Without a limit (the default) overruns are only counted.
+  Rig counted(hand_settings());
+  for (int i = 0; i < 100; ++i) EXPECT_FALSE(counted.period(i >= 20).entered_safe_stop) << i;
+  EXPECT_EQ(counted.loop.counters().overruns, 80u);
+  EXPECT_EQ(counted.loop.lifecycle().state(), hal::LifecycleState::kActive);
+
+  // A silent sensor's latch names the timeout.
+  Rig silent(hand_settings(), settings);
+  for (int i = 0; i < 50; ++i) silent.period();
+  silent.emulator.set_sensor_silent(true);
+  platform::AdmittanceFaultCause cause = platform::AdmittanceFaultCause::kNone;
+  for (int i = 0; i < 20 && cause == platform::AdmittanceFaultCause::kNone; ++i)
+    cause = silent.period().cause;
+  EXPECT_EQ(cause, platform::AdmittanceFaultCause::kForceTimeout);
 }
 
 TEST(AdmittanceLoop, PeriodsDoNotAllocate) {

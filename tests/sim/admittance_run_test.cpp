@@ -19,6 +19,7 @@
 #include "csv_lines.hpp"
 #include "numen/sim/device_process.hpp"
 #include "numen/sim/input_error.hpp"
+#include "numen/sim/run_verdict.hpp"
 #include "numen/sim/scene.hpp"
 #include "numen/sim/view_recording.hpp"
 #include "numen/platform/state_frame.hpp"
@@ -32,6 +33,18 @@ const sim::Scene& admittance_scene() {
   static const sim::Scene s =
       sim::load_scene(std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/admittance.toml");
   return s;
+}
+
+/// The shipped admittance scene with `bus_keys` added to its [bus] table (after its latency),
+/// written to and loaded from `dir`.
+sim::Scene admittance_with_bus(const numen::test::TempDir& dir, const std::string& bus_keys) {
+  std::ifstream in(std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/admittance.toml");
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string from = "latency = 0.0001";
+  text.replace(text.find(from), from.size(), from + "\n" + bus_keys);
+  const std::string path = (dir.path() / "variant.toml").string();
+  std::ofstream(path) << text;
+  return sim::load_scene(path);
 }
 
 }  // namespace
@@ -280,18 +293,73 @@ TEST(AdmittanceScene, TheDeviceProcessRefusesIt) {
   }
 }
 
+// Overruns (a paced run's late wake-ups, passed to each period): overrun_limit of them in a
+// row latch the safe state like the impedance loop's supervisor, an on-time period resets the
+// streak, the summary names the cause and the verdict is a safety stop; a re-arm is refused
+// while the streak lasts and taken after an on-time period. With a limit of 0 (offline runs,
+// --overrun-limit 0) they are never latched.
+TEST(AdmittanceScene, ConsecutiveOverrunsLatchTheSafeState) {
+  const sim::Scene& s = admittance_scene();
+  sim::AdmittanceRunner counted(s, 0, 0);
+  for (int k = 0; k < 300; ++k) counted.period(k >= 100);
+  EXPECT_EQ(counted.loop().counters().overruns, 200u);
+  EXPECT_EQ(counted.summary().faults, 0);
+  EXPECT_EQ(counted.loop().lifecycle().state(), numen::hal::LifecycleState::kActive);
+
+  sim::AdmittanceRunner r(s, 0, 3);
+  for (int k = 0; k < 100; ++k) r.period();
+  ASSERT_EQ(r.loop().lifecycle().state(), numen::hal::LifecycleState::kActive);
+  r.period(true);
+  r.period(true);
+  r.period();  // two in a row, then on time: no latch
+  r.period(true);
+  r.period(true);
+  EXPECT_EQ(r.summary().faults, 0);
+  EXPECT_EQ(r.loop().lifecycle().state(), numen::hal::LifecycleState::kActive);
+  r.period(true);  // the third in a row, period 105
+  EXPECT_TRUE(r.loop().last_report().entered_safe_stop);
+  EXPECT_EQ(r.loop().last_report().cause, numen::platform::AdmittanceFaultCause::kOverruns);
+  EXPECT_EQ(r.loop().last_report().controlword, numen::hal::Controlword::kShutdown);
+  for (int k = 0; k < 20; ++k) r.period(true);  // still late: the cause present
+  EXPECT_EQ(r.loop().lifecycle().state(), numen::hal::LifecycleState::kFault);
+  EXPECT_EQ(r.loop().rearm(), numen::hal::LifecycleResult::kCausePresent);
+  r.period();  // on time
+  EXPECT_EQ(r.loop().rearm(), numen::hal::LifecycleResult::kOk);
+  for (int k = 0; k < 5; ++k) r.period();
+  EXPECT_EQ(r.loop().lifecycle().state(), numen::hal::LifecycleState::kActive);
+  const sim::RunSummary sum = r.summary();
+  EXPECT_EQ(sum.faults, 1);
+  EXPECT_EQ(sum.first_fault, "overruns");
+  EXPECT_EQ(sum.first_fault_period, 105);
+  EXPECT_NEAR(sum.first_fault_time_s, 0.105 + s.compute_phase_s, 1e-12);
+  const sim::RunVerdict v = sim::run_verdict(sum);
+  EXPECT_EQ(v.status, sim::ExitStatus::kSafetyStop);
+}
+
+// A sensor never heard (every frame lost) latches the safe state with its own cause, named in
+// the summary and the verdict (they said an empty "first:").
+TEST(AdmittanceScene, ASilentSensorIsNamedAsTheFirstFault) {
+  numen::test::TempDir dir;
+  const sim::Scene s = admittance_with_bus(dir, "drop_probability = 1.0");
+  sim::RunOptions o;
+  o.duration_s = 1.0;
+  const sim::RunSummary sum = sim::run_scene(s, o);
+  ASSERT_GT(sum.faults, 0);
+  EXPECT_EQ(sum.first_fault, "force reading timeout");
+  EXPECT_GE(sum.first_fault_period, 0);
+  EXPECT_LE(sum.first_fault_period, 5);
+  bool named = false;
+  for (const std::string& reason : sim::run_verdict(sum).reasons)
+    named = named || reason.find("latched, first: force reading timeout") != std::string::npos;
+  EXPECT_TRUE(named);
+}
+
 TEST(AdmittanceScene, LostFramesAreRiddenThroughWithoutASafeStop) {
   // 2 % of the frames dropped both ways: a lost sensor TPDO leaves the other half and the
   // previous one fresh (max age 3 periods), a lost csp RPDO leaves the drive on its last
   // target; the contact is the same.
   numen::test::TempDir dir;
-  std::ifstream in(std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/admittance.toml");
-  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  const std::string from = "latency = 0.0001";
-  text.replace(text.find(from), from.size(), from + "\ndrop_probability = 0.02\nseed = 3");
-  const std::string path = (dir.path() / "lossy.toml").string();
-  std::ofstream(path) << text;
-  const sim::Scene s = sim::load_scene(path);
+  const sim::Scene s = admittance_with_bus(dir, "drop_probability = 0.02\nseed = 3");
   sim::RunOptions o;
   const sim::RunSummary sum = sim::run_scene(s, o);
   EXPECT_GT(sum.bus_frames_dropped, 500);

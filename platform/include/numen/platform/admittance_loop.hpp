@@ -5,7 +5,8 @@
 ///   begin_period: SYNC on the bus;
 ///   end_period:   read every pending frame → force sensor TPDOs → check (fresh, in range)
 ///                 → DeviceLifecycle (a force reading missing or rejected for
-///                 force_timeout_periods, or out of range, latches the safe state)
+///                 force_timeout_periods, out of range, or overrun_limit consecutive
+///                 overrun periods latch the safe state)
 ///                 → data.device_wrench = the measured wrench in the world, about the held
 ///                 body's COM (sensor frame → world through the forward kinematics of the
 ///                 set-points) → core::step (CouplingMode::kAdmittance), or the step
@@ -36,7 +37,22 @@ struct AdmittanceLoopSettings {
   std::uint32_t safe_stop_timeout_periods = 100;
   /// Activate on its own in the first period with a valid reading (else call activate()).
   bool auto_activate = true;
+  /// Consecutive overrun periods (end_period's `overran`) that latch the safe state, as the
+  /// impedance loop's hal::DeviceSettings::overrun_limit; 0: overruns are counted, never
+  /// latched (offline runs, where there is no deadline to miss).
+  std::uint32_t overrun_limit = 0;
 };
+
+/// What latched an admittance loop's safe state (docs/safety.md).
+enum class AdmittanceFaultCause : std::uint8_t {
+  kNone,             ///< Nothing latched.
+  kForceOutOfRange,  ///< A force/torque reading outside the sensor's range (SampleFault).
+  kForceTimeout,     ///< No valid force reading for force_timeout_periods.
+  kOverruns,         ///< overrun_limit consecutive control periods overran.
+};
+
+/// Short English name of an AdmittanceFaultCause (static string), e.g. "force reading timeout".
+const char* to_string(AdmittanceFaultCause cause) noexcept;
 
 /// What one period did.
 struct AdmittanceReport {
@@ -50,6 +66,10 @@ struct AdmittanceReport {
   std::int64_t step_ns = 0;  ///< Wall time of core::step (CLOCK_MONOTONIC ns).
   hal::LifecycleState lifecycle = hal::LifecycleState::kUnconfigured;  ///< After this period.
   bool entered_safe_stop = false;  ///< The safe state latched in this period.
+  /// What latched it (kNone unless entered_safe_stop); several at once: the first of
+  /// out of range, timeout, overruns.
+  AdmittanceFaultCause cause = AdmittanceFaultCause::kNone;
+  bool overran = false;            ///< end_period() was told this period overran.
   bool activated = false;          ///< kInactive → kActive in this period.
 };
 
@@ -62,6 +82,7 @@ struct AdmittanceLoopCounters {
   std::uint64_t invalid_periods = 0;      ///< Periods without a valid reading.
   std::uint64_t command_failures = 0;     ///< Periods whose RPDO writes did not all succeed.
   std::uint64_t hold_periods = 0;         ///< Periods not in kActive (drives disabled, braked).
+  std::uint64_t overruns = 0;             ///< Periods end_period() was told overran.
 };
 
 /// The control loop of one admittance device driving one core::Data.
@@ -76,8 +97,11 @@ class AdmittanceLoop {
 
   /// Starts a period: SYNC (COB-ID 0x080, counter 1..240) stamped `now_ns` (bus clock).
   void begin_period(std::int64_t now_ns) noexcept;
-  /// Ends the period at bus time `now_ns` (see the file comment).
-  const AdmittanceReport& end_period(std::int64_t now_ns) noexcept;
+  /// Ends the period at bus time `now_ns` (see the file comment). `overran`: the previous
+  /// period ran past this one's deadline (platform::Wakeup::overrun of a paced loop, as the
+  /// impedance loop supervises its last period's overrun); overrun_limit of them in a row latch
+  /// the safe state, a period without one resets the streak.
+  const AdmittanceReport& end_period(std::int64_t now_ns, bool overran = false) noexcept;
 
   /// kInactive → kActive now (refused while the reading is invalid).
   hal::LifecycleResult activate() noexcept { return lifecycle_.activate(); }
@@ -113,6 +137,7 @@ class AdmittanceLoop {
   hal::DeviceLifecycle lifecycle_;
   bool disable_sent_ = false;  // controlword shutdown sent since the last kActive period
   std::uint8_t sync_counter_ = 0;
+  std::uint32_t overrun_streak_ = 0;  // consecutive periods told they overran
   AdmittanceReport report_;
   AdmittanceLoopCounters counters_;
   StepFunction step_function_ = nullptr;  // null: core::step

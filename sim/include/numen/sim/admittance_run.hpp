@@ -42,12 +42,17 @@ class AdmittanceRunner {
   /// `scene` (with Scene::admittance set) must outlive the runner. The device starts at the
   /// held body's initial pose (inverse kinematics), the hand at the trajectory's first sample.
   /// `trace_capacity` trace records are reserved (0: no trace; a full trace counts its drops).
-  /// Throws std::invalid_argument if the scene has no admittance device.
-  explicit AdmittanceRunner(const Scene& scene, std::size_t trace_capacity = 0);
+  /// `overrun_limit`: consecutive overrun periods that latch the safe state
+  /// (AdmittanceLoopSettings::overrun_limit; 0: counted only). Throws std::invalid_argument if
+  /// the scene has no admittance device.
+  explicit AdmittanceRunner(const Scene& scene, std::size_t trace_capacity = 0,
+                            std::uint32_t overrun_limit = 0);
 
   /// Runs control period k (see the file comment) and its measurements, and publishes it to
-  /// the state stream if stream_view() was called.
-  void period() noexcept;
+  /// the state stream if stream_view() was called. `overran`: the previous period ran past
+  /// this one's deadline (a paced run's platform::Wakeup::overrun), passed to
+  /// AdmittanceLoop::end_period.
+  void period(bool overran = false) noexcept;
   /// Publishes the run's state stream (docs/viewer.md, "Admittance runs") to a view recording
   /// at `record_path` (empty: none) and to `sinks` (not owned), at `rate_hz` frames per
   /// simulated second; `wait`: the loop waits for the consumers, else drops. Setup only; throws
@@ -109,7 +114,7 @@ class AdmittanceRunner {
   double tool_pen_ = 0.0;
   double error_sq_ = 0.0;
   double solver_iterations_sum_ = 0.0;
-  RunSummary acc_;
+  RunSummary acc_;  // first_fault* set at the first latched safe state
   std::unique_ptr<ViewOutput> view_;      // --record-view, --view
   platform::PeriodReport view_report_;    // the frame's header and wrench (admittance meaning)
   std::vector<double> view_axis_values_;  // the frame's axis field: zeros (no torque is sent)
@@ -124,8 +129,10 @@ class AdmittanceRunner {
 /// device lives on the scene's SimBus; key "--trace" for a trace over the in-memory budget;
 /// key "--phase" for a compute phase not below dt. options.rearm re-arms the loop after a latched
 /// safe state (AdmittanceLoop::rearm()); a paced run reports its overruns, missed periods and
-/// wake-up latency. options.overrun_limit does not apply: like the minimal protocol's devices,
-/// the admittance loop does not supervise overruns (docs/safety.md).
+/// wake-up latency, and latches the safe state after options.overrun_limit consecutive
+/// overruns (0: counted only; an offline run has no deadline and never latches on them;
+/// docs/safety.md). The summary's first_fault names what latched first (to_string of
+/// platform::AdmittanceFaultCause).
 RunSummary run_admittance_scene(const Scene& scene, const RunOptions& options);
 
 }  // namespace numen::sim

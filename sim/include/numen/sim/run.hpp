@@ -289,7 +289,7 @@ struct RunSummary {
   std::int64_t realtime_overruns = 0;      ///< Paced periods (--realtime) that began after their deadline.
   std::int64_t realtime_missed_periods = 0;  ///< Whole periods skipped to re-phase after overruns.
   /// RunOptions::overrun_limit in effect: consecutive overruns that latch (0: counted only, as
-  /// in a minimal-protocol or admittance run, whose loops do not supervise overruns).
+  /// in an unpaced run or a minimal-protocol one, whose loop does not supervise overruns).
   std::uint32_t overrun_limit = 3;
   DurationSummary wakeup_latency_us;       ///< Paced runs: wake-up time − deadline (µs).
   /// RunOptions::rt outcome, one line per step plus the kernel and the limits
