@@ -236,6 +236,11 @@ KernelRealtime check_kernel_realtime() {
   return classify_kernel(sysfs, version);
 }
 
+bool any_step_requested(const RealtimeSettings& settings) noexcept {
+  return settings.fifo_priority != 0 || settings.lock_memory ||
+         settings.prefault_stack_bytes > 0 || !settings.cpu_affinity.empty();
+}
+
 RealtimeReport apply_realtime(const RealtimeSettings& settings) {
   if (settings.fifo_priority < 0 || settings.fifo_priority > 99)
     throw std::invalid_argument(

@@ -101,8 +101,7 @@ int RunCommand::execute() const {
     throw sim::InputError("", 0, 0, "--view-rate",
                           "sets the state stream's rate; without --view or --record-view there "
                           "is no stream");
-  const bool rt_asked = rt_.fifo_priority != 0 || rt_.lock_memory || rt_.prefault_stack_bytes > 0 ||
-                        !rt_.cpu_affinity.empty() || scene_thread_.fifo_priority != 0 ||
+  const bool rt_asked = platform::any_step_requested(rt_) || scene_thread_.fifo_priority != 0 ||
                         !scene_thread_.cpu_affinity.empty();
   if (rt_.strict && !rt_asked)
     throw sim::InputError("", 0, 0, "--rt-strict",

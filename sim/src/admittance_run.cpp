@@ -11,7 +11,6 @@
 #include "numen/hal/device/kinematics_factory.hpp"
 #include "numen/platform/monotonic_clock.hpp"
 #include "numen/platform/periodic_timer.hpp"
-#include "numen/platform/realtime_setup.hpp"
 #include "numen/sim/input_error.hpp"
 #include "numen/sim/simulated_instrument.hpp"
 
@@ -237,50 +236,35 @@ RunSummary run_admittance_scene(const Scene& scene, const RunOptions& options) {
   if (!options.record_view_path.empty() || !options.view_sinks.empty())
     runner.stream_view(options.record_view_path, options.view_sinks, options.view_rate_hz,
                        !options.realtime);
-  const platform::RealtimeSettings& rt = options.rt;
-  std::vector<std::string> rt_lines;
-  if (rt.fifo_priority != 0 || rt.lock_memory || rt.prefault_stack_bytes > 0 ||
-      !rt.cpu_affinity.empty())
-    rt_lines = platform::describe(platform::apply_realtime(rt));  // throws only if strict
+  std::vector<std::string> rt_lines = apply_run_realtime(options.rt);
   const std::int64_t wall0 = platform::monotonic_now_ns();
   platform::PeriodicTimer timer(static_cast<std::int64_t>(std::llround(scene.model.dt * 1e9)),
                                 wall0);
   ViewPacer view_pacer(scene.model.dt, options.realtime ? 0.0 : options.view_speed, wall0);
-  std::int64_t overruns = 0, missed = 0;
-  platform::LatencyHistogram wakeup;
-  std::int64_t rearm_requests = 0, rearms_accepted = 0, rearm_first = -1;
+  RunLoopTally tally;
   bool stopped = false;
   for (std::int64_t k = 0; k < steps; ++k) {
     if (options.stop != nullptr && options.stop->load(std::memory_order_relaxed)) {
       stopped = true;  // SIGINT / SIGTERM (docs/inputs.md, "Signals")
       break;
     }
-    if (options.rearm != nullptr && options.rearm->exchange(false, std::memory_order_relaxed)) {
-      ++rearm_requests;  // SIGUSR1 (docs/safety.md, "How the control loop uses it")
-      if (rearm_first < 0) rearm_first = k;
-      if (runner.loop().rearm() == hal::LifecycleResult::kOk) ++rearms_accepted;
-    }
+    // SIGUSR1 (docs/safety.md, "How the control loop uses it")
+    if (tally.take_rearm(options.rearm, k) && runner.loop().rearm() == hal::LifecycleResult::kOk)
+      tally.rearm_accepted();
     view_pacer.wait();
     bool overran = false;
     if (options.realtime) {
       const platform::Wakeup w = timer.wait_next();
       overran = w.overrun;
-      overruns += w.overrun ? 1 : 0;
-      missed += w.missed_periods;
-      wakeup.record(w.latency_ns());
+      tally.woke(w);
     }
     runner.period(overran);
   }
   runner.finish();
   RunSummary s = runner.summary();
   s.wall_time_s = static_cast<double>(platform::monotonic_now_ns() - wall0) * 1e-9;
-  s.realtime_overruns = overruns;
-  s.realtime_missed_periods = missed;
+  tally.write(s);
   s.overrun_limit = overrun_limit;
-  s.wakeup_latency_us = summarize_ns(wakeup);
-  s.rearm_requests = rearm_requests;
-  s.rearms_accepted = rearms_accepted;
-  s.rearm_first_period = rearm_first;
   s.realtime_setup = std::move(rt_lines);
   runner.multirate().describe_scene_thread(options.scene_thread, s.realtime_setup);
   s.stopped = stopped;

@@ -102,6 +102,33 @@ DurationSummary summarize_ns(const platform::LatencyHistogram& h) {
   return d;
 }
 
+void RunLoopTally::woke(const platform::Wakeup& w) noexcept {
+  overruns_ += w.overrun ? 1 : 0;
+  missed_ += w.missed_periods;
+  wakeup_.record(w.latency_ns());
+}
+
+bool RunLoopTally::take_rearm(std::atomic<bool>* request, std::int64_t k) noexcept {
+  if (request == nullptr || !request->exchange(false, std::memory_order_relaxed)) return false;
+  ++rearm_requests_;
+  if (rearm_first_ < 0) rearm_first_ = k;
+  return true;
+}
+
+void RunLoopTally::write(RunSummary& s) const {
+  s.realtime_overruns = overruns_;
+  s.realtime_missed_periods = missed_;
+  s.wakeup_latency_us = summarize_ns(wakeup_);
+  s.rearm_requests = rearm_requests_;
+  s.rearms_accepted = rearms_accepted_;
+  s.rearm_first_period = rearm_first_;
+}
+
+std::vector<std::string> apply_run_realtime(const platform::RealtimeSettings& rt) {
+  if (!platform::any_step_requested(rt)) return {};
+  return platform::describe(platform::apply_realtime(rt));  // throws only if strict
+}
+
 namespace {
 
 /// The LogBus of a "log:FILE" spec, or nullptr for any other bus; `stats` gets what the loader
@@ -724,15 +751,9 @@ RunSummary run_impedance_scene(const Scene& scene, const RunOptions& options) {
   if (!options.record_view_path.empty() || !options.view_sinks.empty())
     runner.stream_view(options.record_view_path, options.view_sinks, options.view_rate_hz,
                        !(options.realtime || real));
-  const platform::RealtimeSettings& rt = options.rt;
-  std::vector<std::string> rt_lines;
-  if (rt.fifo_priority != 0 || rt.lock_memory || rt.prefault_stack_bytes > 0 ||
-      !rt.cpu_affinity.empty()) {
-    rt_lines = platform::describe(platform::apply_realtime(rt));  // throws only if strict
-  }
+  std::vector<std::string> rt_lines = apply_run_realtime(options.rt);
   const bool paced = options.realtime || real;
-  std::int64_t overruns = 0, missed = 0;
-  platform::LatencyHistogram wakeup;
+  RunLoopTally tally;
   const std::int64_t wall0 = platform::monotonic_now_ns();
   platform::PeriodicTimer timer(static_cast<std::int64_t>(std::llround(scene.model.dt * 1e9)), wall0);
   auto stop_requested = [&] {
@@ -744,26 +765,21 @@ RunSummary run_impedance_scene(const Scene& scene, const RunOptions& options) {
     view_pacer.wait();
     if (paced) {
       const platform::Wakeup w = timer.wait_next();
-      overruns += w.overrun ? 1 : 0;
-      missed += w.missed_periods;
-      wakeup.record(w.latency_ns());
+      tally.woke(w);
       runner.period(w.deadline_ns, w.woke_ns);
     } else {
       runner.period();
     }
   };
-  std::int64_t rearm_requests = 0, rearms_accepted = 0, rearm_first = -1;
   bool stopped = false;
   for (std::int64_t k = 0; k < steps; ++k) {
     if (stop_requested()) {
       stopped = true;
       break;
     }
-    if (options.rearm != nullptr && options.rearm->exchange(false, std::memory_order_relaxed)) {
-      ++rearm_requests;
-      if (rearm_first < 0) rearm_first = k;
-      if (runner.loop().rearm() == platform::RearmResult::kAccepted) ++rearms_accepted;
-    }
+    if (tally.take_rearm(options.rearm, k) &&
+        runner.loop().rearm() == platform::RearmResult::kAccepted)
+      tally.rearm_accepted();
     one_period();
   }
   // Orderly end on a real bus: zero torque, drives disabled, a few periods for the
@@ -782,16 +798,11 @@ RunSummary run_impedance_scene(const Scene& scene, const RunOptions& options) {
   runner.finish();
   RunSummary s = runner.summary();
   s.wall_time_s = static_cast<double>(platform::monotonic_now_ns() - wall0) * 1e-9;
-  s.realtime_overruns = overruns;
-  s.realtime_missed_periods = missed;
+  tally.write(s);
   // Only the managed stack's supervisor latches on overruns (MinimalDevice::supervise ignores
   // them), and only in a paced run (an offline run has no deadlines): any other run reports
   // the policy it has, count only.
   s.overrun_limit = s.managed && paced ? options.overrun_limit : 0;
-  s.rearm_requests = rearm_requests;
-  s.rearms_accepted = rearms_accepted;
-  s.rearm_first_period = rearm_first;
-  s.wakeup_latency_us = summarize_ns(wakeup);
   s.realtime_setup = std::move(rt_lines);
   // The scene thread's own scheduling and CPUs (--scene-rt-priority, --scene-cpu), if asked.
   runner.multirate().describe_scene_thread(options.scene_thread, s.realtime_setup);

@@ -88,6 +88,10 @@ struct RealtimeReport {
   }
 };
 
+/// True if `settings` asks for any step (a priority, the memory lock, a stack prefault or
+/// CPUs); `strict` alone asks for none.
+bool any_step_requested(const RealtimeSettings& settings) noexcept;
+
 /// Applies `settings` to the calling thread (scheduling, affinity, stack) and process
 /// (memory lock), in the order affinity → memory lock → stack prefault → scheduling (pages
 /// are faulted on the CPU the loop will run on; the thread becomes FIFO last), and

@@ -21,6 +21,7 @@
 #include "numen/platform/latency_histogram.hpp"
 #include "numen/platform/loop_statistics.hpp"
 #include "numen/platform/multirate_threads.hpp"
+#include "numen/platform/periodic_timer.hpp"
 #include "numen/sim/multirate_run.hpp"
 #include "numen/platform/realtime_setup.hpp"
 #include "numen/platform/state_stream.hpp"
@@ -134,6 +135,34 @@ struct DurationSummary {
 
 /// The percentiles of a histogram of durations in ns, converted to µs.
 DurationSummary summarize_ns(const platform::LatencyHistogram& h);
+
+struct RunSummary;
+
+/// What a run's period loop counts around its runner (run_scene's impedance loop and
+/// run_admittance_scene share it): a paced loop's wake-ups and the operator's re-arm
+/// requests (RunOptions::rearm, SIGUSR1). Not used inside the real-time period.
+class RunLoopTally {
+ public:
+  /// A paced period's wake-up (platform::PeriodicTimer::wait_next): its overrun, the periods
+  /// it skipped and its latency.
+  void woke(const platform::Wakeup& w) noexcept;
+  /// Takes the re-arm request pending before period `k` (clears `request`); true if there was
+  /// one: the caller re-arms its loop and calls rearm_accepted() if that was accepted.
+  bool take_rearm(std::atomic<bool>* request, std::int64_t k) noexcept;
+  void rearm_accepted() noexcept { ++rearms_accepted_; }
+  /// Writes RunSummary::realtime_overruns, realtime_missed_periods, wakeup_latency_us and the
+  /// rearm_* figures.
+  void write(RunSummary& s) const;
+
+ private:
+  std::int64_t overruns_ = 0, missed_ = 0;
+  platform::LatencyHistogram wakeup_;
+  std::int64_t rearm_requests_ = 0, rearms_accepted_ = 0, rearm_first_ = -1;
+};
+
+/// The real-time setup of a run's loop thread: apply_realtime(rt) described line by line, or
+/// nothing if `rt` asks for no step. Throws as apply_realtime() (a failed step only if strict).
+std::vector<std::string> apply_run_realtime(const platform::RealtimeSettings& rt);
 
 /// The ControlLoop settings of a run: `paced` (real bus, or RunOptions::realtime) periods have
 /// deadlines, so consecutive overruns are supervised and `overrun_limit` of them latch the safe
