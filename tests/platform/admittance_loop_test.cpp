@@ -236,6 +236,23 @@ TEST(AdmittanceLoop, PeriodsDoNotAllocate) {
   EXPECT_EQ(guard.count(), 0);
 }
 
+// The overrun supervision's periods too: streaks, the latch, the safe stop, the re-arm.
+TEST(AdmittanceLoop, OverrunLatchAndRearmDoNotAllocate) {
+  platform::AdmittanceLoopSettings settings;
+  settings.overrun_limit = 2;
+  Rig rig(hand_settings(), settings);
+  rig.hand.position = Vec3(0.01, 0.0, 0.0);
+  for (int i = 0; i < 50; ++i) rig.period();
+  int latches = 0;
+  numen::test::AllocationGuard guard;
+  for (int i = 0; i < 5000; ++i) {
+    latches += rig.period(i % 100 < 3).entered_safe_stop ? 1 : 0;  // 3 late in a row per 100
+    if (i % 100 == 50) (void)rig.loop.rearm();
+  }
+  EXPECT_EQ(guard.count(), 0);
+  EXPECT_EQ(latches, 50);  // each streak latched once, each re-arm was taken
+}
+
 // set_step_function (the multirate device period, docs/multirate.md): the loop calls it once
 // per period instead of core::step, with the measured wrench in data.device_wrench, and
 // commands the device to where it left the held body; null restores core::step.
