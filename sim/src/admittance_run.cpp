@@ -68,7 +68,8 @@ AdmittanceRunner::AdmittanceRunner(const Scene& scene, std::size_t trace_capacit
       loop_(scene.model, data_, bus_.controller(), device_, loop_settings(overrun_limit)),
       multirate_(scene),
       period_ns_(static_cast<std::int64_t>(std::llround(scene.model.dt * 1e9))),
-      phase_ns_(static_cast<std::int64_t>(std::llround(scene.compute_phase_s * 1e9))) {
+      phase_ns_(static_cast<std::int64_t>(std::llround(scene.compute_phase_s * 1e9))),
+      divergence_(scene.model, data_) {
   emulator_.set_axis_values(device_.setpoints());
   if (multirate_.enabled())
     loop_.set_step_function(
@@ -180,11 +181,13 @@ void AdmittanceRunner::period(bool overran) noexcept {
   if (view_)
     view_->publish(data_, view_report_, view_axis_values_,
                    {static_cast<std::uint64_t>(k_ - 1), tool_pen_, hand_pen_});
+  divergence_.observe(model, data_, k_ - 1, ts);
 }
 
 RunSummary AdmittanceRunner::summary() const {
   RunSummary s = acc_;
   if (view_) view_->summarize(s);
+  summarize_divergence(divergence_, scene_->model, s);
   s.steps = k_;
   s.sim_time_s = static_cast<double>(k_) * scene_->model.dt;
   s.step_time_us = summarize_ns(step_time_);
@@ -240,10 +243,11 @@ RunSummary run_admittance_scene(const Scene& scene, const RunOptions& options) {
   const std::int64_t wall0 = platform::monotonic_now_ns();
   platform::PeriodicTimer timer(static_cast<std::int64_t>(std::llround(scene.model.dt * 1e9)),
                                 wall0);
-  ViewPacer view_pacer(scene.model.dt, options.realtime ? 0.0 : options.view_speed, wall0);
+  ViewPacer view_pacer(scene.model.dt, options.realtime ? 0.0 : options.view_speed, wall0,
+                       options.stop);
   RunLoopTally tally;
   bool stopped = false;
-  for (std::int64_t k = 0; k < steps; ++k) {
+  for (std::int64_t k = 0; k < steps && !runner.diverged(); ++k) {
     if (options.stop != nullptr && options.stop->load(std::memory_order_relaxed)) {
       stopped = true;  // SIGINT / SIGTERM (docs/inputs.md, "Signals")
       break;

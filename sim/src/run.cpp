@@ -3,13 +3,16 @@
 
 #include "numen/sim/run.hpp"
 
+#include <sys/stat.h>
 #include <time.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cstdio>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <iomanip>
 #include <span>
@@ -124,6 +127,28 @@ void RunLoopTally::write(RunSummary& s) const {
   s.rearm_first_period = rearm_first_;
 }
 
+void summarize_divergence(const DivergenceMonitor& monitor, const core::Model& model,
+                          RunSummary& s) {
+  DivergenceSummary& d = s.divergence;
+  d.speed_ratio_max = monitor.speed_ratio_max();
+  d.stretch_ratio_max = monitor.stretch_ratio_max();
+  d.energy_ratio_max = monitor.energy_ratio_max();
+  d.scene_size_m = monitor.scene_size_m();
+  d.speed_limit_mps = monitor.speed_limit_mps();
+  const Divergence& v = monitor.divergence();
+  if (v.cause == nullptr) return;
+  d.latched = true;
+  d.cause = v.cause;
+  if (v.net >= 0)
+    d.subject = "net \"" + model.nets[static_cast<std::size_t>(v.net)].name + "\"";
+  else if (v.body >= 0)
+    d.subject = "body \"" + model.bodies[static_cast<std::size_t>(v.body)].name + "\"";
+  d.value = v.value;
+  d.limit = v.limit;
+  d.time_s = v.time_s;
+  d.period = v.period;
+}
+
 std::vector<std::string> apply_run_realtime(const platform::RealtimeSettings& rt) {
   if (!platform::any_step_requested(rt)) return {};
   return platform::describe(platform::apply_realtime(rt));  // throws only if strict
@@ -207,7 +232,8 @@ SceneRunner::SceneRunner(const Scene& scene, std::size_t trace_capacity, const B
       period_ns_(static_cast<std::int64_t>(std::llround(scene.model.dt * 1e9))),
       phase_ns_(static_cast<std::int64_t>(std::llround(scene.compute_phase_s * 1e9))),
       startup_settle_periods_(
-          std::max<std::int64_t>(1, std::llround(kStartupSettle / scene.model.dt))) {
+          std::max<std::int64_t>(1, std::llround(kStartupSettle / scene.model.dt))),
+      divergence_(scene.model, data_) {
   if (multirate_.enabled()) loop_.set_step_function(&SceneRunner::step_multirate, this);
   trace_.reserve(trace_capacity);
   if (writer_) writer_->start();
@@ -263,6 +289,8 @@ void SceneRunner::period(std::int64_t deadline_mono_ns, std::int64_t woke_mono_n
   track_startup(contacts);
   accumulate_step_figures(report, contacts);
   record(report, contacts);
+  if (divergence_.observe(scene_->model, data_, k_ - 1, static_cast<double>(t) * 1e-9))
+    loop_.shutdown();  // zero torque from the next write on; the run stops after this period
   if (view_)
     view_->publish(data_, report,
                           std::span<const double>(loop_.device().sent_torques().torque.data(),
@@ -565,6 +593,7 @@ RunSummary SceneRunner::summary() const {
     s.trace_io_errors = static_cast<std::int64_t>(c.io_errors);
   }
   if (view_) view_->summarize(s);
+  summarize_divergence(divergence_, scene_->model, s);
   if (log_bus_) {
     s.bus_frames_replayed = static_cast<std::int64_t>(log_bus_->log_counters().replayed);
     s.bus_log_records = static_cast<std::int64_t>(log_stats_.records);
@@ -689,6 +718,10 @@ void check_run_options(const Scene& scene, const RunOptions& options) {
     throw InputError("", 0, 0, "--speed",
                      "paces an offline run; this run is paced at real time already (--realtime "
                      "or a real bus)");
+  compute_phase_override_ns(scene, options);  // --phase at or above dt
+  // A simulated run's trace is kept in memory until it ends (a real bus streams it).
+  if (!options.trace_path.empty() && (scene.admittance || !parse_bus_spec(options.bus.spec).real()))
+    in_memory_trace_capacity(std::llround(duration / scene.model.dt));
   const platform::SceneThreadSettings& st = options.scene_thread;
   if (st.fifo_priority == 0 && st.cpu_affinity.empty()) return;
   const std::string key = st.fifo_priority != 0 ? "--scene-rt-priority" : "--scene-cpu";
@@ -708,15 +741,26 @@ void check_run_options(const Scene& scene, const RunOptions& options) {
                          ": the scene thread would pre-empt the device loop");
 }
 
-/// Refuses an output path (--trace, --record) that cannot be opened for writing before the
+/// Refuses an output path (--trace, --record, --record-view) that cannot be written before the
 /// run (InputError, key `key`), so that a long run does not end without its file, and the
-/// error names the option. Creates the file (empty).
+/// error names the option. Touches nothing: an existing file keeps its bytes (the writers
+/// replace it only when the run closes it, hal::LineFile), a missing one is not created.
 void check_output_path(const std::string& path, const std::string& key) {
-  std::FILE* f = std::fopen(path.c_str(), "w");
-  if (f == nullptr)
-    throw InputError("", 0, 0, key,
-                     path + ": cannot be opened for writing (" + std::strerror(errno) + ")");
-  std::fclose(f);
+  auto refuse = [&](const std::string& why) {
+    throw InputError("", 0, 0, key, path + ": cannot be opened for writing (" + why + ")");
+  };
+  struct stat st {};
+  if (::stat(path.c_str(), &st) == 0) {
+    if (S_ISDIR(st.st_mode)) refuse(std::strerror(EISDIR));
+    if (::access(path.c_str(), W_OK) != 0) refuse(std::strerror(errno));
+    return;
+  }
+  if (errno != ENOENT) refuse(std::strerror(errno));
+  const std::filesystem::path parent = std::filesystem::path(path).parent_path();
+  const std::string dir = parent.empty() ? "." : parent.string();
+  if (::stat(dir.c_str(), &st) != 0) refuse(std::strerror(errno));
+  if (!S_ISDIR(st.st_mode)) refuse(dir + " is not a directory");
+  if (::access(dir.c_str(), W_OK | X_OK) != 0) refuse(dir + ": " + std::strerror(errno));
 }
 
 }  // namespace
@@ -760,7 +804,7 @@ RunSummary run_impedance_scene(const Scene& scene, const RunOptions& options) {
     return options.stop != nullptr && options.stop->load(std::memory_order_relaxed);
   };
   // A live viewer of an unpaced run: one period every dt / view_speed of wall time.
-  ViewPacer view_pacer(scene.model.dt, paced ? 0.0 : options.view_speed, wall0);
+  ViewPacer view_pacer(scene.model.dt, paced ? 0.0 : options.view_speed, wall0, options.stop);
   auto one_period = [&] {
     view_pacer.wait();
     if (paced) {
@@ -772,7 +816,7 @@ RunSummary run_impedance_scene(const Scene& scene, const RunOptions& options) {
     }
   };
   bool stopped = false;
-  for (std::int64_t k = 0; k < steps; ++k) {
+  for (std::int64_t k = 0; k < steps && !runner.diverged(); ++k) {
     if (stop_requested()) {
       stopped = true;
       break;
@@ -823,11 +867,15 @@ RunSummary run_scene(const Scene& scene, const RunOptions& options) {
   if (!(options.view_speed >= 0.0) || !std::isfinite(options.view_speed))
     throw InputError("", 0, 0, "--speed", "must be a finite factor >= 0 (got " +
                                               format_input_number(options.view_speed) + ")");
+  // Every refusal comes before any output is opened, and the output checks touch nothing: a
+  // refused run leaves every file as it was (docs/inputs.md, "Outputs").
   check_run_options(scene, options);
   if (!options.trace_path.empty()) check_output_path(options.trace_path, "--trace");
   // (an admittance run refuses --record: run_admittance_scene)
   if (!options.bus.record_path.empty() && !scene.admittance)
     check_output_path(options.bus.record_path, "--record");
+  if (!options.record_view_path.empty())
+    check_output_path(options.record_view_path, "--record-view");
   RunSummary s = scene.admittance ? run_admittance_scene(scene, options)  // admittance_run.cpp
                                   : run_impedance_scene(scene, options);
   RunVerdict verdict = run_verdict(s);

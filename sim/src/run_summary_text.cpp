@@ -180,6 +180,12 @@ constexpr RunSummarySegment kLayout[] = {
     {"  nan detected: YES", set("nan_detected")},
     {"  nan detected: no", unset("nan_detected")},
     {" (non-finite steps {nonfinite_steps})"},
+    {"\n  divergence: speed {divergence.speed_ratio_max}, tie stretch "
+     "{divergence.stretch_ratio_max}, energy {divergence.energy_ratio_max} of their limits "
+     "(speed limit {divergence.speed_limit_mps} m/s, scene {divergence.scene_size_m} m)"},
+    {"; DIVERGED at {divergence.time_s} s (period {divergence.period}): {divergence.cause} of "
+     "{divergence.subject} {divergence.value}, limit {divergence.limit}",
+     set("divergence.latched")},
     {"\n  realtime setup: {*}", always(), {}, {}, "realtime_setup"},
     {"\n  realtime: wake-up latency us median {wakeup_latency_us.median}, p99 "
      "{wakeup_latency_us.p99}, max {wakeup_latency_us.max}; overruns {realtime_overruns}, missed "

@@ -3,6 +3,7 @@
 
 #include "numen/sim/run_verdict.hpp"
 
+#include <cstdio>
 #include <string>
 
 #include "numen/sim/run.hpp"
@@ -18,6 +19,7 @@ const char* to_string(ExitStatus s) noexcept {
     case ExitStatus::kNonFinite: return "non-finite state";
     case ExitStatus::kLostRecords: return "lost records";
     case ExitStatus::kSamplesRejected: return "samples rejected";
+    case ExitStatus::kDiverged: return "diverged";
   }
   return "?";
 }
@@ -26,10 +28,11 @@ RunVerdict run_verdict(const RunSummary& s) {
   RunVerdict v;
   auto add = [&v](ExitStatus status, const std::string& why) {
     v.reasons.push_back(std::string(to_string(status)) + ": " + why);
-    // Severity order: non-finite, safety stop, lost records, samples rejected.
+    // Severity order: non-finite, diverged, safety stop, lost records, samples rejected.
     auto rank = [](ExitStatus x) {
       switch (x) {
-        case ExitStatus::kNonFinite: return 4;
+        case ExitStatus::kNonFinite: return 5;
+        case ExitStatus::kDiverged: return 4;
         case ExitStatus::kSafetyStop: return 3;
         case ExitStatus::kLostRecords: return 2;
         case ExitStatus::kSamplesRejected: return 1;
@@ -41,6 +44,15 @@ RunVerdict run_verdict(const RunSummary& s) {
   const auto n = [](std::int64_t x) { return std::to_string(x); };
   if (s.nonfinite_steps > 0) add(ExitStatus::kNonFinite, n(s.nonfinite_steps) + " steps");
   else if (s.nan_detected) add(ExitStatus::kNonFinite, "the final state is not finite");
+  if (s.divergence.latched) {
+    char why[320];
+    std::snprintf(why, sizeof why, "%s of %s: %.4g above its limit %.4g (%s) at %.4f s",
+                  s.divergence.cause.c_str(), s.divergence.subject.c_str(), s.divergence.value,
+                  s.divergence.limit,
+                  s.divergence.cause == "energy" ? "J" : s.divergence.cause == "tie stretch" ? "m" : "m/s",
+                  s.divergence.time_s);
+    add(ExitStatus::kDiverged, why);
+  }
   if (s.faults > 0)
     add(ExitStatus::kSafetyStop, n(s.faults) + " safe state(s) latched, first: " + s.first_fault);
   if (s.managed && s.startup.rfind("failed", 0) == 0)

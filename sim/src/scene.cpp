@@ -651,6 +651,61 @@ void warn_clamped_contacts(const core::Model& m, std::vector<std::string>& warni
   }
 }
 
+/// Coupling stiffness at or above this fraction of the contact stiffness it yields to draws a
+/// load-time warning: pressed into that contact, the god-object goes k_c / (k_c + k_n) ≥ 20 %
+/// as deep as the hand (docs/dynamics.md, "Coupling against contacts").
+constexpr double kCouplingYieldRatio = 0.25;
+
+/// Load-time lint of the god-object's premise (paper §3): the coupling springs must yield to the
+/// contacts. For every body with a coupling stiffness k_c, the softest contact its tool (the
+/// bodies of its articulation with spheres) can meet — material pairs with the obstacles, the
+/// other bodies and the nets of other bodies, each clamped by the dt floor
+/// (core::body_contact_stiffness_limit()) — is k_n; k_c ≥ kCouplingYieldRatio × k_n is warned
+/// with both keys and the ratio. With k_c ≫ k_n the tool follows the hand into the obstacle
+/// and the feedback vanishes: there is no god-object any more.
+void warn_yielding_coupling(const core::Model& m, std::vector<std::string>& warnings) {
+  const std::vector<int>& tree_of = m.articulation.body_tree;
+  auto tree = [&](int b) { return b < static_cast<int>(tree_of.size()) ? tree_of[static_cast<std::size_t>(b)] : b; };
+  for (int b = 0; b < m.num_bodies(); ++b) {
+    const core::BodyModel& coupled = m.bodies[static_cast<std::size_t>(b)];
+    const double k_c = coupled.coupling.k_t;
+    if (!(k_c > 0.0)) continue;
+    double k_n = std::numeric_limits<double>::infinity();
+    std::string softest;
+    auto consider = [&](int tool, int material, const std::string& what) {
+      const core::BodyModel& t = m.bodies[static_cast<std::size_t>(tool)];
+      const double k = std::min(m.material_pair(t.material, material).stiffness,
+                                core::body_contact_stiffness_limit(m, tool));
+      if (!(k < k_n)) return;
+      k_n = k;
+      softest = "body \"" + t.name + "\" on " + what + " (materials \"" +
+                m.material_names[static_cast<std::size_t>(t.material)] + "\"/\"" +
+                m.material_names[static_cast<std::size_t>(material)] + "\")";
+    };
+    for (int t = 0; t < m.num_bodies(); ++t) {
+      if (tree(t) != tree(b) || m.bodies[static_cast<std::size_t>(t)].sphere_count == 0) continue;
+      for (const core::Obstacle& o : m.obstacles) consider(t, o.material, "obstacle \"" + o.name + "\"");
+      for (int o = 0; o < m.num_bodies(); ++o) {
+        const core::BodyModel& other = m.bodies[static_cast<std::size_t>(o)];
+        if (tree(o) == tree(b) || other.sphere_count == 0) continue;
+        consider(t, other.material, "body \"" + other.name + "\"");
+      }
+      for (const core::NetModel& net : m.nets)
+        if (tree(net.body) != tree(b)) consider(t, net.material, "net \"" + net.name + "\"");
+    }
+    if (!(k_c >= kCouplingYieldRatio * k_n)) continue;
+    std::ostringstream os;
+    os << std::setprecision(3) << "body \"" << coupled.name << "\": coupling stiffness " << k_c
+       << " N/m ([body.coupling] stiffness) is " << k_c / k_n << "x the contact stiffness " << k_n
+       << " N/m of " << softest << " ([contact_default] / [[contact]] stiffness, or the dt floor)"
+       << ": pressed into it, the tool goes k_c/(k_c + k_n) = " << 100.0 * k_c / (k_c + k_n)
+       << " % as deep as the hand and the feedback nearly vanishes; the coupling must yield to "
+          "the contacts (keep it below " << kCouplingYieldRatio
+       << "x; docs/dynamics.md, \"Coupling against contacts\")";
+    warnings.push_back(os.str());
+  }
+}
+
 }  // namespace
 
 Scene load_scene(const std::string& path, const SceneOverrides& overrides) {
@@ -756,6 +811,7 @@ Scene load_scene(const std::string& path, const SceneOverrides& overrides) {
         "the shipped probe's nodes went 2.1 mm into the post instead of 0.2 mm "
         "(docs/results.md, accuracy). implicit-euler or tr-bdf2 (L-stable) are the integrators for nets");
   warn_clamped_contacts(scene.model, scene.warnings);
+  warn_yielding_coupling(scene.model, scene.warnings);
   parse_multirate(root, scene);
   return scene;
 }

@@ -1,5 +1,5 @@
 /// @file study_stability_energy.cpp
-/// The energy meter and the verdict monitor of `numen study stability` (study_stability.hpp,
+/// The input work and the verdict monitor of `numen study stability` (study_stability.hpp,
 /// study_stability_cases.hpp).
 
 #include <algorithm>
@@ -9,105 +9,17 @@
 #include "numen/sim/study_stability_cases.hpp"
 
 namespace numen::sim {
-namespace {
-
-using core::Vec3;
-
-/// ½ k_t |e|² + ½ k_r θ² of a body's coupling springs towards `pose`.
-double coupling_potential(const core::CouplingGains& g, const core::BodyState& s,
-                          const core::Pose& pose) noexcept {
-  const double e2 = (pose.position - s.position).squaredNorm();
-  const double th2 = core::rotation_error(pose.orientation, s.orientation).squaredNorm();
-  return 0.5 * g.k_t * e2 + 0.5 * g.k_r * th2;
-}
-
-/// γ_t (v_t − v)·v_t + γ_r (ω_t − ω)·ω_t: power of the dampers through the target's twist.
-double damper_power(const core::CouplingGains& g, const core::BodyState& s,
-                    const core::Twist& t) noexcept {
-  return g.gamma_t * (t.linear - s.linear_velocity).dot(t.linear) +
-         g.gamma_r * (t.angular - s.angular_velocity).dot(t.angular);
-}
-
-bool springs_act(const core::Model& model) noexcept {
-  return model.coupling_mode == core::CouplingMode::kGodObject ||
-         model.coupling_mode == core::CouplingMode::kFirstOrder;
-}
-
-}  // namespace
-
-double stored_energy(const core::Model& model, const core::Data& data) noexcept {
-  double e = 0.0;
-  for (int i = 0; i < model.num_bodies(); ++i) {
-    const auto k = static_cast<std::size_t>(i);
-    const core::BodyModel& b = model.bodies[k];
-    const core::BodyState& s = data.bodies[k];
-    const core::Mat3 r = s.orientation.toRotationMatrix();
-    const core::Mat3 iw = r * b.inertia_body * r.transpose();
-    e += 0.5 * b.mass * s.linear_velocity.squaredNorm() +
-         0.5 * s.angular_velocity.dot(iw * s.angular_velocity);
-  }
-  for (int i = 0; i < model.num_nodes(); ++i) {
-    const auto k = static_cast<std::size_t>(i);
-    e += 0.5 * model.node_mass[k] * data.nodes[k].velocity.squaredNorm();
-  }
-  if (springs_act(model)) {
-    const int held = data.attached_body;
-    if (held >= 0 && held < model.num_bodies()) {
-      const auto h = static_cast<std::size_t>(held);
-      e += coupling_potential(model.bodies[h].coupling, data.bodies[h], data.target);
-    }
-    for (int i = 0; i < model.num_bodies(); ++i) {
-      const auto k = static_cast<std::size_t>(i);
-      if (i == held || k >= data.body_targets.size() || !data.body_targets[k].enabled) continue;
-      e += coupling_potential(model.bodies[k].coupling, data.bodies[k], data.body_targets[k].pose);
-    }
-  }
-  for (const core::NetSpring& sp : model.net_springs) {
-    const double l = (data.nodes[static_cast<std::size_t>(sp.node_b)].position -
-                      data.nodes[static_cast<std::size_t>(sp.node_a)].position)
-                         .norm();
-    e += 0.5 * sp.stiffness * (l - sp.rest_length) * (l - sp.rest_length);
-  }
-  for (const core::NetModel& net : model.nets) {
-    const core::BodyState& body = data.bodies[static_cast<std::size_t>(net.body)];
-    for (int i = net.node_begin; i < net.node_begin + net.node_count; ++i) {
-      const auto k = static_cast<std::size_t>(i);
-      const Vec3 anchor = body.position + body.orientation * model.node_rest[k];
-      e += 0.5 * net.tie_stiffness * (data.nodes[k].position - anchor).squaredNorm();
-    }
-  }
-  return e;
-}
-
-double contact_energy(const core::Model& model, const core::Data& data) noexcept {
-  double e = 0.0;
-  for (int c = 0; c < data.num_contacts; ++c) {
-    const core::Contact& ct = data.contacts[static_cast<std::size_t>(c)];
-    const double k = model.material_pairs[static_cast<std::size_t>(ct.material_pair)].stiffness;
-    e += 0.5 * k * ct.depth * ct.depth;
-  }
-  for (int c = 0; c < data.num_node_contacts; ++c) {
-    const core::NodeContact& ct = data.node_contacts[static_cast<std::size_t>(c)];
-    const double k = model.material_pairs[static_cast<std::size_t>(ct.material_pair)].stiffness;
-    e += 0.5 * k * ct.depth * ct.depth;
-  }
-  return e;
-}
 
 double input_work(const core::Model& model, const core::Data& data, double energy_before_inputs,
                   double energy_after_inputs) noexcept {
   double w = energy_after_inputs - energy_before_inputs;
-  if (springs_act(model)) {
+  if (coupling_springs_act(model)) {
     double p = 0.0;
-    const int held = data.attached_body;
-    if (held >= 0 && held < model.num_bodies()) {
-      const auto h = static_cast<std::size_t>(held);
-      p += damper_power(model.bodies[h].coupling, data.bodies[h], data.target_twist);
-    }
     for (int i = 0; i < model.num_bodies(); ++i) {
+      const core::Twist* twist = nullptr;
+      if (coupling_target(model, data, i, &twist) == nullptr) continue;
       const auto k = static_cast<std::size_t>(i);
-      if (i == held || k >= data.body_targets.size() || !data.body_targets[k].enabled) continue;
-      p += damper_power(model.bodies[k].coupling, data.bodies[k], data.body_targets[k].twist);
+      p += damper_power(model.bodies[k].coupling, data.bodies[k], *twist);
     }
     w += model.dt * std::max(0.0, p);
   }
@@ -118,7 +30,7 @@ namespace stability {
 
 core::Model empty_model(const core::MaterialPair& pair) {
   core::Model m;
-  m.gravity = Vec3::Zero();
+  m.gravity = core::Vec3::Zero();
   m.material_names = {"default"};
   m.material_pairs = {pair};
   return m;

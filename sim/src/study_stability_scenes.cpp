@@ -98,6 +98,8 @@ StabilityRow scene_run(const Scene& scene, const std::string& name, const char* 
   const char* why = nullptr;
   if (sum.nonfinite_steps > 0 || !std::isfinite(r.penetration_max_m))
     why = "non-finite";
+  else if (sum.divergence.latched)
+    why = "diverged";  // the run's own monitor stopped it (divergence.hpp)
   else if (r.penetration_max_m > r.penetration_bound_m)
     why = "penetration";
   else if (!(sum.free_body_speed_max_mps <= kMaxFreeSpeed))

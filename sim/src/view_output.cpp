@@ -1,9 +1,12 @@
 #include "numen/sim/view_output.hpp"
 
+#include <time.h>
+
 #include <algorithm>
 #include <cmath>
 #include <utility>
 
+#include "numen/platform/monotonic_clock.hpp"
 #include "numen/sim/run.hpp"
 #include "numen/sim/view_scene.hpp"
 
@@ -64,13 +67,32 @@ void ViewOutput::summarize(RunSummary& s) const {
   }
 }
 
-ViewPacer::ViewPacer(double dt_s, double speed, std::int64_t wall0_ns) noexcept {
-  if (speed > 0.0)
-    timer_.emplace(std::max<std::int64_t>(1, std::llround(dt_s * 1e9 / speed)), wall0_ns);
+ViewPacer::ViewPacer(double dt_s, double speed, std::int64_t wall0_ns,
+                     const std::atomic<bool>* stop) noexcept
+    : stop_(stop) {
+  if (!(speed > 0.0)) return;
+  const double ns = dt_s * 1e9 / speed;  // may be +inf for a tiny speed
+  period_ns_ = ns >= static_cast<double>(kMaxPeriodNs)
+                   ? kMaxPeriodNs
+                   : std::max<std::int64_t>(1, std::llround(ns));
+  next_ns_ = wall0_ns;
 }
 
 void ViewPacer::wait() noexcept {
-  if (timer_) timer_->wait_next();
+  if (period_ns_ == 0) return;
+  const std::int64_t now = platform::monotonic_now_ns();
+  next_ns_ += period_ns_;  // at most one period of 31.7 years per call: no overflow
+  if (now > next_ns_ + period_ns_)  // late by a whole period or more: re-phase, do not burst
+    next_ns_ += (now - next_ns_) / period_ns_ * period_ns_;
+  for (;;) {
+    if (stop_ != nullptr && stop_->load(std::memory_order_relaxed)) return;
+    const std::int64_t left = next_ns_ - platform::monotonic_now_ns();
+    if (left <= 0) return;
+    const std::int64_t until = next_ns_ - left + std::min(left, kStopPollNs);
+    const timespec ts{static_cast<time_t>(until / 1'000'000'000),
+                      static_cast<long>(until % 1'000'000'000)};
+    clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr);  // EINTR: loop again
+  }
 }
 
 }  // namespace numen::sim

@@ -53,6 +53,14 @@ std::string default_scene_at(const std::string& dt) {
                              {"latency = 0.0001", "latency = 1e-6\ncompute_phase = 5e-6"}});
 }
 
+/// True once a record sink (hal::LineFile) writes `name` in `dir`: its temporary file
+/// `.NAME.XXXXXX` exists (the run is past loading and its outputs are open).
+bool writing(const TempDir& dir, const std::string& name) {
+  for (const auto& e : std::filesystem::directory_iterator(dir.path()))
+    if (e.path().filename().string().rfind("." + name + ".", 0) == 0) return true;
+  return false;
+}
+
 // Defect 1: a 30 s recording used to be resampled at dt up front (497 MB at dt = 1e-5, ~23 GB
 // at 1e-7). Now the trajectory keeps its 30 Hz knots: the peak RSS of a run does not depend on dt.
 TEST(NumenCli, PeakMemoryDoesNotDependOnTheControlPeriod) {
@@ -107,15 +115,15 @@ TEST(NumenCli, StopSignalWhileLoadingEndsTheProcessAtOnce) {
 }
 
 // Once running, SIGTERM ends the run cleanly: the summary is printed and the status is
-// 128 + SIGTERM (the run did not do what was asked). The recorder's log file exists once the
-// runner is built, i.e. once loading is over.
+// 128 + SIGTERM (the run did not do what was asked). The recorder's temporary file exists once
+// the runner is built, i.e. once loading is over.
 TEST(NumenCli, StopSignalWhileRunningPrintsTheSummary) {
   NUMEN_REQUIRE_ARTICULATION();
   TempDir dir;
   const std::string log = (dir / "run.log").string();
   ChildSignal term;
   term.signal = SIGTERM;
-  term.ready = [&log] { return std::filesystem::exists(log); };
+  term.ready = [&dir] { return writing(dir, "run.log"); };
   const ChildResult r =
       run_child({kNumen, "run", "--realtime", "--overrun-limit", "0", "--duration", "60", "--record", log},
                 dir.path(), 30, term);  // overruns on a loaded machine count, never latch
@@ -123,6 +131,52 @@ TEST(NumenCli, StopSignalWhileRunningPrintsTheSummary) {
   EXPECT_EQ(r.status, 128 + SIGTERM) << r.out << r.err;
   EXPECT_NE(r.out.find("exit status 0 (clean)"), std::string::npos) << r.out;
   EXPECT_LT(r.wall_s, 20.0);
+}
+
+// A stop is always heard: an offline run paced at --speed 1e-9 sleeps 10^6 s per period, in
+// slices that look at the stop request (sim::ViewPacer::kStopPollNs). It used to sleep in one
+// nanosleep and ignore SIGTERM for good.
+TEST(NumenCli, StopSignalDuringAHugePacingPeriodIsHeard) {
+  NUMEN_REQUIRE_ARTICULATION();
+  TempDir dir;
+  ChildSignal term;
+  term.signal = SIGTERM;
+  term.ready = [&dir] { return writing(dir, "run.log"); };
+  const ChildResult r = run_child({kNumen, "run", "--duration", "1", "--speed", "1e-9", "--record",
+                                   (dir / "run.log").string()},
+                                  dir.path(), 60, term);
+  EXPECT_FALSE(r.timed_out) << "SIGTERM was not heard";
+  EXPECT_EQ(r.status, 128 + SIGTERM) << r.out << r.err;
+  EXPECT_NE(r.out.find("steps"), std::string::npos) << r.out;  // the summary was printed
+  EXPECT_LT(r.wall_s, 30.0);
+}
+
+// A refused run leaves every output file as it was: the refusals come before the outputs are
+// opened, the path checks touch nothing, and the writers replace a file only when the run
+// closes it (hal::LineFile). These runs used to truncate keep.* to 0 bytes before exit 2.
+TEST(NumenCli, RefusedRunLeavesItsOutputFilesByteIdentical) {
+  NUMEN_REQUIRE_ARTICULATION();
+  TempDir dir;
+  const std::string before = "previous contents\n\x01\x02 kept\n";
+  const std::vector<std::vector<std::string>> runs = {
+      {"--duration", "1e7", "--trace", "keep.csv"},      // trace over its budget
+      {"--phase", "0.002", "--record", "keep.log"},      // --phase above dt
+      {"--phase", "0.002", "--trace", "keep.csv"},
+      {"--phase", "0.002", "--record-view", "keep.nmv"},
+      {"--duration", "1e-9", "--record", "keep.log", "--trace", "keep.csv"},  // no period
+  };
+  for (const std::vector<std::string>& extra : runs) {
+    for (const char* name : {"keep.csv", "keep.log", "keep.nmv"}) dir.write(name, before);
+    std::vector<std::string> argv = {kNumen, "run"};
+    argv.insert(argv.end(), extra.begin(), extra.end());
+    const ChildResult r = run_child(argv, dir.path(), 60);
+    EXPECT_EQ(r.status, 2) << extra[0] << " " << extra[1] << ": " << r.out << r.err;
+    for (const char* name : {"keep.csv", "keep.log", "keep.nmv"})
+      EXPECT_EQ(numen::test::read_file((dir / name).string()), before) << name << " after " << extra[0];
+    for (const auto& e : std::filesystem::directory_iterator(dir.path()))
+      EXPECT_NE(e.path().filename().string().rfind(".keep.", 0), 0u)
+          << "a temporary file was left behind: " << e.path();
+  }
 }
 
 // Defect 4: --record to a full disk used to report "recorded N frames, 0 dropped" and exit 0.

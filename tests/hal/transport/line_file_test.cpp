@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
@@ -49,4 +50,116 @@ TEST(LineFile, FailuresAreReturned) {
   numen::hal::LineFile closing("/dev/full");
   EXPECT_TRUE(closing.write("x\n", 2));
   EXPECT_FALSE(closing.close());  // the buffered tail cannot be written
+}
+
+namespace {
+
+std::string slurp(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+void put(const std::string& path, const std::string& text) { std::ofstream(path) << text; }
+
+/// Files in `dir` (names), to check that no temporary file is left behind.
+std::size_t entries(const numen::test::TempDir& dir) {
+  std::size_t n = 0;
+  for ([[maybe_unused]] const auto& e : std::filesystem::directory_iterator(dir.path())) ++n;
+  return n;
+}
+
+/// A record sink's shape: closes its file in its destructor (as CandumpWriter, TraceWriter).
+struct ClosingOwner {
+  explicit ClosingOwner(const std::string& path) : file(path) {}
+  ~ClosingOwner() { file.close(); }
+  numen::hal::LineFile file;
+};
+
+}  // namespace
+
+TEST(LineFile, ThePreviousFileStaysUntilClose) {
+  numen::test::TempDir dir;
+  const std::string path = (dir / "keep.csv").string();
+  put(path, "previous\n");
+  numen::hal::LineFile f(path);
+  EXPECT_NE(f.writing_path(), path);  // a temporary file beside it
+  EXPECT_TRUE(f.write("new\n", 4));
+  EXPECT_TRUE(f.flush());
+  EXPECT_EQ(slurp(path), "previous\n");
+  EXPECT_TRUE(f.close());
+  EXPECT_EQ(slurp(path), "new\n");
+  EXPECT_EQ(entries(dir), 1u);
+}
+
+TEST(LineFile, DestroyedWithoutCloseLeavesThePathAsItWas) {
+  numen::test::TempDir dir;
+  const std::string path = (dir / "keep.log").string();
+  put(path, "previous\n");
+  {
+    numen::hal::LineFile f(path);
+    EXPECT_TRUE(f.write("new\n", 4));
+  }
+  EXPECT_EQ(slurp(path), "previous\n");
+  EXPECT_EQ(entries(dir), 1u);
+  const std::string fresh = (dir / "fresh.log").string();
+  { numen::hal::LineFile f(fresh); }
+  EXPECT_FALSE(std::filesystem::exists(fresh));  // a new path is not created either
+  EXPECT_EQ(entries(dir), 1u);
+}
+
+TEST(LineFile, ClosedDuringUnwindingLeavesThePathAsItWas) {
+  numen::test::TempDir dir;
+  const std::string path = (dir / "keep.nmv").string();
+  put(path, "previous\n");
+  try {
+    ClosingOwner owner(path);
+    EXPECT_TRUE(owner.file.write("new\n", 4));
+    throw std::invalid_argument("refused after the outputs were opened");
+  } catch (const std::invalid_argument&) {
+  }
+  EXPECT_EQ(slurp(path), "previous\n");
+  EXPECT_EQ(entries(dir), 1u);
+  // A LineFile opened while an exception is already in flight (a handler's own output) and
+  // closed there is kept.
+  try {
+    throw std::invalid_argument("x");
+  } catch (const std::invalid_argument&) {
+    ClosingOwner inner(path);
+    EXPECT_TRUE(inner.file.write("handler\n", 8));
+  }
+  EXPECT_EQ(slurp(path), "handler\n");
+}
+
+TEST(LineFile, ModeAndLinksOfAnExistingFileAreKept) {
+  numen::test::TempDir dir;
+  const std::string target = (dir / "target.csv").string();
+  const std::string link = (dir / "link.csv").string();
+  put(target, "previous\n");
+  std::filesystem::permissions(target, std::filesystem::perms(0640));
+  std::filesystem::create_symlink(target, link);
+  numen::hal::LineFile f(link);
+  EXPECT_TRUE(f.write("new\n", 4));
+  EXPECT_TRUE(f.close());
+  EXPECT_TRUE(std::filesystem::is_symlink(link));
+  EXPECT_EQ(slurp(target), "new\n");
+  EXPECT_EQ(std::filesystem::status(target).permissions() & std::filesystem::perms::all,
+            std::filesystem::perms(0640));
+  EXPECT_EQ(entries(dir), 2u);
+}
+
+TEST(LineFile, DevicesAreWrittenInPlaceAndDirectoriesRefused) {
+  numen::hal::LineFile null("/dev/null");
+  EXPECT_EQ(null.writing_path(), "/dev/null");
+  EXPECT_TRUE(null.write("x\n", 2));
+  EXPECT_TRUE(null.close());
+  EXPECT_TRUE(std::filesystem::is_character_file("/dev/null"));
+  numen::test::TempDir dir;
+  try {
+    numen::hal::LineFile d(dir.path().string());
+    FAIL() << "no exception";
+  } catch (const std::runtime_error& e) {
+    EXPECT_EQ(std::string(e.what()), dir.path().string() + ": cannot open for writing: Is a directory");
+  }
 }

@@ -28,6 +28,7 @@
 #include "numen/platform/admittance_loop.hpp"
 #include "numen/platform/latency_histogram.hpp"
 #include "numen/platform/multirate_threads.hpp"
+#include "numen/sim/divergence.hpp"
 #include "numen/sim/multirate_run.hpp"
 #include "numen/sim/run.hpp"
 #include "numen/sim/scene.hpp"
@@ -93,6 +94,9 @@ class AdmittanceRunner {
   /// feedback the measured wrench that drove the god-object, no axis columns (no torque is
   /// sent), step time that of the loop's step.
   const Trace& trace() const noexcept { return trace_; }
+  /// The divergence monitor latched (divergence.hpp): the run stops after this period (the
+  /// emulated device lives on the simulated bus only; nothing is sent after the run).
+  bool diverged() const noexcept { return divergence_.divergence().cause != nullptr; }
 
  private:
   const Scene* scene_;
@@ -119,6 +123,7 @@ class AdmittanceRunner {
   platform::PeriodReport view_report_;    // the frame's header and wrench (admittance meaning)
   std::vector<double> view_axis_values_;  // the frame's axis field: zeros (no torque is sent)
   Trace trace_;                           // --trace
+  DivergenceMonitor divergence_;          // judged after each period's measurements
 };
 
 /// Runs an admittance scene for `options.duration_s` (or the scene's duration): as fast as

@@ -28,6 +28,7 @@
 #include "numen/platform/trace_queue.hpp"
 #include "numen/sim/view_output.hpp"
 #include "numen/sim/bus_spec.hpp"
+#include "numen/sim/divergence.hpp"
 #include "numen/sim/scene.hpp"
 #include "numen/sim/simulated_instrument.hpp"
 #include "numen/sim/trace.hpp"
@@ -164,6 +165,11 @@ class RunLoopTally {
 /// nothing if `rt` asks for no step. Throws as apply_realtime() (a failed step only if strict).
 std::vector<std::string> apply_run_realtime(const platform::RealtimeSettings& rt);
 
+/// Writes what `monitor` saw into s.divergence (the breach's body or net named from `model`).
+/// Setup thread (allocates the names), after the run.
+void summarize_divergence(const DivergenceMonitor& monitor, const core::Model& model,
+                          RunSummary& s);
+
 /// The ControlLoop settings of a run: `paced` (real bus, or RunOptions::realtime) periods have
 /// deadlines, so consecutive overruns are supervised and `overrun_limit` of them latch the safe
 /// state; `overrun_limit` 0 or an unpaced run: overruns are only counted (LoopStatistics). The
@@ -203,6 +209,23 @@ struct MultirateSummary {
   /// (a scene-step boundary), and into any other period.
   double model_force_jump_max_n = 0.0;
   double other_force_jump_max_n = 0.0;
+};
+
+/// The divergence monitor of a run (divergence.hpp; docs/safety.md, "Divergence").
+struct DivergenceSummary {
+  bool latched = false;            ///< A breach latched: the run stopped (ExitStatus::kDiverged).
+  std::string cause;               ///< "body speed", "node speed", "tie stretch" or "energy".
+  std::string subject;             ///< The body, or the net, that breached.
+  double value = 0.0;              ///< The quantity (m/s, m or J).
+  double limit = 0.0;              ///< Its limit (same unit).
+  double time_s = 0.0;             ///< Simulated time of the breach (s).
+  std::int64_t period = -1;        ///< Its period (0-based).
+  double speed_ratio_max = 0.0;    ///< Largest speed / its limit of a body or node (1: the limit).
+  double stretch_ratio_max = 0.0;  ///< Largest tie stretch / its limit (0 without nets).
+  /// Largest held energy / max(E₀ + W_in, floor) (0 where the coupling springs do not act).
+  double energy_ratio_max = 0.0;
+  double scene_size_m = 0.0;       ///< The scene's bounding-box diagonal at the start (m).
+  double speed_limit_mps = 0.0;    ///< The speed limit at the end (10 × v_ref; m/s).
 };
 
 struct AdmittanceSummary {
@@ -395,6 +418,7 @@ struct RunSummary {
   /// Admittance device runs only (enabled = true); the impedance-only fields above stay 0.
   AdmittanceSummary admittance;
   MultirateSummary multirate;
+  DivergenceSummary divergence;
   /// The run's exit status (run_verdict(): ExitStatus as int, 0 clean) and every condition
   /// behind it, most severe first; set by run_scene().
   int exit_status = 0;
@@ -462,6 +486,9 @@ class SceneRunner {
   void set_compute_phase_ns(std::int64_t ns) noexcept { phase_ns_ = ns; }
   /// Periods run so far.
   std::int64_t periods() const noexcept { return k_; }
+  /// The divergence monitor latched (divergence.hpp): the period that breached it shut the
+  /// device down (zero torque from the next write on); the run stops after it.
+  bool diverged() const noexcept { return divergence_.divergence().cause != nullptr; }
   /// A multirate scene in a paced run: steps the scene loop on its own thread from now on
   /// (platform::MultirateThreads, `settings`) until finish(); nothing for a single-rate scene.
   /// Allocates (call before the first period). Throws std::system_error if the thread cannot
@@ -565,6 +592,7 @@ class SceneRunner {
   bool has_first_fault_ = false;
   std::uint64_t emcys_traced_ = 0;  // EMCY messages received up to the last trace record
   core::Vec3 last_feedback_force_ = core::Vec3::Zero();  // sent the period before (N)
+  DivergenceMonitor divergence_;  // judged after each period's measurements
 };
 
 /// Fills what a run's summary says of its scene, whichever runner runs it: name, coupling,

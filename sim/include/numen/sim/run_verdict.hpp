@@ -13,7 +13,7 @@ namespace numen::sim {
 struct RunSummary;
 
 /// Exit statuses of the `numen` command. When several conditions hold, the most severe one is
-/// the status (the order below, non-finite first) and every one is listed in the reasons.
+/// the status (non-finite and diverged first, then the order below) and every one is listed in the reasons.
 enum class ExitStatus : int {
   kClean = 0,             ///< The run ended as asked, nothing was lost or rejected.
   kError = 1,             ///< An error that is not the input's (I/O, resources, internal).
@@ -27,6 +27,9 @@ enum class ExitStatus : int {
   kSamplesRejected = 6,   ///< Input samples were rejected during the run (encoder values out
                           ///< of range, jumps, non-finite), no sample was ever valid in a run
                           ///< that was not stopped by a signal, or a replayed bus log gave no frame.
+  kDiverged = 7,          ///< The divergence monitor latched: finite state that physics bounds
+                          ///< (speeds, tie stretch, energy) say is not a simulation any more
+                          ///< (divergence.hpp); the run stopped commanding torque there.
 };
 
 /// Numeric value of `s` (the process exit status).

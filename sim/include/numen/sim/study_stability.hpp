@@ -50,6 +50,7 @@
 
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"
+#include "numen/sim/energy.hpp"
 #include "numen/sim/study_shard.hpp"
 
 namespace numen::sim {
@@ -155,22 +156,6 @@ std::vector<StudyCase> stability_cases(const StabilityOptions& options);
 /// load_scene() throws for the shipped scenes. Cases this build left out (NUMEN_WITH_* options) are
 /// otherwise skipped and listed in StabilityResult::skipped.
 StabilityResult run_stability_study(const StabilityOptions& options);
-
-/// Energy of the verdict (J), gravity left out (the study runs without gravity): Σ ½ m v² +
-/// ½ ωᵀ I_w ω of the bodies, Σ ½ m v² of the net nodes, the coupling springs of the attached
-/// body (Data::target) and of every enabled body target (½ k_t |e|² + ½ k_r θ², θ on the shortest
-/// arc; god-object and first-order modes), ½ k (l − L)² of every net spring and ½ k_tie |x −
-/// anchor|² of every tie. The penalty contacts' potential is left out (contact_energy()): contacts
-/// are found at the step's start, so a body that enters a surface during a step holds ½ k d² at its
-/// first contact that no force put in (a sphere reaching a 1e8 N/m plane at 0.2 m/s with
-/// h = 10 ms: 200 J against the coupling's 0.04 J); the verdict bounds the contacts through the
-/// penetration instead, and an unstable contact shows in this energy as soon as it moves the body.
-/// Non-finite input gives a non-finite result.
-double stored_energy(const core::Model& model, const core::Data& data) noexcept;
-
-/// ½ k d² of every body and node contact of the last step (depths at its start; stiffness of
-/// the contact's material pair), J.
-double contact_energy(const core::Model& model, const core::Data& data) noexcept;
 
 /// Positive work the device input puts in over one step of length h, for the study's energy
 /// bound: the jump of stored_energy() caused by the new targets at the unchanged state

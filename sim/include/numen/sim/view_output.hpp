@@ -5,6 +5,7 @@
 /// feeds (`--record-view`), the further sinks (`--view`'s server), its figures in the run
 /// summary, and the pacing of an offline run that a live viewer watches (`--speed`).
 
+#include <atomic>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -12,7 +13,6 @@
 #include <string>
 #include <vector>
 
-#include "numen/platform/periodic_timer.hpp"
 #include "numen/platform/state_stream.hpp"
 #include "numen/sim/scene.hpp"
 #include "numen/sim/view_recording.hpp"
@@ -53,18 +53,29 @@ class ViewOutput {
   platform::StateStream stream_;
 };
 
-/// Paces an unpaced run (simulated bus or log, no --realtime) for a live viewer: each wait
-/// sleeps until the next period is due at `speed` × real time, on platform::PeriodicTimer's
-/// absolute CLOCK_MONOTONIC deadlines from `wall0_ns` (no drift; a run that falls behind
-/// re-phases instead of bursting). `speed` <= 0: wait() returns at once.
+/// Paces an unpaced run (simulated bus or log, no --realtime) for a live viewer (`--speed`):
+/// each wait() sleeps until the next period is due at `speed` × real time, on absolute
+/// CLOCK_MONOTONIC deadlines from `wall0_ns` (no drift; a run that falls behind re-phases
+/// instead of bursting, as platform::PeriodicTimer does). `speed` <= 0: wait() returns at once.
+/// A stop request is always heard: the sleep is cut into slices of at most kStopPollNs, and
+/// wait() returns as soon as `*stop` is true (a period of 10⁶ s at `--speed 1e-9` ends within
+/// one slice of a SIGTERM).
 class ViewPacer {
  public:
-  ViewPacer(double dt_s, double speed, std::int64_t wall0_ns) noexcept;
-  /// Sleeps until the next period of this pacer is due.
+  /// Longest slice of one sleep (ns): the latency of a stop request during a wait.
+  static constexpr std::int64_t kStopPollNs = 10'000'000;
+  /// Longest period (ns) a pacer keeps: about 31.7 years (dt / speed beyond it is clamped).
+  static constexpr std::int64_t kMaxPeriodNs = 1'000'000'000'000'000'000;
+  /// `stop`: the run's stop request (RunOptions::stop), or nullptr; must outlive the pacer.
+  ViewPacer(double dt_s, double speed, std::int64_t wall0_ns,
+            const std::atomic<bool>* stop = nullptr) noexcept;
+  /// Sleeps until the next period of this pacer is due, or until a stop is requested.
   void wait() noexcept;
 
  private:
-  std::optional<platform::PeriodicTimer> timer_;  // none: no pacing
+  std::int64_t period_ns_ = 0;  // 0: no pacing
+  std::int64_t next_ns_ = 0;    // absolute CLOCK_MONOTONIC deadline of the next period
+  const std::atomic<bool>* stop_ = nullptr;
 };
 
 }  // namespace numen::sim

@@ -1,0 +1,119 @@
+#pragma once
+/// @file divergence.hpp
+/// The divergence monitor of a run (docs/safety.md, "Divergence"): finite is not bounded. A
+/// scene whose gains its time step cannot integrate (a coupling stiffness of 1e12 N/m at 1 ms)
+/// stays finite for seconds while its bodies fly off at 55 m/s and its net's nodes at 933 m/s.
+/// The monitor judges each period's state by physics and latches the first breach with its
+/// cause; the run then stops commanding torque and exits with ExitStatus::kDiverged:
+///
+/// | cause | quantity | limit |
+/// | --- | --- | --- |
+/// | "body speed" | |v| + |ω| r of a body (r: its bounding radius) | speed_factor × v_ref |
+/// | "node speed" | |v| of a net node | speed_factor × v_ref |
+/// | "tie stretch" | |x − a| of a node from its anchor on the rigid component | stretch_factor × the net's rest radius |
+/// | "energy" | stored energy + gravity's potential (energy.hpp) | energy_factor × max(E₀ + W_in, energy_floor_j) |
+///
+/// v_ref = max(the hand's fastest speed so far (|v_t| + |ω_t| r of the held body), √(2 |g| H)
+/// with H the height of the scene's bounding box at the start (its extent along gravity:
+/// bodies, nets, bounded obstacles), speed_floor_mps): whatever
+/// moves in a god-object scene is driven by the hand or falls under gravity, and a penalty
+/// contact throws a light body at most at about twice the speed of what hits it.
+/// W_in is the work the hand puts in through the coupling springs and dampers (the jump of the
+/// springs' potential when the target moves at the unchanged state, plus h times the dampers'
+/// power through the target's twist, as the stability study counts it: study_stability.hpp);
+/// E₀ + W_in is what a passive scene (Adams & Hannaford 1999: the virtual coupling is passive)
+/// can hold at most. The energy bound applies where the coupling springs act (god-object and
+/// first-order modes); it is rebased when the held body changes (an attach event).
+
+#include <algorithm>
+#include <cstdint>
+#include <vector>
+
+#include "numen/core/data.hpp"
+#include "numen/core/model.hpp"
+
+namespace numen::sim {
+
+/// Limits of the divergence monitor (the table in the file comment).
+struct DivergenceLimits {
+  double speed_factor = 10.0;     ///< Speeds may reach this × v_ref.
+  double speed_floor_mps = 0.5;   ///< v_ref is at least this (m/s).
+  double stretch_factor = 1.0;    ///< Tie stretch may reach this × the net's rest radius.
+  double energy_factor = 100.0;   ///< E may reach this × max(E₀ + W_in, energy_floor_j).
+  double energy_floor_j = 0.01;   ///< J: what a scene at rest may hold without a verdict.
+};
+
+/// What the monitor latched.
+struct Divergence {
+  const char* cause = nullptr;  ///< nullptr: none; else "body speed", "node speed", "tie stretch", "energy".
+  int body = -1;                ///< The body ("body speed"), or the net's rigid component.
+  int net = -1;                 ///< The net ("node speed", "tie stretch"); -1 otherwise.
+  double value = 0.0;           ///< The quantity (m/s, m or J).
+  double limit = 0.0;           ///< Its limit then (same unit).
+  std::int64_t period = -1;     ///< Period of the breach (0-based).
+  double time_s = 0.0;          ///< Its simulated time (s).
+};
+
+/// Per-period divergence monitor of one run. Construction allocates (setup); observe() never
+/// allocates, throws, locks or blocks, and costs O(bodies + nodes + springs).
+class DivergenceMonitor {
+ public:
+  /// Sizes the monitor for `model` and takes the scene's scale from `data` (the state at the
+  /// start: body poses, nodes, finite obstacles).
+  DivergenceMonitor(const core::Model& model, const core::Data& data,
+                    const DivergenceLimits& limits = {});
+
+  /// Judges the state after period `period` (simulated time `time_s`). Returns true in the
+  /// period of the first breach (then latched: later calls return false and change nothing).
+  bool observe(const core::Model& model, const core::Data& data, std::int64_t period,
+               double time_s) noexcept;
+
+  /// The latched breach (cause nullptr while none).
+  const Divergence& divergence() const noexcept { return latched_; }
+  /// Largest E / max(E₀ + W_in, energy_floor_j) seen (0 where the energy bound does not apply).
+  double energy_ratio_max() const noexcept { return energy_ratio_max_; }
+  /// Largest speed / speed limit of a body or node seen (1 is the limit).
+  double speed_ratio_max() const noexcept { return speed_ratio_max_; }
+  /// Largest tie stretch / its limit seen.
+  double stretch_ratio_max() const noexcept { return stretch_ratio_max_; }
+  /// The scene's bounding-box diagonal (m) at the start.
+  double scene_size_m() const noexcept { return scene_size_m_; }
+  /// √(2 |g| H) (m/s): the speed of a fall over the scene's height H.
+  double fall_speed_mps() const noexcept { return fall_speed_mps_; }
+  /// The hand's fastest speed so far (m/s).
+  double hand_speed_max_mps() const noexcept { return hand_speed_max_mps_; }
+  /// The speed limit now: speed_factor × v_ref (m/s).
+  double speed_limit_mps() const noexcept {
+    return limits_.speed_factor *
+           std::max({hand_speed_max_mps_, fall_speed_mps_, limits_.speed_floor_mps});
+  }
+  /// The limits in force.
+  const DivergenceLimits& limits() const noexcept { return limits_; }
+
+ private:
+  void latch(const char* cause, int body, int net, double value, double limit,
+             std::int64_t period, double time_s) noexcept;
+  /// The hand's work (J) through the coupling over the step that led from prev_ to `data`.
+  double input_work(const core::Model& model, const core::Data& data) const noexcept;
+  void remember(const core::Data& data) noexcept;
+  void rebase(const core::Model& model, const core::Data& data) noexcept;
+
+  DivergenceLimits limits_;
+  double scene_size_m_ = 0.0;
+  double fall_speed_mps_ = 0.0;            // √(2 |g| H)
+  double hand_speed_max_mps_ = 0.0;
+  std::vector<double> net_radius_m_;       // per net: max |rest offset| of its nodes
+  std::vector<core::BodyState> prev_bodies_;
+  std::vector<core::Pose> prev_targets_;   // per body: its coupling target in the last period
+  std::vector<char> prev_coupled_;         // per body: it had a coupling target then
+  int prev_attached_ = -2;                 // -2: nothing observed yet
+  double energy0_ = 0.0;                   // stored energy at the (re)base
+  double gravity0_ = 0.0;                  // gravity's potential at the (re)base
+  double work_in_ = 0.0;                   // W_in since the (re)base
+  double energy_ratio_max_ = 0.0;
+  double speed_ratio_max_ = 0.0;
+  double stretch_ratio_max_ = 0.0;
+  Divergence latched_;
+};
+
+}  // namespace numen::sim
