@@ -84,7 +84,8 @@ set(_hal_headers
   numen/hal/transport/async_record_writer.hpp numen/hal/transport/bus.hpp
   numen/hal/transport/bus_recorder.hpp numen/hal/transport/can_filter.hpp
   numen/hal/transport/can_frame.hpp numen/hal/transport/candump_log.hpp
-  numen/hal/transport/line_file.hpp numen/hal/transport/log_bus.hpp
+  numen/hal/transport/line_file.hpp numen/hal/transport/line_reader.hpp
+  numen/hal/transport/log_bus.hpp
   numen/hal/transport/serial_frame.hpp numen/hal/transport/sim_bus.hpp
   numen/hal/transport/splitmix64.hpp)
 if(NUMEN_WITH_SOCKETCAN)

@@ -9,11 +9,11 @@
 #include <array>
 #include <charconv>
 #include <cmath>
-#include <fstream>
-#include <iterator>
 #include <limits>
+#include <optional>
 #include <sstream>
 
+#include "numen/hal/transport/line_reader.hpp"
 #include "numen/sim/input_error.hpp"
 #include "numen/sim/shipped_files.hpp"
 
@@ -29,6 +29,10 @@ constexpr std::array<std::string_view, kGroupColumns> kFieldNames = {
 
 constexpr std::array<std::string_view, 4> kGroupNames = {"master_left", "master_right",
                                                          "slave_left", "slave_right"};
+
+/// Longest line read, bytes: a row of 76 numbers is ~1.2 KB (the dataset's files); a longer
+/// line is an error (it bounds the reader's buffer, hal::LineReader).
+constexpr std::size_t kMaxLine = 65536;
 
 /// Largest allowed distance of a singular value of a recorded rotation matrix from 1.
 constexpr double kRotationTolerance = 0.1;
@@ -91,6 +95,38 @@ void check_tip(const std::string& file, int line, int first_column, const std::a
                        " m from the origin of the recording frame; beyond " +
                        format_number(kMaxTargetDistance) +
                        " m it is not instrument motion (a wrong unit or a corrupt file?)");
+}
+
+/// Checks the rotation matrix of a taken row and appends its pose, jaw and recorded twist;
+/// sets `error` (and appends nothing) if the matrix is far from a rotation.
+void take_row(const std::string& file, JigsawsManipulator manipulator, const Row& row,
+              JigsawsRecording& rec, std::vector<core::Pose>& poses, std::vector<double>& jaw,
+              std::optional<InputError>& error) {
+  const int group_begin = static_cast<int>(manipulator) * kGroupColumns;
+  const auto& g = row.group;
+  core::Mat3 r;
+  r << g[3], g[4], g[5], g[6], g[7], g[8], g[9], g[10], g[11];
+  const double ortho = (r.transpose() * r - core::Mat3::Identity()).cwiseAbs().maxCoeff();
+  const Eigen::JacobiSVD<core::Mat3> svd(r);
+  const core::Vec3 sigma = svd.singularValues();
+  const double det = r.determinant();
+  if ((sigma.array() - 1.0).abs().maxCoeff() > kRotationTolerance || !(det > 0.0)) {
+    error = InputError(file, row.line, row.rotation_column,
+                       std::string(kGroupNames[static_cast<std::size_t>(manipulator)]) + ".rotation",
+                       "data columns " + std::to_string(group_begin + 4) + "-" +
+                           std::to_string(group_begin + 12) +
+                           ": rotation matrix is not close to a rotation (singular values " +
+                           format_number(sigma[0]) + " " + format_number(sigma[1]) + " " +
+                           format_number(sigma[2]) + ", det " + format_number(det) + ")");
+    return;
+  }
+  rec.max_orthonormality_error = std::max(rec.max_orthonormality_error, ortho);
+  poses.push_back(core::Pose{core::Vec3(g[0], g[1], g[2]), core::Quat(nearest_rotation(r))});
+  jaw.push_back(g[18]);
+  core::Twist twist;
+  twist.linear = core::Vec3(g[12], g[13], g[14]);
+  twist.angular = core::Vec3(g[15], g[16], g[17]);
+  rec.recorded_twist.push_back(twist);
 }
 
 }  // namespace
@@ -158,33 +194,44 @@ JigsawsRecording load_jigsaws(const std::filesystem::path& path, JigsawsManipula
   std::error_code ec;
   if (std::filesystem::is_directory(path, ec))
     throw InputError(file, 0, 0, "", "is a directory, not a JIGSAWS kinematics file");
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(file, 0, 0, "", "cannot open the file");
-  std::string text;
+  // Read one line at a time in a fixed buffer: memory holds the rows taken, never the file.
+  std::optional<hal::LineReader> reader;
   try {
-    text.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-  } catch (const std::ios_base::failure&) {  // a read error (EIO, ...) thrown by the filebuf
-    throw InputError(file, 0, 0, "", "cannot read the file");
+    reader.emplace(file, kMaxLine);
+  } catch (const std::runtime_error&) {
+    throw InputError(file, 0, 0, "", "cannot open the file");
   }
-  if (in.bad()) throw InputError(file, 0, 0, "", "cannot read the file");
 
   const int group_begin = static_cast<int>(manipulator) * kGroupColumns;
-  std::vector<Row> rows;
+  JigsawsRecording rec;
+  std::vector<core::Pose> poses;
+  std::vector<double> jaw;
+  // The first rotation matrix far from a rotation: thrown after the whole file is read (the
+  // column checks of every row come first, as does a start beyond the end of the file).
+  std::optional<InputError> rotation_error;
   std::size_t file_rows = 0;
   int line_number = 0;
   int first_blank_line = 0;  // first blank line seen after the last data row
-  // A UTF-8 byte order mark at the start of the file is an encoding marker, not data: skipped
-  // (columns of line 1 are counted after it, as an editor shows them).
-  std::size_t pos = text.compare(0, kUtf8Bom.size(), kUtf8Bom) == 0 ? kUtf8Bom.size() : 0;
   // The tip position (columns 1-3 of each group) of the row being read, and their columns.
   std::array<double, 3> tip{};
   std::array<int, 3> tip_columns{};
-  while (pos < text.size()) {
-    std::size_t end = text.find('\n', pos);
-    if (end == std::string::npos) end = text.size();
-    const std::string_view line(text.data() + pos, end - pos);
-    pos = end + 1;
+  std::string_view line;
+  bool cut = false;
+  for (;;) {
+    try {
+      if (!reader->next(line, cut)) break;
+    } catch (const std::runtime_error&) {  // a read error (EIO, ...)
+      throw InputError(file, 0, 0, "", "cannot read the file");
+    }
     ++line_number;
+    // A UTF-8 byte order mark at the start of the file is an encoding marker, not data: skipped
+    // (columns of line 1 are counted after it, as an editor shows them).
+    if (line_number == 1 && line.substr(0, kUtf8Bom.size()) == kUtf8Bom) line.remove_prefix(kUtf8Bom.size());
+    if (cut) {
+      throw InputError(file, line_number, static_cast<int>(kMaxLine) + 1, "",
+                       "line longer than " + std::to_string(kMaxLine) +
+                           " characters; expected 76 numbers per line");
+    }
 
     std::size_t c = 0;
     while (c < line.size() && is_space(line[c])) ++c;
@@ -246,7 +293,7 @@ JigsawsRecording load_jigsaws(const std::filesystem::path& path, JigsawsManipula
           file, line_number, static_cast<int>(line.size()) + 1, "",
           "too few columns: found " + std::to_string(count) + " values, expected exactly 76");
     }
-    if (taken) rows.push_back(row);
+    if (taken && !rotation_error) take_row(file, manipulator, row, rec, poses, jaw, rotation_error);
   }
   if (file_rows == 0) {
     throw InputError(file, 1, 0, "", "the file is empty; expected lines of 76 numbers");
@@ -256,40 +303,13 @@ JigsawsRecording load_jigsaws(const std::filesystem::path& path, JigsawsManipula
                        "starts at row " + std::to_string(first_row) + " but the file has " +
                            std::to_string(file_rows) + " rows");
   }
+  if (rotation_error) throw *rotation_error;
 
-  JigsawsRecording rec;
   rec.file = file;
   rec.manipulator = manipulator;
   rec.first_row = first_row;
   rec.file_rows = file_rows;
   rec.start_time_in_file = static_cast<double>(first_row - 1) / kJigsawsRateHz;
-  std::vector<core::Pose> poses(rows.size());
-  std::vector<double> jaw(rows.size());
-  rec.recorded_twist.resize(rows.size());
-  for (std::size_t i = 0; i < rows.size(); ++i) {
-    const auto& g = rows[i].group;
-    core::Mat3 r;
-    r << g[3], g[4], g[5], g[6], g[7], g[8], g[9], g[10], g[11];
-    const double ortho = (r.transpose() * r - core::Mat3::Identity()).cwiseAbs().maxCoeff();
-    const Eigen::JacobiSVD<core::Mat3> svd(r);
-    const core::Vec3 sigma = svd.singularValues();
-    const double det = r.determinant();
-    if ((sigma.array() - 1.0).abs().maxCoeff() > kRotationTolerance || !(det > 0.0)) {
-      throw InputError(file, rows[i].line, rows[i].rotation_column,
-                       std::string(to_string(manipulator)) + ".rotation",
-                       "data columns " + std::to_string(group_begin + 4) + "-" +
-                           std::to_string(group_begin + 12) +
-                           ": rotation matrix is not close to a rotation (singular values " +
-                           format_number(sigma[0]) + " " + format_number(sigma[1]) + " " +
-                           format_number(sigma[2]) + ", det " + format_number(det) + ")");
-    }
-    rec.max_orthonormality_error = std::max(rec.max_orthonormality_error, ortho);
-    poses[i].position = core::Vec3(g[0], g[1], g[2]);
-    poses[i].orientation = core::Quat(nearest_rotation(r));
-    jaw[i] = g[18];
-    rec.recorded_twist[i].linear = core::Vec3(g[12], g[13], g[14]);
-    rec.recorded_twist[i].angular = core::Vec3(g[15], g[16], g[17]);
-  }
   // The Trajectory constructor normalises and makes the quaternion signs continuous.
   rec.trajectory = Trajectory(1.0 / kJigsawsRateHz, std::move(poses), std::move(jaw));
   return rec;

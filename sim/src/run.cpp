@@ -157,21 +157,25 @@ std::vector<std::string> apply_run_realtime(const platform::RealtimeSettings& rt
 namespace {
 
 /// The LogBus of a "log:FILE" spec, or nullptr for any other bus; `stats` gets what the loader
-/// counted. A log that the loader refuses (located error) or whose records hold no frame the
-/// controller reads (another device's ids) is input rejected: InputError naming the file.
-std::unique_ptr<hal::LogBus> make_log_bus(const Scene& scene, const BusSpec& spec,
+/// counted. The log is streamed from disk (memory does not grow with it); a paced run
+/// (`realtime`) never waits for the reader thread, an offline run does. A log that the loader
+/// refuses (located error) or whose records hold no frame the controller reads (another
+/// device's ids) is input rejected: InputError naming the file.
+std::unique_ptr<hal::LogBus> make_log_bus(const Scene& scene, const BusSpec& spec, bool realtime,
                                           hal::CandumpLoadStats& stats) {
   if (spec.kind != BusKind::kLog) return nullptr;
   hal::LogBusSettings settings;
   settings.filters = controller_filters(scene.device);
   settings.received_only = true;
-  std::vector<hal::CandumpRecord> records;
+  hal::LogBusStream stream;
+  stream.path = spec.target;
+  stream.wait_for_reader = !realtime;
+  std::unique_ptr<hal::LogBus> bus;
   try {
-    records = hal::load_candump_log(spec.target, &stats);
+    bus = std::make_unique<hal::LogBus>(stream, settings, &stats);
   } catch (const std::runtime_error& e) {
     throw InputError("", 0, 0, "", e.what());  // the message is "file:line:column: what"
   }
-  auto bus = std::make_unique<hal::LogBus>(std::move(records), settings);
   if (bus->matching_records() == 0) {
     std::string ids;
     for (const hal::AxisConfig& a : scene.device.axes) {
@@ -207,7 +211,7 @@ SceneRunner::SceneRunner(const Scene& scene, std::size_t trace_capacity, const B
       spec_(parse_bus_spec(bus.spec)),
       bus_(scene.bus),
       real_bus_(spec_.real() ? open_real_bus(spec_, controller_filters(scene.device)) : nullptr),
-      log_bus_(make_log_bus(scene, spec_, log_stats_)),
+      log_bus_(make_log_bus(scene, spec_, realtime, log_stats_)),
       writer_(bus.record_path.empty()
                   ? nullptr
                   : std::make_unique<hal::CandumpWriter>(
@@ -603,6 +607,13 @@ RunSummary SceneRunner::summary() const {
       s.warnings.push_back("the replayed log says its recording lost " +
                            std::to_string(log_stats_.dropped_frames) + " frames (" +
                            std::to_string(log_stats_.drop_notes) + " DROPCOUNT notes)");
+    // An offline run waits for the reader (nothing to say); a paced one does not.
+    const std::uint64_t behind = log_bus_->log_counters().reader_behind;
+    if (!log_bus_->waits_for_reader() && behind > 0)
+      s.warnings.push_back("the log's reader thread fell behind the paced replay " +
+                           std::to_string(behind) + " times: frames due then came late");
+    if (const std::string error = log_bus_->reader_error(); !error.empty())
+      s.warnings.push_back("the replay ended early: " + error);
   }
   if (recorder_) {
     s.bus_frames_recorded = static_cast<std::int64_t>(recorder_->recording_counters().recorded);

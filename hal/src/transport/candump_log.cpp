@@ -3,12 +3,11 @@
 
 #include "numen/hal/transport/candump_log.hpp"
 
-#include <cerrno>
 #include <cstdio>
 #include <cstring>
-#include <fstream>
 #include <limits>
 #include <stdexcept>
+#include <utility>
 
 namespace numen::hal {
 namespace {
@@ -415,128 +414,155 @@ bool is_blank_line(std::string_view line) noexcept {
 
 constexpr std::string_view kDropNote = "DROPCOUNT:";
 
+// Largest N of a DROPCOUNT note: candump prints a __u32 counter difference ("%u").
+constexpr std::uint64_t kMaxDropNote = 0xFFFFFFFFu;
+
 // N of candump's "DROPCOUNT: dropped N CAN frame(s) on 'IF' socket (total drops T)"; 0 if
-// the note does not have that shape (it is still counted as a note).
-std::uint64_t dropped_in_note(std::string_view line) noexcept {
+// the note does not have that shape (it is still counted as a note). `column` gets the
+// 1-based column of N's first digit. Returns false if N has more than 32 bits.
+bool dropped_in_note(std::string_view line, std::uint64_t& n, std::size_t& column) noexcept {
   constexpr std::string_view kDropped = "dropped ";
+  n = 0;
   std::size_t i = kDropNote.size();
   while (i < line.size() && is_blank(line[i])) ++i;
-  if (line.substr(i, kDropped.size()) != kDropped) return 0;
+  if (line.substr(i, kDropped.size()) != kDropped) return true;
   i += kDropped.size();
-  std::uint64_t n = 0;
+  column = i + 1;
   for (; i < line.size() && is_digit(line[i]); ++i) {
-    if (n > (std::numeric_limits<std::uint64_t>::max() - 9) / 10) return n;
     n = n * 10 + static_cast<std::uint64_t>(line[i] - '0');
+    if (n > kMaxDropNote) return false;  // checked per digit: n * 10 + 9 cannot wrap
   }
-  return n;
+  return true;
 }
 
+// `limits` if they are in range (CandumpLoadLimits); throws std::invalid_argument otherwise.
+const CandumpLoadLimits& checked(const CandumpLoadLimits& limits) {
+  if (limits.max_gap_ns <= 0 || limits.max_backward_ns < 0) {
+    throw std::invalid_argument("CandumpLoadLimits: max_gap_ns must be > 0 and max_backward_ns "
+                                ">= 0 (got " + std::to_string(limits.max_gap_ns) + ", " +
+                                std::to_string(limits.max_backward_ns) + ")");
+  }
+  return limits;
+}
+
+}  // namespace
+
 // The latest record time of one interface and direction so far.
-struct StreamTime {
+struct CandumpLogReader::StreamTime {
   CandumpIface iface;
   CandumpDirection direction = CandumpDirection::kUnmarked;
   std::int64_t time_ns = 0;
   std::size_t line = 0;
 };
 
-}  // namespace
+CandumpLogReader::CandumpLogReader(std::string path, const CandumpLoadLimits& limits)
+    : path_(std::move(path)), limits_(checked(limits)), lines_(path_, kCandumpMaxReadLine) {}
 
-std::vector<CandumpRecord> load_candump_log(const std::string& path, CandumpLoadStats* stats,
-                                            const CandumpLoadLimits& limits) {
-  if (limits.max_gap_ns <= 0 || limits.max_backward_ns < 0) {
-    throw std::invalid_argument("CandumpLoadLimits: max_gap_ns must be > 0 and max_backward_ns "
-                                ">= 0 (got " + std::to_string(limits.max_gap_ns) + ", " +
-                                std::to_string(limits.max_backward_ns) + ")");
-  }
-  std::ifstream in(path, std::ios::binary);
-  if (!in) {
-    const int err = errno;
-    throw std::runtime_error(path + ": cannot open: " + std::strerror(err));
-  }
-  std::vector<CandumpRecord> records;
-  CandumpLoadStats counts;
-  std::vector<StreamTime> streams;
-  std::int64_t latest_ns = 0;
-  std::size_t latest_line = 0;
-  std::string line;
-  const auto fail = [&](std::size_t column, const std::string& what) {
-    return std::runtime_error(path + ":" + std::to_string(counts.lines) + ":" +
-                              std::to_string(column) + ": " + what);
-  };
-  while (std::getline(in, line)) {
-    ++counts.lines;
-    const std::string_view text(line);
-    if (is_blank_line(text) || text[0] == '#') {
-      ++counts.skipped;
+CandumpLogReader::~CandumpLogReader() = default;
+
+std::runtime_error CandumpLogReader::located(std::size_t column, const std::string& what) const {
+  return std::runtime_error(path_ + ":" + std::to_string(counts_.lines) + ":" +
+                            std::to_string(column) + ": " + what);
+}
+
+bool CandumpLogReader::next(CandumpRecord& record) {
+  std::string_view text;
+  bool overlong = false;
+  while (lines_.next(text, overlong)) {
+    ++counts_.lines;
+    if (text.empty() || text[0] == '#' || (!overlong && is_blank_line(text))) {
+      ++counts_.skipped;
       continue;
     }
     if (text.substr(0, kDropNote.size()) == kDropNote) {
-      ++counts.skipped;
-      ++counts.drop_notes;
-      counts.dropped_frames += dropped_in_note(text);
+      ++counts_.skipped;
+      ++counts_.drop_notes;
+      std::uint64_t n = 0;
+      std::size_t column = 0;
+      if (!dropped_in_note(text, n, column)) {
+        throw located(column, "DROPCOUNT note: the dropped-frame count does not fit in 32 bits "
+                              "(candump writes an unsigned 32-bit count): not a candump note");
+      }
+      if (n > static_cast<std::uint64_t>(std::numeric_limits<std::int64_t>::max()) -
+                  counts_.dropped_frames) {
+        throw located(column, "DROPCOUNT note: the frames lost by the recording add up to more "
+                              "than 2^63 - 1");
+      }
+      counts_.dropped_frames += n;
       continue;
     }
     if (text[0] != '(') {
-      throw fail(1, "not a candump log line: a record starts with '(' (besides records, only "
-                    "blank lines, '#' comments and DROPCOUNT notes)");
+      throw located(1, "not a candump log line: a record starts with '(' (besides records, only "
+                       "blank lines, '#' comments and DROPCOUNT notes)");
+    }
+    if (overlong) {
+      throw located(kCandumpMaxReadLine + 1,
+                    "line longer than " + std::to_string(kCandumpMaxReadLine) +
+                        " characters: not a candump record");
     }
     CandumpRecord rec;
-    const CandumpParseResult r = parse_candump_line(line, rec);
-    if (!r.ok()) throw fail(r.column, to_string(r.error));
+    const CandumpParseResult r = parse_candump_line(text, rec);
+    if (!r.ok()) throw located(r.column, to_string(r.error));
 
     // Time plausibility. Column 2: where the timestamp starts.
     const std::int64_t t = rec.timestamp_ns;
-    if (latest_line != 0) {
-      const bool ahead = t > latest_ns;
-      const std::int64_t step = ahead ? t - latest_ns : latest_ns - t;
-      if (step > limits.max_gap_ns) {
-        throw fail(2, "timestamp " + log_seconds(t) + " s is " + log_seconds(step) + " s " +
-                          (ahead ? "after" : "before") + " the latest record (line " +
-                          std::to_string(latest_line) + ", " + log_seconds(latest_ns) +
-                          " s): more than the " + log_seconds(limits.max_gap_ns) +
-                          " s allowed between records");
+    if (latest_line_ != 0) {
+      const bool ahead = t > latest_ns_;
+      const std::int64_t step = ahead ? t - latest_ns_ : latest_ns_ - t;
+      if (step > limits_.max_gap_ns) {
+        throw located(2, "timestamp " + log_seconds(t) + " s is " + log_seconds(step) + " s " +
+                             (ahead ? "after" : "before") + " the latest record (line " +
+                             std::to_string(latest_line_) + ", " + log_seconds(latest_ns_) +
+                             " s): more than the " + log_seconds(limits_.max_gap_ns) +
+                             " s allowed between records");
       }
     }
     StreamTime* stream = nullptr;
-    for (StreamTime& s : streams) {
+    for (StreamTime& s : streams_) {
       if (s.iface == rec.iface && s.direction == rec.direction) stream = &s;
     }
     if (stream != nullptr && t < stream->time_ns) {
-      if (stream->time_ns - t > limits.max_backward_ns) {
-        throw fail(2, "timestamp " + log_seconds(t) + " s goes back " +
-                          log_seconds(stream->time_ns - t) + " s against line " +
-                          std::to_string(stream->line) + " (" + log_seconds(stream->time_ns) +
-                          " s) of the same interface '" + std::string(rec.iface.view()) +
-                          "' and direction (" + direction_name(rec.direction) +
-                          "): a recording's times never decrease there");
+      if (stream->time_ns - t > limits_.max_backward_ns) {
+        throw located(2, "timestamp " + log_seconds(t) + " s goes back " +
+                             log_seconds(stream->time_ns - t) + " s against line " +
+                             std::to_string(stream->line) + " (" + log_seconds(stream->time_ns) +
+                             " s) of the same interface '" + std::string(rec.iface.view()) +
+                             "' and direction (" + direction_name(rec.direction) +
+                             "): a recording's times never decrease there");
       }
-      ++counts.out_of_order;
-    } else if (latest_line != 0 && t < latest_ns) {
-      ++counts.out_of_order;
+      ++counts_.out_of_order;
+    } else if (latest_line_ != 0 && t < latest_ns_) {
+      ++counts_.out_of_order;
     }
     if (stream == nullptr) {
-      streams.push_back(StreamTime{rec.iface, rec.direction, t, counts.lines});
+      streams_.push_back(StreamTime{rec.iface, rec.direction, t, counts_.lines});
     } else if (t >= stream->time_ns) {
       stream->time_ns = t;
-      stream->line = counts.lines;
+      stream->line = counts_.lines;
     }
-    if (latest_line == 0 || t >= latest_ns) {
-      latest_ns = t;
-      latest_line = counts.lines;
+    if (latest_line_ == 0 || t >= latest_ns_) {
+      latest_ns_ = t;
+      latest_line_ = counts_.lines;
     }
-    records.push_back(rec);
+    ++counts_.records;
+    record = rec;
+    return true;
   }
-  if (in.bad()) {
-    const int err = errno;
-    throw std::runtime_error(path + ":" + std::to_string(counts.lines + 1) +
-                             ": read error: " + std::strerror(err));
-  }
+  return false;
+}
+
+std::vector<CandumpRecord> load_candump_log(const std::string& path, CandumpLoadStats* stats,
+                                            const CandumpLoadLimits& limits) {
+  CandumpLogReader reader(path, limits);
+  std::vector<CandumpRecord> records;
+  CandumpRecord rec;
+  while (reader.next(rec)) records.push_back(rec);
+  const CandumpLoadStats& counts = reader.stats();
   if (records.empty()) {
     throw std::runtime_error(path + ": no frame records (" + std::to_string(counts.lines) +
                              " lines: blank, '#' comments or DROPCOUNT notes): nothing to "
                              "replay");
   }
-  counts.records = records.size();
   if (stats != nullptr) *stats = counts;
   return records;
 }

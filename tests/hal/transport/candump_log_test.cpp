@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <cstdio>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -516,6 +517,72 @@ TEST(CandumpLog, GarbageIsALocatedError) {
                                      "(1.000000) can0 181#01020304\n"
                                      "garbage\n");
   EXPECT_EQ(load_error(tail), tail + ":2" + what);
+}
+
+// A DROPCOUNT count is candump's unsigned 32-bit counter: one that does not fit wrapped to a
+// negative "lost by the recording" figure with exit 0; it is now a located error (column of N).
+TEST(CandumpLog, DropCountThatDoesNotFitIsALocatedError) {
+  numen::test::TempDir dir;
+  const std::string record = "(1436509052.249713) vcan0 123#DEADBEEF\n";
+  const auto note = [](const std::string& n) {
+    return "DROPCOUNT: dropped " + n + " CAN frames on 'vcan0' socket (total drops 2)\n";
+  };
+  const std::string largest = dir.write("largest.log", record + note("4294967295") + note("7"));
+  numen::hal::CandumpLoadStats stats;
+  numen::hal::load_candump_log(largest, &stats);
+  EXPECT_EQ(stats.dropped_frames, 4294967302u);
+  EXPECT_EQ(stats.drop_notes, 2u);
+  const std::string what =
+      ": DROPCOUNT note: the dropped-frame count does not fit in 32 bits (candump writes an "
+      "unsigned 32-bit count): not a candump note";
+  const std::string over = dir.write("over.log", record + note("4294967296"));
+  EXPECT_EQ(load_error(over), over + ":2:20" + what);
+  const std::string huge = dir.write("huge.log", record + note("99999999999999999999999999"));
+  EXPECT_EQ(load_error(huge), huge + ":2:20" + what);
+  const std::string tab = dir.write("tab.log", record + "DROPCOUNT:\tdropped 18446744073709551616\n");
+  EXPECT_EQ(load_error(tab), tab + ":2:20" + what);
+}
+
+// CandumpLogReader reads the log in a fixed buffer: a record line longer than
+// kCandumpMaxReadLine is an error at the column after the limit, a '#' comment of any length
+// is skipped, and lines across buffer refills come out whole.
+TEST(CandumpLog, ReaderBoundsTheLineLengthAndSkipsLongComments) {
+  numen::test::TempDir dir;
+  const std::size_t limit = numen::hal::kCandumpMaxReadLine;
+  const std::string comment = "#" + std::string(3 * limit, 'x') + "\n";
+  std::string many;
+  for (int i = 0; i < 20000; ++i) {  // ~600 KB: several buffer refills
+    char line[64];
+    std::snprintf(line, sizeof line, "(1.%06d) can0 181#%08X R\n", i % 1000000, i);
+    many += line;
+  }
+  const std::string good = dir.write("good.log", comment + many + comment);
+  numen::hal::CandumpLoadStats stats;
+  const std::vector<CandumpRecord> log = numen::hal::load_candump_log(good, &stats);
+  ASSERT_EQ(log.size(), 20000u);
+  EXPECT_EQ(stats.lines, 20002u);
+  EXPECT_EQ(stats.skipped, 2u);
+  EXPECT_EQ(log[19999].frame.data[3], 0x1F);  // 0x4E1F
+  EXPECT_EQ(log[19999].timestamp_ns, 1'019'999'000);
+  const std::string long_record =
+      dir.write("long.log", many.substr(0, 31) + "(1.000000) can0 181#01" +
+                                std::string(limit, ' ') + "R\n");
+  EXPECT_EQ(load_error(long_record), long_record + ":2:" + std::to_string(limit + 1) +
+                                         ": line longer than " + std::to_string(limit) +
+                                         " characters: not a candump record");
+  // The reader one record at a time gives what the loader gives, with the same counts.
+  numen::hal::CandumpLogReader reader(good);
+  CandumpRecord r;
+  std::size_t n = 0;
+  while (reader.next(r)) {
+    ASSERT_EQ(r.timestamp_ns, log[n].timestamp_ns) << n;
+    ++n;
+  }
+  EXPECT_EQ(n, log.size());
+  EXPECT_EQ(reader.stats().lines, stats.lines);
+  EXPECT_EQ(reader.stats().records, stats.records);
+  EXPECT_THROW(numen::hal::CandumpLogReader(dir.path().string() + "/missing.log"),
+               std::runtime_error);
 }
 
 TEST(CandumpLog, LoadErrorNamesFileLineAndColumn) {

@@ -7,11 +7,13 @@
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "alloc_counter.hpp"
 #include "numen/hal/transport/can_filter.hpp"
 #include "numen/hal/canopen/canopen.hpp"
+#include "temp_dir.hpp"
 
 namespace {
 
@@ -24,6 +26,7 @@ using numen::hal::exact_standard_filter;
 using numen::hal::IoStatus;
 using numen::hal::LogBus;
 using numen::hal::LogBusSettings;
+using numen::hal::LogBusStream;
 
 // A record parsed from a candump line, so the tests read like the logs they replay.
 CandumpRecord rec(const std::string& line) {
@@ -282,6 +285,162 @@ TEST(LogBus, ReadAndWriteDoNotAllocate) {
   s.loop = true;
   s.loop_gap_ns = 800'000;
   LogBus bus(controller_log(), s);
+  CanFrame got;
+  std::uint64_t frames = 0;
+  numen::test::AllocationGuard guard;
+  for (std::int64_t now = 0; now < 30'000'000; now += 1'000'000) {
+    bus.set_time_ns(now);
+    while (bus.read(got) == IoStatus::kOk) ++frames;
+    bus.write(numen::hal::make_sync(now));
+  }
+  EXPECT_EQ(guard.count(), 0);
+  EXPECT_GT(frames, 20u);
+  EXPECT_EQ(frames, bus.log_counters().replayed);
+}
+
+// --- streaming replay (LogBus(const LogBusStream&)) ------------------------------------------
+
+// A log with out-of-order records, other ids, both directions and an error report, as text.
+const std::string kStreamLog =
+    "# recorded on can0\n"
+    "(1436509052.000000) can0 080# T\n"
+    "(1436509052.000150) can0 181#10000000 R\n"
+    "(1436509052.000200) can0 201#6400 T\n"
+    "DROPCOUNT: dropped 3 CAN frames on 'can0' socket (total drops 3)\n"
+    "(1436509052.000100) can1 182#01 R\n"
+    "(1436509052.001000) can0 080# T\n"
+    "(1436509052.001150) can0 181#20000000 R\n"
+    "(1436509052.001160) can0 20000004#0004000000000000 R\n"
+    "\n"
+    "(1436509052.001200) can0 201#C800 T\n"
+    "(1436509052.002150) can0 181#30000000 R\n";
+
+// Everything read() returns while the clock steps by `step_ns` up to `end_ns`, as (time, id).
+std::vector<std::pair<std::int64_t, std::uint32_t>> replay(LogBus& bus, std::int64_t step_ns,
+                                                            std::int64_t end_ns) {
+  std::vector<std::pair<std::int64_t, std::uint32_t>> out;
+  CanFrame got;
+  for (std::int64_t now = 0; now <= end_ns; now += step_ns) {
+    bus.set_time_ns(now);
+    while (bus.read(got) == IoStatus::kOk) out.emplace_back(got.timestamp_ns, got.id);
+  }
+  return out;
+}
+
+// A streamed log replays exactly as the same log loaded into memory: frames, due times,
+// counters, figures, the loader's counts; with loop, filters and a queue of 1 or 3 records
+// (the reader refilling it many times per pass).
+TEST(LogBus, StreamedLogReplaysLikeTheLoadedLog) {
+  numen::test::TempDir dir;
+  const std::string path = dir.write("run.log", kStreamLog);
+  for (const bool loop : {false, true}) {
+    for (const std::size_t queue : {std::size_t{1}, std::size_t{3}, numen::hal::kLogBusQueueRecords}) {
+      LogBusSettings s;
+      s.offset_ns = 250'000;
+      s.loop = loop;
+      s.loop_gap_ns = 300'000;
+      s.received_only = true;
+      s.filters = {exact_standard_filter(0x181), exact_standard_filter(0x182)};
+      numen::hal::CandumpLoadStats loaded_stats, streamed_stats;
+      LogBus loaded(numen::hal::load_candump_log(path, &loaded_stats), s);
+      LogBusStream stream;
+      stream.path = path;
+      stream.queue_records = queue;
+      LogBus streamed(stream, s, &streamed_stats);
+      EXPECT_TRUE(streamed.streaming());
+      EXPECT_TRUE(streamed.waits_for_reader());
+      EXPECT_FALSE(loaded.streaming());
+      EXPECT_EQ(streamed.size(), loaded.size());
+      EXPECT_EQ(streamed.span_ns(), loaded.span_ns());
+      EXPECT_EQ(streamed.matching_records(), loaded.matching_records());
+      EXPECT_EQ(streamed.matching_error_reports(), loaded.matching_error_reports());
+      EXPECT_EQ(streamed_stats.records, loaded_stats.records);
+      EXPECT_EQ(streamed_stats.lines, loaded_stats.lines);
+      EXPECT_EQ(streamed_stats.dropped_frames, 3u);
+      EXPECT_EQ(streamed_stats.out_of_order, loaded_stats.out_of_order);
+      EXPECT_EQ(streamed.next_due_ns(), loaded.next_due_ns());
+      const auto a = replay(loaded, 50'000, 12'000'000);
+      const auto b = replay(streamed, 50'000, 12'000'000);
+      EXPECT_GT(a.size(), loop ? 20u : 3u);
+      EXPECT_EQ(a, b) << "loop " << loop << ", queue " << queue;
+      EXPECT_EQ(streamed.log_counters().replayed, loaded.log_counters().replayed);
+      EXPECT_EQ(streamed.log_counters().filtered, loaded.log_counters().filtered);
+      EXPECT_EQ(streamed.log_counters().passes, loaded.log_counters().passes);
+      EXPECT_EQ(streamed.remaining(), loaded.remaining());
+      EXPECT_EQ(streamed.finished(), loaded.finished());
+      EXPECT_EQ(streamed.reader_error(), "");
+    }
+  }
+}
+
+// The validating pass refuses what load_candump_log() refuses, with the same message, before
+// any replay; the settings are checked as for a log in memory.
+TEST(LogBus, StreamedLogIsCheckedAtConstruction) {
+  numen::test::TempDir dir;
+  const auto error = [](const std::string& path, const LogBusSettings& s = {}) -> std::string {
+    LogBusStream stream;
+    stream.path = path;
+    try {
+      LogBus bus(stream, s);
+    } catch (const std::exception& e) {
+      return e.what();
+    }
+    return "";
+  };
+  const std::string bad = dir.write("bad.log", "(1.000000) can0 181#01\n(1.001000) can0 18Z#01\n");
+  EXPECT_EQ(error(bad).rfind(bad + ":2:", 0), 0u) << error(bad);
+  const std::string empty = dir.write("empty.log", "# nothing\n");
+  EXPECT_EQ(error(empty), empty +
+                              ": no frame records (1 lines: blank, '#' comments or DROPCOUNT "
+                              "notes): nothing to replay");
+  EXPECT_NE(error(dir.path().string() + "/missing.log").find(": cannot open: "), std::string::npos);
+  const std::string one = dir.write("one.log", "(1.000000) can0 181#01\n");
+  LogBusSettings loop;
+  loop.loop = true;
+  EXPECT_NE(error(one, loop).find("pass period > 0"), std::string::npos);
+  LogBusStream zero;
+  zero.path = one;
+  zero.queue_records = 0;
+  EXPECT_THROW((LogBus{zero, LogBusSettings{}}), std::invalid_argument);
+}
+
+// A log changed on disk after the check (here: a record appended, seen when the looping
+// reader opens the file for its second pass) ends the replay there, said by reader_error();
+// the first pass, checked, is replayed whole.
+TEST(LogBus, StreamedLogChangedOnDiskEndsTheReplay) {
+  numen::test::TempDir dir;
+  const std::string path = dir.write("run.log", "(5.000000) can0 181#01\n(5.001000) can0 181#02\n");
+  LogBusSettings s;
+  s.loop = true;
+  s.loop_gap_ns = 500'000;
+  LogBusStream stream;
+  stream.path = path;
+  stream.queue_records = 1;  // the reader holds the second record until read() takes the first
+  LogBus bus(stream, s);
+  dir.write("run.log", "(5.000000) can0 181#01\n(5.001000) can0 181#02\n(5.002000) can0 181#03\n");
+  const auto got = replay(bus, 100'000, 10'000'000);
+  ASSERT_GE(got.size(), 2u);
+  EXPECT_LT(got.size(), 10u);  // not the 14 of an unchanged log
+  EXPECT_NE(bus.reader_error().find(path + ": changed since it was checked: 2 records then, "),
+            std::string::npos)
+      << bus.reader_error();
+  EXPECT_FALSE(bus.finished());  // looping, but nothing more comes
+}
+
+// The real-time side of a streaming replay does not allocate either (the reader thread does,
+// on its own thread: the counter is per thread).
+TEST(LogBus, StreamedReadDoesNotAllocate) {
+  numen::test::TempDir dir;
+  const std::string path = dir.write("run.log", kStreamLog);
+  LogBusSettings s;
+  s.filters = {exact_standard_filter(0x181), exact_standard_filter(0x182)};
+  s.received_only = true;
+  s.loop = true;
+  s.loop_gap_ns = 800'000;
+  LogBusStream stream;
+  stream.path = path;
+  stream.queue_records = 4;
+  LogBus bus(stream, s);
   CanFrame got;
   std::uint64_t frames = 0;
   numen::test::AllocationGuard guard;

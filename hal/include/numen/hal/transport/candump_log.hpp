@@ -27,11 +27,13 @@
 #include <cstddef>
 #include <cstdint>
 #include <span>
+#include <stdexcept>
 #include <string>
 #include <string_view>
 #include <vector>
 
 #include "numen/hal/transport/can_frame.hpp"
+#include "numen/hal/transport/line_reader.hpp"
 
 namespace numen::hal {
 
@@ -176,7 +178,9 @@ struct CandumpLoadStats {
   /// candump's "DROPCOUNT: dropped N CAN frame(s) ..." notes: the recording itself lost
   /// frames (the socket's receive queue overflowed while candump wrote the log).
   std::size_t drop_notes = 0;
-  /// Sum of N over the DROPCOUNT notes: frames the recording lost.
+  /// Sum of N over the DROPCOUNT notes: frames the recording lost. N is candump's 32-bit
+  /// counter: a note whose N does not fit in 32 bits, or a sum beyond int64, is an error at
+  /// the note's line and the column of N.
   std::uint64_t dropped_frames = 0;
   /// Records earlier than the latest record before them, on another interface or direction
   /// (a stream of its own; within the allowed CandumpLoadLimits::max_gap_ns), or on the same
@@ -200,6 +204,49 @@ struct CandumpLoadLimits {
   std::int64_t max_backward_ns = 0;
 };
 
+/// Longest line CandumpLogReader (and load_candump_log()) reads, bytes, without the line
+/// feed. A record is at most kCandumpMaxLineLength characters plus the blanks between its
+/// fields; a longer line that is not a '#' comment or a DROPCOUNT note is an error at column
+/// kCandumpMaxReadLine + 1 (a comment or note is skipped whatever its length). Bounds the
+/// reader's memory.
+inline constexpr std::size_t kCandumpMaxReadLine = 65536;
+
+/// Reads a candump log one record at a time, in constant memory (a LineReader's fixed
+/// 128 KiB buffer and one entry per interface and direction seen), with the checks of load_candump_log(): line
+/// syntax, record time plausibility against CandumpLoadLimits, skipped lines counted. Setup
+/// code or a reader thread (LogBus streaming replay): allocates and throws. Not thread safe.
+class CandumpLogReader {
+ public:
+  /// Opens `path`. Throws std::invalid_argument if `limits` are out of range,
+  /// std::runtime_error "path: cannot open: <errno text>" if the file cannot be read.
+  explicit CandumpLogReader(std::string path, const CandumpLoadLimits& limits = {});
+  ~CandumpLogReader();
+  CandumpLogReader(const CandumpLogReader&) = delete;
+  CandumpLogReader& operator=(const CandumpLogReader&) = delete;
+
+  /// Reads up to the next record: true with `record` set, false at the end of the file (an
+  /// empty log is not refused here: stats().records says how many were read). Throws
+  /// std::runtime_error "path:line:column: <what>" for a bad line (load_candump_log()) and
+  /// "path:line: read error: <errno text>" if reading fails.
+  bool next(CandumpRecord& record);
+  /// Counts so far (records read, lines, skipped lines, DROPCOUNT notes, out of order).
+  const CandumpLoadStats& stats() const noexcept { return counts_; }
+  /// The path as given.
+  const std::string& path() const noexcept { return path_; }
+
+ private:
+  struct StreamTime;  // latest time of one interface and direction
+  std::runtime_error located(std::size_t column, const std::string& what) const;
+
+  std::string path_;
+  CandumpLoadLimits limits_;
+  LineReader lines_;
+  CandumpLoadStats counts_;
+  std::vector<StreamTime> streams_;
+  std::int64_t latest_ns_ = 0;
+  std::size_t latest_line_ = 0;
+};
+
 /// Reads a whole candump log into memory (setup code). Stricter than canplayer, which
 /// silently skips every line not starting with '(': only blank lines, '#' comments and the
 /// "DROPCOUNT: ..." notes candump writes into its log are skipped (the notes are counted in
@@ -208,8 +255,10 @@ struct CandumpLoadLimits {
 /// or a step back within one interface and direction of more than max_backward_ns, is an
 /// error at the offending line. A log without any record (empty, only comments) is an error.
 /// Throws std::runtime_error "path: cannot open: <errno text>", "path: no frame records ..."
-/// or "path:line:column: <what>" for the first bad line. Memory: sizeof(CandumpRecord)
-/// (~112 bytes) per frame. Throws std::invalid_argument if `limits` are out of range.
+/// or "path:line:column: <what>" for the first bad line (CandumpLogReader). Memory:
+/// sizeof(CandumpRecord) (~112 bytes) per frame: to replay a large log, give its path to
+/// LogBus (log_bus.hpp), which streams it. Throws std::invalid_argument if `limits` are out
+/// of range.
 std::vector<CandumpRecord> load_candump_log(const std::string& path,
                                             CandumpLoadStats* stats = nullptr,
                                             const CandumpLoadLimits& limits = {});
