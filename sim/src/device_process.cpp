@@ -104,6 +104,7 @@ DeviceSummary run_device(const Scene& scene, const DeviceOptions& options) {
     const bool tick = now >= next_tick;
     pump(tick ? now : -1);
     if (tick) {
+      s.tick_late_max_s = std::max(s.tick_late_max_s, static_cast<double>(now - next_tick) * 1e-9);
       next_tick += options.tick_ns;
       if (next_tick <= now) next_tick = now + options.tick_ns;  // re-phase after a stall
     }
@@ -172,7 +173,8 @@ std::string format_device_summary(const DeviceSummary& s) {
   os << "  frames malformed " << s.frames_malformed << ", ignored " << s.frames_ignored
      << "; writes would-block " << s.tx_would_block << ", errors " << s.tx_errors << "\n";
   os << "  port: rx " << s.port_rx << ", tx " << s.port_tx << ", dropped " << s.port_dropped
-     << ", errors " << s.port_errors << "; wake-ups " << s.wakeups << "\n";
+     << ", errors " << s.port_errors << "; wake-ups " << s.wakeups << ", ticks late by up to "
+     << std::setprecision(1) << s.tick_late_max_s * 1e3 << std::setprecision(3) << " ms\n";
   if (!s.transport.empty()) os << "  " << s.transport << "\n";
   os << "  torque max:";
   for (const std::string& t : s.axis_torque_max) os << " " << t << ";";

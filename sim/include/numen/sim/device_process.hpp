@@ -70,6 +70,9 @@ struct DeviceSummary {
   std::vector<std::string> drive_states;     ///< "axis: CiA 402 state, states reached" per drive.
   std::int64_t drive_faults = 0;       ///< Drives that went through fault.
   std::int64_t wakeups = 0;            ///< poll(2) returns (frames or ticks).
+  /// The latest a tick ran after it was due, s: the longest this process waited to be
+  /// scheduled (a shared machine's stall shows here, not in the protocol's counts).
+  double tick_late_max_s = 0.0;
 };
 
 /// Runs the scene's device on `options.bus` until the duration or the stop flag, then handles
