@@ -318,11 +318,13 @@ async function run(options, ptys) {
  *  the longest wait for the boot-ups after READY. CiA 301 leaves the SDO timeout to the client;
  *  numen's own client allows 500 ms (docs/protocol.md §19). numen's server answers in the pass
  *  of its loop that reads the request, so a transfer takes two pseudo-terminal hops and two
- *  process wake-ups: 0.4 ms median on a quiet machine; with stress-ng --cpu 2 beside other
- *  builds (load 15 on 2 cores) transfers took up to 981 ms and node's timers fired up to 373
- *  ms late, and the 1000 ms this test had then timed out 1 run in 12 on an answer that came.
- *  5 s: five times the longest stall measured; a server that never answers still fails, in
- *  5 s per node. */
+ *  process wake-ups: 0.4 ms median on a quiet machine. With stress-ng --cpu 2 beside other
+ *  builds (load 15 on 2 cores) transfers took up to 1.6 s, and the 1000 ms this test had
+ *  timed out 1 run in 12 on an answer that came: this node process was not scheduled (its
+ *  event loop stalled up to 1.2 s with 5 ms of CPU used, its side of the line filled to the
+ *  pty's 4 KB), while numen's ticks ran at most 50 ms late and a bare pty pair between two
+ *  processes stayed under 40 ms. 5 s: three times the longest stall measured; a server that
+ *  never answers still fails, in 5 s per node. */
 const SDO_TIMEOUT_MS = 5000;
 
 async function deviceServer(options, ptys) {
