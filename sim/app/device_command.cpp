@@ -19,7 +19,8 @@ DeviceCommand::DeviceCommand(CLI::App& parent)
       ->check([](const std::string& v) { return check_bus(v, true); });
   cli_->add_option("--duration", duration_, "Seconds to run (default: until SIGINT/SIGTERM)")
       ->check(seconds_check(0.0, sim::kMaxRunDuration, true));
-  cli_->add_flag("--ready", ready_, "Print READY on stdout once the bus is open");
+  cli_->add_flag("--ready", ready_,
+                 "Print READY on stdout once the device answers (bus open, nodes booted)");
 }
 
 int DeviceCommand::execute() const {
@@ -29,7 +30,7 @@ int DeviceCommand::execute() const {
   options.bus = bus_;
   options.duration_s = duration_;
   options.stop = &stop_flag();
-  options.announce_ready = ready_;
+  if (ready_) options.on_ready = [] { std::cout << "READY" << std::endl; };
   loading_done();
   std::cout << sim::format_device_summary(sim::run_device(scene, options));
   return 0;

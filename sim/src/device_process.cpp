@@ -49,7 +49,6 @@ DeviceSummary run_device(const Scene& scene, const DeviceOptions& options) {
   std::array<double, hal::kMaxAxes> torque_max{};
   std::array<std::uint32_t, hal::kMaxAxes> states_seen{};  // bit per hal::PowerState
   std::array<bool, hal::kMaxAxes> faulted{};
-  if (options.announce_ready) std::cout << "READY" << std::endl;
 
   const std::int64_t t0 = platform::monotonic_now_ns();
   const std::int64_t end =
@@ -87,6 +86,13 @@ DeviceSummary run_device(const Scene& scene, const DeviceOptions& options) {
 #endif
     account(before);
   };
+  // The first pass before anything is announced: the nodes leave initialisation in their
+  // first tick (boot-up message, then pre-operational), and a node in initialisation ignores
+  // SDO requests. Announced before it, a client's first request could reach a node that never
+  // answers it (interop_device_server under load: node 1's first upload timed out).
+  pump(t0);
+  next_tick += options.tick_ns;
+  if (options.on_ready) options.on_ready();
   while (!(options.stop != nullptr && options.stop->load(std::memory_order_relaxed))) {
     std::int64_t now = platform::monotonic_now_ns();
     if (end >= 0 && now >= end) break;
@@ -98,6 +104,7 @@ DeviceSummary run_device(const Scene& scene, const DeviceOptions& options) {
     const bool tick = now >= next_tick;
     pump(tick ? now : -1);
     if (tick) {
+      s.tick_late_max_s = std::max(s.tick_late_max_s, static_cast<double>(now - next_tick) * 1e-9);
       next_tick += options.tick_ns;
       if (next_tick <= now) next_tick = now + options.tick_ns;  // re-phase after a stall
     }
@@ -116,6 +123,8 @@ DeviceSummary run_device(const Scene& scene, const DeviceOptions& options) {
   s.heartbeats_sent = static_cast<std::int64_t>(c.heartbeats_sent);
   s.boot_ups_sent = static_cast<std::int64_t>(c.boot_ups_sent);
   s.emcys_sent = static_cast<std::int64_t>(c.emcys_sent);
+  s.sdo_requests = static_cast<std::int64_t>(c.sdo_requests);
+  s.sdo_not_allowed = static_cast<std::int64_t>(c.sdo_not_allowed);
   s.controller_losses = static_cast<std::int64_t>(c.controller_losses);
   s.frames_malformed = static_cast<std::int64_t>(c.frames_malformed);
   s.frames_ignored = static_cast<std::int64_t>(c.frames_ignored);
@@ -159,10 +168,13 @@ std::string format_device_summary(const DeviceSummary& s) {
   os << "  NMT commands " << s.nmt_commands << ", boot-ups " << s.boot_ups_sent << ", heartbeats "
      << s.heartbeats_sent << ", EMCY " << s.emcys_sent << ", controller heartbeat losses "
      << s.controller_losses << ", drive faults " << s.drive_faults << "\n";
+  os << "  SDO requests " << s.sdo_requests << ", ignored before boot-up or while stopped "
+     << s.sdo_not_allowed << "\n";
   os << "  frames malformed " << s.frames_malformed << ", ignored " << s.frames_ignored
      << "; writes would-block " << s.tx_would_block << ", errors " << s.tx_errors << "\n";
   os << "  port: rx " << s.port_rx << ", tx " << s.port_tx << ", dropped " << s.port_dropped
-     << ", errors " << s.port_errors << "; wake-ups " << s.wakeups << "\n";
+     << ", errors " << s.port_errors << "; wake-ups " << s.wakeups << ", ticks late by up to "
+     << std::setprecision(1) << s.tick_late_max_s * 1e3 << std::setprecision(3) << " ms\n";
   if (!s.transport.empty()) os << "  " << s.transport << "\n";
   os << "  torque max:";
   for (const std::string& t : s.axis_torque_max) os << " " << t << ";";

@@ -304,31 +304,105 @@ async function run(options, ptys) {
 
 // (d) the other direction: node-canopen's SDO client reads numen's emulated device (numen
 // device on the default scene) and gets numen's abort of a refused write.
+//
+// Order, as a CANopen master has it: numen device prints READY once its nodes have left
+// initialisation (their boot-up messages written, device_process.hpp DeviceOptions::on_ready);
+// a node in initialisation ignores SDO requests (CiA 301), so the client then waits for each
+// node's boot-up on the line before its first request. Each transfer has SDO_TIMEOUT_MS; CiA
+// 301 has no retry (a transfer that times out is aborted, 0x05040000), so none is made here.
+// A timeout's message says whether the node was alive meanwhile (its heartbeats, every 10 ms)
+// and how long this process and numen's were not scheduled, so that a server that stays silent
+// reads apart from a machine that stalled.
+
+/** ms: node-canopen's SDO client timeout, from the request and again from each segment, and
+ *  the longest wait for the boot-ups after READY. CiA 301 leaves the SDO timeout to the client;
+ *  numen's own client allows 500 ms (docs/protocol.md §19). numen's server answers in the pass
+ *  of its loop that reads the request, so a transfer takes two pseudo-terminal hops and two
+ *  process wake-ups: 0.4 ms median on a quiet machine. With stress-ng --cpu 2 beside other
+ *  builds (load 15 on 2 cores) transfers took up to 1.6 s, and the 1000 ms this test had
+ *  timed out 1 run in 12 on an answer that came: this node process was not scheduled (its
+ *  event loop stalled up to 1.2 s with 5 ms of CPU used, its side of the line filled to the
+ *  pty's 4 KB), while numen's ticks ran at most 50 ms late and a bare pty pair between two
+ *  processes stayed under 40 ms. 5 s: three times the longest stall measured; a server that
+ *  never answers still fails, in 5 s per node. */
+const SDO_TIMEOUT_MS = 5000;
 
 async function deviceServer(options, ptys) {
-    const { Device, SdoError } = require('canopen');
+    const { Device, SdoError, DataType } = require('canopen');
     const { SerialLink } = require('./lib/serial_link');
+    const { monitorEventLoopDelay } = require('perf_hooks');
+    const loopDelay = monitorEventLoopDelay({ resolution: 10 });
+    loopDelay.enable();
     const client = new Device({ id: 0x7e });
     for (const n of NODES)
         client.eds.addSdoClientParameter(n, 0x600 + n, 0x580 + n);
-    const link = new SerialLink(ptys[0], (frame) => client.receive(frame));
+    // Boot-up messages (0x700 + node, one byte 0) by node: ms since the start of the scenario;
+    // heartbeats (one byte, not 0) and SDO responses counted by node.
+    const t0 = Date.now();
+    const bootUps = new Map();
+    const heartbeats = new Map(NODES.map((n) => [n, 0]));
+    const responses = new Map(NODES.map((n) => [n, []]));
+    let bootedAll;
+    const allBooted = new Promise((resolve) => { bootedAll = resolve; });
+    const link = new SerialLink(ptys[0], (frame) => {
+        const n = frame.id - 0x700;
+        if (NODES.includes(n) && frame.data.length === 1) {
+            if (frame.data[0] !== 0) {
+                heartbeats.set(n, heartbeats.get(n) + 1);
+            } else if (!bootUps.has(n)) {
+                bootUps.set(n, Date.now() - t0);
+                if (bootUps.size === NODES.length)
+                    bootedAll();
+            }
+        }
+        if (NODES.includes(frame.id - 0x580))
+            responses.get(frame.id - 0x580).push(Date.now() - t0);
+        client.receive(frame);
+    });
     client.on('message', (m) => link.send(m));
     client.start();
 
     let ready;
+    let readyAt;
     const readyLine = new Promise((resolve) => { ready = resolve; });
     const device = numen(options, ['device', options.scene, '--bus', bus(ptys[0]), '--ready'], {
         onStdout: (out, child) => {
-            if (out.includes('READY')) {
+            if (out.includes('READY') && options.deviceChild === undefined) {
                 options.deviceChild = child;
+                readyAt = Date.now() - t0;
                 ready();
             }
         },
     });
     await Promise.race([readyLine, device]);
-    check(options.deviceChild !== undefined, 'numen device printed READY');
-    const up = (n, index, subIndex, dataType) => client.sdo.upload({ serverId: n, index, subIndex, dataType, timeout: 1000 });
-    const { DataType } = require('canopen');
+    check(options.deviceChild !== undefined, `numen device printed READY (${readyAt} ms after start)`);
+    await Promise.race([allBooted, sleep(SDO_TIMEOUT_MS)]);
+    const missing = NODES.filter((n) => !bootUps.has(n));
+    check(missing.length === 0, `numen device's nodes sent their boot-up (${[...bootUps].map(([n, t]) => `${n}: ${t} ms`).join(', ')}`
+        + `${missing.length ? `; none from node ${missing.join(', ')} within ${SDO_TIMEOUT_MS} ms after READY` : ''})`);
+
+    const roundTrips = [];
+    const timedOut = [];  // {n, what, abortedAt}: checked against later responses at the end
+    const up = async (n, index, subIndex, dataType) => {
+        const t = process.hrtime.bigint();
+        const beats = heartbeats.get(n);
+        try {
+            const v = await client.sdo.upload({ serverId: n, index, subIndex, dataType, timeout: SDO_TIMEOUT_MS });
+            roundTrips.push(Number(process.hrtime.bigint() - t) * 1e-6);
+            return v;
+        } catch (e) {
+            const ms = Number(process.hrtime.bigint() - t) * 1e-6;
+            const what = `upload of ${hex(index, 4)}:${subIndex.toString(16).padStart(2, '0')} from node ${n}`;
+            if (e instanceof SdoError && e.code === 0x05040000) {
+                const alive = heartbeats.get(n) - beats;
+                timedOut.push({ n, what, abortedAt: Date.now() - t0 });
+                throw new Error(`${what}: no answer within ${SDO_TIMEOUT_MS} ms (node-canopen's client aborted `
+                    + `after ${ms.toFixed(0)} ms: ${e.message}, ${hex(e.code)}; node ${n} sent ${alive} heartbeats `
+                    + `meanwhile; this process's event loop stalled up to ${(loopDelay.max / 1e6).toFixed(0)} ms)`);
+            }
+            throw new Error(`${what}: ${e.message}${e.code !== undefined ? ` (${hex(e.code)})` : ''} after ${ms.toFixed(0)} ms`);
+        }
+    };
     for (const n of NODES) {
         try {
             const type = await up(n, 0x1000, 0, DataType.UNSIGNED32);
@@ -348,11 +422,25 @@ async function deviceServer(options, ptys) {
             const software = await up(n, 0x100A, 0, DataType.VISIBLE_STRING);
             check(software === 'numen device emulator', `node ${n} 0x100A "${software}"`);
         } catch (e) {
-            check(false, `node ${n}: SDO upload failed: ${e.message}`);
+            check(false, `node ${n}: SDO ${e.message}`);
         }
     }
+    if (roundTrips.length > 0) {
+        const sorted = [...roundTrips].sort((a, b) => a - b);
+        console.log(`SDO uploads: ${sorted.length}, time per transfer median ${sorted[sorted.length >> 1].toFixed(2)} ms, `
+            + `max ${sorted[sorted.length - 1].toFixed(2)} ms (timeout ${SDO_TIMEOUT_MS} ms); this process's event loop `
+            + `stalled up to ${(loopDelay.max / 1e6).toFixed(0)} ms`);
+    }
+    // A response on a timed-out transfer's channel after the client's abort (no other request
+    // goes to that node before the download below): the server answered, late.
+    const downloadAt = Date.now() - t0;
+    for (const { n, what, abortedAt } of timedOut) {
+        const late = responses.get(n).find((r) => r >= abortedAt && r < downloadAt);
+        console.log(late === undefined ? `${what}: no answer from node ${n} after the client's abort either`
+            : `${what}: node ${n} answered ${late - abortedAt} ms after the client's abort (late, not silent)`);
+    }
     try {
-        await client.sdo.download({ serverId: 2, index: 0x1000, subIndex: 0, data: 1, dataType: DataType.UNSIGNED32, timeout: 1000 });
+        await client.sdo.download({ serverId: 2, index: 0x1000, subIndex: 0, data: 1, dataType: DataType.UNSIGNED32, timeout: SDO_TIMEOUT_MS });
         check(false, 'numen refuses the write of the read-only 0x1000');
     } catch (e) {
         check(e instanceof SdoError && e.code === 0x06010002,
@@ -362,6 +450,11 @@ async function deviceServer(options, ptys) {
         options.deviceChild.kill('SIGTERM');
     const r = await device;
     check(r.code === 0, `numen device stops cleanly on SIGTERM (exit ${r.code})`);
+    // numen's summary: every request reached a node's server, none was ignored by a node still
+    // in initialisation.
+    const ignored = /SDO requests (\d+), ignored before boot-up or while stopped (\d+)/.exec(r.stdout);
+    check(ignored !== null && Number(ignored[2]) === 0,
+        `numen device ignored no SDO request (${ignored ? `${ignored[1]} taken, ${ignored[2]} ignored` : 'no SDO line in its summary'})`);
     link.close();
     client.stop();
     return {};

@@ -6,7 +6,6 @@
 
 #include <fcntl.h>
 #include <poll.h>
-#include <pty.h>
 #include <unistd.h>
 
 #include <gtest/gtest.h>
@@ -21,6 +20,7 @@
 #include <thread>
 
 #include "build_features.hpp"
+#include "pseudo_terminal.hpp"
 #include "numen/sim/device_process.hpp"
 #include "numen/sim/run.hpp"
 #include "numen/sim/scene.hpp"
@@ -32,27 +32,7 @@ using numen::sim::DeviceSummary;
 using numen::sim::RunOptions;
 using numen::sim::RunSummary;
 
-struct Pty {
-  int master = -1;
-  std::string path;
-  Pty() {
-    int slave = -1;
-    if (::openpty(&master, &slave, nullptr, nullptr, nullptr) != 0)
-      throw std::runtime_error(std::string("openpty: ") + std::strerror(errno));
-    char name[256];
-    ::ttyname_r(slave, name, sizeof(name));
-    path = name;
-    // Keep the slave open until the bus opened it (a pty with no slave open hangs up); the
-    // relay closes it at the end.
-    slave_ = slave;
-    ::fcntl(master, F_SETFL, ::fcntl(master, F_GETFL) | O_NONBLOCK);
-  }
-  ~Pty() {
-    ::close(master);
-    ::close(slave_);
-  }
-  int slave_ = -1;
-};
+using numen::test::Pty;
 
 // Copies bytes both ways until `stop`; every `garbage_every` ms (0: never) writes 1–24 random
 // bytes into the controller's side between two chunks. Counts what it injected.

@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "alloc_counter.hpp"
+#include "pseudo_terminal.hpp"
 
 #include "serial_test_frames.hpp"
 
@@ -95,18 +96,9 @@ class SerialBusPty : public ::testing::Test {
 
   // Writes all of `bytes` to the master side.
   void put(std::span<const std::uint8_t> bytes) {
-    std::size_t done = 0;
-    while (done < bytes.size()) {
-      const ssize_t n = ::write(master_, bytes.data() + done, bytes.size() - done);
-      if (n > 0) {
-        done += static_cast<std::size_t>(n);
-      } else {
-        ASSERT_TRUE(n < 0 && errno == EAGAIN) << std::strerror(errno);
-        pollfd p{master_, POLLOUT, 0};
-        ::poll(&p, 1, 100);
-      }
-    }
+    ASSERT_TRUE(numen::test::write_all(master_, bytes)) << std::strerror(errno);
   }
+
 
   // Reads from the master what is there now, after waiting up to `timeout_ms` for a first
   // byte.

@@ -12,6 +12,7 @@
 /// heartbeats, the drives' watch of the controller heartbeat, EMCY); it never spins.
 #include <atomic>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -28,8 +29,13 @@ struct DeviceOptions {
   std::int64_t tick_ns = 1'000'000;
   /// Set (SIGINT / SIGTERM handler) to end the run; nullptr: none.
   const std::atomic<bool>* stop = nullptr;
-  /// Print "READY" on stdout (flushed) once the bus is open: for scripts.
-  bool announce_ready = false;
+  /// Called once, on run_device()'s thread, when the device answers: the bus is open and the
+  /// first pass of the loop has run, so that a managed device's nodes have left initialisation
+  /// and their boot-up messages are written (flushed, on a serial line). An SDO request sent
+  /// after this call is answered; one sent before may reach a node still in initialisation,
+  /// which ignores it as CiA 301 has it (counted in DeviceSummary::sdo_not_allowed). `numen
+  /// device --ready` prints READY here. Empty: nothing is called.
+  std::function<void()> on_ready;
 };
 
 /// What the device did.
@@ -48,6 +54,10 @@ struct DeviceSummary {
   std::int64_t heartbeats_sent = 0;
   std::int64_t boot_ups_sent = 0;
   std::int64_t emcys_sent = 0;
+  std::int64_t sdo_requests = 0;       ///< SDO requests a node's server took.
+  /// SDO requests to a node in initialisation (before its boot-up) or stopped: ignored, no
+  /// answer (CiA 301); the client's timeout ends its transfer.
+  std::int64_t sdo_not_allowed = 0;
   std::int64_t controller_losses = 0;  ///< Controller heartbeat losses seen by the nodes.
   std::int64_t frames_malformed = 0;
   std::int64_t frames_ignored = 0;
@@ -60,6 +70,9 @@ struct DeviceSummary {
   std::vector<std::string> drive_states;     ///< "axis: CiA 402 state, states reached" per drive.
   std::int64_t drive_faults = 0;       ///< Drives that went through fault.
   std::int64_t wakeups = 0;            ///< poll(2) returns (frames or ticks).
+  /// The latest a tick ran after it was due, s: the longest this process waited to be
+  /// scheduled (a shared machine's stall shows here, not in the protocol's counts).
+  double tick_late_max_s = 0.0;
 };
 
 /// Runs the scene's device on `options.bus` until the duration or the stop flag, then handles
