@@ -72,7 +72,10 @@ TraceWriter::TraceWriter(const std::string& path, std::vector<std::string> colum
     throw std::runtime_error(path + ": cannot write the header");
 }
 
-TraceWriter::~TraceWriter() {
+TraceWriter::~TraceWriter() { close(); }
+
+void TraceWriter::close() {
+  if (!file_.is_open()) return;
   writer_.stop();
   writer_.drain();
   if (!file_.close()) writer_.count_io_error();

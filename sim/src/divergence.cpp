@@ -80,9 +80,18 @@ void DivergenceMonitor::remember(const core::Data& data) noexcept {
 }
 
 void DivergenceMonitor::rebase(const core::Model& model, const core::Data& data) noexcept {
-  energy0_ = stored_energy(model, data);
+  // The contacts' potential at the base (½ k d², depths at the step's start) belongs to what
+  // the scene starts with: a tool that starts inside an obstacle is pushed out by it.
+  contact0_ = contact_energy(model, data);
+  energy0_ = stored_energy(model, data) + contact0_;
   gravity0_ = gravity_potential(model, data);
   work_in_ = 0.0;
+  // ... and the fastest it can push a body: all of it into the lightest colliding body.
+  double lightest = std::numeric_limits<double>::infinity();
+  for (const core::BodyModel& b : model.bodies)
+    if (b.sphere_count > 0) lightest = std::min(lightest, b.mass);
+  if (std::isfinite(lightest) && std::isfinite(contact0_))
+    push_speed_mps_ = std::max(push_speed_mps_, std::sqrt(2.0 * contact0_ / lightest));
 }
 
 bool DivergenceMonitor::observe(const core::Model& model, const core::Data& data,
@@ -90,13 +99,11 @@ bool DivergenceMonitor::observe(const core::Model& model, const core::Data& data
   if (latched_.cause != nullptr) return false;
   // ---- energy against what the hand put in ----
   const bool springs = coupling_springs_act(model);
-  if (springs) {
-    if (prev_attached_ != data.attached_body) {
-      if (prev_attached_ == -2) remember(data);  // the first period: the start is the base
-      rebase(model, data);
-    } else {
-      work_in_ += input_work(model, data);
-    }
+  if (prev_attached_ != data.attached_body) {
+    if (prev_attached_ == -2) remember(data);  // the first period: the start is the base
+    rebase(model, data);
+  } else if (springs) {
+    work_in_ += input_work(model, data);
   }
   // ---- speeds against the hand's and gravity's ----
   const int held = data.attached_body;
@@ -161,8 +168,8 @@ bool DivergenceMonitor::observe(const core::Model& model, const core::Data& data
       breach = true;
     }
   }
+  remember(data);
   if (springs) {
-    remember(data);
     for (int b = 0; b < model.num_bodies(); ++b) {
       const auto k = static_cast<std::size_t>(b);
       const core::Twist* twist = nullptr;

@@ -679,8 +679,8 @@ RunSummary SceneRunner::summary() const {
 
 void SceneRunner::finish() {
   multirate_.stop();
-  if (writer_) writer_->stop();
-  if (trace_writer_) trace_writer_->stop();
+  if (writer_) writer_->close();              // the log and the trace appear under their
+  if (trace_writer_) trace_writer_->close();  // paths, a failed close counted in the summary
   if (view_) view_->finish();
 }
 

@@ -80,7 +80,10 @@ TEST(RunSummaryText, PrintsTheValuesInTheirFormats) {
            "  multirate scene thread: 86 overruns; scene step us: median 87.500, p99 88.500, max 90.500\n",
            "  re-arm: 2 request(s), 1 accepted, first before period 59\n",
            "  drives: yaw: operation enabled, pitch: switch on disabled\n",
-           "  nan detected: YES (non-finite steps 14)\n  realtime setup: SCHED_FIFO 80: ok\n",
+           "  nan detected: YES (non-finite steps 14)\n  divergence: speed 38.125, tie stretch "
+           "0.250, energy 0.875 of their limits (speed limit 24.500 m/s, scene 0.291 m); DIVERGED "
+           "at 0.412 s (period 412): node speed of net \"bag\" 933.500, limit 24.500\n  realtime "
+           "setup: SCHED_FIFO 80: ok\n",
            "; overrun policy: latch after 4\n",
            "  warning: first warning\n  warning: second warning\n",
            "  exit status 3 (safety stop): first reason; second reason\n"})

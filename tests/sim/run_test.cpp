@@ -1300,9 +1300,12 @@ TEST(RunRecordedTrials, EveryTrialRunsThroughEveryJigsawsSceneWithoutASafetyStop
       const auto t0 = std::chrono::steady_clock::now();
       const RunSummary r = numen::sim::run_scene(s, opt);
       print_summary(name.c_str(), r, wall_s(t0));
-      std::printf("[   info   ]   window %.2f-%.2f s; lifecycle %s, safe stops %lld, first fault '%s'\n",
+      std::printf("[   info   ]   window %.2f-%.2f s; lifecycle %s, safe stops %lld, first fault "
+                  "'%s'; divergence '%s' %s %.4g (limit %.4g), speed %.3g energy %.3g of limits\n",
                   start, start + kWindow, r.lifecycle.c_str(), static_cast<long long>(r.faults),
-                  r.first_fault.c_str());
+                  r.first_fault.c_str(), r.divergence.cause.c_str(), r.divergence.subject.c_str(),
+                  r.divergence.value, r.divergence.limit, r.divergence.speed_ratio_max,
+                  r.divergence.energy_ratio_max);
       EXPECT_GT(r.steps, 0);
       EXPECT_EQ(r.faults, 0) << "safe stop: " << r.first_fault << " (id " << r.first_fault_id
                              << ", value " << r.first_fault_value << ") at " << r.first_fault_time_s << " s";
@@ -1310,6 +1313,7 @@ TEST(RunRecordedTrials, EveryTrialRunsThroughEveryJigsawsSceneWithoutASafetyStop
       EXPECT_EQ(r.values_out_of_range, 0);
       EXPECT_EQ(r.values_jump, 0);
       EXPECT_FALSE(r.nan_detected);
+      EXPECT_FALSE(r.divergence.latched) << r.divergence.cause;
       EXPECT_EQ(r.lifecycle, "active");
     }
   }

@@ -11,7 +11,10 @@ CandumpWriter::CandumpWriter(const std::string& path, const CandumpWriterSetting
       writer_(*this, settings, "CandumpWriterSettings"),
       file_(path) {}
 
-CandumpWriter::~CandumpWriter() {
+CandumpWriter::~CandumpWriter() { close(); }
+
+void CandumpWriter::close() {
+  if (!file_.is_open()) return;
   writer_.stop();
   writer_.drain();
   if (!file_.close()) writer_.count_io_error();

@@ -81,6 +81,10 @@ class TraceWriter final : private hal::RecordSink<TraceRecord> {
   /// flushes the file. Idempotent. Records pushed afterwards wait for the next start() or
   /// the destructor.
   void stop() { writer_.stop(); }
+  /// stop(), then writes what is still queued and closes the file: the trace appears under
+  /// its path (hal::LineFile::close(); a failure is counted in io_errors). Idempotent; the
+  /// destructor calls it.
+  void close();
   /// True between start() and stop().
   bool running() const noexcept { return writer_.running(); }
 

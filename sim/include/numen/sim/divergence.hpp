@@ -13,9 +13,13 @@
 /// | "tie stretch" | |x − a| of a node from its anchor on the rigid component | stretch_factor × the net's rest radius |
 /// | "energy" | stored energy + gravity's potential (energy.hpp) | energy_factor × max(E₀ + W_in, energy_floor_j) |
 ///
+/// E₀ counts the contacts' potential at the base (½ k d² of the first period's contacts).
+///
 /// v_ref = max(the hand's fastest speed so far (|v_t| + |ω_t| r of the held body), √(2 |g| H)
 /// with H the height of the scene's bounding box at the start (its extent along gravity:
-/// bodies, nets, bounded obstacles), speed_floor_mps): whatever
+/// bodies, nets, bounded obstacles), √(2 E_c0 / m_min) with E_c0 the contacts' potential ½ k d²
+/// at the base (a tool that starts inside an obstacle is pushed out by it; m_min the lightest
+/// colliding body), speed_floor_mps): whatever
 /// moves in a god-object scene is driven by the hand or falls under gravity, and a penalty
 /// contact throws a light body at most at about twice the speed of what hits it.
 /// W_in is the work the hand puts in through the coupling springs and dampers (the jump of the
@@ -84,8 +88,8 @@ class DivergenceMonitor {
   double hand_speed_max_mps() const noexcept { return hand_speed_max_mps_; }
   /// The speed limit now: speed_factor × v_ref (m/s).
   double speed_limit_mps() const noexcept {
-    return limits_.speed_factor *
-           std::max({hand_speed_max_mps_, fall_speed_mps_, limits_.speed_floor_mps});
+    return limits_.speed_factor * std::max({hand_speed_max_mps_, fall_speed_mps_,
+                                            push_speed_mps_, limits_.speed_floor_mps});
   }
   /// The limits in force.
   const DivergenceLimits& limits() const noexcept { return limits_; }
@@ -102,6 +106,8 @@ class DivergenceMonitor {
   double scene_size_m_ = 0.0;
   double fall_speed_mps_ = 0.0;            // √(2 |g| H)
   double hand_speed_max_mps_ = 0.0;
+  double push_speed_mps_ = 0.0;            // √(2 E_c0 / m): the start's contacts, all in one body
+  double contact0_ = 0.0;                  // the contacts' potential at the (re)base (J)
   std::vector<double> net_radius_m_;       // per net: max |rest offset| of its nodes
   std::vector<core::BodyState> prev_bodies_;
   std::vector<core::Pose> prev_targets_;   // per body: its coupling target in the last period

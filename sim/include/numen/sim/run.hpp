@@ -499,7 +499,8 @@ class SceneRunner {
   const MultirateRun& multirate() const noexcept { return multirate_; }
 
   /// Ends the run's streams: stops the bus recorder's and the trace's writer threads, which
-  /// write what is still queued and flush, so that summary() reports what reached the files.
+  /// write what is still queued and close the files (they appear under their paths), so that
+  /// summary() reports what reached them.
   /// Idempotent; call it after the last period() (setup thread).
   void finish();
 

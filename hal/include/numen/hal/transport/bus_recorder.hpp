@@ -65,11 +65,12 @@ using CandumpWriterCounters = RecordWriterCounters;
 /// thread. Not copyable or movable.
 class CandumpWriter final : private RecordSink<CandumpRecord> {
  public:
-  /// Opens (truncates) `path` and allocates the queue; the thread is not started. Throws
+  /// Opens `path` (hal::LineFile: a temporary file renamed over it by close()) and allocates
+  /// the queue; the thread is not started. Throws
   /// std::runtime_error "path: cannot open for writing: <errno text>", or
   /// std::invalid_argument naming the setting (queue_capacity 0, poll_period_ns <= 0).
   explicit CandumpWriter(const std::string& path, const CandumpWriterSettings& settings = {});
-  /// stop(), then writes what is still queued and closes the file.
+  /// close().
   ~CandumpWriter() override;
   CandumpWriter(const CandumpWriter&) = delete;
   CandumpWriter& operator=(const CandumpWriter&) = delete;
@@ -83,6 +84,10 @@ class CandumpWriter final : private RecordSink<CandumpRecord> {
   /// flushes the file. Idempotent. Records pushed afterwards wait in the queue for the next
   /// start() or the destructor.
   void stop() { writer_.stop(); }
+  /// stop(), then writes what is still queued and closes the file: the log appears under its
+  /// path (LineFile::close(); a failure is counted in io_errors). Idempotent; the destructor
+  /// calls it.
+  void close();
   /// True between start() and stop().
   bool running() const noexcept { return writer_.running(); }
 
