@@ -213,7 +213,13 @@ const PeriodReport& ControlLoop::end_period(std::int64_t now_ns) noexcept {
       std::span<const double>(tau_.data(), static_cast<std::size_t>(tau_.size())), now_ns);
   report_.output_end_ns = monotonic_now_ns();
   const hal::SentTorques& sent = device_->sent_torques();
-  if (sent.gated) report_.feedback = core::Wrench{};
+  report_.soft_start_ramp = sent.ramp;
+  if (sent.gated) {
+    report_.feedback = core::Wrench{};
+  } else if (sent.ramp < 1.0) {  // what the drives render: the soft start scaled every τ_i
+    report_.feedback.force *= sent.ramp;
+    report_.feedback.torque *= sent.ramp;
+  }
   report_.torque_commanded = sent.any();
   report_.lifecycle = device_->lifecycle();  // after write(): a non-finite τ trips it
   if (!report_.torque_commanded) ++counters_.periods_zero_torque;

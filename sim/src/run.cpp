@@ -538,6 +538,8 @@ RunSummary SceneRunner::summary() const {
   s.solver_iterations_mean =
       k_ > 0 ? static_cast<double>(solver_iterations_sum_) / static_cast<double>(k_) : 0.0;
   s.tracking_error_free_rms_mm = s.free_steps ? std::sqrt(free_sq_ / static_cast<double>(s.free_steps)) * 1e3 : 0.0;
+  s.soft_start_s = scene_->device.soft_start_s;
+  s.soft_start_ramps = static_cast<std::int64_t>(loop_.device().torque_counters().soft_starts);
   // A run that ends inside the start-up: the periods after its last minimum are the god-object's.
   if (in_startup_)
     s.tool_penetration_max_mm = std::max(s.tool_penetration_max_mm, startup_window_max_ * 1e3);

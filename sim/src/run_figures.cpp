@@ -119,6 +119,12 @@ constexpr RunFigure kFigures[] = {
     {"feedback_force_jump_max_n", "N",
      "Largest change of the feedback force sent between consecutive periods", K::kReal,
      [](const S& s) noexcept { return real(s.feedback_force_jump_max_n); }},
+    {"soft_start_s", "s",
+     "The device's soft start: feedback ramped in over this time at start-up and after each "
+     "re-arm (0: off)",
+     K::kReal, [](const S& s) noexcept { return real(s.soft_start_s); }},
+    {"soft_start_ramps", "", "Soft-start ramps run (start-up, re-arms)", K::kCount,
+     [](const S& s) noexcept { return count(s.soft_start_ramps); }},
     {"feedback_torque_max_nm", "N·m", "Largest |feedback torque| sent", K::kReal,
      [](const S& s) noexcept { return real(s.feedback_torque_max_nm); }},
     {"axis_torque_max", "N·m or N", "Largest |axis torque| commanded", K::kReal,

@@ -72,6 +72,9 @@ constexpr RunSummarySegment kLayout[] = {
     {"  feedback: force max {feedback_force_max_n} N (largest jump between periods "
      "{feedback_force_jump_max_n} N), torque max {feedback_torque_max_nm} N·m, axis torque max "
      "{axis_torque_max}\n"},
+    {"  soft start: feedback ramped in over {soft_start_s:ms} ms, {soft_start_ramps} ramp(s)\n",
+     set("soft_start_s"), unset("admittance.enabled")},
+    {"  soft start: off\n", unset("soft_start_s"), unset("admittance.enabled")},
     {"  joints: {num_joints}, drift max {joint_drift_max_mm} mm, {joint_angle_drift_max_mrad} "
      "mrad\n",
      set("num_joints")},

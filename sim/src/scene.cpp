@@ -481,7 +481,7 @@ void parse_device(const TomlTable& root, Scene& scene, const TomlTable*& body_ta
   auto dev = root.table("device");
   if (!dev) root.fail("device", "missing: a scene needs a [device] (the tracked instrument)");
   dev->allow_only({"kind", "name", "attach", "max_sample_age", "jump_tolerance_counts",
-                   "velocity_cutoff", "first_node_id", "tool_offset", "trocar", "tracker", "phantom", "feedback",
+                   "velocity_cutoff", "soft_start", "first_node_id", "tool_offset", "trocar", "tracker", "phantom", "feedback",
                    "axis", "canopen", "admittance"});
   const std::string kind =
       dev->choice("kind", {"trocar-instrument", "pose-tracker", "phantom"}, std::nullopt);
@@ -502,6 +502,8 @@ void parse_device(const TomlTable& root, Scene& scene, const TomlTable*& body_ta
     cfg.max_sample_age_s = dev->number_in("max_sample_age", 1e-9, kInf, std::nullopt);
   cfg.jump_tolerance_counts = dev->number_in("jump_tolerance_counts", 0.0, kInf, cfg.jump_tolerance_counts);
   cfg.velocity_cutoff_hz = dev->number_in("velocity_cutoff", 1e-6, kInf, cfg.velocity_cutoff_hz);
+  cfg.soft_start_s =
+      dev->number_in("soft_start", 0.0, hal::kMaxSoftStartS, hal::kDefaultSceneSoftStartS);
   if (auto off = dev->table("tool_offset")) {
     off->allow_only({"position", "orientation"});
     cfg.tool_offset.position = off->vec3_or("position", Vec3::Zero());

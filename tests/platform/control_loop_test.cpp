@@ -720,9 +720,16 @@ numen::hal::DeviceConfig managed_config() {
   return c;
 }
 
+/// managed_config() with a soft start of `soft_start_s` (DeviceConfig::soft_start_s).
+numen::hal::DeviceConfig managed_config(double soft_start_s) {
+  numen::hal::DeviceConfig c = managed_config();
+  c.soft_start_s = soft_start_s;
+  return c;
+}
+
 /// The full stack: SimBus, managed DeviceEmulator (NMT, heartbeats, CiA 402 drives), the loop.
 struct Rig {
-  numen::hal::DeviceConfig config = managed_config();
+  numen::hal::DeviceConfig config;
   SimBus bus{bus_settings()};
   numen::hal::DeviceEmulator emulator{config};
   numen::hal::InstrumentDevice device{config};
@@ -732,7 +739,9 @@ struct Rig {
   std::int64_t k = 0;
   bool controller_silent = false;
 
-  Rig() { emulator.set_axis_values(kQ); }
+  explicit Rig(double soft_start_s = 0.0) : config(managed_config(soft_start_s)) {
+    emulator.set_axis_values(kQ);
+  }
 
   /// Period k as SceneRunner runs it: SYNC (+ NMT, heartbeat); the device answers and ticks;
   /// the controller reads, supervises, steps and writes; the device takes the RPDOs.
@@ -1109,7 +1118,7 @@ TEST(ControlLoopManaged, TorquesAreSaturatedPerAxis) {
 /// Runs a scripted session (start-up, torque, drive fault, re-arm, kill) and returns every
 /// period's per-mille commands and the body position, for the determinism test.
 std::vector<std::int64_t> session(bool check_allocations) {
-  Rig rig;
+  Rig rig(0.05);  // a 50-period soft start: the start-up's ramp and the re-arm's are counted
   std::vector<std::int64_t> out;
   out.reserve(400 * 4);
   rig.run_to_torque();
@@ -1131,11 +1140,93 @@ std::vector<std::int64_t> session(bool check_allocations) {
   if (check_allocations) {
     EXPECT_EQ(guard.count(), 0) << "allocations in 300 managed periods";
   }
+  // Both ramps ran under the counter: the start-up's (begun in run_to_torque()'s last period)
+  // and the one after the re-arm at period 150.
+  EXPECT_EQ(rig.loop.device().torque_counters().soft_starts, 2u);
+  EXPECT_EQ(rig.loop.device().torque_counters().ramped_writes, 2u * 49u);
   EXPECT_EQ(rig.sup().counters().latches, 2u);  // the drive fault, the kill
   return out;
 }
 
 TEST(ControlLoopManaged, PeriodsNeverAllocateWithTheFullStack) { session(true); }
+
+/// Hand motion of the soft-start tests: a sine on pivot_x and depth, so that the god-object lags
+/// and the feedback is never zero.
+void sway(Rig& rig, int i) {
+  double q[5] = {kQ[0], kQ[1], kQ[2], kQ[3], kQ[4]};
+  q[0] += 0.1 * std::sin(0.05 * i);
+  q[2] += 0.01 * std::sin(0.03 * i);
+  rig.emulator.set_axis_values(q);
+}
+
+// The soft start at the start-up and again after a re-arm, against a twin stack without one
+// that sees the same hand: the hand does not feel the torques (the emulator only records them),
+// so both loops step the same god-object and the ramped stack must send exactly r times the
+// twin's torques, r = min(1, k dt / T) in the k-th period since torque was enabled.
+TEST(ControlLoopManaged, SoftStartRampsTheTorqueInAtStartUpAndAgainAfterARearm) {
+  constexpr double kT = 0.02;   // 20 periods
+  constexpr double kStep = 1e-3 / kT;
+  Rig ramped(kT);
+  Rig twin;
+  std::int64_t since = 0;  // periods since the ramp began (0: not begun)
+  AxisVector last_tau = AxisVector::Zero(5), last_twin = AxisVector::Zero(5);
+  int ramps_seen = 0, ramp_periods = 0;
+  for (int i = 0; i < 260; ++i) {
+    if (i == 80) {  // pivot_y over-current: latched, zero torque, kFault
+      ASSERT_TRUE(ramped.emulator.inject_drive_fault(1, 0x2310));
+      ASSERT_TRUE(twin.emulator.inject_drive_fault(1, 0x2310));
+    }
+    if (i == 140) {
+      ASSERT_EQ(ramped.sup().state(), LifecycleState::kFault);
+      EXPECT_EQ(ramped.loop.rearm(), numen::platform::RearmResult::kAccepted);
+      EXPECT_EQ(twin.loop.rearm(), numen::platform::RearmResult::kAccepted);
+    }
+    sway(ramped, i);
+    sway(twin, i);
+    const PeriodReport& r = ramped.period();
+    const PeriodReport& t = twin.period();
+    SCOPED_TRACE("period " + std::to_string(i));
+    ASSERT_EQ(r.lifecycle, t.lifecycle);
+    const numen::hal::SentTorques& sent = ramped.loop.device().sent_torques();
+    const numen::hal::SentTorques& full = twin.loop.device().sent_torques();
+    ASSERT_EQ(sent.gated, full.gated);
+    if (r.activated) since = 0;  // torque (re-)enabled: the ramp begins at the next open gate
+    if (sent.gated) {
+      if (since > 0) ++since;  // a ramp runs on in time
+      EXPECT_EQ(r.feedback.force.norm(), 0.0);
+    } else {
+      if (since == 0) ++ramps_seen;
+      ++since;
+      const double ramp = std::min(1.0, static_cast<double>(since) * kStep);
+      EXPECT_DOUBLE_EQ(sent.ramp, ramp);
+      EXPECT_DOUBLE_EQ(r.soft_start_ramp, ramp);
+      if (ramp < 1.0) ++ramp_periods;
+      for (int a = 0; a < 5; ++a) {
+        EXPECT_EQ(sent.torque[a], sent.ramp * full.torque[a]) << "axis " << a;
+        // The slope: what the ramp adds, max_torque dt / T, plus what the twin's own torque
+        // changed (the god-object's motion), scaled by the previous r.
+        const double lim = numen::hal::torque_limit(ramped.config.axes[static_cast<std::size_t>(a)]);
+        const double prev_ramp = std::min(1.0, static_cast<double>(since - 1) * kStep);
+        EXPECT_LE(std::abs(sent.torque[a] - last_tau[a]),
+                  kStep * lim + prev_ramp * std::abs(full.torque[a] - last_twin[a]) + 1e-12)
+            << "axis " << a;
+      }
+      EXPECT_NEAR(r.feedback.force.norm(), sent.ramp * t.feedback.force.norm(), 1e-12);
+    }
+    // The first torque period after an enable: at most max_force dt / T of feedback.
+    if (since == 1) {
+      EXPECT_LE(r.feedback.force.norm(), kStep * ramped.model.feedback.max_force + 1e-12);
+      EXPECT_GT(t.feedback.force.norm(), 0.0) << "test bug: no feedback to ramp";
+    }
+    last_tau = sent.torque;
+    last_twin = full.torque;
+  }
+  EXPECT_EQ(ramps_seen, 2) << "the start-up's ramp and the re-arm's";
+  EXPECT_EQ(ramped.loop.device().torque_counters().soft_starts, 2u);
+  EXPECT_EQ(ramp_periods, 2 * 19);
+  EXPECT_EQ(twin.loop.device().torque_counters().soft_starts, 0u);
+  EXPECT_EQ(ramped.sup().state(), LifecycleState::kActive);
+}
 
 TEST(ControlLoopManaged, RerunsAreBitIdentical) {
   const std::vector<std::int64_t> a = session(false);

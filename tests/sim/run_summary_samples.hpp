@@ -30,6 +30,8 @@ inline sim::RunSummary full_managed_summary() {
   s.free_steps = 10;
   s.feedback_force_max_n = 4.5;
   s.feedback_force_jump_max_n = 0.375;
+  s.soft_start_s = 0.1;
+  s.soft_start_ramps = 2;
   s.feedback_torque_max_nm = 0.0625;
   s.axis_torque_max = 0.75;
   s.free_body_speed_max_mps = 0.875;

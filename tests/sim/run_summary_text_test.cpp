@@ -79,6 +79,7 @@ TEST(RunSummaryText, PrintsTheValuesInTheirFormats) {
            "jump max 0.250 N at a new model, 0.125 N otherwise\n",
            "  multirate scene thread: 86 overruns; scene step us: median 87.500, p99 88.500, max 90.500\n",
            "  re-arm: 2 request(s), 1 accepted, first before period 59\n",
+           "  soft start: feedback ramped in over 100.000 ms, 2 ramp(s)\n",
            "  drives: yaw: operation enabled, pitch: switch on disabled\n",
            "  nan detected: YES (non-finite steps 14)\n  divergence: speed 38.125, tie stretch "
            "0.250, energy 0.875 of their limits (speed limit 24.500 m/s, scene 0.291 m); DIVERGED "
@@ -98,6 +99,10 @@ TEST(RunSummaryText, PrintsTheValuesInTheirFormats) {
            "; overrun policy: count only\n"})
     EXPECT_NE(adm.find(part), std::string::npos) << "missing: " << part << "\n" << adm;
   EXPECT_EQ(adm.find("tracking error in free space"), std::string::npos);
+  EXPECT_EQ(adm.find("soft start"), std::string::npos);  // poses, not forces: no ramp
+  numen::sim::RunSummary off = numen::test::full_managed_summary();
+  off.soft_start_s = 0.0;
+  EXPECT_NE(numen::sim::format_summary(off).find("  soft start: off\n"), std::string::npos);
   EXPECT_EQ(adm.find("canopen:"), std::string::npos);
 }
 

@@ -1319,6 +1319,108 @@ TEST(RunRecordedTrials, EveryTrialRunsThroughEveryJigsawsSceneWithoutASafetyStop
   }
 }
 
+// ---------------------------------------------------------------- soft start (docs/safety.md)
+
+/// `text` with `soft_start = <seconds>` as the first key of its [device] table.
+std::string with_soft_start(std::string text, double seconds) {
+  const auto at = text.find("\n[device]\n");
+  EXPECT_NE(at, std::string::npos) << "test bug: no [device] table";
+  if (at != std::string::npos) text.insert(at + 10, "soft_start = " + std::to_string(seconds) + "\n");
+  return text;
+}
+
+// The two held-out JIGSAWS trials (not the excerpt's Suturing_B002) start with the tool inside
+// an obstacle of the default scene (warned: "the tool started inside ..."): the hand is inside,
+// the god-object is pushed out, so the coupling force is large from the first torque period.
+// Without a soft start the feedback jumps from 0 to it in one period (8 N, max_force, on
+// Needle_Passing). With one (T = 0.1 s) it rises along the ramp. The two runs see the same hand
+// and step the same god-object (the simulated hand does not feel the torques), so the ramped
+// feedback is exactly r_k times the unramped one, and every period-to-period change is at most
+// the ramp's slope max_force dt / T plus what the unramped feedback itself changed, scaled by
+// the previous r: |F_k - F_{k-1}| <= (dt / T) max_force + r_{k-1} |F^_k - F^_{k-1}|.
+TEST(RunSoftStart, TheHeldOutTrialsStartingInsideAnObstacleRampTheFeedbackInInsteadOfJumping) {
+  NUMEN_REQUIRE_ARTICULATION();
+  std::string note;
+  std::vector<fs::path> trials;
+  for (const fs::path& t : recorded_trials(&note))
+    if (t.filename() == "Knot_Tying_B001.txt" || t.filename() == "Needle_Passing_B001.txt")
+      trials.push_back(t);
+  if (trials.size() != 2) GTEST_SKIP() << "the held-out JIGSAWS trials are not here: " << note;
+  constexpr double kT = 0.1;
+  const fs::path scene_path = fs::path(NUMEN_SOURCE_DIR) / "sim" / "scenes" / "default.toml";
+  numen::test::TempDir dir;
+  for (const fs::path& trial : trials) {
+    SCOPED_TRACE(trial.filename().string());
+    const std::string text = scene_on_trial(scene_path, trial, "");
+    const Scene off_scene = numen::sim::load_scene(dir.write("off.toml", with_soft_start(text, 0.0)));
+    const Scene on_scene = numen::sim::load_scene(dir.write("on.toml", with_soft_start(text, kT)));
+    ASSERT_EQ(off_scene.device.soft_start_s, 0.0);
+    ASSERT_EQ(on_scene.device.soft_start_s, kT);
+    const double dt = on_scene.model.dt;
+    const double max_force = on_scene.model.feedback.max_force;
+    const double slope = max_force * dt / kT;  // N per period from the ramp
+    const std::int64_t n = periods_for(on_scene, 0.3);
+    SceneRunner off(off_scene, static_cast<std::size_t>(n));
+    SceneRunner on(on_scene, static_cast<std::size_t>(n));
+    numen::core::Vec3 off_last = numen::core::Vec3::Zero(), on_last = numen::core::Vec3::Zero();
+    double ramp_last = 0.0, off_first = 0.0, on_first = 0.0, off_jump_after_first = 0.0;
+    std::int64_t first = -1, ramp_periods = 0;
+    for (std::int64_t k = 0; k < n; ++k) {
+      off.period();
+      on.period();
+      const numen::platform::PeriodReport& a = off.last_report();
+      const numen::platform::PeriodReport& b = on.last_report();
+      const numen::core::Vec3 fa = a.feedback.force, fb = b.feedback.force;
+      EXPECT_EQ(a.soft_start_ramp, 1.0) << "period " << k;  // soft_start = 0: today's behaviour
+      const bool open = !on.loop().device().sent_torques().gated;
+      ASSERT_EQ(open, !off.loop().device().sent_torques().gated) << "period " << k;
+      if (first < 0 && open) {  // torque enabled: the ramp begins
+        first = k;
+        off_first = fa.norm();
+        on_first = fb.norm();
+      }
+      if (first >= 0) {
+        // r_k = min(1, (k - first + 1) dt / T): the ramp begins at the first open gate.
+        const double r = std::min(1.0, static_cast<double>(k - first + 1) * dt / kT);
+        EXPECT_NEAR(b.soft_start_ramp, r, 1e-12) << "period " << k;
+        EXPECT_NEAR((fb - b.soft_start_ramp * fa).norm(), 0.0, 1e-9) << "period " << k;
+        EXPECT_LE((fb - on_last).norm(), slope + ramp_last * (fa - off_last).norm() + 1e-9)
+            << "period " << k;
+        if (k > first) off_jump_after_first = std::max(off_jump_after_first, (fa - off_last).norm());
+        if (b.soft_start_ramp < 1.0) ++ramp_periods;
+      }
+      off_last = fa;
+      on_last = fb;
+      ramp_last = first >= 0 ? b.soft_start_ramp : 0.0;
+    }
+    const RunSummary so = off.summary(), sn = on.summary();
+    std::printf("[   info   ] %s: start-up %lld steps from %.2f mm; first torque period %lld: "
+                "feedback %.3f N without a soft start, %.4f N with %.1f s; jump max %.3f N -> %.4f N "
+                "(ramp slope %.3f N, unramped jumps after the first period up to %.4f N)\n",
+                trial.filename().string().c_str(), static_cast<long long>(sn.startup_steps),
+                sn.startup_tool_penetration_mm, static_cast<long long>(first), off_first, on_first,
+                kT, so.feedback_force_jump_max_n, sn.feedback_force_jump_max_n, slope,
+                off_jump_after_first);
+    ASSERT_GE(first, 0) << "no feedback at all";
+    EXPECT_GT(sn.startup_steps, 0) << "the trial no longer starts inside an obstacle";
+    // Without the ramp: the kick, from 0 to most of max_force in one period.
+    EXPECT_GT(off_first, 0.5 * max_force);
+    EXPECT_EQ(so.feedback_force_jump_max_n, off_first);
+    EXPECT_EQ(so.soft_start_ramps, 0);
+    // With it: one ramp step in the first period, and no jump above the slope plus the
+    // unramped feedback's own largest change after its first period.
+    EXPECT_LE(on_first, slope + 1e-9);
+    EXPECT_LE(sn.feedback_force_jump_max_n, slope + off_jump_after_first + 1e-9);
+    EXPECT_LT(sn.feedback_force_jump_max_n, 0.1 * so.feedback_force_jump_max_n);
+    EXPECT_EQ(ramp_periods, std::llround(kT / dt) - 1);
+    EXPECT_EQ(sn.soft_start_s, kT);
+    EXPECT_EQ(sn.soft_start_ramps, 1);
+    EXPECT_NE(numen::sim::format_summary(sn).find("soft start: feedback ramped in over 100.000 ms, 1 ramp(s)"),
+              std::string::npos);
+    EXPECT_NE(numen::sim::format_summary(so).find("soft start: off"), std::string::npos);
+  }
+}
+
 // ---------------------------------------------------------------- summary figures (issue 17)
 
 /// numen::test::kMiniScene (a ball held by a pose tracker over a floor at z = -0.1 m) with the

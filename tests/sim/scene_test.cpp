@@ -521,6 +521,32 @@ TEST(SceneErrors, ANonPositiveVelocityCutoffIsLocated) {
   }
 }
 
+TEST(Scene, DeviceSoftStartIsReadInSecondsAndDefaultsToATenthOfASecond) {
+  TempDir dir;
+  EXPECT_EQ(load_scene(dir.write("mini.toml", kMini)).device.soft_start_s,
+            numen::hal::kDefaultSceneSoftStartS);
+  EXPECT_EQ(numen::hal::kDefaultSceneSoftStartS, 0.1);
+  for (const auto& [value, seconds] : {std::pair<std::string, double>{"0.25", 0.25}, {"0", 0.0}, {"10", 10.0}}) {
+    const std::string text =
+        replace(kMini, "attach = \"tool\"", "attach = \"tool\"\nsoft_start = " + value);
+    EXPECT_EQ(load_scene(dir.write("soft.toml", text)).device.soft_start_s, seconds) << value;
+  }
+}
+
+TEST(SceneErrors, ASoftStartOutsideZeroToTenSecondsIsLocated) {
+  TempDir dir;
+  for (const std::string bad : {"-0.1", "10.5", "nan", "inf", "\"fast\""}) {
+    const std::string line = "soft_start = " + bad;
+    const std::string text = replace(kMini, "attach = \"tool\"", "attach = \"tool\"\n" + line);
+    const InputError e = load_error(dir, text);
+    expect_located(e, (dir.path() / "bad.toml").string(), line_of(text, line),
+                   column_of(text, line, bad), "device.soft_start",
+                   bad == "nan" || bad == "inf" ? "must be finite"
+                   : bad[0] == '"'              ? "expected a number"
+                                                : "must be in [0, 10]");
+  }
+}
+
 TEST(SceneErrors, MissingTrajectoryFile) {
   TempDir dir;
   const std::string text = replace(kMini, R"(source = "scripted"

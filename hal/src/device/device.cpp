@@ -27,6 +27,10 @@ const char* to_string(RearmResult result) noexcept {
 
 Device::Device(InstrumentDevice& instrument, Bus& bus) : instrument_(&instrument), bus_(&bus) {
   sent_.torque = AxisVector::Zero(instrument.num_axes());
+  const DeviceConfig& c = instrument.config();
+  // validate() bounds both; a hand-built config outside them gets no ramp rather than r = 0.
+  if (std::isfinite(c.soft_start_s) && c.soft_start_s > 0.0 && c.control_period_s > 0.0)
+    ramp_step_ = c.control_period_s / c.soft_start_s;
 }
 
 IoStatus Device::begin_period(std::int64_t now_ns) noexcept {
@@ -85,7 +89,18 @@ IoStatus Device::write(std::span<const double> torques, std::int64_t now_ns) noe
     on_non_finite_torque(non_finite_axis);
     any_allowed = false;
   }
-  // The clamp: |τ_i| <= torque_limit(axis i) (max_torque, within the RPDO's range).
+  // The soft start: r = min(1, k · dt / T) in the k-th write since torque was enabled.
+  if (ramp_step_ > 0.0) {
+    if (ramp_writes_ < 0 && any_allowed) {
+      ramp_writes_ = 0;
+      ++torque_counters_.soft_starts;
+    }
+    if (ramp_writes_ >= 0 && static_cast<double>(ramp_writes_) * ramp_step_ < 1.0) ++ramp_writes_;
+    sent_.ramp = ramp_writes_ < 0 ? 0.0
+                                   : std::min(1.0, static_cast<double>(ramp_writes_) * ramp_step_);
+    if (any_allowed && sent_.ramp < 1.0) ++torque_counters_.ramped_writes;
+  }
+  // The clamp: |τ_i| <= torque_limit(axis i) (max_torque, within the RPDO's range), then r.
   for (int i = 0; i < n && any_allowed; ++i) {
     const auto k = static_cast<std::size_t>(i);
     const AxisConfig& a = config.axes[k];
@@ -96,6 +111,7 @@ IoStatus Device::write(std::span<const double> torques, std::int64_t now_ns) noe
       ++sent_.clamped;
       ++torque_counters_.axis_saturations[k];
     }
+    t *= sent_.ramp;
     sent_.per_mille[k] = torque_per_mille(a, t);
   }
   sent_.gated = !any_allowed;

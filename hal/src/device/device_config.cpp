@@ -292,6 +292,11 @@ void validate(const DeviceConfig& c) {
     fail(c, "velocity_cutoff_hz",
          "must be > 0 Hz (+inf: no filter) (got " + std::to_string(c.velocity_cutoff_hz) + ")");
   }
+  if (!std::isfinite(c.soft_start_s) || c.soft_start_s < 0.0 || c.soft_start_s > kMaxSoftStartS) {
+    fail(c, "soft_start_s",
+         "must be finite and in [0, 10] s (got " + std::to_string(c.soft_start_s) + ")");
+    static_assert(kMaxSoftStartS == 10.0, "the message above names the bound");
+  }
   const std::string prefix = device_name(c) + ": ";
   detail::checked_position(c.tool_offset.position, prefix + "tool_offset.position");
   detail::checked_unit_quaternion(c.tool_offset.orientation, prefix + "tool_offset.orientation");

@@ -60,10 +60,17 @@ DeviceSupervision ManagedDevice::supervise(std::int64_t now_ns, bool overrun) no
       m.operational() && sup.blocking().cause == FaultCause::kNone) {
     out.activated = sup.activate() == LifecycleResult::kOk;
   }
+  if (out.activated) restart_soft_start();  // torque enabled: ramp it in (start-up, re-arm)
   m.request_drives(sup.drive_target());
   out.lifecycle = sup.state();
   out.startup = m.startup().phase;
   return out;
+}
+
+LifecycleResult ManagedDevice::activate() noexcept {
+  const LifecycleResult r = supervisor_->activate();
+  if (r == LifecycleResult::kOk) restart_soft_start();
+  return r;
 }
 
 bool ManagedDevice::torque_allowed(int axis) const noexcept {

@@ -106,6 +106,22 @@ TEST(DeviceConfig, VelocityCutoffMustBePositiveOrInfinite) {
   EXPECT_EQ(error_of(c), "");
 }
 
+TEST(DeviceConfig, SoftStartIsOffByDefaultAndBoundedToTenSeconds) {
+  DeviceConfig c = make_default_trocar_config();
+  EXPECT_EQ(c.soft_start_s, 0.0);  // the hal's default: unscaled torques (scenes: 0.1 s)
+  for (const double bad : {-1e-3, 10.001, std::numeric_limits<double>::quiet_NaN(),
+                           std::numeric_limits<double>::infinity()}) {
+    c.soft_start_s = bad;
+    const std::string e = error_of(c);
+    EXPECT_NE(e.find("soft_start_s must be finite and in [0, 10] s"), std::string::npos)
+        << bad << ": " << e;
+  }
+  for (const double good : {0.0, 1e-4, kDefaultSceneSoftStartS, kMaxSoftStartS}) {
+    c.soft_start_s = good;
+    EXPECT_EQ(error_of(c), "") << good;
+  }
+}
+
 TEST(DeviceConfig, KindDecidesTheKinematics) {
   const auto t = make_kinematics(make_default_trocar_config());
   EXPECT_EQ(t->num_axes(), 5);

@@ -2,11 +2,12 @@
 // the protocol's frames read before the instrument's, read errors), the one gate and clamp of
 // Device::write() (no valid sample, shutdown, the implementation's per-axis permission, axes
 // without a drive, a non-finite torque, ±max_torque and the RPDO's range, the per mille sent),
-// make_device()'s choice, and no allocation in a period of either implementation.
+// the soft start (a linear ramp from the first open gate, 0 = unscaled), make_device()'s choice, and no allocation in a period of either implementation.
 #include "numen/hal/device/device.hpp"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <limits>
@@ -61,11 +62,22 @@ class TestDevice final : public Device {
   }
 };
 
+/// The default trocar instrument (1 ms period) with a soft start of `soft_start_s`.
+DeviceConfig trocar_with_soft_start(double soft_start_s) {
+  DeviceConfig c = make_default_trocar_config(1);
+  c.soft_start_s = soft_start_s;
+  return c;
+}
+
 struct Rig {
-  Rig() : bus(SimBusSettings{}), instrument(make_default_trocar_config(1)), dev(instrument, bus.controller()) {}
+  explicit Rig(double soft_start_s = 0.0)
+      : bus(SimBusSettings{}),
+        instrument(trocar_with_soft_start(soft_start_s)),
+        dev(instrument, bus.controller()) {}
 
   // The encoders answer with kQ0 at t, then the device reads at t.
   void answer_and_read(std::int64_t t) {
+    bus.set_time_ns(t);  // the bus stamps the frames it delivers
     for (int i = 0; i < instrument.num_axes(); ++i) {
       const AxisConfig& a = instrument.config().axes[static_cast<std::size_t>(i)];
       bus.device().write(encode_position_pdo(a.encoder_cob_id, value_to_counts(a, kQ0[i]), t));
@@ -204,6 +216,88 @@ TEST(Device, NonFiniteTorqueOnAnAllowedAxisZeroesEveryAxisAndIsReported) {
   EXPECT_EQ(r.dev.sent_torques().torque[TrocarKinematics::kRoll], 0.0);
 }
 
+// ---- soft start (DeviceConfig::soft_start_s): r = min(1, k dt / T) from the first open gate
+
+TEST(Device, SoftStartRampsTheClampedTorquesInLinearlyFromTheFirstOpenGate) {
+  Rig r(0.01);  // T = 10 periods of 1 ms
+  const double big = 1e3;  // clamped to max_torque on pivot_x
+  const std::vector<double> tau = {big, -0.05, 0.2, 0.0, 0.0};
+  // No valid sample yet: gated, the ramp has not begun (r = 0 until torque is enabled).
+  r.dev.read(0);
+  r.write(tau);
+  EXPECT_TRUE(r.dev.sent_torques().gated);
+  EXPECT_EQ(r.dev.sent_torques().ramp, 0.0);
+  EXPECT_EQ(r.dev.torque_counters().soft_starts, 0u);
+  std::array<double, 5> last{};
+  for (int k = 1; k <= 14; ++k) {
+    SCOPED_TRACE("write " + std::to_string(k) + " since the gate opened");
+    r.answer_and_read(k * kMs);
+    r.write(tau);
+    const SentTorques& s = r.dev.sent_torques();
+    const double ramp = std::min(1.0, k * 0.1);
+    EXPECT_FALSE(s.gated);
+    EXPECT_DOUBLE_EQ(s.ramp, ramp);
+    for (int i = 0; i < 5; ++i) {
+      const AxisConfig& a = r.axis(i);
+      const double lim = torque_limit(a);
+      const double full = a.has_drive() ? std::clamp(tau[static_cast<std::size_t>(i)], -lim, lim) : 0.0;
+      EXPECT_EQ(s.torque[i], s.ramp * full) << i;  // the clamp first, then r
+      EXPECT_EQ(s.per_mille[static_cast<std::size_t>(i)], torque_per_mille(a, s.ramp * full)) << i;
+      // The slope: no axis rises by more than max_torque · dt / T in one period.
+      EXPECT_LE(std::abs(s.torque[i] - last[static_cast<std::size_t>(i)]), 0.1 * lim + 1e-15) << i;
+      last[static_cast<std::size_t>(i)] = s.torque[i];
+    }
+    EXPECT_EQ(s.clamped, 1);  // pivot_x: the clamp still counts what it clamped
+  }
+  EXPECT_EQ(r.dev.torque_counters().soft_starts, 1u);
+  EXPECT_EQ(r.dev.torque_counters().ramped_writes, 9u);  // r = 0.1 … 0.9
+}
+
+TEST(Device, SoftStartRunsOnThroughAGatedPeriodWithoutBeginningAgain) {
+  Rig r(0.005);  // 5 periods
+  const std::vector<double> tau = {0.1, 0.1, 0.1, 0.0, 0.0};
+  r.answer_and_read(0);
+  r.write(tau);
+  EXPECT_DOUBLE_EQ(r.dev.sent_torques().ramp, 0.2);
+  r.answer_and_read(kMs);
+  r.dev.allowed.fill(false);  // the protocol forbids torque for one period: every axis gated
+  r.write(tau);
+  r.dev.allowed.fill(true);
+  EXPECT_TRUE(r.dev.sent_torques().gated);
+  EXPECT_TRUE(r.dev.sent_torques().torque.isZero());
+  // The ramp is a function of time since torque was enabled: a gated period counts.
+  r.answer_and_read(2 * kMs);
+  r.write(tau);
+  EXPECT_DOUBLE_EQ(r.dev.sent_torques().ramp, 0.6);
+  for (int k = 3; k < 8; ++k) {
+    r.answer_and_read(k * kMs);
+    r.write(tau);
+  }
+  EXPECT_EQ(r.dev.sent_torques().ramp, 1.0);
+  EXPECT_EQ(r.dev.sent_torques().torque[0], 0.1);
+  EXPECT_EQ(r.dev.torque_counters().soft_starts, 1u);
+}
+
+TEST(Device, SoftStartOfZeroSendsTheClampedTorquesUnscaled) {
+  Rig r;  // soft_start_s = 0: the hal default
+  ASSERT_EQ(r.instrument.config().soft_start_s, 0.0);
+  const std::vector<double> tau = {1e3, -0.0123456789, 0.2, 0.0, 0.0};
+  for (int k = 0; k < 5; ++k) {
+    r.answer_and_read(k * kMs);
+    r.write(tau);
+    const SentTorques& s = r.dev.sent_torques();
+    EXPECT_EQ(s.ramp, 1.0);
+    for (int i = 0; i < 5; ++i) {
+      const AxisConfig& a = r.axis(i);
+      const double lim = torque_limit(a);
+      const double want = a.has_drive() ? std::clamp(tau[static_cast<std::size_t>(i)], -lim, lim) : 0.0;
+      EXPECT_EQ(s.torque[i], want) << i;  // bit for bit, from the first open period on
+    }
+  }
+  EXPECT_EQ(r.dev.torque_counters().soft_starts, 0u);
+  EXPECT_EQ(r.dev.torque_counters().ramped_writes, 0u);
+}
+
 TEST(Device, MakeDeviceFollowsTheConfiguredProtocol) {
   SimBus bus(SimBusSettings{});
   DeviceConfig m = make_default_trocar_config(1);
@@ -228,11 +322,13 @@ TEST(Device, MakeDeviceFollowsTheConfiguredProtocol) {
 }
 
 // Both protocols against the device emulator: begin_period, read, supervise, write over 2000
-// periods without one allocation; the managed stack reaches kActive and sends torque.
+// periods without one allocation; the managed stack reaches kActive and sends torque. A soft
+// start of 0.5 s puts the ramp's periods under the counter.
 TEST(Device, PeriodsOfBothProtocolsNeverAllocate) {
   for (bool managed : {false, true}) {
     DeviceConfig c = make_default_trocar_config(1);
     c.canopen.managed = managed;
+    c.soft_start_s = 0.5;
     SimBusSettings bs;
     bs.latency_ns = 100'000;
     SimBus bus(bs);
@@ -262,6 +358,8 @@ TEST(Device, PeriodsOfBothProtocolsNeverAllocate) {
     }
     EXPECT_EQ(allocations, 0) << (managed ? "managed" : "minimal");
     EXPECT_GT(torque_periods, 1500) << (managed ? "managed" : "minimal");
+    EXPECT_EQ(dev->torque_counters().soft_starts, 1u) << (managed ? "managed" : "minimal");
+    EXPECT_EQ(dev->torque_counters().ramped_writes, 499u) << (managed ? "managed" : "minimal");
     if (managed) {
       EXPECT_EQ(dev->lifecycle(), LifecycleState::kActive);
     }

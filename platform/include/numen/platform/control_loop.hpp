@@ -47,9 +47,13 @@ struct PeriodReport {
   bool torque_commanded = false;
   /// The feedback wrench the drives were sent this period: the bound bodies' Eq. 8 wrenches
   /// carried to their links (Eq. 9) and summed about link 0's origin (world, N and N·m) — the
-  /// wrench whose τ = Σ J_lᵀ w_l went to Device::write() — and zero when write() gated every
-  /// axis. Per-axis clamping acts on τ (hal::SentTorques::clamped counts it), not on this.
+  /// wrench whose τ = Σ J_lᵀ w_l went to Device::write() — times the soft-start factor
+  /// (soft_start_ramp), and zero when write() gated every axis. Per-axis clamping acts on τ
+  /// (hal::SentTorques::clamped counts it), not on this.
   core::Wrench feedback;
+  /// The soft-start factor r in [0, 1] Device::write() applied this period
+  /// (hal::SentTorques::ramp; 1 once the ramp is over or with the soft start off).
+  double soft_start_ramp = 1.0;
   // Timestamps (CLOCK_MONOTONIC ns).
   std::int64_t deadline_ns = 0;      ///< The period's deadline (begin_period's argument, or
                                      ///< its start when none was given).
@@ -145,7 +149,8 @@ class ControlLoop {
   ///     bound body is driven or the device is not ready);
   ///  6. write: Device::write(τ) — gated (zero unless this period's sample is valid, no
   ///     shutdown, and — managed — the lifecycle active and the drive's master allowing
-  ///     torque) and clamped to ±max_torque there, once; then the torque frames.
+  ///     torque), clamped to ±max_torque and scaled by the soft start's r there, once; then
+  ///     the torque frames.
   const PeriodReport& end_period(std::int64_t now_ns) noexcept;
 
   /// Re-arms after a latched fault or a failed start-up (for the CLI and tests): asks every

@@ -286,6 +286,12 @@ struct RunSummary {
   double feedback_force_max_n = 0.0;       ///< Largest |feedback force| sent (after saturation).
   /// Largest |F_k − F_{k−1}| of the feedback force sent between consecutive periods (N).
   double feedback_force_jump_max_n = 0.0;
+  /// The device's soft start (hal::DeviceConfig::soft_start_s, s; 0: off): the feedback ramps
+  /// in over this time at start-up and after every re-arm.
+  double soft_start_s = 0.0;
+  /// Soft-start ramps run (hal::TorqueCounters::soft_starts: the start-up's and one per
+  /// activation after a re-arm that enabled torque again).
+  std::int64_t soft_start_ramps = 0;
   double feedback_torque_max_nm = 0.0;
   double axis_torque_max = 0.0;            ///< Largest |axis torque| commanded (N·m or N).
   double free_body_speed_max_mps = 0.0;    ///< Fastest body not part of the held tool (m/s): blocks thrown about.

@@ -16,7 +16,14 @@
 ///    managed stack: the lifecycle is kActive and that drive's CiA 402 master allows torque);
 ///  - non-finite: a NaN or infinite τ on an allowed axis zeroes every axis (the managed stack
 ///    latches the safe state, FaultCause::kNonFiniteTorque);
-///  - clamp: |τ_i| <= AxisConfig::max_torque (N·m or N), counted per axis.
+///  - clamp: |τ_i| <= AxisConfig::max_torque (N·m or N), counted per axis;
+///  - soft start: every clamped τ_i times r(t) = min(1, k · dt / T) in the k-th write since
+///    torque was enabled (T = DeviceConfig::soft_start_s, dt = control_period_s; T = 0: r = 1).
+///    Torque is enabled at the first write whose gate opens after construction or, managed
+///    stack, after the lifecycle entered kActive (the start-up, activate(), the activation that
+///    follows a rearm()). A linear ramp, as a CiA 402 drive's torque slope (object 0x6087) and
+///    OpenHaptics' HD_FORCE_RAMPING: each period adds at most max_torque · dt / T to |τ_i|
+///    (docs/safety.md, "Soft start").
 /// The protocol implementations only encode what write() decided (sent_torques()); nothing
 /// downstream clamps or gates again, so what sent_torques() reports is what the drives receive
 /// (up to the per mille rounding of the RPDO, AxisConfig::rated_torque / 1000).
@@ -98,6 +105,9 @@ struct SentTorques {
   bool gated = true;
   /// Axes clamped to ±max_torque in this write.
   int clamped = 0;
+  /// The soft-start factor r in [0, 1] this write applied to every clamped τ_i (1: no ramp
+  /// running or soft start off; 0: torque not enabled yet, so the write was gated).
+  double ramp = 1.0;
   /// Some per mille value is not zero.
   bool any() const noexcept {
     for (std::int16_t v : per_mille)
@@ -114,6 +124,10 @@ struct TorqueCounters {
   std::uint64_t non_finite = 0;    ///< write() calls given a NaN / inf torque on an allowed axis.
   /// Per axis: clamps to ±max_torque (entries >= n are 0).
   std::array<std::uint64_t, kMaxAxes> axis_saturations{};
+  /// Soft-start ramps begun (torque enabled with DeviceConfig::soft_start_s > 0).
+  std::uint64_t soft_starts = 0;
+  /// Writes that scaled an open gate's torques by r < 1 (SentTorques::ramp).
+  std::uint64_t ramped_writes = 0;
 };
 
 /// One instrument on one bus, seen by the control loop (see the file comment). Not thread
@@ -222,6 +236,12 @@ class Device {
   void note(IoStatus s) noexcept {
     if (s == IoStatus::kError) io_error_ = true;
   }
+  /// Torque is (re-)enabled: the soft start begins again at the next write whose gate is open
+  /// (r = dt / T there). Managed stack: the lifecycle entered kActive. No effect with the soft
+  /// start off.
+  void restart_soft_start() noexcept {
+    if (ramp_step_ > 0.0) ramp_writes_ = -1;
+  }
 
   InstrumentDevice* instrument_;
   Bus* bus_;
@@ -230,6 +250,10 @@ class Device {
   SentTorques sent_;
   TorqueCounters torque_counters_;
   DeviceRead read_;
+  // Soft start: dt / T (0: off) and the writes since the ramp began (-1: armed, waiting for an
+  // open gate; counting stops once r reached 1).
+  double ramp_step_ = 0.0;
+  std::int64_t ramp_writes_ = -1;
   std::uint8_t sync_counter_ = 0;
   bool io_error_ = false;
   bool shutting_down_ = false;

@@ -121,6 +121,14 @@ struct CanopenConfig {
 /// drive_tpdo_mapping() and drive TPDO COB-ID 0x280 + node). No validation.
 CanopenAxisConfig make_canopen_axis(std::uint8_t node_id, bool has_drive);
 
+/// Longest DeviceConfig::soft_start_s accepted, s (a ramp longer than this is a typo, not a
+/// soft start: the trainer would render almost no force for seconds).
+inline constexpr double kMaxSoftStartS = 10.0;
+/// The soft start of a scene that does not give `[device] soft_start`, s: 0.1 s, i.e. at the
+/// shipped scenes' 8 N max_force and 1 ms period a rise of at most 0.08 N per period
+/// (docs/safety.md, "Soft start", for the choice).
+inline constexpr double kDefaultSceneSoftStartS = 0.1;
+
 /// Configuration of one instrument. Checked by validate().
 struct DeviceConfig {
   /// Name used in error messages and traces.
@@ -141,6 +149,14 @@ struct DeviceConfig {
   /// +infinity = the bare backward difference. The estimate lags the hand by about
   /// 1/(2π f_c) (3.2 ms at the default 50 Hz) and is bounded by each axis's max_speed.
   double velocity_cutoff_hz = kDefaultVelocityCutoffHz;
+  /// Soft start, s, finite and in [0, kMaxSoftStartS]: Device::write() scales the gated and
+  /// clamped axis torques by r = min(1, k · control_period_s / soft_start_s) in the k-th write
+  /// (k = 1, 2, …) since torque was enabled — the first write whose gate is open after the
+  /// device was built or (managed stack) after the lifecycle entered kActive (start-up,
+  /// activate(), the activation after a rearm()). 0 = off: torques pass unscaled, as before
+  /// the soft start existed. The hal default is 0; a scene's `[device] soft_start` defaults to
+  /// kDefaultSceneSoftStartS (docs/scenes.md, docs/safety.md "Soft start").
+  double soft_start_s = 0.0;
   /// Pose of the controlled frame in the tool frame (tool tip frame for a trocar instrument,
   /// tracked frame for a pose tracker, stylus frame for a phantom). Identity: the controlled
   /// frame is the tool frame.
@@ -163,7 +179,8 @@ struct DeviceConfig {
 /// Throws std::invalid_argument with a message naming the device and the field if `config`
 /// is invalid: wrong axis count for the kind, an invalid axis (validate_axis()), COB-IDs
 /// outside 0x001–0x7FF, equal to 0x080 (SYNC) or used twice, non-positive period or age,
-/// negative jump tolerance, a velocity cutoff that is NaN or <= 0, non-finite positions,
+/// negative jump tolerance, a velocity cutoff that is NaN or <= 0, a soft start that is not
+/// finite or outside [0, kMaxSoftStartS], non-finite positions,
 /// non-unit quaternions (|‖q‖ − 1| > 1e-6), phantom link lengths not finite and > 0. Only the geometry of the config's kind is checked.
 /// With canopen.managed also: one canopen.axes entry per axis; node ids 1–127 and not the
 /// controller's; heartbeat periods >= 1 ms and timeouts above them (axes of one node agreeing);

@@ -11,7 +11,7 @@
 ///                 jump / range, heartbeat lost, node reset, EMCY, drive fault / stuck,
 ///                 overruns, bus off, I/O errors: a fault latches the safe state in this very
 ///                 period); a pending re-arm; the automatic activation; the drives' CiA 402
-///                 target from the lifecycle;
+///                 target from the lifecycle; entering kActive restarts the soft start;
 ///   write:        Device::write() gates (torque_allowed(): lifecycle kActive and the axis's
 ///                 drive master allows torque) and clamps; then each drive's RPDO
 ///                 (controlword + that target torque).
@@ -37,8 +37,9 @@ class ManagedDevice final : public Device {
 
   DeviceSupervision supervise(std::int64_t now_ns, bool overrun) noexcept override;
 
-  /// kInactive → kActive now (SafetySupervisor::activate()).
-  LifecycleResult activate() noexcept override { return supervisor_->activate(); }
+  /// kInactive → kActive now (SafetySupervisor::activate()); on kOk the soft start begins
+  /// again (DeviceConfig::soft_start_s).
+  LifecycleResult activate() noexcept override;
   RearmResult rearm() noexcept override;
   LifecycleState lifecycle() const noexcept override { return supervisor_->state(); }
   bool rearm_pending() const noexcept override { return rearm_pending_; }
