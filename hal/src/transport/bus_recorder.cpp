@@ -14,6 +14,7 @@ CandumpWriter::CandumpWriter(const std::string& path, const CandumpWriterSetting
 CandumpWriter::~CandumpWriter() {
   writer_.stop();
   writer_.drain();
+  writer_.flush_sink();
   if (!file_.close()) writer_.count_io_error();
 }
 
@@ -27,7 +28,12 @@ SinkResult CandumpWriter::write(const CandumpRecord& record) noexcept {
   const CandumpFormatResult r = format_candump_line(t_ns, record.iface, record.frame, direction, line);
   if (!r.ok()) return SinkResult::kFormatError;
   line[r.length] = '\n';
-  return file_.write(line, r.length + 1) ? SinkResult::kWritten : SinkResult::kIoError;
+  return file_.append(line, r.length + 1) ? SinkResult::kBuffered : SinkResult::kIoError;
+}
+
+SinkSettled CandumpWriter::take_settled() noexcept {
+  const LineCounts c = file_.take_counts();
+  return SinkSettled{c.written, c.lost, c.failed_writes};
 }
 
 RecordingBus::RecordingBus(Bus& inner, CandumpWriter& writer, std::string_view iface)

@@ -6,7 +6,8 @@
 ///    with its timestamp, into the lock-free single-producer/single-consumer queue of a
 ///    CandumpWriter (boost::lockfree::spsc_queue, capacity fixed at construction);
 ///  - the CandumpWriter's own thread pops the records, formats them and writes the lines to
-///    the log file through buffered stdio.
+///    the log file through its own buffer with write(2) (CountedLineFile), so that a line
+///    counts as written only once the kernel accepted its bytes.
 /// A full queue drops the record and counts it, so a paced control loop never waits for the
 /// disk (FullQueuePolicy::kDrop). An offline run, which has no deadline, may instead wait for
 /// the writer to make room (kWait), so that a starved writer thread loses nothing.
@@ -54,8 +55,9 @@ struct CandumpWriterSettings : RecordWriterSettings {
   std::int64_t time_offset_ns = 0;
 };
 
-/// Counters of a CandumpWriter (queued, dropped, waits, lines written, records refused by
-/// format_candump_line(), failed fwrite/fflush/fclose calls).
+/// Counters of a CandumpWriter (queued, dropped, waits, lines whose bytes write(2) accepted,
+/// records refused by format_candump_line(), failed write(2)/close(2) calls, lines lost to
+/// them). `--record /dev/full` writes 0 lines.
 using CandumpWriterCounters = RecordWriterCounters;
 
 /// Owner of a candump log file and of the AsyncRecordWriter that fills it from the loop.
@@ -104,10 +106,11 @@ class CandumpWriter final : private RecordSink<CandumpRecord> {
  private:
   SinkResult write(const CandumpRecord& record) noexcept override;
   bool flush() noexcept override { return file_.flush(); }
+  SinkSettled take_settled() noexcept override;
 
   CandumpWriterSettings settings_;
   AsyncRecordWriter<CandumpRecord> writer_;  // first: bad settings throw before the file opens
-  LineFile file_;
+  CountedLineFile file_;
 };
 
 /// Counters of one RecordingBus since construction.
