@@ -102,6 +102,11 @@ constexpr RunSummarySegment kLayout[] = {
      "{frames_unknown_id}), error frames ignored {error_frames}, values out of range "
      "{values_out_of_range}, jumps {values_jump}\n",
      set("real_bus")},
+    // The simulated bus and a log replay: the frames rejected are named (they were silent).
+    {"  frames rejected {frames_rejected} (encoder frames: CAN FD {encoder_frames_fd}, remote "
+     "{encoder_frames_remote}, wrong length {encoder_frames_wrong_length}), unknown id "
+     "{frames_unknown_id}\n",
+     unset("real_bus"), set("frames_rejected", "frames_unknown_id")},
     {"  loop period {loop.period_ns:us1} us, overrun budget {loop.overrun_budget_ns:us1} us, "
      "{loop.periods} periods\n",
      set("real_bus")},
