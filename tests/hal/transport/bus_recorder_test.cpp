@@ -314,8 +314,9 @@ TEST(BusRecorder, WaitPolicyDropsWhileTheWriterIsNotRunning) {
 }
 
 // A frame is written once write(2) accepted its line: on a full device none is, whether the
-// writer thread ran (flushes as the queue empties: a paced run) or not (stop() drains), and
-// every queued record ends in `lost`. stdio's buffer counted thousands as written.
+// records arrived while the writer thread ran (it flushes as the queue empties: a paced run)
+// or were queued before it started (one 64 KiB buffer fills and is written out), and every
+// queued record ends in `lost`. stdio's buffer counted thousands as written.
 TEST(BusRecorder, FramesAreWrittenOnlyWhenTheKernelAcceptsThem) {
   const numen::hal::CandumpIface can0 = numen::hal::make_candump_iface("can0");
   for (const bool thread : {false, true}) {
@@ -325,6 +326,7 @@ TEST(BusRecorder, FramesAreWrittenOnlyWhenTheKernelAcceptsThem) {
     if (thread) writer.start();
     for (int k = 0; k < 3000; ++k)
       ASSERT_TRUE(writer.push(numen::hal::make_sync(k), can0, CandumpDirection::kTransmitted));
+    if (!thread) writer.start();
     writer.stop();
     const numen::hal::CandumpWriterCounters c = writer.counters();
     EXPECT_EQ(c.queued, 3000u) << "thread " << thread;
