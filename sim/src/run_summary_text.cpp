@@ -138,6 +138,7 @@ constexpr RunSummarySegment kLayout[] = {
      "{last_torque_stop_period}\n",
      set("real_bus")},
     {"  end: stopped by signal", set("real_bus"), set("stopped")},
+    {" {stop_signal}", set("real_bus"), set("stopped"), set("stop_signal")},
     {"  end: duration reached", set("real_bus"), unset("stopped")},
     {", shutdown {shutdown_periods} periods, drives ", set("real_bus")},
     {"disabled", set("real_bus"), set("drives_disabled")},
