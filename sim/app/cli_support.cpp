@@ -47,6 +47,10 @@ CLI::Validator number_check(double lo, double hi, bool lo_exclusive) {
       "NUMBER");
 }
 
+CLI::Validator count_check(long long lo, long long hi) {
+  return CLI::Validator([=](const std::string& v) { return sim::check_count(v, lo, hi); }, "COUNT");
+}
+
 std::string check_bus(const std::string& v, bool real_only) {
   try {
     const sim::BusSpec spec = sim::parse_bus_spec(v);

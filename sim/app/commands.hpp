@@ -29,6 +29,9 @@ CLI::Validator seconds_check(double lo, double hi, bool lo_exclusive);
 /// CLI11 check of a plain number (a rate, a factor): finite, in [lo, hi] (or (lo, hi] when
 /// `lo_exclusive`); "nan" and "inf" are refused.
 CLI::Validator number_check(double lo, double hi, bool lo_exclusive);
+/// CLI11 check of a whole number in [lo, hi] (numen::sim::check_count): names the range where
+/// CLI11's conversion would only say "Could not convert".
+CLI::Validator count_check(long long lo, long long hi);
 /// CLI11 check of a --bus spec; `real_only`: only can:IFACE or serial:PATH[@BAUD].
 std::string check_bus(const std::string& v, bool real_only);
 

@@ -22,10 +22,31 @@
 
 #include <CLI/CLI.hpp>
 
+#include <iostream>
+#include <string>
+
 #include "commands.hpp"
 #include "numen/version.hpp"
 #include "numen/sim/run_verdict.hpp"
 #include "signals.hpp"
+
+namespace {
+
+/// If `word` (the command-line word where `app`, called `command`, expects its subcommand) is
+/// not an option and names none of `app`'s subcommands: "unknown subcommand 'word' of numen;
+/// the subcommands are: run, device, ..." (CLI11 would say "A subcommand is required", or take
+/// it as an extra argument). Empty if `word` is an option or a known subcommand.
+std::string unknown_subcommand(CLI::App& app, const std::string& command, const std::string& word) {
+  if (word.empty() || word[0] == '-') return {};
+  std::string known;
+  for (const CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; })) {
+    if (sub->check_name(word)) return {};
+    known += (known.empty() ? "" : ", ") + sub->get_name();
+  }
+  return "unknown subcommand '" + word + "' of " + command + "; the subcommands are: " + known;
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   using namespace numen::app;
@@ -45,6 +66,15 @@ int main(int argc, char** argv) {
   const AccuracyStudyCommand accuracy(*study);
   const StabilityStudyCommand stability(*study);
   const MergeStudyCommand merge(*study);
+
+  // A misspelt subcommand is named, with the known ones (numen frobnicate, numen study frob).
+  std::string unknown = argc > 1 ? unknown_subcommand(app, "numen", argv[1]) : std::string();
+  if (unknown.empty() && argc > 2 && study->check_name(argv[1]))
+    unknown = unknown_subcommand(*study, "numen study", argv[2]);
+  if (!unknown.empty()) {
+    std::cerr << "numen: " << unknown << "\n";
+    return numen::sim::code(numen::sim::ExitStatus::kInputRejected);
+  }
 
   try {
     app.parse(argc, argv);

@@ -3,7 +3,9 @@
 
 #include <sched.h>
 
+#include <cstdint>
 #include <iostream>
+#include <limits>
 
 #include "commands.hpp"
 #include "numen/sim/bus_spec.hpp"
@@ -90,7 +92,8 @@ RunCommand::RunCommand(CLI::App& parent)
       ->check(number_check(0.0, 1e6, true));
   run->add_option("--overrun-limit", overrun_limit_,
                   "Paced run: consecutive overruns that latch the safe state (default 3); 0 counts "
-                  "and reports overruns without latching (a host that cannot hold the period)");
+                  "and reports overruns without latching (a host that cannot hold the period)")
+      ->check(count_check(0, std::numeric_limits<std::uint32_t>::max()));
   run->add_option("--coupling", coupling_, "Override the scene's coupling mode")
       ->check(CLI::IsMember({"god-object", "first-order", "direct"}));
 }
@@ -125,6 +128,7 @@ int RunCommand::execute() const {
   options.scene_thread = scene_thread_;
   options.scene_thread.strict = rt_.strict;
   options.stop = &stop_flag();
+  options.stop_signal = &stop_signal_number();
   options.compute_phase_s = phase_;
   options.overrun_limit = overrun_limit_;
   options.rearm = &rearm_flag();
@@ -164,8 +168,8 @@ int RunCommand::execute() const {
               << " frames sent, " << c.frames_dropped << " dropped (slow clients), "
               << c.closed_bad_input << " connections closed for bad input\n";
   }
-  // A run stopped by a signal and otherwise clean exits 128 + the signal (shell convention).
-  if (summary.exit_status == 0 && summary.stopped) return 128 + stop_signal();
+  // A run stopped by a signal and otherwise clean exits 128 + the signal (shell convention):
+  // run_verdict() put that status, and the signal's name, in the summary.
   return summary.exit_status;
 }
 

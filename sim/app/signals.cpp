@@ -48,6 +48,7 @@ void install_signal_handlers() {
 
 std::atomic<bool>& stop_flag() noexcept { return g_stop; }
 int stop_signal() noexcept { return g_stop_signal.load(std::memory_order_relaxed); }
+const std::atomic<int>& stop_signal_number() noexcept { return g_stop_signal; }
 std::atomic<bool>& rearm_flag() noexcept { return g_rearm; }
 void loading_done() noexcept { g_loading.store(false, std::memory_order_relaxed); }
 

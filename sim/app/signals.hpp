@@ -15,6 +15,8 @@ void install_signal_handlers();
 std::atomic<bool>& stop_flag() noexcept;
 /// The signal that set stop_flag() (0: none).
 int stop_signal() noexcept;
+/// The same number as an atomic, for RunOptions::stop_signal (read once the run has stopped).
+const std::atomic<int>& stop_signal_number() noexcept;
 /// Set by SIGUSR1 (RunOptions::rearm).
 std::atomic<bool>& rearm_flag() noexcept;
 /// From here on a stop signal ends the command cleanly instead of at once: call it just

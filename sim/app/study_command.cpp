@@ -2,6 +2,8 @@
 /// `numen study accuracy`, `numen study stability` (docs/results.md) and `numen study merge`
 /// (shards on a cluster, docs/studies.md).
 
+#include <unistd.h>
+
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -9,6 +11,7 @@
 #include <optional>
 
 #include "commands.hpp"
+#include "numen/sim/input_error.hpp"
 #include "numen/sim/progress_bar.hpp"
 #include "numen/sim/study_accuracy.hpp"
 #include "numen/sim/study_shard.hpp"
@@ -53,6 +56,24 @@ std::int64_t cases_of(const sim::Shard& s, std::int64_t cases) {
   return cases > s.index ? (cases - s.index + s.count - 1) / s.count : 0;
 }
 
+/// Refuses an output directory (`--out`) the study could not write its files into, before the
+/// study runs (which takes minutes to hours): an existing path that is not a directory (a file
+/// is left as it is, never truncated), a directory that cannot be created, or one without
+/// write permission. InputError with key `--out` (status 2). Creates the directory.
+void check_output_dir(const std::string& dir) {
+  std::error_code ec;
+  const std::filesystem::file_status st = std::filesystem::status(dir, ec);
+  if (std::filesystem::exists(st) && !std::filesystem::is_directory(st))
+    throw sim::InputError("", 0, 0, "--out",
+                          dir + " is not a directory (the study writes its files into one)");
+  if (!std::filesystem::exists(st)) {
+    std::filesystem::create_directories(dir, ec);
+    if (ec) throw sim::InputError("", 0, 0, "--out", dir + ": cannot create the directory (" + ec.message() + ")");
+  }
+  if (::access(dir.c_str(), W_OK | X_OK) != 0)
+    throw sim::InputError("", 0, 0, "--out", dir + ": cannot write in this directory");
+}
+
 /// The file of `shard` in `out`; prints that it is skipped and returns "" when it exists.
 std::string shard_path_or_skip(const std::string& study, const sim::Shard& shard,
                                const std::string& out) {
@@ -93,6 +114,7 @@ int AccuracyStudyCommand::execute() const {
     print_cases(sim::accuracy_cases(options));
     return 0;
   }
+  check_output_dir(out_);
   std::string path;
   if (shard && (path = shard_path_or_skip("accuracy", *shard, out_)).empty()) return 0;
   sim::ProgressBar bar;
@@ -137,6 +159,7 @@ int StabilityStudyCommand::execute() const {
     print_cases(sim::stability_cases(options));
     return 0;
   }
+  check_output_dir(out_);
   std::string path;
   if (shard && (path = shard_path_or_skip("stability", *shard, out_)).empty()) return 0;
   sim::ProgressBar bar;
@@ -171,6 +194,7 @@ MergeStudyCommand::MergeStudyCommand(CLI::App& study)
 int MergeStudyCommand::execute() const {
   const std::string out = out_.empty() ? dir_ : out_;
   const std::string study = sim::study_of_shard_dir(dir_);
+  check_output_dir(out);
   if (study == "stability") {
     const sim::StabilityResult result = sim::merge_stability_shards(dir_);
     sim::write_stability_csv(result, out);

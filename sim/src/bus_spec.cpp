@@ -28,11 +28,14 @@
 namespace numen::sim {
 namespace {
 
-void add_unique(std::vector<hal::CanFilter>& out, std::uint32_t cob_id) {
-  const hal::CanFilter f = hal::exact_standard_filter(cob_id);
+void add_unique(std::vector<hal::CanFilter>& out, const hal::CanFilter& f) {
   for (const hal::CanFilter& g : out)
     if (g.id == f.id && g.mask == f.mask) return;
   out.push_back(f);
+}
+
+void add_unique(std::vector<hal::CanFilter>& out, std::uint32_t cob_id) {
+  add_unique(out, hal::exact_standard_filter(cob_id));
 }
 
 bool starts_with(const std::string& s, const char* prefix) {
@@ -82,7 +85,13 @@ BusSpec parse_bus_spec(const std::string& spec) {
 
 std::vector<hal::CanFilter> controller_filters(const hal::DeviceConfig& config) {
   std::vector<hal::CanFilter> out;
-  for (const hal::AxisConfig& axis : config.axes) add_unique(out, axis.encoder_cob_id);
+  // An encoder's COB-ID passes whole: a remote request on it is a malformed sample and a
+  // 29-bit frame of its number an unknown id (InstrumentDevice::on_frame()), counted in the
+  // summary (frames rejected, unknown id) instead of vanishing in the filter.
+  for (const hal::AxisConfig& axis : config.axes) {
+    add_unique(out, hal::standard_id_filter(axis.encoder_cob_id));
+    add_unique(out, hal::extended_id_filter(axis.encoder_cob_id));
+  }
   if (config.canopen.managed) {
     for (const hal::CanopenAxisConfig& x : config.canopen.axes) {
       if (x.drive_tpdo_cob_id != 0) add_unique(out, x.drive_tpdo_cob_id);

@@ -4,9 +4,11 @@
 #include "numen/sim/cli_values.hpp"
 
 #include <cctype>
+#include <charconv>
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
+#include <system_error>
 
 #include "numen/sim/input_error.hpp"
 
@@ -24,6 +26,16 @@ std::string check_seconds(const std::string& text, double lo, double hi, bool lo
   const double v = std::strtod(text.c_str(), &end);
   if (end != text.c_str() + text.size() || errno == ERANGE || !std::isfinite(v)) return expected;
   if (v > hi || v < lo || (lo_exclusive && v == lo)) return expected;
+  return "";
+}
+
+std::string check_count(const std::string& text, long long lo, long long hi) {
+  const std::string expected = "must be a whole number in [" + std::to_string(lo) + ", " +
+                               std::to_string(hi) + "], got '" + InputError::visible(text) + "'";
+  long long v = 0;
+  const char* end = text.data() + text.size();
+  const std::from_chars_result r = std::from_chars(text.data(), end, v);
+  if (text.empty() || r.ec != std::errc() || r.ptr != end || v < lo || v > hi) return expected;
   return "";
 }
 

@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <cstddef>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
@@ -114,6 +115,9 @@ void check_vertex_lines(const std::string& path, std::istream& in) {
 }  // namespace
 
 core::TriangleMesh load_obj_mesh(const std::string& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec))
+    throw InputError(path, 0, 0, "", "is a directory, not an OBJ file");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path, 0, 0, "", "cannot open the OBJ file");
   check_vertex_lines(path, in);

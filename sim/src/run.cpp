@@ -586,6 +586,9 @@ RunSummary SceneRunner::summary() const {
     s.frames_unknown_id = static_cast<std::int64_t>(d.frames_unknown_id);
     s.error_frames = static_cast<std::int64_t>(d.frames_error);
     s.frames_rejected = static_cast<std::int64_t>(d.frames_wrong_length + d.frames_not_data);
+    s.encoder_frames_fd = static_cast<std::int64_t>(d.frames_fd);
+    s.encoder_frames_remote = static_cast<std::int64_t>(d.frames_remote);
+    s.encoder_frames_wrong_length = static_cast<std::int64_t>(d.frames_wrong_length);
     s.values_out_of_range = static_cast<std::int64_t>(d.rejected_out_of_range);
     s.values_jump = static_cast<std::int64_t>(d.rejected_jump);
     if (const hal::CanopenMaster* m = loop_.canopen())
@@ -891,8 +894,9 @@ RunSummary run_scene(const Scene& scene, const RunOptions& options) {
     check_output_path(options.record_view_path, "--record-view");
   RunSummary s = scene.admittance ? run_admittance_scene(scene, options)  // admittance_run.cpp
                                   : run_impedance_scene(scene, options);
+  if (s.stopped && options.stop_signal != nullptr) s.stop_signal = options.stop_signal->load();
   RunVerdict verdict = run_verdict(s);
-  s.exit_status = code(verdict.status);
+  s.exit_status = verdict.exit_status;
   s.exit_reasons = std::move(verdict.reasons);
   return s;
 }

@@ -249,6 +249,12 @@ constexpr RunFigure kFigures[] = {
      [](const S& s) noexcept { return count(s.frames_rejected); }},
     {"frames_unknown_id", "", "Frames of an id no axis has", K::kCount,
      [](const S& s) noexcept { return count(s.frames_unknown_id); }},
+    {"encoder_frames_fd", "", "Encoder frames rejected: CAN FD", K::kCount,
+     [](const S& s) noexcept { return count(s.encoder_frames_fd); }},
+    {"encoder_frames_remote", "", "Encoder frames rejected: remote requests", K::kCount,
+     [](const S& s) noexcept { return count(s.encoder_frames_remote); }},
+    {"encoder_frames_wrong_length", "", "Encoder frames rejected: wrong length", K::kCount,
+     [](const S& s) noexcept { return count(s.encoder_frames_wrong_length); }},
     {"error_frames", "", "Controller error reports the device ignored", K::kCount,
      [](const S& s) noexcept { return count(s.error_frames); }},
     {"values_out_of_range", "", "Axis values rejected as out of [min, max]", K::kCount,
@@ -306,6 +312,8 @@ constexpr RunFigure kFigures[] = {
      [](const S& s) noexcept { return count(s.trace_io_errors); }},
     {"stopped", "", "Ended early by a stop signal", K::kFlag,
      [](const S& s) noexcept { return flag(s.stopped); }},
+    {"stop_signal", "", "The signal that stopped it (2 SIGINT, 15 SIGTERM; 0: none or unknown)",
+     K::kCount, [](const S& s) noexcept { return count(s.stop_signal); }},
     {"shutdown_periods", "", "Periods run to shut down (zero torque, drives disabled)",
      K::kCount, [](const S& s) noexcept { return count(s.shutdown_periods); }},
     {"drives_disabled", "", "Every drive disabled at the end of the shutdown", K::kFlag,
@@ -487,7 +495,7 @@ constexpr RunFigure kFigures[] = {
      [](const S& s) noexcept { return count(s.exit_status); }},
     {"exit_status_name", "", "Its name", K::kText,
      [](const S& s) noexcept {
-       return text(to_string(static_cast<ExitStatus>(s.exit_status)));
+       return text(exit_status_name(s.exit_status));
      }},
     {"exit_reasons", "", "Every condition behind the exit status, most severe first",
      K::kTextList, [](const S& s) noexcept { return list(s.exit_reasons); }},

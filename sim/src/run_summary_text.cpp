@@ -105,6 +105,11 @@ constexpr RunSummarySegment kLayout[] = {
      "{frames_unknown_id}), error frames ignored {error_frames}, values out of range "
      "{values_out_of_range}, jumps {values_jump}\n",
      set("real_bus")},
+    // The simulated bus and a log replay: the frames rejected are named (they were silent).
+    {"  frames rejected {frames_rejected} (encoder frames: CAN FD {encoder_frames_fd}, remote "
+     "{encoder_frames_remote}, wrong length {encoder_frames_wrong_length}), unknown id "
+     "{frames_unknown_id}\n",
+     unset("real_bus"), set("frames_rejected", "frames_unknown_id")},
     {"  loop period {loop.period_ns:us1} us, overrun budget {loop.overrun_budget_ns:us1} us, "
      "{loop.periods} periods\n",
      set("real_bus")},
@@ -136,6 +141,7 @@ constexpr RunSummarySegment kLayout[] = {
      "{last_torque_stop_period}\n",
      set("real_bus")},
     {"  end: stopped by signal", set("real_bus"), set("stopped")},
+    {" {stop_signal}", set("real_bus"), set("stopped"), set("stop_signal")},
     {"  end: duration reached", set("real_bus"), unset("stopped")},
     {", shutdown {shutdown_periods} periods, drives ", set("real_bus")},
     {"disabled", set("real_bus"), set("drives_disabled")},

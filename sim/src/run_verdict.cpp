@@ -3,6 +3,7 @@
 
 #include "numen/sim/run_verdict.hpp"
 
+#include <csignal>
 #include <cstdio>
 #include <string>
 
@@ -77,12 +78,58 @@ RunVerdict run_verdict(const RunSummary& s) {
                                       n(s.trace_io_errors) + " I/O errors)");
   if (s.rejected_samples > 0)
     add(ExitStatus::kSamplesRejected, n(s.rejected_samples) + " axis samples rejected");
+  // Frames on an encoder's COB-ID of the wrong kind or length: each rejected its axis's
+  // sample. Named, whatever else the run latched (every encoder frame sent as CAN FD read
+  // "first: drive stuck" and nothing about the frames).
+  if (const std::int64_t bad =
+          s.encoder_frames_fd + s.encoder_frames_remote + s.encoder_frames_wrong_length;
+      bad > 0)
+    add(ExitStatus::kSamplesRejected,
+        n(bad) + " encoder frames rejected (CAN FD " + n(s.encoder_frames_fd) + ", remote " +
+            n(s.encoder_frames_remote) + ", wrong length " + n(s.encoder_frames_wrong_length) +
+            "): encoder TPDOs are classic CAN data frames of their mapped length");
   // A run a signal ended (perhaps before the first sample arrived) is not judged on this.
-  if (s.steps > 0 && s.invalid_periods >= s.steps && !s.stopped)
-    add(ExitStatus::kSamplesRejected, "no period had a valid sample");
+  if (s.steps > 0 && s.invalid_periods >= s.steps && !s.stopped) {
+    // The managed stack's encoders send once the start-up has made them operational: a run
+    // that ends before that has no sample, through no fault of the frames.
+    if (s.managed && s.startup.rfind("operational", 0) != 0 && s.startup.rfind("failed", 0) != 0)
+      add(ExitStatus::kSamplesRejected,
+          "no period had a valid sample: the run's " + n(s.steps) +
+              " periods ended before the CANopen start-up finished (still in phase '" +
+              s.startup + "'); the encoders send once their nodes are operational: run longer");
+    else
+      add(ExitStatus::kSamplesRejected, "no period had a valid sample");
+  }
   if (s.bus.rfind("log:", 0) == 0 && s.bus_frames_replayed == 0)
     add(ExitStatus::kSamplesRejected, "the bus log gave no frame");
+  v.exit_status = code(v.status);
+  if (s.stopped) {
+    v.reasons.push_back(s.stop_signal > 0 ? "stopped by a signal: " + signal_name(s.stop_signal) +
+                                                " (" + n(s.stop_signal) + ") after " +
+                                                n(s.steps) + " periods"
+                                          : "stopped early (RunOptions::stop) after " +
+                                                n(s.steps) + " periods");
+    if (v.status == ExitStatus::kClean && s.stop_signal > 0) v.exit_status = 128 + s.stop_signal;
+  }
   return v;
+}
+
+const char* exit_status_name(int status) noexcept {
+  if (status > 128 && status <= 128 + 64) return "stopped by a signal";
+  if (status < 0 || status > code(ExitStatus::kSamplesRejected)) return "?";
+  return to_string(static_cast<ExitStatus>(status));
+}
+
+std::string signal_name(int signal) {
+  switch (signal) {
+    case SIGINT: return "SIGINT";
+    case SIGTERM: return "SIGTERM";
+    case SIGHUP: return "SIGHUP";
+    case SIGQUIT: return "SIGQUIT";
+    case SIGUSR1: return "SIGUSR1";
+    case SIGUSR2: return "SIGUSR2";
+    default: return "signal " + std::to_string(signal);
+  }
 }
 
 }  // namespace numen::sim

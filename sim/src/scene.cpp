@@ -770,8 +770,13 @@ Scene load_scene(const std::string& path, const SceneOverrides& overrides) {
     if (cap < 1 || cap > 1 << 20) bus->fail("capacity", "must be in [1, 2^20]");
     scene.bus.capacity = static_cast<std::size_t>(cap);
     scene.compute_phase_s = bus->number_or("compute_phase", 2.0 * latency + 50e-6);
-    if (!(scene.compute_phase_s >= 2.0 * latency && scene.compute_phase_s < scene.model.dt))
-      bus->fail("compute_phase", "must be in [2·latency, dt): one SYNC round trip must fit in the period");
+    // Only a compute_phase the file sets is blamed; the default's misfit is dt's (below).
+    if (bus->has("compute_phase") &&
+        !(scene.compute_phase_s >= 2.0 * latency && scene.compute_phase_s < scene.model.dt))
+      bus->fail("compute_phase",
+                "must be in [2·latency, dt) = [" + format_input_number(2.0 * latency) + ", " +
+                    format_input_number(scene.model.dt) + ") s: one SYNC round trip must fit in "
+                    "the period (got " + format_input_number(scene.compute_phase_s) + " s)");
   } else {
     scene.compute_phase_s = 2.0 * latency + 50e-6;
   }
@@ -779,7 +784,13 @@ Scene load_scene(const std::string& path, const SceneOverrides& overrides) {
   if (std::llround(scene.compute_phase_s * 1e9) < 2 * scene.bus.latency_ns)  // after rounding to ns
     scene.compute_phase_s = 2.0 * static_cast<double>(scene.bus.latency_ns) * 1e-9;
   if (!(scene.compute_phase_s < scene.model.dt))
-    root.fail("dt", "the period is shorter than one SYNC round trip on the bus (2·latency + 50 µs)");
+    root.fail("dt", "the period " + format_input_number(scene.model.dt) +
+                        " s is not longer than the compute phase " +
+                        format_input_number(scene.compute_phase_s) +
+                        " s (one SYNC round trip, 2·[bus] latency = " +
+                        format_input_number(2.0 * latency) +
+                        " s, plus 50 µs unless [bus] compute_phase is set): one round trip must "
+                        "fit in the period");
 
   for (const TomlTable& e : root.tables("event")) {
     e.allow_only({"time", "attach"});

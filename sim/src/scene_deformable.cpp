@@ -120,6 +120,8 @@ core::TriangleMesh parse_mesh(const TomlTable& t, const std::filesystem::path& s
   std::filesystem::path file = t.string("file");
   if (file.is_relative()) file = scene_dir / file;
   std::error_code ec;
+  if (std::filesystem::is_directory(file, ec))
+    t.fail("file", file.string() + " is a directory, not an OBJ mesh file");
   if (!std::filesystem::is_regular_file(file, ec))
     t.fail("file", "mesh file not found: " + file.string() + (ec ? " (" + ec.message() + ")" : ""));
   core::TriangleMesh mesh;

@@ -24,9 +24,9 @@ void parse_multirate(const TomlTable& root, Scene& scene) {
   const double scene_dt = table->number_in("scene_dt", 0.0, 10.0, std::nullopt);
   const double ratio = std::round(scene_dt / dt);
   if (!(ratio >= 1.0) || !(std::abs(ratio * dt - scene_dt) <= 1e-9 * scene_dt) || ratio > 1e6)
-    table->fail("scene_dt", "must be a whole multiple of dt = " + format_input_number(dt) +
-                                " s (got " + format_input_number(scene_dt) + " s, " +
-                                format_input_number(scene_dt / dt) + " dt)");
+    table->fail("scene_dt", "must be a whole multiple of dt = " + format_exact_number(dt) +
+                                " s (got " + format_exact_number(scene_dt) + " s, " +
+                                format_exact_number(scene_dt / dt) + " dt)");
   MultirateScene m;
   m.ratio = static_cast<int>(ratio);
   m.scene_dt_s = ratio * dt;

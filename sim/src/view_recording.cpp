@@ -1,5 +1,7 @@
 #include "numen/sim/view_recording.hpp"
 
+#include <sys/stat.h>
+
 #include <cerrno>
 #include <cstring>
 #include <nlohmann/json.hpp>
@@ -73,6 +75,12 @@ ViewRecordingReader::ViewRecordingReader(const std::string& path) : path_(path) 
   file_ = std::fopen(path.c_str(), "rb");
   if (file_ == nullptr)
     throw InputError(path, 0, 0, "", std::string("cannot open: ") + std::strerror(errno));
+  struct stat st {};
+  if (::fstat(::fileno(file_), &st) == 0 && S_ISDIR(st.st_mode)) {
+    std::fclose(file_);
+    file_ = nullptr;
+    throw InputError(path, 0, 0, "", "is a directory, not a numen view recording");
+  }
   try {
     std::uint64_t at = 0;
     char magic[8];

@@ -34,17 +34,35 @@ const numen::sim::Scene& default_scene() {
 }
 
 /// The COB-IDs of exact 11-bit data-frame filters; fails the test on any other kind of filter.
-std::set<std::uint32_t> exact_ids(const std::vector<numen::hal::CanFilter>& filters) {
+/// The 11-bit ids of `filters` that are exact (exact_standard_filter()); each id in `whole` must
+/// instead come as the pair standard_id_filter() + extended_id_filter() (an encoder's COB-ID).
+std::set<std::uint32_t> exact_ids(const std::vector<numen::hal::CanFilter>& filters,
+                                  const std::set<std::uint32_t>& whole = {}) {
   std::set<std::uint32_t> ids;
+  std::size_t pairs = 0;
   for (const numen::hal::CanFilter& f : filters) {
+    const std::uint32_t id = f.id & numen::hal::kExtendedIdMask;
+    if (whole.count(id) != 0) {
+      const bool standard = f.id == numen::hal::standard_id_filter(id).id &&
+                            f.mask == numen::hal::standard_id_filter(id).mask;
+      const bool extended = f.id == numen::hal::extended_id_filter(id).id &&
+                            f.mask == numen::hal::extended_id_filter(id).mask;
+      EXPECT_TRUE(standard || extended) << std::hex << f.id << " mask " << f.mask;
+      ++pairs;
+      continue;
+    }
     const numen::hal::CanFilter exact = numen::hal::exact_standard_filter(f.id);
     EXPECT_EQ(f.mask, exact.mask) << std::hex << f.id;
     EXPECT_EQ(f.id, exact.id);
     ids.insert(f.id);
   }
-  EXPECT_EQ(ids.size(), filters.size()) << "duplicate filters";
+  EXPECT_EQ(pairs, 2 * whole.size()) << "each whole id: its 11-bit and its 29-bit filter";
+  EXPECT_EQ(ids.size() + pairs, filters.size()) << "duplicate filters";
+  for (const std::uint32_t id : whole) ids.insert(id);
   return ids;
 }
+
+const std::set<std::uint32_t> kEncoderIds = {0x181, 0x182, 0x183, 0x184, 0x185};
 
 std::string error_of(const std::string& spec) {
   try {
@@ -107,7 +125,9 @@ TEST(BusSpec, ManagedFiltersAreExactlyTheIdsEachEndReads) {
   ASSERT_EQ(dev.axes.size(), 5u);
   // Controller: encoder TPDOs 0x181–0x185, drive TPDOs 0x281–0x283, heartbeats 0x701–0x705,
   // EMCY 0x081–0x085 (docs/protocol.md §9).
-  const std::set<std::uint32_t> ctl = exact_ids(numen::sim::controller_filters(dev));
+  // The encoders' COB-IDs pass whole (remote requests and 29-bit frames of their numbers are
+  // counted by the controller, not filtered out unseen).
+  const std::set<std::uint32_t> ctl = exact_ids(numen::sim::controller_filters(dev), kEncoderIds);
   // The shipped scene configures its nodes from DCFs: their SDO responses 0x581–0x585 too.
   const std::set<std::uint32_t> want_ctl = {0x181, 0x182, 0x183, 0x184, 0x185, 0x281, 0x282, 0x283,
                                             0x701, 0x702, 0x703, 0x704, 0x705, 0x081, 0x082, 0x083,
@@ -125,7 +145,7 @@ TEST(BusSpec, MinimalProtocolFiltersOnlyTheEncodersAndTheTorques) {
   NUMEN_REQUIRE_ARTICULATION();
   numen::hal::DeviceConfig dev = default_scene().device;
   dev.canopen.managed = false;
-  EXPECT_EQ(exact_ids(numen::sim::controller_filters(dev)),
+  EXPECT_EQ(exact_ids(numen::sim::controller_filters(dev), kEncoderIds),
             (std::set<std::uint32_t>{0x181, 0x182, 0x183, 0x184, 0x185}));
   EXPECT_EQ(exact_ids(numen::sim::device_filters(dev)),
             (std::set<std::uint32_t>{0x080, 0x201, 0x202, 0x203}));

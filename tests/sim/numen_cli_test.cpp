@@ -119,8 +119,9 @@ TEST(NumenCli, StopSignalWhileLoadingEndsTheProcessAtOnce) {
 }
 
 // Once running, SIGTERM ends the run cleanly: the summary is printed and the status is
-// 128 + SIGTERM (the run did not do what was asked). The recorder's temporary file exists once
-// the runner is built, i.e. once loading is over.
+// 128 + SIGTERM (the run did not do what was asked); the summary states that status and names
+// the signal (it read "exit status 0 (clean)"). The recorder's temporary file exists once the
+// runner is built, i.e. once loading is over.
 TEST(NumenCli, StopSignalWhileRunningPrintsTheSummary) {
   NUMEN_REQUIRE_ARTICULATION();
   TempDir dir;
@@ -133,7 +134,11 @@ TEST(NumenCli, StopSignalWhileRunningPrintsTheSummary) {
                 dir.path(), 30, term);  // overruns on a loaded machine count, never latch
   EXPECT_FALSE(r.timed_out);
   EXPECT_EQ(r.status, 128 + SIGTERM) << r.out << r.err;
-  EXPECT_NE(r.out.find("exit status 0 (clean)"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("exit status 143 (stopped by a signal): stopped by a signal: SIGTERM (15) "
+                       "after "),
+            std::string::npos)
+      << r.out;
+  EXPECT_EQ(r.out.find("exit status 0"), std::string::npos) << r.out;
   EXPECT_LT(r.wall_s, 20.0);
 }
 
@@ -183,6 +188,32 @@ TEST(NumenCli, RefusedRunLeavesItsOutputFilesByteIdentical) {
   }
 }
 
+// ... and --json carries the same: exit_status 130 for SIGINT, its name, the signal number and
+// a reason naming it (it had exit_status 0 and empty exit_reasons).
+TEST(NumenCli, StopSignalIsInTheJsonSummary) {
+  NUMEN_REQUIRE_ARTICULATION();
+  TempDir dir;
+  const std::string log = (dir / "run.log").string();
+  ChildSignal interrupt;
+  interrupt.signal = SIGINT;
+  interrupt.ready = [&dir] { return writing(dir, "run.log"); };
+  const ChildResult r = run_child({kNumen, "run", "--realtime", "--overrun-limit", "0",
+                                   "--duration", "60", "--record", log, "--json"},
+                                  dir.path(), 30, interrupt);
+  EXPECT_FALSE(r.timed_out);
+  ASSERT_EQ(r.status, 128 + SIGINT) << r.out << r.err;
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j.at("exit_status"), 128 + SIGINT);
+  EXPECT_EQ(j.at("exit_status_name"), "stopped by a signal");
+  EXPECT_EQ(j.at("stopped"), true);
+  EXPECT_EQ(j.at("stop_signal"), SIGINT);
+  ASSERT_EQ(j.at("exit_reasons").size(), 1u) << r.out;
+  EXPECT_EQ(j.at("exit_reasons")[0].get<std::string>().rfind(
+                "stopped by a signal: SIGINT (2) after ", 0),
+            0u)
+      << r.out;
+}
+
 // Defect 4: --record to a full disk used to report "recorded N frames, 0 dropped" and exit 0.
 TEST(NumenCli, RecordingThatLosesFramesExitsWithLostRecords) {
   NUMEN_REQUIRE_ARTICULATION();
@@ -191,6 +222,29 @@ TEST(NumenCli, RecordingThatLosesFramesExitsWithLostRecords) {
       run_child({kNumen, "run", "--duration", "0.5", "--record", "/dev/full"}, dir.path(), 120);
   EXPECT_EQ(r.status, 5) << r.out << r.err;
   EXPECT_NE(r.out.find("lost records: --record"), std::string::npos) << r.out;
+}
+
+// --record to a full device wrote nothing, yet read "24 924 of 25 159 frames written (249 I/O
+// errors)" (offline) and "25 159 of 25 159 written" (paced): stdio had accepted the lines into
+// its buffer. A frame now counts as written once write(2) accepted its bytes: none here.
+TEST(NumenCli, RecordingToAFullDeviceWritesNoFrame) {
+  NUMEN_REQUIRE_ARTICULATION();
+  TempDir dir;
+  for (const bool paced : {false, true}) {
+    std::vector<std::string> args = {kNumen, "run", "--duration", "0.3", "--record", "/dev/full",
+                                     "--json"};
+    if (paced) args.insert(args.end(), {"--realtime", "--overrun-limit", "0"});
+    const ChildResult r = run_child(args, dir.path(), 120);
+    ASSERT_EQ(r.status, 5) << r.out << r.err;
+    const nlohmann::json j = nlohmann::json::parse(r.out);
+    EXPECT_GT(j.at("bus_frames_recorded").get<std::int64_t>(), 300) << "paced " << paced;
+    EXPECT_EQ(j.at("bus_record_written"), 0) << "paced " << paced;
+    EXPECT_GT(j.at("bus_record_io_errors").get<std::int64_t>(), 0) << "paced " << paced;
+    const std::string reason = "lost records: --record: 0 of " +
+                               std::to_string(j.at("bus_frames_recorded").get<std::int64_t>()) +
+                               " frames written";
+    EXPECT_EQ(j.at("exit_reasons")[0].get<std::string>().rfind(reason, 0), 0u) << r.out;
+  }
 }
 
 // Defect 4: --json carries the verdict; a clean run of the default scene exits 0.
@@ -322,6 +376,81 @@ TEST(LargeInput, TrajectoryMemoryDoesNotGrowWithTheFile) {
   EXPECT_LT(c.max_rss_kib - a.max_rss_kib, static_cast<long>(rows * 256 / 1024));
 }
 
+// A two-row trajectory (1/30 s: 33 periods) ends the run before the 50-period CANopen start-up:
+// it said "no period had a valid sample"; it names the start-up that never finished and the
+// periods the run had.
+TEST(NumenCli, ARunShorterThanTheStartUpSaysSo) {
+  NUMEN_REQUIRE_ARTICULATION();
+  TempDir dir;
+  const std::string excerpt = numen::test::read_file(
+      (std::filesystem::path(numen::sim::default_scene_path()).parent_path() /
+       "../data/jigsaws_suturing_b002_excerpt.txt")
+          .string());
+  const std::size_t second_end = excerpt.find('\n', excerpt.find('\n') + 1);
+  const std::string rows = dir.write("two_rows.txt", excerpt.substr(0, second_end + 1));
+  const std::string scene =
+      dir.write("scene.toml", default_scene_copy({{kExcerptLine, "file = \"" + rows + "\""}}));
+  const ChildResult r = run_child({kNumen, "run", scene, "--json"}, dir.path(), 60);
+  ASSERT_EQ(r.status, 6) << r.out << r.err;
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  ASSERT_EQ(j.at("exit_reasons").size(), 1u) << r.out;
+  const std::string reason = j.at("exit_reasons")[0];
+  EXPECT_EQ(reason.rfind("samples rejected: no period had a valid sample: the run's 33 periods "
+                         "ended before the CANopen start-up finished (still in phase '",
+                         0),
+            0u)
+      << reason;
+}
+
+// A misspelt subcommand is named with the known ones (CLI11 said "A subcommand is required").
+TEST(NumenCli, UnknownSubcommandIsNamedWithTheKnownOnes) {
+  TempDir dir;
+  const ChildResult r = run_child({kNumen, "frobnicate"}, dir.path(), 30);
+  EXPECT_EQ(r.status, 2) << r.out << r.err;
+  EXPECT_EQ(r.err,
+            "numen: unknown subcommand 'frobnicate' of numen; the subcommands are: run, device, "
+            "info, figures, view, scan, sdo, study\n");
+  const ChildResult study = run_child({kNumen, "study", "frob", "--quick"}, dir.path(), 30);
+  EXPECT_EQ(study.status, 2) << study.out << study.err;
+  EXPECT_EQ(study.err,
+            "numen: unknown subcommand 'frob' of numen study; the subcommands are: accuracy, "
+            "stability, merge\n");
+}
+
+// A negative --overrun-limit got CLI11's bare "Could not convert": the message names the option
+// and the range.
+TEST(NumenCli, NegativeOverrunLimitNamesTheOptionAndTheRange) {
+  TempDir dir;
+  for (const char* v : {"-1", "4294967296", "2.5", "x"}) {
+    const ChildResult r =
+        run_child({kNumen, "run", "--duration", "0.01", "--overrun-limit", v}, dir.path(), 30);
+    EXPECT_EQ(r.status, 2) << v << ": " << r.out << r.err;
+    EXPECT_NE(r.err.find("--overrun-limit: must be a whole number in [0, 4294967295], got '" +
+                         std::string(v) + "'"),
+              std::string::npos)
+        << v << ": " << r.err;
+  }
+}
+
+// `numen study ... --out FILE` computed the whole study, then failed on the path. The output
+// directory is checked first (status 2, naming --out), and an existing file is left as it was.
+TEST(NumenCli, StudyOutputThatIsAFileIsRefusedBeforeTheStudy) {
+  TempDir dir;
+  const std::string file = dir.write("hostname", "keep me\n");
+  for (const char* study : {"accuracy", "stability"}) {
+    const ChildResult r = run_child({kNumen, "study", study, "--quick", "--out", file}, dir.path(), 30);
+    EXPECT_EQ(r.status, 2) << study << ": " << r.out << r.err;
+    EXPECT_NE(r.err.find("--out: " + file + " is not a directory"), std::string::npos) << r.err;
+    EXPECT_EQ(numen::test::read_file(file), "keep me\n");
+  }
+  const ChildResult nested = run_child(
+      {kNumen, "study", "accuracy", "--quick", "--out", file + "/sub"}, dir.path(), 30);
+  EXPECT_EQ(nested.status, 2) << nested.out << nested.err;
+  EXPECT_NE(nested.err.find("--out: " + file + "/sub: cannot create the directory"),
+            std::string::npos)
+      << nested.err;
+}
+
 // Defect 4: a refused command-line value is "input rejected" (2), not CLI11's own codes.
 TEST(NumenCli, RefusedOptionValueExitsWithInputRejected) {
   TempDir dir;
@@ -438,6 +567,16 @@ TEST(NumenCli, ViewOfAFileThatIsNotARecordingIsInputRejected) {
   const ChildResult r = run_child({kNumen, "view", file, "--port", "0"}, dir.path(), 30);
   EXPECT_EQ(r.status, 2) << r.out << r.err;
   EXPECT_NE(r.err.find(file), std::string::npos) << r.err;
+  EXPECT_EQ(r.out.find("open http://"), std::string::npos) << r.out;
+}
+
+// `numen view DIR` said "not a numen view recording": it says it is a directory.
+TEST(NumenCli, ViewOfADirectorySaysItIsADirectory) {
+  TempDir dir;
+  const std::string folder = dir.path().string();
+  const ChildResult r = run_child({kNumen, "view", folder, "--port", "0"}, folder, 30);
+  EXPECT_EQ(r.status, 2) << r.out << r.err;
+  EXPECT_EQ(r.err, "numen: " + folder + ": is a directory, not a numen view recording\n");
   EXPECT_EQ(r.out.find("open http://"), std::string::npos) << r.out;
 }
 

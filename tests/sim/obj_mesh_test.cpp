@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include <filesystem>
+
 #include <string>
 
 #include "numen/sim/input_error.hpp"
@@ -71,6 +73,16 @@ TEST(ObjMesh, CubeQuadsAreTriangulated) {
   EXPECT_EQ(build_mesh_topology(m).boundary_edges, 0);
   EXPECT_NEAR(signed_volume(m), 8.0, 1e-12);  // winding kept: outward
   EXPECT_EQ(m.vertices[6], Vec3(1, 1, 1));    // file order kept
+}
+
+// A directory given as the mesh said "cannot open the OBJ file" (or read as empty): it says it
+// is a directory.
+TEST(ObjMesh, ADirectoryIsNamedAsSuch) {
+  TempDir dir;
+  const std::string folder = (dir / "meshes.obj").string();
+  std::filesystem::create_directories(folder);
+  const InputError e = load_error(folder);
+  EXPECT_EQ(std::string(e.what()), folder + ": is a directory, not an OBJ file");
 }
 
 TEST(ObjMesh, NormalsAndTexcoordsIgnored) {

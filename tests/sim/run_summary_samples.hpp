@@ -127,6 +127,9 @@ inline sim::RunSummary full_managed_summary() {
   s.sync_write_failures = 41;
   s.command_failures = 42;
   s.frames_rejected = 43;
+  s.encoder_frames_fd = 20;
+  s.encoder_frames_remote = 3;
+  s.encoder_frames_wrong_length = 2;
   s.frames_unknown_id = 44;
   s.error_frames = 45;
   s.values_out_of_range = 46;
@@ -151,6 +154,7 @@ inline sim::RunSummary full_managed_summary() {
   s.trace_written = 57;
   s.trace_io_errors = 58;
   s.stopped = true;
+  s.stop_signal = 15;
   s.rearm_requests = 2;
   s.rearms_accepted = 1;
   s.rearm_first_period = 59;

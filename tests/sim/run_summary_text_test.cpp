@@ -69,7 +69,7 @@ TEST(RunSummaryText, PrintsTheValuesInTheirFormats) {
            "400.4, max 500.5 (48 periods)\n",
            "  loop overruns: 50 (longest streak 51), skipped periods 52, invalid periods 49, SAFE "
            "STOP raised\n",
-           "  end: stopped by signal, shutdown 60 periods, drives disabled; trace records 55, "
+           "  end: stopped by signal 15, shutdown 60 periods, drives disabled; trace records 55, "
            "dropped 56, written 57, I/O errors 58\n",
            "  safety: 27 safe stop(s), 28 fault record(s); first: encoder timeout (id 2, value "
            "0.500) at 0.250 s, period 29; EMCY 30",

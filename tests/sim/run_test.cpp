@@ -25,17 +25,20 @@
 #include <iterator>
 #include <memory>
 #include <numbers>
+#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
 
 #include "alloc_counter.hpp"
+#include "child_process.hpp"
 #include "scene_text.hpp"
 #include "temp_dir.hpp"
 #include "numen/core/data.hpp"
 #include "numen/core/features.hpp"
 #include "numen/hal/device/kinematics_factory.hpp"
 #include "numen/sim/jigsaws.hpp"
+#include "numen/sim/run_verdict.hpp"
 #include "numen/sim/scene.hpp"
 #include "numen/sim/simulated_instrument.hpp"
 #include "build_features.hpp"
@@ -995,6 +998,131 @@ TEST(RunBusLog, RecordedRunReplaysBitIdentically) {
   }
   // The god-object moved: the comparison means something.
   EXPECT_GT((recorded.back() - recorded.front()).norm(), 1e-3);
+}
+
+namespace {
+
+/// `log` with, after the `nth` received line of COB-ID 0x181 (1-based), `extra` lines at its time.
+std::string with_lines_after(const std::string& log, int nth, const std::vector<std::string>& extra) {
+  std::istringstream in(log);
+  std::string out, line;
+  int seen = 0;
+  while (std::getline(in, line)) {
+    out += line + "\n";
+    if (line.find(" 181#") == std::string::npos || line.back() != 'R' || ++seen != nth) continue;
+    const std::string stamp = line.substr(0, line.find(' '));
+    for (const std::string& e : extra) out += stamp + " sim0 " + e + " R\n";
+  }
+  return out;
+}
+
+/// The log of a 600-period recorded run of the default scene.
+std::string recorded_log(const numen::test::TempDir& dir) {
+  const std::string path = (dir / "run.log").string();
+  {
+    numen::sim::BusChoice bus;
+    bus.record_path = path;
+    SceneRunner runner(default_scene(), 0, bus);
+    for (int k = 0; k < 600; ++k) runner.period();
+  }
+  return numen::test::read_file(path);
+}
+
+RunSummary replay(const numen::test::TempDir& dir, const std::string& name, const std::string& log) {
+  numen::sim::BusChoice bus;
+  bus.spec = "log:" + dir.write(name, log);
+  SceneRunner runner(default_scene(), 0, bus);
+  for (int k = 0; k < 600; ++k) runner.period();
+  return runner.summary();
+}
+
+}  // namespace
+
+// A remote request (181#R) and a 29-bit frame numbered like an encoder's COB-ID
+// (00000181#...) in a replayed log were filtered out unseen: frames_rejected 0,
+// frames_unknown_id 0, though docs/inputs.md says they are rejected / counted. They now reach
+// the controller and are counted (remote: rejected; 29-bit: unknown id).
+TEST(RunBusLog, RemoteAndExtendedFramesOnAnEncoderIdAreCounted) {
+  NUMEN_REQUIRE_ARTICULATION();
+  const numen::test::TempDir dir;
+  const std::string log = recorded_log(dir);
+  const RunSummary clean = replay(dir, "clean.log", log);
+  EXPECT_EQ(clean.frames_rejected, 0);
+  EXPECT_EQ(clean.frames_unknown_id, 0);
+  const RunSummary s = replay(
+      dir, "odd.log",
+      with_lines_after(with_lines_after(log, 300, {"181#R", "00000181#01020304"}), 400,
+                       {"181#R4", "00000181#R", "00000182#0506"}));
+  EXPECT_EQ(s.encoder_frames_remote, 2);
+  EXPECT_EQ(s.frames_rejected, 2);
+  EXPECT_EQ(s.frames_unknown_id, 3);
+  EXPECT_GT(s.rejected_samples + s.invalid_periods, clean.rejected_samples + clean.invalid_periods)
+      << "a remote request rejects its axis's sample for the period";
+  const numen::sim::RunVerdict v = numen::sim::run_verdict(s);
+  EXPECT_EQ(v.status, numen::sim::ExitStatus::kSamplesRejected);
+  EXPECT_NE(std::find(v.reasons.begin(), v.reasons.end(),
+                      "samples rejected: 2 encoder frames rejected (CAN FD 0, remote 2, wrong "
+                      "length 0): encoder TPDOs are classic CAN data frames of their mapped length"),
+            v.reasons.end());
+  const std::string text = numen::sim::format_summary(s);
+  EXPECT_NE(text.find("frames rejected 2 (encoder frames: CAN FD 0, remote 2, wrong length 0), "
+                      "unknown id 3"),
+            std::string::npos)
+      << text;
+}
+
+// Every encoder frame sent as CAN FD (181##0...): the verdict named "drive stuck" (or nothing
+// about the frames); it counts the FD frames and names them.
+TEST(RunBusLog, EncoderFramesSentAsCanFdAreCountedAndNamed) {
+  NUMEN_REQUIRE_ARTICULATION();
+  const numen::test::TempDir dir;
+  std::string log = recorded_log(dir);
+  std::int64_t encoder_lines = 0;
+  for (std::size_t at = log.find(" sim0 18"); at != std::string::npos;
+       at = log.find(" sim0 18", at + 1)) {
+    const std::size_t hash = log.find('#', at);
+    if (log.compare(log.find('\n', at) - 1, 1, "R") != 0) continue;  // received only
+    log.replace(hash, 1, "##0");
+    ++encoder_lines;
+  }
+  ASSERT_GT(encoder_lines, 1000);
+  const RunSummary s = replay(dir, "fd.log", log);
+  EXPECT_GT(s.encoder_frames_fd, 1000);
+  EXPECT_LE(s.encoder_frames_fd, encoder_lines);
+  EXPECT_EQ(s.encoder_frames_remote + s.encoder_frames_wrong_length, 0);
+  const numen::sim::RunVerdict v = numen::sim::run_verdict(s);
+  const std::string named = "samples rejected: " + std::to_string(s.encoder_frames_fd) +
+                            " encoder frames rejected (CAN FD " +
+                            std::to_string(s.encoder_frames_fd) + ", remote 0, wrong length 0)";
+  bool found = false;
+  for (const std::string& r : v.reasons) found = found || r.rfind(named, 0) == 0;
+  EXPECT_TRUE(found) << ::testing::PrintToString(v.reasons);
+}
+
+// The same frames on the simulated bus reach the controller and are counted.
+TEST(RunBadBus, RemoteExtendedAndFdFramesOnTheSimBusAreCounted) {
+  NUMEN_REQUIRE_ARTICULATION();
+  SceneRunner runner(default_scene(), 0);
+  for (int k = 0; k < 300; ++k) runner.period();
+  numen::hal::CanFrame remote;
+  remote.id = 0x181;
+  remote.flags = numen::hal::CanFlag::kRemote;
+  numen::hal::CanFrame extended;
+  extended.id = 0x181;
+  extended.flags = numen::hal::CanFlag::kExtendedId;
+  extended.len = 4;
+  numen::hal::CanFrame fd;
+  fd.id = 0x182;
+  fd.flags = numen::hal::CanFlag::kFd;
+  fd.len = 4;
+  for (const numen::hal::CanFrame& f : {remote, extended, fd})
+    ASSERT_EQ(runner.bus().device().write(f), numen::hal::IoStatus::kOk);
+  for (int k = 0; k < 5; ++k) runner.period();
+  const RunSummary s = runner.summary();
+  EXPECT_EQ(s.encoder_frames_remote, 1);
+  EXPECT_EQ(s.encoder_frames_fd, 1);
+  EXPECT_EQ(s.frames_rejected, 2);
+  EXPECT_EQ(s.frames_unknown_id, 1);
 }
 
 // recorder_settings(): a paced run never waits for its recorder's disk; an offline run has no

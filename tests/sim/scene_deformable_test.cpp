@@ -489,6 +489,19 @@ TEST(DeformableLoaderErrors, MissingObjFile) {
   EXPECT_NE(e.message().find((dir / "nowhere/probe.obj").string()), std::string::npos) << e.what();
 }
 
+// A directory given as the mesh file said "mesh file not found": it says it is a directory.
+TEST(DeformableLoaderErrors, ObjFileThatIsADirectoryIsNamedAsSuch) {
+  const std::string text = replace(kMini, "mesh = \"icosphere\"\nradius = 0.01\nsubdivisions = 1",
+                                   "mesh = \"obj\"\nfile = \"meshes\"");
+  TempDir dir;
+  std::filesystem::create_directories(dir / "meshes");
+  const InputError e = load_error(dir, text);
+  EXPECT_EQ(e.line(), line_of(text, "file = "));
+  EXPECT_EQ(e.column(), column_of(text, "file = ", "\"meshes"));
+  EXPECT_EQ(e.key(), "deformable[0].file");
+  EXPECT_EQ(e.message(), (dir / "meshes").string() + " is a directory, not an OBJ mesh file");
+}
+
 TEST(DeformableLoaderErrors, BadObjFileNamesTheSceneKey) {
   TempDir dir;
   dir.write("empty.obj", "# no faces\nv 0 0 0\n");

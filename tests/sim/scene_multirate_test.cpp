@@ -67,6 +67,13 @@ TEST(SceneMultirate, BadValuesAreLocatedErrors) {
   EXPECT_EQ(e1.key(), "multirate.scene_dt");
   EXPECT_EQ(e1.line(), numen::test::line_of(not_multiple, "scene_dt = 0.0025"));
   EXPECT_NE(std::string(e1.what()).find("whole multiple of dt"), std::string::npos) << e1.what();
+  // 1e-10 s off a multiple: the message quotes every digit (it read "got 0.001 s, 1 dt").
+  const std::string near = construction_with("[multirate]\nscene_dt = 0.0010000001\nmargin = 0.01");
+  const InputError e_near = load_error(dir, near);
+  EXPECT_EQ(e_near.key(), "multirate.scene_dt");
+  EXPECT_EQ(e_near.line(), numen::test::line_of(near, "scene_dt = 0.0010000001"));
+  EXPECT_EQ(e_near.message(),
+            "must be a whole multiple of dt = 0.001 s (got 0.0010000001 s, 1.0000001 dt)");
   const InputError e2 = load_error(dir, construction_with("[multirate]\nscene_dt = 0.0005\nmargin = 0.01"));
   EXPECT_EQ(e2.key(), "multirate.scene_dt") << "shorter than dt";
   const InputError e3 = load_error(dir, construction_with("[multirate]\nscene_dt = 0.01"));

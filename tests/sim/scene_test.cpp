@@ -1301,6 +1301,28 @@ TEST(SceneErrors, ATrajectoryFileThatIsADirectoryIsLocated) {
   EXPECT_EQ(std::string(e.what()).find("basic_filebuf"), std::string::npos) << e.what();
 }
 
+// dt = 1e-7 with a [bus] table that sets no compute_phase was blamed on bus.compute_phase at
+// the [bus] header, quoting nothing: dt is blamed at its value, with the values that clash.
+TEST(SceneErrors, APeriodShorterThanTheBusRoundTripBlamesDtWithTheValues) {
+  TempDir dir;
+  const std::string text =
+      replace(kMini, "dt = 0.001", "dt = 1e-7") + "\n[bus]\nlatency = 0.0001\n";
+  const InputError e = load_error(dir, text);
+  expect_located(e, (dir.path() / "bad.toml").string(), line_of(text, "dt = 1e-7"),
+                 column_of(text, "dt = 1e-7", "1e-7"), "dt",
+                 "the period 1e-07 s is not longer than the compute phase 0.00025 s (one SYNC "
+                 "round trip, 2·[bus] latency = 0.0002 s, plus 50 µs unless [bus] compute_phase "
+                 "is set)");
+  // A compute_phase the file sets is blamed at its own value, with the interval it misses.
+  const std::string set = replace(kMini, "dt = 0.001", "dt = 0.0005") +
+                          "\n[bus]\nlatency = 0.0001\ncompute_phase = 0.0006\n";
+  const InputError p = load_error(dir, set);
+  expect_located(p, (dir.path() / "bad.toml").string(), line_of(set, "compute_phase = 0.0006"),
+                 column_of(set, "compute_phase = 0.0006", "0.0006"), "bus.compute_phase",
+                 "must be in [2·latency, dt) = [0.0002, 0.0005) s: one SYNC round trip must fit "
+                 "in the period (got 0.0006 s)");
+}
+
 TEST(SceneErrors, ADurationShorterThanOnePeriodIsRefused) {
   TempDir dir;
   const std::string text = replace(kMini, "dt = 0.001", "dt = 0.001\nduration = 0.0001");

@@ -138,6 +138,8 @@ bool InstrumentDevice::on_frame(const CanFrame& frame) noexcept {
         break;
       case DecodeStatus::kNotDataFrame:
         ++counters_.frames_not_data;
+        if (frame.fd()) ++counters_.frames_fd;
+        else if (frame.remote()) ++counters_.frames_remote;
         st.pending = false;
         st.malformed = true;
         break;

@@ -1,6 +1,6 @@
 /// @file bus_recorder.cpp
 /// Non-blocking bus recording: a lock-free SPSC queue from the control loop to a writer
-/// thread that formats candump log lines into a stdio-buffered file.
+/// thread that formats candump log lines into a file written with write(2) (CountedLineFile).
 
 #include "numen/hal/transport/bus_recorder.hpp"
 
@@ -17,6 +17,7 @@ void CandumpWriter::close() {
   if (!file_.is_open()) return;
   writer_.stop();
   writer_.drain();
+  writer_.flush_sink();
   if (!file_.close()) writer_.count_io_error();
 }
 
@@ -30,7 +31,12 @@ SinkResult CandumpWriter::write(const CandumpRecord& record) noexcept {
   const CandumpFormatResult r = format_candump_line(t_ns, record.iface, record.frame, direction, line);
   if (!r.ok()) return SinkResult::kFormatError;
   line[r.length] = '\n';
-  return file_.write(line, r.length + 1) ? SinkResult::kWritten : SinkResult::kIoError;
+  return file_.append(line, r.length + 1) ? SinkResult::kBuffered : SinkResult::kIoError;
+}
+
+SinkSettled CandumpWriter::take_settled() noexcept {
+  const LineCounts c = file_.take_counts();
+  return SinkSettled{c.written, c.lost, c.failed_writes};
 }
 
 RecordingBus::RecordingBus(Bus& inner, CandumpWriter& writer, std::string_view iface)

@@ -1,12 +1,14 @@
 /// @file line_file.cpp
-/// LineFile: stdio file for record sinks, every failure returned; written to a temporary file
-/// renamed over the path on close (line_file.hpp).
+/// The files record sinks write: OutputFile (a temporary file renamed over the path on close),
+/// LineFile (stdio) and CountedLineFile (write(2), counted lines); line_file.hpp.
 
 #include "numen/hal/transport/line_file.hpp"
 
+#include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <climits>
 #include <cstdlib>
@@ -21,7 +23,7 @@ namespace {
   throw std::runtime_error(path + ": cannot open for writing: " + std::strerror(err));
 }
 
-/// The permission bits a new file gets from fopen(): 0666 less the process's umask.
+/// The permission bits a new file gets from open(…, 0666): 0666 less the process's umask.
 mode_t default_mode() {
   const mode_t mask = ::umask(0);
   ::umask(mask);
@@ -30,18 +32,20 @@ mode_t default_mode() {
 
 }  // namespace
 
-LineFile::LineFile(const std::string& path)
-    : path_(path), target_(path), unwinding_at_open_(std::uncaught_exceptions()) {
+// ---------------------------------------------------------------- OutputFile
+
+OutputFile::OutputFile(const std::string& path)
+    : target_(path), unwinding_at_open_(std::uncaught_exceptions()) {
   struct stat st {};
   const bool exists = ::stat(path.c_str(), &st) == 0;
   if (exists && S_ISDIR(st.st_mode)) fail(path, EISDIR);
-  if (exists && !S_ISREG(st.st_mode)) {  // a device, a FIFO, a terminal: written in place
-    file_ = std::fopen(path.c_str(), "w");
-    if (file_ == nullptr) fail(path, errno);
-    return;
-  }
+  auto open_in_place = [&] {
+    fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
+    if (fd_ < 0) fail(path, errno);
+  };
+  if (exists && !S_ISREG(st.st_mode)) return open_in_place();  // a device, a FIFO, a terminal
   if (exists) {
-    if (::access(path.c_str(), W_OK) != 0) fail(path, errno);  // as fopen(path, "w") would
+    if (::access(path.c_str(), W_OK) != 0) fail(path, errno);  // as open(path, O_WRONLY) would
     char resolved[PATH_MAX];
     if (::realpath(path.c_str(), resolved) != nullptr) target_ = resolved;  // a link's target
   }
@@ -49,26 +53,49 @@ LineFile::LineFile(const std::string& path)
   const std::string dir = slash == std::string::npos ? "" : target_.substr(0, slash + 1);
   const std::string base = slash == std::string::npos ? target_ : target_.substr(slash + 1);
   std::string temp = dir + "." + base + ".XXXXXX";
-  const int fd = ::mkstemp(temp.data());
-  if (fd < 0) {
-    const int err = errno;
-    if (!exists) fail(path, err);  // no such directory, a directory not writable
-    file_ = std::fopen(path.c_str(), "w");  // the file is writable, its directory is not
-    if (file_ == nullptr) fail(path, errno);
-    return;
+  fd_ = ::mkostemp(temp.data(), O_CLOEXEC);
+  if (fd_ < 0) {
+    if (!exists) fail(path, errno);  // no such directory, a directory not writable
+    target_ = path;
+    return open_in_place();  // the file is writable, its directory is not
   }
-  ::fchmod(fd, exists ? (st.st_mode & 07777) : default_mode());
-  file_ = ::fdopen(fd, "w");
-  if (file_ == nullptr) {
-    const int err = errno;
-    ::close(fd);
-    ::unlink(temp.c_str());
-    fail(path, err);
-  }
+  ::fchmod(fd_, exists ? (st.st_mode & 07777) : default_mode());
   temp_ = std::move(temp);
 }
 
-LineFile::~LineFile() { discard(); }
+OutputFile::~OutputFile() { discard(); }
+
+void OutputFile::discard() noexcept {
+  if (!temp_.empty()) ::unlink(temp_.c_str());
+  temp_.clear();
+}
+
+bool OutputFile::finish() noexcept {
+  if (temp_.empty()) return true;
+  if (std::uncaught_exceptions() > unwinding_at_open_) {  // the run was refused: keep `path`
+    discard();
+    return true;
+  }
+  const bool ok = ::rename(temp_.c_str(), target_.c_str()) == 0;
+  if (!ok) ::unlink(temp_.c_str());
+  temp_.clear();
+  return ok;
+}
+
+// ---------------------------------------------------------------- LineFile
+
+LineFile::LineFile(const std::string& path) : path_(path), output_(path) {
+  file_ = ::fdopen(output_.fd(), "w");
+  if (file_ == nullptr) {
+    const int err = errno;
+    ::close(output_.fd());
+    fail(path, err);  // ~OutputFile deletes the temporary file
+  }
+}
+
+LineFile::~LineFile() {
+  if (file_ != nullptr) std::fclose(file_);  // output_ then deletes the temporary file
+}
 
 bool LineFile::write(const char* data, std::size_t size) noexcept {
   return file_ != nullptr && std::fwrite(data, 1, size, file_) == size;
@@ -76,30 +103,67 @@ bool LineFile::write(const char* data, std::size_t size) noexcept {
 
 bool LineFile::flush() noexcept { return file_ != nullptr && std::fflush(file_) == 0; }
 
-void LineFile::discard() noexcept {
-  if (file_ == nullptr) return;
-  std::fclose(file_);
-  file_ = nullptr;
-  if (!temp_.empty()) ::unlink(temp_.c_str());
-  temp_.clear();
-}
-
 bool LineFile::close() noexcept {
   if (file_ == nullptr) return true;
-  if (std::uncaught_exceptions() > unwinding_at_open_) {  // the run was refused: keep `path`
-    discard();
-    return true;
-  }
-  bool ok = std::fclose(file_) == 0;
+  const bool closed = std::fclose(file_) == 0;
   file_ = nullptr;
-  if (!temp_.empty()) {
-    if (::rename(temp_.c_str(), target_.c_str()) != 0) {
+  const bool finished = output_.finish();
+  return closed && finished;
+}
+
+// ---------------------------------------------------------------- CountedLineFile
+
+CountedLineFile::CountedLineFile(const std::string& path, std::size_t buffer_bytes)
+    : path_(path), output_(path), fd_(output_.fd()), buffer_(std::max<std::size_t>(buffer_bytes, 1)) {}
+
+CountedLineFile::~CountedLineFile() {
+  if (fd_ >= 0) ::close(fd_);  // output_ then deletes the temporary file
+}
+
+bool CountedLineFile::append(const char* line, std::size_t size) noexcept {
+  if (fd_ < 0 || size == 0 || size > buffer_.size() || line[size - 1] != '\n') return false;
+  // A failed write-out is counted (no caller sees its result); the line is kept.
+  if (buffer_.size() - used_ < size && !flush()) ++counts_.failed_writes;
+  std::memcpy(buffer_.data() + used_, line, size);
+  used_ += size;
+  return true;
+}
+
+bool CountedLineFile::flush() noexcept {
+  if (fd_ < 0) return false;
+  const char* const begin = buffer_.data();
+  std::size_t done = 0;
+  bool ok = true;
+  while (done < used_) {
+    const ssize_t n = ::write(fd_, begin + done, used_ - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) {  // 0 for a non-empty write: no progress, taken as a failure
       ok = false;
-      ::unlink(temp_.c_str());
+      break;
     }
-    temp_.clear();
+    done += static_cast<std::size_t>(n);
   }
+  // Every line ends in its one '\n': the lines wholly accepted are the '\n's written.
+  const auto written = static_cast<std::uint64_t>(std::count(begin, begin + done, '\n'));
+  counts_.written += written;
+  counts_.lost += static_cast<std::uint64_t>(std::count(begin, begin + used_, '\n')) - written;
+  used_ = 0;
   return ok;
+}
+
+bool CountedLineFile::close() noexcept {
+  if (fd_ < 0) return true;
+  const bool flushed = flush();
+  const bool closed = ::close(fd_) == 0;
+  fd_ = -1;
+  const bool finished = output_.finish();
+  return flushed && closed && finished;
+}
+
+LineCounts CountedLineFile::take_counts() noexcept {
+  const LineCounts c = counts_;
+  counts_ = LineCounts{};
+  return c;
 }
 
 }  // namespace numen::hal

@@ -313,6 +313,39 @@ TEST(BusRecorder, WaitPolicyDropsWhileTheWriterIsNotRunning) {
   EXPECT_EQ(writer.counters().written, 2u);
 }
 
+// A frame is written once write(2) accepted its line: on a full device none is, whether the
+// records arrived while the writer thread ran (it flushes as the queue empties: a paced run)
+// or were queued before it started (one 64 KiB buffer fills and is written out), and every
+// queued record ends in `lost`. stdio's buffer counted thousands as written.
+TEST(BusRecorder, FramesAreWrittenOnlyWhenTheKernelAcceptsThem) {
+  const numen::hal::CandumpIface can0 = numen::hal::make_candump_iface("can0");
+  for (const bool thread : {false, true}) {
+    CandumpWriterSettings ws;
+    ws.queue_capacity = 4096;
+    CandumpWriter writer("/dev/full", ws);
+    if (thread) writer.start();
+    for (int k = 0; k < 3000; ++k)
+      ASSERT_TRUE(writer.push(numen::hal::make_sync(k), can0, CandumpDirection::kTransmitted));
+    if (!thread) writer.start();
+    writer.stop();
+    const numen::hal::CandumpWriterCounters c = writer.counters();
+    EXPECT_EQ(c.queued, 3000u) << "thread " << thread;
+    EXPECT_EQ(c.written, 0u) << "thread " << thread;
+    EXPECT_EQ(c.lost, 3000u) << "thread " << thread;
+    EXPECT_GT(c.io_errors, 0u) << "thread " << thread;
+  }
+  // The same records to a file: every one written, none lost.
+  numen::test::TempDir dir;
+  CandumpWriter writer((dir / "run.log").string());
+  writer.start();
+  for (int k = 0; k < 3000; ++k)
+    ASSERT_TRUE(writer.push(numen::hal::make_sync(k), can0, CandumpDirection::kTransmitted));
+  writer.stop();
+  EXPECT_EQ(writer.counters().written, 3000u);
+  EXPECT_EQ(writer.counters().lost + writer.counters().io_errors, 0u);
+  EXPECT_EQ(read_lines((dir / "run.log").string()).size(), 3000u);
+}
+
 TEST(BusRecorder, UnformattableRecordsAreCountedNotWritten) {
   numen::test::TempDir dir;
   const std::string path = (dir / "run.log").string();

@@ -22,6 +22,22 @@ TEST(CanFilter, ExactStandardFilterPassesOnlyThatDataFrame) {
   EXPECT_FALSE(matches(f, frame_with(0x181, CanFlag::kExtendedId)));
 }
 
+// An encoder's COB-ID passes whole: its remote request and the 29-bit frame of its number reach
+// the controller, which counts them (rejected, unknown id); nothing else does.
+TEST(CanFilter, StandardAndExtendedIdFiltersPassEveryKindOfThatNumber) {
+  const CanFilter s = standard_id_filter(0x181);
+  EXPECT_TRUE(matches(s, frame_with(0x181, 0)));
+  EXPECT_TRUE(matches(s, frame_with(0x181, CanFlag::kRemote)));
+  EXPECT_TRUE(matches(s, frame_with(0x181, CanFlag::kFd)));
+  EXPECT_FALSE(matches(s, frame_with(0x181, CanFlag::kExtendedId)));
+  EXPECT_FALSE(matches(s, frame_with(0x182, CanFlag::kRemote)));
+  const CanFilter x = extended_id_filter(0x181);
+  EXPECT_TRUE(matches(x, frame_with(0x181, CanFlag::kExtendedId)));
+  EXPECT_TRUE(matches(x, frame_with(0x181, CanFlag::kExtendedId | CanFlag::kRemote)));
+  EXPECT_FALSE(matches(x, frame_with(0x181, 0)));
+  EXPECT_FALSE(matches(x, frame_with(0x12345181, CanFlag::kExtendedId)));  // not the low bits only
+}
+
 TEST(CanFilter, MaskSelectsARange) {
   // 0x180-0x1FF: all TPDO1 of every node.
   const CanFilter f{0x180, 0x780};

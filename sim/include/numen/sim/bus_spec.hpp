@@ -40,9 +40,12 @@ struct BusSpec {
 /// baud that is not a number or not a supported termios speed).
 BusSpec parse_bus_spec(const std::string& spec);
 
-/// Exact 11-bit filters for every frame the controller reads from the device of `config`:
-/// each axis's encoder TPDO; managed stack: each drive TPDO, and each node's heartbeat
-/// (0x700 + node, also its boot-up) and EMCY (0x080 + node). Ids are deduplicated.
+/// Filters for every frame the controller reads from the device of `config`: each axis's
+/// encoder COB-ID whole (hal::standard_id_filter(): data and remote; hal::extended_id_filter():
+/// the 29-bit frame of that number), so that the frames the device counts as rejected or of
+/// an unknown id reach it; managed stack: exact 11-bit filters (exact_standard_filter()) for
+/// each drive TPDO, each node's heartbeat (0x700 + node, also its boot-up), EMCY (0x080 +
+/// node) and, when configured or polled, SDO response. Filters are deduplicated.
 std::vector<hal::CanFilter> controller_filters(const hal::DeviceConfig& config);
 
 /// Exact 11-bit filters for every frame the device of `config` reads: SYNC (0x080), each

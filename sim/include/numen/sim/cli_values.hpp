@@ -16,4 +16,10 @@ namespace numen::sim {
 /// is, else e.g. "must be a finite number of seconds in (0, 1e+07], got 'nan'".
 std::string check_seconds(const std::string& text, double lo, double hi, bool lo_exclusive);
 
+/// A whole number given on the command line (`--overrun-limit`): `text` must be decimal digits
+/// with an optional leading '-' (nothing else, no blanks) and in [lo, hi]. Returns "" when it
+/// is, else e.g. "must be a whole number in [0, 4294967295], got '-1'" (CLI11's own message
+/// would be "Could not convert", without the range).
+std::string check_count(const std::string& text, long long lo, long long hi);
+
 }  // namespace numen::sim

@@ -7,6 +7,7 @@
 /// return, an escape ...) in any part are written as \xNN in what(), so that a
 /// stray byte of a user's file can neither cut the message nor garble the terminal.
 
+#include <charconv>
 #include <cstdio>
 #include <sstream>
 #include <stdexcept>
@@ -76,6 +77,15 @@ inline std::string format_input_number(double v) {
   char buf[32];
   std::snprintf(buf, sizeof buf, "%g", v);
   return buf;
+}
+
+/// `v` in the fewest digits that read back as exactly `v` (std::to_chars' shortest round trip),
+/// e.g. 0.0010000001, 0.001, 1e+308, nan: for a value whose message is about digits that %g
+/// would cut (a scene_dt that is 1e-10 s off a multiple of dt must not read "got 0.001 s").
+inline std::string format_exact_number(double v) {
+  char buf[32];
+  const std::to_chars_result r = std::to_chars(buf, buf + sizeof buf, v);
+  return std::string(buf, r.ptr);
 }
 
 }  // namespace numen::sim

@@ -89,6 +89,10 @@ struct RunOptions {
   /// shuts down (ControlLoop::shutdown(): zero torque, drives disabled) over at most
   /// shutdown_periods more periods and the summary is returned. nullptr: none.
   const std::atomic<bool>* stop = nullptr;
+  /// The number of the signal that set `stop` (SIGINT 2, SIGTERM 15; 0 or nullptr: not known),
+  /// read once the run has stopped: the summary's exit status is then 128 + it (shell
+  /// convention) unless the run's verdict is worse, and its reasons name the signal.
+  const std::atomic<int>* stop_signal = nullptr;
   /// Set (e.g. by a SIGUSR1 handler: `kill -USR1 PID`) to re-arm after a latched safe state:
   /// taken (exchanged to false) before the next period, which calls ControlLoop::rearm()
   /// (fault resets, start-up rerun if needed; the lifecycle re-arms once no cause is
@@ -398,6 +402,12 @@ struct RunSummary {
                                            ///< no known id, malformed drive TPDOs (InstrumentDevice
                                            ///< and CanopenMaster counters).
   std::int64_t frames_unknown_id = 0;      ///< ... of which of an id no axis has.
+  /// Encoder frames rejected (on an encoder's 11-bit COB-ID, InstrumentDevice): CAN FD frames,
+  /// remote requests, classic data frames of a wrong length. Part of frames_rejected; each
+  /// rejects its axis's sample for the period (docs/inputs.md).
+  std::int64_t encoder_frames_fd = 0;
+  std::int64_t encoder_frames_remote = 0;
+  std::int64_t encoder_frames_wrong_length = 0;
   std::int64_t error_frames = 0;           ///< Controller error reports the device ignored
                                            ///< (never decoded as PDOs; docs/protocol.md).
   std::int64_t values_out_of_range = 0;    ///< Axis values rejected as out of [min, max].
@@ -414,6 +424,7 @@ struct RunSummary {
   std::int64_t trace_written = 0;          ///< ... lines written to the file.
   std::int64_t trace_io_errors = 0;        ///< ... failed writes / flushes (disk full).
   bool stopped = false;                    ///< Ended early by RunOptions::stop (signal).
+  int stop_signal = 0;                     ///< ... by this signal (RunOptions::stop_signal; 0: unknown).
   std::int64_t rearm_requests = 0;         ///< RunOptions::rearm requests taken.
   std::int64_t rearms_accepted = 0;        ///< Of these, ControlLoop::rearm() kAccepted.
   std::int64_t rearm_first_period = -1;    ///< Period before which the first request was taken.
@@ -425,8 +436,9 @@ struct RunSummary {
   AdmittanceSummary admittance;
   MultirateSummary multirate;
   DivergenceSummary divergence;
-  /// The run's exit status (run_verdict(): ExitStatus as int, 0 clean) and every condition
-  /// behind it, most severe first; set by run_scene().
+  /// The run's exit status (run_verdict(): ExitStatus as int, 0 clean; 128 + stop_signal for
+  /// a run a signal stopped that is otherwise clean) and every condition behind it, most
+  /// severe first; set by run_scene(). The status the `numen run` process returns.
   int exit_status = 0;
   std::vector<std::string> exit_reasons;
 };

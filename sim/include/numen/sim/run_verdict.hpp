@@ -39,15 +39,27 @@ constexpr int code(ExitStatus s) noexcept { return static_cast<int>(s); }
 const char* to_string(ExitStatus s) noexcept;
 
 /// A run's status and every condition that holds, most severe first, as readable lines
-/// ("non-finite state: 22 013 steps", ...); empty for kClean.
+/// ("non-finite state: 22 013 steps", ..., "stopped by a signal: SIGTERM (15)"); empty for a
+/// clean run that was not stopped.
 struct RunVerdict {
   ExitStatus status = ExitStatus::kClean;
   std::vector<std::string> reasons;
+  /// The process exit status: code(status), or 128 + RunSummary::stop_signal for a run a
+  /// signal ended (RunSummary::stopped, signal known) whose status is otherwise kClean (shell
+  /// convention: 130 for SIGINT, 143 for SIGTERM).
+  int exit_status = 0;
 };
 
 /// The verdict on a finished run from its summary. A run ended early by a signal
-/// (RunSummary::stopped) is judged on what it ran; the command adds 128 + the signal number
-/// when that verdict is clean.
+/// (RunSummary::stopped) is judged on what it ran; its reasons name the signal, and its
+/// exit_status is 128 + the signal number when that verdict is clean.
 RunVerdict run_verdict(const RunSummary& summary);
+
+/// Name of a process exit status: to_string() of an ExitStatus, "stopped by a signal" for
+/// 128 + a signal number (129..192), "?" for any other.
+const char* exit_status_name(int status) noexcept;
+
+/// "SIGINT", "SIGTERM", ... for the signals numen handles, else "signal N".
+std::string signal_name(int signal);
 
 }  // namespace numen::sim

@@ -79,6 +79,8 @@ struct DeviceCounters {
   /// Remote requests and CAN FD frames on an axis's 11-bit COB-ID (the axis is marked
   /// malformed for the period).
   std::uint64_t frames_not_data = 0;
+  std::uint64_t frames_fd = 0;      ///< ... of which CAN FD frames.
+  std::uint64_t frames_remote = 0;  ///< ... of which remote requests (classic).
   /// Frames whose identifier belongs to no axis, 29-bit frames included (even with the number
   /// of an axis's COB-ID: a different identifier).
   std::uint64_t frames_unknown_id = 0;

@@ -59,15 +59,19 @@ struct RecordWriterSettings {
 
 /// Counters of an AsyncRecordWriter since construction. Read with relaxed atomics: consistent
 /// each, not with each other while the consumer runs. Every pushed record ends in exactly one
-/// of written, format_errors, io_errors once the writer is stopped (queued = written +
-/// format_errors + record io_errors); io_errors also counts failed flushes and closes.
+/// of written, format_errors, io_errors (a sink that writes each record itself) or lost (a
+/// sink that buffers them, SinkResult::kBuffered) once the writer is stopped (queued = written
+/// + format_errors + record io_errors + lost); io_errors also counts failed flushes, closes
+/// and, for a buffering sink, failed writes of its buffer.
 struct RecordWriterCounters {
   std::uint64_t queued = 0;         ///< Records accepted by push().
   std::uint64_t dropped = 0;        ///< Records refused by push(): queue full.
   std::uint64_t waits = 0;          ///< kWait: pushes that found the queue full and waited.
-  std::uint64_t written = 0;        ///< Records the sink wrote.
+  /// Records the sink wrote; for a buffering sink, records whose bytes the file accepted.
+  std::uint64_t written = 0;
   std::uint64_t format_errors = 0;  ///< Records the sink refused to format (not written).
   std::uint64_t io_errors = 0;      ///< Failed sink writes, flushes and closes.
+  std::uint64_t lost = 0;           ///< Buffered records whose bytes the file did not accept.
 };
 
 /// Outcome of RecordSink::write() for one record.
@@ -75,6 +79,17 @@ enum class SinkResult : std::uint8_t {
   kWritten,      ///< The record was written.
   kFormatError,  ///< The record cannot be represented (e.g. a negative log timestamp).
   kIoError,      ///< The write failed (disk full, I/O error, peer gone).
+  /// The record is in the sink's own buffer: neither written nor lost yet. It is counted when
+  /// the sink settles it (RecordSink::take_settled(), after a later write() or flush()).
+  kBuffered,
+};
+
+/// Buffered records (SinkResult::kBuffered) a sink settled since its last take_settled().
+struct SinkSettled {
+  std::uint64_t written = 0;    ///< Their bytes were accepted by the file.
+  std::uint64_t lost = 0;       ///< They were not (an I/O error).
+  /// Failed writes of the sink's buffer inside write() (a failed flush() is returned by it).
+  std::uint64_t io_errors = 0;
 };
 
 /// Consumer side of an AsyncRecordWriter: called on the consumer thread, never on the loop.
@@ -86,6 +101,9 @@ class RecordSink {
   virtual SinkResult write(const Record& record) noexcept = 0;
   /// Pushes buffered output out; false on failure (counted as an io error).
   virtual bool flush() noexcept = 0;
+  /// The kBuffered records settled since the last call (called after every write() and
+  /// flush()). A sink that never returns kBuffered keeps this default: none.
+  virtual SinkSettled take_settled() noexcept { return {}; }
 };
 
 /// Owner of the record queue and of the consumer thread that feeds `sink`. push() is the
@@ -147,7 +165,7 @@ class AsyncRecordWriter {
     thread_.join();
     draining_.store(false);
     drain();  // the thread drained before it ended; this picks up what arrived meanwhile
-    if (!sink_->flush()) io_errors_.fetch_add(1, std::memory_order_relaxed);
+    flush_sink();
   }
 
   /// True between start() and stop().
@@ -198,9 +216,19 @@ class AsyncRecordWriter {
         case SinkResult::kWritten: written_.fetch_add(1, std::memory_order_relaxed); break;
         case SinkResult::kFormatError: format_errors_.fetch_add(1, std::memory_order_relaxed); break;
         case SinkResult::kIoError: io_errors_.fetch_add(1, std::memory_order_relaxed); break;
+        case SinkResult::kBuffered: break;
       }
+      settle();
     }
     return count;
+  }
+
+  /// Flushes the sink (counting a failure as an io error) and counts what it settled. For the
+  /// owner while the consumer is not running (e.g. before reading the counters of a stopped
+  /// writer whose sink holds records drain() added).
+  void flush_sink() noexcept {
+    if (!sink_->flush()) io_errors_.fetch_add(1, std::memory_order_relaxed);
+    settle();
   }
 
   /// Counts one io error outside drain() (e.g. the owner's failed close).
@@ -215,6 +243,7 @@ class AsyncRecordWriter {
     c.written = written_.load(std::memory_order_relaxed);
     c.format_errors = format_errors_.load(std::memory_order_relaxed);
     c.io_errors = io_errors_.load(std::memory_order_relaxed);
+    c.lost = lost_.load(std::memory_order_relaxed);
     return c;
   }
 
@@ -231,12 +260,20 @@ class AsyncRecordWriter {
     return s;
   }
 
+  // Counts the buffered records the sink settled (SinkSettled).
+  void settle() noexcept {
+    const SinkSettled d = sink_->take_settled();
+    if (d.written != 0) written_.fetch_add(d.written, std::memory_order_relaxed);
+    if (d.lost != 0) lost_.fetch_add(d.lost, std::memory_order_relaxed);
+    if (d.io_errors != 0) io_errors_.fetch_add(d.io_errors, std::memory_order_relaxed);
+  }
+
   void run() noexcept {
     const auto period = std::chrono::nanoseconds(settings_.poll_period_ns);
     while (!stop_requested_.load()) {
       room_wanted_.store(false);
       if (drain() > 0) continue;  // keep up while records arrive
-      if (!sink_->flush()) io_errors_.fetch_add(1, std::memory_order_relaxed);
+      flush_sink();
       std::unique_lock<std::mutex> lock(wake_mutex_);
       wake_.wait_for(lock, period,
                      [this] { return stop_requested_.load() || room_wanted_.load(); });
@@ -260,6 +297,7 @@ class AsyncRecordWriter {
   std::atomic<std::uint64_t> written_{0};
   std::atomic<std::uint64_t> format_errors_{0};
   std::atomic<std::uint64_t> io_errors_{0};
+  std::atomic<std::uint64_t> lost_{0};
 };
 
 }  // namespace numen::hal

@@ -6,7 +6,8 @@
 ///    with its timestamp, into the lock-free single-producer/single-consumer queue of a
 ///    CandumpWriter (boost::lockfree::spsc_queue, capacity fixed at construction);
 ///  - the CandumpWriter's own thread pops the records, formats them and writes the lines to
-///    the log file through buffered stdio.
+///    the log file through its own buffer with write(2) (CountedLineFile), so that a line
+///    counts as written only once the kernel accepted its bytes.
 /// A full queue drops the record and counts it, so a paced control loop never waits for the
 /// disk (FullQueuePolicy::kDrop). An offline run, which has no deadline, may instead wait for
 /// the writer to make room (kWait), so that a starved writer thread loses nothing.
@@ -54,8 +55,9 @@ struct CandumpWriterSettings : RecordWriterSettings {
   std::int64_t time_offset_ns = 0;
 };
 
-/// Counters of a CandumpWriter (queued, dropped, waits, lines written, records refused by
-/// format_candump_line(), failed fwrite/fflush/fclose calls).
+/// Counters of a CandumpWriter (queued, dropped, waits, lines whose bytes write(2) accepted,
+/// records refused by format_candump_line(), failed write(2)/close(2) calls, lines lost to
+/// them). `--record /dev/full` writes 0 lines.
 using CandumpWriterCounters = RecordWriterCounters;
 
 /// Owner of a candump log file and of the AsyncRecordWriter that fills it from the loop.
@@ -65,7 +67,7 @@ using CandumpWriterCounters = RecordWriterCounters;
 /// thread. Not copyable or movable.
 class CandumpWriter final : private RecordSink<CandumpRecord> {
  public:
-  /// Opens `path` (hal::LineFile: a temporary file renamed over it by close()) and allocates
+  /// Opens `path` (hal::CountedLineFile on an OutputFile: a temporary file renamed over it by close()) and allocates
   /// the queue; the thread is not started. Throws
   /// std::runtime_error "path: cannot open for writing: <errno text>", or
   /// std::invalid_argument naming the setting (queue_capacity 0, poll_period_ns <= 0).
@@ -85,7 +87,7 @@ class CandumpWriter final : private RecordSink<CandumpRecord> {
   /// start() or the destructor.
   void stop() { writer_.stop(); }
   /// stop(), then writes what is still queued and closes the file: the log appears under its
-  /// path (LineFile::close(); a failure is counted in io_errors). Idempotent; the destructor
+  /// path (CountedLineFile::close(); a failure is counted in io_errors). Idempotent; the destructor
   /// calls it.
   void close();
   /// True between start() and stop().
@@ -109,10 +111,11 @@ class CandumpWriter final : private RecordSink<CandumpRecord> {
  private:
   SinkResult write(const CandumpRecord& record) noexcept override;
   bool flush() noexcept override { return file_.flush(); }
+  SinkSettled take_settled() noexcept override;
 
   CandumpWriterSettings settings_;
   AsyncRecordWriter<CandumpRecord> writer_;  // first: bad settings throw before the file opens
-  LineFile file_;
+  CountedLineFile file_;
 };
 
 /// Counters of one RecordingBus since construction.

@@ -33,6 +33,20 @@ constexpr CanFilter exact_standard_filter(std::uint32_t cob_id) noexcept {
   return CanFilter{cob_id & kStandardIdMask, kStandardIdMask | kFilterExtendedBit | kFilterRemoteBit};
 }
 
+/// A filter passing the 11-bit frames `cob_id` of every kind: data frame and remote request
+/// (mask = 0x7FF | extended bit). For an id whose decoder counts a remote request as malformed
+/// (an encoder TPDO): filtered out, it would be lost without a trace.
+constexpr CanFilter standard_id_filter(std::uint32_t cob_id) noexcept {
+  return CanFilter{cob_id & kStandardIdMask, kStandardIdMask | kFilterExtendedBit};
+}
+
+/// A filter passing the 29-bit frames numbered `id` (data or remote): mask = 0x1FFFFFFF |
+/// extended bit. Such a frame is not the 11-bit COB-ID `id` (ISO 11898-1); a controller that
+/// counts it as an unknown identifier must receive it to count it.
+constexpr CanFilter extended_id_filter(std::uint32_t id) noexcept {
+  return CanFilter{(id & kExtendedIdMask) | kFilterExtendedBit, kExtendedIdMask | kFilterExtendedBit};
+}
+
 /// The SocketCAN-style identifier of `frame`: id plus kFilterExtendedBit / kFilterRemoteBit.
 constexpr std::uint32_t filter_key(const CanFrame& frame) noexcept {
   std::uint32_t key = frame.id;
