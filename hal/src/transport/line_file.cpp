@@ -43,7 +43,10 @@ OutputFile::OutputFile(const std::string& path)
     fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
     if (fd_ < 0) fail(path, errno);
   };
-  if (exists && !S_ISREG(st.st_mode)) return open_in_place();  // a device, a FIFO, a terminal
+  if (exists && !S_ISREG(st.st_mode)) {  // a device, a FIFO, a terminal
+    open_in_place();
+    return;
+  }
   if (exists) {
     if (::access(path.c_str(), W_OK) != 0) fail(path, errno);  // as open(path, O_WRONLY) would
     char resolved[PATH_MAX];
@@ -57,7 +60,8 @@ OutputFile::OutputFile(const std::string& path)
   if (fd_ < 0) {
     if (!exists) fail(path, errno);  // no such directory, a directory not writable
     target_ = path;
-    return open_in_place();  // the file is writable, its directory is not
+    open_in_place();  // the file is writable, its directory is not
+    return;
   }
   ::fchmod(fd_, exists ? (st.st_mode & 07777) : default_mode());
   temp_ = std::move(temp);

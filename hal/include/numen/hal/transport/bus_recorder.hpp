@@ -67,9 +67,9 @@ using CandumpWriterCounters = RecordWriterCounters;
 /// thread. Not copyable or movable.
 class CandumpWriter final : private RecordSink<CandumpRecord> {
  public:
-  /// Opens `path` (hal::CountedLineFile on an OutputFile: a temporary file renamed over it by close()) and allocates
-  /// the queue; the thread is not started. Throws
-  /// std::runtime_error "path: cannot open for writing: <errno text>", or
+  /// Opens `path` (CountedLineFile on an OutputFile: a temporary file renamed over it by
+  /// close()) and allocates the queue; the thread is not started. Throws std::runtime_error
+  /// "path: cannot open for writing: <errno text>", or
   /// std::invalid_argument naming the setting (queue_capacity 0, poll_period_ns <= 0).
   explicit CandumpWriter(const std::string& path, const CandumpWriterSettings& settings = {});
   /// close().
@@ -87,8 +87,8 @@ class CandumpWriter final : private RecordSink<CandumpRecord> {
   /// start() or the destructor.
   void stop() { writer_.stop(); }
   /// stop(), then writes what is still queued and closes the file: the log appears under its
-  /// path (CountedLineFile::close(); a failure is counted in io_errors). Idempotent; the destructor
-  /// calls it.
+  /// path (CountedLineFile::close(); a failure is counted in io_errors). Idempotent; the
+  /// destructor calls it.
   void close();
   /// True between start() and stop().
   bool running() const noexcept { return writer_.running(); }
