@@ -116,6 +116,56 @@ TEST(ViewRecording, EveryDamagedFileIsRefusedWithItsByteOffset) {
   EXPECT_EQ(error(good), "");
 }
 
+/// A recording of no frames whose scene message is `scene` (JSON text).
+std::string recording_bytes(const std::string& scene) {
+  std::string b(numen::sim::kViewRecordingMagic, 8);
+  for (int i = 0; i < 4; ++i) b += static_cast<char>((scene.size() >> (8 * i)) & 0xFF);
+  return b + scene;
+}
+
+// A known member of the scene message with the wrong JSON type (or value) is an InputError
+// naming the file and the key, at the message's byte offset; it was a json type_error naming
+// nothing ("[json.exception.type_error.302] type must be string, but is object").
+TEST(ViewRecording, ASceneMessageMemberOfTheWrongTypeIsNamedByItsKey) {
+  TempDir dir;
+  const std::string layout = R"("layout": {"bodies": 2, "nodes": 0, "axes": 3})";
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {R"({"format": {"a": 1}, "version": 1, )" + layout + "}", "format"},
+      {R"({"format": 1, "version": 1, )" + layout + "}", "format"},
+      {R"({"format": "numen-view", "version": "1", )" + layout + "}", "version"},
+      {R"({"format": "numen-view", "version": 1.5, )" + layout + "}", "version"},
+      {R"({"format": "numen-view", "version": 1})", "layout"},
+      {R"({"format": "numen-view", "version": 1, "layout": [2, 0, 3]})", "layout"},
+      {R"({"format": "numen-view", "version": 1, "layout": {"bodies": -2, "nodes": 0, "axes": 3}})",
+       "layout.bodies"},
+      {R"({"format": "numen-view", "version": 1, "layout": {"bodies": 2, "nodes": "0", "axes": 3}})",
+       "layout.nodes"},
+      {R"({"format": "numen-view", "version": 1, "layout": {"bodies": 2, "nodes": 0}})",
+       "layout.axes"},
+  };
+  for (const auto& [scene, key] : cases) {
+    const std::string path = write_bytes(dir, "bad.nmv", recording_bytes(scene));
+    try {
+      ViewRecordingReader reader(path);
+      ADD_FAILURE() << scene << " was accepted";
+    } catch (const numen::sim::InputError& e) {
+      EXPECT_EQ(e.file(), path) << scene;
+      EXPECT_EQ(e.key(), key) << scene << ": " << e.what();
+      EXPECT_EQ(e.message().rfind("byte 12: ", 0), 0u) << scene << ": " << e.what();
+    }
+  }
+  // A syntax error is reported at its own byte of the file.
+  const std::string path = write_bytes(dir, "bad.nmv", recording_bytes(R"({"format": nul})"));
+  EXPECT_NE(reader_error(path).find("byte 23: the scene message is not a numen-view JSON object"),
+            std::string::npos)
+      << reader_error(path);
+  // The members as a recorder writes them: accepted (no frames).
+  EXPECT_EQ(reader_error(write_bytes(
+                dir, "good.nmv",
+                recording_bytes(R"({"format": "numen-view", "version": 1, )" + layout + "}"))),
+            "");
+}
+
 TEST(ViewRecording, AnUnwritablePathIsAnInputErrorAtTheOption) {
   try {
     numen::sim::ViewRecordingWriter w("/nonexistent-dir/run.nmv", "{}");
