@@ -232,8 +232,8 @@ TEST(StudyShard, MergeNamesTheKeyOfAMemberOfTheWrongType) {
       {R"({"case": 0, "rows": [], "boundaries": []})", "5", "results[0].case"},
       {R"({"case": 0,)", R"({"case": -1,)", "results[0].case"},
       {R"({"case": 0,)", R"({"case": "0",)", "results[0].case"},
-      {R"({"case": 1, "rows": [])", R"({"case": 1, "rows": {}})", "case 1.rows"},
-      {R"({"case": 1, "rows": [])", R"({"case": 1, "rows": [7]})", "case 1.rows.family"},
+      {R"({"case": 1, "rows": [])", R"({"case": 1, "rows": {})", "case 1.rows"},
+      {R"({"case": 1, "rows": [])", R"({"case": 1, "rows": [7])", "case 1.rows.family"},
       // A count far above the results: the first missing case is named (nothing of the
       // count's size is allocated).
       {R"("cases": 2)", R"("cases": 18446744073709551615)", "results"},

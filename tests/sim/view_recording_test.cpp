@@ -154,9 +154,9 @@ TEST(ViewRecording, ASceneMessageMemberOfTheWrongTypeIsNamedByItsKey) {
       EXPECT_EQ(e.message().rfind("byte 12: ", 0), 0u) << scene << ": " << e.what();
     }
   }
-  // A syntax error is reported at its own byte of the file.
+  // A syntax error is reported at its own byte of the file (the '}' after "nul": 12 + 14).
   const std::string path = write_bytes(dir, "bad.nmv", recording_bytes(R"({"format": nul})"));
-  EXPECT_NE(reader_error(path).find("byte 23: the scene message is not a numen-view JSON object"),
+  EXPECT_NE(reader_error(path).find("byte 26: the scene message is not a numen-view JSON object"),
             std::string::npos)
       << reader_error(path);
   // The members as a recorder writes them: accepted (no frames).
