@@ -160,6 +160,10 @@ ViewRecordingReader::ViewRecordingReader(const std::string& path) : path_(path) 
       if (!index_.empty() && h.period <= index_.back().period)
         throw fail(at, "frame " + std::to_string(index_.size()) + " is period " + std::to_string(h.period) +
                            ", not after the previous frame's " + std::to_string(index_.back().period));
+      // frame_at_or_after() searches the times: they must not go back.
+      if (!index_.empty() && h.time_ns < index_.back().time_ns)
+        throw fail(at, "frame " + std::to_string(index_.size()) + " is at " + std::to_string(h.time_ns) +
+                           " ns, before the previous frame's " + std::to_string(index_.back().time_ns) + " ns");
       index_.push_back(Entry{at, *bytes, h.period, h.time_ns});
       at += *bytes;
     }

@@ -58,7 +58,7 @@ void websocket_session(const Setup& s, const http::request<http::string_body>& r
   websocket::stream<beast::test::stream> ws(ioc);
   beast::test::stream peer(ioc);  // takes what the server writes
   ws.next_layer().connect(peer);
-  ws.next_layer().append(frames);
+  ws.next_layer().append(beast::string_view(frames.data(), frames.size()));
   ws.next_layer().close_remote();  // the server reads EOF after the input
   ws.read_message_max(s.settings.max_client_message_bytes);
   beast::error_code ec;

@@ -111,6 +111,18 @@ TEST(ViewRecording, EveryDamagedFileIsRefusedWithItsByteOffset) {
   EXPECT_NE(error(b).find("byte " + std::to_string(first_frame + 4) + ": frame 0: byte 0: not a state frame"),
             std::string::npos)
       << error(b);
+  {
+    // Frame 1 stamped before frame 0 (its period still after): frame_at_or_after() would
+    // search unsorted times. Found by tests/fuzz/view_recording_fuzz.cpp.
+    b = good;
+    const std::uint32_t frame0 = static_cast<unsigned char>(b[first_frame]) |
+                                 static_cast<unsigned char>(b[first_frame + 1]) << 8;
+    const std::size_t second = first_frame + 4 + frame0;
+    for (int i = 0; i < 8; ++i) b[second + 4 + 40 + i] = '\xff';  // time_ns = -1
+    EXPECT_NE(error(b).find("byte " + std::to_string(second + 4) + ": frame 1 is at -1 ns, before the previous frame's"),
+              std::string::npos)
+        << error(b);
+  }
   b = good + good.substr(first_frame);  // the frames again: periods go back
   EXPECT_NE(error(b).find("is period 0, not after the previous frame's"), std::string::npos) << error(b);
   EXPECT_EQ(error(good), "");
