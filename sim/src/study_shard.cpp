@@ -15,11 +15,13 @@
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <iterator>
 #include <map>
 #include <sstream>
 #include <stdexcept>
 
 #include "numen/sim/input_error.hpp"
+#include "json_input.hpp"
 #include "study_shard_json.hpp"
 
 namespace numen::sim {
@@ -225,6 +227,8 @@ void read(const Json& j, double& out, const std::string& file, const std::string
 
 void read(const Json& j, std::int64_t& out, const std::string& file, const std::string& key) {
   if (!j.is_number_integer()) throw InputError(file, 0, 0, key, "not an integer: " + j.dump());
+  if (j.is_number_unsigned() && j.get<std::uint64_t>() > static_cast<std::uint64_t>(INT64_MAX))
+    throw InputError(file, 0, 0, key, "out of range: " + j.dump());
   out = j.get<std::int64_t>();
 }
 
@@ -324,20 +328,24 @@ ShardSet read_shard_set(const std::filesystem::path& dir, const std::string& stu
                          join_indices(missing) + " of " + std::to_string(set.count) + " (" + names +
                          ")");
   }
-  std::vector<Json> by_case;
-  std::vector<bool> seen;
+  // The results by case index, below `cases` (manifest.cases): a map, not a vector of
+  // `cases` entries, so that a damaged count cannot make the merge allocate it.
+  std::map<std::size_t, Json> by_case;
+  std::size_t cases = 0;
   for (const auto& file : files) {
     // Named variables, not a structured binding: the lambda below captures `path`, which
     // clang 14 (the fuzz and ASan builds) refuses for a binding (P1091, clang 16).
     const int index = file.first;
     const std::string& path = file.second;
     std::ifstream in(path, std::ios::binary);
-    if (!in) throw std::runtime_error("cannot read " + path);
-    Json doc;
-    try {
-      doc = Json::parse(in);
-    } catch (const nlohmann::json::exception& e) {
-      throw InputError(path, 0, 0, "", std::string("not a shard file: ") + e.what());
+    const std::string text(std::istreambuf_iterator<char>(in), {});
+    if (!in && !in.eof())
+      throw InputError(path, 0, 0, "", std::string("cannot read: ") + std::strerror(errno));
+    json_input::SyntaxError syntax;
+    const Json doc = json_input::parse<Json>(text, syntax);
+    if (doc.is_discarded()) {
+      const auto [line, column] = json_input::line_column(text, syntax.byte);
+      throw InputError(path, line, column, "", "not a shard file: not JSON: " + syntax.reason);
     }
     const auto expect = [&](const char* key, const Json& want) {
       const Json& got = member(doc, key, path, "");
@@ -350,11 +358,10 @@ ShardSet read_shard_set(const std::filesystem::path& dir, const std::string& stu
     const Json& manifest = member(doc, "manifest", path, "");
     if (set.files.empty()) {
       set.manifest = manifest;
-      const Json& cases = member(manifest, "cases", path, "manifest.");
-      if (!cases.is_number_unsigned())
-        throw InputError(path, 0, 0, "manifest.cases", "not a count: " + cases.dump());
-      by_case.resize(cases.get<std::size_t>());
-      seen.assign(by_case.size(), false);
+      const Json& count = member(manifest, "cases", path, "manifest.");
+      if (!count.is_number_unsigned())
+        throw InputError(path, 0, 0, "manifest.cases", "not a count: " + json_input::shown(count));
+      cases = count.get<std::size_t>();
     } else if (manifest != set.manifest) {
       std::string key;  // the first option that differs
       for (const auto& [k, v] : set.manifest.items())
@@ -376,30 +383,38 @@ ShardSet read_shard_set(const std::filesystem::path& dir, const std::string& stu
     for (std::size_t r = 0; r < results.size(); ++r) {
       const std::string where = "results[" + std::to_string(r) + "].";
       const Json& k = member(results[r], "case", path, where);
-      if (!k.is_number_unsigned() || k.get<std::size_t>() >= by_case.size())
+      if (!k.is_number_unsigned() || k.get<std::size_t>() >= cases)
         throw InputError(path, 0, 0, where + "case",
-                         k.dump() + " is not a case index below " + std::to_string(by_case.size()));
+                         json_input::shown(k) + " is not a case index below " +
+                             std::to_string(cases));
       const std::size_t c = k.get<std::size_t>();
       if (static_cast<int>(c % static_cast<std::size_t>(set.count)) != index)
         throw InputError(path, 0, 0, where + "case",
                          "case " + std::to_string(c) + " belongs to shard " +
                              std::to_string(c % static_cast<std::size_t>(set.count)));
-      if (seen[c])
+      if (!by_case.emplace(c, results[r]).second)
         throw InputError(path, 0, 0, where + "case", "case " + std::to_string(c) + " twice");
-      seen[c] = true;
-      by_case[c] = results[r];
     }
   }
   const Json& skipped = member(set.manifest, "skipped", set.files.front(), "manifest.");
-  for (const Json& s : skipped) {
-    if (!s.is_string()) throw InputError(set.files.front(), 0, 0, "manifest.skipped", "not text");
-    set.skipped.push_back(s.get<std::string>());
+  if (!skipped.is_array())
+    throw InputError(set.files.front(), 0, 0, "manifest.skipped",
+                     "not an array of case names: " + json_input::shown(skipped));
+  for (std::size_t i = 0; i < skipped.size(); ++i) {
+    if (!skipped[i].is_string())
+      throw InputError(set.files.front(), 0, 0, "manifest.skipped[" + std::to_string(i) + "]",
+                       "not text: " + json_input::shown(skipped[i]));
+    set.skipped.push_back(skipped[i].get<std::string>());
   }
-  for (std::size_t c = 0; c < seen.size(); ++c)
-    if (!seen[c])
+  // Every case below `cases` is present: the first absent one is named (the loop stops there,
+  // after at most as many cases as the files hold).
+  for (std::size_t c = 0; c < cases; ++c) {
+    const auto it = by_case.find(c);
+    if (it == by_case.end())
       throw InputError(set.files[c % static_cast<std::size_t>(set.count)], 0, 0, "results",
                        "case " + std::to_string(c) + " is missing");
-  set.results = std::move(by_case);
+    set.results.push_back(std::move(it->second));
+  }
   return set;
 }
 

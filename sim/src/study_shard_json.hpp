@@ -119,7 +119,10 @@ struct ShardSet {
 /// "mismatched shard counts" listing the files per N), all N present (else InputError listing the
 /// missing indices and file names), each a shard file of this study and index, the same manifest
 /// (else InputError naming the file and the first differing option), every case k in the shard
-/// k mod N exactly once and the cases 0 … M − 1 complete.
+/// k mod N exactly once and the cases 0 … M − 1 complete. Every error is an InputError naming
+/// the file and the line and column of a syntax error, or the key of a member missing or of
+/// the wrong JSON type or value; no json exception escapes. Allocates in proportion to the
+/// files' size (never to a count they state).
 ShardSet read_shard_set(const std::filesystem::path& dir, const std::string& study);
 
 }  // namespace numen::sim::shard

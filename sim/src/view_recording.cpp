@@ -8,6 +8,7 @@
 #include <optional>
 #include <stdexcept>
 
+#include "json_input.hpp"
 #include "numen/sim/input_error.hpp"
 #include "numen/sim/view_scene.hpp"
 
@@ -104,17 +105,42 @@ ViewRecordingReader::ViewRecordingReader(const std::string& path) : path_(path) 
     scene_message_.resize(*scene_bytes);
     if (std::fread(scene_message_.data(), 1, *scene_bytes, file_) != *scene_bytes)
       throw fail(at, "the scene message is cut short");
-    nlohmann::json scene = nlohmann::json::parse(scene_message_, nullptr, false);
-    if (scene.is_discarded() || !scene.is_object() || scene.value("format", "") != "numen-view")
-      throw fail(at, "the scene message is not a numen-view JSON object");
-    if (scene.value("version", 0) != kViewSceneVersion)
-      throw fail(at, "scene message version " + scene.value("version", nlohmann::json()).dump() +
-                         ", this reader knows " + std::to_string(kViewSceneVersion));
-    const nlohmann::json& layout = scene.value("layout", nlohmann::json::object());
+    // Every member is type-checked before it is read: json::value() and get<>() throw a
+    // type_error naming no place, which would escape as an unlocated error.
+    json_input::SyntaxError syntax;
+    const auto scene = json_input::parse<nlohmann::json>(scene_message_, syntax);
+    if (scene.is_discarded())
+      throw fail(at + syntax.byte,
+                 "the scene message is not a numen-view JSON object (" + syntax.reason + ")");
+    if (!scene.is_object())
+      throw fail(at, "the scene message is not a numen-view JSON object but " +
+                         json_input::shown(scene));
+    auto bad = [&](const std::string& key, const std::string& what) -> InputError {
+      return InputError(path, 0, 0, key, "byte " + std::to_string(at) + ": " + what);
+    };
+    const auto format = scene.find("format");
+    if (format == scene.end())
+      throw bad("format", "missing: the scene message is not a numen-view JSON object");
+    if (!format->is_string() || *format != "numen-view")
+      throw bad("format", json_input::shown(*format) +
+                              ", expected string \"numen-view\": not a numen-view scene message");
+    const auto version = scene.find("version");
+    if (version == scene.end()) throw bad("version", "missing");
+    if (!version->is_number_integer() || *version != kViewSceneVersion)
+      throw bad("version", "scene message version " + json_input::shown(*version) +
+                               ", this reader knows integer " + std::to_string(kViewSceneVersion));
+    const auto layout = scene.find("layout");
+    if (layout == scene.end()) throw bad("layout", "missing");
+    if (!layout->is_object())
+      throw bad("layout", json_input::shown(*layout) + ", expected an object of counts");
     auto count = [&](const char* key) -> std::uint64_t {
-      const auto it = layout.find(key);
-      if (it == layout.end() || !it->is_number_unsigned())
-        throw fail(at, std::string("the scene message's layout has no count \"") + key + "\"");
+      const auto it = layout->find(key);
+      const std::string name = std::string("layout.") + key;
+      if (it == layout->end())
+        throw bad(name, std::string("missing: the scene message's layout has no count \"") +
+                            key + "\"");
+      if (!it->is_number_unsigned())
+        throw bad(name, json_input::shown(*it) + ", expected a count (a whole number >= 0)");
       return it->get<std::uint64_t>();
     };
     const std::uint64_t bodies = count("bodies"), nodes = count("nodes"), axes = count("axes");
@@ -142,6 +168,10 @@ ViewRecordingReader::ViewRecordingReader(const std::string& path) : path_(path) 
       if (!index_.empty() && h.period <= index_.back().period)
         throw fail(at, "frame " + std::to_string(index_.size()) + " is period " + std::to_string(h.period) +
                            ", not after the previous frame's " + std::to_string(index_.back().period));
+      // frame_at_or_after() searches the times: they must not go back.
+      if (!index_.empty() && h.time_ns < index_.back().time_ns)
+        throw fail(at, "frame " + std::to_string(index_.size()) + " is at " + std::to_string(h.time_ns) +
+                           " ns, before the previous frame's " + std::to_string(index_.back().time_ns) + " ns");
       index_.push_back(Entry{at, *bytes, h.period, h.time_ns});
       at += *bytes;
     }

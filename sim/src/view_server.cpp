@@ -51,7 +51,7 @@ const char* mime_type(const std::string& path) {
 
 /// The request target as a relative file path, or empty when it is not one we serve: only
 /// [A-Za-z0-9._/-], no "..", no empty segment; "/" and ".../" name index.html.
-std::string file_of_target(beast::string_view target) {
+std::string file_of_target(std::string_view target) {
   std::string t(target.substr(0, target.find('?')));
   if (t.empty() || t.front() != '/') return {};
   if (t.back() == '/') t += "index.html";
@@ -70,6 +70,36 @@ struct Outgoing {
 };
 
 }  // namespace
+
+ViewHttpAnswer answer_view_http_request(const ViewServerSettings& settings,
+                                        std::string_view method, std::string_view target,
+                                        bool websocket_upgrade, std::size_t clients) {
+  using Kind = ViewHttpAnswer::Kind;
+  if (websocket_upgrade) {
+    if (target.substr(0, target.find('?')) != settings.stream_path) return {Kind::kNotFound, {}};
+    if (clients >= settings.max_clients) return {Kind::kTooManyViewers, {}};
+    return {Kind::kUpgrade, {}};
+  }
+  if (method != "GET" && method != "HEAD") return {Kind::kNotAllowed, {}};
+  std::string rel = file_of_target(target);
+  if (rel.empty() || settings.static_dir.empty()) return {Kind::kNotFound, {}};
+  return {Kind::kFile, std::move(rel)};
+}
+
+ViewClientRequest read_view_client_message(std::string_view message, bool text, bool replay,
+                                           std::size_t frame_count) {
+  using Kind = ViewClientRequest::Kind;
+  if (!text) return {Kind::kBad, 0};
+  const nlohmann::json j = nlohmann::json::parse(message, nullptr, false);
+  if (j.is_discarded()) return {Kind::kBad, 0};
+  if (!replay) return {Kind::kIgnored, 0};
+  if (!j.is_object() || j.size() != 1) return {Kind::kBad, 0};
+  const auto f = j.find("frame");
+  if (f == j.end() || !f->is_number_unsigned()) return {Kind::kBad, 0};
+  const std::uint64_t i = f->get<std::uint64_t>();
+  if (i >= frame_count) return {Kind::kBad, 0};
+  return {Kind::kFrame, i};
+}
 
 class WsSession;
 class HttpSession;
@@ -208,22 +238,19 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
       const bool text = self->ws_.got_text();
       const std::string message = beast::buffers_to_string(self->in_.data());
       self->in_.consume(self->in_.size());
-      if (!text || !self->on_message(message)) return self->close(true);
+      if (!self->on_message(message, text)) return self->close(true);
       self->do_read();
     });
   }
 
-  /// A client message: live, any JSON is ignored; replay, {"frame": I} asks for frame I.
-  /// False: bad input.
-  bool on_message(const std::string& text) {
-    const nlohmann::json j = nlohmann::json::parse(text, nullptr, false);
-    if (j.is_discarded()) return false;
-    if (s_.source == nullptr) return true;
-    if (!j.is_object() || j.size() != 1 || !j.contains("frame")) return false;
-    const nlohmann::json& f = j["frame"];
-    if (!f.is_number_unsigned()) return false;
-    const std::uint64_t i = f.get<std::uint64_t>();
-    if (i >= s_.source->frame_count()) return false;
+  /// A client message (read_view_client_message()): live, any JSON is ignored; replay,
+  /// {"frame": I} asks for frame I. False: bad input.
+  bool on_message(const std::string& message, bool text) {
+    const ViewClientRequest r = read_view_client_message(
+        message, text, s_.source != nullptr, s_.source ? s_.source->frame_count() : 0);
+    if (r.kind == ViewClientRequest::Kind::kBad) return false;
+    if (r.kind == ViewClientRequest::Kind::kIgnored) return true;
+    const std::uint64_t i = r.frame;
     try {
       s_.source->read_frame(static_cast<std::size_t>(i), scratch_);
     } catch (...) {
@@ -268,8 +295,8 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
  private:
   void do_read() {
     parser_.emplace();
-    parser_->header_limit(8 * 1024);
-    parser_->body_limit(1024);
+    parser_->header_limit(kViewHttpHeaderLimit);
+    parser_->body_limit(kViewHttpBodyLimit);
     stream_.expires_after(std::chrono::seconds(30));
     http::async_read(stream_, buf_, *parser_,
                      [self = shared_from_this()](beast::error_code ec, std::size_t) {
@@ -281,27 +308,34 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
   void on_request(http::request<http::string_body> req) {
     s_.http_requests.fetch_add(1, std::memory_order_relaxed);
     const bool keep_alive = req.keep_alive();
-    if (websocket::is_upgrade(req)) {
-      if (std::string(req.target().substr(0, req.target().find('?'))) != s_.settings.stream_path)
-        return send_text(http::status::not_found, "no WebSocket here\n", req.version(), false);
-      std::size_t n;
-      {
-        const std::lock_guard<std::mutex> lock(s_.clients_mutex);
-        n = s_.clients.size();
-      }
-      if (n >= s_.settings.max_clients) {
+    const bool upgrade = websocket::is_upgrade(req);
+    std::size_t n = 0;
+    if (upgrade) {
+      const std::lock_guard<std::mutex> lock(s_.clients_mutex);
+      n = s_.clients.size();
+    }
+    const ViewHttpAnswer answer = answer_view_http_request(
+        s_.settings, std::string_view(req.method_string().data(), req.method_string().size()),
+        std::string_view(req.target().data(), req.target().size()), upgrade, n);
+    using Kind = ViewHttpAnswer::Kind;
+    switch (answer.kind) {
+      case Kind::kUpgrade:
+        std::make_shared<WsSession>(s_, stream_.release_socket())->run(std::move(req));
+        return;
+      case Kind::kTooManyViewers:
         s_.refused.fetch_add(1, std::memory_order_relaxed);
         return send_text(http::status::service_unavailable, "too many viewers\n", req.version(),
                          false);
-      }
-      std::make_shared<WsSession>(s_, stream_.release_socket())->run(std::move(req));
-      return;
+      case Kind::kNotAllowed:
+        return send_text(http::status::method_not_allowed, "read-only\n", req.version(),
+                         keep_alive);
+      case Kind::kNotFound:
+        return send_text(http::status::not_found, upgrade ? "no WebSocket here\n" : "not found\n",
+                         req.version(), upgrade ? false : keep_alive);
+      case Kind::kFile:
+        break;
     }
-    if (req.method() != http::verb::get && req.method() != http::verb::head)
-      return send_text(http::status::method_not_allowed, "read-only\n", req.version(), keep_alive);
-    const std::string rel = file_of_target(req.target());
-    if (rel.empty() || s_.settings.static_dir.empty())
-      return send_text(http::status::not_found, "not found\n", req.version(), keep_alive);
+    const std::string& rel = answer.file;
     const std::string path = s_.settings.static_dir + "/" + rel;
     http::file_body::value_type body;
     beast::error_code ec;

@@ -1,9 +1,10 @@
 /// @file candump_fuzz.cpp
 /// libFuzzer harness of the candump log parser (hal/transport/candump_log.hpp): every line of the input
-/// through parse_candump_line(); a line that parses must format (format_candump_line()) and
-/// parse back to the same record. Inputs of a size divisible by 8 also go whole through
-/// load_candump_log() as a file, whose only accepted failure is std::runtime_error naming the
-/// place.
+/// through parse_candump_line(); a line that parses must give a well-formed frame (check_frame():
+/// what a replay hands a Bus) and format (format_candump_line()) and parse back to the same
+/// record. Inputs of a size divisible by 8 also go whole through load_candump_log() as a file,
+/// whose only accepted failure is std::runtime_error naming the place, and each record it
+/// loads must pass check_frame() too.
 
 #include <cstdint>
 #include <string_view>
@@ -37,6 +38,8 @@ void check_line(std::string_view line) {
       finding("candump: error column outside the line", line);
     return;
   }
+  if (numen::hal::check_frame(record.frame) != numen::hal::FrameError::kNone)
+    finding("candump: a parsed frame fails check_frame()", line);
   char out[numen::hal::kCandumpLineBufferSize];
   const auto formatted = numen::hal::format_candump_line(record.timestamp_ns, record.iface,
                                                          record.frame, record.direction, out);
@@ -52,7 +55,11 @@ void check_line(std::string_view line) {
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   numen::fuzz::for_each_line({reinterpret_cast<const char*>(data), size}, check_line);
   numen::fuzz::load_file_sometimes(data, size, ".log", [](const std::string& path) {
-    return numen::hal::load_candump_log(path);
+    const auto records = numen::hal::load_candump_log(path);
+    for (const CandumpRecord& r : records)
+      if (numen::hal::check_frame(r.frame) != numen::hal::FrameError::kNone)
+        numen::fuzz::finding("candump: a loaded frame fails check_frame()");
+    return records;
   });
   return 0;
 }

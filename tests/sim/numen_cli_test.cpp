@@ -580,6 +580,26 @@ TEST(NumenCli, ViewOfADirectorySaysItIsADirectory) {
   EXPECT_EQ(r.out.find("open http://"), std::string::npos) << r.out;
 }
 
+// `numen view` of a recording whose scene message has a known member of the wrong JSON type is
+// input rejected (exit 2) naming the file and the key; it printed the json library's
+// "[json.exception.type_error.302] ..." with no place and exited 1.
+TEST(NumenCli, ViewOfARecordingWithAMemberOfTheWrongTypeNamesTheFileAndTheKey) {
+  TempDir dir;
+  for (const auto& [scene, key] : std::vector<std::pair<std::string, std::string>>{
+           {R"({"format": {}, "version": 1, "layout": {"bodies": 1, "nodes": 0, "axes": 0}})",
+            "format"},
+           {R"({"format": "numen-view", "version": "1", "layout": {}})", "version"}}) {
+    std::string bytes(numen::sim::kViewRecordingMagic, 8);
+    for (int i = 0; i < 4; ++i) bytes += static_cast<char>((scene.size() >> (8 * i)) & 0xFF);
+    const std::string file = dir.write("typed.nmv", bytes + scene);
+    const ChildResult r = run_child({kNumen, "view", file, "--port", "0"}, dir.path(), 30);
+    EXPECT_EQ(r.status, 2) << r.out << r.err;
+    EXPECT_NE(r.err.find(file + ": " + key + ": byte 12: "), std::string::npos) << r.err;
+    EXPECT_EQ(r.err.find("json.exception"), std::string::npos) << r.err;
+    EXPECT_EQ(r.out.find("open http://"), std::string::npos) << r.out;
+  }
+}
+
 // Options a run would not apply, or values that do not fit them, are input rejected before
 // the run, naming the option (2026-11-25 audit): `--prefault-stack -1` wrapped to SIZE_MAX
 // and crashed (SIGSEGV in alloca); the others ran and dropped the option without a word.

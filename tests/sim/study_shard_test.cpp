@@ -9,10 +9,12 @@
 #include <filesystem>
 #include <map>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "child_process.hpp"
 #include "numen/sim/input_error.hpp"
+#include "numen/sim/study_stability.hpp"
 #include "temp_dir.hpp"
 
 namespace numen::sim {
@@ -187,6 +189,73 @@ TEST(StudyShard, DirectoryTellsItsStudy) {
                 .message()
                 .find("not a directory"),
             std::string::npos);
+}
+
+/// A one-shard stability file (stability-shard-0-of-1.json) with `replace` done on the text of
+/// a valid one of two cases (each with no rows and no boundaries).
+std::string shard_text(const std::string& from = "", const std::string& to = "") {
+  std::string t = R"({"format": "numen study shard 1", "study": "stability", "shard": 0, )"
+                  R"("shards": 1, "manifest": {"quick": true, "skipped": ["a"], "cases": 2}, )"
+                  R"("wall_s": 0.5, "results": [{"case": 0, "rows": [], "boundaries": []}, )"
+                  R"({"case": 1, "rows": [], "boundaries": []}]})";
+  if (!from.empty()) {
+    const std::size_t at = t.find(from);
+    EXPECT_NE(at, std::string::npos) << from;
+    if (at != std::string::npos) t.replace(at, from.size(), to);
+  }
+  return t;
+}
+
+// Every member of a shard file the merge reads is type-checked: a missing member or one of the
+// wrong JSON type is an InputError naming the file and the key, never a json exception.
+TEST(StudyShard, MergeNamesTheKeyOfAMemberOfTheWrongType) {
+  TempDir dir;
+  const std::string path = (dir / "stability-shard-0-of-1.json").string();
+  dir.write("stability-shard-0-of-1.json", shard_text());
+  const StabilityResult merged = merge_stability_shards(dir.path().string());
+  EXPECT_EQ(merged.cases, 2);
+  EXPECT_EQ(merged.skipped, std::vector<std::string>{"a"});
+  const std::vector<std::tuple<std::string, std::string, std::string>> cases = {
+      {R"("format": "numen study shard 1")", R"("format": 1)", "format"},
+      {R"("shard": 0)", R"("shard": "0")", "shard"},
+      {R"("manifest": {"quick": true, "skipped": ["a"], "cases": 2})", R"("manifest": [])",
+       "manifest.cases"},
+      {R"("cases": 2)", R"("cases": "2")", "manifest.cases"},
+      {R"("cases": 2)", R"("cases": -2)", "manifest.cases"},
+      {R"("skipped": ["a"])", R"("skipped": 3)", "manifest.skipped"},
+      {R"("skipped": ["a"])", R"("skipped": {"a": 1})", "manifest.skipped"},
+      {R"("skipped": ["a"])", R"("skipped": [1])", "manifest.skipped[0]"},
+      {R"("skipped": ["a"], )", "", "manifest.skipped"},
+      {R"("wall_s": 0.5)", R"("wall_s": [0.5])", "wall_s"},
+      {R"([{"case": 0, "rows": [], "boundaries": []}, {"case": 1, "rows": [], "boundaries": []}])",
+       R"({"case": 0})", "results"},
+      {R"({"case": 0, "rows": [], "boundaries": []})", "5", "results[0].case"},
+      {R"({"case": 0,)", R"({"case": -1,)", "results[0].case"},
+      {R"({"case": 0,)", R"({"case": "0",)", "results[0].case"},
+      {R"({"case": 1, "rows": [])", R"({"case": 1, "rows": {})", "case 1.rows"},
+      {R"({"case": 1, "rows": [])", R"({"case": 1, "rows": [7])", "case 1.rows.family"},
+      // A count far above the results: the first missing case is named (nothing of the
+      // count's size is allocated).
+      {R"("cases": 2)", R"("cases": 18446744073709551615)", "results"},
+  };
+  for (const auto& [from, to, key] : cases) {
+    dir.write("stability-shard-0-of-1.json", shard_text(from, to));
+    const InputError e = error_of([&] { (void)merge_stability_shards(dir.path().string()); });
+    EXPECT_EQ(e.file(), path) << to << ": " << e.what();
+    EXPECT_EQ(e.key(), key) << to << ": " << e.what();
+  }
+}
+
+// A shard file that is not JSON is refused at the line and column of its syntax error.
+TEST(StudyShard, MergeLocatesASyntaxErrorByLineAndColumn) {
+  TempDir dir;
+  dir.write("stability-shard-0-of-1.json", "{\n  \"format\": nul,\n}\n");
+  const InputError e = error_of([&] { (void)merge_stability_shards(dir.path().string()); });
+  EXPECT_EQ(e.file(), (dir / "stability-shard-0-of-1.json").string());
+  EXPECT_EQ(e.line(), 2) << e.what();
+  EXPECT_EQ(e.column(), 16) << e.what();
+  EXPECT_NE(e.message().find("not a shard file: not JSON: syntax error"), std::string::npos)
+      << e.what();
 }
 
 }  // namespace

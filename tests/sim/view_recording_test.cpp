@@ -111,9 +111,71 @@ TEST(ViewRecording, EveryDamagedFileIsRefusedWithItsByteOffset) {
   EXPECT_NE(error(b).find("byte " + std::to_string(first_frame + 4) + ": frame 0: byte 0: not a state frame"),
             std::string::npos)
       << error(b);
+  {
+    // Frame 1 stamped before frame 0 (its period still after): frame_at_or_after() would
+    // search unsorted times. Found by tests/fuzz/view_recording_fuzz.cpp.
+    b = good;
+    const std::uint32_t frame0 = static_cast<unsigned char>(b[first_frame]) |
+                                 static_cast<unsigned char>(b[first_frame + 1]) << 8;
+    const std::size_t second = first_frame + 4 + frame0;
+    for (int i = 0; i < 8; ++i) b[second + 4 + 40 + i] = '\xff';  // time_ns = -1
+    EXPECT_NE(error(b).find("byte " + std::to_string(second + 4) + ": frame 1 is at -1 ns, before the previous frame's"),
+              std::string::npos)
+        << error(b);
+  }
   b = good + good.substr(first_frame);  // the frames again: periods go back
   EXPECT_NE(error(b).find("is period 0, not after the previous frame's"), std::string::npos) << error(b);
   EXPECT_EQ(error(good), "");
+}
+
+/// A recording of no frames whose scene message is `scene` (JSON text).
+std::string recording_bytes(const std::string& scene) {
+  std::string b(numen::sim::kViewRecordingMagic, 8);
+  for (int i = 0; i < 4; ++i) b += static_cast<char>((scene.size() >> (8 * i)) & 0xFF);
+  return b + scene;
+}
+
+// A known member of the scene message with the wrong JSON type (or value) is an InputError
+// naming the file and the key, at the message's byte offset; it was a json type_error naming
+// nothing ("[json.exception.type_error.302] type must be string, but is object").
+TEST(ViewRecording, ASceneMessageMemberOfTheWrongTypeIsNamedByItsKey) {
+  TempDir dir;
+  const std::string layout = R"("layout": {"bodies": 2, "nodes": 0, "axes": 3})";
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {R"({"format": {"a": 1}, "version": 1, )" + layout + "}", "format"},
+      {R"({"format": 1, "version": 1, )" + layout + "}", "format"},
+      {R"({"format": "numen-view", "version": "1", )" + layout + "}", "version"},
+      {R"({"format": "numen-view", "version": 1.5, )" + layout + "}", "version"},
+      {R"({"format": "numen-view", "version": 1})", "layout"},
+      {R"({"format": "numen-view", "version": 1, "layout": [2, 0, 3]})", "layout"},
+      {R"({"format": "numen-view", "version": 1, "layout": {"bodies": -2, "nodes": 0, "axes": 3}})",
+       "layout.bodies"},
+      {R"({"format": "numen-view", "version": 1, "layout": {"bodies": 2, "nodes": "0", "axes": 3}})",
+       "layout.nodes"},
+      {R"({"format": "numen-view", "version": 1, "layout": {"bodies": 2, "nodes": 0}})",
+       "layout.axes"},
+  };
+  for (const auto& [scene, key] : cases) {
+    const std::string path = write_bytes(dir, "bad.nmv", recording_bytes(scene));
+    try {
+      ViewRecordingReader reader(path);
+      ADD_FAILURE() << scene << " was accepted";
+    } catch (const numen::sim::InputError& e) {
+      EXPECT_EQ(e.file(), path) << scene;
+      EXPECT_EQ(e.key(), key) << scene << ": " << e.what();
+      EXPECT_EQ(e.message().rfind("byte 12: ", 0), 0u) << scene << ": " << e.what();
+    }
+  }
+  // A syntax error is reported at its own byte of the file (the '}' after "nul": 12 + 14).
+  const std::string path = write_bytes(dir, "bad.nmv", recording_bytes(R"({"format": nul})"));
+  EXPECT_NE(reader_error(path).find("byte 26: the scene message is not a numen-view JSON object"),
+            std::string::npos)
+      << reader_error(path);
+  // The members as a recorder writes them: accepted (no frames).
+  EXPECT_EQ(reader_error(write_bytes(
+                dir, "good.nmv",
+                recording_bytes(R"({"format": "numen-view", "version": 1, )" + layout + "}"))),
+            "");
 }
 
 TEST(ViewRecording, AnUnwritablePathIsAnInputErrorAtTheOption) {

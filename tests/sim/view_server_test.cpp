@@ -355,6 +355,50 @@ TEST(ViewServer, RefusesAnAddressItCannotBind) {
   EXPECT_THROW(ViewServer(zero, kScene), std::invalid_argument);
 }
 
+// The sessions' decisions without a socket (the seam tests/fuzz/view_server_fuzz.cpp drives).
+TEST(ViewServerSeam, AnswersRequestsAsTheSessionsDo) {
+  using Kind = numen::sim::ViewHttpAnswer::Kind;
+  ViewServerSettings s;
+  s.static_dir = "www";
+  s.max_clients = 2;
+  auto answer = [&](std::string_view method, std::string_view target, bool upgrade,
+                    std::size_t clients = 0) {
+    return numen::sim::answer_view_http_request(s, method, target, upgrade, clients);
+  };
+  EXPECT_EQ(answer("GET", "/", false).kind, Kind::kFile);
+  EXPECT_EQ(answer("GET", "/", false).file, "index.html");
+  EXPECT_EQ(answer("HEAD", "/vendor/three.js?v=2", false).file, "vendor/three.js");
+  EXPECT_EQ(answer("POST", "/", false).kind, Kind::kNotAllowed);
+  EXPECT_EQ(answer("GET", "/../etc/passwd", false).kind, Kind::kNotFound);
+  EXPECT_EQ(answer("GET", "//x", false).kind, Kind::kNotFound);
+  EXPECT_EQ(answer("GET", "/a b", false).kind, Kind::kNotFound);
+  EXPECT_EQ(answer("GET", "x", false).kind, Kind::kNotFound);
+  EXPECT_EQ(answer("GET", "", false).kind, Kind::kNotFound);
+  EXPECT_EQ(answer("GET", "/stream?x=1", true).kind, Kind::kUpgrade);
+  EXPECT_EQ(answer("GET", "/stream", true, 2).kind, Kind::kTooManyViewers);
+  EXPECT_EQ(answer("GET", "/other", true).kind, Kind::kNotFound);
+  s.static_dir.clear();
+  EXPECT_EQ(answer("GET", "/index.html", false).kind, Kind::kNotFound);
+}
+
+TEST(ViewServerSeam, ReadsClientMessagesLiveAndInReplay) {
+  using Kind = numen::sim::ViewClientRequest::Kind;
+  auto read = [](std::string_view m, bool text, bool replay, std::size_t frames = 3) {
+    return numen::sim::read_view_client_message(m, text, replay, frames);
+  };
+  EXPECT_EQ(read(R"({"anything": [1]})", true, false).kind, Kind::kIgnored);
+  EXPECT_EQ(read("not json", true, false).kind, Kind::kBad);
+  EXPECT_EQ(read(R"({"frame": 1})", false, false).kind, Kind::kBad);  // binary
+  EXPECT_EQ(read(R"({"frame": 2})", true, true).kind, Kind::kFrame);
+  EXPECT_EQ(read(R"({"frame": 2})", true, true).frame, 2u);
+  EXPECT_EQ(read(R"({"frame": 3})", true, true).kind, Kind::kBad);
+  EXPECT_EQ(read(R"({"frame": -1})", true, true).kind, Kind::kBad);
+  EXPECT_EQ(read(R"({"frame": 1.0})", true, true).kind, Kind::kBad);
+  EXPECT_EQ(read(R"({"frame": "1"})", true, true).kind, Kind::kBad);
+  EXPECT_EQ(read(R"({"frame": 1, "x": 0})", true, true).kind, Kind::kBad);
+  EXPECT_EQ(read(R"([{"frame": 1}])", true, true).kind, Kind::kBad);
+}
+
 TEST(ViewServer, LoopbackAddressesAreKnown) {
   for (const char* h : {"127.0.0.1", "127.1.2.3", "::1", "localhost"})
     EXPECT_TRUE(ViewServer::is_loopback_address(h)) << h;

@@ -59,9 +59,14 @@ class ViewRecordingReader {
  public:
   /// Opens and checks `path`. Throws InputError (file = path, key empty) with the byte offset
   /// and what is wrong: cannot open, not a view recording, a length above kViewRecordMaxBytes,
-  /// a scene message that is not JSON of format "numen-view" and a known version, a frame cut
+  /// a scene message that is not a JSON object (the offset of the syntax error), a frame cut
   /// short, a malformed frame (StateFrameDecoder's reason), a frame whose bodies, nodes or axes
-  /// differ from the scene message's layout, or a period not after its predecessor's.
+  /// differ from the scene message's layout, a period not after its predecessor's, or a time
+  /// before its predecessor's (found by fuzzing: frame_at_or_after() searched unsorted times). A member
+  /// of the scene message that is missing or of the wrong JSON type or value names its key
+  /// ("format": string "numen-view", "version": integer kViewSceneVersion, "layout": object,
+  /// "layout.bodies", "layout.nodes", "layout.axes": whole numbers) with the message's offset.
+  /// No other exception escapes but std::bad_alloc.
   explicit ViewRecordingReader(const std::string& path);
   ~ViewRecordingReader();
   ViewRecordingReader(const ViewRecordingReader&) = delete;

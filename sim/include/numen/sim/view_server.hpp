@@ -29,6 +29,7 @@
 #include <memory>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "numen/platform/state_stream.hpp"
@@ -90,6 +91,52 @@ struct ViewClientCounters {
   std::uint64_t frames_sent = 0;
   std::uint64_t frames_dropped = 0;
 };
+
+/// Largest HTTP request header a connection reads, bytes (a longer one closes it).
+inline constexpr std::size_t kViewHttpHeaderLimit = 8 * 1024;
+/// Largest HTTP request body a connection reads, bytes (the server reads none; a longer one
+/// closes the connection).
+inline constexpr std::size_t kViewHttpBodyLimit = 1024;
+
+/// What the server answers an HTTP request (after Boost.Beast parsed it).
+struct ViewHttpAnswer {
+  enum class Kind : std::uint8_t {
+    kUpgrade,          ///< A WebSocket upgrade on stream_path: becomes a client.
+    kFile,             ///< GET or HEAD of a file name we serve: `file` (404 if it is absent).
+    kNotFound,         ///< 404: no static folder, a target we do not serve, an upgrade elsewhere.
+    kNotAllowed,       ///< 405: any method but GET and HEAD (the server is read-only).
+    kTooManyViewers,   ///< 503: an upgrade while max_clients clients are connected.
+  };
+  Kind kind = Kind::kNotFound;
+  /// kFile: the target as a path relative to static_dir (only [A-Za-z0-9._/-], no "..", no
+  /// empty segment; "/" and ".../" name index.html).
+  std::string file;
+};
+
+/// The server's answer to a request of method `method` ("GET", ...) for `target` (as sent,
+/// query included), `websocket_upgrade` when it asks for one, while `clients` clients are
+/// connected. Pure (the sessions' decision, testable and fuzzed without a socket:
+/// tests/fuzz/view_server_fuzz.cpp).
+ViewHttpAnswer answer_view_http_request(const ViewServerSettings& settings,
+                                        std::string_view method, std::string_view target,
+                                        bool websocket_upgrade, std::size_t clients);
+
+/// What the server makes of one WebSocket message of a client.
+struct ViewClientRequest {
+  enum class Kind : std::uint8_t {
+    kIgnored,  ///< Live: any text message that is JSON.
+    kFrame,    ///< Replay: {"frame": I} with I < the frame count: send frame I.
+    kBad,      ///< Anything else: the connection is closed and counted (closed_bad_input).
+  };
+  Kind kind = Kind::kBad;
+  std::uint64_t frame = 0;  ///< kFrame: I.
+};
+
+/// Reads a client's message `message` (`text`: a text message, else binary) for a live server
+/// (`frame_count` unused) or a replay server of `frame_count` frames (see the file comment).
+/// Pure; never throws but std::bad_alloc.
+ViewClientRequest read_view_client_message(std::string_view message, bool text, bool replay,
+                                           std::size_t frame_count);
 
 /// The server; see the file comment.
 class ViewServer final : public platform::StateFrameSink {

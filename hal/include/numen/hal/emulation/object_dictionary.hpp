@@ -81,6 +81,9 @@ class ObjectDictionary {
   bool read_unsigned(SdoAddress address, std::uint32_t& out) const noexcept;
   /// Largest value length of any entry (the server's staging buffer).
   std::size_t max_length() const noexcept;
+  /// Every entry, in the order added (tests and the SDO server's fuzz harness pick
+  /// addresses from it). noexcept, no allocation.
+  std::span<const OdEntry> entries() const noexcept { return entries_; }
 
  private:
   std::vector<OdEntry> entries_;
