@@ -117,7 +117,8 @@ numen_install_headers(${PROJECT_SOURCE_DIR}/platform/include
 # (study_common.hpp, study_stability_cases.hpp).
 numen_install_headers(${PROJECT_SOURCE_DIR}/sim/include
   numen/sim/admittance_run.hpp numen/sim/bus_spec.hpp numen/sim/computed_motion.hpp
-  numen/sim/device_process.hpp numen/sim/input_error.hpp numen/sim/jigsaws.hpp
+  numen/sim/device_process.hpp numen/sim/divergence.hpp numen/sim/energy.hpp
+  numen/sim/input_error.hpp numen/sim/jigsaws.hpp
   numen/sim/multirate_run.hpp
   numen/sim/obj_mesh.hpp numen/sim/pointer_path.hpp numen/sim/run.hpp
   numen/sim/run_figures.hpp numen/sim/run_verdict.hpp numen/sim/scene.hpp

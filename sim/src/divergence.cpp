@@ -17,6 +17,7 @@ DivergenceMonitor::DivergenceMonitor(const core::Model& model, const core::Data&
                                      const DivergenceLimits& limits)
     : limits_(limits),
       net_radius_m_(model.nets.size(), 0.0),
+      base_stretch_m_(model.nets.size(), 0.0),
       prev_bodies_(data.bodies),
       prev_targets_(data.bodies.size()),
       prev_coupled_(data.bodies.size(), 0) {
@@ -86,6 +87,18 @@ void DivergenceMonitor::rebase(const core::Model& model, const core::Data& data)
   energy0_ = stored_energy(model, data) + contact0_;
   gravity0_ = gravity_potential(model, data);
   work_in_ = 0.0;
+  // A net pressed into an obstacle at the start is stretched by it before anything moves:
+  // twice that stretch is allowed on top of the net's size (the push-out overshoots).
+  for (std::size_t n = 0; n < model.nets.size(); ++n) {
+    const core::NetModel& net = model.nets[n];
+    const core::BodyState& body = data.bodies[static_cast<std::size_t>(net.body)];
+    for (int i = net.node_begin; i < net.node_begin + net.node_count; ++i) {
+      const auto k = static_cast<std::size_t>(i);
+      const double stretch =
+          (data.nodes[k].position - (body.position + body.orientation * model.node_rest[k])).norm();
+      if (std::isfinite(stretch)) base_stretch_m_[n] = std::max(base_stretch_m_[n], stretch);
+    }
+  }
   // ... and the fastest it can push a body: all of it into the lightest colliding body.
   double lightest = std::numeric_limits<double>::infinity();
   for (const core::BodyModel& b : model.bodies)
@@ -135,7 +148,8 @@ bool DivergenceMonitor::observe(const core::Model& model, const core::Data& data
   for (std::size_t n = 0; n < model.nets.size() && !breach; ++n) {
     const core::NetModel& net = model.nets[n];
     const core::BodyState& body = data.bodies[static_cast<std::size_t>(net.body)];
-    const double stretch_limit = limits_.stretch_factor * net_radius_m_[n];
+    const double stretch_limit =
+        limits_.stretch_factor * net_radius_m_[n] + 2.0 * base_stretch_m_[n];
     for (int i = net.node_begin; i < net.node_begin + net.node_count; ++i) {
       const auto k = static_cast<std::size_t>(i);
       const double v = data.nodes[k].velocity.norm();

@@ -205,7 +205,7 @@ TEST(BusRecorder, FullQueueDropsAndCountsWithoutBlocking) {
   EXPECT_EQ(writer.counters().dropped, 6u);
   EXPECT_EQ(bus.controller().counters().frames_tx, 10u);
   writer.start();
-  writer.stop();
+  writer.close();  // the log appears under its path
   const std::vector<std::string> lines = read_lines(path);
   ASSERT_EQ(lines.size(), 4u);  // the first four, in order
   EXPECT_EQ(lines[0], "(0000000000.000000) can0 080# T");
@@ -340,7 +340,7 @@ TEST(BusRecorder, FramesAreWrittenOnlyWhenTheKernelAcceptsThem) {
   writer.start();
   for (int k = 0; k < 3000; ++k)
     ASSERT_TRUE(writer.push(numen::hal::make_sync(k), can0, CandumpDirection::kTransmitted));
-  writer.stop();
+  writer.close();  // the log appears under its path
   EXPECT_EQ(writer.counters().written, 3000u);
   EXPECT_EQ(writer.counters().lost + writer.counters().io_errors, 0u);
   EXPECT_EQ(read_lines((dir / "run.log").string()).size(), 3000u);

@@ -10,7 +10,7 @@
 /// | --- | --- | --- |
 /// | "body speed" | |v| + |ω| r of a body (r: its bounding radius) | speed_factor × v_ref |
 /// | "node speed" | |v| of a net node | speed_factor × v_ref |
-/// | "tie stretch" | |x − a| of a node from its anchor on the rigid component | stretch_factor × the net's rest radius |
+/// | "tie stretch" | |x − a| of a node from its anchor on the rigid component | stretch_factor × the net's rest radius + 2 × its largest stretch at the base |
 /// | "energy" | stored energy + gravity's potential (energy.hpp) | energy_factor × max(E₀ + W_in, energy_floor_j) |
 ///
 /// E₀ counts the contacts' potential at the base (½ k d² of the first period's contacts).
@@ -42,7 +42,7 @@ namespace numen::sim {
 struct DivergenceLimits {
   double speed_factor = 10.0;     ///< Speeds may reach this × v_ref.
   double speed_floor_mps = 0.5;   ///< v_ref is at least this (m/s).
-  double stretch_factor = 1.0;    ///< Tie stretch may reach this × the net's rest radius.
+  double stretch_factor = 1.0;    ///< Tie stretch may reach this × the net's rest radius (+ 2 × the start's).
   double energy_factor = 100.0;   ///< E may reach this × max(E₀ + W_in, energy_floor_j).
   double energy_floor_j = 0.01;   ///< J: what a scene at rest may hold without a verdict.
 };
@@ -109,6 +109,7 @@ class DivergenceMonitor {
   double push_speed_mps_ = 0.0;            // √(2 E_c0 / m): the start's contacts, all in one body
   double contact0_ = 0.0;                  // the contacts' potential at the (re)base (J)
   std::vector<double> net_radius_m_;       // per net: max |rest offset| of its nodes
+  std::vector<double> base_stretch_m_;     // per net: largest tie stretch at the (re)base
   std::vector<core::BodyState> prev_bodies_;
   std::vector<core::Pose> prev_targets_;   // per body: its coupling target in the last period
   std::vector<char> prev_coupled_;         // per body: it had a coupling target then
