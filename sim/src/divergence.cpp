@@ -112,8 +112,7 @@ bool DivergenceMonitor::observe(const core::Model& model, const core::Data& data
   if (latched_.cause != nullptr) return false;
   // ---- energy against what the hand put in ----
   const bool springs = coupling_springs_act(model);
-  if (prev_attached_ != data.attached_body) {
-    if (prev_attached_ == -2) remember(data);  // the first period: the start is the base
+  if (prev_attached_ != data.attached_body) {  // the first period, or a new held body: the base
     rebase(model, data);
   } else if (springs) {
     work_in_ += input_work(model, data);
