@@ -124,33 +124,27 @@ void ControlLoop::apply_targets(const hal::DeviceSample& sample) noexcept {
   }
 }
 
-bool ControlLoop::gather_link_wrenches() noexcept {
+void ControlLoop::gather_link_wrenches() noexcept {
   const core::Data& d = *data_;
   for (core::Wrench& w : link_wrench_) w = core::Wrench{};
-  bool any = false;
   for (std::size_t k = 0; k < binding_.links.size(); ++k) {
     const int body = bound_body_[k];
     if (body < 0) continue;
-    any = true;
     const core::Wrench w = core::carry_wrench(d.body_feedback[static_cast<std::size_t>(body)],
                                               body_target_[k], link_origin_[k]);  // Eq. 9
     core::Wrench& acc = link_wrench_[static_cast<std::size_t>(binding_.links[k].link)];
     acc.force += w.force;
     acc.torque += w.torque;
   }
-  return any;
 }
 
 void ControlLoop::map_feedback() noexcept {
+  // Computes and never gates: a link without a driven body has w = 0, and whether τ is sent
+  // is Device::write()'s decision alone (a non-finite τ trips its latch there).
   report_.feedback = core::Wrench{};
   const auto links = static_cast<std::size_t>(instrument_->num_links());
-  const bool mapped =
-      gather_link_wrenches() &&
-      instrument_->torques_for(std::span<const core::Wrench>(link_wrench_.data(), links), tau_);
-  if (!mapped) {
-    tau_.setZero();
-    return;
-  }
+  gather_link_wrenches();
+  instrument_->torques_for(std::span<const core::Wrench>(link_wrench_.data(), links), tau_);
   // The wrench the drives are asked to render, about link 0's origin (Eq. 9).
   const hal::DeviceSample& sample = instrument_->last_sample();
   const core::Vec3 origin0 = sample.link_targets[0].position;

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 
+#include "numen/core/coupling.hpp"
 #include "numen/sim/energy.hpp"
 
 namespace numen::sim {
@@ -75,6 +76,23 @@ double DivergenceMonitor::input_work(const core::Model& model, const core::Data&
   return std::max(0.0, jump + model.dt * std::max(0.0, power));
 }
 
+double step_response_speed(const core::Model& model, const core::Data& data, int b,
+                           const core::Pose& from, const core::Pose& to) noexcept {
+  const auto k = static_cast<std::size_t>(b);
+  const core::BodyModel& body = model.bodies[k];
+  const core::CouplingGains& g = body.coupling;
+  double v = (to.position - from.position).norm() * std::sqrt(std::max(0.0, g.k_t) / body.mass);
+  const Vec3 theta = core::rotation_error(to.orientation, from.orientation);
+  const double angle = theta.norm();
+  if (angle > 0.0 && g.k_r > 0.0) {
+    const Vec3 u = theta / angle;
+    const core::Mat3 r = data.bodies[k].orientation.toRotationMatrix();
+    const double inertia = u.dot(r * body.inertia_body * r.transpose() * u);
+    if (inertia > 0.0) v += angle * std::sqrt(g.k_r / inertia) * body.bounding_radius;
+  }
+  return v;
+}
+
 void DivergenceMonitor::remember(const core::Data& data) noexcept {
   std::copy(data.bodies.begin(), data.bodies.end(), prev_bodies_.begin());  // same size
   prev_attached_ = data.attached_body;
@@ -130,6 +148,18 @@ bool DivergenceMonitor::observe(const core::Model& model, const core::Data& data
     if (!t.enabled) continue;
     const double v = t.twist.linear.norm() + t.twist.angular.norm() * model.bodies[k].bounding_radius;
     if (std::isfinite(v)) hand_speed_max_mps_ = std::max(hand_speed_max_mps_, v);
+  }
+  // A target that steps (samples held through a link outage, then the hand where it is now)
+  // swings the coupling spring: a mass on a spring k stepped by Δ peaks at Δ √(k/m).
+  if (springs && prev_attached_ == data.attached_body) {
+    for (int b = 0; b < model.num_bodies(); ++b) {
+      const auto k = static_cast<std::size_t>(b);
+      const core::Twist* twist = nullptr;
+      const core::Pose* target = coupling_target(model, data, b, &twist);
+      if (target == nullptr || !prev_coupled_[k]) continue;
+      const double v = step_response_speed(model, data, b, prev_targets_[k], *target);
+      if (std::isfinite(v)) hand_speed_max_mps_ = std::max(hand_speed_max_mps_, v);
+    }
   }
   const double speed_limit = speed_limit_mps();
   bool breach = false;

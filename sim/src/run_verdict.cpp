@@ -116,7 +116,7 @@ RunVerdict run_verdict(const RunSummary& s) {
 
 const char* exit_status_name(int status) noexcept {
   if (status > 128 && status <= 128 + 64) return "stopped by a signal";
-  if (status < 0 || status > code(ExitStatus::kSamplesRejected)) return "?";
+  if (status < 0 || status > code(ExitStatus::kDiverged)) return "?";
   return to_string(static_cast<ExitStatus>(status));
 }
 

@@ -959,6 +959,42 @@ TEST(ControlLoopManaged, ShutdownZeroTorqueAtOnceThenDrivesDisabledWithoutAFault
   EXPECT_EQ(rig.loop.rearm(), numen::platform::RearmResult::kNotLatched);
 }
 
+// Torque is gated once, in Device::write(): a NaN Eq. 8 wrench is mapped as it is (the map
+// computes, it does not zero), reaches write()'s non-finite trip and latches the safe state
+// with FaultCause::kNonFiniteTorque in that very period; no torque leaves from then on.
+TEST(ControlLoopManaged, ANaNWrenchLatchesNonFiniteTorque) {
+  Rig rig;
+  rig.run_to_torque();
+  for (int i = 0; i < 5; ++i) rig.period();
+  ASSERT_TRUE(any_torque(rig));
+  struct Poison {
+    numen::core::Model* model;
+    numen::core::Data* data;
+  } poison{&rig.model, &rig.data};
+  rig.loop.set_step_function(
+      [](void* c) noexcept {
+        auto* p = static_cast<Poison*>(c);
+        numen::core::step(*p->model, *p->data);
+        p->data->body_feedback[0].force.x() = std::numeric_limits<double>::quiet_NaN();
+      },
+      &poison);
+  const std::uint64_t trips = rig.loop.device().torque_counters().non_finite;
+  const PeriodReport& r = rig.period();
+  EXPECT_FALSE(r.torque_commanded);
+  EXPECT_FALSE(any_torque(rig));
+  EXPECT_EQ(rig.loop.device().torque_counters().non_finite, trips + 1);
+  EXPECT_EQ(rig.device.counters().non_finite_wrenches, 1u);
+  EXPECT_TRUE(r.lifecycle == LifecycleState::kSafeStop || r.lifecycle == LifecycleState::kFault)
+      << numen::hal::to_string(r.lifecycle);
+  ASSERT_NE(rig.sup().first_fault(), nullptr);
+  EXPECT_EQ(rig.sup().first_fault()->cause, FaultCause::kNonFiniteTorque);
+  rig.loop.set_step_function(nullptr, nullptr);
+  for (int i = 0; i < 20; ++i) {
+    rig.period();
+    ASSERT_FALSE(any_torque(rig)) << "latched: no torque until a re-arm, period " << i;
+  }
+}
+
 TEST(ControlLoopManaged, ControllerSilentEmulatedDrivesFaultOnTheirOwn) {
   // The drives watch the controller's heartbeat (10 ms, consumer time 30 ms): when the
   // controller stops, they fault by themselves (EMCY 0x8130) and apply zero torque.

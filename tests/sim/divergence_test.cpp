@@ -88,6 +88,35 @@ TEST(DivergenceMonitor, TheHandsOwnSpeedRaisesTheSpeedLimit) {
   EXPECT_NEAR(monitor.divergence().limit, 30.0, 1e-12);
 }
 
+// A held sample that jumps to the hand's pose after a link outage steps the coupling target:
+// the spring swings the tool at Δ √(k/m), which is the hand's doing, not a divergence (the HIL
+// scenario run_device_link: a 1 s outage, the tube at 5.02 m/s against a 5 m/s limit).
+TEST(DivergenceMonitor, ATargetThatStepsRaisesTheSpeedLimitByTheSpringsStepResponse) {
+  Model m = numen::test::make_lean_model(LeanPart::kNone);
+  ASSERT_EQ(m.coupling_mode, numen::core::CouplingMode::kGodObject);
+  Data d = held_at_rest(m);
+  DivergenceMonitor monitor(m, d);
+  const double before = monitor.speed_limit_mps();
+  EXPECT_FALSE(monitor.observe(m, d, 0, 0.0));
+  const double jump = 0.2;  // m
+  d.target.position += Vec3(jump, 0.0, 0.0);
+  const double omega = std::sqrt(m.bodies[0].coupling.k_t / m.bodies[0].mass);
+  EXPECT_NEAR(numen::sim::step_response_speed(m, d, 0, numen::core::Pose{d.bodies[0].position,
+                                                                         d.bodies[0].orientation},
+                                              d.target),
+              jump * omega, 1e-12);
+  // Integrate the swing: the tool's peak stays below the raised limit, which is 10 × Δ ω_n.
+  double peak = 0.0;
+  for (int k = 1; k < 2000; ++k) {
+    numen::core::step(m, d);
+    EXPECT_FALSE(monitor.observe(m, d, k, k * m.dt)) << "period " << k;
+    peak = std::max(peak, d.bodies[0].linear_velocity.norm());
+  }
+  EXPECT_NEAR(monitor.speed_limit_mps(), std::max(before, 10.0 * jump * omega), 1e-9);
+  EXPECT_GT(peak, 0.3 * jump * omega) << "the step did swing the tool";
+  EXPECT_LE(peak, jump * omega * 1.01) << "Δ ω_n bounds the swing";
+}
+
 TEST(DivergenceMonitor, ANodeTornFromItsAnchorLatchesTieStretch) {
   NUMEN_REQUIRE_DEFORMABLE();
   const Model m = numen::test::make_lean_model(LeanPart::kNet);

@@ -111,7 +111,12 @@ TEST(RunVerdict, AStoppedRunCarriesTheSignalsStatusAndName) {
   EXPECT_EQ(run_verdict(clean()).exit_status, 0);
   EXPECT_STREQ(numen::sim::exit_status_name(0), "clean");
   EXPECT_STREQ(numen::sim::exit_status_name(6), "samples rejected");
+  EXPECT_STREQ(numen::sim::exit_status_name(7), "diverged");
+  EXPECT_STREQ(numen::sim::exit_status_name(8), "?");
   EXPECT_STREQ(numen::sim::exit_status_name(99), "?");
+  // Every status the verdict can give has its name (the HIL scripts print it).
+  for (int status = 0; status <= 7; ++status)
+    EXPECT_STRNE(numen::sim::exit_status_name(status), "?") << status;
 }
 
 // A run that ends before the managed start-up has made the encoders send said "no period had

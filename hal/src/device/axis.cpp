@@ -66,33 +66,6 @@ std::int32_t value_to_counts(const AxisConfig& axis, double value) noexcept {
   return static_cast<std::int32_t>(c);
 }
 
-TorqueCommand torque_to_per_mille(const AxisConfig& axis, double torque) noexcept {
-  TorqueCommand out;
-  if (!std::isfinite(torque)) {
-    out.saturated = true;
-    return out;
-  }
-  double t = torque;
-  if (t > axis.max_torque) {
-    t = axis.max_torque;
-    out.saturated = true;
-  } else if (t < -axis.max_torque) {
-    t = -axis.max_torque;
-    out.saturated = true;
-  }
-  double pm = std::round(static_cast<double>(axis.sign) * 1000.0 * t / axis.rated_torque);
-  constexpr double kLo = std::numeric_limits<std::int16_t>::min();
-  constexpr double kHi = std::numeric_limits<std::int16_t>::max();
-  if (pm < kLo || pm > kHi) {
-    pm = pm < kLo ? kLo : kHi;
-    t = static_cast<double>(axis.sign) * pm * axis.rated_torque / 1000.0;
-    out.saturated = true;
-  }
-  out.torque = t;
-  out.per_mille = static_cast<std::int16_t>(pm);
-  return out;
-}
-
 double torque_limit(const AxisConfig& axis) noexcept {
   return std::min(axis.max_torque, 32.767 * axis.rated_torque);
 }

@@ -35,6 +35,9 @@ InstrumentDevice::InstrumentDevice(DeviceConfig config,
                                 " axes but config.axes has " + std::to_string(n_));
   }
   num_links_ = kinematics_->num_links();
+  // Before the first valid sample every link's Jacobian is 0 (6 × n): torques_for() maps a
+  // finite wrench to τ = 0 there, and write() gates it anyway (no valid sample).
+  for (Jacobian& j : link_jacobians_) j = Jacobian::Zero(6, n_);
   if (num_links_ < 1 || num_links_ > kMaxLinks) {
     throw std::invalid_argument("device '" + config_.name + "': kinematics has " +
                                 std::to_string(num_links_) + " links (must be 1.." +
@@ -233,7 +236,7 @@ DeviceSample InstrumentDevice::sample(std::int64_t now_ns) noexcept {
   return s;
 }
 
-bool InstrumentDevice::torques_for(std::span<const core::Wrench> link_wrenches,
+void InstrumentDevice::torques_for(std::span<const core::Wrench> link_wrenches,
                                    AxisVector& tau) noexcept {
   ++counters_.commands;
   tau = AxisVector::Zero(n_);
@@ -247,14 +250,9 @@ bool InstrumentDevice::torques_for(std::span<const core::Wrench> link_wrenches,
     finite = finite && link_wrenches[l].force.allFinite() && link_wrenches[l].torque.allFinite();
   }
   if (!finite) ++counters_.non_finite_wrenches;
-  if (!finite || !last_sample_.ready) {
-    ++counters_.commands_zero;
-    return false;
-  }
   for (std::size_t l = 0; l < used; ++l) {
     tau += torques_from_wrench(link_jacobians_[l], link_wrenches[l]);
   }
-  return true;
 }
 
 }  // namespace numen::hal

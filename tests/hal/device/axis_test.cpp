@@ -85,34 +85,29 @@ TEST(Axis, WrappingSingleTurnEncoder) {
   EXPECT_EQ(value_to_counts(a, kPi / 2 + 2 * kPi), 1024);
 }
 
-TEST(Axis, TorqueScalingSaturationAndSign) {
+// The encoding of a torque Device::write() has already clamped to torque_limit(): scale by
+// rated_torque, apply the sign, round to the nearest per mille.
+TEST(Axis, TorqueScalingAndSign) {
   const AxisConfig a = revolute();  // rated 0.5, max 1.0, sign −1
-  TorqueCommand c = torque_to_per_mille(a, 0.25);
-  EXPECT_EQ(c.per_mille, -500);
-  EXPECT_FALSE(c.saturated);
-  EXPECT_DOUBLE_EQ(c.torque, 0.25);
-  EXPECT_DOUBLE_EQ(per_mille_to_torque(a, c.per_mille), 0.25);
-  c = torque_to_per_mille(a, 3.0);
-  EXPECT_TRUE(c.saturated);
-  EXPECT_DOUBLE_EQ(c.torque, 1.0);
-  EXPECT_EQ(c.per_mille, -2000);
-  c = torque_to_per_mille(a, -3.0);
-  EXPECT_EQ(c.per_mille, 2000);
-  c = torque_to_per_mille(a, std::nan(""));
-  EXPECT_TRUE(c.saturated);
-  EXPECT_EQ(c.per_mille, 0);
-  EXPECT_DOUBLE_EQ(c.torque, 0.0);
+  EXPECT_DOUBLE_EQ(torque_limit(a), 1.0);
+  EXPECT_EQ(torque_per_mille(a, 0.25), -500);
+  EXPECT_DOUBLE_EQ(per_mille_to_torque(a, -500), 0.25);
+  EXPECT_EQ(torque_per_mille(a, -1.0), 2000);
+  EXPECT_EQ(torque_per_mille(a, 0.00024), 0) << "rounds to the nearest per mille";
+  EXPECT_EQ(torque_per_mille(a, std::nan("")), 0);
 }
 
-TEST(Axis, TorqueSaturatesToInt16) {
+// The limit Device::write() clamps to is within what the RPDO's int16 carries, so the
+// encoding of a clamped torque is exact; beyond it the encoding saturates (never wraps).
+TEST(Axis, TorqueLimitIsWithinTheRpdosRange) {
   AxisConfig a = revolute();
   a.sign = 1;
   a.rated_torque = 0.001;
   a.max_torque = 100.0;
-  const TorqueCommand c = torque_to_per_mille(a, 50.0);  // 50e6 per mille
-  EXPECT_TRUE(c.saturated);
-  EXPECT_EQ(c.per_mille, 32767);
-  EXPECT_NEAR(c.torque, 0.032767, 1e-12);
+  EXPECT_NEAR(torque_limit(a), 0.032767, 1e-15);
+  EXPECT_EQ(torque_per_mille(a, torque_limit(a)), 32767);
+  EXPECT_EQ(torque_per_mille(a, -torque_limit(a)), -32767);
+  EXPECT_EQ(torque_per_mille(a, 50.0), 32767);  // 50e6 per mille
 }
 
 TEST(Axis, ValidationNamesTheField) {

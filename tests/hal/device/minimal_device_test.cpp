@@ -42,7 +42,7 @@ class Sender {
   Sender(InstrumentDevice& inst, SimBus& bus) : inst_(&inst), dev_(inst, bus.controller()) {}
   IoStatus command_links(std::span<const Wrench> w, std::int64_t now_ns) {
     AxisVector tau;
-    if (!inst_->torques_for(w, tau)) tau = AxisVector::Zero(inst_->num_axes());
+    inst_->torques_for(w, tau);
     return dev_.write(std::span<const double>(tau.data(), static_cast<std::size_t>(tau.size())),
                       now_ns);
   }
@@ -302,6 +302,7 @@ TEST(MinimalDevice, NonFiniteLinkWrenchSendsZeros) {
   EXPECT_EQ(tx.command_links(w, 0), IoStatus::kOk);
   EXPECT_EQ(tx.last_torques().norm(), 0.0);
   EXPECT_EQ(dev.counters().non_finite_wrenches, 1u);
+  EXPECT_EQ(tx.device().torque_counters().non_finite, 1u) << "zeroed by write()'s trip, once";
   std::array<std::int16_t, kMaxAxes> pm{};
   std::array<int, kMaxAxes> frames{};
   EXPECT_EQ(drain(bus, c, pm, frames), 6);  // two commands, three drives

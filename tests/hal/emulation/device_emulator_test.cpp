@@ -60,7 +60,7 @@ struct Rig {
   // The controller's sending half: τ = Σ J_lᵀ w_l (torques_for), then MinimalDevice::write().
   IoStatus command_links(std::span<const Wrench> w, std::int64_t t) {
     AxisVector tau;
-    if (!device.torques_for(w, tau)) tau = AxisVector::Zero(device.num_axes());
+    device.torques_for(w, tau);
     return sender.write(std::span<const double>(tau.data(), static_cast<std::size_t>(tau.size())),
                         t);
   }

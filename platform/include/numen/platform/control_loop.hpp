@@ -145,8 +145,8 @@ class ControlLoop {
   ///     data.body_targets (paper Eq. 6) — and the prescribed joints' values;
   ///  4. step: one core::step;
   ///  5. map: w_l = the bound bodies' Eq. 8 feedback (data.body_feedback) carried to their
-  ///     link's origin (Eq. 9), τ = Σ_l J_lᵀ w_l (InstrumentDevice::torques_for(); 0 while no
-  ///     bound body is driven or the device is not ready);
+  ///     link's origin (Eq. 9), τ = Σ_l J_lᵀ w_l (InstrumentDevice::torques_for(): computed
+  ///     as it is, NaN included; 0 for a link without a driven body);
   ///  6. write: Device::write(τ) — gated (zero unless this period's sample is valid, no
   ///     shutdown, and — managed — the lifecycle active and the drive's master allowing
   ///     torque), clamped to ±max_torque and scaled by the soft start's r there, once; then
@@ -216,9 +216,9 @@ class ControlLoop {
 
  private:
   void apply_targets(const hal::DeviceSample& sample) noexcept;
-  // Σ of the bound bodies' Eq. 8 wrenches per link into link_wrench_; false if no body is bound.
-  bool gather_link_wrenches() noexcept;
-  // Step 5: link_wrench_ → tau_ (τ = Σ J_lᵀ w_l) and report_.feedback; zero when nothing maps.
+  // Σ of the bound bodies' Eq. 8 wrenches per link into link_wrench_ (0 for a link without one).
+  void gather_link_wrenches() noexcept;
+  // Step 5: link_wrench_ → tau_ (τ = Σ J_lᵀ w_l) and report_.feedback; computes, never gates.
   void map_feedback() noexcept;
   void step_model() noexcept;
 

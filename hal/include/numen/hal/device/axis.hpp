@@ -46,13 +46,6 @@ struct AxisConfig {
   bool has_drive() const noexcept { return drive_cob_id != 0; }
 };
 
-/// A torque converted for the bus.
-struct TorqueCommand {
-  double torque = 0.0;         ///< Saturated torque, N·m or N (0 for a non-finite request).
-  std::int16_t per_mille = 0;  ///< Value to put in the RPDO.
-  bool saturated = false;      ///< The request exceeded max_torque or int16, or was not finite.
-};
-
 /// Wraps an angle to (−π, π], rad. Non-finite input is returned unchanged.
 double wrap_angle(double angle) noexcept;
 
@@ -65,10 +58,6 @@ double counts_to_value(const AxisConfig& axis, std::int32_t counts) noexcept;
 /// Encoder reading of an axis value: round to nearest, saturate to int32. A wrapping axis
 /// wraps the value first. NaN gives offset_counts.
 std::int32_t value_to_counts(const AxisConfig& axis, double value) noexcept;
-
-/// Torque (N·m or N) to RPDO per mille: clamp to ±max_torque, scale by rated_torque,
-/// apply sign, round to nearest, saturate to int16. Non-finite → 0, flagged saturated.
-TorqueCommand torque_to_per_mille(const AxisConfig& axis, double torque) noexcept;
 
 /// The torque bound of `axis`, N·m or N: min(max_torque, 32767 · rated_torque / 1000), the
 /// largest |τ| the axis allows and its RPDO can carry. Device::write() clamps to it.

@@ -99,8 +99,9 @@ struct DeviceCounters {
   std::uint64_t rejected_jump = 0;          ///< ... implausible jump.
   // Mappings (torques_for()).
   std::uint64_t commands = 0;             ///< torques_for() calls.
-  std::uint64_t commands_zero = 0;        ///< ... that returned false (not ready, non-finite).
-  std::uint64_t non_finite_wrenches = 0;  ///< ... given a NaN/inf wrench.
+  /// ... given a NaN/inf wrench (mapped all the same: hal::Device::write() trips on the
+  /// non-finite τ, FaultCause::kNonFiniteTorque).
+  std::uint64_t non_finite_wrenches = 0;
   /// torques_for() calls given more wrenches than the instrument has links (the extra
   /// entries were ignored).
   std::uint64_t extra_link_wrenches = 0;
@@ -138,11 +139,12 @@ class InstrumentDevice {
   /// w_l = link_wrenches[l] in world coordinates about link l's origin and
   /// J_l = Kinematics::link_jacobian(l, q) at the axis values of the last sample(). Links
   /// without an entry (l >= link_wrenches.size()) get a zero wrench; entries beyond
-  /// num_links() are ignored and counted (extra_link_wrenches). No gate and no clamp (that is
-  /// hal::Device::write()); every axis gets its Σ, with a drive or not. Returns false and sets
-  /// `tau` to 0 before the device is ready or if a used wrench is not finite (counted once in
-  /// non_finite_wrenches).
-  bool torques_for(std::span<const core::Wrench> link_wrenches, AxisVector& tau) noexcept;
+  /// num_links() are ignored and counted (extra_link_wrenches). It computes and never gates:
+  /// no gate, no clamp and no zeroing (that is hal::Device::write(), once); every axis gets its
+  /// Σ, with a drive or not. Before the first valid sample the Jacobians are 0 (τ = 0 for a
+  /// finite wrench). A non-finite wrench is mapped as it is (counted in non_finite_wrenches):
+  /// its τ reaches write(), whose non-finite trip latches the safe state.
+  void torques_for(std::span<const core::Wrench> link_wrenches, AxisVector& tau) noexcept;
 
   /// The last sample() result (default-constructed with q = 0 before the first call).
   const DeviceSample& last_sample() const noexcept { return last_sample_; }
