@@ -69,7 +69,8 @@ set(_hal_headers
   numen/hal/canopen/sdo.hpp numen/hal/canopen/sdo_poller.hpp
   numen/hal/device/admittance_device.hpp numen/hal/device/axis.hpp
   numen/hal/device/device.hpp numen/hal/device/device_config.hpp
-  numen/hal/device/force_sensor.hpp numen/hal/device/instrument_device.hpp
+  numen/hal/device/force_sensor.hpp numen/hal/device/impedance_device.hpp
+  numen/hal/device/instrument_device.hpp
   numen/hal/device/rate_estimator.hpp
   numen/hal/device/kinematics.hpp numen/hal/device/kinematics_factory.hpp
   numen/hal/device/managed_device.hpp numen/hal/device/minimal_device.hpp
@@ -103,7 +104,7 @@ numen_install_headers(${PROJECT_BINARY_DIR}/hal/include numen/hal/features.hpp) 
 # platform: the control loops, real-time setup, clocks, timers, statistics, the state stream,
 # the multirate scene thread and its triple buffers.
 numen_install_headers(${PROJECT_SOURCE_DIR}/platform/include
-  numen/platform/admittance_loop.hpp numen/platform/control_loop.hpp
+  numen/platform/control_loop.hpp
   numen/platform/device_binding.hpp numen/platform/latency_histogram.hpp
   numen/platform/loop_statistics.hpp numen/platform/monotonic_clock.hpp
   numen/platform/multirate_threads.hpp numen/platform/periodic_timer.hpp

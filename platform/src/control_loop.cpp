@@ -9,6 +9,7 @@
 
 #include "numen/core/feedback.hpp"
 #include "numen/core/joint.hpp"
+#include "numen/core/rigid_body.hpp"
 #include "numen/core/step.hpp"
 #include "numen/platform/monotonic_clock.hpp"
 
@@ -16,9 +17,8 @@ namespace numen::platform {
 
 namespace {
 
-std::int64_t period_of(const hal::InstrumentDevice& device) {
-  const double p = device.config().control_period_s;
-  return static_cast<std::int64_t>(std::llround(p * 1e9));
+std::int64_t period_of(const hal::DeviceConfig& config) {
+  return static_cast<std::int64_t>(std::llround(config.control_period_s * 1e9));
 }
 
 }  // namespace
@@ -29,10 +29,12 @@ ControlLoop::ControlLoop(const core::Model& model, core::Data& data, hal::Bus& b
     : model_(&model),
       data_(&data),
       instrument_(&device),
-      device_(hal::make_device(device, bus, period_of(device), static_cast<const hal::DeviceSettings&>(settings))),
+      impedance_(hal::make_device(device, bus, period_of(device.config()),
+                                  static_cast<const hal::DeviceSettings&>(settings))),
+      device_(impedance_.get()),
       binding_(std::move(binding)),
       settings_(settings),
-      stats_(std::make_unique<LoopStatistics>(period_of(device))) {
+      stats_(std::make_unique<LoopStatistics>(period_of(device.config()))) {
   if (binding_.links.empty()) binding_.links = DeviceBinding::rigid().links;  // see DeviceBinding
   const int links = device.kinematics().num_links();
   for (const LinkBinding& b : binding_.links) {
@@ -85,6 +87,19 @@ ControlLoop::ControlLoop(const core::Model& model, core::Data& data, hal::Bus& b
     t.enabled = true;
   }
   tau_ = hal::AxisVector::Zero(device.num_axes());
+}
+
+ControlLoop::ControlLoop(const core::Model& model, core::Data& data,
+                         hal::AdmittanceDevice& device, const ControlLoopSettings& settings)
+    : model_(&model),
+      data_(&data),
+      admittance_(&device),
+      device_(&device),
+      settings_(settings),
+      stats_(std::make_unique<LoopStatistics>(period_of(device.config()))) {
+  if (model.coupling_mode != core::CouplingMode::kAdmittance)
+    throw std::invalid_argument("admittance device '" + device.config().name +
+                                "': the model's coupling mode must be admittance");
 }
 
 void ControlLoop::apply_targets(const hal::DeviceSample& sample) noexcept {
@@ -140,7 +155,7 @@ void ControlLoop::gather_link_wrenches() noexcept {
 
 void ControlLoop::map_feedback() noexcept {
   // Computes and never gates: a link without a driven body has w = 0, and whether τ is sent
-  // is Device::write()'s decision alone (a non-finite τ trips its latch there).
+  // is ImpedanceDevice::write()'s decision alone (a non-finite τ trips its latch there).
   report_.feedback = core::Wrench{};
   const auto links = static_cast<std::size_t>(instrument_->num_links());
   gather_link_wrenches();
@@ -187,9 +202,6 @@ const PeriodReport& ControlLoop::end_period(std::int64_t now_ns) noexcept {
   report_.input_end_ns = monotonic_now_ns();
   report_.frames_read = read.frames_read;
   if (read.read_error) ++counters_.read_errors;
-  const hal::DeviceSample& sample = device_->sample();
-  report_.sample_valid = sample.valid;
-  report_.target_ready = sample.ready;
   // 2. supervise
   const hal::DeviceSupervision sup =
       device_->supervise(now_ns, settings_.supervise_overruns && last_overrun_);
@@ -197,16 +209,36 @@ const PeriodReport& ControlLoop::end_period(std::int64_t now_ns) noexcept {
   report_.activated = sup.activated;
   report_.startup = sup.startup;
   if (report_.activated && first_active_period_ < 0) first_active_period_ = period;
+  // 3.–6. the kind's exchange
+  if (admittance_ != nullptr)
+    admittance_period(now_ns);
+  else
+    impedance_period(now_ns);
+  report_.lifecycle = device_->lifecycle();  // after the write: a non-finite τ trips it
+  if (!report_.torque_commanded) ++counters_.periods_zero_torque;
+  if (report_.torque_commanded && first_torque_period_ < 0) first_torque_period_ = period;
+  if (report_.command_status != hal::IoStatus::kOk) ++counters_.command_failures;
+  const PeriodVerdict v = stats_->record_period(report_.times());
+  report_.overrun = v.overrun;
+  last_overrun_ = v.overrun;
+  return report_;
+}
+
+void ControlLoop::impedance_period(std::int64_t now_ns) noexcept {
+  const hal::DeviceSample& sample = impedance_->sample();
+  report_.sample_valid = sample.valid;
+  report_.target_ready = sample.ready;
+  report_.sample_faults = sample.faults;
   // 3. targets, 4. step
   if (sample.ready) apply_targets(sample);
   step_model();
   // 5. map, 6. write
   report_.output_begin_ns = monotonic_now_ns();
   map_feedback();
-  report_.command_status = device_->write(
+  report_.command_status = impedance_->write(
       std::span<const double>(tau_.data(), static_cast<std::size_t>(tau_.size())), now_ns);
   report_.output_end_ns = monotonic_now_ns();
-  const hal::SentTorques& sent = device_->sent_torques();
+  const hal::SentTorques& sent = impedance_->sent_torques();
   report_.soft_start_ramp = sent.ramp;
   if (sent.gated) {
     report_.feedback = core::Wrench{};
@@ -215,14 +247,55 @@ const PeriodReport& ControlLoop::end_period(std::int64_t now_ns) noexcept {
     report_.feedback.torque *= sent.ramp;
   }
   report_.torque_commanded = sent.any();
-  report_.lifecycle = device_->lifecycle();  // after write(): a non-finite τ trips it
-  if (!report_.torque_commanded) ++counters_.periods_zero_torque;
-  if (report_.torque_commanded && first_torque_period_ < 0) first_torque_period_ = period;
-  if (report_.command_status != hal::IoStatus::kOk) ++counters_.command_failures;
-  const PeriodVerdict v = stats_->record_period(report_.times());
-  report_.overrun = v.overrun;
-  last_overrun_ = v.overrun;
-  return report_;
+}
+
+void ControlLoop::brake_held_body() noexcept {
+  // Explicit brake that halves the held body's twist every step (stable in both integrators:
+  // h·b/m = 0.5): −0.5 m v / h, −0.5 I_w ω / h.
+  core::Data& d = *data_;
+  d.device_wrench = core::Wrench{};
+  const int a = d.attached_body;
+  if (a < 0 || a >= model_->num_bodies()) return;
+  const core::BodyModel& bm = model_->bodies[static_cast<std::size_t>(a)];
+  const core::BodyState& s = d.bodies[static_cast<std::size_t>(a)];
+  const double k = 0.5 / model_->dt;
+  d.device_wrench.force = -k * bm.mass * s.linear_velocity;
+  d.device_wrench.torque =
+      -k * (core::world_inertia(s.orientation, bm.inertia_body) * s.angular_velocity);
+}
+
+void ControlLoop::admittance_period(std::int64_t now_ns) noexcept {
+  hal::AdmittanceDevice& dev = *admittance_;
+  const hal::ForceSample& sample = dev.force_sample();
+  report_.sample_valid = sample.valid;
+  report_.target_ready = true;
+  report_.sample_faults = sample.faults;
+  core::Data& d = *data_;
+  const int a = d.attached_body;
+  const bool held = a >= 0 && a < model_->num_bodies();
+  const bool active = dev.lifecycle() == hal::LifecycleState::kActive && !dev.shutting_down();
+  // 3. the input: the last accepted reading (held up to the timeout), in the world, about the
+  // held body's COM; or the brake.
+  if (active && held) {
+    d.device_wrench = dev.world_wrench(sample.wrench, d.bodies[static_cast<std::size_t>(a)].position);
+    report_.feedback = d.device_wrench;
+    report_.driven = true;
+  } else {
+    brake_held_body();
+    report_.feedback = core::Wrench{};
+  }
+  // 4. step
+  step_model();
+  // 5.–6. the held body's pose to the drives (held set-points and shutdown outside kActive)
+  report_.output_begin_ns = monotonic_now_ns();
+  core::Pose pose;
+  if (held) {
+    const core::BodyState& s = d.bodies[static_cast<std::size_t>(a)];
+    pose = core::Pose{s.position, s.orientation};
+  }
+  report_.command_status = dev.write_pose(held ? &pose : nullptr, now_ns);
+  report_.output_end_ns = monotonic_now_ns();
+  report_.controlword = dev.controlword();
 }
 
 RearmResult ControlLoop::rearm() noexcept { return device_->rearm(); }

@@ -49,9 +49,15 @@ hal::AxisVector initial_axes(const Scene& scene) {
   return kin->inverse(pose, hal::AxisVector::Zero(kin->num_axes()));
 }
 
-platform::AdmittanceLoopSettings loop_settings(std::uint32_t overrun_limit) noexcept {
-  platform::AdmittanceLoopSettings s;
+hal::AdmittanceSettings device_settings(std::uint32_t overrun_limit) noexcept {
+  hal::AdmittanceSettings s;
   s.overrun_limit = overrun_limit;
+  return s;
+}
+
+platform::ControlLoopSettings loop_settings(std::uint32_t overrun_limit) noexcept {
+  platform::ControlLoopSettings s;
+  s.supervise_overruns = overrun_limit > 0;
   return s;
 }
 
@@ -62,10 +68,11 @@ AdmittanceRunner::AdmittanceRunner(const Scene& scene, std::size_t trace_capacit
     : scene_(&scene),
       bus_(scene.bus),
       emulator_(scene.device, admittance_of(scene).config, admittance_of(scene).emulator),
-      device_(scene.device, admittance_of(scene).config, initial_axes(scene)),
+      device_(scene.device, admittance_of(scene).config, bus_.controller(), initial_axes(scene),
+              device_settings(overrun_limit)),
       data_(core::make_data(scene.model)),
       ghost_(core::make_data(scene.model)),
-      loop_(scene.model, data_, bus_.controller(), device_, loop_settings(overrun_limit)),
+      loop_(scene.model, data_, device_, loop_settings(overrun_limit)),
       multirate_(scene),
       period_ns_(static_cast<std::int64_t>(std::llround(scene.model.dt * 1e9))),
       phase_ns_(static_cast<std::int64_t>(std::llround(scene.compute_phase_s * 1e9))),
@@ -102,7 +109,7 @@ void AdmittanceRunner::finish() {
   if (view_) view_->finish();
 }
 
-void AdmittanceRunner::period(bool overran) noexcept {
+void AdmittanceRunner::period(std::int64_t deadline_mono_ns, std::int64_t woke_mono_ns) noexcept {
   const core::Model& model = scene_->model;
   const std::int64_t t = k_ * period_ns_;
   const double ts = static_cast<double>(t) * 1e-9;
@@ -112,11 +119,11 @@ void AdmittanceRunner::period(bool overran) noexcept {
   emulator_.set_hand(hand_, scene_->trajectory.twist_at(ts));
 
   bus_.set_time_ns(t);
-  loop_.begin_period(t);
+  loop_.begin_period(t, deadline_mono_ns, woke_mono_ns);
   bus_.set_time_ns(t + scene_->bus.latency_ns);
   emulator_.poll(bus_.device());
   bus_.set_time_ns(t + phase_ns_);
-  const platform::AdmittanceReport& r = loop_.end_period(t + phase_ns_, overran);
+  const platform::PeriodReport& r = loop_.end_period(t + phase_ns_);
   step_time_.record(r.step_ns);
   ++k_;
   multirate_.view(data_);  // a multirate run: both loops as one single-rate Data
@@ -147,9 +154,9 @@ void AdmittanceRunner::period(bool overran) noexcept {
   const double sep = (hand_.position - x_dev).norm();
   a.hand_separation_max_mm = std::max(a.hand_separation_max_mm, sep * 1e3);
   a.final_hand_separation_mm = sep * 1e3;
-  a.final_measured_force_n = r.measured.force.norm();
-  a.measured_force_max_n = std::max(a.measured_force_max_n, r.measured.force.norm());
-  a.measured_torque_max_nm = std::max(a.measured_torque_max_nm, r.measured.torque.norm());
+  a.final_measured_force_n = r.feedback.force.norm();
+  a.measured_force_max_n = std::max(a.measured_force_max_n, r.feedback.force.norm());
+  a.measured_torque_max_nm = std::max(a.measured_torque_max_nm, r.feedback.torque.norm());
   s.tool_penetration_max_mm = std::max(s.tool_penetration_max_mm, tool_pen_ * 1e3);
   s.target_penetration_max_mm = std::max(s.target_penetration_max_mm, hand_pen_ * 1e3);
   s.any_penetration_max_mm = std::max(s.any_penetration_max_mm, data_.max_penetration * 1e3);
@@ -159,8 +166,9 @@ void AdmittanceRunner::period(bool overran) noexcept {
   if (data_.solver_residual > s.solver_residual_max) s.solver_residual_max = data_.solver_residual;
   if (data_.status & core::kSolverNotConverged) ++s.solver_not_converged_steps;
   if (r.entered_safe_stop) {
-    if (s.faults == 0) {  // the first latched safe state of the run (kept across re-arms)
-      s.first_fault = platform::to_string(r.cause);
+    if (s.faults == 0 && device_.first_fault() != nullptr) {
+      // the first latched safe state of the run (kept across re-arms)
+      s.first_fault = hal::to_string(device_.first_fault()->cause);
       s.first_fault_time_s = static_cast<double>(t + phase_ns_) * 1e-9;
       s.first_fault_period = k_ - 1;
     }
@@ -170,11 +178,7 @@ void AdmittanceRunner::period(bool overran) noexcept {
   // runs"; docs/scenes.md): the target is the hand, the wrench the measured one that drove the
   // god-object, no axis torque.
   data_.target = hand_;  // not read by the admittance coupling (core/src/coupling.cpp)
-  view_report_.sample_valid = r.sample_valid;
-  view_report_.target_ready = true;
-  view_report_.step_ns = r.step_ns;
-  view_report_.feedback = r.measured;
-  view_report_.lifecycle = r.lifecycle;
+  view_report_ = r;
   if (trace_.records().capacity() > 0)
     trace_.push(make_trace_record(data_, held, tool_contacts, tool_pen_, hand_pen_, view_report_,
                                   hal::AxisVector()));
@@ -200,7 +204,7 @@ RunSummary AdmittanceRunner::summary() const {
     s.bus_frames_dropped += static_cast<std::int64_t>(bus_.link_counters(dir).dropped);
     s.bus_frames_corrupted += static_cast<std::int64_t>(bus_.link_counters(dir).corrupted());
   }
-  s.lifecycle = hal::to_string(loop_.lifecycle().state());
+  s.lifecycle = hal::to_string(device_.lifecycle());
   s.zero_torque_periods = 0;
   AdmittanceSummary& a = s.admittance;
   a.device_error_rms_mm = k_ > 0 ? std::sqrt(error_sq_ / static_cast<double>(k_)) * 1e3 : 0.0;
@@ -208,7 +212,7 @@ RunSummary AdmittanceRunner::summary() const {
   a.csp_rpdos = static_cast<std::int64_t>(device_.counters().rpdos_written);
   a.setpoints_clamped = static_cast<std::int64_t>(device_.counters().clamped_to_range);
   a.setpoints_rate_limited = static_cast<std::int64_t>(device_.counters().rate_limited);
-  a.hold_periods = static_cast<std::int64_t>(loop_.counters().hold_periods);
+  a.hold_periods = static_cast<std::int64_t>(device_.counters().hold_periods);
   s.rejected_samples = a.sensor_rejected_periods;
   multirate_.summarize(s);
   return s;
@@ -253,16 +257,18 @@ RunSummary run_admittance_scene(const Scene& scene, const RunOptions& options) {
       break;
     }
     // SIGUSR1 (docs/safety.md, "How the control loop uses it")
-    if (tally.take_rearm(options.rearm, k) && runner.loop().rearm() == hal::LifecycleResult::kOk)
+    if (tally.take_rearm(options.rearm, k) &&
+        runner.loop().rearm() == platform::RearmResult::kAccepted)
       tally.rearm_accepted();
     view_pacer.wait();
-    bool overran = false;
+    std::int64_t deadline = -1, woke = -1;
     if (options.realtime) {
       const platform::Wakeup w = timer.wait_next();
-      overran = w.overrun;
+      deadline = w.deadline_ns;
+      woke = w.woke_ns;
       tally.woke(w);
     }
-    runner.period(overran);
+    runner.period(deadline, woke);
   }
   runner.finish();
   RunSummary s = runner.summary();

@@ -77,18 +77,24 @@ double DivergenceMonitor::input_work(const core::Model& model, const core::Data&
 }
 
 double step_response_speed(const core::Model& model, const core::Data& data, int b,
-                           const core::Pose& from, const core::Pose& to) noexcept {
+                           const core::Pose& from, const core::Pose& to,
+                           const core::Twist& twist) noexcept {
   const auto k = static_cast<std::size_t>(b);
   const core::BodyModel& body = model.bodies[k];
   const core::CouplingGains& g = body.coupling;
-  double v = (to.position - from.position).norm() * std::sqrt(std::max(0.0, g.k_t) / body.mass);
+  const double h = model.dt;
+  // What the target's own twist does not explain: a hand moving at v moves the target by v h.
+  const double jump = std::max(0.0, (to.position - from.position).norm() - twist.linear.norm() * h);
+  double v = jump * std::min(std::sqrt(std::max(0.0, g.k_t) / body.mass), 1.0 / h);
   const Vec3 theta = core::rotation_error(to.orientation, from.orientation);
   const double angle = theta.norm();
-  if (angle > 0.0 && g.k_r > 0.0) {
+  const double turn = std::max(0.0, angle - twist.angular.norm() * h);
+  if (turn > 0.0 && g.k_r > 0.0) {
     const Vec3 u = theta / angle;
     const core::Mat3 r = data.bodies[k].orientation.toRotationMatrix();
     const double inertia = u.dot(r * body.inertia_body * r.transpose() * u);
-    if (inertia > 0.0) v += angle * std::sqrt(g.k_r / inertia) * body.bounding_radius;
+    if (inertia > 0.0)
+      v += turn * std::min(std::sqrt(g.k_r / inertia), 1.0 / h) * body.bounding_radius;
   }
   return v;
 }
@@ -157,7 +163,7 @@ bool DivergenceMonitor::observe(const core::Model& model, const core::Data& data
       const core::Twist* twist = nullptr;
       const core::Pose* target = coupling_target(model, data, b, &twist);
       if (target == nullptr || !prev_coupled_[k]) continue;
-      const double v = step_response_speed(model, data, b, prev_targets_[k], *target);
+      const double v = step_response_speed(model, data, b, prev_targets_[k], *target, *twist);
       if (std::isfinite(v)) hand_speed_max_mps_ = std::max(hand_speed_max_mps_, v);
     }
   }

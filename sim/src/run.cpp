@@ -297,8 +297,8 @@ void SceneRunner::period(std::int64_t deadline_mono_ns, std::int64_t woke_mono_n
     loop_.shutdown();  // zero torque from the next write on; the run stops after this period
   if (view_)
     view_->publish(data_, report,
-                          std::span<const double>(loop_.device().sent_torques().torque.data(),
-                                                  static_cast<std::size_t>(loop_.device().sent_torques().torque.size())),
+                          std::span<const double>(loop_.impedance().sent_torques().torque.data(),
+                                                  static_cast<std::size_t>(loop_.impedance().sent_torques().torque.size())),
                           {static_cast<std::uint64_t>(k_ - 1), contacts.tool_pen, contacts.target_pen});
 }
 
@@ -468,7 +468,7 @@ void SceneRunner::accumulate_step_figures(const platform::PeriodReport& report,
       std::max(s.joint_angle_drift_max_mrad, data_.max_joint_angle_drift * 1e3);
   s.target_penetration_max_mm = std::max(s.target_penetration_max_mm, c.target_pen * 1e3);
   s.any_penetration_max_mm = std::max(s.any_penetration_max_mm, data_.max_penetration * 1e3);
-  // What the drives were sent (after the gate and clamp of hal::Device::write()).
+  // What the drives were sent (after the gate and clamp of hal::ImpedanceDevice::write()).
   s.feedback_force_max_n = std::max(s.feedback_force_max_n, report.feedback.force.norm());
   const double jump = (report.feedback.force - last_feedback_force_).norm();
   last_feedback_force_ = report.feedback.force;
@@ -479,7 +479,7 @@ void SceneRunner::accumulate_step_figures(const platform::PeriodReport& report,
     at = std::max(at, jump);
   }
   s.feedback_torque_max_nm = std::max(s.feedback_torque_max_nm, report.feedback.torque.norm());
-  const hal::AxisVector& tau = loop_.device().sent_torques().torque;
+  const hal::AxisVector& tau = loop_.impedance().sent_torques().torque;
   if (tau.size() > 0) s.axis_torque_max = std::max(s.axis_torque_max, tau.cwiseAbs().maxCoeff());
   const int held = data_.attached_body;
   const int held_tree = held >= 0 ? model.articulation.body_tree[static_cast<std::size_t>(held)] : -1;
@@ -505,7 +505,7 @@ void SceneRunner::accumulate_step_figures(const platform::PeriodReport& report,
 
 void SceneRunner::record(const platform::PeriodReport& report, const PeriodContacts& c) noexcept {
   TraceRecord rec = make_trace_record(data_, data_.attached_body, c.tool_contacts, c.tool_pen,
-                                      c.target_pen, report, loop_.device().sent_torques().torque);
+                                      c.target_pen, report, loop_.impedance().sent_torques().torque);
   if (const hal::CanopenMaster* m = loop_.canopen()) {
     const std::uint64_t received = m->emcy_log().counters().received;
     if (received > emcys_traced_) {
@@ -539,7 +539,7 @@ RunSummary SceneRunner::summary() const {
       k_ > 0 ? static_cast<double>(solver_iterations_sum_) / static_cast<double>(k_) : 0.0;
   s.tracking_error_free_rms_mm = s.free_steps ? std::sqrt(free_sq_ / static_cast<double>(s.free_steps)) * 1e3 : 0.0;
   s.soft_start_s = scene_->device.soft_start_s;
-  s.soft_start_ramps = static_cast<std::int64_t>(loop_.device().torque_counters().soft_starts);
+  s.soft_start_ramps = static_cast<std::int64_t>(loop_.impedance().torque_counters().soft_starts);
   // A run that ends inside the start-up: the periods after its last minimum are the god-object's.
   if (in_startup_)
     s.tool_penetration_max_mm = std::max(s.tool_penetration_max_mm, startup_window_max_ * 1e3);

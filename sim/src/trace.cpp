@@ -29,7 +29,7 @@ TraceRecord make_trace_record(const core::Data& data, int held, int tool_contact
   r.tool_contacts = tool_contacts;
   r.tool_penetration_mm = tool_penetration_m * 1e3;
   r.target_penetration_mm = target_penetration_m * 1e3;
-  r.feedback = report.feedback;  // the wrench whose torques were sent (hal::Device::write)
+  r.feedback = report.feedback;  // the wrench whose torques were sent (hal::ImpedanceDevice::write)
   r.num_axes = static_cast<int>(axis_torques.size());
   for (int i = 0; i < r.num_axes; ++i) r.axis_torque[static_cast<std::size_t>(i)] = axis_torques[i];
   r.step_time_us = static_cast<double>(report.step_ns) * 1e-3;

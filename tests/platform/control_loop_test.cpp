@@ -190,11 +190,11 @@ TEST(ControlLoop, TorqueFramesReachTheEmulator) {
   double largest = 0.0;
   for (int i = 0; i < 5; ++i) {
     const auto& a = rig.config.axes[static_cast<std::size_t>(i)];
-    const double sent = rig.loop.device().sent_torques().torque[i];
+    const double sent = rig.loop.impedance().sent_torques().torque[i];
     const double got = rig.emulator.last_torques()[i];
     EXPECT_NEAR(got, sent, a.has_drive() ? 0.5e-3 * a.rated_torque + 1e-12 : 0.0) << "axis " << i;
     EXPECT_EQ(rig.emulator.last_torque_per_mille()[static_cast<std::size_t>(i)],
-              rig.loop.device().sent_torques().per_mille[static_cast<std::size_t>(i)]);
+              rig.loop.impedance().sent_torques().per_mille[static_cast<std::size_t>(i)]);
     largest = std::max(largest, std::abs(got));
   }
   EXPECT_GT(largest, 0.01) << "no torque reached the drives";
@@ -203,7 +203,7 @@ TEST(ControlLoop, TorqueFramesReachTheEmulator) {
       rig.device.kinematics().jacobian(rig.device.last_sample().q), rig.data.feedback_wrench);
   for (int i = 0; i < 3; ++i) {
     const auto& a = rig.config.axes[static_cast<std::size_t>(i)];
-    EXPECT_NEAR(rig.loop.device().sent_torques().torque[i], std::clamp(tau[i], -a.max_torque, a.max_torque),
+    EXPECT_NEAR(rig.loop.impedance().sent_torques().torque[i], std::clamp(tau[i], -a.max_torque, a.max_torque),
                 0.5e-3 * a.rated_torque + 1e-12)
         << "axis " << i;
   }
@@ -270,7 +270,7 @@ TEST(ControlLoop, BusOffIsCountedAndStaleSamplesGetZeroTorque) {
   }
   EXPECT_FALSE(rig.loop.last_report().sample_valid);
   EXPECT_GT(rig.device.counters().rejected_stale, 0u);
-  EXPECT_TRUE(rig.loop.device().sent_torques().torque.isZero()) << "no torque from a stale sample";
+  EXPECT_TRUE(rig.loop.impedance().sent_torques().torque.isZero()) << "no torque from a stale sample";
   EXPECT_GT(rig.loop.counters().periods_zero_torque, 0u);
   EXPECT_EQ(rig.data.target.position, held_target);
   EXPECT_EQ(rig.loop.counters().sync_write_failures, 5u);
@@ -590,11 +590,11 @@ TEST(ControlLoopLinks, TorquesAreTheSumOfTheLinkJacobiansTransposedTimesTheBodyW
     for (int i = 0; i < 5; ++i) {
       const auto& a = rig.config.axes[static_cast<std::size_t>(i)];
       if (!a.has_drive()) {
-        EXPECT_EQ(rig.loop.device().sent_torques().torque[i], 0.0) << "axis " << i;
+        EXPECT_EQ(rig.loop.impedance().sent_torques().torque[i], 0.0) << "axis " << i;
         continue;
       }
       ASSERT_LT(std::abs(tau[i]), 0.5 * a.max_torque) << "test assumes no saturation, axis " << i;
-      EXPECT_NEAR(rig.loop.device().sent_torques().torque[i], tau[i], 0.5e-3 * a.rated_torque + 1e-12)
+      EXPECT_NEAR(rig.loop.impedance().sent_torques().torque[i], tau[i], 0.5e-3 * a.rated_torque + 1e-12)
           << "period " << k << " axis " << i;
     }
     EXPECT_GT(tau.head<3>().cwiseAbs().maxCoeff(), 0.02) << "torques too small to test";
@@ -606,11 +606,11 @@ TEST(ControlLoopLinks, ZeroTorqueWhileTheSampleIsNotValid) {
   NUMEN_REQUIRE_ARTICULATION();  // the trocar instrument's jointed model
   LinkedRig rig;
   rig.period(0);
-  ASSERT_GT(rig.loop.device().sent_torques().torque.cwiseAbs().maxCoeff(), 0.0);
+  ASSERT_GT(rig.loop.impedance().sent_torques().torque.cwiseAbs().maxCoeff(), 0.0);
   rig.emulator.set_responding(false);
   for (int k = 1; k <= 5; ++k) rig.period(k);
   EXPECT_FALSE(rig.loop.last_report().sample_valid);
-  EXPECT_TRUE(rig.loop.device().sent_torques().torque.isZero());
+  EXPECT_TRUE(rig.loop.impedance().sent_torques().torque.isZero());
   EXPECT_GT(rig.loop.counters().periods_zero_torque, 0u);
 }
 
@@ -767,7 +767,7 @@ struct Rig {
 /// True if any drive RPDO of this period carried a non-zero target torque (emulator view).
 bool any_torque(const Rig& rig) {
   for (int a = 0; a < 3; ++a) {
-    if (rig.loop.device().sent_torques().per_mille[static_cast<std::size_t>(a)] != 0) return true;
+    if (rig.loop.impedance().sent_torques().per_mille[static_cast<std::size_t>(a)] != 0) return true;
   }
   return false;
 }
@@ -959,7 +959,7 @@ TEST(ControlLoopManaged, ShutdownZeroTorqueAtOnceThenDrivesDisabledWithoutAFault
   EXPECT_EQ(rig.loop.rearm(), numen::platform::RearmResult::kNotLatched);
 }
 
-// Torque is gated once, in Device::write(): a NaN Eq. 8 wrench is mapped as it is (the map
+// Torque is gated once, in ImpedanceDevice::write(): a NaN Eq. 8 wrench is mapped as it is (the map
 // computes, it does not zero), reaches write()'s non-finite trip and latches the safe state
 // with FaultCause::kNonFiniteTorque in that very period; no torque leaves from then on.
 TEST(ControlLoopManaged, ANaNWrenchLatchesNonFiniteTorque) {
@@ -978,11 +978,11 @@ TEST(ControlLoopManaged, ANaNWrenchLatchesNonFiniteTorque) {
         p->data->body_feedback[0].force.x() = std::numeric_limits<double>::quiet_NaN();
       },
       &poison);
-  const std::uint64_t trips = rig.loop.device().torque_counters().non_finite;
+  const std::uint64_t trips = rig.loop.impedance().torque_counters().non_finite;
   const PeriodReport& r = rig.period();
   EXPECT_FALSE(r.torque_commanded);
   EXPECT_FALSE(any_torque(rig));
-  EXPECT_EQ(rig.loop.device().torque_counters().non_finite, trips + 1);
+  EXPECT_EQ(rig.loop.impedance().torque_counters().non_finite, trips + 1);
   EXPECT_EQ(rig.device.counters().non_finite_wrenches, 1u);
   EXPECT_TRUE(r.lifecycle == LifecycleState::kSafeStop || r.lifecycle == LifecycleState::kFault)
       << numen::hal::to_string(r.lifecycle);
@@ -1070,7 +1070,7 @@ TEST(ControlLoopManaged, ReportedFeedbackIsTheWrenchWhoseTorquesWereSent) {
       rig.emulator.set_axis_values(q);
     }
     const PeriodReport& r = rig.period();
-    const numen::hal::SentTorques& sent = rig.loop.device().sent_torques();
+    const numen::hal::SentTorques& sent = rig.loop.impedance().sent_torques();
     if (!r.torque_commanded) {
       EXPECT_EQ(r.feedback.force.norm(), 0.0) << "period " << i;
       EXPECT_EQ(r.feedback.torque.norm(), 0.0) << "period " << i;
@@ -1091,7 +1091,7 @@ TEST(ControlLoopManaged, ReportedFeedbackIsTheWrenchWhoseTorquesWereSent) {
   EXPECT_GT(gated_with_core_feedback, 0) << "the check is not vacuous: the core had feedback";
   EXPECT_GT(torque_periods, 50);
   // The drives read those RPDOs: after one more exchange each got the last per mille sent.
-  const std::array<std::int16_t, numen::hal::kMaxAxes> last = rig.loop.device().sent_torques().per_mille;
+  const std::array<std::int16_t, numen::hal::kMaxAxes> last = rig.loop.impedance().sent_torques().per_mille;
   rig.period();  // the drives read the RPDOs, then apply them at this period's SYNC
   for (std::size_t a = 0; a < 3; ++a) EXPECT_EQ(rig.emulator.last_torque_per_mille()[a], last[a]) << a;
 }
@@ -1109,7 +1109,7 @@ TEST(ControlLoopManaged, TorquesAreSaturatedPerAxis) {
     rig.emulator.set_axis_values(q);
     rig.period();
     for (int a = 0; a < 3; ++a) {
-      const double tau = rig.loop.device().sent_torques().torque[a];
+      const double tau = rig.loop.impedance().sent_torques().torque[a];
       const double lim = rig.config.axes[static_cast<std::size_t>(a)].max_torque;
       ASSERT_LE(std::abs(tau), lim + 1e-12) << "axis " << a;
       peak[a] = std::max(peak[a], std::abs(tau));
@@ -1143,11 +1143,11 @@ TEST(ControlLoopManaged, TorquesAreSaturatedPerAxis) {
     emulator.tick(t + kLatency, low.bus.device());
     low.bus.set_time_ns(t + kPhase);
     loop.end_period(t + kPhase);
-    clamped_peak = std::max(clamped_peak, std::abs(loop.device().sent_torques().torque[0]));
+    clamped_peak = std::max(clamped_peak, std::abs(loop.impedance().sent_torques().torque[0]));
   }
   EXPECT_DOUBLE_EQ(clamped_peak, low.config.axes[0].max_torque);
-  EXPECT_GT(loop.device().torque_counters().axis_saturations[0], 0u);
-  EXPECT_EQ(loop.device().torque_counters().axis_saturations[3], 0u);  // roll: no drive, τ = 0
+  EXPECT_GT(loop.impedance().torque_counters().axis_saturations[0], 0u);
+  EXPECT_EQ(loop.impedance().torque_counters().axis_saturations[3], 0u);  // roll: no drive, τ = 0
   EXPECT_EQ(loop.supervisor()->state(), LifecycleState::kActive);
 }
 
@@ -1167,7 +1167,7 @@ std::vector<std::int64_t> session(bool check_allocations) {
     if (i == 150) rig.loop.rearm();
     if (i == 250) rig.emulator.kill(true);
     rig.period();
-    for (int a = 0; a < 3; ++a) out.push_back(rig.loop.device().sent_torques().per_mille[static_cast<std::size_t>(a)]);
+    for (int a = 0; a < 3; ++a) out.push_back(rig.loop.impedance().sent_torques().per_mille[static_cast<std::size_t>(a)]);
     std::int64_t bits = 0;
     const double x = rig.data.bodies[0].position.x();
     std::memcpy(&bits, &x, sizeof bits);
@@ -1178,8 +1178,8 @@ std::vector<std::int64_t> session(bool check_allocations) {
   }
   // Both ramps ran under the counter: the start-up's (begun in run_to_torque()'s last period)
   // and the one after the re-arm at period 150.
-  EXPECT_EQ(rig.loop.device().torque_counters().soft_starts, 2u);
-  EXPECT_EQ(rig.loop.device().torque_counters().ramped_writes, 2u * 49u);
+  EXPECT_EQ(rig.loop.impedance().torque_counters().soft_starts, 2u);
+  EXPECT_EQ(rig.loop.impedance().torque_counters().ramped_writes, 2u * 49u);
   EXPECT_EQ(rig.sup().counters().latches, 2u);  // the drive fault, the kill
   return out;
 }
@@ -1223,8 +1223,8 @@ TEST(ControlLoopManaged, SoftStartRampsTheTorqueInAtStartUpAndAgainAfterARearm) 
     const PeriodReport& t = twin.period();
     SCOPED_TRACE("period " + std::to_string(i));
     ASSERT_EQ(r.lifecycle, t.lifecycle);
-    const numen::hal::SentTorques& sent = ramped.loop.device().sent_torques();
-    const numen::hal::SentTorques& full = twin.loop.device().sent_torques();
+    const numen::hal::SentTorques& sent = ramped.loop.impedance().sent_torques();
+    const numen::hal::SentTorques& full = twin.loop.impedance().sent_torques();
     ASSERT_EQ(sent.gated, full.gated);
     if (r.activated) since = 0;  // torque (re-)enabled: the ramp begins at the next open gate
     if (sent.gated) {
@@ -1258,9 +1258,9 @@ TEST(ControlLoopManaged, SoftStartRampsTheTorqueInAtStartUpAndAgainAfterARearm) 
     last_twin = full.torque;
   }
   EXPECT_EQ(ramps_seen, 2) << "the start-up's ramp and the re-arm's";
-  EXPECT_EQ(ramped.loop.device().torque_counters().soft_starts, 2u);
+  EXPECT_EQ(ramped.loop.impedance().torque_counters().soft_starts, 2u);
   EXPECT_EQ(ramp_periods, 2 * 19);
-  EXPECT_EQ(twin.loop.device().torque_counters().soft_starts, 0u);
+  EXPECT_EQ(twin.loop.impedance().torque_counters().soft_starts, 0u);
   EXPECT_EQ(ramped.sup().state(), LifecycleState::kActive);
 }
 

@@ -17,6 +17,7 @@
 
 #include "alloc_counter.hpp"
 #include "csv_lines.hpp"
+#include "numen/platform/monotonic_clock.hpp"
 #include "numen/sim/device_process.hpp"
 #include "numen/sim/input_error.hpp"
 #include "numen/sim/run_verdict.hpp"
@@ -79,7 +80,7 @@ TEST(AdmittanceScene, GodObjectStaysOutsideWhileTheHandGoesThrough) {
   EXPECT_NEAR(x_go.norm(), 0.045, 1e-3);   // on the organ's surface (r 40 mm + probe 5 mm)
   // Quasi-static contact: the measured force is k_hand × the hand–device separation.
   const double sep = (r.hand_pose().position - x_dev).norm();
-  const double f = r.loop().last_report().measured.force.norm();
+  const double f = r.loop().last_report().feedback.force.norm();
   EXPECT_NEAR(f, k_hand * sep, 0.02 * k_hand * sep);
   EXPECT_GT(f, 4.0);
   // Force balance with the penalty contact: δ = F / k_c.
@@ -163,7 +164,7 @@ TEST(AdmittanceScene, RecordsTheHandAsGhostAndTheMeasuredWrench) {
   EXPECT_LT(v.tool_penetration(), 0.001f);    // the god-object on the surface
   v.feedback(wrench);
   const numen::core::Vec3 f(wrench[0], wrench[1], wrench[2]);
-  EXPECT_NEAR(f.norm(), r.loop().last_report().measured.force.norm(), 1e-3 * f.norm() + 1e-6);
+  EXPECT_NEAR(f.norm(), r.loop().last_report().feedback.force.norm(), 1e-3 * f.norm() + 1e-6);
   EXPECT_GT(f.norm(), 1.0);
   for (std::uint32_t a = 0; a < v.header().num_axes; ++a) EXPECT_EQ(v.axis_torque(a), 0.0f);
 }
@@ -209,7 +210,7 @@ TEST(AdmittanceScene, TracesTheHandTheGodObjectAndTheMeasuredWrench) {
   EXPECT_GE(last[col("tool_contacts")], 1.0);
   const numen::core::Vec3 f(last[col("feedback_fx")], last[col("feedback_fy")],
                             last[col("feedback_fz")]);
-  EXPECT_NEAR(f.norm(), r.loop().last_report().measured.force.norm(), 1e-6);
+  EXPECT_NEAR(f.norm(), r.loop().last_report().feedback.force.norm(), 1e-6);
   EXPECT_GT(f.norm(), 4.0);
   // The deepest row is the run's deepest god-object contact.
   double deepest = 0.0;
@@ -293,45 +294,58 @@ TEST(AdmittanceScene, TheDeviceProcessRefusesIt) {
   }
 }
 
-// Overruns (a paced run's late wake-ups, passed to each period): overrun_limit of them in a
-// row latch the safe state like the impedance loop's supervisor, an on-time period resets the
-// streak, the summary names the cause and the verdict is a safety stop; a re-arm is refused
-// while the streak lasts and taken after an on-time period. With a limit of 0 (offline runs,
+// Overruns (a paced run's late periods, stamped by each period's deadline and judged by the
+// loop's statistics, so the next period's supervision sees them): overrun_limit of them in a
+// row latch the safe state like the impedance stack's supervisor, an on-time period resets the
+// streak, the summary names the cause and the verdict is a safety stop; a re-arm waits while
+// the streak lasts and is taken after an on-time period. With a limit of 0 (offline runs,
 // --overrun-limit 0) they are never latched.
 TEST(AdmittanceScene, ConsecutiveOverrunsLatchTheSafeState) {
   const sim::Scene& s = admittance_scene();
+  const auto late = [](sim::AdmittanceRunner& runner) {
+    const std::int64_t now = numen::platform::monotonic_now_ns();
+    runner.period(now - 100'000'000, now);  // 100 ms past its deadline
+  };
+  const auto on_time = [](sim::AdmittanceRunner& runner) {
+    const std::int64_t now = numen::platform::monotonic_now_ns();
+    runner.period(now + 100'000'000, now + 100'000'000);  // a deadline 100 ms ahead
+  };
   sim::AdmittanceRunner counted(s, 0, 0);
-  for (int k = 0; k < 300; ++k) counted.period(k >= 100);
-  EXPECT_EQ(counted.loop().counters().overruns, 200u);
+  for (int k = 0; k < 300; ++k) k >= 100 ? late(counted) : counted.period();
+  EXPECT_EQ(counted.loop().statistics().summary().overruns, 200);
   EXPECT_EQ(counted.summary().faults, 0);
-  EXPECT_EQ(counted.loop().lifecycle().state(), numen::hal::LifecycleState::kActive);
+  EXPECT_EQ(counted.loop().device().lifecycle(), numen::hal::LifecycleState::kActive);
 
   sim::AdmittanceRunner r(s, 0, 3);
-  for (int k = 0; k < 100; ++k) r.period();
-  ASSERT_EQ(r.loop().lifecycle().state(), numen::hal::LifecycleState::kActive);
-  r.period(true);
-  r.period(true);
-  r.period();  // two in a row, then on time: no latch
-  r.period(true);
-  r.period(true);
+  for (int k = 0; k < 100; ++k) on_time(r);
+  ASSERT_EQ(r.loop().device().lifecycle(), numen::hal::LifecycleState::kActive);
+  late(r);
+  late(r);
+  on_time(r);  // two in a row, then on time: no latch
+  late(r);
+  late(r);
   EXPECT_EQ(r.summary().faults, 0);
-  EXPECT_EQ(r.loop().lifecycle().state(), numen::hal::LifecycleState::kActive);
-  r.period(true);  // the third in a row, period 105
+  EXPECT_EQ(r.loop().device().lifecycle(), numen::hal::LifecycleState::kActive);
+  late(r);  // the third in a row, period 105: judged by period 106's supervision
+  EXPECT_FALSE(r.loop().last_report().entered_safe_stop);
+  on_time(r);
   EXPECT_TRUE(r.loop().last_report().entered_safe_stop);
-  EXPECT_EQ(r.loop().last_report().cause, numen::platform::AdmittanceFaultCause::kOverruns);
+  ASSERT_NE(r.loop().device().first_fault(), nullptr);
+  EXPECT_EQ(r.loop().device().first_fault()->cause, numen::hal::FaultCause::kOverruns);
   EXPECT_EQ(r.loop().last_report().controlword, numen::hal::Controlword::kShutdown);
-  for (int k = 0; k < 20; ++k) r.period(true);  // still late: the cause present
-  EXPECT_EQ(r.loop().lifecycle().state(), numen::hal::LifecycleState::kFault);
-  EXPECT_EQ(r.loop().rearm(), numen::hal::LifecycleResult::kCausePresent);
-  r.period();  // on time
-  EXPECT_EQ(r.loop().rearm(), numen::hal::LifecycleResult::kOk);
-  for (int k = 0; k < 5; ++k) r.period();
-  EXPECT_EQ(r.loop().lifecycle().state(), numen::hal::LifecycleState::kActive);
+  for (int k = 0; k < 20; ++k) late(r);  // still late: the cause present
+  EXPECT_EQ(r.loop().device().lifecycle(), numen::hal::LifecycleState::kFault);
+  EXPECT_EQ(r.loop().rearm(), numen::platform::RearmResult::kAccepted);
+  late(r);
+  EXPECT_EQ(r.loop().device().lifecycle(), numen::hal::LifecycleState::kFault)
+      << "the re-arm waits for an on-time period";
+  for (int k = 0; k < 5; ++k) on_time(r);
+  EXPECT_EQ(r.loop().device().lifecycle(), numen::hal::LifecycleState::kActive);
   const sim::RunSummary sum = r.summary();
   EXPECT_EQ(sum.faults, 1);
   EXPECT_EQ(sum.first_fault, "overruns");
-  EXPECT_EQ(sum.first_fault_period, 105);
-  EXPECT_NEAR(sum.first_fault_time_s, 0.105 + s.compute_phase_s, 1e-12);
+  EXPECT_EQ(sum.first_fault_period, 106);
+  EXPECT_NEAR(sum.first_fault_time_s, 0.106 + s.compute_phase_s, 1e-12);
   const sim::RunVerdict v = sim::run_verdict(sum);
   EXPECT_EQ(v.status, sim::ExitStatus::kSafetyStop);
 }

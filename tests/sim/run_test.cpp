@@ -314,7 +314,7 @@ TEST(RunDefaultScene, NoJumpAtStart) {
   EXPECT_LT(tilt, hand_tilt + 1e-3);
 }
 
-// The summary's feedback figures are what the drives were sent — after hal::Device::write()'s
+// The summary's feedback figures are what the drives were sent — after hal::ImpedanceDevice::write()'s
 // gate and clamp — and what the simulated drives applied, not the core's composite wrench.
 TEST(RunDefaultScene, SummaryFeedbackFiguresAreTheOnesTheDrivesReceive) {
   NUMEN_REQUIRE_ARTICULATION();
@@ -325,7 +325,7 @@ TEST(RunDefaultScene, SummaryFeedbackFiguresAreTheOnesTheDrivesReceive) {
   const auto n = static_cast<int>(scene.device.axes.size());
   for (std::int64_t k = 0; k < periods_for(scene, 3.0); ++k) {
     runner.period();
-    const numen::hal::SentTorques& sent = runner.loop().device().sent_torques();
+    const numen::hal::SentTorques& sent = runner.loop().impedance().sent_torques();
     const numen::platform::PeriodReport& r = runner.last_report();
     // The simulated drives applied, at this period's SYNC, the RPDOs of the period before.
     for (int a = 0; a < n; ++a) {
@@ -1500,8 +1500,8 @@ TEST(RunSoftStart, TheHeldOutTrialsStartingInsideAnObstacleRampTheFeedbackInInst
       const numen::platform::PeriodReport& b = on.last_report();
       const numen::core::Vec3 fa = a.feedback.force, fb = b.feedback.force;
       EXPECT_EQ(a.soft_start_ramp, 1.0) << "period " << k;  // soft_start = 0: today's behaviour
-      const bool open = !on.loop().device().sent_torques().gated;
-      ASSERT_EQ(open, !off.loop().device().sent_torques().gated) << "period " << k;
+      const bool open = !on.loop().impedance().sent_torques().gated;
+      ASSERT_EQ(open, !off.loop().impedance().sent_torques().gated) << "period " << k;
       if (first < 0 && open) {  // torque enabled: the ramp begins
         first = k;
         off_first = fa.norm();

@@ -8,6 +8,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "numen/hal/canopen/cia402.hpp"
 #include "numen/hal/device/kinematics_factory.hpp"
 
 namespace numen::hal {
@@ -56,13 +57,30 @@ void validate(const DeviceConfig& device, const AdmittanceConfig& admittance) {
                                   axis.name);
 }
 
-AdmittanceDevice::AdmittanceDevice(DeviceConfig device, AdmittanceConfig admittance,
-                                   const AxisVector& q0)
-    : device_(std::move(device)),
+namespace {
+
+LifecycleSettings lifecycle_settings(const std::string& name, const AdmittanceSettings& s) {
+  if (s.force_timeout_periods == 0)
+    throw std::invalid_argument(name + ": force_timeout_periods must be >= 1");
+  if (s.safe_stop_timeout_periods == 0)
+    throw std::invalid_argument(name + ": safe_stop_timeout_periods must be >= 1");
+  LifecycleSettings l;
+  l.safe_stop_timeout_periods = s.safe_stop_timeout_periods;
+  return l;
+}
+
+}  // namespace
+
+AdmittanceDevice::AdmittanceDevice(DeviceConfig device, AdmittanceConfig admittance, Bus& bus,
+                                   const AxisVector& q0, const AdmittanceSettings& settings)
+    : Device(bus),
+      device_(std::move(device)),
       admittance_(std::move(admittance)),
+      settings_(settings),
       kinematics_(make_kinematics(device_)),  // validates the DeviceConfig
       sensor_(admittance_.sensor),
-      rpdo_map_(csp_drive_rpdo_mapping()) {
+      rpdo_map_(csp_drive_rpdo_mapping()),
+      lifecycle_(lifecycle_settings(device_.name, settings)) {
   validate(device_, admittance_);
   const int n = kinematics_->num_axes();
   if (q0.size() != 0 && q0.size() != n)
@@ -73,6 +91,75 @@ AdmittanceDevice::AdmittanceDevice(DeviceConfig device, AdmittanceConfig admitta
   for (int i = 0; i < n; ++i)
     counts_[static_cast<std::size_t>(i)] =
         value_to_counts(device_.axes[static_cast<std::size_t>(i)], q_[i]);
+  lifecycle_.configure();  // kUnconfigured → kInactive: read and supervised, drives disabled
+}
+
+DeviceSupervision AdmittanceDevice::supervise(std::int64_t now_ns, bool overrun) noexcept {
+  const std::uint64_t period = periods_++;
+  overrun_streak_ = overrun ? overrun_streak_ + 1 : 0;
+  if (!sample_.valid) ++counters_.invalid_periods;
+  const bool out_of_range = (sample_.faults & SampleFault::kOutOfRange) != 0;
+  const bool timed_out = sample_.periods_since_valid >= settings_.force_timeout_periods;
+  const bool overruns = settings_.overrun_limit > 0 && overrun_streak_ >= settings_.overrun_limit;
+  LifecycleInputs in;
+  in.fault = out_of_range || timed_out || overruns;
+  in.cause_present = !sample_.valid || overruns;
+  in.drives_disabled = disable_sent_;
+  const LifecycleUpdate u = lifecycle_.update(now_ns, in);
+  DeviceSupervision out;
+  out.entered_safe_stop = u.entered_safe_stop;
+  if (u.entered_safe_stop && !has_first_fault_) {
+    // Several at once: the first of out of range, timeout, overruns.
+    first_fault_ = FaultRecord{};
+    first_fault_.cause = out_of_range ? FaultCause::kForceOutOfRange
+                         : timed_out  ? FaultCause::kForceTimeout
+                                      : FaultCause::kOverruns;
+    first_fault_.value = out_of_range ? static_cast<double>(sample_.faults)
+                         : timed_out  ? static_cast<double>(sample_.periods_since_valid)
+                                      : static_cast<double>(overrun_streak_);
+    first_fault_.time_ns = now_ns;
+    first_fault_.period = period;
+    first_fault_.latched = true;
+    has_first_fault_ = true;
+  }
+  if (rearm_pending_ && lifecycle_.state() == LifecycleState::kFault &&
+      lifecycle_.rearm() == LifecycleResult::kOk) {
+    rearm_pending_ = false;
+    has_first_fault_ = false;
+  }
+  if (!shutting_down() && settings_.auto_activate &&
+      lifecycle_.state() == LifecycleState::kInactive && sample_.valid) {
+    out.activated = lifecycle_.activate() == LifecycleResult::kOk;
+  }
+  out.lifecycle = lifecycle_.state();
+  return out;
+}
+
+RearmResult AdmittanceDevice::rearm() noexcept {
+  if (!lifecycle_.latched()) return RearmResult::kNotLatched;
+  rearm_pending_ = true;
+  return RearmResult::kAccepted;
+}
+
+void AdmittanceDevice::on_shutdown() noexcept {
+  rearm_pending_ = false;
+  if (lifecycle_.state() == LifecycleState::kActive) (void)lifecycle_.deactivate();
+}
+
+IoStatus AdmittanceDevice::write_pose(const core::Pose* pose, std::int64_t now_ns) noexcept {
+  const bool active = lifecycle_.state() == LifecycleState::kActive && !shutting_down();
+  if (active) {
+    if (pose != nullptr) set_pose(*pose);
+    controlword_ = Controlword::kEnableOperation;
+    disable_sent_ = false;
+  } else {
+    controlword_ = Controlword::kShutdown;
+    ++counters_.hold_periods;
+  }
+  const IoStatus s = write_setpoints(controlword_, now_ns);
+  note(s);
+  if (!active && s == IoStatus::kOk) disable_sent_ = true;
+  return s;
 }
 
 core::Wrench AdmittanceDevice::world_wrench(const core::Wrench& sensor_wrench,
@@ -116,7 +203,7 @@ void AdmittanceDevice::reset_setpoints(const AxisVector& q) noexcept {
   if (q.size() == q_.size()) q_ = q;
 }
 
-IoStatus AdmittanceDevice::write_setpoints(std::uint16_t controlword, Bus& bus,
+IoStatus AdmittanceDevice::write_setpoints(std::uint16_t controlword,
                                            std::int64_t now_ns) noexcept {
   IoStatus first = IoStatus::kOk;
   for (int i = 0; i < q_.size(); ++i) {
@@ -127,7 +214,7 @@ IoStatus AdmittanceDevice::write_setpoints(std::uint16_t controlword, Bus& bus,
     f.id = admittance_.rpdo_cob_ids[k];
     f.timestamp_ns = now_ns;
     rpdo_map_.pack(std::span<const std::int64_t>(values, 2), f);
-    const IoStatus s = bus.write(f);
+    const IoStatus s = bus_->write(f);
     if (s == IoStatus::kOk) {
       ++counters_.rpdos_written;
     } else {

@@ -35,9 +35,6 @@ InstrumentDevice::InstrumentDevice(DeviceConfig config,
                                 " axes but config.axes has " + std::to_string(n_));
   }
   num_links_ = kinematics_->num_links();
-  // Before the first valid sample every link's Jacobian is 0 (6 × n): torques_for() maps a
-  // finite wrench to τ = 0 there, and write() gates it anyway (no valid sample).
-  for (Jacobian& j : link_jacobians_) j = Jacobian::Zero(6, n_);
   if (num_links_ < 1 || num_links_ > kMaxLinks) {
     throw std::invalid_argument("device '" + config_.name + "': kinematics has " +
                                 std::to_string(num_links_) + " links (must be 1.." +

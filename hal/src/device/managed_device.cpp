@@ -1,5 +1,5 @@
 /// @file managed_device.cpp
-/// The managed CANopen stack behind hal::Device: CanopenMaster + SafetySupervisor.
+/// The managed CANopen stack behind hal::ImpedanceDevice: CanopenMaster + SafetySupervisor.
 
 #include "numen/hal/device/managed_device.hpp"
 
@@ -21,7 +21,7 @@ SafetySettings safety_settings(const InstrumentDevice& instrument, const DeviceS
 
 ManagedDevice::ManagedDevice(InstrumentDevice& instrument, Bus& bus, std::int64_t period_ns,
                              const DeviceSettings& settings)
-    : Device(instrument, bus),
+    : ImpedanceDevice(instrument, bus),
       master_(std::make_unique<CanopenMaster>(instrument.config(), period_ns,
                                               settings.drive_settings)),
       supervisor_(std::make_unique<SafetySupervisor>(safety_settings(instrument, settings))),

@@ -1,5 +1,5 @@
 /// @file minimal_device.cpp
-/// The minimal protocol behind hal::Device: torque RPDOs per driven axis.
+/// The minimal protocol behind hal::ImpedanceDevice: torque RPDOs per driven axis.
 
 #include "numen/hal/device/minimal_device.hpp"
 
@@ -7,7 +7,8 @@
 
 namespace numen::hal {
 
-MinimalDevice::MinimalDevice(InstrumentDevice& instrument, Bus& bus) : Device(instrument, bus) {}
+MinimalDevice::MinimalDevice(InstrumentDevice& instrument, Bus& bus)
+    : ImpedanceDevice(instrument, bus) {}
 
 DeviceSupervision MinimalDevice::supervise(std::int64_t now_ns, bool overrun) noexcept {
   (void)now_ns;

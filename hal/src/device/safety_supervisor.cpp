@@ -79,6 +79,10 @@ const char* to_string(FaultCause cause) noexcept {
       return "non-finite torque";
     case FaultCause::kSafeStopTimeout:
       return "safe stop timeout";
+    case FaultCause::kForceOutOfRange:
+      return "force out of range";
+    case FaultCause::kForceTimeout:
+      return "force reading timeout";
   }
   return "unknown";
 }

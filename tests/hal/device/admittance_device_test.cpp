@@ -51,6 +51,7 @@ TEST(AdmittanceDevice, DefaultRpdosAreRpdo1OfTheAxisNodes) {
 }
 
 TEST(AdmittanceDevice, ValidateRejectsClashingCobIds) {
+  hal::SimBus bus{hal::SimBusSettings{}};
   hal::AdmittanceConfig a = hal::make_admittance_config(tracker());
   a.rpdo_cob_ids[2] = 0x181;  // axis x's encoder
   EXPECT_THROW(hal::validate(tracker(), a), std::invalid_argument);
@@ -64,18 +65,18 @@ TEST(AdmittanceDevice, ValidateRejectsClashingCobIds) {
   a.rpdo_cob_ids.pop_back();
   EXPECT_THROW(hal::validate(tracker(), a), std::invalid_argument);
   EXPECT_THROW(hal::AdmittanceDevice(tracker(), hal::make_admittance_config(tracker()),
-                                     hal::AxisVector::Zero(5)),
+                                     bus.controller(), hal::AxisVector::Zero(5)),
                std::invalid_argument);
 }
 
 TEST(AdmittanceDevice, WorkedCspFrameOfProtocolSection18) {
   // x = 12.345 mm at 1 µm/count → 12345 = 0x3039; controlword enable operation 0x000F.
   hal::SimBus bus{hal::SimBusSettings{}};
-  hal::AdmittanceDevice dev(tracker(), hal::make_admittance_config(tracker()), zeros());
+  hal::AdmittanceDevice dev(tracker(), hal::make_admittance_config(tracker()), bus.controller(), zeros());
   hal::AxisVector q = zeros();
   q[0] = 0.012345;  // a set-point (set_pose would rate limit a 12 mm step to 5 mm)
   dev.reset_setpoints(q);
-  ASSERT_EQ(dev.write_setpoints(hal::Controlword::kEnableOperation, bus.controller(), 5),
+  ASSERT_EQ(dev.write_setpoints(hal::Controlword::kEnableOperation, 5),
             hal::IoStatus::kOk);
   std::array<hal::CanFrame, 16> got;
   ASSERT_EQ(drain(bus.device(), got), 6);
@@ -90,7 +91,8 @@ TEST(AdmittanceDevice, WorkedCspFrameOfProtocolSection18) {
 }
 
 TEST(AdmittanceDevice, SetPointsAreClampedToTheRangeAndRateLimited) {
-  hal::AdmittanceDevice dev(tracker(), hal::make_admittance_config(tracker()), zeros());
+  hal::SimBus bus{hal::SimBusSettings{}};
+  hal::AdmittanceDevice dev(tracker(), hal::make_admittance_config(tracker()), bus.controller(), zeros());
   core::Pose p;
   p.position = Vec3(0.1, 0.0, 0.0);  // 100 mm away; max speed 5 m/s → 5 mm per 1 ms period
   dev.set_pose(p);
@@ -108,12 +110,13 @@ TEST(AdmittanceDevice, SetPointsAreClampedToTheRangeAndRateLimited) {
 }
 
 TEST(AdmittanceDevice, MeasuredWrenchGoesToTheWorldAboutThePointAsked) {
+  hal::SimBus bus{hal::SimBusSettings{}};
   hal::AdmittanceConfig a = hal::make_admittance_config(tracker());
   a.sensor.sensor_in_tool.position = Vec3(0.0, 0.0, 0.02);
   a.sensor.sensor_in_tool.orientation = Quat(Eigen::AngleAxisd(M_PI / 2, Vec3::UnitZ()));
   hal::AxisVector q = zeros();
   q[0] = 0.1;  // tool at (0.1, 0, 0), identity orientation
-  hal::AdmittanceDevice dev(tracker(), a, q);
+  hal::AdmittanceDevice dev(tracker(), a, bus.controller(), q);
   core::Wrench s;
   s.force = Vec3(1.0, 0.0, 0.0);  // sensor x = world y
   s.torque = Vec3(0.0, 0.0, 0.01);
@@ -128,14 +131,14 @@ TEST(AdmittanceEmulator, DrivesFollowEnabledSetPointsWithAFirstOrderLag) {
   hal::AdmittanceEmulatorSettings st;
   st.lag_s = 0.002;
   hal::AdmittanceEmulator emu(tracker(), hal::make_admittance_config(tracker()), st);
-  hal::AdmittanceDevice dev(tracker(), hal::make_admittance_config(tracker()), zeros());
+  hal::AdmittanceDevice dev(tracker(), hal::make_admittance_config(tracker()), bus.controller(), zeros());
   emu.set_axis_values(zeros());
   core::Pose p;
   p.position = Vec3(0.004, 0.0, 0.0);
   dev.set_pose(p);
   // Disabled (shutdown): the target is ignored, the axis holds.
   bus.controller().write(hal::make_sync(0));
-  dev.write_setpoints(hal::Controlword::kShutdown, bus.controller(), 0);
+  dev.write_setpoints(hal::Controlword::kShutdown, 0);
   emu.poll(bus.device());
   bus.set_time_ns(1'000'000);
   bus.controller().write(hal::make_sync(1'000'000));
@@ -143,7 +146,7 @@ TEST(AdmittanceEmulator, DrivesFollowEnabledSetPointsWithAFirstOrderLag) {
   EXPECT_EQ(emu.q()[0], 0.0);
   EXPECT_FALSE(emu.enabled(0));
   // Enabled: one SYNC interval (1 ms) later q = 4 mm · (1 − e^{−1/2}).
-  dev.write_setpoints(hal::Controlword::kEnableOperation, bus.controller(), 1'000'000);
+  dev.write_setpoints(hal::Controlword::kEnableOperation, 1'000'000);
   bus.set_time_ns(2'000'000);
   bus.controller().write(hal::make_sync(2'000'000));
   emu.poll(bus.device());
@@ -187,28 +190,31 @@ TEST(AdmittanceEmulator, SensorReportsTheHandSpringInItsFrame) {
   EXPECT_EQ(drain(bus.controller(), got), 0);
 }
 
+// One period as a control loop runs it: begin_period (SYNC), read (the sensor's TPDOs),
+// supervise, write_pose; never allocates.
 TEST(AdmittanceDevice, PeriodicCallsDoNotAllocate) {
   hal::SimBus bus{hal::SimBusSettings{}};
   hal::AdmittanceEmulator emu(tracker(), hal::make_admittance_config(tracker()), {});
-  hal::AdmittanceDevice dev(tracker(), hal::make_admittance_config(tracker()), zeros());
+  hal::AdmittanceDevice dev(tracker(), hal::make_admittance_config(tracker()), bus.controller(), zeros());
   emu.set_axis_values(zeros());
-  hal::CanFrame f;
   numen::test::AllocationGuard guard;
   for (int i = 0; i < 1000; ++i) {
     const std::int64_t t = i * 1'000'000LL;
     bus.set_time_ns(t);
-    bus.controller().write(hal::make_sync(t));
+    dev.begin_period(t);
     core::Pose hand;
     hand.position = Vec3(0.01 * std::sin(1e-3 * i), 0.0, 0.0);
     emu.set_hand(hand, core::Twist{});
     emu.poll(bus.device());
-    while (bus.controller().read(f) == hal::IoStatus::kOk) dev.on_frame(f);
-    const hal::ForceSample s = dev.sample(t);
+    (void)dev.read(t);
+    (void)dev.supervise(t, false);
+    const hal::ForceSample& s = dev.force_sample();
     core::Pose p = dev.commanded_pose();
     p.position += 1e-4 * dev.world_wrench(s.wrench, p.position).force;
-    dev.set_pose(p);
-    dev.write_setpoints(hal::Controlword::kEnableOperation, bus.controller(), t);
+    dev.write_pose(&p, t);
   }
   EXPECT_EQ(guard.count(), 0);
   EXPECT_GT(dev.sensor().counters().accepted, 990u);
+  EXPECT_EQ(dev.lifecycle(), hal::LifecycleState::kActive);
+  EXPECT_EQ(dev.controlword(), hal::Controlword::kEnableOperation);
 }

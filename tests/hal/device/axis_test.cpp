@@ -85,7 +85,7 @@ TEST(Axis, WrappingSingleTurnEncoder) {
   EXPECT_EQ(value_to_counts(a, kPi / 2 + 2 * kPi), 1024);
 }
 
-// The encoding of a torque Device::write() has already clamped to torque_limit(): scale by
+// The encoding of a torque ImpedanceDevice::write() has already clamped to torque_limit(): scale by
 // rated_torque, apply the sign, round to the nearest per mille.
 TEST(Axis, TorqueScalingAndSign) {
   const AxisConfig a = revolute();  // rated 0.5, max 1.0, sign −1
@@ -97,7 +97,7 @@ TEST(Axis, TorqueScalingAndSign) {
   EXPECT_EQ(torque_per_mille(a, std::nan("")), 0);
 }
 
-// The limit Device::write() clamps to is within what the RPDO's int16 carries, so the
+// The limit ImpedanceDevice::write() clamps to is within what the RPDO's int16 carries, so the
 // encoding of a clamped torque is exact; beyond it the encoding saturates (never wraps).
 TEST(Axis, TorqueLimitIsWithinTheRpdosRange) {
   AxisConfig a = revolute();

@@ -1,5 +1,5 @@
 // Tests of numen/hal/device/minimal_device.hpp: the minimal protocol's sending half of hal::Device —
-// InstrumentDevice::torques_for() (τ = Σ_l J_lᵀ w_l) then Device::write(): one torque RPDO per
+// InstrumentDevice::torques_for() (τ = Σ_l J_lᵀ w_l) then ImpedanceDevice::write(): one torque RPDO per
 // driven axis, the gate (not ready, non-finite, no drive) and the per-axis clamp, bus failures,
 // no allocation; on the trocar and on a phantom arm with drives on three of its six axes.
 #include "numen/hal/device/minimal_device.hpp"

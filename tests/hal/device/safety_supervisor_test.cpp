@@ -111,7 +111,7 @@ struct Rig {
     ASSERT_TRUE(sup.torque_allowed());
   }
 
-  // The torques this period would send (requested {1, -0.25}): hal::Device::write() gates them
+  // The torques this period would send (requested {1, -0.25}): hal::ImpedanceDevice::write() gates them
   // on torque_allowed().
   std::array<double, 2> torques() const {
     if (!sup.torque_allowed()) return {0.0, 0.0};
@@ -524,7 +524,7 @@ TEST(SafetySupervisor, FaultLogIsARingOfFixedCapacity) {
   EXPECT_EQ(r.sup.first_fault()->period, 2u);  // kept apart from the ring
 }
 
-// The clamp and the gate of the axis torques are hal::Device::write()'s (device_test.cpp); a
+// The clamp and the gate of the axis torques are hal::ImpedanceDevice::write()'s (device_test.cpp); a
 // non-finite torque it finds is reported here and latches.
 TEST(SafetySupervisor, NonFiniteTorqueLatches) {
   for (double bad :
@@ -591,7 +591,7 @@ TEST(SafetySupervisor, SettingsAreValidated) {
 
 TEST(SafetySupervisor, CauseNamesAreDistinct) {
   std::vector<std::string> names;
-  for (int c = 0; c <= static_cast<int>(FC::kSafeStopTimeout); ++c) {
+  for (int c = 0; c <= static_cast<int>(FC::kForceTimeout); ++c) {
     const std::string n = to_string(static_cast<FC>(c));
     EXPECT_NE(n, "unknown");
     for (const std::string& o : names) EXPECT_NE(n, o);
@@ -750,7 +750,7 @@ struct Loop {
     in.bus_state = bus.controller().state();
     sup.update(t, in);
     master.request(sup.drive_target());
-    // What hal::Device::write() does: the lifecycle's gate, the clamp to 0.5 N·m.
+    // What hal::ImpedanceDevice::write() does: the lifecycle's gate, the clamp to 0.5 N·m.
     tau.fill(sup.torque_allowed() ? std::clamp(torque_request, -0.5, 0.5) : 0.0);
     // Drive 0 carries axis 0's torque; rated torque 1 N·m → per mille.
     const auto per_mille = static_cast<std::int16_t>(std::lround(tau[0] * 1000.0));

@@ -1,15 +1,26 @@
 #pragma once
 /// @file control_loop.hpp
 /// One control period of numen (docs/architecture.md, "One encoder value, frame to torque
-/// frame"; docs/protocol.md §3), the same for every protocol, through hal::Device:
+/// frame"; docs/protocol.md §3), the same for every protocol and both kinds of device, through
+/// hal::Device. An impedance device (hal::ImpedanceDevice):
 ///   begin_period: Device::begin_period — SYNC (+ the managed stack's NMT command due and
 ///                 controller heartbeat);
 ///   end_period:   Device::read (frames → decode → check → forward kinematics)
 ///                 → Device::supervise (managed: watchdogs, lifecycle; a fault latches zero
 ///                 torque now) → bound bodies' targets into core::Data → core::step
 ///                 → map: the bound bodies' Eq. 8 wrenches carried to their links (Eq. 9),
-///                 τ = Σ_l J_lᵀ w_l → Device::write (gate and clamp, once; the torque frames).
-/// The protocol (DeviceConfig::canopen.managed) is chosen once, at construction
+///                 τ = Σ_l J_lᵀ w_l → ImpedanceDevice::write (gate and clamp, once; the torque frames).
+/// An admittance device (hal::AdmittanceDevice; paper Fig. 2 note; docs/dynamics.md
+/// "Admittance devices", docs/protocol.md §18):
+///   begin_period: Device::begin_period — SYNC;
+///   end_period:   Device::read (force sensor TPDOs → the checked reading) → Device::supervise
+///                 (force timeout, out of range, overruns latch the safe state)
+///                 → data.device_wrench = the measured wrench in the world, about the held
+///                 body's COM (in kActive), else a brake that halves the held body's twist
+///                 each step → core::step (CouplingMode::kAdmittance) → the held body's pose
+///                 → AdmittanceDevice::write_pose (inverse kinematics, csp RPDOs; the
+///                 set-points held with controlword shutdown outside kActive).
+/// The kind and protocol (DeviceConfig::canopen.managed) are chosen once, at construction
 /// (hal::make_device()); no period branches on it. The same object runs against SimBus in
 /// simulation and SocketCAN on hardware. Construction may allocate; begin_period / end_period /
 /// rearm never allocate, throw, lock or block.
@@ -24,7 +35,9 @@
 #include "numen/hal/transport/bus.hpp"
 #include "numen/hal/canopen/canopen_master.hpp"
 #include "numen/hal/canopen/cia402.hpp"
+#include "numen/hal/device/admittance_device.hpp"
 #include "numen/hal/device/device.hpp"
+#include "numen/hal/device/impedance_device.hpp"
 #include "numen/hal/canopen/device_lifecycle.hpp"
 #include "numen/hal/device/instrument_device.hpp"
 #include "numen/hal/device/safety_supervisor.hpp"
@@ -45,13 +58,23 @@ struct PeriodReport {
   hal::IoStatus command_status = hal::IoStatus::kOk;  ///< Result of the torque writes.
   /// Non-zero torque was commanded on at least one drive this period.
   bool torque_commanded = false;
-  /// The feedback wrench the drives were sent this period: the bound bodies' Eq. 8 wrenches
+  /// The device wrench of this period. Admittance: the measured wrench that drove the held
+  /// body (world, N and N·m about its COM; zero when not driven). Impedance: the feedback
+  /// wrench the drives were sent this period: the bound bodies' Eq. 8 wrenches
   /// carried to their links (Eq. 9) and summed about link 0's origin (world, N and N·m) — the
-  /// wrench whose τ = Σ J_lᵀ w_l went to Device::write() — times the soft-start factor
+  /// wrench whose τ = Σ J_lᵀ w_l went to ImpedanceDevice::write() — times the soft-start factor
   /// (soft_start_ramp), and zero when write() gated every axis. Per-axis clamping acts on τ
   /// (hal::SentTorques::clamped counts it), not on this.
   core::Wrench feedback;
-  /// The soft-start factor r in [0, 1] Device::write() applied this period
+  /// Admittance: the measured wrench drove the held body this period (kActive, a body held).
+  bool driven = false;
+  /// Admittance: the controlword sent with the set-points (CiA 402: enable operation or
+  /// shutdown); 0 for an impedance device.
+  std::uint16_t controlword = 0;
+  /// The sample's SampleFault bits this period (impedance: the union over the axes; admittance:
+  /// the force reading's).
+  hal::FaultMask sample_faults = 0;
+  /// The soft-start factor r in [0, 1] ImpedanceDevice::write() applied this period
   /// (hal::SentTorques::ramp; 1 once the ramp is over or with the soft start off).
   double soft_start_ramp = 1.0;
   // Timestamps (CLOCK_MONOTONIC ns).
@@ -126,6 +149,13 @@ class ControlLoop {
   ControlLoop(const core::Model& model, core::Data& data, hal::Bus& bus,
               hal::InstrumentDevice& device, DeviceBinding binding = DeviceBinding::rigid(),
               const ControlLoopSettings& settings = {});
+  /// The loop of an admittance device (built by the caller on its bus, with its supervision
+  /// settings: hal::AdmittanceSettings); keeps references to `model`, `data` and `device`.
+  /// Throws std::invalid_argument if the model's coupling mode is not kAdmittance. `settings`:
+  /// supervise_overruns only (the device's own settings supervise). The LoopStatistics period
+  /// is the device's control period.
+  ControlLoop(const core::Model& model, core::Data& data, hal::AdmittanceDevice& device,
+              const ControlLoopSettings& settings = {});
 
   /// Starts period k: writes a SYNC (CANopen COB-ID 0x080) stamped `now_ns` (bus clock);
   /// managed stack: then the NMT command due and the controller's heartbeat when due.
@@ -147,7 +177,7 @@ class ControlLoop {
   ///  5. map: w_l = the bound bodies' Eq. 8 feedback (data.body_feedback) carried to their
   ///     link's origin (Eq. 9), τ = Σ_l J_lᵀ w_l (InstrumentDevice::torques_for(): computed
   ///     as it is, NaN included; 0 for a link without a driven body);
-  ///  6. write: Device::write(τ) — gated (zero unless this period's sample is valid, no
+  ///  6. write: ImpedanceDevice::write(τ) — gated (zero unless this period's sample is valid, no
   ///     shutdown, and — managed — the lifecycle active and the drive's master allowing
   ///     torque), clamped to ±max_torque and scaled by the soft start's r there, once; then
   ///     the torque frames.
@@ -178,8 +208,12 @@ class ControlLoop {
   bool drives_disabled() const noexcept;
   /// True for the managed stack.
   bool managed() const noexcept { return device_->canopen() != nullptr; }
-  /// The device (protocol, supervision, the torques sent).
+  /// The device (protocol, supervision), of either kind.
   const hal::Device& device() const noexcept { return *device_; }
+  /// The impedance device (the torques sent); precondition: !admittance().
+  const hal::ImpedanceDevice& impedance() const noexcept { return *impedance_; }
+  /// The admittance device (nullptr for an impedance device).
+  const hal::AdmittanceDevice* admittance() const noexcept { return admittance_; }
   /// The CANopen master (nullptr in the minimal protocol).
   const hal::CanopenMaster* canopen() const noexcept { return device_->canopen(); }
   /// The CANopen master, e.g. to queue an NMT command (nullptr in the minimal protocol).
@@ -221,11 +255,19 @@ class ControlLoop {
   // Step 5: link_wrench_ → tau_ (τ = Σ J_lᵀ w_l) and report_.feedback; computes, never gates.
   void map_feedback() noexcept;
   void step_model() noexcept;
+  // Steps 3–6 of an impedance device (targets, step, map, write τ).
+  void impedance_period(std::int64_t now_ns) noexcept;
+  // The same of an admittance device (measured wrench or brake, step, write the pose).
+  void admittance_period(std::int64_t now_ns) noexcept;
+  // Admittance outside kActive: data.device_wrench halves the held body's twist each step.
+  void brake_held_body() noexcept;
 
   const core::Model* model_;
   core::Data* data_;
-  hal::InstrumentDevice* instrument_;
-  std::unique_ptr<hal::Device> device_;
+  hal::InstrumentDevice* instrument_ = nullptr;      // impedance
+  std::unique_ptr<hal::ImpedanceDevice> impedance_;  // impedance: built around instrument_
+  hal::AdmittanceDevice* admittance_ = nullptr;      // admittance: the caller's
+  hal::Device* device_ = nullptr;                    // the one of the two
   DeviceBinding binding_;
   std::vector<core::Vec3> link_origin_;   // per binding: world origin of its link this period
   std::vector<core::Vec3> body_target_;   // per binding: target point of its body this period

@@ -3,8 +3,8 @@
 /// The run harness of a scene with an admittance device (`coupling = "admittance"`,
 /// `[device.admittance]`; paper Fig. 2 note): a SimBus, a hal::AdmittanceEmulator on its
 /// device port (the position-controlled device and its force sensor, pushed by a simulated
-/// hand that follows the scene trajectory), a hal::AdmittanceDevice and a
-/// platform::AdmittanceLoop on its controller port. run_scene() dispatches here.
+/// hand that follows the scene trajectory), a hal::AdmittanceDevice and the
+/// platform::ControlLoop that runs it on its controller port. run_scene() dispatches here.
 /// One period (bus time t = k·dt):
 ///   t            controller: SYNC
 ///   t + latency  device: the drives advance to their targets, the hand's wrench is measured,
@@ -25,7 +25,7 @@
 #include "numen/hal/device/admittance_device.hpp"
 #include "numen/hal/emulation/admittance_emulator.hpp"
 #include "numen/hal/transport/sim_bus.hpp"
-#include "numen/platform/admittance_loop.hpp"
+#include "numen/platform/control_loop.hpp"
 #include "numen/platform/latency_histogram.hpp"
 #include "numen/platform/multirate_threads.hpp"
 #include "numen/sim/divergence.hpp"
@@ -44,16 +44,16 @@ class AdmittanceRunner {
   /// held body's initial pose (inverse kinematics), the hand at the trajectory's first sample.
   /// `trace_capacity` trace records are reserved (0: no trace; a full trace counts its drops).
   /// `overrun_limit`: consecutive overrun periods that latch the safe state
-  /// (AdmittanceLoopSettings::overrun_limit; 0: counted only). Throws std::invalid_argument if
+  /// (hal::AdmittanceSettings::overrun_limit; 0: counted only). Throws std::invalid_argument if
   /// the scene has no admittance device.
   explicit AdmittanceRunner(const Scene& scene, std::size_t trace_capacity = 0,
                             std::uint32_t overrun_limit = 0);
 
   /// Runs control period k (see the file comment) and its measurements, and publishes it to
-  /// the state stream if stream_view() was called. `overran`: the previous period ran past
-  /// this one's deadline (a paced run's platform::Wakeup::overrun), passed to
-  /// AdmittanceLoop::end_period.
-  void period(bool overran = false) noexcept;
+  /// the state stream if stream_view() was called. `deadline_mono_ns` / `woke_mono_ns`: a paced
+  /// run's platform::Wakeup (CLOCK_MONOTONIC), for the loop's statistics and overrun verdict
+  /// (ControlLoop::begin_period); < 0: this call's time.
+  void period(std::int64_t deadline_mono_ns = -1, std::int64_t woke_mono_ns = -1) noexcept;
   /// Publishes the run's state stream (docs/viewer.md, "Admittance runs") to a view recording
   /// at `record_path` (empty: none) and to `sinks` (not owned), at `rate_hz` frames per
   /// simulated second; `wait`: the loop waits for the consumers, else drops. Setup only; throws
@@ -80,8 +80,8 @@ class AdmittanceRunner {
   const hal::AdmittanceEmulator& emulator() const noexcept { return emulator_; }
   hal::AdmittanceEmulator& emulator() noexcept { return emulator_; }
   const hal::AdmittanceDevice& device() const noexcept { return device_; }
-  const platform::AdmittanceLoop& loop() const noexcept { return loop_; }
-  platform::AdmittanceLoop& loop() noexcept { return loop_; }
+  const platform::ControlLoop& loop() const noexcept { return loop_; }
+  platform::ControlLoop& loop() noexcept { return loop_; }
   /// The multirate god-object (enabled() false in a single-rate run) and its scene thread.
   const MultirateRun& multirate() const noexcept { return multirate_; }
   /// Where the hand was at the last period (the controlled frame's target, world).
@@ -105,8 +105,8 @@ class AdmittanceRunner {
   hal::AdmittanceDevice device_;
   core::Data data_;
   core::Data ghost_;  // the held body placed at the hand, for measurement
-  platform::AdmittanceLoop loop_;
-  /// Stepped in place of core::step by the loop (AdmittanceLoop::set_step_function) with
+  platform::ControlLoop loop_;
+  /// Stepped in place of core::step by the loop (ControlLoop::set_step_function) with
   /// [multirate]; not enabled in a single-rate run.
   MultirateRun multirate_;
   platform::LatencyHistogram step_time_;
@@ -133,11 +133,11 @@ class AdmittanceRunner {
 /// (key "--bus" or "--record") for a bus other than "sim" or a bus recording: the emulated
 /// device lives on the scene's SimBus; key "--trace" for a trace over the in-memory budget;
 /// key "--phase" for a compute phase not below dt. options.rearm re-arms the loop after a latched
-/// safe state (AdmittanceLoop::rearm()); a paced run reports its overruns, missed periods and
+/// safe state (ControlLoop::rearm()); a paced run reports its overruns, missed periods and
 /// wake-up latency, and latches the safe state after options.overrun_limit consecutive
 /// overruns (0: counted only; an offline run has no deadline and never latches on them;
 /// docs/safety.md). The summary's first_fault names what latched first (to_string of
-/// platform::AdmittanceFaultCause).
+/// hal::FaultCause: "force out of range", "force reading timeout", "overruns").
 RunSummary run_admittance_scene(const Scene& scene, const RunOptions& options);
 
 }  // namespace numen::sim

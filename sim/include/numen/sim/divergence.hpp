@@ -16,8 +16,8 @@
 /// E₀ counts the contacts' potential at the base (½ k d² of the first period's contacts).
 ///
 /// v_ref = max(the hand's fastest speed so far (|v_t| + |ω_t| r of the held body, and the
-/// coupling spring's step response to a target that jumps between two periods: Δx √(k_t/m) +
-/// Δθ √(k_r/I_u) r, step_response_speed()), √(2 |g| H)
+/// coupling spring's step response to a target that jumps between two periods further than
+/// its twist explains, step_response_speed()), √(2 |g| H)
 /// with H the height of the scene's bounding box at the start (its extent along gravity:
 /// bodies, nets, bounded obstacles), √(2 E_c0 / m_min) with E_c0 the contacts' potential ½ k d²
 /// at the base (a tool that starts inside an obstacle is pushed out by it; m_min the lightest
@@ -61,12 +61,18 @@ struct Divergence {
 };
 
 /// Peak speed (m/s, |v| + |ω| r as the speed bound measures it) of body `b` when its coupling
-/// target steps from `from` to `to` in one period: an undamped mass on the coupling spring
-/// stepped by Δ peaks at Δ ω_n, ω_n = √(k_t/m) in translation and √(k_r/I_u) in rotation (I_u
-/// the body's inertia about the step's axis, at its pose in `data`). A held sample that jumps
-/// to the hand's pose after a link outage is such a step (the HIL scenario run_device_link).
+/// target steps from `from` to `to` in one period of h = model.dt while its twist is `twist`:
+/// the jump is the part of the step the twist does not explain, Δ = max(0, |Δx| − |v_t| h)
+/// (and Δθ = max(0, |Δθ| − |ω_t| h)); an undamped mass on the coupling spring stepped by Δ
+/// peaks at Δ ω_n, with ω_n = √(k_t/m) in translation and √(k_r/I_u) in rotation (I_u the
+/// body's inertia about the step's axis, at its pose in `data`), and a step integrated at h
+/// reaches its target in no less than a period, so ω_n is taken at most 1/h. A held sample that
+/// jumps to the hand's pose after a link outage is such a step (the HIL scenario
+/// run_device_link); a hand that moves smoothly gives Δ ≈ 0, so a coupling too stiff for h
+/// (1e12 N/m) does not raise its own limit.
 double step_response_speed(const core::Model& model, const core::Data& data, int b,
-                           const core::Pose& from, const core::Pose& to) noexcept;
+                           const core::Pose& from, const core::Pose& to,
+                           const core::Twist& twist) noexcept;
 
 /// Per-period divergence monitor of one run. Construction allocates (setup); observe() never
 /// allocates, throws, locks or blocks, and costs O(bodies + nodes + springs).

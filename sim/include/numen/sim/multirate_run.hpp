@@ -1,8 +1,8 @@
 #pragma once
 /// @file multirate_run.hpp
 /// The multirate god-object of a run (scene [multirate]; docs/multirate.md), shared by the two
-/// run harnesses (SceneRunner's platform::ControlLoop and AdmittanceRunner's
-/// platform::AdmittanceLoop): the core::MultirateGodObject the loop steps in place of
+/// run harnesses (SceneRunner and AdmittanceRunner, each through its platform::ControlLoop):
+/// the core::MultirateGodObject the loop steps in place of
 /// core::step (their set_step_function()), its scene thread in a paced run
 /// (platform::MultirateThreads), the single-rate view the measurements read, and the run
 /// summary's multirate figures.

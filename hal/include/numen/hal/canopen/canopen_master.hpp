@@ -28,7 +28,7 @@
 ///     update(): heartbeat consumers polled, start-up progress, each Cia402Master updated with
 ///       its drive's newest statusword;
 ///     write_drive_rpdos(): controlword (from the Cia402Master) + the target torque it is given
-///       in each drive's RPDO mapping (gated and clamped before, by hal::Device::write(), which
+///       in each drive's RPDO mapping (gated and clamped before, by hal::ImpedanceDevice::write(), which
 ///       asks drive_outputs()[i].torque_allowed).
 ///
 /// Construction allocates and may throw std::invalid_argument (config not managed or invalid);
@@ -143,7 +143,7 @@ class CanopenMaster {
 
   /// Writes each drive's RPDO stamped `now_ns`: the controlword of its master's last update(),
   /// target torque per_mille[axis] as given (0 for an axis past the span; the caller gated it
-  /// with drive_outputs()[i].torque_allowed, see hal::Device::write()); modes of operation (if
+  /// with drive_outputs()[i].torque_allowed, see hal::ImpedanceDevice::write()); modes of operation (if
   /// mapped) 10. Returns as begin_period().
   IoStatus write_drive_rpdos(std::int64_t now_ns, std::span<const std::int16_t> per_mille,
                              Bus& bus) noexcept;

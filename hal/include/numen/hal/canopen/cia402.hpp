@@ -242,7 +242,7 @@ struct Cia402MasterOutput {
   /// Controlword (0x6040) to send this period.
   std::uint16_t controlword = Controlword::kDisableVoltage;
   /// True only when the target is kEnabled, the statusword reports operation enabled and no
-  /// fault is latched. Otherwise the target torque sent must be 0 (hal::Device::write() gates
+  /// fault is latched. Otherwise the target torque sent must be 0 (hal::ImpedanceDevice::write() gates
   /// on it).
   bool torque_allowed = false;
   /// The state decoded from the statusword given to update().

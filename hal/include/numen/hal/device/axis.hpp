@@ -60,11 +60,11 @@ double counts_to_value(const AxisConfig& axis, std::int32_t counts) noexcept;
 std::int32_t value_to_counts(const AxisConfig& axis, double value) noexcept;
 
 /// The torque bound of `axis`, N·m or N: min(max_torque, 32767 · rated_torque / 1000), the
-/// largest |τ| the axis allows and its RPDO can carry. Device::write() clamps to it.
+/// largest |τ| the axis allows and its RPDO can carry. ImpedanceDevice::write() clamps to it.
 double torque_limit(const AxisConfig& axis) noexcept;
 
 /// Torque (N·m or N) to RPDO per mille without a clamp: sign · round(1000 · τ / rated_torque).
-/// For a τ already clamped to ±torque_limit() (Device::write()); a value outside the int16
+/// For a τ already clamped to ±torque_limit() (ImpedanceDevice::write()); a value outside the int16
 /// range (not reached then) is held at its end, non-finite gives 0.
 std::int16_t torque_per_mille(const AxisConfig& axis, double torque) noexcept;
 

@@ -1,84 +1,48 @@
 #pragma once
 /// @file device.hpp
-/// hal::Device: the one interface between a control loop and an instrument on a bus, in the
-/// manner of a ros2_control hardware interface (read(time) → the controller → write(time), with
-/// a lifecycle). One control period of a device is, in this order:
+/// hal::Device: the one interface between a control loop and a device on a bus, for both kinds
+/// of device (impedance: encoders in, torques out, ImpedanceDevice; admittance: a force sensor
+/// in, position set-points out, AdmittanceDevice), in the manner of a ros2_control hardware
+/// interface (read(time) → the controller → write(time), with a lifecycle). One control period
+/// of a device is, in this order:
 ///
 ///   begin_period(now)  SYNC (CiA 301, COB-ID 0x080) and the protocol's own period-start frames
-///   read(now)          every pending frame → decode → the checked sample (InstrumentDevice)
-///   supervise(now, …)  watchdogs and lifecycle: whether torque may be sent this period
-///   … the caller steps the dynamics and maps the feedback to axis torques τ = Σ J_lᵀ w_l …
-///   write(τ, now)      gate and clamp τ (here, once), then the protocol's torque frames
+///   read(now)          every pending frame → the protocol (take_frame) or the kind's input
+///                      (encoder or force TPDOs) → the kind's checked sample
+///   supervise(now, …)  watchdogs and lifecycle: whether the device may be driven this period
+///   … the caller steps the dynamics …
+///   write …            the kind's output (ImpedanceDevice::write(τ), AdmittanceDevice::
+///                      write_pose(pose)), gated by the lifecycle there, once
 ///
-/// write() is the one place where axis torques are gated and clamped, for every protocol:
-///  - gate: every axis gets 0 unless this period's sample is valid, shutdown() was not called,
-///    and the implementation allows torque on the axis (torque_allowed(): the axis has a drive;
-///    managed stack: the lifecycle is kActive and that drive's CiA 402 master allows torque);
-///  - non-finite: a NaN or infinite τ on an allowed axis zeroes every axis (the managed stack
-///    latches the safe state, FaultCause::kNonFiniteTorque);
-///  - clamp: |τ_i| <= AxisConfig::max_torque (N·m or N), counted per axis;
-///  - soft start: every clamped τ_i times r(t) = min(1, k · dt / T) in the k-th write since
-///    torque was enabled (T = DeviceConfig::soft_start_s, dt = control_period_s; T = 0: r = 1).
-///    Torque is enabled at the first write whose gate opens after construction or, managed
-///    stack, after the lifecycle entered kActive (the start-up, activate(), the activation that
-///    follows a rearm()). A linear ramp, as a CiA 402 drive's torque slope (object 0x6087) and
-///    OpenHaptics' HD_FORCE_RAMPING: each period adds at most max_torque · dt / T to |τ_i|
-///    (docs/safety.md, "Soft start").
-/// The protocol implementations only encode what write() decided (sent_torques()); nothing
-/// downstream clamps or gates again, so what sent_torques() reports is what the drives receive
-/// (up to the per mille rounding of the RPDO, AxisConfig::rated_torque / 1000).
-///
-/// Implementations: MinimalDevice (the minimal protocol: SYNC, position TPDOs, torque RPDOs)
-/// and ManagedDevice (the managed CANopen stack: NMT start-up, heartbeats, EMCY, CiA 402
-/// drives, SafetySupervisor and DeviceLifecycle); make_device() picks one from
-/// DeviceConfig::canopen.managed. Construction allocates and may throw; every other member is
-/// noexcept, allocation free, lock free and never blocks.
+/// This base holds what both kinds share: the period's SYNC counter, the frame-read loop, the
+/// I/O-error flag the supervision reads, shutdown, and the lifecycle interface (activate,
+/// rearm, the state, the first latched fault). Construction allocates and may throw; every
+/// other member is noexcept, allocation free, lock free and never blocks.
 
-#include <array>
 #include <cstdint>
-#include <memory>
-#include <span>
 
-#include "numen/hal/transport/bus.hpp"
 #include "numen/hal/canopen/canopen_master.hpp"
-#include "numen/hal/canopen/cia402.hpp"
 #include "numen/hal/canopen/device_lifecycle.hpp"
-#include "numen/hal/device/instrument_device.hpp"
-#include "numen/hal/device/kinematics.hpp"
+#include "numen/hal/device/safety_supervisor.hpp"
+#include "numen/hal/transport/bus.hpp"
 
 namespace numen::hal {
-
-class SafetySupervisor;
 
 /// What Device::read() found this period.
 struct DeviceRead {
   int frames_read = 0;       ///< Frames taken from the bus.
   bool read_error = false;   ///< A Bus::read() returned IoStatus::kError (the reads stopped).
+  int input_frames = 0;      ///< Frames the kind's input took (encoder or force TPDOs).
 };
 
 /// What Device::supervise() decided this period (minimal protocol: the defaults).
 struct DeviceSupervision {
   /// Lifecycle state after this period (kUnconfigured in the minimal protocol: no lifecycle).
   LifecycleState lifecycle = LifecycleState::kUnconfigured;
-  /// NMT start-up phase after this period (kResetCommunication in the minimal protocol).
+  /// NMT start-up phase after this period (kResetCommunication without an NMT start-up).
   StartupPhase startup = StartupPhase::kResetCommunication;
   bool entered_safe_stop = false;  ///< The safe state latched in this period.
   bool activated = false;          ///< The lifecycle entered kActive in this period.
-};
-
-/// Creation settings of a device's supervision (the minimal protocol uses none of them).
-struct DeviceSettings {
-  /// SafetySettings::encoder_timeout_periods, >= 1.
-  std::uint32_t encoder_timeout_periods = 3;
-  /// SafetySettings::overrun_limit, >= 1.
-  std::uint32_t overrun_limit = 3;
-  /// SafetySettings::safe_stop_timeout_periods, >= 1.
-  std::uint32_t safe_stop_timeout_periods = 100;
-  /// Activate the lifecycle on its own once the start-up is complete and no fault cause is
-  /// present; false: the caller calls activate().
-  bool auto_activate = true;
-  /// Settings of each drive's Cia402Master.
-  Cia402MasterSettings drive_settings;
 };
 
 /// Result of Device::rearm().
@@ -92,46 +56,8 @@ enum class RearmResult : std::uint8_t {
 /// Short English name of a RearmResult (static string).
 const char* to_string(RearmResult result) noexcept;
 
-/// The torques of the last write(), exactly as the torque frames carry them.
-struct SentTorques {
-  /// Per axis, N·m (revolute) or N (prismatic), after the gate and the clamp: 0 on a gated
-  /// axis and on an axis without a drive (n entries). The RPDO carries round(1000 τ / rated)
-  /// per mille of it (per_mille).
-  AxisVector torque;
-  /// Per axis, the RPDO's target torque, per mille of AxisConfig::rated_torque, sign applied
-  /// (entries >= n and axes without a drive are 0).
-  std::array<std::int16_t, kMaxAxes> per_mille{};
-  /// Every axis was zeroed by the gate (no valid sample, shut down, not allowed, non-finite).
-  bool gated = true;
-  /// Axes clamped to ±max_torque in this write.
-  int clamped = 0;
-  /// The soft-start factor r in [0, 1] this write applied to every clamped τ_i (1: no ramp
-  /// running or soft start off; 0: torque not enabled yet, so the write was gated).
-  double ramp = 1.0;
-  /// Some per mille value is not zero.
-  bool any() const noexcept {
-    for (std::int16_t v : per_mille)
-      if (v != 0) return true;
-    return false;
-  }
-};
-
-/// Counters of Device::write() since construction.
-struct TorqueCounters {
-  std::uint64_t writes = 0;        ///< write() calls.
-  std::uint64_t gated_writes = 0;  ///< write() calls that zeroed every axis (SentTorques::gated).
-  std::uint64_t saturations = 0;   ///< Axis torques clamped to ±max_torque.
-  std::uint64_t non_finite = 0;    ///< write() calls given a NaN / inf torque on an allowed axis.
-  /// Per axis: clamps to ±max_torque (entries >= n are 0).
-  std::array<std::uint64_t, kMaxAxes> axis_saturations{};
-  /// Soft-start ramps begun (torque enabled with DeviceConfig::soft_start_s > 0).
-  std::uint64_t soft_starts = 0;
-  /// Writes that scaled an open gate's torques by r < 1 (SentTorques::ramp).
-  std::uint64_t ramped_writes = 0;
-};
-
-/// One instrument on one bus, seen by the control loop (see the file comment). Not thread
-/// safe: one real-time thread owns it.
+/// One device on one bus, seen by the control loop (see the file comment). Not thread safe:
+/// one real-time thread owns it.
 class Device {
  public:
   virtual ~Device() = default;
@@ -144,88 +70,66 @@ class Device {
   /// the supervision.
   IoStatus begin_period(std::int64_t now_ns) noexcept;
 
-  /// Reads every pending frame (at most 1024), gives each to the protocol (managed: drive
-  /// TPDOs, heartbeats, EMCY) or else to the InstrumentDevice (encoder TPDOs), then checks the
-  /// sample at `now_ns` (InstrumentDevice::sample()); sample() holds it.
+  /// Reads every pending frame (at most 1024), gives each to the protocol (take_frame: managed,
+  /// drive TPDOs, heartbeats, EMCY) or else to the kind's input (on_input_frame: encoder or
+  /// force TPDOs), then checks the kind's sample at `now_ns` (end_read).
   const DeviceRead& read(std::int64_t now_ns) noexcept;
 
-  /// Watchdogs and lifecycle at `now_ns` after read(): managed, the CanopenMaster's update, the
-  /// SafetySupervisor's (a fault latches zero torque in this very period), a pending re-arm,
-  /// the automatic activation and the drives' CiA 402 target. `overrun`: the previous period
-  /// overran (counts only where overruns are supervised). Minimal protocol: nothing.
+  /// Watchdogs and lifecycle at `now_ns` after read(): whether the device may be driven this
+  /// period (a fault latches the safe state in this very period). `overrun`: the previous
+  /// period overran (counts only where overruns are supervised).
   virtual DeviceSupervision supervise(std::int64_t now_ns, bool overrun) noexcept = 0;
 
-  /// Sends axis torques `torques` (N·m or N, n entries; missing entries are 0) at `now_ns`:
-  /// gates and clamps them (the file comment; the only place that does), stores the result
-  /// (sent_torques()) and writes the protocol's torque frames (minimal: one torque RPDO per
-  /// driven axis; managed: controlword + target torque RPDO per drive). Returns kOk if every
-  /// write succeeded, else kError if one failed, else kWouldBlock.
-  IoStatus write(std::span<const double> torques, std::int64_t now_ns) noexcept;
-
   // ---- lifecycle (ros2_control: activate, deactivate, error recovery) ----
-  /// kInactive → kActive now (managed: SafetySupervisor::activate()); kNotInactive in the
-  /// minimal protocol (no lifecycle).
+  /// kInactive → kActive now; kNotInactive without a lifecycle (the minimal protocol).
   virtual LifecycleResult activate() noexcept { return LifecycleResult::kNotInactive; }
-  /// Re-arms after a latched fault or a failed start-up: fault resets, the NMT start-up rerun
-  /// if a node is not operational, the lifecycle kFault → kInactive in the first period in
-  /// which no cause is present. Never blocks.
+  /// Re-arms after a latched fault (or a failed start-up): the lifecycle kFault → kInactive in
+  /// the first period in which no cause is present. Never blocks.
   virtual RearmResult rearm() noexcept { return RearmResult::kMinimalProtocol; }
   /// A re-arm was accepted and has not happened yet.
   virtual bool rearm_pending() const noexcept { return false; }
-  /// Orderly stop: write() gates every axis from now on; managed, no automatic activation or
-  /// pending re-arm, and the lifecycle leaves kActive for kInactive (the drives' masters are
-  /// asked for kDisabled). Never blocks.
+  /// Orderly stop: the output is gated from now on; no automatic activation or pending re-arm,
+  /// and the lifecycle leaves kActive for kInactive (the drives are disabled). Never blocks.
   void shutdown() noexcept;
   /// shutdown() was called.
   bool shutting_down() const noexcept { return shutting_down_; }
-  /// The lifecycle state now (kUnconfigured in the minimal protocol: no lifecycle).
+  /// The lifecycle state now (kUnconfigured without a lifecycle).
   virtual LifecycleState lifecycle() const noexcept { return LifecycleState::kUnconfigured; }
-  /// Managed: every drive's master reports a disabled state; minimal protocol: true.
+  /// Every drive reports (or was commanded) a disabled state; true without a lifecycle.
   virtual bool drives_disabled() const noexcept { return true; }
+  /// The first fault that latched the safe state since construction or the last re-arm
+  /// (nullptr: none, or no supervision).
+  virtual const FaultRecord* first_fault() const noexcept { return nullptr; }
 
-  // ---- what the device holds ----
-  /// The controller-side instrument driver (sample, kinematics, mapping τ = Σ J_lᵀ w_l).
-  const InstrumentDevice& instrument() const noexcept { return *instrument_; }
-  /// Same, mutable (InstrumentDevice::torques_for() updates its counters).
-  InstrumentDevice& instrument() noexcept { return *instrument_; }
-  /// The sample of the last read() (InstrumentDevice::last_sample()).
-  const DeviceSample& sample() const noexcept { return instrument_->last_sample(); }
-  /// The torques of the last write(), as sent.
-  const SentTorques& sent_torques() const noexcept { return sent_; }
-  /// Counters of write().
-  const TorqueCounters& torque_counters() const noexcept { return torque_counters_; }
   /// The bus.
   const Bus& bus() const noexcept { return *bus_; }
-  /// The CANopen master (nullptr in the minimal protocol).
+  /// The CANopen master (nullptr without the managed stack).
   virtual const CanopenMaster* canopen() const noexcept { return nullptr; }
   /// Same, mutable (e.g. to queue an NMT command).
   virtual CanopenMaster* canopen() noexcept { return nullptr; }
-  /// The safety supervisor and lifecycle (nullptr in the minimal protocol).
+  /// The impedance stack's safety supervisor and lifecycle (nullptr otherwise).
   virtual const SafetySupervisor* supervisor() const noexcept { return nullptr; }
 
  protected:
-  /// Keeps references: `instrument` and `bus` must outlive the device.
-  Device(InstrumentDevice& instrument, Bus& bus);
+  /// Keeps a reference: `bus` must outlive the device.
+  explicit Device(Bus& bus) : bus_(&bus) {}
 
-  /// Protocol frames read before the instrument's: true if taken (managed: CanopenMaster).
+  /// Protocol frames read before the kind's input: true if taken (managed: CanopenMaster).
   virtual bool take_frame(const CanFrame& frame) noexcept {
     (void)frame;
     return false;
   }
+  /// The kind's input frame (encoder TPDOs, force TPDOs): true if it was one.
+  virtual bool on_input_frame(const CanFrame& frame) noexcept = 0;
+  /// After the frames: the kind's sample at `now_ns`.
+  virtual void end_read(std::int64_t now_ns) noexcept = 0;
   /// Protocol frames at the start of a period, after the SYNC (managed: NMT, heartbeat).
   virtual IoStatus begin_protocol(std::int64_t now_ns) noexcept {
     (void)now_ns;
     return IoStatus::kOk;
   }
-  /// Whether `axis` (< n, with a drive) may get torque this period (the gate's per-protocol
-  /// part; write() adds the sample and shutdown conditions).
-  virtual bool torque_allowed(int axis) const noexcept = 0;
-  /// write() found a non-finite torque on allowed axis `axis` (managed: latch the safe state).
-  virtual void on_non_finite_torque(int axis) noexcept { (void)axis; }
   /// After shutdown() (managed: deactivate the lifecycle).
   virtual void on_shutdown() noexcept {}
-  /// Writes the torque frames of sent_torques() at `now_ns`.
-  virtual IoStatus send(const SentTorques& torques, std::int64_t now_ns) noexcept = 0;
   /// A Bus read or write returned kError since the last take_io_error() (then cleared).
   bool take_io_error() noexcept {
     const bool e = io_error_;
@@ -236,33 +140,14 @@ class Device {
   void note(IoStatus s) noexcept {
     if (s == IoStatus::kError) io_error_ = true;
   }
-  /// Torque is (re-)enabled: the soft start begins again at the next write whose gate is open
-  /// (r = dt / T there). Managed stack: the lifecycle entered kActive. No effect with the soft
-  /// start off.
-  void restart_soft_start() noexcept {
-    if (ramp_step_ > 0.0) ramp_writes_ = -1;
-  }
 
-  InstrumentDevice* instrument_;
   Bus* bus_;
 
  private:
-  SentTorques sent_;
-  TorqueCounters torque_counters_;
   DeviceRead read_;
-  // Soft start: dt / T (0: off) and the writes since the ramp began (-1: armed, waiting for an
-  // open gate; counting stops once r reached 1).
-  double ramp_step_ = 0.0;
-  std::int64_t ramp_writes_ = -1;
   std::uint8_t sync_counter_ = 0;
   bool io_error_ = false;
   bool shutting_down_ = false;
 };
-
-/// The device `instrument.config()` asks for: ManagedDevice if canopen.managed, else
-/// MinimalDevice, with `period_ns` the control period (> 0). Throws std::invalid_argument for
-/// bad settings (construction only).
-std::unique_ptr<Device> make_device(InstrumentDevice& instrument, Bus& bus,
-                                    std::int64_t period_ns, const DeviceSettings& settings = {});
 
 }  // namespace numen::hal

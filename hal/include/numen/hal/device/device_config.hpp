@@ -149,7 +149,7 @@ struct DeviceConfig {
   /// +infinity = the bare backward difference. The estimate lags the hand by about
   /// 1/(2π f_c) (3.2 ms at the default 50 Hz) and is bounded by each axis's max_speed.
   double velocity_cutoff_hz = kDefaultVelocityCutoffHz;
-  /// Soft start, s, finite and in [0, kMaxSoftStartS]: Device::write() scales the gated and
+  /// Soft start, s, finite and in [0, kMaxSoftStartS]: ImpedanceDevice::write() scales the gated and
   /// clamped axis torques by r = min(1, k · control_period_s / soft_start_s) in the k-th write
   /// (k = 1, 2, …) since torque was enabled — the first write whose gate is open after the
   /// device was built or (managed stack) after the lifecycle entered kActive (start-up,

@@ -99,7 +99,7 @@ struct DeviceCounters {
   std::uint64_t rejected_jump = 0;          ///< ... implausible jump.
   // Mappings (torques_for()).
   std::uint64_t commands = 0;             ///< torques_for() calls.
-  /// ... given a NaN/inf wrench (mapped all the same: hal::Device::write() trips on the
+  /// ... given a NaN/inf wrench (mapped all the same: hal::ImpedanceDevice::write() trips on the
   /// non-finite τ, FaultCause::kNonFiniteTorque).
   std::uint64_t non_finite_wrenches = 0;
   /// torques_for() calls given more wrenches than the instrument has links (the extra
@@ -140,10 +140,11 @@ class InstrumentDevice {
   /// J_l = Kinematics::link_jacobian(l, q) at the axis values of the last sample(). Links
   /// without an entry (l >= link_wrenches.size()) get a zero wrench; entries beyond
   /// num_links() are ignored and counted (extra_link_wrenches). It computes and never gates:
-  /// no gate, no clamp and no zeroing (that is hal::Device::write(), once); every axis gets its
-  /// Σ, with a drive or not. Before the first valid sample the Jacobians are 0 (τ = 0 for a
-  /// finite wrench). A non-finite wrench is mapped as it is (counted in non_finite_wrenches):
-  /// its τ reaches write(), whose non-finite trip latches the safe state.
+  /// no gate, no clamp and no zeroing (that is hal::ImpedanceDevice::write(), once); every axis gets its
+  /// Σ, with a drive or not (before the first accepted sample, at the held axis values:
+  /// write() gates that period, whose sample is not valid). A non-finite wrench is mapped as
+  /// it is (counted in non_finite_wrenches): its τ reaches write(), whose non-finite trip
+  /// latches the safe state.
   void torques_for(std::span<const core::Wrench> link_wrenches, AxisVector& tau) noexcept;
 
   /// The last sample() result (default-constructed with q = 0 before the first call).

@@ -1,6 +1,6 @@
 #pragma once
 /// @file managed_device.hpp
-/// ManagedDevice: hal::Device for the managed CANopen stack (DeviceConfig::canopen.managed;
+/// ManagedDevice: hal::ImpedanceDevice for the managed CANopen stack (DeviceConfig::canopen.managed;
 /// docs/protocol.md §9–§16, docs/safety.md). It owns the CanopenMaster (NMT start-up,
 /// heartbeats both ways, EMCY log, one Cia402Master per drive) and the SafetySupervisor with
 /// its DeviceLifecycle, configured at construction (kUnconfigured → kInactive). One period:
@@ -12,7 +12,7 @@
 ///                 overruns, bus off, I/O errors: a fault latches the safe state in this very
 ///                 period); a pending re-arm; the automatic activation; the drives' CiA 402
 ///                 target from the lifecycle; entering kActive restarts the soft start;
-///   write:        Device::write() gates (torque_allowed(): lifecycle kActive and the axis's
+///   write:        ImpedanceDevice::write() gates (torque_allowed(): lifecycle kActive and the axis's
 ///                 drive master allows torque) and clamps; then each drive's RPDO
 ///                 (controlword + that target torque).
 
@@ -20,13 +20,13 @@
 #include <cstdint>
 #include <memory>
 
-#include "numen/hal/device/device.hpp"
+#include "numen/hal/device/impedance_device.hpp"
 #include "numen/hal/device/safety_supervisor.hpp"
 
 namespace numen::hal {
 
-/// The managed CANopen stack behind hal::Device. Not thread safe.
-class ManagedDevice final : public Device {
+/// The managed CANopen stack behind hal::ImpedanceDevice. Not thread safe.
+class ManagedDevice final : public ImpedanceDevice {
  public:
   /// Keeps references: `instrument` and `bus` must outlive the device. Builds the
   /// CanopenMaster (`period_ns` > 0, the control period) and the SafetySupervisor (one axis
@@ -48,6 +48,7 @@ class ManagedDevice final : public Device {
   const CanopenMaster* canopen() const noexcept override { return master_.get(); }
   CanopenMaster* canopen() noexcept override { return master_.get(); }
   const SafetySupervisor* supervisor() const noexcept override { return supervisor_.get(); }
+  const FaultRecord* first_fault() const noexcept override { return supervisor_->first_fault(); }
 
  private:
   bool take_frame(const CanFrame& frame) noexcept override { return master_->on_frame(frame); }

@@ -2,7 +2,7 @@
 /// @file safety_supervisor.hpp
 /// SafetySupervisor: the watchdogs and plausibility checks of one device, the fault log, and
 /// the DeviceLifecycle they drive (whose torque_allowed() is the lifecycle part of the torque
-/// gate in hal::Device::write(), the one place that gates and clamps axis torques). Once per control period it is given
+/// gate in hal::ImpedanceDevice::write(), the one place that gates and clamps axis torques). Once per control period it is given
 /// what the period's reads found (encoder freshness and sample checks, heartbeat consumers,
 /// EMCY count, CiA 402 drive states, loop overrun, bus state) and decides whether the safe
 /// state latches. The rules (see docs/protocol.md, "Safety supervision"):
@@ -20,7 +20,7 @@
 ///    N-period timeout only rejects the sample (the InstrumentDevice holds the last accepted
 ///    value); an isolated overrun only counts. Counted in counters().
 ///  - Safe state sequence: period k detects → torque_allowed() is false from the same period
-///    (commanded_torque_zero(); Device::write() sends zeros) and drive_target() is
+///    (commanded_torque_zero(); ImpedanceDevice::write() sends zeros) and drive_target() is
 ///    kDisabled (the caller requests it from its Cia402Master, whose next update sends disable
 ///    voltage) → kFault once every drive reports disabled, or after safe_stop_timeout_periods
 ///    (recorded as kSafeStopTimeout). Only rearm() leaves kFault, to kInactive, and only when
@@ -63,9 +63,12 @@ enum class FaultCause : std::uint8_t {
   kEncoderJump,      ///< An encoder value moved faster than the axis's max speed allows.
   kOutOfRange,       ///< An encoder value outside the axis's [min, max].
   kNonFinite,        ///< An encoder value that is NaN or infinite.
-  kNonFiniteTorque,  ///< A NaN or infinite axis torque reached the gate (Device::write(),
+  kNonFiniteTorque,  ///< A NaN or infinite axis torque reached the gate (ImpedanceDevice::write(),
                      ///< trip_non_finite_torque()).
   kSafeStopTimeout,  ///< The drives did not report disabled within safe_stop_timeout_periods.
+  kForceOutOfRange,  ///< Admittance: a force/torque reading outside the sensor's range
+                     ///< (AdmittanceDevice; SampleFault::kOutOfRange).
+  kForceTimeout,     ///< Admittance: no valid force reading for force_timeout_periods.
 };
 
 /// Short English name of a FaultCause (static string), e.g. "encoder timeout".
@@ -84,6 +87,8 @@ const char* to_string(FaultCause cause) noexcept;
 /// | kBusOff | 0 | BusState as a number |
 /// | kIoError, kNonFiniteTorque | 0 / axis | 0 |
 /// | kSafeStopTimeout | first drive not disabled | periods waited |
+/// | kForceOutOfRange | 0 | the reading's FaultMask |
+/// | kForceTimeout | 0 | periods without a valid reading |
 /// | kBadInput | 0 | 0 |
 struct FaultRecord {
   FaultCause cause = FaultCause::kNone;  ///< What.
@@ -159,7 +164,7 @@ struct SafetyCounters {
 ///   frames → InstrumentDevice::sample(), HeartbeatMonitor::poll(), Cia402Master::update()
 ///   → supervisor.update(now, inputs)
 ///   → for each drive: master.request(supervisor.drive_target())
-///   → compute torques; Device::write(tau): zeros unless torque_allowed() (and the drive's
+///   → compute torques; ImpedanceDevice::write(tau): zeros unless torque_allowed() (and the drive's
 ///     master allows torque), each clamped to ±max_torque; a NaN trips
 ///     trip_non_finite_torque()
 ///   → sent in this period.
@@ -193,7 +198,7 @@ class SafetySupervisor {
   /// disabled, and updates the lifecycle. In kUnconfigured only the event baselines move.
   LifecycleUpdate update(std::int64_t now_ns, const SafetyInputs& inputs) noexcept;
 
-  /// A NaN or infinite torque reached the torque gate on `axis` (Device::write(), which sends
+  /// A NaN or infinite torque reached the torque gate on `axis` (ImpedanceDevice::write(), which sends
   /// zeros): records kNonFiniteTorque (id = axis) and latches the safe state at once.
   void trip_non_finite_torque(std::size_t axis) noexcept;
 

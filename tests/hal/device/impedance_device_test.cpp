@@ -1,9 +1,11 @@
-// Tests of numen/hal/device/device.hpp: the period's order through hal::Device (SYNC with its counter,
-// the protocol's frames read before the instrument's, read errors), the one gate and clamp of
-// Device::write() (no valid sample, shutdown, the implementation's per-axis permission, axes
-// without a drive, a non-finite torque, ±max_torque and the RPDO's range, the per mille sent),
-// the soft start (a linear ramp from the first open gate, 0 = unscaled), make_device()'s choice, and no allocation in a period of either implementation.
-#include "numen/hal/device/device.hpp"
+// Tests of numen/hal/device/impedance_device.hpp, with the period's order it takes from
+// hal::Device (device.hpp: SYNC with its counter, the protocol's frames read before the
+// instrument's, read errors): the one gate and clamp of ImpedanceDevice::write() (no valid
+// sample, shutdown, the implementation's per-axis permission, axes without a drive, a
+// non-finite torque, ±max_torque and the RPDO's range, the per mille sent), the soft start (a
+// linear ramp from the first open gate, 0 = unscaled), make_device()'s choice, and no
+// allocation in a period of either implementation.
+#include "numen/hal/device/impedance_device.hpp"
 
 #include <gtest/gtest.h>
 
@@ -32,9 +34,9 @@ const double kQ0[5] = {0.1, -0.2, 0.1, 0.5, 0.3};
 
 // A protocol whose permission per axis the test sets, taking frames on one COB-ID for itself
 // and recording what it is asked to send.
-class TestDevice final : public Device {
+class TestDevice final : public ImpedanceDevice {
  public:
-  TestDevice(InstrumentDevice& instrument, Bus& bus) : Device(instrument, bus) {
+  TestDevice(InstrumentDevice& instrument, Bus& bus) : ImpedanceDevice(instrument, bus) {
     allowed.fill(true);
   }
   DeviceSupervision supervise(std::int64_t, bool) noexcept override { return {}; }
@@ -94,7 +96,7 @@ struct Rig {
   TestDevice dev;
 };
 
-TEST(Device, BeginPeriodWritesSyncWithItsCounter1To240) {
+TEST(ImpedanceDevice, BeginPeriodWritesSyncWithItsCounter1To240) {
   Rig r;
   CanFrame f;
   for (int k = 1; k <= 241; ++k) {
@@ -106,7 +108,7 @@ TEST(Device, BeginPeriodWritesSyncWithItsCounter1To240) {
   }
 }
 
-TEST(Device, ReadGivesTheProtocolItsFramesFirstAndTheInstrumentTheRest) {
+TEST(ImpedanceDevice, ReadGivesTheProtocolItsFramesFirstAndTheInstrumentTheRest) {
   Rig r;
   CanFrame hb;
   encode_heartbeat(1, NmtState::kOperational, 0, hb);
@@ -120,7 +122,7 @@ TEST(Device, ReadGivesTheProtocolItsFramesFirstAndTheInstrumentTheRest) {
   EXPECT_TRUE(r.dev.read(kMs).read_error);
 }
 
-TEST(Device, WriteGatesEveryAxisWithoutAValidSampleOrAfterShutdown) {
+TEST(ImpedanceDevice, WriteGatesEveryAxisWithoutAValidSampleOrAfterShutdown) {
   Rig r;
   r.dev.read(0);  // no encoder frame: not valid
   ASSERT_FALSE(r.dev.sample().valid);
@@ -141,7 +143,7 @@ TEST(Device, WriteGatesEveryAxisWithoutAValidSampleOrAfterShutdown) {
   EXPECT_EQ(r.dev.torque_counters().writes, 3u);
 }
 
-TEST(Device, WriteGatesPerAxisOnThePermissionAndOnTheDrive) {
+TEST(ImpedanceDevice, WriteGatesPerAxisOnThePermissionAndOnTheDrive) {
   Rig r;
   r.answer_and_read(0);
   r.dev.allowed[TrocarKinematics::kPivotY] = false;
@@ -159,7 +161,7 @@ TEST(Device, WriteGatesPerAxisOnThePermissionAndOnTheDrive) {
   EXPECT_EQ(r.dev.last.per_mille, s.per_mille);  // the protocol encodes exactly this
 }
 
-TEST(Device, WriteClampsOnceToMaxTorqueAndCountsPerAxis) {
+TEST(ImpedanceDevice, WriteClampsOnceToMaxTorqueAndCountsPerAxis) {
   Rig r;
   r.answer_and_read(0);
   const double big = 1e3;
@@ -186,7 +188,7 @@ TEST(Device, WriteClampsOnceToMaxTorqueAndCountsPerAxis) {
   EXPECT_GE(expected, 2);
 }
 
-TEST(Device, TorqueLimitIsTheRpdoRangeWhenMaxTorqueIsBeyondIt) {
+TEST(ImpedanceDevice, TorqueLimitIsTheRpdoRangeWhenMaxTorqueIsBeyondIt) {
   AxisConfig a;
   a.rated_torque = 0.01;
   a.max_torque = 1.0;  // 100 000 per mille: beyond int16
@@ -199,7 +201,7 @@ TEST(Device, TorqueLimitIsTheRpdoRangeWhenMaxTorqueIsBeyondIt) {
   EXPECT_EQ(torque_limit(a), 0.2);
 }
 
-TEST(Device, NonFiniteTorqueOnAnAllowedAxisZeroesEveryAxisAndIsReported) {
+TEST(ImpedanceDevice, NonFiniteTorqueOnAnAllowedAxisZeroesEveryAxisAndIsReported) {
   Rig r;
   r.answer_and_read(0);
   const double nan = std::numeric_limits<double>::quiet_NaN();
@@ -218,7 +220,7 @@ TEST(Device, NonFiniteTorqueOnAnAllowedAxisZeroesEveryAxisAndIsReported) {
 
 // ---- soft start (DeviceConfig::soft_start_s): r = min(1, k dt / T) from the first open gate
 
-TEST(Device, SoftStartRampsTheClampedTorquesInLinearlyFromTheFirstOpenGate) {
+TEST(ImpedanceDevice, SoftStartRampsTheClampedTorquesInLinearlyFromTheFirstOpenGate) {
   Rig r(0.01);  // T = 10 periods of 1 ms
   const double big = 1e3;  // clamped to max_torque on pivot_x
   const std::vector<double> tau = {big, -0.05, 0.2, 0.0, 0.0};
@@ -253,7 +255,7 @@ TEST(Device, SoftStartRampsTheClampedTorquesInLinearlyFromTheFirstOpenGate) {
   EXPECT_EQ(r.dev.torque_counters().ramped_writes, 9u);  // r = 0.1 … 0.9
 }
 
-TEST(Device, SoftStartRunsOnThroughAGatedPeriodWithoutBeginningAgain) {
+TEST(ImpedanceDevice, SoftStartRunsOnThroughAGatedPeriodWithoutBeginningAgain) {
   Rig r(0.005);  // 5 periods
   const std::vector<double> tau = {0.1, 0.1, 0.1, 0.0, 0.0};
   r.answer_and_read(0);
@@ -278,7 +280,7 @@ TEST(Device, SoftStartRunsOnThroughAGatedPeriodWithoutBeginningAgain) {
   EXPECT_EQ(r.dev.torque_counters().soft_starts, 1u);
 }
 
-TEST(Device, SoftStartOfZeroSendsTheClampedTorquesUnscaled) {
+TEST(ImpedanceDevice, SoftStartOfZeroSendsTheClampedTorquesUnscaled) {
   Rig r;  // soft_start_s = 0: the hal default
   ASSERT_EQ(r.instrument.config().soft_start_s, 0.0);
   const std::vector<double> tau = {1e3, -0.0123456789, 0.2, 0.0, 0.0};
@@ -298,7 +300,7 @@ TEST(Device, SoftStartOfZeroSendsTheClampedTorquesUnscaled) {
   EXPECT_EQ(r.dev.torque_counters().ramped_writes, 0u);
 }
 
-TEST(Device, MakeDeviceFollowsTheConfiguredProtocol) {
+TEST(ImpedanceDevice, MakeDeviceFollowsTheConfiguredProtocol) {
   SimBus bus(SimBusSettings{});
   DeviceConfig m = make_default_trocar_config(1);
   m.canopen.managed = false;
@@ -324,7 +326,7 @@ TEST(Device, MakeDeviceFollowsTheConfiguredProtocol) {
 // Both protocols against the device emulator: begin_period, read, supervise, write over 2000
 // periods without one allocation; the managed stack reaches kActive and sends torque. A soft
 // start of 0.5 s puts the ramp's periods under the counter.
-TEST(Device, PeriodsOfBothProtocolsNeverAllocate) {
+TEST(ImpedanceDevice, PeriodsOfBothProtocolsNeverAllocate) {
   for (bool managed : {false, true}) {
     DeviceConfig c = make_default_trocar_config(1);
     c.canopen.managed = managed;

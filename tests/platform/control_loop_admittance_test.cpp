@@ -1,7 +1,8 @@
-// Tests of platform/admittance_loop: one period of an admittance device on a SimBus against
-// the emulated device (hal::AdmittanceEmulator) — the measured force drives the god-object,
-// the device is commanded its pose, a silent sensor latches the safe state.
-#include "numen/platform/admittance_loop.hpp"
+// Tests of platform::ControlLoop running an admittance device (hal::AdmittanceDevice) on a
+// SimBus against the emulated device (hal::AdmittanceEmulator): the measured force drives the
+// god-object, the device is commanded its pose, a silent sensor or overruns latch the safe
+// state with their hal::FaultCause, the re-arm waits for the cause to clear.
+#include "numen/platform/control_loop.hpp"
 
 #include <gtest/gtest.h>
 
@@ -13,6 +14,7 @@
 #include "numen/hal/emulation/admittance_emulator.hpp"
 #include "numen/hal/canopen/cia402.hpp"
 #include "numen/hal/transport/sim_bus.hpp"
+#include "numen/platform/monotonic_clock.hpp"
 
 namespace core = numen::core;
 namespace hal = numen::hal;
@@ -45,35 +47,49 @@ hal::DeviceConfig tracker() {
 }
 
 /// The loop, the emulated device and the bus of one test (latency 100 µs, phase 300 µs).
+/// The loop's settings with overruns supervised (a paced loop's).
+platform::ControlLoopSettings paced() {
+  platform::ControlLoopSettings s;
+  s.supervise_overruns = true;
+  return s;
+}
+
 struct Rig {
   core::Model model = ball_model();
   core::Data data = core::make_data(model);
   hal::SimBus bus{hal::SimBusSettings{100'000, 0.0, 0.0, 1, 256}};
   hal::AdmittanceEmulator emulator;
   hal::AdmittanceDevice device;
-  platform::AdmittanceLoop loop;
+  platform::ControlLoop loop;
   core::Pose hand;
   std::int64_t k = 0;
 
   explicit Rig(const hal::AdmittanceEmulatorSettings& s,
-               const platform::AdmittanceLoopSettings& loop_settings = {})
+               const hal::AdmittanceSettings& device_settings = {})
       : emulator(tracker(), hal::make_admittance_config(tracker()), s),
-        device(tracker(), hal::make_admittance_config(tracker()), hal::AxisVector::Zero(6)),
-        loop(model, data, bus.controller(), device, loop_settings) {
+        device(tracker(), hal::make_admittance_config(tracker()), bus.controller(),
+               hal::AxisVector::Zero(6), device_settings),
+        loop(model, data, device, paced()) {
     emulator.set_axis_values(hal::AxisVector::Zero(6));
   }
 
-  /// One period; `overran`: told to end_period as a paced loop's overrun wake-up.
-  const platform::AdmittanceReport& period(bool overran = false) {
+  /// One period; `late`: stamped with a deadline 10 periods in the past, so the loop's
+  /// statistics find it overran (the next period's supervision sees it, as a paced loop's).
+  const platform::PeriodReport& period(bool late = false) {
     const std::int64_t t = k++ * 1'000'000;
     emulator.set_hand(hand, core::Twist{});
     bus.set_time_ns(t);
-    loop.begin_period(t);
+    const std::int64_t now = platform::monotonic_now_ns();
+    if (late)
+      loop.begin_period(t, now - 10'000'000, now);
+    else
+      loop.begin_period(t, now + 10'000'000, now + 10'000'000);
     bus.set_time_ns(t + 100'000);
     emulator.poll(bus.device());
     bus.set_time_ns(t + 300'000);
-    return loop.end_period(t + 300'000, overran);
+    return loop.end_period(t + 300'000);
   }
+  hal::LifecycleState state() const { return loop.device().lifecycle(); }
 };
 
 hal::AdmittanceEmulatorSettings hand_settings() {
@@ -88,49 +104,51 @@ hal::AdmittanceEmulatorSettings hand_settings() {
 
 }  // namespace
 
-TEST(AdmittanceLoop, RefusesAModelThatIsNotInAdmittanceMode) {
+TEST(ControlLoopAdmittance, RefusesAModelThatIsNotInAdmittanceModeAndZeroTimeouts) {
   const core::Model m = ball_model(core::CouplingMode::kGodObject);
   core::Data d = core::make_data(m);
   hal::SimBus bus{hal::SimBusSettings{}};
-  hal::AdmittanceDevice dev(tracker(), hal::make_admittance_config(tracker()));
-  EXPECT_THROW(platform::AdmittanceLoop(m, d, bus.controller(), dev), std::invalid_argument);
-  const core::Model a = ball_model();
-  platform::AdmittanceLoopSettings s;
+  hal::AdmittanceDevice dev(tracker(), hal::make_admittance_config(tracker()), bus.controller());
+  EXPECT_THROW(platform::ControlLoop(m, d, dev), std::invalid_argument);
+  hal::AdmittanceSettings s;
   s.force_timeout_periods = 0;
-  EXPECT_THROW(platform::AdmittanceLoop(a, d, bus.controller(), dev, s), std::invalid_argument);
+  EXPECT_THROW(hal::AdmittanceDevice(tracker(), hal::make_admittance_config(tracker()),
+                                     bus.controller(), hal::AxisVector(), s),
+               std::invalid_argument);
 }
 
-TEST(AdmittanceLoop, TheHandPullsTheGodObjectAndTheDeviceFollowsIt) {
+TEST(ControlLoopAdmittance, TheHandPullsTheGodObjectAndTheDeviceFollowsIt) {
   Rig rig(hand_settings());
   rig.hand.position = Vec3(0.02, 0.0, 0.0);  // the hand 20 mm away along x
-  const platform::AdmittanceReport& first = rig.period();
+  const platform::PeriodReport& first = rig.period();
   EXPECT_TRUE(first.sample_valid);
   EXPECT_TRUE(first.activated);
   EXPECT_EQ(first.lifecycle, hal::LifecycleState::kActive);
   EXPECT_EQ(first.controlword, hal::Controlword::kEnableOperation);
-  EXPECT_NEAR(first.measured.force.x(), 4.0, 1e-3);  // 200 N/m × 20 mm
+  EXPECT_NEAR(first.feedback.force.x(), 4.0, 1e-3);  // 200 N/m × 20 mm
   for (int i = 0; i < 1500; ++i) rig.period();
   // Everything settles on the hand: god-object, set-points, device.
   EXPECT_NEAR(rig.data.bodies[0].position.x(), 0.02, 2e-4);
   EXPECT_NEAR(rig.device.setpoints()[0], 0.02, 2e-4);
   EXPECT_NEAR(rig.emulator.q()[0], 0.02, 2e-4);
-  EXPECT_LT(rig.loop.last_report().measured.force.norm(), 0.05);
-  EXPECT_EQ(rig.loop.counters().invalid_periods, 0u);
+  EXPECT_LT(rig.loop.last_report().feedback.force.norm(), 0.05);
+  EXPECT_EQ(rig.device.counters().invalid_periods, 0u);
+  EXPECT_FALSE(rig.loop.last_report().torque_commanded);
   EXPECT_EQ(rig.data.feedback_wrench.force.norm(), 0.0);
 }
 
-TEST(AdmittanceLoop, TheHandTurnsTheGodObjectThroughTheMeasuredTorque) {
+TEST(ControlLoopAdmittance, TheHandTurnsTheGodObjectThroughTheMeasuredTorque) {
   // Rotation path: hand torque → sensor frame → world about the COM → god-object → IK
   // (yaw, pitch, roll set-points) → the device turns with it.
   Rig rig(hand_settings());
   rig.hand.orientation = core::Quat(Eigen::AngleAxisd(0.3, Vec3::UnitZ())) *
                          core::Quat(Eigen::AngleAxisd(0.2, Vec3::UnitX()));
-  const platform::AdmittanceReport& first = rig.period();
+  const platform::PeriodReport& first = rig.period();
   // T = k_rot θu with θu the rotation vector from the device (identity) to the hand.
   const Vec3 theta_u = numen::core::quat_log(rig.hand.orientation);
   const double count = 1e-4;  // default torque_scale, N·m per count
-  EXPECT_LT((first.measured.torque - 0.05 * theta_u).norm(), count) << first.measured.torque;
-  EXPECT_GT(first.measured.torque.norm(), 0.015);
+  EXPECT_LT((first.feedback.torque - 0.05 * theta_u).norm(), count) << first.feedback.torque;
+  EXPECT_GT(first.feedback.torque.norm(), 0.015);
   for (int i = 0; i < 1500; ++i) rig.period();
   const double body_err =
       numen::core::quat_log(rig.hand.orientation * rig.data.bodies[0].orientation.conjugate())
@@ -143,18 +161,18 @@ TEST(AdmittanceLoop, TheHandTurnsTheGodObjectThroughTheMeasuredTorque) {
   const double dead_band = std::sqrt(3.0) * 0.5 * count / 0.05;
   EXPECT_LT(body_err, dead_band);
   EXPECT_LT(dev_err, dead_band + 1e-5);
-  EXPECT_LT(rig.loop.last_report().measured.torque.norm(), count);
+  EXPECT_LT(rig.loop.last_report().feedback.torque.norm(), count);
 }
 
-TEST(AdmittanceLoop, SilentSensorLatchesTheSafeStateAndRearmRecovers) {
+TEST(ControlLoopAdmittance, SilentSensorLatchesTheSafeStateAndRearmRecovers) {
   Rig rig(hand_settings());
   rig.hand.position = Vec3(0.01, 0.0, 0.0);
   for (int i = 0; i < 50; ++i) rig.period();
-  ASSERT_EQ(rig.loop.lifecycle().state(), hal::LifecycleState::kActive);
+  ASSERT_EQ(rig.state(), hal::LifecycleState::kActive);
   rig.emulator.set_sensor_silent(true);
   // Fresh for max_age (3 ms) after the last frames, then the timeout (3 periods).
   int periods = 0;
-  while (rig.loop.lifecycle().state() == hal::LifecycleState::kActive && periods < 20) {
+  while (rig.state() == hal::LifecycleState::kActive && periods < 20) {
     rig.period();
     ++periods;
   }
@@ -163,69 +181,77 @@ TEST(AdmittanceLoop, SilentSensorLatchesTheSafeStateAndRearmRecovers) {
   EXPECT_EQ(rig.loop.last_report().controlword, hal::Controlword::kShutdown);
   rig.period();
   rig.period();
-  EXPECT_EQ(rig.loop.lifecycle().state(), hal::LifecycleState::kFault);
+  EXPECT_EQ(rig.state(), hal::LifecycleState::kFault);
   EXPECT_FALSE(rig.emulator.enabled(0));  // the drives got shutdown
   const double x_held = rig.emulator.q()[0];
   for (int i = 0; i < 100; ++i) rig.period();
   EXPECT_EQ(rig.emulator.q()[0], x_held);                             // holds
   EXPECT_NEAR(rig.data.bodies[0].linear_velocity.norm(), 0.0, 1e-9);  // god-object braked
-  // Rearm refused while the sensor is silent; accepted once it is back.
-  EXPECT_EQ(rig.loop.rearm(), hal::LifecycleResult::kCausePresent);
+  ASSERT_NE(rig.device.first_fault(), nullptr);
+  EXPECT_EQ(rig.device.first_fault()->cause, hal::FaultCause::kForceTimeout);
+  // The re-arm is accepted but waits while the sensor is silent; it happens once it is back.
+  EXPECT_EQ(rig.loop.rearm(), platform::RearmResult::kAccepted);
+  for (int i = 0; i < 10; ++i) rig.period();
+  EXPECT_EQ(rig.state(), hal::LifecycleState::kFault);
+  EXPECT_TRUE(rig.loop.rearm_pending());
   rig.emulator.set_sensor_silent(false);
   rig.period();
-  EXPECT_EQ(rig.loop.rearm(), hal::LifecycleResult::kOk);
   rig.period();
-  EXPECT_EQ(rig.loop.lifecycle().state(), hal::LifecycleState::kActive);
+  EXPECT_EQ(rig.state(), hal::LifecycleState::kActive);
+  EXPECT_FALSE(rig.loop.rearm_pending());
+  EXPECT_EQ(rig.device.first_fault(), nullptr) << "the re-arm clears the first fault";
   for (int i = 0; i < 1500; ++i) rig.period();
   EXPECT_NEAR(rig.emulator.q()[0], 0.01, 2e-4);
 }
 
 // overrun_limit consecutive overruns latch the safe state (cause kOverruns), as the impedance
-// loop's supervisor; fewer, or a streak broken by an on-time period, do not; the re-arm waits
-// for an on-time period. The sensor's own faults keep their cause.
-TEST(AdmittanceLoop, ConsecutiveOverrunsLatchTheSafeState) {
-  platform::AdmittanceLoopSettings settings;
+// stack's supervisor; fewer, or a streak broken by an on-time period, do not; the re-arm waits
+// for an on-time period. The sensor's own faults keep their cause. A late period is seen by
+// the next period's supervision (the loop's statistics judge a period when it ends).
+TEST(ControlLoopAdmittance, ConsecutiveOverrunsLatchTheSafeState) {
+  hal::AdmittanceSettings settings;
   settings.overrun_limit = 2;
   Rig rig(hand_settings(), settings);
   rig.hand.position = Vec3(0.01, 0.0, 0.0);
   for (int i = 0; i < 50; ++i) rig.period();
-  ASSERT_EQ(rig.loop.lifecycle().state(), hal::LifecycleState::kActive);
+  ASSERT_EQ(rig.state(), hal::LifecycleState::kActive);
   for (int i = 0; i < 10; ++i) EXPECT_FALSE(rig.period(i % 2 == 0).entered_safe_stop) << i;
-  EXPECT_EQ(rig.loop.counters().overruns, 5u);
+  EXPECT_EQ(rig.loop.statistics().summary().overruns, 5);
   EXPECT_FALSE(rig.period(true).entered_safe_stop);
-  const platform::AdmittanceReport& r = rig.period(true);
-  EXPECT_TRUE(r.overran);
+  EXPECT_FALSE(rig.period(true).entered_safe_stop) << "judged by the next period";
+  const platform::PeriodReport& r = rig.period(true);
   EXPECT_TRUE(r.entered_safe_stop);
-  EXPECT_EQ(r.cause, platform::AdmittanceFaultCause::kOverruns);
-  EXPECT_STREQ(platform::to_string(r.cause), "overruns");
+  ASSERT_NE(rig.device.first_fault(), nullptr);
+  EXPECT_EQ(rig.device.first_fault()->cause, hal::FaultCause::kOverruns);
+  EXPECT_STREQ(hal::to_string(rig.device.first_fault()->cause), "overruns");
   EXPECT_EQ(r.controlword, hal::Controlword::kShutdown);
   EXPECT_FALSE(r.driven);
   rig.period(true);
   rig.period(true);  // still late: the drives disabled, the cause present
-  EXPECT_EQ(rig.loop.lifecycle().state(), hal::LifecycleState::kFault);
-  EXPECT_EQ(rig.loop.rearm(), hal::LifecycleResult::kCausePresent);
-  rig.period();  // on time
-  EXPECT_EQ(rig.loop.rearm(), hal::LifecycleResult::kOk);
+  EXPECT_EQ(rig.state(), hal::LifecycleState::kFault);
+  EXPECT_EQ(rig.loop.rearm(), platform::RearmResult::kAccepted);
+  rig.period(true);
+  EXPECT_EQ(rig.state(), hal::LifecycleState::kFault) << "the re-arm waits for an on-time period";
+  rig.period();  // on time: the next period's supervision finds no overrun
   rig.period();
-  EXPECT_EQ(rig.loop.lifecycle().state(), hal::LifecycleState::kActive);
+  EXPECT_EQ(rig.state(), hal::LifecycleState::kActive);
 
   // Without a limit (the default) overruns are only counted.
   Rig counted(hand_settings());
   for (int i = 0; i < 100; ++i) EXPECT_FALSE(counted.period(i >= 20).entered_safe_stop) << i;
-  EXPECT_EQ(counted.loop.counters().overruns, 80u);
-  EXPECT_EQ(counted.loop.lifecycle().state(), hal::LifecycleState::kActive);
+  EXPECT_EQ(counted.loop.statistics().summary().overruns, 80);
+  EXPECT_EQ(counted.state(), hal::LifecycleState::kActive);
 
   // A silent sensor's latch names the timeout.
   Rig silent(hand_settings(), settings);
   for (int i = 0; i < 50; ++i) silent.period();
   silent.emulator.set_sensor_silent(true);
-  platform::AdmittanceFaultCause cause = platform::AdmittanceFaultCause::kNone;
-  for (int i = 0; i < 20 && cause == platform::AdmittanceFaultCause::kNone; ++i)
-    cause = silent.period().cause;
-  EXPECT_EQ(cause, platform::AdmittanceFaultCause::kForceTimeout);
+  for (int i = 0; i < 20 && silent.device.first_fault() == nullptr; ++i) silent.period();
+  ASSERT_NE(silent.device.first_fault(), nullptr);
+  EXPECT_EQ(silent.device.first_fault()->cause, hal::FaultCause::kForceTimeout);
 }
 
-TEST(AdmittanceLoop, PeriodsDoNotAllocate) {
+TEST(ControlLoopAdmittance, PeriodsDoNotAllocate) {
   Rig rig(hand_settings());
   rig.period();
   numen::test::AllocationGuard guard;
@@ -237,8 +263,8 @@ TEST(AdmittanceLoop, PeriodsDoNotAllocate) {
 }
 
 // The overrun supervision's periods too: streaks, the latch, the safe stop, the re-arm.
-TEST(AdmittanceLoop, OverrunLatchAndRearmDoNotAllocate) {
-  platform::AdmittanceLoopSettings settings;
+TEST(ControlLoopAdmittance, OverrunLatchAndRearmDoNotAllocate) {
+  hal::AdmittanceSettings settings;
   settings.overrun_limit = 2;
   Rig rig(hand_settings(), settings);
   rig.hand.position = Vec3(0.01, 0.0, 0.0);
@@ -256,7 +282,7 @@ TEST(AdmittanceLoop, OverrunLatchAndRearmDoNotAllocate) {
 // set_step_function (the multirate device period, docs/multirate.md): the loop calls it once
 // per period instead of core::step, with the measured wrench in data.device_wrench, and
 // commands the device to where it left the held body; null restores core::step.
-TEST(AdmittanceLoop, AStepFunctionReplacesCoreStep) {
+TEST(ControlLoopAdmittance, AStepFunctionReplacesCoreStep) {
   Rig rig(hand_settings());
   struct Seen {
     core::Data* data = nullptr;
@@ -273,7 +299,7 @@ TEST(AdmittanceLoop, AStepFunctionReplacesCoreStep) {
       },
       &seen);
   rig.hand.position = Vec3(0.02, 0.0, 0.0);  // 200 N/m × 20 mm along x
-  const platform::AdmittanceReport& r = rig.period();
+  const platform::PeriodReport& r = rig.period();
   ASSERT_TRUE(r.driven);
   EXPECT_EQ(seen.calls, 1);
   EXPECT_NEAR(seen.force.x(), 4.0, 1e-3);

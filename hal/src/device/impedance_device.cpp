@@ -1,0 +1,90 @@
+/// @file impedance_device.cpp
+/// hal::ImpedanceDevice: the one gate and clamp of the axis torques; make_device().
+
+#include "numen/hal/device/impedance_device.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "numen/hal/device/managed_device.hpp"
+#include "numen/hal/device/minimal_device.hpp"
+
+namespace numen::hal {
+
+ImpedanceDevice::ImpedanceDevice(InstrumentDevice& instrument, Bus& bus)
+    : Device(bus), instrument_(&instrument) {
+  sent_.torque = AxisVector::Zero(instrument.num_axes());
+  const DeviceConfig& c = instrument.config();
+  // validate() bounds both; a hand-built config outside them gets no ramp rather than r = 0.
+  if (std::isfinite(c.soft_start_s) && c.soft_start_s > 0.0 && c.control_period_s > 0.0)
+    ramp_step_ = c.control_period_s / c.soft_start_s;
+}
+
+IoStatus ImpedanceDevice::write(std::span<const double> torques, std::int64_t now_ns) noexcept {
+  const DeviceConfig& config = instrument_->config();
+  const int n = instrument_->num_axes();
+  ++torque_counters_.writes;
+  sent_.per_mille = {};
+  sent_.clamped = 0;
+  sent_.gated = true;
+  // The gate: this period's sample, no shutdown, and per axis the protocol's permission.
+  const bool open = sample().valid && !shutting_down();
+  bool any_allowed = false;
+  int non_finite_axis = -1;
+  for (int i = 0; i < n; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    const double tau = k < torques.size() ? torques[k] : 0.0;
+    const bool allowed = open && config.axes[k].has_drive() && torque_allowed(i);
+    sent_.torque[i] = allowed ? tau : 0.0;
+    any_allowed = any_allowed || allowed;
+    if (allowed && !std::isfinite(tau) && non_finite_axis < 0) non_finite_axis = i;
+  }
+  if (non_finite_axis >= 0) {
+    sent_.torque.setZero();
+    ++torque_counters_.non_finite;
+    on_non_finite_torque(non_finite_axis);
+    any_allowed = false;
+  }
+  // The soft start: r = min(1, k · dt / T) in the k-th write since torque was enabled.
+  if (ramp_step_ > 0.0) {
+    if (ramp_writes_ < 0 && any_allowed) {
+      ramp_writes_ = 0;
+      ++torque_counters_.soft_starts;
+    }
+    if (ramp_writes_ >= 0 && static_cast<double>(ramp_writes_) * ramp_step_ < 1.0) ++ramp_writes_;
+    sent_.ramp = ramp_writes_ < 0 ? 0.0
+                                   : std::min(1.0, static_cast<double>(ramp_writes_) * ramp_step_);
+    if (any_allowed && sent_.ramp < 1.0) ++torque_counters_.ramped_writes;
+  }
+  // The clamp: |τ_i| <= torque_limit(axis i) (max_torque, within the RPDO's range), then r.
+  for (int i = 0; i < n && any_allowed; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    const AxisConfig& a = config.axes[k];
+    const double lim = torque_limit(a);
+    double& t = sent_.torque[i];
+    if (t > lim || t < -lim) {
+      t = std::clamp(t, -lim, lim);
+      ++sent_.clamped;
+      ++torque_counters_.axis_saturations[k];
+    }
+    t *= sent_.ramp;
+    sent_.per_mille[k] = torque_per_mille(a, t);
+  }
+  sent_.gated = !any_allowed;
+  torque_counters_.saturations += static_cast<std::uint64_t>(sent_.clamped);
+  if (sent_.gated) ++torque_counters_.gated_writes;
+  const IoStatus s = send(sent_, now_ns);
+  note(s);
+  return s;
+}
+
+std::unique_ptr<ImpedanceDevice> make_device(InstrumentDevice& instrument, Bus& bus,
+                                             std::int64_t period_ns,
+                                             const DeviceSettings& settings) {
+  if (instrument.config().canopen.managed) {
+    return std::make_unique<ManagedDevice>(instrument, bus, period_ns, settings);
+  }
+  return std::make_unique<MinimalDevice>(instrument, bus);
+}
+
+}  // namespace numen::hal
