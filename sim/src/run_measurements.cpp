@@ -16,7 +16,6 @@
 namespace numen::sim {
 namespace {
 
-
 /// Deepest contact (m) involving `body` among data's contacts; 0 if none.
 /// `count` receives their number, `deepest_index` the index of the deepest (unchanged if none).
 double deepest_contact_of(const core::Data& data, int body, int* count = nullptr,

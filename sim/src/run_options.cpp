@@ -37,7 +37,6 @@ std::size_t in_memory_trace_capacity(std::int64_t periods) {
 
 namespace {
 
-
 /// Refuses options that this run would not apply (InputError naming the option): nothing a
 /// user asks for is dropped without a word.
 void check_option_values(const Scene& scene, const RunOptions& options) {
