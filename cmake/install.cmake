@@ -122,7 +122,8 @@ numen_install_headers(${PROJECT_SOURCE_DIR}/sim/include
   numen/sim/input_error.hpp numen/sim/jigsaws.hpp
   numen/sim/multirate_run.hpp
   numen/sim/obj_mesh.hpp numen/sim/pointer_path.hpp numen/sim/run.hpp
-  numen/sim/run_figures.hpp numen/sim/run_verdict.hpp numen/sim/scene.hpp
+  numen/sim/run_figures.hpp numen/sim/run_options.hpp numen/sim/run_summary.hpp
+  numen/sim/run_verdict.hpp numen/sim/scene.hpp
   numen/sim/scene_info.hpp numen/sim/scripted_path.hpp numen/sim/sdo_session.hpp
   numen/sim/shipped_files.hpp
   numen/sim/simulated_instrument.hpp numen/sim/study_accuracy.hpp

@@ -12,6 +12,7 @@
 #include "numen/platform/monotonic_clock.hpp"
 #include "numen/platform/periodic_timer.hpp"
 #include "numen/sim/input_error.hpp"
+#include "numen/sim/run.hpp"
 #include "numen/sim/simulated_instrument.hpp"
 
 namespace numen::sim {

@@ -5,7 +5,7 @@
 #include <cmath>
 #include <utility>
 
-#include "numen/sim/run.hpp"
+#include "numen/sim/run_summary.hpp"
 
 namespace numen::sim {
 

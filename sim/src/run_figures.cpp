@@ -5,7 +5,7 @@
 
 #include <array>
 
-#include "numen/sim/run.hpp"
+#include "numen/sim/run_summary.hpp"
 #include "numen/sim/run_verdict.hpp"
 
 namespace numen::sim {

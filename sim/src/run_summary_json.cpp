@@ -5,8 +5,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "numen/sim/run.hpp"
 #include "numen/sim/run_figures.hpp"
+#include "numen/sim/run_summary.hpp"
 
 namespace numen::sim {
 

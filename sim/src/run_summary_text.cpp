@@ -8,8 +8,8 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "numen/sim/run.hpp"
 #include "numen/sim/run_figures.hpp"
+#include "numen/sim/run_summary.hpp"
 
 namespace numen::sim {
 namespace {

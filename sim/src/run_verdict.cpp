@@ -7,7 +7,7 @@
 #include <cstdio>
 #include <string>
 
-#include "numen/sim/run.hpp"
+#include "numen/sim/run_summary.hpp"
 
 namespace numen::sim {
 

@@ -7,7 +7,7 @@
 #include <utility>
 
 #include "numen/platform/monotonic_clock.hpp"
-#include "numen/sim/run.hpp"
+#include "numen/sim/run_summary.hpp"
 #include "numen/sim/view_scene.hpp"
 
 namespace numen::sim {

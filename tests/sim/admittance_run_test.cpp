@@ -20,6 +20,7 @@
 #include "numen/platform/monotonic_clock.hpp"
 #include "numen/sim/device_process.hpp"
 #include "numen/sim/input_error.hpp"
+#include "numen/sim/run.hpp"
 #include "numen/sim/run_verdict.hpp"
 #include "numen/sim/scene.hpp"
 #include "numen/sim/view_recording.hpp"

@@ -8,8 +8,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "numen/sim/run.hpp"
 #include "numen/sim/run_figures.hpp"
+#include "numen/sim/run_summary.hpp"
 #include "run_summary_samples.hpp"
 
 namespace {

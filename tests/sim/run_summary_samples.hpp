@@ -2,7 +2,7 @@
 // Run summaries that switch on every conditional part of the summaries (shared by the tests of
 // run_figures, run_summary_text and run_summary_json): between them, every figure of
 // run_figures() is printed in the text.
-#include "numen/sim/run.hpp"
+#include "numen/sim/run_summary.hpp"
 
 namespace numen::test {
 

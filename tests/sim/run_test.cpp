@@ -955,7 +955,7 @@ TEST(RunBadBus, CorruptedAndLostFramesAreRejectedWithoutHarm) {
 
 }  // namespace
 
-// --record and --bus log: (run.hpp BusChoice): a recorded run replayed from
+// --record and --bus log: (run_options.hpp BusChoice): a recorded run replayed from
 // its own candump log drives the controller to the same result, bit for bit.
 TEST(RunBusLog, RecordedRunReplaysBitIdentically) {
   NUMEN_REQUIRE_ARTICULATION();
@@ -1151,7 +1151,7 @@ TEST(RunBusLog, BadBusSpecAndBadLogAreClearErrors) {
   }
 }
 
-// RunOptions::rt (run.hpp): the real-time setup is applied on the running
+// RunOptions::rt (run_options.hpp): the real-time setup is applied on the running
 // thread and reported step by step; a step that fails (a CPU that does not
 // exist) is reported without stopping the run, unless strict. Run in its own
 // thread so the test runner's scheduling and affinity are left alone.

@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "numen/sim/run.hpp"
+#include "numen/sim/run_summary.hpp"
 
 namespace {
 

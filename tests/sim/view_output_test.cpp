@@ -5,7 +5,7 @@
 #include <gtest/gtest.h>
 
 #include "numen/platform/monotonic_clock.hpp"
-#include "numen/sim/run.hpp"
+#include "numen/sim/run_summary.hpp"
 #include "numen/sim/view_scene.hpp"
 #include "temp_dir.hpp"
 

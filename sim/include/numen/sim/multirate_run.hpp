@@ -19,7 +19,7 @@
 
 namespace numen::sim {
 
-struct RunSummary;  // run.hpp
+struct RunSummary;  // run_summary.hpp
 
 /// A scene's multirate god-object wired for a run. Empty (enabled() false) for a single-rate
 /// scene; then every member does nothing.
