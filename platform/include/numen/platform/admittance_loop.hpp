@@ -1,7 +1,7 @@
 #pragma once
 /// @file admittance_loop.hpp
 /// One control period of an admittance device (paper Fig. 2 note; docs/dynamics.md
-/// "Admittance devices", docs/protocol.md "Admittance devices"):
+/// "Admittance devices", docs/protocol.md):
 ///   begin_period: SYNC on the bus;
 ///   end_period:   read every pending frame → force sensor TPDOs → check (fresh, in range)
 ///                 → DeviceLifecycle (a force reading missing or rejected for

@@ -1,7 +1,7 @@
 #pragma once
 /// @file control_loop.hpp
 /// One control period of numen (docs/architecture.md, "One encoder value, frame to torque
-/// frame"; docs/protocol.md "One control period"), the same for every protocol, through hal::Device:
+/// frame"; docs/protocol.md), the same for every protocol, through hal::Device:
 ///   begin_period: Device::begin_period — SYNC (+ the managed stack's NMT command due and
 ///                 controller heartbeat);
 ///   end_period:   Device::read (frames → decode → check → forward kinematics)

@@ -1,6 +1,7 @@
 #pragma once
 /// @file study_accuracy.hpp
-/// `numen study accuracy`: work-precision data per integrator (issue 6; docs/accuracy.md). For each time step h of a grid (default 1e-2 s … 1e-5 s, h = 10 ms / n),
+/// `numen study accuracy`: work-precision data per integrator (issue 6; docs/accuracy.md).
+/// For each time step h of a grid (default 1e-2 s … 1e-5 s, h = 10 ms / n),
 /// each integrator (linearly implicit Euler, symplectic Euler, linearised trapezoidal rule,
 /// linearised TR-BDF2)
 /// and each case, the position error (max and RMS, mm) and the orientation error (max and

@@ -1,6 +1,7 @@
 #pragma once
 /// @file study_stability.hpp
-/// `numen study stability`: stiff and extreme cases, one verdict per run (issue 6; docs/stability.md,
+/// `numen study stability`: stiff and extreme cases, one verdict per run (issue 6;
+/// docs/stability.md,
 /// "Stability: stiff and extreme cases"). Families of runs, each for the four integrators
 /// (linearly implicit Euler, symplectic Euler, linearised trapezoidal rule, linearised TR-BDF2):
 ///  - "coupling": one body on the coupling spring of Eq. 2 alone (no gravity, no contact),
