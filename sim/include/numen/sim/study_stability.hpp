@@ -1,8 +1,7 @@
 #pragma once
 /// @file study_stability.hpp
 /// `numen study stability`: stiff and extreme cases, one verdict per run (issue 6;
-/// docs/stability.md,
-/// "Stability: stiff and extreme cases"). Families of runs, each for the four integrators
+/// docs/stability.md). Families of runs, each for the four integrators
 /// (linearly implicit Euler, symplectic Euler, linearised trapezoidal rule, linearised TR-BDF2):
 ///  - "coupling": one body on the coupling spring of Eq. 2 alone (no gravity, no contact),
 ///    released at rest 10 mm from a fixed target; stiffness k 1e1…1e8 N/m × mass m 1e-3…1e2 kg ×
