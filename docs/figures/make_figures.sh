@@ -15,9 +15,9 @@ c=$(mktemp) && ./build/tests/numen_bench --benchmark_filter=Chain --benchmark_re
 d=$(mktemp) && ./build/tests/numen_bench --benchmark_filter=DeformableBall --benchmark_repetitions=5 --benchmark_report_aggregates_only=true --benchmark_out="$d" --benchmark_out_format=json > /dev/null && /usr/bin/python3 $out/plot_deformable_scaling.py "$d" $out/deformable_scaling.png && rm -f "$d"
 # Net solve against Eigen's solvers on one frozen step (docs/deformable.md; ~3.5 minutes)
 p=$(mktemp) && ./build/tests/numen_bench --benchmark_filter=NetPeer --benchmark_repetitions=5 --benchmark_enable_random_interleaving=true --benchmark_report_aggregates_only=true --benchmark_out="$p" --benchmark_out_format=json > /dev/null && /usr/bin/python3 $out/plot_net_solve_work_precision.py "$p" $out/net_solve_work_precision.png && rm -f "$p"
-# Accuracy: error against run time (docs/results.md; ~5 minutes; --quick for a look in seconds)
+# Accuracy: error against run time (docs/accuracy.md; ~5 minutes; --quick for a look in seconds)
 a=$(mktemp -d) && ./build/numen study accuracy --out "$a" && /usr/bin/python3 $out/plot_accuracy.py "$a" $out && rm -rf "$a"
-# Stability: stiff and extreme cases (docs/results.md; ~1 minute; --quick for a look in seconds)
+# Stability: stiff and extreme cases (docs/stability.md; ~1 minute; --quick for a look in seconds)
 s=$(mktemp -d) && ./build/numen study stability --out "$s" > /dev/null && /usr/bin/python3 $out/plot_stability.py "$s" $out && rm -rf "$s"
 # Multirate quality against the rate ratio, construction and default scenes (docs/multirate.md; ~10 s)
 /usr/bin/python3 $out/plot_multirate.py ./build/numen $out

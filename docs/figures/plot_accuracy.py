@@ -1,8 +1,8 @@
 #!/usr/bin/python3
-"""Plots of `numen study accuracy` (docs/results.md, "Accuracy: error against run time").
+"""Plots of `numen study accuracy` (docs/accuracy.md).
 
 usage: plot_accuracy.py DIR OUT_DIR
-Reads DIR/accuracy.csv (schema in docs/results.md) and writes
+Reads DIR/accuracy.csv (schema in docs/accuracy.md) and writes
 OUT_DIR/accuracy_work_precision.png (position and orientation error max against CPU time per
 simulated second, one panel per case, one line per integrator) and
 OUT_DIR/accuracy_convergence.png (position error max against the time step, with the

@@ -1,5 +1,5 @@
-"""Step time of articulated chains against their body count (docs/results.md,
-"Articulated god-objects"). Input: the JSON of
+"""Step time of articulated chains against their body count (docs/articulation.md,
+"Chain scaling"). Input: the JSON of
   numen_bench --benchmark_filter=Chain --benchmark_repetitions=3
               --benchmark_out=FILE --benchmark_out_format=json
 Usage: plot_articulation_scaling.py BENCH.json OUT.png"""

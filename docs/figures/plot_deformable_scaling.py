@@ -1,5 +1,5 @@
-"""Step time of a deformable ball against its node count (docs/results.md,
-"Deformable god-objects"). Input: the JSON of
+"""Step time of a deformable ball against its node count (docs/deformable.md,
+"Measured"). Input: the JSON of
   numen_bench --benchmark_filter=DeformableBall --benchmark_repetitions=5
               --benchmark_report_aggregates_only=true
               --benchmark_out=FILE --benchmark_out_format=json

@@ -1,5 +1,5 @@
 """End-to-end latency of the controller + device pair on vcan0 inside the HIL guest
-(docs/results.md, "Buses and hardware in the loop"). Input: the console log of
+(docs/hil.md, "Measured"). Input: the console log of
 `bash tests/hil/run.sh` (build-hil/build/hil-console.log), whose scenario
 run_device_pair prints its histogram as "HIL-CSV <scenario>,<bin lower edge us>,<count>"
 lines (tests/hil/lib.sh, e2e_histogram). End-to-end latency: from the SYNC written to the

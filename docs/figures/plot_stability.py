@@ -1,9 +1,9 @@
 #!/usr/bin/python3
-"""Stability maps of `numen study stability` (docs/results.md, "Stability: stiff and extreme cases").
+"""Stability maps of `numen study stability` (docs/stability.md).
 
 usage: plot_stability.py DIR OUT_DIR
 Reads DIR/stability_coupling.csv, stability_contact.csv, stability_boundary.csv (schema in
-docs/results.md) and writes into OUT_DIR:
+docs/stability.md) and writes into OUT_DIR:
   stability_coupling_undamped.png, stability_coupling_damped.png: stiffness k against mass m,
       one panel per integrator (rows) and time step (columns), colour = verdict, with the
       symplectic Euler's theoretical limit k = m (a/h)^2 (a = 2 undamped, 2(sqrt(1+z^2) - z) damped);

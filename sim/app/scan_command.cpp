@@ -1,6 +1,6 @@
 /// @file scan_command.cpp
 /// `numen scan`: the CANopen nodes on a bus (boot-ups and heartbeats heard) and their identity
-/// objects read by SDO (docs/protocol.md §19).
+/// objects read by SDO (docs/sdo.md).
 
 #include <cmath>
 #include <iostream>

@@ -1,5 +1,5 @@
 /// @file sdo_command.cpp
-/// `numen sdo`: one SDO read or write on a bus, for bench work (docs/protocol.md §19).
+/// `numen sdo`: one SDO read or write on a bus, for bench work (docs/sdo.md).
 
 #include <cctype>
 #include <charconv>

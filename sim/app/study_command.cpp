@@ -1,5 +1,6 @@
 /// @file study_command.cpp
-/// `numen study accuracy`, `numen study stability` (docs/results.md) and `numen study merge`
+/// `numen study accuracy`, `numen study stability` (docs/accuracy.md,
+/// docs/stability.md) and `numen study merge`
 /// (shards on a cluster, docs/studies.md).
 
 #include <unistd.h>

@@ -181,7 +181,7 @@ constexpr RunSummarySegment kLayout[] = {
     {"  drives:", set("managed"), set("drive_states")},
     {", {*}", set("managed"), {}, {}, "drive_states", " {*}"},
     {"\n", set("managed"), set("drive_states")},
-    {"  admittance protocol: SYNC, force/torque TPDOs, csp RPDOs (docs/protocol.md §18); "
+    {"  admittance protocol: SYNC, force/torque TPDOs, csp RPDOs (docs/protocol.md); "
      "lifecycle {lifecycle}, {faults} safe stop(s)\n",
      unset("managed"), set("admittance.enabled")},
     {"  canopen: minimal protocol (no start-up, no lifecycle)\n", unset("managed"),

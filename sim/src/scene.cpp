@@ -822,7 +822,7 @@ Scene load_scene(const std::string& path, const SceneOverrides& overrides) {
         "integrator trapezoidal with deformable nets: the rule is not L-stable, so the stiff node "
         "modes (light nodes on penalty contacts and ties) ring instead of being damped; at 1 ms "
         "the shipped probe's nodes went 2.1 mm into the post instead of 0.2 mm "
-        "(docs/results.md, accuracy). implicit-euler or tr-bdf2 (L-stable) are the integrators for nets");
+        "(docs/accuracy.md). implicit-euler or tr-bdf2 (L-stable) are the integrators for nets");
   warn_clamped_contacts(scene.model, scene.warnings);
   warn_yielding_coupling(scene.model, scene.warnings);
   parse_multirate(root, scene);

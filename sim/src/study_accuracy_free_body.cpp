@@ -1,6 +1,6 @@
 /// @file study_accuracy_free_body.cpp
 /// Case "free-body" of the accuracy study: the coupled rigid body in free space against the
-/// closed form of the damped oscillator (paper Eq. 1–2; docs/results.md, accuracy).
+/// closed form of the damped oscillator (paper Eq. 1–2; docs/accuracy.md).
 ///
 /// One body, no gravity, no contact, a fixed target. Translation: m ẍ + γ_t ẋ + k_t x = 0 per
 /// axis (x the offset from the target). Rotation about the body's principal axis z: the angle

@@ -258,7 +258,7 @@ TEST(TrBdf2, CoupledStepDoesNotAllocate) {
 
 namespace {
 
-/// Positions every 10 ms over 1 s of the accuracy study's wall (docs/results.md) without
+/// Positions every 10 ms over 1 s of the accuracy study's wall (docs/accuracy.md) without
 /// friction: a 10 mm, 0.1 kg sphere on its coupling spring (200 N/m, ζ 0.85) pulled along a
 /// quintic path 20 mm into the plane z = 0 (2e4 N/m, 10 N·s/m, onset δ0), inputs at t + h/2.
 std::vector<Vec3> frictionless_wall(double dt, double onset) {

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Builds the hardware-in-the-loop guest: a Debian kernel (vmlinuz) and an initramfs
 # (initramfs.cpio.gz) holding busybox, the CAN, evdev and uinput kernel modules, can-utils, numen's HIL programs
-# from BUILD_DIR and the scenario scripts. See docs/protocol.md, "Hardware in the loop".
+# from BUILD_DIR and the scenario scripts. See docs/hil.md.
 #
 # Usage: tests/hil/build_image.sh BUILD_DIR OUT_DIR
 #   BUILD_DIR: a numen build configured with -DNUMEN_BUILD_HIL=ON in which numen_hil_tests and

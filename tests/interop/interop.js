@@ -1,5 +1,5 @@
 'use strict';
-// numen against an independent CANopen stack (docs/protocol.md, "Interoperability with
+// numen against an independent CANopen stack (docs/sdo.md, "Interoperability with
 // node-canopen"). node-canopen plays the default scene's five nodes — CiA 402 drives with their
 // CiA 406 encoder on nodes 1-3, CiA 406 encoders on 4-5 — each built from the DCF the scene
 // gives its node ([[device.canopen.axis]] dcf: sim/scenes/devices/trocar_drive.dcf and
@@ -210,7 +210,7 @@ async function sdo(options, ptys) {
 // runs at a 10 ms control period (RUN_PERIOD), as the HIL suite's controller + device pairs do
 // (docs/hil.md "Control period"): at the default scene's 1 ms, the encoder answers must come
 // back through node's event loop and two pseudo-terminals within the 0.6 ms read phase, which
-// a shared machine does not give (round trip p99 7.8 ms measured, docs/protocol.md §22). A
+// a shared machine does not give (round trip p99 7.8 ms measured, docs/sdo.md). A
 // safe stop whose cause is the timing of a shared machine (numen's loop overrunning, a
 // heartbeat or encoder sample late because a process was not scheduled: the causes the
 // SerialPair tests set apart) is not a protocol failure; the run is then made once more, on a
@@ -316,7 +316,7 @@ async function run(options, ptys) {
 
 /** ms: node-canopen's SDO client timeout, from the request and again from each segment, and
  *  the longest wait for the boot-ups after READY. CiA 301 leaves the SDO timeout to the client;
- *  numen's own client allows 500 ms (docs/protocol.md §19). numen's server answers in the pass
+ *  numen's own client allows 500 ms (docs/sdo.md). numen's server answers in the pass
  *  of its loop that reads the request, so a transfer takes two pseudo-terminal hops and two
  *  process wake-ups: 0.4 ms median on a quiet machine. With stress-ng --cpu 2 beside other
  *  builds (load 15 on 2 cores) transfers took up to 1.6 s, and the 1000 ms this test had

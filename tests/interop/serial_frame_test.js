@@ -1,6 +1,6 @@
 'use strict';
 // The interop tests' framing (lib/serial_frame.js) against numen's own test vectors: the CRC
-// check value of crc16.hpp and the two frames on the line of docs/protocol.md §16, which
+// check value of crc16.hpp and the two frames on the line of docs/transports.md "Serial line", which
 // tests/hal/transport/serial_frame_test.cpp asserts on the C++ side.
 
 const test = require('node:test');
@@ -18,7 +18,7 @@ test('encoder TPDO of node 1 (0x181, 34 12 00 00) on the line', () => {
     assert.deepStrictEqual(line, hex('01 03 81 01 01 04 04 34 12 01 03 B0 66 00'));
 });
 
-test('decoder: the extended frame 0x1ABCDEF1 of docs/protocol.md §16', () => {
+test('decoder: the extended frame 0x1ABCDEF1 of docs/transports.md "Serial line"', () => {
     const d = new SerialFrameDecoder();
     const frames = d.feed(hex('11 01 F1 DE BC 1A 08 11 22 33 44 55 66 77 88 D3 E4 00'));
     assert.strictEqual(frames.length, 1);

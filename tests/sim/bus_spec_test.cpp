@@ -1,6 +1,6 @@
 // Tests of sim/bus_spec: parsing of `--bus` specs (every kind, and located errors for bad ones),
 // the acceptance filters of each end of the link from the shipped default scene's device (the
-// exact COB-ID sets of docs/protocol.md §2 and §9, minimal and managed), opening a real port
+// exact COB-ID sets of docs/protocol.md, docs/canopen.md, minimal and managed), opening a real port
 // (a serial line on a pseudo-terminal; SocketCAN's error naming the interface where the host
 // has no CAN) and wait_bus' timeout and readiness.
 #include "numen/sim/bus_spec.hpp"
@@ -124,7 +124,7 @@ TEST(BusSpec, ManagedFiltersAreExactlyTheIdsEachEndReads) {
   ASSERT_TRUE(dev.canopen.managed);
   ASSERT_EQ(dev.axes.size(), 5u);
   // Controller: encoder TPDOs 0x181–0x185, drive TPDOs 0x281–0x283, heartbeats 0x701–0x705,
-  // EMCY 0x081–0x085 (docs/protocol.md §9).
+  // EMCY 0x081–0x085 (docs/canopen.md).
   // The encoders' COB-IDs pass whole (remote requests and 29-bit frames of their numbers are
   // counted by the controller, not filtered out unseen).
   const std::set<std::uint32_t> ctl = exact_ids(numen::sim::controller_filters(dev), kEncoderIds);

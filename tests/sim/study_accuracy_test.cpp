@@ -1,6 +1,6 @@
 // Tests of sim/study_accuracy (`numen study accuracy`) on tiny grids: the closed-form case
 // converges at the theoretical order of each integrator, every case runs and compares, the
-// CSV files have the documented columns (docs/results.md), the order fit and the input checks.
+// CSV files have the documented columns (docs/accuracy.md), the order fit and the input checks.
 #include "numen/sim/study_accuracy.hpp"
 
 #include <gtest/gtest.h>

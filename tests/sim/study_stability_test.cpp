@@ -172,8 +172,8 @@ TEST(StudyStability, TrBdf2StaysBoundedOnTheContactCapacityPlateAt1ms) {
   // bounded but not passive there (E up to 1.3 × the input in the full run). TR-BDF2 measured
   // E ≤ 1.018 × the input on the quick run (not ≤ 1: the issue's goal is not met yet; the
   // contacts are linearised at the step's start, and BDF2 extrapolates with a = 1.21). At
-  // 10 ms (ω h ≈ 32) it crosses the penetration bound at step 6 (docs/results.md,
-  // "Stability", issue 23) — not asserted here.
+  // 10 ms (ω h ≈ 32) it crosses the penetration bound at step 6 (docs/stability.md,
+  // "TR-BDF2") — not asserted here.
   StabilityOptions o;
   o.quick = true;
   o.families = {"extreme"};
@@ -290,7 +290,7 @@ TEST(StudyStability, ShippedScenesStayBoundedWithAContactStiffnessOfOneTeraNewto
   // stiffness, at 1e12 N/m; implicit Euler. Before the core's contact floor the default scene's
   // tool was thrown away at 7–8 s (non-finite steps) and the endobag's net diverged. Every
   // contact run is stable. The coupling runs never roll a step back either, but two fail the
-  // verdict for reasons of the scene, not of the contacts (docs/results.md): the construction
+  // verdict for reasons of the scene, not of the contacts (docs/stability.md): the construction
   // game's held block, as deep as the hand, throws the others faster than 10 m/s, and the
   // endobag's net solve stops at its relative tolerance of a right-hand side the 1e12 N/m
   // coupling dominates, which tears the net.

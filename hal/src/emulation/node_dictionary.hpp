@@ -1,7 +1,7 @@
 #pragma once
 /// @file node_dictionary.hpp
 /// (internal) The CiA 301 communication objects of an emulated node's object dictionary and
-/// the rules the node applies to downloads into them (docs/protocol.md "DCF", "The emulated
+/// the rules the node applies to downloads into them (docs/sdo.md, docs/canopen.md "The emulated
 /// nodes"): PDO communication and mapping parameters with the CiA 301 sequence, COB-ID SYNC
 /// 0x1005, consumer heartbeat 0x1016, producer heartbeat 0x1017; and the CiA 402 drive
 /// objects a DCF configures (0x6060 modes of operation, 0x6072 max torque). A refused download

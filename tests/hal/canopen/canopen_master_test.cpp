@@ -250,7 +250,7 @@ TEST(CanopenMaster, ConstructionErrors) {
   EXPECT_THROW(CanopenMaster(config(), 0), std::invalid_argument);
 }
 
-// --- Configuration from DCFs (docs/protocol.md "DCF") ---------------------------------------
+// --- Configuration from DCFs (docs/sdo.md) ---------------------------------------
 
 std::shared_ptr<const numen::hal::Dcf> shipped_dcf(const char* name, std::uint8_t node) {
   return std::make_shared<const numen::hal::Dcf>(numen::hal::parse_dcf_file(

@@ -74,7 +74,7 @@ TEST(SocketCanEncode, FdFrameIsCanfdFrameWithFlags) {
 }
 
 TEST(SocketCanEncode, WorkedExampleOfTheProtocolDoc) {
-  // docs/protocol.md, "SocketCAN transport": encoder TPDO 0x181 = 1000 counts, little endian.
+  // docs/transports.md, "SocketCAN transport": encoder TPDO 0x181 = 1000 counts, little endian.
   CanFrame tpdo;
   tpdo.id = 0x181;
   tpdo.len = 4;

@@ -1,4 +1,4 @@
-# Scenario: bring-up over SDO on vcan0 (docs/protocol.md §19). `numen device` plays the default
+# Scenario: bring-up over SDO on vcan0 (docs/sdo.md). `numen device` plays the default
 # scene's five CANopen nodes (three drives, two encoders), left in pre-operational: no
 # controller starts them. `numen scan` must hear every node and read its identity by SDO
 # (device type profile 402 for the drives, 406 for the encoders, serial = node id, name), and

@@ -1,6 +1,6 @@
 'use strict';
 // A minimal CiA 402 power drive system state machine (CiA 402-2 / IEC 61800-7-201 §6.3, as
-// docs/protocol.md §14 reads it) on top of a node-canopen object dictionary: controlword
+// docs/canopen.md "CiA 402 drives" reads it) on top of a node-canopen object dictionary: controlword
 // 0x6040 in, statusword 0x6041 out, cyclic synchronous torque (modes of operation 0x6060 = 10):
 // target torque 0x6071 (per mille of the rated torque), clipped to max torque 0x6072,
 // reported in torque actual value 0x6077. The rated torque is motor rated torque 0x6076 where
@@ -23,7 +23,7 @@ const State = Object.freeze({
 });
 
 // Statusword of each state: the bits of the state (0-3, 5, 6), voltage enabled (4) where the
-// power stage is on, remote (9) always: the typical drive values of docs/protocol.md §14.
+// power stage is on, remote (9) always: the typical drive values of docs/canopen.md "CiA 402 drives".
 const STATUSWORD = Object.freeze({
     [State.NOT_READY]: 0x0200,
     [State.SWITCH_ON_DISABLED]: 0x0250,

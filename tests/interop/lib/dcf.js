@@ -4,7 +4,7 @@
 // node-canopen's Eds reads each object's DefaultValue and nothing of what makes a DCF a DCF:
 // it ignores ParameterValue (the configured value), [DeviceComissioning] (the node id) and
 // $NODEID expressions, and reads a 0-prefixed number as decimal. loadDcf() therefore first
-// rewrites the values numen reads differently (docs/protocol.md §20: `$NODEID`, `$NODEID+N`,
+// rewrites the values numen reads differently (docs/sdo.md: `$NODEID`, `$NODEID+N`,
 // `N+$NODEID`, octal `0NNN`) as plain numbers, lets Eds load that text, then writes every
 // ParameterValue over the object dictionary; applyParameterValues() does it again after an NMT
 // reset, which in node-canopen restores the DefaultValue of every VAR object (a configured
@@ -110,7 +110,7 @@ function isPdoMapping(index) {
 }
 
 /**
- * The number an integer value of a DCF stands for, as numen reads it (docs/protocol.md §20):
+ * The number an integer value of a DCF stands for, as numen reads it (docs/sdo.md):
  * decimal, 0x hexadecimal or 0-prefixed octal, optionally negative; `$NODEID`, `$NODEID+N`
  * and `N+$NODEID` (case-insensitive) with the node's id. Returns null for any other text (a
  * string value; node-canopen reads it as it is).

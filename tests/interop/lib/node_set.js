@@ -3,7 +3,7 @@
 // heartbeat, SDO server, PDO, SYNC, EMCY), one Device per DCF, on one serial line to numen.
 //
 // What this file adds on top of node-canopen, each for a CiA 301 / 402 / 406 behaviour numen's
-// master relies on (docs/protocol.md "Interoperability with node-canopen"):
+// master relies on (docs/sdo.md):
 // - the boot-up message (0x700 + node, 00) on entering pre-operational, which node-canopen
 //   6.2 does not send;
 // - the configured values restored after an NMT reset (dcf.js), or, for nodes a master is to

@@ -1,5 +1,5 @@
 'use strict';
-// numen's serial-line framing of CAN frames (docs/protocol.md §16, serial_frame.hpp), for the
+// numen's serial-line framing of CAN frames (docs/transports.md "Serial line", serial_frame.hpp), for the
 // node-canopen side of the interoperability tests.
 //
 // Payload (before stuffing), 8 + d bytes: flags u8 (CanFlag bits, 6-7 reserved = 0), id u32

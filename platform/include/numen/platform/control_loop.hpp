@@ -1,7 +1,7 @@
 #pragma once
 /// @file control_loop.hpp
 /// One control period of numen (docs/architecture.md, "One encoder value, frame to torque
-/// frame"; docs/protocol.md §3), the same for every protocol and both kinds of device, through
+/// frame"; docs/protocol.md), the same for every protocol and both kinds of device, through
 /// hal::Device. An impedance device (hal::ImpedanceDevice):
 ///   begin_period: Device::begin_period — SYNC (+ the managed stack's NMT command due and
 ///                 controller heartbeat);
@@ -11,7 +11,7 @@
 ///                 → map: the bound bodies' Eq. 8 wrenches carried to their links (Eq. 9),
 ///                 τ = Σ_l J_lᵀ w_l → ImpedanceDevice::write (gate and clamp, once; the torque frames).
 /// An admittance device (hal::AdmittanceDevice; paper Fig. 2 note; docs/dynamics.md
-/// "Admittance devices", docs/protocol.md §18):
+/// "Admittance devices", docs/protocol.md "Admittance devices"):
 ///   begin_period: Device::begin_period — SYNC;
 ///   end_period:   Device::read (force sensor TPDOs → the checked reading) → Device::supervise
 ///                 (force timeout, out of range, overruns latch the safe state)

@@ -2,8 +2,8 @@
 /// @file bus_spec.hpp
 /// The real buses of `numen run --bus` and `numen device --bus`: parsing of the spec
 /// ("can:IFACE", "serial:PATH[@BAUD]"), the acceptance filters each end of the link needs
-/// (from the device's COB-IDs, docs/protocol.md §2, §9, §13), opening the port (SocketCanBus,
-/// docs/protocol.md §11; SerialBus, §16) and waiting on it without spinning.
+/// (from the device's COB-IDs, docs/protocol.md, docs/canopen.md), opening the port (SocketCanBus,
+/// docs/transports.md; SerialBus, the same page) and waiting on it without spinning.
 #include <cstdint>
 #include <memory>
 #include <string>

@@ -4,7 +4,7 @@
 /// (SimulatedInstrument: DeviceEmulator with its CiA 301 node models, heartbeat producers,
 /// CiA 402 drives, encoders playing the scene's trajectory) as a process of its own on a real
 /// bus, so that `numen run --bus ...` in another process (or on another host) talks to it as
-/// to hardware (docs/protocol.md §3, §9; docs/hil.md).
+/// to hardware (docs/protocol.md, docs/canopen.md; docs/hil.md).
 ///
 /// Time: bus time is CLOCK_MONOTONIC ns (the transports stamp received frames with it);
 /// trajectory time 0 is the first SYNC received. The process sleeps in poll(2) on the bus's

@@ -25,7 +25,7 @@ struct Scene;
 struct BusChoice {
   /// "sim" (default): the scene's SimBus with the simulated instrument on its
   /// device port. "log:FILE": a candump log (can-utils `candump -l` format,
-  /// docs/protocol.md §12) replayed as the controller's input — no simulated
+  /// docs/transports.md) replayed as the controller's input — no simulated
   /// instrument; only the encoder TPDOs of the scene's axes are read (exact
   /// CanFilter per COB-ID) and records marked transmitted (" T") are skipped,
   /// so a log recorded with `record_path` replays the controller's input

@@ -1,6 +1,6 @@
 #pragma once
 /// @file sdo_session.hpp
-/// Bring-up over SDO (docs/protocol.md §19; `numen sdo`, `numen scan`): running one transfer
+/// Bring-up over SDO (docs/sdo.md; `numen sdo`, `numen scan`): running one transfer
 /// of hal::SdoClient to its end on a bus, and scanning a bus for CANopen nodes and their
 /// identities. Blocking and allocating: setup code, never in the control period.
 

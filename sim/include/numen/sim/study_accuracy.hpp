@@ -1,7 +1,7 @@
 #pragma once
 /// @file study_accuracy.hpp
-/// `numen study accuracy`: work-precision data per integrator (issue 6; docs/results.md
-/// "Accuracy"). For each time step h of a grid (default 1e-2 s … 1e-5 s, h = 10 ms / n),
+/// `numen study accuracy`: work-precision data per integrator (issue 6; docs/accuracy.md).
+/// For each time step h of a grid (default 1e-2 s … 1e-5 s, h = 10 ms / n),
 /// each integrator (linearly implicit Euler, symplectic Euler, linearised trapezoidal rule,
 /// linearised TR-BDF2)
 /// and each case, the position error (max and RMS, mm) and the orientation error (max and
@@ -30,7 +30,7 @@
 /// fed their time-dependent inputs (targets) at the step's middle t + h/2, the Euler schemes at the
 /// step's start t (what the control loop does): docs/dynamics.md. Study code: allocates,
 /// throws InputError for a scene that cannot be loaded; not real-time.
-/// Schema of the CSV files: docs/results.md, "Accuracy: error against run time".
+/// Schema of the CSV files: docs/accuracy.md.
 
 #include <cstdint>
 #include <functional>
@@ -169,7 +169,7 @@ std::string accuracy_shard_document(const AccuracyResult& result, const Accuracy
 /// shard file.
 AccuracyResult merge_accuracy_shards(const std::string& dir);
 
-/// The table of docs/results.md: case, integrator, observed and theoretical order, error
+/// The table of docs/accuracy.md: case, integrator, observed and theoretical order, error
 /// and CPU time at 1 ms; then the reference checks. Markdown.
 std::string format_accuracy_table(const AccuracyResult& result);
 

@@ -1,7 +1,7 @@
 #pragma once
 /// @file study_stability.hpp
-/// `numen study stability`: stiff and extreme cases, one verdict per run (issue 6; docs/results.md,
-/// "Stability: stiff and extreme cases"). Families of runs, each for the four integrators
+/// `numen study stability`: stiff and extreme cases, one verdict per run (issue 6;
+/// docs/stability.md). Families of runs, each for the four integrators
 /// (linearly implicit Euler, symplectic Euler, linearised trapezoidal rule, linearised TR-BDF2):
 ///  - "coupling": one body on the coupling spring of Eq. 2 alone (no gravity, no contact),
 ///    released at rest 10 mm from a fixed target; stiffness k 1e1…1e8 N/m × mass m 1e-3…1e2 kg ×
@@ -28,7 +28,7 @@
 ///    most penetration_factor × as deep as the hand went plus 1 mm, free bodies below 10 m/s,
 ///    joint drift below 5 mm.
 ///
-/// Verdict of a run (StabilityLimits; docs/results.md gives the reasons):
+/// Verdict of a run (StabilityLimits; docs/stability.md gives the reasons):
 ///  - stable: every step finite and accepted (core::Data::nonfinite_steps stays 0: the core's
 ///    rollback guard never fired), the energy E (kinetic + coupling, net-spring and tie potentials;
 ///    stored_energy(); the contacts' potential is bounded through the penetration) never above
@@ -182,10 +182,10 @@ std::string stability_shard_document(const StabilityResult& result,
 /// not a complete shard file.
 StabilityResult merge_stability_shards(const std::string& dir);
 
-/// The CSV header line of stability_<family>.csv (no newline); schema in docs/results.md.
+/// The CSV header line of stability_<family>.csv (no newline); schema in docs/stability.md.
 const std::string& stability_csv_header();
 
-/// Verdict tables of docs/results.md (Markdown): per family and integrator the number of runs
+/// Verdict tables of docs/stability.md (Markdown): per family and integrator the number of runs
 /// stable / diverged, the extreme cases one by one, and the boundary measurements.
 std::string format_stability_tables(const StabilityResult& result);
 

@@ -1,7 +1,7 @@
 #pragma once
 /// @file canopen_master.hpp
 /// CanopenMaster: the controller's side of the managed CANopen stack for one device's nodes
-/// (docs/protocol.md §3 and §9). It is the NMT master and heartbeat consumer of the nodes,
+/// (docs/protocol.md, docs/canopen.md). It is the NMT master and heartbeat consumer of the nodes,
 /// the controller's heartbeat producer, the EMCY consumer and the CiA 402 master of each drive:
 ///
 ///   start-up (once, and again on restart_startup()):

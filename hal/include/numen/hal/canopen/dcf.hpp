@@ -5,7 +5,7 @@
 /// sub-index of an ARRAY or RECORD ([1018sub2]), with its ParameterName, ObjectType,
 /// DataType, AccessType, DefaultValue, and in a DCF the configured ParameterValue — plus the
 /// [FileInfo], [DeviceInfo] and [DeviceComissioning] sections. numen reads them to configure a
-/// node over SDO at bring-up (dcf_configuration.hpp; docs/protocol.md "DCF").
+/// node over SDO at bring-up (dcf_configuration.hpp; docs/sdo.md).
 ///
 /// Parsed with libinih (no hand-written INI reader). What numen reads (CiA 306 §4):
 ///  - numbers in decimal, hexadecimal (0x…) or octal (leading 0), negative decimals for the

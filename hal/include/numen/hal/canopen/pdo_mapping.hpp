@@ -185,7 +185,7 @@ PdoMapping drive_rpdo_mapping();
 /// The drive RPDO numen sends to a CiA 402 drive in cyclic synchronous position mode (csp,
 /// modes of operation 8; CiA 402-2 §"Cyclic synchronous position mode"): controlword 0x6040
 /// (bytes 0–1), target position 0x607A (bytes 2–5, INTEGER32 counts); 6 bytes. Mapping 0x1600:
-/// 0x60400010, 0x607A0020. Used for admittance devices (docs/protocol.md §18).
+/// 0x60400010, 0x607A0020. Used for admittance devices (docs/protocol.md).
 PdoMapping csp_drive_rpdo_mapping();
 /// The drive TPDO a CiA 402 drive sends on SYNC: statusword 0x6041 (bytes 0–1), torque actual
 /// value 0x6077 (bytes 2–3); 4 bytes. Mapping 0x1A00: 0x60410010, 0x60770010.

@@ -12,7 +12,7 @@
 /// CiA 301), the abort codes with their standard names, and SdoClient, the client's state
 /// machine. Used at bring-up (configuration, `numen sdo`, `numen scan`), and allocation-free
 /// and non-blocking so that the loop may advance one transfer per period. No I/O here: the
-/// caller moves frames between the client and a Bus. See docs/protocol.md, "SDO".
+/// caller moves frames between the client and a Bus. See docs/sdo.md.
 
 #include <cstddef>
 #include <cstdint>

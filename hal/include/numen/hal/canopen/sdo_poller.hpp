@@ -1,6 +1,6 @@
 #pragma once
 /// @file sdo_poller.hpp
-/// Occasional SDO reads inside the control loop (docs/protocol.md "SDO in the loop"): a fixed
+/// Occasional SDO reads inside the control loop (docs/sdo.md "SDO in the loop"): a fixed
 /// list of objects (e.g. every node's error register 0x1001, a drive's statusword 0x6041),
 /// each read again every `every_periods` periods, through one SdoClient per node (CiA 301: one
 /// transfer per channel at a time; the reads of a node queue behind each other). The state

@@ -5,7 +5,7 @@
 /// controlled; numen commands it the god-object's pose through inverse kinematics, one CiA 402
 /// drive per axis in cyclic synchronous position mode (csp, modes of operation 8): controlword
 /// 0x6040 + target position 0x607A INTEGER32 counts in one 6-byte RPDO per axis
-/// (csp_drive_rpdo_mapping(), docs/protocol.md §18).
+/// (csp_drive_rpdo_mapping(), docs/protocol.md).
 /// Construction validates and may allocate/throw; every other call is noexcept, allocation
 /// free, lock free and never blocks.
 

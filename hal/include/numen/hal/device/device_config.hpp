@@ -40,7 +40,7 @@ int expected_axis_count(DeviceKind kind) noexcept;
 /// drive TPDO (statusword 0x6041 + torque actual value 0x6077) of a driven axis's node.
 inline constexpr std::uint32_t kTpdo2BaseCobId = 0x280;
 
-/// CANopen communication of one axis's node in the managed stack (docs/protocol.md §9): which
+/// CANopen communication of one axis's node in the managed stack (docs/canopen.md): which
 /// node it is, its heartbeat, and its static PDO mappings (CiA 301 §7.4.8; the COB-IDs of the
 /// encoder TPDO and the drive RPDO are AxisConfig::encoder_cob_id / drive_cob_id).
 /// Several axes may share a node (a multi-axis module); they must then agree on the heartbeat.
@@ -80,7 +80,7 @@ struct CanopenAxisConfig {
 struct CanopenConfig {
   /// true: the managed stack — NMT start-up, heartbeats both ways, EMCY, CiA 402 drives in cst
   /// with controlword + target torque RPDOs and statusword TPDOs, the device lifecycle and the
-  /// safety supervisor (docs/protocol.md §3, §9; docs/safety.md). false: the minimal protocol
+  /// safety supervisor (docs/canopen.md, docs/safety.md). false: the minimal protocol
   /// (SYNC, 4-byte encoder TPDOs, 2-byte torque RPDOs, no start-up) for encoders configured to
   /// start on their own and drives without a CiA 402 state machine.
   bool managed = true;

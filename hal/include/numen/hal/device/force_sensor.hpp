@@ -2,7 +2,7 @@
 /// @file force_sensor.hpp
 /// A 6-axis force/torque sensor on the bus (the handle of an admittance device, paper Fig. 2
 /// note): its two transmit PDOs, their static mappings, the device-side encoding and the
-/// controller-side decoder with its checks (docs/protocol.md §18).
+/// controller-side decoder with its checks (docs/protocol.md).
 ///
 /// Frames (numen's own convention, modelled on the analog inputs of CiA 404 measuring devices
 /// but with objects in the manufacturer-specific range 0x2000–0x5FFF of CiA 301 §7.4.1, since

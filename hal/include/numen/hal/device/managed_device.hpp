@@ -1,7 +1,7 @@
 #pragma once
 /// @file managed_device.hpp
 /// ManagedDevice: hal::ImpedanceDevice for the managed CANopen stack (DeviceConfig::canopen.managed;
-/// docs/protocol.md §9–§16, docs/safety.md). It owns the CanopenMaster (NMT start-up,
+/// docs/canopen.md, docs/safety.md). It owns the CanopenMaster (NMT start-up,
 /// heartbeats both ways, EMCY log, one Cia402Master per drive) and the SafetySupervisor with
 /// its DeviceLifecycle, configured at construction (kUnconfigured → kInactive). One period:
 ///   begin_period: SYNC, the NMT command due, the controller heartbeat;

@@ -1,7 +1,7 @@
 #pragma once
 /// @file minimal_device.hpp
 /// MinimalDevice: hal::ImpedanceDevice for the minimal protocol (DeviceConfig::canopen.managed = false;
-/// docs/protocol.md §1–§8): SYNC each period, one 4-byte position TPDO per axis from
+/// docs/protocol.md): SYNC each period, one 4-byte position TPDO per axis from
 /// self-starting encoders, one 2-byte torque RPDO (per mille of the rated torque) per axis
 /// with a drive. No NMT, heartbeats, EMCY or lifecycle: torque is allowed on every driven axis
 /// whenever the period's sample is valid (ImpedanceDevice::write() gates and clamps).

@@ -5,7 +5,7 @@
 /// gate in hal::ImpedanceDevice::write(), the one place that gates and clamps axis torques). Once per control period it is given
 /// what the period's reads found (encoder freshness and sample checks, heartbeat consumers,
 /// EMCY count, CiA 402 drive states, loop overrun, bus state) and decides whether the safe
-/// state latches. The rules (see docs/protocol.md, "Safety supervision"):
+/// state latches. The rules (see docs/safety.md):
 ///
 ///  - Latching causes (FaultCause): each moves kInactive / kActive to kSafeStop in the period
 ///    it is detected, is recorded with what, which axis / node / drive, a value, the time and

@@ -2,7 +2,7 @@
 /// @file device_emulator.hpp
 /// DeviceEmulator: the device side of an instrument on a bus. Used by simulated instruments
 /// and by tests in place of real CiA 406 encoders and CiA 402 drives. Two protocols, chosen by
-/// DeviceConfig::canopen.managed (docs/protocol.md §3, §9):
+/// DeviceConfig::canopen.managed (docs/protocol.md, docs/canopen.md):
 ///  - minimal: every encoder answers each SYNC with its 4-byte position TPDO; drives take
 ///    2-byte torque RPDOs. No NMT, no heartbeat.
 ///  - managed: one CiA 301 node per distinct node id (NmtNodeModel: boot-up message at power-on
@@ -24,7 +24,7 @@
 ///    0x6061, 0x6071, 0x6072, 0x6077 (process values kept current at each SYNC). Downloads
 ///    into them take effect at once — PDO COB-IDs and mappings (CiA 301 sequence enforced),
 ///    heartbeat period, the controller's consumer time, modes of operation, max torque — or are
-///    refused with their CiA 301 abort code (docs/protocol.md "The emulated nodes"). NMT reset
+///    refused with their CiA 301 abort code (docs/sdo.md). NMT reset
 ///    communication restores 0x1000–0x1FFF to the values of the configuration, reset node
 ///    every object.
 /// Fault-injection hooks for tests: kill() (the device stops reading and sending entirely),

@@ -13,7 +13,7 @@
 ///
 /// The pure conversions (encode_socketcan(), decode_socketcan(), to_kernel_filter(),
 /// decode_error_frame()) are free functions so they can be tested without a CAN-capable
-/// kernel. See docs/protocol.md, "SocketCAN transport".
+/// kernel. See docs/transports.md, "SocketCAN transport".
 
 #include <linux/can.h>
 
