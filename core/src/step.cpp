@@ -91,7 +91,7 @@ void run_step(const Model& model, Data& data, ContactWriter write, const void* c
   data.status = kStepOk;
   data.stages_run = 0;
   save_state(data);
-  impose_direct_target(model, data);  // clears SolverScratch::imposed; imposes with kStageDirectTarget
+  impose_direct_target(model, data);  // clears SolverScratch::imposed; imposes by the plan
   bool wrote = false;  // the caller's writer ran (and wrote the node contacts if it says so)
   if ((plan & kStageContacts) && !data.scratch->solver.contact_terms.empty()) {  // capacity.hpp
     data.contacts_dropped = 0;
@@ -117,7 +117,7 @@ void run_step(const Model& model, Data& data, ContactWriter write, const void* c
   }
   compute_forces(model, data);
   if (data.contacts_clamped > 0) ++data.contact_clamped_steps;  // body and node contacts
-  integrate(model, data);  // sets its bit, and kStageNetSolve or kStageJointSolve where it runs them
+  integrate(model, data);  // sets its bit, and kStageNetSolve or kStageJointSolve if run
   if constexpr (kWithArticulation) {
     if (plan & kStageJointDrift) measure_joint_drift(model, data);  // sets its bit
   }

@@ -64,7 +64,8 @@ TEST(StepStages, FinalizeStoresThePlanOnce) {
   core::Model unfinalized;
   EXPECT_EQ(unfinalized.stage_plan, 0u);
   for (LeanPart part : numen::test::lean_parts()) {
-    for (auto integ : {core::Integrator::kLinearlyImplicitEuler, core::Integrator::kSymplecticEuler}) {
+    for (auto integ :
+         {core::Integrator::kLinearlyImplicitEuler, core::Integrator::kSymplecticEuler}) {
       const core::Model m = lean_model(part, integ);
       EXPECT_EQ(m.stage_plan, core::compiled_stages(m)) << static_cast<int>(part);
     }
@@ -103,7 +104,8 @@ TEST(StepStages, MakeDataRefusesAMissingOrStalePlan) {
 
 TEST(StepStages, StepRunsExactlyTheCompiledStages) {
   for (LeanPart part : numen::test::lean_parts()) {
-    for (auto integ : {core::Integrator::kLinearlyImplicitEuler, core::Integrator::kSymplecticEuler}) {
+    for (auto integ :
+         {core::Integrator::kLinearlyImplicitEuler, core::Integrator::kSymplecticEuler}) {
       const core::Model m = lean_model(part, integ);
       core::Data d = core::make_data(m);
       EXPECT_EQ(d.stages_run, 0u);
@@ -283,10 +285,11 @@ TEST(StepStages, MultirateLoopsReportTheirModelsPlans) {
   if (core::kWithDeformable) parts.push_back(LeanPart::kNet);
   if (core::kWithArticulation && core::kWithDeformable) parts.push_back(LeanPart::kJointAndNet);
   for (LeanPart part : parts) {
-    for (auto integ : {core::Integrator::kLinearlyImplicitEuler, core::Integrator::kSymplecticEuler}) {
+    for (auto integ :
+         {core::Integrator::kLinearlyImplicitEuler, core::Integrator::kSymplecticEuler}) {
       const core::Model scene = lean_model(part, integ);
-      const auto mr = std::make_unique<core::MultirateGodObject>(scene, 0,
-                                                                 core::MultirateSettings{2, 0.0, {}});
+      const auto mr = std::make_unique<core::MultirateGodObject>(
+          scene, 0, core::MultirateSettings{2, 0.0, {}});
       core::Data view = core::make_data(scene);
       const std::string what = "part " + std::to_string(static_cast<int>(part)) +
                                ", integrator " + std::to_string(static_cast<int>(integ));
@@ -302,7 +305,8 @@ TEST(StepStages, MultirateLoopsReportTheirModelsPlans) {
         EXPECT_EQ(mr->device_data().stages_run, device.stage_plan) << what;
         EXPECT_EQ(mr->scene_data().stages_run, scene_loop.stage_plan) << what;
         mr->view(view);
-        const std::uint32_t both = device.stage_plan | (mr->took_model() ? scene_loop.stage_plan : 0u);
+        const std::uint32_t both =
+            device.stage_plan | (mr->took_model() ? scene_loop.stage_plan : 0u);
         EXPECT_EQ(view.stages_run, both) << what << ", period " << k;
       }
     }
