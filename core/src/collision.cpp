@@ -14,6 +14,7 @@
 #include "numen/core/capacity.hpp"
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"
+#include "numen/core/step_stages.hpp"
 
 #include "detail/data_scratch.hpp"
 #include "detail/narrowphase.hpp"
@@ -265,6 +266,7 @@ void build_collision_structures(Model& model) {
 }
 
 void detect_contacts(const Model& model, Data& data) noexcept {
+  data.stages_run |= kStageContacts;  // the stage report (step_stages.hpp)
   CollisionScratch& cs = data.scratch->collision;
   const int nb = model.num_bodies();
   const Sphere* bs = model.body_spheres.data();

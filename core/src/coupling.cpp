@@ -85,7 +85,7 @@ void apply_device_wrench(const Model& model, Data& data) noexcept {
 
 void impose_direct_target(const Model& model, Data& data) noexcept {
   for (auto& v : data.scratch->solver.imposed) v = 0;
-  if (model.coupling_mode != CouplingMode::kDirect) return;
+  if (!(model.stage_plan & kStageDirectTarget)) return;  // the plan: CouplingMode::kDirect
   data.stages_run |= kStageDirectTarget;  // the stage report (step_stages.hpp)
   if (valid_body(model, data.attached_body))
     impose(data, static_cast<std::size_t>(data.attached_body), data.target, data.target_twist);

@@ -3,12 +3,15 @@
 
 #include "numen/core/data.hpp"
 
+#include <stdexcept>
+#include <string>
 #include <utility>
 
 #include "detail/data_scratch.hpp"
 #include "numen/core/capacity.hpp"
 #include "numen/core/features.hpp"
 #include "numen/core/model.hpp"
+#include "numen/core/step_stages.hpp"
 
 namespace numen::core {
 namespace {
@@ -52,6 +55,16 @@ DataScratchPtr& DataScratchPtr::operator=(DataScratchPtr&& other) noexcept = def
 DataScratchPtr::~DataScratchPtr() = default;
 
 Data make_data(const Model& model) {
+  // The stage plan is computed once, by finalize_model(); step() only reads it.
+  if (model.stage_plan == 0)
+    throw std::invalid_argument(
+        "make_data: the model has no stage plan (Model::stage_plan 0): finalize_model() has not "
+        "accepted it");
+  if (const std::uint32_t current = compiled_stages(model); model.stage_plan != current)
+    throw std::invalid_argument(
+        "make_data: the model's stage plan is stale (Model::stage_plan " +
+        std::to_string(model.stage_plan) + ", the model now compiles to " +
+        std::to_string(current) + "): call finalize_model() again after editing the model");
   Data data;
   data.scratch = DataScratchPtr(std::make_unique<DataScratch>());
   DataScratch& scratch = *data.scratch;

@@ -9,6 +9,7 @@
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"
 #include "numen/core/rigid_body.hpp"
+#include "numen/core/step_stages.hpp"
 
 namespace numen::core {
 namespace {
@@ -47,6 +48,7 @@ Wrench carry_wrench(const Wrench& w, const Vec3& from, const Vec3& to) noexcept 
 }
 
 void compute_feedback(const Model& model, Data& data) noexcept {
+  data.stages_run |= kStageFeedback;  // the stage report (step_stages.hpp)
   data.feedback_wrench = Wrench{};
   for (Wrench& w : data.body_feedback) w = Wrench{};
   if (model.coupling_mode == CouplingMode::kDirect ||

@@ -528,7 +528,7 @@ void project_joint_velocities(const Model& model, Data& data, double elapsed,
 #endif  // NUMEN_WITH_ARTICULATION
 
 bool solve_linearized_system(const Model& model, Data& data) noexcept {
-  const std::uint32_t plan = compiled_stages(model);  // the solve step() reports (step_stages.hpp)
+  const std::uint32_t plan = model.stage_plan;  // the solve step() reports (step_stages.hpp)
   bool converged = false;
   if (plan & kStageNetSolve) {
     if constexpr (kWithDeformable) {
@@ -563,8 +563,8 @@ void integrate_linearized(const Model& model, Data& data, double system_step) no
   s.joint_rate_from_stage_start = false;
   s.joint_rows_at_drift_end = false;
   const double scale = h / system_step;
-  // The solve this model runs (step_stages.hpp: the plan step() reports from).
-  const std::uint32_t plan = compiled_stages(model);
+  // The solve this model runs (Model::stage_plan: the plan step() reports from).
+  const std::uint32_t plan = model.stage_plan;
   // Optional parts (features.hpp): compiled out, their models are refused by finalize_model().
   if constexpr (kWithDeformable) {
     // The nets' linearisation over h_s, before the gyroscopic step changes the bodies' ω.
@@ -688,7 +688,7 @@ void integrate_symplectic_euler(const Model& model, Data& data) noexcept {
   if constexpr (kWithDeformable)
     integrate_nodes_symplectic(model, data);  // forces of the step's start, like the bodies'
 #if NUMEN_WITH_ARTICULATION
-  if (compiled_stages(model) & kStageJointSolve) {
+  if (model.stage_plan & kStageJointSolve) {
     integrate_symplectic_euler_constrained(model, data);
     data.stages_run |= kStageJointSolve;
     return;
@@ -725,6 +725,7 @@ double linearized_system_step(const Model& model) noexcept {
 }
 
 void integrate(const Model& model, Data& data) noexcept {
+  data.stages_run |= kStageIntegrate;  // the stage report (step_stages.hpp)
   switch (model.integrator) {
     case Integrator::kSymplecticEuler:
       integrate_symplectic_euler(model, data);

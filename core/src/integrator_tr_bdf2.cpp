@@ -105,7 +105,7 @@ void integrate_tr_bdf2(const Model& model, Data& data) noexcept {
   const double h_gamma = 2.0 * hs;            // γh: the trapezoidal stage's length
   const double a = tr_bdf2::kStageWeight;
   const std::size_t nb = data.bodies.size();
-  const bool nets = kWithDeformable && (compiled_stages(model) & kStageNetSolve) != 0;
+  const bool nets = kWithDeformable && (model.stage_plan & kStageNetSolve) != 0;
   [[maybe_unused]] const bool joints = kWithArticulation && !model.joints.empty();
   s.system_step = hs;
 

@@ -7,6 +7,7 @@
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"
 #include "numen/core/rigid_body.hpp"
+#include "numen/core/step_stages.hpp"
 
 #include "detail/data_scratch.hpp"
 #include "detail/joint_system.hpp"
@@ -165,6 +166,7 @@ void store_joint_multipliers(const Model& model, Data& data, std::span<const Joi
 }
 
 void measure_joint_drift(const Model& model, Data& data) noexcept {
+  data.stages_run |= kStageJointDrift;  // the stage report (step_stages.hpp)
   double linear = 0.0;
   double angular = 0.0;
   JointRows rows;

@@ -11,6 +11,7 @@
 #include "numen/core/collision.hpp"
 #include "numen/core/features.hpp"
 #include "numen/core/net_model.hpp"
+#include "numen/core/step_stages.hpp"
 
 namespace numen::core {
 namespace {
@@ -85,6 +86,7 @@ double damping_from_ratio(double zeta, double mass, double stiffness) noexcept {
 }
 
 std::string finalize_model(Model& model) {
+  model.stage_plan = 0;  // not finalized until the end: a refused model has no plan
   std::ostringstream err;
   if (!(model.dt > 0.0) || !std::isfinite(model.dt)) {
     err << "time step dt must be finite and > 0 (got " << model.dt << ")";
@@ -220,6 +222,7 @@ std::string finalize_model(Model& model) {
     set_unjointed_topology(model);
   }
   build_collision_structures(model);
+  model.stage_plan = compiled_stages(model);  // reads the articulation's body trees: last
   return {};
 }
 

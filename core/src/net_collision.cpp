@@ -21,6 +21,7 @@
 #include "numen/core/capacity.hpp"
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"
+#include "numen/core/step_stages.hpp"
 
 #include "detail/data_scratch.hpp"
 #include "detail/narrowphase.hpp"
@@ -237,6 +238,7 @@ inline void collide_node_bodies(const Model& model, const Data& data, const NetS
 void detect_node_contacts(const Model& model, Data& data) noexcept {
   data.num_node_contacts = 0;
   if (model.nets.empty()) return;
+  data.stages_run |= kStageNodeContacts;  // the stage report (step_stages.hpp)
   NetScratch& ns = data.scratch->net;
   CollisionScratch& cs = data.scratch->collision;
   const StaticSphereGrid& grid = model.static_grid;

@@ -11,6 +11,7 @@
 #include "numen/core/contact_force.hpp"
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"
+#include "numen/core/step_stages.hpp"
 
 #include "detail/data_scratch.hpp"
 #include "detail/net_solve.hpp"
@@ -309,6 +310,7 @@ void linearization_pass(const Model& model, Data& data, double h) noexcept {
 
 void compute_net_forces(const Model& model, Data& data) noexcept {
   if (model.nets.empty()) return;
+  data.stages_run |= kStageNetForces;  // the stage report (step_stages.hpp)
   NetScratch& s = data.scratch->net;
 
   // Gravity, and the zero-length ties to the rigid component with their
@@ -459,6 +461,7 @@ void integrate_nodes_implicit(const Model& model, Data& data) noexcept {
 }
 
 void measure_nets(const Model& model, Data& data) noexcept {
+  data.stages_run |= kStageMeasureNets;  // the stage report (step_stages.hpp)
   for (std::size_t k = 0; k < model.nets.size(); ++k) {
     const NetModel& net = model.nets[k];
     NetOutput& out = data.nets[k];

@@ -3,6 +3,8 @@
 
 #include "numen/core/step.hpp"
 
+#include <cassert>
+
 #include "numen/core/collision.hpp"
 #include "numen/core/contact_force.hpp"
 #include "numen/core/coupling.hpp"
@@ -30,8 +32,10 @@ void save_state(Data& data) noexcept {
 /// Checks stage: rejects a non-finite result (rollback to the saved poses and
 /// node positions, zero twists and node velocities, zero feedback, and the solver's and joints' outputs cleared
 /// so that nothing non-finite is carried into the next step: Δu is the next
-/// step's Δu_prev, joint_system.hpp). Returns true when the step was accepted.
+/// step's Δu_prev, joint_system.hpp). Sets its bit of Data::stages_run. Returns true
+/// when the step was accepted.
 bool check_finite(Data& data) noexcept {
+  data.stages_run |= kStageChecks;
   bool finite = data.feedback_wrench.force.allFinite() && data.feedback_wrench.torque.allFinite();
   for (const BodyState& s : data.bodies) finite = finite && state_is_finite(s);
   for (const Vec6& d : data.scratch->solver.delta) finite = finite && d.allFinite();
@@ -68,10 +72,7 @@ void compute_forces(const Model& model, Data& data) noexcept {
   compute_contact_forces(model, data);
   data.stages_run |= kStageBodyForces;
   if constexpr (kWithDeformable) {
-    if (!model.nets.empty()) {
-      compute_net_forces(model, data);
-      data.stages_run |= kStageNetForces;
-    }
+    if (model.stage_plan & kStageNetForces) compute_net_forces(model, data);  // sets its bit
   }
 }
 
@@ -79,25 +80,28 @@ namespace {
 
 /// step() and step_with_contacts(): the contact stage is `write` when given, else detection.
 void run_step(const Model& model, Data& data, ContactWriter write, const void* context) noexcept {
-  // The stages this model runs, from the one source compiled_stages() reads
-  // (step_stages.cpp); every stage sets its own bit of Data::stages_run where it
-  // runs (the integrator's solves in integrator.cpp), so the report is what ran.
-  // A part compiled out (features.hpp) has no model: finalize_model() refuses it.
-  const std::uint32_t plan = compiled_stages(model);
+  // The stages this model runs: its plan, computed once by finalize_model()
+  // (Model::stage_plan, step_stages.hpp), never here. Every stage function sets its own
+  // bit of Data::stages_run where it runs (the integrator's solves in integrator.cpp),
+  // so the report is what ran. A part compiled out (features.hpp) has no model:
+  // finalize_model() refuses it.
+  const std::uint32_t plan = model.stage_plan;
+  assert(plan == compiled_stages(model) &&
+         "Model::stage_plan is stale: call finalize_model() again after editing the model");
   data.status = kStepOk;
   data.stages_run = 0;
   save_state(data);
-  impose_direct_target(model, data);  // clears SolverScratch::imposed; imposes in kDirect
+  impose_direct_target(model, data);  // clears SolverScratch::imposed; imposes by the plan
   bool wrote = false;  // the caller's writer ran (and wrote the node contacts if it says so)
   if ((plan & kStageContacts) && !data.scratch->solver.contact_terms.empty()) {  // capacity.hpp
     data.contacts_dropped = 0;
     if (write != nullptr) {
       write(model, data, context);
       wrote = true;
+      data.stages_run |= kStageContacts;  // the caller's writer is this step's contact stage
     } else {
-      detect_contacts(model, data);  // may set kContactOverflow, counts contact_overflow_steps
+      detect_contacts(model, data);  // sets its bit; may set kContactOverflow
     }
-    data.stages_run |= kStageContacts;
   } else {
     data.num_contacts = 0;
     data.contacts_dropped = 0;
@@ -105,30 +109,23 @@ void run_step(const Model& model, Data& data, ContactWriter write, const void* c
   }
   if constexpr (kWithDeformable) {
     if (plan & kStageNodeContacts) {
-      if (!wrote || !model.caller_node_contacts) detect_node_contacts(model, data);
-      data.stages_run |= kStageNodeContacts;
+      if (wrote && model.caller_node_contacts)
+        data.stages_run |= kStageNodeContacts;  // the caller's writer wrote them
+      else
+        detect_node_contacts(model, data);  // sets its bit
     }
   }
   compute_forces(model, data);
   if (data.contacts_clamped > 0) ++data.contact_clamped_steps;  // body and node contacts
-  integrate(model, data);  // sets kStageNetSolve or kStageJointSolve where it runs them
-  data.stages_run |= kStageIntegrate;
+  integrate(model, data);  // sets its bit, and kStageNetSolve or kStageJointSolve if run
   if constexpr (kWithArticulation) {
-    if (plan & kStageJointDrift) {
-      measure_joint_drift(model, data);
-      data.stages_run |= kStageJointDrift;
-    }
+    if (plan & kStageJointDrift) measure_joint_drift(model, data);  // sets its bit
   }
   if constexpr (kWithDeformable) {
-    if (plan & kStageMeasureNets) {
-      measure_nets(model, data);
-      data.stages_run |= kStageMeasureNets;
-    }
+    if (plan & kStageMeasureNets) measure_nets(model, data);  // sets its bit
   }
-  compute_feedback(model, data);
-  data.stages_run |= kStageFeedback;
-  const bool accepted = check_finite(data);
-  data.stages_run |= kStageChecks;
+  compute_feedback(model, data);  // sets its bit
+  const bool accepted = check_finite(data);  // sets its bit
   if constexpr (kWithDeformable) {
     if (!accepted && (plan & kStageMeasureNets)) {
       for (NetOutput& o : data.nets) o.tie_wrench = Wrench{};

@@ -31,8 +31,8 @@ constexpr std::array<StageDescription, 12> kStages{{
 std::span<const StageDescription> step_stage_table() noexcept { return kStages; }
 
 std::uint32_t compiled_stages(const Model& model) noexcept {
-  // The one source of the stage plan: step() gates its stages on these bits and
-  // the integrator picks its solve from them (integrator.cpp).
+  // The stage plan, stored by finalize_model() as Model::stage_plan: step() gates its
+  // stages on it and the integrator picks its solve from it (integrator.cpp).
   std::uint32_t s = kStageBodyForces | kStageIntegrate | kStageFeedback | kStageChecks;
   if (model.coupling_mode == CouplingMode::kDirect) s |= kStageDirectTarget;
   if (contact_capacity(model) > 0) s |= kStageContacts;

@@ -3,7 +3,9 @@
 #include "numen/core/step_stages.hpp"
 
 #include <cstring>
+#include <memory>
 #include <set>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -12,11 +14,19 @@
 #include "alloc_counter.hpp"
 #include "build_features.hpp"
 #include "lean_scenes.hpp"
+#include "numen/core/collision.hpp"
+#include "numen/core/coupling.hpp"
 #include "numen/core/data.hpp"
+#include "numen/core/feedback.hpp"
+#include "numen/core/integrator.hpp"
 #include "numen/core/model.hpp"
+#include "numen/core/multirate.hpp"
+#include "numen/core/net_collision.hpp"
+#include "numen/core/net_forces.hpp"
 #include "numen/core/step.hpp"
 
 #include "detail/data_scratch.hpp"
+#include "detail/joint_system.hpp"
 
 namespace core = numen::core;
 using numen::test::LeanPart;
@@ -36,17 +46,123 @@ TEST(StepStages, TableListsEveryStageOnceInStepOrder) {
   EXPECT_EQ(seen, (core::kStageChecks << 1) - 1);
 }
 
+namespace {
+
+/// make_lean_model(part) with the integrator `integ`: edited, so finalized again (the
+/// stage plan, Model::stage_plan, is derived by finalize_model()).
+core::Model lean_model(LeanPart part, core::Integrator integ) {
+  core::Model m = make_lean_model(part);
+  m.integrator = integ;
+  const std::string err = core::finalize_model(m);
+  EXPECT_EQ(err, "");
+  return m;
+}
+
+}  // namespace
+
+TEST(StepStages, FinalizeStoresThePlanOnce) {
+  core::Model unfinalized;
+  EXPECT_EQ(unfinalized.stage_plan, 0u);
+  for (LeanPart part : numen::test::lean_parts()) {
+    for (auto integ :
+         {core::Integrator::kLinearlyImplicitEuler, core::Integrator::kSymplecticEuler}) {
+      const core::Model m = lean_model(part, integ);
+      EXPECT_EQ(m.stage_plan, core::compiled_stages(m)) << static_cast<int>(part);
+    }
+  }
+  // A refused model has no plan, even one it had before.
+  core::Model refused = make_lean_model(LeanPart::kNone);
+  ASSERT_NE(refused.stage_plan, 0u);
+  refused.dt = -1.0;
+  EXPECT_NE(core::finalize_model(refused), "");
+  EXPECT_EQ(refused.stage_plan, 0u);
+}
+
+TEST(StepStages, MakeDataRefusesAMissingOrStalePlan) {
+  core::Model m = make_lean_model(LeanPart::kNone);
+  core::Model unfinalized = m;
+  unfinalized.stage_plan = 0;
+  try {
+    (void)core::make_data(unfinalized);
+    ADD_FAILURE() << "a model without a plan accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("finalize_model()"), std::string::npos) << e.what();
+  }
+  m.coupling_mode = core::CouplingMode::kDirect;  // the plan gains kStageDirectTarget
+  try {
+    (void)core::make_data(m);
+    ADD_FAILURE() << "a stale plan accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("stale"), std::string::npos) << e.what();
+  }
+  ASSERT_EQ(core::finalize_model(m), "");
+  core::Data d = core::make_data(m);
+  core::step(m, d);
+  EXPECT_NE(d.stages_run & core::kStageDirectTarget, 0u);
+  EXPECT_EQ(d.stages_run, m.stage_plan);
+}
+
 TEST(StepStages, StepRunsExactlyTheCompiledStages) {
   for (LeanPart part : numen::test::lean_parts()) {
-    for (auto integ : {core::Integrator::kLinearlyImplicitEuler, core::Integrator::kSymplecticEuler}) {
-      core::Model m = make_lean_model(part);
-      m.integrator = integ;
+    for (auto integ :
+         {core::Integrator::kLinearlyImplicitEuler, core::Integrator::kSymplecticEuler}) {
+      const core::Model m = lean_model(part, integ);
       core::Data d = core::make_data(m);
       EXPECT_EQ(d.stages_run, 0u);
       core::step(m, d);
-      EXPECT_EQ(d.stages_run, core::compiled_stages(m)) << static_cast<int>(part);
+      EXPECT_EQ(d.stages_run, m.stage_plan) << static_cast<int>(part);
     }
   }
+}
+
+// Every stage function sets its own bit where it runs, also called alone (outside step()).
+TEST(StepStages, EachStageFunctionReportsItself) {
+  const auto alone = [](const core::Model& m, void (*stage)(const core::Model&, core::Data&)) {
+    core::Data d = core::make_data(m);
+    stage(m, d);
+    return d.stages_run;
+  };
+  const core::Model rigid = make_lean_model(LeanPart::kObstacle);
+  EXPECT_EQ(alone(rigid, core::detect_contacts), core::kStageContacts);
+  EXPECT_EQ(alone(rigid, core::compute_forces), core::kStageBodyForces);
+  EXPECT_EQ(alone(rigid, core::integrate), core::kStageIntegrate);
+  EXPECT_EQ(alone(rigid, core::compute_feedback), core::kStageFeedback);
+  EXPECT_EQ(alone(rigid, core::impose_direct_target), 0u) << "god-object coupling: no target";
+  core::Model direct = rigid;
+  direct.coupling_mode = core::CouplingMode::kDirect;
+  ASSERT_EQ(core::finalize_model(direct), "");
+  EXPECT_EQ(alone(direct, core::impose_direct_target), core::kStageDirectTarget);
+  if constexpr (core::kWithArticulation) {
+    const core::Model hinged = make_lean_model(LeanPart::kJoint);
+    EXPECT_EQ(alone(hinged, core::measure_joint_drift), core::kStageJointDrift);
+    EXPECT_EQ(alone(hinged, core::integrate), core::kStageIntegrate | core::kStageJointSolve);
+  }
+  if constexpr (core::kWithDeformable) {
+    const core::Model net = make_lean_model(LeanPart::kNet);
+    EXPECT_EQ(alone(net, core::detect_node_contacts), core::kStageNodeContacts);
+    EXPECT_EQ(alone(net, core::compute_net_forces), core::kStageNetForces);
+    EXPECT_EQ(alone(net, core::compute_forces), core::kStageBodyForces | core::kStageNetForces);
+    EXPECT_EQ(alone(net, core::measure_nets), core::kStageMeasureNets);
+  }
+}
+
+// The forces stage runs the nets' forces by the plan, not by the model's nets.
+TEST(StepStages, NetForcesFollowThePlan) {
+  NUMEN_REQUIRE_DEFORMABLE();
+  core::Model m = make_lean_model(LeanPart::kNet);
+  core::Data d = core::make_data(m);
+  std::vector<core::Vec3>& node_force = d.scratch->net.force;  // written by compute_net_forces()
+  ASSERT_FALSE(node_force.empty());
+  m.stage_plan &= ~static_cast<std::uint32_t>(core::kStageNetForces);  // by hand: no step()
+  for (core::Vec3& f : node_force) f.setZero();
+  core::compute_forces(m, d);
+  EXPECT_EQ(d.stages_run, core::kStageBodyForces);
+  EXPECT_TRUE(node_force[0].isZero(0.0)) << "the nets' forces ran without their stage";
+  m.stage_plan |= core::kStageNetForces;
+  d.stages_run = 0;
+  core::compute_forces(m, d);
+  EXPECT_EQ(d.stages_run, core::kStageBodyForces | core::kStageNetForces);
+  EXPECT_FALSE(node_force[0].isZero(0.0)) << "the node's weight";
 }
 
 TEST(StepStages, RigidOnlySceneRunsNoPassForWhatItLacks) {
@@ -127,8 +243,7 @@ TEST(StepStages, ReportIsWhatRanForEveryIntegratorJointsAndNets) {
   for (LeanPart part : parts) {
     for (auto integ : {core::Integrator::kLinearlyImplicitEuler, core::Integrator::kTrapezoidal,
                        core::Integrator::kTrBdf2, core::Integrator::kSymplecticEuler}) {
-      core::Model m = make_lean_model(part);
-      m.integrator = integ;
+      const core::Model m = lean_model(part, integ);
       core::Data d = core::make_data(m);
       {
         numen::test::AllocationGuard guard;
@@ -144,7 +259,7 @@ TEST(StepStages, ReportIsWhatRanForEveryIntegratorJointsAndNets) {
       const bool net_solve = (d.stages_run & core::kStageNetSolve) != 0;
       EXPECT_FALSE(joint_solve && net_solve) << what;
       EXPECT_EQ(joint_solve || (net_solve && !m.joints.empty()), ran.joints_solved) << what;
-      EXPECT_EQ(d.stages_run, core::compiled_stages(m)) << what;
+      EXPECT_EQ(d.stages_run, m.stage_plan) << what;
       const bool nets = !m.nets.empty(), joints = !m.joints.empty();
       const bool symplectic = integ == core::Integrator::kSymplecticEuler;
       EXPECT_EQ(ran.net_solve, nets && !symplectic) << what;
@@ -157,6 +272,43 @@ TEST(StepStages, ReportIsWhatRanForEveryIntegratorJointsAndNets) {
       EXPECT_EQ((d.stages_run & core::kStageNetForces) != 0, nets) << what;
       EXPECT_EQ((d.stages_run & core::kStageMeasureNets) != 0, nets) << what;
       EXPECT_EQ((d.stages_run & core::kStageJointDrift) != 0, joints) << what;
+    }
+  }
+}
+
+// The multirate god-object's two loops step their own models (the god-object model and the
+// scene-loop model, each finalized by the object: Model::stage_plan current), each reporting
+// its plan, and the single-rate view reports both: every multirate integrator × (joints, nets).
+TEST(StepStages, MultirateLoopsReportTheirModelsPlans) {
+  std::vector<LeanPart> parts{LeanPart::kNone, LeanPart::kObstacle};
+  if (core::kWithArticulation) parts.push_back(LeanPart::kJoint);
+  if (core::kWithDeformable) parts.push_back(LeanPart::kNet);
+  if (core::kWithArticulation && core::kWithDeformable) parts.push_back(LeanPart::kJointAndNet);
+  for (LeanPart part : parts) {
+    for (auto integ :
+         {core::Integrator::kLinearlyImplicitEuler, core::Integrator::kSymplecticEuler}) {
+      const core::Model scene = lean_model(part, integ);
+      const auto mr = std::make_unique<core::MultirateGodObject>(
+          scene, 0, core::MultirateSettings{2, 0.0, {}});
+      core::Data view = core::make_data(scene);
+      const std::string what = "part " + std::to_string(static_cast<int>(part)) +
+                               ", integrator " + std::to_string(static_cast<int>(integ));
+      const core::Model& device = mr->device_model();
+      const core::Model& scene_loop = mr->scene_model();
+      EXPECT_EQ(device.stage_plan, core::compiled_stages(device)) << what;
+      EXPECT_EQ(scene_loop.stage_plan, core::compiled_stages(scene_loop)) << what;
+      EXPECT_NE(device.stage_plan & core::kStageContacts, 0u) << what << ": the planes";
+      EXPECT_NE(scene_loop.stage_plan & core::kStageDirectTarget, 0u) << what << ": imposed";
+      for (int k = 0; k < 4; ++k) {
+        mr->step();
+        ASSERT_EQ(mr->device_data().status, core::kStepOk) << what;
+        EXPECT_EQ(mr->device_data().stages_run, device.stage_plan) << what;
+        EXPECT_EQ(mr->scene_data().stages_run, scene_loop.stage_plan) << what;
+        mr->view(view);
+        const std::uint32_t both =
+            device.stage_plan | (mr->took_model() ? scene_loop.stage_plan : 0u);
+        EXPECT_EQ(view.stages_run, both) << what << ", period " << k;
+      }
     }
   }
 }

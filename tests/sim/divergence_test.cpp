@@ -52,6 +52,7 @@ TEST(DivergenceMonitor, AStateAtRestStaysBelowEveryBound) {
 TEST(DivergenceMonitor, ABodyFasterThanTheSceneAllowsLatchesBodySpeed) {
   Model m = numen::test::make_lean_model(LeanPart::kNone);
   m.coupling_mode = numen::core::CouplingMode::kDirect;  // no energy bound: speeds alone
+  ASSERT_EQ(numen::core::finalize_model(m), "");         // edited: its stage plan again
   Data d = held_at_rest(m);
   DivergenceMonitor monitor(m, d);
   // v_ref = max(hand 0, √(2 g H) with H = 0.06 m the tool's height: 1.085 m/s, floor 0.5 m/s)
@@ -78,6 +79,7 @@ TEST(DivergenceMonitor, ABodyFasterThanTheSceneAllowsLatchesBodySpeed) {
 TEST(DivergenceMonitor, TheHandsOwnSpeedRaisesTheSpeedLimit) {
   Model m = numen::test::make_lean_model(LeanPart::kNone);
   m.coupling_mode = numen::core::CouplingMode::kDirect;  // no energy bound: speeds alone
+  ASSERT_EQ(numen::core::finalize_model(m), "");         // edited: its stage plan again
   Data d = held_at_rest(m);
   DivergenceMonitor monitor(m, d);
   d.target_twist.linear = Vec3(3.0, 0.0, 0.0);  // a fast hand: limit 10 × 3 m/s

@@ -61,7 +61,8 @@ void store_joint_multipliers(const Model& model, Data& data, std::span<const Joi
 
 /// After the step: C of every joint at the new configuration into
 /// Data::joints[j].position_error and coordinate, and the largest linear and
-/// angular errors into Data::max_joint_drift / max_joint_angle_drift.
+/// angular errors into Data::max_joint_drift / max_joint_angle_drift. Sets its
+/// bit of Data::stages_run (kStageJointDrift, step_stages.hpp).
 void measure_joint_drift(const Model& model, Data& data) noexcept;
 
 }  // namespace numen::core

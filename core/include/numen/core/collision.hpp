@@ -41,7 +41,8 @@ void build_collision_structures(Model& model);
 /// 0 if none). Overflow beyond kMaxContacts keeps the first kMaxContacts,
 /// counts the rest in data.contacts_dropped, ORs StepStatus::kContactOverflow
 /// into data.status and increments data.contact_overflow_steps (once per call).
-/// Clears only the kContactOverflow bit of data.status on entry. Requires
+/// Clears only the kContactOverflow bit of data.status on entry. Sets its bit
+/// of data.stages_run (kStageContacts, step_stages.hpp). Requires
 /// a Data made by make_data() for `model`. No allocation, no exception.
 void detect_contacts(const Model& model, Data& data) noexcept;
 

@@ -49,8 +49,9 @@ bool first_order_applicable(const CouplingGains& gains) noexcept;
 /// them in SolverScratch::imposed, i.e. moving bodies of infinite mass for the
 /// rest of the step (their joints to each other are disabled). With a
 /// non-finite target, sets kInvalidTarget and holds that body still (pose
-/// kept, twist zeroed). In kDirect it records itself in Data::stages_run
-/// (kStageDirectTarget, step_stages.hpp).
+/// kept, twist zeroed). Imposes only when Model::stage_plan has
+/// kStageDirectTarget (CouplingMode::kDirect), and then records itself in
+/// Data::stages_run (step_stages.hpp).
 /// Call before detect_contacts() so that contacts see the imposed pose.
 void impose_direct_target(const Model& model, Data& data) noexcept;
 

@@ -164,8 +164,8 @@ struct Data {
   /// net_solve.hpp). NaN when non-finite.
   double solver_residual = 0.0;
   std::uint32_t status = kStepOk;  ///< StepStatus bits of the last step.
-  /// StepStage bits (step_stages.hpp) of the stages the last step ran; equal to
-  /// compiled_stages(model) after any step. 0 before the first step.
+  /// StepStage bits (step_stages.hpp) of the stages the last step ran, each set by
+  /// its stage; equal to Model::stage_plan after any step. 0 before the first step.
   std::uint32_t stages_run = 0;
   std::int64_t nonfinite_steps = 0;  ///< Steps whose result was rejected as non-finite.
 
@@ -179,7 +179,9 @@ struct Data {
 /// Allocates a Data for a finalized `model` (its scratch block included) and resets
 /// it: only what the model needs — no joint buffers or tree-solve scratch without joints, no node or net
 /// buffers without nets, no contact scratch when nothing can collide
-/// (capacity.hpp; sizes in data_size.hpp). Allocates.
+/// (capacity.hpp; sizes in data_size.hpp). Allocates. Throws std::invalid_argument
+/// for a model without a current stage plan (Model::stage_plan): never finalized,
+/// refused by finalize_model(), or edited since without finalize_model() again.
 Data make_data(const Model& model);
 
 /// Puts every body back at its initial pose and twist, clears inputs, outputs

@@ -44,6 +44,7 @@ Wrench carry_wrench(const Wrench& w, const Vec3& from, const Vec3& to) noexcept;
 /// carried to that point sum to the composite exactly. When no body is
 /// attached (or its target is not finite) the composite is zero and each
 /// per-body wrench is saturated on its own. All zero in CouplingMode::kDirect.
+/// Sets its bit of Data::stages_run (kStageFeedback, step_stages.hpp).
 void compute_feedback(const Model& model, Data& data) noexcept;
 
 }  // namespace numen::core

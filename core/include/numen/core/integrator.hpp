@@ -29,8 +29,9 @@ struct Data;
 /// Integrate stage: dispatches on Model::integrator to
 /// integrate_linearly_implicit_euler(), integrate_trapezoidal(), integrate_tr_bdf2() or
 /// integrate_symplectic_euler(); the solve inside (net solve, joint solve or the
-/// bodies alone) is the one compiled_stages() names (step_stages.hpp), and sets
-/// its bit of Data::stages_run (kStageNetSolve, kStageJointSolve) when it runs. Needs
+/// bodies alone) is the one Model::stage_plan names (step_stages.hpp), and sets
+/// its bit of Data::stages_run (kStageNetSolve, kStageJointSolve) when it runs; sets
+/// kStageIntegrate itself. Needs
 /// Data::body_wrench (explicit forces: gravity, applied, coupling, contacts)
 /// and the ContactTerm lever arms and normal velocities of this step.
 /// Advances Data::bodies by dt.

@@ -180,7 +180,8 @@ struct BaumgarteSettings {
 };
 
 /// The immutable, compiled description of a scene. Fill the public fields,
-/// then call finalize_model(); afterwards only read it.
+/// then call finalize_model(); afterwards only read it (an edit needs
+/// finalize_model() again: its derived fields, the stage plan included, go stale).
 struct Model {
   double dt = 1e-3;                              ///< Fixed time step (s).
   Vec3 gravity = Vec3(0.0, 0.0, -9.81);          ///< m/s², world frame.
@@ -231,6 +232,15 @@ struct Model {
 
   StaticSphereGrid static_grid;    ///< Derived by finalize_model() (broad phase).
   ArticulationTopology articulation;  ///< Derived by finalize_model() (elimination order).
+  /// The stage plan (StepStage bits, step_stages.hpp): the stages step() runs for this
+  /// model and the solve integrate() picks, in every step, and what Data::stages_run holds
+  /// after any step. Derived by finalize_model() as compiled_stages(*this), from integrator,
+  /// coupling_mode, the joints, the nets and what can collide (bodies, obstacles,
+  /// caller_contacts); 0 before finalize_model() and after a refusal. A model edited after
+  /// finalize_model() has a stale plan until finalize_model() runs again: make_data() refuses
+  /// a model whose plan is missing or stale, and step() asserts it current in builds without
+  /// NDEBUG (it does not recompute it).
+  std::uint32_t stage_plan = 0;
 
   int num_materials() const noexcept { return static_cast<int>(material_names.size()); }
   /// Contact parameters between materials a and b.
@@ -244,9 +254,11 @@ struct Model {
 };
 
 /// Validates `model` and computes its derived fields (inverse inertias,
-/// bounding radii, obstacle bounds, broad-phase grid). Returns an empty string
-/// on success, else a message naming the offending body/obstacle/field.
-/// Allocates: load time only.
+/// bounding radii, obstacle bounds, broad-phase grid, articulation topology, the
+/// stage plan Model::stage_plan last). Returns an empty string on success, else a
+/// message naming the offending body/obstacle/field (and leaves stage_plan 0, so
+/// make_data() refuses the model). Call it again after any edit of a finalized
+/// model. Allocates: load time only.
 std::string finalize_model(Model& model);
 
 /// Default damping from a damping ratio ζ for a spring k acting on mass m:

@@ -368,8 +368,9 @@ class MultirateGodObject {
   /// snapshot's contacts
   /// followed by the device loop's contacts against the planes (body_a the god-object, its
   /// spheres' scene indices, body_b, obstacle and sphere_b the plane's other side); the depth
-  /// and counters of both (status: the device step's, or'ed with the scene step's in the period
-  /// that took its model; the *_steps counters summed); the joint states (the articulation's
+  /// and counters of both (status and stages_run: the device step's, or'ed with the scene
+  /// step's in the period that took its model, each loop's report its own model's
+  /// Model::stage_plan; the *_steps counters summed); the joint states (the articulation's
   /// from the device loop, the others from the snapshot) and the larger drift; time and
   /// step_count of the device periods. Leaves the caller's fields (attached_body, targets,
   /// applied wrenches) alone. Never allocates.

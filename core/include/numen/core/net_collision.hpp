@@ -25,7 +25,8 @@ struct Data;
 /// first ones, adds the rest to data.contacts_dropped, ORs
 /// StepStatus::kContactOverflow into data.status and increments
 /// data.contact_overflow_steps unless detect_contacts() already did in this
-/// step. Call after detect_contacts(). Nothing to do without nets. No
+/// step. Call after detect_contacts(). Nothing to do without nets; with nets it
+/// sets its bit of Data::stages_run (kStageNodeContacts, step_stages.hpp). No
 /// allocation, no exception.
 void detect_node_contacts(const Model& model, Data& data) noexcept;
 

@@ -28,7 +28,9 @@ struct Data;
 /// (NetScratch::lever), and each NodeContact's r_b, normal_velocity, active
 /// and force. Independent of the integrator: it reads no h_s.
 /// Call after compute_contact_forces() (body_wrench is reset by
-/// apply_external_forces()) and after detect_node_contacts(). No allocation.
+/// apply_external_forces()) and after detect_node_contacts(). Nothing to do
+/// without nets; with nets it sets its bit of Data::stages_run (kStageNetForces,
+/// step_stages.hpp). No allocation.
 void compute_net_forces(const Model& model, Data& data) noexcept;
 
 /// Symplectic Euler of the nodes: v1 = v0 + h f/m, x1 = x0 + h v1, with the
@@ -53,7 +55,8 @@ void integrate_nodes_implicit(const Model& model, Data& data) noexcept;
 
 /// End-of-step observables of every net into Data::nets (NetOutput):
 /// largest tie stretch |x − a| against the rigid component's end pose,
-/// largest structural strain, kinetic energy, largest node speed.
+/// largest structural strain, kinetic energy, largest node speed. Sets its bit
+/// of Data::stages_run (kStageMeasureNets, step_stages.hpp).
 void measure_nets(const Model& model, Data& data) noexcept;
 
 }  // namespace numen::core

@@ -34,9 +34,12 @@ struct Data;
 ///      kNonFinite is set and Data::nonfinite_steps counted
 /// Data::status is cleared first (then detect_contacts may set
 /// kContactOverflow and count contact_overflow_steps);
-/// The stages are those compiled_stages(model) names (step_stages.hpp: a model
-/// without joints or nets runs no pass for them); each sets its own bit of
-/// Data::stages_run where it runs, so that field is what ran; time += dt and ++step_count at the end. In kDirect the attached body's
+/// The stages are those Model::stage_plan names (computed once by finalize_model();
+/// step_stages.hpp: a model without joints or nets runs no pass for them; a plan left
+/// stale by an edit after finalize_model() fails an assertion in builds without NDEBUG);
+/// each stage function sets its own bit of Data::stages_run where it runs (the caller's
+/// contact writer's bits are set for it, step_with_contacts()), so that field is what
+/// ran; time += dt and ++step_count at the end. In kDirect the attached body's
 /// pose/twist are imposed before detect_contacts.
 /// Never allocates, throws, locks or calls the OS. Deterministic.
 void step(const Model& model, Data& data) noexcept;
@@ -48,7 +51,9 @@ using ContactWriter = void (*)(const Model& model, Data& data, const void* conte
 /// step() with stage 1 replaced by `write(model, data, context)`: the caller gives the contacts
 /// (the multirate device loop's planes, multirate.hpp) instead of detect_contacts; the node
 /// contacts are still detected for a model with nets, unless Model::caller_node_contacts says
-/// that `write` writes them too. Everything else as step(). Never
+/// that `write` writes them too. `write` is the contact stage: step_with_contacts() sets
+/// kStageContacts of Data::stages_run for it (and kStageNodeContacts when it writes the node
+/// contacts). Everything else as step(). Never
 /// allocates, throws, locks or calls the OS (if `write` does not).
 void step_with_contacts(const Model& model, Data& data, ContactWriter write,
                         const void* context) noexcept;
@@ -56,7 +61,9 @@ void step_with_contacts(const Model& model, Data& data, ContactWriter write,
 /// Forces stage of step(): body_wrench := gravity + applied wrench
 /// (apply_external_forces), + coupling on the attached body (apply_coupling,
 /// Eq. 2), + penalty contact forces of data.contacts (compute_contact_forces),
-/// + the nets' forces and their reactions (compute_net_forces).
+/// + the nets' forces and their reactions (compute_net_forces, when
+/// Model::stage_plan has kStageNetForces). Sets kStageBodyForces of
+/// Data::stages_run (compute_net_forces sets its own).
 /// The gyroscopic term is handled by the integrator (implicit or explicit).
 /// Expects detect_contacts() (and impose_direct_target() in kDirect) to have
 /// run this step. No allocation.

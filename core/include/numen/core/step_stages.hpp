@@ -3,7 +3,8 @@
 /// The stages of core::step() (step.hpp) as data: which of them a given model
 /// runs, in step order, and why a stage is skipped. Each stage records itself
 /// in Data::stages_run when it runs, so a test (and `numen info`) can check that a
-/// scene without joints, nets or anything to collide runs no pass for them.
+/// scene without joints, nets or anything to collide runs no pass for them. The
+/// plan of a model is computed once, by finalize_model() (Model::stage_plan).
 
 #include <cstdint>
 #include <span>
@@ -38,10 +39,11 @@ struct StageDescription {
 /// Every stage of step(), in the order step() runs them (static table).
 std::span<const StageDescription> step_stage_table() noexcept;
 
-/// Bits of the stages step() runs for `model` (finalized): what Data::stages_run
-/// holds after any step of this model. The one source of the plan: step() gates
-/// its stages on these bits and the integrator picks its solve from them; each
-/// stage sets its own bit of Data::stages_run where it runs. The integrate
+/// Bits of the stages step() runs for `model` (its articulation topology derived):
+/// the pure function finalize_model() stores as Model::stage_plan, once per model.
+/// step() gates its stages on the stored plan and the integrator picks its solve
+/// from it (neither calls this); each stage sets its own bit of Data::stages_run
+/// where it runs, so that field equals the plan after any step. The integrate
 /// stage's variants: kStageNetSolve with nets and a linearised integrator (bodies
 /// and nodes as one system, with or without joints; symplectic Euler steps the
 /// nodes explicitly), else kStageJointSolve with joints (the KKT tree solve,
