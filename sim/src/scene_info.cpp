@@ -55,7 +55,7 @@ SceneInfo describe_scene(const Scene& scene) {
   info.body_spheres = static_cast<int>(m.body_spheres.size());
   info.static_spheres = static_cast<int>(m.static_spheres.size());
   info.materials = m.num_materials();
-  const std::uint32_t compiled = core::compiled_stages(m);
+  const std::uint32_t compiled = m.stage_plan;  // finalize_model() computed it
   for (const core::StageDescription& s : core::step_stage_table()) {
     const bool runs = (compiled & s.stage) != 0;
     std::string why;
