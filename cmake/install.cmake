@@ -78,6 +78,7 @@ set(_hal_headers
   numen/hal/device/safety_supervisor.hpp numen/hal/device/sample_check.hpp
   numen/hal/device/trocar_kinematics.hpp
   numen/hal/emulation/admittance_emulator.hpp numen/hal/emulation/device_emulator.hpp
+  numen/hal/emulation/device_motion.hpp numen/hal/emulation/emulated_device.hpp
   numen/hal/emulation/object_dictionary.hpp numen/hal/emulation/sdo_server.hpp
   numen/hal/input/event_code_name.hpp numen/hal/input/evemu_log.hpp
   numen/hal/input/evemu_replay.hpp numen/hal/input/input_event.hpp
@@ -117,7 +118,8 @@ numen_install_headers(${PROJECT_SOURCE_DIR}/platform/include
 # progress_bar.hpp, run_summary_text.hpp, trace_columns.hpp) and the studies' building blocks
 # (study_common.hpp, study_stability_cases.hpp).
 numen_install_headers(${PROJECT_SOURCE_DIR}/sim/include
-  numen/sim/admittance_run.hpp numen/sim/bus_spec.hpp numen/sim/computed_motion.hpp
+  numen/sim/admittance_hand.hpp numen/sim/admittance_run.hpp numen/sim/bus_spec.hpp
+  numen/sim/computed_motion.hpp
   numen/sim/device_process.hpp numen/sim/divergence.hpp numen/sim/energy.hpp
   numen/sim/input_error.hpp numen/sim/jigsaws.hpp
   numen/sim/multirate_run.hpp
@@ -128,7 +130,7 @@ numen_install_headers(${PROJECT_SOURCE_DIR}/sim/include
   numen/sim/shipped_files.hpp
   numen/sim/simulated_instrument.hpp numen/sim/study_accuracy.hpp
   numen/sim/study_shard.hpp numen/sim/study_stability.hpp numen/sim/trace.hpp
-  numen/sim/trajectory.hpp
+  numen/sim/trajectory.hpp numen/sim/trajectory_motion.hpp
   numen/sim/trocar_placement.hpp numen/sim/view_output.hpp numen/sim/view_recording.hpp
   numen/sim/view_scene.hpp numen/sim/view_server.hpp)
 

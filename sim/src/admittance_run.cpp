@@ -68,7 +68,8 @@ AdmittanceRunner::AdmittanceRunner(const Scene& scene, std::size_t trace_capacit
                                    std::uint32_t overrun_limit)
     : scene_(&scene),
       bus_(scene.bus),
-      emulator_(scene.device, admittance_of(scene).config, admittance_of(scene).emulator),
+      hand_motion_(scene.device, admittance_of(scene).hand),
+      emulator_(scene.device, admittance_of(scene).config),
       device_(scene.device, admittance_of(scene).config, bus_.controller(), initial_axes(scene),
               device_settings(overrun_limit)),
       data_(core::make_data(scene.model)),
@@ -79,6 +80,8 @@ AdmittanceRunner::AdmittanceRunner(const Scene& scene, std::size_t trace_capacit
       phase_ns_(static_cast<std::int64_t>(std::llround(scene.compute_phase_s * 1e9))),
       divergence_(scene.model, data_) {
   emulator_.set_axis_values(device_.setpoints());
+  hand_motion_.set_axis_values(device_.setpoints());
+  emulator_.set_motion(&hand_motion_);
   if (multirate_.enabled())
     loop_.set_step_function(
         [](void* self) noexcept {
@@ -88,7 +91,7 @@ AdmittanceRunner::AdmittanceRunner(const Scene& scene, std::size_t trace_capacit
         this);
   describe_scene(scene, acc_);
   acc_.admittance.enabled = true;
-  acc_.admittance.k_hand = scene.admittance->emulator.k_hand;
+  acc_.admittance.k_hand = scene.admittance->hand.k_hand;
   acc_.managed = false;
   acc_.startup = "admittance: SYNC, force TPDOs, csp RPDOs (no NMT start-up)";
   view_axis_values_.assign(scene.device.axes.size(), 0.0);
@@ -117,7 +120,7 @@ void AdmittanceRunner::period(std::int64_t deadline_mono_ns, std::int64_t woke_m
   // The hand: where the trajectory puts the controlled frame (through the device's constraint).
   const hal::Kinematics& kin = device_.kinematics();
   hand_ = kin.forward(instrument_axes(scene_->device, kin, scene_->trajectory.at(ts)));
-  emulator_.set_hand(hand_, scene_->trajectory.twist_at(ts));
+  hand_motion_.set_hand(hand_, scene_->trajectory.twist_at(ts));
 
   bus_.set_time_ns(t);
   loop_.begin_period(t, deadline_mono_ns, woke_mono_ns);

@@ -441,7 +441,7 @@ void parse_admittance(const TomlTable& dev, Scene& scene, const hal::DeviceConfi
       a.config.rpdo_cob_ids[i] = static_cast<std::uint32_t>(ids[i]);
     }
   }
-  a.emulator.lag_s = ad->number_in("drive_lag", 0.0, 1.0, a.emulator.lag_s);
+  a.hand.lag_s = ad->number_in("drive_lag", 0.0, 1.0, a.hand.lag_s);
   if (auto fs = ad->table("force_sensor")) {
     fs->allow_only({"node_id", "force_cob_id", "torque_cob_id", "force_scale", "torque_scale",
                     "max_force", "max_torque", "max_age", "position", "orientation"});
@@ -463,10 +463,10 @@ void parse_admittance(const TomlTable& dev, Scene& scene, const hal::DeviceConfi
   }
   if (auto h = ad->table("hand")) {
     h->allow_only({"stiffness", "damping", "rotational_stiffness", "rotational_damping"});
-    a.emulator.k_hand = h->number_in("stiffness", 0.0, kInf, a.emulator.k_hand);
-    a.emulator.c_hand = h->number_in("damping", 0.0, kInf, a.emulator.c_hand);
-    a.emulator.k_hand_rot = h->number_in("rotational_stiffness", 0.0, kInf, a.emulator.k_hand_rot);
-    a.emulator.c_hand_rot = h->number_in("rotational_damping", 0.0, kInf, a.emulator.c_hand_rot);
+    a.hand.k_hand = h->number_in("stiffness", 0.0, kInf, a.hand.k_hand);
+    a.hand.c_hand = h->number_in("damping", 0.0, kInf, a.hand.c_hand);
+    a.hand.k_hand_rot = h->number_in("rotational_stiffness", 0.0, kInf, a.hand.k_hand_rot);
+    a.hand.c_hand_rot = h->number_in("rotational_damping", 0.0, kInf, a.hand.c_hand_rot);
   }
   try {
     hal::validate(cfg, a.config);

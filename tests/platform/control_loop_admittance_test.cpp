@@ -10,6 +10,7 @@
 #include <stdexcept>
 
 #include "alloc_counter.hpp"
+#include "spring_hand.hpp"
 #include "numen/core/rigid_body.hpp"
 #include "numen/hal/emulation/admittance_emulator.hpp"
 #include "numen/hal/canopen/cia402.hpp"
@@ -47,6 +48,11 @@ hal::DeviceConfig tracker() {
 }
 
 /// The loop, the emulated device and the bus of one test (latency 100 µs, phase 300 µs).
+/// The hand's springs and dampers (SpringHand): N/m, N·s/m, N·m/rad, N·m·s/rad.
+struct HandGains {
+  double k, c, k_rot, c_rot;
+};
+
 /// The loop's settings with overruns supervised (a paced loop's).
 platform::ControlLoopSettings paced() {
   platform::ControlLoopSettings s;
@@ -58,26 +64,28 @@ struct Rig {
   core::Model model = ball_model();
   core::Data data = core::make_data(model);
   hal::SimBus bus{hal::SimBusSettings{100'000, 0.0, 0.0, 1, 256}};
+  numen::test::SpringHand motion;
   hal::AdmittanceEmulator emulator;
   hal::AdmittanceDevice device;
   platform::ControlLoop loop;
   core::Pose hand;
   std::int64_t k = 0;
 
-  explicit Rig(const hal::AdmittanceEmulatorSettings& s,
-               const hal::AdmittanceSettings& device_settings = {})
-      : emulator(tracker(), hal::make_admittance_config(tracker()), s),
+  explicit Rig(const HandGains& s, const hal::AdmittanceSettings& device_settings = {})
+      : motion(tracker(), s.k, s.c, s.k_rot, s.c_rot),
+        emulator(tracker(), hal::make_admittance_config(tracker())),
         device(tracker(), hal::make_admittance_config(tracker()), bus.controller(),
                hal::AxisVector::Zero(6), device_settings),
         loop(model, data, device, paced()) {
     emulator.set_axis_values(hal::AxisVector::Zero(6));
+    emulator.set_motion(&motion);
   }
 
   /// One period; `late`: stamped with a deadline 10 periods in the past, so the loop's
   /// statistics find it overran (the next period's supervision sees it, as a paced loop's).
   const platform::PeriodReport& period(bool late = false) {
     const std::int64_t t = k++ * 1'000'000;
-    emulator.set_hand(hand, core::Twist{});
+    motion.hand = hand;
     bus.set_time_ns(t);
     const std::int64_t now = platform::monotonic_now_ns();
     if (late)
@@ -92,15 +100,7 @@ struct Rig {
   hal::LifecycleState state() const { return loop.device().lifecycle(); }
 };
 
-hal::AdmittanceEmulatorSettings hand_settings() {
-  hal::AdmittanceEmulatorSettings s;
-  s.k_hand = 200.0;
-  s.c_hand = 6.0;
-  s.k_hand_rot = 0.05;
-  s.c_hand_rot = 0.004;
-  s.lag_s = 0.002;
-  return s;
-}
+HandGains hand_settings() { return HandGains{200.0, 6.0, 0.05, 0.004}; }
 
 }  // namespace
 

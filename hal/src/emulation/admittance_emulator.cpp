@@ -6,84 +6,49 @@
 #include <span>
 #include <stdexcept>
 
-#include "numen/core/rigid_body.hpp"
 #include "numen/hal/canopen/canopen.hpp"
 #include "numen/hal/canopen/cia402.hpp"
 #include "numen/hal/device/force_sensor.hpp"
 #include "numen/hal/device/kinematics_factory.hpp"
 
 namespace numen::hal {
-namespace {
 
-bool non_negative(double v) noexcept { return std::isfinite(v) && v >= 0.0; }
-
-}  // namespace
-
-AdmittanceEmulator::AdmittanceEmulator(DeviceConfig device, AdmittanceConfig admittance,
-                                       const AdmittanceEmulatorSettings& settings)
+AdmittanceEmulator::AdmittanceEmulator(DeviceConfig device, AdmittanceConfig admittance)
     : device_(std::move(device)),
       admittance_(std::move(admittance)),
-      settings_(settings),
       kinematics_(make_kinematics(device_)),
       rpdo_map_(csp_drive_rpdo_mapping()) {
   validate(device_, admittance_);
-  if (!non_negative(settings.k_hand) || !non_negative(settings.c_hand) ||
-      !non_negative(settings.k_hand_rot) || !non_negative(settings.c_hand_rot) ||
-      !non_negative(settings.lag_s))
-    throw std::invalid_argument(device_.name +
-                                ": hand gains and drive lag must be finite and >= 0");
   const int n = kinematics_->num_axes();
   q_ = AxisVector::Zero(n);
   qdot_ = AxisVector::Zero(n);
-  target_ = AxisVector::Zero(n);
-  hand_pose_ = kinematics_->forward(q_);
+  commands_.torque = AxisVector::Zero(n);
+  commands_.position_target = AxisVector::Zero(n);
 }
 
 void AdmittanceEmulator::set_axis_values(const AxisVector& q) noexcept {
   if (q.size() != q_.size()) return;
   q_ = q;
-  target_ = q;
+  commands_.position_target = q;
   qdot_.setZero();
 }
 
-void AdmittanceEmulator::set_hand(const core::Pose& pose, const core::Twist& twist) noexcept {
-  hand_pose_ = pose;
-  hand_twist_ = twist;
-}
-
 void AdmittanceEmulator::on_sync(const CanFrame& frame, Bus& port) noexcept {
-  const double dt =
-      had_sync_ ? static_cast<double>(frame.timestamp_ns - last_sync_ns_) * 1e-9 : 0.0;
-  last_sync_ns_ = frame.timestamp_ns;
-  had_sync_ = true;
-  const double alpha = settings_.lag_s > 0.0 ? 1.0 - std::exp(-dt / settings_.lag_s) : 1.0;
-  for (int i = 0; i < q_.size(); ++i) {
-    if (!enabled_[static_cast<std::size_t>(i)] || dt <= 0.0) {
-      qdot_[i] = 0.0;
-      continue;
-    }
-    const bool wraps = device_.axes[static_cast<std::size_t>(i)].wraps;
-    const double step = alpha * axis_difference(target_[i], q_[i], wraps);
-    q_[i] = wraps ? wrap_angle(q_[i] + step) : q_[i] + step;
-    qdot_[i] = step / dt;
+  if (const DeviceMotionState* s = move(frame.timestamp_ns, commands_)) {
+    q_ = s->q;
+    qdot_ = s->qdot;
+    hand_wrench_ = s->handle_wrench;
+  } else {
+    qdot_.setZero();
+    hand_wrench_ = core::Wrench{};
   }
-  // The hand's spring–damper on the handle (controlled frame), world.
-  const core::Pose dev = kinematics_->forward(q_);
-  const Jacobian j = kinematics_->jacobian(q_);
-  const core::Vec6 twist = j * qdot_;
-  const core::Vec3 v_dev = twist.head<3>();
-  const core::Vec3 w_dev = twist.tail<3>();
-  hand_wrench_.force = settings_.k_hand * (hand_pose_.position - dev.position) +
-                       settings_.c_hand * (hand_twist_.linear - v_dev);
-  hand_wrench_.torque =
-      settings_.k_hand_rot * core::quat_log(hand_pose_.orientation * dev.orientation.conjugate()) +
-      settings_.c_hand_rot * (hand_twist_.angular - w_dev);
   ++counters_.syncs;
   if (silent_) return;
   // Reported by the sensor: its frame, torque about its origin.
-  const core::Pose& s = admittance_.sensor.sensor_in_tool;
-  const core::Quat r = dev.orientation * s.orientation;
-  const core::Vec3 origin = dev.position + dev.orientation * s.position;
+  const core::Pose dev = kinematics_->forward(q_);
+  const core::Pose& sp = admittance_.sensor.sensor_in_tool;
+  const core::Quat r = dev.orientation * sp.orientation;
+  const core::Vec3 origin = dev.position + dev.orientation * sp.position;
   core::Wrench in_sensor;
   in_sensor.force = r.conjugate() * hand_wrench_.force;
   in_sensor.torque =
@@ -109,22 +74,12 @@ void AdmittanceEmulator::on_frame(const CanFrame& frame, Bus& device_port) noexc
     ++counters_.rpdos;
     const auto cw = static_cast<std::uint16_t>(v[0]);
     const bool enable = decode_controlword(cw) == ControlCommand::kEnableOperation;
-    enabled_[i] = enable ? 1 : 0;
+    commands_.enabled[i] = enable ? 1 : 0;
     if (enable)
-      target_[static_cast<int>(i)] =
+      commands_.position_target[static_cast<int>(i)] =
           counts_to_value(device_.axes[i], static_cast<std::int32_t>(v[1]));
     return;
   }
-}
-
-int AdmittanceEmulator::poll(Bus& device_port, int max_frames) noexcept {
-  int n = 0;
-  CanFrame frame;
-  while (n < max_frames && device_port.read(frame) == IoStatus::kOk) {
-    on_frame(frame, device_port);
-    ++n;
-  }
-  return n;
 }
 
 }  // namespace numen::hal

@@ -417,6 +417,11 @@ void DeviceEmulator::on_frame(const CanFrame& frame, Bus& device_port) noexcept 
     ++counters_.frames_while_killed;
     return;
   }
+  if (is_sync(frame)) {  // where the device is at the SYNC, under the torques it holds
+    commands_.torque = last_torques_;
+    if (const DeviceMotionState* s = move(frame.timestamp_ns, commands_))
+      set_axis_values(s->q.data());
+  }
   if (!managed_) {
     on_frame_minimal(frame, device_port);
     return;
@@ -485,16 +490,6 @@ void DeviceEmulator::on_frame(const CanFrame& frame, Bus& device_port) noexcept 
     return;
   }
   ++counters_.frames_ignored;
-}
-
-int DeviceEmulator::poll(Bus& device_port, int max_frames) noexcept {
-  CanFrame frame;
-  int read = 0;
-  while (read < max_frames && device_port.read(frame) == IoStatus::kOk) {
-    ++read;
-    on_frame(frame, device_port);
-  }
-  return read;
 }
 
 void DeviceEmulator::queue_emcy(std::size_t node, std::uint16_t code,

@@ -1,6 +1,5 @@
 // Tests of hal/admittance_device (controller side: csp RPDOs through inverse kinematics, the
-// measured wrench in the world) and hal/admittance_emulator (device side: drives that follow
-// the set-points, a force sensor measuring the simulated hand).
+// measured wrench in the world, one period against the emulated device).
 #include "numen/hal/device/admittance_device.hpp"
 
 #include <gtest/gtest.h>
@@ -9,6 +8,7 @@
 #include <stdexcept>
 
 #include "alloc_counter.hpp"
+#include "fixed_motion.hpp"
 #include "numen/hal/emulation/admittance_emulator.hpp"
 #include "numen/hal/canopen/canopen.hpp"
 #include "numen/hal/canopen/cia402.hpp"
@@ -126,75 +126,13 @@ TEST(AdmittanceDevice, MeasuredWrenchGoesToTheWorldAboutThePointAsked) {
   EXPECT_TRUE(w.torque.isApprox(Vec3(-0.02, 0.0, 0.01), 1e-12));
 }
 
-TEST(AdmittanceEmulator, DrivesFollowEnabledSetPointsWithAFirstOrderLag) {
-  hal::SimBus bus{hal::SimBusSettings{}};
-  hal::AdmittanceEmulatorSettings st;
-  st.lag_s = 0.002;
-  hal::AdmittanceEmulator emu(tracker(), hal::make_admittance_config(tracker()), st);
-  hal::AdmittanceDevice dev(tracker(), hal::make_admittance_config(tracker()), bus.controller(), zeros());
-  emu.set_axis_values(zeros());
-  core::Pose p;
-  p.position = Vec3(0.004, 0.0, 0.0);
-  dev.set_pose(p);
-  // Disabled (shutdown): the target is ignored, the axis holds.
-  bus.controller().write(hal::make_sync(0));
-  dev.write_setpoints(hal::Controlword::kShutdown, 0);
-  emu.poll(bus.device());
-  bus.set_time_ns(1'000'000);
-  bus.controller().write(hal::make_sync(1'000'000));
-  emu.poll(bus.device());
-  EXPECT_EQ(emu.q()[0], 0.0);
-  EXPECT_FALSE(emu.enabled(0));
-  // Enabled: one SYNC interval (1 ms) later q = 4 mm · (1 − e^{−1/2}).
-  dev.write_setpoints(hal::Controlword::kEnableOperation, 1'000'000);
-  bus.set_time_ns(2'000'000);
-  bus.controller().write(hal::make_sync(2'000'000));
-  emu.poll(bus.device());
-  EXPECT_TRUE(emu.enabled(0));
-  EXPECT_NEAR(emu.q()[0], 0.004 * (1.0 - std::exp(-0.5)), 1e-6);  // 1 µm counts
-  EXPECT_NEAR(emu.qdot()[0], emu.q()[0] / 1e-3, 1e-9);
-  EXPECT_EQ(emu.counters().rpdos, 12u);
-}
-
-TEST(AdmittanceEmulator, SensorReportsTheHandSpringInItsFrame) {
-  hal::SimBus bus{hal::SimBusSettings{}};
-  hal::AdmittanceEmulatorSettings st;
-  st.k_hand = 200.0;
-  st.c_hand = 0.0;
-  hal::AdmittanceConfig a = hal::make_admittance_config(tracker());
-  a.sensor.sensor_in_tool.orientation = Quat(Eigen::AngleAxisd(M_PI, Vec3::UnitX()));  // flipped
-  hal::AdmittanceEmulator emu(tracker(), a, st);
-  emu.set_axis_values(zeros());
-  core::Pose hand;
-  hand.position = Vec3(0.010, 0.0, -0.005);  // 10 mm along x, 5 mm down from the handle
-  emu.set_hand(hand, core::Twist{});
-  bus.controller().write(hal::make_sync(0));
-  emu.poll(bus.device());
-  hal::ForceSensor sensor(a.sensor);
-  std::array<hal::CanFrame, 16> got;
-  const int n = drain(bus.controller(), got);
-  ASSERT_EQ(n, 2);
-  for (int i = 0; i < n; ++i) EXPECT_TRUE(sensor.on_frame(got[static_cast<std::size_t>(i)]));
-  const hal::ForceSample r = sensor.sample(0);
-  ASSERT_TRUE(r.valid);
-  // World (2, 0, −1) N; the sensor frame is turned by π about x: (2, 0, 1) N.
-  EXPECT_NEAR(r.wrench.force.x(), 2.0, 0.01);
-  EXPECT_NEAR(r.wrench.force.y(), 0.0, 0.01);
-  EXPECT_NEAR(r.wrench.force.z(), 1.0, 0.01);
-  EXPECT_TRUE(emu.hand_wrench().force.isApprox(Vec3(2.0, 0.0, -1.0), 1e-12));
-  // Silenced sensor: no TPDOs.
-  emu.set_sensor_silent(true);
-  bus.set_time_ns(1'000'000);
-  bus.controller().write(hal::make_sync(1'000'000));
-  emu.poll(bus.device());
-  EXPECT_EQ(drain(bus.controller(), got), 0);
-}
-
 // One period as a control loop runs it: begin_period (SYNC), read (the sensor's TPDOs),
 // supervise, write_pose; never allocates.
 TEST(AdmittanceDevice, PeriodicCallsDoNotAllocate) {
   hal::SimBus bus{hal::SimBusSettings{}};
-  hal::AdmittanceEmulator emu(tracker(), hal::make_admittance_config(tracker()), {});
+  hal::AdmittanceEmulator emu(tracker(), hal::make_admittance_config(tracker()));
+  numen::test::FixedMotion motion(6);
+  emu.set_motion(&motion);
   hal::AdmittanceDevice dev(tracker(), hal::make_admittance_config(tracker()), bus.controller(), zeros());
   emu.set_axis_values(zeros());
   numen::test::AllocationGuard guard;
@@ -202,9 +140,7 @@ TEST(AdmittanceDevice, PeriodicCallsDoNotAllocate) {
     const std::int64_t t = i * 1'000'000LL;
     bus.set_time_ns(t);
     dev.begin_period(t);
-    core::Pose hand;
-    hand.position = Vec3(0.01 * std::sin(1e-3 * i), 0.0, 0.0);
-    emu.set_hand(hand, core::Twist{});
+    motion.state.handle_wrench.force = Vec3(2.0 * std::sin(1e-3 * i), 0.0, 0.0);
     emu.poll(bus.device());
     (void)dev.read(t);
     (void)dev.supervise(t, false);

@@ -24,6 +24,7 @@
 #include "numen/core/data.hpp"
 #include "numen/hal/device/admittance_device.hpp"
 #include "numen/hal/emulation/admittance_emulator.hpp"
+#include "numen/sim/admittance_hand.hpp"
 #include "numen/hal/transport/sim_bus.hpp"
 #include "numen/platform/control_loop.hpp"
 #include "numen/platform/latency_histogram.hpp"
@@ -102,6 +103,7 @@ class AdmittanceRunner {
  private:
   const Scene* scene_;
   hal::SimBus bus_;
+  AdmittanceHand hand_motion_;  // the emulator's motion: drive lag and the hand's spring
   hal::AdmittanceEmulator emulator_;
   hal::AdmittanceDevice device_;
   core::Data data_;

@@ -13,10 +13,10 @@
 
 #include "numen/core/model.hpp"
 #include "numen/hal/device/admittance_device.hpp"
-#include "numen/hal/emulation/admittance_emulator.hpp"
 #include "numen/hal/device/device_config.hpp"
 #include "numen/hal/transport/sim_bus.hpp"
 #include "numen/platform/device_binding.hpp"
+#include "numen/sim/admittance_hand.hpp"
 #include "numen/sim/trajectory.hpp"
 
 namespace numen::sim {
@@ -37,7 +37,7 @@ struct AttachEvent {
 /// Fig. 2 note): the force sensor and csp RPDOs, and the emulated device's hand and drives.
 struct AdmittanceScene {
   hal::AdmittanceConfig config;               ///< Validated against Scene::device.
-  hal::AdmittanceEmulatorSettings emulator;   ///< The simulated hand (k_hand, c_hand, ...) and drive lag.
+  AdmittanceHandSettings hand;  ///< The simulated hand (k_hand, c_hand, ...) and drive lag.
 };
 
 /// Triangles of one net's surface, as node indices local to the net (0 .. node_count − 1),

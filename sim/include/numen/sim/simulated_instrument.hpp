@@ -1,11 +1,10 @@
 #pragma once
 /// @file simulated_instrument.hpp
-/// The device side of a simulated run: a tracked instrument whose hand follows
-/// a recorded or scripted Trajectory. On each SYNC it latches the trajectory at
-/// the SYNC's bus time, turns the tool pose into axis values by the
-/// instrument's inverse kinematics, and its emulated encoders answer with
-/// quantised position PDOs; its drives receive the torque PDOs. The controller
-/// only ever sees the bus, as on hardware.
+/// The device side of a simulated run: a tracked instrument (hal::DeviceEmulator) whose
+/// motion is a hand replaying a recorded or scripted Trajectory (TrajectoryMotion). On each
+/// SYNC the emulator asks the motion for the axis values at the SYNC's bus time, and its
+/// emulated encoders answer with quantised position PDOs; its drives receive the torque PDOs.
+/// The controller only ever sees the bus, as on hardware.
 
 #include <cstdint>
 #include <memory>
@@ -15,16 +14,9 @@
 #include "numen/hal/emulation/device_emulator.hpp"
 #include "numen/hal/device/kinematics.hpp"
 #include "numen/sim/trajectory.hpp"
+#include "numen/sim/trajectory_motion.hpp"
 
 namespace numen::sim {
-
-/// Axis values (m or rad) that put an instrument of `config` (with its
-/// `kinematics`, built from the same config) at the tool-frame pose of
-/// `sample`: trocar instrument — inverse kinematics of the tip through the
-/// trocar, jaw from the sample; pose tracker — inverse kinematics of the
-/// tracked frame · tool_offset. noexcept, no allocation.
-hal::AxisVector instrument_axes(const hal::DeviceConfig& config, const hal::Kinematics& kinematics,
-                                const TrajectorySample& sample) noexcept;
 
 /// A simulated instrument on the device port of a bus. Construction allocates
 /// and may throw std::invalid_argument (invalid config); poll() is noexcept
@@ -34,11 +26,13 @@ class SimulatedInstrument {
   /// `trajectory` is the world pose of the tool frame (trocar instrument: the
   /// tip, z along the shaft; pose tracker: the tracked frame) and must outlive
   /// this object. Time 0 of the trajectory is bus time `start_ns`.
+  SimulatedInstrument(const SimulatedInstrument&) = delete;  // the emulator points at motion_
+  SimulatedInstrument& operator=(const SimulatedInstrument&) = delete;
   SimulatedInstrument(const hal::DeviceConfig& config, const Trajectory& trajectory,
                       std::int64_t start_ns = 0);
 
-  /// Handles every frame pending on `device_port`: a SYNC latches the axis
-  /// values of the trajectory at the SYNC's timestamp and is answered by the
+  /// Handles every frame pending on `device_port` (DeviceEmulator::poll()): a SYNC latches
+  /// the axis values of the trajectory at the SYNC's timestamp and is answered by the
   /// encoders (and, managed stack, the drives); torque / drive RPDOs update
   /// last_torques(). Then, if `now_ns` >= 0 (bus time), the managed stack's
   /// time-driven part (DeviceEmulator::tick(): boot-ups, heartbeats, the
@@ -47,9 +41,9 @@ class SimulatedInstrument {
   /// Makes trajectory time 0 the timestamp of the next SYNC received (a device process on a
   /// real bus, `numen device`: the controller starts whenever it starts; bus time is
   /// CLOCK_MONOTONIC). Until that SYNC, axes_at() uses the start given at construction.
-  void start_at_next_sync() noexcept { start_at_sync_ = true; }
+  void start_at_next_sync() noexcept { motion_.start_at_next_sync(); }
   /// Bus time (ns) at which the trajectory starts.
-  std::int64_t start_ns() const noexcept { return start_ns_; }
+  std::int64_t start_ns() const noexcept { return motion_.start_ns(); }
 
   /// Axis values of the trajectory at bus time `t_ns` (m or rad).
   hal::AxisVector axes_at(std::int64_t t_ns) const noexcept;
@@ -61,14 +55,12 @@ class SimulatedInstrument {
   const hal::AxisVector& last_torques() const noexcept { return emulator_.last_torques(); }
   const hal::DeviceEmulator& emulator() const noexcept { return emulator_; }
   hal::DeviceEmulator& emulator() noexcept { return emulator_; }
-  const hal::Kinematics& kinematics() const noexcept { return *kinematics_; }
+  const hal::Kinematics& kinematics() const noexcept { return motion_.kinematics(); }
+  /// The hand's motion (TrajectoryMotion).
+  const TrajectoryMotion& motion() const noexcept { return motion_; }
 
  private:
-  hal::DeviceConfig config_;
-  const Trajectory* trajectory_;
-  std::int64_t start_ns_;
-  bool start_at_sync_ = false;
-  std::unique_ptr<hal::Kinematics> kinematics_;
+  TrajectoryMotion motion_;
   hal::DeviceEmulator emulator_;
 };
 

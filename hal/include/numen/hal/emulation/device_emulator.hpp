@@ -37,6 +37,7 @@
 #include <memory>
 #include <vector>
 
+#include "numen/hal/emulation/emulated_device.hpp"
 #include "numen/hal/transport/bus.hpp"
 #include "numen/hal/transport/can_frame.hpp"
 #include "numen/hal/canopen/cia402.hpp"
@@ -83,7 +84,7 @@ struct EmulatorCounters {
 inline constexpr std::uint32_t kEmulatorVendorId = 0x00000000;
 
 /// Emulated encoders and drives of one instrument. Not thread safe.
-class DeviceEmulator {
+class DeviceEmulator final : public EmulatedDevice {
  public:
   /// Throws std::invalid_argument if validate(config) does. Axis values start at 0. Managed
   /// stack: every node powered on, in initialisation (its boot-up message goes out at the
@@ -108,12 +109,10 @@ class DeviceEmulator {
   /// operational) sets the drive's controlword / target torque for the next SYNC; a SYNC steps
   /// every drive with them and, on operational nodes, sends the encoder and drive TPDOs; the
   /// controller's heartbeat feeds the nodes' consumers. Other frames are ignored. While
-  /// killed every frame is discarded (counted in frames_while_killed).
-  void on_frame(const CanFrame& frame, Bus& device_port) noexcept;
-
-  /// Reads up to `max_frames` frames from `device_port` and handles each with on_frame()
-  /// (discards them while killed). Returns the number read.
-  int poll(Bus& device_port, int max_frames = 256) noexcept;
+  /// killed every frame is discarded (counted in frames_while_killed). A SYNC first asks the
+  /// motion (set_motion()) for the axis values at its timestamp, the drives holding
+  /// last_torques(), and sets them (set_axis_values()).
+  void on_frame(const CanFrame& frame, Bus& device_port) noexcept override;
 
   /// Managed stack, once per period at bus time `now_ns` (after poll()): boot-up messages of
   /// nodes in initialisation (power-on, reset) — the node enters pre-operational and starts its
@@ -121,7 +120,7 @@ class DeviceEmulator {
   /// the node's drives), EMCY messages queued (injected faults, heartbeat loss, abort
   /// connection; an EMCY error reset 0x0000 after a drive's fault reset). Nothing while killed
   /// or in the minimal protocol.
-  void tick(std::int64_t now_ns, Bus& device_port) noexcept;
+  void tick(std::int64_t now_ns, Bus& device_port) noexcept override;
 
   /// Managed stack: drive of `axis` faults now (CiA 402 transition 13, error code `code`,
   /// zero torque); an EMCY {code, error register generic + the code's class bit} goes out at
@@ -219,6 +218,7 @@ class DeviceEmulator {
   std::array<bool, kMaxAxes> silent_{};
   std::array<std::int32_t, kMaxAxes> counts_{};
   AxisVector last_torques_;
+  DriveCommands commands_;  // what the motion is told at a SYNC (torque = last_torques_)
   std::array<std::int16_t, kMaxAxes> last_per_mille_{};
   // Managed stack.
   std::vector<Node> nodes_;
