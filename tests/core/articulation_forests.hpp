@@ -56,7 +56,8 @@ constexpr TypeChoice kTypes[] = {
 };
 
 inline core::JointModel joint(const std::string& name, int parent, int child,
-                       core::JointType type = core::JointType::kRevolute, bool prescribed = false) {
+                              core::JointType type = core::JointType::kRevolute,
+                              bool prescribed = false) {
   core::JointModel j;
   j.name = name;
   j.type = type;

@@ -58,8 +58,8 @@ struct NetParams {
 /// Body 0, the rigid component of one net (no spheres), attached to the
 /// device; its target starts at its initial pose.
 inline core::Model net_model(core::Integrator integ, core::CouplingMode mode, double dt,
-                      const core::TriangleMesh& mesh, const NetParams& p, const Vec3& gravity,
-                      double body_mass = 0.1) {
+                             const core::TriangleMesh& mesh, const NetParams& p,
+                             const Vec3& gravity, double body_mass = 0.1) {
   core::Model m;
   m.dt = dt;
   m.gravity = gravity;

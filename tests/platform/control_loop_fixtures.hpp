@@ -20,7 +20,6 @@
 
 namespace numen::test::control_loop_fixtures {
 
-
 using numen::core::Pose;
 using numen::core::Quat;
 using numen::core::Vec3;
@@ -36,7 +35,7 @@ constexpr std::int64_t kPhase = 250'000;
 
 inline numen::hal::DeviceConfig trocar_config() {
   numen::hal::DeviceConfig c = numen::hal::make_default_trocar_config(1);
-  c.canopen.managed = false;  // the minimal protocol; managed_config() below for the full stack
+  c.canopen.managed = false;  // the minimal protocol; managed_config() for the full stack
   c.trocar.point = Vec3(0.0, 0.0, 0.2);
   c.trocar.orientation = Quat(Eigen::AngleAxisd(std::numbers::pi, Vec3::UnitX()));
   c.control_period_s = 1e-3;

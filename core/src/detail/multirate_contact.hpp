@@ -14,7 +14,8 @@
 namespace numen::core::detail {
 
 /// True when exactly one side of `c` is a body of the god-object; `on_a` says which.
-inline bool god_object_contact(const Contact& c, std::span<const int> device_body, bool& on_a) noexcept {
+inline bool god_object_contact(const Contact& c, std::span<const int> device_body,
+                               bool& on_a) noexcept {
   on_a = in_god_object(device_body, c.body_a);
   return on_a != in_god_object(device_body, c.body_b);
 }

@@ -22,11 +22,12 @@ constexpr std::int64_t kMs = 1'000'000;
 using hal::FaultRecord;
 
 inline void expect_record(const FaultRecord* r, FC cause, std::uint8_t id, std::uint64_t period,
-                   std::int64_t time_ns, const std::string& what) {
+                          std::int64_t time_ns, const std::string& what) {
   ASSERT_NE(r, nullptr) << what;
   EXPECT_EQ(r->cause, cause) << what << ": got " << to_string(r->cause);
   EXPECT_EQ(r->id, id) << what;
   EXPECT_EQ(r->period, period) << what;
   EXPECT_EQ(r->time_ns, time_ns) << what;
 }
+
 }  // namespace numen::test::safety_records
