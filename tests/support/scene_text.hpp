@@ -2,13 +2,15 @@
 /// @file scene_text.hpp
 /// Helpers of the scene-file tests (tests/sim/scene*_test.cpp): locate a
 /// needle in a scene text (1-based line and column, as InputError reports
-/// them), edit a template scene, and load a text expecting an InputError.
+/// them), edit a template scene, load a text expecting an InputError, and check where
+/// the error is located.
 /// Header-only; include from numen::sim test files only.
 
 #include <gtest/gtest.h>
 
 #include <cstdio>
 #include <exception>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
@@ -137,6 +139,30 @@ inline sim::InputError load_error(const TempDir& dir, const std::string& text,
   }
   ADD_FAILURE() << "expected InputError, the scene loaded:\n" << text;
   return sim::InputError(path, 0, 0, "", "no error");
+}
+
+/// what() must contain the scene file's name, the line (and column), the key and `message`.
+inline void expect_located(const sim::InputError& e, const std::string& file, int line, int column,
+                           const std::string& key, const std::string& message) {
+  const std::string what = e.what();
+  SCOPED_TRACE(what);
+  EXPECT_EQ(e.file(), file);
+  EXPECT_NE(what.find(std::filesystem::path(file).filename().string()), std::string::npos)
+      << "file name";
+  EXPECT_GT(line, 0) << "test bug: the line was not found in the template";
+  EXPECT_EQ(e.line(), line);
+  std::ostringstream place;
+  place << ':' << line << ':';
+  if (column > 0) {
+    EXPECT_EQ(e.column(), column);
+    place << column << ':';
+  }
+  EXPECT_NE(what.find(place.str()), std::string::npos) << place.str();
+  if (!key.empty()) {
+    EXPECT_EQ(e.key(), key);
+    EXPECT_NE(what.find(key), std::string::npos) << "dotted key";
+  }
+  EXPECT_NE(e.message().find(message), std::string::npos) << "message: " << e.message();
 }
 
 }  // namespace numen::test

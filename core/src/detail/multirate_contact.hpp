@@ -1,0 +1,46 @@
+#pragma once
+/// @file multirate_contact.hpp
+/// The contacts of a multirate god-object seen by both loops (docs/multirate.md): which contact
+/// is the god-object's, and the force a contact applied over a step (the impulse hand-back).
+/// Private to numen::core (multirate.cpp, multirate_god_object.cpp).
+
+#include <span>
+
+#include "numen/core/data.hpp"
+
+#include "detail/multirate_net.hpp"
+#include "detail/solver_scratch.hpp"
+
+namespace numen::core::detail {
+
+/// True when exactly one side of `c` is a body of the god-object; `on_a` says which.
+inline bool god_object_contact(const Contact& c, std::span<const int> device_body,
+                               bool& on_a) noexcept {
+  on_a = in_god_object(device_body, c.body_a);
+  return on_a != in_god_object(device_body, c.body_b);
+}
+
+/// The force a contact of the last step applied to its body a over the step (N, world): for
+/// the linearly implicit Euler F₀ + K h v₁ + D Δv on the contact's relative velocity
+/// v = (v_a + ω_a × r_a) − (v_b + ω_b × r_b) − surface velocity (the linearisation the step
+/// solved, integrator.cpp: v₁'s normal part is the step's start value ContactTerm::
+/// normal_velocity plus its change; docs/multirate.md), for the symplectic Euler F₀. `a0`, `a1`,
+/// `b0`, `b1`: the bodies' states at the step's start and end (b null: static, its surface
+/// moving at a constant velocity).
+inline Vec3 effective_contact_force(const Contact& c, const ContactTerm& t, bool implicit, double h,
+                                    const BodyState& a0, const BodyState& a1, const BodyState* b0,
+                                    const BodyState* b1) noexcept {
+  Vec3 f = c.force;
+  if (!implicit) return f;
+  const auto point_velocity = [](const BodyState& s, const Vec3& r) {
+    return Vec3(s.linear_velocity + s.angular_velocity.cross(r));
+  };
+  Vec3 dv = point_velocity(a1, t.r_a) - point_velocity(a0, t.r_a);
+  if (b0 != nullptr && b1 != nullptr) dv -= point_velocity(*b1, t.r_b) - point_velocity(*b0, t.r_b);
+  const Vec3& n = c.normal;
+  f -= (t.stiffness * h * (t.normal_velocity + n.dot(dv)) + t.damping * n.dot(dv)) * n;
+  f -= t.friction * (dv - n.dot(dv) * n);
+  return f;
+}
+
+}  // namespace numen::core::detail

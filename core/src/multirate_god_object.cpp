@@ -1,0 +1,586 @@
+/// @file multirate_god_object.cpp
+/// The two loops of a multirate god-object interleaved on one thread (MultirateGodObject,
+/// multirate.hpp, docs/multirate.md): the exchange of device reports and scene models, tool
+/// switching, the single-rate view.
+
+#include "numen/core/multirate.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "numen/core/collision.hpp"
+#include "numen/core/data.hpp"
+#include "numen/core/features.hpp"
+#include "numen/core/model.hpp"
+#include "numen/core/net_collision.hpp"
+#include "numen/core/step.hpp"
+
+#include "detail/data_scratch.hpp"
+#include "detail/multirate_contact.hpp"
+#include "detail/multirate_net.hpp"
+
+namespace numen::core {
+namespace {
+
+/// The scene loop's contact stage: detection, the planes of the god-object's contacts (before
+/// any body moves), then those contacts cut back to the god-object's true spheres (the
+/// proximity model grew them by the margin): depth − δ, the middle of the overlap δ/2 back
+/// towards the god-object; a contact left without depth is dropped, and so is one between two
+/// bodies of the god-object (the scene-loop model has not their joints). With nets
+/// (Model::caller_node_contacts), the node contacts likewise: detected, their node planes
+/// built, cut back.
+struct SampleContext {
+  ContactPlaneSet* planes;
+  std::span<const int> device_body;  // per scene body: god-object model index or −1
+  double margin;
+  double device_dt;
+  detail::NodePlaneScratch node_scratch;
+};
+
+using detail::in_god_object;
+using detail::effective_contact_force;
+using detail::god_object_contact;
+
+void detect_and_build_planes(const Model& model, Data& data, const void* context) noexcept {
+  const auto* c = static_cast<const SampleContext*>(context);
+  detect_contacts(model, data);
+  build_contact_planes(model, data, c->device_body, c->device_dt, *c->planes);
+  int kept = 0;
+  double deepest = 0.0;
+  const int n = std::clamp(data.num_contacts, 0, kMaxContacts);
+  for (int i = 0; i < n; ++i) {
+    Contact k = data.contacts[static_cast<std::size_t>(i)];
+    // Two bodies of the god-object's articulation: its joints are the device loop's, and one
+    // articulation never collides with itself (ArticulationTopology::body_tree).
+    if (in_god_object(c->device_body, k.body_a) && in_god_object(c->device_body, k.body_b)) continue;
+    bool on_a = false;
+    if (c->margin > 0.0 && god_object_contact(k, c->device_body, on_a)) {
+      k.depth -= c->margin;
+      if (!(k.depth > 0.0)) continue;
+      k.position += (0.5 * c->margin) * (on_a ? k.normal : Vec3(-k.normal));
+    }
+    deepest = std::max(deepest, k.depth);
+    data.contacts[static_cast<std::size_t>(kept++)] = k;
+  }
+  data.num_contacts = kept;
+  data.max_penetration = deepest;
+  if constexpr (kWithDeformable) {
+    if (model.caller_node_contacts) {
+      detect_node_contacts(model, data);
+      detail::build_node_planes(model, data, c->device_body, c->margin, c->node_scratch, *c->planes);
+      detail::cut_back_node_contacts(model, data, c->device_body, c->margin, deepest);
+    }
+  }
+}
+
+}  // namespace
+
+MultirateGodObject::MultirateGodObject(const Model& scene, int body, const MultirateSettings& settings)
+    : ratio_(settings.ratio), margin_(settings.margin), body_(body) {
+  if (settings.ratio < 1)
+    throw std::invalid_argument("multirate: the rate ratio scene_dt / dt must be >= 1 (got " +
+                                std::to_string(settings.ratio) + ")");
+  if (!(settings.margin >= 0.0) || !std::isfinite(settings.margin))
+    throw std::invalid_argument("multirate: the contact margin must be >= 0 m and finite (got " +
+                                std::to_string(settings.margin) + ")");
+  std::vector<int> bodies;
+  if (body >= 0) bodies.push_back(body);
+  for (int t : settings.tools)
+    if (std::find(bodies.begin(), bodies.end(), t) == bodies.end()) bodies.push_back(t);
+  if (bodies.empty())
+    throw std::invalid_argument("multirate: no god-object: the device holds no body and has no tools");
+  std::size_t largest = 1;
+  for (int b : bodies) {
+    Slot s;
+    s.body = b;
+    std::string error = make_god_object_model(scene, b, scene.dt, s.device_model);
+    if (error.empty()) error = make_proximity_model(scene, b, settings.margin, s.scene_model);
+    if (!error.empty()) throw std::invalid_argument(error);
+    s.bodies = god_object_bodies(scene, b);
+    s.device_body.assign(scene.bodies.size(), -1);
+    for (std::size_t i = 0; i < s.bodies.size(); ++i)
+      s.device_body[static_cast<std::size_t>(s.bodies[i])] = static_cast<int>(i);
+    for (std::size_t j = 0; j < scene.joints.size(); ++j)
+      if (s.device_body[static_cast<std::size_t>(scene.joints[j].child)] >= 0)
+        s.joints.push_back(static_cast<int>(j));
+    largest = std::max(largest, s.bodies.size());
+    s.scene_model.dt = scene.dt * settings.ratio;
+    // The god-object moves in the scene loop as the device loop moved it: imposed (kDirect, an
+    // infinitely heavy body for the scene's implicit solve: the held body by the target, the
+    // rest of its articulation by their body targets), its joints left to the device loop.
+    s.scene_model.coupling_mode = CouplingMode::kDirect;
+    s.scene_model.initial_attached_body = b;
+    std::vector<JointModel> kept;
+    for (std::size_t j = 0; j < s.scene_model.joints.size(); ++j)
+      if (s.device_body[static_cast<std::size_t>(s.scene_model.joints[j].child)] < 0) {
+        kept.push_back(s.scene_model.joints[j]);
+        s.scene_joints.push_back(static_cast<int>(j));
+      }
+    s.scene_model.joints = std::move(kept);
+    // With nets, the scene loop's contact stage detects the node contacts itself (node planes).
+    s.scene_model.caller_node_contacts = s.scene_model.num_nets() > 0;
+    error = finalize_model(s.scene_model);
+    if (!error.empty()) throw std::invalid_argument("multirate: scene-loop model: " + error);
+    s.device = make_data(s.device_model);
+    s.scene = make_data(s.scene_model);
+    slots_.push_back(std::move(s));
+  }
+  for (const NetModel& net : scene.nets) {
+    bool held = false;
+    for (const Slot& s : slots_)
+      held = held || std::find(s.bodies.begin(), s.bodies.end(), net.body) != s.bodies.end();
+    if (!held)
+      throw std::invalid_argument("multirate: net '" + net.name +
+                                  "' is on a body in no god-object the device may hold: the "
+                                  "device loop would not feel it");
+  }
+  free_scene_model_ = scene;
+  free_scene_model_.dt = scene.dt * settings.ratio;
+  free_scene_model_.initial_attached_body = -1;
+  if (std::string error = finalize_model(free_scene_model_); !error.empty())
+    throw std::invalid_argument("multirate: scene-loop model: " + error);
+  free_scene_ = make_data(free_scene_model_);
+  for (std::size_t j = 0; j < scene.joints.size(); ++j) free_joints_.push_back(static_cast<int>(j));
+  scene_slot_ = slot_ = body >= 0 ? 0 : -1;
+  scene_ = body >= 0 ? &slots_[0].scene : &free_scene_;
+  scene_->attached_body = body;
+  for (Slot& s : slots_)
+    for (std::size_t i = 0; i < s.bodies.size(); ++i)
+      s.device.bodies[i] = scene_->bodies[static_cast<std::size_t>(s.bodies[i])];
+  const std::size_t nb = scene.bodies.size();
+  impulse_total_.assign(nb, Wrench{});
+  owed_.assign(nb, Wrench{});
+  seen_total_.assign(nb, Wrench{});
+  base_applied_.assign(nb, Wrench{});
+  released_states_.assign(largest, BodyState{});
+  snapshot_.bodies = scene_->bodies;
+  snapshot_.joints.assign(scene.joints.size(), JointState{});
+  snapshot_.nodes = scene_->nodes;
+  snapshot_.node_contacts.assign(scene_->node_contacts.size(), NodeContact{});
+  snapshot_.nets = scene_->nets;
+  if (scene.num_nets() > 0) {
+    node_slot_.assign(static_cast<std::size_t>(scene.num_nodes()), -1);
+    slot_node_.assign(kMaxContactPlanes, -1);
+    node_stiffness_.assign(kMaxContactPlanes, Mat3::Zero());
+    plane_slot_.assign(kMaxContactPlanes, -1);
+    planes_stiffness_.assign(kMaxContactPlanes, 0.0);
+    planes_depth_.assign(kMaxContactPlanes, 0.0);
+  }
+  report_ = make_report();
+  model_ = make_scene_model();
+}
+
+MultirateDeviceReport MultirateGodObject::make_report() const {
+  MultirateDeviceReport r;
+  r.impulse_total.assign(impulse_total_.size(), Wrench{});
+  r.states.assign(released_states_.size(), BodyState{});
+  r.released_states.assign(released_states_.size(), BodyState{});
+  write_report(r);
+  return r;
+}
+
+MultirateSceneModel MultirateGodObject::make_scene_model() const {
+  MultirateSceneModel m;
+  m.scene.bodies = snapshot_.bodies;
+  m.scene.joints = snapshot_.joints;
+  m.scene.nodes = snapshot_.nodes;
+  m.scene.node_contacts = snapshot_.node_contacts;
+  m.scene.nets = snapshot_.nets;
+  return m;
+}
+
+int MultirateGodObject::slot_of(int body) const noexcept {
+  for (std::size_t i = 0; i < slots_.size(); ++i)
+    if (slots_[i].body == body) return static_cast<int>(i);
+  return -1;
+}
+
+Wrench MultirateGodObject::owed_impulse(int b) const noexcept {
+  Wrench w;
+  if (b < 0 || b >= static_cast<int>(owed_.size())) return w;
+  const auto i = static_cast<std::size_t>(b);
+  w.force = owed_[i].force + impulse_total_[i].force - seen_total_[i].force;
+  w.torque = owed_[i].torque + impulse_total_[i].torque - seen_total_[i].torque;
+  return w;
+}
+
+std::span<const int> MultirateGodObject::god_object() const noexcept {
+  if (slot_ < 0) return {};
+  return std::span<const int>(slot().bodies);
+}
+
+void MultirateGodObject::take_targets(const Data& scene_data) noexcept {
+  if (slot_ < 0) return;
+  Slot& s = slot();
+  Data& d = s.device;
+  d.target = scene_data.target;
+  d.target_twist = scene_data.target_twist;
+  d.device_wrench = scene_data.device_wrench;  // CouplingMode::kAdmittance (Data::device_wrench)
+  for (std::size_t i = 0; i < s.bodies.size(); ++i) {
+    const auto b = static_cast<std::size_t>(s.bodies[i]);
+    if (b < scene_data.body_targets.size()) d.body_targets[i] = scene_data.body_targets[b];
+  }
+  for (std::size_t j = 0; j < s.joints.size(); ++j) {
+    const auto sj = static_cast<std::size_t>(s.joints[j]);
+    if (sj < scene_data.joint_prescribed.size()) d.joint_prescribed[j] = scene_data.joint_prescribed[sj];
+  }
+}
+
+bool MultirateGodObject::select(int body) noexcept {
+  if (body == body_) return true;
+  const int next = body >= 0 ? slot_of(body) : -1;
+  if (body >= 0 && next < 0) return false;
+  released_body_ = body_;
+  if (slot_ >= 0) {
+    const Slot& old = slot();
+    for (std::size_t i = 0; i < old.bodies.size() && i < released_states_.size(); ++i)
+      released_states_[i] = old.device.bodies[i];
+  }
+  slot_ = next;
+  body_ = body;
+  if (slot_ >= 0) {
+    Slot& s = slot();
+    for (std::size_t i = 0; i < s.bodies.size(); ++i)
+      s.device.bodies[i] = snapshot_.bodies[static_cast<std::size_t>(s.bodies[i])];
+    s.device.num_contacts = 0;
+  }
+  planes_.count = 0;
+  planes_.carrier_count = 0;
+  period_ = 0;  // one thread: a scene period now, the new god-object's planes
+  ++switches_;
+  ++counters_.switches;
+  return true;
+}
+
+void MultirateGodObject::write_report(MultirateDeviceReport& out) const noexcept {
+  out.period = counters_.device_steps;
+  out.body = body_;
+  if (slot_ >= 0) {
+    const Slot& s = slot();
+    for (std::size_t i = 0; i < s.bodies.size() && i < out.states.size(); ++i) out.states[i] = s.device.bodies[i];
+  }
+  const std::size_t n = std::min(out.impulse_total.size(), impulse_total_.size());
+  for (std::size_t b = 0; b < n; ++b) out.impulse_total[b] = impulse_total_[b];
+  out.switches = switches_;
+  out.released_body = released_body_;
+  for (std::size_t i = 0; i < out.released_states.size() && i < released_states_.size(); ++i)
+    out.released_states[i] = released_states_[i];
+}
+
+void MultirateGodObject::scene_step(const MultirateDeviceReport& in, MultirateSceneModel& out) noexcept {
+  // A switch: the released god-object continues in the scene loop where the device left it.
+  if (in.switches != seen_switches_) {
+    seen_switches_ = in.switches;
+    const int released = in.released_body >= 0 ? slot_of(in.released_body) : -1;
+    if (released >= 0) {
+      const Slot& r = slots_[static_cast<std::size_t>(released)];
+      for (std::size_t i = 0; i < r.bodies.size() && i < in.released_states.size(); ++i) {
+        const auto b = static_cast<std::size_t>(r.bodies[i]);
+        scene_->bodies[b] = in.released_states[i];
+        scene_->body_targets[b].enabled = false;  // no longer imposed
+      }
+    }
+  }
+  const int body = in.body >= 0 && slot_of(in.body) >= 0 ? in.body : -1;
+  const int next_slot = body >= 0 ? slot_of(body) : -1;
+  if (next_slot != scene_slot_) {  // another scene-loop model: its Data takes the scene's state
+    Data& next = next_slot >= 0 ? slots_[static_cast<std::size_t>(next_slot)].scene : free_scene_;
+    for (std::size_t b = 0; b < next.bodies.size() && b < scene_->bodies.size(); ++b) {
+      next.bodies[b] = scene_->bodies[b];
+      next.applied_wrench[b] = scene_->applied_wrench[b];
+      next.body_targets[b] = scene_->body_targets[b];
+    }
+    detail::copy_nets(*scene_, next);  // same sizes: the scene-loop models all have the scene's nets
+    next.time = scene_->time;
+    next.step_count = scene_->step_count;
+    scene_ = &next;
+    scene_slot_ = next_slot;
+  }
+  scene_->attached_body = body;
+  const std::vector<int>& scene_joints =
+      scene_slot_ >= 0 ? slots_[static_cast<std::size_t>(scene_slot_)].scene_joints : free_joints_;
+  static const std::vector<int> kNone;
+  const std::vector<int>& device_body = scene_slot_ >= 0 ? slots_[static_cast<std::size_t>(scene_slot_)].device_body : kNone;
+  const std::vector<int>& god = scene_slot_ >= 0 ? slots_[static_cast<std::size_t>(scene_slot_)].bodies : kNone;
+  const Model& model = scene_model();
+  const double h = model.dt;
+  const std::size_t nb = owed_.size();
+  // What the device loop's planes gave each body since the last scene step.
+  for (std::size_t b = 0; b < nb && b < in.impulse_total.size(); ++b) {
+    owed_[b].force += in.impulse_total[b].force - seen_total_[b].force;
+    owed_[b].torque += in.impulse_total[b].torque - seen_total_[b].torque;
+    seen_total_[b] = in.impulse_total[b];
+  }
+  // The god-object's poses and twists, imposed over the scene step: the held body by the
+  // target, the rest of its articulation by their body targets.
+  for (std::size_t i = 0; i < god.size() && i < in.states.size(); ++i) {
+    const auto b = static_cast<std::size_t>(god[i]);
+    const BodyState& g = in.states[i];
+    Pose pose;
+    pose.position = g.position;
+    pose.orientation = g.orientation;
+    Twist twist;
+    twist.linear = g.linear_velocity;
+    twist.angular = g.angular_velocity;
+    if (god[i] == body) {
+      scene_->target = pose;
+      scene_->target_twist = twist;
+    } else {
+      BodyTarget& t = scene_->body_targets[b];
+      t.pose = pose;
+      t.twist = twist;
+      t.enabled = true;
+    }
+    scene_->bodies[b] = g;
+  }
+  // What each scene body is owed (the device loop's impulses less what the scene's own contact
+  // with the god-object gave it), applied over this step.
+  for (std::size_t b = 0; b < nb; ++b) {
+    base_applied_[b] = scene_->applied_wrench[b];
+    scene_->applied_wrench[b].force += owed_[b].force / h;
+    scene_->applied_wrench[b].torque += owed_[b].torque / h;
+    owed_[b] = Wrench{};
+  }
+  SampleContext context{&out.planes, std::span<const int>(device_body.data(), device_body.size()),
+                        body >= 0 ? margin_ : 0.0, slots_.front().device_model.dt,
+                        detail::NodePlaneScratch{node_slot_, slot_node_, node_stiffness_, plane_slot_,
+                                                 planes_stiffness_, planes_depth_}};
+  step_with_contacts(model, *scene_, &detect_and_build_planes, &context);
+  const bool rejected = (scene_->status & kNonFinite) != 0;
+  for (std::size_t b = 0; b < nb; ++b) {
+    if (rejected) {  // rolled back: what was owed is still owed
+      owed_[b].force = h * (scene_->applied_wrench[b].force - base_applied_[b].force);
+      owed_[b].torque = h * (scene_->applied_wrench[b].torque - base_applied_[b].torque);
+    }
+    scene_->applied_wrench[b] = base_applied_[b];
+  }
+  // The impulse the scene step's god-object contacts gave each scene body: already received,
+  // so no longer owed.
+  if (!rejected && body >= 0) {
+    const bool implicit = model.integrator == Integrator::kLinearlyImplicitEuler;
+    const int n = std::clamp(scene_->num_contacts, 0, kMaxContacts);
+    for (int i = 0; i < n; ++i) {
+      const Contact& c = scene_->contacts[static_cast<std::size_t>(i)];
+      const ContactTerm& t = scene_->scratch->solver.contact_terms[static_cast<std::size_t>(i)];
+      bool on_a = false;
+      if (!t.active || !god_object_contact(c, device_body, on_a) || c.body_a < 0 || c.body_b < 0) continue;
+      const auto a = static_cast<std::size_t>(c.body_a);
+      const auto b = static_cast<std::size_t>(c.body_b);
+      const std::vector<BodyState>& before = scene_->scratch->solver.saved_state;  // the step's start
+      const Vec3 f = effective_contact_force(c, t, implicit, h, before[a], scene_->bodies[a],
+                                             &before[b], &scene_->bodies[b]);
+      // The other body's share: −f if it is b, +f if it is a.
+      const Vec3 on_other = on_a ? Vec3(-f) : f;
+      const Vec3& r = on_a ? t.r_b : t.r_a;
+      Wrench& w = owed_[on_a ? b : a];
+      w.force -= h * on_other;
+      w.torque -= h * r.cross(on_other);
+      ++counters_.scene_contacts;
+    }
+  }
+  for (std::size_t i = 0; i < god.size() && i < in.states.size(); ++i)
+    scene_->bodies[static_cast<std::size_t>(god[i])] = in.states[i];
+  ++counters_.scene_steps;
+  counters_.planes_dropped += out.planes.dropped;
+  counters_.planes_max = std::max<std::int64_t>(counters_.planes_max, out.planes.count);
+  // The model: the planes (above), the tools' states, the snapshot of the scene.
+  out.body = body;
+  out.sample_period = in.period;
+  MultirateSceneSnapshot& snap = out.scene;
+  for (std::size_t b = 0; b < snap.bodies.size() && b < scene_->bodies.size(); ++b) snap.bodies[b] = scene_->bodies[b];
+  for (std::size_t j = 0; j < scene_joints.size() && j < scene_->joints.size(); ++j) {
+    const auto sj = static_cast<std::size_t>(scene_joints[j]);
+    if (sj < snap.joints.size()) snap.joints[sj] = scene_->joints[j];
+  }
+  int count = 0;
+  const int ns = std::clamp(scene_->num_contacts, 0, kMaxContacts);
+  for (int i = 0; i < ns; ++i) {
+    const Contact& c = scene_->contacts[static_cast<std::size_t>(i)];
+    bool on_a = false;
+    if (god_object_contact(c, device_body, on_a)) continue;  // the device loop's
+    snap.contacts[static_cast<std::size_t>(count++)] = c;
+  }
+  snap.num_contacts = count;
+  snap.contacts_dropped = scene_->contacts_dropped;
+  snap.contacts_clamped = scene_->contacts_clamped;
+  snap.contact_overflow_steps = scene_->contact_overflow_steps;
+  snap.contact_clamped_steps = scene_->contact_clamped_steps;
+  snap.nonfinite_steps = scene_->nonfinite_steps;
+  snap.status = scene_->status;
+  snap.stages_run = scene_->stages_run;
+  snap.solver_iterations = scene_->solver_iterations;
+  snap.solver_residual = scene_->solver_residual;
+  snap.max_joint_drift = scene_->max_joint_drift;
+  snap.max_joint_angle_drift = scene_->max_joint_angle_drift;
+  detail::copy_nets(*scene_, snap);
+}
+
+void MultirateGodObject::take_model(const MultirateSceneModel& m) noexcept {
+  const MultirateSceneSnapshot& from = m.scene;
+  MultirateSceneSnapshot& to = snapshot_;
+  for (std::size_t b = 0; b < to.bodies.size() && b < from.bodies.size(); ++b) to.bodies[b] = from.bodies[b];
+  for (std::size_t j = 0; j < to.joints.size() && j < from.joints.size(); ++j) to.joints[j] = from.joints[j];
+  to.num_contacts = std::clamp(from.num_contacts, 0, kMaxContacts);
+  std::copy_n(from.contacts.begin(), to.num_contacts, to.contacts.begin());
+  to.contacts_dropped = from.contacts_dropped;
+  to.contacts_clamped = from.contacts_clamped;
+  to.contact_overflow_steps = from.contact_overflow_steps;
+  to.contact_clamped_steps = from.contact_clamped_steps;
+  to.nonfinite_steps = from.nonfinite_steps;
+  to.status = from.status;
+  to.stages_run = from.stages_run;
+  to.solver_iterations = from.solver_iterations;
+  to.solver_residual = from.solver_residual;
+  to.max_joint_drift = from.max_joint_drift;
+  to.max_joint_angle_drift = from.max_joint_angle_drift;
+  detail::copy_nets(from, to);
+  if (m.body != body_) return;  // sampled before a switch: not this god-object's planes
+  planes_.count = std::clamp(m.planes.count, 0, kMaxContactPlanes);
+  planes_.carrier_count = std::clamp(m.planes.carrier_count, 0, kMaxPlaneCarriers);
+  planes_.dropped = m.planes.dropped;
+  std::copy_n(m.planes.planes.begin(), planes_.count, planes_.planes.begin());
+  std::copy_n(m.planes.carriers.begin(), planes_.carrier_count, planes_.carriers.begin());
+  periods_since_model_ = 0;
+}
+
+void MultirateGodObject::hand_back() noexcept {
+  const int np = std::clamp(planes_.count, 0, kMaxContactPlanes);
+  for (int i = 0; i < np; ++i) {
+    const ContactPlane& p = planes_.planes[static_cast<std::size_t>(i)];
+    if (p.other_body < 0 || p.other_body >= static_cast<int>(impulse_total_.size()) ||
+        p.carrier < 0 || p.carrier >= planes_.carrier_count)
+      continue;
+    // About the body's centre of mass as the device loop moved it.
+    const PlaneCarrier& k = planes_.carriers[static_cast<std::size_t>(p.carrier)];
+    Wrench& w = impulse_total_[static_cast<std::size_t>(p.other_body)];
+    w.force -= p.impulse;
+    w.torque -= (p.impulse_point - (k.com + k.displacement)).cross(p.impulse);
+  }
+}
+
+void MultirateGodObject::device_step(const MultirateSceneModel* fresh) noexcept {
+  took_model_ = fresh != nullptr;
+  if (fresh != nullptr) take_model(*fresh);
+  if (slot_ >= 0) {
+    if (periods_since_model_ >= ratio_) ++counters_.stale_models;
+    step_god_object(device_model(), planes_, slot().device);
+    hand_back();
+  }
+  ++periods_since_model_;
+  ++counters_.device_steps;
+  ++period_;
+}
+
+void MultirateGodObject::step() noexcept {
+  const bool sample = period_ % ratio_ == 0;
+  if (sample) {
+    write_report(report_);
+    scene_step(report_, model_);
+  }
+  device_step(sample ? &model_ : nullptr);
+}
+
+void MultirateGodObject::write_feedback(Data& out) const noexcept {
+  if (slot_ < 0) return;
+  const Slot& s = slot();
+  const Data& d = s.device;
+  for (std::size_t i = 0; i < s.bodies.size(); ++i) {
+    const auto g = static_cast<std::size_t>(s.bodies[i]);
+    if (g < out.bodies.size()) out.bodies[g] = d.bodies[i];
+    if (g < out.body_feedback.size()) out.body_feedback[g] = d.body_feedback[i];
+  }
+  out.coupling_wrench = d.coupling_wrench;
+  out.device_wrench = d.device_wrench;
+  out.feedback_wrench = d.feedback_wrench;
+}
+
+void MultirateGodObject::view(Data& out) const noexcept {
+  const MultirateSceneSnapshot& snap = snapshot_;
+  const std::size_t nb = std::min(out.bodies.size(), snap.bodies.size());
+  for (std::size_t b = 0; b < nb; ++b) {
+    out.bodies[b] = snap.bodies[b];
+    if (b < out.body_feedback.size()) out.body_feedback[b] = Wrench{};
+  }
+  const std::size_t nj = std::min(out.joints.size(), snap.joints.size());
+  for (std::size_t j = 0; j < nj; ++j) out.joints[j] = snap.joints[j];
+  out.max_joint_drift = snap.max_joint_drift;
+  out.max_joint_angle_drift = snap.max_joint_angle_drift;
+  // The scene loop's contacts not on the god-object (those on it are the device loop's).
+  int count = 0;
+  double deepest = 0.0;
+  const std::span<const int> device_body =
+      slot_ >= 0 ? std::span<const int>(slot().device_body) : std::span<const int>();
+  for (int i = 0; i < snap.num_contacts; ++i) {
+    const Contact& c = snap.contacts[static_cast<std::size_t>(i)];
+    bool on_a = false;
+    if (god_object_contact(c, device_body, on_a)) continue;  // sampled before a switch
+    out.contacts[static_cast<std::size_t>(count++)] = c;
+    deepest = std::max(deepest, c.depth);
+  }
+  // The nets, the god-object's included, as the scene loop left them.
+  detail::copy_nets(snap, out);
+  for (int i = 0; i < out.num_node_contacts; ++i)
+    deepest = std::max(deepest, out.node_contacts[static_cast<std::size_t>(i)].depth);
+  out.contacts_dropped = took_model_ ? snap.contacts_dropped : 0;
+  out.contacts_clamped = took_model_ ? snap.contacts_clamped : 0;
+  out.contact_overflow_steps = snap.contact_overflow_steps;
+  out.contact_clamped_steps = snap.contact_clamped_steps;
+  out.nonfinite_steps = snap.nonfinite_steps;
+  out.status = took_model_ ? snap.status : kStepOk;
+  out.stages_run = took_model_ ? snap.stages_run : 0u;
+  out.solver_iterations = took_model_ ? snap.solver_iterations : 0;
+  out.solver_residual = took_model_ ? snap.solver_residual : 0.0;
+  out.coupling_wrench = Wrench{};
+  out.device_wrench = Wrench{};
+  out.feedback_wrench = Wrench{};
+  for (const Slot& s : slots_) {
+    out.contact_overflow_steps += s.device.contact_overflow_steps;
+    out.contact_clamped_steps += s.device.contact_clamped_steps;
+    out.nonfinite_steps += s.device.nonfinite_steps;
+  }
+  if (slot_ >= 0) {
+    const Slot& s = slot();
+    const Data& d = s.device;
+    write_feedback(out);
+    for (std::size_t j = 0; j < s.joints.size(); ++j) {
+      const auto sj = static_cast<std::size_t>(s.joints[j]);
+      if (sj < out.joints.size()) out.joints[sj] = d.joints[j];
+    }
+    out.max_joint_drift = std::max(out.max_joint_drift, d.max_joint_drift);
+    out.max_joint_angle_drift = std::max(out.max_joint_angle_drift, d.max_joint_angle_drift);
+    const int nd = std::clamp(d.num_contacts, 0, kMaxContacts);
+    for (int i = 0; i < nd; ++i) {
+      if (count >= kMaxContacts) {
+        ++out.contacts_dropped;
+        continue;
+      }
+      Contact c = d.contacts[static_cast<std::size_t>(i)];
+      const ContactPlane& p =
+          planes_.planes[static_cast<std::size_t>(std::clamp(c.sphere_b, 0, kMaxContactPlanes - 1))];
+      if (p.node >= 0) continue;  // the net's contact: the scene loop's node contact, above
+      const int local = std::clamp(c.body_a, 0, static_cast<int>(s.bodies.size()) - 1);
+      const int g = s.bodies[static_cast<std::size_t>(local)];
+      c.sphere_a = s.scene_model.bodies[static_cast<std::size_t>(g)].sphere_begin +
+                   (c.sphere_a - s.device_model.bodies[static_cast<std::size_t>(local)].sphere_begin);
+      c.body_a = g;
+      c.body_b = p.other_body;
+      c.obstacle = p.obstacle;
+      c.sphere_b = p.other_sphere;
+      out.contacts[static_cast<std::size_t>(count++)] = c;
+      deepest = std::max(deepest, c.depth);
+    }
+    out.contacts_dropped += d.contacts_dropped;
+    out.contacts_clamped += d.contacts_clamped;
+    out.status |= d.status;
+    out.stages_run |= d.stages_run;
+    out.solver_iterations = std::max(out.solver_iterations, d.solver_iterations);
+    out.solver_residual = std::max(out.solver_residual, d.solver_residual);
+  }
+  out.num_contacts = count;
+  out.max_penetration = deepest;
+  out.time = static_cast<double>(counters_.device_steps) * slots_.front().device_model.dt;
+  out.step_count = counters_.device_steps;
+}
+
+}  // namespace numen::core
