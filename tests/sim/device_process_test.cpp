@@ -60,12 +60,12 @@ TEST(DeviceProcess, AnSdoRequestSentWhenReadyIsAnswered) {
   options.bus = "serial:" + line.path + "@1000000";
   options.stop = &stop;
   options.on_ready = [&] {
-    ++ready_calls;
     ASSERT_TRUE(numen::test::write_all(line.master, upload_device_type(1)));
     // Until the request is in the device's input (a pty hands bytes on through a kernel
     // worker): its next read takes it.
     pollfd p{line.slave, POLLIN, 0};
     ::poll(&p, 1, 10'000);
+    ++ready_calls;  // after the write: the probe below must follow request 1 on the line
   };
   numen::sim::DeviceSummary summary;
   std::thread device([&] { summary = numen::sim::run_device(scene, options); });
@@ -94,7 +94,9 @@ TEST(DeviceProcess, AnSdoRequestSentWhenReadyIsAnswered) {
         ++boot_ups;
       if (f.id == numen::hal::sdo_response_cob_id(2)) probe_answered = true;
     }
-    if (boot_ups == 5 && !probe_sent) {
+    // The boot-ups go out before on_ready runs: the probe waits for request 1 to be written,
+    // or it could overtake it on the line.
+    if (boot_ups == 5 && !probe_sent && ready_calls.load() > 0) {
       ASSERT_TRUE(numen::test::write_all(line.master, upload_device_type(2)));
       probe_sent = true;
     }

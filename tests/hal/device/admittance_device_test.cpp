@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "alloc_counter.hpp"
+#include "admittance_tracker.hpp"
 #include "fixed_motion.hpp"
 #include "numen/hal/emulation/admittance_emulator.hpp"
 #include "numen/hal/canopen/canopen.hpp"
@@ -19,23 +20,12 @@ namespace core = numen::core;
 using core::Quat;
 using core::Vec3;
 
+using numen::test::drain;
+
 namespace {
 
-hal::DeviceConfig tracker() {
-  hal::DeviceConfig c = hal::make_default_pose_tracker_config(1);
-  c.control_period_s = 1e-3;
-  return c;
-}
-
-hal::AxisVector zeros() { return hal::AxisVector::Zero(6); }
-
-/// Reads every frame pending on `port` into `out` (at most 16); returns the count.
-int drain(hal::Bus& port, std::array<hal::CanFrame, 16>& out) {
-  int n = 0;
-  hal::CanFrame f;
-  while (n < 16 && port.read(f) == hal::IoStatus::kOk) out[static_cast<std::size_t>(n++)] = f;
-  return n;
-}
+hal::DeviceConfig tracker() { return numen::test::admittance_tracker(); }
+hal::AxisVector zeros() { return numen::test::tracker_zeros(); }
 
 }  // namespace
 

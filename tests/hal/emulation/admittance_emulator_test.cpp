@@ -8,6 +8,7 @@
 #include <array>
 #include <cmath>
 
+#include "admittance_tracker.hpp"
 #include "fixed_motion.hpp"
 #include "numen/hal/canopen/canopen.hpp"
 #include "numen/hal/canopen/cia402.hpp"
@@ -20,22 +21,12 @@ namespace core = numen::core;
 using core::Quat;
 using core::Vec3;
 
+using numen::test::drain;
+
 namespace {
 
-hal::DeviceConfig tracker() {
-  hal::DeviceConfig c = hal::make_default_pose_tracker_config(1);
-  c.control_period_s = 1e-3;
-  return c;
-}
-
-hal::AxisVector zeros() { return hal::AxisVector::Zero(6); }
-
-int drain(hal::Bus& port, std::array<hal::CanFrame, 16>& out) {
-  int n = 0;
-  hal::CanFrame f;
-  while (n < 16 && port.read(f) == hal::IoStatus::kOk) out[static_cast<std::size_t>(n++)] = f;
-  return n;
-}
+hal::DeviceConfig tracker() { return numen::test::admittance_tracker(); }
+hal::AxisVector zeros() { return numen::test::tracker_zeros(); }
 
 }  // namespace
 
