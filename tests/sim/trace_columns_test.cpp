@@ -40,7 +40,7 @@ TraceRecord distinct_record() {
   r.frames_read = 7;
   r.sample_valid = true;
   r.torque_commanded = true;
-  r.lifecycle = 3;
+  r.lifecycle = 8;
   r.target.position = {next(), next(), next()};
   r.target.orientation = numen::core::Quat(next(), next(), next(), next());
   r.tool.position = {next(), next(), next()};

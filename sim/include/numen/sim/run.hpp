@@ -132,7 +132,8 @@ class SceneRunner {
   /// (TraceKind::kStream: frames_read, sample_valid, torque_commanded, lifecycle,
   /// target_{x,y,z}, tool_{x,y,z}, feedback_f{x,y,z}, axis_torque_<axis name> per axis,
   /// step_time_us, end_to_end_us, wakeup_latency_us, emcys, emcy_node, emcy_code); flags
-  /// bit 0 sample valid, bit 1 torque commanded, bit 2 overrun. Throws like TraceWriter's constructor.
+  /// bit 0 sample valid, bit 1 torque commanded, bit 2 overrun. Throws like TraceWriter's
+  /// constructor.
   void stream_trace(const std::string& path);
   /// Publishes the run's state stream (docs/viewer.md) to a view recording at `record_path`
   /// (empty: none) and to `sinks`, at `rate_hz` frames per simulated second; `wait`: the loop

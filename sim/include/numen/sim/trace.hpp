@@ -37,9 +37,9 @@ struct TraceRecord {
   core::Wrench feedback;             ///< Eq. 8, sent to the device (N, N·m).
   std::array<double, hal::kMaxAxes> axis_torque{};  ///< N·m or N.
   int num_axes = 0;
-  double step_time_us = 0.0;      ///< Wall time of core::step.
-  double end_to_end_us = 0.0;     ///< SYNC sent to the torque writes returned.
-  double wakeup_latency_us = 0.0; ///< Wake-up time − deadline (paced runs).
+  double step_time_us = 0.0;       ///< Wall time of core::step.
+  double end_to_end_us = 0.0;      ///< SYNC sent to the torque writes returned.
+  double wakeup_latency_us = 0.0;  ///< Wake-up time − deadline (paced runs).
   int solver_iterations = 0;
   // Articulation (zero without joints), paper Eq. 4–5.
   double joint_drift_mm = 0.0;            ///< Largest linear joint error |C| after the step.
