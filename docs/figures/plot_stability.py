@@ -42,7 +42,7 @@ def load(path):
 
 
 def key(r):
-    return "stable" if r["verdict"] == "stable" else r["reason"]
+    return "stable" if r["stable"] == "1" else r["reason"]
 
 
 def scatter(ax, rows, x, y):

@@ -127,7 +127,8 @@ class InfoCommand {
   bool json_ = false;
 };
 
-/// `numen figures`: the table of a run's summary figures (run_figures()) as Markdown.
+/// `numen figures`: the table of a run's summary figures (run_figures()) as Markdown;
+/// `--all`: every output's names (record_lists.hpp).
 class FiguresCommand {
  public:
   explicit FiguresCommand(CLI::App& parent);
@@ -136,6 +137,7 @@ class FiguresCommand {
 
  private:
   CLI::App* cli_;
+  bool all_ = false;
 };
 
 /// `numen study accuracy ...`: work-precision data per integrator.

@@ -13,6 +13,7 @@
 #include "numen/sim/run.hpp"
 #include "numen/sim/study_accuracy.hpp"
 #include "numen/sim/study_common.hpp"
+#include "numen/sim/study_fields.hpp"
 #include "numen/sim/study_stability.hpp"
 
 namespace py = pybind11;
@@ -46,46 +47,16 @@ void check_member(const std::string& what, const std::string& name,
   throw py::value_error("unknown " + what + " '" + name + "' (one of: " + list + ")");
 }
 
+/// A study row as a dict, keyed by its field list (study_fields.hpp).
 py::dict row_dict(const sim::StabilityRow& r) {
   py::dict d;
-  d["family"] = r.family;
-  d["case"] = r.case_name;
-  d["integrator"] = r.integrator;
-  d["dt_s"] = r.dt_s;
-  d["mass_kg"] = r.mass_kg;
-  d["stiffness"] = r.stiffness;
-  d["parameter_name"] = r.parameter_name;
-  d["parameter"] = r.parameter;
-  d["omega_dt"] = r.omega_dt;
-  d["steps"] = r.steps;
-  d["stable"] = r.stable;
-  d["diverged_step"] = r.diverged_step;
-  d["reason"] = r.reason;
-  d["energy_ref_j"] = r.energy_ref_j;
-  d["energy_ratio_max"] = r.energy_ratio_max;
-  d["penetration_max_m"] = r.penetration_max_m;
-  d["penetration_bound_m"] = r.penetration_bound_m;
-  d["drift_max_m"] = r.drift_max_m;
-  d["nonfinite_steps"] = r.nonfinite_steps;
-  d["note"] = r.note;
+  sim::stability_row_fields(r, [&d](const char* key, const auto& v) { d[key] = v; });
   return d;
 }
 
 py::dict row_dict(const sim::AccuracyRow& r) {
   py::dict d;
-  d["case"] = r.case_name;
-  d["integrator"] = r.integrator;
-  d["dt_s"] = r.dt_s;
-  d["steps"] = r.steps;
-  d["horizon_s"] = r.horizon_s;
-  d["position_error_max_mm"] = r.position_error_max_mm;
-  d["position_error_rms_mm"] = r.position_error_rms_mm;
-  d["orientation_error_max_mrad"] = r.orientation_error_max_mrad;
-  d["orientation_error_rms_mrad"] = r.orientation_error_rms_mrad;
-  d["cpu_s_per_sim_s"] = r.cpu_s_per_sim_s;
-  d["diverged"] = r.diverged;
-  d["nonfinite_steps"] = r.nonfinite_steps;
-  d["reference"] = r.reference;
+  sim::accuracy_row_fields(r, [&d](const char* key, const auto& v) { d[key] = v; });
   return d;
 }
 

@@ -136,6 +136,9 @@ SceneRunner::SceneRunner(const Scene& scene, std::size_t trace_capacity, const B
       divergence_(scene.model, data_) {
   if (multirate_.enabled()) loop_.set_step_function(&SceneRunner::step_multirate, this);
   trace_.reserve(trace_capacity);
+  std::vector<std::string> axis_names;
+  for (const hal::AxisConfig& a : scene.device.axes) axis_names.push_back(a.name);
+  trace_.set_axis_names(std::move(axis_names));
   if (writer_) writer_->start();
   acc_.bus = bus.spec;
   describe_scene(scene, acc_);
@@ -147,7 +150,7 @@ void SceneRunner::stream_trace(const std::string& path) {
   std::vector<std::string> axis_names;
   for (const hal::AxisConfig& a : scene_->device.axes) axis_names.push_back(a.name);
   trace_writer_ = std::make_unique<platform::TraceWriter>(
-      path, trace_column_names(trace_stream_columns(), std::span(axis_names)));
+      path, trace_column_names(TraceKind::kStream, axis_names));
   trace_writer_->start();
 }
 
@@ -258,7 +261,7 @@ void SceneRunner::record(const platform::PeriodReport& report, const PeriodConta
     r.time_ns = report.deadline_ns;
     r.flags = (report.sample_valid ? 1u : 0u) | (report.torque_commanded ? 2u : 0u) |
               (report.overrun ? 4u : 0u);
-    trace_column_values(trace_stream_columns(), StreamedPeriod{rec, report},
+    trace_column_values(TraceKind::kStream, rec,
                         static_cast<int>(scene_->device.axes.size()), std::span(r.values));
     trace_writer_->push(r);
   }

@@ -7,6 +7,7 @@
 
 #include "numen/sim/run_summary.hpp"
 #include "numen/sim/run_verdict.hpp"
+#include "markdown_cell.hpp"
 
 namespace numen::sim {
 
@@ -519,10 +520,7 @@ std::string format_run_figures_markdown() {
     out += "` | ";
     out += f.unit;
     out += " | ";
-    for (const char c : f.description) {
-      if (c == '|') out += '\\';
-      out += c;
-    }
+    append_markdown_cell(out, f.description);
     out += " |\n";
   }
   return out;

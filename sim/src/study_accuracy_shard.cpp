@@ -3,10 +3,12 @@
 /// (study_accuracy.hpp, study_shard.hpp; format: docs/studies.md "Shard files").
 
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "numen/sim/scene.hpp"
 #include "numen/sim/study_accuracy.hpp"
+#include "numen/sim/study_fields.hpp"
 #include "numen/version.hpp"
 #include "study_shard_json.hpp"
 
@@ -14,24 +16,6 @@ namespace numen::sim {
 namespace {
 
 using shard::Json;
-
-/// The members of a run, by the names of the columns of accuracy.csv.
-template <class Row, class Visit>
-void row_fields(Row& r, Visit&& v) {
-  v("case", r.case_name);
-  v("integrator", r.integrator);
-  v("dt_s", r.dt_s);
-  v("steps", r.steps);
-  v("horizon_s", r.horizon_s);
-  v("position_error_max_mm", r.position_error_max_mm);
-  v("position_error_rms_mm", r.position_error_rms_mm);
-  v("orientation_error_max_mrad", r.orientation_error_max_mrad);
-  v("orientation_error_rms_mrad", r.orientation_error_rms_mrad);
-  v("cpu_s_per_sim_s", r.cpu_s_per_sim_s);
-  v("diverged", r.diverged);
-  v("nonfinite_steps", r.nonfinite_steps);
-  v("reference", r.reference);
-}
 
 /// The members of a fit (accuracy_orders.csv).
 template <class Fit, class Visit>
@@ -76,43 +60,24 @@ Json manifest(const AccuracyOptions& o, const AccuracyResult& r) {
   return m;
 }
 
+/// The lists of an accuracy result in a shard file.
+auto accuracy_lists() {
+  return std::make_tuple(shard::record_list("rows", &AccuracyResult::rows,
+                                            [](auto& x, auto&& v) { accuracy_row_fields(x, v); }),
+                         shard::record_list("fits", &AccuracyResult::fits,
+                                            [](auto& x, auto&& v) { fit_fields(x, v); }),
+                         shard::record_list("references", &AccuracyResult::references,
+                                            [](auto& x, auto&& v) { reference_fields(x, v); }));
+}
+
 }  // namespace
 
 std::string accuracy_shard_document(const AccuracyResult& result, const AccuracyOptions& options) {
-  shard::ResultsByCase results(result.shard, result.cases, {"rows", "fits", "references"});
-  for (const AccuracyRow& r : result.rows)
-    results.add(r.case_index, "rows",
-                shard::record_json(r, [](auto& x, auto&& v) { row_fields(x, v); }));
-  for (const AccuracyFit& f : result.fits)
-    results.add(f.case_index, "fits",
-                shard::record_json(f, [](auto& x, auto&& v) { fit_fields(x, v); }));
-  for (const ReferenceCheck& c : result.references)
-    results.add(c.case_index, "references",
-                shard::record_json(c, [](auto& x, auto&& v) { reference_fields(x, v); }));
-  return shard::document("accuracy", result.shard, manifest(options, result), result.wall_s,
-                         results.array());
+  return shard::shard_document("accuracy", result, manifest(options, result), accuracy_lists());
 }
 
 AccuracyResult merge_accuracy_shards(const std::string& dir) {
-  const shard::ShardSet set = shard::read_shard_set(dir, "accuracy");
-  AccuracyResult result;
-  result.skipped = set.skipped;
-  result.cases = static_cast<std::int64_t>(set.results.size());
-  for (std::size_t k = 0; k < set.results.size(); ++k) {
-    const std::string& file = set.files[k % set.files.size()];
-    const auto index = static_cast<std::int64_t>(k);
-    shard::read_list(
-        set.results[k], "rows", [](auto& x, auto&& v) { row_fields(x, v); }, index, file,
-        result.rows);
-    shard::read_list(
-        set.results[k], "fits", [](auto& x, auto&& v) { fit_fields(x, v); }, index, file,
-        result.fits);
-    shard::read_list(
-        set.results[k], "references", [](auto& x, auto&& v) { reference_fields(x, v); }, index,
-        file, result.references);
-  }
-  for (double w : set.wall_s) result.wall_s += w;
-  return result;
+  return shard::merge_shard_set<AccuracyResult>(dir, "accuracy", accuracy_lists());
 }
 
 }  // namespace numen::sim

@@ -14,6 +14,7 @@
 #include <map>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "numen/sim/input_error.hpp"
@@ -105,6 +106,21 @@ void read_list(const Json& entry, const char* list, Fields&& fields, std::int64_
 std::string document(const std::string& study, const Shard& shard, const Json& manifest,
                      double wall_s, const Json& results);
 
+/// One list of records of a study's result: its name in a case's entry, the result's member
+/// that holds it (records with a case_index) and its field list (study_fields.hpp).
+template <class Result, class Record, class Fields>
+struct RecordList {
+  const char* name;
+  std::vector<Record> Result::*records;
+  Fields fields;
+};
+template <class Result, class Record, class Fields>
+RecordList<Result, Record, Fields> record_list(const char* name,
+                                               std::vector<Record> Result::*records,
+                                               Fields fields) {
+  return {name, records, fields};
+}
+
 /// A complete, consistent set of shard files, read back.
 struct ShardSet {
   int count = 0;                     ///< N.
@@ -124,5 +140,47 @@ struct ShardSet {
 /// the wrong JSON type or value; no json exception escapes. Allocates in proportion to the
 /// files' size (never to a count they state).
 ShardSet read_shard_set(const std::filesystem::path& dir, const std::string& study);
+
+/// The shard file of `result` (a study's result: shard, cases, wall_s and the lists), each
+/// record of the RecordLists in `lists` (a tuple) under its case.
+template <class Result, class... Lists>
+std::string shard_document(const std::string& study, const Result& result, const Json& manifest,
+                           const std::tuple<Lists...>& lists) {
+  return std::apply(
+      [&](const Lists&... list) {
+        ResultsByCase results(result.shard, result.cases, {list.name...});
+        const auto add = [&](const auto& l) {
+          for (const auto& r : result.*(l.records))
+            results.add(r.case_index, l.name, record_json(r, l.fields));
+        };
+        (add(list), ...);
+        return document(study, result.shard, manifest, result.wall_s, results.array());
+      },
+      lists);
+}
+
+/// Reads the shard set of `study` in `dir` (read_shard_set()) into one result: the skipped
+/// cases, the case count, every case's records of the RecordLists in `lists` (a tuple) in case
+/// order, and the summed wall time.
+template <class Result, class... Lists>
+Result merge_shard_set(const std::string& dir, const std::string& study,
+                       const std::tuple<Lists...>& lists) {
+  const ShardSet set = read_shard_set(dir, study);
+  Result result;
+  result.skipped = set.skipped;
+  result.cases = static_cast<std::int64_t>(set.results.size());
+  for (std::size_t k = 0; k < set.results.size(); ++k) {
+    const std::string& file = set.files[k % set.files.size()];
+    const auto index = static_cast<std::int64_t>(k);
+    std::apply(
+        [&](const Lists&... list) {
+          (read_list(set.results[k], list.name, list.fields, index, file, result.*(list.records)),
+           ...);
+        },
+        lists);
+  }
+  for (double w : set.wall_s) result.wall_s += w;
+  return result;
+}
 
 }  // namespace numen::sim::shard

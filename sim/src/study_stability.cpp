@@ -19,6 +19,7 @@
 #include "numen/sim/input_error.hpp"
 #include "numen/sim/scene.hpp"
 #include "numen/sim/study_common.hpp"
+#include "numen/sim/study_fields.hpp"
 #include "numen/sim/study_stability_cases.hpp"
 
 namespace numen::sim {
@@ -44,6 +45,12 @@ std::string field(const std::string& s) {
   for (char c : s) q += c == '"' ? std::string("\"\"") : std::string(1, c);
   return q + "\"";
 }
+
+/// A member of a row as a CSV cell: numbers by num(), flags 1 or 0, text by field().
+std::string cell(double v) { return num(v); }
+std::string cell(std::int64_t v) { return std::to_string(v); }
+std::string cell(bool v) { return v ? "1" : "0"; }
+std::string cell(const std::string& v) { return field(v); }
 
 /// A Markdown table header on a new line: `lead` (two columns, "| a | b |"), one column per label,
 /// and the separator line.
@@ -208,10 +215,11 @@ StabilityResult run_stability_study(const StabilityOptions& options) {
 }
 
 const std::string& stability_csv_header() {
-  static const std::string h =
-      "family,case,integrator,dt_s,mass_kg,stiffness,parameter_name,parameter,omega_dt,steps,"
-      "verdict,diverged_step,reason,energy_ref_j,energy_ratio_max,penetration_max_m,"
-      "penetration_bound_m,drift_max_m,nonfinite_steps,note";
+  static const std::string h = [] {
+    std::string line;
+    for (const std::string& n : stability_row_names()) line += (line.empty() ? "" : ",") + n;
+    return line;
+  }();
   return h;
 }
 
@@ -227,13 +235,12 @@ void write_stability_csv(const StabilityResult& result, const std::string& dir) 
       it->second << stability_csv_header() << '\n';
     }
     std::ofstream& f = it->second;
-    f << r.family << ',' << field(r.case_name) << ',' << r.integrator << ',' << num(r.dt_s) << ','
-      << num(r.mass_kg) << ',' << num(r.stiffness) << ',' << r.parameter_name << ','
-      << num(r.parameter) << ',' << num(r.omega_dt) << ',' << r.steps << ','
-      << (r.stable ? "stable" : "diverged") << ',' << r.diverged_step << ',' << r.reason << ','
-      << num(r.energy_ref_j) << ',' << num(r.energy_ratio_max) << ',' << num(r.penetration_max_m)
-      << ',' << num(r.penetration_bound_m) << ',' << num(r.drift_max_m) << ',' << r.nonfinite_steps
-      << ',' << field(r.note) << '\n';
+    bool first = true;
+    stability_row_fields(r, [&](const char*, const auto& v) {
+      f << (first ? "" : ",") << cell(v);
+      first = false;
+    });
+    f << '\n';
     if (!f) throw std::runtime_error("cannot write stability_" + r.family + ".csv in " + dir);
   }
   if (!result.boundaries.empty()) {

@@ -19,7 +19,10 @@ TraceRecord make_trace_record(const core::Data& data, int held, int tool_contact
   TraceRecord r;
   r.time_s = data.time;
   r.attached_body = held;
+  r.frames_read = report.frames_read;
   r.sample_valid = report.sample_valid;
+  r.torque_commanded = report.torque_commanded;
+  r.lifecycle = static_cast<int>(report.lifecycle);
   r.target = data.target;
   if (held >= 0) {
     const core::BodyState& b = data.bodies[static_cast<std::size_t>(held)];
@@ -33,6 +36,8 @@ TraceRecord make_trace_record(const core::Data& data, int held, int tool_contact
   r.num_axes = static_cast<int>(axis_torques.size());
   for (int i = 0; i < r.num_axes; ++i) r.axis_torque[static_cast<std::size_t>(i)] = axis_torques[i];
   r.step_time_us = static_cast<double>(report.step_ns) * 1e-3;
+  r.end_to_end_us = static_cast<double>(report.output_end_ns - report.sync_sent_ns) * 1e-3;
+  r.wakeup_latency_us = static_cast<double>(report.woke_ns - report.deadline_ns) * 1e-3;
   r.solver_iterations = data.solver_iterations;
   r.joint_drift_mm = data.max_joint_drift * 1e3;
   r.joint_angle_drift_mrad = data.max_joint_angle_drift * 1e3;
@@ -54,16 +59,18 @@ void Trace::write_csv(const std::string& path) const {
   std::ofstream out(path);
   if (!out) throw std::runtime_error(path + ": cannot open the trace file for writing");
   const int axes = records_.empty() ? 0 : records_.front().num_axes;
-  std::vector<std::string> axis_index;
-  for (int i = 0; i < axes; ++i) axis_index.push_back(std::to_string(i));
-  const std::span<const TraceColumn<TraceRecord>> columns = trace_csv_columns();
-  const std::vector<std::string> names = trace_column_names(columns, std::span(axis_index));
+  std::vector<std::string> axis_names;
+  for (int i = 0; i < axes; ++i)
+    axis_names.push_back(static_cast<std::size_t>(i) < axis_names_.size()
+                             ? axis_names_[static_cast<std::size_t>(i)]
+                             : std::to_string(i));
+  const std::vector<std::string> names = trace_column_names(TraceKind::kCsv, axis_names);
   for (std::size_t c = 0; c < names.size(); ++c) out << (c ? "," : "") << names[c];
   out << '\n';
   out.precision(9);
   std::vector<double> row(names.size());
   for (const TraceRecord& r : records_) {
-    const std::size_t n = trace_column_values(columns, r, axes, std::span(row));
+    const std::size_t n = trace_column_values(TraceKind::kCsv, r, axes, std::span(row));
     for (std::size_t c = 0; c < n; ++c) out << (c ? "," : "") << row[c];
     out << '\n';
   }

@@ -1,33 +1,47 @@
 /// @file trace_columns.cpp
-/// The column tables of the traces (trace_columns.hpp).
+/// The column table of the traces (trace_columns.hpp).
 
 #include "numen/sim/trace_columns.hpp"
+
+#include "markdown_cell.hpp"
 
 namespace numen::sim {
 namespace {
 
 using R = TraceRecord;
-using P = StreamedPeriod;
 
-constexpr TraceColumn<R> kCsvColumns[] = {
-    {"time_s", "s", "Simulated time after the step", [](const R& r, int) noexcept { return r.time_s; }},
+// The streamed columns keep their order (tests/hil/scenarios read frames_read … target_z by
+// position: columns 4–10 after period, time_ns, flags).
+constexpr TraceColumn kColumns[] = {
+    {"time_s", "s", "Simulated time after the step",
+     [](const R& r, int) noexcept { return r.time_s; }},
     {"attached_body", "", "Held body index (-1: none)",
      [](const R& r, int) noexcept { return static_cast<double>(r.attached_body); }},
+    {"frames_read", "", "Frames taken from the bus this period",
+     [](const R& r, int) noexcept { return static_cast<double>(r.frames_read); }, false, true},
     {"sample_valid", "", "1: the period's sample was valid",
-     [](const R& r, int) noexcept { return r.sample_valid ? 1.0 : 0.0; }},
+     [](const R& r, int) noexcept { return r.sample_valid ? 1.0 : 0.0; }, false, true},
+    {"torque_commanded", "", "1: non-zero torque was commanded",
+     [](const R& r, int) noexcept { return r.torque_commanded ? 1.0 : 0.0; }, false, true},
+    {"lifecycle", "", "Lifecycle state after the period (hal::LifecycleState value)",
+     [](const R& r, int) noexcept { return static_cast<double>(r.lifecycle); }, false, true},
     {"target_x", "m", "Device target of the held body's COM frame: x",
-     [](const R& r, int) noexcept { return r.target.position.x(); }},
-    {"target_y", "m", "... y", [](const R& r, int) noexcept { return r.target.position.y(); }},
-    {"target_z", "m", "... z", [](const R& r, int) noexcept { return r.target.position.z(); }},
+     [](const R& r, int) noexcept { return r.target.position.x(); }, false, true},
+    {"target_y", "m", "... y", [](const R& r, int) noexcept { return r.target.position.y(); },
+     false, true},
+    {"target_z", "m", "... z", [](const R& r, int) noexcept { return r.target.position.z(); },
+     false, true},
     {"target_qw", "", "... orientation quaternion w",
      [](const R& r, int) noexcept { return r.target.orientation.w(); }},
     {"target_qx", "", "... x", [](const R& r, int) noexcept { return r.target.orientation.x(); }},
     {"target_qy", "", "... y", [](const R& r, int) noexcept { return r.target.orientation.y(); }},
     {"target_qz", "", "... z", [](const R& r, int) noexcept { return r.target.orientation.z(); }},
     {"tool_x", "m", "Held body's (god-object's) pose: x",
-     [](const R& r, int) noexcept { return r.tool.position.x(); }},
-    {"tool_y", "m", "... y", [](const R& r, int) noexcept { return r.tool.position.y(); }},
-    {"tool_z", "m", "... z", [](const R& r, int) noexcept { return r.tool.position.z(); }},
+     [](const R& r, int) noexcept { return r.tool.position.x(); }, false, true},
+    {"tool_y", "m", "... y", [](const R& r, int) noexcept { return r.tool.position.y(); }, false,
+     true},
+    {"tool_z", "m", "... z", [](const R& r, int) noexcept { return r.tool.position.z(); }, false,
+     true},
     {"tool_qw", "", "... orientation quaternion w",
      [](const R& r, int) noexcept { return r.tool.orientation.w(); }},
     {"tool_qx", "", "... x", [](const R& r, int) noexcept { return r.tool.orientation.x(); }},
@@ -42,19 +56,28 @@ constexpr TraceColumn<R> kCsvColumns[] = {
     {"target_penetration_mm", "mm", "Deepest contact of the target (where the hand is)",
      [](const R& r, int) noexcept { return r.target_penetration_mm; }},
     {"feedback_fx", "N", "Feedback wrench sent (Eq. 8): force x",
-     [](const R& r, int) noexcept { return r.feedback.force.x(); }},
-    {"feedback_fy", "N", "... force y", [](const R& r, int) noexcept { return r.feedback.force.y(); }},
-    {"feedback_fz", "N", "... force z", [](const R& r, int) noexcept { return r.feedback.force.z(); }},
+     [](const R& r, int) noexcept { return r.feedback.force.x(); }, false, true},
+    {"feedback_fy", "N", "... force y",
+     [](const R& r, int) noexcept { return r.feedback.force.y(); }, false, true},
+    {"feedback_fz", "N", "... force z",
+     [](const R& r, int) noexcept { return r.feedback.force.z(); }, false, true},
     {"feedback_tx", "N·m", "... torque x",
      [](const R& r, int) noexcept { return r.feedback.torque.x(); }},
     {"feedback_ty", "N·m", "... torque y",
      [](const R& r, int) noexcept { return r.feedback.torque.y(); }},
     {"feedback_tz", "N·m", "... torque z",
      [](const R& r, int) noexcept { return r.feedback.torque.z(); }},
-    {"axis_torque_", "N·m or N", "Torque commanded on each axis",
-     [](const R& r, int a) noexcept { return r.axis_torque[static_cast<std::size_t>(a)]; }, true},
+    {"axis_torque_", "N·m or N", "Torque commanded on each axis (named by the axis)",
+     [](const R& r, int a) noexcept {
+       return a < r.num_axes ? r.axis_torque[static_cast<std::size_t>(a)] : 0.0;
+     },
+     true, true},
     {"step_time_us", "us", "Wall time of core::step",
-     [](const R& r, int) noexcept { return r.step_time_us; }},
+     [](const R& r, int) noexcept { return r.step_time_us; }, false, true},
+    {"end_to_end_us", "us", "SYNC sent to the torque writes returned",
+     [](const R& r, int) noexcept { return r.end_to_end_us; }, false, true},
+    {"wakeup_latency_us", "us", "Wake-up time − deadline",
+     [](const R& r, int) noexcept { return r.wakeup_latency_us; }, false, true},
     {"solver_iterations", "", "Iterations of the implicit solve",
      [](const R& r, int) noexcept { return static_cast<double>(r.solver_iterations); }},
     {"joint_drift_mm", "mm", "Largest linear joint error |C| after the step",
@@ -78,63 +101,55 @@ constexpr TraceColumn<R> kCsvColumns[] = {
     {"net_strain_max", "1", "Largest |l − L|/L of a structural spring",
      [](const R& r, int) noexcept { return r.net_strain_max; }},
     {"emcys", "", "CANopen EMCY messages received this period",
-     [](const R& r, int) noexcept { return static_cast<double>(r.emcys); }},
+     [](const R& r, int) noexcept { return static_cast<double>(r.emcys); }, false, true},
     {"emcy_node", "", "Node of the newest EMCY this period (0: none)",
-     [](const R& r, int) noexcept { return static_cast<double>(r.emcy_node); }},
+     [](const R& r, int) noexcept { return static_cast<double>(r.emcy_node); }, false, true},
     {"emcy_code", "", "Its error code (0: none; named by CiA 301/402 in the summary's EMCY list)",
-     [](const R& r, int) noexcept { return static_cast<double>(r.emcy_code); }},
-};
-
-constexpr TraceColumn<P> kStreamColumns[] = {
-    {"frames_read", "", "Frames taken from the bus this period",
-     [](const P& p, int) noexcept { return static_cast<double>(p.report.frames_read); }},
-    {"sample_valid", "", "1: the period's sample was valid",
-     [](const P& p, int) noexcept { return p.report.sample_valid ? 1.0 : 0.0; }},
-    {"torque_commanded", "", "1: non-zero torque was commanded",
-     [](const P& p, int) noexcept { return p.report.torque_commanded ? 1.0 : 0.0; }},
-    {"lifecycle", "", "Lifecycle state after the period (hal::LifecycleState value)",
-     [](const P& p, int) noexcept { return static_cast<double>(p.report.lifecycle); }},
-    {"target_x", "m", "Device target of the held body's COM frame: x",
-     [](const P& p, int) noexcept { return p.record.target.position.x(); }},
-    {"target_y", "m", "... y", [](const P& p, int) noexcept { return p.record.target.position.y(); }},
-    {"target_z", "m", "... z", [](const P& p, int) noexcept { return p.record.target.position.z(); }},
-    {"tool_x", "m", "God-object (held body) position: x",
-     [](const P& p, int) noexcept { return p.record.tool.position.x(); }},
-    {"tool_y", "m", "... y", [](const P& p, int) noexcept { return p.record.tool.position.y(); }},
-    {"tool_z", "m", "... z", [](const P& p, int) noexcept { return p.record.tool.position.z(); }},
-    {"force_x", "N", "Feedback force sent: x",
-     [](const P& p, int) noexcept { return p.record.feedback.force.x(); }},
-    {"force_y", "N", "... y", [](const P& p, int) noexcept { return p.record.feedback.force.y(); }},
-    {"force_z", "N", "... z", [](const P& p, int) noexcept { return p.record.feedback.force.z(); }},
-    {"tau_", "N·m or N", "Torque commanded on each axis (named by the axis)",
-     [](const P& p, int a) noexcept {
-       return a < p.record.num_axes ? p.record.axis_torque[static_cast<std::size_t>(a)] : 0.0;
-     },
-     true},
-    {"step_us", "us", "Wall time of core::step",
-     [](const P& p, int) noexcept { return static_cast<double>(p.report.step_ns) * 1e-3; }},
-    {"end_to_end_us", "us", "SYNC sent to the torque writes returned",
-     [](const P& p, int) noexcept {
-       return static_cast<double>(p.report.output_end_ns - p.report.sync_sent_ns) * 1e-3;
-     }},
-    {"wakeup_us", "us", "Wake-up time − deadline",
-     [](const P& p, int) noexcept {
-       return static_cast<double>(p.report.woke_ns - p.report.deadline_ns) * 1e-3;
-     }},
-    {"emcys", "", "CANopen EMCY messages received this period",
-     [](const P& p, int) noexcept { return static_cast<double>(p.record.emcys); }},
-    {"emcy_node", "", "Node of the newest EMCY this period (0: none)",
-     [](const P& p, int) noexcept { return static_cast<double>(p.record.emcy_node); }},
-    {"emcy_code", "", "Its error code (0: none; named by CiA 301/402 in the summary's EMCY list)",
-     [](const P& p, int) noexcept { return static_cast<double>(p.record.emcy_code); }},
+     [](const R& r, int) noexcept { return static_cast<double>(r.emcy_code); }, false, true},
 };
 
 }  // namespace
 
-std::span<const TraceColumn<TraceRecord>> trace_csv_columns() noexcept { return kCsvColumns; }
+std::span<const TraceColumn> trace_columns() noexcept { return kColumns; }
 
-std::span<const TraceColumn<StreamedPeriod>> trace_stream_columns() noexcept {
-  return kStreamColumns;
+std::vector<std::string> trace_column_names(TraceKind kind,
+                                            std::span<const std::string> axis_names) {
+  std::vector<std::string> names;
+  for (const TraceColumn& c : kColumns) {
+    if (!in_trace(c, kind)) continue;
+    if (!c.per_axis) {
+      names.emplace_back(c.name);
+      continue;
+    }
+    for (const std::string& a : axis_names) names.push_back(std::string(c.name) + a);
+  }
+  return names;
+}
+
+std::size_t trace_column_values(TraceKind kind, const TraceRecord& row, int num_axes,
+                                std::span<double> out) noexcept {
+  std::size_t n = 0;
+  for (const TraceColumn& c : kColumns) {
+    if (!in_trace(c, kind)) continue;
+    const int repeat = c.per_axis ? num_axes : 1;
+    for (int a = 0; a < repeat && n < out.size(); ++a) out[n++] = c.get(row, a);
+  }
+  return n;
+}
+
+std::string format_trace_columns_markdown() {
+  std::string out = "| column | unit | traces | what it holds |\n| --- | --- | --- | --- |\n";
+  for (const TraceColumn& c : kColumns) {
+    out += "| `";
+    out += c.name;
+    if (c.per_axis) out += "<axis>";
+    out += "` | ";
+    out += c.unit;
+    out += c.streamed ? " | csv, stream | " : " | csv | ";
+    append_markdown_cell(out, c.description);
+    out += " |\n";
+  }
+  return out;
 }
 
 }  // namespace numen::sim

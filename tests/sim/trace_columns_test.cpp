@@ -1,7 +1,8 @@
-// Tests of sim/trace_columns: each trace's header and rows come from one column table, so
+// Tests of sim/trace_columns: both traces' headers and rows come from one column table, so
 // every column of the table is in the header and each row holds the table's values in the
 // header's order — for the in-memory CSV of a simulated run and for the streamed trace of a
-// real-bus run, whose period stays allocation-free.
+// real-bus run (the table's streamed columns, under the same names), whose period stays
+// allocation-free.
 #include "numen/sim/trace_columns.hpp"
 
 #include <gtest/gtest.h>
@@ -36,7 +37,10 @@ TraceRecord distinct_record() {
   const auto next = [&v] { return v += 0.125; };
   r.time_s = next();
   r.attached_body = 2;
+  r.frames_read = 7;
   r.sample_valid = true;
+  r.torque_commanded = true;
+  r.lifecycle = 8;
   r.target.position = {next(), next(), next()};
   r.target.orientation = numen::core::Quat(next(), next(), next(), next());
   r.tool.position = {next(), next(), next()};
@@ -50,6 +54,8 @@ TraceRecord distinct_record() {
   r.num_axes = 3;
   for (int a = 0; a < 3; ++a) r.axis_torque[static_cast<std::size_t>(a)] = -next();
   r.step_time_us = next();
+  r.end_to_end_us = next();
+  r.wakeup_latency_us = next();
   r.solver_iterations = 5;
   r.joint_drift_mm = next();
   r.joint_angle_drift_mrad = next();
@@ -73,16 +79,17 @@ TEST(TraceColumns, CsvHeaderIsTheTableAndRowsHoldItsValuesInOrder) {
   const std::vector<std::string> lines = read_lines(dir / "t.csv");
   ASSERT_EQ(lines.size(), 2u);
   const std::vector<std::string> axes = {"0", "1", "2"};
-  const auto columns = numen::sim::trace_csv_columns();
-  const std::vector<std::string> names = numen::sim::trace_column_names(columns, std::span(axes));
+  const std::vector<std::string> names =
+      numen::sim::trace_column_names(numen::sim::TraceKind::kCsv, axes);
   EXPECT_EQ(split(lines[0]), names);
   // Every column of the table is in the header (per-axis ones once per axis).
-  for (const auto& c : columns) {
+  for (const auto& c : numen::sim::trace_columns()) {
     const std::string first = std::string(c.name) + (c.per_axis ? "0" : "");
     EXPECT_NE(std::find(names.begin(), names.end(), first), names.end()) << c.name;
   }
   std::vector<double> values(names.size());
-  ASSERT_EQ(numen::sim::trace_column_values(columns, r, 3, std::span(values)), names.size());
+  ASSERT_EQ(numen::sim::trace_column_values(numen::sim::TraceKind::kCsv, r, 3, std::span(values)),
+            names.size());
   const std::vector<std::string> row = split(lines[1]);
   ASSERT_EQ(row.size(), names.size());
   for (std::size_t c = 0; c < names.size(); ++c)
@@ -99,10 +106,10 @@ TEST(TraceColumns, CsvHeaderIsTheTableAndRowsHoldItsValuesInOrder) {
 TEST(TraceColumns, ValuesStopWhereTheOutputEnds) {
   const TraceRecord r = distinct_record();
   std::array<double, 4> out{};
-  EXPECT_EQ(numen::sim::trace_column_values(numen::sim::trace_csv_columns(), r, 3, std::span(out)),
-            4u);
+  EXPECT_EQ(
+      numen::sim::trace_column_values(numen::sim::TraceKind::kCsv, r, 3, std::span(out)), 4u);
   EXPECT_EQ(out[0], r.time_s);
-  EXPECT_EQ(out[3], r.target.position.x());
+  EXPECT_EQ(out[3], r.sample_valid ? 1.0 : 0.0);
 }
 
 TEST(TraceColumns, StreamedTraceHeaderIsTheTableAndRowsHoldItsValuesWithoutAllocating) {
@@ -122,19 +129,22 @@ TEST(TraceColumns, StreamedTraceHeaderIsTheTableAndRowsHoldItsValuesWithoutAlloc
   runner.finish();
   std::vector<std::string> axis_names;
   for (const auto& a : scene.device.axes) axis_names.push_back(a.name);
-  const auto columns = numen::sim::trace_stream_columns();
   std::vector<std::string> header = {"period", "time_ns", "flags"};
-  for (const std::string& n : numen::sim::trace_column_names(columns, std::span(axis_names)))
+  for (const std::string& n :
+       numen::sim::trace_column_names(numen::sim::TraceKind::kStream, axis_names))
     header.push_back(n);
   const std::vector<std::string> lines = read_lines(path);
   ASSERT_EQ(lines.size(), 201u);
   EXPECT_EQ(split(lines[0]), header);
-  // The last row: the values of the last period's record and report, in the header's order.
+  // The last row: the values of the last period's record, in the header's order.
   std::vector<double> values(header.size() - 3);
-  const numen::sim::StreamedPeriod last{runner.trace().records().back(), runner.last_report()};
-  ASSERT_EQ(numen::sim::trace_column_values(columns, last, static_cast<int>(axis_names.size()),
+  const TraceRecord& last = runner.trace().records().back();
+  ASSERT_EQ(numen::sim::trace_column_values(numen::sim::TraceKind::kStream, last,
+                                            static_cast<int>(axis_names.size()),
                                             std::span(values)),
             values.size());
+  EXPECT_EQ(last.frames_read, runner.last_report().frames_read);
+  EXPECT_EQ(last.step_time_us, static_cast<double>(runner.last_report().step_ns) * 1e-3);
   const std::vector<std::string> row = split(lines.back());
   ASSERT_EQ(row.size(), header.size());
   EXPECT_EQ(row[0], "199");

@@ -272,7 +272,10 @@ TEST(Trace, RunSceneWritesOneRowPerStep) {
   const auto lines = read_lines(dir / "run.csv");
   ASSERT_EQ(lines.size(), 251u);
   const auto header = split(lines[0]);
-  EXPECT_EQ(column(header, "axis_torque_4") + 1, column(header, "step_time_us"));  // 5 axes
+  // Per-axis columns are named by the scene's axes, the last followed by step_time_us.
+  ASSERT_EQ(scene.device.axes.size(), 5u);
+  EXPECT_EQ(column(header, "axis_torque_" + scene.device.axes.back().name) + 1,
+            column(header, "step_time_us"));
   const auto last = split(lines.back());
   ASSERT_EQ(last.size(), header.size());
   EXPECT_NEAR(std::stod(last[0]), 0.25, 1e-9);

@@ -128,10 +128,12 @@ class SceneRunner {
   /// The controller's port (the real bus, the log replay, the recorder, or the SimBus port).
   const hal::Bus& port() const noexcept { return *port_; }
   /// Streams one record per period into a CSV through platform::TraceWriter (lock-free queue,
-  /// writer thread started here; setup only). Columns: trace_stream_columns() (frames_read,
-  /// sample_valid, torque_commanded, lifecycle, target_{x,y,z}, tool_{x,y,z}, force_{x,y,z},
-  /// tau_<axis name> per axis, step_us, end_to_end_us, wakeup_us); flags bit 0 sample valid,
-  /// bit 1 torque commanded, bit 2 overrun. Throws like TraceWriter's constructor.
+  /// writer thread started here; setup only). Columns: the streamed ones of trace_columns()
+  /// (TraceKind::kStream: frames_read, sample_valid, torque_commanded, lifecycle,
+  /// target_{x,y,z}, tool_{x,y,z}, feedback_f{x,y,z}, axis_torque_<axis name> per axis,
+  /// step_time_us, end_to_end_us, wakeup_latency_us, emcys, emcy_node, emcy_code); flags
+  /// bit 0 sample valid, bit 1 torque commanded, bit 2 overrun. Throws like TraceWriter's
+  /// constructor.
   void stream_trace(const std::string& path);
   /// Publishes the run's state stream (docs/viewer.md) to a view recording at `record_path`
   /// (empty: none) and to `sinks`, at `rate_hz` frames per simulated second; `wait`: the loop

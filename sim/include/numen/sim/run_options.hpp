@@ -44,7 +44,7 @@ struct BusChoice {
 
 /// Largest in-memory trace of a simulated run (`--trace` without a real bus): one TraceRecord per
 /// period is kept until the run ends, so run_scene() refuses (InputError, key "--trace") a run
-/// whose trace would take more, before allocating it. 1 GiB: ~3 million periods, 50 min at 1 kHz.
+/// whose trace would take more, before allocating it. 1 GiB: ~2.5 million periods, 41 min at 1 kHz.
 inline constexpr std::size_t kMaxInMemoryTraceBytes = std::size_t{1} << 30;
 
 /// The capacity (records) of the in-memory trace of a simulated run of `periods` periods, for

@@ -23,7 +23,11 @@ namespace numen::sim {
 struct TraceRecord {
   double time_s = 0.0;
   int attached_body = -1;
-  bool sample_valid = false;
+  // What the control loop did (platform::PeriodReport).
+  int frames_read = 0;            ///< Frames taken from the bus this period.
+  bool sample_valid = false;      ///< Every axis fresh and plausible this period.
+  bool torque_commanded = false;  ///< Non-zero torque was commanded on a drive.
+  int lifecycle = 0;              ///< hal::LifecycleState value after the period.
   core::Pose target;                 ///< Device target of the held body's COM frame.
   core::Pose tool;                   ///< Held body's pose (zero when none).
   int contacts = 0;                  ///< All contacts this step.
@@ -33,7 +37,9 @@ struct TraceRecord {
   core::Wrench feedback;             ///< Eq. 8, sent to the device (N, N·m).
   std::array<double, hal::kMaxAxes> axis_torque{};  ///< N·m or N.
   int num_axes = 0;
-  double step_time_us = 0.0;
+  double step_time_us = 0.0;       ///< Wall time of core::step.
+  double end_to_end_us = 0.0;      ///< SYNC sent to the torque writes returned.
+  double wakeup_latency_us = 0.0;  ///< Wake-up time − deadline (paced runs).
   int solver_iterations = 0;
   // Articulation (zero without joints), paper Eq. 4–5.
   double joint_drift_mm = 0.0;            ///< Largest linear joint error |C| after the step.
@@ -71,12 +77,16 @@ class Trace {
   }
   const std::vector<TraceRecord>& records() const noexcept { return records_; }
   std::uint64_t dropped() const noexcept { return dropped_; }
-  /// Writes a header line and one CSV row per record. Throws std::runtime_error
-  /// naming the path if it cannot be written.
+  /// Names the device's axes for the per-axis columns ("axis_torque_<name>"; setup only).
+  /// Without names the axes are named by their index ("axis_torque_0").
+  void set_axis_names(std::vector<std::string> names) { axis_names_ = std::move(names); }
+  /// Writes a header line and one CSV row per record, the columns of trace_columns()
+  /// (trace_columns.hpp). Throws std::runtime_error naming the path if it cannot be written.
   void write_csv(const std::string& path) const;
 
  private:
   std::vector<TraceRecord> records_;
+  std::vector<std::string> axis_names_;
   std::uint64_t dropped_ = 0;
 };
 

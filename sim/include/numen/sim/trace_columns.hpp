@@ -1,12 +1,15 @@
 #pragma once
 /// @file trace_columns.hpp
-/// The columns of a run's per-period traces, one table per trace: name, unit, description and
-/// accessor of each column. The header line and every row are written from the same table, so
-/// a column's name and value cannot drift apart.
-///   - trace_csv_columns(): the in-memory trace of a simulated run (Trace::write_csv, one
-///     TraceRecord per period).
-///   - trace_stream_columns(): the streamed trace of a real-bus run (SceneRunner::stream_trace,
-///     platform::TraceWriter; values from the period's TraceRecord and PeriodReport).
+/// The one column table of a run's per-period traces: name, unit, description, accessor and
+/// the traces that carry each column. Both traces write header and rows from it, so a column's
+/// name and value cannot drift apart, and a quantity has one name in both:
+///   - TraceKind::kCsv: the in-memory trace of a run (`numen run --trace`, Trace::write_csv,
+///     one TraceRecord per period): every column.
+///   - TraceKind::kStream: the streamed trace of a real-bus run (SceneRunner::stream_trace,
+///     platform::TraceWriter, after its period, time_ns and flags): the columns marked
+///     `streamed`, in the table's order.
+/// Per-axis columns are named prefix + axis name ("axis_torque_yaw"). The names that differed
+/// before the table was shared are listed in docs/scenes.md, "Trace columns".
 
 #include <cstddef>
 #include <span>
@@ -14,13 +17,17 @@
 #include <string_view>
 #include <vector>
 
-#include "numen/platform/control_loop.hpp"
 #include "numen/sim/trace.hpp"
 
 namespace numen::sim {
 
-/// One column, or one column per device axis, of a trace whose rows are read from `Source`.
-template <typename Source>
+/// The traces written from the column table.
+enum class TraceKind {
+  kCsv,     ///< Trace::write_csv: every column.
+  kStream,  ///< The streamed real-bus trace: the columns marked `streamed`.
+};
+
+/// One column, or one column per device axis, of a trace whose rows are TraceRecords.
 struct TraceColumn {
   /// Column name; for a per-axis column the prefix of the names (trace_column_names()).
   std::string_view name;
@@ -28,51 +35,34 @@ struct TraceColumn {
   std::string_view description;  ///< One line: what the column holds (world frame).
   /// The value of a row (`axis`: the axis index of a per-axis column, else 0). Never
   /// allocates or throws.
-  double (*get)(const Source& row, int axis) noexcept;
+  double (*get)(const TraceRecord& row, int axis) noexcept;
   bool per_axis = false;  ///< Repeated once per device axis.
+  bool streamed = false;  ///< Also in the streamed trace (TraceKind::kStream).
 };
 
-/// One period of a streamed trace: the record of the period and what the control loop did.
-struct StreamedPeriod {
-  const TraceRecord& record;
-  const platform::PeriodReport& report;
-};
+/// Every column, in the order of Trace::write_csv.
+std::span<const TraceColumn> trace_columns() noexcept;
 
-/// Columns of Trace::write_csv. Per-axis columns are named prefix + axis index
-/// ("axis_torque_0").
-std::span<const TraceColumn<TraceRecord>> trace_csv_columns() noexcept;
-
-/// Columns of the streamed real-bus trace. Per-axis columns are named prefix + axis name
-/// ("tau_yaw"). Besides these, platform::TraceWriter writes period, time_ns and flags.
-std::span<const TraceColumn<StreamedPeriod>> trace_stream_columns() noexcept;
-
-/// The header names of `columns`, per-axis columns expanded once per entry of `axis_suffixes`
-/// (axis indices or names) in order. Setup only (allocates).
-template <typename Source>
-std::vector<std::string> trace_column_names(std::span<const TraceColumn<Source>> columns,
-                                            std::span<const std::string> axis_suffixes) {
-  std::vector<std::string> names;
-  for (const TraceColumn<Source>& c : columns) {
-    if (!c.per_axis) {
-      names.emplace_back(c.name);
-      continue;
-    }
-    for (const std::string& a : axis_suffixes) names.push_back(std::string(c.name) + a);
-  }
-  return names;
+/// Whether `column` is written in traces of `kind`.
+constexpr bool in_trace(const TraceColumn& column, TraceKind kind) noexcept {
+  return kind == TraceKind::kCsv || column.streamed;
 }
 
-/// Writes the values of one row, in the order of trace_column_names() with `num_axes` axes,
-/// into `out`; returns how many were written (stops when `out` is full). Never allocates.
-template <typename Source>
-std::size_t trace_column_values(std::span<const TraceColumn<Source>> columns, const Source& row,
-                                int num_axes, std::span<double> out) noexcept {
-  std::size_t n = 0;
-  for (const TraceColumn<Source>& c : columns) {
-    const int repeat = c.per_axis ? num_axes : 1;
-    for (int a = 0; a < repeat && n < out.size(); ++a) out[n++] = c.get(row, a);
-  }
-  return n;
-}
+/// The header names of the trace `kind`, per-axis columns expanded once per entry of
+/// `axis_names` in order. Setup only (allocates).
+std::vector<std::string> trace_column_names(TraceKind kind,
+                                            std::span<const std::string> axis_names);
+
+/// Writes the values of one row of the trace `kind`, in the order of trace_column_names() with
+/// `num_axes` axes, into `out`; returns how many were written (stops when `out` is full). A
+/// per-axis column reads 0 for an axis at or past `row.num_axes`. Never allocates.
+std::size_t trace_column_values(TraceKind kind, const TraceRecord& row, int num_axes,
+                                std::span<double> out) noexcept;
+
+/// The table as Markdown (`numen figures --all`; docs/scenes.md, "Trace columns", holds it
+/// verbatim, tested): a header "| column | unit | traces | what it holds |", a rule and one row
+/// per column (per-axis ones as "`axis_torque_<axis>`"; traces "csv" or "csv, stream"), '|' in
+/// descriptions escaped.
+std::string format_trace_columns_markdown();
 
 }  // namespace numen::sim
