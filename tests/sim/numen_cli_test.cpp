@@ -652,7 +652,7 @@ TEST(NumenCli, TraceThatWouldOutgrowItsBudgetIsRefusedBeforeTheRun) {
 }
 
 // Defect 6: out of memory printed "std::bad_alloc"; it now says what ran out (status 1). The
-// process gets 400 MB of address space and a trace of ~1.7 million periods (~600 MB, within
+// process gets 400 MB of address space and a trace of ~1.7 million periods (~730 MB, within
 // the trace budget) to reserve.
 TEST(NumenCli, OutOfMemoryIsNamed) {
   NUMEN_SKIP_UNDER_SANITIZER_HEAP("the sanitizer reserves terabytes of address space: ulimit -v stops it first");
