@@ -1,5 +1,5 @@
 /// @file figures_command.cpp
-/// `numen figures`: the run figures table (docs/scenes.md, "Summary figures", holds its output);
+/// `numen figures`: the run figures table (docs/outputs.md, "Summary figures", holds its output);
 /// `numen figures --all`: the names of every output (record_lists.hpp).
 
 #include <iostream>

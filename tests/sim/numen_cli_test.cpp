@@ -258,7 +258,7 @@ TEST(NumenCli, JsonCarriesTheExitStatus) {
 }
 
 // Issue 18: one class per subcommand; each still answers --help, and `numen figures` prints the
-// figure table that docs/scenes.md holds.
+// figure table that docs/outputs.md holds.
 TEST(NumenCli, EverySubcommandParsesAndFiguresPrintsTheTable) {
   TempDir dir;
   for (const std::vector<std::string>& args :

@@ -63,12 +63,12 @@ TEST(RecordNames, FiguresAllListsEveryOutputOnceEach) {
 }
 
 TEST(RecordNames, DocsTraceTableIsTheGeneratedTable) {
-  std::ifstream in(std::string(NUMEN_SOURCE_DIR) + "/docs/scenes.md");
-  ASSERT_TRUE(in) << "docs/scenes.md";
+  std::ifstream in(std::string(NUMEN_SOURCE_DIR) + "/docs/outputs.md");
+  ASSERT_TRUE(in) << "docs/outputs.md";
   std::stringstream ss;
   ss << in.rdbuf();
   EXPECT_NE(ss.str().find(sim::format_trace_columns_markdown()), std::string::npos)
-      << "docs/scenes.md does not hold the trace column table as `numen figures --all` prints "
+      << "docs/outputs.md does not hold the trace column table as `numen figures --all` prints "
          "it:\n"
       << sim::format_trace_columns_markdown();
 }

@@ -1,6 +1,6 @@
 // Tests of sim/run_figures: the one table of a run's figures. Names are unique JSON paths,
 // every row is described and reads a value of its declared kind, and the docs' summary table
-// (docs/scenes.md, "Summary figures") lists every figure.
+// (docs/outputs.md, "Summary figures") lists every figure.
 #include "numen/sim/run_figures.hpp"
 
 #include <gtest/gtest.h>
@@ -57,18 +57,18 @@ TEST(RunFigures, AccessorsReadTheSummary) {
 }
 
 TEST(RunFigures, DocsSummaryTableIsTheGeneratedTable) {
-  std::ifstream in(std::string(NUMEN_SOURCE_DIR) + "/docs/scenes.md");
-  ASSERT_TRUE(in) << "docs/scenes.md";
+  std::ifstream in(std::string(NUMEN_SOURCE_DIR) + "/docs/outputs.md");
+  ASSERT_TRUE(in) << "docs/outputs.md";
   std::stringstream ss;
   ss << in.rdbuf();
   const std::string doc = ss.str();
   const std::string table = numen::sim::format_run_figures_markdown();
   EXPECT_NE(doc.find(table), std::string::npos)
-      << "docs/scenes.md does not hold the figure table as `numen figures` prints it:\n"
+      << "docs/outputs.md does not hold the figure table as `numen figures` prints it:\n"
       << table;
   for (const RunFigure& f : numen::sim::run_figures())  // each row, for a readable failure
     EXPECT_NE(doc.find("| `" + std::string(f.name) + "` | "), std::string::npos)
-        << "docs/scenes.md's figure table lacks " << f.name;
+        << "docs/outputs.md's figure table lacks " << f.name;
 }
 
 TEST(RunFigures, MarkdownTableHasOneRowPerFigureAndEscapesBars) {

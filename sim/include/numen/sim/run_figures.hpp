@@ -2,7 +2,7 @@
 /// @file run_figures.hpp
 /// The one list of a run's figures (RunSummary): name, unit, description and accessor of each.
 /// The JSON summary (`numen run --json`), the text summary (run_summary_text.hpp) and the
-/// docs table (docs/scenes.md, "Summary figures") are written from it; a figure added here
+/// docs table (docs/outputs.md, "Summary figures") are written from it; a figure added here
 /// appears in all of them, and a test checks that none is missing from any. The accessors
 /// never allocate, so a periodic state stream can read the same table.
 
@@ -63,7 +63,7 @@ std::span<const RunFigure> run_figures() noexcept;
 /// The figure called `name`, or nullptr.
 const RunFigure* find_run_figure(std::string_view name) noexcept;
 
-/// The table as Markdown (`numen figures`; docs/scenes.md holds it verbatim, tested): a
+/// The table as Markdown (`numen figures`; docs/outputs.md holds it verbatim, tested): a
 /// header "| figure | unit | what it measures |", a rule and one row per figure, '|' in
 /// descriptions escaped.
 std::string format_run_figures_markdown();

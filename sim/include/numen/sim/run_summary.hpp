@@ -69,7 +69,7 @@ struct DivergenceSummary {
   double speed_limit_mps = 0.0;    ///< The speed limit at the end (10 × v_ref; m/s).
 };
 
-/// What a run of an admittance device measured (AdmittanceRunner; docs/scenes.md). Positions
+/// What a run of an admittance device measured (AdmittanceRunner; docs/outputs.md). Positions
 /// are the controlled frame's origin (world): "device" where the emulated device is, "hand"
 /// where the simulated hand wants it (the scene trajectory), "god-object" the held body's COM.
 struct AdmittanceSummary {

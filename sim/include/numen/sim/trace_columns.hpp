@@ -9,7 +9,7 @@
 ///     platform::TraceWriter, after its period, time_ns and flags): the columns marked
 ///     `streamed`, in the table's order.
 /// Per-axis columns are named prefix + axis name ("axis_torque_yaw"). The names that differed
-/// before the table was shared are listed in docs/scenes.md, "Trace columns".
+/// before the table was shared are listed in docs/outputs.md, "Trace columns".
 
 #include <cstddef>
 #include <span>
@@ -59,7 +59,7 @@ std::vector<std::string> trace_column_names(TraceKind kind,
 std::size_t trace_column_values(TraceKind kind, const TraceRecord& row, int num_axes,
                                 std::span<double> out) noexcept;
 
-/// The table as Markdown (`numen figures --all`; docs/scenes.md, "Trace columns", holds it
+/// The table as Markdown (`numen figures --all`; docs/outputs.md, "Trace columns", holds it
 /// verbatim, tested): a header "| column | unit | traces | what it holds |", a rule and one row
 /// per column (per-axis ones as "`axis_torque_<axis>`"; traces "csv" or "csv, stream"), '|' in
 /// descriptions escaped.
