@@ -12,7 +12,6 @@
 namespace numen::sim {
 namespace {
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
 using core::Pose;
 using core::Quat;
 using core::Vec3;

@@ -18,7 +18,6 @@
 namespace numen::sim {
 namespace {
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
 using core::Quat;
 using core::Vec3;
 

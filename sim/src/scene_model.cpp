@@ -13,7 +13,6 @@
 namespace numen::sim {
 namespace {
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
 using core::Quat;
 using core::Sphere;
 using core::Vec3;

@@ -11,6 +11,7 @@
 /// below 5 mm (10 % of the lever arm).
 
 #include <cmath>
+#include <numbers>
 #include <cstdio>
 
 #include "numen/sim/scene.hpp"
@@ -22,8 +23,7 @@ namespace {
 
 using core::Vec3;
 
-constexpr double kRootMass = 0.1, kR = 0.02, kLever = 0.05, kDriftBound = 0.005, kSpin = 10.0;
-constexpr double kPi = 3.14159265358979323846;
+constexpr double kRootMass = 0.1, kR = 0.02, kLever = 0.05, kSpin = 10.0;
 
 std::vector<double> articulation_steps(const StabilityOptions& o) {
   if (o.quick) return {1e-3, 1e-2};
@@ -72,7 +72,7 @@ StabilityRow articulation_run(core::Integrator integrator, double h, double rati
       [h](std::int64_t k, core::Data& d) noexcept {
         const double t = static_cast<double>(k) * h;
         d.target.orientation =
-            core::Quat(Eigen::AngleAxisd(std::fmod(kSpin * t, 2.0 * kPi), Vec3::UnitZ()));
+            core::Quat(Eigen::AngleAxisd(std::fmod(kSpin * t, 2.0 * std::numbers::pi), Vec3::UnitZ()));
         d.target_twist.angular = Vec3(0.0, 0.0, kSpin);
       },
       monitor);

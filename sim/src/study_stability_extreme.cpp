@@ -5,6 +5,7 @@
 /// core::kMaxContacts.
 
 #include <cmath>
+#include <numbers>
 #include <cstdio>
 
 #include "numen/core/capacity.hpp"
@@ -19,7 +20,6 @@ using core::Mat3;
 using core::Quat;
 using core::Vec3;
 
-constexpr double kPi = 3.14159265358979323846;
 
 std::vector<double> extreme_steps(const StabilityOptions& o) {
   if (o.quick) return {1e-3, 1e-2};
@@ -63,7 +63,7 @@ StabilityRow teleport_run(core::Integrator integrator, double h, double k_t, boo
   core::Data data = core::make_data(model);
   const std::int64_t jump = std::max<std::int64_t>(1, std::llround(0.05 / h));
   const Vec3 to(1.0, 0.0, 0.0);
-  const Quat turn(Eigen::AngleAxisd(kPi - 0.1, Vec3::UnitZ()));
+  const Quat turn(Eigen::AngleAxisd(std::numbers::pi - 0.1, Vec3::UnitZ()));
   // Static penetration: the coupling stretched from the wall contact (x = 40 mm) to 1 m.
   const double static_depth = k_t * (to.x() - (kWallX - kR)) / (k_t + kKc);
   const double bound = wall ? limits.penetration_factor * static_depth : kInf;
@@ -111,7 +111,7 @@ StabilityRow spin_run(core::Integrator integrator, double h, double k_r,
       model, data, n,
       [&](std::int64_t k, core::Data& d) noexcept {
         const double t = static_cast<double>(k) * h;
-        d.target.orientation = Quat(Eigen::AngleAxisd(std::fmod(kW * t, 2.0 * kPi), axis));
+        d.target.orientation = Quat(Eigen::AngleAxisd(std::fmod(kW * t, 2.0 * std::numbers::pi), axis));
         d.target_twist.angular = kW * axis;
       },
       monitor);

@@ -19,6 +19,7 @@
 /// place of the energy bound (the loop's input work is not metered).
 
 #include <cmath>
+#include <numbers>
 #include <cstdio>
 #include <limits>
 #include <memory>
@@ -39,7 +40,6 @@ namespace {
 using core::Quat;
 using core::Vec3;
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kMaxSpeed = 10.0;              // m/s
 constexpr double kMaxAngularSpeed = 1000.0;     // rad/s
 constexpr double kLoopDriftBound = 0.005;       // m
@@ -270,7 +270,7 @@ StabilityRow trocar_run(const Scene& base_scene, core::Integrator integrator, do
     const double s =
         kMinDepth +
         (d0 - kMinDepth) * (1.0 - tau * tau * tau * (10.0 - 15.0 * tau + 6.0 * tau * tau));
-    const double w = 2.0 * kPi * kHz * t;
+    const double w = 2.0 * std::numbers::pi * kHz * t;
     const Quat shaft = trocar.orientation *
                        Quat(Eigen::AngleAxisd(kWobble * std::sin(w), Vec3::UnitX())) *
                        Quat(Eigen::AngleAxisd(kWobble * std::cos(w), Vec3::UnitY()));

@@ -36,7 +36,6 @@ namespace {
 
 constexpr double kSlack = 0.001;        // m: one 1 ms period at 1 m/s
 constexpr double kMaxFreeSpeed = 10.0;  // m/s
-constexpr double kDriftBound = 0.005;   // m
 constexpr double kZeta = 0.85;          // the scenes' coupling damping ratio
 
 std::vector<double> stiffnesses(const StabilityOptions& o) {

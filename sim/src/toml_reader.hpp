@@ -5,6 +5,7 @@
 /// Load time only (allocates, throws).
 
 #include <cstdint>
+#include <limits>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -16,6 +17,9 @@
 #include "numen/sim/input_error.hpp"
 
 namespace numen::sim {
+
+/// The upper bound `number_in()` takes for a key that has none (+∞).
+inline constexpr double kInf = std::numeric_limits<double>::infinity();
 
 /// A view of one TOML table with its dotted key path (e.g. "body[2].coupling").
 class TomlTable {

@@ -18,10 +18,6 @@ namespace {
 /// instant, so that at(i · period) returns sample i bit for bit.
 constexpr double kSnap = 1e-9;
 
-[[noreturn]] void fail(const std::string& key, const std::string& message) {
-  throw InputError("", 0, 0, key, message);
-}
-
 bool finite(const core::Vec3& v) { return v.allFinite(); }
 
 }  // namespace
@@ -35,11 +31,11 @@ core::Quat slerp_shortest(const core::Quat& q0, const core::Quat& q1, double s) 
 
 Trajectory::Trajectory(double period, std::vector<core::Pose> poses, std::vector<double> jaw) {
   if (!std::isfinite(period) || period <= 0.0) {
-    fail("trajectory.period", "must be finite and > 0 s, got " + format_input_number(period));
+    fail_at_key("trajectory.period", "must be finite and > 0 s, got " + format_input_number(period));
   }
-  if (poses.empty()) fail("trajectory.samples", "a trajectory needs at least one sample");
+  if (poses.empty()) fail_at_key("trajectory.samples", "a trajectory needs at least one sample");
   if (!jaw.empty() && jaw.size() != poses.size()) {
-    fail("trajectory.jaw", "has " + std::to_string(jaw.size()) + " values for " +
+    fail_at_key("trajectory.jaw", "has " + std::to_string(jaw.size()) + " values for " +
                                std::to_string(poses.size()) + " poses");
   }
   period_ = period;
@@ -50,9 +46,9 @@ Trajectory::Trajectory(double period, std::vector<core::Pose> poses, std::vector
     TrajectorySample& s = samples_[i];
     s.time = static_cast<double>(i) * period;
     s.pose.position = poses[i].position;
-    if (!finite(s.pose.position)) fail(where + ".position", "is not finite");
+    if (!finite(s.pose.position)) fail_at_key(where + ".position", "is not finite");
     if (s.pose.position.stableNorm() > kMaxTargetDistance) {
-      fail(where + ".position", "the target at " + format_input_number(s.time) + " s is " +
+      fail_at_key(where + ".position", "the target at " + format_input_number(s.time) + " s is " +
                                     format_input_number(s.pose.position.stableNorm()) +
                                     " m from the origin; a target beyond " +
                                     format_input_number(kMaxTargetDistance) +
@@ -61,7 +57,7 @@ Trajectory::Trajectory(double period, std::vector<core::Pose> poses, std::vector
     core::Quat q = poses[i].orientation;
     const double norm = q.norm();
     if (!std::isfinite(norm) || norm < 1e-9) {
-      fail(where + ".orientation", "quaternion is not finite or has zero norm");
+      fail_at_key(where + ".orientation", "quaternion is not finite or has zero norm");
     }
     q.coeffs() /= norm;
     // Sign continuity: q and -q are the same rotation; keep the one closest to
@@ -70,15 +66,15 @@ Trajectory::Trajectory(double period, std::vector<core::Pose> poses, std::vector
     if (dot < 0.0) q.coeffs() = -q.coeffs();
     s.pose.orientation = q;
     s.jaw = jaw.empty() ? 0.0 : jaw[i];
-    if (!std::isfinite(s.jaw)) fail(where + ".jaw", "is not finite");
+    if (!std::isfinite(s.jaw)) fail_at_key(where + ".jaw", "is not finite");
   }
 }
 
 Trajectory::Trajectory(std::shared_ptr<const ComputedMotion> path, double period, std::size_t count) {
   if (!std::isfinite(period) || period <= 0.0) {
-    fail("trajectory.period", "must be finite and > 0 s, got " + std::to_string(period));
+    fail_at_key("trajectory.period", "must be finite and > 0 s, got " + std::to_string(period));
   }
-  if (count == 0 || !path) fail("trajectory.samples", "a trajectory needs at least one sample");
+  if (count == 0 || !path) fail_at_key("trajectory.samples", "a trajectory needs at least one sample");
   period_ = period;
   size_ = count;
   path_ = std::move(path);
@@ -160,24 +156,24 @@ core::Vec3 apply(const Placement& placement, const core::Vec3& p) noexcept {
 
 Trajectory sample_motion(std::shared_ptr<const ComputedMotion> motion, double dt,
                          const std::string& dt_key) {
-  if (!std::isfinite(dt) || dt <= 0.0) fail(dt_key, "must be finite and > 0 s, got " + format_input_number(dt));
+  if (!std::isfinite(dt) || dt <= 0.0) fail_at_key(dt_key, "must be finite and > 0 s, got " + format_input_number(dt));
   const double m = motion->duration() / dt;
   const double intervals = std::ceil(m - 1e-9 * std::max(1.0, m));
-  if (!(intervals < 1e9)) fail(dt_key, "gives more than 1e9 samples; dt is too small");
+  if (!(intervals < 1e9)) fail_at_key(dt_key, "gives more than 1e9 samples; dt is too small");
   const std::size_t n = static_cast<std::size_t>(std::max(0.0, intervals)) + 1;
   return Trajectory(std::move(motion), dt, n);
 }
 
 Trajectory transformed(const Trajectory& trajectory, const Placement& placement) {
   if (!std::isfinite(placement.scale) || placement.scale <= 0.0) {
-    fail("placement.scale", "must be finite and > 0, got " + format_input_number(placement.scale));
+    fail_at_key("placement.scale", "must be finite and > 0, got " + format_input_number(placement.scale));
   }
   const double norm = placement.pose.orientation.norm();
   if (!std::isfinite(norm) || norm < 1e-9) {
-    fail("placement.orientation", "quaternion is not finite or has zero norm");
+    fail_at_key("placement.orientation", "quaternion is not finite or has zero norm");
   }
   if (!finite(placement.pose.position) || !finite(placement.origin)) {
-    fail("placement.position", "origin and position must be finite");
+    fail_at_key("placement.position", "origin and position must be finite");
   }
   if (trajectory.empty()) return Trajectory{};
   const core::Quat r = placement.pose.orientation.normalized();
@@ -191,7 +187,7 @@ Trajectory transformed(const Trajectory& trajectory, const Placement& placement)
     moved.placement_.scale = placement.scale * inner.scale;
     const ComputedMotion::FarthestPoint far = moved.path_->farthest_point(moved.placement_);
     if (!(far.distance <= kMaxTargetDistance)) {
-      fail("trajectory.placement",
+      fail_at_key("trajectory.placement",
            "the target at " + format_input_number(far.time) + " s is " +
                format_input_number(far.distance) + " m from the origin; a target beyond " +
                format_input_number(kMaxTargetDistance) +

@@ -15,10 +15,6 @@
 namespace numen::sim {
 namespace {
 
-[[noreturn]] void fail(const std::string& key, const std::string& message) {
-  throw InputError("", 0, 0, key, message);
-}
-
 core::Vec3 centroid_of(const Trajectory& trajectory) {
   core::Vec3 c = core::Vec3::Zero();
   for (std::size_t i = 0; i < trajectory.size(); ++i) c += trajectory[i].pose.position;
@@ -35,9 +31,9 @@ double line_distance(const core::Vec3& x, const core::Vec3& p, const core::Vec3&
 
 AxisIntersection least_squares_axis_intersection(const Trajectory& trajectory, int axis_column) {
   if (axis_column < 0 || axis_column > 2) {
-    fail("trocar.axis_column", "must be 0 (x), 1 (y) or 2 (z), got " + std::to_string(axis_column));
+    fail_at_key("trocar.axis_column", "must be 0 (x), 1 (y) or 2 (z), got " + std::to_string(axis_column));
   }
-  if (trajectory.empty()) fail("trocar.trajectory", "the trajectory is empty");
+  if (trajectory.empty()) fail_at_key("trocar.trajectory", "the trajectory is empty");
   const std::size_t n = trajectory.size();
   // Centre the positions for conditioning: x = c + y, solve A y = b.
   const core::Vec3 c = centroid_of(trajectory);
@@ -60,7 +56,7 @@ AxisIntersection least_squares_axis_intersection(const Trajectory& trajectory, i
     std::ostringstream os;
     os << "the tool axes are (nearly) parallel (conditioning " << out.conditioning
        << "): their intersection is undefined";
-    fail("trocar.trajectory", os.str());
+    fail_at_key("trocar.trajectory", os.str());
   }
   // A is symmetric positive definite: solve with its eigen-decomposition.
   const core::Vec3 y =
@@ -81,9 +77,9 @@ AxisIntersection least_squares_axis_intersection(const Trajectory& trajectory, i
 
 ApproachTrocar trocar_from_approach(const Trajectory& trajectory, double standoff_m) {
   if (!std::isfinite(standoff_m) || standoff_m < 0.0) {
-    fail("trocar.standoff", "must be finite and >= 0 m, got " + std::to_string(standoff_m));
+    fail_at_key("trocar.standoff", "must be finite and >= 0 m, got " + std::to_string(standoff_m));
   }
-  if (trajectory.empty()) fail("trocar.trajectory", "the trajectory is empty");
+  if (trajectory.empty()) fail_at_key("trocar.trajectory", "the trajectory is empty");
   const std::size_t n = trajectory.size();
   ApproachTrocar out;
   out.centroid = centroid_of(trajectory);
@@ -95,7 +91,7 @@ ApproachTrocar trocar_from_approach(const Trajectory& trajectory, double standof
   mean_z /= static_cast<double>(n);
   out.approach_consistency = mean_z.norm();
   if (!(out.approach_consistency >= 1e-6)) {
-    fail("trocar.trajectory", "the tip z axes average to zero: no mean approach direction");
+    fail_at_key("trocar.trajectory", "the tip z axes average to zero: no mean approach direction");
   }
   out.approach = mean_z / out.approach_consistency;
   out.point = out.centroid - standoff_m * out.approach;

@@ -19,6 +19,7 @@
 #include "numen/core/step.hpp"
 
 #include "detail/data_scratch.hpp"
+#include "rotation.hpp"
 
 namespace core = numen::core;
 using core::Mat12;
@@ -29,7 +30,7 @@ using core::Vec3;
 
 namespace {
 
-Quat rot(double angle, const Vec3& axis) { return Quat(Eigen::AngleAxisd(angle, axis.normalized())); }
+using numen::test::rot;
 
 const core::MaterialPair kMat{2.0e4, 30.0, 4.0};
 

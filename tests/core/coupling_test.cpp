@@ -17,6 +17,8 @@
 #include "alloc_counter.hpp"
 
 #include "detail/data_scratch.hpp"
+#include "rotation.hpp"
+#include "test_constants.hpp"
 
 namespace core = numen::core;
 using core::Mat3;
@@ -25,9 +27,9 @@ using core::Vec3;
 
 namespace {
 
-constexpr double kPi = std::numbers::pi;
+using numen::test::kPi;
 
-Quat rot(double angle, const Vec3& axis) { return Quat(Eigen::AngleAxisd(angle, axis.normalized())); }
+using numen::test::rot;
 
 core::Model coupled_model(core::Integrator integrator, core::CouplingMode mode, double dt,
                           core::CouplingGains gains, double mass = 1.0) {

@@ -10,6 +10,7 @@
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"
 #include "numen/core/step.hpp"
+#include "rotation.hpp"
 
 namespace core = numen::core;
 using core::Quat;
@@ -17,7 +18,7 @@ using core::Vec3;
 
 namespace {
 
-Quat rot(double angle, const Vec3& axis) { return Quat(Eigen::AngleAxisd(angle, axis.normalized())); }
+using numen::test::rot;
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 

@@ -23,6 +23,7 @@
 
 #include "detail/data_scratch.hpp"
 #include "detail/implicit_system.hpp"
+#include "rotation.hpp"
 
 namespace core = numen::core;
 using core::Mat12;
@@ -33,7 +34,7 @@ using core::Vec6;
 
 namespace {
 
-Quat rot(double angle, const Vec3& axis) { return Quat(Eigen::AngleAxisd(angle, axis.normalized())); }
+using numen::test::rot;
 
 const char* name(core::Integrator i) {
   return i == core::Integrator::kSymplecticEuler ? "symplectic"

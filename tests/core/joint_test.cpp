@@ -14,6 +14,7 @@
 #include "alloc_counter.hpp"
 #include "numen/core/data.hpp"
 #include "numen/core/rigid_body.hpp"
+#include "test_constants.hpp"
 
 namespace core = numen::core;
 using core::BodyState;
@@ -28,7 +29,7 @@ using core::Vec6;
 
 namespace {
 
-constexpr double kPi = std::numbers::pi;
+using numen::test::kPi;
 
 constexpr std::array<JointType, 6> kTypes = {JointType::kFixed,     JointType::kRevolute,
                                              JointType::kPrismatic, JointType::kCylindrical,

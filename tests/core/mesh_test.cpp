@@ -3,6 +3,8 @@
 // errors, net topology (edges, bending pairs), lumped areas, mean incident edge
 // lengths and transform_mesh.
 #include "numen/core/mesh.hpp"
+#include "net_states.hpp"
+#include "test_constants.hpp"
 
 #include <gtest/gtest.h>
 
@@ -32,9 +34,9 @@ using numen::core::validate_mesh;
 using numen::core::Vec3;
 using numen::core::vertex_areas;
 
-constexpr double kPi = std::numbers::pi;
+using numen::test::kPi;
 
-std::size_t at(int i) { return static_cast<std::size_t>(i); }
+using numen::test::at;
 
 double area(const TriangleMesh& m) {
   double a = 0.0;

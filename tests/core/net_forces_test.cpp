@@ -25,6 +25,7 @@
 #include "detail/data_scratch.hpp"
 #include "detail/implicit_system.hpp"
 #include "detail/net_solve.hpp"
+#include "net_states.hpp"
 
 namespace core = numen::core;
 using core::Mat3;
@@ -33,7 +34,7 @@ using core::Vec3;
 
 namespace {
 
-std::size_t at(int i) { return static_cast<std::size_t>(i); }
+using numen::test::at;
 
 /// The linearisation of spring e of Model::net_springs (stored in the sweep order).
 core::SweepSpring spring_term(const core::Data& d, int e) {
@@ -128,13 +129,6 @@ std::vector<Vec3> reference_forces(const core::Model& m, const core::Data& d,
 
 /// Moves every node off its anchor by a deterministic pseudo-random offset
 /// (≤ `dx` per axis) and velocity (≤ `dv`).
-void perturb(core::Data& d, double dx, double dv) {
-  for (std::size_t i = 0; i < d.nodes.size(); ++i) {
-    const double s = static_cast<double>(i) + 1.0;
-    d.nodes[i].position += dx * Vec3(std::sin(1.3 * s), std::cos(2.1 * s), std::sin(0.7 * s + 1.0));
-    d.nodes[i].velocity += dv * Vec3(std::cos(1.7 * s), std::sin(2.9 * s), std::cos(0.3 * s));
-  }
-}
 
 /// Forces stage of step() for the current states.
 void forces(const core::Model& m, core::Data& d) {
@@ -182,7 +176,7 @@ TEST(NetForces, SpringAndTieForcesAgainstHandValues) {
 TEST(NetForces, GeneralStateMatchesTheHeaderFormulasAndTheReactionBalances) {
   const core::Model m = scene(core::make_icosphere(0.04, 1));
   core::Data d = core::make_data(m);
-  perturb(d, 3e-3, 0.2);
+  numen::test::perturb_nodes(d, 3e-3, 0.2);
   d.applied_wrench[0].force = Vec3(1.0, 2.0, 3.0);
   d.applied_wrench[0].torque = Vec3(0.01, -0.02, 0.03);
   forces(m, d);
@@ -221,7 +215,7 @@ TEST(NetForces, SpringBlockAndTieSumsMatchTheirDefinitions) {
   const core::Model m = scene(core::make_icosphere(0.04, 1));
   ASSERT_NE(m.integrator, core::Integrator::kSymplecticEuler);
   core::Data d = core::make_data(m);
-  perturb(d, 3e-3, 0.2);
+  numen::test::perturb_nodes(d, 3e-3, 0.2);
   forces(m, d);
   std::vector<Mat3> ref(d.nodes.size(), Mat3::Zero());
   for (std::size_t e = 0; e < m.net_springs.size(); ++e) {
@@ -278,7 +272,7 @@ TEST(NetForces, AtRestOnTheRigidComponentOnlyGravityActs) {
 TEST(NetForces, NodeContactForceIsThePenaltyLawWithItsReactionOnTheBody) {
   const core::Model m = scene(core::make_icosphere(0.04, 0));
   core::Data d = core::make_data(m);
-  perturb(d, 1e-3, 0.3);
+  numen::test::perturb_nodes(d, 1e-3, 0.3);
   // Three hand-made contacts: node 2 on a static obstacle, node 5 on body 1,
   // node 7 separating so fast that the contact pulls → inactive.
   d.num_node_contacts = 3;
@@ -495,7 +489,7 @@ TEST(NetForces, ZeroLengthSpringKeepsItsLastDirection) {
 TEST(NetForces, NodeUpdatesSymplecticAndImplicit) {
   const core::Model m = scene(core::make_icosphere(0.04, 0));
   core::Data d = core::make_data(m);
-  perturb(d, 1e-3, 0.1);
+  numen::test::perturb_nodes(d, 1e-3, 0.1);
   core::compute_forces(m, d);
   const std::vector<core::NodeState> s0 = d.nodes;
   core::integrate_nodes_symplectic(m, d);
@@ -518,7 +512,7 @@ TEST(NetForces, NodeUpdatesSymplecticAndImplicit) {
 TEST(NetForces, MeasureNetsObservables) {
   const core::Model m = scene(core::make_icosphere(0.04, 1));
   core::Data d = core::make_data(m);
-  perturb(d, 2e-3, 0.2);
+  numen::test::perturb_nodes(d, 2e-3, 0.2);
   d.nodes[17].position += Vec3(0.0, 0.01, 0.0);  // the largest stretch
   core::measure_nets(m, d);
   const core::BodyState& b = d.bodies[0];

@@ -17,6 +17,7 @@
 #include "numen/core/model.hpp"
 
 #include "detail/data_scratch.hpp"
+#include "net_states.hpp"
 
 namespace core = numen::core;
 using core::Vec3;
@@ -26,7 +27,7 @@ namespace {
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-std::size_t at(int i) { return static_cast<std::size_t>(i); }
+using numen::test::at;
 
 /// Two materials, two bodies (the second one will carry the nets), no spheres.
 core::Model base_model() {

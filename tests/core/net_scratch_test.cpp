@@ -18,13 +18,14 @@
 #include "numen/core/model.hpp"
 #include "numen/core/net_model.hpp"
 #include "detail/data_scratch.hpp"
+#include "net_states.hpp"
 
 namespace core = numen::core;
 using core::Vec3;
 
 namespace {
 
-std::size_t at(int i) { return static_cast<std::size_t>(i); }
+using numen::test::at;
 
 /// Two bodies, each carrying a net: a 642-node icosphere on body 0 and a
 /// capsule net on body 1 (two nets, so that the per-net ranges are checked).

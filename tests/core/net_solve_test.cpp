@@ -40,6 +40,7 @@
 #include "detail/implicit_system.hpp"
 #include "detail/joint_system.hpp"
 #include "detail/net_solve.hpp"
+#include "net_states.hpp"
 
 namespace core = numen::core;
 using core::Mat3;
@@ -50,7 +51,7 @@ using Eigen::VectorXd;
 
 namespace {
 
-std::size_t at(int i) { return static_cast<std::size_t>(i); }
+using numen::test::at;
 
 Quat rot(double angle, const Vec3& axis) {
   return Quat(Eigen::AngleAxisd(angle, axis.normalized()));
@@ -150,13 +151,6 @@ core::Model scene(Variant v) {
 }
 
 /// Moves the nodes off their anchors (some springs stretched, some compressed).
-void perturb(core::Data& d, double dx, double dv) {
-  for (std::size_t i = 0; i < d.nodes.size(); ++i) {
-    const double s = static_cast<double>(i) + 1.0;
-    d.nodes[i].position += dx * Vec3(std::sin(1.3 * s), std::cos(2.1 * s), std::sin(0.7 * s + 1.0));
-    d.nodes[i].velocity += dv * Vec3(std::cos(1.7 * s), std::sin(2.9 * s), std::cos(0.3 * s));
-  }
-}
 
 /// Two node contacts on a plane (the two lowest nodes) and one with body 1
 /// (the node nearest to it), written by hand in place of detect_node_contacts.
@@ -296,7 +290,7 @@ void check_scratch(const core::Model& m, const core::Data& d, const Dense& ref, 
 TEST(NetSolve, FreeRigidComponentMatchesTheDenseSolve) {
   const core::Model m = scene(Variant::kFree);
   core::Data d = core::make_data(m);
-  perturb(d, 3e-3, 0.05);
+  numen::test::perturb_nodes(d, 3e-3, 0.05);
   d.target = core::Pose{Vec3(0.02, 0.0, 0.12), rot(0.5, Vec3(1, 2, 2.5))};
   d.target_twist = core::Twist{Vec3(0.1, 0.0, 0.0), Vec3(0.0, 0.3, 0.0)};
   bool converged = false;
@@ -322,7 +316,7 @@ TEST(NetSolve, FreeRigidComponentMatchesTheDenseSolve) {
 TEST(NetSolve, WarmStartedSolveAfterRealStepsMatchesTheDenseSolve) {
   const core::Model m = scene(Variant::kFree);
   core::Data d = core::make_data(m);
-  perturb(d, 2e-3, 0.05);
+  numen::test::perturb_nodes(d, 2e-3, 0.05);
   for (int k = 0; k < 30; ++k) {
     d.target.position.x() += 2e-4;
     core::step(m, d);
@@ -351,7 +345,7 @@ TEST(NetSolve, JointedRigidComponentMatchesTheDenseKktSolve) {
     core::step(m, d);
     ASSERT_EQ(d.status, core::kStepOk) << k;
   }
-  perturb(d, 3e-3, 0.05);
+  numen::test::perturb_nodes(d, 3e-3, 0.05);
   bool converged = false;
   const Snapshot s = staged_solve(m, d, &converged);
   const Dense ref = dense_system(m, s);
@@ -397,7 +391,7 @@ TEST(NetSolve, JointedRigidComponentMatchesTheDenseKktSolve) {
 TEST(NetSolve, ImposedRigidComponentHasNoUnknownAndTheNodesMatchTheDenseSolve) {
   const core::Model m = scene(Variant::kImposed);
   core::Data d = core::make_data(m);
-  perturb(d, 3e-3, 0.05);
+  numen::test::perturb_nodes(d, 3e-3, 0.05);
   d.target = core::Pose{Vec3(0.02, -0.01, 0.11), rot(0.5, Vec3(1, 2, 2.5))};
   d.target_twist = core::Twist{Vec3(0.2, 0.0, -0.1), Vec3(0.5, 0.3, 0.0)};
   bool converged = false;
@@ -428,7 +422,7 @@ TEST(NetSolve, ReportsNonConvergenceAtMaxIterations) {
   m.solver.max_iterations = 1;
   ASSERT_EQ(core::finalize_model(m), "");
   core::Data d = core::make_data(m);
-  perturb(d, 3e-3, 0.05);
+  numen::test::perturb_nodes(d, 3e-3, 0.05);
   bool converged = true;
   staged_solve(m, d, &converged);
   EXPECT_FALSE(converged);
@@ -436,7 +430,7 @@ TEST(NetSolve, ReportsNonConvergenceAtMaxIterations) {
   EXPECT_GT(d.solver_residual, m.solver.tolerance);
   // Through step(): the status bit, and the iterate is still used (finite).
   core::Data d2 = core::make_data(m);
-  perturb(d2, 3e-3, 0.05);
+  numen::test::perturb_nodes(d2, 3e-3, 0.05);
   core::step(m, d2);
   EXPECT_TRUE(d2.status & core::kSolverNotConverged);
   EXPECT_EQ(d2.status & core::kNonFinite, 0u);
@@ -446,7 +440,7 @@ TEST(NetSolve, SeveralNetsOnOneBodyAndOnTheProbeMatchTheDenseSolve) {
   const core::Model m = scene(Variant::kThreeNets);
   ASSERT_EQ(m.num_nets(), 3);
   core::Data d = core::make_data(m);
-  perturb(d, 3e-3, 0.05);
+  numen::test::perturb_nodes(d, 3e-3, 0.05);
   d.target = core::Pose{Vec3(0.02, 0.0, 0.12), rot(0.5, Vec3(1, 2, 2.5))};
   bool converged = false;
   const Snapshot s = staged_solve(m, d, &converged);
@@ -532,7 +526,7 @@ Staged staged_body_contact(double tolerance = 1e-12,
   st.m.solver.error_estimate_delay = delay;
   st.m.solver.max_iterations = max_iterations;
   st.d = core::make_data(st.m);
-  perturb(st.d, 3e-3, 0.05);
+  numen::test::perturb_nodes(st.d, 3e-3, 0.05);
   st.d.target = core::Pose{Vec3(0.02, 0.0, 0.12), rot(0.5, Vec3(1, 2, 2.5))};
   st.snap = staged_solve(st.m, st.d, &st.converged, true);
   st.ref = dense_system(st.m, st.snap);

@@ -26,6 +26,7 @@
 #include "detail/data_scratch.hpp"
 #include "detail/implicit_system.hpp"
 #include "detail/joint_system.hpp"
+#include "rotation.hpp"
 
 namespace core = numen::core;
 using core::Quat;
@@ -33,7 +34,7 @@ using core::Vec3;
 
 namespace {
 
-Quat rot(double angle, const Vec3& axis) { return Quat(Eigen::AngleAxisd(angle, axis.normalized())); }
+using numen::test::rot;
 
 /// Rotation taking the joint frame's z onto the world y axis (revolute about y).
 const Quat kZtoY = rot(-M_PI / 2, Vec3::UnitX());

@@ -14,6 +14,7 @@
 #include "numen/core/data.hpp"
 #include "numen/core/mesh.hpp"
 #include "numen/core/model.hpp"
+#include "net_states.hpp"
 
 namespace numen::test::deformable_nets {
 
@@ -21,7 +22,7 @@ using core::Mat3;
 using core::Quat;
 using core::Vec3;
 
-inline std::size_t at(int i) { return static_cast<std::size_t>(i); }
+using numen::test::at;
 
 inline Quat rot(double angle, const Vec3& axis) { return Quat(Eigen::AngleAxisd(angle, axis.normalized())); }
 

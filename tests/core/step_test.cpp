@@ -15,6 +15,7 @@
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"
 #include "numen/core/rigid_body.hpp"
+#include "rotation.hpp"
 
 namespace core = numen::core;
 using core::Mat3;
@@ -23,7 +24,7 @@ using core::Vec3;
 
 namespace {
 
-Quat rot(double angle, const Vec3& axis) { return Quat(Eigen::AngleAxisd(angle, axis.normalized())); }
+using numen::test::rot;
 
 /// 13 bodies with one sphere each above a floor plane, body 0 coupled.
 core::Model thirteen_bodies(core::Integrator integ, core::CouplingMode mode) {

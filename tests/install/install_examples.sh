@@ -31,7 +31,7 @@ configure_build() {  # NAME SOURCE
   local dir
   dir=$(sed -n 's/^numen_DIR:PATH=//p' "$work/$1/CMakeCache.txt")
   case "$dir" in "$prefix"/*) ;; *) fail "$1 found numen in '$dir', not in $prefix" ;; esac
-  cmake --build "$work/$1" -j1 >"$work/$1.build.log" 2>&1 || { cat "$work/$1.build.log"; fail "build $1"; }
+  cmake --build "$work/$1" -j2 >"$work/$1.build.log" 2>&1 || { cat "$work/$1.build.log"; fail "build $1"; }
 }
 
 finite_only() {  # FILE: no nan/inf anywhere

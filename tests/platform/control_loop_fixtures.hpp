@@ -17,6 +17,7 @@
 #include "numen/hal/device/device_config.hpp"
 #include "numen/hal/transport/sim_bus.hpp"
 #include "numen/platform/control_loop.hpp"
+#include "test_constants.hpp"
 
 namespace numen::test::control_loop_fixtures {
 
@@ -29,7 +30,7 @@ using numen::hal::IoStatus;
 using numen::hal::SimBus;
 using numen::platform::ControlLoop;
 using numen::platform::PeriodReport;
-constexpr std::int64_t kMs = 1'000'000;
+using numen::test::kMs;
 constexpr std::int64_t kLatency = 100'000;
 constexpr std::int64_t kPhase = 250'000;
 

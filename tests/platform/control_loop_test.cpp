@@ -32,7 +32,7 @@
 
 using namespace numen::test::control_loop_fixtures;
 
-namespace {
+namespace control_loop_test {  // named: the unity build shares a TU with other test files
 
 /// Bus, emulated instrument, controller-side device, model, data and the loop.
 struct Rig {
@@ -279,7 +279,7 @@ TEST(ControlLoop, PeriodsNeverAllocate) {
   EXPECT_EQ(rig.device.counters().samples_valid, 2001u);
 }
 
-}  // namespace
+}  // namespace control_loop_test
 
 // ---- Target velocity from encoders: a 1 m target jump through the whole loop ----
 //

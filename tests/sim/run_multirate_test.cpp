@@ -70,7 +70,7 @@ RunSummary run_whole(const Scene& scene) {
   return runner.summary();
 }
 
-void print(const char* name, const RunSummary& s) {
+void print_rate_run(const char* name, const RunSummary& s) {
   std::printf("%-22s tool %.3f mm, any body %.3f mm, tracking rms %.3f mm, fastest block %.3f m/s, "
               "scene steps %lld, planes max %lld\n",
               name, s.tool_penetration_max_mm, s.any_penetration_max_mm, s.tracking_error_free_rms_mm,
@@ -97,10 +97,10 @@ TEST(RunMultirate, ConstructionSceneAtRateRatiosOneTwoAndTen) {
   const RunSummary r1 = run_whole(construction_multirate(dir, 0.001, 0.0));
   const RunSummary r2 = run_whole(construction_multirate(dir, 0.002, 0.01));
   const RunSummary r10 = run_whole(construction_multirate(dir, 0.01, 0.01));
-  print("single-rate 1 kHz", single);
-  print("multirate 1 kHz/1 kHz", r1);
-  print("multirate 1 kHz/500 Hz", r2);
-  print("multirate 1 kHz/100 Hz", r10);
+  print_rate_run("single-rate 1 kHz", single);
+  print_rate_run("multirate 1 kHz/1 kHz", r1);
+  print_rate_run("multirate 1 kHz/500 Hz", r2);
+  print_rate_run("multirate 1 kHz/100 Hz", r10);
   for (const RunSummary* s : {&r1, &r2, &r10}) {
     EXPECT_TRUE(s->multirate.enabled);
     EXPECT_EQ(s->nonfinite_steps, 0);

@@ -23,6 +23,7 @@
 #include "numen/sim/input_error.hpp"
 #include "numen/sim/scene.hpp"
 #include "numen/sim/simulated_instrument.hpp"
+#include "rotation.hpp"
 
 namespace {
 
@@ -41,14 +42,8 @@ using numen::sim::InputError;
 using numen::sim::load_scene;
 using numen::sim::Scene;
 
-std::string excerpt_path() {
-  return std::string(NUMEN_SOURCE_DIR) + "/sim/data/jigsaws_suturing_b002_excerpt.txt";
-}
 
-double angle_between(const Quat& a, const Quat& b) {
-  const double d = std::min(1.0, std::abs(a.normalized().dot(b.normalized())));
-  return 2.0 * std::acos(d);
-}
+using numen::test::angle_between;
 
 using numen::test::TempDir;
 
@@ -151,7 +146,7 @@ standoff = 0.12
 
 [trajectory]
 source = "jigsaws"
-file = ")" + excerpt_path() + R"("
+file = ")" + numen::test::jigsaws_excerpt_path() + R"("
 manipulator = "slave_right"
 end_time = 1.0
 )";

@@ -232,7 +232,7 @@ TEST(DeformableShippedScene, RecordedTargetGoesThroughThePost) {
 
 // A small valid scene: a held tool with a sphere, a hidden core body and one
 // deformable on it. Every error test changes one thing.
-const std::string kMini = R"(name = "mini"
+const std::string kMiniNet = R"(name = "mini"
 dt = 0.001
 gravity = [0.0, 0.0, 0.0]
 
@@ -287,11 +287,11 @@ type = "hold"
 duration = 0.25
 )";
 
-/// The [[deformable]] table of kMini replaced by `table` (which starts with "[[deformable]]").
+/// The [[deformable]] table of kMiniNet replaced by `table` (which starts with "[[deformable]]").
 std::string with_deformable(const std::string& table) {
-  const auto begin = kMini.find("[[deformable]]");
-  const auto end = kMini.find("[[obstacle]]");
-  return kMini.substr(0, begin) + table + "\n" + kMini.substr(end);
+  const auto begin = kMiniNet.find("[[deformable]]");
+  const auto end = kMiniNet.find("[[obstacle]]");
+  return kMiniNet.substr(0, begin) + table + "\n" + kMiniNet.substr(end);
 }
 
 /// Expects the error of `text` at the value of the first line containing
@@ -313,7 +313,7 @@ void expect_error_at(const std::string& text, const std::string& needle, const s
 
 TEST(DeformableLoader, MiniSceneLoadsWithDefaults) {
   TempDir dir;
-  const Scene s = load_scene(dir.write("mini.toml", kMini));
+  const Scene s = load_scene(dir.write("mini.toml", kMiniNet));
   ASSERT_EQ(s.model.num_nets(), 1);
   const NetModel& net = s.model.nets[0];
   EXPECT_EQ(net.name, "skin");
@@ -437,13 +437,13 @@ tie_stiffness = 500.0
 // ---------------------------------------------------------------- errors
 
 TEST(DeformableLoaderErrors, UnknownBody) {
-  const std::string text = replace(kMini, "body = \"core\"", "body = \"kore\"");
+  const std::string text = replace(kMiniNet, "body = \"core\"", "body = \"kore\"");
   expect_error_at(text, "body = \"kore\"", "\"kore\"", "deformable[0].body",
                   "no body named \"kore\"");
 }
 
 TEST(DeformableLoaderErrors, BodyWithSpheresIsRejected) {
-  const std::string text = replace(kMini, "body = \"core\"", "body = \"tool\"");
+  const std::string text = replace(kMiniNet, "body = \"core\"", "body = \"tool\"");
   expect_error_at(text, "body = \"tool\"", "\"tool\"", "deformable[0].body", "hidden");
   TempDir dir;
   const InputError e = load_error(dir, text);
@@ -453,26 +453,26 @@ TEST(DeformableLoaderErrors, BodyWithSpheresIsRejected) {
 
 TEST(DeformableLoaderErrors, SolverErrorEstimateDelayOutOfRange) {
   const std::string solver = "[solver]\ntolerance = 1.0e-3\nerror_estimate_delay = ";
-  const std::string text = replace(kMini, "[[material]]", solver + "9\n\n[[material]]");
+  const std::string text = replace(kMiniNet, "[[material]]", solver + "9\n\n[[material]]");
   expect_error_at(text, "error_estimate_delay = 9", "9", "solver.error_estimate_delay",
                   "must be in [0, 8]");
   TempDir dir;
   const Scene s = load_scene(
-      dir.write("delay.toml", replace(kMini, "[[material]]", solver + "0\n\n[[material]]")));
+      dir.write("delay.toml", replace(kMiniNet, "[[material]]", solver + "0\n\n[[material]]")));
   EXPECT_EQ(s.model.solver.error_estimate_delay, 0);  // the residual rule
-  EXPECT_EQ(load_scene(dir.write("mini.toml", kMini)).model.solver.error_estimate_delay,
+  EXPECT_EQ(load_scene(dir.write("mini.toml", kMiniNet)).model.solver.error_estimate_delay,
             numen::core::SolverSettings{}.error_estimate_delay);
 }
 
 TEST(DeformableLoaderErrors, UnknownMeshKind) {
-  const std::string text = replace(kMini, "mesh = \"icosphere\"", "mesh = \"torus\"");
+  const std::string text = replace(kMiniNet, "mesh = \"icosphere\"", "mesh = \"torus\"");
   expect_error_at(text, "mesh = \"torus\"", "\"torus\"", "deformable[0].mesh",
                   "\"icosphere\", \"capsule\", \"box\", \"obj\"");
 }
 
 TEST(DeformableLoaderErrors, MeshTooLargeIsRefusedBeforeItIsBuilt) {
   const std::string text =
-      replace(kMini, "mesh = \"icosphere\"\nradius = 0.01\nsubdivisions = 1",
+      replace(kMiniNet, "mesh = \"icosphere\"\nradius = 0.01\nsubdivisions = 1",
               "mesh = \"capsule\"\nradius = 0.01\nhalf_length = 0.02\nsegments = 1024\n"
               "rings = 256\ncylinder_rings = 100000");
   expect_error_at(text, "mesh = \"capsule\"", "\"capsule\"", "deformable[0].mesh",
@@ -480,7 +480,7 @@ TEST(DeformableLoaderErrors, MeshTooLargeIsRefusedBeforeItIsBuilt) {
 }
 
 TEST(DeformableLoaderErrors, MissingObjFile) {
-  const std::string text = replace(kMini, "mesh = \"icosphere\"\nradius = 0.01\nsubdivisions = 1",
+  const std::string text = replace(kMiniNet, "mesh = \"icosphere\"\nradius = 0.01\nsubdivisions = 1",
                                    "mesh = \"obj\"\nfile = \"nowhere/probe.obj\"");
   expect_error_at(text, "file = ", "\"nowhere", "deformable[0].file", "mesh file not found");
   TempDir dir;
@@ -491,7 +491,7 @@ TEST(DeformableLoaderErrors, MissingObjFile) {
 
 // A directory given as the mesh file said "mesh file not found": it says it is a directory.
 TEST(DeformableLoaderErrors, ObjFileThatIsADirectoryIsNamedAsSuch) {
-  const std::string text = replace(kMini, "mesh = \"icosphere\"\nradius = 0.01\nsubdivisions = 1",
+  const std::string text = replace(kMiniNet, "mesh = \"icosphere\"\nradius = 0.01\nsubdivisions = 1",
                                    "mesh = \"obj\"\nfile = \"meshes\"");
   TempDir dir;
   std::filesystem::create_directories(dir / "meshes");
@@ -505,7 +505,7 @@ TEST(DeformableLoaderErrors, ObjFileThatIsADirectoryIsNamedAsSuch) {
 TEST(DeformableLoaderErrors, BadObjFileNamesTheSceneKey) {
   TempDir dir;
   dir.write("empty.obj", "# no faces\nv 0 0 0\n");
-  const std::string text = replace(kMini, "mesh = \"icosphere\"\nradius = 0.01\nsubdivisions = 1",
+  const std::string text = replace(kMiniNet, "mesh = \"icosphere\"\nradius = 0.01\nsubdivisions = 1",
                                    "mesh = \"obj\"\nfile = \"empty.obj\"");
   const InputError e = load_error(dir, text);
   EXPECT_EQ(e.line(), line_of(text, "file = "));
@@ -514,29 +514,29 @@ TEST(DeformableLoaderErrors, BadObjFileNamesTheSceneKey) {
 }
 
 TEST(DeformableLoaderErrors, BadNumbers) {
-  expect_error_at(replace(kMini, "mass = 0.01", "mass = -0.01"), "mass = -0.01", "-0.01",
+  expect_error_at(replace(kMiniNet, "mass = 0.01", "mass = -0.01"), "mass = -0.01", "-0.01",
                   "deformable[0].mass", "must be in");
-  expect_error_at(replace(kMini, "stiffness = 200.0", "stiffness = \"stiff\""),
+  expect_error_at(replace(kMiniNet, "stiffness = 200.0", "stiffness = \"stiff\""),
                   "stiffness = \"stiff\"", "\"stiff\"", "deformable[0].stiffness",
                   "expected a number");
-  expect_error_at(replace(kMini, "tie_stiffness = 500.0", "tie_stiffness = 0.0"),
+  expect_error_at(replace(kMiniNet, "tie_stiffness = 500.0", "tie_stiffness = 0.0"),
                   "tie_stiffness = 0.0", "0.0", "deformable[0].tie_stiffness", "must be in");
-  expect_error_at(replace(kMini, "subdivisions = 1", "subdivisions = 7"), "subdivisions = 7", "7",
+  expect_error_at(replace(kMiniNet, "subdivisions = 1", "subdivisions = 7"), "subdivisions = 7", "7",
                   "deformable[0].subdivisions", "[0, 6]");
-  expect_error_at(replace(kMini, "subdivisions = 1", "subdivisions = 1.5"), "subdivisions = 1.5",
+  expect_error_at(replace(kMiniNet, "subdivisions = 1", "subdivisions = 1.5"), "subdivisions = 1.5",
                   "1.5", "deformable[0].subdivisions", "expected an integer");
-  expect_error_at(replace(kMini, "radius = 0.01\nsubdivisions", "radius = 0.0\nsubdivisions"),
+  expect_error_at(replace(kMiniNet, "radius = 0.01\nsubdivisions", "radius = 0.0\nsubdivisions"),
                   "radius = 0.0", "0.0", "deformable[0].radius", "must be in");
-  expect_error_at(replace(kMini, "tie_stiffness = 500.0", "tie_stiffness = 500.0\ndamping = -1.0"),
+  expect_error_at(replace(kMiniNet, "tie_stiffness = 500.0", "tie_stiffness = 500.0\ndamping = -1.0"),
                   "damping = -1.0", "-1.0", "deformable[0].damping", "must be in");
   expect_error_at(
-      replace(kMini, "tie_stiffness = 500.0", "tie_stiffness = 500.0\nscale = [1.0, 0.0, 1.0]"),
+      replace(kMiniNet, "tie_stiffness = 500.0", "tie_stiffness = 500.0\nscale = [1.0, 0.0, 1.0]"),
       "scale = ", "[", "deformable[0].scale", "non-zero");
   expect_error_at(
-      replace(kMini, "tie_stiffness = 500.0", "tie_stiffness = 500.0\nposition = [1.0, 2.0]"),
+      replace(kMiniNet, "tie_stiffness = 500.0", "tie_stiffness = 500.0\nposition = [1.0, 2.0]"),
       "position = [1.0, 2.0]", "[", "deformable[0].position", "expected 3 numbers");
   expect_error_at(
-      replace(kMini, "tie_stiffness = 500.0", "tie_stiffness = 500.0\nnode_radius = -0.001"),
+      replace(kMiniNet, "tie_stiffness = 500.0", "tie_stiffness = 500.0\nnode_radius = -0.001"),
       "node_radius = ", "-0.001", "deformable[0].node_radius", "must be in");
 }
 
@@ -545,7 +545,7 @@ TEST(DeformableLoaderErrors, MissingRequiredKeys) {
   for (const char* key : {"mass = 0.01\n", "stiffness = 200.0\n", "tie_stiffness = 500.0\n",
                           "radius = 0.01\n", "body = \"core\"\n", "name = \"skin\"\n"}) {
     const std::string line(key);
-    const std::string text = replace(kMini, "\n" + line, "\n");
+    const std::string text = replace(kMiniNet, "\n" + line, "\n");
     TempDir dir;
     const InputError e = load_error(dir, text);
     EXPECT_EQ(e.line(), line_of(text, "[[deformable]]")) << e.what();
@@ -555,14 +555,14 @@ TEST(DeformableLoaderErrors, MissingRequiredKeys) {
 }
 
 TEST(DeformableLoaderErrors, UnknownKey) {
-  expect_error_at(replace(kMini, "tie_stiffness = 500.0", "tie_stiffnes = 500.0"), "tie_stiffnes",
+  expect_error_at(replace(kMiniNet, "tie_stiffness = 500.0", "tie_stiffnes = 500.0"), "tie_stiffnes",
                   "500.0", "deformable[0].tie_stiffnes", "unknown key");
   // A key of another mesh kind is unknown here too.
-  expect_error_at(replace(kMini, "subdivisions = 1", "subdivisions = 1\nhalf_length = 0.01"),
+  expect_error_at(replace(kMiniNet, "subdivisions = 1", "subdivisions = 1\nhalf_length = 0.01"),
                   "half_length", "0.01", "deformable[0].half_length", "unknown key");
   // And [[deformable]] itself is known at the top level.
   TempDir dir;
-  EXPECT_NO_THROW((void)load_scene(dir.write("ok.toml", kMini)));
+  EXPECT_NO_THROW((void)load_scene(dir.write("ok.toml", kMiniNet)));
 }
 
 TEST(DeformableLoaderErrors, DuplicateName) {
@@ -593,7 +593,7 @@ tie_stiffness = 500.0
 TEST(DeformableLoaderErrors, CoreRejectionIsLocatedAtTheDeformablesTable) {
   // A scale that flattens the sphere to ~1e-300 m along x: every triangle is
   // degenerate; core::add_net's message lands on the [[deformable]] table.
-  const std::string text = replace(kMini, "tie_stiffness = 500.0",
+  const std::string text = replace(kMiniNet, "tie_stiffness = 500.0",
                                    "tie_stiffness = 500.0\nscale = [1.0e-300, 1.0, 1.0]");
   TempDir dir;
   const InputError e = load_error(dir, text);
@@ -605,7 +605,7 @@ TEST(DeformableLoaderErrors, CoreRejectionIsLocatedAtTheDeformablesTable) {
 
 TEST(DeformableLoaderErrors, UnknownMaterial) {
   const std::string text =
-      replace(kMini, "tie_stiffness = 500.0", "tie_stiffness = 500.0\nmaterial = \"gold\"");
+      replace(kMiniNet, "tie_stiffness = 500.0", "tie_stiffness = 500.0\nmaterial = \"gold\"");
   expect_error_at(text, "material = \"gold\"", "\"gold\"", "deformable[0].material",
                   "unknown material");
 }

@@ -48,7 +48,7 @@ using numen::test::TempDir;
 
 // A small valid scene (pose tracker, scripted path; tests/support/scene_text.hpp). Every error
 // test below changes one thing in it, so that the error can only come from that change.
-const std::string& kMini = numen::test::kMiniScene;
+using numen::test::kMiniScene;
 
 }  // namespace
 
@@ -56,7 +56,7 @@ const std::string& kMini = numen::test::kMiniScene;
 
 TEST(SceneCanopen, DefaultsAreTheManagedStackAndKeysAreRead) {
   TempDir dir;
-  const Scene d = load_scene(dir.write("mini.toml", kMini));
+  const Scene d = load_scene(dir.write("mini.toml", kMiniScene));
   EXPECT_TRUE(d.device.canopen.managed);
   ASSERT_EQ(d.device.canopen.axes.size(), 6u);
   EXPECT_EQ(d.device.canopen.axes[0].node_id, 1);
@@ -64,7 +64,7 @@ TEST(SceneCanopen, DefaultsAreTheManagedStackAndKeysAreRead) {
   EXPECT_EQ(d.device.canopen.axes[0].effective_heartbeat_timeout_ms(), 30u);
   EXPECT_EQ(d.device.canopen.axes[0].drive_tpdo_cob_id, 0u);  // a pose tracker has no drives
 
-  const std::string text = replace(kMini, "attach = \"tool\"\n", R"(attach = "tool"
+  const std::string text = replace(kMiniScene, "attach = \"tool\"\n", R"(attach = "tool"
 
 [device.canopen]
 controller_node_id = 100
@@ -79,7 +79,7 @@ startup_timeout = 500
   EXPECT_EQ(s.device.canopen.axes[3].effective_heartbeat_timeout_ms(), 50u);
 
   const Scene m = load_scene(dir.write(
-      "minimal.toml", replace(kMini, "attach = \"tool\"\n", "attach = \"tool\"\ncanopen = { managed = false }\n")));
+      "minimal.toml", replace(kMiniScene, "attach = \"tool\"\n", "attach = \"tool\"\ncanopen = { managed = false }\n")));
   EXPECT_FALSE(m.device.canopen.managed);
 }
 
@@ -95,7 +95,7 @@ encoder_tpdo = [0x60040020, 0x60410010]
 [[device.canopen.axis]]
 node_id = 9
 )";
-  const std::string text = replace(kMini, "attach = \"tool\"\n", "attach = \"tool\"\n" + axis);
+  const std::string text = replace(kMiniScene, "attach = \"tool\"\n", "attach = \"tool\"\n" + axis);
   const Scene s = load_scene(dir.write("map.toml", text));
   ASSERT_EQ(s.device.canopen.axes[0].encoder_tpdo.size(), 2u);
   EXPECT_EQ(s.device.canopen.axes[0].encoder_tpdo[1].index, 0x6041);
@@ -118,7 +118,7 @@ node_id = 9
   EXPECT_EQ(e3.line(), line_of(clash, "node_id = 127"));
   EXPECT_NE(std::string(e3.what()).find("controller's node id"), std::string::npos);
   // An unknown key.
-  const InputError e4 = load_error(dir, replace(kMini, "attach = \"tool\"\n", "attach = \"tool\"\ncanopen = { manged = true }\n"), "typo.toml");
+  const InputError e4 = load_error(dir, replace(kMiniScene, "attach = \"tool\"\n", "attach = \"tool\"\ncanopen = { manged = true }\n"), "typo.toml");
   EXPECT_NE(std::string(e4.what()).find("manged"), std::string::npos);
 }
 
@@ -133,7 +133,7 @@ TEST(SceneCanopen, DcfsAreReadPerNodeRelativeToTheScene) {
   TempDir dir;
   const std::string dcf = shipped_dcf_text("encoder.dcf");
   dir.write("enc.dcf", dcf);
-  const std::string text = replace(kMini, "attach = \"tool\"\n", R"(attach = "tool"
+  const std::string text = replace(kMiniScene, "attach = \"tool\"\n", R"(attach = "tool"
 
 [device.canopen]
 dcf = "enc.dcf"
@@ -169,7 +169,7 @@ dcf = "own.dcf"
 TEST(SceneCanopen, DcfErrorsAreLocatedInTheSceneOrInTheDcf) {
   TempDir dir;
   const std::string dcf = shipped_dcf_text("encoder.dcf");
-  const std::string scene = replace(kMini, "attach = \"tool\"\n", "attach = \"tool\"\n\n[device.canopen]\ndcf = \"enc.dcf\"\n");
+  const std::string scene = replace(kMiniScene, "attach = \"tool\"\n", "attach = \"tool\"\n\n[device.canopen]\ndcf = \"enc.dcf\"\n");
   // No such file: at the scene's key.
   const InputError missing = load_error(dir, scene, "missing.toml");
   expect_located(missing, (dir.path() / "missing.toml").string(), line_of(scene, "dcf = "),

@@ -45,15 +45,12 @@ using numen::sim::load_scene;
 using numen::sim::Scene;
 using numen::test::expect_located;
 
-std::string excerpt_path() {
-  return std::string(NUMEN_SOURCE_DIR) + "/sim/data/jigsaws_suturing_b002_excerpt.txt";
-}
 
 using numen::test::TempDir;
 
 // A small valid scene (pose tracker, scripted path; tests/support/scene_text.hpp). Every error
 // test below changes one thing in it, so that the error can only come from that change.
-const std::string& kMini = numen::test::kMiniScene;
+using numen::test::kMiniScene;
 
 }  // namespace
 
@@ -61,7 +58,7 @@ const std::string& kMini = numen::test::kMiniScene;
 
 TEST(SceneErrors, TheTemplateIsValid) {
   TempDir dir;
-  const Scene s = load_scene(dir.write("mini.toml", kMini));
+  const Scene s = load_scene(dir.write("mini.toml", kMiniScene));
   EXPECT_EQ(s.name, "mini");
   EXPECT_EQ(s.model.num_bodies(), 1);
   EXPECT_NEAR(s.trajectory.duration(), 0.75, 1e-9);
@@ -70,7 +67,7 @@ TEST(SceneErrors, TheTemplateIsValid) {
 
 TEST(SceneErrors, NegativeContactOnsetDepthNamesTheKey) {
   TempDir dir;
-  const std::string text = kMini + "\n[contact_default]\nonset_depth = -1e-4\n";
+  const std::string text = kMiniScene + "\n[contact_default]\nonset_depth = -1e-4\n";
   const InputError e = load_error(dir, text);
   expect_located(e, (dir.path() / "bad.toml").string(), line_of(text, "onset_depth = "),
                  column_of(text, "onset_depth = ", "-1e-4"), "contact_default.onset_depth", "");
@@ -79,7 +76,7 @@ TEST(SceneErrors, NegativeContactOnsetDepthNamesTheKey) {
 TEST(SceneErrors, TrapezoidalWithFirstOrderCouplingNamesTheIntegratorKey) {
   TempDir dir;
   const std::string text = replace(
-      kMini, "dt = 0.001", "dt = 0.001\nintegrator = \"trapezoidal\"\ncoupling = \"first-order\"");
+      kMiniScene, "dt = 0.001", "dt = 0.001\nintegrator = \"trapezoidal\"\ncoupling = \"first-order\"");
   const InputError e = load_error(dir, text);
   expect_located(e, (dir.path() / "bad.toml").string(), line_of(text, "integrator = "),
                  column_of(text, "integrator = ", "\"trapezoidal\""), "integrator", "first-order");
@@ -100,7 +97,7 @@ TEST(SceneErrors, MissingSceneFile) {
 
 TEST(SceneErrors, TomlSyntaxError) {
   TempDir dir;
-  const std::string text = replace(kMini, "mass = 0.1", "mass = = 0.1");
+  const std::string text = replace(kMiniScene, "mass = 0.1", "mass = = 0.1");
   const InputError e = load_error(dir, text, "syntax.toml");
   const std::string what = e.what();
   EXPECT_EQ(e.file(), (dir.path() / "syntax.toml").string());
@@ -129,7 +126,7 @@ TEST(SceneErrors, NonAsciiCharacterInABarePositionIsALocatedSyntaxError) {
   // The same character class after a value and as a key on a later line (U+00E9, U+0416).
   TempDir dir;
   for (const std::string bad : {"\xC3\xA9", "\xD0\x96"}) {
-    const std::string text = replace(kMini, "mass = 0.1", "mass = 0.1 " + bad + "\n" + bad + " = 1");
+    const std::string text = replace(kMiniScene, "mass = 0.1", "mass = 0.1 " + bad + "\n" + bad + " = 1");
     const InputError e = load_error(dir, text, "non_ascii.toml");
     EXPECT_EQ(e.line(), line_of(text, "mass = 0.1")) << e.what();
     EXPECT_GT(e.column(), 0) << e.what();
@@ -139,7 +136,7 @@ TEST(SceneErrors, NonAsciiCharacterInABarePositionIsALocatedSyntaxError) {
 
 TEST(SceneErrors, UnknownTopLevelKeyIsATypo) {
   TempDir dir;
-  const std::string text = replace(kMini, "gravity = [", "gravitty = [");
+  const std::string text = replace(kMiniScene, "gravity = [", "gravitty = [");
   const InputError e = load_error(dir, text);
   expect_located(e, (dir.path() / "bad.toml").string(), line_of(text, "gravitty"),
                  column_of(text, "gravitty", "["), "gravitty", "unknown key");
@@ -148,7 +145,7 @@ TEST(SceneErrors, UnknownTopLevelKeyIsATypo) {
 
 TEST(SceneErrors, UnknownKeyInsideSecondBody) {
   TempDir dir;
-  const std::string text = replace(kMini, "[[obstacle]]", R"([[body]]
+  const std::string text = replace(kMiniScene, "[[obstacle]]", R"([[body]]
 name = "second"
 mass = 0.2
 radiuss = 0.01
@@ -162,7 +159,7 @@ position = [0.0, 0.3, 0.0]
 
 TEST(SceneErrors, NumberWhereAStringIsExpected) {
   TempDir dir;
-  const std::string text = replace(kMini, "name = \"tool\"", "name = 42");
+  const std::string text = replace(kMiniScene, "name = \"tool\"", "name = 42");
   const InputError e = load_error(dir, text);
   expect_located(e, (dir.path() / "bad.toml").string(), line_of(text, "name = 42"),
                  column_of(text, "name = 42", "42"), "body[0].name", "expected a string");
@@ -171,7 +168,7 @@ TEST(SceneErrors, NumberWhereAStringIsExpected) {
 
 TEST(SceneErrors, NegativeMass) {
   TempDir dir;
-  const std::string text = replace(kMini, "mass = 0.1", "mass = -0.1");
+  const std::string text = replace(kMiniScene, "mass = 0.1", "mass = -0.1");
   const InputError e = load_error(dir, text);
   expect_located(e, (dir.path() / "bad.toml").string(), line_of(text, "mass = -0.1"),
                  column_of(text, "mass = -0.1", "-0.1"), "body[0].mass", "must be in");
@@ -180,7 +177,7 @@ TEST(SceneErrors, NegativeMass) {
 
 TEST(SceneErrors, UnknownMaterial) {
   TempDir dir;
-  const std::string text = replace(kMini, "material = \"steel\"", "material = \"wood\"");
+  const std::string text = replace(kMiniScene, "material = \"steel\"", "material = \"wood\"");
   const InputError e = load_error(dir, text);
   expect_located(e, (dir.path() / "bad.toml").string(), line_of(text, "material = \"wood\""),
                  column_of(text, "material = \"wood\"", "\"wood\""), "body[0].material",
@@ -190,7 +187,7 @@ TEST(SceneErrors, UnknownMaterial) {
 
 TEST(SceneErrors, UnknownBodyInDeviceAttach) {
   TempDir dir;
-  const std::string text = replace(kMini, "attach = \"tool\"", "attach = \"tol\"");
+  const std::string text = replace(kMiniScene, "attach = \"tool\"", "attach = \"tol\"");
   const InputError e = load_error(dir, text);
   expect_located(e, (dir.path() / "bad.toml").string(), line_of(text, "attach = \"tol\""),
                  column_of(text, "attach = \"tol\"", "\"tol\""), "device.attach", "no body named \"tol\"");
@@ -200,7 +197,7 @@ TEST(SceneErrors, ANonPositiveVelocityCutoffIsLocated) {
   TempDir dir;
   for (const std::string bad : {"0.0", "-50.0", "nan", "inf"}) {
     const std::string line = "velocity_cutoff = " + bad;
-    const std::string text = replace(kMini, "attach = \"tool\"", "attach = \"tool\"\n" + line);
+    const std::string text = replace(kMiniScene, "attach = \"tool\"", "attach = \"tool\"\n" + line);
     const InputError e = load_error(dir, text);
     expect_located(e, (dir.path() / "bad.toml").string(), line_of(text, line),
                    column_of(text, line, bad), "device.velocity_cutoff",
@@ -212,7 +209,7 @@ TEST(SceneErrors, ASoftStartOutsideZeroToTenSecondsIsLocated) {
   TempDir dir;
   for (const std::string bad : {"-0.1", "10.5", "nan", "inf", "\"fast\""}) {
     const std::string line = "soft_start = " + bad;
-    const std::string text = replace(kMini, "attach = \"tool\"", "attach = \"tool\"\n" + line);
+    const std::string text = replace(kMiniScene, "attach = \"tool\"", "attach = \"tool\"\n" + line);
     const InputError e = load_error(dir, text);
     expect_located(e, (dir.path() / "bad.toml").string(), line_of(text, line),
                    column_of(text, line, bad), "device.soft_start",
@@ -224,7 +221,7 @@ TEST(SceneErrors, ASoftStartOutsideZeroToTenSecondsIsLocated) {
 
 TEST(SceneErrors, MissingTrajectoryFile) {
   TempDir dir;
-  const std::string text = replace(kMini, R"(source = "scripted"
+  const std::string text = replace(kMiniScene, R"(source = "scripted"
 start = { position = [0.0, 0.0, 0.0] })",
                                    R"(source = "jigsaws"
 file = "no_such_recording.txt")");
@@ -265,8 +262,8 @@ file = ")";
 TEST(SceneErrors, JigsawsTrajectoryWithAMalformedLineNamesTheDataFile) {
   TempDir dir;
   // A copy of the shipped excerpt with one token of line 7 replaced.
-  std::ifstream in(excerpt_path());
-  ASSERT_TRUE(in) << excerpt_path();
+  std::ifstream in(numen::test::jigsaws_excerpt_path());
+  ASSERT_TRUE(in) << numen::test::jigsaws_excerpt_path();
   std::ostringstream data;
   std::string line;
   int bad_column = 0;
@@ -306,14 +303,14 @@ TEST(SceneErrors, JigsawsTrajectoryWithAMalformedLineNamesTheDataFile) {
     EXPECT_NE(e.message().find("not a number"), std::string::npos);
   }
   // The same scene with the shipped excerpt loads.
-  const std::string good = replace(text, data_path, excerpt_path());
+  const std::string good = replace(text, data_path, numen::test::jigsaws_excerpt_path());
   const Scene s = load_scene(dir.write("jig_ok.toml", good));
   EXPECT_NEAR(s.trajectory.duration(), 899.0 / 30.0, 1.5e-3);
 }
 
 TEST(SceneErrors, ScriptedSegmentWithNegativeDurationIsLocatedAtThatSegment) {
   TempDir dir;
-  const std::string text = replace(kMini, "duration = 0.25", "duration = -0.25");
+  const std::string text = replace(kMiniScene, "duration = 0.25", "duration = -0.25");
   const InputError e = load_error(dir, text);
   expect_located(e, (dir.path() / "bad.toml").string(), line_of(text, "duration = -0.25"),
                  column_of(text, "duration = -0.25", "-0.25"), "trajectory.segment[1].duration", "> 0");
@@ -321,7 +318,7 @@ TEST(SceneErrors, ScriptedSegmentWithNegativeDurationIsLocatedAtThatSegment) {
 
 TEST(SceneErrors, WrongNumberOfDeviceAxes) {
   TempDir dir;
-  const std::string text = kMini + R"(
+  const std::string text = kMiniScene + R"(
 [[device.axis]]
 name = "x"
 
@@ -343,7 +340,7 @@ TEST(SceneErrors, AContactStiffnessTheStepCannotResolveIsAWarningNamingTheBody) 
   // The mini scene's tool: 0.1 kg, its sphere at the COM (effective mass 0.1 kg); at dt = 1 ms the
   // time-constant floor ω h ≤ 5 lets a contact act with at most 0.1 · (5 / 1 ms)² = 2.5e6 N/m.
   TempDir dir;
-  const std::string stiff = kMini + "\n[contact_default]\nstiffness = 1e9\n";
+  const std::string stiff = kMiniScene + "\n[contact_default]\nstiffness = 1e9\n";
   const Scene s = load_scene(dir.write("stiff.toml", stiff));
   ASSERT_EQ(s.warnings.size(), 1u);
   const std::string& w = s.warnings[0];
@@ -352,21 +349,21 @@ TEST(SceneErrors, AContactStiffnessTheStepCannotResolveIsAWarningNamingTheBody) 
   EXPECT_NE(w.find("2.5e+06 N/m"), std::string::npos) << w;
   EXPECT_NE(w.find("contact_max_omega_dt"), std::string::npos) << w;
   // Below the floor, or with the floor raised in [solver]: no warning.
-  const Scene soft = load_scene(dir.write("soft.toml", kMini + "\n[contact_default]\nstiffness = 2e6\n"));
+  const Scene soft = load_scene(dir.write("soft.toml", kMiniScene + "\n[contact_default]\nstiffness = 2e6\n"));
   EXPECT_TRUE(soft.warnings.empty());
   const Scene raised = load_scene(
-      dir.write("raised.toml", kMini + "\n[contact_default]\nstiffness = 1e9\n[solver]\ncontact_max_omega_dt = 100.0\n"));
+      dir.write("raised.toml", kMiniScene + "\n[contact_default]\nstiffness = 1e9\n[solver]\ncontact_max_omega_dt = 100.0\n"));
   EXPECT_TRUE(raised.warnings.empty()) << raised.warnings.front();
   EXPECT_DOUBLE_EQ(raised.model.solver.contact_max_omega_dt, 100.0);
   // Out of range: an error naming the key.
-  const InputError e = load_error(dir, kMini + "\n[solver]\ncontact_max_omega_dt = 0.0\n");
+  const InputError e = load_error(dir, kMiniScene + "\n[solver]\ncontact_max_omega_dt = 0.0\n");
   EXPECT_EQ(e.key(), "solver.contact_max_omega_dt");
 }
 
 TEST(SceneErrors, DampingOutsideThePapersRuleIsAWarningNotAnError) {
   TempDir dir;
   // ζ = 0.5 → γ/√(mk) = 1.0 < 1.4.
-  const std::string low = replace(kMini, "damping_ratio = 0.85", "damping_ratio = 0.5");
+  const std::string low = replace(kMiniScene, "damping_ratio = 0.85", "damping_ratio = 0.5");
   const Scene s = load_scene(dir.write("low.toml", low));
   ASSERT_EQ(s.warnings.size(), 1u);
   const std::string& w = s.warnings[0];
@@ -375,19 +372,19 @@ TEST(SceneErrors, DampingOutsideThePapersRuleIsAWarningNotAnError) {
   EXPECT_NE(w.find("1.4"), std::string::npos) << w;
   // Explicit damping: γ = 2.5 √(m k) → above 2.
   const double gamma = 2.5 * std::sqrt(0.1 * 100.0);
-  const std::string high = replace(kMini, "damping_ratio = 0.85", "damping = " + std::to_string(gamma));
+  const std::string high = replace(kMiniScene, "damping_ratio = 0.85", "damping = " + std::to_string(gamma));
   const Scene h = load_scene(dir.write("high.toml", high));
   ASSERT_EQ(h.warnings.size(), 1u);
   EXPECT_NE(h.warnings[0].find("body[0].coupling.damping"), std::string::npos) << h.warnings[0];
   EXPECT_NEAR(h.model.bodies[0].coupling.gamma_t, gamma, 1e-6);
   // Inside the rule (γ/√(mk) = 1.6): no warning.
-  const std::string ok = replace(kMini, "damping_ratio = 0.85", "damping_ratio = 0.8");
+  const std::string ok = replace(kMiniScene, "damping_ratio = 0.85", "damping_ratio = 0.8");
   EXPECT_TRUE(load_scene(dir.write("ok.toml", ok)).warnings.empty());
 }
 
 TEST(SceneErrors, MissingDevice) {
   TempDir dir;
-  const std::string text = replace(kMini, "[device]\nkind = \"pose-tracker\"\nattach = \"tool\"\n", "");
+  const std::string text = replace(kMiniScene, "[device]\nkind = \"pose-tracker\"\nattach = \"tool\"\n", "");
   const InputError e = load_error(dir, text);
   const std::string what = e.what();
   SCOPED_TRACE(what);
@@ -400,7 +397,7 @@ TEST(SceneErrors, MissingDevice) {
 
 TEST(SceneErrors, MissingTrajectory) {
   TempDir dir;
-  const std::string text = kMini.substr(0, kMini.find("[trajectory]"));
+  const std::string text = kMiniScene.substr(0, kMiniScene.find("[trajectory]"));
   const InputError e = load_error(dir, text);
   const std::string what = e.what();
   SCOPED_TRACE(what);
@@ -418,7 +415,7 @@ namespace {
 /// The first `rows` lines of the shipped excerpt, with `edit` applied to line `line` (1-based).
 std::string excerpt_lines(int rows, int line = 0,
                           const std::function<void(std::string&)>& edit = nullptr) {
-  std::ifstream in(excerpt_path());
+  std::ifstream in(numen::test::jigsaws_excerpt_path());
   std::string out, l;
   for (int n = 1; n <= rows && std::getline(in, l); ++n) {
     if (n == line && edit) edit(l);
@@ -431,7 +428,7 @@ std::string excerpt_lines(int rows, int line = 0,
 
 TEST(SceneErrors, ObstacleNameDeclaredTwice) {
   TempDir dir;
-  const std::string text = replace(kMini, "[device]", R"([[obstacle]]
+  const std::string text = replace(kMiniScene, "[device]", R"([[obstacle]]
 name = "floor"
 type = "sphere"
 radius = 0.01
@@ -447,7 +444,7 @@ position = [0.0, 0.5, 0.0]
 TEST(SceneErrors, ScriptedTargetsFartherThan10mAreLocated) {
   TempDir dir;
   {  // The start of the path.
-    const std::string text = replace(kMini, "start = { position = [0.0, 0.0, 0.0] }",
+    const std::string text = replace(kMiniScene, "start = { position = [0.0, 0.0, 0.0] }",
                                      "start = { position = [1000.0, 0.0, 0.0] }");
     const InputError e = load_error(dir, text);
     expect_located(e, (dir.path() / "bad.toml").string(), line_of(text, "start = {"),
@@ -455,13 +452,13 @@ TEST(SceneErrors, ScriptedTargetsFartherThan10mAreLocated) {
     EXPECT_NE(e.message().find("beyond 10 m"), std::string::npos) << e.what();
   }
   {  // A segment's end point.
-    const std::string text = replace(kMini, "to = [0.01, 0.0, 0.0]", "to = [0.01, 1e100, 0.0]");
+    const std::string text = replace(kMiniScene, "to = [0.01, 0.0, 0.0]", "to = [0.01, 1e100, 0.0]");
     const InputError e = load_error(dir, text);
     expect_located(e, (dir.path() / "bad.toml").string(), line_of(text, "to = [0.01, 1e100"),
                    column_of(text, "to = [0.01, 1e100", "["), "trajectory.segment[0].to", "1e+100 m");
   }
   {  // A placement that scales the path out of the room.
-    const std::string text = replace(kMini, "start = { position = [0.0, 0.0, 0.0] }",
+    const std::string text = replace(kMiniScene, "start = { position = [0.0, 0.0, 0.0] }",
                                      "start = { position = [0.5, 0.0, 0.0] }\nplacement = { scale = 100.0 }");
     const InputError e = load_error(dir, text);
     EXPECT_EQ(e.key(), "trajectory.placement") << e.what();
@@ -495,7 +492,7 @@ TEST(SceneErrors, AJigsawsTrajectoryOfOneRowIsRefused) {
   TempDir dir;
   {  // start_time == end_time: one row.
     const std::string text =
-        jigsaws_scene(excerpt_path(), "start_time = 2.0\nend_time = 2.0\n");
+        jigsaws_scene(numen::test::jigsaws_excerpt_path(), "start_time = 2.0\nend_time = 2.0\n");
     const InputError e = load_error(dir, text);
     expect_located(e, (dir.path() / "bad.toml").string(), line_of(text, "end_time"),
                    column_of(text, "end_time", "2.0"), "trajectory.end_time", "holds one row");
@@ -530,7 +527,7 @@ TEST(SceneErrors, ATrajectoryFileThatIsADirectoryIsLocated) {
 TEST(SceneErrors, APeriodShorterThanTheBusRoundTripBlamesDtWithTheValues) {
   TempDir dir;
   const std::string text =
-      replace(kMini, "dt = 0.001", "dt = 1e-7") + "\n[bus]\nlatency = 0.0001\n";
+      replace(kMiniScene, "dt = 0.001", "dt = 1e-7") + "\n[bus]\nlatency = 0.0001\n";
   const InputError e = load_error(dir, text);
   expect_located(e, (dir.path() / "bad.toml").string(), line_of(text, "dt = 1e-7"),
                  column_of(text, "dt = 1e-7", "1e-7"), "dt",
@@ -538,7 +535,7 @@ TEST(SceneErrors, APeriodShorterThanTheBusRoundTripBlamesDtWithTheValues) {
                  "round trip, 2·[bus] latency = 0.0002 s, plus 50 µs unless [bus] compute_phase "
                  "is set)");
   // A compute_phase the file sets is blamed at its own value, with the interval it misses.
-  const std::string set = replace(kMini, "dt = 0.001", "dt = 0.0005") +
+  const std::string set = replace(kMiniScene, "dt = 0.001", "dt = 0.0005") +
                           "\n[bus]\nlatency = 0.0001\ncompute_phase = 0.0006\n";
   const InputError p = load_error(dir, set);
   expect_located(p, (dir.path() / "bad.toml").string(), line_of(set, "compute_phase = 0.0006"),
@@ -549,11 +546,11 @@ TEST(SceneErrors, APeriodShorterThanTheBusRoundTripBlamesDtWithTheValues) {
 
 TEST(SceneErrors, ADurationShorterThanOnePeriodIsRefused) {
   TempDir dir;
-  const std::string text = replace(kMini, "dt = 0.001", "dt = 0.001\nduration = 0.0001");
+  const std::string text = replace(kMiniScene, "dt = 0.001", "dt = 0.001\nduration = 0.0001");
   const InputError e = load_error(dir, text);
   expect_located(e, (dir.path() / "bad.toml").string(), line_of(text, "duration = 0.0001"),
                  column_of(text, "duration = 0.0001", "0.0001"), "duration", "no step");
-  const std::string huge = replace(kMini, "dt = 0.001", "dt = 0.001\nduration = 1e300");
+  const std::string huge = replace(kMiniScene, "dt = 0.001", "dt = 0.001\nduration = 1e300");
   const InputError h = load_error(dir, huge);
   EXPECT_EQ(h.key(), "duration");
   EXPECT_LT(std::string(h.what()).size(), 300u) << h.what();
@@ -578,8 +575,8 @@ TEST(SceneErrors, ASceneFileThatIsADirectoryIsNamedAsSuch) {
 
 TEST(SceneErrors, AByteOrderMarkStartsASceneButIsNamedElsewhere) {
   TempDir dir;
-  EXPECT_EQ(load_scene(dir.write("bom.toml", "\xEF\xBB\xBF" + kMini)).name, "mini");
-  const std::string text = replace(kMini, "dt = 0.001", "\xEF\xBB\xBF" "dt = 0.001");
+  EXPECT_EQ(load_scene(dir.write("bom.toml", "\xEF\xBB\xBF" + kMiniScene)).name, "mini");
+  const std::string text = replace(kMiniScene, "dt = 0.001", "\xEF\xBB\xBF" "dt = 0.001");
   const InputError e = load_error(dir, text);
   EXPECT_EQ(e.line(), line_of(text, "dt = 0.001")) << e.what();
   EXPECT_NE(e.message().find("byte order mark"), std::string::npos) << e.what();

@@ -32,6 +32,7 @@
 
 #include "detail/joint_system.hpp"
 #include "build_features.hpp"
+#include "rotation.hpp"
 
 namespace {
 
@@ -49,16 +50,13 @@ using numen::sim::SceneOverrides;
 std::string construction_path() { return std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/construction.toml"; }
 
 /// Angle (rad) between two rotations, q and -q being the same.
-double angle_between(const Quat& a, const Quat& b) {
-  const double d = std::min(1.0, std::abs(a.normalized().dot(b.normalized())));
-  return 2.0 * std::acos(d);
-}
+using numen::test::angle_between;
 
 using numen::test::TempDir;
 
 // A small valid scene (pose tracker, scripted path; tests/support/scene_text.hpp). Every error
 // test below changes one thing in it, so that the error can only come from that change.
-const std::string& kMini = numen::test::kMiniScene;
+using numen::test::kMiniScene;
 
 }  // namespace
 
@@ -240,7 +238,7 @@ TEST(Scene, CouplingModeNames) {
 
 TEST(Scene, EventsAreSortedByTime) {
   TempDir dir;
-  std::string text = replace(kMini, "[device]", R"([[body]]
+  std::string text = replace(kMiniScene, "[device]", R"([[body]]
 name = "other"
 mass = 0.1
 position = [0.0, 0.2, 0.0]
@@ -272,7 +270,7 @@ attach = "none"
 
 TEST(Scene, TrapezoidalIntegratorIsSelectedByName) {
   TempDir dir;
-  const std::string text = replace(kMini, "dt = 0.001", "dt = 0.001\nintegrator = \"trapezoidal\"");
+  const std::string text = replace(kMiniScene, "dt = 0.001", "dt = 0.001\nintegrator = \"trapezoidal\"");
   const Scene s = load_scene(dir.write("trap.toml", text));
   EXPECT_EQ(s.model.integrator, numen::core::Integrator::kTrapezoidal);
   EXPECT_STREQ(numen::sim::to_string(s.model.integrator), "trapezoidal");
@@ -313,7 +311,7 @@ TEST(Scene, TrapezoidalWithADeformableNetIsWarnedAbout) {
 TEST(Scene, TrBdf2IntegratorIsSelectedByNameAndRunsFirstOrderCoupling) {
   TempDir dir;
   const std::string text = replace(
-      kMini, "dt = 0.001", "dt = 0.001\nintegrator = \"tr-bdf2\"\ncoupling = \"first-order\"");
+      kMiniScene, "dt = 0.001", "dt = 0.001\nintegrator = \"tr-bdf2\"\ncoupling = \"first-order\"");
   const Scene s = load_scene(dir.write("trbdf2.toml", text));
   EXPECT_EQ(s.model.integrator, numen::core::Integrator::kTrBdf2);
   EXPECT_EQ(s.model.coupling_mode, numen::core::CouplingMode::kFirstOrder);
@@ -330,29 +328,29 @@ TEST(Scene, TrBdf2WithADeformableNetIsNotWarnedAbout) {
 
 TEST(Scene, ContactOnsetDepthIsReadPerPairWithTheDefaultsFallback) {
   TempDir dir;
-  const Scene plain = load_scene(dir.write("plain.toml", kMini));
+  const Scene plain = load_scene(dir.write("plain.toml", kMiniScene));
   for (const auto& p : plain.model.material_pairs) EXPECT_EQ(p.onset_depth, 0.0);
   const Scene s = load_scene(
-      dir.write("onset.toml", kMini + "\n[contact_default]\nstiffness = 2e4\nonset_depth = 2e-4\n"));
+      dir.write("onset.toml", kMiniScene + "\n[contact_default]\nstiffness = 2e4\nonset_depth = 2e-4\n"));
   for (const auto& p : s.model.material_pairs) EXPECT_EQ(p.onset_depth, 2e-4);
 }
 
 TEST(Scene, DeviceVelocityCutoffIsReadInHertz) {
   TempDir dir;
-  EXPECT_EQ(load_scene(dir.write("mini.toml", kMini)).device.velocity_cutoff_hz,
+  EXPECT_EQ(load_scene(dir.write("mini.toml", kMiniScene)).device.velocity_cutoff_hz,
             numen::hal::kDefaultVelocityCutoffHz);
-  const std::string text = replace(kMini, "attach = \"tool\"", "attach = \"tool\"\nvelocity_cutoff = 20.5");
+  const std::string text = replace(kMiniScene, "attach = \"tool\"", "attach = \"tool\"\nvelocity_cutoff = 20.5");
   EXPECT_EQ(load_scene(dir.write("cutoff.toml", text)).device.velocity_cutoff_hz, 20.5);
 }
 
 TEST(Scene, DeviceSoftStartIsReadInSecondsAndDefaultsToATenthOfASecond) {
   TempDir dir;
-  EXPECT_EQ(load_scene(dir.write("mini.toml", kMini)).device.soft_start_s,
+  EXPECT_EQ(load_scene(dir.write("mini.toml", kMiniScene)).device.soft_start_s,
             numen::hal::kDefaultSceneSoftStartS);
   EXPECT_EQ(numen::hal::kDefaultSceneSoftStartS, 0.1);
   for (const auto& [value, seconds] : {std::pair<std::string, double>{"0.25", 0.25}, {"0", 0.0}, {"10", 10.0}}) {
     const std::string text =
-        replace(kMini, "attach = \"tool\"", "attach = \"tool\"\nsoft_start = " + value);
+        replace(kMiniScene, "attach = \"tool\"", "attach = \"tool\"\nsoft_start = " + value);
     EXPECT_EQ(load_scene(dir.write("soft.toml", text)).device.soft_start_s, seconds) << value;
   }
 }

@@ -18,6 +18,7 @@
 #include "numen/hal/device/trocar_kinematics.hpp"
 #include "numen/sim/scene.hpp"
 #include "build_features.hpp"
+#include "rotation.hpp"
 
 namespace {
 
@@ -39,9 +40,7 @@ Quat rx(double a) { return Quat(Eigen::AngleAxisd(a, Vec3::UnitX())); }
 Quat ry(double a) { return Quat(Eigen::AngleAxisd(a, Vec3::UnitY())); }
 Quat rz(double a) { return Quat(Eigen::AngleAxisd(a, Vec3::UnitZ())); }
 
-double angle_between(const Quat& a, const Quat& b) {
-  return 2.0 * std::acos(std::min(1.0, std::abs(a.normalized().dot(b.normalized()))));
-}
+using numen::test::angle_between;
 
 /// A trocar above the origin pointing down (−z), controlled frame 40 mm behind the tip.
 DeviceConfig trocar_config() {

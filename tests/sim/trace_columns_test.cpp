@@ -28,7 +28,7 @@ namespace fs = std::filesystem;
 using numen::sim::TraceRecord;
 
 using numen::test::read_lines;
-const auto split = [](const std::string& line) { return numen::test::split_csv(line); };
+using numen::test::split_csv;
 
 /// A record whose every field has its own value, exact in 9 significant digits.
 TraceRecord distinct_record() {
@@ -81,7 +81,7 @@ TEST(TraceColumns, CsvHeaderIsTheTableAndRowsHoldItsValuesInOrder) {
   const std::vector<std::string> axes = {"0", "1", "2"};
   const std::vector<std::string> names =
       numen::sim::trace_column_names(numen::sim::TraceKind::kCsv, axes);
-  EXPECT_EQ(split(lines[0]), names);
+  EXPECT_EQ(split_csv(lines[0]), names);
   // Every column of the table is in the header (per-axis ones once per axis).
   for (const auto& c : numen::sim::trace_columns()) {
     const std::string first = std::string(c.name) + (c.per_axis ? "0" : "");
@@ -90,7 +90,7 @@ TEST(TraceColumns, CsvHeaderIsTheTableAndRowsHoldItsValuesInOrder) {
   std::vector<double> values(names.size());
   ASSERT_EQ(numen::sim::trace_column_values(numen::sim::TraceKind::kCsv, r, 3, std::span(values)),
             names.size());
-  const std::vector<std::string> row = split(lines[1]);
+  const std::vector<std::string> row = split_csv(lines[1]);
   ASSERT_EQ(row.size(), names.size());
   for (std::size_t c = 0; c < names.size(); ++c)
     EXPECT_EQ(std::stod(row[c]), values[c]) << names[c];
@@ -135,7 +135,7 @@ TEST(TraceColumns, StreamedTraceHeaderIsTheTableAndRowsHoldItsValuesWithoutAlloc
     header.push_back(n);
   const std::vector<std::string> lines = read_lines(path);
   ASSERT_EQ(lines.size(), 201u);
-  EXPECT_EQ(split(lines[0]), header);
+  EXPECT_EQ(split_csv(lines[0]), header);
   // The last row: the values of the last period's record, in the header's order.
   std::vector<double> values(header.size() - 3);
   const TraceRecord& last = runner.trace().records().back();
@@ -145,7 +145,7 @@ TEST(TraceColumns, StreamedTraceHeaderIsTheTableAndRowsHoldItsValuesWithoutAlloc
             values.size());
   EXPECT_EQ(last.frames_read, runner.last_report().frames_read);
   EXPECT_EQ(last.step_time_us, static_cast<double>(runner.last_report().step_ns) * 1e-3);
-  const std::vector<std::string> row = split(lines.back());
+  const std::vector<std::string> row = split_csv(lines.back());
   ASSERT_EQ(row.size(), header.size());
   EXPECT_EQ(row[0], "199");
   for (std::size_t c = 0; c < values.size(); ++c)

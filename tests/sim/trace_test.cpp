@@ -34,7 +34,7 @@ using numen::sim::TraceRecord;
 using numen::test::TempDir;
 
 using numen::test::read_lines;
-std::vector<std::string> split(const std::string& line) { return numen::test::split_csv(line); }
+using numen::test::split_csv;
 
 TraceRecord record(int i) {
   TraceRecord r;
@@ -78,7 +78,7 @@ TEST(Trace, WriteCsvHasAHeaderAndOneRowPerRecord) {
   trace.write_csv(path.string());
   const std::vector<std::string> lines = read_lines(path);
   ASSERT_EQ(lines.size(), 5u);
-  const std::vector<std::string> header = split(lines[0]);
+  const std::vector<std::string> header = split_csv(lines[0]);
   EXPECT_EQ(header.front(), "time_s");
   EXPECT_EQ(header.back(), "emcy_code");
   EXPECT_EQ(column(header, "baumgarte_rhs_max") + 1, column(header, "solver_residual"));
@@ -87,7 +87,7 @@ TEST(Trace, WriteCsvHasAHeaderAndOneRowPerRecord) {
   EXPECT_EQ(column(header, "axis_torque_0") + 2, column(header, "axis_torque_2"));
   for (const auto& h : header) EXPECT_NE(h, "axis_torque_3");
   for (int i = 0; i < 4; ++i) {
-    const std::vector<std::string> row = split(lines[static_cast<std::size_t>(i) + 1]);
+    const std::vector<std::string> row = split_csv(lines[static_cast<std::size_t>(i) + 1]);
     ASSERT_EQ(row.size(), header.size()) << "row " << i;
     const TraceRecord r = record(i);
     EXPECT_DOUBLE_EQ(std::stod(row[static_cast<std::size_t>(column(header, "time_s"))]), r.time_s);
@@ -271,12 +271,12 @@ TEST(Trace, RunSceneWritesOneRowPerStep) {
   ASSERT_EQ(s.steps, 250);
   const auto lines = read_lines(dir / "run.csv");
   ASSERT_EQ(lines.size(), 251u);
-  const auto header = split(lines[0]);
+  const auto header = split_csv(lines[0]);
   // Per-axis columns are named by the scene's axes, the last followed by step_time_us.
   ASSERT_EQ(scene.device.axes.size(), 5u);
   EXPECT_EQ(column(header, "axis_torque_" + scene.device.axes.back().name) + 1,
             column(header, "step_time_us"));
-  const auto last = split(lines.back());
+  const auto last = split_csv(lines.back());
   ASSERT_EQ(last.size(), header.size());
   EXPECT_NEAR(std::stod(last[0]), 0.25, 1e-9);
 

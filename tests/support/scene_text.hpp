@@ -66,6 +66,11 @@ duration = 0.25
 )";
 
 
+/// The shipped JIGSAWS excerpt (sim/data) the scene tests load.
+inline std::string jigsaws_excerpt_path() {
+  return std::string(NUMEN_SOURCE_DIR) + "/sim/data/jigsaws_suturing_b002_excerpt.txt";
+}
+
 /// 1-based line of the `nth` (1-based) line of `text` containing `needle` (0: none).
 inline int line_of(const std::string& text, const std::string& needle, int nth = 1) {
   std::istringstream in(text);

@@ -27,6 +27,15 @@ inline hal::CanFrame make(std::uint32_t id, std::uint8_t flags, Bytes data) {
   return f;
 }
 
+/// Expects `a` and `b` to be the same frame: id, flags, len and all 64 data bytes (those past
+/// len are zero on both sides of a round trip).
+inline void expect_same(const hal::CanFrame& a, const hal::CanFrame& b) {
+  EXPECT_EQ(a.id, b.id);
+  EXPECT_EQ(a.flags, b.flags);
+  EXPECT_EQ(a.len, b.len);
+  EXPECT_EQ(a.data, b.data);
+}
+
 /// The bytes of `f` on the line (encode_serial_frame(); expects success).
 inline Bytes encode(const hal::CanFrame& f) {
   std::array<std::uint8_t, hal::kSerialMaxFrameOnLine> buf{};

@@ -14,6 +14,7 @@
 #include "numen/hal/canopen/canopen.hpp"
 #include "numen/hal/emulation/device_emulator.hpp"
 #include "numen/hal/transport/sim_bus.hpp"
+#include "test_constants.hpp"
 
 namespace {
 
@@ -28,7 +29,7 @@ using numen::hal::PowerState;
 using numen::hal::SimBus;
 using numen::hal::StartupPhase;
 
-constexpr std::int64_t kMs = 1'000'000;
+using numen::test::kMs;
 constexpr std::int64_t kLatency = 100'000;
 constexpr std::int64_t kPhase = 250'000;
 

@@ -17,6 +17,7 @@
 #include "numen/hal/canopen/nmt.hpp"
 #include "numen/hal/emulation/device_emulator.hpp"
 #include "numen/hal/transport/sim_bus.hpp"
+#include "test_constants.hpp"
 
 namespace {
 
@@ -32,7 +33,7 @@ using numen::hal::NodeConfigurator;
 using numen::hal::SdoAddress;
 using numen::hal::SimBus;
 
-constexpr std::int64_t kMs = 1'000'000;
+using numen::test::kMs;
 
 std::string shipped_text(const char* name) {
   std::ifstream in(std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/devices/" + name);

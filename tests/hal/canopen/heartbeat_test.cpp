@@ -13,12 +13,13 @@
 #include "numen/hal/canopen/nmt.hpp"
 #include "numen/hal/transport/sim_bus.hpp"
 #include "numen/hal/transport/splitmix64.hpp"
+#include "test_constants.hpp"
 
 namespace {
 
 using namespace numen::hal;
 
-constexpr std::int64_t kMs = 1'000'000;
+using numen::test::kMs;
 
 CanFrame heartbeat(std::uint8_t node, NmtState state, std::int64_t t) {
   CanFrame f;

@@ -10,12 +10,13 @@
 #include "alloc_counter.hpp"
 #include "numen/hal/emulation/device_emulator.hpp"
 #include "numen/hal/transport/sim_bus.hpp"
+#include "test_constants.hpp"
 
 namespace {
 
 using namespace numen::hal;
 
-constexpr std::int64_t kMs = 1'000'000;
+using numen::test::kMs;
 
 struct Rig {
   DeviceEmulator emulator{make_default_trocar_config(1)};

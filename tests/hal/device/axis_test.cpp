@@ -1,5 +1,6 @@
 // Tests of numen/hal/device/axis.hpp: counts and torque scaling, wrapping, saturation, validation.
 #include "numen/hal/device/axis.hpp"
+#include "test_constants.hpp"
 
 #include <gtest/gtest.h>
 
@@ -12,7 +13,7 @@
 namespace {
 
 using namespace numen::hal;
-constexpr double kPi = std::numbers::pi;
+using numen::test::kPi;
 
 AxisConfig revolute() {
   AxisConfig a;

@@ -25,12 +25,14 @@
 #include "numen/hal/device/safety_supervisor.hpp"
 #include "numen/hal/transport/sim_bus.hpp"
 #include "numen/hal/device/trocar_kinematics.hpp"
+#include "test_constants.hpp"
+#include "instrument_fixtures.hpp"
 
 namespace {
 
 using namespace numen::hal;
-constexpr std::int64_t kMs = 1'000'000;
-const double kQ0[5] = {0.1, -0.2, 0.1, 0.5, 0.3};
+using numen::test::kMs;
+using numen::test::kQ0;
 
 // A protocol whose permission per axis the test sets, taking frames on one COB-ID for itself
 // and recording what it is asked to send.

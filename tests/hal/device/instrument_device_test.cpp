@@ -23,6 +23,7 @@
 #include "numen/hal/device/rate_estimator.hpp"
 #include "numen/hal/transport/sim_bus.hpp"
 #include "numen/hal/device/trocar_kinematics.hpp"
+#include "test_constants.hpp"
 
 namespace {
 
@@ -36,7 +37,7 @@ using numen::test::kQ0;
 using numen::test::phantom_config;
 using numen::test::some_link_wrenches;
 using numen::test::trocar_config;
-constexpr std::int64_t kMs = 1'000'000;
+using numen::test::kMs;
 
 
 

@@ -14,6 +14,8 @@
 #include "alloc_counter.hpp"
 #include "kinematics_check.hpp"
 #include "numen/hal/device/axis.hpp"
+#include "rotation.hpp"
+#include "test_constants.hpp"
 
 namespace {
 
@@ -25,9 +27,9 @@ using numen::core::Wrench;
 using numen::test::numeric_link_jacobian;
 using numen::test::uniform;
 using PK = PhantomKinematics;
-constexpr double kPi = std::numbers::pi;
+using numen::test::kPi;
 
-Quat rot(double angle, const Vec3& axis) { return Quat(Eigen::AngleAxisd(angle, axis)); }
+using numen::test::rot;
 
 // A base that is neither at the origin nor axis aligned, and unequal links.
 PhantomGeometry some_geometry() {

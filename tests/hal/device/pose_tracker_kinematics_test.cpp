@@ -9,8 +9,10 @@
 
 #include "alloc_counter.hpp"
 #include "numen/hal/device/axis.hpp"
+#include "rotation.hpp"
+#include "test_constants.hpp"
 
-namespace {
+namespace pose_tracker_kinematics_test {  // named: the unity build shares a TU with other test files
 
 using namespace numen::hal;
 using numen::core::Pose;
@@ -18,9 +20,9 @@ using numen::core::Quat;
 using numen::core::Vec3;
 using numen::core::Wrench;
 using PK = PoseTrackerKinematics;
-constexpr double kPi = std::numbers::pi;
+using numen::test::kPi;
 
-Quat rot(double angle, const Vec3& axis) { return Quat(Eigen::AngleAxisd(angle, axis)); }
+using numen::test::rot;
 
 PoseTrackerGeometry some_base() {
   PoseTrackerGeometry g;
@@ -135,4 +137,4 @@ TEST(PoseTrackerKinematics, CallsDoNotAllocate) {
   EXPECT_TRUE(std::isfinite(sink));
 }
 
-}  // namespace
+}  // namespace pose_tracker_kinematics_test

@@ -16,14 +16,15 @@
 
 #include "alloc_counter.hpp"
 #include "numen/hal/device/axis.hpp"
+#include "test_constants.hpp"
 
 namespace {
 
 using numen::hal::kDefaultVelocityCutoffHz;
 using numen::hal::RateEstimator;
-constexpr double kPi = std::numbers::pi;
+using numen::test::kPi;
 constexpr double kInf = std::numeric_limits<double>::infinity();
-constexpr std::int64_t kMs = 1'000'000;
+using numen::test::kMs;
 
 TEST(RateEstimator, WithoutCutoffOrBoundItIsTheBackwardDifference) {
   RateEstimator r;  // f_c = +inf, no bound

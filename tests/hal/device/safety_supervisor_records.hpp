@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include "numen/hal/device/safety_supervisor.hpp"
+#include "test_constants.hpp"
 
 namespace numen::test::safety_records {
 
@@ -17,7 +18,7 @@ using LS = hal::LifecycleState;
 using LR = hal::LifecycleResult;
 using FC = hal::FaultCause;
 using PS = hal::PowerState;
-constexpr std::int64_t kMs = 1'000'000;
+using numen::test::kMs;
 
 using hal::FaultRecord;
 

@@ -1,5 +1,6 @@
 // Tests of numen/hal/device/sample_check.hpp: each plausibility check in isolation.
 #include "numen/hal/device/sample_check.hpp"
+#include "test_constants.hpp"
 
 #include <gtest/gtest.h>
 
@@ -10,7 +11,7 @@
 namespace {
 
 using namespace numen::hal;
-constexpr std::int64_t kMs = 1'000'000;
+using numen::test::kMs;
 
 AxisCheckLimits limits() {
   AxisConfig a;

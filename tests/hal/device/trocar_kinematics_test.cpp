@@ -13,6 +13,8 @@
 #include "alloc_counter.hpp"
 #include "kinematics_check.hpp"
 #include "numen/hal/device/axis.hpp"
+#include "rotation.hpp"
+#include "test_constants.hpp"
 
 namespace {
 
@@ -22,10 +24,10 @@ using numen::core::Quat;
 using numen::core::Vec3;
 using numen::core::Vec6;
 using numen::core::Wrench;
-constexpr double kPi = std::numbers::pi;
+using numen::test::kPi;
 using TK = TrocarKinematics;
 
-Quat rot(double angle, const Vec3& axis) { return Quat(Eigen::AngleAxisd(angle, axis)); }
+using numen::test::rot;
 
 TrocarGeometry tilted_trocar() {
   TrocarGeometry g;

@@ -23,7 +23,7 @@
 #include "numen/hal/transport/sim_bus.hpp"
 #include "numen/hal/device/trocar_kinematics.hpp"
 
-namespace {
+namespace device_emulator_test {  // named: the unity build shares a TU with other test files
 
 using namespace numen::hal;
 using numen::core::Vec3;
@@ -462,11 +462,11 @@ TEST(DeviceEmulator, PhantomEndToEnd) {
   EXPECT_GT(std::abs(rig.emulator.last_torques()[PhantomKinematics::kShoulder]), 0.1);
 }
 
-}  // namespace
+}  // namespace device_emulator_test
 
 // ---------------------------------------------------------------- managed stack
 
-namespace {
+namespace device_emulator_test {  // named: the unity build shares a TU with other test files
 using namespace numen::hal;
 
 TEST(DeviceEmulatorManaged, BootsAnswersNmtAndSendsPdosOnlyWhenOperational) {
@@ -520,11 +520,11 @@ TEST(DeviceEmulatorManaged, BootsAnswersNmtAndSendsPdosOnlyWhenOperational) {
   EXPECT_EQ(emu.counters().frames_while_killed, 1u);
 }
 
-}  // namespace
+}  // namespace device_emulator_test
 
 // ---------------------------------------------------------------- SDO (managed stack)
 
-namespace {
+namespace device_emulator_test {  // named: the unity build shares a TU with other test files
 using namespace numen::hal;
 
 /// Runs `client`'s transfer against the emulator over `bus` (no latency), up to 20 exchanges
@@ -709,4 +709,4 @@ TEST(DeviceEmulatorManaged, HeartbeatSyncAndDriveObjectsRules) {
   EXPECT_EQ(od_value(emu, 1, {0x1016, 1}), 0x007F001Eu);
 }
 
-}  // namespace
+}  // namespace device_emulator_test

@@ -11,7 +11,7 @@
 #include "alloc_counter.hpp"
 
 namespace numen::hal {
-namespace {
+namespace relative_pose_integrator_test {  // named: the unity build shares a TU with other test files
 
 using core::Quat;
 using core::Vec3;
@@ -437,5 +437,5 @@ TEST(RelativePoseIntegrator, FeedAndEndPeriodDoNotAllocate) {
   EXPECT_GT(in.counters().moving_reports, 0u);
 }
 
-}  // namespace
+}  // namespace relative_pose_integrator_test
 }  // namespace numen::hal

@@ -32,12 +32,7 @@ using test::Bytes;
 using test::encode;
 using test::make;
 
-void expect_same(const CanFrame& a, const CanFrame& b) {
-  EXPECT_EQ(a.id, b.id);
-  EXPECT_EQ(a.flags, b.flags);
-  EXPECT_EQ(a.len, b.len);
-  EXPECT_EQ(a.data, b.data);
-}
+using numen::test::expect_same;
 
 std::int64_t now_ns() {
   timespec ts{};

@@ -18,7 +18,7 @@
 #include "serial_test_frames.hpp"
 
 namespace numen::hal {
-namespace {
+namespace serial_frame_test {  // named: the unity build shares a TU with other test files
 
 using test::Bytes;
 using test::encode;
@@ -43,12 +43,7 @@ Bytes line_from_payload(Bytes payload) {
   return out;
 }
 
-void expect_same(const CanFrame& a, const CanFrame& b) {
-  EXPECT_EQ(a.id, b.id);
-  EXPECT_EQ(a.flags, b.flags);
-  EXPECT_EQ(a.len, b.len);
-  EXPECT_EQ(a.data, b.data);  // all 64 bytes: those past len are zero on both sides
-}
+using numen::test::expect_same;
 
 // Feeds `bytes` in pieces of `step` bytes (0: all at once) and collects the frames.
 std::vector<CanFrame> feed_all(SerialFrameDecoder& dec, const Bytes& bytes, std::size_t step) {
@@ -420,5 +415,5 @@ TEST(SerialFrameDecoder, DecodingAndEncodingDoNotAllocate) {
   EXPECT_EQ(frames, 20u * (s.survivors.size() + 1));
 }
 
-}  // namespace
+}  // namespace serial_frame_test
 }  // namespace numen::hal

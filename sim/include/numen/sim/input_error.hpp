@@ -71,6 +71,12 @@ class InputError : public std::runtime_error {
   std::string message_;
 };
 
+/// Throws an InputError about `key` with no file position: for values checked after their
+/// file was read, or handed over in memory (a trajectory, a trocar placement).
+[[noreturn]] inline void fail_at_key(const std::string& key, const std::string& message) {
+  throw InputError("", 0, 0, key, message);
+}
+
 /// `v` as an input message quotes it: 6 significant digits (printf %g), e.g.
 /// 1000, 1e+308, 0.0333333, -1, nan — never the 309 digits of std::to_string(DBL_MAX).
 inline std::string format_input_number(double v) {

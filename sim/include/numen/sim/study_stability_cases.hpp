@@ -159,6 +159,10 @@ void plan_scene_extreme(const StabilityOptions& o, const std::string& scene_dir,
 /// "scenes <name>: reason" line in Plan::skipped.
 void plan_scene_stiffness(const StabilityOptions& o, const std::string& scene_dir, Plan& plan);
 
+/// Joint drift (m, largest joint-constraint error over the run) above which a case with joints
+/// is unstable: the articulation cases and the shipped scenes with joints.
+inline constexpr double kDriftBound = 0.005;
+
 /// The integrators of `o` (all three when empty).
 const std::vector<core::Integrator>& integrators_of(const StabilityOptions& o);
 

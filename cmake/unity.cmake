@@ -1,0 +1,20 @@
+# Unity builds (docs/testing.md "Test build time"): numen_unity(TARGET) compiles TARGET's
+# sources NUMEN_UNITY_BATCH at a time, one translation unit per batch, so that each batch
+# parses the heavy header-only libraries it shares (GoogleTest, Eigen, CLI11, toml++,
+# nlohmann/json, pybind11) once instead of once per file. Applied to the test programs and
+# benchmarks, the `numen` command, numen::sim and the Python module; core, hal and platform
+# compile file by file (their files are light to parse, and heavy to optimise).
+#
+# File-local names (anonymous namespaces, static functions) of the files of one batch share a
+# translation unit: two of one name are a redefinition error. Give one a distinct name, or
+# move a shared helper to a header. NUMEN_UNITY_BATCH=1 turns unity builds off (a change to
+# one file then recompiles that file alone: the setting for editing one file often).
+set(NUMEN_UNITY_BATCH 8 CACHE STRING "Source files per unity translation unit (1: no unity build)")
+if(NOT NUMEN_UNITY_BATCH MATCHES "^[1-9][0-9]*$")
+  message(FATAL_ERROR "NUMEN_UNITY_BATCH must be a positive integer, not '${NUMEN_UNITY_BATCH}'")
+endif()
+function(numen_unity target)
+  if(NUMEN_UNITY_BATCH GREATER 1)
+    set_target_properties(${target} PROPERTIES UNITY_BUILD ON UNITY_BUILD_BATCH_SIZE ${NUMEN_UNITY_BATCH})
+  endif()
+endfunction()
