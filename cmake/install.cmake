@@ -116,26 +116,28 @@ numen_install_headers(${PROJECT_SOURCE_DIR}/platform/include
 # sim: scenes (load_scene, run_scene), trajectories, simulated instruments, traces, studies,
 # view recordings and server. Not installed: the `numen` command's helpers (cli_values.hpp,
 # progress_bar.hpp, run_summary_text.hpp, trace_columns.hpp) and the studies' building blocks
-# (study_common.hpp, study_stability_cases.hpp).
+# (study_common.hpp, study_stability_cases.hpp). One folder per concept, as in the source tree
+# (docs/architecture.md "sim").
 numen_install_headers(${PROJECT_SOURCE_DIR}/sim/include
-  numen/sim/admittance_hand.hpp numen/sim/admittance_run.hpp numen/sim/bus_spec.hpp
-  numen/sim/computed_motion.hpp
-  numen/sim/device_process.hpp numen/sim/divergence.hpp numen/sim/energy.hpp
-  numen/sim/input_error.hpp numen/sim/jigsaws.hpp
-  numen/sim/multirate_run.hpp
-  numen/sim/obj_mesh.hpp numen/sim/pointer_path.hpp numen/sim/run.hpp
-  numen/sim/run_figures.hpp numen/sim/run_options.hpp numen/sim/run_summary.hpp
-  numen/sim/run_verdict.hpp numen/sim/scene.hpp
-  numen/sim/scene_info.hpp numen/sim/scripted_path.hpp numen/sim/sdo_session.hpp
-  numen/sim/shipped_files.hpp
-  numen/sim/simulated_instrument.hpp numen/sim/study_accuracy.hpp
-  numen/sim/study_shard.hpp numen/sim/study_stability.hpp numen/sim/trace.hpp
-  numen/sim/trajectory.hpp numen/sim/trajectory_motion.hpp
-  numen/sim/trocar_placement.hpp numen/sim/view_output.hpp numen/sim/view_recording.hpp
-  numen/sim/view_scene.hpp numen/sim/view_server.hpp)
+  numen/sim/scene/obj_mesh.hpp numen/sim/scene/scene.hpp numen/sim/scene/scene_info.hpp
+  numen/sim/scene/trocar_placement.hpp
+  numen/sim/input/bus_spec.hpp numen/sim/input/computed_motion.hpp numen/sim/input/input_error.hpp
+  numen/sim/input/jigsaws.hpp numen/sim/input/pointer_path.hpp numen/sim/input/scripted_path.hpp
+  numen/sim/input/shipped_files.hpp numen/sim/input/trajectory.hpp
+  numen/sim/device/admittance_hand.hpp numen/sim/device/device_process.hpp
+  numen/sim/device/sdo_session.hpp numen/sim/device/simulated_instrument.hpp
+  numen/sim/device/trajectory_motion.hpp
+  numen/sim/run/admittance_run.hpp numen/sim/run/divergence.hpp numen/sim/run/energy.hpp
+  numen/sim/run/multirate_run.hpp numen/sim/run/run.hpp numen/sim/run/run_figures.hpp
+  numen/sim/run/run_options.hpp numen/sim/run/run_summary.hpp numen/sim/run/run_verdict.hpp
+  numen/sim/run/trace.hpp
+  numen/sim/study/study_accuracy.hpp numen/sim/study/study_shard.hpp
+  numen/sim/study/study_stability.hpp
+  numen/sim/view/view_output.hpp numen/sim/view/view_recording.hpp numen/sim/view/view_scene.hpp
+  numen/sim/view/view_server.hpp)
 
 # --- Shipped files: scenes and data side by side (a scene's "../data/..." resolves), the
-# viewer page; found by an installed `numen` relative to itself (sim/src/shipped_files.cpp).
+# viewer page; found by an installed `numen` relative to itself (sim/src/input/shipped_files.cpp).
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/sim/scenes ${PROJECT_SOURCE_DIR}/sim/data
         DESTINATION ${NUMEN_INSTALL_DATADIR})
 install(DIRECTORY ${PROJECT_BINARY_DIR}/viewer/ DESTINATION ${NUMEN_INSTALL_DATADIR}/viewer)  # sim/CMakeLists.txt

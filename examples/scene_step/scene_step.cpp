@@ -15,8 +15,8 @@
 
 #include "numen/core/data.hpp"
 #include "numen/core/step.hpp"
-#include "numen/sim/input_error.hpp"
-#include "numen/sim/scene.hpp"
+#include "numen/sim/input/input_error.hpp"
+#include "numen/sim/scene/scene.hpp"
 #include "numen/version.hpp"
 
 int main(int argc, char** argv) {

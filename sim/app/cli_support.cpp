@@ -7,10 +7,10 @@
 #include <stdexcept>
 
 #include "commands.hpp"
-#include "numen/sim/bus_spec.hpp"
-#include "numen/sim/cli_values.hpp"
-#include "numen/sim/input_error.hpp"
-#include "numen/sim/run_verdict.hpp"
+#include "numen/sim/input/bus_spec.hpp"
+#include "numen/sim/input/cli_values.hpp"
+#include "numen/sim/input/input_error.hpp"
+#include "numen/sim/run/run_verdict.hpp"
 
 namespace numen::app {
 

@@ -4,9 +4,9 @@
 #include <iostream>
 
 #include "commands.hpp"
-#include "numen/sim/cli_values.hpp"
-#include "numen/sim/device_process.hpp"
-#include "numen/sim/scene.hpp"
+#include "numen/sim/device/device_process.hpp"
+#include "numen/sim/input/cli_values.hpp"
+#include "numen/sim/scene/scene.hpp"
 #include "signals.hpp"
 
 namespace numen::app {

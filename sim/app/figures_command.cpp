@@ -5,8 +5,8 @@
 #include <iostream>
 
 #include "commands.hpp"
-#include "numen/sim/record_lists.hpp"
-#include "numen/sim/run_figures.hpp"
+#include "numen/sim/run/record_lists.hpp"
+#include "numen/sim/run/run_figures.hpp"
 
 namespace numen::app {
 

@@ -4,8 +4,8 @@
 #include <iostream>
 
 #include "commands.hpp"
-#include "numen/sim/scene.hpp"
-#include "numen/sim/scene_info.hpp"
+#include "numen/sim/scene/scene.hpp"
+#include "numen/sim/scene/scene_info.hpp"
 
 namespace numen::app {
 

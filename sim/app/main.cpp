@@ -27,7 +27,7 @@
 
 #include "commands.hpp"
 #include "numen/version.hpp"
-#include "numen/sim/run_verdict.hpp"
+#include "numen/sim/run/run_verdict.hpp"
 #include "signals.hpp"
 
 namespace {

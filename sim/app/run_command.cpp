@@ -8,13 +8,13 @@
 #include <limits>
 
 #include "commands.hpp"
-#include "numen/sim/bus_spec.hpp"
-#include "numen/sim/cli_values.hpp"
-#include "numen/sim/input_error.hpp"
-#include "numen/sim/run.hpp"
-#include "numen/sim/scene.hpp"
-#include "numen/sim/view_scene.hpp"
-#include "numen/sim/view_server.hpp"
+#include "numen/sim/input/bus_spec.hpp"
+#include "numen/sim/input/cli_values.hpp"
+#include "numen/sim/input/input_error.hpp"
+#include "numen/sim/run/run.hpp"
+#include "numen/sim/scene/scene.hpp"
+#include "numen/sim/view/view_scene.hpp"
+#include "numen/sim/view/view_server.hpp"
 #include <memory>
 #include "signals.hpp"
 

@@ -6,8 +6,8 @@
 #include <iostream>
 
 #include "commands.hpp"
-#include "numen/sim/bus_spec.hpp"
-#include "numen/sim/sdo_session.hpp"
+#include "numen/sim/device/sdo_session.hpp"
+#include "numen/sim/input/bus_spec.hpp"
 #include "signals.hpp"
 
 namespace numen::app {

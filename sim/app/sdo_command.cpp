@@ -11,9 +11,9 @@
 #include <vector>
 
 #include "commands.hpp"
-#include "numen/sim/bus_spec.hpp"
-#include "numen/sim/input_error.hpp"
-#include "numen/sim/sdo_session.hpp"
+#include "numen/sim/device/sdo_session.hpp"
+#include "numen/sim/input/bus_spec.hpp"
+#include "numen/sim/input/input_error.hpp"
 #include "signals.hpp"
 
 namespace numen::app {

@@ -12,11 +12,11 @@
 #include <optional>
 
 #include "commands.hpp"
-#include "numen/sim/input_error.hpp"
-#include "numen/sim/progress_bar.hpp"
-#include "numen/sim/study_accuracy.hpp"
-#include "numen/sim/study_shard.hpp"
-#include "numen/sim/study_stability.hpp"
+#include "numen/sim/input/input_error.hpp"
+#include "numen/sim/run/progress_bar.hpp"
+#include "numen/sim/study/study_accuracy.hpp"
+#include "numen/sim/study/study_shard.hpp"
+#include "numen/sim/study/study_stability.hpp"
 
 namespace numen::app {
 namespace {

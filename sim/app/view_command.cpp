@@ -9,10 +9,10 @@
 #include <thread>
 
 #include "commands.hpp"
-#include "numen/sim/input_error.hpp"
-#include "numen/sim/view_recording.hpp"
-#include "numen/sim/shipped_files.hpp"
-#include "numen/sim/view_server.hpp"
+#include "numen/sim/input/input_error.hpp"
+#include "numen/sim/view/view_recording.hpp"
+#include "numen/sim/input/shipped_files.hpp"
+#include "numen/sim/view/view_server.hpp"
 #include "signals.hpp"
 
 namespace numen::app {

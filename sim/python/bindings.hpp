@@ -11,7 +11,7 @@
 
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"
-#include "numen/sim/scene.hpp"
+#include "numen/sim/scene/scene.hpp"
 
 namespace numen::python {
 

@@ -10,11 +10,11 @@
 #include <vector>
 
 #include "bindings.hpp"
-#include "numen/sim/run.hpp"
-#include "numen/sim/study_accuracy.hpp"
-#include "numen/sim/study_common.hpp"
-#include "numen/sim/study_fields.hpp"
-#include "numen/sim/study_stability.hpp"
+#include "numen/sim/run/run.hpp"
+#include "numen/sim/study/study_accuracy.hpp"
+#include "numen/sim/study/study_common.hpp"
+#include "numen/sim/study/study_fields.hpp"
+#include "numen/sim/study/study_stability.hpp"
 
 namespace py = pybind11;
 

@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "bindings.hpp"
-#include "numen/sim/input_error.hpp"
+#include "numen/sim/input/input_error.hpp"
 
 namespace py = pybind11;
 

@@ -19,7 +19,7 @@
 #include "lean_scenes.hpp"
 #include "numen/core/data.hpp"
 #include "numen/core/step.hpp"
-#include "numen/sim/scene.hpp"
+#include "numen/sim/scene/scene.hpp"
 
 namespace {
 

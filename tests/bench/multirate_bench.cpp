@@ -33,9 +33,9 @@
 #include "numen/core/multirate.hpp"
 #include "numen/platform/latency_histogram.hpp"
 #include "numen/platform/monotonic_clock.hpp"
-#include "numen/sim/admittance_run.hpp"
-#include "numen/sim/run.hpp"
-#include "numen/sim/scene.hpp"
+#include "numen/sim/run/admittance_run.hpp"
+#include "numen/sim/run/run.hpp"
+#include "numen/sim/scene/scene.hpp"
 
 namespace {
 
@@ -82,7 +82,7 @@ void multirate_time(benchmark::State& state, const char* name, double speed) {
     runner->period();
     single.record(step_ns(*runner));
     numen::core::Data& d = mr->device_data();
-    if (k == 0) {  // the runner starts the god-object at the hand (sim/run.hpp): so does this
+    if (k == 0) {  // the runner starts the god-object at the hand (sim/run/run.hpp): so does this
       const std::span<const int> god = mr->god_object();
       for (std::size_t i = 0; i < god.size(); ++i)
         d.bodies[i] = runner->data().bodies[static_cast<std::size_t>(god[i])];

@@ -21,9 +21,9 @@
 #include "deformable_ball.hpp"
 #include "numen/core/step.hpp"
 #include "numen/platform/state_stream.hpp"
-#include "numen/sim/run.hpp"
-#include "numen/sim/scene.hpp"
-#include "numen/sim/view_scene.hpp"
+#include "numen/sim/run/run.hpp"
+#include "numen/sim/scene/scene.hpp"
+#include "numen/sim/view/view_scene.hpp"
 
 namespace {
 

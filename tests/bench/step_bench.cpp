@@ -19,8 +19,8 @@
 #include <string>
 
 #include "numen/platform/latency_histogram.hpp"
-#include "numen/sim/run.hpp"
-#include "numen/sim/scene.hpp"
+#include "numen/sim/run/run.hpp"
+#include "numen/sim/scene/scene.hpp"
 
 namespace {
 

@@ -1,13 +1,13 @@
 /// @file obj_fuzz.cpp
-/// libFuzzer harness of the OBJ mesh loader (sim/obj_mesh.hpp, tinyobjloader): the input as
+/// libFuzzer harness of the OBJ mesh loader (sim/scene/obj_mesh.hpp, tinyobjloader): the input as
 /// an .obj file through load_obj_mesh(). The only accepted failure is sim::InputError; any
 /// other exception is a finding.
 
 #include <cstdint>
 
 #include "fuzz_input.hpp"
-#include "numen/sim/input_error.hpp"
-#include "numen/sim/obj_mesh.hpp"
+#include "numen/sim/input/input_error.hpp"
+#include "numen/sim/scene/obj_mesh.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   try {

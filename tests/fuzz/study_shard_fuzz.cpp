@@ -1,5 +1,5 @@
 /// @file study_shard_fuzz.cpp
-/// libFuzzer harness of the study shard files and their merge (sim/study_shard.hpp,
+/// libFuzzer harness of the study shard files and their merge (sim/study/study_shard.hpp,
 /// study_shard_json.hpp; `numen study merge DIR`): the input as the shard files of a directory
 /// of this process's own, merged by merge_stability_shards() or merge_accuracy_shards(). The
 /// input's last byte picks the study and the split: one file (shard 0 of 1), or two (shards 0
@@ -18,9 +18,9 @@
 #include <string_view>
 
 #include "fuzz_input.hpp"
-#include "numen/sim/input_error.hpp"
-#include "numen/sim/study_accuracy.hpp"
-#include "numen/sim/study_stability.hpp"
+#include "numen/sim/input/input_error.hpp"
+#include "numen/sim/study/study_accuracy.hpp"
+#include "numen/sim/study/study_stability.hpp"
 
 namespace {
 

@@ -1,6 +1,6 @@
 /// @file view_recording_fuzz.cpp
 /// libFuzzer harness of the view recording reader that `numen view REC` serves
-/// (sim/view_recording.hpp): the input as a .nmv file through ViewRecordingReader, whose only
+/// (sim/view/view_recording.hpp): the input as a .nmv file through ViewRecordingReader, whose only
 /// accepted failure is InputError (located: the file, the byte offset, the scene message's
 /// key); any other exception escapes and is a finding. A file it accepts is read back frame by
 /// frame (each must decode again, as its index said) and searched by time. Seeds: a recording
@@ -11,8 +11,8 @@
 
 #include "fuzz_input.hpp"
 #include "numen/platform/state_frame.hpp"
-#include "numen/sim/input_error.hpp"
-#include "numen/sim/view_recording.hpp"
+#include "numen/sim/input/input_error.hpp"
+#include "numen/sim/view/view_recording.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string& path = numen::fuzz::input_file(data, size, ".nmv");

@@ -1,6 +1,6 @@
 /// @file view_server_fuzz.cpp
-/// libFuzzer harness of what the viewer's HTTP and WebSocket server (sim/view_server.hpp) makes
-/// of a client's bytes, without a socket: the parsing of Boost.Beast with the server's limits
+/// libFuzzer harness of what the viewer's HTTP and WebSocket server (sim/view/view_server.hpp)
+/// makes of a client's bytes, without a socket: the parsing of Boost.Beast with the server's limits
 /// (kViewHttpHeaderLimit, kViewHttpBodyLimit, max_client_message_bytes) and the server's own
 /// decisions on what it parsed (answer_view_http_request(), read_view_client_message(), the
 /// seam the sessions call). The input's last byte picks:
@@ -23,7 +23,7 @@
 #include <string_view>
 
 #include "fuzz_input.hpp"
-#include "numen/sim/view_server.hpp"
+#include "numen/sim/view/view_server.hpp"
 
 namespace {
 

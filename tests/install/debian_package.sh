@@ -32,7 +32,7 @@ for f in /usr/bin/numen \
          /usr/share/numen/data/jigsaws_suturing_b002_excerpt.txt \
          /usr/share/numen/viewer/index.html \
          /usr/include/numen/version.hpp /usr/include/numen/core/model.hpp \
-         /usr/include/numen/core/features.hpp /usr/include/numen/sim/scene.hpp \
+         /usr/include/numen/core/features.hpp /usr/include/numen/sim/scene/scene.hpp \
          /usr/lib/cmake/numen/numenConfig.cmake /usr/lib/cmake/numen/numenConfigVersion.cmake \
          /usr/lib/cmake/numen/numenTargets.cmake \
          /usr/share/doc/numen/copyright /usr/share/doc/numen/deploy.md \

@@ -9,7 +9,7 @@
 #include "mujoco_engine.hpp"
 #include "numen/core/step.hpp"
 #include "numen/platform/monotonic_clock.hpp"
-#include "numen/sim/scene.hpp"
+#include "numen/sim/scene/scene.hpp"
 
 namespace numen::peer {
 

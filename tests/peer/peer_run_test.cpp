@@ -11,8 +11,8 @@
 #include <sstream>
 
 #include "numen/core/step.hpp"
-#include "numen/sim/run.hpp"
-#include "numen/sim/scene.hpp"
+#include "numen/sim/run/run.hpp"
+#include "numen/sim/scene/scene.hpp"
 #include "peer_table.hpp"
 
 namespace peer = numen::peer;

@@ -8,7 +8,7 @@
 #include <stdexcept>
 
 #include "numen/core/data.hpp"
-#include "numen/sim/scene.hpp"
+#include "numen/sim/scene/scene.hpp"
 
 namespace numen::peer {
 

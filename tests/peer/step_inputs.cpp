@@ -7,7 +7,7 @@
 #include <memory>
 
 #include "numen/core/step.hpp"
-#include "numen/sim/run.hpp"
+#include "numen/sim/run/run.hpp"
 
 namespace numen::peer {
 

@@ -9,7 +9,7 @@
 
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"
-#include "numen/sim/scene.hpp"
+#include "numen/sim/scene/scene.hpp"
 
 namespace numen::peer {
 

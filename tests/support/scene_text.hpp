@@ -1,6 +1,6 @@
 #pragma once
 /// @file scene_text.hpp
-/// Helpers of the scene-file tests (tests/sim/scene*_test.cpp): locate a
+/// Helpers of the scene-file tests (tests/sim/scene/scene*_test.cpp): locate a
 /// needle in a scene text (1-based line and column, as InputError reports
 /// them), edit a template scene, load a text expecting an InputError, and check where
 /// the error is located.
@@ -15,8 +15,8 @@
 #include <sstream>
 #include <string>
 
-#include "numen/sim/input_error.hpp"
-#include "numen/sim/scene.hpp"
+#include "numen/sim/input/input_error.hpp"
+#include "numen/sim/scene/scene.hpp"
 #include "temp_dir.hpp"
 
 namespace numen::test {

@@ -1,6 +1,6 @@
 """The Python dicts carry the names `numen figures --all` lists for their output (sim/python,
-sim/record_lists.cpp): a study row's dict has its row's field list, in order; a run's dict the
-run figures. The C++ outputs: tests/sim/record_names_test.cpp."""
+sim/run/record_lists.cpp): a study row's dict has its row's field list, in order; a run's dict the
+run figures. The C++ outputs: tests/sim/run/record_names_test.cpp."""
 import os
 import re
 import subprocess

@@ -2,7 +2,7 @@
 /// @file line_reader.hpp
 /// LineReader: a text file read one line at a time in a fixed buffer, so that memory does not
 /// depend on the file's size or on its longest line. Users: the candump log reader
-/// (candump_log.hpp) and the JIGSAWS kinematics loader (sim/jigsaws.hpp). Setup code or a
+/// (candump_log.hpp) and the JIGSAWS kinematics loader (sim/input/jigsaws.hpp). Setup code or a
 /// reader thread: opening allocates the buffer once, reading never allocates.
 
 #include <cstddef>

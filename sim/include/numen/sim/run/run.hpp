@@ -1,0 +1,265 @@
+#pragma once
+/// @file run.hpp
+/// The run harness behind `numen run`: a SimBus, a SimulatedInstrument on its
+/// device port, the platform::ControlLoop on its controller port, the fixed-step
+/// loop (as fast as possible, or paced to wall-clock time), the measurements of
+/// the summary and an optional per-step trace. The options of a run are in
+/// run_options.hpp, what it measured in run_summary.hpp.
+
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "numen/core/data.hpp"
+#include "numen/hal/device/instrument_device.hpp"
+#include "numen/hal/transport/bus_recorder.hpp"
+#include "numen/hal/transport/log_bus.hpp"
+#include "numen/hal/transport/sim_bus.hpp"
+#include "numen/platform/control_loop.hpp"
+#include "numen/platform/latency_histogram.hpp"
+#include "numen/platform/multirate_threads.hpp"
+#include "numen/platform/periodic_timer.hpp"
+#include "numen/platform/realtime_setup.hpp"
+#include "numen/platform/state_stream.hpp"
+#include "numen/platform/trace_queue.hpp"
+#include "numen/sim/device/simulated_instrument.hpp"
+#include "numen/sim/input/bus_spec.hpp"
+#include "numen/sim/run/divergence.hpp"
+#include "numen/sim/run/multirate_run.hpp"
+#include "numen/sim/run/run_options.hpp"
+#include "numen/sim/run/run_summary.hpp"
+#include "numen/sim/run/trace.hpp"
+#include "numen/sim/scene/scene.hpp"
+#include "numen/sim/view/view_output.hpp"
+
+namespace numen::sim {
+
+/// Start-up of a run whose tool starts inside an obstacle (RunSummary): it ends when the
+/// tool's penetration has set no new minimum for this long (s).
+inline constexpr double kStartupSettle = 0.02;
+
+/// What a run's period loop counts around its runner (run_scene's impedance loop and
+/// run_admittance_scene share it): a paced loop's wake-ups and the operator's re-arm
+/// requests (RunOptions::rearm, SIGUSR1). Not used inside the real-time period.
+class RunLoopTally {
+ public:
+  /// A paced period's wake-up (platform::PeriodicTimer::wait_next): its overrun, the periods
+  /// it skipped and its latency.
+  void woke(const platform::Wakeup& w) noexcept;
+  /// Takes the re-arm request pending before period `k` (clears `request`); true if there was
+  /// one: the caller re-arms its loop and calls rearm_accepted() if that was accepted.
+  bool take_rearm(std::atomic<bool>* request, std::int64_t k) noexcept;
+  void rearm_accepted() noexcept { ++rearms_accepted_; }
+  /// Writes RunSummary::realtime_overruns, realtime_missed_periods, wakeup_latency_us and the
+  /// rearm_* figures.
+  void write(RunSummary& s) const;
+
+ private:
+  std::int64_t overruns_ = 0, missed_ = 0;
+  platform::LatencyHistogram wakeup_;
+  std::int64_t rearm_requests_ = 0, rearms_accepted_ = 0, rearm_first_ = -1;
+};
+
+/// The real-time setup of a run's loop thread: apply_realtime(rt) described line by line, or
+/// nothing if `rt` asks for no step. Throws as apply_realtime() (a failed step only if strict).
+std::vector<std::string> apply_run_realtime(const platform::RealtimeSettings& rt);
+
+/// Writes what `monitor` saw into s.divergence (the breach's body or net named from `model`).
+/// Setup thread (allocates the names), after the run.
+void summarize_divergence(const DivergenceMonitor& monitor, const core::Model& model,
+                          RunSummary& s);
+
+/// The ControlLoop settings of a run: `paced` (real bus, or RunOptions::realtime) periods have
+/// deadlines, so consecutive overruns are supervised and `overrun_limit` of them latch the safe
+/// state; `overrun_limit` 0 or an unpaced run: overruns are only counted (LoopStatistics). The
+/// other settings are ControlLoopSettings' defaults (encoder timeout 3 periods, docs/safety.md).
+platform::ControlLoopSettings control_loop_settings(bool paced, std::uint32_t overrun_limit) noexcept;
+
+/// The bus recorder's (BusChoice::record_path) writer settings of a run: a `paced` run drops
+/// records its writer thread has no room for (hal::FullQueuePolicy::kDrop, counted in
+/// RunSummary::bus_record_dropped; the loop never waits for the disk); an offline run has no
+/// deadline and waits for room (kWait), so its log is complete however starved the writer
+/// thread is. The other settings are CandumpWriterSettings' defaults.
+hal::CandumpWriterSettings recorder_settings(bool paced) noexcept;
+
+/// Writes the in-memory trace of a simulated run to `path` after the run and accounts for it in
+/// `s` (trace_pushed, trace_dropped, trace_written, trace_io_errors): a file that cannot be
+/// written is not thrown but counted (1 I/O error, 0 written) with the error as a warning, so
+/// the run keeps its summary and its verdict reports the lost records (exit status 5).
+void write_in_memory_trace(const Trace& trace, const std::string& path, RunSummary& s);
+
+/// A scene wired for a run: SimBus, simulated instrument on its device port,
+/// InstrumentDevice and ControlLoop on its controller port, core Data, the
+/// measurement state and the trace storage. The constructor allocates
+/// everything; period() never allocates, throws or locks (tested), so the
+/// same loop can be driven by a test, a benchmark or `numen run`.
+class SceneRunner {
+ public:
+  /// `scene` must outlive the runner. `trace_capacity` records are reserved.
+  /// `bus` chooses the controller's bus; a log is loaded and a recording
+  /// opened (its writer thread started) here. Throws std::invalid_argument
+  /// for an unknown bus spec, std::runtime_error ("file:line:column: what")
+  /// for a log that cannot be read or a recording that cannot be written.
+  /// `realtime`: the periods are paced to CLOCK_MONOTONIC (run_scene with
+  /// RunOptions::realtime), so overruns are supervised (control_loop_settings()) with
+  /// `overrun_limit` (RunOptions::overrun_limit; 0: counted, never latched).
+  explicit SceneRunner(const Scene& scene, std::size_t trace_capacity = 0,
+                       const BusChoice& bus = {}, bool realtime = false,
+                       std::uint32_t overrun_limit = 3);
+
+  /// Runs control period k (bus time k·dt), in named parts: apply_due_events() (tool
+  /// switching), exchange() (SYNC and the managed stack's NMT / heartbeat, the instrument's
+  /// answer, the controller's read–check–supervise–step–write in platform::ControlLoop), then
+  /// the measurements outside the timed step — count_period(), measure_contacts(),
+  /// track_free_space(), track_startup(), accumulate_step_figures() — and record() (one trace
+  /// record). `deadline_mono_ns` / `woke_mono_ns`: the paced
+  /// timer's wake-up (CLOCK_MONOTONIC), -1 when not paced.
+  ///
+  /// Real bus (can:, serial:): bus time is CLOCK_MONOTONIC. The SYNC goes out at once
+  /// (stamped now), then the thread sleeps until deadline + compute phase (clock_nanosleep,
+  /// TIMER_ABSTIME; `deadline_mono_ns` < 0: from now) while the device answers, then
+  /// end_period reads, checks, steps and writes the torques at that time. This sleep is the
+  /// only blocking call; nothing allocates, throws or locks.
+  void period(std::int64_t deadline_mono_ns = -1, std::int64_t woke_mono_ns = -1) noexcept;
+  /// True when the controller's port is a real bus (can:, serial:).
+  bool real_bus() const noexcept { return spec_.real(); }
+  /// The controller's port (the real bus, the log replay, the recorder, or the SimBus port).
+  const hal::Bus& port() const noexcept { return *port_; }
+  /// Streams one record per period into a CSV through platform::TraceWriter (lock-free queue,
+  /// writer thread started here; setup only). Columns: the streamed ones of trace_columns()
+  /// (TraceKind::kStream: frames_read, sample_valid, torque_commanded, lifecycle,
+  /// target_{x,y,z}, tool_{x,y,z}, feedback_f{x,y,z}, axis_torque_<axis name> per axis,
+  /// step_time_us, end_to_end_us, wakeup_latency_us, emcys, emcy_node, emcy_code); flags
+  /// bit 0 sample valid, bit 1 torque commanded, bit 2 overrun. Throws like TraceWriter's
+  /// constructor.
+  void stream_trace(const std::string& path);
+  /// Publishes the run's state stream (docs/viewer.md) to a view recording at `record_path`
+  /// (empty: none) and to `sinks`, at `rate_hz` frames per simulated second; `wait`: the loop
+  /// waits for the consumers (offline runs), else drops. Starts the stream's thread. Throws
+  /// InputError at --record-view when the file cannot be created.
+  void stream_view(const std::string& record_path, std::vector<platform::StateFrameSink*> sinks,
+                   double rate_hz, bool wait);
+  /// The streaming trace writer (nullptr unless stream_trace() was called).
+  platform::TraceWriter* trace_writer() noexcept { return trace_writer_.get(); }
+  /// Overrides the scene's compute phase (ns, >= 0).
+  void set_compute_phase_ns(std::int64_t ns) noexcept { phase_ns_ = ns; }
+  /// Periods run so far.
+  std::int64_t periods() const noexcept { return k_; }
+  /// The divergence monitor latched (divergence.hpp): the period that breached it shut the
+  /// device down (zero torque from the next write on); the run stops after it.
+  bool diverged() const noexcept { return divergence_.divergence().cause != nullptr; }
+  /// A multirate scene in a paced run: steps the scene loop on its own thread from now on
+  /// (platform::MultirateThreads, `settings`) until finish(); nothing for a single-rate scene.
+  /// Allocates (call before the first period). Throws std::system_error if the thread cannot
+  /// start.
+  void start_scene_thread(const platform::SceneThreadSettings& settings);
+  /// The multirate god-object (MultirateRun::enabled() false in a single-rate run) and its
+  /// scene thread; read the thread's realtime_report() after finish().
+  const MultirateRun& multirate() const noexcept { return multirate_; }
+
+  /// Ends the run's streams: stops the bus recorder's and the trace's writer threads, which
+  /// write what is still queued and close the files (they appear under their paths), so that
+  /// summary() reports what reached them.
+  /// Idempotent; call it after the last period() (setup thread).
+  void finish();
+
+  /// The summary of the periods run so far (wall time and realtime overruns
+  /// are the caller's, see run_scene).
+  RunSummary summary() const;
+
+  const core::Data& data() const noexcept { return data_; }
+  const hal::InstrumentDevice& device() const noexcept { return device_; }
+  const SimulatedInstrument& instrument() const noexcept { return instrument_; }
+  /// The simulated instrument, for fault injection in tests.
+  SimulatedInstrument& instrument() noexcept { return instrument_; }
+  /// The control loop (lifecycle, supervisor, CANopen master, statistics, rearm()).
+  const platform::ControlLoop& loop() const noexcept { return loop_; }
+  platform::ControlLoop& loop() noexcept { return loop_; }
+  hal::SimBus& bus() noexcept { return bus_; }
+  const Trace& trace() const noexcept { return trace_; }
+  /// What the control loop did in the last period (step wall time included).
+  const platform::PeriodReport& last_report() const noexcept { return loop_.last_report(); }
+
+ private:
+  /// What measure_contacts() found after a period's step (penetrations in m).
+  struct PeriodContacts {
+    bool held = false;              ///< A body is held (else everything below is zero).
+    double tool_pen = 0.0;          ///< Deepest contact of the tool (bodies and nets).
+    double target_pen = 0.0;        ///< Deepest contact of the target (where the hand is).
+    int tool_contacts = 0;          ///< Contacts of the tool.
+    int target_contacts = 0;        ///< Contacts of the target.
+    int deepest_tool_contact = -1;  ///< Index of the tool's deepest rigid contact (-1: none).
+    int deepest_tool_body = -1;     ///< Its tool body.
+  };
+  /// Attaches the bodies of the tool-switching events due at bus time `t_ns`.
+  void apply_due_events(std::int64_t t_ns) noexcept;
+  /// The bus side of the period at bus time `t` (ns): the simulated bus and instrument, the
+  /// log replay or the real bus around ControlLoop::begin_period / end_period.
+  const platform::PeriodReport& exchange(std::int64_t t, std::int64_t deadline_mono_ns,
+                                         std::int64_t woke_mono_ns) noexcept;
+  /// Counts of the period's report: frames, torque stops, bus errors, invalid and zero-torque
+  /// periods, the first latched fault.
+  void count_period(const platform::PeriodReport& report) noexcept;
+  /// The tool's and the target's contacts (the target detected on ghost_).
+  PeriodContacts measure_contacts() noexcept;
+  /// The free-space tracking error (RunSummary::tracking_error_free_rms_mm).
+  void track_free_space(const PeriodContacts& c) noexcept;
+  /// The start-up push-out and the god-object's penetration after it (RunSummary).
+  void track_startup(const PeriodContacts& c) noexcept;
+  /// Running maxima and sums of the step: penetrations, feedback, joints, solver, nets.
+  void accumulate_step_figures(const platform::PeriodReport& report, const PeriodContacts& c) noexcept;
+  /// The period's trace record: in memory (trace_) and streamed (trace_writer_).
+  void record(const platform::PeriodReport& report, const PeriodContacts& c) noexcept;
+  /// The loop's step in a multirate run: MultirateRun::step(data_); period() writes the rest
+  /// of the single-rate view (MultirateRun::view()) after the timed step, before measuring.
+  static void step_multirate(void* runner) noexcept;
+
+  const Scene* scene_;
+  BusSpec spec_;
+  hal::SimBus bus_;
+  std::unique_ptr<hal::Bus> real_bus_;            // --bus can:IFACE / serial:PATH
+  hal::CandumpLoadStats log_stats_;               // --bus log:FILE, what the loader counted
+  std::unique_ptr<hal::LogBus> log_bus_;          // --bus log:FILE
+  std::unique_ptr<hal::CandumpWriter> writer_;    // --record FILE
+  std::unique_ptr<hal::RecordingBus> recorder_;   // --record FILE, around the controller port
+  hal::Bus* port_;                                // what the control loop reads and writes
+  SimulatedInstrument instrument_;
+  hal::InstrumentDevice device_;
+  core::Data data_;
+  core::Data ghost_;  // the held body placed at the target, for measurement
+  platform::ControlLoop loop_;
+  /// The multirate god-object (scene [multirate]), stepped in place of core::step by the
+  /// loop (ControlLoop::set_step_function); not enabled in a single-rate run.
+  MultirateRun multirate_;
+  Trace trace_;
+  std::int64_t k_ = 0;
+  std::size_t next_event_ = 0;
+  std::int64_t period_ns_;
+  std::int64_t phase_ns_;
+  RunSummary acc_;     // running maxima and counts
+  double free_sq_ = 0.0;
+  std::int64_t solver_iterations_sum_ = 0;
+  std::unique_ptr<platform::TraceWriter> trace_writer_;  // real-bus --trace
+  std::unique_ptr<ViewOutput> view_;                     // --record-view, --view
+  bool last_torque_ = false;
+  std::int64_t startup_settle_periods_;  // kStartupSettle in periods (>= 1)
+  bool in_startup_ = false;       // the spawned tool is being pushed out (RunSummary::startup_steps)
+  double startup_min_ = 0.0;      // lowest tool penetration of the start-up so far (m)
+  double startup_window_max_ = 0.0;  // deepest tool penetration since that minimum (m)
+  int startup_obstacle_ = -1;     // obstacle of the deepest start-up contact (-1: none)
+  int startup_other_body_ = -1;   // ... or the other body
+  hal::FaultRecord first_fault_;  // the first latched fault of the run (kept across re-arms)
+  bool has_first_fault_ = false;
+  std::uint64_t emcys_traced_ = 0;  // EMCY messages received up to the last trace record
+  core::Vec3 last_feedback_force_ = core::Vec3::Zero();  // sent the period before (N)
+  DivergenceMonitor divergence_;  // judged after each period's measurements
+};
+
+/// Runs `scene` for options.duration_s (or the scene's duration) and judges it
+/// (RunSummary::exit_status, run_verdict()).
+/// Throws std::runtime_error if the trace cannot be written.
+RunSummary run_scene(const Scene& scene, const RunOptions& options);
+
+}  // namespace numen::sim

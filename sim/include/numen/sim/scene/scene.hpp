@@ -1,0 +1,113 @@
+#pragma once
+/// @file scene.hpp
+/// A scene file (TOML, see docs/scenes.md) loaded into everything a run needs:
+/// the compiled core::Model, the instrument's hal::DeviceConfig, the SimBus
+/// settings, the target trajectory (world frame, at the control period) and
+/// the tool-switching events. Load time only: allocates, throws InputError
+/// naming file, line, column and key.
+
+#include <array>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "numen/core/model.hpp"
+#include "numen/hal/device/admittance_device.hpp"
+#include "numen/hal/device/device_config.hpp"
+#include "numen/hal/transport/sim_bus.hpp"
+#include "numen/platform/device_binding.hpp"
+#include "numen/sim/device/admittance_hand.hpp"
+#include "numen/sim/input/trajectory.hpp"
+
+namespace numen::sim {
+
+/// Longest run a scene's `duration` or `numen run --duration` may ask for (s):
+/// 1e7 s, about 116 days of simulated or paced time. Beyond it the step count
+/// duration / dt no longer fits the run's arithmetic; no experiment needs it.
+inline constexpr double kMaxRunDuration = 1e7;
+
+/// At `time_s`, the device lets go of its body and holds `body` (-1: none).
+/// The paper's construction game picks which block the hand holds.
+struct AttachEvent {
+  double time_s = 0.0;
+  int body = -1;
+};
+
+/// An admittance device (scene `[device.admittance]`, with `coupling = "admittance"`; paper
+/// Fig. 2 note): the force sensor and csp RPDOs, and the emulated device's hand and drives.
+struct AdmittanceScene {
+  hal::AdmittanceConfig config;               ///< Validated against Scene::device.
+  AdmittanceHandSettings hand;  ///< The simulated hand (k_hand, c_hand, ...) and drive lag.
+};
+
+/// Triangles of one net's surface, as node indices local to the net (0 .. node_count − 1),
+/// counter-clockwise seen from outside: for display (the dynamics use the springs).
+using NetTriangles = std::vector<std::array<int, 3>>;
+
+/// A multirate god-object (scene `[multirate]`; docs/multirate.md, core::MultirateGodObject):
+/// the device loop at the scene's dt, the scene loop at scene_dt_s = ratio · dt.
+struct MultirateScene {
+  double scene_dt_s = 0.0;  ///< The scene loop's period (s).
+  int ratio = 1;            ///< N = scene_dt / dt ≥ 1: device periods per scene period.
+  double margin_m = 0.0;    ///< Proximity margin δ (m): the god-object's spheres grown by it.
+  /// The bodies the device holds in the run (the attached one, then the events' in order).
+  std::vector<int> tools;
+};
+
+/// Everything a run of a scene needs.
+struct Scene {
+  std::string file;          ///< Path of the scene file, as given.
+  std::string name;
+  std::string description;
+  core::Model model;         ///< Finalized.
+  hal::DeviceConfig device;  ///< Validated; control_period_s = model.dt.
+  /// Which bodies the device's links drive and which joints its axes impose
+  /// (bodies' `link` keys, joints' `prescribed`); the rigid binding (link 0 →
+  /// the attached body) when the scene binds nothing.
+  platform::DeviceBinding binding;
+  hal::SimBusSettings bus;   ///< The simulated bus between controller and instrument.
+  /// Bus time after SYNC at which the controller reads the encoder answers and
+  /// steps (s, in (2·latency, dt)): one SYNC round trip fits in the period.
+  double compute_phase_s = 0.0;
+  /// Target of the instrument's tool frame (trocar instrument: the tip) in the
+  /// world, sampled at model.dt.
+  Trajectory trajectory;
+  std::vector<AttachEvent> events;  ///< Sorted by time.
+  /// Per net (model.nets order): its surface triangles (the viewer draws them).
+  std::vector<NetTriangles> net_triangles;
+  /// Set exactly when model.coupling_mode is kAdmittance (the loader requires both or neither).
+  std::optional<AdmittanceScene> admittance;
+  /// Set by a [multirate] table: the god-object runs at dt against an intermediate contact
+  /// model the scene loop refreshes every scene_dt (the run harness, SceneRunner).
+  std::optional<MultirateScene> multirate;
+  double duration_s = 0.0;          ///< Default run length (s).
+  std::vector<std::string> warnings;  ///< Non-fatal remarks of the loader.
+  /// How the trocar point was placed (for the summary), empty if not a trocar.
+  std::string trocar_note;
+};
+
+/// Changes a caller may impose on a scene at load time (command line).
+struct SceneOverrides {
+  /// Replaces the scene's coupling (`numen run --coupling`): god-object, first-order or direct
+  /// for an impedance scene; an admittance scene's coupling cannot be changed, nor another
+  /// scene's made admittance (InputError, key "--coupling").
+  std::optional<core::CouplingMode> coupling;
+};
+
+/// Loads and compiles `path`. Throws InputError.
+Scene load_scene(const std::string& path, const SceneOverrides& overrides = {});
+
+/// The shipped default scene: share/numen/scenes/default.toml of the installed prefix the
+/// running executable belongs to, else sim/scenes/default.toml of the source tree
+/// (shipped_data_dir(), shipped_files.hpp).
+std::string default_scene_path();
+
+/// "god-object", "first-order", "direct" → mode; throws InputError (key
+/// "coupling") otherwise.
+core::CouplingMode parse_coupling_mode(const std::string& name);
+/// Name of a coupling mode as used in scene files.
+const char* to_string(core::CouplingMode mode) noexcept;
+/// Name of an integrator as used in scene files.
+const char* to_string(core::Integrator integrator) noexcept;
+
+}  // namespace numen::sim

@@ -1,0 +1,34 @@
+#pragma once
+/// @file view_scene.hpp
+/// The scene message of the state stream (docs/viewer.md, "Scene message"): the static world
+/// of a run, sent once as JSON before the frames (state_frame.hpp) that animate it. Everything
+/// a renderer needs to draw a frame: each body's spheres, the obstacles, the nets' triangles,
+/// the joints, the device and the frame layout. Setup code (allocates).
+
+#include <string>
+
+#include "numen/platform/state_frame.hpp"
+#include "numen/sim/scene/scene.hpp"
+
+namespace numen::sim {
+
+/// Version of the scene message's schema (its "version" key); bumped with the frame version.
+inline constexpr int kViewSceneVersion = 1;
+
+/// The frame layout of a run of `scene`: its bodies, net nodes and axes, and room for every
+/// contact the model can report (core::kMaxContacts rigid + the nets' node contacts).
+platform::StateFrameLayout view_frame_layout(const Scene& scene);
+
+/// The scene message as compact JSON (UTF-8): format, version, scene name and description,
+/// dt (s), display rate (Hz; at most 1/dt: the stream sends one frame per period at most),
+/// the frame layout, bodies (name, spheres [x, y, z, r] in the body frame, m), obstacles
+/// (name, type, position, orientation [x, y, z, w], and per type half_extents / radius /
+/// half_length / spheres in the world frame), nets (name, rigid body, node_begin, node_count,
+/// node radius, triangles as local node indices), joints (name, type, parent, child (−1:
+/// world), frame in the parent and in the child), the device (name, kind, protocol "managed" |
+/// "minimal" | "admittance", axis names) and the initially attached body. Numbers are the
+/// model's doubles.
+std::string view_scene_message(const Scene& scene, const platform::StateFrameLayout& layout,
+                               double display_rate_hz);
+
+}  // namespace numen::sim

@@ -1,0 +1,211 @@
+/// @file bus_spec.cpp
+/// Parsing, filters and opening of the real buses of `numen run` / `numen device`.
+
+#include "numen/sim/input/bus_spec.hpp"
+
+#include <poll.h>
+#include <time.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <charconv>
+#include <sstream>
+#include <stdexcept>
+
+#include "numen/hal/canopen/canopen.hpp"
+#include "numen/hal/canopen/emcy.hpp"
+#include "numen/hal/canopen/heartbeat.hpp"
+#include "numen/hal/canopen/nmt.hpp"
+#include "numen/hal/canopen/sdo.hpp"
+#include "numen/hal/features.hpp"
+#if NUMEN_WITH_SERIAL
+#include "numen/hal/transport/serial_bus.hpp"
+#endif
+#if NUMEN_WITH_SOCKETCAN
+#include "numen/hal/transport/socketcan_bus.hpp"
+#endif
+
+namespace numen::sim {
+namespace {
+
+void add_unique(std::vector<hal::CanFilter>& out, const hal::CanFilter& f) {
+  for (const hal::CanFilter& g : out)
+    if (g.id == f.id && g.mask == f.mask) return;
+  out.push_back(f);
+}
+
+void add_unique(std::vector<hal::CanFilter>& out, std::uint32_t cob_id) {
+  add_unique(out, hal::exact_standard_filter(cob_id));
+}
+
+bool starts_with(const std::string& s, const char* prefix) {
+  return s.rfind(prefix, 0) == 0;
+}
+
+}  // namespace
+
+BusSpec parse_bus_spec(const std::string& spec) {
+  BusSpec out;
+  auto bad = [&](const std::string& why) {
+    return std::invalid_argument("--bus '" + spec + "': " + why);
+  };
+  if (spec == "sim") return out;
+  if (starts_with(spec, "log:")) {
+    out.kind = BusKind::kLog;
+    out.target = spec.substr(4);
+  } else if (starts_with(spec, "can:")) {
+    out.kind = BusKind::kCan;
+    out.target = spec.substr(4);
+    if (out.target.size() >= 16) throw bad("interface name longer than 15 characters (IFNAMSIZ)");
+  } else if (starts_with(spec, "serial:")) {
+    out.kind = BusKind::kSerial;
+    std::string rest = spec.substr(7);
+    const std::size_t at = rest.rfind('@');
+    if (at != std::string::npos) {
+      const std::string b = rest.substr(at + 1);
+      std::uint32_t baud = 0;
+      const auto r = std::from_chars(b.data(), b.data() + b.size(), baud);
+      if (b.empty() || r.ec != std::errc() || r.ptr != b.data() + b.size())
+        throw bad("baud '" + b + "' is not a decimal number of bit/s");
+#if NUMEN_WITH_SERIAL  // else refused whole by missing_backend()
+      const auto bauds = hal::serial_supported_bauds();
+      if (std::find(bauds.begin(), bauds.end(), baud) == bauds.end())
+        throw bad("baud " + b + " is not a supported termios speed (9600 ... 4000000)");
+#endif
+      out.baud = baud;
+      rest.resize(at);
+    }
+    out.target = rest;
+  } else {
+    throw bad("expected sim, log:FILE, can:IFACE or serial:PATH[@BAUD]");
+  }
+  if (out.target.empty()) throw bad("nothing after the prefix");
+  return out;
+}
+
+std::vector<hal::CanFilter> controller_filters(const hal::DeviceConfig& config) {
+  std::vector<hal::CanFilter> out;
+  // An encoder's COB-ID passes whole: a remote request on it is a malformed sample and a
+  // 29-bit frame of its number an unknown id (InstrumentDevice::on_frame()), counted in the
+  // summary (frames rejected, unknown id) instead of vanishing in the filter.
+  for (const hal::AxisConfig& axis : config.axes) {
+    add_unique(out, hal::standard_id_filter(axis.encoder_cob_id));
+    add_unique(out, hal::extended_id_filter(axis.encoder_cob_id));
+  }
+  if (config.canopen.managed) {
+    for (const hal::CanopenAxisConfig& x : config.canopen.axes) {
+      if (x.drive_tpdo_cob_id != 0) add_unique(out, x.drive_tpdo_cob_id);
+      add_unique(out, hal::heartbeat_cob_id(x.node_id));
+      add_unique(out, hal::emcy_cob_id(x.node_id));
+      // SDO responses: the node's configuration from its DCF, the in-loop reads.
+      if (x.dcf || config.canopen.sdo_poll_period_ms > 0)
+        add_unique(out, hal::sdo_response_cob_id(x.node_id));
+    }
+  }
+  return out;
+}
+
+std::vector<hal::CanFilter> device_filters(const hal::DeviceConfig& config) {
+  std::vector<hal::CanFilter> out;
+  add_unique(out, hal::kSyncCobId);
+  for (const hal::AxisConfig& axis : config.axes)
+    if (axis.drive_cob_id != 0) add_unique(out, axis.drive_cob_id);
+  if (config.canopen.managed) {
+    add_unique(out, hal::kNmtCobId);
+    add_unique(out, hal::heartbeat_cob_id(config.canopen.controller_node_id));
+    for (const hal::CanopenAxisConfig& x : config.canopen.axes)  // each node's SDO server
+      add_unique(out, hal::sdo_request_cob_id(x.node_id));
+  }
+  return out;
+}
+
+std::string missing_backend(const BusSpec& spec) {
+  const std::string scheme = spec.kind == BusKind::kCan ? "can:" : "serial:";
+  if (spec.kind == BusKind::kCan && !hal::kWithSocketCan)
+    return "bus '" + scheme + spec.target + "' needs SocketCAN: this build has NUMEN_WITH_SOCKETCAN=OFF";
+  if (spec.kind == BusKind::kSerial && !hal::kWithSerial)
+    return "bus '" + scheme + spec.target + "' needs the serial backend: this build has NUMEN_WITH_SERIAL=OFF";
+  return {};
+}
+
+std::unique_ptr<hal::Bus> open_real_bus(const BusSpec& spec,
+                                        const std::vector<hal::CanFilter>& filters) {
+  if (const std::string missing = missing_backend(spec); !missing.empty())
+    throw std::invalid_argument(missing);
+#if NUMEN_WITH_SOCKETCAN
+  if (spec.kind == BusKind::kCan) {
+    hal::SocketCanOptions options;
+    options.fd_frames = false;  // the protocol uses classic frames; works on MTU 16 and 72
+    return std::make_unique<hal::SocketCanBus>(spec.target, filters, options);
+  }
+#endif
+#if NUMEN_WITH_SERIAL
+  if (spec.kind == BusKind::kSerial) {
+    return std::make_unique<hal::SerialBus>(spec.target, spec.baud, filters);
+  }
+#endif
+  (void)filters;
+  throw std::invalid_argument("open_real_bus: '" + spec.target + "' is not a can: or serial: bus");
+}
+
+bool wait_bus(hal::Bus& bus, std::int64_t timeout_ns) noexcept {
+  int fd = -1;
+#if NUMEN_WITH_SOCKETCAN
+  if (auto* c = dynamic_cast<hal::SocketCanBus*>(&bus)) fd = c->native_handle();
+#endif
+#if NUMEN_WITH_SERIAL
+  if (auto* s = dynamic_cast<hal::SerialBus*>(&bus)) fd = s->native_handle();
+#endif
+  (void)bus;
+  if (timeout_ns < 0) timeout_ns = 0;
+  const timespec ts{static_cast<time_t>(timeout_ns / 1'000'000'000),
+                    static_cast<long>(timeout_ns % 1'000'000'000)};
+  if (fd < 0) {
+    nanosleep(&ts, nullptr);
+    return true;
+  }
+  pollfd p{fd, POLLIN, 0};
+  const int r = ppoll(&p, 1, &ts, nullptr);
+  return r > 0;
+}
+
+std::string describe_transport_counters(const hal::Bus& bus) {
+  std::ostringstream os;
+#if NUMEN_WITH_SOCKETCAN
+  if (const auto* c = dynamic_cast<const hal::SocketCanBus*>(&bus)) {
+    const hal::SocketCanCounters& x = c->socketcan_counters();
+    os << "socketcan " << c->name() << ": error frames " << x.error_frames << ", bus off "
+       << x.bus_off << ", restarts " << x.restarts << ", link down " << x.link_down
+       << ", malformed " << x.malformed_rx << ", tx retries " << x.tx_retries << ", reopens "
+       << x.reopens << ", last errno " << x.last_errno;
+    return os.str();
+  }
+#endif
+#if NUMEN_WITH_SERIAL
+  if (const auto* s = dynamic_cast<const hal::SerialBus*>(&bus)) {
+    const hal::SerialCounters x = s->serial_counters();
+    os << "serial " << s->path() << " @" << s->baud() << ": frames " << x.frames
+       << ", rejected " << x.rejected() << " (torn " << x.torn_frames << ", cobs "
+       << x.cobs_errors << ", crc " << x.crc_errors << ", malformed " << x.malformed_frames
+       << "), garbage bytes " << x.garbage_bytes << ", resyncs " << x.resyncs << ", filtered "
+       << x.filtered;
+  }
+#endif
+  (void)bus;
+  return os.str();
+}
+
+std::uint64_t link_down_events(const hal::Bus& bus) noexcept {
+#if NUMEN_WITH_SOCKETCAN
+  if (const auto* c = dynamic_cast<const hal::SocketCanBus*>(&bus))
+    return c->socketcan_counters().link_down;
+#endif
+#if NUMEN_WITH_SERIAL
+  if (const auto* s = dynamic_cast<const hal::SerialBus*>(&bus))
+    return s->state() == hal::BusState::kBusOff ? 1 : 0;
+#endif
+  (void)bus;
+  return 0;
+}
+
+}  // namespace numen::sim

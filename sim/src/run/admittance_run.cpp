@@ -1,0 +1,289 @@
+/// @file admittance_run.cpp
+
+#include "numen/sim/run/admittance_run.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <utility>
+
+#include "numen/core/collision.hpp"
+#include "numen/hal/device/kinematics_factory.hpp"
+#include "numen/platform/monotonic_clock.hpp"
+#include "numen/platform/periodic_timer.hpp"
+#include "numen/sim/device/simulated_instrument.hpp"
+#include "numen/sim/input/input_error.hpp"
+#include "numen/sim/run/run.hpp"
+
+namespace numen::sim {
+namespace {
+
+const AdmittanceScene& admittance_of(const Scene& scene) {
+  if (!scene.admittance)
+    throw std::invalid_argument(scene.name +
+                                ": not an admittance scene (coupling = \"admittance\")");
+  return *scene.admittance;
+}
+
+/// Deepest contact (m) of `body` among data's contacts (0 if none); `count` (if given): how many.
+double deepest_of(const core::Data& data, int body, int* count = nullptr) noexcept {
+  double deepest = 0.0;
+  int n = 0;
+  for (int i = 0; i < data.num_contacts; ++i) {
+    const core::Contact& c = data.contacts[static_cast<std::size_t>(i)];
+    if (c.body_a == body || c.body_b == body) {
+      deepest = std::max(deepest, c.depth);
+      ++n;
+    }
+  }
+  if (count != nullptr) *count = n;
+  return deepest;
+}
+
+/// Axis values that put the device's controlled frame at the held body's initial pose.
+hal::AxisVector initial_axes(const Scene& scene) {
+  const auto kin = hal::make_kinematics(scene.device);
+  const int held = scene.model.initial_attached_body;
+  const core::Pose pose = held >= 0
+                              ? scene.model.bodies[static_cast<std::size_t>(held)].initial_pose
+                              : kin->forward(hal::AxisVector::Zero(kin->num_axes()));
+  return kin->inverse(pose, hal::AxisVector::Zero(kin->num_axes()));
+}
+
+hal::AdmittanceSettings device_settings(std::uint32_t overrun_limit) noexcept {
+  hal::AdmittanceSettings s;
+  s.overrun_limit = overrun_limit;
+  return s;
+}
+
+platform::ControlLoopSettings loop_settings(std::uint32_t overrun_limit) noexcept {
+  platform::ControlLoopSettings s;
+  s.supervise_overruns = overrun_limit > 0;
+  return s;
+}
+
+}  // namespace
+
+AdmittanceRunner::AdmittanceRunner(const Scene& scene, std::size_t trace_capacity,
+                                   std::uint32_t overrun_limit)
+    : scene_(&scene),
+      bus_(scene.bus),
+      hand_motion_(scene.device, admittance_of(scene).hand),
+      emulator_(scene.device, admittance_of(scene).config),
+      device_(scene.device, admittance_of(scene).config, bus_.controller(), initial_axes(scene),
+              device_settings(overrun_limit)),
+      data_(core::make_data(scene.model)),
+      ghost_(core::make_data(scene.model)),
+      loop_(scene.model, data_, device_, loop_settings(overrun_limit)),
+      multirate_(scene),
+      period_ns_(static_cast<std::int64_t>(std::llround(scene.model.dt * 1e9))),
+      phase_ns_(static_cast<std::int64_t>(std::llround(scene.compute_phase_s * 1e9))),
+      divergence_(scene.model, data_) {
+  emulator_.set_axis_values(device_.setpoints());
+  hand_motion_.set_axis_values(device_.setpoints());
+  emulator_.set_motion(&hand_motion_);
+  if (multirate_.enabled())
+    loop_.set_step_function(
+        [](void* self) noexcept {
+          auto& r = *static_cast<AdmittanceRunner*>(self);
+          r.multirate_.step(r.data_);
+        },
+        this);
+  describe_scene(scene, acc_);
+  acc_.admittance.enabled = true;
+  acc_.admittance.k_hand = scene.admittance->hand.k_hand;
+  acc_.managed = false;
+  acc_.startup = "admittance: SYNC, force TPDOs, csp RPDOs (no NMT start-up)";
+  view_axis_values_.assign(scene.device.axes.size(), 0.0);
+  trace_.reserve(trace_capacity);
+}
+
+void AdmittanceRunner::stream_view(const std::string& record_path,
+                                   std::vector<platform::StateFrameSink*> sinks, double rate_hz,
+                                   bool wait) {
+  view_ = std::make_unique<ViewOutput>(*scene_, record_path, std::move(sinks), rate_hz, wait);
+}
+
+void AdmittanceRunner::start_scene_thread(const platform::SceneThreadSettings& settings) {
+  multirate_.start_scene_thread(settings);
+}
+
+void AdmittanceRunner::finish() {
+  multirate_.stop();
+  if (view_) view_->finish();
+}
+
+void AdmittanceRunner::period(std::int64_t deadline_mono_ns, std::int64_t woke_mono_ns) noexcept {
+  const core::Model& model = scene_->model;
+  const std::int64_t t = k_ * period_ns_;
+  const double ts = static_cast<double>(t) * 1e-9;
+  // The hand: where the trajectory puts the controlled frame (through the device's constraint).
+  const hal::Kinematics& kin = device_.kinematics();
+  hand_ = kin.forward(instrument_axes(scene_->device, kin, scene_->trajectory.at(ts)));
+  hand_motion_.set_hand(hand_, scene_->trajectory.twist_at(ts));
+
+  bus_.set_time_ns(t);
+  loop_.begin_period(t, deadline_mono_ns, woke_mono_ns);
+  bus_.set_time_ns(t + scene_->bus.latency_ns);
+  emulator_.poll(bus_.device());
+  bus_.set_time_ns(t + phase_ns_);
+  const platform::PeriodReport& r = loop_.end_period(t + phase_ns_);
+  step_time_.record(r.step_ns);
+  ++k_;
+  multirate_.view(data_);  // a multirate run: both loops as one single-rate Data
+
+  // ---- measurements ----
+  RunSummary& s = acc_;
+  AdmittanceSummary& a = s.admittance;
+  const int held = data_.attached_body;
+  hand_pen_ = tool_pen_ = 0.0;
+  int tool_contacts = 0;
+  const core::Vec3 x_dev = emulator_.pose().position;
+  if (held >= 0) {
+    const auto h = static_cast<std::size_t>(held);
+    tool_pen_ = deepest_of(data_, held, &tool_contacts);
+    ghost_.bodies = data_.bodies;  // same size: no allocation
+    ghost_.bodies[h].position = hand_.position;
+    ghost_.bodies[h].orientation = hand_.orientation;
+    core::detect_contacts(model, ghost_);
+    hand_pen_ = deepest_of(ghost_, held);
+    const double e = (x_dev - data_.bodies[h].position).norm();
+    error_sq_ += e * e;
+    a.device_error_max_mm = std::max(a.device_error_max_mm, e * 1e3);
+  }
+  if (!r.sample_valid) {
+    ++s.invalid_periods;
+    ++a.sensor_rejected_periods;
+  }
+  const double sep = (hand_.position - x_dev).norm();
+  a.hand_separation_max_mm = std::max(a.hand_separation_max_mm, sep * 1e3);
+  a.final_hand_separation_mm = sep * 1e3;
+  a.final_measured_force_n = r.feedback.force.norm();
+  a.measured_force_max_n = std::max(a.measured_force_max_n, r.feedback.force.norm());
+  a.measured_torque_max_nm = std::max(a.measured_torque_max_nm, r.feedback.torque.norm());
+  s.tool_penetration_max_mm = std::max(s.tool_penetration_max_mm, tool_pen_ * 1e3);
+  s.target_penetration_max_mm = std::max(s.target_penetration_max_mm, hand_pen_ * 1e3);
+  s.any_penetration_max_mm = std::max(s.any_penetration_max_mm, data_.max_penetration * 1e3);
+  s.contacts_max = std::max(s.contacts_max, data_.num_contacts);
+  s.solver_iterations_max = std::max(s.solver_iterations_max, data_.solver_iterations);
+  solver_iterations_sum_ += data_.solver_iterations;
+  if (data_.solver_residual > s.solver_residual_max) s.solver_residual_max = data_.solver_residual;
+  if (data_.status & core::kSolverNotConverged) ++s.solver_not_converged_steps;
+  if (r.entered_safe_stop) {
+    if (s.faults == 0 && device_.first_fault() != nullptr) {
+      // the first latched safe state of the run (kept across re-arms)
+      s.first_fault = hal::to_string(device_.first_fault()->cause);
+      s.first_fault_time_s = static_cast<double>(t + phase_ns_) * 1e-9;
+      s.first_fault_period = k_ - 1;
+    }
+    ++s.faults;
+  }
+  // The frame and the trace record of an admittance period (docs/viewer.md, "Admittance
+  // runs"; docs/scenes.md): the target is the hand, the wrench the measured one that drove the
+  // god-object, no axis torque.
+  data_.target = hand_;  // not read by the admittance coupling (core/src/coupling.cpp)
+  view_report_ = r;
+  if (trace_.records().capacity() > 0)
+    trace_.push(make_trace_record(data_, held, tool_contacts, tool_pen_, hand_pen_, view_report_,
+                                  hal::AxisVector()));
+  if (view_)
+    view_->publish(data_, view_report_, view_axis_values_,
+                   {static_cast<std::uint64_t>(k_ - 1), tool_pen_, hand_pen_});
+  divergence_.observe(model, data_, k_ - 1, ts);
+}
+
+RunSummary AdmittanceRunner::summary() const {
+  RunSummary s = acc_;
+  if (view_) view_->summarize(s);
+  summarize_divergence(divergence_, scene_->model, s);
+  s.steps = k_;
+  s.sim_time_s = static_cast<double>(k_) * scene_->model.dt;
+  s.step_time_us = summarize_ns(step_time_);
+  s.solver_iterations_mean = k_ > 0 ? solver_iterations_sum_ / static_cast<double>(k_) : 0.0;
+  s.nonfinite_steps = data_.nonfinite_steps;
+  s.nan_detected = data_.nonfinite_steps > 0;
+  s.contact_overflow = data_.contact_overflow_steps;
+  for (auto dir :
+       {hal::SimBus::Direction::kControllerToDevice, hal::SimBus::Direction::kDeviceToController}) {
+    s.bus_frames_dropped += static_cast<std::int64_t>(bus_.link_counters(dir).dropped);
+    s.bus_frames_corrupted += static_cast<std::int64_t>(bus_.link_counters(dir).corrupted());
+  }
+  s.lifecycle = hal::to_string(device_.lifecycle());
+  s.zero_torque_periods = 0;
+  AdmittanceSummary& a = s.admittance;
+  a.device_error_rms_mm = k_ > 0 ? std::sqrt(error_sq_ / static_cast<double>(k_)) * 1e3 : 0.0;
+  a.sensor_frames = static_cast<std::int64_t>(device_.sensor().counters().frames);
+  a.csp_rpdos = static_cast<std::int64_t>(device_.counters().rpdos_written);
+  a.setpoints_clamped = static_cast<std::int64_t>(device_.counters().clamped_to_range);
+  a.setpoints_rate_limited = static_cast<std::int64_t>(device_.counters().rate_limited);
+  a.hold_periods = static_cast<std::int64_t>(device_.counters().hold_periods);
+  s.rejected_samples = a.sensor_rejected_periods;
+  multirate_.summarize(s);
+  return s;
+}
+
+RunSummary run_admittance_scene(const Scene& scene, const RunOptions& options) {
+  // The emulated device lives on the scene's SimBus: another bus, or a log of it, is refused.
+  if (options.bus.spec != "sim")
+    throw InputError("", 0, 0, "--bus",
+                     "'" + options.bus.spec + "': the admittance scene '" + scene.name +
+                         "' runs its emulated device on the simulated bus only (use --bus sim)");
+  if (!options.bus.record_path.empty())
+    throw InputError("", 0, 0, "--record",
+                     "the admittance scene '" + scene.name +
+                         "' does not record its simulated bus (use --trace or --record-view)");
+  const double duration = options.duration_s >= 0.0 ? options.duration_s : scene.duration_s;
+  const auto steps = static_cast<std::int64_t>(std::llround(duration / scene.model.dt));
+  // Overruns latch only where there is a deadline to miss (a paced run).
+  const std::uint32_t overrun_limit = options.realtime ? options.overrun_limit : 0;
+  AdmittanceRunner runner(scene,
+                          options.trace_path.empty() ? 0 : in_memory_trace_capacity(steps),
+                          overrun_limit);
+  if (const std::int64_t phase = compute_phase_override_ns(scene, options); phase >= 0)
+    runner.set_compute_phase_ns(phase);
+  // A multirate scene's scene thread is started before the real-time setup pins and promotes
+  // this thread (as run_impedance_scene does).
+  if (options.realtime) runner.start_scene_thread(options.scene_thread);
+  if (!options.record_view_path.empty() || !options.view_sinks.empty())
+    runner.stream_view(options.record_view_path, options.view_sinks, options.view_rate_hz,
+                       !options.realtime);
+  std::vector<std::string> rt_lines = apply_run_realtime(options.rt);
+  const std::int64_t wall0 = platform::monotonic_now_ns();
+  platform::PeriodicTimer timer(static_cast<std::int64_t>(std::llround(scene.model.dt * 1e9)),
+                                wall0);
+  ViewPacer view_pacer(scene.model.dt, options.realtime ? 0.0 : options.view_speed, wall0,
+                       options.stop);
+  RunLoopTally tally;
+  bool stopped = false;
+  for (std::int64_t k = 0; k < steps && !runner.diverged(); ++k) {
+    if (options.stop != nullptr && options.stop->load(std::memory_order_relaxed)) {
+      stopped = true;  // SIGINT / SIGTERM (docs/inputs.md, "Signals")
+      break;
+    }
+    // SIGUSR1 (docs/safety.md, "How the control loop uses it")
+    if (tally.take_rearm(options.rearm, k) &&
+        runner.loop().rearm() == platform::RearmResult::kAccepted)
+      tally.rearm_accepted();
+    view_pacer.wait();
+    std::int64_t deadline = -1, woke = -1;
+    if (options.realtime) {
+      const platform::Wakeup w = timer.wait_next();
+      deadline = w.deadline_ns;
+      woke = w.woke_ns;
+      tally.woke(w);
+    }
+    runner.period(deadline, woke);
+  }
+  runner.finish();
+  RunSummary s = runner.summary();
+  s.wall_time_s = static_cast<double>(platform::monotonic_now_ns() - wall0) * 1e-9;
+  tally.write(s);
+  s.overrun_limit = overrun_limit;
+  s.realtime_setup = std::move(rt_lines);
+  runner.multirate().describe_scene_thread(options.scene_thread, s.realtime_setup);
+  s.stopped = stopped;
+  if (!options.trace_path.empty()) write_in_memory_trace(runner.trace(), options.trace_path, s);
+  return s;
+}
+
+}  // namespace numen::sim

@@ -1,0 +1,388 @@
+/// @file run.cpp
+/// The fixed-step run of a scene (run.hpp): SceneRunner's wiring and period, the bus it talks
+/// to, the period loop of run_scene(). The period's measurements are in run_measurements.cpp,
+/// the summary in run_summary.cpp, the option checks in run_options.cpp.
+
+#include "numen/sim/run/run.hpp"
+
+#include <time.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <span>
+#include <stdexcept>
+
+#include "numen/core/step.hpp"
+#include "numen/platform/monotonic_clock.hpp"
+#include "numen/sim/input/input_error.hpp"
+#include "numen/sim/run/admittance_run.hpp"
+#include "numen/sim/run/run_verdict.hpp"
+#include "numen/sim/run/trace_columns.hpp"
+
+namespace numen::sim {
+
+void RunLoopTally::woke(const platform::Wakeup& w) noexcept {
+  overruns_ += w.overrun ? 1 : 0;
+  missed_ += w.missed_periods;
+  wakeup_.record(w.latency_ns());
+}
+
+bool RunLoopTally::take_rearm(std::atomic<bool>* request, std::int64_t k) noexcept {
+  if (request == nullptr || !request->exchange(false, std::memory_order_relaxed)) return false;
+  ++rearm_requests_;
+  if (rearm_first_ < 0) rearm_first_ = k;
+  return true;
+}
+
+void RunLoopTally::write(RunSummary& s) const {
+  s.realtime_overruns = overruns_;
+  s.realtime_missed_periods = missed_;
+  s.wakeup_latency_us = summarize_ns(wakeup_);
+  s.rearm_requests = rearm_requests_;
+  s.rearms_accepted = rearms_accepted_;
+  s.rearm_first_period = rearm_first_;
+}
+
+std::vector<std::string> apply_run_realtime(const platform::RealtimeSettings& rt) {
+  if (!platform::any_step_requested(rt)) return {};
+  return platform::describe(platform::apply_realtime(rt));  // throws only if strict
+}
+
+namespace {
+
+/// The LogBus of a "log:FILE" spec, or nullptr for any other bus; `stats` gets what the loader
+/// counted. The log is streamed from disk (memory does not grow with it); a paced run
+/// (`realtime`) never waits for the reader thread, an offline run does. A log that the loader
+/// refuses (located error) or whose records hold no frame the controller reads (another
+/// device's ids) is input rejected: InputError naming the file.
+std::unique_ptr<hal::LogBus> make_log_bus(const Scene& scene, const BusSpec& spec, bool realtime,
+                                          hal::CandumpLoadStats& stats) {
+  if (spec.kind != BusKind::kLog) return nullptr;
+  hal::LogBusSettings settings;
+  settings.filters = controller_filters(scene.device);
+  settings.received_only = true;
+  hal::LogBusStream stream;
+  stream.path = spec.target;
+  stream.wait_for_reader = !realtime;
+  std::unique_ptr<hal::LogBus> bus;
+  try {
+    bus = std::make_unique<hal::LogBus>(stream, settings, &stats);
+  } catch (const std::runtime_error& e) {
+    throw InputError("", 0, 0, "", e.what());  // the message is "file:line:column: what"
+  }
+  if (bus->matching_records() == 0) {
+    std::string ids;
+    for (const hal::AxisConfig& a : scene.device.axes) {
+      char buf[16];
+      std::snprintf(buf, sizeof buf, "%s0x%03X", ids.empty() ? "" : ", ", a.encoder_cob_id);
+      ids += buf;
+    }
+    throw InputError(spec.target, 0, 0, "",
+                     std::to_string(stats.records) + " records, none that the controller reads "
+                     "(received frames of the scene's encoder COB-IDs " + ids + "): nothing to replay");
+  }
+  return bus;
+}
+
+}  // namespace
+
+platform::ControlLoopSettings control_loop_settings(bool paced, std::uint32_t overrun_limit) noexcept {
+  platform::ControlLoopSettings s;
+  s.supervise_overruns = paced && overrun_limit > 0;
+  if (overrun_limit > 0) s.overrun_limit = overrun_limit;
+  return s;
+}
+
+hal::CandumpWriterSettings recorder_settings(bool paced) noexcept {
+  hal::CandumpWriterSettings s;
+  s.full_queue = paced ? hal::FullQueuePolicy::kDrop : hal::FullQueuePolicy::kWait;
+  return s;
+}
+
+SceneRunner::SceneRunner(const Scene& scene, std::size_t trace_capacity, const BusChoice& bus,
+                         bool realtime, std::uint32_t overrun_limit)
+    : scene_(&scene),
+      spec_(parse_bus_spec(bus.spec)),
+      bus_(scene.bus),
+      real_bus_(spec_.real() ? open_real_bus(spec_, controller_filters(scene.device)) : nullptr),
+      log_bus_(make_log_bus(scene, spec_, realtime, log_stats_)),
+      writer_(bus.record_path.empty()
+                  ? nullptr
+                  : std::make_unique<hal::CandumpWriter>(
+                        bus.record_path, recorder_settings(realtime || spec_.real()))),
+      recorder_(writer_ ? std::make_unique<hal::RecordingBus>(
+                              real_bus_  ? *real_bus_
+                              : log_bus_ ? static_cast<hal::Bus&>(*log_bus_)
+                                         : bus_.controller(),
+                              *writer_, spec_.kind == BusKind::kCan ? spec_.target : "sim0")
+                        : nullptr),
+      port_(recorder_   ? static_cast<hal::Bus*>(recorder_.get())
+            : real_bus_ ? real_bus_.get()
+            : log_bus_  ? static_cast<hal::Bus*>(log_bus_.get())
+                        : static_cast<hal::Bus*>(&bus_.controller())),
+      instrument_(scene.device, scene.trajectory),
+      device_(scene.device),
+      data_(core::make_data(scene.model)),
+      ghost_(core::make_data(scene.model)),
+      loop_(scene.model, data_, *port_, device_, scene.binding,
+            control_loop_settings(realtime || spec_.real(), overrun_limit)),
+      multirate_(scene),
+      period_ns_(static_cast<std::int64_t>(std::llround(scene.model.dt * 1e9))),
+      phase_ns_(static_cast<std::int64_t>(std::llround(scene.compute_phase_s * 1e9))),
+      startup_settle_periods_(
+          std::max<std::int64_t>(1, std::llround(kStartupSettle / scene.model.dt))),
+      divergence_(scene.model, data_) {
+  if (multirate_.enabled()) loop_.set_step_function(&SceneRunner::step_multirate, this);
+  trace_.reserve(trace_capacity);
+  std::vector<std::string> axis_names;
+  for (const hal::AxisConfig& a : scene.device.axes) axis_names.push_back(a.name);
+  trace_.set_axis_names(std::move(axis_names));
+  if (writer_) writer_->start();
+  acc_.bus = bus.spec;
+  describe_scene(scene, acc_);
+  acc_.managed = loop_.managed();
+  acc_.real_bus = spec_.real();
+}
+
+void SceneRunner::stream_trace(const std::string& path) {
+  std::vector<std::string> axis_names;
+  for (const hal::AxisConfig& a : scene_->device.axes) axis_names.push_back(a.name);
+  trace_writer_ = std::make_unique<platform::TraceWriter>(
+      path, trace_column_names(TraceKind::kStream, axis_names));
+  trace_writer_->start();
+}
+
+void SceneRunner::stream_view(const std::string& record_path,
+                              std::vector<platform::StateFrameSink*> sinks, double rate_hz,
+                              bool wait) {
+  view_ = std::make_unique<ViewOutput>(*scene_, record_path, std::move(sinks), rate_hz, wait);
+}
+
+void SceneRunner::period(std::int64_t deadline_mono_ns, std::int64_t woke_mono_ns) noexcept {
+  const std::int64_t t = k_ * period_ns_;
+  apply_due_events(t);
+  const platform::PeriodReport& report = exchange(t, deadline_mono_ns, woke_mono_ns);
+  ++k_;
+  // ---- measurements (outside the timed step) ----
+  multirate_.view(data_);  // a multirate run: both loops as one single-rate Data
+  count_period(report);
+  const PeriodContacts contacts = measure_contacts();
+  track_free_space(contacts);
+  track_startup(contacts);
+  accumulate_step_figures(report, contacts);
+  record(report, contacts);
+  if (divergence_.observe(scene_->model, data_, k_ - 1, static_cast<double>(t) * 1e-9))
+    loop_.shutdown();  // zero torque from the next write on; the run stops after this period
+  if (view_)
+    view_->publish(data_, report,
+                          std::span<const double>(loop_.impedance().sent_torques().torque.data(),
+                                                  static_cast<std::size_t>(loop_.impedance().sent_torques().torque.size())),
+                          {static_cast<std::uint64_t>(k_ - 1), contacts.tool_pen, contacts.target_pen});
+}
+
+void SceneRunner::step_multirate(void* runner) noexcept {
+  SceneRunner& r = *static_cast<SceneRunner*>(runner);
+  r.multirate_.step(r.data_);
+}
+
+void SceneRunner::start_scene_thread(const platform::SceneThreadSettings& settings) {
+  multirate_.start_scene_thread(settings);
+}
+
+void SceneRunner::apply_due_events(std::int64_t t_ns) noexcept {
+  while (next_event_ < scene_->events.size() &&
+         scene_->events[next_event_].time_s * 1e9 <= static_cast<double>(t_ns) + 0.5) {
+    core::set_attached_body(scene_->model, data_, scene_->events[next_event_].body);
+    ++next_event_;
+  }
+}
+
+const platform::PeriodReport& SceneRunner::exchange(std::int64_t t, std::int64_t deadline_mono_ns,
+                                                    std::int64_t woke_mono_ns) noexcept {
+  if (real_bus_) {  // bus time = CLOCK_MONOTONIC; the device answers in another process
+    const std::int64_t now = platform::monotonic_now_ns();
+    loop_.begin_period(now, deadline_mono_ns, woke_mono_ns);
+    const std::int64_t read_at = (deadline_mono_ns >= 0 ? deadline_mono_ns : now) + phase_ns_;
+    const timespec ts{static_cast<time_t>(read_at / 1'000'000'000),
+                      static_cast<long>(read_at % 1'000'000'000)};
+    while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
+    }
+    return loop_.end_period(platform::monotonic_now_ns());
+  }
+  if (log_bus_) {  // the recorded instrument's frames arrive at their logged times
+    log_bus_->set_time_ns(t);
+    loop_.begin_period(t, deadline_mono_ns, woke_mono_ns);
+    log_bus_->set_time_ns(t + phase_ns_);
+    return loop_.end_period(t + phase_ns_);
+  }
+  bus_.set_time_ns(t);
+  loop_.begin_period(t, deadline_mono_ns, woke_mono_ns);
+  bus_.set_time_ns(t + scene_->bus.latency_ns);
+  instrument_.poll(bus_.device(), t + scene_->bus.latency_ns);  // encoders latch at SYNC and answer
+  bus_.set_time_ns(t + phase_ns_);
+  return loop_.end_period(t + phase_ns_);
+}
+
+void SceneRunner::count_period(const platform::PeriodReport& report) noexcept {
+  RunSummary& s = acc_;
+  if (report.frames_read > 0) s.last_device_frame_period = k_ - 1;
+  if (last_torque_ && !report.torque_commanded) s.last_torque_stop_period = k_ - 1;
+  last_torque_ = report.torque_commanded;
+  if (port_->state() != hal::BusState::kOk || report.command_status == hal::IoStatus::kError)
+    ++s.bus_error_periods;
+  if (!report.sample_valid) ++s.invalid_periods;
+  if (!report.torque_commanded) ++s.zero_torque_periods;
+  if (report.entered_safe_stop && !has_first_fault_ && loop_.supervisor() != nullptr &&
+      loop_.supervisor()->first_fault() != nullptr) {
+    first_fault_ = *loop_.supervisor()->first_fault();
+    has_first_fault_ = true;
+  }
+}
+
+void SceneRunner::record(const platform::PeriodReport& report, const PeriodContacts& c) noexcept {
+  TraceRecord rec = make_trace_record(data_, data_.attached_body, c.tool_contacts, c.tool_pen,
+                                      c.target_pen, report, loop_.impedance().sent_torques().torque);
+  if (const hal::CanopenMaster* m = loop_.canopen()) {
+    const std::uint64_t received = m->emcy_log().counters().received;
+    if (received > emcys_traced_) {
+      rec.emcys = static_cast<int>(std::min<std::uint64_t>(received - emcys_traced_, 1'000'000));
+      if (const hal::EmcyRecord* e = m->emcy_log().newest()) {
+        rec.emcy_node = e->message.node_id;
+        rec.emcy_code = e->message.error_code;
+      }
+      emcys_traced_ = received;
+    }
+  }
+  if (trace_writer_) {
+    platform::TraceRecord r;
+    r.period = static_cast<std::uint64_t>(k_ - 1);
+    r.time_ns = report.deadline_ns;
+    r.flags = (report.sample_valid ? 1u : 0u) | (report.torque_commanded ? 2u : 0u) |
+              (report.overrun ? 4u : 0u);
+    trace_column_values(TraceKind::kStream, rec,
+                        static_cast<int>(scene_->device.axes.size()), std::span(r.values));
+    trace_writer_->push(r);
+  }
+  trace_.push(rec);
+}
+
+void SceneRunner::finish() {
+  multirate_.stop();
+  if (writer_) writer_->close();              // the log and the trace appear under their
+  if (trace_writer_) trace_writer_->close();  // paths, a failed close counted in the summary
+  if (view_) view_->finish();
+}
+
+void write_in_memory_trace(const Trace& trace, const std::string& path, RunSummary& s) {
+  const auto records = static_cast<std::int64_t>(trace.records().size());
+  s.trace_pushed = records;
+  s.trace_dropped = static_cast<std::int64_t>(trace.dropped());
+  try {
+    trace.write_csv(path);
+    s.trace_written = records;
+  } catch (const std::exception& e) {  // disk full, the file removed or made read-only meanwhile
+    s.trace_written = 0;
+    s.trace_io_errors = 1;
+    s.warnings.push_back(std::string("--trace: ") + e.what());
+  }
+}
+
+namespace {
+
+RunSummary run_impedance_scene(const Scene& scene, const RunOptions& options) {
+  const double duration = options.duration_s >= 0.0 ? options.duration_s : scene.duration_s;
+  const auto steps = static_cast<std::int64_t>(std::llround(duration / scene.model.dt));
+  const bool real = parse_bus_spec(options.bus.spec).real();
+  // A real bus streams its trace through the TraceWriter; the in-memory trace is for sim runs,
+  // refused before anything is allocated when it would not fit the budget.
+  const std::size_t trace_capacity =
+      options.trace_path.empty() || real ? 0 : in_memory_trace_capacity(steps);
+  SceneRunner runner(scene, trace_capacity, options.bus, options.realtime, options.overrun_limit);
+  if (const std::int64_t phase = compute_phase_override_ns(scene, options); phase >= 0)
+    runner.set_compute_phase_ns(phase);
+  // The writer threads and a multirate scene's scene thread are started before the real-time
+  // setup pins and promotes this thread.
+  if (real && !options.trace_path.empty()) runner.stream_trace(options.trace_path);
+  if (options.realtime || real) runner.start_scene_thread(options.scene_thread);
+  if (!options.record_view_path.empty() || !options.view_sinks.empty())
+    runner.stream_view(options.record_view_path, options.view_sinks, options.view_rate_hz,
+                       !(options.realtime || real));
+  std::vector<std::string> rt_lines = apply_run_realtime(options.rt);
+  const bool paced = options.realtime || real;
+  RunLoopTally tally;
+  const std::int64_t wall0 = platform::monotonic_now_ns();
+  platform::PeriodicTimer timer(static_cast<std::int64_t>(std::llround(scene.model.dt * 1e9)), wall0);
+  auto stop_requested = [&] {
+    return options.stop != nullptr && options.stop->load(std::memory_order_relaxed);
+  };
+  // A live viewer of an unpaced run: one period every dt / view_speed of wall time.
+  ViewPacer view_pacer(scene.model.dt, paced ? 0.0 : options.view_speed, wall0, options.stop);
+  auto one_period = [&] {
+    view_pacer.wait();
+    if (paced) {
+      const platform::Wakeup w = timer.wait_next();
+      tally.woke(w);
+      runner.period(w.deadline_ns, w.woke_ns);
+    } else {
+      runner.period();
+    }
+  };
+  bool stopped = false;
+  for (std::int64_t k = 0; k < steps && !runner.diverged(); ++k) {
+    if (stop_requested()) {
+      stopped = true;
+      break;
+    }
+    if (tally.take_rearm(options.rearm, k) &&
+        runner.loop().rearm() == platform::RearmResult::kAccepted)
+      tally.rearm_accepted();
+    one_period();
+  }
+  // Orderly end on a real bus: zero torque, drives disabled, a few periods for the
+  // controlwords to go out (the device keeps answering SYNCs meanwhile).
+  std::int64_t shutdown = 0;
+  if (real) {
+    runner.loop().shutdown();
+    for (; shutdown < options.shutdown_periods; ++shutdown) {
+      one_period();
+      if (runner.loop().drives_disabled() && shutdown >= 2) {
+        ++shutdown;
+        break;
+      }
+    }
+  }
+  runner.finish();
+  RunSummary s = runner.summary();
+  s.wall_time_s = static_cast<double>(platform::monotonic_now_ns() - wall0) * 1e-9;
+  tally.write(s);
+  // Only the managed stack's supervisor latches on overruns (MinimalDevice::supervise ignores
+  // them), and only in a paced run (an offline run has no deadlines): any other run reports
+  // the policy it has, count only.
+  s.overrun_limit = s.managed && paced ? options.overrun_limit : 0;
+  s.realtime_setup = std::move(rt_lines);
+  // The scene thread's own scheduling and CPUs (--scene-rt-priority, --scene-cpu), if asked.
+  runner.multirate().describe_scene_thread(options.scene_thread, s.realtime_setup);
+  s.stopped = stopped;
+  s.shutdown_periods = shutdown;
+  s.drives_disabled = runner.loop().drives_disabled();
+  if (!options.trace_path.empty() && !real)
+    write_in_memory_trace(runner.trace(), options.trace_path, s);
+  return s;
+}
+
+}  // namespace
+
+RunSummary run_scene(const Scene& scene, const RunOptions& options) {
+  check_run_options(scene, options);  // every refusal before any output is opened
+  RunSummary s = scene.admittance ? run_admittance_scene(scene, options)  // admittance_run.cpp
+                                  : run_impedance_scene(scene, options);
+  if (s.stopped && options.stop_signal != nullptr) s.stop_signal = options.stop_signal->load();
+  RunVerdict verdict = run_verdict(s);
+  s.exit_status = verdict.exit_status;
+  s.exit_reasons = std::move(verdict.reasons);
+  return s;
+}
+
+}  // namespace numen::sim

@@ -1,0 +1,214 @@
+/// @file run_measurements.cpp
+/// The measurements of SceneRunner's periods, outside the timed step: the tool's and the
+/// target's contacts, free-space tracking, the start-up push-out, and the running maxima and
+/// sums of the step (RunSummary).
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+
+#include "numen/core/collision.hpp"
+#include "numen/core/data.hpp"
+#include "numen/core/features.hpp"
+#include "numen/core/net_collision.hpp"
+#include "numen/sim/run/run.hpp"
+
+namespace numen::sim {
+namespace {
+
+/// Deepest contact (m) involving `body` among data's contacts; 0 if none.
+/// `count` receives their number, `deepest_index` the index of the deepest (unchanged if none).
+double deepest_contact_of(const core::Data& data, int body, int* count = nullptr,
+                          int* deepest_index = nullptr) {
+  double deepest = 0.0;
+  int n = 0;
+  for (int i = 0; i < data.num_contacts; ++i) {
+    const core::Contact& c = data.contacts[static_cast<std::size_t>(i)];
+    if (c.body_a == body || c.body_b == body) {
+      if (c.depth > deepest && deepest_index) *deepest_index = i;
+      deepest = std::max(deepest, c.depth);
+      ++n;
+    }
+  }
+  if (count) *count = n;
+  return deepest;
+}
+
+/// Deepest node contact (m) of the nets whose rigid component belongs to
+/// articulation `tree`; 0 if none. `count` receives their number.
+double deepest_node_contact_of_tree(const core::Model& model, const core::Data& data, int tree,
+                                    int* count) {
+  double deepest = 0.0;
+  int n = 0;
+  for (int i = 0; i < data.num_node_contacts; ++i) {
+    const core::NodeContact& c = data.node_contacts[static_cast<std::size_t>(i)];
+    const int net = model.node_net[static_cast<std::size_t>(c.node)];
+    const int body = model.nets[static_cast<std::size_t>(net)].body;
+    if (model.articulation.body_tree[static_cast<std::size_t>(body)] != tree) continue;
+    deepest = std::max(deepest, c.depth);
+    ++n;
+  }
+  if (count) *count = n;
+  return deepest;
+}
+
+/// Puts the nodes of the nets whose rigid component belongs to articulation
+/// `tree` at their rest positions on that body's pose in `ghost` (the
+/// undeformed tool where the hand is).
+void place_tool_nets_at_rest(const core::Model& model, core::Data& ghost, int tree) {
+  for (const core::NetModel& net : model.nets) {
+    if (model.articulation.body_tree[static_cast<std::size_t>(net.body)] != tree) continue;
+    const core::BodyState& b = ghost.bodies[static_cast<std::size_t>(net.body)];
+    for (int i = net.node_begin; i < net.node_begin + net.node_count; ++i) {
+      const auto n = static_cast<std::size_t>(i);
+      ghost.nodes[n].position = b.position + b.orientation * model.node_rest[n];
+      ghost.nodes[n].velocity.setZero();
+    }
+  }
+}
+
+}  // namespace
+
+SceneRunner::PeriodContacts SceneRunner::measure_contacts() noexcept {
+  const core::Model& model = scene_->model;
+  PeriodContacts c;
+  const int held = data_.attached_body;
+  if (held < 0) return c;
+  c.held = true;
+  const auto h = static_cast<std::size_t>(held);
+  // The tool: every body of the held body's articulation (the held body
+  // alone for a rigid tool). The target: the same bodies placed where the
+  // device puts them (held body at data.target, the others at their own
+  // targets, Eq. 6).
+  const int tree = model.articulation.body_tree[h];
+  ghost_.bodies = data_.bodies;  // same size: no allocation
+  ghost_.bodies[h].position = data_.target.position;
+  ghost_.bodies[h].orientation = data_.target.orientation;
+  for (std::size_t b = 0; b < data_.bodies.size(); ++b) {
+    const core::BodyTarget& bt = data_.body_targets[b];
+    if (b == h || !bt.enabled) continue;
+    ghost_.bodies[b].position = bt.pose.position;
+    ghost_.bodies[b].orientation = bt.pose.orientation;
+  }
+  core::detect_contacts(model, ghost_);
+  for (int b = 0; b < model.num_bodies(); ++b) {
+    if (model.articulation.body_tree[static_cast<std::size_t>(b)] != tree) continue;
+    int n = 0, m = 0, deepest = -1;
+    const double pen = deepest_contact_of(data_, b, &n, &deepest);
+    if (pen > c.tool_pen) {
+      c.deepest_tool_contact = deepest;
+      c.deepest_tool_body = b;
+    }
+    c.tool_pen = std::max(c.tool_pen, pen);
+    c.tool_contacts += n;
+    c.target_pen = std::max(c.target_pen, deepest_contact_of(ghost_, b, &m));
+    c.target_contacts += m;
+  }
+  if (model.num_nets() > 0) {
+    // The tool's nets: as deformed (god-object), in their rest shape on the
+    // target poses (the hand).
+    ghost_.nodes = data_.nodes;  // same size: no allocation
+    place_tool_nets_at_rest(model, ghost_, tree);
+    if constexpr (core::kWithDeformable) core::detect_node_contacts(model, ghost_);
+    int n = 0;
+    c.tool_pen = std::max(c.tool_pen, deepest_node_contact_of_tree(model, data_, tree, &n));
+    c.tool_contacts += n;
+    int m = 0;
+    c.target_pen = std::max(c.target_pen, deepest_node_contact_of_tree(model, ghost_, tree, &m));
+    c.target_contacts += m;
+  }
+  return c;
+}
+
+void SceneRunner::track_free_space(const PeriodContacts& c) noexcept {
+  // Free space: neither the tool nor the hand touches anything. A step where the tool has
+  // come off a surface while the hand is still inside the obstacle is not free-space
+  // tracking: the error there is the god-object's constraint, not its lag.
+  if (!c.held || c.tool_contacts != 0 || c.target_contacts != 0) return;
+  const double e =
+      (data_.bodies[static_cast<std::size_t>(data_.attached_body)].position - data_.target.position)
+          .norm();
+  free_sq_ += e * e;
+  acc_.tracking_error_free_max_mm = std::max(acc_.tracking_error_free_max_mm, e * 1e3);
+  ++acc_.free_steps;
+}
+
+void SceneRunner::track_startup(const PeriodContacts& c) noexcept {
+  RunSummary& s = acc_;
+  // Start-up (RunSummary): the tool was spawned where the hand is, inside an obstacle, and the
+  // contact forces push it out. It runs from the first period through the last period that
+  // lowers the tool's penetration to a new minimum before kStartupSettle without one (or a
+  // period without contact); the periods after that minimum count as the god-object's again.
+  if (k_ == 1 && c.tool_contacts > 0) {
+    in_startup_ = true;
+    startup_min_ = c.tool_pen;
+    startup_window_max_ = 0.0;
+    s.startup_steps = 1;
+    s.startup_tool_penetration_mm = c.tool_pen * 1e3;
+    if (c.deepest_tool_contact >= 0) {
+      const core::Contact& d = data_.contacts[static_cast<std::size_t>(c.deepest_tool_contact)];
+      startup_obstacle_ = d.obstacle;
+      startup_other_body_ = d.body_a == c.deepest_tool_body ? d.body_b : d.body_a;
+    }
+  } else if (in_startup_) {
+    if (c.tool_contacts > 0 && c.tool_pen < startup_min_) {  // still being pushed out
+      startup_min_ = c.tool_pen;
+      startup_window_max_ = 0.0;
+      s.startup_steps = k_;
+    } else {
+      startup_window_max_ = std::max(startup_window_max_, c.tool_pen);
+      if (c.tool_contacts == 0 || k_ - s.startup_steps >= startup_settle_periods_) {
+        in_startup_ = false;
+        s.tool_penetration_max_mm = std::max(s.tool_penetration_max_mm, startup_window_max_ * 1e3);
+      }
+    }
+  }
+  if (!in_startup_)
+    s.tool_penetration_max_mm = std::max(s.tool_penetration_max_mm, c.tool_pen * 1e3);
+}
+
+void SceneRunner::accumulate_step_figures(const platform::PeriodReport& report,
+                                          const PeriodContacts& c) noexcept {
+  const core::Model& model = scene_->model;
+  RunSummary& s = acc_;
+  s.joint_drift_max_mm = std::max(s.joint_drift_max_mm, data_.max_joint_drift * 1e3);
+  s.joint_angle_drift_max_mrad =
+      std::max(s.joint_angle_drift_max_mrad, data_.max_joint_angle_drift * 1e3);
+  s.target_penetration_max_mm = std::max(s.target_penetration_max_mm, c.target_pen * 1e3);
+  s.any_penetration_max_mm = std::max(s.any_penetration_max_mm, data_.max_penetration * 1e3);
+  // What the drives were sent (after the gate and clamp of hal::ImpedanceDevice::write()).
+  s.feedback_force_max_n = std::max(s.feedback_force_max_n, report.feedback.force.norm());
+  const double jump = (report.feedback.force - last_feedback_force_).norm();
+  last_feedback_force_ = report.feedback.force;
+  s.feedback_force_jump_max_n = std::max(s.feedback_force_jump_max_n, jump);
+  if (multirate_.enabled()) {
+    double& at = multirate_.took_model() ? s.multirate.model_force_jump_max_n
+                                          : s.multirate.other_force_jump_max_n;
+    at = std::max(at, jump);
+  }
+  s.feedback_torque_max_nm = std::max(s.feedback_torque_max_nm, report.feedback.torque.norm());
+  const hal::AxisVector& tau = loop_.impedance().sent_torques().torque;
+  if (tau.size() > 0) s.axis_torque_max = std::max(s.axis_torque_max, tau.cwiseAbs().maxCoeff());
+  const int held = data_.attached_body;
+  const int held_tree = held >= 0 ? model.articulation.body_tree[static_cast<std::size_t>(held)] : -1;
+  for (int b = 0; b < model.num_bodies(); ++b)
+    if (model.articulation.body_tree[static_cast<std::size_t>(b)] != held_tree)
+      s.free_body_speed_max_mps = std::max(
+          s.free_body_speed_max_mps, data_.bodies[static_cast<std::size_t>(b)].linear_velocity.norm());
+  s.contacts_max = std::max(s.contacts_max, data_.num_contacts);
+  s.solver_iterations_max = std::max(s.solver_iterations_max, data_.solver_iterations);
+  solver_iterations_sum_ += data_.solver_iterations;
+  // A NaN residual (a rejected solve) is kept, not dropped by std::max.
+  if (std::isnan(data_.solver_residual) || data_.solver_residual > s.solver_residual_max)
+    if (!std::isnan(s.solver_residual_max)) s.solver_residual_max = data_.solver_residual;
+  if (data_.status & core::kSolverNotConverged) ++s.solver_not_converged_steps;
+  s.node_contacts_max = std::max(s.node_contacts_max, data_.num_node_contacts);
+  for (const core::NetOutput& net : data_.nets) {
+    s.net_penetration_max_mm = std::max(s.net_penetration_max_mm, net.max_penetration * 1e3);
+    s.net_tie_stretch_max_mm = std::max(s.net_tie_stretch_max_mm, net.max_tie_stretch * 1e3);
+    s.net_strain_max = std::max(s.net_strain_max, net.max_strain);
+    s.net_node_speed_max_mps = std::max(s.net_node_speed_max_mps, net.max_node_speed);
+  }
+}
+
+}  // namespace numen::sim

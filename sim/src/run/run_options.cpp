@@ -1,0 +1,130 @@
+/// @file run_options.cpp
+/// The checks of a run's options (run_options.hpp): what a run would not apply, or could not
+/// write, is refused before anything is opened.
+
+#include "numen/sim/run/run_options.hpp"
+
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <string>
+
+#include "numen/sim/input/bus_spec.hpp"
+#include "numen/sim/input/input_error.hpp"
+#include "numen/sim/run/trace.hpp"
+#include "numen/sim/scene/scene.hpp"
+
+namespace numen::sim {
+
+std::size_t in_memory_trace_capacity(std::int64_t periods) {
+  // One record per period kept until the run ends: a long --duration with --trace.
+  const double bytes = static_cast<double>(periods) * static_cast<double>(sizeof(TraceRecord));
+  if (bytes > static_cast<double>(kMaxInMemoryTraceBytes))
+    throw InputError("", 0, 0, "--trace",
+                     "a simulated run keeps one trace record (" +
+                         std::to_string(sizeof(TraceRecord)) + " bytes) per period until it "
+                         "ends: " + std::to_string(periods) + " periods need " +
+                         std::to_string(static_cast<long long>(bytes / (1 << 20))) +
+                         " MiB, more than the " + std::to_string(kMaxInMemoryTraceBytes >> 20) +
+                         " MiB a trace may take; shorten --duration");
+  return static_cast<std::size_t>(std::max<std::int64_t>(periods, 0));
+}
+
+namespace {
+
+/// Refuses options that this run would not apply (InputError naming the option): nothing a
+/// user asks for is dropped without a word.
+void check_option_values(const Scene& scene, const RunOptions& options) {
+  const double duration = options.duration_s >= 0.0 ? options.duration_s : scene.duration_s;
+  if (std::llround(duration / scene.model.dt) < 1)
+    throw InputError("", 0, 0, "--duration",
+                     format_input_number(duration) + " s is less than half a period (dt = " +
+                         format_input_number(scene.model.dt) + " s): the run would have none");
+  // An admittance scene's real bus is refused by its runner (run_admittance_scene).
+  const bool paced =
+      options.realtime || (!scene.admittance && parse_bus_spec(options.bus.spec).real());
+  if (options.view_speed > 0.0 && paced)
+    throw InputError("", 0, 0, "--speed",
+                     "paces an offline run; this run is paced at real time already (--realtime "
+                     "or a real bus)");
+  compute_phase_override_ns(scene, options);  // --phase at or above dt
+  // A simulated run's trace is kept in memory until it ends (a real bus streams it).
+  if (!options.trace_path.empty() && (scene.admittance || !parse_bus_spec(options.bus.spec).real()))
+    in_memory_trace_capacity(std::llround(duration / scene.model.dt));
+  const platform::SceneThreadSettings& st = options.scene_thread;
+  if (st.fifo_priority == 0 && st.cpu_affinity.empty()) return;
+  const std::string key = st.fifo_priority != 0 ? "--scene-rt-priority" : "--scene-cpu";
+  if (!scene.multirate)
+    throw InputError("", 0, 0, key,
+                     "scene \"" + scene.name + "\" has no [multirate]: there is no scene thread");
+  if (!paced)
+    throw InputError("", 0, 0, key,
+                     "an offline run steps both loops on one thread: the scene thread runs in "
+                     "paced runs only (--realtime or a real bus)");
+  if (st.fifo_priority != 0 && st.fifo_priority >= options.rt.fifo_priority)
+    throw InputError("", 0, 0, "--scene-rt-priority",
+                     std::to_string(st.fifo_priority) + " must be below the loop thread's " +
+                         (options.rt.fifo_priority == 0
+                              ? std::string("(--rt-priority not given: not real-time)")
+                              : "--rt-priority " + std::to_string(options.rt.fifo_priority)) +
+                         ": the scene thread would pre-empt the device loop");
+}
+
+/// Refuses an output path (--trace, --record, --record-view) that cannot be written before the
+/// run (InputError, key `key`), so that a long run does not end without its file, and the
+/// error names the option. Touches nothing: an existing file keeps its bytes (the writers
+/// replace it only when the run closes it, hal::LineFile), a missing one is not created.
+void check_output_path(const std::string& path, const std::string& key) {
+  auto refuse = [&](const std::string& why) {
+    throw InputError("", 0, 0, key, path + ": cannot be opened for writing (" + why + ")");
+  };
+  struct stat st {};
+  if (::stat(path.c_str(), &st) == 0) {
+    if (S_ISDIR(st.st_mode)) refuse(std::strerror(EISDIR));
+    if (::access(path.c_str(), W_OK) != 0) refuse(std::strerror(errno));
+    return;
+  }
+  if (errno != ENOENT) refuse(std::strerror(errno));
+  const std::filesystem::path parent = std::filesystem::path(path).parent_path();
+  const std::string dir = parent.empty() ? "." : parent.string();
+  if (::stat(dir.c_str(), &st) != 0) refuse(std::strerror(errno));
+  if (!S_ISDIR(st.st_mode)) refuse(dir + " is not a directory");
+  if (::access(dir.c_str(), W_OK | X_OK) != 0) refuse(dir + ": " + std::strerror(errno));
+}
+
+}  // namespace
+
+std::int64_t compute_phase_override_ns(const Scene& scene, const RunOptions& options) {
+  if (options.compute_phase_s < 0.0) return -1;
+  if (!(options.compute_phase_s < scene.model.dt))
+    throw InputError("", 0, 0, "--phase",
+                     format_input_number(options.compute_phase_s) +
+                         " s must be below the period dt = " + format_input_number(scene.model.dt) +
+                         " s");
+  return static_cast<std::int64_t>(std::llround(options.compute_phase_s * 1e9));
+}
+
+void check_run_options(const Scene& scene, const RunOptions& options) {
+  if (!(options.view_rate_hz > 0.0))
+    throw InputError("", 0, 0, "--view-rate", "must be > 0 frames per second (got " +
+                                                  format_input_number(options.view_rate_hz) + ")");
+  if (!(options.view_speed >= 0.0) || !std::isfinite(options.view_speed))
+    throw InputError("", 0, 0, "--speed", "must be a finite factor >= 0 (got " +
+                                              format_input_number(options.view_speed) + ")");
+  // Every refusal comes before any output is opened, and the output checks touch nothing: a
+  // refused run leaves every file as it was (docs/inputs.md, "Outputs").
+  check_option_values(scene, options);
+  if (!options.trace_path.empty()) check_output_path(options.trace_path, "--trace");
+  // (an admittance run refuses --record: run_admittance_scene)
+  if (!options.bus.record_path.empty() && !scene.admittance)
+    check_output_path(options.bus.record_path, "--record");
+  if (!options.record_view_path.empty())
+    check_output_path(options.record_view_path, "--record-view");
+}
+
+}  // namespace numen::sim

@@ -1,0 +1,222 @@
+/// @file run_summary.cpp
+/// A run's summary built from what its runner measured: SceneRunner::summary() and the
+/// summarize helpers both runners share (summarize_ns, summarize_divergence, describe_scene).
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <iomanip>
+#include <sstream>
+#include <string>
+
+#include "numen/hal/canopen/emcy.hpp"
+#include "numen/hal/canopen/heartbeat.hpp"
+#include "numen/sim/run/run.hpp"
+#include "numen/sim/run/run_summary.hpp"
+
+namespace numen::sim {
+
+DurationSummary summarize_ns(const platform::LatencyHistogram& h) {
+  DurationSummary d;
+  d.median = static_cast<double>(h.quantile(0.5)) * 1e-3;
+  d.p99 = static_cast<double>(h.quantile(0.99)) * 1e-3;
+  d.p999 = static_cast<double>(h.quantile(0.999)) * 1e-3;
+  d.max = static_cast<double>(h.max()) * 1e-3;
+  d.mean = h.mean() * 1e-3;
+  return d;
+}
+
+void summarize_divergence(const DivergenceMonitor& monitor, const core::Model& model,
+                          RunSummary& s) {
+  DivergenceSummary& d = s.divergence;
+  d.speed_ratio_max = monitor.speed_ratio_max();
+  d.stretch_ratio_max = monitor.stretch_ratio_max();
+  d.energy_ratio_max = monitor.energy_ratio_max();
+  d.scene_size_m = monitor.scene_size_m();
+  d.speed_limit_mps = monitor.speed_limit_mps();
+  const Divergence& v = monitor.divergence();
+  if (v.cause == nullptr) return;
+  d.latched = true;
+  d.cause = v.cause;
+  if (v.net >= 0)
+    d.subject = "net \"" + model.nets[static_cast<std::size_t>(v.net)].name + "\"";
+  else if (v.body >= 0)
+    d.subject = "body \"" + model.bodies[static_cast<std::size_t>(v.body)].name + "\"";
+  d.value = v.value;
+  d.limit = v.limit;
+  d.time_s = v.time_s;
+  d.period = v.period;
+}
+
+void describe_scene(const Scene& scene, RunSummary& s) {
+  s.scene = scene.name;
+  s.coupling = to_string(scene.model.coupling_mode);
+  s.integrator = to_string(scene.model.integrator);
+  s.dt_s = scene.model.dt;
+  s.warnings = scene.warnings;
+  s.trocar_note = scene.trocar_note;
+  s.num_bodies = scene.model.num_bodies();
+  s.num_joints = scene.model.num_joints();
+  s.num_nets = scene.model.num_nets();
+  s.num_nodes = scene.model.num_nodes();
+  if (scene.multirate) {
+    s.multirate.enabled = true;
+    s.multirate.scene_dt_s = scene.multirate->scene_dt_s;
+    s.multirate.ratio = scene.multirate->ratio;
+    s.multirate.margin_mm = scene.multirate->margin_m * 1e3;
+  }
+}
+
+RunSummary SceneRunner::summary() const {
+  RunSummary s = acc_;
+  s.steps = k_;
+  s.sim_time_s = static_cast<double>(k_) * scene_->model.dt;
+  s.step_time_us = summarize_ns(loop_.step_time());
+  s.solver_iterations_mean =
+      k_ > 0 ? static_cast<double>(solver_iterations_sum_) / static_cast<double>(k_) : 0.0;
+  s.tracking_error_free_rms_mm = s.free_steps ? std::sqrt(free_sq_ / static_cast<double>(s.free_steps)) * 1e3 : 0.0;
+  s.soft_start_s = scene_->device.soft_start_s;
+  s.soft_start_ramps = static_cast<std::int64_t>(loop_.impedance().torque_counters().soft_starts);
+  // A run that ends inside the start-up: the periods after its last minimum are the god-object's.
+  if (in_startup_)
+    s.tool_penetration_max_mm = std::max(s.tool_penetration_max_mm, startup_window_max_ * 1e3);
+  if (s.startup_steps > 0) {
+    const core::Model& model = scene_->model;
+    std::string what = "an obstacle";
+    if (startup_obstacle_ >= 0)
+      what = "obstacle '" + model.obstacles[static_cast<std::size_t>(startup_obstacle_)].name + "'";
+    else if (startup_other_body_ >= 0)
+      what = "body '" + model.bodies[static_cast<std::size_t>(startup_other_body_)].name + "'";
+    std::ostringstream os;
+    os << std::fixed << std::setprecision(1) << "the tool started inside " << what << ", "
+       << s.startup_tool_penetration_mm << " mm deep (the god-object is spawned where the hand "
+       << "is): the " << s.startup_steps << " start-up steps (" << std::setprecision(3)
+       << static_cast<double>(s.startup_steps) * model.dt
+       << " s) that pushed it out are reported apart, not in the god-object penetration max";
+    s.warnings.push_back(os.str());
+  }
+  s.rejected_samples = static_cast<std::int64_t>(device_.counters().values_rejected);
+  s.contact_overflow = data_.contact_overflow_steps;
+  s.contact_clamped_steps = data_.contact_clamped_steps;
+  s.nonfinite_steps = data_.nonfinite_steps;
+  multirate_.summarize(s);
+  s.nan_detected = data_.nonfinite_steps > 0;
+  for (const auto& b : data_.bodies)
+    s.nan_detected = s.nan_detected || !b.position.allFinite() || !b.orientation.coeffs().allFinite();
+  for (const auto& n : data_.nodes)
+    s.nan_detected = s.nan_detected || !n.position.allFinite() || !n.velocity.allFinite();
+  for (auto dir : {hal::SimBus::Direction::kControllerToDevice, hal::SimBus::Direction::kDeviceToController}) {
+    s.bus_frames_dropped += static_cast<std::int64_t>(bus_.link_counters(dir).dropped);
+    s.bus_frames_corrupted += static_cast<std::int64_t>(bus_.link_counters(dir).corrupted());
+  }
+  if (real_bus_) {
+    s.port = port_->counters();
+    s.transport = describe_transport_counters(*real_bus_);
+    s.bus_state = hal::to_string(port_->state());
+    s.loop = loop_.statistics().summary();
+  }
+  s.read_errors = static_cast<std::int64_t>(loop_.counters().read_errors);
+  s.sync_write_failures = static_cast<std::int64_t>(loop_.counters().sync_write_failures);
+  s.command_failures = static_cast<std::int64_t>(loop_.counters().command_failures);
+  {
+    const hal::DeviceCounters& d = device_.counters();
+    s.frames_unknown_id = static_cast<std::int64_t>(d.frames_unknown_id);
+    s.error_frames = static_cast<std::int64_t>(d.frames_error);
+    s.frames_rejected = static_cast<std::int64_t>(d.frames_wrong_length + d.frames_not_data);
+    s.encoder_frames_fd = static_cast<std::int64_t>(d.frames_fd);
+    s.encoder_frames_remote = static_cast<std::int64_t>(d.frames_remote);
+    s.encoder_frames_wrong_length = static_cast<std::int64_t>(d.frames_wrong_length);
+    s.values_out_of_range = static_cast<std::int64_t>(d.rejected_out_of_range);
+    s.values_jump = static_cast<std::int64_t>(d.rejected_jump);
+    if (const hal::CanopenMaster* m = loop_.canopen())
+      s.frames_rejected += static_cast<std::int64_t>(m->counters().drive_tpdos_malformed);
+  }
+  if (trace_writer_) {
+    const platform::TraceWriterCounters c = trace_writer_->counters();
+    s.trace_pushed = static_cast<std::int64_t>(c.queued);
+    s.trace_dropped = static_cast<std::int64_t>(c.dropped);
+    s.trace_written = static_cast<std::int64_t>(c.written);
+    s.trace_io_errors = static_cast<std::int64_t>(c.io_errors);
+  }
+  if (view_) view_->summarize(s);
+  summarize_divergence(divergence_, scene_->model, s);
+  if (log_bus_) {
+    s.bus_frames_replayed = static_cast<std::int64_t>(log_bus_->log_counters().replayed);
+    s.bus_log_records = static_cast<std::int64_t>(log_stats_.records);
+    s.bus_log_lost_frames = static_cast<std::int64_t>(log_stats_.dropped_frames);
+    s.bus_log_out_of_order = static_cast<std::int64_t>(log_stats_.out_of_order);
+    if (log_stats_.dropped_frames > 0)
+      s.warnings.push_back("the replayed log says its recording lost " +
+                           std::to_string(log_stats_.dropped_frames) + " frames (" +
+                           std::to_string(log_stats_.drop_notes) + " DROPCOUNT notes)");
+    // An offline run waits for the reader (nothing to say); a paced one does not.
+    const std::uint64_t behind = log_bus_->log_counters().reader_behind;
+    if (!log_bus_->waits_for_reader() && behind > 0)
+      s.warnings.push_back("the log's reader thread fell behind the paced replay " +
+                           std::to_string(behind) + " times: frames due then came late");
+    if (const std::string error = log_bus_->reader_error(); !error.empty())
+      s.warnings.push_back("the replay ended early: " + error);
+  }
+  if (recorder_) {
+    s.bus_frames_recorded = static_cast<std::int64_t>(recorder_->recording_counters().recorded);
+    s.bus_record_dropped = static_cast<std::int64_t>(recorder_->recording_counters().dropped);
+    const hal::CandumpWriterCounters w = writer_->counters();
+    s.bus_record_written = static_cast<std::int64_t>(w.written);
+    s.bus_record_io_errors = static_cast<std::int64_t>(w.io_errors);
+    s.bus_record_format_errors = static_cast<std::int64_t>(w.format_errors);
+  }
+  if (const hal::CanopenMaster* m = loop_.canopen()) {
+    const hal::SafetySupervisor& sup = *loop_.supervisor();
+    const hal::StartupReport& st = m->startup();
+    s.startup = hal::to_string(st.phase);
+    if (st.phase == hal::StartupPhase::kFailed)
+      s.startup += " (node " + std::to_string(st.missing_node) + ")";
+    if (st.configuration_failed) s.startup += ": " + m->configuration_error();
+    if (st.phase == hal::StartupPhase::kOperational || st.attempts > 1)
+      s.periods_to_operational = static_cast<std::int64_t>(st.done_period);
+    s.periods_to_active = loop_.first_active_period();
+    s.periods_to_torque = loop_.first_torque_period();
+    s.lifecycle = hal::to_string(sup.state());
+    s.faults = static_cast<std::int64_t>(sup.counters().latches);
+    s.fault_records = static_cast<std::int64_t>(sup.counters().records);
+    if (has_first_fault_) {
+      s.first_fault = hal::to_string(first_fault_.cause);
+      s.first_fault_id = first_fault_.id;
+      s.first_fault_value = first_fault_.value;
+      s.first_fault_time_s = static_cast<double>(first_fault_.time_ns) * 1e-9;
+      s.first_fault_period = static_cast<std::int64_t>(first_fault_.period);
+    }
+    s.emcys = static_cast<std::int64_t>(m->emcy_log().counters().received);
+    s.emcy_faults = static_cast<std::int64_t>(m->emcy_log().counters().faults);
+    s.configured_nodes = static_cast<std::int64_t>(m->counters().configurations);
+    if (const hal::SdoPoller* p = m->sdo_poller()) {
+      s.sdo_reads = static_cast<std::int64_t>(p->counters().completed);
+      s.sdo_read_errors = static_cast<std::int64_t>(p->counters().aborted + p->counters().timeouts);
+    }
+    for (std::size_t i = 0; i < m->emcy_log().size(); ++i) {
+      const hal::EmcyRecord& r = *m->emcy_log().at(i);
+      // A drive node's codes by the CiA 402 table (its device profile), others by CiA 301's.
+      std::uint16_t profile = 301;
+      for (std::size_t d = 0; d < m->num_drives(); ++d) {
+        const auto axis = static_cast<std::size_t>(m->drive_axis(d));
+        if (scene_->device.canopen.axes[axis].node_id == r.message.node_id) profile = 402;
+      }
+      char line[200];
+      std::snprintf(line, sizeof line, "node %d at %.3f s: 0x%04X %s (register 0x%02X)",
+                    r.message.node_id, static_cast<double>(r.timestamp_ns) * 1e-9,
+                    r.message.error_code, hal::describe_emcy_code(r.message.error_code, profile),
+                    r.message.error_register);
+      s.emcy_messages.push_back(line);
+    }
+    for (const hal::HeartbeatConsumer& c : m->heartbeats())
+      s.heartbeat_losses += static_cast<std::int64_t>(c.counters().losses);
+    for (std::size_t i = 0; i < m->num_drives(); ++i) {
+      const int axis = m->drive_axis(i);
+      s.drive_states.push_back(scene_->device.axes[static_cast<std::size_t>(axis)].name + ": " +
+                               hal::to_string(m->drive_outputs()[i].state));
+    }
+  }
+  return s;
+}
+
+}  // namespace numen::sim

@@ -1,0 +1,135 @@
+/// @file run_verdict.cpp
+/// The exit status of a finished run (see run_verdict.hpp).
+
+#include "numen/sim/run/run_verdict.hpp"
+
+#include <csignal>
+#include <cstdio>
+#include <string>
+
+#include "numen/sim/run/run_summary.hpp"
+
+namespace numen::sim {
+
+const char* to_string(ExitStatus s) noexcept {
+  switch (s) {
+    case ExitStatus::kClean: return "clean";
+    case ExitStatus::kError: return "error";
+    case ExitStatus::kInputRejected: return "input rejected";
+    case ExitStatus::kSafetyStop: return "safety stop";
+    case ExitStatus::kNonFinite: return "non-finite state";
+    case ExitStatus::kLostRecords: return "lost records";
+    case ExitStatus::kSamplesRejected: return "samples rejected";
+    case ExitStatus::kDiverged: return "diverged";
+  }
+  return "?";
+}
+
+RunVerdict run_verdict(const RunSummary& s) {
+  RunVerdict v;
+  auto add = [&v](ExitStatus status, const std::string& why) {
+    v.reasons.push_back(std::string(to_string(status)) + ": " + why);
+    // Severity order: non-finite, diverged, safety stop, lost records, samples rejected.
+    auto rank = [](ExitStatus x) {
+      switch (x) {
+        case ExitStatus::kNonFinite: return 5;
+        case ExitStatus::kDiverged: return 4;
+        case ExitStatus::kSafetyStop: return 3;
+        case ExitStatus::kLostRecords: return 2;
+        case ExitStatus::kSamplesRejected: return 1;
+        default: return 0;
+      }
+    };
+    if (rank(status) > rank(v.status)) v.status = status;
+  };
+  const auto n = [](std::int64_t x) { return std::to_string(x); };
+  if (s.nonfinite_steps > 0) add(ExitStatus::kNonFinite, n(s.nonfinite_steps) + " steps");
+  else if (s.nan_detected) add(ExitStatus::kNonFinite, "the final state is not finite");
+  if (s.divergence.latched) {
+    char why[320];
+    std::snprintf(why, sizeof why, "%s of %s: %.4g above its limit %.4g (%s) at %.4f s",
+                  s.divergence.cause.c_str(), s.divergence.subject.c_str(), s.divergence.value,
+                  s.divergence.limit,
+                  s.divergence.cause == "energy" ? "J" : s.divergence.cause == "tie stretch" ? "m" : "m/s",
+                  s.divergence.time_s);
+    add(ExitStatus::kDiverged, why);
+  }
+  if (s.faults > 0)
+    add(ExitStatus::kSafetyStop, n(s.faults) + " safe state(s) latched, first: " + s.first_fault);
+  if (s.managed && s.startup.rfind("failed", 0) == 0)
+    add(ExitStatus::kSafetyStop, "start-up " + s.startup);
+  if (s.bus_record_dropped > 0)
+    add(ExitStatus::kLostRecords, "--record: " + n(s.bus_record_dropped) + " frames dropped");
+  if (s.bus_record_io_errors > 0 || s.bus_record_format_errors > 0 ||
+      s.bus_record_written < s.bus_frames_recorded)
+    add(ExitStatus::kLostRecords,
+        "--record: " + n(s.bus_record_written) + " of " + n(s.bus_frames_recorded) +
+            " frames written (" + n(s.bus_record_io_errors) + " I/O errors, " +
+            n(s.bus_record_format_errors) + " not formattable)");
+  if (s.view_recorded && (s.view_frames_dropped > 0 || s.view_record_io_errors > 0 ||
+                          s.view_record_frames < s.view_frames_published))
+    add(ExitStatus::kLostRecords, "--record-view: " + n(s.view_record_frames) + " of " +
+                                      n(s.view_frames_published + s.view_frames_dropped) +
+                                      " due frames written (" + n(s.view_frames_dropped) +
+                                      " dropped, " + n(s.view_record_io_errors) + " I/O errors)");
+  if (s.trace_dropped > 0 || s.trace_io_errors > 0 || s.trace_written < s.trace_pushed)
+    add(ExitStatus::kLostRecords, "--trace: " + n(s.trace_written) + " of " +
+                                      n(s.trace_pushed + s.trace_dropped) + " records written (" +
+                                      n(s.trace_io_errors) + " I/O errors)");
+  if (s.rejected_samples > 0)
+    add(ExitStatus::kSamplesRejected, n(s.rejected_samples) + " axis samples rejected");
+  // Frames on an encoder's COB-ID of the wrong kind or length: each rejected its axis's
+  // sample. Named, whatever else the run latched (every encoder frame sent as CAN FD read
+  // "first: drive stuck" and nothing about the frames).
+  if (const std::int64_t bad =
+          s.encoder_frames_fd + s.encoder_frames_remote + s.encoder_frames_wrong_length;
+      bad > 0)
+    add(ExitStatus::kSamplesRejected,
+        n(bad) + " encoder frames rejected (CAN FD " + n(s.encoder_frames_fd) + ", remote " +
+            n(s.encoder_frames_remote) + ", wrong length " + n(s.encoder_frames_wrong_length) +
+            "): encoder TPDOs are classic CAN data frames of their mapped length");
+  // A run a signal ended (perhaps before the first sample arrived) is not judged on this.
+  if (s.steps > 0 && s.invalid_periods >= s.steps && !s.stopped) {
+    // The managed stack's encoders send once the start-up has made them operational: a run
+    // that ends before that has no sample, through no fault of the frames.
+    if (s.managed && s.startup.rfind("operational", 0) != 0 && s.startup.rfind("failed", 0) != 0)
+      add(ExitStatus::kSamplesRejected,
+          "no period had a valid sample: the run's " + n(s.steps) +
+              " periods ended before the CANopen start-up finished (still in phase '" +
+              s.startup + "'); the encoders send once their nodes are operational: run longer");
+    else
+      add(ExitStatus::kSamplesRejected, "no period had a valid sample");
+  }
+  if (s.bus.rfind("log:", 0) == 0 && s.bus_frames_replayed == 0)
+    add(ExitStatus::kSamplesRejected, "the bus log gave no frame");
+  v.exit_status = code(v.status);
+  if (s.stopped) {
+    v.reasons.push_back(s.stop_signal > 0 ? "stopped by a signal: " + signal_name(s.stop_signal) +
+                                                " (" + n(s.stop_signal) + ") after " +
+                                                n(s.steps) + " periods"
+                                          : "stopped early (RunOptions::stop) after " +
+                                                n(s.steps) + " periods");
+    if (v.status == ExitStatus::kClean && s.stop_signal > 0) v.exit_status = 128 + s.stop_signal;
+  }
+  return v;
+}
+
+const char* exit_status_name(int status) noexcept {
+  if (status > 128 && status <= 128 + 64) return "stopped by a signal";
+  if (status < 0 || status > code(ExitStatus::kDiverged)) return "?";
+  return to_string(static_cast<ExitStatus>(status));
+}
+
+std::string signal_name(int signal) {
+  switch (signal) {
+    case SIGINT: return "SIGINT";
+    case SIGTERM: return "SIGTERM";
+    case SIGHUP: return "SIGHUP";
+    case SIGQUIT: return "SIGQUIT";
+    case SIGUSR1: return "SIGUSR1";
+    case SIGUSR2: return "SIGUSR2";
+    default: return "signal " + std::to_string(signal);
+  }
+}
+
+}  // namespace numen::sim

@@ -1,0 +1,155 @@
+/// @file trace_columns.cpp
+/// The column table of the traces (trace_columns.hpp).
+
+#include "numen/sim/run/trace_columns.hpp"
+
+#include "markdown_cell.hpp"
+
+namespace numen::sim {
+namespace {
+
+using R = TraceRecord;
+
+// The streamed columns keep their order (tests/hil/scenarios read frames_read … target_z by
+// position: columns 4–10 after period, time_ns, flags).
+constexpr TraceColumn kColumns[] = {
+    {"time_s", "s", "Simulated time after the step",
+     [](const R& r, int) noexcept { return r.time_s; }},
+    {"attached_body", "", "Held body index (-1: none)",
+     [](const R& r, int) noexcept { return static_cast<double>(r.attached_body); }},
+    {"frames_read", "", "Frames taken from the bus this period",
+     [](const R& r, int) noexcept { return static_cast<double>(r.frames_read); }, false, true},
+    {"sample_valid", "", "1: the period's sample was valid",
+     [](const R& r, int) noexcept { return r.sample_valid ? 1.0 : 0.0; }, false, true},
+    {"torque_commanded", "", "1: non-zero torque was commanded",
+     [](const R& r, int) noexcept { return r.torque_commanded ? 1.0 : 0.0; }, false, true},
+    {"lifecycle", "", "Lifecycle state after the period (hal::LifecycleState value)",
+     [](const R& r, int) noexcept { return static_cast<double>(r.lifecycle); }, false, true},
+    {"target_x", "m", "Device target of the held body's COM frame: x",
+     [](const R& r, int) noexcept { return r.target.position.x(); }, false, true},
+    {"target_y", "m", "... y", [](const R& r, int) noexcept { return r.target.position.y(); },
+     false, true},
+    {"target_z", "m", "... z", [](const R& r, int) noexcept { return r.target.position.z(); },
+     false, true},
+    {"target_qw", "", "... orientation quaternion w",
+     [](const R& r, int) noexcept { return r.target.orientation.w(); }},
+    {"target_qx", "", "... x", [](const R& r, int) noexcept { return r.target.orientation.x(); }},
+    {"target_qy", "", "... y", [](const R& r, int) noexcept { return r.target.orientation.y(); }},
+    {"target_qz", "", "... z", [](const R& r, int) noexcept { return r.target.orientation.z(); }},
+    {"tool_x", "m", "Held body's (god-object's) pose: x",
+     [](const R& r, int) noexcept { return r.tool.position.x(); }, false, true},
+    {"tool_y", "m", "... y", [](const R& r, int) noexcept { return r.tool.position.y(); }, false,
+     true},
+    {"tool_z", "m", "... z", [](const R& r, int) noexcept { return r.tool.position.z(); }, false,
+     true},
+    {"tool_qw", "", "... orientation quaternion w",
+     [](const R& r, int) noexcept { return r.tool.orientation.w(); }},
+    {"tool_qx", "", "... x", [](const R& r, int) noexcept { return r.tool.orientation.x(); }},
+    {"tool_qy", "", "... y", [](const R& r, int) noexcept { return r.tool.orientation.y(); }},
+    {"tool_qz", "", "... z", [](const R& r, int) noexcept { return r.tool.orientation.z(); }},
+    {"contacts", "", "All rigid contacts this step",
+     [](const R& r, int) noexcept { return static_cast<double>(r.contacts); }},
+    {"tool_contacts", "", "Contacts of the tool",
+     [](const R& r, int) noexcept { return static_cast<double>(r.tool_contacts); }},
+    {"tool_penetration_mm", "mm", "Deepest contact of the tool",
+     [](const R& r, int) noexcept { return r.tool_penetration_mm; }},
+    {"target_penetration_mm", "mm", "Deepest contact of the target (where the hand is)",
+     [](const R& r, int) noexcept { return r.target_penetration_mm; }},
+    {"feedback_fx", "N", "Feedback wrench sent (Eq. 8): force x",
+     [](const R& r, int) noexcept { return r.feedback.force.x(); }, false, true},
+    {"feedback_fy", "N", "... force y",
+     [](const R& r, int) noexcept { return r.feedback.force.y(); }, false, true},
+    {"feedback_fz", "N", "... force z",
+     [](const R& r, int) noexcept { return r.feedback.force.z(); }, false, true},
+    {"feedback_tx", "N·m", "... torque x",
+     [](const R& r, int) noexcept { return r.feedback.torque.x(); }},
+    {"feedback_ty", "N·m", "... torque y",
+     [](const R& r, int) noexcept { return r.feedback.torque.y(); }},
+    {"feedback_tz", "N·m", "... torque z",
+     [](const R& r, int) noexcept { return r.feedback.torque.z(); }},
+    {"axis_torque_", "N·m or N", "Torque commanded on each axis (named by the axis)",
+     [](const R& r, int a) noexcept {
+       return a < r.num_axes ? r.axis_torque[static_cast<std::size_t>(a)] : 0.0;
+     },
+     true, true},
+    {"step_time_us", "us", "Wall time of core::step",
+     [](const R& r, int) noexcept { return r.step_time_us; }, false, true},
+    {"end_to_end_us", "us", "SYNC sent to the torque writes returned",
+     [](const R& r, int) noexcept { return r.end_to_end_us; }, false, true},
+    {"wakeup_latency_us", "us", "Wake-up time − deadline",
+     [](const R& r, int) noexcept { return r.wakeup_latency_us; }, false, true},
+    {"solver_iterations", "", "Iterations of the implicit solve",
+     [](const R& r, int) noexcept { return static_cast<double>(r.solver_iterations); }},
+    {"joint_drift_mm", "mm", "Largest linear joint error |C| after the step",
+     [](const R& r, int) noexcept { return r.joint_drift_mm; }},
+    {"joint_angle_drift_mrad", "mrad", "Largest angular joint error |C| after the step",
+     [](const R& r, int) noexcept { return r.joint_angle_drift_mrad; }},
+    {"joint_reaction_max_n", "N", "Largest |reaction force| of a joint on its child",
+     [](const R& r, int) noexcept { return r.joint_reaction_max_n; }},
+    {"baumgarte_rhs_max", "m/s or rad/s", "Largest |c| of a joint row: the Baumgarte correction",
+     [](const R& r, int) noexcept { return r.baumgarte_rhs_max; }},
+    {"solver_residual", "1",
+     "Stopping measure of the implicit solve (relative residual ‖r‖/‖b‖; nets without joints: "
+     "relative energy-norm error estimate)",
+     [](const R& r, int) noexcept { return r.solver_residual; }},
+    {"node_contacts", "", "Node contacts of all nets",
+     [](const R& r, int) noexcept { return static_cast<double>(r.node_contacts); }},
+    {"net_penetration_mm", "mm", "Deepest node contact",
+     [](const R& r, int) noexcept { return r.net_penetration_mm; }},
+    {"net_tie_stretch_mm", "mm", "Largest |x − a| of a node from its rest position",
+     [](const R& r, int) noexcept { return r.net_tie_stretch_mm; }},
+    {"net_strain_max", "1", "Largest |l − L|/L of a structural spring",
+     [](const R& r, int) noexcept { return r.net_strain_max; }},
+    {"emcys", "", "CANopen EMCY messages received this period",
+     [](const R& r, int) noexcept { return static_cast<double>(r.emcys); }, false, true},
+    {"emcy_node", "", "Node of the newest EMCY this period (0: none)",
+     [](const R& r, int) noexcept { return static_cast<double>(r.emcy_node); }, false, true},
+    {"emcy_code", "", "Its error code (0: none; named by CiA 301/402 in the summary's EMCY list)",
+     [](const R& r, int) noexcept { return static_cast<double>(r.emcy_code); }, false, true},
+};
+
+}  // namespace
+
+std::span<const TraceColumn> trace_columns() noexcept { return kColumns; }
+
+std::vector<std::string> trace_column_names(TraceKind kind,
+                                            std::span<const std::string> axis_names) {
+  std::vector<std::string> names;
+  for (const TraceColumn& c : kColumns) {
+    if (!in_trace(c, kind)) continue;
+    if (!c.per_axis) {
+      names.emplace_back(c.name);
+      continue;
+    }
+    for (const std::string& a : axis_names) names.push_back(std::string(c.name) + a);
+  }
+  return names;
+}
+
+std::size_t trace_column_values(TraceKind kind, const TraceRecord& row, int num_axes,
+                                std::span<double> out) noexcept {
+  std::size_t n = 0;
+  for (const TraceColumn& c : kColumns) {
+    if (!in_trace(c, kind)) continue;
+    const int repeat = c.per_axis ? num_axes : 1;
+    for (int a = 0; a < repeat && n < out.size(); ++a) out[n++] = c.get(row, a);
+  }
+  return n;
+}
+
+std::string format_trace_columns_markdown() {
+  std::string out = "| column | unit | traces | what it holds |\n| --- | --- | --- | --- |\n";
+  for (const TraceColumn& c : kColumns) {
+    out += "| `";
+    out += c.name;
+    if (c.per_axis) out += "<axis>";
+    out += "` | ";
+    out += c.unit;
+    out += c.streamed ? " | csv, stream | " : " | csv | ";
+    append_markdown_cell(out, c.description);
+    out += " |\n";
+  }
+  return out;
+}
+
+}  // namespace numen::sim

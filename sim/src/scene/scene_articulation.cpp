@@ -1,0 +1,154 @@
+/// @file scene_articulation.cpp
+/// [[joint]], [baumgarte] and body–link bindings of a scene file.
+
+#include "scene_articulation.hpp"
+
+#include <limits>
+#include <string>
+
+#include "numen/hal/device/kinematics_factory.hpp"
+#include "numen/sim/device/simulated_instrument.hpp"
+
+namespace numen::sim {
+namespace {
+
+using core::Pose;
+using core::Quat;
+using core::Vec3;
+
+/// { position = [..], orientation = [w, x, y, z] } or { position, axis = [..] }
+/// (the frame's z axis onto `axis`).
+Pose parse_frame(const TomlTable& t) {
+  t.allow_only({"position", "orientation", "axis"});
+  Pose p;
+  p.position = t.vec3_or("position", Vec3::Zero());
+  if (t.has("axis")) {
+    if (t.has("orientation")) t.fail("axis", "give either orientation or axis, not both");
+    const Vec3 axis = t.vec3("axis");
+    if (!(axis.norm() > 1e-12)) t.fail("axis", "must be a non-zero vector");
+    p.orientation = Quat::FromTwoVectors(Vec3::UnitZ(), axis.normalized());
+  } else {
+    p.orientation = t.quaternion_or("orientation", Quat::Identity());
+  }
+  return p;
+}
+
+int body_or_world(const TomlTable& t, std::string_view key, const core::Model& m, bool allow_world) {
+  const std::string name = t.string(key);
+  if (allow_world && name == "world") return -1;
+  for (int i = 0; i < m.num_bodies(); ++i)
+    if (m.bodies[static_cast<std::size_t>(i)].name == name) return i;
+  t.fail(key, "no body named \"" + name + "\"" + (allow_world ? " (or \"world\")" : ""));
+}
+
+core::JointType parse_joint_type(const TomlTable& t) {
+  const std::string type = t.choice(
+      "type", {"fixed", "revolute", "prismatic", "cylindrical", "spherical", "trocar"}, std::nullopt);
+  if (type == "fixed") return core::JointType::kFixed;
+  if (type == "revolute") return core::JointType::kRevolute;
+  if (type == "prismatic") return core::JointType::kPrismatic;
+  if (type == "cylindrical") return core::JointType::kCylindrical;
+  if (type == "spherical") return core::JointType::kSpherical;
+  return core::JointType::kTrocar;
+}
+
+int axis_index(const TomlTable& t, std::string_view key, const hal::DeviceConfig& device) {
+  const std::string name = t.string(key);
+  std::string list;
+  for (std::size_t i = 0; i < device.axes.size(); ++i) {
+    if (device.axes[i].name == name) return static_cast<int>(i);
+    list += (list.empty() ? "" : ", ") + device.axes[i].name;
+  }
+  t.fail(key, "the device has no axis \"" + name + "\" (axes: " + list + ")");
+}
+
+int link_index(const TomlTable& t, std::string_view key, const hal::Kinematics& kin) {
+  const std::string name = t.string(key);
+  const int link = kin.find_link(name.c_str());
+  if (link >= 0) return link;
+  std::string list;
+  for (int i = 0; i < kin.num_links(); ++i) list += (list.empty() ? "" : ", ") + std::string(kin.link_name(i));
+  t.fail(key, "the device has no link \"" + name + "\" (links: " + list + ")");
+}
+
+}  // namespace
+
+void parse_articulation(const TomlTable& root, const std::vector<TomlTable>& body_tables,
+                        Scene& scene) {
+  core::Model& m = scene.model;
+  if (auto b = root.table("baumgarte")) {
+    b->allow_only({"alpha_dt", "beta_dt2"});
+    m.baumgarte.alpha_dt = b->number_in("alpha_dt", 0.0, kInf, m.baumgarte.alpha_dt);
+    m.baumgarte.beta_dt2 = b->number_in("beta_dt2", 0.0, kInf, m.baumgarte.beta_dt2);
+    if (!(m.baumgarte.alpha_dt + m.baumgarte.beta_dt2 > 0.0))
+      b->fail(b->has("beta_dt2") ? "beta_dt2" : "alpha_dt",
+              "alpha_dt and beta_dt2 cannot both be 0: the joint error would drift unchecked");
+  }
+
+  const auto kin = hal::make_kinematics(scene.device);
+  const hal::AxisVector q0 = instrument_axes(scene.device, *kin, scene.trajectory.at(0.0));
+
+  // Body–link bindings and the starting poses they imply.
+  scene.binding = platform::DeviceBinding{};
+  for (std::size_t i = 0; i < body_tables.size(); ++i) {
+    const TomlTable& t = body_tables[i];
+    if (t.has("link_offset") && !t.has("link"))
+      t.fail("link_offset", "needs a link = \"...\" to be relative to");
+    if (!t.has("link")) continue;
+    platform::LinkBinding lb;
+    lb.link = link_index(t, "link", *kin);
+    lb.body = static_cast<int>(i);
+    if (auto off = t.table("link_offset")) lb.body_in_link = parse_frame(*off);
+    scene.binding.links.push_back(lb);
+    if (!t.has("position")) {
+      if (t.has("orientation"))
+        t.fail("orientation", "a body bound to a link without a position starts at the link's pose; "
+                              "give both position and orientation, or neither");
+      const Pose link = kin->link_pose(lb.link, q0);
+      core::BodyModel& body = m.bodies[i];
+      body.initial_pose.position = link.position + link.orientation * lb.body_in_link.position;
+      body.initial_pose.orientation = link.orientation * lb.body_in_link.orientation;
+    }
+  }
+  // Link 0 → whichever body is held when that body has no link of its own
+  // (the rigid binding; after a tool switch to a body without a link).
+  scene.binding.links.push_back(platform::LinkBinding{});
+
+  // Joints.
+  for (const TomlTable& t : root.tables("joint")) {
+    t.allow_only({"name", "type", "parent", "child", "parent_frame", "child_frame", "prescribed"});
+    core::JointModel j;
+    j.name = t.string("name");
+    for (const auto& other : m.joints)
+      if (other.name == j.name) t.fail("name", "joint \"" + j.name + "\" declared twice");
+    j.type = parse_joint_type(t);
+    j.parent = body_or_world(t, "parent", m, true);
+    j.child = body_or_world(t, "child", m, false);
+    if (j.child == j.parent) t.fail("child", "a joint needs two different bodies");
+    if (const toml::node* n = t.node("parent_frame"); n && n->is_string()) {
+      if (n->as_string()->get() != "trocar")
+        t.fail("parent_frame", "expected a table { position, orientation | axis } or \"trocar\"");
+      if (scene.device.kind != hal::DeviceKind::kTrocarInstrument || j.parent != -1)
+        t.fail("parent_frame", "\"trocar\" is the trocar point of a trocar instrument, for a joint to the world");
+      j.frame_parent = Pose{scene.device.trocar.point, scene.device.trocar.orientation};
+    } else if (auto f = t.table("parent_frame")) {
+      j.frame_parent = parse_frame(*f);
+    }
+    if (auto f = t.table("child_frame")) j.frame_child = parse_frame(*f);
+    if (auto p = t.table("prescribed")) {
+      p->allow_only({"axis", "scale", "offset"});
+      if (!core::joint_can_be_prescribed(j.type))
+        t.fail("prescribed", "only revolute and prismatic joints can be prescribed");
+      j.prescribed = true;
+      platform::AxisPrescription ap;
+      ap.joint = static_cast<int>(m.joints.size());
+      ap.axis = axis_index(*p, "axis", scene.device);
+      ap.scale = p->number_in("scale", -kInf, kInf, 1.0);
+      ap.offset = p->number_in("offset", -kInf, kInf, 0.0);
+      scene.binding.prescriptions.push_back(ap);
+    }
+    m.joints.push_back(std::move(j));
+  }
+}
+
+}  // namespace numen::sim

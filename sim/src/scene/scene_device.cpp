@@ -1,0 +1,412 @@
+/// @file scene_device.cpp
+/// Scene file → the device: `[device]`, its axes, CANopen nodes and DCFs, feedback and
+/// admittance (scene_device.hpp, docs/scenes.md "Device").
+
+#include "scene_device.hpp"
+
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <iomanip>
+#include <limits>
+#include <map>
+#include <memory>
+#include <sstream>
+#include <stdexcept>
+
+#include "numen/sim/scene/trocar_placement.hpp"
+#include "toml_reader.hpp"
+
+namespace numen::sim {
+namespace {
+
+using core::Quat;
+using core::Vec3;
+
+hal::AxisConfig parse_axis(const TomlTable& a, hal::AxisConfig axis) {
+  a.allow_only({"name", "encoder_cob_id", "drive_cob_id", "counts_per_unit", "offset_counts", "sign",
+                "min", "max", "max_speed", "wraps", "rated_torque", "max_torque"});
+  axis.name = a.string_or("name", axis.name);
+  auto cob = [&](std::string_view key, std::uint32_t fallback) {
+    const auto v = a.integer_or(key, fallback);
+    if (v < 0 || v > 0x7FF) a.fail(key, "must be an 11-bit COB-ID in [0, 0x7FF]");
+    return static_cast<std::uint32_t>(v);
+  };
+  axis.encoder_cob_id = cob("encoder_cob_id", axis.encoder_cob_id);
+  axis.drive_cob_id = cob("drive_cob_id", axis.drive_cob_id);
+  axis.counts_per_unit = a.number_in("counts_per_unit", 1e-12, kInf, axis.counts_per_unit);
+  const auto off = a.integer_or("offset_counts", axis.offset_counts);
+  if (off < INT32_MIN || off > INT32_MAX) a.fail("offset_counts", "must fit in int32");
+  axis.offset_counts = static_cast<std::int32_t>(off);
+  const auto sign = a.integer_or("sign", axis.sign);
+  if (sign != 1 && sign != -1) a.fail("sign", "must be 1 or -1");
+  axis.sign = static_cast<int>(sign);
+  axis.min = a.number_or("min", axis.min);
+  axis.max = a.number_or("max", axis.max);
+  if (!(axis.min < axis.max)) a.fail("max", "must be greater than min");
+  if (a.has("max_speed")) axis.max_speed = a.number_in("max_speed", 1e-12, kInf, std::nullopt);
+  axis.wraps = a.boolean_or("wraps", axis.wraps);
+  axis.rated_torque = a.number_in("rated_torque", 1e-12, kInf, axis.rated_torque);
+  axis.max_torque = a.number_in("max_torque", 0.0, kInf, axis.max_torque);
+  return axis;
+}
+
+/// A static PDO mapping: a list of CiA 301 mapping entries (index << 16 | subindex << 8 | bits,
+/// e.g. 0x60710010), each one of the objects numen knows (find_known_pdo_object).
+std::vector<hal::PdoEntry> parse_mapping(const TomlTable& t, std::string_view key,
+                                         std::vector<hal::PdoEntry> fallback) {
+  const toml::node* n = t.node(key);
+  if (!n) return fallback;
+  const toml::array* arr = n->as_array();
+  if (!arr || arr->empty() || arr->size() > hal::kMaxPdoEntries)
+    t.fail(key, "expected a list of 1 to 8 mapping entries such as 0x60710010 (index:sub:bits)");
+  std::vector<hal::PdoEntry> out;
+  for (std::size_t i = 0; i < arr->size(); ++i) {
+    const std::string k = t.key_path(key) + "[" + std::to_string(i) + "]";
+    const auto* v = arr->get(i)->as_integer();
+    if (!v || v->get() < 0 || v->get() > 0xFFFFFFFF)
+      t.fail_at(arr->get(i), k, "expected a 32-bit mapping entry such as 0x60710010");
+    hal::PdoEntry e;
+    if (!hal::find_known_pdo_object(static_cast<std::uint32_t>(v->get()), e)) {
+      char buf[16];
+      std::snprintf(buf, sizeof buf, "0x%08llX", static_cast<unsigned long long>(v->get()));
+      t.fail_at(arr->get(i), k,
+                std::string(buf) +
+                    " is not an object numen maps (0x60040020 position value, 0x60640020 position "
+                    "actual value, 0x60400010 controlword, 0x60410010 statusword, 0x60710010 "
+                    "target torque, 0x60770010 torque actual value, 0x60600008 modes of "
+                    "operation, 0x60610008 modes of operation display)");
+    }
+    out.push_back(e);
+  }
+  return out;
+}
+
+std::uint16_t parse_ms(const TomlTable& t, std::string_view key, std::uint16_t fallback) {
+  const auto v = t.integer_or(key, fallback);
+  if (v < 1 || v > 65535) t.fail(key, "must be an integer number of ms in [1, 65535]");
+  return static_cast<std::uint16_t>(v);
+}
+
+/// A DCF error as the scene's error: located in the DCF (file, line, "[section] key"), naming
+/// the scene key that referenced the file.
+InputError dcf_input_error(const hal::DcfError& e, const std::string& scene_key) {
+  const hal::DcfLocation& l = e.location();
+  std::string key = l.section.empty() ? "" : "[" + l.section + "]";
+  if (!l.key.empty()) key += (key.empty() ? "" : " ") + l.key;
+  return InputError(l.file, l.line, 0, key, e.message() + " (the DCF of " + scene_key + ")");
+}
+
+/// `dcf` of [device.canopen] (every node) and of each [[device.canopen.axis]] (its node):
+/// read relative to the scene file, resolved for the node id, checked against the axis's
+/// COB-IDs, mappings and heartbeat (hal::check_dcfs). Axes of one node share the parsed file.
+void parse_dcfs(const TomlTable& c, const std::vector<TomlTable>& axes, hal::DeviceConfig& cfg) {
+  const std::filesystem::path dir = std::filesystem::path(c.file()).parent_path();
+  std::map<std::pair<std::string, int>, std::shared_ptr<const hal::Dcf>> parsed;
+  std::vector<std::string> keys(cfg.axes.size());
+  for (std::size_t i = 0; i < cfg.axes.size(); ++i) {
+    const TomlTable* t = i < axes.size() && axes[i].has("dcf") ? &axes[i] : c.has("dcf") ? &c : nullptr;
+    if (t == nullptr) continue;
+    keys[i] = t->key_path("dcf");
+    if (!cfg.canopen.managed)
+      t->fail("dcf", "a DCF configures a node of the managed stack: set managed = true or remove it");
+    std::filesystem::path file = t->string("dcf");
+    if (file.empty()) t->fail("dcf", "is empty: give the path of the node's DCF (CiA 306)");
+    if (file.is_relative()) file = dir / file;
+    if (!std::filesystem::is_regular_file(file)) t->fail("dcf", "DCF file not found: " + file.string());
+    hal::CanopenAxisConfig& x = cfg.canopen.axes[i];
+    auto& slot = parsed[{file.string(), x.node_id}];
+    try {
+      if (!slot) slot = std::make_shared<const hal::Dcf>(hal::parse_dcf_file(file.string(), x.node_id));
+    } catch (const hal::DcfError& e) {
+      throw dcf_input_error(e, keys[i]);
+    }
+    x.dcf = slot;
+  }
+  try {
+    hal::check_dcfs(cfg);
+  } catch (const hal::DcfError& e) {
+    std::string key;
+    for (std::size_t i = 0; i < keys.size() && key.empty(); ++i)
+      if (cfg.canopen.axes[i].dcf && cfg.canopen.axes[i].dcf->path == e.location().file) key = keys[i];
+    throw dcf_input_error(e, key);
+  } catch (const std::invalid_argument& e) {
+    c.fail_at(nullptr, c.path(), e.what());
+  }
+}
+
+/// [device.canopen] and its [[device.canopen.axis]] entries (docs/scenes.md).
+void parse_canopen(const TomlTable& dev, hal::DeviceConfig& cfg) {
+  hal::CanopenConfig& co = cfg.canopen;
+  // Reconcile the defaults with the [[device.axis]] drive COB-IDs (0 = no motor).
+  for (std::size_t i = 0; i < cfg.axes.size(); ++i) {
+    hal::CanopenAxisConfig& x = co.axes[i];
+    if (cfg.axes[i].has_drive() != (x.drive_tpdo_cob_id != 0)) {
+      const hal::CanopenAxisConfig d = hal::make_canopen_axis(x.node_id, cfg.axes[i].has_drive());
+      x.drive_tpdo_cob_id = d.drive_tpdo_cob_id;
+      x.drive_rpdo = d.drive_rpdo;
+      x.drive_tpdo = d.drive_tpdo;
+    }
+  }
+  auto c = dev.table("canopen");
+  if (!c) return;
+  c->allow_only({"managed", "controller_node_id", "controller_heartbeat_period",
+                 "drive_heartbeat_timeout", "node_heartbeat_period", "heartbeat_timeout",
+                 "startup_timeout", "startup_retry", "sdo_timeout", "sdo_poll_period", "dcf", "axis"});
+  co.managed = c->boolean_or("managed", co.managed);
+  const auto ctrl = c->integer_or("controller_node_id", co.controller_node_id);
+  if (ctrl < 1 || ctrl > 127) c->fail("controller_node_id", "must be a CANopen node id in [1, 127]");
+  co.controller_node_id = static_cast<std::uint8_t>(ctrl);
+  co.controller_heartbeat_period_ms =
+      parse_ms(*c, "controller_heartbeat_period", co.controller_heartbeat_period_ms);
+  if (c->has("drive_heartbeat_timeout"))
+    co.drive_heartbeat_timeout_ms = parse_ms(*c, "drive_heartbeat_timeout", 1);
+  // A time in ms within [lo, 600000] ("what" the message adds).
+  const auto ms_in = [&](const char* key, std::uint32_t fallback, std::int64_t lo, const char* what) {
+    const auto v = c->integer_or(key, fallback);
+    if (v < lo || v > 600'000)
+      c->fail(key, "must be in [" + std::to_string(lo) + ", 600000] ms" + what);
+    return static_cast<std::uint32_t>(v);
+  };
+  co.startup_timeout_ms = ms_in("startup_timeout", co.startup_timeout_ms, 1, "");
+  co.startup_retry_ms = ms_in("startup_retry", co.startup_retry_ms, 1, "");
+  co.sdo_timeout_ms = ms_in("sdo_timeout", co.sdo_timeout_ms, 1, "");
+  co.sdo_poll_period_ms = ms_in("sdo_poll_period", co.sdo_poll_period_ms, 0, " (0: no reads)");
+  const std::uint16_t period = parse_ms(*c, "node_heartbeat_period", 10);
+  const std::uint16_t timeout = c->has("heartbeat_timeout") ? parse_ms(*c, "heartbeat_timeout", 1) : 0;
+  for (hal::CanopenAxisConfig& x : co.axes) {
+    x.heartbeat_period_ms = period;
+    x.heartbeat_timeout_ms = timeout;
+  }
+  const std::vector<TomlTable> axes = c->tables("axis");
+  if (!axes.empty() && axes.size() != cfg.axes.size())
+    c->fail("axis", "the device has " + std::to_string(cfg.axes.size()) + " axes, " +
+                        std::to_string(axes.size()) + " given (give all or none)");
+  for (std::size_t i = 0; i < axes.size(); ++i) {
+    const TomlTable& a = axes[i];
+    hal::CanopenAxisConfig& x = co.axes[i];
+    a.allow_only({"node_id", "heartbeat_period", "heartbeat_timeout", "drive_tpdo_cob_id",
+                  "encoder_tpdo", "drive_rpdo", "drive_tpdo", "dcf"});
+    const auto node = a.integer_or("node_id", x.node_id);
+    if (node < 1 || node > 127) a.fail("node_id", "must be a CANopen node id in [1, 127]");
+    x.node_id = static_cast<std::uint8_t>(node);
+    x.heartbeat_period_ms = parse_ms(a, "heartbeat_period", x.heartbeat_period_ms);
+    if (a.has("heartbeat_timeout")) x.heartbeat_timeout_ms = parse_ms(a, "heartbeat_timeout", 1);
+    const auto tpdo = a.integer_or("drive_tpdo_cob_id", x.drive_tpdo_cob_id);
+    if (tpdo < 0 || tpdo > 0x7FF) a.fail("drive_tpdo_cob_id", "must be an 11-bit COB-ID in [0, 0x7FF]");
+    x.drive_tpdo_cob_id = static_cast<std::uint32_t>(tpdo);
+    x.encoder_tpdo = parse_mapping(a, "encoder_tpdo", x.encoder_tpdo);
+    x.drive_rpdo = parse_mapping(a, "drive_rpdo", x.drive_rpdo);
+    x.drive_tpdo = parse_mapping(a, "drive_tpdo", x.drive_tpdo);
+    // Point a validation error of this axis at its table.
+    try {
+      hal::validate(cfg);
+    } catch (const std::invalid_argument& e) {
+      const std::string what = e.what();
+      if (what.find("canopen.axes[" + std::to_string(i) + "]") != std::string::npos) {
+        for (const char* key : {"drive_tpdo_cob_id", "drive_rpdo", "drive_tpdo", "encoder_tpdo",
+                                "heartbeat_timeout", "heartbeat_period", "node_id"}) {
+          if (what.find(key) != std::string::npos && a.has(key)) a.fail(key, what);
+        }
+        a.fail_at(nullptr, a.path(), what);
+      }
+    }
+  }
+  try {
+    hal::validate(cfg);
+  } catch (const std::invalid_argument& e) {
+    const std::string what = e.what();
+    if (what.find("canopen") != std::string::npos) c->fail_at(nullptr, c->path(), what);
+  }
+  parse_dcfs(*c, axes, cfg);
+}
+
+void parse_feedback(const TomlTable& dev, core::FeedbackGains& f) {
+  auto fb = dev.table("feedback");
+  if (!fb) return;  // non-haptic: all zero
+  fb->allow_only({"stiffness", "damping", "rotational_stiffness", "rotational_damping", "max_force",
+                  "max_torque"});
+  f.k_t = fb->number_in("stiffness", 0.0, kInf, 0.0);
+  f.gamma_t = fb->number_in("damping", 0.0, kInf, 0.0);
+  f.k_r = fb->number_in("rotational_stiffness", 0.0, kInf, 0.0);
+  f.gamma_r = fb->number_in("rotational_damping", 0.0, kInf, 0.0);
+  f.max_force = fb->number_in("max_force", 0.0, kInf, kInf);
+  f.max_torque = fb->number_in("max_torque", 0.0, kInf, kInf);
+}
+
+/// `[device.admittance]` (docs/scenes.md): required with coupling = "admittance", refused
+/// otherwise.
+void parse_admittance(const TomlTable& dev, Scene& scene, const hal::DeviceConfig& cfg) {
+  const bool admittance = scene.model.coupling_mode == core::CouplingMode::kAdmittance;
+  auto ad = dev.table("admittance");
+  if (!ad) {
+    if (admittance)
+      dev.fail("admittance", "missing: coupling = \"admittance\" needs [device.admittance] (force sensor, hand)");
+    return;
+  }
+  if (!admittance)
+    ad->fail_at(nullptr, ad->path(), "[device.admittance] needs coupling = \"admittance\"");
+  ad->allow_only({"drive_lag", "rpdo_cob_ids", "force_sensor", "hand"});
+  AdmittanceScene a;
+  a.config = hal::make_admittance_config(cfg);
+  if (ad->has("rpdo_cob_ids")) {
+    const std::vector<double> ids = ad->numbers("rpdo_cob_ids", static_cast<int>(cfg.axes.size()));
+    for (std::size_t i = 0; i < ids.size(); ++i) {
+      if (!(ids[i] >= 1 && ids[i] <= 0x7FF && ids[i] == std::floor(ids[i])))
+        ad->fail("rpdo_cob_ids", "entries must be 11-bit COB-IDs");
+      a.config.rpdo_cob_ids[i] = static_cast<std::uint32_t>(ids[i]);
+    }
+  }
+  a.hand.lag_s = ad->number_in("drive_lag", 0.0, 1.0, a.hand.lag_s);
+  if (auto fs = ad->table("force_sensor")) {
+    fs->allow_only({"node_id", "force_cob_id", "torque_cob_id", "force_scale", "torque_scale",
+                    "max_force", "max_torque", "max_age", "position", "orientation"});
+    hal::ForceSensorConfig& c = a.config.sensor;
+    const auto node = fs->integer_or("node_id", c.node_id);
+    if (node < 1 || node > 127) fs->fail("node_id", "must be a CANopen node id in [1, 127]");
+    c.node_id = static_cast<std::uint8_t>(node);
+    c.force_cob_id = static_cast<std::uint32_t>(fs->number_in("force_cob_id", 1, 0x7FF, 0.0));
+    c.torque_cob_id = static_cast<std::uint32_t>(fs->number_in("torque_cob_id", 1, 0x7FF, 0.0));
+    c.force_scale = fs->number_in("force_scale", 1e-9, kInf, c.force_scale);
+    c.torque_scale = fs->number_in("torque_scale", 1e-9, kInf, c.torque_scale);
+    c.max_force = fs->number_in("max_force", 1e-9, kInf, c.max_force);
+    c.max_torque = fs->number_in("max_torque", 1e-9, kInf, c.max_torque);
+    c.max_age_s = fs->number_in("max_age", 1e-9, kInf, 3.0 * cfg.control_period_s);
+    c.sensor_in_tool.position = fs->vec3_or("position", Vec3::Zero());
+    c.sensor_in_tool.orientation = fs->quaternion_or("orientation", Quat::Identity());
+  } else {
+    a.config.sensor.max_age_s = 3.0 * cfg.control_period_s;
+  }
+  if (auto h = ad->table("hand")) {
+    h->allow_only({"stiffness", "damping", "rotational_stiffness", "rotational_damping"});
+    a.hand.k_hand = h->number_in("stiffness", 0.0, kInf, a.hand.k_hand);
+    a.hand.c_hand = h->number_in("damping", 0.0, kInf, a.hand.c_hand);
+    a.hand.k_hand_rot = h->number_in("rotational_stiffness", 0.0, kInf, a.hand.k_hand_rot);
+    a.hand.c_hand_rot = h->number_in("rotational_damping", 0.0, kInf, a.hand.c_hand_rot);
+  }
+  try {
+    hal::validate(cfg, a.config);
+  } catch (const std::invalid_argument& e) {
+    ad->fail_at(nullptr, ad->path(), e.what());
+  }
+  scene.admittance = std::move(a);
+}
+
+}  // namespace
+
+int body_index(const TomlTable& t, std::string_view key, const core::Model& m) {
+  const std::string name = t.string(key);
+  if (name == "none") return -1;
+  for (int i = 0; i < m.num_bodies(); ++i)
+    if (m.bodies[static_cast<std::size_t>(i)].name == name) return i;
+  t.fail(key, "no body named \"" + name + "\" (use a [[body]] name or \"none\")");
+}
+
+void parse_device(const TomlTable& root, Scene& scene, const TomlTable*& body_table_of_attached,
+                  const std::vector<TomlTable>& body_tables) {
+  auto dev = root.table("device");
+  if (!dev) root.fail("device", "missing: a scene needs a [device] (the tracked instrument)");
+  dev->allow_only({"kind", "name", "attach", "max_sample_age", "jump_tolerance_counts",
+                   "velocity_cutoff", "soft_start", "first_node_id", "tool_offset", "trocar", "tracker", "phantom", "feedback",
+                   "axis", "canopen", "admittance"});
+  const std::string kind =
+      dev->choice("kind", {"trocar-instrument", "pose-tracker", "phantom"}, std::nullopt);
+  const auto node = dev->integer_or("first_node_id", 1);
+  if (node < 1 || node > 120) dev->fail("first_node_id", "must be a CANopen node id in [1, 120]");
+  hal::DeviceConfig cfg;
+  try {
+    const auto id = static_cast<std::uint8_t>(node);
+    cfg = kind == "trocar-instrument" ? hal::make_default_trocar_config(id)
+          : kind == "phantom"         ? hal::make_default_phantom_config(id)
+                                      : hal::make_default_pose_tracker_config(id);
+  } catch (const std::invalid_argument& e) {
+    dev->fail("first_node_id", e.what());
+  }
+  cfg.name = dev->string_or("name", cfg.name);
+  cfg.control_period_s = scene.model.dt;
+  if (dev->has("max_sample_age"))
+    cfg.max_sample_age_s = dev->number_in("max_sample_age", 1e-9, kInf, std::nullopt);
+  cfg.jump_tolerance_counts = dev->number_in("jump_tolerance_counts", 0.0, kInf, cfg.jump_tolerance_counts);
+  cfg.velocity_cutoff_hz = dev->number_in("velocity_cutoff", 1e-6, kInf, cfg.velocity_cutoff_hz);
+  cfg.soft_start_s =
+      dev->number_in("soft_start", 0.0, hal::kMaxSoftStartS, hal::kDefaultSceneSoftStartS);
+  if (auto off = dev->table("tool_offset")) {
+    off->allow_only({"position", "orientation"});
+    cfg.tool_offset.position = off->vec3_or("position", Vec3::Zero());
+    cfg.tool_offset.orientation = off->quaternion_or("orientation", Quat::Identity());
+  }
+  const std::vector<TomlTable> axes = dev->tables("axis");
+  if (!axes.empty()) {
+    if (axes.size() != cfg.axes.size())
+      dev->fail("axis", "a " + kind + " has " + std::to_string(cfg.axes.size()) + " axes, " +
+                            std::to_string(axes.size()) + " given (give all or none)");
+    for (std::size_t i = 0; i < axes.size(); ++i) cfg.axes[i] = parse_axis(axes[i], cfg.axes[i]);
+  }
+  if (kind == "trocar-instrument") {
+    cfg.kind = hal::DeviceKind::kTrocarInstrument;
+    auto tr = dev->table("trocar");
+    if (!tr) dev->fail("trocar", "missing: give point = [x, y, z] or placement = \"approach\"");
+    tr->allow_only({"point", "orientation", "placement", "standoff"});
+    const std::string placement = tr->choice("placement", {"explicit", "approach"},
+                                             tr->has("point") ? "explicit" : "approach");
+    Vec3 centroid = Vec3::Zero();
+    for (std::size_t i = 0; i < scene.trajectory.size(); ++i) centroid += scene.trajectory[i].pose.position;
+    centroid /= static_cast<double>(std::max<std::size_t>(1, scene.trajectory.size()));
+    if (placement == "approach") {
+      if (tr->has("point")) tr->fail("point", "give either point or placement = \"approach\"");
+      const double standoff = tr->number_in("standoff", 1e-6, kInf, 0.12);
+      ApproachTrocar a;
+      try {
+        a = trocar_from_approach(scene.trajectory, standoff);
+      } catch (const InputError& e) {
+        tr->fail("standoff", e.message());
+      }
+      cfg.trocar.point = a.point;
+      cfg.trocar.orientation = Quat::FromTwoVectors(Vec3::UnitZ(), a.approach);
+      std::ostringstream os;
+      os << std::fixed << std::setprecision(1)
+         << "trocar placed behind the recorded tip centroid along the mean approach axis, standoff "
+         << standoff * 1e3 << " mm (recorded tip " << a.min_depth * 1e3 << "–" << a.max_depth * 1e3
+         << " mm from the trocar point)";
+      scene.trocar_note = os.str();
+    } else {
+      cfg.trocar.point = tr->vec3("point");
+      const Vec3 toward = centroid - cfg.trocar.point;
+      cfg.trocar.orientation = tr->quaternion_or(
+          "orientation", toward.norm() > 1e-9 ? Quat::FromTwoVectors(Vec3::UnitZ(), toward) : Quat::Identity());
+      scene.trocar_note = "trocar point given in the scene";
+    }
+    if (tr->has("orientation") && placement == "approach") tr->fail("orientation", "set by placement = \"approach\"");
+  } else if (kind == "phantom") {
+    cfg.kind = hal::DeviceKind::kPhantom;
+    if (auto ph = dev->table("phantom")) {
+      ph->allow_only({"position", "orientation", "upper_arm", "forearm"});
+      cfg.phantom.base.position = ph->vec3_or("position", Vec3::Zero());
+      cfg.phantom.base.orientation = ph->quaternion_or("orientation", Quat::Identity());
+      cfg.phantom.l1 = ph->number_in("upper_arm", 1e-3, 10.0, cfg.phantom.l1);
+      cfg.phantom.l2 = ph->number_in("forearm", 1e-3, 10.0, cfg.phantom.l2);
+    }
+  } else {
+    cfg.kind = hal::DeviceKind::kPoseTracker;
+    if (auto tk = dev->table("tracker")) {
+      tk->allow_only({"position", "orientation"});
+      cfg.tracker.base.position = tk->vec3_or("position", Vec3::Zero());
+      cfg.tracker.base.orientation = tk->quaternion_or("orientation", Quat::Identity());
+    }
+  }
+  parse_canopen(*dev, cfg);
+  try {
+    hal::validate(cfg);
+  } catch (const std::invalid_argument& e) {
+    dev->fail("axis", e.what());
+  }
+  parse_feedback(*dev, scene.model.feedback);
+  parse_admittance(*dev, scene, cfg);
+  scene.model.initial_attached_body = dev->has("attach") ? body_index(*dev, "attach", scene.model) : -1;
+  body_table_of_attached = nullptr;
+  if (scene.model.initial_attached_body >= 0)
+    body_table_of_attached = &body_tables[static_cast<std::size_t>(scene.model.initial_attached_body)];
+  scene.device = std::move(cfg);
+}
+
+}  // namespace numen::sim

@@ -1,0 +1,29 @@
+#pragma once
+/// @file scene_device.hpp
+/// The device of a scene file (docs/scenes.md, "Device"): `[device]` with its axes, its CANopen
+/// nodes and their DCFs, its force feedback and its admittance coupling, compiled into a
+/// hal::DeviceConfig. Private to numen::sim (used by scene.cpp).
+
+#include <string_view>
+#include <vector>
+
+#include "numen/core/model.hpp"
+#include "numen/sim/scene/scene.hpp"
+#include "toml_reader.hpp"
+
+namespace numen::sim {
+
+/// The index in `m` of the body named by string key `key` of `t`, −1 for "none". Throws
+/// InputError at the key for a name that is no [[body]].
+int body_index(const TomlTable& t, std::string_view key, const core::Model& m);
+
+/// Reads `[device]` of `root` into scene.device, scene.model.feedback, the admittance settings,
+/// scene.trocar_note and scene.model.initial_attached_body (`attach`); `body_table_of_attached`
+/// is then the [[body]] table of the attached body (of `body_tables`, one per body), or null.
+/// Needs scene.model.dt (the control period) and coupling_mode, the bodies' names and
+/// scene.trajectory (a trocar placed from the approach). Throws InputError (file, line, column,
+/// key) for a missing [device], an unknown key or a bad value.
+void parse_device(const TomlTable& root, Scene& scene, const TomlTable*& body_table_of_attached,
+                  const std::vector<TomlTable>& body_tables);
+
+}  // namespace numen::sim

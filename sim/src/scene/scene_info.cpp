@@ -1,0 +1,180 @@
+/// @file scene_info.cpp
+/// `numen info`: a scene's stages, sizes, capacities and bytes (scene_info.hpp).
+
+#include "numen/sim/scene/scene_info.hpp"
+
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <iomanip>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "numen/core/capacity.hpp"
+#include "numen/core/data.hpp"
+#include "numen/core/step_stages.hpp"
+#include "numen/sim/scene/scene.hpp"
+
+namespace numen::sim {
+namespace {
+
+/// "12.3 KiB" style, with the exact byte count.
+std::string bytes(std::size_t n) {
+  std::ostringstream os;
+  os << n << " B";
+  if (n >= 1024) os << " (" << std::fixed << std::setprecision(1) << n / 1024.0 << " KiB)";
+  return os.str();
+}
+
+/// {group: heap bytes, ...} in the groups' order.
+template <std::size_t N>
+nlohmann::ordered_json json_groups(const std::array<core::BufferGroupBytes, N>& groups) {
+  nlohmann::ordered_json j = nlohmann::ordered_json::object();
+  for (const core::BufferGroupBytes& g : groups) j[g.group] = g.heap_bytes;
+  return j;
+}
+
+}  // namespace
+
+SceneInfo describe_scene(const Scene& scene) {
+  const core::Model& m = scene.model;
+  SceneInfo info;
+  info.name = scene.name;
+  info.file = scene.file;
+  info.integrator = to_string(m.integrator);
+  info.coupling = to_string(m.coupling_mode);
+  info.dt_s = m.dt;
+  info.bodies = m.num_bodies();
+  info.joints = m.num_joints();
+  info.joint_rows = m.articulation.num_rows;
+  info.nets = m.num_nets();
+  info.nodes = m.num_nodes();
+  info.net_springs = static_cast<int>(m.net_springs.size());
+  info.obstacles = static_cast<int>(m.obstacles.size());
+  info.body_spheres = static_cast<int>(m.body_spheres.size());
+  info.static_spheres = static_cast<int>(m.static_spheres.size());
+  info.materials = m.num_materials();
+  const std::uint32_t compiled = m.stage_plan;  // finalize_model() computed it
+  for (const core::StageDescription& s : core::step_stage_table()) {
+    const bool runs = (compiled & s.stage) != 0;
+    std::string why;
+    if (!runs) why = s.skipped_why != nullptr ? s.skipped_why : "";
+    // With nets the joints go through the net solve (net_solve.hpp), not the tree solve.
+    if (!runs && s.stage == core::kStageJointSolve && info.joints > 0) why = "joints solved with the nets";
+    info.stages.push_back(StageLine{s.name, runs, why});
+  }
+  info.max_contacts = core::kMaxContacts;
+  info.contact_capacity = core::contact_capacity(m);
+  info.cross_contact_capacity = core::cross_contact_capacity(m);
+  const core::Data data = core::make_data(m);
+  info.node_contact_capacity = static_cast<int>(data.node_contacts.size());
+  info.model_bytes = core::model_footprint(m);
+  info.data_bytes = core::data_footprint(data);
+  const hal::DeviceConfig& device = scene.device;
+  info.device_name = device.name;
+  info.device_kind = hal::to_string(device.kind);
+  info.device_managed = device.canopen.managed;
+  for (const hal::AxisConfig& a : device.axes) info.device_axes.push_back({a.name, a.rated_torque});
+  if (device.canopen.managed) {
+    for (std::size_t a = 0; a < device.canopen.axes.size(); ++a) {
+      const hal::CanopenAxisConfig& c = device.canopen.axes[a];
+      auto node = std::find_if(info.device_nodes.begin(), info.device_nodes.end(),
+                               [&](const DeviceNodeLine& n) { return n.node_id == c.node_id; });
+      if (node == info.device_nodes.end()) {
+        DeviceNodeLine n;
+        n.node_id = c.node_id;
+        if (c.dcf) n.dcf = std::filesystem::absolute(c.dcf->path).lexically_normal().string();
+        info.device_nodes.push_back(std::move(n));
+        node = info.device_nodes.end() - 1;
+      }
+      node->axes.push_back(static_cast<int>(a));
+    }
+  }
+  return info;
+}
+
+std::string format_scene_info(const SceneInfo& i) {
+  std::ostringstream os;
+  os << "scene " << i.name << " (" << i.file << ")\n";
+  os << "  integrator " << i.integrator << ", coupling " << i.coupling << ", dt " << i.dt_s * 1e3
+     << " ms\n";
+  os << "  sizes: " << i.bodies << " bodies (" << i.body_spheres << " spheres), " << i.joints
+     << " joints (" << i.joint_rows << " rows), " << i.nets << " nets (" << i.nodes << " nodes, "
+     << i.net_springs << " springs), " << i.obstacles << " obstacles (" << i.static_spheres
+     << " static spheres), " << i.materials << " materials\n";
+  os << "  stages of step(), in order:\n";
+  int k = 1;
+  for (const StageLine& s : i.stages) {
+    os << "    " << std::setw(2) << k++ << ". " << s.name;
+    if (!s.runs) os << "  -- skipped: " << s.skipped_why;
+    os << "\n";
+  }
+  os << "  capacities: contacts " << i.contact_capacity << " (compiled max " << i.max_contacts
+     << "), body-body contacts " << i.cross_contact_capacity << ", node contacts "
+     << i.node_contact_capacity << "\n";
+  os << "  Model: sizeof " << bytes(i.model_bytes.sizeof_model) << ", heap "
+     << bytes(i.model_bytes.heap_bytes()) << "\n";
+  for (const core::BufferGroupBytes& g : i.model_bytes.groups)
+    os << "    " << std::left << std::setw(24) << g.group << std::right << bytes(g.heap_bytes) << "\n";
+  os << "  Data: sizeof " << bytes(i.data_bytes.sizeof_data) << " (contact array "
+     << i.max_contacts << " x " << sizeof(core::Contact) << " B inside), heap "
+     << bytes(i.data_bytes.heap_bytes()) << "\n";
+  for (const core::BufferGroupBytes& g : i.data_bytes.groups)
+    os << "    " << std::left << std::setw(24) << g.group << std::right << bytes(g.heap_bytes) << "\n";
+  os << "  device " << i.device_name << ": " << i.device_kind << ", " << i.device_axes.size()
+     << " axes, " << (i.device_managed ? "managed CANopen stack" : "minimal protocol") << "\n";
+  for (const DeviceNodeLine& n : i.device_nodes) {
+    os << "    node " << n.node_id << ":";
+    for (int a : n.axes) os << " " << i.device_axes[static_cast<std::size_t>(a)].name;
+    os << (n.dcf.empty() ? " (no DCF)" : ", DCF " + n.dcf) << "\n";
+  }
+  return os.str();
+}
+
+std::string format_scene_info_json(const SceneInfo& i) {
+  nlohmann::ordered_json j;  // keys in insertion order
+  j["name"] = i.name;
+  j["file"] = i.file;
+  j["integrator"] = i.integrator;
+  j["coupling"] = i.coupling;
+  j["dt_s"] = i.dt_s;
+  j["sizes"] = {{"bodies", i.bodies},
+                {"body_spheres", i.body_spheres},
+                {"joints", i.joints},
+                {"joint_rows", i.joint_rows},
+                {"nets", i.nets},
+                {"nodes", i.nodes},
+                {"net_springs", i.net_springs},
+                {"obstacles", i.obstacles},
+                {"static_spheres", i.static_spheres},
+                {"materials", i.materials}};
+  nlohmann::ordered_json stages = nlohmann::ordered_json::array();
+  for (const StageLine& s : i.stages)
+    stages.push_back({{"name", s.name}, {"runs", s.runs}, {"skipped_why", s.skipped_why}});
+  j["stages"] = std::move(stages);
+  j["capacities"] = {{"max_contacts", i.max_contacts},
+                     {"contacts", i.contact_capacity},
+                     {"body_contacts", i.cross_contact_capacity},
+                     {"node_contacts", i.node_contact_capacity}};
+  j["model_bytes"] = {{"sizeof", i.model_bytes.sizeof_model},
+                      {"heap", i.model_bytes.heap_bytes()},
+                      {"groups", json_groups(i.model_bytes.groups)}};
+  j["data_bytes"] = {{"sizeof", i.data_bytes.sizeof_data},
+                     {"heap", i.data_bytes.heap_bytes()},
+                     {"groups", json_groups(i.data_bytes.groups)}};
+  nlohmann::ordered_json axes = nlohmann::ordered_json::array();
+  for (const DeviceAxisLine& a : i.device_axes) axes.push_back({{"name", a.name}, {"rated_torque", a.rated_torque}});
+  nlohmann::ordered_json nodes = nlohmann::ordered_json::array();
+  for (const DeviceNodeLine& n : i.device_nodes)
+    nodes.push_back({{"node_id", n.node_id}, {"dcf", n.dcf}, {"axes", n.axes}});
+  j["device"] = {{"name", i.device_name},
+                 {"kind", i.device_kind},
+                 {"managed", i.device_managed},
+                 {"axes", std::move(axes)},
+                 {"nodes", std::move(nodes)}};
+  // A scene's file name may hold bytes that are not UTF-8: replaced by U+FFFD instead of throwing.
+  return j.dump(-1, ' ', false, nlohmann::ordered_json::error_handler_t::replace);
+}
+
+}  // namespace numen::sim

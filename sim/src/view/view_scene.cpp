@@ -1,0 +1,138 @@
+#include "numen/sim/view/view_scene.hpp"
+
+#include <algorithm>
+
+#include <nlohmann/json.hpp>
+
+#include "numen/core/capacity.hpp"
+
+namespace numen::sim {
+namespace {
+
+using nlohmann::json;
+
+json vec3(const core::Vec3& v) { return json::array({v.x(), v.y(), v.z()}); }
+json quat(const core::Quat& q) { return json::array({q.x(), q.y(), q.z(), q.w()}); }
+json sphere(const core::Sphere& s) {
+  return json::array({s.center.x(), s.center.y(), s.center.z(), s.radius});
+}
+json pose(const core::Pose& p) { return json{{"position", vec3(p.position)}, {"orientation", quat(p.orientation)}}; }
+
+const char* shape_name(core::ShapeType t) {
+  switch (t) {
+    case core::ShapeType::kPlane: return "plane";
+    case core::ShapeType::kBox: return "box";
+    case core::ShapeType::kSphere: return "sphere";
+    case core::ShapeType::kCapsule: return "capsule";
+    case core::ShapeType::kSphereSet: return "sphere_set";
+  }
+  return "unknown";
+}
+
+json obstacle(const core::Model& m, const core::Obstacle& o) {
+  json j{{"name", o.name},
+         {"type", shape_name(o.type)},
+         {"position", vec3(o.pose.position)},
+         {"orientation", quat(o.pose.orientation)}};
+  switch (o.type) {
+    case core::ShapeType::kPlane: break;
+    case core::ShapeType::kBox: j["half_extents"] = vec3(o.half_extents); break;
+    case core::ShapeType::kSphere: j["radius"] = o.radius; break;
+    case core::ShapeType::kCapsule:
+      j["radius"] = o.radius;
+      j["half_length"] = o.half_length;
+      break;
+    case core::ShapeType::kSphereSet: {
+      json spheres = json::array();
+      for (int i = o.sphere_begin; i < o.sphere_begin + o.sphere_count; ++i)
+        spheres.push_back(sphere(m.static_spheres[static_cast<std::size_t>(i)]));
+      j["spheres"] = std::move(spheres);
+      break;
+    }
+  }
+  return j;
+}
+
+}  // namespace
+
+platform::StateFrameLayout view_frame_layout(const Scene& scene) {
+  const core::Model& m = scene.model;
+  platform::StateFrameLayout layout;
+  layout.num_bodies = static_cast<std::uint32_t>(m.num_bodies());
+  layout.num_nodes = static_cast<std::uint32_t>(m.num_nodes());
+  layout.num_axes = static_cast<std::uint32_t>(scene.device.axes.size());
+  layout.max_contacts =
+      static_cast<std::uint32_t>(core::kMaxContacts + (m.num_nets() > 0 ? core::kMaxNodeContacts : 0));
+  return layout;
+}
+
+std::string view_scene_message(const Scene& scene, const platform::StateFrameLayout& layout,
+                               double display_rate_hz) {
+  const core::Model& m = scene.model;
+  json bodies = json::array();
+  for (const core::BodyModel& b : m.bodies) {
+    json spheres = json::array();
+    for (int i = b.sphere_begin; i < b.sphere_begin + b.sphere_count; ++i)
+      spheres.push_back(sphere(m.body_spheres[static_cast<std::size_t>(i)]));
+    bodies.push_back({{"name", b.name}, {"spheres", std::move(spheres)}});
+  }
+  json obstacles = json::array();
+  for (const core::Obstacle& o : m.obstacles) obstacles.push_back(obstacle(m, o));
+  json nets = json::array();
+  for (std::size_t n = 0; n < m.nets.size(); ++n) {
+    const core::NetModel& net = m.nets[n];
+    json triangles = json::array();
+    if (n < scene.net_triangles.size())
+      for (const auto& t : scene.net_triangles[n]) triangles.push_back(json::array({t[0], t[1], t[2]}));
+    const double radius =
+        net.node_count > 0 ? m.node_radius[static_cast<std::size_t>(net.node_begin)] : 0.0;
+    nets.push_back({{"name", net.name},
+                    {"body", net.body},
+                    {"node_begin", net.node_begin},
+                    {"node_count", net.node_count},
+                    {"node_radius", radius},
+                    {"triangles", std::move(triangles)}});
+  }
+  json joints = json::array();
+  for (const core::JointModel& j : m.joints)
+    joints.push_back({{"name", j.name},
+                      {"type", core::to_string(j.type)},
+                      {"parent", j.parent},
+                      {"child", j.child},
+                      {"prescribed", j.prescribed},
+                      {"frame_parent", pose(j.frame_parent)},
+                      {"frame_child", pose(j.frame_child)}});
+  json axes = json::array();
+  for (const hal::AxisConfig& a : scene.device.axes) axes.push_back(a.name);
+  const json message{
+      {"format", "numen-view"},
+      {"version", kViewSceneVersion},
+      {"frame_version", platform::kStateFrameVersion},
+      {"scene", scene.name},
+      {"description", scene.description},
+      {"dt", m.dt},
+      // The stream sends at most one frame per period: a faster rate asked is the period's.
+      {"display_rate_hz", std::min(display_rate_hz, 1.0 / m.dt)},
+      {"layout",
+       {{"bodies", layout.num_bodies},
+        {"nodes", layout.num_nodes},
+        {"axes", layout.num_axes},
+        {"max_contacts", layout.max_contacts}}},
+      {"attached_body", m.initial_attached_body},
+      {"bodies", std::move(bodies)},
+      {"obstacles", std::move(obstacles)},
+      {"nets", std::move(nets)},
+      {"joints", std::move(joints)},
+      {"device",
+       {{"name", scene.device.name},
+        {"kind", hal::to_string(scene.device.kind)},
+        // What the frames' lifecycle, start-up and wrench fields mean (docs/viewer.md):
+        // "managed" CANopen (NMT start-up, CiA 402), "minimal" (no start-up), "admittance"
+        // (no start-up; the wrench is the measured one, no axis torque).
+        {"protocol", scene.admittance ? "admittance" : scene.device.canopen.managed ? "managed" : "minimal"},
+        {"axes", std::move(axes)}}}};
+  // Non-finite numbers (an infinite plane has none, but a user's scene might) become null.
+  return message.dump(-1, ' ', false, json::error_handler_t::replace);
+}
+
+}  // namespace numen::sim

@@ -1,0 +1,216 @@
+// Tests of numen/sim/run/divergence.hpp: each physics bound latches its named cause with the
+// quantity and its limit, a passive state stays below every bound, and observe() never
+// allocates.
+
+#include "numen/sim/run/divergence.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "alloc_counter.hpp"
+#include "build_features.hpp"
+#include "lean_scenes.hpp"
+#include "numen/core/data.hpp"
+#include "numen/core/step.hpp"
+#include "numen/sim/run/energy.hpp"
+
+namespace {
+
+using numen::core::Data;
+using numen::core::Model;
+using numen::core::Vec3;
+using numen::sim::DivergenceMonitor;
+using numen::test::LeanPart;
+
+/// The lean tool held at its start, its target where it is (nothing moves, nothing is put in).
+Data held_at_rest(const Model& m) {
+  Data d = numen::core::make_data(m);
+  d.target.position = d.bodies[0].position;
+  d.target.orientation = d.bodies[0].orientation;
+  return d;
+}
+
+TEST(DivergenceMonitor, AStateAtRestStaysBelowEveryBound) {
+  const Model m = numen::test::make_lean_model(LeanPart::kObstacle);
+  Data d = held_at_rest(m);
+  DivergenceMonitor monitor(m, d);
+  for (int k = 0; k < 500; ++k) {
+    numen::core::step(m, d);
+    EXPECT_FALSE(monitor.observe(m, d, k, k * m.dt));
+  }
+  EXPECT_EQ(monitor.divergence().cause, nullptr);
+  EXPECT_LT(monitor.speed_ratio_max(), 1.0);
+  EXPECT_LT(monitor.energy_ratio_max(), 1.0);
+  // The scene is the tool's bounds (the floor plane is unbounded): 2·(0.03 m) along z, the
+  // bounding radius 0.03 m along x and y.
+  EXPECT_NEAR(monitor.scene_size_m(), std::sqrt(3.0) * 0.06, 1e-12);
+}
+
+TEST(DivergenceMonitor, ABodyFasterThanTheSceneAllowsLatchesBodySpeed) {
+  Model m = numen::test::make_lean_model(LeanPart::kNone);
+  m.coupling_mode = numen::core::CouplingMode::kDirect;  // no energy bound: speeds alone
+  ASSERT_EQ(numen::core::finalize_model(m), "");         // edited: its stage plan again
+  Data d = held_at_rest(m);
+  DivergenceMonitor monitor(m, d);
+  // v_ref = max(hand 0, √(2 g H) with H = 0.06 m the tool's height: 1.085 m/s, floor 0.5 m/s)
+  // → limit 10.85 m/s.
+  const double limit = 10.0 * std::sqrt(2.0 * 9.81 * 0.06);
+  EXPECT_NEAR(monitor.fall_speed_mps(), limit / 10.0, 1e-12);
+  EXPECT_NEAR(monitor.speed_limit_mps(), limit, 1e-12);
+  EXPECT_FALSE(monitor.observe(m, d, 0, 0.0));
+  d.bodies[0].linear_velocity = Vec3(0.0, 0.99 * limit, 0.0);
+  EXPECT_FALSE(monitor.observe(m, d, 1, m.dt)) << "below the limit";
+  d.bodies[0].linear_velocity = Vec3(0.0, 55.0, 0.0);  // the construction block at k_t = 1e12
+  EXPECT_TRUE(monitor.observe(m, d, 2, 2 * m.dt));
+  const numen::sim::Divergence& v = monitor.divergence();
+  ASSERT_NE(v.cause, nullptr);
+  EXPECT_EQ(std::string(v.cause), "body speed");
+  EXPECT_EQ(v.body, 0);
+  EXPECT_DOUBLE_EQ(v.value, 55.0);
+  EXPECT_NEAR(v.limit, limit, 1e-9);
+  EXPECT_EQ(v.period, 2);
+  EXPECT_FALSE(monitor.observe(m, d, 3, 3 * m.dt)) << "latched once";
+  EXPECT_EQ(monitor.divergence().period, 2);
+}
+
+TEST(DivergenceMonitor, TheHandsOwnSpeedRaisesTheSpeedLimit) {
+  Model m = numen::test::make_lean_model(LeanPart::kNone);
+  m.coupling_mode = numen::core::CouplingMode::kDirect;  // no energy bound: speeds alone
+  ASSERT_EQ(numen::core::finalize_model(m), "");         // edited: its stage plan again
+  Data d = held_at_rest(m);
+  DivergenceMonitor monitor(m, d);
+  d.target_twist.linear = Vec3(3.0, 0.0, 0.0);  // a fast hand: limit 10 × 3 m/s
+  d.bodies[0].linear_velocity = Vec3(25.0, 0.0, 0.0);
+  EXPECT_FALSE(monitor.observe(m, d, 0, 0.0));
+  d.bodies[0].linear_velocity = Vec3(31.0, 0.0, 0.0);
+  EXPECT_TRUE(monitor.observe(m, d, 1, m.dt));
+  EXPECT_NEAR(monitor.divergence().limit, 30.0, 1e-12);
+}
+
+// A held sample that jumps to the hand's pose after a link outage steps the coupling target:
+// the spring swings the tool at Δ √(k/m), which is the hand's doing, not a divergence (the HIL
+// scenario run_device_link: a 1 s outage, the tube at 5.02 m/s against a 5 m/s limit).
+TEST(DivergenceMonitor, ATargetThatStepsRaisesTheSpeedLimitByTheSpringsStepResponse) {
+  Model m = numen::test::make_lean_model(LeanPart::kNone);
+  ASSERT_EQ(m.coupling_mode, numen::core::CouplingMode::kGodObject);
+  Data d = held_at_rest(m);
+  DivergenceMonitor monitor(m, d);
+  const double before = monitor.speed_limit_mps();
+  EXPECT_FALSE(monitor.observe(m, d, 0, 0.0));
+  const double jump = 0.2;  // m
+  d.target.position += Vec3(jump, 0.0, 0.0);
+  const double omega = std::sqrt(m.bodies[0].coupling.k_t / m.bodies[0].mass);
+  ASSERT_LT(omega, 1.0 / m.dt);
+  const numen::core::Pose from{d.bodies[0].position, d.bodies[0].orientation};
+  EXPECT_NEAR(numen::sim::step_response_speed(m, d, 0, from, d.target, numen::core::Twist{}),
+              jump * omega, 1e-12);
+  // A target whose twist explains the step (a hand moving at Δ/h) is no jump.
+  numen::core::Twist moving;
+  moving.linear = Vec3(jump / m.dt, 0.0, 0.0);
+  EXPECT_EQ(numen::sim::step_response_speed(m, d, 0, from, d.target, moving), 0.0);
+  // Integrate the swing: the tool's peak stays below the raised limit, which is 10 × Δ ω_n.
+  double peak = 0.0;
+  for (int k = 1; k < 2000; ++k) {
+    numen::core::step(m, d);
+    EXPECT_FALSE(monitor.observe(m, d, k, k * m.dt)) << "period " << k;
+    peak = std::max(peak, d.bodies[0].linear_velocity.norm());
+  }
+  EXPECT_NEAR(monitor.speed_limit_mps(), std::max(before, 10.0 * jump * omega), 1e-9);
+  EXPECT_GT(peak, 0.3 * jump * omega) << "the step did swing the tool";
+  EXPECT_LE(peak, jump * omega * 1.01) << "Δ ω_n bounds the swing";
+}
+
+TEST(DivergenceMonitor, ANodeTornFromItsAnchorLatchesTieStretch) {
+  NUMEN_REQUIRE_DEFORMABLE();
+  const Model m = numen::test::make_lean_model(LeanPart::kNet);
+  Data d = held_at_rest(m);
+  DivergenceMonitor monitor(m, d);
+  EXPECT_FALSE(monitor.observe(m, d, 0, 0.0));
+  d.nodes[3].position += Vec3(0.0, 0.0, 0.029);  // the net's radius is 0.03 m
+  EXPECT_FALSE(monitor.observe(m, d, 1, m.dt));
+  EXPECT_GT(monitor.stretch_ratio_max(), 0.95);
+  d.nodes[3].position += Vec3(0.0, 0.0, 0.002);
+  EXPECT_TRUE(monitor.observe(m, d, 2, 2 * m.dt));
+  EXPECT_EQ(std::string(monitor.divergence().cause), "tie stretch");
+  EXPECT_EQ(monitor.divergence().net, 0);
+  EXPECT_NEAR(monitor.divergence().limit, 0.03, 1e-12);
+  // A node at 933 m/s (the endobag at k_t = 1e12) is a node speed.
+  Data e = held_at_rest(m);
+  DivergenceMonitor fast(m, e);
+  e.nodes[0].velocity = Vec3(933.0, 0.0, 0.0);
+  EXPECT_TRUE(fast.observe(m, e, 0, 0.0));
+  EXPECT_EQ(std::string(fast.divergence().cause), "node speed");
+}
+
+TEST(DivergenceMonitor, EnergyNobodyPutInLatchesEnergy) {
+  Model m = numen::test::make_lean_model(LeanPart::kNone);
+  m.bodies[0].mass = 100.0;  // heavy and slow: below every speed limit, far above the energy
+  Data d = held_at_rest(m);
+  DivergenceMonitor monitor(m, d);
+  EXPECT_FALSE(monitor.observe(m, d, 0, 0.0));
+  d.bodies[0].linear_velocity = Vec3(0.0, 0.1, 0.0);  // ½ m v² = 0.5 J: 50 × the 0.01 J floor
+  EXPECT_FALSE(monitor.observe(m, d, 1, m.dt));
+  EXPECT_NEAR(monitor.energy_ratio_max(), 50.0, 1.0);
+  d.bodies[0].linear_velocity = Vec3(0.0, 1.0, 0.0);  // 50 J
+  EXPECT_TRUE(monitor.observe(m, d, 2, 2 * m.dt));
+  EXPECT_EQ(std::string(monitor.divergence().cause), "energy");
+  EXPECT_LT(monitor.speed_ratio_max(), 1.0);
+}
+
+TEST(DivergenceMonitor, WorkTheHandPutsInThroughTheCouplingIsAllowed) {
+  // The hand pulls the tool 10 cm away and holds it there: the spring's potential is the hand's
+  // work (the jump at the unchanged state), so the ratio stays at about 1, not E / floor.
+  const Model m = numen::test::make_lean_model(LeanPart::kNone);
+  Data d = held_at_rest(m);
+  DivergenceMonitor monitor(m, d);
+  d.target.position += Vec3(0.1, 0.0, 0.0);  // ½ · 400 · 0.01 = 2 J
+  for (int k = 0; k < 2000; ++k) {
+    numen::core::step(m, d);
+    ASSERT_FALSE(monitor.observe(m, d, k, k * m.dt)) << k;
+  }
+  EXPECT_LE(monitor.energy_ratio_max(), 1.0 + 1e-9);
+  EXPECT_GT(monitor.energy_ratio_max(), 0.5);
+}
+
+TEST(DivergenceMonitor, AToolThatStartsInsideAnObstacleMayBePushedOut) {
+  // The lean tool's lowest sphere 15 mm into the floor, its target where it is: the contacts'
+  // potential at the start pushes it out. That energy is the scene's, and the speed it can give
+  // the tool, √(2 E_c0 / m), raises the speed limit (the held-out trials that start inside the
+  // organ; RunRecordedTrials.*).
+  Model m = numen::test::make_lean_model(LeanPart::kObstacle);
+  m.bodies[0].initial_pose.position = Vec3(0.0, 0.0, 0.015);
+  Data d = held_at_rest(m);
+  d.bodies[0].position = m.bodies[0].initial_pose.position;
+  d.target.position = d.bodies[0].position;
+  DivergenceMonitor monitor(m, d);
+  numen::core::step(m, d);
+  ASSERT_GT(d.num_contacts, 0);
+  const double e_c0 = numen::sim::contact_energy(m, d);
+  EXPECT_FALSE(monitor.observe(m, d, 0, 0.0));
+  EXPECT_NEAR(monitor.speed_limit_mps(),
+              10.0 * std::max(std::sqrt(2.0 * e_c0 / m.bodies[0].mass), monitor.fall_speed_mps()),
+              1e-9);
+  for (int k = 1; k < 1000; ++k) {
+    numen::core::step(m, d);
+    ASSERT_FALSE(monitor.observe(m, d, k, k * m.dt)) << k << ": " << monitor.divergence().cause;
+  }
+  EXPECT_LT(monitor.energy_ratio_max(), 1.0 + 1e-9);
+}
+
+TEST(DivergenceMonitor, ObserveDoesNotAllocate) {
+  NUMEN_REQUIRE_DEFORMABLE();
+  const Model m = numen::test::make_lean_model(LeanPart::kNet);
+  Data d = held_at_rest(m);
+  DivergenceMonitor monitor(m, d);
+  numen::test::AllocationGuard guard;
+  for (int k = 0; k < 100; ++k) monitor.observe(m, d, k, k * m.dt);
+  d.nodes[0].velocity = Vec3(933.0, 0.0, 0.0);
+  monitor.observe(m, d, 100, 0.1);
+  EXPECT_EQ(guard.count(), 0);
+  EXPECT_NE(monitor.divergence().cause, nullptr);
+}
+
+}  // namespace

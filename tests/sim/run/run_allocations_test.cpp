@@ -1,0 +1,120 @@
+// Tests of sim/run: a period of every shipped scene never allocates (SceneRunner, with a
+// connected state-stream consumer).
+#include "numen/sim/run/run.hpp"
+
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+
+#include <atomic>
+
+#include <algorithm>
+#include <bit>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <memory>
+#include <numbers>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "alloc_counter.hpp"
+#include "child_process.hpp"
+#include "run_scenes.hpp"
+#include "scene_text.hpp"
+#include "temp_dir.hpp"
+#include "numen/core/data.hpp"
+#include "numen/core/features.hpp"
+#include "numen/hal/device/kinematics_factory.hpp"
+#include "numen/sim/input/jigsaws.hpp"
+#include "numen/sim/run/run_verdict.hpp"
+#include "numen/sim/scene/scene.hpp"
+#include "numen/sim/device/simulated_instrument.hpp"
+#include "build_features.hpp"
+#include "numen/hal/canopen/emcy.hpp"
+#include "sanitizer.hpp"
+
+namespace {
+
+using namespace numen::test::run_scenes;
+
+// ---------------------------------------------------------------- zero allocations
+
+/// A state-stream consumer that only counts (stands in for a connected viewer).
+class CountingViewSink final : public numen::platform::StateFrameSink {
+ public:
+  bool write_frame(std::span<const std::byte> frame) noexcept override {
+    frames.fetch_add(1);
+    bytes.fetch_add(frame.size());
+    return true;
+  }
+  std::atomic<std::int64_t> frames{0}, bytes{0};
+};
+
+void expect_no_allocation(const Scene& scene, const char* name) {
+  SceneRunner runner(scene, 10'000);  // construction allocates (trace storage too)
+  // A viewer is connected: the state stream publishes every period (1 kHz, its worst case).
+  CountingViewSink viewer;
+  runner.stream_view("", {&viewer}, 1.0 / scene.model.dt, false);
+  std::int64_t count = -1;
+  {
+    numen::test::AllocationGuard guard;
+    for (int k = 0; k < 10'000; ++k) runner.period();
+    count = guard.count();
+  }
+  EXPECT_EQ(count, 0) << name << ": heap allocations in 10,000 periods";
+  EXPECT_EQ(runner.periods(), 10'000);
+  EXPECT_EQ(runner.trace().records().size(), 10'000u);
+  runner.finish();
+  const RunSummary s = runner.summary();
+  EXPECT_EQ(s.view_frames_published + s.view_frames_dropped, 10'000) << name;
+  EXPECT_EQ(viewer.frames.load(), s.view_frames_published) << name;
+  EXPECT_GT(s.contacts_max + s.node_contacts_max, 0)
+      << name << ": the contact path was not exercised";
+  if (scene.model.num_nets() > 0) {
+    EXPECT_GT(s.node_contacts_max, 0) << name << ": the nets never touched anything";
+  }
+  EXPECT_FALSE(s.nan_detected);
+}
+
+TEST(RunAllocations, DefaultScenePeriodNeverAllocates) {
+  NUMEN_REQUIRE_ARTICULATION();
+  expect_no_allocation(default_scene(), "default");
+}
+
+TEST(RunAllocations, ConstructionScenePeriodNeverAllocates) {
+  expect_no_allocation(construction_scene(), "construction");
+}
+
+TEST(RunAllocations, PhantomScenePeriodNeverAllocates) {
+  NUMEN_REQUIRE_ARTICULATION();
+  expect_no_allocation(phantom_scene(), "phantom");  // 6 s scene: the trajectory holds its end
+}
+
+TEST(RunAllocations, DeformableScenePeriodNeverAllocates) {
+  NUMEN_SKIP_UNDER_SANITIZER(kDeformableRunTooSlow);
+  NUMEN_REQUIRE_DEFORMABLE();
+  expect_no_allocation(deformable_scene(), "deformable");  // the post contact is at 2.7–3.2 s
+}
+
+TEST(RunAllocations, EndobagScenePeriodNeverAllocates) {
+  NUMEN_SKIP_UNDER_SANITIZER(kDeformableRunTooSlow);
+  NUMEN_REQUIRE_DEFORMABLE();
+  NUMEN_REQUIRE_ARTICULATION();
+  expect_no_allocation(endobag_scene(), "endobag");
+}
+
+TEST(RunAllocations, MouseScenePeriodNeverAllocates) {
+  NUMEN_REQUIRE_EVDEV();  // the scene names its event codes
+  expect_no_allocation(mouse_scene(), "mouse");  // 5 s scene: the trajectory holds its end
+}
+
+}  // namespace

@@ -1,0 +1,146 @@
+// Tests of sim/run with the options of run_options.hpp: the real-time setup, the overrun
+// policy of paced runs and the re-arm request.
+#include "numen/sim/run/run.hpp"
+
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+
+#include <atomic>
+
+#include <algorithm>
+#include <bit>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <memory>
+#include <numbers>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "alloc_counter.hpp"
+#include "child_process.hpp"
+#include "run_scenes.hpp"
+#include "scene_text.hpp"
+#include "temp_dir.hpp"
+#include "numen/core/data.hpp"
+#include "numen/core/features.hpp"
+#include "numen/hal/device/kinematics_factory.hpp"
+#include "numen/sim/input/jigsaws.hpp"
+#include "numen/sim/run/run_verdict.hpp"
+#include "numen/sim/scene/scene.hpp"
+#include "numen/sim/device/simulated_instrument.hpp"
+#include "build_features.hpp"
+#include "numen/hal/canopen/emcy.hpp"
+#include "sanitizer.hpp"
+
+namespace {
+
+using namespace numen::test::run_scenes;
+
+// RunOptions::rt (run_options.hpp): the real-time setup is applied on the running
+// thread and reported step by step; a step that fails (a CPU that does not
+// exist) is reported without stopping the run, unless strict. Run in its own
+// thread so the test runner's scheduling and affinity are left alone.
+TEST(RunRealtimeSetup, StepsAreReportedAndAFailureDoesNotStopTheRun) {
+  NUMEN_REQUIRE_ARTICULATION();
+  RunSummary s;
+  std::thread t([&] {
+    numen::sim::RunOptions opt;
+    opt.duration_s = 0.05;
+    opt.rt.cpu_affinity = {4095};  // no such CPU here
+    s = numen::sim::run_scene(default_scene(), opt);
+  });
+  t.join();
+  EXPECT_EQ(s.steps, 50);
+  ASSERT_FALSE(s.realtime_setup.empty());
+  bool affinity_failed = false;
+  for (const std::string& line : s.realtime_setup)
+    affinity_failed = affinity_failed || (line.find("affinity") != std::string::npos &&
+                                          line.find("FAILED") != std::string::npos);
+  EXPECT_TRUE(affinity_failed);
+  const nlohmann::json setup =
+      nlohmann::json::parse(numen::sim::format_summary_json(s)).at("realtime_setup");
+  ASSERT_EQ(setup.size(), s.realtime_setup.size());
+  EXPECT_EQ(setup.at(0), s.realtime_setup[0]);
+
+  bool threw = false;
+  std::thread strict([&] {
+    numen::sim::RunOptions opt;
+    opt.duration_s = 0.05;
+    opt.rt.cpu_affinity = {4095};
+    opt.rt.strict = true;
+    try {
+      numen::sim::run_scene(default_scene(), opt);
+    } catch (const std::runtime_error&) {
+      threw = true;
+    }
+  });
+  strict.join();
+  EXPECT_TRUE(threw);
+}
+
+TEST(RunRealtimeSetup, NothingRequestedReportsNothing) {
+  NUMEN_REQUIRE_ARTICULATION();
+  numen::sim::RunOptions opt;
+  opt.duration_s = 0.01;
+  EXPECT_TRUE(numen::sim::run_scene(default_scene(), opt).realtime_setup.empty());
+}
+
+TEST(RunOverrunPolicy, PacedRunsLatchAfterTheLimitAndZeroOnlyCounts) {
+  NUMEN_REQUIRE_ARTICULATION();
+  const auto paced = numen::sim::control_loop_settings(true, 5);
+  EXPECT_TRUE(paced.supervise_overruns);
+  EXPECT_EQ(paced.overrun_limit, 5u);
+  const auto count_only = numen::sim::control_loop_settings(true, 0);
+  EXPECT_FALSE(count_only.supervise_overruns);
+  EXPECT_GE(count_only.overrun_limit, 1u);  // a valid setting even when unused
+  // A run as fast as possible has no deadlines, whatever the limit.
+  EXPECT_FALSE(numen::sim::control_loop_settings(false, 3).supervise_overruns);
+  // The policy in effect is reported in the summary.
+  numen::sim::RunOptions opt;
+  opt.duration_s = 0.01;
+  opt.realtime = true;
+  opt.overrun_limit = 0;
+  const RunSummary s = numen::sim::run_scene(default_scene(), opt);
+  EXPECT_EQ(s.overrun_limit, 0u);
+  EXPECT_NE(numen::sim::format_summary(s).find("overrun policy: count only"), std::string::npos);
+  // The minimal protocol has no supervisor to latch: its run reports count only, whatever the
+  // limit asked (it used to print "latch after 3").
+  Scene minimal = default_scene();
+  minimal.device.canopen.managed = false;
+  opt.overrun_limit = 3;
+  const RunSummary m = numen::sim::run_scene(minimal, opt);
+  EXPECT_FALSE(m.managed);
+  EXPECT_EQ(m.overrun_limit, 0u);
+  EXPECT_NE(numen::sim::format_summary(m).find("overrun policy: count only"), std::string::npos);
+  const RunSummary managed = numen::sim::run_scene(default_scene(), opt);
+  EXPECT_EQ(managed.overrun_limit, 3u);
+  // Unpaced: no deadlines, nothing latches, whatever the limit (its JSON said 3).
+  opt.realtime = false;
+  EXPECT_EQ(numen::sim::run_scene(default_scene(), opt).overrun_limit, 0u);
+}
+
+TEST(RunRearm, ARequestIsTakenOnceBeforeThePeriodAndReported) {
+  NUMEN_REQUIRE_ARTICULATION();
+  std::atomic<bool> rearm{true};
+  numen::sim::RunOptions opt;
+  opt.duration_s = 0.02;
+  opt.rearm = &rearm;
+  const RunSummary s = numen::sim::run_scene(default_scene(), opt);
+  EXPECT_FALSE(rearm.load());
+  EXPECT_EQ(s.rearm_requests, 1);
+  EXPECT_EQ(s.rearm_first_period, 0);
+  EXPECT_EQ(s.rearms_accepted, 0);  // nothing latched at period 0: ControlLoop says kNotLatched
+  EXPECT_NE(numen::sim::format_summary(s).find("re-arm: 1 request(s), 0 accepted"), std::string::npos);
+}
+
+}  // namespace

@@ -1,0 +1,168 @@
+// Tests of sim/run_verdict: the exit status of a finished run from its summary (issue 17,
+// defect 4: runs with non-finite steps, rejected samples, no replayed frame or lost records
+// used to exit 0).
+
+#include "numen/sim/run/run_verdict.hpp"
+
+#include <gtest/gtest.h>
+
+#include <string>
+#include <vector>
+
+#include "numen/sim/run/run_summary.hpp"
+
+namespace {
+
+using numen::sim::ExitStatus;
+using numen::sim::RunSummary;
+using numen::sim::run_verdict;
+
+RunSummary clean() {
+  RunSummary s;
+  s.steps = 1000;
+  s.invalid_periods = 2;  // the periods before the first sample
+  return s;
+}
+
+TEST(RunVerdict, CleanRunIsZeroWithNoReason) {
+  const auto v = run_verdict(clean());
+  EXPECT_EQ(v.status, ExitStatus::kClean);
+  EXPECT_EQ(code(v.status), 0);
+  EXPECT_TRUE(v.reasons.empty());
+}
+
+TEST(RunVerdict, EachConditionHasItsStatus) {
+  RunSummary s = clean();
+  s.nonfinite_steps = 3;
+  EXPECT_EQ(run_verdict(s).status, ExitStatus::kNonFinite);
+  s = clean();
+  s.nan_detected = true;
+  EXPECT_EQ(run_verdict(s).status, ExitStatus::kNonFinite);
+  s = clean();
+  s.faults = 1;
+  s.first_fault = "encoder out of range";
+  EXPECT_EQ(run_verdict(s).status, ExitStatus::kSafetyStop);
+  s = clean();
+  s.managed = true;
+  s.startup = "failed (node 3)";
+  EXPECT_EQ(run_verdict(s).status, ExitStatus::kSafetyStop);
+  s = clean();
+  s.bus_frames_recorded = 100;
+  s.bus_record_written = 100;
+  s.bus_record_dropped = 1;
+  EXPECT_EQ(run_verdict(s).status, ExitStatus::kLostRecords);
+  s = clean();
+  s.bus_frames_recorded = 100;
+  s.bus_record_written = 0;  // /dev/full
+  s.bus_record_io_errors = 2;
+  EXPECT_EQ(run_verdict(s).status, ExitStatus::kLostRecords);
+  s = clean();
+  s.trace_pushed = 10;
+  s.trace_written = 9;
+  EXPECT_EQ(run_verdict(s).status, ExitStatus::kLostRecords);
+  s = clean();
+  s.rejected_samples = 1;
+  EXPECT_EQ(run_verdict(s).status, ExitStatus::kSamplesRejected);
+  s = clean();
+  s.invalid_periods = s.steps;
+  EXPECT_EQ(run_verdict(s).status, ExitStatus::kSamplesRejected);
+  s.stopped = true;  // a signal ended it before the first sample: not the input's fault
+  EXPECT_EQ(run_verdict(s).status, ExitStatus::kClean);
+  s = clean();
+  s.bus = "log:x.log";
+  s.bus_frames_replayed = 0;
+  EXPECT_EQ(run_verdict(s).status, ExitStatus::kSamplesRejected);
+}
+
+TEST(RunVerdict, TheMostSevereConditionWinsAndEveryOneIsListed) {
+  RunSummary s = clean();
+  s.rejected_samples = 5;
+  s.faults = 1;
+  s.nonfinite_steps = 7;
+  const auto v = run_verdict(s);
+  EXPECT_EQ(v.status, ExitStatus::kNonFinite);
+  ASSERT_EQ(v.reasons.size(), 3u);
+  EXPECT_EQ(v.reasons[0], "non-finite state: 7 steps");
+  EXPECT_EQ(v.reasons[1].rfind("safety stop: 1 safe state(s) latched", 0), 0u) << v.reasons[1];
+  EXPECT_EQ(v.reasons[2], "samples rejected: 5 axis samples rejected");
+}
+
+// A run a signal stopped returned 128 + N, but its summary said "exit status 0 (clean)" with no
+// reason: the verdict carries the status the process returns and names the signal.
+TEST(RunVerdict, AStoppedRunCarriesTheSignalsStatusAndName) {
+  RunSummary s = clean();
+  s.stopped = true;
+  s.stop_signal = 15;
+  auto v = run_verdict(s);
+  EXPECT_EQ(v.status, ExitStatus::kClean);
+  EXPECT_EQ(v.exit_status, 143);
+  EXPECT_EQ(v.reasons, std::vector<std::string>{"stopped by a signal: SIGTERM (15) after 1000 periods"});
+  EXPECT_STREQ(numen::sim::exit_status_name(v.exit_status), "stopped by a signal");
+  s.stop_signal = 2;
+  EXPECT_EQ(run_verdict(s).exit_status, 130);
+  EXPECT_EQ(run_verdict(s).reasons.at(0), "stopped by a signal: SIGINT (2) after 1000 periods");
+  // A worse verdict keeps its status; the signal is its last reason.
+  s.rejected_samples = 4;
+  v = run_verdict(s);
+  EXPECT_EQ(v.exit_status, 6);
+  ASSERT_EQ(v.reasons.size(), 2u);
+  EXPECT_EQ(v.reasons[1], "stopped by a signal: SIGINT (2) after 1000 periods");
+  // Not stopped: the status is the verdict's, no signal named.
+  EXPECT_EQ(run_verdict(clean()).exit_status, 0);
+  EXPECT_STREQ(numen::sim::exit_status_name(0), "clean");
+  EXPECT_STREQ(numen::sim::exit_status_name(6), "samples rejected");
+  EXPECT_STREQ(numen::sim::exit_status_name(7), "diverged");
+  EXPECT_STREQ(numen::sim::exit_status_name(8), "?");
+  EXPECT_STREQ(numen::sim::exit_status_name(99), "?");
+  // Every status the verdict can give has its name (the HIL scripts print it).
+  for (int status = 0; status <= 7; ++status)
+    EXPECT_STRNE(numen::sim::exit_status_name(status), "?") << status;
+}
+
+// A run that ends before the managed start-up has made the encoders send said "no period had
+// a valid sample": it names the start-up that never finished and the periods the run had.
+TEST(RunVerdict, ARunEndedBeforeTheStartUpFinishedSaysSo) {
+  RunSummary s = clean();
+  s.steps = 33;
+  s.invalid_periods = 33;
+  s.managed = true;
+  s.startup = "wait operational";
+  const auto v = run_verdict(s);
+  EXPECT_EQ(v.status, ExitStatus::kSamplesRejected);
+  EXPECT_EQ(v.reasons, std::vector<std::string>{
+                           "samples rejected: no period had a valid sample: the run's 33 periods "
+                           "ended before the CANopen start-up finished (still in phase 'wait "
+                           "operational'); the encoders send once their nodes are operational: "
+                           "run longer"});
+  s.startup = "operational";  // it finished: the frames are to blame
+  EXPECT_EQ(run_verdict(s).reasons,
+            std::vector<std::string>{"samples rejected: no period had a valid sample"});
+}
+
+// Encoder frames of the wrong kind (CAN FD, remote) or length reject their samples: the verdict
+// counts and names them, beside whatever the run latched (it read "first: drive stuck" only).
+TEST(RunVerdict, RejectedEncoderFramesAreNamed) {
+  RunSummary s = clean();
+  s.faults = 1;
+  s.first_fault = "drive stuck";
+  s.frames_rejected = 4950;
+  s.encoder_frames_fd = 4950;
+  const auto v = run_verdict(s);
+  EXPECT_EQ(v.status, ExitStatus::kSafetyStop);
+  ASSERT_EQ(v.reasons.size(), 2u);
+  EXPECT_EQ(v.reasons[1],
+            "samples rejected: 4950 encoder frames rejected (CAN FD 4950, remote 0, wrong length "
+            "0): encoder TPDOs are classic CAN data frames of their mapped length");
+}
+
+TEST(RunVerdict, StatusesAreDistinctAndNamed) {
+  EXPECT_STREQ(to_string(ExitStatus::kClean), "clean");
+  EXPECT_STREQ(to_string(ExitStatus::kSafetyStop), "safety stop");
+  EXPECT_EQ(code(ExitStatus::kInputRejected), 2);
+  EXPECT_EQ(code(ExitStatus::kSafetyStop), 3);
+  EXPECT_EQ(code(ExitStatus::kNonFinite), 4);
+  EXPECT_EQ(code(ExitStatus::kLostRecords), 5);
+  EXPECT_EQ(code(ExitStatus::kSamplesRejected), 6);
+}
+
+}  // namespace

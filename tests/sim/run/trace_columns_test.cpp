@@ -1,0 +1,155 @@
+// Tests of sim/trace_columns: both traces' headers and rows come from one column table, so
+// every column of the table is in the header and each row holds the table's values in the
+// header's order — for the in-memory CSV of a simulated run and for the streamed trace of a
+// real-bus run (the table's streamed columns, under the same names), whose period stays
+// allocation-free.
+#include "numen/sim/run/trace_columns.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <array>
+#include <filesystem>
+#include <fstream>
+#include <span>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "alloc_counter.hpp"
+#include "csv_lines.hpp"
+#include "numen/sim/run/run.hpp"
+#include "numen/sim/scene/scene.hpp"
+#include "temp_dir.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+using numen::sim::TraceRecord;
+
+using numen::test::read_lines;
+using numen::test::split_csv;
+
+/// A record whose every field has its own value, exact in 9 significant digits.
+TraceRecord distinct_record() {
+  TraceRecord r;
+  double v = 0.0;
+  const auto next = [&v] { return v += 0.125; };
+  r.time_s = next();
+  r.attached_body = 2;
+  r.frames_read = 7;
+  r.sample_valid = true;
+  r.torque_commanded = true;
+  r.lifecycle = 8;
+  r.target.position = {next(), next(), next()};
+  r.target.orientation = numen::core::Quat(next(), next(), next(), next());
+  r.tool.position = {next(), next(), next()};
+  r.tool.orientation = numen::core::Quat(next(), next(), next(), next());
+  r.contacts = 3;
+  r.tool_contacts = 4;
+  r.tool_penetration_mm = next();
+  r.target_penetration_mm = next();
+  r.feedback.force = {next(), next(), next()};
+  r.feedback.torque = {next(), next(), next()};
+  r.num_axes = 3;
+  for (int a = 0; a < 3; ++a) r.axis_torque[static_cast<std::size_t>(a)] = -next();
+  r.step_time_us = next();
+  r.end_to_end_us = next();
+  r.wakeup_latency_us = next();
+  r.solver_iterations = 5;
+  r.joint_drift_mm = next();
+  r.joint_angle_drift_mrad = next();
+  r.joint_reaction_max_n = next();
+  r.baumgarte_rhs_max = next();
+  r.node_contacts = 6;
+  r.net_penetration_mm = next();
+  r.net_tie_stretch_mm = next();
+  r.net_strain_max = next();
+  r.solver_residual = next();
+  return r;
+}
+
+TEST(TraceColumns, CsvHeaderIsTheTableAndRowsHoldItsValuesInOrder) {
+  numen::sim::Trace trace;
+  trace.reserve(1);
+  const TraceRecord r = distinct_record();
+  trace.push(r);
+  numen::test::TempDir dir;
+  trace.write_csv((dir / "t.csv").string());
+  const std::vector<std::string> lines = read_lines(dir / "t.csv");
+  ASSERT_EQ(lines.size(), 2u);
+  const std::vector<std::string> axes = {"0", "1", "2"};
+  const std::vector<std::string> names =
+      numen::sim::trace_column_names(numen::sim::TraceKind::kCsv, axes);
+  EXPECT_EQ(split_csv(lines[0]), names);
+  // Every column of the table is in the header (per-axis ones once per axis).
+  for (const auto& c : numen::sim::trace_columns()) {
+    const std::string first = std::string(c.name) + (c.per_axis ? "0" : "");
+    EXPECT_NE(std::find(names.begin(), names.end(), first), names.end()) << c.name;
+  }
+  std::vector<double> values(names.size());
+  ASSERT_EQ(numen::sim::trace_column_values(numen::sim::TraceKind::kCsv, r, 3, std::span(values)),
+            names.size());
+  const std::vector<std::string> row = split_csv(lines[1]);
+  ASSERT_EQ(row.size(), names.size());
+  for (std::size_t c = 0; c < names.size(); ++c)
+    EXPECT_EQ(std::stod(row[c]), values[c]) << names[c];
+  // Values are distinct, so a column written under another's name would be caught.
+  EXPECT_EQ(std::stod(row[static_cast<std::size_t>(
+                std::find(names.begin(), names.end(), "axis_torque_2") - names.begin())]),
+            r.axis_torque[2]);
+  EXPECT_EQ(std::stod(row[static_cast<std::size_t>(
+                std::find(names.begin(), names.end(), "solver_residual") - names.begin())]),
+            r.solver_residual);
+}
+
+TEST(TraceColumns, ValuesStopWhereTheOutputEnds) {
+  const TraceRecord r = distinct_record();
+  std::array<double, 4> out{};
+  EXPECT_EQ(
+      numen::sim::trace_column_values(numen::sim::TraceKind::kCsv, r, 3, std::span(out)), 4u);
+  EXPECT_EQ(out[0], r.time_s);
+  EXPECT_EQ(out[3], r.sample_valid ? 1.0 : 0.0);
+}
+
+TEST(TraceColumns, StreamedTraceHeaderIsTheTableAndRowsHoldItsValuesWithoutAllocating) {
+  const numen::sim::Scene scene = numen::sim::load_scene(std::string(NUMEN_SOURCE_DIR) +
+                                                         "/sim/scenes/construction.toml");
+  numen::test::TempDir dir;
+  const fs::path path = dir / "stream.csv";
+  numen::sim::SceneRunner runner(scene, 200);
+  runner.stream_trace(path.string());
+  std::int64_t allocations = -1;
+  {
+    numen::test::AllocationGuard guard;
+    for (int k = 0; k < 200; ++k) runner.period();
+    allocations = guard.count();
+  }
+  EXPECT_EQ(allocations, 0) << "heap allocations in 200 streamed periods";
+  runner.finish();
+  std::vector<std::string> axis_names;
+  for (const auto& a : scene.device.axes) axis_names.push_back(a.name);
+  std::vector<std::string> header = {"period", "time_ns", "flags"};
+  for (const std::string& n :
+       numen::sim::trace_column_names(numen::sim::TraceKind::kStream, axis_names))
+    header.push_back(n);
+  const std::vector<std::string> lines = read_lines(path);
+  ASSERT_EQ(lines.size(), 201u);
+  EXPECT_EQ(split_csv(lines[0]), header);
+  // The last row: the values of the last period's record, in the header's order.
+  std::vector<double> values(header.size() - 3);
+  const TraceRecord& last = runner.trace().records().back();
+  ASSERT_EQ(numen::sim::trace_column_values(numen::sim::TraceKind::kStream, last,
+                                            static_cast<int>(axis_names.size()),
+                                            std::span(values)),
+            values.size());
+  EXPECT_EQ(last.frames_read, runner.last_report().frames_read);
+  EXPECT_EQ(last.step_time_us, static_cast<double>(runner.last_report().step_ns) * 1e-3);
+  const std::vector<std::string> row = split_csv(lines.back());
+  ASSERT_EQ(row.size(), header.size());
+  EXPECT_EQ(row[0], "199");
+  for (std::size_t c = 0; c < values.size(); ++c)
+    EXPECT_EQ(std::stod(row[c + 3]), values[c]) << header[c + 3];
+}
+
+}  // namespace

@@ -1,0 +1,229 @@
+// Tests of sim/obj_mesh: Wavefront OBJ files through tinyobjloader (quads
+// triangulated, normals/texture coordinates ignored, unused vertices removed)
+// and the InputError for each failure, naming the file.
+#include "numen/sim/scene/obj_mesh.hpp"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+#include <string>
+
+#include "numen/sim/input/input_error.hpp"
+#include "temp_dir.hpp"
+
+namespace {
+
+using numen::core::build_mesh_topology;
+using numen::core::TriangleMesh;
+using numen::core::validate_mesh;
+using numen::core::Vec3;
+using numen::sim::InputError;
+using numen::sim::load_obj_mesh;
+using numen::test::TempDir;
+
+/// Signed volume (divergence theorem); > 0 for a closed mesh wound outward.
+double signed_volume(const TriangleMesh& m) {
+  double v = 0.0;
+  for (const auto& t : m.triangles) {
+    v += m.vertices[static_cast<std::size_t>(t[0])].dot(
+             m.vertices[static_cast<std::size_t>(t[1])].cross(
+                 m.vertices[static_cast<std::size_t>(t[2])])) /
+         6.0;
+  }
+  return v;
+}
+
+/// Loads `path` expecting an InputError; returns it.
+InputError load_error(const std::string& path) {
+  try {
+    load_obj_mesh(path);
+  } catch (const InputError& e) {
+    return e;
+  }
+  ADD_FAILURE() << "no InputError for " << path;
+  return InputError(path, 0, 0, "", "");
+}
+
+/// A cube of side 2 centred at the origin, six quads wound outward.
+constexpr const char* kCube = R"(# cube
+o cube
+v -1 -1 -1
+v  1 -1 -1
+v  1  1 -1
+v -1  1 -1
+v -1 -1  1
+v  1 -1  1
+v  1  1  1
+v -1  1  1
+f 1 4 3 2
+f 5 6 7 8
+f 1 2 6 5
+f 2 3 7 6
+f 3 4 8 7
+f 4 1 5 8
+)";
+
+TEST(ObjMesh, CubeQuadsAreTriangulated) {
+  TempDir dir;
+  const TriangleMesh m = load_obj_mesh(dir.write("cube.obj", kCube));
+  EXPECT_EQ(m.num_vertices(), 8);
+  EXPECT_EQ(m.num_triangles(), 12);
+  EXPECT_EQ(validate_mesh(m), "");
+  EXPECT_EQ(build_mesh_topology(m).boundary_edges, 0);
+  EXPECT_NEAR(signed_volume(m), 8.0, 1e-12);  // winding kept: outward
+  EXPECT_EQ(m.vertices[6], Vec3(1, 1, 1));    // file order kept
+}
+
+// A directory given as the mesh said "cannot open the OBJ file" (or read as empty): it says it
+// is a directory.
+TEST(ObjMesh, ADirectoryIsNamedAsSuch) {
+  TempDir dir;
+  const std::string folder = (dir / "meshes.obj").string();
+  std::filesystem::create_directories(folder);
+  const InputError e = load_error(folder);
+  EXPECT_EQ(std::string(e.what()), folder + ": is a directory, not an OBJ file");
+}
+
+TEST(ObjMesh, NormalsAndTexcoordsIgnored) {
+  TempDir dir;
+  const std::string path = dir.write("tri.obj",
+                                     "mtllib missing.mtl\n"
+                                     "v 0 0 0\nv 0.5 0 0\nv 0 0.25 0.1\n"
+                                     "vt 0 0\nvt 1 0\nvt 0 1\n"
+                                     "vn 0 0 1\nvn 0 0 1\nvn 0 0 1\n"
+                                     "usemtl red\n"
+                                     "f 1/1/1 2/2/2 3/3/3\n");
+  const TriangleMesh m = load_obj_mesh(path);
+  ASSERT_EQ(m.num_vertices(), 3);
+  ASSERT_EQ(m.num_triangles(), 1);
+  EXPECT_EQ(m.triangles[0], (std::array<int, 3>{0, 1, 2}));
+  EXPECT_EQ(m.vertices[1], Vec3(0.5, 0, 0));
+  EXPECT_NEAR(m.vertices[2].y(), 0.25, 1e-7);
+  EXPECT_NEAR(m.vertices[2].z(), 0.1, 1e-7);  // read as float by the loader
+  // Normal-only and negative (relative) indices too.
+  const TriangleMesh n = load_obj_mesh(dir.write("rel.obj",
+                                                 "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\n"
+                                                 "f -3//1 -2//1 -1//1\n"));
+  EXPECT_EQ(n.triangles[0], (std::array<int, 3>{0, 1, 2}));
+}
+
+TEST(ObjMesh, UnusedVerticesRemovedAndIndicesCompacted) {
+  TempDir dir;
+  const std::string path = dir.write("unused.obj",
+                                     "v 9 9 9\n"  // unused
+                                     "v 0 0 0\nv 1 0 0\n"
+                                     "v 7 7 7\n"  // unused
+                                     "v 0 1 0\nv 1 1 0\n"
+                                     "f 2 3 5\nf 3 6 5\n");
+  const TriangleMesh m = load_obj_mesh(path);
+  ASSERT_EQ(m.num_vertices(), 4);
+  EXPECT_EQ(m.vertices[0], Vec3(0, 0, 0));
+  EXPECT_EQ(m.vertices[1], Vec3(1, 0, 0));
+  EXPECT_EQ(m.vertices[2], Vec3(0, 1, 0));
+  EXPECT_EQ(m.vertices[3], Vec3(1, 1, 0));
+  ASSERT_EQ(m.num_triangles(), 2);
+  EXPECT_EQ(m.triangles[0], (std::array<int, 3>{0, 1, 2}));
+  EXPECT_EQ(m.triangles[1], (std::array<int, 3>{1, 3, 2}));
+  EXPECT_EQ(validate_mesh(m), "");
+}
+
+TEST(ObjMesh, SeveralShapesShareTheVertexList) {
+  TempDir dir;
+  const std::string path = dir.write("groups.obj",
+                                     "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\n"
+                                     "o a\nf 1 2 3\n"
+                                     "o b\nf 2 4 3\n");
+  const TriangleMesh m = load_obj_mesh(path);
+  EXPECT_EQ(m.num_vertices(), 4);
+  EXPECT_EQ(m.num_triangles(), 2);
+}
+
+TEST(ObjMesh, MissingFile) {
+  TempDir dir;
+  const std::string path = (dir / "nope.obj").string();
+  const InputError e = load_error(path);
+  EXPECT_EQ(e.file(), path);
+  EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+}
+
+TEST(ObjMesh, NoFace) {
+  TempDir dir;
+  const std::string path = dir.write("points.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nl 1 2\n");
+  const InputError e = load_error(path);
+  const std::string what = e.what();
+  EXPECT_NE(what.find(path), std::string::npos) << what;
+  EXPECT_NE(what.find("no face"), std::string::npos) << what;
+  EXPECT_NE(std::string(load_error(dir.write("empty.obj", "")).what()).find("no face"),
+            std::string::npos);
+}
+
+TEST(ObjMesh, NonManifoldEdge) {
+  TempDir dir;
+  const std::string path = dir.write("fin.obj",
+                                     "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 -1 0\nv 0 0 1\n"
+                                     "f 1 2 3\nf 2 1 4\nf 1 2 5\n");
+  const InputError e = load_error(path);
+  const std::string what = e.what();
+  EXPECT_EQ(e.file(), path);
+  EXPECT_NE(what.find(path), std::string::npos) << what;
+  EXPECT_NE(what.find("edge (0, 1)"), std::string::npos) << what;
+  EXPECT_NE(what.find("3 triangles"), std::string::npos) << what;
+}
+
+TEST(ObjMesh, DegenerateFace) {
+  TempDir dir;
+  const std::string path = dir.write("flat.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n");
+  const std::string what = load_error(path).what();
+  EXPECT_NE(what.find(path), std::string::npos) << what;
+  EXPECT_NE(what.find("degenerate"), std::string::npos) << what;
+}
+
+TEST(ObjMesh, BadFaces) {
+  TempDir dir;
+  // A triangle and a quad pointing past the vertex list, a face of two vertices
+  // (the loader only warns about these and drops or keeps them).
+  for (const char* face : {"f 1 2 5\n", "f 1 2 3 7\n", "f 1 2 3\nf 2 4\n"}) {
+    const std::string path =
+        dir.write("range.obj", std::string("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\n") + face);
+    const std::string what = load_error(path).what();
+    EXPECT_NE(what.find(path), std::string::npos) << what;
+  }
+}
+
+TEST(ObjMesh, ParseErrorCarriesTheLine) {
+  TempDir dir;
+  // Index 0 does not exist in OBJ (1-based): the loader stops at line 4.
+  const std::string path = dir.write("zero.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n");
+  const InputError e = load_error(path);
+  const std::string what = e.what();
+  EXPECT_NE(what.find(path), std::string::npos) << what;
+  EXPECT_EQ(e.line(), 4) << what;
+  EXPECT_NE(what.find(path + ":4:"), std::string::npos) << what;
+}
+
+}  // namespace
+
+namespace {
+
+TEST(ObjMesh, MalformedVertexCoordinatesAreRefusedAtTheirLine) {
+  // tinyobjloader reads a bad or missing coordinate as 0: checked before it.
+  numen::test::TempDir dir;
+  const std::string faces = "f 1 2 3\n";
+  const std::string bad = dir.write("bad_v.obj", "v 0 0 0\nv 1 0 0\nv 0 1 abc\n" + faces);
+  const InputError e1 = load_error(bad);
+  EXPECT_EQ(e1.line(), 3) << e1.what();
+  EXPECT_NE(std::string(e1.what()).find("abc"), std::string::npos) << e1.what();
+  const std::string short_v = dir.write("short_v.obj", "v 0 0 0\nv 1 0\nv 0 1 0\n" + faces);
+  const InputError e2 = load_error(short_v);
+  EXPECT_EQ(e2.line(), 2) << e2.what();
+  const std::string inf_v = dir.write("inf_v.obj", "v 0 0 0\nv inf 0 0\nv 0 1 0\n" + faces);
+  EXPECT_EQ(load_error(inf_v).line(), 2);
+  // Colours after the coordinates and comments are fine.
+  EXPECT_EQ(numen::sim::load_obj_mesh(dir.write(
+                "ok.obj", "v 0 0 0 1 0 0\nv 1 0 0 # corner\nv 0 1 0\n" + faces))
+                .num_vertices(),
+            3);
+}
+
+}  // namespace

@@ -1,0 +1,613 @@
+// Tests of sim/scene_deformable (through load_scene): [[deformable]] tables
+// compile into core nets (one node per mesh vertex, a structural spring per
+// edge, a bending spring per pair of adjacent triangles) tied to a hidden rigid
+// component; the shipped deformable and endobag scenes match the mesh
+// formulas; the recorded target really goes through the deformable scene's
+// post; every error names the file, line, column and dotted key.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <numbers>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "build_features.hpp"
+#include "numen/core/mesh.hpp"
+#include "numen/hal/device/kinematics_factory.hpp"
+#include "numen/sim/device/simulated_instrument.hpp"
+#include "numen/sim/input/input_error.hpp"
+#include "numen/sim/scene/scene.hpp"
+#include "scene_text.hpp"
+#include "temp_dir.hpp"
+
+namespace {
+
+using numen::test::column_of;
+using numen::test::line_of;
+using numen::test::load_error;
+using numen::test::replace;
+
+using numen::core::Model;
+using numen::core::NetModel;
+using numen::core::Quat;
+using numen::core::Vec3;
+using numen::sim::InputError;
+using numen::sim::load_scene;
+using numen::sim::Scene;
+using numen::test::TempDir;
+
+std::string scene_path(const std::string& name) {
+  return std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/" + name + ".toml";
+}
+
+const Scene& deformable_scene() {
+  static const Scene s = load_scene(scene_path("deformable"));
+  return s;
+}
+const Scene& endobag_scene() {
+  static const Scene s = load_scene(scene_path("endobag"));
+  return s;
+}
+
+int body_index(const Model& m, const std::string& name) {
+  for (int i = 0; i < m.num_bodies(); ++i)
+    if (m.bodies[static_cast<std::size_t>(i)].name == name) return i;
+  return -1;
+}
+
+/// Node and spring counts of a closed, manifold triangle mesh of V vertices:
+/// F = 2V − 4 triangles, E = 3V − 6 edges, one bending pair per edge.
+void expect_closed_net_counts(const NetModel& net, const numen::core::TriangleMesh& mesh,
+                              int vertices) {
+  EXPECT_EQ(net.node_count, vertices);
+  EXPECT_EQ(mesh.num_vertices(), vertices);
+  EXPECT_EQ(mesh.num_triangles(), 2 * vertices - 4);
+  EXPECT_EQ(net.structural_count, 3 * vertices - 6);
+  EXPECT_EQ(net.bending_count, 3 * vertices - 6);
+  const numen::core::MeshTopology topo = numen::core::build_mesh_topology(mesh);
+  EXPECT_EQ(net.structural_count, static_cast<int>(topo.edges.size()));
+  EXPECT_EQ(net.bending_count, static_cast<int>(topo.bending_pairs.size()));
+  EXPECT_EQ(topo.boundary_edges, 0);
+}
+
+// ---------------------------------------------------------------- shipped scenes
+
+TEST(DeformableShippedScene, ProbeIsACapsuleNetOnAHiddenCore) {
+  const Scene& s = deformable_scene();
+  const Model& m = s.model;
+  ASSERT_EQ(m.num_nets(), 1);
+  const NetModel& net = m.nets[0];
+  EXPECT_EQ(net.name, "probe");
+  const int core = body_index(m, "core");
+  ASSERT_GE(core, 0);
+  EXPECT_EQ(net.body, core);
+  EXPECT_EQ(m.bodies[static_cast<std::size_t>(core)].sphere_count, 0) << "the rigid core is hidden";
+  EXPECT_EQ(m.initial_attached_body, core);
+  EXPECT_EQ(m.material_names[static_cast<std::size_t>(net.material)], "silicone");
+
+  // Capsule r = 6 mm, h = 14 mm, 16 segments, 4 rings per hemisphere, and
+  // the default cylinder rings round(2h / (π r / 2·4)) − 1 = 11:
+  // V = 2 + 16·(2·4 + 11) = 306.
+  const int cylinder_rings =
+      static_cast<int>(std::lround(2.0 * 0.014 / (std::numbers::pi * 0.006 / 8.0))) - 1;
+  EXPECT_EQ(cylinder_rings, 11);
+  const auto mesh = numen::core::make_capsule(0.006, 0.014, 16, 4, cylinder_rings);
+  expect_closed_net_counts(net, mesh, 2 + 16 * (2 * 4 + cylinder_rings));
+  EXPECT_EQ(m.num_nodes(), 306);
+  EXPECT_EQ(static_cast<int>(m.net_springs.size()), net.structural_count + net.bending_count);
+  for (int i = 0; i < net.node_count; ++i) {
+    const auto n = static_cast<std::size_t>(net.node_begin + i);
+    ASSERT_TRUE(m.node_rest[n].isApprox(mesh.vertices[static_cast<std::size_t>(i)], 1e-12))
+        << "node " << i;
+  }
+  double mass = 0.0;
+  for (double x : m.node_mass) mass += x;
+  EXPECT_NEAR(mass, 0.01, 1e-12);
+  EXPECT_NEAR(net.mass, 0.01, 1e-12);
+  EXPECT_DOUBLE_EQ(net.tie_stiffness, 400.0);
+  EXPECT_DOUBLE_EQ(net.tie_damping, 0.2);
+  EXPECT_DOUBLE_EQ(m.net_springs[0].stiffness, 200.0);
+  EXPECT_DOUBLE_EQ(m.net_springs[static_cast<std::size_t>(net.structural_count)].stiffness, 50.0);
+  // The implicit solve's settings of the scene.
+  EXPECT_EQ(m.solver.max_iterations, 100);
+  EXPECT_DOUBLE_EQ(m.solver.tolerance, 3e-4);
+  EXPECT_EQ(m.solver.error_estimate_delay, 1);  // the energy-norm error estimate
+}
+
+TEST(DeformableShippedScene, EndobagIsAnIcosphereNetJointedToTheTube) {
+  NUMEN_REQUIRE_ARTICULATION();
+  const Scene& s = endobag_scene();
+  const Model& m = s.model;
+  ASSERT_EQ(m.num_nets(), 1);
+  const NetModel& net = m.nets[0];
+  EXPECT_EQ(net.name, "bag");
+  const int core = body_index(m, "bag_core");
+  const int tube = body_index(m, "tube");
+  ASSERT_GE(core, 0);
+  ASSERT_GE(tube, 0);
+  EXPECT_EQ(net.body, core);
+  EXPECT_EQ(m.bodies[static_cast<std::size_t>(core)].sphere_count, 0);
+  // Fixed to the tube: one articulation, so the bag does not collide with
+  // the tube and the jaws it encloses.
+  EXPECT_EQ(m.num_joints(), 5);
+  EXPECT_EQ(m.articulation.body_tree[static_cast<std::size_t>(core)],
+            m.articulation.body_tree[static_cast<std::size_t>(tube)]);
+  // Icosphere, 2 subdivisions: V = 10·4² + 2 = 162, E = 30·4² = 480.
+  const auto mesh = numen::core::make_icosphere(0.012, 2);
+  expect_closed_net_counts(net, mesh, 162);
+  EXPECT_EQ(net.structural_count, 480);
+  // The bag starts 5 mm ahead of the tip, on the tube's axis: 45 mm from the
+  // tube's COM (40 mm behind the tip).
+  const auto& tube0 = m.bodies[static_cast<std::size_t>(tube)].initial_pose;
+  const auto& core0 = m.bodies[static_cast<std::size_t>(core)].initial_pose;
+  EXPECT_LT((core0.position - (tube0.position + tube0.orientation * Vec3(0, 0, 0.045))).norm(),
+            1e-9);
+  // The jaws' spheres (2–11 mm ahead of the tip, radius 1.5 mm, for straight
+  // jaws; opened by up to 0.6 rad they stay within 9 mm of the bag's centre)
+  // are inside the bag (radius 12 mm, centred 5 mm ahead of the tip).
+  for (const char* jaw : {"jaw_1", "jaw_2"}) {
+    const int j = body_index(m, jaw);
+    ASSERT_GE(j, 0);
+    const auto& b = m.bodies[static_cast<std::size_t>(j)];
+    for (int i = 0; i < b.sphere_count; ++i) {
+      const auto& sp = m.body_spheres[static_cast<std::size_t>(b.sphere_begin + i)];
+      // Jaw frame: hinge at the tip, COM 6 mm ahead; worst case the jaw straight ahead.
+      const double ahead = 0.006 + sp.center.z();
+      EXPECT_LT(std::abs(ahead - 0.005) + sp.radius, 0.012) << jaw << " sphere " << i;
+    }
+  }
+}
+
+/// Distance from p to the segment [a, b].
+double segment_distance(const Vec3& p, const Vec3& a, const Vec3& b) {
+  const Vec3 ab = b - a;
+  const double t = std::clamp((p - a).dot(ab) / ab.squaredNorm(), 0.0, 1.0);
+  return (p - (a + t * ab)).norm();
+}
+
+TEST(DeformableShippedScene, RecordedTargetGoesThroughThePost) {
+  // The probe placed where the hand puts it (the core at the device's target,
+  // the net in its rest shape) over the recorded motion: its node spheres go
+  // deep into the post, and its axis passes through the post itself.
+  const Scene& s = deformable_scene();
+  const Model& m = s.model;
+  const numen::core::Obstacle* post = nullptr;
+  for (const auto& o : m.obstacles)
+    if (o.name == "post") post = &o;
+  ASSERT_NE(post, nullptr);
+  ASSERT_EQ(post->type, numen::core::ShapeType::kCapsule);
+  const Vec3 axis = post->pose.orientation * Vec3::UnitZ();
+  const Vec3 pa = post->pose.position - post->half_length * axis;
+  const Vec3 pb = post->pose.position + post->half_length * axis;
+  const auto kin = numen::hal::make_kinematics(s.device);
+  const NetModel& net = m.nets[0];
+
+  double deepest = 0.0, deepest_time = -1.0, axis_inside = 0.0;
+  double first_contact = -1.0;
+  for (std::size_t k = 0; k < s.trajectory.size(); k += 5) {
+    const auto& sample = s.trajectory[k];
+    const numen::core::Pose core =
+        kin->forward(numen::sim::instrument_axes(s.device, *kin, sample));
+    double depth = 0.0;
+    for (int i = net.node_begin; i < net.node_begin + net.node_count; ++i) {
+      const auto n = static_cast<std::size_t>(i);
+      const Vec3 x = core.position + core.orientation * m.node_rest[n];
+      depth = std::max(depth, post->radius + m.node_radius[n] - segment_distance(x, pa, pb));
+    }
+    // The probe's axis: the capsule's segment along the core's z.
+    for (double z = -0.014; z <= 0.014 + 1e-12; z += 0.001) {
+      const Vec3 x = core.position + core.orientation * Vec3(0.0, 0.0, z);
+      axis_inside = std::max(axis_inside, post->radius - segment_distance(x, pa, pb));
+    }
+    if (depth > 0.0 && first_contact < 0.0) first_contact = sample.time;
+    if (depth > deepest) {
+      deepest = depth;
+      deepest_time = sample.time;
+    }
+  }
+  std::printf(
+      "[   info   ] target probe vs post: first contact at %.2f s, deepest %.2f mm at %.2f s; "
+      "probe axis %.2f mm inside the post\n",
+      first_contact, deepest * 1e3, deepest_time, axis_inside * 1e3);
+  // A hollow net's node spheres reach at most post radius + node radius
+  // (~6.4 mm) into a 5 mm post: when a node sits on its axis.
+  EXPECT_GE(deepest, 0.006) << "the hand's probe must go deep into the post";
+  EXPECT_GT(axis_inside, 0.002) << "the probe's axis must pass through the post";
+  // First met on the lateral sweep at 2.5–3.5 s (the run tests run 10 s).
+  EXPECT_GT(first_contact, 2.5);
+  EXPECT_LT(first_contact, 3.5);
+  // The core starts where the device puts it.
+  const numen::core::Pose start =
+      kin->forward(numen::sim::instrument_axes(s.device, *kin, s.trajectory.at(0.0)));
+  EXPECT_LT(
+      (m.bodies[static_cast<std::size_t>(net.body)].initial_pose.position - start.position).norm(),
+      1e-9);
+}
+
+// ---------------------------------------------------------------- loader
+
+// A small valid scene: a held tool with a sphere, a hidden core body and one
+// deformable on it. Every error test changes one thing.
+const std::string kMiniNet = R"(name = "mini"
+dt = 0.001
+gravity = [0.0, 0.0, 0.0]
+
+[[material]]
+name = "steel"
+
+[[material]]
+name = "rubber"
+
+[[body]]
+name = "tool"
+mass = 0.1
+material = "steel"
+spheres = [[0.0, 0.0, 0.0, 0.01]]
+[body.coupling]
+stiffness = 100.0
+damping_ratio = 0.85
+
+[[body]]
+name = "core"
+mass = 0.05
+inertia = [1.0e-5, 1.0e-5, 1.0e-5]
+material = "rubber"
+position = [0.0, 0.1, 0.0]
+
+[[deformable]]
+name = "skin"
+body = "core"
+mesh = "icosphere"
+radius = 0.01
+subdivisions = 1
+mass = 0.01
+stiffness = 200.0
+tie_stiffness = 500.0
+
+[[obstacle]]
+name = "floor"
+type = "plane"
+point = [0.0, 0.0, -0.1]
+normal = [0.0, 0.0, 1.0]
+
+[device]
+kind = "pose-tracker"
+attach = "tool"
+
+[trajectory]
+source = "scripted"
+start = { position = [0.0, 0.0, 0.0] }
+
+[[trajectory.segment]]
+type = "hold"
+duration = 0.25
+)";
+
+/// The [[deformable]] table of kMiniNet replaced by `table` (which starts with "[[deformable]]").
+std::string with_deformable(const std::string& table) {
+  const auto begin = kMiniNet.find("[[deformable]]");
+  const auto end = kMiniNet.find("[[obstacle]]");
+  return kMiniNet.substr(0, begin) + table + "\n" + kMiniNet.substr(end);
+}
+
+/// Expects the error of `text` at the value of the first line containing
+/// `needle` (column of `value` there), with dotted key `key` and `phrase` in
+/// the message; the formatted what() carries file:line:column: key.
+void expect_error_at(const std::string& text, const std::string& needle, const std::string& value,
+                     const std::string& key, const std::string& phrase) {
+  TempDir dir;
+  const InputError e = load_error(dir, text);
+  EXPECT_EQ(e.file(), (dir / "bad.toml").string());
+  EXPECT_EQ(e.line(), line_of(text, needle)) << e.what();
+  EXPECT_EQ(e.column(), column_of(text, needle, value)) << e.what();
+  EXPECT_EQ(e.key(), key) << e.what();
+  EXPECT_NE(e.message().find(phrase), std::string::npos) << e.what();
+  const std::string where = e.file() + ":" + std::to_string(e.line()) + ":" +
+                            std::to_string(e.column()) + ": " + key + ": ";
+  EXPECT_EQ(std::string(e.what()).rfind(where, 0), 0u) << e.what();
+}
+
+TEST(DeformableLoader, MiniSceneLoadsWithDefaults) {
+  TempDir dir;
+  const Scene s = load_scene(dir.write("mini.toml", kMiniNet));
+  ASSERT_EQ(s.model.num_nets(), 1);
+  const NetModel& net = s.model.nets[0];
+  EXPECT_EQ(net.name, "skin");
+  EXPECT_EQ(net.body, 1);
+  EXPECT_EQ(net.node_count, 42);  // 10·4 + 2
+  EXPECT_EQ(net.structural_count, 120);
+  EXPECT_EQ(net.bending_count, 120);
+  // Defaults: the core's material, no damping, no bending, node radius from the mesh.
+  EXPECT_EQ(s.model.material_names[static_cast<std::size_t>(net.material)], "rubber");
+  EXPECT_EQ(net.tie_damping, 0.0);
+  for (int i = 0; i < net.structural_count; ++i)
+    EXPECT_EQ(s.model.net_springs[static_cast<std::size_t>(net.spring_begin + i)].damping, 0.0);
+  for (int i = 0; i < net.bending_count; ++i)
+    EXPECT_EQ(
+        s.model.net_springs[static_cast<std::size_t>(net.spring_begin + net.structural_count + i)]
+            .stiffness,
+        0.0);
+  for (double r : s.model.node_radius) {
+    EXPECT_GT(r, 0.002);
+    EXPECT_LT(r, 0.006);
+  }
+}
+
+TEST(DeformableLoader, MeshKindsScaleAndPlacement) {
+  TempDir dir;
+  // A unit tetrahedron (outward winding), 2 cm after scaling; its path is
+  // relative to the scene file's folder.
+  std::filesystem::create_directories(dir / "meshes");
+  dir.write("meshes/tet.obj",
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n");
+  const std::string text = with_deformable(R"([[deformable]]
+name = "ball"
+body = "core"
+mesh = "icosphere"
+radius = 0.01
+subdivisions = 0
+position = [0.0, 0.0, 0.05]
+orientation = [0.7071067811865476, 0.7071067811865476, 0.0, 0.0]
+scale = [1.0, 2.0, 1.0]
+mass = 0.01
+stiffness = 200.0
+tie_stiffness = 500.0
+node_radius = 0.003
+material = "steel"
+
+[[deformable]]
+name = "pill"
+body = "core"
+mesh = "capsule"
+radius = 0.005
+half_length = 0.01
+segments = 8
+rings = 2
+cylinder_rings = 3
+mass = 0.01
+stiffness = 200.0
+damping = 0.1
+bending_stiffness = 10.0
+bending_damping = 0.01
+tie_stiffness = 500.0
+tie_damping = 0.2
+
+[[deformable]]
+name = "brick"
+body = "core"
+mesh = "box"
+half_extents = [0.01, 0.02, 0.03]
+subdivisions = 1
+mass = 0.01
+stiffness = 200.0
+tie_stiffness = 500.0
+
+[[deformable]]
+name = "tet"
+body = "core"
+mesh = "obj"
+file = "meshes/tet.obj"
+scale = [0.02, 0.02, 0.02]
+mass = 0.01
+stiffness = 200.0
+tie_stiffness = 500.0
+)");
+  const Scene s = load_scene(dir.write("kinds.toml", text));
+  const Model& m = s.model;
+  ASSERT_EQ(m.num_nets(), 4);
+  // Icosphere s = 0: 12 vertices, scaled 2× along y, turned 90° about x
+  // (y → z), centred 5 cm along the core's z.
+  EXPECT_EQ(m.nets[0].node_count, 12);
+  auto expected = numen::core::make_icosphere(0.01, 0);
+  double ymax0 = 0.0;
+  for (const Vec3& v : expected.vertices) ymax0 = std::max(ymax0, v.y());
+  numen::core::transform_mesh(
+      expected, Vec3(1.0, 2.0, 1.0),
+      numen::core::Pose{Vec3(0.0, 0.0, 0.05), Quat(std::sqrt(0.5), std::sqrt(0.5), 0.0, 0.0)});
+  double zmax = -1.0;
+  for (int i = 0; i < 12; ++i) {
+    const Vec3& r = m.node_rest[static_cast<std::size_t>(i)];
+    EXPECT_TRUE(r.isApprox(expected.vertices[static_cast<std::size_t>(i)], 1e-12))
+        << "vertex " << i;
+    zmax = std::max(zmax, r.z() - 0.05);
+    EXPECT_DOUBLE_EQ(m.node_radius[static_cast<std::size_t>(i)], 0.003);
+  }
+  EXPECT_NEAR(zmax, 2.0 * ymax0, 1e-12);  // the axis scaled 2×, turned from y onto z
+  EXPECT_EQ(m.material_names[static_cast<std::size_t>(m.nets[0].material)], "steel");
+  // Capsule: V = 2 + 8·(2·2 + 3) = 58.
+  EXPECT_EQ(m.nets[1].node_count, 58);
+  EXPECT_EQ(m.nets[1].structural_count, 3 * 58 - 6);
+  EXPECT_DOUBLE_EQ(m.nets[1].tie_damping, 0.2);
+  // Box n = 1: 6(n+2)² − 12(n+2) + 8 = 26 vertices.
+  EXPECT_EQ(m.nets[2].node_count, 26);
+  // OBJ tetrahedron: 4 nodes, 6 edges, no bending pair (each edge's two
+  // opposite vertices form another edge: skipped, not doubled).
+  EXPECT_EQ(m.nets[3].node_count, 4);
+  EXPECT_EQ(m.nets[3].structural_count, 6);
+  EXPECT_EQ(m.nets[3].bending_count, 0);
+  const Vec3& tip = m.node_rest[static_cast<std::size_t>(m.nets[3].node_begin + 3)];
+  EXPECT_TRUE(tip.isApprox(Vec3(0.0, 0.0, 0.02), 1e-12)) << tip.transpose();
+  EXPECT_EQ(m.num_nodes(), 12 + 58 + 26 + 4);
+}
+
+// ---------------------------------------------------------------- errors
+
+TEST(DeformableLoaderErrors, UnknownBody) {
+  const std::string text = replace(kMiniNet, "body = \"core\"", "body = \"kore\"");
+  expect_error_at(text, "body = \"kore\"", "\"kore\"", "deformable[0].body",
+                  "no body named \"kore\"");
+}
+
+TEST(DeformableLoaderErrors, BodyWithSpheresIsRejected) {
+  const std::string text = replace(kMiniNet, "body = \"core\"", "body = \"tool\"");
+  expect_error_at(text, "body = \"tool\"", "\"tool\"", "deformable[0].body", "hidden");
+  TempDir dir;
+  const InputError e = load_error(dir, text);
+  EXPECT_NE(e.message().find("does not collide"), std::string::npos) << e.what();
+  EXPECT_NE(e.message().find("spheres"), std::string::npos) << e.what();
+}
+
+TEST(DeformableLoaderErrors, SolverErrorEstimateDelayOutOfRange) {
+  const std::string solver = "[solver]\ntolerance = 1.0e-3\nerror_estimate_delay = ";
+  const std::string text = replace(kMiniNet, "[[material]]", solver + "9\n\n[[material]]");
+  expect_error_at(text, "error_estimate_delay = 9", "9", "solver.error_estimate_delay",
+                  "must be in [0, 8]");
+  TempDir dir;
+  const Scene s = load_scene(
+      dir.write("delay.toml", replace(kMiniNet, "[[material]]", solver + "0\n\n[[material]]")));
+  EXPECT_EQ(s.model.solver.error_estimate_delay, 0);  // the residual rule
+  EXPECT_EQ(load_scene(dir.write("mini.toml", kMiniNet)).model.solver.error_estimate_delay,
+            numen::core::SolverSettings{}.error_estimate_delay);
+}
+
+TEST(DeformableLoaderErrors, UnknownMeshKind) {
+  const std::string text = replace(kMiniNet, "mesh = \"icosphere\"", "mesh = \"torus\"");
+  expect_error_at(text, "mesh = \"torus\"", "\"torus\"", "deformable[0].mesh",
+                  "\"icosphere\", \"capsule\", \"box\", \"obj\"");
+}
+
+TEST(DeformableLoaderErrors, MeshTooLargeIsRefusedBeforeItIsBuilt) {
+  const std::string text =
+      replace(kMiniNet, "mesh = \"icosphere\"\nradius = 0.01\nsubdivisions = 1",
+              "mesh = \"capsule\"\nradius = 0.01\nhalf_length = 0.02\nsegments = 1024\n"
+              "rings = 256\ncylinder_rings = 100000");
+  expect_error_at(text, "mesh = \"capsule\"", "\"capsule\"", "deformable[0].mesh",
+                  "more than the 65536");
+}
+
+TEST(DeformableLoaderErrors, MissingObjFile) {
+  const std::string text = replace(kMiniNet, "mesh = \"icosphere\"\nradius = 0.01\nsubdivisions = 1",
+                                   "mesh = \"obj\"\nfile = \"nowhere/probe.obj\"");
+  expect_error_at(text, "file = ", "\"nowhere", "deformable[0].file", "mesh file not found");
+  TempDir dir;
+  const InputError e = load_error(dir, text);
+  // The path is resolved against the scene file's folder.
+  EXPECT_NE(e.message().find((dir / "nowhere/probe.obj").string()), std::string::npos) << e.what();
+}
+
+// A directory given as the mesh file said "mesh file not found": it says it is a directory.
+TEST(DeformableLoaderErrors, ObjFileThatIsADirectoryIsNamedAsSuch) {
+  const std::string text = replace(kMiniNet, "mesh = \"icosphere\"\nradius = 0.01\nsubdivisions = 1",
+                                   "mesh = \"obj\"\nfile = \"meshes\"");
+  TempDir dir;
+  std::filesystem::create_directories(dir / "meshes");
+  const InputError e = load_error(dir, text);
+  EXPECT_EQ(e.line(), line_of(text, "file = "));
+  EXPECT_EQ(e.column(), column_of(text, "file = ", "\"meshes"));
+  EXPECT_EQ(e.key(), "deformable[0].file");
+  EXPECT_EQ(e.message(), (dir / "meshes").string() + " is a directory, not an OBJ mesh file");
+}
+
+TEST(DeformableLoaderErrors, BadObjFileNamesTheSceneKey) {
+  TempDir dir;
+  dir.write("empty.obj", "# no faces\nv 0 0 0\n");
+  const std::string text = replace(kMiniNet, "mesh = \"icosphere\"\nradius = 0.01\nsubdivisions = 1",
+                                   "mesh = \"obj\"\nfile = \"empty.obj\"");
+  const InputError e = load_error(dir, text);
+  EXPECT_EQ(e.line(), line_of(text, "file = "));
+  EXPECT_EQ(e.key(), "deformable[0].file");
+  EXPECT_NE(e.message().find("empty.obj"), std::string::npos) << e.what();
+}
+
+TEST(DeformableLoaderErrors, BadNumbers) {
+  expect_error_at(replace(kMiniNet, "mass = 0.01", "mass = -0.01"), "mass = -0.01", "-0.01",
+                  "deformable[0].mass", "must be in");
+  expect_error_at(replace(kMiniNet, "stiffness = 200.0", "stiffness = \"stiff\""),
+                  "stiffness = \"stiff\"", "\"stiff\"", "deformable[0].stiffness",
+                  "expected a number");
+  expect_error_at(replace(kMiniNet, "tie_stiffness = 500.0", "tie_stiffness = 0.0"),
+                  "tie_stiffness = 0.0", "0.0", "deformable[0].tie_stiffness", "must be in");
+  expect_error_at(replace(kMiniNet, "subdivisions = 1", "subdivisions = 7"), "subdivisions = 7", "7",
+                  "deformable[0].subdivisions", "[0, 6]");
+  expect_error_at(replace(kMiniNet, "subdivisions = 1", "subdivisions = 1.5"), "subdivisions = 1.5",
+                  "1.5", "deformable[0].subdivisions", "expected an integer");
+  expect_error_at(replace(kMiniNet, "radius = 0.01\nsubdivisions", "radius = 0.0\nsubdivisions"),
+                  "radius = 0.0", "0.0", "deformable[0].radius", "must be in");
+  expect_error_at(replace(kMiniNet, "tie_stiffness = 500.0", "tie_stiffness = 500.0\ndamping = -1.0"),
+                  "damping = -1.0", "-1.0", "deformable[0].damping", "must be in");
+  expect_error_at(
+      replace(kMiniNet, "tie_stiffness = 500.0", "tie_stiffness = 500.0\nscale = [1.0, 0.0, 1.0]"),
+      "scale = ", "[", "deformable[0].scale", "non-zero");
+  expect_error_at(
+      replace(kMiniNet, "tie_stiffness = 500.0", "tie_stiffness = 500.0\nposition = [1.0, 2.0]"),
+      "position = [1.0, 2.0]", "[", "deformable[0].position", "expected 3 numbers");
+  expect_error_at(
+      replace(kMiniNet, "tie_stiffness = 500.0", "tie_stiffness = 500.0\nnode_radius = -0.001"),
+      "node_radius = ", "-0.001", "deformable[0].node_radius", "must be in");
+}
+
+TEST(DeformableLoaderErrors, MissingRequiredKeys) {
+  // A missing key points at the table ([[deformable]] header line).
+  for (const char* key : {"mass = 0.01\n", "stiffness = 200.0\n", "tie_stiffness = 500.0\n",
+                          "radius = 0.01\n", "body = \"core\"\n", "name = \"skin\"\n"}) {
+    const std::string line(key);
+    const std::string text = replace(kMiniNet, "\n" + line, "\n");
+    TempDir dir;
+    const InputError e = load_error(dir, text);
+    EXPECT_EQ(e.line(), line_of(text, "[[deformable]]")) << e.what();
+    EXPECT_EQ(e.key(), "deformable[0]." + line.substr(0, line.find(' '))) << e.what();
+    EXPECT_NE(e.message().find("missing"), std::string::npos) << e.what();
+  }
+}
+
+TEST(DeformableLoaderErrors, UnknownKey) {
+  expect_error_at(replace(kMiniNet, "tie_stiffness = 500.0", "tie_stiffnes = 500.0"), "tie_stiffnes",
+                  "500.0", "deformable[0].tie_stiffnes", "unknown key");
+  // A key of another mesh kind is unknown here too.
+  expect_error_at(replace(kMiniNet, "subdivisions = 1", "subdivisions = 1\nhalf_length = 0.01"),
+                  "half_length", "0.01", "deformable[0].half_length", "unknown key");
+  // And [[deformable]] itself is known at the top level.
+  TempDir dir;
+  EXPECT_NO_THROW((void)load_scene(dir.write("ok.toml", kMiniNet)));
+}
+
+TEST(DeformableLoaderErrors, DuplicateName) {
+  const std::string text = with_deformable(R"([[deformable]]
+name = "skin"
+body = "core"
+mesh = "icosphere"
+radius = 0.01
+mass = 0.01
+stiffness = 200.0
+tie_stiffness = 500.0
+
+[[deformable]]
+name = "skin"
+body = "core"
+mesh = "icosphere"
+radius = 0.02
+mass = 0.01
+stiffness = 200.0
+tie_stiffness = 500.0
+)");
+  TempDir dir;
+  const InputError e = load_error(dir, text);
+  EXPECT_EQ(e.key(), "deformable[1].name");
+  EXPECT_NE(e.message().find("declared twice"), std::string::npos) << e.what();
+}
+
+TEST(DeformableLoaderErrors, CoreRejectionIsLocatedAtTheDeformablesTable) {
+  // A scale that flattens the sphere to ~1e-300 m along x: every triangle is
+  // degenerate; core::add_net's message lands on the [[deformable]] table.
+  const std::string text = replace(kMiniNet, "tie_stiffness = 500.0",
+                                   "tie_stiffness = 500.0\nscale = [1.0e-300, 1.0, 1.0]");
+  TempDir dir;
+  const InputError e = load_error(dir, text);
+  EXPECT_EQ(e.line(), line_of(text, "[[deformable]]")) << e.what();
+  EXPECT_EQ(e.key(), "deformable[0]") << e.what();
+  EXPECT_NE(e.message().find("net 'skin'"), std::string::npos) << e.what();
+  EXPECT_NE(e.message().find("mesh"), std::string::npos) << e.what();
+}
+
+TEST(DeformableLoaderErrors, UnknownMaterial) {
+  const std::string text =
+      replace(kMiniNet, "tie_stiffness = 500.0", "tie_stiffness = 500.0\nmaterial = \"gold\"");
+  expect_error_at(text, "material = \"gold\"", "\"gold\"", "deformable[0].material",
+                  "unknown material");
+}
+
+}  // namespace

@@ -1,0 +1,227 @@
+// Tests of sim/scene: [device.canopen] (sim/src/scene/scene_device.cpp): the managed stack's
+// defaults, the PDO mappings, the DCFs read per node, their errors located in the scene or in
+// the DCF, and the shipped scenes configuring every node from its DCF.
+#include "numen/sim/scene/scene.hpp"
+
+#include <gtest/gtest.h>
+
+#include "sanitizer.hpp"
+#include "scene_text.hpp"
+#include "temp_dir.hpp"
+
+#include "numen/core/data.hpp"
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cstdio>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <numbers>
+#include <sstream>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "numen/hal/device/device_config.hpp"
+#include "numen/sim/device/simulated_instrument.hpp"
+#include "numen/sim/input/input_error.hpp"
+
+#include "detail/joint_system.hpp"
+#include "build_features.hpp"
+
+namespace {
+
+using numen::test::column_of;
+using numen::test::line_of;
+using numen::test::load_error;
+using numen::test::replace;
+
+using numen::sim::InputError;
+using numen::sim::load_scene;
+using numen::sim::Scene;
+using numen::test::expect_located;
+
+using numen::test::TempDir;
+
+// A small valid scene (pose tracker, scripted path; tests/support/scene_text.hpp). Every error
+// test below changes one thing in it, so that the error can only come from that change.
+using numen::test::kMiniScene;
+
+}  // namespace
+
+// ---------------------------------------------------------------- [device.canopen]
+
+TEST(SceneCanopen, DefaultsAreTheManagedStackAndKeysAreRead) {
+  TempDir dir;
+  const Scene d = load_scene(dir.write("mini.toml", kMiniScene));
+  EXPECT_TRUE(d.device.canopen.managed);
+  ASSERT_EQ(d.device.canopen.axes.size(), 6u);
+  EXPECT_EQ(d.device.canopen.axes[0].node_id, 1);
+  EXPECT_EQ(d.device.canopen.axes[5].node_id, 6);
+  EXPECT_EQ(d.device.canopen.axes[0].effective_heartbeat_timeout_ms(), 30u);
+  EXPECT_EQ(d.device.canopen.axes[0].drive_tpdo_cob_id, 0u);  // a pose tracker has no drives
+
+  const std::string text = replace(kMiniScene, "attach = \"tool\"\n", R"(attach = "tool"
+
+[device.canopen]
+controller_node_id = 100
+node_heartbeat_period = 20
+heartbeat_timeout = 50
+startup_timeout = 500
+)");
+  const Scene s = load_scene(dir.write("canopen.toml", text));
+  EXPECT_EQ(s.device.canopen.controller_node_id, 100);
+  EXPECT_EQ(s.device.canopen.startup_timeout_ms, 500u);
+  EXPECT_EQ(s.device.canopen.axes[3].heartbeat_period_ms, 20);
+  EXPECT_EQ(s.device.canopen.axes[3].effective_heartbeat_timeout_ms(), 50u);
+
+  const Scene m = load_scene(dir.write(
+      "minimal.toml", replace(kMiniScene, "attach = \"tool\"\n", "attach = \"tool\"\ncanopen = { managed = false }\n")));
+  EXPECT_FALSE(m.device.canopen.managed);
+}
+
+TEST(SceneCanopen, MappingsAreListedAndErrorsAreLocated) {
+  TempDir dir;
+  const std::string axis = R"(
+[[device.canopen.axis]]
+encoder_tpdo = [0x60040020, 0x60410010]
+[[device.canopen.axis]]
+[[device.canopen.axis]]
+[[device.canopen.axis]]
+[[device.canopen.axis]]
+[[device.canopen.axis]]
+node_id = 9
+)";
+  const std::string text = replace(kMiniScene, "attach = \"tool\"\n", "attach = \"tool\"\n" + axis);
+  const Scene s = load_scene(dir.write("map.toml", text));
+  ASSERT_EQ(s.device.canopen.axes[0].encoder_tpdo.size(), 2u);
+  EXPECT_EQ(s.device.canopen.axes[0].encoder_tpdo[1].index, 0x6041);
+  EXPECT_EQ(s.device.canopen.axes[5].node_id, 9);
+
+  // An object numen does not map: located at the list element.
+  const std::string bad = replace(text, "[0x60040020, 0x60410010]", "[0x60040020, 0x60720010]");
+  const InputError e = load_error(dir, bad, "badmap.toml");
+  expect_located(e, (dir.path() / "badmap.toml").string(), line_of(bad, "0x60720010"),
+                 column_of(bad, "encoder_tpdo", "0x60720010"),
+                 "device.canopen.axis[0].encoder_tpdo[1]", "is not an object numen maps");
+  // No position object: the whole mapping is refused, at its key.
+  const std::string nopos = replace(text, "[0x60040020, 0x60410010]", "[0x60410010]");
+  const InputError e2 = load_error(dir, nopos, "nopos.toml");
+  EXPECT_EQ(e2.line(), line_of(nopos, "[0x60410010]"));
+  EXPECT_NE(std::string(e2.what()).find("must map the position value 0x6004:00"), std::string::npos);
+  // A node id used by the controller.
+  const std::string clash = replace(text, "node_id = 9", "node_id = 127");
+  const InputError e3 = load_error(dir, clash, "clash.toml");
+  EXPECT_EQ(e3.line(), line_of(clash, "node_id = 127"));
+  EXPECT_NE(std::string(e3.what()).find("controller's node id"), std::string::npos);
+  // An unknown key.
+  const InputError e4 = load_error(dir, replace(kMiniScene, "attach = \"tool\"\n", "attach = \"tool\"\ncanopen = { manged = true }\n"), "typo.toml");
+  EXPECT_NE(std::string(e4.what()).find("manged"), std::string::npos);
+}
+
+std::string shipped_dcf_text(const char* name) {
+  std::ifstream in(std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/devices/" + name);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+TEST(SceneCanopen, DcfsAreReadPerNodeRelativeToTheScene) {
+  TempDir dir;
+  const std::string dcf = shipped_dcf_text("encoder.dcf");
+  dir.write("enc.dcf", dcf);
+  const std::string text = replace(kMiniScene, "attach = \"tool\"\n", R"(attach = "tool"
+
+[device.canopen]
+dcf = "enc.dcf"
+sdo_timeout = 50
+sdo_poll_period = 100
+)");
+  const Scene s = load_scene(dir.write("dcf.toml", text));
+  EXPECT_EQ(s.device.canopen.sdo_timeout_ms, 50u);
+  EXPECT_EQ(s.device.canopen.sdo_poll_period_ms, 100u);
+  for (std::size_t i = 0; i < 6; ++i) {
+    const numen::hal::CanopenAxisConfig& x = s.device.canopen.axes[i];
+    ASSERT_NE(x.dcf, nullptr);
+    EXPECT_EQ(x.dcf->resolved_node_id, x.node_id);
+    EXPECT_EQ(x.dcf->find({0x1800, 1})->value, 0x180u + x.node_id);  // $NODEID resolved per node
+    EXPECT_EQ(x.dcf->path, (dir.path() / "enc.dcf").string());
+  }
+  // One axis's own DCF wins over the device's.
+  dir.write("own.dcf", dcf);
+  const std::string own = replace(text, "sdo_poll_period = 100\n", "sdo_poll_period = 100\n" R"(
+[[device.canopen.axis]]
+[[device.canopen.axis]]
+[[device.canopen.axis]]
+[[device.canopen.axis]]
+[[device.canopen.axis]]
+[[device.canopen.axis]]
+dcf = "own.dcf"
+)");
+  const Scene o = load_scene(dir.write("own.toml", own));
+  EXPECT_EQ(o.device.canopen.axes[5].dcf->path, (dir.path() / "own.dcf").string());
+  EXPECT_EQ(o.device.canopen.axes[4].dcf->path, (dir.path() / "enc.dcf").string());
+}
+
+TEST(SceneCanopen, DcfErrorsAreLocatedInTheSceneOrInTheDcf) {
+  TempDir dir;
+  const std::string dcf = shipped_dcf_text("encoder.dcf");
+  const std::string scene = replace(kMiniScene, "attach = \"tool\"\n", "attach = \"tool\"\n\n[device.canopen]\ndcf = \"enc.dcf\"\n");
+  // No such file: at the scene's key.
+  const InputError missing = load_error(dir, scene, "missing.toml");
+  expect_located(missing, (dir.path() / "missing.toml").string(), line_of(scene, "dcf = "),
+                 column_of(scene, "dcf = ", "\"enc.dcf\""), "device.canopen.dcf", "DCF file not found");
+  // A malformed DCF: at its line, section and key, naming the scene key.
+  const std::string bad = replace(dcf, "AccessType=rw\nDefaultValue=10", "AccessType=rx\nDefaultValue=10");
+  dir.write("enc.dcf", bad);
+  const InputError e = load_error(dir, scene, "bad.toml");
+  EXPECT_EQ(e.file(), (dir.path() / "enc.dcf").string());
+  EXPECT_EQ(e.line(), line_of(bad, "AccessType=rx"));
+  EXPECT_EQ(e.key(), "[1017] AccessType");
+  EXPECT_NE(std::string(e.what()).find("is not ro, wo, rw, rwr, rww or const (the DCF of device.canopen.dcf)"),
+            std::string::npos);
+  // A DCF that disagrees with the scene: the heartbeat, at the DCF's value.
+  dir.write("enc.dcf", dcf);
+  const std::string hb = replace(scene, "dcf = \"enc.dcf\"\n", "dcf = \"enc.dcf\"\nnode_heartbeat_period = 20\n");
+  const InputError e2 = load_error(dir, hb, "hb.toml");
+  EXPECT_EQ(e2.line(), line_of(dcf, "ParameterValue=10"));
+  EXPECT_EQ(e2.key(), "[1017] ParameterValue");
+  EXPECT_NE(std::string(e2.what()).find("producer heartbeat time 10 ms, the axis 'x' node's heartbeat_period is 20 ms"),
+            std::string::npos) << e2.what();
+  // A COB-ID the DCF does not configure: at the file.
+  const std::string cob = replace(dcf, "ParameterValue=$NODEID+0x180", "ParameterValue=$NODEID+0x190");
+  dir.write("enc.dcf", cob);
+  const InputError e3 = load_error(dir, scene, "cob.toml");
+  EXPECT_EQ(e3.line(), 0);
+  EXPECT_NE(std::string(e3.what()).find("no enabled TPDO with COB-ID 0x181 (the encoder TPDO of axis 'x')"),
+            std::string::npos) << e3.what();
+  // Only the managed stack is configured.
+  dir.write("enc.dcf", dcf);
+  const InputError e4 = load_error(dir, replace(scene, "[device.canopen]\n", "[device.canopen]\nmanaged = false\n"), "minimal.toml");
+  EXPECT_NE(std::string(e4.what()).find("set managed = true"), std::string::npos);
+}
+
+TEST(SceneCanopen, ShippedScenesConfigureEveryNodeFromItsDcf) {
+  const std::string dir = std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/";
+  for (const char* name : {"construction.toml"}) {  // mouse.toml: needs libevdev for its codes
+    SCOPED_TRACE(name);
+    const Scene s = load_scene(dir + name);
+    for (const numen::hal::CanopenAxisConfig& x : s.device.canopen.axes) {
+      ASSERT_NE(x.dcf, nullptr);
+      EXPECT_NE(x.dcf->path.find("devices/encoder.dcf"), std::string::npos);
+    }
+  }
+  if (!numen::core::kWithArticulation) GTEST_SKIP() << "the trocar and arm scenes have joints: NUMEN_WITH_ARTICULATION=OFF";
+  for (const char* name : {"default.toml", "phantom.toml"}) {
+    SCOPED_TRACE(name);
+    const Scene s = load_scene(dir + name);
+    for (std::size_t i = 0; i < s.device.axes.size(); ++i) {
+      const numen::hal::CanopenAxisConfig& x = s.device.canopen.axes[i];
+      ASSERT_NE(x.dcf, nullptr);
+      EXPECT_EQ(x.dcf->find({0x1400, 1}) != nullptr, s.device.axes[i].has_drive());
+    }
+  }
+}

@@ -1,0 +1,178 @@
+// Tests of sim/scene_info: `numen info` on the shipped scenes — sizes from the
+// Model, stages equal to those step() runs, bytes equal to what make_data()
+// asked the allocator for, the device's CANopen nodes as the scene configures them.
+#include "numen/sim/scene/scene_info.hpp"
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+
+#include "alloc_counter.hpp"
+#include "numen/core/capacity.hpp"
+#include "numen/core/data.hpp"
+#include "numen/core/features.hpp"
+#include "numen/core/step.hpp"
+#include "numen/core/step_stages.hpp"
+#include "numen/hal/features.hpp"
+#include "numen/sim/scene/scene.hpp"
+
+namespace core = numen::core;
+namespace sim = numen::sim;
+
+namespace {
+
+/// The shipped scenes this build can load (default, phantom and endobag have
+/// joints; deformable and endobag nets; mouse names its event codes, which libevdev resolves).
+std::vector<std::string> shipped_scenes() {
+  std::vector<std::string> out{"construction", "admittance"};
+  if (numen::hal::kWithEvdev) out.push_back("mouse");
+  if (core::kWithArticulation) out.insert(out.end(), {"default", "phantom"});
+  if (core::kWithDeformable) out.push_back("deformable");
+  if (core::kWithArticulation && core::kWithDeformable) out.push_back("endobag");
+  return out;
+}
+
+std::string shipped(const std::string& name) {
+  return std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/" + name + ".toml";
+}
+
+}  // namespace
+
+TEST(SceneInfo, SizesAreTheModelsCounts) {
+  for (const std::string& name : shipped_scenes()) {
+    const sim::Scene scene = sim::load_scene(shipped(name));
+    const core::Model& m = scene.model;
+    const sim::SceneInfo i = sim::describe_scene(scene);
+    EXPECT_EQ(i.name, scene.name);
+    EXPECT_EQ(i.bodies, m.num_bodies()) << name;
+    EXPECT_EQ(i.joints, m.num_joints()) << name;
+    EXPECT_EQ(i.nets, m.num_nets()) << name;
+    EXPECT_EQ(i.nodes, m.num_nodes()) << name;
+    EXPECT_EQ(i.obstacles, static_cast<int>(m.obstacles.size())) << name;
+    EXPECT_EQ(i.body_spheres, static_cast<int>(m.body_spheres.size())) << name;
+    EXPECT_EQ(i.contact_capacity, core::contact_capacity(m)) << name;
+    EXPECT_EQ(i.node_contact_capacity, m.num_nodes() > 0 ? core::kMaxNodeContacts : 0) << name;
+  }
+}
+
+TEST(SceneInfo, StagesAreThoseStepRuns) {
+  for (const std::string& name : shipped_scenes()) {
+    const sim::Scene scene = sim::load_scene(shipped(name));
+    const sim::SceneInfo i = sim::describe_scene(scene);
+    core::Data d = core::make_data(scene.model);
+    core::step(scene.model, d);
+    const auto table = core::step_stage_table();
+    ASSERT_EQ(i.stages.size(), table.size());
+    for (std::size_t k = 0; k < table.size(); ++k) {
+      EXPECT_EQ(i.stages[k].name, table[k].name);
+      EXPECT_EQ(i.stages[k].runs, (d.stages_run & table[k].stage) != 0) << name << ": " << table[k].name;
+      EXPECT_EQ(i.stages[k].skipped_why.empty(), i.stages[k].runs) << name << ": " << table[k].name;
+    }
+  }
+}
+
+TEST(SceneInfo, DataBytesAreWhatMakeDataAllocated) {
+  for (const std::string& name : shipped_scenes()) {
+    const sim::Scene scene = sim::load_scene(shipped(name));
+    const sim::SceneInfo i = sim::describe_scene(scene);
+    const std::int64_t before = numen::test::allocated_bytes();
+    const core::Data d = core::make_data(scene.model);
+    const auto allocated = static_cast<std::size_t>(numen::test::allocated_bytes() - before);
+    EXPECT_EQ(i.data_bytes.sizeof_data, sizeof(core::Data));
+    // Nets sort their springs with one temporary array of num_nodes ints (NetScratch::resize).
+    const std::size_t temporary =
+        static_cast<std::size_t>(scene.model.num_nodes()) * sizeof(std::int32_t);
+    EXPECT_EQ(allocated, i.data_bytes.heap_bytes() + temporary) << name;
+  }
+}
+
+TEST(SceneInfo, ReportAndJsonNameEveryStageAndGroup) {
+  const sim::SceneInfo i = sim::describe_scene(sim::load_scene(shipped("construction")));
+  const std::string text = sim::format_scene_info(i);
+  const nlohmann::json json = nlohmann::json::parse(sim::format_scene_info_json(i));
+  ASSERT_EQ(json.at("stages").size(), i.stages.size());
+  for (std::size_t k = 0; k < i.stages.size(); ++k) {
+    const sim::StageLine& s = i.stages[k];
+    EXPECT_NE(text.find(s.name), std::string::npos) << s.name;
+    EXPECT_EQ(json.at("stages").at(k).at("name"), s.name);
+    EXPECT_EQ(json.at("stages").at(k).at("runs"), s.runs) << s.name;
+    EXPECT_EQ(json.at("stages").at(k).at("skipped_why"), s.skipped_why) << s.name;
+    if (!s.runs) {
+      std::string line = "skipped: ";
+      line += s.skipped_why;
+      EXPECT_NE(text.find(line), std::string::npos) << s.name;
+    }
+  }
+  for (const core::BufferGroupBytes& g : i.data_bytes.groups)
+    EXPECT_EQ(json.at("data_bytes").at("groups").at(g.group), g.heap_bytes) << g.group;
+  EXPECT_EQ(json.at("data_bytes").at("heap"), i.data_bytes.heap_bytes());
+  EXPECT_EQ(json.at("sizes").at("bodies"), i.bodies);
+  EXPECT_EQ(json.at("name"), i.name);
+}
+
+TEST(SceneInfo, JsonEscapesNamesAndReplacesBytesThatAreNotUtf8) {
+  sim::SceneInfo i = sim::describe_scene(sim::load_scene(shipped("construction")));
+  i.name = "quote \" backslash \\ tab \t bad \xff end";
+  const std::string out = sim::format_scene_info_json(i);
+  ASSERT_TRUE(nlohmann::json::accept(out)) << out;
+  EXPECT_EQ(nlohmann::json::parse(out).at("name"),
+            "quote \" backslash \\ tab \t bad \xef\xbf\xbd end");
+}
+
+// The device part (what tests/interop/lib/scene.js reads instead of the scene file): every axis
+// of a managed-stack device is served by exactly one node, with the node id and the DCF (an
+// absolute path to a file that exists) the scene gave it; text and JSON agree.
+TEST(SceneInfo, DeviceNodesAreTheScenesCanopenAxes) {
+  for (const std::string& name : shipped_scenes()) {
+    const sim::Scene scene = sim::load_scene(shipped(name));
+    const sim::SceneInfo i = sim::describe_scene(scene);
+    const nlohmann::json device = nlohmann::json::parse(sim::format_scene_info_json(i)).at("device");
+    const std::string text = sim::format_scene_info(i);
+    EXPECT_EQ(device.at("name"), scene.device.name) << name;
+    EXPECT_EQ(device.at("managed"), scene.device.canopen.managed) << name;
+    ASSERT_EQ(device.at("axes").size(), scene.device.axes.size()) << name;
+    for (std::size_t a = 0; a < scene.device.axes.size(); ++a) {
+      EXPECT_EQ(device.at("axes").at(a).at("name"), scene.device.axes[a].name) << name;
+      EXPECT_EQ(device.at("axes").at(a).at("rated_torque"), scene.device.axes[a].rated_torque) << name;
+    }
+    if (!scene.device.canopen.managed) {
+      EXPECT_TRUE(device.at("nodes").empty()) << name;
+      continue;
+    }
+    std::vector<int> served(scene.device.canopen.axes.size(), 0);
+    for (const nlohmann::json& n : device.at("nodes")) {
+      const int id = n.at("node_id");
+      const std::string dcf = n.at("dcf");
+      std::string line = "    node ";  // the text's line of the node
+      line += std::to_string(id);
+      line += ':';
+      for (int a : n.at("axes")) {
+        line += ' ';
+        line += device.at("axes").at(a).at("name").get<std::string>();
+      }
+      if (dcf.empty()) {
+        line += " (no DCF)\n";
+      } else {
+        line += ", DCF ";
+        line += dcf;
+        line += '\n';
+      }
+      EXPECT_NE(text.find(line), std::string::npos) << name << ": no line '" << line << "' in\n" << text;
+      for (int a : n.at("axes")) {
+        ++served.at(static_cast<std::size_t>(a));
+        const numen::hal::CanopenAxisConfig& c = scene.device.canopen.axes[static_cast<std::size_t>(a)];
+        EXPECT_EQ(c.node_id, id) << name << " axis " << a;
+        EXPECT_EQ(c.dcf != nullptr, !dcf.empty()) << name << " axis " << a;
+      }
+      if (!dcf.empty()) {
+        EXPECT_TRUE(std::filesystem::path(dcf).is_absolute()) << dcf;
+        EXPECT_TRUE(std::filesystem::exists(dcf)) << dcf;
+      }
+    }
+    for (std::size_t a = 0; a < served.size(); ++a) EXPECT_EQ(served[a], 1) << name << " axis " << a;
+  }
+}

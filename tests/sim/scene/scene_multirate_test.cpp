@@ -1,0 +1,166 @@
+// Tests of sim/scene_multirate: the [multirate] table of a scene file — the scene loop's period
+// and the proximity margin, and the scenes a multirate god-object refuses, each with a located
+// error (file, line, column, key).
+#include <gtest/gtest.h>
+
+#include <string>
+#include <vector>
+
+#include "build_features.hpp"
+#include "scene_text.hpp"
+#include "temp_dir.hpp"
+#include "numen/core/features.hpp"
+#include "numen/core/multirate.hpp"
+#include "numen/sim/input/input_error.hpp"
+#include "numen/sim/scene/scene.hpp"
+
+namespace {
+
+using numen::sim::InputError;
+using numen::sim::Scene;
+using numen::test::replace;
+using numen::test::TempDir;
+
+/// The shipped construction scene with `table` after its coupling line, loadable from `dir`.
+std::string construction_with(const std::string& table) {
+  return replace(numen::test::shipped_scene_text("construction.toml"), "coupling = \"god-object\"\n",
+                 "coupling = \"god-object\"\n\n" + table + "\n");
+}
+
+InputError load_error(TempDir& dir, const std::string& text, const char* file = "mr.toml") {
+  try {
+    numen::sim::load_scene(dir.write(file, text));
+  } catch (const InputError& e) {
+    return e;
+  }
+  ADD_FAILURE() << "loaded without an error";
+  return InputError("", 0, 0, "", "");
+}
+
+}  // namespace
+
+TEST(SceneMultirate, SceneDtAndMarginGiveTheRatioAndEveryHeldBodyIsATool) {
+  TempDir dir;
+  const Scene s = numen::sim::load_scene(
+      dir.write("mr.toml", construction_with("[multirate]\nscene_dt = 0.01\nmargin = 0.008")));
+  ASSERT_TRUE(s.multirate.has_value());
+  EXPECT_EQ(s.multirate->ratio, 10);
+  EXPECT_DOUBLE_EQ(s.multirate->scene_dt_s, 0.01);
+  EXPECT_DOUBLE_EQ(s.multirate->margin_m, 0.008);
+  // "held" at the start, "loose_1" after the release (tool switching).
+  ASSERT_EQ(s.multirate->tools.size(), 2u);
+  EXPECT_EQ(s.model.bodies[static_cast<std::size_t>(s.multirate->tools[0])].name, "held");
+  EXPECT_EQ(s.model.bodies[static_cast<std::size_t>(s.multirate->tools[1])].name, "loose_1");
+  // Without the table nothing changes; at scene_dt = dt the margin may be left out.
+  EXPECT_FALSE(numen::sim::load_scene(std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/construction.toml")
+                   .multirate.has_value());
+  const Scene one = numen::sim::load_scene(
+      dir.write("one.toml", construction_with("[multirate]\nscene_dt = 0.001")));
+  EXPECT_EQ(one.multirate->ratio, 1);
+  EXPECT_EQ(one.multirate->margin_m, 0.0);
+}
+
+TEST(SceneMultirate, BadValuesAreLocatedErrors) {
+  TempDir dir;
+  const std::string not_multiple = construction_with("[multirate]\nscene_dt = 0.0025\nmargin = 0.01");
+  const InputError e1 = load_error(dir, not_multiple);
+  EXPECT_EQ(e1.key(), "multirate.scene_dt");
+  EXPECT_EQ(e1.line(), numen::test::line_of(not_multiple, "scene_dt = 0.0025"));
+  EXPECT_NE(std::string(e1.what()).find("whole multiple of dt"), std::string::npos) << e1.what();
+  // 1e-10 s off a multiple: the message quotes every digit (it read "got 0.001 s, 1 dt").
+  const std::string near = construction_with("[multirate]\nscene_dt = 0.0010000001\nmargin = 0.01");
+  const InputError e_near = load_error(dir, near);
+  EXPECT_EQ(e_near.key(), "multirate.scene_dt");
+  EXPECT_EQ(e_near.line(), numen::test::line_of(near, "scene_dt = 0.0010000001"));
+  EXPECT_EQ(e_near.message(),
+            "must be a whole multiple of dt = 0.001 s (got 0.0010000001 s, 1.0000001 dt)");
+  const InputError e2 = load_error(dir, construction_with("[multirate]\nscene_dt = 0.0005\nmargin = 0.01"));
+  EXPECT_EQ(e2.key(), "multirate.scene_dt") << "shorter than dt";
+  const InputError e3 = load_error(dir, construction_with("[multirate]\nscene_dt = 0.01"));
+  EXPECT_EQ(e3.key(), "multirate.margin");
+  EXPECT_NE(std::string(e3.what()).find("missing"), std::string::npos) << e3.what();
+  const InputError e4 = load_error(dir, construction_with("[multirate]\nscene_dt = 0.01\nmargin = -0.001"));
+  EXPECT_EQ(e4.key(), "multirate.margin");
+  const InputError e5 = load_error(dir, construction_with("[multirate]\nscene_dt = 0.01\nmargn = 0.01"));
+  EXPECT_NE(std::string(e5.what()).find("margn"), std::string::npos) << "a typo is refused: " << e5.what();
+}
+
+TEST(SceneMultirate, WhatTheMultirateGodObjectCannotRunIsRefusedAtTheTable) {
+  TempDir dir;
+  // An integrator without an effective contact force (the impulse hand-back needs it).
+  const std::string trbdf2 = replace(construction_with("[multirate]\nscene_dt = 0.01\nmargin = 0.01"),
+                                     "integrator = \"implicit-euler\"", "integrator = \"tr-bdf2\"");
+  const InputError e1 = load_error(dir, trbdf2);
+  EXPECT_EQ(e1.key(), "multirate.scene_dt");
+  EXPECT_NE(std::string(e1.what()).find("integrator"), std::string::npos) << e1.what();
+  // A net off its rigid component's centre of mass (the device loop lumps the net onto the
+  // component, which keeps its own centre of mass).
+  if (numen::core::kWithDeformable) {
+    const std::string text = numen::test::shipped_scene_text("deformable.toml") +
+                             "\n[multirate]\nscene_dt = 0.01\nmargin = 0.01\n";
+    const std::string data = std::string("\"") + NUMEN_SOURCE_DIR + "/sim/data/";
+    const std::string off = replace(replace(text, "\"../data/", data), "position = [0.0, 0.0, 0.0]     # mesh centre",
+                                    "position = [0.0, 0.0, 0.005]   # mesh centre");
+    const InputError e2 = load_error(dir, off, "deformable_mr.toml");
+    EXPECT_EQ(e2.key(), "multirate.scene_dt");
+    EXPECT_NE(std::string(e2.what()).find("net 'probe' has its centre of mass"), std::string::npos) << e2.what();
+  }
+}
+
+// The default scene's god-object is the held tube's articulation: the trocar sleeve, the tube
+// and both jaws, with the pivot, insertion and jaw joints (two prescribed by the jaw axis).
+TEST(SceneMultirate, AnArticulatedToolIsOneGodObject) {
+  NUMEN_REQUIRE_ARTICULATION();
+  TempDir dir;
+  const std::string text = numen::test::shipped_scene_text("default.toml") +
+                           "\n[multirate]\nscene_dt = 0.005\nmargin = 0.005\n";
+  const std::string data = std::string("\"") + NUMEN_SOURCE_DIR + "/sim/data/";
+  const Scene s = numen::sim::load_scene(dir.write("default_mr.toml", replace(text, "\"../data/", data)));
+  ASSERT_TRUE(s.multirate.has_value());
+  EXPECT_EQ(s.multirate->ratio, 5);
+  ASSERT_EQ(s.multirate->tools.size(), 1u);
+  const std::vector<int> god = numen::core::god_object_bodies(s.model, s.multirate->tools[0]);
+  EXPECT_EQ(god.size(), 4u) << "sleeve, tube, jaw_1, jaw_2";
+  numen::core::Model device;
+  ASSERT_EQ(numen::core::make_god_object_model(s.model, s.multirate->tools[0], s.model.dt, device), "");
+  EXPECT_EQ(device.num_bodies(), 4);
+  EXPECT_EQ(device.num_joints(), 4);
+  EXPECT_TRUE(device.obstacles.empty());
+  EXPECT_EQ(device.bodies[static_cast<std::size_t>(device.initial_attached_body)].name,
+            s.model.bodies[static_cast<std::size_t>(s.multirate->tools[0])].name);
+}
+
+// The margin must cover the hand's travel in one scene period: at 100 ms the construction
+// scene's hand moves up to 52 mm, five times a 10 mm margin — a warning with the numbers; at
+// 10 ms (5 mm) none.
+TEST(SceneMultirate, AMarginShorterThanTheHandsTravelIsWarnedAbout) {
+  TempDir dir;
+  const auto warned = [](const Scene& s) {
+    for (const std::string& w : s.warnings)
+      if (w.find("the hand travels up to") != std::string::npos) return true;
+    return false;
+  };
+  const Scene slow = numen::sim::load_scene(
+      dir.write("slow.toml", construction_with("[multirate]\nscene_dt = 0.1\nmargin = 0.01")));
+  EXPECT_TRUE(warned(slow));
+  const Scene fine = numen::sim::load_scene(
+      dir.write("fine.toml", construction_with("[multirate]\nscene_dt = 0.01\nmargin = 0.01")));
+  EXPECT_FALSE(warned(fine));
+}
+
+// A net on a body the device never holds would be the scene loop's alone: the device loop would
+// not feel it. Refused at the table, naming the net and the body.
+TEST(SceneMultirate, ANetOnABodyNoGodObjectHoldsIsRefused) {
+  if (!numen::core::kWithDeformable) GTEST_SKIP() << "a build without nets";
+  TempDir dir;
+  std::string text = numen::test::shipped_scene_text("deformable.toml") +
+                     "\n[multirate]\nscene_dt = 0.01\nmargin = 0.002\n";
+  text = replace(text, "\"../data/", std::string("\"") + NUMEN_SOURCE_DIR + "/sim/data/");
+  text = replace(text, "[[deformable]]\nname = \"probe\"\nbody = \"core\"",
+                 "[[body]]\nname = \"spare\"\nmass = 0.05\ninertia = [1.0e-5, 1.0e-5, 1.0e-5]\n"
+                 "material = \"steel\"\n\n[[deformable]]\nname = \"probe\"\nbody = \"spare\"");
+  const InputError e = load_error(dir, text, "spare_net_mr.toml");
+  EXPECT_EQ(e.key(), "multirate.scene_dt");
+  EXPECT_NE(std::string(e.what()).find("net 'probe' is on body 'spare', which is in no body's god-object"),
+            std::string::npos) << e.what();
+}

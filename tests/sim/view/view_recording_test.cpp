@@ -1,0 +1,232 @@
+#include "numen/sim/view/view_recording.hpp"
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "build_features.hpp"
+#include "child_process.hpp"
+#include "numen/sim/input/input_error.hpp"
+#include "numen/sim/run/run.hpp"
+#include "numen/sim/scene/scene.hpp"
+#include "numen/sim/view/view_scene.hpp"
+#include "temp_dir.hpp"
+
+namespace {
+
+using numen::sim::ViewRecordingReader;
+using numen::test::TempDir;
+
+/// A recording of `seconds` of `scene` written by run_scene itself.
+std::string record(const TempDir& dir, const std::string& scene_path, double seconds,
+                   numen::sim::RunSummary* summary = nullptr) {
+  const numen::sim::Scene scene = numen::sim::load_scene(scene_path);
+  numen::sim::RunOptions options;
+  options.duration_s = seconds;
+  options.record_view_path = (dir / "run.nmv").string();
+  const numen::sim::RunSummary s = numen::sim::run_scene(scene, options);
+  EXPECT_EQ(s.exit_status, 0);
+  if (summary != nullptr) *summary = s;
+  return options.record_view_path;
+}
+
+std::string read_bytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+std::string write_bytes(const TempDir& dir, const std::string& name, const std::string& bytes) {
+  const std::string path = (dir / name).string();
+  std::ofstream(path, std::ios::binary) << bytes;
+  return path;
+}
+
+std::string reader_error(const std::string& path) {
+  try {
+    ViewRecordingReader reader(path);
+  } catch (const numen::sim::InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(ViewRecording, ARunRecordsEveryDueFrameInOrder) {
+  NUMEN_REQUIRE_ARTICULATION();
+  TempDir dir;
+  numen::sim::RunSummary s;
+  const std::string path = record(dir, numen::sim::default_scene_path(), 0.5, &s);
+  EXPECT_TRUE(s.view_recorded);
+  EXPECT_EQ(s.view_frames_published, 30);  // 0.5 s at 60 Hz
+  EXPECT_EQ(s.view_frames_dropped, 0);
+  EXPECT_EQ(s.view_record_frames, 30);
+  EXPECT_EQ(s.view_record_io_errors, 0);
+  const ViewRecordingReader reader(path);
+  ASSERT_EQ(reader.size(), 30u);
+  const auto scene = nlohmann::json::parse(reader.scene_message());
+  EXPECT_EQ(scene["format"], "numen-view");
+  EXPECT_EQ(scene["layout"]["bodies"].get<int>(), s.num_bodies);
+  EXPECT_EQ(reader.period(0), 0u);
+  for (std::size_t i = 1; i < reader.size(); ++i) {
+    EXPECT_GT(reader.time_ns(i), reader.time_ns(i - 1));
+    EXPECT_NEAR(static_cast<double>(reader.time_ns(i) - reader.time_ns(i - 1)), 1e9 / 60, 1e6);
+  }
+  EXPECT_EQ(reader.frame_at_or_after(reader.time_ns(7)), 7u);
+  EXPECT_EQ(reader.frame_at_or_after(reader.time_ns(7) + 1), 8u);
+  EXPECT_EQ(reader.frame_at_or_after(INT64_MAX), reader.size());
+  std::vector<std::byte> frame;
+  reader.frame(29, frame);
+  numen::platform::StateFrameView view;
+  ASSERT_TRUE(numen::platform::StateFrameDecoder::decode(frame, view).ok());
+  // The last frame's tool pose is finite and where a 0.5 s run of the default scene has it.
+  float pose[7];
+  view.body_pose(static_cast<std::uint32_t>(view.header().attached_body), pose);
+  for (float v : pose) EXPECT_TRUE(std::isfinite(v));
+}
+
+TEST(ViewRecording, EveryDamagedFileIsRefusedWithItsByteOffset) {
+  NUMEN_REQUIRE_ARTICULATION();
+  TempDir dir;
+  const std::string good = read_bytes(record(dir, numen::sim::default_scene_path(), 0.1));
+  ASSERT_GT(good.size(), 100u);
+  const std::uint32_t scene_bytes = static_cast<unsigned char>(good[8]) |
+                                    static_cast<unsigned char>(good[9]) << 8 |
+                                    static_cast<unsigned char>(good[10]) << 16;
+  const std::size_t first_frame = 12 + scene_bytes;  // its length field
+  auto error = [&](const std::string& bytes) { return reader_error(write_bytes(dir, "bad.nmv", bytes)); };
+
+  EXPECT_NE(reader_error((dir / "missing.nmv").string()).find("cannot open"), std::string::npos);
+  EXPECT_NE(error("").find("byte 0: not a numen view recording"), std::string::npos);
+  EXPECT_NE(error("NMVREC01").find("byte 8: the file ends before the scene message"), std::string::npos);
+  std::string b = good;
+  b[11] = '\x7f';  // a scene message of ~2 GB
+  EXPECT_NE(error(b).find("byte 8: the length of the scene message is"), std::string::npos);
+  b = good;
+  b[12] = '[';
+  EXPECT_NE(error(b).find("not a numen-view JSON object"), std::string::npos);
+  b = good.substr(0, good.size() - 3);  // the last frame cut short: a killed run
+  EXPECT_NE(error(b).find("frame 5 is cut short"), std::string::npos) << error(b);
+  b = good;
+  b[first_frame + 4] = 'X';  // the first frame's magic
+  EXPECT_NE(error(b).find("byte " + std::to_string(first_frame + 4) + ": frame 0: byte 0: not a state frame"),
+            std::string::npos)
+      << error(b);
+  {
+    // Frame 1 stamped before frame 0 (its period still after): frame_at_or_after() would
+    // search unsorted times. Found by tests/fuzz/view_recording_fuzz.cpp.
+    b = good;
+    const std::uint32_t frame0 = static_cast<unsigned char>(b[first_frame]) |
+                                 static_cast<unsigned char>(b[first_frame + 1]) << 8;
+    const std::size_t second = first_frame + 4 + frame0;
+    for (int i = 0; i < 8; ++i) b[second + 4 + 40 + i] = '\xff';  // time_ns = -1
+    EXPECT_NE(error(b).find("byte " + std::to_string(second + 4) + ": frame 1 is at -1 ns, before the previous frame's"),
+              std::string::npos)
+        << error(b);
+  }
+  b = good + good.substr(first_frame);  // the frames again: periods go back
+  EXPECT_NE(error(b).find("is period 0, not after the previous frame's"), std::string::npos) << error(b);
+  EXPECT_EQ(error(good), "");
+}
+
+/// A recording of no frames whose scene message is `scene` (JSON text).
+std::string recording_bytes(const std::string& scene) {
+  std::string b(numen::sim::kViewRecordingMagic, 8);
+  for (int i = 0; i < 4; ++i) b += static_cast<char>((scene.size() >> (8 * i)) & 0xFF);
+  return b + scene;
+}
+
+// A known member of the scene message with the wrong JSON type (or value) is an InputError
+// naming the file and the key, at the message's byte offset; it was a json type_error naming
+// nothing ("[json.exception.type_error.302] type must be string, but is object").
+TEST(ViewRecording, ASceneMessageMemberOfTheWrongTypeIsNamedByItsKey) {
+  TempDir dir;
+  const std::string layout = R"("layout": {"bodies": 2, "nodes": 0, "axes": 3})";
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {R"({"format": {"a": 1}, "version": 1, )" + layout + "}", "format"},
+      {R"({"format": 1, "version": 1, )" + layout + "}", "format"},
+      {R"({"format": "numen-view", "version": "1", )" + layout + "}", "version"},
+      {R"({"format": "numen-view", "version": 1.5, )" + layout + "}", "version"},
+      {R"({"format": "numen-view", "version": 1})", "layout"},
+      {R"({"format": "numen-view", "version": 1, "layout": [2, 0, 3]})", "layout"},
+      {R"({"format": "numen-view", "version": 1, "layout": {"bodies": -2, "nodes": 0, "axes": 3}})",
+       "layout.bodies"},
+      {R"({"format": "numen-view", "version": 1, "layout": {"bodies": 2, "nodes": "0", "axes": 3}})",
+       "layout.nodes"},
+      {R"({"format": "numen-view", "version": 1, "layout": {"bodies": 2, "nodes": 0}})",
+       "layout.axes"},
+  };
+  for (const auto& [scene, key] : cases) {
+    const std::string path = write_bytes(dir, "bad.nmv", recording_bytes(scene));
+    try {
+      ViewRecordingReader reader(path);
+      ADD_FAILURE() << scene << " was accepted";
+    } catch (const numen::sim::InputError& e) {
+      EXPECT_EQ(e.file(), path) << scene;
+      EXPECT_EQ(e.key(), key) << scene << ": " << e.what();
+      EXPECT_EQ(e.message().rfind("byte 12: ", 0), 0u) << scene << ": " << e.what();
+    }
+  }
+  // A syntax error is reported at its own byte of the file (the '}' after "nul": 12 + 14).
+  const std::string path = write_bytes(dir, "bad.nmv", recording_bytes(R"({"format": nul})"));
+  EXPECT_NE(reader_error(path).find("byte 26: the scene message is not a numen-view JSON object"),
+            std::string::npos)
+      << reader_error(path);
+  // The members as a recorder writes them: accepted (no frames).
+  EXPECT_EQ(reader_error(write_bytes(
+                dir, "good.nmv",
+                recording_bytes(R"({"format": "numen-view", "version": 1, )" + layout + "}"))),
+            "");
+}
+
+TEST(ViewRecording, AnUnwritablePathIsAnInputErrorAtTheOption) {
+  try {
+    numen::sim::ViewRecordingWriter w("/nonexistent-dir/run.nmv", "{}");
+    FAIL() << "no error";
+  } catch (const numen::sim::InputError& e) {
+    EXPECT_EQ(e.key(), "--record-view");
+    EXPECT_NE(std::string(e.what()).find("/nonexistent-dir/run.nmv"), std::string::npos);
+  }
+}
+
+TEST(ViewRecording, AFullDiskIsFoundBeforeTheRunStarts) {
+  NUMEN_REQUIRE_ARTICULATION();
+  if (!std::filesystem::exists("/dev/full")) GTEST_SKIP() << "no /dev/full on this machine";
+  const numen::sim::Scene scene = numen::sim::load_scene(numen::sim::default_scene_path());
+  numen::sim::RunOptions options;
+  options.duration_s = 0.5;
+  options.record_view_path = "/dev/full";
+  try {
+    numen::sim::run_scene(scene, options);
+    FAIL() << "no error";
+  } catch (const numen::sim::InputError& e) {
+    EXPECT_EQ(e.key(), "--record-view");
+    EXPECT_NE(std::string(e.what()).find("/dev/full: cannot write"), std::string::npos) << e.what();
+  }
+}
+
+TEST(ViewSceneMessage, DescribesTheNetsBodiesAndObstaclesOfTheDeformableScene) {
+  NUMEN_REQUIRE_DEFORMABLE();
+  const std::string path =
+      (std::filesystem::path(numen::sim::default_scene_path()).parent_path() / "deformable.toml").string();
+  const numen::sim::Scene scene = numen::sim::load_scene(path);
+  const auto layout = numen::sim::view_frame_layout(scene);
+  const auto j = nlohmann::json::parse(numen::sim::view_scene_message(scene, layout, 60.0));
+  EXPECT_EQ(j["version"], numen::sim::kViewSceneVersion);
+  EXPECT_EQ(j["bodies"].size(), scene.model.bodies.size());
+  EXPECT_EQ(j["obstacles"].size(), scene.model.obstacles.size());
+  ASSERT_EQ(j["nets"].size(), scene.model.nets.size());
+  ASSERT_GT(j["nets"].size(), 0u);
+  const auto& net = j["nets"][0];
+  EXPECT_EQ(net["node_count"].get<int>(), scene.model.nets[0].node_count);
+  ASSERT_GT(net["triangles"].size(), 0u);
+  for (const auto& t : net["triangles"])
+    for (int i = 0; i < 3; ++i) {
+      EXPECT_GE(t[i].get<int>(), 0);
+      EXPECT_LT(t[i].get<int>(), scene.model.nets[0].node_count);
+    }
+  EXPECT_EQ(j["layout"]["nodes"].get<std::uint32_t>(), layout.num_nodes);
+  EXPECT_EQ(j["device"]["axes"].size(), scene.device.axes.size());
+  EXPECT_EQ(j["device"]["protocol"], scene.device.canopen.managed ? "managed" : "minimal");
+}
+
+}  // namespace
