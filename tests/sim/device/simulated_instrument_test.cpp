@@ -19,6 +19,7 @@
 #include "numen/sim/scene/scene.hpp"
 #include "build_features.hpp"
 #include "rotation.hpp"
+#include "test_constants.hpp"
 
 namespace {
 
@@ -34,7 +35,7 @@ using numen::hal::TrocarKinematics;
 using numen::sim::SimulatedInstrument;
 using numen::sim::Trajectory;
 using TK = TrocarKinematics;
-constexpr std::int64_t kMs = 1'000'000;
+using numen::test::kMs;
 
 Quat rx(double a) { return Quat(Eigen::AngleAxisd(a, Vec3::UnitX())); }
 Quat ry(double a) { return Quat(Eigen::AngleAxisd(a, Vec3::UnitY())); }

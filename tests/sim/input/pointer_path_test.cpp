@@ -15,6 +15,7 @@
 #include "alloc_counter.hpp"
 #include "numen/hal/input/evemu_log.hpp"
 #include "numen/hal/input/evemu_replay.hpp"
+#include "test_constants.hpp"
 
 namespace {
 
@@ -23,7 +24,7 @@ using numen::hal::InputEvent;
 using numen::sim::PointerPath;
 using numen::sim::Trajectory;
 
-constexpr std::int64_t kMs = 1'000'000;  // ns
+using numen::test::kMs;
 
 numen::hal::RelativePoseIntegratorSettings mouse() {
   numen::hal::RelativePoseIntegratorSettings s;

@@ -10,6 +10,7 @@
 
 #include "alloc_counter.hpp"
 #include "numen/sim/input/input_error.hpp"
+#include "test_constants.hpp"
 
 namespace {
 
@@ -23,7 +24,7 @@ using numen::sim::PathSegment;
 using numen::sim::ScriptedPath;
 using numen::sim::StepSegment;
 
-constexpr double kPi = std::numbers::pi;
+using numen::test::kPi;
 
 PathSegment line(std::optional<Vec3> from, const Vec3& to, double duration) {
   PathSegment s;

@@ -11,6 +11,7 @@
 
 #include "alloc_counter.hpp"
 #include "numen/sim/input/input_error.hpp"
+#include "test_constants.hpp"
 
 namespace {
 
@@ -20,7 +21,7 @@ using numen::core::Vec3;
 using numen::sim::InputError;
 using numen::sim::Trajectory;
 
-constexpr double kPi = std::numbers::pi;
+using numen::test::kPi;
 
 Quat about(const Vec3& axis, double angle) {
   return Quat(Eigen::AngleAxisd(angle, axis.normalized()));

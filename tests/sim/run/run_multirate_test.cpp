@@ -140,7 +140,7 @@ TEST(RunMultirate, TwoRunnersAreBitIdentical) {
 namespace {
 
 /// 10 000 periods of `scene` under the allocation counter; the summary after.
-RunSummary expect_no_allocation(const Scene& scene, const char* name) {
+RunSummary run_without_allocation(const Scene& scene, const char* name) {
   SceneRunner runner(scene, 10'000);
   std::int64_t count = -1;
   {
@@ -162,7 +162,7 @@ RunSummary expect_no_allocation(const Scene& scene, const char* name) {
 // switch to the second block, 1 000 scene steps — no heap allocation in either loop.
 TEST(RunMultirate, PeriodNeverAllocates) {
   numen::test::TempDir dir;
-  const RunSummary s = expect_no_allocation(construction_multirate(dir, 0.01, 0.01), "construction");
+  const RunSummary s = run_without_allocation(construction_multirate(dir, 0.01, 0.01), "construction");
   EXPECT_EQ(s.multirate.scene_steps, 1000);
   EXPECT_EQ(s.multirate.switches, 2);
 }
@@ -240,7 +240,7 @@ TEST(RunMultirate, DefaultSceneArticulatedGodObjectAtRateRatiosOneFiveAndTen) {
 TEST(RunMultirate, DefaultScenePeriodNeverAllocates) {
   NUMEN_REQUIRE_ARTICULATION();
   numen::test::TempDir dir;
-  expect_no_allocation(default_multirate(dir, 0.01, 0.005), "default");
+  run_without_allocation(default_multirate(dir, 0.01, 0.005), "default");
 }
 
 namespace {
@@ -338,7 +338,7 @@ TEST(RunMultirate, EndobagSceneNetOnAnArticulatedGodObjectAtRateRatiosOneFiveAnd
 TEST(RunMultirate, DeformableScenePeriodNeverAllocates) {
   NUMEN_REQUIRE_DEFORMABLE();
   numen::test::TempDir dir;
-  const RunSummary s = expect_no_allocation(deformable_scene(dir, 0.001, 0.01, 0.005), "deformable");
+  const RunSummary s = run_without_allocation(deformable_scene(dir, 0.001, 0.01, 0.005), "deformable");
   EXPECT_GT(s.node_contacts_max, 0);
 }
 
@@ -350,7 +350,7 @@ TEST(RunMultirate, TheOtherShippedScenesNeverAllocate) {
   NUMEN_REQUIRE_DEFORMABLE();
   numen::test::TempDir dir;
   for (const char* name : {"mouse.toml", "phantom.toml", "endobag.toml"}) {
-    const RunSummary s = expect_no_allocation(shipped_scene(dir, name, 0.001, 0.005, 0.005), name);
+    const RunSummary s = run_without_allocation(shipped_scene(dir, name, 0.001, 0.005, 0.005), name);
     EXPECT_EQ(s.multirate.scene_steps, 2000) << name;
     EXPECT_EQ(s.multirate.planes_dropped, 0) << name;
   }

@@ -24,7 +24,7 @@ using test::TempDir;
 
 /// Free body (closed form) and wall (reference run and its check), 3 steps, 50 ms: 6 study
 /// cases (2 cases × 3 integrators), a fraction of a second.
-AccuracyOptions small_grid() {
+AccuracyOptions small_accuracy_grid() {
   AccuracyOptions o;
   o.cases = {"free-body", "wall"};
   o.steps = {1e-2, 5e-3, 2e-3};
@@ -54,7 +54,7 @@ std::string without_cpu_columns(const std::string& csv) {
 }
 
 TEST(StudyAccuracyShard, MergeEqualsTheOneProcessRunExceptCpuTimes) {
-  const AccuracyOptions o = small_grid();
+  const AccuracyOptions o = small_accuracy_grid();
   const AccuracyResult one = run_accuracy_study(o);
   ASSERT_EQ(one.cases, 6);
   ASSERT_EQ(one.fits.size(), 6u);
@@ -88,7 +88,7 @@ TEST(StudyAccuracyShard, MergeEqualsTheOneProcessRunExceptCpuTimes) {
 }
 
 TEST(StudyAccuracyShard, ListHasOneCasePerCaseAndIntegrator) {
-  AccuracyOptions o = small_grid();
+  AccuracyOptions o = small_accuracy_grid();
   const std::vector<StudyCase> all = accuracy_cases(o);
   ASSERT_EQ(all.size(), 6u);
   EXPECT_EQ(all[4].family, "wall");

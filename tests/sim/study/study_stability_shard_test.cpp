@@ -27,7 +27,7 @@ using test::TempDir;
 
 /// A grid of a fraction of a second: coupling and contact, quick, 20 steps per run, two
 /// integrators (2 × 2 × 3 × 6 × 8 + 2 × 2 × 3 × 3 × 7 = 828 cases).
-StabilityOptions small_grid() {
+StabilityOptions small_stability_grid() {
   StabilityOptions o;
   o.quick = true;
   o.families = {"coupling", "contact"};
@@ -55,7 +55,7 @@ void expect_same_files(const std::filesystem::path& a, const std::filesystem::pa
 }
 
 TEST(StudyStabilityShard, MergeIsByteIdenticalToTheOneProcessRun) {
-  const StabilityOptions o = small_grid();
+  const StabilityOptions o = small_stability_grid();
   TempDir whole;
   const StabilityResult one = run_stability_study(o);
   ASSERT_EQ(one.cases, 828);
@@ -73,7 +73,7 @@ TEST(StudyStabilityShard, MergeIsByteIdenticalToTheOneProcessRun) {
 }
 
 TEST(StudyStabilityShard, ShardsPartitionTheCasesAndRunOnlyTheirs) {
-  const StabilityOptions o = small_grid();
+  const StabilityOptions o = small_stability_grid();
   const std::vector<StudyCase> all = stability_cases(o);
   ASSERT_EQ(all.size(), 828u);
   for (std::size_t k = 0; k < all.size(); ++k)
@@ -173,7 +173,7 @@ InputError merge_error(const std::filesystem::path& dir) {
 }
 
 TEST(StudyStabilityShard, MissingShardsAreListedByIndex) {
-  StabilityOptions o = small_grid();
+  StabilityOptions o = small_stability_grid();
   o.families = {"coupling"};
   TempDir dir;
   run_shard(o, {0, 4}, dir.path());
@@ -187,7 +187,7 @@ TEST(StudyStabilityShard, MissingShardsAreListedByIndex) {
 }
 
 TEST(StudyStabilityShard, MismatchedShardCountsAreRefused) {
-  StabilityOptions o = small_grid();
+  StabilityOptions o = small_stability_grid();
   o.families = {"coupling"};
   TempDir dir;
   run_shard(o, {0, 2}, dir.path());
@@ -201,7 +201,7 @@ TEST(StudyStabilityShard, MismatchedShardCountsAreRefused) {
 }
 
 TEST(StudyStabilityShard, ShardsOfOtherOptionsAreRefused) {
-  StabilityOptions o = small_grid();
+  StabilityOptions o = small_stability_grid();
   o.families = {"coupling"};
   TempDir dir;
   run_shard(o, {0, 2}, dir.path());
@@ -214,7 +214,7 @@ TEST(StudyStabilityShard, ShardsOfOtherOptionsAreRefused) {
 }
 
 TEST(StudyStabilityShard, DamagedShardFilesAreNamed) {
-  StabilityOptions o = small_grid();
+  StabilityOptions o = small_stability_grid();
   o.families = {"coupling"};
   TempDir dir;
   run_shard(o, {0, 2}, dir.path());
