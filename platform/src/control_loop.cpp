@@ -52,14 +52,7 @@ ControlLoop::ControlLoop(const core::Model& model, core::Data& data, hal::Bus& b
     if (p.axis < 0 || p.axis >= device.num_axes())
       throw std::invalid_argument("device binding: axis " + std::to_string(p.axis) + " out of range");
   }
-  explicit_bound_.assign(static_cast<std::size_t>(model.num_bodies()), 0);
-  for (const LinkBinding& b : binding_.links) {
-    if (b.body < 0) continue;
-    if (explicit_bound_[static_cast<std::size_t>(b.body)])
-      throw std::invalid_argument("device binding: body " + std::to_string(b.body) +
-                                  " is bound to two links");
-    explicit_bound_[static_cast<std::size_t>(b.body)] = 1;
-  }
+  explicit_bound_ = explicitly_bound_bodies(binding_, model.num_bodies());
   link_origin_.assign(binding_.links.size(), core::Vec3::Zero());
   body_target_.assign(binding_.links.size(), core::Vec3::Zero());
   bound_body_.assign(binding_.links.size(), -1);
@@ -106,31 +99,15 @@ void ControlLoop::apply_targets(const hal::DeviceSample& sample) noexcept {
   core::Data& d = *data_;
   for (std::size_t k = 0; k < binding_.links.size(); ++k) {
     const LinkBinding& b = binding_.links[k];
-    int body = b.body < 0 ? d.attached_body : b.body;
-    // The attached body follows its own link if it has one; the "attached"
-    // binding (body -1) serves only a held body without one (tool switching).
-    if (b.body < 0 && body >= 0 && explicit_bound_[static_cast<std::size_t>(body)]) body = -1;
+    const int body = bound_body(b, d, explicit_bound_);
     bound_body_[k] = body;
     const core::Pose& link = sample.link_targets[static_cast<std::size_t>(b.link)];
-    const core::Twist& lt = sample.link_twists[static_cast<std::size_t>(b.link)];
     core::Pose pose;
-    pose.position = link.position + link.orientation * b.body_in_link.position;
-    pose.orientation = link.orientation * b.body_in_link.orientation;
     core::Twist twist;
-    twist.angular = lt.angular;
-    twist.linear = lt.linear + lt.angular.cross(pose.position - link.position);
+    body_target_of(b, link, sample.link_twists[static_cast<std::size_t>(b.link)], pose, twist);
     link_origin_[k] = link.position;
     body_target_[k] = pose.position;
-    if (body < 0) continue;
-    if (body == d.attached_body) {
-      d.target = pose;
-      d.target_twist = twist;
-    } else {
-      core::BodyTarget& t = d.body_targets[static_cast<std::size_t>(body)];
-      t.pose = pose;
-      t.twist = twist;
-      t.enabled = true;
-    }
+    if (body >= 0) set_body_target(d, body, pose, twist);
   }
   for (const AxisPrescription& p : binding_.prescriptions) {
     core::JointPrescription& jp = d.joint_prescribed[static_cast<std::size_t>(p.joint)];

@@ -9,7 +9,8 @@
 /// its order. The case therefore takes the instrument's axis values (instrument_axes(), the
 /// encoder values of the simulated instrument) every 40 ms and joins them by a C¹ cubic
 /// (Catmull–Rom: Hermite with tangents (q_{k+1} − q_{k−1}) / 2Δ), then gives every bound body
-/// its link's pose and twist J_l(q) q̇ (as platform::ControlLoop::apply_targets does) and
+/// its link's pose and twist J_l(q) q̇ through the same binding rules as platform::ControlLoop
+/// (platform::bound_body(), body_target_of(), set_body_target()) and
 /// every prescribed joint (the jaws) its axis value (at the step's start) and rate.
 ///
 /// Solver. The linear solves run to a relative residual of 1e-9 (at most 1000 iterations)
@@ -52,9 +53,7 @@ class SceneCase final : public AccuracyCase {
         step_cost_(step_cost) {
     binding_ = scene_.binding;
     if (binding_.links.empty()) binding_ = platform::DeviceBinding::rigid();
-    explicit_bound_.assign(static_cast<std::size_t>(scene_.model.num_bodies()), 0);
-    for (const platform::LinkBinding& b : binding_.links)
-      if (b.body >= 0) explicit_bound_[static_cast<std::size_t>(b.body)] = 1;
+    explicit_bound_ = platform::explicitly_bound_bodies(binding_, scene_.model.num_bodies());
     // Knots t0 + (k − 2) Δ, k = 0 … K, covering [t0 − 2Δ, t0 + horizon + 2Δ].
     const int knots = static_cast<int>(std::ceil(horizon / kKnotSpacing)) + 5;
     for (int k = 0; k < knots; ++k) {
@@ -123,27 +122,17 @@ class SceneCase final : public AccuracyCase {
     hal::AxisVector q, qdot;
     axes_at(t_in, q, qdot);
     for (const platform::LinkBinding& b : binding_.links) {
-      int body = b.body < 0 ? d.attached_body : b.body;
-      if (b.body < 0 && body >= 0 && explicit_bound_[static_cast<std::size_t>(body)]) body = -1;
+      const int body = platform::bound_body(b, d, explicit_bound_);
       if (body < 0) continue;
       const core::Pose link = kinematics_->link_pose(b.link, q);
-      const hal::Jacobian jac = kinematics_->link_jacobian(b.link, q);
-      const core::Vec6 lt = jac * qdot;
+      const core::Vec6 lt = kinematics_->link_jacobian(b.link, q) * qdot;
+      core::Twist link_twist;
+      link_twist.linear = lt.head<3>();
+      link_twist.angular = lt.tail<3>();
       core::Pose pose;
-      pose.position = link.position + link.orientation * b.body_in_link.position;
-      pose.orientation = link.orientation * b.body_in_link.orientation;
       core::Twist twist;
-      twist.angular = lt.tail<3>();
-      twist.linear = lt.head<3>() + twist.angular.cross(pose.position - link.position);
-      if (body == d.attached_body) {
-        d.target = pose;
-        d.target_twist = twist;
-      } else {
-        core::BodyTarget& bt = d.body_targets[static_cast<std::size_t>(body)];
-        bt.pose = pose;
-        bt.twist = twist;
-        bt.enabled = true;
-      }
+      platform::body_target_of(b, link, link_twist, pose, twist);
+      platform::set_body_target(d, body, pose, twist);
     }
     if (binding_.prescriptions.empty()) return;
     hal::AxisVector q_start = q, qdot_start = qdot;

@@ -6,8 +6,11 @@
 /// (Eq. 8 per body, mapped to axis torques by τ = Σ_l J_lᵀ w_l).
 /// Built at load time; read by the ControlLoop every period without allocation.
 
+#include <cstdint>
+#include <span>
 #include <vector>
 
+#include "numen/core/data.hpp"
 #include "numen/core/types.hpp"
 
 namespace numen::platform {
@@ -39,5 +42,28 @@ struct DeviceBinding {
   /// The binding used when a scene says nothing: link 0 drives the attached body.
   static DeviceBinding rigid() { return DeviceBinding{{LinkBinding{}}, {}}; }
 };
+
+/// Per body of a model of `num_bodies` bodies: 1 if a link binding of `binding` names it
+/// (LinkBinding::body ≥ 0), else 0. Load time (allocates). Throws std::invalid_argument if a
+/// body is bound to two links or a binding names a body out of [0, num_bodies).
+std::vector<std::uint8_t> explicitly_bound_bodies(const DeviceBinding& binding, int num_bodies);
+
+/// The body `b` drives in `d` this period, −1 for none: its own body, or, for the "attached"
+/// binding (body −1), the attached body (Data::attached_body) unless that body has a link of its
+/// own (`explicit_bound`, from explicitly_bound_bodies()), which it then follows (tool
+/// switching). Real-time safe.
+int bound_body(const LinkBinding& b, const core::Data& d,
+               std::span<const std::uint8_t> explicit_bound) noexcept;
+
+/// The coupling target of the body bound by `b` while its link is at `link` (world frame) with
+/// twist `link_twist` (ω in rad/s, the link origin's velocity in m/s, world frame): pose =
+/// link · body_in_link; twist = (ω, v_link + ω × (p_body − p_link)), the rigid transfer of the
+/// link's twist to the body's origin (paper Eq. 6's target per body).
+void body_target_of(const LinkBinding& b, const core::Pose& link, const core::Twist& link_twist,
+                    core::Pose& pose, core::Twist& twist) noexcept;
+
+/// Sets body `body`'s coupling target in `d`: Data::target and Data::target_twist for the
+/// attached body, its BodyTarget (enabled) for any other. `body` must be in range.
+void set_body_target(core::Data& d, int body, const core::Pose& pose, const core::Twist& twist) noexcept;
 
 }  // namespace numen::platform
