@@ -4,7 +4,6 @@
 #include <bit>
 #include <cmath>
 #include <cstring>
-#include <initializer_list>
 #include <iterator>
 #include <limits>
 
@@ -88,29 +87,33 @@ Offsets offsets(std::uint64_t b, std::uint64_t n, std::uint64_t c, std::uint64_t
 }
 constexpr std::size_t array_index(FrameArray a) noexcept { return static_cast<std::size_t>(a); }
 
-// Writes the floats in order; returns the byte after them.
-std::byte* put_floats(std::byte* p, std::initializer_list<double> values) noexcept {
-  for (double v : values) {
-    put_f32(p, v);
-    p += kFrameFloatBytes;
-  }
+// Writes the scalars in order as floats; returns the byte after them.
+template <class... Values>
+std::byte* put_floats(std::byte* p, Values... values) noexcept {
+  ((put_f32(p, static_cast<double>(values)), p += kFrameFloatBytes), ...);
   return p;
 }
 
-std::byte* put_pose(std::byte* p, const core::Pose& pose) noexcept {
-  const core::Quat& q = pose.orientation;
-  return put_floats(p, {pose.position.x(), pose.position.y(), pose.position.z(), q.x(), q.y(), q.z(), q.w()});
+// Writes a fixed-size Eigen vector's coefficients in order as floats; returns the byte after
+// them. Indexed stores, not put_floats(): the node loop of a large net is then vectorised
+// (2562 nodes: 6.6 µs per frame against 10 µs).
+template <class Vector>
+std::byte* put_coeffs(std::byte* p, const Vector& v) noexcept {
+  for (Eigen::Index i = 0; i < v.size(); ++i) put_f32(p + kFrameFloatBytes * static_cast<std::size_t>(i), v[i]);
+  return p + kFrameFloatBytes * static_cast<std::size_t>(v.size());
 }
 
-std::byte* put_vec3(std::byte* p, const core::Vec3& v) noexcept {
-  return put_floats(p, {v.x(), v.y(), v.z()});
+std::byte* put_pose(std::byte* p, const core::Pose& pose) noexcept {
+  return put_coeffs(put_coeffs(p, pose.position), pose.orientation.coeffs());  // x y z w
 }
+
+std::byte* put_vec3(std::byte* p, const core::Vec3& v) noexcept { return put_coeffs(p, v); }
 
 std::byte* put_contact(std::byte* p, const core::Vec3& point, const core::Vec3& normal,
                        double depth, const core::Vec3& force) noexcept {
   p = put_vec3(p, point);
   p = put_vec3(p, normal);
-  p = put_floats(p, {depth});
+  p = put_floats(p, depth);
   return put_vec3(p, force);
 }
 
@@ -174,7 +177,7 @@ std::size_t encode_state_frame(const StateFrameLayout& layout, const core::Data&
     } else {
       p = put_pose(p, core::Pose{data.bodies[b].position, data.bodies[b].orientation});
     }
-    p = put_floats(p, {target != nullptr ? 1.0 : 0.0});
+    p = put_floats(p, target != nullptr ? 1.0 : 0.0);
   }
   p = array(FrameArray::kNodePosition);
   for (const core::NodeState& n : data.nodes) p = put_vec3(p, n.position);
@@ -191,8 +194,8 @@ std::size_t encode_state_frame(const StateFrameLayout& layout, const core::Data&
   p = put_vec3(array(FrameArray::kFeedback), report.feedback.force);
   put_vec3(p, report.feedback.torque);
   p = array(FrameArray::kAxisTorque);
-  for (double tau : axis_torques) p = put_floats(p, {tau});
-  put_floats(array(FrameArray::kPenetration), {figures.tool_penetration, figures.target_penetration});
+  for (double tau : axis_torques) p = put_floats(p, tau);
+  put_floats(array(FrameArray::kPenetration), figures.tool_penetration, figures.target_penetration);
   return o.end;
 }
 
