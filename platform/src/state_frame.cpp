@@ -99,8 +99,10 @@ std::byte* put_floats(std::byte* p, Values... values) noexcept {
 // (2562 nodes: 6.6 µs per frame against 10 µs).
 template <class Vector>
 std::byte* put_coeffs(std::byte* p, const Vector& v) noexcept {
-  for (Eigen::Index i = 0; i < v.size(); ++i) put_f32(p + kFrameFloatBytes * static_cast<std::size_t>(i), v[i]);
-  return p + kFrameFloatBytes * static_cast<std::size_t>(v.size());
+  const auto n = static_cast<std::size_t>(v.size());
+  for (std::size_t i = 0; i < n; ++i)
+    put_f32(p + kFrameFloatBytes * i, v[static_cast<Eigen::Index>(i)]);
+  return p + kFrameFloatBytes * n;
 }
 
 std::byte* put_pose(std::byte* p, const core::Pose& pose) noexcept {
@@ -146,7 +148,8 @@ std::size_t encode_state_frame(const StateFrameLayout& layout, const core::Data&
   put_field<FrameField::kAttachedBody>(h, data.attached_body);
   put_field<FrameField::kPeriod>(h, figures.period);
   const double t_ns = data.time * 1e9;
-  put_field<FrameField::kTimeNs>(h, std::isfinite(t_ns) && std::abs(t_ns) < 9e18 ? std::llround(t_ns) : 0);
+  const bool t_fits = std::isfinite(t_ns) && std::abs(t_ns) < 9e18;
+  put_field<FrameField::kTimeNs>(h, t_fits ? std::llround(t_ns) : 0);
   put_field<FrameField::kStepStatus>(h, data.status);
   const std::uint32_t flags = (report.sample_valid ? kFrameSampleValid : 0u) |
                               (report.torque_commanded ? kFrameTorqueCommanded : 0u) |
@@ -224,7 +227,8 @@ void StateFrameView::node_position(std::uint32_t n, float out[3]) const noexcept
 
 FrameContact StateFrameView::contact(std::uint32_t c) const noexcept {
   FrameContact k{};
-  static_assert(std::size(k.point) + std::size(k.normal) + 1 + std::size(k.force) == kFrameContactFloats);
+  static_assert(std::size(k.point) + std::size(k.normal) + 1 + std::size(k.force) ==
+                kFrameContactFloats);
   std::size_t at = f32s(item(FrameArray::kContact, c), k.point, std::size(k.point));
   at = f32s(at, k.normal, std::size(k.normal));
   at = f32s(at, &k.depth, 1);
@@ -258,16 +262,19 @@ StateFrameDecodeResult StateFrameDecoder::decode(std::span<const std::byte> byte
                                         " bytes is shorter than its " +
                                         std::to_string(kStateFrameHeaderBytes) + "-byte header");
   const std::byte* h = bytes.data();
-  if (std::memcmp(h + offset_of(FrameField::kMagic), kStateFrameMagic, sizeof kStateFrameMagic) != 0)
+  const std::byte* magic = h + offset_of(FrameField::kMagic);
+  if (std::memcmp(magic, kStateFrameMagic, sizeof kStateFrameMagic) != 0)
     return fail(FrameField::kMagic, "not a state frame (magic is not NMVF)");
   const auto version = get_field<FrameField::kVersion>(h);
   if (version != kStateFrameVersion)
     return fail(FrameField::kVersion, "frame version " + std::to_string(version) +
-                                          ", this reader knows " + std::to_string(kStateFrameVersion));
+                                          ", this reader knows " +
+                                          std::to_string(kStateFrameVersion));
   const auto header_bytes = get_field<FrameField::kHeaderBytes>(h);
   if (header_bytes != kStateFrameHeaderBytes)
     return fail(FrameField::kHeaderBytes, "header size " + std::to_string(header_bytes) +
-                                              ", expected " + std::to_string(kStateFrameHeaderBytes));
+                                              ", expected " +
+                                              std::to_string(kStateFrameHeaderBytes));
   StateFrameHeader hd;
   hd.frame_bytes = get_field<FrameField::kFrameBytes>(h);
   hd.num_bodies = get_field<FrameField::kNumBodies>(h);
@@ -284,7 +291,8 @@ StateFrameDecodeResult StateFrameDecoder::decode(std::span<const std::byte> byte
   hd.startup = get_field<FrameField::kStartup>(h);
   if (hd.frame_bytes != bytes.size())
     return fail(FrameField::kFrameBytes, "frame size field says " + std::to_string(hd.frame_bytes) +
-                                             " bytes, the frame has " + std::to_string(bytes.size()));
+                                             " bytes, the frame has " +
+                                             std::to_string(bytes.size()));
   // Counts are u32: the offsets below are computed in 64 bits and cannot overflow.
   const Offsets o = offsets(hd.num_bodies, hd.num_nodes, hd.num_contacts, hd.num_axes);
   if (o.end != bytes.size())

@@ -127,9 +127,11 @@ TEST(StateFrame, RoundTripsEveryField) {
 }
 
 /// The `bytes` bytes at `at`, little-endian, as an unsigned number.
-std::uint64_t frame_le_bytes(const std::vector<std::byte>& frame, std::size_t at, std::size_t bytes) {
+std::uint64_t frame_le_bytes(const std::vector<std::byte>& frame, std::size_t at,
+                             std::size_t bytes) {
   std::uint64_t v = 0;
-  for (std::size_t i = 0; i < bytes; ++i) v |= std::to_integer<std::uint64_t>(frame.at(at + i)) << (8 * i);
+  for (std::size_t i = 0; i < bytes; ++i)
+    v |= std::to_integer<std::uint64_t>(frame.at(at + i)) << (8 * i);
   return v;
 }
 
@@ -164,8 +166,12 @@ TEST(StateFrame, EachDeclaredFieldIsAtItsDeclaredOffset) {
         want = numen::platform::kFrameSampleValid | numen::platform::kFrameTorqueCommanded;
         break;
       case FrameField::kStepNs: want = 12345; break;
-      case FrameField::kLifecycle: want = static_cast<std::uint64_t>(numen::hal::LifecycleState::kActive); break;
-      case FrameField::kStartup: want = static_cast<std::uint64_t>(numen::hal::StartupPhase::kOperational); break;
+      case FrameField::kLifecycle:
+        want = static_cast<std::uint64_t>(numen::hal::LifecycleState::kActive);
+        break;
+      case FrameField::kStartup:
+        want = static_cast<std::uint64_t>(numen::hal::StartupPhase::kOperational);
+        break;
       case FrameField::kReserved: want = 0; break;
     }
     EXPECT_EQ(got, want) << f.name << " at byte " << f.offset;
@@ -306,7 +312,8 @@ TEST(StateFrameDecoder, RejectsEveryMalformedFrameWithItsOffset) {
 
 /// The rows of the Markdown table whose header line is `head` in `doc`, each as its cells
 /// (trimmed); empty if there is no such table.
-std::vector<std::vector<std::string>> frame_doc_table(const std::string& doc, const std::string& head) {
+std::vector<std::vector<std::string>> frame_doc_table(const std::string& doc,
+                                                      const std::string& head) {
   std::vector<std::vector<std::string>> rows;
   std::size_t at = doc.find(head + "\n");
   if (at == std::string::npos) return rows;

@@ -21,7 +21,8 @@ std::string state_frame_layout_json() {
   for (const p::StateFrameArray& a : p::kStateFrameArrays) {
     nlohmann::ordered_json count = nullptr;
     if (a.count) count = std::string(p::frame_field(*a.count).name);
-    arrays.push_back({{"name", std::string(a.name)}, {"floats", a.floats}, {"count", std::move(count)}});
+    arrays.push_back(
+        {{"name", std::string(a.name)}, {"floats", a.floats}, {"count", std::move(count)}});
   }
   const nlohmann::ordered_json layout{
       {"magic", std::string(p::kStateFrameMagic, sizeof p::kStateFrameMagic)},

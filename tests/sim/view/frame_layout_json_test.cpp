@@ -23,9 +23,10 @@ namespace platform = numen::platform;
 
 /// The little-endian integer of `bytes` bytes at `at`, sign-extended when `is_signed`.
 std::int64_t layout_json_integer(const std::vector<std::byte>& f, std::size_t at, std::size_t bytes,
-                                bool is_signed) {
+                                 bool is_signed) {
   std::uint64_t v = 0;
-  for (std::size_t i = 0; i < bytes; ++i) v |= std::to_integer<std::uint64_t>(f.at(at + i)) << (8 * i);
+  for (std::size_t i = 0; i < bytes; ++i)
+    v |= std::to_integer<std::uint64_t>(f.at(at + i)) << (8 * i);
   if (is_signed && bytes < 8 && (v >> (8 * bytes - 1)) != 0) v |= ~std::uint64_t{0} << (8 * bytes);
   return static_cast<std::int64_t>(v);
 }
@@ -61,7 +62,8 @@ TEST(FrameLayoutJson, HasEveryDeclaredFieldAndArrayInOrder) {
     const platform::StateFrameField& f = platform::kStateFrameFields[i];
     EXPECT_EQ(j["header"][i].at("name"), std::string(f.name));
     EXPECT_EQ(j["header"][i].at("offset"), f.offset) << f.name;
-    EXPECT_EQ(j["header"][i].at("type"), std::string(platform::frame_field_type_name(f.type))) << f.name;
+    EXPECT_EQ(j["header"][i].at("type"), std::string(platform::frame_field_type_name(f.type)))
+        << f.name;
   }
   ASSERT_EQ(j.at("arrays").size(), platform::kStateFrameArrays.size());
   for (std::size_t i = 0; i < platform::kStateFrameArrays.size(); ++i) {
@@ -69,7 +71,8 @@ TEST(FrameLayoutJson, HasEveryDeclaredFieldAndArrayInOrder) {
     EXPECT_EQ(j["arrays"][i].at("name"), std::string(a.name));
     EXPECT_EQ(j["arrays"][i].at("floats"), a.floats) << a.name;
     if (a.count)
-      EXPECT_EQ(j["arrays"][i].at("count"), std::string(platform::frame_field(*a.count).name)) << a.name;
+      EXPECT_EQ(j["arrays"][i].at("count"), std::string(platform::frame_field(*a.count).name))
+          << a.name;
     else
       EXPECT_TRUE(j["arrays"][i].at("count").is_null()) << a.name;
   }
@@ -86,11 +89,21 @@ TEST(FrameLayoutJson, AFrameDecodedFromTheJsonReadsWhatTheViewReads) {
   ASSERT_TRUE(decoded.ok()) << decoded.error;
   const platform::StateFrameHeader& h = view.header();
   const std::map<std::string, std::int64_t> members = {
-      {"frame_bytes", h.frame_bytes}, {"num_bodies", h.num_bodies},   {"num_nodes", h.num_nodes},
-      {"num_contacts", h.num_contacts}, {"num_axes", h.num_axes},     {"attached_body", h.attached_body},
-      {"period", static_cast<std::int64_t>(h.period)},          {"time_ns", h.time_ns},       {"step_status", h.step_status},
-      {"flags", h.flags},               {"step_ns", h.step_ns},       {"lifecycle", h.lifecycle},
-      {"startup", h.startup},           {"version", 1},               {"header_bytes", 64},
+      {"frame_bytes", h.frame_bytes},
+      {"num_bodies", h.num_bodies},
+      {"num_nodes", h.num_nodes},
+      {"num_contacts", h.num_contacts},
+      {"num_axes", h.num_axes},
+      {"attached_body", h.attached_body},
+      {"period", static_cast<std::int64_t>(h.period)},
+      {"time_ns", h.time_ns},
+      {"step_status", h.step_status},
+      {"flags", h.flags},
+      {"step_ns", h.step_ns},
+      {"lifecycle", h.lifecycle},
+      {"startup", h.startup},
+      {"version", 1},
+      {"header_bytes", 64},
       {"reserved", 0}};
   const auto j = nlohmann::json::parse(numen::sim::state_frame_layout_json());
   std::map<std::string, std::int64_t> fields;
@@ -112,10 +125,13 @@ TEST(FrameLayoutJson, AFrameDecodedFromTheJsonReadsWhatTheViewReads) {
   std::size_t at = j.at("header_bytes");
   for (const auto& a : j.at("arrays")) {
     const std::size_t items =
-        a.at("count").is_null() ? 1 : static_cast<std::size_t>(fields.at(a.at("count").get<std::string>()));
+        a.at("count").is_null()
+            ? 1
+            : static_cast<std::size_t>(fields.at(a.at("count").get<std::string>()));
     std::vector<float>& floats = arrays[a.at("name").get<std::string>()];
     for (std::size_t i = 0; i < items * a.at("floats").get<std::size_t>(); ++i, at += 4)
-      floats.push_back(std::bit_cast<float>(static_cast<std::uint32_t>(layout_json_integer(frame, at, 4, false))));
+      floats.push_back(std::bit_cast<float>(
+          static_cast<std::uint32_t>(layout_json_integer(frame, at, 4, false))));
   }
   EXPECT_EQ(at, frame.size());
   float pose[7];

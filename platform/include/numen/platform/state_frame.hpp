@@ -140,7 +140,7 @@ enum class FrameArray : std::uint8_t {
 /// One float32 array after the header: `count` items of `floats` floats each.
 struct StateFrameArray {
   FrameArray id;                    ///< Its index in kStateFrameArrays.
-  std::string_view name;            ///< As StateFrameView's accessor and the page name it.
+  std::string_view name;            ///< The name StateFrameView's accessor and the page use.
   std::size_t floats;               ///< float32 values per item.
   std::optional<FrameField> count;  ///< Header count of items (B, N, C, A); none: one item.
 };
@@ -181,8 +181,8 @@ constexpr bool frame_fields_tile_the_header() noexcept {
   for (std::size_t i = 0; i < kStateFrameFields.size(); ++i) {
     const StateFrameField& f = kStateFrameFields[i];
     const std::size_t bytes = frame_field_bytes(f.type);
-    if (static_cast<std::size_t>(f.id) != i || f.offset != at || bytes == 0 || f.offset % bytes != 0 ||
-        f.name.empty())
+    if (static_cast<std::size_t>(f.id) != i || f.offset != at || bytes == 0 ||
+        f.offset % bytes != 0 || f.name.empty())
       return false;
     at += bytes;
   }
@@ -203,7 +203,7 @@ constexpr bool frame_arrays_are_well_formed() noexcept {
 static_assert(detail::frame_fields_tile_the_header(),
               "kStateFrameFields must tile the 64-byte header in order, without overlap");
 static_assert(detail::frame_arrays_are_well_formed(),
-              "kStateFrameArrays: ids in order, floats > 0, counts among num_bodies/nodes/contacts/axes");
+              "kStateFrameArrays: ids in order, floats > 0, counts of bodies/nodes/contacts/axes");
 static_assert(frame_field(FrameField::kMagic).type == FrameFieldType::kChar4 &&
               sizeof kStateFrameMagic == frame_field_bytes(FrameFieldType::kChar4));
 
