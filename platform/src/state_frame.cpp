@@ -4,6 +4,7 @@
 #include <bit>
 #include <cmath>
 #include <cstring>
+#include <iterator>
 #include <limits>
 
 namespace numen::platform {
@@ -25,42 +26,97 @@ void put_f32(std::byte* p, double v) noexcept {
   put_le<std::uint32_t>(p, std::bit_cast<std::uint32_t>(static_cast<float>(v)));
 }
 
-// Offsets of the arrays after the header, for counts B, N, C, A.
+// The C++ type a field of wire type T is read as and the unsigned type of its bytes.
+template <FrameFieldType T>
+struct Wire;
+template <>
+struct Wire<FrameFieldType::kU8> { using type = std::uint8_t; using bits = std::uint8_t; };
+template <>
+struct Wire<FrameFieldType::kU16> { using type = std::uint16_t; using bits = std::uint16_t; };
+template <>
+struct Wire<FrameFieldType::kU32> { using type = std::uint32_t; using bits = std::uint32_t; };
+template <>
+struct Wire<FrameFieldType::kI32> { using type = std::int32_t; using bits = std::uint32_t; };
+template <>
+struct Wire<FrameFieldType::kU64> { using type = std::uint64_t; using bits = std::uint64_t; };
+template <>
+struct Wire<FrameFieldType::kI64> { using type = std::int64_t; using bits = std::uint64_t; };
+
+template <FrameField F>
+using field_t = typename Wire<frame_field(F).type>::type;
+
+// Header field F at its declared offset, as its declared type.
+template <FrameField F>
+void put_field(std::byte* frame, field_t<F> v) noexcept {
+  using Bits = typename Wire<frame_field(F).type>::bits;
+  static_assert(sizeof(Bits) == frame_field_bytes(frame_field(F).type));
+  put_le<Bits>(frame + frame_field(F).offset, static_cast<Bits>(v));
+}
+template <FrameField F>
+field_t<F> get_field(const std::byte* frame) noexcept {
+  using Bits = typename Wire<frame_field(F).type>::bits;
+  return static_cast<field_t<F>>(get_le<Bits>(frame + frame_field(F).offset));
+}
+constexpr std::size_t offset_of(FrameField f) noexcept { return frame_field(f).offset; }
+
+// Byte offsets of the arrays after the header (kStateFrameArrays, in order) and of the end,
+// for counts B, N, C, A.
 struct Offsets {
-  std::size_t targets, nodes, contacts, wrench, axes, figures, end;
+  std::array<std::size_t, kStateFrameArrays.size()> at;
+  std::size_t end;
 };
 Offsets offsets(std::uint64_t b, std::uint64_t n, std::uint64_t c, std::uint64_t a) noexcept {
   Offsets o{};
-  o.targets = kStateFrameHeaderBytes + 4 * kFramePoseFloats * b;
-  o.nodes = o.targets + 4 * kFrameTargetFloats * b;
-  o.contacts = o.nodes + 4 * kFrameNodeFloats * n;
-  o.wrench = o.contacts + 4 * kFrameContactFloats * c;
-  o.axes = o.wrench + 4 * kFrameWrenchFloats;
-  o.figures = o.axes + 4 * a;
-  o.end = o.figures + 4 * kFrameFigureFloats;
+  std::size_t at = kStateFrameHeaderBytes;
+  for (std::size_t i = 0; i < kStateFrameArrays.size(); ++i) {
+    const StateFrameArray& array = kStateFrameArrays[i];
+    std::uint64_t items = 1;
+    if (array.count) {
+      switch (*array.count) {
+        case FrameField::kNumBodies: items = b; break;
+        case FrameField::kNumNodes: items = n; break;
+        case FrameField::kNumContacts: items = c; break;
+        default: items = a; break;  // kNumAxes (frame_arrays_are_well_formed())
+      }
+    }
+    o.at[i] = at;
+    at += kFrameFloatBytes * array.floats * items;
+  }
+  o.end = at;
   return o;
+}
+constexpr std::size_t array_index(FrameArray a) noexcept { return static_cast<std::size_t>(a); }
+
+// Writes the scalars in order as floats; returns the byte after them.
+template <class... Values>
+std::byte* put_floats(std::byte* p, Values... values) noexcept {
+  ((put_f32(p, static_cast<double>(values)), p += kFrameFloatBytes), ...);
+  return p;
+}
+
+// Writes a fixed-size Eigen vector's coefficients in order as floats; returns the byte after
+// them. Indexed stores, not put_floats(): the node loop of a large net is then vectorised
+// (2562 nodes: 6.6 µs per frame against 10 µs).
+template <class Vector>
+std::byte* put_coeffs(std::byte* p, const Vector& v) noexcept {
+  const auto n = static_cast<std::size_t>(v.size());
+  for (std::size_t i = 0; i < n; ++i)
+    put_f32(p + kFrameFloatBytes * i, v[static_cast<Eigen::Index>(i)]);
+  return p + kFrameFloatBytes * n;
 }
 
 std::byte* put_pose(std::byte* p, const core::Pose& pose) noexcept {
-  for (int i = 0; i < 3; ++i) put_f32(p + 4 * i, pose.position[i]);
-  put_f32(p + 12, pose.orientation.x());
-  put_f32(p + 16, pose.orientation.y());
-  put_f32(p + 20, pose.orientation.z());
-  put_f32(p + 24, pose.orientation.w());
-  return p + 28;
+  return put_coeffs(put_coeffs(p, pose.position), pose.orientation.coeffs());  // x y z w
 }
 
-std::byte* put_vec3(std::byte* p, const core::Vec3& v) noexcept {
-  for (int i = 0; i < 3; ++i) put_f32(p + 4 * i, v[i]);
-  return p + 12;
-}
+std::byte* put_vec3(std::byte* p, const core::Vec3& v) noexcept { return put_coeffs(p, v); }
 
 std::byte* put_contact(std::byte* p, const core::Vec3& point, const core::Vec3& normal,
                        double depth, const core::Vec3& force) noexcept {
   p = put_vec3(p, point);
   p = put_vec3(p, normal);
-  put_f32(p, depth);
-  return put_vec3(p + 4, force);
+  p = put_floats(p, depth);
+  return put_vec3(p, force);
 }
 
 }  // namespace
@@ -81,35 +137,38 @@ std::size_t encode_state_frame(const StateFrameLayout& layout, const core::Data&
   const Offsets o = offsets(layout.num_bodies, layout.num_nodes, contacts, layout.num_axes);
 
   std::byte* h = out.data();
-  std::memcpy(h, kStateFrameMagic, 4);
-  put_le<std::uint16_t>(h + 4, kStateFrameVersion);
-  put_le<std::uint16_t>(h + 6, static_cast<std::uint16_t>(kStateFrameHeaderBytes));
-  put_le<std::uint32_t>(h + 8, static_cast<std::uint32_t>(o.end));
-  put_le<std::uint32_t>(h + 12, layout.num_bodies);
-  put_le<std::uint32_t>(h + 16, layout.num_nodes);
-  put_le<std::uint32_t>(h + 20, contacts);
-  put_le<std::uint32_t>(h + 24, layout.num_axes);
-  put_le<std::uint32_t>(h + 28, static_cast<std::uint32_t>(data.attached_body));
-  put_le<std::uint64_t>(h + 32, figures.period);
+  std::memcpy(h + offset_of(FrameField::kMagic), kStateFrameMagic, sizeof kStateFrameMagic);
+  put_field<FrameField::kVersion>(h, kStateFrameVersion);
+  put_field<FrameField::kHeaderBytes>(h, static_cast<std::uint16_t>(kStateFrameHeaderBytes));
+  put_field<FrameField::kFrameBytes>(h, static_cast<std::uint32_t>(o.end));
+  put_field<FrameField::kNumBodies>(h, layout.num_bodies);
+  put_field<FrameField::kNumNodes>(h, layout.num_nodes);
+  put_field<FrameField::kNumContacts>(h, contacts);
+  put_field<FrameField::kNumAxes>(h, layout.num_axes);
+  put_field<FrameField::kAttachedBody>(h, data.attached_body);
+  put_field<FrameField::kPeriod>(h, figures.period);
   const double t_ns = data.time * 1e9;
-  put_le<std::uint64_t>(h + 40, static_cast<std::uint64_t>(
-                                    std::isfinite(t_ns) && std::abs(t_ns) < 9e18 ? std::llround(t_ns) : 0));
-  put_le<std::uint32_t>(h + 48, data.status);
-  std::uint32_t flags = (report.sample_valid ? kFrameSampleValid : 0u) |
-                        (report.torque_commanded ? kFrameTorqueCommanded : 0u) |
-                        (report.overrun ? kFrameOverrun : 0u) |
-                        (report.target_ready ? kFrameTargetReady : 0u) |
-                        (rigid + nodal > contacts ? kFrameContactsTruncated : 0u);
-  put_le<std::uint32_t>(h + 52, flags);
+  const bool t_fits = std::isfinite(t_ns) && std::abs(t_ns) < 9e18;
+  put_field<FrameField::kTimeNs>(h, t_fits ? std::llround(t_ns) : 0);
+  put_field<FrameField::kStepStatus>(h, data.status);
+  const std::uint32_t flags = (report.sample_valid ? kFrameSampleValid : 0u) |
+                              (report.torque_commanded ? kFrameTorqueCommanded : 0u) |
+                              (report.overrun ? kFrameOverrun : 0u) |
+                              (report.target_ready ? kFrameTargetReady : 0u) |
+                              (rigid + nodal > contacts ? kFrameContactsTruncated : 0u);
+  put_field<FrameField::kFlags>(h, flags);
   const std::int64_t step_ns =
       std::clamp<std::int64_t>(report.step_ns, 0, std::numeric_limits<std::uint32_t>::max());
-  put_le<std::uint32_t>(h + 56, static_cast<std::uint32_t>(step_ns));
-  h[60] = static_cast<std::byte>(report.lifecycle);
-  h[61] = static_cast<std::byte>(report.startup);
-  put_le<std::uint16_t>(h + 62, 0);
+  put_field<FrameField::kStepNs>(h, static_cast<std::uint32_t>(step_ns));
+  put_field<FrameField::kLifecycle>(h, static_cast<std::uint8_t>(report.lifecycle));
+  put_field<FrameField::kStartup>(h, static_cast<std::uint8_t>(report.startup));
+  put_field<FrameField::kReserved>(h, 0);
 
-  std::byte* p = out.data() + kStateFrameHeaderBytes;
+  // Each array from its declared offset (kStateFrameArrays), items in order.
+  auto array = [&](FrameArray a) { return out.data() + o.at[array_index(a)]; };
+  std::byte* p = array(FrameArray::kBodyPose);
   for (const core::BodyState& b : data.bodies) p = put_pose(p, core::Pose{b.position, b.orientation});
+  p = array(FrameArray::kTargetPose);
   for (std::uint32_t b = 0; b < layout.num_bodies; ++b) {
     const bool attached = static_cast<std::int32_t>(b) == data.attached_body;
     const bool has_own = b < data.body_targets.size() && data.body_targets[b].enabled;
@@ -121,10 +180,11 @@ std::size_t encode_state_frame(const StateFrameLayout& layout, const core::Data&
     } else {
       p = put_pose(p, core::Pose{data.bodies[b].position, data.bodies[b].orientation});
     }
-    put_f32(p, target != nullptr ? 1.0 : 0.0);
-    p += 4;
+    p = put_floats(p, target != nullptr ? 1.0 : 0.0);
   }
+  p = array(FrameArray::kNodePosition);
   for (const core::NodeState& n : data.nodes) p = put_vec3(p, n.position);
+  p = array(FrameArray::kContact);
   std::uint32_t written = 0;
   for (std::uint32_t c = 0; c < rigid && written < contacts; ++c, ++written) {
     const core::Contact& k = data.contacts[c];
@@ -134,14 +194,11 @@ std::size_t encode_state_frame(const StateFrameLayout& layout, const core::Data&
     const core::NodeContact& k = data.node_contacts[c];
     p = put_contact(p, k.position, k.normal, k.depth, k.force);
   }
-  p = put_vec3(p, report.feedback.force);
-  p = put_vec3(p, report.feedback.torque);
-  for (double tau : axis_torques) {
-    put_f32(p, tau);
-    p += 4;
-  }
-  put_f32(p, figures.tool_penetration);
-  put_f32(p + 4, figures.target_penetration);
+  p = put_vec3(array(FrameArray::kFeedback), report.feedback.force);
+  put_vec3(p, report.feedback.torque);
+  p = array(FrameArray::kAxisTorque);
+  for (double tau : axis_torques) p = put_floats(p, tau);
+  put_floats(array(FrameArray::kPenetration), figures.tool_penetration, figures.target_penetration);
   return o.end;
 }
 
@@ -149,92 +206,108 @@ float StateFrameView::f32(std::size_t offset) const noexcept {
   return std::bit_cast<float>(get_le<std::uint32_t>(bytes_ + offset));
 }
 
+std::size_t StateFrameView::f32s(std::size_t at, float* out, std::size_t n) const noexcept {
+  for (std::size_t i = 0; i < n; ++i, at += kFrameFloatBytes) out[i] = f32(at);
+  return at;
+}
+
 void StateFrameView::body_pose(std::uint32_t b, float out[7]) const noexcept {
-  for (std::size_t i = 0; i < kFramePoseFloats; ++i)
-    out[i] = f32(kStateFrameHeaderBytes + 4 * (kFramePoseFloats * b + i));
+  f32s(item(FrameArray::kBodyPose, b), out, kFramePoseFloats);
 }
 
 bool StateFrameView::target_pose(std::uint32_t b, float out[7]) const noexcept {
-  for (std::size_t i = 0; i < kFramePoseFloats; ++i) out[i] = f32(targets_ + 4 * (kFrameTargetFloats * b + i));
-  return f32(targets_ + 4 * (kFrameTargetFloats * b + 7)) != 0.0F;
+  float flag = 0.0F;
+  f32s(f32s(item(FrameArray::kTargetPose, b), out, kFramePoseFloats), &flag, 1);
+  return flag != 0.0F;
 }
 
 void StateFrameView::node_position(std::uint32_t n, float out[3]) const noexcept {
-  for (std::size_t i = 0; i < 3; ++i) out[i] = f32(nodes_ + 4 * (kFrameNodeFloats * n + i));
+  f32s(item(FrameArray::kNodePosition, n), out, kFrameNodeFloats);
 }
 
 FrameContact StateFrameView::contact(std::uint32_t c) const noexcept {
   FrameContact k{};
-  const std::size_t at = contacts_ + 4 * kFrameContactFloats * c;
-  for (std::size_t i = 0; i < 3; ++i) {
-    k.point[i] = f32(at + 4 * i);
-    k.normal[i] = f32(at + 12 + 4 * i);
-    k.force[i] = f32(at + 28 + 4 * i);
-  }
-  k.depth = f32(at + 24);
+  static_assert(std::size(k.point) + std::size(k.normal) + 1 + std::size(k.force) ==
+                kFrameContactFloats);
+  std::size_t at = f32s(item(FrameArray::kContact, c), k.point, std::size(k.point));
+  at = f32s(at, k.normal, std::size(k.normal));
+  at = f32s(at, &k.depth, 1);
+  f32s(at, k.force, std::size(k.force));
   return k;
 }
 
 void StateFrameView::feedback(float out[6]) const noexcept {
-  for (std::size_t i = 0; i < 6; ++i) out[i] = f32(wrench_ + 4 * i);
+  f32s(item(FrameArray::kFeedback, 0), out, kFrameWrenchFloats);
 }
 
-float StateFrameView::axis_torque(std::uint32_t a) const noexcept { return f32(axes_ + 4 * a); }
-float StateFrameView::tool_penetration() const noexcept { return f32(figures_); }
-float StateFrameView::target_penetration() const noexcept { return f32(figures_ + 4); }
+float StateFrameView::axis_torque(std::uint32_t a) const noexcept {
+  return f32(item(FrameArray::kAxisTorque, a));
+}
+float StateFrameView::tool_penetration() const noexcept {
+  return f32(item(FrameArray::kPenetration, 0));
+}
+float StateFrameView::target_penetration() const noexcept {
+  float both[kFrameFigureFloats];
+  f32s(item(FrameArray::kPenetration, 0), both, kFrameFigureFloats);
+  return both[1];
+}
 
 StateFrameDecodeResult StateFrameDecoder::decode(std::span<const std::byte> bytes,
                                                  StateFrameView& view) {
-  auto fail = [](std::size_t offset, const std::string& what) {
-    return StateFrameDecodeResult{"byte " + std::to_string(offset) + ": " + what};
+  auto fail = [](FrameField at, const std::string& what) {
+    return StateFrameDecodeResult{"byte " + std::to_string(offset_of(at)) + ": " + what};
   };
   if (bytes.size() < kStateFrameHeaderBytes)
-    return fail(0, "frame of " + std::to_string(bytes.size()) + " bytes is shorter than its " +
-                       std::to_string(kStateFrameHeaderBytes) + "-byte header");
+    return fail(FrameField::kMagic, "frame of " + std::to_string(bytes.size()) +
+                                        " bytes is shorter than its " +
+                                        std::to_string(kStateFrameHeaderBytes) + "-byte header");
   const std::byte* h = bytes.data();
-  if (std::memcmp(h, kStateFrameMagic, 4) != 0) return fail(0, "not a state frame (magic is not NMVF)");
-  const auto version = get_le<std::uint16_t>(h + 4);
+  const std::byte* magic = h + offset_of(FrameField::kMagic);
+  if (std::memcmp(magic, kStateFrameMagic, sizeof kStateFrameMagic) != 0)
+    return fail(FrameField::kMagic, "not a state frame (magic is not NMVF)");
+  const auto version = get_field<FrameField::kVersion>(h);
   if (version != kStateFrameVersion)
-    return fail(4, "frame version " + std::to_string(version) + ", this reader knows " +
-                       std::to_string(kStateFrameVersion));
-  if (get_le<std::uint16_t>(h + 6) != kStateFrameHeaderBytes)
-    return fail(6, "header size " + std::to_string(get_le<std::uint16_t>(h + 6)) + ", expected " +
-                       std::to_string(kStateFrameHeaderBytes));
+    return fail(FrameField::kVersion, "frame version " + std::to_string(version) +
+                                          ", this reader knows " +
+                                          std::to_string(kStateFrameVersion));
+  const auto header_bytes = get_field<FrameField::kHeaderBytes>(h);
+  if (header_bytes != kStateFrameHeaderBytes)
+    return fail(FrameField::kHeaderBytes, "header size " + std::to_string(header_bytes) +
+                                              ", expected " +
+                                              std::to_string(kStateFrameHeaderBytes));
   StateFrameHeader hd;
-  hd.frame_bytes = get_le<std::uint32_t>(h + 8);
-  hd.num_bodies = get_le<std::uint32_t>(h + 12);
-  hd.num_nodes = get_le<std::uint32_t>(h + 16);
-  hd.num_contacts = get_le<std::uint32_t>(h + 20);
-  hd.num_axes = get_le<std::uint32_t>(h + 24);
-  hd.attached_body = static_cast<std::int32_t>(get_le<std::uint32_t>(h + 28));
-  hd.period = get_le<std::uint64_t>(h + 32);
-  hd.time_ns = static_cast<std::int64_t>(get_le<std::uint64_t>(h + 40));
-  hd.step_status = get_le<std::uint32_t>(h + 48);
-  hd.flags = get_le<std::uint32_t>(h + 52);
-  hd.step_ns = get_le<std::uint32_t>(h + 56);
-  hd.lifecycle = std::to_integer<std::uint8_t>(h[60]);
-  hd.startup = std::to_integer<std::uint8_t>(h[61]);
+  hd.frame_bytes = get_field<FrameField::kFrameBytes>(h);
+  hd.num_bodies = get_field<FrameField::kNumBodies>(h);
+  hd.num_nodes = get_field<FrameField::kNumNodes>(h);
+  hd.num_contacts = get_field<FrameField::kNumContacts>(h);
+  hd.num_axes = get_field<FrameField::kNumAxes>(h);
+  hd.attached_body = get_field<FrameField::kAttachedBody>(h);
+  hd.period = get_field<FrameField::kPeriod>(h);
+  hd.time_ns = get_field<FrameField::kTimeNs>(h);
+  hd.step_status = get_field<FrameField::kStepStatus>(h);
+  hd.flags = get_field<FrameField::kFlags>(h);
+  hd.step_ns = get_field<FrameField::kStepNs>(h);
+  hd.lifecycle = get_field<FrameField::kLifecycle>(h);
+  hd.startup = get_field<FrameField::kStartup>(h);
   if (hd.frame_bytes != bytes.size())
-    return fail(8, "frame size field says " + std::to_string(hd.frame_bytes) + " bytes, the frame has " +
-                       std::to_string(bytes.size()));
+    return fail(FrameField::kFrameBytes, "frame size field says " + std::to_string(hd.frame_bytes) +
+                                             " bytes, the frame has " +
+                                             std::to_string(bytes.size()));
   // Counts are u32: the offsets below are computed in 64 bits and cannot overflow.
   const Offsets o = offsets(hd.num_bodies, hd.num_nodes, hd.num_contacts, hd.num_axes);
   if (o.end != bytes.size())
-    return fail(12, "counts (bodies " + std::to_string(hd.num_bodies) + ", nodes " +
-                        std::to_string(hd.num_nodes) + ", contacts " + std::to_string(hd.num_contacts) +
-                        ", axes " + std::to_string(hd.num_axes) + ") need " + std::to_string(o.end) +
-                        " bytes, the frame has " + std::to_string(bytes.size()));
+    return fail(FrameField::kNumBodies,
+                "counts (bodies " + std::to_string(hd.num_bodies) + ", nodes " +
+                    std::to_string(hd.num_nodes) + ", contacts " + std::to_string(hd.num_contacts) +
+                    ", axes " + std::to_string(hd.num_axes) + ") need " + std::to_string(o.end) +
+                    " bytes, the frame has " + std::to_string(bytes.size()));
   if (hd.attached_body < -1 || hd.attached_body >= static_cast<std::int64_t>(hd.num_bodies))
-    return fail(28, "attached body " + std::to_string(hd.attached_body) + " is not -1 or a body index below " +
-                        std::to_string(hd.num_bodies));
+    return fail(FrameField::kAttachedBody, "attached body " + std::to_string(hd.attached_body) +
+                                               " is not -1 or a body index below " +
+                                               std::to_string(hd.num_bodies));
   view.bytes_ = bytes.data();
   view.header_ = hd;
-  view.targets_ = o.targets;
-  view.nodes_ = o.nodes;
-  view.contacts_ = o.contacts;
-  view.wrench_ = o.wrench;
-  view.axes_ = o.axes;
-  view.figures_ = o.figures;
+  view.at_ = o.at;
   return {};
 }
 

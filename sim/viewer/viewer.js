@@ -1,8 +1,8 @@
 // The numen viewer (docs/viewer.md "Page"). Connects to the WebSocket of the server that served
 // it, reads the scene message (JSON), the session message (live, or replay with the frame
-// index) and then binary state frames (platform/include/numen/platform/state_frame.hpp), and
-// draws them with three.js; plots with uPlot. Read-only: in live mode it sends nothing; in
-// replay mode only {"frame": I} requests.
+// index; its frame_layout says how frames are laid out) and then binary state frames
+// (platform/include/numen/platform/state_frame.hpp), and draws them with three.js; plots with
+// uPlot. Read-only: in live mode it sends nothing; in replay mode only {"frame": I} requests.
 //
 // URL parameters: ?frame=I (replay: show frame I, paused), ?w=W&h=H (the view's size in
 // pixels); the browser test uses both.
@@ -38,34 +38,66 @@ try {
   throw e;
 }
 
-// ---- State frames (state_frame.hpp, version 1) -------------------------------------------
-const HEADER = 64;
+// ---- State frames (state_frame.hpp) -------------------------------------------------------
+// The layout comes from the session message's frame_layout (the server writes it from
+// platform::kStateFrameFields and kStateFrameArrays): header fields by name, offset and type,
+// then float32 arrays of `floats` per item, repeated `count` times (a header field; null: once).
+// A frame decodes to { h: header fields by name, time_s, and one Float32Array per array name }.
+const READ = {
+  u8: (v, o) => v.getUint8(o), u16: (v, o) => v.getUint16(o, true),
+  u32: (v, o) => v.getUint32(o, true), i32: (v, o) => v.getInt32(o, true),
+  u64: (v, o) => Number(v.getBigUint64(o, true)), i64: (v, o) => Number(v.getBigInt64(o, true)),
+  'char[4]': (v, o) => String.fromCharCode(v.getUint8(o), v.getUint8(o + 1), v.getUint8(o + 2), v.getUint8(o + 3)),
+};
+// What this page reads of a frame: a layout without one of these is refused by name.
+const USED_FIELDS = ['magic', 'version', 'header_bytes', 'frame_bytes', 'num_bodies', 'num_nodes',
+                     'num_contacts', 'num_axes', 'attached_body', 'period', 'time_ns', 'step_status',
+                     'flags', 'step_ns', 'lifecycle', 'startup'];
+const USED_ARRAYS = ['body_pose', 'target_pose', 'node_position', 'contact', 'feedback', 'penetration'];
+let frameLayout = null;  // the session message's frame_layout, checked
+const FLOATS = {};       // floats per item, by array name
+
+function setFrameLayout(L) {
+  const where = 'the session message\'s frame_layout';
+  if (!L || typeof L !== 'object')
+    throw new Error(where + ' is missing: the server is older than this page (rebuild and restart numen)');
+  for (const k of ['magic', 'version', 'header_bytes', 'float_bytes', 'header', 'arrays'])
+    if (L[k] === undefined) throw new Error(where + ' has no "' + k + '"');
+  if (L.float_bytes !== Float32Array.BYTES_PER_ELEMENT) throw new Error(where + ': float_bytes ' + L.float_bytes);
+  const fields = new Set();
+  for (const f of L.header) {
+    if (!READ[f.type]) throw new Error(where + ': field "' + f.name + '" has unknown type "' + f.type + '"');
+    fields.add(f.name);
+  }
+  for (const n of USED_FIELDS) if (!fields.has(n)) throw new Error(where + ' has no header field "' + n + '"');
+  for (const a of L.arrays) {
+    if (a.count !== null && !fields.has(a.count))
+      throw new Error(where + ': array "' + a.name + '" counts by "' + a.count + '", not a header field');
+    FLOATS[a.name] = a.floats;
+  }
+  for (const n of USED_ARRAYS) if (FLOATS[n] === undefined) throw new Error(where + ' has no array "' + n + '"');
+  frameLayout = L;
+}
+
 function decodeFrame(buf) {
-  if (buf.byteLength < HEADER) throw new Error('frame shorter than its header');
+  const L = frameLayout;
+  if (!L) throw new Error('a frame before the session message\'s frame_layout');
+  if (buf.byteLength < L.header_bytes) throw new Error('frame shorter than its header');
   const v = new DataView(buf);
-  const magic = String.fromCharCode(v.getUint8(0), v.getUint8(1), v.getUint8(2), v.getUint8(3));
-  if (magic !== 'NMVF') throw new Error('not a state frame (magic ' + magic + ')');
-  if (v.getUint16(4, true) !== 1) throw new Error('frame version ' + v.getUint16(4, true));
-  const h = {
-    bytes: v.getUint32(8, true), B: v.getUint32(12, true), N: v.getUint32(16, true),
-    C: v.getUint32(20, true), A: v.getUint32(24, true), attached: v.getInt32(28, true),
-    period: Number(v.getBigUint64(32, true)), time: Number(v.getBigInt64(40, true)) * 1e-9,
-    stepStatus: v.getUint32(48, true), flags: v.getUint32(52, true),
-    stepNs: v.getUint32(56, true), lifecycle: v.getUint8(60), startup: v.getUint8(61),
-  };
-  const need = HEADER + 4 * (15 * h.B + 3 * h.N + 10 * h.C + 6 + h.A + 2);
-  if (h.bytes !== buf.byteLength || need !== buf.byteLength)
-    throw new Error('frame of ' + buf.byteLength + ' bytes, header says ' + h.bytes + ', counts ' + need);
-  const f = new Float32Array(buf, HEADER, (buf.byteLength - HEADER) / 4);  // little-endian hosts
+  const h = {};
+  for (const f of L.header) h[f.name] = READ[f.type](v, f.offset);
+  if (h.magic !== L.magic) throw new Error('not a state frame (magic ' + h.magic + ')');
+  if (h.version !== L.version) throw new Error('frame version ' + h.version + ', layout ' + L.version);
+  if (h.header_bytes !== L.header_bytes) throw new Error('header size ' + h.header_bytes);
+  let need = L.header_bytes;
+  for (const a of L.arrays) need += L.float_bytes * a.floats * (a.count === null ? 1 : h[a.count]);
+  if (h.frame_bytes !== buf.byteLength || need !== buf.byteLength)
+    throw new Error('frame of ' + buf.byteLength + ' bytes, header says ' + h.frame_bytes + ', counts ' + need);
+  const f = new Float32Array(buf, L.header_bytes, (buf.byteLength - L.header_bytes) / L.float_bytes);  // little-endian hosts
+  const fr = { h, time_s: h.time_ns * 1e-9 };
   let o = 0;
-  const poses = f.subarray(o, o += 7 * h.B);
-  const targets = f.subarray(o, o += 8 * h.B);
-  const nodes = f.subarray(o, o += 3 * h.N);
-  const contacts = f.subarray(o, o += 10 * h.C);
-  const wrench = f.subarray(o, o += 6);
-  const torques = f.subarray(o, o += h.A);
-  return { h, poses, targets, nodes, contacts, wrench, torques,
-           toolPen: f[o], handPen: f[o + 1] };
+  for (const a of L.arrays) fr[a.name] = f.subarray(o, o += a.floats * (a.count === null ? 1 : h[a.count]));
+  return fr;
 }
 
 const LIFECYCLE = ['unconfigured', 'inactive', 'active', 'safe stop', 'fault'];
@@ -228,21 +260,23 @@ const tmpM = new THREE.Matrix4(), tmpQ = new THREE.Quaternion(), tmpP = new THRE
 
 function showFrame(fr) {
   const { h } = fr;
-  if (h.B !== bodies.length) throw new Error('frame has ' + h.B + ' bodies, scene ' + bodies.length);
-  for (let b = 0; b < h.B; ++b) {
-    const p = fr.poses.subarray(7 * b, 7 * b + 7);
+  if (h.num_bodies !== bodies.length) throw new Error('frame has ' + h.num_bodies + ' bodies, scene ' + bodies.length);
+  const P = FLOATS.body_pose, T = FLOATS.target_pose, K = FLOATS.contact;
+  for (let b = 0; b < h.num_bodies; ++b) {
+    const p = fr.body_pose.subarray(P * b, P * b + P);
     bodies[b].position.set(p[0], p[1], p[2]);
     bodies[b].quaternion.set(p[3], p[4], p[5], p[6]);
-    const t = fr.targets.subarray(8 * b, 8 * b + 8);
-    ghosts[b].visible = t[7] !== 0;
+    const t = fr.target_pose.subarray(T * b, T * b + T);
+    ghosts[b].visible = t[T - 1] !== 0;  // the target flag, after the pose
     ghosts[b].position.set(t[0], t[1], t[2]);
     ghosts[b].quaternion.set(t[3], t[4], t[5], t[6]);
-    const tool = b === h.attached;
+    const tool = b === h.attached_body;
     bodies[b].material.color.setHex(tool ? COLORS.tool : COLORS.body);
   }
   for (const { net, geo } of nets) {
     const pos = geo.attributes.position.array;
-    pos.set(fr.nodes.subarray(3 * net.node_begin, 3 * (net.node_begin + net.node_count)));
+    const N = FLOATS.node_position;
+    pos.set(fr.node_position.subarray(N * net.node_begin, N * (net.node_begin + net.node_count)));
     geo.attributes.position.needsUpdate = true;
     if (geo.index) geo.computeVertexNormals();
     geo.computeBoundingSphere();
@@ -250,8 +284,9 @@ function showFrame(fr) {
   if (!fitted) {  // on where the bodies, their targets and the nets are now (else the obstacles)
     fitted = true;
     const box = new THREE.Box3();
-    for (let n = 0; n < h.N; ++n) box.expandByPoint(new THREE.Vector3(fr.nodes[3 * n], fr.nodes[3 * n + 1], fr.nodes[3 * n + 2]));
-    for (let b = 0; b < h.B; ++b) {
+    const x = fr.node_position, N = FLOATS.node_position;
+    for (let n = 0; n < h.num_nodes; ++n) box.expandByPoint(new THREE.Vector3(x[N * n], x[N * n + 1], x[N * n + 2]));
+    for (let b = 0; b < h.num_bodies; ++b) {
       for (const g of ghosts[b].visible ? [bodies[b], ghosts[b]] : [bodies[b]]) {
         g.updateMatrixWorld();
         for (const sp of scene.bodies[b].spheres) {
@@ -263,13 +298,13 @@ function showFrame(fr) {
     fitCamera(box.isEmpty() ? obstacleBox : box);
   }
   const showContacts = document.getElementById('contacts').checked;
-  const nc = showContacts ? Math.min(h.C, MAX_DRAWN_CONTACTS) : 0;
+  const nc = showContacts ? Math.min(h.num_contacts, MAX_DRAWN_CONTACTS) : 0;
   let maxDepth = 1e-6;
-  for (let c = 0; c < nc; ++c) maxDepth = Math.max(maxDepth, fr.contacts[10 * c + 6]);
+  for (let c = 0; c < nc; ++c) maxDepth = Math.max(maxDepth, fr.contact[K * c + 6]);
   const lp = contactLines.geometry.attributes.position.array, lc = contactLines.geometry.attributes.color.array;
   const dot = extent * 0.01, len = extent * 0.06;
   for (let c = 0; c < nc; ++c) {
-    const k = fr.contacts.subarray(10 * c, 10 * c + 10);
+    const k = fr.contact.subarray(K * c, K * c + K);  // point, normal, depth, force
     depthColor.setHSL(0.33 * (1 - k[6] / maxDepth), 1, 0.5);  // green (shallow) to red (deepest)
     tmpM.compose(tmpP.set(k[0], k[1], k[2]), tmpQ.identity(), tmpS.setScalar(dot));
     contactPoints.setMatrixAt(c, tmpM);
@@ -284,11 +319,11 @@ function showFrame(fr) {
   contactLines.geometry.attributes.position.needsUpdate = true;
   contactLines.geometry.attributes.color.needsUpdate = true;
   // Feedback force, drawn at the tool (world frame, N).
-  const F = new THREE.Vector3(fr.wrench[0], fr.wrench[1], fr.wrench[2]);
+  const F = new THREE.Vector3(fr.feedback[0], fr.feedback[1], fr.feedback[2]);
   const fmag = F.length();
-  forceArrow.visible = fmag > 1e-3 && h.attached >= 0;
+  forceArrow.visible = fmag > 1e-3 && h.attached_body >= 0;
   if (forceArrow.visible) {
-    forceArrow.position.copy(bodies[h.attached].position);
+    forceArrow.position.copy(bodies[h.attached_body].position);
     forceArrow.setDirection(F.clone().normalize());
     const l = Math.min(1, fmag / 10) * extent * 0.8 + extent * 0.05;  // 10 N: 0.85 of the scene
     forceArrow.setLength(l, 0.2 * l, 0.1 * l);
@@ -310,11 +345,11 @@ function showFrame(fr) {
   plotAdd(fr, fmag);
   statusEl.className = '';
   statusEl.textContent =
-    `t = ${h.time.toFixed(3)} s   period ${h.period}\n` +
+    `t = ${fr.time_s.toFixed(3)} s   period ${h.period}\n` +
     `lifecycle: ${LIFECYCLE[h.lifecycle] ?? h.lifecycle}` +
     (managed ? `   start-up: ${STARTUP[h.startup] ?? h.startup}` : `   (${protocol} protocol)`) + '\n' +
-    `flags: ${bits(h.flags, FLAGS)}\nstep: ${h.stepStatus ? bits(h.stepStatus, STEP) : 'ok'}\n` +
-    `contacts: ${h.C}${h.C > nc && showContacts ? ` (${nc} drawn)` : ''}   |F| = ${fmag.toFixed(2)} N`;
+    `flags: ${bits(h.flags, FLAGS)}\nstep: ${h.step_status ? bits(h.step_status, STEP) : 'ok'}\n` +
+    `contacts: ${h.num_contacts}${h.num_contacts > nc && showContacts ? ` (${nc} drawn)` : ''}   |F| = ${fmag.toFixed(2)} N`;
   updateCounters();
 }
 
@@ -340,10 +375,10 @@ const plots = {
 };
 let plotDirty = false;
 function plotAdd(fr, fmag) {
-  const d = plotData, t = fr.h.time;
+  const d = plotData, t = fr.time_s;
   if (d.t.length && t < d.t[d.t.length - 1]) for (const k in d) d[k].length = 0;  // a seek back
-  d.t.push(t); d.tool.push(1e3 * fr.toolPen); d.hand.push(1e3 * fr.handPen);
-  d.force.push(fmag); d.step.push(fr.h.stepNs * 1e-3);
+  d.t.push(t); d.tool.push(1e3 * fr.penetration[0]); d.hand.push(1e3 * fr.penetration[1]);
+  d.force.push(fmag); d.step.push(fr.h.step_ns * 1e-3);
   while (d.t.length && d.t[0] < t - WINDOW_S) for (const k in d) d[k].shift();
   plotDirty = true;
 }
@@ -409,6 +444,7 @@ ws.onmessage = (ev) => {
       const m = JSON.parse(ev.data);
       if (!scene) buildScene(m);
       else if (m.type === 'session') {
+        setFrameLayout(m.frame_layout);
         session = m;
         if (m.mode === 'replay') setupReplay();
         statusEl.textContent = m.mode === 'live' ? 'live: waiting for frames…' : 'replay';
@@ -424,7 +460,7 @@ ws.onmessage = (ev) => {
       replay.pending = -1;
       document.getElementById('slider').value = String(replay.index);
       document.getElementById('clock').textContent =
-        `${fr.h.time.toFixed(3)} / ${(session.time_s[session.frames - 1] ?? 0).toFixed(3)} s`;
+        `${fr.time_s.toFixed(3)} / ${(session.time_s[session.frames - 1] ?? 0).toFixed(3)} s`;
     }
     showFrame(fr);
   } catch (e) {
@@ -477,8 +513,8 @@ window.numenView = {
   probe() {
     const p = { errors, framesShown, framesReceived, mode: session?.mode ?? null,
                 period: last?.h.period ?? null, colors: { tool: COLORS.tool, ghost: COLORS.ghost } };
-    if (last && last.h.attached >= 0) {
-      const b = last.h.attached;
+    if (last && last.h.attached_body >= 0) {
+      const b = last.h.attached_body;
       p.tool = project(bodies[b], b);
       p.ghost = ghosts[b].visible ? project(ghosts[b], b) : [];
       p.toolName = scene.bodies[b].name;

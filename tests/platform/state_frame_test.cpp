@@ -3,7 +3,11 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <bit>
 #include <cstring>
+#include <fstream>
+#include <sstream>
+#include <string>
 #include <vector>
 
 #include "alloc_counter.hpp"
@@ -17,7 +21,9 @@
 namespace {
 
 using numen::core::Vec3;
+using numen::platform::FrameArray;
 using numen::platform::FrameContact;
+using numen::platform::FrameField;
 using numen::platform::StateFrameDecoder;
 using numen::platform::StateFrameFigures;
 using numen::platform::StateFrameLayout;
@@ -118,6 +124,83 @@ TEST(StateFrame, RoundTripsEveryField) {
   EXPECT_FLOAT_EQ(v.axis_torque(2), 1.5F);
   EXPECT_FLOAT_EQ(v.tool_penetration(), 0.0015F);
   EXPECT_FLOAT_EQ(v.target_penetration(), 0.012F);
+}
+
+/// The `bytes` bytes at `at`, little-endian, as an unsigned number.
+std::uint64_t frame_le_bytes(const std::vector<std::byte>& frame, std::size_t at,
+                             std::size_t bytes) {
+  std::uint64_t v = 0;
+  for (std::size_t i = 0; i < bytes; ++i)
+    v |= std::to_integer<std::uint64_t>(frame.at(at + i)) << (8 * i);
+  return v;
+}
+
+// Each declared header field's bytes at its declared offset, and each array's first float at
+// the offset the declaration gives it (the arrays in order from the header's end).
+TEST(StateFrame, EachDeclaredFieldIsAtItsDeclaredOffset) {
+  Period p;
+  p.data.target.position.x() = 0.5;            // first float of target_pose (body 0 is held)
+  p.data.contacts[0].position.x() = 0.004;      // first float of contact
+  std::vector<std::byte> buf(p.layout.max_frame_bytes());
+  const std::size_t n =
+      numen::platform::encode_state_frame(p.layout, p.data, p.report, p.torques, p.figures, buf);
+  ASSERT_EQ(n, p.layout.frame_bytes(1));
+  for (const numen::platform::StateFrameField& f : numen::platform::kStateFrameFields) {
+    const std::size_t bytes = numen::platform::frame_field_bytes(f.type);
+    const std::uint64_t got = frame_le_bytes(buf, f.offset, bytes);
+    std::uint64_t want = 0;
+    switch (f.id) {
+      case FrameField::kMagic: want = 0x46564D4E; break;  // "NMVF"
+      case FrameField::kVersion: want = 1; break;
+      case FrameField::kHeaderBytes: want = 64; break;
+      case FrameField::kFrameBytes: want = n; break;
+      case FrameField::kNumBodies: want = 2; break;
+      case FrameField::kNumNodes: want = 0; break;
+      case FrameField::kNumContacts: want = 1; break;
+      case FrameField::kNumAxes: want = 3; break;
+      case FrameField::kAttachedBody: want = 0; break;
+      case FrameField::kPeriod: want = 42; break;
+      case FrameField::kTimeNs: want = 42'000'000; break;
+      case FrameField::kStepStatus: want = numen::core::kContactOverflow; break;
+      case FrameField::kFlags:
+        want = numen::platform::kFrameSampleValid | numen::platform::kFrameTorqueCommanded;
+        break;
+      case FrameField::kStepNs: want = 12345; break;
+      case FrameField::kLifecycle:
+        want = static_cast<std::uint64_t>(numen::hal::LifecycleState::kActive);
+        break;
+      case FrameField::kStartup:
+        want = static_cast<std::uint64_t>(numen::hal::StartupPhase::kOperational);
+        break;
+      case FrameField::kReserved: want = 0; break;
+    }
+    EXPECT_EQ(got, want) << f.name << " at byte " << f.offset;
+  }
+  // Counts B = 2, N = 0, C = 1, A = 3: each array's first float where the declaration puts it.
+  std::size_t at = numen::platform::kStateFrameHeaderBytes;
+  for (const numen::platform::StateFrameArray& a : numen::platform::kStateFrameArrays) {
+    std::size_t items = 1;
+    if (a.count == FrameField::kNumBodies) items = 2;
+    if (a.count == FrameField::kNumNodes) items = 0;
+    if (a.count == FrameField::kNumContacts) items = 1;
+    if (a.count == FrameField::kNumAxes) items = 3;
+    float want = 0.0F;
+    switch (a.id) {
+      case FrameArray::kBodyPose: want = 0.01F; break;    // body 0's x
+      case FrameArray::kTargetPose: want = 0.5F; break;   // body 0's target x
+      case FrameArray::kNodePosition: break;              // no node
+      case FrameArray::kContact: want = 0.004F; break;    // the contact point's x
+      case FrameArray::kFeedback: want = 1.0F; break;     // force x
+      case FrameArray::kAxisTorque: want = 0.25F; break;  // axis 0
+      case FrameArray::kPenetration: want = 0.0015F; break;  // tool penetration
+    }
+    if (items > 0) {
+      const auto bits = static_cast<std::uint32_t>(frame_le_bytes(buf, at, 4));
+      EXPECT_FLOAT_EQ(std::bit_cast<float>(bits), want) << a.name << " at byte " << at;
+    }
+    at += 4 * a.floats * items;
+  }
+  EXPECT_EQ(at, n);
 }
 
 TEST(StateFrame, IsLittleEndianOnTheWire) {
@@ -224,6 +307,62 @@ TEST(StateFrameDecoder, RejectsEveryMalformedFrameWithItsOffset) {
   b[28] = std::byte{5};
   EXPECT_NE(decode(b).find("byte 28: attached body 5"), std::string::npos);
   EXPECT_EQ(decode(buf), "");
+}
+
+
+/// The rows of the Markdown table whose header line is `head` in `doc`, each as its cells
+/// (trimmed); empty if there is no such table.
+std::vector<std::vector<std::string>> frame_doc_table(const std::string& doc,
+                                                      const std::string& head) {
+  std::vector<std::vector<std::string>> rows;
+  std::size_t at = doc.find(head + "\n");
+  if (at == std::string::npos) return rows;
+  at = doc.find('\n', doc.find('\n', at) + 1);  // past the header and the rule
+  std::istringstream lines(doc.substr(at + 1));
+  for (std::string line; std::getline(lines, line) && line.rfind("| ", 0) == 0;) {
+    std::vector<std::string> cells;
+    std::istringstream in(line.substr(1));
+    for (std::string cell; std::getline(in, cell, '|');) {
+      const std::size_t b = cell.find_first_not_of(' '), e = cell.find_last_not_of(' ');
+      cells.push_back(b == std::string::npos ? "" : cell.substr(b, e - b + 1));
+    }
+    rows.push_back(std::move(cells));
+  }
+  return rows;
+}
+
+// docs/viewer.md "Frames" gives the header's and the arrays' layout in two tables: their
+// offset, name and type columns (name, floats and count for the arrays) are the declaration's,
+// row for row.
+TEST(StateFrameDeclaration, DocsTablesAreTheDeclaration) {
+  std::ifstream in(std::string(NUMEN_SOURCE_DIR) + "/docs/viewer.md");
+  ASSERT_TRUE(in) << "docs/viewer.md";
+  std::stringstream ss;
+  ss << in.rdbuf();
+  const auto fields = frame_doc_table(ss.str(), "| offset | field | type | contents |");
+  ASSERT_EQ(fields.size(), numen::platform::kStateFrameFields.size())
+      << "docs/viewer.md's header table has " << fields.size() << " rows, kStateFrameFields "
+      << numen::platform::kStateFrameFields.size();
+  for (std::size_t i = 0; i < fields.size(); ++i) {
+    const auto& f = numen::platform::kStateFrameFields[i];
+    ASSERT_GE(fields[i].size(), 3u) << "row " << i;
+    EXPECT_EQ(fields[i][0], std::to_string(f.offset)) << f.name;
+    EXPECT_EQ(fields[i][1], "`" + std::string(f.name) + "`") << "offset " << f.offset;
+    EXPECT_EQ(fields[i][2], numen::platform::frame_field_type_name(f.type)) << f.name;
+  }
+  const auto arrays = frame_doc_table(ss.str(), "| array | floats | count | contents |");
+  ASSERT_EQ(arrays.size(), numen::platform::kStateFrameArrays.size())
+      << "docs/viewer.md's array table has " << arrays.size() << " rows, kStateFrameArrays "
+      << numen::platform::kStateFrameArrays.size();
+  for (std::size_t i = 0; i < arrays.size(); ++i) {
+    const auto& a = numen::platform::kStateFrameArrays[i];
+    ASSERT_GE(arrays[i].size(), 3u) << "row " << i;
+    EXPECT_EQ(arrays[i][0], "`" + std::string(a.name) + "`") << "array " << i;
+    EXPECT_EQ(arrays[i][1], std::to_string(a.floats)) << a.name;
+    EXPECT_EQ(arrays[i][2],
+              a.count ? "`" + std::string(numen::platform::frame_field(*a.count).name) + "`" : "1")
+        << a.name;
+  }
 }
 
 }  // namespace

@@ -4,6 +4,7 @@
 #include "numen/sim/run/record_lists.hpp"
 
 #include "markdown_cell.hpp"
+#include "numen/platform/state_frame.hpp"
 #include "numen/sim/run/run_figures.hpp"
 #include "numen/sim/run/trace_columns.hpp"
 #include "numen/sim/study/study_fields.hpp"
@@ -30,6 +31,11 @@ std::vector<RecordList> record_lists() {
        "stability_row_fields()", stability_row_names()});
   lists.push_back({"accuracy study row: accuracy.csv, shard rows, numen.study_accuracy",
                    "accuracy_row_fields()", accuracy_row_names()});
+  std::vector<std::string> frame;
+  for (const platform::StateFrameField& f : platform::kStateFrameFields) frame.emplace_back(f.name);
+  for (const platform::StateFrameArray& a : platform::kStateFrameArrays) frame.emplace_back(a.name);
+  lists.push_back({"state frame: `numen run --view`, `--record-view`, the viewer page",
+                   "platform::kStateFrameFields, platform::kStateFrameArrays", std::move(frame)});
   return lists;
 }
 

@@ -25,6 +25,8 @@
 #include <stdexcept>
 #include <thread>
 
+#include "numen/sim/view/frame_layout_json.hpp"
+
 namespace numen::sim {
 
 namespace asio = boost::asio;
@@ -399,7 +401,11 @@ ViewServer::Impl::Impl(const ViewServerSettings& s, std::string scene_message, V
     throw std::invalid_argument("ViewServerSettings::max_clients must be >= 1");
   if (settings.stream_path.empty() || settings.stream_path.front() != '/')
     throw std::invalid_argument("ViewServerSettings::stream_path must start with '/'");
-  nlohmann::json j{{"type", "session"}, {"mode", source ? "replay" : "live"}};
+  // The frames' layout from the declaration that encodes and decodes them: a recording's
+  // frames passed this build's decoder (ViewRecordingReader), so it is theirs too.
+  nlohmann::json j{{"type", "session"},
+                   {"mode", source ? "replay" : "live"},
+                   {"frame_layout", nlohmann::json::parse(state_frame_layout_json())}};
   if (source) {
     const std::size_t n = source->frame_count();
     nlohmann::json times = nlohmann::json::array();

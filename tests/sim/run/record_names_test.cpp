@@ -1,7 +1,8 @@
 // Tests of sim/record_lists and study_fields: every output writes the names of the one
 // declaration it comes from, so the outputs that carry a quantity carry it under one name —
 // the summary's JSON and the run figures, the CSV trace and the streamed trace, a study row's
-// CSV, shard file and field list (the Python dicts: tests/sim/python/record_names_test.py).
+// CSV, shard file and field list (the Python dicts: tests/sim/python/record_names_test.py), the
+// state frame and the layout the page decodes it with.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -14,6 +15,7 @@
 #include <vector>
 
 #include "csv_lines.hpp"
+#include "numen/platform/state_frame.hpp"
 #include "numen/sim/run/record_lists.hpp"
 #include "numen/sim/run/run.hpp"
 #include "numen/sim/run/run_figures.hpp"
@@ -21,6 +23,7 @@
 #include "numen/sim/run/trace_columns.hpp"
 #include "numen/sim/scene/scene.hpp"
 #include "numen/sim/study/study_fields.hpp"
+#include "numen/sim/view/frame_layout_json.hpp"
 #include "run_summary_samples.hpp"
 #include "temp_dir.hpp"
 
@@ -49,7 +52,7 @@ const sim::RecordList& list_of(const std::vector<sim::RecordList>& lists, std::s
 
 TEST(RecordNames, FiguresAllListsEveryOutputOnceEach) {
   const std::vector<sim::RecordList> lists = sim::record_lists();
-  ASSERT_EQ(lists.size(), 5u);
+  ASSERT_EQ(lists.size(), 6u);
   for (const sim::RecordList& l : lists) {
     EXPECT_FALSE(l.names.empty()) << l.output;
     const std::set<std::string> unique(l.names.begin(), l.names.end());
@@ -142,6 +145,23 @@ TEST(RecordNames, TraceColumnsOfSummaryQuantitiesHaveTheFiguresNames) {
                                      [](const sim::TraceColumn& c) { return c.per_axis; });
   ASSERT_NE(per_axis, sim::trace_columns().end());
   EXPECT_EQ(per_axis->name, "axis_torque_");
+}
+
+// The state frame's list is its declaration, complete: every header field, then every array,
+// in order; the page's layout (the session message's frame_layout) carries the same names.
+TEST(RecordNames, StateFrameListIsEveryDeclaredFieldThenEveryArray) {
+  std::vector<std::string> declared;
+  for (const numen::platform::StateFrameField& f : numen::platform::kStateFrameFields)
+    declared.emplace_back(f.name);
+  for (const numen::platform::StateFrameArray& a : numen::platform::kStateFrameArrays)
+    declared.emplace_back(a.name);
+  ASSERT_EQ(declared.size(), 17u + 7u);
+  EXPECT_EQ(list_of(sim::record_lists(), "state frame").names, declared);
+  const nlohmann::json page = nlohmann::json::parse(sim::state_frame_layout_json());
+  std::vector<std::string> sent;
+  for (const auto& f : page.at("header")) sent.push_back(f.at("name").get<std::string>());
+  for (const auto& a : page.at("arrays")) sent.push_back(a.at("name").get<std::string>());
+  EXPECT_EQ(sent, declared);
 }
 
 std::vector<std::string> csv_header(const std::filesystem::path& file) {

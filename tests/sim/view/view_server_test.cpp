@@ -19,6 +19,8 @@
 #include <sys/socket.h>
 #include <thread>
 
+#include "numen/sim/view/frame_layout_json.hpp"
+
 namespace {
 
 namespace asio = boost::asio;
@@ -119,6 +121,7 @@ TEST(ViewServer, ClientReceivesTheSceneMessageThenFramesInOrder) {
   const nlohmann::json session = c.read_greeting();
   EXPECT_EQ(session["type"], "session");
   EXPECT_EQ(session["mode"], "live");
+  EXPECT_EQ(session["frame_layout"], nlohmann::json::parse(numen::sim::state_frame_layout_json()));
   EXPECT_EQ(server.counters().clients_connected, 1u);
   for (std::uint64_t k = 0; k < 5; ++k) {
     const auto f = frame_bytes(100 + k, 100 + static_cast<std::size_t>(k));
@@ -264,6 +267,8 @@ TEST(ViewServer, ReplayAnswersFrameRequestsAndClosesOnBadOnes) {
   const nlohmann::json session = c.read_greeting();
   EXPECT_EQ(session["mode"], "replay");
   EXPECT_EQ(session["frames"], 3);
+  // A recording's page decodes with the same layout as a live one's.
+  EXPECT_EQ(session["frame_layout"], nlohmann::json::parse(numen::sim::state_frame_layout_json()));
   ASSERT_EQ(session["time_s"].size(), 3u);
   EXPECT_DOUBLE_EQ(session["time_s"][1].get<double>(), 0.016667);
   for (const std::uint64_t i : {2, 0, 1}) {

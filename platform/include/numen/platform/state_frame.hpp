@@ -7,38 +7,23 @@
 /// buffer (encode_state_frame(): noexcept, no allocation); readers check it with
 /// decode_state_frame(), which never reads past the bytes it is given.
 ///
-/// Layout (offsets in bytes; u32/i32/u64/i64 little-endian, f32 IEEE 754 little-endian):
-///
-///     0  char[4] magic "NMVF"           32  u64 period index k
-///     4  u16 version (1)                40  i64 simulated time t = k·dt, ns
-///     6  u16 header bytes (64)          48  u32 core step status (core::StepStatus bits)
-///     8  u32 frame bytes (total)        52  u32 flags (StateFrameFlag bits)
-///    12  u32 bodies B                   56  u32 wall time of core::step, ns (saturated)
-///    16  u32 net nodes N                60  u8 lifecycle (hal::LifecycleState)
-///    20  u32 contacts C                 61  u8 start-up phase (hal::StartupPhase)
-///    24  u32 axes A                     62  u16 reserved (0)
-///    28  i32 attached body (−1: none)
-///
-///     64                 B × 7 f32  body poses: position (m) x y z, orientation x y z w
-///     64 + 28B           B × 8 f32  target poses (the hand's ghost) as above, then 1 if the
-///                                   body has a target this period, else 0
-///     64 + 60B           N × 3 f32  net node positions (m)
-///     64 + 60B + 12N     C × 10 f32 contacts: point (m) x y z, unit normal x y z (pushes
-///                                   the first body out), depth (m, > 0), force on the first
-///                                   body (N) x y z; rigid contacts first, then node contacts
-///     … + 40C            6 f32      feedback wrench sent to the device: force (N) x y z,
-///                                   torque (N·m) x y z, world frame, about link 0's origin
-///     … + 24             A f32      torque or force sent to each axis (N·m or N)
-///     … + 4A             2 f32      tool penetration, hand (target) penetration (m)
+/// Layout: kStateFrameFields (the header's fields: name, byte offset, type) and
+/// kStateFrameArrays (the float32 arrays after it: name, floats per item, the header count the
+/// item repeats), below. The encoder, the decoder, the viewer page (the view server sends
+/// both lists in its session message) and `numen figures --all` all read these two lists.
+/// u16/u32/i32/u64/i64 are little-endian, f32 IEEE 754 little-endian.
 ///
 /// Frame: world (z up in the shipped scenes). Poses are of each body's centre-of-mass frame,
 /// as core::BodyState. float32 keeps 0.06 µm at 1 m: ample for display, not for analysis
 /// (use --trace for that).
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <string>
+#include <string_view>
 
 #include "numen/core/data.hpp"
 #include "numen/platform/control_loop.hpp"
@@ -51,10 +36,186 @@ inline constexpr char kStateFrameMagic[4] = {'N', 'M', 'V', 'F'};
 inline constexpr std::uint16_t kStateFrameVersion = 1;
 /// Size of the fixed header, bytes.
 inline constexpr std::size_t kStateFrameHeaderBytes = 64;
-/// float32 values per body pose, per target, per node, per contact, in the wrench.
-inline constexpr std::size_t kFramePoseFloats = 7, kFrameTargetFloats = 8, kFrameNodeFloats = 3,
-                             kFrameContactFloats = 10, kFrameWrenchFloats = 6,
-                             kFrameFigureFloats = 2;
+
+/// Bytes of each float32 of the arrays.
+inline constexpr std::size_t kFrameFloatBytes = sizeof(float);
+static_assert(kFrameFloatBytes == 4);
+
+/// Wire type of a header field: unsigned or signed integers of 1 to 8 bytes (little-endian),
+/// or four bytes taken as they are (char[4]).
+enum class FrameFieldType : std::uint8_t { kU8, kU16, kU32, kI32, kU64, kI64, kChar4 };
+
+/// Bytes a field of type `t` occupies.
+constexpr std::size_t frame_field_bytes(FrameFieldType t) noexcept {
+  switch (t) {
+    case FrameFieldType::kU8: return 1;
+    case FrameFieldType::kU16: return 2;
+    case FrameFieldType::kU32:
+    case FrameFieldType::kI32:
+    case FrameFieldType::kChar4: return 4;
+    case FrameFieldType::kU64:
+    case FrameFieldType::kI64: return 8;
+  }
+  return 0;
+}
+
+/// The name of `t` in the docs and the session message: "u8", "u16", "u32", "i32", "u64",
+/// "i64", "char[4]".
+constexpr std::string_view frame_field_type_name(FrameFieldType t) noexcept {
+  switch (t) {
+    case FrameFieldType::kU8: return "u8";
+    case FrameFieldType::kU16: return "u16";
+    case FrameFieldType::kU32: return "u32";
+    case FrameFieldType::kI32: return "i32";
+    case FrameFieldType::kU64: return "u64";
+    case FrameFieldType::kI64: return "i64";
+    case FrameFieldType::kChar4: return "char[4]";
+  }
+  return "";
+}
+
+/// The header's fields, in their order: each one's index in kStateFrameFields.
+enum class FrameField : std::uint8_t {
+  kMagic, kVersion, kHeaderBytes, kFrameBytes, kNumBodies, kNumNodes, kNumContacts, kNumAxes,
+  kAttachedBody, kPeriod, kTimeNs, kStepStatus, kFlags, kStepNs, kLifecycle, kStartup, kReserved
+};
+
+/// One field of the header.
+struct StateFrameField {
+  FrameField id;          ///< Its index in kStateFrameFields.
+  std::string_view name;  ///< Everywhere the field is named: StateFrameHeader, the page, the docs.
+  std::size_t offset;     ///< Byte offset in the frame.
+  FrameFieldType type;    ///< Wire type (its size: frame_field_bytes()).
+};
+
+/// The 64-byte header, field by field (names as StateFrameHeader's members):
+///
+///     magic          "NMVF" (kStateFrameMagic)
+///     version        kStateFrameVersion (1)
+///     header_bytes   kStateFrameHeaderBytes (64)
+///     frame_bytes    the whole frame, bytes
+///     num_bodies     B: bodies
+///     num_nodes      N: net nodes
+///     num_contacts   C: contacts
+///     num_axes       A: device axes
+///     attached_body  the held body's index, −1: none
+///     period         period index k
+///     time_ns        simulated time t = k·dt, ns
+///     step_status    core::StepStatus bits of the period's core::step
+///     flags          StateFrameFlag bits
+///     step_ns        wall time of core::step, ns (saturated at 2³²−1)
+///     lifecycle      hal::LifecycleState
+///     startup        hal::StartupPhase
+///     reserved       0
+inline constexpr std::array<StateFrameField, 17> kStateFrameFields{{
+    {FrameField::kMagic, "magic", 0, FrameFieldType::kChar4},
+    {FrameField::kVersion, "version", 4, FrameFieldType::kU16},
+    {FrameField::kHeaderBytes, "header_bytes", 6, FrameFieldType::kU16},
+    {FrameField::kFrameBytes, "frame_bytes", 8, FrameFieldType::kU32},
+    {FrameField::kNumBodies, "num_bodies", 12, FrameFieldType::kU32},
+    {FrameField::kNumNodes, "num_nodes", 16, FrameFieldType::kU32},
+    {FrameField::kNumContacts, "num_contacts", 20, FrameFieldType::kU32},
+    {FrameField::kNumAxes, "num_axes", 24, FrameFieldType::kU32},
+    {FrameField::kAttachedBody, "attached_body", 28, FrameFieldType::kI32},
+    {FrameField::kPeriod, "period", 32, FrameFieldType::kU64},
+    {FrameField::kTimeNs, "time_ns", 40, FrameFieldType::kI64},
+    {FrameField::kStepStatus, "step_status", 48, FrameFieldType::kU32},
+    {FrameField::kFlags, "flags", 52, FrameFieldType::kU32},
+    {FrameField::kStepNs, "step_ns", 56, FrameFieldType::kU32},
+    {FrameField::kLifecycle, "lifecycle", 60, FrameFieldType::kU8},
+    {FrameField::kStartup, "startup", 61, FrameFieldType::kU8},
+    {FrameField::kReserved, "reserved", 62, FrameFieldType::kU16},
+}};
+
+/// The declaration of header field `f`.
+constexpr const StateFrameField& frame_field(FrameField f) noexcept {
+  return kStateFrameFields[static_cast<std::size_t>(f)];
+}
+
+/// The arrays after the header, in their order: each one's index in kStateFrameArrays.
+enum class FrameArray : std::uint8_t {
+  kBodyPose, kTargetPose, kNodePosition, kContact, kFeedback, kAxisTorque, kPenetration
+};
+
+/// One float32 array after the header: `count` items of `floats` floats each.
+struct StateFrameArray {
+  FrameArray id;                    ///< Its index in kStateFrameArrays.
+  std::string_view name;            ///< The name StateFrameView's accessor and the page use.
+  std::size_t floats;               ///< float32 values per item.
+  std::optional<FrameField> count;  ///< Header count of items (B, N, C, A); none: one item.
+};
+
+/// The arrays, in order from byte kStateFrameHeaderBytes, each item's floats:
+///
+///     body_pose      B × 7   position (m) x y z, orientation x y z w
+///     target_pose    B × 8   target pose (the hand's ghost) as above, then 1 if the body has
+///                            a target this period, else 0
+///     node_position  N × 3   net node position (m) x y z
+///     contact        C × 10  point (m) x y z, unit normal x y z (pushes the first body out),
+///                            depth (m, > 0), force on the first body (N) x y z; rigid contacts
+///                            first, then node contacts
+///     feedback       1 × 6   feedback wrench sent to the device: force (N) x y z, torque (N·m)
+///                            x y z, world frame, about link 0's origin
+///     axis_torque    A × 1   torque or force sent to the axis (N·m or N)
+///     penetration    1 × 2   tool penetration, hand (target) penetration (m)
+inline constexpr std::array<StateFrameArray, 7> kStateFrameArrays{{
+    {FrameArray::kBodyPose, "body_pose", 7, FrameField::kNumBodies},
+    {FrameArray::kTargetPose, "target_pose", 8, FrameField::kNumBodies},
+    {FrameArray::kNodePosition, "node_position", 3, FrameField::kNumNodes},
+    {FrameArray::kContact, "contact", 10, FrameField::kNumContacts},
+    {FrameArray::kFeedback, "feedback", 6, std::nullopt},
+    {FrameArray::kAxisTorque, "axis_torque", 1, FrameField::kNumAxes},
+    {FrameArray::kPenetration, "penetration", 2, std::nullopt},
+}};
+
+/// The declaration of array `a`.
+constexpr const StateFrameArray& frame_array(FrameArray a) noexcept {
+  return kStateFrameArrays[static_cast<std::size_t>(a)];
+}
+
+namespace detail {
+/// The fields are in kStateFrameFields at their id's index, tile the header from byte 0 to
+/// kStateFrameHeaderBytes without gap or overlap, in order, each at a multiple of its size.
+constexpr bool frame_fields_tile_the_header() noexcept {
+  std::size_t at = 0;
+  for (std::size_t i = 0; i < kStateFrameFields.size(); ++i) {
+    const StateFrameField& f = kStateFrameFields[i];
+    const std::size_t bytes = frame_field_bytes(f.type);
+    if (static_cast<std::size_t>(f.id) != i || f.offset != at || bytes == 0 ||
+        f.offset % bytes != 0 || f.name.empty())
+      return false;
+    at += bytes;
+  }
+  return at == kStateFrameHeaderBytes;
+}
+/// The arrays are at their id's index, have floats, and repeat a u32 count of the header.
+constexpr bool frame_arrays_are_well_formed() noexcept {
+  for (std::size_t i = 0; i < kStateFrameArrays.size(); ++i) {
+    const StateFrameArray& a = kStateFrameArrays[i];
+    if (static_cast<std::size_t>(a.id) != i || a.floats == 0 || a.name.empty()) return false;
+    if (a.count && *a.count != FrameField::kNumBodies && *a.count != FrameField::kNumNodes &&
+        *a.count != FrameField::kNumContacts && *a.count != FrameField::kNumAxes)
+      return false;
+  }
+  return true;
+}
+}  // namespace detail
+static_assert(detail::frame_fields_tile_the_header(),
+              "kStateFrameFields must tile the 64-byte header in order, without overlap");
+static_assert(detail::frame_arrays_are_well_formed(),
+              "kStateFrameArrays: ids in order, floats > 0, counts of bodies/nodes/contacts/axes");
+static_assert(frame_field(FrameField::kMagic).type == FrameFieldType::kChar4 &&
+              sizeof kStateFrameMagic == frame_field_bytes(FrameFieldType::kChar4));
+
+/// float32 values per body pose, per target, per node, per contact, in the wrench, in the
+/// figures (kStateFrameArrays' items).
+inline constexpr std::size_t kFramePoseFloats = frame_array(FrameArray::kBodyPose).floats,
+                             kFrameTargetFloats = frame_array(FrameArray::kTargetPose).floats,
+                             kFrameNodeFloats = frame_array(FrameArray::kNodePosition).floats,
+                             kFrameContactFloats = frame_array(FrameArray::kContact).floats,
+                             kFrameWrenchFloats = frame_array(FrameArray::kFeedback).floats,
+                             kFrameFigureFloats = frame_array(FrameArray::kPenetration).floats;
+static_assert(kFrameTargetFloats == kFramePoseFloats + 1, "a target is a pose and its flag");
 
 /// Bits of the header's flags word.
 enum StateFrameFlag : std::uint32_t {
@@ -88,7 +249,8 @@ struct FrameContact {
   float force[3];   ///< N on the first body (or node), world.
 };
 
-/// The scalars of a frame's header (the arrays are read through StateFrameView).
+/// The scalars of a frame's header (the arrays are read through StateFrameView); members
+/// are named as their kStateFrameFields entries.
 struct StateFrameHeader {
   std::uint32_t frame_bytes = 0;
   std::uint32_t num_bodies = 0, num_nodes = 0, num_contacts = 0, num_axes = 0;
@@ -127,9 +289,15 @@ class StateFrameView {
  private:
   friend class StateFrameDecoder;
   float f32(std::size_t offset) const noexcept;
+  /// Reads `n` floats from byte `at` on into `out`; returns the byte after them.
+  std::size_t f32s(std::size_t at, float* out, std::size_t n) const noexcept;
+  /// Byte offset of item `i` of array `a`.
+  std::size_t item(FrameArray a, std::size_t i) const noexcept {
+    return at_[static_cast<std::size_t>(a)] + kFrameFloatBytes * frame_array(a).floats * i;
+  }
   const std::byte* bytes_ = nullptr;
   StateFrameHeader header_{};
-  std::size_t targets_ = 0, nodes_ = 0, contacts_ = 0, wrench_ = 0, axes_ = 0, figures_ = 0;
+  std::array<std::size_t, kStateFrameArrays.size()> at_{};  // each array's byte offset
 };
 
 /// Outcome of decode_state_frame(): empty `error` on success.

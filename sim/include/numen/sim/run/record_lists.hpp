@@ -4,7 +4,8 @@
 /// (`numen figures --all`): the run figures (run_figures.hpp: the JSON summary, the text
 /// summary's placeholders, numen.run_scene's dict), the trace columns (trace_columns.hpp: the
 /// CSV of `--trace` and the streamed real-bus trace) and the study rows (study_fields.hpp:
-/// the studies' CSV files, shard files and numen.study_* dicts). Setup only (allocates).
+/// the studies' CSV files, shard files and numen.study_* dicts) and the state frame
+/// (platform/state_frame.hpp: the viewer's frames, live and recorded). Setup only (allocates).
 
 #include <string>
 #include <string_view>
@@ -20,7 +21,8 @@ struct RecordList {
 };
 
 /// Every output's names: run figures, the CSV trace, the streamed trace (with the writer's
-/// period, time_ns, flags first), the stability row, the accuracy row.
+/// period, time_ns, flags first), the stability row, the accuracy row, the state frame (its
+/// header fields, then its arrays).
 std::vector<RecordList> record_lists();
 
 /// `numen figures --all` (Markdown): "## Run figures" and format_run_figures_markdown(),
