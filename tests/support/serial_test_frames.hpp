@@ -27,9 +27,9 @@ inline hal::CanFrame make(std::uint32_t id, std::uint8_t flags, Bytes data) {
   return f;
 }
 
-/// Expects `a` and `b` to be the same frame: id, flags, len and all 64 data bytes (those past
+/// Expects `a` and `b` to be identical frames: id, flags, len and all 64 data bytes (those past
 /// len are zero on both sides of a round trip).
-inline void expect_same(const hal::CanFrame& a, const hal::CanFrame& b) {
+inline void expect_identical(const hal::CanFrame& a, const hal::CanFrame& b) {
   EXPECT_EQ(a.id, b.id);
   EXPECT_EQ(a.flags, b.flags);
   EXPECT_EQ(a.len, b.len);

@@ -32,7 +32,7 @@ using test::Bytes;
 using test::encode;
 using test::make;
 
-using numen::test::expect_same;
+using numen::test::expect_identical;
 
 std::int64_t now_ns() {
   timespec ts{};
@@ -188,7 +188,7 @@ TEST_F(SerialBusPty, FramesRoundTripFromTheLineWithReceiveTimestamps) {
     CanFrame got;
     ASSERT_EQ(read_frame(got), IoStatus::kOk);
     const std::int64_t after = now_ns();
-    expect_same(got, sent);
+    expect_identical(got, sent);
     EXPECT_GE(got.timestamp_ns, before);
     EXPECT_LE(got.timestamp_ns, after);
   }
@@ -213,7 +213,7 @@ TEST_F(SerialBusPty, FramesRoundTripOntoTheLine) {
   const std::vector<CanFrame> got = decode(line, dec);
   const std::vector<CanFrame> sent = all_kinds();
   ASSERT_EQ(got.size(), sent.size());
-  for (std::size_t i = 0; i < sent.size(); ++i) expect_same(got[i], sent[i]);
+  for (std::size_t i = 0; i < sent.size(); ++i) expect_identical(got[i], sent[i]);
   EXPECT_EQ(bus_->counters().frames_tx, sent.size());
 }
 
@@ -278,7 +278,7 @@ TEST_F(SerialBusPty, DamageOnTheLineCostsOnlyTheDamagedFrames) {
   const std::vector<CanFrame> got = deliver(d.bytes);
   // 8 frames sent, 2 damaged (torn, flipped bit): exactly the other 6 arrive, in order.
   ASSERT_EQ(got.size(), d.survivors.size());
-  for (std::size_t i = 0; i < got.size(); ++i) expect_same(got[i], d.survivors[i]);
+  for (std::size_t i = 0; i < got.size(); ++i) expect_identical(got[i], d.survivors[i]);
   expect_damage_counters(*bus_, d);
   EXPECT_EQ(bus_->state(), BusState::kOk);
 }
@@ -297,7 +297,7 @@ TEST_F(SerialBusPty, ByteAtATimeOnTheLineGivesTheSameResult) {
   CanFrame f;
   EXPECT_EQ(bus_->read(f), IoStatus::kWouldBlock);
   ASSERT_EQ(got.size(), d.survivors.size());
-  for (std::size_t i = 0; i < got.size(); ++i) expect_same(got[i], d.survivors[i]);
+  for (std::size_t i = 0; i < got.size(); ++i) expect_identical(got[i], d.survivors[i]);
   expect_damage_counters(*bus_, d);
 }
 
@@ -317,7 +317,7 @@ TEST_F(SerialBusPty, PartialFrameGivesWouldBlockAndIsKeptForTheNextRead) {
   EXPECT_EQ(bus_->counters().errors, 0u);
   put(std::span<const std::uint8_t>(e).subspan(half));
   ASSERT_EQ(read_frame(f), IoStatus::kOk);
-  expect_same(f, sent);
+  expect_identical(f, sent);
   EXPECT_EQ(bus_->serial_counters().frames, 1u);
 }
 
@@ -340,9 +340,9 @@ TEST_F(SerialBusPty, FiltersDropFramesInUserSpaceAndCountThem) {
   }
   const std::vector<CanFrame> got = deliver(bytes);
   ASSERT_EQ(got.size(), 3u);
-  expect_same(got[0], line[0]);
-  expect_same(got[1], line[3]);
-  expect_same(got[2], line[4]);
+  expect_identical(got[0], line[0]);
+  expect_identical(got[1], line[3]);
+  expect_identical(got[2], line[4]);
   EXPECT_EQ(bus_->serial_counters().filtered, 3u);
   EXPECT_EQ(bus_->serial_counters().frames, 6u);
   EXPECT_EQ(bus_->counters().frames_rx, 3u);
@@ -390,7 +390,7 @@ TEST_F(SerialBusPty, FullDriverQueueKeepsPartialWritesPendingAndRefusesWhatDoesN
   EXPECT_EQ(dec.counters().rejected(), 0u);
   EXPECT_EQ(dec.buffered(), 0u);
   ASSERT_EQ(got.size(), accepted.size());
-  for (std::size_t i = 0; i < got.size(); ++i) expect_same(got[i], accepted[i]);
+  for (std::size_t i = 0; i < got.size(); ++i) expect_identical(got[i], accepted[i]);
   // And the port writes again.
   EXPECT_EQ(bus_->write(make(0x42, 0, {})), IoStatus::kOk);
 }

@@ -43,7 +43,7 @@ Bytes line_from_payload(Bytes payload) {
   return out;
 }
 
-using numen::test::expect_same;
+using numen::test::expect_identical;
 
 // Feeds `bytes` in pieces of `step` bytes (0: all at once) and collects the frames.
 std::vector<CanFrame> feed_all(SerialFrameDecoder& dec, const Bytes& bytes, std::size_t step) {
@@ -88,7 +88,7 @@ TEST(SerialFrame, WorkedExampleBytesOnTheLine) {
   SerialFrameDecoder dec;
   const std::vector<CanFrame> got = feed_all(dec, expected, 0);
   ASSERT_EQ(got.size(), 1u);
-  expect_same(got[0], f);
+  expect_identical(got[0], f);
   EXPECT_EQ(got[0].timestamp_ns, 0);
 }
 
@@ -131,7 +131,7 @@ TEST(SerialFrame, EveryFrameKindRoundTrips) {
   }
   const std::vector<CanFrame> got = feed_all(dec, line, 0);
   ASSERT_EQ(got.size(), sent.size());
-  for (std::size_t i = 0; i < sent.size(); ++i) expect_same(got[i], sent[i]);
+  for (std::size_t i = 0; i < sent.size(); ++i) expect_identical(got[i], sent[i]);
   EXPECT_EQ(got[3].len, 8);  // the remote request's requested length survives
   expect_counters(dec.counters(), SerialCounters{.frames = sent.size()});
 }
@@ -258,7 +258,7 @@ TEST(SerialFrameDecoder, ResynchronisesAfterEachKindOfDamageAndCountsItsCause) {
   SerialFrameDecoder dec;
   const std::vector<CanFrame> got = feed_all(dec, s.line, 0);
   ASSERT_EQ(got.size(), s.survivors.size());
-  for (std::size_t i = 0; i < got.size(); ++i) expect_same(got[i], s.survivors[i]);
+  for (std::size_t i = 0; i < got.size(); ++i) expect_identical(got[i], s.survivors[i]);
   expect_counters(dec.counters(), s.counters);
   EXPECT_EQ(dec.counters().rejected(), 6u);
   EXPECT_FALSE(dec.hunting());
@@ -271,7 +271,7 @@ TEST(SerialFrameDecoder, ByteAtATimeGivesTheSameResultAsOneChunk) {
     SerialFrameDecoder dec;
     const std::vector<CanFrame> got = feed_all(dec, s.line, step);
     ASSERT_EQ(got.size(), s.survivors.size()) << "step " << step;
-    for (std::size_t i = 0; i < got.size(); ++i) expect_same(got[i], s.survivors[i]);
+    for (std::size_t i = 0; i < got.size(); ++i) expect_identical(got[i], s.survivors[i]);
     expect_counters(dec.counters(), s.counters);
   }
 }
@@ -352,9 +352,9 @@ TEST(SerialFrameDecoder, NoBitFlipYieldsAWrongFrame) {
       const bool delimiter_hit = bit / 8 == v.size() - 1;
       ASSERT_GE(got.size(), delimiter_hit ? 2u : 3u) << "bit " << bit;
       ASSERT_LE(got.size(), 3u) << "bit " << bit;
-      expect_same(got.front(), c);
-      expect_same(got.back(), a);
-      if (got.size() == 3) expect_same(got[1], c);
+      expect_identical(got.front(), c);
+      expect_identical(got.back(), a);
+      if (got.size() == 3) expect_identical(got[1], c);
       EXPECT_GE(dec.counters().rejected(), 1u) << "bit " << bit;
     }
   }
