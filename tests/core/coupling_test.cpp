@@ -28,7 +28,6 @@ using core::Vec3;
 namespace {
 
 using numen::test::kPi;
-
 using numen::test::rot;
 
 core::Model coupled_model(core::Integrator integrator, core::CouplingMode mode, double dt,

@@ -35,7 +35,6 @@ using numen::core::Vec3;
 using numen::core::vertex_areas;
 
 using numen::test::kPi;
-
 using numen::test::at;
 
 double area(const TriangleMesh& m) {

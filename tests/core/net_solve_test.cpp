@@ -41,6 +41,7 @@
 #include "detail/joint_system.hpp"
 #include "detail/net_solve.hpp"
 #include "net_states.hpp"
+#include "rotation.hpp"
 
 namespace core = numen::core;
 using core::Mat3;
@@ -52,10 +53,7 @@ using Eigen::VectorXd;
 namespace {
 
 using numen::test::at;
-
-Quat rot(double angle, const Vec3& axis) {
-  return Quat(Eigen::AngleAxisd(angle, axis.normalized()));
-}
+using numen::test::rot;
 
 enum class Variant { kFree, kJointed, kImposed, kThreeNets };
 
@@ -149,8 +147,6 @@ core::Model scene(Variant v) {
   EXPECT_EQ(core::finalize_model(m), "");
   return m;
 }
-
-/// Moves the nodes off their anchors (some springs stretched, some compressed).
 
 /// Two node contacts on a plane (the two lowest nodes) and one with body 1
 /// (the node nearest to it), written by hand in place of detect_node_contacts.

@@ -28,7 +28,6 @@ using numen::test::numeric_link_jacobian;
 using numen::test::uniform;
 using PK = PhantomKinematics;
 using numen::test::kPi;
-
 using numen::test::rot;
 
 // A base that is neither at the origin nor axis aligned, and unequal links.

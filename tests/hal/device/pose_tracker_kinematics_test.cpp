@@ -21,7 +21,6 @@ using numen::core::Vec3;
 using numen::core::Wrench;
 using PK = PoseTrackerKinematics;
 using numen::test::kPi;
-
 using numen::test::rot;
 
 PoseTrackerGeometry some_base() {

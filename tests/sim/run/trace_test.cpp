@@ -32,7 +32,6 @@ using numen::sim::Trace;
 using numen::sim::TraceRecord;
 
 using numen::test::TempDir;
-
 using numen::test::read_lines;
 using numen::test::split_csv;
 

@@ -44,7 +44,6 @@ using numen::sim::Scene;
 
 
 using numen::test::angle_between;
-
 using numen::test::TempDir;
 
 // The articulated trocar instrument of default.toml, on one second of the

@@ -51,7 +51,6 @@ std::string construction_path() { return std::string(NUMEN_SOURCE_DIR) + "/sim/s
 
 /// Angle (rad) between two rotations, q and -q being the same.
 using numen::test::angle_between;
-
 using numen::test::TempDir;
 
 // A small valid scene (pose tracker, scripted path; tests/support/scene_text.hpp). Every error
