@@ -15,6 +15,7 @@
 #include "numen/core/mesh.hpp"
 #include "numen/core/model.hpp"
 #include "net_states.hpp"
+#include "rotation.hpp"
 
 namespace numen::test::deformable_nets {
 
@@ -24,7 +25,7 @@ using core::Vec3;
 
 using numen::test::at;
 
-inline Quat rot(double angle, const Vec3& axis) { return Quat(Eigen::AngleAxisd(angle, axis.normalized())); }
+using numen::test::rot;
 
 inline const char* name(core::Integrator i) {
   return i == core::Integrator::kSymplecticEuler ? "symplectic"
