@@ -18,6 +18,7 @@
 #include "numen/sim/input/input_error.hpp"
 #include "numen/sim/scene/scene.hpp"
 #include "numen/sim/study/study_common.hpp"
+#include "numen/sim/study/study_fields.hpp"
 #include "study_accuracy_cases.hpp"
 
 namespace numen::sim {
@@ -386,15 +387,21 @@ void write_accuracy_csv(const AccuracyResult& r, const std::string& dir) {
   };
   {
     std::ofstream f = open("accuracy.csv");
-    f << "case,integrator,dt_s,steps,horizon_s,position_error_max_mm,position_error_rms_mm,"
-         "orientation_error_max_mrad,orientation_error_rms_mrad,cpu_s_per_sim_s,diverged,"
-         "nonfinite_steps,reference\n";
-    for (const AccuracyRow& x : r.rows)
-      f << x.case_name << ',' << x.integrator << ',' << x.dt_s << ',' << x.steps << ','
-        << x.horizon_s << ',' << x.position_error_max_mm << ',' << x.position_error_rms_mm << ','
-        << x.orientation_error_max_mrad << ',' << x.orientation_error_rms_mrad << ','
-        << x.cpu_s_per_sim_s << ',' << (x.diverged ? 1 : 0) << ',' << x.nonfinite_steps << ','
-        << x.reference << '\n';
+    // The columns are the row's field list (study_fields.hpp); a bool is written 1/0.
+    bool first = true;
+    for (const std::string& name : accuracy_row_names()) {
+      f << (first ? "" : ",") << name;
+      first = false;
+    }
+    f << '\n';
+    for (const AccuracyRow& x : r.rows) {
+      first = true;
+      accuracy_row_fields(x, [&](const char*, const auto& v) {
+        f << (first ? "" : ",") << v;
+        first = false;
+      });
+      f << '\n';
+    }
     if (!f) throw std::runtime_error("cannot write accuracy.csv in " + dir);
   }
   {

@@ -44,8 +44,6 @@ using numen::sim::InputError;
 using numen::sim::load_scene;
 using numen::sim::Scene;
 using numen::test::expect_located;
-
-
 using numen::test::TempDir;
 
 // A small valid scene (pose tracker, scripted path; tests/support/scene_text.hpp). Every error

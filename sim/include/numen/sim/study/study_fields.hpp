@@ -3,8 +3,8 @@
 /// The one field list of each study record: `fields(record, visit)` calls
 /// visit(name, member) for each member, in column order. The stability row's list writes
 /// stability_<family>.csv, the shard files' rows and numen.study_stability's dicts; the
-/// accuracy row's list writes the shard files' rows and numen.study_accuracy's dicts (and
-/// names the columns of accuracy.csv, StudyFields.*). A member has one name in all of them.
+/// accuracy row's list writes accuracy.csv, the shard files' rows and numen.study_accuracy's
+/// dicts (StudyFields.*). A member has one name in all of them.
 /// Members are std::string, double, std::int64_t, int, bool or std::vector<double>.
 
 #include <string>
