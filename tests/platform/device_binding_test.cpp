@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "free_bodies.hpp"
@@ -30,10 +31,24 @@ TEST(DeviceBinding, ExplicitlyBoundBodiesMarksTheBodiesNamedByALink) {
   EXPECT_EQ(explicitly_bound_bodies(binding, 3), (std::vector<std::uint8_t>{0, 0, 1}));
 }
 
+// The message of the std::invalid_argument `f` throws ("" if it throws none).
+template <class F>
+std::string refusal(F&& f) {
+  try {
+    f();
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "";
+}
+
 TEST(DeviceBinding, ABodyBoundTwiceOrOutOfRangeIsRefused) {
-  EXPECT_THROW(explicitly_bound_bodies(DeviceBinding{{link_to(0, 1), link_to(1, 1)}, {}}, 2),
-               std::invalid_argument);
-  EXPECT_THROW(explicitly_bound_bodies(DeviceBinding{{link_to(0, 2)}, {}}, 2), std::invalid_argument);
+  EXPECT_EQ(refusal([] {
+              explicitly_bound_bodies(DeviceBinding{{link_to(0, 1), link_to(1, 1)}, {}}, 2);
+            }),
+            "device binding: body 1 is bound to two links");
+  EXPECT_EQ(refusal([] { explicitly_bound_bodies(DeviceBinding{{link_to(0, 2)}, {}}, 2); }),
+            "device binding: body 2 out of range (2 bodies)");
 }
 
 TEST(DeviceBinding, TheAttachedBindingServesOnlyAHeldBodyWithoutALinkOfItsOwn) {
