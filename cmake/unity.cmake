@@ -2,8 +2,9 @@
 # sources NUMEN_UNITY_BATCH at a time, one translation unit per batch, so that each batch
 # parses the heavy header-only libraries it shares (GoogleTest, Eigen, CLI11, toml++,
 # nlohmann/json, pybind11) once instead of once per file. Applied to the test programs and
-# benchmarks, the `numen` command, numen::sim and the Python module; core, hal and platform
-# compile file by file (their files are light to parse, and heavy to optimise).
+# benchmarks, the `numen` command, numen::sim, the Python module and the MuJoCo peer's library;
+# core, hal and platform compile file by file (their files are light to parse, and heavy to
+# optimise).
 #
 # File-local names (anonymous namespaces, static functions) of the files of one batch share a
 # translation unit: two of one name are a redefinition error. Give one a distinct name, or
