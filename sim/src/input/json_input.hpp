@@ -22,8 +22,8 @@ struct SyntaxError {
   std::string reason;    ///< nlohmann's description ("syntax error while parsing value - …").
 };
 
-/// Parses `text` as one JSON value. On a syntax error returns a discarded value
-/// (is_discarded()) and fills `error`. Never throws a json exception.
+/// Parses `text` as one JSON value. On a syntax error, or a number beyond a double's range,
+/// returns a discarded value (is_discarded()) and fills `error`. Never throws a json exception.
 template <class Json>
 Json parse(std::string_view text, SyntaxError& error) {
   try {
@@ -34,6 +34,22 @@ Json parse(std::string_view text, SyntaxError& error) {
     const std::size_t at = what.find("parse error");
     const std::size_t colon = at == std::string::npos ? std::string::npos : what.find(": ", at);
     error.reason = colon == std::string::npos ? what : what.substr(colon + 2);
+    return Json(nlohmann::json::value_t::discarded);
+  } catch (const nlohmann::json::out_of_range& e) {
+    // A number beyond a double's range ("1e999": out_of_range.406, "number overflow parsing
+    // '1e999'") carries no byte offset; the number it quotes is found in the text (the first
+    // occurrence is the one that overflowed: the parser stops there).
+    const std::string what = e.what();
+    const std::size_t close = what.rfind('\'');
+    const std::size_t open = close == std::string::npos || close == 0
+                                 ? std::string::npos
+                                 : what.rfind('\'', close - 1);
+    const std::string number =
+        open == std::string::npos ? std::string() : what.substr(open + 1, close - open - 1);
+    const std::size_t at = number.empty() ? std::string::npos : text.find(number);
+    error.byte = at == std::string::npos ? 0 : at;
+    const std::size_t bracket = what.find("] ");
+    error.reason = bracket == std::string::npos ? what : what.substr(bracket + 2);
     return Json(nlohmann::json::value_t::discarded);
   }
 }

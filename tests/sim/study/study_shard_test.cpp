@@ -258,5 +258,17 @@ TEST(StudyShard, MergeLocatesASyntaxErrorByLineAndColumn) {
       << e.what();
 }
 
+// A number beyond a double's range is refused where it stands (nlohmann reports it as an
+// out_of_range without a place; it must not escape as an exception).
+TEST(StudyShard, MergeLocatesANumberBeyondADoubleAtItsPlace) {
+  TempDir dir;
+  dir.write("stability-shard-0-of-1.json", "{\n  \"wall_s\": 6e6666,\n}\n");
+  const InputError e = error_of([&] { (void)merge_stability_shards(dir.path().string()); });
+  EXPECT_EQ(e.file(), (dir / "stability-shard-0-of-1.json").string());
+  EXPECT_EQ(e.line(), 2) << e.what();
+  EXPECT_EQ(e.column(), 13) << e.what();
+  EXPECT_NE(e.message().find("number overflow parsing '6e6666'"), std::string::npos) << e.what();
+}
+
 }  // namespace
 }  // namespace numen::sim
