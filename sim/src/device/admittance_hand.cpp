@@ -6,7 +6,6 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "numen/core/rigid_body.hpp"
 #include "numen/hal/device/axis.hpp"
 #include "numen/hal/device/kinematics_factory.hpp"
 
@@ -17,14 +16,15 @@ bool non_negative(double v) noexcept { return std::isfinite(v) && v >= 0.0; }
 
 }  // namespace
 
-AdmittanceHand::AdmittanceHand(const hal::DeviceConfig& device,
-                               const AdmittanceHandSettings& settings)
-    : device_(device), settings_(settings), kinematics_(hal::make_kinematics(device_)) {
-  if (!non_negative(settings.k_hand) || !non_negative(settings.c_hand) ||
-      !non_negative(settings.k_hand_rot) || !non_negative(settings.c_hand_rot) ||
-      !non_negative(settings.lag_s))
-    throw std::invalid_argument(device_.name +
-                                ": hand gains and drive lag must be finite and >= 0");
+AdmittanceHand::AdmittanceHand(const hal::DeviceConfig& device, const HandSettings& hand,
+                               double lag_s)
+    : device_(device),
+      hand_settings_(hand),
+      lag_s_(lag_s),
+      kinematics_(hal::make_kinematics(device_)) {
+  validate(hand, device_.name);
+  if (!non_negative(lag_s))
+    throw std::invalid_argument(device_.name + ": drive lag must be finite and >= 0");
   const int n = kinematics_->num_axes();
   state_.q = hal::AxisVector::Zero(n);
   state_.qdot = hal::AxisVector::Zero(n);
@@ -49,7 +49,7 @@ const hal::DeviceMotionState& AdmittanceHand::at_sync(std::int64_t t_ns,
   had_sync_ = true;
   hal::AxisVector& q = state_.q;
   hal::AxisVector& qdot = state_.qdot;
-  const double alpha = settings_.lag_s > 0.0 ? 1.0 - std::exp(-dt / settings_.lag_s) : 1.0;
+  const double alpha = lag_s_ > 0.0 ? 1.0 - std::exp(-dt / lag_s_) : 1.0;
   for (int i = 0; i < q.size(); ++i) {
     const auto k = static_cast<std::size_t>(i);
     if (!c.enabled[k] || dt <= 0.0 || i >= c.position_target.size()) {
@@ -65,14 +65,10 @@ const hal::DeviceMotionState& AdmittanceHand::at_sync(std::int64_t t_ns,
   const core::Pose dev = kinematics_->forward(q);
   const hal::Jacobian j = kinematics_->jacobian(q);
   const core::Vec6 twist = j * qdot;
-  const core::Vec3 v_dev = twist.head<3>();
-  const core::Vec3 w_dev = twist.tail<3>();
-  core::Wrench& w = state_.handle_wrench;
-  w.force = settings_.k_hand * (hand_pose_.position - dev.position) +
-            settings_.c_hand * (hand_twist_.linear - v_dev);
-  w.torque =
-      settings_.k_hand_rot * core::quat_log(hand_pose_.orientation * dev.orientation.conjugate()) +
-      settings_.c_hand_rot * (hand_twist_.angular - w_dev);
+  core::Twist handle;
+  handle.linear = twist.head<3>();
+  handle.angular = twist.tail<3>();
+  state_.handle_wrench = hand_wrench(hand_settings_, hand_pose_, hand_twist_, dev, handle);
   return state_;
 }
 

@@ -37,7 +37,8 @@ DeviceSummary run_device(const Scene& scene, const DeviceOptions& options) {
                                 "': expected can:IFACE or serial:PATH[@BAUD]");
   if (options.tick_ns <= 0) throw std::invalid_argument("DeviceOptions::tick_ns must be > 0");
   const std::unique_ptr<hal::Bus> port = open_real_bus(spec, device_filters(scene.device));
-  SimulatedInstrument instrument(scene.device, scene.trajectory);
+  SimulatedInstrument instrument(scene.device, scene.trajectory,
+                                 scene.plant ? &*scene.plant : nullptr, scene.hand);
   instrument.start_at_next_sync();
   hal::DeviceEmulator& emu = instrument.emulator();
   const std::size_t n = scene.device.axes.size();

@@ -10,6 +10,15 @@ SimulatedInstrument::SimulatedInstrument(const hal::DeviceConfig& config,
   emulator_.set_motion(&motion_);
 }
 
+SimulatedInstrument::SimulatedInstrument(const hal::DeviceConfig& config,
+                                         const Trajectory& trajectory,
+                                         const DevicePlantSettings* plant,
+                                         const HandSettings& hand, std::int64_t start_ns)
+    : motion_(config, trajectory, start_ns), emulator_(config) {
+  if (plant) plant_ = std::make_unique<PlantMotion>(config, *plant, hand, trajectory, start_ns);
+  emulator_.set_motion(plant_ ? static_cast<hal::DeviceMotion*>(plant_.get()) : &motion_);
+}
+
 hal::AxisVector SimulatedInstrument::axes_at(std::int64_t t_ns) const noexcept {
   return motion_.axes_at(t_ns);
 }

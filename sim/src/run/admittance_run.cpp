@@ -68,7 +68,7 @@ AdmittanceRunner::AdmittanceRunner(const Scene& scene, std::size_t trace_capacit
                                    std::uint32_t overrun_limit)
     : scene_(&scene),
       bus_(scene.bus),
-      hand_motion_(scene.device, admittance_of(scene).hand),
+      hand_motion_(scene.device, scene.hand, admittance_of(scene).drive_lag_s),
       emulator_(scene.device, admittance_of(scene).config),
       device_(scene.device, admittance_of(scene).config, bus_.controller(), initial_axes(scene),
               device_settings(overrun_limit)),
@@ -91,7 +91,8 @@ AdmittanceRunner::AdmittanceRunner(const Scene& scene, std::size_t trace_capacit
         this);
   describe_scene(scene, acc_);
   acc_.admittance.enabled = true;
-  acc_.admittance.k_hand = scene.admittance->hand.k_hand;
+  acc_.device_loop = "admittance";
+  acc_.admittance.k_hand = scene.hand.stiffness;
   acc_.managed = false;
   acc_.startup = "admittance: SYNC, force TPDOs, csp RPDOs (no NMT start-up)";
   view_axis_values_.assign(scene.device.axes.size(), 0.0);

@@ -122,7 +122,9 @@ SceneRunner::SceneRunner(const Scene& scene, std::size_t trace_capacity, const B
             : real_bus_ ? real_bus_.get()
             : log_bus_  ? static_cast<hal::Bus*>(log_bus_.get())
                         : static_cast<hal::Bus*>(&bus_.controller())),
-      instrument_(scene.device, scene.trajectory),
+      // The emulated device runs on the simulated bus only (a log or a real bus brings its own).
+      instrument_(scene.device, scene.trajectory,
+                  scene.plant && !real_bus_ && !log_bus_ ? &*scene.plant : nullptr, scene.hand),
       device_(scene.device),
       data_(core::make_data(scene.model)),
       ghost_(core::make_data(scene.model)),
@@ -135,6 +137,7 @@ SceneRunner::SceneRunner(const Scene& scene, std::size_t trace_capacity, const B
           std::max<std::int64_t>(1, std::llround(kStartupSettle / scene.model.dt))),
       divergence_(scene.model, data_) {
   if (multirate_.enabled()) loop_.set_step_function(&SceneRunner::step_multirate, this);
+  explicit_bound_ = platform::explicitly_bound_bodies(scene.binding, scene.model.num_bodies());
   trace_.reserve(trace_capacity);
   std::vector<std::string> axis_names;
   for (const hal::AxisConfig& a : scene.device.axes) axis_names.push_back(a.name);
@@ -168,12 +171,18 @@ void SceneRunner::period(std::int64_t deadline_mono_ns, std::int64_t woke_mono_n
   // ---- measurements (outside the timed step) ----
   multirate_.view(data_);  // a multirate run: both loops as one single-rate Data
   count_period(report);
+  if (const PlantMotion* plant = instrument_.plant()) hand_axes_ = plant->intent_axes_at(t);
   const PeriodContacts contacts = measure_contacts();
   track_free_space(contacts);
   track_startup(contacts);
   accumulate_step_figures(report, contacts);
   record(report, contacts);
-  if (divergence_.observe(scene_->model, data_, k_ - 1, static_cast<double>(t) * 1e-9))
+  bool diverged = divergence_.observe(scene_->model, data_, k_ - 1, static_cast<double>(t) * 1e-9);
+  if (const PlantMotion* plant = instrument_.plant(); plant && plant->figures().diverged)
+    diverged = divergence_.latch_external("device plant", plant->figures().diverged_axis,
+                                          plant->figures().diverged_time_s, k_ - 1,
+                                          static_cast<double>(t) * 1e-9) || diverged;
+  if (diverged)
     loop_.shutdown();  // zero torque from the next write on; the run stops after this period
   if (view_)
     view_->publish(data_, report,

@@ -104,6 +104,26 @@ SceneRunner::PeriodContacts SceneRunner::measure_contacts() noexcept {
     c.target_pen = std::max(c.target_pen, deepest_contact_of(ghost_, b, &m));
     c.target_contacts += m;
   }
+  c.hand_pen = c.target_pen;  // replay: the encoders read the hand
+  if (instrument_.plant() != nullptr) {
+    // Closed loop: the tool's bodies where the hand means to be (each bound body at its link's
+    // pose at the intent's axis values, this period's SYNC), the rest as above.
+    const hal::Kinematics& kin = instrument_.kinematics();
+    for (const platform::LinkBinding& lb : scene_->binding.links) {
+      const int b = platform::bound_body(lb, data_, explicit_bound_);
+      if (b < 0) continue;
+      core::Pose pose;
+      core::Twist twist;
+      platform::body_target_of(lb, kin.link_pose(lb.link, hand_axes_), core::Twist{}, pose, twist);
+      ghost_.bodies[static_cast<std::size_t>(b)].position = pose.position;
+      ghost_.bodies[static_cast<std::size_t>(b)].orientation = pose.orientation;
+    }
+    core::detect_contacts(model, ghost_);
+    c.hand_pen = 0.0;
+    for (int b = 0; b < model.num_bodies(); ++b)
+      if (model.articulation.body_tree[static_cast<std::size_t>(b)] == tree)
+        c.hand_pen = std::max(c.hand_pen, deepest_contact_of(ghost_, b));
+  }
   if (model.num_nets() > 0) {
     // The tool's nets: as deformed (god-object), in their rest shape on the
     // target poses (the hand).
@@ -175,6 +195,8 @@ void SceneRunner::accumulate_step_figures(const platform::PeriodReport& report,
   s.joint_angle_drift_max_mrad =
       std::max(s.joint_angle_drift_max_mrad, data_.max_joint_angle_drift * 1e3);
   s.target_penetration_max_mm = std::max(s.target_penetration_max_mm, c.target_pen * 1e3);
+  s.device_penetration_max_mm = s.target_penetration_max_mm;
+  s.hand_penetration_max_mm = std::max(s.hand_penetration_max_mm, c.hand_pen * 1e3);
   s.any_penetration_max_mm = std::max(s.any_penetration_max_mm, data_.max_penetration * 1e3);
   // What the drives were sent (after the gate and clamp of hal::ImpedanceDevice::write()).
   s.feedback_force_max_n = std::max(s.feedback_force_max_n, report.feedback.force.norm());

@@ -8,6 +8,7 @@
 #include <iomanip>
 #include <sstream>
 #include <string>
+#include <string_view>
 
 #include "numen/hal/canopen/emcy.hpp"
 #include "numen/hal/canopen/heartbeat.hpp"
@@ -38,7 +39,9 @@ void summarize_divergence(const DivergenceMonitor& monitor, const core::Model& m
   if (v.cause == nullptr) return;
   d.latched = true;
   d.cause = v.cause;
-  if (v.net >= 0)
+  if (std::string_view(v.cause) == "device plant")
+    d.subject = "device axis " + std::to_string(v.body);
+  else if (v.net >= 0)
     d.subject = "net \"" + model.nets[static_cast<std::size_t>(v.net)].name + "\"";
   else if (v.body >= 0)
     d.subject = "body \"" + model.bodies[static_cast<std::size_t>(v.body)].name + "\"";
@@ -76,6 +79,20 @@ RunSummary SceneRunner::summary() const {
       k_ > 0 ? static_cast<double>(solver_iterations_sum_) / static_cast<double>(k_) : 0.0;
   s.tracking_error_free_rms_mm = s.free_steps ? std::sqrt(free_sq_ / static_cast<double>(s.free_steps)) * 1e3 : 0.0;
   s.soft_start_s = scene_->device.soft_start_s;
+  if (const PlantMotion* plant = instrument_.plant()) {
+    const PlantFigures& f = plant->figures();
+    s.device_loop = "closed";
+    s.closed_loop = true;
+    s.handle_force_max_n = f.handle_force_max_n;
+    s.device_port_energy_j = f.port_energy_j;
+    s.device_port_energy_min_j = f.port_energy_min_j;
+    s.device_port_energy_min_time_s = f.port_energy_min_time_s;
+    s.hand_separation_max_mm = f.hand_separation_max_mm;
+    s.limit_cycle_detected = f.limit_cycle.detected();
+    s.limit_cycle_amplitude_mm = f.limit_cycle.amplitude_m() * 1e3;
+    s.limit_cycle_hz = f.limit_cycle.frequency_hz();
+    s.limit_cycle_time_s = f.limit_cycle.time_s();
+  }
   s.soft_start_ramps = static_cast<std::int64_t>(loop_.impedance().torque_counters().soft_starts);
   // A run that ends inside the start-up: the periods after its last minimum are the god-object's.
   if (in_startup_)

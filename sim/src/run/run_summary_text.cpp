@@ -27,18 +27,27 @@ constexpr RunSummaryCondition unset(std::string_view f) noexcept { return {f, T:
 // "trace records N, dropped ", "loop overruns: ", "end-to-end (SYNC", "re-arm: ",
 // "nan detected: no", "exit status".
 constexpr RunSummarySegment kLayout[] = {
-    {"scene {scene}: {coupling} coupling, {integrator}, dt {dt_s:ms} ms\n"},
+    {"scene {scene}: {coupling} coupling, {integrator}, dt {dt_s:ms} ms, device {device_loop}\n"},
     {"  {trocar_note}\n", set("trocar_note")},
     {"  {steps} steps, {sim_time_s} s simulated in {wall_time_s} s wall ({real_time_factor}x "
      "real time)\n"},
     {"  step time us: median {step_time_us.median}, p99 {step_time_us.p99}, p99.9 "
      "{step_time_us.p999}, max {step_time_us.max}, mean {step_time_us.mean}\n"},
-    {"  penetration max: target (the hand) {target_penetration_max_mm} mm, god-object "
+    {"  penetration max: target (where the encoders put the tool) {target_penetration_max_mm} mm, god-object "
      "{tool_penetration_max_mm} mm"},
     {" after a start-up of {startup_steps} steps from {startup_tool_penetration_mm} mm (the tool "
      "started inside)",
      set("startup_steps")},
     {"; any body {any_penetration_max_mm} mm\n"},
+    {"  closed loop: hand {hand_penetration_max_mm} mm deep, handle "
+     "{device_penetration_max_mm} mm; force on the hand max {handle_force_max_n} N, hand–handle "
+     "separation max {hand_separation_max_mm} mm; port energy {device_port_energy_j} J, min "
+     "{device_port_energy_min_j} J at {device_port_energy_min_time_s} s\n",
+     set("closed_loop")},
+    {"  device: limit cycle at {limit_cycle_time_s} s: {limit_cycle_amplitude_mm} mm at "
+     "{limit_cycle_hz} Hz\n",
+     set("limit_cycle_detected")},
+
     {"  tracking error in free space (tool and hand out of contact): rms "
      "{tracking_error_free_rms_mm} mm, max {tracking_error_free_max_mm} mm over {free_steps} "
      "steps\n",

@@ -391,6 +391,7 @@ Scene load_scene(const std::string& path, const SceneOverrides& overrides) {
   scene.bus.latency_ns = static_cast<std::int64_t>(std::llround(latency * 1e9));
   if (std::llround(scene.compute_phase_s * 1e9) < 2 * scene.bus.latency_ns)  // after rounding to ns
     scene.compute_phase_s = 2.0 * static_cast<double>(scene.bus.latency_ns) * 1e-9;
+  if (scene.plant) scene.plant->torque_phase_s = scene.compute_phase_s;
   if (!(scene.compute_phase_s < scene.model.dt))
     root.fail("dt", "the period " + format_input_number(scene.model.dt) +
                         " s is not longer than the compute phase " +

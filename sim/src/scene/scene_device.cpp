@@ -257,7 +257,7 @@ void parse_admittance(const TomlTable& dev, Scene& scene, const hal::DeviceConfi
       a.config.rpdo_cob_ids[i] = static_cast<std::uint32_t>(ids[i]);
     }
   }
-  a.hand.lag_s = ad->number_in("drive_lag", 0.0, 1.0, a.hand.lag_s);
+  a.drive_lag_s = ad->number_in("drive_lag", 0.0, 1.0, a.drive_lag_s);
   if (auto fs = ad->table("force_sensor")) {
     fs->allow_only({"node_id", "force_cob_id", "torque_cob_id", "force_scale", "torque_scale",
                     "max_force", "max_torque", "max_age", "position", "orientation"});
@@ -278,11 +278,16 @@ void parse_admittance(const TomlTable& dev, Scene& scene, const hal::DeviceConfi
     a.config.sensor.max_age_s = 3.0 * cfg.control_period_s;
   }
   if (auto h = ad->table("hand")) {
+    // The hand's former place (before [device.hand] served both kinds of device): still read.
+    if (dev.has("hand"))
+      h->fail_at(nullptr, h->path(), "give the hand once, in [device.hand] (this table is its former place)");
     h->allow_only({"stiffness", "damping", "rotational_stiffness", "rotational_damping"});
-    a.hand.k_hand = h->number_in("stiffness", 0.0, kInf, a.hand.k_hand);
-    a.hand.c_hand = h->number_in("damping", 0.0, kInf, a.hand.c_hand);
-    a.hand.k_hand_rot = h->number_in("rotational_stiffness", 0.0, kInf, a.hand.k_hand_rot);
-    a.hand.c_hand_rot = h->number_in("rotational_damping", 0.0, kInf, a.hand.c_hand_rot);
+    scene.hand.stiffness = h->number_in("stiffness", 0.0, kInf, scene.hand.stiffness);
+    scene.hand.damping = h->number_in("damping", 0.0, kInf, scene.hand.damping);
+    scene.hand.rotational_stiffness =
+        h->number_in("rotational_stiffness", 0.0, kInf, scene.hand.rotational_stiffness);
+    scene.hand.rotational_damping =
+        h->number_in("rotational_damping", 0.0, kInf, scene.hand.rotational_damping);
   }
   try {
     hal::validate(cfg, a.config);
@@ -290,6 +295,77 @@ void parse_admittance(const TomlTable& dev, Scene& scene, const hal::DeviceConfi
     ad->fail_at(nullptr, ad->path(), e.what());
   }
   scene.admittance = std::move(a);
+}
+
+/// `[device.hand]` (docs/scenes.md): the simulated hand of both kinds of device (hand.hpp).
+void parse_hand(const TomlTable& dev, HandSettings& hand) {
+  auto h = dev.table("hand");
+  if (!h) return;
+  h->allow_only({"mass", "stiffness", "damping", "rotational_inertia", "rotational_stiffness",
+                 "rotational_damping"});
+  hand.mass = h->number_in("mass", 0.0, kInf, hand.mass);
+  hand.stiffness = h->number_in("stiffness", 0.0, kInf, hand.stiffness);
+  hand.damping = h->number_in("damping", 0.0, kInf, hand.damping);
+  hand.rotational_inertia = h->number_in("rotational_inertia", 0.0, kInf, hand.rotational_inertia);
+  hand.rotational_stiffness =
+      h->number_in("rotational_stiffness", 0.0, kInf, hand.rotational_stiffness);
+  hand.rotational_damping = h->number_in("rotational_damping", 0.0, kInf, hand.rotational_damping);
+}
+
+/// A list of one entry per axis, or one number for every axis, each in [lo, hi].
+std::vector<double> per_axis(const TomlTable& t, std::string_view key, int n, double lo, double hi,
+                             double fallback) {
+  if (!t.has(key)) return std::vector<double>(static_cast<std::size_t>(n), fallback);
+  if (t.node(key)->is_array()) {
+    const std::vector<double> v = t.numbers(key, n);
+    for (double x : v)
+      if (!(x >= lo && x <= hi))
+        t.fail(key, "entries must be in [" + format_input_number(lo) + ", " +
+                        format_input_number(hi) + "]");
+    return v;
+  }
+  return std::vector<double>(static_cast<std::size_t>(n), t.number_in(key, lo, hi, std::nullopt));
+}
+
+/// `[device.plant]` (docs/scenes.md, docs/device_plant.md): the impedance device's mechanics;
+/// the emulated device then moves under the drives' torques (closed loop).
+void parse_plant(const TomlTable& dev, Scene& scene, const hal::DeviceConfig& cfg) {
+  auto p = dev.table("plant");
+  if (!p) return;
+  if (scene.model.coupling_mode == core::CouplingMode::kAdmittance)
+    p->fail_at(nullptr, p->path(),
+               "[device.plant] is an impedance device's mechanics; an admittance device's drives "
+               "are position controlled ([device.admittance] drive_lag)");
+  p->allow_only({"inertia", "damping", "coulomb", "current_lag", "delay_periods", "substeps"});
+  const int n = static_cast<int>(cfg.axes.size());
+  const std::vector<double> inertia = p->numbers("inertia", n);
+  for (double m : inertia)
+    if (!(m >= 0.0 && m < kInf))
+      p->fail("inertia", "entries must be finite and >= 0 (kg or kg·m²; 0: the axis follows the hand)");
+  const std::vector<double> damping = per_axis(*p, "damping", n, 0.0, kInf, 0.0);
+  const std::vector<double> coulomb = per_axis(*p, "coulomb", n, 0.0, kInf, 0.0);
+  const std::vector<double> lag = per_axis(*p, "current_lag", n, 0.0, 1.0, 0.0);
+  const auto delay = p->integer_or("delay_periods", 0);
+  if (delay < 0 || delay > kMaxPlantDelayPeriods)
+    p->fail("delay_periods", "must be in [0, " + std::to_string(kMaxPlantDelayPeriods) + "]");
+  const auto substeps = p->integer_or("substeps", DevicePlantSettings{}.substeps);
+  if (substeps < 1 || substeps > kMaxPlantSubsteps)
+    p->fail("substeps", "must be in [1, " + std::to_string(kMaxPlantSubsteps) + "]");
+  DevicePlantSettings plant;
+  plant.substeps = static_cast<int>(substeps);
+  for (int i = 0; i < n; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    AxisPlantSettings a;
+    a.inertia = inertia[k];
+    a.damping = damping[k];
+    a.coulomb = coulomb[k];
+    a.current_lag_s = lag[k];
+    a.delay_periods = static_cast<int>(delay);
+    // The drive saturates at the axis's max_torque (0 there: no drive limit given).
+    a.max_torque = cfg.axes[k].max_torque > 0.0 ? cfg.axes[k].max_torque : kInf;
+    plant.axes.push_back(a);
+  }
+  scene.plant = std::move(plant);
 }
 
 }  // namespace
@@ -308,7 +384,7 @@ void parse_device(const TomlTable& root, Scene& scene, const TomlTable*& body_ta
   if (!dev) root.fail("device", "missing: a scene needs a [device] (the tracked instrument)");
   dev->allow_only({"kind", "name", "attach", "max_sample_age", "jump_tolerance_counts",
                    "velocity_cutoff", "soft_start", "first_node_id", "tool_offset", "trocar", "tracker", "phantom", "feedback",
-                   "axis", "canopen", "admittance"});
+                   "axis", "canopen", "admittance", "hand", "plant"});
   const std::string kind =
       dev->choice("kind", {"trocar-instrument", "pose-tracker", "phantom"}, std::nullopt);
   const auto node = dev->integer_or("first_node_id", 1);
@@ -401,7 +477,9 @@ void parse_device(const TomlTable& root, Scene& scene, const TomlTable*& body_ta
     dev->fail("axis", e.what());
   }
   parse_feedback(*dev, scene.model.feedback);
+  parse_hand(*dev, scene.hand);
   parse_admittance(*dev, scene, cfg);
+  parse_plant(*dev, scene, cfg);
   scene.model.initial_attached_body = dev->has("attach") ? body_index(*dev, "attach", scene.model) : -1;
   body_table_of_attached = nullptr;
   if (scene.model.initial_attached_body >= 0)

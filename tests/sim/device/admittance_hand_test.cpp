@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <stdexcept>
+#include <string>
 
 #include "alloc_counter.hpp"
 #include "numen/hal/canopen/canopen.hpp"
@@ -33,21 +34,29 @@ hal::AxisVector zeros() { return hal::AxisVector::Zero(6); }
 }  // namespace
 
 TEST(AdmittanceHand, RefusesNegativeGainsAndLag) {
-  sim::AdmittanceHandSettings s;
-  s.lag_s = -1.0;
-  EXPECT_THROW(sim::AdmittanceHand(tracker(), s), std::invalid_argument);
-  s = sim::AdmittanceHandSettings{};
-  s.k_hand = std::nan("");
-  EXPECT_THROW(sim::AdmittanceHand(tracker(), s), std::invalid_argument);
+  const auto message = [](const sim::HandSettings& h, double lag) {
+    try {
+      sim::AdmittanceHand hand(tracker(), h, lag);
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  EXPECT_NE(message(sim::HandSettings{}, -1.0).find("drive lag must be finite and >= 0"),
+            std::string::npos);
+  sim::HandSettings h;
+  h.stiffness = std::nan("");
+  EXPECT_NE(message(h, 0.002).find("hand stiffness must be finite and >= 0"), std::string::npos);
+  h = sim::HandSettings{};
+  h.rotational_damping = -1.0;
+  EXPECT_NE(message(h, 0.002).find("hand rotational_damping"), std::string::npos);
 }
 
 // Through the device side: RPDOs from the controller's AdmittanceDevice, SYNCs, the emulator
 // asking its motion.
 TEST(AdmittanceHand, DrivesFollowEnabledSetPointsWithAFirstOrderLag) {
   hal::SimBus bus{hal::SimBusSettings{}};
-  sim::AdmittanceHandSettings st;
-  st.lag_s = 0.002;
-  sim::AdmittanceHand hand(tracker(), st);
+  sim::AdmittanceHand hand(tracker(), sim::HandSettings{}, 0.002);
   hal::AdmittanceEmulator emu(tracker(), hal::make_admittance_config(tracker()));
   emu.set_motion(&hand);
   hal::AdmittanceDevice dev(tracker(), hal::make_admittance_config(tracker()), bus.controller(),
@@ -78,11 +87,11 @@ TEST(AdmittanceHand, DrivesFollowEnabledSetPointsWithAFirstOrderLag) {
 }
 
 TEST(AdmittanceHand, TheHandsSpringAndDamperPullTheHandle) {
-  sim::AdmittanceHandSettings st;
-  st.k_hand = 200.0;
-  st.c_hand = 4.0;
-  st.k_hand_rot = 0.5;
-  sim::AdmittanceHand hand(tracker(), st);
+  sim::HandSettings st;
+  st.stiffness = 200.0;
+  st.damping = 4.0;
+  st.rotational_stiffness = 0.5;
+  sim::AdmittanceHand hand(tracker(), st, 0.002);
   core::Pose at;
   at.position = Vec3(0.010, 0.0, -0.005);  // 10 mm along x, 5 mm down from the handle
   core::Twist moving;

@@ -57,15 +57,15 @@ TEST(AdmittanceScene, LoadsTheSensorTheHandAndTheDrives) {
   EXPECT_EQ(s.model.coupling_mode, numen::core::CouplingMode::kAdmittance);
   EXPECT_EQ(s.admittance->config.sensor.effective_force_cob_id(), 0x1A0u);
   EXPECT_DOUBLE_EQ(s.admittance->config.sensor.force_scale, 0.001);
-  EXPECT_DOUBLE_EQ(s.admittance->hand.k_hand, 200.0);
-  EXPECT_DOUBLE_EQ(s.admittance->hand.lag_s, 0.002);
+  EXPECT_DOUBLE_EQ(s.hand.stiffness, 200.0);
+  EXPECT_DOUBLE_EQ(s.admittance->drive_lag_s, 0.002);
   EXPECT_EQ(s.admittance->config.rpdo_cob_ids.front(), 0x201u);
 }
 
 TEST(AdmittanceScene, GodObjectStaysOutsideWhileTheHandGoesThrough) {
   const sim::Scene& s = admittance_scene();
   sim::AdmittanceRunner r(s);
-  const double k_hand = s.admittance->hand.k_hand;
+  const double k_hand = s.hand.stiffness;
   double hand_deepest = 0.0, tool_deepest = 0.0;
   // 2.7 s: the end of the hold, 25 mm inside.
   for (int k = 0; k < 2700; ++k) {

@@ -59,7 +59,10 @@ TEST(RunSummaryText, EveryFigureOfTheTableIsPrinted) {
 TEST(RunSummaryText, PrintsTheValuesInTheirFormats) {
   const std::string text = numen::sim::format_summary(numen::test::full_managed_summary());
   for (const char* part : {
-           "scene sample: god-object coupling, implicit-euler, dt 1.000 ms\n",
+           "scene sample: god-object coupling, implicit-euler, dt 1.000 ms, device closed\n",
+           "  closed loop: hand 24.250 mm deep, handle 1.250 mm; force on the hand max 5.500 N, "
+           "hand–handle separation max 29.500 mm; port energy 0.080 J, min -0.013 J at 0.125 s\n",
+           "  device: limit cycle at 0.375 s: 1.875 mm at 15.000 Hz\n",
            "  trocar placed at the port\n",
            "  500 steps, 0.500 s simulated in 0.250 s wall (2.000x real time)\n",
            " after a start-up of 3 steps from 2.500 mm (the tool started inside); any body 3.500 mm\n",

@@ -1,10 +1,13 @@
 #pragma once
 /// @file simulated_instrument.hpp
 /// The device side of a simulated run: a tracked instrument (hal::DeviceEmulator) whose
-/// motion is a hand replaying a recorded or scripted Trajectory (TrajectoryMotion). On each
-/// SYNC the emulator asks the motion for the axis values at the SYNC's bus time, and its
-/// emulated encoders answer with quantised position PDOs; its drives receive the torque PDOs.
-/// The controller only ever sees the bus, as on hardware.
+/// motion is either a hand replaying a recorded or scripted Trajectory (TrajectoryMotion: the
+/// axes are where the trajectory puts them, whatever the torques) or, when the scene gives the
+/// device's mechanics, the closed loop (PlantMotion: the device moves under the drives' torques
+/// and the hand's pull toward the trajectory). On each SYNC the emulator asks the motion for the
+/// axis values at the SYNC's bus time, and its emulated encoders answer with quantised position
+/// PDOs; its drives receive the torque PDOs. The controller only ever sees the bus, as on
+/// hardware.
 
 #include <cstdint>
 #include <memory>
@@ -14,6 +17,7 @@
 #include "numen/hal/emulation/device_emulator.hpp"
 #include "numen/hal/device/kinematics.hpp"
 #include "numen/sim/input/trajectory.hpp"
+#include "numen/sim/device/plant_motion.hpp"
 #include "numen/sim/device/trajectory_motion.hpp"
 
 namespace numen::sim {
@@ -30,6 +34,11 @@ class SimulatedInstrument {
   SimulatedInstrument& operator=(const SimulatedInstrument&) = delete;
   SimulatedInstrument(const hal::DeviceConfig& config, const Trajectory& trajectory,
                       std::int64_t start_ns = 0);
+  /// Closed loop when `plant` is set: the device's mechanics and the `hand` that holds it
+  /// (PlantMotion; throws std::invalid_argument as it does). Replay when `plant` is null.
+  SimulatedInstrument(const hal::DeviceConfig& config, const Trajectory& trajectory,
+                      const DevicePlantSettings* plant, const HandSettings& hand,
+                      std::int64_t start_ns = 0);
 
   /// Handles every frame pending on `device_port` (DeviceEmulator::poll()): a SYNC latches
   /// the axis values of the trajectory at the SYNC's timestamp and is answered by the
@@ -41,7 +50,10 @@ class SimulatedInstrument {
   /// Makes trajectory time 0 the timestamp of the next SYNC received (a device process on a
   /// real bus, `numen device`: the controller starts whenever it starts; bus time is
   /// CLOCK_MONOTONIC). Until that SYNC, axes_at() uses the start given at construction.
-  void start_at_next_sync() noexcept { motion_.start_at_next_sync(); }
+  void start_at_next_sync() noexcept {
+    motion_.start_at_next_sync();
+    if (plant_) plant_->start_at_next_sync();
+  }
   /// Bus time (ns) at which the trajectory starts.
   std::int64_t start_ns() const noexcept { return motion_.start_ns(); }
 
@@ -56,11 +68,14 @@ class SimulatedInstrument {
   const hal::DeviceEmulator& emulator() const noexcept { return emulator_; }
   hal::DeviceEmulator& emulator() noexcept { return emulator_; }
   const hal::Kinematics& kinematics() const noexcept { return motion_.kinematics(); }
-  /// The hand's motion (TrajectoryMotion).
+  /// The hand's replayed motion (TrajectoryMotion; the intent in closed loop).
   const TrajectoryMotion& motion() const noexcept { return motion_; }
+  /// The closed loop's device and hand, or null in replay.
+  const PlantMotion* plant() const noexcept { return plant_.get(); }
 
  private:
   TrajectoryMotion motion_;
+  std::unique_ptr<PlantMotion> plant_;
   hal::DeviceEmulator emulator_;
 };
 

@@ -88,6 +88,16 @@ class DivergenceMonitor {
   bool observe(const core::Model& model, const core::Data& data, std::int64_t period,
                double time_s) noexcept;
 
+  /// Latches a breach found outside the monitor (e.g. "device plant": the emulated device's
+  /// mechanics ran away, PlantMotion) with `cause` (a static string), the axis or body index
+  /// `subject` in Divergence::body, `value` its time (s). Returns true if this latched it (false
+  /// if a breach was already latched). noexcept, no allocation.
+  bool latch_external(const char* cause, int subject, double value, std::int64_t period,
+                      double time_s) noexcept {
+    if (latched_.cause != nullptr) return false;
+    latch(cause, subject, -1, value, 0.0, period, time_s);
+    return true;
+  }
   /// The latched breach (cause nullptr while none).
   const Divergence& divergence() const noexcept { return latched_; }
   /// Largest E / max(E₀ + W_in, energy_floor_j) seen (0 where the energy bound does not apply).

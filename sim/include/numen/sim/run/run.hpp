@@ -187,7 +187,8 @@ class SceneRunner {
   struct PeriodContacts {
     bool held = false;              ///< A body is held (else everything below is zero).
     double tool_pen = 0.0;          ///< Deepest contact of the tool (bodies and nets).
-    double target_pen = 0.0;        ///< Deepest contact of the target (where the hand is).
+    double target_pen = 0.0;        ///< Deepest contact of the target (where the encoders are).
+    double hand_pen = 0.0;          ///< Closed loop: of the held body at the hand's intent.
     int tool_contacts = 0;          ///< Contacts of the tool.
     int target_contacts = 0;        ///< Contacts of the target.
     int deepest_tool_contact = -1;  ///< Index of the tool's deepest rigid contact (-1: none).
@@ -226,6 +227,8 @@ class SceneRunner {
   std::unique_ptr<hal::RecordingBus> recorder_;   // --record FILE, around the controller port
   hal::Bus* port_;                                // what the control loop reads and writes
   SimulatedInstrument instrument_;
+  hal::AxisVector hand_axes_;  // closed loop: the intent's axis values at this period's SYNC
+  std::vector<std::uint8_t> explicit_bound_;  // per body: 1 if a binding names it
   hal::InstrumentDevice device_;
   core::Data data_;
   core::Data ghost_;  // the held body placed at the target, for measurement

@@ -115,7 +115,30 @@ struct RunSummary {
   double sim_time_s = 0.0;
   double wall_time_s = 0.0;
   DurationSummary step_time_us;            ///< Wall time of core::step per period.
+  /// Deepest overlap of the target: the tool's bodies where the encoders put them (the hand in
+  /// replay, the device's handle in closed loop), mm.
   double target_penetration_max_mm = 0.0;
+  /// The device: "replay" (the encoders read the trajectory, whatever the torques) or "closed"
+  /// (the emulated device moves under the drives' torques and the hand: [device.plant]).
+  std::string device_loop = "replay";
+  bool closed_loop = false;                ///< device_loop is "closed".
+  /// Closed loop: the held body where the hand means to be (the trajectory), mm deep.
+  double hand_penetration_max_mm = 0.0;
+  /// Where the device's handle is (its encoders): the same quantity as
+  /// target_penetration_max_mm, under the closed loop's name, mm.
+  double device_penetration_max_mm = 0.0;
+  /// Closed loop (PlantMotion::figures()): the largest force of the hand on the handle (N), the
+  /// energy the hand put into the device (J: final, minimum and when), the largest hand–handle
+  /// separation (mm), and the handle's limit cycle (LimitCycleDetector).
+  double handle_force_max_n = 0.0;
+  double device_port_energy_j = 0.0;
+  double device_port_energy_min_j = 0.0;
+  double device_port_energy_min_time_s = 0.0;
+  double hand_separation_max_mm = 0.0;
+  bool limit_cycle_detected = false;
+  double limit_cycle_amplitude_mm = 0.0;
+  double limit_cycle_hz = 0.0;
+  double limit_cycle_time_s = 0.0;
   double tool_penetration_max_mm = 0.0;    ///< God-object, after the start-up (see above).
   /// The god-object's penetration at the first period when it starts inside an obstacle (mm;
   /// the deepest of the start-up); 0 when it starts free.

@@ -17,6 +17,8 @@
 #include "numen/hal/transport/sim_bus.hpp"
 #include "numen/platform/device_binding.hpp"
 #include "numen/sim/device/admittance_hand.hpp"
+#include "numen/sim/device/hand.hpp"
+#include "numen/sim/device/plant_motion.hpp"
 #include "numen/sim/input/trajectory.hpp"
 
 namespace numen::sim {
@@ -37,7 +39,8 @@ struct AttachEvent {
 /// Fig. 2 note): the force sensor and csp RPDOs, and the emulated device's hand and drives.
 struct AdmittanceScene {
   hal::AdmittanceConfig config;               ///< Validated against Scene::device.
-  AdmittanceHandSettings hand;  ///< The simulated hand (k_hand, c_hand, ...) and drive lag.
+  /// Time constant of each drive's tracking of its csp target, s (`drive_lag`; 0: ideal).
+  double drive_lag_s = kDefaultDriveLagS;
 };
 
 /// Triangles of one net's surface, as node indices local to the net (0 .. node_count − 1),
@@ -77,6 +80,13 @@ struct Scene {
   std::vector<NetTriangles> net_triangles;
   /// Set exactly when model.coupling_mode is kAdmittance (the loader requires both or neither).
   std::optional<AdmittanceScene> admittance;
+  /// The simulated hand on the device (`[device.hand]`; hand.hpp): what holds the handle in
+  /// closed loop and what an admittance device's force sensor measures.
+  HandSettings hand;
+  /// The impedance device's mechanics (`[device.plant]`): set, the emulated device moves
+  /// under the drives' torques and the hand (closed loop, PlantMotion); unset, it replays the
+  /// trajectory whatever the torques. torque_phase_s is compute_phase_s.
+  std::optional<DevicePlantSettings> plant;
   /// Set by a [multirate] table: the god-object runs at dt against an intermediate contact
   /// model the scene loop refreshes every scene_dt (the run harness, SceneRunner).
   std::optional<MultirateScene> multirate;
