@@ -164,6 +164,7 @@ void AdmittanceRunner::period(std::int64_t deadline_mono_ns, std::int64_t woke_m
   a.measured_torque_max_nm = std::max(a.measured_torque_max_nm, r.feedback.torque.norm());
   s.tool_penetration_max_mm = std::max(s.tool_penetration_max_mm, tool_pen_ * 1e3);
   s.target_penetration_max_mm = std::max(s.target_penetration_max_mm, hand_pen_ * 1e3);
+  s.hand_penetration_max_mm = s.target_penetration_max_mm;
   s.any_penetration_max_mm = std::max(s.any_penetration_max_mm, data_.max_penetration * 1e3);
   s.contacts_max = std::max(s.contacts_max, data_.num_contacts);
   s.solver_iterations_max = std::max(s.solver_iterations_max, data_.solver_iterations);

@@ -21,6 +21,12 @@ core::Model with_scheme(const core::Model& model, core::Integrator integrator, d
   return m;
 }
 
+Scene load_replayed_scene(const std::string& path) {
+  Scene scene = load_scene(path);
+  scene.plant.reset();
+  return scene;
+}
+
 double thread_cpu_seconds() noexcept {
   timespec ts{};
   clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);

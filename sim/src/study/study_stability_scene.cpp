@@ -440,10 +440,10 @@ void plan_scene_extreme(const StabilityOptions& o, const std::string& dir, Plan&
   }
   // Loaded once, shared by the cases (each run copies what it changes).
   const std::shared_ptr<const Scene> deformable =
-      no_nets.empty() ? std::make_shared<const Scene>(load_scene(dir + "/deformable.toml"))
+      no_nets.empty() ? std::make_shared<const Scene>(study::load_replayed_scene(dir + "/deformable.toml"))
                       : nullptr;
   const std::shared_ptr<const Scene> trocar =
-      no_joints.empty() ? std::make_shared<const Scene>(load_scene(dir + "/default.toml"))
+      no_joints.empty() ? std::make_shared<const Scene>(study::load_replayed_scene(dir + "/default.toml"))
                         : nullptr;
   const std::vector<double> steps =
       o.quick ? std::vector<double>{1e-3} : std::vector<double>{1e-4, 1e-3, 1e-2};

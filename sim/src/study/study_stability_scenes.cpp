@@ -128,7 +128,7 @@ void plan_scene_stiffness(const StabilityOptions& o, const std::string& dir, Pla
     const std::string name = std::filesystem::path(file).stem().string();
     std::shared_ptr<const Scene> scene;
     try {
-      scene = std::make_shared<const Scene>(load_scene(file));
+      scene = std::make_shared<const Scene>(study::load_replayed_scene(file));
     } catch (const std::exception& e) {  // a part this build left out (NUMEN_WITH_*)
       const std::string missing = study::missing_parts(true, true);
       if (missing.empty()) throw;

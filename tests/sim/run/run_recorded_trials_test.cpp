@@ -279,8 +279,12 @@ TEST(RunSoftStart, TheHeldOutTrialsStartingInsideAnObstacleRampTheFeedbackInInst
   for (const fs::path& trial : trials) {
     SCOPED_TRACE(trial.filename().string());
     const std::string text = scene_on_trial(scene_path, trial, "");
-    const Scene off_scene = numen::sim::load_scene(dir.write("off.toml", with_soft_start(text, 0.0)));
-    const Scene on_scene = numen::sim::load_scene(dir.write("on.toml", with_soft_start(text, kT)));
+    // In replay, so that both runs see the same hand (in closed loop the ramp would change the
+    // device's motion, and with it the force it scales).
+    Scene off_scene = numen::sim::load_scene(dir.write("off.toml", with_soft_start(text, 0.0)));
+    Scene on_scene = numen::sim::load_scene(dir.write("on.toml", with_soft_start(text, kT)));
+    off_scene.plant.reset();
+    on_scene.plant.reset();
     ASSERT_EQ(off_scene.device.soft_start_s, 0.0);
     ASSERT_EQ(on_scene.device.soft_start_s, kT);
     const double dt = on_scene.model.dt;

@@ -70,7 +70,7 @@ TEST(RunDefaultScene, GodObjectStaysOnTheSurfaceWhileTheHandGoesThrough) {
 
   // The hand (the instrument placed at the device target) goes deep into the
   // organ and the tissue; the god-object stays on the surface.
-  EXPECT_GE(s.target_penetration_max_mm, 10.0);
+  EXPECT_GE(s.hand_penetration_max_mm, 10.0);
   EXPECT_LE(s.tool_penetration_max_mm, 2.0);
   EXPECT_GT(s.contacts_max, 0);
   EXPECT_EQ(s.contact_overflow, 0);
@@ -150,7 +150,7 @@ TEST(RunDefaultScene, StiffContactsOfOneTeraNewtonPerMetreStayFiniteAndOutside) 
   const RunSummary s = runner.summary();
   EXPECT_EQ(s.nonfinite_steps, 0);
   EXPECT_FALSE(s.nan_detected);
-  EXPECT_GE(s.target_penetration_max_mm, 7.0) << "the hand must go into the organ";
+  EXPECT_GE(s.hand_penetration_max_mm, 7.0) << "the hand must go into the organ";
   EXPECT_LE(s.tool_penetration_max_mm, 2.0);
   EXPECT_GT(s.contact_clamped_steps, 0) << "the floor acted and was counted";
   EXPECT_NE(numen::sim::format_summary(s).find("stiff contacts: stiffness clamped"), std::string::npos);
@@ -451,7 +451,7 @@ TEST(RunArticulated, DefaultInstrumentStaysOutsideWhileTheJointsHold) {
   for (int k = 0; k < 15'000; ++k) runner.period();
   const RunSummary s = runner.summary();
   EXPECT_EQ(s.num_joints, 4);
-  EXPECT_GE(s.target_penetration_max_mm, 10.0);
+  EXPECT_GE(s.hand_penetration_max_mm, 10.0);
   EXPECT_LE(s.tool_penetration_max_mm, 3.0);
   EXPECT_LT(s.joint_drift_max_mm, 0.01);
   EXPECT_LT(s.joint_angle_drift_max_mrad, 1.0);
@@ -470,7 +470,7 @@ TEST(RunArticulated, PhantomArmStopsOnTheDeskAndItsMotorsGetJointTorques) {
   SceneRunner runner(phantom_scene(), 6000);
   for (int k = 0; k < 6000; ++k) runner.period();
   const RunSummary s = runner.summary();
-  EXPECT_GE(s.target_penetration_max_mm, 10.0) << "the hand goes through the desk";
+  EXPECT_GE(s.hand_penetration_max_mm, 10.0) << "the hand goes through the desk";
   EXPECT_LE(s.tool_penetration_max_mm, 3.0) << "the arm stays on it";
   EXPECT_LT(s.joint_drift_max_mm, 0.05);
   EXPECT_FALSE(s.nan_detected);

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "numen/core/model.hpp"
+#include "numen/sim/scene/scene.hpp"
 
 namespace numen::sim::study {
 
@@ -16,6 +17,12 @@ namespace numen::sim::study {
 /// (e.g. the trapezoidal rule with first-order coupling).
 core::Model with_scheme(const core::Model& model, core::Integrator integrator, double dt,
                         const std::string& study);
+
+/// The scene at `path` (load_scene()) in replay: without its `[device.plant]`, so that the
+/// emulated device reads the hand's recorded pose whatever the torques. The stability study
+/// measures the simulation against the hand's motion; the closed loop's device is what
+/// `numen study passivity` measures (docs/studies.md).
+Scene load_replayed_scene(const std::string& path);
 
 /// Thread CPU time (s), CLOCK_THREAD_CPUTIME_ID.
 double thread_cpu_seconds() noexcept;
