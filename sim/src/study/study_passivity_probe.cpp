@@ -84,6 +84,7 @@ struct ProbeTrace {
 };
 
 constexpr int kProbeSubsteps = 2;
+constexpr double kFar = std::numeric_limits<double>::infinity();
 
 /// Runs `periods` control periods from rest at `x0` with the hand `hand` following `intent`.
 template <class Intent>
@@ -169,7 +170,7 @@ ProbeOscillation sustained_oscillation(const std::vector<double>& x, std::size_t
   int crossings = 0;
   for (std::size_t i = begin + 1; i < end; ++i)
     if ((x[i - 1] - mean) * (x[i] - mean) < 0.0) ++crossings;
-  if (a >= 1e-8 && crossings >= 6 && a2 >= 0.8 * a1) {
+  if (a >= 1e-8 && crossings >= 2 && a2 >= 0.8 * a1) {
     o.amplitude = a;
     o.hz = crossings / (2.0 * static_cast<double>(end - begin) * period);
   }
@@ -247,6 +248,27 @@ PassivityProbe probe_passivity(const PassivityPoint& p) {
     };
     account(run_probe(p, low, stiff, 100 * cycle + 2, intent, false), "dither");
   }
+  // Resonance: the stiff hand moves the device through the samples X_k = A (1 − cos θ* k),
+  // linearly between them (constant velocity over each period: the sampled motion at θ* that
+  // dissipates least), θ* the frequency at which the delay bound binds, for at least 20 cycles
+  // and 400 periods, then back to the surface in 200 periods (raised cosine) and at rest.
+  // Colgate & Schenkel's worst frequency is θ → 0 (the press) for B <= 0 without delay and π
+  // (the dither) for B > 0 without delay; with a delay and B > 0 it lies between.
+  const double theta = delay_bound_frequency(p);
+  if (std::isfinite(theta) && theta > 0.01 && theta < std::numbers::pi - 0.01) {
+    const double amp = delta > 0.0 ? 100.0 * delta : 1e-3;
+    const int cycles =
+        std::max(20, static_cast<int>(std::ceil(400.0 * theta / (2.0 * std::numbers::pi))));
+    const int periods = static_cast<int>(std::ceil(cycles * 2.0 * std::numbers::pi / theta));
+    const auto sample = [=](int k) { return amp * (1.0 - std::cos(theta * k)); };
+    const auto intent = [=](double s) {
+      const double u = s / t;
+      if (u >= periods) return raised_cosine_move(s, periods * t, 200.0 * t, sample(periods), 0.0);
+      const int k = static_cast<int>(std::floor(u));
+      return sample(k) + (sample(k + 1) - sample(k)) * (u - k);
+    };
+    account(run_probe(p, 0.0, stiff, periods + 202, intent, false), "resonance");
+  }
   // Contact: a hand (0.2 kg, 10 N·s/m, 300 N/m) whose intent goes from 1 mm outside to 5 mm
   // inside the wall in 0.1 s, holds 0.4 s, returns in 0.1 s and rests 0.4 s: the limit-cycle
   // probe. Its energy is reported apart (contact_passive): it moves many counts per period,
@@ -274,6 +296,14 @@ PassivityProbe probe_passivity(const PassivityPoint& p) {
         out.limit_cycle_amplitude_m = o.amplitude;
         out.limit_cycle_hz = o.hz;
       }
+    }
+    // A run whose device left ±1 m (or whose position is not finite) diverged: a growing
+    // oscillation counts as one, its amplitude the largest |x| reached (∞ if not finite).
+    double reach = 0.0;
+    for (double x : r.x) reach = std::isfinite(x) ? std::max(reach, std::abs(x)) : kFar;
+    if (reach > 1.0) {
+      out.limit_cycle = true;
+      out.limit_cycle_amplitude_m = std::max(out.limit_cycle_amplitude_m, reach);
     }
   }
   return out;

@@ -58,7 +58,8 @@ TEST(StudyPassivity, BoundaryWithoutDampingIsAbbottOkamuras) {
 TEST(StudyPassivity, DelayShrinksTheBoundAsColgatesConditionWithTheDelaySays) {
   PassivityPoint p = wall(1e-3, 1.0, 0.0, 0.0);
   p.delay_periods = 1;
-  EXPECT_NEAR(delay_bound(p), 1.0 / (0.5e-3 + 1e-3), 1e-6);  // b / (T/2 + dT)
+  EXPECT_DOUBLE_EQ(delay_bound(p), 1.0 / (0.5e-3 + 1e-3));  // b / (T/2 + dT)
+  EXPECT_EQ(delay_bound_frequency(p), 0.0);
   const PassivityBoundary r = find_passivity_boundary(p, 0.01);
   EXPECT_NEAR(r.ratio_delay, 1.0, 0.1) << r.k_max;
 }
@@ -79,10 +80,10 @@ TEST(StudyPassivity, GodObjectInsideItsBoundIsPassiveAtAnyObstacleStiffnessADire
     const PassivityProbe w = probe_passivity(direct);
     EXPECT_FALSE(w.passive) << "k_w=" << kw;
     EXPECT_FALSE(w.contact_passive) << "k_w=" << kw;
-    if (kw >= 1e6) {  // far beyond the bound: the pressed wall chatters
+    if (kw >= 1e6) {  // far beyond the bound: the pressed wall throws the hand out
       EXPECT_TRUE(w.limit_cycle) << "k_w=" << kw;
-      EXPECT_GT(w.limit_cycle_hz, 0.0);
-      EXPECT_GT(w.limit_cycle_amplitude_m, 0.0);
+      EXPECT_GT(w.limit_cycle_amplitude_m, 1e-3) << "k_w=" << kw;  // 4.5 mm, 1.6e9 m (diverged)
+      EXPECT_GT(w.limit_cycle_hz, 0.0) << "k_w=" << kw;
     }
   }
 }
@@ -115,10 +116,11 @@ PassivityResult two_cases() {
     r.boundaries.push_back(b);
     PassivityRow row;
     row.period_s = p.period_s;
+    row.device_damping = 1.0;
     row.coupling = "wall";
     row.stiffness = 1500.0;
     row.passive = k == 0;
-    row.energy_min_j = -1e-9 * k;
+    row.energy_min_j = k ? -1e-9 : 0.0;
     row.obstacle_stiffness = std::nan("");
     row.kind = "grid";
     row.case_index = k;

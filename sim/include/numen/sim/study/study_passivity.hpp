@@ -64,6 +64,8 @@ PassivityProbe probe_passivity(const PassivityPoint& point);
 double colgate_bound(const PassivityPoint& p);
 double abbott_okamura_bound(const PassivityPoint& p);
 double delay_bound(const PassivityPoint& p);
+/// The θ = ωT (rad per period, in [0, π]) at which delay_bound()'s condition binds.
+double delay_bound_frequency(const PassivityPoint& p);
 /// The dither run's own bound (derived in docs/passivity.md, Δ > 0; infinity for Δ = 0):
 /// 2 f_c/Δ + 4 a b/(T Δ) − B/T with the dither's amplitude a = Δ/100, for d = 0.
 double dither_bound(const PassivityPoint& p);
