@@ -7,8 +7,9 @@ largest passive stiffness K_max (markers) against the rendered damping B, one pa
 (direct wall; god-object with a 1e6 N/m obstacle) and rate (1 kHz, 10 kHz), for the device
 b = 1 N s/m without friction: without quantisation at delays 0, 1, 2 periods, and with a
 10 um encoder (no delay); the device with f_c = 0.05 N and the same encoder as well. Lines:
-the analytic bounds (Colgate & Schenkel 2(b - |B|)/T; the delay bound, Colgate & Schenkel's
-condition with the delay; Abbott & Okamura max(2b/T, 2 f_c/Delta) dashed).
+the analytic bounds (the delay bound, Colgate & Schenkel's condition with the delay, which is
+their 2(b - |B|)/T for d = 0; Abbott & Okamura max(2b/T, 2 f_c/Delta) dashed). A configuration
+with no passive K (K_max = 0) has no marker.
 """
 import csv
 import math
@@ -81,7 +82,9 @@ def main():
             ax.grid(True, which="both", alpha=0.3)
     axes[0][0].legend(fontsize=7, loc="lower left")
     fig.suptitle("Z-width: measured K_max (markers) and analytic bounds (lines: Colgate & Schenkel "
-                 "with the delay; dashed: Abbott & Okamura)", fontsize=10)
+                 "with the delay; dashed: Abbott & Okamura)\n"
+                 "a missing marker: no passive K (quantised damper without friction, B > 0)",
+                 fontsize=10)
     fig.tight_layout()
     fig.savefig(sys.argv[2], dpi=110)
     print("wrote", sys.argv[2])
