@@ -34,9 +34,7 @@ std::vector<PassivityConfig> passivity_plan(const PassivityOptions& o) {
     double b, fc;
   };
   const std::vector<double> periods = {1e-3, 1e-4};
-  const std::vector<Device> devices =
-      o.quick ? std::vector<Device>{{1.0, 0.0}, {0.0, 0.05}, {1.0, 0.05}}
-              : std::vector<Device>{{1.0, 0.0}, {0.0, 0.05}, {1.0, 0.05}};
+  const std::vector<Device> devices = {{1.0, 0.0}, {0.0, 0.05}, {1.0, 0.05}};
   const std::vector<double> resolutions =
       o.quick ? std::vector<double>{0.0, 1e-5} : std::vector<double>{0.0, 1e-5, 1e-6};
   const std::vector<int> delays = o.quick ? std::vector<int>{0, 1} : std::vector<int>{0, 1, 2};

@@ -1,7 +1,7 @@
 /// @file study_passivity_probe.cpp
 /// The probe of `numen study passivity` (study_passivity.hpp; docs/passivity.md "Probe"): one
 /// device axis (AxisPlant), an encoder, a controller at period T rendering a direct wall or a
-/// 1-DOF god-object behind a virtual coupling, and three hand motions; the energy the hand puts
+/// 1-DOF god-object behind a virtual coupling, and four hand motions; the energy the hand puts
 /// into the device port decides passivity.
 
 #include <algorithm>
@@ -75,8 +75,9 @@ struct ProbeHand {
   double stiffness = 0.0;
 };
 
-/// The energy record of one run: E(t) = ∫ F_hand v dt sampled at every sub-step, and the
-/// device position at the end of every period.
+/// The energy record of one run: E(t) = ∫ F_hand v dt sampled at every sub-step (a run whose E
+/// is not finite stops there with energy_min = −∞), and the device position at the end of every
+/// period.
 struct ProbeTrace {
   double energy_min = 0.0;
   double energy_peak = 0.0;
@@ -122,6 +123,10 @@ ProbeTrace run_probe(const PassivityPoint& p, double x0, const ProbeHand& hand, 
                 0.5 * hand.mass * (v1 * v1 - v0 * v0);
       external = e.external;
       damping = e.damping;
+      if (!std::isfinite(energy)) {  // the run blew up: not passive, said as −∞
+        trace.energy_min = -kFar;
+        return trace;
+      }
       trace.energy_min = std::min(trace.energy_min, energy);
       trace.energy_peak = std::max(trace.energy_peak, std::abs(energy));
     }
@@ -297,10 +302,12 @@ PassivityProbe probe_passivity(const PassivityPoint& p) {
         out.limit_cycle_hz = o.hz;
       }
     }
-    // A run whose device left ±1 m (or whose position is not finite) diverged: a growing
-    // oscillation counts as one, its amplitude the largest |x| reached (∞ if not finite).
+    // A run whose device left ±1 m (or whose position or energy is not finite) diverged: a
+    // growing oscillation counts as one, its amplitude the largest |x| reached (∞ if not
+    // finite).
     double reach = 0.0;
     for (double x : r.x) reach = std::isfinite(x) ? std::max(reach, std::abs(x)) : kFar;
+    if (!std::isfinite(r.energy_min)) reach = kFar;
     if (reach > 1.0) {
       out.limit_cycle = true;
       out.limit_cycle_amplitude_m = std::max(out.limit_cycle_amplitude_m, reach);

@@ -34,17 +34,19 @@ struct PassivityPoint {
   double obstacle_stiffness = 1e6;
 };
 
-/// What the probe of one point measured (the three hand motions: docs/passivity.md "Probe").
+/// What the probe of one point measured (the four hand motions: docs/passivity.md "Probe").
 struct PassivityProbe {
-  bool passive = true;                ///< min E(t) >= −ε in the press and the dither runs.
-  double energy_min_j = 0.0;          ///< min over those runs and time of E(t) (J).
-  double energy_peak_j = 0.0;         ///< max over those runs and time of |E(t)| (J).
-  std::string worst_run;              ///< The run of the lowest E/ε: "press" or "dither".
-  bool contact_passive = true;        ///< min E(t) >= −ε in the contact run.
+  bool passive = true;          ///< min E(t) >= −ε in the press, dither and resonance runs.
+  double energy_min_j = 0.0;    ///< min over those runs and time of E(t) (J).
+  double energy_peak_j = 0.0;   ///< max over those runs and time of |E(t)| (J).
+  std::string worst_run;        ///< The run of the lowest E/ε: "press", "dither" or "resonance".
+  bool contact_passive = true;  ///< min E(t) >= −ε in the contact run.
   double contact_energy_min_j = 0.0;  ///< min over time of E(t) in the contact run (J).
-  bool limit_cycle = false;  ///< A sustained oscillation in the contact run (documented rule).
-  double limit_cycle_amplitude_m = 0.0;  ///< Half peak-to-peak of the position (m); 0: none.
-  double limit_cycle_hz = 0.0;           ///< Its frequency (Hz); 0: none.
+  /// A sustained or growing oscillation in the contact run (docs/passivity.md "Decision rule").
+  bool limit_cycle = false;
+  /// Half peak-to-peak of the position (m; the largest |x| reached if it diverged); 0: none.
+  double limit_cycle_amplitude_m = 0.0;
+  double limit_cycle_hz = 0.0;  ///< Its frequency (Hz); 0: none.
 };
 
 /// The device's inertia in every probe (kg).
@@ -54,20 +56,21 @@ inline constexpr double kPassivityGodObjectMass = 0.02;
 /// ε of the decision rule, relative to the run's peak |E(t)|.
 inline constexpr double kPassivityEpsilonRelative = 1e-6;
 
-/// Runs the three hand motions on `point`. Throws std::invalid_argument naming a bad setting.
+/// Runs the hand motions of docs/passivity.md "Probe" on `point`. Throws std::invalid_argument
+/// naming a bad setting.
 PassivityProbe probe_passivity(const PassivityPoint& point);
 
 /// The analytic bounds of a point (N/m; 0 when no positive K is passive, infinity when none
 /// applies): Colgate & Schenkel 2(b − |B|)/T; Abbott & Okamura max(2(b − |B|)/T, 2 f_c/Δ)
 /// (infinity for Δ = 0 with f_c > 0); the delay bound: Colgate & Schenkel's frequency condition
-/// with H(z) = z^{−d}(K + B(1 − z^{−1})/T), min over ωT ∈ (0, π] (= b/(T/2 + dT) for B = 0).
+/// with H(z) = z^{−d}(K + B(1 − z^{−1})/T), min over ωT ∈ [0, π] (= b/(T/2 + dT) for B = 0).
 double colgate_bound(const PassivityPoint& p);
 double abbott_okamura_bound(const PassivityPoint& p);
 double delay_bound(const PassivityPoint& p);
 /// The θ = ωT (rad per period, in [0, π]) at which delay_bound()'s condition binds.
 double delay_bound_frequency(const PassivityPoint& p);
 /// The dither run's own bound (derived in docs/passivity.md, Δ > 0; infinity for Δ = 0):
-/// 2 f_c/Δ + 4 a b/(T Δ) − B/T with the dither's amplitude a = Δ/100, for d = 0.
+/// 2 f_c/Δ + 4 a b/(T Δ) − B/T with the dither's amplitude a = Δ/100 (0 if negative).
 double dither_bound(const PassivityPoint& p);
 
 /// What to run.
@@ -140,7 +143,7 @@ struct PassivityBoundary {
 struct PassivityResult {
   std::vector<PassivityRow> rows;
   std::vector<PassivityBoundary> boundaries;
-  std::vector<std::string> skipped;  ///< Unused (the shard machinery's field).
+  std::vector<std::string> skipped;  ///< Always empty (the shard machinery's field).
   std::int64_t cases = 0;
   Shard shard;
   double wall_s = 0.0;
@@ -168,7 +171,10 @@ void write_passivity_csv(const PassivityResult& result, const std::string& dir);
 /// The text summary: per configuration K_max against the bounds. Markdown.
 std::string format_passivity_table(const PassivityResult& result);
 
-/// Failures of a result (empty: none): a boundary whose bisection did not bracket, a NaN.
+/// Failures of a result (empty: none), one message each: an energy or a K_max that is NaN; a
+/// direct wall without quantisation and friction whose K_max is not within 10 % of
+/// delay_bound(); a quantised direct wall without damping and delay whose K_max is not within
+/// 10 % of 2 f_c/Δ.
 std::vector<std::string> passivity_failures(const PassivityResult& result);
 
 /// The shard file of `result` (study_shard.hpp).
