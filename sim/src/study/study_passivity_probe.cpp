@@ -142,7 +142,7 @@ double raised_cosine_move(double t, double t0, double d, double a, double b) {
   return a + (b - a) * 0.5 * (1.0 - std::cos(std::numbers::pi * (t - t0) / d));
 }
 
-/// The stiff hand of the press and dither runs: a damper c_h = 1000 m / T (the device follows
+/// The stiff hand of the press, dither and resonance runs: a damper c_h = 1000 m / T (the device follows
 /// the intent's velocity within T/1000) with a spring k_h = c_h / (5 T) removing the drift.
 ProbeHand stiff_hand(const PassivityPoint& p) {
   ProbeHand hand;
@@ -277,7 +277,7 @@ PassivityProbe probe_passivity(const PassivityPoint& p) {
   // Contact: a hand (0.2 kg, 10 N·s/m, 300 N/m) whose intent goes from 1 mm outside to 5 mm
   // inside the wall in 0.1 s, holds 0.4 s, returns in 0.1 s and rests 0.4 s: the limit-cycle
   // probe. Its energy is reported apart (contact_passive): it moves many counts per period,
-  // outside the press and dither's design (docs/passivity.md).
+  // outside the other runs' design (docs/passivity.md).
   {
     ProbeHand hand;
     hand.mass = 0.2;
