@@ -142,8 +142,9 @@ double raised_cosine_move(double t, double t0, double d, double a, double b) {
   return a + (b - a) * 0.5 * (1.0 - std::cos(std::numbers::pi * (t - t0) / d));
 }
 
-/// The stiff hand of the press, dither and resonance runs: a damper c_h = 1000 m / T (the device follows
-/// the intent's velocity within T/1000) with a spring k_h = c_h / (5 T) removing the drift.
+/// The stiff hand of the press, dither and resonance runs: a damper c_h = 1000 m / T (the
+/// device follows the intent's velocity within T/1000) with a spring k_h = c_h / (5 T) removing
+/// the drift.
 ProbeHand stiff_hand(const PassivityPoint& p) {
   ProbeHand hand;
   hand.damping = 1000.0 * kPassivityDeviceMass / p.period_s;
