@@ -19,5 +19,7 @@ p=$(mktemp) && ./build/tests/numen_bench --benchmark_filter=NetPeer --benchmark_
 a=$(mktemp -d) && ./build/numen study accuracy --out "$a" && /usr/bin/python3 $out/plot_accuracy.py "$a" $out && rm -rf "$a"
 # Stability: stiff and extreme cases (docs/stability.md; ~1 minute; --quick for a look in seconds)
 s=$(mktemp -d) && ./build/numen study stability --out "$s" > /dev/null && /usr/bin/python3 $out/plot_stability.py "$s" $out && rm -rf "$s"
+# Passivity: the Z-width of a 1-DOF device (docs/passivity.md; ~1 minute; --quick for a look in seconds)
+z=$(mktemp -d) && ./build/numen study passivity --out "$z" > /dev/null && /usr/bin/python3 $out/plot_passivity.py "$z" $out/passivity_zwidth.png && rm -rf "$z"
 # Multirate quality against the rate ratio, construction and default scenes (docs/multirate.md; ~10 s)
 /usr/bin/python3 $out/plot_multirate.py ./build/numen $out

@@ -172,6 +172,21 @@ class StabilityStudyCommand {
   bool list_ = false;
 };
 
+/// `numen study passivity ...`: the Z-width of a 1-DOF impedance device (docs/passivity.md).
+class PassivityStudyCommand {
+ public:
+  explicit PassivityStudyCommand(CLI::App& study);
+  bool parsed() const { return cli_->parsed(); }
+  int execute() const;
+
+ private:
+  CLI::App* cli_;
+  std::string out_ = "passivity";
+  bool quick_ = false;
+  std::string shard_;  ///< "I/N" or "" (then SLURM_ARRAY_TASK_ID/COUNT, or the whole study).
+  bool list_ = false;
+};
+
 /// `numen study merge DIR`: the shard files of a study (docs/studies.md) checked and merged
 /// into the one-process run's CSV files.
 class MergeStudyCommand {

@@ -14,7 +14,8 @@
 ///   numen sdo --bus can:IFACE|serial:PATH[@BAUD] NODE read|write INDEX:SUB [VALUE] [--type T]
 ///   numen study accuracy [--out DIR] [--quick] [--case NAME]...
 ///   numen study stability [--out DIR] [--quick] [--family NAME]...
-///   numen study accuracy|stability ... [--shard I/N] [--list]
+///   numen study passivity [--out DIR] [--quick]
+///   numen study accuracy|stability|passivity ... [--shard I/N] [--list]
 ///   numen study merge DIR [--out DIR]
 /// SIGINT / SIGTERM: while the input loads, the process ends at once (status 128 + signal;
 /// nothing is open on a bus yet); once a run or device has started, it ends cleanly (run: zero
@@ -61,10 +62,11 @@ int main(int argc, char** argv) {
   const ViewCommand view(app);
   const ScanCommand scan(app);
   const SdoCommand sdo(app);
-  CLI::App* study = app.add_subcommand("study", "Measure the integrators (docs/results.md)");
+  CLI::App* study = app.add_subcommand("study", "Measure the integrators and the device (docs/results.md)");
   study->require_subcommand(1);
   const AccuracyStudyCommand accuracy(*study);
   const StabilityStudyCommand stability(*study);
+  const PassivityStudyCommand passivity(*study);
   const MergeStudyCommand merge(*study);
 
   // A misspelt subcommand is named, with the known ones (numen frobnicate, numen study frob).
@@ -86,6 +88,7 @@ int main(int argc, char** argv) {
 
   if (stability.parsed()) return run_guarded([&] { return stability.execute(); });
   if (accuracy.parsed()) return run_guarded([&] { return accuracy.execute(); });
+  if (passivity.parsed()) return run_guarded([&] { return passivity.execute(); });
   if (merge.parsed()) return run_guarded([&] { return merge.execute(); });
   if (figures.parsed()) return run_guarded([&] { return figures.execute(); });
   install_signal_handlers();  // the studies keep the default: a signal ends them at once

@@ -1,6 +1,6 @@
 /// @file study_command.cpp
-/// `numen study accuracy`, `numen study stability` (docs/accuracy.md,
-/// docs/stability.md) and `numen study merge`
+/// `numen study accuracy`, `numen study stability`, `numen study passivity` (docs/accuracy.md,
+/// docs/stability.md, docs/passivity.md) and `numen study merge`
 /// (shards on a cluster, docs/studies.md).
 
 #include <unistd.h>
@@ -14,7 +14,9 @@
 #include "commands.hpp"
 #include "numen/sim/input/input_error.hpp"
 #include "numen/sim/run/progress_bar.hpp"
+#include "numen/sim/run/run_verdict.hpp"
 #include "numen/sim/study/study_accuracy.hpp"
+#include "numen/sim/study/study_passivity.hpp"
 #include "numen/sim/study/study_shard.hpp"
 #include "numen/sim/study/study_stability.hpp"
 
@@ -86,6 +88,20 @@ std::string shard_path_or_skip(const std::string& study, const sim::Shard& shard
   }
   std::filesystem::create_directories(out);
   return path.string();
+}
+
+/// The passivity study's summary on stdout; status 1 (listed on stderr) when the result has
+/// failures (sim::passivity_failures()).
+int report_passivity(const sim::PassivityResult& result, const std::string& out,
+                     const char* what) {
+  std::cout << sim::format_passivity_table(result);
+  std::printf("%s%zu points of %lld configurations in %.1f s; wrote %s/passivity.csv, "
+              "passivity_boundary.csv\n",
+              what, result.rows.size(), static_cast<long long>(result.cases), result.wall_s,
+              out.c_str());
+  const std::vector<std::string> failures = sim::passivity_failures(result);
+  for (const std::string& f : failures) std::cerr << "numen: passivity: " << f << '\n';
+  return failures.empty() ? 0 : sim::code(sim::ExitStatus::kError);
 }
 
 }  // namespace
@@ -182,6 +198,47 @@ int StabilityStudyCommand::execute() const {
   return 0;
 }
 
+PassivityStudyCommand::PassivityStudyCommand(CLI::App& study)
+    : cli_(study.add_subcommand(
+          "passivity",
+          "Z-width of a 1-DOF impedance device: the largest passive stiffness per configuration "
+          "against the analytic bounds")) {
+  cli_->add_option("--out", out_,
+                   "Directory of passivity.csv and passivity_boundary.csv (figure: "
+                   "docs/figures/plot_passivity.py DIR), or of the shard file");
+  cli_->add_flag("--quick", quick_, "A coarse sweep: seconds");
+  cli_->add_option("--shard", shard_, kShardHelp);
+  cli_->add_flag("--list", list_, kListHelp);
+}
+
+int PassivityStudyCommand::execute() const {
+  sim::PassivityOptions options;
+  options.quick = quick_;
+  const std::optional<sim::Shard> shard = shard_of(shard_);
+  if (shard) options.shard = *shard;
+  if (list_) {
+    print_cases(sim::passivity_cases(options));
+    return 0;
+  }
+  check_output_dir(out_);
+  std::string path;
+  if (shard && (path = shard_path_or_skip("passivity", *shard, out_)).empty()) return 0;
+  sim::ProgressBar bar;
+  options.progress = progress_on(bar);
+  const sim::PassivityResult result = sim::run_passivity_study(options);
+  bar.finish();
+  if (shard) {
+    sim::write_file_atomically(path, sim::passivity_shard_document(result, options));
+    std::printf("%s: %zu points, %lld of the %lld configurations, in %.1f s; wrote %s\n",
+                shard_label(*shard).c_str(), result.rows.size(),
+                static_cast<long long>(cases_of(*shard, result.cases)),
+                static_cast<long long>(result.cases), result.wall_s, path.c_str());
+    return 0;
+  }
+  sim::write_passivity_csv(result, out_);
+  return report_passivity(result, out_, "");
+}
+
 MergeStudyCommand::MergeStudyCommand(CLI::App& study)
     : cli_(study.add_subcommand(
           "merge",
@@ -216,6 +273,11 @@ int MergeStudyCommand::execute() const {
         "accuracy_references.csv\n",
         result.rows.size(), static_cast<long long>(result.cases), result.wall_s, out.c_str());
     return 0;
+  }
+  if (study == "passivity") {
+    const sim::PassivityResult result = sim::merge_passivity_shards(dir_);
+    sim::write_passivity_csv(result, out);
+    return report_passivity(result, out, "merged; shards' wall time in all: ");
   }
   throw std::runtime_error(dir_ + ": shard files of an unknown study \"" + study + "\"");
 }

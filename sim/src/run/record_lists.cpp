@@ -31,6 +31,8 @@ std::vector<RecordList> record_lists() {
        "stability_row_fields()", stability_row_names()});
   lists.push_back({"accuracy study row: accuracy.csv, shard rows, numen.study_accuracy",
                    "accuracy_row_fields()", accuracy_row_names()});
+  lists.push_back({"passivity study row: passivity.csv, shard rows", "passivity_row_fields()",
+                   passivity_row_names()});
   std::vector<std::string> frame;
   for (const platform::StateFrameField& f : platform::kStateFrameFields) frame.emplace_back(f.name);
   for (const platform::StateFrameArray& a : platform::kStateFrameArrays) frame.emplace_back(a.name);

@@ -39,7 +39,8 @@ std::optional<int> whole_decimal(std::string_view text) {
 
 std::string quoted(std::string_view text) { return "\"" + InputError::visible(text, true) + "\""; }
 
-/// "<study>-shard-<I>-of-<N>.json" → (study, shard), study "stability" or "accuracy"; nullopt
+/// "<study>-shard-<I>-of-<N>.json" → (study, shard), study "stability", "accuracy" or
+/// "passivity"; nullopt
 /// for any other name.
 std::optional<std::pair<std::string, Shard>> parse_file_name(const std::string& name) {
   const std::string_view n(name);
@@ -50,7 +51,8 @@ std::optional<std::pair<std::string, Shard>> parse_file_name(const std::string& 
   const auto i = whole_decimal(n.substr(at + 7, of - at - 7));
   const auto c = whole_decimal(n.substr(of + 4, n.size() - 5 - of - 4));
   const std::string study(n.substr(0, at));
-  if (!i || !c || *c < 1 || *i >= *c || (study != "stability" && study != "accuracy"))
+  if (!i || !c || *c < 1 || *i >= *c ||
+      (study != "stability" && study != "accuracy" && study != "passivity"))
     return std::nullopt;
   return std::make_pair(study, Shard{*i, *c});
 }

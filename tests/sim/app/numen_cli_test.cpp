@@ -414,7 +414,7 @@ TEST(NumenCli, UnknownSubcommandIsNamedWithTheKnownOnes) {
   EXPECT_EQ(study.status, 2) << study.out << study.err;
   EXPECT_EQ(study.err,
             "numen: unknown subcommand 'frob' of numen study; the subcommands are: accuracy, "
-            "stability, merge\n");
+            "stability, passivity, merge\n");
 }
 
 // A negative --overrun-limit got CLI11's bare "Could not convert": the message names the option
@@ -437,7 +437,7 @@ TEST(NumenCli, NegativeOverrunLimitNamesTheOptionAndTheRange) {
 TEST(NumenCli, StudyOutputThatIsAFileIsRefusedBeforeTheStudy) {
   TempDir dir;
   const std::string file = dir.write("hostname", "keep me\n");
-  for (const char* study : {"accuracy", "stability"}) {
+  for (const char* study : {"accuracy", "stability", "passivity"}) {
     const ChildResult r = run_child({kNumen, "study", study, "--quick", "--out", file}, dir.path(), 30);
     EXPECT_EQ(r.status, 2) << study << ": " << r.out << r.err;
     EXPECT_NE(r.err.find("--out: " + file + " is not a directory"), std::string::npos) << r.err;

@@ -52,7 +52,7 @@ const sim::RecordList& list_of(const std::vector<sim::RecordList>& lists, std::s
 
 TEST(RecordNames, FiguresAllListsEveryOutputOnceEach) {
   const std::vector<sim::RecordList> lists = sim::record_lists();
-  ASSERT_EQ(lists.size(), 6u);
+  ASSERT_EQ(lists.size(), 7u);
   for (const sim::RecordList& l : lists) {
     EXPECT_FALSE(l.names.empty()) << l.output;
     const std::set<std::string> unique(l.names.begin(), l.names.end());

@@ -21,8 +21,8 @@ struct RecordList {
 };
 
 /// Every output's names: run figures, the CSV trace, the streamed trace (with the writer's
-/// period, time_ns, flags first), the stability row, the accuracy row, the state frame (its
-/// header fields, then its arrays).
+/// period, time_ns, flags first), the stability row, the accuracy row, the passivity row, the
+/// state frame (its header fields, then its arrays).
 std::vector<RecordList> record_lists();
 
 /// `numen figures --all` (Markdown): "## Run figures" and format_run_figures_markdown(),

@@ -63,7 +63,7 @@ void write_file_atomically(const std::filesystem::path& path, std::string_view c
 /// One line of `--list` (no newline): "<index>\t<family>\t<name>\t<parameters>".
 std::string format_case_line(const StudyCase& c);
 
-/// The study ("stability" or "accuracy") whose shard files are in `dir`. Throws
+/// The study ("stability", "accuracy" or "passivity") whose shard files are in `dir`. Throws
 /// std::runtime_error naming `dir` when it holds none, or files of both studies.
 std::string study_of_shard_dir(const std::filesystem::path& dir);
 

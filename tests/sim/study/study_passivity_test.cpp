@@ -1,0 +1,226 @@
+/// @file study_passivity_test.cpp
+/// `numen study passivity` (sim/src/study/study_passivity*.cpp, docs/passivity.md): the measured
+/// boundary against Colgate & Schenkel (no friction, no quantisation) and Abbott & Okamura
+/// (no damping), the god-object coupling inside its bound against a direct wall of the
+/// obstacle's stiffness, the CSV columns, the shard merge and the refused options.
+
+#include "numen/sim/study/study_passivity.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "child_process.hpp"
+#include "numen/sim/input/input_error.hpp"
+#include "numen/sim/study/study_fields.hpp"
+#include "numen/sim/study/study_shard.hpp"
+#include "temp_dir.hpp"
+
+namespace numen::sim {
+namespace {
+
+using test::read_file;
+using test::TempDir;
+
+PassivityPoint wall(double period, double b, double fc, double delta) {
+  PassivityPoint p;
+  p.period_s = period;
+  p.device_damping = b;
+  p.coulomb = fc;
+  p.resolution = delta;
+  p.coupling = "wall";
+  return p;
+}
+
+TEST(StudyPassivity, BoundaryWithoutFrictionOrQuantisationIsColgates) {
+  // Two (b, T) pairs: 2b/T = 2000 N/m at 1 kHz and 1e4 N/m at 10 kHz.
+  for (const auto& [b, t] : {std::pair{1.0, 1e-3}, std::pair{0.5, 1e-4}}) {
+    const PassivityBoundary r = find_passivity_boundary(wall(t, b, 0.0, 0.0), 0.01);
+    const double bound = 2.0 * b / t;
+    EXPECT_DOUBLE_EQ(r.colgate_bound, bound);
+    EXPECT_NEAR(r.k_max / bound, 1.0, 0.1) << "b=" << b << " T=" << t << " K_max=" << r.k_max;
+    EXPECT_LT(r.k_passive, r.k_not_passive);
+  }
+}
+
+TEST(StudyPassivity, BoundaryWithoutDampingIsAbbottOkamuras) {
+  for (const auto& [t, delta] : {std::pair{1e-3, 1e-5}, std::pair{1e-4, 1e-6}}) {
+    const PassivityBoundary r = find_passivity_boundary(wall(t, 0.0, 0.05, delta), 0.01);
+    const double bound = 2.0 * 0.05 / delta;
+    EXPECT_DOUBLE_EQ(r.abbott_okamura_bound, bound);
+    EXPECT_NEAR(r.k_max / bound, 1.0, 0.1) << "T=" << t << " Δ=" << delta << " K_max=" << r.k_max;
+  }
+}
+
+TEST(StudyPassivity, DelayShrinksTheBoundAsColgatesConditionWithTheDelaySays) {
+  PassivityPoint p = wall(1e-3, 1.0, 0.0, 0.0);
+  p.delay_periods = 1;
+  EXPECT_DOUBLE_EQ(delay_bound(p), 1.0 / (0.5e-3 + 1e-3));  // b / (T/2 + dT)
+  EXPECT_EQ(delay_bound_frequency(p), 0.0);
+  const PassivityBoundary r = find_passivity_boundary(p, 0.01);
+  EXPECT_NEAR(r.ratio_delay, 1.0, 0.1) << r.k_max;
+}
+
+TEST(StudyPassivity, GodObjectInsideItsBoundIsPassiveAtAnyObstacleStiffnessADirectWallIsNot) {
+  // b = 0.2 N·s/m at 1 kHz: Colgate's bound 400 N/m; the coupling K = 200 N/m, B = 0.
+  for (double kw : {1e3, 1e6, 1e9}) {
+    PassivityPoint go = wall(1e-3, 0.2, 0.0, 0.0);
+    go.coupling = "god-object";
+    go.stiffness = 200.0;
+    go.obstacle_stiffness = kw;
+    const PassivityProbe g = probe_passivity(go);
+    EXPECT_TRUE(g.passive) << "k_w=" << kw << " E_min=" << g.energy_min_j;
+    EXPECT_TRUE(g.contact_passive) << "k_w=" << kw << " E_min=" << g.contact_energy_min_j;
+    EXPECT_FALSE(g.limit_cycle) << "k_w=" << kw << " amplitude " << g.limit_cycle_amplitude_m;
+    PassivityPoint direct = wall(1e-3, 0.2, 0.0, 0.0);
+    direct.stiffness = kw;
+    const PassivityProbe w = probe_passivity(direct);
+    EXPECT_FALSE(w.passive) << "k_w=" << kw;
+    EXPECT_FALSE(w.contact_passive) << "k_w=" << kw;
+    if (kw >= 1e6) {  // far beyond the bound: the pressed wall throws the hand out
+      EXPECT_TRUE(w.limit_cycle) << "k_w=" << kw;
+      EXPECT_GT(w.limit_cycle_amplitude_m, 1e-3) << "k_w=" << kw;  // 4.5 mm, 1.6e9 m (diverged)
+      EXPECT_GT(w.limit_cycle_hz, 0.0) << "k_w=" << kw;
+    }
+  }
+}
+
+TEST(StudyPassivity, ProbeRefusesABadPointNamingTheSetting) {
+  PassivityPoint p = wall(1e-3, 1.0, 0.0, 0.0);
+  p.coupling = "spring";
+  try {
+    probe_passivity(p);
+    FAIL() << "accepted coupling \"spring\"";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("coupling"), std::string::npos) << e.what();
+  }
+  p = wall(0.0, 1.0, 0.0, 0.0);
+  EXPECT_THROW(probe_passivity(p), std::invalid_argument);
+  p = wall(1e-3, -1.0, 0.0, 0.0);
+  EXPECT_THROW(probe_passivity(p), std::invalid_argument);
+}
+
+/// A result of two cases (one row and one boundary each) built by hand: what the CSV writer and
+/// the shard files see, without running the sweep.
+PassivityResult two_cases() {
+  PassivityResult r;
+  r.cases = 2;
+  for (int k = 0; k < 2; ++k) {
+    PassivityPoint p = wall(k ? 1e-4 : 1e-3, 1.0, 0.0, 0.0);
+    p.stiffness = 1500.0;
+    PassivityBoundary b = find_passivity_boundary(p, 0.05);
+    b.case_index = k;
+    r.boundaries.push_back(b);
+    PassivityRow row;
+    row.period_s = p.period_s;
+    row.device_damping = 1.0;
+    row.coupling = "wall";
+    row.stiffness = 1500.0;
+    row.passive = k == 0;
+    row.energy_min_j = k ? -1e-9 : 0.0;
+    row.obstacle_stiffness = std::nan("");
+    row.kind = "grid";
+    row.case_index = k;
+    r.rows.push_back(row);
+  }
+  return r;
+}
+
+TEST(StudyPassivity, CsvColumnsAreTheContract) {
+  TempDir dir;
+  write_passivity_csv(two_cases(), dir.path().string());
+  std::istringstream csv(read_file((dir / "passivity.csv").string()));
+  std::string header, line;
+  std::getline(csv, header);
+  const std::string contract =
+      "period_s,device_damping,coulomb,resolution,delay_periods,coupling,stiffness,damping,"
+      "passive,energy_min_j";
+  EXPECT_EQ(header.rfind(contract, 0), 0u) << header;
+  for (const char* extra :
+       {"obstacle_stiffness", "limit_cycle", "limit_cycle_amplitude_m", "limit_cycle_hz",
+        "colgate_bound", "abbott_okamura_bound", "delay_bound"})
+    EXPECT_NE(header.find(std::string(",") + extra + ","), std::string::npos) << extra;
+  std::string joined;
+  for (const std::string& n : passivity_row_names()) joined += (joined.empty() ? "" : ",") + n;
+  EXPECT_EQ(header, joined);
+  std::getline(csv, line);
+  EXPECT_EQ(line.rfind("0.001,1,0,0,0,wall,1500,0,1,0,", 0), 0u) << line;
+  std::getline(csv, line);
+  EXPECT_EQ(line.rfind("0.0001,1,0,0,0,wall,1500,0,0,-1e-09,", 0), 0u) << line;
+  const std::string boundary = read_file((dir / "passivity_boundary.csv").string());
+  EXPECT_EQ(boundary.rfind("period_s,device_damping,coulomb,resolution,delay_periods,coupling,"
+                           "damping,obstacle_stiffness,k_max,",
+                           0),
+            0u)
+      << boundary;
+}
+
+TEST(StudyPassivity, ShardFilesMergeIntoTheOneProcessCsv) {
+  const PassivityResult one = two_cases();
+  TempDir whole, shards;
+  write_passivity_csv(one, whole.path().string());
+  PassivityOptions o;
+  for (int i = 0; i < 2; ++i) {
+    PassivityResult part;
+    part.cases = one.cases;
+    part.shard = {i, 2};
+    part.rows = {one.rows[static_cast<std::size_t>(i)]};
+    part.boundaries = {one.boundaries[static_cast<std::size_t>(i)]};
+    o.shard = part.shard;
+    write_file_atomically(shards / shard_file_name("passivity", part.shard),
+                          passivity_shard_document(part, o));
+  }
+  EXPECT_EQ(study_of_shard_dir(shards.path()), "passivity");
+  const PassivityResult merged = merge_passivity_shards(shards.path().string());
+  write_passivity_csv(merged, shards.path().string());
+  for (const char* name : {"passivity.csv", "passivity_boundary.csv"})
+    EXPECT_EQ(read_file((whole / name).string()), read_file((shards / name).string())) << name;
+}
+
+TEST(StudyPassivity, ListHasOneCasePerConfigurationAndShardsSplitIt) {
+  PassivityOptions o;
+  o.quick = true;
+  const std::vector<StudyCase> all = passivity_cases(o);
+  ASSERT_GE(all.size(), 8u);
+  EXPECT_EQ(all[0].family, "passivity");
+  EXPECT_EQ(all[0].name, "wall");
+  o.shard = {1, 3};
+  const std::vector<StudyCase> part = passivity_cases(o);
+  for (const StudyCase& c : part) EXPECT_EQ(c.index % 3, 1);
+  EXPECT_EQ(part.size(), (all.size() + 1) / 3);
+  o.shard = {3, 3};
+  EXPECT_THROW(passivity_cases(o), InputError);
+}
+
+TEST(StudyPassivity, CommandRefusesBadOptionsClearly) {
+  TempDir dir;
+  const std::string cli = NUMEN_CLI;
+  const auto run = [&](const std::vector<std::string>& args) {
+    std::vector<std::string> argv = {
+        "/usr/bin/env", "-u",       "SLURM_ARRAY_TASK_ID", "-u", "SLURM_ARRAY_TASK_COUNT", cli,
+        "study",        "passivity"};
+    argv.insert(argv.end(), args.begin(), args.end());
+    return test::run_child(argv, dir.path().string(), 60);
+  };
+  const test::ChildResult bad_shard = run({"--list", "--shard", "2/2"});
+  EXPECT_EQ(bad_shard.status, 2) << bad_shard.out;
+  EXPECT_NE(bad_shard.err.find("--shard: shard index 2 is not below the count 2"),
+            std::string::npos)
+      << bad_shard.err;
+  const test::ChildResult not_shard = run({"--list", "--shard", "one/2"});
+  EXPECT_EQ(not_shard.status, 2);
+  EXPECT_NE(not_shard.err.find("--shard"), std::string::npos) << not_shard.err;
+  const test::ChildResult unknown = run({"--stiffness", "3"});
+  EXPECT_EQ(unknown.status, 2);
+  EXPECT_NE(unknown.err.find("--stiffness"), std::string::npos) << unknown.err;
+  const test::ChildResult list = run({"--quick", "--list"});
+  EXPECT_EQ(list.status, 0) << list.err;
+  EXPECT_EQ(list.out.rfind("0\tpassivity\twall\tT=0.001 b=1 fc=0 delta=0 d=0 B=0 kw=nan\n", 0), 0u)
+      << list.out;
+}
+
+}  // namespace
+}  // namespace numen::sim
