@@ -46,7 +46,7 @@ class RunCommand {
   CLI::App* cli_;
   std::string scene_path_, trace_path_, coupling_, bus_ = "sim", record_path_, record_view_path_, view_;
   double duration_ = -1.0, phase_ = -1.0, view_rate_ = 60.0, speed_ = 0.0;
-  bool json_ = false, realtime_ = false;
+  bool json_ = false, realtime_ = false, replay_ = false, strict_ = false;
   platform::RealtimeSettings rt_;
   platform::SceneThreadSettings scene_thread_;
   std::uint32_t overrun_limit_ = 3;
@@ -82,7 +82,7 @@ class DeviceCommand {
   CLI::App* cli_;
   std::string scene_, bus_;
   double duration_ = -1.0;
-  bool ready_ = false;
+  bool ready_ = false, replay_ = false, strict_ = false;
 };
 
 /// `numen scan --bus ...`: the CANopen nodes on a bus and their identities (SDO reads; never
@@ -124,7 +124,7 @@ class InfoCommand {
  private:
   CLI::App* cli_;
   std::string scene_;
-  bool json_ = false;
+  bool json_ = false, strict_ = false;
 };
 
 /// `numen figures`: the table of a run's summary figures (run_figures()) as Markdown;

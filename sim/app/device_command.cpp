@@ -21,11 +21,19 @@ DeviceCommand::DeviceCommand(CLI::App& parent)
       ->check(seconds_check(0.0, sim::kMaxRunDuration, true));
   cli_->add_flag("--ready", ready_,
                  "Print READY on stdout once the device answers (bus open, nodes booted)");
+  cli_->add_flag("--replay", replay_,
+                 "The device replays the trajectory whatever the torques (the scene's "
+                 "[device.plant] is checked, then not used)");
+  cli_->add_flag("--strict", strict_,
+                 "The passivity lint's findings are errors (exit 2), not warnings");
 }
 
 int DeviceCommand::execute() const {
   const std::string path = scene_.empty() ? sim::default_scene_path() : scene_;
-  const sim::Scene scene = sim::load_scene(path);
+  sim::SceneOverrides overrides;
+  overrides.replay = replay_;
+  overrides.strict = strict_;
+  const sim::Scene scene = sim::load_scene(path, overrides);
   sim::DeviceOptions options;
   options.bus = bus_;
   options.duration_s = duration_;

@@ -14,11 +14,17 @@ InfoCommand::InfoCommand(CLI::App& parent)
           "info", "Print what a scene compiles to: sizes, the stages step() runs, capacities, bytes")) {
   cli_->add_option("scene", scene_, "Scene file (TOML); default: the shipped default scene");
   cli_->add_flag("--json", json_, "Print one JSON object instead of the report");
+  cli_->add_flag("--strict", strict_,
+                 "The passivity lint's findings are errors (exit 2), not warnings");
 }
 
 int InfoCommand::execute() const {
   const std::string path = scene_.empty() ? sim::default_scene_path() : scene_;
-  const sim::SceneInfo si = sim::describe_scene(sim::load_scene(path));
+  sim::SceneOverrides overrides;
+  overrides.strict = strict_;
+  const sim::Scene scene = sim::load_scene(path, overrides);
+  for (const std::string& w : scene.warnings) std::cerr << "numen: warning: " << w << "\n";
+  const sim::SceneInfo si = sim::describe_scene(scene);
   if (json_)
     std::cout << sim::format_scene_info_json(si) << std::endl;
   else

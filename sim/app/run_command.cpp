@@ -96,6 +96,11 @@ RunCommand::RunCommand(CLI::App& parent)
       ->check(count_check(0, std::numeric_limits<std::uint32_t>::max()));
   run->add_option("--coupling", coupling_, "Override the scene's coupling mode")
       ->check(CLI::IsMember({"god-object", "first-order", "direct"}));
+  run->add_flag("--replay", replay_,
+                "Run the device in replay: the encoders read the trajectory whatever the torques "
+                "(the scene's [device.plant] is checked, then not used)");
+  run->add_flag("--strict", strict_,
+                "The passivity lint's findings are errors (exit 2), not warnings");
 }
 
 int RunCommand::execute() const {
@@ -113,6 +118,8 @@ int RunCommand::execute() const {
                           "--scene-rt-priority, --scene-cpu)");
   sim::SceneOverrides overrides;
   if (!coupling_.empty()) overrides.coupling = sim::parse_coupling_mode(coupling_);
+  overrides.replay = replay_;
+  overrides.strict = strict_;
   const std::string path = scene_path_.empty() ? sim::default_scene_path() : scene_path_;
   const sim::Scene scene = sim::load_scene(path, overrides);
   if (cli_->count("--view-rate") > 0 && view_rate_ * scene.model.dt > 1.0)

@@ -92,6 +92,14 @@ RunSummary SceneRunner::summary() const {
     s.limit_cycle_amplitude_mm = f.limit_cycle.amplitude_m() * 1e3;
     s.limit_cycle_hz = f.limit_cycle.frequency_hz();
     s.limit_cycle_time_s = f.limit_cycle.time_s();
+    if (s.limit_cycle_detected) {
+      std::ostringstream os;
+      os << std::setprecision(3) << "the device's handle went into a limit cycle at "
+         << s.limit_cycle_time_s << " s (" << s.limit_cycle_amplitude_mm << " mm at "
+         << s.limit_cycle_hz << " Hz): the haptic loop is not stable with this plant and "
+         << "feedback (numen info: the passivity lint; docs/device_plant.md)";
+      s.warnings.push_back(os.str());
+    }
   }
   s.soft_start_ramps = static_cast<std::int64_t>(loop_.impedance().torque_counters().soft_starts);
   // A run that ends inside the start-up: the periods after its last minimum are the god-object's.

@@ -435,6 +435,17 @@ Scene load_scene(const std::string& path, const SceneOverrides& overrides) {
   warn_clamped_contacts(scene.model, scene.warnings);
   warn_yielding_coupling(scene.model, scene.warnings);
   parse_multirate(root, scene);
+  if (overrides.replay) scene.plant.reset();
+  scene.passivity_lint = passivity_lint(scene);
+  for (const PassivityLintRow& row : scene.passivity_lint) {
+    if (row.passes) continue;
+    if (overrides.strict) {
+      const TomlTable plant = *root.table("device")->table("plant");
+      plant.fail(plant.has("damping") ? "damping" : "inertia",
+                 passivity_lint_warning(row) + " (--strict)");
+    }
+    scene.warnings.push_back(passivity_lint_warning(row));
+  }
   return scene;
 }
 

@@ -4,6 +4,7 @@
 #include "numen/sim/scene/scene_info.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <iomanip>
@@ -76,6 +77,8 @@ SceneInfo describe_scene(const Scene& scene) {
   info.device_kind = hal::to_string(device.kind);
   info.device_managed = device.canopen.managed;
   for (const hal::AxisConfig& a : device.axes) info.device_axes.push_back({a.name, a.rated_torque});
+  info.device_loop = scene.plant ? "closed" : "replay";
+  info.passivity_lint = scene.passivity_lint;
   if (device.canopen.managed) {
     for (std::size_t a = 0; a < device.canopen.axes.size(); ++a) {
       const hal::CanopenAxisConfig& c = device.canopen.axes[a];
@@ -129,6 +132,13 @@ std::string format_scene_info(const SceneInfo& i) {
     for (int a : n.axes) os << " " << i.device_axes[static_cast<std::size_t>(a)].name;
     os << (n.dcf.empty() ? " (no DCF)" : ", DCF " + n.dcf) << "\n";
   }
+  os << "  device loop: " << i.device_loop << "\n";
+  for (const PassivityLintRow& r : i.passivity_lint)
+    os << "    passivity of " << r.axis_name << ": K " << r.stiffness << ", B " << r.damping
+       << " rendered at T " << r.period_s << " s; b " << r.device_damping << " against K T/2 + |B| "
+       << r.stiffness * r.period_s / 2.0 + std::abs(r.damping)
+       << " (Colgate & Schenkel), K against max(2b/T, 2 f_c/Δ) " << r.abbott_okamura_bound
+       << " (Abbott & Okamura): " << (r.passes ? "passive" : "NOT PASSIVE") << "\n";
   return os.str();
 }
 
@@ -172,7 +182,21 @@ std::string format_scene_info_json(const SceneInfo& i) {
                  {"kind", i.device_kind},
                  {"managed", i.device_managed},
                  {"axes", std::move(axes)},
-                 {"nodes", std::move(nodes)}};
+                 {"nodes", std::move(nodes)},
+                 {"loop", i.device_loop}};
+  nlohmann::ordered_json lint = nlohmann::ordered_json::array();
+  for (const PassivityLintRow& r : i.passivity_lint)
+    lint.push_back({{"axis", r.axis_name},
+                    {"period_s", r.period_s},
+                    {"stiffness", r.stiffness},
+                    {"damping", r.damping},
+                    {"device_damping", r.device_damping},
+                    {"coulomb", r.coulomb},
+                    {"resolution", r.resolution},
+                    {"colgate_margin", r.colgate_margin},
+                    {"abbott_okamura_bound", r.abbott_okamura_bound},
+                    {"passive", r.passes}});
+  j["passivity_lint"] = std::move(lint);
   // A scene's file name may hold bytes that are not UTF-8: replaced by U+FFFD instead of throwing.
   return j.dump(-1, ' ', false, nlohmann::ordered_json::error_handler_t::replace);
 }

@@ -242,6 +242,10 @@ TEST(RunRecordedTrials, EveryTrialRunsThroughEveryJigsawsSceneWithoutASafetyStop
       EXPECT_FALSE(r.nan_detected);
       EXPECT_FALSE(r.divergence.latched) << r.divergence.cause;
       EXPECT_EQ(r.lifecycle, "active");
+      // The shipped scenes with a [device.plant] run the haptic loop closed: no limit cycle.
+      EXPECT_EQ(r.device_loop, s.plant ? "closed" : "replay");
+      EXPECT_FALSE(r.limit_cycle_detected) << r.limit_cycle_amplitude_mm << " mm at "
+                                           << r.limit_cycle_hz << " Hz";
     }
   }
 }

@@ -20,6 +20,7 @@
 #include "numen/sim/device/hand.hpp"
 #include "numen/sim/device/plant_motion.hpp"
 #include "numen/sim/input/trajectory.hpp"
+#include "numen/sim/scene/passivity_lint.hpp"
 
 namespace numen::sim {
 
@@ -87,6 +88,9 @@ struct Scene {
   /// under the drives' torques and the hand (closed loop, PlantMotion); unset, it replays the
   /// trajectory whatever the torques. torque_phase_s is compute_phase_s.
   std::optional<DevicePlantSettings> plant;
+  /// The passivity lint of the plant against the feedback coupling (passivity_lint.hpp; empty
+  /// in replay). A failing row is also a warning.
+  std::vector<PassivityLintRow> passivity_lint;
   /// Set by a [multirate] table: the god-object runs at dt against an intermediate contact
   /// model the scene loop refreshes every scene_dt (the run harness, SceneRunner).
   std::optional<MultirateScene> multirate;
@@ -102,6 +106,12 @@ struct SceneOverrides {
   /// for an impedance scene; an admittance scene's coupling cannot be changed, nor another
   /// scene's made admittance (InputError, key "--coupling").
   std::optional<core::CouplingMode> coupling;
+  /// Runs the device in replay (`numen run --replay`): the scene's [device.plant] is read and
+  /// checked, then dropped; the encoders read the trajectory whatever the torques.
+  bool replay = false;
+  /// The passivity lint's findings are errors (`--strict`): InputError at [device.plant]
+  /// damping instead of a warning (passivity_lint.hpp).
+  bool strict = false;
 };
 
 /// Loads and compiles `path`. Throws InputError.

@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+#include "numen/sim/scene/passivity_lint.hpp"
+
 #include "numen/core/data_size.hpp"
 
 namespace numen::sim {
@@ -57,6 +59,10 @@ struct SceneInfo {
   bool device_managed = false;     ///< The managed CANopen stack ([device.canopen] managed).
   std::vector<DeviceAxisLine> device_axes;   ///< Every axis, in the scene's order.
   std::vector<DeviceNodeLine> device_nodes;  ///< Managed stack only; else empty.
+  /// "closed" (the scene declares [device.plant]) or "replay".
+  std::string device_loop;
+  /// The passivity lint of each driven plant axis (Scene::passivity_lint).
+  std::vector<PassivityLintRow> passivity_lint;
 };
 
 /// Describes a loaded scene (makes one Data to measure it). Load time only: allocates.
