@@ -4,8 +4,10 @@
 # Pass: the start-up reaches active, torque flows (the device applied non-zero torque), no
 # frame lost (SocketCAN drops 0 on both ports, every SYNC answered by the device, the
 # controller read every period's sample), candump's SYNC period median 1 ms +- 0.1 ms, the
-# log holds only the device's and the controller's ids. Prints the latency figures and the
-# end-to-end histogram as HIL-CSV lines.
+# log holds only the device's and the controller's ids; the default scene's [device.plant] closes
+# the haptic loop in the device process (the trainer moves under the torques it receives and the
+# simulated hand) and it stays free of limit cycles with its plant bounded. Prints the latency
+# figures and the end-to-end histogram as HIL-CSV lines.
 . /hil/lib.sh
 period_us=${HIL_PAIR_PERIOD_US:-1000}
 pair_scene "$period_us"
@@ -34,13 +36,17 @@ nonzero=$(field /tmp/dev.txt 'non-zero torque ')
 dev_drop=$(field /tmp/dev.txt 'port: rx [0-9]+, tx [0-9]+, dropped ')
 overruns=$(field /tmp/run.txt 'loop overruns: ')
 e2e=$(grep 'end-to-end (SYNC' /tmp/run.txt | sed 's/.*us: //')
+device_loop=$(grep -o 'device loop [a-z]*' /tmp/dev.txt | awk '{ print $3 }')
+limit_cycle=$(grep -o 'limit cycle [a-z]*' /tmp/dev.txt | awk '{ print $3 }')
+plant=$(grep -o 'plant [a-z]*$' /tmp/dev.txt | awk '{ print $2 }')
+closed_loop=$(grep 'device loop' /tmp/dev.txt | sed 's/^ *//')
 ctl_syncs=$(grep -c '^([0-9.]*) vcan0 080#' /tmp/pair.log)
 # SYNC period median from candump's timestamps (us).
 sync_median=$(grep ' vcan0 080#' /tmp/pair.log | sed 's/^(\([0-9]*\)\.\([0-9]*\)).*/\1\2/' |
   awk 'NR > 1 { print $1 - p } { p = $1 }' | sort -n | awk '{ a[NR] = $1 } END { print a[int((NR + 1) / 2)] }')
 ids=$(sed 's/^([0-9.]*) vcan0 \([0-9A-F]*\)#.*/\1/' /tmp/pair.log | sort -u | tr '\n' ' ')
 unexpected=$(echo "$ids" | tr ' ' '\n' | grep -v -E '^(000|080|08[1-5]|18[1-5]|20[1-3]|28[1-3]|70[1-5]|77F)$' | grep -c . )
-detail="period $period_us us; syncs sent $ctl_syncs (candump), device SYNCs $syncs answered $answered, drops ctl $rx_drop dev $dev_drop, invalid periods $invalid, active at period $active, periods with torque commanded $torque_periods, device non-zero torque RPDO periods $nonzero, overruns $overruns, safe stops $faults ${first_fault:+($first_fault)}, trace dropped $trace_drop, SYNC period median ${sync_median} us, ids $ids; end-to-end us: $e2e"
+detail="period $period_us us; syncs sent $ctl_syncs (candump), device SYNCs $syncs answered $answered, drops ctl $rx_drop dev $dev_drop, invalid periods $invalid, active at period $active, periods with torque commanded $torque_periods, device non-zero torque RPDO periods $nonzero, overruns $overruns, safe stops $faults ${first_fault:+($first_fault)}, trace dropped $trace_drop, SYNC period median ${sync_median} us, ids $ids; $closed_loop; end-to-end us: $e2e"
 [ "$rx_drop" = 0 ] && [ "$dev_drop" = 0 ] || fail_timing /tmp/run.txt "SocketCAN dropped frames: $detail"
 [ -n "$active" ] && [ "$active" -ge 0 ] || fail_timing /tmp/run.txt "lifecycle never active: $detail"
 # Every SYNC reaches the device; every SYNC after the start-up (nodes operational by the period
@@ -54,6 +60,9 @@ if [ "$faults" != 0 ]; then
 fi
 [ "$nonzero" -gt 0 ] || fail_premise "$first_fault" "no torque reached the device: $detail"
 [ "$unexpected" = 0 ] || fail "unexpected ids on the bus: $detail"
+[ "$device_loop" = closed ] || fail "the device did not close the haptic loop: $detail"
+[ "$plant" = bounded ] || fail "the device's plant ran away: $detail"
+[ "$limit_cycle" = no ] || fail "the closed haptic loop went into a limit cycle: $detail"
 [ "$trace_drop" = 0 ] || fail_timing /tmp/run.txt "trace records dropped: $detail"
 [ "$sync_median" -ge $((period_us * 9 / 10)) ] && [ "$sync_median" -le $((period_us * 11 / 10)) ] || fail_timing /tmp/run.txt "SYNC period off: $detail"
 e2e_histogram /tmp/pair.csv $((period_us / 40))
