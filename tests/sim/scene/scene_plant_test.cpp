@@ -105,11 +105,13 @@ TEST(ScenePlant, TheHandIsOneTableForBothKindsOfDevice) {
   expect_located(load_error(dir, bad, "badhand.toml"), (dir.path() / "badhand.toml").string(),
                  line_of(bad, "mass = -0.4"), column_of(bad, "mass", "-0.4"), "device.hand.mass",
                  "must be");
-  // An admittance scene's hand in its former place is read; given twice it is refused.
-  const std::string admittance = numen::test::shipped_scene_text("admittance.toml");
-  ASSERT_NE(admittance.find("[device.admittance.hand]"), std::string::npos);
+  // An admittance scene's hand in its former place ([device.admittance.hand]) is still read;
+  // given in both places it is refused.
+  const std::string admittance = replace(numen::test::shipped_scene_text("admittance.toml"),
+                                         "[device.hand]", "[device.admittance.hand]");
   const Scene a = load_scene(dir.write("adm.toml", admittance));
-  EXPECT_GT(a.hand.stiffness, 0.0);
+  EXPECT_EQ(a.hand.stiffness, 200.0);
+  EXPECT_EQ(a.hand.damping, 6.0);
   const std::string twice =
       replace(admittance, "[device.admittance.hand]", hand + "\n[device.admittance.hand]");
   const InputError e = load_error(dir, twice, "twice.toml");
