@@ -196,8 +196,10 @@ const hal::DeviceMotionState& PlantMotion::at_sync(std::int64_t t_ns,
   }
   const double t1 = static_cast<double>(t_ns - start_ns_) * 1e-9;
   const int n = static_cast<int>(state_.q.size());
-  if (!had_sync_) {
-    // The device starts where the hand means it to be, at rest.
+  const double gap = static_cast<double>(t_ns - last_sync_ns_) * 1e-9;
+  if (!had_sync_ || (gap > kMaxSyncGapS && !figures_.diverged)) {
+    // The device starts where the hand means it to be, at rest; after a silence of the bus
+    // longer than kMaxSyncGapS (a controller restarted) it starts again there.
     had_sync_ = true;
     const hal::AxisVector qi = instrument_axes(config_, *kinematics_, trajectory_->at(t1));
     for (int i = 0; i < n; ++i) plants_[static_cast<std::size_t>(i)].reset(qi[i], 0.0);
@@ -206,11 +208,17 @@ const hal::DeviceMotionState& PlantMotion::at_sync(std::int64_t t_ns,
   } else if (!figures_.diverged && t_ns > last_sync_ns_) {
     const double t0 = static_cast<double>(last_sync_ns_ - start_ns_) * 1e-9;
     const double period = t1 - t0;
+    // `substeps` per control period of the scene; a longer interval (SYNCs late or lost on a
+    // real bus) gets as many more.
+    const double nominal = config_.control_period_s > 0.0 ? config_.control_period_s : period;
+    const int total = settings_.substeps *
+                      static_cast<int>(std::clamp(std::ceil(period / nominal - 1e-9), 1.0,
+                                                  kMaxSyncGapS / nominal + 1.0));
     const double phase = std::min(settings_.torque_phase_s, period);
-    int before = static_cast<int>(std::lround(settings_.substeps * phase / period));
+    int before = static_cast<int>(std::lround(total * phase / period));
     if (phase > 0.0) before = std::max(before, 1);
-    before = std::min(before, settings_.substeps - 1);
-    const int after = std::max(settings_.substeps - before, 1);
+    before = std::min(before, total - 1);
+    const int after = std::max(total - before, 1);
     advance(t0, t0 + phase, before);
     for (int i = 0; i < n; ++i)
       plants_[static_cast<std::size_t>(i)].command(i < commands.torque.size() ? commands.torque[i]

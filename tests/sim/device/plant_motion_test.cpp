@@ -78,6 +78,23 @@ TEST(PlantMotion, FreeAxisFollowsTheDrivesTorque) {
   EXPECT_NEAR(late.state().qdot[0], 2.0 * (1.0 - 0.25e-3), 1e-9);
 }
 
+// SYNCs late or lost: the interval is integrated whole (q̇ = (τ/m) t across a 5-period gap); a
+// silence of more than kMaxSyncGapS restarts the device at rest at the intent.
+TEST(PlantMotion, ALateSyncIsIntegratedAndALongSilenceRestarts) {
+  const Trajectory traj = still_at(core::Vec3(0.01, 0.0, 0.0));
+  DevicePlantSettings s = plant();
+  s.torque_phase_s = 0.0;
+  PlantMotion m(tracker(), s, no_hand(), traj);
+  (void)m.at_sync(0, torque_on_x(0.0));
+  (void)m.at_sync(1 * kMs, torque_on_x(0.2));
+  (void)m.at_sync(6 * kMs, torque_on_x(0.2));
+  EXPECT_NEAR(m.state().qdot[0], 2.0 * 6e-3, 1e-12);
+  (void)m.at_sync(6 * kMs + static_cast<std::int64_t>(kMaxSyncGapS * 1e9) + kMs, torque_on_x(0.2));
+  EXPECT_EQ(m.state().qdot[0], 0.0);
+  EXPECT_NEAR(m.state().q[0], 0.01, 1e-12);
+  EXPECT_FALSE(m.figures().diverged);
+}
+
 // The hand alone (no torque) pulls a damped device onto the intent; the device started there,
 // so it is moved by the hand's 10 mm offset only.
 TEST(PlantMotion, TheHandPullsTheHandleToTheIntent) {

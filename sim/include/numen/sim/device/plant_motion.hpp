@@ -18,8 +18,9 @@
 /// Between two SYNCs (period T) the drives hold the torque they last received: the plant steps
 /// to the instant the controller's torque frames arrive (`torque_phase_s` after the SYNC, the
 /// scene's compute phase), takes them, and steps to the next SYNC, in `substeps` steps per
-/// period in all (sub-steps of equal length within each part). The encoders then latch q (the
-/// emulator quantises it to counts).
+/// control period spanned in all (sub-steps of equal length within each part; see
+/// kMaxSyncGapS for a silent bus). The encoders then latch q (the emulator quantises it to
+/// counts).
 ///
 /// Also measured here, where the physics is exact (figures()): the energy that flowed into the
 /// device from the hand (the one-port of Colgate & Schenkel 1997 and of the passivity observer
@@ -44,6 +45,10 @@ namespace numen::sim {
 
 /// Most sub-steps per control period a plant takes.
 inline constexpr int kMaxPlantSubsteps = 1000;
+/// A silence of the bus longer than this (s) between two SYNCs restarts the emulated device at
+/// rest where the hand means it to be (a controller that stopped and started again); shorter
+/// intervals are integrated with `substeps` per control period they span.
+inline constexpr double kMaxSyncGapS = 1.0;
 
 /// An impedance device's mechanics (scene `[device.plant]`; docs/scenes.md).
 struct DevicePlantSettings {
