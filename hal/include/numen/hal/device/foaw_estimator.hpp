@@ -19,8 +19,11 @@
 /// d is the noise band: a line the signal stays within ±d of cannot be told from it, so the
 /// window grows while the motion is a line to within the noise (a long window: the noise's
 /// effect, ≤ 2d / (t_k − t_{k−n}), shrinks) and shrinks when it bends (a short window: small
-/// lag). With quantised values (step q) the paper's d is the half count q/2, the default here
-/// (DeviceConfig::foaw_noise_counts = 0.5, divided by the axis's counts_per_unit).
+/// lag). Values rounded to a step q lie within ±q/2 of the motion: the default d is that half
+/// count (DeviceConfig::foaw_noise_counts = 0.5, divided by the axis's counts_per_unit). The
+/// end-fit line runs through two rounded values, so a point of a straight motion can lie up to
+/// q from it: a band of one count lets the window grow much longer on fine encoders at high
+/// rates (docs/architecture.md has both measured).
 /// The paper's uniform T is replaced by the values' own timestamps, so a lost frame is weighted
 /// by the time it spans, as in RateEstimator.
 ///
