@@ -7,7 +7,7 @@
 ///    (5 axes: decode, checks, rates, forward kinematics and link Jacobians), one period per
 ///    iteration with fresh TPDOs fed untimed; bare = velocity cutoff +∞ (α = 1, no exp).
 ///  - FoawEstimatorUpdate/{sine,still}: FOAW (foaw_estimator.hpp, window up to 32, band a half
-///    count) on the same sine, and on a still axis (every window accepted: the O(N²) worst case).
+///    count) on the same sine, and on a still axis (every window accepted: the longest search).
 /// Run: ./build/tests/numen_bench --benchmark_filter='RateEstimator|Foaw|InstrumentDeviceSample'
 
 #include <benchmark/benchmark.h>

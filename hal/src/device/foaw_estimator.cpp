@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 
 #include "numen/hal/device/axis.hpp"
@@ -45,18 +46,25 @@ double FoawEstimator::update(double value, std::int64_t time_ns) noexcept {
   count_ = std::min(count_ + 1, kCapacity);
   if (count_ < 2) return rate_;
 
-  // Grow the window from 1 while every value inside lies within ±d of the end-fit line.
+  // Grow the window from 1 while every value inside lies within ±d of the end-fit line. Value j
+  // back is inside for a slope b iff |Δ_j − b τ_j| ≤ d (Δ_j = y − y_{k−j}, τ_j = t_k − t_{k−j}),
+  // i.e. b ∈ [(Δ_j − d)/τ_j, (Δ_j + d)/τ_j]: the values inside a window bound its slope to the
+  // intersection [lo, hi], narrowed by one value per growth (O(N) per update).
+  // A value exactly on the band's edge is inside (|…| ≤ d): rounded values on a grid put many
+  // there, so the edge is widened by 1e-9 d, far above the slopes' rounding errors.
+  const double d = noise_band_ * (1.0 + 1e-9);
   const int longest = std::min(max_window_, count_ - 1);
-  double slope = (y - value_back(1)) / (static_cast<double>(time_ns - time_back(1)) * 1e-9);
+  auto tau = [&](int j) { return static_cast<double>(time_ns - time_back(j)) * 1e-9; };
+  double slope = (y - value_back(1)) / tau(1);
   int window = 1;
+  double lo = -std::numeric_limits<double>::infinity();
+  double hi = std::numeric_limits<double>::infinity();
   for (int n = 2; n <= longest; ++n) {
-    const double b = (y - value_back(n)) / (static_cast<double>(time_ns - time_back(n)) * 1e-9);
-    bool inside = true;
-    for (int j = 1; j < n && inside; ++j) {
-      const double line = y - b * (static_cast<double>(time_ns - time_back(j)) * 1e-9);
-      inside = std::abs(value_back(j) - line) <= noise_band_;
-    }
-    if (!inside) break;
+    const double tj = tau(n - 1), dj = y - value_back(n - 1);
+    lo = std::max(lo, (dj - d) / tj);
+    hi = std::min(hi, (dj + d) / tj);
+    const double b = (y - value_back(n)) / tau(n);
+    if (!(b >= lo && b <= hi)) break;
     slope = b;
     window = n;
   }

@@ -37,8 +37,10 @@
 ///   difference) and typically ÷n.
 /// - Wrapping axes: the history holds the unwrapped values (each new value is the previous
 ///   one plus the wrapped difference), rebased by whole turns when it grows past 1000 rad.
-/// - Work: O(N²) per value in the worst case (a still axis accepts every window; N = 32 gives
-///   at most 496 point checks), O(1) state of N + 1 values and timestamps.
+/// - Work: O(N) per value. Value j back is inside the band of a slope b iff
+///   b ∈ [(Δ_j − d)/τ_j, (Δ_j + d)/τ_j] (Δ_j = y_k − y_{k−j}, τ_j = t_k − t_{k−j}), so the values
+///   inside a window bound its slope to the intersection of their intervals, narrowed by one
+///   value as the window grows by one. State: N + 1 values and timestamps.
 ///
 /// Allocation free, noexcept, no locks; one instance per axis (InstrumentDevice's fixed arrays).
 /// Not thread safe.
