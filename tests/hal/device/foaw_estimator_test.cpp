@@ -1,8 +1,8 @@
 // Tests of numen/hal/device/foaw_estimator.hpp: first-order adaptive windowing (end fit) of one
 // encoder axis — the window against a brute-force reading of its definition, exact slopes on
 // lines at any intervals, the velocity bound on a jump, wrapped differences, the history's
-// capacity, reset, no allocation; and the 2 Hz pivot sine at 1 and 10 kHz (quantisation
-// noise ≤ q / Δt and below the bare difference's, lag, gain). Simulated time only.
+// capacity, reset, no allocation; and the 2 Hz pivot sine at 1 and 10 kHz (error against the
+// true rate below the bare difference's, lag, gain). Simulated time only.
 #include "numen/hal/device/foaw_estimator.hpp"
 
 #include <gtest/gtest.h>
