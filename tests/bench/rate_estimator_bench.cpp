@@ -6,7 +6,9 @@
 ///  - InstrumentDeviceSample/{filtered,bare}: InstrumentDevice::sample() of the default trocar
 ///    (5 axes: decode, checks, rates, forward kinematics and link Jacobians), one period per
 ///    iteration with fresh TPDOs fed untimed; bare = velocity cutoff +∞ (α = 1, no exp).
-/// Run: ./build/tests/numen_bench --benchmark_filter='RateEstimator|InstrumentDeviceSample'
+///  - FoawEstimatorUpdate/{sine,still}: FOAW (foaw_estimator.hpp, window up to 32, band a half
+///    count) on the same sine, and on a still axis (every window accepted: the longest search).
+/// Run: ./build/tests/numen_bench --benchmark_filter='RateEstimator|Foaw|InstrumentDeviceSample'
 
 #include <benchmark/benchmark.h>
 
@@ -18,6 +20,7 @@
 #include "numen/hal/canopen/canopen.hpp"
 #include "numen/hal/device/axis.hpp"
 #include "numen/hal/device/device_config.hpp"
+#include "numen/hal/device/foaw_estimator.hpp"
 #include "numen/hal/device/instrument_device.hpp"
 #include "numen/hal/device/rate_estimator.hpp"
 
@@ -47,6 +50,21 @@ void RateEstimatorUpdate(benchmark::State& state) {
   state.SetLabel(filtered ? "filtered" : "bare");
 }
 BENCHMARK(RateEstimatorUpdate)->Arg(1)->Arg(0);
+
+void FoawEstimatorUpdate(benchmark::State& state) {
+  const bool sine = state.range(0) != 0;
+  const double q = 2.0 * std::numbers::pi / 16384.0;
+  numen::hal::FoawEstimator r(numen::hal::kFoawMaxWindow, 0.5 * q, 10.0, false);
+  double values[1000];
+  for (std::int64_t k = 0; k < 1000; ++k) values[k] = sine ? pivot_value(k) : 0.25;
+  std::int64_t k = 0;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(r.update(values[k % 1000], k * kMs));
+    ++k;
+  }
+  state.SetLabel(sine ? "sine" : "still");
+}
+BENCHMARK(FoawEstimatorUpdate)->Arg(1)->Arg(0);
 
 void InstrumentDeviceSample(benchmark::State& state) {
   const bool filtered = state.range(0) != 0;

@@ -8,6 +8,7 @@
 #include <numbers>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 
 #include "geometry_check.hpp"
 #include "numen/hal/canopen/canopen.hpp"
@@ -238,6 +239,18 @@ const char* to_string(DeviceKind kind) noexcept {
   return "unknown";
 }
 
+const char* to_string(VelocityEstimator estimator) noexcept {
+  switch (estimator) {
+    case VelocityEstimator::kDifference:
+      return "difference";
+    case VelocityEstimator::kFilter:
+      return "filter";
+    case VelocityEstimator::kFoaw:
+      return "foaw";
+  }
+  return "unknown";
+}
+
 int expected_axis_count(DeviceKind kind) noexcept {
   switch (kind) {
     case DeviceKind::kTrocarInstrument:
@@ -291,6 +304,20 @@ void validate(const DeviceConfig& c) {
   if (std::isnan(c.velocity_cutoff_hz) || c.velocity_cutoff_hz <= 0.0) {
     fail(c, "velocity_cutoff_hz",
          "must be > 0 Hz (+inf: no filter) (got " + std::to_string(c.velocity_cutoff_hz) + ")");
+  }
+  if (std::string_view(to_string(c.velocity_estimator)) == "unknown") {
+    fail(c, "velocity_estimator",
+         "must be difference, filter or foaw (got " +
+             std::to_string(static_cast<int>(c.velocity_estimator)) + ")");
+  }
+  if (c.foaw_max_window < 1 || c.foaw_max_window > kFoawMaxWindow) {
+    fail(c, "foaw_max_window",
+         "must be in [1, " + std::to_string(kFoawMaxWindow) + "] sample intervals (got " +
+             std::to_string(c.foaw_max_window) + ")");
+  }
+  if (!std::isfinite(c.foaw_noise_counts) || c.foaw_noise_counts < 0.0) {
+    fail(c, "foaw_noise_counts",
+         "must be finite and >= 0 counts (got " + std::to_string(c.foaw_noise_counts) + ")");
   }
   if (!std::isfinite(c.soft_start_s) || c.soft_start_s < 0.0 || c.soft_start_s > kMaxSoftStartS) {
     fail(c, "soft_start_s",

@@ -5,6 +5,7 @@
 #include "numen/hal/device/instrument_device.hpp"
 
 #include <algorithm>
+#include <limits>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -41,13 +42,19 @@ InstrumentDevice::InstrumentDevice(DeviceConfig config,
                                 std::to_string(kMaxLinks) + ")");
   }
   const double age = config_.effective_max_sample_age_s();
+  use_foaw_ = config_.velocity_estimator == VelocityEstimator::kFoaw;
   hold_.resize(n_);
   for (int i = 0; i < n_; ++i) {
     const AxisConfig& a = config_.axes[static_cast<std::size_t>(i)];
     limits_[static_cast<std::size_t>(i)] = make_check_limits(a, age, config_.jump_tolerance_counts);
     hold_[i] = std::clamp(0.0, a.min, a.max);
-    rates_[static_cast<std::size_t>(i)] =
-        RateEstimator(config_.velocity_cutoff_hz, a.max_speed, a.wraps);
+    const double cutoff = config_.velocity_estimator == VelocityEstimator::kDifference
+                              ? std::numeric_limits<double>::infinity()
+                              : config_.velocity_cutoff_hz;
+    rates_[static_cast<std::size_t>(i)] = RateEstimator(cutoff, a.max_speed, a.wraps);
+    foaws_[static_cast<std::size_t>(i)] =
+        FoawEstimator(config_.foaw_max_window, config_.foaw_noise_counts / a.counts_per_unit,
+                      a.max_speed, a.wraps);
   }
   if (config_.canopen.managed) {
     for (int i = 0; i < n_; ++i) {
@@ -64,6 +71,7 @@ InstrumentDevice::InstrumentDevice(DeviceConfig config,
 void InstrumentDevice::reset() noexcept {
   axes_ = {};
   for (RateEstimator& r : rates_) r.reset();
+  for (FoawEstimator& r : foaws_) r.reset();
   last_sample_ = DeviceSample{};
   last_sample_.q = hold_;
   last_sample_.qdot = AxisVector::Zero(n_);
@@ -173,7 +181,11 @@ DeviceSample InstrumentDevice::sample(std::int64_t now_ns) noexcept {
           check_sample(lim, v, st.pending_stamp_ns, now_ns, st.has_value ? &st.last : nullptr) |
           st.superseded;
       if (c == SampleFault::kNone) {
-        rates_[k].update(v, st.pending_stamp_ns);
+        if (use_foaw_) {
+          foaws_[k].update(v, st.pending_stamp_ns);
+        } else {
+          rates_[k].update(v, st.pending_stamp_ns);
+        }
         st.last = AcceptedValue{v, st.pending_stamp_ns};
         st.has_value = true;
         accepted = true;
@@ -199,6 +211,7 @@ DeviceSample InstrumentDevice::sample(std::int64_t now_ns) noexcept {
       if (!accepted && held_stale) {
         f |= SampleFault::kStale;
         rates_[k].reset();
+        foaws_[k].reset();
       }
     }
 
@@ -215,7 +228,7 @@ DeviceSample InstrumentDevice::sample(std::int64_t now_ns) noexcept {
       ready = false;
     }
     s.q[i] = st.has_value ? st.last.value : hold_[i];
-    s.qdot[i] = rates_[k].rate();
+    s.qdot[i] = use_foaw_ ? foaws_[k].rate() : rates_[k].rate();
     if (accepted) {
       st.periods_since_accepted = 0;
     } else if (st.periods_since_accepted < UINT32_MAX) {

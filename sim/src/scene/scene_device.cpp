@@ -383,8 +383,9 @@ void parse_device(const TomlTable& root, Scene& scene, const TomlTable*& body_ta
   auto dev = root.table("device");
   if (!dev) root.fail("device", "missing: a scene needs a [device] (the tracked instrument)");
   dev->allow_only({"kind", "name", "attach", "max_sample_age", "jump_tolerance_counts",
-                   "velocity_cutoff", "soft_start", "first_node_id", "tool_offset", "trocar", "tracker", "phantom", "feedback",
-                   "axis", "canopen", "admittance", "hand", "plant"});
+                   "velocity_cutoff", "velocity_estimator", "foaw_max_window", "foaw_noise_counts",
+                   "soft_start", "first_node_id", "tool_offset", "trocar", "tracker", "phantom",
+                   "feedback", "axis", "canopen", "admittance", "hand", "plant"});
   const std::string kind =
       dev->choice("kind", {"trocar-instrument", "pose-tracker", "phantom"}, std::nullopt);
   const auto node = dev->integer_or("first_node_id", 1);
@@ -404,6 +405,19 @@ void parse_device(const TomlTable& root, Scene& scene, const TomlTable*& body_ta
     cfg.max_sample_age_s = dev->number_in("max_sample_age", 1e-9, kInf, std::nullopt);
   cfg.jump_tolerance_counts = dev->number_in("jump_tolerance_counts", 0.0, kInf, cfg.jump_tolerance_counts);
   cfg.velocity_cutoff_hz = dev->number_in("velocity_cutoff", 1e-6, kInf, cfg.velocity_cutoff_hz);
+  {
+    const std::string est = dev->choice("velocity_estimator", {"difference", "filter", "foaw"},
+                                        hal::to_string(cfg.velocity_estimator));
+    cfg.velocity_estimator = est == "difference" ? hal::VelocityEstimator::kDifference
+                             : est == "foaw"     ? hal::VelocityEstimator::kFoaw
+                                                 : hal::VelocityEstimator::kFilter;
+  }
+  const auto window = dev->integer_or("foaw_max_window", cfg.foaw_max_window);
+  if (window < 1 || window > hal::kFoawMaxWindow)
+    dev->fail("foaw_max_window", "must be in [1, " + std::to_string(hal::kFoawMaxWindow) +
+                                     "] sample intervals");
+  cfg.foaw_max_window = static_cast<int>(window);
+  cfg.foaw_noise_counts = dev->number_in("foaw_noise_counts", 0.0, 1e6, cfg.foaw_noise_counts);
   cfg.soft_start_s =
       dev->number_in("soft_start", 0.0, hal::kMaxSoftStartS, hal::kDefaultSceneSoftStartS);
   if (auto off = dev->table("tool_offset")) {

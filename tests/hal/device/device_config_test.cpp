@@ -106,6 +106,31 @@ TEST(DeviceConfig, VelocityCutoffMustBePositiveOrInfinite) {
   EXPECT_EQ(error_of(c), "");
 }
 
+TEST(DeviceConfig, VelocityEstimatorAndFoawSettingsAreChecked) {
+  DeviceConfig c = make_default_trocar_config();
+  EXPECT_EQ(c.velocity_estimator, VelocityEstimator::kFilter);
+  EXPECT_STREQ(to_string(VelocityEstimator::kDifference), "difference");
+  EXPECT_STREQ(to_string(VelocityEstimator::kFilter), "filter");
+  EXPECT_STREQ(to_string(VelocityEstimator::kFoaw), "foaw");
+  c.velocity_estimator = static_cast<VelocityEstimator>(7);
+  EXPECT_NE(error_of(c).find("velocity_estimator"), std::string::npos);
+  c.velocity_estimator = VelocityEstimator::kFoaw;
+  EXPECT_EQ(error_of(c), "");
+  for (const int bad : {0, -1, kFoawMaxWindow + 1}) {
+    c.foaw_max_window = bad;
+    EXPECT_NE(error_of(c).find("foaw_max_window"), std::string::npos) << bad;
+  }
+  c.foaw_max_window = 1;
+  EXPECT_EQ(error_of(c), "");
+  for (const double bad : {-0.5, std::numeric_limits<double>::quiet_NaN(),
+                           std::numeric_limits<double>::infinity()}) {
+    c.foaw_noise_counts = bad;
+    EXPECT_NE(error_of(c).find("foaw_noise_counts"), std::string::npos) << bad;
+  }
+  c.foaw_noise_counts = 0.0;
+  EXPECT_EQ(error_of(c), "");
+}
+
 TEST(DeviceConfig, SoftStartIsOffByDefaultAndBoundedToTenSeconds) {
   DeviceConfig c = make_default_trocar_config();
   EXPECT_EQ(c.soft_start_s, 0.0);  // the hal's default: unscaled torques (scenes: 0.1 s)

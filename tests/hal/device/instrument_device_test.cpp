@@ -20,6 +20,7 @@
 #include "kinematics_check.hpp"
 #include "numen/hal/canopen/canopen.hpp"
 #include "numen/hal/device/phantom_kinematics.hpp"
+#include "numen/hal/device/foaw_estimator.hpp"
 #include "numen/hal/device/rate_estimator.hpp"
 #include "numen/hal/transport/sim_bus.hpp"
 #include "numen/hal/device/trocar_kinematics.hpp"
@@ -215,6 +216,50 @@ TEST(InstrumentDevice, RateIsHeldOverARejectedValueAndRestartedAfterStaleness) {
   feed(dev, q, 13 * kMs);
   const double a1 = RateEstimator::smoothing(kDefaultVelocityCutoffHz, 1e-3);
   EXPECT_NEAR(dev.sample(13 * kMs).qdot[TK::kPivotX], a1 * 0.2, a1 * quant / 1e-3 + 1e-12);
+}
+
+// The estimator is the configured one: on the same quantised ramp each axis's rate is what a
+// standalone RateEstimator (difference: f_c = +∞; filter) or FoawEstimator (band = the
+// configured counts over the axis's counts_per_unit) gives on the accepted values; all three
+// keep the rate over a rejected value and restart after staleness (as above).
+TEST(InstrumentDevice, TheConfiguredVelocityEstimatorGivesTheRates) {
+  for (const VelocityEstimator kind :
+       {VelocityEstimator::kDifference, VelocityEstimator::kFilter, VelocityEstimator::kFoaw}) {
+    DeviceConfig c = trocar_config();
+    c.velocity_estimator = kind;
+    c.foaw_max_window = 8;
+    c.foaw_noise_counts = 1.0;
+    InstrumentDevice dev(c);
+    std::array<RateEstimator, 5> rates;
+    std::array<FoawEstimator, 5> foaws;
+    for (int i = 0; i < 5; ++i) {
+      const AxisConfig& a = c.axes[static_cast<std::size_t>(i)];
+      rates[static_cast<std::size_t>(i)] =
+          RateEstimator(kind == VelocityEstimator::kDifference
+                            ? std::numeric_limits<double>::infinity()
+                            : c.velocity_cutoff_hz,
+                        a.max_speed, a.wraps);
+      foaws[static_cast<std::size_t>(i)] = FoawEstimator(8, 1.0 / a.counts_per_unit, a.max_speed, a.wraps);
+    }
+    for (int k = 0; k <= 30; ++k) {
+      double q[5];
+      for (int i = 0; i < 5; ++i) q[i] = kQ0[i] + 0.3 * std::sin(0.05 * k + i) * 1e-1;
+      feed(dev, q, k * kMs);
+      const DeviceSample s = dev.sample(k * kMs);
+      ASSERT_TRUE(s.valid) << k;
+      for (int i = 0; i < 5; ++i) {
+        const auto ii = static_cast<std::size_t>(i);
+        const double v = s.q[i];  // the accepted (quantised) value
+        const double expected = kind == VelocityEstimator::kFoaw ? foaws[ii].update(v, k * kMs)
+                                                                 : rates[ii].update(v, k * kMs);
+        EXPECT_EQ(s.qdot[i], expected) << to_string(kind) << " axis " << i << " period " << k;
+      }
+    }
+    EXPECT_NE(dev.last_sample().qdot.norm(), 0.0) << to_string(kind);
+    // Stale: every estimator is zeroed and restarted.
+    const DeviceSample stale = dev.sample(40 * kMs);
+    EXPECT_EQ(stale.qdot.norm(), 0.0) << to_string(kind);
+  }
 }
 
 TEST(InstrumentDevice, OutOfRangeIsRejectedAndTheTargetHeld) {

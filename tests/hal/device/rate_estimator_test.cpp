@@ -15,6 +15,7 @@
 #include <numbers>
 
 #include "alloc_counter.hpp"
+#include "encoder_sine.hpp"
 #include "numen/hal/device/axis.hpp"
 #include "test_constants.hpp"
 
@@ -143,69 +144,23 @@ TEST(RateEstimator, UpdateDoesNotAllocate) {
 
 // ---- A 2 Hz sine on the default trocar's pivot encoder (2^14 counts per turn) ----
 
-struct SineRun {
-  double noise_max = 0.0;  // max |estimate(quantised) − estimate(exact values)|
-  double noise_rms = 0.0;
-  double lag_s = 0.0;      // phase delay of the estimate (exact values) behind the true rate
-  double gain = 0.0;       // its amplitude / the true rate's
-};
+using numen::test::encoder_sine::SineRun;
 
-// x(t) = A sin(2π f t) sampled every dt for 3 s; the estimate of the exact values is fitted
-// with a cos + b sin over the last 2 s (whole periods) to get its gain and phase delay.
 SineRun run_sine(double cutoff_hz, double dt) {
-  numen::hal::AxisConfig axis;
-  axis.counts_per_unit = 16384.0 / (2.0 * kPi);
-  axis.min = -1.2;
-  axis.max = 1.2;
-  constexpr double kA = 0.3, kF = 2.0;
-  const double w = 2.0 * kPi * kF;
-  RateEstimator exact(cutoff_hz, 10.0, false), quantised(cutoff_hz, 10.0, false);
-  const auto dt_ns = static_cast<std::int64_t>(std::llround(dt * 1e9));
-  const int n = static_cast<int>(std::llround(3.0 / dt));
-  const int fit_from = static_cast<int>(std::llround(1.0 / dt));
-  SineRun out;
-  double scc = 0, sss = 0, scs = 0, svc = 0, svs = 0, sq = 0;
-  int count = 0;
-  for (int k = 0; k <= n; ++k) {
-    const std::int64_t t_ns = k * dt_ns;
-    const double t = static_cast<double>(t_ns) * 1e-9;
-    const double x = kA * std::sin(w * t);
-    const double xq = numen::hal::counts_to_value(axis, numen::hal::value_to_counts(axis, x));
-    const double ve = exact.update(x, t_ns);
-    const double vq = quantised.update(xq, t_ns);
-    out.noise_max = std::max(out.noise_max, std::abs(vq - ve));
-    sq += (vq - ve) * (vq - ve);
-    if (k >= fit_from) {
-      const double c = std::cos(w * t), s = std::sin(w * t);
-      scc += c * c;
-      sss += s * s;
-      scs += c * s;
-      svc += ve * c;
-      svs += ve * s;
-      ++count;
-    }
-  }
-  out.noise_rms = std::sqrt(sq / (n + 1));
-  // Least squares ve ≈ a cos(wt) + b sin(wt); the true rate is A w cos(wt).
-  const double det = scc * sss - scs * scs;
-  const double a = (svc * sss - svs * scs) / det;
-  const double b = (svs * scc - svc * scs) / det;
-  // a cos + b sin = G A w cos(w t − φ): a = G A w cos φ, b = G A w sin φ.
-  out.gain = std::hypot(a, b) / (kA * w);
-  out.lag_s = std::atan2(b, a) / w;
-  (void)count;
-  return out;
+  return numen::test::encoder_sine::run_sine([&] { return RateEstimator(cutoff_hz, 10.0, false); },
+                                             dt);
 }
 
 TEST(RateEstimatorSine, QuantisationNoiseStaysBelowAlphaQOverDtAtOneAndTenKilohertz) {
-  const double q = 2.0 * kPi / 16384.0;  // rad, one count
+  const double q = numen::test::encoder_sine::kCount;  // rad
   for (const double dt : {1e-3, 1e-4}) {
     const SineRun f = run_sine(kDefaultVelocityCutoffHz, dt);
     const SineRun bare = run_sine(kInf, dt);
     const double bound = RateEstimator::quantisation_bound(kDefaultVelocityCutoffHz, dt, q);
-    std::printf("[   info   ] %g kHz: noise max %.4f rad/s (bound %.4f), rms %.4f; bare difference "
-                "max %.4f rms %.4f (q/dt %.4f)\n",
-                1e-3 / dt, f.noise_max, bound, f.noise_rms, bare.noise_max, bare.noise_rms, q / dt);
+    std::printf("[   info   ] %g kHz: noise max %.4f rad/s (bound %.4f), rms %.4f, error rms %.4f; "
+                "bare difference max %.4f rms %.4f (q/dt %.4f), error rms %.4f\n",
+                1e-3 / dt, f.noise_max, bound, f.noise_rms, f.error_rms, bare.noise_max,
+                bare.noise_rms, q / dt, bare.error_rms);
     EXPECT_LE(f.noise_max, bound * (1.0 + 1e-9)) << dt;
     // The bare difference reaches most of its own bound q/Δt; the filtered peak is below 2α
     // times the bare one (α = 0.27 at 1 kHz, 0.031 at 10 kHz).

@@ -203,6 +203,23 @@ TEST(SceneErrors, ANonPositiveVelocityCutoffIsLocated) {
   }
 }
 
+TEST(SceneErrors, AnUnknownVelocityEstimatorOrFoawSettingIsLocated) {
+  TempDir dir;
+  struct Bad {
+    std::string line, value, key, what;
+  };
+  for (const Bad& b : {Bad{"velocity_estimator = \"kalman\"", "\"kalman\"",
+                           "device.velocity_estimator", "\"difference\", \"filter\", \"foaw\""},
+                       Bad{"foaw_max_window = 0", "0", "device.foaw_max_window", "must be in [1, 32]"},
+                       Bad{"foaw_max_window = 33", "33", "device.foaw_max_window", "must be in [1, 32]"},
+                       Bad{"foaw_noise_counts = -1.0", "-1.0", "device.foaw_noise_counts", "must be in"}}) {
+    const std::string text = replace(kMiniScene, "attach = \"tool\"", "attach = \"tool\"\n" + b.line);
+    const InputError e = load_error(dir, text);
+    expect_located(e, (dir.path() / "bad.toml").string(), line_of(text, b.line),
+                   column_of(text, b.line, b.value), b.key, b.what);
+  }
+}
+
 TEST(SceneErrors, ASoftStartOutsideZeroToTenSecondsIsLocated) {
   TempDir dir;
   for (const std::string bad : {"-0.1", "10.5", "nan", "inf", "\"fast\""}) {

@@ -342,6 +342,25 @@ TEST(Scene, DeviceVelocityCutoffIsReadInHertz) {
   EXPECT_EQ(load_scene(dir.write("cutoff.toml", text)).device.velocity_cutoff_hz, 20.5);
 }
 
+TEST(Scene, DeviceVelocityEstimatorAndFoawSettingsAreRead) {
+  TempDir dir;
+  const numen::hal::DeviceConfig plain = load_scene(dir.write("mini.toml", kMiniScene)).device;
+  EXPECT_EQ(plain.velocity_estimator, numen::hal::VelocityEstimator::kFilter);
+  EXPECT_EQ(plain.foaw_max_window, numen::hal::kFoawMaxWindow);
+  EXPECT_EQ(plain.foaw_noise_counts, numen::hal::kDefaultFoawNoiseCounts);
+  for (const auto& [name, kind] :
+       {std::pair<std::string, numen::hal::VelocityEstimator>{"difference", numen::hal::VelocityEstimator::kDifference},
+        {"filter", numen::hal::VelocityEstimator::kFilter}, {"foaw", numen::hal::VelocityEstimator::kFoaw}}) {
+    const std::string text = replace(kMiniScene, "attach = \"tool\"",
+                                     "attach = \"tool\"\nvelocity_estimator = \"" + name +
+                                         "\"\nfoaw_max_window = 12\nfoaw_noise_counts = 1.5");
+    const numen::hal::DeviceConfig c = load_scene(dir.write(name + ".toml", text)).device;
+    EXPECT_EQ(c.velocity_estimator, kind) << name;
+    EXPECT_EQ(c.foaw_max_window, 12) << name;
+    EXPECT_EQ(c.foaw_noise_counts, 1.5) << name;
+  }
+}
+
 TEST(Scene, DeviceSoftStartIsReadInSecondsAndDefaultsToATenthOfASecond) {
   TempDir dir;
   EXPECT_EQ(load_scene(dir.write("mini.toml", kMiniScene)).device.soft_start_s,

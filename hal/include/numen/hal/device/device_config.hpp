@@ -12,6 +12,7 @@
 
 #include "numen/core/types.hpp"
 #include "numen/hal/device/axis.hpp"
+#include "numen/hal/device/foaw_estimator.hpp"
 #include "numen/hal/canopen/dcf.hpp"
 #include "numen/hal/canopen/pdo_mapping.hpp"
 #include "numen/hal/device/phantom_kinematics.hpp"
@@ -35,6 +36,19 @@ const char* to_string(DeviceKind kind) noexcept;
 /// Number of axes a device kind has (5 trocar instrument, 6 pose tracker, 6 phantom); 0 for a
 /// value outside the enum.
 int expected_axis_count(DeviceKind kind) noexcept;
+
+/// How InstrumentDevice estimates each axis's rate q̇ from its accepted encoder values
+/// (docs/architecture.md, "Target velocity from encoders"). Every choice is bounded by the
+/// axis's max_speed and handles missing, rejected and stale values the same way.
+enum class VelocityEstimator : std::uint8_t {
+  kDifference,  ///< The bare backward difference (RateEstimator at f_c = +∞).
+  kFilter,      ///< The first-order filtered difference (RateEstimator at velocity_cutoff_hz).
+  kFoaw,        ///< First-order adaptive windowing, end fit (FoawEstimator).
+};
+
+/// The scene spelling of a VelocityEstimator (static string): "difference", "filter", "foaw";
+/// "unknown" for a value outside the enum.
+const char* to_string(VelocityEstimator estimator) noexcept;
 
 /// Base COB-ID of TPDO2 (0x280 + node id; CiA 301 predefined connection set): numen's default
 /// drive TPDO (statusword 0x6041 + torque actual value 0x6077) of a driven axis's node.
@@ -149,6 +163,14 @@ struct DeviceConfig {
   /// +infinity = the bare backward difference. The estimate lags the hand by about
   /// 1/(2π f_c) (3.2 ms at the default 50 Hz) and is bounded by each axis's max_speed.
   double velocity_cutoff_hz = kDefaultVelocityCutoffHz;
+  /// Rate estimator of every axis (scene key `[device] velocity_estimator`).
+  VelocityEstimator velocity_estimator = VelocityEstimator::kFilter;
+  /// kFoaw: the largest window, sample intervals, 1 … kFoawMaxWindow (1 = the bounded bare
+  /// difference).
+  int foaw_max_window = kFoawMaxWindow;
+  /// kFoaw: the noise band d in encoder counts, finite and >= 0; each axis's d is this over its
+  /// counts_per_unit (default: the quantisation half count).
+  double foaw_noise_counts = kDefaultFoawNoiseCounts;
   /// Soft start, s, finite and in [0, kMaxSoftStartS]: ImpedanceDevice::write() scales the gated and
   /// clamped axis torques by r = min(1, k · control_period_s / soft_start_s) in the k-th write
   /// (k = 1, 2, …) since torque was enabled — the first write whose gate is open after the
@@ -179,8 +201,9 @@ struct DeviceConfig {
 /// Throws std::invalid_argument with a message naming the device and the field if `config`
 /// is invalid: wrong axis count for the kind, an invalid axis (validate_axis()), COB-IDs
 /// outside 0x001–0x7FF, equal to 0x080 (SYNC) or used twice, non-positive period or age,
-/// negative jump tolerance, a velocity cutoff that is NaN or <= 0, a soft start that is not
-/// finite or outside [0, kMaxSoftStartS], non-finite positions,
+/// negative jump tolerance, a velocity cutoff that is NaN or <= 0, a velocity estimator outside
+/// the enum, a FOAW window outside 1 … kFoawMaxWindow, a FOAW noise band that is not finite or
+/// < 0, a soft start that is not finite or outside [0, kMaxSoftStartS], non-finite positions,
 /// non-unit quaternions (|‖q‖ − 1| > 1e-6), phantom link lengths not finite and > 0. Only the geometry of the config's kind is checked.
 /// With canopen.managed also: one canopen.axes entry per axis; node ids 1–127 and not the
 /// controller's; heartbeat periods >= 1 ms and timeouts above them (axes of one node agreeing);

@@ -22,6 +22,7 @@
 #include "numen/hal/device/device_config.hpp"
 #include "numen/hal/device/kinematics.hpp"
 #include "numen/hal/canopen/pdo_mapping.hpp"
+#include "numen/hal/device/foaw_estimator.hpp"
 #include "numen/hal/device/rate_estimator.hpp"
 #include "numen/hal/device/sample_check.hpp"
 
@@ -38,11 +39,13 @@ struct DeviceSample {
   /// Controlled frame's target pose, world. Always finite; built from the last accepted axis
   /// values (0 clamped into [min, max] for an axis without one).
   core::Pose target;
-  /// Controlled frame's target twist, world: J(q) q̇. q̇ of an axis is its RateEstimator's
-  /// estimate (rate_estimator.hpp: the accepted values' backward difference, bounded by the
-  /// axis's max_speed, low-pass filtered at DeviceConfig::velocity_cutoff_hz). It is 0 before
-  /// two accepted values; held through a rejected or missing value while the held value is
-  /// fresh; 0 (and the filter restarted) once the held value is stale.
+  /// Controlled frame's target twist, world: J(q) q̇. q̇ of an axis is the estimate of
+  /// DeviceConfig::velocity_estimator from the accepted values, bounded by the axis's
+  /// max_speed: the backward difference, or it low-pass filtered at
+  /// DeviceConfig::velocity_cutoff_hz (RateEstimator, rate_estimator.hpp), or the adaptive
+  /// window's end-fit slope (FoawEstimator, foaw_estimator.hpp). It is 0 before two accepted
+  /// values; held through a rejected or missing value while the held value is fresh; 0 (and
+  /// the estimator restarted) once the held value is stale.
   core::Twist twist;
   /// Number of links of the kinematics (Kinematics::num_links(), 1..kMaxLinks): entries
   /// [0, num_links) of link_targets and link_twists are valid, the others are left default.
@@ -192,8 +195,11 @@ class InstrumentDevice {
   int num_links_ = 1;
   std::array<AxisCheckLimits, kMaxAxes> limits_{};
   std::array<AxisState, kMaxAxes> axes_{};
-  // Velocity of each axis from its accepted values (configured once; reset() restarts them).
+  // Velocity of each axis from its accepted values (configured once; reset() restarts them):
+  // rates_ for the difference and the filter, foaws_ for FOAW (config_.velocity_estimator).
   std::array<RateEstimator, kMaxAxes> rates_{};
+  std::array<FoawEstimator, kMaxAxes> foaws_{};
+  bool use_foaw_ = false;
   AxisVector hold_;  // value used before an axis's first accepted value
   std::array<Jacobian, kMaxLinks> link_jacobians_{};  // at last_sample_.q; [0]: jacobian()
   DeviceSample last_sample_;

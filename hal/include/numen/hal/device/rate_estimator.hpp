@@ -33,11 +33,9 @@
 /// scene's coupling frequency (√(k_t/m) = 141 rad/s, 22.5 Hz), so hand motion (below ~10 Hz)
 /// passes with a gain above 0.98, while the quantisation bound of the default trocar's
 /// 14-bit pivots is 0.12 rad/s at any rate (bare difference: 0.38 rad/s at 1 kHz, 3.8 rad/s
-/// at 10 kHz). Why not Janabi-Sharifi et al.'s adaptive window (IEEE TCST 8(6), 2000): its
-/// window shrinks to one sample at a discontinuity, so a jump passes unfiltered (the bound
-/// alone would stop it); it needs a history of up to N values per axis and O(N) … O(N²)
-/// work per sample against O(1) here; and its lag varies with the signal, where this one is
-/// a fixed, documented τ.
+/// at 10 kHz). The alternative, first-order adaptive windowing, is FoawEstimator
+/// (foaw_estimator.hpp); DeviceConfig::velocity_estimator picks one, and docs/architecture.md
+/// compares the three on the same cases.
 ///
 /// Allocation free, noexcept, no locks; one instance per axis (InstrumentDevice's fixed
 /// arrays). Not thread safe.
