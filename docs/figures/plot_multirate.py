@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """Multirate quality against the rate ratio (docs/multirate.md): runs a shipped scene through
-`numen run --json` single-rate and with `[multirate] scene_dt = N·dt` for each ratio N, and plots
+`numen run --json --replay` single-rate and with `[multirate] scene_dt = N·dt` for each ratio N, and plots
 the tool's deepest contact, the free-space tracking error, a third figure of the scene (the
 fastest free body, the net's largest tie stretch, or the largest feedback force) and the largest
 feedback-force jump (at a new scene model and otherwise) against N; the single-rate run at the
@@ -58,7 +58,9 @@ def scene_copy(root, name, ratio, tmp, slow=None):
 
 
 def run(numen, path, may_fail=False):
-    out = subprocess.run([numen, "run", path, "--json"], capture_output=True, text=True)
+    # --replay: the same hand in every run (a scene's [device.plant] would let each run's device
+    # answer its own forces; the closed loop is docs/device_plant.md's).
+    out = subprocess.run([numen, "run", path, "--json", "--replay"], capture_output=True, text=True)
     if out.returncode != 0:
         if may_fail:
             print("left out: %s (exit %d)" % (os.path.basename(path), out.returncode))
