@@ -119,7 +119,8 @@ numen_install_headers(${PROJECT_SOURCE_DIR}/platform/include
 # (study_common.hpp, study_stability_cases.hpp). One folder per concept, as in the source tree
 # (docs/architecture.md "sim").
 numen_install_headers(${PROJECT_SOURCE_DIR}/sim/include
-  numen/sim/scene/obj_mesh.hpp numen/sim/scene/scene.hpp numen/sim/scene/scene_info.hpp
+  numen/sim/scene/obj_mesh.hpp numen/sim/scene/passivity_lint.hpp numen/sim/scene/scene.hpp
+  numen/sim/scene/scene_info.hpp
   numen/sim/scene/trocar_placement.hpp
   numen/sim/input/bus_spec.hpp numen/sim/input/computed_motion.hpp numen/sim/input/input_error.hpp
   numen/sim/input/jigsaws.hpp numen/sim/input/pointer_path.hpp numen/sim/input/scripted_path.hpp
