@@ -161,7 +161,8 @@ void PlantMotion::advance(double t0, double t1, int parts) noexcept {
     core::Vec6 w6;
     w6 << w.force, w.torque;
     const hal::AxisVector f = j.transpose() * w6;
-    figures_.handle_force_max_n = std::max(figures_.handle_force_max_n, w.force.norm());
+    figures_.handle_force_n = w.force.norm();
+    figures_.handle_force_max_n = std::max(figures_.handle_force_max_n, figures_.handle_force_n);
     for (int i = 0; i < n; ++i) {
       const auto k = static_cast<std::size_t>(i);
       if (follows_[k]) continue;

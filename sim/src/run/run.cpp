@@ -253,6 +253,11 @@ void SceneRunner::count_period(const platform::PeriodReport& report) noexcept {
 void SceneRunner::record(const platform::PeriodReport& report, const PeriodContacts& c) noexcept {
   TraceRecord rec = make_trace_record(data_, data_.attached_body, c.tool_contacts, c.tool_pen,
                                       c.target_pen, report, loop_.impedance().sent_torques().torque);
+  if (const PlantMotion* plant = instrument_.plant()) {
+    rec.hand_penetration_mm = c.hand_pen * 1e3;
+    rec.handle_force_n = plant->figures().handle_force_n;
+    rec.device_port_energy_j = plant->figures().port_energy_j;
+  }
   if (const hal::CanopenMaster* m = loop_.canopen()) {
     const std::uint64_t received = m->emcy_log().counters().received;
     if (received > emcys_traced_) {

@@ -97,6 +97,7 @@ struct PlantFigures {
   double port_energy_min_j = 0.0;     ///< Its minimum (<= 0), J.
   double port_energy_min_time_s = 0.0;  ///< When (trajectory time), s.
   double handle_force_max_n = 0.0;    ///< Largest |force of the hand on the handle|, N.
+  double handle_force_n = 0.0;        ///< The same at the last sub-step, N.
   double hand_separation_max_mm = 0.0;  ///< Largest |x_intent − x_handle|, mm.
   LimitCycleDetector limit_cycle;
   bool diverged = false;              ///< A non-finite or runaway axis (the plant then holds).

@@ -34,6 +34,12 @@ struct TraceRecord {
   int tool_contacts = 0;             ///< Contacts of the held body.
   double tool_penetration_mm = 0.0;
   double target_penetration_mm = 0.0;
+  /// Closed loop (docs/device_plant.md; 0 in replay): the tool's depth where the hand means it
+  /// to be, the force of the hand on the handle (N) and the energy the hand has put into the
+  /// device so far (J).
+  double hand_penetration_mm = 0.0;
+  double handle_force_n = 0.0;
+  double device_port_energy_j = 0.0;
   core::Wrench feedback;             ///< Eq. 8, sent to the device (N, N·m).
   std::array<double, hal::kMaxAxes> axis_torque{};  ///< N·m or N.
   int num_axes = 0;
