@@ -14,13 +14,14 @@ namespace numen::hal {
 ImpedanceDevice::ImpedanceDevice(InstrumentDevice& instrument, Bus& bus)
     : Device(bus), instrument_(&instrument) {
   sent_.torque = AxisVector::Zero(instrument.num_axes());
+  passivity_q_ = AxisVector::Zero(instrument.num_axes());
+  passivity_rate_ = AxisVector::Zero(instrument.num_axes());
   const DeviceConfig& c = instrument.config();
   // validate() bounds both; a hand-built config outside them gets no ramp rather than r = 0.
   if (std::isfinite(c.soft_start_s) && c.soft_start_s > 0.0 && c.control_period_s > 0.0)
     ramp_step_ = c.control_period_s / c.soft_start_s;
   if (c.passivity.enabled)
-    passivity_ = PassivityController(instrument.num_axes(), c.control_period_s,
-                                     c.passivity.axis_mask, c.passivity.velocity_threshold);
+    passivity_ = PassivityController(instrument.num_axes(), c.control_period_s, c.passivity);
 }
 
 IoStatus ImpedanceDevice::write(std::span<const double> torques, std::int64_t now_ns) noexcept {
@@ -52,11 +53,22 @@ IoStatus ImpedanceDevice::write(std::span<const double> torques, std::int64_t no
   }
   // The passivity controller: observer and damper on the gated torques, before the clamp.
   if (!any_allowed) allowed_mask = 0;
-  if (passivity_.num_axes() > 0 && allowed_mask != 0) {
-    const AxisVector& qdot = sample().qdot;
-    (void)passivity_.apply(std::span<double>(sent_.torque.data(), static_cast<std::size_t>(n)),
-                           std::span<const double>(qdot.data(), static_cast<std::size_t>(qdot.size())),
-                           allowed_mask);
+  if (passivity_.num_axes() > 0) {
+    // Its rate: the backward difference of this period's axis values (Hannaford & Ryu's),
+    // not the filtered q̇ (docs/passivity.md "Passivity controller": the filter's lag hides
+    // the energy a render produces). 0 for the first valid sample after an invalid one.
+    const AxisVector& q = sample().q;
+    const double dt = config.control_period_s;
+    for (int i = 0; i < n; ++i) {
+      passivity_rate_[i] = passivity_primed_ ? (q[i] - passivity_q_[i]) / dt : 0.0;
+      passivity_q_[i] = q[i];
+    }
+    passivity_primed_ = sample().valid;
+    if (allowed_mask != 0)
+      (void)passivity_.apply(
+          std::span<double>(sent_.torque.data(), static_cast<std::size_t>(n)),
+          std::span<const double>(passivity_rate_.data(), static_cast<std::size_t>(n)),
+          allowed_mask);
   }
   // The soft start: r = min(1, k · dt / T) in the k-th write since torque was enabled.
   if (ramp_step_ > 0.0) {

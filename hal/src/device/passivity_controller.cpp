@@ -3,6 +3,7 @@
 
 #include "numen/hal/device/passivity_controller.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -10,8 +11,12 @@
 namespace numen::hal {
 
 PassivityController::PassivityController(int num_axes, double period_s, std::uint32_t axis_mask,
-                                         double velocity_threshold)
-    : n_(num_axes), period_(period_s), mask_(axis_mask), v_min_(velocity_threshold) {
+                                         double velocity_threshold, double energy_limit)
+    : n_(num_axes),
+      period_(period_s),
+      mask_(axis_mask),
+      v_min_(velocity_threshold),
+      e_max_(energy_limit) {
   if (num_axes < 0 || num_axes > kMaxAxes)
     throw std::invalid_argument("PassivityController: num_axes must be in [0, " +
                                 std::to_string(kMaxAxes) + "]");
@@ -19,6 +24,8 @@ PassivityController::PassivityController(int num_axes, double period_s, std::uin
     throw std::invalid_argument("PassivityController: period_s must be finite and > 0");
   if (!(std::isfinite(velocity_threshold) && velocity_threshold >= 0.0))
     throw std::invalid_argument("PassivityController: velocity_threshold must be finite and >= 0");
+  if (!(energy_limit > 0.0))
+    throw std::invalid_argument("PassivityController: energy_limit must be > 0 (+inf: none)");
 }
 
 int PassivityController::apply(std::span<double> torque, std::span<const double> rate,
@@ -47,7 +54,7 @@ int PassivityController::apply(std::span<double> torque, std::span<const double>
       ++counters_.axis_acting_periods[k];
       ++acted;
     }
-    energy_[k] = e;
+    energy_[k] = std::min(e, e_max_);
     torque[k] = out;
     torque_[k] = out;
     rate_[k] = v;
@@ -62,7 +69,8 @@ void PassivityController::sent(std::span<const double> sent_torque) noexcept {
     const auto k = static_cast<std::size_t>(i);
     if ((observed_ & (1u << static_cast<unsigned>(i))) == 0) continue;
     const double s = k < sent_torque.size() ? sent_torque[k] : 0.0;
-    if (std::isfinite(s)) energy_[k] -= period_ * (s - torque_[k]) * rate_[k];
+    if (std::isfinite(s))
+      energy_[k] = std::min(energy_[k] - period_ * (s - torque_[k]) * rate_[k], e_max_);
   }
   observed_ = 0;
 }

@@ -329,7 +329,8 @@ TEST(ImpedanceDevice, MakeDeviceFollowsTheConfiguredProtocol) {
 // The passivity controller runs in write() after the gate and before the clamp: on the depth
 // axis, moving at 20 mm/s under a torque that pushes along the motion (an active render), the
 // controller adds damping from the first period E < 0, every write's E is the energy of what
-// was sent (Σ −T τ_sent q̇), and it stays >= 0; the clamp still bounds the sent torque.
+// was sent (Σ −T τ_sent v, v the backward difference of the axis value), and it stays >= 0;
+// the clamp still bounds the sent torque.
 TEST(ImpedanceDevice, PassivityControllerDampsAnActiveRenderBeforeTheClamp) {
   DeviceConfig c = make_default_trocar_config(1);
   c.passivity.enabled = true;
@@ -338,7 +339,7 @@ TEST(ImpedanceDevice, PassivityControllerDampsAnActiveRenderBeforeTheClamp) {
   Rig r(c);
   constexpr int kD = TrocarKinematics::kDepth;
   const double v = 0.02, lim = torque_limit(r.axis(kD));
-  double energy = 0.0;
+  double energy = 0.0, q_prev = 0.0;
   for (int k = 0; k < 300; ++k) {
     SCOPED_TRACE("period " + std::to_string(k));
     r.answer_and_read(k * kMs, v * k * 1e-3);
@@ -346,8 +347,11 @@ TEST(ImpedanceDevice, PassivityControllerDampsAnActiveRenderBeforeTheClamp) {
     const double push = k < 200 ? 2.0 : 2.0 * lim;
     r.write({0.01, 0.0, push, 0.0, 0.0});
     const SentTorques& s = r.dev.sent_torques();
-    const double qdot = r.dev.sample().qdot[kD];
-    energy -= 1e-3 * s.torque[kD] * qdot;
+    // The controller's rate: the backward difference of the axis value (0 at the first sample).
+    const double q = r.dev.sample().q[kD];
+    const double rate = k == 0 ? 0.0 : (q - q_prev) / 1e-3;
+    q_prev = q;
+    energy -= 1e-3 * s.torque[kD] * rate;
     EXPECT_NEAR(r.dev.passivity().energy(kD), energy, 1e-12);
     EXPECT_GE(r.dev.passivity().energy(kD), -1e-12);
     EXPECT_LE(std::abs(s.torque[kD]), lim);

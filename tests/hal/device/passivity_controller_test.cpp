@@ -1,7 +1,7 @@
 // Tests of numen/hal/device/passivity_controller.hpp: the observer's arithmetic
 // E(n) = E(n−1) − T τ v, no action while the port is passive, the damper α = −E / (T v²) that
-// brings E back to 0 on an active sequence, the velocity threshold, the axis mask and the
-// caller's gate, sent()'s booking of what the clamp took away, the settings' checks, and no
+// brings E back to 0 on an active sequence, the velocity threshold, the energy limit, the axis
+// mask and the caller's gate, sent()'s booking of what the clamp took away, the settings' checks, and no
 // allocation in a period.
 #include "numen/hal/device/passivity_controller.hpp"
 
@@ -126,6 +126,29 @@ TEST(PassivityController, SentBooksWhatTheClampTookAway) {
   EXPECT_EQ(pc.counters().acting_periods, 0u);
 }
 
+TEST(PassivityController, EnergyLimitCapsTheMarginADissipativeRenderBuildsUp) {
+  PassivityController paper(1, kT, 0b1, 0.0);
+  PassivityController tank(1, kT, 0b1, 0.0, 1e-4);
+  const std::array<double, 1> rate = {0.5};
+  for (int n = 0; n < 100; ++n) {  // a damper: 1 mJ per period into the environment
+    std::array<double, 1> a = {-2.0}, b = {-2.0};
+    paper.apply(a, rate);
+    tank.apply(b, rate);
+  }
+  EXPECT_NEAR(paper.energy(0), 0.1, 1e-12);
+  EXPECT_EQ(tank.energy(0), 1e-4);
+  // Then a render that produces 1 mJ per period: the paper's observer waits 100 periods, the
+  // capped one damps from the first.
+  std::array<double, 1> a = {2.0}, b = {2.0};
+  EXPECT_EQ(paper.apply(a, rate), 0);
+  EXPECT_EQ(tank.apply(b, rate), 1);
+  EXPECT_NEAR(tank.energy(0), 0.0, 1e-18);
+  EXPECT_NEAR(b[0], 2.0 - (0.9e-3 / (kT * 0.25)) * 0.5, 1e-12);
+  const std::array<double, 1> sent = {-5.0};  // sent() is capped too
+  tank.sent(sent);
+  EXPECT_EQ(tank.energy(0), 1e-4);
+}
+
 TEST(PassivityController, ConstructorRejectsBadSettings) {
   EXPECT_THROW(PassivityController(-1, kT, 1), std::invalid_argument);
   EXPECT_THROW(PassivityController(numen::hal::kMaxAxes + 1, kT, 1), std::invalid_argument);
@@ -133,6 +156,8 @@ TEST(PassivityController, ConstructorRejectsBadSettings) {
   EXPECT_THROW(PassivityController(1, std::nan(""), 1), std::invalid_argument);
   EXPECT_THROW(PassivityController(1, kT, 1, -1e-3), std::invalid_argument);
   EXPECT_THROW(PassivityController(1, kT, 1, INFINITY), std::invalid_argument);
+  EXPECT_THROW(PassivityController(1, kT, 1, 0.0, 0.0), std::invalid_argument);
+  EXPECT_THROW(PassivityController(1, kT, 1, 0.0, std::nan("")), std::invalid_argument);
   EXPECT_NO_THROW(PassivityController(0, kT, 0));
 }
 

@@ -17,8 +17,9 @@
 ///  - non-finite: a NaN or infinite τ on an allowed axis zeroes every axis (the managed stack
 ///    latches the safe state, FaultCause::kNonFiniteTorque);
 ///  - passivity controller (DeviceConfig::passivity enabled; passivity_controller.hpp): on
-///    the allowed axes of its mask, the observer books E_i −= T τ_i q̇_i (q̇: this period's
-///    DeviceSample::qdot) and, while E_i < 0, the damper −α q̇_i is added to τ_i. It runs
+///    the allowed axes of its mask, the observer books E_i −= T τ_i v_i (v_i: the backward
+///    difference of the axis value over the period, Hannaford & Ryu's rate, not the filtered
+///    DeviceSample::qdot) and, while E_i < 0, the damper −α v_i is added to τ_i. It runs
 ///    after the gate (a gated axis gets no damping) and before the clamp and the soft start,
 ///    so the clamp still bounds what is sent; what they take away is booked back into E
 ///    (PassivityController::sent());
@@ -158,6 +159,11 @@ class ImpedanceDevice : public Device {
   SentTorques sent_;
   TorqueCounters torque_counters_;
   PassivityController passivity_;
+  // The passivity controller's rate: the last sample's axis values and their backward
+  // difference (primed: the last sample was valid).
+  AxisVector passivity_q_;
+  AxisVector passivity_rate_;
+  bool passivity_primed_ = false;
   // Soft start: dt / T (0: off) and the writes since the ramp began (-1: armed, waiting for an
   // open gate; counting stops once r reached 1).
   double ramp_step_ = 0.0;

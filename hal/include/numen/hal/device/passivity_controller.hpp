@@ -27,12 +27,22 @@
 /// the soft start of ImpedanceDevice::write() come after); sent() books the difference,
 /// E(n) ← E(n) − T (τ_sent − τ_controlled) v(n), so E is the energy of what was sent.
 ///
+/// Energy limit (optional, E_max, J; +∞ = the paper's observer): after each update
+///   E(n) ← min(E(n), E_max),
+/// the upper bound of an energy tank (Franken, Stramigioli, Misra, Secchi, Macchelli, IEEE T-RO
+/// 27(4), 2011). The paper's observer counts every joule the environment has dissipated since
+/// the start (a god-object's contacts, a coupling's damper) as margin, so a render that later
+/// produces energy is not damped until it has given all of it back; with E_max the margin is
+/// at most E_max. Capping E only ever lowers it, so the controlled port stays passive; the
+/// price is more damping (less transparency) for a smaller E_max.
+///
 /// Axes are chosen by a bit mask (bit i: axis i); the others are neither observed nor
 /// controlled. Every member except the constructor is noexcept, allocation free and lock free.
 /// Not thread safe: the real-time thread that owns the device owns it.
 
 #include <array>
 #include <cstdint>
+#include <limits>
 #include <span>
 
 #include "numen/hal/device/kinematics.hpp"
@@ -52,6 +62,8 @@ struct PassivitySettings {
   std::uint32_t axis_mask = 0;
   /// v_min, m/s or rad/s, finite and >= 0: the controller acts only for |v| > v_min.
   double velocity_threshold = kDefaultPassivityVelocityThreshold;
+  /// E_max, J, > 0 (+∞: no limit, the paper's observer): the most energy E_i may hold.
+  double energy_limit = std::numeric_limits<double>::infinity();
 };
 
 /// Counters of a PassivityController since construction or reset().
@@ -70,9 +82,15 @@ class PassivityController {
   /// Controls nothing (num_axes() == 0).
   PassivityController() = default;
   /// `num_axes` in [0, kMaxAxes], `period_s` T > 0 and finite, `axis_mask` the axes controlled,
-  /// `velocity_threshold` v_min >= 0 and finite. Throws std::invalid_argument otherwise.
+  /// `velocity_threshold` v_min >= 0 and finite, `energy_limit` E_max > 0 (+∞: none). Throws
+  /// std::invalid_argument otherwise.
   PassivityController(int num_axes, double period_s, std::uint32_t axis_mask,
-                      double velocity_threshold = kDefaultPassivityVelocityThreshold);
+                      double velocity_threshold = kDefaultPassivityVelocityThreshold,
+                      double energy_limit = std::numeric_limits<double>::infinity());
+  /// The same from a device's settings (PassivitySettings::enabled is not read).
+  PassivityController(int num_axes, double period_s, const PassivitySettings& settings)
+      : PassivityController(num_axes, period_s, settings.axis_mask, settings.velocity_threshold,
+                            settings.energy_limit) {}
 
   /// One period: for every axis i < num_axes() in the mask and in `allowed` (bit i), observes
   /// E_i with torque[i] and rate[i] and, if E_i < 0 and |rate[i]| > v_min, adds −α v to
@@ -102,6 +120,7 @@ class PassivityController {
   double period_ = 1e-3;
   std::uint32_t mask_ = 0;
   double v_min_ = kDefaultPassivityVelocityThreshold;
+  double e_max_ = std::numeric_limits<double>::infinity();
   std::array<double, kMaxAxes> energy_{};
   std::array<double, kMaxAxes> alpha_{};
   // The last apply(): the torque it left and the rate it used, per observed axis (bit mask).
