@@ -122,7 +122,7 @@ TEST(DeviceConfig, SoftStartIsOffByDefaultAndBoundedToTenSeconds) {
   }
 }
 
-TEST(DeviceConfig, PassivityIsOffByDefaultAndItsThresholdMustBeFiniteAndNonNegative) {
+TEST(DeviceConfig, PassivityIsOffByDefaultAndItsSettingsAreChecked) {
   DeviceConfig c = make_default_trocar_config();
   EXPECT_FALSE(c.passivity.enabled);
   EXPECT_EQ(c.passivity.velocity_threshold, kDefaultPassivityVelocityThreshold);
@@ -135,6 +135,11 @@ TEST(DeviceConfig, PassivityIsOffByDefaultAndItsThresholdMustBeFiniteAndNonNegat
   }
   c.passivity.velocity_threshold = 0.0;
   EXPECT_EQ(error_of(c), "");
+  EXPECT_TRUE(std::isinf(c.passivity.energy_limit));  // none: the paper's observer
+  for (const double bad : {0.0, -1.0, std::numeric_limits<double>::quiet_NaN()}) {
+    c.passivity.energy_limit = bad;
+    EXPECT_NE(error_of(c).find("passivity.energy_limit must be > 0 J"), std::string::npos) << bad;
+  }
 }
 
 TEST(DeviceConfig, KindDecidesTheKinematics) {

@@ -185,7 +185,7 @@ struct DeviceConfig {
 /// is invalid: wrong axis count for the kind, an invalid axis (validate_axis()), COB-IDs
 /// outside 0x001–0x7FF, equal to 0x080 (SYNC) or used twice, non-positive period or age,
 /// negative jump tolerance, a velocity cutoff that is NaN or <= 0, a soft start that is not
-/// finite or outside [0, kMaxSoftStartS], a passivity velocity threshold not finite or < 0, non-finite positions,
+/// finite or outside [0, kMaxSoftStartS], a passivity velocity threshold not finite or < 0 or an energy limit not > 0, non-finite positions,
 /// non-unit quaternions (|‖q‖ − 1| > 1e-6), phantom link lengths not finite and > 0. Only the geometry of the config's kind is checked.
 /// With canopen.managed also: one canopen.axes entry per axis; node ids 1–127 and not the
 /// controller's; heartbeat periods >= 1 ms and timeouts above them (axes of one node agreeing);

@@ -7,15 +7,16 @@
 ///
 /// Port variables of axis i in period n (impedance causality: the device imposes the flow, the
 /// rendered environment answers with the effort):
-///   v(n)  the axis rate the controller estimates (DeviceSample::qdot, m/s or rad/s);
+///   v(n)  the axis rate (m/s or rad/s): ImpedanceDevice::write() gives the backward
+///         difference (q(n) − q(n−1))/T of the axis values, as the paper does;
 ///   τ(n)  the axis torque the rendered environment sends to the device (N or N·m);
 ///   f(n) = −τ(n)  the effort the device's motion meets at the environment's port, so that
 ///         f·v is the power flowing INTO the rendered environment (a virtual spring being
 ///         compressed, τ = −k x with x, v > 0, has f v = k x v > 0: it stores energy).
-/// Observer (paper Eq. 8, with the controller's own dissipation of the earlier periods):
+/// Observer (with the controller's own dissipation of the earlier periods):
 ///   E(n) = E(n−1) + T f(n) v(n) = E(n−1) − T τ(n) v(n),   E(0) = 0.
 /// E(n) < 0: the rendered environment (with the sampling, the rate estimate and the hold) has
-/// produced energy on that axis since the start. Controller (paper Eqs. 10–11): when
+/// produced energy on that axis since the start. Controller: when
 /// E(n) < 0 and |v(n)| > v_min, a variable damper
 ///   α(n) = −E(n) / (T v(n)²)   (N·s/m or N·m·s/rad),   τ(n) ← τ(n) − α(n) v(n),
 /// which dissipates exactly T α(n) v(n)² = −E(n) over the period; that energy is put back:
@@ -26,6 +27,11 @@
 /// The torque the drive finally receives may differ from the controlled one (the clamp and
 /// the soft start of ImpedanceDevice::write() come after); sent() books the difference,
 /// E(n) ← E(n) − T (τ_sent − τ_controlled) v(n), so E is the energy of what was sent.
+///
+/// The sampled product T τ(n) v(n) does not see the energy a held torque delivers while the
+/// axis moves on to q(n+1): it books a virtual spring as passive over any closed path, so the
+/// controller does not lift a wall beyond Colgate & Schenkel's 2b/T (docs/passivity.md
+/// "Passivity controller", measured).
 ///
 /// Energy limit (optional, E_max, J; +∞ = the paper's observer): after each update
 ///   E(n) ← min(E(n), E_max),
