@@ -93,48 +93,54 @@ TEST(RunPassivity, ControllerRemovesTheLimitCycleOfAnActiveDefaultSceneSingleRat
 // coupling) in replay — the device follows the recorded hand whatever it is sent, so the run
 // with the controller and the one without see the same motion and render the same
 // environment — sent torques compared period by period on the driven axes (pivot_x, pivot_y in
-// N·m, depth in N): what the controller changes of the unconstrained render. Figures in
-// docs/passivity.md, "Passivity controller".
+// N·m, depth in N), without an energy limit and with 0.1 mJ: what the controller changes of the
+// unconstrained render. Figures in docs/passivity.md, "Passivity controller".
 TEST(RunPassivity, TransparencyOnThePassiveDefaultSceneInReplay) {
-  NUMEN_SKIP_UNDER_SANITIZER("two 10 s runs compare figures, which is not what a sanitizer checks");
+  NUMEN_SKIP_UNDER_SANITIZER("three 10 s runs compare figures, which is not what a sanitizer checks");
   NUMEN_REQUIRE_ARTICULATION();
   numen::test::TempDir dir;
   std::string text = numen::test::shipped_scene_text("default.toml");
   text = replace(text, "\"../data/", std::string("\"") + NUMEN_SOURCE_DIR + "/sim/data/");
   Scene plain = numen::sim::load_scene(dir.write("plain.toml", text));
-  Scene controlled = numen::sim::load_scene(dir.write("pc.toml", text + "\n[device.passivity]\n"));
   plain.plant.reset();  // replay
-  controlled.plant.reset();
-  SceneRunner a(plain), b(controlled);
   constexpr double kSeconds = 10.0;
   const auto periods = std::llround(kSeconds / plain.model.dt);
-  double sq[3] = {0.0, 0.0, 0.0}, max_err[3] = {0.0, 0.0, 0.0}, max_tau[3] = {0.0, 0.0, 0.0};
-  for (std::int64_t k = 0; k < periods; ++k) {
-    a.period();
-    b.period();
-    const auto& ta = a.loop().impedance().sent_torques().torque;
-    const auto& tb = b.loop().impedance().sent_torques().torque;
-    for (int i = 0; i < 3; ++i) {
-      const double e = tb[i] - ta[i];
-      sq[i] += e * e;
-      max_err[i] = std::max(max_err[i], std::abs(e));
-      max_tau[i] = std::max(max_tau[i], std::abs(ta[i]));
+  for (const char* limit : {"", "energy_limit = 1e-4\n"}) {
+    SCOPED_TRACE(limit);
+    Scene controlled =
+        numen::sim::load_scene(dir.write("pc.toml", text + "\n[device.passivity]\n" + limit));
+    controlled.plant.reset();
+    SceneRunner a(plain), b(controlled);
+    double sq[3] = {0.0, 0.0, 0.0}, max_err[3] = {0.0, 0.0, 0.0}, max_tau[3] = {0.0, 0.0, 0.0};
+    for (std::int64_t k = 0; k < periods; ++k) {
+      a.period();
+      b.period();
+      const auto& ta = a.loop().impedance().sent_torques().torque;
+      const auto& tb = b.loop().impedance().sent_torques().torque;
+      for (int i = 0; i < 3; ++i) {
+        const double e = tb[i] - ta[i];
+        sq[i] += e * e;
+        max_err[i] = std::max(max_err[i], std::abs(e));
+        max_tau[i] = std::max(max_tau[i], std::abs(ta[i]));
+      }
     }
+    a.finish();
+    b.finish();
+    const RunSummary sb = b.summary();
+    std::printf("%s\n", *limit ? "E_max = 0.1 mJ" : "E_max = inf");
+    const char* names[3] = {"pivot_x (N·m)", "pivot_y (N·m)", "depth (N)"};
+    for (int i = 0; i < 3; ++i) {
+      const double rms = std::sqrt(sq[i] / static_cast<double>(periods));
+      std::printf("  %-14s |τ| max %.4g, controller's change: rms %.3g, max %.3g\n", names[i],
+                  max_tau[i], rms, max_err[i]);
+      // Against the render's largest torque: a few per cent without a limit; the 0.1 mJ
+      // limit pays for its margin in transparency (18 % rms on the depth, measured).
+      EXPECT_LE(rms, (*limit ? 0.25 : 0.1) * max_tau[i]) << names[i];
+    }
+    std::printf("  controller acted in %lld of %lld periods, dissipated %.4g J\n",
+                static_cast<long long>(sb.passivity_acting_periods),
+                static_cast<long long>(periods), sb.passivity_dissipated_j);
+    EXPECT_TRUE(sb.passivity_controller);
+    EXPECT_GT(sb.passivity_acting_periods, 0);
   }
-  a.finish();
-  b.finish();
-  const RunSummary sb = b.summary();
-  const char* names[3] = {"pivot_x (N·m)", "pivot_y (N·m)", "depth (N)"};
-  for (int i = 0; i < 3; ++i) {
-    const double rms = std::sqrt(sq[i] / static_cast<double>(periods));
-    std::printf("%-14s |τ| max %.4g, controller's change: rms %.3g, max %.3g\n", names[i],
-                max_tau[i], rms, max_err[i]);
-    // The controller only ever subtracts a damper's force: bounded by what it dissipated.
-    EXPECT_LE(rms, max_tau[i]) << names[i];
-  }
-  std::printf("controller acted in %lld of %lld periods, dissipated %.4g J\n",
-              static_cast<long long>(sb.passivity_acting_periods), static_cast<long long>(periods),
-              sb.passivity_dissipated_j);
-  EXPECT_TRUE(sb.passivity_controller);
-  EXPECT_GE(sb.passivity_dissipated_j, 0.0);
 }
