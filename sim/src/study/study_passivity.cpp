@@ -79,27 +79,27 @@ std::vector<PassivityConfig> passivity_plan(const PassivityOptions& o) {
   // device (b = 1 N·s/m, no friction, no quantisation, B = 0), wall and
   // god-object (k_w = 1e6), at each period, appended so that the cases above keep their index.
   for (double e_max : {kNoBound, 1e-6})
-  for (double t : periods)
-    for (int d : {0, 1})
-      for (double kw : {std::nan(""), 1e6}) {
-        PassivityConfig c;
-        PassivityPoint& p = c.point;
-        p.period_s = t;
-        p.device_damping = 1.0;
-        p.delay_periods = d;
-        p.coupling = std::isnan(kw) ? "wall" : "god-object";
-        p.obstacle_stiffness = kw;
-        p.passivity_controller = true;
-        p.passivity_energy_limit_j = e_max;
-        c.info.index = static_cast<std::int64_t>(out.size());
-        c.info.family = "passivity";
-        c.info.name = p.coupling + " + passivity controller";
-        char buf[200];
-        std::snprintf(buf, sizeof buf, "T=%g b=1 fc=0 delta=0 d=%d B=0 kw=%g pc=1 E_max=%g", t, d,
-                      kw, e_max);
-        c.info.parameters = buf;
-        out.push_back(std::move(c));
-      }
+    for (double t : periods)
+      for (int d : {0, 1})
+        for (double kw : {std::nan(""), 1e6}) {
+          PassivityConfig c;
+          PassivityPoint& p = c.point;
+          p.period_s = t;
+          p.device_damping = 1.0;
+          p.delay_periods = d;
+          p.coupling = std::isnan(kw) ? "wall" : "god-object";
+          p.obstacle_stiffness = kw;
+          p.passivity_controller = true;
+          p.passivity_energy_limit_j = e_max;
+          c.info.index = static_cast<std::int64_t>(out.size());
+          c.info.family = "passivity";
+          c.info.name = p.coupling + " + passivity controller";
+          char buf[200];
+          std::snprintf(buf, sizeof buf, "T=%g b=1 fc=0 delta=0 d=%d B=0 kw=%g pc=1 E_max=%g", t,
+                        d, kw, e_max);
+          c.info.parameters = buf;
+          out.push_back(std::move(c));
+        }
   return out;
 }
 
@@ -294,15 +294,15 @@ void write_passivity_csv(const PassivityResult& r, const std::string& dir) {
 
 std::string format_passivity_table(const PassivityResult& r) {
   std::string out =
-      "| T (s) | b | f_c | Δ (m) | d | coupling | B | k_w | PC E_max (J) | K_max (N/m) | Colgate | ratio | "
-      "A&O | ratio | delay | ratio |\n"
+      "| T (s) | b | f_c | Δ (m) | d | coupling | B | k_w | PC E_max (J) | K_max (N/m) | "
+      "Colgate | ratio | A&O | ratio | delay | ratio |\n"
       "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- "
       "| --- |\n";
   char buf[400];
   for (const PassivityBoundary& b : r.boundaries) {
     std::snprintf(buf, sizeof buf,
-                  "| %g | %g | %g | %g | %d | %s | %g | %g | %s | %.4g | %.4g | %.3f | %.4g | %.3f | "
-                  "%.4g | %.3f |\n",
+                  "| %g | %g | %g | %g | %d | %s | %g | %g | %s | %.4g | %.4g | %.3f | %.4g | "
+                  "%.3f | %.4g | %.3f |\n",
                   b.period_s, b.device_damping, b.coulomb, b.resolution, b.delay_periods,
                   b.coupling.c_str(), b.damping, b.obstacle_stiffness,
                   pc_cell(b).c_str(), b.k_max, b.colgate_bound,
