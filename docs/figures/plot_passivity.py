@@ -36,6 +36,8 @@ def select(rows, coupling, period, kw, b, fc, delta, delay):
     for r in rows:
         if r["coupling"] != coupling or r["period_s"] != period:
             continue
+        if r.get("passivity_controller", 0.0) != 0.0:  # the controller's cases: not the Z-width
+            continue
         if coupling == "god-object" and r["obstacle_stiffness"] != kw:
             continue
         if (r["device_damping"], r["coulomb"], r["resolution"], r["delay_periods"]) != (b, fc, delta, delay):

@@ -319,6 +319,12 @@ void validate(const DeviceConfig& c) {
     fail(c, "foaw_noise_counts",
          "must be finite and >= 0 counts (got " + std::to_string(c.foaw_noise_counts) + ")");
   }
+  if (!std::isfinite(c.passivity.velocity_threshold) || c.passivity.velocity_threshold < 0.0)
+    fail(c, "passivity.velocity_threshold",
+         "must be finite and >= 0 (got " + std::to_string(c.passivity.velocity_threshold) + ")");
+  if (!(c.passivity.energy_limit > 0.0))
+    fail(c, "passivity.energy_limit",
+         "must be > 0 J (+inf: no limit) (got " + std::to_string(c.passivity.energy_limit) + ")");
   if (!std::isfinite(c.soft_start_s) || c.soft_start_s < 0.0 || c.soft_start_s > kMaxSoftStartS) {
     fail(c, "soft_start_s",
          "must be finite and in [0, 10] s (got " + std::to_string(c.soft_start_s) + ")");

@@ -14,10 +14,14 @@ namespace numen::hal {
 ImpedanceDevice::ImpedanceDevice(InstrumentDevice& instrument, Bus& bus)
     : Device(bus), instrument_(&instrument) {
   sent_.torque = AxisVector::Zero(instrument.num_axes());
+  passivity_q_ = AxisVector::Zero(instrument.num_axes());
+  passivity_rate_ = AxisVector::Zero(instrument.num_axes());
   const DeviceConfig& c = instrument.config();
   // validate() bounds both; a hand-built config outside them gets no ramp rather than r = 0.
   if (std::isfinite(c.soft_start_s) && c.soft_start_s > 0.0 && c.control_period_s > 0.0)
     ramp_step_ = c.control_period_s / c.soft_start_s;
+  if (c.passivity.enabled)
+    passivity_ = PassivityController(instrument.num_axes(), c.control_period_s, c.passivity);
 }
 
 IoStatus ImpedanceDevice::write(std::span<const double> torques, std::int64_t now_ns) noexcept {
@@ -30,6 +34,7 @@ IoStatus ImpedanceDevice::write(std::span<const double> torques, std::int64_t no
   // The gate: this period's sample, no shutdown, and per axis the protocol's permission.
   const bool open = sample().valid && !shutting_down();
   bool any_allowed = false;
+  std::uint32_t allowed_mask = 0;  // bit i: axis i passed the gate
   int non_finite_axis = -1;
   for (int i = 0; i < n; ++i) {
     const auto k = static_cast<std::size_t>(i);
@@ -37,6 +42,7 @@ IoStatus ImpedanceDevice::write(std::span<const double> torques, std::int64_t no
     const bool allowed = open && config.axes[k].has_drive() && torque_allowed(i);
     sent_.torque[i] = allowed ? tau : 0.0;
     any_allowed = any_allowed || allowed;
+    if (allowed) allowed_mask |= 1u << static_cast<unsigned>(i);
     if (allowed && !std::isfinite(tau) && non_finite_axis < 0) non_finite_axis = i;
   }
   if (non_finite_axis >= 0) {
@@ -44,6 +50,25 @@ IoStatus ImpedanceDevice::write(std::span<const double> torques, std::int64_t no
     ++torque_counters_.non_finite;
     on_non_finite_torque(non_finite_axis);
     any_allowed = false;
+  }
+  // The passivity controller: observer and damper on the gated torques, before the clamp.
+  if (!any_allowed) allowed_mask = 0;
+  if (passivity_.num_axes() > 0) {
+    // Its rate: the backward difference of this period's axis values (Hannaford & Ryu's),
+    // not the filtered q̇ (docs/passivity.md "Passivity controller": the filter's lag hides
+    // the energy a render produces). 0 for the first valid sample after an invalid one.
+    const AxisVector& q = sample().q;
+    const double dt = config.control_period_s;
+    for (int i = 0; i < n; ++i) {
+      passivity_rate_[i] = passivity_primed_ ? (q[i] - passivity_q_[i]) / dt : 0.0;
+      passivity_q_[i] = q[i];
+    }
+    passivity_primed_ = sample().valid;
+    if (allowed_mask != 0)
+      (void)passivity_.apply(
+          std::span<double>(sent_.torque.data(), static_cast<std::size_t>(n)),
+          std::span<const double>(passivity_rate_.data(), static_cast<std::size_t>(n)),
+          allowed_mask);
   }
   // The soft start: r = min(1, k · dt / T) in the k-th write since torque was enabled.
   if (ramp_step_ > 0.0) {
@@ -70,6 +95,8 @@ IoStatus ImpedanceDevice::write(std::span<const double> torques, std::int64_t no
     t *= sent_.ramp;
     sent_.per_mille[k] = torque_per_mille(a, t);
   }
+  if (passivity_.num_axes() > 0 && allowed_mask != 0)
+    passivity_.sent(std::span<const double>(sent_.torque.data(), static_cast<std::size_t>(n)));
   sent_.gated = !any_allowed;
   torque_counters_.saturations += static_cast<std::uint64_t>(sent_.clamped);
   if (sent_.gated) ++torque_counters_.gated_writes;

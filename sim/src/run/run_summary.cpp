@@ -102,6 +102,10 @@ RunSummary SceneRunner::summary() const {
     }
   }
   s.soft_start_ramps = static_cast<std::int64_t>(loop_.impedance().torque_counters().soft_starts);
+  const hal::PassivityController& pc = loop_.impedance().passivity();
+  s.passivity_controller = pc.num_axes() > 0;
+  s.passivity_acting_periods = static_cast<std::int64_t>(pc.counters().acting_periods);
+  s.passivity_dissipated_j = pc.counters().dissipated_j;
   // A run that ends inside the start-up: the periods after its last minimum are the god-object's.
   if (in_startup_)
     s.tool_penetration_max_mm = std::max(s.tool_penetration_max_mm, startup_window_max_ * 1e3);

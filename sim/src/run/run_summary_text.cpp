@@ -84,6 +84,9 @@ constexpr RunSummarySegment kLayout[] = {
     {"  soft start: feedback ramped in over {soft_start_s:ms} ms, {soft_start_ramps} ramp(s)\n",
      set("soft_start_s"), unset("admittance.enabled")},
     {"  soft start: off\n", unset("soft_start_s"), unset("admittance.enabled")},
+    {"  passivity controller: acted in {passivity_acting_periods} periods, dissipated "
+     "{passivity_dissipated_j} J\n",
+     set("passivity_controller")},
     {"  joints: {num_joints}, drift max {joint_drift_max_mm} mm, {joint_angle_drift_max_mrad} "
      "mrad\n",
      set("num_joints")},

@@ -368,6 +368,51 @@ void parse_plant(const TomlTable& dev, Scene& scene, const hal::DeviceConfig& cf
   scene.plant = std::move(plant);
 }
 
+/// `[device.passivity]` (docs/scenes.md, docs/passivity.md "Passivity controller"): the
+/// time-domain passivity controller of ImpedanceDevice::write() on the named driven axes.
+void parse_passivity(const TomlTable& dev, const Scene& scene, hal::DeviceConfig& cfg) {
+  auto p = dev.table("passivity");
+  if (!p) return;
+  p->allow_only({"enabled", "axes", "velocity_threshold", "energy_limit"});
+  if (scene.model.coupling_mode == core::CouplingMode::kAdmittance)
+    p->fail_at(nullptr, p->path(),
+               "[device.passivity] controls an impedance device's torques; an admittance "
+               "device's drives are position controlled");
+  hal::PassivitySettings s;
+  s.enabled = p->boolean_or("enabled", true);
+  s.velocity_threshold =
+      p->number_in("velocity_threshold", 0.0, 1e3, hal::kDefaultPassivityVelocityThreshold);
+  s.energy_limit = p->number_in("energy_limit", 1e-12, kInf, s.energy_limit);
+  const auto driven_names = [&] {
+    std::string list;
+    for (const hal::AxisConfig& a : cfg.axes)
+      if (a.has_drive()) list += (list.empty() ? "\"" : ", \"") + a.name + "\"";
+    return list;
+  };
+  if (const toml::node* n = p->node("axes")) {
+    const toml::array* arr = n->as_array();
+    if (!arr || arr->empty())
+      p->fail("axes", "expected a list of driven axis names, e.g. [" + driven_names() + "]");
+    for (std::size_t i = 0; i < arr->size(); ++i) {
+      const std::string k = p->key_path("axes") + "[" + std::to_string(i) + "]";
+      const auto* name = arr->get(i)->as_string();
+      if (!name) p->fail_at(arr->get(i), k, "expected an axis name (a string)");
+      int found = -1;
+      for (std::size_t a = 0; a < cfg.axes.size(); ++a)
+        if (cfg.axes[a].name == name->get()) found = static_cast<int>(a);
+      if (found < 0 || !cfg.axes[static_cast<std::size_t>(found)].has_drive())
+        p->fail_at(arr->get(i), k,
+                   (found < 0 ? "no axis named \"" : "axis without a drive \"") + name->get() +
+                       "\" (driven axes: " + driven_names() + ")");
+      s.axis_mask |= 1u << static_cast<unsigned>(found);
+    }
+  } else {
+    for (std::size_t a = 0; a < cfg.axes.size(); ++a)
+      if (cfg.axes[a].has_drive()) s.axis_mask |= 1u << static_cast<unsigned>(a);
+  }
+  cfg.passivity = s;
+}
+
 }  // namespace
 
 int body_index(const TomlTable& t, std::string_view key, const core::Model& m) {
@@ -385,7 +430,7 @@ void parse_device(const TomlTable& root, Scene& scene, const TomlTable*& body_ta
   dev->allow_only({"kind", "name", "attach", "max_sample_age", "jump_tolerance_counts",
                    "velocity_cutoff", "velocity_estimator", "foaw_max_window", "foaw_noise_counts",
                    "soft_start", "first_node_id", "tool_offset", "trocar", "tracker", "phantom",
-                   "feedback", "axis", "canopen", "admittance", "hand", "plant"});
+                   "feedback", "axis", "canopen", "admittance", "hand", "plant", "passivity"});
   const std::string kind =
       dev->choice("kind", {"trocar-instrument", "pose-tracker", "phantom"}, std::nullopt);
   const auto node = dev->integer_or("first_node_id", 1);
@@ -494,6 +539,7 @@ void parse_device(const TomlTable& root, Scene& scene, const TomlTable*& body_ta
   parse_hand(*dev, scene.hand);
   parse_admittance(*dev, scene, cfg);
   parse_plant(*dev, scene, cfg);
+  parse_passivity(*dev, scene, cfg);
   scene.model.initial_attached_body = dev->has("attach") ? body_index(*dev, "attach", scene.model) : -1;
   body_table_of_attached = nullptr;
   if (scene.model.initial_attached_body >= 0)

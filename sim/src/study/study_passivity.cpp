@@ -74,6 +74,32 @@ std::vector<PassivityConfig> passivity_plan(const PassivityOptions& o) {
               out.push_back(std::move(c));
             }
       }
+  // The passivity controller (docs/passivity.md "Passivity controller"), without an energy
+  // limit (the paper's observer) and with E_max = 1 µJ: the undelayed and the one-period-delayed
+  // device (b = 1 N·s/m, no friction, no quantisation, B = 0), wall and
+  // god-object (k_w = 1e6), at each period, appended so that the cases above keep their index.
+  for (double e_max : {kNoBound, 1e-6})
+    for (double t : periods)
+      for (int d : {0, 1})
+        for (double kw : {std::nan(""), 1e6}) {
+          PassivityConfig c;
+          PassivityPoint& p = c.point;
+          p.period_s = t;
+          p.device_damping = 1.0;
+          p.delay_periods = d;
+          p.coupling = std::isnan(kw) ? "wall" : "god-object";
+          p.obstacle_stiffness = kw;
+          p.passivity_controller = true;
+          p.passivity_energy_limit_j = e_max;
+          c.info.index = static_cast<std::int64_t>(out.size());
+          c.info.family = "passivity";
+          c.info.name = p.coupling + " + passivity controller";
+          char buf[200];
+          std::snprintf(buf, sizeof buf, "T=%g b=1 fc=0 delta=0 d=%d B=0 kw=%g pc=1 E_max=%g", t,
+                        d, kw, e_max);
+          c.info.parameters = buf;
+          out.push_back(std::move(c));
+        }
   return out;
 }
 
@@ -89,6 +115,8 @@ PassivityRow passivity_row_of(const PassivityPoint& p, const PassivityProbe& r, 
   row.stiffness = p.stiffness;
   row.damping = p.damping;
   row.obstacle_stiffness = p.obstacle_stiffness;
+  row.passivity_controller = p.passivity_controller;
+  row.passivity_energy_limit_j = p.passivity_energy_limit_j;
   row.passive = r.passive;
   row.energy_min_j = r.energy_min_j;
   row.energy_peak_j = r.energy_peak_j;
@@ -113,6 +141,15 @@ double reference_stiffness(const PassivityPoint& p) {
   for (double b : {delay_bound(p), abbott_okamura_bound(p), dither_bound(p)})
     if (b > 0.0 && b < k) k = b;
   return std::isfinite(k) ? k : 1e3;
+}
+
+/// The passivity controller column of the text table: "–" off, else its E_max ("∞": none).
+std::string pc_cell(const PassivityBoundary& b) {
+  if (!b.passivity_controller) return "–";
+  if (std::isinf(b.passivity_energy_limit_j)) return "∞";
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%g", b.passivity_energy_limit_j);
+  return buf;
 }
 
 double bound_ratio(double measured, double bound) {
@@ -200,6 +237,8 @@ PassivityBoundary find_passivity_boundary(const PassivityPoint& point, double to
   b.coupling = point.coupling;
   b.damping = point.damping;
   b.obstacle_stiffness = point.obstacle_stiffness;
+  b.passivity_controller = point.passivity_controller;
+  b.passivity_energy_limit_j = point.passivity_energy_limit_j;
   b.colgate_bound = colgate_bound(point);
   b.abbott_okamura_bound = abbott_okamura_bound(point);
   b.delay_bound = delay_bound(point);
@@ -255,17 +294,18 @@ void write_passivity_csv(const PassivityResult& r, const std::string& dir) {
 
 std::string format_passivity_table(const PassivityResult& r) {
   std::string out =
-      "| T (s) | b | f_c | Δ (m) | d | coupling | B | k_w | K_max (N/m) | Colgate | ratio | "
-      "A&O | ratio | delay | ratio |\n"
+      "| T (s) | b | f_c | Δ (m) | d | coupling | B | k_w | PC E_max (J) | K_max (N/m) | "
+      "Colgate | ratio | A&O | ratio | delay | ratio |\n"
       "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- "
-      "|\n";
+      "| --- |\n";
   char buf[400];
   for (const PassivityBoundary& b : r.boundaries) {
     std::snprintf(buf, sizeof buf,
-                  "| %g | %g | %g | %g | %d | %s | %g | %g | %.4g | %.4g | %.3f | %.4g | %.3f | "
-                  "%.4g | %.3f |\n",
+                  "| %g | %g | %g | %g | %d | %s | %g | %g | %s | %.4g | %.4g | %.3f | %.4g | "
+                  "%.3f | %.4g | %.3f |\n",
                   b.period_s, b.device_damping, b.coulomb, b.resolution, b.delay_periods,
-                  b.coupling.c_str(), b.damping, b.obstacle_stiffness, b.k_max, b.colgate_bound,
+                  b.coupling.c_str(), b.damping, b.obstacle_stiffness,
+                  pc_cell(b).c_str(), b.k_max, b.colgate_bound,
                   b.ratio_colgate, b.abbott_okamura_bound, b.ratio_abbott_okamura, b.delay_bound,
                   b.ratio_delay);
     out += buf;
@@ -286,12 +326,14 @@ std::vector<std::string> passivity_failures(const PassivityResult& r) {
     // Where the theory's assumptions hold, the boundary must reproduce it within 10 %:
     // a direct wall without quantisation and friction (Colgate & Schenkel, with the delay),
     // and one without damping at the count scale (Abbott & Okamura, 2 f_c/Δ).
-    const bool colgate = b.coupling == "wall" && b.resolution == 0.0 && b.coulomb == 0.0;
+    // (Not with the passivity controller: it moves the boundary, which is what it measures.)
+    const bool colgate = b.coupling == "wall" && b.resolution == 0.0 && b.coulomb == 0.0 &&
+                         !b.passivity_controller;
     if (colgate && !(std::abs(b.ratio_delay - 1.0) <= 0.1))
       out.push_back(where + ": K_max / delay bound = " + std::to_string(b.ratio_delay) +
                     ", outside 1 ± 0.1");
     const bool quantised = b.coupling == "wall" && b.resolution > 0.0 && b.device_damping == 0.0 &&
-                           b.delay_periods == 0;
+                           b.delay_periods == 0 && !b.passivity_controller;
     if (quantised && !(std::abs(b.ratio_abbott_okamura - 1.0) <= 0.1))
       out.push_back(where + ": K_max / (2 f_c/Δ) = " + std::to_string(b.ratio_abbott_okamura) +
                     ", outside 1 ± 0.1");

@@ -1,8 +1,8 @@
 /// @file study_passivity_probe.cpp
 /// The probe of `numen study passivity` (study_passivity.hpp; docs/passivity.md "Probe"): one
 /// device axis (AxisPlant), an encoder, a controller at period T rendering a direct wall or a
-/// 1-DOF god-object behind a virtual coupling, and four hand motions; the energy the hand puts
-/// into the device port decides passivity.
+/// 1-DOF god-object behind a virtual coupling (optionally through hal::PassivityController),
+/// and four hand motions; the energy the hand puts into the device port decides passivity.
 
 #include <algorithm>
 #include <cmath>
@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "numen/hal/device/passivity_controller.hpp"
 #include "numen/sim/device/axis_plant.hpp"
 #include "numen/sim/study/study_passivity.hpp"
 
@@ -26,19 +27,34 @@ double encoder_reading(double x, double resolution) {
 
 /// The controller: reads the encoder at the start of each period, estimates the velocity by
 /// the backward difference and returns the force to hold over the period. The wall's surface
-/// (and the god-object's obstacle) is x = 0, the wall occupies x > 0.
-class PassivityController {
+/// (and the god-object's obstacle) is x = 0, the wall occupies x > 0. With
+/// PassivityPoint::passivity_controller the force goes through hal::PassivityController (the
+/// device's own class, one axis, the backward difference as its rate, the default velocity
+/// threshold, PassivityPoint::passivity_energy_limit_j), as ImpedanceDevice::write() does
+/// before its clamp.
+class ProbeController {
  public:
-  PassivityController(const PassivityPoint& p, double x0)
+  ProbeController(const PassivityPoint& p, double x0)
       : p_(p),
         god_object_(p.coupling == "god-object"),
         previous_(encoder_reading(x0, p.resolution)),
-        go_x_(previous_) {}
+        go_x_(previous_),
+        passivity_(1, p.period_s, p.passivity_controller ? 1u : 0u,
+                   hal::kDefaultPassivityVelocityThreshold, p.passivity_energy_limit_j) {}
 
   double force(double x) {
     const double xq = encoder_reading(x, p_.resolution);
     const double v = (xq - previous_) / p_.period_s;
     previous_ = xq;
+    double f[1] = {render(xq, v)};
+    const double rate[1] = {v};
+    if (p_.passivity_controller) (void)passivity_.apply(f, rate);
+    return f[0];
+  }
+
+ private:
+  /// The environment's force at the encoder reading xq and the rate estimate v.
+  double render(double xq, double v) {
     if (!god_object_) return xq > 0.0 ? -p_.stiffness * xq - p_.damping * v : 0.0;
     // The god-object (mass m_g, position g, velocity u) coupled to the device by the spring-
     // damper (K, B) (paper Eq. 2, target = the device) and held out of the obstacle x > 0 by
@@ -59,12 +75,12 @@ class PassivityController {
     return k * (go_x_ - xq) + b * (go_u_ - v);
   }
 
- private:
   PassivityPoint p_;
   bool god_object_;
   double previous_;    ///< The last encoder reading (m).
   double go_x_ = 0.0;  ///< God-object position (m).
   double go_u_ = 0.0;  ///< God-object velocity (m/s).
+  hal::PassivityController passivity_;
 };
 
 /// The hand: a mass m_h, damper c_h and spring k_h (held over a sub-step) pulling the device
@@ -98,7 +114,7 @@ ProbeTrace run_probe(const PassivityPoint& p, double x0, const ProbeHand& hand, 
   s.delay_periods = p.delay_periods;
   AxisPlant plant(s);
   plant.reset(x0, 0.0);
-  PassivityController controller(p, x0);
+  ProbeController controller(p, x0);
   ProbeTrace trace;
   if (keep_positions) trace.x.reserve(static_cast<std::size_t>(periods));
   const double t = p.period_s, h = t / kProbeSubsteps;
@@ -192,6 +208,8 @@ void check_point(const PassivityPoint& p) {
   if (!std::isfinite(p.damping)) bad("damping must be finite");
   if (!(std::isfinite(p.resolution) && p.resolution >= 0.0))
     bad("resolution must be finite and >= 0");
+  if (!(p.passivity_energy_limit_j > 0.0))
+    bad("passivity_energy_limit_j must be > 0 (+inf: none)");
   if (p.coupling != "wall" && p.coupling != "god-object")
     bad("coupling must be \"wall\" or \"god-object\" (got \"" + p.coupling + "\")");
   if (p.coupling == "god-object" &&

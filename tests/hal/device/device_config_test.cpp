@@ -147,6 +147,26 @@ TEST(DeviceConfig, SoftStartIsOffByDefaultAndBoundedToTenSeconds) {
   }
 }
 
+TEST(DeviceConfig, PassivityIsOffByDefaultAndItsSettingsAreChecked) {
+  DeviceConfig c = make_default_trocar_config();
+  EXPECT_FALSE(c.passivity.enabled);
+  EXPECT_EQ(c.passivity.velocity_threshold, kDefaultPassivityVelocityThreshold);
+  for (const double bad : {-1e-3, std::numeric_limits<double>::quiet_NaN(),
+                           std::numeric_limits<double>::infinity()}) {
+    c.passivity.velocity_threshold = bad;
+    const std::string e = error_of(c);
+    EXPECT_NE(e.find("passivity.velocity_threshold must be finite and >= 0"), std::string::npos)
+        << bad << ": " << e;
+  }
+  c.passivity.velocity_threshold = 0.0;
+  EXPECT_EQ(error_of(c), "");
+  EXPECT_TRUE(std::isinf(c.passivity.energy_limit));  // none: the paper's observer
+  for (const double bad : {0.0, -1.0, std::numeric_limits<double>::quiet_NaN()}) {
+    c.passivity.energy_limit = bad;
+    EXPECT_NE(error_of(c).find("passivity.energy_limit must be > 0 J"), std::string::npos) << bad;
+  }
+}
+
 TEST(DeviceConfig, KindDecidesTheKinematics) {
   const auto t = make_kinematics(make_default_trocar_config());
   EXPECT_EQ(t->num_axes(), 5);

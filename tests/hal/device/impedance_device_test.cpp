@@ -4,7 +4,7 @@
 // sample, shutdown, the implementation's per-axis permission, axes without a drive, a
 // non-finite torque, ±max_torque and the RPDO's range, the per mille sent), the soft start (a
 // linear ramp from the first open gate, 0 = unscaled), make_device()'s choice, and no
-// allocation in a period of either implementation.
+// allocation in a period of either implementation; the passivity controller in write().
 #include "numen/hal/device/impedance_device.hpp"
 
 #include <gtest/gtest.h>
@@ -74,17 +74,18 @@ DeviceConfig trocar_with_soft_start(double soft_start_s) {
 }
 
 struct Rig {
-  explicit Rig(double soft_start_s = 0.0)
-      : bus(SimBusSettings{}),
-        instrument(trocar_with_soft_start(soft_start_s)),
-        dev(instrument, bus.controller()) {}
+  explicit Rig(double soft_start_s = 0.0) : Rig(trocar_with_soft_start(soft_start_s)) {}
+  explicit Rig(const DeviceConfig& c)
+      : bus(SimBusSettings{}), instrument(c), dev(instrument, bus.controller()) {}
 
-  // The encoders answer with kQ0 at t, then the device reads at t.
-  void answer_and_read(std::int64_t t) {
+  // The encoders answer with kQ0 (plus `depth` m on the depth axis) at t, then the device
+  // reads at t.
+  void answer_and_read(std::int64_t t, double depth = 0.0) {
     bus.set_time_ns(t);  // the bus stamps the frames it delivers
     for (int i = 0; i < instrument.num_axes(); ++i) {
       const AxisConfig& a = instrument.config().axes[static_cast<std::size_t>(i)];
-      bus.device().write(encode_position_pdo(a.encoder_cob_id, value_to_counts(a, kQ0[i]), t));
+      const double q = kQ0[i] + (i == TrocarKinematics::kDepth ? depth : 0.0);
+      bus.device().write(encode_position_pdo(a.encoder_cob_id, value_to_counts(a, q), t));
     }
     dev.read(t);
   }
@@ -325,6 +326,56 @@ TEST(ImpedanceDevice, MakeDeviceFollowsTheConfiguredProtocol) {
   EXPECT_THROW(make_device(managed, bus.controller(), 0), std::invalid_argument);
 }
 
+// The passivity controller runs in write() after the gate and before the clamp: on the depth
+// axis, moving at 20 mm/s under a torque that pushes along the motion (an active render), the
+// controller adds damping from the first period E < 0, every write's E is the energy of what
+// was sent (Σ −T τ_sent v, v the backward difference of the axis value), and it stays >= 0;
+// the clamp still bounds the sent torque.
+TEST(ImpedanceDevice, PassivityControllerDampsAnActiveRenderBeforeTheClamp) {
+  DeviceConfig c = make_default_trocar_config(1);
+  c.passivity.enabled = true;
+  c.passivity.axis_mask = 1u << TrocarKinematics::kDepth;
+  c.passivity.velocity_threshold = 1e-4;
+  Rig r(c);
+  constexpr int kD = TrocarKinematics::kDepth;
+  const double v = 0.02, lim = torque_limit(r.axis(kD));
+  double energy = 0.0, q_prev = 0.0;
+  for (int k = 0; k < 300; ++k) {
+    SCOPED_TRACE("period " + std::to_string(k));
+    r.answer_and_read(k * kMs, v * k * 1e-3);
+    // Pushing along the motion; beyond the clamp for k >= 200.
+    const double push = k < 200 ? 2.0 : 2.0 * lim;
+    r.write({0.01, 0.0, push, 0.0, 0.0});
+    const SentTorques& s = r.dev.sent_torques();
+    // The controller's rate: the backward difference of the axis value (0 at the first sample).
+    const double q = r.dev.sample().q[kD];
+    const double rate = k == 0 ? 0.0 : (q - q_prev) / 1e-3;
+    q_prev = q;
+    energy -= 1e-3 * s.torque[kD] * rate;
+    EXPECT_NEAR(r.dev.passivity().energy(kD), energy, 1e-12);
+    EXPECT_GE(r.dev.passivity().energy(kD), -1e-12);
+    EXPECT_LE(std::abs(s.torque[kD]), lim);
+    EXPECT_EQ(s.torque[0], 0.01);  // pivot_x is outside the mask: untouched
+    if (r.dev.passivity().damping(kD) > 0.0) {
+      EXPECT_LT(s.torque[kD], std::min(push, lim));
+    }
+  }
+  EXPECT_GT(r.dev.passivity().counters().acting_periods, 250u);
+  EXPECT_GT(r.dev.passivity().counters().dissipated_j, 0.0);
+  EXPECT_EQ(r.dev.passivity().counters().axis_acting_periods[0], 0u);
+}
+
+// Off (the default): write() has no controller.
+TEST(ImpedanceDevice, PassivityControllerIsOffByDefault) {
+  Rig r;
+  EXPECT_EQ(r.dev.passivity().num_axes(), 0);
+  for (int k = 0; k < 10; ++k) {
+    r.answer_and_read(k * kMs, 1e-4 * k);
+    r.write({0.0, 0.0, 2.0, 0.0, 0.0});
+    EXPECT_EQ(r.dev.sent_torques().torque[TrocarKinematics::kDepth], 2.0);
+  }
+}
+
 // Both protocols against the device emulator: begin_period, read, supervise, write over 2000
 // periods without one allocation; the managed stack reaches kActive and sends torque. A soft
 // start of 0.5 s puts the ramp's periods under the counter.
@@ -333,6 +384,8 @@ TEST(ImpedanceDevice, PeriodsOfBothProtocolsNeverAllocate) {
     DeviceConfig c = make_default_trocar_config(1);
     c.canopen.managed = managed;
     c.soft_start_s = 0.5;
+    c.passivity.enabled = true;  // the controller runs in every write
+    c.passivity.axis_mask = 0b111;
     SimBusSettings bs;
     bs.latency_ns = 100'000;
     SimBus bus(bs);

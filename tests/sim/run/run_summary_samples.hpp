@@ -45,6 +45,9 @@ inline sim::RunSummary full_managed_summary() {
   s.feedback_force_jump_max_n = 0.375;
   s.soft_start_s = 0.1;
   s.soft_start_ramps = 2;
+  s.passivity_controller = true;
+  s.passivity_acting_periods = 12;
+  s.passivity_dissipated_j = 0.25;
   s.feedback_torque_max_nm = 0.0625;
   s.axis_torque_max = 0.75;
   s.free_body_speed_max_mps = 0.875;

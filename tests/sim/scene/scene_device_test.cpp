@@ -1,6 +1,7 @@
 // Tests of sim/scene: [device.canopen] (sim/src/scene/scene_device.cpp): the managed stack's
 // defaults, the PDO mappings, the DCFs read per node, their errors located in the scene or in
-// the DCF, and the shipped scenes configuring every node from its DCF.
+// the DCF, and the shipped scenes configuring every node from its DCF; [device.passivity]
+// (the axes it controls, its errors located).
 #include "numen/sim/scene/scene.hpp"
 
 #include <gtest/gtest.h>
@@ -222,5 +223,62 @@ TEST(SceneCanopen, ShippedScenesConfigureEveryNodeFromItsDcf) {
       ASSERT_NE(x.dcf, nullptr);
       EXPECT_EQ(x.dcf->find({0x1400, 1}) != nullptr, s.device.axes[i].has_drive());
     }
+  }
+}
+
+// ---------------------------------------------------------------- [device.passivity]
+
+namespace {
+
+/// The mini scene on a phantom (drives on turret, shoulder, elbow) with `section` appended.
+std::string phantom_scene(const std::string& section) {
+  return replace(kMiniScene, "kind = \"pose-tracker\"", "kind = \"phantom\"") + section;
+}
+
+}  // namespace
+
+TEST(ScenePassivity, OffWithoutTheSectionEveryDrivenAxisByDefaultOrTheNamedOnes) {
+  TempDir dir;
+  const Scene off = load_scene(dir.write("off.toml", phantom_scene("")));
+  EXPECT_FALSE(off.device.passivity.enabled);
+  const Scene all = load_scene(dir.write("all.toml", phantom_scene("\n[device.passivity]\n")));
+  EXPECT_TRUE(all.device.passivity.enabled);
+  EXPECT_EQ(all.device.passivity.axis_mask, 0b111u);  // turret, shoulder, elbow
+  EXPECT_EQ(all.device.passivity.velocity_threshold, numen::hal::kDefaultPassivityVelocityThreshold);
+  const Scene some = load_scene(dir.write(
+      "some.toml", phantom_scene("\n[device.passivity]\nenabled = true\naxes = [\"elbow\", "
+                                 "\"turret\"]\nvelocity_threshold = 0.002\nenergy_limit = 1e-4\n")));
+  EXPECT_TRUE(some.device.passivity.enabled);
+  EXPECT_EQ(some.device.passivity.axis_mask, 0b101u);
+  EXPECT_EQ(some.device.passivity.velocity_threshold, 0.002);
+  EXPECT_EQ(some.device.passivity.energy_limit, 1e-4);
+  EXPECT_TRUE(std::isinf(all.device.passivity.energy_limit));
+  const Scene disabled =
+      load_scene(dir.write("disabled.toml", phantom_scene("\n[device.passivity]\nenabled = false\n")));
+  EXPECT_FALSE(disabled.device.passivity.enabled);
+}
+
+TEST(ScenePassivity, ErrorsAreLocated) {
+  TempDir dir;
+  const std::string file = (dir.path() / "bad.toml").string();
+  struct Case {
+    std::string line, value, key, message;
+  };
+  for (const Case& c : std::vector<Case>{
+           {"axes = [\"elbo\"]", "\"elbo\"", "device.passivity.axes[0]", "no axis named \"elbo\""},
+           {"axes = [\"turret\", \"gimbal_yaw\"]", "\"gimbal_yaw\"", "device.passivity.axes[1]",
+            "axis without a drive \"gimbal_yaw\" (driven axes: \"turret\", \"shoulder\", \"elbow\")"},
+           {"axes = [3]", "3", "device.passivity.axes[0]", "expected an axis name"},
+           {"axes = \"elbow\"", "\"elbow\"", "device.passivity.axes", "expected a list"},
+           {"axes = []", "[]", "device.passivity.axes", "expected a list"},
+           {"enabled = 1", "1", "device.passivity.enabled", "expected true or false"},
+           {"velocity_threshold = -1.0", "-1.0", "device.passivity.velocity_threshold", "must be in"},
+           {"energy_limit = 0.0", "0.0", "device.passivity.energy_limit", "must be in"},
+           {"stiffness = 3.0", "3.0", "device.passivity.stiffness", "unknown key"},
+       }) {
+    const std::string text = phantom_scene("\n[device.passivity]\n" + c.line + "\n");
+    const InputError e = load_error(dir, text);
+    expect_located(e, file, line_of(text, c.line), column_of(text, c.line, c.value), c.key,
+                   c.message);
   }
 }

@@ -2,7 +2,8 @@
 /// `numen study passivity` (sim/src/study/study_passivity*.cpp, docs/passivity.md): the measured
 /// boundary against Colgate & Schenkel (no friction, no quantisation) and Abbott & Okamura
 /// (no damping), the god-object coupling inside its bound against a direct wall of the
-/// obstacle's stiffness, the CSV columns, the shard merge and the refused options.
+/// obstacle's stiffness, the passivity controller on a delayed wall, the CSV columns, the shard
+/// merge and the refused options.
 
 #include "numen/sim/study/study_passivity.hpp"
 
@@ -88,6 +89,28 @@ TEST(StudyPassivity, GodObjectInsideItsBoundIsPassiveAtAnyObstacleStiffnessADire
   }
 }
 
+// The passivity controller in the probe (hal::PassivityController, docs/passivity.md
+// "Passivity controller"): the paper's observer leaves the boundary where it is (it books a
+// held spring as passive); with an energy limit of 1 µJ it damps the energy a one-period delay
+// releases, and the delayed wall's K_max rises from b/(T/2 + T) to 2b/T, not beyond.
+TEST(StudyPassivity, PassivityControllerLiftsTheDelayedWallToColgatesBoundNotBeyond) {
+  PassivityPoint p = wall(1e-3, 1.0, 0.0, 0.0);
+  p.delay_periods = 1;
+  p.passivity_controller = true;
+  const PassivityBoundary paper = find_passivity_boundary(p, 0.01);
+  EXPECT_NEAR(paper.k_max / delay_bound(p), 1.0, 0.02) << paper.k_max;
+  EXPECT_TRUE(paper.passivity_controller);
+  p.passivity_energy_limit_j = 1e-6;
+  const PassivityBoundary tank = find_passivity_boundary(p, 0.01);
+  EXPECT_NEAR(tank.k_max / colgate_bound(p), 1.0, 0.02) << tank.k_max;
+  EXPECT_EQ(tank.passivity_energy_limit_j, 1e-6);
+  p.delay_periods = 0;
+  const PassivityBoundary undelayed = find_passivity_boundary(p, 0.01);
+  EXPECT_NEAR(undelayed.k_max / colgate_bound(p), 1.0, 0.02) << undelayed.k_max;
+  p.passivity_energy_limit_j = 0.0;
+  EXPECT_THROW(probe_passivity(p), std::invalid_argument);
+}
+
 TEST(StudyPassivity, ProbeRefusesABadPointNamingTheSetting) {
   PassivityPoint p = wall(1e-3, 1.0, 0.0, 0.0);
   p.coupling = "spring";
@@ -141,7 +164,7 @@ TEST(StudyPassivity, CsvColumnsAreTheContract) {
   EXPECT_EQ(header.rfind(contract, 0), 0u) << header;
   for (const char* extra :
        {"obstacle_stiffness", "limit_cycle", "limit_cycle_amplitude_m", "limit_cycle_hz",
-        "colgate_bound", "abbott_okamura_bound", "delay_bound"})
+        "colgate_bound", "abbott_okamura_bound", "delay_bound", "passivity_controller"})
     EXPECT_NE(header.find(std::string(",") + extra + ","), std::string::npos) << extra;
   std::string joined;
   for (const std::string& n : passivity_row_names()) joined += (joined.empty() ? "" : ",") + n;

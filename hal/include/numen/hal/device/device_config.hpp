@@ -15,6 +15,7 @@
 #include "numen/hal/device/foaw_estimator.hpp"
 #include "numen/hal/canopen/dcf.hpp"
 #include "numen/hal/canopen/pdo_mapping.hpp"
+#include "numen/hal/device/passivity_controller.hpp"
 #include "numen/hal/device/phantom_kinematics.hpp"
 #include "numen/hal/device/pose_tracker_kinematics.hpp"
 #include "numen/hal/device/rate_estimator.hpp"
@@ -179,6 +180,10 @@ struct DeviceConfig {
   /// the soft start existed. The hal default is 0; a scene's `[device] soft_start` defaults to
   /// kDefaultSceneSoftStartS (docs/scenes.md, docs/safety.md "Soft start").
   double soft_start_s = 0.0;
+  /// The time-domain passivity controller on the axis port (passivity_controller.hpp):
+  /// ImpedanceDevice::write() runs it on the gated torques before the clamp. Off by default;
+  /// a scene's `[device.passivity]` turns it on (docs/scenes.md, docs/passivity.md).
+  PassivitySettings passivity;
   /// Pose of the controlled frame in the tool frame (tool tip frame for a trocar instrument,
   /// tracked frame for a pose tracker, stylus frame for a phantom). Identity: the controlled
   /// frame is the tool frame.
@@ -203,7 +208,8 @@ struct DeviceConfig {
 /// outside 0x001–0x7FF, equal to 0x080 (SYNC) or used twice, non-positive period or age,
 /// negative jump tolerance, a velocity cutoff that is NaN or <= 0, a velocity estimator outside
 /// the enum, a FOAW window outside 1 … kFoawMaxWindow, a FOAW noise band that is not finite or
-/// < 0, a soft start that is not finite or outside [0, kMaxSoftStartS], non-finite positions,
+/// < 0, a soft start that is not finite or outside [0, kMaxSoftStartS], a passivity velocity
+/// threshold not finite or < 0 or an energy limit not > 0, non-finite positions,
 /// non-unit quaternions (|‖q‖ − 1| > 1e-6), phantom link lengths not finite and > 0. Only the geometry of the config's kind is checked.
 /// With canopen.managed also: one canopen.axes entry per axis; node ids 1–127 and not the
 /// controller's; heartbeat periods >= 1 ms and timeouts above them (axes of one node agreeing);

@@ -16,6 +16,13 @@
 ///    managed stack: the lifecycle is kActive and that drive's CiA 402 master allows torque);
 ///  - non-finite: a NaN or infinite τ on an allowed axis zeroes every axis (the managed stack
 ///    latches the safe state, FaultCause::kNonFiniteTorque);
+///  - passivity controller (DeviceConfig::passivity enabled; passivity_controller.hpp): on
+///    the allowed axes of its mask, the observer books E_i −= T τ_i v_i (v_i: the backward
+///    difference of the axis value over the period, Hannaford & Ryu's rate, not the filtered
+///    DeviceSample::qdot) and, while E_i < 0, the damper −α v_i is added to τ_i. It runs
+///    after the gate (a gated axis gets no damping) and before the clamp and the soft start,
+///    so the clamp still bounds what is sent; what they take away is booked back into E
+///    (PassivityController::sent());
 ///  - clamp: |τ_i| <= AxisConfig::max_torque (N·m or N), counted per axis;
 ///  - soft start: every clamped τ_i times r(t) = min(1, k · dt / T) in the k-th write since
 ///    torque was enabled (T = DeviceConfig::soft_start_s, dt = control_period_s; T = 0: r = 1).
@@ -43,6 +50,7 @@
 #include "numen/hal/device/device.hpp"
 #include "numen/hal/device/instrument_device.hpp"
 #include "numen/hal/device/kinematics.hpp"
+#include "numen/hal/device/passivity_controller.hpp"
 
 namespace numen::hal {
 
@@ -120,6 +128,9 @@ class ImpedanceDevice : public Device {
   const SentTorques& sent_torques() const noexcept { return sent_; }
   /// Counters of write().
   const TorqueCounters& torque_counters() const noexcept { return torque_counters_; }
+  /// The passivity controller write() runs (num_axes() == 0 when DeviceConfig::passivity is
+  /// off): its energies E_i, dampers and counters.
+  const PassivityController& passivity() const noexcept { return passivity_; }
 
  protected:
   /// Keeps references: `instrument` and `bus` must outlive the device.
@@ -147,6 +158,12 @@ class ImpedanceDevice : public Device {
 
   SentTorques sent_;
   TorqueCounters torque_counters_;
+  PassivityController passivity_;
+  // The passivity controller's rate: the last sample's axis values and their backward
+  // difference (primed: the last sample was valid).
+  AxisVector passivity_q_;
+  AxisVector passivity_rate_;
+  bool passivity_primed_ = false;
   // Soft start: dt / T (0: off) and the writes since the ramp began (-1: armed, waiting for an
   // open gate; counting stops once r reached 1).
   double ramp_step_ = 0.0;

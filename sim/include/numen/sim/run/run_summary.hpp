@@ -159,6 +159,13 @@ struct RunSummary {
   /// Soft-start ramps run (hal::TorqueCounters::soft_starts: the start-up's and one per
   /// activation after a re-arm that enabled torque again).
   std::int64_t soft_start_ramps = 0;
+  /// The device's time-domain passivity controller runs (hal::DeviceConfig::passivity;
+  /// scene `[device.passivity]`, docs/passivity.md "Passivity controller").
+  bool passivity_controller = false;
+  /// Periods in which it added damping on some axis (hal::PassivityCounters::acting_periods).
+  std::int64_t passivity_acting_periods = 0;
+  /// Energy its dampers dissipated, J (hal::PassivityCounters::dissipated_j).
+  double passivity_dissipated_j = 0.0;
   double feedback_torque_max_nm = 0.0;
   double axis_torque_max = 0.0;            ///< Largest |axis torque| commanded (N·m or N).
   double free_body_speed_max_mps = 0.0;    ///< Fastest body not part of the held tool (m/s): blocks thrown about.

@@ -103,6 +103,8 @@ void passivity_row_fields(Row& r, Visit&& v) {
   v("delay_bound", r.delay_bound);
   v("dither_bound", r.dither_bound);
   v("kind", r.kind);
+  v("passivity_controller", r.passivity_controller);
+  v("passivity_energy_limit_j", r.passivity_energy_limit_j);
 }
 
 /// The members of a measured boundary (PassivityBoundary), by the names of the columns of
@@ -129,6 +131,8 @@ void passivity_boundary_fields(Boundary& b, Visit&& v) {
   v("ratio_delay", b.ratio_delay);
   v("ratio_dither", b.ratio_dither);
   v("evaluations", b.evaluations);
+  v("passivity_controller", b.passivity_controller);
+  v("passivity_energy_limit_j", b.passivity_energy_limit_j);
 }
 
 /// The names `fields` visits, in order (e.g. field_names<StabilityRow>(stability_row_fields)).

@@ -12,6 +12,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -32,6 +33,13 @@ struct PassivityPoint {
   double damping = 0.0;    ///< B (N·s/m): the wall's damping, or the coupling's.
   /// Penalty stiffness k_w (N/m) of the god-object's obstacle; unused by "wall".
   double obstacle_stiffness = 1e6;
+  /// The controller's force goes through hal::PassivityController (Hannaford & Ryu's observer
+  /// and damper on the port, the backward difference as its rate; docs/passivity.md
+  /// "Passivity controller") before it is held over the period.
+  bool passivity_controller = false;
+  /// The controller's energy limit E_max (J, > 0; +inf: the paper's observer), see
+  /// hal::PassivitySettings::energy_limit.
+  double passivity_energy_limit_j = std::numeric_limits<double>::infinity();
 };
 
 /// What the probe of one point measured (the four hand motions: docs/passivity.md "Probe").
@@ -95,6 +103,8 @@ struct PassivityRow {
   double stiffness = 0.0;
   double damping = 0.0;
   double obstacle_stiffness = 0.0;  ///< NaN for "wall".
+  bool passivity_controller = false;  ///< PassivityPoint::passivity_controller.
+  double passivity_energy_limit_j = 0.0;  ///< PassivityPoint::passivity_energy_limit_j.
   bool passive = false;
   double energy_min_j = 0.0;
   double energy_peak_j = 0.0;
@@ -122,6 +132,8 @@ struct PassivityBoundary {
   std::string coupling;
   double damping = 0.0;
   double obstacle_stiffness = 0.0;
+  bool passivity_controller = false;  ///< PassivityPoint::passivity_controller.
+  double passivity_energy_limit_j = 0.0;  ///< PassivityPoint::passivity_energy_limit_j.
   /// Geometric mean of the final bracket (N/m); 0: not passive at the bracket's low end,
   /// infinity: passive at its high end.
   double k_max = 0.0;
