@@ -71,7 +71,8 @@ set(_hal_headers
   numen/hal/device/device.hpp numen/hal/device/device_config.hpp
   numen/hal/device/force_sensor.hpp numen/hal/device/impedance_device.hpp
   numen/hal/device/instrument_device.hpp
-  numen/hal/device/foaw_estimator.hpp numen/hal/device/rate_estimator.hpp
+  numen/hal/device/foaw_estimator.hpp numen/hal/device/passivity_controller.hpp
+  numen/hal/device/rate_estimator.hpp
   numen/hal/device/kinematics.hpp numen/hal/device/kinematics_factory.hpp
   numen/hal/device/managed_device.hpp numen/hal/device/minimal_device.hpp
   numen/hal/device/phantom_kinematics.hpp numen/hal/device/pose_tracker_kinematics.hpp
