@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "numen/hal/device/axis.hpp"
 #include "numen/hal/device/managed_device.hpp"
 #include "numen/hal/device/minimal_device.hpp"
 
@@ -60,7 +61,9 @@ IoStatus ImpedanceDevice::write(std::span<const double> torques, std::int64_t no
     const AxisVector& q = sample().q;
     const double dt = config.control_period_s;
     for (int i = 0; i < n; ++i) {
-      passivity_rate_[i] = passivity_primed_ ? (q[i] - passivity_q_[i]) / dt : 0.0;
+      const bool wraps = config.axes[static_cast<std::size_t>(i)].wraps;  // across ±π: the short way
+      passivity_rate_[i] =
+          passivity_primed_ ? axis_difference(q[i], passivity_q_[i], wraps) / dt : 0.0;
       passivity_q_[i] = q[i];
     }
     passivity_primed_ = sample().valid;
