@@ -99,8 +99,9 @@ constexpr RunFigure kFigures[] = {
      "replay, the handle in closed loop) with obstacles and other bodies",
      K::kReal, [](const S& s) noexcept { return real(s.target_penetration_max_mm); }},
     {"device_loop", "",
-     "replay (the encoders read the trajectory) or closed (the device moves under the torques "
-     "and the hand: [device.plant])",
+     "replay (the encoders read the trajectory), closed (the device moves under the torques "
+     "and the hand: [device.plant]), external (a real bus or a bus log: another process's "
+     "device), admittance",
      K::kText, [](const S& s) noexcept { return text(s.device_loop); }},
     {"closed_loop", "", "device_loop is closed", K::kFlag,
      [](const S& s) noexcept { return flag(s.closed_loop); }},

@@ -79,6 +79,8 @@ RunSummary SceneRunner::summary() const {
       k_ > 0 ? static_cast<double>(solver_iterations_sum_) / static_cast<double>(k_) : 0.0;
   s.tracking_error_free_rms_mm = s.free_steps ? std::sqrt(free_sq_ / static_cast<double>(s.free_steps)) * 1e3 : 0.0;
   s.soft_start_s = scene_->device.soft_start_s;
+  // On a real bus or a replayed log the device is not this process's: what moves it is unknown.
+  if (real_bus_ || log_bus_) s.device_loop = "external";
   if (const PlantMotion* plant = instrument_.plant()) {
     const PlantFigures& f = plant->figures();
     s.device_loop = "closed";

@@ -118,8 +118,10 @@ struct RunSummary {
   /// Deepest overlap of the target: the tool's bodies where the encoders put them (the hand in
   /// replay, the device's handle in closed loop), mm.
   double target_penetration_max_mm = 0.0;
-  /// The device: "replay" (the encoders read the trajectory, whatever the torques) or "closed"
-  /// (the emulated device moves under the drives' torques and the hand: [device.plant]).
+  /// The device: "replay" (the encoders read the trajectory, whatever the torques), "closed"
+  /// (the emulated device moves under the drives' torques and the hand: [device.plant]),
+  /// "external" (--bus on a real bus or a log: the device is not this process's) or
+  /// "admittance" (AdmittanceRunner's emulated device).
   std::string device_loop = "replay";
   bool closed_loop = false;                ///< device_loop is "closed".
   /// Closed loop: the held body where the hand means to be (the trajectory), mm deep.
