@@ -63,12 +63,8 @@ const hal::DeviceMotionState& AdmittanceHand::at_sync(std::int64_t t_ns,
   }
   // The hand's spring–damper on the handle (controlled frame), world.
   const core::Pose dev = kinematics_->forward(q);
-  const hal::Jacobian j = kinematics_->jacobian(q);
-  const core::Vec6 twist = j * qdot;
-  core::Twist handle;
-  handle.linear = twist.head<3>();
-  handle.angular = twist.tail<3>();
-  state_.handle_wrench = hand_wrench(hand_settings_, hand_pose_, hand_twist_, dev, handle);
+  state_.handle_wrench = hand_wrench(hand_settings_, hand_pose_, hand_twist_, dev,
+                                     hal::twist_from_rates(kinematics_->jacobian(q), qdot));
   return state_;
 }
 

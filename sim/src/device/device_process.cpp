@@ -115,17 +115,7 @@ DeviceSummary run_device(const Scene& scene, const DeviceOptions& options) {
   // counts cover everything the controller sent. No tick: nothing is sent unasked.
   pump(-1);
   s.wall_time_s = static_cast<double>(platform::monotonic_now_ns() - t0) * 1e-9;
-  if (const PlantMotion* plant = instrument.plant()) {
-    const PlantFigures& f = plant->figures();
-    s.device_loop = "closed";
-    s.port_energy_j = f.port_energy_j;
-    s.port_energy_min_j = f.port_energy_min_j;
-    s.handle_force_max_n = f.handle_force_max_n;
-    s.limit_cycle = f.limit_cycle.detected();
-    s.limit_cycle_amplitude_mm = f.limit_cycle.amplitude_m() * 1e3;
-    s.limit_cycle_hz = f.limit_cycle.frequency_hz();
-    s.plant_diverged = f.diverged;
-  }
+  if (const PlantMotion* plant = instrument.plant()) s.closed_loop = plant->figures();
   const hal::EmulatorCounters& c = emu.counters();
   s.syncs = static_cast<std::int64_t>(c.syncs);
   s.encoder_tpdos = static_cast<std::int64_t>(c.tpdos_sent);
@@ -193,13 +183,16 @@ std::string format_device_summary(const DeviceSummary& s) {
   os << "\n";
   for (const std::string& t : s.node_states) os << "  node " << t << "\n";
   for (const std::string& t : s.drive_states) os << "  drive " << t << "\n";
-  os << "  device loop " << s.device_loop;
-  if (s.device_loop == "closed")
-    os << ": force on the hand max " << s.handle_force_max_n << " N, port energy "
-       << s.port_energy_j << " J (min " << s.port_energy_min_j << " J), limit cycle "
-       << (s.limit_cycle ? "yes" : "no") << " (" << s.limit_cycle_amplitude_mm << " mm at "
-       << s.limit_cycle_hz << " Hz), plant " << (s.plant_diverged ? "diverged" : "bounded");
-  os << "\n";
+  if (const auto& f = s.closed_loop) {
+    const LimitCycleDetector& c = f->limit_cycle;
+    os << "  device loop closed: force on the hand max " << f->handle_force_max_n
+       << " N, port energy " << f->port_energy_j << " J (min " << f->port_energy_min_j
+       << " J), limit cycle " << (c.detected() ? "yes" : "no") << " ("
+       << c.amplitude_m() * 1e3 << " mm at " << c.frequency_hz() << " Hz), plant "
+       << (f->diverged ? "diverged" : "bounded") << "\n";
+  } else {
+    os << "  device loop replay\n";
+  }
   return os.str();
 }
 

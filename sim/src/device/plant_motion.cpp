@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <stdexcept>
 #include <string>
 
@@ -21,14 +22,6 @@ double runaway_speed(const hal::AxisConfig& a) noexcept {
   return std::isfinite(a.max_speed) ? 100.0 * a.max_speed : 1e3;
 }
 
-core::Twist twist_of(const hal::Jacobian& j, const hal::AxisVector& qdot) noexcept {
-  const core::Vec6 v = j * qdot;
-  core::Twist t;
-  t.linear = v.head<3>();
-  t.angular = v.tail<3>();
-  return t;
-}
-
 }  // namespace
 
 void LimitCycleDetector::add(const core::Vec3& e, double t_s, double dt_s) noexcept {
@@ -38,7 +31,7 @@ void LimitCycleDetector::add(const core::Vec3& e, double t_s, double dt_s) noexc
     block_start_s_ = t_s;
     return;
   }
-  const double tau = 1.0 / (2.0 * 3.14159265358979323846 * kHighPassHz);
+  const double tau = 1.0 / (2.0 * std::numbers::pi * kHighPassHz);
   const double alpha = tau / (tau + dt_s);
   y_ = alpha * (y_ + e - last_e_);
   last_e_ = e;
@@ -107,17 +100,15 @@ PlantMotion::PlantMotion(const hal::DeviceConfig& config, const DevicePlantSetti
   state_.qdot = hal::AxisVector::Zero(n);
 }
 
-hal::AxisVector PlantMotion::intent_axes_at(std::int64_t t_ns) const noexcept {
-  return instrument_axes(config_, *kinematics_,
-                         trajectory_->at(static_cast<double>(t_ns - start_ns_) * 1e-9));
+hal::AxisVector PlantMotion::intent_at(double t) const noexcept {
+  return instrument_axes(config_, *kinematics_, trajectory_->at(t));
 }
 
-void PlantMotion::gather(double t) noexcept {
-  const hal::AxisVector qi = instrument_axes(config_, *kinematics_, trajectory_->at(t));
+void PlantMotion::gather() noexcept {
   for (int i = 0; i < state_.q.size(); ++i) {
     const auto k = static_cast<std::size_t>(i);
     if (follows_[k]) {
-      state_.q[i] = qi[i];
+      state_.q[i] = intent_[i];
     } else {
       state_.q[i] = plants_[k].q();
       state_.qdot[i] = plants_[k].qdot();
@@ -137,10 +128,10 @@ void PlantMotion::advance(double t0, double t1, int parts) noexcept {
                              hand_.rotational_damping, hand_.rotational_damping,
                              hand_.rotational_damping)
                                 .finished();
-  hal::AxisVector qi0 = instrument_axes(config_, *kinematics_, trajectory_->at(t0));
+  hal::AxisVector qi0 = intent_at(t0);
   for (int s = 0; s < parts; ++s) {
     const double ta = t0 + s * h;
-    const hal::AxisVector qi1 = instrument_axes(config_, *kinematics_, trajectory_->at(ta + h));
+    const hal::AxisVector qi1 = intent_at(ta + h);
     hal::AxisVector qdot_i(n);
     for (int i = 0; i < n; ++i) {
       const bool wraps = config_.axes[static_cast<std::size_t>(i)].wraps;
@@ -148,7 +139,7 @@ void PlantMotion::advance(double t0, double t1, int parts) noexcept {
     }
     // The intent and the handle at the sub-step's start; the hand's wrench held over it.
     const core::Pose intent = kinematics_->forward(qi0);
-    const core::Twist intent_twist = twist_of(kinematics_->jacobian(qi0), qdot_i);
+    const core::Twist intent_twist = hal::twist_from_rates(kinematics_->jacobian(qi0), qdot_i);
     for (int i = 0; i < n; ++i)
       if (follows_[static_cast<std::size_t>(i)]) {
         state_.q[i] = qi0[i];
@@ -157,10 +148,8 @@ void PlantMotion::advance(double t0, double t1, int parts) noexcept {
     const core::Pose handle = kinematics_->forward(state_.q);
     const hal::Jacobian j = kinematics_->jacobian(state_.q);
     const core::Wrench w =
-        hand_wrench(hand_, intent, intent_twist, handle, twist_of(j, state_.qdot));
-    core::Vec6 w6;
-    w6 << w.force, w.torque;
-    const hal::AxisVector f = j.transpose() * w6;
+        hand_wrench(hand_, intent, intent_twist, handle, hal::twist_from_rates(j, state_.qdot));
+    const hal::AxisVector f = hal::torques_from_wrench(j, w);
     figures_.handle_force_n = w.force.norm();
     figures_.handle_force_max_n = std::max(figures_.handle_force_max_n, figures_.handle_force_n);
     for (int i = 0; i < n; ++i) {
@@ -198,13 +187,13 @@ const hal::DeviceMotionState& PlantMotion::at_sync(std::int64_t t_ns,
   const double t1 = static_cast<double>(t_ns - start_ns_) * 1e-9;
   const int n = static_cast<int>(state_.q.size());
   const double gap = static_cast<double>(t_ns - last_sync_ns_) * 1e-9;
+  intent_ = intent_at(t1);
   if (!had_sync_ || (gap > kMaxSyncGapS && !figures_.diverged)) {
     // The device starts where the hand means it to be, at rest; after a silence of the bus
     // longer than kMaxSyncGapS (a controller restarted) it starts again there.
     had_sync_ = true;
-    const hal::AxisVector qi = instrument_axes(config_, *kinematics_, trajectory_->at(t1));
-    for (int i = 0; i < n; ++i) plants_[static_cast<std::size_t>(i)].reset(qi[i], 0.0);
-    state_.q = qi;
+    for (int i = 0; i < n; ++i) plants_[static_cast<std::size_t>(i)].reset(intent_[i], 0.0);
+    state_.q = intent_;
     state_.qdot.setZero();
   } else if (!figures_.diverged && t_ns > last_sync_ns_) {
     const double t0 = static_cast<double>(last_sync_ns_ - start_ns_) * 1e-9;
@@ -225,12 +214,11 @@ const hal::DeviceMotionState& PlantMotion::at_sync(std::int64_t t_ns,
       plants_[static_cast<std::size_t>(i)].command(i < commands.torque.size() ? commands.torque[i]
                                                                               : 0.0);
     if (!figures_.diverged) advance(t0 + phase, t1, after);
-    if (!figures_.diverged) gather(t1);
+    if (!figures_.diverged) gather();
   }
   last_sync_ns_ = t_ns;
   // What the hand feels and where it is against the handle, at the SYNC.
-  const hal::AxisVector qi = instrument_axes(config_, *kinematics_, trajectory_->at(t1));
-  const core::Pose intent = kinematics_->forward(qi);
+  const core::Pose intent = kinematics_->forward(intent_);
   const core::Pose handle = kinematics_->forward(state_.q);
   const core::Vec3 e = handle.position - intent.position;
   figures_.hand_separation_max_mm = std::max(figures_.hand_separation_max_mm, e.norm() * 1e3);

@@ -171,7 +171,7 @@ void SceneRunner::period(std::int64_t deadline_mono_ns, std::int64_t woke_mono_n
   // ---- measurements (outside the timed step) ----
   multirate_.view(data_);  // a multirate run: both loops as one single-rate Data
   count_period(report);
-  if (const PlantMotion* plant = instrument_.plant()) hand_axes_ = plant->intent_axes_at(t);
+
   const PeriodContacts contacts = measure_contacts();
   track_free_space(contacts);
   track_startup(contacts);

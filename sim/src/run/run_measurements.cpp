@@ -105,7 +105,7 @@ SceneRunner::PeriodContacts SceneRunner::measure_contacts() noexcept {
     c.target_contacts += m;
   }
   c.hand_pen = c.target_pen;  // replay: the encoders read the hand
-  if (instrument_.plant() != nullptr) {
+  if (const PlantMotion* plant = instrument_.plant()) {
     // Closed loop: the tool's bodies where the hand means to be (each bound body at its link's
     // pose at the intent's axis values, this period's SYNC), the rest as above.
     const hal::Kinematics& kin = instrument_.kinematics();
@@ -114,7 +114,8 @@ SceneRunner::PeriodContacts SceneRunner::measure_contacts() noexcept {
       if (b < 0) continue;
       core::Pose pose;
       core::Twist twist;
-      platform::body_target_of(lb, kin.link_pose(lb.link, hand_axes_), core::Twist{}, pose, twist);
+      platform::body_target_of(lb, kin.link_pose(lb.link, plant->intent_axes()), core::Twist{},
+                               pose, twist);
       ghost_.bodies[static_cast<std::size_t>(b)].position = pose.position;
       ghost_.bodies[static_cast<std::size_t>(b)].orientation = pose.orientation;
     }

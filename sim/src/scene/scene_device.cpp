@@ -23,6 +23,16 @@ namespace {
 using core::Quat;
 using core::Vec3;
 
+/// The hand's keys present in `h` (each finite and >= 0; absent: `hand` keeps its value).
+void read_hand(const TomlTable& h, HandSettings& hand) {
+  hand.mass = h.number_in("mass", 0.0, kInf, hand.mass);
+  hand.stiffness = h.number_in("stiffness", 0.0, kInf, hand.stiffness);
+  hand.damping = h.number_in("damping", 0.0, kInf, hand.damping);
+  hand.rotational_inertia = h.number_in("rotational_inertia", 0.0, kInf, hand.rotational_inertia);
+  hand.rotational_stiffness = h.number_in("rotational_stiffness", 0.0, kInf, hand.rotational_stiffness);
+  hand.rotational_damping = h.number_in("rotational_damping", 0.0, kInf, hand.rotational_damping);
+}
+
 hal::AxisConfig parse_axis(const TomlTable& a, hal::AxisConfig axis) {
   a.allow_only({"name", "encoder_cob_id", "drive_cob_id", "counts_per_unit", "offset_counts", "sign",
                 "min", "max", "max_speed", "wraps", "rated_torque", "max_torque"});
@@ -282,12 +292,7 @@ void parse_admittance(const TomlTable& dev, Scene& scene, const hal::DeviceConfi
     if (dev.has("hand"))
       h->fail_at(nullptr, h->path(), "give the hand once, in [device.hand] (this table is its former place)");
     h->allow_only({"stiffness", "damping", "rotational_stiffness", "rotational_damping"});
-    scene.hand.stiffness = h->number_in("stiffness", 0.0, kInf, scene.hand.stiffness);
-    scene.hand.damping = h->number_in("damping", 0.0, kInf, scene.hand.damping);
-    scene.hand.rotational_stiffness =
-        h->number_in("rotational_stiffness", 0.0, kInf, scene.hand.rotational_stiffness);
-    scene.hand.rotational_damping =
-        h->number_in("rotational_damping", 0.0, kInf, scene.hand.rotational_damping);
+    read_hand(*h, scene.hand);
   }
   try {
     hal::validate(cfg, a.config);
@@ -303,13 +308,7 @@ void parse_hand(const TomlTable& dev, HandSettings& hand) {
   if (!h) return;
   h->allow_only({"mass", "stiffness", "damping", "rotational_inertia", "rotational_stiffness",
                  "rotational_damping"});
-  hand.mass = h->number_in("mass", 0.0, kInf, hand.mass);
-  hand.stiffness = h->number_in("stiffness", 0.0, kInf, hand.stiffness);
-  hand.damping = h->number_in("damping", 0.0, kInf, hand.damping);
-  hand.rotational_inertia = h->number_in("rotational_inertia", 0.0, kInf, hand.rotational_inertia);
-  hand.rotational_stiffness =
-      h->number_in("rotational_stiffness", 0.0, kInf, hand.rotational_stiffness);
-  hand.rotational_damping = h->number_in("rotational_damping", 0.0, kInf, hand.rotational_damping);
+  read_hand(*h, hand);
 }
 
 /// A list of one entry per axis, or one number for every axis, each in [lo, hi].

@@ -12,6 +12,7 @@
 /// heartbeats, the drives' watch of the controller heartbeat, EMCY); it never spins.
 #include <atomic>
 #include <cstdint>
+#include <optional>
 #include <functional>
 #include <string>
 #include <vector>
@@ -73,15 +74,9 @@ struct DeviceSummary {
   /// The latest a tick ran after it was due, s: the longest this process waited to be
   /// scheduled (a shared machine's stall shows here, not in the protocol's counts).
   double tick_late_max_s = 0.0;
-  /// "closed" (the scene's [device.plant]: the device moves under the received torques and the
-  /// hand, PlantMotion) or "replay".
-  std::string device_loop = "replay";
-  /// Closed loop (PlantMotion::figures()): the energy the hand put into the device, its minimum
-  /// (J), the largest force on the hand (N), the handle's limit cycle, the plant's runaway.
-  double port_energy_j = 0.0, port_energy_min_j = 0.0, handle_force_max_n = 0.0;
-  bool limit_cycle = false;
-  double limit_cycle_amplitude_mm = 0.0, limit_cycle_hz = 0.0;
-  bool plant_diverged = false;
+  /// Set when the scene's [device.plant] closed the loop (the device moved under the received
+  /// torques and the hand, PlantMotion): what it measured. Unset: replay.
+  std::optional<PlantFigures> closed_loop;
 };
 
 /// Runs the scene's device on `options.bus` until the duration or the stop flag, then handles

@@ -118,8 +118,8 @@ class PlantMotion final : public hal::DeviceMotion {
   /// Makes trajectory time 0 the time of the next SYNC (a device process on a real bus).
   void start_at_next_sync() noexcept { start_at_sync_ = true; }
   std::int64_t start_ns() const noexcept { return start_ns_; }
-  /// Axis values of the intent at bus time `t_ns` (m or rad).
-  hal::AxisVector intent_axes_at(std::int64_t t_ns) const noexcept;
+  /// Axis values of the intent at the last SYNC (m or rad; empty before the first).
+  const hal::AxisVector& intent_axes() const noexcept { return intent_; }
   const hal::Kinematics& kinematics() const noexcept { return *kinematics_; }
   const PlantFigures& figures() const noexcept { return figures_; }
   /// The state of the last SYNC.
@@ -129,8 +129,10 @@ class PlantMotion final : public hal::DeviceMotion {
  private:
   /// Steps the plant `parts` sub-steps over [t0, t1] (trajectory time, s).
   void advance(double t0, double t1, int parts) noexcept;
-  /// q with the plant axes' values and the follower axes at the intent of time t.
-  void gather(double t) noexcept;
+  /// Axis values of the intent at trajectory time `t` (s).
+  hal::AxisVector intent_at(double t) const noexcept;
+  /// q (and q̇) from the plant axes, the follower axes at intent_.
+  void gather() noexcept;
 
   hal::DeviceConfig config_;
   DevicePlantSettings settings_;
@@ -142,6 +144,7 @@ class PlantMotion final : public hal::DeviceMotion {
   std::vector<AxisPlant> plants_;   // one per axis (unused where inertia is 0)
   std::array<bool, hal::kMaxAxes> follows_{};
   hal::DeviceMotionState state_;
+  hal::AxisVector intent_;          // the intent's axis values at the last SYNC
   bool had_sync_ = false;
   std::int64_t last_sync_ns_ = 0;
   PlantFigures figures_;

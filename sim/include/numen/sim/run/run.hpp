@@ -227,7 +227,6 @@ class SceneRunner {
   std::unique_ptr<hal::RecordingBus> recorder_;   // --record FILE, around the controller port
   hal::Bus* port_;                                // what the control loop reads and writes
   SimulatedInstrument instrument_;
-  hal::AxisVector hand_axes_;  // closed loop: the intent's axis values at this period's SYNC
   std::vector<std::uint8_t> explicit_bound_;  // per body: 1 if a binding names it
   hal::InstrumentDevice device_;
   core::Data data_;
