@@ -30,6 +30,15 @@ int run_guarded(const std::function<int()>& body) {
   }
 }
 
+void add_scene_flags(CLI::App* command, bool* replay, bool& strict) {
+  if (replay != nullptr)
+    command->add_flag("--replay", *replay,
+                      "Run the device in replay: the encoders read the trajectory whatever the "
+                      "torques (the scene's [device.plant] is checked, then not used)");
+  command->add_flag("--strict", strict,
+                    "The passivity lint's findings are errors (exit 2), not warnings");
+}
+
 CLI::Validator seconds_check(double lo, double hi, bool lo_exclusive) {
   return CLI::Validator(
       [=](const std::string& v) { return sim::check_seconds(v, lo, hi, lo_exclusive); },

@@ -24,6 +24,10 @@ namespace numen::app {
 /// bad input (InputError: scene, trajectory, option values) or 1 for any other error (I/O,
 /// out of memory, internal), printed as "numen: what".
 int run_guarded(const std::function<int()>& body);
+/// The scene flags of the commands that load a closed-loop scene (docs/device_plant.md):
+/// `--replay` (SceneOverrides::replay; null: not offered) and `--strict`
+/// (SceneOverrides::strict).
+void add_scene_flags(CLI::App* command, bool* replay, bool& strict);
 /// CLI11 check of a time in seconds (numen::sim::check_seconds): finite, in [lo, hi] or (lo, hi].
 CLI::Validator seconds_check(double lo, double hi, bool lo_exclusive);
 /// CLI11 check of a plain number (a rate, a factor): finite, in [lo, hi] (or (lo, hi] when

@@ -21,11 +21,7 @@ DeviceCommand::DeviceCommand(CLI::App& parent)
       ->check(seconds_check(0.0, sim::kMaxRunDuration, true));
   cli_->add_flag("--ready", ready_,
                  "Print READY on stdout once the device answers (bus open, nodes booted)");
-  cli_->add_flag("--replay", replay_,
-                 "The device replays the trajectory whatever the torques (the scene's "
-                 "[device.plant] is checked, then not used)");
-  cli_->add_flag("--strict", strict_,
-                 "The passivity lint's findings are errors (exit 2), not warnings");
+  add_scene_flags(cli_, &replay_, strict_);
 }
 
 int DeviceCommand::execute() const {

@@ -14,8 +14,7 @@ InfoCommand::InfoCommand(CLI::App& parent)
           "info", "Print what a scene compiles to: sizes, the stages step() runs, capacities, bytes")) {
   cli_->add_option("scene", scene_, "Scene file (TOML); default: the shipped default scene");
   cli_->add_flag("--json", json_, "Print one JSON object instead of the report");
-  cli_->add_flag("--strict", strict_,
-                 "The passivity lint's findings are errors (exit 2), not warnings");
+  add_scene_flags(cli_, nullptr, strict_);
 }
 
 int InfoCommand::execute() const {

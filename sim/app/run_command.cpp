@@ -96,11 +96,7 @@ RunCommand::RunCommand(CLI::App& parent)
       ->check(count_check(0, std::numeric_limits<std::uint32_t>::max()));
   run->add_option("--coupling", coupling_, "Override the scene's coupling mode")
       ->check(CLI::IsMember({"god-object", "first-order", "direct"}));
-  run->add_flag("--replay", replay_,
-                "Run the device in replay: the encoders read the trajectory whatever the torques "
-                "(the scene's [device.plant] is checked, then not used)");
-  run->add_flag("--strict", strict_,
-                "The passivity lint's findings are errors (exit 2), not warnings");
+  add_scene_flags(run, &replay_, strict_);
 }
 
 int RunCommand::execute() const {
