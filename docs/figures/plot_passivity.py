@@ -9,7 +9,10 @@ b = 1 N s/m without friction: without quantisation at delays 0, 1, 2 periods, an
 10 um encoder (no delay); the device with f_c = 0.05 N and the same encoder as well. Lines:
 the analytic bounds (the delay bound, Colgate & Schenkel's condition with the delay, which is
 their 2(b - |B|)/T for d = 0; Abbott & Okamura max(2b/T, 2 f_c/Delta) dashed). A configuration
-with no passive K (K_max = 0) has no marker.
+with no passive K (K_max = 0) has no marker. Filled markers: the backward difference as v-hat
+(the theory's); hollow markers: the 50 Hz filter (docs/passivity.md "Velocity estimators").
+Stars and crosses at B = 0: the passivity controller without and with an energy limit of
+1 uJ, at delays 0 (blue) and 1 (orange).
 """
 import csv
 import math
@@ -26,17 +29,19 @@ def load(path):
         rows = list(csv.DictReader(f))
     for r in rows:
         for k in r:
-            if k != "coupling":
+            if k not in ("coupling", "velocity_estimator"):
                 r[k] = float(r[k])
     return rows
 
 
-def select(rows, coupling, period, kw, b, fc, delta, delay):
+def select(rows, coupling, period, kw, b, fc, delta, delay, estimator="difference", pc=False):
     out = []
     for r in rows:
         if r["coupling"] != coupling or r["period_s"] != period:
             continue
-        if r.get("passivity_controller", 0.0) != 0.0:  # the controller's cases: not the Z-width
+        if (r.get("passivity_controller", 0.0) != 0.0) != pc:
+            continue
+        if r.get("velocity_estimator", "difference") != estimator:
             continue
         if coupling == "god-object" and r["obstacle_stiffness"] != kw:
             continue
@@ -76,6 +81,18 @@ def main():
                 if bound:
                     ax.plot(bs, [p[bound] if p[bound] > 0 else float("nan") for p in pts], color=colour,
                             linestyle="--" if bound == "abbott_okamura_bound" else "-", linewidth=1)
+                filt = select(rows, coupling, period, kw, b, fc, delta, delay, estimator="filter")
+                if filt:
+                    ax.plot([p["damping"] for p in filt],
+                            [p["k_max"] if p["k_max"] > 0 else float("nan") for p in filt],
+                            marker=marker, linestyle="none", markerfacecolor="none", color=colour,
+                            label=label + ", 50 Hz filter")
+            for delay, colour in ((0, "tab:blue"), (1, "tab:orange")):
+                for p in select(rows, coupling, period, kw, 1.0, 0.0, 0.0, delay, pc=True):
+                    limited = math.isfinite(p["passivity_energy_limit_j"])
+                    ax.plot([p["damping"]], [p["k_max"] if p["k_max"] > 0 else float("nan")],
+                            marker="P" if limited else "*", markersize=9, linestyle="none",
+                            color=colour, label="PC, d = %d%s" % (delay, ", E_max = 1 µJ" if limited else ""))
             ax.set_yscale("log")
             ax.set_xlabel("rendered damping B (N·s/m)")
             ax.set_ylabel("largest passive K (N/m)")

@@ -199,6 +199,8 @@ std::size_t encode_state_frame(const StateFrameLayout& layout, const core::Data&
   p = array(FrameArray::kAxisTorque);
   for (double tau : axis_torques) p = put_floats(p, tau);
   put_floats(array(FrameArray::kPenetration), figures.tool_penetration, figures.target_penetration);
+  put_floats(array(FrameArray::kDeviceLoop), figures.hand_penetration, figures.handle_force,
+             figures.device_port_energy);
   return o.end;
 }
 
@@ -250,6 +252,10 @@ float StateFrameView::target_penetration() const noexcept {
   float both[kFrameFigureFloats];
   f32s(item(FrameArray::kPenetration, 0), both, kFrameFigureFloats);
   return both[1];
+}
+
+void StateFrameView::device_loop(float out[3]) const noexcept {
+  f32s(item(FrameArray::kDeviceLoop, 0), out, kFrameDeviceLoopFloats);
 }
 
 StateFrameDecodeResult StateFrameDecoder::decode(std::span<const std::byte> bytes,

@@ -3,9 +3,9 @@
 /// (platform/state_frame.hpp; the frames `numen view` replays and the live stream sends): the
 /// input as one frame through StateFrameDecoder::decode(). A frame it accepts is read whole
 /// through every accessor of the view (each body's pose and target, each node, contact and
-/// axis, the wrench and penetrations): the decoder's checks must keep them inside the bytes
-/// (AddressSanitizer sees a read past them: the input is copied into a buffer of its exact
-/// size). Checks: an accepted frame's header says its own size, and a refused one has a reason.
+/// axis, the wrench, the penetrations and the closed loop's figures): the decoder's checks must
+/// keep them inside the bytes (AddressSanitizer sees a read past them: the input is copied into
+/// a buffer of its exact size). Checks: an accepted frame's header says its own size, and a refused one has a reason.
 
 #include <cstddef>
 #include <cstdint>
@@ -38,6 +38,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   for (std::uint32_t a = 0; a < h.num_axes; ++a) sum += view.axis_torque(a);
   view.feedback(out);
   sum += out[5] + view.tool_penetration() + view.target_penetration();
+  view.device_loop(out);
+  sum += out[0] + out[1] + out[2];
   volatile float keep = sum;
   (void)keep;
   return 0;

@@ -217,13 +217,12 @@ TEST(ControlLoopLinks, BoundBodiesGetTheirLinkTargetsAndPrescribedJointsTheirAxi
   ASSERT_TRUE(r1.sample_valid);
   const AxisVector q0 = q;
   q = quantised(rig.config, kQb);
-  // q̇: the first step of each axis's RateEstimator (state 0) on the bounded difference.
+  // q̇: each axis's default estimator (FOAW) over its only interval: the bounded difference.
+  ASSERT_EQ(rig.config.velocity_estimator, numen::hal::VelocityEstimator::kFoaw);
   AxisVector qdot(q.size());
-  const double alpha =
-      numen::hal::RateEstimator::smoothing(rig.config.velocity_cutoff_hz, 1e-3);
   for (int i = 0; i < q.size(); ++i) {
     const double vmax = rig.config.axes[static_cast<std::size_t>(i)].max_speed;
-    qdot[i] = alpha * std::clamp((q[i] - q0[i]) / 1e-3, -vmax, vmax);
+    qdot[i] = std::clamp((q[i] - q0[i]) / 1e-3, -vmax, vmax);
   }
   ASSERT_LT((rig.device.last_sample().q - q).norm(), 1e-12);
   ASSERT_LT((rig.device.last_sample().qdot - qdot).norm(), 1e-6 * qdot.norm());

@@ -42,7 +42,7 @@ struct Period {
   numen::core::Data data = numen::core::make_data(model);
   numen::platform::PeriodReport report;
   std::array<double, 3> torques{0.25, -0.5, 1.5};
-  StateFrameFigures figures{42, 0.0015, 0.012};
+  StateFrameFigures figures{42, 0.0015, 0.012, 0.02, 3.5, -0.25};
   StateFrameLayout layout{2, 0, 3, 4};
 
   Period() {
@@ -68,8 +68,9 @@ struct Period {
 
 TEST(StateFrame, SizeFollowsTheLayout) {
   const StateFrameLayout layout{2, 10, 3, 5};
-  // 64 header + 2·28 poses + 2·32 targets + 10·12 nodes + c·40 contacts + 24 wrench + 4·3 axes + 8.
-  EXPECT_EQ(layout.frame_bytes(0), 64u + 56 + 64 + 120 + 24 + 12 + 8);
+  // 64 header + 2·28 poses + 2·32 targets + 10·12 nodes + c·40 contacts + 24 wrench + 4·3 axes
+  // + 8 penetrations + 12 closed-loop figures.
+  EXPECT_EQ(layout.frame_bytes(0), 64u + 56 + 64 + 120 + 24 + 12 + 8 + 12);
   EXPECT_EQ(layout.frame_bytes(4), layout.frame_bytes(0) + 160);
   EXPECT_EQ(layout.max_frame_bytes(), layout.frame_bytes(5));
 }
@@ -124,6 +125,11 @@ TEST(StateFrame, RoundTripsEveryField) {
   EXPECT_FLOAT_EQ(v.axis_torque(2), 1.5F);
   EXPECT_FLOAT_EQ(v.tool_penetration(), 0.0015F);
   EXPECT_FLOAT_EQ(v.target_penetration(), 0.012F);
+  float loop[3];
+  v.device_loop(loop);
+  EXPECT_FLOAT_EQ(loop[0], 0.02F);   // hand penetration
+  EXPECT_FLOAT_EQ(loop[1], 3.5F);    // handle force
+  EXPECT_FLOAT_EQ(loop[2], -0.25F);  // port energy
 }
 
 /// The `bytes` bytes at `at`, little-endian, as an unsigned number.
@@ -151,7 +157,7 @@ TEST(StateFrame, EachDeclaredFieldIsAtItsDeclaredOffset) {
     std::uint64_t want = 0;
     switch (f.id) {
       case FrameField::kMagic: want = 0x46564D4E; break;  // "NMVF"
-      case FrameField::kVersion: want = 1; break;
+      case FrameField::kVersion: want = 2; break;
       case FrameField::kHeaderBytes: want = 64; break;
       case FrameField::kFrameBytes: want = n; break;
       case FrameField::kNumBodies: want = 2; break;
@@ -193,6 +199,7 @@ TEST(StateFrame, EachDeclaredFieldIsAtItsDeclaredOffset) {
       case FrameArray::kFeedback: want = 1.0F; break;     // force x
       case FrameArray::kAxisTorque: want = 0.25F; break;  // axis 0
       case FrameArray::kPenetration: want = 0.0015F; break;  // tool penetration
+      case FrameArray::kDeviceLoop: want = 0.02F; break;     // hand penetration
     }
     if (items > 0) {
       const auto bits = static_cast<std::uint32_t>(frame_le_bytes(buf, at, 4));
@@ -210,7 +217,7 @@ TEST(StateFrame, IsLittleEndianOnTheWire) {
       numen::platform::encode_state_frame(p.layout, p.data, p.report, p.torques, p.figures, buf);
   ASSERT_GT(n, 64u);
   EXPECT_EQ(std::memcmp(buf.data(), "NMVF", 4), 0);
-  EXPECT_EQ(std::to_integer<int>(buf[4]), 1);  // version, low byte first
+  EXPECT_EQ(std::to_integer<int>(buf[4]), 2);  // version, low byte first
   EXPECT_EQ(std::to_integer<int>(buf[5]), 0);
   EXPECT_EQ(std::to_integer<int>(buf[32]), 42);  // period 42, low byte first
   // body 0's x = 0.01f: 0x3C23D70A, bytes 0A D7 23 3C
@@ -292,8 +299,8 @@ TEST(StateFrameDecoder, RejectsEveryMalformedFrameWithItsOffset) {
   b[0] = std::byte{'X'};
   EXPECT_NE(decode(b).find("byte 0: not a state frame"), std::string::npos);
   b = buf;
-  b[4] = std::byte{2};
-  EXPECT_NE(decode(b).find("byte 4: frame version 2"), std::string::npos);
+  b[4] = std::byte{3};
+  EXPECT_NE(decode(b).find("byte 4: frame version 3"), std::string::npos);
   b = buf;
   b.pop_back();
   EXPECT_NE(decode(b).find("byte 8: frame size field"), std::string::npos);

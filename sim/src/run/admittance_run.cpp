@@ -190,7 +190,7 @@ void AdmittanceRunner::period(std::int64_t deadline_mono_ns, std::int64_t woke_m
                                   hal::AxisVector()));
   if (view_)
     view_->publish(data_, view_report_, view_axis_values_,
-                   {static_cast<std::uint64_t>(k_ - 1), tool_pen_, hand_pen_});
+                   {static_cast<std::uint64_t>(k_ - 1), tool_pen_, hand_pen_, hand_pen_, 0.0, 0.0});
   divergence_.observe(model, data_, k_ - 1, ts);
 }
 

@@ -188,7 +188,7 @@ void SceneRunner::period(std::int64_t deadline_mono_ns, std::int64_t woke_mono_n
     view_->publish(data_, report,
                           std::span<const double>(loop_.impedance().sent_torques().torque.data(),
                                                   static_cast<std::size_t>(loop_.impedance().sent_torques().torque.size())),
-                          {static_cast<std::uint64_t>(k_ - 1), contacts.tool_pen, contacts.target_pen});
+                          view_figures(contacts));
 }
 
 void SceneRunner::step_multirate(void* runner) noexcept {
@@ -280,6 +280,16 @@ void SceneRunner::record(const platform::PeriodReport& report, const PeriodConta
     trace_writer_->push(r);
   }
   trace_.push(rec);
+}
+
+platform::StateFrameFigures SceneRunner::view_figures(const PeriodContacts& c) const noexcept {
+  platform::StateFrameFigures f{static_cast<std::uint64_t>(k_ - 1), c.tool_pen, c.target_pen,
+                                c.hand_pen, 0.0, 0.0};
+  if (const PlantMotion* plant = instrument_.plant()) {
+    f.handle_force = plant->figures().handle_force_n;
+    f.device_port_energy = plant->figures().port_energy_j;
+  }
+  return f;
 }
 
 void SceneRunner::finish() {

@@ -12,7 +12,9 @@
 #include <string>
 #include <vector>
 
+#include "numen/hal/device/foaw_estimator.hpp"
 #include "numen/hal/device/passivity_controller.hpp"
+#include "numen/hal/device/rate_estimator.hpp"
 #include "numen/sim/device/axis_plant.hpp"
 #include "numen/sim/study/study_passivity.hpp"
 
@@ -26,7 +28,8 @@ double encoder_reading(double x, double resolution) {
 }
 
 /// The controller: reads the encoder at the start of each period, estimates the velocity by
-/// the backward difference and returns the force to hold over the period. The wall's surface
+/// PassivityPoint::velocity_estimator (the backward difference by default) and returns the
+/// force to hold over the period. The wall's surface
 /// (and the god-object's obstacle) is x = 0, the wall occupies x > 0. With
 /// PassivityPoint::passivity_controller the force goes through hal::PassivityController (the
 /// device's own class, one axis, the backward difference as its rate, the default velocity
@@ -37,17 +40,32 @@ class ProbeController {
   ProbeController(const PassivityPoint& p, double x0)
       : p_(p),
         god_object_(p.coupling == "god-object"),
+        estimator_(p.velocity_estimator == "filter" ? kFilter
+                   : p.velocity_estimator == "foaw" ? kFoaw
+                                                    : kDifference),
         previous_(encoder_reading(x0, p.resolution)),
         go_x_(previous_),
+        filter_(kPassivityFilterCutoffHz, std::numeric_limits<double>::infinity(), false),
+        foaw_(hal::kFoawMaxWindow, 0.5 * p.resolution, std::numeric_limits<double>::infinity(),
+              false),
         passivity_(1, p.period_s, p.passivity_controller ? 1u : 0u,
-                   hal::kDefaultPassivityVelocityThreshold, p.passivity_energy_limit_j) {}
+                   hal::kDefaultPassivityVelocityThreshold, p.passivity_energy_limit_j) {
+    // The estimators start from the reading at rest (v̂ = 0 until the next one).
+    filter_.update(previous_, 0);
+    foaw_.update(previous_, 0);
+  }
 
   double force(double x) {
     const double xq = encoder_reading(x, p_.resolution);
-    const double v = (xq - previous_) / p_.period_s;
+    const double difference = (xq - previous_) / p_.period_s;
     previous_ = xq;
+    ++k_;
+    const std::int64_t t_ns = std::llround(static_cast<double>(k_) * p_.period_s * 1e9);
+    double v = difference;
+    if (estimator_ == kFilter) v = filter_.update(xq, t_ns);
+    if (estimator_ == kFoaw) v = foaw_.update(xq, t_ns);
     double f[1] = {render(xq, v)};
-    const double rate[1] = {v};
+    const double rate[1] = {difference};
     if (p_.passivity_controller) (void)passivity_.apply(f, rate);
     return f[0];
   }
@@ -75,11 +93,17 @@ class ProbeController {
     return k * (go_x_ - xq) + b * (go_u_ - v);
   }
 
+  enum Estimator { kDifference, kFilter, kFoaw };
+
   PassivityPoint p_;
   bool god_object_;
+  Estimator estimator_;
   double previous_;    ///< The last encoder reading (m).
+  std::int64_t k_ = 0;  ///< Periods read so far.
   double go_x_ = 0.0;  ///< God-object position (m).
   double go_u_ = 0.0;  ///< God-object velocity (m/s).
+  hal::RateEstimator filter_;
+  hal::FoawEstimator foaw_;
   hal::PassivityController passivity_;
 };
 
@@ -210,6 +234,10 @@ void check_point(const PassivityPoint& p) {
     bad("resolution must be finite and >= 0");
   if (!(p.passivity_energy_limit_j > 0.0))
     bad("passivity_energy_limit_j must be > 0 (+inf: none)");
+  if (p.velocity_estimator != "difference" && p.velocity_estimator != "filter" &&
+      p.velocity_estimator != "foaw")
+    bad("velocity_estimator must be \"difference\", \"filter\" or \"foaw\" (got \"" +
+        p.velocity_estimator + "\")");
   if (p.coupling != "wall" && p.coupling != "god-object")
     bad("coupling must be \"wall\" or \"god-object\" (got \"" + p.coupling + "\")");
   if (p.coupling == "god-object" &&

@@ -108,7 +108,7 @@ TEST(DeviceConfig, VelocityCutoffMustBePositiveOrInfinite) {
 
 TEST(DeviceConfig, VelocityEstimatorAndFoawSettingsAreChecked) {
   DeviceConfig c = make_default_trocar_config();
-  EXPECT_EQ(c.velocity_estimator, VelocityEstimator::kFilter);
+  EXPECT_EQ(c.velocity_estimator, VelocityEstimator::kFoaw);
   EXPECT_STREQ(to_string(VelocityEstimator::kDifference), "difference");
   EXPECT_STREQ(to_string(VelocityEstimator::kFilter), "filter");
   EXPECT_STREQ(to_string(VelocityEstimator::kFoaw), "foaw");

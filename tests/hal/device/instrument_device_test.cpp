@@ -108,6 +108,7 @@ TEST(InstrumentDevice, TwistIsJacobianTimesRateOfTheLastTwoSamples) {
 // r (1 − exp(−t/τ)), within the filtered quantisation bound α q / Δt, and the twist is J q̇.
 TEST(InstrumentDevice, RatesAreFilteredAtTheConfiguredCutoff) {
   DeviceConfig c = trocar_config();
+  c.velocity_estimator = VelocityEstimator::kFilter;
   ASSERT_EQ(c.velocity_cutoff_hz, kDefaultVelocityCutoffHz);
   InstrumentDevice dev(c);
   const double rate[5] = {0.5, -0.3, 0.05, 1.0, 2.0};
@@ -135,6 +136,7 @@ TEST(InstrumentDevice, RatesAreFilteredAtTheConfiguredCutoff) {
 // tracker glitch would) gives a rate bounded by the axis's max_speed, not jump / Δt.
 TEST(InstrumentDevice, RateIsBoundedByTheAxisMaxSpeed) {
   DeviceConfig c = trocar_config();
+  c.velocity_estimator = VelocityEstimator::kFilter;  // and the difference at f_c = ∞
   c.jump_tolerance_counts = 1e5;  // 38 rad on the pivots, 1 m on the depth
   for (const double cutoff : {kDefaultVelocityCutoffHz, std::numeric_limits<double>::infinity()}) {
     c.velocity_cutoff_hz = cutoff;
@@ -176,6 +178,7 @@ TEST(InstrumentDevice, AWrappingAxisRateUsesTheWrappedDifference) {
 // a stale held value zeroes it and the filter restarts from the next accepted value.
 TEST(InstrumentDevice, RateIsHeldOverARejectedValueAndRestartedAfterStaleness) {
   DeviceConfig c = trocar_config();
+  c.velocity_estimator = VelocityEstimator::kFilter;
   InstrumentDevice dev(c);
   auto ramp = [](int k, double* q) {
     for (int i = 0; i < 5; ++i) q[i] = kQ0[i] + 0.2 * 1e-3 * k;

@@ -40,6 +40,7 @@ std::string active(std::string text) {
   text = replace(text, "coulomb = [0.01, 0.01, 0.1, 0.0, 0.0]", "coulomb = [0.0, 0.0, 0.0, 0.0, 0.0]");
   text = replace(text, "stiffness = 300.0            # N/m\ndamping = 1.0",
                  "stiffness = 3000.0\ndamping = 0.0");
+  text = replace(text, "[device.plant]\n", "[device.plant]\ndelay_periods = 3\n");
   return text;
 }
 

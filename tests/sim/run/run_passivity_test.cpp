@@ -1,7 +1,8 @@
 // Tests of the time-domain passivity controller in a closed-loop run (scene
 // `[device.passivity]`, hal::PassivityController in ImpedanceDevice::write()): the shipped
-// default scene made active — no damping in the trainer's mechanics ([device.plant] damping 0)
-// and a stiff undamped coupling ([device.feedback] stiffness 3000 N/m, damping 0) — chatters
+// default scene made active — no damping in the trainer's mechanics ([device.plant] damping 0),
+// a stiff undamped coupling ([device.feedback] stiffness 3000 N/m, damping 0) and the 50 Hz
+// velocity filter, whose lag in the coupling's target velocity produces energy — chatters
 // (a limit cycle in the summary) without the controller and does not with it, in the
 // single-rate loop and in the multirate one (scene loop at 200 Hz), with an energy limit of
 // 0.1 mJ (the observer alone, E_max = ∞, keeps the god-object's dissipation as margin and does
@@ -14,6 +15,7 @@
 #include <cstdio>
 #include <string>
 
+#include "alloc_counter.hpp"
 #include "build_features.hpp"
 #include "sanitizer.hpp"
 #include "scene_text.hpp"
@@ -36,6 +38,7 @@ Scene active_default_scene(numen::test::TempDir& dir, bool passivity, bool multi
   text = replace(text, "damping = [0.02, 0.02, 1.5, 0.0, 0.0]", "damping = [0.0, 0.0, 0.0, 0.0, 0.0]");
   text = replace(text, "stiffness = 300.0            # N/m\ndamping = 1.0                # N·s/m",
                  "stiffness = 3000.0\ndamping = 0.0");
+  text = replace(text, "[device]\n", "[device]\nvelocity_estimator = \"filter\"\n");
   if (passivity) text += "\n[device.passivity]\nenergy_limit = 1e-4\n";
   if (multirate) text += "\n[multirate]\nscene_dt = 0.005\nmargin = 0.005\n";
   const std::string name = std::string("active_") + (passivity ? "pc_" : "") +
@@ -144,3 +147,22 @@ TEST(RunPassivity, TransparencyOnThePassiveDefaultSceneInReplay) {
     EXPECT_GT(sb.passivity_acting_periods, 0);
   }
 }
+
+namespace run_passivity_test {
+
+// The closed loop's periods with the passivity controller acting (the active scene, where it
+// dissipates) never allocate: the plant, the hand, the observer and its damper.
+TEST(RunPassivity, PeriodsWithTheControllerActingNeverAllocate) {
+  NUMEN_REQUIRE_ARTICULATION();
+  numen::test::TempDir dir;
+  const Scene scene = active_default_scene(dir, true, false);
+  SceneRunner runner(scene);
+  for (int k = 0; k < 200; ++k) runner.period();  // start-up, first contacts
+  numen::test::AllocationGuard guard;
+  for (int k = 0; k < 15000; ++k) runner.period();  // to 15.2 s: the contacts that chatter
+  EXPECT_EQ(guard.count(), 0);
+  runner.finish();
+  EXPECT_GT(runner.summary().passivity_acting_periods, 0);  // it did act in those periods
+}
+
+}  // namespace run_passivity_test

@@ -345,7 +345,7 @@ TEST(Scene, DeviceVelocityCutoffIsReadInHertz) {
 TEST(Scene, DeviceVelocityEstimatorAndFoawSettingsAreRead) {
   TempDir dir;
   const numen::hal::DeviceConfig plain = load_scene(dir.write("mini.toml", kMiniScene)).device;
-  EXPECT_EQ(plain.velocity_estimator, numen::hal::VelocityEstimator::kFilter);
+  EXPECT_EQ(plain.velocity_estimator, numen::hal::VelocityEstimator::kFoaw);
   EXPECT_EQ(plain.foaw_max_window, numen::hal::kFoawMaxWindow);
   EXPECT_EQ(plain.foaw_noise_counts, numen::hal::kDefaultFoawNoiseCounts);
   for (const auto& [name, kind] :

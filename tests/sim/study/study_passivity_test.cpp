@@ -111,6 +111,33 @@ TEST(StudyPassivity, PassivityControllerLiftsTheDelayedWallToColgatesBoundNotBey
   EXPECT_THROW(probe_passivity(p), std::invalid_argument);
 }
 
+// The velocity estimators on a damped wall (B = b/2, Δ = 0, 1 kHz): FOAW keeps the
+// difference's (Colgate & Schenkel's) boundary, 2(b − B)/T; the 50 Hz filter, which removes the
+// damper's Nyquist-rate response where that bound binds, renders a stiffer wall (docs/
+// passivity.md "Velocity estimators": 1846 against 1010 N/m).
+TEST(StudyPassivity, FoawKeepsColgatesBoundTheFilterRendersAStifferDampedWall) {
+  PassivityPoint p = wall(1e-3, 1.0, 0.0, 0.0);
+  p.damping = 0.5;
+  const PassivityBoundary difference = find_passivity_boundary(p, 0.01);
+  EXPECT_NEAR(difference.k_max / colgate_bound(p), 1.0, 0.05) << difference.k_max;
+  EXPECT_EQ(difference.velocity_estimator, "difference");
+  p.velocity_estimator = "foaw";
+  const PassivityBoundary foaw = find_passivity_boundary(p, 0.01);
+  EXPECT_NEAR(foaw.k_max / difference.k_max, 1.0, 0.01) << foaw.k_max;
+  EXPECT_EQ(foaw.velocity_estimator, "foaw");
+  p.velocity_estimator = "filter";
+  const PassivityBoundary filter = find_passivity_boundary(p, 0.01);
+  EXPECT_GT(filter.k_max, 1.5 * colgate_bound(p)) << filter.k_max;
+  EXPECT_LT(filter.k_max, 2.0 * p.device_damping / p.period_s * 1.05) << filter.k_max;
+  p.velocity_estimator = "kalman";
+  try {
+    probe_passivity(p);
+    FAIL() << "accepted velocity_estimator \"kalman\"";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("velocity_estimator"), std::string::npos) << e.what();
+  }
+}
+
 TEST(StudyPassivity, ProbeRefusesABadPointNamingTheSetting) {
   PassivityPoint p = wall(1e-3, 1.0, 0.0, 0.0);
   p.coupling = "spring";

@@ -102,7 +102,7 @@ TEST(FrameLayoutJson, AFrameDecodedFromTheJsonReadsWhatTheViewReads) {
       {"step_ns", h.step_ns},
       {"lifecycle", h.lifecycle},
       {"startup", h.startup},
-      {"version", 1},
+      {"version", 2},
       {"header_bytes", 64},
       {"reserved", 0}};
   const auto j = nlohmann::json::parse(numen::sim::state_frame_layout_json());
@@ -146,6 +146,9 @@ TEST(FrameLayoutJson, AFrameDecodedFromTheJsonReadsWhatTheViewReads) {
   EXPECT_EQ(arrays.at("axis_torque").at(2), view.axis_torque(2));
   EXPECT_EQ(arrays.at("penetration").at(0), view.tool_penetration());
   EXPECT_EQ(arrays.at("penetration").at(1), view.target_penetration());
+  float loop[3];
+  view.device_loop(loop);
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(arrays.at("device_loop").at(i), loop[i]);
   EXPECT_TRUE(arrays.at("node_position").empty());
 }
 

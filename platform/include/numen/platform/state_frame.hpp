@@ -33,7 +33,7 @@ namespace numen::platform {
 /// First bytes of every frame.
 inline constexpr char kStateFrameMagic[4] = {'N', 'M', 'V', 'F'};
 /// Version written by encode_state_frame() and the only one decode_state_frame() accepts.
-inline constexpr std::uint16_t kStateFrameVersion = 1;
+inline constexpr std::uint16_t kStateFrameVersion = 2;
 /// Size of the fixed header, bytes.
 inline constexpr std::size_t kStateFrameHeaderBytes = 64;
 
@@ -91,7 +91,7 @@ struct StateFrameField {
 /// The 64-byte header, field by field (names as StateFrameHeader's members):
 ///
 ///     magic          "NMVF" (kStateFrameMagic)
-///     version        kStateFrameVersion (1)
+///     version        kStateFrameVersion (2)
 ///     header_bytes   kStateFrameHeaderBytes (64)
 ///     frame_bytes    the whole frame, bytes
 ///     num_bodies     B: bodies
@@ -134,7 +134,8 @@ constexpr const StateFrameField& frame_field(FrameField f) noexcept {
 
 /// The arrays after the header, in their order: each one's index in kStateFrameArrays.
 enum class FrameArray : std::uint8_t {
-  kBodyPose, kTargetPose, kNodePosition, kContact, kFeedback, kAxisTorque, kPenetration
+  kBodyPose, kTargetPose, kNodePosition, kContact, kFeedback, kAxisTorque, kPenetration,
+  kDeviceLoop
 };
 
 /// One float32 array after the header: `count` items of `floats` floats each.
@@ -158,7 +159,12 @@ struct StateFrameArray {
 ///                            x y z, world frame, about link 0's origin
 ///     axis_torque    A × 1   torque or force sent to the axis (N·m or N)
 ///     penetration    1 × 2   tool penetration, hand (target) penetration (m)
-inline constexpr std::array<StateFrameArray, 7> kStateFrameArrays{{
+///     device_loop    1 × 3   the closed loop's figures (docs/device_plant.md): the hand's
+///                            penetration (m, its intent's; the target's in replay), the
+///                            force of the hand on the handle (N, 0 in replay), the energy
+///                            that flowed into the device port so far (J, Hannaford & Ryu's
+///                            observer; 0 in replay)
+inline constexpr std::array<StateFrameArray, 8> kStateFrameArrays{{
     {FrameArray::kBodyPose, "body_pose", 7, FrameField::kNumBodies},
     {FrameArray::kTargetPose, "target_pose", 8, FrameField::kNumBodies},
     {FrameArray::kNodePosition, "node_position", 3, FrameField::kNumNodes},
@@ -166,6 +172,7 @@ inline constexpr std::array<StateFrameArray, 7> kStateFrameArrays{{
     {FrameArray::kFeedback, "feedback", 6, std::nullopt},
     {FrameArray::kAxisTorque, "axis_torque", 1, FrameField::kNumAxes},
     {FrameArray::kPenetration, "penetration", 2, std::nullopt},
+    {FrameArray::kDeviceLoop, "device_loop", 3, std::nullopt},
 }};
 
 /// The declaration of array `a`.
@@ -214,7 +221,8 @@ inline constexpr std::size_t kFramePoseFloats = frame_array(FrameArray::kBodyPos
                              kFrameNodeFloats = frame_array(FrameArray::kNodePosition).floats,
                              kFrameContactFloats = frame_array(FrameArray::kContact).floats,
                              kFrameWrenchFloats = frame_array(FrameArray::kFeedback).floats,
-                             kFrameFigureFloats = frame_array(FrameArray::kPenetration).floats;
+                             kFrameFigureFloats = frame_array(FrameArray::kPenetration).floats,
+                             kFrameDeviceLoopFloats = frame_array(FrameArray::kDeviceLoop).floats;
 static_assert(kFrameTargetFloats == kFramePoseFloats + 1, "a target is a pose and its flag");
 
 /// Bits of the header's flags word.
@@ -285,6 +293,9 @@ class StateFrameView {
   float tool_penetration() const noexcept;
   /// Hand penetration (m): how deep the target pose would sit in the obstacles.
   float target_penetration() const noexcept;
+  /// The closed loop's figures (kStateFrameArrays' device_loop): hand penetration (m), force
+  /// on the handle (N), device port energy (J).
+  void device_loop(float out[3]) const noexcept;
 
  private:
   friend class StateFrameDecoder;
@@ -321,6 +332,10 @@ struct StateFrameFigures {
   std::uint64_t period = 0;         ///< Period index k.
   double tool_penetration = 0.0;    ///< m: deepest contact of the attached body.
   double target_penetration = 0.0;  ///< m: how deep the target pose sits in the obstacles.
+  /// m: how deep the hand's intent sits in the obstacles (closed loop; the target's in replay).
+  double hand_penetration = 0.0;
+  double handle_force = 0.0;  ///< N: |force of the hand on the handle| (closed loop; 0 in replay).
+  double device_port_energy = 0.0;  ///< J: energy into the device port so far (0 in replay).
 };
 
 /// Writes the frame of the period that just ended into `out`: poses, targets, nodes and

@@ -164,8 +164,9 @@ struct DeviceConfig {
   /// +infinity = the bare backward difference. The estimate lags the hand by about
   /// 1/(2π f_c) (3.2 ms at the default 50 Hz) and is bounded by each axis's max_speed.
   double velocity_cutoff_hz = kDefaultVelocityCutoffHz;
-  /// Rate estimator of every axis (scene key `[device] velocity_estimator`).
-  VelocityEstimator velocity_estimator = VelocityEstimator::kFilter;
+  /// Rate estimator of every axis (scene key `[device] velocity_estimator`); FOAW by default,
+  /// chosen by measurement (docs/architecture.md "Target velocity from encoders").
+  VelocityEstimator velocity_estimator = VelocityEstimator::kFoaw;
   /// kFoaw: the largest window, sample intervals, 1 … kFoawMaxWindow (1 = the bounded bare
   /// difference).
   int foaw_max_window = kFoawMaxWindow;

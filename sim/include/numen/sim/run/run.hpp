@@ -213,6 +213,10 @@ class SceneRunner {
   void accumulate_step_figures(const platform::PeriodReport& report, const PeriodContacts& c) noexcept;
   /// The period's trace record: in memory (trace_) and streamed (trace_writer_).
   void record(const platform::PeriodReport& report, const PeriodContacts& c) noexcept;
+  /// The state frame's figures of this period (k_ − 1): penetrations, and the closed loop's
+  /// hand penetration, handle force and port energy (the target's penetration and zeros in
+  /// replay, as the trace's columns).
+  platform::StateFrameFigures view_figures(const PeriodContacts& c) const noexcept;
   /// The loop's step in a multirate run: MultirateRun::step(data_); period() writes the rest
   /// of the single-rate view (MultirateRun::view()) after the timed step, before measuring.
   static void step_multirate(void* runner) noexcept;

@@ -105,6 +105,7 @@ void passivity_row_fields(Row& r, Visit&& v) {
   v("kind", r.kind);
   v("passivity_controller", r.passivity_controller);
   v("passivity_energy_limit_j", r.passivity_energy_limit_j);
+  v("velocity_estimator", r.velocity_estimator);
 }
 
 /// The members of a measured boundary (PassivityBoundary), by the names of the columns of
@@ -133,6 +134,7 @@ void passivity_boundary_fields(Boundary& b, Visit&& v) {
   v("evaluations", b.evaluations);
   v("passivity_controller", b.passivity_controller);
   v("passivity_energy_limit_j", b.passivity_energy_limit_j);
+  v("velocity_estimator", b.velocity_estimator);
 }
 
 /// The names `fields` visits, in order (e.g. field_names<StabilityRow>(stability_row_fields)).

@@ -40,7 +40,16 @@ struct PassivityPoint {
   /// The controller's energy limit E_max (J, > 0; +inf: the paper's observer), see
   /// hal::PassivitySettings::energy_limit.
   double passivity_energy_limit_j = std::numeric_limits<double>::infinity();
+  /// The controller's velocity estimate v̂ from the encoder readings (docs/architecture.md
+  /// "Target velocity from encoders"): "difference" (the bare backward difference, the
+  /// theory's), "filter" (hal::RateEstimator at kPassivityFilterCutoffHz, the device's
+  /// default cutoff) or "foaw" (hal::FoawEstimator, 32 intervals, a band of half a count).
+  /// The passivity controller's own rate stays the backward difference, as on the device.
+  std::string velocity_estimator = "difference";
 };
+
+/// Cutoff of the "filter" estimator in the probe (Hz): the device's default velocity_cutoff.
+inline constexpr double kPassivityFilterCutoffHz = 50.0;
 
 /// What the probe of one point measured (the four hand motions: docs/passivity.md "Probe").
 struct PassivityProbe {
@@ -105,6 +114,7 @@ struct PassivityRow {
   double obstacle_stiffness = 0.0;  ///< NaN for "wall".
   bool passivity_controller = false;  ///< PassivityPoint::passivity_controller.
   double passivity_energy_limit_j = 0.0;  ///< PassivityPoint::passivity_energy_limit_j.
+  std::string velocity_estimator;         ///< PassivityPoint::velocity_estimator.
   bool passive = false;
   double energy_min_j = 0.0;
   double energy_peak_j = 0.0;
@@ -134,6 +144,7 @@ struct PassivityBoundary {
   double obstacle_stiffness = 0.0;
   bool passivity_controller = false;  ///< PassivityPoint::passivity_controller.
   double passivity_energy_limit_j = 0.0;  ///< PassivityPoint::passivity_energy_limit_j.
+  std::string velocity_estimator;         ///< PassivityPoint::velocity_estimator.
   /// Geometric mean of the final bracket (N/m); 0: not passive at the bracket's low end,
   /// infinity: passive at its high end.
   double k_max = 0.0;
