@@ -1,90 +1,85 @@
-// The connection to the server (docs/viewer.md "Server", "Replay"): the WebSocket on /stream,
-// its messages (scene, session, frames) handed to `on`, and replay's paced frame requests.
-import { S, errors, fail, statusEl, updateCounters } from './panel.js';
+// The connection to the server (docs/viewer.md "Server", "Page"): the WebSocket on /stream and
+// its messages (scene, session, frames) handed to the page; reconnection with a backoff shown
+// on the page when the server goes away.
+import { S, errors, fail, updateCounters } from './panel.js';
 import { decodeFrame } from './protocol.js';
 
-const replay = { index: 0, playing: false, speed: 1, clock: 0, pending: -1, sentAt: 0 };
-let ws = null;
+/// Reconnection delays (s): 0.25, 0.5, 1, 2, then every 2 s (the page resumes within 2 s of
+/// the server's return, plus the time to connect).
+const BACKOFF_S = [0.25, 0.5, 1, 2];
+/// The connection's state, shown in #connection and read by the tests.
+export const link = { state: 'connecting', attempts: 0, reconnects: 0, openedAt: 0, sceneText: null };
+const connEl = document.getElementById('connection');
+let ws = null, on = null, retryTimer = 0, countdown = 0;
 
-function request(i) {
-  i = Math.max(0, Math.min(S.session.frames - 1, i));
-  replay.pending = i;
-  replay.sentAt = performance.now();
-  ws.send(JSON.stringify({ frame: i }));
+function showLink(text, cls) {
+  connEl.textContent = text;
+  connEl.className = cls;
 }
 
-function setupReplay(fixedFrame) {
-  const session = S.session;
-  document.getElementById('replay').hidden = false;
-  const slider = document.getElementById('slider');
-  slider.max = String(Math.max(0, session.frames - 1));
-  const play = document.getElementById('play');
-  const setPlaying = (p) => { replay.playing = p; play.textContent = p ? '❚❚' : '▶'; };
-  play.onclick = () => {
-    if (!replay.playing && replay.index >= session.frames - 1) replay.index = 0;
-    replay.clock = session.time_s[replay.index] ?? 0;
-    setPlaying(!replay.playing);
-  };
-  document.getElementById('back').onclick = () => { setPlaying(false); request(replay.index - 1); };
-  document.getElementById('fwd').onclick = () => { setPlaying(false); request(replay.index + 1); };
-  document.getElementById('speed').onchange = (e) => { replay.speed = Number(e.target.value); };
-  slider.oninput = () => { setPlaying(false); request(Number(slider.value)); };
-  if (session.frames === 0) { fail('the recording has no frame'); return; }
-  request(fixedFrame ?? 0);
-  setPlaying(fixedFrame === null);
-  let prev = performance.now();
-  const tick = (now) => {
-    const dt = (now - prev) * 1e-3;
-    prev = now;
-    if (replay.pending >= 0 && now - replay.sentAt > 1000) request(replay.pending);  // lost
-    if (replay.playing && replay.pending < 0) {
-      replay.clock += dt * replay.speed;
-      let i = replay.index;
-      while (i + 1 < session.frames && session.time_s[i + 1] <= replay.clock) ++i;
-      if (i !== replay.index) request(i);
-      else if (i >= session.frames - 1) setPlaying(false);
-    }
-    requestAnimationFrame(tick);
-  };
-  requestAnimationFrame(tick);
+/// Sends a JSON message when connected (a message on a closed socket is never attempted).
+export function send(obj) {
+  if (ws && ws.readyState === WebSocket.OPEN) { ws.send(JSON.stringify(obj)); return true; }
+  return false;
 }
 
-/// Connects; on.scene(msg) builds the scene, on.frame(fr) shows a frame. `fixedFrame`: replay
-/// shows that frame paused (?frame=I), null: plays from the start.
-export function connect(on, fixedFrame) {
+function open() {
+  link.state = link.reconnects || link.attempts ? 'reconnecting' : 'connecting';
   ws = new WebSocket((location.protocol === 'https:' ? 'wss://' : 'ws://') + location.host + '/stream');
   ws.binaryType = 'arraybuffer';
+  ws.onopen = () => {
+    if (link.attempts > 0) link.reconnects++;
+    link.attempts = 0;
+    link.state = 'open';
+    link.openedAt = performance.now();
+    showLink('connected to ' + location.host, 'ok');
+  };
   ws.onmessage = (ev) => {
     try {
       if (typeof ev.data === 'string') {
         const m = JSON.parse(ev.data);
-        if (!S.scene) on.scene(m);
-        else if (m.type === 'session') {
-          on.session(m);
-          if (m.mode === 'replay') setupReplay(fixedFrame);
-          statusEl.textContent = m.mode === 'live' ? 'live: waiting for frames…' : 'replay';
-          updateCounters();
+        if (m.type === 'session') { on.session(m); updateCounters(); return; }
+        if (S.scene) {  // a reconnection: the same scene goes on, another reloads the page
+          if (ev.data !== link.sceneText) location.reload();
+          return;
         }
+        link.sceneText = ev.data;
+        on.scene(m);
         return;
       }
       S.framesReceived++;
       let fr;
       try { fr = decodeFrame(ev.data); } catch (e) { S.badFrames++; errors.push(String(e)); return; }
-      if (S.session && S.session.mode === 'replay') {
-        replay.index = replay.pending >= 0 ? replay.pending : replay.index;
-        replay.pending = -1;
-        document.getElementById('slider').value = String(replay.index);
-        document.getElementById('clock').textContent =
-          `${fr.time_s.toFixed(3)} / ${(S.session.time_s[S.session.frames - 1] ?? 0).toFixed(3)} s`;
-      }
       on.frame(fr);
     } catch (e) {
       fail('viewer error: ' + e.message);
     }
   };
   ws.onclose = () => {
-    if (!errors.length) { statusEl.textContent += '\n(connection closed)'; }
+    const was = link.state;
+    link.state = 'closed';
     window.numenView.closed = true;
+    const delay = BACKOFF_S[Math.min(link.attempts, BACKOFF_S.length - 1)];
+    link.attempts++;
+    const why = was === 'open' ? 'connection to the server lost' : 'no server at ' + location.host;
+    let left = delay;
+    const tickDown = () => {
+      showLink(`${why}: reconnecting in ${left.toFixed(1)} s (attempt ${link.attempts})`, 'lost');
+      left = Math.max(0, left - 0.25);
+    };
+    tickDown();
+    clearInterval(countdown);
+    countdown = setInterval(tickDown, 250);
+    clearTimeout(retryTimer);
+    retryTimer = setTimeout(() => { clearInterval(countdown); open(); }, delay * 1000);
   };
-  ws.onerror = () => fail('WebSocket error (is the server running?)');
+  ws.onerror = () => { /* onclose follows and says it */ };
+}
+
+/// Connects; on.scene(msg) builds the scene (once), on.session(msg) adopts the session (on
+/// every connection), on.frame(fr) shows a decoded frame.
+export function connect(handlers) {
+  on = handlers;
+  if (location.protocol === 'file:') return;  // index.html says how to serve the page
+  open();
 }

@@ -4,11 +4,13 @@ import * as THREE from 'three';
 import { S, errors, setStatus, updateCounters, writeProbe } from './panel.js';
 import { FLOATS, setFrameLayout, LIFECYCLE, STARTUP, STEP, FLAGS, bits } from './protocol.js';
 import { params, renderer, scene3, camera } from './stage.js';
-import { controls, fitCamera, view } from './camera.js';
+import { controls, fitCamera, followTool, preset, view } from './camera.js';
 import { COLORS, G, buildScene, addPlanes, frameBox, showBodies, showJointAxes } from './geometry.js';
 import { buildContacts, showContacts } from './contacts.js';
 import { plotAdd } from './plots.js';
-import { connect } from './connection.js';
+import { connect, link } from './connection.js';
+import { setupReplay, replayed, seek, replay } from './replay.js';
+import { showFault, markTimeline } from './faults.js';
 
 // The device's protocol (scene message): only the managed stack has a start-up to show.
 let protocol = 'managed', managed = true, fitted = false;
@@ -22,20 +24,30 @@ function onScene(msg) {
   buildContacts();
 }
 
+let marks = 0;
 function onSession(m) {
   setFrameLayout(m.frame_layout);
   S.session = m;
+  if (m.mode === 'replay') {
+    setupReplay(params.has('frame') ? Number(params.get('frame')) : null);
+    marks = markTimeline(m.series, m.frames, seek);
+  }
+  if (!S.last) setStatus(m.mode === 'live' ? 'live: waiting for frames…' : 'replay');
 }
 
+let banner = '';
 function showFrame(fr) {
   const { h } = fr;
+  if (S.session && S.session.mode === 'replay') replayed(fr);
   showBodies(fr);
-  if (!fitted) {  // on where the bodies, their targets and the nets are now (else the obstacles)
+  if (!fitted) {  // the whole scene: obstacles, and where the bodies, targets and nets are now
     fitted = true;
-    const box = frameBox(S.scene, fr);
-    const c = fitCamera(box.isEmpty() ? G.obstacleBox : box);
+    const box = frameBox(S.scene, fr).union(G.obstacleBox);
+    const c = fitCamera(box);
     addPlanes(S.scene, c, view.extent);
   }
+  const tool = toolInfo();
+  followTool(tool ? tool.position : null);
   const contactsOn = document.getElementById('contacts').checked;
   const { drawn, fmag } = showContacts(fr, contactsOn);
   showJointAxes(document.getElementById('axes').checked);
@@ -44,6 +56,7 @@ function showFrame(fr) {
   S.last = fr;
   S.framesShown++;
   plotAdd(fr, fmag);
+  banner = showFault(fr, managed);
   setStatus(
     `t = ${fr.time_s.toFixed(3)} s   period ${h.period}\n` +
     `lifecycle: ${LIFECYCLE[h.lifecycle] ?? h.lifecycle}` +
@@ -51,6 +64,38 @@ function showFrame(fr) {
     `flags: ${bits(h.flags, FLAGS)}\nstep: ${h.step_status ? bits(h.step_status, STEP) : 'ok'}\n` +
     `contacts: ${h.num_contacts}${h.num_contacts > drawn && contactsOn ? ` (${drawn} drawn)` : ''}   |F| = ${fmag.toFixed(2)} N`);
   updateCounters();
+}
+
+/// The instrument: { position: the attached body's origin, tip: its farthest sphere along its
+/// spheres' line (else the origin), axis: towards the tip (world) } or null without one.
+function toolInfo() {
+  const b = S.last ? S.last.h.attached_body : -1;
+  if (b < 0) return null;
+  const body = G.bodies[b], sp = S.scene.bodies[b].spheres;
+  body.updateMatrixWorld();
+  const axis = new THREE.Vector3(0, 0, 1);
+  let tip = new THREE.Vector3();
+  if (sp.length >= 2) {
+    axis.set(sp[sp.length - 1][0] - sp[0][0], sp[sp.length - 1][1] - sp[0][1], sp[sp.length - 1][2] - sp[0][2]).normalize();
+    tip.set(sp[sp.length - 1][0], sp[sp.length - 1][1], sp[sp.length - 1][2]);
+  }
+  tip.applyMatrix4(body.matrixWorld);
+  axis.applyQuaternion(body.quaternion);
+  return { position: body.position.clone(), tip, axis };
+}
+
+for (const el of document.querySelectorAll('#views button'))
+  el.onclick = () => {
+    const t = toolInfo();
+    preset(el.dataset.view, t && { position: t.tip, axis: t.axis });
+  };
+
+/// A world point projected to page pixels; inside: within the canvas and in front.
+function projectPoint(p) {
+  const rect = renderer.domElement.getBoundingClientRect();
+  const pc = p.clone().project(camera);
+  return { x: rect.left + (pc.x + 1) / 2 * rect.width, y: rect.top + (1 - pc.y) / 2 * rect.height,
+           inside: Math.abs(pc.x) < 1 && Math.abs(pc.y) < 1 && pc.z < 1 };
 }
 
 /// Sphere centres of body b (or of its ghost) projected to page pixels, with radii in pixels.
@@ -74,19 +119,27 @@ window.numenView = {
   probe() {
     const last = S.last;
     const p = { errors, framesShown: S.framesShown, framesReceived: S.framesReceived, mode: S.session?.mode ?? null,
-                period: last?.h.period ?? null, colors: { tool: COLORS.tool, ghost: COLORS.ghost } };
+                period: last?.h.period ?? null, colors: { tool: COLORS.tool, ghost: COLORS.ghost },
+                link: { state: link.state, reconnects: link.reconnects, attempts: link.attempts },
+                banner, marks };
     if (last && last.h.attached_body >= 0) {
       const b = last.h.attached_body;
       p.tool = project(G.bodies[b], b);
       p.ghost = G.ghosts[b].visible ? project(G.ghosts[b], b) : [];
       p.toolName = S.scene.bodies[b].name;
+      camera.updateMatrixWorld();
+      p.toolPx = projectPoint(toolInfo().position);
     }
+    if (S.session?.mode === 'replay') p.index = replay.index;
     return p;
   },
+  /// Replay: shows frame i, paused.
+  seek: (i) => seek(i),
+  /// A preset view by name (the buttons' names).
+  view: (name) => document.querySelector(`#views button[data-view="${name}"]`).click(),
 };
 
-connect({ scene: onScene, session: onSession, frame: showFrame },
-        params.has('frame') ? Number(params.get('frame')) : null);
+connect({ scene: onScene, session: onSession, frame: showFrame });
 
 renderer.setAnimationLoop(() => {
   controls.update();

@@ -1,25 +1,31 @@
 #!/usr/bin/python3
 """Browser test of the viewer (docs/viewer.md "Tests"), run by CTest as viewer_browser.
 
-Records a short run of a scene (`numen run --duration D --record-view F.nmv`), serves it with
-`numen view F.nmv --port 0`, loads the page in headless Chromium (SwiftShader WebGL) showing
-one frame paused (?frame=I), takes a screenshot, and checks it with PIL:
-  - the page shows the frame and logged no JavaScript error (the page's own error list, read
-    from its #probe element with --dump-dom, and Chromium's console log);
+Records a run of a scene (`numen run --duration D --record-view F.nmv`), serves it with
+`numen view F.nmv --port 0`, and drives the page in headless Chromium (SwiftShader WebGL) over
+the DevTools protocol (cdp.py: --remote-debugging-pipe, real time). For each scene it shows the
+frame where the hand goes deepest (?frame=I, paused), takes a screenshot and checks it with PIL:
+  - the page shows the frame and logged no JavaScript error (its own error list and
+    Chromium's runtime exceptions and console errors);
   - the tool's colour appears where the page's camera projects the tool's spheres, and the
     ghost's colour where it projects the ghost's (the hand's target pose), and most of the
     tool-coloured pixels lie on the tool's projection.
+On the default scene also:
+  - the camera (following the tool, as by default) keeps the tool's projected position inside
+    the canvas on 60 frames spread over the whole recording;
+  - reconnect: `numen view` is killed, the page says the connection is lost, `numen view` is
+    started again on the same port, and the page shows a frame again within RECONNECT_S;
+On a run that latches a fault (the default scene on a bus losing 30 % of its frames):
+  - the fault banner shows, with its cause, and the replay timeline has its mark.
 Exit 0: passed; 1: failed; 77: skipped, only when Chromium is not installed.
 
-    tests/sim/view/viewer_browser_test.py --numen build/numen --out DIR \
+    tests/sim/view/viewer_browser_test.py --numen build/numen --out DIR \\
         [--scene FILE] [--figure PNG]
     tests/sim/view/viewer_browser_test.py --numen build/numen --out DIR --figures docs/figures
         (the three screenshots of docs/viewer.md: default, construction, deformable)
 """
 import argparse
 import colorsys
-import html
-import json
 import os
 import re
 import shutil
@@ -28,11 +34,15 @@ import subprocess
 import sys
 import time
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import cdp  # noqa: E402
+
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
 FIGURE_SCENES = [("default", None), ("construction", "sim/scenes/construction.toml"),
                  ("deformable", "sim/scenes/deformable.toml")]
 WIDTH, HEIGHT = 1200, 760  # the window
 VIEW_W, VIEW_H = 860, 760  # the 3D view in it (the rest: the side panel)
+RECONNECT_S = 5.0          # the page resumes within this after the server is back (backoff ≤ 2 s)
 
 
 def chromium_path():
@@ -41,17 +51,6 @@ def chromium_path():
         if p:
             return p
     return None
-
-
-def chromium(exe, profile, url, extra):
-    """Runs headless Chromium on `url`; returns (stdout, stderr)."""
-    cmd = [exe, "--headless", "--no-sandbox", "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
-           "--no-first-run", "--disable-background-networking", "--disable-component-update",
-           "--disable-sync", "--disable-quic", "--hide-scrollbars", "--force-device-scale-factor=1",
-           "--user-data-dir=" + profile, "--window-size=%d,%d" % (WIDTH, HEIGHT),
-           "--virtual-time-budget=20000", "--enable-logging=stderr", "--v=0"] + extra + [url]
-    r = subprocess.run(cmd, capture_output=True, text=True, timeout=180)
-    return r.stdout, r.stderr
 
 
 def is_tool(p):
@@ -100,75 +99,67 @@ def deepest_hand_frame(path):
     return best_i
 
 
-def check_scene(numen, out, name, scene, duration, figure):
-    """Records, serves, shoots and checks one scene; returns a list of failures."""
-    from PIL import Image  # python3-pil
-    failures = []
-    os.makedirs(out, exist_ok=True)
-    rec = os.path.join(out, name + ".nmv")
-    run = [numen, "run"] + ([os.path.join(ROOT, scene)] if scene else []) + [
-        "--duration", str(duration), "--record-view", rec]
-    r = subprocess.run(run, capture_output=True, text=True, timeout=300)
-    if r.returncode != 0 or not os.path.exists(rec):
-        return ["%s: exit %d\n%s" % (" ".join(run), r.returncode, r.stderr)]
-    view = subprocess.Popen([numen, "view", rec, "--port", "0"], stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)
-    try:
-        line = view.stdout.readline()  # "numen view: F: N frames, T s; open URL (Ctrl-C ends)"
+class Viewer:
+    """`numen view REC --port P` running; .url, .frames; stop() ends it (SIGTERM)."""
+
+    def __init__(self, numen, rec, port=0):
+        self.proc = subprocess.Popen([numen, "view", rec, "--port", str(port)], stdout=subprocess.PIPE,
+                                     stderr=subprocess.PIPE, text=True)
+        line = self.proc.stdout.readline()  # "numen view: F: N frames, T s; open URL (Ctrl-C ends)"
         m = re.search(r": (\d+) frames, .* open (http://\S+)", line)
         if not m:
-            return ["numen view printed %r, stderr %r" % (line, view.stderr.read() if view.poll() is not None else "")]
-        frames, url = int(m.group(1)), m.group(2)
-        if frames == 0:
-            return ["%s holds no frame" % rec]
-        shown = deepest_hand_frame(rec)
-        url += "?frame=%d&w=%d&h=%d" % (shown, VIEW_W, VIEW_H)
-        profile = os.path.join(out, "chromium-profile-" + name)
-        shot = os.path.join(out, "viewer_%s.png" % name)
-        if os.path.exists(shot):
-            os.remove(shot)
-        # Two runs (a screenshot, then the DOM with the page's probe), each on a fresh profile:
-        # the same frame, paused, in a view of the same size, so the same projection.
-        # Headless Chromium's virtual time can run out before the WebSocket has delivered the
-        # frame when the machine is loaded (seen at load average 7): then the DOM has no probe
-        # yet. Such an attempt says nothing about the page; it is repeated (5 attempts), and
-        # said so. Any other outcome is judged below.
-        for attempt in range(1, 6):
-            shutil.rmtree(profile, ignore_errors=True)
-            _, log1 = chromium(chromium_exe, profile, url, ["--screenshot=" + shot])
-            shutil.rmtree(profile, ignore_errors=True)
-            dom, log2 = chromium(chromium_exe, profile, url, ["--dump-dom"])
-            shutil.rmtree(profile, ignore_errors=True)
-            if re.search(r'<pre id="probe"[^>]*>\s*[^<\s]', dom):  # a probe with content
-                if attempt > 1:
-                    print("%s: attempt %d showed the frame" % (name, attempt))
-                break
-            print("%s: attempt %d: the page had shown no frame when Chromium's virtual time ran out"
-                  % (name, attempt))
-    finally:
-        view.terminate()
+            err = self.proc.stderr.read() if self.proc.poll() is not None else ""
+            self.stop()
+            raise RuntimeError("numen view printed %r, stderr %r" % (line, err))
+        self.frames, self.url = int(m.group(1)), m.group(2)
+        self.port = int(re.search(r":(\d+)/$", self.url).group(1))
+
+    def stop(self):
+        """Ends the server; returns a failure text or None."""
+        self.proc.terminate()
         try:
-            view.wait(timeout=20)
+            self.proc.wait(timeout=20)
         except subprocess.TimeoutExpired:
-            view.kill()
-            failures.append("numen view did not end on SIGTERM")
-    if view.returncode not in (0, None):
-        failures.append("numen view exited %d: %s" % (view.returncode, view.stderr.read()))
-    for log in (log1, log2):
-        for l in log.splitlines():
-            if "CONSOLE" in l and ("Uncaught" in l or "Error" in l):
-                failures.append("JavaScript: " + l.strip())
-    m = re.search(r'<pre id="probe"[^>]*>(.*?)</pre>', dom, re.S)
-    if not m or not m.group(1).strip():
-        return failures + ["the page never showed a frame (no probe in the DOM)"]
-    probe = json.loads(html.unescape(m.group(1)))
-    if probe.get("errors"):
-        failures.append("the page logged errors: %s" % probe["errors"])
-    if probe.get("framesShown", 0) < 1:
-        failures.append("no frame shown")
-    if not os.path.exists(shot):
-        return failures + ["no screenshot"]
-    img = Image.open(shot).convert("RGB")
+            self.proc.kill()
+            self.proc.wait()
+            return "numen view did not end on SIGTERM"
+        if self.proc.returncode not in (0, -15):
+            return "numen view exited %d: %s" % (self.proc.returncode, self.proc.stderr.read())
+        return None
+
+
+def record(numen, out, name, scene, duration, extra=()):
+    """Records `duration` s of `scene` (None: the default) to OUT/NAME.nmv; returns its path."""
+    rec = os.path.join(out, name + ".nmv")
+    run = [numen, "run"] + ([scene] if scene else []) + ["--duration", str(duration), "--record-view", rec, *extra]
+    r = subprocess.run(run, capture_output=True, text=True, timeout=300)
+    if not os.path.exists(rec):
+        raise RuntimeError("%s: exit %d, no recording\n%s" % (" ".join(run), r.returncode, r.stderr))
+    return rec, r
+
+
+def open_page(browser, url, query, timeout=60):
+    """Opens the page, waits until it shows a frame (?frame=I: that frame); returns the Page."""
+    page = browser.open(url + query, (WIDTH, HEIGHT))
+    waited = page.wait("window.numenView && numenView.probe().framesShown > 0 && "
+                       "document.title.endsWith('ready')", timeout)
+    if waited is None:
+        raise RuntimeError("the page showed no frame within %d s (%s)" % (timeout, url + query))
+    time.sleep(0.3)  # a few animation frames: the shown frame is rendered
+    return page
+
+
+def page_failures(page, name):
+    failures = ["%s: JavaScript: %s" % (name, e) for e in page.console_errors()]
+    errs = page.eval("numenView.errors")
+    if errs:
+        failures.append("%s: the page logged errors: %s" % (name, errs))
+    return failures
+
+
+def check_pixels(img, probe, name):
+    """The tool's and the ghost's colours where the page projects them; returns failures."""
+    failures = []
     tool = [d for d in probe.get("tool", []) if d["inside"]]
     ghost = [d for d in probe.get("ghost", []) if d["inside"]]
     if probe.get("tool") == [] and name != "default":
@@ -193,15 +184,137 @@ def check_scene(numen, out, name, scene, duration, figure):
             print("%s: %d ghost-coloured pixels on the ghost's projection" % (name, g))
             if g < 10:
                 failures.append("%s: the ghost's colour is not where its projection says (%d pixels)" % (name, g))
-    if figure:
-        os.makedirs(os.path.dirname(os.path.abspath(figure)), exist_ok=True)
-        shutil.copyfile(shot, figure)
-        print("wrote " + figure)
+    return failures
+
+
+def check_reconnect(numen, browser, viewer, rec):
+    """Kills the server under a page and starts it again; returns (failures, new viewer)."""
+    page = open_page(browser, viewer.url, "?w=%d&h=%d" % (VIEW_W, VIEW_H))
+    failures = []
+    viewer.stop()
+    lost = page.wait("numenView.probe().link.state !== 'open'", 10)
+    said = page.eval("document.getElementById('connection').textContent")
+    if lost is None or "reconnecting" not in said:
+        failures.append("reconnect: the page did not say the connection was lost (%r)" % said)
+    time.sleep(3)  # a few failed attempts: the backoff grows
+    shown = page.eval("numenView.probe().framesShown")
+    again = Viewer(numen, rec, viewer.port)
+    resumed = page.wait("numenView.probe().link.state === 'open' && numenView.probe().framesShown > %d" % shown,
+                        RECONNECT_S)
+    print("reconnect: the page said %r; resumed %s after the server's restart"
+          % (said, "in %.2f s" % resumed if resumed is not None else "not within %g s" % RECONNECT_S))
+    if resumed is None:
+        failures.append("reconnect: the page did not resume within %g s of the server's return" % RECONNECT_S)
+    failures += page_failures(page, "reconnect")
+    page.send("Page.close")
+    return failures, again
+
+
+def check_camera(browser, viewer, samples=60):
+    """The camera keeps the tool in view: the page opened at frame 0 (follow the tool on, as by
+    default), then `samples` frames spread over the whole recording shown in order; the tool's
+    projected position (its body's origin) must be inside the canvas on every one."""
+    page = open_page(browser, viewer.url, "?frame=0&w=%d&h=%d" % (VIEW_W, VIEW_H))
+    n = viewer.frames
+    frames = sorted(set([round(k * (n - 1) / (samples - 1)) for k in range(samples)]))
+    outside = []
+    for i in frames:
+        page.eval("numenView.seek(%d)" % i)
+        if page.wait("numenView.probe().index === %d && numenView.probe().framesShown > 0" % i, 10) is None:
+            outside.append((i, "never shown"))
+            continue
+        t = page.eval("numenView.probe().toolPx")
+        if not t or not t["inside"]:
+            outside.append((i, t))
+    print("camera: the tool's projection inside the canvas on %d of %d sampled frames"
+          % (len(frames) - len(outside), len(frames)))
+    failures = ["camera: the tool leaves the view at frames %s" % outside[:5]] if outside else []
+    failures += page_failures(page, "camera")
+    page.send("Page.close")
+    return failures
+
+
+def check_fault(numen, browser, out):
+    """A run that latches (the default scene on a bus losing 30 % of its frames): the replay's
+    last frame shows the fault banner with its cause, and the timeline marks it."""
+    scenes = os.path.join(out, "latch", "scenes")
+    os.makedirs(scenes, exist_ok=True)
+    for link, target in ((os.path.join(out, "latch", "data"), os.path.join(ROOT, "sim", "data")),
+                         (os.path.join(scenes, "devices"), os.path.join(ROOT, "sim", "scenes", "devices"))):
+        if not os.path.islink(link):
+            os.symlink(target, link)
+    with open(os.path.join(ROOT, "sim", "scenes", "default.toml")) as f:
+        text = f.read()
+    text, n = re.subn(r"(?m)^drop_probability = 0\.0", "drop_probability = 0.3", text)
+    if n != 1:
+        return ["fault: default.toml has no [bus] drop_probability = 0.0 line to change"]
+    scene = os.path.join(scenes, "latch.toml")
+    with open(scene, "w") as f:
+        f.write(text)
+    rec, r = record(numen, out, "latch", scene, 2.0)
+    if r.returncode != 3:
+        return ["fault: the lossy-bus run exited %d, not 3 (safety stop)\n%s" % (r.returncode, r.stderr)]
+    viewer = Viewer(numen, rec)
+    failures = []
+    try:
+        page = open_page(browser, viewer.url, "?frame=%d&w=%d&h=%d" % (viewer.frames - 1, VIEW_W, VIEW_H))
+        p = page.eval("numenView.probe()")
+        page.screenshot(os.path.join(out, "viewer_latch.png"))
+        print("fault: banner %r, %d timeline mark(s)" % (p["banner"], p["marks"]))
+        if not p["banner"].startswith("FAULT"):
+            failures.append("fault: no fault banner on the last frame of a latched run (%r)" % p["banner"])
+        if "since t =" not in p["banner"]:
+            failures.append("fault: the banner does not say since when (%r)" % p["banner"])
+        if p["marks"] < 1:
+            failures.append("fault: the replay timeline has no mark")
+        failures += page_failures(page, "fault")
+    finally:
+        f = viewer.stop()
+        if f:
+            failures.append(f)
+    return failures
+
+
+def check_scene(numen, browser, out, name, scene, duration, figure):
+    """Records, serves, shoots and checks one scene; returns a list of failures."""
+    from PIL import Image  # python3-pil
+    failures = []
+    os.makedirs(out, exist_ok=True)
+    try:
+        rec, r = record(numen, out, name, os.path.join(ROOT, scene) if scene else None, duration)
+    except RuntimeError as e:
+        return [str(e)]
+    if r.returncode != 0:
+        return ["%s: exit %d\n%s" % (name, r.returncode, r.stderr)]
+    viewer = Viewer(numen, rec)
+    try:
+        if viewer.frames == 0:
+            return ["%s holds no frame" % rec]
+        shown = deepest_hand_frame(rec)
+        page = open_page(browser, viewer.url, "?frame=%d&w=%d&h=%d" % (shown, VIEW_W, VIEW_H))
+        shot = os.path.join(out, "viewer_%s.png" % name)
+        page.screenshot(shot)
+        probe = page.eval("numenView.probe()")
+        failures += page_failures(page, name)
+        page.send("Page.close")
+        img = Image.open(shot).convert("RGB")
+        failures += check_pixels(img, probe, name)
+        if figure:
+            os.makedirs(os.path.dirname(os.path.abspath(figure)), exist_ok=True)
+            shutil.copyfile(shot, figure)
+            print("wrote " + figure)
+        if name == "default":
+            failures += check_camera(browser, viewer)
+            f, viewer = check_reconnect(numen, browser, viewer, rec)
+            failures += f
+    finally:
+        f = viewer.stop()
+        if f:
+            failures.append(f)
     return failures
 
 
 def main():
-    global chromium_exe
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--numen", required=True, help="the numen program")
     ap.add_argument("--out", required=True, help="folder for the recording, screenshot, profile")
@@ -214,21 +327,27 @@ def main():
     if a.skip:
         print("SKIPPED: " + a.skip)
         return 77
-    chromium_exe = chromium_path()
-    if not chromium_exe:
+    exe = chromium_path()
+    if not exe:
         print("SKIPPED: chromium is not installed (Debian: apt-get install chromium; "
               "CI installs it: .ci/run, viewer step)")
         return 77
+    os.makedirs(a.out, exist_ok=True)
     jobs = ([(n, s, os.path.join(a.figures, "viewer_%s.png" % n)) for n, s in FIGURE_SCENES]
             if a.figures else [("default" if not a.scene else os.path.splitext(os.path.basename(a.scene))[0], a.scene, a.figure)])
     failures = []
-    for name, scene, figure in jobs:
-        failures += check_scene(a.numen, a.out, name, scene, a.duration, figure)
+    profile = os.path.join(a.out, "chromium-profile")
+    shutil.rmtree(profile, ignore_errors=True)
+    with cdp.Browser(exe, profile, (WIDTH, HEIGHT)) as browser:
+        for name, scene, figure in jobs:
+            failures += check_scene(a.numen, browser, a.out, name, scene, a.duration, figure)
+        if not a.scene and not a.figures:
+            failures += check_fault(a.numen, browser, a.out)
+    shutil.rmtree(profile, ignore_errors=True)
     for f in failures:
         print("FAIL: " + f)
     return 1 if failures else 0
 
 
-chromium_exe = None
 if __name__ == "__main__":
     sys.exit(main())
