@@ -6,7 +6,7 @@ import { FLOATS } from './protocol.js';
 
 /// Colours of what is drawn (the legend's too).
 export const COLORS = { tool: 0xff8800, body: 0x9aa4b0, ghost: 0x00c8ff, obstacle: 0xc0504d,
-                        plane: 0x707a68, box: 0xb09060, net: 0x60c060 };
+                        plane: 0x707a68, box: 0xb09060, net: 0x60c060, spheres: 0xf0f0a0 };
 export const sphereGeo = new THREE.SphereGeometry(1, 24, 16);
 
 /// One InstancedMesh of `spheres` ([x, y, z, r] in the parent's frame) in `material`.
@@ -19,6 +19,84 @@ function sphereSet(spheres, material) {
     mesh.setMatrixAt(i, m);
   });
   return mesh;
+}
+
+/// A capsule from a to b (THREE.Vector3, m) of radius r, as a geometry.
+function capsuleBetween(a, b, r) {
+  const d = b.clone().sub(a), L = d.length();
+  const g = new THREE.CapsuleGeometry(r, Math.max(1e-6, L), 6, 20);  // along y, centred
+  g.applyQuaternion(new THREE.Quaternion().setFromUnitVectors(new THREE.Vector3(0, 1, 0), L > 0 ? d.normalize() : new THREE.Vector3(0, 0, 1)));
+  g.translate((a.x + b.x) / 2, (a.y + b.y) / 2, (a.z + b.z) / 2);
+  return g;
+}
+
+/// Body i's visual shape in its own frame (a geometry), or null when its spheres are its look:
+///  - spheres on one line (a shaft, a jaw): a capsule from the first centre to the last, of
+///    the largest radius;
+///  - no spheres, a deformable net on it (the hidden rigid core): a 1.5 mm shaft along its z
+///    through the net's extent (sized by sizeCores() on the first frame);
+///  - no spheres, a joint to the world (the trocar sleeve): a 4 mm sleeve along its z, from
+///    8 cm behind the joint's frame to 1 cm ahead;
+///  - no spheres otherwise: a 3 mm ball at its origin.
+function visualShape(msg, i) {
+  const sp = msg.bodies[i].spheres;
+  if (sp.length >= 2) {
+    const a = v3(sp[0]), b = v3(sp[sp.length - 1]), ab = b.clone().sub(a);
+    const L = ab.length();
+    if (L === 0) return null;
+    let r = 0;
+    for (const s of sp) {
+      const p = v3(s).sub(a);
+      const off = p.clone().sub(ab.clone().multiplyScalar(p.dot(ab) / (L * L))).length();
+      if (off > 0.1 * s[3]) return null;  // not one line
+      r = Math.max(r, s[3]);
+    }
+    return capsuleBetween(a, b, r);
+  }
+  if (sp.length === 1) return null;
+  if (msg.nets.some((n) => n.body === i)) {
+    const g = new THREE.CylinderGeometry(0.0015, 0.0015, 1, 16).rotateX(Math.PI / 2);  // along z, length 1
+    g.userData = { core: true };
+    return g;
+  }
+  const j = msg.joints.find((j) => (j.child === i && j.parent === -1) || (j.parent === i && j.child === -1));
+  if (j) {
+    const f = v3((j.child === i ? j.frame_child : j.frame_parent).position);
+    const z = new THREE.Vector3(0, 0, 1).applyQuaternion(q((j.child === i ? j.frame_child : j.frame_parent).orientation));
+    return capsuleBetween(f.clone().addScaledVector(z, -0.08), f.clone().addScaledVector(z, 0.01), 0.004);
+  }
+  return new THREE.SphereGeometry(0.003, 16, 12);
+}
+
+/// Sizes the hidden cores' shafts to their nets' extent along their z at frame fr (once).
+export function sizeCores(msg, fr) {
+  const N = FLOATS.node_position, x = fr.node_position;
+  G.bodies.forEach((g, i) => {
+    const mesh = g.children.find((c) => c.geometry?.userData?.core);
+    if (!mesh) return;
+    g.updateMatrixWorld();
+    const inv = g.matrixWorld.clone().invert();
+    let lo = Infinity, hi = -Infinity;
+    for (const n of msg.nets) {
+      if (n.body !== i) continue;
+      for (let k = n.node_begin; k < n.node_begin + n.node_count; ++k) {
+        const z = new THREE.Vector3(x[N * k], x[N * k + 1], x[N * k + 2]).applyMatrix4(inv).z;
+        lo = Math.min(lo, z);
+        hi = Math.max(hi, z);
+      }
+    }
+    if (!(hi > lo)) return;
+    for (const m of [mesh, G.ghosts[i].children.find((c) => c.geometry === mesh.geometry)]) {
+      m.scale.set(1, 1, hi - lo);
+      m.position.set(0, 0, (hi + lo) / 2);
+    }
+  });
+}
+
+/// Shows or hides the collision spheres of the bodies that have another shape.
+export function showCollisionSpheres(on) {
+  for (const g of [...G.bodies, ...G.ghosts])
+    for (const c of g.children) if (c.userData.collision) c.visible = on;
 }
 
 /// What buildScene() made: one entry per body (its group and its ghost), net and joint.
@@ -53,12 +131,25 @@ export function buildScene(msg) {
   }
   msg.bodies.forEach((b, i) => {
     const tool = i === msg.attached_body;
+    // transparent (opacity 1): drawn in the same pass as the ghosts, after them (renderOrder)
     const solid = new THREE.MeshLambertMaterial({ color: tool ? COLORS.tool : COLORS.body, transparent: true, opacity: 1 });
-    const g = sphereSet(b.spheres, solid);
-    g.renderOrder = 2;  // after the ghosts: a ghost never hides its tool
     const ghostMat = new THREE.MeshBasicMaterial({ color: COLORS.ghost, transparent: true, opacity: 0.45, depthTest: false, depthWrite: false });
-    const gh = sphereSet(b.spheres, ghostMat);
-    gh.renderOrder = 1;
+    const shape = visualShape(msg, i);
+    const g = new THREE.Group(), gh = new THREE.Group();
+    g.name = gh.name = b.name;
+    g.userData = { body: i, material: solid };
+    // The collision spheres: the body's look where it has no other shape, else a toggle.
+    const spheres = sphereSet(b.spheres, shape ? new THREE.MeshLambertMaterial({ color: COLORS.spheres, transparent: true, opacity: 0.5 }) : solid);
+    const ghostSpheres = sphereSet(b.spheres, ghostMat);
+    spheres.userData.collision = ghostSpheres.userData.collision = !!shape;
+    g.add(spheres);
+    gh.add(ghostSpheres);
+    if (shape) {
+      g.add(new THREE.Mesh(shape, solid));
+      gh.add(new THREE.Mesh(shape, ghostMat));
+    }
+    for (const o of [g, ...g.children]) o.renderOrder = 2;  // after the ghosts: a ghost never hides its tool
+    for (const o of [gh, ...gh.children]) o.renderOrder = 1;
     gh.visible = false;
     scene3.add(g, gh);
     G.bodies.push(g);
@@ -137,7 +228,7 @@ export function showBodies(fr) {
     G.ghosts[b].visible = t[T - 1] !== 0;  // the target flag, after the pose
     G.ghosts[b].position.set(t[0], t[1], t[2]);
     G.ghosts[b].quaternion.set(t[3], t[4], t[5], t[6]);
-    G.bodies[b].material.color.setHex(b === h.attached_body ? COLORS.tool : COLORS.body);
+    G.bodies[b].userData.material.color.setHex(b === h.attached_body ? COLORS.tool : COLORS.body);
   }
   for (const { net, geo } of G.nets) {
     const pos = geo.attributes.position.array;

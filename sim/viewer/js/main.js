@@ -3,11 +3,14 @@
 import * as THREE from 'three';
 import { S, errors, setStatus, updateCounters, writeProbe } from './panel.js';
 import { FLOATS, setFrameLayout, LIFECYCLE, STARTUP, STEP, FLAGS, bits } from './protocol.js';
-import { params, renderer, scene3, camera } from './stage.js';
+import { params, renderer, scene3, camera, render, requestRender } from './stage.js';
 import { controls, fitCamera, followTool, preset, view } from './camera.js';
-import { COLORS, G, buildScene, addPlanes, frameBox, showBodies, showJointAxes } from './geometry.js';
-import { buildContacts, showContacts } from './contacts.js';
-import { plotAdd } from './plots.js';
+import { COLORS, G, buildScene, addPlanes, frameBox, showBodies, showJointAxes, showCollisionSpheres, sizeCores } from './geometry.js';
+import { buildContacts, showContacts, forceScale } from './contacts.js';
+import { showLegend } from './legend.js';
+import { showPick, pick } from './pick.js';
+import { plotSeries, plotBuffer, plotCursor, plotPoints } from './plots.js';
+import { setupLive, liveFrame, pauseAt, live } from './live.js';
 import { connect, link } from './connection.js';
 import { setupReplay, replayed, seek, replay } from './replay.js';
 import { showFault, markTimeline } from './faults.js';
@@ -21,7 +24,7 @@ function onScene(msg) {
   protocol = (msg.device && msg.device.protocol) || 'managed';
   managed = protocol === 'managed';
   document.getElementById('title').textContent = 'numen view — ' + msg.scene;
-  buildContacts();
+  buildContacts(msg.bodies.length);
 }
 
 let marks = 0;
@@ -31,45 +34,72 @@ function onSession(m) {
   if (m.mode === 'replay') {
     setupReplay(params.has('frame') ? Number(params.get('frame')) : null);
     marks = markTimeline(m.series, m.frames, seek);
+    plotSeries(m.series, seek);
+  } else {
+    setupLive(showFrame);
   }
   if (!S.last) setStatus(m.mode === 'live' ? 'live: waiting for frames…' : 'replay');
 }
 
-let banner = '';
-function showFrame(fr) {
+let banner = '', contactText = '';
+/// Draws frame fr (the view, the banner, the status); the toggles redraw the frame shown.
+function draw(fr) {
   const { h } = fr;
-  if (S.session && S.session.mode === 'replay') replayed(fr);
   showBodies(fr);
   if (!fitted) {  // the whole scene: obstacles, and where the bodies, targets and nets are now
     fitted = true;
+    sizeCores(S.scene, fr);
     const box = frameBox(S.scene, fr).union(G.obstacleBox);
     const c = fitCamera(box);
     addPlanes(S.scene, c, view.extent);
   }
-  const tool = toolInfo();
+  const tool = toolInfo(fr);
   followTool(tool ? tool.position : null);
-  const contactsOn = document.getElementById('contacts').checked;
-  const { drawn, fmag } = showContacts(fr, contactsOn);
-  showJointAxes(document.getElementById('axes').checked);
-  if (S.lastPeriod >= 0 && S.session && S.session.mode === 'live' && h.period <= S.lastPeriod) S.gaps++;
-  S.lastPeriod = h.period;
-  S.last = fr;
-  S.framesShown++;
-  plotAdd(fr, fmag);
+  const contactsOn = toggles.contacts.checked;
+  const { drawn, arrows, fmag } = showContacts(fr, contactsOn, toggles.springs.checked);
+  showJointAxes(toggles.axes.checked);
+  showCollisionSpheres(toggles.spheres.checked);
+  showLegend(forceScale);
   banner = showFault(fr, managed);
+  contactText = `contacts: ${h.num_contacts}${h.num_contacts > drawn && contactsOn ? ` (${drawn} drawn)` : ''}` +
+                `${contactsOn ? `, ${arrows} force arrows` : ''}   |F| = ${fmag.toFixed(2)} N`;
   setStatus(
     `t = ${fr.time_s.toFixed(3)} s   period ${h.period}\n` +
     `lifecycle: ${LIFECYCLE[h.lifecycle] ?? h.lifecycle}` +
     (managed ? `   start-up: ${STARTUP[h.startup] ?? h.startup}` : `   (${protocol} protocol)`) + '\n' +
-    `flags: ${bits(h.flags, FLAGS)}\nstep: ${h.step_status ? bits(h.step_status, STEP) : 'ok'}\n` +
-    `contacts: ${h.num_contacts}${h.num_contacts > drawn && contactsOn ? ` (${drawn} drawn)` : ''}   |F| = ${fmag.toFixed(2)} N`);
+    `flags: ${bits(h.flags, FLAGS)}\nstep: ${h.step_status ? bits(h.step_status, STEP) : 'ok'}\n` + contactText);
+  showPick(fr);
+  requestRender();
+  return fmag;
+}
+
+/// Shows a frame that arrived (replay: the one asked for; live: the newest, or one of the
+/// buffer when the view is paused).
+function showFrame(fr) {
+  if (S.session && S.session.mode === 'replay') replayed(fr);
+  draw(fr);
+  S.last = fr;
+  S.framesShown++;
+  plotCursor(fr.time_s);
   updateCounters();
+}
+
+/// A frame arrived: replay shows it (it was asked for); live buffers it (live.js shows it).
+function onFrame(fr) {
+  if (S.session && S.session.mode === 'replay') return showFrame(fr);
+  plotBuffer(liveFrame(fr), pauseAt);
+}
+
+const toggles = {};
+for (const id of ['contacts', 'axes', 'spheres', 'springs']) {
+  toggles[id] = document.getElementById(id);
+  toggles[id].onchange = () => { if (S.last) draw(S.last); };  // at once, paused or not
 }
 
 /// The instrument: { position: the attached body's origin, tip: its farthest sphere along its
 /// spheres' line (else the origin), axis: towards the tip (world) } or null without one.
-function toolInfo() {
-  const b = S.last ? S.last.h.attached_body : -1;
+function toolInfo(fr = S.last) {
+  const b = fr ? fr.h.attached_body : -1;
   if (b < 0) return null;
   const body = G.bodies[b], sp = S.scene.bodies[b].spheres;
   body.updateMatrixWorld();
@@ -131,6 +161,25 @@ window.numenView = {
       p.toolPx = projectPoint(toolInfo().position);
     }
     if (S.session?.mode === 'replay') p.index = replay.index;
+    else p.live = { buffered: live.frames.length, paused: live.paused, firstPeriod: live.frames[0]?.h.period ?? null };
+    p.plotPoints = plotPoints();
+    p.series = S.session?.series ? { frames: S.session.series.frames, stride: S.session.series.stride } : null;
+    p.pick = pick;
+    p.scale = { ...forceScale };
+    p.shapes = S.scene ? S.scene.bodies.filter((b, i) => G.bodies[i].children.length > 1).map((b) => b.name) : [];
+    if (last) {
+      // The force arrows of the first contacts: from the contact point to the arrow's tip (px).
+      const K = FLOATS.contact, c = last.contact;
+      p.arrows = [];
+      for (let k = 0; k < Math.min(8, last.h.num_contacts); ++k) {
+        const o = new THREE.Vector3(c[K * k], c[K * k + 1], c[K * k + 2]);
+        const f = new THREE.Vector3(c[K * k + 7], c[K * k + 8], c[K * k + 9]);
+        if (f.length() < 1e-6) continue;
+        p.arrows.push({ from: projectPoint(o), to: projectPoint(o.clone().addScaledVector(f, forceScale.m_per_n)), n: f.length() });
+      }
+      if (last.h.attached_body >= 0 && G.ghosts[last.h.attached_body].visible)
+        p.ghostPx = projectPoint(G.ghosts[last.h.attached_body].position);
+    }
     return p;
   },
   /// Replay: shows frame i, paused.
@@ -139,11 +188,15 @@ window.numenView = {
   view: (name) => document.querySelector(`#views button[data-view="${name}"]`).click(),
 };
 
-connect({ scene: onScene, session: onSession, frame: showFrame });
+connect({ scene: onScene, session: onSession, frame: onFrame });
 
+controls.addEventListener('change', requestRender);
 renderer.setAnimationLoop(() => {
   controls.update();
+  if (!render.needed) return;
+  render.needed = false;
   renderer.render(scene3, camera);
+  render.count++;
   if (S.last) {
     if (!document.title.endsWith('ready')) document.title = 'numen view: ready';
     writeProbe();

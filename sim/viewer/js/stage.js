@@ -22,7 +22,13 @@ if (params.has('w') && params.has('h')) {
   container.style.width = Number(params.get('w')) + 'px';
   container.style.height = Number(params.get('h')) + 'px';
 }
+/// Whether the view must be rendered again (a frame drawn, the camera moved, a resize): the
+/// page renders only then, so a paused view costs nothing.
+export const render = { needed: true, count: 0 };
+export const requestRender = () => { render.needed = true; };
+
 function resize() {
+  render.needed = true;
   const w = container.clientWidth, h = container.clientHeight;
   renderer.setSize(w, h);
   camera.aspect = w / h;

@@ -15,6 +15,8 @@ On the default scene also:
     the canvas on 60 frames spread over the whole recording;
   - reconnect: `numen view` is killed, the page says the connection is lost, `numen view` is
     started again on the same port, and the page shows a frame again within RECONNECT_S;
+Live (`numen run --view 0 --wait-for-viewer`): the page gets every frame from period 0; paused,
+it holds its frame while frames keep arriving, steps back, scrubs and returns to live.
 On a run that latches a fault (the default scene on a bus losing 30 % of its frames):
   - the fault banner shows, with its cause, and the replay timeline has its mark.
 Exit 0: passed; 1: failed; 77: skipped, only when Chromium is not installed.
@@ -77,7 +79,8 @@ def count_in_discs(img, discs, pred, grow=1.0, extra=0.0):
 
 
 def count_all(img, pred):
-    return sum(1 for p in img.getdata() if pred(p))
+    """Pixels of the 3D view (not the side panel: its legend and plots use the same colours)."""
+    return sum(1 for p in img.crop((0, 0, VIEW_W, VIEW_H)).getdata() if pred(p))
 
 
 def deepest_hand_frame(path):
@@ -154,6 +157,54 @@ def page_failures(page, name):
     errs = page.eval("numenView.errors")
     if errs:
         failures.append("%s: the page logged errors: %s" % (name, errs))
+    return failures
+
+
+def expected_plot_points(frames, max_points=2000):
+    """The replay plot's points for a recording of `frames` frames (docs/viewer.md "Replay"):
+    frames 0, s, 2s, ... with s = max(1, ceil(frames / max_points)), and the last frame."""
+    s = max(1, -(-frames // max_points))
+    return len(range(0, frames, s)) + (1 if frames and (frames - 1) % s else 0)
+
+
+def near_colour(img, x, y, rad, pred):
+    """Pixels within `rad` of (x, y) satisfying `pred`."""
+    px, (w, h) = img.load(), img.size
+    return sum(1 for yy in range(max(0, int(y - rad)), min(h, int(y + rad) + 1))
+               for xx in range(max(0, int(x - rad)), min(w, int(x + rad) + 1)) if pred(px[xx, yy]))
+
+
+def is_arrow(p):
+    """A contact's depth colour (contacts.js: hue 60° to 280°, saturated) or its blend."""
+    h, s, v = colorsys.rgb_to_hsv(p[0] / 255, p[1] / 255, p[2] / 255)
+    return s > 0.45 and v > 0.3 and 55 / 360 <= h <= 285 / 360
+
+
+def check_shapes(img, probe, name):
+    """Tool parts drawn as shapes, force arrows where the contacts are, the ghost visible."""
+    failures = []
+    if name == "default":
+        for part in ("sleeve", "tube", "jaw_1", "jaw_2"):
+            if part not in probe.get("shapes", []):
+                failures.append("default: %s is not drawn as a shape (shapes %s)" % (part, probe.get("shapes")))
+    arrows = [a for a in probe.get("arrows", []) if a["from"]["inside"] and a["to"]["inside"]
+              and abs(a["to"]["x"] - a["from"]["x"]) + abs(a["to"]["y"] - a["from"]["y"]) > 12]
+    if name in ("default", "deformable", "construction"):
+        if not arrows:
+            failures.append("%s: no contact force arrow long enough to see in the frame (%s)" % (name, probe.get("arrows")))
+        else:
+            a = arrows[0]
+            mx, my = (a["from"]["x"] + a["to"]["x"]) / 2, (a["from"]["y"] + a["to"]["y"]) / 2
+            n = near_colour(img, mx, my, 3, is_arrow)
+            print("%s: contact force arrow of %.2f N, %d arrow-coloured pixels at its middle" % (name, a["n"], n))
+            if n < 1:
+                failures.append("%s: the force arrow of a contact is not drawn where it acts" % name)
+    if name == "deformable":  # the hidden core's ghost: the hand's target
+        g = probe.get("ghostPx")
+        n = near_colour(img, g["x"], g["y"], 10, is_ghost) if g and g["inside"] else 0
+        print("deformable: %d ghost-coloured pixels around the hidden core's ghost" % n)
+        if n < 10:
+            failures.append("deformable: the hidden core's ghost is not visible (%d pixels, %s)" % (n, g))
     return failures
 
 
@@ -234,6 +285,63 @@ def check_camera(browser, viewer, samples=60):
     return failures
 
 
+def check_live(numen, browser, duration=8.0):
+    """`numen run --view 0 --wait-for-viewer`: the run starts when the page connects, so the
+    page receives every frame from period 0; paused, the view holds its frame while frames keep
+    arriving, steps back and scrubs through its buffer, and goes back to live."""
+    run = subprocess.Popen([numen, "run", "--view", "0", "--wait-for-viewer=60", "--duration", str(duration)],
+                           stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    failures = []
+    try:
+        url = None
+        for _ in range(20):
+            line = run.stderr.readline()
+            m = re.search(r"viewer on (http://\S+)", line)
+            if m:
+                url = m.group(1)
+                break
+        if not url:
+            return ["live: numen run --view printed no URL"]
+        time.sleep(1.0)  # the run must still be waiting
+        page = open_page(browser, url, "?w=%d&h=%d" % (VIEW_W, VIEW_H))
+        p = page.eval("numenView.probe()")
+        if p["live"]["firstPeriod"] != 0:
+            failures.append("live: the first frame the page got is of period %s, not 0" % p["live"]["firstPeriod"])
+        # Pause the view, and read its state at once (the page may be rendering behind).
+        p0 = page.eval("(() => { document.getElementById('play').click(); return numenView.probe(); })()")
+        time.sleep(1.0)
+        p1 = page.eval("numenView.probe()")
+        if not p0["live"]["paused"] or p1["period"] != p0["period"]:
+            failures.append("live: the paused view did not hold its frame (%s, then %s)" % (p0["period"], p1["period"]))
+        if p1["live"]["buffered"] <= p0["live"]["buffered"]:
+            failures.append("live: no frame arrived while the view was paused")
+        page.eval("document.getElementById('back').click()")
+        back = page.eval("numenView.probe().period")
+        page.eval("(() => { const s = document.getElementById('slider'); s.value = '0'; s.dispatchEvent(new Event('input')); })()")
+        first = page.eval("numenView.probe().period")
+        page.eval("document.getElementById('play').click()")  # back to live
+        time.sleep(0.5)
+        again = page.eval("numenView.probe()")
+        print("live: paused at period %d while %d -> %d frames arrived; back a step: %d; scrubbed to %d; "
+              "live again at %d" % (p0["period"], p0["live"]["buffered"], p1["live"]["buffered"], back, first, again["period"]))
+        if not back < p0["period"] or first != 0 or again["live"]["paused"] or again["period"] <= p0["period"]:
+            failures.append("live: step / scrub / back to live did not show the expected frames")
+        run.wait(timeout=60)
+        received = page.eval("numenView.probe().framesReceived")
+        err = run.stderr.read()
+        m = re.search(r"viewer: 1 clients, (\d+) frames sent, (\d+) dropped", err)
+        print("live: the page received %d frames; numen: %s" % (received, m.group(0) if m else err.strip()[-200:]))
+        if run.returncode != 0 or not m or int(m.group(1)) != received or int(m.group(2)) != 0:
+            failures.append("live: exit %s, the page received %d frames (numen: %s)" % (run.returncode, received, err[-300:]))
+        failures += page_failures(page, "live")
+        page.send("Page.close")
+    finally:
+        if run.poll() is None:
+            run.kill()
+            run.wait()
+    return failures
+
+
 def check_fault(numen, browser, out):
     """A run that latches (the default scene on a bus losing 30 % of its frames): the replay's
     last frame shows the fault banner with its cause, and the timeline marks it."""
@@ -299,6 +407,12 @@ def check_scene(numen, browser, out, name, scene, duration, figure):
         page.send("Page.close")
         img = Image.open(shot).convert("RGB")
         failures += check_pixels(img, probe, name)
+        failures += check_shapes(img, probe, name)
+        want = expected_plot_points(viewer.frames)
+        print("%s: replay plot of %d points, the recording %d frames (%d expected)"
+              % (name, probe["plotPoints"], viewer.frames, want))
+        if probe["plotPoints"] != want:
+            failures.append("%s: the replay plot has %d points, not %d" % (name, probe["plotPoints"], want))
         if figure:
             os.makedirs(os.path.dirname(os.path.abspath(figure)), exist_ok=True)
             shutil.copyfile(shot, figure)
@@ -342,6 +456,7 @@ def main():
         for name, scene, figure in jobs:
             failures += check_scene(a.numen, browser, a.out, name, scene, a.duration, figure)
         if not a.scene and not a.figures:
+            failures += check_live(a.numen, browser)
             failures += check_fault(a.numen, browser, a.out)
     shutil.rmtree(profile, ignore_errors=True)
     for f in failures:
