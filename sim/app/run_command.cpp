@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <iostream>
 #include <limits>
+#include <string>
 
 #include "commands.hpp"
 #include "numen/sim/input/bus_spec.hpp"
@@ -84,7 +85,7 @@ RunCommand::RunCommand(CLI::App& parent)
           return "HOST must be an IP address or localhost (names are not resolved), got '" + v + "'";
         return {};
       });
-  run->add_flag("--wait-for-viewer{60}", wait_for_viewer_s_,
+  run->add_flag("--wait-for-viewer{60}", wait_for_viewer_,
                "With --view: start the run when the first page connects, waiting at most this "
                "many seconds (--wait-for-viewer=S; default 60); none connected: exit 1")
       ->check(seconds_check(0.0, 86400.0, true));
@@ -158,6 +159,7 @@ int RunCommand::execute() const {
         vs, sim::view_scene_message(scene, sim::view_frame_layout(scene), view_rate_));
     viewer->start();
     std::cerr << "numen: viewer on " << viewer->url() << std::endl;
+    const double wait_for_viewer_s_ = wait_for_viewer_.empty() ? 0.0 : std::stod(wait_for_viewer_);
     if (wait_for_viewer_s_ > 0.0) {
       std::cerr << "numen: waiting up to " << wait_for_viewer_s_ << " s for a page at "
                 << viewer->url() << " (--wait-for-viewer)" << std::endl;

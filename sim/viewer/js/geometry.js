@@ -8,10 +8,14 @@ import { FLOATS } from './protocol.js';
 export const COLORS = { tool: 0xff8800, body: 0x9aa4b0, ghost: 0x00c8ff, obstacle: 0xc0504d,
                         plane: 0x707a68, box: 0xb09060, net: 0x60c060, spheres: 0xf0f0a0 };
 export const sphereGeo = new THREE.SphereGeometry(1, 24, 16);
+/// Spheres of a set of many (an organ of hundreds): 10 × 7 facets each, a fifth of the triangles
+/// (software rendering draws every one; docs/viewer.md "What it costs").
+const coarseSphereGeo = new THREE.SphereGeometry(1, 10, 7);
 
 /// One InstancedMesh of `spheres` ([x, y, z, r] in the parent's frame) in `material`.
 function sphereSet(spheres, material) {
-  const mesh = new THREE.InstancedMesh(sphereGeo, material, Math.max(1, spheres.length));
+  const geo = spheres.length > 32 ? coarseSphereGeo : sphereGeo;
+  const mesh = new THREE.InstancedMesh(geo, material, Math.max(1, spheres.length));
   mesh.count = spheres.length;
   const m = new THREE.Matrix4();
   spheres.forEach((s, i) => {

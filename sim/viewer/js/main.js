@@ -75,9 +75,18 @@ function draw(fr) {
 
 /// Shows a frame that arrived (replay: the one asked for; live: the newest, or one of the
 /// buffer when the view is paused).
+/// The page's cost (tests/sim/view/viewer_perf.py): frames drawn and rendered, the time in
+/// draw() and in renderer.render() (with ?perf=1 the render waits for the GPU: gl.finish()).
+const perf = { drawn: 0, drawMs: 0, rendered: 0, renderMs: 0, contacts: 0, nodes: 0, finish: params.has('perf') };
+
 function showFrame(fr) {
   if (S.session && S.session.mode === 'replay') replayed(fr);
+  const t0 = performance.now();
   draw(fr);
+  perf.drawMs += performance.now() - t0;
+  perf.drawn++;
+  perf.contacts += fr.h.num_contacts;
+  perf.nodes += fr.h.num_nodes;
   S.last = fr;
   S.framesShown++;
   plotCursor(fr.time_s);
@@ -182,6 +191,7 @@ window.numenView = {
     }
     return p;
   },
+  perf,
   /// Replay: shows frame i, paused.
   seek: (i) => seek(i),
   /// A preset view by name (the buttons' names).
@@ -195,8 +205,11 @@ renderer.setAnimationLoop(() => {
   controls.update();
   if (!render.needed) return;
   render.needed = false;
+  const t0 = performance.now();
   renderer.render(scene3, camera);
-  render.count++;
+  if (perf.finish) renderer.getContext().finish();
+  perf.renderMs += performance.now() - t0;
+  perf.rendered++;
   if (S.last) {
     if (!document.title.endsWith('ready')) document.title = 'numen view: ready';
     writeProbe();

@@ -74,19 +74,23 @@ export function plotBuffer(data, pick) {
   dirty = true;
 }
 
-/// Moves the cursor line to simulated time t (s).
+/// Moves the cursor line to simulated time t (s) (drawn at the next redraw, at most 5 per second).
 export function plotCursor(t) {
+  if (t !== cursorT) dirtyCursor = true;
   cursorT = t;
-  for (const u of Object.values(plots)) u.redraw(false, false);
 }
 
 /// Points in the penetration plot (the tests compare it with the recording's frames).
 export function plotPoints() { return plots.pen.data[0].length; }
 
-let dirty = false;
+let dirty = false, dirtyCursor = false;
 function redraw() {
   plots.pen.setData([plotData.t, plotData.tool, plotData.hand]);
   plots.force.setData([plotData.t, plotData.force]);
   plots.step.setData([plotData.t, plotData.step]);
 }
-setInterval(() => { if (dirty) { dirty = false; redraw(); } }, 200);
+setInterval(() => {
+  if (dirty) redraw();
+  else if (dirtyCursor) for (const u of Object.values(plots)) u.redraw(false, false);
+  dirty = dirtyCursor = false;
+}, 200);

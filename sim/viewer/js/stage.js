@@ -4,7 +4,17 @@ import * as THREE from 'three';
 
 export const params = new URLSearchParams(location.search);
 export const container = document.getElementById('view');
-export const renderer = new THREE.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
+/// The WebGL renderer's name (e.g. "ANGLE (Google, Vulkan 1.3.0 (SwiftShader Device ...))").
+export const glRenderer = (() => {
+  const gl = document.createElement('canvas').getContext('webgl2');
+  const ext = gl && gl.getExtension('WEBGL_debug_renderer_info');
+  return ext ? String(gl.getParameter(ext.UNMASKED_RENDERER_WEBGL)) : 'unknown';
+})();
+/// Software rendering (SwiftShader) draws without multisampling: it costs a third of the frame
+/// rate there (docs/viewer.md "What it costs"); ?aa=1 / ?aa=0 force it on or off.
+const software = /SwiftShader|llvmpipe|software/i.test(glRenderer);
+const antialias = params.has('aa') ? params.get('aa') !== '0' : !software;
+export const renderer = new THREE.WebGLRenderer({ antialias, preserveDrawingBuffer: true });
 renderer.setPixelRatio(window.devicePixelRatio);
 container.appendChild(renderer.domElement);
 export const scene3 = new THREE.Scene();
@@ -24,7 +34,7 @@ if (params.has('w') && params.has('h')) {
 }
 /// Whether the view must be rendered again (a frame drawn, the camera moved, a resize): the
 /// page renders only then, so a paused view costs nothing.
-export const render = { needed: true, count: 0 };
+export const render = { needed: true };
 export const requestRender = () => { render.needed = true; };
 
 function resize() {

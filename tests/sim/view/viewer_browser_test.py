@@ -327,9 +327,11 @@ def check_live(numen, browser, duration=8.0):
         if not back < p0["period"] or first != 0 or again["live"]["paused"] or again["period"] <= p0["period"]:
             failures.append("live: step / scrub / back to live did not show the expected frames")
         run.wait(timeout=60)
-        received = page.eval("numenView.probe().framesReceived")
         err = run.stderr.read()
         m = re.search(r"viewer: 1 clients, (\d+) frames sent, (\d+) dropped", err)
+        if m:  # the page may still be reading what was sent
+            page.wait("numenView.probe().framesReceived >= %d" % int(m.group(1)), 30)
+        received = page.eval("numenView.probe().framesReceived")
         print("live: the page received %d frames; numen: %s" % (received, m.group(0) if m else err.strip()[-200:]))
         if run.returncode != 0 or not m or int(m.group(1)) != received or int(m.group(2)) != 0:
             failures.append("live: exit %s, the page received %d frames (numen: %s)" % (run.returncode, received, err[-300:]))
