@@ -159,13 +159,13 @@ int RunCommand::execute() const {
         vs, sim::view_scene_message(scene, sim::view_frame_layout(scene), view_rate_));
     viewer->start();
     std::cerr << "numen: viewer on " << viewer->url() << std::endl;
-    const double wait_for_viewer_s_ = wait_for_viewer_.empty() ? 0.0 : std::stod(wait_for_viewer_);
-    if (wait_for_viewer_s_ > 0.0) {
-      std::cerr << "numen: waiting up to " << wait_for_viewer_s_ << " s for a page at "
+    const double wait_s = wait_for_viewer_.empty() ? 0.0 : std::stod(wait_for_viewer_);
+    if (wait_s > 0.0) {
+      std::cerr << "numen: waiting up to " << wait_s << " s for a page at "
                 << viewer->url() << " (--wait-for-viewer)" << std::endl;
-      if (!viewer->wait_for_client(wait_for_viewer_s_)) {
+      if (!viewer->wait_for_client(wait_s)) {
         std::cerr << "numen: no viewer connected to " << viewer->url() << " within "
-                  << wait_for_viewer_s_ << " s (--wait-for-viewer): the run did not start"
+                  << wait_s << " s (--wait-for-viewer): the run did not start"
                   << std::endl;
         return sim::code(sim::ExitStatus::kError);
       }

@@ -3,8 +3,8 @@
 // blank canvas; else loads the page's modules (js/main.js and what it imports).
 //
 // URL parameters: ?frame=I (replay: show frame I, paused), ?w=W&h=H (the view's size in
-// pixels); the browser test uses both. window.numenView exposes the state a test reads (also
-// written to #probe as JSON).
+// pixels), ?aa=0|1 (multisampling), ?perf=1 (render timed to the GPU's end): docs/viewer.md.
+// window.numenView exposes the state a test reads (also written to #probe as JSON).
 import { fail } from './js/panel.js';
 
 try {

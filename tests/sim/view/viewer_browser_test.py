@@ -208,6 +208,21 @@ def check_shapes(img, probe, name):
     return failures
 
 
+def check_pick(page, probe, name):
+    """A click on the tool (the middle of its projected spheres) shows its name and pose."""
+    discs = [d for d in probe.get("tool", []) if d["inside"]]
+    if not discs:
+        return []
+    d = discs[len(discs) // 2]
+    for kind in ("mousePressed", "mouseReleased"):
+        page.send("Input.dispatchMouseEvent", {"type": kind, "x": d["x"], "y": d["y"], "button": "left", "clickCount": 1})
+    text = page.eval("numenView.probe().pick.text")
+    print("%s: a click on the tool shows %r" % (name, text.splitlines()[:2]))
+    if not text.startswith(probe["toolName"]) or "position" not in text or "contacts" not in text:
+        return ["%s: a click on the tool did not show it (%r)" % (name, text)]
+    return []
+
+
 def check_pixels(img, probe, name):
     """The tool's and the ghost's colours where the page projects them; returns failures."""
     failures = []
@@ -405,6 +420,7 @@ def check_scene(numen, browser, out, name, scene, duration, figure):
         shot = os.path.join(out, "viewer_%s.png" % name)
         page.screenshot(shot)
         probe = page.eval("numenView.probe()")
+        failures += check_pick(page, probe, name)
         failures += page_failures(page, name)
         page.send("Page.close")
         img = Image.open(shot).convert("RGB")

@@ -48,7 +48,7 @@ def main():
     ap.add_argument("--numen", required=True)
     ap.add_argument("--out", required=True)
     ap.add_argument("--duration", type=float, default=12.0)
-    ap.add_argument("--query", default="", help="more URL parameters of the page, e.g. &noaa=1")
+    ap.add_argument("--query", default="", help="more URL parameters of the page, e.g. &aa=1")
     ap.add_argument("--scenes", default=",".join(n for n, _ in SCENES), help="names, comma-separated")
     a = ap.parse_args()
     exe = chromium_path()
