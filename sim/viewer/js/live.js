@@ -50,6 +50,14 @@ export function setupLive(showFrame) {
   slider.oninput = () => { setPaused(true); showAt(Number(slider.value)); };
 }
 
+/// Empties the buffer (a new live session: another run's periods start again at 0).
+export function liveReset() {
+  live.frames.length = 0;
+  live.shown = null;
+  for (const k in cols) cols[k].length = 0;
+  setPaused(false);
+}
+
 /// Pauses the view on buffer frame i (a plot click).
 export function pauseAt(i) { setPaused(true); showAt(i); }
 

@@ -10,7 +10,7 @@ import { buildContacts, showContacts, forceScale } from './contacts.js';
 import { showLegend } from './legend.js';
 import { showPick, pick } from './pick.js';
 import { plotSeries, plotBuffer, plotCursor, plotPoints } from './plots.js';
-import { setupLive, liveFrame, pauseAt, live } from './live.js';
+import { setupLive, liveFrame, liveReset, pauseAt, live } from './live.js';
 import { connect, link } from './connection.js';
 import { setupReplay, replayed, seek, replay } from './replay.js';
 import { showFault, markTimeline } from './faults.js';
@@ -36,6 +36,7 @@ function onSession(m) {
     marks = markTimeline(m.series, m.frames, seek);
     plotSeries(m.series, seek);
   } else {
+    liveReset();  // a new connection is a new run: its frames start again
     setupLive(showFrame);
   }
   if (!S.last) setStatus(m.mode === 'live' ? 'live: waiting for frames…' : 'replay');
@@ -73,11 +74,12 @@ function draw(fr) {
   return fmag;
 }
 
-/// Shows a frame that arrived (replay: the one asked for; live: the newest, or one of the
-/// buffer when the view is paused).
 /// The page's cost (tests/sim/view/viewer_perf.py): frames drawn and rendered, the time in
 /// draw() and in renderer.render() (with ?perf=1 the render waits for the GPU: gl.finish()).
 const perf = { drawn: 0, drawMs: 0, rendered: 0, renderMs: 0, contacts: 0, nodes: 0, finish: params.has('perf') };
+
+/// Shows a frame that arrived (replay: the one asked for; live: the newest, or one of the
+/// buffer when the view is paused).
 
 function showFrame(fr) {
   if (S.session && S.session.mode === 'replay') replayed(fr);

@@ -8,7 +8,7 @@ import { S } from './panel.js';
 
 const el = document.getElementById('pick');
 const ray = new THREE.Raycaster();
-let picked = -1, down = null, prev = null;
+let picked = -1, down = null, prev = null, before = null;  // the frames shown last and before it
 /// What the panel shows of the picked body (read by the tests).
 export const pick = { body: -1, text: '' };
 
@@ -40,14 +40,13 @@ const mm = (v) => (1e3 * v).toFixed(1);
 /// and the contacts whose point lies on its spheres (within radius + 1 mm: a contact does not
 /// name its body).
 export function showPick(fr) {
-  const before = prev;
-  prev = fr;
+  if (fr !== prev) { before = prev; prev = fr; }  // a redraw of the same frame keeps its velocity
   pick.body = picked;
   if (picked < 0 || !S.scene) { el.hidden = true; pick.text = ''; return; }
   const P = FLOATS.body_pose, K = FLOATS.contact, b = picked;
   const p = fr.body_pose.subarray(P * b, P * b + P);
   let vel = 'needs two frames';
-  if (before && before !== fr && fr.time_s > before.time_s && fr.time_s - before.time_s < 0.2) {
+  if (before && fr.time_s > before.time_s && fr.time_s - before.time_s < 0.2) {
     const q = before.body_pose.subarray(P * b, P * b + P), dt = fr.time_s - before.time_s;
     const v = [0, 1, 2].map((k) => (p[k] - q[k]) / dt);
     vel = `(${v.map(mm).join(', ')}) mm/s, |v| = ${mm(Math.hypot(...v))} mm/s`;
