@@ -11,6 +11,7 @@ frame where the hand goes deepest (?frame=I, paused), takes a screenshot and che
     ghost's colour where it projects the ghost's (the hand's target pose), and most of the
     tool-coloured pixels lie on the tool's projection.
 On the default scene also:
+  - the favicon is served, and the page opened as file:// says how to serve it;
   - the camera (following the tool, as by default) keeps the tool's projected position inside
     the canvas on 60 frames spread over the whole recording;
   - reconnect: `numen view` is killed, the page says the connection is lost, `numen view` is
@@ -205,6 +206,32 @@ def check_shapes(img, probe, name):
         print("deformable: %d ghost-coloured pixels around the hidden core's ghost" % n)
         if n < 10:
             failures.append("deformable: the hidden core's ghost is not visible (%d pixels, %s)" % (n, g))
+    return failures
+
+
+def check_page_files(browser, numen, viewer):
+    """The favicon the page links is served (no 404 on a page load), and the page opened as a
+    file says how to serve it instead of "connecting…"."""
+    import urllib.request
+    failures = []
+    try:
+        with urllib.request.urlopen(viewer.url + "favicon.svg", timeout=10) as r:
+            kind = r.headers.get("Content-Type", "")
+        if kind != "image/svg+xml":
+            failures.append("favicon.svg served as %r" % kind)
+    except Exception as e:  # noqa: BLE001 (any failure is the finding)
+        failures.append("favicon.svg: %s" % e)
+    index = os.path.join(os.path.dirname(os.path.abspath(numen)), "viewer", "index.html")
+    if os.path.exists(index):
+        page = browser.open("file://" + index, (WIDTH, HEIGHT))
+        page.wait("document.readyState === 'complete'", 10)
+        text = page.eval("document.getElementById('status').textContent")
+        print("file://: the page says %r" % text.splitlines()[0])
+        if "numen run --view" not in text or "numen view" not in text:
+            failures.append("file://: the page does not say how to serve it (%r)" % text)
+        page.send("Page.close")
+    else:
+        print("file://: no %s beside numen: not checked" % index)
     return failures
 
 
@@ -436,6 +463,7 @@ def check_scene(numen, browser, out, name, scene, duration, figure):
             shutil.copyfile(shot, figure)
             print("wrote " + figure)
         if name == "default":
+            failures += check_page_files(browser, numen, viewer)
             failures += check_camera(browser, viewer)
             f, viewer = check_reconnect(numen, browser, viewer, rec)
             failures += f
