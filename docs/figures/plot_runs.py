@@ -24,11 +24,18 @@ def default_run(trace, out):
     d = load(trace)
     t = d["time_s"]
     fig, ax = plt.subplots(2, 1, figsize=(9, 6), sharex=True)
-    ax[0].plot(t, d["target_penetration_mm"], lw=0.8, label="target (recorded hand, tool placed there)")
-    ax[0].plot(t, d["tool_penetration_mm"], lw=0.8, label="god-object")
+    # Closed loop (the trace's hand column is not all zero): the hand pulls the handle along
+    # the recording, the handle is the device pose the god-object follows.
+    closed = any(v != 0.0 for v in d.get("hand_penetration_mm", []))
+    if closed:
+        ax[0].plot(t, d["hand_penetration_mm"], lw=0.8, label="hand (recorded motion)")
+        ax[0].plot(t, d["target_penetration_mm"], lw=0.8, label="handle (device pose, held back by the feedback)")
+    else:
+        ax[0].plot(t, d["target_penetration_mm"], lw=0.8, label="target (recorded hand, tool placed there)")
+    ax[0].plot(t, d["tool_penetration_mm"], lw=0.8, label="god-object (the tool)")
     ax[0].set_ylabel("penetration (mm)")
     ax[0].legend(loc="upper right")
-    ax[0].set_title("Default scene: articulated trocar instrument (sleeve, tube, jaws) on recorded suturing motion (JIGSAWS, Gao et al. 2014)")
+    ax[0].set_title("Default scene: laparoscopic instrument on recorded suturing motion (JIGSAWS)")
     sep = [((d["tool_x"][i] - d["target_x"][i]) ** 2 + (d["tool_y"][i] - d["target_y"][i]) ** 2
             + (d["tool_z"][i] - d["target_z"][i]) ** 2) ** 0.5 * 1e3 for i in range(len(t))]
     f = [(d["feedback_fx"][i] ** 2 + d["feedback_fy"][i] ** 2 + d["feedback_fz"][i] ** 2) ** 0.5 for i in range(len(t))]

@@ -50,6 +50,7 @@ class RunCommand {
   CLI::App* cli_;
   std::string scene_path_, trace_path_, coupling_, bus_ = "sim", record_path_, record_view_path_, view_;
   double duration_ = -1.0, phase_ = -1.0, view_rate_ = 60.0, speed_ = 0.0;
+  std::string wait_for_viewer_;  // --wait-for-viewer[=S] as given (a flag: CLI11 would round a number)
   bool json_ = false, realtime_ = false, replay_ = false, strict_ = false;
   platform::RealtimeSettings rt_;
   platform::SceneThreadSettings scene_thread_;

@@ -6,12 +6,14 @@
 #include <cstdint>
 #include <iostream>
 #include <limits>
+#include <string>
 
 #include "commands.hpp"
 #include "numen/sim/input/bus_spec.hpp"
 #include "numen/sim/input/cli_values.hpp"
 #include "numen/sim/input/input_error.hpp"
 #include "numen/sim/run/run.hpp"
+#include "numen/sim/run/run_verdict.hpp"
 #include "numen/sim/scene/scene.hpp"
 #include "numen/sim/view/view_scene.hpp"
 #include "numen/sim/view/view_server.hpp"
@@ -83,6 +85,10 @@ RunCommand::RunCommand(CLI::App& parent)
           return "HOST must be an IP address or localhost (names are not resolved), got '" + v + "'";
         return {};
       });
+  run->add_flag("--wait-for-viewer{60}", wait_for_viewer_,
+               "With --view: start the run when the first page connects, waiting at most this "
+               "many seconds (--wait-for-viewer=S; default 60); none connected: exit 1")
+      ->check(seconds_check(0.0, 86400.0, true));
   run->add_option("--view-rate", view_rate_,
                   "Frames per second of simulated time in the state stream (default 60)")
       ->check(number_check(0.0, 1e6, true));
@@ -105,6 +111,9 @@ int RunCommand::execute() const {
     throw sim::InputError("", 0, 0, "--view-rate",
                           "sets the state stream's rate; without --view or --record-view there "
                           "is no stream");
+  if (cli_->count("--wait-for-viewer") > 0 && view_.empty())
+    throw sim::InputError("", 0, 0, "--wait-for-viewer",
+                          "waits for a page of the live viewer; without --view there is none");
   const bool rt_asked = platform::any_step_requested(rt_) || scene_thread_.fifo_priority != 0 ||
                         !scene_thread_.cpu_affinity.empty();
   if (rt_.strict && !rt_asked)
@@ -150,6 +159,18 @@ int RunCommand::execute() const {
         vs, sim::view_scene_message(scene, sim::view_frame_layout(scene), view_rate_));
     viewer->start();
     std::cerr << "numen: viewer on " << viewer->url() << std::endl;
+    const double wait_s = wait_for_viewer_.empty() ? 0.0 : std::stod(wait_for_viewer_);
+    if (wait_s > 0.0) {
+      std::cerr << "numen: waiting up to " << wait_s << " s for a page at "
+                << viewer->url() << " (--wait-for-viewer)" << std::endl;
+      if (!viewer->wait_for_client(wait_s)) {
+        std::cerr << "numen: no viewer connected to " << viewer->url() << " within "
+                  << wait_s << " s (--wait-for-viewer): the run did not start"
+                  << std::endl;
+        return sim::code(sim::ExitStatus::kError);
+      }
+      std::cerr << "numen: a viewer connected: the run starts" << std::endl;
+    }
     options.view_sinks.push_back(viewer.get());
     // An offline run is paced at real time for the viewer; a paced run already is.
     if (options.view_speed <= 0.0 && !realtime_ && !sim::parse_bus_spec(bus_).real())

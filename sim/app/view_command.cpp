@@ -12,6 +12,7 @@
 #include "numen/sim/input/input_error.hpp"
 #include "numen/sim/view/view_recording.hpp"
 #include "numen/sim/input/shipped_files.hpp"
+#include "numen/sim/view/view_series.hpp"
 #include "numen/sim/view/view_server.hpp"
 #include "signals.hpp"
 
@@ -66,7 +67,8 @@ int ViewCommand::execute() const {
   settings.port = port_;
   settings.static_dir = page_dir_.empty() ? viewer_page_dir() : page_dir_;
   warn_if_exposed(host_, std::cerr);
-  sim::ViewServer server(settings, reader.scene_message(), source);
+  // The plots' series over the whole file (decimated, docs/viewer.md "Replay").
+  sim::ViewServer server(settings, reader.scene_message(), source, sim::view_replay_series(source));
   loading_done();
   server.start();
   const double seconds =

@@ -19,6 +19,7 @@
 #include <boost/beast/websocket.hpp>
 #include <chrono>
 #include <cmath>
+#include <condition_variable>
 #include <deque>
 #include <mutex>
 #include <nlohmann/json.hpp>
@@ -107,7 +108,8 @@ class WsSession;
 class HttpSession;
 
 struct ViewServer::Impl {
-  Impl(const ViewServerSettings& s, std::string scene_message, ViewFrameSource* src);
+  Impl(const ViewServerSettings& s, std::string scene_message, ViewFrameSource* src,
+       const std::string& series);
 
   void do_accept();
   void close_all();  // I/O thread
@@ -125,6 +127,7 @@ struct ViewServer::Impl {
   std::uint64_t next_id = 1;  // I/O thread
   std::vector<std::weak_ptr<HttpSession>> http_sessions;  // I/O thread
   mutable std::mutex clients_mutex;
+  std::condition_variable client_added;             // with clients_mutex: wait_for_client()
   std::vector<std::shared_ptr<WsSession>> clients;  // connected WebSocket clients
   std::atomic<std::uint64_t> connected{0}, total{0}, refused{0}, http_requests{0}, offered{0},
       sent{0}, dropped{0}, bad_input{0}, requests{0}, source_errors{0};
@@ -391,7 +394,8 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
   std::optional<http::request_parser<http::string_body>> parser_;
 };
 
-ViewServer::Impl::Impl(const ViewServerSettings& s, std::string scene_message, ViewFrameSource* src)
+ViewServer::Impl::Impl(const ViewServerSettings& s, std::string scene_message, ViewFrameSource* src,
+                       const std::string& series)
     : settings(s), scene(std::make_shared<const std::string>(std::move(scene_message))), source(src) {
   if (settings.client_queue_frames < 1)
     throw std::invalid_argument("ViewServerSettings::client_queue_frames must be >= 1");
@@ -413,6 +417,12 @@ ViewServer::Impl::Impl(const ViewServerSettings& s, std::string scene_message, V
       times.push_back(std::round(static_cast<double>(source->frame_time_ns(i)) * 1e-3) * 1e-6);
     j["frames"] = n;
     j["time_s"] = std::move(times);
+    if (!series.empty()) {
+      nlohmann::json sj = nlohmann::json::parse(series, nullptr, false);
+      if (!sj.is_object())
+        throw std::invalid_argument("ViewServer: the replay's series is not a JSON object");
+      j["series"] = std::move(sj);
+    }
   }
   session = std::make_shared<const std::string>(j.dump());
 }
@@ -435,6 +445,7 @@ void ViewServer::Impl::add_client(const std::shared_ptr<WsSession>& c) {
   clients.push_back(c);
   connected.store(clients.size(), std::memory_order_relaxed);
   total.fetch_add(1, std::memory_order_relaxed);
+  client_added.notify_all();
 }
 
 void ViewServer::Impl::remove_client(const WsSession* c) {
@@ -458,11 +469,11 @@ void ViewServer::Impl::close_all() {
 }
 
 ViewServer::ViewServer(const ViewServerSettings& settings, std::string scene_message)
-    : impl_(std::make_unique<Impl>(settings, std::move(scene_message), nullptr)) {}
+    : impl_(std::make_unique<Impl>(settings, std::move(scene_message), nullptr, std::string())) {}
 
 ViewServer::ViewServer(const ViewServerSettings& settings, std::string scene_message,
-                       ViewFrameSource& source)
-    : impl_(std::make_unique<Impl>(settings, std::move(scene_message), &source)) {}
+                       ViewFrameSource& source, const std::string& series)
+    : impl_(std::make_unique<Impl>(settings, std::move(scene_message), &source, series)) {}
 
 ViewServer::~ViewServer() { stop(); }
 
@@ -517,6 +528,13 @@ std::string ViewServer::url() const {
   const std::string& h = impl_->settings.host;
   const bool v6 = h.find(':') != std::string::npos;
   return "http://" + (v6 ? "[" + h + "]" : h) + ":" + std::to_string(port()) + "/";
+}
+
+bool ViewServer::wait_for_client(double timeout_s) {
+  Impl& s = *impl_;
+  std::unique_lock<std::mutex> lock(s.clients_mutex);
+  return s.client_added.wait_for(lock, std::chrono::duration<double>(timeout_s),
+                                 [&s] { return !s.clients.empty(); });
 }
 
 bool ViewServer::write_frame(std::span<const std::byte> frame) noexcept {

@@ -539,6 +539,17 @@ TEST(NumenCli, ViewAddressThatIsNotHostPortIsInputRejected) {
   EXPECT_EQ(r.out.find("open http://"), std::string::npos) << r.out;
 }
 
+// --wait-for-viewer: without a page the run does not start, says so and exits 1.
+TEST(NumenCli, WaitForViewerWithoutAPageEndsBeforeTheRun) {
+  NUMEN_REQUIRE_ARTICULATION();
+  TempDir dir;
+  const ChildResult r = run_child(
+      {kNumen, "run", "--duration", "0.05", "--view", "0", "--wait-for-viewer=0.3"}, dir.path(), 60);
+  EXPECT_EQ(r.status, 1) << r.out << r.err;
+  EXPECT_NE(r.err.find("within 0.3 s (--wait-for-viewer): the run did not start"), std::string::npos) << r.err;
+  EXPECT_EQ(r.out.find("steps"), std::string::npos) << "no summary: " << r.out;
+}
+
 // A view rate above the control rate publishes every period: said on stderr, and the
 // recording's scene message carries the rate it got (1/dt), not the one asked.
 TEST(NumenCli, ViewRateAboveTheControlRateIsSaidAndRecordedAsTheControlRate) {
@@ -616,6 +627,7 @@ TEST(NumenCli, OptionsARunWouldNotApplyAreInputRejected) {
       {{"--realtime", "--scene-cpu", "0"}, "--scene-cpu"},  // no [multirate]: no scene thread
       {{"--record", (dir / "no_dir" / "x.log").string()}, "--record"},
       {{"--view-rate", "30"}, "--view-rate"},  // no stream to set the rate of
+      {{"--wait-for-viewer"}, "--wait-for-viewer"},  // no viewer to wait for
       {{"--rt-strict"}, "--rt-strict"},        // no real-time step to make fatal
   };
   for (const auto& [extra, key] : cases) {

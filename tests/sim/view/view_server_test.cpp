@@ -294,6 +294,39 @@ TEST(ViewServer, ReplayAnswersFrameRequestsAndClosesOnBadOnes) {
   EXPECT_EQ(server.counters().requests, 3u);
 }
 
+TEST(ViewServer, ReplaySessionCarriesTheSeriesGiven) {
+  ThreeFrames source;
+  ViewServer server(free_port(), kScene, source, R"({"frames":3,"t":[0,1,2]})");
+  server.start();
+  Client c(server.port());
+  const nlohmann::json session = c.read_greeting();
+  EXPECT_EQ(session["series"]["t"].size(), 3u);
+  EXPECT_THROW(ViewServer(free_port(), kScene, source, "[1]"), std::invalid_argument);
+}
+
+TEST(ViewServer, WaitForClientReturnsWhenAPageConnectsAndTimesOutWithoutOne) {
+  ViewServer server(free_port(), kScene);
+  server.start();
+  const auto t0 = std::chrono::steady_clock::now();
+  EXPECT_FALSE(server.wait_for_client(0.2));
+  EXPECT_GE(std::chrono::steady_clock::now() - t0, std::chrono::milliseconds(190));
+  std::atomic<bool> connected{false};
+  std::thread page([&] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    Client c(server.port());
+    c.read_greeting();
+    connected = true;
+    eventually([&] { return server.counters().frames_offered > 0; });
+  });
+  EXPECT_TRUE(server.wait_for_client(20.0));
+  EXPECT_EQ(server.counters().clients_connected, 1u);
+  EXPECT_TRUE(server.wait_for_client(0.01)) << "a client is connected: no wait";
+  const auto f = frame_bytes(0);
+  server.write_frame(f);
+  page.join();
+  EXPECT_TRUE(connected);
+}
+
 /// GET `target` over plain HTTP/1.1.
 http::response<http::string_body> get(std::uint16_t port, const std::string& target) {
   asio::io_context ioc;

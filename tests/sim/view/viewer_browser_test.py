@@ -1,25 +1,34 @@
 #!/usr/bin/python3
 """Browser test of the viewer (docs/viewer.md "Tests"), run by CTest as viewer_browser.
 
-Records a short run of a scene (`numen run --duration D --record-view F.nmv`), serves it with
-`numen view F.nmv --port 0`, loads the page in headless Chromium (SwiftShader WebGL) showing
-one frame paused (?frame=I), takes a screenshot, and checks it with PIL:
-  - the page shows the frame and logged no JavaScript error (the page's own error list, read
-    from its #probe element with --dump-dom, and Chromium's console log);
+Records a run of a scene (`numen run --duration D --record-view F.nmv`), serves it with
+`numen view F.nmv --port 0`, and drives the page in headless Chromium (SwiftShader WebGL) over
+the DevTools protocol (cdp.py: --remote-debugging-pipe, real time). For each scene it shows the
+frame where the hand goes deepest (?frame=I, paused), takes a screenshot and checks it with PIL:
+  - the page shows the frame and logged no JavaScript error (its own error list and
+    Chromium's runtime exceptions and console errors);
   - the tool's colour appears where the page's camera projects the tool's spheres, and the
     ghost's colour where it projects the ghost's (the hand's target pose), and most of the
     tool-coloured pixels lie on the tool's projection.
+On the default scene also:
+  - the favicon is served, and the page opened as file:// says how to serve it;
+  - the camera (following the tool, as by default) keeps the tool's projected position inside
+    the canvas on 60 frames spread over the whole recording;
+  - reconnect: `numen view` is killed, the page says the connection is lost, `numen view` is
+    started again on the same port, and the page shows a frame again within RECONNECT_S;
+Live (`numen run --view 0 --wait-for-viewer`): the page gets every frame from period 0; paused,
+it holds its frame while frames keep arriving, steps back, scrubs and returns to live.
+On a run that latches a fault (the default scene on a bus losing 30 % of its frames):
+  - the fault banner shows, with its cause, and the replay timeline has its mark.
 Exit 0: passed; 1: failed; 77: skipped, only when Chromium is not installed.
 
-    tests/sim/view/viewer_browser_test.py --numen build/numen --out DIR \
+    tests/sim/view/viewer_browser_test.py --numen build/numen --out DIR \\
         [--scene FILE] [--figure PNG]
     tests/sim/view/viewer_browser_test.py --numen build/numen --out DIR --figures docs/figures
         (the three screenshots of docs/viewer.md: default, construction, deformable)
 """
 import argparse
 import colorsys
-import html
-import json
 import os
 import re
 import shutil
@@ -28,11 +37,15 @@ import subprocess
 import sys
 import time
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import cdp  # noqa: E402
+
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
 FIGURE_SCENES = [("default", None), ("construction", "sim/scenes/construction.toml"),
                  ("deformable", "sim/scenes/deformable.toml")]
 WIDTH, HEIGHT = 1200, 760  # the window
 VIEW_W, VIEW_H = 860, 760  # the 3D view in it (the rest: the side panel)
+RECONNECT_S = 5.0          # the page resumes within this after the server is back (backoff ≤ 2 s)
 
 
 def chromium_path():
@@ -41,17 +54,6 @@ def chromium_path():
         if p:
             return p
     return None
-
-
-def chromium(exe, profile, url, extra):
-    """Runs headless Chromium on `url`; returns (stdout, stderr)."""
-    cmd = [exe, "--headless", "--no-sandbox", "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
-           "--no-first-run", "--disable-background-networking", "--disable-component-update",
-           "--disable-sync", "--disable-quic", "--hide-scrollbars", "--force-device-scale-factor=1",
-           "--user-data-dir=" + profile, "--window-size=%d,%d" % (WIDTH, HEIGHT),
-           "--virtual-time-budget=20000", "--enable-logging=stderr", "--v=0"] + extra + [url]
-    r = subprocess.run(cmd, capture_output=True, text=True, timeout=180)
-    return r.stdout, r.stderr
 
 
 def is_tool(p):
@@ -78,7 +80,8 @@ def count_in_discs(img, discs, pred, grow=1.0, extra=0.0):
 
 
 def count_all(img, pred):
-    return sum(1 for p in img.getdata() if pred(p))
+    """Pixels of the 3D view (not the side panel: its legend and plots use the same colours)."""
+    return sum(1 for p in img.crop((0, 0, VIEW_W, VIEW_H)).getdata() if pred(p))
 
 
 def deepest_hand_frame(path):
@@ -100,75 +103,156 @@ def deepest_hand_frame(path):
     return best_i
 
 
-def check_scene(numen, out, name, scene, duration, figure):
-    """Records, serves, shoots and checks one scene; returns a list of failures."""
-    from PIL import Image  # python3-pil
-    failures = []
-    os.makedirs(out, exist_ok=True)
-    rec = os.path.join(out, name + ".nmv")
-    run = [numen, "run"] + ([os.path.join(ROOT, scene)] if scene else []) + [
-        "--duration", str(duration), "--record-view", rec]
-    r = subprocess.run(run, capture_output=True, text=True, timeout=300)
-    if r.returncode != 0 or not os.path.exists(rec):
-        return ["%s: exit %d\n%s" % (" ".join(run), r.returncode, r.stderr)]
-    view = subprocess.Popen([numen, "view", rec, "--port", "0"], stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)
-    try:
-        line = view.stdout.readline()  # "numen view: F: N frames, T s; open URL (Ctrl-C ends)"
+class Viewer:
+    """`numen view REC --port P` running; .url, .frames; stop() ends it (SIGTERM)."""
+
+    def __init__(self, numen, rec, port=0):
+        self.proc = subprocess.Popen([numen, "view", rec, "--port", str(port)], stdout=subprocess.PIPE,
+                                     stderr=subprocess.PIPE, text=True)
+        line = self.proc.stdout.readline()  # "numen view: F: N frames, T s; open URL (Ctrl-C ends)"
         m = re.search(r": (\d+) frames, .* open (http://\S+)", line)
         if not m:
-            return ["numen view printed %r, stderr %r" % (line, view.stderr.read() if view.poll() is not None else "")]
-        frames, url = int(m.group(1)), m.group(2)
-        if frames == 0:
-            return ["%s holds no frame" % rec]
-        shown = deepest_hand_frame(rec)
-        url += "?frame=%d&w=%d&h=%d" % (shown, VIEW_W, VIEW_H)
-        profile = os.path.join(out, "chromium-profile-" + name)
-        shot = os.path.join(out, "viewer_%s.png" % name)
-        if os.path.exists(shot):
-            os.remove(shot)
-        # Two runs (a screenshot, then the DOM with the page's probe), each on a fresh profile:
-        # the same frame, paused, in a view of the same size, so the same projection.
-        # Headless Chromium's virtual time can run out before the WebSocket has delivered the
-        # frame when the machine is loaded (seen at load average 7): then the DOM has no probe
-        # yet. Such an attempt says nothing about the page; it is repeated (5 attempts), and
-        # said so. Any other outcome is judged below.
-        for attempt in range(1, 6):
-            shutil.rmtree(profile, ignore_errors=True)
-            _, log1 = chromium(chromium_exe, profile, url, ["--screenshot=" + shot])
-            shutil.rmtree(profile, ignore_errors=True)
-            dom, log2 = chromium(chromium_exe, profile, url, ["--dump-dom"])
-            shutil.rmtree(profile, ignore_errors=True)
-            if re.search(r'<pre id="probe"[^>]*>\s*[^<\s]', dom):  # a probe with content
-                if attempt > 1:
-                    print("%s: attempt %d showed the frame" % (name, attempt))
-                break
-            print("%s: attempt %d: the page had shown no frame when Chromium's virtual time ran out"
-                  % (name, attempt))
-    finally:
-        view.terminate()
+            err = self.proc.stderr.read() if self.proc.poll() is not None else ""
+            self.stop()
+            raise RuntimeError("numen view printed %r, stderr %r" % (line, err))
+        self.frames, self.url = int(m.group(1)), m.group(2)
+        self.port = int(re.search(r":(\d+)/$", self.url).group(1))
+
+    def stop(self):
+        """Ends the server; returns a failure text or None."""
+        self.proc.terminate()
         try:
-            view.wait(timeout=20)
+            self.proc.wait(timeout=20)
         except subprocess.TimeoutExpired:
-            view.kill()
-            failures.append("numen view did not end on SIGTERM")
-    if view.returncode not in (0, None):
-        failures.append("numen view exited %d: %s" % (view.returncode, view.stderr.read()))
-    for log in (log1, log2):
-        for l in log.splitlines():
-            if "CONSOLE" in l and ("Uncaught" in l or "Error" in l):
-                failures.append("JavaScript: " + l.strip())
-    m = re.search(r'<pre id="probe"[^>]*>(.*?)</pre>', dom, re.S)
-    if not m or not m.group(1).strip():
-        return failures + ["the page never showed a frame (no probe in the DOM)"]
-    probe = json.loads(html.unescape(m.group(1)))
-    if probe.get("errors"):
-        failures.append("the page logged errors: %s" % probe["errors"])
-    if probe.get("framesShown", 0) < 1:
-        failures.append("no frame shown")
-    if not os.path.exists(shot):
-        return failures + ["no screenshot"]
-    img = Image.open(shot).convert("RGB")
+            self.proc.kill()
+            self.proc.wait()
+            return "numen view did not end on SIGTERM"
+        if self.proc.returncode not in (0, -15):
+            return "numen view exited %d: %s" % (self.proc.returncode, self.proc.stderr.read())
+        return None
+
+
+def record(numen, out, name, scene, duration, extra=()):
+    """Records `duration` s of `scene` (None: the default) to OUT/NAME.nmv; returns its path."""
+    rec = os.path.join(out, name + ".nmv")
+    run = [numen, "run"] + ([scene] if scene else []) + ["--duration", str(duration), "--record-view", rec, *extra]
+    r = subprocess.run(run, capture_output=True, text=True, timeout=300)
+    if not os.path.exists(rec):
+        raise RuntimeError("%s: exit %d, no recording\n%s" % (" ".join(run), r.returncode, r.stderr))
+    return rec, r
+
+
+def open_page(browser, url, query, timeout=60):
+    """Opens the page, waits until it shows a frame (?frame=I: that frame); returns the Page."""
+    page = browser.open(url + query, (WIDTH, HEIGHT))
+    waited = page.wait("window.numenView && numenView.probe().framesShown > 0 && "
+                       "document.title.endsWith('ready')", timeout)
+    if waited is None:
+        raise RuntimeError("the page showed no frame within %d s (%s)" % (timeout, url + query))
+    time.sleep(0.3)  # a few animation frames: the shown frame is rendered
+    return page
+
+
+def page_failures(page, name):
+    failures = ["%s: JavaScript: %s" % (name, e) for e in page.console_errors()]
+    errs = page.eval("numenView.errors")
+    if errs:
+        failures.append("%s: the page logged errors: %s" % (name, errs))
+    return failures
+
+
+def expected_plot_points(frames, max_points=2000):
+    """The replay plot's points for a recording of `frames` frames (docs/viewer.md "Replay"):
+    frames 0, s, 2s, ... with s = max(1, ceil(frames / max_points)), and the last frame."""
+    s = max(1, -(-frames // max_points))
+    return len(range(0, frames, s)) + (1 if frames and (frames - 1) % s else 0)
+
+
+def near_colour(img, x, y, rad, pred):
+    """Pixels within `rad` of (x, y) satisfying `pred`."""
+    px, (w, h) = img.load(), img.size
+    return sum(1 for yy in range(max(0, int(y - rad)), min(h, int(y + rad) + 1))
+               for xx in range(max(0, int(x - rad)), min(w, int(x + rad) + 1)) if pred(px[xx, yy]))
+
+
+def is_arrow(p):
+    """A contact's depth colour (contacts.js: hue 60° to 280°, saturated) or its blend."""
+    h, s, v = colorsys.rgb_to_hsv(p[0] / 255, p[1] / 255, p[2] / 255)
+    return s > 0.45 and v > 0.3 and 55 / 360 <= h <= 285 / 360
+
+
+def check_shapes(img, probe, name):
+    """Tool parts drawn as shapes, force arrows where the contacts are, the ghost visible."""
+    failures = []
+    if name == "default":
+        for part in ("sleeve", "tube", "jaw_1", "jaw_2"):
+            if part not in probe.get("shapes", []):
+                failures.append("default: %s is not drawn as a shape (shapes %s)" % (part, probe.get("shapes")))
+    arrows = [a for a in probe.get("arrows", []) if a["from"]["inside"] and a["to"]["inside"]
+              and abs(a["to"]["x"] - a["from"]["x"]) + abs(a["to"]["y"] - a["from"]["y"]) > 12]
+    if name in ("default", "deformable", "construction"):
+        if not arrows:
+            failures.append("%s: no contact force arrow long enough to see in the frame (%s)" % (name, probe.get("arrows")))
+        else:
+            a = arrows[0]
+            mx, my = (a["from"]["x"] + a["to"]["x"]) / 2, (a["from"]["y"] + a["to"]["y"]) / 2
+            n = near_colour(img, mx, my, 3, is_arrow)
+            print("%s: contact force arrow of %.2f N, %d arrow-coloured pixels at its middle" % (name, a["n"], n))
+            if n < 1:
+                failures.append("%s: the force arrow of a contact is not drawn where it acts" % name)
+    if name == "deformable":  # the hidden core's ghost: the hand's target
+        g = probe.get("ghostPx")
+        n = near_colour(img, g["x"], g["y"], 10, is_ghost) if g and g["inside"] else 0
+        print("deformable: %d ghost-coloured pixels around the hidden core's ghost" % n)
+        if n < 10:
+            failures.append("deformable: the hidden core's ghost is not visible (%d pixels, %s)" % (n, g))
+    return failures
+
+
+def check_page_files(browser, numen, viewer):
+    """The favicon the page links is served (no 404 on a page load), and the page opened as a
+    file says how to serve it instead of "connecting…"."""
+    import urllib.request
+    failures = []
+    try:
+        with urllib.request.urlopen(viewer.url + "favicon.svg", timeout=10) as r:
+            kind = r.headers.get("Content-Type", "")
+        if kind != "image/svg+xml":
+            failures.append("favicon.svg served as %r" % kind)
+    except Exception as e:  # noqa: BLE001 (any failure is the finding)
+        failures.append("favicon.svg: %s" % e)
+    index = os.path.join(os.path.dirname(os.path.abspath(numen)), "viewer", "index.html")
+    if os.path.exists(index):
+        page = browser.open("file://" + index, (WIDTH, HEIGHT))
+        page.wait("document.readyState === 'complete'", 10)
+        text = page.eval("document.getElementById('status').textContent")
+        print("file://: the page says %r" % text.splitlines()[0])
+        if "numen run --view" not in text or "numen view" not in text:
+            failures.append("file://: the page does not say how to serve it (%r)" % text)
+        page.send("Page.close")
+    else:
+        print("file://: no %s beside numen: not checked" % index)
+    return failures
+
+
+def check_pick(page, probe, name):
+    """A click on the tool (the middle of its projected spheres) shows its name and pose."""
+    discs = [d for d in probe.get("tool", []) if d["inside"]]
+    if not discs:
+        return []
+    d = discs[len(discs) // 2]
+    for kind in ("mousePressed", "mouseReleased"):
+        page.send("Input.dispatchMouseEvent", {"type": kind, "x": d["x"], "y": d["y"], "button": "left", "clickCount": 1})
+    text = page.eval("numenView.probe().pick.text")
+    print("%s: a click on the tool shows %r" % (name, text.splitlines()[:2]))
+    if not text.startswith(probe["toolName"]) or "position" not in text or "contacts" not in text:
+        return ["%s: a click on the tool did not show it (%r)" % (name, text)]
+    return []
+
+
+def check_pixels(img, probe, name):
+    """The tool's and the ghost's colours where the page projects them; returns failures."""
+    failures = []
     tool = [d for d in probe.get("tool", []) if d["inside"]]
     ghost = [d for d in probe.get("ghost", []) if d["inside"]]
     if probe.get("tool") == [] and name != "default":
@@ -193,15 +277,204 @@ def check_scene(numen, out, name, scene, duration, figure):
             print("%s: %d ghost-coloured pixels on the ghost's projection" % (name, g))
             if g < 10:
                 failures.append("%s: the ghost's colour is not where its projection says (%d pixels)" % (name, g))
-    if figure:
-        os.makedirs(os.path.dirname(os.path.abspath(figure)), exist_ok=True)
-        shutil.copyfile(shot, figure)
-        print("wrote " + figure)
+    return failures
+
+
+def check_reconnect(numen, browser, viewer, rec):
+    """Kills the server under a page and starts it again; returns (failures, new viewer)."""
+    page = open_page(browser, viewer.url, "?w=%d&h=%d" % (VIEW_W, VIEW_H))
+    failures = []
+    viewer.stop()
+    lost = page.wait("numenView.probe().link.state !== 'open'", 10)
+    said = page.eval("document.getElementById('connection').textContent")
+    if lost is None or "reconnecting" not in said:
+        failures.append("reconnect: the page did not say the connection was lost (%r)" % said)
+    time.sleep(3)  # a few failed attempts: the backoff grows
+    shown = page.eval("numenView.probe().framesShown")
+    again = Viewer(numen, rec, viewer.port)
+    resumed = page.wait("numenView.probe().link.state === 'open' && numenView.probe().framesShown > %d" % shown,
+                        RECONNECT_S)
+    print("reconnect: the page said %r; resumed %s after the server's restart"
+          % (said, "in %.2f s" % resumed if resumed is not None else "not within %g s" % RECONNECT_S))
+    if resumed is None:
+        failures.append("reconnect: the page did not resume within %g s of the server's return" % RECONNECT_S)
+    failures += page_failures(page, "reconnect")
+    page.send("Page.close")
+    return failures, again
+
+
+def check_camera(browser, viewer, samples=60):
+    """The camera keeps the tool in view: the page opened at frame 0 (follow the tool on, as by
+    default), then `samples` frames spread over the whole recording shown in order; the tool's
+    projected position (its body's origin) must be inside the canvas on every one."""
+    page = open_page(browser, viewer.url, "?frame=0&w=%d&h=%d" % (VIEW_W, VIEW_H))
+    n = viewer.frames
+    frames = sorted(set([round(k * (n - 1) / (samples - 1)) for k in range(samples)]))
+    outside = []
+    for i in frames:
+        page.eval("numenView.seek(%d)" % i)
+        if page.wait("numenView.probe().index === %d && numenView.probe().framesShown > 0" % i, 10) is None:
+            outside.append((i, "never shown"))
+            continue
+        t = page.eval("numenView.probe().toolPx")
+        if not t or not t["inside"]:
+            outside.append((i, t))
+    print("camera: the tool's projection inside the canvas on %d of %d sampled frames"
+          % (len(frames) - len(outside), len(frames)))
+    failures = ["camera: the tool leaves the view at frames %s" % outside[:5]] if outside else []
+    failures += page_failures(page, "camera")
+    page.send("Page.close")
+    return failures
+
+
+def check_live(numen, browser, duration=8.0):
+    """`numen run --view 0 --wait-for-viewer`: the run starts when the page connects, so the
+    page receives every frame from period 0; paused, the view holds its frame while frames keep
+    arriving, steps back and scrubs through its buffer, and goes back to live."""
+    run = subprocess.Popen([numen, "run", "--view", "0", "--wait-for-viewer=60", "--duration", str(duration)],
+                           stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    failures = []
+    try:
+        url = None
+        for _ in range(20):
+            line = run.stderr.readline()
+            m = re.search(r"viewer on (http://\S+)", line)
+            if m:
+                url = m.group(1)
+                break
+        if not url:
+            return ["live: numen run --view printed no URL"]
+        time.sleep(1.0)  # the run must still be waiting
+        page = open_page(browser, url, "?w=%d&h=%d" % (VIEW_W, VIEW_H))
+        p = page.eval("numenView.probe()")
+        if p["live"]["firstPeriod"] != 0:
+            failures.append("live: the first frame the page got is of period %s, not 0" % p["live"]["firstPeriod"])
+        # Pause the view, and read its state at once (the page may be rendering behind).
+        p0 = page.eval("(() => { document.getElementById('play').click(); return numenView.probe(); })()")
+        time.sleep(1.0)
+        p1 = page.eval("numenView.probe()")
+        if not p0["live"]["paused"] or p1["period"] != p0["period"]:
+            failures.append("live: the paused view did not hold its frame (%s, then %s)" % (p0["period"], p1["period"]))
+        if p1["live"]["buffered"] <= p0["live"]["buffered"]:
+            failures.append("live: no frame arrived while the view was paused")
+        page.eval("document.getElementById('back').click()")
+        back = page.eval("numenView.probe().period")
+        page.eval("(() => { const s = document.getElementById('slider'); s.value = '0'; s.dispatchEvent(new Event('input')); })()")
+        first = page.eval("numenView.probe().period")
+        page.eval("document.getElementById('play').click()")  # back to live
+        time.sleep(0.5)
+        again = page.eval("numenView.probe()")
+        print("live: paused at period %d while %d -> %d frames arrived; back a step: %d; scrubbed to %d; "
+              "live again at %d" % (p0["period"], p0["live"]["buffered"], p1["live"]["buffered"], back, first, again["period"]))
+        if not back < p0["period"] or first != 0 or again["live"]["paused"] or again["period"] <= p0["period"]:
+            failures.append("live: step / scrub / back to live did not show the expected frames")
+        run.wait(timeout=60)
+        err = run.stderr.read()
+        m = re.search(r"viewer: 1 clients, (\d+) frames sent, (\d+) dropped", err)
+        if m:  # the page may still be reading what was sent
+            page.wait("numenView.probe().framesReceived >= %d" % int(m.group(1)), 30)
+        received = page.eval("numenView.probe().framesReceived")
+        print("live: the page received %d frames; numen: %s" % (received, m.group(0) if m else err.strip()[-200:]))
+        if run.returncode != 0 or not m or int(m.group(1)) != received or int(m.group(2)) != 0:
+            failures.append("live: exit %s, the page received %d frames (numen: %s)" % (run.returncode, received, err[-300:]))
+        failures += page_failures(page, "live")
+        page.send("Page.close")
+    finally:
+        if run.poll() is None:
+            run.kill()
+            run.wait()
+    return failures
+
+
+def check_fault(numen, browser, out):
+    """A run that latches (the default scene on a bus losing 30 % of its frames): the replay's
+    last frame shows the fault banner with its cause, and the timeline marks it."""
+    scenes = os.path.join(out, "latch", "scenes")
+    os.makedirs(scenes, exist_ok=True)
+    for link, target in ((os.path.join(out, "latch", "data"), os.path.join(ROOT, "sim", "data")),
+                         (os.path.join(scenes, "devices"), os.path.join(ROOT, "sim", "scenes", "devices"))):
+        if not os.path.islink(link):
+            os.symlink(target, link)
+    with open(os.path.join(ROOT, "sim", "scenes", "default.toml")) as f:
+        text = f.read()
+    text, n = re.subn(r"(?m)^drop_probability = 0\.0", "drop_probability = 0.3", text)
+    if n != 1:
+        return ["fault: default.toml has no [bus] drop_probability = 0.0 line to change"]
+    scene = os.path.join(scenes, "latch.toml")
+    with open(scene, "w") as f:
+        f.write(text)
+    rec, r = record(numen, out, "latch", scene, 2.0)
+    if r.returncode != 3:
+        return ["fault: the lossy-bus run exited %d, not 3 (safety stop)\n%s" % (r.returncode, r.stderr)]
+    viewer = Viewer(numen, rec)
+    failures = []
+    try:
+        page = open_page(browser, viewer.url, "?frame=%d&w=%d&h=%d" % (viewer.frames - 1, VIEW_W, VIEW_H))
+        p = page.eval("numenView.probe()")
+        page.screenshot(os.path.join(out, "viewer_latch.png"))
+        print("fault: banner %r, %d timeline mark(s)" % (p["banner"], p["marks"]))
+        if not p["banner"].startswith("FAULT"):
+            failures.append("fault: no fault banner on the last frame of a latched run (%r)" % p["banner"])
+        if "since t =" not in p["banner"]:
+            failures.append("fault: the banner does not say since when (%r)" % p["banner"])
+        if p["marks"] < 1:
+            failures.append("fault: the replay timeline has no mark")
+        failures += page_failures(page, "fault")
+    finally:
+        f = viewer.stop()
+        if f:
+            failures.append(f)
+    return failures
+
+
+def check_scene(numen, browser, out, name, scene, duration, figure):
+    """Records, serves, shoots and checks one scene; returns a list of failures."""
+    from PIL import Image  # python3-pil
+    failures = []
+    os.makedirs(out, exist_ok=True)
+    try:
+        rec, r = record(numen, out, name, os.path.join(ROOT, scene) if scene else None, duration)
+    except RuntimeError as e:
+        return [str(e)]
+    if r.returncode != 0:
+        return ["%s: exit %d\n%s" % (name, r.returncode, r.stderr)]
+    viewer = Viewer(numen, rec)
+    try:
+        if viewer.frames == 0:
+            return ["%s holds no frame" % rec]
+        shown = deepest_hand_frame(rec)
+        page = open_page(browser, viewer.url, "?frame=%d&w=%d&h=%d" % (shown, VIEW_W, VIEW_H))
+        shot = os.path.join(out, "viewer_%s.png" % name)
+        page.screenshot(shot)
+        probe = page.eval("numenView.probe()")
+        failures += check_pick(page, probe, name)
+        failures += page_failures(page, name)
+        page.send("Page.close")
+        img = Image.open(shot).convert("RGB")
+        failures += check_pixels(img, probe, name)
+        failures += check_shapes(img, probe, name)
+        want = expected_plot_points(viewer.frames)
+        print("%s: replay plot of %d points, the recording %d frames (%d expected)"
+              % (name, probe["plotPoints"], viewer.frames, want))
+        if probe["plotPoints"] != want:
+            failures.append("%s: the replay plot has %d points, not %d" % (name, probe["plotPoints"], want))
+        if figure:
+            os.makedirs(os.path.dirname(os.path.abspath(figure)), exist_ok=True)
+            shutil.copyfile(shot, figure)
+            print("wrote " + figure)
+        if name == "default":
+            failures += check_page_files(browser, numen, viewer)
+            failures += check_camera(browser, viewer)
+            f, viewer = check_reconnect(numen, browser, viewer, rec)
+            failures += f
+    finally:
+        f = viewer.stop()
+        if f:
+            failures.append(f)
     return failures
 
 
 def main():
-    global chromium_exe
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--numen", required=True, help="the numen program")
     ap.add_argument("--out", required=True, help="folder for the recording, screenshot, profile")
@@ -214,21 +487,28 @@ def main():
     if a.skip:
         print("SKIPPED: " + a.skip)
         return 77
-    chromium_exe = chromium_path()
-    if not chromium_exe:
+    exe = chromium_path()
+    if not exe:
         print("SKIPPED: chromium is not installed (Debian: apt-get install chromium; "
               "CI installs it: .ci/run, viewer step)")
         return 77
+    os.makedirs(a.out, exist_ok=True)
     jobs = ([(n, s, os.path.join(a.figures, "viewer_%s.png" % n)) for n, s in FIGURE_SCENES]
             if a.figures else [("default" if not a.scene else os.path.splitext(os.path.basename(a.scene))[0], a.scene, a.figure)])
     failures = []
-    for name, scene, figure in jobs:
-        failures += check_scene(a.numen, a.out, name, scene, a.duration, figure)
+    profile = os.path.join(a.out, "chromium-profile")
+    shutil.rmtree(profile, ignore_errors=True)
+    with cdp.Browser(exe, profile, (WIDTH, HEIGHT)) as browser:
+        for name, scene, figure in jobs:
+            failures += check_scene(a.numen, browser, a.out, name, scene, a.duration, figure)
+        if not a.scene and not a.figures:
+            failures += check_live(a.numen, browser)
+            failures += check_fault(a.numen, browser, a.out)
+    shutil.rmtree(profile, ignore_errors=True)
     for f in failures:
         print("FAIL: " + f)
     return 1 if failures else 0
 
 
-chromium_exe = None
 if __name__ == "__main__":
     sys.exit(main())

@@ -145,9 +145,11 @@ class ViewServer final : public platform::StateFrameSink {
   /// to write_frame(). Throws std::invalid_argument naming a setting out of range.
   ViewServer(const ViewServerSettings& settings, std::string scene_message);
   /// Replay server: sends `scene_message`, the index of `source` (not owned; must outlive the
-  /// server), then the frames each client requests.
+  /// server) and `series` as the session message's "series" (a JSON object's text,
+  /// view_replay_series() in view_series.hpp; empty: none), then the frames each client
+  /// requests. Throws std::invalid_argument when `series` is not a JSON object.
   ViewServer(const ViewServerSettings& settings, std::string scene_message,
-             ViewFrameSource& source);
+             ViewFrameSource& source, const std::string& series = {});
   /// stop().
   ~ViewServer() override;
   ViewServer(const ViewServer&) = delete;
@@ -162,6 +164,11 @@ class ViewServer final : public platform::StateFrameSink {
   std::uint16_t port() const noexcept;
   /// http://HOST:PORT/ (after start()).
   std::string url() const;
+  /// Blocks the calling (setup) thread until a WebSocket client is connected — one already is,
+  /// or one connects — or `timeout_s` seconds (> 0) have passed. True when a client is
+  /// connected (`numen run --view --wait-for-viewer`: the run starts when the first page
+  /// connects, so that page sees every frame).
+  bool wait_for_client(double timeout_s);
 
   /// Live: copies `frame` once and queues it for every connected client (see the file comment).
   /// Never waits for a client. False only when the copy could not be allocated.
