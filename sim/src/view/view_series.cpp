@@ -19,7 +19,7 @@ namespace {
 
 /// What the series keeps of one frame.
 struct FramePoint {
-  double t = 0.0, tool_mm = 0.0, hand_mm = 0.0, force_n = 0.0, step_us = 0.0;
+  double t = 0.0, tool_mm = 0.0, hand_mm = 0.0, intent_mm = 0.0, force_n = 0.0, step_us = 0.0;
   std::uint32_t contacts = 0, step_status = 0;
   int lifecycle = 0;
 };
@@ -46,6 +46,9 @@ std::string view_replay_series(ViewFrameSource& source, std::size_t max_points) 
     p.t = static_cast<double>(h.time_ns) * 1e-9;
     p.tool_mm = 1e3 * v.tool_penetration();
     p.hand_mm = 1e3 * v.target_penetration();
+    float loop[3];
+    v.device_loop(loop);
+    p.intent_mm = 1e3 * loop[0];
     p.force_n = std::hypot(static_cast<double>(fb[0]), static_cast<double>(fb[1]),
                            static_cast<double>(fb[2]));
     p.step_us = 1e-3 * h.step_ns;
@@ -65,6 +68,7 @@ std::string view_replay_series(ViewFrameSource& source, std::size_t max_points) 
   if (n > 0 && (n - 1) % stride != 0) sampled.push_back(n - 1);
   nlohmann::json frame = nlohmann::json::array(), t = nlohmann::json::array(),
                  tool = nlohmann::json::array(), hand = nlohmann::json::array(),
+                 intent = nlohmann::json::array(),
                  force = nlohmann::json::array(), step = nlohmann::json::array(),
                  contacts = nlohmann::json::array(), lifecycle = nlohmann::json::array(),
                  status = nlohmann::json::array();
@@ -74,6 +78,7 @@ std::string view_replay_series(ViewFrameSource& source, std::size_t max_points) 
       const FramePoint& p = all[k];
       m.tool_mm = std::max(m.tool_mm, p.tool_mm);
       m.hand_mm = std::max(m.hand_mm, p.hand_mm);
+      m.intent_mm = std::max(m.intent_mm, p.intent_mm);
       m.force_n = std::max(m.force_n, p.force_n);
       m.step_us = std::max(m.step_us, p.step_us);
       m.contacts = std::max(m.contacts, p.contacts);
@@ -84,6 +89,7 @@ std::string view_replay_series(ViewFrameSource& source, std::size_t max_points) 
     t.push_back(round6(m.t));
     tool.push_back(round6(m.tool_mm));
     hand.push_back(round6(m.hand_mm));
+    intent.push_back(round6(m.intent_mm));
     force.push_back(round6(m.force_n));
     step.push_back(std::round(m.step_us * 1e3) * 1e-3);
     contacts.push_back(m.contacts);
@@ -92,6 +98,7 @@ std::string view_replay_series(ViewFrameSource& source, std::size_t max_points) 
   }
   const nlohmann::json j{{"frames", n},         {"stride", stride},      {"frame", frame},
                          {"t", t},              {"tool_mm", tool},       {"hand_mm", hand},
+                         {"intent_mm", intent},
                          {"force_n", force},    {"step_us", step},       {"contacts", contacts},
                          {"lifecycle", lifecycle}, {"step_status", status}, {"events", events},
                          {"event_count", event_count}};

@@ -152,9 +152,11 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
     ws_.async_accept(req, [self = shared_from_this()](beast::error_code ec) {
       if (ec) return self->close(false);
       self->id_ = self->s_.next_id++;
-      self->s_.add_client(self);
+      // The greeting is queued before the client joins the list, so a frame published as soon
+      // as it is listed (wait_for_client() returns then) comes after the scene and the session.
       self->enqueue({self->s_.scene, false});
       self->enqueue({self->s_.session, false});
+      self->s_.add_client(self);
       self->do_read();
     });
   }

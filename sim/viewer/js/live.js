@@ -10,7 +10,7 @@ export const LIVE_BUFFER_BYTES = 64e6;
 export const live = { frames: [], paused: false, shown: null };
 let show = null;
 const slider = document.getElementById('slider'), play = document.getElementById('play');
-const cols = { t: [], tool: [], hand: [], force: [], step: [] };
+const cols = { t: [], tool: [], hand: [], intent: [], force: [], step: [] };
 
 function setPaused(p) {
   live.paused = p;
@@ -69,6 +69,7 @@ export function liveFrame(fr) {
   if (n && fr.h.period <= live.frames[n - 1].h.period) S.gaps++;
   live.frames.push(fr);
   cols.t.push(fr.time_s); cols.tool.push(1e3 * fr.penetration[0]); cols.hand.push(1e3 * fr.penetration[1]);
+  cols.intent.push(1e3 * fr.device_loop[0]);
   cols.force.push(fmag); cols.step.push(fr.h.step_ns * 1e-3);
   if (live.frames.length > Math.min(LIVE_BUFFER_FRAMES, Math.max(60, Math.floor(LIVE_BUFFER_BYTES / fr.h.frame_bytes)))) {
     live.frames.shift();

@@ -4,7 +4,7 @@
 // says), with a cursor line at the frame shown; a click on a plot shows that frame. Live: the
 // page's buffer of received frames (live.js), the same way.
 
-const plotData = { t: [], tool: [], hand: [], force: [], step: [] };
+const plotData = { t: [], tool: [], hand: [], intent: [], force: [], step: [] };
 let cursorT = null, onPick = null;
 
 /// Tick labels without thousands separators (uPlot's default writes 2,000: clipped to ",000").
@@ -51,7 +51,10 @@ function makePlot(el, title, series) {
   return u;
 }
 const plots = {
-  pen: makePlot('plot-pen', 'penetration (mm)', [{ label: 'tool', stroke: '#ff8800' }, { label: 'hand', stroke: '#00a0d0' }]),
+  // hand: the target (the encoders' pose: the handle in a closed loop); intent: where the hand
+  // pulls it (the recorded pose; the target's in replay).
+  pen: makePlot('plot-pen', 'penetration (mm)', [{ label: 'tool', stroke: '#ff8800' }, { label: 'hand', stroke: '#00a0d0' },
+                                                 { label: 'intent', stroke: '#7a7a7a', dash: [4, 3] }]),
   force: makePlot('plot-force', 'feedback force |F| (N)', [{ label: '|F|', stroke: '#c0a000' }]),
   step: makePlot('plot-step', 'step time (µs)', [{ label: 'step', stroke: '#6060c0' }]),
 };
@@ -61,6 +64,7 @@ const plots = {
 export function plotSeries(series, pick) {
   if (!series) return;
   plotData.t = series.t; plotData.tool = series.tool_mm; plotData.hand = series.hand_mm;
+  plotData.intent = series.intent_mm;
   plotData.force = series.force_n; plotData.step = series.step_us;
   onPick = (i) => pick(series.frame[i]);
   redraw();
@@ -85,7 +89,7 @@ export function plotPoints() { return plots.pen.data[0].length; }
 
 let dirty = false, dirtyCursor = false;
 function redraw() {
-  plots.pen.setData([plotData.t, plotData.tool, plotData.hand]);
+  plots.pen.setData([plotData.t, plotData.tool, plotData.hand, plotData.intent]);
   plots.force.setData([plotData.t, plotData.force]);
   plots.step.setData([plotData.t, plotData.step]);
 }

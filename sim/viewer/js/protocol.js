@@ -13,7 +13,8 @@ const READ = {
 const USED_FIELDS = ['magic', 'version', 'header_bytes', 'frame_bytes', 'num_bodies', 'num_nodes',
                      'num_contacts', 'num_axes', 'attached_body', 'period', 'time_ns', 'step_status',
                      'flags', 'step_ns', 'lifecycle', 'startup'];
-const USED_ARRAYS = ['body_pose', 'target_pose', 'node_position', 'contact', 'feedback', 'penetration'];
+const USED_ARRAYS = ['body_pose', 'target_pose', 'node_position', 'contact', 'feedback', 'penetration',
+                     'device_loop'];
 let frameLayout = null;  // the session message's frame_layout, checked
 /// Floats per item, by array name (from the layout).
 export const FLOATS = {};

@@ -63,7 +63,7 @@ TEST_F(ViewSeries, UndecimatedHasOnePointPerFrame) {
   ASSERT_EQ(reader_->size(), 30u);
   EXPECT_EQ(j["frames"], 30);
   EXPECT_EQ(j["stride"], 1);
-  for (const char* k : {"frame", "t", "tool_mm", "hand_mm", "force_n", "step_us", "contacts",
+  for (const char* k : {"frame", "t", "tool_mm", "hand_mm", "intent_mm", "force_n", "step_us", "contacts",
                         "lifecycle", "step_status"})
     EXPECT_EQ(j[k].size(), 30u) << k;
   for (std::size_t i = 0; i < 30; ++i) {

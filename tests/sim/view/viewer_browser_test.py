@@ -86,8 +86,9 @@ def count_all(img, pred):
 
 def deepest_hand_frame(path):
     """Index of the frame of a view recording (docs/viewer.md "Recording file") where the hand
-    (target) goes deepest below the tool: hand penetration - tool penetration, the last two
-    float32 of each frame. There the ghost stands apart from the tool."""
+    (target) goes deepest below the tool: hand penetration - tool penetration, the frame's
+    `penetration` array, the last but one (the `device_loop` array's 3 float32 follow it).
+    There the ghost stands apart from the tool."""
     with open(path, "rb") as f:
         data = f.read()
     assert data[:8] == b"NMVREC01", path
@@ -95,7 +96,7 @@ def deepest_hand_frame(path):
     off, best, best_i, i = 12 + n, -1.0, 0, 0
     while off + 4 <= len(data):
         (n,) = struct.unpack_from("<I", data, off)
-        tool, hand = struct.unpack_from("<ff", data, off + 4 + n - 8)
+        tool, hand = struct.unpack_from("<ff", data, off + 4 + n - 8 - 12)
         if hand - tool > best:
             best, best_i = hand - tool, i
         off += 4 + n
@@ -176,9 +177,11 @@ def near_colour(img, x, y, rad, pred):
 
 
 def is_arrow(p):
-    """A contact's depth colour (contacts.js: hue 60° to 280°, saturated) or its blend."""
+    """A contact's depth colour (contacts.js: hue 60° to 280°, saturated) or its blend; the
+    deepest end renders at up to 287° on the canvas (the colour space's conversion), so the band
+    reaches 300° (the organ's red and the tool's orange stay out)."""
     h, s, v = colorsys.rgb_to_hsv(p[0] / 255, p[1] / 255, p[2] / 255)
-    return s > 0.45 and v > 0.3 and 55 / 360 <= h <= 285 / 360
+    return s > 0.45 and v > 0.3 and 55 / 360 <= h <= 300 / 360
 
 
 def check_shapes(img, probe, name):

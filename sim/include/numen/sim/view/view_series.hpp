@@ -20,9 +20,10 @@ inline constexpr std::size_t kViewSeriesMaxEvents = 256;
 ///   "frames": N, "stride": s = max(1, ceil(N / max_points)),
 ///   "frame": the frames sampled (0, s, 2s, ... and N − 1),
 ///   "t": their simulated time (s),
-///   "tool_mm", "hand_mm", "force_n", "step_us", "contacts": for each sampled frame i the
-///     largest value over frames [i, i + s) (peaks survive the decimation): tool and hand
-///     (target) penetration (mm), |feedback force| (N), step time (µs), contact count,
+///   "tool_mm", "hand_mm", "intent_mm", "force_n", "step_us", "contacts": for each sampled
+///     frame i the largest value over frames [i, i + s) (peaks survive the decimation): tool,
+///     hand (target) and hand's intent (the frame's device_loop; the target's in replay)
+///     penetration (mm), |feedback force| (N), step time (µs), contact count,
 ///   "lifecycle": the largest hal::LifecycleState over [i, i + s) (4: fault, 3: safe stop),
 ///   "step_status": the OR of core::StepStatus bits over [i, i + s),
 ///   "events": each frame where the lifecycle or the step status changes (the first
