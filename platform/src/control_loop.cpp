@@ -192,6 +192,7 @@ const PeriodReport& ControlLoop::end_period(std::int64_t now_ns) noexcept {
   else
     impedance_period(now_ns);
   report_.lifecycle = device_->lifecycle();  // after the write: a non-finite τ trips it
+  if (const hal::FaultRecord* f = device_->first_fault()) report_.fault_cause = f->cause;
   if (!report_.torque_commanded) ++counters_.periods_zero_torque;
   if (report_.torque_commanded && first_torque_period_ < 0) first_torque_period_ = period;
   if (report_.command_status != hal::IoStatus::kOk) ++counters_.command_failures;

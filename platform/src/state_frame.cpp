@@ -162,6 +162,7 @@ std::size_t encode_state_frame(const StateFrameLayout& layout, const core::Data&
   put_field<FrameField::kStepNs>(h, static_cast<std::uint32_t>(step_ns));
   put_field<FrameField::kLifecycle>(h, static_cast<std::uint8_t>(report.lifecycle));
   put_field<FrameField::kStartup>(h, static_cast<std::uint8_t>(report.startup));
+  put_field<FrameField::kFaultCause>(h, static_cast<std::uint8_t>(report.fault_cause));
   put_field<FrameField::kReserved>(h, 0);
 
   // Each array from its declared offset (kStateFrameArrays), items in order.
@@ -295,6 +296,7 @@ StateFrameDecodeResult StateFrameDecoder::decode(std::span<const std::byte> byte
   hd.step_ns = get_field<FrameField::kStepNs>(h);
   hd.lifecycle = get_field<FrameField::kLifecycle>(h);
   hd.startup = get_field<FrameField::kStartup>(h);
+  hd.fault_cause = get_field<FrameField::kFaultCause>(h);
   if (hd.frame_bytes != bytes.size())
     return fail(FrameField::kFrameBytes, "frame size field says " + std::to_string(hd.frame_bytes) +
                                              " bytes, the frame has " +

@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "numen/hal/device/safety_supervisor.hpp"
 #include "numen/platform/state_frame.hpp"
 
 namespace numen::sim {
@@ -24,13 +25,19 @@ std::string state_frame_layout_json() {
     arrays.push_back(
         {{"name", std::string(a.name)}, {"floats", a.floats}, {"count", std::move(count)}});
   }
+  // The header's fault_cause by value (hal::FaultCause, hal::to_string): the page names the
+  // cause of a latched safe state with them.
+  nlohmann::ordered_json causes = nlohmann::ordered_json::array();
+  for (int c = 0; c <= static_cast<int>(hal::FaultCause::kForceTimeout); ++c)
+    causes.push_back(hal::to_string(static_cast<hal::FaultCause>(c)));
   const nlohmann::ordered_json layout{
       {"magic", std::string(p::kStateFrameMagic, sizeof p::kStateFrameMagic)},
       {"version", p::kStateFrameVersion},
       {"header_bytes", p::kStateFrameHeaderBytes},
       {"float_bytes", p::kFrameFloatBytes},
       {"header", std::move(header)},
-      {"arrays", std::move(arrays)}};
+      {"arrays", std::move(arrays)},
+      {"fault_causes", std::move(causes)}};
   return layout.dump();
 }
 

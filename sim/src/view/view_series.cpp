@@ -21,7 +21,7 @@ namespace {
 struct FramePoint {
   double t = 0.0, tool_mm = 0.0, hand_mm = 0.0, intent_mm = 0.0, force_n = 0.0, step_us = 0.0;
   std::uint32_t contacts = 0, step_status = 0;
-  int lifecycle = 0;
+  int lifecycle = 0, fault_cause = 0;
 };
 
 double round6(double x) { return std::round(x * 1e6) * 1e-6; }
@@ -55,10 +55,11 @@ std::string view_replay_series(ViewFrameSource& source, std::size_t max_points) 
     p.contacts = h.num_contacts;
     p.lifecycle = h.lifecycle;
     p.step_status = h.step_status;
+    p.fault_cause = h.fault_cause;
     if (k > 0 && (p.lifecycle != all[k - 1].lifecycle || p.step_status != all[k - 1].step_status)) {
       if (events.size() < kViewSeriesMaxEvents)
         events.push_back({{"frame", k}, {"t", round6(p.t)}, {"lifecycle", p.lifecycle},
-                          {"step_status", p.step_status}});
+                          {"step_status", p.step_status}, {"fault_cause", p.fault_cause}});
       ++event_count;
     }
   }

@@ -1,17 +1,18 @@
 // Faults and safe states (docs/viewer.md "Page"): a banner over the view with what the frame
 // says caused them, and marks on the replay timeline at every change of the device's lifecycle
 // or the step's status (the replay session message's series.events, read from the whole file).
-import { LIFECYCLE, STARTUP, STEP, FLAGS, bits } from './protocol.js';
+import { LIFECYCLE, STARTUP, STEP, FLAGS, FAULT_CAUSES, bits } from './protocol.js';
 
 const banner = document.getElementById('banner');
 let since = null;  // { t, period } of the first frame of the fault shown
 let events = [];   // the replay's series.events (empty live)
 
 /// The fault or safe state of a frame header as { level: 'fault' | 'safe' | 'step', text }, or
-/// null when it has none. Its cause: what the frame carries (the step's status bits, a failed
-/// start-up, the flags); the safety supervisor's own cause is in the run's summary.
+/// null when it has none. Its cause: what the frame carries (the safety supervisor's cause of
+/// the latched safe state, the step's status bits, a failed start-up, the flags).
 export function faultOf(h, managed) {
   const causes = [];
+  if (h.fault_cause) causes.push(FAULT_CAUSES[h.fault_cause] ?? 'cause ' + h.fault_cause);
   if (h.step_status) causes.push('step: ' + bits(h.step_status, STEP));
   if (managed && h.startup === 5) causes.push('start-up: ' + STARTUP[5]);
   if (h.flags & (1 << 2)) causes.push('overrun');
@@ -42,8 +43,7 @@ export function showFault(fr, managed) {
   else if (!since || fr.time_s < since.t) since = { t: fr.time_s };
   banner.hidden = false;
   banner.className = f.level;
-  banner.textContent = f.text + `   (since t = ${since.t.toFixed(3)} s; ` +
-                       `the run's summary names the supervisor's cause)`;
+  banner.textContent = f.text + `   (since t = ${since.t.toFixed(3)} s)`;
   return banner.textContent;
 }
 
@@ -62,6 +62,7 @@ export function markTimeline(series, frames, seek) {
     m.className = 'mark ' + level;
     m.style.left = (100 * e.frame / Math.max(1, frames - 1)) + '%';
     m.title = `t = ${e.t.toFixed(3)} s: ${LIFECYCLE[e.lifecycle] ?? e.lifecycle}` +
+              (e.fault_cause ? ' (' + (FAULT_CAUSES[e.fault_cause] ?? e.fault_cause) + ')' : '') +
               (e.step_status ? ', step: ' + bits(e.step_status, STEP) : '');
     m.onclick = () => seek(e.frame);
     el.appendChild(m);

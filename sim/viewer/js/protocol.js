@@ -12,19 +12,21 @@ const READ = {
 // What this page reads of a frame: a layout without one of these is refused by name.
 const USED_FIELDS = ['magic', 'version', 'header_bytes', 'frame_bytes', 'num_bodies', 'num_nodes',
                      'num_contacts', 'num_axes', 'attached_body', 'period', 'time_ns', 'step_status',
-                     'flags', 'step_ns', 'lifecycle', 'startup'];
+                     'flags', 'step_ns', 'lifecycle', 'startup', 'fault_cause'];
 const USED_ARRAYS = ['body_pose', 'target_pose', 'node_position', 'contact', 'feedback', 'penetration',
                      'device_loop'];
 let frameLayout = null;  // the session message's frame_layout, checked
 /// Floats per item, by array name (from the layout).
 export const FLOATS = {};
+/// The names of the header's fault_cause values (hal::FaultCause; the layout's fault_causes).
+export const FAULT_CAUSES = [];
 
 /// Checks and adopts the session message's frame_layout; throws naming what is missing.
 export function setFrameLayout(L) {
   const where = 'the session message\'s frame_layout';
   if (!L || typeof L !== 'object')
     throw new Error(where + ' is missing: the server is older than this page (rebuild and restart numen)');
-  for (const k of ['magic', 'version', 'header_bytes', 'float_bytes', 'header', 'arrays'])
+  for (const k of ['magic', 'version', 'header_bytes', 'float_bytes', 'header', 'arrays', 'fault_causes'])
     if (L[k] === undefined) throw new Error(where + ' has no "' + k + '"');
   if (L.float_bytes !== Float32Array.BYTES_PER_ELEMENT) throw new Error(where + ': float_bytes ' + L.float_bytes);
   const fields = new Set();
@@ -39,6 +41,8 @@ export function setFrameLayout(L) {
     FLOATS[a.name] = a.floats;
   }
   for (const n of USED_ARRAYS) if (FLOATS[n] === undefined) throw new Error(where + ' has no array "' + n + '"');
+  FAULT_CAUSES.length = 0;
+  FAULT_CAUSES.push(...L.fault_causes);
   frameLayout = L;
 }
 

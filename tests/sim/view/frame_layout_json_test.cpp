@@ -102,6 +102,7 @@ TEST(FrameLayoutJson, AFrameDecodedFromTheJsonReadsWhatTheViewReads) {
       {"step_ns", h.step_ns},
       {"lifecycle", h.lifecycle},
       {"startup", h.startup},
+      {"fault_cause", h.fault_cause},
       {"version", 2},
       {"header_bytes", 64},
       {"reserved", 0}};

@@ -420,6 +420,12 @@ def check_fault(numen, browser, out):
             failures.append("fault: no fault banner on the last frame of a latched run (%r)" % p["banner"])
         if "since t =" not in p["banner"]:
             failures.append("fault: the banner does not say since when (%r)" % p["banner"])
+        # The supervisor's cause, as the run's summary names it ("safety: … first: CAUSE (id …").
+        cause = re.search(r"safety: .*?first: ([a-z -]+?) \(", r.stdout)
+        if not cause:
+            failures.append("fault: the run's summary names no first fault:\n%s" % r.stdout)
+        elif cause.group(1) not in p["banner"]:
+            failures.append("fault: the banner does not name the cause %r (%r)" % (cause.group(1), p["banner"]))
         if p["marks"] < 1:
             failures.append("fault: the replay timeline has no mark")
         failures += page_failures(page, "fault")

@@ -94,6 +94,9 @@ struct PeriodReport {
   hal::StartupPhase startup = hal::StartupPhase::kResetCommunication;  ///< After this period.
   /// The safe state latched in this period (the supervisor's first_fault() says why).
   bool entered_safe_stop = false;
+  /// After this period: the cause of the latched safe state (hal::Device::first_fault(),
+  /// cleared by a re-arm); kNone while none is latched.
+  hal::FaultCause fault_cause = hal::FaultCause::kNone;
   /// The lifecycle entered kActive in this period.
   bool activated = false;
 

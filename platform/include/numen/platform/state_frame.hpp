@@ -77,7 +77,8 @@ constexpr std::string_view frame_field_type_name(FrameFieldType t) noexcept {
 /// The header's fields, in their order: each one's index in kStateFrameFields.
 enum class FrameField : std::uint8_t {
   kMagic, kVersion, kHeaderBytes, kFrameBytes, kNumBodies, kNumNodes, kNumContacts, kNumAxes,
-  kAttachedBody, kPeriod, kTimeNs, kStepStatus, kFlags, kStepNs, kLifecycle, kStartup, kReserved
+  kAttachedBody, kPeriod, kTimeNs, kStepStatus, kFlags, kStepNs, kLifecycle, kStartup, kFaultCause,
+  kReserved
 };
 
 /// One field of the header.
@@ -106,8 +107,10 @@ struct StateFrameField {
 ///     step_ns        wall time of core::step, ns (saturated at 2³²−1)
 ///     lifecycle      hal::LifecycleState
 ///     startup        hal::StartupPhase
+///     fault_cause    hal::FaultCause of the latched safe state (the device's first_fault()),
+///                    0 (kNone) while none is latched
 ///     reserved       0
-inline constexpr std::array<StateFrameField, 17> kStateFrameFields{{
+inline constexpr std::array<StateFrameField, 18> kStateFrameFields{{
     {FrameField::kMagic, "magic", 0, FrameFieldType::kChar4},
     {FrameField::kVersion, "version", 4, FrameFieldType::kU16},
     {FrameField::kHeaderBytes, "header_bytes", 6, FrameFieldType::kU16},
@@ -124,7 +127,8 @@ inline constexpr std::array<StateFrameField, 17> kStateFrameFields{{
     {FrameField::kStepNs, "step_ns", 56, FrameFieldType::kU32},
     {FrameField::kLifecycle, "lifecycle", 60, FrameFieldType::kU8},
     {FrameField::kStartup, "startup", 61, FrameFieldType::kU8},
-    {FrameField::kReserved, "reserved", 62, FrameFieldType::kU16},
+    {FrameField::kFaultCause, "fault_cause", 62, FrameFieldType::kU8},
+    {FrameField::kReserved, "reserved", 63, FrameFieldType::kU8},
 }};
 
 /// The declaration of header field `f`.
@@ -270,6 +274,7 @@ struct StateFrameHeader {
   std::uint32_t step_ns = 0;      ///< Wall time of core::step, ns (saturated at 2³²−1).
   std::uint8_t lifecycle = 0;     ///< hal::LifecycleState.
   std::uint8_t startup = 0;       ///< hal::StartupPhase.
+  std::uint8_t fault_cause = 0;   ///< hal::FaultCause of the latched safe state (0: none).
 };
 
 /// A checked frame: the header and the offsets of its arrays in the bytes it was decoded from

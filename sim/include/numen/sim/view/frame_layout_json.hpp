@@ -11,14 +11,17 @@ namespace numen::sim {
 
 /// The layout as compact JSON (UTF-8):
 ///
-///     {"magic": "NMVF", "version": 1, "header_bytes": 64, "float_bytes": 4,
+///     {"magic": "NMVF", "version": 2, "header_bytes": 64, "float_bytes": 4,
 ///      "header": [{"name": "magic", "offset": 0, "type": "char[4]"}, ...],
 ///      "arrays": [{"name": "body_pose", "floats": 7, "count": "num_bodies"}, ...,
-///                 {"name": "feedback", "floats": 6, "count": null}, ...]}
+///                 {"name": "feedback", "floats": 6, "count": null}, ...],
+///      "fault_causes": ["none", ..., "heartbeat lost", ...]}
 ///
 /// "header": every field in order (offset in bytes; type "u8", "u16", "u32", "i32", "u64",
 /// "i64" little-endian, or "char[4]"). "arrays": the float32 arrays after the header in order:
 /// floats per item and the header field that counts the items (null: one item).
+/// "fault_causes": hal::to_string() of each hal::FaultCause by value (the header's
+/// fault_cause).
 std::string state_frame_layout_json();
 
 }  // namespace numen::sim

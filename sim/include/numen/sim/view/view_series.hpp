@@ -27,7 +27,8 @@ inline constexpr std::size_t kViewSeriesMaxEvents = 256;
 ///   "lifecycle": the largest hal::LifecycleState over [i, i + s) (4: fault, 3: safe stop),
 ///   "step_status": the OR of core::StepStatus bits over [i, i + s),
 ///   "events": each frame where the lifecycle or the step status changes (the first
-///     kViewSeriesMaxEvents: frame, t, lifecycle, step_status), "event_count": all of them.
+///     kViewSeriesMaxEvents: frame, t, lifecycle, step_status, fault_cause), "event_count": all of
+///     them.
 /// Throws std::runtime_error naming the frame when a frame does not decode (a recording's
 /// reader checked them already). Reads every frame once: setup, not the loop.
 std::string view_replay_series(ViewFrameSource& source, std::size_t max_points = kViewSeriesMaxPoints);
