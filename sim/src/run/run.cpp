@@ -11,6 +11,7 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <span>
 #include <stdexcept>
 
@@ -55,11 +56,14 @@ namespace {
 /// The LogBus of a "log:FILE" spec, or nullptr for any other bus; `stats` gets what the loader
 /// counted. The log is streamed from disk (memory does not grow with it); a paced run
 /// (`realtime`) never waits for the reader thread, an offline run does. A log that the loader
-/// refuses (located error) or whose records hold no frame the controller reads (another
-/// device's ids) is input rejected: InputError naming the file.
+/// refuses (located error), a directory, or a log whose records hold no frame the controller
+/// reads (another device's ids) is input rejected: InputError naming the file.
 std::unique_ptr<hal::LogBus> make_log_bus(const Scene& scene, const BusSpec& spec, bool realtime,
                                           hal::CandumpLoadStats& stats) {
   if (spec.kind != BusKind::kLog) return nullptr;
+  std::error_code ec;  // (a directory opens, then fails its first read: "FILE:1: read error")
+  if (std::filesystem::is_directory(spec.target, ec))
+    throw InputError(spec.target, 0, 0, "", "is a directory, not a candump log");
   hal::LogBusSettings settings;
   settings.filters = controller_filters(scene.device);
   settings.received_only = true;

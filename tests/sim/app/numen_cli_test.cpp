@@ -173,6 +173,7 @@ TEST(NumenCli, RefusedRunLeavesItsOutputFilesByteIdentical) {
       {"--phase", "0.002", "--trace", "keep.csv"},
       {"--phase", "0.002", "--record-view", "keep.nmv"},
       {"--duration", "1e-9", "--record", "keep.log", "--trace", "keep.csv"},  // no period
+      {"--record", "keep.log", "--trace", "keep.log"},   // two outputs on one file
   };
   for (const std::vector<std::string>& extra : runs) {
     for (const char* name : {"keep.csv", "keep.log", "keep.nmv"}) dir.write(name, before);
