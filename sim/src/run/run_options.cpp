@@ -120,22 +120,26 @@ bool same_regular_file(const std::string& a, const std::string& b) {
 /// other's without a word) or on a file the run reads (the scene file, the `--bus log:` log:
 /// the output would replace it). InputError at the later output's key.
 void check_outputs_distinct(const Scene& scene, const RunOptions& options) {
-  struct File {
-    std::string key, path, what;
+  struct Output {
+    const char* key;
+    const std::string& path;
   };
-  std::vector<File> inputs;
-  if (!scene.file.empty()) inputs.push_back({"", scene.file, "the scene file"});
+  struct Input {
+    std::string path, what;
+  };
+  std::vector<Input> inputs;
+  if (!scene.file.empty()) inputs.push_back({scene.file, "the scene file"});
   const BusSpec bus = parse_bus_spec(options.bus.spec);
   if (bus.kind == BusKind::kLog)
-    inputs.push_back({"", bus.target, "the replayed log (--bus " + options.bus.spec + ")"});
-  std::vector<File> outputs;
-  if (!options.trace_path.empty()) outputs.push_back({"--trace", options.trace_path, ""});
+    inputs.push_back({bus.target, "the replayed log (--bus " + options.bus.spec + ")"});
+  std::vector<Output> outputs;
+  if (!options.trace_path.empty()) outputs.push_back({"--trace", options.trace_path});
   if (!options.bus.record_path.empty() && !scene.admittance)
-    outputs.push_back({"--record", options.bus.record_path, ""});
+    outputs.push_back({"--record", options.bus.record_path});
   if (!options.record_view_path.empty())
-    outputs.push_back({"--record-view", options.record_view_path, ""});
+    outputs.push_back({"--record-view", options.record_view_path});
   for (std::size_t i = 0; i < outputs.size(); ++i) {
-    for (const File& in : inputs)
+    for (const Input& in : inputs)
       if (same_regular_file(outputs[i].path, in.path))
         throw InputError("", 0, 0, outputs[i].key,
                          outputs[i].path + " is " + in.what + ": the output would replace it");
