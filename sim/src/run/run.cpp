@@ -337,15 +337,21 @@ RunSummary run_impedance_scene(const Scene& scene, const RunOptions& options) {
   };
   // A live viewer of an unpaced run: one period every dt / view_speed of wall time.
   ViewPacer view_pacer(scene.model.dt, paced ? 0.0 : options.view_speed, wall0, options.stop);
-  auto one_period = [&] {
+  // One period; false (and no period) when a stop request came while a paced run waited for
+  // its deadline (`hear_stop`: heard within platform::kStopSliceNs whatever dt is).
+  auto one_period = [&](bool hear_stop) {
     view_pacer.wait();
     if (paced) {
-      const platform::Wakeup w = timer.wait_next();
+      const platform::Wakeup w = hear_stop
+                                     ? timer.wait_next(options.stop, platform::kStopSliceNs)
+                                     : timer.wait_next();
+      if (w.stopped) return false;
       tally.woke(w);
       runner.period(w.deadline_ns, w.woke_ns);
     } else {
       runner.period();
     }
+    return true;
   };
   bool stopped = false;
   for (std::int64_t k = 0; k < steps && !runner.diverged(); ++k) {
@@ -356,7 +362,10 @@ RunSummary run_impedance_scene(const Scene& scene, const RunOptions& options) {
     if (tally.take_rearm(options.rearm, k) &&
         runner.loop().rearm() == platform::RearmResult::kAccepted)
       tally.rearm_accepted();
-    one_period();
+    if (!one_period(true)) {
+      stopped = true;
+      break;
+    }
   }
   // Orderly end on a real bus: zero torque, drives disabled, a few periods for the
   // controlwords to go out (the device keeps answering SYNCs meanwhile).
@@ -364,7 +373,7 @@ RunSummary run_impedance_scene(const Scene& scene, const RunOptions& options) {
   if (real) {
     runner.loop().shutdown();
     for (; shutdown < options.shutdown_periods; ++shutdown) {
-      one_period();
+      one_period(false);  // the stop was heard: these periods are paced to the end
       if (runner.loop().drives_disabled() && shutdown >= 2) {
         ++shutdown;
         break;

@@ -196,4 +196,33 @@ TEST(RunOutputs, AnOutputOnAnotherOutputsFileOrOnAFileTheRunReadsIsRefused) {
   EXPECT_NO_THROW(numen::sim::check_run_options(scene, opt));
 }
 
+// A paced run heard its stop only at the end of the period it was waiting for: up to dt, 1 s
+// at the longest dt a scene may have. It is heard within a slice (platform::kStopSliceNs)
+// whatever dt is, and no period runs after it.
+TEST(RunStop, APacedRunWithALongPeriodHearsItsStopWithinASlice) {
+  const numen::test::TempDir dir;
+  std::string text = numen::test::replace(numen::test::kMiniScene, "dt = 0.001", "dt = 0.5");
+  text = numen::test::replace(text, "duration = 0.25", "duration = 10.0");
+  const Scene scene = numen::sim::load_scene(dir.write("slow.toml", text));
+  std::atomic<bool> stop{false};
+  numen::sim::RunOptions opt;
+  opt.realtime = true;
+  opt.overrun_limit = 0;
+  opt.duration_s = 5.0;
+  opt.stop = &stop;
+  std::thread stopper([&stop] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(150));
+    stop.store(true);
+  });
+  const auto t0 = std::chrono::steady_clock::now();
+  const RunSummary s = numen::sim::run_scene(scene, opt);
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  stopper.join();
+  std::printf("[   info   ] dt 0.5 s, stop at 0.15 s: the run returned after %.3f s, %lld steps\n",
+              wall, static_cast<long long>(s.steps));
+  EXPECT_TRUE(s.stopped);
+  EXPECT_EQ(s.steps, 0) << "the first deadline (0.5 s) was not reached: no period ran";
+  EXPECT_LT(wall, 0.45) << "the stop waited for the period's deadline";
+}
+
 }  // namespace
