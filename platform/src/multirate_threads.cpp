@@ -83,7 +83,8 @@ void MultirateThreads::run() noexcept {
   if (!setup_error_.empty()) return;
   PeriodicTimer timer(period_ns_, monotonic_now_ns());
   while (!stop_.load(std::memory_order_relaxed)) {
-    const Wakeup w = timer.wait_next();
+    const Wakeup w = timer.wait_next(&stop_, kStopSliceNs);  // stop() heard in a long period
+    if (w.stopped) break;
     if (w.overrun) scene_overruns_.fetch_add(1, std::memory_order_relaxed);
     if (stop_.load(std::memory_order_relaxed)) break;
     const std::int64_t t0 = monotonic_now_ns();

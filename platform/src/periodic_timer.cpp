@@ -31,4 +31,25 @@ Wakeup PeriodicTimer::wait_next() noexcept {
   return w;
 }
 
+Wakeup PeriodicTimer::wait_next(const std::atomic<bool>* stop, std::int64_t slice_ns) noexcept {
+  if (stop != nullptr && slice_ns > 0) {
+    for (;;) {
+      const std::int64_t now = monotonic_now_ns();
+      if (stop->load(std::memory_order_relaxed)) {
+        Wakeup w;
+        w.stopped = true;
+        w.deadline_ns = next_ns_;
+        w.woke_ns = now;
+        return w;
+      }
+      if (next_ns_ - now <= 2 * slice_ns) break;
+      const std::int64_t until = now + slice_ns;
+      const timespec ts{static_cast<time_t>(until / 1'000'000'000),
+                        static_cast<long>(until % 1'000'000'000)};
+      clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr);  // EINTR: look again
+    }
+  }
+  return wait_next();
+}
+
 }  // namespace numen::platform

@@ -3,7 +3,7 @@
 /// Runs a program (the `numen` command) as a child process for end-to-end tests: its
 /// stdout / stderr go to files, a signal can be sent to it once a condition holds, and the
 /// result carries its exit status, its peak resident memory and whether it had to be killed.
-/// Header-only, for test files; POSIX (posix_spawn, wait4).
+/// Header-only, for test files; POSIX (posix_spawn, wait4) and Linux's /proc/PID/status.
 
 #include <fcntl.h>
 #include <signal.h>
@@ -13,6 +13,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cstdlib>
 #include <fstream>
 #include <functional>
 #include <sstream>
@@ -28,7 +29,12 @@ namespace numen::test {
 struct ChildResult {
   int status = -1;          ///< Exit status, or 128 + signal if a signal ended it.
   bool timed_out = false;   ///< It was still running at the deadline and was killed.
-  long max_rss_kib = 0;     ///< Peak resident set size (getrusage ru_maxrss, KiB).
+  /// Peak resident set size of the program itself (KiB): the last VmHWM of
+  /// /proc/PID/status read while it ran (every 10 ms, so at most the last 10 ms are missed).
+  /// wait4's ru_maxrss is only the fallback for a child gone before the first read: Linux
+  /// keeps the spawning process's high-water mark across exec, so it is at least this test
+  /// binary's own RSS (~35 MB), which floored every figure and hid growth below it.
+  long max_rss_kib = 0;
   double wall_s = 0.0;      ///< Wall time from spawn to exit (s).
   std::string out;          ///< Its stdout.
   std::string err;          ///< Its stderr.
@@ -40,6 +46,15 @@ struct ChildSignal {
   int signal = 0;
   std::function<bool()> ready;
 };
+
+/// VmHWM of process `pid` (KiB) from /proc/PID/status, or 0 when it cannot be read.
+inline long own_peak_rss_kib(pid_t pid) {
+  std::ifstream f("/proc/" + std::to_string(pid) + "/status");
+  std::string line;
+  while (std::getline(f, line))
+    if (line.rfind("VmHWM:", 0) == 0) return std::atol(line.c_str() + 6);
+  return 0;
+}
 
 inline std::string read_file(const std::string& path) {
   std::ifstream f(path, std::ios::binary);
@@ -78,7 +93,9 @@ inline ChildResult run_child(const std::vector<std::string>& argv, const std::st
   bool signalled = send.signal == 0;
   int wstatus = 0;
   struct rusage usage {};
+  long own_peak_kib = 0;
   for (;;) {
+    if (const long hwm = own_peak_rss_kib(pid); hwm > 0) own_peak_kib = hwm;  // still running
     const pid_t done = ::wait4(pid, &wstatus, WNOHANG, &usage);
     if (done == pid) break;
     if (!signalled && (!send.ready || send.ready())) {
@@ -94,7 +111,7 @@ inline ChildResult run_child(const std::vector<std::string>& argv, const std::st
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
   r.wall_s = elapsed();
-  r.max_rss_kib = usage.ru_maxrss;
+  r.max_rss_kib = own_peak_kib > 0 ? own_peak_kib : usage.ru_maxrss;
   r.status = WIFEXITED(wstatus) ? WEXITSTATUS(wstatus) : 128 + WTERMSIG(wstatus);
   r.out = read_file(out_path);
   r.err = read_file(err_path);

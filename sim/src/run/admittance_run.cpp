@@ -268,8 +268,12 @@ RunSummary run_admittance_scene(const Scene& scene, const RunOptions& options) {
       tally.rearm_accepted();
     view_pacer.wait();
     std::int64_t deadline = -1, woke = -1;
-    if (options.realtime) {
-      const platform::Wakeup w = timer.wait_next();
+    if (options.realtime) {  // a stop is heard while waiting, whatever dt is
+      const platform::Wakeup w = timer.wait_next(options.stop, platform::kStopSliceNs);
+      if (w.stopped) {
+        stopped = true;
+        break;
+      }
       deadline = w.deadline_ns;
       woke = w.woke_ns;
       tally.woke(w);

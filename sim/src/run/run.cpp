@@ -11,6 +11,7 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <span>
 #include <stdexcept>
 
@@ -55,11 +56,14 @@ namespace {
 /// The LogBus of a "log:FILE" spec, or nullptr for any other bus; `stats` gets what the loader
 /// counted. The log is streamed from disk (memory does not grow with it); a paced run
 /// (`realtime`) never waits for the reader thread, an offline run does. A log that the loader
-/// refuses (located error) or whose records hold no frame the controller reads (another
-/// device's ids) is input rejected: InputError naming the file.
+/// refuses (located error), a directory, or a log whose records hold no frame the controller
+/// reads (another device's ids) is input rejected: InputError naming the file.
 std::unique_ptr<hal::LogBus> make_log_bus(const Scene& scene, const BusSpec& spec, bool realtime,
                                           hal::CandumpLoadStats& stats) {
   if (spec.kind != BusKind::kLog) return nullptr;
+  std::error_code ec;  // (a directory opens, then fails its first read: "FILE:1: read error")
+  if (std::filesystem::is_directory(spec.target, ec))
+    throw InputError(spec.target, 0, 0, "", "is a directory, not a candump log");
   hal::LogBusSettings settings;
   settings.filters = controller_filters(scene.device);
   settings.received_only = true;
@@ -343,15 +347,21 @@ RunSummary run_impedance_scene(const Scene& scene, const RunOptions& options) {
   };
   // A live viewer of an unpaced run: one period every dt / view_speed of wall time.
   ViewPacer view_pacer(scene.model.dt, paced ? 0.0 : options.view_speed, wall0, options.stop);
-  auto one_period = [&] {
+  // One period; false (and no period) when a stop request came while a paced run waited for
+  // its deadline (`hear_stop`: heard within platform::kStopSliceNs whatever dt is).
+  auto one_period = [&](bool hear_stop) {
     view_pacer.wait();
     if (paced) {
-      const platform::Wakeup w = timer.wait_next();
+      const platform::Wakeup w = hear_stop
+                                     ? timer.wait_next(options.stop, platform::kStopSliceNs)
+                                     : timer.wait_next();
+      if (w.stopped) return false;
       tally.woke(w);
       runner.period(w.deadline_ns, w.woke_ns);
     } else {
       runner.period();
     }
+    return true;
   };
   bool stopped = false;
   for (std::int64_t k = 0; k < steps && !runner.diverged(); ++k) {
@@ -362,7 +372,10 @@ RunSummary run_impedance_scene(const Scene& scene, const RunOptions& options) {
     if (tally.take_rearm(options.rearm, k) &&
         runner.loop().rearm() == platform::RearmResult::kAccepted)
       tally.rearm_accepted();
-    one_period();
+    if (!one_period(true)) {
+      stopped = true;
+      break;
+    }
   }
   // Orderly end on a real bus: zero torque, drives disabled, a few periods for the
   // controlwords to go out (the device keeps answering SYNCs meanwhile).
@@ -370,7 +383,7 @@ RunSummary run_impedance_scene(const Scene& scene, const RunOptions& options) {
   if (real) {
     runner.loop().shutdown();
     for (; shutdown < options.shutdown_periods; ++shutdown) {
-      one_period();
+      one_period(false);  // the stop was heard: these periods are paced to the end
       if (runner.loop().drives_disabled() && shutdown >= 2) {
         ++shutdown;
         break;

@@ -13,6 +13,8 @@
 #include <cstring>
 #include <filesystem>
 #include <string>
+#include <system_error>
+#include <vector>
 
 #include "numen/sim/input/bus_spec.hpp"
 #include "numen/sim/input/input_error.hpp"
@@ -97,6 +99,59 @@ void check_output_path(const std::string& path, const std::string& key) {
   if (::access(dir.c_str(), W_OK | X_OK) != 0) refuse(dir + ": " + std::strerror(errno));
 }
 
+/// True when `a` and `b` name one regular file: the same inode when both exist, the same
+/// absolute path (symbolic links of its existing part resolved) when neither does. A device or
+/// FIFO is written in place and may take several outputs (`/dev/null`): never the same file.
+bool same_regular_file(const std::string& a, const std::string& b) {
+  struct stat sa {}, sb {};
+  const bool a_exists = ::stat(a.c_str(), &sa) == 0;
+  const bool b_exists = ::stat(b.c_str(), &sb) == 0;
+  if (a_exists != b_exists) return false;
+  if (a_exists)
+    return S_ISREG(sa.st_mode) && S_ISREG(sb.st_mode) && sa.st_dev == sb.st_dev &&
+           sa.st_ino == sb.st_ino;
+  std::error_code ea, eb;
+  const std::filesystem::path ca = std::filesystem::weakly_canonical(a, ea);
+  const std::filesystem::path cb = std::filesystem::weakly_canonical(b, eb);
+  return !ea && !eb && ca == cb;
+}
+
+/// Refuses an output on the file of another output (the one closed last would replace the
+/// other's without a word) or on a file the run reads (the scene file, the `--bus log:` log:
+/// the output would replace it). InputError at the later output's key.
+void check_outputs_distinct(const Scene& scene, const RunOptions& options) {
+  struct Output {
+    const char* key;
+    const std::string& path;
+  };
+  struct Input {
+    std::string path, what;
+  };
+  std::vector<Input> inputs;
+  if (!scene.file.empty()) inputs.push_back({scene.file, "the scene file"});
+  const BusSpec bus = parse_bus_spec(options.bus.spec);
+  if (bus.kind == BusKind::kLog)
+    inputs.push_back({bus.target, "the replayed log (--bus " + options.bus.spec + ")"});
+  std::vector<Output> outputs;
+  if (!options.trace_path.empty()) outputs.push_back({"--trace", options.trace_path});
+  if (!options.bus.record_path.empty() && !scene.admittance)
+    outputs.push_back({"--record", options.bus.record_path});
+  if (!options.record_view_path.empty())
+    outputs.push_back({"--record-view", options.record_view_path});
+  for (std::size_t i = 0; i < outputs.size(); ++i) {
+    for (const Input& in : inputs)
+      if (same_regular_file(outputs[i].path, in.path))
+        throw InputError("", 0, 0, outputs[i].key,
+                         outputs[i].path + " is " + in.what + ": the output would replace it");
+    for (std::size_t j = 0; j < i; ++j)
+      if (same_regular_file(outputs[i].path, outputs[j].path))
+        throw InputError("", 0, 0, outputs[i].key,
+                         outputs[i].path + " is also " + outputs[j].key +
+                             "'s file: each output needs a file of its own (the one closed "
+                             "last would replace the other)");
+  }
+}
+
 }  // namespace
 
 std::int64_t compute_phase_override_ns(const Scene& scene, const RunOptions& options) {
@@ -125,6 +180,7 @@ void check_run_options(const Scene& scene, const RunOptions& options) {
     check_output_path(options.bus.record_path, "--record");
   if (!options.record_view_path.empty())
     check_output_path(options.record_view_path, "--record-view");
+  check_outputs_distinct(scene, options);
 }
 
 }  // namespace numen::sim

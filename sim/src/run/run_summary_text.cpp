@@ -8,6 +8,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "numen/sim/run/divergence.hpp"
 #include "numen/sim/run/run_figures.hpp"
 #include "numen/sim/run/run_summary.hpp"
 
@@ -201,9 +202,12 @@ constexpr RunSummarySegment kLayout[] = {
     {"  nan detected: YES", set("nan_detected")},
     {"  nan detected: no", unset("nan_detected")},
     {" (non-finite steps {nonfinite_steps})"},
+    // Speed and stretch are ratios to their limits; energy_ratio_max is E / (E0 + W_in), whose
+    // limit is DivergenceLimits::energy_factor (static_assert below).
     {"\n  divergence: speed {divergence.speed_ratio_max}, tie stretch "
-     "{divergence.stretch_ratio_max}, energy {divergence.energy_ratio_max} of their limits "
-     "(speed limit {divergence.speed_limit_mps} m/s, scene {divergence.scene_size_m} m)"},
+     "{divergence.stretch_ratio_max} of their limits; energy {divergence.energy_ratio_max}x "
+     "what the scene started with plus the hand's work (limit 100x) (speed limit "
+     "{divergence.speed_limit_mps} m/s, scene {divergence.scene_size_m} m)"},
     {"; DIVERGED at {divergence.time_s} s (period {divergence.period}): {divergence.cause} of "
      "{divergence.subject} {divergence.value}, limit {divergence.limit}",
      set("divergence.latched")},
@@ -221,6 +225,8 @@ constexpr RunSummarySegment kLayout[] = {
     {"; {*}", always(), {}, {}, "exit_reasons", ": {*}"},
     {"\n"},
 };
+static_assert(DivergenceLimits{}.energy_factor == 100.0,
+              "the divergence line of kLayout says the energy limit is 100x");
 
 const RunFigure& figure(std::string_view name) {
   const RunFigure* f = find_run_figure(name);

@@ -173,11 +173,15 @@ TEST(NumenCli, RefusedRunLeavesItsOutputFilesByteIdentical) {
       {"--phase", "0.002", "--trace", "keep.csv"},
       {"--phase", "0.002", "--record-view", "keep.nmv"},
       {"--duration", "1e-9", "--record", "keep.log", "--trace", "keep.csv"},  // no period
+      {"--record", "keep.log", "--trace", "keep.log"},   // two outputs on one file
   };
   for (const std::vector<std::string>& extra : runs) {
     for (const char* name : {"keep.csv", "keep.log", "keep.nmv"}) dir.write(name, before);
     std::vector<std::string> argv = {kNumen, "run"};
-    argv.insert(argv.end(), extra.begin(), extra.end());
+    // The files in `dir` (the child runs in the test's working directory, not in `dir`: a
+    // relative keep.* named files the checks below never read).
+    for (const std::string& a : extra)
+      argv.push_back(a.rfind("keep.", 0) == 0 ? (dir / a).string() : a);
     const ChildResult r = run_child(argv, dir.path(), 60);
     EXPECT_EQ(r.status, 2) << extra[0] << " " << extra[1] << ": " << r.out << r.err;
     for (const char* name : {"keep.csv", "keep.log", "keep.nmv"})

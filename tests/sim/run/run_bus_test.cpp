@@ -35,6 +35,7 @@
 #include "numen/core/data.hpp"
 #include "numen/core/features.hpp"
 #include "numen/hal/device/kinematics_factory.hpp"
+#include "numen/sim/input/input_error.hpp"
 #include "numen/sim/input/jigsaws.hpp"
 #include "numen/sim/run/run_verdict.hpp"
 #include "numen/sim/scene/scene.hpp"
@@ -293,6 +294,15 @@ TEST(RunBusLog, BadBusSpecAndBadLogAreClearErrors) {
     FAIL() << "a bad log line must be refused";
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("bad.log:2:"), std::string::npos) << e.what();
+  }
+  // A directory said "DIR:1: read error: Is a directory": it says what it is.
+  bus.spec = "log:" + dir.path().string();
+  try {
+    SceneRunner runner(scene, 0, bus);
+    FAIL() << "a directory must be refused";
+  } catch (const numen::sim::InputError& e) {
+    EXPECT_EQ(e.file(), dir.path().string());
+    EXPECT_EQ(e.message(), "is a directory, not a candump log");
   }
 }
 

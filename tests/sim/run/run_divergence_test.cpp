@@ -38,8 +38,9 @@ Scene with_coupling_stiffness(Scene s, double k) {
 }
 
 void print(const char* what, const RunSummary& s) {
-  std::printf("[   info   ] %s: %lld steps, exit %d; speed %.3g (limit %.3g m/s), stretch %.3g, "
-              "energy %.3g of the limits; %s %s %.4g (limit %.4g) at %.4f s\n",
+  std::printf("[   info   ] %s: %lld steps, exit %d; speed %.3g (limit %.3g m/s), stretch %.3g "
+              "of the limits, energy %.3g x (E0 + W_in) (limit 100); %s %s %.4g (limit %.4g) at "
+              "%.4f s\n",
               what, static_cast<long long>(s.steps), s.exit_status, s.divergence.speed_ratio_max,
               s.divergence.speed_limit_mps,
               s.divergence.stretch_ratio_max, s.divergence.energy_ratio_max,

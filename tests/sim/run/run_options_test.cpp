@@ -1,5 +1,5 @@
 // Tests of sim/run with the options of run_options.hpp: the real-time setup, the overrun
-// policy of paced runs and the re-arm request.
+// policy of paced runs, the re-arm request and the checks of the outputs' files.
 #include "numen/sim/run/run.hpp"
 
 #include <gtest/gtest.h>
@@ -34,7 +34,9 @@
 #include "numen/core/data.hpp"
 #include "numen/core/features.hpp"
 #include "numen/hal/device/kinematics_factory.hpp"
+#include "numen/sim/input/input_error.hpp"
 #include "numen/sim/input/jigsaws.hpp"
+#include "numen/sim/run/run_options.hpp"
 #include "numen/sim/run/run_verdict.hpp"
 #include "numen/sim/scene/scene.hpp"
 #include "numen/sim/device/simulated_instrument.hpp"
@@ -141,6 +143,86 @@ TEST(RunRearm, ARequestIsTakenOnceBeforeThePeriodAndReported) {
   EXPECT_EQ(s.rearm_first_period, 0);
   EXPECT_EQ(s.rearms_accepted, 0);  // nothing latched at period 0: ControlLoop says kNotLatched
   EXPECT_NE(numen::sim::format_summary(s).find("re-arm: 1 request(s), 0 accepted"), std::string::npos);
+}
+
+// Two outputs on one file ran and kept only the one closed last (exit 0), and `--record` on
+// the replayed log replaced the log with the recording of its replay: both are refused before
+// anything is opened, at the later output's option. Devices take several outputs
+// (/dev/null is written in place).
+TEST(RunOutputs, AnOutputOnAnotherOutputsFileOrOnAFileTheRunReadsIsRefused) {
+  const numen::test::TempDir dir;
+  const Scene scene = numen::sim::load_scene(dir.write("mini.toml", numen::test::kMiniScene));
+  const std::string log = dir.write("in.log", "(0.000000) sim0 181#00 R\n");
+  const std::string out = (dir / "out.csv").string();  // not there yet
+  auto refusal = [&](const numen::sim::RunOptions& opt) -> numen::sim::InputError {
+    try {
+      numen::sim::check_run_options(scene, opt);
+    } catch (const numen::sim::InputError& e) {
+      return e;
+    }
+    ADD_FAILURE() << "not refused";
+    return numen::sim::InputError("", 0, 0, "", "");
+  };
+  numen::sim::RunOptions opt;
+  opt.trace_path = out;
+  opt.bus.record_path = (dir / "." / "out.csv").string();  // another spelling of one path
+  numen::sim::InputError e = refusal(opt);
+  EXPECT_EQ(e.key(), "--record");
+  EXPECT_EQ(e.message(), opt.bus.record_path + " is also --trace's file: each output needs a "
+                         "file of its own (the one closed last would replace the other)");
+  opt.bus.record_path.clear();
+  opt.record_view_path = out;
+  EXPECT_EQ(refusal(opt).key(), "--record-view");
+  opt.record_view_path.clear();
+  opt.trace_path = scene.file;
+  e = refusal(opt);
+  EXPECT_EQ(e.key(), "--trace");
+  EXPECT_EQ(e.message(), scene.file + " is the scene file: the output would replace it");
+  opt.trace_path.clear();
+  opt.bus.spec = "log:" + log;
+  opt.bus.record_path = log;
+  e = refusal(opt);
+  EXPECT_EQ(e.key(), "--record");
+  EXPECT_EQ(e.message(), log + " is the replayed log (--bus log:" + log +
+                             "): the output would replace it");
+  EXPECT_EQ(numen::test::read_file(log), "(0.000000) sim0 181#00 R\n");
+  EXPECT_FALSE(std::filesystem::exists(out));
+  // Distinct files, and a device for every output, are accepted.
+  opt.bus.record_path = (dir / "rec.log").string();
+  opt.trace_path = out;
+  EXPECT_NO_THROW(numen::sim::check_run_options(scene, opt));
+  opt.bus.spec = "sim";
+  opt.trace_path = opt.bus.record_path = opt.record_view_path = "/dev/null";
+  EXPECT_NO_THROW(numen::sim::check_run_options(scene, opt));
+}
+
+// A paced run heard its stop only at the end of the period it was waiting for: up to dt, 1 s
+// at the longest dt a scene may have. It is heard within a slice (platform::kStopSliceNs)
+// whatever dt is, and no period runs after it.
+TEST(RunStop, APacedRunWithALongPeriodHearsItsStopWithinASlice) {
+  const numen::test::TempDir dir;
+  std::string text = numen::test::replace(numen::test::kMiniScene, "dt = 0.001", "dt = 0.5");
+  text = numen::test::replace(text, "duration = 0.25", "duration = 10.0");
+  const Scene scene = numen::sim::load_scene(dir.write("slow.toml", text));
+  std::atomic<bool> stop{false};
+  numen::sim::RunOptions opt;
+  opt.realtime = true;
+  opt.overrun_limit = 0;
+  opt.duration_s = 5.0;
+  opt.stop = &stop;
+  std::thread stopper([&stop] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(150));
+    stop.store(true);
+  });
+  const auto t0 = std::chrono::steady_clock::now();
+  const RunSummary s = numen::sim::run_scene(scene, opt);
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  stopper.join();
+  std::printf("[   info   ] dt 0.5 s, stop at 0.15 s: the run returned after %.3f s, %lld steps\n",
+              wall, static_cast<long long>(s.steps));
+  EXPECT_TRUE(s.stopped);
+  EXPECT_EQ(s.steps, 0) << "the first deadline (0.5 s) was not reached: no period ran";
+  EXPECT_LT(wall, 0.45) << "the stop waited for the period's deadline";
 }
 
 }  // namespace

@@ -4,9 +4,14 @@
 /// (clock_nanosleep with TIMER_ABSTIME): no drift accumulates, a late period
 /// is reported as an overrun instead of being hidden.
 
+#include <atomic>
 #include <cstdint>
 
 namespace numen::platform {
+
+/// Longest slice of a paced loop's sleep while a stop can be requested (ns): how late a stop
+/// request is heard in a period longer than two of them (PeriodicTimer::wait_next(stop, …)).
+inline constexpr std::int64_t kStopSliceNs = 10'000'000;
 
 /// Result of one wait.
 struct Wakeup {
@@ -16,6 +21,9 @@ struct Wakeup {
   /// The caller reached wait_next() after the deadline: the previous period
   /// overran (counted even when less than a whole period late).
   bool overrun = false;
+  /// wait_next(stop, slice_ns) returned early on a stop request: no deadline was waited for
+  /// (deadline_ns is the one that is still next), the caller should not run a period.
+  bool stopped = false;
   /// Wake-up latency woke_ns − deadline_ns (ns); with overrun, how late.
   std::int64_t latency_ns() const noexcept { return woke_ns - deadline_ns; }
 };
@@ -29,6 +37,13 @@ class PeriodicTimer {
   /// or more whole periods, the missed deadlines are skipped (counted in
   /// missed_periods) so the loop re-phases instead of bursting.
   Wakeup wait_next() noexcept;
+  /// As wait_next(), but a stop request is heard during a long period: while the deadline is
+  /// more than 2 × `slice_ns` away it sleeps in slices of `slice_ns` and returns as soon as
+  /// `*stop` is true (Wakeup::stopped, the deadline kept for a later call; also at once when
+  /// it is true on entry); the last 1–2 slices are wait_next()'s one sleep, so without a stop
+  /// a period is paced exactly as by wait_next(). `stop` nullptr or `slice_ns` <= 0:
+  /// wait_next().
+  Wakeup wait_next(const std::atomic<bool>* stop, std::int64_t slice_ns) noexcept;
   /// The period (ns).
   std::int64_t period_ns() const noexcept { return period_ns_; }
 

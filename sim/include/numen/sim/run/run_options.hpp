@@ -116,9 +116,10 @@ std::int64_t compute_phase_override_ns(const Scene& scene, const RunOptions& opt
 /// negative or not finite or with a paced run, a --duration shorter than half a period,
 /// --phase not below dt, an in-memory --trace over kMaxInMemoryTraceBytes, a scene thread
 /// (--scene-rt-priority, --scene-cpu) that the run would not start or that would pre-empt the
-/// device loop, and an output path (--trace, --record, --record-view) that cannot be opened
-/// for writing. Touches no file: a refused run leaves every file as it was (docs/inputs.md,
-/// "Outputs").
+/// device loop, an output path (--trace, --record, --record-view) that cannot be opened for
+/// writing, and an output on the regular file of another output, of the scene file or of the
+/// `--bus log:` log (it would replace it). Touches no file: a refused run leaves every file as
+/// it was (docs/inputs.md, "Outputs").
 void check_run_options(const Scene& scene, const RunOptions& options);
 
 }  // namespace numen::sim
