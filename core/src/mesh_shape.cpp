@@ -107,8 +107,13 @@ Nearest search(const MeshShape& s, const Vec3& p, double bound) noexcept {
     const std::int32_t second = node.index;
     const double d_first = box_distance2(p, nodes[first].lo, nodes[first].hi);
     const double d_second = box_distance2(p, nodes[second].lo, nodes[second].hi);
-    // Push the farther child first: the nearer one is searched first.
-    const bool first_nearer = d_first <= d_second;
+    // Push the farther child first: the nearer one is searched first; when p is in both boxes
+    // (both 0), the one whose centre is nearer.
+    const bool first_nearer =
+        d_first < d_second ||
+        (d_first == d_second &&
+         (p - 0.5 * (nodes[first].lo + nodes[first].hi)).squaredNorm() <=
+             (p - 0.5 * (nodes[second].lo + nodes[second].hi)).squaredNorm());
     const std::int32_t near_child = first_nearer ? first : second;
     const std::int32_t far_child = first_nearer ? second : first;
     const double d_near = first_nearer ? d_first : d_second;

@@ -422,9 +422,6 @@ TEST(NetCollision, IgnoresItsRigidComponentAndItsArticulation) {
   m.body_spheres.push_back(Sphere{Vec3(0.05, 0, 0), 0.02});
   add_icosphere_net(m, 0.05, 2, 0, 0.01);
   const std::vector<Sphere> ball = {{Vec3::Zero(), 0.02}};
-  m.meshes.emplace_back();  // a closed mesh obstacle (icosphere, 320 triangles)
-  EXPECT_EQ(build_mesh_shape(make_icosphere(0.04, 2), m.meshes.back()), "");
-  add_obstacle(m, ShapeType::kMesh, Vec3(0.02, -0.03, 0.01), random_rotation(rng), 1).mesh = 0;
   const int jointed = add_sphere_body(m, Vec3(0, 0.05, 0), ball);     // hinged to body 0
   const int grandchild = add_sphere_body(m, Vec3(0, 0, 0.05), ball);  // hinged to `jointed`
   const int free_body = add_sphere_body(m, Vec3(-0.05, 0, 0), ball);
