@@ -141,7 +141,8 @@ TEST(SceneMesh, DeformableNetFromAnStlFile) {
             "vertex 0 0 1\nvertex 0 1 0\nendloop\nendfacet\nfacet normal 0 0 0\nouter loop\n"
             "vertex 1 0 0\nvertex 0 1 0\nvertex 0 0 1\nendloop\nendfacet\nendsolid t\n");
   const std::string text = replace(kMiniScene, "[[obstacle]]",
-                                   "[[body]]\nname = \"core\"\nmass = 0.05\n\n"
+                                   "[[body]]\nname = \"core\"\nmass = 0.05\n"
+                                   "inertia = [1e-5, 1e-5, 1e-5]\n\n"
                                    "[[deformable]]\nname = \"tet\"\nbody = \"core\"\n"
                                    "mesh = \"file\"\nfile = \"tet.stl\"\nunits = \"mm\"\n"
                                    "scale = 20.0\nmass = 0.01\nstiffness = 200.0\n"
