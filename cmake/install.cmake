@@ -51,7 +51,7 @@ numen_install_headers(${PROJECT_SOURCE_DIR}/core/include
   numen/core/articulation.hpp numen/core/broadphase.hpp numen/core/capacity.hpp
   numen/core/collision.hpp numen/core/contact.hpp numen/core/contact_force.hpp
   numen/core/coupling.hpp numen/core/data.hpp numen/core/data_size.hpp numen/core/feedback.hpp
-  numen/core/integrator.hpp numen/core/joint.hpp numen/core/mesh.hpp numen/core/model.hpp
+  numen/core/integrator.hpp numen/core/joint.hpp numen/core/mesh.hpp numen/core/mesh_shape.hpp numen/core/model.hpp
   numen/core/multirate.hpp numen/core/net_collision.hpp numen/core/net_forces.hpp numen/core/net_model.hpp
   numen/core/net_state.hpp numen/core/rigid_body.hpp numen/core/step.hpp
   numen/core/step_stages.hpp numen/core/types.hpp)
@@ -120,7 +120,7 @@ numen_install_headers(${PROJECT_SOURCE_DIR}/platform/include
 # (study_common.hpp, study_stability_cases.hpp). One folder per concept, as in the source tree
 # (docs/architecture.md "sim").
 numen_install_headers(${PROJECT_SOURCE_DIR}/sim/include
-  numen/sim/scene/obj_mesh.hpp numen/sim/scene/passivity_lint.hpp numen/sim/scene/scene.hpp
+  numen/sim/scene/mesh_file.hpp numen/sim/scene/passivity_lint.hpp numen/sim/scene/scene.hpp
   numen/sim/scene/scene_info.hpp
   numen/sim/scene/trocar_placement.hpp
   numen/sim/input/bus_spec.hpp numen/sim/input/computed_motion.hpp numen/sim/input/input_error.hpp

@@ -128,6 +128,14 @@ void collide_body_obstacle(const Model& model, const Data& data, int b, int o,
           sink.add(b, -1, o, s, -1, mat, g);
       return;
     }
+    case ShapeType::kMesh: {
+      // The body already met the mesh's world AABB (detect_contacts()); each sphere's own
+      // reach is the query's (mesh_signed_distance() rejects far centres on its grid).
+      const MeshShape& shape = model.meshes[static_cast<std::size_t>(ob.mesh)];
+      for (int s = s0; s < s1; ++s)
+        if (sphere_mesh(sw[s], bs[s].radius, shape, ob.pose, g)) sink.add(b, -1, o, s, -1, mat, g);
+      return;
+    }
     case ShapeType::kSphereSet:
       return;  // through the grid
   }
@@ -248,6 +256,19 @@ void build_collision_structures(Model& model) {
         const Vec3 ext = rot.col(2).cwiseAbs() * o.half_length + Vec3::Constant(o.radius);
         o.aabb_min = c - ext;
         o.aabb_max = c + ext;
+        break;
+      }
+      case ShapeType::kMesh: {
+        // The world box of the mesh's local box (its eight corners).
+        o.aabb_min = Vec3::Constant(kInf);
+        o.aabb_max = Vec3::Constant(-kInf);
+        if (o.mesh < 0 || static_cast<std::size_t>(o.mesh) >= model.meshes.size()) break;
+        const MeshShape& shape = model.meshes[static_cast<std::size_t>(o.mesh)];
+        const Vec3 mid = 0.5 * (shape.aabb_min + shape.aabb_max);
+        const Vec3 half = 0.5 * (shape.aabb_max - shape.aabb_min);
+        const Vec3 ext = rot.cwiseAbs() * half;
+        o.aabb_min = c + rot * mid - ext;
+        o.aabb_max = c + rot * mid + ext;
         break;
       }
       case ShapeType::kSphereSet:

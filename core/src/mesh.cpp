@@ -166,6 +166,34 @@ TriangleMesh make_capsule(double radius, double half_length, int segments, int r
   return mesh;
 }
 
+TriangleMesh make_torus(double major_radius, double minor_radius, int segments, int sides) {
+  TriangleMesh mesh;
+  if (!(minor_radius > 0.0) || !(major_radius > minor_radius) || !std::isfinite(major_radius) ||
+      segments < 3 || sides < 3)
+    return mesh;
+  const double two_pi = 2.0 * std::numbers::pi;
+  mesh.vertices.reserve(static_cast<std::size_t>(segments) * static_cast<std::size_t>(sides));
+  for (int i = 0; i < segments; ++i) {
+    const double u = two_pi * i / segments;
+    for (int j = 0; j < sides; ++j) {
+      const double v = two_pi * j / sides;
+      const double ring = major_radius + minor_radius * std::cos(v);
+      mesh.vertices.emplace_back(ring * std::cos(u), ring * std::sin(u),
+                                 minor_radius * std::sin(v));
+    }
+  }
+  const auto at = [&](int i, int j) { return (i % segments) * sides + (j % sides); };
+  mesh.triangles.reserve(2 * mesh.vertices.size());
+  for (int i = 0; i < segments; ++i)
+    for (int j = 0; j < sides; ++j) {
+      // Around the tube (v) and the axis (u): (∂/∂u × ∂/∂v) points outward.
+      const int a = at(i, j), b = at(i + 1, j), c = at(i + 1, j + 1), d = at(i, j + 1);
+      mesh.triangles.push_back({a, b, c});
+      mesh.triangles.push_back({a, c, d});
+    }
+  return mesh;
+}
+
 TriangleMesh make_box(const Vec3& half_extents, int subdivisions) {
   TriangleMesh mesh;
   if (!half_extents.allFinite() || !(half_extents.minCoeff() > 0.0) || subdivisions < 0) {

@@ -170,6 +170,10 @@ std::string finalize_model(Model& model) {
         (o.sphere_begin < 0 || o.sphere_count < 0 ||
          static_cast<std::size_t>(o.sphere_begin + o.sphere_count) > model.static_spheres.size()))
       return who + ": sphere range out of Model::static_spheres";
+    if (o.type == ShapeType::kMesh &&
+        (o.mesh < 0 || static_cast<std::size_t>(o.mesh) >= model.meshes.size() ||
+         model.meshes[static_cast<std::size_t>(o.mesh)].nodes.empty()))
+      return who + ": mesh index out of Model::meshes (or a shape build_mesh_shape() did not build)";
   }
   for (std::size_t i = 0; i < model.static_spheres.size(); ++i) {
     const Sphere& sp = model.static_spheres[i];

@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "detail/narrowphase.hpp"
+#include "numen/core/mesh_shape.hpp"
 
 namespace numen::core {
 namespace {
@@ -122,6 +123,18 @@ bool sphere_capsule(const Vec3& c, double r, const Vec3& center, const Vec3& axi
   const double depth = s - d;
   if (!(depth > 0.0)) return false;
   finish(q + radius * n, n, depth, out);
+  return true;
+}
+
+bool sphere_mesh(const Vec3& c, double r, const MeshShape& shape, const Pose& pose,
+                 ContactGeometry& out) noexcept {
+  const Vec3 local = pose.orientation.conjugate() * (c - pose.position);
+  MeshDistance md;
+  if (!mesh_signed_distance(shape, local, r, md)) return false;
+  const double depth = r - md.distance;
+  if (!(depth > 0.0)) return false;
+  const Vec3 n = pose.orientation * md.normal;
+  finish(pose.position + pose.orientation * md.point, n, depth, out);
   return true;
 }
 

@@ -114,6 +114,7 @@ int gather_obstacles(const Model& model, NetScratch& ns, const Vec3& lo, const V
       case ShapeType::kBox:
       case ShapeType::kSphere:
       case ShapeType::kCapsule:
+      case ShapeType::kMesh:
         if (!boxes_overlap(lo, hi, ob.aabb_min, ob.aabb_max)) continue;
         if (ob.type == ShapeType::kBox)
           ns.obstacle_rotation[static_cast<std::size_t>(n)] =
@@ -189,6 +190,9 @@ inline void collide_node_obstacle(const Model& model, const NetScratch& ns, int 
       case ShapeType::kCapsule:
         hit = sphere_capsule(c, r, ob.pose.position, ns.obstacle_axis[static_cast<std::size_t>(k)],
                              ob.half_length, ob.radius, g);
+        break;
+      case ShapeType::kMesh:
+        hit = sphere_mesh(c, r, model.meshes[static_cast<std::size_t>(ob.mesh)], ob.pose, g);
         break;
       default:
         break;

@@ -157,6 +157,10 @@ std::vector<Ref> brute_force(const Model& m, const Data& d) {
               if (sphere_sphere(c, r, ss.center, ss.radius, x - ss.center, g)) add(k);
             }
             break;
+          case ShapeType::kMesh:
+            if (sphere_mesh(c, r, m.meshes[static_cast<std::size_t>(ob.mesh)], ob.pose, g))
+              add(-1);
+            break;
         }
       }
     }

@@ -179,6 +179,10 @@ std::vector<Ref> brute_force(const Model& m, const Data& d) {
               if (sphere_sphere(c, r, ss.center, ss.radius, fb, g)) add(-1, o, s, mp, Vec3::Zero());
             }
             break;
+          case ShapeType::kMesh:
+            if (sphere_mesh(c, r, m.meshes[static_cast<std::size_t>(ob.mesh)], ob.pose, g))
+              add(-1, o, -1, mp, Vec3::Zero());
+            break;
         }
       }
       for (int b = 0; b < m.num_bodies(); ++b) {
@@ -268,6 +272,9 @@ Model random_scene(std::uint32_t seed) {
     cap.half_length = size(rng);
     cap.radius = 0.5 * size(rng);
   }
+  m.meshes.emplace_back();  // a closed mesh obstacle (icosphere, 320 triangles)
+  EXPECT_EQ(build_mesh_shape(make_icosphere(0.04, 2), m.meshes.back()), "");
+  add_obstacle(m, ShapeType::kMesh, Vec3(0.02, -0.03, 0.01), random_rotation(rng), 1).mesh = 0;
   const int jointed = add_sphere_body(m, Vec3(0.05, 0, 0),
                                       random_ball(rng, 12, Vec3::Zero(), 0.03, 0.005, 0.01), 2);
   add_sphere_body(m, Vec3(-0.06, 0.03, 0), random_ball(rng, 20, Vec3::Zero(), 0.03, 0.004, 0.01),
@@ -306,7 +313,7 @@ void scramble(const Model& m, Data& d, std::mt19937& rng) {
 
 TEST(NetCollision, EqualsBruteForceOnRandomScenes) {
   NUMEN_REQUIRE_ARTICULATION();
-  int by_kind[6] = {0, 0, 0, 0, 0, 0};  // plane, box, sphere, capsule, sphere set, body
+  int by_kind[7] = {0, 0, 0, 0, 0, 0, 0};  // plane, box, sphere, capsule, sphere set, mesh, body
   for (std::uint32_t seed : {1u, 2u, 3u, 4u}) {
     const Model m = random_scene(seed);
     Data d = make_data(m);
@@ -330,7 +337,7 @@ TEST(NetCollision, EqualsBruteForceOnRandomScenes) {
         const int net = m.node_net[static_cast<std::size_t>(node)];
         deepest[net] = std::max(deepest[net], r.g.depth);
         const int o = std::get<2>(r.key);
-        ++by_kind[o < 0 ? 5 : static_cast<int>(m.obstacles[static_cast<std::size_t>(o)].type)];
+        ++by_kind[o < 0 ? 6 : static_cast<int>(m.obstacles[static_cast<std::size_t>(o)].type)];
         EXPECT_NE(std::get<1>(r.key), 1) << "body 1 is jointed to the rigid component";
         EXPECT_EQ(std::get<4>(r.key) / m.num_materials(),
                   m.nets[static_cast<std::size_t>(net)].material);
@@ -340,7 +347,7 @@ TEST(NetCollision, EqualsBruteForceOnRandomScenes) {
       EXPECT_GE(d.max_penetration, std::max(deepest[0], deepest[1]));
     }
   }
-  for (int k = 0; k < 6; ++k) EXPECT_GT(by_kind[k], 10) << "kind " << k << " barely exercised";
+  for (int k = 0; k < 7; ++k) EXPECT_GT(by_kind[k], 10) << "kind " << k << " barely exercised";
 }
 
 TEST(NetCollision, PlaneContactsOfASunkenNet) {

@@ -142,6 +142,10 @@ MjcfTranslation translate_to_mjcf(const core::Model& model, Drive drive,
             << "\"/>\n";
         }
         break;
+      case core::ShapeType::kMesh:
+        throw std::invalid_argument("mjcf: obstacle '" + o.name +
+                                    "' is a mesh: the peer scenes have none, and it is not "
+                                    "translated");
     }
   }
 

@@ -15,6 +15,10 @@
 #include "numen/core/types.hpp"
 
 namespace numen::core {
+struct MeshShape;
+}
+
+namespace numen::core {
 
 /// Contact geometry of one sphere pair / sphere–shape pair.
 struct ContactGeometry {
@@ -60,5 +64,12 @@ bool sphere_box(const Vec3& c, double r, const Vec3& center, const Mat3& rotatio
 /// (ties: x before y before z).
 bool sphere_capsule(const Vec3& c, double r, const Vec3& center, const Vec3& axis,
                     double half_length, double radius, ContactGeometry& out) noexcept;
+
+/// Sphere against the solid inside of a closed mesh `shape` placed at `pose` (mesh frame → world):
+/// the exact signed distance sd of the centre to the surface (mesh_signed_distance(), reach r),
+/// depth r − sd, normal the unit direction of the closest feature (outward), surface point the
+/// closest point. A centre inside, however deep, is pushed out through the nearest surface point.
+bool sphere_mesh(const Vec3& c, double r, const MeshShape& shape, const Pose& pose,
+                 ContactGeometry& out) noexcept;
 
 }  // namespace numen::core

@@ -337,7 +337,8 @@ Scene load_scene(const std::string& path, const SceneOverrides& overrides) {
   if (!core::kWithDeformable && root.has("deformable"))
     root.fail("deformable", "scene \"" + scene.name +
                                 "\" needs deformable nets: this build has NUMEN_WITH_DEFORMABLE=OFF");
-  scene.model = parse_scene_model(root, scene.warnings);
+  const std::filesystem::path dir = std::filesystem::path(path).parent_path();
+  scene.model = parse_scene_model(root, dir, scene.warnings);
   if (overrides.coupling) {
     // An admittance device is position controlled (its own protocol, [device.admittance]):
     // no override turns a scene into one or out of one.
@@ -350,7 +351,6 @@ Scene load_scene(const std::string& path, const SceneOverrides& overrides) {
                            : "an impedance scene cannot be overridden to the admittance coupling");
     scene.model.coupling_mode = *overrides.coupling;
   }
-  const std::filesystem::path dir = std::filesystem::path(path).parent_path();
   scene.trajectory = parse_trajectory(root, scene.model.dt, dir, scene.warnings);
 
   const std::vector<TomlTable> body_tables = root.tables("body");

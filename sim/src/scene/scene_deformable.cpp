@@ -13,7 +13,7 @@
 
 #include "numen/core/mesh.hpp"
 #include "numen/core/net_model.hpp"
-#include "numen/sim/scene/obj_mesh.hpp"
+#include "scene_mesh.hpp"
 
 namespace numen::sim {
 namespace {
@@ -88,7 +88,8 @@ void check_node_count(const TomlTable& t, const char* key, double nodes) {
 
 /// The mesh of one [[deformable]] in its own frame (before scale and placement).
 core::TriangleMesh parse_mesh(const TomlTable& t, const std::filesystem::path& scene_dir) {
-  const std::string kind = t.choice("mesh", {"icosphere", "capsule", "box", "obj"}, std::nullopt);
+  const std::string kind =
+      t.choice("mesh", {"icosphere", "capsule", "box", "obj", "file"}, std::nullopt);
   if (kind == "icosphere") {
     t.allow_only({NUMEN_DEFORMABLE_COMMON_KEYS, "radius", "subdivisions"});
     const double r = t.number_in("radius", 1e-6, kInf, std::nullopt);
@@ -115,31 +116,11 @@ core::TriangleMesh parse_mesh(const TomlTable& t, const std::filesystem::path& s
     check_node_count(t, "subdivisions", 6.0 * side * side - 12.0 * side + 8.0);
     return core::make_box(h, n);
   }
-  t.allow_only({NUMEN_DEFORMABLE_COMMON_KEYS, "file"});
-  std::filesystem::path file = t.string("file");
-  if (file.is_relative()) file = scene_dir / file;
-  std::error_code ec;
-  if (std::filesystem::is_directory(file, ec))
-    t.fail("file", file.string() + " is a directory, not an OBJ mesh file");
-  if (!std::filesystem::is_regular_file(file, ec))
-    t.fail("file", "mesh file not found: " + file.string() + (ec ? " (" + ec.message() + ")" : ""));
-  core::TriangleMesh mesh;
-  try {
-    mesh = load_obj_mesh(file.string());
-  } catch (const InputError& e) {
-    if (e.line() > 0) throw;  // a place in the OBJ file itself
-    t.fail("file", e.what());
-  }
+  // "obj" (the key's first name) and "file": any format the mesh reader takes.
+  t.allow_only({NUMEN_DEFORMABLE_COMMON_KEYS, "file", "units"});
+  core::TriangleMesh mesh = read_scene_mesh_file(t, scene_dir).mesh;
   check_node_count(t, "file", mesh.num_vertices());
   return mesh;
-}
-
-/// Scale of the mesh: [x, y, z], each finite and non-zero (a negative product mirrors it).
-Vec3 parse_scale(const TomlTable& t) {
-  if (!t.has("scale")) return Vec3::Ones();
-  const Vec3 s = t.vec3("scale");
-  if (!(s.cwiseAbs().minCoeff() > 0.0)) t.fail("scale", "every factor must be non-zero");
-  return s;
 }
 
 void parse_deformable(const TomlTable& t, const std::filesystem::path& scene_dir, core::Model& m,
@@ -151,11 +132,12 @@ void parse_deformable(const TomlTable& t, const std::filesystem::path& scene_dir
       t.fail("name", "deformable \"" + settings.name + "\" declared twice");
   settings.body = rigid_component(t, m);
   core::TriangleMesh mesh = parse_mesh(t, scene_dir);  // checks the keys for its kind
-  const Vec3 scale = parse_scale(t);
+  const Vec3 scale = read_mesh_scale(t);
   core::Pose placement;
   placement.position = t.vec3_or("position", Vec3::Zero());
   placement.orientation = t.quaternion_or("orientation", Quat::Identity());
   core::transform_mesh(mesh, scale, placement);
+  if (t.has("file")) check_scaled_mesh(t, mesh, t.string("file"));
 
   settings.material = net_material(t, m, settings.body);
   settings.mass = t.number_in("mass", 1e-12, kInf, std::nullopt);

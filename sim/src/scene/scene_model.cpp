@@ -7,8 +7,13 @@
 #include <limits>
 #include <map>
 #include <sstream>
+#include <utility>
 
 #include <Eigen/Eigenvalues>
+
+#include "numen/core/mesh_shape.hpp"
+#include "numen/sim/scene/mesh_file.hpp"
+#include "scene_mesh.hpp"
 
 namespace numen::sim {
 namespace {
@@ -296,14 +301,43 @@ void parse_bodies(const TomlTable& root, core::Model& m, std::vector<std::string
 /// Rotation taking +z onto the unit vector `dir`.
 Quat z_onto(const Vec3& dir) { return Quat::FromTwoVectors(Vec3::UnitZ(), dir.normalized()); }
 
-void parse_obstacles(const TomlTable& root, core::Model& m, std::vector<std::string>& warnings) {
+/// A mesh obstacle: the closed mesh of `file`, scaled (`units`, `scale`), built into
+/// m.meshes in its own frame; the obstacle's pose places it. An inward-wound mesh is turned
+/// outward with a warning; an open or inconsistently wound one is refused at `file`.
+void parse_mesh_obstacle(const TomlTable& t, const std::filesystem::path& scene_dir,
+                         core::Obstacle& o, core::Model& m, std::vector<std::string>& warnings) {
+  t.allow_only({"name", "type", "material", "file", "units", "scale", "position", "orientation"});
+  o.type = core::ShapeType::kMesh;
+  o.pose.position = t.vec3_or("position", Vec3::Zero());
+  o.pose.orientation = t.quaternion_or("orientation", Quat::Identity());
+  SceneMeshFile file = read_scene_mesh_file(t, scene_dir);
+  core::transform_mesh(file.mesh, read_mesh_scale(t), core::Pose{});
+  check_scaled_mesh(t, file.mesh, file.path);
+  if (signed_volume(file.mesh) < 0.0) {
+    for (auto& tri : file.mesh.triangles) std::swap(tri[1], tri[2]);
+    std::ostringstream os;
+    os << t.file();
+    if (const toml::node* n = t.node("file")) os << ":" << n->source().begin.line;
+    os << ": " << t.key_path("file") << ": " << file.path
+       << ": the triangles wind inward (negative volume): turned outward";
+    warnings.push_back(os.str());
+  }
+  core::MeshShape shape;
+  const std::string err = core::build_mesh_shape(file.mesh, shape);
+  if (!err.empty()) t.fail("file", file.path + ": " + err);
+  o.mesh = static_cast<int>(m.meshes.size());
+  m.meshes.push_back(std::move(shape));
+}
+
+void parse_obstacles(const TomlTable& root, const std::filesystem::path& scene_dir, core::Model& m,
+                     std::vector<std::string>& warnings) {
   for (const TomlTable& t : root.tables("obstacle")) {
     core::Obstacle o;
     o.name = t.string("name");
     for (const auto& other : m.obstacles)
       if (other.name == o.name) t.fail("name", "obstacle \"" + o.name + "\" declared twice");
     const std::string type =
-        t.choice("type", {"plane", "box", "sphere", "capsule", "sphere-set"}, std::nullopt);
+        t.choice("type", {"plane", "box", "sphere", "capsule", "sphere-set", "mesh"}, std::nullopt);
     o.material = material_index(t, "material", m);
     if (type == "plane") {
       t.allow_only({"name", "type", "material", "point", "normal"});
@@ -333,6 +367,8 @@ void parse_obstacles(const TomlTable& root, core::Model& m, std::vector<std::str
       o.pose.orientation = z_onto(b - a);
       o.half_length = 0.5 * (b - a).norm();
       o.radius = t.number_in("radius", 1e-9, kInf, std::nullopt);
+    } else if (type == "mesh") {
+      parse_mesh_obstacle(t, scene_dir, o, m, warnings);
     } else {
       t.allow_only({"name", "type", "material", "position", "orientation", "spheres", "ellipsoid",
                     "sphere_line", "sphere_grid"});
@@ -356,7 +392,8 @@ void parse_obstacles(const TomlTable& root, core::Model& m, std::vector<std::str
 
 }  // namespace
 
-core::Model parse_scene_model(const TomlTable& root, std::vector<std::string>& warnings) {
+core::Model parse_scene_model(const TomlTable& root, const std::filesystem::path& scene_dir,
+                              std::vector<std::string>& warnings) {
   core::Model m;
   m.dt = root.number_in("dt", 1e-7, 1.0, 1e-3);
   m.gravity = root.vec3_or("gravity", Vec3(0.0, 0.0, -9.81));
@@ -392,7 +429,7 @@ core::Model parse_scene_model(const TomlTable& root, std::vector<std::string>& w
   }
   parse_materials(root, m);
   parse_bodies(root, m, warnings);
-  parse_obstacles(root, m, warnings);
+  parse_obstacles(root, scene_dir, m, warnings);
   m.initial_attached_body = -1;  // set by the device section (scene.cpp), which finalizes
   return m;
 }

@@ -5,6 +5,7 @@
 #include <nlohmann/json.hpp>
 
 #include "numen/core/capacity.hpp"
+#include "numen/core/mesh_shape.hpp"
 
 namespace numen::sim {
 namespace {
@@ -25,6 +26,7 @@ const char* shape_name(core::ShapeType t) {
     case core::ShapeType::kSphere: return "sphere";
     case core::ShapeType::kCapsule: return "capsule";
     case core::ShapeType::kSphereSet: return "sphere_set";
+    case core::ShapeType::kMesh: return "mesh";
   }
   return "unknown";
 }
@@ -47,6 +49,28 @@ json obstacle(const core::Model& m, const core::Obstacle& o) {
       for (int i = o.sphere_begin; i < o.sphere_begin + o.sphere_count; ++i)
         spheres.push_back(sphere(m.static_spheres[static_cast<std::size_t>(i)]));
       j["spheres"] = std::move(spheres);
+      break;
+    }
+    case core::ShapeType::kMesh: {
+      // The surface in the obstacle's frame, flat: x y z per vertex (m), i j k per triangle
+      // (outward winding); above kViewMeshMaxTriangles only its bounds (the message stays
+      // well under a recording's kViewRecordMaxBytes).
+      const core::MeshShape& mesh = m.meshes[static_cast<std::size_t>(o.mesh)];
+      j["triangle_count"] = mesh.num_triangles();
+      if (mesh.num_triangles() > kViewMeshMaxTriangles) {
+        j["aabb"] = json::array({vec3(mesh.aabb_min), vec3(mesh.aabb_max)});
+        break;
+      }
+      json vertices = json::array(), triangles = json::array();
+      for (const core::Vec3& v : mesh.vertices) {
+        vertices.push_back(v.x());
+        vertices.push_back(v.y());
+        vertices.push_back(v.z());
+      }
+      for (const std::array<int, 3>& t : mesh.triangles)
+        for (int k : t) triangles.push_back(k);
+      j["vertices"] = std::move(vertices);
+      j["triangles"] = std::move(triangles);
       break;
     }
   }

@@ -120,6 +120,21 @@ export function buildScene(msg) {
       const g = new THREE.CapsuleGeometry(o.radius, 2 * o.half_length, 8, 24);
       g.rotateX(Math.PI / 2);  // three's capsule is along y, numen's along z
       obj = new THREE.Mesh(g, mat);
+    } else if (o.type === 'mesh') {
+      // The obstacle's surface (scene message: flat vertices and triangles in its frame), or its
+      // bounds as a wire box when the server sent only those (a mesh too large to send).
+      if (o.vertices) {
+        const g = new THREE.BufferGeometry();
+        g.setAttribute('position', new THREE.Float32BufferAttribute(o.vertices, 3));
+        g.setIndex(o.triangles);
+        g.computeVertexNormals();
+        obj = new THREE.Mesh(g, mat);
+      } else {
+        const [lo, hi] = o.aabb;
+        const g = new THREE.BoxGeometry(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]);
+        g.translate((hi[0] + lo[0]) / 2, (hi[1] + lo[1]) / 2, (hi[2] + lo[2]) / 2);
+        obj = new THREE.LineSegments(new THREE.EdgesGeometry(g), new THREE.LineBasicMaterial({ color: COLORS.obstacle }));
+      }
     } else if (o.type === 'sphere_set') {
       obj = sphereSet(o.spheres, mat);  // world coordinates already
       for (const s of o.spheres) box.expandByPoint(v3(s).addScalar(s[3])).expandByPoint(v3(s).addScalar(-s[3]));

@@ -499,7 +499,7 @@ TEST(DeformableLoaderErrors, ObjFileThatIsADirectoryIsNamedAsSuch) {
   EXPECT_EQ(e.line(), line_of(text, "file = "));
   EXPECT_EQ(e.column(), column_of(text, "file = ", "\"meshes"));
   EXPECT_EQ(e.key(), "deformable[0].file");
-  EXPECT_EQ(e.message(), (dir / "meshes").string() + " is a directory, not an OBJ mesh file");
+  EXPECT_EQ(e.message(), (dir / "meshes").string() + " is a directory, not a mesh file");
 }
 
 TEST(DeformableLoaderErrors, BadObjFileNamesTheSceneKey) {

@@ -2,7 +2,7 @@
 /// @file collision.hpp
 /// Collision stage (paper §5, sphere-based collision for penalty contacts):
 /// the sphere sets of the dynamic bodies against the static obstacles (plane,
-/// box, sphere, capsule, sphere set) and against each other.
+/// box, sphere, capsule, sphere set, closed mesh: mesh_shape.hpp) and against each other.
 ///
 /// Pipeline of detect_contacts():
 ///   1. world centres c_w = x + R c_b of every body sphere, tight world AABB per body;

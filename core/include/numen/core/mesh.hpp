@@ -1,7 +1,7 @@
 #pragma once
 /// @file mesh.hpp
 /// Triangle surface meshes for deformable god-objects (paper §4.2; Meseure &
-/// Chaillou, JVCA 2000): built-in shapes (icosphere, capsule, box), the
+/// Chaillou, JVCA 2000): built-in shapes (icosphere, capsule, box, torus), the
 /// topology a mass-spring net needs (edges, bending pairs across adjacent
 /// triangles) and lumped per-vertex areas. Load time only: every function
 /// here allocates; nothing is called from step().
@@ -50,6 +50,12 @@ TriangleMesh make_capsule(double radius, double half_length, int segments, int r
 /// vertices for n = subdivisions. Closed, manifold, outward winding. Arguments
 /// out of range give an empty mesh.
 TriangleMesh make_box(const Vec3& half_extents, int subdivisions);
+
+/// Torus around z centred at the origin: tube of `minor_radius` (m, > 0) around the circle of
+/// `major_radius` (m, > minor_radius) in the xy plane; `segments` (≥ 3) vertices along that
+/// circle times `sides` (≥ 3) around the tube, 2·segments·sides triangles. Closed, manifold,
+/// outward winding. Arguments out of range give an empty mesh.
+TriangleMesh make_torus(double major_radius, double minor_radius, int segments, int sides);
 
 /// Checks a mesh for use as a net: at least one triangle, indices in range,
 /// finite vertices, no degenerate triangle (area ≤ 1e-12 × the squared

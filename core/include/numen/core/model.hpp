@@ -12,6 +12,7 @@
 #include "numen/core/articulation.hpp"
 #include "numen/core/broadphase.hpp"
 #include "numen/core/joint.hpp"
+#include "numen/core/mesh_shape.hpp"
 #include "numen/core/net_model.hpp"
 #include "numen/core/types.hpp"
 
@@ -93,7 +94,7 @@ struct BodyModel {
 };
 
 /// Shape of a static obstacle.
-enum class ShapeType : std::uint8_t { kPlane, kBox, kSphere, kCapsule, kSphereSet };
+enum class ShapeType : std::uint8_t { kPlane, kBox, kSphere, kCapsule, kSphereSet, kMesh };
 
 /// A static obstacle, world frame.
 /// - plane: `pose.position` is a point on it, the normal is pose.orientation·z;
@@ -104,6 +105,8 @@ enum class ShapeType : std::uint8_t { kPlane, kBox, kSphere, kCapsule, kSphereSe
 ///   half length `half_length`, `radius` (m).
 /// - sphere set: spheres [sphere_begin, sphere_begin + sphere_count) of
 ///   Model::static_spheres, already in world coordinates.
+/// - mesh: the closed mesh Model::meshes[mesh] (in its own frame) placed by `pose`; the solid is
+///   its inside (mesh_shape.hpp, docs/meshes.md).
 struct Obstacle {
   std::string name;
   ShapeType type = ShapeType::kPlane;
@@ -114,6 +117,7 @@ struct Obstacle {
   double half_length = 0.0;
   int sphere_begin = 0;
   int sphere_count = 0;
+  int mesh = -1;  ///< Index into Model::meshes (mesh obstacles only).
   Vec3 aabb_min = Vec3::Constant(-std::numeric_limits<double>::infinity());  ///< Derived.
   Vec3 aabb_max = Vec3::Constant(std::numeric_limits<double>::infinity());   ///< Derived.
 };
@@ -192,6 +196,7 @@ struct Model {
   std::vector<Sphere> body_spheres;    ///< Body-frame spheres of all bodies.
   std::vector<Obstacle> obstacles;     ///< Static obstacles.
   std::vector<Sphere> static_spheres;  ///< World-frame spheres of sphere-set obstacles.
+  std::vector<MeshShape> meshes;       ///< Shapes of the mesh obstacles (build_mesh_shape()).
   std::vector<JointModel> joints;      ///< Joints of the articulations (a forest; may be empty).
   BaumgarteSettings baumgarte;         ///< Joint drift correction (Eq. 5).
 

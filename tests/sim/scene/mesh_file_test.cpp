@@ -1,13 +1,20 @@
-// Tests of sim/obj_mesh: Wavefront OBJ files through tinyobjloader (quads
-// triangulated, normals/texture coordinates ignored, unused vertices removed)
-// and the InputError for each failure, naming the file.
-#include "numen/sim/scene/obj_mesh.hpp"
+// Tests of sim/mesh_file: mesh files through Assimp — OBJ (quads triangulated, normals/texture
+// coordinates ignored, unused vertices removed), STL (ASCII, binary), PLY, glTF (its node
+// transform applied) — and the InputError for each failure, naming the file.
+#include "numen/sim/scene/mesh_file.hpp"
 
 #include <gtest/gtest.h>
 
-#include <filesystem>
+#include <algorithm>
 
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <limits>
 #include <string>
+#include <vector>
 
 #include "numen/sim/input/input_error.hpp"
 #include "temp_dir.hpp"
@@ -19,25 +26,14 @@ using numen::core::TriangleMesh;
 using numen::core::validate_mesh;
 using numen::core::Vec3;
 using numen::sim::InputError;
-using numen::sim::load_obj_mesh;
+using numen::sim::load_mesh_file;
+using numen::sim::signed_volume;
 using numen::test::TempDir;
-
-/// Signed volume (divergence theorem); > 0 for a closed mesh wound outward.
-double signed_volume(const TriangleMesh& m) {
-  double v = 0.0;
-  for (const auto& t : m.triangles) {
-    v += m.vertices[static_cast<std::size_t>(t[0])].dot(
-             m.vertices[static_cast<std::size_t>(t[1])].cross(
-                 m.vertices[static_cast<std::size_t>(t[2])])) /
-         6.0;
-  }
-  return v;
-}
 
 /// Loads `path` expecting an InputError; returns it.
 InputError load_error(const std::string& path) {
   try {
-    load_obj_mesh(path);
+    load_mesh_file(path);
   } catch (const InputError& e) {
     return e;
   }
@@ -66,23 +62,23 @@ f 4 1 5 8
 
 TEST(ObjMesh, CubeQuadsAreTriangulated) {
   TempDir dir;
-  const TriangleMesh m = load_obj_mesh(dir.write("cube.obj", kCube));
+  const TriangleMesh m = load_mesh_file(dir.write("cube.obj", kCube));
   EXPECT_EQ(m.num_vertices(), 8);
   EXPECT_EQ(m.num_triangles(), 12);
   EXPECT_EQ(validate_mesh(m), "");
   EXPECT_EQ(build_mesh_topology(m).boundary_edges, 0);
   EXPECT_NEAR(signed_volume(m), 8.0, 1e-12);  // winding kept: outward
-  EXPECT_EQ(m.vertices[6], Vec3(1, 1, 1));    // file order kept
+  // Numbered in the order the triangles first use them.
+  EXPECT_EQ(std::count(m.vertices.begin(), m.vertices.end(), Vec3(1, 1, 1)), 1);
 }
 
-// A directory given as the mesh said "cannot open the OBJ file" (or read as empty): it says it
-// is a directory.
+// A directory given as the mesh says it is a directory (not "cannot open").
 TEST(ObjMesh, ADirectoryIsNamedAsSuch) {
   TempDir dir;
   const std::string folder = (dir / "meshes.obj").string();
   std::filesystem::create_directories(folder);
   const InputError e = load_error(folder);
-  EXPECT_EQ(std::string(e.what()), folder + ": is a directory, not an OBJ file");
+  EXPECT_EQ(std::string(e.what()), folder + ": is a directory, not a mesh file");
 }
 
 TEST(ObjMesh, NormalsAndTexcoordsIgnored) {
@@ -94,15 +90,15 @@ TEST(ObjMesh, NormalsAndTexcoordsIgnored) {
                                      "vn 0 0 1\nvn 0 0 1\nvn 0 0 1\n"
                                      "usemtl red\n"
                                      "f 1/1/1 2/2/2 3/3/3\n");
-  const TriangleMesh m = load_obj_mesh(path);
+  const TriangleMesh m = load_mesh_file(path);
   ASSERT_EQ(m.num_vertices(), 3);
   ASSERT_EQ(m.num_triangles(), 1);
   EXPECT_EQ(m.triangles[0], (std::array<int, 3>{0, 1, 2}));
   EXPECT_EQ(m.vertices[1], Vec3(0.5, 0, 0));
   EXPECT_NEAR(m.vertices[2].y(), 0.25, 1e-7);
-  EXPECT_NEAR(m.vertices[2].z(), 0.1, 1e-7);  // read as float by the loader
+  EXPECT_NEAR(m.vertices[2].z(), 0.1, 1e-7);  // read as float by Assimp
   // Normal-only and negative (relative) indices too.
-  const TriangleMesh n = load_obj_mesh(dir.write("rel.obj",
+  const TriangleMesh n = load_mesh_file(dir.write("rel.obj",
                                                  "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\n"
                                                  "f -3//1 -2//1 -1//1\n"));
   EXPECT_EQ(n.triangles[0], (std::array<int, 3>{0, 1, 2}));
@@ -116,7 +112,7 @@ TEST(ObjMesh, UnusedVerticesRemovedAndIndicesCompacted) {
                                      "v 7 7 7\n"  // unused
                                      "v 0 1 0\nv 1 1 0\n"
                                      "f 2 3 5\nf 3 6 5\n");
-  const TriangleMesh m = load_obj_mesh(path);
+  const TriangleMesh m = load_mesh_file(path);
   ASSERT_EQ(m.num_vertices(), 4);
   EXPECT_EQ(m.vertices[0], Vec3(0, 0, 0));
   EXPECT_EQ(m.vertices[1], Vec3(1, 0, 0));
@@ -134,7 +130,7 @@ TEST(ObjMesh, SeveralShapesShareTheVertexList) {
                                      "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\n"
                                      "o a\nf 1 2 3\n"
                                      "o b\nf 2 4 3\n");
-  const TriangleMesh m = load_obj_mesh(path);
+  const TriangleMesh m = load_mesh_file(path);
   EXPECT_EQ(m.num_vertices(), 4);
   EXPECT_EQ(m.num_triangles(), 2);
 }
@@ -207,7 +203,7 @@ TEST(ObjMesh, ParseErrorCarriesTheLine) {
 namespace {
 
 TEST(ObjMesh, MalformedVertexCoordinatesAreRefusedAtTheirLine) {
-  // tinyobjloader reads a bad or missing coordinate as 0: checked before it.
+  // Assimp reads a bad or missing coordinate as 0: checked before it.
   numen::test::TempDir dir;
   const std::string faces = "f 1 2 3\n";
   const std::string bad = dir.write("bad_v.obj", "v 0 0 0\nv 1 0 0\nv 0 1 abc\n" + faces);
@@ -220,10 +216,135 @@ TEST(ObjMesh, MalformedVertexCoordinatesAreRefusedAtTheirLine) {
   const std::string inf_v = dir.write("inf_v.obj", "v 0 0 0\nv inf 0 0\nv 0 1 0\n" + faces);
   EXPECT_EQ(load_error(inf_v).line(), 2);
   // Colours after the coordinates and comments are fine.
-  EXPECT_EQ(numen::sim::load_obj_mesh(dir.write(
+  EXPECT_EQ(numen::sim::load_mesh_file(dir.write(
                 "ok.obj", "v 0 0 0 1 0 0\nv 1 0 0 # corner\nv 0 1 0\n" + faces))
                 .num_vertices(),
             3);
+}
+
+}  // namespace
+
+namespace {
+
+using numen::test::TempDir;
+
+/// The unit tetrahedron (outward winding) the format tests read.
+void expect_tetrahedron(const TriangleMesh& m, const Vec3& offset) {
+  ASSERT_EQ(m.num_vertices(), 4);
+  ASSERT_EQ(m.num_triangles(), 4);
+  EXPECT_EQ(validate_mesh(m), "");
+  EXPECT_EQ(build_mesh_topology(m).boundary_edges, 0);
+  EXPECT_NEAR(signed_volume(m), 1.0 / 6.0, 1e-7);
+  for (const Vec3& v : {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 1)})
+    EXPECT_EQ(std::count(m.vertices.begin(), m.vertices.end(), v + offset), 1) << v.transpose();
+}
+
+constexpr const char* kTetStl = R"(solid tet
+facet normal 0 0 -1
+ outer loop
+  vertex 0 0 0
+  vertex 0 1 0
+  vertex 1 0 0
+ endloop
+endfacet
+facet normal 0 -1 0
+ outer loop
+  vertex 0 0 0
+  vertex 1 0 0
+  vertex 0 0 1
+ endloop
+endfacet
+facet normal -1 0 0
+ outer loop
+  vertex 0 0 0
+  vertex 0 0 1
+  vertex 0 1 0
+ endloop
+endfacet
+facet normal 1 1 1
+ outer loop
+  vertex 1 0 0
+  vertex 0 1 0
+  vertex 0 0 1
+ endloop
+endfacet
+endsolid tet
+)";
+
+/// A binary STL of `tris` (each three vertices), normals zero.
+std::string binary_stl(const std::vector<std::array<Vec3, 3>>& tris) {
+  std::string out(80, ' ');
+  const auto n = static_cast<std::uint32_t>(tris.size());
+  out.append(reinterpret_cast<const char*>(&n), 4);
+  for (const auto& t : tris) {
+    float f[12] = {0, 0, 0};
+    for (int k = 0; k < 3; ++k)
+      for (int c = 0; c < 3; ++c) f[3 + 3 * k + c] = static_cast<float>(t[static_cast<std::size_t>(k)][c]);
+    out.append(reinterpret_cast<const char*>(f), sizeof f);
+    out.append(2, '\0');
+  }
+  return out;
+}
+
+std::vector<std::array<Vec3, 3>> tet_triangles() {
+  const Vec3 o(0, 0, 0), x(1, 0, 0), y(0, 1, 0), z(0, 0, 1);
+  return {{o, y, x}, {o, x, z}, {o, z, y}, {x, y, z}};
+}
+
+TEST(MeshFile, StlAsciiAndBinary) {
+  TempDir dir;
+  expect_tetrahedron(load_mesh_file(dir.write("tet.stl", kTetStl)), Vec3::Zero());
+  expect_tetrahedron(load_mesh_file(dir.write("tet_bin.stl", binary_stl(tet_triangles()))),
+                     Vec3::Zero());
+}
+
+TEST(MeshFile, Ply) {
+  TempDir dir;
+  const std::string ply =
+      "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+      "property float z\nelement face 4\nproperty list uchar int vertex_indices\nend_header\n"
+      "0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n";
+  expect_tetrahedron(load_mesh_file(dir.write("tet.ply", ply)), Vec3::Zero());
+}
+
+TEST(MeshFile, GltfWithItsNodeTransform) {
+  TempDir dir;
+  // The tetrahedron in an embedded buffer, its node translated by (0, 0, 2).
+  const std::string gltf =
+      R"({"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[0]}],"nodes":[{"mesh":0,"translation":[0,0,2]}],"meshes":[{"primitives":[{"attributes":{"POSITION":0},"indices":1}]}],"buffers":[{"byteLength":72,"uri":"data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAAAAAAAAAAAAAAAIA/AAACAAEAAAABAAMAAAADAAIAAQACAAMA"}],"bufferViews":[{"buffer":0,"byteOffset":0,"byteLength":48},{"buffer":0,"byteOffset":48,"byteLength":24}],"accessors":[{"bufferView":0,"componentType":5126,"count":4,"type":"VEC3","max":[1,1,1],"min":[0,0,0]},{"bufferView":1,"componentType":5123,"count":12,"type":"SCALAR"}]})";
+  expect_tetrahedron(load_mesh_file(dir.write("tet.gltf", gltf)), Vec3(0, 0, 2));
+}
+
+TEST(MeshFile, NonFiniteBinaryStlVertexIsRefused) {
+  TempDir dir;
+  auto tris = tet_triangles();
+  tris[3][2] = Vec3(0, 0, std::numeric_limits<double>::quiet_NaN());
+  const std::string path = dir.write("nan.stl", binary_stl(tris));
+  const std::string what = load_error(path).what();
+  EXPECT_NE(what.find(path), std::string::npos) << what;
+  EXPECT_NE(what.find("not finite"), std::string::npos) << what;
+}
+
+TEST(MeshFile, TriangleBoundIsNamed) {
+  TempDir dir;
+  const std::string path = dir.write("tet.stl", kTetStl);
+  try {
+    load_mesh_file(path, 3);
+    ADD_FAILURE() << "no InputError";
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find(path), std::string::npos) << what;
+    EXPECT_NE(what.find("4 triangles, more than the 3"), std::string::npos) << what;
+    EXPECT_NE(what.find("kMaxMeshTriangles"), std::string::npos) << what;
+  }
+  EXPECT_EQ(load_mesh_file(path, 4).num_triangles(), 4);
+}
+
+TEST(MeshFile, UnparsableFileNamesAssimp) {
+  TempDir dir;
+  const std::string path = dir.write("junk.stl", "solid x\nfacet normal 0 0 1\n outer loop\n");
+  const std::string what = load_error(path).what();
+  EXPECT_NE(what.find(path), std::string::npos) << what;
 }
 
 }  // namespace

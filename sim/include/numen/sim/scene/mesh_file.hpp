@@ -1,0 +1,39 @@
+#pragma once
+/// @file mesh_file.hpp
+/// Triangle meshes from files, read with Debian's Assimp (libassimp-dev), the one reader of every
+/// mesh a scene uses: the deformable nets' and the mesh obstacles' (docs/meshes.md).
+
+#include <string>
+
+#include "numen/core/mesh.hpp"
+
+namespace numen::sim {
+
+/// Most triangles a mesh file may have. The bound is memory: loading a mesh obstacle peaks at
+/// about 0.56 GB per million triangles (Assimp's copy, numen's vertex map and mesh, the
+/// core::MeshShape being built), of which the kept shape is 0.145 GB; 2 million keeps one mesh
+/// near 1.1 GB, and a 1-million-triangle mesh loads (docs/meshes.md, "Limits").
+inline constexpr int kMaxMeshTriangles = 2'000'000;
+
+/// Reads the triangle surface of a mesh file (STL ASCII or binary, Wavefront OBJ, PLY, glTF 2.0
+/// .gltf/.glb, and Assimp's other formats) in the file's own frame and units: every mesh of the
+/// file, each node's transform applied (glTF), polygons triangulated (a face's winding kept),
+/// points and lines dropped, positions only (normals, texture coordinates, colours and materials
+/// are ignored; an OBJ's .mtl is not needed). Vertices at the same position are one vertex
+/// (across the file's meshes too), numbered in the order the triangles first use them. The
+/// result passes core::validate_mesh().
+/// An OBJ file's `v` and `f` lines are checked first, at their line: a coordinate that is not a
+/// finite number, a vertex without three coordinates, a face of fewer than three vertices or
+/// one naming a vertex that does not exist (OBJ counts from 1; negative: relative).
+/// Throws InputError naming `path` (and the line, for an OBJ line) when the file is missing, a
+/// directory, unreadable, empty, not parsed by Assimp (its message appended), has no triangle,
+/// more than `max_triangles` triangles (the bound named), a non-finite vertex, or is an
+/// invalid mesh (validate_mesh's message: degenerate triangle, edge shared by more than two
+/// triangles). Load time only.
+core::TriangleMesh load_mesh_file(const std::string& path, int max_triangles = kMaxMeshTriangles);
+
+/// Signed volume of a triangle mesh (m³; divergence theorem): > 0 for a closed mesh wound
+/// outward, < 0 wound inward.
+double signed_volume(const core::TriangleMesh& mesh);
+
+}  // namespace numen::sim

@@ -1,0 +1,106 @@
+// Cost of the mesh obstacles' signed-distance query (core/mesh_shape.hpp, docs/meshes.md) against
+// the triangle count, and of building the shape. Torus of R 4 cm, r 1.5 cm (core::make_torus) at
+// 1k, 10k and 100k triangles (16×32, 50×100, 158×316 vertices).
+// MeshContact: one query per contact — 4096 sphere centres outside the analytic surface, closer
+// than the sphere radius 5 mm (uniform in the offset: penetrations 0–5 mm), reach 5 mm, cycled;
+// the time per iteration is the cost of one sphere–mesh contact. Counters: triangles,
+// tree_depth, hit_fraction (queries that found the contact; the rest are chord error).
+// MeshContactSweep: the same offsets, the centres in the order a tool sweeping once around the
+// torus's outer rim (v within ±9°) meets them: consecutive queries share cache lines.
+// MeshContactInside: centres inside, 0–5 mm deep (a sphere sunk past its centre), where the
+// tube's concavity leaves many triangles nearly as close as the nearest.
+// MeshMiss: the same points moved 2 cm out along the torus normal (in the bounds box or beyond,
+// no contact): the cost of a sphere that is near but not touching.
+// MeshBuild: build_mesh_shape() (tree, normals, edges, the 32³-cell grid); counter memory_MB.
+//
+//   ./build/tests/numen_bench --benchmark_filter='Mesh(Contact|Miss|Build)' --benchmark_repetitions=3
+
+#include <benchmark/benchmark.h>
+
+#include <cmath>
+#include <numbers>
+#include <random>
+#include <vector>
+
+#include "numen/core/mesh.hpp"
+#include "numen/core/mesh_shape.hpp"
+
+namespace {
+
+namespace core = numen::core;
+using core::Vec3;
+
+constexpr double kMajor = 0.04, kMinor = 0.015, kReach = 0.005;
+
+/// Sides around the tube for about `triangles` triangles (segments = 2 sides).
+int sides_for(int triangles) {
+  return static_cast<int>(std::lround(std::sqrt(triangles / 4.0)));
+}
+
+core::MeshShape torus_shape(int triangles) {
+  const int sides = sides_for(triangles);
+  core::MeshShape s;
+  core::build_mesh_shape(core::make_torus(kMajor, kMinor, 2 * sides, sides), s);
+  return s;
+}
+
+/// Points at a signed offset in [lo, hi] (m) from the analytic torus surface along its normal;
+/// `sweep`: ordered along the torus (u increasing) as a tool would meet them, so that consecutive
+/// queries touch neighbouring triangles; otherwise in random order over the whole surface.
+std::vector<Vec3> torus_points(double lo, double hi, bool sweep) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> angle(0.0, 2.0 * std::numbers::pi), offset(lo, hi);
+  std::vector<Vec3> out(4096);
+  for (std::size_t k = 0; k < out.size(); ++k) {
+    Vec3& p = out[k];
+    const double u = sweep ? 2.0 * std::numbers::pi * static_cast<double>(k) / out.size() : angle(rng);
+    const double v = angle(rng) * (sweep ? 0.05 : 1.0);
+    const double rho = kMinor + offset(rng);
+    const double ring = kMajor + rho * std::cos(v);
+    p = Vec3(ring * std::cos(u), ring * std::sin(u), rho * std::sin(v));
+  }
+  return out;
+}
+
+void run_queries(benchmark::State& state, double lo, double hi, bool sweep = false) {
+  const core::MeshShape s = torus_shape(static_cast<int>(state.range(0)));
+  const std::vector<Vec3> points = torus_points(lo, hi, sweep);
+  std::size_t i = 0;
+  int hits = 0;
+  for (auto _ : state) {
+    core::MeshDistance d;
+    hits += core::mesh_signed_distance(s, points[i], kReach, d) ? 1 : 0;
+    benchmark::DoNotOptimize(d);
+    i = (i + 1) & (points.size() - 1);
+  }
+  state.counters["triangles"] = s.num_triangles();
+  state.counters["tree_depth"] = s.tree_depth;
+  state.counters["hit_fraction"] = static_cast<double>(hits) / static_cast<double>(state.iterations());
+}
+
+void MeshContact(benchmark::State& state) { run_queries(state, 0.0, kReach); }
+void MeshContactInside(benchmark::State& state) { run_queries(state, -kReach, 0.0); }
+void MeshContactSweep(benchmark::State& state) { run_queries(state, 0.0, kReach, true); }
+void MeshMiss(benchmark::State& state) { run_queries(state, 0.02, 0.02); }
+
+void MeshBuild(benchmark::State& state) {
+  const int sides = sides_for(static_cast<int>(state.range(0)));
+  const core::TriangleMesh mesh = core::make_torus(kMajor, kMinor, 2 * sides, sides);
+  std::size_t bytes = 0;
+  for (auto _ : state) {
+    core::MeshShape s;
+    core::build_mesh_shape(mesh, s);
+    bytes = s.memory_bytes();
+    benchmark::DoNotOptimize(s);
+  }
+  state.counters["triangles"] = mesh.num_triangles();
+  state.counters["memory_MB"] = static_cast<double>(bytes) / 1e6;
+}
+
+BENCHMARK(MeshContact)->Arg(1000)->Arg(10000)->Arg(100000);
+BENCHMARK(MeshContactSweep)->Arg(1000)->Arg(10000)->Arg(100000);
+BENCHMARK(MeshContactInside)->Arg(1000)->Arg(10000)->Arg(100000);
+BENCHMARK(MeshMiss)->Arg(1000)->Arg(10000)->Arg(100000);
+BENCHMARK(MeshBuild)->Arg(1000)->Arg(10000)->Arg(100000)->Unit(benchmark::kMillisecond);
+
+}  // namespace

@@ -1,0 +1,155 @@
+// Tests of sim/scene's mesh keys (scene_mesh.cpp, the mesh obstacles of scene_model.cpp, the
+// nets' mesh files of scene_deformable.cpp): the shipped mesh scene loads and runs with its probe
+// on the surface, units/scale/placement reach the model, and each bad mesh is an InputError at
+// the scene's line and key that names the mesh file.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <string>
+
+#include "numen/core/mesh_shape.hpp"
+#include "numen/sim/input/input_error.hpp"
+#include "numen/sim/run/run.hpp"
+#include "numen/sim/run/run_summary.hpp"
+#include "numen/sim/scene/scene.hpp"
+#include "build_features.hpp"
+#include "scene_text.hpp"
+#include "temp_dir.hpp"
+
+namespace {
+
+using numen::core::MeshDistance;
+using numen::core::ShapeType;
+using numen::core::Vec3;
+using numen::sim::InputError;
+using numen::sim::load_scene;
+using numen::sim::Scene;
+using numen::test::kMiniScene;
+using numen::test::line_of;
+using numen::test::replace;
+using numen::test::TempDir;
+
+/// A tetrahedron of side 1 (file units), outward winding.
+constexpr const char* kTet = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
+
+/// The mini scene with a mesh obstacle of `keys` (after name and type) in place of its floor.
+std::string with_mesh_obstacle(const std::string& keys) {
+  return replace(kMiniScene,
+                 "name = \"floor\"\ntype = \"plane\"\npoint = [0.0, 0.0, -0.1]\n"
+                 "normal = [0.0, 0.0, 1.0]",
+                 "name = \"organ\"\ntype = \"mesh\"\n" + keys);
+}
+
+TEST(SceneMesh, ShippedMeshSceneLoadsAndItsProbeStaysOnTheSurface) {
+  const Scene s = load_scene(std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/mesh.toml");
+  ASSERT_EQ(s.model.obstacles.size(), 1u);
+  EXPECT_EQ(s.model.obstacles[0].type, ShapeType::kMesh);
+  ASSERT_EQ(s.model.meshes.size(), 1u);
+  EXPECT_EQ(s.model.meshes[0].num_triangles(), 1280);
+  // Millimetres to metres: the lobe's semi-axes are 60 × 40 × 25 mm.
+  EXPECT_NEAR(s.model.meshes[0].aabb_min.x(), -0.060, 1e-6);
+  EXPECT_NEAR(s.model.meshes[0].aabb_max.y(), 0.040, 1e-6);
+  const numen::sim::RunSummary r = numen::sim::run_scene(s, numen::sim::RunOptions{});
+  EXPECT_EQ(r.exit_status, 0);
+  EXPECT_GE(r.contacts_max, 1);
+  EXPECT_EQ(r.contact_overflow, 0);
+  EXPECT_GT(r.target_penetration_max_mm, 7.0);  // the hand goes 8 mm in
+  EXPECT_LT(r.tool_penetration_max_mm, 2.0);    // the probe stays on the surface
+}
+
+TEST(SceneMesh, UnitsScaleAndPlacementReachTheModel) {
+  TempDir dir;
+  dir.write("tet.obj", kTet);
+  const Scene s = load_scene(dir.write(
+      "s.toml", with_mesh_obstacle("file = \"tet.obj\"\nunits = \"cm\"\nscale = 2.0\n"
+                                   "position = [0.0, 0.0, -0.1]\n"
+                                   "orientation = [0.0, 0.0, 0.0, 1.0]\n")));
+  const auto& ob = s.model.obstacles[0];
+  const auto& shape = s.model.meshes[static_cast<std::size_t>(ob.mesh)];
+  EXPECT_NEAR(shape.aabb_max.x(), 0.02, 1e-9);  // 1 × cm × 2, in the mesh frame
+  EXPECT_NEAR(ob.pose.position.z(), -0.1, 1e-15);
+  // Turned half a turn about z: the world box spans x in [−0.02, 0].
+  EXPECT_NEAR(ob.aabb_min.x(), -0.02, 1e-9);
+  EXPECT_NEAR(ob.aabb_max.x(), 0.0, 1e-9);
+  // Per-axis scale, and the default (metres) for a mesh in metres.
+  const Scene t = load_scene(
+      dir.write("t.toml", with_mesh_obstacle("file = \"tet.obj\"\nscale = [0.01, 0.02, 0.03]\n")));
+  EXPECT_NEAR(t.model.meshes[0].aabb_max.z(), 0.03, 1e-9);
+}
+
+TEST(SceneMesh, InwardWindingIsTurnedWithAWarning) {
+  TempDir dir;
+  dir.write("inward.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nf 1 4 2\nf 1 3 4\nf 2 4 3\n");
+  const Scene s = load_scene(dir.write("s.toml", with_mesh_obstacle("file = \"inward.obj\"\n")));
+  ASSERT_EQ(s.model.meshes.size(), 1u);
+  bool warned = false;
+  for (const std::string& w : s.warnings) warned |= w.find("wind inward") != std::string::npos;
+  EXPECT_TRUE(warned);
+  MeshDistance d;
+  ASSERT_TRUE(numen::core::mesh_signed_distance(s.model.meshes[0], Vec3(0.1, 0.1, 0.1), 1.0, d));
+  EXPECT_LT(d.distance, 0.0);  // inside is inside
+}
+
+/// The InputError of `text` (scene in `dir`) at the line holding `needle` and `key`, naming
+/// `mesh_file` and containing `message`.
+void expect_mesh_error(const TempDir& dir, const std::string& text, const std::string& needle,
+                       const std::string& key, const std::string& mesh_file,
+                       const std::string& message) {
+  const InputError e = numen::test::load_error(dir, text);
+  const std::string what = e.what();
+  EXPECT_EQ(e.line(), line_of(text, needle)) << what;
+  EXPECT_EQ(e.key(), key) << what;
+  EXPECT_NE(what.find("bad.toml"), std::string::npos) << what;
+  EXPECT_NE(what.find(mesh_file), std::string::npos) << what;
+  EXPECT_NE(what.find(message), std::string::npos) << what;
+}
+
+TEST(SceneMesh, BadMeshesAreLocatedAtTheSceneKeyAndNameTheMeshFile) {
+  TempDir dir;
+  // Missing.
+  expect_mesh_error(dir, with_mesh_obstacle("file = \"nowhere.stl\"\n"), "file = ",
+                    "obstacle[0].file", "nowhere.stl", "mesh file not found");
+  // Empty.
+  dir.write("empty.obj", "");
+  expect_mesh_error(dir, with_mesh_obstacle("file = \"empty.obj\"\n"), "file = ",
+                    "obstacle[0].file", "empty.obj", "no face");
+  // A non-finite vertex: the mesh file's line too.
+  dir.write("nan.obj", "v 0 0 0\nv 1 0 0\nv 0 nan 0\nf 1 2 3\n");
+  expect_mesh_error(dir, with_mesh_obstacle("file = \"nan.obj\"\n"), "file = ",
+                    "obstacle[0].file", "nan.obj:3:", "not a finite number");
+  // Open where a closed surface is needed: the boundary edges counted.
+  dir.write("open.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\n");
+  expect_mesh_error(dir, with_mesh_obstacle("file = \"open.obj\"\n"), "file = ",
+                    "obstacle[0].file", "open.obj", "open: 3 boundary edges");
+  // Degenerate after scaling: flattened to 1e-13 of its height.
+  dir.write("tet.obj", kTet);
+  expect_mesh_error(dir, with_mesh_obstacle("file = \"tet.obj\"\nscale = [1.0, 1.0, 1e-13]\n"),
+                    "scale = ", "obstacle[0].scale", "tet.obj", "degenerate");
+  // Units outside the list.
+  const InputError u = numen::test::load_error(
+      dir, with_mesh_obstacle("file = \"tet.obj\"\nunits = \"inch\"\n"));
+  EXPECT_EQ(u.key(), "obstacle[0].units") << u.what();
+}
+
+TEST(SceneMesh, DeformableNetFromAnStlFile) {
+  NUMEN_REQUIRE_DEFORMABLE();
+  TempDir dir;
+  dir.write("tet.stl",
+            "solid t\nfacet normal 0 0 0\nouter loop\nvertex 0 0 0\nvertex 0 1 0\nvertex 1 0 0\n"
+            "endloop\nendfacet\nfacet normal 0 0 0\nouter loop\nvertex 0 0 0\nvertex 1 0 0\n"
+            "vertex 0 0 1\nendloop\nendfacet\nfacet normal 0 0 0\nouter loop\nvertex 0 0 0\n"
+            "vertex 0 0 1\nvertex 0 1 0\nendloop\nendfacet\nfacet normal 0 0 0\nouter loop\n"
+            "vertex 1 0 0\nvertex 0 1 0\nvertex 0 0 1\nendloop\nendfacet\nendsolid t\n");
+  const std::string text = replace(kMiniScene, "[[obstacle]]",
+                                   "[[body]]\nname = \"core\"\nmass = 0.05\n"
+                                   "inertia = [1e-5, 1e-5, 1e-5]\n\n"
+                                   "[[deformable]]\nname = \"tet\"\nbody = \"core\"\n"
+                                   "mesh = \"file\"\nfile = \"tet.stl\"\nunits = \"mm\"\n"
+                                   "scale = 20.0\nmass = 0.01\nstiffness = 200.0\n"
+                                   "tie_stiffness = 500.0\n\n[[obstacle]]");
+  const Scene s = load_scene(dir.write("net.toml", text));
+  ASSERT_EQ(s.model.num_nets(), 1);
+  EXPECT_EQ(s.model.nets[0].node_count, 4);
+}
+
+}  // namespace
