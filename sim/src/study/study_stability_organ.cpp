@@ -52,7 +52,9 @@ core::Model plunge_model(const Scene& scene, double radius, const Vec3& start) {
   tool.initial_pose = core::Pose{start, core::Quat::Identity()};
   tool.initial_twist = core::Twist{};
   m.body_spheres = {core::Sphere{Vec3::Zero(), radius}};
-  m.bodies = {s.bodies[static_cast<std::size_t>(net.body)], tool};
+  core::BodyModel anchor = s.bodies[static_cast<std::size_t>(net.body)];
+  anchor.sphere_begin = 0;  // no spheres, in this model's (one-sphere) table
+  m.bodies = {anchor, tool};
   m.initial_attached_body = 1;
   core::TriangleMesh mesh;
   for (int i = 0; i < net.node_count; ++i)
@@ -122,8 +124,8 @@ StabilityRow organ_run(const Scene& scene, core::Integrator integrator, double h
   monitor.fill(r);
   char note[200];
   std::snprintf(note, sizeof note,
-                "%d node contacts at the end, organ pushed %.3g mm from rest at most (end), max "
-                "strain %.3g, tool %.3g mm past the rest surface at the end",
+                "at the end: %d node contacts, organ %.3g mm from its rest shape, max strain %.3g, "
+                "tool %.3g mm past the rest surface",
                 data.num_node_contacts, 1e3 * data.nets[0].max_tie_stretch, data.nets[0].max_strain,
                 1e3 * (data.bodies[1].position - start).dot(axis) - 20.0);
   r.note = note;

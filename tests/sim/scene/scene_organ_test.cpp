@@ -116,8 +116,8 @@ TEST(OrganLoader, OrganStartingInsideTheToolIsWarnedNamingBoth) {
 TEST(OrganLoaderErrors, AnchoredBodyTakesNoCouplingLinkOrVelocity) {
   NUMEN_REQUIRE_DEFORMABLE();
   TempDir dir;
-  const std::string coupling =
-      replace(mini_organ(), "anchored = true\n", "anchored = true\n[body.coupling]\nstiffness = 10.0\n");
+  const std::string coupling = replace(mini_organ(), "position = [0.0, 0.0, -0.04]\n",
+                                       "position = [0.0, 0.0, -0.04]\n[body.coupling]\nstiffness = 10.0\n");
   const InputError a = load_error(dir, coupling);
   EXPECT_EQ(a.key(), "body[1].coupling") << a.what();
   EXPECT_NE(a.message().find("is anchored (a static body held where it starts): it takes no coupling"),
