@@ -62,8 +62,12 @@ void parse_multirate(const TomlTable& root, Scene& scene) {
     if (!in_god_object[static_cast<std::size_t>(net.body)])
       table->fail("scene_dt", "net '" + net.name + "' is on body '" +
                                   model.bodies[static_cast<std::size_t>(net.body)].name +
-                                  "', which is in no body's god-object the device holds: the "
-                                  "device loop would not feel it");
+                                  (model.bodies[static_cast<std::size_t>(net.body)].anchored
+                                       ? "', an organ's anchored core: organs do not run "
+                                         "multirate yet (docs/deformable.md, \"Organs\"), the "
+                                         "device loop would not feel it"
+                                       : "', which is in no body's god-object the device holds: "
+                                         "the device loop would not feel it"));
   for (const platform::AxisPrescription& p : scene.binding.prescriptions)
     if (!in_god_object[static_cast<std::size_t>(model.joints[static_cast<std::size_t>(p.joint)].child)])
       table->fail("scene_dt", "joint '" + model.joints[static_cast<std::size_t>(p.joint)].name +

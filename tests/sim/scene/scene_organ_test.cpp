@@ -190,3 +190,16 @@ TEST(OrganShippedScene, TheDeformableOrganTakesTheLatticesPlaceAndTheHandGoesInt
   EXPECT_LT(deepest, 0.020);
   EXPECT_GT(inside, 30u);
 }
+
+TEST(OrganLoaderErrors, AnOrganDoesNotRunMultirateYet) {
+  NUMEN_REQUIRE_DEFORMABLE();
+  const std::string text =
+      replace(mini_organ(), "[device]", "[multirate]\nscene_dt = 0.01\nmargin = 0.01\n\n[device]");
+  TempDir dir;
+  const InputError e = load_error(dir, text);
+  EXPECT_EQ(e.key(), "multirate.scene_dt") << e.what();
+  EXPECT_NE(e.message().find("net 'liver' is on body 'organ_core', an organ's anchored core: organs "
+                             "do not run multirate yet"),
+            std::string::npos)
+      << e.what();
+}
