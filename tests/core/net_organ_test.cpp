@@ -14,6 +14,7 @@
 #include "alloc_counter.hpp"
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"
+#include "numen/core/multirate.hpp"
 #include "numen/core/step.hpp"
 #include "numen/core/step_stages.hpp"
 #include "organ_indentation.hpp"
@@ -153,6 +154,42 @@ TEST(NetOrgan, StepsPressingTheShippedOrganDoNotAllocate) {
   EXPECT_EQ(count, 0);
   EXPECT_GT(max_contacts, 3) << "the tool must press on the organ";
   EXPECT_GT(dent, 1e-3);
+}
+
+TEST(NetOrgan, MultirateDeviceLoopFeelsTheOrganAsTheSingleRateStepDoes) {
+  // The god-object pressed 5 mm into the patch: single-rate at 10 kHz, and multirate with the
+  // organ in a 1 kHz scene loop and the god-object at 10 kHz against the organ's planes on its
+  // sphere (docs/deformable.md, "Organs in multirate"). At rest both hold the god-object on the
+  // dented organ: its height and the feedback within 15 % of the dent and the force.
+  const double dt = 1e-4;
+  const core::Model m = organ_model(patch(), OrganParams{}, dt, core::CouplingMode::kGodObject,
+                                    0.005, Vec3(0, 0, 0.012));
+  const double z_touch = 0.005 + m.node_radius[0];
+  core::Data single = core::make_data(m);
+  core::MultirateGodObject mr(m, 1, {10, 0.002, {}});
+  double deepest_single = 0.0, deepest_mr = 0.0;
+  for (int k = 0; k < 10000; ++k) {
+    const Vec3 target(0.0, 0.0, z_touch - 0.005 * std::min(1.0, k * dt / 0.3));
+    single.target.position = target;
+    mr.device_data().target.position = target;
+    core::step(m, single);
+    mr.step();
+    ASSERT_EQ(single.status, core::kStepOk) << k;
+    deepest_single = std::max(deepest_single, z_touch - single.bodies[1].position.z());
+    deepest_mr = std::max(deepest_mr, z_touch - mr.device_data().bodies[0].position.z());
+  }
+  const double f_single = single.feedback_wrench.force.z();
+  const double f_mr = mr.device_data().feedback_wrench.force.z();
+  std::printf("[organ multirate] god-object past the touch: single-rate %.3f mm, multirate %.3f mm "
+              "(max %.3f / %.3f); feedback %.3f / %.3f N; planes max %d\n",
+              1e3 * (z_touch - single.bodies[1].position.z()),
+              1e3 * (z_touch - mr.device_data().bodies[0].position.z()), 1e3 * deepest_single,
+              1e3 * deepest_mr, f_single, f_mr, mr.counters().planes_max);
+  EXPECT_GT(f_single, 0.2);
+  EXPECT_NEAR(f_mr, f_single, 0.15 * f_single);
+  EXPECT_NEAR(mr.device_data().bodies[0].position.z(), single.bodies[1].position.z(),
+              0.15 * (z_touch - single.bodies[1].position.z()));
+  EXPECT_LE(deepest_mr, 2.0 * deepest_single);
 }
 
 TEST(NetOrgan, ModelRefusesAnAnchoredBodyThatSomethingWouldMove) {

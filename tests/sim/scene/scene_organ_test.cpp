@@ -191,15 +191,12 @@ TEST(OrganShippedScene, TheDeformableOrganTakesTheLatticesPlaceAndTheHandGoesInt
   EXPECT_GT(inside, 30u);
 }
 
-TEST(OrganLoaderErrors, AnOrganDoesNotRunMultirateYet) {
+TEST(OrganLoader, AnOrganRunsMultirate) {
   NUMEN_REQUIRE_DEFORMABLE();
   const std::string text =
       replace(mini_organ(), "[device]", "[multirate]\nscene_dt = 0.01\nmargin = 0.01\n\n[device]");
   TempDir dir;
-  const InputError e = load_error(dir, text);
-  EXPECT_EQ(e.key(), "multirate.scene_dt") << e.what();
-  EXPECT_NE(e.message().find("net 'liver' is on body 'organ_core', an organ's anchored core: organs "
-                             "do not run multirate yet"),
-            std::string::npos)
-      << e.what();
+  const Scene s = load_scene(dir.write("mr.toml", text));
+  ASSERT_TRUE(s.multirate.has_value());
+  EXPECT_EQ(s.model.num_nets(), 1);
 }
