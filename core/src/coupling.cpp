@@ -85,8 +85,11 @@ void apply_device_wrench(const Model& model, Data& data) noexcept {
 
 void impose_direct_target(const Model& model, Data& data) noexcept {
   for (auto& v : data.scratch->solver.imposed) v = 0;
-  if (!(model.stage_plan & kStageDirectTarget)) return;  // the plan: CouplingMode::kDirect
+  if (!(model.stage_plan & kStageDirectTarget)) return;  // the plan: kDirect or anchored bodies
   data.stages_run |= kStageDirectTarget;  // the stage report (step_stages.hpp)
+  for (std::size_t i = 0; i < model.bodies.size(); ++i)  // static bodies: where they started
+    if (model.bodies[i].anchored) impose(data, i, model.bodies[i].initial_pose, Twist{});
+  if (model.coupling_mode != CouplingMode::kDirect) return;
   if (valid_body(model, data.attached_body))
     impose(data, static_cast<std::size_t>(data.attached_body), data.target, data.target_twist);
   for (std::size_t i = 0; i < data.bodies.size(); ++i)

@@ -151,6 +151,9 @@ std::string finalize_model(Model& model) {
     body.initial_pose.orientation.normalize();
     if (!finite(body.initial_twist.linear) || !finite(body.initial_twist.angular))
       return who + ": initial twist must be finite";
+    if (body.anchored && (body.initial_twist.linear.squaredNorm() > 0.0 ||
+                          body.initial_twist.angular.squaredNorm() > 0.0))
+      return who + ": anchored (a static body) with a non-zero initial twist";
   }
   for (const Obstacle& o : model.obstacles) {
     const std::string who = "obstacle '" + o.name + "'";
@@ -187,6 +190,10 @@ std::string finalize_model(Model& model) {
   if (!(f.max_force >= 0.0) || !(f.max_torque >= 0.0)) return "feedback saturation must be >= 0";
   if (model.initial_attached_body < -1 || model.initial_attached_body >= model.num_bodies())
     return "initial attached body index out of range";
+  if (model.initial_attached_body >= 0 &&
+      model.bodies[static_cast<std::size_t>(model.initial_attached_body)].anchored)
+    return "body '" + model.bodies[static_cast<std::size_t>(model.initial_attached_body)].name +
+           "': anchored (a static body) cannot be held by the device";
   if (model.solver.max_iterations < 1 || !(model.solver.tolerance > 0.0))
     return "solver needs max_iterations >= 1 and tolerance > 0";
   if (model.solver.error_estimate_delay < 0 ||
@@ -213,6 +220,10 @@ std::string finalize_model(Model& model) {
       return who + ": only revolute and prismatic joints can be prescribed (got " +
              to_string(j.type) + ")";
     j.num_rows = joint_row_count(j.type, j.prescribed);
+    for (int b : {j.parent, j.child})
+      if (b >= 0 && b < model.num_bodies() && model.bodies[static_cast<std::size_t>(b)].anchored)
+        return who + ": body '" + model.bodies[static_cast<std::size_t>(b)].name +
+               "' is anchored (a static body): it takes no joint";
   }
   if (std::string e = validate_nets(model); !e.empty()) return e;
   if (!kWithDeformable && !model.nets.empty())

@@ -130,7 +130,9 @@ MultirateGodObject::MultirateGodObject(const Model& scene, int body, const Multi
     bool held = false;
     for (const Slot& s : slots_)
       held = held || std::find(s.bodies.begin(), s.bodies.end(), net.body) != s.bodies.end();
-    if (!held)
+    // An organ (a net on an anchored body) stays in the scene loop; its contacts with the
+    // god-object reach the device loop as planes on the god-object's spheres (build_node_planes).
+    if (!held && !scene.bodies[static_cast<std::size_t>(net.body)].anchored)
       throw std::invalid_argument("multirate: net '" + net.name +
                                   "' is on a body in no god-object the device may hold: the "
                                   "device loop would not feel it");

@@ -64,12 +64,18 @@ void build_node_planes(const Model& scene, const Data& data, std::span<const int
     const NodeContact& c = data.node_contacts[static_cast<std::size_t>(i)];
     if (c.node < 0 || c.node >= num_nodes || c.material_pair < 0 || c.material_pair >= np) continue;
     const int net = scene.node_net[static_cast<std::size_t>(c.node)];
-    if (!net_on_god_object(scene, device_body, net) || in_god_object(device_body, c.body_b)) continue;
+    const NetModel& nm = scene.nets[static_cast<std::size_t>(net)];
+    // An organ's node (its net on an anchored body) touching a sphere of the god-object: a plane
+    // on that sphere, through the node's compliance, as a god-object node's plane the other way.
+    const bool organ = scene.bodies[static_cast<std::size_t>(nm.body)].anchored &&
+                       in_god_object(device_body, c.body_b) && c.sphere_b >= 0 &&
+                       c.sphere_b < static_cast<int>(scene.body_spheres.size());
+    if (!organ && (!net_on_god_object(scene, device_body, net) || in_god_object(device_body, c.body_b)))
+      continue;
     if (out.count >= kMaxContactPlanes || out.count >= room) {
       ++out.dropped;
       continue;
     }
-    const NetModel& nm = scene.nets[static_cast<std::size_t>(net)];
     const auto node = static_cast<std::size_t>(c.node);
     int& slot = scratch.slot_of_node[node];
     if (slot < 0) {  // a node's first plane: its tie (its springs below)
@@ -108,6 +114,18 @@ void build_node_planes(const Model& scene, const Data& data, std::span<const int
       const BodyState& o = data.bodies[static_cast<std::size_t>(c.body_b)];
       p.velocity = o.linear_velocity + o.angular_velocity.cross(p.point - o.position);
     }
+    if (organ) {  // on the god-object's (grown) sphere; normal from the node to it
+      const Sphere& sp = scene.body_spheres[static_cast<std::size_t>(c.sphere_b)];
+      p.body = device_body[static_cast<std::size_t>(c.body_b)];
+      p.local_point = sp.center;
+      p.radius = sp.radius - margin;
+      p.normal = -c.normal;
+      p.point = x + scene.node_radius[node] * p.normal;  // the node sphere's surface point
+      p.other_body = nm.body;
+      p.obstacle = -1;
+      p.other_sphere = -1;
+      p.velocity = data.nodes[node].velocity;
+    }
     p.carrier = -1;  // the net renders the contact on a scene body in the scene loop
     p.stiffness_scale = 1.0;
     p.depth_offset = d0;  // for now (below: the offset)
@@ -117,8 +135,9 @@ void build_node_planes(const Model& scene, const Data& data, std::span<const int
   if (out.count == first) return;
   // The springs of the nodes with planes, their neighbours moving with the component.
   for (int k = 0; k < scene.num_nets(); ++k) {
-    if (!net_on_god_object(scene, device_body, k)) continue;
     const NetModel& nm = scene.nets[static_cast<std::size_t>(k)];
+    if (!net_on_god_object(scene, device_body, k) && !scene.bodies[static_cast<std::size_t>(nm.body)].anchored)
+      continue;
     const int end = nm.spring_begin + nm.structural_count + nm.bending_count;
     for (int s = nm.spring_begin; s < end; ++s) {
       const NetSpring& sp = scene.net_springs[static_cast<std::size_t>(s)];
@@ -157,7 +176,9 @@ void build_node_planes(const Model& scene, const Data& data, std::span<const int
     const BodyState& g = data.bodies[static_cast<std::size_t>(nm.body)];
     const auto node = static_cast<std::size_t>(p.node);
     const Vec3 anchor = g.position + g.orientation * scene.node_rest[node];
-    const double e0 = std::max(0.0, p.normal.dot(data.nodes[node].position - anchor));
+    // A god-object node is pushed along its plane's normal, an organ's node against it.
+    const double side = net_on_god_object(scene, device_body, scene.node_net[node]) ? 1.0 : -1.0;
+    const double e0 = std::max(0.0, side * p.normal.dot(data.nodes[node].position - anchor));
     const double w = d0 / scratch.planes_depth[slot];
     p.depth_offset = w * k_n * e0 / (k * p.stiffness_scale) - d0;
   }

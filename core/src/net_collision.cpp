@@ -256,9 +256,12 @@ void detect_node_contacts(const Model& model, Data& data) noexcept {
     Vec3 lo, hi;
     net_aabb(model, data, net, lo, hi);
     if (lo.x() <= hi.x()) {  // some finite node
-      const int num_obstacles = gather_obstacles(model, ns, lo, hi);
+      // An organ (a net on an anchored body) is part of the static world: like two obstacles,
+      // it does not collide with the obstacles; only with the dynamic bodies.
+      const bool organ = model.bodies[static_cast<std::size_t>(net.body)].anchored;
+      const int num_obstacles = organ ? 0 : gather_obstacles(model, ns, lo, hi);
       const bool use_grid =
-          !grid.empty() && boxes_overlap(lo, hi, grid.bounds_min, grid.bounds_max);
+          !organ && !grid.empty() && boxes_overlap(lo, hi, grid.bounds_min, grid.bounds_max);
       // Body AABBs and world sphere centres come from detect_contacts(), which
       // must have run on the same body states earlier in this step.
       const int num_bodies = gather_bodies(model, data, ns, net, lo, hi);

@@ -3,6 +3,7 @@
 
 #include "numen/core/step_stages.hpp"
 
+#include <algorithm>
 #include <array>
 
 #include "numen/core/capacity.hpp"
@@ -12,7 +13,7 @@ namespace numen::core {
 namespace {
 
 constexpr std::array<StageDescription, 12> kStages{{
-    {kStageDirectTarget, "direct target", "coupling mode is not direct"},
+    {kStageDirectTarget, "direct target", "coupling mode is not direct, no anchored body"},
     {kStageContacts, "contacts (broad + narrow phase)", "nothing to collide"},
     {kStageNodeContacts, "node contacts", "no nets"},
     {kStageBodyForces, "body forces (gravity, coupling, contacts)", nullptr},
@@ -34,7 +35,9 @@ std::uint32_t compiled_stages(const Model& model) noexcept {
   // The stage plan, stored by finalize_model() as Model::stage_plan: step() gates its
   // stages on it and the integrator picks its solve from it (integrator.cpp).
   std::uint32_t s = kStageBodyForces | kStageIntegrate | kStageFeedback | kStageChecks;
-  if (model.coupling_mode == CouplingMode::kDirect) s |= kStageDirectTarget;
+  const bool anchored = std::any_of(model.bodies.begin(), model.bodies.end(),
+                                    [](const BodyModel& b) { return b.anchored; });
+  if (model.coupling_mode == CouplingMode::kDirect || anchored) s |= kStageDirectTarget;
   if (contact_capacity(model) > 0) s |= kStageContacts;
   const bool nets = !model.nets.empty();
   const bool joints = !model.joints.empty();

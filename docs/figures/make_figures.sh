@@ -23,3 +23,5 @@ s=$(mktemp -d) && ./build/numen study stability --out "$s" > /dev/null && /usr/b
 z=$(mktemp -d) && ./build/numen study passivity --out "$z" > /dev/null && /usr/bin/python3 $out/plot_passivity.py "$z" $out/passivity_zwidth.png && rm -rf "$z"
 # Multirate quality against the rate ratio, construction and default scenes (docs/multirate.md; ~10 s)
 /usr/bin/python3 $out/plot_multirate.py ./build/numen $out
+# The deformable organ: hand vs tool vs organ surface, excerpt and full trials (docs/deformable.md; ~6 minutes)
+docs/figures/organ_runs.sh > /dev/null

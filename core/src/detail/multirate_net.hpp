@@ -69,8 +69,12 @@ void grow_god_object_nodes(std::span<const int> device_body, double margin, Mode
 /// offset that makes it start from its share w = d₀ / Σd₀ of what the node's tie and springs
 /// carried, k s (d₀ + offset) = w k_n e₀ (e₀ ≥ 0 the node's deflection from its rest position
 /// along n). Static planes (no carrier): the net renders its
-/// contacts on the scene's bodies in the scene loop. Counts planes beyond the room in
-/// out.dropped. No allocation.
+/// contacts on the scene's bodies in the scene loop. Likewise for every node contact of an
+/// organ (a net on an anchored body) with a sphere of the god-object (grown by `margin`): a plane
+/// on that sphere (its centre in its body's frame, its true radius), normal from the node to it,
+/// point on the node sphere's surface, s and offset from the organ node's K_n, Σk and e₀ (its
+/// deflection against the normal). Counts planes beyond the room in out.dropped. No
+/// allocation.
 void build_node_planes(const Model& scene, const Data& data, std::span<const int> device_body,
                        double margin, NodePlaneScratch scratch, ContactPlaneSet& out) noexcept;
 

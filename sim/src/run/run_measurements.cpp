@@ -52,12 +52,36 @@ double deepest_node_contact_of_tree(const core::Model& model, const core::Data& 
   return deepest;
 }
 
+/// Deepest node contact (m) of the nets of other bodies (an organ's, on an anchored body) with
+/// the bodies of articulation `tree` (the tool pushing the organ); 0 if none. `count` receives
+/// their number.
+double deepest_tool_contact_on_nets(const core::Model& model, const core::Data& data, int tree,
+                                    int* count) {
+  double deepest = 0.0;
+  int n = 0;
+  const std::vector<int>& tree_of = model.articulation.body_tree;
+  for (int i = 0; i < data.num_node_contacts; ++i) {
+    const core::NodeContact& c = data.node_contacts[static_cast<std::size_t>(i)];
+    if (c.body_b < 0 || tree_of[static_cast<std::size_t>(c.body_b)] != tree) continue;
+    const int net = model.node_net[static_cast<std::size_t>(c.node)];
+    if (tree_of[static_cast<std::size_t>(model.nets[static_cast<std::size_t>(net)].body)] == tree)
+      continue;
+    deepest = std::max(deepest, c.depth);
+    ++n;
+  }
+  if (count) *count = n;
+  return deepest;
+}
+
 /// Puts the nodes of the nets whose rigid component belongs to articulation
 /// `tree` at their rest positions on that body's pose in `ghost` (the
-/// undeformed tool where the hand is).
+/// undeformed tool where the hand is), and those of the anchored bodies' nets (the organs,
+/// undeformed: what the hand would meet).
 void place_tool_nets_at_rest(const core::Model& model, core::Data& ghost, int tree) {
   for (const core::NetModel& net : model.nets) {
-    if (model.articulation.body_tree[static_cast<std::size_t>(net.body)] != tree) continue;
+    if (model.articulation.body_tree[static_cast<std::size_t>(net.body)] != tree &&
+        !model.bodies[static_cast<std::size_t>(net.body)].anchored)
+      continue;
     const core::BodyState& b = ghost.bodies[static_cast<std::size_t>(net.body)];
     for (int i = net.node_begin; i < net.node_begin + net.node_count; ++i) {
       const auto n = static_cast<std::size_t>(i);
@@ -137,6 +161,14 @@ SceneRunner::PeriodContacts SceneRunner::measure_contacts() noexcept {
     int m = 0;
     c.target_pen = std::max(c.target_pen, deepest_node_contact_of_tree(model, ghost_, tree, &m));
     c.target_contacts += m;
+    // The organs (nets of anchored bodies): the tool on the deformed net, the hand's tool
+    // (the ghost's bodies) on its rest shape.
+    c.tool_pen = std::max(c.tool_pen, deepest_tool_contact_on_nets(model, data_, tree, &n));
+    c.tool_contacts += n;
+    const double organ = deepest_tool_contact_on_nets(model, ghost_, tree, &m);
+    c.target_pen = std::max(c.target_pen, organ);
+    c.target_contacts += m;
+    c.hand_pen = std::max(c.hand_pen, organ);
   }
   return c;
 }

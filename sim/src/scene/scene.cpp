@@ -432,6 +432,8 @@ Scene load_scene(const std::string& path, const SceneOverrides& overrides) {
         "modes (light nodes on penalty contacts and ties) ring instead of being damped; at 1 ms "
         "the shipped probe's nodes went 2.1 mm into the post instead of 0.2 mm "
         "(docs/accuracy.md). implicit-euler or tr-bdf2 (L-stable) are the integrators for nets");
+  if constexpr (core::kWithDeformable)
+    warn_organs_inside_tools(scene.model, scene.net_triangles, scene.warnings);
   warn_clamped_contacts(scene.model, scene.warnings);
   warn_yielding_coupling(scene.model, scene.warnings);
   parse_multirate(root, scene);

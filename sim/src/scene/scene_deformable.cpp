@@ -45,8 +45,11 @@ int rigid_component(const TomlTable& t, const core::Model& m) {
     if (b.sphere_count > 0)
       t.fail("body", "body \"" + name + "\" has " + std::to_string(b.sphere_count) +
                          (b.sphere_count == 1 ? " sphere" : " spheres") +
-                         ": the rigid component of a deformable is the paper's hidden "
-                         "rigid god-object (§4.2), it follows the device but does not collide; "
+                         (b.anchored ? ": the anchored rigid component of a deformable organ "
+                                       "holds the net's rest shape but does not collide; "
+                                     : ": the rigid component of a deformable is the paper's hidden "
+                                       "rigid god-object (§4.2), it follows the device but does not "
+                                       "collide; ") +
                          "give it no spheres (the net's nodes collide)");
     return i;
   }
@@ -161,6 +164,63 @@ void parse_deformable(const TomlTable& t, const std::filesystem::path& scene_dir
 void parse_deformables(const TomlTable& root, const std::filesystem::path& scene_dir,
                        core::Model& model, std::vector<NetTriangles>& triangles) {
   for (const TomlTable& t : root.tables("deformable")) parse_deformable(t, scene_dir, model, triangles);
+}
+
+namespace {
+
+/// Winding number of the closed triangle surface `tris` (vertices `verts`) about `p`: ±1 inside,
+/// 0 outside (Van Oosterom & Strackee 1983's solid angle of each triangle, summed over 4π).
+double winding_number(const std::vector<Vec3>& verts, const NetTriangles& tris, const Vec3& p) {
+  double omega = 0.0;
+  for (const auto& t : tris) {
+    const Vec3 a = verts[static_cast<std::size_t>(t[0])] - p;
+    const Vec3 b = verts[static_cast<std::size_t>(t[1])] - p;
+    const Vec3 c = verts[static_cast<std::size_t>(t[2])] - p;
+    const double la = a.norm(), lb = b.norm(), lc = c.norm();
+    const double num = a.dot(b.cross(c));
+    const double den = la * lb * lc + a.dot(b) * lc + b.dot(c) * la + c.dot(a) * lb;
+    omega += 2.0 * std::atan2(num, den);
+  }
+  return omega / (4.0 * std::numbers::pi);
+}
+
+}  // namespace
+
+void warn_organs_inside_tools(const core::Model& m, const std::vector<NetTriangles>& triangles,
+                              std::vector<std::string>& warnings) {
+  for (std::size_t k = 0; k < m.nets.size() && k < triangles.size(); ++k) {
+    const core::NetModel& net = m.nets[k];
+    const core::BodyModel& anchor = m.bodies[static_cast<std::size_t>(net.body)];
+    if (!anchor.anchored) continue;
+    std::vector<Vec3> rest(static_cast<std::size_t>(net.node_count));
+    for (int i = 0; i < net.node_count; ++i)
+      rest[static_cast<std::size_t>(i)] =
+          anchor.initial_pose.position +
+          anchor.initial_pose.orientation * m.node_rest[static_cast<std::size_t>(net.node_begin + i)];
+    for (const core::BodyModel& tool : m.bodies) {
+      if (tool.anchored || tool.sphere_count == 0) continue;
+      double overlap = 0.0;  // deepest node-sphere overlap (m)
+      int inside = 0;        // sphere centres inside the closed rest surface
+      for (int s = tool.sphere_begin; s < tool.sphere_begin + tool.sphere_count; ++s) {
+        const core::Sphere& sp = m.body_spheres[static_cast<std::size_t>(s)];
+        const Vec3 c = tool.initial_pose.position + tool.initial_pose.orientation * sp.center;
+        for (int i = 0; i < net.node_count; ++i)
+          overlap = std::max(overlap, sp.radius + m.node_radius[static_cast<std::size_t>(net.node_begin + i)] -
+                                          (c - rest[static_cast<std::size_t>(i)]).norm());
+        if (std::abs(winding_number(rest, triangles[k], c)) > 0.5) ++inside;
+      }
+      if (!(overlap > 0.0) && inside == 0) continue;
+      warnings.push_back(
+          "deformable \"" + net.name + "\" starts inside body \"" + tool.name + "\": " +
+          (inside > 0 ? std::to_string(inside) + " of its " + std::to_string(tool.sphere_count) +
+                            " spheres' centres lie inside the organ's rest surface"
+                      : std::string("its spheres overlap the organ's node spheres")) +
+          " (deepest node overlap " + format_input_number(overlap * 1e3) +
+          " mm) at the starting poses: the first steps push the tool out of the organ, or it "
+          "stays inside the hollow net; move the organ (its [[body]] position) or start the "
+          "trajectory elsewhere");
+    }
+  }
 }
 
 }  // namespace numen::sim

@@ -8,6 +8,8 @@
 /// scene.cpp, before the model is finalized).
 
 #include <filesystem>
+#include <string>
+#include <vector>
 
 #include "numen/core/model.hpp"
 #include "numen/sim/scene/scene.hpp"
@@ -24,5 +26,13 @@ namespace numen::sim {
 /// local to the net) to `triangles`, in the order of model.nets.
 void parse_deformables(const TomlTable& root, const std::filesystem::path& scene_dir,
                        core::Model& model, std::vector<NetTriangles>& triangles);
+
+/// Load-time check of the deformable organs (nets on an anchored body, core::BodyModel::anchored)
+/// against the bodies that move (the tool), at their starting poses: appends one warning per
+/// organ and body, naming both, when a sphere of the body overlaps a node sphere of the organ's
+/// rest shape or has its centre inside the organ's closed rest surface (winding number of
+/// `triangles`, model.nets' order). Call after core::finalize_model(). Load time only.
+void warn_organs_inside_tools(const core::Model& model, const std::vector<NetTriangles>& triangles,
+                              std::vector<std::string>& warnings);
 
 }  // namespace numen::sim

@@ -418,7 +418,12 @@ int body_index(const TomlTable& t, std::string_view key, const core::Model& m) {
   const std::string name = t.string(key);
   if (name == "none") return -1;
   for (int i = 0; i < m.num_bodies(); ++i)
-    if (m.bodies[static_cast<std::size_t>(i)].name == name) return i;
+    if (m.bodies[static_cast<std::size_t>(i)].name == name) {
+      if (m.bodies[static_cast<std::size_t>(i)].anchored)
+        t.fail(key, "body \"" + name + "\" is anchored (a static body, e.g. an organ's rigid "
+                    "component): no device holds it");
+      return i;
+    }
   t.fail(key, "no body named \"" + name + "\" (use a [[body]] name or \"none\")");
 }
 

@@ -13,8 +13,8 @@
 
 namespace numen::sim {
 
-/// The index in `m` of the body named by string key `key` of `t`, −1 for "none". Throws
-/// InputError at the key for a name that is no [[body]].
+/// The index in `m` of the body a device holds, named by string key `key` of `t`, −1 for
+/// "none". Throws InputError at the key for a name that is no [[body]] or an anchored one.
 int body_index(const TomlTable& t, std::string_view key, const core::Model& m);
 
 /// Reads `[device]` of `root` into scene.device, scene.model.feedback, the admittance settings,

@@ -273,7 +273,7 @@ void parse_bodies(const TomlTable& root, core::Model& m, std::vector<std::string
   for (const TomlTable& t : root.tables("body")) {
     t.allow_only({"name", "mass", "inertia", "material", "position", "orientation",
                   "linear_velocity", "angular_velocity", "spheres", "sphere_line",
-                  "sphere_grid", "coupling", "link", "link_offset"});
+                  "sphere_grid", "coupling", "link", "link_offset", "anchored"});
     core::BodyModel b;
     b.name = t.string("name");
     for (const auto& other : m.bodies)
@@ -292,6 +292,13 @@ void parse_bodies(const TomlTable& root, core::Model& m, std::vector<std::string
     b.initial_twist.linear = t.vec3_or("linear_velocity", Vec3::Zero());
     b.initial_twist.angular = t.vec3_or("angular_velocity", Vec3::Zero());
     b.coupling = parse_coupling(t, b.mass, b.inertia_body, warnings);
+    b.anchored = t.boolean_or("anchored", false);
+    if (b.anchored) {  // a static body: nothing drives or moves it
+      for (const char* key : {"link", "coupling", "linear_velocity", "angular_velocity"})
+        if (t.has(key))
+          t.fail(key, "body \"" + b.name + "\" is anchored (a static body held where it starts): "
+                      "it takes no " + key);
+    }
     m.bodies.push_back(std::move(b));
   }
 }

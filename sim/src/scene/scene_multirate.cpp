@@ -58,8 +58,11 @@ void parse_multirate(const TomlTable& root, Scene& scene) {
                                   "' is bound to a device link but is not in a held body's "
                                   "articulation: the device loop steps only the god-object");
   // A net is the scene loop's; the device loop feels it only as its god-object's own.
+  // An organ (a net on an anchored body) is the scene loop's too, felt through planes on the
+  // god-object's spheres.
   for (const core::NetModel& net : model.nets)
-    if (!in_god_object[static_cast<std::size_t>(net.body)])
+    if (!in_god_object[static_cast<std::size_t>(net.body)] &&
+        !model.bodies[static_cast<std::size_t>(net.body)].anchored)
       table->fail("scene_dt", "net '" + net.name + "' is on body '" +
                                   model.bodies[static_cast<std::size_t>(net.body)].name +
                                   "', which is in no body's god-object the device holds: the "

@@ -11,7 +11,8 @@
 ///  - "bus-nonfinite": the same loop while the encoders send, for 30 periods, what NaN, +Inf and
 ///    −Inf become on the wire (hal::value_to_counts: the offset counts and the int32 extremes);
 ///  - "core-target-nonfinite": NaN / ±Inf written straight into core::Data's target pose and twist
-///    for 20 steps (what the core does if anything non-finite ever got through).
+///    for 20 steps (what the core does if anything non-finite ever got through);
+///  - "organ-plunge" (study_stability_organ.cpp): the organ of sim/scenes/organ.toml plunged into.
 /// The loop cases' verdict: every period core::Data finite (bodies, nodes, target, feedback) and
 /// no rollback, nothing non-finite reaching the core (no kInvalidTarget), drive torques finite and
 /// within each axis's max_torque, zero in every period whose input was bad; tool speeds below
@@ -433,7 +434,10 @@ StabilityRow core_target_run(const Scene& scene, core::Integrator integrator) {
 void plan_scene_extreme(const StabilityOptions& o, const std::string& dir, Plan& plan) {
   const std::string no_nets = study::missing_parts(false, true);
   const std::string no_joints = study::missing_parts(true, false);  // default.toml's trocar
-  if (!no_nets.empty()) plan.skipped.push_back("deformable-jump: " + no_nets);
+  if (!no_nets.empty()) {
+    plan.skipped.push_back("deformable-jump: " + no_nets);
+    plan.skipped.push_back("organ-plunge: " + no_nets);
+  }
   if (!no_joints.empty()) {
     for (const char* c : {"trocar-zero-insertion", "bus-nonfinite", "core-target-nonfinite"})
       plan.skipped.push_back(std::string(c) + ": " + no_joints);
@@ -442,6 +446,12 @@ void plan_scene_extreme(const StabilityOptions& o, const std::string& dir, Plan&
   const std::shared_ptr<const Scene> deformable =
       no_nets.empty() ? std::make_shared<const Scene>(study::load_replayed_scene(dir + "/deformable.toml"))
                       : nullptr;
+  // The organ scene's instrument has joints, but the case takes only its organ and tube.
+  const std::shared_ptr<const Scene> organ =
+      no_nets.empty() && no_joints.empty()
+          ? std::make_shared<const Scene>(study::load_replayed_scene(dir + "/organ.toml"))
+          : nullptr;
+  if (no_nets.empty() && !no_joints.empty()) plan.skipped.push_back("organ-plunge: " + no_joints);
   const std::shared_ptr<const Scene> trocar =
       no_joints.empty() ? std::make_shared<const Scene>(study::load_replayed_scene(dir + "/default.toml"))
                         : nullptr;
@@ -455,6 +465,11 @@ void plan_scene_extreme(const StabilityOptions& o, const std::string& dir, Plan&
       plan.add("extreme", "deformable-jump", case_parameters(integrator, {{"h", h}}),
                20.0 * kSceneWeight / 5.0, [=](StabilityResult& r) {
                  r.rows.push_back(deformable_run(*deformable, integrator, h, limits, jump_s));
+               });
+    for (double h : organ ? steps : std::vector<double>{})
+      plan.add("extreme", "organ-plunge", case_parameters(integrator, {{"h", h}}),
+               20.0 * kSceneWeight / 5.0, [=](StabilityResult& r) {
+                 r.rows.push_back(organ_run(*organ, integrator, h, limits, jump_s));
                });
     if (!trocar) continue;
     plan.add(

@@ -112,6 +112,13 @@ TEST(RunAllocations, EndobagScenePeriodNeverAllocates) {
   expect_no_allocation(endobag_scene(), "endobag");
 }
 
+TEST(RunAllocations, OrganScenePeriodNeverAllocates) {
+  NUMEN_SKIP_UNDER_SANITIZER(kDeformableRunTooSlow);
+  NUMEN_REQUIRE_DEFORMABLE();
+  NUMEN_REQUIRE_ARTICULATION();
+  expect_no_allocation(organ_scene(), "organ");  // the hand goes into the organ from 3 s
+}
+
 TEST(RunAllocations, MouseScenePeriodNeverAllocates) {
   NUMEN_REQUIRE_EVDEV();  // the scene names its event codes
   expect_no_allocation(mouse_scene(), "mouse");  // 5 s scene: the trajectory holds its end

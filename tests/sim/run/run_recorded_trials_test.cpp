@@ -90,7 +90,8 @@ std::vector<fs::path> jigsaws_scenes() {
 
 /// The text of the shipped scene `scene` reading `trial` instead of its excerpt, with `extra`
 /// lines added to its [trajectory] (the last table of each of these scenes) and `trocar`
-/// replacing its approach placement when not empty.
+/// replacing its approach placement when not empty; its DCFs and other ../data files by
+/// absolute paths.
 std::string scene_on_trial(const fs::path& scene, const fs::path& trial, const std::string& extra,
                            const std::string& trocar = "") {
   std::ifstream in(scene);
@@ -101,6 +102,11 @@ std::string scene_on_trial(const fs::path& scene, const fs::path& trial, const s
   if (at != std::string::npos)
     text.replace(at, file_line.size(), "file = \"" + fs::absolute(trial).string() + "\"\n" + extra);
   text = numen::test::with_absolute_dcf_paths(text, fs::absolute(scene).parent_path().string());
+  // Other shipped data the scene reads (the organ scene's mesh), from the copy's directory.
+  const std::string data = "file = \"../data/";
+  const std::string data_abs = "file = \"" + (fs::absolute(scene).parent_path() / ".." / "data").string() + "/";
+  for (auto p = text.find(data); p != std::string::npos; p = text.find(data, p + data_abs.size()))
+    text.replace(p, data.size(), data_abs);
   if (!trocar.empty()) {
     const std::string approach = "placement = \"approach\"";
     const auto p = text.find(approach);

@@ -116,6 +116,11 @@ inline const Scene& endobag_scene() {
       numen::sim::load_scene(std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/endobag.toml");
   return s;
 }
+inline const Scene& organ_scene() {
+  static const Scene s =
+      numen::sim::load_scene(std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/organ.toml");
+  return s;
+}
 
 inline const Scene& mouse_scene() {
   static const Scene s = numen::sim::load_scene(std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/mouse.toml");

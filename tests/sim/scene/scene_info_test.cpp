@@ -26,13 +26,13 @@ namespace sim = numen::sim;
 namespace {
 
 /// The shipped scenes this build can load (default, phantom and endobag have
-/// joints; deformable and endobag nets; mouse names its event codes, which libevdev resolves).
+/// joints; deformable, endobag and organ nets; mouse names its event codes, which libevdev resolves).
 std::vector<std::string> shipped_scenes() {
   std::vector<std::string> out{"construction", "admittance"};
   if (numen::hal::kWithEvdev) out.push_back("mouse");
   if (core::kWithArticulation) out.insert(out.end(), {"default", "phantom"});
   if (core::kWithDeformable) out.push_back("deformable");
-  if (core::kWithArticulation && core::kWithDeformable) out.push_back("endobag");
+  if (core::kWithArticulation && core::kWithDeformable) out.insert(out.end(), {"endobag", "organ"});
   return out;
 }
 

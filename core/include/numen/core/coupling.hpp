@@ -43,14 +43,15 @@ bool target_is_finite(const Pose& target, const Twist& target_twist) noexcept;
 /// god-object model (kGodObject) for that body.
 bool first_order_applicable(const CouplingGains& gains) noexcept;
 
-/// kDirect only (no-op in other modes): imposes x, q, v, ω of the attached
+/// Imposes every anchored body (BodyModel::anchored) at its initial pose with a zero twist,
+/// in every coupling mode; then, in kDirect only, imposes x, q, v, ω of the attached
 /// body := Data::target / target_twist, and of every other body with an
 /// enabled Data::body_targets entry := that target (q normalised), and marks
 /// them in SolverScratch::imposed, i.e. moving bodies of infinite mass for the
 /// rest of the step (their joints to each other are disabled). With a
 /// non-finite target, sets kInvalidTarget and holds that body still (pose
 /// kept, twist zeroed). Imposes only when Model::stage_plan has
-/// kStageDirectTarget (CouplingMode::kDirect), and then records itself in
+/// kStageDirectTarget (kDirect or an anchored body), and then records itself in
 /// Data::stages_run (step_stages.hpp).
 /// Call before detect_contacts() so that contacts see the imposed pose.
 void impose_direct_target(const Model& model, Data& data) noexcept;

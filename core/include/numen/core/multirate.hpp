@@ -107,6 +107,12 @@ struct ContactPlane {
   /// d + depth_offset, so that at the sample it gives its share w = d₀/Σd₀ of what the node's
   /// tie and springs carried, w k_n e₀ (e₀ the node's deflection along n), and releases where
   /// the node would leave the surface (docs/multirate.md, "Deformable god-objects").
+  /// An organ's node (a net on an anchored body, docs/deformable.md "Organs in multirate")
+  /// touching a sphere of the god-object gives the same kind of plane the other way round:
+  /// `node` that organ node, the sphere the god-object's (`local_point`, `radius`: its centre in
+  /// its body's frame and its true radius), the normal from the node to it, the point the node
+  /// sphere's surface, s and the offset from the organ node's compliance (e₀ its deflection
+  /// against the normal).
   int node = -1;
   Vec3 local_point = Vec3::Zero();  ///< Node plane: the sphere's centre (m, body frame).
   double radius = 0.0;              ///< Node plane: the node's sphere radius (m).
@@ -317,7 +323,8 @@ class MultirateGodObject {
   /// its Data; and the scene-loop model and Data without a god-object (all reset from `scene`). Throws std::invalid_argument with the
   /// message of make_god_object_model() / make_proximity_model(), for N < 1, a margin < 0, no
   /// body at all (`body` −1 and no tools), or a net on a body in none of their god-objects
-  /// (the device loop feels a net only through its god-object's node planes). Allocates (load time).
+  /// and not anchored (the device loop feels a net only through its god-object's node planes,
+  /// or an organ's through planes on the god-object's spheres). Allocates (load time).
   MultirateGodObject(const Model& scene, int body, const MultirateSettings& settings);
 
   /// One device period on one thread: every N-th (the first included, and the first after a

@@ -7,7 +7,9 @@
 /// Model::static_grid) and against the spheres of the dynamic bodies, except
 /// the net's own rigid component and the bodies of its articulation
 /// (ArticulationTopology::body_tree). Nets do not collide with themselves or
-/// with each other. Coincident centres (narrowphase.hpp fallbacks): the
+/// with each other. An organ's net (its rigid component anchored, BodyModel::anchored) is part
+/// of the static world and, like the obstacles among themselves, meets no obstacle: only the
+/// dynamic bodies' spheres. Coincident centres (narrowphase.hpp fallbacks): the
 /// normal is the direction from the net's rigid component's COM to the node
 /// (+z when those coincide too).
 

@@ -15,7 +15,7 @@ struct Model;
 
 /// One stage of step(), as a bit of Data::stages_run.
 enum StepStage : std::uint32_t {
-  kStageDirectTarget = 1u << 0,   ///< impose_direct_target (CouplingMode::kDirect only).
+  kStageDirectTarget = 1u << 0,   ///< impose_direct_target (CouplingMode::kDirect, anchored bodies).
   kStageContacts = 1u << 1,       ///< detect_contacts: broad and narrow phase, bodies.
   kStageNodeContacts = 1u << 2,   ///< detect_node_contacts: net nodes against everything.
   kStageBodyForces = 1u << 3,     ///< gravity, applied wrenches, coupling, contact forces.

@@ -16,6 +16,7 @@
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"
 #include "numen/core/step.hpp"
+#include "numen/sim/scene/scene.hpp"
 #include "numen/sim/study/study_shard.hpp"
 #include "numen/sim/study/study_stability.hpp"
 
@@ -153,6 +154,12 @@ void plan_articulation(const StabilityOptions& o, Plan& plan);
 /// this build left out (the jump: nets; the others: the trocar's joints) are not planned; each
 /// gets one "case: reason" line in Plan::skipped.
 void plan_scene_extreme(const StabilityOptions& o, const std::string& scene_dir, Plan& plan);
+/// "organ-plunge" of "extreme" (study_stability_organ.cpp): the organ of `scene` (a net on an
+/// anchored body; sim/scenes/organ.toml) and a one-sphere god-object of the held body's mass and
+/// coupling whose target jumps 40 mm into it in one period; `horizon` s of steps of `h`. Throws
+/// std::invalid_argument for a scene without an organ or a held body.
+StabilityRow organ_run(const Scene& scene, core::Integrator integrator, double h,
+                       const StabilityLimits& limits, double horizon);
 /// "scenes": every shipped scene (`scene_dir`/*.toml) through run_scene() with its contact
 /// stiffness and, separately, its coupling stiffness swept to 1e12 N/m
 /// (study_stability_scenes.cpp). A scene this build cannot load (NUMEN_WITH_* options) gets one

@@ -1,0 +1,135 @@
+/// @file study_stability_organ.cpp
+/// Case "organ-plunge" of the family "extreme" of `numen study stability` (study_stability.hpp):
+/// the deformable organ of sim/scenes/organ.toml (its net on its anchored core, as shipped) and a
+/// god-object of the instrument's tube (one sphere of the tube's radius and mass, the tube's
+/// coupling), started 20 mm outside the organ's convex face on the organ's approach axis, whose
+/// target jumps 40 mm along that axis in one period, 20 mm past the rest surface: the coupling
+/// pulls with k_t × 40 mm at once (40 N for the shipped tube), far beyond what the hollow net
+/// holds, so the sphere dents the organ, then slips between its nodes into it. Core driven
+/// directly, gravity off. Verdict of study_stability.hpp (energy, finite states, penetration
+/// bound k_t × jump / k_contact on one node contact, as the deformable jump's).
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
+
+#include "numen/core/mesh.hpp"
+#include "numen/core/net_model.hpp"
+#include "numen/sim/scene/scene.hpp"
+#include "numen/sim/study/study_common.hpp"
+#include "numen/sim/study/study_stability_cases.hpp"
+
+namespace numen::sim::stability {
+namespace {
+
+using core::Vec3;
+
+/// The organ of `scene` (its first net on an anchored body) and a one-sphere tool with the held
+/// body's mass and coupling, `radius` (m), starting at `start`: body 0 the organ's core, body 1
+/// the tool (held). Materials and contact pairs as the scene's.
+core::Model plunge_model(const Scene& scene, double radius, const Vec3& start) {
+  const core::Model& s = scene.model;
+  int k = -1;
+  for (int i = 0; i < s.num_nets() && k < 0; ++i)
+    if (s.bodies[static_cast<std::size_t>(s.nets[static_cast<std::size_t>(i)].body)].anchored) k = i;
+  if (k < 0 || s.initial_attached_body < 0)
+    throw std::invalid_argument("organ-plunge: the scene has no organ (a net on an anchored body) "
+                                "or no held body");
+  const core::NetModel& net = s.nets[static_cast<std::size_t>(k)];
+  const core::BodyModel& held = s.bodies[static_cast<std::size_t>(s.initial_attached_body)];
+  core::Model m;
+  m.dt = s.dt;
+  m.gravity = Vec3::Zero();
+  m.integrator = s.integrator;
+  m.solver = s.solver;
+  m.material_names = s.material_names;
+  m.material_pairs = s.material_pairs;
+  core::BodyModel tool = held;
+  tool.name = "tool";
+  tool.sphere_begin = 0;
+  tool.sphere_count = 1;
+  tool.initial_pose = core::Pose{start, core::Quat::Identity()};
+  tool.initial_twist = core::Twist{};
+  m.body_spheres = {core::Sphere{Vec3::Zero(), radius}};
+  core::BodyModel anchor = s.bodies[static_cast<std::size_t>(net.body)];
+  anchor.sphere_begin = 0;  // no spheres, in this model's (one-sphere) table
+  m.bodies = {anchor, tool};
+  m.initial_attached_body = 1;
+  core::TriangleMesh mesh;
+  for (int i = 0; i < net.node_count; ++i)
+    mesh.vertices.push_back(s.node_rest[static_cast<std::size_t>(net.node_begin + i)]);
+  mesh.triangles = scene.net_triangles[static_cast<std::size_t>(k)];
+  const core::NetSpring& structural = s.net_springs[static_cast<std::size_t>(net.spring_begin)];
+  core::NetSettings settings;
+  settings.name = net.name;
+  settings.body = 0;
+  settings.material = net.material;
+  settings.mass = net.mass;
+  settings.stiffness = structural.stiffness;
+  settings.damping = structural.damping;
+  if (net.bending_count > 0) {
+    const core::NetSpring& bending =
+        s.net_springs[static_cast<std::size_t>(net.spring_begin + net.structural_count)];
+    settings.bending_stiffness = bending.stiffness;
+    settings.bending_damping = bending.damping;
+  }
+  settings.tie_stiffness = net.tie_stiffness;
+  settings.tie_damping = net.tie_damping;
+  settings.node_radius = s.node_radius[static_cast<std::size_t>(net.node_begin)];
+  std::string error = core::add_net(m, mesh, settings);
+  if (error.empty()) error = core::finalize_model(m);
+  if (!error.empty()) throw std::invalid_argument("organ-plunge: " + error);
+  return m;
+}
+
+}  // namespace
+
+StabilityRow organ_run(const Scene& scene, core::Integrator integrator, double h,
+                       const StabilityLimits& limits, double horizon) {
+  constexpr double kTubeRadius = 0.0025;  // m, the shipped instrument's tube
+  // The organ's approach axis (its frame's z) and its rest surface's nearest point on it.
+  const core::BodyModel* core_body = nullptr;
+  for (const core::BodyModel& b : scene.model.bodies)
+    if (b.anchored) core_body = &b;
+  if (core_body == nullptr) throw std::invalid_argument("organ-plunge: the scene has no anchored body");
+  const Vec3 centre = core_body->initial_pose.position;
+  const Vec3 axis = core_body->initial_pose.orientation * Vec3::UnitZ();
+  double face = 0.0;  // how far the rest surface reaches towards −axis from the centre (m)
+  for (const Vec3& r : scene.model.node_rest) face = std::max(face, -(core_body->initial_pose.orientation * r).dot(axis));
+  const Vec3 start = centre - (face + 0.020) * axis;
+  const Vec3 goal = centre - (face - 0.020) * axis;
+  core::Model base = plunge_model(scene, kTubeRadius, start);
+  const core::Model model = study::with_scheme(base, integrator, h, "stability study");
+  core::Data data = core::make_data(model);
+  double k_contact = kInf;
+  for (const core::MaterialPair& p : model.material_pairs) k_contact = std::min(k_contact, p.stiffness);
+  const double jump = (goal - start).norm();
+  const double static_depth = model.bodies[1].coupling.k_t * jump / k_contact;
+  const auto n = std::max<std::int64_t>(1, std::llround(horizon / h));
+  const std::int64_t at = std::max<std::int64_t>(1, std::llround(0.05 / h));
+  Monitor monitor(limits, limits.penetration_factor * static_depth, kInf, n,
+                  model.bodies[1].mass, h);
+  drive(
+      model, data, n,
+      [&](std::int64_t k, core::Data& d) noexcept {
+        d.target.position = k >= at ? goal : start;
+        d.target.orientation = core::Quat::Identity();
+        d.target_twist = core::Twist{};
+      },
+      monitor);
+  StabilityRow r = make_row("extreme", "organ-plunge", integrator, h, model.bodies[1].mass,
+                            model.nets[0].tie_stiffness, jump, "jump_m", kNaN);
+  r.energy_ratio_max = kNaN;
+  monitor.fill(r);
+  char note[200];
+  std::snprintf(note, sizeof note,
+                "at the end: %d node contacts, organ %.3g mm from its rest shape, max strain %.3g, "
+                "tool %.3g mm past the rest surface",
+                data.num_node_contacts, 1e3 * data.nets[0].max_tie_stretch, data.nets[0].max_strain,
+                1e3 * (data.bodies[1].position - start).dot(axis) - 20.0);
+  r.note = note;
+  return r;
+}
+
+}  // namespace numen::sim::stability
