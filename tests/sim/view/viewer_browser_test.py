@@ -42,7 +42,7 @@ import cdp  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
 FIGURE_SCENES = [("default", None), ("construction", "sim/scenes/construction.toml"),
-                 ("deformable", "sim/scenes/deformable.toml")]
+                 ("deformable", "sim/scenes/deformable.toml"), ("organ", "sim/scenes/organ.toml")]
 WIDTH, HEIGHT = 1200, 760  # the window
 VIEW_W, VIEW_H = 860, 760  # the 3D view in it (the rest: the side panel)
 RECONNECT_S = 5.0          # the page resumes within this after the server is back (backoff ≤ 2 s)
