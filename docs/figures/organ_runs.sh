@@ -1,12 +1,11 @@
 #!/usr/bin/env bash
 # The organ scene (sim/scenes/organ.toml) in --replay on the shipped excerpt and on every full
-# JIGSAWS trial (*.txt of $NUMEN_JIGSAWS_DIR, default ../shared/data/jigsaws beside the clone, as
-# tests/sim/run/run_recorded_trials_test.cpp), then docs/figures/organ_runs.png (plot_organ.py:
-# hand vs tool vs organ surface) and its figures as JSON on stdout. Run from the project root
+# JIGSAWS trial (*.txt of $NUMEN_JIGSAWS_DIR, docs/inputs.md; none when it is unset), then
+# docs/figures/organ_runs.png (plot_organ.py: hand vs tool vs organ surface) and its figures as JSON on stdout. Run from the project root
 # after building. Needs python3-numpy and python3-matplotlib.
 set -euo pipefail
 root=$(pwd)
-trials=${NUMEN_JIGSAWS_DIR:-$root/../shared/data/jigsaws}
+trials=${NUMEN_JIGSAWS_DIR:-}
 tmp=$(mktemp -d)
 runs=()
 ./build/numen run sim/scenes/organ.toml --replay --trace "$tmp/excerpt.csv" > /dev/null
