@@ -14,6 +14,7 @@
 #include <cstdio>
 #include <stdexcept>
 
+#include "numen/core/features.hpp"
 #include "numen/core/mesh.hpp"
 #include "numen/core/net_model.hpp"
 #include "numen/sim/scene/scene.hpp"
@@ -77,7 +78,11 @@ core::Model plunge_model(const Scene& scene, double radius, const Vec3& start) {
   settings.tie_stiffness = net.tie_stiffness;
   settings.tie_damping = net.tie_damping;
   settings.node_radius = s.node_radius[static_cast<std::size_t>(net.node_begin)];
+#if NUMEN_WITH_DEFORMABLE
   std::string error = core::add_net(m, mesh, settings);
+#else  // nets are compiled out: the plan skips this case before it runs (study_stability_scene.cpp)
+  std::string error = "needs deformable nets: this build has NUMEN_WITH_DEFORMABLE=OFF";
+#endif
   if (error.empty()) error = core::finalize_model(m);
   if (!error.empty()) throw std::invalid_argument("organ-plunge: " + error);
   return m;
