@@ -73,6 +73,22 @@ struct Nearest {
   int feature = kFace;
 };
 
+/// Triangle t's closest point to p replaces `best` when it is nearer.
+inline void consider(const MeshShape& s, const Vec3& p, int t, Nearest& best) noexcept {
+  const auto& tri = s.triangles[static_cast<std::size_t>(t)];
+  int feature = kFace;
+  const Vec3 q = closest_on_triangle(p, s.vertices[static_cast<std::size_t>(tri[0])],
+                                     s.vertices[static_cast<std::size_t>(tri[1])],
+                                     s.vertices[static_cast<std::size_t>(tri[2])], feature);
+  const double d2 = (p - q).squaredNorm();
+  if (d2 < best.distance2) {
+    best.distance2 = d2;
+    best.point = q;
+    best.triangle = t;
+    best.feature = feature;
+  }
+}
+
 /// Closest triangle to p closer than `bound` (m; +∞: any), nearest child first.
 Nearest search(const MeshShape& s, const Vec3& p, double bound) noexcept {
   Nearest best;
@@ -87,20 +103,7 @@ Nearest search(const MeshShape& s, const Vec3& p, double bound) noexcept {
     const MeshBvhNode& node = nodes[stack[--sp]];
     if (box_distance2(p, node.lo, node.hi) >= best.distance2) continue;
     if (node.count > 0) {
-      for (int t = node.index; t < node.index + node.count; ++t) {
-        const auto& tri = s.triangles[static_cast<std::size_t>(t)];
-        int feature = kFace;
-        const Vec3 q = closest_on_triangle(p, s.vertices[static_cast<std::size_t>(tri[0])],
-                                           s.vertices[static_cast<std::size_t>(tri[1])],
-                                           s.vertices[static_cast<std::size_t>(tri[2])], feature);
-        const double d2 = (p - q).squaredNorm();
-        if (d2 < best.distance2) {
-          best.distance2 = d2;
-          best.point = q;
-          best.triangle = t;
-          best.feature = feature;
-        }
-      }
+      for (int t = node.index; t < node.index + node.count; ++t) consider(s, p, t, best);
       continue;
     }
     const std::int32_t first = static_cast<std::int32_t>(&node - nodes) + 1;
@@ -377,18 +380,7 @@ bool mesh_signed_distance(const MeshShape& s, const Vec3& p, double reach,
 MeshDistance mesh_signed_distance_brute(const MeshShape& s, const Vec3& p) noexcept {
   Nearest best;
   for (int t = 0; t < s.num_triangles(); ++t) {
-    const auto& tri = s.triangles[static_cast<std::size_t>(t)];
-    int feature = kFace;
-    const Vec3 q = closest_on_triangle(p, s.vertices[static_cast<std::size_t>(tri[0])],
-                                       s.vertices[static_cast<std::size_t>(tri[1])],
-                                       s.vertices[static_cast<std::size_t>(tri[2])], feature);
-    const double d2 = (p - q).squaredNorm();
-    if (d2 < best.distance2) {
-      best.distance2 = d2;
-      best.point = q;
-      best.triangle = t;
-      best.feature = feature;
-    }
+    consider(s, p, t, best);
   }
   return best.triangle < 0 ? MeshDistance{} : signed_result(s, p, best);
 }
