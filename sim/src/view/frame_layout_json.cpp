@@ -28,7 +28,7 @@ std::string state_frame_layout_json() {
   // The header's fault_cause by value (hal::FaultCause, hal::to_string): the page names the
   // cause of a latched safe state with them.
   nlohmann::ordered_json causes = nlohmann::ordered_json::array();
-  for (int c = 0; c <= static_cast<int>(hal::FaultCause::kForceTimeout); ++c)
+  for (int c = 0; c <= static_cast<int>(hal::kLastFaultCause); ++c)
     causes.push_back(hal::to_string(static_cast<hal::FaultCause>(c)));
   const nlohmann::ordered_json layout{
       {"magic", std::string(p::kStateFrameMagic, sizeof p::kStateFrameMagic)},

@@ -15,6 +15,7 @@
 
 #include "free_bodies.hpp"
 #include "numen/core/model.hpp"
+#include "numen/hal/device/safety_supervisor.hpp"
 #include "numen/platform/state_frame.hpp"
 
 namespace {
@@ -81,6 +82,22 @@ TEST(FrameLayoutJson, HasEveryDeclaredFieldAndArrayInOrder) {
 // The page's decoding (viewer.js decodeFrame), done here from the JSON alone: header fields by
 // name are StateFrameHeader's members of the same name, the arrays end at frame_bytes, and
 // their floats are the view's.
+// The page names a latched safe state's cause (the header's fault_cause) from the layout's
+// list: every hal::FaultCause by value, each with its name, the last one kLastFaultCause.
+TEST(FrameLayoutJson, NamesEveryFaultCauseByValue) {
+  const auto j = nlohmann::json::parse(numen::sim::state_frame_layout_json());
+  const auto& causes = j.at("fault_causes");
+  ASSERT_EQ(causes.size(), static_cast<std::size_t>(numen::hal::kLastFaultCause) + 1);
+  for (std::size_t c = 0; c < causes.size(); ++c) {
+    const char* name = numen::hal::to_string(static_cast<numen::hal::FaultCause>(c));
+    EXPECT_EQ(causes[c], name) << c;
+    EXPECT_STRNE(name, "unknown") << c;
+  }
+  EXPECT_EQ(causes[static_cast<std::size_t>(numen::hal::FaultCause::kHeartbeatLost)], "heartbeat lost");
+  EXPECT_STREQ(numen::hal::to_string(static_cast<numen::hal::FaultCause>(causes.size())), "unknown")
+      << "a FaultCause after kLastFaultCause: make it the last";
+}
+
 TEST(FrameLayoutJson, AFrameDecodedFromTheJsonReadsWhatTheViewReads) {
   const std::vector<std::byte> frame = layout_json_frame();
   ASSERT_FALSE(frame.empty());

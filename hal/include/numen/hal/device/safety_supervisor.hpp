@@ -71,6 +71,10 @@ enum class FaultCause : std::uint8_t {
   kForceTimeout,     ///< Admittance: no valid force reading for force_timeout_periods.
 };
 
+/// The last FaultCause (the values run from kNone = 0 to it): a new cause goes before this
+/// line and becomes it. Readers that list every cause (the view's frame layout) stop here.
+inline constexpr FaultCause kLastFaultCause = FaultCause::kForceTimeout;
+
 /// Short English name of a FaultCause (static string), e.g. "encoder timeout".
 const char* to_string(FaultCause cause) noexcept;
 
