@@ -45,6 +45,16 @@ std::vector<PassivityConfig> passivity_plan(const PassivityOptions& o) {
   const std::vector<double> couplings = o.quick ? std::vector<double>{std::nan(""), 1e6}
                                                 : std::vector<double>{std::nan(""), 1e3, 1e6, 1e9};
   std::vector<PassivityConfig> out;
+  // One configuration, numbered in the plan's order (its study case).
+  const auto append = [&out](const PassivityPoint& p, std::string name, const char* parameters) {
+    PassivityConfig c;
+    c.point = p;
+    c.info.index = static_cast<std::int64_t>(out.size());
+    c.info.family = "passivity";
+    c.info.name = std::move(name);
+    c.info.parameters = parameters;
+    out.push_back(std::move(c));
+  };
   for (double t : periods)
     for (const Device& dev : devices)
       for (double delta : resolutions) {
@@ -54,8 +64,7 @@ std::vector<PassivityConfig> passivity_plan(const PassivityOptions& o) {
           for (double kw : couplings)
             for (double frac : damping_fractions) {
               if (dev.b == 0.0 && frac != 0.0) continue;
-              PassivityConfig c;
-              PassivityPoint& p = c.point;
+              PassivityPoint p;
               p.period_s = t;
               p.device_damping = dev.b;
               p.coulomb = dev.fc;
@@ -64,14 +73,10 @@ std::vector<PassivityConfig> passivity_plan(const PassivityOptions& o) {
               p.coupling = std::isnan(kw) ? "wall" : "god-object";
               p.obstacle_stiffness = kw;
               p.damping = frac * dev.b;
-              c.info.index = static_cast<std::int64_t>(out.size());
-              c.info.family = "passivity";
-              c.info.name = p.coupling;
               char buf[200];
               std::snprintf(buf, sizeof buf, "T=%g b=%g fc=%g delta=%g d=%d B=%g kw=%g", t, dev.b,
                             dev.fc, delta, d, p.damping, kw);
-              c.info.parameters = buf;
-              out.push_back(std::move(c));
+              append(p, p.coupling, buf);
             }
       }
   // The passivity controller (docs/passivity.md "Passivity controller"), without an energy
@@ -82,8 +87,7 @@ std::vector<PassivityConfig> passivity_plan(const PassivityOptions& o) {
     for (double t : periods)
       for (int d : {0, 1})
         for (double kw : {std::nan(""), 1e6}) {
-          PassivityConfig c;
-          PassivityPoint& p = c.point;
+          PassivityPoint p;
           p.period_s = t;
           p.device_damping = 1.0;
           p.delay_periods = d;
@@ -91,14 +95,10 @@ std::vector<PassivityConfig> passivity_plan(const PassivityOptions& o) {
           p.obstacle_stiffness = kw;
           p.passivity_controller = true;
           p.passivity_energy_limit_j = e_max;
-          c.info.index = static_cast<std::int64_t>(out.size());
-          c.info.family = "passivity";
-          c.info.name = p.coupling + " + passivity controller";
           char buf[200];
           std::snprintf(buf, sizeof buf, "T=%g b=1 fc=0 delta=0 d=%d B=0 kw=%g pc=1 E_max=%g", t,
                         d, kw, e_max);
-          c.info.parameters = buf;
-          out.push_back(std::move(c));
+          append(p, p.coupling + " + passivity controller", buf);
         }
   // The velocity estimators on the damped wall and coupling (docs/passivity.md "Velocity
   // estimators"): B = 0.25 b and 0.5 b (B = 0 does not read v̂), with and without
@@ -118,8 +118,7 @@ std::vector<PassivityConfig> passivity_plan(const PassivityOptions& o) {
       for (const Encoder& e : encoders)
         for (double kw : {std::nan(""), 1e6})
           for (double frac : estimator_fractions) {
-            PassivityConfig c;
-            PassivityPoint& p = c.point;
+            PassivityPoint p;
             p.period_s = t;
             p.device_damping = 1.0;
             p.coulomb = e.fc;
@@ -128,14 +127,10 @@ std::vector<PassivityConfig> passivity_plan(const PassivityOptions& o) {
             p.obstacle_stiffness = kw;
             p.damping = frac;
             p.velocity_estimator = estimator;
-            c.info.index = static_cast<std::int64_t>(out.size());
-            c.info.family = "passivity";
-            c.info.name = p.coupling + " + " + estimator;
             char buf[200];
             std::snprintf(buf, sizeof buf, "T=%g b=1 fc=%g delta=%g d=0 B=%g kw=%g v=%s", t, e.fc,
                           e.delta, p.damping, kw, estimator);
-            c.info.parameters = buf;
-            out.push_back(std::move(c));
+            append(p, p.coupling + " + " + estimator, buf);
           }
   return out;
 }
