@@ -119,6 +119,10 @@ TEST(RunAllocations, OrganScenePeriodNeverAllocates) {
   expect_no_allocation(organ_scene(), "organ");  // the hand goes into the organ from 3 s
 }
 
+TEST(RunAllocations, MeshObstacleScenePeriodNeverAllocates) {
+  expect_no_allocation(mesh_scene(), "mesh");  // the probe presses the mesh lobe at 1–2.7 s
+}
+
 TEST(RunAllocations, MouseScenePeriodNeverAllocates) {
   NUMEN_REQUIRE_EVDEV();  // the scene names its event codes
   expect_no_allocation(mouse_scene(), "mouse");  // 5 s scene: the trajectory holds its end

@@ -122,6 +122,12 @@ inline const Scene& organ_scene() {
   return s;
 }
 
+/// The rigid mesh obstacle scene (sim/scenes/mesh.toml: a probe pressed into a mesh lobe).
+inline const Scene& mesh_scene() {
+  static const Scene s = numen::sim::load_scene(std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/mesh.toml");
+  return s;
+}
+
 inline const Scene& mouse_scene() {
   static const Scene s = numen::sim::load_scene(std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/mouse.toml");
   return s;
