@@ -4,7 +4,8 @@
 # nlohmann/json, pybind11) once instead of once per file. Applied to the test programs and
 # benchmarks, the `numen` command, numen::sim, the Python module and the MuJoCo peer's library;
 # core, hal and platform compile file by file (their files are light to parse, and heavy to
-# optimise).
+# optimise at -O3), but in sanitizer builds (numen_unity_when_sanitized): there everything is at
+# -O1, and parsing Eigen and the standard library once per batch is the larger share.
 #
 # File-local names (anonymous namespaces, static functions) of the files of one batch share a
 # translation unit: two of one name are a redefinition error. Give one a distinct name, or
@@ -17,5 +18,11 @@ endif()
 function(numen_unity target)
   if(NUMEN_UNITY_BATCH GREATER 1)
     set_target_properties(${target} PROPERTIES UNITY_BUILD ON UNITY_BUILD_BATCH_SIZE ${NUMEN_UNITY_BATCH})
+  endif()
+endfunction()
+# core, hal and platform: unity batches in sanitizer builds only (NUMEN_SANITIZE, .ci/sanitize).
+function(numen_unity_when_sanitized target)
+  if(NUMEN_SANITIZE)
+    numen_unity(${target})
   endif()
 endfunction()

@@ -201,10 +201,10 @@ TEST(NetOrgan, MultirateDeviceLoopFeelsTheOrganAsTheSingleRateStepDoes) {
   const double f_single = single.feedback_wrench.force.z();
   const double f_mr = mr.device_data().feedback_wrench.force.z();
   std::printf("[organ multirate] god-object past the touch: single-rate %.3f mm, multirate %.3f mm "
-              "(max %.3f / %.3f); feedback %.3f / %.3f N; planes max %d\n",
+              "(max %.3f / %.3f); feedback %.3f / %.3f N; planes max %ld\n",
               1e3 * (z_touch - single.bodies[1].position.z()),
               1e3 * (z_touch - mr.device_data().bodies[0].position.z()), 1e3 * deepest_single,
-              1e3 * deepest_mr, f_single, f_mr, mr.counters().planes_max);
+              1e3 * deepest_mr, f_single, f_mr, static_cast<long>(mr.counters().planes_max));
   EXPECT_GT(f_single, 0.2);
   EXPECT_NEAR(f_mr, f_single, 0.15 * f_single);
   EXPECT_NEAR(mr.device_data().bodies[0].position.z(), single.bodies[1].position.z(),
