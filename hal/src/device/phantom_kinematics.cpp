@@ -10,6 +10,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "axis_rotation.hpp"
 #include "geometry_check.hpp"
 #include "numen/hal/device/axis.hpp"
 
@@ -18,13 +19,12 @@ namespace {
 
 using core::Quat;
 using core::Vec3;
+using detail::axis_rotation;
 
 constexpr double kPi = std::numbers::pi;
 
-Quat rot(double angle, const Vec3& axis) noexcept { return Quat(Eigen::AngleAxisd(angle, axis)); }
-
-constexpr const char* kLinkNames[PhantomKinematics::kNumLinks] = {"tool", "turret", "upper_arm",
-                                                                  "forearm", "stylus"};
+constexpr const char* kPhantomLinkNames[PhantomKinematics::kNumLinks] = {
+    "tool", "turret", "upper_arm", "forearm", "stylus"};
 
 double checked_length(double l, const char* field) {
   if (!std::isfinite(l) || l <= 0.0) {
@@ -52,12 +52,13 @@ PhantomKinematics::PhantomKinematics(const PhantomGeometry& geometry,
 PhantomKinematics::Frames PhantomKinematics::frames(const AxisVector& q) const noexcept {
   eigen_assert(q.size() == kNumAxes);
   Frames f;
-  f.turret = (geometry_.base.orientation * rot(q[kTurret], Vec3::UnitZ())).normalized();
-  f.upper_arm = (f.turret * rot(q[kShoulder], Vec3::UnitY())).normalized();
-  f.forearm = (f.turret * rot(q[kElbow], Vec3::UnitY())).normalized();
-  f.stylus = (f.forearm * rot(q[kGimbalYaw], Vec3::UnitZ()) * rot(q[kGimbalPitch], Vec3::UnitY()) *
-              rot(q[kStylusRoll], Vec3::UnitX()))
-                 .normalized();
+  f.turret = (geometry_.base.orientation * axis_rotation(q[kTurret], Vec3::UnitZ())).normalized();
+  f.upper_arm = (f.turret * axis_rotation(q[kShoulder], Vec3::UnitY())).normalized();
+  f.forearm = (f.turret * axis_rotation(q[kElbow], Vec3::UnitY())).normalized();
+  f.stylus =
+      (f.forearm * axis_rotation(q[kGimbalYaw], Vec3::UnitZ()) *
+       axis_rotation(q[kGimbalPitch], Vec3::UnitY()) * axis_rotation(q[kStylusRoll], Vec3::UnitX()))
+          .normalized();
   f.elbow = geometry_.base.position + geometry_.l1 * (f.upper_arm * Vec3::UnitX());
   f.gimbal = f.elbow - geometry_.l2 * (f.forearm * Vec3::UnitZ());
   return f;
@@ -84,10 +85,10 @@ Jacobian PhantomKinematics::stylus_fixed_jacobian(const AxisVector& q, const Fra
   const Vec3& s = geometry_.base.position;
   const Vec3 z_b = geometry_.base.orientation * Vec3::UnitZ();
   const Vec3 y_t = f.turret * Vec3::UnitY();
-  const Quat yawed = f.forearm * rot(q[kGimbalYaw], Vec3::UnitZ());
+  const Quat yawed = f.forearm * axis_rotation(q[kGimbalYaw], Vec3::UnitZ());
   const Vec3 w3 = f.forearm * Vec3::UnitZ();
   const Vec3 w4 = yawed * Vec3::UnitY();
-  const Vec3 w5 = yawed * rot(q[kGimbalPitch], Vec3::UnitY()) * Vec3::UnitX();
+  const Vec3 w5 = yawed * axis_rotation(q[kGimbalPitch], Vec3::UnitY()) * Vec3::UnitX();
   const Vec3 r = origin - f.gimbal;
 
   Jacobian j(6, kNumAxes);
@@ -106,7 +107,7 @@ Jacobian PhantomKinematics::jacobian(const AxisVector& q) const noexcept {
 }
 
 const char* PhantomKinematics::link_name(int link) const noexcept {
-  return (link >= 0 && link < kNumLinks) ? kLinkNames[link] : "";
+  return (link >= 0 && link < kNumLinks) ? kPhantomLinkNames[link] : "";
 }
 
 core::Pose PhantomKinematics::link_pose(int link, const AxisVector& q) const noexcept {
@@ -114,7 +115,8 @@ core::Pose PhantomKinematics::link_pose(int link, const AxisVector& q) const noe
   switch (link) {
     case kLinkTurret: {
       p.position = geometry_.base.position;
-      p.orientation = (geometry_.base.orientation * rot(q[kTurret], Vec3::UnitZ())).normalized();
+      p.orientation =
+          (geometry_.base.orientation * axis_rotation(q[kTurret], Vec3::UnitZ())).normalized();
       return p;
     }
     case kLinkUpperArm: {
@@ -146,7 +148,7 @@ Jacobian PhantomKinematics::link_jacobian(int link, const AxisVector& q) const n
       j.col(kTurret).tail<3>() = geometry_.base.orientation * Vec3::UnitZ();
       if (link == kLinkUpperArm) {
         j.col(kShoulder).tail<3>() =
-            geometry_.base.orientation * (rot(q[kTurret], Vec3::UnitZ()) * Vec3::UnitY());
+            geometry_.base.orientation * (axis_rotation(q[kTurret], Vec3::UnitZ()) * Vec3::UnitY());
       }
       return j;
     }
@@ -209,7 +211,7 @@ AxisVector PhantomKinematics::inverse(const core::Pose& pose,
   const double q1 = -alpha1;
 
   // Gimbal: R_Fᵀ R_S = Rz(q3) Ry(q4) Rx(q5).
-  const Quat r_f = rb * rot(q0, Vec3::UnitZ()) * rot(q2, Vec3::UnitY());
+  const Quat r_f = rb * axis_rotation(q0, Vec3::UnitZ()) * axis_rotation(q2, Vec3::UnitY());
   const core::Mat3 m = (r_f.conjugate() * r_s).toRotationMatrix();
   const double cos_pitch = std::hypot(m(0, 0), m(1, 0));
   const double q4 = std::atan2(-m(2, 0), cos_pitch);

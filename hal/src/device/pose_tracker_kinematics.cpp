@@ -5,6 +5,7 @@
 
 #include <cmath>
 
+#include "axis_rotation.hpp"
 #include "geometry_check.hpp"
 #include "numen/hal/device/axis.hpp"
 
@@ -13,8 +14,7 @@ namespace {
 
 using core::Quat;
 using core::Vec3;
-
-Quat rot(double angle, const Vec3& axis) noexcept { return Quat(Eigen::AngleAxisd(angle, axis)); }
+using detail::axis_rotation;
 
 }  // namespace
 
@@ -31,8 +31,9 @@ PoseTrackerKinematics::PoseTrackerKinematics(const PoseTrackerGeometry& geometry
 
 core::Pose PoseTrackerKinematics::forward(const AxisVector& q) const noexcept {
   eigen_assert(q.size() == kNumAxes);
-  const Quat local =
-      rot(q[kYaw], Vec3::UnitZ()) * rot(q[kPitch], Vec3::UnitY()) * rot(q[kRoll], Vec3::UnitX());
+  const Quat local = axis_rotation(q[kYaw], Vec3::UnitZ()) *
+                     axis_rotation(q[kPitch], Vec3::UnitY()) *
+                     axis_rotation(q[kRoll], Vec3::UnitX());
   const Quat r_tool = geometry_.base.orientation * local;
   const Vec3 o = geometry_.base.position + geometry_.base.orientation * Vec3(q[kX], q[kY], q[kZ]);
   core::Pose out;
@@ -44,9 +45,9 @@ core::Pose PoseTrackerKinematics::forward(const AxisVector& q) const noexcept {
 Jacobian PoseTrackerKinematics::jacobian(const AxisVector& q) const noexcept {
   eigen_assert(q.size() == kNumAxes);
   const Quat& rb = geometry_.base.orientation;
-  const Quat r_yaw = rb * rot(q[kYaw], Vec3::UnitZ());
-  const Quat r_yaw_pitch = r_yaw * rot(q[kPitch], Vec3::UnitY());
-  const Quat r_tool = r_yaw_pitch * rot(q[kRoll], Vec3::UnitX());
+  const Quat r_yaw = rb * axis_rotation(q[kYaw], Vec3::UnitZ());
+  const Quat r_yaw_pitch = r_yaw * axis_rotation(q[kPitch], Vec3::UnitY());
+  const Quat r_tool = r_yaw_pitch * axis_rotation(q[kRoll], Vec3::UnitX());
   const Vec3 w_yaw = rb * Vec3::UnitZ();
   const Vec3 w_pitch = r_yaw * Vec3::UnitY();
   const Vec3 w_roll = r_yaw_pitch * Vec3::UnitX();

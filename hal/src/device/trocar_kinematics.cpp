@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "axis_rotation.hpp"
 #include "geometry_check.hpp"
 #include "numen/hal/device/axis.hpp"
 
@@ -14,11 +15,10 @@ namespace {
 
 using core::Quat;
 using core::Vec3;
+using detail::axis_rotation;
 
-Quat rot(double angle, const Vec3& axis) noexcept { return Quat(Eigen::AngleAxisd(angle, axis)); }
-
-constexpr const char* kLinkNames[TrocarKinematics::kNumLinks] = {"tool", "trocar", "tube", "jaw_1",
-                                                                 "jaw_2"};
+constexpr const char* kTrocarLinkNames[TrocarKinematics::kNumLinks] = {"tool", "trocar", "tube",
+                                                                       "jaw_1", "jaw_2"};
 
 // +1 for jaw_1, −1 for jaw_2: each jaw turns by ±jaw/2 about the tube's x axis.
 double jaw_sign(int link) noexcept { return link == TrocarKinematics::kLinkJaw1 ? 1.0 : -1.0; }
@@ -35,10 +35,10 @@ TrocarKinematics::TrocarKinematics(const TrocarGeometry& trocar, const core::Pos
 
 core::Pose TrocarKinematics::tool_pose(const AxisVector& q) const noexcept {
   eigen_assert(q.size() == kNumAxes);
-  const Quat swing =
-      trocar_.orientation * rot(q[kPivotX], Vec3::UnitX()) * rot(q[kPivotY], Vec3::UnitY());
+  const Quat swing = trocar_.orientation * axis_rotation(q[kPivotX], Vec3::UnitX()) *
+                     axis_rotation(q[kPivotY], Vec3::UnitY());
   core::Pose tool;
-  tool.orientation = (swing * rot(q[kRoll], Vec3::UnitZ())).normalized();
+  tool.orientation = (swing * axis_rotation(q[kRoll], Vec3::UnitZ())).normalized();
   tool.position = trocar_.point + q[kDepth] * (swing * Vec3::UnitZ());
   return tool;
 }
@@ -54,8 +54,8 @@ core::Pose TrocarKinematics::forward(const AxisVector& q) const noexcept {
 Jacobian TrocarKinematics::tube_fixed_jacobian(const AxisVector& q,
                                                const Vec3& origin) const noexcept {
   eigen_assert(q.size() == kNumAxes);
-  const Quat rc_a = trocar_.orientation * rot(q[kPivotX], Vec3::UnitX());
-  const Quat swing = rc_a * rot(q[kPivotY], Vec3::UnitY());
+  const Quat rc_a = trocar_.orientation * axis_rotation(q[kPivotX], Vec3::UnitX());
+  const Quat swing = rc_a * axis_rotation(q[kPivotY], Vec3::UnitY());
   const Vec3 w_a = trocar_.orientation * Vec3::UnitX();
   const Vec3 w_b = rc_a * Vec3::UnitY();
   const Vec3 s = swing * Vec3::UnitZ();
@@ -76,7 +76,7 @@ Jacobian TrocarKinematics::jacobian(const AxisVector& q) const noexcept {
 }
 
 const char* TrocarKinematics::link_name(int link) const noexcept {
-  return (link >= 0 && link < kNumLinks) ? kLinkNames[link] : "";
+  return (link >= 0 && link < kNumLinks) ? kTrocarLinkNames[link] : "";
 }
 
 core::Pose TrocarKinematics::link_pose(int link, const AxisVector& q) const noexcept {
@@ -85,9 +85,9 @@ core::Pose TrocarKinematics::link_pose(int link, const AxisVector& q) const noex
     case kLinkTrocar: {
       core::Pose sleeve;
       sleeve.position = trocar_.point;
-      sleeve.orientation =
-          (trocar_.orientation * rot(q[kPivotX], Vec3::UnitX()) * rot(q[kPivotY], Vec3::UnitY()))
-              .normalized();
+      sleeve.orientation = (trocar_.orientation * axis_rotation(q[kPivotX], Vec3::UnitX()) *
+                            axis_rotation(q[kPivotY], Vec3::UnitY()))
+                               .normalized();
       return sleeve;
     }
     case kLinkTube:
@@ -96,7 +96,8 @@ core::Pose TrocarKinematics::link_pose(int link, const AxisVector& q) const noex
     case kLinkJaw2: {
       core::Pose jaw = tool_pose(q);
       jaw.orientation =
-          (jaw.orientation * rot(0.5 * jaw_sign(link) * q[kJaw], Vec3::UnitX())).normalized();
+          (jaw.orientation * axis_rotation(0.5 * jaw_sign(link) * q[kJaw], Vec3::UnitX()))
+              .normalized();
       return jaw;
     }
     default:
@@ -109,7 +110,7 @@ Jacobian TrocarKinematics::link_jacobian(int link, const AxisVector& q) const no
   switch (link) {
     case kLinkTrocar: {
       // The sleeve pivots about p_c (fixed origin); depth, roll and jaw do not move it.
-      const Quat rc_a = trocar_.orientation * rot(q[kPivotX], Vec3::UnitX());
+      const Quat rc_a = trocar_.orientation * axis_rotation(q[kPivotX], Vec3::UnitX());
       Jacobian j(6, kNumAxes);
       j.setZero();
       j.col(kPivotX).tail<3>() = trocar_.orientation * Vec3::UnitX();
@@ -139,7 +140,8 @@ AxisVector TrocarKinematics::inverse_tool(const core::Pose& tool, double jaw) co
   const double a = std::atan2(-uc.y(), uc.z());
 
   // Swing–twist: the twist of R_sᵀ R_tool about z is the roll.
-  const Quat swing = trocar_.orientation * rot(a, Vec3::UnitX()) * rot(b, Vec3::UnitY());
+  const Quat swing =
+      trocar_.orientation * axis_rotation(a, Vec3::UnitX()) * axis_rotation(b, Vec3::UnitY());
   const Quat rel = swing.conjugate() * tool.orientation;
   double psi = 0.0;
   if (std::abs(rel.w()) + std::abs(rel.z()) > 1e-12) {
