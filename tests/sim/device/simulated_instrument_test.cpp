@@ -18,6 +18,7 @@
 #include "numen/hal/device/trocar_kinematics.hpp"
 #include "numen/sim/scene/scene.hpp"
 #include "build_features.hpp"
+#include "lattice_scene.hpp"
 #include "rotation.hpp"
 #include "test_constants.hpp"
 
@@ -121,7 +122,7 @@ TEST(SimulatedInstrument, StartTimeShiftsTheTrajectory) {
 
 TEST(SimulatedInstrument, DefaultSceneReportsTheRecordedTip) {
   NUMEN_REQUIRE_ARTICULATION();
-  const numen::sim::Scene scene = numen::sim::load_scene(numen::sim::default_scene_path());
+  const numen::sim::Scene scene = numen::sim::load_scene(numen::test::lattice_scene_path());
   const SimulatedInstrument inst(scene.device, scene.trajectory);
   const auto& kin = static_cast<const TrocarKinematics&>(inst.kinematics());
   const Pose offset = scene.device.tool_offset;

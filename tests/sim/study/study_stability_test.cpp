@@ -325,7 +325,7 @@ TEST(StudyStability, ShippedScenesStayBoundedWithAContactStiffnessOfOneTeraNewto
       default_clamped = row.note.find("; 0 steps with clamped") == std::string::npos;
   }
   const std::size_t skipped = r.skipped.size();
-  EXPECT_EQ(contact + skipped, 9u);  // 9 shipped scenes (mouse.toml: issue 18; mesh.toml, organ.toml: 36)
+  EXPECT_EQ(contact + skipped, 9u);  // 9 shipped scenes (mouse.toml: issue 18; mesh.toml, lattice.toml: 36)
   EXPECT_EQ(coupling + skipped, 9u);
   if (core::kWithArticulation) {
     EXPECT_TRUE(default_clamped);
