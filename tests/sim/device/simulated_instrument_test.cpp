@@ -120,7 +120,7 @@ TEST(SimulatedInstrument, StartTimeShiftsTheTrajectory) {
   EXPECT_LT((late.axes_at(0) - now.axes_at(0)).norm(), 1e-15);
 }
 
-TEST(SimulatedInstrument, DefaultSceneReportsTheRecordedTip) {
+TEST(SimulatedInstrument, LatticeSceneReportsTheRecordedTip) {
   NUMEN_REQUIRE_ARTICULATION();
   const numen::sim::Scene scene = numen::sim::load_scene(numen::test::lattice_scene_path());
   const SimulatedInstrument inst(scene.device, scene.trajectory);

@@ -85,7 +85,7 @@ void expect_no_allocation(const Scene& scene, const char* name) {
   EXPECT_FALSE(s.nan_detected);
 }
 
-TEST(RunAllocations, DefaultScenePeriodNeverAllocates) {
+TEST(RunAllocations, LatticeScenePeriodNeverAllocates) {
   NUMEN_REQUIRE_ARTICULATION();
   expect_no_allocation(lattice_scene(), "lattice");
 }

@@ -52,7 +52,7 @@ RunSummary run_for(const Scene& scene, double seconds) {
 
 // The whole shipped recording, closed loop: clean, no limit cycle, the hand 24 mm into the
 // organ, the handle held back by the feedback, the god-object on the surface.
-TEST(RunClosedLoop, DefaultSceneIsStableAndPushesTheHandleBack) {
+TEST(RunClosedLoop, LatticeSceneIsStableAndPushesTheHandleBack) {
   NUMEN_REQUIRE_ARTICULATION();
   NUMEN_SKIP_UNDER_SANITIZER("a 30 s run's figures (the closed loop's periods run under the "
                              "sanitizers in RunClosedLoop.PeriodsNeverAllocate)");

@@ -216,10 +216,10 @@ Scene replayed(Scene scene) {
 // prescribed jaws) in the device loop, the tissue and organs in the scene loop. At scene rates of
 // 1 kHz, 200 Hz and 100 Hz the instrument stays as far out of the organs as the single-rate one,
 // tracks the hand as closely in free space, and the drives get the same largest force.
-TEST(RunMultirate, DefaultSceneArticulatedGodObjectAtRateRatiosOneFiveAndTen) {
+TEST(RunMultirate, LatticeSceneArticulatedGodObjectAtRateRatiosOneFiveAndTen) {
   NUMEN_SKIP_UNDER_SANITIZER(
       "four runs of the 30 s scene compare figures, which is not what a sanitizer checks; they "
-      "take 140 s under ASan+UBSan (RunMultirate.DefaultScenePeriodNeverAllocates runs the same "
+      "take 140 s under ASan+UBSan (RunMultirate.LatticeScenePeriodNeverAllocates runs the same "
       "path there)");
   NUMEN_REQUIRE_ARTICULATION();
   numen::test::TempDir dir;
@@ -245,7 +245,7 @@ TEST(RunMultirate, DefaultSceneArticulatedGodObjectAtRateRatiosOneFiveAndTen) {
   }
 }
 
-TEST(RunMultirate, DefaultScenePeriodNeverAllocates) {
+TEST(RunMultirate, LatticeScenePeriodNeverAllocates) {
   NUMEN_REQUIRE_ARTICULATION();
   numen::test::TempDir dir;
   run_without_allocation(default_multirate(dir, 0.01, 0.005), "lattice");

@@ -64,7 +64,7 @@ void print(const char* name, const RunSummary& s) {
 
 }  // namespace
 
-TEST(RunPassivity, ControllerRemovesTheLimitCycleOfAnActiveDefaultSceneSingleRateAndMultirate) {
+TEST(RunPassivity, ControllerRemovesTheLimitCycleOfAnActiveLatticeSceneSingleRateAndMultirate) {
   NUMEN_SKIP_UNDER_SANITIZER(
       "four closed-loop runs of the 30 s trial compare figures, which is not what a sanitizer "
       "checks");
@@ -98,7 +98,7 @@ TEST(RunPassivity, ControllerRemovesTheLimitCycleOfAnActiveDefaultSceneSingleRat
 // environment — sent torques compared period by period on the driven axes (pivot_x, pivot_y in
 // N·m, depth in N), without an energy limit and with 0.1 mJ: what the controller changes of the
 // unconstrained render. Figures in docs/passivity.md, "Passivity controller".
-TEST(RunPassivity, TransparencyOnThePassiveDefaultSceneInReplay) {
+TEST(RunPassivity, TransparencyOnThePassiveLatticeSceneInReplay) {
   NUMEN_SKIP_UNDER_SANITIZER("three 10 s runs compare figures, which is not what a sanitizer checks");
   NUMEN_REQUIRE_ARTICULATION();
   numen::test::TempDir dir;

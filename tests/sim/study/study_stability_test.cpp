@@ -287,7 +287,7 @@ TEST(StudyStability, MonitorCriteriaAndGrowth) {
 TEST(StudyStability, ShippedScenesStayBoundedWithAContactStiffnessOfOneTeraNewtonPerMetre) {
   NUMEN_SKIP_UNDER_SANITIZER(
       "every shipped scene for 6 s twice: 130 s under ASan+UBSan with coverage; the scenes'"
-      " runs of RunDefaultScene.*, RunConstructionScene.* and the contact floor's tests "
+      " runs of RunLatticeScene.*, RunConstructionScene.* and the contact floor's tests "
       "(ContactForce.*) run there");
   // Family "scenes", quick: every shipped scene with its contact stiffness, then its coupling
   // stiffness, at 1e12 N/m; implicit Euler. Before the core's contact floor the default scene's
