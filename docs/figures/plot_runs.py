@@ -33,6 +33,8 @@ def default_run(trace, out, what="default"):
     else:
         ax[0].plot(t, d["target_penetration_mm"], lw=0.8, label="target (recorded hand, tool placed there)")
     ax[0].plot(t, d["tool_penetration_mm"], lw=0.8, label="god-object (the tool)")
+    if any(v != 0.0 for v in d.get("net_tie_stretch_mm", [])):  # a deformable organ
+        ax[0].plot(t, d["net_tie_stretch_mm"], lw=0.8, label="organ surface pushed from rest, max")
     ax[0].set_ylabel("penetration (mm)")
     ax[0].legend(loc="upper right")
     organ = "deformable organ" if what == "default" else "rigid sphere-lattice organ"

@@ -123,7 +123,7 @@ BENCHMARK_CAPTURE(step_time, ConstructionGodObject, "construction.toml", nullptr
 BENCHMARK_CAPTURE(step_time, PhantomScene, "phantom.toml", nullptr)->UseManualTime()->Iterations(6000);
 BENCHMARK_CAPTURE(step_time, ConstructionDirect, "construction.toml", "direct")->UseManualTime()->Iterations(9000);
 BENCHMARK_CAPTURE(period_time, LatticeScene, "lattice.toml")->Iterations(30000);
-// The default scene (its deformable organ, 1002 nodes): the first 10 s, the hand in the organ from 3 s.
+// The default scene (its deformable organ, 1002 nodes): its first 10 s.
 BENCHMARK_CAPTURE(step_time, DefaultScene, "default.toml", nullptr)->UseManualTime()->Iterations(10000);
 BENCHMARK_CAPTURE(period_time, ConstructionGodObject, "construction.toml")->Iterations(9000);
 

@@ -12,7 +12,8 @@
 ///    −Inf become on the wire (hal::value_to_counts: the offset counts and the int32 extremes);
 ///  - "core-target-nonfinite": NaN / ±Inf written straight into core::Data's target pose and twist
 ///    for 20 steps (what the core does if anything non-finite ever got through);
-///  - "organ-plunge" (study_stability_organ.cpp): the organ of sim/scenes/default.toml plunged into.
+///  - "organ-plunge" (study_stability_organ.cpp): the organ of sim/scenes/default.toml, plunged
+///    into.
 /// The loop cases' verdict: every period core::Data finite (bodies, nodes, target, feedback) and
 /// no rollback, nothing non-finite reaching the core (no kInvalidTarget), drive torques finite and
 /// within each axis's max_torque, zero in every period whose input was bad; tool speeds below
