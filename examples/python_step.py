@@ -1,12 +1,12 @@
 #!/usr/bin/env python3
-"""Steps numen's default scene from Python and plots how deep the tool (the god-object) and its
-target (the same instrument imposed at the hand's pose) go into the organ and the tissue
-(docs/python.md).
+"""Steps numen's lattice scene (the default scene with a rigid sphere-lattice organ) from Python
+and plots how deep the tool (the god-object) and its target (the same instrument imposed at the
+hand's pose) go into the organ and the tissue (docs/python.md).
 
     PYTHONPATH=build/sim/python /usr/bin/python3 examples/python_step.py \
         --out docs/figures/python_step_depth.png
 
-Two Data of the default scene are stepped with the same scripted target: the device target of
+Two Data of the lattice scene are stepped with the same scripted target: the device target of
 the attached body is the scene trajectory's pose and twist at each step (no bus, no device
 kinematics; numen.run_scene runs the full control loop). One is the scene as it is (god-object
 coupling: springs pull the tool toward the target, contacts keep it out of the obstacles); the
@@ -15,6 +15,7 @@ goes where the hand goes, through the obstacles. Depth is Data.max_penetration, 
 contact of the step (mm). Needs matplotlib (python3-matplotlib); Agg backend, no display.
 """
 import argparse
+import os
 
 import matplotlib
 
@@ -38,7 +39,7 @@ def main():
     ap.add_argument("--duration", type=float, default=None, help="s (default: the scene's)")
     args = ap.parse_args()
 
-    path = numen.default_scene_path()
+    path = os.path.join(os.path.dirname(numen.default_scene_path()), "lattice.toml")
     tool_scene = numen.load_scene(path)
     target_scene = numen.load_scene(path, coupling="direct")
     tool, target = tool_scene.make_data(), target_scene.make_data()

@@ -5,12 +5,14 @@ set -euo pipefail
 out=docs/figures
 tmp=$(mktemp -d)
 ./build/numen run --trace "$tmp/default.csv" > /dev/null
+./build/numen run sim/scenes/lattice.toml --trace "$tmp/lattice.csv" > /dev/null
 ./build/numen run sim/scenes/construction.toml --trace "$tmp/god.csv" > /dev/null
 ./build/numen run sim/scenes/construction.toml --coupling direct --trace "$tmp/direct.csv" > /dev/null
 /usr/bin/python3 $out/plot_runs.py default "$tmp/default.csv" $out/default_run.png
+/usr/bin/python3 $out/plot_runs.py lattice "$tmp/lattice.csv" $out/lattice_run.png
 /usr/bin/python3 $out/plot_runs.py construction "$tmp/god.csv" "$tmp/direct.csv" $out/construction.png
 rm -rf "$tmp"
-echo "wrote $out/default_run.png $out/construction.png"
+echo "wrote $out/default_run.png $out/lattice_run.png $out/construction.png"
 c=$(mktemp) && ./build/tests/numen_bench --benchmark_filter=Chain --benchmark_repetitions=3 --benchmark_report_aggregates_only=true --benchmark_out="$c" --benchmark_out_format=json > /dev/null && /usr/bin/python3 $out/plot_articulation_scaling.py "$c" $out/articulation_scaling.png && rm -f "$c"
 d=$(mktemp) && ./build/tests/numen_bench --benchmark_filter=DeformableBall --benchmark_repetitions=5 --benchmark_report_aggregates_only=true --benchmark_out="$d" --benchmark_out_format=json > /dev/null && /usr/bin/python3 $out/plot_deformable_scaling.py "$d" $out/deformable_scaling.png && rm -f "$d"
 # Net solve against Eigen's solvers on one frozen step (docs/deformable.md; ~3.5 minutes)
@@ -21,7 +23,7 @@ a=$(mktemp -d) && ./build/numen study accuracy --out "$a" && /usr/bin/python3 $o
 s=$(mktemp -d) && ./build/numen study stability --out "$s" > /dev/null && /usr/bin/python3 $out/plot_stability.py "$s" $out && rm -rf "$s"
 # Passivity: the Z-width of a 1-DOF device (docs/passivity.md; ~1 minute; --quick for a look in seconds)
 z=$(mktemp -d) && ./build/numen study passivity --out "$z" > /dev/null && /usr/bin/python3 $out/plot_passivity.py "$z" $out/passivity_zwidth.png && rm -rf "$z"
-# Multirate quality against the rate ratio, construction and default scenes (docs/multirate.md; ~10 s)
+# Multirate quality against the rate ratio, construction and lattice scenes (docs/multirate.md; ~10 s)
 /usr/bin/python3 $out/plot_multirate.py ./build/numen $out
-# The deformable organ: hand vs tool vs organ surface, excerpt and full trials (docs/deformable.md; ~6 minutes)
+# The default scene's deformable organ: hand vs tool vs organ surface, excerpt and full trials (docs/results.md, docs/deformable.md; ~6 minutes)
 docs/figures/organ_runs.sh > /dev/null

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The organ scene (sim/scenes/organ.toml) in --replay on the shipped excerpt and on every full
+# The default scene (sim/scenes/default.toml: the deformable organ) in --replay on the shipped excerpt and on every full
 # JIGSAWS trial (*.txt of $NUMEN_JIGSAWS_DIR, docs/inputs.md; none when it is unset), then
 # docs/figures/organ_runs.png (plot_organ.py: hand vs tool vs organ surface) and its figures as JSON on stdout. Run from the project root
 # after building. Needs python3-numpy and python3-matplotlib.
@@ -8,7 +8,7 @@ root=$(pwd)
 trials=${NUMEN_JIGSAWS_DIR:-}
 tmp=$(mktemp -d)
 runs=()
-./build/numen run sim/scenes/organ.toml --replay --trace "$tmp/excerpt.csv" > /dev/null
+./build/numen run sim/scenes/default.toml --replay --trace "$tmp/excerpt.csv" > /dev/null
 runs+=("excerpt (30 s)=$tmp/excerpt.csv")
 for f in "$trials"/*.txt; do
   [ -e "$f" ] || continue
@@ -17,7 +17,7 @@ for f in "$trials"/*.txt; do
   sed -e "s#dcf = \"devices/#dcf = \"$root/sim/scenes/devices/#" \
       -e "s#file = \"../data/organ_lobe.obj\"#file = \"$root/sim/data/organ_lobe.obj\"#" \
       -e "s#file = \"../data/jigsaws_suturing_b002_excerpt.txt\"#file = \"$(realpath "$f")\"#" \
-      sim/scenes/organ.toml > "$tmp/$n.toml"
+      sim/scenes/default.toml > "$tmp/$n.toml"
   ./build/numen run "$tmp/$n.toml" --replay --trace "$tmp/$n.csv" > /dev/null
   runs+=("$n=$tmp/$n.csv")
 done

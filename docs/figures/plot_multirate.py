@@ -29,10 +29,10 @@ import matplotlib.pyplot as plt
 
 RATIOS = [1, 2, 5, 10, 20, 100]
 SLOW = [2, 5, 10, 20]  # single-rate at dt = N·1 ms
-MARGIN = {"construction": 0.01, "default": 0.01, "deformable": 0.002, "endobag": 0.002}
-SCENES = ["construction", "default", "deformable", "endobag"]
+MARGIN = {"construction": 0.01, "lattice": 0.01, "deformable": 0.002, "endobag": 0.002}
+SCENES = ["construction", "lattice", "deformable", "endobag"]
 THIRD = {"construction": ("free_body_speed_max_mps", "fastest free body (m/s)"),
-         "default": ("feedback_force_max_n", "largest feedback force (N)"),
+         "lattice": ("feedback_force_max_n", "largest feedback force (N)"),
          "deformable": ("net_tie_stretch_max_mm", "net's largest tie stretch (mm)"),
          "endobag": ("net_tie_stretch_max_mm", "net's largest tie stretch (mm)")}
 

@@ -1,7 +1,7 @@
 #!/usr/bin/python3
-"""Hand against tool against organ surface on the organ scene (docs/deformable.md, "Organs").
+"""Hand against tool against organ surface on the default scene (docs/deformable.md, "Organs").
 
-    ./build/numen run --scene sim/scenes/organ.toml --trace organ.csv [--trajectory FILE]
+    ./build/numen run sim/scenes/default.toml --replay --trace organ.csv   (docs/figures/organ_runs.sh)
     /usr/bin/python3 docs/figures/plot_organ.py OUT.png [--json OUT.json] LABEL=organ.csv ...
 
 For each trace (one panel each): the depth of the recorded hand's instrument tip and of the
@@ -10,7 +10,7 @@ god-object's tip below the organ's rest surface (the tube's frame is the traced 
 its rest shape (the trace's net_tie_stretch_mm: the largest node displacement from its rest
 position). The depth is signed (> 0 inside the rest surface: the winding number of its
 triangles) and measured to the nearest rest vertex (exact to within half an edge, ≤ 2.4 mm).
-The organ's mesh and pose are read from sim/scenes/organ.toml. Needs numpy and matplotlib
+The organ's mesh and pose are read from sim/scenes/default.toml. Needs numpy and matplotlib
 (Debian's python3-numpy, python3-matplotlib).
 """
 import csv
@@ -38,7 +38,7 @@ def quat_rotate(q, v):
 
 
 def organ_surface():
-    scene = tomllib.loads((ROOT / "sim/scenes/organ.toml").read_text())
+    scene = tomllib.loads((ROOT / "sim/scenes/default.toml").read_text())
     body = next(b for b in scene["body"] if b["name"] == "organ_core")
     net = next(d for d in scene["deformable"] if d["name"] == "organ")
     verts, tris = [], []
@@ -113,7 +113,7 @@ def main():
         ax.set_ylabel("mm / N")
     axes[0, 0].legend(loc="upper right", fontsize=7)
     axes[-1, 0].set_xlabel("time (s)")
-    fig.suptitle("Organ scene: recorded hand vs god-object vs deformable organ (depths < 0: outside)",
+    fig.suptitle("Default scene: recorded hand vs god-object vs deformable organ (depths < 0: outside)",
                  fontsize=10)
     fig.tight_layout()
     fig.savefig(out, dpi=100)

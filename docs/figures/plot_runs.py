@@ -20,7 +20,7 @@ def load(path):
     return {k: [float(r[k]) for r in rows] for k in rows[0]}
 
 
-def default_run(trace, out):
+def default_run(trace, out, what="default"):
     d = load(trace)
     t = d["time_s"]
     fig, ax = plt.subplots(2, 1, figsize=(9, 6), sharex=True)
@@ -33,9 +33,13 @@ def default_run(trace, out):
     else:
         ax[0].plot(t, d["target_penetration_mm"], lw=0.8, label="target (recorded hand, tool placed there)")
     ax[0].plot(t, d["tool_penetration_mm"], lw=0.8, label="god-object (the tool)")
+    if any(v != 0.0 for v in d.get("net_tie_stretch_mm", [])):  # a deformable organ
+        ax[0].plot(t, d["net_tie_stretch_mm"], lw=0.8, label="organ surface pushed from rest, max")
     ax[0].set_ylabel("penetration (mm)")
     ax[0].legend(loc="upper right")
-    ax[0].set_title("Default scene: laparoscopic instrument on recorded suturing motion (JIGSAWS)")
+    organ = "deformable organ" if what == "default" else "rigid sphere-lattice organ"
+    ax[0].set_title("%s scene (%s): laparoscopic instrument on recorded suturing motion (JIGSAWS)"
+                    % (what.capitalize(), organ))
     sep = [((d["tool_x"][i] - d["target_x"][i]) ** 2 + (d["tool_y"][i] - d["target_y"][i]) ** 2
             + (d["tool_z"][i] - d["target_z"][i]) ** 2) ** 0.5 * 1e3 for i in range(len(t))]
     f = [(d["feedback_fx"][i] ** 2 + d["feedback_fy"][i] ** 2 + d["feedback_fz"][i] ** 2) ** 0.5 for i in range(len(t))]
@@ -62,9 +66,9 @@ def construction(god, direct, out):
 
 if __name__ == "__main__":
     what = sys.argv[1]
-    if what == "default":
-        default_run(sys.argv[2], sys.argv[3])
+    if what in ("default", "lattice"):
+        default_run(sys.argv[2], sys.argv[3], what)
     elif what == "construction":
         construction(sys.argv[2], sys.argv[3], sys.argv[4])
     else:
-        sys.exit("usage: plot_runs.py default TRACE OUT.png | construction GOD.csv DIRECT.csv OUT.png")
+        sys.exit("usage: plot_runs.py default|lattice TRACE OUT.png | construction GOD.csv DIRECT.csv OUT.png")

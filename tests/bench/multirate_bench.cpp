@@ -123,9 +123,9 @@ void multirate_admittance(benchmark::State& state, const char* name, double spee
 
 BENCHMARK_CAPTURE(multirate_impedance, Construction, "construction.toml", 2.0)
     ->Arg(1)->Arg(10)->Arg(100)->UseManualTime()->Iterations(9000);
-// The default scene: an articulated haptic instrument (4 bodies, 4 joints) on a recorded trial;
+// The lattice scene: an articulated haptic instrument (4 bodies, 4 joints) on a recorded trial;
 // its first 9 s; the margin covers 1 m/s (10 mm at 100 Hz, as docs/figures/plot_multirate.py).
-BENCHMARK_CAPTURE(multirate_impedance, Default, "default.toml", 1.0)
+BENCHMARK_CAPTURE(multirate_impedance, Lattice, "lattice.toml", 1.0)
     ->Arg(1)->Arg(10)->UseManualTime()->Iterations(9000);
 // The deformable scene (a 306-node probe on its hidden core) and the endobag (a 162-node bag on
 // the articulated instrument), their first 9 s; the margin covers 0.2 m/s (2 mm at 100 Hz, the

@@ -27,7 +27,7 @@ constexpr std::int64_t kPeriodNs = 1'000'000;
 
 const numen::sim::Scene& trainer() {
   static const numen::sim::Scene scene =
-      numen::sim::load_scene(std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/default.toml");
+      numen::sim::load_scene(std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/lattice.toml");
   return scene;
 }
 

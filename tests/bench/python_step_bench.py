@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
-"""Cost of a Python call of Data.step() against the C++ step, on the default scene
-(docs/python.md "Overhead"). A benchmark, not a test: run it by hand on a quiet machine.
+"""Cost of a Python call of Data.step() against the C++ step, on the lattice scene (the default
+scene with a rigid sphere-lattice organ; docs/python.md "Overhead"). A benchmark, not a test: run it by hand on a quiet machine.
 
     PYTHONPATH=build/sim/python /usr/bin/python3 tests/bench/python_step_bench.py \
         [--steps 20000] [--rounds 5] [--cpp-bench build/tests/numen_bench]
@@ -15,11 +15,12 @@ difference is the cost of the call from Python: argument conversion, the model c
 binding's dispatch. Reported: medians over the rounds of the mean per call (µs), their ratio and
 difference (the per-call overhead), and the whole Python loop per step (target_at,
 target_twist_at, set_target and step). With --cpp-bench, the C++ benchmark
-step_time/DefaultScene (Google Benchmark; core::step within the full control period of the
+step_time/LatticeScene (Google Benchmark; core::step within the full control period of the
 simulated bus) is run in the same process run for reference.
 """
 import argparse
 import json
+import os
 import statistics
 import subprocess
 import time
@@ -55,7 +56,7 @@ def timer_cost_s(samples=200000):
 
 
 def cpp_benchmark(path):
-    out = subprocess.run([path, "--benchmark_filter=step_time/DefaultScene/",
+    out = subprocess.run([path, "--benchmark_filter=step_time/LatticeScene/",
                           "--benchmark_format=json"], check=True, capture_output=True,
                          text=True).stdout
     b = json.loads(out)["benchmarks"][0]
@@ -69,7 +70,7 @@ def main():
     ap.add_argument("--rounds", type=int, default=5)
     ap.add_argument("--cpp-bench", default="", help="path of numen_bench (optional)")
     args = ap.parse_args()
-    scene = numen.load_scene(numen.default_scene_path())
+    scene = numen.load_scene(os.path.join(os.path.dirname(numen.default_scene_path()), "lattice.toml"))
     steps = min(args.steps, int(scene.duration / scene.dt))
     bracket = timer_cost_s()
     py_step, py_loop, cpp_step, cpp_loop = [], [], [], []
@@ -81,7 +82,7 @@ def main():
         cpp_step.append(ref["step_s"] / steps * 1e6)
         cpp_loop.append(ref["wall_s"] / steps * 1e6)
     m = statistics.median
-    print(f"default scene, {steps} steps x {args.rounds} rounds (medians of per-round means)")
+    print(f"lattice scene, {steps} steps x {args.rounds} rounds (medians of per-round means)")
     print(f"  timer bracket (subtracted)      {bracket * 1e6:8.3f} us")
     print(f"  C++   core::step                {m(cpp_step):8.3f} us/step")
     print(f"  Python data.step(scene)         {m(py_step):8.3f} us/call")
@@ -92,7 +93,7 @@ def main():
           f"set_target, step)")
     if args.cpp_bench:
         mean_us, p50 = cpp_benchmark(args.cpp_bench)
-        print(f"  numen_bench step_time/DefaultScene: mean {mean_us:.3f} us, p50 {p50} us "
+        print(f"  numen_bench step_time/LatticeScene: mean {mean_us:.3f} us, p50 {p50} us "
               f"(full control period, device-driven target)")
 
 

@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "deformable_ball.hpp"
+#include "lattice_scene.hpp"
 #include "numen/core/step.hpp"
 #include "numen/platform/state_stream.hpp"
 #include "numen/sim/run/run.hpp"
@@ -74,7 +75,7 @@ void publish_loop(benchmark::State& state, const numen::core::Data& data,
 }
 
 void StateFramePublishDefaultScene(benchmark::State& state) {
-  const numen::sim::Scene scene = numen::sim::load_scene(numen::sim::default_scene_path());
+  const numen::sim::Scene scene = numen::sim::load_scene(numen::test::lattice_scene_path());
   numen::sim::SceneRunner runner(scene);
   for (int k = 0; k < 3000; ++k) runner.period();  // the tool is in contact by now
   publish_loop(state, runner.data(), numen::sim::view_frame_layout(scene));

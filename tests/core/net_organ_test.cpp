@@ -120,7 +120,7 @@ TEST(NetOrgan, ShippedOrganForceAgainstIndentationConvergesInTheTimeStep) {
       "a convergence figure against a 10x finer reference (tens of thousands of net steps), "
       "not what a sanitizer checks; the organ's step runs there in "
       "NetOrgan.StepsPressingTheShippedOrganDoNotAllocate");
-  // The shipped organ (sim/data/organ_lobe.obj, 1002 nodes, organ.toml's constants), a 2.5 mm
+  // The shipped organ (sim/data/organ_lobe.obj, 1002 nodes, default.toml's constants), a 2.5 mm
   // sphere (the instrument's tube) imposed at 20 mm/s from −z onto its convex face, 6 mm past
   // the first touch (at ~7.5 mm and ~3 N this small sphere slips between the nodes into the
   // hollow net: docs/deformable.md, "Organs"), at dt = 1 ms and 0.1 ms.

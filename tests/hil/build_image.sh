@@ -122,13 +122,13 @@ for prog in numen_hil_tests numen_hil_can; do
   copy_libs "$build/tests/$prog"
 done
 
-# 5b. The numen command (numen run / numen device) with the default scene and its trajectory
+# 5b. The numen command (numen run / numen device) with the lattice scene and its trajectory
 # data at the same relative paths (the scene names ../data/...).
 cp "$build/numen" "$root/hil/bin/numen"
 strip --strip-unneeded "$root/hil/bin/numen" 2>/dev/null || true
 copy_libs "$build/numen"
 mkdir -p "$root/hil/sim/scenes" "$root/hil/sim/data"
-cp "$repo/sim/scenes/default.toml" "$root/hil/sim/scenes/"
+cp "$repo/sim/scenes/lattice.toml" "$root/hil/sim/scenes/"
 cp -r "$repo/sim/scenes/devices" "$root/hil/sim/scenes/"  # the scene's node DCFs
 cp "$repo"/sim/data/*.txt "$root/hil/sim/data/"
 

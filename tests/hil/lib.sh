@@ -66,9 +66,9 @@ wait_for_line() {
 }
 
 # numen run / numen device helpers (scenarios 70+). The scene and its data are in /hil/sim.
-HIL_SCENE=/hil/sim/scenes/default.toml
+HIL_SCENE=/hil/sim/scenes/lattice.toml
 
-# pair_scene PERIOD_US: writes /hil/sim/scenes/pair.toml, the default scene with its control
+# pair_scene PERIOD_US: writes /hil/sim/scenes/pair.toml, the lattice scene with its control
 # period (dt: the SYNC period and step of both processes) set to PERIOD_US microseconds, the
 # encoder sample age left to its default of 3 periods, and the CANopen heartbeats every 10
 # periods (at least 10 ms; consumer timeout 3 heartbeats); points HIL_SCENE at it.
@@ -79,13 +79,13 @@ pair_scene() {
   hb=$((us / 100))
   [ "$hb" -ge 10 ] || hb=10
   sed -e "s/^dt = 0\.001\$/dt = $dt/" -e '/^max_sample_age = /d' \
-    /hil/sim/scenes/default.toml >"$out"
-  grep -q "^dt = $dt\$" "$out" || fail "pair_scene: no 'dt = 0.001' line to replace in default.toml"
-  # The heartbeat keys go into default.toml's [device.canopen]. The nodes come configured (the
+    /hil/sim/scenes/lattice.toml >"$out"
+  grep -q "^dt = $dt\$" "$out" || fail "pair_scene: no 'dt = 0.001' line to replace in lattice.toml"
+  # The heartbeat keys go into lattice.toml's [device.canopen]. The nodes come configured (the
   # node DCF lines are dropped): these scenarios time the loop, torque and faults from the first
   # periods on, and `numen device`'s nodes hold what the DCFs would write (the configuration
   # over SDO is covered by scan_and_sdo's transfers and the DcfConfiguration/CanopenMaster tests).
-  grep -q '^\[device\.canopen\]$' "$out" || fail "pair_scene: default.toml has no [device.canopen]"
+  grep -q '^\[device\.canopen\]$' "$out" || fail "pair_scene: lattice.toml has no [device.canopen]"
   sed -i "s/^\[device\.canopen\]\$/[device.canopen]\ncontroller_heartbeat_period = $hb\nnode_heartbeat_period = $hb/" "$out"
   sed -i '/^dcf = "devices\//d' "$out"
   ! grep -q '^dcf = ' "$out" || fail "pair_scene: a dcf line is left in pair.toml"

@@ -5,11 +5,14 @@
 # extracts it into a temporary root (dpkg -x) and runs the extracted /usr/bin/numen on the
 # extracted default scene: the executable finds its data relative to itself.
 #
-#   debian_package.sh BUILD_DIR WORK_DIR SCENE_NAME
+#   debian_package.sh BUILD_DIR WORK_DIR SCENE_NAME DEFAULT_LOADS
+#
+# SCENE_NAME: the shipped scene the extracted numen runs; DEFAULT_LOADS: yes when the build
+# loads the default scene (joints and a net), which is then found with no scene given.
 #
 # Exit 77 (skipped) only when dpkg-deb or lintian is missing (.ci/deps installs lintian).
 set -euo pipefail
-build=$1 work=$2 scene=$3
+build=$1 work=$2 scene=$3 default_loads=$4
 for tool in dpkg-deb dpkg-shlibdeps lintian; do
   command -v "$tool" >/dev/null || { echo "debian_package: $tool not found: skipped"; exit 77; }
 done
@@ -64,7 +67,7 @@ grep -q 'file = "/usr/share/numen/data/' "$root/etc/numen/scene.toml" \
   >"$work/run.log" 2>&1 || { cat "$work/run.log"; fail "numen run from the extracted root"; }
 tail -n 3 "$work/run.log"
 # With no scene, the extracted numen finds the default scene relative to itself.
-if [ "$scene" = default.toml ]; then
+if [ "$default_loads" = yes ]; then
   (cd "$work" && "$root/usr/bin/numen" info --json) >"$work/info.json" 2>&1 \
     || { cat "$work/info.json"; fail "numen info (default scene) from the extracted root"; }
   grep -qF "\"file\":\"$root/usr/share/numen/scenes/default.toml\"" "$work/info.json" \

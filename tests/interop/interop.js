@@ -1,6 +1,6 @@
 'use strict';
 // numen against an independent CANopen stack (docs/sdo.md, "Interoperability with
-// node-canopen"). node-canopen plays the default scene's five nodes — CiA 402 drives with their
+// node-canopen"). node-canopen plays the lattice scene's five nodes — CiA 402 drives with their
 // CiA 406 encoder on nodes 1-3, CiA 406 encoders on 4-5 — each built from the DCF the scene
 // gives its node ([[device.canopen.axis]] dcf: sim/scenes/devices/trocar_drive.dcf and
 // encoder.dcf, the files numen configures the nodes from), on numen's serial framing over
@@ -10,7 +10,7 @@
 // reason).
 //
 // Usage (through pty_pairs.py, which opens SCENARIOS[name].ptys pseudo-terminal pairs):
-//   node interop.js --numen PATH --scene DEFAULT_SCENE SCENARIO
+//   node interop.js --numen PATH --scene SCENE SCENARIO
 
 const fs = require('fs');
 const os = require('os');
@@ -19,13 +19,13 @@ const { spawn } = require('child_process');
 
 const BAUD = 1000000;  // numen's serial default; a pseudo-terminal ignores it
 
-// The default scene's nodes (sim/scenes/default.toml [[device.axis]]): node n is axis n - 1
+// The lattice scene's nodes (sim/scenes/lattice.toml [[device.axis]]): node n is axis n - 1
 // (checked against the scene by sceneDcfs()).
 const NODES = [1, 2, 3, 4, 5];
 const DRIVES = [1, 2, 3];
 const AXES = ['pivot_x', 'pivot_y', 'depth', 'roll', 'jaw'];
 
-// The hand behind each axis (plant_axis.js). Hold positions: the first sample of the default
+// The hand behind each axis (plant_axis.js). Hold positions: the first sample of the lattice
 // scene's recording (the encoder frames of `numen run --record`), so that numen's god-object
 // starts where the shipped runs start; the hand then moves each axis by ±amplitude.
 // counts_per_unit as the scene: 2^14 counts per turn, 10 µm on depth.
@@ -205,10 +205,10 @@ async function sdo(options, ptys) {
     return { nodes };
 }
 
-// (c) the default scene's loop against the node-canopen nodes: start-up (reset, boot-ups,
+// (c) the lattice scene's loop against the node-canopen nodes: start-up (reset, boot-ups,
 // configuration from the DCFs, start, CiA 402 power-up), 10 s of torque, no fault. The scene
 // runs at a 10 ms control period (RUN_PERIOD), as the HIL suite's controller + device pairs do
-// (docs/hil.md "Control period"): at the default scene's 1 ms, the encoder answers must come
+// (docs/hil.md "Control period"): at the lattice scene's 1 ms, the encoder answers must come
 // back through node's event loop and two pseudo-terminals within the 0.6 ms read phase, which
 // a shared machine does not give (round trip p99 7.8 ms measured, docs/sdo.md). A
 // safe stop whose cause is the timing of a shared machine (numen's loop overrunning, a

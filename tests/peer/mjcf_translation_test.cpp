@@ -52,7 +52,7 @@ void expect_same_bodies(const core::Model& model, const peer::MujocoEngine& engi
 
 TEST(MjcfTranslation, TheInstrumentHasTheSameBodiesJointsAndObstacles) {
   const peer::PeerScene s =
-      peer::load_recorded_scene("instrument", "sim/scenes/default.toml", 0.01);
+      peer::load_recorded_scene("instrument", "sim/scenes/lattice.toml", 0.01);
   peer::MujocoEngine engine(s.model, peer::Drive::kMocapWeld, peer::held_bodies(s.inputs));
   const mjModel* m = engine.mj_model();
   // world + sleeve, tube, two jaws + the tube's mocap body.

@@ -77,7 +77,7 @@ TEST(MujocoEngine, PrescribedJawsFollowTheRecordedJawAngle) {
   // minus the starting coordinate); after 0.5 s MuJoCo's hinge coordinate is there within
   // 5 mrad (the equality is soft: time constant 2 Δt, critically damped, so it lags the
   // recorded motion by about 2 ms × the jaw's angular rate).
-  const peer::PeerScene s = peer::load_recorded_scene("instrument", "sim/scenes/default.toml", 0.5);
+  const peer::PeerScene s = peer::load_recorded_scene("instrument", "sim/scenes/lattice.toml", 0.5);
   peer::MujocoEngine engine(s.model, peer::Drive::kMocapWeld, peer::held_bodies(s.inputs));
   for (const peer::StepInput& in : s.inputs) {
     engine.apply(in);

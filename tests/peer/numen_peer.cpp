@@ -46,7 +46,7 @@ int main(int argc, char** argv) {
                                                         "sim/scenes/construction.toml", duration));
     if (only.empty() || only == "instrument")
       scenes.push_back(
-          numen::peer::load_recorded_scene("instrument", "sim/scenes/default.toml", duration));
+          numen::peer::load_recorded_scene("instrument", "sim/scenes/lattice.toml", duration));
     if (print_mjcf) {
       for (const auto& s : scenes)
         std::cout << numen::peer::translate_to_mjcf(s.model, numen::peer::Drive::kMocapWeld,

@@ -53,7 +53,7 @@ TEST(PeerRun, BothEnginesStepEveryScene) {
 TEST(PeerRun, NumensReplayIsTheRunOfTheSceneRunnerBitForBit) {
   // The recording holds every input core::step reads: replaying it on a fresh Data reproduces
   // the SceneRunner's bodies exactly (construction: 3 s through the tower, the instrument: 1 s).
-  for (const char* file : {"sim/scenes/construction.toml", "sim/scenes/default.toml"}) {
+  for (const char* file : {"sim/scenes/construction.toml", "sim/scenes/lattice.toml"}) {
     const numen::sim::Scene scene =
         numen::sim::load_scene(std::string(NUMEN_SOURCE_DIR) + "/" + file);
     const int steps = file[11] == 'c' ? 3000 : 1000;

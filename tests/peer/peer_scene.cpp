@@ -72,7 +72,7 @@ std::vector<PeerScene> comparison_scenes(double duration_s) {
   std::vector<PeerScene> scenes;
   scenes.push_back(make_wall_scene(duration_s));
   scenes.push_back(load_recorded_scene("construction", "sim/scenes/construction.toml", duration_s));
-  scenes.push_back(load_recorded_scene("instrument", "sim/scenes/default.toml", duration_s));
+  scenes.push_back(load_recorded_scene("instrument", "sim/scenes/lattice.toml", duration_s));
   return scenes;
 }
 

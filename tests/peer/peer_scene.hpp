@@ -5,7 +5,7 @@
 ///   wall          the god-object pushed into a wall (tests/core/step_test.cpp,
 ///                 StepBehaviour.GodObjectPushedIntoAWallStaysOutsideWithinThePenaltyBound)
 ///   construction  sim/scenes/construction.toml (paper Fig. 5/6), inputs recorded through the bus
-///   instrument    sim/scenes/default.toml: the articulated trocar instrument against the organ
+///   instrument    sim/scenes/lattice.toml: the articulated trocar instrument against the organ
 ///                 and the tissue plane, on the recorded suturing motion
 
 #include <string>

@@ -27,7 +27,7 @@ namespace numen::test::organ {
 
 using core::Vec3;
 
-/// The shipped organ's constants (sim/scenes/organ.toml), per spring and per node.
+/// The shipped organ's constants (sim/scenes/default.toml), per spring and per node.
 struct OrganParams {
   double node_mass = 7e-5;  ///< kg per node (the net's mass is node_mass × nodes).
   double k = 200.0, gamma = 0.1;

@@ -265,7 +265,7 @@ AccuracyResult run_accuracy_study(const AccuracyOptions& options) {
     } else if (n == "wall-smoothed") {
       s.c = accuracy::make_wall_case(accuracy::kWallOnsetDepth);
     } else if (n == "articulated") {
-      s.c = accuracy::make_scene_case(dir + "/default.toml", kArticulatedStart, 0.6, 40.0);
+      s.c = accuracy::make_scene_case(dir + "/lattice.toml", kArticulatedStart, 0.6, 40.0);
     } else {
       s.c = accuracy::make_scene_case(dir + "/deformable.toml", kDeformableStart, 0.2, 500.0);
       s.reference_dt = 2e-6;

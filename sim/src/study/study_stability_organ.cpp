@@ -1,11 +1,13 @@
 /// @file study_stability_organ.cpp
 /// Case "organ-plunge" of the family "extreme" of `numen study stability` (study_stability.hpp):
-/// the deformable organ of sim/scenes/organ.toml (its net on its anchored core, as shipped) and a
+/// the deformable organ of sim/scenes/default.toml (its net on its anchored core and the rigid
+/// core surface under it, as shipped) and a
 /// god-object of the instrument's tube (one sphere of the tube's radius and mass, the tube's
 /// coupling), started 20 mm outside the organ's convex face on the organ's approach axis, whose
 /// target jumps 40 mm along that axis in one period, 20 mm past the rest surface: the coupling
 /// pulls with k_t × 40 mm at once (40 N for the shipped tube), far beyond what the hollow net
-/// holds, so the sphere dents the organ, then slips between its nodes into it. Core driven
+/// holds, so the sphere dents the organ, then slips between its nodes onto the rigid core (or,
+/// in a scene without one, into the hollow net). Core driven
 /// directly, gravity off. Verdict of study_stability.hpp (energy, finite states, penetration
 /// bound k_t × jump / k_contact on one node contact, as the deformable jump's).
 
@@ -28,7 +30,8 @@ using core::Vec3;
 
 /// The organ of `scene` (its first net on an anchored body) and a one-sphere tool with the held
 /// body's mass and coupling, `radius` (m), starting at `start`: body 0 the organ's core, body 1
-/// the tool (held). Materials and contact pairs as the scene's.
+/// the tool (held); the scene's mesh obstacles (the organ's rigid core surface). Materials and
+/// contact pairs as the scene's.
 core::Model plunge_model(const Scene& scene, double radius, const Vec3& start) {
   const core::Model& s = scene.model;
   int k = -1;
@@ -57,6 +60,14 @@ core::Model plunge_model(const Scene& scene, double radius, const Vec3& start) {
   anchor.sphere_begin = 0;  // no spheres, in this model's (one-sphere) table
   m.bodies = {anchor, tool};
   m.initial_attached_body = 1;
+  // The scene's mesh obstacles: the organ's rigid core under its surface (default.toml).
+  for (const core::Obstacle& o : s.obstacles) {
+    if (o.type != core::ShapeType::kMesh) continue;
+    core::Obstacle c = o;
+    c.mesh = static_cast<int>(m.meshes.size());
+    m.meshes.push_back(s.meshes[static_cast<std::size_t>(o.mesh)]);
+    m.obstacles.push_back(c);
+  }
   core::TriangleMesh mesh;
   for (int i = 0; i < net.node_count; ++i)
     mesh.vertices.push_back(s.node_rest[static_cast<std::size_t>(net.node_begin + i)]);

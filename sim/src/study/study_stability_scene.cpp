@@ -2,7 +2,7 @@
 /// Scene cases of the family "extreme" of `numen study stability` (study_stability.hpp):
 ///  - "deformable-jump": the deformable probe of sim/scenes/deformable.toml (gravity off) whose
 ///    target jumps 10 cm towards the post in one period (core driven directly);
-///  - "trocar-zero-insertion": the articulated trocar instrument of sim/scenes/default.toml, whose
+///  - "trocar-zero-insertion": the articulated trocar instrument of sim/scenes/lattice.toml, whose
 ///    hand pulls the tip back to the trocar point (insertion depth d → 1 µm, below the encoder's
 ///    10 µm count: the controller reads d = 0, the pivot's singular point where the tip no longer
 ///    moves with the pivot angles) while the shaft keeps wobbling ±0.3 rad at 2 Hz, then holds it;
@@ -12,7 +12,8 @@
 ///    −Inf become on the wire (hal::value_to_counts: the offset counts and the int32 extremes);
 ///  - "core-target-nonfinite": NaN / ±Inf written straight into core::Data's target pose and twist
 ///    for 20 steps (what the core does if anything non-finite ever got through);
-///  - "organ-plunge" (study_stability_organ.cpp): the organ of sim/scenes/organ.toml plunged into.
+///  - "organ-plunge" (study_stability_organ.cpp): the organ of sim/scenes/default.toml, plunged
+///    into.
 /// The loop cases' verdict: every period core::Data finite (bodies, nodes, target, feedback) and
 /// no rollback, nothing non-finite reaching the core (no kInvalidTarget), drive torques finite and
 /// within each axis's max_torque, zero in every period whose input was bad; tool speeds below
@@ -433,7 +434,7 @@ StabilityRow core_target_run(const Scene& scene, core::Integrator integrator) {
 
 void plan_scene_extreme(const StabilityOptions& o, const std::string& dir, Plan& plan) {
   const std::string no_nets = study::missing_parts(false, true);
-  const std::string no_joints = study::missing_parts(true, false);  // default.toml's trocar
+  const std::string no_joints = study::missing_parts(true, false);  // lattice.toml's trocar
   if (!no_nets.empty()) {
     plan.skipped.push_back("deformable-jump: " + no_nets);
     plan.skipped.push_back("organ-plunge: " + no_nets);
@@ -446,14 +447,14 @@ void plan_scene_extreme(const StabilityOptions& o, const std::string& dir, Plan&
   const std::shared_ptr<const Scene> deformable =
       no_nets.empty() ? std::make_shared<const Scene>(study::load_replayed_scene(dir + "/deformable.toml"))
                       : nullptr;
-  // The organ scene's instrument has joints, but the case takes only its organ and tube.
+  // The default (organ) scene's instrument has joints, but the case takes only its organ and tube.
   const std::shared_ptr<const Scene> organ =
       no_nets.empty() && no_joints.empty()
-          ? std::make_shared<const Scene>(study::load_replayed_scene(dir + "/organ.toml"))
+          ? std::make_shared<const Scene>(study::load_replayed_scene(dir + "/default.toml"))
           : nullptr;
   if (no_nets.empty() && !no_joints.empty()) plan.skipped.push_back("organ-plunge: " + no_joints);
   const std::shared_ptr<const Scene> trocar =
-      no_joints.empty() ? std::make_shared<const Scene>(study::load_replayed_scene(dir + "/default.toml"))
+      no_joints.empty() ? std::make_shared<const Scene>(study::load_replayed_scene(dir + "/lattice.toml"))
                         : nullptr;
   const std::vector<double> steps =
       o.quick ? std::vector<double>{1e-3} : std::vector<double>{1e-4, 1e-3, 1e-2};

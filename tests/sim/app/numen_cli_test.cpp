@@ -15,6 +15,7 @@
 
 #include "build_features.hpp"
 #include "child_process.hpp"
+#include "lattice_scene.hpp"
 #include "numen/hal/transport/candump_log.hpp"
 #include "numen/sim/input/jigsaws.hpp"
 #include "numen/sim/run/run_figures.hpp"
@@ -34,14 +35,20 @@ using numen::test::TempDir;
 
 const std::string kNumen = NUMEN_CLI;
 
-std::string default_scene_text() { return numen::test::read_file(numen::sim::default_scene_path()); }
+/// The shipped lattice scene (sim/scenes/lattice.toml): the scene of these tests, which need
+/// *a* scene with the articulated instrument. A run with no scene runs the default scene, whose
+/// deformable organ costs ~60x the lattice's step; only the test of the default scene's lookup
+/// below runs without one.
+const std::string kLattice = numen::test::lattice_scene_path();
+
+std::string lattice_scene_text() { return numen::test::read_file(kLattice); }
 
 const std::string kExcerptLine = "file = \"../data/jigsaws_suturing_b002_excerpt.txt\"";
 
-/// The default scene with `edits` applied (from → to, each must match) and its trajectory file
+/// The lattice scene with `edits` applied (from → to, each must match) and its trajectory file
 /// given as an absolute path (the copy lives in a temporary directory).
-std::string default_scene_copy(const std::vector<std::pair<std::string, std::string>>& edits) {
-  std::string text = default_scene_text();
+std::string lattice_scene_copy(const std::vector<std::pair<std::string, std::string>>& edits) {
+  std::string text = lattice_scene_text();
   for (const auto& [from, to] : edits) text = numen::test::replace(text, from, to);
   const std::string dir =
       std::filesystem::path(numen::sim::default_scene_path()).parent_path().string() + "/";
@@ -50,10 +57,10 @@ std::string default_scene_copy(const std::vector<std::pair<std::string, std::str
   return numen::test::with_absolute_dcf_paths(text, dir);
 }
 
-/// The default scene at control period `dt` (s): the simulated bus's latency and compute
+/// The lattice scene at control period `dt` (s): the simulated bus's latency and compute
 /// phase are scaled so that a SYNC round trip fits in the period.
-std::string default_scene_at(const std::string& dt) {
-  return default_scene_copy({{"dt = 0.001", "dt = " + dt},
+std::string lattice_scene_at(const std::string& dt) {
+  return lattice_scene_copy({{"dt = 0.001", "dt = " + dt},
                              {"latency = 0.0001", "latency = 1e-6\ncompute_phase = 5e-6"}});
 }
 
@@ -70,8 +77,8 @@ bool writing(const TempDir& dir, const std::string& name) {
 TEST(NumenCli, PeakMemoryDoesNotDependOnTheControlPeriod) {
   NUMEN_REQUIRE_ARTICULATION();
   TempDir dir;
-  const std::string coarse = dir.write("coarse.toml", default_scene_at("0.001"));
-  const std::string fine = dir.write("fine.toml", default_scene_at("1e-5"));
+  const std::string coarse = dir.write("coarse.toml", lattice_scene_at("0.001"));
+  const std::string fine = dir.write("fine.toml", lattice_scene_at("1e-5"));
   const ChildResult a = run_child({kNumen, "run", coarse, "--duration", "0.05"}, dir.path(), 120);
   const ChildResult b = run_child({kNumen, "run", fine, "--duration", "0.05"}, dir.path(), 120);
   ASSERT_EQ(a.status, 0) << a.out << a.err;
@@ -85,8 +92,8 @@ TEST(NumenCli, PeakMemoryDoesNotDependOnTheControlPeriod) {
 TEST(NumenCli, PeakMemoryDoesNotGrowWithTheDuration) {
   NUMEN_REQUIRE_ARTICULATION();
   TempDir dir;
-  const ChildResult a = run_child({kNumen, "run", "--duration", "0.5"}, dir.path(), 120);
-  const ChildResult b = run_child({kNumen, "run", "--duration", "8"}, dir.path(), 300);
+  const ChildResult a = run_child({kNumen, "run", kLattice, "--duration", "0.5"}, dir.path(), 120);
+  const ChildResult b = run_child({kNumen, "run", kLattice, "--duration", "8"}, dir.path(), 300);
   ASSERT_EQ(a.status, 0) << a.out << a.err;
   ASSERT_EQ(b.status, 0) << b.out << b.err;
   std::printf("[   info   ] peak RSS: 0.5 s %ld KiB, 8 s %ld KiB\n", a.max_rss_kib, b.max_rss_kib);
@@ -96,12 +103,12 @@ TEST(NumenCli, PeakMemoryDoesNotGrowWithTheDuration) {
 // Defect 1: SIGTERM while the input loads (here a trajectory file that is a FIFO nobody writes:
 // the loader blocks in open()) ends the process at once, with a message and 128 + SIGTERM.
 TEST(NumenCli, StopSignalWhileLoadingEndsTheProcessAtOnce) {
-  NUMEN_REQUIRE_ARTICULATION();  // the default scene has joints
+  NUMEN_REQUIRE_ARTICULATION();  // the lattice scene has joints
   TempDir dir;
   const std::string fifo = (dir / "trajectory.txt").string();
   ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
   const std::string scene =
-      dir.write("scene.toml", default_scene_copy({{kExcerptLine, "file = \"" + fifo + "\""}}));
+      dir.write("scene.toml", lattice_scene_copy({{kExcerptLine, "file = \"" + fifo + "\""}}));
   // A non-blocking open for writing succeeds once the child has the FIFO open for reading; the
   // write end stays open (and empty), so the child then waits in read(): still loading.
   int writer = -1;
@@ -130,7 +137,7 @@ TEST(NumenCli, StopSignalWhileRunningPrintsTheSummary) {
   term.signal = SIGTERM;
   term.ready = [&dir] { return writing(dir, "run.log"); };
   const ChildResult r =
-      run_child({kNumen, "run", "--realtime", "--overrun-limit", "0", "--duration", "60", "--record", log},
+      run_child({kNumen, "run", kLattice, "--realtime", "--overrun-limit", "0", "--duration", "60", "--record", log},
                 dir.path(), 30, term);  // overruns on a loaded machine count, never latch
   EXPECT_FALSE(r.timed_out);
   EXPECT_EQ(r.status, 128 + SIGTERM) << r.out << r.err;
@@ -151,7 +158,7 @@ TEST(NumenCli, StopSignalDuringAHugePacingPeriodIsHeard) {
   ChildSignal term;
   term.signal = SIGTERM;
   term.ready = [&dir] { return writing(dir, "run.log"); };
-  const ChildResult r = run_child({kNumen, "run", "--duration", "1", "--speed", "1e-9", "--record",
+  const ChildResult r = run_child({kNumen, "run", kLattice, "--duration", "1", "--speed", "1e-9", "--record",
                                    (dir / "run.log").string()},
                                   dir.path(), 60, term);
   EXPECT_FALSE(r.timed_out) << "SIGTERM was not heard";
@@ -177,7 +184,7 @@ TEST(NumenCli, RefusedRunLeavesItsOutputFilesByteIdentical) {
   };
   for (const std::vector<std::string>& extra : runs) {
     for (const char* name : {"keep.csv", "keep.log", "keep.nmv"}) dir.write(name, before);
-    std::vector<std::string> argv = {kNumen, "run"};
+    std::vector<std::string> argv = {kNumen, "run", kLattice};
     // The files in `dir` (the child runs in the test's working directory, not in `dir`: a
     // relative keep.* named files the checks below never read).
     for (const std::string& a : extra)
@@ -201,7 +208,7 @@ TEST(NumenCli, StopSignalIsInTheJsonSummary) {
   ChildSignal interrupt;
   interrupt.signal = SIGINT;
   interrupt.ready = [&dir] { return writing(dir, "run.log"); };
-  const ChildResult r = run_child({kNumen, "run", "--realtime", "--overrun-limit", "0",
+  const ChildResult r = run_child({kNumen, "run", kLattice, "--realtime", "--overrun-limit", "0",
                                    "--duration", "60", "--record", log, "--json"},
                                   dir.path(), 30, interrupt);
   EXPECT_FALSE(r.timed_out);
@@ -223,7 +230,7 @@ TEST(NumenCli, RecordingThatLosesFramesExitsWithLostRecords) {
   NUMEN_REQUIRE_ARTICULATION();
   TempDir dir;
   const ChildResult r =
-      run_child({kNumen, "run", "--duration", "0.5", "--record", "/dev/full"}, dir.path(), 120);
+      run_child({kNumen, "run", kLattice, "--duration", "0.5", "--record", "/dev/full"}, dir.path(), 120);
   EXPECT_EQ(r.status, 5) << r.out << r.err;
   EXPECT_NE(r.out.find("lost records: --record"), std::string::npos) << r.out;
 }
@@ -235,7 +242,7 @@ TEST(NumenCli, RecordingToAFullDeviceWritesNoFrame) {
   NUMEN_REQUIRE_ARTICULATION();
   TempDir dir;
   for (const bool paced : {false, true}) {
-    std::vector<std::string> args = {kNumen, "run", "--duration", "0.3", "--record", "/dev/full",
+    std::vector<std::string> args = {kNumen, "run", kLattice, "--duration", "0.3", "--record", "/dev/full",
                                      "--json"};
     if (paced) args.insert(args.end(), {"--realtime", "--overrun-limit", "0"});
     const ChildResult r = run_child(args, dir.path(), 120);
@@ -251,11 +258,11 @@ TEST(NumenCli, RecordingToAFullDeviceWritesNoFrame) {
   }
 }
 
-// Defect 4: --json carries the verdict; a clean run of the default scene exits 0.
+// Defect 4: --json carries the verdict; a clean run of the lattice scene exits 0.
 TEST(NumenCli, JsonCarriesTheExitStatus) {
   NUMEN_REQUIRE_ARTICULATION();
   TempDir dir;
-  const ChildResult r = run_child({kNumen, "run", "--duration", "0.5", "--json"}, dir.path(), 120);
+  const ChildResult r = run_child({kNumen, "run", kLattice, "--duration", "0.5", "--json"}, dir.path(), 120);
   EXPECT_EQ(r.status, 0) << r.out << r.err;
   EXPECT_NE(r.out.find("\"exit_status\":0"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("\"exit_reasons\":[]"), std::string::npos) << r.out;
@@ -305,7 +312,7 @@ TEST(LargeInput, LogReplayMemoryDoesNotGrowWithTheLog) {
   TempDir dir;
   const std::string base = (dir / "base.log").string();
   const ChildResult rec =
-      run_child({kNumen, "run", "--duration", "3", "--record", base}, dir.path(), 300);
+      run_child({kNumen, "run", kLattice, "--duration", "3", "--record", base}, dir.path(), 300);
   ASSERT_EQ(rec.status, 0) << rec.out << rec.err;
   // The recording, then 500 MB of another node's frames after it, 10 µs apart.
   const std::string big = (dir / "big.log").string();
@@ -335,9 +342,9 @@ TEST(LargeInput, LogReplayMemoryDoesNotGrowWithTheLog) {
     std::fclose(f);
   }
   const ChildResult small =
-      run_child({kNumen, "run", "--duration", "2", "--bus", "log:" + base}, dir.path(), 300);
+      run_child({kNumen, "run", kLattice, "--duration", "2", "--bus", "log:" + base}, dir.path(), 300);
   const ChildResult large =
-      run_child({kNumen, "run", "--duration", "2", "--bus", "log:" + big}, dir.path(), 300);
+      run_child({kNumen, "run", kLattice, "--duration", "2", "--bus", "log:" + big}, dir.path(), 300);
   std::filesystem::remove(big);
   ASSERT_EQ(small.status, 0) << small.out << small.err;
   ASSERT_EQ(large.status, 0) << large.out << large.err;
@@ -364,9 +371,9 @@ TEST(LargeInput, TrajectoryMemoryDoesNotGrowWithTheFile) {
                            std::filesystem::file_size(excerpt) * 900;
   const std::string big_line = "file = \"" + big + "\"";
   const std::string window = dir.write(
-      "window.toml", default_scene_copy({{kExcerptLine, big_line + "\nend_time = 29.9"}}));
-  const std::string whole = dir.write("whole.toml", default_scene_copy({{kExcerptLine, big_line}}));
-  const ChildResult a = run_child({kNumen, "run", "--duration", "2"}, dir.path(), 300);
+      "window.toml", lattice_scene_copy({{kExcerptLine, big_line + "\nend_time = 29.9"}}));
+  const std::string whole = dir.write("whole.toml", lattice_scene_copy({{kExcerptLine, big_line}}));
+  const ChildResult a = run_child({kNumen, "run", kLattice, "--duration", "2"}, dir.path(), 300);
   const ChildResult b = run_child({kNumen, "run", window, "--duration", "2"}, dir.path(), 300);
   const ChildResult c = run_child({kNumen, "run", whole, "--duration", "2"}, dir.path(), 300);
   std::filesystem::remove(big);
@@ -393,7 +400,7 @@ TEST(NumenCli, ARunShorterThanTheStartUpSaysSo) {
   const std::size_t second_end = excerpt.find('\n', excerpt.find('\n') + 1);
   const std::string rows = dir.write("two_rows.txt", excerpt.substr(0, second_end + 1));
   const std::string scene =
-      dir.write("scene.toml", default_scene_copy({{kExcerptLine, "file = \"" + rows + "\""}}));
+      dir.write("scene.toml", lattice_scene_copy({{kExcerptLine, "file = \"" + rows + "\""}}));
   const ChildResult r = run_child({kNumen, "run", scene, "--json"}, dir.path(), 60);
   ASSERT_EQ(r.status, 6) << r.out << r.err;
   const nlohmann::json j = nlohmann::json::parse(r.out);
@@ -427,7 +434,7 @@ TEST(NumenCli, NegativeOverrunLimitNamesTheOptionAndTheRange) {
   TempDir dir;
   for (const char* v : {"-1", "4294967296", "2.5", "x"}) {
     const ChildResult r =
-        run_child({kNumen, "run", "--duration", "0.01", "--overrun-limit", v}, dir.path(), 30);
+        run_child({kNumen, "run", kLattice, "--duration", "0.01", "--overrun-limit", v}, dir.path(), 30);
     EXPECT_EQ(r.status, 2) << v << ": " << r.out << r.err;
     EXPECT_NE(r.err.find("--overrun-limit: must be a whole number in [0, 4294967295], got '" +
                          std::string(v) + "'"),
@@ -458,7 +465,7 @@ TEST(NumenCli, StudyOutputThatIsAFileIsRefusedBeforeTheStudy) {
 // Defect 4: a refused command-line value is "input rejected" (2), not CLI11's own codes.
 TEST(NumenCli, RefusedOptionValueExitsWithInputRejected) {
   TempDir dir;
-  const ChildResult r = run_child({kNumen, "run", "--duration", "abc"}, dir.path(), 30);
+  const ChildResult r = run_child({kNumen, "run", kLattice, "--duration", "abc"}, dir.path(), 30);
   EXPECT_EQ(r.status, 2) << r.out << r.err;
   const ChildResult help = run_child({kNumen, "run", "--help"}, dir.path(), 30);
   EXPECT_EQ(help.status, 0) << help.err;
@@ -471,7 +478,7 @@ TEST(NumenCli, ReplayOfALogWithoutEncoderFramesIsInputRejected) {
   TempDir dir;
   const std::string log = dir.write("other.log", "(0.000100) vcan0 7FF#0102\n(0.000200) vcan0 7FF#0304\n");
   const ChildResult r =
-      run_child({kNumen, "run", "--duration", "0.2", "--bus", "log:" + log}, dir.path(), 60);
+      run_child({kNumen, "run", kLattice, "--duration", "0.2", "--bus", "log:" + log}, dir.path(), 60);
   EXPECT_EQ(r.status, 2) << r.out << r.err;
   EXPECT_NE(r.err.find(log + ": 2 records, none that the controller reads"), std::string::npos)
       << r.err;
@@ -480,11 +487,11 @@ TEST(NumenCli, ReplayOfALogWithoutEncoderFramesIsInputRejected) {
 
 // ... and a log that is not a candump log at all is refused at its first bad line.
 TEST(NumenCli, ReplayOfGarbageIsALocatedInputError) {
-  NUMEN_REQUIRE_ARTICULATION();  // the default scene has joints
+  NUMEN_REQUIRE_ARTICULATION();  // the lattice scene has joints
   TempDir dir;
   const std::string log = dir.write("garbage.log", "(0.000100) vcan0 181#00000000\nhello\n");
   const ChildResult r =
-      run_child({kNumen, "run", "--duration", "0.2", "--bus", "log:" + log}, dir.path(), 60);
+      run_child({kNumen, "run", kLattice, "--duration", "0.2", "--bus", "log:" + log}, dir.path(), 60);
   EXPECT_EQ(r.status, 2) << r.out << r.err;
   EXPECT_EQ(r.err.rfind("numen: " + log + ":2:1: ", 0), 0u) << r.err;
 }
@@ -532,7 +539,7 @@ TEST(NumenCli, BadSdoArgumentsAreInputRejectedBeforeTheBusIsOpened) {
 TEST(NumenCli, ViewAddressThatIsNotHostPortIsInputRejected) {
   TempDir dir;
   for (const char* v : {"http://x", "8080x", "host:", ":8080", "99999", "notahost:8080"}) {
-    const ChildResult r = run_child({kNumen, "run", "--duration", "0.01", "--view", v}, dir.path(), 30);
+    const ChildResult r = run_child({kNumen, "run", kLattice, "--duration", "0.01", "--view", v}, dir.path(), 30);
     EXPECT_EQ(r.status, 2) << v << ": " << r.err;
   }
   // `numen view --host`: a name is not resolved; refused before the file is read or served.
@@ -548,7 +555,7 @@ TEST(NumenCli, WaitForViewerWithoutAPageEndsBeforeTheRun) {
   NUMEN_REQUIRE_ARTICULATION();
   TempDir dir;
   const ChildResult r = run_child(
-      {kNumen, "run", "--duration", "0.05", "--view", "0", "--wait-for-viewer=0.3"}, dir.path(), 60);
+      {kNumen, "run", kLattice, "--duration", "0.05", "--view", "0", "--wait-for-viewer=0.3"}, dir.path(), 60);
   EXPECT_EQ(r.status, 1) << r.out << r.err;
   EXPECT_NE(r.err.find("within 0.3 s (--wait-for-viewer): the run did not start"), std::string::npos) << r.err;
   EXPECT_EQ(r.out.find("steps"), std::string::npos) << "no summary: " << r.out;
@@ -560,7 +567,7 @@ TEST(NumenCli, ViewRateAboveTheControlRateIsSaidAndRecordedAsTheControlRate) {
   NUMEN_REQUIRE_ARTICULATION();
   TempDir dir;
   const std::string file = (dir.path() / "run.nmv").string();
-  const ChildResult r = run_child({kNumen, "run", "--duration", "0.05", "--record-view", file,
+  const ChildResult r = run_child({kNumen, "run", kLattice, "--duration", "0.05", "--record-view", file,
                                    "--view-rate", "5000"},
                                   dir.path(), 120);
   ASSERT_EQ(r.status, 0) << r.out << r.err;
@@ -619,7 +626,7 @@ TEST(NumenCli, ViewOfARecordingWithAMemberOfTheWrongTypeNamesTheFileAndTheKey) {
 // the run, naming the option (2026-11-25 audit): `--prefault-stack -1` wrapped to SIZE_MAX
 // and crashed (SIGSEGV in alloca); the others ran and dropped the option without a word.
 TEST(NumenCli, OptionsARunWouldNotApplyAreInputRejected) {
-  NUMEN_REQUIRE_ARTICULATION();  // the default scene has joints
+  NUMEN_REQUIRE_ARTICULATION();  // the lattice scene has joints
   TempDir dir;
   const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
       {{"--prefault-stack", "-1"}, "--prefault-stack"},
@@ -635,7 +642,7 @@ TEST(NumenCli, OptionsARunWouldNotApplyAreInputRejected) {
       {{"--rt-strict"}, "--rt-strict"},        // no real-time step to make fatal
   };
   for (const auto& [extra, key] : cases) {
-    std::vector<std::string> args = {kNumen, "run", "--duration", "0.05"};
+    std::vector<std::string> args = {kNumen, "run", kLattice, "--duration", "0.05"};
     args.insert(args.end(), extra.begin(), extra.end());
     const ChildResult r = run_child(args, dir.path(), 30);
     EXPECT_EQ(r.status, 2) << extra.front() << ": " << r.out << r.err;
@@ -643,7 +650,7 @@ TEST(NumenCli, OptionsARunWouldNotApplyAreInputRejected) {
   }
   // `numen view --page` names a folder holding the page.
   const std::string rec = (dir / "run.nmv").string();
-  ASSERT_EQ(run_child({kNumen, "run", "--duration", "0.05", "--record-view", rec}, dir.path(), 30).status, 0);
+  ASSERT_EQ(run_child({kNumen, "run", kLattice, "--duration", "0.05", "--record-view", rec}, dir.path(), 30).status, 0);
   const ChildResult v =
       run_child({kNumen, "view", rec, "--port", "0", "--page", (dir / "nowhere").string()}, dir.path(), 30);
   EXPECT_EQ(v.status, 2) << v.out << v.err;
@@ -654,10 +661,10 @@ TEST(NumenCli, OptionsARunWouldNotApplyAreInputRejected) {
 // Defect 1: --trace of a simulated run keeps one record per period; a run whose trace would
 // outgrow the budget (kMaxInMemoryTraceBytes) is refused before anything is allocated.
 TEST(NumenCli, TraceThatWouldOutgrowItsBudgetIsRefusedBeforeTheRun) {
-  NUMEN_REQUIRE_ARTICULATION();  // the default scene has joints
+  NUMEN_REQUIRE_ARTICULATION();  // the lattice scene has joints
   TempDir dir;
   const ChildResult r = run_child(
-      {kNumen, "run", "--duration", "1e6", "--trace", (dir / "t.csv").string()}, dir.path(), 60);
+      {kNumen, "run", kLattice, "--duration", "1e6", "--trace", (dir / "t.csv").string()}, dir.path(), 60);
   EXPECT_EQ(r.status, 2) << r.out << r.err;
   EXPECT_NE(r.err.find("--trace: a simulated run keeps one trace record"), std::string::npos)
       << r.err;
@@ -674,7 +681,7 @@ TEST(NumenCli, OutOfMemoryIsNamed) {
   NUMEN_SKIP_UNDER_SANITIZER_HEAP("the sanitizer reserves terabytes of address space: ulimit -v stops it first");
   NUMEN_REQUIRE_ARTICULATION();
   TempDir dir;
-  const std::string cmd = "ulimit -v 400000; exec " + kNumen + " run --duration 1700 --trace " +
+  const std::string cmd = "ulimit -v 400000; exec " + kNumen + " run " + kLattice + " --duration 1700 --trace " +
                           (dir / "t.csv").string();
   const ChildResult r = run_child({"/bin/sh", "-c", cmd}, dir.path(), 60);
   EXPECT_EQ(r.status, 1) << r.out << r.err;
@@ -698,6 +705,7 @@ TEST(NumenCli, VersionFlagPrintsTheProjectVersion) {
 // (sim/input/shipped_files.hpp; the Debian package and `cmake --install` rely on it).
 TEST(NumenCli, InstalledExecutableFindsTheDefaultSceneRelativeToItself) {
   NUMEN_REQUIRE_ARTICULATION();
+  NUMEN_REQUIRE_DEFORMABLE();  // the default scene's organ
   TempDir dir;
   namespace fs = std::filesystem;
   const fs::path prefix = dir / "prefix";
@@ -710,6 +718,7 @@ TEST(NumenCli, InstalledExecutableFindsTheDefaultSceneRelativeToItself) {
   fs::copy(source_scenes / "devices", prefix / "share/numen/scenes/devices");  // its node DCFs
   fs::copy_file(source_scenes / "../data/jigsaws_suturing_b002_excerpt.txt",
                 prefix / "share/numen/data/jigsaws_suturing_b002_excerpt.txt");
+  fs::copy_file(source_scenes / "../data/organ_lobe.obj", prefix / "share/numen/data/organ_lobe.obj");
   const ChildResult r = run_child({(prefix / "bin/numen").string(), "info", "--json"}, dir.path(), 60);
   ASSERT_EQ(r.status, 0) << r.out << r.err;
   const std::string expected = (prefix / "share/numen/scenes/default.toml").string();

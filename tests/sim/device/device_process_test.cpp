@@ -22,6 +22,7 @@
 #include "numen/hal/transport/serial_frame.hpp"
 #include "numen/sim/device/device_process.hpp"
 #include "numen/sim/scene/scene.hpp"
+#include "lattice_scene.hpp"
 #include "pseudo_terminal.hpp"
 #include "serial_test_frames.hpp"
 
@@ -51,7 +52,7 @@ numen::test::Bytes upload_device_type(std::uint8_t node) {
 // first one was handled, whatever the machine's load.
 TEST(DeviceProcess, AnSdoRequestSentWhenReadyIsAnswered) {
   NUMEN_REQUIRE_ARTICULATION();  // the default scene's instrument
-  const numen::sim::Scene scene = numen::sim::load_scene(numen::sim::default_scene_path());
+  const numen::sim::Scene scene = numen::sim::load_scene(numen::test::lattice_scene_path());
   ASSERT_TRUE(scene.device.canopen.managed);
   Pty line;
   std::atomic<bool> stop{false};

@@ -20,6 +20,7 @@
 #include <thread>
 
 #include "build_features.hpp"
+#include "lattice_scene.hpp"
 #include "pseudo_terminal.hpp"
 #include "numen/sim/device/device_process.hpp"
 #include "numen/sim/run/run.hpp"
@@ -82,7 +83,7 @@ struct PairResult {
 };
 
 PairResult run_pair(int garbage_every_ms, std::uint64_t* bursts) {
-  numen::sim::Scene scene = numen::sim::load_scene(numen::sim::default_scene_path());
+  numen::sim::Scene scene = numen::sim::load_scene(numen::test::lattice_scene_path());
   // The nodes come configured: this is a test of the serial transport, and the DCF
   // configuration (47 SDO transfers, one per period) would leave the first 50–130 SYNCs
   // unanswered, more under load, against the answered-SYNC bound below (DcfConfiguration tests

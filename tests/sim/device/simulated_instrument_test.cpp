@@ -18,6 +18,7 @@
 #include "numen/hal/device/trocar_kinematics.hpp"
 #include "numen/sim/scene/scene.hpp"
 #include "build_features.hpp"
+#include "lattice_scene.hpp"
 #include "rotation.hpp"
 #include "test_constants.hpp"
 
@@ -119,9 +120,9 @@ TEST(SimulatedInstrument, StartTimeShiftsTheTrajectory) {
   EXPECT_LT((late.axes_at(0) - now.axes_at(0)).norm(), 1e-15);
 }
 
-TEST(SimulatedInstrument, DefaultSceneReportsTheRecordedTip) {
+TEST(SimulatedInstrument, LatticeSceneReportsTheRecordedTip) {
   NUMEN_REQUIRE_ARTICULATION();
-  const numen::sim::Scene scene = numen::sim::load_scene(numen::sim::default_scene_path());
+  const numen::sim::Scene scene = numen::sim::load_scene(numen::test::lattice_scene_path());
   const SimulatedInstrument inst(scene.device, scene.trajectory);
   const auto& kin = static_cast<const TrocarKinematics&>(inst.kinematics());
   const Pose offset = scene.device.tool_offset;

@@ -21,6 +21,7 @@
 #include "numen/hal/transport/can_filter.hpp"
 #include "numen/sim/scene/scene.hpp"
 #include "build_features.hpp"
+#include "lattice_scene.hpp"
 
 namespace {
 
@@ -28,8 +29,8 @@ using numen::sim::BusKind;
 using numen::sim::BusSpec;
 using numen::sim::parse_bus_spec;
 
-const numen::sim::Scene& default_scene() {
-  static const numen::sim::Scene s = numen::sim::load_scene(numen::sim::default_scene_path());
+const numen::sim::Scene& lattice_scene() {
+  static const numen::sim::Scene s = numen::sim::load_scene(numen::test::lattice_scene_path());
   return s;
 }
 
@@ -120,7 +121,7 @@ TEST(BusSpec, BadSpecsNameTheSpecAndTheProblem) {
 
 TEST(BusSpec, ManagedFiltersAreExactlyTheIdsEachEndReads) {
   NUMEN_REQUIRE_ARTICULATION();
-  const numen::hal::DeviceConfig& dev = default_scene().device;
+  const numen::hal::DeviceConfig& dev = lattice_scene().device;
   ASSERT_TRUE(dev.canopen.managed);
   ASSERT_EQ(dev.axes.size(), 5u);
   // Controller: encoder TPDOs 0x181–0x185, drive TPDOs 0x281–0x283, heartbeats 0x701–0x705,
@@ -143,7 +144,7 @@ TEST(BusSpec, ManagedFiltersAreExactlyTheIdsEachEndReads) {
 
 TEST(BusSpec, MinimalProtocolFiltersOnlyTheEncodersAndTheTorques) {
   NUMEN_REQUIRE_ARTICULATION();
-  numen::hal::DeviceConfig dev = default_scene().device;
+  numen::hal::DeviceConfig dev = lattice_scene().device;
   dev.canopen.managed = false;
   EXPECT_EQ(exact_ids(numen::sim::controller_filters(dev), kEncoderIds),
             (std::set<std::uint32_t>{0x181, 0x182, 0x183, 0x184, 0x185}));

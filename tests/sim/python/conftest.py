@@ -1,5 +1,5 @@
 """Fixtures of the Python module's tests: the module (from PYTHONPATH, the build tree) and the
-shipped default scene, loaded once."""
+shipped lattice scene (the default scene with a rigid organ: a few µs a step), loaded once."""
 import os
 
 import pytest
@@ -22,12 +22,13 @@ def load_or_skip(name):
 
 @pytest.fixture(scope="session")
 def scene():
-    """The default scene; in a build without articulation (its instrument has joints), the
-    construction scene (rigid blocks on a floor, no joints), so that the lean builds of
+    """The lattice scene (sim/scenes/lattice.toml: the default scene's instrument, a rigid
+    sphere-lattice organ; the default scene's net costs ~60x its step, and these tests need only
+    a scene); in a build without articulation (its instrument has joints), the construction scene (rigid blocks on a floor, no joints), so that the lean builds of
     .ci/options-matrix still step, view and run a scene."""
     if not numen.features["articulation"]:
         return load_or_skip("construction.toml")
-    return load_or_skip("default.toml")
+    return load_or_skip("lattice.toml")
 
 
 def scripted_step(scene, data):

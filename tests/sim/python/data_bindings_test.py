@@ -6,7 +6,7 @@ import pytest
 import numen
 from conftest import load_or_skip, scripted_step
 
-STEPS = 400  # 0.4 s of the default scene: the tool reaches the organ (contacts)
+STEPS = 400  # 0.4 s of the lattice scene: the tool reaches the organ (contacts)
 
 
 def bits(a):

@@ -85,9 +85,9 @@ void expect_no_allocation(const Scene& scene, const char* name) {
   EXPECT_FALSE(s.nan_detected);
 }
 
-TEST(RunAllocations, DefaultScenePeriodNeverAllocates) {
+TEST(RunAllocations, LatticeScenePeriodNeverAllocates) {
   NUMEN_REQUIRE_ARTICULATION();
-  expect_no_allocation(default_scene(), "default");
+  expect_no_allocation(lattice_scene(), "lattice");
 }
 
 TEST(RunAllocations, ConstructionScenePeriodNeverAllocates) {
@@ -116,7 +116,7 @@ TEST(RunAllocations, OrganScenePeriodNeverAllocates) {
   NUMEN_SKIP_UNDER_SANITIZER(kDeformableRunTooSlow);
   NUMEN_REQUIRE_DEFORMABLE();
   NUMEN_REQUIRE_ARTICULATION();
-  expect_no_allocation(organ_scene(), "organ");  // the hand goes into the organ from 3 s
+  expect_no_allocation(organ_scene(), "default (organ)");  // the hand goes into the organ from 3 s
 }
 
 TEST(RunAllocations, MeshObstacleScenePeriodNeverAllocates) {

@@ -52,7 +52,7 @@ using namespace numen::test::run_scenes;
 
 TEST(RunBadBus, CorruptedAndLostFramesAreRejectedWithoutHarm) {
   NUMEN_REQUIRE_ARTICULATION();
-  Scene scene = default_scene();  // a copy
+  Scene scene = lattice_scene();  // a copy
   scene.bus.corruption_probability = 0.05;
   scene.bus.drop_probability = 0.02;
   scene.bus.seed = 20240611;
@@ -105,7 +105,7 @@ TEST(RunBadBus, CorruptedAndLostFramesAreRejectedWithoutHarm) {
 // its own candump log drives the controller to the same result, bit for bit.
 TEST(RunBusLog, RecordedRunReplaysBitIdentically) {
   NUMEN_REQUIRE_ARTICULATION();
-  const Scene& scene = default_scene();
+  const Scene& scene = lattice_scene();
   const numen::test::TempDir dir;
   const std::string log = (dir / "run.log").string();
   constexpr int kPeriods = 2000;
@@ -168,7 +168,7 @@ std::string recorded_log(const numen::test::TempDir& dir) {
   {
     numen::sim::BusChoice bus;
     bus.record_path = path;
-    SceneRunner runner(default_scene(), 0, bus);
+    SceneRunner runner(lattice_scene(), 0, bus);
     for (int k = 0; k < 600; ++k) runner.period();
   }
   return numen::test::read_file(path);
@@ -177,7 +177,7 @@ std::string recorded_log(const numen::test::TempDir& dir) {
 RunSummary replay(const numen::test::TempDir& dir, const std::string& name, const std::string& log) {
   numen::sim::BusChoice bus;
   bus.spec = "log:" + dir.write(name, log);
-  SceneRunner runner(default_scene(), 0, bus);
+  SceneRunner runner(lattice_scene(), 0, bus);
   for (int k = 0; k < 600; ++k) runner.period();
   return runner.summary();
 }
@@ -248,7 +248,7 @@ TEST(RunBusLog, EncoderFramesSentAsCanFdAreCountedAndNamed) {
 // The same frames on the simulated bus reach the controller and are counted.
 TEST(RunBadBus, RemoteExtendedAndFdFramesOnTheSimBusAreCounted) {
   NUMEN_REQUIRE_ARTICULATION();
-  SceneRunner runner(default_scene(), 0);
+  SceneRunner runner(lattice_scene(), 0);
   for (int k = 0; k < 300; ++k) runner.period();
   numen::hal::CanFrame remote;
   remote.id = 0x181;
@@ -281,7 +281,7 @@ TEST(RunBusLog, PacedRecorderDropsOfflineRecorderWaits) {
 
 TEST(RunBusLog, BadBusSpecAndBadLogAreClearErrors) {
   NUMEN_REQUIRE_ARTICULATION();
-  const Scene& scene = default_scene();
+  const Scene& scene = lattice_scene();
   numen::sim::BusChoice bus;
   bus.spec = "can0";
   EXPECT_THROW(SceneRunner(scene, 0, bus), std::invalid_argument);

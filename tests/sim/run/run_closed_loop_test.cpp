@@ -27,9 +27,9 @@ using numen::sim::RunSummary;
 using numen::sim::Scene;
 using numen::test::replace;
 
-/// The shipped default scene's text, loadable from a temporary directory, with `edits` applied.
+/// The shipped lattice scene's text, loadable from a temporary directory, with `edits` applied.
 std::string default_text() {
-  std::string text = numen::test::shipped_scene_text("default.toml");
+  std::string text = numen::test::shipped_scene_text("lattice.toml");
   return replace(text, "\"../data/", "\"" + std::string(NUMEN_SOURCE_DIR) + "/sim/data/");
 }
 
@@ -52,11 +52,11 @@ RunSummary run_for(const Scene& scene, double seconds) {
 
 // The whole shipped recording, closed loop: clean, no limit cycle, the hand 24 mm into the
 // organ, the handle held back by the feedback, the god-object on the surface.
-TEST(RunClosedLoop, DefaultSceneIsStableAndPushesTheHandleBack) {
+TEST(RunClosedLoop, LatticeSceneIsStableAndPushesTheHandleBack) {
   NUMEN_REQUIRE_ARTICULATION();
   NUMEN_SKIP_UNDER_SANITIZER("a 30 s run's figures (the closed loop's periods run under the "
                              "sanitizers in RunClosedLoop.PeriodsNeverAllocate)");
-  const Scene& scene = numen::test::run_scenes::default_scene();
+  const Scene& scene = numen::test::run_scenes::lattice_scene();
   ASSERT_TRUE(scene.plant.has_value());
   const RunSummary s = run_for(scene, -1.0);
   std::printf("[   info   ] hand %.3f mm, handle %.3f mm, tool %.3f mm, handle force %.3f N, "
@@ -123,7 +123,7 @@ TEST(RunClosedLoop, APlantThatRunsAwayLatchesTheDivergence) {
 // never allocate.
 TEST(RunClosedLoop, PeriodsNeverAllocate) {
   NUMEN_REQUIRE_ARTICULATION();
-  const Scene& scene = numen::test::run_scenes::default_scene();
+  const Scene& scene = numen::test::run_scenes::lattice_scene();
   numen::sim::SceneRunner runner(scene);
   for (int k = 0; k < 200; ++k) runner.period();  // start-up, first contacts
   numen::test::AllocationGuard guard;

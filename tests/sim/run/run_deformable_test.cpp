@@ -215,7 +215,7 @@ TEST(RunDeformable, SummaryReportsTheNets) {
   EXPECT_NE(text.find("deformable: 1 net(s), 306 nodes"), std::string::npos) << text;
   EXPECT_NE(text.find("solver iterations mean"), std::string::npos) << text;
   // A scene without nets says nothing about them.
-  const RunSummary r = numen::sim::run_scene(default_scene(), opt);
+  const RunSummary r = numen::sim::run_scene(lattice_scene(), opt);
   EXPECT_EQ(r.num_nodes, 0);
   EXPECT_EQ(numen::sim::format_summary(r).find("deformable:"), std::string::npos);
 }

@@ -86,12 +86,12 @@ void expect_deterministic(const Scene& scene, std::int64_t n, const char* name) 
   EXPECT_TRUE(moved) << name;
 }
 
-TEST(RunDeterminism, DefaultSceneTwoRunnersAreBitIdentical) {
+TEST(RunDeterminism, LatticeSceneTwoRunnersAreBitIdentical) {
   NUMEN_SKIP_UNDER_SANITIZER(
       "bit-identity is not what a sanitizer checks; 12 s of the scene twice take 31 s under"
-      " ASan+UBSan with coverage (RunDefaultScene.* runs it there)");
+      " ASan+UBSan with coverage (RunLatticeScene.* runs it there)");
   NUMEN_REQUIRE_ARTICULATION();
-  expect_deterministic(default_scene(), periods_for(default_scene(), 12.0), "default");
+  expect_deterministic(lattice_scene(), periods_for(lattice_scene(), 12.0), "lattice");
 }
 
 TEST(RunDeterminism, ConstructionSceneTwoRunnersAreBitIdentical) {

@@ -81,7 +81,7 @@ TEST(RunDivergence, EndobagAtATeraNewtonCouplingStopsAsDiverged) {
 
 // The shipped scenes at their own gains stay well inside every bound over their whole runs.
 TEST(RunDivergence, ShippedScenesStayInsideTheBounds) {
-  for (const char* name : {"default.toml", "construction.toml", "phantom.toml"}) {
+  for (const char* name : {"lattice.toml", "construction.toml", "phantom.toml"}) {
     if (std::string(name) != "construction.toml" && !numen::core::kWithArticulation) continue;
     const RunSummary s = numen::sim::run_scene(shipped(name), RunOptions{});
     print(name, s);
@@ -149,8 +149,8 @@ TEST(SceneLint, ACouplingThatYieldsIsNotWarned) {
 }
 
 TEST(SceneLint, NoShippedSceneIsWarned) {
-  for (const char* name : {"default.toml", "construction.toml", "phantom.toml", "deformable.toml",
-                           "endobag.toml", "mouse.toml", "admittance.toml"}) {
+  for (const char* name : {"default.toml", "lattice.toml", "construction.toml", "phantom.toml",
+                           "deformable.toml", "endobag.toml", "mouse.toml", "admittance.toml"}) {
     Scene s;
     try {
       s = shipped(name);

@@ -19,6 +19,7 @@
 
 #include "alloc_counter.hpp"
 #include "build_features.hpp"
+#include "lattice_scene.hpp"
 #include "sanitizer.hpp"
 #include "scene_text.hpp"
 #include "temp_dir.hpp"
@@ -196,9 +197,9 @@ TEST(RunMultirate, APacedRunStepsTheSceneOnItsOwnThread) {
 
 namespace {
 
-/// The shipped default scene with [multirate] scene_dt, margin (m).
+/// The shipped lattice scene with [multirate] scene_dt, margin (m).
 Scene default_multirate(numen::test::TempDir& dir, double scene_dt, double margin) {
-  return shipped_scene(dir, "default.toml", 0.001, scene_dt, margin);
+  return shipped_scene(dir, "lattice.toml", 0.001, scene_dt, margin);
 }
 
 /// `scene` in replay (without its [device.plant]): runs that compare the god-object's numerics
@@ -215,14 +216,14 @@ Scene replayed(Scene scene) {
 // prescribed jaws) in the device loop, the tissue and organs in the scene loop. At scene rates of
 // 1 kHz, 200 Hz and 100 Hz the instrument stays as far out of the organs as the single-rate one,
 // tracks the hand as closely in free space, and the drives get the same largest force.
-TEST(RunMultirate, DefaultSceneArticulatedGodObjectAtRateRatiosOneFiveAndTen) {
+TEST(RunMultirate, LatticeSceneArticulatedGodObjectAtRateRatiosOneFiveAndTen) {
   NUMEN_SKIP_UNDER_SANITIZER(
       "four runs of the 30 s scene compare figures, which is not what a sanitizer checks; they "
-      "take 140 s under ASan+UBSan (RunMultirate.DefaultScenePeriodNeverAllocates runs the same "
+      "take 140 s under ASan+UBSan (RunMultirate.LatticeScenePeriodNeverAllocates runs the same "
       "path there)");
   NUMEN_REQUIRE_ARTICULATION();
   numen::test::TempDir dir;
-  const Scene single_scene = replayed(numen::sim::load_scene(numen::sim::default_scene_path()));
+  const Scene single_scene = replayed(numen::sim::load_scene(numen::test::lattice_scene_path()));
   const RunSummary single = run_whole(single_scene);
   std::printf("%-22s tool %.3f mm, tracking rms %.4f mm, force max %.3f N, joint drift %.4f mm\n",
               "single-rate 1 kHz", single.tool_penetration_max_mm, single.tracking_error_free_rms_mm,
@@ -244,10 +245,10 @@ TEST(RunMultirate, DefaultSceneArticulatedGodObjectAtRateRatiosOneFiveAndTen) {
   }
 }
 
-TEST(RunMultirate, DefaultScenePeriodNeverAllocates) {
+TEST(RunMultirate, LatticeScenePeriodNeverAllocates) {
   NUMEN_REQUIRE_ARTICULATION();
   numen::test::TempDir dir;
-  run_without_allocation(default_multirate(dir, 0.01, 0.005), "default");
+  run_without_allocation(default_multirate(dir, 0.01, 0.005), "lattice");
 }
 
 namespace {

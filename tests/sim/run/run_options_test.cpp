@@ -59,7 +59,7 @@ TEST(RunRealtimeSetup, StepsAreReportedAndAFailureDoesNotStopTheRun) {
     numen::sim::RunOptions opt;
     opt.duration_s = 0.05;
     opt.rt.cpu_affinity = {4095};  // no such CPU here
-    s = numen::sim::run_scene(default_scene(), opt);
+    s = numen::sim::run_scene(lattice_scene(), opt);
   });
   t.join();
   EXPECT_EQ(s.steps, 50);
@@ -81,7 +81,7 @@ TEST(RunRealtimeSetup, StepsAreReportedAndAFailureDoesNotStopTheRun) {
     opt.rt.cpu_affinity = {4095};
     opt.rt.strict = true;
     try {
-      numen::sim::run_scene(default_scene(), opt);
+      numen::sim::run_scene(lattice_scene(), opt);
     } catch (const std::runtime_error&) {
       threw = true;
     }
@@ -94,7 +94,7 @@ TEST(RunRealtimeSetup, NothingRequestedReportsNothing) {
   NUMEN_REQUIRE_ARTICULATION();
   numen::sim::RunOptions opt;
   opt.duration_s = 0.01;
-  EXPECT_TRUE(numen::sim::run_scene(default_scene(), opt).realtime_setup.empty());
+  EXPECT_TRUE(numen::sim::run_scene(lattice_scene(), opt).realtime_setup.empty());
 }
 
 TEST(RunOverrunPolicy, PacedRunsLatchAfterTheLimitAndZeroOnlyCounts) {
@@ -112,23 +112,23 @@ TEST(RunOverrunPolicy, PacedRunsLatchAfterTheLimitAndZeroOnlyCounts) {
   opt.duration_s = 0.01;
   opt.realtime = true;
   opt.overrun_limit = 0;
-  const RunSummary s = numen::sim::run_scene(default_scene(), opt);
+  const RunSummary s = numen::sim::run_scene(lattice_scene(), opt);
   EXPECT_EQ(s.overrun_limit, 0u);
   EXPECT_NE(numen::sim::format_summary(s).find("overrun policy: count only"), std::string::npos);
   // The minimal protocol has no supervisor to latch: its run reports count only, whatever the
   // limit asked (it used to print "latch after 3").
-  Scene minimal = default_scene();
+  Scene minimal = lattice_scene();
   minimal.device.canopen.managed = false;
   opt.overrun_limit = 3;
   const RunSummary m = numen::sim::run_scene(minimal, opt);
   EXPECT_FALSE(m.managed);
   EXPECT_EQ(m.overrun_limit, 0u);
   EXPECT_NE(numen::sim::format_summary(m).find("overrun policy: count only"), std::string::npos);
-  const RunSummary managed = numen::sim::run_scene(default_scene(), opt);
+  const RunSummary managed = numen::sim::run_scene(lattice_scene(), opt);
   EXPECT_EQ(managed.overrun_limit, 3u);
   // Unpaced: no deadlines, nothing latches, whatever the limit (its JSON said 3).
   opt.realtime = false;
-  EXPECT_EQ(numen::sim::run_scene(default_scene(), opt).overrun_limit, 0u);
+  EXPECT_EQ(numen::sim::run_scene(lattice_scene(), opt).overrun_limit, 0u);
 }
 
 TEST(RunRearm, ARequestIsTakenOnceBeforeThePeriodAndReported) {
@@ -137,7 +137,7 @@ TEST(RunRearm, ARequestIsTakenOnceBeforeThePeriodAndReported) {
   numen::sim::RunOptions opt;
   opt.duration_s = 0.02;
   opt.rearm = &rearm;
-  const RunSummary s = numen::sim::run_scene(default_scene(), opt);
+  const RunSummary s = numen::sim::run_scene(lattice_scene(), opt);
   EXPECT_FALSE(rearm.load());
   EXPECT_EQ(s.rearm_requests, 1);
   EXPECT_EQ(s.rearm_first_period, 0);

@@ -30,10 +30,10 @@ using numen::sim::Scene;
 using numen::sim::SceneRunner;
 using numen::test::replace;
 
-/// The default scene made active (see the file comment), with `[device.passivity]` when
+/// The lattice scene made active (see the file comment), with `[device.passivity]` when
 /// `passivity`, and `[multirate] scene_dt = 5 ms` when `multirate`.
 Scene active_default_scene(numen::test::TempDir& dir, bool passivity, bool multirate) {
-  std::string text = numen::test::shipped_scene_text("default.toml");
+  std::string text = numen::test::shipped_scene_text("lattice.toml");
   text = replace(text, "\"../data/", std::string("\"") + NUMEN_SOURCE_DIR + "/sim/data/");
   text = replace(text, "damping = [0.02, 0.02, 1.5, 0.0, 0.0]", "damping = [0.0, 0.0, 0.0, 0.0, 0.0]");
   text = replace(text, "stiffness = 300.0            # N/m\ndamping = 1.0                # N·s/m",
@@ -42,7 +42,7 @@ Scene active_default_scene(numen::test::TempDir& dir, bool passivity, bool multi
   if (passivity) text += "\n[device.passivity]\nenergy_limit = 1e-4\n";
   if (multirate) text += "\n[multirate]\nscene_dt = 0.005\nmargin = 0.005\n";
   const std::string name = std::string("active_") + (passivity ? "pc_" : "") +
-                           (multirate ? "multirate_" : "") + "default.toml";
+                           (multirate ? "multirate_" : "") + "lattice.toml";
   return numen::sim::load_scene(dir.write(name, text));
 }
 
@@ -64,7 +64,7 @@ void print(const char* name, const RunSummary& s) {
 
 }  // namespace
 
-TEST(RunPassivity, ControllerRemovesTheLimitCycleOfAnActiveDefaultSceneSingleRateAndMultirate) {
+TEST(RunPassivity, ControllerRemovesTheLimitCycleOfAnActiveLatticeSceneSingleRateAndMultirate) {
   NUMEN_SKIP_UNDER_SANITIZER(
       "four closed-loop runs of the 30 s trial compare figures, which is not what a sanitizer "
       "checks");
@@ -98,11 +98,11 @@ TEST(RunPassivity, ControllerRemovesTheLimitCycleOfAnActiveDefaultSceneSingleRat
 // environment — sent torques compared period by period on the driven axes (pivot_x, pivot_y in
 // N·m, depth in N), without an energy limit and with 0.1 mJ: what the controller changes of the
 // unconstrained render. Figures in docs/passivity.md, "Passivity controller".
-TEST(RunPassivity, TransparencyOnThePassiveDefaultSceneInReplay) {
+TEST(RunPassivity, TransparencyOnThePassiveLatticeSceneInReplay) {
   NUMEN_SKIP_UNDER_SANITIZER("three 10 s runs compare figures, which is not what a sanitizer checks");
   NUMEN_REQUIRE_ARTICULATION();
   numen::test::TempDir dir;
-  std::string text = numen::test::shipped_scene_text("default.toml");
+  std::string text = numen::test::shipped_scene_text("lattice.toml");
   text = replace(text, "\"../data/", std::string("\"") + NUMEN_SOURCE_DIR + "/sim/data/");
   Scene plain = numen::sim::load_scene(dir.write("plain.toml", text));
   plain.plant.reset();  // replay

@@ -179,10 +179,10 @@ TEST(RunRecordedTrials, EveryAxisOfEveryTrialStaysInItsRangeInEveryJigsawsScene)
   const std::vector<fs::path> trials = recorded_trials(&note);
   std::printf("[   info   ] %s\n", note.c_str());
   const std::vector<fs::path> scenes = jigsaws_scenes();
-  ASSERT_GE(scenes.size(), 3u) << "default, deformable and endobag read JIGSAWS recordings";
+  ASSERT_GE(scenes.size(), 4u) << "default, deformable, endobag and lattice read JIGSAWS recordings";
   numen::test::TempDir dir;
   for (const fs::path& scene_path : scenes) {
-    if (!numen::core::kWithDeformable && scene_path.stem() != "default") continue;
+    if (!numen::core::kWithDeformable && scene_path.stem() != "lattice") continue;
     for (const fs::path& trial : trials) {
       SCOPED_TRACE(scene_path.stem().string() + " on " + trial.filename().string());
       const Scene s = numen::sim::load_scene(
@@ -208,7 +208,7 @@ TEST(RunRecordedTrials, EveryTrialRunsThroughEveryJigsawsSceneWithoutASafetyStop
   // (the whole trial sets the trocar, as in a run of the whole trial).
   constexpr double kWindow = 3.0;
   for (const fs::path& scene_path : jigsaws_scenes()) {
-    if (!numen::core::kWithDeformable && scene_path.stem() != "default") continue;
+    if (!numen::core::kWithDeformable && scene_path.stem() != "lattice") continue;
     for (const fs::path& trial : trials) {
       const std::string name = scene_path.stem().string() + " on " + trial.filename().string();
       SCOPED_TRACE(name);
@@ -267,7 +267,7 @@ std::string with_soft_start(std::string text, double seconds) {
 }
 
 // The two held-out JIGSAWS trials (not the excerpt's Suturing_B002) start with the tool inside
-// an obstacle of the default scene (warned: "the tool started inside ..."): the hand is inside,
+// an obstacle of the lattice scene (warned: "the tool started inside ..."): the hand is inside,
 // the god-object is pushed out, so the coupling force is large from the first torque period.
 // Without a soft start the feedback jumps from 0 to it in one period (8 N, max_force, on
 // Needle_Passing). With one (T = 0.1 s) it rises along the ramp. The two runs see the same hand
@@ -284,7 +284,7 @@ TEST(RunSoftStart, TheHeldOutTrialsStartingInsideAnObstacleRampTheFeedbackInInst
       trials.push_back(t);
   if (trials.size() != 2) GTEST_SKIP() << "the held-out JIGSAWS trials are not here: " << note;
   constexpr double kT = 0.1;
-  const fs::path scene_path = fs::path(NUMEN_SOURCE_DIR) / "sim" / "scenes" / "default.toml";
+  const fs::path scene_path = fs::path(NUMEN_SOURCE_DIR) / "sim" / "scenes" / "lattice.toml";
   numen::test::TempDir dir;
   for (const fs::path& trial : trials) {
     SCOPED_TRACE(trial.filename().string());

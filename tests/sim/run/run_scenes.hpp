@@ -36,9 +36,12 @@ using numen::sim::TraceRecord;
 
 inline std::string construction_path() { return std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/construction.toml"; }
 
-/// The shipped scenes, loaded once for the whole suite.
-inline const Scene& default_scene() {
-  static const Scene s = numen::sim::load_scene(numen::sim::default_scene_path());
+/// The shipped scenes, loaded once for the whole suite. The lattice scene (lattice.toml: the
+/// default scene with a rigid sphere-lattice organ) is the articulated instrument's scene of
+/// these tests; the default scene (default.toml, its deformable organ: ~60x the step) is
+/// organ_scene().
+inline const Scene& lattice_scene() {
+  static const Scene s = numen::sim::load_scene(std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/lattice.toml");
   return s;
 }
 inline const Scene& construction_scene() {
@@ -116,9 +119,10 @@ inline const Scene& endobag_scene() {
       numen::sim::load_scene(std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/endobag.toml");
   return s;
 }
+/// The default scene (default.toml): the articulated instrument against the deformable organ.
 inline const Scene& organ_scene() {
   static const Scene s =
-      numen::sim::load_scene(std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/organ.toml");
+      numen::sim::load_scene(std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/default.toml");
   return s;
 }
 

@@ -162,7 +162,7 @@ TEST(RunSummaryFigures, JsonCarriesEveryFigureOfTheTextSummary) {
   NUMEN_REQUIRE_ARTICULATION();
   numen::sim::RunOptions opt;
   opt.duration_s = 0.02;
-  const RunSummary s = numen::sim::run_scene(default_scene(), opt);
+  const RunSummary s = numen::sim::run_scene(lattice_scene(), opt);
   const nlohmann::json j = nlohmann::json::parse(numen::sim::format_summary_json(s));
   // Figures of the text summary that the JSON used to leave out.
   EXPECT_EQ(j.at("trocar_note").get<std::string>(), s.trocar_note);

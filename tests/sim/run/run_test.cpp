@@ -32,6 +32,7 @@
 
 #include "alloc_counter.hpp"
 #include "child_process.hpp"
+#include "lattice_scene.hpp"
 #include "run_scenes.hpp"
 #include "scene_text.hpp"
 #include "temp_dir.hpp"
@@ -50,22 +51,22 @@ namespace {
 
 using namespace numen::test::run_scenes;
 
-TEST(RunDefaultScene, GodObjectStaysOnTheSurfaceWhileTheHandGoesThrough) {
+TEST(RunLatticeScene, GodObjectStaysOnTheSurfaceWhileTheHandGoesThrough) {
   NUMEN_REQUIRE_ARTICULATION();
-  const Scene& scene = default_scene();
+  const Scene& scene = lattice_scene();
   const std::int64_t n = periods_for(scene, 15.0);
   SceneRunner runner(scene, static_cast<std::size_t>(n));
   const auto t0 = std::chrono::steady_clock::now();
   for (std::int64_t k = 0; k < n; ++k) runner.period();
   const double wall = wall_s(t0);
   const RunSummary s = runner.summary();
-  print_summary("default 15 s", s, wall);
+  print_summary("lattice 15 s", s, wall);
 
   EXPECT_EQ(runner.periods(), n);
   EXPECT_EQ(s.steps, n);
   EXPECT_NEAR(s.sim_time_s, 15.0, 1e-9);
   EXPECT_EQ(runner.data().step_count, n);
-  EXPECT_EQ(s.scene, "default");
+  EXPECT_EQ(s.scene, "lattice");
   EXPECT_EQ(s.coupling, "god-object");
 
   // The hand (the instrument placed at the device target) goes deep into the
@@ -133,7 +134,7 @@ TEST(RunDefaultScene, GodObjectStaysOnTheSurfaceWhileTheHandGoesThrough) {
   EXPECT_DOUBLE_EQ(deepest_target, s.target_penetration_max_mm);
 }
 
-TEST(RunDefaultScene, StiffContactsOfOneTeraNewtonPerMetreStayFiniteAndOutside) {
+TEST(RunLatticeScene, StiffContactsOfOneTeraNewtonPerMetreStayFiniteAndOutside) {
   // Issue 17, defect 2: [contact_default] stiffness = 1e12 N/m. Without the contact time-constant
   // floor the tool was thrown away at 7–8 s (non-finite steps from then on, god-object
   // "penetration" of 7e8 mm, exit 0). With it, every contact acts with at most the stiffness the
@@ -142,7 +143,7 @@ TEST(RunDefaultScene, StiffContactsOfOneTeraNewtonPerMetreStayFiniteAndOutside) 
   // shipped 2e4 N/m, under which the god-object stays within 2 mm of the surface
   // (GodObjectStaysOnTheSurfaceWhileTheHandGoesThrough), so it stays within 2 mm here too.
   NUMEN_REQUIRE_ARTICULATION();
-  Scene scene = default_scene();
+  Scene scene = lattice_scene();
   for (numen::core::MaterialPair& p : scene.model.material_pairs) p.stiffness = 1e12;
   SceneRunner runner(scene);
   const std::int64_t n = periods_for(scene, 8.0);
@@ -160,9 +161,9 @@ TEST(RunDefaultScene, StiffContactsOfOneTeraNewtonPerMetreStayFiniteAndOutside) 
 // Issue 22: an EMCY reaches the summary with its node, time, code and name — a drive's by the
 // CiA 402 table — (text and --json: the figure emcy_messages), and the trace's row of the period
 // it came in, with its node and code (columns emcys, emcy_node, emcy_code).
-TEST(RunDefaultScene, AnInjectedDriveFaultIsReportedByItsEmcyName) {
+TEST(RunLatticeScene, AnInjectedDriveFaultIsReportedByItsEmcyName) {
   NUMEN_REQUIRE_ARTICULATION();
-  const Scene& scene = default_scene();
+  const Scene& scene = lattice_scene();
   SceneRunner runner(scene, 500);
   for (int k = 0; k < 500; ++k) {
     if (k == 300) {
@@ -201,14 +202,14 @@ TEST(RunDefaultScene, AnInjectedDriveFaultIsReportedByItsEmcyName) {
   EXPECT_EQ(emcys, s.emcys);
 }
 
-TEST(RunDefaultScene, NoJumpAtStart) {
+TEST(RunLatticeScene, NoJumpAtStart) {
   NUMEN_REQUIRE_ARTICULATION();
   // The instrument starts at the device's first target (the hand's pose at t = 0). The first
   // valid sample comes at period 49, after the NMT start-up and the nodes' configuration from
   // their DCFs; the god-object held its starting pose until then while the recorded hand went
   // on. At that sample target and god-object differ by no more than the hand moved during the
   // start-up (plus the encoder quantisation): no jump of the god-object's own.
-  const Scene& scene = default_scene();
+  const Scene& scene = lattice_scene();
   SceneRunner runner(scene);
   runner.period();
   const auto held0 = static_cast<std::size_t>(runner.data().attached_body);
@@ -235,9 +236,9 @@ TEST(RunDefaultScene, NoJumpAtStart) {
 
 // The summary's feedback figures are what the drives were sent — after hal::ImpedanceDevice::write()'s
 // gate and clamp — and what the simulated drives applied, not the core's composite wrench.
-TEST(RunDefaultScene, SummaryFeedbackFiguresAreTheOnesTheDrivesReceive) {
+TEST(RunLatticeScene, SummaryFeedbackFiguresAreTheOnesTheDrivesReceive) {
   NUMEN_REQUIRE_ARTICULATION();
-  const Scene& scene = default_scene();
+  const Scene& scene = lattice_scene();
   SceneRunner runner(scene);
   double sent_max = 0.0, received_max = 0.0, feedback_max = 0.0, core_gated_max = 0.0;
   std::array<std::int16_t, numen::hal::kMaxAxes> sent_before{};
@@ -271,12 +272,12 @@ TEST(RunDefaultScene, SummaryFeedbackFiguresAreTheOnesTheDrivesReceive) {
               sent_max, received_max, feedback_max, core_gated_max);
 }
 
-TEST(RunDefaultScene, RealtimeRunIsPacedToTheClock) {
+TEST(RunLatticeScene, RealtimeRunIsPacedToTheClock) {
   NUMEN_REQUIRE_ARTICULATION();
   numen::sim::RunOptions opt;
   opt.duration_s = 0.1;
   opt.realtime = true;
-  const RunSummary s = numen::sim::run_scene(default_scene(), opt);
+  const RunSummary s = numen::sim::run_scene(lattice_scene(), opt);
   EXPECT_EQ(s.steps, 100);
   // 100 periods of 1 ms paced by clock_nanosleep take at least ~0.1 s.
   EXPECT_GE(s.wall_time_s, 0.09);
@@ -284,11 +285,11 @@ TEST(RunDefaultScene, RealtimeRunIsPacedToTheClock) {
               static_cast<long long>(s.realtime_overruns));
 }
 
-TEST(RunDefaultScene, RunSceneRunsTheRequestedDuration) {
+TEST(RunLatticeScene, RunSceneRunsTheRequestedDuration) {
   NUMEN_REQUIRE_ARTICULATION();
   numen::sim::RunOptions opt;
   opt.duration_s = 0.5;
-  const RunSummary s = numen::sim::run_scene(default_scene(), opt);
+  const RunSummary s = numen::sim::run_scene(lattice_scene(), opt);
   EXPECT_EQ(s.steps, 500);
   EXPECT_NEAR(s.sim_time_s, 0.5, 1e-12);
   EXPECT_GT(s.wall_time_s, 0.0);
@@ -384,9 +385,9 @@ TEST(RunConstructionScene, DirectCouplingPenetratesTenTimesMoreThanTheGodObject)
 // first two periods (before the first sample the trocar sleeve had no target and was
 // over-constrained between the world and the imposed tube); the bound bodies now hold their
 // starting poses until the device has a target.
-TEST(RunDefaultScene, DirectCouplingHasNoNonFiniteStepBeforeTheFirstSample) {
+TEST(RunLatticeScene, DirectCouplingHasNoNonFiniteStepBeforeTheFirstSample) {
   NUMEN_REQUIRE_ARTICULATION();
-  const Scene scene = numen::sim::load_scene(numen::sim::default_scene_path(),
+  const Scene scene = numen::sim::load_scene(numen::test::lattice_scene_path(),
                                              numen::sim::SceneOverrides{CouplingMode::kDirect});
   SceneRunner runner(scene);
   for (int k = 0; k < 50; ++k) runner.period();
@@ -447,7 +448,7 @@ TEST(RunArticulated, DefaultInstrumentStaysOutsideWhileTheJointsHold) {
   NUMEN_REQUIRE_ARTICULATION();
   // Paper Fig. 7: the articulated tool (sleeve, tube, jaws) stays on the
   // organ and tissue while the recorded tip goes through; the joints hold.
-  SceneRunner runner(default_scene());
+  SceneRunner runner(lattice_scene());
   for (int k = 0; k < 15'000; ++k) runner.period();
   const RunSummary s = runner.summary();
   EXPECT_EQ(s.num_joints, 4);
@@ -458,7 +459,7 @@ TEST(RunArticulated, DefaultInstrumentStaysOutsideWhileTheJointsHold) {
   EXPECT_FALSE(s.nan_detected);
   // The sleeve stays on the trocar point: the spherical joint to the world.
   const auto& d = runner.data();
-  EXPECT_LT((d.bodies[0].position - default_scene().device.trocar.point).norm(), 1e-5);
+  EXPECT_LT((d.bodies[0].position - lattice_scene().device.trocar.point).norm(), 1e-5);
   // The jaws follow the jaw encoder: each hinge at ±jaw/2 within a few mrad.
   const double jaw = runner.device().last_sample().q(4);
   EXPECT_NEAR(d.joints[2].coordinate, 0.5 * jaw, 5e-3);

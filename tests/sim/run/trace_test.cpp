@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include "lattice_scene.hpp"
 #include "temp_dir.hpp"
 #include <unistd.h>
 
@@ -186,7 +187,7 @@ TEST(Trace, WriteErrorOfASmallTraceIsReported) {
 // the verdict reports the lost records (exit status 5, "lost records").
 TEST(Trace, ARunChecksItsPathFirstAndCountsAFailedWrite) {
   NUMEN_REQUIRE_ARTICULATION();
-  const numen::sim::Scene scene = numen::sim::load_scene(numen::sim::default_scene_path());
+  const numen::sim::Scene scene = numen::sim::load_scene(numen::test::lattice_scene_path());
   numen::sim::RunOptions opt;
   opt.duration_s = 0.05;
   TempDir dir;
@@ -261,7 +262,7 @@ TEST(Trace, MakeTraceRecordReadsTheStateAfterTheStep) {
 
 TEST(Trace, RunSceneWritesOneRowPerStep) {
   NUMEN_REQUIRE_ARTICULATION();
-  const numen::sim::Scene scene = numen::sim::load_scene(numen::sim::default_scene_path());
+  const numen::sim::Scene scene = numen::sim::load_scene(numen::test::lattice_scene_path());
   TempDir dir;
   numen::sim::RunOptions opt;
   opt.duration_s = 0.25;

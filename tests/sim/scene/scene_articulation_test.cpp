@@ -46,7 +46,7 @@ using numen::sim::Scene;
 using numen::test::angle_between;
 using numen::test::TempDir;
 
-// The articulated trocar instrument of default.toml, on one second of the
+// The articulated trocar instrument of lattice.toml, on one second of the
 // shipped excerpt, plus a body bound to link "tool" with a given position.
 std::string art_scene() {
   return R"(name = "art"

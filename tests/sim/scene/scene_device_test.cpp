@@ -215,7 +215,7 @@ TEST(SceneCanopen, ShippedScenesConfigureEveryNodeFromItsDcf) {
     }
   }
   if (!numen::core::kWithArticulation) GTEST_SKIP() << "the trocar and arm scenes have joints: NUMEN_WITH_ARTICULATION=OFF";
-  for (const char* name : {"default.toml", "phantom.toml"}) {
+  for (const char* name : {"lattice.toml", "phantom.toml"}) {
     SCOPED_TRACE(name);
     const Scene s = load_scene(dir + name);
     for (std::size_t i = 0; i < s.device.axes.size(); ++i) {

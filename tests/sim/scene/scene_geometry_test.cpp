@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include "lattice_scene.hpp"
 #include "sanitizer.hpp"
 #include "scene_text.hpp"
 #include "temp_dir.hpp"
@@ -147,8 +148,8 @@ std::vector<Vec3> dense_directions(int n) {  // the 26 plus n near-uniform (Fibo
   return d;
 }
 
-const Scene& default_scene() {
-  static const Scene s = load_scene(numen::sim::default_scene_path());
+const Scene& lattice_scene() {
+  static const Scene s = load_scene(numen::test::lattice_scene_path());
   return s;
 }
 
@@ -171,7 +172,7 @@ SphereUnion organ_union(const Scene& s) {
 /// organ's union, deepest first by depth_to_exterior() over the 26 directions.
 const std::vector<std::pair<double, Vec3>>& organ_tips() {
   static const std::vector<std::pair<double, Vec3>> inside = [] {
-    const Scene& s = default_scene();
+    const Scene& s = lattice_scene();
     const SphereUnion u = organ_union(s);
     const std::vector<Vec3> coarse = cube_directions();
     std::vector<std::pair<double, Vec3>> out;
@@ -186,9 +187,9 @@ const std::vector<std::pair<double, Vec3>>& organ_tips() {
   return inside;
 }
 
-TEST(DefaultSceneGeometry, RecordedTipGoesAtLeast10mmIntoTheTissue) {
+TEST(LatticeSceneGeometry, RecordedTipGoesAtLeast10mmIntoTheTissue) {
   NUMEN_REQUIRE_ARTICULATION();
-  const Scene& s = default_scene();
+  const Scene& s = lattice_scene();
   const numen::core::Obstacle* tissue = obstacle(s, "tissue");
   ASSERT_NE(tissue, nullptr);
   ASSERT_EQ(tissue->type, ShapeType::kPlane);
@@ -203,14 +204,14 @@ TEST(DefaultSceneGeometry, RecordedTipGoesAtLeast10mmIntoTheTissue) {
   EXPECT_GE(depth, 0.010);
 }
 
-TEST(DefaultSceneGeometry, RecordedTipGoesAtLeast10mmIntoTheOrgan) {
+TEST(LatticeSceneGeometry, RecordedTipGoesAtLeast10mmIntoTheOrgan) {
   NUMEN_SKIP_UNDER_SANITIZER(
       "checks the shipped recording against the shipped organ (data, not code): 40 s under "
       "ASan+UBSan with coverage");
   NUMEN_REQUIRE_ARTICULATION();
   // Depth inside the solid the organ's spheres bound: distance to the nearest
   // point outside the union's outer surface.
-  const Scene& s = default_scene();
+  const Scene& s = lattice_scene();
   const SphereUnion u = organ_union(s);
   const auto& inside = organ_tips();
   ASSERT_FALSE(inside.empty()) << "the recorded tip never enters the organ";
@@ -225,14 +226,14 @@ TEST(DefaultSceneGeometry, RecordedTipGoesAtLeast10mmIntoTheOrgan) {
   EXPECT_GE(depth, 0.010);
 }
 
-TEST(DefaultSceneGeometry, RecordedTipGoesAtLeast10mmBelowTheUnionOfTheOrgansSpheres) {
+TEST(LatticeSceneGeometry, RecordedTipGoesAtLeast10mmBelowTheUnionOfTheOrgansSpheres) {
   NUMEN_SKIP_UNDER_SANITIZER(
       "checks the shipped recording against the shipped organ (data, not code): 60 s under "
       "ASan+UBSan with coverage");
   NUMEN_REQUIRE_ARTICULATION();
   // Depth below the union itself: distance to the nearest point that no
   // sphere covers (enclosed voids count), marched along 26 + 400 directions.
-  const Scene& s = default_scene();
+  const Scene& s = lattice_scene();
   const SphereUnion u = organ_union(s);
   const auto& inside = organ_tips();
   ASSERT_FALSE(inside.empty());

@@ -25,14 +25,14 @@ namespace sim = numen::sim;
 
 namespace {
 
-/// The shipped scenes this build can load (default, phantom and endobag have
-/// joints; deformable, endobag and organ nets; mouse names its event codes, which libevdev resolves).
+/// The shipped scenes this build can load (lattice, default, phantom and endobag have
+/// joints; deformable, endobag and default nets; mouse names its event codes, which libevdev resolves).
 std::vector<std::string> shipped_scenes() {
   std::vector<std::string> out{"construction", "admittance"};
   if (numen::hal::kWithEvdev) out.push_back("mouse");
-  if (core::kWithArticulation) out.insert(out.end(), {"default", "phantom"});
+  if (core::kWithArticulation) out.insert(out.end(), {"lattice", "phantom"});
   if (core::kWithDeformable) out.push_back("deformable");
-  if (core::kWithArticulation && core::kWithDeformable) out.insert(out.end(), {"endobag", "organ"});
+  if (core::kWithArticulation && core::kWithDeformable) out.insert(out.end(), {"endobag", "default"});
   return out;
 }
 

@@ -107,12 +107,12 @@ TEST(SceneMultirate, WhatTheMultirateGodObjectCannotRunIsRefusedAtTheTable) {
   }
 }
 
-// The default scene's god-object is the held tube's articulation: the trocar sleeve, the tube
+// The lattice scene's god-object is the held tube's articulation: the trocar sleeve, the tube
 // and both jaws, with the pivot, insertion and jaw joints (two prescribed by the jaw axis).
 TEST(SceneMultirate, AnArticulatedToolIsOneGodObject) {
   NUMEN_REQUIRE_ARTICULATION();
   TempDir dir;
-  const std::string text = numen::test::shipped_scene_text("default.toml") +
+  const std::string text = numen::test::shipped_scene_text("lattice.toml") +
                            "\n[multirate]\nscene_dt = 0.005\nmargin = 0.005\n";
   const std::string data = std::string("\"") + NUMEN_SOURCE_DIR + "/sim/data/";
   const Scene s = numen::sim::load_scene(dir.write("default_mr.toml", replace(text, "\"../data/", data)));

@@ -1,8 +1,8 @@
 // Tests of deformable organs in scene files (docs/scenes.md, "Deformable god-objects and
 // organs"): `anchored = true` bodies, a [[deformable]] on one, its located errors, the load-time
-// warning when an organ starts inside the tool (naming both), and the shipped organ scene
-// (sim/scenes/organ.toml): the default scene with its lattice replaced by the deformable organ,
-// where the recorded hand goes into it.
+// warning when an organ starts inside the tool (naming both), and the shipped default scene
+// (sim/scenes/default.toml): the lattice scene (lattice.toml) with its sphere lattice replaced
+// by the deformable organ, where the recorded hand goes into it.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -155,13 +155,16 @@ TEST(OrganShippedScene, TheDeformableOrganTakesTheLatticesPlaceAndTheHandGoesInt
   NUMEN_REQUIRE_ARTICULATION();
   NUMEN_REQUIRE_DEFORMABLE();
   const std::string dir = std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/";
-  const Scene def = load_scene(dir + "default.toml");
-  const Scene s = load_scene(dir + "organ.toml");
-  EXPECT_EQ(s.name, "organ");
+  const Scene def = load_scene(dir + "lattice.toml");
+  const Scene s = load_scene(dir + "default.toml");
+  EXPECT_EQ(s.name, "default");
   EXPECT_TRUE(s.warnings.empty()) << s.warnings.front();
-  // default.toml's obstacles but the lattice; its bodies plus the organ's anchored core.
-  ASSERT_EQ(s.model.obstacles.size(), 1u);
+  // lattice.toml's obstacles but the lattice, and the organ's rigid core surface (a mesh under
+  // the net); its bodies plus the organ's anchored core.
+  ASSERT_EQ(s.model.obstacles.size(), 2u);
   EXPECT_EQ(s.model.obstacles[0].name, "tissue");
+  EXPECT_EQ(s.model.obstacles[1].name, "organ_core_surface");
+  EXPECT_EQ(s.model.obstacles[1].type, numen::core::ShapeType::kMesh);
   ASSERT_EQ(s.model.num_bodies(), def.model.num_bodies() + 1);
   const numen::core::BodyModel& core_body = s.model.bodies.back();
   EXPECT_EQ(core_body.name, "organ_core");
@@ -171,6 +174,22 @@ TEST(OrganShippedScene, TheDeformableOrganTakesTheLatticesPlaceAndTheHandGoesInt
   ASSERT_EQ(lattice.name, "organ");
   EXPECT_LT((core_body.initial_pose.position - lattice.pose.position).norm(), 1e-12);
   EXPECT_LT(core_body.initial_pose.orientation.angularDistance(lattice.pose.orientation), 1e-9);
+  EXPECT_LT((s.model.obstacles[1].pose.position - lattice.pose.position).norm(), 1e-12);
+  EXPECT_LT(s.model.obstacles[1].pose.orientation.angularDistance(lattice.pose.orientation), 1e-9);
+  // The core lies 2.2-3.2 mm under the rest surface (the scaled mesh, docs/deformable.md): every
+  // vertex of its mesh inside the rest surface, its nearest rest node (within half an edge of
+  // the nearest surface point) 2-4.5 mm away.
+  const numen::core::Obstacle& core_surface = s.model.obstacles[1];
+  double shallowest = 1.0, deepest_vertex = 0.0;
+  for (const Vec3& v : s.model.meshes[static_cast<std::size_t>(core_surface.mesh)].vertices) {
+    const double d = depth_below_rest_surface(s, 0, core_surface.pose.position + core_surface.pose.orientation * v);
+    shallowest = std::min(shallowest, d);
+    deepest_vertex = std::max(deepest_vertex, d);
+  }
+  std::printf("[   info   ] core surface: its vertices %.2f-%.2f mm from the nearest rest node, inside\n",
+              1e3 * shallowest, 1e3 * deepest_vertex);
+  EXPECT_GT(shallowest, 0.002);
+  EXPECT_LT(deepest_vertex, 0.0045);
   ASSERT_EQ(s.model.num_nets(), 1);
   EXPECT_EQ(s.model.nets[0].name, "organ");
   EXPECT_EQ(s.model.nets[0].node_count, 1002);

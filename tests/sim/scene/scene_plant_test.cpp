@@ -119,19 +119,19 @@ TEST(ScenePlant, TheHandIsOneTableForBothKindsOfDevice) {
   EXPECT_NE(e.message().find("give the hand once, in [device.hand]"), std::string::npos) << e.what();
 }
 
-// The shipped closed-loop scenes pass the lint; the default scene's plant without damping or
+// The shipped closed-loop scenes pass the lint; the lattice scene's plant without damping or
 // friction under a 3000 N/m coupling fails it on its driven axes: a warning naming the keys and
 // both bounds, or with --strict an error at [device.plant] damping.
 TEST(ScenePlant, ThePassivityLintWarnsOrRefusesWithStrict) {
   NUMEN_REQUIRE_ARTICULATION();  // the shipped trocar and PHANToM scenes are articulated
-  for (const char* name : {"default.toml", "phantom.toml"}) {
+  for (const char* name : {"lattice.toml", "phantom.toml"}) {
     const Scene s = load_scene(std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/" + name);
     ASSERT_FALSE(s.passivity_lint.empty()) << name;
     for (const numen::sim::PassivityLintRow& r : s.passivity_lint)
       EXPECT_TRUE(r.passes) << name << " " << r.axis_name;
   }
   TempDir dir;
-  std::string text = numen::test::shipped_scene_text("default.toml");
+  std::string text = numen::test::shipped_scene_text("lattice.toml");
   text = replace(text, "damping = [0.02, 0.02, 1.5, 0.0, 0.0]", "damping = [0.0, 0.0, 0.0, 0.0, 0.0]");
   text = replace(text, "coulomb = [0.01, 0.01, 0.1, 0.0, 0.0]", "coulomb = [0.0, 0.0, 0.0, 0.0, 0.0]");
   text = replace(text, "stiffness = 300.0            # N/m", "stiffness = 3000.0");

@@ -32,6 +32,7 @@
 
 #include "detail/joint_system.hpp"
 #include "build_features.hpp"
+#include "lattice_scene.hpp"
 #include "rotation.hpp"
 
 namespace {
@@ -61,10 +62,10 @@ using numen::test::kMiniScene;
 
 // ---------------------------------------------------------------- shipped scenes
 
-TEST(Scene, DefaultSceneLoadsWhatItsFileDescribes) {
+TEST(Scene, LatticeSceneLoadsWhatItsFileDescribes) {
   NUMEN_REQUIRE_ARTICULATION();
-  const Scene s = load_scene(numen::sim::default_scene_path());
-  EXPECT_EQ(s.name, "default");
+  const Scene s = load_scene(numen::test::lattice_scene_path());
+  EXPECT_EQ(s.name, "lattice");
   EXPECT_EQ(s.model.dt, 0.001);
   EXPECT_EQ(s.model.coupling_mode, CouplingMode::kGodObject);
   EXPECT_EQ(s.model.gravity, Vec3::Zero());
@@ -181,9 +182,9 @@ TEST(Scene, ConstructionSceneLoadsWhatItsFileDescribes) {
 
 TEST(Scene, AttachedBodyStartsAtTheDevicesFirstTarget) {
   NUMEN_REQUIRE_ARTICULATION();
-  // Default scene: the instrument's position is omitted, so it starts at the
-  // device's first controlled pose (no jump at start).
-  const Scene s = load_scene(numen::sim::default_scene_path());
+  // Lattice scene (the default scene's instrument): the instrument's position is omitted, so it
+  // starts at the device's first controlled pose (no jump at start).
+  const Scene s = load_scene(numen::test::lattice_scene_path());
   const numen::core::Pose initial =
       s.model.bodies[static_cast<std::size_t>(s.model.initial_attached_body)].initial_pose;
   const numen::sim::SimulatedInstrument inst(s.device, s.trajectory);
@@ -212,7 +213,7 @@ TEST(Scene, CouplingOverrideChangesTheMode) {
   EXPECT_EQ(god.model.coupling_mode, CouplingMode::kGodObject);
   const Scene direct = load_scene(construction_path(), SceneOverrides{CouplingMode::kDirect});
   EXPECT_EQ(direct.model.coupling_mode, CouplingMode::kDirect);
-  const Scene first = load_scene(numen::sim::default_scene_path(), SceneOverrides{CouplingMode::kFirstOrder});
+  const Scene first = load_scene(numen::test::lattice_scene_path(), SceneOverrides{CouplingMode::kFirstOrder});
   EXPECT_EQ(first.model.coupling_mode, CouplingMode::kFirstOrder);
   // Nothing else changes.
   EXPECT_EQ(direct.model.num_bodies(), god.model.num_bodies());
@@ -374,7 +375,7 @@ TEST(Scene, DeviceSoftStartIsReadInSecondsAndDefaultsToATenthOfASecond) {
 }
 
 TEST(Scene, APartThisBuildLeftOutIsRefusedByName) {
-  // default.toml has [[joint]] tables, deformable.toml [[deformable]] ones.
+  // lattice.toml has [[joint]] tables, deformable.toml [[deformable]] ones.
   const std::string dir = std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/";
   const auto error_of = [](const std::string& path) -> std::string {
     try {
@@ -384,11 +385,11 @@ TEST(Scene, APartThisBuildLeftOutIsRefusedByName) {
     }
     return {};
   };
-  const std::string joints = error_of(dir + "default.toml");
+  const std::string joints = error_of(dir + "lattice.toml");
   if (numen::core::kWithArticulation) {
     EXPECT_EQ(joints, "");
   } else {
-    EXPECT_NE(joints.find("default.toml:"), std::string::npos) << joints;  // file:line
+    EXPECT_NE(joints.find("lattice.toml:"), std::string::npos) << joints;  // file:line
     EXPECT_NE(joints.find("needs joints: this build has NUMEN_WITH_ARTICULATION=OFF"),
               std::string::npos)
         << joints;

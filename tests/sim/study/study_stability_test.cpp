@@ -287,15 +287,15 @@ TEST(StudyStability, MonitorCriteriaAndGrowth) {
 TEST(StudyStability, ShippedScenesStayBoundedWithAContactStiffnessOfOneTeraNewtonPerMetre) {
   NUMEN_SKIP_UNDER_SANITIZER(
       "every shipped scene for 6 s twice: 130 s under ASan+UBSan with coverage; the scenes'"
-      " runs of RunDefaultScene.*, RunConstructionScene.* and the contact floor's tests "
+      " runs of RunLatticeScene.*, RunConstructionScene.* and the contact floor's tests "
       "(ContactForce.*) run there");
   // Family "scenes", quick: every shipped scene with its contact stiffness, then its coupling
-  // stiffness, at 1e12 N/m; implicit Euler. Before the core's contact floor the default scene's
+  // stiffness, at 1e12 N/m; implicit Euler. Before the core's contact floor the lattice scene's
   // tool was thrown away at 7–8 s (non-finite steps) and the endobag's net diverged. Every
   // contact run is stable. The coupling runs never roll a step back either, but two fail the
   // verdict for reasons of the scene, not of the contacts (docs/stability.md): the construction
   // game's held block, as deep as the hand, throws the others faster than 10 m/s, and the
-  // endobag's net solve (and the organ scene's) stops at its relative tolerance of a
+  // endobag's net solve (and the default scene's organ) stops at its relative tolerance of a
   // right-hand side the 1e12 N/m coupling dominates, which tears the net.
   StabilityOptions o;
   o.quick = true;
@@ -303,7 +303,7 @@ TEST(StudyStability, ShippedScenesStayBoundedWithAContactStiffnessOfOneTeraNewto
   o.integrators = {Integrator::kLinearlyImplicitEuler};
   const StabilityResult r = run_stability_study(o);
   int contact = 0, coupling = 0;
-  bool default_clamped = false;
+  bool lattice_clamped = false;
   for (const StabilityRow& row : r.rows) {
     EXPECT_EQ(row.family, "scenes");
     EXPECT_EQ(row.stiffness, 1e12);
@@ -316,22 +316,22 @@ TEST(StudyStability, ShippedScenesStayBoundedWithAContactStiffnessOfOneTeraNewto
       ++coupling;
       const bool known = row.case_name == "coupling-stiffness construction" ||
                          row.case_name == "coupling-stiffness endobag" ||
-                         row.case_name == "coupling-stiffness organ";  // as the endobag's
+                         row.case_name == "coupling-stiffness default";  // its organ: as the endobag's
       if (!known) {
         EXPECT_TRUE(row.stable) << describe(row) << " " << row.note;
       }
     }
-    if (row.case_name == "contact-stiffness default")
-      default_clamped = row.note.find("; 0 steps with clamped") == std::string::npos;
+    if (row.case_name == "contact-stiffness lattice")
+      lattice_clamped = row.note.find("; 0 steps with clamped") == std::string::npos;
   }
   const std::size_t skipped = r.skipped.size();
-  EXPECT_EQ(contact + skipped, 9u);  // 9 shipped scenes (mouse.toml: issue 18; mesh.toml, organ.toml: 36)
+  EXPECT_EQ(contact + skipped, 9u);  // 9 shipped scenes (mouse.toml: issue 18; mesh.toml, lattice.toml: 36)
   EXPECT_EQ(coupling + skipped, 9u);
   if (core::kWithArticulation) {
-    EXPECT_TRUE(default_clamped);
+    EXPECT_TRUE(lattice_clamped);
   }
   if (core::kWithArticulation) {
-    EXPECT_NE(format_stability_tables(r).find("| contact-stiffness default | implicit-euler | stable"),
+    EXPECT_NE(format_stability_tables(r).find("| contact-stiffness lattice | implicit-euler | stable"),
               std::string::npos)
         << format_stability_tables(r);
   }

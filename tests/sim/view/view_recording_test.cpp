@@ -13,6 +13,7 @@
 #include "numen/sim/run/run.hpp"
 #include "numen/sim/scene/scene.hpp"
 #include "numen/sim/view/view_scene.hpp"
+#include "lattice_scene.hpp"
 #include "temp_dir.hpp"
 
 namespace {
@@ -57,7 +58,7 @@ TEST(ViewRecording, ARunRecordsEveryDueFrameInOrder) {
   NUMEN_REQUIRE_ARTICULATION();
   TempDir dir;
   numen::sim::RunSummary s;
-  const std::string path = record(dir, numen::sim::default_scene_path(), 0.5, &s);
+  const std::string path = record(dir, numen::test::lattice_scene_path(), 0.5, &s);
   EXPECT_TRUE(s.view_recorded);
   EXPECT_EQ(s.view_frames_published, 30);  // 0.5 s at 60 Hz
   EXPECT_EQ(s.view_frames_dropped, 0);
@@ -89,7 +90,7 @@ TEST(ViewRecording, ARunRecordsEveryDueFrameInOrder) {
 TEST(ViewRecording, EveryDamagedFileIsRefusedWithItsByteOffset) {
   NUMEN_REQUIRE_ARTICULATION();
   TempDir dir;
-  const std::string good = read_bytes(record(dir, numen::sim::default_scene_path(), 0.1));
+  const std::string good = read_bytes(record(dir, numen::test::lattice_scene_path(), 0.1));
   ASSERT_GT(good.size(), 100u);
   const std::uint32_t scene_bytes = static_cast<unsigned char>(good[8]) |
                                     static_cast<unsigned char>(good[9]) << 8 |
@@ -193,7 +194,7 @@ TEST(ViewRecording, AnUnwritablePathIsAnInputErrorAtTheOption) {
 TEST(ViewRecording, AFullDiskIsFoundBeforeTheRunStarts) {
   NUMEN_REQUIRE_ARTICULATION();
   if (!std::filesystem::exists("/dev/full")) GTEST_SKIP() << "no /dev/full on this machine";
-  const numen::sim::Scene scene = numen::sim::load_scene(numen::sim::default_scene_path());
+  const numen::sim::Scene scene = numen::sim::load_scene(numen::test::lattice_scene_path());
   numen::sim::RunOptions options;
   options.duration_s = 0.5;
   options.record_view_path = "/dev/full";

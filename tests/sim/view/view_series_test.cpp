@@ -14,6 +14,7 @@
 #include "numen/sim/scene/scene.hpp"
 #include "numen/sim/view/view_recording.hpp"
 #include "numen/sim/view/view_server.hpp"
+#include "lattice_scene.hpp"
 #include "temp_dir.hpp"
 
 namespace {
@@ -50,7 +51,7 @@ class ViewSeries : public ::testing::Test {
     numen::sim::RunOptions options;
     options.duration_s = 0.5;  // 30 frames at 60 Hz
     options.record_view_path = (dir_ / "run.nmv").string();
-    numen::sim::run_scene(numen::sim::load_scene(numen::sim::default_scene_path()), options);
+    numen::sim::run_scene(numen::sim::load_scene(numen::test::lattice_scene_path()), options);
     reader_ = std::make_unique<ViewRecordingReader>(options.record_view_path);
   }
   numen::test::TempDir dir_;

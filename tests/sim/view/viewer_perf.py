@@ -21,7 +21,7 @@ import cdp  # noqa: E402
 from viewer_browser_test import (ROOT, WIDTH, HEIGHT, VIEW_W, VIEW_H, Viewer, chromium_path,  # noqa: E402
                                  record)
 
-SCENES = [("default", None), ("construction", "sim/scenes/construction.toml"),
+SCENES = [("lattice", "sim/scenes/lattice.toml"), ("construction", "sim/scenes/construction.toml"),
           ("deformable", "sim/scenes/deformable.toml"), ("endobag", "sim/scenes/endobag.toml")]
 WARMUP_S, MEASURE_S = 2.0, 8.0
 

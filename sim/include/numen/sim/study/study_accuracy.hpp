@@ -14,7 +14,7 @@
 ///    contact with damping and viscous friction), smooth (quintic) target motion;
 ///  - "wall-smoothed": the same with the smoothed C¹ contact onset (core::MaterialPair::
 ///    onset_depth = 0.1 mm): what the penalty law's onset costs the second-order schemes;
-///  - "articulated": the articulated instrument of sim/scenes/default.toml following the shipped
+///  - "articulated": the articulated instrument of sim/scenes/lattice.toml following the shipped
 ///    recording (sim/data), its axis values interpolated by a C¹ cubic (Catmull–Rom) through
 ///    samples every 40 ms so that the input does not cap every scheme at first order;
 ///  - "deformable": the deformable probe of sim/scenes/deformable.toml on the same input, over

@@ -16,7 +16,7 @@
 ///  - "extreme": a target teleporting 1 m (and half a turn) in one period, free and into a wall;
 ///    a target spinning at 100 rad/s about a non-principal axis; more contacts than
 ///    core::kMaxContacts; the deformable probe (sim/scenes/deformable.toml) whose target jumps
-///    10 cm into the post; the trocar instrument (sim/scenes/default.toml) pulled to zero insertion
+///    10 cm into the post; the trocar instrument (sim/scenes/lattice.toml) pulled to zero insertion
 ///    through the control loop; encoder frames carrying what a NaN or ±Inf becomes on the bus
 ///    (hal::value_to_counts) through SimBus, InstrumentDevice and ControlLoop, and the sample
 ///    check and core::Data given NaN/Inf directly.

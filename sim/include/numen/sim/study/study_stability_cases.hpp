@@ -155,7 +155,7 @@ void plan_articulation(const StabilityOptions& o, Plan& plan);
 /// gets one "case: reason" line in Plan::skipped.
 void plan_scene_extreme(const StabilityOptions& o, const std::string& scene_dir, Plan& plan);
 /// "organ-plunge" of "extreme" (study_stability_organ.cpp): the organ of `scene` (a net on an
-/// anchored body; sim/scenes/organ.toml) and a one-sphere god-object of the held body's mass and
+/// anchored body; sim/scenes/default.toml) and a one-sphere god-object of the held body's mass and
 /// coupling whose target jumps 40 mm into it in one period; `horizon` s of steps of `h`. Throws
 /// std::invalid_argument for a scene without an organ or a held body.
 StabilityRow organ_run(const Scene& scene, core::Integrator integrator, double h,
