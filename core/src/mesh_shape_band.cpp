@@ -241,7 +241,10 @@ bool rasterize(const MeshShape& s, const MeshBand& band, double slack, std::size
     if (vertex_triangle[v] < 0) continue;
     dirs.clear();
     hs.clear();
-    for (int w : neighbours[v]) {
+    auto& ring = neighbours[v];  // each neighbour twice (two triangles an edge)
+    std::sort(ring.begin(), ring.end());
+    ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
+    for (int w : ring) {
       dirs.push_back((V[static_cast<std::size_t>(w)] - V[v]).normalized());
       hs.push_back(below(dirs.back(), V[v]));
     }
