@@ -20,7 +20,6 @@ using detail::kInf;
 using detail::Nearest;
 using detail::signed_result;
 
-
 /// Closest triangle to p closer than `bound` (m; +∞: any), nearest child first.
 Nearest search(const MeshShape& s, const Vec3& p, double bound) noexcept {
   Nearest best;
@@ -251,6 +250,9 @@ std::string build_mesh_shape(const TriangleMesh& mesh, MeshShape& s,
 bool mesh_signed_distance(const MeshShape& s, const Vec3& p, double reach,
                           MeshDistance& out) noexcept {
   if (!p.allFinite() || s.nodes.empty()) return false;
+  // Outside the bounds is outside the mesh: beyond reach of the box, no contact.
+  const double outside2 = box_distance2(p, s.aabb_min, s.aabb_max);
+  if (outside2 > 0.0 && outside2 >= reach * reach) return false;
   {
     // The narrow band: exact when the nearest listed triangle is within its width.
     Nearest n;
@@ -260,11 +262,8 @@ bool mesh_signed_distance(const MeshShape& s, const Vec3& p, double reach,
     }
   }
   double bound = kInf;
-  const double outside2 = box_distance2(p, s.aabb_min, s.aabb_max);
   if (outside2 > 0.0) {
-    // Outside the bounds is outside the mesh: only a distance below reach matters.
-    if (outside2 >= reach * reach) return false;
-    bound = reach;
+    bound = reach;  // outside the mesh: only a distance below reach matters
   } else if (!s.grid_distance.empty()) {
     // |sd(p) − sd(c)| ≤ |p − c| at the cell centre c; float storage: a relative slack.
     int cell[3];
