@@ -40,8 +40,8 @@ inline constexpr int kMeshBrickCells = 8;
 /// the caller does not say (the scene passes its largest sphere radius plus a margin).
 inline constexpr double kMeshDefaultBand = 0.005;
 
-/// Most bytes a narrow band may take, while built (its (cell, triangle) pairs, 8 bytes each) and
-/// kept; a mesh whose band would need more keeps the tree alone (MeshBand::note says so).
+/// Most bytes a narrow band may take, while built (12 per (cell, triangle) pair, 4 per grid cell)
+/// and kept; a mesh whose band would need more keeps the tree alone (MeshBand::note says so).
 inline constexpr std::size_t kMeshBandMaxBytes = std::size_t{256} << 20;
 
 /// How build_mesh_shape() builds the narrow band.
