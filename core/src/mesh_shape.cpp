@@ -9,85 +9,16 @@
 #include <numeric>
 #include <tuple>
 
+#include "detail/mesh_shape_query.hpp"
+
 namespace numen::core {
 namespace {
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
-
-/// Closest feature of a triangle to a point.
-enum Feature : int { kFace = 0, kVertex0, kVertex1, kVertex2, kEdge01, kEdge12, kEdge20 };
-
-/// Closest point to `p` on the triangle (a, b, c) and its feature: Ericson, Real-Time Collision
-/// Detection (2005), §5.1.5, ClosestPtPointTriangle (Voronoi regions by barycentric tests).
-Vec3 closest_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c,
-                         int& feature) noexcept {
-  const Vec3 ab = b - a, ac = c - a, ap = p - a;
-  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
-  if (d1 <= 0.0 && d2 <= 0.0) {
-    feature = kVertex0;
-    return a;
-  }
-  const Vec3 bp = p - b;
-  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
-  if (d3 >= 0.0 && d4 <= d3) {
-    feature = kVertex1;
-    return b;
-  }
-  const double vc = d1 * d4 - d3 * d2;
-  if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) {
-    feature = kEdge01;
-    return a + (d1 / (d1 - d3)) * ab;
-  }
-  const Vec3 cp = p - c;
-  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
-  if (d6 >= 0.0 && d5 <= d6) {
-    feature = kVertex2;
-    return c;
-  }
-  const double vb = d5 * d2 - d1 * d6;
-  if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) {
-    feature = kEdge20;
-    return a + (d2 / (d2 - d6)) * ac;
-  }
-  const double va = d3 * d6 - d5 * d4;
-  if (va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0) {
-    feature = kEdge12;
-    return b + ((d4 - d3) / ((d4 - d3) + (d5 - d6))) * (c - b);
-  }
-  const double denom = 1.0 / (va + vb + vc);
-  feature = kFace;
-  return a + ab * (vb * denom) + ac * (vc * denom);
-}
-
-/// Squared distance from p to the box [lo, hi] (0 inside).
-inline double box_distance2(const Vec3& p, const Vec3& lo, const Vec3& hi) noexcept {
-  const Vec3 d = (lo - p).cwiseMax(p - hi).cwiseMax(0.0);
-  return d.squaredNorm();
-}
-
-/// Result of the tree search: the closest triangle and feature found below the bound.
-struct Nearest {
-  double distance2 = kInf;
-  Vec3 point = Vec3::Zero();
-  int triangle = -1;
-  int feature = kFace;
-};
-
-/// Triangle t's closest point to p replaces `best` when it is nearer.
-inline void consider(const MeshShape& s, const Vec3& p, int t, Nearest& best) noexcept {
-  const auto& tri = s.triangles[static_cast<std::size_t>(t)];
-  int feature = kFace;
-  const Vec3 q = closest_on_triangle(p, s.vertices[static_cast<std::size_t>(tri[0])],
-                                     s.vertices[static_cast<std::size_t>(tri[1])],
-                                     s.vertices[static_cast<std::size_t>(tri[2])], feature);
-  const double d2 = (p - q).squaredNorm();
-  if (d2 < best.distance2) {
-    best.distance2 = d2;
-    best.point = q;
-    best.triangle = t;
-    best.feature = feature;
-  }
-}
+using detail::box_distance2;
+using detail::consider;
+using detail::kInf;
+using detail::Nearest;
+using detail::signed_result;
 
 /// Closest triangle to p closer than `bound` (m; +∞: any), nearest child first.
 Nearest search(const MeshShape& s, const Vec3& p, double bound) noexcept {
@@ -125,42 +56,6 @@ Nearest search(const MeshShape& s, const Vec3& p, double bound) noexcept {
     if (d_near < best.distance2 && sp < kStack) stack[sp++] = near_child;
   }
   return best;
-}
-
-/// Angle-weighted pseudo-normal of the feature `f` of triangle t.
-const Vec3& pseudo_normal(const MeshShape& s, int t, int f) noexcept {
-  const auto ti = static_cast<std::size_t>(t);
-  switch (f) {
-    case kVertex0:
-    case kVertex1:
-    case kVertex2:
-      return s.vertex_normals[static_cast<std::size_t>(s.triangles[ti][f - kVertex0])];
-    case kEdge01:
-    case kEdge12:
-    case kEdge20:
-      return s.edge_normals[static_cast<std::size_t>(s.triangle_edges[ti][f - kEdge01])];
-    default:
-      return s.face_normals[ti];
-  }
-}
-
-/// The signed result of a search that found triangle `n.triangle`.
-MeshDistance signed_result(const MeshShape& s, const Vec3& p, const Nearest& n) noexcept {
-  MeshDistance out;
-  const Vec3& pn = pseudo_normal(s, n.triangle, n.feature);
-  const Vec3 diff = p - n.point;
-  const double d = std::sqrt(n.distance2);
-  const bool outside = diff.dot(pn) >= 0.0;
-  out.distance = outside ? d : -d;
-  out.point = n.point;
-  out.triangle = n.triangle;
-  if (d > 1e-12 * (1.0 + n.point.norm())) {
-    out.normal = (outside ? diff : Vec3(-diff)) / d;
-  } else {
-    const double len = pn.norm();
-    out.normal = len > 0.0 ? Vec3(pn / len) : Vec3(s.face_normals[static_cast<std::size_t>(n.triangle)]);
-  }
-  return out;
 }
 
 /// Builds the subtree over order[begin, end) at node index `at` (already allocated); returns its
@@ -288,10 +183,12 @@ std::size_t MeshShape::memory_bytes() const noexcept {
          face_normals.capacity() * sizeof(Vec3) +
          triangle_edges.capacity() * sizeof(triangle_edges[0]) +
          edge_normals.capacity() * sizeof(Vec3) + vertex_normals.capacity() * sizeof(Vec3) +
-         nodes.capacity() * sizeof(MeshBvhNode) + grid_distance.capacity() * sizeof(float);
+         nodes.capacity() * sizeof(MeshBvhNode) + grid_distance.capacity() * sizeof(float) +
+         mesh_band_bytes(band);
 }
 
-std::string build_mesh_shape(const TriangleMesh& mesh, MeshShape& s) {
+std::string build_mesh_shape(const TriangleMesh& mesh, MeshShape& s,
+                             const MeshShapeOptions& options) {
   const std::string invalid = validate_mesh(mesh);
   if (!invalid.empty()) return invalid;
   s = MeshShape{};
@@ -346,18 +243,27 @@ std::string build_mesh_shape(const TriangleMesh& mesh, MeshShape& s) {
     return "the surface encloses a signed volume of " + std::to_string(volume) +
            " m³ (≤ 0): its triangles wind inward, not counter-clockwise seen from outside";
   build_grid(s);
+  build_mesh_band(s, options);
   return "";
 }
 
 bool mesh_signed_distance(const MeshShape& s, const Vec3& p, double reach,
                           MeshDistance& out) noexcept {
   if (!p.allFinite() || s.nodes.empty()) return false;
-  double bound = kInf;
+  // Outside the bounds is outside the mesh: beyond reach of the box, no contact.
   const double outside2 = box_distance2(p, s.aabb_min, s.aabb_max);
+  if (outside2 > 0.0 && outside2 >= reach * reach) return false;
+  {
+    // The narrow band: exact when the nearest listed triangle is within its width.
+    Nearest n;
+    if (detail::band_nearest(s.band, s, p, n)) {
+      out = signed_result(s, p, n);
+      return out.distance < reach;
+    }
+  }
+  double bound = kInf;
   if (outside2 > 0.0) {
-    // Outside the bounds is outside the mesh: only a distance below reach matters.
-    if (outside2 >= reach * reach) return false;
-    bound = reach;
+    bound = reach;  // outside the mesh: only a distance below reach matters
   } else if (!s.grid_distance.empty()) {
     // |sd(p) − sd(c)| ≤ |p − c| at the cell centre c; float storage: a relative slack.
     int cell[3];

@@ -11,13 +11,19 @@
 // tube's concavity leaves many triangles nearly as close as the nearest.
 // MeshMiss: the same points moved 2 cm out along the torus normal (in the bounds box or beyond,
 // no contact): the cost of a sphere that is near but not touching.
-// MeshBuild: build_mesh_shape() (tree, normals, edges, the 32³-cell grid); counter memory_MB.
+// MeshBuild: build_mesh_shape() (tree, normals, edges, the 32³-cell grid, the band); counter
+// memory_MB (the whole shape) and band_MB.
+// The second argument: 0 builds no band (the tree answers every query), 1 the narrow band of
+// width 5 mm (the reach) and cells of the mean edge length; both in the same run. Counter
+// band_triangles: triangles listed per non-empty band cell (mean).
 //
 //   ./build/tests/numen_bench --benchmark_filter='Mesh(Contact|Miss|Build)' --benchmark_repetitions=3
 
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <numbers>
 #include <random>
 #include <vector>
@@ -37,11 +43,29 @@ int sides_for(int triangles) {
   return static_cast<int>(std::lround(std::sqrt(triangles / 4.0)));
 }
 
-core::MeshShape torus_shape(int triangles) {
+/// Options of the run: no band (`band` 0, the tree) or the band of width kReach.
+core::MeshShapeOptions mesh_options(std::int64_t band) {
+  core::MeshShapeOptions o;
+  o.band = band != 0 ? kReach : 0.0;
+  return o;
+}
+
+core::MeshShape torus_shape(int triangles, std::int64_t band) {
   const int sides = sides_for(triangles);
   core::MeshShape s;
-  core::build_mesh_shape(core::make_torus(kMajor, kMinor, 2 * sides, sides), s);
+  core::build_mesh_shape(core::make_torus(kMajor, kMinor, 2 * sides, sides), s, mesh_options(band));
   return s;
+}
+
+/// Mean triangles listed per non-empty band cell (0 without a band).
+double band_triangles(const core::MeshShape& s) {
+  constexpr std::size_t kCells = core::kMeshBrickCells * core::kMeshBrickCells * core::kMeshBrickCells;
+  const auto& begin = s.band.cell_begin;
+  std::size_t cells = 0;
+  for (std::size_t slot = 0; slot < begin.size() / (kCells + 1); ++slot)
+    for (std::size_t k = 0; k < kCells; ++k)
+      if (begin[slot * (kCells + 1) + k + 1] > begin[slot * (kCells + 1) + k]) ++cells;
+  return cells == 0 ? 0.0 : static_cast<double>(s.band.triangles.size()) / static_cast<double>(cells);
 }
 
 /// Points at a signed offset in [lo, hi] (m) from the analytic torus surface along its normal;
@@ -63,7 +87,7 @@ std::vector<Vec3> torus_points(double lo, double hi, bool sweep) {
 }
 
 void run_queries(benchmark::State& state, double lo, double hi, bool sweep = false) {
-  const core::MeshShape s = torus_shape(static_cast<int>(state.range(0)));
+  const core::MeshShape s = torus_shape(static_cast<int>(state.range(0)), state.range(1));
   const std::vector<Vec3> points = torus_points(lo, hi, sweep);
   std::size_t i = 0;
   int hits = 0;
@@ -76,6 +100,7 @@ void run_queries(benchmark::State& state, double lo, double hi, bool sweep = fal
   state.counters["triangles"] = s.num_triangles();
   state.counters["tree_depth"] = s.tree_depth;
   state.counters["hit_fraction"] = static_cast<double>(hits) / static_cast<double>(state.iterations());
+  state.counters["band_triangles"] = band_triangles(s);
 }
 
 void MeshContact(benchmark::State& state) { run_queries(state, 0.0, kReach); }
@@ -86,21 +111,30 @@ void MeshMiss(benchmark::State& state) { run_queries(state, 0.02, 0.02); }
 void MeshBuild(benchmark::State& state) {
   const int sides = sides_for(static_cast<int>(state.range(0)));
   const core::TriangleMesh mesh = core::make_torus(kMajor, kMinor, 2 * sides, sides);
-  std::size_t bytes = 0;
+  std::size_t bytes = 0, band_bytes = 0;
   for (auto _ : state) {
     core::MeshShape s;
-    core::build_mesh_shape(mesh, s);
+    core::build_mesh_shape(mesh, s, mesh_options(state.range(1)));
     bytes = s.memory_bytes();
+    band_bytes = core::mesh_band_bytes(s.band);
     benchmark::DoNotOptimize(s);
   }
   state.counters["triangles"] = mesh.num_triangles();
   state.counters["memory_MB"] = static_cast<double>(bytes) / 1e6;
+  state.counters["band_MB"] = static_cast<double>(band_bytes) / 1e6;
 }
 
-BENCHMARK(MeshContact)->Arg(1000)->Arg(10000)->Arg(100000);
-BENCHMARK(MeshContactSweep)->Arg(1000)->Arg(10000)->Arg(100000);
-BENCHMARK(MeshContactInside)->Arg(1000)->Arg(10000)->Arg(100000);
-BENCHMARK(MeshMiss)->Arg(1000)->Arg(10000)->Arg(100000);
-BENCHMARK(MeshBuild)->Arg(1000)->Arg(10000)->Arg(100000)->Unit(benchmark::kMillisecond);
+/// Triangles {1k, 10k, 100k} × {tree, band}.
+void sizes(benchmark::internal::Benchmark* b) {
+  b->ArgNames({"triangles", "band"});
+  for (std::int64_t band : {0, 1})
+    for (std::int64_t n : {1000, 10000, 100000}) b->Args({n, band});
+}
+
+BENCHMARK(MeshContact)->Apply(sizes);
+BENCHMARK(MeshContactSweep)->Apply(sizes);
+BENCHMARK(MeshContactInside)->Apply(sizes);
+BENCHMARK(MeshMiss)->Apply(sizes);
+BENCHMARK(MeshBuild)->Apply(sizes)->Unit(benchmark::kMillisecond);
 
 }  // namespace

@@ -159,7 +159,10 @@ TEST(MeshShape, BuildRefusesOpenInconsistentAndInwardMeshes) {
 }
 
 TEST(MeshShape, TreeIsBalancedAndMemoryIsCounted) {
-  const MeshShape s = built(make_torus(0.04, 0.015, 100, 50));  // 10000 triangles
+  MeshShape s;  // the tree alone (no narrow band): 10000 triangles
+  numen::core::MeshShapeOptions tree_only;
+  tree_only.band = 0.0;
+  ASSERT_EQ(build_mesh_shape(make_torus(0.04, 0.015, 100, 50), s, tree_only), "");
   EXPECT_EQ(s.num_triangles(), 10000);
   EXPECT_LE(s.tree_depth, 13);  // ⌈log2(10000 / 4)⌉ + 1
   EXPECT_GT(s.memory_bytes(), 10000u * 100u);

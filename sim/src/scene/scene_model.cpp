@@ -3,6 +3,8 @@
 
 #include "scene_model.hpp"
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -12,6 +14,7 @@
 #include <Eigen/Eigenvalues>
 
 #include "numen/core/mesh_shape.hpp"
+#include "numen/core/mesh_shape_intersect.hpp"
 #include "numen/sim/scene/mesh_file.hpp"
 #include "scene_mesh.hpp"
 
@@ -308,9 +311,23 @@ void parse_bodies(const TomlTable& root, core::Model& m, std::vector<std::string
 /// Rotation taking +z onto the unit vector `dir`.
 Quat z_onto(const Vec3& dir) { return Quat::FromTwoVectors(Vec3::UnitZ(), dir.normalized()); }
 
+/// Margin added to the largest sphere radius of the bodies for a mesh obstacle's narrow band (m):
+/// every sphere of the scene's bodies then gets the band's flat query (docs/meshes.md).
+constexpr double kMeshBandMargin = 0.001;
+
+/// Index in `mesh` of the triangle with the vertices `tri` in that order, or −1.
+long triangle_index(const core::TriangleMesh& mesh, const std::array<int, 3>& tri) {
+  const auto it = std::find(mesh.triangles.begin(), mesh.triangles.end(), tri);
+  return it == mesh.triangles.end() ? -1 : static_cast<long>(it - mesh.triangles.begin());
+}
+
 /// A mesh obstacle: the closed mesh of `file`, scaled (`units`, `scale`), built into
 /// m.meshes in its own frame; the obstacle's pose places it. An inward-wound mesh is turned
-/// outward with a warning; an open or inconsistently wound one is refused at `file`.
+/// outward with a warning; an open or inconsistently wound one is refused at `file`. Warnings
+/// at `file` too: a surface that intersects itself (the pairs counted, the first named by the
+/// file's triangle indices, from 0), a narrow band over its memory cap (the tree answers).
+/// The narrow band's width is the largest sphere radius of the bodies (parsed before the
+/// obstacles) plus kMeshBandMargin.
 void parse_mesh_obstacle(const TomlTable& t, const std::filesystem::path& scene_dir,
                          core::Obstacle& o, core::Model& m, std::vector<std::string>& warnings) {
   t.allow_only({"name", "type", "material", "file", "units", "scale", "position", "orientation"});
@@ -320,18 +337,32 @@ void parse_mesh_obstacle(const TomlTable& t, const std::filesystem::path& scene_
   SceneMeshFile file = read_scene_mesh_file(t, scene_dir);
   core::transform_mesh(file.mesh, read_mesh_scale(t), core::Pose{});
   check_scaled_mesh(t, file.mesh, file.path);
-  if (signed_volume(file.mesh) < 0.0) {
-    for (auto& tri : file.mesh.triangles) std::swap(tri[1], tri[2]);
+  const auto warn = [&](const std::string& message) {
     std::ostringstream os;
     os << t.file();
     if (const toml::node* n = t.node("file")) os << ":" << n->source().begin.line;
-    os << ": " << t.key_path("file") << ": " << file.path
-       << ": the triangles wind inward (negative volume): turned outward";
+    os << ": " << t.key_path("file") << ": " << file.path << ": " << message;
     warnings.push_back(os.str());
+  };
+  if (signed_volume(file.mesh) < 0.0) {
+    for (auto& tri : file.mesh.triangles) std::swap(tri[1], tri[2]);
+    warn("the triangles wind inward (negative volume): turned outward");
   }
+  core::MeshShapeOptions options;
+  double largest = 0.0;
+  for (const Sphere& sp : m.body_spheres) largest = std::max(largest, sp.radius);
+  options.band = largest > 0.0 ? largest + kMeshBandMargin : core::kMeshDefaultBand;
   core::MeshShape shape;
-  const std::string err = core::build_mesh_shape(file.mesh, shape);
+  const std::string err = core::build_mesh_shape(file.mesh, shape, options);
   if (!err.empty()) t.fail("file", file.path + ": " + err);
+  if (!shape.band.note.empty()) warn(shape.band.note);
+  const core::MeshSelfIntersections x = core::find_self_intersections(shape);
+  if (x.count > 0)
+    warn("the surface intersects itself: " + std::to_string(x.count) + " pair" +
+         (x.count == 1 ? "" : "s") + " of triangles meet (first: triangles " +
+         std::to_string(triangle_index(file.mesh, x.first_a)) + " and " +
+         std::to_string(triangle_index(file.mesh, x.first_b)) +
+         " of the file, from 0); contacts near them may push the wrong way");
   o.mesh = static_cast<int>(m.meshes.size());
   m.meshes.push_back(std::move(shape));
 }

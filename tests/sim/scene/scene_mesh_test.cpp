@@ -90,6 +90,32 @@ TEST(SceneMesh, InwardWindingIsTurnedWithAWarning) {
   EXPECT_LT(d.distance, 0.0);  // inside is inside
 }
 
+TEST(SceneMesh, SelfIntersectingMeshIsWarnedWithAPairAndTheCount) {
+  // The tetrahedron of kTet and a second one whose apex pokes through its face z = 0 from
+  // below: its three side faces (file triangles 5, 6, 7) cross the first's base (triangle 0).
+  TempDir dir;
+  dir.write("poke.obj", std::string(kTet) +
+                            "v 0.1 0.1 -1\nv 0.35 0.1 -1\nv 0.1 0.35 -1\nv 0.2 0.2 0.1\n"
+                            "f 5 7 6\nf 5 6 8\nf 5 8 7\nf 6 7 8\n");
+  const std::string text = with_mesh_obstacle("file = \"poke.obj\"\n");
+  const Scene s = load_scene(dir.write("s.toml", text));
+  std::string warning;
+  for (const std::string& w : s.warnings)
+    if (w.find("intersects itself") != std::string::npos) warning = w;
+  ASSERT_NE(warning, "");
+  EXPECT_NE(warning.find("s.toml:" + std::to_string(line_of(text, "poke.obj")) + ": obstacle[0].file: "),
+            std::string::npos) << warning;
+  EXPECT_NE(warning.find("poke.obj: the surface intersects itself: 3 pairs of triangles meet (first: triangles "),
+            std::string::npos) << warning;
+  EXPECT_TRUE(warning.find("triangles 0 and ") != std::string::npos ||
+              warning.find(" and 0 of the file") != std::string::npos) << warning;
+  // The shipped lobe: no such warning, and its band is built (no note).
+  const Scene lobe = load_scene(std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/mesh.toml");
+  for (const std::string& w : lobe.warnings) EXPECT_EQ(w.find("intersects itself"), std::string::npos) << w;
+  EXPECT_GT(lobe.model.meshes[0].band.width, 0.0);
+  EXPECT_EQ(lobe.model.meshes[0].band.note, "");
+}
+
 /// The InputError of `text` (scene in `dir`) at the line holding `needle` and `key`, naming
 /// `mesh_file` and containing `message`.
 void expect_mesh_error(const TempDir& dir, const std::string& text, const std::string& needle,

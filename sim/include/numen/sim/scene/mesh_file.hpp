@@ -10,9 +10,9 @@
 namespace numen::sim {
 
 /// Most triangles a mesh file may have. The bound is memory: loading a mesh obstacle peaks at
-/// about 0.56 GB per million triangles (Assimp's copy, numen's vertex map and mesh, the
-/// core::MeshShape being built), of which the kept shape is 0.145 GB; 2 million keeps one mesh
-/// near 1.1 GB, and a 1-million-triangle mesh loads (docs/meshes.md, "Limits").
+/// about 0.56 GB per million triangles (Assimp's copy, numen's vertex map and mesh, the built
+/// core::MeshShape), the kept shape 0.145 GB, a narrow band at most core::kMeshBandMaxBytes more;
+/// 2 million keeps one mesh near 1.1 GB: a 1-million-triangle mesh loads (docs/meshes.md, "Limits").
 inline constexpr int kMaxMeshTriangles = 2'000'000;
 
 /// Reads the triangle surface of a mesh file (STL ASCII or binary, Wavefront OBJ, PLY, glTF 2.0
