@@ -349,6 +349,7 @@ void MultirateGodObject::scene_step(const MultirateDeviceReport& in, MultirateSc
                         detail::NodePlaneScratch{node_slot_, slot_node_, node_stiffness_, plane_slot_,
                                                  planes_stiffness_, planes_depth_}};
   step_with_contacts(model, *scene_, &detect_and_build_planes, &context);
+  if constexpr (kWithDeformable) detail::drop_look_ahead_contacts(*scene_);
   const bool rejected = (scene_->status & kNonFinite) != 0;
   for (std::size_t b = 0; b < nb; ++b) {
     if (rejected) {  // rolled back: what was owed is still owed
