@@ -89,9 +89,10 @@ inline constexpr double kLookAheadGap = 1e-4;
 /// Cuts the node contacts of nets on the god-object in `data` back to the true node spheres
 /// (depth − δ, the middle of the overlap δ/2 towards the node), marks the look-ahead
 /// candidates (NodeContact::engaged: every contact left with depth > 0, and one with depth in
-/// (−kLookAheadGap, 0] of a node with no other contact; the rest is dropped), drops those with a body of the god-object (the scene-loop model has not the
-/// god-object's joints, so a net on one of its bodies is no longer in the same articulation as
-/// the others, with which it never collides in the scene: ArticulationTopology::body_tree);
+/// (−kLookAheadGap, 0] of a node with no other contact; the rest is dropped), drops those with
+/// a body of the god-object (the scene-loop model has not the god-object's joints, so a net on
+/// one of its bodies is no longer in the same articulation as the others, with which it never
+/// collides in the scene: ArticulationTopology::body_tree);
 /// cuts the contacts of the other nets with the god-object's grown spheres back the same way
 /// (the middle δ/2 towards the god-object); and re-measures every net's
 /// NetOutput::max_penetration from the contacts kept (contacts beyond kMaxNodeContacts no
