@@ -69,7 +69,10 @@ void detect_and_build_planes(const Model& model, Data& data, const void* context
     if (model.caller_node_contacts) {
       detect_node_contacts(model, data);
       detail::build_node_planes(model, data, c->device_body, c->margin, c->node_scratch, *c->planes);
-      detail::cut_back_node_contacts(model, data, c->device_body, c->margin, deepest);
+      // The look-ahead where the net steps slower than the device loop (at a rate ratio of 1
+      // the scene step is the single-rate step).
+      detail::cut_back_node_contacts(model, data, c->device_body, c->margin, deepest,
+                                     model.dt > 1.5 * c->device_dt);
     }
   }
 }

@@ -197,7 +197,7 @@ void drop_look_ahead_contacts(Data& data) noexcept {
 }
 
 void cut_back_node_contacts(const Model& scene, Data& data, std::span<const int> device_body,
-                            double margin, double body_deepest) noexcept {
+                            double margin, double body_deepest, bool look_ahead) noexcept {
   for (NetOutput& o : data.nets) o.max_penetration = 0.0;
   int kept = 0;
   const int n = std::clamp(data.num_node_contacts, 0, static_cast<int>(data.node_contacts.size()));
@@ -211,8 +211,9 @@ void cut_back_node_contacts(const Model& scene, Data& data, std::span<const int>
       // The look-ahead (NodeContact::engaged): a touching node, and one within kLookAheadGap of
       // a surface while touching nothing else, may reach it within the scene step.
       if (c.depth > 0.0) {
-        c.engaged = true;
+        c.engaged = look_ahead;
       } else {
+        if (!look_ahead) continue;
         if (!(c.depth > -kLookAheadGap)) continue;
         bool touching = false;  // a node's contacts are consecutive (detect_node_contacts)
         for (int j = kept - 1; j >= 0 && data.node_contacts[static_cast<std::size_t>(j)].node == c.node; --j)

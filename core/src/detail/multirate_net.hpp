@@ -88,8 +88,9 @@ inline constexpr double kLookAheadGap = 1e-4;
 
 /// Cuts the node contacts of nets on the god-object in `data` back to the true node spheres
 /// (depth − δ, the middle of the overlap δ/2 towards the node), marks the look-ahead
-/// candidates (NodeContact::engaged: every contact left with depth > 0, and one with depth in
-/// (−kLookAheadGap, 0] of a node with no other contact; the rest is dropped), drops those with
+/// candidates when `look_ahead` (NodeContact::engaged: every contact left with depth > 0, and
+/// one with depth in (−kLookAheadGap, 0] of a node with no other contact; the rest is dropped;
+/// without `look_ahead` a contact left without depth is dropped), drops those with
 /// a body of the god-object (the scene-loop model has not the god-object's joints, so a net on
 /// one of its bodies is no longer in the same articulation as the others, with which it never
 /// collides in the scene: ArticulationTopology::body_tree);
@@ -99,7 +100,7 @@ inline constexpr double kLookAheadGap = 1e-4;
 /// longer counted) and data.max_penetration (`body_deepest`: the deepest body contact). No
 /// allocation.
 void cut_back_node_contacts(const Model& scene, Data& data, std::span<const int> device_body,
-                            double margin, double body_deepest) noexcept;
+                            double margin, double body_deepest, bool look_ahead) noexcept;
 
 /// Drops the node contacts without depth from `data` (the look-ahead's candidates, once the
 /// scene step is done: not contacts). No allocation.
