@@ -69,7 +69,10 @@ void detect_and_build_planes(const Model& model, Data& data, const void* context
     if (model.caller_node_contacts) {
       detect_node_contacts(model, data);
       detail::build_node_planes(model, data, c->device_body, c->margin, c->node_scratch, *c->planes);
-      detail::cut_back_node_contacts(model, data, c->device_body, c->margin, deepest);
+      // The look-ahead where the net steps slower than the device loop (at a rate ratio of 1
+      // the scene step is the single-rate step).
+      detail::cut_back_node_contacts(model, data, c->device_body, c->margin, deepest,
+                                     model.dt > 1.5 * c->device_dt);
     }
   }
 }
@@ -349,6 +352,7 @@ void MultirateGodObject::scene_step(const MultirateDeviceReport& in, MultirateSc
                         detail::NodePlaneScratch{node_slot_, slot_node_, node_stiffness_, plane_slot_,
                                                  planes_stiffness_, planes_depth_}};
   step_with_contacts(model, *scene_, &detect_and_build_planes, &context);
+  if constexpr (kWithDeformable) detail::drop_look_ahead_contacts(*scene_);
   const bool rejected = (scene_->status & kNonFinite) != 0;
   for (std::size_t b = 0; b < nb; ++b) {
     if (rejected) {  // rolled back: what was owed is still owed

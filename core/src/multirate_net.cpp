@@ -186,8 +186,18 @@ void build_node_planes(const Model& scene, const Data& data, std::span<const int
     scratch.slot_of_node[static_cast<std::size_t>(scratch.slot_node[static_cast<std::size_t>(s)])] = -1;
 }
 
+void drop_look_ahead_contacts(Data& data) noexcept {
+  int kept = 0;
+  const int n = std::clamp(data.num_node_contacts, 0, static_cast<int>(data.node_contacts.size()));
+  for (int i = 0; i < n; ++i) {
+    const NodeContact& c = data.node_contacts[static_cast<std::size_t>(i)];
+    if (c.depth > 0.0) data.node_contacts[static_cast<std::size_t>(kept++)] = c;
+  }
+  data.num_node_contacts = kept;
+}
+
 void cut_back_node_contacts(const Model& scene, Data& data, std::span<const int> device_body,
-                            double margin, double body_deepest) noexcept {
+                            double margin, double body_deepest, bool look_ahead) noexcept {
   for (NetOutput& o : data.nets) o.max_penetration = 0.0;
   int kept = 0;
   const int n = std::clamp(data.num_node_contacts, 0, static_cast<int>(data.node_contacts.size()));
@@ -198,7 +208,21 @@ void cut_back_node_contacts(const Model& scene, Data& data, std::span<const int>
     if (net_on_god_object(scene, device_body, net)) {  // the node's sphere was grown
       if (in_god_object(device_body, c.body_b)) continue;  // see the header
       c.depth -= margin;
-      if (!(c.depth > 0.0)) continue;
+      // The look-ahead (NodeContact::engaged): a touching node, and one within kLookAheadGap of
+      // a surface while touching nothing else, may reach it within the scene step.
+      if (c.depth > 0.0) {
+        c.engaged = look_ahead;
+      } else {
+        if (!look_ahead) continue;
+        if (!(c.depth > -kLookAheadGap)) continue;
+        bool touching = false;  // a node's contacts are consecutive (detect_node_contacts)
+        for (int j = kept - 1; j >= 0 && data.node_contacts[static_cast<std::size_t>(j)].node == c.node; --j)
+          touching = touching || data.node_contacts[static_cast<std::size_t>(j)].depth > 0.0;
+        for (int j = i + 1; j < n && data.node_contacts[static_cast<std::size_t>(j)].node == c.node; ++j)
+          touching = touching || data.node_contacts[static_cast<std::size_t>(j)].depth > margin;
+        if (touching) continue;
+        c.engaged = true;
+      }
       c.position += (0.5 * margin) * c.normal;  // towards the node
       if (c.body_b >= 0) c.r_b += (0.5 * margin) * c.normal;
     } else if (in_god_object(device_body, c.body_b)) {  // the god-object's sphere was grown
@@ -208,7 +232,7 @@ void cut_back_node_contacts(const Model& scene, Data& data, std::span<const int>
       c.r_b -= (0.5 * margin) * c.normal;
     }
     double& deepest = data.nets[static_cast<std::size_t>(net)].max_penetration;
-    deepest = std::max(deepest, c.depth);
+    deepest = std::max(deepest, c.depth);  // a look-ahead contact's depth ≤ 0 counts nothing
     data.node_contacts[static_cast<std::size_t>(kept++)] = c;
   }
   data.num_node_contacts = kept;

@@ -68,6 +68,7 @@ struct NodeContactSink {
       c.r_b.setZero();
     c.normal_velocity = 0.0;
     c.active = false;
+    c.engaged = false;
     c.weight_normal = 0.0;
     c.weight_isotropic = 0.0;
   }

@@ -378,7 +378,26 @@ void compute_net_forces(const Model& model, Data& data) noexcept {
       }
     }
     ct.stiffness = mp.stiffness;
-    const ContactForceResult r = contact_penalty_force(ct.normal, ct.depth, v_rel, mp);
+    ContactForceResult r = contact_penalty_force(ct.normal, ct.depth, v_rel, mp);
+    if (ct.engaged && !r.active) {
+      // The look-ahead (NodeContact::engaged): the node alone over the step, implicit, with its
+      // tie (the component moving at its twist) and its force at the step's start.
+      const NetModel& net = model.nets[static_cast<std::size_t>(model.node_net[i])];
+      const BodyState& body = data.bodies[static_cast<std::size_t>(net.body)];
+      const Vec3 anchor_velocity = body.linear_velocity + body.angular_velocity.cross(s.lever[i]);
+      const double h = model.dt;
+      const Vec3 dv = h * (s.force[i] - h * net.tie_stiffness * (data.nodes[i].velocity - anchor_velocity)) /
+                      (model.node_mass[i] + h * net.tie_damping + h * h * net.tie_stiffness);
+      ct.engaged = ct.depth - h * ct.normal.dot(v_rel + dv) > 0.0;
+      if (ct.engaged) {  // below the surface at the step's end: k d − c v_n, unclamped
+        r.normal_force = mp.stiffness * ct.depth - mp.damping * ct.normal.dot(v_rel);
+        r.force = r.normal_force * ct.normal;
+        r.active = true;
+        r.stiffness = mp.stiffness;
+        r.damping = mp.damping;
+        r.friction = 0.0;
+      }
+    }
     ct.force = r.force;
     ct.active = r.active;
     if (r.active) {  // the law's Jacobian coefficients (k_eff, c, μ for the linear law)

@@ -78,17 +78,32 @@ void grow_god_object_nodes(std::span<const int> device_body, double margin, Mode
 void build_node_planes(const Model& scene, const Data& data, std::span<const int> device_body,
                        double margin, NodePlaneScratch scratch, ContactPlaneSet& out) noexcept;
 
+/// The look-ahead's reach (m): a node of a net on the god-object within this distance of a
+/// surface, touching nothing else, keeps its contact (depth ≤ 0) as a look-ahead candidate
+/// (NodeContact::engaged). An engaged contact that the node does not reach pulls it by k d₁
+/// (d₁ its depth at the step's end, ≥ −0.1 mm: 2 N at 2·10⁴ N/m); a wider reach let the
+/// endobag's bag be pulled into its sphere-set organs (docs/multirate.md, "Deformable
+/// god-objects").
+inline constexpr double kLookAheadGap = 1e-4;
+
 /// Cuts the node contacts of nets on the god-object in `data` back to the true node spheres
-/// (depth − δ, the middle of the overlap δ/2 towards the node; a contact left without depth is
-/// dropped), drops those with a body of the god-object (the scene-loop model has not the
-/// god-object's joints, so a net on one of its bodies is no longer in the same articulation as
-/// the others, with which it never collides in the scene: ArticulationTopology::body_tree);
+/// (depth − δ, the middle of the overlap δ/2 towards the node), marks the look-ahead
+/// candidates when `look_ahead` (NodeContact::engaged: every contact left with depth > 0, and
+/// one with depth in (−kLookAheadGap, 0] of a node with no other contact; the rest is dropped;
+/// without `look_ahead` a contact left without depth is dropped), drops those with
+/// a body of the god-object (the scene-loop model has not the god-object's joints, so a net on
+/// one of its bodies is no longer in the same articulation as the others, with which it never
+/// collides in the scene: ArticulationTopology::body_tree);
 /// cuts the contacts of the other nets with the god-object's grown spheres back the same way
 /// (the middle δ/2 towards the god-object); and re-measures every net's
 /// NetOutput::max_penetration from the contacts kept (contacts beyond kMaxNodeContacts no
 /// longer counted) and data.max_penetration (`body_deepest`: the deepest body contact). No
 /// allocation.
 void cut_back_node_contacts(const Model& scene, Data& data, std::span<const int> device_body,
-                            double margin, double body_deepest) noexcept;
+                            double margin, double body_deepest, bool look_ahead) noexcept;
+
+/// Drops the node contacts without depth from `data` (the look-ahead's candidates, once the
+/// scene step is done: not contacts). No allocation.
+void drop_look_ahead_contacts(Data& data) noexcept;
 
 }  // namespace numen::core::detail

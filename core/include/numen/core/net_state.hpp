@@ -31,7 +31,17 @@ struct NodeContact {
   Vec3 force = Vec3::Zero();     ///< Penalty force on the node (N, world); −force on body_b.
   Vec3 r_b = Vec3::Zero();       ///< Contact point − COM of body_b (m, world); 0 when static.
   double normal_velocity = 0.0;  ///< v_n = n · (v_node − v_b(point)) at the step's start (m/s).
-  bool active = false;           ///< f_n > 0.
+  bool active = false;           ///< f_n > 0 (or `engaged`).
+  /// A look-ahead candidate: set by the caller of the step (the multirate scene loop,
+  /// docs/multirate.md, "Deformable god-objects"), never by detect_node_contacts(). Where the
+  /// law is inactive at the step's start (the node separating, or depth ≤ 0),
+  /// compute_net_forces() predicts the node's depth at the step's end, alone, implicit, with
+  /// its tie and its force at the start: d − h n · v₁, v₁ = v + h (F − h k_tie (v − v_anchor))
+  /// / (m + h γ_tie + h² k_tie). Below the surface there, the law acts unclamped, f_n = k d − c
+  /// v_n whatever its sign, with k and c in the implicit step (no friction): the step holds a
+  /// node that reaches the surface within it instead of finding it deep at the next step. Else
+  /// the contact stays inactive and the flag is cleared.
+  bool engaged = false;
   /// k_eff (N/m): the material pair's stiffness, clamped by the contact time-constant floor
   /// (SolverSettings::node_contact_max_omega_dt) on the node's mass and the body's effective mass.
   /// When active: the law's ∂f_n/∂d (contact_penalty_force(): k_eff for the linear law), the
