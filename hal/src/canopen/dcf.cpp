@@ -8,13 +8,15 @@
 
 #include <algorithm>
 #include <cctype>
-#include <charconv>
 #include <cerrno>
+#include <charconv>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <map>
 #include <sstream>
+
+#include "../hex_text.hpp"
 
 namespace numen::hal {
 namespace {
@@ -32,11 +34,7 @@ std::string trim(std::string_view s) {
   return std::string(s.substr(b, e - b + 1));
 }
 
-std::string hex(std::uint64_t v, int digits) {
-  char buf[24];
-  std::snprintf(buf, sizeof buf, "0x%0*llX", digits, static_cast<unsigned long long>(v));
-  return buf;
-}
+using detail::hex_digits;
 
 struct Key {
   std::string name;  // as written
@@ -212,7 +210,7 @@ class Reader {
     std::string why;
     if (!number(k->value, v, why)) fail(sec, key, why);
     if (v < 0 || v > static_cast<__int128>(max))
-      fail(sec, key, "'" + trim(k->value) + "' is outside [0, " + hex(max, 1) + "]");
+      fail(sec, key, "'" + trim(k->value) + "' is outside [0, " + hex_digits(max, 1) + "]");
     return static_cast<std::uint64_t>(v);
   }
 
@@ -244,11 +242,13 @@ class Reader {
       hi = (static_cast<__int128>(1) << bits) - 1;
     }
     if (v < lo || v > hi) {
-      fail(sec, key, "'" + t + "' does not fit the data type " + hex(type, 4) + " (range " +
-                         std::to_string(static_cast<long long>(lo)) + " to " +
-                         (bits == 64 && hi > static_cast<__int128>(INT64_MAX)
-                              ? std::string("18446744073709551615")
-                              : std::to_string(static_cast<long long>(hi))) + ")");
+      fail(sec, key,
+           "'" + t + "' does not fit the data type " + hex_digits(type, 4) + " (range " +
+               std::to_string(static_cast<long long>(lo)) + " to " +
+               (bits == 64 && hi > static_cast<__int128>(INT64_MAX)
+                    ? std::string("18446744073709551615")
+                    : std::to_string(static_cast<long long>(hi))) +
+               ")");
     }
     const std::uint64_t mask = bits == 64 ? ~std::uint64_t{0} : ((std::uint64_t{1} << bits) - 1);
     return static_cast<std::uint64_t>(v) & mask;
@@ -265,8 +265,10 @@ class Reader {
                          e.data_type == CanopenDataType::kUnicodeString ||
                          e.data_type == CanopenDataType::kDomain;
     if (!numeric && !textual)
-      fail(sec, "DataType", hex(e.data_type, 4) + " is not a data type numen reads (BOOLEAN, "
-                            "INTEGERn, UNSIGNEDn, REAL32, strings, DOMAIN)");
+      fail(sec, "DataType",
+           hex_digits(e.data_type, 4) +
+               " is not a data type numen reads (BOOLEAN, "
+               "INTEGERn, UNSIGNEDn, REAL32, strings, DOMAIN)");
     const std::string access = lower(text(sec, "AccessType"));
     if (access == "ro") e.access = DcfAccess::kReadOnly;
     else if (access == "wo") e.access = DcfAccess::kWriteOnly;
@@ -361,8 +363,9 @@ Dcf build(ParseState& s, const std::string& name, std::uint8_t node_id) {
   for (const auto& [index, ss] : subs) {
     if (objects.count(index) == 0) {
       const Section& first = *ss.begin()->second;
-      throw DcfError(DcfLocation{s.file, first.line, first.name, ""},
-                     "sub-index section without its object section [" + hex(index, 4).substr(2) + "]");
+      throw DcfError(
+          DcfLocation{s.file, first.line, first.name, ""},
+          "sub-index section without its object section [" + hex_digits(index, 4).substr(2) + "]");
     }
   }
   for (const auto& [index, sec] : objects) {
@@ -389,7 +392,8 @@ Dcf build(ParseState& s, const std::string& name, std::uint8_t node_id) {
         dcf.entries.push_back(r.entry(*subsec, SdoAddress{index, static_cast<std::uint8_t>(sub)}));
       }
     } else {
-      r.fail(*sec, "ObjectType", hex(type, 1) + " is not 0x7 (VAR), 0x8 (ARRAY) or 0x9 (RECORD)");
+      r.fail(*sec, "ObjectType",
+             hex_digits(type, 1) + " is not 0x7 (VAR), 0x8 (ARRAY) or 0x9 (RECORD)");
     }
   }
   // Every listed object has its section.
@@ -401,8 +405,9 @@ Dcf build(ParseState& s, const std::string& name, std::uint8_t node_id) {
       const std::string key = std::to_string(i);
       const auto index = static_cast<std::uint16_t>(r.unsigned_key(*sec, key, 0xFFFF, 0, true));
       if (objects.count(index) == 0)
-        r.fail(*sec, key, "object " + hex(index, 4) + " is listed but has no [" +
-                              hex(index, 4).substr(2) + "] section");
+        r.fail(*sec, key,
+               "object " + hex_digits(index, 4) + " is listed but has no [" +
+                   hex_digits(index, 4).substr(2) + "] section");
     }
   }
   std::sort(dcf.entries.begin(), dcf.entries.end(), [](const DcfEntry& a, const DcfEntry& b) {

@@ -7,6 +7,8 @@
 #include <cstdio>
 #include <set>
 
+#include "../hex_text.hpp"
+
 namespace numen::hal {
 namespace {
 
@@ -19,10 +21,9 @@ bool is_pdo_mapping(std::uint16_t index) noexcept {
   return (index >= 0x1600 && index <= 0x17FF) || (index >= 0x1A00 && index <= 0x1BFF);
 }
 
-std::string hex(std::uint64_t v, std::size_t bytes) {
-  char buf[24];
-  std::snprintf(buf, sizeof buf, "0x%0*llX", static_cast<int>(2 * bytes), static_cast<unsigned long long>(v));
-  return buf;
+// The value in hex, two digits per byte of its object.
+std::string hex_of_size(std::uint64_t v, std::size_t bytes) {
+  return detail::hex_digits(v, static_cast<int>(2 * bytes));
 }
 
 }  // namespace
@@ -79,8 +80,11 @@ DcfConfiguration::DcfConfiguration(std::shared_ptr<const Dcf> dcf) : dcf_(std::m
     if (has_count) n = entries[static_cast<std::size_t>(count)].value;
     if (has_count || any_mapping) {
       if (count < 0) {
-        throw DcfError(entries[static_cast<std::size_t>(index_of({map, 1}) >= 0 ? index_of({map, 1}) : 0)].location,
-                       "mapping entries without the mapping count [" + hex(map, 2).substr(2) + "sub0]");
+        throw DcfError(
+            entries[static_cast<std::size_t>(index_of({map, 1}) >= 0 ? index_of({map, 1}) : 0)]
+                .location,
+            "mapping entries without the mapping count [" + hex_of_size(map, 2).substr(2) +
+                "sub0]");
       }
       const auto c = static_cast<std::size_t>(count);
       step(ConfigurationStep::Kind::kWrite, c, 0);
@@ -204,9 +208,11 @@ std::string NodeConfigurator::error() const {
   std::string where = to_string(e.location) + ": node " + std::to_string(node_id()) + " ";
   if (abort_code_ != 0) {
     const bool write = s.kind == ConfigurationStep::Kind::kWrite;
-    std::string what = write ? "writing " + to_string(s.address) + " = " + hex(s.value, s.size)
-                             : "reading " + to_string(s.address);
-    const std::string name = std::string(sdo_abort_name(abort_code_)) + " (" + hex(abort_code_, 4) + ")";
+    std::string what =
+        write ? "writing " + to_string(s.address) + " = " + hex_of_size(s.value, s.size)
+              : "reading " + to_string(s.address);
+    const std::string name =
+        std::string(sdo_abort_name(abort_code_)) + " (" + hex_of_size(abort_code_, 4) + ")";
     return where + (by_server_ ? "refused " + what + ": " + name
                                : what + " failed: " + name + (abort_code_ == SdoAbort::kTimeout
                                                                   ? ", the node did not answer (" +
@@ -218,8 +224,8 @@ std::string NodeConfigurator::error() const {
     return where + to_string(s.address) + " read back " + std::to_string(read_size_) +
            " bytes, the DCF's data type has " + std::to_string(s.size);
   }
-  return where + to_string(s.address) + " read back " + hex(read_value_, s.size) +
-         ", the DCF configures " + hex(s.value, s.size);
+  return where + to_string(s.address) + " read back " + hex_of_size(read_value_, s.size) +
+         ", the DCF configures " + hex_of_size(s.value, s.size);
 }
 
 }  // namespace numen::hal

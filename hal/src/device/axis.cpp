@@ -12,6 +12,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "../hex_text.hpp"
+
 namespace numen::hal {
 namespace {
 
@@ -21,11 +23,7 @@ constexpr double kPi = std::numbers::pi;
   throw std::invalid_argument(std::string(where) + ": " + field + " " + what);
 }
 
-std::string hex(std::uint32_t id) {
-  char buf[16];
-  std::snprintf(buf, sizeof buf, "0x%03X", static_cast<unsigned>(id));
-  return buf;
-}
+using detail::hex_cob_id;
 
 std::string num(double v) {
   char buf[64];
@@ -89,12 +87,12 @@ void validate_axis(const AxisConfig& a, std::string_view where) {
   if (!cob_ok(a.encoder_cob_id)) {
     fail(where, "encoder_cob_id",
          "must be an 11-bit COB-ID in 0x001-0x7FF other than 0x080 (SYNC) (got " +
-             hex(a.encoder_cob_id) + ")");
+             hex_cob_id(a.encoder_cob_id) + ")");
   }
   if (a.drive_cob_id != 0 && !cob_ok(a.drive_cob_id)) {
     fail(where, "drive_cob_id",
          "must be 0 (no motor) or an 11-bit COB-ID in 0x001-0x7FF other than 0x080 (got " +
-             hex(a.drive_cob_id) + ")");
+             hex_cob_id(a.drive_cob_id) + ")");
   }
   if (a.drive_cob_id != 0 && a.drive_cob_id == a.encoder_cob_id) {
     fail(where, "drive_cob_id", "must differ from encoder_cob_id");

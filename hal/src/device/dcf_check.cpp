@@ -5,6 +5,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "../hex_text.hpp"
 #include "numen/hal/device/device_config.hpp"
 
 namespace numen::hal {
@@ -12,11 +13,7 @@ namespace {
 
 constexpr std::uint32_t kPdoInvalidBit = 0x80000000u;
 
-std::string hex(std::uint64_t v, int digits) {
-  char buf[24];
-  std::snprintf(buf, sizeof buf, "0x%0*llX", digits, static_cast<unsigned long long>(v));
-  return buf;
-}
+using detail::hex_digits;
 
 /// The entry's value (ParameterValue, else DefaultValue), or false if it has none.
 bool value_of(const Dcf& dcf, SdoAddress a, std::uint64_t& v, const DcfEntry** entry) {
@@ -45,9 +42,9 @@ void check_pdo(const Dcf& dcf, std::uint16_t first_comm, std::uint32_t cob_id,
     std::uint64_t n = 0;
     const DcfEntry* count = nullptr;
     if (!value_of(dcf, {map, 0}, n, &count)) {
-      fail_file(dcf, std::string(rx ? "RPDO" : "TPDO") + " " + hex(cob_id, 3) + " ([" +
-                         hex(comm, 4).substr(2) + "]) has no mapping count [" + hex(map, 4).substr(2) +
-                         "sub0] with a value (" + what + ")");
+      fail_file(dcf, std::string(rx ? "RPDO" : "TPDO") + " " + hex_digits(cob_id, 3) + " ([" +
+                         hex_digits(comm, 4).substr(2) + "]) has no mapping count [" +
+                         hex_digits(map, 4).substr(2) + "sub0] with a value (" + what + ")");
     }
     if (n != mapping.size()) {
       throw DcfError(count->location, "maps " + std::to_string(n) + " objects, " + what + " maps " +
@@ -58,19 +55,19 @@ void check_pdo(const Dcf& dcf, std::uint16_t first_comm, std::uint32_t cob_id,
       const DcfEntry* e = nullptr;
       const auto sub = static_cast<std::uint8_t>(i + 1);
       if (!value_of(dcf, {map, sub}, v, &e)) {
-        fail_file(dcf, "mapping entry [" + hex(map, 4).substr(2) + "sub" + std::to_string(sub) +
-                           "] has no value (" + what + ")");
+        fail_file(dcf, "mapping entry [" + hex_digits(map, 4).substr(2) + "sub" +
+                           std::to_string(sub) + "] has no value (" + what + ")");
       }
       if (v != mapping_entry_value(mapping[i])) {
-        throw DcfError(e->location, "maps " + hex(v, 8) + ", " + what + " maps " +
-                                        hex(mapping_entry_value(mapping[i]), 8) + " as entry " +
-                                        std::to_string(sub));
+        throw DcfError(e->location, "maps " + hex_digits(v, 8) + ", " + what + " maps " +
+                                        hex_digits(mapping_entry_value(mapping[i]), 8) +
+                                        " as entry " + std::to_string(sub));
       }
     }
     return;
   }
   fail_file(dcf, std::string("no enabled ") + (rx ? "RPDO" : "TPDO") + " with COB-ID " +
-                     hex(cob_id, 3) + " (" + what + ")");
+                     hex_digits(cob_id, 3) + " (" + what + ")");
 }
 
 }  // namespace

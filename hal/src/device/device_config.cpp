@@ -10,6 +10,7 @@
 #include <string>
 #include <string_view>
 
+#include "../hex_text.hpp"
 #include "geometry_check.hpp"
 #include "numen/hal/canopen/canopen.hpp"
 #include "numen/hal/canopen/emcy.hpp"
@@ -51,11 +52,7 @@ void check_node_range(std::uint8_t first, int count, const char* what) {
   }
 }
 
-std::string hex(std::uint32_t v) {
-  char buf[16];
-  std::snprintf(buf, sizeof buf, "0x%03X", v);
-  return buf;
-}
+using detail::hex_cob_id;
 
 // A COB-ID a PDO must not use in the managed stack: NMT, SYNC / EMCY, heartbeat.
 bool reserved_cob_id(std::uint32_t id) noexcept {
@@ -177,7 +174,7 @@ void validate_canopen(const DeviceConfig& c) {
         throw std::invalid_argument(where +
                                     ": drive_tpdo_cob_id must be an 11-bit COB-ID on a "
                                     "driven axis (got " +
-                                    hex(x.drive_tpdo_cob_id) + ")");
+                                    hex_cob_id(x.drive_tpdo_cob_id) + ")");
       }
       check_mapping(
           x.drive_rpdo, where + ".drive_rpdo", {PdoObject::kControlword, PdoObject::kTargetTorque},
@@ -191,19 +188,19 @@ void validate_canopen(const DeviceConfig& c) {
       ids.push_back(x.drive_tpdo_cob_id);
       owners.push_back(where + " drive TPDO");
     } else if (x.drive_tpdo_cob_id != 0) {
-      throw std::invalid_argument(where + ": drive_tpdo_cob_id " + hex(x.drive_tpdo_cob_id) +
+      throw std::invalid_argument(where + ": drive_tpdo_cob_id " + hex_cob_id(x.drive_tpdo_cob_id) +
                                   " on an axis without a drive (drive_cob_id = 0)");
     }
   }
   for (std::size_t i = 0; i < ids.size(); ++i) {
     if (reserved_cob_id(ids[i])) {
-      throw std::invalid_argument(owners[i] + ": COB-ID " + hex(ids[i]) +
+      throw std::invalid_argument(owners[i] + ": COB-ID " + hex_cob_id(ids[i]) +
                                   " is reserved in the managed stack (NMT 0x000, SYNC/EMCY "
                                   "0x080-0x0FF, heartbeat 0x700-0x77F)");
     }
     for (std::size_t j = 0; j < i; ++j) {
       if (ids[i] == ids[j]) {
-        throw std::invalid_argument(owners[i] + ": COB-ID " + hex(ids[i]) +
+        throw std::invalid_argument(owners[i] + ": COB-ID " + hex_cob_id(ids[i]) +
                                     " is already used by the " + owners[j]);
       }
     }
