@@ -31,9 +31,9 @@ namespace {
 
 using numen::test::kPi;
 
-constexpr std::array<JointType, 6> kTypes = {JointType::kFixed,     JointType::kRevolute,
-                                             JointType::kPrismatic, JointType::kCylindrical,
-                                             JointType::kSpherical, JointType::kTrocar};
+constexpr std::array<JointType, 6> kJointTypes = {JointType::kFixed,     JointType::kRevolute,
+                                                  JointType::kPrismatic, JointType::kCylindrical,
+                                                  JointType::kSpherical, JointType::kTrocar};
 
 /// A joint type with its prescribed flag: every variant of the catalogue.
 struct Variant {
@@ -250,7 +250,7 @@ TEST(Joint, RowCountsOfTheCatalogue) {
   }
   EXPECT_TRUE(core::joint_can_be_prescribed(JointType::kRevolute));
   EXPECT_TRUE(core::joint_can_be_prescribed(JointType::kPrismatic));
-  for (JointType t : kTypes) EXPECT_LE(core::joint_row_count(t, false), core::kMaxJointRows);
+  for (JointType t : kJointTypes) EXPECT_LE(core::joint_row_count(t, false), core::kMaxJointRows);
 }
 
 TEST(Joint, AngularRowsFollowTheCatalogueOrder) {

@@ -29,6 +29,9 @@
 
 namespace numen::core {
 namespace {
+// Its own namespace: collision_test.cpp has helpers of the same names (Ref, Key,
+// brute_force, random_scene) and the test programs compile as unity builds.
+namespace net_collision_test {
 
 /// A model with `materials` materials and, as body 0, the rigid component of
 /// the nets (no spheres) at the origin.
@@ -646,5 +649,6 @@ TEST(NetCollisionRealTime, DeterministicWhateverTheScratchHistory) {
   EXPECT_GT(with_contacts, 20);
 }
 
+}  // namespace net_collision_test
 }  // namespace
 }  // namespace numen::core

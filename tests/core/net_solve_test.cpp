@@ -233,21 +233,22 @@ Snapshot staged_solve(const core::Model& m, core::Data& d, bool* converged,
 /// integrator.hpp, computed from the snapshot only (no solver scratch):
 /// numen::test::assemble_net_system() (the formulas, shared with the peer
 /// benchmark), densified. Rows of imposed bodies are identity with b = 0.
-struct Dense {
+struct DenseSystem {
   MatrixXd a;
   VectorXd b;
   std::vector<double> spring_alpha, spring_beta;  // for a cross-check of SweepSpring
 };
 
-Dense dense_system(const core::Model& m, const Snapshot& s) {
+DenseSystem dense_system(const core::Model& m, const Snapshot& s) {
   numen::test::NetSystem sys = numen::test::assemble_net_system(m, s);
-  return Dense{MatrixXd(sys.a), std::move(sys.b), std::move(sys.spring_alpha),
-               std::move(sys.spring_beta)};
+  return DenseSystem{MatrixXd(sys.a), std::move(sys.b), std::move(sys.spring_alpha),
+                     std::move(sys.spring_beta)};
 }
 
 /// Checks shared by the three variants: the solver's spring and contact
 /// weights, the body blocks of A (SolverScratch::block), convergence.
-void check_scratch(const core::Model& m, const core::Data& d, const Dense& ref, bool converged) {
+void check_scratch(const core::Model& m, const core::Data& d, const DenseSystem& ref,
+                   bool converged) {
   EXPECT_TRUE(converged);
   EXPECT_GT(d.solver_iterations, 0);
   EXPECT_LE(d.solver_residual, m.solver.tolerance);
@@ -291,7 +292,7 @@ TEST(NetSolve, FreeRigidComponentMatchesTheDenseSolve) {
   d.target_twist = core::Twist{Vec3(0.1, 0.0, 0.0), Vec3(0.0, 0.3, 0.0)};
   bool converged = false;
   const Snapshot s = staged_solve(m, d, &converged);
-  const Dense ref = dense_system(m, s);
+  const DenseSystem ref = dense_system(m, s);
   check_scratch(m, d, ref, converged);
   EXPECT_LT((ref.a - ref.a.transpose()).norm(), 1e-14 * ref.a.norm());
   const Eigen::LLT<MatrixXd> llt(ref.a);
@@ -323,7 +324,7 @@ TEST(NetSolve, WarmStartedSolveAfterRealStepsMatchesTheDenseSolve) {
   EXPECT_TRUE(any_warm);
   bool converged = false;
   const Snapshot s = staged_solve(m, d, &converged);
-  const Dense ref = dense_system(m, s);
+  const DenseSystem ref = dense_system(m, s);
   check_scratch(m, d, ref, converged);
   const VectorXd x_ref = ref.a.llt().solve(ref.b);
   const double err = (numen::test::net_system_unknowns(m, d) - x_ref).norm() / x_ref.norm();
@@ -344,7 +345,7 @@ TEST(NetSolve, JointedRigidComponentMatchesTheDenseKktSolve) {
   numen::test::perturb_nodes(d, 3e-3, 0.05);
   bool converged = false;
   const Snapshot s = staged_solve(m, d, &converged);
-  const Dense ref = dense_system(m, s);
+  const DenseSystem ref = dense_system(m, s);
   check_scratch(m, d, ref, converged);
   // KKT: [A Gᵀ; G 0] [Δ; y] = [b; c] with G = the joint rows at the step's
   // start (Data::articulation.rows) and c their Baumgarte right-hand side.
@@ -396,7 +397,7 @@ TEST(NetSolve, ImposedRigidComponentHasNoUnknownAndTheNodesMatchTheDenseSolve) {
   EXPECT_FALSE(d.scratch->solver.in_solve[0]);
   EXPECT_TRUE(d.scratch->solver.delta[0].isZero(0.0)) << d.scratch->solver.delta[0].transpose();
   EXPECT_EQ(s.bodies[0].position, d.target.position);
-  const Dense ref = dense_system(m, s);
+  const DenseSystem ref = dense_system(m, s);
   check_scratch(m, d, ref, converged);
   const VectorXd x_ref = ref.a.llt().solve(ref.b);
   const VectorXd x = numen::test::net_system_unknowns(m, d);
@@ -440,7 +441,7 @@ TEST(NetSolve, SeveralNetsOnOneBodyAndOnTheProbeMatchTheDenseSolve) {
   d.target = core::Pose{Vec3(0.02, 0.0, 0.12), rot(0.5, Vec3(1, 2, 2.5))};
   bool converged = false;
   const Snapshot s = staged_solve(m, d, &converged);
-  const Dense ref = dense_system(m, s);
+  const DenseSystem ref = dense_system(m, s);
   check_scratch(m, d, ref, converged);
   const VectorXd x_ref = ref.a.llt().solve(ref.b);
   const double err = (numen::test::net_system_unknowns(m, d) - x_ref).norm() / x_ref.norm();
@@ -509,7 +510,7 @@ struct Staged {
   core::Model m;
   core::Data d;
   Snapshot snap;
-  Dense ref;
+  DenseSystem ref;
   bool converged = false;
 };
 

@@ -389,7 +389,7 @@ TEST(StepDeformable, OutputsOfARejectedStepDescribeTheRestoredNet) {
 
 namespace {
 
-struct FirstOrderRun {
+struct PressingRun {
   double final_error = 0.0, max_stretch = 0.0;
   int nonfinite_steps = 0, first_bad = -1;
   std::uint32_t bad_status = 0;
@@ -398,7 +398,7 @@ struct FirstOrderRun {
 /// kFirstOrder (massless rigid component, the paper's footnote) carrying the
 /// pressing scene's net (no obstacles, no gravity) to a target 10 cm away
 /// along a 0.5 m/s ramp.
-FirstOrderRun first_order_run(core::Integrator integ, double gamma_t, double gamma_r) {
+PressingRun first_order_run(core::Integrator integ, double gamma_t, double gamma_r) {
   core::Model m = pressing_scene(integ, false);
   m.coupling_mode = core::CouplingMode::kFirstOrder;
   m.gravity = Vec3::Zero();
@@ -407,7 +407,7 @@ FirstOrderRun first_order_run(core::Integrator integ, double gamma_t, double gam
   EXPECT_EQ(core::finalize_model(m), "");
   core::Data d = core::make_data(m);
   const Vec3 home = d.target.position;
-  FirstOrderRun r;
+  PressingRun r;
   const int steps = static_cast<int>(0.5 / m.dt);
   for (int k = 0; k < steps; ++k) {
     d.target.position = home + Vec3(0.1 * std::min(1.0, k * m.dt / 0.2), 0.0, 0.0);
@@ -433,7 +433,7 @@ TEST(StepDeformable, FirstOrderCouplingCarriesTheNet) {
   const double gamma_tie = core::damping_from_ratio(0.7, 0.1 / 42, 300.0);
   const double sum_t = 42 * gamma_tie, sum_r = sum_t * 2.0 / 3.0 * 0.05 * 0.05;
   // Implicit: any first-order gains, here weaker than the ties' damping.
-  const FirstOrderRun imp = first_order_run(core::Integrator::kLinearlyImplicitEuler, 20.0, 0.05);
+  const PressingRun imp = first_order_run(core::Integrator::kLinearlyImplicitEuler, 20.0, 0.05);
   std::printf("[first order implicit   γ_t 20  γ_r 0.05] final error %.2e m, max tie stretch %.2e m, non-finite %d\n",
               imp.final_error, imp.max_stretch, imp.nonfinite_steps);
   EXPECT_EQ(imp.first_bad, -1) << imp.bad_status;
@@ -443,14 +443,15 @@ TEST(StepDeformable, FirstOrderCouplingCarriesTheNet) {
   // reaction explicitly, and that reaction holds −Γ v0: v1 ∝ −(Γ/γ) v0 is
   // unstable unless γ_t > Γ_t and γ_r > Γ_r (integrator.hpp states only
   // h k/γ < 2). With twice those sums it is bounded...
-  const FirstOrderRun ok = first_order_run(core::Integrator::kSymplecticEuler, 2.0 * sum_t, 2.0 * sum_r);
+  const PressingRun ok =
+      first_order_run(core::Integrator::kSymplecticEuler, 2.0 * sum_t, 2.0 * sum_r);
   std::printf("[first order symplectic γ_t %.0f γ_r %.3f] final error %.2e m, max tie stretch %.2e m, non-finite %d\n",
               2.0 * sum_t, 2.0 * sum_r, ok.final_error, ok.max_stretch, ok.nonfinite_steps);
   EXPECT_EQ(ok.first_bad, -1) << ok.bad_status;
   EXPECT_LT(ok.final_error, 1e-3);
   EXPECT_LT(ok.max_stretch, 2e-3);
   // ... with the implicit run's gains it diverges (rejected steps, rolled back).
-  const FirstOrderRun bad = first_order_run(core::Integrator::kSymplecticEuler, 20.0, 0.05);
+  const PressingRun bad = first_order_run(core::Integrator::kSymplecticEuler, 20.0, 0.05);
   std::printf("[first order symplectic γ_t 20  γ_r 0.05] final error %.2e m, max tie stretch %.2e m, non-finite %d "
               "(first bad step %d)\n",
               bad.final_error, bad.max_stretch, bad.nonfinite_steps, bad.first_bad);

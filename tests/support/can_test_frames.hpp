@@ -1,14 +1,16 @@
 #pragma once
 /// @file can_test_frames.hpp
 /// CAN frames for the SocketCAN tests (host: tests/hal/socketcan_bus_test.cpp; guest:
-/// tests/hil/socketcan_bus_hil_test.cpp): a data frame with a seeded payload, a controller
-/// error report, a field-by-field comparison and the CLOCK_MONOTONIC time. Header-only.
+/// tests/hil/socketcan_bus_hil_test.cpp; the CANopen tests): a data frame with a seeded or a
+/// given payload, a controller error report, a field-by-field comparison and the
+/// CLOCK_MONOTONIC time. Header-only.
 
 #include <gtest/gtest.h>
 #include <linux/can/error.h>
 #include <time.h>
 
 #include <cstdint>
+#include <initializer_list>
 
 #include "numen/hal/transport/can_frame.hpp"
 
@@ -32,6 +34,16 @@ inline hal::CanFrame make(std::uint32_t id, std::uint8_t flags, std::uint8_t len
   if ((flags & hal::CanFlag::kRemote) == 0) {
     for (std::uint8_t i = 0; i < len; ++i) f.data[i] = static_cast<std::uint8_t>(seed + 7 * i);
   }
+  return f;
+}
+
+/// A data frame `id` with the payload `bytes` (at most 8), stamped `t` (ns).
+inline hal::CanFrame raw_frame(std::uint32_t id, std::initializer_list<std::uint8_t> bytes,
+                               std::int64_t t = 0) {
+  hal::CanFrame f;
+  f.id = id;
+  f.timestamp_ns = t;
+  for (std::uint8_t b : bytes) f.data[f.len++] = b;
   return f;
 }
 

@@ -33,7 +33,7 @@ using numen::test::kMs;
 constexpr std::int64_t kLatency = 100'000;
 constexpr std::int64_t kPhase = 250'000;
 
-DeviceConfig config() {
+DeviceConfig master_config() {
   DeviceConfig c = numen::hal::make_default_trocar_config(1);
   c.control_period_s = 1e-3;
   return c;
@@ -45,8 +45,9 @@ numen::hal::SimBusSettings bus_settings() {
   return s;
 }
 
-struct Rig {
-  explicit Rig(const DeviceConfig& c = config()) : cfg(c), emulator(c), master(c, kMs) {}
+struct MasterRig {
+  explicit MasterRig(const DeviceConfig& c = master_config())
+      : cfg(c), emulator(c), master(c, kMs) {}
   DeviceConfig cfg;
   SimBus bus{bus_settings()};
   DeviceEmulator emulator;
@@ -72,7 +73,7 @@ struct Rig {
 };
 
 TEST(CanopenMaster, StartUpPhasesInExactPeriods) {
-  Rig rig;
+  MasterRig rig;
   EXPECT_EQ(rig.master.startup().phase, StartupPhase::kResetCommunication);
   rig.period();  // 0: reset communication sent, boot-ups read
   EXPECT_EQ(rig.master.startup().phase, StartupPhase::kStartNodes);
@@ -110,7 +111,7 @@ TEST(CanopenMaster, StartUpPhasesInExactPeriods) {
 }
 
 TEST(CanopenMaster, ALostStartCommandIsRepeatedToTheNodes) {
-  Rig rig;
+  MasterRig rig;
   rig.period();
   rig.emulator.kill(true);  // period 1: the start command is lost
   rig.period();
@@ -128,7 +129,7 @@ TEST(CanopenMaster, ABootUpWhileStartingRestartsTheNodeWithoutAFault) {
   // master waits; then node 1 boots again (a late answer to a reset, or a node reset during
   // the start-up). The master starts it again at once and its consumer does not report a
   // reset fault; after the start-up, a boot-up is a fault.
-  Rig rig;
+  MasterRig rig;
   rig.period();
   rig.emulator.kill(true);  // period 1: the start command is lost
   rig.period();
@@ -158,9 +159,9 @@ TEST(CanopenMaster, ABootUpWhileStartingRestartsTheNodeWithoutAFault) {
 }
 
 TEST(CanopenMaster, StartUpFailsAtItsDeadlineNamingTheMissingNode) {
-  DeviceConfig c = config();
+  DeviceConfig c = master_config();
   c.canopen.startup_timeout_ms = 20;
-  Rig rig(c);
+  MasterRig rig(c);
   rig.emulator.kill(true);
   for (int i = 0; i < 25; ++i) rig.period();
   EXPECT_EQ(rig.master.startup().phase, StartupPhase::kFailed);
@@ -175,7 +176,7 @@ TEST(CanopenMaster, StartUpFailsAtItsDeadlineNamingTheMissingNode) {
 }
 
 TEST(CanopenMaster, RoutesFramesAndCountsMalformedOnes) {
-  Rig rig;
+  MasterRig rig;
   CanFrame f;
   // A heartbeat before the node's post-reset boot-up is not given to the monitor.
   numen::hal::encode_heartbeat(1, NmtState::kOperational, 0, f);
@@ -207,7 +208,7 @@ TEST(CanopenMaster, RoutesFramesAndCountsMalformedOnes) {
 // Issue 17 #7: error reports and 29-bit frames whose numbers are a drive TPDO, heartbeat or
 // EMCY COB-ID are not the master's; a CAN FD frame on the drive TPDO's id is malformed.
 TEST(CanopenMaster, ErrorAndExtendedFramesAreNotCanopenTraffic) {
-  Rig rig;
+  MasterRig rig;
   for (std::uint32_t id : {0x281u, 0x701u, 0x082u}) {
     for (std::uint8_t flag : {numen::hal::CanFlag::kErrorFrame, numen::hal::CanFlag::kExtendedId}) {
       CanFrame f;
@@ -232,7 +233,7 @@ TEST(CanopenMaster, ErrorAndExtendedFramesAreNotCanopenTraffic) {
 }
 
 TEST(CanopenMaster, PeriodsDoNotAllocate) {
-  Rig rig;
+  MasterRig rig;
   numen::test::AllocationGuard guard;
   for (int i = 0; i < 50; ++i) rig.period();
   rig.master.request_drives(Cia402Target::kEnabled);
@@ -245,10 +246,10 @@ TEST(CanopenMaster, PeriodsDoNotAllocate) {
 }
 
 TEST(CanopenMaster, ConstructionErrors) {
-  DeviceConfig c = config();
+  DeviceConfig c = master_config();
   c.canopen.managed = false;
   EXPECT_THROW(CanopenMaster(c, kMs), std::invalid_argument);
-  EXPECT_THROW(CanopenMaster(config(), 0), std::invalid_argument);
+  EXPECT_THROW(CanopenMaster(master_config(), 0), std::invalid_argument);
 }
 
 // --- Configuration from DCFs (docs/sdo.md) ---------------------------------------
@@ -260,7 +261,7 @@ std::shared_ptr<const numen::hal::Dcf> shipped_dcf(const char* name, std::uint8_
 
 /// The trainer with the shipped DCFs: drives on nodes 1–3, encoders on 4–5.
 DeviceConfig config_with_dcfs() {
-  DeviceConfig c = config();
+  DeviceConfig c = master_config();
   for (std::size_t i = 0; i < c.axes.size(); ++i) {
     numen::hal::CanopenAxisConfig& x = c.canopen.axes[i];
     x.dcf = shipped_dcf(c.axes[i].has_drive() ? "trocar_drive.dcf" : "encoder.dcf", x.node_id);
@@ -270,7 +271,7 @@ DeviceConfig config_with_dcfs() {
 }
 
 TEST(CanopenMaster, StartUpConfiguresEveryNodeFromItsDcfBeforeStartingIt) {
-  Rig rig(config_with_dcfs());
+  MasterRig rig(config_with_dcfs());
   rig.period();  // 0: reset communication, boot-ups: every node booted → configure
   EXPECT_EQ(rig.master.startup().phase, StartupPhase::kConfigure);
   std::size_t longest = 0;
@@ -307,7 +308,7 @@ TEST(CanopenMaster, StartUpConfiguresEveryNodeFromItsDcfBeforeStartingIt) {
 TEST(CanopenMaster, ADcfTheNodeDisagreesWithStopsTheStartUpWithALocatedError) {
   DeviceConfig c = config_with_dcfs();
   c.canopen.axes[0].dcf = shipped_dcf("encoder.dcf", 1);  // node 1 is a drive, not an encoder
-  Rig rig(c);
+  MasterRig rig(c);
   while (rig.master.startup().phase != StartupPhase::kFailed && rig.k < 500) rig.period();
   ASSERT_EQ(rig.master.startup().phase, StartupPhase::kFailed);
   EXPECT_TRUE(rig.master.startup().configuration_failed);
@@ -325,7 +326,7 @@ TEST(CanopenMaster, ADcfTheNodeDisagreesWithStopsTheStartUpWithALocatedError) {
 }
 
 TEST(CanopenMaster, ANodeThatResetsWhileBeingConfiguredIsConfiguredAgain) {
-  Rig rig(config_with_dcfs());
+  MasterRig rig(config_with_dcfs());
   for (int i = 0; i < 20; ++i) rig.period();
   ASSERT_EQ(rig.master.startup().phase, StartupPhase::kConfigure);
   rig.emulator.power_cycle();  // every node boots again: its configuration is gone
@@ -336,9 +337,9 @@ TEST(CanopenMaster, ANodeThatResetsWhileBeingConfiguredIsConfiguredAgain) {
 }
 
 TEST(CanopenMaster, InLoopSdoReadsOnceOperationalWithoutAllocating) {
-  DeviceConfig c = config();
+  DeviceConfig c = master_config();
   c.canopen.sdo_poll_period_ms = 20;
-  Rig rig(c);
+  MasterRig rig(c);
   ASSERT_NE(rig.master.sdo_poller(), nullptr);
   EXPECT_EQ(rig.master.sdo_poller()->reads().size(), 5u + 3u);  // 0x1001 per node, 0x6041 per drive
   numen::test::AllocationGuard guard;
@@ -360,7 +361,7 @@ TEST(CanopenMaster, InLoopSdoReadsOnceOperationalWithoutAllocating) {
 }
 
 TEST(CanopenMaster, ConfigurationPeriodsDoNotAllocate) {
-  Rig rig(config_with_dcfs());
+  MasterRig rig(config_with_dcfs());
   numen::test::AllocationGuard guard;
   while (!rig.master.operational() && rig.k < 500) rig.period();
   EXPECT_EQ(guard.count(), 0);

@@ -8,18 +8,13 @@
 #include <initializer_list>
 
 #include "alloc_counter.hpp"
+#include "can_test_frames.hpp"
 
 namespace {
 
 using namespace numen::hal;
 
-CanFrame raw(std::uint32_t id, std::initializer_list<std::uint8_t> bytes, std::int64_t t = 0) {
-  CanFrame f;
-  f.id = id;
-  f.timestamp_ns = t;
-  for (std::uint8_t b : bytes) f.data[f.len++] = b;
-  return f;
-}
+using numen::test::raw_frame;
 
 TEST(Emcy, EncodeIsByteExact) {
   EmcyMessage m;
@@ -51,7 +46,8 @@ TEST(Emcy, EncodeIsByteExact) {
 TEST(Emcy, DecodesRealWorldExamples) {
   EmcyMessage m;
   // Heartbeat consumer of node 10 lost its producer: 0x8130, register generic + communication.
-  ASSERT_EQ(decode_emcy(raw(0x08A, {0x30, 0x81, 0x11, 0, 0, 0, 0, 0}), m), EmcyDecodeStatus::kOk);
+  ASSERT_EQ(decode_emcy(raw_frame(0x08A, {0x30, 0x81, 0x11, 0, 0, 0, 0, 0}), m),
+            EmcyDecodeStatus::kOk);
   EXPECT_EQ(m.node_id, 10);
   EXPECT_EQ(m.error_code, 0x8130);
   EXPECT_EQ(m.error_register, 0x11);
@@ -60,7 +56,7 @@ TEST(Emcy, DecodesRealWorldExamples) {
   EXPECT_TRUE(emcy_reports_fault(m));
   // CiA 402 drive on node 3: DC link over-voltage 0x3210, register generic + voltage, with
   // a manufacturer-specific value (e.g. the measured voltage).
-  ASSERT_EQ(decode_emcy(raw(0x083, {0x10, 0x32, 0x05, 0x2C, 0x01, 0x00, 0x00, 0x7E}), m),
+  ASSERT_EQ(decode_emcy(raw_frame(0x083, {0x10, 0x32, 0x05, 0x2C, 0x01, 0x00, 0x00, 0x7E}), m),
             EmcyDecodeStatus::kOk);
   EXPECT_EQ(m.node_id, 3);
   EXPECT_EQ(m.error_code, 0x3210);
@@ -73,14 +69,14 @@ TEST(Emcy, DecodesRealWorldExamples) {
   EXPECT_STREQ(describe_emcy_code(m.error_code), "voltage inside the device");
   EXPECT_TRUE(emcy_reports_fault(m));
   // The same drive clears the error: 0x0000 with register 0 — not a fault.
-  ASSERT_EQ(decode_emcy(raw(0x083, {0, 0, 0, 0, 0, 0, 0, 0}), m), EmcyDecodeStatus::kOk);
+  ASSERT_EQ(decode_emcy(raw_frame(0x083, {0, 0, 0, 0, 0, 0, 0, 0}), m), EmcyDecodeStatus::kOk);
   EXPECT_EQ(m.error_code, 0x0000);
   EXPECT_TRUE(is_error_reset(m.error_code));
   EXPECT_EQ(emcy_error_class(m.error_code), EmcyErrorClass::kErrorReset);
   EXPECT_STREQ(describe_emcy_code(m.error_code), "error reset or no error");
   EXPECT_FALSE(emcy_reports_fault(m));
   // Error reset of one error while another is still active (register still has bits).
-  ASSERT_EQ(decode_emcy(raw(0x083, {0, 0, 0x09, 0, 0, 0, 0, 0}), m), EmcyDecodeStatus::kOk);
+  ASSERT_EQ(decode_emcy(raw_frame(0x083, {0, 0, 0x09, 0, 0, 0, 0, 0}), m), EmcyDecodeStatus::kOk);
   EXPECT_TRUE(is_error_reset(m.error_code));
   EXPECT_TRUE(emcy_reports_fault(m));
   // CiA 402 over-current on the output side, drive temperature.
@@ -91,7 +87,7 @@ TEST(Emcy, DecodesRealWorldExamples) {
 }
 
 TEST(Emcy, DecodeRejections) {
-  const CanFrame good = raw(0x085, {0x10, 0x32, 0x05, 0, 0, 0, 0, 0});
+  const CanFrame good = raw_frame(0x085, {0x10, 0x32, 0x05, 0, 0, 0, 0, 0});
   auto status = [](const CanFrame& f) {
     EmcyMessage m;
     m.node_id = 77;
@@ -115,7 +111,7 @@ TEST(Emcy, DecodeRejections) {
     EXPECT_EQ(status(f), EmcyDecodeStatus::kWrongLength) << int(len);
   }
   // A SYNC with a counter byte at 0x080 is still not an EMCY.
-  EXPECT_EQ(status(raw(0x080, {5})), EmcyDecodeStatus::kWrongId);
+  EXPECT_EQ(status(raw_frame(0x080, {5})), EmcyDecodeStatus::kWrongId);
   for (std::uint8_t flag : {CanFlag::kRemote, CanFlag::kFd}) {
     f = good;
     f.flags = flag;
@@ -257,11 +253,11 @@ TEST(EmcyLog, RingKeepsTheLastK) {
   EXPECT_EQ(log.counters().resets, 1u);
   EXPECT_EQ(log.counters().overwritten, 2u);
   // Malformed and foreign frames are counted (or not) and not recorded.
-  EXPECT_EQ(log.on_frame(raw(0x083, {})), EmcyDecodeStatus::kWrongLength);
-  CanFrame rtr = raw(0x083, {});
+  EXPECT_EQ(log.on_frame(raw_frame(0x083, {})), EmcyDecodeStatus::kWrongLength);
+  CanFrame rtr = raw_frame(0x083, {});
   rtr.flags = CanFlag::kRemote;
   EXPECT_EQ(log.on_frame(rtr), EmcyDecodeStatus::kNotDataFrame);
-  EXPECT_EQ(log.on_frame(raw(0x080, {})), EmcyDecodeStatus::kWrongId);
+  EXPECT_EQ(log.on_frame(raw_frame(0x080, {})), EmcyDecodeStatus::kWrongId);
   EXPECT_EQ(log.counters().wrong_length, 1u);
   EXPECT_EQ(log.counters().not_data, 1u);
   EXPECT_EQ(log.newest()->message.node_id, 6);
@@ -277,11 +273,11 @@ TEST(EmcyLog, RingKeepsTheLastK) {
 TEST(EmcyLog, PerPeriodCallsDoNotAllocate) {
   EmcyLog<> log;
   const CanFrame frames[] = {
-      raw(0x08A, {0x30, 0x81, 0x11, 0, 0, 0, 0, 0}),
-      raw(0x083, {0x10, 0x32, 0x05, 0, 0, 0, 0, 0}),
-      raw(0x083, {0, 0, 0, 0, 0, 0, 0, 0}),
-      raw(0x083, {0x10, 0x32}),
-      raw(0x080, {}),
+      raw_frame(0x08A, {0x30, 0x81, 0x11, 0, 0, 0, 0, 0}),
+      raw_frame(0x083, {0x10, 0x32, 0x05, 0, 0, 0, 0, 0}),
+      raw_frame(0x083, {0, 0, 0, 0, 0, 0, 0, 0}),
+      raw_frame(0x083, {0x10, 0x32}),
+      raw_frame(0x080, {}),
   };
   numen::test::AllocationGuard guard;
   std::size_t text = 0;

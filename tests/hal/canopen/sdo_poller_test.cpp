@@ -18,11 +18,11 @@ using namespace numen::hal;
 
 using numen::test::kMs;
 
-struct Rig {
+struct PollerRig {
   DeviceEmulator emulator{make_default_trocar_config(1)};
   SimBus bus{SimBusSettings{}};
   std::int64_t t = 0;
-  Rig() { emulator.tick(0, bus.device()); }  // boot-ups: pre-operational, SDO allowed
+  PollerRig() { emulator.tick(0, bus.device()); }  // boot-ups: pre-operational, SDO allowed
   void period(SdoPoller& p) {
     t += kMs;
     bus.set_time_ns(t);
@@ -35,7 +35,7 @@ struct Rig {
 };
 
 TEST(SdoPoller, ReadsEachObjectAtItsRateOneTransferPerNode) {
-  Rig rig;
+  PollerRig rig;
   const PeriodicRead reads[] = {{1, {0x1001, 0}, 10}, {1, {0x1018, 2}, 10}, {4, {0x1018, 4}, 5}};
   SdoPoller p(reads, 50 * kMs);
   {
@@ -57,7 +57,7 @@ TEST(SdoPoller, ReadsEachObjectAtItsRateOneTransferPerNode) {
 }
 
 TEST(SdoPoller, LiveStatuswordFollowsTheDrive) {
-  Rig rig;
+  PollerRig rig;
   const PeriodicRead reads[] = {{1, {0x6041, 0}, 1}};
   SdoPoller p(reads, 50 * kMs);
   CanFrame f;
@@ -72,7 +72,7 @@ TEST(SdoPoller, LiveStatuswordFollowsTheDrive) {
 }
 
 TEST(SdoPoller, RefusedAndUnansweredReadsAreCounted) {
-  Rig rig;
+  PollerRig rig;
   const PeriodicRead reads[] = {{4, {0x6041, 0}, 2}, {9, {0x1001, 0}, 100}};  // no drive; no node
   SdoPoller p(reads, 10 * kMs);
   for (int k = 0; k < 30; ++k) rig.period(p);

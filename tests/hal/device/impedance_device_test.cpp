@@ -73,9 +73,10 @@ DeviceConfig trocar_with_soft_start(double soft_start_s) {
   return c;
 }
 
-struct Rig {
-  explicit Rig(double soft_start_s = 0.0) : Rig(trocar_with_soft_start(soft_start_s)) {}
-  explicit Rig(const DeviceConfig& c)
+struct ImpedanceRig {
+  explicit ImpedanceRig(double soft_start_s = 0.0)
+      : ImpedanceRig(trocar_with_soft_start(soft_start_s)) {}
+  explicit ImpedanceRig(const DeviceConfig& c)
       : bus(SimBusSettings{}), instrument(c), dev(instrument, bus.controller()) {}
 
   // The encoders answer with kQ0 (plus `depth` m on the depth axis) at t, then the device
@@ -100,7 +101,7 @@ struct Rig {
 };
 
 TEST(ImpedanceDevice, BeginPeriodWritesSyncWithItsCounter1To240) {
-  Rig r;
+  ImpedanceRig r;
   CanFrame f;
   for (int k = 1; k <= 241; ++k) {
     ASSERT_EQ(r.dev.begin_period(k * kMs), IoStatus::kOk);
@@ -112,7 +113,7 @@ TEST(ImpedanceDevice, BeginPeriodWritesSyncWithItsCounter1To240) {
 }
 
 TEST(ImpedanceDevice, ReadGivesTheProtocolItsFramesFirstAndTheInstrumentTheRest) {
-  Rig r;
+  ImpedanceRig r;
   CanFrame hb;
   encode_heartbeat(1, NmtState::kOperational, 0, hb);
   r.bus.device().write(hb);
@@ -126,7 +127,7 @@ TEST(ImpedanceDevice, ReadGivesTheProtocolItsFramesFirstAndTheInstrumentTheRest)
 }
 
 TEST(ImpedanceDevice, WriteGatesEveryAxisWithoutAValidSampleOrAfterShutdown) {
-  Rig r;
+  ImpedanceRig r;
   r.dev.read(0);  // no encoder frame: not valid
   ASSERT_FALSE(r.dev.sample().valid);
   r.write({0.1, 0.1, 0.1, 0.1, 0.1});
@@ -147,7 +148,7 @@ TEST(ImpedanceDevice, WriteGatesEveryAxisWithoutAValidSampleOrAfterShutdown) {
 }
 
 TEST(ImpedanceDevice, WriteGatesPerAxisOnThePermissionAndOnTheDrive) {
-  Rig r;
+  ImpedanceRig r;
   r.answer_and_read(0);
   r.dev.allowed[TrocarKinematics::kPivotY] = false;
   r.write({0.01, 0.02, 0.03, 0.04, 0.05});
@@ -165,7 +166,7 @@ TEST(ImpedanceDevice, WriteGatesPerAxisOnThePermissionAndOnTheDrive) {
 }
 
 TEST(ImpedanceDevice, WriteClampsOnceToMaxTorqueAndCountsPerAxis) {
-  Rig r;
+  ImpedanceRig r;
   r.answer_and_read(0);
   const double big = 1e3;
   r.write({big, -big, 0.0, big, 0.0});
@@ -205,7 +206,7 @@ TEST(ImpedanceDevice, TorqueLimitIsTheRpdoRangeWhenMaxTorqueIsBeyondIt) {
 }
 
 TEST(ImpedanceDevice, NonFiniteTorqueOnAnAllowedAxisZeroesEveryAxisAndIsReported) {
-  Rig r;
+  ImpedanceRig r;
   r.answer_and_read(0);
   const double nan = std::numeric_limits<double>::quiet_NaN();
   r.write({0.05, 0.05, nan, 0.05, 0.05});
@@ -224,7 +225,7 @@ TEST(ImpedanceDevice, NonFiniteTorqueOnAnAllowedAxisZeroesEveryAxisAndIsReported
 // ---- soft start (DeviceConfig::soft_start_s): r = min(1, k dt / T) from the first open gate
 
 TEST(ImpedanceDevice, SoftStartRampsTheClampedTorquesInLinearlyFromTheFirstOpenGate) {
-  Rig r(0.01);  // T = 10 periods of 1 ms
+  ImpedanceRig r(0.01);    // T = 10 periods of 1 ms
   const double big = 1e3;  // clamped to max_torque on pivot_x
   const std::vector<double> tau = {big, -0.05, 0.2, 0.0, 0.0};
   // No valid sample yet: gated, the ramp has not begun (r = 0 until torque is enabled).
@@ -259,7 +260,7 @@ TEST(ImpedanceDevice, SoftStartRampsTheClampedTorquesInLinearlyFromTheFirstOpenG
 }
 
 TEST(ImpedanceDevice, SoftStartRunsOnThroughAGatedPeriodWithoutBeginningAgain) {
-  Rig r(0.005);  // 5 periods
+  ImpedanceRig r(0.005);  // 5 periods
   const std::vector<double> tau = {0.1, 0.1, 0.1, 0.0, 0.0};
   r.answer_and_read(0);
   r.write(tau);
@@ -284,7 +285,7 @@ TEST(ImpedanceDevice, SoftStartRunsOnThroughAGatedPeriodWithoutBeginningAgain) {
 }
 
 TEST(ImpedanceDevice, SoftStartOfZeroSendsTheClampedTorquesUnscaled) {
-  Rig r;  // soft_start_s = 0: the hal default
+  ImpedanceRig r;  // soft_start_s = 0: the hal default
   ASSERT_EQ(r.instrument.config().soft_start_s, 0.0);
   const std::vector<double> tau = {1e3, -0.0123456789, 0.2, 0.0, 0.0};
   for (int k = 0; k < 5; ++k) {
@@ -336,7 +337,7 @@ TEST(ImpedanceDevice, PassivityControllerDampsAnActiveRenderBeforeTheClamp) {
   c.passivity.enabled = true;
   c.passivity.axis_mask = 1u << TrocarKinematics::kDepth;
   c.passivity.velocity_threshold = 1e-4;
-  Rig r(c);
+  ImpedanceRig r(c);
   constexpr int kD = TrocarKinematics::kDepth;
   const double v = 0.02, lim = torque_limit(r.axis(kD));
   double energy = 0.0, q_prev = 0.0;
@@ -367,7 +368,7 @@ TEST(ImpedanceDevice, PassivityControllerDampsAnActiveRenderBeforeTheClamp) {
 
 // Off (the default): write() has no controller.
 TEST(ImpedanceDevice, PassivityControllerIsOffByDefault) {
-  Rig r;
+  ImpedanceRig r;
   EXPECT_EQ(r.dev.passivity().num_axes(), 0);
   for (int k = 0; k < 10; ++k) {
     r.answer_and_read(k * kMs, 1e-4 * k);

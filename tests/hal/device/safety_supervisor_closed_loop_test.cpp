@@ -46,8 +46,8 @@ DeviceConfig minimal(DeviceConfig c) {
   return c;
 }
 
-struct Loop {
-  Loop()
+struct ClosedLoopRig {
+  ClosedLoopRig()
       : bus(bus_settings()),
         device(minimal(make_default_trocar_config(1))),
         emulator(minimal(make_default_trocar_config(1))),
@@ -173,7 +173,7 @@ struct Loop {
 };
 
 TEST(SafetySupervisor, ClosedLoopDriveFaultZeroTorqueDisabledLatchedRearmEnabled) {
-  Loop l;
+  ClosedLoopRig l;
   ASSERT_EQ(l.sup.configure(), LR::kOk);
   for (int i = 0; i < 30; ++i) l.period(0.2);
   ASSERT_EQ(l.sup.state(), LS::kInactive);
@@ -237,7 +237,7 @@ TEST(SafetySupervisor, ClosedLoopDriveFaultZeroTorqueDisabledLatchedRearmEnabled
 }
 
 TEST(SafetySupervisor, ClosedLoopSilentEncodersTimeOutAtExactlyThreePeriods) {
-  Loop l;
+  ClosedLoopRig l;
   ASSERT_EQ(l.sup.configure(), LR::kOk);
   for (int i = 0; i < 15; ++i) l.period(0.0);  // the first heartbeat comes at 10 ms
   ASSERT_EQ(l.sup.activate(), LR::kOk) << to_string(l.sup.blocking().cause);
@@ -256,7 +256,7 @@ TEST(SafetySupervisor, ClosedLoopSilentEncodersTimeOutAtExactlyThreePeriods) {
 }
 
 TEST(SafetySupervisor, ClosedLoopPeriodDoesNotAllocate) {
-  Loop l;
+  ClosedLoopRig l;
   l.sup.configure();
   for (int i = 0; i < 15; ++i) l.period(0.0);
   ASSERT_EQ(l.sup.activate(), LR::kOk);

@@ -41,8 +41,8 @@ SafetySettings two_axes() {
 // 1 ms period. By default everything is healthy: every axis accepted a frame this period, the
 // node sends a heartbeat every period, the drives follow the supervisor's drive target one
 // period later (operation enabled / switch on disabled).
-struct Rig {
-  explicit Rig(SafetySettings s = two_axes()) : sup(s) {
+struct SupervisorRig {
+  explicit SupervisorRig(SafetySettings s = two_axes()) : sup(s) {
     hb.add(kNode, 3 * kMs);
     for (Cia402MasterOutput& d : drives) d.state = PS::kSwitchOnDisabled;
   }
@@ -118,7 +118,7 @@ struct Rig {
 // detected (called before every step from then on, so the condition persists).
 struct Case {
   const char* name;
-  std::function<void(Rig&)> inject;
+  std::function<void(SupervisorRig&)> inject;
   FC cause;
   std::uint8_t id;
   double value;  // NaN: not checked
@@ -129,36 +129,36 @@ const double kAny = std::numeric_limits<double>::quiet_NaN();
 std::vector<Case> latching_cases() {
   return {
       {"encoder jump",
-       [](Rig& r) {
+       [](SupervisorRig& r) {
          r.mask[1] = SampleFault::kJump;
          r.age[1] = 1;
        },
        FC::kEncoderJump, 1, SampleFault::kJump},
       {"out of range",
-       [](Rig& r) {
+       [](SupervisorRig& r) {
          r.mask[0] = SampleFault::kOutOfRange;
          r.age[0] = 1;
        },
        FC::kOutOfRange, 0, SampleFault::kOutOfRange},
       {"non-finite",
-       [](Rig& r) {
+       [](SupervisorRig& r) {
          r.mask[1] = SampleFault::kNonFinite;
          r.age[1] = 1;
        },
        FC::kNonFinite, 1, SampleFault::kNonFinite},
       {"drive fault",
-       [](Rig& r) {
+       [](SupervisorRig& r) {
          r.drives[1].fault = true;
          r.drives[1].state = PS::kFault;
        },
        FC::kDriveFault, 1, static_cast<double>(PS::kFault)},
-      {"drive stuck", [](Rig& r) { r.drives[0].stuck = true; }, FC::kDriveStuck, 0, kAny},
-      {"bus off", [](Rig& r) { r.bus = BusState::kBusOff; }, FC::kBusOff, 0,
+      {"drive stuck", [](SupervisorRig& r) { r.drives[0].stuck = true; }, FC::kDriveStuck, 0, kAny},
+      {"bus off", [](SupervisorRig& r) { r.bus = BusState::kBusOff; }, FC::kBusOff, 0,
        static_cast<double>(BusState::kBusOff)},
-      {"I/O error", [](Rig& r) { r.io_error = true; }, FC::kIoError, 0, 0.0},
-      {"bad input", [](Rig& r) { r.axis_entries = 1; }, FC::kBadInput, 0, 0.0},
+      {"I/O error", [](SupervisorRig& r) { r.io_error = true; }, FC::kIoError, 0, 0.0},
+      {"bad input", [](SupervisorRig& r) { r.axis_entries = 1; }, FC::kBadInput, 0, 0.0},
       {"node reset",
-       [](Rig& r) {
+       [](SupervisorRig& r) {
          if (!r.heartbeats_on) return;  // one reset
          CanFrame f;
          encode_heartbeat(kNode, NmtState::kBootUp, r.t + kMs / 2, f);
@@ -167,7 +167,7 @@ std::vector<Case> latching_cases() {
        },
        FC::kNodeReset, kNode, kAny},
       {"EMCY",
-       [](Rig& r) {
+       [](SupervisorRig& r) {
          if (r.emcy.counters().received > 0) return;
          EmcyMessage m;
          m.node_id = kNode;
@@ -181,7 +181,7 @@ std::vector<Case> latching_cases() {
 
 TEST(SafetySupervisor, EveryCauseLatchesInItsDetectionPeriodWithZeroTorqueAtOnce) {
   for (const Case& c : latching_cases()) {
-    Rig r;
+    SupervisorRig r;
     r.bring_up();
     r.run(5);
     ASSERT_EQ(r.torques()[0], 1.0);
@@ -220,7 +220,7 @@ TEST(SafetySupervisor, EveryCauseLatchesInItsDetectionPeriodWithZeroTorqueAtOnce
 }
 
 TEST(SafetySupervisor, HeartbeatLossLatchesInThePeriodTheConsumerDetectsIt) {
-  Rig r;  // consumer timeout 3 ms, one heartbeat per 1 ms period
+  SupervisorRig r;  // consumer timeout 3 ms, one heartbeat per 1 ms period
   r.bring_up();
   r.run(3);
   const std::int64_t last = r.t;
@@ -239,7 +239,7 @@ TEST(SafetySupervisor, HeartbeatLossLatchesInThePeriodTheConsumerDetectsIt) {
 }
 
 TEST(SafetySupervisor, HeartbeatLossThatRecoveredBeforeTheUpdateStillLatches) {
-  Rig r;
+  SupervisorRig r;
   r.bring_up();
   r.heartbeats_on = false;
   // Between two updates the node is lost (poll at +4 ms) and heard again: the consumer is
@@ -261,7 +261,7 @@ TEST(SafetySupervisor, EncoderTimeoutFiresAtExactlyNPeriodsWithoutAFreshFrame) {
   for (std::uint32_t n : {1u, 3u, 5u}) {
     SafetySettings s = two_axes();
     s.encoder_timeout_periods = n;
-    Rig r(s);
+    SupervisorRig r(s);
     r.bring_up();
     // Axis 1 accepted a frame in the last period; from now on none. The held value is not
     // stale for the first two periods (no fault bit), then stale.
@@ -284,7 +284,7 @@ TEST(SafetySupervisor, EncoderTimeoutFiresAtExactlyNPeriodsWithoutAFreshFrame) {
 }
 
 TEST(SafetySupervisor, IsolatedStaleFramesOnlyRejectTheSample) {
-  Rig r;  // N = 3
+  SupervisorRig r;  // N = 3
   r.bring_up();
   for (int i = 0; i < 50; ++i) {
     // Two periods without a frame (stale, malformed), then a fresh one: never N in a row.
@@ -300,7 +300,7 @@ TEST(SafetySupervisor, IsolatedStaleFramesOnlyRejectTheSample) {
 }
 
 TEST(SafetySupervisor, OverrunsLatchOnlyWhenConsecutive) {
-  Rig r;  // overrun_limit = 3
+  SupervisorRig r;  // overrun_limit = 3
   r.bring_up();
   const bool pattern[] = {true, true, false, true, false, true, true, false, true, true};
   for (bool o : pattern) {
@@ -319,7 +319,7 @@ TEST(SafetySupervisor, OverrunsLatchOnlyWhenConsecutive) {
 }
 
 TEST(SafetySupervisor, NothingHoldsTheLastCommand) {
-  Rig r;
+  SupervisorRig r;
   // Unconfigured and inactive: zeros, whatever was asked.
   EXPECT_EQ(r.torques()[0], 0.0);
   ASSERT_EQ(r.sup.configure(), LR::kOk);
@@ -349,7 +349,7 @@ TEST(SafetySupervisor, NothingHoldsTheLastCommand) {
 }
 
 TEST(SafetySupervisor, RearmRefusedWhileTheCausePersistsAcceptedAfterThenActivateAgain) {
-  Rig r;
+  SupervisorRig r;
   r.bring_up();
   r.mask[1] = SampleFault::kOutOfRange;
   r.age[1] = 1;
@@ -384,7 +384,7 @@ TEST(SafetySupervisor, RearmRefusedWhileTheCausePersistsAcceptedAfterThenActivat
 }
 
 TEST(SafetySupervisor, ActivationWaitsForEncodersHeartbeatsAndDisabledDrives) {
-  Rig r;
+  SupervisorRig r;
   r.heartbeats_on = false;
   r.mask = {SampleFault::kNoData, SampleFault::kNoData};
   r.age = {7, 7};
@@ -412,7 +412,7 @@ TEST(SafetySupervisor, ActivationWaitsForEncodersHeartbeatsAndDisabledDrives) {
 
 TEST(SafetySupervisor, SafeStopEndsInFaultWhenDrivesDisableOrRecordsTheTimeout) {
   {
-    Rig r;
+    SupervisorRig r;
     r.bring_up();
     r.io_error = true;
     r.step();  // trip; the drives follow kDisabled in the rig
@@ -423,7 +423,7 @@ TEST(SafetySupervisor, SafeStopEndsInFaultWhenDrivesDisableOrRecordsTheTimeout) 
     EXPECT_FALSE(r.sup.lifecycle().safe_stop_timed_out());
   }
   {
-    Rig r;  // safe_stop_timeout_periods = 10
+    SupervisorRig r;  // safe_stop_timeout_periods = 10
     r.bring_up();
     r.drives_follow = false;  // drive 0 stays in operation enabled (not disabling)
     r.bus = BusState::kBusOff;
@@ -449,7 +449,7 @@ TEST(SafetySupervisor, SafeStopEndsInFaultWhenDrivesDisableOrRecordsTheTimeout) 
 }
 
 TEST(SafetySupervisor, CausesAreRecordedOncePerEpisodeAndLaterFaultsDoNotReplaceTheFirst) {
-  Rig r;
+  SupervisorRig r;
   r.bring_up();
   r.mask[0] = SampleFault::kOutOfRange;
   r.step();
@@ -475,7 +475,7 @@ TEST(SafetySupervisor, CausesAreRecordedOncePerEpisodeAndLaterFaultsDoNotReplace
 }
 
 TEST(SafetySupervisor, SeveralCausesInOnePeriodAreAllRecordedTheFirstInOrderLatches) {
-  Rig r;
+  SupervisorRig r;
   r.bring_up();
   r.mask[1] = SampleFault::kJump;
   r.overrun = true;
@@ -490,7 +490,7 @@ TEST(SafetySupervisor, SeveralCausesInOnePeriodAreAllRecordedTheFirstInOrderLatc
 }
 
 TEST(SafetySupervisor, FaultLogIsARingOfFixedCapacity) {
-  Rig r;
+  SupervisorRig r;
   r.bring_up();
   // Toggle an I/O error: one record per rising edge.
   for (std::size_t i = 0; i < kFaultLogCapacity + 10; ++i) {
@@ -515,7 +515,7 @@ TEST(SafetySupervisor, FaultLogIsARingOfFixedCapacity) {
 TEST(SafetySupervisor, NonFiniteTorqueLatches) {
   for (double bad :
        {std::numeric_limits<double>::quiet_NaN(), -std::numeric_limits<double>::infinity()}) {
-    Rig r;
+    SupervisorRig r;
     r.bring_up();
     const std::uint64_t k = r.periods - 1;  // the period of the last update
     (void)bad;  // what write() found; the supervisor is told the axis
@@ -534,7 +534,7 @@ TEST(SafetySupervisor, NonFiniteTorqueLatches) {
 }
 
 TEST(SafetySupervisor, UnconfiguredAbsorbsEventsWithoutActing) {
-  Rig r;
+  SupervisorRig r;
   EmcyMessage m;
   m.node_id = kNode;
   m.error_code = 0x5000;
@@ -586,7 +586,7 @@ TEST(SafetySupervisor, CauseNamesAreDistinct) {
 }
 
 TEST(SafetySupervisor, PerPeriodCallsDoNotAllocate) {
-  Rig r;
+  SupervisorRig r;
   r.bring_up();
   numen::test::AllocationGuard guard;
   for (int i = 0; i < 200; ++i) {

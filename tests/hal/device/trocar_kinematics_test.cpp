@@ -37,7 +37,7 @@ TrocarGeometry tilted_trocar() {
   return g;
 }
 
-Pose some_offset() {
+Pose trocar_offset() {
   Pose p;
   p.position = Vec3(0.01, -0.005, 0.02);
   p.orientation = rot(0.3, Vec3(1, 2, 3).normalized());
@@ -50,7 +50,7 @@ AxisVector q_of(double a, double b, double d, double psi, double jaw) {
   return q;
 }
 
-double angle_between(const Quat& x, const Quat& y) { return x.angularDistance(y); }
+double trocar_angle_between(const Quat& x, const Quat& y) { return x.angularDistance(y); }
 
 // Angular velocity (world) taking orientation `from` to `to` over dt.
 Vec3 omega(const Quat& from, const Quat& to, double dt) {
@@ -63,7 +63,7 @@ TEST(TrocarKinematics, ZeroPivotsPutTheTipAlongTheTrocarAxis) {
   const TK k(g);
   const Pose p = k.forward(q_of(0, 0, 0.12, 0, 0));
   EXPECT_TRUE(p.position.isApprox(g.point + 0.12 * (g.orientation * Vec3::UnitZ()), 1e-12));
-  EXPECT_LT(angle_between(p.orientation, g.orientation), 1e-12);
+  EXPECT_LT(trocar_angle_between(p.orientation, g.orientation), 1e-12);
 }
 
 TEST(TrocarKinematics, PivotsFollowTheDocumentedConvention) {
@@ -79,24 +79,24 @@ TEST(TrocarKinematics, PivotsFollowTheDocumentedConvention) {
   const Pose r = k.forward(q_of(0.3, 0.5, 1.0, 0.7, 0));
   EXPECT_TRUE(r.position.isApprox(p.position, 1e-12));
   EXPECT_TRUE((r.orientation * Vec3::UnitZ()).isApprox(p.orientation * Vec3::UnitZ(), 1e-12));
-  EXPECT_NEAR(angle_between(r.orientation, p.orientation), 0.7, 1e-12);
+  EXPECT_NEAR(trocar_angle_between(r.orientation, p.orientation), 0.7, 1e-12);
   // The jaw does not move the rigid tool.
   const Pose j = k.forward(q_of(0.3, 0.5, 1.0, 0.7, 0.9));
   EXPECT_TRUE(j.position.isApprox(r.position, 1e-15));
 }
 
 TEST(TrocarKinematics, ToolOffsetIsAppliedInTheToolFrame) {
-  const Pose off = some_offset();
+  const Pose off = trocar_offset();
   const TK k(tilted_trocar(), off);
   const AxisVector q = q_of(0.2, -0.1, 0.15, 0.4, 0.2);
   const Pose tool = k.tool_pose(q);
   const Pose c = k.forward(q);
   EXPECT_TRUE(c.position.isApprox(tool.position + tool.orientation * off.position, 1e-12));
-  EXPECT_LT(angle_between(c.orientation, tool.orientation * off.orientation), 1e-12);
+  EXPECT_LT(trocar_angle_between(c.orientation, tool.orientation * off.orientation), 1e-12);
 }
 
 TEST(TrocarKinematics, InverseOfForwardIsTheIdentity) {
-  const TK k(tilted_trocar(), some_offset());
+  const TK k(tilted_trocar(), trocar_offset());
   for (double a : {-1.0, -0.3, 0.0, 0.6, 1.2}) {
     for (double b : {-1.2, -0.2, 0.0, 0.5, 1.3}) {
       for (double psi : {-3.0, -1.0, 0.0, 2.0, kPi}) {
@@ -129,7 +129,8 @@ TEST(TrocarKinematics, ForwardOfInverseKeepsTheTipPositionAndRollButDropsTheWris
   EXPECT_NEAR(back[TK::kRoll], 0.8, 1e-9);  // twist survives the swing
   const Pose again = k.tool_pose(back);
   EXPECT_TRUE(again.position.isApprox(recorded.position, 1e-12));
-  EXPECT_NEAR(angle_between(again.orientation, recorded.orientation), 0.5, 1e-9);  // wrist lost
+  EXPECT_NEAR(trocar_angle_between(again.orientation, recorded.orientation), 0.5,
+              1e-9);  // wrist lost
 }
 
 TEST(TrocarKinematics, InverseAtTheTrocarPointUsesTheRecordedAxis) {
@@ -154,7 +155,7 @@ AxisVector sample_q(int i) {
 }
 
 TEST_P(TrocarJacobian, MatchesCentralDifferencesOfForward) {
-  const TK k(tilted_trocar(), some_offset());
+  const TK k(tilted_trocar(), trocar_offset());
   const AxisVector q = sample_q(GetParam());
   const Jacobian j = k.jacobian(q);
   ASSERT_EQ(j.rows(), 6);
@@ -174,7 +175,7 @@ TEST_P(TrocarJacobian, MatchesCentralDifferencesOfForward) {
 }
 
 TEST_P(TrocarJacobian, TransposeMapsWrenchesByVirtualWork) {
-  const TK k(tilted_trocar(), some_offset());
+  const TK k(tilted_trocar(), trocar_offset());
   const AxisVector q = sample_q(GetParam());
   Wrench w;
   w.force = Vec3(1.5, -2.0, 0.7);
@@ -208,7 +209,7 @@ TEST(TrocarKinematics, InsertionForceIsTheDepthTorque) {
 }
 
 TEST(TrocarKinematics, CallsDoNotAllocate) {
-  const TK k(tilted_trocar(), some_offset());
+  const TK k(tilted_trocar(), trocar_offset());
   const AxisVector q = sample_q(3);
   numen::test::AllocationGuard guard;
   double sink = 0;
@@ -240,7 +241,7 @@ using numen::test::numeric_link_jacobian;
 using numen::test::uniform;
 
 // Random configuration within the mechanism's useful range (away from d = 0).
-AxisVector random_q(numen::hal::SplitMix64& rng) {
+AxisVector random_trocar_q(numen::hal::SplitMix64& rng) {
   return q_of(uniform(rng, -1.2, 1.2), uniform(rng, -1.2, 1.2), uniform(rng, 0.02, 0.3),
               uniform(rng, -kPi, kPi), uniform(rng, 0.0, 1.2));
 }
@@ -261,10 +262,10 @@ TEST(TrocarLinks, NamesAndLookup) {
 }
 
 TEST(TrocarLinks, LinkZeroIsTheControlledFrame) {
-  const TK k(tilted_trocar(), some_offset());
+  const TK k(tilted_trocar(), trocar_offset());
   numen::hal::SplitMix64 rng(11);
   for (int trial = 0; trial < 20; ++trial) {
-    const AxisVector q = random_q(rng);
+    const AxisVector q = random_trocar_q(rng);
     const Pose f = k.forward(q);
     const Pose l0 = k.link_pose(TK::kLinkTool, q);
     EXPECT_EQ(l0.position, f.position);
@@ -275,27 +276,29 @@ TEST(TrocarLinks, LinkZeroIsTheControlledFrame) {
 
 TEST(TrocarLinks, FramesFollowTheDocumentedGeometry) {
   const TrocarGeometry g = tilted_trocar();
-  const TK k(g, some_offset());
+  const TK k(g, trocar_offset());
   const AxisVector q = q_of(0.3, -0.4, 0.15, 0.7, 0.6);
   const Quat swing = g.orientation * rot(0.3, Vec3::UnitX()) * rot(-0.4, Vec3::UnitY());
   // Sleeve: at the trocar point, no roll, z along the shaft.
   const Pose sleeve = k.link_pose(TK::kLinkTrocar, q);
   EXPECT_EQ(sleeve.position, g.point);
-  EXPECT_LT(angle_between(sleeve.orientation, swing), 1e-12);
+  EXPECT_LT(trocar_angle_between(sleeve.orientation, swing), 1e-12);
   // Tube == tool_pose (tip, with roll).
   const Pose tube = k.link_pose(TK::kLinkTube, q);
   const Pose tool = k.tool_pose(q);
   EXPECT_TRUE(tube.position.isApprox(tool.position, 1e-15));
-  EXPECT_LT(angle_between(tube.orientation, tool.orientation), 1e-15);
+  EXPECT_LT(trocar_angle_between(tube.orientation, tool.orientation), 1e-15);
   EXPECT_TRUE(tube.position.isApprox(g.point + 0.15 * (sleeve.orientation * Vec3::UnitZ()), 1e-12));
   // Jaws: at the tip, ±jaw/2 about the tube's x axis, so 0.6 rad apart.
   const Pose j1 = k.link_pose(TK::kLinkJaw1, q);
   const Pose j2 = k.link_pose(TK::kLinkJaw2, q);
   EXPECT_EQ(j1.position, tube.position);
   EXPECT_EQ(j2.position, tube.position);
-  EXPECT_LT(angle_between(j1.orientation, tube.orientation * rot(0.3, Vec3::UnitX())), 1e-12);
-  EXPECT_LT(angle_between(j2.orientation, tube.orientation * rot(-0.3, Vec3::UnitX())), 1e-12);
-  EXPECT_NEAR(angle_between(j1.orientation, j2.orientation), 0.6, 1e-12);
+  EXPECT_LT(trocar_angle_between(j1.orientation, tube.orientation * rot(0.3, Vec3::UnitX())),
+            1e-12);
+  EXPECT_LT(trocar_angle_between(j2.orientation, tube.orientation * rot(-0.3, Vec3::UnitX())),
+            1e-12);
+  EXPECT_NEAR(trocar_angle_between(j1.orientation, j2.orientation), 0.6, 1e-12);
   // Both jaws keep the tube's x axis (the hinge) and open symmetrically about the shaft.
   const Vec3 x_t = tube.orientation * Vec3::UnitX();
   EXPECT_TRUE((j1.orientation * Vec3::UnitX()).isApprox(x_t, 1e-12));
@@ -304,18 +307,18 @@ TEST(TrocarLinks, FramesFollowTheDocumentedGeometry) {
   EXPECT_TRUE((z1 + z2).normalized().isApprox(tube.orientation * Vec3::UnitZ(), 1e-12));
   // jaw = 0: both jaws are the tube.
   const AxisVector closed = q_of(0.3, -0.4, 0.15, 0.7, 0.0);
-  EXPECT_LT(angle_between(k.link_pose(TK::kLinkJaw1, closed).orientation,
-                          k.link_pose(TK::kLinkTube, closed).orientation),
+  EXPECT_LT(trocar_angle_between(k.link_pose(TK::kLinkJaw1, closed).orientation,
+                                 k.link_pose(TK::kLinkTube, closed).orientation),
             1e-15);
   // An index out of range gives link 0.
   EXPECT_EQ(k.link_pose(7, q).position, k.forward(q).position);
 }
 
 TEST(TrocarLinks, EveryLinkJacobianMatchesCentralDifferencesOfItsPose) {
-  const TK k(tilted_trocar(), some_offset());
+  const TK k(tilted_trocar(), trocar_offset());
   numen::hal::SplitMix64 rng(2024);
   for (int trial = 0; trial < 25; ++trial) {
-    const AxisVector q = random_q(rng);
+    const AxisVector q = random_trocar_q(rng);
     for (int l = 0; l < k.num_links(); ++l) {
       const Jacobian j = k.link_jacobian(l, q);
       ASSERT_EQ(j.rows(), 6);
@@ -332,7 +335,7 @@ TEST(TrocarLinks, EveryLinkJacobianMatchesCentralDifferencesOfItsPose) {
 }
 
 TEST(TrocarLinks, JacobianColumnsHaveTheDocumentedStructure) {
-  const TK k(tilted_trocar(), some_offset());
+  const TK k(tilted_trocar(), trocar_offset());
   const AxisVector q = q_of(0.2, 0.5, 0.12, -1.0, 0.8);
   // Sleeve: pure rotation about p_c by the pivots only.
   const Jacobian sleeve = k.link_jacobian(TK::kLinkTrocar, q);
@@ -354,10 +357,10 @@ TEST(TrocarLinks, JacobianColumnsHaveTheDocumentedStructure) {
 
 TEST(TrocarLinks, TransposeMapsLinkWrenchesByVirtualWork) {
   // Σ_l w_l · δx_l (δx_l from link_pose only) == τ · δq with τ = Σ_l J_lᵀ w_l, to O(|δq|²).
-  const TK k(tilted_trocar(), some_offset());
+  const TK k(tilted_trocar(), trocar_offset());
   numen::hal::SplitMix64 rng(77);
   for (int trial = 0; trial < 50; ++trial) {
-    const AxisVector q = random_q(rng);
+    const AxisVector q = random_trocar_q(rng);
     std::array<Wrench, TK::kNumLinks> w;
     for (Wrench& x : w) x = numen::test::random_wrench(rng, 2.0);
     AxisVector dq(5);
@@ -372,7 +375,7 @@ TEST(TrocarLinks, TransposeMapsLinkWrenchesByVirtualWork) {
 }
 
 TEST(TrocarLinks, LinkCallsDoNotAllocate) {
-  const TK k(tilted_trocar(), some_offset());
+  const TK k(tilted_trocar(), trocar_offset());
   const AxisVector q = sample_q(5);
   numen::test::AllocationGuard guard;
   double sink = 0;

@@ -25,19 +25,19 @@ using numen::test::drain;
 
 namespace {
 
-hal::DeviceConfig tracker() { return numen::test::admittance_tracker(); }
-hal::AxisVector zeros() { return numen::test::tracker_zeros(); }
+hal::DeviceConfig emulator_tracker() { return numen::test::admittance_tracker(); }
+hal::AxisVector emulator_zeros() { return numen::test::tracker_zeros(); }
 
 }  // namespace
 
 TEST(AdmittanceEmulator, EnabledSetPointsReachTheMotionAndItsAxesAreReported) {
   hal::SimBus bus{hal::SimBusSettings{}};
-  hal::AdmittanceEmulator emu(tracker(), hal::make_admittance_config(tracker()));
+  hal::AdmittanceEmulator emu(emulator_tracker(), hal::make_admittance_config(emulator_tracker()));
   numen::test::FixedMotion motion(6);
   emu.set_motion(&motion);
-  hal::AdmittanceDevice dev(tracker(), hal::make_admittance_config(tracker()), bus.controller(),
-                            zeros());
-  emu.set_axis_values(zeros());
+  hal::AdmittanceDevice dev(emulator_tracker(), hal::make_admittance_config(emulator_tracker()),
+                            bus.controller(), emulator_zeros());
+  emu.set_axis_values(emulator_zeros());
   core::Pose p;
   p.position = Vec3(0.004, 0.0, 0.0);
   dev.set_pose(p);
@@ -68,9 +68,9 @@ TEST(AdmittanceEmulator, EnabledSetPointsReachTheMotionAndItsAxesAreReported) {
 
 TEST(AdmittanceEmulator, SensorReportsTheMotionsHandWrenchInItsFrame) {
   hal::SimBus bus{hal::SimBusSettings{}};
-  hal::AdmittanceConfig a = hal::make_admittance_config(tracker());
+  hal::AdmittanceConfig a = hal::make_admittance_config(emulator_tracker());
   a.sensor.sensor_in_tool.orientation = Quat(Eigen::AngleAxisd(M_PI, Vec3::UnitX()));  // flipped
-  hal::AdmittanceEmulator emu(tracker(), a);
+  hal::AdmittanceEmulator emu(emulator_tracker(), a);
   numen::test::FixedMotion motion(6);
   motion.state.handle_wrench.force = Vec3(2.0, 0.0, -1.0);  // world
   emu.set_motion(&motion);

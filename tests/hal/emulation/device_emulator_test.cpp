@@ -53,8 +53,8 @@ void trajectory(double t, double* q) {
 // Controller and device on one SimBus. One period k at t = k·P:
 //   controller: read TPDOs -> sample(t) -> command(w) -> SYNC;
 //   device, at t + P/2: read SYNC and RPDOs -> answer with TPDOs (delivered before t + P).
-struct Rig {
-  explicit Rig(const SimBusSettings& s, const DeviceConfig& c = trocar_config())
+struct EmulatorRig {
+  explicit EmulatorRig(const SimBusSettings& s, const DeviceConfig& c = trocar_config())
       : bus(s), device(c), emulator(c), sender(device, bus.controller()) {}
 
   // The controller's sending half: τ = Σ J_lᵀ w_l (torques_for), then MinimalDevice::write().
@@ -112,7 +112,7 @@ TEST(DeviceEmulator, AnswersEachSyncWithOneTpdoPerAxisStampedWithTheSync) {
 }
 
 TEST(DeviceEmulator, ControllerSamplesThePoseTheEmulatorWasGiven) {
-  Rig rig(latency_only());
+  EmulatorRig rig(latency_only());
   double q[5];
   trajectory(0.0, q);
   rig.emulator.set_axis_values(q);
@@ -134,7 +134,7 @@ TEST(DeviceEmulator, ControllerSamplesThePoseTheEmulatorWasGiven) {
 }
 
 TEST(DeviceEmulator, FollowsAMovingInstrumentWithOnePeriodOfDelay) {
-  Rig rig(latency_only());
+  EmulatorRig rig(latency_only());
   double q[5];
   trajectory(0.0, q);
   rig.emulator.set_axis_values(q);
@@ -163,7 +163,7 @@ TEST(DeviceEmulator, FollowsAMovingInstrumentWithOnePeriodOfDelay) {
 }
 
 TEST(DeviceEmulator, TorquesRoundTripThroughRpdos) {
-  Rig rig(latency_only());
+  EmulatorRig rig(latency_only());
   double q[5];
   trajectory(0.3, q);
   rig.emulator.set_axis_values(q);
@@ -185,7 +185,7 @@ TEST(DeviceEmulator, TorquesRoundTripThroughRpdos) {
 }
 
 TEST(DeviceEmulator, OutOfRangeValueIsRejectedAndTheTargetHeld) {
-  Rig rig(latency_only());
+  EmulatorRig rig(latency_only());
   double q[5];
   trajectory(0.0, q);
   rig.emulator.set_axis_values(q);
@@ -209,7 +209,7 @@ TEST(DeviceEmulator, OutOfRangeValueIsRejectedAndTheTargetHeld) {
 }
 
 TEST(DeviceEmulator, SilentDeviceBecomesStaleAndTheTargetStays) {
-  Rig rig(latency_only());
+  EmulatorRig rig(latency_only());
   double q[5];
   trajectory(0.2, q);
   rig.emulator.set_axis_values(q);
@@ -237,7 +237,7 @@ TEST(DeviceEmulator, SilentDeviceBecomesStaleAndTheTargetStays) {
 }
 
 TEST(DeviceEmulator, JumpIsRejectedAndCounted) {
-  Rig rig(latency_only());
+  EmulatorRig rig(latency_only());
   double q[5];
   trajectory(0.0, q);
   rig.emulator.set_axis_values(q);
@@ -257,7 +257,7 @@ TEST(DeviceEmulator, JumpIsRejectedAndCounted) {
 
 // Runs `periods` periods on a faulty bus; checks every period that rejected axes hold their
 // value and accepted ones are plausible. Returns the device counters.
-DeviceCounters run_faulty(const SimBusSettings& settings, int periods, Rig& rig) {
+DeviceCounters run_faulty(const SimBusSettings& settings, int periods, EmulatorRig& rig) {
   double q[5];
   trajectory(0.0, q);
   rig.emulator.set_axis_values(q);
@@ -300,7 +300,7 @@ TEST(DeviceEmulator, CorruptedFramesAreRejectedAndCounted) {
   SimBusSettings s = latency_only();
   s.corruption_probability = 0.05;
   s.seed = 11;
-  Rig rig(s);
+  EmulatorRig rig(s);
   const DeviceCounters n = run_faulty(s, 4000, rig);
   const auto& link = rig.bus.link_counters(SimBus::Direction::kDeviceToController);
   EXPECT_GT(link.corrupted(), 500u);
@@ -318,7 +318,7 @@ TEST(DeviceEmulator, LostFramesLeaveTheTargetHeldAndFresh) {
   SimBusSettings s = latency_only();
   s.drop_probability = 0.1;
   s.seed = 5;
-  Rig rig(s);
+  EmulatorRig rig(s);
   const DeviceCounters n = run_faulty(s, 3000, rig);
   EXPECT_GT(rig.bus.link_counters(SimBus::Direction::kDeviceToController).dropped, 0u);
   // A lost frame is no rejection; only runs of >= 3 lost answers make an axis stale.
@@ -338,7 +338,7 @@ Trace run_trace(std::uint64_t seed) {
   s.drop_probability = 0.05;
   s.corruption_probability = 0.05;
   s.seed = seed;
-  Rig rig(s);
+  EmulatorRig rig(s);
   Trace tr;
   double q[5];
   trajectory(0.0, q);
@@ -374,7 +374,7 @@ TEST(DeviceEmulator, TenThousandPeriodsWithoutAllocation) {
   SimBusSettings s = latency_only();
   s.drop_probability = 0.02;
   s.corruption_probability = 0.02;
-  Rig rig(s);
+  EmulatorRig rig(s);
   double q[5];
   trajectory(0.0, q);
   rig.emulator.set_axis_values(q);
@@ -403,7 +403,7 @@ TEST(DeviceEmulator, PoseTrackerEndToEnd) {
   DeviceConfig c = make_default_pose_tracker_config(40);
   c.canopen.managed = false;
   c.control_period_s = kPeriodS;
-  Rig rig(latency_only(), c);
+  EmulatorRig rig(latency_only(), c);
   const double q[6] = {0.1, -0.2, 0.3, 2.0, -0.4, -3.0};
   rig.emulator.set_axis_values(q);
   DeviceSample s;
@@ -422,7 +422,7 @@ TEST(DeviceEmulator, PhantomEndToEnd) {
   DeviceConfig c = make_default_phantom_config(50);
   c.canopen.managed = false;
   c.control_period_s = kPeriodS;
-  Rig rig(latency_only(), c);
+  EmulatorRig rig(latency_only(), c);
   const double q[6] = {0.3, -0.2, 0.1, -1.0, 0.6, 2.5};
   rig.emulator.set_axis_values(q);
   DeviceSample s;

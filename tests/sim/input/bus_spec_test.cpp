@@ -29,7 +29,7 @@ using numen::sim::BusKind;
 using numen::sim::BusSpec;
 using numen::sim::parse_bus_spec;
 
-const numen::sim::Scene& lattice_scene() {
+const numen::sim::Scene& bus_lattice_scene() {
   static const numen::sim::Scene s = numen::sim::load_scene(numen::test::lattice_scene_path());
   return s;
 }
@@ -121,7 +121,7 @@ TEST(BusSpec, BadSpecsNameTheSpecAndTheProblem) {
 
 TEST(BusSpec, ManagedFiltersAreExactlyTheIdsEachEndReads) {
   NUMEN_REQUIRE_ARTICULATION();
-  const numen::hal::DeviceConfig& dev = lattice_scene().device;
+  const numen::hal::DeviceConfig& dev = bus_lattice_scene().device;
   ASSERT_TRUE(dev.canopen.managed);
   ASSERT_EQ(dev.axes.size(), 5u);
   // Controller: encoder TPDOs 0x181–0x185, drive TPDOs 0x281–0x283, heartbeats 0x701–0x705,
@@ -144,7 +144,7 @@ TEST(BusSpec, ManagedFiltersAreExactlyTheIdsEachEndReads) {
 
 TEST(BusSpec, MinimalProtocolFiltersOnlyTheEncodersAndTheTorques) {
   NUMEN_REQUIRE_ARTICULATION();
-  numen::hal::DeviceConfig dev = lattice_scene().device;
+  numen::hal::DeviceConfig dev = bus_lattice_scene().device;
   dev.canopen.managed = false;
   EXPECT_EQ(exact_ids(numen::sim::controller_filters(dev), kEncoderIds),
             (std::set<std::uint32_t>{0x181, 0x182, 0x183, 0x184, 0x185}));

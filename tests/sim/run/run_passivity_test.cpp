@@ -54,7 +54,7 @@ RunSummary run_for(const Scene& scene, double seconds) {
   return runner.summary();
 }
 
-void print(const char* name, const RunSummary& s) {
+void print_run(const char* name, const RunSummary& s) {
   std::printf("%-32s limit cycle %d (%.3f mm at %.1f Hz, at %.2f s), port energy min %.4f J, "
               "controller acted %lld periods, dissipated %.4f J\n",
               name, s.limit_cycle_detected ? 1 : 0, s.limit_cycle_amplitude_mm, s.limit_cycle_hz,
@@ -76,8 +76,8 @@ TEST(RunPassivity, ControllerRemovesTheLimitCycleOfAnActiveLatticeSceneSingleRat
     const Scene controlled = active_default_scene(dir, true, multirate);
     const RunSummary without = run_for(plain, plain.duration_s);
     const RunSummary with = run_for(controlled, controlled.duration_s);
-    print(multirate ? "multirate, no controller" : "single-rate, no controller", without);
-    print(multirate ? "multirate, controller" : "single-rate, controller", with);
+    print_run(multirate ? "multirate, no controller" : "single-rate, no controller", without);
+    print_run(multirate ? "multirate, controller" : "single-rate, controller", with);
     EXPECT_EQ(without.multirate.enabled, multirate);
     EXPECT_TRUE(without.closed_loop);
     EXPECT_TRUE(without.limit_cycle_detected);

@@ -36,7 +36,7 @@ std::vector<std::string> shipped_scenes() {
   return out;
 }
 
-std::string shipped(const std::string& name) {
+std::string shipped_path(const std::string& name) {
   return std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/" + name + ".toml";
 }
 
@@ -44,7 +44,7 @@ std::string shipped(const std::string& name) {
 
 TEST(SceneInfo, SizesAreTheModelsCounts) {
   for (const std::string& name : shipped_scenes()) {
-    const sim::Scene scene = sim::load_scene(shipped(name));
+    const sim::Scene scene = sim::load_scene(shipped_path(name));
     const core::Model& m = scene.model;
     const sim::SceneInfo i = sim::describe_scene(scene);
     EXPECT_EQ(i.name, scene.name);
@@ -61,7 +61,7 @@ TEST(SceneInfo, SizesAreTheModelsCounts) {
 
 TEST(SceneInfo, StagesAreThoseStepRuns) {
   for (const std::string& name : shipped_scenes()) {
-    const sim::Scene scene = sim::load_scene(shipped(name));
+    const sim::Scene scene = sim::load_scene(shipped_path(name));
     const sim::SceneInfo i = sim::describe_scene(scene);
     core::Data d = core::make_data(scene.model);
     core::step(scene.model, d);
@@ -77,7 +77,7 @@ TEST(SceneInfo, StagesAreThoseStepRuns) {
 
 TEST(SceneInfo, DataBytesAreWhatMakeDataAllocated) {
   for (const std::string& name : shipped_scenes()) {
-    const sim::Scene scene = sim::load_scene(shipped(name));
+    const sim::Scene scene = sim::load_scene(shipped_path(name));
     const sim::SceneInfo i = sim::describe_scene(scene);
     const std::int64_t before = numen::test::allocated_bytes();
     const core::Data d = core::make_data(scene.model);
@@ -91,7 +91,7 @@ TEST(SceneInfo, DataBytesAreWhatMakeDataAllocated) {
 }
 
 TEST(SceneInfo, ReportAndJsonNameEveryStageAndGroup) {
-  const sim::SceneInfo i = sim::describe_scene(sim::load_scene(shipped("construction")));
+  const sim::SceneInfo i = sim::describe_scene(sim::load_scene(shipped_path("construction")));
   const std::string text = sim::format_scene_info(i);
   const nlohmann::json json = nlohmann::json::parse(sim::format_scene_info_json(i));
   ASSERT_EQ(json.at("stages").size(), i.stages.size());
@@ -115,7 +115,7 @@ TEST(SceneInfo, ReportAndJsonNameEveryStageAndGroup) {
 }
 
 TEST(SceneInfo, JsonEscapesNamesAndReplacesBytesThatAreNotUtf8) {
-  sim::SceneInfo i = sim::describe_scene(sim::load_scene(shipped("construction")));
+  sim::SceneInfo i = sim::describe_scene(sim::load_scene(shipped_path("construction")));
   i.name = "quote \" backslash \\ tab \t bad \xff end";
   const std::string out = sim::format_scene_info_json(i);
   ASSERT_TRUE(nlohmann::json::accept(out)) << out;
@@ -128,7 +128,7 @@ TEST(SceneInfo, JsonEscapesNamesAndReplacesBytesThatAreNotUtf8) {
 // absolute path to a file that exists) the scene gave it; text and JSON agree.
 TEST(SceneInfo, DeviceNodesAreTheScenesCanopenAxes) {
   for (const std::string& name : shipped_scenes()) {
-    const sim::Scene scene = sim::load_scene(shipped(name));
+    const sim::Scene scene = sim::load_scene(shipped_path(name));
     const sim::SceneInfo i = sim::describe_scene(scene);
     const nlohmann::json device = nlohmann::json::parse(sim::format_scene_info_json(i)).at("device");
     const std::string text = sim::format_scene_info(i);

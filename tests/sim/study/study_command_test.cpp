@@ -21,7 +21,7 @@ using numen::test::read_file;
 using numen::test::run_child;
 using numen::test::TempDir;
 
-const std::string kNumen = NUMEN_CLI;
+const std::string kNumenCli = NUMEN_CLI;
 
 /// `numen args…` with the Slurm array variables set to `id`/`count` ("" : unset).
 ChildResult numen(const std::vector<std::string>& args, const TempDir& dir,
@@ -30,7 +30,7 @@ ChildResult numen(const std::vector<std::string>& args, const TempDir& dir,
                                    "SLURM_ARRAY_TASK_COUNT"};
   if (!id.empty()) argv.push_back("SLURM_ARRAY_TASK_ID=" + id);
   if (!count.empty()) argv.push_back("SLURM_ARRAY_TASK_COUNT=" + count);
-  argv.push_back(kNumen);
+  argv.push_back(kNumenCli);
   argv.insert(argv.end(), args.begin(), args.end());
   return run_child(argv, dir.path().string(), 120);
 }
