@@ -11,6 +11,7 @@ N = 20) as a second series. Writes the figures and a JSON of the numbers beside 
 
 With SCENE names, only those scenes are run; the other scenes' numbers are read from the
 OUT_DIR/multirate_quality.json already there, and the figure is drawn from both.
+
 (docs/figures/make_figures.sh runs it.) The scene copies are written to a temporary directory
 with their data and DCF paths made absolute. The margin is 10 mm for every ratio on the rigid
 scenes (1 m/s of tool travel at 100 Hz) and 2 mm on the deformable ones (the hands travel less
