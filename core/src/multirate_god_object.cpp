@@ -72,7 +72,7 @@ void detect_and_build_planes(const Model& model, Data& data, const void* context
       // The look-ahead where the net steps slower than the device loop (at a rate ratio of 1
       // the scene step is the single-rate step).
       detail::cut_back_node_contacts(model, data, c->device_body, c->margin, deepest,
-                                     model.dt > 1.5 * c->device_dt);
+                                     model.dt > 1.5 * c->device_dt ? model.dt : 0.0);
     }
   }
 }

@@ -186,6 +186,21 @@ void build_node_planes(const Model& scene, const Data& data, std::span<const int
     scratch.slot_of_node[static_cast<std::size_t>(scratch.slot_node[static_cast<std::size_t>(s)])] = -1;
 }
 
+bool anchor_reaches(const Model& scene, const Data& data, const NodeContact& c, double step) noexcept {
+  const auto i = static_cast<std::size_t>(c.node);
+  const NetModel& net = scene.nets[static_cast<std::size_t>(scene.node_net[i])];
+  const BodyState& g = data.bodies[static_cast<std::size_t>(net.body)];
+  const Vec3 lever = g.orientation * scene.node_rest[i];
+  const Vec3 anchor = g.position + lever + step * (g.linear_velocity + g.angular_velocity.cross(lever));
+  Vec3 surface_motion = Vec3::Zero();  // the other side's point over the step
+  if (c.body_b >= 0) {
+    const BodyState& b = data.bodies[static_cast<std::size_t>(c.body_b)];
+    surface_motion = step * (b.linear_velocity + b.angular_velocity.cross(c.position - b.position));
+  }
+  // The depth of a point x + δ on the contact's tangent plane is d − n · δ.
+  return c.depth - c.normal.dot(anchor - data.nodes[i].position - surface_motion) > 0.0;
+}
+
 void drop_look_ahead_contacts(Data& data) noexcept {
   int kept = 0;
   const int n = std::clamp(data.num_node_contacts, 0, static_cast<int>(data.node_contacts.size()));
@@ -197,7 +212,8 @@ void drop_look_ahead_contacts(Data& data) noexcept {
 }
 
 void cut_back_node_contacts(const Model& scene, Data& data, std::span<const int> device_body,
-                            double margin, double body_deepest, bool look_ahead) noexcept {
+                            double margin, double body_deepest, double step) noexcept {
+  const bool look_ahead = step > 0.0;
   for (NetOutput& o : data.nets) o.max_penetration = 0.0;
   int kept = 0;
   const int n = std::clamp(data.num_node_contacts, 0, static_cast<int>(data.node_contacts.size()));
@@ -208,13 +224,14 @@ void cut_back_node_contacts(const Model& scene, Data& data, std::span<const int>
     if (net_on_god_object(scene, device_body, net)) {  // the node's sphere was grown
       if (in_god_object(device_body, c.body_b)) continue;  // see the header
       c.depth -= margin;
-      // The look-ahead (NodeContact::engaged): a touching node, and one within kLookAheadGap of
-      // a surface while touching nothing else, may reach it within the scene step.
+      // The look-ahead (NodeContact::engaged): a touching node, and one touching nothing else
+      // within kLookAheadGap of a surface or whose anchor is beyond it at the step's end, may
+      // reach it within the scene step.
       if (c.depth > 0.0) {
         c.engaged = look_ahead;
       } else {
         if (!look_ahead) continue;
-        if (!(c.depth > -kLookAheadGap)) continue;
+        if (!(c.depth > -kLookAheadGap) && !anchor_reaches(scene, data, c, step)) continue;
         bool touching = false;  // a node's contacts are consecutive (detect_node_contacts)
         for (int j = kept - 1; j >= 0 && data.node_contacts[static_cast<std::size_t>(j)].node == c.node; --j)
           touching = touching || data.node_contacts[static_cast<std::size_t>(j)].depth > 0.0;

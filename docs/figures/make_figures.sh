@@ -23,7 +23,7 @@ a=$(mktemp -d) && ./build/numen study accuracy --out "$a" && /usr/bin/python3 $o
 s=$(mktemp -d) && ./build/numen study stability --out "$s" > /dev/null && /usr/bin/python3 $out/plot_stability.py "$s" $out && rm -rf "$s"
 # Passivity: the Z-width of a 1-DOF device (docs/passivity.md; ~1 minute; --quick for a look in seconds)
 z=$(mktemp -d) && ./build/numen study passivity --out "$z" > /dev/null && /usr/bin/python3 $out/plot_passivity.py "$z" $out/passivity_zwidth.png && rm -rf "$z"
-# Multirate quality against the rate ratio, construction and lattice scenes (docs/multirate.md; ~10 s)
+# Multirate quality against the rate ratio, construction, lattice, deformable and endobag scenes (docs/multirate.md; 44 runs)
 /usr/bin/python3 $out/plot_multirate.py ./build/numen $out
 # The default scene's deformable organ: hand vs tool vs organ surface, excerpt and full trials (docs/results.md, docs/deformable.md; ~6 minutes)
 docs/figures/organ_runs.sh > /dev/null

@@ -6,7 +6,10 @@ on the shipped excerpt with `dt = 0.0001` (a 10 kHz device loop; `[bus] latency 
 `margin = 0.002`. Prints one line per run. The scene copies are written to a temporary directory
 with their data and DCF paths made absolute.
 
-    /usr/bin/python3 docs/figures/net_multirate_depth.py ./build/numen
+    /usr/bin/python3 docs/figures/net_multirate_depth.py ./build/numen [FLOOR]
+
+With FLOOR, the copies set `[solver] node_contact_max_omega_dt = FLOOR` (the node contacts'
+time-constant floor, docs/dynamics.md "Stiff contacts"; 100 when not given).
 """
 import json
 import os
@@ -19,7 +22,7 @@ RUNS = [("deformable", None), ("deformable", 0.001), ("deformable", 0.01),
         ("endobag", None), ("endobag", 0.001), ("endobag", 0.01)]
 
 
-def scene_copy(root, name, scene_dt, tmp):
+def scene_copy(root, name, scene_dt, tmp, floor=None):
     scenes = os.path.join(root, "sim", "scenes")
     with open(os.path.join(scenes, name + ".toml")) as f:
         text = f.read()
@@ -32,6 +35,10 @@ def scene_copy(root, name, scene_dt, tmp):
                       "[bus]\nlatency = 0.00001\ncompute_phase = 0.00005\n", text)
     if n != 1:
         sys.exit("%s: no [bus] latency line to replace" % name)
+    if floor is not None:
+        if "\n[solver]\n" not in text:
+            sys.exit("%s: no [solver] table to set node_contact_max_omega_dt in" % name)
+        text = text.replace("\n[solver]\n", "\n[solver]\nnode_contact_max_omega_dt = %r\n" % floor, 1)
     if scene_dt is not None:
         text += "\n[multirate]\nscene_dt = %r\nmargin = 0.002\n" % scene_dt
     path = os.path.join(tmp, "%s_%s.toml" % (name, scene_dt or "single"))
@@ -42,10 +49,11 @@ def scene_copy(root, name, scene_dt, tmp):
 
 def main():
     numen = sys.argv[1]
+    floor = float(sys.argv[2]) if len(sys.argv) > 2 else None
     root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
     with tempfile.TemporaryDirectory() as tmp:
         for name, scene_dt in RUNS:
-            path = scene_copy(root, name, scene_dt, tmp)
+            path = scene_copy(root, name, scene_dt, tmp, floor)
             out = subprocess.run([numen, "run", path, "--json", "--replay"], capture_output=True, text=True)
             if out.returncode != 0:
                 sys.exit("%s failed (exit %d): %s" % (path, out.returncode, out.stderr[-2000:]))

@@ -7,14 +7,17 @@ feedback-force jump (at a new scene model and otherwise) against N; the single-r
 device rate as a line, and the single-rate run at the scene loop's period (dt = N·1 ms, up to
 N = 20) as a second series. Writes the figures and a JSON of the numbers beside them.
 
-    /usr/bin/python3 docs/figures/plot_multirate.py ./build/numen OUT_DIR
+    /usr/bin/python3 docs/figures/plot_multirate.py ./build/numen OUT_DIR [SCENE ...]
+
+With SCENE names, only those scenes are run; the other scenes' numbers are read from the
+OUT_DIR/multirate_quality.json already there, and the figure is drawn from both.
 
 (docs/figures/make_figures.sh runs it.) The scene copies are written to a temporary directory
 with their data and DCF paths made absolute. The margin is 10 mm for every ratio on the rigid
 scenes (1 m/s of tool travel at 100 Hz) and 2 mm on the deformable ones (the hands travel less
-than that in 10 ms; a wider margin brings tangent planes of organ spheres a node never touches,
-docs/multirate.md). A run that fails is left out of its series (a single-rate scene at 20 ms may
-not hold). Needs Debian's python3-matplotlib (run with /usr/bin/python3).
+than that in 10 ms; docs/multirate.md, "The margin on sphere sets"). A run that fails is left
+out of its series (a single-rate scene at 20 ms may not hold, a multirate run at N = 100 may be
+stopped by the run monitor). Needs Debian's python3-matplotlib (run with /usr/bin/python3).
 """
 import json
 import os
@@ -63,7 +66,8 @@ def run(numen, path, may_fail=False):
     out = subprocess.run([numen, "run", path, "--json", "--replay"], capture_output=True, text=True)
     if out.returncode != 0:
         if may_fail:
-            print("left out: %s (exit %d)" % (os.path.basename(path), out.returncode))
+            status = [l.strip() for l in out.stderr.splitlines() if l.strip().startswith("exit status")]
+            print("left out: %s (%s)" % (os.path.basename(path), status[-1] if status else "exit %d" % out.returncode))
             return None
         sys.exit("%s failed (exit %d): %s" % (path, out.returncode, out.stderr[-2000:]))
     return json.loads(out.stdout)
@@ -71,21 +75,38 @@ def run(numen, path, may_fail=False):
 
 def main():
     numen, out_dir = sys.argv[1], sys.argv[2]
+    chosen = sys.argv[3:] or SCENES
+    for name in chosen:
+        if name not in SCENES:
+            sys.exit("unknown scene %r (one of %s)" % (name, ", ".join(SCENES)))
     root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
     results = {}
-    with tempfile.TemporaryDirectory() as tmp:
+    kept = os.path.join(out_dir, "multirate_quality.json")
+    if chosen != SCENES:
+        try:
+            with open(kept) as f:
+                earlier = json.load(f)
+        except OSError as e:
+            sys.exit("%s: %s (the scenes not run are read from it)" % (kept, e))
         for name in SCENES:
+            if name not in chosen:
+                if name not in earlier:
+                    sys.exit("%s has no scene %r (run it too)" % (kept, name))
+                results[name] = earlier[name]
+    with tempfile.TemporaryDirectory() as tmp:
+        for name in chosen:
             single = run(numen, scene_copy(root, name, None, tmp))
-            rows = [run(numen, scene_copy(root, name, n, tmp)) for n in RATIOS]
+            rows = [run(numen, scene_copy(root, name, n, tmp), may_fail=n >= 100) for n in RATIOS]
             slow = [run(numen, scene_copy(root, name, None, tmp, n), may_fail=True) for n in SLOW]
-            results[name] = {"single": single, "multirate": dict(zip(map(str, RATIOS), rows)),
+            results[name] = {"single": single,
+                             "multirate": {str(n): r for n, r in zip(RATIOS, rows) if r is not None},
                              "slow": {str(n): r for n, r in zip(SLOW, slow) if r is not None}}
     with open(os.path.join(out_dir, "multirate_quality.json"), "w") as f:
         json.dump({n: {"single": {k: r["single"][k] for k in keys(r["single"])},
                        "multirate": {q: {k: v[k] for k in keys(v)} | {"multirate": v["multirate"]}
                                      for q, v in r["multirate"].items()},
                        "slow": {q: {k: v[k] for k in keys(v)} for q, v in r["slow"].items()}}
-                   for n, r in results.items()}, f, indent=1)
+                   for n, r in ((n, results[n]) for n in SCENES)}, f, indent=1)
     fig, ax = plt.subplots(len(SCENES), 4, figsize=(16, 3.6 * len(SCENES)))
     for i, name in enumerate(SCENES):
         r = results[name]
@@ -94,14 +115,15 @@ def main():
                   ("feedback_force_jump_max_n", "largest feedback-force jump (N)")]
         for j, (key, label) in enumerate(panels):
             a = ax[i][j]
-            ys = [r["multirate"][str(n)][key] for n in RATIOS]
-            a.semilogx(RATIOS, ys, "o-", label="multirate (device 1 kHz)")
+            ratios = [n for n in RATIOS if str(n) in r["multirate"]]
+            ys = [r["multirate"][str(n)][key] for n in ratios]
+            a.semilogx(ratios, ys, "o-", label="multirate (device 1 kHz)")
             slow = [(n, r["slow"][str(n)][key]) for n in SLOW if str(n) in r["slow"]]
             if slow:
                 a.semilogx([n for n, _ in slow], [y for _, y in slow], "^:", color="tab:red",
                            label="single-rate at dt = N ms")
             if key == "feedback_force_jump_max_n":
-                a.semilogx(RATIOS, [r["multirate"][str(n)]["multirate"]["model_force_jump_max_n"] for n in RATIOS],
+                a.semilogx(ratios, [r["multirate"][str(n)]["multirate"]["model_force_jump_max_n"] for n in ratios],
                            "s--", label="… into a period with a new model")
             a.axhline(r["single"][key], color="k", lw=0.8, label="single-rate 1 kHz")
             a.set_title("%s: %s" % (name, label), fontsize=9)

@@ -226,3 +226,57 @@ TEST(MultirateNet, ASpherePlaneKeepsNothingOfTheNodePlaneBeforeIt) {
   EXPECT_EQ(p.depth_offset, 0.0);
   EXPECT_EQ(p.radius, 0.0);
 }
+
+namespace {
+
+/// The look-ahead candidates (NodeContact::engaged) that cut_back_node_contacts() keeps for the
+/// 42-node ball's lowest node, at rest on its anchor with `gap` (m) between its sphere and the
+/// floor, its core moving at `speed` (m/s) along −z, over a scene step of `step` (s); margin
+/// 2 mm. Returns {candidates of the lowest node, its contacts found on the grown spheres}.
+std::pair<int, int> lowest_node_candidates(double gap, double speed, double step) {
+  core::Model ball = numen::test::make_deformable_ball(1);
+  const double margin = 0.002;
+  core::Model proximity;
+  EXPECT_EQ(core::make_proximity_model(ball, 0, margin, proximity), "");
+  core::Data d = core::make_data(proximity);
+  int lowest = 0;
+  for (int i = 0; i < ball.num_nodes(); ++i)
+    if (ball.node_rest[static_cast<std::size_t>(i)].z() < ball.node_rest[static_cast<std::size_t>(lowest)].z()) lowest = i;
+  const auto low = static_cast<std::size_t>(lowest);
+  d.bodies[0].position = Vec3(0.02, 0.0, -ball.node_rest[low].z() + ball.node_radius[low] + gap);
+  d.bodies[0].linear_velocity = Vec3(0.0, 0.0, -speed);
+  for (int i = 0; i < ball.num_nodes(); ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    d.nodes[k].position = d.bodies[0].position + ball.node_rest[k];
+    d.nodes[k].velocity.setZero();  // the node lags: its anchor moves, it does not yet
+  }
+  core::detect_node_contacts(proximity, d);
+  int found = 0;
+  for (int i = 0; i < d.num_node_contacts; ++i) found += d.node_contacts[static_cast<std::size_t>(i)].node == lowest;
+  const std::vector<int> device_body = {0};
+  core::detail::cut_back_node_contacts(proximity, d, device_body, margin, 0.0, step);
+  int kept = 0;
+  for (int i = 0; i < d.num_node_contacts; ++i) {
+    const core::NodeContact& c = d.node_contacts[static_cast<std::size_t>(i)];
+    if (c.node != lowest) continue;
+    EXPECT_TRUE(c.engaged);
+    ++kept;
+  }
+  return {kept, found};
+}
+
+}  // namespace
+
+// A node off the surface is a candidate within kLookAheadGap of it, or farther (within the
+// margin) when its anchor, carried at the core's twist, is beyond the surface at the step's
+// end: its tie pulls it there within the step. At a rate ratio of 1 (step 0) no look-ahead.
+TEST(MultirateNet, LookAheadKeepsANodeWhoseAnchorReachesTheSurfaceWithinTheStep) {
+  NUMEN_REQUIRE_DEFORMABLE();
+  EXPECT_EQ(lowest_node_candidates(0.5e-4, 0.0, 0.01), std::make_pair(1, 1));   // within the gap
+  EXPECT_EQ(lowest_node_candidates(0.5e-3, 0.0, 0.01), std::make_pair(0, 1));   // at rest: dropped
+  EXPECT_EQ(lowest_node_candidates(0.5e-3, 0.04, 0.01), std::make_pair(0, 1));  // anchor 0.4 mm down
+  EXPECT_EQ(lowest_node_candidates(0.5e-3, 0.06, 0.01), std::make_pair(1, 1));  // anchor 0.6 mm down
+  EXPECT_EQ(lowest_node_candidates(0.5e-3, 0.06, 0.001), std::make_pair(0, 1)); // a shorter step
+  EXPECT_EQ(lowest_node_candidates(0.5e-4, 0.06, 0.0), std::make_pair(0, 1));   // no look-ahead
+  EXPECT_EQ(lowest_node_candidates(2.5e-3, 0.5, 0.01), std::make_pair(0, 0));   // beyond the margin
+}

@@ -81,16 +81,27 @@ void build_node_planes(const Model& scene, const Data& data, std::span<const int
 /// The look-ahead's reach (m): a node of a net on the god-object within this distance of a
 /// surface, touching nothing else, keeps its contact (depth ≤ 0) as a look-ahead candidate
 /// (NodeContact::engaged). An engaged contact that the node does not reach pulls it by k d₁
-/// (d₁ its depth at the step's end, ≥ −0.1 mm: 2 N at 2·10⁴ N/m); a wider reach let the
-/// endobag's bag be pulled into its sphere-set organs (docs/multirate.md, "Deformable
-/// god-objects").
+/// (d₁ its depth at the step's end, ≥ −0.1 mm: 2 N at 2·10⁴ N/m); a wider reach for every
+/// node let the endobag's bag be pulled into its sphere-set organs (docs/multirate.md,
+/// "Deformable god-objects"). Farther nodes are candidates by anchor_reaches().
 inline constexpr double kLookAheadGap = 1e-4;
+
+/// True when the anchor of the node of contact `c` (its rest position on its rigid component,
+/// carried at the component's twist over `step` seconds) lies beyond the contact's tangent
+/// plane (the other side's point carried at its body's velocity) at the step's end: the tie
+/// pulls the node there within the step, however far it is from the surface at the start
+/// (d − n · (a₁ − x − h v_b) > 0, d the contact's true depth, n its normal, x the node's
+/// position, a₁ the anchor at the step's end). For a node of a net on the god-object, whose
+/// contact `c` is in `data` (its component's state the sample's). No allocation.
+bool anchor_reaches(const Model& scene, const Data& data, const NodeContact& c, double step) noexcept;
 
 /// Cuts the node contacts of nets on the god-object in `data` back to the true node spheres
 /// (depth − δ, the middle of the overlap δ/2 towards the node), marks the look-ahead
-/// candidates when `look_ahead` (NodeContact::engaged: every contact left with depth > 0, and
-/// one with depth in (−kLookAheadGap, 0] of a node with no other contact; the rest is dropped;
-/// without `look_ahead` a contact left without depth is dropped), drops those with
+/// candidates when `step` > 0 (the scene step, s; NodeContact::engaged: every contact left
+/// with depth > 0, and one with depth ≤ 0 of a node with no other contact, within
+/// kLookAheadGap of the surface or whose anchor reaches it within the step, anchor_reaches();
+/// the rest is dropped; with `step` = 0, no look-ahead, a contact left without depth is
+/// dropped), drops those with
 /// a body of the god-object (the scene-loop model has not the god-object's joints, so a net on
 /// one of its bodies is no longer in the same articulation as the others, with which it never
 /// collides in the scene: ArticulationTopology::body_tree);
@@ -100,7 +111,7 @@ inline constexpr double kLookAheadGap = 1e-4;
 /// longer counted) and data.max_penetration (`body_deepest`: the deepest body contact). No
 /// allocation.
 void cut_back_node_contacts(const Model& scene, Data& data, std::span<const int> device_body,
-                            double margin, double body_deepest, bool look_ahead) noexcept;
+                            double margin, double body_deepest, double step) noexcept;
 
 /// Drops the node contacts without depth from `data` (the look-ahead's candidates, once the
 /// scene step is done: not contacts). No allocation.
