@@ -2,6 +2,7 @@
 /// The nets of a multirate god-object (detail/multirate_net.hpp, docs/multirate.md).
 
 #include "detail/multirate_net.hpp"
+#include "detail/net_surface.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -85,11 +86,13 @@ void build_node_planes(const Model& scene, const Data& data, std::span<const int
       scratch.planes_stiffness[static_cast<std::size_t>(slot)] = 0.0;
       scratch.planes_depth[static_cast<std::size_t>(slot)] = 0.0;
     }
-    const double k = scene.material_pairs[static_cast<std::size_t>(c.material_pair)].stiffness;
+    // A triangle contact's share w (NodeContact::share; 1 for a node sphere's contact) counts
+    // as a plane of stiffness w k at its node.
+    const double k = c.share * scene.material_pairs[static_cast<std::size_t>(c.material_pair)].stiffness;
     const double d0 = c.depth - margin;  // the true depth
     if (d0 > 0.0) {
       scratch.planes_stiffness[static_cast<std::size_t>(slot)] += k;
-      scratch.planes_depth[static_cast<std::size_t>(slot)] += d0;
+      scratch.planes_depth[static_cast<std::size_t>(slot)] += c.share * d0;
     }
     const BodyState& g = data.bodies[static_cast<std::size_t>(nm.body)];
     const Vec3& x = data.nodes[node].position;
@@ -125,9 +128,16 @@ void build_node_planes(const Model& scene, const Data& data, std::span<const int
       p.obstacle = -1;
       p.other_sphere = -1;
       p.velocity = data.nodes[node].velocity;
+      if (c.face >= 0) {  // a triangle contact: through the triangle's closest point
+        p.point = c.position - (0.5 * c.depth) * c.normal;
+        p.velocity = contact_node_value(scene, c, [&](int v) -> const Vec3& {
+          return data.nodes[static_cast<std::size_t>(v)].velocity;
+        });
+      }
     }
     p.carrier = -1;  // the net renders the contact on a scene body in the scene loop
-    p.stiffness_scale = 1.0;
+    p.share = c.share;
+    p.stiffness_scale = c.share;  // w; times s below
     p.depth_offset = d0;  // for now (below: the offset)
     p.impulse.setZero();
     p.impulse_point = p.point;
@@ -159,13 +169,14 @@ void build_node_planes(const Model& scene, const Data& data, std::span<const int
     ContactPlane& p = out.planes[static_cast<std::size_t>(i)];
     const auto slot = static_cast<std::size_t>(scratch.plane_slot[static_cast<std::size_t>(i)]);
     const double k_n = p.normal.dot(scratch.stiffness[slot] * p.normal);
-    const double k = scene.material_pairs[static_cast<std::size_t>(p.material_pair)].stiffness;
+    const double share = p.share;
+    const double k = share * scene.material_pairs[static_cast<std::size_t>(p.material_pair)].stiffness;
     // The node's planes in contact act in parallel (Σk), in series with the node: each one's
     // share of the series stiffness Σk k_n / (Σk + k_n) is k s with s = k_n / (Σk + k_n); a
     // plane not in contact at the sample joins them when it engages (Σk + k).
     const double d0 = p.depth_offset;
     const double k_sum = scratch.planes_stiffness[slot] + (d0 > 0.0 ? 0.0 : k);
-    p.stiffness_scale = k_n > 0.0 && k_sum > 0.0 ? k_n / (k_sum + k_n) : 1.0;
+    p.stiffness_scale = share * (k_n > 0.0 && k_sum > 0.0 ? k_n / (k_sum + k_n) : 1.0);
     p.depth_offset = 0.0;
     if (!(d0 > 0.0) || !(k_n > 0.0) || !(k > 0.0)) continue;
     // In contact: the node's deflection from its rest position on the component along n,
@@ -179,8 +190,8 @@ void build_node_planes(const Model& scene, const Data& data, std::span<const int
     // A god-object node is pushed along its plane's normal, an organ's node against it.
     const double side = net_on_god_object(scene, device_body, scene.node_net[node]) ? 1.0 : -1.0;
     const double e0 = std::max(0.0, side * p.normal.dot(data.nodes[node].position - anchor));
-    const double w = d0 / scratch.planes_depth[slot];
-    p.depth_offset = w * k_n * e0 / (k * p.stiffness_scale) - d0;
+    const double w = share * d0 / scratch.planes_depth[slot];
+    p.depth_offset = w * k_n * e0 / (k / share * p.stiffness_scale) - d0;
   }
   for (int s = 0; s < slots; ++s)
     scratch.slot_of_node[static_cast<std::size_t>(scratch.slot_node[static_cast<std::size_t>(s)])] = -1;

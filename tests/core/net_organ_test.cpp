@@ -58,12 +58,12 @@ TEST(NetOrgan, TheOrgansReactionActsOnTheToolAndReachesTheFeedback) {
       "settles the tool on the organ to compare forces (figures, several minutes under "
       "ASan+UBSan); the organ's step runs there in NetOrgan.StepsPressingTheShippedOrganDoNotAllocate");
   // A god-object pressed 10 mm into the patch: at rest, the coupling spring holds the organ's
-  // reaction (−Σ node contact forces, on the tool: +z) and the device feels (k_fb / k_c) of it (Eq. 8
+  // reaction (−Σ node contact forces, the triangle contact's shares, on the tool: +z) and the device feels (k_fb / k_c) of it (Eq. 8
   // on the coupling's stretch).
   const core::Model m = organ_model(patch(), OrganParams{}, 1e-3, core::CouplingMode::kGodObject,
                                     0.005, Vec3(0, 0, 0.02));
   core::Data d = core::make_data(m);
-  const double z_touch = 0.005 + m.node_radius[0];
+  const double z_touch = 0.005;  // the tool's sphere on the patch's triangles (z = 0)
   d.target.position = Vec3(0.0, 0.0, z_touch - 0.010);
   for (int k = 0; k < 3000; ++k) {
     core::step(m, d);
@@ -187,7 +187,7 @@ TEST(NetOrgan, MultirateDeviceLoopFeelsTheOrganAsTheSingleRateStepDoes) {
   const double dt = 1e-4;
   const core::Model m = organ_model(patch(), OrganParams{}, dt, core::CouplingMode::kGodObject,
                                     0.005, Vec3(0, 0, 0.012));
-  const double z_touch = 0.005 + m.node_radius[0];
+  const double z_touch = 0.005;  // the tool's sphere on the patch's triangles (z = 0)
   core::Data single = core::make_data(m);
   core::MultirateGodObject mr(m, 1, {10, 0.002, {}});
   double deepest_single = 0.0, deepest_mr = 0.0;
