@@ -3,8 +3,9 @@
 /// Private to numen::core (core/src/detail): an organ's surface contacts (docs/deformable.md,
 /// "Surface contacts"). An organ (a net on an anchored body, BodyModel::anchored) whose net has
 /// surface triangles (Model::net_faces) meets the dynamic bodies' spheres with its triangles
-/// through the node centres instead of its node spheres: each sphere near the net gets at most
-/// one contact, with its nearest surface point, written as one NodeContact per triangle node of
+/// through the node centres instead of its node spheres: a contact per triangle whose closest
+/// point to a sphere's centre lies inside it within the sphere's radius, and one at the nearest
+/// edge or vertex point when that is nearer, each written as one NodeContact per triangle node of
 /// barycentric weight > 0 (NodeContact::face). No allocation, no exception.
 
 #include <array>
@@ -25,12 +26,13 @@ namespace detail {
 /// nodes' current positions. Broad phase: the triangles whose bounds meet the near spheres'
 /// bounds (NetScratch::face_candidates, one pass over the net's triangles), then per sphere
 /// those whose bounds are within its radius. Narrow phase: the closest point q on each
-/// candidate (Ericson 2005, §5.1.5; mesh_shape_query.hpp) and the nearest one, at distance
-/// d < r (sphere centre c, radius r). Outside or inside from the angle-weighted pseudo-normal
-/// at q of the triangles that share it (Bærentzen & Aanæs 2005): outward direction o =
-/// ±(c − q)/d, signed distance s = ±d, depth r − s (up to 2r for a centre r inside), normal
-/// −o (from the tool's sphere into the organ), position the middle of the overlap
-/// ½ (q + c − r o). `mat_net`: the net's row of Model::material_pairs.
+/// candidate (Ericson 2005, §5.1.5; mesh_shape_query.hpp), at d = |c − q| < r (sphere centre c,
+/// radius r). A triangle whose q lies inside it: a contact along its outward unit normal o,
+/// depth r − o · (c − q) (up to 2r for a centre r inside). The nearest q on an edge or a vertex,
+/// when nearer than every such triangle: one more, o = ±(c − q)/d, outside or inside from the
+/// angle-weighted pseudo-normal at q of the triangles that share it (Bærentzen & Aanæs 2005),
+/// depth r ∓ d. Normal −o (from the tool's sphere into the organ), position the middle of the
+/// overlap ½ (q + c − r o). `mat_net`: the net's row of Model::material_pairs.
 void collide_net_faces(const Model& model, const Data& data, NetScratch& ns, const NetModel& net,
                        int num_near, int mat_net, NodeContactSink& sink) noexcept;
 
