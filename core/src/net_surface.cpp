@@ -25,6 +25,11 @@ using collision_detail::kMargin;
 /// edge point computed from two triangles).
 constexpr double kSamePoint2 = 1e-9 * 1e-9;
 
+/// A triangle with an edge stretched beyond this many times its rest length is torn: it meets
+/// no sphere (docs/deformable.md, "Surface contacts": a tool driven through the organ otherwise
+/// drags its surface along).
+constexpr double kTearStretch = 3.0;
+
 /// The angle of the triangle (a, b, c) at its point q of feature `f` (Feature): the corner's
 /// angle at a vertex, π on an edge, 2π inside; the weight of its normal in the pseudo-normal.
 double angle_at(int f, const Vec3& a, const Vec3& b, const Vec3& c) noexcept {
@@ -74,6 +79,14 @@ void collide_net_faces(const Model& model, const Data& data, NetScratch& ns, con
     const Vec3& c = nodes[t[2]].position;
     const Vec3 lo = a.cwiseMin(b).cwiseMin(c), hi = a.cwiseMax(b).cwiseMax(c);
     if (!boxes_overlap(lo, hi, qlo, qhi) || !(lo.allFinite() && hi.allFinite())) continue;
+    const Vec3& ra = model.node_rest[static_cast<std::size_t>(t[0])];
+    const Vec3& rb = model.node_rest[static_cast<std::size_t>(t[1])];
+    const Vec3& rc = model.node_rest[static_cast<std::size_t>(t[2])];
+    constexpr double kTear2 = kTearStretch * kTearStretch;
+    if ((b - a).squaredNorm() > kTear2 * (rb - ra).squaredNorm() ||
+        (c - b).squaredNorm() > kTear2 * (rc - rb).squaredNorm() ||
+        (a - c).squaredNorm() > kTear2 * (ra - rc).squaredNorm())
+      continue;  // torn
     ns.face_candidates[static_cast<std::size_t>(nc)] = f;
     ns.face_lo[static_cast<std::size_t>(nc)] = lo;
     ns.face_hi[static_cast<std::size_t>(nc)] = hi;
