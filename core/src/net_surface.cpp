@@ -96,6 +96,10 @@ void collide_net_faces(const Model& model, const Data& data, NetScratch& ns, con
   const std::int32_t* cand = ns.face_candidates.data();
   const Vec3* flo = ns.face_lo.data();
   const Vec3* fhi = ns.face_hi.data();
+  // Corner k of candidate m at the nodes' current positions.
+  const auto corner = [&](int m, int k) -> const Vec3& {
+    return nodes[model.net_faces[static_cast<std::size_t>(cand[m])][static_cast<std::size_t>(k)]].position;
+  };
 
   int j = 0;
   for (int k = 0; k < num_near; ++k) {
@@ -120,9 +124,7 @@ void collide_net_faces(const Model& model, const Data& data, NetScratch& ns, con
       for (int m = 0; m < nc; ++m) {
         if (detail::box_distance2(centre, flo[m], fhi[m]) >= r * r) continue;
         const std::array<int, 3>& t = model.net_faces[static_cast<std::size_t>(cand[m])];
-        const Vec3& a = nodes[t[0]].position;
-        const Vec3& b = nodes[t[1]].position;
-        const Vec3& c = nodes[t[2]].position;
+        const Vec3 &a = corner(m, 0), &b = corner(m, 1), &c = corner(m, 2);
         int fm = kFace;
         Vec3 wm;
         const Vec3 qm = closest_on_triangle(centre, a, b, c, fm, wm);
@@ -152,10 +154,7 @@ void collide_net_faces(const Model& model, const Data& data, NetScratch& ns, con
       Vec3 pn = Vec3::Zero();
       for (int m = 0; m < nc; ++m) {
         if (m != best && detail::box_distance2(q, flo[m], fhi[m]) > kSamePoint2) continue;
-        const std::array<int, 3>& t = model.net_faces[static_cast<std::size_t>(cand[m])];
-        const Vec3& a = nodes[t[0]].position;
-        const Vec3& b = nodes[t[1]].position;
-        const Vec3& c = nodes[t[2]].position;
+        const Vec3 &a = corner(m, 0), &b = corner(m, 1), &c = corner(m, 2);
         int fm = kFace;
         Vec3 wm;
         const Vec3 qm = m == best ? q : closest_on_triangle(centre, a, b, c, fm, wm);

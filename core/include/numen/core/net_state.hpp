@@ -38,7 +38,11 @@ struct NodeContact {
   double depth = 0.0;            ///< Penetration depth (m), > 0.
   Vec3 force = Vec3::Zero();     ///< Penalty force on the node (N, world); −force on body_b.
   Vec3 r_b = Vec3::Zero();       ///< Contact point − COM of body_b (m, world); 0 when static.
-  double normal_velocity = 0.0;  ///< v_n = n · (v_node − v_b(point)) at the step's start (m/s).
+  /// v_n = n · (v_node − v_b(point)) at the step's start (m/s): the implicit step's h² K v₀ term.
+  /// A triangle contact's share keeps its own node's velocity here (its law acts on the
+  /// triangle's point velocity): the Jacobian is lumped on the nodes (docs/deformable.md,
+  /// "Surface contacts").
+  double normal_velocity = 0.0;
   bool active = false;           ///< f_n > 0 (or `engaged`).
   /// A look-ahead candidate: set by the caller of the step (the multirate scene loop,
   /// docs/multirate.md, "Deformable god-objects"), never by detect_node_contacts(). Where the
