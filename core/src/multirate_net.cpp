@@ -156,7 +156,7 @@ void build_node_planes(const Model& scene, const Data& data, std::span<const int
       const int sb = scratch.slot_of_node[static_cast<std::size_t>(sp.node_b)];
       if (sa < 0 && sb < 0) continue;
       // An organ's spring between two nodes with planes: a triangle contact loads its nodes
-      // together, so the spring moves with both and holds neither (counted, it made the device
+      // together, so the spring moves with both and holds neither (counted, it makes the device
       // loop ~20 % stiffer than the net: docs/deformable.md, "Organs in multirate").
       if (sa >= 0 && sb >= 0 && scene.bodies[static_cast<std::size_t>(nm.body)].anchored) continue;
       Vec3 e = data.nodes[static_cast<std::size_t>(sp.node_b)].position -
