@@ -69,7 +69,8 @@ DataFootprint data_footprint(const Data& d) noexcept {
            n.sweep_springs.weight_isotropic, n.sweep_springs.high, n.spring_constants.rest_length,
            n.spring_constants.stiffness, n.spring_constants.damping, n.spring_length,
            n.spring_low_begin, n.spring_slot, n.near_obstacles, n.obstacle_axis,
-           n.obstacle_rotation, n.near_bodies, n.near_sphere_end, n.near_spheres)};
+           n.obstacle_rotation, n.near_bodies, n.near_sphere_end, n.near_spheres,
+           n.face_candidates, n.face_lo, n.face_hi)};
   f.groups[6] = {"scratch block", sizeof(DataScratch)};
   return f;
 }
@@ -85,7 +86,7 @@ ModelFootprint model_footprint(const Model& m) noexcept {
                                    g.entries)};
   f.groups[2] = {"joints", heap(m.joints, t.nodes, t.body_node, t.joint_node, t.body_tree)};
   f.groups[3] = {"nets", heap(m.nets, m.net_springs, m.node_rest, m.node_mass, m.node_radius,
-                              m.node_net, m.node_sweep_order)};
+                              m.node_net, m.node_sweep_order, m.net_faces)};
   return f;
 }
 

@@ -40,6 +40,7 @@ std::string validate_nets(const Model& model) {
     return "nets: node_rest, node_mass, node_radius and node_net must have the same size";
   int next_node = 0;
   int next_spring = 0;
+  int next_face = 0;
   for (int k = 0; k < model.num_nets(); ++k) {
     const NetModel& net = model.nets[static_cast<std::size_t>(k)];
     const std::string who = "net '" + net.name + "'";
@@ -53,8 +54,11 @@ std::string validate_nets(const Model& model) {
     if (!(net.tie_stiffness > 0.0 && std::isfinite(net.tie_stiffness)) ||
         !(net.tie_damping >= 0.0 && std::isfinite(net.tie_damping)))
       return who + ": tie_stiffness must be finite and > 0, tie_damping finite and >= 0";
+    if (net.face_begin != next_face || net.face_count < 0)
+      return who + ": face range must follow the previous net's";
     next_node += net.node_count;
     next_spring += net.structural_count + net.bending_count;
+    next_face += net.face_count;
     for (int i = net.node_begin; i < next_node; ++i) {
       const auto u = static_cast<std::size_t>(i);
       if (model.node_net[u] != k || !finite(model.node_rest[u]) || !(model.node_mass[u] > 0.0) ||
@@ -72,10 +76,20 @@ std::string validate_nets(const Model& model) {
         return who + ": spring " + std::to_string(s - net.spring_begin) +
                " needs two distinct nodes of the net, rest length > 0, finite k, γ >= 0";
     }
+    for (int f = net.face_begin; f < next_face; ++f) {
+      if (f >= static_cast<int>(model.net_faces.size())) return who + ": face range beyond Model::net_faces";
+      const auto& t = model.net_faces[static_cast<std::size_t>(f)];
+      for (int v : t)
+        if (v < net.node_begin || v >= next_node)
+          return who + ": face " + std::to_string(f - net.face_begin) + " names a node outside the net";
+      if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2])
+        return who + ": face " + std::to_string(f - net.face_begin) + " repeats a node";
+    }
   }
   if (next_node != static_cast<int>(n) ||
-      next_spring != static_cast<int>(model.net_springs.size()))
-    return "nets: node or spring arrays hold entries no net owns";
+      next_spring != static_cast<int>(model.net_springs.size()) ||
+      next_face != static_cast<int>(model.net_faces.size()))
+    return "nets: node, spring or face arrays hold entries no net owns";
   return "";
 }
 

@@ -82,6 +82,7 @@ std::string make_god_object_model(const Model& scene, int body, double device_dt
   if (std::string e = detail::lump_nets(scene, local, m); !e.empty()) return e;
   m.nets.clear();
   m.net_springs.clear();
+  m.net_faces.clear();
   m.node_rest.clear();
   m.node_mass.clear();
   m.node_radius.clear();
@@ -280,7 +281,7 @@ void write_plane_contacts(const Model& model, const ContactPlaneSet& planes, Dat
     c.sphere_a = node ? -1 : bm.sphere_begin + p.sphere;
     c.material_pair = p.material_pair;
     c.stiffness_scale = node ? p.stiffness_scale : 1.0;
-    c.damping_scale = c.stiffness_scale * c.stiffness_scale;
+    c.damping_scale = node && p.share > 0.0 ? c.stiffness_scale * c.stiffness_scale / p.share : 1.0;
     c.position = centre - (s.radius - 0.5 * depth) * normal;  // middle of the overlap
     c.normal = normal;
     c.depth = depth;

@@ -2,6 +2,7 @@
 /// The nets of a multirate god-object (detail/multirate_net.hpp, docs/multirate.md).
 
 #include "detail/multirate_net.hpp"
+#include "detail/net_surface.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -85,11 +86,13 @@ void build_node_planes(const Model& scene, const Data& data, std::span<const int
       scratch.planes_stiffness[static_cast<std::size_t>(slot)] = 0.0;
       scratch.planes_depth[static_cast<std::size_t>(slot)] = 0.0;
     }
-    const double k = scene.material_pairs[static_cast<std::size_t>(c.material_pair)].stiffness;
+    // A triangle contact's share w (NodeContact::share; 1 for a node sphere's contact) counts
+    // as a plane of stiffness w k at its node.
+    const double k = c.share * scene.material_pairs[static_cast<std::size_t>(c.material_pair)].stiffness;
     const double d0 = c.depth - margin;  // the true depth
     if (d0 > 0.0) {
       scratch.planes_stiffness[static_cast<std::size_t>(slot)] += k;
-      scratch.planes_depth[static_cast<std::size_t>(slot)] += d0;
+      scratch.planes_depth[static_cast<std::size_t>(slot)] += c.share * d0;
     }
     const BodyState& g = data.bodies[static_cast<std::size_t>(nm.body)];
     const Vec3& x = data.nodes[node].position;
@@ -125,9 +128,16 @@ void build_node_planes(const Model& scene, const Data& data, std::span<const int
       p.obstacle = -1;
       p.other_sphere = -1;
       p.velocity = data.nodes[node].velocity;
+      if (c.face >= 0) {  // a triangle contact: through the triangle's closest point
+        p.point = c.position - (0.5 * c.depth) * c.normal;
+        p.velocity = contact_node_value(scene, c, [&](int v) -> const Vec3& {
+          return data.nodes[static_cast<std::size_t>(v)].velocity;
+        });
+      }
     }
     p.carrier = -1;  // the net renders the contact on a scene body in the scene loop
-    p.stiffness_scale = 1.0;
+    p.share = c.share;
+    p.stiffness_scale = c.share;  // w; times s below
     p.depth_offset = d0;  // for now (below: the offset)
     p.impulse.setZero();
     p.impulse_point = p.point;
@@ -145,6 +155,10 @@ void build_node_planes(const Model& scene, const Data& data, std::span<const int
       const int sa = scratch.slot_of_node[static_cast<std::size_t>(sp.node_a)];
       const int sb = scratch.slot_of_node[static_cast<std::size_t>(sp.node_b)];
       if (sa < 0 && sb < 0) continue;
+      // An organ's spring between two nodes with planes: a triangle contact loads its nodes
+      // together, so the spring moves with both and holds neither (counted, it makes the device
+      // loop ~20 % stiffer than the net: docs/deformable.md, "Organs in multirate").
+      if (sa >= 0 && sb >= 0 && scene.bodies[static_cast<std::size_t>(nm.body)].anchored) continue;
       Vec3 e = data.nodes[static_cast<std::size_t>(sp.node_b)].position -
                data.nodes[static_cast<std::size_t>(sp.node_a)].position;
       const double l = e.norm();
@@ -155,32 +169,57 @@ void build_node_planes(const Model& scene, const Data& data, std::span<const int
       if (sb >= 0) scratch.stiffness[static_cast<std::size_t>(sb)] += k_e;
     }
   }
-  for (int i = first; i < out.count; ++i) {
-    ContactPlane& p = out.planes[static_cast<std::size_t>(i)];
-    const auto slot = static_cast<std::size_t>(scratch.plane_slot[static_cast<std::size_t>(i)]);
-    const double k_n = p.normal.dot(scratch.stiffness[slot] * p.normal);
-    const double k = scene.material_pairs[static_cast<std::size_t>(p.material_pair)].stiffness;
-    // The node's planes in contact act in parallel (Σk), in series with the node: each one's
-    // share of the series stiffness Σk k_n / (Σk + k_n) is k s with s = k_n / (Σk + k_n); a
-    // plane not in contact at the sample joins them when it engages (Σk + k).
-    const double d0 = p.depth_offset;
-    const double k_sum = scratch.planes_stiffness[slot] + (d0 > 0.0 ? 0.0 : k);
-    p.stiffness_scale = k_n > 0.0 && k_sum > 0.0 ? k_n / (k_sum + k_n) : 1.0;
-    p.depth_offset = 0.0;
-    if (!(d0 > 0.0) || !(k_n > 0.0) || !(k > 0.0)) continue;
-    // In contact: the node's deflection from its rest position on the component along n,
-    // e₀ ≥ 0, is what its tie and springs carried to the component (k_n e₀), shared among the
-    // node's planes in contact by their depths (their share of the contact force, w = d₀/Σd₀);
-    // the plane starts there: k s (d₀ + offset) = w k_n e₀.
+  // The node's deflection from its rest position on the component along n, e₀ ≥ 0, is what
+  // its tie and springs carried to the component (k_n e₀).
+  const auto deflection = [&](const ContactPlane& p) {
     const NetModel& nm = scene.nets[static_cast<std::size_t>(scene.node_net[static_cast<std::size_t>(p.node)])];
     const BodyState& g = data.bodies[static_cast<std::size_t>(nm.body)];
     const auto node = static_cast<std::size_t>(p.node);
     const Vec3 anchor = g.position + g.orientation * scene.node_rest[node];
     // A god-object node is pushed along its plane's normal, an organ's node against it.
     const double side = net_on_god_object(scene, device_body, scene.node_net[node]) ? 1.0 : -1.0;
-    const double e0 = std::max(0.0, side * p.normal.dot(data.nodes[node].position - anchor));
-    const double w = d0 / scratch.planes_depth[slot];
-    p.depth_offset = w * k_n * e0 / (k * p.stiffness_scale) - d0;
+    return std::max(0.0, side * p.normal.dot(data.nodes[node].position - anchor));
+  };
+  for (int i = first; i < out.count;) {
+    // The planes of one contact: a node sphere's (one plane, w = 1), or a triangle contact's
+    // (one per node of weight w > 0, consecutive, through the same point along the same normal).
+    const ContactPlane& head = out.planes[static_cast<std::size_t>(i)];
+    int j = i + 1;
+    if (head.share < 1.0)
+      while (j < out.count && out.planes[static_cast<std::size_t>(j)].share < 1.0 &&
+             out.planes[static_cast<std::size_t>(j)].point == head.point &&
+             out.planes[static_cast<std::size_t>(j)].normal == head.normal)
+        ++j;
+    const double k = scene.material_pairs[static_cast<std::size_t>(head.material_pair)].stiffness;
+    const double d0 = head.depth_offset;
+    // The contact (k) in series with its nodes, each node m loaded by its planes in contact in
+    // parallel (Σk_m, this one's w_m k included; a plane not in contact at the sample joins them
+    // when it engages): s = 1 / (1 + Σ_m w_m Σk_m / k_n,m), each plane w_m k s. A node sphere's
+    // plane: s = k_n / (Σk + k_n). At the sample the contact starts from what its nodes carried
+    // for it, shared among each node's planes in contact by their weighted depths w d₀:
+    // k s (d₀ + offset) = Σ_m (w_m d₀ / Σ w d₀) k_n,m e₀,m.
+    double x = 0.0, carried = 0.0, k_n0 = 0.0, k_sum0 = 0.0;
+    bool compliant = true;
+    for (int m = i; m < j; ++m) {
+      const ContactPlane& p = out.planes[static_cast<std::size_t>(m)];
+      const auto slot = static_cast<std::size_t>(scratch.plane_slot[static_cast<std::size_t>(m)]);
+      const double k_n = p.normal.dot(scratch.stiffness[slot] * p.normal);
+      const double k_sum = scratch.planes_stiffness[slot] + (d0 > 0.0 ? 0.0 : p.share * k);
+      if (!(k_n > 0.0) || !(k_sum > 0.0)) compliant = false;
+      x += p.share * k_sum / k_n;
+      k_n0 = k_n;
+      k_sum0 = k_sum;
+      if (d0 > 0.0 && k_n > 0.0) carried += p.share * d0 / scratch.planes_depth[slot] * k_n * deflection(p);
+    }
+    const bool single = j == i + 1 && head.share == 1.0;
+    const double s = !compliant ? 1.0 : single ? k_n0 / (k_sum0 + k_n0) : 1.0 / (1.0 + x);
+    const double offset = d0 > 0.0 && compliant && k > 0.0 ? carried / (k * s) - d0 : 0.0;
+    for (int m = i; m < j; ++m) {
+      ContactPlane& p = out.planes[static_cast<std::size_t>(m)];
+      p.stiffness_scale = p.share * s;
+      p.depth_offset = offset;
+    }
+    i = j;
   }
   for (int s = 0; s < slots; ++s)
     scratch.slot_of_node[static_cast<std::size_t>(scratch.slot_node[static_cast<std::size_t>(s)])] = -1;

@@ -2,7 +2,8 @@
 /// Collision stage of the deformable nets (net_collision.hpp; paper §4.2, §5):
 /// node spheres against the primitive obstacles, the static sphere sets (grid
 /// query shared with the bodies, collision_query.hpp) and the dynamic bodies'
-/// spheres, culled per net by the AABB of its node spheres.
+/// spheres, culled per net by the AABB of its node spheres; an organ's surface
+/// triangles against the dynamic bodies' spheres (net_surface.cpp).
 ///
 /// Depends on detect_contacts() having run earlier in the step on the same
 /// body states: it fills CollisionScratch::body_aabb_min/max, sphere_world and
@@ -25,6 +26,8 @@
 
 #include "detail/data_scratch.hpp"
 #include "detail/narrowphase.hpp"
+#include "detail/net_surface.hpp"
+#include "detail/node_contact_sink.hpp"
 
 namespace numen::core {
 namespace {
@@ -33,46 +36,7 @@ using collision_detail::box_distance2;
 using collision_detail::boxes_overlap;
 using collision_detail::kInf;
 using collision_detail::kMargin;
-
-/// Writes node contacts up to the capacity, counts the rest; tracks the
-/// deepest contact (dropped ones included) of the current net and of the call.
-struct NodeContactSink {
-  NodeContact* out;
-  int capacity;
-  int count = 0;
-  int dropped = 0;
-  double net_max_depth = 0.0;  ///< Reset per net.
-  double max_depth = 0.0;
-
-  /// `com_b`: centre of mass of body_b (ignored for a static obstacle).
-  void add(int node, int body_b, int obstacle, int sphere_b, int material_pair,
-           const ContactGeometry& g, const Vec3& com_b) noexcept {
-    net_max_depth = std::max(net_max_depth, g.depth);
-    if (count >= capacity) {
-      ++dropped;
-      return;
-    }
-    NodeContact& c = out[count++];
-    c.node = node;
-    c.body_b = body_b;
-    c.obstacle = obstacle;
-    c.sphere_b = sphere_b;
-    c.material_pair = material_pair;
-    c.position = g.position;
-    c.normal = g.normal;
-    c.depth = g.depth;
-    c.force.setZero();
-    if (body_b >= 0)
-      c.r_b = g.position - com_b;
-    else
-      c.r_b.setZero();
-    c.normal_velocity = 0.0;
-    c.active = false;
-    c.engaged = false;
-    c.weight_normal = 0.0;
-    c.weight_isotropic = 0.0;
-  }
-};
+using detail::NodeContactSink;
 
 /// Tight AABB of the finite node spheres of `net` (inverted when none is finite).
 void net_aabb(const Model& model, const Data& data, const NetModel& net, Vec3& lo,
@@ -269,7 +233,12 @@ void detect_node_contacts(const Model& model, Data& data) noexcept {
       const int mat_net = net.material * num_materials;
       const Vec3& com = data.bodies[static_cast<std::size_t>(net.body)].position;
       const bool com_finite = com.allFinite();
-      if (num_obstacles > 0 || use_grid || num_bodies > 0) {
+      // An organ with surface triangles meets the tool's spheres with them, not with its
+      // node spheres (net_surface.hpp).
+      const bool faces = organ && net.face_count > 0;
+      if (faces && num_bodies > 0)
+        detail::collide_net_faces(model, data, ns, net, num_bodies, mat_net, sink);
+      if (!faces && (num_obstacles > 0 || use_grid || num_bodies > 0)) {
         for (int i = net.node_begin; i < net.node_begin + net.node_count; ++i) {
           const Vec3& c = data.nodes[static_cast<std::size_t>(i)].position;
           if (!c.allFinite()) continue;

@@ -15,6 +15,7 @@
 
 #include "detail/data_scratch.hpp"
 #include "detail/net_solve.hpp"
+#include "detail/net_surface.hpp"
 
 namespace numen::core {
 namespace {
@@ -347,12 +348,17 @@ void compute_net_forces(const Model& model, Data& data) noexcept {
   // Structural and bending springs.
   spring_pass(model, data);
 
-  // Node contacts (penalty law of contact_force.hpp, the node on side a).
+  // Node contacts (penalty law of contact_force.hpp, the node on side a). A triangle contact's
+  // share (NodeContact::face) takes the law at the triangle's point, Σ w_m v_m, and keeps its
+  // node's share w of the force and of the Jacobian's coefficients (net_surface.hpp).
   const int nc = std::clamp(data.num_node_contacts, 0, static_cast<int>(data.node_contacts.size()));
+  const NodeState* node_states = data.nodes.data();
   for (int c = 0; c < nc; ++c) {
     NodeContact& ct = data.node_contacts[static_cast<std::size_t>(c)];
     const auto i = static_cast<std::size_t>(ct.node);
-    Vec3 v_rel = data.nodes[i].velocity;
+    const Vec3 v_point = detail::contact_node_value(
+        model, ct, [&](int v) -> const Vec3& { return node_states[v].velocity; });
+    Vec3 v_rel = v_point;
     ct.r_b.setZero();
     if (ct.body_b >= 0) {
       const BodyState& b = data.bodies[static_cast<std::size_t>(ct.body_b)];
@@ -364,7 +370,7 @@ void compute_net_forces(const Model& model, Data& data) noexcept {
     // other side adds its mobility along n at the contact point (imposed: none).
     MaterialPair mp = model.material_pairs[static_cast<std::size_t>(ct.material_pair)];
     if (mp.stiffness > 0.0 && model.solver.node_contact_max_omega_dt < std::numeric_limits<double>::infinity()) {
-      double inv_mass = 1.0 / model.node_mass[i];
+      double inv_mass = detail::contact_node_inverse_mass(model, ct);
       if (ct.body_b >= 0 && data.scratch->solver.imposed[static_cast<std::size_t>(ct.body_b)] == 0) {
         const auto b = static_cast<std::size_t>(ct.body_b);
         inv_mass += 1.0 / contact_effective_mass(model.bodies[b], data.bodies[b], ct.r_b, false,
@@ -377,9 +383,16 @@ void compute_net_forces(const Model& model, Data& data) noexcept {
         ++data.contacts_clamped;
       }
     }
-    ct.stiffness = mp.stiffness;
+    ct.stiffness = ct.share * mp.stiffness;
     ContactForceResult r = contact_penalty_force(ct.normal, ct.depth, v_rel, mp);
-    if (ct.engaged && !r.active) {
+    if (ct.face >= 0) {  // the node's share of the triangle's contact
+      r.force *= ct.share;
+      r.normal_force *= ct.share;
+      r.stiffness *= ct.share;
+      r.damping *= ct.share;
+      r.friction *= ct.share;
+    }
+    if (ct.engaged && !r.active && ct.face < 0) {
       // The look-ahead (NodeContact::engaged): the node alone over the step, implicit, with its
       // tie (the component moving at its twist) and its force at the step's start.
       const NetModel& net = model.nets[static_cast<std::size_t>(model.node_net[i])];
@@ -405,7 +418,10 @@ void compute_net_forces(const Model& model, Data& data) noexcept {
       ct.damping = r.damping;
       ct.friction = r.friction;
     }
-    ct.normal_velocity = ct.normal.dot(v_rel);
+    // The implicit step's h² K v₀ term uses the node's own relative velocity: with a triangle
+    // contact's Jacobian lumped on its nodes (docs/deformable.md, "Surface contacts") the same
+    // K̃ must stand on both sides, else the triangle's nodes chatter.
+    ct.normal_velocity = ct.normal.dot(ct.face < 0 ? v_rel : Vec3(v_rel - v_point + data.nodes[i].velocity));
     if (!r.active) continue;
     s.force[i] += r.force;
     if (ct.body_b >= 0) {

@@ -92,6 +92,15 @@ std::string add_net(Model& model, const TriangleMesh& mesh, const NetSettings& s
       return where + "bending pair " + std::to_string(a) + "-" + std::to_string(b) +
              " has zero rest length (coincident vertices)";
   net.bending_count = static_cast<int>(topo.bending_pairs.size());
+  // The surface triangles, wound outward (TriangleMesh): a mesh whose triangles enclose a
+  // negative signed volume winds inward and is turned (the organ's surface contacts read the
+  // outward side from the winding, net_surface.hpp).
+  double volume = 0.0;
+  for (const auto& t : mesh.triangles)
+    volume += mesh.vertices[static_cast<std::size_t>(t[0])].dot(
+        mesh.vertices[static_cast<std::size_t>(t[1])].cross(mesh.vertices[static_cast<std::size_t>(t[2])]));
+  net.face_begin = static_cast<int>(model.net_faces.size());
+  net.face_count = mesh.num_triangles();
 
   const int net_index = model.num_nets();
   for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
@@ -102,6 +111,11 @@ std::string add_net(Model& model, const TriangleMesh& mesh, const NetSettings& s
     model.node_net.push_back(net_index);
   }
   model.net_springs.insert(model.net_springs.end(), springs.begin(), springs.end());
+  for (const auto& t : mesh.triangles)
+    model.net_faces.push_back(volume < 0.0 ? std::array<int, 3>{net.node_begin + t[0], net.node_begin + t[2],
+                                                                net.node_begin + t[1]}
+                                           : std::array<int, 3>{net.node_begin + t[0], net.node_begin + t[1],
+                                                                net.node_begin + t[2]});
   model.nets.push_back(std::move(net));
   return "";
 }

@@ -87,6 +87,12 @@ void NetScratch::resize(const Model& model) {
   std::size_t body_spheres = 0;  // Σ sphere_count: room even if bodies shared a range
   for (const BodyModel& b : model.bodies) body_spheres += static_cast<std::size_t>(b.sphere_count);
   near_spheres.assign(n > 0 ? body_spheres : 0, 0);
+  std::size_t faces = 0;
+  for (const NetModel& net : model.nets) faces = std::max(faces, static_cast<std::size_t>(net.face_count));
+  if (n == 0) faces = 0;
+  face_candidates.assign(faces, 0);
+  face_lo.assign(faces, Vec3::Zero());
+  face_hi.assign(faces, Vec3::Zero());
 }
 
 }  // namespace numen::core

@@ -58,12 +58,12 @@ TEST(NetOrgan, TheOrgansReactionActsOnTheToolAndReachesTheFeedback) {
       "settles the tool on the organ to compare forces (figures, several minutes under "
       "ASan+UBSan); the organ's step runs there in NetOrgan.StepsPressingTheShippedOrganDoNotAllocate");
   // A god-object pressed 10 mm into the patch: at rest, the coupling spring holds the organ's
-  // reaction (−Σ node contact forces, on the tool: +z) and the device feels (k_fb / k_c) of it (Eq. 8
+  // reaction (−Σ node contact forces, the triangle contact's shares, on the tool: +z) and the device feels (k_fb / k_c) of it (Eq. 8
   // on the coupling's stretch).
   const core::Model m = organ_model(patch(), OrganParams{}, 1e-3, core::CouplingMode::kGodObject,
                                     0.005, Vec3(0, 0, 0.02));
   core::Data d = core::make_data(m);
-  const double z_touch = 0.005 + m.node_radius[0];
+  const double z_touch = 0.005;  // the tool's sphere on the patch's triangles (z = 0)
   d.target.position = Vec3(0.0, 0.0, z_touch - 0.010);
   for (int k = 0; k < 3000; ++k) {
     core::step(m, d);
@@ -122,8 +122,8 @@ TEST(NetOrgan, ShippedOrganForceAgainstIndentationConvergesInTheTimeStep) {
       "NetOrgan.StepsPressingTheShippedOrganDoNotAllocate");
   // The shipped organ (sim/data/organ_lobe.obj, 1002 nodes, default.toml's constants), a 2.5 mm
   // sphere (the instrument's tube) imposed at 20 mm/s from −z onto its convex face, 6 mm past
-  // the first touch (at ~7.5 mm and ~3 N this small sphere slips between the nodes into the
-  // hollow net: docs/deformable.md, "Organs"), at dt = 1 ms and 0.1 ms.
+  // its first touch of the rest surface (its triangles: docs/deformable.md, "Surface contacts"),
+  // at dt = 1 ms and 0.1 ms.
   const core::TriangleMesh mesh = shipped_organ_mesh();
   ASSERT_EQ(mesh.num_vertices(), 1002) << "sim/data/organ_lobe.obj";
   const Vec3 dir(0, 0, 1);
@@ -159,7 +159,7 @@ TEST(NetOrgan, StepsPressingTheShippedOrganDoNotAllocate) {
     for (int k = 0; k < steps; ++k) {
       const double t = k * m.dt;
       d.target.position = Vec3(0.008 * std::sin(4.0 * t), 0.006 * std::cos(3.0 * t),
-                               -0.03 + 0.008 * std::min(1.0, t / descent_s));  // 2 mm past the touch
+                               -0.03 + 0.010 * std::min(1.0, t / descent_s));  // 2 mm past the touch
       core::step(m, d);
       ASSERT_EQ(d.status, core::kStepOk) << k;
       max_contacts = std::max(max_contacts, d.num_node_contacts);
@@ -187,7 +187,7 @@ TEST(NetOrgan, MultirateDeviceLoopFeelsTheOrganAsTheSingleRateStepDoes) {
   const double dt = 1e-4;
   const core::Model m = organ_model(patch(), OrganParams{}, dt, core::CouplingMode::kGodObject,
                                     0.005, Vec3(0, 0, 0.012));
-  const double z_touch = 0.005 + m.node_radius[0];
+  const double z_touch = 0.005;  // the tool's sphere on the patch's triangles (z = 0)
   core::Data single = core::make_data(m);
   core::MultirateGodObject mr(m, 1, {10, 0.002, {}});
   double deepest_single = 0.0, deepest_mr = 0.0;

@@ -23,6 +23,8 @@
 #include "numen/core/model.hpp"
 #include "numen/core/step.hpp"
 
+#include "detail/mesh_shape_query.hpp"
+
 namespace numen::test::organ {
 
 using core::Vec3;
@@ -132,10 +134,37 @@ inline core::Model organ_model(const core::TriangleMesh& mesh, const OrganParams
   return m;
 }
 
-/// Distance along unit `dir` from `from` at which a sphere of `radius` first touches a node
-/// sphere of the organ's rest shape (+∞ if it never does).
+/// Distance along unit `dir` from `from` at which a sphere of `radius` first touches the organ's
+/// rest shape (+∞ if it never does within 0.2 m): its surface triangles (the organ's contacts
+/// with the tool, net_surface.hpp; scanned in 0.05 mm steps, then bisected), or its node spheres
+/// for a net without faces.
 inline double first_touch(const core::Model& m, const Vec3& from, const Vec3& dir, double radius) {
   double best = std::numeric_limits<double>::infinity();
+  if (m.nets[0].face_count > 0) {
+    const core::Pose& pose = m.bodies[0].initial_pose;
+    const auto touches = [&](double s) {
+      const Vec3 p = from + s * dir;
+      for (const auto& t : m.net_faces) {
+        int feature = 0;
+        const Vec3 q = core::detail::closest_on_triangle(
+            p, pose.position + pose.orientation * m.node_rest[static_cast<std::size_t>(t[0])],
+            pose.position + pose.orientation * m.node_rest[static_cast<std::size_t>(t[1])],
+            pose.position + pose.orientation * m.node_rest[static_cast<std::size_t>(t[2])], feature);
+        if ((p - q).norm() < radius) return true;
+      }
+      return false;
+    };
+    double lo = 0.0;
+    for (double s = 0.0; s < 0.2; s += 5e-5) {
+      if (touches(s)) {
+        double hi = s;
+        for (int i = 0; i < 60; ++i) (touches(0.5 * (lo + hi)) ? hi : lo) = 0.5 * (lo + hi);
+        return hi;
+      }
+      lo = s;
+    }
+    return best;
+  }
   for (int i = 0; i < m.num_nodes(); ++i) {
     const auto k = static_cast<std::size_t>(i);
     const Vec3 c = m.bodies[0].initial_pose.position + m.bodies[0].initial_pose.orientation * m.node_rest[k];
@@ -151,7 +180,8 @@ inline double first_touch(const core::Model& m, const Vec3& from, const Vec3& di
 }
 
 /// The tool's force along −`dir` from the organ's node contacts (N): Σ node contact forces on
-/// the nodes it touches, projected on `dir` (their reaction on the tool is the opposite).
+/// the nodes it touches (a triangle contact's shares included), projected on `dir` (their
+/// reaction on the tool is the opposite).
 inline double organ_force_on_tool(const core::Data& d, const Vec3& dir) {
   double f = 0.0;
   for (int c = 0; c < d.num_node_contacts; ++c)

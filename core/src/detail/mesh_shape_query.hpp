@@ -19,46 +19,65 @@ inline constexpr double kInf = std::numeric_limits<double>::infinity();
 /// Closest feature of a triangle to a point.
 enum Feature : int { kFace = 0, kVertex0, kVertex1, kVertex2, kEdge01, kEdge12, kEdge20 };
 
-/// Closest point to `p` on the triangle (a, b, c) and its feature: Ericson, Real-Time Collision
+/// Closest point to `p` on the triangle (a, b, c), its feature and its barycentric weights
+/// `w` (the point is w.x a + w.y b + w.z c; each ≥ 0, sum 1): Ericson, Real-Time Collision
 /// Detection (2005), §5.1.5, ClosestPtPointTriangle (Voronoi regions by barycentric tests).
 inline Vec3 closest_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c,
-                         int& feature) noexcept {
+                                int& feature, Vec3& w) noexcept {
   const Vec3 ab = b - a, ac = c - a, ap = p - a;
   const double d1 = ab.dot(ap), d2 = ac.dot(ap);
   if (d1 <= 0.0 && d2 <= 0.0) {
     feature = kVertex0;
+    w = Vec3(1.0, 0.0, 0.0);
     return a;
   }
   const Vec3 bp = p - b;
   const double d3 = ab.dot(bp), d4 = ac.dot(bp);
   if (d3 >= 0.0 && d4 <= d3) {
     feature = kVertex1;
+    w = Vec3(0.0, 1.0, 0.0);
     return b;
   }
   const double vc = d1 * d4 - d3 * d2;
   if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) {
     feature = kEdge01;
-    return a + (d1 / (d1 - d3)) * ab;
+    const double t = d1 / (d1 - d3);
+    w = Vec3(1.0 - t, t, 0.0);
+    return a + t * ab;
   }
   const Vec3 cp = p - c;
   const double d5 = ab.dot(cp), d6 = ac.dot(cp);
   if (d6 >= 0.0 && d5 <= d6) {
     feature = kVertex2;
+    w = Vec3(0.0, 0.0, 1.0);
     return c;
   }
   const double vb = d5 * d2 - d1 * d6;
   if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) {
     feature = kEdge20;
-    return a + (d2 / (d2 - d6)) * ac;
+    const double t = d2 / (d2 - d6);
+    w = Vec3(1.0 - t, 0.0, t);
+    return a + t * ac;
   }
   const double va = d3 * d6 - d5 * d4;
   if (va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0) {
     feature = kEdge12;
-    return b + ((d4 - d3) / ((d4 - d3) + (d5 - d6))) * (c - b);
+    const double t = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+    w = Vec3(0.0, 1.0 - t, t);
+    return b + t * (c - b);
   }
   const double denom = 1.0 / (va + vb + vc);
   feature = kFace;
-  return a + ab * (vb * denom) + ac * (vc * denom);
+  const double v = vb * denom, u = vc * denom;
+  w = Vec3(1.0 - v - u, v, u);
+  return a + ab * v + ac * u;
+}
+
+/// Closest point to `p` on the triangle (a, b, c) and its feature (the weights unused).
+inline Vec3 closest_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c,
+                                int& feature) noexcept {
+  Vec3 w;
+  return closest_on_triangle(p, a, b, c, feature, w);
 }
 
 /// Squared distance from p to the box [lo, hi] (0 inside).

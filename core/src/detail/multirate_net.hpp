@@ -73,8 +73,13 @@ void grow_god_object_nodes(std::span<const int> device_body, double margin, Mode
 /// organ (a net on an anchored body) with a sphere of the god-object (grown by `margin`): a plane
 /// on that sphere (its centre in its body's frame, its true radius), normal from the node to it,
 /// point on the node sphere's surface, s and offset from the organ node's K_n, Σk and e₀ (its
-/// deflection against the normal). Counts planes beyond the room in out.dropped. No
-/// allocation.
+/// deflection against the normal). A triangle contact of an organ (NodeContact::face) gives a
+/// plane per node of its shares through the triangle's closest point (ContactPlane::share w):
+/// the contact in series with its nodes, s = 1 / (1 + Σ_m w_m Σk_m / k_n,m) (Σk_m counting w k
+/// per plane; for a node sphere's plane this is k_n / (Σk + k_n)), each plane w_m k s, one
+/// offset for the contact, k s (d₀ + offset) = Σ_m (w_m d₀ / Σ w d₀) k_n,m e₀,m; an organ's
+/// spring between two nodes with planes is left out of their K_n (they move together). Counts
+/// planes beyond the room in out.dropped. No allocation.
 void build_node_planes(const Model& scene, const Data& data, std::span<const int> device_body,
                        double margin, NodePlaneScratch scratch, ContactPlaneSet& out) noexcept;
 

@@ -149,6 +149,11 @@ struct NetScratch {
   std::vector<std::int32_t> near_bodies;
   std::vector<std::int32_t> near_sphere_end;  ///< Per near body: end of its run of near_spheres.
   std::vector<std::int32_t> near_spheres;     ///< Body spheres near the net, by near body.
+  /// An organ's surface contacts (net_surface.hpp): the net's triangles (Model::net_faces
+  /// indices) whose bounds meet the near spheres' bounds, and those bounds (m, world). Sized by
+  /// the largest NetModel::face_count.
+  std::vector<std::int32_t> face_candidates;
+  std::vector<Vec3> face_lo, face_hi;
   /// Sizes every buffer for `model` (all empty when it has no net). Allocates: make_data() only.
   void resize(const Model& model);
 };

@@ -4,6 +4,7 @@
 /// masses, inertias, sphere sets, obstacles, materials, gains, time step).
 /// Mutable state lives in core::Data. Pattern of MuJoCo's mjModel/mjData.
 
+#include <array>
 #include <cstdint>
 #include <limits>
 #include <string>
@@ -214,6 +215,11 @@ struct Model {
   std::vector<double> node_mass;       ///< kg, > 0 (lumped by vertex area).
   std::vector<double> node_radius;     ///< Collision sphere radius (m), > 0.
   std::vector<int> node_net;           ///< Net owning each node.
+  /// Surface triangles of every net (per net, NetModel::face_begin/face_count): the mesh's
+  /// triangles as global node indices, wound counter-clockwise seen from outside (outward
+  /// normal (x1 − x0) × (x2 − x0); add_net() turns a mesh that encloses a negative volume).
+  /// An organ's contacts with the tool are against them (net_surface.hpp).
+  std::vector<std::array<int, 3>> net_faces;
   /// Order in which the solver's SSOR sweeps visit the nodes (net_solve.hpp):
   /// node_sweep_order[p] is the global node at sweep position p, a reverse
   /// Cuthill–McKee order of each net's spring graph within the net's own index

@@ -112,11 +112,16 @@ struct ContactPlane {
   /// `node` that organ node, the sphere the god-object's (`local_point`, `radius`: its centre in
   /// its body's frame and its true radius), the normal from the node to it, the point the node
   /// sphere's surface, s and the offset from the organ node's compliance (e₀ its deflection
-  /// against the normal).
+  /// against the normal). A triangle contact of an organ (NodeContact::face ≥ 0) gives one
+  /// such plane per node of the triangle, through the triangle's closest point, each rendering
+  /// the node's share w of it (`share`).
   int node = -1;
   Vec3 local_point = Vec3::Zero();  ///< Node plane: the sphere's centre (m, body frame).
   double radius = 0.0;              ///< Node plane: the node's sphere radius (m).
-  double stiffness_scale = 1.0;     ///< Node plane: s (1 for a sphere plane).
+  double stiffness_scale = 1.0;     ///< Node plane: w s (1 for a sphere plane).
+  /// Node plane of a triangle contact: its node's barycentric share w (NodeContact::share); 1
+  /// otherwise. The plane renders stiffness w k s and damping w c s².
+  double share = 1.0;
   /// Node plane: w k_n e₀ / (k s) − d₀ (m), d₀ the node's true depth at the sample (0 for a
   /// node not in contact then).
   double depth_offset = 0.0;

@@ -33,7 +33,8 @@ struct NetSpring {
 
 /// One net of a Model. Its nodes are [node_begin, node_begin + node_count) of
 /// the Model's node arrays, its springs [spring_begin, spring_begin +
-/// structural_count + bending_count) of Model::net_springs (structural first).
+/// structural_count + bending_count) of Model::net_springs (structural first),
+/// its surface triangles [face_begin, face_begin + face_count) of Model::net_faces.
 struct NetModel {
   std::string name;
   int body = -1;              ///< Rigid component: index into Model::bodies.
@@ -42,6 +43,8 @@ struct NetModel {
   int spring_begin = 0;
   int structural_count = 0;
   int bending_count = 0;
+  int face_begin = 0;  ///< First of the net's triangles in Model::net_faces.
+  int face_count = 0;  ///< The mesh's triangles (0 for a net built by hand without faces).
   /// Zero-length spring of every node to its rest position on the rigid
   /// component (paper §4.2): f = −k_tie (x − a) − γ_tie (v − v_a), a = x_b + R_b r.
   double tie_stiffness = 0.0;  ///< k_tie (N/m) per node, > 0.

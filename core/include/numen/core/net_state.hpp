@@ -16,9 +16,17 @@ struct NodeState {
 };
 
 /// A penalty contact between a node's sphere and an obstacle or a dynamic
-/// body's sphere. Geometry from detect_node_contacts(); force and
-/// linearisation from compute_net_forces(); weights from the implicit solve.
-/// Same penalty law as core::Contact (contact_force.hpp), the node on side a.
+/// body's sphere, or one node's share of a contact between an organ's surface
+/// triangle and a dynamic body's sphere (`face` ≥ 0; net_surface.hpp). Geometry
+/// from detect_node_contacts(); force and linearisation from compute_net_forces();
+/// weights from the implicit solve. Same penalty law as core::Contact
+/// (contact_force.hpp), the node on side a.
+///
+/// A triangle contact is written as one NodeContact per node of the triangle with a
+/// barycentric weight w > 0 at the closest point (consecutive, the same geometry):
+/// its law acts once on the triangle's point velocity Σ w_m v_m, and this entry
+/// carries the node's share w of its force and of its Jacobian coefficients
+/// (`stiffness`, `damping`, `friction`), so that the shares sum to the contact.
 struct NodeContact {
   int node = -1;           ///< Global node index, receives +force.
   int body_b = -1;         ///< Dynamic body receiving −force, or -1 for a static obstacle.
@@ -30,7 +38,11 @@ struct NodeContact {
   double depth = 0.0;            ///< Penetration depth (m), > 0.
   Vec3 force = Vec3::Zero();     ///< Penalty force on the node (N, world); −force on body_b.
   Vec3 r_b = Vec3::Zero();       ///< Contact point − COM of body_b (m, world); 0 when static.
-  double normal_velocity = 0.0;  ///< v_n = n · (v_node − v_b(point)) at the step's start (m/s).
+  /// v_n = n · (v_node − v_b(point)) at the step's start (m/s): the implicit step's h² K v₀ term.
+  /// A triangle contact's share keeps its own node's velocity here (its law acts on the
+  /// triangle's point velocity): the Jacobian is lumped on the nodes (docs/deformable.md,
+  /// "Surface contacts").
+  double normal_velocity = 0.0;
   bool active = false;           ///< f_n > 0 (or `engaged`).
   /// A look-ahead candidate: set by the caller of the step (the multirate scene loop,
   /// docs/multirate.md, "Deformable god-objects"), never by detect_node_contacts(). Where the
@@ -53,6 +65,13 @@ struct NodeContact {
   double friction = 0.0;         ///< See damping (N·s/m).
   double weight_normal = 0.0;    ///< α of the implicit weight W = α n nᵀ + β I (kg = N·s²/m).
   double weight_isotropic = 0.0; ///< β (kg).
+  /// A triangle contact's share: its triangle (index into Model::net_faces), else −1 (a node
+  /// sphere's contact).
+  int face = -1;
+  /// Barycentric weights of the closest point on `face`, one per node of Model::net_faces[face]
+  /// (sum 1, each ≥ 0); unused when face < 0.
+  Vec3 face_weights = Vec3::Zero();
+  double share = 1.0;  ///< This node's weight w in face_weights (1 for a node sphere's contact).
 };
 
 /// What a net did in the last step (observable; traces and studies).

@@ -1,0 +1,89 @@
+#pragma once
+/// @file node_contact_sink.hpp
+/// Private to numen::core (core/src/detail): the writer of the node contacts of the collision
+/// stage of the nets (net_collision.cpp: node spheres; net_surface.cpp: an organ's surface
+/// triangles), bounded by the capacity, counting what it cannot keep. No allocation.
+
+#include <algorithm>
+#include <array>
+
+#include "detail/narrowphase.hpp"
+#include "numen/core/net_state.hpp"
+#include "numen/core/types.hpp"
+
+namespace numen::core::detail {
+
+/// Writes node contacts up to the capacity, counts the rest; tracks the
+/// deepest contact (dropped ones included) of the current net and of the call.
+struct NodeContactSink {
+  NodeContact* out;
+  int capacity;
+  int count = 0;
+  int dropped = 0;              ///< Contacts not written: a node sphere's, or a whole triangle contact.
+  double net_max_depth = 0.0;  ///< Reset per net.
+  double max_depth = 0.0;
+
+  /// A node sphere's contact. `com_b`: centre of mass of body_b (ignored for a static obstacle).
+  void add(int node, int body_b, int obstacle, int sphere_b, int material_pair,
+           const ContactGeometry& g, const Vec3& com_b) noexcept {
+    net_max_depth = std::max(net_max_depth, g.depth);
+    if (count >= capacity) {
+      ++dropped;
+      return;
+    }
+    write(node, body_b, obstacle, sphere_b, material_pair, g, com_b);
+  }
+
+  /// A contact of the surface triangle `face` (global node indices `nodes`, barycentric
+  /// weights `w` of the closest point) with the sphere `sphere_b` of the dynamic body `body_b`
+  /// (centre of mass `com_b`): one entry per node of weight > 0 (NodeContact::face), all or
+  /// none — a triangle contact that does not fit whole is dropped and counted once.
+  void add_face(int face, const std::array<int, 3>& nodes, const Vec3& w, int body_b,
+                int sphere_b, int material_pair, const ContactGeometry& g,
+                const Vec3& com_b) noexcept {
+    net_max_depth = std::max(net_max_depth, g.depth);
+    const int entries = (w.x() > 0.0 ? 1 : 0) + (w.y() > 0.0 ? 1 : 0) + (w.z() > 0.0 ? 1 : 0);
+    if (count + entries > capacity) {
+      ++dropped;
+      return;
+    }
+    for (int m = 0; m < 3; ++m) {
+      if (!(w[m] > 0.0)) continue;
+      NodeContact& c = write(nodes[static_cast<std::size_t>(m)], body_b, -1, sphere_b,
+                             material_pair, g, com_b);
+      c.face = face;
+      c.face_weights = w;
+      c.share = w[m];
+    }
+  }
+
+ private:
+  NodeContact& write(int node, int body_b, int obstacle, int sphere_b, int material_pair,
+                     const ContactGeometry& g, const Vec3& com_b) noexcept {
+    NodeContact& c = out[count++];
+    c.node = node;
+    c.body_b = body_b;
+    c.obstacle = obstacle;
+    c.sphere_b = sphere_b;
+    c.material_pair = material_pair;
+    c.position = g.position;
+    c.normal = g.normal;
+    c.depth = g.depth;
+    c.force.setZero();
+    if (body_b >= 0)
+      c.r_b = g.position - com_b;
+    else
+      c.r_b.setZero();
+    c.normal_velocity = 0.0;
+    c.active = false;
+    c.engaged = false;
+    c.weight_normal = 0.0;
+    c.weight_isotropic = 0.0;
+    c.face = -1;
+    c.face_weights.setZero();
+    c.share = 1.0;
+    return c;
+  }
+};
+
+}  // namespace numen::core::detail
