@@ -116,6 +116,42 @@ TEST(SceneMesh, SelfIntersectingMeshIsWarnedWithAPairAndTheCount) {
   EXPECT_EQ(lobe.model.meshes[0].band.note, "");
 }
 
+TEST(SceneMesh, NetMeshThatIntersectsItselfIsWarnedAtItsFile) {
+  NUMEN_REQUIRE_DEFORMABLE();
+  // The poking pair of tetrahedra of the test above as the surface of an organ's net.
+  TempDir dir;
+  dir.write("poke.obj", std::string(kTet) +
+                            "v 0.1 0.1 -1\nv 0.35 0.1 -1\nv 0.1 0.35 -1\nv 0.2 0.2 0.1\n"
+                            "f 5 7 6\nf 5 6 8\nf 5 8 7\nf 6 7 8\n");
+  const auto organ = [](const std::string& mesh_keys) {
+    return replace(kMiniScene, "[[obstacle]]",
+                   "[[body]]\nname = \"core\"\nmass = 0.05\ninertia = [1e-5, 1e-5, 1e-5]\n"
+                   "position = [0.0, 0.0, 0.2]\nanchored = true\n\n"
+                   "[[deformable]]\nname = \"organ\"\nbody = \"core\"\n" + mesh_keys +
+                   "scale = 0.02\nmass = 0.01\nstiffness = 200.0\n"
+                   "tie_stiffness = 500.0\n\n[[obstacle]]");
+  };
+  const std::string text = organ("mesh = \"file\"\nfile = \"poke.obj\"\n");
+  const Scene s = load_scene(dir.write("s.toml", text));
+  std::string warning;
+  for (const std::string& w : s.warnings)
+    if (w.find("intersects itself") != std::string::npos) warning = w;
+  ASSERT_NE(warning, "");
+  EXPECT_NE(warning.find("s.toml:" + std::to_string(line_of(text, "poke.obj")) + ": deformable[0].file: poke.obj: "),
+            std::string::npos) << warning;
+  EXPECT_NE(warning.find("the surface intersects itself: 3 pairs of triangles meet (first: triangles "),
+            std::string::npos) << warning;
+  EXPECT_NE(warning.find("the net's rest surface passes through itself"), std::string::npos) << warning;
+  // The clean tetrahedron and a built-in icosphere: no such warning.
+  dir.write("tet.obj", kTet);
+  for (const std::string& keys : {std::string("mesh = \"file\"\nfile = \"tet.obj\"\n"),
+                                  std::string("mesh = \"icosphere\"\nradius = 1.0\n")}) {
+    const Scene clean = load_scene(dir.write("c.toml", organ(keys)));
+    for (const std::string& w : clean.warnings)
+      EXPECT_EQ(w.find("intersects itself"), std::string::npos) << w;
+  }
+}
+
 /// The InputError of `text` (scene in `dir`) at the line holding `needle` and `key`, naming
 /// `mesh_file` and containing `message`.
 void expect_mesh_error(const TempDir& dir, const std::string& text, const std::string& needle,
