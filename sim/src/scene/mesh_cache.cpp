@@ -5,12 +5,10 @@
 
 #include <array>
 #include <cerrno>
-#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
-#include <iterator>
 #include <system_error>
 #include <type_traits>
 #include <utility>
@@ -220,16 +218,15 @@ std::string check_shape(const core::MeshShape& s) {
   return "";
 }
 
-double since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
-
 /// Reads `path` into `out` when its key is `key`: "" then, else why not ("missing" when absent).
 std::string read_cache(const std::filesystem::path& path, std::uint64_t key, core::MeshShape& out) {
-  std::ifstream in(path, std::ios::binary);
+  std::ifstream in(path, std::ios::binary | std::ios::ate);
   if (!in) return "missing";
-  const std::string data((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  if (in.bad()) return "damaged (a read error)";
+  const std::streamoff bytes = in.tellg();
+  if (bytes < 0) return "damaged (a read error)";
+  std::string data(static_cast<std::size_t>(bytes), '\0');
+  in.seekg(0);
+  if (!in.read(data.data(), bytes)) return "damaged (a read error)";
   Reader r{data.data(), data.data() + data.size()};
   char magic[8] = {};
   for (char& c : magic) r.value(c);
@@ -331,12 +328,10 @@ std::string build_mesh_shape_cached(const core::TriangleMesh& mesh,
                                     const std::filesystem::path& path, core::MeshShape& out,
                                     MeshCacheOutcome& outcome) {
   outcome = MeshCacheOutcome{};
-  const auto t0 = std::chrono::steady_clock::now();
   const std::uint64_t key = mesh_cache_key(mesh, options);
   const std::string why = read_cache(path, key, out);
   if (why.empty()) {
     outcome.loaded = true;
-    outcome.seconds = since(t0);
     return "";
   }
   if (why != "missing") outcome.note = path.string() + ": " + why + ": rebuilt";
@@ -345,7 +340,6 @@ std::string build_mesh_shape_cached(const core::TriangleMesh& mesh,
   const std::string written = write_cache(path, key, out);
   outcome.written = written.empty();
   if (!written.empty()) outcome.note += (outcome.note.empty() ? "" : "; ") + written;
-  outcome.seconds = since(t0);
   return "";
 }
 

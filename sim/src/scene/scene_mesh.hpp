@@ -54,8 +54,8 @@ void warn_self_intersections(const TomlTable& t, std::string_view key, const std
 /// every sphere of the scene's bodies then gets the band's flat query (docs/meshes.md).
 inline constexpr double kMeshBandMargin = 0.001;
 
-/// A build that takes at least this long (s) is reported with its time and memory, a warning at
-/// `file` (docs/meshes.md, "Build cache").
+/// A build that takes at least this much CPU time (s, the loading thread's) is reported with its
+/// time and memory, a warning at `file` (docs/meshes.md, "Build cache").
 inline constexpr double kSlowMeshBuildSeconds = 1.0;
 
 /// The closed mesh of `t`'s `file` (`units`, `scale`), built as a collision shape

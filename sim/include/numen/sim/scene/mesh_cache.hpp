@@ -44,7 +44,6 @@ struct MeshCacheOutcome {
   /// "" or why the file was not used or not written: "stale (…)", "damaged (…)", "cannot write
   /// …" — the caller's warning. A missing file is no warning (the first load writes it).
   std::string note;
-  double seconds = 0.0;  ///< Wall time of the load, or of the build and the write (s).
 };
 
 /// Fills `out` with the shape of `mesh` built with `options`: read from `path` when the file is
