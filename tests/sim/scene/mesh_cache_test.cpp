@@ -164,7 +164,7 @@ std::string cached_tet_scene(const std::string& cache_line) {
 
 TEST(MeshCache, TheSceneKeyReadsAndWritesTheFileAndLocatesItsWarnings) {
   TempDir dir;
-  dir.write("tet.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n");
+  dir.write("tet.obj", numen::test::kTetObj);
   const std::string text = cached_tet_scene("cache = \"tet.nmshape\"\n");
   const std::string scene = dir.write("s.toml", text);
   const numen::sim::Scene first = numen::sim::load_scene(scene);

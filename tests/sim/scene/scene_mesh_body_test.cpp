@@ -22,12 +22,10 @@ using numen::sim::InputError;
 using numen::sim::load_scene;
 using numen::sim::Scene;
 using numen::test::kMiniScene;
+using numen::test::kTetObj;
 using numen::test::line_of;
 using numen::test::replace;
 using numen::test::TempDir;
-
-/// A tetrahedron of side 1 (file units), outward winding.
-constexpr const char* kBodyTet = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
 
 /// The mini scene with a second body "block" (no spheres) whose [body.mesh] table holds `keys`.
 std::string with_mesh_body(const std::string& keys) {
@@ -59,7 +57,7 @@ TEST(SceneMeshBody, ExampleSceneLoadsAndItsProbePushesTheLobeAway) {
 
 TEST(SceneMeshBody, KeysReachTheModel) {
   TempDir dir;
-  dir.write("tet.obj", kBodyTet);
+  dir.write("tet.obj", kTetObj);
   const Scene s = load_scene(dir.write(
       "s.toml", with_mesh_body("file = \"tet.obj\"\nunits = \"cm\"\nscale = 2.0\n"
                                "position = [0.0, 0.01, 0.0]\n"
@@ -75,7 +73,7 @@ TEST(SceneMeshBody, KeysReachTheModel) {
 
 TEST(SceneMeshBody, BadKeysAreLocated) {
   TempDir dir;
-  dir.write("tet.obj", kBodyTet);
+  dir.write("tet.obj", kTetObj);
   // Not a table.
   {
     const std::string text = replace(kMiniScene, "material = \"steel\"\n",
