@@ -208,6 +208,29 @@ void collide_bodies(const Model& model, Data& data, int a, int b, ContactSink& s
   }
 }
 
+/// The spheres of body `b` against the mesh of body `m`, placed at `pose` (world) with world box
+/// [lo, hi]: only b's spheres within reach of the box are queried (sphere_mesh() decides). The
+/// contact's body_b is m, its sphere_b −1; the normal points out of the mesh.
+void collide_body_mesh(const Model& model, Data& data, int b, int m, const Pose& pose,
+                       const Vec3& lo, const Vec3& hi, ContactSink& sink) noexcept {
+  const BodyModel& bb = model.bodies[static_cast<std::size_t>(b)];
+  const BodyModel& mb = model.bodies[static_cast<std::size_t>(m)];
+  CollisionScratch& cs = data.scratch->collision;
+  std::int32_t* near = cs.near_a.data();
+  const int n = collision_detail::spheres_near_box(
+      cs.sphere_x.data(), cs.sphere_y.data(), cs.sphere_z.data(), cs.sphere_r.data(),
+      bb.sphere_begin, bb.sphere_begin + bb.sphere_count, lo, hi, near);
+  const MeshShape& shape = model.meshes[static_cast<std::size_t>(mb.mesh)];
+  const int mat = bb.material * model.num_materials() + mb.material;
+  const Vec3* sw = cs.sphere_world.data();
+  const double* R = cs.sphere_r.data();
+  ContactGeometry g;
+  for (int i = 0; i < n; ++i) {
+    const int s = near[i];
+    if (sphere_mesh(sw[s], R[s], shape, pose, g)) sink.add(b, m, -1, s, -1, mat, g);
+  }
+}
+
 }  // namespace
 
 void CollisionScratch::resize(const Model& model) {
@@ -229,6 +252,9 @@ void CollisionScratch::resize(const Model& model) {
   for (const BodyModel& b : model.bodies) max_spheres = std::max(max_spheres, b.sphere_count);
   near_a.assign(static_cast<std::size_t>(max_spheres), 0);
   near_b.assign(static_cast<std::size_t>(max_spheres), 0);
+  mesh_bodies.clear();
+  for (std::size_t b = 0; b < nb; ++b)
+    if (model.bodies[b].mesh >= 0) mesh_bodies.push_back(static_cast<std::int32_t>(b));
   entry_stamp.assign(static_cast<std::size_t>(model.static_grid.num_entries), 0u);
   stamp = 0;
 }
@@ -372,6 +398,31 @@ void detect_contacts(const Model& model, Data& data) noexcept {
         if (tree[a] == tree[b]) continue;  // same articulation: no self-collision
         collide_bodies(model, data, std::min(a, b), std::max(a, b), sink);
       }
+    }
+  }
+
+  // 4. Spheres against the meshes of the other bodies (BodyModel::mesh): the mesh's world box
+  //    from its local box at the body's pose, then the bodies of other articulations whose
+  //    sphere box meets it.
+  const int* tree = model.articulation.body_tree.data();
+  for (const std::int32_t m : cs.mesh_bodies) {
+    const BodyModel& mb = model.bodies[static_cast<std::size_t>(m)];
+    const BodyState& st = data.bodies[static_cast<std::size_t>(m)];
+    if (!(st.position.allFinite() && st.orientation.coeffs().allFinite())) continue;
+    const Pose pose{st.position + st.orientation * mb.mesh_pose.position,
+                    st.orientation * mb.mesh_pose.orientation};
+    const MeshShape& shape = model.meshes[static_cast<std::size_t>(mb.mesh)];
+    const Mat3 rot = pose.orientation.toRotationMatrix();
+    const Vec3 mid = pose.position + rot * (0.5 * (shape.aabb_min + shape.aabb_max));
+    const Vec3 ext = rot.cwiseAbs() * (0.5 * (shape.aabb_max - shape.aabb_min));
+    const Vec3 lo = mid - ext;
+    const Vec3 hi = mid + ext;
+    for (int b = 0; b < nb; ++b) {
+      if (b == m || tree[b] == tree[m]) continue;  // its own spheres, its articulation's
+      const Vec3& blo = cs.body_aabb_min[static_cast<std::size_t>(b)];
+      const Vec3& bhi = cs.body_aabb_max[static_cast<std::size_t>(b)];
+      if (!(blo.x() <= bhi.x()) || !boxes_overlap(blo, bhi, lo, hi)) continue;
+      collide_body_mesh(model, data, b, m, pose, lo, hi, sink);
     }
   }
 

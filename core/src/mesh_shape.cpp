@@ -187,10 +187,7 @@ std::size_t MeshShape::memory_bytes() const noexcept {
          mesh_band_bytes(band);
 }
 
-std::string build_mesh_shape(const TriangleMesh& mesh, MeshShape& s,
-                             const MeshShapeOptions& options) {
-  const std::string invalid = validate_mesh(mesh);
-  if (!invalid.empty()) return invalid;
+void build_mesh_tree(const TriangleMesh& mesh, MeshShape& s) {
   s = MeshShape{};
   s.vertices = mesh.vertices;
   const std::size_t nt = mesh.triangles.size();
@@ -217,6 +214,14 @@ std::string build_mesh_shape(const TriangleMesh& mesh, MeshShape& s,
     s.triangles[i] = mesh.triangles[static_cast<std::size_t>(order[i])];
   s.aabb_min = s.nodes[0].lo;
   s.aabb_max = s.nodes[0].hi;
+}
+
+std::string build_mesh_shape(const TriangleMesh& mesh, MeshShape& s,
+                             const MeshShapeOptions& options) {
+  const std::string invalid = validate_mesh(mesh);
+  if (!invalid.empty()) return invalid;
+  build_mesh_tree(mesh, s);
+  const std::size_t nt = mesh.triangles.size();
 
   // Face normals, the signed volume, the angle-weighted vertex normals.
   s.face_normals.resize(nt);

@@ -133,4 +133,11 @@ MeshSelfIntersections find_self_intersections(const MeshShape& s) {
   return out;
 }
 
+MeshSelfIntersections find_self_intersections(const TriangleMesh& mesh) {
+  if (mesh.triangles.empty()) return {};
+  MeshShape tree;
+  build_mesh_tree(mesh, tree);
+  return find_self_intersections(tree);
+}
+
 }  // namespace numen::core

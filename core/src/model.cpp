@@ -165,6 +165,14 @@ std::string finalize_model(Model& model) {
     body.initial_pose.orientation.normalize();
     if (!finite(body.initial_twist.linear) || !finite(body.initial_twist.angular))
       return who + ": initial twist must be finite";
+    if (body.mesh != -1 &&
+        (body.mesh < 0 || static_cast<std::size_t>(body.mesh) >= model.meshes.size() ||
+         model.meshes[static_cast<std::size_t>(body.mesh)].nodes.empty()))
+      return who + ": mesh index out of Model::meshes (or a shape build_mesh_shape() did not build)";
+    if (!finite(body.mesh_pose.position) || !body.mesh_pose.orientation.coeffs().allFinite() ||
+        body.mesh_pose.orientation.norm() < 1e-9)
+      return who + ": mesh pose must be finite with a non-zero quaternion";
+    body.mesh_pose.orientation.normalize();
     if (body.anchored && (body.initial_twist.linear.squaredNorm() > 0.0 ||
                           body.initial_twist.angular.squaredNorm() > 0.0))
       return who + ": anchored (a static body) with a non-zero initial twist";

@@ -53,6 +53,11 @@ std::string make_god_object_model(const Model& scene, int body, double device_dt
     return "multirate: the god-object's integrator must be the linearly implicit or the "
            "symplectic Euler (the impulse hand-back needs the step's effective contact force)";
   const std::vector<int> bodies = god_object_bodies(scene, body);
+  for (int b : bodies)
+    if (scene.bodies[static_cast<std::size_t>(b)].mesh >= 0)
+      return "multirate: god-object body '" + scene.bodies[static_cast<std::size_t>(b)].name +
+             "' carries a mesh (BodyModel::mesh): the contact planes stand for the god-object's "
+             "spheres only; give the mesh to a body the tool touches";
   std::vector<int> local(scene.bodies.size(), -1);
   for (std::size_t i = 0; i < bodies.size(); ++i) local[static_cast<std::size_t>(bodies[i])] = static_cast<int>(i);
   Model m = scene;  // the scene's settings; its bodies, joints and obstacles replaced below

@@ -13,23 +13,28 @@
 // no contact): the cost of a sphere that is near but not touching.
 // MeshBuild: build_mesh_shape() (tree, normals, edges, the 32³-cell grid, the band); counter
 // memory_MB (the whole shape) and band_MB.
+// MeshCacheLoad: the same shape read from its cache file (sim::build_mesh_shape_cached(), written
+// once before the loop in the temp folder: read, checksum, parse, index checks); counter file_MB.
 // The second argument: 0 builds no band (the tree answers every query), 1 the narrow band of
 // width 5 mm (the reach) and cells of the mean edge length; both in the same run. Counter
 // band_triangles: triangles listed per non-empty band cell (mean).
 //
-//   ./build/tests/numen_bench --benchmark_filter='Mesh(Contact|Miss|Build)' --benchmark_repetitions=3
+//   ./build/tests/numen_bench --benchmark_filter='Mesh(Contact|Miss|Build|CacheLoad)' --benchmark_repetitions=3
 
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <filesystem>
 #include <numbers>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "numen/core/mesh.hpp"
 #include "numen/core/mesh_shape.hpp"
+#include "numen/sim/scene/mesh_cache.hpp"
 
 namespace {
 
@@ -124,6 +129,31 @@ void MeshBuild(benchmark::State& state) {
   state.counters["band_MB"] = static_cast<double>(band_bytes) / 1e6;
 }
 
+void MeshCacheLoad(benchmark::State& state) {
+  const int sides = sides_for(static_cast<int>(state.range(0)));
+  const core::TriangleMesh mesh = core::make_torus(kMajor, kMinor, 2 * sides, sides);
+  const core::MeshShapeOptions options = mesh_options(state.range(1));
+  const std::filesystem::path path =
+      std::filesystem::temp_directory_path() /
+      ("numen_bench_" + std::to_string(state.range(0)) + "_" + std::to_string(state.range(1)) + ".nmshape");
+  core::MeshShape s;
+  numen::sim::MeshCacheOutcome o;
+  numen::sim::build_mesh_shape_cached(mesh, options, path, s, o);  // writes it
+  if (!o.written) state.SkipWithError(("cache not written: " + o.note).c_str());
+  bool loaded = true;
+  for (auto _ : state) {
+    core::MeshShape l;
+    numen::sim::build_mesh_shape_cached(mesh, options, path, l, o);
+    loaded = loaded && o.loaded;
+    benchmark::DoNotOptimize(l);
+  }
+  if (!loaded) state.SkipWithError("the cache file was not used");
+  state.counters["triangles"] = mesh.num_triangles();
+  state.counters["file_MB"] = static_cast<double>(std::filesystem::file_size(path)) / 1e6;
+  std::error_code ec;
+  std::filesystem::remove(path, ec);
+}
+
 /// Triangles {1k, 10k, 100k} × {tree, band}.
 void sizes(benchmark::internal::Benchmark* b) {
   b->ArgNames({"triangles", "band"});
@@ -136,5 +166,6 @@ BENCHMARK(MeshContactSweep)->Apply(sizes);
 BENCHMARK(MeshContactInside)->Apply(sizes);
 BENCHMARK(MeshMiss)->Apply(sizes);
 BENCHMARK(MeshBuild)->Apply(sizes)->Unit(benchmark::kMillisecond);
+BENCHMARK(MeshCacheLoad)->Apply(sizes)->Unit(benchmark::kMillisecond);
 
 }  // namespace

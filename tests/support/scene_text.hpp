@@ -21,6 +21,11 @@
 
 namespace numen::test {
 
+/// A tetrahedron of side 1 as an OBJ file (file units), wound outward: the mesh tests' smallest
+/// closed mesh.
+inline constexpr const char* kTetObj =
+    "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
+
 /// A small valid scene: a 0.1 kg ball (one 10 mm sphere, coupling 100 N/m, damping ratio 0.85)
 /// held by a pose tracker over a floor plane at z = -0.1 m, on a scripted path (10 mm line in
 /// 0.5 s, hold 0.25 s). The scene-file tests change one thing in it; the run tests replace its

@@ -26,6 +26,7 @@ struct CollisionScratch {
                                           ///< kept between steps (coherent insertion sort).
   std::vector<std::int32_t> near_a;       ///< Body–body: spheres of each body near the other's
   std::vector<std::int32_t> near_b;       ///< AABB; size = largest sphere count of a body.
+  std::vector<std::int32_t> mesh_bodies;  ///< Bodies with a mesh (BodyModel::mesh), index order.
   std::vector<std::uint32_t> entry_stamp;  ///< Per static grid entry: last query that tested it.
   std::uint32_t stamp = 0;  ///< Current query id (wraps: the stamps are then cleared).
   /// Sizes every buffer for `model`. Allocates: make_data() only.

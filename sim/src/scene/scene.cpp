@@ -362,7 +362,8 @@ Scene load_scene(const std::string& path, const SceneOverrides& overrides) {
   }
   parse_articulation(root, body_tables, scene);
   // Nets after the bodies' starting poses are known (their nodes start there).
-  if constexpr (core::kWithDeformable) parse_deformables(root, dir, scene.model, scene.net_triangles);
+  if constexpr (core::kWithDeformable)
+    parse_deformables(root, dir, scene.model, scene.net_triangles, scene.warnings);
 
   // Bus between controller and instrument.
   double latency = 100e-6;

@@ -127,7 +127,7 @@ core::TriangleMesh parse_mesh(const TomlTable& t, const std::filesystem::path& s
 }
 
 void parse_deformable(const TomlTable& t, const std::filesystem::path& scene_dir, core::Model& m,
-                      std::vector<NetTriangles>& triangles) {
+                      std::vector<NetTriangles>& triangles, std::vector<std::string>& warnings) {
   core::NetSettings settings;
   settings.name = t.string("name");
   for (const core::NetModel& other : m.nets)
@@ -141,6 +141,10 @@ void parse_deformable(const TomlTable& t, const std::filesystem::path& scene_dir
   placement.orientation = t.quaternion_or("orientation", Quat::Identity());
   core::transform_mesh(mesh, scale, placement);
   if (t.has("file")) check_scaled_mesh(t, mesh, t.string("file"));
+  const bool file = t.has("file");
+  warn_self_intersections(t, file ? "file" : "mesh", t.string(file ? "file" : "mesh"), mesh,
+                          core::find_self_intersections(mesh),
+                          "the net's rest surface passes through itself", warnings);
 
   settings.material = net_material(t, m, settings.body);
   settings.mass = t.number_in("mass", 1e-12, kInf, std::nullopt);
@@ -162,8 +166,10 @@ void parse_deformable(const TomlTable& t, const std::filesystem::path& scene_dir
 }  // namespace
 
 void parse_deformables(const TomlTable& root, const std::filesystem::path& scene_dir,
-                       core::Model& model, std::vector<NetTriangles>& triangles) {
-  for (const TomlTable& t : root.tables("deformable")) parse_deformable(t, scene_dir, model, triangles);
+                       core::Model& model, std::vector<NetTriangles>& triangles,
+                       std::vector<std::string>& warnings) {
+  for (const TomlTable& t : root.tables("deformable"))
+    parse_deformable(t, scene_dir, model, triangles, warnings);
 }
 
 namespace {

@@ -23,9 +23,12 @@ namespace numen::sim {
 /// keys, unknown body or material, a rigid component with spheres, unknown
 /// mesh kind, missing OBJ file, numbers out of range; core::add_net()'s own
 /// message is located at the deformable's table. Appends each net's triangles (node indices
-/// local to the net) to `triangles`, in the order of model.nets.
+/// local to the net) to `triangles`, in the order of model.nets. Appends to `warnings` a mesh
+/// whose surface intersects itself (core::find_self_intersections(), at `file`, or at `mesh`
+/// for a built-in one; docs/meshes.md, "Self-intersections").
 void parse_deformables(const TomlTable& root, const std::filesystem::path& scene_dir,
-                       core::Model& model, std::vector<NetTriangles>& triangles);
+                       core::Model& model, std::vector<NetTriangles>& triangles,
+                       std::vector<std::string>& warnings);
 
 /// Load-time check of the deformable organs (nets on an anchored body, core::BodyModel::anchored)
 /// against the bodies that move (the tool), at their starting poses: appends one warning per

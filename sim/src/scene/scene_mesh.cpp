@@ -3,11 +3,35 @@
 
 #include "scene_mesh.hpp"
 
+#include <algorithm>
+#include <array>
+#include <sstream>
 #include <system_error>
+#include <utility>
 
+#include <time.h>
+
+#include "numen/core/mesh_shape.hpp"
+#include "numen/sim/scene/mesh_cache.hpp"
 #include "numen/sim/scene/mesh_file.hpp"
 
 namespace numen::sim {
+namespace {
+
+/// Index in `mesh` of the triangle with the vertices `tri` in that order, or −1.
+long triangle_index(const core::TriangleMesh& mesh, const std::array<int, 3>& tri) {
+  const auto it = std::find(mesh.triangles.begin(), mesh.triangles.end(), tri);
+  return it == mesh.triangles.end() ? -1 : static_cast<long>(it - mesh.triangles.begin());
+}
+
+/// CPU time of the calling thread (s): a build's cost, whatever else the machine runs.
+double thread_cpu_seconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
+
+}  // namespace
 
 SceneMeshFile read_scene_mesh_file(const TomlTable& t, const std::filesystem::path& scene_dir) {
   std::filesystem::path file = t.string("file");
@@ -47,6 +71,90 @@ void check_scaled_mesh(const TomlTable& t, const core::TriangleMesh& mesh, const
   t.fail(t.has("scale") ? "scale" : "file",
          path + ": invalid mesh after scaling and placement (vertices counted from 0 in the order "
                 "the triangles first use them): " + invalid);
+}
+
+std::string mesh_warning(const TomlTable& t, std::string_view key, const std::string& what,
+                         const std::string& message) {
+  std::ostringstream os;
+  os << t.file();
+  if (const toml::node* n = t.node(key)) os << ":" << n->source().begin.line;
+  os << ": " << t.key_path(key) << ": " << what << ": " << message;
+  return os.str();
+}
+
+void warn_self_intersections(const TomlTable& t, std::string_view key, const std::string& what,
+                             const core::TriangleMesh& mesh, const core::MeshSelfIntersections& x,
+                             std::string_view consequence, std::vector<std::string>& warnings) {
+  if (x.count == 0) return;
+  warnings.push_back(mesh_warning(
+      t, key, what,
+      "the surface intersects itself: " + std::to_string(x.count) + " pair" +
+          (x.count == 1 ? "" : "s") + " of triangles meet (first: triangles " +
+          std::to_string(triangle_index(mesh, x.first_a)) + " and " +
+          std::to_string(triangle_index(mesh, x.first_b)) + " of the file, from 0); " +
+          std::string(consequence)));
+}
+
+int add_mesh_shape(const TomlTable& t, const std::filesystem::path& scene_dir, core::Model& m,
+                   std::vector<std::string>& warnings) {
+  SceneMeshFile file = read_scene_mesh_file(t, scene_dir);
+  core::transform_mesh(file.mesh, read_mesh_scale(t), core::Pose{});
+  check_scaled_mesh(t, file.mesh, file.path);
+  if (signed_volume(file.mesh) < 0.0) {
+    for (auto& tri : file.mesh.triangles) std::swap(tri[1], tri[2]);
+    warnings.push_back(mesh_warning(t, "file", file.path,
+                                    "the triangles wind inward (negative volume): turned outward"));
+  }
+  core::MeshShapeOptions options;
+  double largest = 0.0;
+  for (const core::Sphere& sp : m.body_spheres) largest = std::max(largest, sp.radius);
+  options.band = largest > 0.0 ? largest + kMeshBandMargin : core::kMeshDefaultBand;
+  core::MeshShape shape;
+  std::filesystem::path cache;  // empty: no cache file
+  if (t.has("cache")) {
+    const toml::node* n = t.node("cache");
+    if (const auto* on = n->as_boolean()) {
+      if (on->get()) {
+        const std::filesystem::path dir = default_mesh_cache_dir();
+        if (dir.empty())
+          warnings.push_back(mesh_warning(t, "cache", file.path,
+                                          "no cache folder ($XDG_CACHE_HOME and $HOME are unset): "
+                                          "the shape is built at every load"));
+        else
+          cache = dir / mesh_cache_file_name(std::filesystem::path(file.path).stem().string(),
+                                             mesh_cache_key(file.mesh, options));
+      }
+    } else if (n->is_string()) {
+      cache = t.string("cache");
+      if (cache.empty()) t.fail("cache", "expected a file path, true or false");
+      if (cache.is_relative()) cache = scene_dir / cache;
+    } else {
+      t.fail("cache", "expected true, false or a file path (a string)");
+    }
+  }
+  const double t0 = thread_cpu_seconds();
+  MeshCacheOutcome outcome;
+  const std::string err =
+      cache.empty() ? core::build_mesh_shape(file.mesh, shape, options)
+                    : build_mesh_shape_cached(file.mesh, options, cache, shape, outcome);
+  if (!err.empty()) t.fail("file", file.path + ": " + err);
+  if (!outcome.note.empty()) warnings.push_back(mesh_warning(t, "cache", file.path, outcome.note));
+  const double seconds = thread_cpu_seconds() - t0;
+  if (!outcome.loaded && seconds >= kSlowMeshBuildSeconds) {
+    std::ostringstream os;
+    os.precision(2);
+    os << "built in " << std::fixed << seconds << " s of CPU ("
+       << static_cast<double>(shape.memory_bytes()) / 1e6 << " MB, of which the narrow band "
+       << static_cast<double>(core::mesh_band_bytes(shape.band)) / 1e6 << " MB)"
+       << (cache.empty() ? "; `cache = true` keeps the built shape for the next load" : "");
+    warnings.push_back(mesh_warning(t, "file", file.path, os.str()));
+  }
+  if (!shape.band.note.empty())
+    warnings.push_back(mesh_warning(t, "file", file.path, shape.band.note));
+  warn_self_intersections(t, "file", file.path, file.mesh, core::find_self_intersections(shape),
+                          "contacts near them may push the wrong way", warnings);
+  m.meshes.push_back(std::move(shape));
+  return static_cast<int>(m.meshes.size()) - 1;
 }
 
 }  // namespace numen::sim

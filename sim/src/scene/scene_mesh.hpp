@@ -1,13 +1,18 @@
 #pragma once
 /// @file scene_mesh.hpp
 /// The keys of a mesh file in a scene table — `file`, `units`, `scale` — shared by the
-/// [[deformable]] nets and the mesh obstacles (docs/meshes.md). Private to numen::sim.
+/// [[deformable]] nets, the mesh obstacles and the bodies' meshes (docs/meshes.md), and the
+/// collision shape built from such a table. Private to numen::sim.
 /// Load time only (allocates, throws InputError located at the key, naming the mesh file).
 
 #include <filesystem>
 #include <string>
+#include <string_view>
+#include <vector>
 
 #include "numen/core/mesh.hpp"
+#include "numen/core/mesh_shape_intersect.hpp"
+#include "numen/core/model.hpp"
 #include "toml_reader.hpp"
 
 namespace numen::sim {
@@ -31,5 +36,39 @@ core::Vec3 read_mesh_scale(const TomlTable& t);
 /// Fails at `scale` (or `file` when absent) when the mesh, scaled and placed, no longer passes
 /// core::validate_mesh() (a triangle degenerate after scaling), naming `path`.
 void check_scaled_mesh(const TomlTable& t, const core::TriangleMesh& mesh, const std::string& path);
+
+/// The warning "<scene file>:<line>: <key path>: <what>: <message>" located at `key` of `t`
+/// (`what`: the mesh file's path, or the name of a built-in mesh).
+std::string mesh_warning(const TomlTable& t, std::string_view key, const std::string& what,
+                         const std::string& message);
+
+/// Appends a mesh_warning() at `key` when `x` (the pairs of `mesh`'s triangles that meet,
+/// core::find_self_intersections()) is not empty: "the surface intersects itself: N pairs of
+/// triangles meet (first: triangles A and B of the file, from 0); <consequence>", A and B the
+/// pair's indices in `mesh` (the file's order).
+void warn_self_intersections(const TomlTable& t, std::string_view key, const std::string& what,
+                             const core::TriangleMesh& mesh, const core::MeshSelfIntersections& x,
+                             std::string_view consequence, std::vector<std::string>& warnings);
+
+/// Margin added to the largest sphere radius of the bodies for a mesh shape's narrow band (m):
+/// every sphere of the scene's bodies then gets the band's flat query (docs/meshes.md).
+inline constexpr double kMeshBandMargin = 0.001;
+
+/// A build that takes at least this much CPU time (s, the loading thread's) is reported with its
+/// time and memory, a warning at `file` (docs/meshes.md, "Build cache").
+inline constexpr double kSlowMeshBuildSeconds = 1.0;
+
+/// The closed mesh of `t`'s `file` (`units`, `scale`), built as a collision shape
+/// (core::build_mesh_shape()) in its own frame and appended to `m.meshes`; returns its index. Its
+/// narrow band's width is the largest radius in m.body_spheres plus kMeshBandMargin. An
+/// inward-wound mesh is turned outward with a warning; an open or inconsistently wound one is
+/// refused at `file`. Warnings at `file` too: a surface that intersects itself, a narrow band over
+/// its memory cap (the tree answers), a build of kSlowMeshBuildSeconds or more (its time and
+/// memory). `cache` (optional): true reads and writes the built shape in
+/// default_mesh_cache_dir(), a string in that file (relative to `scene_dir`), false or absent
+/// builds it at every load (mesh_cache.hpp); a stale or damaged cache file, or one that cannot be
+/// written, is a warning at `cache` and the shape is built. Load time only.
+int add_mesh_shape(const TomlTable& t, const std::filesystem::path& scene_dir, core::Model& m,
+                   std::vector<std::string>& warnings);
 
 }  // namespace numen::sim

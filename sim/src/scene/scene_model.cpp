@@ -8,14 +8,12 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <optional>
 #include <sstream>
 #include <utility>
 
 #include <Eigen/Eigenvalues>
 
-#include "numen/core/mesh_shape.hpp"
-#include "numen/core/mesh_shape_intersect.hpp"
-#include "numen/sim/scene/mesh_file.hpp"
 #include "scene_mesh.hpp"
 
 namespace numen::sim {
@@ -276,7 +274,7 @@ void parse_bodies(const TomlTable& root, core::Model& m, std::vector<std::string
   for (const TomlTable& t : root.tables("body")) {
     t.allow_only({"name", "mass", "inertia", "material", "position", "orientation",
                   "linear_velocity", "angular_velocity", "spheres", "sphere_line",
-                  "sphere_grid", "coupling", "link", "link_offset", "anchored"});
+                  "sphere_grid", "coupling", "link", "link_offset", "anchored", "mesh"});
     core::BodyModel b;
     b.name = t.string("name");
     for (const auto& other : m.bodies)
@@ -311,60 +309,33 @@ void parse_bodies(const TomlTable& root, core::Model& m, std::vector<std::string
 /// Rotation taking +z onto the unit vector `dir`.
 Quat z_onto(const Vec3& dir) { return Quat::FromTwoVectors(Vec3::UnitZ(), dir.normalized()); }
 
-/// Margin added to the largest sphere radius of the bodies for a mesh obstacle's narrow band (m):
-/// every sphere of the scene's bodies then gets the band's flat query (docs/meshes.md).
-constexpr double kMeshBandMargin = 0.001;
-
-/// Index in `mesh` of the triangle with the vertices `tri` in that order, or −1.
-long triangle_index(const core::TriangleMesh& mesh, const std::array<int, 3>& tri) {
-  const auto it = std::find(mesh.triangles.begin(), mesh.triangles.end(), tri);
-  return it == mesh.triangles.end() ? -1 : static_cast<long>(it - mesh.triangles.begin());
-}
-
 /// A mesh obstacle: the closed mesh of `file`, scaled (`units`, `scale`), built into
-/// m.meshes in its own frame; the obstacle's pose places it. An inward-wound mesh is turned
-/// outward with a warning; an open or inconsistently wound one is refused at `file`. Warnings
-/// at `file` too: a surface that intersects itself (the pairs counted, the first named by the
-/// file's triangle indices, from 0), a narrow band over its memory cap (the tree answers).
-/// The narrow band's width is the largest sphere radius of the bodies (parsed before the
-/// obstacles) plus kMeshBandMargin.
+/// m.meshes in its own frame (add_mesh_shape(), with its warnings); the obstacle's pose places it.
 void parse_mesh_obstacle(const TomlTable& t, const std::filesystem::path& scene_dir,
                          core::Obstacle& o, core::Model& m, std::vector<std::string>& warnings) {
-  t.allow_only({"name", "type", "material", "file", "units", "scale", "position", "orientation"});
+  t.allow_only({"name", "type", "material", "file", "units", "scale", "position", "orientation",
+                "cache"});
   o.type = core::ShapeType::kMesh;
   o.pose.position = t.vec3_or("position", Vec3::Zero());
   o.pose.orientation = t.quaternion_or("orientation", Quat::Identity());
-  SceneMeshFile file = read_scene_mesh_file(t, scene_dir);
-  core::transform_mesh(file.mesh, read_mesh_scale(t), core::Pose{});
-  check_scaled_mesh(t, file.mesh, file.path);
-  const auto warn = [&](const std::string& message) {
-    std::ostringstream os;
-    os << t.file();
-    if (const toml::node* n = t.node("file")) os << ":" << n->source().begin.line;
-    os << ": " << t.key_path("file") << ": " << file.path << ": " << message;
-    warnings.push_back(os.str());
-  };
-  if (signed_volume(file.mesh) < 0.0) {
-    for (auto& tri : file.mesh.triangles) std::swap(tri[1], tri[2]);
-    warn("the triangles wind inward (negative volume): turned outward");
+  o.mesh = add_mesh_shape(t, scene_dir, m, warnings);
+}
+
+/// The [body.mesh] tables (docs/meshes.md, "Mesh bodies"): each body's closed mesh built into
+/// m.meshes like a mesh obstacle's (after every body, so that its narrow band covers every
+/// sphere), placed in the body frame by the table's `position` and `orientation`.
+void parse_body_meshes(const TomlTable& root, const std::filesystem::path& scene_dir, core::Model& m,
+                       std::vector<std::string>& warnings) {
+  const std::vector<TomlTable> bodies = root.tables("body");
+  for (std::size_t i = 0; i < bodies.size(); ++i) {
+    const std::optional<TomlTable> t = bodies[i].table("mesh");
+    if (!t) continue;
+    t->allow_only({"file", "units", "scale", "position", "orientation", "cache"});
+    core::BodyModel& b = m.bodies[i];
+    b.mesh_pose.position = t->vec3_or("position", Vec3::Zero());
+    b.mesh_pose.orientation = t->quaternion_or("orientation", Quat::Identity());
+    b.mesh = add_mesh_shape(*t, scene_dir, m, warnings);
   }
-  core::MeshShapeOptions options;
-  double largest = 0.0;
-  for (const Sphere& sp : m.body_spheres) largest = std::max(largest, sp.radius);
-  options.band = largest > 0.0 ? largest + kMeshBandMargin : core::kMeshDefaultBand;
-  core::MeshShape shape;
-  const std::string err = core::build_mesh_shape(file.mesh, shape, options);
-  if (!err.empty()) t.fail("file", file.path + ": " + err);
-  if (!shape.band.note.empty()) warn(shape.band.note);
-  const core::MeshSelfIntersections x = core::find_self_intersections(shape);
-  if (x.count > 0)
-    warn("the surface intersects itself: " + std::to_string(x.count) + " pair" +
-         (x.count == 1 ? "" : "s") + " of triangles meet (first: triangles " +
-         std::to_string(triangle_index(file.mesh, x.first_a)) + " and " +
-         std::to_string(triangle_index(file.mesh, x.first_b)) +
-         " of the file, from 0); contacts near them may push the wrong way");
-  o.mesh = static_cast<int>(m.meshes.size());
-  m.meshes.push_back(std::move(shape));
 }
 
 void parse_obstacles(const TomlTable& root, const std::filesystem::path& scene_dir, core::Model& m,
@@ -467,6 +438,7 @@ core::Model parse_scene_model(const TomlTable& root, const std::filesystem::path
   }
   parse_materials(root, m);
   parse_bodies(root, m, warnings);
+  parse_body_meshes(root, scene_dir, m, warnings);
   parse_obstacles(root, scene_dir, m, warnings);
   m.initial_attached_body = -1;  // set by the device section (scene.cpp), which finalizes
   return m;

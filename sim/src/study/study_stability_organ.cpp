@@ -55,9 +55,11 @@ core::Model plunge_model(const Scene& scene, double radius, const Vec3& start) {
   tool.sphere_count = 1;
   tool.initial_pose = core::Pose{start, core::Quat::Identity()};
   tool.initial_twist = core::Twist{};
+  tool.mesh = -1;  // a one-sphere tool
   m.body_spheres = {core::Sphere{Vec3::Zero(), radius}};
   core::BodyModel anchor = s.bodies[static_cast<std::size_t>(net.body)];
   anchor.sphere_begin = 0;  // no spheres, in this model's (one-sphere) table
+  anchor.mesh = -1;         // the organ is its net and the mesh obstacles below
   m.bodies = {anchor, tool};
   m.initial_attached_body = 1;
   // The scene's mesh obstacles: the organ's rigid core under its surface (default.toml).

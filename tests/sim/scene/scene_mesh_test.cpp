@@ -29,8 +29,13 @@ using numen::test::line_of;
 using numen::test::replace;
 using numen::test::TempDir;
 
-/// A tetrahedron of side 1 (file units), outward winding.
-constexpr const char* kTet = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
+using numen::test::kTetObj;
+
+/// kTetObj and a second tetrahedron whose apex pokes through its face z = 0 from below: its three
+/// side faces (file triangles 5, 6, 7) cross the first's base (triangle 0).
+const std::string kPokeObj = std::string(kTetObj) +
+                             "v 0.1 0.1 -1\nv 0.35 0.1 -1\nv 0.1 0.35 -1\nv 0.2 0.2 0.1\n"
+                             "f 5 7 6\nf 5 6 8\nf 5 8 7\nf 6 7 8\n";
 
 /// The mini scene with a mesh obstacle of `keys` (after name and type) in place of its floor.
 std::string with_mesh_obstacle(const std::string& keys) {
@@ -59,7 +64,7 @@ TEST(SceneMesh, ShippedMeshSceneLoadsAndItsProbeStaysOnTheSurface) {
 
 TEST(SceneMesh, UnitsScaleAndPlacementReachTheModel) {
   TempDir dir;
-  dir.write("tet.obj", kTet);
+  dir.write("tet.obj", kTetObj);
   const Scene s = load_scene(dir.write(
       "s.toml", with_mesh_obstacle("file = \"tet.obj\"\nunits = \"cm\"\nscale = 2.0\n"
                                    "position = [0.0, 0.0, -0.1]\n"
@@ -91,12 +96,8 @@ TEST(SceneMesh, InwardWindingIsTurnedWithAWarning) {
 }
 
 TEST(SceneMesh, SelfIntersectingMeshIsWarnedWithAPairAndTheCount) {
-  // The tetrahedron of kTet and a second one whose apex pokes through its face z = 0 from
-  // below: its three side faces (file triangles 5, 6, 7) cross the first's base (triangle 0).
   TempDir dir;
-  dir.write("poke.obj", std::string(kTet) +
-                            "v 0.1 0.1 -1\nv 0.35 0.1 -1\nv 0.1 0.35 -1\nv 0.2 0.2 0.1\n"
-                            "f 5 7 6\nf 5 6 8\nf 5 8 7\nf 6 7 8\n");
+  dir.write("poke.obj", kPokeObj);
   const std::string text = with_mesh_obstacle("file = \"poke.obj\"\n");
   const Scene s = load_scene(dir.write("s.toml", text));
   std::string warning;
@@ -114,6 +115,40 @@ TEST(SceneMesh, SelfIntersectingMeshIsWarnedWithAPairAndTheCount) {
   for (const std::string& w : lobe.warnings) EXPECT_EQ(w.find("intersects itself"), std::string::npos) << w;
   EXPECT_GT(lobe.model.meshes[0].band.width, 0.0);
   EXPECT_EQ(lobe.model.meshes[0].band.note, "");
+}
+
+TEST(SceneMesh, NetMeshThatIntersectsItselfIsWarnedAtItsFile) {
+  NUMEN_REQUIRE_DEFORMABLE();
+  // The poking pair of tetrahedra as the surface of an organ's net.
+  TempDir dir;
+  dir.write("poke.obj", kPokeObj);
+  const auto organ = [](const std::string& mesh_keys) {
+    return replace(kMiniScene, "[[obstacle]]",
+                   "[[body]]\nname = \"core\"\nmass = 0.05\ninertia = [1e-5, 1e-5, 1e-5]\n"
+                   "position = [0.0, 0.0, 0.2]\nanchored = true\n\n"
+                   "[[deformable]]\nname = \"organ\"\nbody = \"core\"\n" + mesh_keys +
+                   "scale = 0.02\nmass = 0.01\nstiffness = 200.0\n"
+                   "tie_stiffness = 500.0\n\n[[obstacle]]");
+  };
+  const std::string text = organ("mesh = \"file\"\nfile = \"poke.obj\"\n");
+  const Scene s = load_scene(dir.write("s.toml", text));
+  std::string warning;
+  for (const std::string& w : s.warnings)
+    if (w.find("intersects itself") != std::string::npos) warning = w;
+  ASSERT_NE(warning, "");
+  EXPECT_NE(warning.find("s.toml:" + std::to_string(line_of(text, "poke.obj")) + ": deformable[0].file: poke.obj: "),
+            std::string::npos) << warning;
+  EXPECT_NE(warning.find("the surface intersects itself: 3 pairs of triangles meet (first: triangles "),
+            std::string::npos) << warning;
+  EXPECT_NE(warning.find("the net's rest surface passes through itself"), std::string::npos) << warning;
+  // The clean tetrahedron and a built-in icosphere: no such warning.
+  dir.write("tet.obj", kTetObj);
+  for (const std::string& keys : {std::string("mesh = \"file\"\nfile = \"tet.obj\"\n"),
+                                  std::string("mesh = \"icosphere\"\nradius = 1.0\n")}) {
+    const Scene clean = load_scene(dir.write("c.toml", organ(keys)));
+    for (const std::string& w : clean.warnings)
+      EXPECT_EQ(w.find("intersects itself"), std::string::npos) << w;
+  }
 }
 
 /// The InputError of `text` (scene in `dir`) at the line holding `needle` and `key`, naming
@@ -148,7 +183,7 @@ TEST(SceneMesh, BadMeshesAreLocatedAtTheSceneKeyAndNameTheMeshFile) {
   expect_mesh_error(dir, with_mesh_obstacle("file = \"open.obj\"\n"), "file = ",
                     "obstacle[0].file", "open.obj", "open: 3 boundary edges");
   // Degenerate after scaling: flattened to 1e-13 of its height.
-  dir.write("tet.obj", kTet);
+  dir.write("tet.obj", kTetObj);
   expect_mesh_error(dir, with_mesh_obstacle("file = \"tet.obj\"\nscale = [1.0, 1.0, 1e-13]\n"),
                     "scale = ", "obstacle[0].scale", "tet.obj", "degenerate");
   // Units outside the list.

@@ -2,7 +2,8 @@
 /// @file collision.hpp
 /// Collision stage (paper §5, sphere-based collision for penalty contacts):
 /// the sphere sets of the dynamic bodies against the static obstacles (plane,
-/// box, sphere, capsule, sphere set, closed mesh: mesh_shape.hpp) and against each other.
+/// box, sphere, capsule, sphere set, closed mesh: mesh_shape.hpp), against each other and
+/// against the meshes of the other bodies (BodyModel::mesh).
 ///
 /// Pipeline of detect_contacts():
 ///   1. world centres c_w = x + R c_b of every body sphere, tight world AABB per body;
@@ -15,7 +16,13 @@
 ///      the scratch's sweep order, CollisionScratch::sweep_order in
 ///      core/src/detail/collision_scratch.hpp), then sphere–sphere between the spheres
 ///      of the two bodies that meet the overlap of their AABBs. body_a is the
-///      lower body index.
+///      lower body index;
+///   4. body meshes (bodies with BodyModel::mesh, index order): the mesh's world box
+///      (its local box at the body's pose composed with BodyModel::mesh_pose), the bodies of
+///      other articulations (index order) whose AABB meets it, then each of their spheres
+///      near the box against the mesh (sphere centre into the mesh frame, the mesh's signed
+///      distance, back to world: sphere_mesh()). body_a is the sphere's body, body_b the
+///      mesh's, sphere_b −1, the normal out of the mesh.
 /// The order of the contacts is a pure function of the model and the body
 /// states (deterministic, independent of the scratch's history).
 ///

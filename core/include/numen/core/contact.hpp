@@ -1,7 +1,7 @@
 #pragma once
 /// @file contact.hpp
-/// A penalty contact point between a dynamic body's sphere and an obstacle or
-/// another dynamic body's sphere (paper §5: sphere-based collision).
+/// A penalty contact point between a dynamic body's sphere and an obstacle, another dynamic
+/// body's sphere or another dynamic body's mesh (paper §5: sphere-based collision).
 
 #include "numen/core/types.hpp"
 
@@ -14,7 +14,9 @@ struct Contact {
   int body_b = -1;          ///< Other dynamic body (receives −force), or -1 for a static obstacle.
   int obstacle = -1;        ///< Obstacle index when body_b == -1, else -1.
   int sphere_a = -1;        ///< Index into Model::body_spheres.
-  int sphere_b = -1;        ///< Index into body_spheres (body_b >= 0) or static_spheres, or -1.
+  /// Index into body_spheres (body_b >= 0) or static_spheres, or -1: a plane or mesh obstacle,
+  /// or body_b's mesh (BodyModel::mesh) when body_b >= 0.
+  int sphere_b = -1;
   int material_pair = 0;    ///< Index into Model::material_pairs.
   Vec3 position = Vec3::Zero();  ///< Contact point (m): middle of the overlap.
   Vec3 normal = Vec3::UnitZ();   ///< Unit normal from b towards a: pushes a out along +normal.

@@ -124,6 +124,12 @@ struct MeshShape {
 std::string build_mesh_shape(const TriangleMesh& mesh, MeshShape& out,
                              const MeshShapeOptions& options = {});
 
+/// The first part of build_mesh_shape(): `out` gets the vertices of `mesh`, its AABB tree, its
+/// triangles in the tree's leaf order and their bounds (aabb_min, aabb_max, tree_depth), the rest
+/// empty. `mesh` must pass validate_mesh() and have a triangle; it need not be closed (enough for
+/// find_self_intersections()). Allocates: load time only.
+void build_mesh_tree(const TriangleMesh& mesh, MeshShape& out);
+
 /// Builds `s.band` for a MeshShape whose tree, normals and edges are built (build_mesh_shape()
 /// calls it). Allocates: load time only.
 void build_mesh_band(MeshShape& s, const MeshShapeOptions& options);

@@ -29,6 +29,10 @@ struct MeshSelfIntersections {
 /// Pairs that share a vertex or an edge are skipped (they meet there by construction).
 MeshSelfIntersections find_self_intersections(const MeshShape& shape);
 
+/// The same for any mesh that passes validate_mesh(), open ones included (a net's surface):
+/// builds the tree (build_mesh_tree()) and searches it. Empty result for a mesh without triangles.
+MeshSelfIntersections find_self_intersections(const TriangleMesh& mesh);
+
 /// True when the triangles (a0, a1, a2) and (b0, b1, b2) meet (a point in common, the boundary
 /// included). The signs come from double-precision orientation determinants.
 bool triangles_intersect(const Vec3& a0, const Vec3& a1, const Vec3& a2, const Vec3& b0,

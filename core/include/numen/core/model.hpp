@@ -98,6 +98,13 @@ struct BodyModel {
   /// Chaillou 2000): its net's ties pull the nodes back to their rest shape and the reaction
   /// goes nowhere. initial_twist must be zero.
   bool anchored = false;
+  /// Mesh collision shape (docs/meshes.md, "Mesh bodies"): index into Model::meshes, or -1 for
+  /// none. The spheres of the other bodies collide with it (detect_contacts(), the contact's
+  /// body_b with sphere_b −1), not those of this body or of a body of its articulation; the nets'
+  /// nodes, the obstacles and other meshes do not (the body touches those through its spheres).
+  int mesh = -1;
+  /// Pose of the mesh's frame in the body frame (origin at the COM; m).
+  Pose mesh_pose;
 };
 
 /// Shape of a static obstacle.
@@ -203,7 +210,7 @@ struct Model {
   std::vector<Sphere> body_spheres;    ///< Body-frame spheres of all bodies.
   std::vector<Obstacle> obstacles;     ///< Static obstacles.
   std::vector<Sphere> static_spheres;  ///< World-frame spheres of sphere-set obstacles.
-  std::vector<MeshShape> meshes;       ///< Shapes of the mesh obstacles (build_mesh_shape()).
+  std::vector<MeshShape> meshes;       ///< Mesh obstacles' and bodies' shapes (build_mesh_shape()).
   std::vector<JointModel> joints;      ///< Joints of the articulations (a forest; may be empty).
   BaumgarteSettings baumgarte;         ///< Joint drift correction (Eq. 5).
 

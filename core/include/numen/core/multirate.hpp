@@ -158,8 +158,9 @@ std::vector<int> god_object_bodies(const Model& scene, int body);
 /// fills `out`, or a message naming what refuses: a body out of range, a net on the god-object
 /// whose centre of mass is more than 0.1 mm from its component's, an integrator other than the
 /// linearly implicit or symplectic Euler (the impulse hand-back needs the step's effective
-/// contact force, MultirateGodObject), a device_dt ≤ 0 or not finite.
-/// Load time: allocates.
+/// contact force, MultirateGodObject), a device_dt ≤ 0 or not finite, a body of the god-object
+/// with a mesh (BodyModel::mesh: the planes stand for its spheres only; the tool's spheres against
+/// another body's mesh are planes like any contact). Load time: allocates.
 std::string make_god_object_model(const Model& scene, int body, double device_dt, Model& out);
 
 /// A copy of `scene` in which every sphere of the god-object of `body` (god_object_bodies()),

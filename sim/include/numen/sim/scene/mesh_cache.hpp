@@ -1,0 +1,60 @@
+#pragma once
+/// @file mesh_cache.hpp
+/// A cache file of a built core::MeshShape (docs/meshes.md, "Build cache"): the narrow band of a
+/// large mesh takes seconds to build (about 2 s at 100k triangles), its file a fraction of that
+/// to read. The file holds the whole shape (tree, normals, edges, grid, band) after a header:
+///
+///   "NUMENMSH" (8 bytes), format version (u32), key (u64), payload size (u64),
+///   payload checksum (u64), payload
+///
+/// in the host's byte order (a file from another byte order reads as stale). The key is a 64-bit
+/// FNV-1a hash of the format version, the mesh's vertices and triangles as built (after units,
+/// scale and winding), the build options (band width, cell factor, memory cap) and the shape's
+/// compile-time constants (leaf size, grid and brick cells): any change of what the build would
+/// produce changes it. The checksum (the same hash of the payload) finds a damaged file; the
+/// payload is then checked for sizes and index ranges before it is trusted. Load time only.
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+
+#include "numen/core/mesh.hpp"
+#include "numen/core/mesh_shape.hpp"
+
+namespace numen::sim {
+
+/// Version of the cache file format (part of the key: a file of another version is stale).
+inline constexpr std::uint32_t kMeshCacheVersion = 1;
+
+/// The key of the shape core::build_mesh_shape(mesh, ·, options) builds (see the file's comment).
+std::uint64_t mesh_cache_key(const core::TriangleMesh& mesh, const core::MeshShapeOptions& options);
+
+/// The default cache folder: $XDG_CACHE_HOME/numen/meshes, else $HOME/.cache/numen/meshes; empty
+/// when neither variable is set.
+std::filesystem::path default_mesh_cache_dir();
+
+/// The file name of a mesh's cache in a cache folder: "<stem>-<key, 16 hex digits>.nmshape"
+/// (`stem`: the mesh file's name without its extension).
+std::string mesh_cache_file_name(const std::string& stem, std::uint64_t key);
+
+/// What build_mesh_shape_cached() did.
+struct MeshCacheOutcome {
+  bool loaded = false;   ///< The shape came from the file (else it was built).
+  bool written = false;  ///< The file was (re)written with the built shape.
+  /// "" or why the file was not used or not written: "stale (…)", "damaged (…)", "cannot write
+  /// …" — the caller's warning. A missing file is no warning (the first load writes it).
+  std::string note;
+};
+
+/// Fills `out` with the shape of `mesh` built with `options`: read from `path` when the file is
+/// there with the right key and checksum and a consistent payload, else built
+/// (core::build_mesh_shape()) and written to `path` (through a temporary file renamed over it;
+/// its folder made when missing). A file that cannot be used or written is never an error: the
+/// shape is built, and `outcome.note` says why. Returns build_mesh_shape()'s error ("" on
+/// success; then nothing is written). Load time only.
+std::string build_mesh_shape_cached(const core::TriangleMesh& mesh,
+                                    const core::MeshShapeOptions& options,
+                                    const std::filesystem::path& path, core::MeshShape& out,
+                                    MeshCacheOutcome& outcome);
+
+}  // namespace numen::sim
