@@ -66,13 +66,14 @@ std::string file_of_target(std::string_view target) {
   return t.substr(1);
 }
 
-/// One outgoing WebSocket message: shared by every client it is queued for.
+}  // namespace
+
+/// One outgoing WebSocket message: shared by every client it is queued for. Outside the
+/// anonymous namespace: WsSession (external linkage) holds a queue of them.
 struct Outgoing {
   std::shared_ptr<const std::string> data;
   bool binary = false;  ///< A frame (counted, may be dropped) rather than a text message.
 };
-
-}  // namespace
 
 ViewHttpAnswer answer_view_http_request(const ViewServerSettings& settings,
                                         std::string_view method, std::string_view target,
