@@ -73,8 +73,6 @@ AxisVector random_q(SplitMix64& rng) {
   return q;
 }
 
-double angle_between(const Quat& a, const Quat& b) { return a.angularDistance(b); }
-
 TEST(PhantomKinematics, HomePostureIsAnL) {
   const PhantomGeometry g = some_geometry();
   const PK k(g);
@@ -84,7 +82,7 @@ TEST(PhantomKinematics, HomePostureIsAnL) {
   EXPECT_TRUE(elbow.position.isApprox(g.base.position + g.l1 * (rb * Vec3::UnitX()), 1e-12));
   const Pose stylus = k.stylus_pose(q);
   EXPECT_TRUE(stylus.position.isApprox(g.base.position + rb * Vec3(g.l1, 0.0, -g.l2), 1e-12));
-  EXPECT_LT(angle_between(stylus.orientation, rb), 1e-12);
+  EXPECT_LT(stylus.orientation.angularDistance(rb), 1e-12);
   // Identity offset: the controlled frame is the stylus frame.
   const Pose f = k.forward(q);
   EXPECT_TRUE(f.position.isApprox(stylus.position, 1e-15));
@@ -101,10 +99,10 @@ TEST(PhantomKinematics, AxesFollowTheDocumentedConvention) {
   // orientation does not change and the gimbal moves with the elbow.
   const Pose e1 = k.link_pose(PK::kLinkForearm, q_of(0, 0.3, 0, 0, 0, 0));
   EXPECT_TRUE(e1.position.isApprox(Vec3(l * std::cos(0.3), 0, -l * std::sin(0.3)), 1e-12));
-  EXPECT_LT(angle_between(e1.orientation, Quat::Identity()), 1e-15);
+  EXPECT_LT(e1.orientation.angularDistance(Quat::Identity()), 1e-15);
   p = k.stylus_pose(q_of(0, 0.3, 0, 0, 0, 0));
   EXPECT_TRUE(p.position.isApprox(e1.position + Vec3(0, 0, -l), 1e-12));
-  EXPECT_LT(angle_between(p.orientation, Quat::Identity()), 1e-15);
+  EXPECT_LT(p.orientation.angularDistance(Quat::Identity()), 1e-15);
   // q2 > 0 swings the gimbal back towards the turret axis, measured from the turret (the
   // same forearm direction whatever q1).
   for (double q1 : {-0.4, 0.0, 0.5}) {
@@ -119,7 +117,7 @@ TEST(PhantomKinematics, AxesFollowTheDocumentedConvention) {
   p = k.stylus_pose(q_of(0, 0, 0, 0.3, -0.2, 0.7));
   const Quat expected =
       rot(0.3, Vec3::UnitZ()) * rot(-0.2, Vec3::UnitY()) * rot(0.7, Vec3::UnitX());
-  EXPECT_LT(angle_between(p.orientation, expected), 1e-12);
+  EXPECT_LT(p.orientation.angularDistance(expected), 1e-12);
   EXPECT_TRUE(p.position.isApprox(Vec3(l, 0, -l), 1e-12));  // the gimbal does not move g
   // Roll turns about the pen: the pen axis x_S does not change.
   const Pose r = k.stylus_pose(q_of(0, 0, 0, 0.3, -0.2, -1.1));
@@ -133,7 +131,7 @@ TEST(PhantomKinematics, ToolOffsetIsAppliedInTheStylusFrame) {
   const Pose s = k.stylus_pose(q);
   const Pose c = k.forward(q);
   EXPECT_TRUE(c.position.isApprox(s.position + s.orientation * off.position, 1e-12));
-  EXPECT_LT(angle_between(c.orientation, s.orientation * off.orientation), 1e-12);
+  EXPECT_LT(c.orientation.angularDistance(s.orientation * off.orientation), 1e-12);
 }
 
 TEST(PhantomKinematics, LinkNamesAndLinkZero) {
@@ -165,14 +163,14 @@ TEST(PhantomKinematics, LinkFramesSitWhereDocumented) {
   const Quat r_t = g.base.orientation * rot(0.4, Vec3::UnitZ());
   const Pose turret = k.link_pose(PK::kLinkTurret, q);
   EXPECT_EQ(turret.position, g.base.position);
-  EXPECT_LT(angle_between(turret.orientation, r_t), 1e-12);
+  EXPECT_LT(turret.orientation.angularDistance(r_t), 1e-12);
   const Pose upper = k.link_pose(PK::kLinkUpperArm, q);
   EXPECT_EQ(upper.position, g.base.position);
-  EXPECT_LT(angle_between(upper.orientation, r_t * rot(-0.2, Vec3::UnitY())), 1e-12);
+  EXPECT_LT(upper.orientation.angularDistance(r_t * rot(-0.2, Vec3::UnitY())), 1e-12);
   const Pose fore = k.link_pose(PK::kLinkForearm, q);
   EXPECT_TRUE(
       fore.position.isApprox(g.base.position + g.l1 * (upper.orientation * Vec3::UnitX()), 1e-12));
-  EXPECT_LT(angle_between(fore.orientation, r_t * rot(0.3, Vec3::UnitY())), 1e-12);
+  EXPECT_LT(fore.orientation.angularDistance(r_t * rot(0.3, Vec3::UnitY())), 1e-12);
   const Pose stylus = k.link_pose(PK::kLinkStylus, q);
   EXPECT_TRUE(
       stylus.position.isApprox(fore.position - g.l2 * (fore.orientation * Vec3::UnitZ()), 1e-12));
@@ -270,7 +268,7 @@ TEST(PhantomKinematics, UnreachableTargetsAreClampedToTheWorkspaceBoundary) {
     const Pose p = k.forward(q);
     EXPECT_NEAR((p.position - g.base.position).norm(), g.l1 + g.l2, 1e-9);
     EXPECT_TRUE((p.position - g.base.position).normalized().isApprox(dir, 1e-9));
-    EXPECT_LT(angle_between(p.orientation, orientation), 1e-9);  // orientation kept
+    EXPECT_LT(p.orientation.angularDistance(orientation), 1e-9);  // orientation kept
   }
   // Too near (inside the inner sphere |l1 − l2|): radially out onto it.
   Pose near;
@@ -310,7 +308,7 @@ TEST(PhantomKinematics, TargetOnTheTurretAxisKeepsTheGivenTurretAngle) {
     EXPECT_DOUBLE_EQ(q[PK::kTurret], q0);
     const Pose p = k.forward(q);
     EXPECT_LT((p.position - target.position).norm(), 1e-9);
-    EXPECT_LT(angle_between(p.orientation, target.orientation), 1e-9);
+    EXPECT_LT(p.orientation.angularDistance(target.orientation), 1e-9);
   }
 }
 
@@ -323,7 +321,7 @@ TEST(PhantomKinematics, GimbalLockKeepsTheGivenRollAndThePose) {
     ASSERT_TRUE(back.allFinite());
     const Pose p = k.forward(back);
     EXPECT_LT((p.position - target.position).norm(), 1e-9);
-    EXPECT_LT(angle_between(p.orientation, target.orientation), 1e-7);
+    EXPECT_LT(p.orientation.angularDistance(target.orientation), 1e-7);
     EXPECT_NEAR(std::abs(back[PK::kGimbalPitch]), kPi / 2, 1e-7);
   }
 }

@@ -50,8 +50,6 @@ AxisVector q_of(double a, double b, double d, double psi, double jaw) {
   return q;
 }
 
-double trocar_angle_between(const Quat& x, const Quat& y) { return x.angularDistance(y); }
-
 // Angular velocity (world) taking orientation `from` to `to` over dt.
 Vec3 omega(const Quat& from, const Quat& to, double dt) {
   const Eigen::AngleAxisd aa(to * from.conjugate());
@@ -63,7 +61,7 @@ TEST(TrocarKinematics, ZeroPivotsPutTheTipAlongTheTrocarAxis) {
   const TK k(g);
   const Pose p = k.forward(q_of(0, 0, 0.12, 0, 0));
   EXPECT_TRUE(p.position.isApprox(g.point + 0.12 * (g.orientation * Vec3::UnitZ()), 1e-12));
-  EXPECT_LT(trocar_angle_between(p.orientation, g.orientation), 1e-12);
+  EXPECT_LT(p.orientation.angularDistance(g.orientation), 1e-12);
 }
 
 TEST(TrocarKinematics, PivotsFollowTheDocumentedConvention) {
@@ -79,7 +77,7 @@ TEST(TrocarKinematics, PivotsFollowTheDocumentedConvention) {
   const Pose r = k.forward(q_of(0.3, 0.5, 1.0, 0.7, 0));
   EXPECT_TRUE(r.position.isApprox(p.position, 1e-12));
   EXPECT_TRUE((r.orientation * Vec3::UnitZ()).isApprox(p.orientation * Vec3::UnitZ(), 1e-12));
-  EXPECT_NEAR(trocar_angle_between(r.orientation, p.orientation), 0.7, 1e-12);
+  EXPECT_NEAR(r.orientation.angularDistance(p.orientation), 0.7, 1e-12);
   // The jaw does not move the rigid tool.
   const Pose j = k.forward(q_of(0.3, 0.5, 1.0, 0.7, 0.9));
   EXPECT_TRUE(j.position.isApprox(r.position, 1e-15));
@@ -92,7 +90,7 @@ TEST(TrocarKinematics, ToolOffsetIsAppliedInTheToolFrame) {
   const Pose tool = k.tool_pose(q);
   const Pose c = k.forward(q);
   EXPECT_TRUE(c.position.isApprox(tool.position + tool.orientation * off.position, 1e-12));
-  EXPECT_LT(trocar_angle_between(c.orientation, tool.orientation * off.orientation), 1e-12);
+  EXPECT_LT(c.orientation.angularDistance(tool.orientation * off.orientation), 1e-12);
 }
 
 TEST(TrocarKinematics, InverseOfForwardIsTheIdentity) {
@@ -129,7 +127,7 @@ TEST(TrocarKinematics, ForwardOfInverseKeepsTheTipPositionAndRollButDropsTheWris
   EXPECT_NEAR(back[TK::kRoll], 0.8, 1e-9);  // twist survives the swing
   const Pose again = k.tool_pose(back);
   EXPECT_TRUE(again.position.isApprox(recorded.position, 1e-12));
-  EXPECT_NEAR(trocar_angle_between(again.orientation, recorded.orientation), 0.5,
+  EXPECT_NEAR(again.orientation.angularDistance(recorded.orientation), 0.5,
               1e-9);  // wrist lost
 }
 
@@ -282,23 +280,21 @@ TEST(TrocarLinks, FramesFollowTheDocumentedGeometry) {
   // Sleeve: at the trocar point, no roll, z along the shaft.
   const Pose sleeve = k.link_pose(TK::kLinkTrocar, q);
   EXPECT_EQ(sleeve.position, g.point);
-  EXPECT_LT(trocar_angle_between(sleeve.orientation, swing), 1e-12);
+  EXPECT_LT(sleeve.orientation.angularDistance(swing), 1e-12);
   // Tube == tool_pose (tip, with roll).
   const Pose tube = k.link_pose(TK::kLinkTube, q);
   const Pose tool = k.tool_pose(q);
   EXPECT_TRUE(tube.position.isApprox(tool.position, 1e-15));
-  EXPECT_LT(trocar_angle_between(tube.orientation, tool.orientation), 1e-15);
+  EXPECT_LT(tube.orientation.angularDistance(tool.orientation), 1e-15);
   EXPECT_TRUE(tube.position.isApprox(g.point + 0.15 * (sleeve.orientation * Vec3::UnitZ()), 1e-12));
   // Jaws: at the tip, ±jaw/2 about the tube's x axis, so 0.6 rad apart.
   const Pose j1 = k.link_pose(TK::kLinkJaw1, q);
   const Pose j2 = k.link_pose(TK::kLinkJaw2, q);
   EXPECT_EQ(j1.position, tube.position);
   EXPECT_EQ(j2.position, tube.position);
-  EXPECT_LT(trocar_angle_between(j1.orientation, tube.orientation * rot(0.3, Vec3::UnitX())),
-            1e-12);
-  EXPECT_LT(trocar_angle_between(j2.orientation, tube.orientation * rot(-0.3, Vec3::UnitX())),
-            1e-12);
-  EXPECT_NEAR(trocar_angle_between(j1.orientation, j2.orientation), 0.6, 1e-12);
+  EXPECT_LT(j1.orientation.angularDistance(tube.orientation * rot(0.3, Vec3::UnitX())), 1e-12);
+  EXPECT_LT(j2.orientation.angularDistance(tube.orientation * rot(-0.3, Vec3::UnitX())), 1e-12);
+  EXPECT_NEAR(j1.orientation.angularDistance(j2.orientation), 0.6, 1e-12);
   // Both jaws keep the tube's x axis (the hinge) and open symmetrically about the shaft.
   const Vec3 x_t = tube.orientation * Vec3::UnitX();
   EXPECT_TRUE((j1.orientation * Vec3::UnitX()).isApprox(x_t, 1e-12));
@@ -307,8 +303,8 @@ TEST(TrocarLinks, FramesFollowTheDocumentedGeometry) {
   EXPECT_TRUE((z1 + z2).normalized().isApprox(tube.orientation * Vec3::UnitZ(), 1e-12));
   // jaw = 0: both jaws are the tube.
   const AxisVector closed = q_of(0.3, -0.4, 0.15, 0.7, 0.0);
-  EXPECT_LT(trocar_angle_between(k.link_pose(TK::kLinkJaw1, closed).orientation,
-                                 k.link_pose(TK::kLinkTube, closed).orientation),
+  EXPECT_LT(k.link_pose(TK::kLinkJaw1, closed)
+                .orientation.angularDistance(k.link_pose(TK::kLinkTube, closed).orientation),
             1e-15);
   // An index out of range gives link 0.
   EXPECT_EQ(k.link_pose(7, q).position, k.forward(q).position);

@@ -28,7 +28,6 @@ Quat about(const Vec3& axis, double angle) {
 }
 
 /// Angle (rad) between two rotations, sign-insensitive.
-double angular_distance(const Quat& a, const Quat& b) { return a.angularDistance(b); }
 
 /// A 30 Hz trajectory moving at constant linear velocity `v` and spinning at
 /// constant world angular velocity `w` from orientation `q_init`.
@@ -87,7 +86,7 @@ TEST(Trajectory, MakesQuaternionSignsContinuous) {
   for (std::size_t i = 0; i + 1 < tr.size(); ++i) {
     EXPECT_GT(tr[i].pose.orientation.dot(tr[i + 1].pose.orientation), 0.0) << i;
   }
-  EXPECT_NEAR(angular_distance(tr[2].pose.orientation, about(Vec3::UnitY(), 0.2)), 0.0, 1e-15);
+  EXPECT_NEAR(tr[2].pose.orientation.angularDistance(about(Vec3::UnitY(), 0.2)), 0.0, 1e-15);
 }
 
 TEST(Trajectory, AtSampleInstantsReturnsTheSamples) {
@@ -127,12 +126,12 @@ TEST(Trajectory, SlerpTakesTheShortestArc) {
   Quat q1 = about(Vec3::UnitX(), 0.5);
   q1.coeffs() *= -1.0;  // the long way round if taken literally
   const Quat mid = numen::sim::slerp_shortest(q0, q1, 0.5);
-  EXPECT_NEAR(angular_distance(mid, about(Vec3::UnitX(), 0.25)), 0.0, 1e-15);
+  EXPECT_NEAR(mid.angularDistance(about(Vec3::UnitX(), 0.25)), 0.0, 1e-15);
   EXPECT_GT(mid.dot(q0), 0.0);  // stays in the hemisphere of q0
   // Agrees with Eigen's slerp away from tiny angles.
   const Quat a = about(Vec3(1, -1, 2), 0.3), b = about(Vec3(0, 1, 1), 2.0);
   for (double s : {0.1, 0.5, 0.9}) {
-    EXPECT_NEAR(angular_distance(numen::sim::slerp_shortest(a, b, s), a.slerp(s, b)), 0.0, 1e-12);
+    EXPECT_NEAR(numen::sim::slerp_shortest(a, b, s).angularDistance(a.slerp(s, b)), 0.0, 1e-12);
   }
 }
 
@@ -146,7 +145,7 @@ TEST(Trajectory, RotationVectorRoundTripsIncludingTinyAndLargeAngles) {
     minus.coeffs() *= -1.0;
     EXPECT_NEAR((numen::core::quat_log(minus) - v).norm(), 0.0, 1e-14) << angle;
     const Quat back = numen::core::quat_exp(v);
-    EXPECT_NEAR(angular_distance(back, q), 0.0, 1e-14) << angle;
+    EXPECT_NEAR(back.angularDistance(q), 0.0, 1e-14) << angle;
     EXPECT_NEAR(back.norm(), 1.0, 1e-15);
   }
 }
@@ -206,7 +205,7 @@ TEST(Interpolation, EqualsTheRecordedPosesAtSampleInstantsOfA1kHzLoop) {
     if (std::abs(static_cast<double>(k) * 30.0 - static_cast<double>(i) * 1000.0) > 1e-9) continue;
     const auto s = rec.at(static_cast<double>(k) * 1e-3);
     EXPECT_NEAR((s.pose.position - rec[i].pose.position).norm(), 0.0, 1e-15) << i;
-    EXPECT_NEAR(angular_distance(s.pose.orientation, rec[i].pose.orientation), 0.0, 1e-15) << i;
+    EXPECT_NEAR(s.pose.orientation.angularDistance(rec[i].pose.orientation), 0.0, 1e-15) << i;
   }
   EXPECT_NEAR((rec.at(1.0).pose.position - rec[30].pose.position).norm(), 0.0, 1e-15);
 }
@@ -223,7 +222,7 @@ TEST(Interpolation, InterpolatesBetweenRecordedSamples) {
   EXPECT_NEAR((mid.pose.orientation.coeffs() - half.coeffs()).norm(), 0.0, 1e-15);
   EXPECT_NEAR(mid.jaw, 0.15, 1e-15);
   // A quarter.
-  EXPECT_NEAR(angular_distance(rec.at(5.0 / 600).pose.orientation, about(Vec3::UnitY(), 0.15)), 0.0,
+  EXPECT_NEAR(rec.at(5.0 / 600).pose.orientation.angularDistance(about(Vec3::UnitY(), 0.15)), 0.0,
               1e-15);
 }
 
@@ -261,8 +260,7 @@ TEST(Placement, MovesRotatesAndScalesTheWholeTrajectory) {
     const Vec3 expected =
         Vec3(1.0, 2.0, 3.0) + r * (2.0 * (rec[i].pose.position - placement.origin));
     EXPECT_NEAR((moved[i].pose.position - expected).norm(), 0.0, 1e-15);
-    EXPECT_NEAR(angular_distance(moved[i].pose.orientation, r * rec[i].pose.orientation), 0.0,
-                1e-15);
+    EXPECT_NEAR(moved[i].pose.orientation.angularDistance(r * rec[i].pose.orientation), 0.0, 1e-15);
     EXPECT_EQ(moved[i].jaw, rec[i].jaw);
   }
   const auto tw = moved.twist_at(0.25);
