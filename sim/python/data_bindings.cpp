@@ -77,7 +77,8 @@ auto node_contact_rows(core::Vec3 core::NodeContact::*member) {
   return [member](const py::object& self) {
     const core::Data& d = handle(self).data;
     const auto n = static_cast<std::size_t>(d.num_node_contacts);
-    return vec3_rows<core::NodeContact>(self, n, n > 0 ? (d.node_contacts[0].*member).data() : nullptr);
+    return vec3_rows<core::NodeContact>(self, n,
+                                        n > 0 ? (d.node_contacts[0].*member).data() : nullptr);
   };
 }
 

@@ -98,7 +98,8 @@ void bind_scene(py::module_& m) {
             py::array_t<int> faces({static_cast<py::ssize_t>(mo.net_faces.size()), py::ssize_t{3}});
             for (std::size_t f = 0; f < mo.net_faces.size(); ++f)
               for (int k = 0; k < 3; ++k)
-                faces.mutable_at(static_cast<py::ssize_t>(f), k) = mo.net_faces[f][static_cast<std::size_t>(k)];
+                faces.mutable_at(static_cast<py::ssize_t>(f), k) =
+                    mo.net_faces[f][static_cast<std::size_t>(k)];
             return faces;
           },
           "(F, 3) int copy of the nets' surface triangles as global node indices, outward "

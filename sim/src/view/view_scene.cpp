@@ -72,7 +72,9 @@ json obstacle(const core::Model& m, const core::Obstacle& o) {
       j["spheres"] = std::move(spheres);
       break;
     }
-    case core::ShapeType::kMesh: mesh_surface(j, m.meshes[static_cast<std::size_t>(o.mesh)]); break;
+    case core::ShapeType::kMesh:
+      mesh_surface(j, m.meshes[static_cast<std::size_t>(o.mesh)]);
+      break;
   }
   return j;
 }

@@ -85,7 +85,8 @@ TEST(ViewSceneMessage, CarriesAMeshObstaclesSurface) {
 // the mesh's pose in the body frame (the model's BodyModel::mesh_pose, [x, y, z, w]) and its
 // surface in the mesh's frame; a body without a mesh (the probe) has none.
 TEST(ViewSceneMessage, CarriesABodysMeshWithItsPoseInTheBodyFrame) {
-  numen::sim::Scene scene = numen::sim::load_scene(std::string(NUMEN_TEST_DATA_DIR) + "/mesh_body.toml");
+  numen::sim::Scene scene =
+      numen::sim::load_scene(std::string(NUMEN_TEST_DATA_DIR) + "/mesh_body.toml");
   const numen::core::Model& model = scene.model;
   ASSERT_EQ(model.bodies.size(), 2u);
   ASSERT_EQ(model.bodies[0].name, "lobe");
@@ -106,7 +107,8 @@ TEST(ViewSceneMessage, CarriesABodysMeshWithItsPoseInTheBodyFrame) {
   EXPECT_EQ(mesh["orientation"][1].get<double>(), pose.orientation.y());
   EXPECT_EQ(mesh["orientation"][2].get<double>(), pose.orientation.z());
   EXPECT_EQ(mesh["orientation"][3].get<double>(), pose.orientation.w());
-  const numen::core::MeshShape& shape = model.meshes[static_cast<std::size_t>(model.bodies[0].mesh)];
+  const numen::core::MeshShape& shape =
+      model.meshes[static_cast<std::size_t>(model.bodies[0].mesh)];
   EXPECT_EQ(shape.num_triangles(), 1280);  // lobe.obj
   expect_mesh_surface(mesh, shape);
   EXPECT_EQ(lobe["spheres"].size(), 4u);  // its feet stay: the page's toggle
