@@ -1,5 +1,7 @@
 """numen.Data: stepping from Python against the same loop in C++, and the NumPy views
 (sim/python/data_bindings.cpp)."""
+import os
+
 import numpy as np
 import pytest
 
@@ -138,90 +140,16 @@ def test_target_views_and_reset(scene):
     assert data.status & numen.STATUS_INVALID_TARGET
 
 
-# A one-sphere probe pressed 8 mm into a small organ (an icosphere net tied to an anchored core:
-# the probe meets its surface triangles, docs/deformable.md "Surface contacts"), and a free net
-# ball dropped on a floor (its node spheres meet the plane); 0.6 s, about 0.1 s to step.
-NODE_CONTACT_SCENE = """
-name = "node-contacts"
-dt = 0.001
-duration = 0.6
-gravity = [0.0, 0.0, -9.81]
-integrator = "implicit-euler"
-coupling = "god-object"
-
-[[material]]
-name = "steel"
-
-[contact_default]
-stiffness = 2000.0
-damping = 2.0
-
-[[obstacle]]
-name = "floor"
-type = "plane"
-point = [0.0, 0.0, -0.05]
-normal = [0.0, 0.0, 1.0]
-
-[[body]]
-name = "organ_core"
-mass = 0.1
-inertia = [1.0e-4, 1.0e-4, 1.0e-4]
-anchored = true
-
-[[deformable]]
-name = "organ"
-body = "organ_core"
-mesh = "icosphere"
-radius = 0.02
-mass = 0.02
-stiffness = 200.0
-tie_stiffness = 100.0
-tie_damping = 0.1
-
-[[body]]
-name = "ball_core"
-mass = 0.01
-inertia = [1.0e-6, 1.0e-6, 1.0e-6]
-position = [0.1, 0.0, -0.035]
-
-[[deformable]]
-name = "ball"
-body = "ball_core"
-mesh = "icosphere"
-radius = 0.01
-subdivisions = 1
-mass = 0.01
-stiffness = 200.0
-tie_stiffness = 400.0
-tie_damping = 0.2
-
-[[body]]
-name = "probe"
-mass = 0.03
-spheres = [[0.0, 0.0, 0.0, 0.004]]
-coupling = { stiffness = 300.0, damping_ratio = 0.9 }
-
-[device]
-kind = "pose-tracker"
-attach = "probe"
-
-[trajectory]
-source = "scripted"
-start = { position = [-0.03, 0.0, 0.0] }
-
-[[trajectory.segment]]
-type = "line"
-to = [-0.012, 0.0, 0.0]
-duration = 0.5
-"""
+# A probe pressed into a small organ (triangle contacts) and a net ball on a floor (node sphere
+# contacts): tests/data/node_contacts.toml.
+NODE_CONTACT_SCENE = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "data",
+                                  "node_contacts.toml")
 
 
-def test_node_contact_views_carry_the_surface_triangle_fields(tmp_path):
+def test_node_contact_views_carry_the_surface_triangle_fields():
     if not numen.features["deformable"]:
         pytest.skip("this build has NUMEN_WITH_DEFORMABLE=OFF: no nets")
-    path = tmp_path / "node_contacts.toml"
-    path.write_text(NODE_CONTACT_SCENE)
-    s = numen.load_scene(str(path))
+    s = numen.load_scene(NODE_CONTACT_SCENE)
     m = s.model
     faces = m.net_faces
     assert faces.shape == (320 + 80, 3) and faces.dtype.kind == "i"  # icospheres of 2 and 1 subdivisions
