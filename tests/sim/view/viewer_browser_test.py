@@ -257,8 +257,11 @@ def check_mesh_bodies(page, probe, shot, name, frames):
             failures.append("%s: the mesh body %s is not drawn as a shape (shapes %s)" % (name, n, probe.get("shapes")))
         if b["drawn"] != b["sent"]:
             failures.append("%s: %s: %d triangles drawn of the %d sent" % (name, n, b["drawn"], b["sent"]))
+        if b["middle"] is None or first[n]["middle"] is None or last[n]["middle"] is None:
+            failures.append("%s: %s: no surface drawn" % (name, n))
+            continue
         px = b["middlePx"]
-        grey = near_colour(img, px["x"], px["y"], 3, is_body) if px and px["inside"] else 0
+        grey = near_colour(img, px["x"], px["y"], 3, is_body) if px["inside"] else 0
         moved = [last[n]["position"][k] - first[n]["position"][k] for k in range(3)]
         followed = [last[n]["middle"][k] - first[n]["middle"][k] for k in range(3)]
         off = max(abs(moved[k] - followed[k]) for k in range(3))
