@@ -87,6 +87,9 @@ ModelFootprint model_footprint(const Model& m) noexcept {
   f.groups[2] = {"joints", heap(m.joints, t.nodes, t.body_node, t.joint_node, t.body_tree)};
   f.groups[3] = {"nets", heap(m.nets, m.net_springs, m.node_rest, m.node_mass, m.node_radius,
                               m.node_net, m.node_sweep_order, m.net_faces)};
+  std::size_t meshes = heap(m.meshes);
+  for (const MeshShape& s : m.meshes) meshes += s.memory_bytes();
+  f.groups[4] = {"meshes", meshes};
   return f;
 }
 

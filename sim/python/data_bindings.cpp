@@ -72,6 +72,28 @@ auto contact_rows(core::Vec3 core::Contact::*member) {
   };
 }
 
+/// Getter of the (num_node_contacts, 3) view of the Vec3 `member` of Data::node_contacts.
+auto node_contact_rows(core::Vec3 core::NodeContact::*member) {
+  return [member](const py::object& self) {
+    const core::Data& d = handle(self).data;
+    const auto n = static_cast<std::size_t>(d.num_node_contacts);
+    return vec3_rows<core::NodeContact>(self, n,
+                                        n > 0 ? (d.node_contacts[0].*member).data() : nullptr);
+  };
+}
+
+/// Getter of the (num_node_contacts,) view of the scalar `member` (int, double or bool) of
+/// Data::node_contacts, strided over core::NodeContact; with none it points at the Data itself.
+template <typename T>
+auto node_contact_column(T core::NodeContact::*member) {
+  return [member](const py::object& self) {
+    const core::Data& d = handle(self).data;
+    const auto n = static_cast<py::ssize_t>(d.num_node_contacts);
+    const T* first = n > 0 ? &(d.node_contacts[0].*member) : reinterpret_cast<const T*>(&d);
+    return view(self, first, {n}, {static_cast<py::ssize_t>(sizeof(core::NodeContact))});
+  };
+}
+
 /// The model a step argument names: a numen.Scene (its model) or a numen.Model.
 const core::Model& model_of(const py::object& scene_or_model) {
   if (py::isinstance<sim::Scene>(scene_or_model)) return scene_or_model.cast<const sim::Scene&>().model;
@@ -295,7 +317,49 @@ void bind_data(py::module_& m) {
                         {static_cast<py::ssize_t>(sizeof(core::Contact)),
                          byte_offset(&d.contacts[0].body_a, &d.contacts[0].body_b)});
           },
-          "View (C, 2) int of (body_a, body_b) per contact; body_b -1: a static obstacle.");
+          "View (C, 2) int of (body_a, body_b) per contact; body_b -1: a static obstacle.")
+      // The nets' node contacts (core::NodeContact, net_state.hpp): a node sphere's contact, or
+      // one node's share of a surface triangle's contact (docs/deformable.md "Surface contacts").
+      .def_property_readonly(
+          "num_node_contacts", [](const DataHandle& h) { return h.data.num_node_contacts; },
+          "Node contacts K of the last step (0 without nets).")
+      .def_property_readonly(
+          "node_contact_nodes", node_contact_column(&core::NodeContact::node),
+          "View (K,) int of the node receiving +force (global node index); strided over "
+          "core::NodeContact, K = num_node_contacts when taken.")
+      .def_property_readonly(
+          "node_contact_bodies", node_contact_column(&core::NodeContact::body_b),
+          "View (K,) int of the body receiving -force, -1 for a static obstacle.")
+      .def_property_readonly(
+          "node_contact_obstacles", node_contact_column(&core::NodeContact::obstacle),
+          "View (K,) int of the obstacle index where the body is -1, else -1.")
+      .def_property_readonly(
+          "node_contact_points", node_contact_rows(&core::NodeContact::position),
+          "View (K, 3) of the contact points (m, world): the middle of the overlap.")
+      .def_property_readonly(
+          "node_contact_normals", node_contact_rows(&core::NodeContact::normal),
+          "View (K, 3) of the unit normals, from the body/obstacle towards the node.")
+      .def_property_readonly(
+          "node_contact_forces", node_contact_rows(&core::NodeContact::force),
+          "View (K, 3) of the penalty force on the node (N, world; a triangle contact: this "
+          "node's share); -force on the body.")
+      .def_property_readonly(
+          "node_contact_depths", node_contact_column(&core::NodeContact::depth),
+          "View (K,) of the penetration depths (m, > 0).")
+      .def_property_readonly(
+          "node_contact_active", node_contact_column(&core::NodeContact::active),
+          "View (K,) bool: the contact law acts (f_n > 0, or engaged by a look-ahead).")
+      .def_property_readonly(
+          "node_contact_faces", node_contact_column(&core::NodeContact::face),
+          "View (K,) int: a surface triangle's contact, its triangle (row of Model.net_faces); "
+          "-1 for a node sphere's contact.")
+      .def_property_readonly(
+          "node_contact_face_weights", node_contact_rows(&core::NodeContact::face_weights),
+          "View (K, 3) of the barycentric weights of the closest point on the triangle, one per "
+          "node of Model.net_faces[face] in its order (each >= 0, sum 1); 0 where face is -1.")
+      .def_property_readonly(
+          "node_contact_shares", node_contact_column(&core::NodeContact::share),
+          "View (K,) of this node's weight among face_weights (1 for a node sphere's contact).");
 
   m.def("step", [](const py::object& model, py::object data) {
           checked_step(model_of(model), handle(data));

@@ -92,6 +92,19 @@ void bind_scene(py::module_& m) {
             return names;
           },
           "Joint names, in joint index order.")
+      .def_property_readonly(
+          "net_faces",
+          [](const core::Model& mo) {
+            py::array_t<int> faces({static_cast<py::ssize_t>(mo.net_faces.size()), py::ssize_t{3}});
+            for (std::size_t f = 0; f < mo.net_faces.size(); ++f)
+              for (int k = 0; k < 3; ++k)
+                faces.mutable_at(static_cast<py::ssize_t>(f), k) =
+                    mo.net_faces[f][static_cast<std::size_t>(k)];
+            return faces;
+          },
+          "(F, 3) int copy of the nets' surface triangles as global node indices, outward "
+          "(Model::net_faces; each net's rows [face_begin, face_begin + face_count)); (0, 3) "
+          "without nets. Data.node_contact_faces index its rows.")
       .def_property_readonly("initial_attached_body",
                              [](const core::Model& mo) { return mo.initial_attached_body; },
                              "Body the device holds after a reset (-1: none).");

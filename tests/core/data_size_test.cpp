@@ -113,6 +113,8 @@ TEST(DataSize, ModelFootprintCountsItsArrays) {
   EXPECT_GE(fn.groups[3].heap_bytes,
             static_cast<std::size_t>(net.num_nodes()) *
                 (sizeof(core::Vec3) + 2 * sizeof(double) + sizeof(int)));
+  EXPECT_EQ(fr.groups[4].heap_bytes, 0u);  // meshes: none
   EXPECT_EQ(fn.heap_bytes(), fn.groups[0].heap_bytes + fn.groups[1].heap_bytes +
-                                 fn.groups[2].heap_bytes + fn.groups[3].heap_bytes);
+                                 fn.groups[2].heap_bytes + fn.groups[3].heap_bytes +
+                                 fn.groups[4].heap_bytes);
 }

@@ -14,6 +14,7 @@
 
 #include "numen/core/capacity.hpp"
 #include "numen/core/data.hpp"
+#include "numen/core/mesh_shape.hpp"
 #include "numen/core/step_stages.hpp"
 #include "numen/sim/scene/scene.hpp"
 
@@ -34,6 +35,42 @@ nlohmann::ordered_json json_groups(const std::array<core::BufferGroupBytes, N>& 
   nlohmann::ordered_json j = nlohmann::ordered_json::object();
   for (const core::BufferGroupBytes& g : groups) j[g.group] = g.heap_bytes;
   return j;
+}
+
+/// The line of a mesh obstacle's or body's shape.
+MeshLine shape_line(const char* kind, const std::string& name, const core::MeshShape& s) {
+  MeshLine l;
+  l.kind = kind;
+  l.name = name;
+  l.triangles = s.num_triangles();
+  l.vertices = static_cast<int>(s.vertices.size());
+  l.heap = s.memory_bytes();
+  l.band_heap = core::mesh_band_bytes(s.band);
+  l.band_width_m = s.band.width;
+  l.band_note = s.band.note;
+  return l;
+}
+
+/// Every mesh of `m` (SceneInfo::meshes).
+std::vector<MeshLine> mesh_lines(const core::Model& m) {
+  std::vector<MeshLine> out;
+  for (const core::Obstacle& o : m.obstacles)
+    if (o.type == core::ShapeType::kMesh)
+      out.push_back(shape_line("obstacle", o.name, m.meshes[static_cast<std::size_t>(o.mesh)]));
+  for (const core::BodyModel& b : m.bodies)
+    if (b.mesh >= 0)
+      out.push_back(shape_line("body", b.name, m.meshes[static_cast<std::size_t>(b.mesh)]));
+  for (const core::NetModel& n : m.nets) {
+    if (n.face_count == 0) continue;
+    MeshLine l;
+    l.kind = "net";
+    l.name = n.name;
+    l.triangles = n.face_count;
+    l.vertices = n.node_count;
+    l.heap = static_cast<std::size_t>(n.face_count) * sizeof(m.net_faces[0]);
+    out.push_back(std::move(l));
+  }
+  return out;
 }
 
 }  // namespace
@@ -71,6 +108,7 @@ SceneInfo describe_scene(const Scene& scene) {
   const core::Data data = core::make_data(m);
   info.node_contact_capacity = static_cast<int>(data.node_contacts.size());
   info.model_bytes = core::model_footprint(m);
+  info.meshes = mesh_lines(m);
   info.data_bytes = core::data_footprint(data);
   const hal::DeviceConfig& device = scene.device;
   info.device_name = device.name;
@@ -120,6 +158,18 @@ std::string format_scene_info(const SceneInfo& i) {
      << bytes(i.model_bytes.heap_bytes()) << "\n";
   for (const core::BufferGroupBytes& g : i.model_bytes.groups)
     os << "    " << std::left << std::setw(24) << g.group << std::right << bytes(g.heap_bytes) << "\n";
+  for (const MeshLine& l : i.meshes) {
+    os << "  mesh " << l.kind << " " << l.name << ": " << l.triangles << " triangles, "
+       << l.vertices << (l.kind == "net" ? " nodes, " : " vertices, ") << bytes(l.heap);
+    if (l.kind == "net")
+      os << " of triangles (no narrow band: the surface moves)";
+    else if (l.band_width_m > 0.0)
+      os << ", of which narrow band " << bytes(l.band_heap) << " (width " << l.band_width_m * 1e3
+         << " mm)";
+    else
+      os << ", " << (l.band_note.empty() ? "no narrow band" : l.band_note);
+    os << "\n";
+  }
   os << "  Data: sizeof " << bytes(i.data_bytes.sizeof_data) << " (contact array "
      << i.max_contacts << " x " << sizeof(core::Contact) << " B inside), heap "
      << bytes(i.data_bytes.heap_bytes()) << "\n";
@@ -170,6 +220,17 @@ std::string format_scene_info_json(const SceneInfo& i) {
   j["model_bytes"] = {{"sizeof", i.model_bytes.sizeof_model},
                       {"heap", i.model_bytes.heap_bytes()},
                       {"groups", json_groups(i.model_bytes.groups)}};
+  nlohmann::ordered_json meshes = nlohmann::ordered_json::array();
+  for (const MeshLine& l : i.meshes)
+    meshes.push_back({{"kind", l.kind},
+                      {"name", l.name},
+                      {"triangles", l.triangles},
+                      {"vertices", l.vertices},
+                      {"heap", l.heap},
+                      {"band_heap", l.band_heap},
+                      {"band_width_m", l.band_width_m},
+                      {"band_note", l.band_note}});
+  j["meshes"] = std::move(meshes);
   j["data_bytes"] = {{"sizeof", i.data_bytes.sizeof_data},
                      {"heap", i.data_bytes.heap_bytes()},
                      {"groups", json_groups(i.data_bytes.groups)}};

@@ -31,6 +31,27 @@ const char* shape_name(core::ShapeType t) {
   return "unknown";
 }
 
+// A mesh's surface into `j`, in the mesh's own frame: its triangle_count, then flat x y z per
+// vertex (m) and i j k per triangle (outward winding); above kViewMeshMaxTriangles only its
+// bounds (the message stays well under a recording's kViewRecordMaxBytes).
+void mesh_surface(json& j, const core::MeshShape& mesh) {
+  j["triangle_count"] = mesh.num_triangles();
+  if (mesh.num_triangles() > kViewMeshMaxTriangles) {
+    j["aabb"] = json::array({vec3(mesh.aabb_min), vec3(mesh.aabb_max)});
+    return;
+  }
+  json vertices = json::array(), triangles = json::array();
+  for (const core::Vec3& v : mesh.vertices) {
+    vertices.push_back(v.x());
+    vertices.push_back(v.y());
+    vertices.push_back(v.z());
+  }
+  for (const std::array<int, 3>& t : mesh.triangles)
+    for (int k : t) triangles.push_back(k);
+  j["vertices"] = std::move(vertices);
+  j["triangles"] = std::move(triangles);
+}
+
 json obstacle(const core::Model& m, const core::Obstacle& o) {
   json j{{"name", o.name},
          {"type", shape_name(o.type)},
@@ -51,28 +72,9 @@ json obstacle(const core::Model& m, const core::Obstacle& o) {
       j["spheres"] = std::move(spheres);
       break;
     }
-    case core::ShapeType::kMesh: {
-      // The surface in the obstacle's frame, flat: x y z per vertex (m), i j k per triangle
-      // (outward winding); above kViewMeshMaxTriangles only its bounds (the message stays
-      // well under a recording's kViewRecordMaxBytes).
-      const core::MeshShape& mesh = m.meshes[static_cast<std::size_t>(o.mesh)];
-      j["triangle_count"] = mesh.num_triangles();
-      if (mesh.num_triangles() > kViewMeshMaxTriangles) {
-        j["aabb"] = json::array({vec3(mesh.aabb_min), vec3(mesh.aabb_max)});
-        break;
-      }
-      json vertices = json::array(), triangles = json::array();
-      for (const core::Vec3& v : mesh.vertices) {
-        vertices.push_back(v.x());
-        vertices.push_back(v.y());
-        vertices.push_back(v.z());
-      }
-      for (const std::array<int, 3>& t : mesh.triangles)
-        for (int k : t) triangles.push_back(k);
-      j["vertices"] = std::move(vertices);
-      j["triangles"] = std::move(triangles);
+    case core::ShapeType::kMesh:
+      mesh_surface(j, m.meshes[static_cast<std::size_t>(o.mesh)]);
       break;
-    }
   }
   return j;
 }
@@ -98,7 +100,13 @@ std::string view_scene_message(const Scene& scene, const platform::StateFrameLay
     json spheres = json::array();
     for (int i = b.sphere_begin; i < b.sphere_begin + b.sphere_count; ++i)
       spheres.push_back(sphere(m.body_spheres[static_cast<std::size_t>(i)]));
-    bodies.push_back({{"name", b.name}, {"spheres", std::move(spheres)}});
+    json body{{"name", b.name}, {"spheres", std::move(spheres)}};
+    if (b.mesh >= 0) {  // its mesh's pose in the body frame, and its surface in the mesh frame
+      json mesh = pose(b.mesh_pose);
+      mesh_surface(mesh, m.meshes[static_cast<std::size_t>(b.mesh)]);
+      body["mesh"] = std::move(mesh);
+    }
+    bodies.push_back(std::move(body));
   }
   json obstacles = json::array();
   for (const core::Obstacle& o : m.obstacles) obstacles.push_back(obstacle(m, o));

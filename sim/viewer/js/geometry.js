@@ -34,7 +34,38 @@ function capsuleBetween(a, b, r) {
   return g;
 }
 
+/// A mesh's surface from the scene message (flat `vertices` and `triangles` in its own frame)
+/// as a geometry, or its bounds as box edges (userData.wire) when the server sent only its
+/// `aabb` (a mesh too large to send).
+function meshGeometry(m) {
+  if (m.vertices) {
+    const g = new THREE.BufferGeometry();
+    g.setAttribute('position', new THREE.Float32BufferAttribute(m.vertices, 3));
+    g.setIndex(m.triangles);
+    g.computeVertexNormals();
+    return g;
+  }
+  const [lo, hi] = m.aabb;
+  const box = new THREE.BoxGeometry(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]);
+  box.translate((hi[0] + lo[0]) / 2, (hi[1] + lo[1]) / 2, (hi[2] + lo[2]) / 2);
+  const g = new THREE.EdgesGeometry(box);
+  g.userData.wire = true;
+  return g;
+}
+
+/// Geometry g drawn in `material`: as lines of its colour (the same Color object: a colour
+/// change shows on both) when g is a wire box, else as a mesh.
+function drawable(g, material) {
+  if (!g.userData.wire) return new THREE.Mesh(g, material);
+  const { transparent, opacity, depthTest, depthWrite } = material;
+  const lines = new THREE.LineBasicMaterial({ transparent, opacity, depthTest, depthWrite });
+  lines.color = material.color;
+  return new THREE.LineSegments(g, lines);
+}
+
 /// Body i's visual shape in its own frame (a geometry), or null when its spheres are its look:
+///  - a mesh (the scene message's `mesh` of the body): its surface placed by the mesh's pose in
+///    the body frame (userData.surface);
 ///  - spheres on one line (a shaft, a jaw): a capsule from the first centre to the last, of
 ///    the largest radius;
 ///  - no spheres, a deformable net on it (the hidden rigid core): a 1.5 mm shaft along its z
@@ -43,6 +74,12 @@ function capsuleBetween(a, b, r) {
 ///    8 cm behind the joint's frame to 1 cm ahead;
 ///  - no spheres otherwise: a 3 mm ball at its origin.
 function visualShape(msg, i) {
+  const mesh = msg.bodies[i].mesh;
+  if (mesh) {
+    const g = meshGeometry(mesh).applyQuaternion(q(mesh.orientation)).translate(...mesh.position);
+    g.userData.surface = true;
+    return g;
+  }
   const sp = msg.bodies[i].spheres;
   if (sp.length >= 2) {
     const a = v3(sp[0]), b = v3(sp[sp.length - 1]), ab = b.clone().sub(a);
@@ -120,22 +157,8 @@ export function buildScene(msg) {
       const g = new THREE.CapsuleGeometry(o.radius, 2 * o.half_length, 8, 24);
       g.rotateX(Math.PI / 2);  // three's capsule is along y, numen's along z
       obj = new THREE.Mesh(g, mat);
-    } else if (o.type === 'mesh') {
-      // The obstacle's surface (scene message: flat vertices and triangles in its frame), or its
-      // bounds as a wire box when the server sent only those (a mesh too large to send).
-      if (o.vertices) {
-        const g = new THREE.BufferGeometry();
-        g.setAttribute('position', new THREE.Float32BufferAttribute(o.vertices, 3));
-        g.setIndex(o.triangles);
-        g.computeVertexNormals();
-        obj = new THREE.Mesh(g, mat);
-      } else {
-        const [lo, hi] = o.aabb;
-        const g = new THREE.BoxGeometry(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]);
-        g.translate((hi[0] + lo[0]) / 2, (hi[1] + lo[1]) / 2, (hi[2] + lo[2]) / 2);
-        obj = new THREE.LineSegments(new THREE.EdgesGeometry(g), new THREE.LineBasicMaterial({ color: COLORS.obstacle }));
-      }
-    } else if (o.type === 'sphere_set') {
+    } else if (o.type === 'mesh') obj = drawable(meshGeometry(o), mat);  // in the obstacle's frame
+    else if (o.type === 'sphere_set') {
       obj = sphereSet(o.spheres, mat);  // world coordinates already
       for (const s of o.spheres) box.expandByPoint(v3(s).addScalar(s[3])).expandByPoint(v3(s).addScalar(-s[3]));
     } else continue;
@@ -164,8 +187,8 @@ export function buildScene(msg) {
     g.add(spheres);
     gh.add(ghostSpheres);
     if (shape) {
-      g.add(new THREE.Mesh(shape, solid));
-      gh.add(new THREE.Mesh(shape, ghostMat));
+      g.add(drawable(shape, solid));
+      gh.add(drawable(shape, ghostMat));
     }
     for (const o of [g, ...g.children]) o.renderOrder = 2;  // after the ghosts: a ghost never hides its tool
     for (const o of [gh, ...gh.children]) o.renderOrder = 1;
@@ -217,7 +240,8 @@ export function addPlanes(msg, c, r) {
   for (const a of G.jointAxes) a.scale.setScalar(0.15 * r);
 }
 
-/// Box (world, m) around the frame's bodies, their targets and the nets (empty if none).
+/// Box (world, m) around the frame's bodies (their spheres and mesh surfaces), their targets and
+/// the nets (empty if none).
 export function frameBox(msg, fr) {
   const box = new THREE.Box3();
   const x = fr.node_position, N = FLOATS.node_position;
@@ -229,6 +253,7 @@ export function frameBox(msg, fr) {
         const c = v3(sp).applyMatrix4(g.matrixWorld);
         box.expandByPoint(c.clone().addScalar(sp[3])).expandByPoint(c.addScalar(-sp[3]));
       }
+      for (const c of g.children) if (c.geometry?.userData?.surface) box.expandByObject(c);
     }
   }
   return box;

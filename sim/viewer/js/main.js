@@ -178,6 +178,20 @@ window.numenView = {
     p.pick = pick;
     p.scale = { ...forceScale };
     p.shapes = S.scene ? S.scene.bodies.filter((b, i) => G.bodies[i].children.length > 1).map((b) => b.name) : [];
+    // The bodies with a mesh: the triangles drawn, the body's position in the frame shown (m,
+    // world) and the middle of the drawn surface's world box (it moves with the body's pose).
+    p.meshBodies = [];
+    S.scene?.bodies.forEach((b, i) => {
+      if (!b.mesh || !last) return;
+      const surface = G.bodies[i].children.find((c) => c.geometry?.userData?.surface);
+      const index = surface?.geometry.index;
+      G.bodies[i].updateMatrixWorld();
+      const middle = surface ? new THREE.Box3().setFromObject(surface).getCenter(new THREE.Vector3()) : null;
+      const P = FLOATS.body_pose;
+      p.meshBodies.push({ name: b.name, sent: b.mesh.triangle_count, drawn: index ? index.count / 3 : 0,
+                          position: Array.from(last.body_pose.subarray(P * i, P * i + 3)),
+                          middle: middle?.toArray() ?? null, middlePx: middle ? projectPoint(middle) : null });
+    });
     if (last) {
       // The force arrows of the first contacts: from the contact point to the arrow's tip (px).
       const K = FLOATS.contact, c = last.contact;

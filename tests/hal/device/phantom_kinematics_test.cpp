@@ -6,10 +6,9 @@
 
 #include <gtest/gtest.h>
 
-#include <array>
 #include <cmath>
-#include <numbers>
 #include <stdexcept>
+#include <string>
 
 #include "alloc_counter.hpp"
 #include "kinematics_check.hpp"
@@ -23,8 +22,6 @@ using namespace numen::hal;
 using numen::core::Pose;
 using numen::core::Quat;
 using numen::core::Vec3;
-using numen::core::Wrench;
-using numen::test::numeric_link_jacobian;
 using numen::test::uniform;
 using PK = PhantomKinematics;
 using numen::test::kPi;
@@ -128,32 +125,18 @@ TEST(PhantomKinematics, ToolOffsetIsAppliedInTheStylusFrame) {
   const Pose off = some_offset();
   const PK k(some_geometry(), off);
   const AxisVector q = q_of(0.2, -0.3, 0.4, 0.5, -0.6, 0.7);
-  const Pose s = k.stylus_pose(q);
-  const Pose c = k.forward(q);
-  EXPECT_TRUE(c.position.isApprox(s.position + s.orientation * off.position, 1e-12));
-  EXPECT_LT(c.orientation.angularDistance(s.orientation * off.orientation), 1e-12);
+  numen::test::expect_offset_applied(k.stylus_pose(q), off, k.forward(q));
 }
 
 TEST(PhantomKinematics, LinkNamesAndLinkZero) {
   const PK k(some_geometry(), some_offset());
-  ASSERT_EQ(k.num_links(), 5);
-  const char* names[] = {"tool", "turret", "upper_arm", "forearm", "stylus"};
-  for (int l = 0; l < 5; ++l) {
-    EXPECT_STREQ(k.link_name(l), names[l]);
-    EXPECT_EQ(k.find_link(names[l]), l);
-  }
-  EXPECT_STREQ(k.link_name(5), "");
+  const char* const names[] = {"tool", "turret", "upper_arm", "forearm", "stylus"};
+  numen::test::expect_link_names(k, names);
   EXPECT_EQ(k.find_link("gimbal"), -1);
+  static_assert(PK::kLinkTool == 0);
   SplitMix64 rng(5);
-  for (int trial = 0; trial < 10; ++trial) {
-    const AxisVector q = random_q(rng);
-    const Pose f = k.forward(q);
-    const Pose l0 = k.link_pose(PK::kLinkTool, q);
-    EXPECT_EQ(l0.position, f.position);
-    EXPECT_EQ(l0.orientation.coeffs(), f.orientation.coeffs());
-    EXPECT_EQ(k.link_jacobian(PK::kLinkTool, q), k.jacobian(q));
-    EXPECT_EQ(k.link_pose(-3, q).position, f.position);  // out of range: link 0
-  }
+  for (int trial = 0; trial < 10; ++trial)
+    numen::test::expect_link_zero_is_the_controlled_frame(k, random_q(rng));
 }
 
 TEST(PhantomKinematics, LinkFramesSitWhereDocumented) {
@@ -184,16 +167,8 @@ TEST_P(PhantomJacobian, ControlledFrameMatchesCentralDifferencesOfForward) {
   SplitMix64 rng(1000 + static_cast<std::uint64_t>(GetParam()));
   const AxisVector q = random_q(rng);
   const Jacobian j = k.jacobian(q);
-  ASSERT_EQ(j.rows(), 6);
   ASSERT_EQ(j.cols(), 6);
-  const double h = 1e-6;
-  for (int c = 0; c < 6; ++c) {
-    AxisVector qp = q, qm = q;
-    qp[c] += h;
-    qm[c] -= h;
-    const numen::core::Vec6 d = numen::test::pose_difference(k.forward(qm), k.forward(qp));
-    EXPECT_LT((j.col(c) - d / (2 * h)).norm(), 1e-6) << "column " << c;
-  }
+  numen::test::expect_jacobian_matches_central_differences(k, q, 1e-6);
   EXPECT_GT(j.col(PK::kShoulder).head<3>().norm(), 0.05);  // the check is not vacuous
   EXPECT_EQ(j.col(PK::kShoulder).tail<3>().norm(), 0.0);   // parallelogram: no rotation
 }
@@ -201,18 +176,7 @@ TEST_P(PhantomJacobian, ControlledFrameMatchesCentralDifferencesOfForward) {
 TEST_P(PhantomJacobian, EveryLinkJacobianMatchesCentralDifferencesOfItsPose) {
   const PK k(some_geometry(), some_offset());
   SplitMix64 rng(2000 + static_cast<std::uint64_t>(GetParam()));
-  const AxisVector q = random_q(rng);
-  for (int l = 0; l < k.num_links(); ++l) {
-    const Jacobian j = k.link_jacobian(l, q);
-    ASSERT_EQ(j.cols(), 6);
-    const Jacobian fd = numeric_link_jacobian(k, l, q, 1e-6);
-    for (int c = 0; c < 6; ++c) {
-      EXPECT_LT((j.col(c) - fd.col(c)).norm(), 1e-6)
-          << "link " << k.link_name(l) << " column " << c << "\n"
-          << j.col(c).transpose() << "\n"
-          << fd.col(c).transpose();
-    }
-  }
+  numen::test::expect_link_jacobians_match_central_differences(k, random_q(rng), 1e-6);
 }
 
 TEST_P(PhantomJacobian, TransposeMapsLinkWrenchesByVirtualWork) {
@@ -220,15 +184,10 @@ TEST_P(PhantomJacobian, TransposeMapsLinkWrenchesByVirtualWork) {
   const PK k(some_geometry(), some_offset());
   SplitMix64 rng(3000 + static_cast<std::uint64_t>(GetParam()));
   for (int trial = 0; trial < 5; ++trial) {
+    SCOPED_TRACE("trial " + std::to_string(trial));
     const AxisVector q = random_q(rng);
-    std::array<Wrench, PK::kNumLinks> w;
-    for (Wrench& x : w) x = numen::test::random_wrench(rng, 3.0);
-    AxisVector dq(6);
-    for (int i = 0; i < 6; ++i) dq[i] = uniform(rng, -1e-5, 1e-5);
-    const AxisVector tau = numen::test::link_torques(k, q, w);
-    const double work = numen::test::link_virtual_work(k, q, dq, w);
-    EXPECT_GT(std::abs(tau.dot(dq)), 1e-8);  // first order, well above the tolerance below
-    EXPECT_NEAR(work, tau.dot(dq), 10.0 * dq.squaredNorm()) << "trial " << trial;
+    const numen::test::LinkWorkTrial t = numen::test::expect_link_virtual_work(k, q, rng, 3.0);
+    EXPECT_GT(std::abs(t.tau.dot(t.dq)), 1e-8);  // first order, well above its tolerance
   }
 }
 
@@ -334,10 +293,7 @@ TEST(PhantomKinematics, CallsDoNotAllocate) {
   double sink = 0;
   for (int i = 0; i < 100; ++i) {
     const Pose p = k.forward(q);
-    sink += k.jacobian(q).sum() + k.inverse(p, q).sum();
-    for (int l = 0; l < k.num_links(); ++l) {
-      sink += k.link_pose(l, q).position.x() + k.link_jacobian(l, q).sum();
-    }
+    sink += k.jacobian(q).sum() + k.inverse(p, q).sum() + numen::test::link_calls_sum(k, q);
   }
   EXPECT_EQ(guard.count(), 0);
   EXPECT_TRUE(std::isfinite(sink));

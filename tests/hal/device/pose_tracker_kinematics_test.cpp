@@ -1,5 +1,5 @@
-// Tests of numen/hal/device/pose_tracker_kinematics.hpp: Euler convention, round trips, gimbal lock,
-// Jacobian against finite differences and the virtual-work identity.
+// Tests of numen/hal/device/pose_tracker_kinematics.hpp: Euler convention, round trips, gimbal
+// lock, Jacobian against finite differences and the virtual-work identity (kinematics_check.hpp).
 #include "numen/hal/device/pose_tracker_kinematics.hpp"
 
 #include <gtest/gtest.h>
@@ -8,6 +8,7 @@
 #include <numbers>
 
 #include "alloc_counter.hpp"
+#include "kinematics_check.hpp"
 #include "numen/hal/device/axis.hpp"
 #include "rotation.hpp"
 #include "test_constants.hpp"
@@ -41,11 +42,6 @@ AxisVector q_of(double x, double y, double z, double yaw, double pitch, double r
   AxisVector q(6);
   q << x, y, z, yaw, pitch, roll;
   return q;
-}
-
-Vec3 omega(const Quat& from, const Quat& to, double dt) {
-  const Eigen::AngleAxisd aa(to * from.conjugate());
-  return aa.axis() * aa.angle() / dt;
 }
 
 TEST(PoseTrackerKinematics, IdentityBaseAndOffsetGiveTheAxesDirectly) {
@@ -92,18 +88,8 @@ AxisVector sample_q(int i) {
 TEST_P(TrackerJacobian, MatchesCentralDifferencesOfForward) {
   const PK k(some_base(), some_offset());
   const AxisVector q = sample_q(GetParam());
-  const Jacobian j = k.jacobian(q);
-  ASSERT_EQ(j.cols(), 6);
-  const double h = 1e-6;
-  for (int c = 0; c < 6; ++c) {
-    AxisVector qp = q, qm = q;
-    qp[c] += h;
-    qm[c] -= h;
-    const Pose pp = k.forward(qp), pm = k.forward(qm);
-    EXPECT_LT((j.col(c).head<3>() - (pp.position - pm.position) / (2 * h)).norm(), 1e-7) << c;
-    EXPECT_LT((j.col(c).tail<3>() - omega(pm.orientation, pp.orientation, 2 * h)).norm(), 1e-7)
-        << c;
-  }
+  ASSERT_EQ(k.jacobian(q).cols(), 6);
+  numen::test::expect_jacobian_matches_central_differences(k, q, 1e-7);
 }
 
 TEST_P(TrackerJacobian, TransposeMapsWrenchesByVirtualWork) {
@@ -112,13 +98,9 @@ TEST_P(TrackerJacobian, TransposeMapsWrenchesByVirtualWork) {
   Wrench w;
   w.force = Vec3(-1.0, 0.4, 2.0);
   w.torque = Vec3(0.3, -0.2, 0.1);
-  const AxisVector tau = torques_from_wrench(k.jacobian(q), w);
   AxisVector dq(6);
   dq << 1e-6, -1e-6, 2e-6, 1.5e-6, -0.5e-6, 1e-6;
-  const Pose p0 = k.forward(q), p1 = k.forward(q + dq);
-  const Eigen::AngleAxisd aa(p1.orientation * p0.orientation.conjugate());
-  const double work = w.force.dot(p1.position - p0.position) + w.torque.dot(aa.axis() * aa.angle());
-  EXPECT_NEAR(work, tau.dot(dq), 1e-11);
+  numen::test::expect_virtual_work(k, q, w, dq, 1e-11);
 }
 
 INSTANTIATE_TEST_SUITE_P(Configurations, TrackerJacobian, ::testing::Range(0, 12));

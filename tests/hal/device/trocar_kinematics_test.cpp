@@ -5,10 +5,9 @@
 
 #include <gtest/gtest.h>
 
-#include <array>
 #include <cmath>
-#include <numbers>
 #include <stdexcept>
+#include <string>
 
 #include "alloc_counter.hpp"
 #include "kinematics_check.hpp"
@@ -22,7 +21,6 @@ using namespace numen::hal;
 using numen::core::Pose;
 using numen::core::Quat;
 using numen::core::Vec3;
-using numen::core::Vec6;
 using numen::core::Wrench;
 using numen::test::kPi;
 using TK = TrocarKinematics;
@@ -48,12 +46,6 @@ AxisVector q_of(double a, double b, double d, double psi, double jaw) {
   AxisVector q(5);
   q << a, b, d, psi, jaw;
   return q;
-}
-
-// Angular velocity (world) taking orientation `from` to `to` over dt.
-Vec3 omega(const Quat& from, const Quat& to, double dt) {
-  const Eigen::AngleAxisd aa(to * from.conjugate());
-  return aa.axis() * aa.angle() / dt;
 }
 
 TEST(TrocarKinematics, ZeroPivotsPutTheTipAlongTheTrocarAxis) {
@@ -87,10 +79,7 @@ TEST(TrocarKinematics, ToolOffsetIsAppliedInTheToolFrame) {
   const Pose off = trocar_offset();
   const TK k(tilted_trocar(), off);
   const AxisVector q = q_of(0.2, -0.1, 0.15, 0.4, 0.2);
-  const Pose tool = k.tool_pose(q);
-  const Pose c = k.forward(q);
-  EXPECT_TRUE(c.position.isApprox(tool.position + tool.orientation * off.position, 1e-12));
-  EXPECT_LT(c.orientation.angularDistance(tool.orientation * off.orientation), 1e-12);
+  numen::test::expect_offset_applied(k.tool_pose(q), off, k.forward(q));
 }
 
 TEST(TrocarKinematics, InverseOfForwardIsTheIdentity) {
@@ -155,21 +144,9 @@ AxisVector sample_q(int i) {
 TEST_P(TrocarJacobian, MatchesCentralDifferencesOfForward) {
   const TK k(tilted_trocar(), trocar_offset());
   const AxisVector q = sample_q(GetParam());
-  const Jacobian j = k.jacobian(q);
-  ASSERT_EQ(j.rows(), 6);
-  ASSERT_EQ(j.cols(), 5);
-  const double h = 1e-6;
-  for (int c = 0; c < 5; ++c) {
-    AxisVector qp = q, qm = q;
-    qp[c] += h;
-    qm[c] -= h;
-    const Pose pp = k.forward(qp), pm = k.forward(qm);
-    const Vec3 v = (pp.position - pm.position) / (2 * h);
-    const Vec3 w = omega(pm.orientation, pp.orientation, 2 * h);
-    EXPECT_LT((j.col(c).head<3>() - v).norm(), 1e-7) << "column " << c;
-    EXPECT_LT((j.col(c).tail<3>() - w).norm(), 1e-7) << "column " << c;
-  }
-  EXPECT_EQ(j.col(TK::kJaw).norm(), 0.0);
+  ASSERT_EQ(k.jacobian(q).cols(), 5);
+  numen::test::expect_jacobian_matches_central_differences(k, q, 1e-7);
+  EXPECT_EQ(k.jacobian(q).col(TK::kJaw).norm(), 0.0);
 }
 
 TEST_P(TrocarJacobian, TransposeMapsWrenchesByVirtualWork) {
@@ -178,16 +155,10 @@ TEST_P(TrocarJacobian, TransposeMapsWrenchesByVirtualWork) {
   Wrench w;
   w.force = Vec3(1.5, -2.0, 0.7);
   w.torque = Vec3(-0.1, 0.05, 0.2);
-  const AxisVector tau = torques_from_wrench(k.jacobian(q), w);
   // For a small displacement δq, the work of W on the controlled frame's motion equals τᵀ δq.
   AxisVector dq(5);
   dq << 1e-6, -2e-6, 1.5e-6, 3e-6, 1e-6;
-  const Pose p0 = k.forward(q), p1 = k.forward(q + dq);
-  const Vec3 dx = p1.position - p0.position;
-  const Eigen::AngleAxisd aa(p1.orientation * p0.orientation.conjugate());
-  const Vec3 dtheta = aa.axis() * aa.angle();
-  const double work = w.force.dot(dx) + w.torque.dot(dtheta);
-  EXPECT_NEAR(work, tau.dot(dq), 1e-11);
+  const AxisVector tau = numen::test::expect_virtual_work(k, q, w, dq, 1e-11);
   EXPECT_EQ(tau[TK::kJaw], 0.0);
 }
 
@@ -235,7 +206,6 @@ TEST(TrocarKinematics, RejectsANonUnitQuaternion) {
 
 // ---- Links: trocar sleeve, tube, two jaws (paper §5; Kinematics link API) ----
 
-using numen::test::numeric_link_jacobian;
 using numen::test::uniform;
 
 // Random configuration within the mechanism's useful range (away from d = 0).
@@ -246,30 +216,17 @@ AxisVector random_trocar_q(numen::hal::SplitMix64& rng) {
 
 TEST(TrocarLinks, NamesAndLookup) {
   const TK k(tilted_trocar());
-  ASSERT_EQ(k.num_links(), 5);
-  const char* names[] = {"tool", "trocar", "tube", "jaw_1", "jaw_2"};
-  for (int l = 0; l < 5; ++l) {
-    EXPECT_STREQ(k.link_name(l), names[l]);
-    EXPECT_EQ(k.find_link(names[l]), l);
-  }
-  EXPECT_STREQ(k.link_name(5), "");
-  EXPECT_STREQ(k.link_name(-1), "");
+  const char* const names[] = {"tool", "trocar", "tube", "jaw_1", "jaw_2"};
+  numen::test::expect_link_names(k, names);
   EXPECT_EQ(k.find_link("jaw"), -1);
-  EXPECT_EQ(k.find_link(""), -1);
-  EXPECT_EQ(k.find_link(nullptr), -1);
 }
 
 TEST(TrocarLinks, LinkZeroIsTheControlledFrame) {
   const TK k(tilted_trocar(), trocar_offset());
+  static_assert(TK::kLinkTool == 0);
   numen::hal::SplitMix64 rng(11);
-  for (int trial = 0; trial < 20; ++trial) {
-    const AxisVector q = random_trocar_q(rng);
-    const Pose f = k.forward(q);
-    const Pose l0 = k.link_pose(TK::kLinkTool, q);
-    EXPECT_EQ(l0.position, f.position);
-    EXPECT_EQ(l0.orientation.coeffs(), f.orientation.coeffs());
-    EXPECT_EQ(k.link_jacobian(TK::kLinkTool, q), k.jacobian(q));
-  }
+  for (int trial = 0; trial < 20; ++trial)
+    numen::test::expect_link_zero_is_the_controlled_frame(k, random_trocar_q(rng));
 }
 
 TEST(TrocarLinks, FramesFollowTheDocumentedGeometry) {
@@ -314,19 +271,8 @@ TEST(TrocarLinks, EveryLinkJacobianMatchesCentralDifferencesOfItsPose) {
   const TK k(tilted_trocar(), trocar_offset());
   numen::hal::SplitMix64 rng(2024);
   for (int trial = 0; trial < 25; ++trial) {
-    const AxisVector q = random_trocar_q(rng);
-    for (int l = 0; l < k.num_links(); ++l) {
-      const Jacobian j = k.link_jacobian(l, q);
-      ASSERT_EQ(j.rows(), 6);
-      ASSERT_EQ(j.cols(), 5);
-      const Jacobian fd = numeric_link_jacobian(k, l, q, 1e-6);
-      for (int c = 0; c < 5; ++c) {
-        EXPECT_LT((j.col(c) - fd.col(c)).norm(), 1e-6)
-            << "link " << k.link_name(l) << " column " << c << " trial " << trial << "\n"
-            << j.col(c).transpose() << "\n"
-            << fd.col(c).transpose();
-      }
-    }
+    SCOPED_TRACE("trial " + std::to_string(trial));
+    numen::test::expect_link_jacobians_match_central_differences(k, random_trocar_q(rng), 1e-6);
   }
 }
 
@@ -356,17 +302,12 @@ TEST(TrocarLinks, TransposeMapsLinkWrenchesByVirtualWork) {
   const TK k(tilted_trocar(), trocar_offset());
   numen::hal::SplitMix64 rng(77);
   for (int trial = 0; trial < 50; ++trial) {
+    SCOPED_TRACE("trial " + std::to_string(trial));
     const AxisVector q = random_trocar_q(rng);
-    std::array<Wrench, TK::kNumLinks> w;
-    for (Wrench& x : w) x = numen::test::random_wrench(rng, 2.0);
-    AxisVector dq(5);
-    for (int i = 0; i < 5; ++i) dq[i] = uniform(rng, -1e-5, 1e-5);
-    const AxisVector tau = numen::test::link_torques(k, q, w);
-    const double work = numen::test::link_virtual_work(k, q, dq, w);
-    EXPECT_NEAR(work, tau.dot(dq), 10.0 * dq.squaredNorm()) << "trial " << trial;
+    const numen::test::LinkWorkTrial t = numen::test::expect_link_virtual_work(k, q, rng, 2.0);
     // The jaw axis carries the jaws' torques about the hinge: τ_jaw = ½ x_t · (t_3 − t_4).
     const Vec3 x_t = k.tool_pose(q).orientation * Vec3::UnitX();
-    EXPECT_NEAR(tau[TK::kJaw], 0.5 * x_t.dot(w[3].torque - w[4].torque), 1e-12);
+    EXPECT_NEAR(t.tau[TK::kJaw], 0.5 * x_t.dot(t.w[3].torque - t.w[4].torque), 1e-12);
   }
 }
 
@@ -375,12 +316,7 @@ TEST(TrocarLinks, LinkCallsDoNotAllocate) {
   const AxisVector q = sample_q(5);
   numen::test::AllocationGuard guard;
   double sink = 0;
-  for (int i = 0; i < 100; ++i) {
-    for (int l = 0; l < k.num_links(); ++l) {
-      sink += k.link_pose(l, q).position.x() + k.link_jacobian(l, q).sum();
-    }
-    sink += k.find_link("jaw_2");
-  }
+  for (int i = 0; i < 100; ++i) sink += numen::test::link_calls_sum(k, q) + k.find_link("jaw_2");
   EXPECT_EQ(guard.count(), 0);
   EXPECT_TRUE(std::isfinite(sink));
 }

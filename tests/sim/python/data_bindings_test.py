@@ -1,5 +1,7 @@
 """numen.Data: stepping from Python against the same loop in C++, and the NumPy views
 (sim/python/data_bindings.cpp)."""
+import os
+
 import numpy as np
 import pytest
 
@@ -136,3 +138,57 @@ def test_target_views_and_reset(scene):
     data.set_target([np.nan, 0, 0], [0, 0, 0, 1])
     data.step(scene)
     assert data.status & numen.STATUS_INVALID_TARGET
+
+
+# A probe pressed into a small organ (triangle contacts) and a net ball on a floor (node sphere
+# contacts): tests/data/node_contacts.toml.
+NODE_CONTACT_SCENE = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "data",
+                                  "node_contacts.toml")
+
+
+def test_node_contact_views_carry_the_surface_triangle_fields():
+    if not numen.features["deformable"]:
+        pytest.skip("this build has NUMEN_WITH_DEFORMABLE=OFF: no nets")
+    s = numen.load_scene(NODE_CONTACT_SCENE)
+    m = s.model
+    faces = m.net_faces
+    assert faces.shape == (320 + 80, 3) and faces.dtype.kind == "i"  # icospheres of 2 and 1 subdivisions
+    assert faces.min() >= 0 and faces.max() < m.num_nodes
+    data = s.make_data()
+    assert data.num_node_contacts == 0 and data.node_contact_faces.shape == (0,)
+    for _ in range(600):
+        scripted_step(s, data)
+    k = data.num_node_contacts
+    nodes, bodies, obstacles = data.node_contact_nodes, data.node_contact_bodies, data.node_contact_obstacles
+    points, normals, forces = data.node_contact_points, data.node_contact_normals, data.node_contact_forces
+    depths, active = data.node_contact_depths, data.node_contact_active
+    face, weights, shares = data.node_contact_faces, data.node_contact_face_weights, data.node_contact_shares
+    for v in (nodes, bodies, obstacles, depths, active, face, shares):
+        assert v.shape == (k,) and v.base is data and not v.flags.writeable
+    for v in (points, normals, forces, weights):
+        assert v.shape == (k, 3) and v.base is data and not v.flags.writeable
+    assert active.dtype == np.bool_ and face.dtype.kind == "i" and shares.dtype == np.float64
+    assert face.strides == (shares.strides[0],) and face.strides[0] > 3 * 8  # strided, no copy
+    assert np.all(depths > 0) and np.allclose(np.linalg.norm(normals, axis=1), 1.0)
+    probe = m.body_names.index("probe")
+    tri = face >= 0
+    # The probe on the organ: triangle contacts, one row per node of each triangle it touches.
+    assert tri.sum() >= 3 and np.all(bodies[tri] == probe) and np.all(obstacles[tri] == -1)
+    for i in np.flatnonzero(tri):
+        corners = faces[face[i]]
+        assert nodes[i] in corners
+        assert np.all(weights[i] >= 0) and weights[i].sum() == pytest.approx(1.0, abs=1e-12)
+        assert shares[i] == weights[i][list(corners).index(nodes[i])]
+    # A triangle's force is split over its nodes by their shares: parallel, in proportion.
+    for f in np.unique(face[tri]):
+        rows = np.flatnonzero(face == f)
+        assert len(rows) == 3
+        per_share = forces[rows] / shares[rows, None]
+        assert np.allclose(per_share, per_share[0], rtol=1e-9, atol=0)
+    # The ball on the floor: node spheres' contacts with obstacle 0, no triangle, share 1.
+    sphere = ~tri
+    assert sphere.sum() >= 1
+    assert np.all(bodies[sphere] == -1) and np.all(obstacles[sphere] == 0)
+    assert np.all(shares[sphere] == 1.0) and np.all(weights[sphere] == 0.0)
+    ball = m.net_faces[320:]
+    assert np.all(np.isin(nodes[sphere], ball))

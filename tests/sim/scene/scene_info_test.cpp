@@ -3,6 +3,7 @@
 // asked the allocator for, the device's CANopen nodes as the scene configures them.
 #include "numen/sim/scene/scene_info.hpp"
 
+#include <algorithm>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -15,6 +16,7 @@
 #include "numen/core/capacity.hpp"
 #include "numen/core/data.hpp"
 #include "numen/core/features.hpp"
+#include "numen/core/mesh_shape.hpp"
 #include "numen/core/step.hpp"
 #include "numen/core/step_stages.hpp"
 #include "numen/hal/features.hpp"
@@ -175,4 +177,85 @@ TEST(SceneInfo, DeviceNodesAreTheScenesCanopenAxes) {
     }
     for (std::size_t a = 0; a < served.size(); ++a) EXPECT_EQ(served[a], 1) << name << " axis " << a;
   }
+}
+
+// Each mesh with its memory: a mesh obstacle (sim/scenes/mesh.toml), a mesh body
+// (tests/data/mesh_body.toml), a net's surface (deformable.toml; the default scene has an organ
+// net and a mesh obstacle, its rigid core), its bytes the shape's own count; the Model's
+// "meshes" group their sum; text and JSON agree.
+TEST(SceneInfo, EachMeshWithItsTrianglesAndBytes) {
+  std::vector<std::string> paths{shipped_path("mesh"),
+                                 std::string(NUMEN_TEST_DATA_DIR) + "/mesh_body.toml"};
+  if (core::kWithDeformable) paths.push_back(shipped_path("deformable"));
+  if (core::kWithArticulation && core::kWithDeformable) paths.push_back(shipped_path("default"));
+  std::vector<std::string> kinds;
+  for (const std::string& path : paths) {
+    const sim::Scene scene = sim::load_scene(path);
+    const core::Model& m = scene.model;
+    const sim::SceneInfo i = sim::describe_scene(scene);
+    const std::string text = sim::format_scene_info(i);
+    const nlohmann::json json = nlohmann::json::parse(sim::format_scene_info_json(i));
+    std::size_t shapes = m.meshes.capacity() * sizeof(core::MeshShape);
+    std::size_t nets_with_faces = 0;
+    for (const core::NetModel& n : m.nets) nets_with_faces += n.face_count > 0 ? 1 : 0;
+    ASSERT_EQ(i.meshes.size(), m.meshes.size() + nets_with_faces) << path;
+    ASSERT_EQ(json.at("meshes").size(), i.meshes.size()) << path;
+    for (std::size_t k = 0; k < i.meshes.size(); ++k) {
+      const sim::MeshLine& l = i.meshes[k];
+      kinds.push_back(l.kind);
+      const nlohmann::json& jl = json.at("meshes").at(k);
+      EXPECT_EQ(jl.at("kind"), l.kind);
+      EXPECT_EQ(jl.at("name"), l.name);
+      EXPECT_EQ(jl.at("triangles"), l.triangles);
+      EXPECT_EQ(jl.at("vertices"), l.vertices);
+      EXPECT_EQ(jl.at("heap"), l.heap);
+      EXPECT_EQ(jl.at("band_heap"), l.band_heap);
+      EXPECT_EQ(jl.at("band_width_m"), l.band_width_m);
+      EXPECT_EQ(jl.at("band_note"), l.band_note);
+      std::string line = "  mesh " + l.kind + " " + l.name + ": " + std::to_string(l.triangles) +
+                         " triangles, " + std::to_string(l.vertices);
+      EXPECT_NE(text.find(line), std::string::npos) << path << ": no '" << line << "' in\n" << text;
+      if (l.kind == "net") {
+        const auto n = std::find_if(m.nets.begin(), m.nets.end(),
+                                    [&](const core::NetModel& x) { return x.name == l.name; });
+        ASSERT_NE(n, m.nets.end()) << l.name;
+        EXPECT_EQ(l.triangles, n->face_count);
+        EXPECT_EQ(l.vertices, n->node_count);
+        EXPECT_EQ(l.heap, static_cast<std::size_t>(n->face_count) * 3 * sizeof(int));
+        EXPECT_EQ(l.band_heap, 0u);
+        continue;
+      }
+      int index = -1;  // the shape of the obstacle or body of that name
+      for (const core::Obstacle& o : m.obstacles)
+        if (l.kind == "obstacle" && o.name == l.name) index = o.mesh;
+      for (const core::BodyModel& b : m.bodies)
+        if (l.kind == "body" && b.name == l.name) index = b.mesh;
+      ASSERT_GE(index, 0) << path << ": " << l.kind << " " << l.name;
+      const core::MeshShape& s = m.meshes[static_cast<std::size_t>(index)];
+      EXPECT_EQ(l.triangles, s.num_triangles());
+      EXPECT_EQ(l.vertices, static_cast<int>(s.vertices.size()));
+      EXPECT_EQ(l.heap, s.memory_bytes());
+      EXPECT_EQ(l.band_heap, core::mesh_band_bytes(s.band));
+      EXPECT_GT(l.band_heap, 0u) << path;  // the shipped meshes have a band
+      EXPECT_LT(l.band_heap, l.heap);
+      EXPECT_EQ(l.band_width_m, s.band.width);
+      EXPECT_GT(l.band_width_m, 0.0);
+      shapes += l.heap;
+    }
+    EXPECT_EQ(i.model_bytes.groups[4].group, std::string("meshes"));
+    EXPECT_EQ(i.model_bytes.groups[4].heap_bytes, shapes) << path;
+    EXPECT_EQ(json.at("model_bytes").at("groups").at("meshes"), shapes) << path;
+  }
+  EXPECT_NE(std::find(kinds.begin(), kinds.end(), "obstacle"), kinds.end());
+  EXPECT_NE(std::find(kinds.begin(), kinds.end(), "body"), kinds.end());
+  if (core::kWithDeformable) {
+    EXPECT_NE(std::find(kinds.begin(), kinds.end(), "net"), kinds.end());
+  }
+}
+
+TEST(SceneInfo, ASceneWithoutMeshesListsNone) {
+  const sim::SceneInfo i = sim::describe_scene(sim::load_scene(shipped_path("construction")));
+  EXPECT_TRUE(i.meshes.empty());
+  EXPECT_TRUE(nlohmann::json::parse(sim::format_scene_info_json(i)).at("meshes").empty());
+  EXPECT_EQ(sim::format_scene_info(i).find("  mesh "), std::string::npos);
 }

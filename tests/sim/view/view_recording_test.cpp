@@ -7,12 +7,9 @@
 
 #include "build_features.hpp"
 #include "child_process.hpp"
-#include "numen/core/mesh_shape.hpp"
-#include "numen/core/model.hpp"
 #include "numen/sim/input/input_error.hpp"
 #include "numen/sim/run/run.hpp"
 #include "numen/sim/scene/scene.hpp"
-#include "numen/sim/view/view_scene.hpp"
 #include "lattice_scene.hpp"
 #include "temp_dir.hpp"
 
@@ -205,56 +202,6 @@ TEST(ViewRecording, AFullDiskIsFoundBeforeTheRunStarts) {
     EXPECT_EQ(e.key(), "--record-view");
     EXPECT_NE(std::string(e.what()).find("/dev/full: cannot write"), std::string::npos) << e.what();
   }
-}
-
-TEST(ViewSceneMessage, DescribesTheNetsBodiesAndObstaclesOfTheDeformableScene) {
-  NUMEN_REQUIRE_DEFORMABLE();
-  const std::string path =
-      (std::filesystem::path(numen::sim::default_scene_path()).parent_path() / "deformable.toml").string();
-  const numen::sim::Scene scene = numen::sim::load_scene(path);
-  const auto layout = numen::sim::view_frame_layout(scene);
-  const auto j = nlohmann::json::parse(numen::sim::view_scene_message(scene, layout, 60.0));
-  EXPECT_EQ(j["version"], numen::sim::kViewSceneVersion);
-  EXPECT_EQ(j["bodies"].size(), scene.model.bodies.size());
-  EXPECT_EQ(j["obstacles"].size(), scene.model.obstacles.size());
-  ASSERT_EQ(j["nets"].size(), scene.model.nets.size());
-  ASSERT_GT(j["nets"].size(), 0u);
-  const auto& net = j["nets"][0];
-  EXPECT_EQ(net["node_count"].get<int>(), scene.model.nets[0].node_count);
-  ASSERT_GT(net["triangles"].size(), 0u);
-  for (const auto& t : net["triangles"])
-    for (int i = 0; i < 3; ++i) {
-      EXPECT_GE(t[i].get<int>(), 0);
-      EXPECT_LT(t[i].get<int>(), scene.model.nets[0].node_count);
-    }
-  EXPECT_EQ(j["layout"]["nodes"].get<std::uint32_t>(), layout.num_nodes);
-  EXPECT_EQ(j["device"]["axes"].size(), scene.device.axes.size());
-  EXPECT_EQ(j["device"]["protocol"], scene.device.canopen.managed ? "managed" : "minimal");
-}
-
-// A mesh obstacle goes to the page as its surface: every vertex and triangle of the model's
-// mesh, in the obstacle's frame (sim/scenes/mesh.toml).
-TEST(ViewSceneMessage, CarriesAMeshObstaclesSurface) {
-  const std::string path =
-      (std::filesystem::path(numen::sim::default_scene_path()).parent_path() / "mesh.toml").string();
-  const numen::sim::Scene scene = numen::sim::load_scene(path);
-  const auto j = nlohmann::json::parse(
-      numen::sim::view_scene_message(scene, numen::sim::view_frame_layout(scene), 60.0));
-  int meshes = 0;
-  for (std::size_t i = 0; i < scene.model.obstacles.size(); ++i) {
-    const numen::core::Obstacle& o = scene.model.obstacles[i];
-    if (o.type != numen::core::ShapeType::kMesh) continue;
-    ++meshes;
-    const numen::core::MeshShape& m = scene.model.meshes[static_cast<std::size_t>(o.mesh)];
-    const auto& jo = j["obstacles"][i];
-    EXPECT_EQ(jo["type"], "mesh");
-    EXPECT_EQ(jo["triangle_count"].get<int>(), m.num_triangles());
-    ASSERT_EQ(jo["vertices"].size(), 3 * m.vertices.size());
-    ASSERT_EQ(jo["triangles"].size(), 3 * m.triangles.size());
-    EXPECT_EQ(jo["vertices"][3].get<double>(), m.vertices[1].x());
-    EXPECT_EQ(jo["triangles"][5].get<int>(), m.triangles[1][2]);
-  }
-  EXPECT_EQ(meshes, 1);
 }
 
 }  // namespace

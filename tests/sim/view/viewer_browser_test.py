@@ -18,6 +18,9 @@ On the lattice scene (the default scene's instrument with a rigid organ) also:
     started again on the same port, and the page shows a frame again within RECONNECT_S;
 Live (`numen run --view 0 --wait-for-viewer`): the page gets every frame from period 0; paused,
 it holds its frame while frames keep arriving, steps back, scrubs and returns to live.
+On a 2 s run of tests/data/mesh_body.toml (a probe pushing a free body whose shape is a mesh):
+  - the body is drawn as its mesh (every triangle sent), in its grey where the surface's middle
+    projects, and the surface moves with the body from the first frame to the last.
 On a run that latches a fault (the lattice scene on a bus losing 30 % of its frames):
   - the fault banner shows, with its cause, and the replay timeline has its mark.
 Exit 0: passed; 1: failed; 77: skipped, only when Chromium is not installed.
@@ -47,6 +50,9 @@ FIGURE_SCENES = [("default", None), ("lattice", "sim/scenes/lattice.toml"),
 # recording with a rigid organ; a few µs a step against the default scene's net, ~60x that).
 LATTICE = os.path.join(ROOT, "sim", "scenes", "lattice.toml")
 INSTRUMENT = ("default", "lattice")  # the scenes of the articulated instrument and the hand
+# A probe pushing a free body whose shape is a mesh (docs/meshes.md "Mesh bodies"): its whole 2 s.
+MESH_BODY = os.path.join(ROOT, "tests", "data", "mesh_body.toml")
+MESH_BODY_S = 2.0
 WIDTH, HEIGHT = 1200, 760  # the window
 VIEW_W, VIEW_H = 860, 760  # the 3D view in it (the rest: the side panel)
 RECONNECT_S = 5.0          # the page resumes within this after the server is back (backoff ≤ 2 s)
@@ -214,6 +220,59 @@ def check_shapes(img, probe, name):
         print("deformable: %d ghost-coloured pixels around the hidden core's ghost" % n)
         if n < 10:
             failures.append("deformable: the hidden core's ghost is not visible (%d pixels, %s)" % (n, g))
+    return failures
+
+
+def is_body(p):
+    """The grey of a body that is not the tool (geometry.js COLORS.body, 0x9aa4b0: blue above
+    green above red), lit: not the background (0x20242a, darker) nor the floor (green first)."""
+    return max(p) > 70 and p[2] >= p[1] >= p[0] and p[2] - p[0] >= 8
+
+
+def mesh_bodies_at(page, i):
+    """The probe's mesh bodies at frame i (shown paused), by name; None if never shown."""
+    page.eval("numenView.seek(%d)" % i)
+    if page.wait("numenView.probe().index === %d" % i, 10) is None:
+        return None
+    return {b["name"]: b for b in page.eval("numenView.probe().meshBodies")}
+
+
+def check_mesh_bodies(page, probe, shot, name, frames):
+    """A body with a mesh is drawn as its surface: every triangle the scene message sent, in the
+    body's grey where the surface's middle projects, moving with the body: from the first to the
+    last of the recording's `frames` frames, the surface's middle moves as the body's origin does
+    (within 0.5 mm)."""
+    from PIL import Image  # python3-pil
+    shown = probe.get("meshBodies", [])
+    if not shown:
+        return []
+    failures = []
+    img = Image.open(shot).convert("RGB")
+    first, last = mesh_bodies_at(page, 0), mesh_bodies_at(page, frames - 1)
+    if first is None or last is None:
+        return ["%s: the first or last frame is never shown" % name]
+    for b in shown:
+        n = b["name"]
+        if n not in probe.get("shapes", []):
+            failures.append("%s: the mesh body %s is not drawn as a shape (shapes %s)" % (name, n, probe.get("shapes")))
+        if b["drawn"] != b["sent"]:
+            failures.append("%s: %s: %d triangles drawn of the %d sent" % (name, n, b["drawn"], b["sent"]))
+        if b["middle"] is None or first[n]["middle"] is None or last[n]["middle"] is None:
+            failures.append("%s: %s: no surface drawn" % (name, n))
+            continue
+        px = b["middlePx"]
+        grey = near_colour(img, px["x"], px["y"], 3, is_body) if px["inside"] else 0
+        moved = [last[n]["position"][k] - first[n]["position"][k] for k in range(3)]
+        followed = [last[n]["middle"][k] - first[n]["middle"][k] for k in range(3)]
+        off = max(abs(moved[k] - followed[k]) for k in range(3))
+        print("%s: mesh body %s: %d of %d triangles drawn, %d body-grey pixels at its middle; the body "
+              "moved %.1f mm over the recording, its surface's middle %.1f mm (%.2f mm apart)"
+              % (name, n, b["drawn"], b["sent"], grey, 1e3 * sum(m * m for m in moved) ** 0.5,
+                 1e3 * sum(f * f for f in followed) ** 0.5, 1e3 * off))
+        if grey < 10:
+            failures.append("%s: %s: the body's grey is not where its surface projects (%d pixels)" % (name, n, grey))
+        if off > 0.5e-3:
+            failures.append("%s: %s: the surface does not move with the body (%.2f mm apart)" % (name, n, 1e3 * off))
     return failures
 
 
@@ -462,6 +521,7 @@ def check_scene(numen, browser, out, name, scene, duration, figure):
         page.screenshot(shot)
         probe = page.eval("numenView.probe()")
         failures += check_pick(page, probe, name)
+        failures += check_mesh_bodies(page, probe, shot, name, viewer.frames)
         failures += page_failures(page, name)
         page.send("Page.close")
         img = Image.open(shot).convert("RGB")
@@ -507,15 +567,15 @@ def main():
               "CI installs it: .ci/run, viewer step)")
         return 77
     os.makedirs(a.out, exist_ok=True)
-    jobs = ([(n, s, os.path.join(a.figures, "viewer_%s.png" % n)) for n, s in FIGURE_SCENES]
-            if a.figures else [("lattice", LATTICE, a.figure) if not a.scene
-                               else (os.path.splitext(os.path.basename(a.scene))[0], a.scene, a.figure)])
+    jobs = ([(n, s, a.duration, os.path.join(a.figures, "viewer_%s.png" % n)) for n, s in FIGURE_SCENES]
+            if a.figures else [(os.path.splitext(os.path.basename(a.scene))[0], a.scene, a.duration, a.figure)]
+            if a.scene else [("lattice", LATTICE, a.duration, a.figure), ("mesh_body", MESH_BODY, MESH_BODY_S, None)])
     failures = []
     profile = os.path.join(a.out, "chromium-profile")
     shutil.rmtree(profile, ignore_errors=True)
     with cdp.Browser(exe, profile, (WIDTH, HEIGHT)) as browser:
-        for name, scene, figure in jobs:
-            failures += check_scene(a.numen, browser, a.out, name, scene, a.duration, figure)
+        for name, scene, duration, figure in jobs:
+            failures += check_scene(a.numen, browser, a.out, name, scene, duration, figure)
         if not a.scene and not a.figures:
             failures += check_live(a.numen, browser)
             failures += check_fault(a.numen, browser, a.out)

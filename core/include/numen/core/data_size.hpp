@@ -40,10 +40,11 @@ DataFootprint data_footprint(const Data& data) noexcept;
 /// Bytes of a Model: sizeof(Model) and its heap arrays by group (names and
 /// strings not counted). Groups: bodies (bodies, spheres, materials), obstacles
 /// (obstacles, static spheres, static grid), joints (joints, articulation
-/// topology), nets (nets, springs, node arrays).
+/// topology), nets (nets, springs, node arrays), meshes (the mesh obstacles' and
+/// bodies' shapes, Model::meshes: MeshShape::memory_bytes() each, narrow bands included).
 struct ModelFootprint {
   std::size_t sizeof_model = 0;
-  std::array<BufferGroupBytes, 4> groups{};
+  std::array<BufferGroupBytes, 5> groups{};
   std::size_t heap_bytes() const noexcept;  ///< Σ groups.
 };
 

@@ -38,6 +38,22 @@ struct DeviceNodeLine {
   std::vector<int> axes;  ///< Indices into SceneInfo::device_axes.
 };
 
+/// One mesh of the scene and its memory (docs/meshes.md "Limits"): a mesh obstacle's or mesh
+/// body's shape (core::MeshShape in Model::meshes), or a net's surface (its triangles in
+/// Model::net_faces; its nodes and springs are the Model's "nets" group).
+struct MeshLine {
+  std::string kind;  ///< "obstacle", "body" or "net".
+  std::string name;  ///< The obstacle's, body's or net's name.
+  int triangles = 0;
+  int vertices = 0;  ///< A net's: its nodes.
+  /// Heap bytes: MeshShape::memory_bytes() (vertices, triangles, normals, edges, tree, grid and
+  /// narrow band); a net's: its rows of Model::net_faces.
+  std::size_t heap = 0;
+  std::size_t band_heap = 0;  ///< Of which the narrow band (core::mesh_band_bytes()); a net: 0.
+  double band_width_m = 0.0;  ///< The band's width B (m); 0: none.
+  std::string band_note;      ///< Why a shape has no band (the memory cap), else "".
+};
+
 /// What a scene compiles to.
 struct SceneInfo {
   std::string name;
@@ -53,6 +69,9 @@ struct SceneInfo {
   int cross_contact_capacity = 0;  ///< core::cross_contact_capacity().
   int node_contact_capacity = 0;   ///< Data::node_contacts.size(): kMaxNodeContacts with nets, else 0.
   core::ModelFootprint model_bytes;
+  /// Every mesh: the mesh obstacles, then the mesh bodies, then the nets with triangles, each in
+  /// the model's order.
+  std::vector<MeshLine> meshes;
   core::DataFootprint data_bytes;  ///< Of a Data made by make_data() for the scene.
   std::string device_name;         ///< [device] name.
   std::string device_kind;         ///< hal::to_string(DeviceKind).
@@ -73,7 +92,8 @@ std::string format_scene_info(const SceneInfo& info);
 
 /// The same as one JSON object (no trailing newline): keys name, file,
 /// integrator, coupling, dt_s, sizes{...}, stages[{name, runs, skipped_why}],
-/// capacities{...}, model_bytes{sizeof, heap, groups{...}}, data_bytes{...},
+/// capacities{...}, model_bytes{sizeof, heap, groups{...}}, meshes[{kind, name, triangles,
+/// vertices, heap, band_heap, band_width_m, band_note}], data_bytes{...},
 /// device{name, kind, managed, axes[{name, rated_torque}], nodes[{node_id, dcf, axes[]}]}.
 std::string format_scene_info_json(const SceneInfo& info);
 

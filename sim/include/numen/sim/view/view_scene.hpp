@@ -15,8 +15,8 @@ namespace numen::sim {
 /// Version of the scene message's schema (its "version" key); bumped with the frame version.
 inline constexpr int kViewSceneVersion = 1;
 
-/// Most triangles of a mesh obstacle the scene message carries (about 5 MB of JSON); a larger
-/// mesh is sent as its bounds ("aabb") and triangle count only.
+/// Most triangles of a mesh (obstacle or body) the scene message carries (about 5 MB of JSON); a
+/// larger mesh is sent as its bounds ("aabb") and triangle count only.
 inline constexpr int kViewMeshMaxTriangles = 200'000;
 
 /// The frame layout of a run of `scene`: its bodies, net nodes and axes, and room for every
@@ -25,13 +25,15 @@ platform::StateFrameLayout view_frame_layout(const Scene& scene);
 
 /// The scene message as compact JSON (UTF-8): format, version, scene name and description,
 /// dt (s), display rate (Hz; at most 1/dt: the stream sends one frame per period at most),
-/// the frame layout, bodies (name, spheres [x, y, z, r] in the body frame, m), obstacles
+/// the frame layout, bodies (name, spheres [x, y, z, r] in the body frame, m; a body with a
+/// mesh (core::BodyModel::mesh): "mesh", its position and orientation in the body frame and
+/// its surface as an obstacle's mesh below, in the mesh's frame), obstacles
 /// (name, type, position, orientation [x, y, z, w], and per type half_extents / radius /
 /// half_length / spheres in the world frame; a mesh: triangle_count, and vertices (flat x y z,
 /// m, in the obstacle's frame) and triangles (flat i j k, outward), or above
-/// kViewMeshMaxTriangles its aabb [[min], [max]] only), nets (name, rigid body, node_begin, node_count,
-/// node radius, triangles as local node indices), joints (name, type, parent, child (−1:
-/// world), frame in the parent and in the child), the device (name, kind, protocol "managed" |
+/// kViewMeshMaxTriangles its aabb [[min], [max]] only), nets (name, rigid body, node_begin,
+/// node_count, node radius, triangles as local node indices), joints (name, type, parent, child
+/// (−1: world), frame in the parent and in the child), the device (name, kind, protocol "managed" |
 /// "minimal" | "admittance", axis names) and the initially attached body. Numbers are the
 /// model's doubles.
 std::string view_scene_message(const Scene& scene, const platform::StateFrameLayout& layout,
