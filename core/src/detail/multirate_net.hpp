@@ -118,6 +118,17 @@ bool anchor_reaches(const Model& scene, const Data& data, const NodeContact& c, 
 void cut_back_node_contacts(const Model& scene, Data& data, std::span<const int> device_body,
                             double margin, double body_deepest, double step) noexcept;
 
+/// Drops from `data` every organ triangle contact (NodeContact::face ≥ 0, a net on an anchored
+/// body) with a sphere of the god-object (grown by `margin` in the proximity model `scene`)
+/// that the sphere's true radius r would not have found: its centre behind the triangle
+/// (inside) by r or more, true depth d − δ ≥ 2 r. The grown sphere reaches triangles whose back
+/// faces it: across a fold, or the far wall of a dent the tool pressed, up to r + δ behind it;
+/// as a contact that triangle would be 2 r + δ deep and throw its nodes through the tool
+/// (docs/deformable.md, "Organs in multirate"). Call before build_node_planes(). Keeps the
+/// order of the rest. No allocation.
+void drop_back_face_contacts(const Model& scene, Data& data, std::span<const int> device_body,
+                             double margin) noexcept;
+
 /// Drops the node contacts without depth from `data` (the look-ahead's candidates, once the
 /// scene step is done: not contacts). No allocation.
 void drop_look_ahead_contacts(Data& data) noexcept;
