@@ -299,7 +299,14 @@ void cut_back_node_contacts(const Model& scene, Data& data, std::span<const int>
       if (c.body_b >= 0) c.r_b += (0.5 * margin) * c.normal;
     } else if (in_god_object(device_body, c.body_b)) {  // the god-object's sphere was grown
       c.depth -= margin;
-      if (!(c.depth > 0.0)) continue;
+      // An organ's triangle within kLookAheadGap: a look-ahead candidate (engaged where the
+      // triangle's point is predicted inside the sphere at the step's end, compute_net_forces).
+      if (c.depth > 0.0) {
+        c.engaged = look_ahead && c.face >= 0;
+      } else {
+        if (!look_ahead || c.face < 0 || !(c.depth > -kLookAheadGap)) continue;
+        c.engaged = true;
+      }
       c.position -= (0.5 * margin) * c.normal;  // towards the god-object
       c.r_b -= (0.5 * margin) * c.normal;
     }
