@@ -111,7 +111,9 @@ bool anchor_reaches(const Model& scene, const Data& data, const NodeContact& c, 
 /// one of its bodies is no longer in the same articulation as the others, with which it never
 /// collides in the scene: ArticulationTopology::body_tree);
 /// cuts the contacts of the other nets with the god-object's grown spheres back the same way
-/// (the middle δ/2 towards the god-object); and re-measures every net's
+/// (the middle δ/2 towards the god-object), keeping, when `step` > 0, an organ's triangle
+/// contact within kLookAheadGap of the surface as a look-ahead candidate (NodeContact::engaged;
+/// its node contacts and those left without depth are dropped); and re-measures every net's
 /// NetOutput::max_penetration from the contacts kept (contacts beyond kMaxNodeContacts no
 /// longer counted) and data.max_penetration (`body_deepest`: the deepest body contact). No
 /// allocation.
