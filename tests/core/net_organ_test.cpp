@@ -3,8 +3,8 @@
 // impose_direct_target) that the tool's sphere pushes. The anchored body never moves; the
 // organ's reaction acts on the tool and reaches the device's feedback; the force against
 // indentation of a flat patch converges in the time step; a step with the shipped organ does
-// not allocate; the multirate scene loop keeps the organ's contacts as shallow as the single-rate
-// step and meets only the triangles the tool's true sphere reaches;
+// not allocate; the multirate scene loop finds the organ's contacts at most thrice as deep as the
+// single-rate step and meets only the triangles the tool's true sphere reaches;
 // the model refuses an anchored body that a device or a joint would move.
 #include <gtest/gtest.h>
 
@@ -217,7 +217,7 @@ TEST(NetOrgan, MultirateDeviceLoopFeelsTheOrganAsTheSingleRateStepDoes) {
   EXPECT_LE(deepest_mr, 2.0 * deepest_single);
 }
 
-TEST(NetOrgan, MultirateSceneLoopKeepsTheOrgansContactsAsShallowAsTheSingleRateStep) {
+TEST(NetOrgan, MultirateSceneLoopFindsTheOrgansContactsAtMostThriceAsDeepAsTheSingleRateStep) {
   NUMEN_SKIP_UNDER_SANITIZER(
       "compares figures of the multirate and the single-rate step, not what a sanitizer checks; "
       "the organ's step runs there in NetOrgan.StepsPressingTheShippedOrganDoNotAllocate");
