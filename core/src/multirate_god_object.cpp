@@ -68,6 +68,7 @@ void detect_and_build_planes(const Model& model, Data& data, const void* context
   if constexpr (kWithDeformable) {
     if (model.caller_node_contacts) {
       detect_node_contacts(model, data);
+      detail::drop_back_face_contacts(model, data, c->device_body, c->margin);
       detail::build_node_planes(model, data, c->device_body, c->margin, c->node_scratch, *c->planes);
       // The look-ahead where the net steps slower than the device loop (at a rate ratio of 1
       // the scene step is the single-rate step).

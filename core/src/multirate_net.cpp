@@ -240,6 +240,22 @@ bool anchor_reaches(const Model& scene, const Data& data, const NodeContact& c, 
   return c.depth - c.normal.dot(anchor - data.nodes[i].position - surface_motion) > 0.0;
 }
 
+void drop_back_face_contacts(const Model& scene, Data& data, std::span<const int> device_body,
+                             double margin) noexcept {
+  int kept = 0;
+  const int n = std::clamp(data.num_node_contacts, 0, static_cast<int>(data.node_contacts.size()));
+  const int num_spheres = static_cast<int>(scene.body_spheres.size());
+  for (int i = 0; i < n; ++i) {
+    const NodeContact& c = data.node_contacts[static_cast<std::size_t>(i)];
+    if (c.face >= 0 && in_god_object(device_body, c.body_b) && c.sphere_b >= 0 && c.sphere_b < num_spheres) {
+      const double r = scene.body_spheres[static_cast<std::size_t>(c.sphere_b)].radius - margin;
+      if (!(c.depth - margin < 2.0 * r)) continue;
+    }
+    data.node_contacts[static_cast<std::size_t>(kept++)] = c;
+  }
+  data.num_node_contacts = kept;
+}
+
 void drop_look_ahead_contacts(Data& data) noexcept {
   int kept = 0;
   const int n = std::clamp(data.num_node_contacts, 0, static_cast<int>(data.node_contacts.size()));
@@ -283,7 +299,14 @@ void cut_back_node_contacts(const Model& scene, Data& data, std::span<const int>
       if (c.body_b >= 0) c.r_b += (0.5 * margin) * c.normal;
     } else if (in_god_object(device_body, c.body_b)) {  // the god-object's sphere was grown
       c.depth -= margin;
-      if (!(c.depth > 0.0)) continue;
+      // An organ's triangle within kLookAheadGap: a look-ahead candidate (engaged where the
+      // triangle's point is predicted inside the sphere at the step's end, compute_net_forces).
+      if (c.depth > 0.0) {
+        c.engaged = look_ahead && c.face >= 0;
+      } else {
+        if (!look_ahead || c.face < 0 || !(c.depth > -kLookAheadGap)) continue;
+        c.engaged = true;
+      }
       c.position -= (0.5 * margin) * c.normal;  // towards the god-object
       c.r_b -= (0.5 * margin) * c.normal;
     }

@@ -5,6 +5,7 @@
 #include "numen/core/net_forces.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -353,6 +354,31 @@ void compute_net_forces(const Model& model, Data& data) noexcept {
   // node's share w of the force and of the Jacobian's coefficients (net_surface.hpp).
   const int nc = std::clamp(data.num_node_contacts, 0, static_cast<int>(data.node_contacts.size()));
   const NodeState* node_states = data.nodes.data();
+  // The look-ahead of a triangle contact (NodeContact::engaged, face ≥ 0), decided for all its
+  // shares alike before any contact force joins the nodes' forces: each node of the triangle
+  // alone over the step, implicit, with its tie and its force at the start (gravity, tie,
+  // springs); the triangle's point Σ w_m (v_m + Δv_m) against the body's point.
+  for (int c = 0; c < nc; ++c) {
+    NodeContact& ct = data.node_contacts[static_cast<std::size_t>(c)];
+    if (!ct.engaged || ct.face < 0) continue;
+    const std::array<int, 3>& t = model.net_faces[static_cast<std::size_t>(ct.face)];
+    const double h = model.dt;
+    Vec3 v_point = Vec3::Zero();
+    for (int m = 0; m < 3; ++m) {
+      const auto v = static_cast<std::size_t>(t[static_cast<std::size_t>(m)]);
+      const NetModel& net = model.nets[static_cast<std::size_t>(model.node_net[v])];
+      const BodyState& body = data.bodies[static_cast<std::size_t>(net.body)];
+      const Vec3 anchor_velocity = body.linear_velocity + body.angular_velocity.cross(s.lever[v]);
+      const Vec3 dv = h * (s.force[v] - h * net.tie_stiffness * (node_states[v].velocity - anchor_velocity)) /
+                      (model.node_mass[v] + h * net.tie_damping + h * h * net.tie_stiffness);
+      v_point += ct.face_weights[m] * (node_states[v].velocity + dv);
+    }
+    if (ct.body_b >= 0) {
+      const BodyState& b = data.bodies[static_cast<std::size_t>(ct.body_b)];
+      v_point -= b.linear_velocity + b.angular_velocity.cross(ct.position - b.position);
+    }
+    ct.engaged = ct.depth - h * ct.normal.dot(v_point) > 0.0;
+  }
   for (int c = 0; c < nc; ++c) {
     NodeContact& ct = data.node_contacts[static_cast<std::size_t>(c)];
     const auto i = static_cast<std::size_t>(ct.node);
@@ -410,6 +436,13 @@ void compute_net_forces(const Model& model, Data& data) noexcept {
         r.damping = mp.damping;
         r.friction = 0.0;
       }
+    } else if (ct.engaged && !r.active) {  // a triangle's, decided above: its share of k d − c v_n ≥ 0
+      r.normal_force = ct.share * std::max(0.0, mp.stiffness * ct.depth - mp.damping * ct.normal.dot(v_rel));
+      r.force = r.normal_force * ct.normal;
+      r.active = true;
+      r.stiffness = ct.share * mp.stiffness;
+      r.damping = ct.share * mp.damping;
+      r.friction = 0.0;
     }
     ct.force = r.force;
     ct.active = r.active;

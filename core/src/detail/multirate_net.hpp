@@ -111,12 +111,25 @@ bool anchor_reaches(const Model& scene, const Data& data, const NodeContact& c, 
 /// one of its bodies is no longer in the same articulation as the others, with which it never
 /// collides in the scene: ArticulationTopology::body_tree);
 /// cuts the contacts of the other nets with the god-object's grown spheres back the same way
-/// (the middle δ/2 towards the god-object); and re-measures every net's
+/// (the middle δ/2 towards the god-object), keeping, when `step` > 0, an organ's triangle
+/// contact within kLookAheadGap of the surface as a look-ahead candidate (NodeContact::engaged;
+/// its node contacts and those left without depth are dropped); and re-measures every net's
 /// NetOutput::max_penetration from the contacts kept (contacts beyond kMaxNodeContacts no
 /// longer counted) and data.max_penetration (`body_deepest`: the deepest body contact). No
 /// allocation.
 void cut_back_node_contacts(const Model& scene, Data& data, std::span<const int> device_body,
                             double margin, double body_deepest, double step) noexcept;
+
+/// Drops from `data` every organ triangle contact (NodeContact::face ≥ 0, a net on an anchored
+/// body) with a sphere of the god-object (grown by `margin` in the proximity model `scene`)
+/// that the sphere's true radius r would not have found: its centre behind the triangle
+/// (inside) by r or more, true depth d − δ ≥ 2 r. The grown sphere reaches triangles whose back
+/// faces it: across a fold, or the far wall of a dent the tool pressed, up to r + δ behind it;
+/// as a contact that triangle would be 2 r + δ deep and throw its nodes through the tool
+/// (docs/deformable.md, "Organs in multirate"). Call before build_node_planes(). Keeps the
+/// order of the rest. No allocation.
+void drop_back_face_contacts(const Model& scene, Data& data, std::span<const int> device_body,
+                             double margin) noexcept;
 
 /// Drops the node contacts without depth from `data` (the look-ahead's candidates, once the
 /// scene step is done: not contacts). No allocation.

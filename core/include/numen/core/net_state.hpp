@@ -52,7 +52,11 @@ struct NodeContact {
   /// / (m + h γ_tie + h² k_tie). Below the surface there, the law acts unclamped, f_n = k d − c
   /// v_n whatever its sign, with k and c in the implicit step (no friction): the step holds a
   /// node that reaches the surface within it instead of finding it deep at the next step. Else
-  /// the contact stays inactive and the flag is cleared.
+  /// the contact stays inactive and the flag is cleared. A triangle contact's shares (an organ's,
+  /// `face` ≥ 0) are decided together before any contact force joins the nodes' forces, the
+  /// triangle's point Σ w_m (v_m + Δv_m) predicted from each node alone so (F without contacts),
+  /// and act with their share of max(0, k d − c v_n) at the start (never a pull there), k and c
+  /// in the implicit step.
   bool engaged = false;
   /// k_eff (N/m): the material pair's stiffness, clamped by the contact time-constant floor
   /// (SolverSettings::node_contact_max_omega_dt) on the node's mass and the body's effective mass.
