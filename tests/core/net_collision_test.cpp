@@ -362,8 +362,8 @@ TEST(NetCollision, EqualsBruteForceOnRandomScenes) {
       EXPECT_GE(d.max_penetration, std::max(deepest[0], deepest[1]));
     }
   }
-  std::printf("[net collision] contacts compared: plane %d, box %d, sphere %d, capsule %d, sphere set %d, "
-              "mesh %d, body %d\n",
+  std::printf("[net collision] contacts compared: plane %d, box %d, sphere %d, capsule %d, "
+              "sphere set %d, mesh %d, body %d\n",
               by_kind[0], by_kind[1], by_kind[2], by_kind[3], by_kind[4], by_kind[5], by_kind[6]);
   for (int k = 0; k < 7; ++k) EXPECT_GT(by_kind[k], 10) << "kind " << k << " barely exercised";
 }

@@ -146,10 +146,10 @@ void check_ten_thousand_steps_do_not_allocate(core::Integrator integ, bool joint
     }
     count = guard.count();
   }
-  std::printf("[alloc %-10s joints %d] %d steps: allocations %lld, node contacts ≤ %d (steps on the ridge "
-              "%d), max penetration %.2e m, iterations %d..%d, max residual %.2e\n",
-              name(integ), joints ? 1 : 0, steps, static_cast<long long>(count), max_contacts, ridge_steps,
-              max_pen, min_iterations, max_iterations, max_residual);
+  std::printf("[alloc %-10s joints %d] %d steps: allocations %lld, node contacts ≤ %d (steps on "
+              "the ridge %d), max penetration %.2e m, iterations %d..%d, max residual %.2e\n",
+              name(integ), joints ? 1 : 0, steps, static_cast<long long>(count), max_contacts,
+              ridge_steps, max_pen, min_iterations, max_iterations, max_residual);
   EXPECT_EQ(count, 0);
   EXPECT_EQ(bad_step, -1) << "status " << bad_status;
   EXPECT_GT(max_contacts, 5) << "the net must press on the obstacles";
