@@ -16,6 +16,7 @@
 #include "numen/core/model.hpp"
 #include "numen/core/rigid_body.hpp"
 #include "rotation.hpp"
+#include "sanitizer.hpp"
 
 namespace core = numen::core;
 using core::Mat3;
@@ -78,6 +79,10 @@ bool same_bits(const core::BodyState& a, const core::BodyState& b) {
 }  // namespace
 
 TEST(Step, TenThousandStepsOfThirteenBodiesDoNotAllocate) {
+  // 2 000 steps under the sanitizers (the six 10 000-step runs took 82 s under ASan+UBSan on a
+  // loaded 2-core machine): the bodies reach the floor within 0.2 s, and the tool switch at
+  // half the run, so the contacts and both tools run as in the 10 000.
+  const int steps = numen::test::under_sanitizer() ? 2000 : 10000;
   for (auto integ : {core::Integrator::kLinearlyImplicitEuler, core::Integrator::kSymplecticEuler}) {
     for (auto mode : {core::CouplingMode::kGodObject, core::CouplingMode::kFirstOrder,
                       core::CouplingMode::kDirect}) {
@@ -88,9 +93,9 @@ TEST(Step, TenThousandStepsOfThirteenBodiesDoNotAllocate) {
       std::uint32_t bad_status = 0;
       {
         numen::test::AllocationGuard guard;
-        for (int i = 0; i < 10000; ++i) {
+        for (int i = 0; i < steps; ++i) {
           drive_target(m, d, i);
-          if (i == 5000) core::set_attached_body(m, d, 3);  // tool switching
+          if (i == steps / 2) core::set_attached_body(m, d, 3);  // tool switching
           core::step(m, d);
           if (d.status != core::kStepOk && first_bad < 0) {
             first_bad = i;
@@ -102,7 +107,7 @@ TEST(Step, TenThousandStepsOfThirteenBodiesDoNotAllocate) {
       EXPECT_EQ(first_bad, -1) << "status " << bad_status << " integrator " << static_cast<int>(integ)
                                << " mode " << static_cast<int>(mode);
       EXPECT_EQ(count, 0) << static_cast<int>(integ) << " " << static_cast<int>(mode);
-      EXPECT_EQ(d.step_count, 10000);
+      EXPECT_EQ(d.step_count, steps);
       EXPECT_EQ(d.nonfinite_steps, 0);
       for (const auto& s : d.bodies) EXPECT_TRUE(core::state_is_finite(s));
     }
