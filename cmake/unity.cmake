@@ -18,21 +18,95 @@ endif()
 # The test programs take larger batches: their compile is mostly the instantiation of Eigen and
 # GoogleTest templates, which a batch does once for all its files (two batches of 8 core test
 # files compiled as one: 23 % less compiler time). File-local names clash as above, within a
-# batch of 16 (a test file added, or left out by a NUMEN_WITH_* option, shifts the batches).
+# batch of 16 (a test file added shifts the batches after it).
 set(NUMEN_UNITY_TEST_BATCH 16 CACHE STRING "Test files per unity translation unit of a test program")
 if(NOT NUMEN_UNITY_TEST_BATCH MATCHES "^[1-9][0-9]*$")
   message(FATAL_ERROR "NUMEN_UNITY_TEST_BATCH must be a positive integer, not '${NUMEN_UNITY_TEST_BATCH}'")
 endif()
-# numen_unity(TARGET [BATCH]): BATCH files per unity translation unit, NUMEN_UNITY_BATCH when
-# not given; nothing when NUMEN_UNITY_BATCH is 1 (no unity build anywhere).
+# numen_unity(TARGET [BATCH n] [OPTIONAL file...]): n files per unity translation unit
+# (NUMEN_UNITY_BATCH when not given); nothing when NUMEN_UNITY_BATCH is 1 (no unity build
+# anywhere). The batches are named groups (UNITY_BUILD_MODE GROUP) that keep the files a
+# NUMEN_WITH_* option touches apart, so that reconfiguring with other options (the options
+# matrix in one build directory: .ci/options-matrix --in) recompiles those batches only, not
+# every batch after a left-out file: the files OPTIONAL names (the target's files that an
+# option leaves out of the build, relative to the target's folder or absolute, every one
+# whether this build leaves it out or not) and those that include a features.hpp
+# (the options' #if, directly or through tests/support's build_features.hpp or lean_scenes.hpp)
+# are batched among themselves (groups features_<i>), the others in their sorted order (groups
+# <i>), unless there is no OPTIONAL file and either kind has fewer than BATCH / 2 files; n
+# files make round(n / BATCH) groups of sizes within one. A file marked SKIP_UNITY_BUILD_INCLUSION before the call is compiled alone.
 function(numen_unity target)
+  cmake_parse_arguments(PARSE_ARGV 1 arg "" "BATCH" "OPTIONAL")
   set(batch ${NUMEN_UNITY_BATCH})
-  if(ARGC GREATER 1)
-    set(batch ${ARGV1})
+  if(arg_BATCH)
+    set(batch ${arg_BATCH})
   endif()
-  if(NUMEN_UNITY_BATCH GREATER 1 AND batch GREATER 1)
-    set_target_properties(${target} PROPERTIES UNITY_BUILD ON UNITY_BUILD_BATCH_SIZE ${batch})
+  if(NOT (NUMEN_UNITY_BATCH GREATER 1 AND batch GREATER 1))
+    return()
   endif()
+  get_target_property(_dir ${target} SOURCE_DIR)
+  get_target_property(_sources ${target} SOURCES)
+  set(_optional)
+  foreach(_s IN LISTS arg_OPTIONAL)
+    get_filename_component(_a "${_s}" ABSOLUTE BASE_DIR "${_dir}")
+    list(APPEND _optional "${_a}")
+  endforeach()
+  list(REMOVE_DUPLICATES _optional)
+  set(_files)
+  foreach(_s IN LISTS _sources)
+    get_filename_component(_a "${_s}" ABSOLUTE BASE_DIR "${_dir}")
+    get_source_file_property(_skip "${_a}" TARGET_DIRECTORY ${target} SKIP_UNITY_BUILD_INCLUSION)
+    if(_a MATCHES "\\.(cpp|cc|cxx)$" AND NOT _skip)
+      list(APPEND _files "${_a}")
+    endif()
+  endforeach()
+  list(SORT _files)
+  set(_plain)
+  set(_touched)
+  foreach(_a IN LISTS _files)
+    set(_features)
+    if(NOT _a IN_LIST _optional)
+      file(STRINGS "${_a}" _features LIMIT_COUNT 1
+           REGEX "^#include \"(numen/(core|hal)/features|build_features|lean_scenes)\\.hpp\"")
+    endif()
+    if(_a IN_LIST _optional OR _features)
+      list(APPEND _touched "${_a}")
+    else()
+      list(APPEND _plain "${_a}")
+    endif()
+  endforeach()
+  # Without OPTIONAL files and with fewer than half a batch of either kind: one list (a batch of
+  # its own would cost every build its parse of the shared headers, to spare the reconfigure a
+  # few files; nothing left out, the other batches stay the same anyway).
+  list(LENGTH _plain _n_plain)
+  list(LENGTH _touched _n_touched)
+  list(LENGTH _optional _n_optional)
+  math(EXPR _half "${batch} / 2")
+  if(_n_optional EQUAL 0 AND (_n_plain LESS _half OR _n_touched LESS _half))
+    set(_plain ${_files})
+    set(_touched)
+  endif()
+  # Each list in round(n / batch) groups (at least one) of sizes within one of each other.
+  foreach(_kind plain touched)
+    list(LENGTH _${_kind} _n)
+    if(_n EQUAL 0)
+      continue()
+    endif()
+    math(EXPR _groups "(${_n} + ${batch} / 2) / ${batch}")
+    if(_groups LESS 1)
+      set(_groups 1)
+    endif()
+    set(_i 0)
+    foreach(_a IN LISTS _${_kind})
+      math(EXPR _group "${_i} * ${_groups} / ${_n}")
+      if(_kind STREQUAL touched)
+        set(_group "features_${_group}")
+      endif()
+      set_source_files_properties("${_a}" TARGET_DIRECTORY ${target} PROPERTIES UNITY_GROUP ${_group})
+      math(EXPR _i "${_i} + 1")
+    endforeach()
+  endforeach()
+  set_target_properties(${target} PROPERTIES UNITY_BUILD ON UNITY_BUILD_MODE GROUP)
 endfunction()
 # core, hal and platform: unity batches in sanitizer builds only (NUMEN_SANITIZE, .ci/sanitize).
 function(numen_unity_when_sanitized target)

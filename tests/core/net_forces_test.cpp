@@ -26,6 +26,7 @@
 #include "detail/implicit_system.hpp"
 #include "detail/net_solve.hpp"
 #include "net_states.hpp"
+#include "step_deformable_nets.hpp"
 
 namespace core = numen::core;
 using core::Mat3;
@@ -44,17 +45,7 @@ core::SweepSpring spring_term(const core::Data& d, int e) {
 /// The length of spring e of Model::net_springs at the last compute_net_forces().
 double spring_length(const core::Data& d, int e) { return d.scratch->net.spring_length[at(d.scratch->net.spring_slot[at(e)])]; }
 
-/// Equilateral triangle of side `side` in the body's x–y plane, centred on its COM.
-core::TriangleMesh triangle(double side) {
-  core::TriangleMesh m;
-  const double r = side / std::sqrt(3.0);  // circumradius
-  for (int k = 0; k < 3; ++k) {
-    const double a = 2.0 * M_PI * k / 3.0;
-    m.vertices.push_back(Vec3(r * std::cos(a), r * std::sin(a), 0.0));
-  }
-  m.triangles = {{0, 1, 2}};
-  return m;
-}
+using numen::test::deformable_nets::triangle;  // equilateral, in the body's x–y plane
 
 /// Body 0: the rigid component (no spheres) at a general pose and twist;
 /// body 1: an obstacle body for node–body contacts. One net on body 0.

@@ -21,6 +21,7 @@
 #include "numen/platform/monotonic_clock.hpp"
 #include "numen/platform/periodic_timer.hpp"
 #include "temp_dir.hpp"
+#include "csv_lines.hpp"
 
 using numen::platform::kTraceMaxColumns;
 using numen::platform::RealtimeStepStatus;
@@ -30,13 +31,7 @@ using numen::platform::TraceWriterSettings;
 
 namespace {
 
-std::vector<std::string> read_lines(const std::string& path) {
-  std::ifstream in(path);
-  std::vector<std::string> lines;
-  std::string line;
-  while (std::getline(in, line)) lines.push_back(line);
-  return lines;
-}
+using numen::test::read_lines;
 
 std::vector<std::string> split(const std::string& line) {
   std::vector<std::string> fields;

@@ -20,6 +20,7 @@
 #include "numen/hal/transport/log_bus.hpp"
 #include "numen/hal/transport/sim_bus.hpp"
 #include "temp_dir.hpp"
+#include "csv_lines.hpp"
 
 namespace {
 
@@ -40,12 +41,7 @@ struct Expected {
   CandumpDirection direction;
 };
 
-std::vector<std::string> read_lines(const std::string& path) {
-  std::ifstream in(path);
-  std::vector<std::string> lines;
-  for (std::string line; std::getline(in, line);) lines.push_back(line);
-  return lines;
-}
+using numen::test::read_lines;
 
 void expect_matches(const std::vector<CandumpRecord>& log, const std::vector<Expected>& want) {
   ASSERT_EQ(log.size(), want.size());

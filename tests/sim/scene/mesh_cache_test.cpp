@@ -54,7 +54,9 @@ void expect_same_cached_shape(const core::MeshShape& a, const core::MeshShape& b
     core::MeshDistance da, db;
     const bool ha = core::mesh_signed_distance(a, p, 0.01, da);
     ASSERT_EQ(ha, core::mesh_signed_distance(b, p, 0.01, db));
-    if (ha) EXPECT_EQ(da.distance, db.distance);
+    if (ha) {
+      EXPECT_EQ(da.distance, db.distance);
+    }
   }
 }
 
