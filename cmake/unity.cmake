@@ -25,16 +25,17 @@ if(NOT NUMEN_UNITY_TEST_BATCH MATCHES "^[1-9][0-9]*$")
 endif()
 # numen_unity(TARGET [BATCH n] [OPTIONAL file...]): n files per unity translation unit
 # (NUMEN_UNITY_BATCH when not given); nothing when NUMEN_UNITY_BATCH is 1 (no unity build
-# anywhere). The batches are named groups (UNITY_BUILD_MODE GROUP) that keep the files a
-# NUMEN_WITH_* option touches apart, so that reconfiguring with other options (the options
-# matrix in one build directory: .ci/options-matrix --in) recompiles those batches only, not
-# every batch after a left-out file: the files OPTIONAL names (the target's files that an
-# option leaves out of the build, relative to the target's folder or absolute, every one
-# whether this build leaves it out or not) and those that include a features.hpp
-# (the options' #if, directly or through tests/support's build_features.hpp or lean_scenes.hpp)
-# are batched among themselves (groups features_<i>), the others in their sorted order (groups
-# <i>), unless there is no OPTIONAL file and either kind has fewer than BATCH / 2 files; n
-# files make round(n / BATCH) groups of sizes within one. A file marked SKIP_UNITY_BUILD_INCLUSION before the call is compiled alone.
+# anywhere). The batches are named groups (UNITY_BUILD_MODE GROUP) that keep apart the files a
+# NUMEN_WITH_* option touches, so that reconfiguring with other options (the options matrix in
+# one build directory: .ci/options-matrix --in) recompiles those batches only, not every batch
+# after a left-out file. Touched: the files OPTIONAL names (the target's files that an option
+# leaves out, every one whether this build leaves it out or not; relative to the target's folder
+# or absolute) and those that include a features.hpp (the options' #if, directly or through
+# tests/support's build_features.hpp or lean_scenes.hpp). They are batched among themselves
+# (groups features_<i>), the others in their sorted order (groups <i>); without OPTIONAL files
+# and with fewer than BATCH / 2 of either kind, all together. n files make round(n / BATCH)
+# groups of sizes within one. A file marked SKIP_UNITY_BUILD_INCLUSION before the call is
+# compiled alone.
 function(numen_unity target)
   cmake_parse_arguments(PARSE_ARGV 1 arg "" "BATCH" "OPTIONAL")
   set(batch ${NUMEN_UNITY_BATCH})
