@@ -208,6 +208,15 @@ void collide_bodies(const Model& model, Data& data, int a, int b, ContactSink& s
   }
 }
 
+/// The world box [lo, hi] of `shape`'s local box placed at position `c`, rotation `rot` (the
+/// box of its eight corners).
+void posed_mesh_box(const MeshShape& shape, const Vec3& c, const Mat3& rot, Vec3& lo, Vec3& hi) noexcept {
+  const Vec3 mid = c + rot * (0.5 * (shape.aabb_min + shape.aabb_max));
+  const Vec3 ext = rot.cwiseAbs() * (0.5 * (shape.aabb_max - shape.aabb_min));
+  lo = mid - ext;
+  hi = mid + ext;
+}
+
 /// The spheres of body `b` against the mesh of body `m`, placed at `pose` (world) with world box
 /// [lo, hi]: only b's spheres within reach of the box are queried (sphere_mesh() decides). The
 /// contact's body_b is m, its sphere_b −1; the normal points out of the mesh.
@@ -289,12 +298,7 @@ void build_collision_structures(Model& model) {
         o.aabb_min = Vec3::Constant(kInf);
         o.aabb_max = Vec3::Constant(-kInf);
         if (o.mesh < 0 || static_cast<std::size_t>(o.mesh) >= model.meshes.size()) break;
-        const MeshShape& shape = model.meshes[static_cast<std::size_t>(o.mesh)];
-        const Vec3 mid = 0.5 * (shape.aabb_min + shape.aabb_max);
-        const Vec3 half = 0.5 * (shape.aabb_max - shape.aabb_min);
-        const Vec3 ext = rot.cwiseAbs() * half;
-        o.aabb_min = c + rot * mid - ext;
-        o.aabb_max = c + rot * mid + ext;
+        posed_mesh_box(model.meshes[static_cast<std::size_t>(o.mesh)], c, rot, o.aabb_min, o.aabb_max);
         break;
       }
       case ShapeType::kSphereSet:
@@ -411,12 +415,9 @@ void detect_contacts(const Model& model, Data& data) noexcept {
     if (!(st.position.allFinite() && st.orientation.coeffs().allFinite())) continue;
     const Pose pose{st.position + st.orientation * mb.mesh_pose.position,
                     st.orientation * mb.mesh_pose.orientation};
-    const MeshShape& shape = model.meshes[static_cast<std::size_t>(mb.mesh)];
-    const Mat3 rot = pose.orientation.toRotationMatrix();
-    const Vec3 mid = pose.position + rot * (0.5 * (shape.aabb_min + shape.aabb_max));
-    const Vec3 ext = rot.cwiseAbs() * (0.5 * (shape.aabb_max - shape.aabb_min));
-    const Vec3 lo = mid - ext;
-    const Vec3 hi = mid + ext;
+    Vec3 lo, hi;
+    posed_mesh_box(model.meshes[static_cast<std::size_t>(mb.mesh)], pose.position,
+                   pose.orientation.toRotationMatrix(), lo, hi);
     for (int b = 0; b < nb; ++b) {
       if (b == m || tree[b] == tree[m]) continue;  // its own spheres, its articulation's
       const Vec3& blo = cs.body_aabb_min[static_cast<std::size_t>(b)];
