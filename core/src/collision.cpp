@@ -210,7 +210,8 @@ void collide_bodies(const Model& model, Data& data, int a, int b, ContactSink& s
 
 /// The world box [lo, hi] of `shape`'s local box placed at position `c`, rotation `rot` (the
 /// box of its eight corners).
-void posed_mesh_box(const MeshShape& shape, const Vec3& c, const Mat3& rot, Vec3& lo, Vec3& hi) noexcept {
+void posed_mesh_box(const MeshShape& shape, const Vec3& c, const Mat3& rot, Vec3& lo,
+                    Vec3& hi) noexcept {
   const Vec3 mid = c + rot * (0.5 * (shape.aabb_min + shape.aabb_max));
   const Vec3 ext = rot.cwiseAbs() * (0.5 * (shape.aabb_max - shape.aabb_min));
   lo = mid - ext;
@@ -298,7 +299,8 @@ void build_collision_structures(Model& model) {
         o.aabb_min = Vec3::Constant(kInf);
         o.aabb_max = Vec3::Constant(-kInf);
         if (o.mesh < 0 || static_cast<std::size_t>(o.mesh) >= model.meshes.size()) break;
-        posed_mesh_box(model.meshes[static_cast<std::size_t>(o.mesh)], c, rot, o.aabb_min, o.aabb_max);
+        posed_mesh_box(model.meshes[static_cast<std::size_t>(o.mesh)], c, rot, o.aabb_min,
+                       o.aabb_max);
         break;
       }
       case ShapeType::kSphereSet:
