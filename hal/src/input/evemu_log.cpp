@@ -6,18 +6,15 @@
 #include <limits>
 #include <stdexcept>
 
+#include "../text_chars.hpp"
+
 namespace numen::hal {
 
 namespace {
 
-bool is_blank(char c) noexcept { return c == ' ' || c == '\t'; }
-bool is_digit(char c) noexcept { return c >= '0' && c <= '9'; }
-int hex_value(char c) noexcept {
-  if (c >= '0' && c <= '9') return c - '0';
-  if (c >= 'a' && c <= 'f') return c - 'a' + 10;
-  if (c >= 'A' && c <= 'F') return c - 'A' + 10;
-  return -1;
-}
+using detail::hex_value;
+using detail::is_blank;
+using detail::is_digit;
 
 // Cursor over one line; columns are 1-based.
 struct Cursor {

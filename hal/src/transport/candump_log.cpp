@@ -9,20 +9,16 @@
 #include <stdexcept>
 #include <utility>
 
+#include "../text_chars.hpp"
+
 namespace numen::hal {
 namespace {
 
 constexpr char kHexUpper[] = "0123456789ABCDEF";
 
-constexpr int hex_value(char c) noexcept {
-  if (c >= '0' && c <= '9') return c - '0';
-  if (c >= 'A' && c <= 'F') return c - 'A' + 10;
-  if (c >= 'a' && c <= 'f') return c - 'a' + 10;
-  return -1;
-}
-
-constexpr bool is_digit(char c) noexcept { return c >= '0' && c <= '9'; }
-constexpr bool is_blank(char c) noexcept { return c == ' ' || c == '\t'; }
+using detail::hex_value;
+using detail::is_blank;
+using detail::is_digit;
 
 // Characters of an interface name: printable ASCII without space, and not '/', ':' (Linux
 // dev_valid_name) or '#' (reserved for the frame field).
