@@ -2,12 +2,11 @@
 # sources NUMEN_UNITY_BATCH at a time, one translation unit per batch, so that each batch
 # parses the heavy header-only libraries it shares (GoogleTest, Eigen, CLI11, toml++,
 # nlohmann/json, pybind11) once instead of once per file. Applied to the test programs and
-# benchmarks, the `numen` command, numen::sim, hal, platform, the Python module and the MuJoCo
-# peer's library (hal's and platform's files are protocol and runtime code: their compile at -O3
-# is 63 % parsing, `-fsyntax-only` of each file against its whole compile). core compiles file
-# by file (its step is what the optimiser works on at -O3), but in sanitizer builds
-# (numen_unity_when_sanitized): there everything is at -O1, and parsing Eigen and the standard
-# library once per batch is the larger share.
+# benchmarks, the `numen` command and every library (core, hal, platform, sim), the Python
+# module and the MuJoCo peer's library. Even the libraries' compile at -O3 is mostly parsing:
+# `-fsyntax-only` of each file one by one takes 63 % of its whole compile in core, hal and
+# platform alike; core's step costs the same instructions either way (callgrind, docs/testing.md
+# "Test build time").
 #
 # File-local names (anonymous namespaces, static functions) of the files of one batch share a
 # translation unit: two of one name are a redefinition error. Give one a distinct name, or
@@ -110,10 +109,4 @@ function(numen_unity target)
     endforeach()
   endforeach()
   set_target_properties(${target} PROPERTIES UNITY_BUILD ON UNITY_BUILD_MODE GROUP)
-endfunction()
-# core, hal and platform: unity batches in sanitizer builds only (NUMEN_SANITIZE, .ci/sanitize).
-function(numen_unity_when_sanitized target)
-  if(NUMEN_SANITIZE)
-    numen_unity(${target})
-  endif()
 endfunction()
