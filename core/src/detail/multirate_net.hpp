@@ -125,8 +125,8 @@ void cut_back_node_contacts(const Model& scene, Data& data, std::span<const int>
 /// whose true depth d − δ is r or more: the sphere's centre on the triangle's inner side. The
 /// grown sphere reaches triangles whose back faces it (across a fold, or the far wall of a dent
 /// the tool pressed) up to r + δ behind it, which its true radius r does not (true depth ≥ 2 r);
-/// and a sphere the god-object moved past a triangle's plane within a scene period (the jaws
-/// in the shipped organ's folds) meets it from behind within r (true depth r to 2 r). Taken,
+/// and a sphere that got past a triangle's plane (the jaws in the shipped organ's folds) meets
+/// it from behind within r (true depth r to 2 r). Taken,
 /// the law pushes such a triangle around the sphere's far side: it hooks onto the tool, which
 /// drags the organ along, and its nodes are thrown through the tool (docs/deformable.md,
 /// "Organs in multirate"). Call before build_node_planes(). Keeps the order of the rest. No
