@@ -248,8 +248,10 @@ void drop_back_face_contacts(const Model& scene, Data& data, std::span<const int
   for (int i = 0; i < n; ++i) {
     const NodeContact& c = data.node_contacts[static_cast<std::size_t>(i)];
     if (c.face >= 0 && in_god_object(device_body, c.body_b) && c.sphere_b >= 0 && c.sphere_b < num_spheres) {
+      // True depth d − δ ≥ r: the sphere's centre on the triangle's inner side, where the law
+      // would push the triangle around the sphere's far side and hook it onto the tool.
       const double r = scene.body_spheres[static_cast<std::size_t>(c.sphere_b)].radius - margin;
-      if (!(c.depth - margin < 2.0 * r)) continue;
+      if (!(c.depth - margin < r)) continue;
     }
     data.node_contacts[static_cast<std::size_t>(kept++)] = c;
   }

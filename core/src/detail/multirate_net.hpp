@@ -122,12 +122,15 @@ void cut_back_node_contacts(const Model& scene, Data& data, std::span<const int>
 
 /// Drops from `data` every organ triangle contact (NodeContact::face ≥ 0, a net on an anchored
 /// body) with a sphere of the god-object (grown by `margin` in the proximity model `scene`)
-/// that the sphere's true radius r would not have found: its centre behind the triangle
-/// (inside) by r or more, true depth d − δ ≥ 2 r. The grown sphere reaches triangles whose back
-/// faces it: across a fold, or the far wall of a dent the tool pressed, up to r + δ behind it;
-/// as a contact that triangle would be 2 r + δ deep and throw its nodes through the tool
-/// (docs/deformable.md, "Organs in multirate"). Call before build_node_planes(). Keeps the
-/// order of the rest. No allocation.
+/// whose true depth d − δ is r or more: the sphere's centre on the triangle's inner side. The
+/// grown sphere reaches triangles whose back faces it (across a fold, or the far wall of a dent
+/// the tool pressed) up to r + δ behind it, which its true radius r does not (true depth ≥ 2 r);
+/// and a sphere that got past a triangle's plane (the jaws in the shipped organ's folds) meets
+/// it from behind within r (true depth r to 2 r). Taken,
+/// the law pushes such a triangle around the sphere's far side: it hooks onto the tool, which
+/// drags the organ along, and its nodes are thrown through the tool (docs/deformable.md,
+/// "Organs in multirate"). Call before build_node_planes(). Keeps the order of the rest. No
+/// allocation.
 void drop_back_face_contacts(const Model& scene, Data& data, std::span<const int> device_body,
                              double margin) noexcept;
 
