@@ -461,6 +461,7 @@ class MultirateGodObject {
   std::vector<int> plane_slot_;
   std::vector<double> planes_stiffness_;
   std::vector<double> planes_depth_;
+  std::vector<Vec3> node_force_;
   // One thread (step()).
   MultirateDeviceReport report_;
   MultirateSceneModel model_;
