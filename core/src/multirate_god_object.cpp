@@ -350,6 +350,8 @@ void MultirateGodObject::scene_step(const MultirateDeviceReport& in, MultirateSc
       t.enabled = true;
     }
     scene_->bodies[b] = g;
+    scene_->bodies[b].linear_velocity = twist.linear;  // the step's start, as imposed
+    scene_->bodies[b].angular_velocity = twist.angular;
   }
   // What each scene body is owed (the device loop's impulses less what the scene's own contact
   // with the god-object gave it), applied over this step.
