@@ -291,10 +291,6 @@ void MultirateGodObject::scene_step(const MultirateDeviceReport& in, MultirateSc
   }
   const int body = in.body >= 0 && slot_of(in.body) >= 0 ? in.body : -1;
   const int next_slot = body >= 0 ? slot_of(body) : -1;
-  // The god-object's motion over the last scene period (its poses at the last sample and at
-  // this one) is what the scene step extrapolates, not the twist of the device loop's last
-  // period alone; after a switch, or at the first sample, its twist.
-  const bool moved_last_period = next_slot == scene_slot_ && next_slot >= 0 && counters_.scene_steps > 0;
   if (next_slot != scene_slot_) {  // another scene-loop model: its Data takes the scene's state
     Data& next = next_slot >= 0 ? slots_[static_cast<std::size_t>(next_slot)].scene : free_scene_;
     for (std::size_t b = 0; b < next.bodies.size() && b < scene_->bodies.size(); ++b) {
@@ -334,12 +330,6 @@ void MultirateGodObject::scene_step(const MultirateDeviceReport& in, MultirateSc
     Twist twist;
     twist.linear = g.linear_velocity;
     twist.angular = g.angular_velocity;
-    if (moved_last_period) {  // scene_->bodies holds the god-object as the last sample left it
-      const BodyState& last = scene_->bodies[b];
-      const Eigen::AngleAxisd turn(g.orientation * last.orientation.conjugate());
-      twist.linear = (g.position - last.position) / h;
-      twist.angular = (turn.angle() / h) * turn.axis();
-    }
     if (god[i] == body) {
       scene_->target = pose;
       scene_->target_twist = twist;
@@ -350,8 +340,6 @@ void MultirateGodObject::scene_step(const MultirateDeviceReport& in, MultirateSc
       t.enabled = true;
     }
     scene_->bodies[b] = g;
-    scene_->bodies[b].linear_velocity = twist.linear;  // the step's start, as imposed
-    scene_->bodies[b].angular_velocity = twist.angular;
   }
   // What each scene body is owed (the device loop's impulses less what the scene's own contact
   // with the god-object gave it), applied over this step.
