@@ -210,7 +210,8 @@ void build_node_planes(const Model& scene, const Data& data, std::span<const int
     // max(0, n · F_m): k_n e₀ takes the node's neighbours at rest, and in a dent, where they are
     // not, it is up to ~1.8 times what they push (the jaw drawn along the shipped organ's rigid
     // core; docs/deformable.md, "Organs in multirate").
-    const bool organ = !net_on_god_object(scene, device_body, scene.node_net[static_cast<std::size_t>(head.node)]);
+    const bool organ =
+        !net_on_god_object(scene, device_body, scene.node_net[static_cast<std::size_t>(head.node)]);
     double x = 0.0, carried = 0.0, k_n0 = 0.0, k_sum0 = 0.0;
     bool compliant = true;
     for (int m = i; m < j; ++m) {

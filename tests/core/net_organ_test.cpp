@@ -192,8 +192,9 @@ TEST(NetOrgan, MultirateDeviceLoopFeelsTheOrganAsTheSingleRateStepDoes) {
   // organ in a 1 kHz scene loop and the god-object at 10 kHz against the organ's planes on its
   // sphere (docs/deformable.md, "Organs in multirate"). At rest both hold the god-object on the
   // dented organ: its height and the feedback within 3 % of the dent and the force (the planes
-  // start from what the nodes' ties and springs push: 0.04 % and 0.1 %; from k_n e₀, the node's
-  // deflection times its stiffness with its neighbours at rest, 9 % and 11 %).
+  // start from the larger of k d₀ and what the nodes' ties and springs push: 0.04 % and 0.1 %;
+  // from k_n e₀, the node's deflection times its stiffness with its neighbours at rest, 9 % and
+  // 11 %).
   const double dt = 1e-4;
   const core::Model m = organ_model(patch(), OrganParams{}, dt, core::CouplingMode::kGodObject,
                                     0.005, Vec3(0, 0, 0.012));
