@@ -172,6 +172,7 @@ MultirateGodObject::MultirateGodObject(const Model& scene, int body, const Multi
     plane_slot_.assign(kMaxContactPlanes, -1);
     planes_stiffness_.assign(kMaxContactPlanes, 0.0);
     planes_depth_.assign(kMaxContactPlanes, 0.0);
+    node_force_.assign(kMaxContactPlanes, Vec3::Zero());
   }
   report_ = make_report();
   model_ = make_scene_model();
@@ -351,7 +352,7 @@ void MultirateGodObject::scene_step(const MultirateDeviceReport& in, MultirateSc
   SampleContext context{&out.planes, std::span<const int>(device_body.data(), device_body.size()),
                         body >= 0 ? margin_ : 0.0, slots_.front().device_model.dt,
                         detail::NodePlaneScratch{node_slot_, slot_node_, node_stiffness_, plane_slot_,
-                                                 planes_stiffness_, planes_depth_}};
+                                                 planes_stiffness_, planes_depth_, node_force_}};
   step_with_contacts(model, *scene_, &detect_and_build_planes, &context);
   if constexpr (kWithDeformable) detail::drop_look_ahead_contacts(*scene_);
   const bool rejected = (scene_->status & kNonFinite) != 0;

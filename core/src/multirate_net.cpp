@@ -56,7 +56,7 @@ void build_node_planes(const Model& scene, const Data& data, std::span<const int
   const int first = out.count;
   const int room = static_cast<int>(std::min({scratch.slot_node.size(), scratch.stiffness.size(),
                                                scratch.plane_slot.size(), scratch.planes_stiffness.size(),
-                                               scratch.planes_depth.size()}));
+                                               scratch.planes_depth.size(), scratch.force.size()}));
   const int num_nodes = std::min(scene.num_nodes(), static_cast<int>(scratch.slot_of_node.size()));
   const int np = static_cast<int>(scene.material_pairs.size());
   int slots = 0;
@@ -85,6 +85,10 @@ void build_node_planes(const Model& scene, const Data& data, std::span<const int
       scratch.stiffness[static_cast<std::size_t>(slot)] = nm.tie_stiffness * Mat3::Identity();
       scratch.planes_stiffness[static_cast<std::size_t>(slot)] = 0.0;
       scratch.planes_depth[static_cast<std::size_t>(slot)] = 0.0;
+      const BodyState& a = data.bodies[static_cast<std::size_t>(nm.body)];
+      scratch.force[static_cast<std::size_t>(slot)] =
+          -nm.tie_stiffness * (data.nodes[static_cast<std::size_t>(c.node)].position -
+                               (a.position + a.orientation * scene.node_rest[static_cast<std::size_t>(c.node)]));
     }
     // A triangle contact's share w (NodeContact::share; 1 for a node sphere's contact) counts
     // as a plane of stiffness w k at its node.
@@ -158,12 +162,15 @@ void build_node_planes(const Model& scene, const Data& data, std::span<const int
       // An organ's spring between two nodes with planes: a triangle contact loads its nodes
       // together, so the spring moves with both and holds neither (counted, it makes the device
       // loop ~20 % stiffer than the net: docs/deformable.md, "Organs in multirate").
-      if (sa >= 0 && sb >= 0 && scene.bodies[static_cast<std::size_t>(nm.body)].anchored) continue;
       Vec3 e = data.nodes[static_cast<std::size_t>(sp.node_b)].position -
                data.nodes[static_cast<std::size_t>(sp.node_a)].position;
       const double l = e.norm();
       if (!(l > 0.0)) continue;
       e /= l;
+      const Vec3 f_a = sp.stiffness * (l - sp.rest_length) * e;  // the spring's elastic force on node_a
+      if (sa >= 0) scratch.force[static_cast<std::size_t>(sa)] += f_a;
+      if (sb >= 0) scratch.force[static_cast<std::size_t>(sb)] -= f_a;
+      if (sa >= 0 && sb >= 0 && scene.bodies[static_cast<std::size_t>(nm.body)].anchored) continue;
       const Mat3 k_e = sp.stiffness * (e * e.transpose());
       if (sa >= 0) scratch.stiffness[static_cast<std::size_t>(sa)] += k_e;
       if (sb >= 0) scratch.stiffness[static_cast<std::size_t>(sb)] += k_e;
@@ -197,7 +204,14 @@ void build_node_planes(const Model& scene, const Data& data, std::span<const int
     // when it engages): s = 1 / (1 + Σ_m w_m Σk_m / k_n,m), each plane w_m k s. A node sphere's
     // plane: s = k_n / (Σk + k_n). At the sample the contact starts from what its nodes carried
     // for it, shared among each node's planes in contact by their weighted depths w d₀:
-    // k s (d₀ + offset) = Σ_m (w_m d₀ / Σ w d₀) k_n,m e₀,m.
+    // k s (d₀ + offset) = Σ_m (w_m d₀ / Σ w d₀) k_n,m e₀,m. An organ's contact starts from the
+    // larger of its law's elastic force k d₀ (what the scene loop's step exchanges with the tool)
+    // and what its nodes' ties and springs push along n at the sample, Σ_m (w_m d₀ / Σ w d₀)
+    // max(0, n · F_m): k_n e₀ takes the node's neighbours at rest, and in a dent, where they are
+    // not, it is up to ~1.8 times what they push (the jaw drawn along the shipped organ's rigid
+    // core; docs/deformable.md, "Organs in multirate").
+    const bool organ =
+        !net_on_god_object(scene, device_body, scene.node_net[static_cast<std::size_t>(head.node)]);
     double x = 0.0, carried = 0.0, k_n0 = 0.0, k_sum0 = 0.0;
     bool compliant = true;
     for (int m = i; m < j; ++m) {
@@ -209,8 +223,11 @@ void build_node_planes(const Model& scene, const Data& data, std::span<const int
       x += p.share * k_sum / k_n;
       k_n0 = k_n;
       k_sum0 = k_sum;
-      if (d0 > 0.0 && k_n > 0.0) carried += p.share * d0 / scratch.planes_depth[slot] * k_n * deflection(p);
+      if (d0 > 0.0 && k_n > 0.0)
+        carried += p.share * d0 / scratch.planes_depth[slot] *
+                   (organ ? std::max(0.0, p.normal.dot(scratch.force[slot])) : k_n * deflection(p));
     }
+    if (organ && d0 > 0.0) carried = std::max(carried, k * d0);
     const bool single = j == i + 1 && head.share == 1.0;
     const double s = !compliant ? 1.0 : single ? k_n0 / (k_sum0 + k_n0) : 1.0 / (1.0 + x);
     const double offset = d0 > 0.0 && compliant && k > 0.0 ? carried / (k * s) - d0 : 0.0;

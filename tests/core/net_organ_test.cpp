@@ -191,7 +191,10 @@ TEST(NetOrgan, MultirateDeviceLoopFeelsTheOrganAsTheSingleRateStepDoes) {
   // The god-object pressed 5 mm into the patch: single-rate at 10 kHz, and multirate with the
   // organ in a 1 kHz scene loop and the god-object at 10 kHz against the organ's planes on its
   // sphere (docs/deformable.md, "Organs in multirate"). At rest both hold the god-object on the
-  // dented organ: its height and the feedback within 15 % of the dent and the force.
+  // dented organ: its height and the feedback within 3 % of the dent and the force (the planes
+  // start from the larger of k d₀ and what the nodes' ties and springs push: 0.04 % and 0.1 %;
+  // from k_n e₀, the node's deflection times its stiffness with its neighbours at rest, 9 % and
+  // 11 %).
   const double dt = 1e-4;
   const core::Model m = organ_model(patch(), OrganParams{}, dt, core::CouplingMode::kGodObject,
                                     0.005, Vec3(0, 0, 0.012));
@@ -217,9 +220,9 @@ TEST(NetOrgan, MultirateDeviceLoopFeelsTheOrganAsTheSingleRateStepDoes) {
               1e3 * (z_touch - mr.device_data().bodies[0].position.z()), 1e3 * deepest_single,
               1e3 * deepest_mr, f_single, f_mr, static_cast<long>(mr.counters().planes_max));
   EXPECT_GT(f_single, 0.2);
-  EXPECT_NEAR(f_mr, f_single, 0.15 * f_single);
+  EXPECT_NEAR(f_mr, f_single, 0.03 * f_single);
   EXPECT_NEAR(mr.device_data().bodies[0].position.z(), single.bodies[1].position.z(),
-              0.15 * (z_touch - single.bodies[1].position.z()));
+              0.03 * (z_touch - single.bodies[1].position.z()));
   EXPECT_LE(deepest_mr, 2.0 * deepest_single);
 }
 

@@ -25,6 +25,7 @@ struct NodePlaneScratch {
   std::span<int> plane_slot;    ///< Per plane of the set: its node's slot, or −1.
   std::span<double> planes_stiffness;  ///< Per slot: Σ k over the node's planes in contact (N/m).
   std::span<double> planes_depth;      ///< Per slot: Σ d₀ over its planes in contact (m).
+  std::span<Vec3> force;               ///< Per slot: its tie's and springs' elastic force (N, world).
 };
 
 /// True when scene body `b` is a body of the god-object (`device_body`: per scene body, its
@@ -68,16 +69,19 @@ void grow_god_object_nodes(std::span<const int> device_body, double margin, Mode
 /// planes in contact at the sample (in parallel; a plane not in contact counted with them), and for a plane in contact (true depth d₀ = d − δ > 0) the depth
 /// offset that makes it start from its share w = d₀ / Σd₀ of what the node's tie and springs
 /// carried, k s (d₀ + offset) = w k_n e₀ (e₀ ≥ 0 the node's deflection from its rest position
-/// along n). Static planes (no carrier): the net renders its
-/// contacts on the scene's bodies in the scene loop. Likewise for every node contact of an
-/// organ (a net on an anchored body) with a sphere of the god-object (grown by `margin`): a plane
+/// along n) — a net on the god-object; an organ's contact as below. Static planes (no
+/// carrier): the net renders its contacts on the scene's bodies in the scene loop. Likewise for
+/// every node contact of an organ (a net on an anchored body) with a sphere of the god-object (grown by `margin`): a plane
 /// on that sphere (its centre in its body's frame, its true radius), normal from the node to it,
-/// point on the node sphere's surface, s and offset from the organ node's K_n, Σk and e₀ (its
-/// deflection against the normal). A triangle contact of an organ (NodeContact::face) gives a
-/// plane per node of its shares through the triangle's closest point (ContactPlane::share w):
+/// point on the node sphere's surface, s from the organ node's K_n and Σk. A triangle contact
+/// of an organ (NodeContact::face) gives a plane per node of its shares through the triangle's
+/// closest point (ContactPlane::share w):
 /// the contact in series with its nodes, s = 1 / (1 + Σ_m w_m Σk_m / k_n,m) (Σk_m counting w k
 /// per plane; for a node sphere's plane this is k_n / (Σk + k_n)), each plane w_m k s, one
-/// offset for the contact, k s (d₀ + offset) = Σ_m (w_m d₀ / Σ w d₀) k_n,m e₀,m; an organ's
+/// offset for the contact: an organ's contact starts from the larger of its law's elastic force
+/// k d₀ and what its nodes' ties and springs push along the normal at the sample,
+/// k s (d₀ + offset) = max(k d₀, Σ_m (w_m d₀ / Σ w d₀) max(0, n · F_m)) (F_m the elastic force of
+/// node m's tie and springs; the node sphere's plane of an organ likewise, w = 1); an organ's
 /// spring between two nodes with planes is left out of their K_n (they move together). Counts
 /// planes beyond the room in out.dropped. No allocation.
 void build_node_planes(const Model& scene, const Data& data, std::span<const int> device_body,

@@ -111,9 +111,10 @@ struct ContactPlane {
   /// touching a sphere of the god-object gives the same kind of plane the other way round:
   /// `node` that organ node, the sphere the god-object's (`local_point`, `radius`: its centre in
   /// its body's frame and its true radius), the normal from the node to it, the point the node
-  /// sphere's surface, s and the offset from the organ node's compliance (e₀ its deflection
-  /// against the normal). A triangle contact of an organ (NodeContact::face ≥ 0) gives one
-  /// such plane per node of the triangle, through the triangle's closest point, each rendering
+  /// sphere's surface, s from the organ node's compliance, and the offset so that at the sample
+  /// the contact gives the larger of its law's elastic force k d₀ and what its nodes' ties and
+  /// springs push along the normal (their elastic force F, w max(0, n · F)). A triangle contact
+  /// of an organ (NodeContact::face ≥ 0) gives one such plane per node of the triangle, through the triangle's closest point, each rendering
   /// the node's share w of it (`share`).
   int node = -1;
   Vec3 local_point = Vec3::Zero();  ///< Node plane: the sphere's centre (m, body frame).
@@ -122,8 +123,8 @@ struct ContactPlane {
   /// Node plane of a triangle contact: its node's barycentric share w (NodeContact::share); 1
   /// otherwise. The plane renders stiffness w k s and damping w c s².
   double share = 1.0;
-  /// Node plane: w k_n e₀ / (k s) − d₀ (m), d₀ the node's true depth at the sample (0 for a
-  /// node not in contact then).
+  /// Node plane: w k_n e₀ / (k s) − d₀ (m; an organ's: its start above / (k s) − d₀), d₀ the
+  /// node's true depth at the sample (0 for a node not in contact then).
   double depth_offset = 0.0;
   /// Written by step_god_object(): the impulse this plane gave the god-object over the last
   /// device period (N·s, world; its effective force times dt) and where it acted (m, world).
@@ -461,6 +462,7 @@ class MultirateGodObject {
   std::vector<int> plane_slot_;
   std::vector<double> planes_stiffness_;
   std::vector<double> planes_depth_;
+  std::vector<Vec3> node_force_;
   // One thread (step()).
   MultirateDeviceReport report_;
   MultirateSceneModel model_;
