@@ -114,8 +114,8 @@ struct ContactPlane {
   /// sphere's surface, s from the organ node's compliance, and the offset so that at the sample
   /// the contact gives the larger of its law's elastic force k d₀ and what its nodes' ties and
   /// springs push along the normal (their elastic force F, w max(0, n · F)). A triangle contact
-  /// of an organ (NodeContact::face ≥ 0) gives one such plane per node of the triangle, through the triangle's closest point, each rendering
-  /// the node's share w of it (`share`).
+  /// of an organ (NodeContact::face ≥ 0) gives one such plane per node of the triangle, through
+  /// the triangle's closest point, each rendering the node's share w of it (`share`).
   int node = -1;
   Vec3 local_point = Vec3::Zero();  ///< Node plane: the sphere's centre (m, body frame).
   double radius = 0.0;              ///< Node plane: the node's sphere radius (m).
