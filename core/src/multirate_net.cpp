@@ -60,6 +60,13 @@ void build_node_planes(const Model& scene, const Data& data, std::span<const int
   const int num_nodes = std::min(scene.num_nodes(), static_cast<int>(scratch.slot_of_node.size()));
   const int np = static_cast<int>(scene.material_pairs.size());
   int slots = 0;
+  // A node's rest position on its net's component (world): where its tie pulls it.
+  const auto rest_anchor = [&](int node) -> Vec3 {
+    const auto u = static_cast<std::size_t>(node);
+    const BodyState& g = data.bodies[static_cast<std::size_t>(
+        scene.nets[static_cast<std::size_t>(scene.node_net[u])].body)];
+    return g.position + g.orientation * scene.node_rest[u];
+  };
   const int n = std::clamp(data.num_node_contacts, 0, static_cast<int>(data.node_contacts.size()));
   for (int i = 0; i < n; ++i) {
     const NodeContact& c = data.node_contacts[static_cast<std::size_t>(i)];
@@ -85,10 +92,8 @@ void build_node_planes(const Model& scene, const Data& data, std::span<const int
       scratch.stiffness[static_cast<std::size_t>(slot)] = nm.tie_stiffness * Mat3::Identity();
       scratch.planes_stiffness[static_cast<std::size_t>(slot)] = 0.0;
       scratch.planes_depth[static_cast<std::size_t>(slot)] = 0.0;
-      const BodyState& a = data.bodies[static_cast<std::size_t>(nm.body)];
       scratch.force[static_cast<std::size_t>(slot)] =
-          -nm.tie_stiffness * (data.nodes[static_cast<std::size_t>(c.node)].position -
-                               (a.position + a.orientation * scene.node_rest[static_cast<std::size_t>(c.node)]));
+          -nm.tie_stiffness * (data.nodes[node].position - rest_anchor(c.node));
     }
     // A triangle contact's share w (NodeContact::share; 1 for a node sphere's contact) counts
     // as a plane of stiffness w k at its node.
@@ -176,16 +181,12 @@ void build_node_planes(const Model& scene, const Data& data, std::span<const int
       if (sb >= 0) scratch.stiffness[static_cast<std::size_t>(sb)] += k_e;
     }
   }
-  // The node's deflection from its rest position on the component along n, e₀ ≥ 0, is what
-  // its tie and springs carried to the component (k_n e₀).
+  // A god-object node's deflection from its rest position on the component along n (it is
+  // pushed along its plane's normal), e₀ ≥ 0, is what its tie and springs carried to the
+  // component (k_n e₀). An organ's contact starts from its nodes' forces instead (below).
   const auto deflection = [&](const ContactPlane& p) {
-    const NetModel& nm = scene.nets[static_cast<std::size_t>(scene.node_net[static_cast<std::size_t>(p.node)])];
-    const BodyState& g = data.bodies[static_cast<std::size_t>(nm.body)];
-    const auto node = static_cast<std::size_t>(p.node);
-    const Vec3 anchor = g.position + g.orientation * scene.node_rest[node];
-    // A god-object node is pushed along its plane's normal, an organ's node against it.
-    const double side = net_on_god_object(scene, device_body, scene.node_net[node]) ? 1.0 : -1.0;
-    return std::max(0.0, side * p.normal.dot(data.nodes[node].position - anchor));
+    return std::max(0.0, p.normal.dot(data.nodes[static_cast<std::size_t>(p.node)].position -
+                                      rest_anchor(p.node)));
   };
   for (int i = first; i < out.count;) {
     // The planes of one contact: a node sphere's (one plane, w = 1), or a triangle contact's

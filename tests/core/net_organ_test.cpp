@@ -32,6 +32,41 @@ namespace {
 /// The flat patch of the indentation tests: 17 × 17 nodes 2.5 mm apart (40 mm square).
 core::TriangleMesh patch() { return flat_patch(16, 0.0025); }
 
+/// What 50 device periods (10 kHz device, 1 kHz scene, 2 mm margin) of the tool's 1.5 mm sphere
+/// held at `start` under the patch left: the most node contacts of the multirate scene loop (and
+/// of the single-rate step beside it, when `with_single`), the scene loop's deepest, the fastest
+/// patch node, the last feedback force.
+struct HeldUnderPatch {
+  int contacts = 0;
+  int single_contacts = 0;
+  double deepest = 0.0;   ///< m
+  double fastest = 0.0;   ///< m/s
+  double feedback = 0.0;  ///< N
+};
+HeldUnderPatch hold_under_patch(const Vec3& start, bool with_single) {
+  const core::Model m =
+      organ_model(patch(), OrganParams{}, 1e-4, core::CouplingMode::kGodObject, 0.0015, start);
+  core::Data single = core::make_data(m);
+  core::MultirateGodObject mr(m, 1, {10, 0.002, {}});
+  HeldUnderPatch h;
+  for (int k = 0; k < 50; ++k) {
+    if (with_single) {
+      single.target.position = start;
+      core::step(m, single);
+      EXPECT_EQ(single.status, core::kStepOk) << k;
+      h.single_contacts = std::max(h.single_contacts, single.num_node_contacts);
+    }
+    mr.device_data().target.position = start;
+    mr.step();
+    h.contacts = std::max(h.contacts, mr.scene_data().num_node_contacts);
+    h.deepest = std::max(h.deepest, mr.scene_data().nets[0].max_penetration);
+    for (const core::NodeState& n : mr.scene_data().nodes)
+      h.fastest = std::max(h.fastest, n.velocity.norm());
+  }
+  h.feedback = mr.device_data().feedback_wrench.force.norm();
+  return h;
+}
+
 }  // namespace
 
 TEST(NetOrgan, AnchoredBodyStaysWhereItStartsWhileTheToolPressesItsNet) {
@@ -269,27 +304,12 @@ TEST(NetOrgan, MultirateSceneLoopMeetsOnlyTheTrianglesTheToolsTrueSphereReaches)
   // multirate scene loop detects on the sphere grown by the 2 mm margin, which reaches the
   // triangles' back faces; as contacts they would be 2 r + 1 mm = 4 mm deep and throw the
   // patch's nodes through the tool. Both must leave the patch at rest.
-  const double dt = 1e-4;
-  const Vec3 start(0.0, 0.0, -0.0025);
-  const core::Model m = organ_model(patch(), OrganParams{}, dt, core::CouplingMode::kGodObject, 0.0015, start);
-  core::Data single = core::make_data(m);
-  core::MultirateGodObject mr(m, 1, {10, 0.002, {}});
-  double deepest = 0.0, fastest = 0.0;
-  int contacts = 0;
-  for (int k = 0; k < 50; ++k) {
-    single.target.position = start;
-    mr.device_data().target.position = start;
-    core::step(m, single);
-    mr.step();
-    ASSERT_EQ(single.status, core::kStepOk) << k;
-    contacts = std::max({contacts, single.num_node_contacts, mr.scene_data().num_node_contacts});
-    deepest = std::max(deepest, mr.scene_data().nets[0].max_penetration);
-    for (const core::NodeState& n : mr.scene_data().nodes) fastest = std::max(fastest, n.velocity.norm());
-  }
-  EXPECT_EQ(contacts, 0);
-  EXPECT_EQ(deepest, 0.0) << "a back face within the margin taken for a contact";
-  EXPECT_LT(fastest, 1e-9) << "m/s: the patch must stay at rest";
-  EXPECT_LT(mr.device_data().feedback_wrench.force.norm(), 1e-6);
+  const HeldUnderPatch h = hold_under_patch(Vec3(0.0, 0.0, -0.0025), true);
+  EXPECT_EQ(h.single_contacts, 0);
+  EXPECT_EQ(h.contacts, 0);
+  EXPECT_EQ(h.deepest, 0.0) << "a back face within the margin taken for a contact";
+  EXPECT_LT(h.fastest, 1e-9) << "m/s: the patch must stay at rest";
+  EXPECT_LT(h.feedback, 1e-6);
 }
 
 TEST(NetOrgan, MultirateSceneLoopDoesNotHookTheTrianglesTheToolsSpherePassed) {
@@ -299,23 +319,11 @@ TEST(NetOrgan, MultirateSceneLoopDoesNotHookTheTrianglesTheToolsSpherePassed) {
   // from behind, 2.5 mm deep (between r and 2 r); taken, the law pushes them around the
   // sphere's far side, hooking the patch onto the tool (18 contacts, the nodes at 1.6 m/s
   // within 5 ms without the cut). The scene loop must leave the patch at rest.
-  const double dt = 1e-4;
-  const Vec3 start(0.0, 0.0, -0.001);
-  const core::Model m = organ_model(patch(), OrganParams{}, dt, core::CouplingMode::kGodObject, 0.0015, start);
-  core::MultirateGodObject mr(m, 1, {10, 0.002, {}});
-  double deepest = 0.0, fastest = 0.0;
-  int contacts = 0;
-  for (int k = 0; k < 50; ++k) {
-    mr.device_data().target.position = start;
-    mr.step();
-    contacts = std::max(contacts, mr.scene_data().num_node_contacts);
-    deepest = std::max(deepest, mr.scene_data().nets[0].max_penetration);
-    for (const core::NodeState& n : mr.scene_data().nodes) fastest = std::max(fastest, n.velocity.norm());
-  }
-  EXPECT_EQ(contacts, 0);
-  EXPECT_EQ(deepest, 0.0) << "m: a triangle the sphere's centre passed taken for a contact";
-  EXPECT_LT(fastest, 1e-9) << "m/s: the patch must stay at rest";
-  EXPECT_LT(mr.device_data().feedback_wrench.force.norm(), 1e-6);
+  const HeldUnderPatch h = hold_under_patch(Vec3(0.0, 0.0, -0.001), false);
+  EXPECT_EQ(h.contacts, 0);
+  EXPECT_EQ(h.deepest, 0.0) << "m: a triangle the sphere's centre passed taken for a contact";
+  EXPECT_LT(h.fastest, 1e-9) << "m/s: the patch must stay at rest";
+  EXPECT_LT(h.feedback, 1e-6);
 }
 
 TEST(NetOrgan, ModelRefusesAnAnchoredBodyThatSomethingWouldMove) {
