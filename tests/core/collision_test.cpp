@@ -59,8 +59,8 @@ struct Scene {
     return static_cast<int>(model.obstacles.size()) - 1;
   }
   int plane(const Vec3& point, const Vec3& normal, int material = 0) {
-    return obstacle(ShapeType::kPlane, point,
-                    Quat::FromTwoVectors(Vec3::UnitZ(), normal.normalized()), material);
+    return obstacle(ShapeType::kPlane, point, rotation_between(Vec3::UnitZ(), normal.normalized()),
+                    material);
   }
   int box(const Vec3& centre, const Quat& q, const Vec3& half, int material = 0) {
     const int o = obstacle(ShapeType::kBox, centre, q, material);
@@ -489,7 +489,7 @@ TEST(CollisionStage, CullingKeepsContactsAtTheRimOfTheBoundingSphere) {
   sc.body(Vec3::Zero(), Quat::Identity(), {{Vec3(0.1, 0, 0), 0.05}});
   sc.sphere(Vec3(0.2, 0, 0), 0.06);
   sc.box(Vec3(0.0, 0.19, 0.0), Quat::Identity(), Vec3(0.2, 0.05, 0.2));
-  sc.capsule(Vec3(0.1, 0, -0.195), Quat::FromTwoVectors(Vec3::UnitZ(), Vec3::UnitX()), 0.2, 0.055);
+  sc.capsule(Vec3(0.1, 0, -0.195), rotation_between(Vec3::UnitZ(), Vec3::UnitX()), 0.2, 0.055);
   sc.finalize();
   Data d = make_data(sc.model);
   for (const Quat& q : {Quat::Identity(), Quat(Eigen::AngleAxisd(M_PI / 2, Vec3::UnitZ())),
@@ -521,7 +521,7 @@ TEST(CollisionStage, ObstacleBoundsAreComputedAtFinalize) {
       sc.box(Vec3(1, 1, 1), Quat(Eigen::AngleAxisd(M_PI / 2, Vec3::UnitZ())), Vec3(1, 2, 3));
   const int sphere = sc.sphere(Vec3(1, 2, 3), 0.5);
   const int capsule =
-      sc.capsule(Vec3(0, 0, 1), Quat::FromTwoVectors(Vec3::UnitZ(), Vec3::UnitX()), 2.0, 0.5);
+      sc.capsule(Vec3(0, 0, 1), rotation_between(Vec3::UnitZ(), Vec3::UnitX()), 2.0, 0.5);
   const int set = sc.sphere_set({{Vec3(0, 0, 0), 1.0}, {Vec3(3, 1, 0), 0.5}});
   const int empty = sc.sphere_set({});
   sc.finalize();

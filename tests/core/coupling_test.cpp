@@ -343,7 +343,7 @@ core::Model admittance_model(core::Integrator integrator, bool wall, double k_c 
     core::Obstacle w;
     w.name = "wall";
     w.type = core::ShapeType::kPlane;
-    w.pose.orientation = Quat::FromTwoVectors(Vec3::UnitZ(), -Vec3::UnitX());  // normal −x
+    w.pose.orientation = core::rotation_between(Vec3::UnitZ(), -Vec3::UnitX());  // normal −x
     m.obstacles = {w};
   }
   m.body_spheres = {core::Sphere{Vec3::Zero(), 0.01}};

@@ -275,7 +275,7 @@ Model random_scene(std::uint32_t seed) {
   add_sphere_range(m, 120, 40, 2);  // spheres listed by two sets: two entries
   add_sphere_range(m, 0, 0, 1);
   add_obstacle(m, ShapeType::kPlane, Vec3(0, 0, -0.1),
-               Quat::FromTwoVectors(Vec3::UnitZ(), Vec3(0.1, -0.05, 1.0).normalized()), 0);
+               rotation_between(Vec3::UnitZ(), Vec3(0.1, -0.05, 1.0).normalized()), 0);
   std::uniform_real_distribution<double> at(-0.12, 0.12);
   std::uniform_real_distribution<double> size(0.01, 0.04);
   for (int i = 0; i < 3; ++i) {

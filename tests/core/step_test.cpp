@@ -275,7 +275,7 @@ TEST(StepBehaviour, GodObjectPushedIntoAWallStaysOutsideWithinThePenaltyBound) {
   core::Obstacle wall;
   wall.name = "wall";
   wall.type = core::ShapeType::kPlane;
-  wall.pose.orientation = Quat::FromTwoVectors(Vec3::UnitZ(), -Vec3::UnitX());  // normal −x
+  wall.pose.orientation = core::rotation_between(Vec3::UnitZ(), -Vec3::UnitX());  // normal −x
   m.obstacles = {wall};
   m.body_spheres = {core::Sphere{Vec3::Zero(), 0.01}};
   core::BodyModel b;

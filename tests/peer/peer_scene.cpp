@@ -25,7 +25,7 @@ PeerScene make_wall_scene(double duration_s) {
   core::Obstacle wall;
   wall.name = "wall";
   wall.type = core::ShapeType::kPlane;
-  wall.pose.orientation = core::Quat::FromTwoVectors(core::Vec3::UnitZ(), -core::Vec3::UnitX());
+  wall.pose.orientation = core::rotation_between(core::Vec3::UnitZ(), -core::Vec3::UnitX());
   m.obstacles = {wall};
   m.body_spheres = {core::Sphere{core::Vec3::Zero(), 0.01}};
   core::BodyModel b;

@@ -111,7 +111,7 @@ numen::core::Model linked_model(bool prescribed) {
   j.parent = 0;
   j.child = 1;
   j.frame_parent.position = Vec3(0.0, 0.0, 0.04);
-  j.frame_parent.orientation = Quat::FromTwoVectors(Vec3::UnitZ(), Vec3::UnitX());
+  j.frame_parent.orientation = numen::core::rotation_between(Vec3::UnitZ(), Vec3::UnitX());
   j.frame_child.position = Vec3(0.0, 0.0, -0.006);
   j.frame_child.orientation = j.frame_parent.orientation;
   j.prescribed = prescribed;

@@ -26,7 +26,7 @@ Pose parse_frame(const TomlTable& t) {
     if (t.has("orientation")) t.fail("axis", "give either orientation or axis, not both");
     const Vec3 axis = t.vec3("axis");
     if (!(axis.norm() > 1e-12)) t.fail("axis", "must be a non-zero vector");
-    p.orientation = Quat::FromTwoVectors(Vec3::UnitZ(), axis.normalized());
+    p.orientation = core::rotation_between(Vec3::UnitZ(), axis.normalized());
   } else {
     p.orientation = t.quaternion_or("orientation", Quat::Identity());
   }

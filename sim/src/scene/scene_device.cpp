@@ -501,7 +501,7 @@ void parse_device(const TomlTable& root, Scene& scene, const TomlTable*& body_ta
         tr->fail("standoff", e.message());
       }
       cfg.trocar.point = a.point;
-      cfg.trocar.orientation = Quat::FromTwoVectors(Vec3::UnitZ(), a.approach);
+      cfg.trocar.orientation = core::rotation_between(Vec3::UnitZ(), a.approach);
       std::ostringstream os;
       os << std::fixed << std::setprecision(1)
          << "trocar placed behind the recorded tip centroid along the mean approach axis, standoff "
@@ -512,7 +512,8 @@ void parse_device(const TomlTable& root, Scene& scene, const TomlTable*& body_ta
       cfg.trocar.point = tr->vec3("point");
       const Vec3 toward = centroid - cfg.trocar.point;
       cfg.trocar.orientation = tr->quaternion_or(
-          "orientation", toward.norm() > 1e-9 ? Quat::FromTwoVectors(Vec3::UnitZ(), toward) : Quat::Identity());
+          "orientation",
+          toward.norm() > 1e-9 ? core::rotation_between(Vec3::UnitZ(), toward) : Quat::Identity());
       scene.trocar_note = "trocar point given in the scene";
     }
     if (tr->has("orientation") && placement == "approach") tr->fail("orientation", "set by placement = \"approach\"");

@@ -307,7 +307,7 @@ void parse_bodies(const TomlTable& root, core::Model& m, std::vector<std::string
 // ---------- obstacles ----------
 
 /// Rotation taking +z onto the unit vector `dir`.
-Quat z_onto(const Vec3& dir) { return Quat::FromTwoVectors(Vec3::UnitZ(), dir.normalized()); }
+Quat z_onto(const Vec3& dir) { return core::rotation_between(Vec3::UnitZ(), dir.normalized()); }
 
 /// A mesh obstacle: the closed mesh of `file`, scaled (`units`, `scale`), built into
 /// m.meshes in its own frame (add_mesh_shape(), with its warnings); the obstacle's pose places it.

@@ -56,7 +56,7 @@ StabilityRow teleport_run(core::Integrator integrator, double h, double k_t, boo
     plane.name = "wall";
     plane.type = core::ShapeType::kPlane;
     plane.pose.position = Vec3(kWallX, 0.0, 0.0);
-    plane.pose.orientation = Quat::FromTwoVectors(Vec3::UnitZ(), -Vec3::UnitX());  // normal −x
+    plane.pose.orientation = core::rotation_between(Vec3::UnitZ(), -Vec3::UnitX());  // normal −x
     base.obstacles = {plane};
   }
   const core::Model model = study::with_scheme(base, integrator, h, "stability study");

@@ -39,7 +39,7 @@ Trajectory pivoting(const Vec3& trocar, const Vec3& mean_dir, int axis_column, s
     const Vec3 d = (Quat(Eigen::AngleAxisd(0.6 * uni(rng), tilt.normalized())) * m).normalized();
     const double depth = 0.12 + 0.04 * uni(rng);
     // Frame with column `axis_column` = d, rolled by a random angle about d.
-    Mat3 r = Quat::FromTwoVectors(Vec3::Unit(axis_column), d).toRotationMatrix();
+    Mat3 r = numen::core::rotation_between(Vec3::Unit(axis_column), d).toRotationMatrix();
     r = Eigen::AngleAxisd(3.0 * uni(rng), d).toRotationMatrix() * r;
     poses[i].position = trocar + depth * d;
     poses[i].orientation = Quat(r);
