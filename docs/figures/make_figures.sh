@@ -2,6 +2,7 @@
 # Regenerates the figures of docs/results.md. Run from the project root after
 # building (README). Needs python3-matplotlib (apt-get install python3-matplotlib).
 set -euo pipefail
+cmake --build build -j2 --target numen figures >/dev/null  # numen_bench is in the figures target
 out=docs/figures
 tmp=$(mktemp -d)
 ./build/numen run --trace "$tmp/default.csv" > /dev/null
