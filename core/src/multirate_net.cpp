@@ -60,6 +60,12 @@ void build_node_planes(const Model& scene, const Data& data, std::span<const int
   const int num_nodes = std::min(scene.num_nodes(), static_cast<int>(scratch.slot_of_node.size()));
   const int np = static_cast<int>(scene.material_pairs.size());
   int slots = 0;
+  // An organ's net: on an anchored body, which no device holds (its contacts with the god-object's
+  // spheres become planes on those spheres, below).
+  const auto organ_net = [&](int net) {
+    return scene.bodies[static_cast<std::size_t>(scene.nets[static_cast<std::size_t>(net)].body)]
+        .anchored;
+  };
   // A node's rest position on its net's component (world): where its tie pulls it.
   const auto rest_anchor = [&](int node) -> Vec3 {
     const auto u = static_cast<std::size_t>(node);
@@ -75,8 +81,7 @@ void build_node_planes(const Model& scene, const Data& data, std::span<const int
     const NetModel& nm = scene.nets[static_cast<std::size_t>(net)];
     // An organ's node (its net on an anchored body) touching a sphere of the god-object: a plane
     // on that sphere, through the node's compliance, as a god-object node's plane the other way.
-    const bool organ = scene.bodies[static_cast<std::size_t>(nm.body)].anchored &&
-                       in_god_object(device_body, c.body_b) && c.sphere_b >= 0 &&
+    const bool organ = organ_net(net) && in_god_object(device_body, c.body_b) && c.sphere_b >= 0 &&
                        c.sphere_b < static_cast<int>(scene.body_spheres.size());
     if (!organ && (!net_on_god_object(scene, device_body, net) || in_god_object(device_body, c.body_b)))
       continue;
@@ -92,8 +97,9 @@ void build_node_planes(const Model& scene, const Data& data, std::span<const int
       scratch.stiffness[static_cast<std::size_t>(slot)] = nm.tie_stiffness * Mat3::Identity();
       scratch.planes_stiffness[static_cast<std::size_t>(slot)] = 0.0;
       scratch.planes_depth[static_cast<std::size_t>(slot)] = 0.0;
-      scratch.force[static_cast<std::size_t>(slot)] =
-          -nm.tie_stiffness * (data.nodes[node].position - rest_anchor(c.node));
+      scratch.force[static_cast<std::size_t>(slot)] =  // an organ's contacts start from it (below)
+          organ ? Vec3(-nm.tie_stiffness * (data.nodes[node].position - rest_anchor(c.node)))
+                : Vec3::Zero();
     }
     // A triangle contact's share w (NodeContact::share; 1 for a node sphere's contact) counts
     // as a plane of stiffness w k at its node.
@@ -155,8 +161,8 @@ void build_node_planes(const Model& scene, const Data& data, std::span<const int
   // The springs of the nodes with planes, their neighbours moving with the component.
   for (int k = 0; k < scene.num_nets(); ++k) {
     const NetModel& nm = scene.nets[static_cast<std::size_t>(k)];
-    if (!net_on_god_object(scene, device_body, k) && !scene.bodies[static_cast<std::size_t>(nm.body)].anchored)
-      continue;
+    const bool organ = organ_net(k);
+    if (!organ && !net_on_god_object(scene, device_body, k)) continue;
     const int end = nm.spring_begin + nm.structural_count + nm.bending_count;
     for (int s = nm.spring_begin; s < end; ++s) {
       const NetSpring& sp = scene.net_springs[static_cast<std::size_t>(s)];
@@ -172,10 +178,12 @@ void build_node_planes(const Model& scene, const Data& data, std::span<const int
       const double l = e.norm();
       if (!(l > 0.0)) continue;
       e /= l;
-      const Vec3 f_a = sp.stiffness * (l - sp.rest_length) * e;  // the spring's elastic force on node_a
-      if (sa >= 0) scratch.force[static_cast<std::size_t>(sa)] += f_a;
-      if (sb >= 0) scratch.force[static_cast<std::size_t>(sb)] -= f_a;
-      if (sa >= 0 && sb >= 0 && scene.bodies[static_cast<std::size_t>(nm.body)].anchored) continue;
+      if (organ) {  // the spring's elastic force on node_a (an organ's contacts start from it)
+        const Vec3 f_a = sp.stiffness * (l - sp.rest_length) * e;
+        if (sa >= 0) scratch.force[static_cast<std::size_t>(sa)] += f_a;
+        if (sb >= 0) scratch.force[static_cast<std::size_t>(sb)] -= f_a;
+        if (sa >= 0 && sb >= 0) continue;
+      }
       const Mat3 k_e = sp.stiffness * (e * e.transpose());
       if (sa >= 0) scratch.stiffness[static_cast<std::size_t>(sa)] += k_e;
       if (sb >= 0) scratch.stiffness[static_cast<std::size_t>(sb)] += k_e;
@@ -211,8 +219,7 @@ void build_node_planes(const Model& scene, const Data& data, std::span<const int
     // max(0, n · F_m): k_n e₀ takes the node's neighbours at rest, and in a dent, where they are
     // not, it is up to ~1.8 times what they push (the jaw drawn along the shipped organ's rigid
     // core; docs/deformable.md, "Organs in multirate").
-    const bool organ =
-        !net_on_god_object(scene, device_body, scene.node_net[static_cast<std::size_t>(head.node)]);
+    const bool organ = organ_net(scene.node_net[static_cast<std::size_t>(head.node)]);
     double x = 0.0, carried = 0.0, k_n0 = 0.0, k_sum0 = 0.0;
     bool compliant = true;
     for (int m = i; m < j; ++m) {

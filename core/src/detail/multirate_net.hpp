@@ -25,7 +25,8 @@ struct NodePlaneScratch {
   std::span<int> plane_slot;    ///< Per plane of the set: its node's slot, or −1.
   std::span<double> planes_stiffness;  ///< Per slot: Σ k over the node's planes in contact (N/m).
   std::span<double> planes_depth;      ///< Per slot: Σ d₀ over its planes in contact (m).
-  std::span<Vec3> force;               ///< Per slot: its tie's and springs' elastic force (N, world).
+  std::span<Vec3> force;  ///< Per slot of an organ's node: its tie's and springs' elastic force (N,
+                          ///< world); 0 otherwise.
 };
 
 /// True when scene body `b` is a body of the god-object (`device_body`: per scene body, its
