@@ -125,6 +125,7 @@ void reset_data(const Model& model, Data& data) noexcept {
   for (NetOutput& o : data.nets) o = NetOutput{};
   data.contacts_dropped = 0;
   data.contact_overflow_steps = 0;
+  data.net_crossed_steps = 0;
   data.contacts_clamped = 0;
   data.contact_clamped_steps = 0;
   data.max_penetration = 0.0;

@@ -299,6 +299,11 @@ void MultirateGodObject::scene_step(const MultirateDeviceReport& in, MultirateSc
       next.body_targets[b] = scene_->body_targets[b];
     }
     detail::copy_nets(*scene_, next);  // same sizes: the scene-loop models all have the scene's nets
+    // The counts since reset go on from the scene's (the view reports the current Data's).
+    next.contact_overflow_steps = scene_->contact_overflow_steps;
+    next.contact_clamped_steps = scene_->contact_clamped_steps;
+    next.net_crossed_steps = scene_->net_crossed_steps;
+    next.nonfinite_steps = scene_->nonfinite_steps;
     next.time = scene_->time;
     next.step_count = scene_->step_count;
     scene_ = &next;
@@ -414,6 +419,7 @@ void MultirateGodObject::scene_step(const MultirateDeviceReport& in, MultirateSc
   snap.contacts_clamped = scene_->contacts_clamped;
   snap.contact_overflow_steps = scene_->contact_overflow_steps;
   snap.contact_clamped_steps = scene_->contact_clamped_steps;
+  snap.net_crossed_steps = scene_->net_crossed_steps;
   snap.nonfinite_steps = scene_->nonfinite_steps;
   snap.status = scene_->status;
   snap.stages_run = scene_->stages_run;
@@ -435,6 +441,7 @@ void MultirateGodObject::take_model(const MultirateSceneModel& m) noexcept {
   to.contacts_clamped = from.contacts_clamped;
   to.contact_overflow_steps = from.contact_overflow_steps;
   to.contact_clamped_steps = from.contact_clamped_steps;
+  to.net_crossed_steps = from.net_crossed_steps;
   to.nonfinite_steps = from.nonfinite_steps;
   to.status = from.status;
   to.stages_run = from.stages_run;
@@ -530,10 +537,13 @@ void MultirateGodObject::view(Data& out) const noexcept {
   detail::copy_nets(snap, out);
   for (int i = 0; i < out.num_node_contacts; ++i)
     deepest = std::max(deepest, out.node_contacts[static_cast<std::size_t>(i)].depth);
+  for (const NetOutput& o : out.nets)
+    deepest = std::max(deepest, o.crossed_depth);  // dropped, not hidden
   out.contacts_dropped = took_model_ ? snap.contacts_dropped : 0;
   out.contacts_clamped = took_model_ ? snap.contacts_clamped : 0;
   out.contact_overflow_steps = snap.contact_overflow_steps;
   out.contact_clamped_steps = snap.contact_clamped_steps;
+  out.net_crossed_steps = snap.net_crossed_steps;
   out.nonfinite_steps = snap.nonfinite_steps;
   out.status = took_model_ ? snap.status : kStepOk;
   out.stages_run = took_model_ ? snap.stages_run : 0u;

@@ -267,6 +267,11 @@ bool anchor_reaches(const Model& scene, const Data& data, const NodeContact& c, 
 
 void drop_back_face_contacts(const Model& scene, Data& data, std::span<const int> device_body,
                              double margin) noexcept {
+  for (NetOutput& o : data.nets) {
+    o.crossed_contacts = 0;
+    o.crossed_depth = 0.0;
+  }
+  bool crossed = false;
   int kept = 0;
   const int n = std::clamp(data.num_node_contacts, 0, static_cast<int>(data.node_contacts.size()));
   const int num_spheres = static_cast<int>(scene.body_spheres.size());
@@ -276,11 +281,27 @@ void drop_back_face_contacts(const Model& scene, Data& data, std::span<const int
       // True depth d − δ ≥ r: the sphere's centre on the triangle's inner side, where the law
       // would push the triangle around the sphere's far side and hook it onto the tool.
       const double r = scene.body_spheres[static_cast<std::size_t>(c.sphere_b)].radius - margin;
-      if (!(c.depth - margin < r)) continue;
+      const double depth = c.depth - margin;
+      if (!(depth < r)) {
+        // Below 2 r the true sphere overlaps the triangle from behind: the tool is past the
+        // surface by that much, which is counted, not hidden (beyond, only the grown sphere
+        // reaches the triangle's back face).
+        const int net = c.node >= 0 && c.node < scene.num_nodes()
+                            ? scene.node_net[static_cast<std::size_t>(c.node)]
+                            : -1;
+        if (net >= 0 && depth < 2.0 * r) {
+          NetOutput& o = data.nets[static_cast<std::size_t>(net)];
+          ++o.crossed_contacts;
+          o.crossed_depth = std::max(o.crossed_depth, depth);
+          crossed = true;
+        }
+        continue;
+      }
     }
     data.node_contacts[static_cast<std::size_t>(kept++)] = c;
   }
   data.num_node_contacts = kept;
+  if (crossed) ++data.net_crossed_steps;
 }
 
 void drop_look_ahead_contacts(Data& data) noexcept {
@@ -296,7 +317,7 @@ void drop_look_ahead_contacts(Data& data) noexcept {
 void cut_back_node_contacts(const Model& scene, Data& data, std::span<const int> device_body,
                             double margin, double body_deepest, double step) noexcept {
   const bool look_ahead = step > 0.0;
-  for (NetOutput& o : data.nets) o.max_penetration = 0.0;
+  for (NetOutput& o : data.nets) o.max_penetration = o.crossed_depth;
   int kept = 0;
   const int n = std::clamp(data.num_node_contacts, 0, static_cast<int>(data.node_contacts.size()));
   for (int i = 0; i < n; ++i) {

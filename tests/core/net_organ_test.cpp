@@ -42,6 +42,8 @@ struct HeldUnderPatch {
   double deepest = 0.0;   ///< m
   double fastest = 0.0;   ///< m/s
   double feedback = 0.0;  ///< N
+  int crossed = 0;        ///< Most NetOutput::crossed_contacts in a scene step.
+  std::int64_t crossed_steps = 0;  ///< Data::net_crossed_steps at the end.
 };
 HeldUnderPatch hold_under_patch(const Vec3& start, bool with_single) {
   const core::Model m =
@@ -60,10 +62,12 @@ HeldUnderPatch hold_under_patch(const Vec3& start, bool with_single) {
     mr.step();
     h.contacts = std::max(h.contacts, mr.scene_data().num_node_contacts);
     h.deepest = std::max(h.deepest, mr.scene_data().nets[0].max_penetration);
+    h.crossed = std::max(h.crossed, mr.scene_data().nets[0].crossed_contacts);
     for (const core::NodeState& n : mr.scene_data().nodes)
       h.fastest = std::max(h.fastest, n.velocity.norm());
   }
   h.feedback = mr.device_data().feedback_wrench.force.norm();
+  h.crossed_steps = mr.scene_data().net_crossed_steps;
   return h;
 }
 
@@ -308,6 +312,8 @@ TEST(NetOrgan, MultirateSceneLoopMeetsOnlyTheTrianglesTheToolsTrueSphereReaches)
   EXPECT_EQ(h.single_contacts, 0);
   EXPECT_EQ(h.contacts, 0);
   EXPECT_EQ(h.deepest, 0.0) << "a back face within the margin taken for a contact";
+  EXPECT_EQ(h.crossed, 0) << "a back face the true sphere does not reach counted as crossed";
+  EXPECT_EQ(h.crossed_steps, 0);
   EXPECT_LT(h.fastest, 1e-9) << "m/s: the patch must stay at rest";
   EXPECT_LT(h.feedback, 1e-6);
 }
@@ -318,10 +324,13 @@ TEST(NetOrgan, MultirateSceneLoopDoesNotHookTheTrianglesTheToolsSpherePassed) {
   // (docs/deformable.md, "Organs in multirate"). Its true sphere meets the triangles above it
   // from behind, 2.5 mm deep (between r and 2 r); taken, the law pushes them around the
   // sphere's far side, hooking the patch onto the tool (18 contacts, the nodes at 1.6 m/s
-  // within 5 ms without the cut). The scene loop must leave the patch at rest.
+  // within 5 ms without the cut). The scene loop must leave the patch at rest, and say that the
+  // tool is past the surface: the dropped contacts counted, their true depth in max_penetration.
   const HeldUnderPatch h = hold_under_patch(Vec3(0.0, 0.0, -0.001), false);
-  EXPECT_EQ(h.contacts, 0);
-  EXPECT_EQ(h.deepest, 0.0) << "m: a triangle the sphere's centre passed taken for a contact";
+  EXPECT_EQ(h.contacts, 0) << "a triangle the sphere's centre passed taken for a contact";
+  EXPECT_GT(h.crossed, 0);
+  EXPECT_EQ(h.crossed_steps, 5) << "every scene step of the 50 device steps at a ratio of 10";
+  EXPECT_NEAR(h.deepest, 0.0025, 1e-6) << "m: r + 1 mm, the sphere past the surface, not hidden";
   EXPECT_LT(h.fastest, 1e-9) << "m/s: the patch must stay at rest";
   EXPECT_LT(h.feedback, 1e-6);
 }

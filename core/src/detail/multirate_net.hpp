@@ -120,8 +120,9 @@ bool anchor_reaches(const Model& scene, const Data& data, const NodeContact& c, 
 /// contact within kLookAheadGap of the surface as a look-ahead candidate (NodeContact::engaged;
 /// its node contacts and those left without depth are dropped); and re-measures every net's
 /// NetOutput::max_penetration from the contacts kept (contacts beyond kMaxNodeContacts no
-/// longer counted) and data.max_penetration (`body_deepest`: the deepest body contact). No
-/// allocation.
+/// longer counted) and the crossed ones drop_back_face_contacts() counted
+/// (NetOutput::crossed_depth), and data.max_penetration (`body_deepest`: the deepest body contact).
+/// No allocation.
 void cut_back_node_contacts(const Model& scene, Data& data, std::span<const int> device_body,
                             double margin, double body_deepest, double step) noexcept;
 

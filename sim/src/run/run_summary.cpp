@@ -129,6 +129,7 @@ RunSummary SceneRunner::summary() const {
   s.rejected_samples = static_cast<std::int64_t>(device_.counters().values_rejected);
   s.contact_overflow = data_.contact_overflow_steps;
   s.contact_clamped_steps = data_.contact_clamped_steps;
+  s.net_crossed_steps = data_.net_crossed_steps;
   s.nonfinite_steps = data_.nonfinite_steps;
   multirate_.summarize(s);
   s.nan_detected = data_.nonfinite_steps > 0;

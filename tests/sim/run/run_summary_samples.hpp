@@ -68,6 +68,7 @@ inline sim::RunSummary full_managed_summary() {
   s.num_nodes = 12;
   s.node_contacts_max = 13;
   s.net_penetration_max_mm = 0.25;
+  s.net_crossed_steps = 74;
   s.net_tie_stretch_max_mm = 1.75;
   s.net_strain_max = 0.125;
   s.net_node_speed_max_mps = 0.0625;

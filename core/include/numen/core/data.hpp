@@ -132,6 +132,9 @@ struct Data {
   int num_contacts = 0;
   int contacts_dropped = 0;        ///< Contacts lost to the capacity this step.
   std::int64_t contact_overflow_steps = 0;  ///< Steps with an overflow since reset.
+  /// Multirate scene steps since reset in which a god-object's sphere was past a net's surface
+  /// (NetOutput::crossed_contacts > 0 for some net); 0 single-rate.
+  std::int64_t net_crossed_steps = 0;
   double max_penetration = 0.0;    ///< Deepest contact this step (m).
   /// Contacts whose stiffness the time-constant floor lowered this step
   /// (SolverSettings::contact_max_omega_dt; they act with k_eff < k, so penetrate more).

@@ -255,6 +255,7 @@ struct MultirateSceneSnapshot {
   int contacts_clamped = 0;
   std::int64_t contact_overflow_steps = 0;
   std::int64_t contact_clamped_steps = 0;
+  std::int64_t net_crossed_steps = 0;  ///< Data::net_crossed_steps.
   std::int64_t nonfinite_steps = 0;
   std::uint32_t status = 0;
   std::uint32_t stages_run = 0;

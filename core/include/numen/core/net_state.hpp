@@ -85,7 +85,16 @@ struct NetOutput {
   double kinetic_energy = 0.0;     ///< Σ ½ m |v|² of the nodes, step's end (J).
   double max_node_speed = 0.0;     ///< Largest |v| of a node, step's end (m/s).
   Wrench tie_wrench;               ///< Σ tie forces on the rigid component at its COM, step's start (N, N·m).
-  double max_penetration = 0.0;    ///< Deepest node contact this step (m).
+  double max_penetration = 0.0;    ///< Deepest node contact this step (m), crossed ones included.
+  /// Multirate scene loop only (0 in a single-rate step, which takes every contact): contacts of
+  /// a god-object's sphere whose centre had got past this net's surface, behind a triangle that
+  /// its true sphere overlaps (true depth from r to 2 r), found at this scene step's sample and
+  /// dropped there, since their law would hook the triangle onto the tool
+  /// (detail::drop_back_face_contacts(), docs/deformable.md "Organs in multirate").
+  int crossed_contacts = 0;
+  /// The deepest true depth of those (m, from r to 2 r; 0 without one): how far the sphere is
+  /// past the surface, counted in max_penetration.
+  double crossed_depth = 0.0;
 };
 
 }  // namespace numen::core

@@ -191,7 +191,12 @@ struct RunSummary {
   int num_nets = 0;
   int num_nodes = 0;
   int node_contacts_max = 0;            ///< Node contacts in one step (all nets).
-  double net_penetration_max_mm = 0.0;  ///< Deepest node contact of any net (mm).
+  /// Deepest node contact of any net, crossed ones included (mm).
+  double net_penetration_max_mm = 0.0;
+  /// Multirate scene steps in which a sphere of the god-object was past a net's surface
+  /// (core::Data::net_crossed_steps: those contacts dropped, their depth in
+  /// net_penetration_max_mm); 0 single-rate.
+  std::int64_t net_crossed_steps = 0;
   double net_tie_stretch_max_mm = 0.0;  ///< Largest |x − a| of a node from its rest position (mm).
   double net_strain_max = 0.0;  ///< Largest |l − L|/L of a structural spring (dimensionless).
   double net_node_speed_max_mps = 0.0;  ///< Fastest node (m/s).
