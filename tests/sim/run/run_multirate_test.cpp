@@ -138,6 +138,32 @@ TEST(RunMultirate, TwoRunnersAreBitIdentical) {
   EXPECT_GT(a.summary().contacts_max, 0);
 }
 
+// The view's counts since reset (core::Data: contact_clamped_steps, contact_overflow_steps,
+// net_crossed_steps, nonfinite_steps) are the current scene-loop model's; a tool switch makes
+// another model current, whose Data takes the counts on (MultirateGodObject::select()): none
+// goes down over the construction scene's two switches, and the stiff contacts' count is not
+// zero there, so a reset would show.
+TEST(RunMultirate, CountsSinceResetCarryOverAToolSwitch) {
+  numen::test::TempDir dir;
+  SceneRunner runner(construction_multirate(dir, 0.01, 0.01));
+  std::int64_t clamped = 0, overflow = 0, crossed = 0, nonfinite = 0;
+  for (int k = 0; k < 9000; ++k) {
+    runner.period();
+    const numen::core::Data& d = runner.data();
+    ASSERT_GE(d.contact_clamped_steps, clamped) << "period " << k;
+    ASSERT_GE(d.contact_overflow_steps, overflow) << "period " << k;
+    ASSERT_GE(d.net_crossed_steps, crossed) << "period " << k;
+    ASSERT_GE(d.nonfinite_steps, nonfinite) << "period " << k;
+    clamped = d.contact_clamped_steps;
+    overflow = d.contact_overflow_steps;
+    crossed = d.net_crossed_steps;
+    nonfinite = d.nonfinite_steps;
+  }
+  runner.finish();
+  EXPECT_EQ(runner.summary().multirate.switches, 2);
+  EXPECT_GT(clamped, 0) << "no count to carry: the test would not see a reset";
+}
+
 namespace {
 
 /// 10 000 periods of `scene` under the allocation counter; the summary after.
