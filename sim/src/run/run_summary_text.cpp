@@ -96,9 +96,9 @@ constexpr RunSummarySegment kLayout[] = {
      "net penetration max {net_penetration_max_mm} mm, tie stretch max {net_tie_stretch_max_mm} "
      "mm, strain max {net_strain_max}, node speed max {net_node_speed_max_mps} m/s\n",
      set("num_nets")},
-    {"  deformable: a sphere of the tool past a net's surface in {net_crossed_steps} scene steps "
-     "(multirate: those contacts dropped, their depth in the net penetration max; "
-     "docs/deformable.md, \"Organs in multirate\")\n",
+    {"  deformable: a sphere of the tool past a net's surface (or the surface folded over it) in "
+     "{net_crossed_steps} scene steps (multirate: those contacts dropped, their depth in the net "
+     "penetration max; docs/deformable.md, \"Organs in multirate\")\n",
      set("net_crossed_steps")},
     {"  contacts max {contacts_max}, overflow steps {contact_overflow}, solver iterations mean "
      "{solver_iterations_mean}, max {solver_iterations_max}, residual max "

@@ -88,7 +88,8 @@ struct NetOutput {
   double max_penetration = 0.0;    ///< Deepest node contact this step (m), crossed ones included.
   /// Multirate scene loop only (0 in a single-rate step, which takes every contact): contacts of
   /// a god-object's sphere whose centre had got past this net's surface, behind a triangle that
-  /// its true sphere overlaps (true depth from r to 2 r), found at this scene step's sample and
+  /// its true sphere overlaps (true depth from r to 2 r; or the surface folded over the sphere,
+  /// its inner side towards it: not told apart), found at this scene step's sample and
   /// dropped there, since their law would hook the triangle onto the tool
   /// (detail::drop_back_face_contacts(), docs/deformable.md "Organs in multirate").
   int crossed_contacts = 0;
