@@ -289,7 +289,7 @@ void drop_back_face_contacts(const Model& scene, Data& data, std::span<const int
         const int net = c.node >= 0 && c.node < scene.num_nodes()
                             ? scene.node_net[static_cast<std::size_t>(c.node)]
                             : -1;
-        if (net >= 0 && depth < 2.0 * r) {
+        if (net >= 0 && static_cast<std::size_t>(net) < data.nets.size() && depth < 2.0 * r) {
           NetOutput& o = data.nets[static_cast<std::size_t>(net)];
           ++o.crossed_contacts;
           o.crossed_depth = std::max(o.crossed_depth, depth);

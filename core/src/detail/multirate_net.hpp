@@ -135,7 +135,11 @@ void cut_back_node_contacts(const Model& scene, Data& data, std::span<const int>
 /// it from behind within r (true depth r to 2 r). Taken,
 /// the law pushes such a triangle around the sphere's far side: it hooks onto the tool, which
 /// drags the organ along, and its nodes are thrown through the tool (docs/deformable.md,
-/// "Organs in multirate"). Call before build_node_planes(). Keeps the order of the rest. No
+/// "Organs in multirate"). Those from r to 2 r deep (the true sphere overlapping the triangle
+/// from behind: a sphere past the surface, or the surface folded over it) are counted, not
+/// hidden: NetOutput::crossed_contacts and crossed_depth of their net (reset by every call;
+/// cut_back_node_contacts() puts crossed_depth in max_penetration) and, once per call with one,
+/// data.net_crossed_steps. Call before build_node_planes(). Keeps the order of the rest. No
 /// allocation.
 void drop_back_face_contacts(const Model& scene, Data& data, std::span<const int> device_body,
                              double margin) noexcept;
