@@ -23,6 +23,18 @@
 namespace numen::core {
 namespace {
 
+/// The counts since reset (steps with a contact overflow, a clamped contact stiffness, a sphere
+/// behind a net's surface, a non-finite state) from `from` to `to`, each a Data or a
+/// MultirateSceneSnapshot: the scene-loop model's Data, its snapshot, the device loop's copy of
+/// it, the view, and the next scene-loop model's Data at a tool switch carry the same counts.
+template <typename From, typename To>
+void copy_counts(const From& from, To& to) noexcept {
+  to.contact_overflow_steps = from.contact_overflow_steps;
+  to.contact_clamped_steps = from.contact_clamped_steps;
+  to.net_crossed_steps = from.net_crossed_steps;
+  to.nonfinite_steps = from.nonfinite_steps;
+}
+
 /// The scene loop's contact stage: detection, the planes of the god-object's contacts (before
 /// any body moves), then those contacts cut back to the god-object's true spheres (the
 /// proximity model grew them by the margin): depth − δ, the middle of the overlap δ/2 back
@@ -299,11 +311,7 @@ void MultirateGodObject::scene_step(const MultirateDeviceReport& in, MultirateSc
       next.body_targets[b] = scene_->body_targets[b];
     }
     detail::copy_nets(*scene_, next);  // same sizes: the scene-loop models all have the scene's nets
-    // The counts since reset go on from the scene's (the view reports the current Data's).
-    next.contact_overflow_steps = scene_->contact_overflow_steps;
-    next.contact_clamped_steps = scene_->contact_clamped_steps;
-    next.net_crossed_steps = scene_->net_crossed_steps;
-    next.nonfinite_steps = scene_->nonfinite_steps;
+    copy_counts(*scene_, next);  // go on from the scene's: the view reports the current Data's
     next.time = scene_->time;
     next.step_count = scene_->step_count;
     scene_ = &next;
@@ -417,10 +425,7 @@ void MultirateGodObject::scene_step(const MultirateDeviceReport& in, MultirateSc
   snap.num_contacts = count;
   snap.contacts_dropped = scene_->contacts_dropped;
   snap.contacts_clamped = scene_->contacts_clamped;
-  snap.contact_overflow_steps = scene_->contact_overflow_steps;
-  snap.contact_clamped_steps = scene_->contact_clamped_steps;
-  snap.net_crossed_steps = scene_->net_crossed_steps;
-  snap.nonfinite_steps = scene_->nonfinite_steps;
+  copy_counts(*scene_, snap);
   snap.status = scene_->status;
   snap.stages_run = scene_->stages_run;
   snap.solver_iterations = scene_->solver_iterations;
@@ -439,10 +444,7 @@ void MultirateGodObject::take_model(const MultirateSceneModel& m) noexcept {
   std::copy_n(from.contacts.begin(), to.num_contacts, to.contacts.begin());
   to.contacts_dropped = from.contacts_dropped;
   to.contacts_clamped = from.contacts_clamped;
-  to.contact_overflow_steps = from.contact_overflow_steps;
-  to.contact_clamped_steps = from.contact_clamped_steps;
-  to.net_crossed_steps = from.net_crossed_steps;
-  to.nonfinite_steps = from.nonfinite_steps;
+  copy_counts(from, to);
   to.status = from.status;
   to.stages_run = from.stages_run;
   to.solver_iterations = from.solver_iterations;
@@ -541,10 +543,7 @@ void MultirateGodObject::view(Data& out) const noexcept {
     deepest = std::max(deepest, o.crossed_depth);  // dropped, not hidden
   out.contacts_dropped = took_model_ ? snap.contacts_dropped : 0;
   out.contacts_clamped = took_model_ ? snap.contacts_clamped : 0;
-  out.contact_overflow_steps = snap.contact_overflow_steps;
-  out.contact_clamped_steps = snap.contact_clamped_steps;
-  out.net_crossed_steps = snap.net_crossed_steps;
-  out.nonfinite_steps = snap.nonfinite_steps;
+  copy_counts(snap, out);
   out.status = took_model_ ? snap.status : kStepOk;
   out.stages_run = took_model_ ? snap.stages_run : 0u;
   out.solver_iterations = took_model_ ? snap.solver_iterations : 0;
