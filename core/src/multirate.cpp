@@ -246,34 +246,84 @@ void build_contact_planes(const Model& scene, const Data& data, std::span<const 
   }
 }
 
+namespace {
+
+/// Plane `i` of `planes` at the god-object's pose in `data`, moved by its carrier.
+struct PlaneAtPose {
+  bool valid = false;          // a body, sphere and material pair of the model
+  Sphere sphere;               // the sphere it acts on (a node plane's own), in its body's frame
+  Vec3 centre = Vec3::Zero();  // the sphere's centre (m, world)
+  Vec3 normal = Vec3::UnitZ();
+  Vec3 surface_velocity = Vec3::Zero();
+  double depth = 0.0;  // d, a node plane's with its depth_offset (m)
+};
+
+PlaneAtPose plane_at_pose(const Model& model, const ContactPlaneSet& planes, int i,
+                          const Data& data) noexcept {
+  PlaneAtPose out;
+  const ContactPlane& p = planes.planes[static_cast<std::size_t>(i)];
+  if (p.body < 0 || p.body >= model.num_bodies() || p.material_pair < 0 ||
+      p.material_pair >= static_cast<int>(model.material_pairs.size()))
+    return out;
+  const BodyModel& bm = model.bodies[static_cast<std::size_t>(p.body)];
+  const BodyState& g = data.bodies[static_cast<std::size_t>(p.body)];
+  const bool node = p.node >= 0;  // a node plane: its own sphere, through the node's compliance
+  if (!node && (p.sphere < 0 || p.sphere >= bm.sphere_count)) return out;
+  out.sphere = node ? Sphere{p.local_point, p.radius}
+                    : model.body_spheres[static_cast<std::size_t>(bm.sphere_begin + p.sphere)];
+  out.centre = g.position + g.orientation * out.sphere.center;
+  Vec3 point = p.point;
+  out.normal = p.normal;
+  const int nc = std::clamp(planes.carrier_count, 0, kMaxPlaneCarriers);
+  if (p.carrier >= 0 && p.carrier < nc) {
+    const PlaneCarrier& k = planes.carriers[static_cast<std::size_t>(p.carrier)];
+    point += k.displacement + k.rotation.cross(p.point - k.com);
+    out.normal = (out.normal + k.rotation.cross(out.normal)).normalized();
+    out.surface_velocity =
+        k.linear_velocity + k.angular_velocity.cross(point - (k.com + k.displacement));
+  }
+  out.depth =
+      out.normal.dot(point - out.centre) + out.sphere.radius + (node ? p.depth_offset : 0.0);
+  out.valid = true;
+  return out;
+}
+
+}  // namespace
+
+double plane_elastic_energy(const Model& model, const ContactPlaneSet& planes,
+                            const Data& data) noexcept {
+  double energy = 0.0;
+  const int n = std::clamp(planes.count, 0, kMaxContactPlanes);
+  for (int i = 0; i < n; ++i) {
+    const PlaneAtPose a = plane_at_pose(model, planes, i, data);
+    if (!a.valid || !(a.depth > 0.0)) continue;
+    const ContactPlane& p = planes.planes[static_cast<std::size_t>(i)];
+    const MaterialPair& mp = model.material_pairs[static_cast<std::size_t>(p.material_pair)];
+    const double k = mp.stiffness * (p.node >= 0 ? p.stiffness_scale : 1.0);
+    const double d = a.depth, d0 = mp.onset_depth;
+    energy += d0 > 0.0 ? (d < d0 ? k * d * d * d / (6.0 * d0)
+                                 : k * d0 * d0 / 6.0 + 0.5 * k * (d * d - d * d0))
+                       : 0.5 * k * d * d;
+  }
+  return energy;
+}
+
 void write_plane_contacts(const Model& model, const ContactPlaneSet& planes, Data& data) noexcept {
   data.num_contacts = 0;
   data.max_penetration = 0.0;
   data.contacts_dropped = 0;
-  const int nbodies = model.num_bodies();
-  const int np = static_cast<int>(model.material_pairs.size());
   const int n = std::clamp(planes.count, 0, kMaxContactPlanes);
-  const int nc = std::clamp(planes.carrier_count, 0, kMaxPlaneCarriers);
   for (int i = 0; i < n; ++i) {
+    const PlaneAtPose a = plane_at_pose(model, planes, i, data);
+    if (!a.valid) continue;
     const ContactPlane& p = planes.planes[static_cast<std::size_t>(i)];
-    if (p.body < 0 || p.body >= nbodies || p.material_pair < 0 || p.material_pair >= np) continue;
     const BodyModel& bm = model.bodies[static_cast<std::size_t>(p.body)];
-    const BodyState& g = data.bodies[static_cast<std::size_t>(p.body)];
-    const bool node = p.node >= 0;  // a node plane: its own sphere, through the node's compliance
-    if (!node && (p.sphere < 0 || p.sphere >= bm.sphere_count)) continue;
-    const Sphere s = node ? Sphere{p.local_point, p.radius}
-                          : model.body_spheres[static_cast<std::size_t>(bm.sphere_begin + p.sphere)];
-    const Vec3 centre = g.position + g.orientation * s.center;
-    Vec3 point = p.point;
-    Vec3 normal = p.normal;
-    Vec3 surface_velocity = Vec3::Zero();
-    if (p.carrier >= 0 && p.carrier < nc) {
-      const PlaneCarrier& k = planes.carriers[static_cast<std::size_t>(p.carrier)];
-      point += k.displacement + k.rotation.cross(p.point - k.com);
-      normal = (normal + k.rotation.cross(normal)).normalized();
-      surface_velocity = k.linear_velocity + k.angular_velocity.cross(point - (k.com + k.displacement));
-    }
-    const double depth = normal.dot(point - centre) + s.radius + (node ? p.depth_offset : 0.0);
+    const bool node = p.node >= 0;
+    const Sphere& s = a.sphere;
+    const Vec3& centre = a.centre;
+    const Vec3& normal = a.normal;
+    const Vec3& surface_velocity = a.surface_velocity;
+    const double depth = a.depth;
     if (!(depth > 0.0)) continue;
     if (data.num_contacts >= kMaxContacts) {
       ++data.contacts_dropped;

@@ -478,7 +478,19 @@ void MultirateGodObject::hand_back() noexcept {
 
 void MultirateGodObject::device_step(const MultirateSceneModel* fresh) noexcept {
   took_model_ = fresh != nullptr;
-  if (fresh != nullptr) take_model(*fresh);
+  if (fresh != nullptr) {
+    // What the new planes add at the god-object's pose (MultirateCounters::reset_energy).
+    const bool held = slot_ >= 0;
+    const double before = held ? plane_elastic_energy(device_model(), planes_, slot().device) : 0.0;
+    take_model(*fresh);
+    if (held && periods_since_model_ == 0) {  // this body's planes were taken
+      const double added = plane_elastic_energy(device_model(), planes_, slot().device) - before;
+      if (added > 0.0) {
+        counters_.reset_energy += added;
+        counters_.reset_energy_max = std::max(counters_.reset_energy_max, added);
+      }
+    }
+  }
   if (slot_ >= 0) {
     if (periods_since_model_ >= ratio_) ++counters_.stale_models;
     step_god_object(device_model(), planes_, slot().device);

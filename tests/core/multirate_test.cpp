@@ -276,6 +276,84 @@ TEST(Multirate, WallIsPassiveAtTenKilohertzAgainstPlanesAtOneHundredHertz) {
   EXPECT_GT(late.energy_growth, 1.0 * e_drop) << "without a margin the late planes inject energy";
 }
 
+// plane_elastic_energy() is the law's elastic force integrated over the depth: the linear law,
+// the smoothed onset below and beyond δ0 (against Simpson's rule on contact_penalty_force() at
+// rest), a node plane through its offset and stiffness scale, and nothing for a plane not reached.
+TEST(Multirate, PlaneElasticEnergyIsTheLawsForceIntegratedOverTheDepth) {
+  const double k = 2e4;
+  core::Model g;
+  ASSERT_EQ(core::make_god_object_model(tool_scene(1e-4, k, 10.0, Vec3::Zero()), 0, 1e-4, g), "");
+  core::Data d = core::make_data(g);
+  d.bodies[0].position = Vec3(0.0, 0.0, 0.05);
+  d.bodies[0].orientation = Quat::Identity();
+  // Sphere 0 (centre z = 0.05 − 0.02, r = 0.01) on a floor plane at z = h: depth h − 0.02.
+  const auto plane_at = [](double h) {
+    core::ContactPlaneSet set;
+    set.count = 1;
+    core::ContactPlane& p = set.planes[0];
+    p.body = 0;
+    p.sphere = 0;
+    p.point = Vec3(0.0, 0.0, h);
+    p.normal = Vec3::UnitZ();
+    return set;
+  };
+  const auto law_integral = [&](const core::MaterialPair& mp, double depth) {
+    constexpr int kIntervals = 2000;  // Simpson's rule on the law's elastic force at rest
+    const auto f = [&](double x) {
+      return core::contact_penalty_force(Vec3::UnitZ(), x, Vec3::Zero(), mp).normal_force;
+    };
+    const double h = depth / kIntervals;
+    double sum = f(0.0) + f(depth);
+    for (int i = 1; i < kIntervals; ++i) sum += (i % 2 == 1 ? 4.0 : 2.0) * f(i * h);
+    return sum * h / 3.0;
+  };
+  EXPECT_NEAR(core::plane_elastic_energy(g, plane_at(0.021), d), 0.5 * k * 1e-6, 1e-12);
+  EXPECT_EQ(core::plane_elastic_energy(g, plane_at(0.0195), d), 0.0) << "a plane not reached";
+  g.material_pairs[0].onset_depth = 2e-3;
+  for (const double depth : {1e-3, 3e-3}) {
+    const double e = core::plane_elastic_energy(g, plane_at(0.02 + depth), d);
+    EXPECT_NEAR(e, law_integral(g.material_pairs[0], depth), 1e-9 * e) << "depth " << depth;
+  }
+  g.material_pairs[0].onset_depth = 0.0;
+  core::ContactPlaneSet node = plane_at(0.0205);  // 0.5 mm into the node plane's own sphere
+  node.planes[0].node = 0;
+  node.planes[0].sphere = -1;
+  node.planes[0].local_point = Vec3(0.0, 0.0, -0.02);
+  node.planes[0].radius = 0.01;
+  node.planes[0].stiffness_scale = 0.1;
+  node.planes[0].depth_offset = 1e-3;
+  EXPECT_NEAR(core::plane_elastic_energy(g, node, d), 0.5 * 0.1 * k * 1.5e-3 * 1.5e-3, 1e-12);
+}
+
+// The energy the new planes add at the samples (MultirateCounters::reset_energy): the tool of the
+// wall test above dropped on the floor at 10 kHz against planes refreshed at 100 Hz. With the
+// margin each sample gives the floor's tangent planes where the last gave them, and adds nothing;
+// without it a sphere that reached the floor between samples gets its plane late, already deep,
+// and the new plane hands the tool the law's energy at that depth (the injection the wall test
+// measures in flight).
+TEST(Multirate, NewPlanesAddEnergyOnlyWhereTheyComeLate) {
+  core::Model scene = tool_scene(1e-4, 2e4, 0.0, Vec3(0, 0, -9.81));
+  scene.bodies[0].coupling = {};  // free fall, then bounces
+  scene.bodies[0].initial_pose.orientation = Quat(Eigen::AngleAxisd(0.4, Vec3::UnitY()));
+  ASSERT_EQ(core::finalize_model(scene), "");
+  const auto run = [&](double margin) {
+    core::MultirateGodObject mr(scene, 0, core::MultirateSettings{100, margin, {}});
+    for (int i = 0; i < 5000; ++i) mr.step();  // 0.5 s: the first bounces
+    return mr.counters();
+  };
+  const core::MultirateCounters with = run(0.015);
+  const core::MultirateCounters late = run(0.0);
+  const double e_drop = scene.bodies[0].mass * 9.81 * 0.05;  // J, the scale of the run
+  std::printf(
+      "new planes added %.3g J (most %.3g J) with the margin, %.3g J (most %.3g J) without; drop "
+      "%.3g J\n",
+      with.reset_energy, with.reset_energy_max, late.reset_energy, late.reset_energy_max, e_drop);
+  EXPECT_LE(with.reset_energy, 1e-9 * e_drop);
+  EXPECT_GT(late.reset_energy, 0.1 * e_drop);
+  EXPECT_LE(late.reset_energy_max, late.reset_energy);
+  EXPECT_GT(late.reset_energy_max, 0.0);
+}
+
 // A plane on a moving body moves with it: the depth after its carrier moved follows the other side's
 // surface, and the contact's relative velocity is taken against it (a god-object moving with
 // the plane feels no damping).

@@ -54,6 +54,8 @@ void MultirateRun::summarize(RunSummary& s) const {
   s.multirate.planes_dropped = c.planes_dropped;
   s.multirate.switches = c.switches;
   s.multirate.stale_models = c.stale_models;
+  s.multirate.reset_energy_j = c.reset_energy;
+  s.multirate.reset_energy_max_j = c.reset_energy_max;
   if (scene_thread_) {
     s.multirate.scene_thread = true;
     s.multirate.scene_overruns = scene_thread_->counters().scene_overruns;

@@ -447,6 +447,12 @@ constexpr RunFigure kFigures[] = {
      K::kCount, [](const S& s) noexcept { return count(s.multirate.stale_models); }, multirate_run},
     {"multirate.switches", "", "Tool switches the god-object followed", K::kCount,
      [](const S& s) noexcept { return count(s.multirate.switches); }, multirate_run},
+    {"multirate.reset_energy_j", "J",
+     "Energy the new planes added at the samples, over what the planes they replaced held at the "
+     "god-object's pose, summed", K::kReal,
+     [](const S& s) noexcept { return real(s.multirate.reset_energy_j); }, multirate_run},
+    {"multirate.reset_energy_max_j", "J", "... the most one sample added", K::kReal,
+     [](const S& s) noexcept { return real(s.multirate.reset_energy_max_j); }, multirate_run},
     {"multirate.model_force_jump_max_n", "N",
      "Largest change of the feedback force sent into a period that took a new scene model",
      K::kReal, [](const S& s) noexcept { return real(s.multirate.model_force_jump_max_n); },

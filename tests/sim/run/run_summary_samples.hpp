@@ -192,6 +192,8 @@ inline sim::RunSummary full_managed_summary() {
   s.multirate.scene_step_us = {87.5, 88.5, 89.5, 90.5, 91.5};
   s.multirate.model_force_jump_max_n = 0.25;
   s.multirate.other_force_jump_max_n = 0.125;
+  s.multirate.reset_energy_j = 0.375;
+  s.multirate.reset_energy_max_j = 0.125;
   s.exit_status = 3;
   s.exit_reasons = {"first reason", "second reason"};
   return s;

@@ -193,6 +193,17 @@ void build_contact_planes(const Model& scene, const Data& data, std::span<const 
 /// allocation.
 void write_plane_contacts(const Model& model, const ContactPlaneSet& planes, Data& data) noexcept;
 
+/// The elastic energy (J) the contact law stores in the planes of `planes` at the god-object's
+/// pose in `data` (a Data of the god-object model `model`), each plane moved by its carrier and
+/// at the depth write_plane_contacts() gives it (a node plane's with its depth_offset, stiffness
+/// k s): Σ over the planes with d > 0 of ∫₀^d e(x) dx, e the law's elastic force
+/// (contact_force.hpp) — k d²/2 for the linear law; with the smoothed onset δ0, k d³/(6 δ0)
+/// below δ0 and k δ0²/6 + k (d² − d δ0)/2 beyond. The law's own k, before the time-constant
+/// floor. MultirateGodObject measures with it what each new set of planes adds
+/// (MultirateCounters::reset_energy). No allocation.
+double plane_elastic_energy(const Model& model, const ContactPlaneSet& planes,
+                            const Data& data) noexcept;
+
 /// One device period of the god-object against the intermediate model: step() of `model` (a
 /// god-object model) with write_plane_contacts() as its contact stage — coupling (Eq. 2), the
 /// planes' penalty forces with their stiffness and damping implicit, integration, feedback
@@ -211,8 +222,8 @@ struct MultirateSettings {
   std::vector<int> tools;
 };
 
-/// Counters of a MultirateGodObject. The device loop writes device_steps, stale_models and
-/// switches, the scene loop the others.
+/// Counters of a MultirateGodObject. The device loop writes device_steps, stale_models,
+/// switches and reset_energy(_max), the scene loop the others.
 struct MultirateCounters {
   std::int64_t device_steps = 0;  ///< Device periods stepped.
   std::int64_t scene_steps = 0;   ///< Scene periods stepped (samples taken).
@@ -224,6 +235,16 @@ struct MultirateCounters {
   /// body in the last N periods (a late scene step, or the first ones after a switch while the
   /// scene loop has not sampled the new body). 0 when both loops share a thread.
   std::int64_t stale_models = 0;
+  /// Energy the new planes added at the samples (J): at each new model of the held body, the
+  /// planes' elastic energy at the god-object's pose then (plane_elastic_energy()) less that of
+  /// the planes they replace, summed where it is positive. A plane set replaced at the sample
+  /// is the device loop's one non-passive act (Colgate & Brown 1994): planes that start deeper,
+  /// or stiffer, than those they replace hand the god-object energy that no motion of its own
+  /// paid, which a scene body moving into the god-object, or an organ pushing it, may account
+  /// for, and an impedance wrongly reset may not (docs/multirate.md, "The energy of a new
+  /// model"; the observer, Hannaford & Ryu 2002, applied to the model update).
+  double reset_energy = 0.0;
+  double reset_energy_max = 0.0;  ///< The largest one sample added (J).
 };
 
 /// What the device loop hands the scene loop (MultirateGodObject::write_report()): the

@@ -50,6 +50,10 @@ struct MultirateSummary {
   /// (a scene-step boundary), and into any other period.
   double model_force_jump_max_n = 0.0;
   double other_force_jump_max_n = 0.0;
+  /// Energy the new planes added at the samples (J; core::MultirateCounters::reset_energy),
+  /// and the most one sample added.
+  double reset_energy_j = 0.0;
+  double reset_energy_max_j = 0.0;
 };
 
 /// The divergence monitor of a run (divergence.hpp; docs/safety.md, "Divergence").
