@@ -114,6 +114,13 @@ ContactForceResult contact_penalty_force(const Vec3& normal, double depth, const
   return penalty_force(normal, depth, v_rel, material);
 }
 
+double contact_elastic_energy(double depth, const MaterialPair& material) noexcept {
+  if (!(depth > 0.0)) return 0.0;
+  const double k = material.stiffness, d = depth, d0 = material.onset_depth;
+  if (!(d0 > 0.0)) return 0.5 * k * d * d;
+  return d < d0 ? k * d * d * d / (6.0 * d0) : k * d0 * d0 / 6.0 + 0.5 * k * (d * d - d * d0);
+}
+
 Mat3x12 contact_velocity_jacobian(const Vec3& r_a, const Vec3& r_b) noexcept {
   Mat3x12 g;
   g.block<3, 3>(0, 0) = Mat3::Identity();

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "numen/core/contact_force.hpp"
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"
 #include "numen/core/rigid_body.hpp"
@@ -296,14 +297,10 @@ double plane_elastic_energy(const Model& model, const ContactPlaneSet& planes,
   const int n = std::clamp(planes.count, 0, kMaxContactPlanes);
   for (int i = 0; i < n; ++i) {
     const PlaneAtPose a = plane_at_pose(model, planes, i, data);
-    if (!a.valid || !(a.depth > 0.0)) continue;
+    if (!a.valid) continue;
     const ContactPlane& p = planes.planes[static_cast<std::size_t>(i)];
     const MaterialPair& mp = model.material_pairs[static_cast<std::size_t>(p.material_pair)];
-    const double k = mp.stiffness * (p.node >= 0 ? p.stiffness_scale : 1.0);
-    const double d = a.depth, d0 = mp.onset_depth;
-    energy += d0 > 0.0 ? (d < d0 ? k * d * d * d / (6.0 * d0)
-                                 : k * d0 * d0 / 6.0 + 0.5 * k * (d * d - d * d0))
-                       : 0.5 * k * d * d;
+    energy += (p.node >= 0 ? p.stiffness_scale : 1.0) * contact_elastic_energy(a.depth, mp);
   }
   return energy;
 }
@@ -319,10 +316,6 @@ void write_plane_contacts(const Model& model, const ContactPlaneSet& planes, Dat
     const ContactPlane& p = planes.planes[static_cast<std::size_t>(i)];
     const BodyModel& bm = model.bodies[static_cast<std::size_t>(p.body)];
     const bool node = p.node >= 0;
-    const Sphere& s = a.sphere;
-    const Vec3& centre = a.centre;
-    const Vec3& normal = a.normal;
-    const Vec3& surface_velocity = a.surface_velocity;
     const double depth = a.depth;
     if (!(depth > 0.0)) continue;
     if (data.num_contacts >= kMaxContacts) {
@@ -337,11 +330,11 @@ void write_plane_contacts(const Model& model, const ContactPlaneSet& planes, Dat
     c.material_pair = p.material_pair;
     c.stiffness_scale = node ? p.stiffness_scale : 1.0;
     c.damping_scale = node && p.share > 0.0 ? c.stiffness_scale * c.stiffness_scale / p.share : 1.0;
-    c.position = centre - (s.radius - 0.5 * depth) * normal;  // middle of the overlap
-    c.normal = normal;
+    c.position = a.centre - (a.sphere.radius - 0.5 * depth) * a.normal;  // middle of the overlap
+    c.normal = a.normal;
     c.depth = depth;
     c.force.setZero();
-    c.surface_velocity = surface_velocity;
+    c.surface_velocity = a.surface_velocity;
     c.sphere_b = i;  // the plane
     // The overlap itself (a node plane's depth holds the node's deflection too).
     data.max_penetration = std::max(data.max_penetration, node ? depth - p.depth_offset : depth);

@@ -435,7 +435,7 @@ void MultirateGodObject::scene_step(const MultirateDeviceReport& in, MultirateSc
   detail::copy_nets(*scene_, snap);
 }
 
-void MultirateGodObject::take_model(const MultirateSceneModel& m) noexcept {
+bool MultirateGodObject::take_model(const MultirateSceneModel& m) noexcept {
   const MultirateSceneSnapshot& from = m.scene;
   MultirateSceneSnapshot& to = snapshot_;
   for (std::size_t b = 0; b < to.bodies.size() && b < from.bodies.size(); ++b) to.bodies[b] = from.bodies[b];
@@ -452,13 +452,14 @@ void MultirateGodObject::take_model(const MultirateSceneModel& m) noexcept {
   to.max_joint_drift = from.max_joint_drift;
   to.max_joint_angle_drift = from.max_joint_angle_drift;
   detail::copy_nets(from, to);
-  if (m.body != body_) return;  // sampled before a switch: not this god-object's planes
+  if (m.body != body_) return false;  // sampled before a switch: not this god-object's planes
   planes_.count = std::clamp(m.planes.count, 0, kMaxContactPlanes);
   planes_.carrier_count = std::clamp(m.planes.carrier_count, 0, kMaxPlaneCarriers);
   planes_.dropped = m.planes.dropped;
   std::copy_n(m.planes.planes.begin(), planes_.count, planes_.planes.begin());
   std::copy_n(m.planes.carriers.begin(), planes_.carrier_count, planes_.carriers.begin());
   periods_since_model_ = 0;
+  return true;
 }
 
 void MultirateGodObject::hand_back() noexcept {
@@ -482,8 +483,7 @@ void MultirateGodObject::device_step(const MultirateSceneModel* fresh) noexcept 
     // What the new planes add at the god-object's pose (MultirateCounters::reset_energy).
     const bool held = slot_ >= 0;
     const double before = held ? plane_elastic_energy(device_model(), planes_, slot().device) : 0.0;
-    take_model(*fresh);
-    if (held && periods_since_model_ == 0) {  // this body's planes were taken
+    if (take_model(*fresh) && held) {
       const double added = plane_elastic_energy(device_model(), planes_, slot().device) - before;
       if (added > 0.0) {
         counters_.reset_energy += added;

@@ -65,6 +65,11 @@ Vec3 contact_relative_velocity(const BodyState& a, const Vec3& r_a, const BodySt
 ContactForceResult contact_penalty_force(const Vec3& normal, double depth, const Vec3& v_rel,
                                          const MaterialPair& material) noexcept;
 
+/// The elastic energy (J) the penalty law stores at `depth` (m): ∫₀^d e(x) dx of its elastic force
+/// e above — k d²/2 for the linear law; with the smoothed onset δ0, k d³/(6 δ0) below δ0 and
+/// k δ0²/6 + k (d² − d δ0)/2 beyond. 0 for d ≤ 0. The material's own k (no time-constant floor).
+double contact_elastic_energy(double depth, const MaterialPair& material) noexcept;
+
 /// G (3×12): v_rel = G (v_a, ω_a, v_b, ω_b), G = [I, −[r_a]×, −I, [r_b]×].
 /// Gᵀ F is the generalized force (F, r_a × F, −F, −r_b × F) of the pair.
 Mat3x12 contact_velocity_jacobian(const Vec3& r_a, const Vec3& r_b) noexcept;

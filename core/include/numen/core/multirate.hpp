@@ -196,11 +196,9 @@ void write_plane_contacts(const Model& model, const ContactPlaneSet& planes, Dat
 /// The elastic energy (J) the contact law stores in the planes of `planes` at the god-object's
 /// pose in `data` (a Data of the god-object model `model`), each plane moved by its carrier and
 /// at the depth write_plane_contacts() gives it (a node plane's with its depth_offset, stiffness
-/// k s): Σ over the planes with d > 0 of ∫₀^d e(x) dx, e the law's elastic force
-/// (contact_force.hpp) — k d²/2 for the linear law; with the smoothed onset δ0, k d³/(6 δ0)
-/// below δ0 and k δ0²/6 + k (d² − d δ0)/2 beyond. The law's own k, before the time-constant
-/// floor. MultirateGodObject measures with it what each new set of planes adds
-/// (MultirateCounters::reset_energy). No allocation.
+/// k s): Σ over the planes of s · contact_elastic_energy(d) (contact_force.hpp; s = 1 for a
+/// sphere's plane), the law's own k, before the time-constant floor. MultirateGodObject measures
+/// with it what each new set of planes adds (MultirateCounters::reset_energy). No allocation.
 double plane_elastic_energy(const Model& model, const ContactPlaneSet& planes,
                             const Data& data) noexcept;
 
@@ -450,7 +448,9 @@ class MultirateGodObject {
   const Slot& slot() const noexcept { return slots_[static_cast<std::size_t>(std::max(slot_, 0))]; }
   int slot_of(int body) const noexcept;
   void hand_back() noexcept;
-  void take_model(const MultirateSceneModel& model) noexcept;
+  /// Takes the model's snapshot, and its planes when they are the held body's: returns whether
+  /// it took them.
+  bool take_model(const MultirateSceneModel& model) noexcept;
 
   int ratio_;
   double margin_;
