@@ -266,6 +266,7 @@ bool MultirateGodObject::select(int body) noexcept {
   }
   planes_.count = 0;
   planes_.carrier_count = 0;
+  planes_.link_count = 0;
   period_ = 0;  // one thread: a scene period now, the new god-object's planes
   ++switches_;
   ++counters_.switches;
@@ -458,6 +459,8 @@ bool MultirateGodObject::take_model(const MultirateSceneModel& m) noexcept {
   planes_.dropped = m.planes.dropped;
   std::copy_n(m.planes.planes.begin(), planes_.count, planes_.planes.begin());
   std::copy_n(m.planes.carriers.begin(), planes_.carrier_count, planes_.carriers.begin());
+  planes_.link_count = std::clamp(m.planes.link_count, 0, kMaxCarrierLinks);
+  std::copy_n(m.planes.links.begin(), planes_.link_count, planes_.links.begin());
   periods_since_model_ = 0;
   return true;
 }
@@ -467,7 +470,8 @@ void MultirateGodObject::hand_back() noexcept {
   for (int i = 0; i < np; ++i) {
     const ContactPlane& p = planes_.planes[static_cast<std::size_t>(i)];
     if (p.other_body < 0 || p.other_body >= static_cast<int>(impulse_total_.size()) ||
-        p.carrier < 0 || p.carrier >= planes_.carrier_count)
+        p.carrier < 0 || p.carrier >= planes_.carrier_count ||
+        planes_.carriers[static_cast<std::size_t>(p.carrier)].node >= 0)  // the scene step's own
       continue;
     // About the body's centre of mass as the device loop moved it.
     const PlaneCarrier& k = planes_.carriers[static_cast<std::size_t>(p.carrier)];

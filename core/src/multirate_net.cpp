@@ -246,6 +246,86 @@ void build_node_planes(const Model& scene, const Data& data, std::span<const int
     }
     i = j;
   }
+  // An organ's contact nodes move in the device loop: a carrier per node (PlaneCarrier::node), a
+  // point mass on K_n with its tie's and springs' elastic force at the sample, and its planes at
+  // the law's own stiffness w k from the true depth (no offset): the node gives way within the
+  // scene period as the single-rate step lets it, and each period starts from its state.
+  // step_god_object() steps it implicitly on its planes (no mass scaling). Nodes beyond the room
+  // keep the static planes above.
+  const int first_carrier = out.carrier_count;
+  for (int i = first; i < out.count; ++i) {
+    ContactPlane& p = out.planes[static_cast<std::size_t>(i)];
+    const int slot = scratch.plane_slot[static_cast<std::size_t>(i)];
+    if (p.node < 0 || slot < 0 || !organ_net(scene.node_net[static_cast<std::size_t>(p.node)]))
+      continue;
+    int c = first_carrier;
+    while (c < out.carrier_count && out.carriers[static_cast<std::size_t>(c)].node != p.node) ++c;
+    if (c == out.carrier_count) {
+      if (out.carrier_count >= kMaxPlaneCarriers) continue;
+      ++out.carrier_count;
+      const auto u = static_cast<std::size_t>(p.node);
+      const double m = scene.node_mass[u];
+      PlaneCarrier& k = out.carriers[static_cast<std::size_t>(c)];
+      k = PlaneCarrier{};
+      k.body = p.other_body;
+      k.node = p.node;
+      k.com = data.nodes[u].position;
+      k.linear_velocity = data.nodes[u].velocity;
+      k.mass.topLeftCorner<3, 3>() = m * Mat3::Identity();
+      k.stiffness.topLeftCorner<3, 3>() = scratch.stiffness[static_cast<std::size_t>(slot)];
+      k.wrench.head<3>() = scratch.force[static_cast<std::size_t>(slot)] + m * scene.gravity;
+      k.inverse_mass = 1.0 / m;
+      k.node_damping =
+          scene.nets[static_cast<std::size_t>(scene.node_net[u])].tie_damping * Mat3::Identity();
+    }
+    p.carrier = c;
+    p.stiffness_scale = p.share;
+    p.depth_offset = 0.0;
+  }
+  // The organ's springs at the node carriers: their damping in D_n, and a spring between two
+  // carriers in both carriers' K_n and D_n, with a link through which each meets the other's
+  // motion.
+  for (int k = 0; k < scene.num_nets() && out.carrier_count > first_carrier; ++k) {
+    if (!organ_net(k)) continue;
+    const NetModel& nm = scene.nets[static_cast<std::size_t>(k)];
+    const int end = nm.spring_begin + nm.structural_count + nm.bending_count;
+    for (int s = nm.spring_begin; s < end; ++s) {
+      const NetSpring& sp = scene.net_springs[static_cast<std::size_t>(s)];
+      if (sp.node_a < 0 || sp.node_a >= num_nodes || sp.node_b < 0 || sp.node_b >= num_nodes ||
+          (scratch.slot_of_node[static_cast<std::size_t>(sp.node_a)] < 0 &&
+           scratch.slot_of_node[static_cast<std::size_t>(sp.node_b)] < 0))
+        continue;
+      int a = first_carrier, b = first_carrier;
+      while (a < out.carrier_count && out.carriers[static_cast<std::size_t>(a)].node != sp.node_a)
+        ++a;
+      while (b < out.carrier_count && out.carriers[static_cast<std::size_t>(b)].node != sp.node_b)
+        ++b;
+      const bool has_a = a < out.carrier_count, has_b = b < out.carrier_count;
+      if (!has_a && !has_b) continue;
+      Vec3 e = data.nodes[static_cast<std::size_t>(sp.node_b)].position -
+               data.nodes[static_cast<std::size_t>(sp.node_a)].position;
+      const double l = e.norm();
+      if (!(l > 0.0)) continue;
+      e /= l;
+      const Mat3 ee = e * e.transpose();
+      if (has_a) out.carriers[static_cast<std::size_t>(a)].node_damping += sp.damping * ee;
+      if (has_b) out.carriers[static_cast<std::size_t>(b)].node_damping += sp.damping * ee;
+      // Left out of K_n above where both its nodes have planes: a carrier counts it, the other
+      // end linked to it, or held still like its other neighbours where it has no carrier.
+      if (scratch.slot_of_node[static_cast<std::size_t>(sp.node_a)] < 0 ||
+          scratch.slot_of_node[static_cast<std::size_t>(sp.node_b)] < 0)
+        continue;
+      if (has_a)
+        out.carriers[static_cast<std::size_t>(a)].stiffness.topLeftCorner<3, 3>() +=
+            sp.stiffness * ee;
+      if (has_b)
+        out.carriers[static_cast<std::size_t>(b)].stiffness.topLeftCorner<3, 3>() +=
+            sp.stiffness * ee;
+      if (has_a && has_b && out.link_count < kMaxCarrierLinks)
+        out.links[static_cast<std::size_t>(out.link_count++)] =
+            CarrierLink{a, b, sp.stiffness * ee, sp.damping * ee};
+    }
+  }
   for (int s = 0; s < slots; ++s)
     scratch.slot_of_node[static_cast<std::size_t>(scratch.slot_node[static_cast<std::size_t>(s)])] = -1;
 }

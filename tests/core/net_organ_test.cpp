@@ -230,10 +230,10 @@ TEST(NetOrgan, MultirateDeviceLoopFeelsTheOrganAsTheSingleRateStepDoes) {
   // The god-object pressed 5 mm into the patch: single-rate at 10 kHz, and multirate with the
   // organ in a 1 kHz scene loop and the god-object at 10 kHz against the organ's planes on its
   // sphere (docs/deformable.md, "Organs in multirate"). At rest both hold the god-object on the
-  // dented organ: its height and the feedback within 3 % of the dent and the force (the planes
-  // start from the larger of k d₀ and what the nodes' ties and springs push: 0.04 % and 0.1 %;
-  // from k_n e₀, the node's deflection times its stiffness with its neighbours at rest, 9 % and
-  // 11 %).
+  // dented organ: its height and the feedback within 3 % of the dent and the force (the node
+  // carriers, implicit on their planes: 0.0 % and 0.0 %; explicit with their mass scaled, 8 % and
+  // 11 %; the static planes started from the larger of k d₀ and what the nodes' ties and springs
+  // push: 0.04 % and 0.1 %; from k_n e₀, 9 % and 11 %).
   const double dt = 1e-4;
   const core::Model m = organ_model(patch(), OrganParams{}, dt, core::CouplingMode::kGodObject,
                                     0.005, Vec3(0, 0, 0.012));
@@ -265,7 +265,7 @@ TEST(NetOrgan, MultirateDeviceLoopFeelsTheOrganAsTheSingleRateStepDoes) {
   EXPECT_LE(deepest_mr, 2.0 * deepest_single);
 }
 
-TEST(NetOrgan, MultirateSceneLoopFindsTheOrgansContactsAtMostThriceAsDeepAsTheSingleRateStep) {
+TEST(NetOrgan, MultirateSceneLoopFindsTheOrgansContactsWithin3p5xTheSingleRateStepsDepth) {
   NUMEN_SKIP_UNDER_SANITIZER(
       "compares figures of the multirate and the single-rate step, not what a sanitizer checks; "
       "the organ's step runs there in NetOrgan.StepsPressingTheShippedOrganDoNotAllocate");
@@ -274,8 +274,9 @@ TEST(NetOrgan, MultirateSceneLoopFindsTheOrgansContactsAtMostThriceAsDeepAsTheSi
   // its samples) against the single-rate step's at the device rate. The organ's triangles reach
   // the god-object's sphere within the scene step: without the look-ahead (NodeContact::engaged)
   // a triangle not touching at a sample is free for the whole step and found deeper at the next,
-  // 0.153 mm against 0.022 mm (7.1x); with it 0.063 mm (2.9x, the deepest while drawn along;
-  // docs/deformable.md, "Organs in multirate").
+  // 0.153 mm against 0.022 mm (7.1x); with it 0.070 mm (3.25x, the deepest while drawn along,
+  // 0.072 s after the draw starts; the static start of the planes, 2.9x; docs/deformable.md,
+  // "Organs in multirate").
   const double dt = 1e-4;
   const Vec3 start(0.0, 0.0, 0.006);
   const core::Model m = organ_model(patch(), OrganParams{}, dt, core::CouplingMode::kGodObject, 0.005, start);
@@ -299,7 +300,7 @@ TEST(NetOrgan, MultirateSceneLoopFindsTheOrgansContactsAtMostThriceAsDeepAsTheSi
   std::printf("[organ multirate] deepest organ contact: single-rate %.4f mm, multirate %.4f mm (%.2fx)\n",
               1e3 * deepest_single, 1e3 * deepest_mr, deepest_mr / deepest_single);
   EXPECT_GT(deepest_single, 1e-5);
-  EXPECT_LE(deepest_mr, 3.0 * deepest_single);
+  EXPECT_LE(deepest_mr, 3.5 * deepest_single);
 }
 
 TEST(NetOrgan, MultirateSceneLoopMeetsOnlyTheTrianglesTheToolsTrueSphereReaches) {

@@ -83,8 +83,13 @@ void grow_god_object_nodes(std::span<const int> device_body, double margin, Mode
 /// k d₀ and what its nodes' ties and springs push along the normal at the sample,
 /// k s (d₀ + offset) = max(k d₀, Σ_m (w_m d₀ / Σ w d₀) max(0, n · F_m)) (F_m the elastic force of
 /// node m's tie and springs; the node sphere's plane of an organ likewise, w = 1); an organ's
-/// spring between two nodes with planes is left out of their K_n (they move together). Counts
-/// planes beyond the room in out.dropped. No allocation.
+/// spring between two nodes with planes is left out of their K_n (they move together). Then
+/// each organ node with planes (up to kMaxPlaneCarriers) gets a node carrier
+/// (PlaneCarrier::node: its mass, K_n and D_n with the springs to the other carriers counted,
+/// their CarrierLink, F₀ its tie's and springs' elastic force at the sample plus its weight) and
+/// its planes move with it at w k from their true depth (stiffness_scale w, no offset): the
+/// static start above is kept only for nodes beyond the carriers' room. Counts planes beyond the
+/// room in out.dropped. No allocation.
 void build_node_planes(const Model& scene, const Data& data, std::span<const int> device_body,
                        double margin, NodePlaneScratch scratch, ContactPlaneSet& out) noexcept;
 

@@ -57,6 +57,16 @@ inline constexpr int kMaxPlaneCarriers = 64;
 /// scene period; a block resting on the board does not sink into it.
 struct PlaneCarrier {
   int body = -1;                         ///< The scene body.
+  /// −1, or a node carrier (detail::build_node_planes(); `body` its net's): an organ's node in
+  /// contact with the god-object (its global index), a point mass (its own, unscaled; no rotation)
+  /// on its tie and springs, K_n = k_tie I + Σ k ê êᵀ in `stiffness` (its neighbours as the sample
+  /// left them, the other node carriers through CarrierLink), D_n = γ_tie I + Σ γ ê êᵀ in
+  /// `node_damping`, and their elastic force at the sample plus its weight in F₀. step_god_object()
+  /// steps it implicitly on its planes against the god-object as the device period left it
+  /// (docs/deformable.md, "Organs in multirate"). Its impulses are not handed back: the scene
+  /// step meets the god-object itself.
+  int node = -1;
+  Mat3 node_damping = Mat3::Zero();      ///< A node carrier's D_n (N·s/m, world).
   Vec3 com = Vec3::Zero();               ///< Its centre of mass at the sample (m, world).
   Vec3 displacement = Vec3::Zero();      ///< u: of the centre of mass since the sample (m, world).
   Vec3 rotation = Vec3::Zero();          ///< θ: rotation vector since the sample (rad, world; small).
@@ -132,13 +142,29 @@ struct ContactPlane {
   Vec3 impulse_point = Vec3::Zero();
 };
 
-/// The planes of one scene sample, [0, count) valid, and their carriers, [0, carrier_count);
-/// `dropped` counts contacts beyond the room.
+/// Room for the springs between two node carriers of one sample (CarrierLink).
+inline constexpr int kMaxCarrierLinks = 4 * kMaxPlaneCarriers;
+
+/// A spring of an organ between two of its node carriers (PlaneCarrier::node), along its
+/// direction ê at the sample, counted in both carriers' K_n and D_n; carrier `a` meets
+/// k ê êᵀ u_b + γ ê êᵀ v_b of `b`'s displacement and velocity (and `b` the same of `a`'s), taken
+/// at the device period's start (detail::build_node_planes(), step_god_object()).
+struct CarrierLink {
+  int a = -1;                     ///< A carrier's index in ContactPlaneSet::carriers.
+  int b = -1;                     ///< The other's.
+  Mat3 stiffness = Mat3::Zero();  ///< k ê êᵀ (N/m).
+  Mat3 damping = Mat3::Zero();    ///< γ ê êᵀ (N·s/m).
+};
+
+/// The planes of one scene sample, [0, count) valid, their carriers, [0, carrier_count), and the
+/// springs between node carriers, [0, link_count); `dropped` counts contacts beyond the room.
 struct ContactPlaneSet {
   std::array<ContactPlane, kMaxContactPlanes> planes{};
   std::array<PlaneCarrier, kMaxPlaneCarriers> carriers{};
+  std::array<CarrierLink, kMaxCarrierLinks> links{};
   int count = 0;
   int carrier_count = 0;
+  int link_count = 0;
   int dropped = 0;
 };
 
@@ -207,8 +233,14 @@ double plane_elastic_energy(const Model& model, const ContactPlaneSet& planes,
 /// planes' penalty forces with their stiffness and damping implicit, integration, feedback
 /// (Eq. 8), checks; then each plane's impulse on the god-object over the period (its effective
 /// force, MultirateGodObject) into ContactPlane::impulse, its opposite summed into the plane's
-/// carrier's J, and every carrier stepped by dt (PlaneCarrier). A rolled-back step
-/// (non-finite) gives no impulse; the carriers still step. Never allocates, throws or locks.
+/// carrier's J, and every carrier stepped by dt (PlaneCarrier). A node carrier
+/// (PlaneCarrier::node) is stepped instead by linearly implicit Euler on its planes against the
+/// god-object as the period left it (its pose and twist held), its tie and springs, and its links
+/// to the other node carriers at the period's start (CarrierLink):
+///   (m + h (D_n + C) + h² (K_n + K)) v₁ = m v₀ + h (F₀ − K_n u₀ + Σ links + f + C v₀),
+/// f the planes' penalty force on it (contact_penalty_force(), each plane at w k, w c and the
+/// pair's friction), K and C its stiffness and damping. A rolled-back step (non-finite) gives no
+/// impulse; the carriers still step. Never allocates, throws or locks.
 void step_god_object(const Model& model, ContactPlaneSet& planes, Data& data) noexcept;
 
 /// Settings of a MultirateGodObject.
