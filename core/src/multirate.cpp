@@ -281,7 +281,7 @@ PlaneAtPose plane_at_pose(const Model& model, const ContactPlaneSet& planes, int
   if (p.carrier >= 0 && p.carrier < nc) {
     const PlaneCarrier& k = planes.carriers[static_cast<std::size_t>(p.carrier)];
     point += k.displacement + k.rotation.cross(p.point - k.com);
-    out.normal = (out.normal + k.rotation.cross(out.normal)).normalized();
+    if (k.node < 0) out.normal = (out.normal + k.rotation.cross(out.normal)).normalized();
     out.surface_velocity =
         k.linear_velocity + k.angular_velocity.cross(point - (k.com + k.displacement));
   }
@@ -354,6 +354,13 @@ void step_god_object(const Model& model, ContactPlaneSet& planes, Data& data) no
   const int np = std::clamp(planes.count, 0, kMaxContactPlanes);
   const int nc = std::clamp(planes.carrier_count, 0, kMaxPlaneCarriers);
   for (int i = 0; i < np; ++i) planes.planes[static_cast<std::size_t>(i)].impulse.setZero();
+  // A node carrier's planes' stiffness and damping (K, C below), from the god-object's step.
+  std::array<Mat3, kMaxPlaneCarriers> node_k, node_c;
+  for (int i = 0; i < nc; ++i) {
+    if (planes.carriers[static_cast<std::size_t>(i)].node < 0) continue;
+    node_k[static_cast<std::size_t>(i)].setZero();
+    node_c[static_cast<std::size_t>(i)].setZero();
+  }
   if ((data.status & kNonFinite) == 0) {
     const bool implicit = model.integrator == Integrator::kLinearlyImplicitEuler;
     const int n = std::clamp(data.num_contacts, 0, kMaxContacts);
@@ -373,66 +380,38 @@ void step_god_object(const Model& model, ContactPlaneSet& planes, Data& data) no
       const Vec3 j = -p.impulse;  // on the carrier
       k.impulse.head<3>() += j;
       k.impulse.tail<3>() += (c.position - (k.com + k.displacement)).cross(j);
+      if (k.node < 0) continue;
+      const Mat3 nn = c.normal * c.normal.transpose();
+      node_k[static_cast<std::size_t>(p.carrier)] += t.stiffness * nn;
+      node_c[static_cast<std::size_t>(p.carrier)] +=
+          t.damping * nn + t.friction * (Mat3::Identity() - nn);
     }
   }
-  // The organs' node carriers: implicit on their planes against the god-object as the period
-  // left it (its pose and twist held), linearly implicit Euler with their tie and springs:
-  //   (m + h (D_n + C) + h² (K_n + K)) v₁ = m v₀ + h (F₀ − K_n u₀ + Σ links + f(u₀, v₀) + C v₀),
-  // f the planes' penalty force on the node (contact_penalty_force(), each plane's w k, w c and
-  // friction), K and C its Jacobian coefficients. A 70 mg node on a plane of 2·10⁴ N/m and
-  // 10 N·s/m at 10 kHz (k h²/m = 2.9, c h/m = 14) is out of reach of an explicit exchange.
-  std::array<Mat3, kMaxPlaneCarriers> node_k, node_c;
-  std::array<Vec3, kMaxPlaneCarriers> node_f;
-  bool any_node = false;
-  for (int i = 0; i < nc; ++i) {
-    node_k[static_cast<std::size_t>(i)].setZero();
-    node_c[static_cast<std::size_t>(i)].setZero();
-    node_f[static_cast<std::size_t>(i)].setZero();
-    any_node = any_node || planes.carriers[static_cast<std::size_t>(i)].node >= 0;
-  }
-  for (int i = 0; any_node && i < np; ++i) {
-    const ContactPlane& p = planes.planes[static_cast<std::size_t>(i)];
-    if (p.carrier < 0 || p.carrier >= nc ||
-        planes.carriers[static_cast<std::size_t>(p.carrier)].node < 0)
-      continue;
-    const PlaneAtPose a = plane_at_pose(model, planes, i, data);
-    if (!a.valid || !(a.depth > 0.0)) continue;
-    const PlaneCarrier& k = planes.carriers[static_cast<std::size_t>(p.carrier)];
-    const BodyState& g = data.bodies[static_cast<std::size_t>(p.body)];
-    const Vec3 point = a.centre - (a.sphere.radius - 0.5 * a.depth) * a.normal;
-    const Vec3 sphere_velocity = g.linear_velocity + g.angular_velocity.cross(point - g.position);
-    MaterialPair material = model.material_pairs[static_cast<std::size_t>(p.material_pair)];
-    material.stiffness *= p.stiffness_scale;
-    material.damping *= p.share > 0.0 ? p.stiffness_scale * p.stiffness_scale / p.share : 1.0;
-    const ContactForceResult f = contact_penalty_force(
-        -a.normal, a.depth, Vec3(k.linear_velocity - sphere_velocity), material);
-    if (!f.active) continue;
-    const auto c = static_cast<std::size_t>(p.carrier);
-    const Mat3 nn = a.normal * a.normal.transpose();
-    node_f[c] += f.force;
-    node_k[c] += f.stiffness * nn;
-    node_c[c] += f.damping * nn + f.friction * (Mat3::Identity() - nn);
-  }
+  // The organs' node carriers: the god-object's impulse J on the node over the period (its
+  // planes moving at v₀), and beyond v₀ the planes' stiffness K and damping C, linearly
+  // implicit with the node's tie and springs and its links at the period's start:
+  //   (m + h (D_n + C) + h² (K_n + K)) v₁ = m v₀ + h (F₀ − K_n u₀ + Σ links) + J + h (C + h K) v₀.
+  // A 70 mg node on a plane of 2·10⁴ N/m and 10 N·s/m at 10 kHz (k h²/m = 2.9, c h/m = 14) is
+  // out of reach of the explicit exchange of the bodies' carriers below.
   const int nl = std::clamp(planes.link_count, 0, kMaxCarrierLinks);
-  for (int l = 0; any_node && l < nl; ++l) {  // the springs between node carriers, explicit
+  for (int l = 0; l < nl; ++l) {  // the springs between node carriers, at the period's start
     const CarrierLink& e = planes.links[static_cast<std::size_t>(l)];
     if (e.a < 0 || e.a >= nc || e.b < 0 || e.b >= nc) continue;
-    const PlaneCarrier& a = planes.carriers[static_cast<std::size_t>(e.a)];
-    const PlaneCarrier& b = planes.carriers[static_cast<std::size_t>(e.b)];
-    node_f[static_cast<std::size_t>(e.a)] +=
-        e.stiffness * b.displacement + e.damping * b.linear_velocity;
-    node_f[static_cast<std::size_t>(e.b)] +=
-        e.stiffness * a.displacement + e.damping * a.linear_velocity;
+    PlaneCarrier& a = planes.carriers[static_cast<std::size_t>(e.a)];
+    PlaneCarrier& b = planes.carriers[static_cast<std::size_t>(e.b)];
+    a.impulse.head<3>() += h * (e.stiffness * b.displacement + e.damping * b.linear_velocity);
+    b.impulse.head<3>() += h * (e.stiffness * a.displacement + e.damping * a.linear_velocity);
   }
   for (int i = 0; i < nc; ++i) {
     PlaneCarrier& k = planes.carriers[static_cast<std::size_t>(i)];
     if (k.node >= 0) {
       const auto c = static_cast<std::size_t>(i);
-      const Mat3 m = k.mass.topLeftCorner<3, 3>();
+      const double m = k.mass(0, 0);
       const Mat3 k_n = k.stiffness.topLeftCorner<3, 3>();
-      const Mat3 system = m + h * (k.node_damping + node_c[c]) + (h * h) * (k_n + node_k[c]);
-      const Vec3 rhs = m * k.linear_velocity + h * (k.wrench.head<3>() - k_n * k.displacement +
-                                                    node_f[c] + node_c[c] * k.linear_velocity);
+      const Mat3 reaction = h * node_c[c] + (h * h) * node_k[c];
+      const Mat3 system = m * Mat3::Identity() + h * k.node_damping + (h * h) * k_n + reaction;
+      const Vec3 rhs = m * k.linear_velocity + h * (k.wrench.head<3>() - k_n * k.displacement) +
+                       k.impulse.head<3>() + reaction * k.linear_velocity;
       k.linear_velocity = system.inverse() * rhs;
       k.displacement += h * k.linear_velocity;
       k.impulse.setZero();
