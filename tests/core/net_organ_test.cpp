@@ -274,8 +274,8 @@ TEST(NetOrgan, MultirateSceneLoopFindsTheOrgansContactsWithin3p5xTheSingleRateSt
   // its samples) against the single-rate step's at the device rate. The organ's triangles reach
   // the god-object's sphere within the scene step: without the look-ahead (NodeContact::engaged)
   // a triangle not touching at a sample is free for the whole step and found deeper at the next,
-  // 0.153 mm against 0.022 mm (7.1x); with it 0.070 mm (3.25x, the deepest while drawn along,
-  // 0.072 s after the draw starts; the static start of the planes, 2.9x; docs/deformable.md,
+  // 0.153 mm against 0.022 mm (7.1x); with it 0.068 mm (3.17x, the deepest while drawn along;
+  // with the static start of the planes instead of the node carriers, 2.9x; docs/deformable.md,
   // "Organs in multirate").
   const double dt = 1e-4;
   const Vec3 start(0.0, 0.0, 0.006);

@@ -234,13 +234,13 @@ double plane_elastic_energy(const Model& model, const ContactPlaneSet& planes,
 /// (Eq. 8), checks; then each plane's impulse on the god-object over the period (its effective
 /// force, MultirateGodObject) into ContactPlane::impulse, its opposite summed into the plane's
 /// carrier's J, and every carrier stepped by dt (PlaneCarrier). A node carrier
-/// (PlaneCarrier::node) is stepped instead by linearly implicit Euler on its planes against the
-/// god-object as the period left it (its pose and twist held), its tie and springs, and its links
-/// to the other node carriers at the period's start (CarrierLink):
-///   (m + h (D_n + C) + h² (K_n + K)) v₁ = m v₀ + h (F₀ − K_n u₀ + Σ links + f + C v₀),
-/// f the planes' penalty force on it (contact_penalty_force(), each plane at w k, w c and the
-/// pair's friction), K and C its stiffness and damping. A rolled-back step (non-finite) gives no
-/// impulse; the carriers still step. Never allocates, throws or locks.
+/// (PlaneCarrier::node) is stepped instead by linearly implicit Euler with its tie and springs,
+/// its links to the other node carriers at the period's start (CarrierLink), its J (the
+/// god-object's step took its planes as moving at v₀) and, beyond v₀, its planes' stiffness K and
+/// damping C (Σ over its active planes of the contact terms' k n nᵀ and c n nᵀ + μ (I − n nᵀ)):
+///   (m + h (D_n + C) + h² (K_n + K)) v₁ = m v₀ + h (F₀ − K_n u₀ + Σ links) + J + h (C + h K) v₀.
+/// A rolled-back step (non-finite) gives no impulse; the carriers still step. Never allocates,
+/// throws or locks.
 void step_god_object(const Model& model, ContactPlaneSet& planes, Data& data) noexcept;
 
 /// Settings of a MultirateGodObject.
