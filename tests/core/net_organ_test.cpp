@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <memory>
 #include <vector>
 
 #include "alloc_counter.hpp"
@@ -263,6 +264,53 @@ TEST(NetOrgan, MultirateDeviceLoopFeelsTheOrganAsTheSingleRateStepDoes) {
   EXPECT_NEAR(mr.device_data().bodies[0].position.z(), single.bodies[1].position.z(),
               0.03 * (z_touch - single.bodies[1].position.z()));
   EXPECT_LE(deepest_mr, 2.0 * deepest_single);
+}
+
+TEST(NetOrgan, MultirateLoopsOnTheOrganCarryItsNodesWithoutAllocating) {
+  // The god-object pressed 3 mm past its touch into the patch and drawn along it, 10 kHz /
+  // 1 kHz: the organ's nodes under it are the device loop's node carriers (PlaneCarrier::node),
+  // the springs between them linked (CarrierLink), and neither loop allocates; each carrier
+  // starts a period at its node's state at the sample and yields under the tool within it.
+  const double dt = 1e-4;
+  const core::Model m = organ_model(patch(), OrganParams{}, dt, core::CouplingMode::kGodObject,
+                                    0.005, Vec3(0, 0, 0.006));
+  auto owner =
+      std::make_unique<core::MultirateGodObject>(m, 1, core::MultirateSettings{10, 0.002, {}});
+  core::MultirateGodObject& mr = *owner;
+  const int periods = numen::test::under_sanitizer() ? 1000 : 3000;
+  int carriers = 0, links = 0;
+  double moved = 0.0;
+  std::int64_t count = 0;
+  {
+    numen::test::AllocationGuard guard;
+    for (int k = 0; k < periods; ++k) {
+      const double t = k * dt;
+      mr.device_data().target.position =
+          Vec3(0.05 * std::max(0.0, t - 0.08), 0.0, 0.006 - 0.05 * std::min(t, 0.08));
+      mr.step();
+      ASSERT_EQ(mr.device_data().status, core::kStepOk) << k;
+      const core::ContactPlaneSet& ps = mr.planes();
+      int nodes = 0;
+      for (int c = 0; c < ps.carrier_count; ++c) {
+        const core::PlaneCarrier& pc = ps.carriers[static_cast<std::size_t>(c)];
+        if (pc.node < 0) continue;
+        ++nodes;
+        moved = std::max(moved, pc.displacement.norm());
+      }
+      carriers = std::max(carriers, nodes);
+      links = std::max(links, ps.link_count);
+    }
+    count = guard.count();
+  }
+  std::printf(
+      "[organ multirate alloc] allocations %lld, node carriers <= %d, links <= %d, a "
+      "carrier moved <= %.4f mm within a scene period\n",
+      static_cast<long long>(count), carriers, links, 1e3 * moved);
+  EXPECT_EQ(count, 0);
+  EXPECT_GE(carriers, 3) << "the nodes under the tool are carried in the device loop";
+  EXPECT_GE(links, 1);
+  EXPECT_GT(moved, 1e-7) << "a carrier yields under the tool within the scene period";
+  EXPECT_EQ(mr.scene_data().nets[0].crossed_contacts, 0);
 }
 
 TEST(NetOrgan, MultirateSceneLoopFindsTheOrgansContactsWithin3p5xTheSingleRateStepsDepth) {
