@@ -19,6 +19,7 @@ DivergenceMonitor::DivergenceMonitor(const core::Model& model, const core::Data&
     : limits_(limits),
       net_radius_m_(model.nets.size(), 0.0),
       base_stretch_m_(model.nets.size(), 0.0),
+      net_energy_(model.nets.size(), 0.0),
       prev_bodies_(data.bodies),
       prev_targets_(data.bodies.size()),
       prev_coupled_(data.bodies.size(), 0) {
@@ -132,7 +133,8 @@ void DivergenceMonitor::rebase(const core::Model& model, const core::Data& data)
 }
 
 bool DivergenceMonitor::observe(const core::Model& model, const core::Data& data,
-                                std::int64_t period, double time_s) noexcept {
+                                std::int64_t period, double time_s,
+                                bool organs_unchanged) noexcept {
   if (latched_.cause != nullptr) return false;
   // ---- energy against what the hand put in ----
   const bool springs = coupling_springs_act(model);
@@ -180,8 +182,14 @@ bool DivergenceMonitor::observe(const core::Model& model, const core::Data& data
     }
   }
   // ---- nodes: speeds and ties ----
+  // An organ's nodes as the last call judged them: nothing to judge again.
+  const auto same = [&](const core::NetModel& net) {
+    return organs_unchanged && net_energy_taken_ &&
+           model.bodies[static_cast<std::size_t>(net.body)].anchored;
+  };
   for (std::size_t n = 0; n < model.nets.size() && !breach; ++n) {
     const core::NetModel& net = model.nets[n];
+    if (same(net)) continue;
     const core::BodyState& body = data.bodies[static_cast<std::size_t>(net.body)];
     const double stretch_limit =
         limits_.stretch_factor * net_radius_m_[n] + 2.0 * base_stretch_m_[n];
@@ -207,8 +215,18 @@ bool DivergenceMonitor::observe(const core::Model& model, const core::Data& data
   if (springs && !breach) {
     // What the scene holds now, gravity's potential taken from its value at the base: a
     // passive scene keeps it below E₀ + W_in (what it started with plus the hand's work).
-    const double held_energy =
-        stored_energy(model, data) + gravity_potential(model, data) - gravity0_;
+    double gravity = 0.0;
+    double held_energy = body_energy(model, data, &gravity);
+    held_energy += gravity - gravity0_;
+    for (int n = 0; n < model.num_nets(); ++n) {
+      const auto k = static_cast<std::size_t>(n);
+      if (!same(model.nets[k])) {
+        double net_gravity = 0.0;
+        net_energy_[k] = net_energy(model, data, n, &net_gravity) + net_gravity;
+      }
+      held_energy += net_energy_[k];
+    }
+    net_energy_taken_ = true;
     const double budget = std::max(energy0_ + work_in_, limits_.energy_floor_j);
     const double ratio = held_energy / budget;
     if (std::isfinite(ratio)) energy_ratio_max_ = std::max(energy_ratio_max_, ratio);

@@ -43,7 +43,13 @@ const core::Pose* coupling_target(const core::Model& model, const core::Data& da
 }
 
 double stored_energy(const core::Model& model, const core::Data& data) noexcept {
-  double e = 0.0;
+  double e = body_energy(model, data, nullptr);
+  for (int n = 0; n < model.num_nets(); ++n) e += net_energy(model, data, n, nullptr);
+  return e;
+}
+
+double body_energy(const core::Model& model, const core::Data& data, double* gravity) noexcept {
+  double e = 0.0, u = 0.0;
   for (int i = 0; i < model.num_bodies(); ++i) {
     const auto k = static_cast<std::size_t>(i);
     const core::BodyModel& b = model.bodies[k];
@@ -52,32 +58,38 @@ double stored_energy(const core::Model& model, const core::Data& data) noexcept 
     const core::Mat3 iw = r * b.inertia_body * r.transpose();
     e += 0.5 * b.mass * s.linear_velocity.squaredNorm() +
          0.5 * s.angular_velocity.dot(iw * s.angular_velocity);
+    u -= b.mass * model.gravity.dot(s.position);
+    const core::Twist* twist = nullptr;
+    if (const core::Pose* target = coupling_target(model, data, i, &twist))
+      e += coupling_potential(b.coupling, s, *target);
   }
-  for (int i = 0; i < model.num_nodes(); ++i) {
+  if (gravity != nullptr) *gravity = u;
+  return e;
+}
+
+double net_energy(const core::Model& model, const core::Data& data, int n,
+                  double* gravity) noexcept {
+  if (gravity != nullptr) *gravity = 0.0;
+  if (n < 0 || n >= model.num_nets()) return 0.0;
+  const core::NetModel& net = model.nets[static_cast<std::size_t>(n)];
+  const core::BodyState& body = data.bodies[static_cast<std::size_t>(net.body)];
+  double e = 0.0, u = 0.0;
+  for (int i = net.node_begin; i < net.node_begin + net.node_count; ++i) {
     const auto k = static_cast<std::size_t>(i);
     e += 0.5 * model.node_mass[k] * data.nodes[k].velocity.squaredNorm();
+    const Vec3 anchor = body.position + body.orientation * model.node_rest[k];
+    e += 0.5 * net.tie_stiffness * (data.nodes[k].position - anchor).squaredNorm();
+    u -= model.node_mass[k] * model.gravity.dot(data.nodes[k].position);
   }
-  for (int i = 0; i < model.num_bodies(); ++i) {
-    const core::Twist* twist = nullptr;
-    if (const core::Pose* target = coupling_target(model, data, i, &twist)) {
-      const auto k = static_cast<std::size_t>(i);
-      e += coupling_potential(model.bodies[k].coupling, data.bodies[k], *target);
-    }
-  }
-  for (const core::NetSpring& sp : model.net_springs) {
+  const int end = net.spring_begin + net.structural_count + net.bending_count;
+  for (int s = net.spring_begin; s < end; ++s) {
+    const core::NetSpring& sp = model.net_springs[static_cast<std::size_t>(s)];
     const double l = (data.nodes[static_cast<std::size_t>(sp.node_b)].position -
                       data.nodes[static_cast<std::size_t>(sp.node_a)].position)
                          .norm();
     e += 0.5 * sp.stiffness * (l - sp.rest_length) * (l - sp.rest_length);
   }
-  for (const core::NetModel& net : model.nets) {
-    const core::BodyState& body = data.bodies[static_cast<std::size_t>(net.body)];
-    for (int i = net.node_begin; i < net.node_begin + net.node_count; ++i) {
-      const auto k = static_cast<std::size_t>(i);
-      const Vec3 anchor = body.position + body.orientation * model.node_rest[k];
-      e += 0.5 * net.tie_stiffness * (data.nodes[k].position - anchor).squaredNorm();
-    }
-  }
+  if (gravity != nullptr) *gravity = u;
   return e;
 }
 
@@ -98,13 +110,11 @@ double contact_energy(const core::Model& model, const core::Data& data) noexcept
 
 double gravity_potential(const core::Model& model, const core::Data& data) noexcept {
   double u = 0.0;
-  for (int i = 0; i < model.num_bodies(); ++i) {
-    const auto k = static_cast<std::size_t>(i);
-    u -= model.bodies[k].mass * model.gravity.dot(data.bodies[k].position);
-  }
-  for (int i = 0; i < model.num_nodes(); ++i) {
-    const auto k = static_cast<std::size_t>(i);
-    u -= model.node_mass[k] * model.gravity.dot(data.nodes[k].position);
+  body_energy(model, data, &u);
+  for (int n = 0; n < model.num_nets(); ++n) {
+    double g = 0.0;
+    net_energy(model, data, n, &g);
+    u += g;
   }
   return u;
 }

@@ -181,7 +181,9 @@ void SceneRunner::period(std::int64_t deadline_mono_ns, std::int64_t woke_mono_n
   track_startup(contacts);
   accumulate_step_figures(report, contacts);
   record(report, contacts);
-  bool diverged = divergence_.observe(scene_->model, data_, k_ - 1, static_cast<double>(t) * 1e-9);
+  // A multirate run's organs change only at the scene samples (MultirateRun::view()).
+  bool diverged = divergence_.observe(scene_->model, data_, k_ - 1, static_cast<double>(t) * 1e-9,
+                                      multirate_.enabled() && !multirate_.took_model());
   if (const PlantMotion* plant = instrument_.plant(); plant && plant->figures().diverged)
     diverged = divergence_.latch_external("device plant", plant->figures().diverged_axis,
                                           plant->figures().diverged_time_s, k_ - 1,

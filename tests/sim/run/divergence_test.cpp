@@ -16,6 +16,7 @@
 #include "numen/core/data.hpp"
 #include "numen/core/step.hpp"
 #include "numen/sim/run/energy.hpp"
+#include "organ_indentation.hpp"
 
 namespace {
 
@@ -143,6 +144,47 @@ TEST(DivergenceMonitor, ANodeTornFromItsAnchorLatchesTieStretch) {
   e.nodes[0].velocity = Vec3(933.0, 0.0, 0.0);
   EXPECT_TRUE(fast.observe(m, e, 0, 0.0));
   EXPECT_EQ(std::string(fast.divergence().cause), "node speed");
+}
+
+TEST(DivergenceMonitor, AnOrgansEnergyIsItsNetsPartAndIsTakenOnceWhileItIsUnchanged) {
+  NUMEN_REQUIRE_DEFORMABLE();
+  // A flat organ (a net on an anchored body, no gravity) dented and moving, the tool held
+  // where it is (its coupling holds nothing).
+  const Model m = numen::test::organ::organ_model(
+      numen::test::organ::flat_patch(16, 0.0025), numen::test::organ::OrganParams{}, 1e-3,
+      numen::core::CouplingMode::kGodObject, 0.005, Vec3(0, 0, 0.02));
+  Data d = numen::core::make_data(m);
+  d.target.position = d.bodies[1].position;
+  d.target.orientation = d.bodies[1].orientation;
+  for (std::size_t i = 0; i < d.nodes.size(); i += 7) {
+    d.nodes[i].position.z() -= 0.001;
+    d.nodes[i].velocity = Vec3(0.0, 0.01, -0.02);
+  }
+  // stored_energy() and gravity_potential() are the bodies' parts plus the nets'.
+  double body_gravity = 0.0, net_gravity = 0.0;
+  const double parts =
+      numen::sim::body_energy(m, d, &body_gravity) + numen::sim::net_energy(m, d, 0, &net_gravity);
+  EXPECT_GT(numen::sim::net_energy(m, d, 0, nullptr), 1e-6);
+  EXPECT_NEAR(parts, numen::sim::stored_energy(m, d), 1e-15);
+  EXPECT_NEAR(body_gravity + net_gravity, numen::sim::gravity_potential(m, d), 1e-15);
+  EXPECT_EQ(numen::sim::net_energy(m, d, 1, &net_gravity), 0.0) << "a net out of range";
+  // Judged every period, and judged once then taken as unchanged: the same figures.
+  Data base = d;
+  DivergenceMonitor every(m, base), once(m, base);
+  d.nodes[0].position.z() -= 0.002;  // the organ now holds more than it started with
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_FALSE(every.observe(m, d, k, k * m.dt));
+    EXPECT_FALSE(once.observe(m, d, k, k * m.dt, /*organs_unchanged=*/k > 0));
+  }
+  EXPECT_GT(every.energy_ratio_max(), 0.0);
+  EXPECT_DOUBLE_EQ(once.energy_ratio_max(), every.energy_ratio_max());
+  EXPECT_DOUBLE_EQ(once.stretch_ratio_max(), every.stretch_ratio_max());
+  // Taken as unchanged, a node torn from its anchor is not seen: the caller says when the
+  // organ changed (a multirate run's new scene model); the next such call latches it.
+  d.nodes[5].position.z() += 0.1;
+  EXPECT_FALSE(once.observe(m, d, 3, 3 * m.dt, true));
+  EXPECT_TRUE(once.observe(m, d, 4, 4 * m.dt, false));
+  EXPECT_EQ(std::string(once.divergence().cause), "tie stretch");
 }
 
 TEST(DivergenceMonitor, EnergyNobodyPutInLatchesEnergy) {

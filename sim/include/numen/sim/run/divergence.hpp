@@ -75,7 +75,8 @@ double step_response_speed(const core::Model& model, const core::Data& data, int
                            const core::Twist& twist) noexcept;
 
 /// Per-period divergence monitor of one run. Construction allocates (setup); observe() never
-/// allocates, throws, locks or blocks, and costs O(bodies + nodes + springs).
+/// allocates, throws, locks or blocks, and costs O(bodies + nodes + springs) (O(bodies + the
+/// god-object's nets) where the organs are unchanged).
 class DivergenceMonitor {
  public:
   /// Sizes the monitor for `model` and takes the scene's scale from `data` (the state at the
@@ -85,8 +86,12 @@ class DivergenceMonitor {
 
   /// Judges the state after period `period` (simulated time `time_s`). Returns true in the
   /// period of the first breach (then latched: later calls return false and change nothing).
-  bool observe(const core::Model& model, const core::Data& data, std::int64_t period,
-               double time_s) noexcept;
+  /// `organs_unchanged`: the nodes of the organs (nets on anchored bodies) are those of the last
+  /// call (a multirate run's view between two scene samples, MultirateRun::took_model()): their
+  /// speeds and tie stretches were judged then and their energy is taken from then, so that a
+  /// device period does not pay O(nodes + springs) for a state the scene loop has not changed.
+  bool observe(const core::Model& model, const core::Data& data, std::int64_t period, double time_s,
+               bool organs_unchanged = false) noexcept;
 
   /// Latches a breach found outside the monitor (e.g. "device plant": the emulated device's
   /// mechanics ran away, PlantMotion) with `cause` (a static string), the axis or body index
@@ -136,6 +141,8 @@ class DivergenceMonitor {
   double contact0_ = 0.0;                  // the contacts' potential at the (re)base (J)
   std::vector<double> net_radius_m_;       // per net: max |rest offset| of its nodes
   std::vector<double> base_stretch_m_;     // per net: largest tie stretch at the (re)base
+  std::vector<double> net_energy_;         // per net: its energy and gravity potential, last taken
+  bool net_energy_taken_ = false;          // net_energy_ holds every net's
   std::vector<core::BodyState> prev_bodies_;
   std::vector<core::Pose> prev_targets_;   // per body: its coupling target in the last period
   std::vector<char> prev_coupled_;         // per body: it had a coupling target then

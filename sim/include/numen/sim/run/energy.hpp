@@ -22,6 +22,18 @@ namespace numen::sim {
 /// Non-finite input gives a non-finite result.
 double stored_energy(const core::Model& model, const core::Data& data) noexcept;
 
+/// The bodies' part of stored_energy() (J): their ½ m v² + ½ ωᵀ I_w ω and the coupling springs;
+/// their share of gravity_potential(), −Σ m g·x, into `*gravity` (J) when not null.
+double body_energy(const core::Model& model, const core::Data& data, double* gravity) noexcept;
+
+/// The part of stored_energy() (J) that belongs to net `n` (Model::nets): its nodes' ½ m v², its
+/// springs' ½ k (l − L)² and its ties' ½ k_tie |x − anchor|²; its nodes' share of
+/// gravity_potential(), −Σ m g·x, into `*gravity` (J) when not null. stored_energy() and
+/// gravity_potential() are the bodies' parts plus the sums of these over the nets. 0 for `n` out
+/// of range.
+double net_energy(const core::Model& model, const core::Data& data, int n,
+                  double* gravity) noexcept;
+
 /// ½ k d² of every body and node contact of the last step (depths at its start; stiffness of
 /// the contact's material pair), J.
 double contact_energy(const core::Model& model, const core::Data& data) noexcept;
