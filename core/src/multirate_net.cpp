@@ -172,7 +172,7 @@ void build_node_planes(const Model& scene, const Data& data, std::span<const int
       if (sa < 0 && sb < 0) continue;
       // An organ's spring between two nodes with planes: a triangle contact loads its nodes
       // together, so the spring moves with both and holds neither (counted, it makes the device
-      // loop ~20 % stiffer than the net: docs/deformable.md, "Organs in multirate").
+      // loop ~20 % stiffer than the net: docs/organs.md, "Organs in multirate").
       Vec3 e = data.nodes[static_cast<std::size_t>(sp.node_b)].position -
                data.nodes[static_cast<std::size_t>(sp.node_a)].position;
       const double l = e.norm();
@@ -218,7 +218,7 @@ void build_node_planes(const Model& scene, const Data& data, std::span<const int
     // and what its nodes' ties and springs push along n at the sample, Σ_m (w_m d₀ / Σ w d₀)
     // max(0, n · F_m): k_n e₀ takes the node's neighbours at rest, and in a dent, where they are
     // not, it is up to ~1.8 times what they push (the jaw drawn along the shipped organ's rigid
-    // core; docs/deformable.md, "Organs in multirate").
+    // core; docs/organs.md, "Organs in multirate").
     const bool organ = organ_net(scene.node_net[static_cast<std::size_t>(head.node)]);
     double x = 0.0, carried = 0.0, k_n0 = 0.0, k_sum0 = 0.0;
     bool compliant = true;

@@ -452,7 +452,7 @@ void compute_net_forces(const Model& model, Data& data) noexcept {
       ct.friction = r.friction;
     }
     // The implicit step's h² K v₀ term uses the node's own relative velocity: with a triangle
-    // contact's Jacobian lumped on its nodes (docs/deformable.md, "Surface contacts") the same
+    // contact's Jacobian lumped on its nodes (docs/organs.md, "Surface contacts") the same
     // K̃ must stand on both sides, else the triangle's nodes chatter.
     ct.normal_velocity = ct.normal.dot(ct.face < 0 ? v_rel : Vec3(v_rel - v_point + data.nodes[i].velocity));
     if (!r.active) continue;

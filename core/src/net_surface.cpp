@@ -1,5 +1,5 @@
 /// @file net_surface.cpp
-/// An organ's surface contacts (detail/net_surface.hpp; docs/deformable.md, "Surface
+/// An organ's surface contacts (detail/net_surface.hpp; docs/organs.md, "Surface
 /// contacts"): the dynamic bodies' spheres against the net's triangles through its node
 /// centres, the closest point by Ericson's test shared with the mesh obstacles
 /// (mesh_shape_query.hpp), inside or outside by the angle-weighted pseudo-normal.
@@ -26,7 +26,7 @@ using collision_detail::kMargin;
 constexpr double kSamePoint2 = 1e-9 * 1e-9;
 
 /// A triangle with an edge stretched beyond this many times its rest length is torn: it meets
-/// no sphere (docs/deformable.md, "Surface contacts": a tool driven through the organ otherwise
+/// no sphere (docs/organs.md, "Surface contacts": a tool driven through the organ otherwise
 /// drags its surface along).
 constexpr double kTearStretch = 3.0;
 

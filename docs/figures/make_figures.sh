@@ -26,5 +26,5 @@ s=$(mktemp -d) && ./build/numen study stability --out "$s" > /dev/null && /usr/b
 z=$(mktemp -d) && ./build/numen study passivity --out "$z" > /dev/null && /usr/bin/python3 $out/plot_passivity.py "$z" $out/passivity_zwidth.png && rm -rf "$z"
 # Multirate quality against the rate ratio, construction, lattice, deformable and endobag scenes (docs/multirate.md; 44 runs)
 /usr/bin/python3 $out/plot_multirate.py ./build/numen $out
-# The default scene's deformable organ: hand vs tool vs organ surface, excerpt and full trials (docs/results.md, docs/deformable.md; ~6 minutes)
+# The default scene's deformable organ: hand vs tool vs organ surface, excerpt and full trials (docs/results.md, docs/organs.md; ~6 minutes)
 docs/figures/organ_runs.sh > /dev/null

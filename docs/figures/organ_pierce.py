@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Piercing check of a deformable organ on numen-view recordings (docs/deformable.md, "The rigid core").
+"""Piercing check of a deformable organ on numen-view recordings (docs/organs.md, "The rigid core").
 
     ./build/numen run [SCENE] [--replay] --record-view run.nmv --view-rate 100
     /usr/bin/python3 docs/figures/organ_pierce.py [--every N] run.nmv ...

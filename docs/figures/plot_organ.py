@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Hand against tool against organ surface on the default scene (docs/deformable.md, "Organs").
+"""Hand against tool against organ surface on the default scene (docs/organs.md, "Organs").
 
     ./build/numen run sim/scenes/default.toml --replay --trace organ.csv   (docs/figures/organ_runs.sh)
     /usr/bin/python3 docs/figures/plot_organ.py OUT.png [--json OUT.json] LABEL=organ.csv ...

@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Writes organ_lobe.obj: a closed, liver-lobe-like surface for the deformable organ of
-sim/scenes/default.toml (docs/deformable.md, "Organs"). Procedural, no input data.
+sim/scenes/default.toml (docs/organs.md, "Organs"). Procedural, no input data.
 
     python3 sim/data/make_organ_mesh.py > sim/data/organ_lobe.obj
 

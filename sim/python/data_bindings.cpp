@@ -319,7 +319,7 @@ void bind_data(py::module_& m) {
           },
           "View (C, 2) int of (body_a, body_b) per contact; body_b -1: a static obstacle.")
       // The nets' node contacts (core::NodeContact, net_state.hpp): a node sphere's contact, or
-      // one node's share of a surface triangle's contact (docs/deformable.md "Surface contacts").
+      // one node's share of a surface triangle's contact (docs/organs.md "Surface contacts").
       .def_property_readonly(
           "num_node_contacts", [](const DataHandle& h) { return h.data.num_node_contacts; },
           "Node contacts K of the last step (0 without nets).")

@@ -1,4 +1,4 @@
-// The multirate god-object's device step against a deformable organ (docs/deformable.md,
+// The multirate god-object's device step against a deformable organ (docs/organs.md,
 // "Organs"): an icosphere organ of 2562 nodes (radius 30 mm, the shipped organ's constants per
 // spring and per node) on an anchored core, and a 5 mm sphere god-object (50 g, 1000 N/m
 // coupling) pressed 6 mm into it while its target circles; the organ in the scene loop at

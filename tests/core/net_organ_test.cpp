@@ -1,4 +1,4 @@
-// Tests of deformable organs (docs/deformable.md, "Organs"; Meseure & Chaillou 2000): a net tied
+// Tests of deformable organs (docs/organs.md, "Organs"; Meseure & Chaillou 2000): a net tied
 // to an anchored rigid component (core::BodyModel::anchored, coupling.cpp's
 // impose_direct_target) that the tool's sphere pushes. The anchored body never moves; the
 // organ's reaction acts on the tool and reaches the device's feedback; the force against
@@ -170,7 +170,7 @@ TEST(NetOrgan, ShippedOrganForceAgainstIndentationConvergesInTheTimeStep) {
       "NetOrgan.StepsPressingTheShippedOrganDoNotAllocate");
   // The shipped organ (sim/data/organ_lobe.obj, 1002 nodes, default.toml's constants), a 2.5 mm
   // sphere (the instrument's tube) imposed at 20 mm/s from −z onto its convex face, 6 mm past
-  // its first touch of the rest surface (its triangles: docs/deformable.md, "Surface contacts"),
+  // its first touch of the rest surface (its triangles: docs/organs.md, "Surface contacts"),
   // at dt = 1 ms and 0.1 ms.
   const core::TriangleMesh mesh = shipped_organ_mesh();
   ASSERT_EQ(mesh.num_vertices(), 1002) << "sim/data/organ_lobe.obj";
@@ -230,7 +230,7 @@ TEST(NetOrgan, MultirateDeviceLoopFeelsTheOrganAsTheSingleRateStepDoes) {
       "the organ's step runs there in NetOrgan.StepsPressingTheShippedOrganDoNotAllocate");
   // The god-object pressed 5 mm into the patch: single-rate at 10 kHz, and multirate with the
   // organ in a 1 kHz scene loop and the god-object at 10 kHz against the organ's planes on its
-  // sphere (docs/deformable.md, "Organs in multirate"). At rest both hold the god-object on the
+  // sphere (docs/organs.md, "Organs in multirate"). At rest both hold the god-object on the
   // dented organ: its height and the feedback within 3 % of the dent and the force (the node
   // carriers, implicit on their planes: 0.0 % and 0.0 %; explicit with their mass scaled, 8 % and
   // 11 %; the static planes started from the larger of k d₀ and what the nodes' ties and springs
@@ -323,7 +323,7 @@ TEST(NetOrgan, MultirateSceneLoopFindsTheOrgansContactsWithin3p5xTheSingleRateSt
   // the god-object's sphere within the scene step: without the look-ahead (NodeContact::engaged)
   // a triangle not touching at a sample is free for the whole step and found deeper at the next,
   // 0.153 mm against 0.022 mm (7.1x); with it 0.068 mm (3.17x, the deepest while drawn along;
-  // with the static start of the planes instead of the node carriers, 2.9x; docs/deformable.md,
+  // with the static start of the planes instead of the node carriers, 2.9x; docs/organs.md,
   // "Organs in multirate").
   const double dt = 1e-4;
   const Vec3 start(0.0, 0.0, 0.006);
@@ -370,7 +370,7 @@ TEST(NetOrgan, MultirateSceneLoopMeetsOnlyTheTrianglesTheToolsTrueSphereReaches)
 TEST(NetOrgan, MultirateSceneLoopDoesNotHookTheTrianglesTheToolsSpherePassed) {
   // The tool's 1.5 mm sphere held 1 mm under the patch: its centre past the triangles' plane,
   // as a jaw of the god-object gets past the shipped organ's surface in its folds
-  // (docs/deformable.md, "Organs in multirate"). Its true sphere meets the triangles above it
+  // (docs/organs.md, "Organs in multirate"). Its true sphere meets the triangles above it
   // from behind, 2.5 mm deep (between r and 2 r); taken, the law pushes them around the
   // sphere's far side, hooking the patch onto the tool (18 contacts, the nodes at 1.6 m/s
   // within 5 ms without the cut). The scene loop must leave the patch at rest, and say that the

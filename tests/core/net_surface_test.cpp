@@ -1,4 +1,4 @@
-// An organ's surface contacts (core/src/net_surface.cpp; docs/deformable.md, "Surface
+// An organ's surface contacts (core/src/net_surface.cpp; docs/organs.md, "Surface
 // contacts"): the tool's spheres against the organ's triangles through its node centres. The
 // geometry against an every-triangle reference (depth, normal, barycentric shares), a centre
 // below the surface pushed back out, a vertex or an edge shared by several triangles counted
@@ -261,7 +261,7 @@ TEST(NetSurface, TheShippedOrganHoldsTheJawsSphereAtItsSurface) {
   // device's feedback saturates at 8 N on the shipped scene). The sphere stays on the deformed
   // surface (its deepest contact well under a millimetre, its centre never below the surface)
   // and, at rest, the organ's push holds the coupling's pull. With node spheres this sphere slipped through the net at a few millimetres
-  // (docs/deformable.md, "Organs").
+  // (docs/organs.md, "Organs").
   const core::TriangleMesh mesh = shipped_organ_mesh();
   ASSERT_EQ(mesh.num_vertices(), 1002) << "sim/data/organ_lobe.obj";
   const double radius = 0.0015;

@@ -1,6 +1,6 @@
 #pragma once
 /// @file organ_indentation.hpp
-/// Deformable organs for the tests (docs/deformable.md, "Organs"): a net tied to an anchored
+/// Deformable organs for the tests (docs/organs.md, "Organs"): a net tied to an anchored
 /// rigid component (core::BodyModel::anchored) and a one-sphere tool, the shipped organ mesh
 /// (sim/data/organ_lobe.obj, read here without the sim layer), a flat patch, and the
 /// force–indentation curve of the tool pushed into the organ at constant speed. Header-only;

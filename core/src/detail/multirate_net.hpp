@@ -139,7 +139,7 @@ void cut_back_node_contacts(const Model& scene, Data& data, std::span<const int>
 /// and a sphere that got past a triangle's plane (the jaws in the shipped organ's folds) meets
 /// it from behind within r (true depth r to 2 r). Taken,
 /// the law pushes such a triangle around the sphere's far side: it hooks onto the tool, which
-/// drags the organ along, and its nodes are thrown through the tool (docs/deformable.md,
+/// drags the organ along, and its nodes are thrown through the tool (docs/organs.md,
 /// "Organs in multirate"). Those from r to 2 r deep (the true sphere overlapping the triangle
 /// from behind: a sphere past the surface, or the surface folded over it) are counted, not
 /// hidden: NetOutput::crossed_contacts and crossed_depth of their net (reset by every call;

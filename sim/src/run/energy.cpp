@@ -110,11 +110,13 @@ double contact_energy(const core::Model& model, const core::Data& data) noexcept
 
 double gravity_potential(const core::Model& model, const core::Data& data) noexcept {
   double u = 0.0;
-  body_energy(model, data, &u);
-  for (int n = 0; n < model.num_nets(); ++n) {
-    double g = 0.0;
-    net_energy(model, data, n, &g);
-    u += g;
+  for (int i = 0; i < model.num_bodies(); ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    u -= model.bodies[k].mass * model.gravity.dot(data.bodies[k].position);
+  }
+  for (int i = 0; i < model.num_nodes(); ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    u -= model.node_mass[k] * model.gravity.dot(data.nodes[k].position);
   }
   return u;
 }

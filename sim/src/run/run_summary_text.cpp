@@ -99,7 +99,7 @@ constexpr RunSummarySegment kLayout[] = {
      set("num_nets")},
     {"  deformable: a sphere of the tool past a net's surface (or the surface folded over it) in "
      "{net_crossed_steps} scene steps (multirate: those contacts dropped, their depth in the net "
-     "penetration max; docs/deformable.md, \"Organs in multirate\")\n",
+     "penetration max; docs/organs.md, \"Organs in multirate\")\n",
      set("net_crossed_steps")},
     {"  contacts max {contacts_max}, overflow steps {contact_overflow}, solver iterations mean "
      "{solver_iterations_mean}, max {solver_iterations_max}, residual max "

@@ -176,7 +176,7 @@ TEST(OrganShippedScene, TheDeformableOrganTakesTheLatticesPlaceAndTheHandGoesInt
   EXPECT_LT(core_body.initial_pose.orientation.angularDistance(lattice.pose.orientation), 1e-9);
   EXPECT_LT((s.model.obstacles[1].pose.position - lattice.pose.position).norm(), 1e-12);
   EXPECT_LT(s.model.obstacles[1].pose.orientation.angularDistance(lattice.pose.orientation), 1e-9);
-  // The core lies 2.2-3.2 mm under the rest surface (the scaled mesh, docs/deformable.md): every
+  // The core lies 2.2-3.2 mm under the rest surface (the scaled mesh, docs/organs.md): every
   // vertex of its mesh inside the rest surface, its nearest rest node (within half an edge of
   // the nearest surface point) 2-4.5 mm away.
   const numen::core::Obstacle& core_surface = s.model.obstacles[1];

@@ -94,7 +94,7 @@ struct BodyModel {
   double bounding_radius = 0.0;             ///< Derived: max |c| + r over its spheres (m).
   /// A static body: held at initial_pose with a zero twist in every step (a body of infinite
   /// mass that nothing moves; never integrated, never coupled to the device, no joint). The
-  /// anchored rigid component of a deformable organ (docs/deformable.md, "Organs"; Meseure &
+  /// anchored rigid component of a deformable organ (docs/organs.md, "Organs"; Meseure &
   /// Chaillou 2000): its net's ties pull the nodes back to their rest shape and the reaction
   /// goes nowhere. initial_twist must be zero.
   bool anchored = false;

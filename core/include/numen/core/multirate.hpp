@@ -63,7 +63,7 @@ struct PlaneCarrier {
   /// left them, the other node carriers through CarrierLink), D_n = γ_tie I + Σ γ ê êᵀ in
   /// `node_damping`, and their elastic force at the sample plus its weight in F₀. step_god_object()
   /// steps it implicitly on its planes against the god-object as the device period left it
-  /// (docs/deformable.md, "Organs in multirate"). Its impulses are not handed back: the scene
+  /// (docs/organs.md, "Organs in multirate"). Its impulses are not handed back: the scene
   /// step meets the god-object itself.
   int node = -1;
   Mat3 node_damping = Mat3::Zero();      ///< A node carrier's D_n (N·s/m, world).
@@ -117,7 +117,7 @@ struct ContactPlane {
   /// d + depth_offset, so that at the sample it gives its share w = d₀/Σd₀ of what the node's
   /// tie and springs carried, w k_n e₀ (e₀ the node's deflection along n), and releases where
   /// the node would leave the surface (docs/multirate.md, "Deformable god-objects").
-  /// An organ's node (a net on an anchored body, docs/deformable.md "Organs in multirate")
+  /// An organ's node (a net on an anchored body, docs/organs.md "Organs in multirate")
   /// touching a sphere of the god-object gives the same kind of plane the other way round:
   /// `node` that organ node, the sphere the god-object's (`local_point`, `radius`: its centre in
   /// its body's frame and its true radius), the normal from the node to it, the point the node

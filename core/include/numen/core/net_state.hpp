@@ -40,7 +40,7 @@ struct NodeContact {
   Vec3 r_b = Vec3::Zero();       ///< Contact point − COM of body_b (m, world); 0 when static.
   /// v_n = n · (v_node − v_b(point)) at the step's start (m/s): the implicit step's h² K v₀ term.
   /// A triangle contact's share keeps its own node's velocity here (its law acts on the
-  /// triangle's point velocity): the Jacobian is lumped on the nodes (docs/deformable.md,
+  /// triangle's point velocity): the Jacobian is lumped on the nodes (docs/organs.md,
   /// "Surface contacts").
   double normal_velocity = 0.0;
   bool active = false;           ///< f_n > 0 (or `engaged`).
@@ -91,7 +91,7 @@ struct NetOutput {
   /// its true sphere overlaps (true depth from r to 2 r; or the surface folded over the sphere,
   /// its inner side towards it: not told apart), found at this scene step's sample and
   /// dropped there, since their law would hook the triangle onto the tool
-  /// (detail::drop_back_face_contacts(), docs/deformable.md "Organs in multirate").
+  /// (detail::drop_back_face_contacts(), docs/organs.md "Organs in multirate").
   int crossed_contacts = 0;
   /// The deepest true depth of those (m, from r to 2 r; 0 without one): how far the sphere is
   /// past the surface, counted in max_penetration.
