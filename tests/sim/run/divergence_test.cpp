@@ -172,10 +172,14 @@ TEST(DivergenceMonitor, AnOrgansEnergyIsItsNetsPartAndIsTakenOnceWhileItIsUnchan
   Data base = d;
   DivergenceMonitor every(m, base), once(m, base);
   d.nodes[0].position.z() -= 0.002;  // the organ now holds more than it started with
+  std::int64_t allocations = 0;
   for (int k = 0; k < 3; ++k) {
     EXPECT_FALSE(every.observe(m, d, k, k * m.dt));
+    numen::test::AllocationGuard guard;
     EXPECT_FALSE(once.observe(m, d, k, k * m.dt, /*organs_unchanged=*/k > 0));
+    allocations += guard.count();
   }
+  EXPECT_EQ(allocations, 0) << "observe() with the organs taken as unchanged";
   EXPECT_GT(every.energy_ratio_max(), 0.0);
   EXPECT_DOUBLE_EQ(once.energy_ratio_max(), every.energy_ratio_max());
   EXPECT_DOUBLE_EQ(once.stretch_ratio_max(), every.stretch_ratio_max());
