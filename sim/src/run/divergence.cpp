@@ -20,6 +20,7 @@ DivergenceMonitor::DivergenceMonitor(const core::Model& model, const core::Data&
       net_radius_m_(model.nets.size(), 0.0),
       base_stretch_m_(model.nets.size(), 0.0),
       net_energy_(model.nets.size(), 0.0),
+      organ_energy_sum_(model.nets.size(), 0.0),
       prev_bodies_(data.bodies),
       prev_targets_(data.bodies.size()),
       prev_coupled_(data.bodies.size(), 0) {
@@ -182,18 +183,31 @@ bool DivergenceMonitor::observe(const core::Model& model, const core::Data& data
     }
   }
   // ---- nodes: speeds and ties ----
-  // An organ's nodes as the last call judged them: nothing to judge again.
-  const auto same = [&](const core::NetModel& net) {
-    return organs_unchanged && net_energy_taken_ &&
-           model.bodies[static_cast<std::size_t>(net.body)].anchored;
+  // An organ's new state is judged in organ_slices_ parts, one a call (set_organ_slices()):
+  // this call judges its parts [first, last). A new state before the last one's parts are done
+  // (or the first call) is judged whole.
+  int first = organ_slice_, last = std::min(organ_slice_ + 1, organ_slices_);
+  if (!organs_unchanged || !net_energy_taken_) {
+    first = 0;
+    last = organ_slice_ < organ_slices_ || !net_energy_taken_ ? organ_slices_ : 1;
+  }
+  organ_slice_ = last;
+  const auto organ = [&](const core::NetModel& net) {
+    return model.bodies[static_cast<std::size_t>(net.body)].anchored;
   };
   for (std::size_t n = 0; n < model.nets.size() && !breach; ++n) {
     const core::NetModel& net = model.nets[n];
-    if (same(net)) continue;
+    const bool part = organ(net);
+    if (part && first >= last) continue;
     const core::BodyState& body = data.bodies[static_cast<std::size_t>(net.body)];
     const double stretch_limit =
         limits_.stretch_factor * net_radius_m_[n] + 2.0 * base_stretch_m_[n];
-    for (int i = net.node_begin; i < net.node_begin + net.node_count; ++i) {
+    const IndexRange nodes =
+        part
+            ? IndexRange{part_of_range(net.node_begin, net.node_count, first, organ_slices_).begin,
+                         part_of_range(net.node_begin, net.node_count, last - 1, organ_slices_).end}
+            : IndexRange{net.node_begin, net.node_begin + net.node_count};
+    for (int i = nodes.begin; i < nodes.end; ++i) {
       const auto k = static_cast<std::size_t>(i);
       const double v = data.nodes[k].velocity.norm();
       speed_ratio_max_ = std::max(speed_ratio_max_, v / speed_limit);
@@ -220,9 +234,17 @@ bool DivergenceMonitor::observe(const core::Model& model, const core::Data& data
     held_energy += gravity - gravity0_;
     for (int n = 0; n < model.num_nets(); ++n) {
       const auto k = static_cast<std::size_t>(n);
-      if (!same(model.nets[k])) {
+      if (!organ(model.nets[k])) {
         double net_gravity = 0.0;
         net_energy_[k] = net_energy(model, data, n, &net_gravity) + net_gravity;
+      } else if (first < last) {
+        if (first == 0) organ_energy_sum_[k] = 0.0;
+        for (int p = first; p < last; ++p) {
+          double net_gravity = 0.0;
+          organ_energy_sum_[k] +=
+              net_energy_part(model, data, n, p, organ_slices_, &net_gravity) + net_gravity;
+        }
+        if (last == organ_slices_) net_energy_[k] = organ_energy_sum_[k];  // judged whole
       }
       held_energy += net_energy_[k];
     }

@@ -73,22 +73,33 @@ double deepest_tool_contact_on_nets(const core::Model& model, const core::Data& 
   return deepest;
 }
 
-/// Puts the nodes of the nets whose rigid component belongs to articulation
-/// `tree` at their rest positions on that body's pose in `ghost` (the
-/// undeformed tool where the hand is), and those of the anchored bodies' nets (the organs,
-/// undeformed: what the hand would meet).
-void place_tool_nets_at_rest(const core::Model& model, core::Data& ghost, int tree) {
+/// The ghost's nodes (the undeformed tool where the hand is, and what the hand would meet): the
+/// nodes of the nets whose rigid component belongs to articulation `tree` at their rest
+/// positions on that body's pose in `ghost`, those of the anchored bodies' nets (the organs,
+/// undeformed) at their rest positions — written once (`organs_placed`): an anchored body never
+/// moves — and the other nets' as `data` has them. O(the nodes of the tool's and the other nets):
+/// an organ's nodes cost nothing per period.
+void place_ghost_nodes(const core::Model& model, const core::Data& data, core::Data& ghost,
+                       int tree, bool& organs_placed) {
   for (const core::NetModel& net : model.nets) {
-    if (model.articulation.body_tree[static_cast<std::size_t>(net.body)] != tree &&
-        !model.bodies[static_cast<std::size_t>(net.body)].anchored)
+    const bool organ = model.bodies[static_cast<std::size_t>(net.body)].anchored;
+    const bool tool = model.articulation.body_tree[static_cast<std::size_t>(net.body)] == tree;
+    const auto begin = static_cast<std::size_t>(net.node_begin);
+    const auto end = begin + static_cast<std::size_t>(net.node_count);
+    if (!organ && !tool) {
+      std::copy(data.nodes.begin() + static_cast<std::ptrdiff_t>(begin),
+                data.nodes.begin() + static_cast<std::ptrdiff_t>(end),
+                ghost.nodes.begin() + static_cast<std::ptrdiff_t>(begin));
       continue;
+    }
+    if (organ && organs_placed) continue;
     const core::BodyState& b = ghost.bodies[static_cast<std::size_t>(net.body)];
-    for (int i = net.node_begin; i < net.node_begin + net.node_count; ++i) {
-      const auto n = static_cast<std::size_t>(i);
+    for (std::size_t n = begin; n < end; ++n) {
       ghost.nodes[n].position = b.position + b.orientation * model.node_rest[n];
       ghost.nodes[n].velocity.setZero();
     }
   }
+  organs_placed = true;
 }
 
 }  // namespace
@@ -152,8 +163,7 @@ SceneRunner::PeriodContacts SceneRunner::measure_contacts() noexcept {
   if (model.num_nets() > 0) {
     // The tool's nets: as deformed (god-object), in their rest shape on the
     // target poses (the hand).
-    ghost_.nodes = data_.nodes;  // same size: no allocation
-    place_tool_nets_at_rest(model, ghost_, tree);
+    place_ghost_nodes(model, data_, ghost_, tree, ghost_organs_placed_);
     if constexpr (core::kWithDeformable) core::detect_node_contacts(model, ghost_);
     int n = 0;
     c.tool_pen = std::max(c.tool_pen, deepest_node_contact_of_tree(model, data_, tree, &n));

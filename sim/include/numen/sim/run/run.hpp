@@ -235,6 +235,7 @@ class SceneRunner {
   hal::InstrumentDevice device_;
   core::Data data_;
   core::Data ghost_;  // the held body placed at the target, for measurement
+  bool ghost_organs_placed_ = false;  // ghost_'s organs at rest (measure_contacts())
   platform::ControlLoop loop_;
   /// The multirate god-object (scene [multirate]), stepped in place of core::step by the
   /// loop (ControlLoop::set_step_function); not enabled in a single-rate run.
