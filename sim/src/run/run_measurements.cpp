@@ -110,12 +110,49 @@ SceneRunner::PeriodContacts SceneRunner::measure_contacts() noexcept {
   const int held = data_.attached_body;
   if (held < 0) return c;
   c.held = true;
-  const auto h = static_cast<std::size_t>(held);
-  // The tool: every body of the held body's articulation (the held body
-  // alone for a rigid tool). The target: the same bodies placed where the
-  // device puts them (held body at data.target, the others at their own
-  // targets, Eq. 6).
-  const int tree = model.articulation.body_tree[h];
+  // The tool: every body of the held body's articulation (the held body alone for a rigid
+  // tool), its contacts as the step found them.
+  const int tree = model.articulation.body_tree[static_cast<std::size_t>(held)];
+  for (int b = 0; b < model.num_bodies(); ++b) {
+    if (model.articulation.body_tree[static_cast<std::size_t>(b)] != tree) continue;
+    int n = 0, deepest = -1;
+    const double pen = deepest_contact_of(data_, b, &n, &deepest);
+    if (pen > c.tool_pen) {
+      c.deepest_tool_contact = deepest;
+      c.deepest_tool_body = b;
+    }
+    c.tool_pen = std::max(c.tool_pen, pen);
+    c.tool_contacts += n;
+  }
+  if (model.num_nets() > 0) {
+    // The tool's nets as deformed (god-object), and the tool on the organs (nets of anchored
+    // bodies) as they are.
+    int n = 0;
+    c.tool_pen = std::max(c.tool_pen, deepest_node_contact_of_tree(model, data_, tree, &n));
+    c.tool_contacts += n;
+    c.tool_pen = std::max(c.tool_pen, deepest_tool_contact_on_nets(model, data_, tree, &n));
+    c.tool_contacts += n;
+  }
+  // The target (and the closed loop's hand) is detected anew on ghost_ in its periods only
+  // (ghost_every_: every period but in a multirate run, where it is at most 1 kHz), and held
+  // between them.
+  if ((k_ - 1) % ghost_every_ == 0 || held != ghost_held_) {
+    measure_target(tree);
+    ghost_held_ = held;
+  }
+  c.target_pen = target_.target_pen;
+  c.target_contacts = target_.target_contacts;
+  c.hand_pen = target_.hand_pen;
+  return c;
+}
+
+void SceneRunner::measure_target(int tree) noexcept {
+  const core::Model& model = scene_->model;
+  const auto h = static_cast<std::size_t>(data_.attached_body);
+  TargetContacts& c = target_;
+  c = TargetContacts{};
+  // The target: the tool's bodies placed where the device puts them (held body at
+  // data.target, the others at their own targets, Eq. 6).
   ghost_.bodies = data_.bodies;  // same size: no allocation
   ghost_.bodies[h].position = data_.target.position;
   ghost_.bodies[h].orientation = data_.target.orientation;
@@ -128,14 +165,7 @@ SceneRunner::PeriodContacts SceneRunner::measure_contacts() noexcept {
   core::detect_contacts(model, ghost_);
   for (int b = 0; b < model.num_bodies(); ++b) {
     if (model.articulation.body_tree[static_cast<std::size_t>(b)] != tree) continue;
-    int n = 0, m = 0, deepest = -1;
-    const double pen = deepest_contact_of(data_, b, &n, &deepest);
-    if (pen > c.tool_pen) {
-      c.deepest_tool_contact = deepest;
-      c.deepest_tool_body = b;
-    }
-    c.tool_pen = std::max(c.tool_pen, pen);
-    c.tool_contacts += n;
+    int m = 0;
     c.target_pen = std::max(c.target_pen, deepest_contact_of(ghost_, b, &m));
     c.target_contacts += m;
   }
@@ -161,26 +191,18 @@ SceneRunner::PeriodContacts SceneRunner::measure_contacts() noexcept {
         c.hand_pen = std::max(c.hand_pen, deepest_contact_of(ghost_, b));
   }
   if (model.num_nets() > 0) {
-    // The tool's nets: as deformed (god-object), in their rest shape on the
-    // target poses (the hand).
+    // The tool's nets in their rest shape on the target poses, and the target's tool on the
+    // organs' rest shapes (what the hand would meet).
     place_ghost_nodes(model, data_, ghost_, tree, ghost_organs_placed_);
     if constexpr (core::kWithDeformable) core::detect_node_contacts(model, ghost_);
-    int n = 0;
-    c.tool_pen = std::max(c.tool_pen, deepest_node_contact_of_tree(model, data_, tree, &n));
-    c.tool_contacts += n;
     int m = 0;
     c.target_pen = std::max(c.target_pen, deepest_node_contact_of_tree(model, ghost_, tree, &m));
     c.target_contacts += m;
-    // The organs (nets of anchored bodies): the tool on the deformed net, the hand's tool
-    // (the ghost's bodies) on its rest shape.
-    c.tool_pen = std::max(c.tool_pen, deepest_tool_contact_on_nets(model, data_, tree, &n));
-    c.tool_contacts += n;
     const double organ = deepest_tool_contact_on_nets(model, ghost_, tree, &m);
     c.target_pen = std::max(c.target_pen, organ);
     c.target_contacts += m;
     c.hand_pen = std::max(c.hand_pen, organ);
   }
-  return c;
 }
 
 void SceneRunner::track_free_space(const PeriodContacts& c) noexcept {

@@ -237,6 +237,47 @@ Scene replayed(Scene scene) {
 
 }  // namespace
 
+// The target (the tool where the hand is) is detected anew on a copy of the scene; in a multirate
+// run with a device period under 1 ms only every round(1 ms / dt) periods, held in between
+// (docs/outputs.md): the lattice scene in replay at a 10 kHz device loop and a 1 kHz scene loop,
+// its first 4.2 s (the hand reaches the organs at about 3.7 s). Every block of ten periods from a
+// multiple of ten holds one value; at a 1 kHz device loop every period is measured.
+TEST(RunMultirate, TheTargetIsMeasuredAtMostAtOneKilohertz) {
+  numen::test::TempDir dir;
+  const std::vector<std::pair<std::string, std::string>> bus = {
+      {"latency = 0.0001", "compute_phase = 0.00005\nlatency = 0.00001"}};
+  const auto target_depths = [&](double dt, double seconds) {
+    const Scene scene = replayed(shipped_scene(dir, "lattice.toml", dt, 1e-3, 0.002, bus));
+    const auto periods = static_cast<std::size_t>(std::llround(seconds / dt));
+    SceneRunner runner(scene, periods);
+    for (std::size_t k = 0; k < periods; ++k) runner.period();
+    std::vector<double> depths;
+    for (const numen::sim::TraceRecord& r : runner.trace().records())
+      depths.push_back(r.target_penetration_mm);
+    return depths;
+  };
+  const std::vector<double> fast = target_depths(1e-4, 4.2);
+  ASSERT_EQ(fast.size(), 42000u);
+  int held_wrong = 0, blocks_in_contact = 0, changes = 0;
+  for (std::size_t k = 0; k < fast.size(); ++k) {
+    if (k % 10 != 0) {
+      held_wrong += fast[k] != fast[k - k % 10] ? 1 : 0;
+      continue;
+    }
+    blocks_in_contact += fast[k] > 0.0 ? 1 : 0;
+    changes += k > 0 && fast[k] != fast[k - 10] ? 1 : 0;
+  }
+  std::printf("10 kHz / 1 kHz: %d blocks of ten periods with the target in contact, %d changes\n",
+              blocks_in_contact, changes);
+  EXPECT_EQ(held_wrong, 0) << "a period between two measurements changed the target's depth";
+  EXPECT_GT(blocks_in_contact, 100);
+  EXPECT_GT(changes, 100) << "the target measured anew every tenth period";
+  const std::vector<double> slow = target_depths(1e-3, 4.2);
+  int steps = 0;
+  for (std::size_t k = 1; k < slow.size(); ++k) steps += slow[k] != slow[k - 1] ? 1 : 0;
+  EXPECT_GT(steps, 100) << "at 1 kHz the target is measured every period";
+}
+
 // The default scene (a haptic trocar instrument on a recorded JIGSAWS trial, 30 s): its
 // god-object is the whole articulated instrument (sleeve, tube, jaws; pivot, insertion and the
 // prescribed jaws) in the device loop, the tissue and organs in the scene loop. At scene rates of

@@ -194,6 +194,12 @@ class SceneRunner {
     int deepest_tool_contact = -1;  ///< Index of the tool's deepest rigid contact (-1: none).
     int deepest_tool_body = -1;     ///< Its tool body.
   };
+  /// What measure_target() found (penetrations in m; PeriodContacts' fields of the same names).
+  struct TargetContacts {
+    double target_pen = 0.0;
+    double hand_pen = 0.0;
+    int target_contacts = 0;
+  };
   /// Attaches the bodies of the tool-switching events due at bus time `t_ns`.
   void apply_due_events(std::int64_t t_ns) noexcept;
   /// The bus side of the period at bus time `t` (ns): the simulated bus and instrument, the
@@ -203,8 +209,13 @@ class SceneRunner {
   /// Counts of the period's report: frames, torque stops, bus errors, invalid and zero-torque
   /// periods, the first latched fault.
   void count_period(const platform::PeriodReport& report) noexcept;
-  /// The tool's and the target's contacts (the target detected on ghost_).
+  /// The tool's contacts (as the step found them) and the target's (measure_target(), in its
+  /// periods; held between them).
   PeriodContacts measure_contacts() noexcept;
+  /// The target's and the closed loop's hand's contacts into target_: the tool of articulation
+  /// `tree` detected anew on ghost_ at the target (and at the hand's intent), its nets at rest,
+  /// against the organs' rest shapes. O(the scene's contact detection).
+  void measure_target(int tree) noexcept;
   /// The free-space tracking error (RunSummary::tracking_error_free_rms_mm).
   void track_free_space(const PeriodContacts& c) noexcept;
   /// The start-up push-out and the god-object's penetration after it (RunSummary).
@@ -235,7 +246,13 @@ class SceneRunner {
   hal::InstrumentDevice device_;
   core::Data data_;
   core::Data ghost_;  // the held body placed at the target, for measurement
-  bool ghost_organs_placed_ = false;  // ghost_'s organs at rest (measure_contacts())
+  bool ghost_organs_placed_ = false;  // ghost_'s organs at rest (measure_target())
+  /// The target is measured every ghost_every_ periods: 1, but in a multirate run at most at
+  /// 1 kHz (round(1 ms / dt) periods), so that a 10 kHz device loop's thread does not detect the
+  /// whole scene again every period (docs/outputs.md).
+  std::int64_t ghost_every_ = 1;
+  int ghost_held_ = -1;      // the held body when the target was last measured
+  TargetContacts target_{};  // the target's contacts, last measured
   platform::ControlLoop loop_;
   /// The multirate god-object (scene [multirate]), stepped in place of core::step by the
   /// loop (ControlLoop::set_step_function); not enabled in a single-rate run.
