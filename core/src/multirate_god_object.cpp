@@ -14,6 +14,7 @@
 #include "numen/core/features.hpp"
 #include "numen/core/model.hpp"
 #include "numen/core/net_collision.hpp"
+#include "numen/core/rigid_body.hpp"
 #include "numen/core/step.hpp"
 
 #include "detail/data_scratch.hpp"
@@ -92,11 +93,18 @@ void detect_and_build_planes(const Model& model, Data& data, const void* context
 
 }  // namespace
 
-MultirateGodObject::MultirateGodObject(const Model& scene, int body, const MultirateSettings& settings)
-    : ratio_(settings.ratio), margin_(settings.margin), body_(body) {
+MultirateGodObject::MultirateGodObject(const Model& scene, int body,
+                                       const MultirateSettings& settings)
+    : ratio_(settings.ratio),
+      margin_(settings.margin),
+      fold_step_(settings.fold_step),
+      body_(body) {
   if (settings.ratio < 1)
     throw std::invalid_argument("multirate: the rate ratio scene_dt / dt must be >= 1 (got " +
                                 std::to_string(settings.ratio) + ")");
+  if (!(settings.fold_step > 0.0))
+    throw std::invalid_argument("multirate: fold_step must be > 0 s (got " +
+                                std::to_string(settings.fold_step) + ")");
   if (!(settings.margin >= 0.0) || !std::isfinite(settings.margin))
     throw std::invalid_argument("multirate: the contact margin must be >= 0 m and finite (got " +
                                 std::to_string(settings.margin) + ")");
@@ -367,20 +375,47 @@ void MultirateGodObject::scene_step(const MultirateDeviceReport& in, MultirateSc
                         body >= 0 ? margin_ : 0.0, slots_.front().device_model.dt,
                         detail::NodePlaneScratch{node_slot_, slot_node_, node_stiffness_, plane_slot_,
                                                  planes_stiffness_, planes_depth_, node_force_}};
-  step_with_contacts(model, *scene_, &detect_and_build_planes, &context);
-  if constexpr (kWithDeformable) detail::drop_look_ahead_contacts(*scene_);
-  const bool rejected = (scene_->status & kNonFinite) != 0;
-  for (std::size_t b = 0; b < nb; ++b) {
-    if (rejected) {  // rolled back: what was owed is still owed
-      owed_[b].force = h * (scene_->applied_wrench[b].force - base_applied_[b].force);
-      owed_[b].torque = h * (scene_->applied_wrench[b].torque - base_applied_[b].torque);
-    }
-    scene_->applied_wrench[b] = base_applied_[b];
+  // Where an organ's surface has folded under the tool, the step is taken in sub-steps of at
+  // most fold_step_ (MultirateSettings::fold_step), the god-object imposed along its twist.
+  int substeps = 1;
+  if constexpr (kWithDeformable) {
+    if (h > fold_step_ && detail::organ_surface_folded(model, *scene_))
+      substeps = static_cast<int>(std::min(std::ceil(h / fold_step_), 1000.0));
   }
-  // The impulse the scene step's god-object contacts gave each scene body: already received,
-  // so no longer owed.
-  if (!rejected && body >= 0) {
-    const bool implicit = model.integrator == Integrator::kLinearlyImplicitEuler;
+  if (substeps > 1) ++counters_.folded_scene_steps;
+  const double hs = h / substeps;
+  // The scene loop's model steps at hs over the sub-steps (this thread's alone: the device
+  // loop reads other fields of it, never dt).
+  Model& stepped = scene_slot_ >= 0 ? slots_[static_cast<std::size_t>(scene_slot_)].scene_model
+                                    : free_scene_model_;
+  stepped.dt = hs;
+  const bool implicit = model.integrator == Integrator::kLinearlyImplicitEuler;
+  // The god-object's imposed poses moved along their twists to a sub-step's start.
+  const auto advance_imposed = [&](double dt) noexcept {
+    for (std::size_t i = 0; i < god.size() && i < in.states.size(); ++i) {
+      Pose& pose = god[i] == body ? scene_->target
+                                  : scene_->body_targets[static_cast<std::size_t>(god[i])].pose;
+      const Twist& twist = god[i] == body
+                               ? scene_->target_twist
+                               : scene_->body_targets[static_cast<std::size_t>(god[i])].twist;
+      pose.position += dt * twist.linear;
+      pose.orientation = integrate_orientation(pose.orientation, twist.angular, dt);
+    }
+  };
+  bool rejected = false;
+  double stepped_time = 0.0;
+  for (int sub = 0; sub < substeps; ++sub) {
+    if (sub > 0) {
+      if constexpr (kWithDeformable) detail::drop_look_ahead_contacts(*scene_);
+      advance_imposed(hs);
+    }
+    step_with_contacts(stepped, *scene_, &detect_and_build_planes, &context);
+    rejected = (scene_->status & kNonFinite) != 0;
+    if (rejected) break;
+    stepped_time += hs;
+    // The impulse the sub-step's god-object contacts gave each scene body: already received,
+    // so no longer owed.
+    if (body < 0) continue;
     const int n = std::clamp(scene_->num_contacts, 0, kMaxContacts);
     for (int i = 0; i < n; ++i) {
       const Contact& c = scene_->contacts[static_cast<std::size_t>(i)];
@@ -390,16 +425,27 @@ void MultirateGodObject::scene_step(const MultirateDeviceReport& in, MultirateSc
       const auto a = static_cast<std::size_t>(c.body_a);
       const auto b = static_cast<std::size_t>(c.body_b);
       const std::vector<BodyState>& before = scene_->scratch->solver.saved_state;  // the step's start
-      const Vec3 f = effective_contact_force(c, t, implicit, h, before[a], scene_->bodies[a],
+      const Vec3 f = effective_contact_force(c, t, implicit, hs, before[a], scene_->bodies[a],
                                              &before[b], &scene_->bodies[b]);
       // The other body's share: −f if it is b, +f if it is a.
       const Vec3 on_other = on_a ? Vec3(-f) : f;
       const Vec3& r = on_a ? t.r_b : t.r_a;
       Wrench& w = owed_[on_a ? b : a];
-      w.force -= h * on_other;
-      w.torque -= h * r.cross(on_other);
+      w.force -= hs * on_other;
+      w.torque -= hs * r.cross(on_other);
       ++counters_.scene_contacts;
     }
+  }
+  stepped.dt = h;
+  if constexpr (kWithDeformable) detail::drop_look_ahead_contacts(*scene_);
+  for (std::size_t b = 0; b < nb; ++b) {
+    if (rejected) {  // rolled back: what was owed over the rest of the step is still owed
+      owed_[b].force +=
+          (h - stepped_time) * (scene_->applied_wrench[b].force - base_applied_[b].force);
+      owed_[b].torque +=
+          (h - stepped_time) * (scene_->applied_wrench[b].torque - base_applied_[b].torque);
+    }
+    scene_->applied_wrench[b] = base_applied_[b];
   }
   for (std::size_t i = 0; i < god.size() && i < in.states.size(); ++i)
     scene_->bodies[static_cast<std::size_t>(god[i])] = in.states[i];

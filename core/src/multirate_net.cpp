@@ -394,6 +394,30 @@ void drop_look_ahead_contacts(Data& data) noexcept {
   data.num_node_contacts = kept;
 }
 
+bool organ_surface_folded(const Model& scene, const Data& data) noexcept {
+  const int n = std::clamp(data.num_node_contacts, 0, static_cast<int>(data.node_contacts.size()));
+  const int faces = static_cast<int>(scene.net_faces.size());
+  for (int i = 0; i < n; ++i) {
+    const NodeContact& c = data.node_contacts[static_cast<std::size_t>(i)];
+    if (c.face < 0 || c.face >= faces) continue;
+    const std::array<int, 3>& f = scene.net_faces[static_cast<std::size_t>(c.face)];
+    const NetModel& net =
+        scene.nets[static_cast<std::size_t>(scene.node_net[static_cast<std::size_t>(f[0])])];
+    if (!scene.bodies[static_cast<std::size_t>(net.body)].anchored) continue;
+    const auto x = [&](int k) {
+      return data.nodes[static_cast<std::size_t>(f[static_cast<std::size_t>(k)])].position;
+    };
+    const auto r = [&](int k) {
+      return scene.node_rest[static_cast<std::size_t>(f[static_cast<std::size_t>(k)])];
+    };
+    const Vec3 now = (x(1) - x(0)).cross(x(2) - x(0));
+    const Vec3 rest = data.bodies[static_cast<std::size_t>(net.body)].orientation *
+                      (r(1) - r(0)).cross(r(2) - r(0));
+    if (now.dot(rest) < 0.0) return true;
+  }
+  return false;
+}
+
 void cut_back_node_contacts(const Model& scene, Data& data, std::span<const int> device_body,
                             double margin, double body_deepest, double step) noexcept {
   const bool look_ahead = step > 0.0;

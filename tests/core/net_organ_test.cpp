@@ -3,19 +3,26 @@
 // impose_direct_target) that the tool's sphere pushes. The anchored body never moves; the
 // organ's reaction acts on the tool and reaches the device's feedback; the force against
 // indentation of a flat patch converges in the time step; a step with the shipped organ does
-// not allocate; the multirate scene loop finds the organ's contacts at most thrice as deep as the
-// single-rate step, meets only the triangles the tool's true sphere reaches and does not hook
-// those whose plane the sphere's centre passed;
-// the model refuses an anchored body that a device or a joint would move.
+// not allocate; the multirate device loop feels the organ as the single-rate step does, the
+// scene loop finds the organ's contacts as deep as the single-rate step at a rate ratio of 1 and
+// at most 3.5 times as deep at 10, meets only the triangles the tool's true sphere reaches, does
+// not hook those whose plane the sphere's centre passed, and takes a scene step in sub-steps
+// where the organ's surface has folded; the model refuses an anchored body that a device or a
+// joint would move.
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <memory>
+#include <stdexcept>
+#include <utility>
 #include <vector>
 
 #include "alloc_counter.hpp"
+#include "detail/multirate_net.hpp"
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"
 #include "numen/core/multirate.hpp"
@@ -405,6 +412,73 @@ TEST(NetOrgan, MultirateSceneLoopDoesNotHookTheTrianglesTheToolsSpherePassed) {
   EXPECT_NEAR(h.deepest, 0.0025, 1e-6) << "m: r + 1 mm, the sphere past the surface, not hidden";
   EXPECT_LT(h.fastest, 1e-9) << "m/s: the patch must stay at rest";
   EXPECT_LT(h.feedback, 1e-6);
+}
+
+namespace {
+
+/// The 5 mm god-object pressed 1.5 mm into the patch at 10 kHz / 1 kHz (`fold_step` as given),
+/// then one triangle of the organ's contacts turned over (two of its nodes swapped) and one
+/// more scene period stepped: the scene steps counted as folded before and after the turn, and
+/// the heap allocations of that scene period.
+struct FoldCount {
+  std::int64_t before = 0;
+  std::int64_t after = 0;
+  bool folded_before = true;     // detail::organ_surface_folded() on the pressed patch
+  bool folded_after = false;     // ... with the triangle turned over
+  std::int64_t allocations = 0;  // in the ten periods after the turn
+};
+FoldCount fold_count(double fold_step) {
+  const core::Model m = organ_model(patch(), OrganParams{}, 1e-4, core::CouplingMode::kGodObject,
+                                    0.005, Vec3(0.0, 0.0, 0.0035));
+  core::MultirateGodObject mr(m, 1, {10, 0.002, {}, fold_step});
+  FoldCount f;
+  for (int k = 0; k < 200; ++k) {
+    mr.device_data().target.position = Vec3(0.0, 0.0, 0.0035);
+    mr.step();
+  }
+  f.before = mr.counters().folded_scene_steps;
+  core::Data& scene = mr.scene_data();
+  f.folded_before = core::detail::organ_surface_folded(m, scene);
+  int face = -1;
+  for (int i = 0; i < scene.num_node_contacts && face < 0; ++i)
+    face = scene.node_contacts[static_cast<std::size_t>(i)].face;
+  EXPECT_GE(face, 0) << "the pressed patch has triangle contacts";
+  if (face < 0) return f;
+  const std::array<int, 3>& tri = m.net_faces[static_cast<std::size_t>(face)];
+  std::swap(scene.nodes[static_cast<std::size_t>(tri[1])].position,
+            scene.nodes[static_cast<std::size_t>(tri[2])].position);
+  f.folded_after = core::detail::organ_surface_folded(m, scene);
+  numen::test::AllocationGuard guard;
+  for (int k = 0; k < 10; ++k) {
+    mr.device_data().target.position = Vec3(0.0, 0.0, 0.0035);
+    mr.step();
+  }
+  f.allocations = guard.count();
+  f.after = mr.counters().folded_scene_steps;
+  return f;
+}
+
+}  // namespace
+
+TEST(NetOrgan, MultirateSceneStepIsSubSteppedWhereTheOrgansSurfaceHasFolded) {
+  // A scene step that starts with an organ's triangle in contact turned more than 90° from its
+  // rest normal is taken in sub-steps of at most fold_step (0.5 ms by default: two at a 1 ms
+  // scene period; docs/organs.md, "Organs in multirate"). The pressed flat patch has not folded.
+  const FoldCount f = fold_count(core::MultirateSettings{}.fold_step);
+  EXPECT_FALSE(f.folded_before);
+  EXPECT_TRUE(f.folded_after);
+  EXPECT_EQ(f.before, 0);
+  EXPECT_EQ(f.after, 1) << "the scene step after the turn";
+  EXPECT_EQ(f.allocations, 0) << "a sub-stepped scene step";
+  // A fold_step of the scene period or more never sub-steps.
+  const FoldCount never = fold_count(1e-3);
+  EXPECT_TRUE(never.folded_after);
+  EXPECT_EQ(never.after, 0);
+  EXPECT_THROW(core::MultirateGodObject(
+                   organ_model(patch(), OrganParams{}, 1e-4, core::CouplingMode::kGodObject, 0.005,
+                               Vec3(0.0, 0.0, 0.01)),
+                   1, {10, 0.002, {}, 0.0}),
+               std::invalid_argument);
 }
 
 TEST(NetOrgan, ModelRefusesAnAnchoredBodyThatSomethingWouldMove) {

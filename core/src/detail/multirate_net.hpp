@@ -47,6 +47,12 @@ bool net_on_god_object(const Model& scene, std::span<const int> device_body, int
 /// mass). Load time.
 std::string lump_nets(const Model& scene, std::span<const int> device_body, Model& out);
 
+/// True when a triangle of an organ (a net on an anchored body) in one of `data`'s node contacts
+/// (NodeContact::face ≥ 0: the last scene step's) has turned more than 90° from its rest
+/// normal, the rest triangle carried by its body's orientation: the organ's surface has folded
+/// where something touches it (MultirateSettings::fold_step). O(node contacts). No allocation.
+bool organ_surface_folded(const Model& scene, const Data& data) noexcept;
+
 /// The nets' state — nodes, node contacts, per-net outputs — from `from` to `to` (each a Data
 /// or a MultirateSceneSnapshot: the same fields), within the smaller sizes. No allocation.
 template <typename From, typename To>

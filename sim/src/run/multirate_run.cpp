@@ -12,7 +12,7 @@ namespace numen::sim {
 MultirateRun::MultirateRun(const Scene& scene) : scene_(&scene) {
   if (!scene.multirate) return;
   const core::MultirateSettings settings{scene.multirate->ratio, scene.multirate->margin_m,
-                                         scene.multirate->tools};
+                                         scene.multirate->tools, scene.multirate->fold_step_s};
   god_object_ = std::make_unique<core::MultirateGodObject>(
       scene.model, scene.model.initial_attached_body, settings);
 }
@@ -56,6 +56,7 @@ void MultirateRun::summarize(RunSummary& s) const {
   s.multirate.stale_models = c.stale_models;
   s.multirate.reset_energy_j = c.reset_energy;
   s.multirate.reset_energy_max_j = c.reset_energy_max;
+  s.multirate.folded_scene_steps = c.folded_scene_steps;
   if (scene_thread_) {
     s.multirate.scene_thread = true;
     s.multirate.scene_overruns = scene_thread_->counters().scene_overruns;

@@ -453,6 +453,10 @@ constexpr RunFigure kFigures[] = {
      [](const S& s) noexcept { return real(s.multirate.reset_energy_j); }, multirate_run},
     {"multirate.reset_energy_max_j", "J", "... the most one sample added", K::kReal,
      [](const S& s) noexcept { return real(s.multirate.reset_energy_max_j); }, multirate_run},
+    {"multirate.folded_scene_steps", "",
+     "Scene steps taken in sub-steps of at most [multirate] fold_step because an organ's surface "
+     "had folded under the tool", K::kCount,
+     [](const S& s) noexcept { return count(s.multirate.folded_scene_steps); }, multirate_run},
     {"multirate.model_force_jump_max_n", "N",
      "Largest change of the feedback force sent into a period that took a new scene model",
      K::kReal, [](const S& s) noexcept { return real(s.multirate.model_force_jump_max_n); },

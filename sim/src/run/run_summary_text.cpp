@@ -68,7 +68,8 @@ constexpr RunSummarySegment kLayout[] = {
     {"  multirate: scene loop every {multirate.scene_dt_s:ms} ms ({multirate.ratio} device "
      "periods), margin {multirate.margin_mm} mm; {multirate.scene_steps} scene steps, planes max "
      "{multirate.planes_max}, dropped {multirate.planes_dropped}, stale models "
-     "{multirate.stale_models}, tool switches {multirate.switches}; the new planes added "
+     "{multirate.stale_models}, tool switches {multirate.switches}, folded scene steps "
+     "{multirate.folded_scene_steps}; the new planes added "
      "{multirate.reset_energy_j} J (at most {multirate.reset_energy_max_j} J at a sample)",
      set("multirate.enabled")},
     // An admittance device is sent poses, not forces: no feedback force to jump.

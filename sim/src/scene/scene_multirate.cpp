@@ -19,7 +19,7 @@ namespace numen::sim {
 void parse_multirate(const TomlTable& root, Scene& scene) {
   const auto table = root.table("multirate");
   if (!table) return;
-  table->allow_only({"scene_dt", "margin"});
+  table->allow_only({"scene_dt", "margin", "fold_step"});
   const double dt = scene.model.dt;
   const double scene_dt = table->number_in("scene_dt", 0.0, 10.0, std::nullopt);
   const double ratio = std::round(scene_dt / dt);
@@ -36,6 +36,7 @@ void parse_multirate(const TomlTable& root, Scene& scene) {
                 "starts handing its plane to the device loop; it must cover the tool's travel "
                 "towards a surface in one scene period (docs/multirate.md, \"The margin\")");
   m.margin_m = table->number_in("margin", 0.0, 1.0, 0.0);
+  m.fold_step_s = table->number_in("fold_step", 1e-6, 10.0, core::MultirateSettings{}.fold_step);
   const core::Model& model = scene.model;
   std::vector<int> bodies;
   if (model.initial_attached_body >= 0) bodies.push_back(model.initial_attached_body);

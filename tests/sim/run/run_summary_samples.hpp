@@ -194,6 +194,7 @@ inline sim::RunSummary full_managed_summary() {
   s.multirate.other_force_jump_max_n = 0.125;
   s.multirate.reset_energy_j = 0.375;
   s.multirate.reset_energy_max_j = 0.125;
+  s.multirate.folded_scene_steps = 92;
   s.exit_status = 3;
   s.exit_reasons = {"first reason", "second reason"};
   return s;

@@ -78,7 +78,8 @@ TEST(RunSummaryText, PrintsTheValuesInTheirFormats) {
            "0.500) at 0.250 s, period 29; EMCY 30",
            "  SDO: 71 node configuration(s) from DCFs; in-loop reads 72, errors 73\n",
            "  multirate: scene loop every 10.000 ms (10 device periods), margin 12.500 mm; 81 scene "
-           "steps, planes max 82, dropped 83, stale models 84, tool switches 85; the new planes "
+           "steps, planes max 82, dropped 83, stale models 84, tool switches 85, folded scene steps 92; "
+           "the new planes "
            "added 0.375 J (at most 0.125 J at a sample); feedback force jump max 0.250 N at a new "
            "model, 0.125 N otherwise\n",
            "  multirate scene thread: 86 overruns; scene step us: median 87.500, p99 88.500, max 90.500\n",

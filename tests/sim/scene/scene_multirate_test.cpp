@@ -58,6 +58,12 @@ TEST(SceneMultirate, SceneDtAndMarginGiveTheRatioAndEveryHeldBodyIsATool) {
       dir.write("one.toml", construction_with("[multirate]\nscene_dt = 0.001")));
   EXPECT_EQ(one.multirate->ratio, 1);
   EXPECT_EQ(one.multirate->margin_m, 0.0);
+  // The longest step where an organ's surface has folded: 0.5 ms unless set.
+  EXPECT_DOUBLE_EQ(s.multirate->fold_step_s, 5e-4);
+  const Scene fold = numen::sim::load_scene(dir.write(
+      "fold.toml",
+      construction_with("[multirate]\nscene_dt = 0.01\nmargin = 0.008\nfold_step = 0.002")));
+  EXPECT_DOUBLE_EQ(fold.multirate->fold_step_s, 0.002);
 }
 
 TEST(SceneMultirate, BadValuesAreLocatedErrors) {
@@ -81,6 +87,11 @@ TEST(SceneMultirate, BadValuesAreLocatedErrors) {
   EXPECT_NE(std::string(e3.what()).find("missing"), std::string::npos) << e3.what();
   const InputError e4 = load_error(dir, construction_with("[multirate]\nscene_dt = 0.01\nmargin = -0.001"));
   EXPECT_EQ(e4.key(), "multirate.margin");
+  const std::string no_fold =
+      construction_with("[multirate]\nscene_dt = 0.01\nmargin = 0.01\nfold_step = 0");
+  const InputError e6 = load_error(dir, no_fold);
+  EXPECT_EQ(e6.key(), "multirate.fold_step");
+  EXPECT_EQ(e6.line(), numen::test::line_of(no_fold, "fold_step = 0"));
   const InputError e5 = load_error(dir, construction_with("[multirate]\nscene_dt = 0.01\nmargn = 0.01"));
   EXPECT_NE(std::string(e5.what()).find("margn"), std::string::npos) << "a typo is refused: " << e5.what();
 }

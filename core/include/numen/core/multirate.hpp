@@ -250,6 +250,12 @@ struct MultirateSettings {
   /// Other bodies the device may hold later (tool switching, select()): their god-object and
   /// proximity models are built at construction. Duplicates and the first body are ignored.
   std::vector<int> tools;
+  /// Longest step (s, > 0; infinity: no sub-steps) of a scene step where an organ's surface has
+  /// folded: a scene step that starts with a triangle of an organ in contact turned more than
+  /// 90° from its rest normal (detail::organ_surface_folded()) is taken in ⌈scene_dt /
+  /// fold_step⌉ sub-steps, the god-object imposed along its twist (docs/organs.md, "Organs in
+  /// multirate": the organ's coarse step folds its surface over the tool).
+  double fold_step = 5e-4;
 };
 
 /// Counters of a MultirateGodObject. The device loop writes device_steps, stale_models,
@@ -275,6 +281,9 @@ struct MultirateCounters {
   /// model"; the observer, Hannaford & Ryu 2002, applied to the model update).
   double reset_energy = 0.0;
   double reset_energy_max = 0.0;  ///< The largest one sample added (J).
+  /// Scene steps taken in sub-steps because an organ's surface had folded
+  /// (MultirateSettings::fold_step).
+  std::int64_t folded_scene_steps = 0;
 };
 
 /// What the device loop hands the scene loop (MultirateGodObject::write_report()): the
@@ -486,6 +495,7 @@ class MultirateGodObject {
 
   int ratio_;
   double margin_;
+  double fold_step_;              // MultirateSettings::fold_step
   std::vector<Slot> slots_;       // one per body the device may hold (at least one)
   Model free_scene_model_;        // the scene loop without a god-object
   // Device loop.

@@ -54,6 +54,9 @@ struct MultirateSummary {
   /// and the most one sample added.
   double reset_energy_j = 0.0;
   double reset_energy_max_j = 0.0;
+  /// Scene steps taken in sub-steps because an organ's surface had folded under the tool
+  /// (core::MultirateCounters::folded_scene_steps).
+  std::int64_t folded_scene_steps = 0;
 };
 
 /// The divergence monitor of a run (divergence.hpp; docs/safety.md, "Divergence").

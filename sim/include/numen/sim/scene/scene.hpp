@@ -54,6 +54,9 @@ struct MultirateScene {
   double scene_dt_s = 0.0;  ///< The scene loop's period (s).
   int ratio = 1;            ///< N = scene_dt / dt ≥ 1: device periods per scene period.
   double margin_m = 0.0;    ///< Proximity margin δ (m): the god-object's spheres grown by it.
+  /// Longest step (s) of a scene step where an organ's surface has folded under the tool
+  /// (core::MultirateSettings::fold_step; scene key `fold_step`, default 0.5 ms).
+  double fold_step_s = 5e-4;
   /// The bodies the device holds in the run (the attached one, then the events' in order).
   std::vector<int> tools;
 };
