@@ -243,6 +243,7 @@ Scene replayed(Scene scene) {
 // its first 4.2 s (the hand reaches the organs at about 3.7 s). Every block of ten periods from a
 // multiple of ten holds one value; at a 1 kHz device loop every period is measured.
 TEST(RunMultirate, TheTargetIsMeasuredAtMostAtOneKilohertz) {
+  NUMEN_REQUIRE_ARTICULATION();  // the lattice scene's instrument
   numen::test::TempDir dir;
   const std::vector<std::pair<std::string, std::string>> bus = {
       {"latency = 0.0001", "compute_phase = 0.00005\nlatency = 0.00001"}};
