@@ -332,7 +332,10 @@ void MultirateGodObject::scene_step(const MultirateDeviceReport& in, MultirateSc
   static const std::vector<int> kNone;
   const std::vector<int>& device_body = scene_slot_ >= 0 ? slots_[static_cast<std::size_t>(scene_slot_)].device_body : kNone;
   const std::vector<int>& god = scene_slot_ >= 0 ? slots_[static_cast<std::size_t>(scene_slot_)].bodies : kNone;
-  const Model& model = scene_model();
+  // The scene loop's model (this thread's: its dt is a sub-step's below, and the device loop
+  // reads other fields of it, never dt).
+  Model& model = scene_slot_ >= 0 ? slots_[static_cast<std::size_t>(scene_slot_)].scene_model
+                                  : free_scene_model_;
   const double h = model.dt;
   const std::size_t nb = owed_.size();
   // What the device loop's planes gave each body since the last scene step.
@@ -384,11 +387,7 @@ void MultirateGodObject::scene_step(const MultirateDeviceReport& in, MultirateSc
   }
   if (substeps > 1) ++counters_.folded_scene_steps;
   const double hs = h / substeps;
-  // The scene loop's model steps at hs over the sub-steps (this thread's alone: the device
-  // loop reads other fields of it, never dt).
-  Model& stepped = scene_slot_ >= 0 ? slots_[static_cast<std::size_t>(scene_slot_)].scene_model
-                                    : free_scene_model_;
-  stepped.dt = hs;
+  model.dt = hs;
   const bool implicit = model.integrator == Integrator::kLinearlyImplicitEuler;
   // The god-object's imposed poses moved along their twists to a sub-step's start.
   const auto advance_imposed = [&](double dt) noexcept {
@@ -409,7 +408,7 @@ void MultirateGodObject::scene_step(const MultirateDeviceReport& in, MultirateSc
       if constexpr (kWithDeformable) detail::drop_look_ahead_contacts(*scene_);
       advance_imposed(hs);
     }
-    step_with_contacts(stepped, *scene_, &detect_and_build_planes, &context);
+    step_with_contacts(model, *scene_, &detect_and_build_planes, &context);
     rejected = (scene_->status & kNonFinite) != 0;
     if (rejected) break;
     stepped_time += hs;
@@ -436,7 +435,7 @@ void MultirateGodObject::scene_step(const MultirateDeviceReport& in, MultirateSc
       ++counters_.scene_contacts;
     }
   }
-  stepped.dt = h;
+  model.dt = h;
   if constexpr (kWithDeformable) detail::drop_look_ahead_contacts(*scene_);
   for (std::size_t b = 0; b < nb; ++b) {
     if (rejected) {  // rolled back: what was owed over the rest of the step is still owed

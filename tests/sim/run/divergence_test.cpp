@@ -26,11 +26,12 @@ using numen::core::Vec3;
 using numen::sim::DivergenceMonitor;
 using numen::test::LeanPart;
 
-/// The lean tool held at its start, its target where it is (nothing moves, nothing is put in).
-Data held_at_rest(const Model& m) {
+/// The state of `m` at its start with the tool (body `tool`) held where it is: its target at its
+/// pose, so its coupling holds nothing (nothing moves, nothing is put in).
+Data held_at_rest(const Model& m, int tool = 0) {
   Data d = numen::core::make_data(m);
-  d.target.position = d.bodies[0].position;
-  d.target.orientation = d.bodies[0].orientation;
+  d.target.position = d.bodies[static_cast<std::size_t>(tool)].position;
+  d.target.orientation = d.bodies[static_cast<std::size_t>(tool)].orientation;
   return d;
 }
 
@@ -146,26 +147,18 @@ TEST(DivergenceMonitor, ANodeTornFromItsAnchorLatchesTieStretch) {
   EXPECT_EQ(std::string(fast.divergence().cause), "node speed");
 }
 
-/// A flat organ (a net on an anchored body, no gravity) and a tool 20 mm above it.
+/// A flat organ (a net on an anchored body, no gravity) and a tool (body 1) 20 mm above it.
 Model flat_organ() {
   return numen::test::organ::organ_model(
       numen::test::organ::flat_patch(16, 0.0025), numen::test::organ::OrganParams{}, 1e-3,
       numen::core::CouplingMode::kGodObject, 0.005, Vec3(0, 0, 0.02));
 }
 
-/// The state of `m` at its start with the tool held where it is (its coupling holds nothing).
-Data tool_held_still(const Model& m) {
-  Data d = numen::core::make_data(m);
-  d.target.position = d.bodies[1].position;
-  d.target.orientation = d.bodies[1].orientation;
-  return d;
-}
-
 TEST(DivergenceMonitor, AnOrgansEnergyIsItsNetsPartAndIsTakenOnceWhileItIsUnchanged) {
   NUMEN_REQUIRE_DEFORMABLE();
   // A flat organ dented and moving.
   const Model m = flat_organ();
-  Data d = tool_held_still(m);
+  Data d = held_at_rest(m, 1);
   for (std::size_t i = 0; i < d.nodes.size(); i += 7) {
     d.nodes[i].position.z() -= 0.001;
     d.nodes[i].velocity = Vec3(0.0, 0.01, -0.02);
@@ -204,7 +197,7 @@ TEST(DivergenceMonitor, AnOrgansEnergyIsItsNetsPartAndIsTakenOnceWhileItIsUnchan
 TEST(DivergenceMonitor, AnOrgansNewStateIsJudgedInSlicesAndWholeWhenTheNextComesEarly) {
   NUMEN_REQUIRE_DEFORMABLE();
   const Model m = flat_organ();
-  Data d = tool_held_still(m);
+  Data d = held_at_rest(m, 1);
   for (std::size_t i = 0; i < d.nodes.size(); i += 7) d.nodes[i].velocity = Vec3(0.0, 0.01, -0.02);
   // The parts of an organ's energy sum to its whole (net_energy_part(), 4 and 7 parts).
   for (const int parts : {4, 7}) {
