@@ -92,6 +92,7 @@ TEST(SceneMultirate, BadValuesAreLocatedErrors) {
   const InputError e6 = load_error(dir, no_fold);
   EXPECT_EQ(e6.key(), "multirate.fold_step");
   EXPECT_EQ(e6.line(), numen::test::line_of(no_fold, "fold_step = 0"));
+  EXPECT_EQ(e6.message(), "must be in [1e-06, 10], got 0");
   const InputError e5 = load_error(dir, construction_with("[multirate]\nscene_dt = 0.01\nmargn = 0.01"));
   EXPECT_NE(std::string(e5.what()).find("margn"), std::string::npos) << "a typo is refused: " << e5.what();
 }
