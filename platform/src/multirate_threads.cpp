@@ -68,6 +68,7 @@ void MultirateThreads::run() noexcept {
   RealtimeSettings rt;
   rt.fifo_priority = settings_.fifo_priority;
   rt.cpu_affinity = settings_.cpu_affinity;
+  rt.timer_slack_ns = settings_.timer_slack_ns;
   rt.strict = settings_.strict;
   try {
     realtime_ = apply_realtime(rt);  // allocates: before the loop

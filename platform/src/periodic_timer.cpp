@@ -21,14 +21,20 @@ Wakeup PeriodicTimer::wait_next() noexcept {
     next_ns_ += w.missed_periods * period_ns_;
   }
   w.deadline_ns = next_ns_;
+  const std::int64_t sleep_until = next_ns_ - spin_ns_;
   timespec ts{};
-  ts.tv_sec = static_cast<time_t>(next_ns_ / 1'000'000'000);
-  ts.tv_nsec = static_cast<long>(next_ns_ % 1'000'000'000);
+  ts.tv_sec = static_cast<time_t>(sleep_until / 1'000'000'000);
+  ts.tv_nsec = static_cast<long>(sleep_until % 1'000'000'000);
   while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
   }
   w.woke_ns = monotonic_now_ns();
+  while (w.woke_ns < next_ns_) w.woke_ns = monotonic_now_ns();  // spin_ns_ > 0: the spin
   next_ns_ += period_ns_;
   return w;
+}
+
+void PeriodicTimer::set_spin_ns(std::int64_t spin_ns) noexcept {
+  spin_ns_ = spin_ns < 0 ? 0 : (spin_ns > period_ns_ ? period_ns_ : spin_ns);
 }
 
 Wakeup PeriodicTimer::wait_next(const std::atomic<bool>* stop, std::int64_t slice_ns) noexcept {

@@ -1,12 +1,14 @@
 /// @file realtime_setup.cpp
-/// SCHED_FIFO, mlockall, stack prefault and CPU affinity for the calling thread, each step
-/// checked and reported (sched(7), mlockall(2), sched_setaffinity(2), pthread_getattr_np(3)).
+/// SCHED_FIFO, mlockall, stack prefault, CPU affinity and timer slack for the calling thread,
+/// each step checked and reported (sched(7), mlockall(2), sched_setaffinity(2),
+/// pthread_getattr_np(3), prctl(2) PR_SET_TIMERSLACK).
 
 #include "numen/platform/realtime_setup.hpp"
 
 #include <alloca.h>
 #include <pthread.h>
 #include <sched.h>
+#include <sys/prctl.h>
 #include <sys/mman.h>
 #include <sys/resource.h>
 #include <sys/sysinfo.h>
@@ -188,6 +190,19 @@ RealtimeStep apply_scheduling(int priority, std::int64_t rtprio_limit) {
   return applied(what);
 }
 
+RealtimeStep apply_timer_slack(std::int64_t ns) {
+  const std::int64_t before = current_timer_slack_ns();
+  if (prctl(PR_SET_TIMERSLACK, static_cast<unsigned long>(ns), 0, 0, 0) != 0) {
+    const int err = errno;
+    return failed(err, "timer slack " + std::to_string(ns) + " ns refused: " + errno_text(err));
+  }
+  const std::int64_t got = current_timer_slack_ns();
+  if (got != ns)
+    return failed(EINVAL, "timer slack " + std::to_string(ns) + " ns set but the thread reports " +
+                              std::to_string(got) + " ns");
+  return applied(std::to_string(got) + " ns (was " + std::to_string(before) + " ns)");
+}
+
 const char* status_text(RealtimeStepStatus s) {
   switch (s) {
     case RealtimeStepStatus::kNotRequested:
@@ -238,7 +253,13 @@ KernelRealtime check_kernel_realtime() {
 
 bool any_step_requested(const RealtimeSettings& settings) noexcept {
   return settings.fifo_priority != 0 || settings.lock_memory ||
-         settings.prefault_stack_bytes > 0 || !settings.cpu_affinity.empty();
+         settings.prefault_stack_bytes > 0 || !settings.cpu_affinity.empty() ||
+         settings.timer_slack_ns > 0;
+}
+
+std::int64_t current_timer_slack_ns() noexcept {
+  const int v = prctl(PR_GET_TIMERSLACK, 0, 0, 0, 0);
+  return v < 0 ? -1 : static_cast<std::int64_t>(v);
 }
 
 RealtimeReport apply_realtime(const RealtimeSettings& settings) {
@@ -247,6 +268,9 @@ RealtimeReport apply_realtime(const RealtimeSettings& settings) {
         "RealtimeSettings.fifo_priority must be 0 (SCHED_OTHER) or "
         "1..99 (SCHED_FIFO), got " +
         std::to_string(settings.fifo_priority));
+  if (settings.timer_slack_ns < 0)
+    throw std::invalid_argument("RealtimeSettings.timer_slack_ns must be >= 0 (0: leave it), got " +
+                                std::to_string(settings.timer_slack_ns));
   RealtimeReport r;
   r.rtprio_limit = soft_limit(RLIMIT_RTPRIO);
   r.memlock_limit_bytes = soft_limit(RLIMIT_MEMLOCK);
@@ -254,6 +278,7 @@ RealtimeReport apply_realtime(const RealtimeSettings& settings) {
   if (settings.lock_memory) r.memory_lock = apply_memory_lock(r.memlock_limit_bytes);
   if (settings.prefault_stack_bytes > 0)
     r.stack_prefault = apply_stack_prefault(settings.prefault_stack_bytes);
+  if (settings.timer_slack_ns > 0) r.timer_slack = apply_timer_slack(settings.timer_slack_ns);
   if (settings.fifo_priority > 0)
     r.scheduling = apply_scheduling(settings.fifo_priority, r.rtprio_limit);
   r.kernel = check_kernel_realtime();
@@ -281,6 +306,7 @@ std::vector<std::string> describe(const RealtimeReport& r) {
   lines.push_back(k);
   lines.push_back("limits: RLIMIT_RTPRIO " + limit_text(r.rtprio_limit, "") + ", RLIMIT_MEMLOCK " +
                   limit_text(r.memlock_limit_bytes, " bytes"));
+  lines.push_back(step_line("timer slack", r.timer_slack));
   return lines;
 }
 

@@ -11,6 +11,7 @@
 #include "numen/sim/input/cli_values.hpp"
 #include "numen/sim/input/input_error.hpp"
 #include "numen/sim/run/run_verdict.hpp"
+#include "numen/sim/scene/scene.hpp"
 
 namespace numen::app {
 
@@ -68,6 +69,11 @@ std::string check_bus(const std::string& v, bool real_only) {
   } catch (const std::invalid_argument& e) {
     return e.what();
   }
+}
+
+void print_load_warnings(const sim::Scene& scene, std::ostream& err) {
+  for (const std::string& w : scene.warnings) err << "numen: warning: " << w << "\n";
+  err.flush();
 }
 
 }  // namespace numen::app

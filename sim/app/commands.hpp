@@ -18,6 +18,10 @@
 #include "numen/platform/multirate_threads.hpp"
 #include "numen/platform/realtime_setup.hpp"
 
+namespace numen::sim {
+struct Scene;
+}  // namespace numen::sim
+
 namespace numen::app {
 
 /// Runs a subcommand's body, which returns its exit status; an exception ends it with 2 for
@@ -49,7 +53,8 @@ class RunCommand {
  private:
   CLI::App* cli_;
   std::string scene_path_, trace_path_, coupling_, bus_ = "sim", record_path_, record_view_path_, view_;
-  double duration_ = -1.0, phase_ = -1.0, view_rate_ = 60.0, speed_ = 0.0;
+  double duration_ = -1.0, phase_ = -1.0, view_rate_ = 60.0, speed_ = 0.0, spin_us_ = 0.0;
+  std::int64_t timer_slack_ns_ = 1;
   std::string wait_for_viewer_;  // --wait-for-viewer[=S] as given (a flag: CLI11 would round a number)
   bool json_ = false, realtime_ = false, replay_ = false, strict_ = false;
   platform::RealtimeSettings rt_;
@@ -60,6 +65,9 @@ class RunCommand {
 /// The viewer page's folder: share/numen/viewer of the installed prefix, else the build
 /// tree's (build/viewer, sim/CMakeLists.txt); sim::shipped_viewer_dir().
 std::string viewer_page_dir();
+/// Prints each of the scene loader's warnings on `err` as "numen: warning: …", when the scene
+/// has loaded (a run keeps them in its summary too).
+void print_load_warnings(const sim::Scene& scene, std::ostream& err);
 /// Prints a warning on `err` when the viewer's `host` is not a loopback address.
 void warn_if_exposed(const std::string& host, std::ostream& err);
 

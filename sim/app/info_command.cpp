@@ -4,6 +4,7 @@
 #include <iostream>
 
 #include "commands.hpp"
+#include "numen/sim/run/step_timing.hpp"
 #include "numen/sim/scene/scene.hpp"
 #include "numen/sim/scene/scene_info.hpp"
 
@@ -21,13 +22,17 @@ int InfoCommand::execute() const {
   const std::string path = scene_.empty() ? sim::default_scene_path() : scene_;
   sim::SceneOverrides overrides;
   overrides.strict = strict_;
-  const sim::Scene scene = sim::load_scene(path, overrides);
-  for (const std::string& w : scene.warnings) std::cerr << "numen: warning: " << w << "\n";
+  sim::Scene scene = sim::load_scene(path, overrides);
+  const sim::StepTiming timing = sim::time_scene_step(scene);
+  if (const auto slow = sim::step_timing_warning(timing)) scene.warnings.push_back(*slow);
+  print_load_warnings(scene, std::cerr);
   const sim::SceneInfo si = sim::describe_scene(scene);
-  if (json_)
+  if (json_) {
     std::cout << sim::format_scene_info_json(si) << std::endl;
-  else
+  } else {
     std::cout << sim::format_scene_info(si);
+    std::cout << sim::describe_step_timing(timing) << "\n";
+  }
   return 0;
 }
 

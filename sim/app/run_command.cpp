@@ -3,6 +3,7 @@
 
 #include <sched.h>
 
+#include <cmath>
 #include <cstdint>
 #include <iostream>
 #include <limits>
@@ -14,6 +15,7 @@
 #include "numen/sim/input/input_error.hpp"
 #include "numen/sim/run/run.hpp"
 #include "numen/sim/run/run_verdict.hpp"
+#include "numen/sim/run/step_timing.hpp"
 #include "numen/sim/scene/scene.hpp"
 #include "numen/sim/view/view_scene.hpp"
 #include "numen/sim/view/view_server.hpp"
@@ -57,6 +59,15 @@ RunCommand::RunCommand(CLI::App& parent)
   run->add_flag("--rt-strict", rt_.strict,
                 "Fail instead of reporting when a real-time step fails (the loop thread's and the "
                 "scene thread's)");
+  run->add_option("--timer-slack", timer_slack_ns_,
+                  "Paced run: timer slack in ns of the loop and scene threads (prctl "
+                  "PR_SET_TIMERSLACK), whatever their scheduling; default 1, 0 leaves the "
+                  "kernel's (50000 for SCHED_OTHER)")
+      ->check(CLI::Range(std::int64_t{0}, std::int64_t{1'000'000'000}));
+  run->add_option("--spin", spin_us_,
+                  "Paced run with --cpu: end each period's wait in a busy-wait of this many "
+                  "microseconds before the deadline (default 0: sleep to it; docs/realtime.md)")
+      ->check(number_check(0.0, 1e6, false));
   run->add_option("--scene-rt-priority", scene_thread_.fifo_priority,
                   "Multirate scene, paced run: SCHED_FIFO priority 1-99 of the scene thread (0: "
                   "leave the scheduler alone; below the loop thread's)")
@@ -121,12 +132,20 @@ int RunCommand::execute() const {
                           "makes a failed real-time step fatal; no real-time step was asked "
                           "(--rt-priority, --lock-memory, --prefault-stack, --cpu, "
                           "--scene-rt-priority, --scene-cpu)");
+  if (cli_->count("--timer-slack") > 0 && !realtime_ && !sim::parse_bus_spec(bus_).real())
+    throw sim::InputError("", 0, 0, "--timer-slack",
+                          "sets the timer slack of a paced run's threads; this run is offline "
+                          "(no --realtime, no real bus)");
   sim::SceneOverrides overrides;
   if (!coupling_.empty()) overrides.coupling = sim::parse_coupling_mode(coupling_);
   overrides.replay = replay_;
   overrides.strict = strict_;
   const std::string path = scene_path_.empty() ? sim::default_scene_path() : scene_path_;
-  const sim::Scene scene = sim::load_scene(path, overrides);
+  sim::Scene scene = sim::load_scene(path, overrides);
+  // The load's warnings on stderr now (a paced run may last half an hour), and in the summary.
+  if (const auto slow = sim::step_timing_warning(sim::time_scene_step(scene)))
+    scene.warnings.push_back(*slow);
+  print_load_warnings(scene, std::cerr);
   if (cli_->count("--view-rate") > 0 && view_rate_ * scene.model.dt > 1.0)
     std::cerr << "numen: --view-rate " << view_rate_ << " is above the device rate ("
               << 1.0 / scene.model.dt << " Hz): the stream sends every period" << std::endl;
@@ -139,6 +158,8 @@ int RunCommand::execute() const {
   options.rt = rt_;
   options.scene_thread = scene_thread_;
   options.scene_thread.strict = rt_.strict;
+  options.timer_slack_ns = timer_slack_ns_;
+  options.spin_ns = std::llround(spin_us_ * 1e3);
   options.stop = &stop_flag();
   options.stop_signal = &stop_signal_number();
   options.compute_phase_s = phase_;

@@ -173,4 +173,22 @@ TEST(MultirateThreads, AFailedSetupIsReportedOrStrictlyRefused) {
   EXPECT_EQ(threads.counters().scene_steps, 0);
 }
 
+// The defects issue: the scene thread's timer slack is set on it whatever its scheduling, read
+// back on it (apply_realtime() on the thread) and reported.
+TEST(MultirateThreads, TheSceneThreadsTimerSlackIsSetOnIt) {
+  const core::Model scene = press_scene(1e-3);
+  auto god = std::make_unique<core::MultirateGodObject>(scene, 0, core::MultirateSettings{10, 0.01, {}});
+  numen::platform::SceneThreadSettings settings;
+  settings.timer_slack_ns = 1;
+  const std::int64_t mine = numen::platform::current_timer_slack_ns();
+  numen::platform::MultirateThreads threads(*god, 10'000'000, settings);
+  threads.start();
+  const numen::platform::RealtimeStep& slack = threads.realtime_report().timer_slack;
+  EXPECT_EQ(slack.status, numen::platform::RealtimeStepStatus::kApplied) << slack.message;
+  EXPECT_EQ(slack.message.rfind("1 ns (was ", 0), 0u) << slack.message;
+  EXPECT_EQ(numen::platform::current_timer_slack_ns(), mine);  // not the starting thread's
+  threads.stop();
+}
+
 }  // namespace
+

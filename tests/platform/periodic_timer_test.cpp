@@ -12,6 +12,8 @@
 #include <cstdio>
 #include <thread>
 
+#include <time.h>
+
 #include "numen/platform/monotonic_clock.hpp"
 
 namespace {
@@ -63,3 +65,39 @@ TEST(PeriodicTimer, WithoutAStopFlagItIsWaitNext) {
 }
 
 }  // namespace
+
+namespace {
+
+std::int64_t thread_cpu_ns() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
+}
+
+}  // namespace
+
+// The spin (set_spin_ns, `numen run --spin`): the wait sleeps to spin_ns before the deadline
+// and reads the clock until it, on this thread's CPU: never before the deadline, and the spin
+// is CPU time of the waiting thread (a sleep to the deadline takes almost none).
+TEST(PeriodicTimer, ASpinEndsTheWaitAtTheDeadlineOnTheWaitingThreadsCpu) {
+  constexpr std::int64_t kPeriod = 10'000'000, kSpin = 5'000'000;  // 10 ms periods, 5 ms spin
+  PeriodicTimer timer(kPeriod, monotonic_now_ns());
+  EXPECT_EQ(timer.spin_ns(), 0);
+  timer.set_spin_ns(kSpin);
+  EXPECT_EQ(timer.spin_ns(), kSpin);
+  const std::int64_t cpu0 = thread_cpu_ns();
+  for (int k = 0; k < 10; ++k) {
+    const Wakeup w = timer.wait_next();
+    EXPECT_GE(w.woke_ns, w.deadline_ns) << "period " << k;
+  }
+  const std::int64_t spun = thread_cpu_ns() - cpu0;
+  std::printf("[   info   ] 10 periods with a 5 ms spin: %.1f ms of the thread's CPU time\n",
+              static_cast<double>(spun) * 1e-6);
+  // 50 ms of spin in all: at least a tenth of it on a machine shared with other work.
+  EXPECT_GT(spun, 5'000'000);
+  // Clamped to [0, period].
+  timer.set_spin_ns(-5);
+  EXPECT_EQ(timer.spin_ns(), 0);
+  timer.set_spin_ns(3 * kPeriod);
+  EXPECT_EQ(timer.spin_ns(), kPeriod);
+}

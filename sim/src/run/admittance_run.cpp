@@ -245,14 +245,13 @@ RunSummary run_admittance_scene(const Scene& scene, const RunOptions& options) {
     runner.set_compute_phase_ns(phase);
   // A multirate scene's scene thread is started before the real-time setup pins and promotes
   // this thread (as run_impedance_scene does).
-  if (options.realtime) runner.start_scene_thread(options.scene_thread);
+  if (options.realtime) runner.start_scene_thread(paced_scene_thread(options));
   if (!options.record_view_path.empty() || !options.view_sinks.empty())
     runner.stream_view(options.record_view_path, options.view_sinks, options.view_rate_hz,
                        !options.realtime);
-  std::vector<std::string> rt_lines = apply_run_realtime(options.rt);
+  std::vector<std::string> rt_lines = apply_run_realtime(options, options.realtime);
   const std::int64_t wall0 = platform::monotonic_now_ns();
-  platform::PeriodicTimer timer(static_cast<std::int64_t>(std::llround(scene.model.dt * 1e9)),
-                                wall0);
+  platform::PeriodicTimer timer = run_timer(options, scene.model.dt, wall0);
   ViewPacer view_pacer(scene.model.dt, options.realtime ? 0.0 : options.view_speed, wall0,
                        options.stop);
   RunLoopTally tally;
@@ -286,7 +285,7 @@ RunSummary run_admittance_scene(const Scene& scene, const RunOptions& options) {
   tally.write(s);
   s.overrun_limit = overrun_limit;
   s.realtime_setup = std::move(rt_lines);
-  runner.multirate().describe_scene_thread(options.scene_thread, s.realtime_setup);
+  runner.multirate().describe_scene_thread(paced_scene_thread(options), s.realtime_setup);
   s.stopped = stopped;
   if (!options.trace_path.empty()) write_in_memory_trace(runner.trace(), options.trace_path, s);
   return s;

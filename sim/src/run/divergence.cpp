@@ -133,6 +133,20 @@ void DivergenceMonitor::rebase(const core::Model& model, const core::Data& data)
     push_speed_mps_ = std::max(push_speed_mps_, std::sqrt(2.0 * contact0_ / lightest));
 }
 
+void DivergenceMonitor::end_startup(const core::Model& model, const core::Data& data) noexcept {
+  // What the push-out left moving keeps its room (10 x its speed); the start's contact energy
+  // no longer counts.
+  double fastest = 0.0;
+  for (int b = 0; b < model.num_bodies(); ++b) {
+    const auto k = static_cast<std::size_t>(b);
+    const core::BodyState& s = data.bodies[k];
+    const double v = s.linear_velocity.norm() + s.angular_velocity.norm() * model.bodies[k].bounding_radius;
+    if (std::isfinite(v)) fastest = std::max(fastest, v);
+  }
+  push_speed_mps_ = fastest;
+  rebase(model, data);  // E_0 and W_in from here; the push speed of the contacts now
+}
+
 bool DivergenceMonitor::observe(const core::Model& model, const core::Data& data,
                                 std::int64_t period, double time_s,
                                 bool organs_unchanged) noexcept {

@@ -74,7 +74,8 @@ void MultirateRun::describe_scene_thread(const platform::SceneThreadSettings& se
   if (!scene_thread_) return;
   for (const std::string& line : platform::describe(scene_thread_->realtime_report()))
     if ((settings.fifo_priority != 0 && line.rfind("scheduling:", 0) == 0) ||
-        (!settings.cpu_affinity.empty() && line.rfind("cpu affinity:", 0) == 0))
+        (!settings.cpu_affinity.empty() && line.rfind("cpu affinity:", 0) == 0) ||
+        (settings.timer_slack_ns > 0 && line.rfind("timer slack:", 0) == 0))
       lines.push_back("scene thread " + line);
 }
 

@@ -46,9 +46,23 @@ void RunLoopTally::write(RunSummary& s) const {
   s.rearm_first_period = rearm_first_;
 }
 
-std::vector<std::string> apply_run_realtime(const platform::RealtimeSettings& rt) {
+std::vector<std::string> apply_run_realtime(const RunOptions& options, bool paced) {
+  platform::RealtimeSettings rt = options.rt;
+  if (paced) rt.timer_slack_ns = options.timer_slack_ns;
   if (!platform::any_step_requested(rt)) return {};
   return platform::describe(platform::apply_realtime(rt));  // throws only if strict
+}
+
+platform::SceneThreadSettings paced_scene_thread(const RunOptions& options) {
+  platform::SceneThreadSettings st = options.scene_thread;
+  st.timer_slack_ns = options.timer_slack_ns;
+  return st;
+}
+
+platform::PeriodicTimer run_timer(const RunOptions& options, double dt_s, std::int64_t start_ns) {
+  platform::PeriodicTimer timer(static_cast<std::int64_t>(std::llround(dt_s * 1e9)), start_ns);
+  timer.set_spin_ns(options.spin_ns);
+  return timer;
 }
 
 namespace {
@@ -246,6 +260,25 @@ const platform::PeriodReport& SceneRunner::exchange(std::int64_t t, std::int64_t
   return loop_.end_period(t + phase_ns_);
 }
 
+void SceneRunner::count_zero_torque(const platform::PeriodReport& report,
+                                    RunSummary& s) const noexcept {
+  ++s.zero_torque_periods;
+  const hal::ImpedanceDevice& device = loop_.impedance();
+  const hal::SentTorques& sent = device.sent_torques();
+  if (report.fault_cause != hal::FaultCause::kNone)
+    ++s.zero_torque_safe_state;
+  else if (device.shutting_down())
+    ++s.zero_torque_shutdown;
+  else if (s.managed && report.lifecycle != hal::LifecycleState::kActive)
+    ++s.zero_torque_startup;
+  else if (sent.gated)
+    ++s.zero_torque_gated;
+  else if (sent.ramp < 1.0)
+    ++s.zero_torque_soft_start;
+  else
+    ++s.zero_torque_below_resolution;
+}
+
 void SceneRunner::count_period(const platform::PeriodReport& report) noexcept {
   RunSummary& s = acc_;
   if (report.frames_read > 0) s.last_device_frame_period = k_ - 1;
@@ -254,7 +287,7 @@ void SceneRunner::count_period(const platform::PeriodReport& report) noexcept {
   if (port_->state() != hal::BusState::kOk || report.command_status == hal::IoStatus::kError)
     ++s.bus_error_periods;
   if (!report.sample_valid) ++s.invalid_periods;
-  if (!report.torque_commanded) ++s.zero_torque_periods;
+  if (!report.torque_commanded) count_zero_torque(report, s);
   if (report.entered_safe_stop && !has_first_fault_ && loop_.supervisor() != nullptr &&
       loop_.supervisor()->first_fault() != nullptr) {
     first_fault_ = *loop_.supervisor()->first_fault();
@@ -341,15 +374,15 @@ RunSummary run_impedance_scene(const Scene& scene, const RunOptions& options) {
   // The writer threads and a multirate scene's scene thread are started before the real-time
   // setup pins and promotes this thread.
   if (real && !options.trace_path.empty()) runner.stream_trace(options.trace_path);
-  if (options.realtime || real) runner.start_scene_thread(options.scene_thread);
+  if (options.realtime || real) runner.start_scene_thread(paced_scene_thread(options));
   if (!options.record_view_path.empty() || !options.view_sinks.empty())
     runner.stream_view(options.record_view_path, options.view_sinks, options.view_rate_hz,
                        !(options.realtime || real));
-  std::vector<std::string> rt_lines = apply_run_realtime(options.rt);
   const bool paced = options.realtime || real;
+  std::vector<std::string> rt_lines = apply_run_realtime(options, paced);
   RunLoopTally tally;
   const std::int64_t wall0 = platform::monotonic_now_ns();
-  platform::PeriodicTimer timer(static_cast<std::int64_t>(std::llround(scene.model.dt * 1e9)), wall0);
+  platform::PeriodicTimer timer = run_timer(options, scene.model.dt, wall0);
   auto stop_requested = [&] {
     return options.stop != nullptr && options.stop->load(std::memory_order_relaxed);
   };
@@ -408,7 +441,7 @@ RunSummary run_impedance_scene(const Scene& scene, const RunOptions& options) {
   s.overrun_limit = s.managed && paced ? options.overrun_limit : 0;
   s.realtime_setup = std::move(rt_lines);
   // The scene thread's own scheduling and CPUs (--scene-rt-priority, --scene-cpu), if asked.
-  runner.multirate().describe_scene_thread(options.scene_thread, s.realtime_setup);
+  runner.multirate().describe_scene_thread(paced_scene_thread(options), s.realtime_setup);
   s.stopped = stopped;
   s.shutdown_periods = shutdown;
   s.drives_disabled = runner.loop().drives_disabled();

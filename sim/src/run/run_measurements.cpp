@@ -245,6 +245,7 @@ void SceneRunner::track_startup(const PeriodContacts& c) noexcept {
       if (c.tool_contacts == 0 || k_ - s.startup_steps >= startup_settle_periods_) {
         in_startup_ = false;
         s.tool_penetration_max_mm = std::max(s.tool_penetration_max_mm, startup_window_max_ * 1e3);
+        divergence_.end_startup(scene_->model, data_);  // the push-out no longer sets its bounds
       }
     }
   }

@@ -39,6 +39,28 @@ std::size_t in_memory_trace_capacity(std::int64_t periods) {
 
 namespace {
 
+/// Refuses a --spin that this run would not apply or that would take the loop's CPU from
+/// others (InputError naming the option).
+void check_pacing_options(const Scene& scene, const RunOptions& options, bool paced) {
+  if (options.spin_ns == 0) return;
+  const std::string spin = format_input_number(static_cast<double>(options.spin_ns) * 1e-3) + " us";
+  if (options.spin_ns < 0)
+    throw InputError("", 0, 0, "--spin", "must be >= 0 us (got " + spin + ")");
+  if (!paced)
+    throw InputError("", 0, 0, "--spin",
+                     "ends a paced period's wait in a busy-wait; this run is offline (no "
+                     "--realtime, no real bus)");
+  if (options.rt.cpu_affinity.empty())
+    throw InputError("", 0, 0, "--spin",
+                     "busy-waits up to " + spin +
+                         " a period on the loop thread's CPU: give it a CPU of its own with "
+                         "--cpu (docs/realtime.md, \"Spinning the end of the wait\")");
+  if (static_cast<double>(options.spin_ns) >= scene.model.dt * 1e9)
+    throw InputError("", 0, 0, "--spin",
+                     spin + " must be below the period dt = " +
+                         format_input_number(scene.model.dt * 1e6) + " us");
+}
+
 /// Refuses options that this run would not apply (InputError naming the option): nothing a
 /// user asks for is dropped without a word.
 void check_option_values(const Scene& scene, const RunOptions& options) {
@@ -55,6 +77,7 @@ void check_option_values(const Scene& scene, const RunOptions& options) {
                      "paces an offline run; this run is paced at real time already (--realtime "
                      "or a real bus)");
   compute_phase_override_ns(scene, options);  // --phase at or above dt
+  check_pacing_options(scene, options, paced);
   // A simulated run's trace is kept in memory until it ends (a real bus streams it).
   if (!options.trace_path.empty() && (scene.admittance || !parse_bus_spec(options.bus.spec).real()))
     in_memory_trace_capacity(std::llround(duration / scene.model.dt));

@@ -188,7 +188,9 @@ constexpr RunSummarySegment kLayout[] = {
      "{first_fault.time_s} s, period {first_fault.period}",
      set("managed"), set("first_fault.cause")},
     {"; EMCY {emcys} ({emcy_faults} faults), heartbeat losses {heartbeat_losses}, zero-torque "
-     "periods {zero_torque_periods}\n",
+     "periods {zero_torque_periods} (start-up {zero_torque_startup}, safe state "
+     "{zero_torque_safe_state}, shutdown {zero_torque_shutdown}, gated {zero_torque_gated}, soft "
+     "start {zero_torque_soft_start}, below resolution {zero_torque_below_resolution})\n",
      set("managed")},
     {"  SDO: {configured_nodes} node configuration(s) from DCFs; in-loop reads {sdo_reads}, "
      "errors {sdo_read_errors}\n",

@@ -640,6 +640,10 @@ TEST(NumenCli, OptionsARunWouldNotApplyAreInputRejected) {
       {{"--view-rate", "30"}, "--view-rate"},  // no stream to set the rate of
       {{"--wait-for-viewer"}, "--wait-for-viewer"},  // no viewer to wait for
       {{"--rt-strict"}, "--rt-strict"},        // no real-time step to make fatal
+      {{"--timer-slack", "1"}, "--timer-slack"},  // an offline run has no deadlines
+      {{"--spin", "100"}, "--spin"},              // ... and no wait to spin
+      {{"--realtime", "--spin", "100"}, "--spin"},  // a spin needs a CPU of its own (--cpu)
+      {{"--realtime", "--cpu", "0", "--spin", "1000"}, "--spin"},  // not below dt = 1 ms
   };
   for (const auto& [extra, key] : cases) {
     std::vector<std::string> args = {kNumen, "run", kLattice, "--duration", "0.05"};
@@ -656,6 +660,37 @@ TEST(NumenCli, OptionsARunWouldNotApplyAreInputRejected) {
   EXPECT_EQ(v.status, 2) << v.out << v.err;
   EXPECT_NE(v.err.find("--page"), std::string::npos) << v.err;
   EXPECT_EQ(v.out.find("open http://"), std::string::npos) << v.out;
+}
+
+// The defects issue: the load's warnings were printed only in the summary, at the end of the run
+// (a 30-minute paced run's user saw them after it). They are on stderr when the scene has loaded,
+// before the run's summary (here on stderr too: --json), and still in the summary.
+TEST(NumenCli, LoadWarningsArePrintedWhenTheSceneLoadsAndKeptInTheSummary) {
+  NUMEN_REQUIRE_ARTICULATION();
+  TempDir dir;
+  const std::string scene = dir.write(
+      "stiff.toml", lattice_scene_copy({{"stiffness = 2.0e4     # N/m per sphere contact",
+                                         "stiffness = 1.0e9"}}));
+  const ChildResult r = run_child({kNumen, "run", scene, "--duration", "0.01", "--json"}, dir.path(), 60);
+  const std::size_t at_load = r.err.find("numen: warning: ");
+  const std::size_t summary = r.err.find("scene lattice");
+  ASSERT_NE(at_load, std::string::npos) << r.err;
+  ASSERT_NE(summary, std::string::npos) << r.err;
+  EXPECT_LT(at_load, summary) << r.err;
+  EXPECT_NE(r.err.find("contact_max_omega_dt", at_load), std::string::npos) << r.err;
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  ASSERT_FALSE(j.at("warnings").empty());
+  EXPECT_NE(j.at("warnings").at(0).get<std::string>().find("contact_max_omega_dt"), std::string::npos);
+}
+
+// `numen info` prints the scene's step timed at load against its period (docs/realtime.md,
+// "Before a paced run").
+TEST(NumenCli, InfoPrintsTheStepTimedAtLoad) {
+  NUMEN_REQUIRE_ARTICULATION();
+  const ChildResult r = run_child({kNumen, "info", kLattice}, ".", 60);
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.out.find("step at load: median "), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("steps, against the 1000 us period ("), std::string::npos) << r.out;
 }
 
 // Defect 1: --trace of a simulated run keeps one record per period; a run whose trace would

@@ -30,6 +30,8 @@ struct SceneThreadSettings {
   /// stack prefault are the device loop's, process-wide or its own: not applied here).
   int fifo_priority = 0;
   std::vector<int> cpu_affinity;
+  /// Timer slack of the scene thread (ns), as RealtimeSettings::timer_slack_ns; 0: leave it.
+  std::int64_t timer_slack_ns = 0;
   /// Like RealtimeSettings::strict: a step that fails stops the thread and start() throws
   /// (else the failure is reported in realtime_report() and the thread runs on).
   bool strict = false;

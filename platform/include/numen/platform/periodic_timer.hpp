@@ -2,7 +2,9 @@
 /// @file periodic_timer.hpp
 /// Fixed-period wake-ups on absolute CLOCK_MONOTONIC deadlines
 /// (clock_nanosleep with TIMER_ABSTIME): no drift accumulates, a late period
-/// is reported as an overrun instead of being hidden.
+/// is reported as an overrun instead of being hidden. Optionally the wait ends in a short
+/// busy-wait on the clock (spin), for a loop on a CPU of its own on a kernel without
+/// PREEMPT_RT (docs/realtime.md "Spinning the end of the wait").
 
 #include <atomic>
 #include <cstdint>
@@ -46,10 +48,19 @@ class PeriodicTimer {
   Wakeup wait_next(const std::atomic<bool>* stop, std::int64_t slice_ns) noexcept;
   /// The period (ns).
   std::int64_t period_ns() const noexcept { return period_ns_; }
+  /// The wait sleeps until `spin_ns` before each deadline, then reads CLOCK_MONOTONIC in a
+  /// loop until the deadline: the wake-up's own latency (the kernel's timer, the scheduler)
+  /// is taken before the deadline instead of after it, at the price of a CPU busy for up to
+  /// `spin_ns` a period. 0 (the default): one clock_nanosleep to the deadline. Clamped to
+  /// [0, period]. Meant for a thread on a CPU no other thread uses.
+  void set_spin_ns(std::int64_t spin_ns) noexcept;
+  /// The spin of set_spin_ns() (ns).
+  std::int64_t spin_ns() const noexcept { return spin_ns_; }
 
  private:
   std::int64_t period_ns_;
   std::int64_t next_ns_;
+  std::int64_t spin_ns_ = 0;
 };
 
 }  // namespace numen::platform

@@ -4,8 +4,10 @@
 /// happened: SCHED_FIFO priority (pthread_setschedparam, POSIX.1-2017 "Scheduling Policies";
 /// sched(7)), memory locking (mlockall(2): MCL_CURRENT | MCL_FUTURE), stack prefaulting (the
 /// pages are touched once so the loop takes no page fault on them later), CPU affinity
-/// (sched_setaffinity(2) with pid 0: the calling thread). And whether the kernel itself is
-/// PREEMPT_RT (/sys/kernel/realtime, uname -v).
+/// (sched_setaffinity(2) with pid 0: the calling thread), the thread's timer slack
+/// (prctl(2) PR_SET_TIMERSLACK: how late the kernel may fire its timers to coalesce wake-ups,
+/// 50 µs by default for a SCHED_OTHER thread). And whether the kernel itself is PREEMPT_RT
+/// (/sys/kernel/realtime, uname -v).
 ///
 /// Lack of privilege is not an exception: every step is reported as not requested, applied
 /// or failed (errno and a message that says how to grant the privilege), and a non-real-time
@@ -40,6 +42,13 @@ struct RealtimeSettings {
   /// the step fails and the previous affinity is kept (the kernel would silently drop
   /// unusable CPUs from a mask; this does not).
   std::vector<int> cpu_affinity;
+  /// Timer slack of the calling thread in ns (prctl(PR_SET_TIMERSLACK)); 0: leave it alone.
+  /// The kernel may fire a SCHED_OTHER thread's timers up to this late so that wake-ups
+  /// coalesce: its default of 50 µs made every wake-up of a 100 µs loop 54–66 µs late on a
+  /// 16-core PREEMPT_DYNAMIC machine where SCHED_FIFO was refused (docs/realtime.md "Timer
+  /// slack"). 1 is the minimum (the kernel reads 0 as "back to the default"). Applied whatever
+  /// the scheduling policy, and read back (PR_GET_TIMERSLACK).
+  std::int64_t timer_slack_ns = 0;
   /// True: apply_realtime() throws std::runtime_error if any requested step failed (the
   /// message is describe() of the report). False: failures are only reported.
   bool strict = false;
@@ -76,6 +85,7 @@ struct RealtimeReport {
   RealtimeStep memory_lock;     ///< mlockall (lock_memory).
   RealtimeStep stack_prefault;  ///< stack touch (prefault_stack_bytes).
   RealtimeStep affinity;        ///< CPU affinity (cpu_affinity).
+  RealtimeStep timer_slack;     ///< Timer slack (timer_slack_ns).
   KernelRealtime kernel;        ///< The kernel check (always done).
   /// RLIMIT_RTPRIO soft limit when the report was made (-1: unlimited).
   std::int64_t rtprio_limit = 0;
@@ -84,16 +94,17 @@ struct RealtimeReport {
   /// No requested step failed.
   bool ok() const noexcept {
     return !scheduling.failed() && !memory_lock.failed() && !stack_prefault.failed() &&
-           !affinity.failed();
+           !affinity.failed() && !timer_slack.failed();
   }
 };
 
-/// True if `settings` asks for any step (a priority, the memory lock, a stack prefault or
-/// CPUs); `strict` alone asks for none.
+/// True if `settings` asks for any step (a priority, the memory lock, a stack prefault, CPUs
+/// or a timer slack); `strict` alone asks for none.
 bool any_step_requested(const RealtimeSettings& settings) noexcept;
 
-/// Applies `settings` to the calling thread (scheduling, affinity, stack) and process
-/// (memory lock), in the order affinity → memory lock → stack prefault → scheduling (pages
+/// Applies `settings` to the calling thread (scheduling, affinity, stack, timer slack) and
+/// process (memory lock), in the order affinity → memory lock → stack prefault → timer slack →
+/// scheduling (pages
 /// are faulted on the CPU the loop will run on; the thread becomes FIFO last), and
 /// checks the kernel. Never throws for lack of privilege or a CPU that cannot be used: those
 /// are failed steps. Throws std::invalid_argument if fifo_priority is outside 0..99, and —
@@ -109,10 +120,16 @@ KernelRealtime check_kernel_realtime();
 /// is utsname.version.
 KernelRealtime classify_kernel(const char* sysfs_text, const std::string& uname_version);
 
-/// Human-readable lines: one per step, one for the kernel, one for the limits. Example:
+/// Human-readable lines: one per step, one for the kernel, one for the limits, then the timer
+/// slack's step. Example:
 ///   "scheduling: applied: SCHED_FIFO priority 80"
 ///   "memory lock: FAILED: mlockall(MCL_CURRENT|MCL_FUTURE) refused: ..."
 ///   "kernel: not real-time (no /sys/kernel/realtime; uname -v: #1 SMP PREEMPT_DYNAMIC ...)"
+///   "limits: RLIMIT_RTPRIO 0, RLIMIT_MEMLOCK 8388608 bytes"
+///   "timer slack: applied: 1 ns (was 50000 ns)"
 std::vector<std::string> describe(const RealtimeReport& report);
+
+/// The calling thread's timer slack in ns (prctl(PR_GET_TIMERSLACK)); -1 if it cannot be read.
+std::int64_t current_timer_slack_ns() noexcept;
 
 }  // namespace numen::platform

@@ -30,6 +30,13 @@
 /// E₀ + W_in is what a passive scene (Adams & Hannaford 1999: the virtual coupling is passive)
 /// can hold at most. The energy bound applies where the coupling springs act (god-object and
 /// first-order modes); it is rebased when the held body changes (an attach event).
+///
+/// A tool that starts inside an obstacle is pushed out by it (the run's start-up, RunSummary):
+/// E_c0 then sets v_ref and E₀ for the push-out only. When the runner says the start-up has
+/// ended (end_startup()), both are rebased on the state then: the push speed becomes the
+/// larger of √(2 E_c / m_min) of the contacts then and the fastest body's speed then (what the
+/// push-out left moving), E₀ the stored energy then. A trial that starts 20.9 mm inside the
+/// tissue no longer runs its whole length under a 989 m/s speed limit.
 
 #include <algorithm>
 #include <cstdint>
@@ -97,6 +104,10 @@ class DivergenceMonitor {
   bool observe(const core::Model& model, const core::Data& data, std::int64_t period, double time_s,
                bool organs_unchanged = false) noexcept;
 
+  /// The run's start-up push-out ended with `data` (see the file comment): the speed bound's
+  /// push speed and the energy base E₀ + W_in are rebased on this state. No allocation.
+  void end_startup(const core::Model& model, const core::Data& data) noexcept;
+
   /// Judges each new state of the organs over `slices` calls (observe(); at least 1): a
   /// multirate run's runner sets about half the device periods of a scene period, so that the
   /// O(nodes + springs) of a scene sample is spread over the periods until the next.
@@ -131,6 +142,9 @@ class DivergenceMonitor {
   double fall_speed_mps() const noexcept { return fall_speed_mps_; }
   /// The hand's fastest speed so far (m/s).
   double hand_speed_max_mps() const noexcept { return hand_speed_max_mps_; }
+  /// The push speed in v_ref (m/s): √(2 E_c0 / m_min) of the start's contacts, or what
+  /// end_startup() left.
+  double push_speed_mps() const noexcept { return push_speed_mps_; }
   /// The speed limit now: speed_factor × v_ref (m/s).
   double speed_limit_mps() const noexcept {
     return limits_.speed_factor * std::max({hand_speed_max_mps_, fall_speed_mps_,

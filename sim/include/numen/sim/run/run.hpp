@@ -62,9 +62,19 @@ class RunLoopTally {
   std::int64_t rearm_requests_ = 0, rearms_accepted_ = 0, rearm_first_ = -1;
 };
 
-/// The real-time setup of a run's loop thread: apply_realtime(rt) described line by line, or
-/// nothing if `rt` asks for no step. Throws as apply_realtime() (a failed step only if strict).
-std::vector<std::string> apply_run_realtime(const platform::RealtimeSettings& rt);
+/// The real-time setup of a run's loop thread: apply_realtime() of options.rt described line by
+/// line, or nothing if it asks for no step. A `paced` run also sets the thread's timer slack to
+/// options.timer_slack_ns whatever its scheduling (docs/realtime.md "Timer slack"); an offline
+/// run leaves it. Throws as apply_realtime() (a failed step only if strict).
+std::vector<std::string> apply_run_realtime(const RunOptions& options, bool paced);
+
+/// The scene thread's settings of a paced run: options.scene_thread with the timer slack of
+/// options.timer_slack_ns.
+platform::SceneThreadSettings paced_scene_thread(const RunOptions& options);
+
+/// The period timer of a paced run of period `dt_s` starting at `start_ns`, with the spin of
+/// options.spin_ns (platform::PeriodicTimer::set_spin_ns).
+platform::PeriodicTimer run_timer(const RunOptions& options, double dt_s, std::int64_t start_ns);
 
 /// Writes what `monitor` saw into s.divergence (the breach's body or net named from `model`).
 /// Setup thread (allocates the names), after the run.
@@ -209,6 +219,9 @@ class SceneRunner {
   /// Counts of the period's report: frames, torque stops, bus errors, invalid and zero-torque
   /// periods, the first latched fault.
   void count_period(const platform::PeriodReport& report) noexcept;
+  /// One zero-torque period into s.zero_torque_periods and its cause's count
+  /// (RunSummary::zero_torque_safe_state and the others, in their order).
+  void count_zero_torque(const platform::PeriodReport& report, RunSummary& s) const noexcept;
   /// The tool's contacts (as the step found them) and the target's (measure_target(), in its
   /// periods; held between them).
   PeriodContacts measure_contacts() noexcept;

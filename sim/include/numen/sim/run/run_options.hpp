@@ -67,6 +67,17 @@ struct RunOptions {
   /// A multirate scene's scene thread in a paced run (scheduling, CPUs; docs/multirate.md):
   /// paced runs step the scene loop on it, offline runs interleave both loops on one thread.
   platform::SceneThreadSettings scene_thread;
+  /// Timer slack (ns) that a paced run gives its loop thread and its scene thread
+  /// (prctl(PR_SET_TIMERSLACK), `--timer-slack`), whatever their scheduling policy: the
+  /// kernel's default of 50 µs lets a SCHED_OTHER thread's timer fire up to that late
+  /// (docs/realtime.md "Timer slack"). 1 (the minimum) by default; 0 leaves the kernel's.
+  /// Offline runs leave it.
+  std::int64_t timer_slack_ns = 1;
+  /// Paced run: the loop thread's period wait ends in a busy-wait of this long before each
+  /// deadline (ns, `--spin`; platform::PeriodicTimer::set_spin_ns); 0 (default): it sleeps to
+  /// the deadline. For a loop thread on a CPU of its own (rt.cpu_affinity, `--cpu`) on a
+  /// kernel without PREEMPT_RT: check_run_options() refuses it otherwise, and at or above dt.
+  std::int64_t spin_ns = 0;
   /// Set (e.g. by a SIGINT / SIGTERM handler) to end the run early and cleanly: the loop
   /// shuts down (ControlLoop::shutdown(): zero torque, drives disabled) over at most
   /// shutdown_periods more periods and the summary is returned. nullptr: none.
@@ -114,7 +125,8 @@ std::int64_t compute_phase_override_ns(const Scene& scene, const RunOptions& opt
 /// Refuses options that a run of `scene` would not apply or whose outputs it could not write,
 /// before anything is opened (InputError naming the option): --view-rate not > 0, --speed
 /// negative or not finite or with a paced run, a --duration shorter than half a period,
-/// --phase not below dt, an in-memory --trace over kMaxInMemoryTraceBytes, a scene thread
+/// --phase not below dt, an in-memory --trace over kMaxInMemoryTraceBytes, a --spin in an
+/// offline run, without --cpu or not below dt, a --timer-slack in an offline run, a scene thread
 /// (--scene-rt-priority, --scene-cpu) that the run would not start or that would pre-empt the
 /// device loop, an output path (--trace, --record, --record-view) that cannot be opened for
 /// writing, and an output on the regular file of another output, of the scene file or of the

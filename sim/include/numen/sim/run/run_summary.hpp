@@ -266,6 +266,19 @@ struct RunSummary {
   std::int64_t sdo_read_errors = 0;        ///< ... aborted by a node or timed out.
   std::int64_t heartbeat_losses = 0;       ///< Heartbeat losses over all nodes.
   std::int64_t zero_torque_periods = 0;    ///< Periods that commanded zero torque on every drive.
+  /// zero_torque_periods by cause, each period counted once, under the first that applies in
+  /// this order (they sum to zero_torque_periods): a safe state latched; the loop shutting
+  /// down (end of a real-bus run); the device not yet active (start-up: NMT, CiA 402
+  /// enabling); every axis gated by the device (no valid sample, torque not yet allowed, a
+  /// non-finite τ); the soft start's ramp scaling τ to under half a per mille of rated torque;
+  /// the gate open and every τ under half a per mille of its rated torque (the tool in free
+  /// space or barely touching: below the drives' resolution).
+  std::int64_t zero_torque_safe_state = 0;
+  std::int64_t zero_torque_shutdown = 0;         ///< See zero_torque_safe_state.
+  std::int64_t zero_torque_startup = 0;          ///< See zero_torque_safe_state.
+  std::int64_t zero_torque_gated = 0;            ///< See zero_torque_safe_state.
+  std::int64_t zero_torque_soft_start = 0;       ///< See zero_torque_safe_state.
+  std::int64_t zero_torque_below_resolution = 0; ///< See zero_torque_safe_state.
   std::vector<std::string> drive_states;   ///< "axis: CiA 402 state" per drive at the end.
   /// The EMCY messages the master still holds at the end (its log keeps the last 16), oldest
   /// first: "node 3 at 1.234 s: 0x4310 <CiA 301 name> (register 0x09)"; an error reset says

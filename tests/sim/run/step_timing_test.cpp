@@ -1,0 +1,62 @@
+// Tests of numen/sim/run/step_timing.hpp: the scene's step timed at load, the warning of a step
+// that cannot fit its period, and the line `numen info` prints.
+
+#include "numen/sim/run/step_timing.hpp"
+
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "build_features.hpp"
+#include "run_scenes.hpp"
+
+namespace {
+
+using numen::sim::StepTiming;
+using namespace numen::test::run_scenes;
+
+TEST(StepTiming, TheLatticeScenesStepIsTimedAgainstItsPeriodAndFits) {
+  NUMEN_REQUIRE_ARTICULATION();
+  const StepTiming t = numen::sim::time_scene_step(lattice_scene(), 20, 10.0);
+  EXPECT_EQ(t.steps, 20);
+  EXPECT_FALSE(t.multirate);
+  EXPECT_EQ(t.period_s, lattice_scene().model.dt);
+  EXPECT_GT(t.median_us, 0.0);
+  EXPECT_GE(t.max_us, t.median_us);
+  std::printf("[   info   ] %s\n", numen::sim::describe_step_timing(t).c_str());
+  // The lattice's step is ~6-9 us of its 1 ms period (docs/organs.md): no warning even on a
+  // loaded machine.
+  EXPECT_FALSE(numen::sim::step_timing_warning(t).has_value());
+}
+
+TEST(StepTiming, ABudgetStopsTheTimingAfterThreeSteps) {
+  NUMEN_REQUIRE_ARTICULATION();
+  const StepTiming t = numen::sim::time_scene_step(lattice_scene(), 1000, 0.0);
+  EXPECT_EQ(t.steps, 3);
+}
+
+TEST(StepTiming, AStepLongerThanItsPeriodIsAWarningWithTheFigures) {
+  StepTiming t;
+  t.steps = 20;
+  t.median_us = 3700.0;
+  t.max_us = 4100.0;
+  t.period_s = 0.001;
+  const auto w = numen::sim::step_timing_warning(t);
+  ASSERT_TRUE(w.has_value());
+  EXPECT_EQ(*w,
+            "the scene's step took 3700 us (median of 20 steps timed at load, the tool at rest) "
+            "against its 1000 us period: a paced run (--realtime, a real bus) will overrun every "
+            "period, and an offline run runs at about 0.27x real time at best "
+            "(docs/realtime.md, \"Before a paced run\")");
+  t.multirate = true;
+  t.period_s = 0.005;
+  EXPECT_FALSE(numen::sim::step_timing_warning(t).has_value()) << "it fits a 5 ms scene period";
+  t.median_us = 5001.0;
+  EXPECT_NE(numen::sim::step_timing_warning(t)->find("against its 5000 us scene period"),
+            std::string::npos);
+  EXPECT_EQ(numen::sim::describe_step_timing(t),
+            "step at load: median 5001.0 us, max 4100.0 us over 20 steps, against the 5000 us "
+            "scene period (100.0% of it)");
+}
+
+}  // namespace
