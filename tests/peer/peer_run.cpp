@@ -4,7 +4,6 @@
 #include "peer_run.hpp"
 
 #include <algorithm>
-#include <cmath>
 
 #include "mujoco_engine.hpp"
 #include "numen/core/step.hpp"
@@ -12,19 +11,6 @@
 #include "numen/sim/scene/scene.hpp"
 
 namespace numen::peer {
-
-void percentiles_us(std::vector<std::int64_t>& ns, double& median_us, double& p99_us) {
-  median_us = p99_us = 0.0;
-  if (ns.empty()) return;
-  auto at = [&](double q) {
-    const auto k = static_cast<std::size_t>(std::ceil(q * static_cast<double>(ns.size()))) - 1;
-    const auto i = std::min(k, ns.size() - 1);
-    std::nth_element(ns.begin(), ns.begin() + static_cast<std::ptrdiff_t>(i), ns.end());
-    return static_cast<double>(ns[i]) * 1e-3;
-  };
-  median_us = at(0.5);
-  p99_us = at(0.99);
-}
 
 std::vector<int> held_bodies(const InputRecording& inputs) {
   std::vector<int> held;

@@ -12,6 +12,7 @@
 #include "mjcf_translation.hpp"
 #include "peer_metrics.hpp"
 #include "peer_scene.hpp"
+#include "step_percentiles.hpp"
 
 namespace numen::peer {
 
@@ -31,8 +32,9 @@ struct PeerRow {
   int contacts_max = 0;  ///< Most contacts the engine itself detected in one step.
 };
 
-/// Median and 99th percentile (µs) of step durations in ns (nearest rank). Reorders `ns`.
-void percentiles_us(std::vector<std::int64_t>& ns, double& median_us, double& p99_us);
+/// Median and 99th percentile (µs) of step durations in ns (nearest rank; step_percentiles.hpp,
+/// shared with tests/soft_peer). Reorders `ns`.
+using test::percentiles_us;
 
 /// The bodies the device holds at some period of `inputs` (sorted, unique).
 std::vector<int> held_bodies(const InputRecording& inputs);
