@@ -3,14 +3,18 @@
 // on the control period nor on the run's duration (issue 17, defects 1 and 4).
 
 #include <gtest/gtest.h>
+#include <netinet/in.h>
 #include <nlohmann/json.hpp>
+#include <sys/socket.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "build_features.hpp"
@@ -535,12 +539,27 @@ TEST(NumenCli, BadSdoArgumentsAreInputRejectedBeforeTheBusIsOpened) {
   }
 }
 
-// `numen run --view` takes [HOST:]PORT only.
+// `numen run --view` takes [HOST:]PORT only: each refusal is exit 2 with its message.
 TEST(NumenCli, ViewAddressThatIsNotHostPortIsInputRejected) {
   TempDir dir;
-  for (const char* v : {"http://x", "8080x", "host:", ":8080", "99999", "notahost:8080"}) {
+  const std::string shape =
+      "--view: expected [HOST:]PORT (HOST an IPv4 address, localhost or an IPv6 address in "
+      "brackets such as [::1]; PORT in 0-65535), got '";
+  const std::string host =
+      "--view: HOST must be an IP address or localhost (names are not resolved), got '";
+  const std::string brackets =
+      "--view: the HOST in brackets must be an IPv6 address (names are not resolved), got '";
+  const std::pair<const char*, std::string> cases[] = {
+      {"http://x", shape},        {"8080x", shape},
+      {"host:", shape},           {":8080", shape},
+      {"99999", shape},           {"[::1]", shape},
+      {"[::1]8080", shape},       {"[::1:8080", shape},
+      {"notahost:8080", host},    {"[127.0.0.1]:80", brackets},
+      {"[notahost]:80", brackets}};
+  for (const auto& [v, message] : cases) {
     const ChildResult r = run_child({kNumen, "run", kLattice, "--duration", "0.01", "--view", v}, dir.path(), 30);
     EXPECT_EQ(r.status, 2) << v << ": " << r.err;
+    EXPECT_EQ(r.err.substr(0, r.err.find('\n')), message + v + "'") << r.err;
   }
   // `numen view --host`: a name is not resolved; refused before the file is read or served.
   const ChildResult r =
@@ -548,6 +567,32 @@ TEST(NumenCli, ViewAddressThatIsNotHostPortIsInputRejected) {
   EXPECT_EQ(r.status, 2) << r.out << r.err;
   EXPECT_NE(r.err.find("--host"), std::string::npos) << r.err;
   EXPECT_EQ(r.out.find("open http://"), std::string::npos) << r.out;
+}
+
+/// True if a TCP socket can be bound to [::1]:0 here.
+bool ipv6_loopback_bindable() {
+  const int fd = ::socket(AF_INET6, SOCK_STREAM | SOCK_CLOEXEC, 0);
+  if (fd < 0) return false;
+  sockaddr_in6 a{};
+  a.sin6_family = AF_INET6;
+  a.sin6_addr = in6addr_loopback;
+  const bool ok = ::bind(fd, reinterpret_cast<const sockaddr*>(&a), sizeof a) == 0;
+  ::close(fd);
+  return ok;
+}
+
+// `--view '[::1]:0'` (an IPv6 address in brackets, as the URL prints it) was refused while
+// `::1:0` was taken: both listen on ::1 and print the URL with the brackets.
+TEST(NumenCli, ViewOnABracketedIPv6AddressPrintsItsUrl) {
+  NUMEN_REQUIRE_ARTICULATION();
+  if (!ipv6_loopback_bindable()) GTEST_SKIP() << "this machine cannot bind ::1 (no IPv6 loopback)";
+  TempDir dir;
+  for (const char* v : {"[::1]:0", "::1:0"}) {
+    const ChildResult r =
+        run_child({kNumen, "run", kLattice, "--duration", "0.3", "--view", v}, dir.path(), 60);
+    EXPECT_EQ(r.status, 0) << v << ": " << r.err;
+    EXPECT_EQ(r.err.rfind("numen: viewer on http://[::1]:", 0), 0u) << v << ": " << r.err;
+  }
 }
 
 // --wait-for-viewer: without a page the run does not start, says so and exits 1.
