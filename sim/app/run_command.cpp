@@ -191,7 +191,8 @@ int RunCommand::execute() const {
     const sim::ViewServerCounters c = viewer->counters();
     std::cerr << "  viewer: " << c.clients_total << " clients, " << c.frames_sent
               << " frames sent, " << c.frames_dropped << " dropped (slow clients), "
-              << c.closed_bad_input << " connections closed for bad input\n";
+              << c.closed_bad_input << " connections closed for bad input"
+              << viewer_overload(c, sim::ViewServerSettings{}.max_http_connections) << "\n";
   }
   // A run stopped by a signal and otherwise clean exits 128 + the signal (shell convention):
   // run_verdict() put that status, and the signal's name, in the summary.
