@@ -116,9 +116,9 @@ numen_install_headers(${PROJECT_SOURCE_DIR}/platform/include
 
 # sim: scenes (load_scene, run_scene), trajectories, simulated instruments, traces, studies,
 # view recordings and server. Not installed: the `numen` command's helpers (cli_values.hpp,
-# progress_bar.hpp, run_summary_text.hpp, trace_columns.hpp) and the studies' building blocks
-# (study_common.hpp, study_stability_cases.hpp). One folder per concept, as in the source tree
-# (docs/architecture.md "sim").
+# view_address.hpp, progress_bar.hpp, run_summary_text.hpp, trace_columns.hpp) and the studies'
+# building blocks (study_common.hpp, study_stability_cases.hpp). One folder per concept, as in the
+# source tree (docs/architecture.md "sim").
 numen_install_headers(${PROJECT_SOURCE_DIR}/sim/include
   numen/sim/scene/mesh_file.hpp numen/sim/scene/passivity_lint.hpp numen/sim/scene/scene.hpp
   numen/sim/scene/scene_info.hpp

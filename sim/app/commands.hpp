@@ -7,6 +7,7 @@
 /// exit status (docs/inputs.md, "Exit statuses") and may throw (run_guarded()). The options
 /// are bound to the command's members: construct it in place and keep it there.
 
+#include <cstddef>
 #include <cstdint>
 #include <functional>
 #include <ostream>
@@ -17,6 +18,7 @@
 
 #include "numen/platform/multirate_threads.hpp"
 #include "numen/platform/realtime_setup.hpp"
+#include "numen/sim/view/view_server.hpp"
 
 namespace numen::sim {
 struct Scene;
@@ -70,6 +72,10 @@ std::string viewer_page_dir();
 void print_load_warnings(const sim::Scene& scene, std::ostream& err);
 /// Prints a warning on `err` when the viewer's `host` is not a loopback address.
 void warn_if_exposed(const std::string& host, std::ostream& err);
+/// What the viewer's server turned away, for its closing line: ", N HTTP connections shed (more
+/// than M open), K accepts failed (out of descriptors or memory)", each part only when not 0;
+/// "" when none.
+std::string viewer_overload(const sim::ViewServerCounters& c, std::size_t max_http_connections);
 
 /// `numen view FILE.nmv [--port P] [--host H]`: serves a view recording to the browser.
 class ViewCommand {

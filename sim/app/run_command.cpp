@@ -7,12 +7,14 @@
 #include <cstdint>
 #include <iostream>
 #include <limits>
+#include <stdexcept>
 #include <string>
 
 #include "commands.hpp"
 #include "numen/sim/input/bus_spec.hpp"
 #include "numen/sim/input/cli_values.hpp"
 #include "numen/sim/input/input_error.hpp"
+#include "numen/sim/input/view_address.hpp"
 #include "numen/sim/run/run.hpp"
 #include "numen/sim/run/run_verdict.hpp"
 #include "numen/sim/run/step_timing.hpp"
@@ -84,17 +86,16 @@ RunCommand::RunCommand(CLI::App& parent)
                   "Write the run's state stream (scene message and frames, docs/viewer.md) to "
                   "this view recording (.nmv), for `numen view`");
   run->add_option("--view", view_,
-                  "Serve the live 3D viewer on [HOST:]PORT (default host 127.0.0.1; docs/viewer.md); "
-                  "an offline run is then paced at real time (--speed to change)")
+                  "Serve the live 3D viewer on [HOST:]PORT (default host 127.0.0.1, an IPv6 "
+                  "host in brackets: [::1]:8080; docs/viewer.md); an offline run is then paced "
+                  "at real time (--speed to change)")
       ->check([](const std::string& v) -> std::string {
-        const auto colon = v.rfind(':');
-        const std::string port = v.substr(colon == std::string::npos ? 0 : colon + 1);
-        if (port.empty() || port.size() > 5 || port.find_first_not_of("0123456789") != std::string::npos ||
-            std::stoi(port) > 65535 || (colon != std::string::npos && colon == 0))
-          return "expected [HOST:]PORT, PORT in 0-65535, got '" + v + "'";
-        if (colon != std::string::npos && !sim::ViewServer::is_address(v.substr(0, colon)))
-          return "HOST must be an IP address or localhost (names are not resolved), got '" + v + "'";
-        return {};
+        try {
+          (void)sim::parse_view_address(v);
+          return {};
+        } catch (const std::invalid_argument& e) {
+          return e.what();
+        }
       });
   run->add_flag("--wait-for-viewer{60}", wait_for_viewer_,
                "With --view: start the run when the first page connects, waiting at most this "
@@ -171,9 +172,9 @@ int RunCommand::execute() const {
   std::unique_ptr<sim::ViewServer> viewer;
   if (!view_.empty()) {
     sim::ViewServerSettings vs;
-    const auto colon = view_.rfind(':');
-    if (colon != std::string::npos) vs.host = view_.substr(0, colon);
-    vs.port = static_cast<std::uint16_t>(std::stoi(view_.substr(colon == std::string::npos ? 0 : colon + 1)));
+    const sim::ViewAddress address = sim::parse_view_address(view_);  // checked by the option
+    vs.host = address.host;
+    vs.port = address.port;
     vs.static_dir = viewer_page_dir();
     warn_if_exposed(vs.host, std::cerr);
     viewer = std::make_unique<sim::ViewServer>(
@@ -211,7 +212,8 @@ int RunCommand::execute() const {
     const sim::ViewServerCounters c = viewer->counters();
     std::cerr << "  viewer: " << c.clients_total << " clients, " << c.frames_sent
               << " frames sent, " << c.frames_dropped << " dropped (slow clients), "
-              << c.closed_bad_input << " connections closed for bad input\n";
+              << c.closed_bad_input << " connections closed for bad input"
+              << viewer_overload(c, sim::ViewServerSettings{}.max_http_connections) << "\n";
   }
   // A run stopped by a signal and otherwise clean exits 128 + the signal (shell convention):
   // run_verdict() put that status, and the signal's name, in the summary.

@@ -41,6 +41,17 @@ void warn_if_exposed(const std::string& host, std::ostream& err) {
         << ", reachable from the network; anyone who can reach it sees the run (read-only)\n";
 }
 
+std::string viewer_overload(const sim::ViewServerCounters& c, std::size_t max_http_connections) {
+  std::string out;
+  if (c.connections_shed > 0)
+    out += ", " + std::to_string(c.connections_shed) + " HTTP connections shed (more than " +
+           std::to_string(max_http_connections) + " open)";
+  if (c.accept_failures > 0)
+    out +=
+        ", " + std::to_string(c.accept_failures) + " accepts failed (out of descriptors or memory)";
+  return out;
+}
+
 ViewCommand::ViewCommand(CLI::App& parent)
     : cli_(parent.add_subcommand("view", "Serve a view recording (--record-view) to the browser")) {
   cli_->add_option("file", file_, "View recording written by `numen run --record-view FILE`")
@@ -79,9 +90,9 @@ int ViewCommand::execute() const {
   while (!stop_flag().load()) std::this_thread::sleep_for(std::chrono::milliseconds(50));
   server.stop();
   const sim::ViewServerCounters c = server.counters();
-  std::cout << "numen view: " << c.clients_total << " viewers, " << c.requests
-            << " frames served, " << c.closed_bad_input << " connections closed for bad input"
-            << std::endl;
+  std::cout << "numen view: " << c.clients_total << " viewers, " << c.requests << " frames served, "
+            << c.closed_bad_input << " connections closed for bad input"
+            << viewer_overload(c, settings.max_http_connections) << std::endl;
   return 0;
 }
 

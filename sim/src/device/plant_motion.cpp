@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <stdexcept>
 #include <string>
@@ -164,11 +165,15 @@ void PlantMotion::advance(double t0, double t1, int parts) noexcept {
       p.step(h, f[i] + c_extra * p.qdot(), m_extra, c_extra);
       figures_.port_energy_j += f[i] * (p.q() - q_before);
       const double speed = std::abs(p.qdot());
-      if (!figures_.diverged &&
-          (!std::isfinite(p.q()) || !(speed <= runaway_speed(config_.axes[k])))) {
+      const double limit = runaway_speed(config_.axes[k]);
+      if (!figures_.diverged && (!std::isfinite(p.q()) || !(speed <= limit))) {
         figures_.diverged = true;
         figures_.diverged_axis = i;
         figures_.diverged_time_s = ta + h;
+        // An axis whose value is not finite (its speed then too, or NaN) ran away at +inf.
+        figures_.diverged_speed =
+            std::isfinite(p.q()) ? speed : std::numeric_limits<double>::infinity();
+        figures_.diverged_speed_limit = limit;
       }
     }
     qi0 = qi1;

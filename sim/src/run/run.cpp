@@ -205,9 +205,10 @@ void SceneRunner::period(std::int64_t deadline_mono_ns, std::int64_t woke_mono_n
   bool diverged = divergence_.observe(scene_->model, data_, k_ - 1, static_cast<double>(t) * 1e-9,
                                       multirate_.enabled() && !multirate_.took_model());
   if (const PlantMotion* plant = instrument_.plant(); plant && plant->figures().diverged)
-    diverged = divergence_.latch_external("device plant", plant->figures().diverged_axis,
-                                          plant->figures().diverged_time_s, k_ - 1,
-                                          static_cast<double>(t) * 1e-9) || diverged;
+    diverged = divergence_.latch_external(
+                   "device plant", plant->figures().diverged_axis, plant->figures().diverged_speed,
+                   plant->figures().diverged_speed_limit, k_ - 1, static_cast<double>(t) * 1e-9) ||
+               diverged;
   if (diverged)
     loop_.shutdown();  // zero torque from the next write on; the run stops after this period
   if (view_)

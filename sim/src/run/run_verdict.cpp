@@ -5,6 +5,8 @@
 
 #include <csignal>
 #include <cstdio>
+#include <iomanip>
+#include <sstream>
 #include <string>
 
 #include "numen/sim/run/run_summary.hpp"
@@ -47,11 +49,26 @@ RunVerdict run_verdict(const RunSummary& s) {
   else if (s.nan_detected) add(ExitStatus::kNonFinite, "the final state is not finite");
   if (s.divergence.latched) {
     char why[320];
-    std::snprintf(why, sizeof why, "%s of %s: %.4g above its limit %.4g (%s) at %.4f s",
-                  s.divergence.cause.c_str(), s.divergence.subject.c_str(), s.divergence.value,
-                  s.divergence.limit,
-                  s.divergence.cause == "energy" ? "J" : s.divergence.cause == "tie stretch" ? "m" : "m/s",
-                  s.divergence.time_s);
+    const std::string& cause = s.divergence.cause;
+    // A device axis is prismatic (m/s) or revolute (rad/s): its speed is in the axis's unit.
+    const char* unit = cause == "energy"         ? "J"
+                       : cause == "tie stretch"  ? "m"
+                       : cause == "device plant" ? "m/s or rad/s"
+                                                 : "m/s";
+    // 4 significant digits, more where the value and its limit would read the same (a speed of
+    // 200.008 just past its limit 200: "200.01 above its limit 200", not "200 above ... 200").
+    const auto significant = [](double v, int digits) {
+      std::ostringstream os;
+      os << std::setprecision(digits) << v;  // as printf's %.<digits>g
+      return os.str();
+    };
+    int digits = 4;
+    while (digits < 17 &&
+           significant(s.divergence.value, digits) == significant(s.divergence.limit, digits))
+      ++digits;
+    std::snprintf(why, sizeof why, "%s of %s: %s above its limit %s (%s) at %.4f s", cause.c_str(),
+                  s.divergence.subject.c_str(), significant(s.divergence.value, digits).c_str(),
+                  significant(s.divergence.limit, digits).c_str(), unit, s.divergence.time_s);
     add(ExitStatus::kDiverged, why);
   }
   if (s.faults > 0)
@@ -91,12 +108,17 @@ RunVerdict run_verdict(const RunSummary& s) {
   // A run a signal ended (perhaps before the first sample arrived) is not judged on this.
   if (s.steps > 0 && s.invalid_periods >= s.steps && !s.stopped) {
     // The managed stack's encoders send once the start-up has made them operational: a run
-    // that ends before that has no sample, through no fault of the frames.
+    // that ends before that has no sample, through no fault of the frames. A run stopped by
+    // its divergence would not have been longer: a longer --duration does not help it.
     if (s.managed && s.startup.rfind("operational", 0) != 0 && s.startup.rfind("failed", 0) != 0)
       add(ExitStatus::kSamplesRejected,
-          "no period had a valid sample: the run's " + n(s.steps) +
-              " periods ended before the CANopen start-up finished (still in phase '" +
-              s.startup + "'); the encoders send once their nodes are operational: run longer");
+          "no period had a valid sample: " +
+              (s.divergence.latched
+                   ? "the divergence stopped the run after " + n(s.steps) + " periods, before"
+                   : "the run's " + n(s.steps) + " periods ended before") +
+              " the CANopen start-up finished (still in phase '" + s.startup +
+              "'); the encoders send once their nodes are operational" +
+              (s.divergence.latched ? "" : ": run longer"));
     else
       add(ExitStatus::kSamplesRejected, "no period had a valid sample");
   }

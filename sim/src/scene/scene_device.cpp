@@ -11,6 +11,7 @@
 #include <limits>
 #include <map>
 #include <memory>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 
@@ -311,19 +312,29 @@ void parse_hand(const TomlTable& dev, HandSettings& hand) {
   read_hand(*h, hand);
 }
 
-/// A list of one entry per axis, or one number for every axis, each in [lo, hi].
+/// A list of one entry per axis, or one number for every axis, each finite and in [lo, hi];
+/// absent: `fallback` for every axis, or refused when there is none. `range` words the bound in
+/// the refusal ("must be in [0, 1]" by default): an entry of the list out of it is refused as
+/// "entries " + range, the one number as range + ", got V".
 std::vector<double> per_axis(const TomlTable& t, std::string_view key, int n, double lo, double hi,
-                             double fallback) {
-  if (!t.has(key)) return std::vector<double>(static_cast<std::size_t>(n), fallback);
+                             std::optional<double> fallback, std::string range = {}) {
+  if (range.empty())
+    range = "must be in [" + format_input_number(lo) + ", " + format_input_number(hi) + "]";
+  if (!t.has(key)) {
+    if (!fallback)
+      t.fail(key, "missing (one number for every axis, or a list of " + std::to_string(n) +
+                      ", one per axis, is required)");
+    return std::vector<double>(static_cast<std::size_t>(n), *fallback);
+  }
   if (t.node(key)->is_array()) {
     const std::vector<double> v = t.numbers(key, n);
     for (double x : v)
-      if (!(x >= lo && x <= hi))
-        t.fail(key, "entries must be in [" + format_input_number(lo) + ", " +
-                        format_input_number(hi) + "]");
+      if (!(x >= lo && x <= hi)) t.fail(key, "entries " + range);
     return v;
   }
-  return std::vector<double>(static_cast<std::size_t>(n), t.number_in(key, lo, hi, std::nullopt));
+  const double x = t.number_or(key, 0.0);  // a number, finite (else refused with its type)
+  if (!(x >= lo && x <= hi)) t.fail(key, range + ", got " + format_input_number(x));
+  return std::vector<double>(static_cast<std::size_t>(n), x);
 }
 
 /// `[device.plant]` (docs/scenes.md, docs/device_plant.md): the impedance device's mechanics;
@@ -337,10 +348,9 @@ void parse_plant(const TomlTable& dev, Scene& scene, const hal::DeviceConfig& cf
                "are position controlled ([device.admittance] drive_lag)");
   p->allow_only({"inertia", "damping", "coulomb", "current_lag", "delay_periods", "substeps"});
   const int n = static_cast<int>(cfg.axes.size());
-  const std::vector<double> inertia = p->numbers("inertia", n);
-  for (double m : inertia)
-    if (!(m >= 0.0 && m < kInf))
-      p->fail("inertia", "entries must be finite and >= 0 (kg or kg·m²; 0: the axis follows the hand)");
+  const std::vector<double> inertia =
+      per_axis(*p, "inertia", n, 0.0, kInf, std::nullopt,
+               "must be finite and >= 0 (kg or kg·m²; 0: the axis follows the hand)");
   const std::vector<double> damping = per_axis(*p, "damping", n, 0.0, kInf, 0.0);
   const std::vector<double> coulomb = per_axis(*p, "coulomb", n, 0.0, kInf, 0.0);
   const std::vector<double> lag = per_axis(*p, "current_lag", n, 0.0, 1.0, 0.0);

@@ -8,6 +8,10 @@
 /// clients() and the I/O thread registering or removing a client) and each client's queue
 /// (its own mutex: write_frame() pushes, the I/O thread pops). Each lock is held for a few
 /// pointer moves; the I/O thread never writes to a socket with one held.
+///
+/// The accept loop (I/O thread): a failed accept pauses it on a timer (back_off()), a
+/// connection that closes or the timer resumes it (resume_accept()); past max_http_connections
+/// an accepted connection closes the HTTP connection waiting longest for its request (admit()).
 
 #include "numen/sim/view/view_server.hpp"
 
@@ -112,7 +116,12 @@ struct ViewServer::Impl {
   Impl(const ViewServerSettings& s, std::string scene_message, ViewFrameSource* src,
        const std::string& series);
 
+  // The accept loop and the connections' bound (I/O thread).
   void do_accept();
+  void back_off();
+  void resume_accept();
+  void admit(tcp::socket socket);
+  void connection_closed();
   void close_all();  // I/O thread
   void add_client(const std::shared_ptr<WsSession>& c);
   void remove_client(const WsSession* c);
@@ -126,12 +135,17 @@ struct ViewServer::Impl {
   bool started = false, stopped = false;
   std::uint16_t bound_port = 0;
   std::uint64_t next_id = 1;  // I/O thread
-  std::vector<std::weak_ptr<HttpSession>> http_sessions;  // I/O thread
+  std::vector<std::weak_ptr<HttpSession>> http_sessions;  // I/O thread, in order of accept
+  std::uint64_t next_wait = 1;      // I/O thread: HttpSession::waiting_since()'s clock
+  asio::steady_timer backoff{ioc};  // I/O thread: the accept loop's pause
+  bool accept_paused = false;       // I/O thread: no accept outstanding, the timer set
+  std::uint64_t pause_id = 0;       // I/O thread: the pause the timer's handler belongs to
+  int failures_in_a_row = 0;        // I/O thread: accepts failed since the last one accepted
   mutable std::mutex clients_mutex;
   std::condition_variable client_added;             // with clients_mutex: wait_for_client()
   std::vector<std::shared_ptr<WsSession>> clients;  // connected WebSocket clients
   std::atomic<std::uint64_t> connected{0}, total{0}, refused{0}, http_requests{0}, offered{0},
-      sent{0}, dropped{0}, bad_input{0}, requests{0}, source_errors{0};
+      sent{0}, dropped{0}, bad_input{0}, requests{0}, source_errors{0}, accept_failures{0}, shed{0};
 };
 
 /// A WebSocket client: its bounded queue of outgoing messages, its reads of client messages.
@@ -207,6 +221,7 @@ class WsSession : public std::enable_shared_from_this<WsSession> {
     beast::error_code ec;
     beast::get_lowest_layer(ws_).socket().shutdown(tcp::socket::shutdown_both, ec);
     beast::get_lowest_layer(ws_).socket().close(ec);
+    s_.connection_closed();
   }
 
   ViewClientCounters counters() const {
@@ -294,11 +309,21 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
 
   void run() { do_read(); }
 
+  /// Closes the connection (idempotent); the server may accept again.
   void close() {
+    if (closed_) return;
+    closed_ = true;
+    waiting_since_ = 0;
     beast::error_code ec;
     stream_.socket().shutdown(tcp::socket::shutdown_both, ec);
     stream_.socket().close(ec);
+    s_.connection_closed();
   }
+  /// Closed, or handed to a WebSocket client: no longer one of the server's HTTP connections.
+  bool closed() const noexcept { return closed_; }
+  /// When it began to wait for its request (the server's next_wait then); 0 while it is being
+  /// answered, and once closed.
+  std::uint64_t waiting_since() const noexcept { return waiting_since_; }
 
  private:
   void do_read() {
@@ -306,9 +331,11 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
     parser_->header_limit(kViewHttpHeaderLimit);
     parser_->body_limit(kViewHttpBodyLimit);
     stream_.expires_after(std::chrono::seconds(30));
+    waiting_since_ = s_.next_wait++;
     http::async_read(stream_, buf_, *parser_,
                      [self = shared_from_this()](beast::error_code ec, std::size_t) {
                        if (ec) return self->close();
+                       self->waiting_since_ = 0;
                        self->on_request(self->parser_->release());
                      });
   }
@@ -328,6 +355,7 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
     using Kind = ViewHttpAnswer::Kind;
     switch (answer.kind) {
       case Kind::kUpgrade:
+        closed_ = true;  // its socket is the client's now
         std::make_shared<WsSession>(s_, stream_.release_socket())->run(std::move(req));
         return;
       case Kind::kTooManyViewers:
@@ -395,6 +423,8 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
   beast::tcp_stream stream_;
   beast::flat_buffer buf_;
   std::optional<http::request_parser<http::string_body>> parser_;
+  std::uint64_t waiting_since_ = 0;
+  bool closed_ = false;
 };
 
 ViewServer::Impl::Impl(const ViewServerSettings& s, std::string scene_message, ViewFrameSource* src,
@@ -406,6 +436,8 @@ ViewServer::Impl::Impl(const ViewServerSettings& s, std::string scene_message, V
     throw std::invalid_argument("ViewServerSettings::max_client_message_bytes must be >= 16");
   if (settings.max_clients < 1)
     throw std::invalid_argument("ViewServerSettings::max_clients must be >= 1");
+  if (settings.max_http_connections < 1)
+    throw std::invalid_argument("ViewServerSettings::max_http_connections must be >= 1");
   if (settings.stream_path.empty() || settings.stream_path.front() != '/')
     throw std::invalid_argument("ViewServerSettings::stream_path must start with '/'");
   // The frames' layout from the declaration that encodes and decodes them: a recording's
@@ -433,14 +465,60 @@ ViewServer::Impl::Impl(const ViewServerSettings& s, std::string scene_message, V
 void ViewServer::Impl::do_accept() {
   acceptor.async_accept(ioc, [this](beast::error_code ec, tcp::socket socket) {
     if (ec == asio::error::operation_aborted || !acceptor.is_open()) return;
-    if (!ec) {
-      auto session = std::make_shared<HttpSession>(*this, std::move(socket));
-      std::erase_if(http_sessions, [](const std::weak_ptr<HttpSession>& w) { return w.expired(); });
-      http_sessions.push_back(session);
-      session->run();
-    }
-    do_accept();
+    // Out of descriptors (EMFILE, ENFILE) or memory (ENOBUFS, ENOMEM), the connection stays in
+    // the listen queue: accepting again at once would fail again, as fast as the core runs.
+    if (ec) return back_off();
+    failures_in_a_row = 0;
+    do_accept();  // first: a handler that throws (out of memory) leaves the loop accepting
+    admit(std::move(socket));
   });
+}
+
+void ViewServer::Impl::back_off() {
+  accept_failures.fetch_add(1, std::memory_order_relaxed);
+  const int doublings = std::min(failures_in_a_row++, 16);
+  const auto delay = std::min(kViewAcceptBackoff * (1 << doublings), kViewAcceptBackoffMax);
+  accept_paused = true;
+  const std::uint64_t pause = ++pause_id;
+  backoff.expires_after(delay);
+  backoff.async_wait([this, pause](beast::error_code) {
+    // Not ended meanwhile by a connection that closed (a newer pause would have another id).
+    if (accept_paused && pause == pause_id && acceptor.is_open()) resume_accept();
+  });
+}
+
+void ViewServer::Impl::resume_accept() {
+  accept_paused = false;
+  ++pause_id;
+  backoff.cancel();
+  do_accept();
+}
+
+void ViewServer::Impl::connection_closed() {
+  // A descriptor is free: a paused accept loop tries again now rather than at its timer.
+  if (accept_paused && acceptor.is_open()) resume_accept();
+}
+
+void ViewServer::Impl::admit(tcp::socket socket) {
+  std::erase_if(http_sessions, [](const std::weak_ptr<HttpSession>& w) {
+    const auto h = w.lock();
+    return !h || h->closed();
+  });
+  auto session = std::make_shared<HttpSession>(*this, std::move(socket));
+  if (http_sessions.size() >= settings.max_http_connections) {
+    // Room for the newcomer: the connection waiting longest for its request goes; when every
+    // one is being answered, the newcomer.
+    shed.fetch_add(1, std::memory_order_relaxed);
+    std::shared_ptr<HttpSession> oldest;
+    for (const auto& w : http_sessions)
+      if (auto h = w.lock();
+          h && h->waiting_since() != 0 && (!oldest || h->waiting_since() < oldest->waiting_since()))
+        oldest = std::move(h);
+    if (!oldest) return session->close();
+    oldest->close();  // left in the list until the next admit() prunes it
+  }
+  http_sessions.push_back(session);
+  session->run();
 }
 
 void ViewServer::Impl::add_client(const std::shared_ptr<WsSession>& c) {
@@ -460,6 +538,8 @@ void ViewServer::Impl::remove_client(const WsSession* c) {
 void ViewServer::Impl::close_all() {
   beast::error_code ec;
   acceptor.close(ec);
+  accept_paused = false;
+  backoff.cancel();
   for (const auto& w : http_sessions)
     if (auto h = w.lock()) h->close();
   http_sessions.clear();
@@ -559,9 +639,10 @@ bool ViewServer::write_frame(std::span<const std::byte> frame) noexcept {
 ViewServerCounters ViewServer::counters() const noexcept {
   const Impl& s = *impl_;
   const auto r = std::memory_order_relaxed;
-  return {s.connected.load(r), s.total.load(r),    s.refused.load(r),  s.http_requests.load(r),
-          s.offered.load(r),   s.sent.load(r),     s.dropped.load(r),  s.bad_input.load(r),
-          s.requests.load(r),  s.source_errors.load(r)};
+  return {s.connected.load(r),     s.total.load(r),           s.refused.load(r),
+          s.http_requests.load(r), s.offered.load(r),         s.sent.load(r),
+          s.dropped.load(r),       s.bad_input.load(r),       s.requests.load(r),
+          s.source_errors.load(r), s.accept_failures.load(r), s.shed.load(r)};
 }
 
 std::vector<ViewClientCounters> ViewServer::clients() const {

@@ -3,14 +3,19 @@
 // on the control period nor on the run's duration (issue 17, defects 1 and 4).
 
 #include <gtest/gtest.h>
+#include <netinet/in.h>
 #include <nlohmann/json.hpp>
+#include <poll.h>
+#include <sys/socket.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "build_features.hpp"
@@ -535,12 +540,27 @@ TEST(NumenCli, BadSdoArgumentsAreInputRejectedBeforeTheBusIsOpened) {
   }
 }
 
-// `numen run --view` takes [HOST:]PORT only.
+// `numen run --view` takes [HOST:]PORT only: each refusal is exit 2 with its message.
 TEST(NumenCli, ViewAddressThatIsNotHostPortIsInputRejected) {
   TempDir dir;
-  for (const char* v : {"http://x", "8080x", "host:", ":8080", "99999", "notahost:8080"}) {
+  const std::string shape =
+      "--view: expected [HOST:]PORT (HOST an IPv4 address, localhost or an IPv6 address in "
+      "brackets such as [::1]; PORT in 0-65535), got '";
+  const std::string host =
+      "--view: HOST must be an IP address or localhost (names are not resolved), got '";
+  const std::string brackets =
+      "--view: the HOST in brackets must be an IPv6 address (names are not resolved), got '";
+  const std::pair<const char*, std::string> cases[] = {
+      {"http://x", shape},        {"8080x", shape},
+      {"host:", shape},           {":8080", shape},
+      {"99999", shape},           {"[::1]", shape},
+      {"[::1]8080", shape},       {"[::1:8080", shape},
+      {"notahost:8080", host},    {"[127.0.0.1]:80", brackets},
+      {"[notahost]:80", brackets}};
+  for (const auto& [v, message] : cases) {
     const ChildResult r = run_child({kNumen, "run", kLattice, "--duration", "0.01", "--view", v}, dir.path(), 30);
     EXPECT_EQ(r.status, 2) << v << ": " << r.err;
+    EXPECT_EQ(r.err.substr(0, r.err.find('\n')), message + v + "'") << r.err;
   }
   // `numen view --host`: a name is not resolved; refused before the file is read or served.
   const ChildResult r =
@@ -548,6 +568,80 @@ TEST(NumenCli, ViewAddressThatIsNotHostPortIsInputRejected) {
   EXPECT_EQ(r.status, 2) << r.out << r.err;
   EXPECT_NE(r.err.find("--host"), std::string::npos) << r.err;
   EXPECT_EQ(r.out.find("open http://"), std::string::npos) << r.out;
+}
+
+/// True if a TCP socket can be bound to [::1]:0 here.
+bool ipv6_loopback_bindable() {
+  const int fd = ::socket(AF_INET6, SOCK_STREAM | SOCK_CLOEXEC, 0);
+  if (fd < 0) return false;
+  sockaddr_in6 a{};
+  a.sin6_family = AF_INET6;
+  a.sin6_addr = in6addr_loopback;
+  const bool ok = ::bind(fd, reinterpret_cast<const sockaddr*>(&a), sizeof a) == 0;
+  ::close(fd);
+  return ok;
+}
+
+// `--view '[::1]:0'` (an IPv6 address in brackets, as the URL prints it) was refused while
+// `::1:0` was taken: both listen on ::1 and print the URL with the brackets.
+TEST(NumenCli, ViewOnABracketedIPv6AddressPrintsItsUrl) {
+  NUMEN_REQUIRE_ARTICULATION();
+  if (!ipv6_loopback_bindable()) GTEST_SKIP() << "this machine cannot bind ::1 (no IPv6 loopback)";
+  TempDir dir;
+  for (const char* v : {"[::1]:0", "::1:0"}) {
+    const ChildResult r =
+        run_child({kNumen, "run", kLattice, "--duration", "0.3", "--view", v}, dir.path(), 60);
+    EXPECT_EQ(r.status, 0) << v << ": " << r.err;
+    EXPECT_EQ(r.err.rfind("numen: viewer on http://[::1]:", 0), 0u) << v << ": " << r.err;
+  }
+}
+
+// `numen view` closes the HTTP connections past its 64 that wait longest for their request, and
+// says how many when it ends: 70 idle connections from 127.0.0.1 close the first 6.
+TEST(NumenCli, ViewSaysHowManyConnectionsItShed) {
+  NUMEN_REQUIRE_ARTICULATION();
+  TempDir dir;
+  const std::string file = (dir.path() / "run.nmv").string();
+  const ChildResult recorded = run_child(
+      {kNumen, "run", kLattice, "--duration", "0.1", "--record-view", file}, dir.path(), 120);
+  ASSERT_EQ(recorded.status, 0) << recorded.err;
+  std::vector<int> idle;
+  bool first_six_closed = false;
+  ChildSignal interrupt;
+  interrupt.signal = SIGINT;
+  interrupt.ready = [&] {
+    const std::string out = numen::test::read_file((dir.path() / "child.out").string());
+    const std::string url = "open http://127.0.0.1:";
+    const auto at = out.find(url);
+    if (at == std::string::npos) return false;
+    sockaddr_in a{};
+    a.sin_family = AF_INET;
+    a.sin_port = htons(static_cast<std::uint16_t>(std::stoi(out.substr(at + url.size()))));
+    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    for (int i = 0; i < 70; ++i) {
+      idle.push_back(::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0));
+      if (::connect(idle.back(), reinterpret_cast<const sockaddr*>(&a), sizeof a) != 0) return true;
+    }
+    // The first 6 see the server's close (bounded: 20 s each): the 70th has been accepted.
+    first_six_closed = true;
+    for (int i = 0; i < 6; ++i) {
+      pollfd p{idle[static_cast<std::size_t>(i)], POLLIN, 0};
+      char c = 0;
+      first_six_closed =
+          first_six_closed && ::poll(&p, 1, 20000) == 1 && ::recv(p.fd, &c, 1, MSG_DONTWAIT) == 0;
+    }
+    return true;
+  };
+  const ChildResult r =
+      run_child({kNumen, "view", file, "--port", "0"}, dir.path(), 120, interrupt);
+  for (const int fd : idle) ::close(fd);
+  EXPECT_TRUE(first_six_closed);
+  EXPECT_EQ(r.status, 0) << r.out << r.err;
+  const std::string last = r.out.substr(r.out.rfind("numen view: "));
+  EXPECT_EQ(last,
+            "numen view: 0 viewers, 0 frames served, 0 connections closed for bad input, 6 HTTP "
+            "connections shed (more than 64 open)\n")
+      << r.out;
 }
 
 // --wait-for-viewer: without a page the run does not start, says so and exits 1.

@@ -149,7 +149,8 @@ TEST(PlantMotion, AnAxisOfInertiaZeroFollowsTheIntent) {
   EXPECT_NEAR(m.state().q[3], 0.2, 1e-9);
 }
 
-// A runaway axis (a huge torque on a tiny inertia) is flagged with its axis and the plant holds.
+// A runaway axis (a huge torque on a tiny inertia) is flagged with its axis, its speed and its
+// runaway speed (100 x its max_speed), and the plant holds.
 TEST(PlantMotion, ARunawayAxisIsFlagged) {
   const Trajectory traj = still_at(core::Vec3::Zero());
   PlantMotion m(tracker(), plant(1e-6), no_hand(), traj);
@@ -158,6 +159,9 @@ TEST(PlantMotion, ARunawayAxisIsFlagged) {
   EXPECT_TRUE(m.figures().diverged);
   EXPECT_EQ(m.figures().diverged_axis, 0);
   EXPECT_TRUE(std::isfinite(m.state().q[0]));
+  EXPECT_EQ(m.figures().diverged_speed_limit, 100.0 * tracker().axes[0].max_speed);
+  EXPECT_GT(m.figures().diverged_speed, m.figures().diverged_speed_limit);
+  EXPECT_EQ(m.figures().diverged_speed, std::abs(m.axis(0).qdot())) << "the speed that breached";
 }
 
 TEST(PlantMotion, RefusesBadSettingsNamingThem) {

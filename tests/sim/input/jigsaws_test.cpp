@@ -18,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "jigsaws_trials.hpp"
 #include "numen/sim/input/input_error.hpp"
 
 namespace {
@@ -187,9 +188,12 @@ TEST(Jigsaws, ExcerptValuesMatchTheFileText) {
   }
 }
 
+// The full trial is outside the repository: NUMEN_JIGSAWS_DIR (jigsaws_trials.hpp).
 TEST(Jigsaws, ExcerptIsTheDocumentedSliceOfTheFullTrial) {
-  const fs::path full = "/work/shared/data/jigsaws/Suturing_B002.txt";
-  if (!fs::exists(full)) GTEST_SKIP() << "full dataset not present (the project runs without it)";
+  const auto dir = numen::test::jigsaws_trials_dir();
+  if (!dir) GTEST_SKIP() << numen::test::kNoJigsawsTrials;
+  const fs::path full = *dir / "Suturing_B002.txt";
+  ASSERT_TRUE(fs::is_regular_file(full)) << "NUMEN_JIGSAWS_DIR: no " << full.string();
   JigsawsOptions options;
   options.first_row = kExcerptFirstRow;
   options.max_rows = kExcerptRows;

@@ -9,6 +9,7 @@
 
 #include <cstdio>
 #include <string>
+#include <vector>
 
 #include "alloc_counter.hpp"
 #include "build_features.hpp"
@@ -100,23 +101,73 @@ TEST(RunClosedLoop, AnActiveLoopIsReportedAsALimitCycle) {
   EXPECT_EQ(lint_warnings, 3);
 }
 
-// A plant the sub-steps cannot hold (the depth axis at 1e-9 kg with no damping, and a hand
-// without mass or damper: its spring, held over each sub-step, on almost no mass) runs away: the
-// run latches the divergence with the cause "device plant" and exits non-zero.
+/// The default text with its depth axis at `inertia` kg without damping, and a hand without
+/// mass or damper (its spring, held over each sub-step, on almost no mass) of `hand`'s extra
+/// keys: a plant the sub-steps cannot hold.
+std::string runaway(const std::string& inertia, const std::string& hand = "") {
+  std::string text = replace(default_text(), "inertia = [4.0e-3, 4.0e-3, 0.15, 0.0, 0.0]",
+                             "inertia = [4.0e-3, 4.0e-3, " + inertia + ", 0.0, 0.0]");
+  text = replace(text, "damping = [0.02, 0.02, 1.5, 0.0, 0.0]",
+                 "damping = [0.02, 0.02, 0.0, 0.0, 0.0]");
+  return replace(text, "[device.feedback]",
+                 "[device.hand]\nmass = 0.0\ndamping = 0.0\n" + hand + "\n[device.feedback]");
+}
+
+/// The divergence's reason of `s` and its expected text around the value: the axis speed and
+/// its runaway speed, 100 x the axis's max_speed (2 m/s: docs/device_plant.md), at the
+/// divergence's time.
+void expect_axis_speed_reason(const RunSummary& s, const Scene& scene) {
+  ASSERT_EQ(scene.device.axes[2].max_speed, 2.0) << "test bug: the text below says 200";
+  const double limit = 100.0 * scene.device.axes[2].max_speed;
+  EXPECT_EQ(s.divergence.limit, limit);
+  EXPECT_GT(s.divergence.value, limit) << "the axis's speed, above its runaway speed";
+  const std::vector<std::string> reasons = numen::sim::run_verdict(s).reasons;
+  ASSERT_FALSE(reasons.empty());
+  const std::string head = "diverged: device plant of device axis 2: ";
+  char at[32];
+  std::snprintf(at, sizeof at, "%.4f s", s.divergence.time_s);
+  const std::string tail = std::string(" above its limit 200 (m/s or rad/s) at ") + at;
+  EXPECT_EQ(reasons[0].substr(0, head.size()), head) << reasons[0];
+  ASSERT_GE(reasons[0].size(), tail.size());
+  EXPECT_EQ(reasons[0].substr(reasons[0].size() - tail.size()), tail) << reasons[0];
+}
+
+// A plant the sub-steps cannot hold (the depth axis at 1e-9 kg) runs away when the hand first
+// moves it: the run latches the divergence with the cause "device plant", the axis's speed and
+// its runaway speed (it gave the sub-step's time against a limit of 0), and exits 7.
 TEST(RunClosedLoop, APlantThatRunsAwayLatchesTheDivergence) {
   NUMEN_REQUIRE_ARTICULATION();
   numen::test::TempDir dir;
-  std::string text = replace(default_text(), "inertia = [4.0e-3, 4.0e-3, 0.15, 0.0, 0.0]",
-                             "inertia = [4.0e-3, 4.0e-3, 1.0e-9, 0.0, 0.0]");
-  text = replace(text, "damping = [0.02, 0.02, 1.5, 0.0, 0.0]", "damping = [0.02, 0.02, 0.0, 0.0, 0.0]");
-  text = replace(text, "[device.feedback]",
-                 "[device.hand]\nmass = 0.0\ndamping = 0.0\n\n[device.feedback]");
-  const Scene scene = numen::sim::load_scene(dir.write("runaway.toml", text));
+  const Scene scene = numen::sim::load_scene(dir.write("runaway.toml", runaway("1.0e-9")));
   const RunSummary s = run_for(scene, 2.0);
   EXPECT_TRUE(s.divergence.latched);
   EXPECT_EQ(s.divergence.cause, "device plant");
   EXPECT_EQ(s.divergence.subject, "device axis 2");
   EXPECT_EQ(numen::sim::run_verdict(s).status, ExitStatus::kDiverged);
+  expect_axis_speed_reason(s, scene);
+}
+
+// The same plant under a stiff hand whose recording moves from its first period on runs away in
+// period 1, before the CANopen start-up has made the encoders send: the verdict says the
+// divergence stopped the run, not "run longer" (a longer run stops there too).
+TEST(RunClosedLoop, APlantThatRunsAwayBeforeTheStartUpIsNotToldToRunLonger) {
+  NUMEN_REQUIRE_ARTICULATION();
+  numen::test::TempDir dir;
+  std::string text = runaway("1.0e-15", "stiffness = 1.0e9\n");
+  text = replace(text, "manipulator = \"slave_right\"\n",
+                 "manipulator = \"slave_right\"\nstart_time = 5.0\n");
+  const Scene scene = numen::sim::load_scene(dir.write("early.toml", text));
+  const RunSummary s = run_for(scene, 2.0);
+  EXPECT_EQ(s.divergence.period, 1);
+  EXPECT_EQ(s.steps, 2);
+  EXPECT_DOUBLE_EQ(s.divergence.time_s, 0.001);
+  expect_axis_speed_reason(s, scene);
+  const std::vector<std::string> reasons = numen::sim::run_verdict(s).reasons;
+  ASSERT_EQ(reasons.size(), 2u);
+  EXPECT_EQ(reasons[1],
+            "samples rejected: no period had a valid sample: the divergence stopped the run after "
+            "2 periods, before the CANopen start-up finished (still in phase 'configure'); the "
+            "encoders send once their nodes are operational");
 }
 
 // The closed loop's periods (the emulated plant and hand, the hand's penetration, the figures)

@@ -29,6 +29,7 @@
 
 #include "alloc_counter.hpp"
 #include "child_process.hpp"
+#include "jigsaws_trials.hpp"
 #include "run_scenes.hpp"
 #include "scene_text.hpp"
 #include "temp_dir.hpp"
@@ -49,28 +50,20 @@ using namespace numen::test::run_scenes;
 
 // ---------------------------------------------------------------- recorded trials (issue 17)
 // Every shipped JIGSAWS scene must accept every recorded trial: the axis limits are the
-// instrument's, not one excerpt's. The full trials live outside the repository:
-// $NUMEN_JIGSAWS_DIR, else ../shared/data/jigsaws beside the clone (CI; /work/shared/data/jigsaws
-// in development). Without them these tests run the shipped excerpt only and say so.
+// instrument's, not one excerpt's. The full trials live outside the repository, in the folder
+// NUMEN_JIGSAWS_DIR names (jigsaws_trials.hpp; CI sets it). Unset, these tests check the shipped
+// excerpt and then report themselves skipped, naming the variable.
 
 namespace fs = std::filesystem;
 
-/// The recordings to run: the shipped excerpt, then every *.txt of the trials folder.
+/// The recordings to run: the shipped excerpt, then every *.txt of NUMEN_JIGSAWS_DIR.
 std::vector<fs::path> recorded_trials(std::string* note) {
   std::vector<fs::path> out = {numen::sim::jigsaws_excerpt_path()};
-  const char* env = std::getenv("NUMEN_JIGSAWS_DIR");
-  const fs::path dir = env != nullptr && *env != '\0'
-                           ? fs::path(env)
-                           : fs::path(NUMEN_SOURCE_DIR) / ".." / "shared" / "data" / "jigsaws";
-  std::vector<fs::path> trials;
-  std::error_code ec;
-  if (fs::is_directory(dir, ec))
-    for (const auto& e : fs::directory_iterator(dir, ec))
-      if (e.path().extension() == ".txt") trials.push_back(e.path());
-  std::sort(trials.begin(), trials.end());
-  *note = trials.empty() ? "no JIGSAWS trials in " + dir.string() +
-                               " (set NUMEN_JIGSAWS_DIR): the shipped excerpt only"
-                         : std::to_string(trials.size()) + " trials from " + dir.string();
+  const std::vector<fs::path> trials = numen::test::jigsaws_trials();
+  *note = numen::test::jigsaws_trials_dir()
+              ? std::to_string(trials.size()) + " trials from " +
+                    numen::test::jigsaws_trials_dir()->string()
+              : std::string("the shipped excerpt only: ") + numen::test::kNoJigsawsTrials;
   out.insert(out.end(), trials.begin(), trials.end());
   return out;
 }
@@ -195,6 +188,8 @@ TEST(RunRecordedTrials, EveryAxisOfEveryTrialStaysInItsRangeInEveryJigsawsScene)
                       << " s on, up to " << v.worst << (v.speed ? " per s" : "");
     }
   }
+  if (!numen::test::jigsaws_trials_dir())
+    GTEST_SKIP() << "the shipped excerpt checked; " << numen::test::kNoJigsawsTrials;
 }
 
 TEST(RunRecordedTrials, EveryTrialRunsThroughEveryJigsawsSceneWithoutASafetyStop) {
@@ -254,6 +249,8 @@ TEST(RunRecordedTrials, EveryTrialRunsThroughEveryJigsawsSceneWithoutASafetyStop
                                            << r.limit_cycle_hz << " Hz";
     }
   }
+  if (!numen::test::jigsaws_trials_dir())
+    GTEST_SKIP() << "the shipped excerpt checked; " << numen::test::kNoJigsawsTrials;
 }
 
 // ---------------------------------------------------------------- soft start (docs/safety.md)
@@ -277,12 +274,14 @@ std::string with_soft_start(std::string text, double seconds) {
 // the previous r: |F_k - F_{k-1}| <= (dt / T) max_force + r_{k-1} |F^_k - F^_{k-1}|.
 TEST(RunSoftStart, TheHeldOutTrialsStartingInsideAnObstacleRampTheFeedbackInInsteadOfJumping) {
   NUMEN_REQUIRE_ARTICULATION();
-  std::string note;
+  if (!numen::test::jigsaws_trials_dir()) GTEST_SKIP() << numen::test::kNoJigsawsTrials;
   std::vector<fs::path> trials;
-  for (const fs::path& t : recorded_trials(&note))
+  for (const fs::path& t : numen::test::jigsaws_trials())
     if (t.filename() == "Knot_Tying_B001.txt" || t.filename() == "Needle_Passing_B001.txt")
       trials.push_back(t);
-  if (trials.size() != 2) GTEST_SKIP() << "the held-out JIGSAWS trials are not here: " << note;
+  ASSERT_EQ(trials.size(), 2u) << "NUMEN_JIGSAWS_DIR="
+                               << numen::test::jigsaws_trials_dir()->string()
+                               << " lacks Knot_Tying_B001.txt or Needle_Passing_B001.txt";
   constexpr double kT = 0.1;
   const fs::path scene_path = fs::path(NUMEN_SOURCE_DIR) / "sim" / "scenes" / "lattice.toml";
   numen::test::TempDir dir;

@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -22,6 +23,24 @@ RunSummary clean() {
   s.steps = 1000;
   s.invalid_periods = 2;  // the periods before the first sample
   return s;
+}
+
+/// `s` ended after `steps` periods without a valid sample, the managed start-up in `phase`.
+void end_before_startup(RunSummary& s, std::int64_t steps, const std::string& phase) {
+  s.steps = steps;
+  s.invalid_periods = steps;
+  s.managed = true;
+  s.startup = phase;
+}
+
+/// `s` with the emulated device's axis 2 run away at `speed` against `limit` at `time_s`.
+void plant_ran_away(RunSummary& s, double speed, double limit, double time_s) {
+  s.divergence.latched = true;
+  s.divergence.cause = "device plant";
+  s.divergence.subject = "device axis 2";
+  s.divergence.value = speed;
+  s.divergence.limit = limit;
+  s.divergence.time_s = time_s;
 }
 
 TEST(RunVerdict, CleanRunIsZeroWithNoReason) {
@@ -123,10 +142,7 @@ TEST(RunVerdict, AStoppedRunCarriesTheSignalsStatusAndName) {
 // a valid sample": it names the start-up that never finished and the periods the run had.
 TEST(RunVerdict, ARunEndedBeforeTheStartUpFinishedSaysSo) {
   RunSummary s = clean();
-  s.steps = 33;
-  s.invalid_periods = 33;
-  s.managed = true;
-  s.startup = "wait operational";
+  end_before_startup(s, 33, "wait operational");
   const auto v = run_verdict(s);
   EXPECT_EQ(v.status, ExitStatus::kSamplesRejected);
   EXPECT_EQ(v.reasons, std::vector<std::string>{
@@ -137,6 +153,31 @@ TEST(RunVerdict, ARunEndedBeforeTheStartUpFinishedSaysSo) {
   s.startup = "operational";  // it finished: the frames are to blame
   EXPECT_EQ(run_verdict(s).reasons,
             std::vector<std::string>{"samples rejected: no period had a valid sample"});
+}
+
+// The emulated device's axis that runs away is named with its speed and its runaway speed (it
+// read "device plant of device axis 2: 0.0002667 above its limit 0 (m/s)": the sub-step's
+// time against 0); a run that this divergence stopped in its second period, before the
+// start-up finished, is not told to run longer.
+TEST(RunVerdict, ADevicePlantDivergenceNamesTheAxisSpeedAndItsLimit) {
+  RunSummary s = clean();
+  end_before_startup(s, 2, "wait operational");
+  plant_ran_away(s, 31234.5, 1000.0, 0.001);
+  const auto v = run_verdict(s);
+  EXPECT_EQ(v.status, ExitStatus::kDiverged);
+  EXPECT_EQ(v.reasons,
+            (std::vector<std::string>{
+                "diverged: device plant of device axis 2: 3.123e+04 above its limit 1000 (m/s or "
+                "rad/s) at 0.0010 s",
+                "samples rejected: no period had a valid sample: the divergence stopped the run "
+                "after 2 periods, before the CANopen start-up finished (still in phase 'wait "
+                "operational'); the encoders send once their nodes are operational"}));
+  // Just past its limit the value gets the digits that tell it from the limit.
+  s = clean();
+  plant_ran_away(s, 200.008, 200.0, 0.081);
+  EXPECT_EQ(run_verdict(s).reasons,
+            std::vector<std::string>{"diverged: device plant of device axis 2: 200.01 above its "
+                                     "limit 200 (m/s or rad/s) at 0.0810 s"});
 }
 
 // Encoder frames of the wrong kind (CAN FD, remote) or length reject their samples: the verdict

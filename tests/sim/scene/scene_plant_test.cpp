@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <string>
+#include <utility>
 
 #include "build_features.hpp"
 #include "numen/sim/input/input_error.hpp"
@@ -92,6 +93,45 @@ TEST(ScenePlant, BadValuesAreLocatedAtTheirKey) {
   const std::string text = replace(admittance, "[device.admittance]", kPlant + "\n[device.admittance]");
   const InputError e = load_error(dir, text, "adm.toml");
   EXPECT_NE(e.message().find("an impedance device's mechanics"), std::string::npos) << e.what();
+}
+
+// `inertia` takes one number for every axis, as damping and coulomb do (it was refused as
+// "expected an array of numbers, found a number"), with the list's range.
+TEST(ScenePlant, InertiaIsOneNumberForEveryAxisOrAListOfOnePerAxis) {
+  TempDir dir;
+  const std::string list = "inertia = [0.2, 0.2, 0.2, 1e-4, 1e-4, 0.0]";
+  const std::pair<std::string, double> ones[] = {{"0.0", 0.0}, {"2e-3", 2e-3}, {"1", 1.0}};
+  for (const auto& [value, m] : ones) {
+    const std::string one = "inertia = " + value;
+    const Scene s = load_scene(dir.write("one.toml", with_tables(replace(kPlant, list, one))));
+    ASSERT_TRUE(s.plant.has_value()) << one;
+    ASSERT_EQ(s.plant->axes.size(), 6u);
+    for (const auto& axis : s.plant->axes) EXPECT_EQ(axis.inertia, m) << one;
+  }
+  const std::string file = (dir.path() / "bad.toml").string();
+  struct Case {
+    std::string to, message;
+  };
+  const Case cases[] = {
+      {"inertia = -1.0",
+       "must be finite and >= 0 (kg or kg·m²; 0: the axis follows the hand), got -1"},
+      {"inertia = nan", "must be finite"},
+      {"inertia = inf", "must be finite"},
+      {"inertia = \"heavy\"", "expected a number, found a string"},
+  };
+  for (const Case& c : cases) {
+    const std::string text = with_tables(replace(kPlant, list, c.to));
+    const InputError e = load_error(dir, text, "bad.toml");
+    expect_located(e, file, line_of(text, c.to), column_of(text, c.to, c.to.substr(10)),
+                   "device.plant.inertia", c.message);
+    EXPECT_EQ(e.message(), c.message);
+  }
+  // Without it the table is refused, saying both forms.
+  const std::string text = with_tables(replace(kPlant, list + "\n", ""));
+  const InputError e = load_error(dir, text, "bad.toml");
+  EXPECT_EQ(e.key(), "device.plant.inertia");
+  EXPECT_EQ(e.message(),
+            "missing (one number for every axis, or a list of 6, one per axis, is required)");
 }
 
 TEST(ScenePlant, TheHandIsOneTableForBothKindsOfDevice) {

@@ -10,14 +10,23 @@
 #include <boost/beast/core.hpp>
 #include <boost/beast/http.hpp>
 #include <boost/beast/websocket.hpp>
+#include <cerrno>
 #include <chrono>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <functional>
 #include <nlohmann/json.hpp>
-#include <sys/socket.h>
 #include <thread>
+#include <vector>
+
+#include <fcntl.h>
+#include <netinet/in.h>
+#include <poll.h>
+#include <sys/resource.h>
+#include <sys/socket.h>
+#include <unistd.h>
 
 #include "numen/sim/view/frame_layout_json.hpp"
 
@@ -391,6 +400,166 @@ TEST(ViewServer, RefusesAnAddressItCannotBind) {
   ViewServerSettings zero = free_port();
   zero.client_queue_frames = 0;
   EXPECT_THROW(ViewServer(zero, kScene), std::invalid_argument);
+}
+
+/// TCP sockets of this process (plain descriptors, no Asio), closed when it goes.
+class RawSockets {
+ public:
+  RawSockets() = default;
+  RawSockets(const RawSockets&) = delete;
+  RawSockets& operator=(const RawSockets&) = delete;
+  ~RawSockets() { close_all(); }
+  /// Opens `n` unconnected IPv4 TCP sockets; false if one cannot be opened.
+  bool open(int n) {
+    for (int i = 0; i < n; ++i) {
+      const int fd = ::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
+      if (fd < 0) return false;
+      fds_.push_back(fd);
+    }
+    return true;
+  }
+  /// Connects socket i to 127.0.0.1:port (blocking: done once the kernel has queued it).
+  bool connect(std::size_t i, std::uint16_t port) const {
+    sockaddr_in a{};
+    a.sin_family = AF_INET;
+    a.sin_port = htons(port);
+    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    return ::connect(fds_[i], reinterpret_cast<const sockaddr*>(&a), sizeof a) == 0;
+  }
+  /// Waits (bounded: 20 s) for socket i to be readable and reads: true if the server closed
+  /// it (end of file or reset) without sending anything.
+  bool closed_by_server(std::size_t i) const {
+    pollfd p{fds_[i], POLLIN, 0};
+    if (::poll(&p, 1, 20000) != 1) return false;
+    char c = 0;
+    return ::recv(fds_[i], &c, 1, MSG_DONTWAIT) <= 0;
+  }
+  /// True if socket i has nothing to read and is not closed, now.
+  bool quiet(std::size_t i) const {
+    char c = 0;
+    return ::recv(fds_[i], &c, 1, MSG_DONTWAIT) < 0 && (errno == EAGAIN || errno == EWOULDBLOCK);
+  }
+  void close_all() {
+    for (const int fd : fds_) ::close(fd);
+    fds_.clear();
+  }
+  std::size_t size() const { return fds_.size(); }
+  int fd(std::size_t i) const { return fds_[i]; }
+
+ private:
+  std::vector<int> fds_;
+};
+
+/// "GET / HTTP/1.1" on a new connection to 127.0.0.1:port and what the server answered up to
+/// its close (bounded: 20 s); "" if the connection or the request failed.
+std::string raw_get(std::uint16_t port) {
+  RawSockets s;
+  if (!s.open(1) || !s.connect(0, port)) return "";
+  const std::string request = "GET / HTTP/1.1\r\nHost: 127.0.0.1\r\nConnection: close\r\n\r\n";
+  if (::send(s.fd(0), request.data(), request.size(), MSG_NOSIGNAL) !=
+      static_cast<ssize_t>(request.size()))
+    return "";
+  std::string answer;
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  for (;;) {
+    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
+        deadline - std::chrono::steady_clock::now());
+    pollfd p{s.fd(0), POLLIN, 0};
+    if (left.count() <= 0 || ::poll(&p, 1, static_cast<int>(left.count())) != 1) return answer;
+    char buf[512];
+    const ssize_t n = ::recv(s.fd(0), buf, sizeof buf, 0);
+    if (n <= 0) return answer;
+    answer.append(buf, static_cast<std::size_t>(n));
+  }
+}
+
+/// Lowers this process's RLIMIT_NOFILE so that exactly `room` more descriptors can be opened
+/// (the lowest free numbers are taken first); puts the limit back when it goes.
+class DescriptorRoom {
+ public:
+  explicit DescriptorRoom(int room) {
+    ::getrlimit(RLIMIT_NOFILE, &saved_);
+    int free_seen = 0;
+    rlim_t limit = 0;
+    for (int fd = 0; free_seen < room; ++fd) {
+      if (::fcntl(fd, F_GETFD) < 0 && errno == EBADF) ++free_seen;
+      limit = static_cast<rlim_t>(fd) + 1;
+    }
+    rlimit lowered = saved_;
+    lowered.rlim_cur = limit;
+    ok_ = ::setrlimit(RLIMIT_NOFILE, &lowered) == 0;
+  }
+  DescriptorRoom(const DescriptorRoom&) = delete;
+  DescriptorRoom& operator=(const DescriptorRoom&) = delete;
+  ~DescriptorRoom() { ::setrlimit(RLIMIT_NOFILE, &saved_); }
+  bool ok() const { return ok_; }
+
+ private:
+  rlimit saved_{};
+  bool ok_ = false;
+};
+
+/// The status line of an HTTP answer.
+std::string status_line(const std::string& answer) { return answer.substr(0, answer.find("\r\n")); }
+
+// Out of descriptors (`ulimit -n` reached: here room for 8 of 40 connections held from
+// 127.0.0.1) accept() fails with EMFILE while the rest wait in the listen queue. The server
+// retried at once: it answered nothing and burnt its core until they closed. It now pauses
+// (kViewAcceptBackoff, doubling), so over a hold of 300 ms it fails at most once per 10 ms (a
+// bound that a loaded machine only makes easier to hold; retrying at once fails as fast as the
+// core runs), and it answers again once the held connections close, the limit still as low.
+TEST(ViewServer, OutOfDescriptorsItPausesAcceptingAndAnswersOnceTheConnectionsClose) {
+  ViewServerSettings s = free_port();
+  s.max_http_connections = 1000;  // the descriptors run out first
+  ViewServer server(s, kScene);
+  server.start();
+  RawSockets held;
+  ASSERT_TRUE(held.open(40));
+  {
+    const DescriptorRoom room(8);  // after the held sockets were opened: room for the server
+    ASSERT_TRUE(room.ok());
+    for (std::size_t i = 0; i < held.size(); ++i) ASSERT_TRUE(held.connect(i, server.port())) << i;
+    ASSERT_TRUE(eventually([&] { return server.counters().accept_failures > 0; }));
+    const auto t0 = std::chrono::steady_clock::now();
+    const std::uint64_t failures0 = server.counters().accept_failures;
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));
+    const std::uint64_t failures1 = server.counters().accept_failures;
+    const auto held_for = std::chrono::steady_clock::now() - t0;
+    std::printf("[   info   ] %llu failed accepts over a %.0f ms hold\n",
+                static_cast<unsigned long long>(failures1 - failures0),
+                std::chrono::duration<double, std::milli>(held_for).count());
+    EXPECT_LE(failures1 - failures0,
+              1 + static_cast<std::uint64_t>(held_for / numen::sim::kViewAcceptBackoff));
+    EXPECT_EQ(server.counters().http_requests, 0u);
+    held.close_all();
+    EXPECT_EQ(status_line(raw_get(server.port())), "HTTP/1.1 404 Not Found");
+  }
+  EXPECT_EQ(server.counters().http_requests, 1u);
+  EXPECT_EQ(server.counters().connections_shed, 0u);
+}
+
+// Past max_http_connections an accepted connection closes the one that has waited longest for
+// its request: 10 idle connections against 4 close the first 6 and keep the last 4; a request
+// on an 11th is answered, closing the 7th.
+TEST(ViewServer, PastItsHttpConnectionsANewOneClosesTheOneWaitingLongest) {
+  ViewServerSettings s = free_port();
+  s.max_http_connections = 4;
+  ViewServer server(s, kScene);
+  server.start();
+  RawSockets idle;
+  ASSERT_TRUE(idle.open(10));
+  for (std::size_t i = 0; i < idle.size(); ++i) ASSERT_TRUE(idle.connect(i, server.port())) << i;
+  ASSERT_TRUE(eventually([&] { return server.counters().connections_shed == 6; }));
+  for (std::size_t i = 0; i < 6; ++i) EXPECT_TRUE(idle.closed_by_server(i)) << i;
+  for (std::size_t i = 6; i < 10; ++i) EXPECT_TRUE(idle.quiet(i)) << i;
+  EXPECT_EQ(status_line(raw_get(server.port())), "HTTP/1.1 404 Not Found");
+  EXPECT_TRUE(idle.closed_by_server(6));
+  for (std::size_t i = 7; i < 10; ++i) EXPECT_TRUE(idle.quiet(i)) << i;
+  EXPECT_EQ(server.counters().connections_shed, 7u);
+  EXPECT_EQ(server.counters().accept_failures, 0u);
+  ViewServerSettings none = free_port();
+  none.max_http_connections = 0;
+  EXPECT_THROW(ViewServer(none, kScene), std::invalid_argument);
 }
 
 // The sessions' decisions without a socket (the seam tests/fuzz/view_server_fuzz.cpp drives).

@@ -101,8 +101,12 @@ struct PlantFigures {
   double hand_separation_max_mm = 0.0;  ///< Largest |x_intent − x_handle|, mm.
   LimitCycleDetector limit_cycle;
   bool diverged = false;              ///< A non-finite or runaway axis (the plant then holds).
-  int diverged_axis = -1;
-  double diverged_time_s = 0.0;
+  int diverged_axis = -1;             ///< That axis (its index in the device's axes).
+  double diverged_time_s = 0.0;       ///< When (trajectory time), s.
+  /// Its |speed| then, m/s or rad/s (+inf where its value is not finite).
+  double diverged_speed = 0.0;
+  /// Its runaway speed, m/s or rad/s: 100 × its max_speed (10³ without one).
+  double diverged_speed_limit = 0.0;
 };
 
 /// An impedance device with mechanics and a hand (see the file comment).

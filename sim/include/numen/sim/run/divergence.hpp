@@ -58,10 +58,13 @@ struct DivergenceLimits {
 
 /// What the monitor latched.
 struct Divergence {
-  const char* cause = nullptr;  ///< nullptr: none; else "body speed", "node speed", "tie stretch", "energy".
-  int body = -1;                ///< The body ("body speed"), or the net's rigid component.
+  /// nullptr: none; else "body speed", "node speed", "tie stretch", "energy" or one latched
+  /// from outside (DivergenceMonitor::latch_external(): "device plant").
+  const char* cause = nullptr;
+  int body = -1;  ///< The body ("body speed"), the net's rigid component, or the device axis
+                  ///< ("device plant").
   int net = -1;                 ///< The net ("node speed", "tie stretch"); -1 otherwise.
-  double value = 0.0;           ///< The quantity (m/s, m or J).
+  double value = 0.0;           ///< The quantity (m/s, m or J; "device plant": m/s or rad/s).
   double limit = 0.0;           ///< Its limit then (same unit).
   std::int64_t period = -1;     ///< Period of the breach (0-based).
   double time_s = 0.0;          ///< Its simulated time (s).
@@ -120,12 +123,14 @@ class DivergenceMonitor {
 
   /// Latches a breach found outside the monitor (e.g. "device plant": the emulated device's
   /// mechanics ran away, PlantMotion) with `cause` (a static string), the axis or body index
-  /// `subject` in Divergence::body, `value` its time (s). Returns true if this latched it (false
-  /// if a breach was already latched). noexcept, no allocation.
-  bool latch_external(const char* cause, int subject, double value, std::int64_t period,
-                      double time_s) noexcept {
+  /// `subject` in Divergence::body, the quantity `value` that breached its `limit` (the device
+  /// plant: the axis's speed and its runaway speed, m/s or rad/s), in period `period` at
+  /// simulated time `time_s`. Returns true if this latched it (false if a breach was already
+  /// latched). noexcept, no allocation.
+  bool latch_external(const char* cause, int subject, double value, double limit,
+                      std::int64_t period, double time_s) noexcept {
     if (latched_.cause != nullptr) return false;
-    latch(cause, subject, -1, value, 0.0, period, time_s);
+    latch(cause, subject, -1, value, limit, period, time_s);
     return true;
   }
   /// The latched breach (cause nullptr while none).

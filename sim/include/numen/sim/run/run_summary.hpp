@@ -62,9 +62,11 @@ struct MultirateSummary {
 /// The divergence monitor of a run (divergence.hpp; docs/safety.md, "Divergence").
 struct DivergenceSummary {
   bool latched = false;            ///< A breach latched: the run stopped (ExitStatus::kDiverged).
-  std::string cause;               ///< "body speed", "node speed", "tie stretch" or "energy".
-  std::string subject;             ///< The body, or the net, that breached.
-  double value = 0.0;              ///< The quantity (m/s, m or J).
+  /// "body speed", "node speed", "tie stretch", "energy" or "device plant" (an axis of the
+  /// emulated device ran away, docs/device_plant.md).
+  std::string cause;
+  std::string subject;  ///< The body, the net or the device axis ("device axis N") that breached.
+  double value = 0.0;   ///< The quantity (m/s, m or J; a device axis's speed: m/s or rad/s).
   double limit = 0.0;              ///< Its limit (same unit).
   double time_s = 0.0;             ///< Simulated time of the breach (s).
   std::int64_t period = -1;        ///< Its period (0-based).

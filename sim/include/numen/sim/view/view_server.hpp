@@ -20,10 +20,18 @@
 /// above the limit, and in replay any message that is not a valid request, close that
 /// connection and are counted (closed_bad_input).
 ///
+/// Bounded: at most max_http_connections HTTP connections (a new one past them closes the one
+/// that has waited longest for its request) and max_clients WebSocket clients; an accept that
+/// fails (out of file descriptors or memory: EMFILE, ENFILE, ENOBUFS, ENOMEM) pauses accepting
+/// (kViewAcceptBackoff, doubling with each failure in a row up to kViewAcceptBackoffMax; a
+/// connection that closes ends the pause) instead of retrying at once, so that a flood of
+/// connections never makes the I/O thread spin beside the run's loop.
+///
 /// Threads: one I/O thread of its own (SCHED_OTHER) runs every socket; start(), stop() and
 /// the destructor belong to the setup thread; write_frame() to one producer thread (the
 /// stream's); counters() to any thread. Boost.Beast stays in view_server.cpp (pimpl).
 
+#include <chrono>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -68,7 +76,19 @@ struct ViewServerSettings {
   std::size_t max_client_message_bytes = 256;
   /// Clients served at once, >= 1; a further WebSocket upgrade is answered 503.
   std::size_t max_clients = 16;
+  /// HTTP connections open at once, >= 1: each waits for its request (a keep-alive connection
+  /// for its next one, at most 30 s) or is being answered; a WebSocket client is no longer one.
+  /// A connection accepted past it closes the one that has waited longest for its request, or
+  /// is closed itself when all of them are being answered (counted: connections_shed).
+  std::size_t max_http_connections = 64;
 };
+
+/// The accept loop's first pause after a failed accept (out of descriptors or memory); each
+/// further failure in a row doubles it, up to kViewAcceptBackoffMax. A connection of the server
+/// that closes (a descriptor freed) ends the pause at once; a successful accept resets it.
+inline constexpr std::chrono::milliseconds kViewAcceptBackoff{10};
+/// The accept loop's longest pause after failed accepts.
+inline constexpr std::chrono::milliseconds kViewAcceptBackoffMax{1000};
 
 /// Counters of a ViewServer since start() (relaxed atomics; each consistent on its own).
 struct ViewServerCounters {
@@ -82,6 +102,11 @@ struct ViewServerCounters {
   std::uint64_t closed_bad_input = 0;   ///< Connections closed for a bad or oversized message.
   std::uint64_t requests = 0;           ///< Replay frame requests answered.
   std::uint64_t source_errors = 0;      ///< Replay frames the source failed to read.
+  /// Accepts that failed (EMFILE, ENFILE, ENOBUFS, ENOMEM, ...), each followed by a pause.
+  std::uint64_t accept_failures = 0;
+  /// HTTP connections closed because max_http_connections were open (the one waiting longest
+  /// for its request, or the new one).
+  std::uint64_t connections_shed = 0;
 };
 
 /// One connected client's counters (ViewServer::clients()).
