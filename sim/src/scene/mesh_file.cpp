@@ -20,16 +20,17 @@
 #include <tuple>
 #include <vector>
 
+#include "mesh_counts.hpp"
 #include "numen/sim/input/input_error.hpp"
 
 namespace numen::sim {
 namespace {
 
-/// True when `path` ends in ".obj", whatever the case.
-bool is_obj(const std::string& path) {
+/// The extension of `path` in lower case (".obj").
+std::string extension_of(const std::string& path) {
   std::string ext = std::filesystem::path(path).extension().string();
   for (char& ch : ext) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
-  return ext == ".obj";
+  return ext;
 }
 
 /// The index of an OBJ face corner ("7", "7/2", "7//3", "-1/..."): its first number.
@@ -130,7 +131,22 @@ core::TriangleMesh load_mesh_file(const std::string& path, int max_triangles) {
     if (probe.peek() == std::ifstream::traits_type::eof())
       throw InputError(path, 0, 0, "", "the mesh file is empty: no face");
   }
-  if (is_obj(path)) check_obj_lines(path);
+  // Only the formats whose counts and references are checked here reach Assimp: its other
+  // importers trust their headers (an OFF that promises 4·10^8 vertices parses for half a minute).
+  const std::string ext = extension_of(path);
+  if (ext == ".obj") {
+    check_obj_lines(path);
+  } else if (ext == ".ply") {
+    check_ply_counts(path);
+  } else if (ext == ".stl") {
+    check_stl_counts(path);
+  } else if (ext != ".gltf" && ext != ".glb") {
+    throw InputError(path, 0, 0, "",
+                     "a mesh file is .stl, .obj, .ply, .gltf or .glb: " +
+                         (ext.empty() ? std::string("this one has no extension")
+                                      : "not \"" + InputError::visible(ext, true) + "\"") +
+                         " (docs/meshes.md)");
+  }
 
   Assimp::Importer importer;
   // Only positions are read: every other component is removed before vertices are joined, so

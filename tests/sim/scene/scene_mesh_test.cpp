@@ -13,6 +13,7 @@
 #include "numen/sim/run/run_summary.hpp"
 #include "numen/sim/scene/scene.hpp"
 #include "build_features.hpp"
+#include "mesh_text.hpp"
 #include "scene_text.hpp"
 #include "temp_dir.hpp"
 
@@ -197,6 +198,33 @@ std::string located(const TempDir& dir, const std::string& text, const std::stri
                     const std::string& key, const std::string& message) {
   return (dir / "bad.toml").string() + ":" + std::to_string(line_of(text, needle)) + ":" +
          std::to_string(static_cast<int>(needle.size()) + 1) + ": " + key + ": " + message;
+}
+
+// Defects 1 and 2: a PLY whose header disagrees with its body (Assimp aborted the process on
+// it) or promises more elements than the file holds (a minute and 1.2 GB, or std::bad_alloc) is
+// refused at the scene's `file` key with both numbers (the checks: mesh_counts_test.cpp).
+TEST(SceneMesh, PlyCountsThatDisagreeWithItsBodyAreRefusedAtTheFileKey) {
+  TempDir dir;
+  const auto ply = [&](const std::string& name, const std::string& vertices) {
+    return dir.write(name, numen::test::ascii_ply(vertices, "4"));
+  };
+  const std::string two = ply("two.ply", "2");
+  std::string text = with_mesh_obstacle("file = \"two.ply\"\n");
+  EXPECT_EQ(std::string(numen::test::load_error(dir, text).what()),
+            located(dir, text, "file = ", "obstacle[0].file",
+                    two + ": the PLY header's elements take 6 lines (vertex 2, face 4), the body "
+                          "after end_header has 8"));
+  const std::string many = ply("many.ply", "100000000");
+  text = with_mesh_obstacle("file = \"many.ply\"\n");
+  EXPECT_EQ(std::string(numen::test::load_error(dir, text).what()),
+            located(dir, text, "file = ", "obstacle[0].file",
+                    many + ": the PLY header's elements take 100000004 lines (vertex 100000000, "
+                           "face 4), the body after end_header has 8"));
+  // The same file with its true count loads.
+  ply("tet.ply", "4");
+  EXPECT_EQ(load_scene(dir.write("s.toml", with_mesh_obstacle("file = \"tet.ply\"\n")))
+                .model.meshes.size(),
+            1u);
 }
 
 // Defect 4: `scale = 1e30` loaded and every step was non-finite (exit 4, penetrations of
