@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "mesh_counts.hpp"
+#include "mesh_side_files.hpp"
 #include "numen/sim/input/input_error.hpp"
 
 namespace numen::sim {
@@ -140,7 +141,9 @@ core::TriangleMesh load_mesh_file(const std::string& path, int max_triangles) {
     check_ply_counts(path);
   } else if (ext == ".stl") {
     check_stl_counts(path);
-  } else if (ext != ".gltf" && ext != ".glb") {
+  } else if (ext == ".gltf" || ext == ".glb") {
+    check_gltf_uris(path);
+  } else {
     throw InputError(path, 0, 0, "",
                      "a mesh file is .stl, .obj, .ply, .gltf or .glb: " +
                          (ext.empty() ? std::string("this one has no extension")
@@ -149,6 +152,8 @@ core::TriangleMesh load_mesh_file(const std::string& path, int max_triangles) {
   }
 
   Assimp::Importer importer;
+  auto* io = new MeshFolderIOSystem(path);  // owned by the importer
+  importer.SetIOHandler(io);
   // Only positions are read: every other component is removed before vertices are joined, so
   // that a corner's normal or texture coordinate does not keep two equal positions apart.
   importer.SetPropertyInteger(
@@ -160,6 +165,12 @@ core::TriangleMesh load_mesh_file(const std::string& path, int max_triangles) {
   const aiScene* scene = importer.ReadFile(
       path, aiProcess_RemoveComponent | aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
                 aiProcess_SortByPType | aiProcess_PreTransformVertices);
+  if (!io->refused().empty())
+    throw InputError(path, 0, 0, "",
+                     "refers to " + io->refused() + ", outside the mesh file's folder " +
+                         io->folder().string() +
+                         ": a mesh file's side files (buffers, images, materials) are read only "
+                         "from its own folder");
   if (scene == nullptr) {
     const std::string why = importer.GetErrorString();
     throw InputError(path, 0, 0, "",

@@ -16,6 +16,7 @@
 #include "build_features.hpp"
 #include "child_process.hpp"
 #include "lattice_scene.hpp"
+#include "mesh_text.hpp"
 #include "numen/hal/transport/candump_log.hpp"
 #include "numen/sim/input/jigsaws.hpp"
 #include "numen/sim/run/run_figures.hpp"
@@ -686,6 +687,34 @@ TEST(NumenCli, OutOfMemoryIsNamed) {
   const ChildResult r = run_child({"/bin/sh", "-c", cmd}, dir.path(), 60);
   EXPECT_EQ(r.status, 1) << r.out << r.err;
   EXPECT_NE(r.err.find("numen: out of memory"), std::string::npos) << r.err;
+}
+
+// Defects 1 and 3 of the mesh reader, end to end: a PLY whose header says 2 vertices over a body
+// of 4 vertices and 4 faces aborted numen inside Assimp (SIGABRT, status 134); a glTF whose
+// buffer is ../../../../../../etc/passwd loaded that file's bytes as vertices and exited 0. Both
+// are now input rejected (2), the located message the whole of stderr.
+TEST(NumenCli, MeshFilesThatCrashedOrLeakedAreInputRejected) {
+  TempDir dir;
+  const std::string crash = dir.write("crash.ply", numen::test::ascii_ply("2", "4"));
+  const std::string leak =
+      dir.write("leak.gltf", numen::test::tet_gltf("../../../../../../etc/passwd"));
+  for (const auto& [mesh, message] :
+       {std::pair<std::string, std::string>{
+            crash,
+            "the PLY header's elements take 6 lines (vertex 2, face 4), "
+            "the body after end_header has 8"},
+        {leak,
+         "buffers[0].uri \"../../../../../../etc/passwd\" has a \"..\" segment: a glTF's buffers "
+         "and images are read only from data: URIs and relative paths inside the mesh file's "
+         "folder"}}) {
+    const std::string name = std::filesystem::path(mesh).filename().string();
+    const std::string text = numen::test::with_mesh_obstacle("file = \"" + name + "\"\n");
+    const std::string scene = dir.write(name + ".toml", text);
+    const ChildResult r = run_child({kNumen, "run", scene}, dir.path(), 60);
+    EXPECT_EQ(r.status, 2) << name << ": " << r.out << r.err;
+    EXPECT_EQ(r.err, "numen: " + scene + ":" + std::to_string(numen::test::line_of(text, name)) +
+                         ":8: obstacle[0].file: " + mesh + ": " + message + "\n");
+  }
 }
 
 }  // namespace

@@ -227,6 +227,21 @@ TEST(SceneMesh, PlyCountsThatDisagreeWithItsBodyAreRefusedAtTheFileKey) {
             1u);
 }
 
+// Defect 3: a glTF buffer's URI led out of the mesh's folder; its bytes became the obstacle's
+// vertices and the run exited 0. Refused at `file`, naming the glTF's key and the URI.
+TEST(SceneMesh, GltfBufferOutsideTheMeshFolderIsRefusedAtTheFileKey) {
+  TempDir dir;
+  const std::string gltf =
+      dir.write("leak.gltf", numen::test::tet_gltf("../../../../../../etc/passwd"));
+  const std::string text = with_mesh_obstacle("file = \"leak.gltf\"\n");
+  EXPECT_EQ(
+      std::string(numen::test::load_error(dir, text).what()),
+      located(dir, text, "file = ", "obstacle[0].file",
+              gltf + ": buffers[0].uri \"../../../../../../etc/passwd\" has a \"..\" segment: "
+                     "a glTF's buffers and images are read only from data: URIs and relative "
+                     "paths inside the mesh file's folder"));
+}
+
 // Defect 4: `scale = 1e30` loaded and every step was non-finite (exit 4, penetrations of
 // 2.5·10^31 mm); a mesh must span [kMinMeshSize, kMaxMeshSize] once scaled, refused at `scale`
 // (else `units`, else `file`).

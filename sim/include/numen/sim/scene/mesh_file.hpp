@@ -26,13 +26,15 @@ inline constexpr int kMaxMeshTriangles = 2'000'000;
 /// coordinate that is not a finite number, a vertex without three coordinates, a face of fewer
 /// than three vertices or one naming a vertex that does not exist: OBJ counts from 1, negative is
 /// relative); a PLY's header against its body and its faces' vertex indices, a binary STL's count
-/// against its size (mesh_counts.hpp).
+/// against its size (mesh_counts.hpp); a glTF's buffer and image URIs (a `data:` URI or a relative
+/// path inside the file's folder). Assimp then opens only the file and files in its folder,
+/// resolved canonically (MeshFolderIOSystem, mesh_side_files.hpp).
 /// Throws InputError naming `path` (and the line, for an OBJ line or a PLY header or ASCII line)
 /// when the file is missing, a directory, unreadable, empty, of another extension, fails a check
-/// above, is not parsed by Assimp (its message appended), has no triangle, more than
-/// `max_triangles` triangles (the bound named), a non-finite vertex, or is an invalid mesh
-/// (validate_mesh's message: degenerate triangle, edge shared by more than two triangles). Load
-/// time only.
+/// above, refers to a file outside its folder, is not parsed by Assimp (its message appended), has
+/// no triangle, more than `max_triangles` triangles (the bound named), a non-finite vertex, or is
+/// an invalid mesh (validate_mesh's message: degenerate triangle, edge shared by more than two
+/// triangles). Load time only.
 core::TriangleMesh load_mesh_file(const std::string& path, int max_triangles = kMaxMeshTriangles);
 
 /// Signed volume of a triangle mesh (m³; divergence theorem): > 0 for a closed mesh wound
