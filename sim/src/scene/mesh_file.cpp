@@ -12,11 +12,14 @@
 #include <cctype>
 #include <cmath>
 #include <cstdlib>
+#include <exception>
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <new>
 #include <sstream>
 #include <string>
+#include <string_view>
 #include <tuple>
 #include <vector>
 
@@ -32,6 +35,23 @@ std::string extension_of(const std::string& path) {
   std::string ext = std::filesystem::path(path).extension().string();
   for (char& ch : ext) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
   return ext;
+}
+
+/// Rethrows std::bad_alloc when Assimp's read failed for want of memory: Assimp catches every
+/// exception of an importer and keeps its what() as the error string ("std::bad_alloc"), which
+/// would blame the mesh file for the machine's memory. The exception itself where Assimp keeps it
+/// (Importer::GetException()), else the string: some of Assimp 5.2's paths keep only that.
+void rethrow_out_of_memory(const Assimp::Importer& importer) {
+  if (const std::exception_ptr& e = importer.GetException()) {
+    try {
+      std::rethrow_exception(e);
+    } catch (const std::bad_alloc&) {
+      throw;
+    } catch (...) {
+    }
+  }
+  if (std::string_view(importer.GetErrorString()) == std::bad_alloc().what())
+    throw std::bad_alloc();
 }
 
 /// The index of an OBJ face corner ("7", "7/2", "7//3", "-1/..."): its first number.
@@ -172,6 +192,7 @@ core::TriangleMesh load_mesh_file(const std::string& path, int max_triangles) {
                          ": a mesh file's side files (buffers, images, materials) are read only "
                          "from its own folder");
   if (scene == nullptr) {
+    rethrow_out_of_memory(importer);
     const std::string why = importer.GetErrorString();
     throw InputError(path, 0, 0, "",
                      "cannot read the mesh file (Assimp: " + InputError::visible(why) + ")" +

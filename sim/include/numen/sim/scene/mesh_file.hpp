@@ -34,7 +34,8 @@ inline constexpr int kMaxMeshTriangles = 2'000'000;
 /// above, refers to a file outside its folder, is not parsed by Assimp (its message appended), has
 /// no triangle, more than `max_triangles` triangles (the bound named), a non-finite vertex, or is
 /// an invalid mesh (validate_mesh's message: degenerate triangle, edge shared by more than two
-/// triangles). Load time only.
+/// triangles). Throws std::bad_alloc when memory runs out, Assimp's included (Assimp keeps an
+/// importer's exception as its error: it is thrown again). Load time only.
 core::TriangleMesh load_mesh_file(const std::string& path, int max_triangles = kMaxMeshTriangles);
 
 /// Signed volume of a triangle mesh (m³; divergence theorem): > 0 for a closed mesh wound
