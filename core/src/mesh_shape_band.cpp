@@ -14,7 +14,9 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <numbers>
+#include <string>
 #include <vector>
 
 #include "detail/mesh_shape_query.hpp"
@@ -304,8 +306,15 @@ void build_mesh_band(MeshShape& s, const MeshShapeOptions& options) {
   // while built): refuse a band clearly over the cap before rasterising it.
   const double estimate = area * 2.0 * (B + rho) / (h * h * h) * 16.0 * 12.0;
   const std::size_t cap = options.max_band_bytes;
-  const auto mb = [](double bytes) { return std::to_string(static_cast<long long>(bytes / 1048576.0 + 0.5)) + " MB"; };
-  if (estimate > static_cast<double>(cap)) {
+  // Whole megabytes, or three digits and an exponent beyond 10^9 MB: a mesh far smaller than its
+  // band (a 1e-30 scale) estimates 10^90 bytes, which a long long cannot hold.
+  const auto mb = [](double bytes) {
+    char text[32];
+    const double m = bytes / 1048576.0;
+    std::snprintf(text, sizeof text, m < 1e9 ? "%.0f MB" : "%.3g MB", m);
+    return std::string(text);
+  };
+  if (!(estimate <= static_cast<double>(cap))) {  // NaN too
     refuse("it would take about " + mb(estimate) + ", over the cap of " + mb(static_cast<double>(cap)));
     return;
   }

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <random>
+#include <regex>
 #include <string>
 
 #include "alloc_counter.hpp"
@@ -117,6 +118,22 @@ TEST(MeshShapeBand, BandOverTheCapIsNotBuiltAndTheTreeAnswers) {
   MeshDistance d;
   ASSERT_TRUE(numen::core::mesh_signed_distance(s, p, 0.005, d));
   EXPECT_NEAR(d.distance, numen::core::mesh_signed_distance_brute(s, p).distance, 1e-12);
+}
+
+// Defect 4 of the mesh reader: a 1 m mesh at scale 1e-30 estimated its 5 mm band at ~10^32 bytes,
+// printed through a long long as "-9223372036854775808 MB". Beyond 10^9 MB it is printed with an
+// exponent; below, in whole megabytes as before.
+TEST(MeshShapeBand, EstimateOfAMeshFarSmallerThanItsBandIsPrintedNotWrapped) {
+  TriangleMesh tiny = numen::core::make_icosphere(1.0, 1);
+  for (Vec3& v : tiny.vertices) v *= 1e-30;
+  MeshShape s;
+  ASSERT_EQ(build_mesh_shape(tiny, s, MeshShapeOptions{}), "");
+  EXPECT_EQ(s.band.width, 0.0);
+  EXPECT_TRUE(std::regex_match(
+      s.band.note,
+      std::regex(
+          R"(no narrow band \(it would take about [1-9]\.[0-9]{2}e\+[0-9]{2,3} MB, over the cap of 256 MB\): every query searches the tree)")))
+      << s.band.note;
 }
 
 TEST(MeshShapeBand, NoBandWhenItsWidthIsZero) {

@@ -13,6 +13,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <map>
 #include <stdexcept>
 #include <string>
 #include <string_view>
@@ -26,19 +27,21 @@ namespace numen::fuzz {
 
 /// Writes `size` bytes at `data` to this process's own temporary file (named by the pid, under
 /// the system temp dir, ending in `suffix` such as ".toml") and returns its path; the same file
-/// is rewritten on every call and removed at exit. Aborts if the file cannot be written: a
-/// harness that fuzzes nothing must not pass.
+/// (one per suffix) is rewritten on every call and removed at exit. Aborts if the file cannot be
+/// written: a harness that fuzzes nothing must not pass.
 inline const std::string& input_file(const std::uint8_t* data, std::size_t size,
                                      const char* suffix) {
-  static const std::string path = [&] {
-    std::string p = (std::filesystem::temp_directory_path() /
-                     ("numen_fuzz_" + std::to_string(::getpid()) + suffix))
-                        .string();
-    static std::string to_remove;
-    to_remove = p;
-    std::atexit([] { std::remove(to_remove.c_str()); });
-    return p;
-  }();
+  static std::map<std::string, std::string> paths;  // suffix -> path
+  std::string& path = paths[suffix];
+  if (path.empty()) {
+    path = (std::filesystem::temp_directory_path() /
+            ("numen_fuzz_" + std::to_string(::getpid()) + suffix))
+               .string();
+    if (paths.size() == 1)
+      std::atexit([] {
+        for (const auto& [s, p] : paths) std::remove(p.c_str());
+      });
+  }
   std::FILE* f = std::fopen(path.c_str(), "wb");
   if (f == nullptr || (size > 0 && std::fwrite(data, 1, size, f) != size) || std::fclose(f) != 0) {
     std::perror(path.c_str());

@@ -132,6 +132,15 @@ inline std::string replace(std::string text, const std::string& from, const std:
   return text;
 }
 
+/// kMiniScene with a mesh obstacle named "organ" of `keys` (after name and type: `file`, `units`,
+/// `scale`, ...) in place of its floor.
+inline std::string with_mesh_obstacle(const std::string& keys) {
+  return replace(kMiniScene,
+                 "name = \"floor\"\ntype = \"plane\"\npoint = [0.0, 0.0, -0.1]\n"
+                 "normal = [0.0, 0.0, 1.0]",
+                 "name = \"organ\"\ntype = \"mesh\"\n" + keys);
+}
+
 /// Writes `text` as `name` in `dir`, loads it and returns the InputError
 /// thrown (printed as info); fails the test if the scene loads or another
 /// exception is thrown.

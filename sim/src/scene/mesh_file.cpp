@@ -12,24 +12,46 @@
 #include <cctype>
 #include <cmath>
 #include <cstdlib>
+#include <exception>
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <new>
 #include <sstream>
 #include <string>
+#include <string_view>
 #include <tuple>
 #include <vector>
 
+#include "mesh_counts.hpp"
+#include "mesh_side_files.hpp"
 #include "numen/sim/input/input_error.hpp"
 
 namespace numen::sim {
 namespace {
 
-/// True when `path` ends in ".obj", whatever the case.
-bool is_obj(const std::string& path) {
+/// The extension of `path` in lower case (".obj").
+std::string extension_of(const std::string& path) {
   std::string ext = std::filesystem::path(path).extension().string();
   for (char& ch : ext) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
-  return ext == ".obj";
+  return ext;
+}
+
+/// Rethrows std::bad_alloc when Assimp's read failed for want of memory: Assimp catches every
+/// exception of an importer and keeps its what() as the error string ("std::bad_alloc"), which
+/// would blame the mesh file for the machine's memory. The exception itself where Assimp keeps it
+/// (Importer::GetException()), else the string: some of Assimp 5.2's paths keep only that.
+void rethrow_out_of_memory(const Assimp::Importer& importer) {
+  if (const std::exception_ptr& e = importer.GetException()) {
+    try {
+      std::rethrow_exception(e);
+    } catch (const std::bad_alloc&) {
+      throw;
+    } catch (...) {
+    }
+  }
+  if (std::string_view(importer.GetErrorString()) == std::bad_alloc().what())
+    throw std::bad_alloc();
 }
 
 /// The index of an OBJ face corner ("7", "7/2", "7//3", "-1/..."): its first number.
@@ -130,9 +152,28 @@ core::TriangleMesh load_mesh_file(const std::string& path, int max_triangles) {
     if (probe.peek() == std::ifstream::traits_type::eof())
       throw InputError(path, 0, 0, "", "the mesh file is empty: no face");
   }
-  if (is_obj(path)) check_obj_lines(path);
+  // Only the formats whose counts and references are checked here reach Assimp: its other
+  // importers trust their headers (an OFF that promises 4·10^8 vertices parses for half a minute).
+  const std::string ext = extension_of(path);
+  if (ext == ".obj") {
+    check_obj_lines(path);
+  } else if (ext == ".ply") {
+    check_ply_counts(path);
+  } else if (ext == ".stl") {
+    check_stl_counts(path);
+  } else if (ext == ".gltf" || ext == ".glb") {
+    check_gltf_uris(path);
+  } else {
+    throw InputError(path, 0, 0, "",
+                     "a mesh file is .stl, .obj, .ply, .gltf or .glb: " +
+                         (ext.empty() ? std::string("this one has no extension")
+                                      : "not \"" + InputError::visible(ext, true) + "\"") +
+                         " (docs/meshes.md)");
+  }
 
   Assimp::Importer importer;
+  auto* io = new MeshFolderIOSystem(path);  // owned by the importer
+  importer.SetIOHandler(io);
   // Only positions are read: every other component is removed before vertices are joined, so
   // that a corner's normal or texture coordinate does not keep two equal positions apart.
   importer.SetPropertyInteger(
@@ -144,7 +185,14 @@ core::TriangleMesh load_mesh_file(const std::string& path, int max_triangles) {
   const aiScene* scene = importer.ReadFile(
       path, aiProcess_RemoveComponent | aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
                 aiProcess_SortByPType | aiProcess_PreTransformVertices);
+  if (!io->refused().empty())
+    throw InputError(path, 0, 0, "",
+                     "refers to " + io->refused() + ", outside the mesh file's folder " +
+                         io->folder().string() +
+                         ": a mesh file's side files (buffers, images, materials) are read only "
+                         "from its own folder");
   if (scene == nullptr) {
+    rethrow_out_of_memory(importer);
     const std::string why = importer.GetErrorString();
     throw InputError(path, 0, 0, "",
                      "cannot read the mesh file (Assimp: " + InputError::visible(why) + ")" +

@@ -140,8 +140,9 @@ void parse_deformable(const TomlTable& t, const std::filesystem::path& scene_dir
   placement.position = t.vec3_or("position", Vec3::Zero());
   placement.orientation = t.quaternion_or("orientation", Quat::Identity());
   core::transform_mesh(mesh, scale, placement);
-  if (t.has("file")) check_scaled_mesh(t, mesh, t.string("file"));
   const bool file = t.has("file");
+  check_mesh_size(t, mesh, file ? "file" : "mesh", t.string(file ? "file" : "mesh"));
+  if (file) check_scaled_mesh(t, mesh, t.string("file"));
   warn_self_intersections(t, file ? "file" : "mesh", t.string(file ? "file" : "mesh"), mesh,
                           core::find_self_intersections(mesh),
                           "the net's rest surface passes through itself", warnings);

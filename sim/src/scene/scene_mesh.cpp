@@ -65,6 +65,24 @@ core::Vec3 read_mesh_scale(const TomlTable& t) {
   return unit * scale;
 }
 
+void check_mesh_size(const TomlTable& t, const core::TriangleMesh& mesh, std::string_view key,
+                     const std::string& what) {
+  if (mesh.vertices.empty()) return;
+  core::Vec3 lo = mesh.vertices.front(), hi = lo;
+  for (const core::Vec3& v : mesh.vertices) {
+    lo = lo.cwiseMin(v);
+    hi = hi.cwiseMax(v);
+  }
+  const double size = (hi - lo).maxCoeff();
+  if (size >= kMinMeshSize && size <= kMaxMeshSize) return;  // NaN (an overflow) fails too
+  t.fail(t.has("scale")   ? "scale"
+         : t.has("units") ? "units"
+                          : key,
+         what + ": the mesh, scaled, spans " + format_input_number(size) +
+             " m (its bounding box's longest side), outside [" + format_input_number(kMinMeshSize) +
+             ", " + format_input_number(kMaxMeshSize) + "] m: a wrong unit or scale?");
+}
+
 void check_scaled_mesh(const TomlTable& t, const core::TriangleMesh& mesh, const std::string& path) {
   const std::string invalid = core::validate_mesh(mesh);
   if (invalid.empty()) return;
@@ -99,6 +117,7 @@ int add_mesh_shape(const TomlTable& t, const std::filesystem::path& scene_dir, c
                    std::vector<std::string>& warnings) {
   SceneMeshFile file = read_scene_mesh_file(t, scene_dir);
   core::transform_mesh(file.mesh, read_mesh_scale(t), core::Pose{});
+  check_mesh_size(t, file.mesh, "file", file.path);
   check_scaled_mesh(t, file.mesh, file.path);
   if (signed_volume(file.mesh) < 0.0) {
     for (auto& tri : file.mesh.triangles) std::swap(tri[1], tri[2]);

@@ -33,6 +33,22 @@ SceneMeshFile read_scene_mesh_file(const TomlTable& t, const std::filesystem::pa
 /// absent), per axis.
 core::Vec3 read_mesh_scale(const TomlTable& t);
 
+/// Smallest and largest size a scaled mesh may have (m, the longest side of its bounding box).
+/// A scene is an instrument's reach (kMaxTargetDistance, 10 m, from its origin) and the organs,
+/// tools and fixtures in it, from a fraction of a millimetre to a metre or two: 1 km is a hundred
+/// reaches and 1 µm is below every sphere and contact depth a scene measures. Outside, the
+/// `units` or `scale` is wrong: `scale = 1e30` made every step non-finite (penetrations of
+/// 2.5·10^31 mm), `scale = 1e-30` estimated its narrow band at ~10^32 bytes (docs/meshes.md,
+/// "Size").
+inline constexpr double kMinMeshSize = 1e-6;
+inline constexpr double kMaxMeshSize = 1e3;
+
+/// Fails when `mesh` (scaled, and placed for a net) spans less than kMinMeshSize or more than
+/// kMaxMeshSize: at `scale`, else `units`, else `key` (the table's `file` or `mesh`), naming
+/// `what` (the mesh file's path, or a built-in mesh's kind), the size and the bounds.
+void check_mesh_size(const TomlTable& t, const core::TriangleMesh& mesh, std::string_view key,
+                     const std::string& what);
+
 /// Fails at `scale` (or `file` when absent) when the mesh, scaled and placed, no longer passes
 /// core::validate_mesh() (a triangle degenerate after scaling), naming `path`.
 void check_scaled_mesh(const TomlTable& t, const core::TriangleMesh& mesh, const std::string& path);

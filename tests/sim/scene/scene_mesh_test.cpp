@@ -13,6 +13,7 @@
 #include "numen/sim/run/run_summary.hpp"
 #include "numen/sim/scene/scene.hpp"
 #include "build_features.hpp"
+#include "mesh_text.hpp"
 #include "scene_text.hpp"
 #include "temp_dir.hpp"
 
@@ -28,6 +29,7 @@ using numen::test::kMiniScene;
 using numen::test::line_of;
 using numen::test::replace;
 using numen::test::TempDir;
+using numen::test::with_mesh_obstacle;
 
 using numen::test::kTetObj;
 
@@ -37,12 +39,15 @@ const std::string kPokeObj = std::string(kTetObj) +
                              "v 0.1 0.1 -1\nv 0.35 0.1 -1\nv 0.1 0.35 -1\nv 0.2 0.2 0.1\n"
                              "f 5 7 6\nf 5 6 8\nf 5 8 7\nf 6 7 8\n";
 
-/// The mini scene with a mesh obstacle of `keys` (after name and type) in place of its floor.
-std::string with_mesh_obstacle(const std::string& keys) {
-  return replace(kMiniScene,
-                 "name = \"floor\"\ntype = \"plane\"\npoint = [0.0, 0.0, -0.1]\n"
-                 "normal = [0.0, 0.0, 1.0]",
-                 "name = \"organ\"\ntype = \"mesh\"\n" + keys);
+/// The mini scene with an anchored body "core" (at z = 0.2 m) whose net "organ" has the mesh keys
+/// `mesh_keys` (`mesh`, `file`, `scale`, ...).
+std::string with_organ_net(const std::string& mesh_keys) {
+  return replace(kMiniScene, "[[obstacle]]",
+                 "[[body]]\nname = \"core\"\nmass = 0.05\ninertia = [1e-5, 1e-5, 1e-5]\n"
+                 "position = [0.0, 0.0, 0.2]\nanchored = true\n\n"
+                 "[[deformable]]\nname = \"organ\"\nbody = \"core\"\n" +
+                     mesh_keys +
+                     "mass = 0.01\nstiffness = 200.0\ntie_stiffness = 500.0\n\n[[obstacle]]");
 }
 
 TEST(SceneMesh, ShippedMeshSceneLoadsAndItsProbeStaysOnTheSurface) {
@@ -123,12 +128,7 @@ TEST(SceneMesh, NetMeshThatIntersectsItselfIsWarnedAtItsFile) {
   TempDir dir;
   dir.write("poke.obj", kPokeObj);
   const auto organ = [](const std::string& mesh_keys) {
-    return replace(kMiniScene, "[[obstacle]]",
-                   "[[body]]\nname = \"core\"\nmass = 0.05\ninertia = [1e-5, 1e-5, 1e-5]\n"
-                   "position = [0.0, 0.0, 0.2]\nanchored = true\n\n"
-                   "[[deformable]]\nname = \"organ\"\nbody = \"core\"\n" + mesh_keys +
-                   "scale = 0.02\nmass = 0.01\nstiffness = 200.0\n"
-                   "tie_stiffness = 500.0\n\n[[obstacle]]");
+    return with_organ_net(mesh_keys + "scale = 0.02\n");
   };
   const std::string text = organ("mesh = \"file\"\nfile = \"poke.obj\"\n");
   const Scene s = load_scene(dir.write("s.toml", text));
@@ -190,6 +190,118 @@ TEST(SceneMesh, BadMeshesAreLocatedAtTheSceneKeyAndNameTheMeshFile) {
   const InputError u = numen::test::load_error(
       dir, with_mesh_obstacle("file = \"tet.obj\"\nunits = \"inch\"\n"));
   EXPECT_EQ(u.key(), "obstacle[0].units") << u.what();
+}
+
+/// The exact what() of an error at `key` of the first line of `text` holding `needle`, at its
+/// value (`needle` ends where the value starts): "<dir>/bad.toml:L:C: <key>: <message>".
+std::string located(const TempDir& dir, const std::string& text, const std::string& needle,
+                    const std::string& key, const std::string& message) {
+  return (dir / "bad.toml").string() + ":" + std::to_string(line_of(text, needle)) + ":" +
+         std::to_string(static_cast<int>(needle.size()) + 1) + ": " + key + ": " + message;
+}
+
+// Defects 1 and 2: a PLY whose header disagrees with its body (Assimp aborted the process on
+// it) or promises more elements than the file holds (a minute and 1.2 GB, or std::bad_alloc) is
+// refused at the scene's `file` key with both numbers (the checks: mesh_counts_test.cpp).
+TEST(SceneMesh, PlyCountsThatDisagreeWithItsBodyAreRefusedAtTheFileKey) {
+  TempDir dir;
+  const auto ply = [&](const std::string& name, const std::string& vertices) {
+    return dir.write(name, numen::test::ascii_ply(vertices, "4"));
+  };
+  const std::string two = ply("two.ply", "2");
+  std::string text = with_mesh_obstacle("file = \"two.ply\"\n");
+  EXPECT_EQ(std::string(numen::test::load_error(dir, text).what()),
+            located(dir, text, "file = ", "obstacle[0].file",
+                    two + ": the PLY header's elements take 6 lines (vertex 2, face 4), the body "
+                          "after end_header has 8"));
+  const std::string many = ply("many.ply", "100000000");
+  text = with_mesh_obstacle("file = \"many.ply\"\n");
+  EXPECT_EQ(std::string(numen::test::load_error(dir, text).what()),
+            located(dir, text, "file = ", "obstacle[0].file",
+                    many + ": the PLY header's elements take 100000004 lines (vertex 100000000, "
+                           "face 4), the body after end_header has 8"));
+  // The same file with its true count loads.
+  ply("tet.ply", "4");
+  EXPECT_EQ(load_scene(dir.write("s.toml", with_mesh_obstacle("file = \"tet.ply\"\n")))
+                .model.meshes.size(),
+            1u);
+}
+
+// Defect 3: a glTF buffer's URI led out of the mesh's folder; its bytes became the obstacle's
+// vertices and the run exited 0. Refused at `file`, naming the glTF's key and the URI.
+TEST(SceneMesh, GltfBufferOutsideTheMeshFolderIsRefusedAtTheFileKey) {
+  TempDir dir;
+  const std::string gltf =
+      dir.write("leak.gltf", numen::test::tet_gltf("../../../../../../etc/passwd"));
+  const std::string text = with_mesh_obstacle("file = \"leak.gltf\"\n");
+  EXPECT_EQ(
+      std::string(numen::test::load_error(dir, text).what()),
+      located(dir, text, "file = ", "obstacle[0].file",
+              gltf + ": buffers[0].uri \"../../../../../../etc/passwd\" has a \"..\" segment: "
+                     "a glTF's buffers and images are read only from data: URIs and relative "
+                     "paths inside the mesh file's folder"));
+}
+
+// Defect 4: `scale = 1e30` loaded and every step was non-finite (exit 4, penetrations of
+// 2.5·10^31 mm); a mesh must span [kMinMeshSize, kMaxMeshSize] once scaled, refused at `scale`
+// (else `units`, else `file`).
+TEST(SceneMesh, MeshFarOutsideTheSceneScaleIsRefusedAtScale) {
+  TempDir dir;
+  const std::string tet = dir.write("tet.obj", kTetObj);  // 1 m a side
+  const auto message = [&](const std::string& size) {
+    return tet + ": the mesh, scaled, spans " + size +
+           " m (its bounding box's longest side), outside [1e-06, 1000] m: a wrong unit or scale?";
+  };
+  std::string text = with_mesh_obstacle("file = \"tet.obj\"\nscale = 1e30\n");
+  EXPECT_EQ(std::string(numen::test::load_error(dir, text).what()),
+            located(dir, text, "scale = ", "obstacle[0].scale", message("1e+30")));
+  text = with_mesh_obstacle("file = \"tet.obj\"\nscale = [1.0, 1e-30, 1.0]\n");
+  EXPECT_EQ(std::string(numen::test::load_error(dir, text).what()),  // the longest side counts:
+            located(dir, text, "scale = ", "obstacle[0].scale",      // flattened, not small
+                    tet + ": invalid mesh after scaling and placement (vertices counted from 0 in "
+                          "the order the triangles first use them): triangle 0 is degenerate "
+                          "(area 5e-31 m^2, at most 2e-12)"));
+  text = with_mesh_obstacle("file = \"tet.obj\"\nunits = \"mm\"\nscale = 1e-30\n");
+  EXPECT_EQ(std::string(numen::test::load_error(dir, text).what()),
+            located(dir, text, "scale = ", "obstacle[0].scale", message("1e-33")));
+  // A body's mesh; without `scale`, at `units`.
+  text = replace(kMiniScene, "spheres = [[0.0, 0.0, 0.0, 0.01]]",
+                 "spheres = [[0.0, 0.0, 0.0, 0.01]]\n[body.mesh]\nfile = \"tet.obj\"\n"
+                 "scale = [2e3, 1.0, 1.0]");
+  EXPECT_EQ(std::string(numen::test::load_error(dir, text).what()),
+            located(dir, text, "scale = ", "body[0].mesh.scale", message("2000")));
+  dir.write("km.obj",
+            "v 0 0 0\nv 2e6 0 0\nv 0 2e6 0\nv 0 0 2e6\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n");
+  text = with_mesh_obstacle("file = \"km.obj\"\nunits = \"mm\"\n");
+  EXPECT_EQ(std::string(numen::test::load_error(dir, text).what()),
+            located(dir, text, "units = ", "obstacle[0].units",
+                    (dir / "km.obj").string() +
+                        ": the mesh, scaled, spans 2000 m (its bounding "
+                        "box's longest side), outside [1e-06, 1000] m: a wrong unit or scale?"));
+  // The bounds themselves load.
+  for (const char* scale : {"1e3", "1e-6"})
+    EXPECT_EQ(load_scene(dir.write("s.toml", with_mesh_obstacle("file = \"tet.obj\"\nscale = " +
+                                                                std::string(scale) + "\n")))
+                  .model.meshes.size(),
+              1u)
+        << scale;
+}
+
+// The same bound on a net's mesh, a file's or a built-in one's, at its `scale`.
+TEST(SceneMesh, NetFarOutsideTheSceneScaleIsRefusedAtScale) {
+  NUMEN_REQUIRE_DEFORMABLE();
+  TempDir dir;
+  dir.write("tet.obj", kTetObj);
+  std::string text = with_organ_net("mesh = \"file\"\nfile = \"tet.obj\"\nscale = 1e30\n");
+  EXPECT_EQ(std::string(numen::test::load_error(dir, text).what()),
+            located(dir, text, "scale = ", "deformable[0].scale",
+                    "tet.obj: the mesh, scaled, spans 1e+30 m (its bounding box's longest side), "
+                    "outside [1e-06, 1000] m: a wrong unit or scale?"));
+  text = with_organ_net("mesh = \"icosphere\"\nradius = 1.0\nscale = 1e-9\n");
+  EXPECT_EQ(std::string(numen::test::load_error(dir, text).what()),
+            located(dir, text, "scale = ", "deformable[0].scale",
+                    "icosphere: the mesh, scaled, spans 2e-09 m (its bounding box's longest side), "
+                    "outside [1e-06, 1000] m: a wrong unit or scale?"));
 }
 
 TEST(SceneMesh, DeformableNetFromAnStlFile) {
