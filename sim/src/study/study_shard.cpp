@@ -207,7 +207,7 @@ double to_double(const Json& j, const std::string& file, const std::string& key)
     if (s == "nan" || s == "-nan" || s == "inf" || s == "-inf")
       return std::strtod(s.c_str(), nullptr);
   }
-  throw InputError(file, 0, 0, key, "not a number: " + j.dump());
+  throw InputError(file, 0, 0, key, "not a number: " + json_input::shown(j));
 }
 
 const Json& member(const Json& j, const char* key, const std::string& file,
@@ -228,32 +228,35 @@ void read(const Json& j, double& out, const std::string& file, const std::string
 }
 
 void read(const Json& j, std::int64_t& out, const std::string& file, const std::string& key) {
-  if (!j.is_number_integer()) throw InputError(file, 0, 0, key, "not an integer: " + j.dump());
+  if (!j.is_number_integer())
+    throw InputError(file, 0, 0, key, "not an integer: " + json_input::shown(j));
   if (j.is_number_unsigned() && j.get<std::uint64_t>() > static_cast<std::uint64_t>(INT64_MAX))
-    throw InputError(file, 0, 0, key, "out of range: " + j.dump());
+    throw InputError(file, 0, 0, key, "out of range: " + json_input::shown(j));
   out = j.get<std::int64_t>();
 }
 
 void read(const Json& j, int& out, const std::string& file, const std::string& key) {
   std::int64_t v = 0;
   read(j, v, file, key);
-  if (v < INT_MIN || v > INT_MAX) throw InputError(file, 0, 0, key, "out of range: " + j.dump());
+  if (v < INT_MIN || v > INT_MAX)
+    throw InputError(file, 0, 0, key, "out of range: " + json_input::shown(j));
   out = static_cast<int>(v);
 }
 
 void read(const Json& j, bool& out, const std::string& file, const std::string& key) {
-  if (!j.is_boolean()) throw InputError(file, 0, 0, key, "not true or false: " + j.dump());
+  if (!j.is_boolean())
+    throw InputError(file, 0, 0, key, "not true or false: " + json_input::shown(j));
   out = j.get<bool>();
 }
 
 void read(const Json& j, std::string& out, const std::string& file, const std::string& key) {
-  if (!j.is_string()) throw InputError(file, 0, 0, key, "not a string: " + j.dump());
+  if (!j.is_string()) throw InputError(file, 0, 0, key, "not a string: " + json_input::shown(j));
   out = j.get<std::string>();
 }
 
 void read(const Json& j, std::vector<double>& out, const std::string& file,
           const std::string& key) {
-  if (!j.is_array()) throw InputError(file, 0, 0, key, "not an array: " + j.dump());
+  if (!j.is_array()) throw InputError(file, 0, 0, key, "not an array: " + json_input::shown(j));
   out.clear();
   for (std::size_t i = 0; i < j.size(); ++i)
     out.push_back(to_double(j[i], file, key + "[" + std::to_string(i) + "]"));
@@ -347,11 +350,15 @@ ShardSet read_shard_set(const std::filesystem::path& dir, const std::string& stu
     const Json doc = json_input::parse<Json>(text, syntax);
     if (doc.is_discarded()) {
       const auto [line, column] = json_input::line_column(text, syntax.byte);
-      throw InputError(path, line, column, "", "not a shard file: not JSON: " + syntax.reason);
+      throw InputError(path, line, column, "",
+                       std::string("not a shard file: ") + (syntax.too_deep ? "" : "not JSON: ") +
+                           syntax.reason);
     }
     const auto expect = [&](const char* key, const Json& want) {
       const Json& got = member(doc, key, path, "");
-      if (got != want) throw InputError(path, 0, 0, key, got.dump() + ", expected " + want.dump());
+      if (got != want)
+        throw InputError(path, 0, 0, key,
+                         json_input::shown(got) + ", expected " + json_input::shown(want));
     };
     expect("format", kFormat);
     expect("study", study);
@@ -371,9 +378,13 @@ ShardSet read_shard_set(const std::filesystem::path& dir, const std::string& stu
       for (const auto& [k, v] : manifest.items())
         if (key.empty() && !set.manifest.contains(k)) key = k;
       const auto shown = [&](const Json& m) {
-        return m.contains(key) ? m.at(key).dump() : std::string("absent");
+        return m.contains(key) ? json_input::shown(m.at(key)) : std::string("absent");
       };
-      throw InputError(path, 0, 0, "manifest." + key,
+      // The key is the file's: quoted by its first bytes, as the values are.
+      const std::string named = key.size() > json_input::kShownBytes
+                                    ? key.substr(0, json_input::kShownBytes) + "..."
+                                    : key;
+      throw InputError(path, 0, 0, "manifest." + named,
                        shown(manifest) + ", but " + shown(set.manifest) + " in " +
                            set.files.front() +
                            ": the shards ran with different options, grid or build");

@@ -622,6 +622,23 @@ TEST(NumenCli, ViewOfARecordingWithAMemberOfTheWrongTypeNamesTheFileAndTheKey) {
   }
 }
 
+// `numen view` of a recording whose scene message is 200 000 nested arrays is input rejected at
+// the bracket that opens level 65 (byte 12 + 64); it crashed (SIGSEGV, status 139): the message
+// quoting the array dumped it whole, recursively.
+TEST(NumenCli, ViewOfARecordingNestedTooDeepIsInputRejected) {
+  TempDir dir;
+  const std::string scene = std::string(200000, '[') + std::string(200000, ']');
+  std::string bytes(numen::sim::kViewRecordingMagic, 8);
+  for (int i = 0; i < 4; ++i) bytes += static_cast<char>((scene.size() >> (8 * i)) & 0xFF);
+  const std::string file = dir.write("deep.nmv", bytes + scene);
+  const ChildResult r = run_child({kNumen, "view", file, "--port", "0"}, dir.path(), 30);
+  EXPECT_EQ(r.status, 2) << r.out << r.err;
+  EXPECT_EQ(r.err, "numen: " + file +
+                       ": byte 76: the scene message is not a numen-view JSON object (arrays and "
+                       "objects nested more than 64 deep)\n");
+  EXPECT_EQ(r.out.find("open http://"), std::string::npos) << r.out;
+}
+
 // Options a run would not apply, or values that do not fit them, are input rejected before
 // the run, naming the option (2026-11-25 audit): `--prefault-stack -1` wrapped to SIZE_MAX
 // and crashed (SIGSEGV in alloca); the others ran and dropped the option without a word.

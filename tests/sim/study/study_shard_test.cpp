@@ -258,6 +258,48 @@ TEST(StudyShard, MergeLocatesASyntaxErrorByLineAndColumn) {
       << e.what();
 }
 
+// Arrays and objects nested more than 64 deep are refused while the file is parsed, at the line
+// and column of the bracket that opens level 65, whatever member holds them (one the merge
+// does not read included); 200 000 deep in a case's entry crashed the merge (SIGSEGV: it
+// copies each entry, and nlohmann's copy recurses).
+TEST(StudyShard, MergeRefusesJsonNestedTooDeepAtItsPlace) {
+  TempDir dir;
+  const std::string path = (dir / "stability-shard-0-of-1.json").string();
+  const std::string entry = R"({"case": 1, "rows": [)";
+  const std::string before = shard_text(entry, "{\"case\": 1,\n  \"extra\": ");
+  const std::size_t first = before.find("\"extra\": ") + 9;         // offset of its first '{'
+  const int column = static_cast<int>(first - before.rfind('\n'));  // 1-based
+  for (const std::size_t depth : {std::size_t{65}, std::size_t{200000}}) {
+    std::string deep;
+    for (std::size_t i = 0; i < depth; ++i) deep += R"({"a": )";
+    deep += "1" + std::string(depth, '}') + R"(, "rows": [)";
+    dir.write("stability-shard-0-of-1.json",
+              shard_text(entry, "{\"case\": 1,\n  \"extra\": " + deep));
+    const InputError e = error_of([&] { (void)merge_stability_shards(dir.path().string()); });
+    EXPECT_EQ(e.file(), path);
+    EXPECT_EQ(e.line(), 2) << e.what();
+    // The entry is level 3 (the file's object, "results", the entry): level 65 opens at the
+    // 62nd `{"a": ` (6 bytes each) of the line.
+    EXPECT_EQ(e.column(), column + 61 * 6) << e.what();
+    EXPECT_EQ(e.key(), "");
+    EXPECT_EQ(e.message(), "not a shard file: arrays and objects nested more than 64 deep");
+  }
+}
+
+// A syntax error quotes the token it stopped in by its first 40 bytes: nlohmann's message
+// quoted a string without its closing quote whole (here 100 000 bytes).
+TEST(StudyShard, MergeQuotesTheTokenOfASyntaxErrorShort) {
+  TempDir dir;
+  dir.write("stability-shard-0-of-1.json", "{\"format\": \"" + std::string(100000, 'x'));
+  const InputError e = error_of([&] { (void)merge_stability_shards(dir.path().string()); });
+  EXPECT_EQ(e.line(), 1);
+  EXPECT_EQ(e.column(), 100013);
+  EXPECT_EQ(e.message(),
+            "not a shard file: not JSON: syntax error while parsing value - invalid string: "
+            "missing closing quote; last read: '\"" +
+                std::string(39, 'x') + "...'");
+}
+
 // A number beyond a double's range is refused where it stands (nlohmann reports it as an
 // out_of_range without a place; it must not escape as an exception).
 TEST(StudyShard, MergeLocatesANumberBeyondADoubleAtItsPlace) {
