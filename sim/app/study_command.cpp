@@ -250,11 +250,13 @@ MergeStudyCommand::MergeStudyCommand(CLI::App& study)
 }
 
 int MergeStudyCommand::execute() const {
+  // Every shard file is read and checked before anything is written: a set that is refused
+  // (status 2) leaves --out as it was, and the CSV files are written as one set.
   const std::string out = out_.empty() ? dir_ : out_;
   const std::string study = sim::study_of_shard_dir(dir_);
-  check_output_dir(out);
   if (study == "stability") {
     const sim::StabilityResult result = sim::merge_stability_shards(dir_);
+    check_output_dir(out);
     sim::write_stability_csv(result, out);
     std::cout << sim::format_stability_tables(result);
     std::printf(
@@ -265,6 +267,7 @@ int MergeStudyCommand::execute() const {
   }
   if (study == "accuracy") {
     const sim::AccuracyResult result = sim::merge_accuracy_shards(dir_);
+    check_output_dir(out);
     sim::write_accuracy_csv(result, out);
     std::cout << sim::format_accuracy_table(result);
     std::printf(
@@ -276,6 +279,7 @@ int MergeStudyCommand::execute() const {
   }
   if (study == "passivity") {
     const sim::PassivityResult result = sim::merge_passivity_shards(dir_);
+    check_output_dir(out);
     sim::write_passivity_csv(result, out);
     return report_passivity(result, out, "merged; shards' wall time in all: ");
   }

@@ -136,7 +136,12 @@ std::string shard_file_name(const std::string& study, const Shard& shard) {
          ".json";
 }
 
-void write_file_atomically(const std::filesystem::path& path, std::string_view content) {
+namespace {
+
+/// Writes `content` into a new temporary file beside `path` (".NAME.XXXXXX", mkstemp), with the
+/// mode a plain create would give it, flushed to disk (fsync); returns its path. Throws
+/// std::runtime_error naming `path` and the system's reason (the temporary file removed).
+std::string write_temporary(const std::filesystem::path& path, std::string_view content) {
   const std::filesystem::path dir = path.has_parent_path() ? path.parent_path() : ".";
   std::string tmp = (dir / ("." + path.filename().string() + ".XXXXXX")).string();
   const int fd = ::mkstemp(tmp.data());
@@ -166,11 +171,41 @@ void write_file_atomically(const std::filesystem::path& path, std::string_view c
     ::unlink(tmp.c_str());
     throw std::runtime_error("cannot write " + path.string() + ": " + std::strerror(err));
   }
+  return tmp;
+}
+
+/// Renames temporary file `tmp` onto `path`; throws std::runtime_error (`tmp` removed).
+void rename_onto(const std::string& tmp, const std::filesystem::path& path) {
   if (::rename(tmp.c_str(), path.c_str()) != 0) {
     const int err = errno;
     ::unlink(tmp.c_str());
     throw std::runtime_error("cannot rename " + tmp + " to " + path.string() + ": " +
                              std::strerror(err));
+  }
+}
+
+}  // namespace
+
+void write_file_atomically(const std::filesystem::path& path, std::string_view content) {
+  rename_onto(write_temporary(path, content), path);
+}
+
+void write_files_atomically(const std::filesystem::path& dir, const OutputFiles& files) {
+  std::vector<std::string> written;  // the temporary files, in the order of `files`
+  try {
+    for (const auto& [name, content] : files)
+      written.push_back(write_temporary(dir / name, content));
+  } catch (...) {
+    for (const std::string& tmp : written) ::unlink(tmp.c_str());
+    throw;
+  }
+  for (std::size_t i = 0; i < files.size(); ++i) {
+    try {
+      rename_onto(written[i], dir / files[i].first);
+    } catch (...) {
+      for (std::size_t j = i + 1; j < written.size(); ++j) ::unlink(written[j].c_str());
+      throw;
+    }
   }
 }
 
@@ -298,6 +333,15 @@ std::string document(const std::string& study, const Shard& s, const Json& manif
   doc["wall_s"] = number(wall_s);
   doc["results"] = results;
   return doc.dump(1) + "\n";
+}
+
+void expect_records(const std::string& file, std::int64_t case_index, const char* list,
+                    std::size_t got, std::size_t want, const std::string& why) {
+  if (got == want) return;
+  throw InputError(file, 0, 0, "case " + std::to_string(case_index) + "." + list,
+                   std::to_string(got) + " in the file, but the study's plan gives the case " +
+                       std::to_string(want) + (why.empty() ? "" : " (" + why + ")") +
+                       ": the shard that ran it did not write it whole");
 }
 
 ShardSet read_shard_set(const std::filesystem::path& dir, const std::string& study) {

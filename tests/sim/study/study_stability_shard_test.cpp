@@ -241,7 +241,7 @@ TEST(StudyStabilityShard, DamagedShardFilesAreNamed) {
   dir.write("stability-shard-1-of-2.json",
             text.substr(0, dt) + "\"dt_s\": \"fast\"" + text.substr(text.find(',', dt)));
   e = merge_error(dir.path());
-  EXPECT_EQ(e.key(), "case 1.rows.dt_s");
+  EXPECT_EQ(e.key(), "case 1.rows[0].dt_s");
   EXPECT_EQ(e.message(), "not a number: string \"fast\"");
 }
 
