@@ -268,6 +268,65 @@ TEST(NumenCli, JsonCarriesTheExitStatus) {
   EXPECT_NE(r.out.find("\"exit_reasons\":[]"), std::string::npos) << r.out;
 }
 
+/// `numen args…` with its stdout closed (`>&-`), on /dev/full, or into a pipe whose reader has
+/// gone: what a lost stdout looks like to numen in each of the three ways.
+std::vector<std::pair<std::string, ChildResult>> with_stdout_lost(
+    const std::vector<std::string>& args, const TempDir& dir) {
+  std::string command = "exec " + kNumen;
+  std::vector<std::string> argv = {kNumen};
+  for (const std::string& a : args) {
+    command += " " + a;
+    argv.push_back(a);
+  }
+  return {
+      {"Bad file descriptor", run_child({"/bin/sh", "-c", command + " >&-"}, dir.path(), 120)},
+      {"No space left on device",
+       run_child({"/bin/sh", "-c", command + " >/dev/full"}, dir.path(), 120)},
+      {"Broken pipe", run_child(argv, dir.path(), 120, {}, numen::test::ChildStdout::kBrokenPipe)}};
+}
+
+// A run whose summary cannot be written on stdout lost its record: status 5, said on stderr
+// with the summary, whose status is the process's. It exited 0 with its output gone (closed
+// stdout, /dev/full), or died of SIGPIPE (141) after printing "exit status 0 (clean)" on stderr.
+TEST(NumenCli, RunWhoseSummaryStdoutRefusesIsLostRecords) {
+  NUMEN_REQUIRE_ARTICULATION();
+  TempDir dir;
+  for (const bool json : {false, true}) {
+    std::vector<std::string> args = {"run", kLattice, "--duration", "0.05"};
+    if (json) args.push_back("--json");
+    for (const auto& [reason, r] : with_stdout_lost(args, dir)) {
+      EXPECT_EQ(r.status, 5) << reason << ": " << r.err;
+      const std::string status_line =
+          "  exit status 5 (lost records): lost records: stdout: the summary was not written (" +
+          reason + ")\n";
+      EXPECT_NE(r.err.find(status_line), std::string::npos) << reason << ": " << r.err;
+      EXPECT_EQ(r.err.find("exit status 0"), std::string::npos) << reason << ": " << r.err;
+      if (!json)
+        EXPECT_EQ(r.err.rfind("numen: stdout: cannot write the summary (" + reason +
+                                  "); it follows on stderr\nscene ",
+                              0),
+                  0u)
+            << reason << ": " << r.err;
+    }
+  }
+}
+
+// Any other command whose stdout output cannot be written says so and exits 1 (error): `numen
+// info --json` and `numen study … --list` exited 0 with nothing printed.
+TEST(NumenCli, OutputThatStdoutRefusesIsAnError) {
+  NUMEN_REQUIRE_ARTICULATION();  // the lattice scene has joints
+  TempDir dir;
+  for (const std::vector<std::string>& args :
+       {std::vector<std::string>{"info", kLattice, "--json"},
+        std::vector<std::string>{"study", "stability", "--quick", "--family", "coupling", "--list",
+                                 "--shard", "0/1"}}) {
+    for (const auto& [reason, r] : with_stdout_lost(args, dir)) {
+      EXPECT_EQ(r.status, 1) << args[0] << ", " << reason << ": " << r.err;
+      EXPECT_EQ(r.err, "numen: stdout: cannot write the output (" + reason + ")\n") << args[0];
+    }
+  }
+}
+
 // Issue 18: one class per subcommand; each still answers --help, and `numen figures` prints the
 // figure table that docs/outputs.md holds.
 TEST(NumenCli, EverySubcommandParsesAndFiguresPrintsTheTable) {
