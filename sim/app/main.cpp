@@ -17,10 +17,10 @@
 ///   numen study passivity [--out DIR] [--quick]
 ///   numen study accuracy|stability|passivity ... [--shard I/N] [--list]
 ///   numen study merge DIR [--out DIR]
-/// SIGINT / SIGTERM: while the input loads, the process ends at once (status 128 + signal;
-/// nothing is open on a bus yet); once a run or device has started, it ends cleanly (run: zero
-/// torque, drives disabled; both: summary). SIGPIPE is ignored: output that cannot be written
-/// on stdout is reported (standard_streams.hpp). Exit statuses: docs/inputs.md.
+/// SIGINT / SIGTERM / SIGHUP: while the input loads, the process ends at once (status 128 +
+/// signal; nothing is open on a bus yet); once a run or device has started, it ends cleanly
+/// (run: zero torque, drives disabled; both: summary). SIGPIPE is ignored: output that cannot
+/// be written on stdout is reported (standard_streams.hpp). Exit statuses: docs/inputs.md.
 
 #include <CLI/CLI.hpp>
 

@@ -27,8 +27,8 @@ RunCommand::RunCommand(CLI::App& parent)
     : cli_(parent.add_subcommand("run", "Run a scene on the simulated bus and print a summary")) {
   CLI::App* run = cli_;
   run->footer(
-      "Signals: SIGINT / SIGTERM end the run cleanly (zero torque, drives disabled); SIGUSR1 "
-      "re-arms after a latched safe state (docs/safety.md).");
+      "Signals: SIGINT / SIGTERM / SIGHUP end the run cleanly (zero torque, drives disabled); "
+      "SIGUSR1 re-arms after a latched safe state (docs/safety.md).");
   run->add_option("scene", scene_path_, "Scene file (TOML); default: the shipped default scene");
   run->add_option("--duration", duration_, "Simulated time in seconds (default: the scene's)")
       ->check(seconds_check(0.0, sim::kMaxRunDuration, true));

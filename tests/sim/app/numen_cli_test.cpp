@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -101,7 +102,8 @@ TEST(NumenCli, PeakMemoryDoesNotGrowWithTheDuration) {
 }
 
 // Defect 1: SIGTERM while the input loads (here a trajectory file that is a FIFO nobody writes:
-// the loader blocks in open()) ends the process at once, with a message and 128 + SIGTERM.
+// the loader blocks in open()) ends the process at once, with a message and 128 + SIGTERM;
+// SIGHUP alike (129).
 TEST(NumenCli, StopSignalWhileLoadingEndsTheProcessAtOnce) {
   NUMEN_REQUIRE_ARTICULATION();  // the lattice scene has joints
   TempDir dir;
@@ -118,11 +120,30 @@ TEST(NumenCli, StopSignalWhileLoadingEndsTheProcessAtOnce) {
     writer = ::open(fifo.c_str(), O_WRONLY | O_NONBLOCK);
     return writer >= 0;
   };
-  const ChildResult r = run_child({kNumen, "run", scene}, dir.path(), 20, term);
-  if (writer >= 0) ::close(writer);
-  EXPECT_FALSE(r.timed_out) << "SIGTERM was ignored while loading";
-  EXPECT_EQ(r.status, 128 + SIGTERM) << r.out << r.err;
-  EXPECT_NE(r.err.find("stopped by a signal while loading"), std::string::npos) << r.err;
+  for (const int signal : {SIGTERM, SIGHUP}) {
+    term.signal = signal;
+    const ChildResult r = run_child({kNumen, "run", scene}, dir.path(), 20, term);
+    if (writer >= 0) ::close(writer);
+    writer = -1;
+    EXPECT_FALSE(r.timed_out) << "signal " << signal << " was ignored while loading";
+    EXPECT_EQ(r.status, 128 + signal) << r.out << r.err;
+    EXPECT_EQ(r.err, "numen: stopped by a signal while loading (nothing was commanded)\n");
+  }
+}
+
+/// A paced run of the lattice scene (60 s; overruns on a loaded machine are counted, never
+/// latched) with `extra` options, sent `signal` once it is past loading: its --record file in
+/// `dir` is open.
+ChildResult paced_run_stopped_by(int signal, const TempDir& dir,
+                                 const std::vector<std::string>& extra = {}) {
+  ChildSignal stop;
+  stop.signal = signal;
+  stop.ready = [&dir] { return writing(dir, "run.log"); };
+  std::vector<std::string> argv = {
+      kNumen, "run",        kLattice, "--realtime", "--overrun-limit",
+      "0",    "--duration", "60",     "--record",   (dir / "run.log").string()};
+  argv.insert(argv.end(), extra.begin(), extra.end());
+  return run_child(argv, dir.path(), 30, stop);
 }
 
 // Once running, SIGTERM ends the run cleanly: the summary is printed and the status is
@@ -132,13 +153,7 @@ TEST(NumenCli, StopSignalWhileLoadingEndsTheProcessAtOnce) {
 TEST(NumenCli, StopSignalWhileRunningPrintsTheSummary) {
   NUMEN_REQUIRE_ARTICULATION();
   TempDir dir;
-  const std::string log = (dir / "run.log").string();
-  ChildSignal term;
-  term.signal = SIGTERM;
-  term.ready = [&dir] { return writing(dir, "run.log"); };
-  const ChildResult r =
-      run_child({kNumen, "run", kLattice, "--realtime", "--overrun-limit", "0", "--duration", "60", "--record", log},
-                dir.path(), 30, term);  // overruns on a loaded machine count, never latch
+  const ChildResult r = paced_run_stopped_by(SIGTERM, dir);
   EXPECT_FALSE(r.timed_out);
   EXPECT_EQ(r.status, 128 + SIGTERM) << r.out << r.err;
   EXPECT_NE(r.out.find("exit status 143 (stopped by a signal): stopped by a signal: SIGTERM (15) "
@@ -147,6 +162,28 @@ TEST(NumenCli, StopSignalWhileRunningPrintsTheSummary) {
       << r.out;
   EXPECT_EQ(r.out.find("exit status 0"), std::string::npos) << r.out;
   EXPECT_LT(r.wall_s, 20.0);
+}
+
+// SIGHUP (the terminal or ssh session of a paced run closed) is a stop signal as SIGTERM is:
+// the run ends cleanly, prints its summary with status 129 and writes its trace. It used to
+// kill the process (status 129 from the default action): no summary, no trace file.
+TEST(NumenCli, HangupWhileRunningEndsTheRunCleanly) {
+  NUMEN_REQUIRE_ARTICULATION();
+  TempDir dir;
+  const std::string trace = (dir / "run.csv").string();
+  const ChildResult r = paced_run_stopped_by(SIGHUP, dir, {"--trace", trace});
+  EXPECT_FALSE(r.timed_out);
+  EXPECT_EQ(r.status, 128 + SIGHUP) << r.out << r.err;
+  const std::string stopped =
+      "  exit status 129 (stopped by a signal): stopped by a signal: SIGHUP (1) after ";
+  const std::size_t at = r.out.find(stopped);
+  ASSERT_NE(at, std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("  trace: " + trace + "\n"), std::string::npos) << r.out;
+  // The trace: its header and one record per period the run ran.
+  const long periods = std::atol(r.out.c_str() + at + stopped.size());
+  const std::string lines = numen::test::read_file(trace);
+  EXPECT_EQ(lines.rfind("time_s,", 0), 0u) << lines.substr(0, 100);
+  EXPECT_EQ(std::count(lines.begin(), lines.end(), '\n'), periods + 1);
 }
 
 // A stop is always heard: an offline run paced at --speed 1e-9 sleeps 10^6 s per period, in
@@ -204,13 +241,7 @@ TEST(NumenCli, RefusedRunLeavesItsOutputFilesByteIdentical) {
 TEST(NumenCli, StopSignalIsInTheJsonSummary) {
   NUMEN_REQUIRE_ARTICULATION();
   TempDir dir;
-  const std::string log = (dir / "run.log").string();
-  ChildSignal interrupt;
-  interrupt.signal = SIGINT;
-  interrupt.ready = [&dir] { return writing(dir, "run.log"); };
-  const ChildResult r = run_child({kNumen, "run", kLattice, "--realtime", "--overrun-limit", "0",
-                                   "--duration", "60", "--record", log, "--json"},
-                                  dir.path(), 30, interrupt);
+  const ChildResult r = paced_run_stopped_by(SIGINT, dir, {"--json"});
   EXPECT_FALSE(r.timed_out);
   ASSERT_EQ(r.status, 128 + SIGINT) << r.out << r.err;
   const nlohmann::json j = nlohmann::json::parse(r.out);

@@ -67,7 +67,7 @@ struct RunOptions {
   /// A multirate scene's scene thread in a paced run (scheduling, CPUs; docs/multirate.md):
   /// paced runs step the scene loop on it, offline runs interleave both loops on one thread.
   platform::SceneThreadSettings scene_thread;
-  /// Set (e.g. by a SIGINT / SIGTERM handler) to end the run early and cleanly: the loop
+  /// Set (e.g. by a SIGINT / SIGTERM / SIGHUP handler) to end the run early and cleanly: the loop
   /// shuts down (ControlLoop::shutdown(): zero torque, drives disabled) over at most
   /// shutdown_periods more periods and the summary is returned. nullptr: none.
   const std::atomic<bool>* stop = nullptr;
