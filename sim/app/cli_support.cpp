@@ -1,6 +1,6 @@
 /// @file cli_support.cpp
-/// What the subcommands share: the guard that turns exceptions into exit statuses and the
-/// CLI11 checks of times and bus specs.
+/// What the subcommands share: the guard that turns exceptions and a stdout that could not be
+/// written into exit statuses, and the CLI11 checks of times and bus specs.
 
 #include <iostream>
 #include <new>
@@ -12,12 +12,13 @@
 #include "numen/sim/input/input_error.hpp"
 #include "numen/sim/run/run_verdict.hpp"
 #include "numen/sim/scene/scene.hpp"
+#include "standard_streams.hpp"
 
 namespace numen::app {
 
 int run_guarded(const std::function<int()>& body) {
   try {
-    return body();
+    return with_stdout_checked(body());
   } catch (const sim::InputError& e) {
     std::cerr << "numen: " << e.what() << "\n";
     return sim::code(sim::ExitStatus::kInputRejected);

@@ -28,7 +28,9 @@ namespace numen::app {
 
 /// Runs a subcommand's body, which returns its exit status; an exception ends it with 2 for
 /// bad input (InputError: scene, trajectory, option values) or 1 for any other error (I/O,
-/// out of memory, internal), printed as "numen: what".
+/// out of memory, internal), printed as "numen: what". Then stdout is flushed: if any of the
+/// body's output did not reach it (closed, a full disk, a pipe whose reader has gone), that is
+/// printed ("numen: stdout: cannot write the output (Broken pipe)") and a status 0 becomes 1.
 int run_guarded(const std::function<int()>& body);
 /// The scene flags of the commands that load a closed-loop scene (docs/device_plant.md):
 /// `--replay` (SceneOverrides::replay; null: not offered) and `--strict`

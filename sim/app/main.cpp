@@ -17,9 +17,10 @@
 ///   numen study passivity [--out DIR] [--quick]
 ///   numen study accuracy|stability|passivity ... [--shard I/N] [--list]
 ///   numen study merge DIR [--out DIR]
-/// SIGINT / SIGTERM: while the input loads, the process ends at once (status 128 + signal;
-/// nothing is open on a bus yet); once a run or device has started, it ends cleanly (run: zero
-/// torque, drives disabled; both: summary). Exit statuses: docs/inputs.md.
+/// SIGINT / SIGTERM / SIGHUP: while the input loads, the process ends at once (status 128 +
+/// signal; nothing is open on a bus yet); once a run or device has started, it ends cleanly
+/// (run: zero torque, drives disabled; both: summary). SIGPIPE is ignored: output that cannot
+/// be written on stdout is reported (standard_streams.hpp). Exit statuses: docs/inputs.md.
 
 #include <CLI/CLI.hpp>
 
@@ -30,6 +31,7 @@
 #include "numen/version.hpp"
 #include "numen/sim/run/run_verdict.hpp"
 #include "signals.hpp"
+#include "standard_streams.hpp"
 
 namespace {
 
@@ -51,6 +53,7 @@ std::string unknown_subcommand(CLI::App& app, const std::string& command, const 
 
 int main(int argc, char** argv) {
   using namespace numen::app;
+  guard_standard_streams();  // first: before any file is opened (standard_streams.hpp)
   CLI::App app{"numen — real-time control core for generalized dynamic god-objects"};
   app.set_version_flag("--version", std::string("numen ") + NUMEN_VERSION,
                        "Print the version (semantic versioning) and exit");
@@ -83,7 +86,8 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     // --help and --version exit 0; every refused value or option is input rejected.
     const int status = app.exit(e);
-    return status == 0 ? 0 : numen::sim::code(numen::sim::ExitStatus::kInputRejected);
+    return status == 0 ? with_stdout_checked(0)  // --help, --version
+                       : numen::sim::code(numen::sim::ExitStatus::kInputRejected);
   }
 
   if (stability.parsed()) return run_guarded([&] { return stability.execute(); });

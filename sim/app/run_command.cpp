@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <iostream>
 #include <limits>
+#include <memory>
 #include <stdexcept>
 #include <string>
 
@@ -21,8 +22,8 @@
 #include "numen/sim/scene/scene.hpp"
 #include "numen/sim/view/view_scene.hpp"
 #include "numen/sim/view/view_server.hpp"
-#include <memory>
 #include "signals.hpp"
+#include "standard_streams.hpp"
 
 namespace numen::app {
 
@@ -30,8 +31,8 @@ RunCommand::RunCommand(CLI::App& parent)
     : cli_(parent.add_subcommand("run", "Run a scene on the simulated bus and print a summary")) {
   CLI::App* run = cli_;
   run->footer(
-      "Signals: SIGINT / SIGTERM end the run cleanly (zero torque, drives disabled); SIGUSR1 "
-      "re-arms after a latched safe state (docs/safety.md).");
+      "Signals: SIGINT / SIGTERM / SIGHUP end the run cleanly (zero torque, drives disabled); "
+      "SIGUSR1 re-arms after a latched safe state (docs/safety.md).");
   run->add_option("scene", scene_path_, "Scene file (TOML); default: the shipped default scene");
   run->add_option("--duration", duration_, "Simulated time in seconds (default: the scene's)")
       ->check(seconds_check(0.0, sim::kMaxRunDuration, true));
@@ -199,13 +200,24 @@ int RunCommand::execute() const {
       options.view_speed = 1.0;
   }
   loading_done();  // from here a signal ends the run cleanly
-  const sim::RunSummary summary = sim::run_scene(scene, options);
+  sim::RunSummary summary = sim::run_scene(scene, options);
+  // The summary on stdout first: if it cannot be written, the run lost its record (status 5 at
+  // least), and the summary printed on stderr says so with the status the process returns.
   if (json_) {
+    std::cout << sim::format_summary_json(summary) << '\n';
+    summary.stdout_error = stdout_failure();
+    if (!summary.stdout_error.empty()) sim::judge_run(summary);
     std::cerr << sim::format_summary(summary);
-    std::cout << sim::format_summary_json(summary) << std::endl;
   } else {
     std::cout << sim::format_summary(summary);
     if (!trace_path_.empty()) std::cout << "  trace: " << trace_path_ << "\n";
+    summary.stdout_error = stdout_failure();
+    if (!summary.stdout_error.empty()) {
+      sim::judge_run(summary);
+      std::cerr << "numen: stdout: cannot write the summary (" << summary.stdout_error
+                << "); it follows on stderr\n"
+                << sim::format_summary(summary);
+    }
   }
   if (viewer) {
     viewer->stop();

@@ -15,7 +15,7 @@ std::atomic<int> g_stop_signal{0};  // the signal that set g_stop
 std::atomic<bool> g_rearm{false};   // SIGUSR1: the operator's re-arm (RunOptions::rearm)
 /// True while the command loads its input (scene, trajectory, logs): nothing is open on a bus
 /// and nothing was commanded, so a stop signal ends the process at once (loading a large file
-/// must not make SIGINT / SIGTERM wait). Cleared just before the bus is opened.
+/// must not make SIGINT / SIGTERM / SIGHUP wait). Cleared just before the bus is opened.
 std::atomic<bool> g_loading{true};
 static_assert(std::atomic<int>::is_always_lock_free, "signal handlers store to std::atomic<int>");
 
@@ -40,6 +40,7 @@ void install_signal_handlers() {
   sigemptyset(&sa.sa_mask);
   sigaction(SIGINT, &sa, nullptr);
   sigaction(SIGTERM, &sa, nullptr);
+  sigaction(SIGHUP, &sa, nullptr);  // the terminal or ssh session closed: as SIGTERM
   struct sigaction rearm {};
   rearm.sa_handler = on_rearm_signal;
   sigemptyset(&rearm.sa_mask);

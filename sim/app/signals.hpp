@@ -1,9 +1,10 @@
 #pragma once
 /// @file signals.hpp
-/// The `numen` command's signal handling. SIGINT / SIGTERM: while the input loads, the process
-/// ends at once (status 128 + signal; nothing is open on a bus yet); once a run or device has
-/// started (loading_done()), they set stop_flag() and the command ends cleanly. SIGUSR1 sets
-/// rearm_flag() (the operator's re-arm, RunOptions::rearm).
+/// The `numen` command's signal handling. SIGINT / SIGTERM / SIGHUP (a closed terminal or ssh
+/// session): while the input loads, the process ends at once (status 128 + signal; nothing is
+/// open on a bus yet); once a run or device has started (loading_done()), they set stop_flag()
+/// and the command ends cleanly. SIGUSR1 sets rearm_flag() (the operator's re-arm,
+/// RunOptions::rearm). SIGPIPE is ignored from the start (standard_streams.hpp).
 
 #include <atomic>
 
@@ -11,7 +12,8 @@ namespace numen::app {
 
 /// Installs the handlers (setup; the studies keep the default: a signal ends them at once).
 void install_signal_handlers();
-/// Set by SIGINT / SIGTERM once loading is done (RunOptions::stop, DeviceOptions::stop).
+/// Set by SIGINT / SIGTERM / SIGHUP once loading is done (RunOptions::stop,
+/// DeviceOptions::stop).
 std::atomic<bool>& stop_flag() noexcept;
 /// The signal that set stop_flag() (0: none).
 int stop_signal() noexcept;

@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <iostream>
 #include <optional>
+#include <string>
 
 #include "commands.hpp"
 #include "numen/sim/input/input_error.hpp"
@@ -22,6 +23,17 @@
 
 namespace numen::app {
 namespace {
+
+/// `format` (printf's) with `args`, for the one-line reports the commands write with std::cout
+/// (standard_streams.hpp: a failed write of std::cout is reported).
+template <class... Args>
+std::string formatted(const char* format, Args... args) {
+  const int n = std::snprintf(nullptr, 0, format, args...);
+  if (n <= 0) return {};
+  std::string text(static_cast<std::size_t>(n), '\0');
+  std::snprintf(text.data(), text.size() + 1, format, args...);
+  return text;
+}
 
 /// The progress callback of a study, drawn on `bar` (stderr).
 std::function<void(double, double, const std::string&)> progress_on(sim::ProgressBar& bar) {
@@ -95,10 +107,10 @@ std::string shard_path_or_skip(const std::string& study, const sim::Shard& shard
 int report_passivity(const sim::PassivityResult& result, const std::string& out,
                      const char* what) {
   std::cout << sim::format_passivity_table(result);
-  std::printf("%s%zu points of %lld configurations in %.1f s; wrote %s/passivity.csv, "
-              "passivity_boundary.csv\n",
-              what, result.rows.size(), static_cast<long long>(result.cases), result.wall_s,
-              out.c_str());
+  std::cout << formatted(
+      "%s%zu points of %lld configurations in %.1f s; wrote %s/passivity.csv, "
+      "passivity_boundary.csv\n",
+      what, result.rows.size(), static_cast<long long>(result.cases), result.wall_s, out.c_str());
   const std::vector<std::string> failures = sim::passivity_failures(result);
   for (const std::string& f : failures) std::cerr << "numen: passivity: " << f << '\n';
   return failures.empty() ? 0 : sim::code(sim::ExitStatus::kError);
@@ -140,10 +152,10 @@ int AccuracyStudyCommand::execute() const {
   bar.finish();
   if (shard) {
     sim::write_file_atomically(path, sim::accuracy_shard_document(result, options));
-    std::printf("%s: %zu runs, %lld of the %lld study cases, in %.1f s; wrote %s\n",
-                shard_label(*shard).c_str(), result.rows.size(),
-                static_cast<long long>(cases_of(*shard, result.cases)),
-                static_cast<long long>(result.cases), result.wall_s, path.c_str());
+    std::cout << formatted("%s: %zu runs, %lld of the %lld study cases, in %.1f s; wrote %s\n",
+                           shard_label(*shard).c_str(), result.rows.size(),
+                           static_cast<long long>(cases_of(*shard, result.cases)),
+                           static_cast<long long>(result.cases), result.wall_s, path.c_str());
     return 0;
   }
   sim::write_accuracy_csv(result, out_);
@@ -185,16 +197,16 @@ int StabilityStudyCommand::execute() const {
   bar.finish();
   if (shard) {
     sim::write_file_atomically(path, sim::stability_shard_document(result, options));
-    std::printf("%s: %zu runs, %lld of the %lld cases, in %.1f s; wrote %s\n",
-                shard_label(*shard).c_str(), result.rows.size(),
-                static_cast<long long>(cases_of(*shard, result.cases)),
-                static_cast<long long>(result.cases), result.wall_s, path.c_str());
+    std::cout << formatted("%s: %zu runs, %lld of the %lld cases, in %.1f s; wrote %s\n",
+                           shard_label(*shard).c_str(), result.rows.size(),
+                           static_cast<long long>(cases_of(*shard, result.cases)),
+                           static_cast<long long>(result.cases), result.wall_s, path.c_str());
     return 0;
   }
   sim::write_stability_csv(result, out_);
   std::cout << sim::format_stability_tables(result);
-  std::printf("%zu runs in %.1f s; wrote %s/stability_*.csv\n", result.rows.size(), result.wall_s,
-              out_.c_str());
+  std::cout << formatted("%zu runs in %.1f s; wrote %s/stability_*.csv\n", result.rows.size(),
+                         result.wall_s, out_.c_str());
   return 0;
 }
 
@@ -229,10 +241,10 @@ int PassivityStudyCommand::execute() const {
   bar.finish();
   if (shard) {
     sim::write_file_atomically(path, sim::passivity_shard_document(result, options));
-    std::printf("%s: %zu points, %lld of the %lld configurations, in %.1f s; wrote %s\n",
-                shard_label(*shard).c_str(), result.rows.size(),
-                static_cast<long long>(cases_of(*shard, result.cases)),
-                static_cast<long long>(result.cases), result.wall_s, path.c_str());
+    std::cout << formatted("%s: %zu points, %lld of the %lld configurations, in %.1f s; wrote %s\n",
+                           shard_label(*shard).c_str(), result.rows.size(),
+                           static_cast<long long>(cases_of(*shard, result.cases)),
+                           static_cast<long long>(result.cases), result.wall_s, path.c_str());
     return 0;
   }
   sim::write_passivity_csv(result, out_);
@@ -250,14 +262,16 @@ MergeStudyCommand::MergeStudyCommand(CLI::App& study)
 }
 
 int MergeStudyCommand::execute() const {
+  // Every shard file is read and checked before anything is written: a set that is refused
+  // (status 2) leaves --out as it was, and the CSV files are written as one set.
   const std::string out = out_.empty() ? dir_ : out_;
   const std::string study = sim::study_of_shard_dir(dir_);
-  check_output_dir(out);
   if (study == "stability") {
     const sim::StabilityResult result = sim::merge_stability_shards(dir_);
+    check_output_dir(out);
     sim::write_stability_csv(result, out);
     std::cout << sim::format_stability_tables(result);
-    std::printf(
+    std::cout << formatted(
         "merged %zu runs of %lld cases; shards' wall time %.1f s in all; wrote "
         "%s/stability_*.csv\n",
         result.rows.size(), static_cast<long long>(result.cases), result.wall_s, out.c_str());
@@ -265,9 +279,10 @@ int MergeStudyCommand::execute() const {
   }
   if (study == "accuracy") {
     const sim::AccuracyResult result = sim::merge_accuracy_shards(dir_);
+    check_output_dir(out);
     sim::write_accuracy_csv(result, out);
     std::cout << sim::format_accuracy_table(result);
-    std::printf(
+    std::cout << formatted(
         "merged %zu runs of %lld study cases (CPU times as measured by each shard); "
         "shards' wall time %.1f s in all; wrote %s/accuracy.csv, accuracy_orders.csv, "
         "accuracy_references.csv\n",
@@ -276,6 +291,7 @@ int MergeStudyCommand::execute() const {
   }
   if (study == "passivity") {
     const sim::PassivityResult result = sim::merge_passivity_shards(dir_);
+    check_output_dir(out);
     sim::write_passivity_csv(result, out);
     return report_passivity(result, out, "merged; shards' wall time in all: ");
   }

@@ -1,7 +1,7 @@
 /// @file view_command.cpp
 /// `numen view FILE.nmv`: serves a view recording to the browser (docs/viewer.md "Replay"):
 /// the page, the scene message, the frame index, and the frames the page asks for. Runs until
-/// SIGINT / SIGTERM.
+/// SIGINT / SIGTERM / SIGHUP.
 
 #include <chrono>
 #include <filesystem>

@@ -50,6 +50,11 @@ inline const std::string& input_file(const std::uint8_t* data, std::size_t size,
   return path;
 }
 
+/// The longest error message a harness of a located-error loader accepts (bytes): a message
+/// names the file, the place and the key, and quotes a bounded prefix of what it refuses
+/// (json_input::shown(): 40 bytes), however large or deep the input is.
+inline constexpr std::size_t kMaxMessageBytes = 1024;
+
 /// Reports a finding that is not a sanitizer's (a broken invariant): prints `what` and
 /// `detail` to stderr and aborts, which libFuzzer saves as a crash input.
 [[noreturn]] inline void finding(const char* what, std::string_view detail = {}) {

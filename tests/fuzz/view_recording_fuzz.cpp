@@ -7,6 +7,7 @@
 /// of the default scene cut to two frames, and one of a scene message without frames.
 
 #include <cstdint>
+#include <cstring>
 #include <vector>
 
 #include "fuzz_input.hpp"
@@ -29,8 +30,11 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       if (reader.frame_at_or_after(reader.time_ns(i)) > i)
         numen::fuzz::finding("view recording: frame_at_or_after past the frame");
     }
-  } catch (const numen::sim::InputError&) {
-    // a located error: the expected outcome for a bad file
+  } catch (const numen::sim::InputError& e) {
+    // a located error: the expected outcome for a bad file; it quotes a bounded prefix of
+    // what it refuses, whatever the size or depth of the input
+    if (std::strlen(e.what()) > numen::fuzz::kMaxMessageBytes)
+      numen::fuzz::finding("view recording: an error message quotes the input unbounded");
   }
   return 0;
 }

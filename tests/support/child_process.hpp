@@ -47,6 +47,13 @@ struct ChildSignal {
   std::function<bool()> ready;
 };
 
+/// Where the child's stdout goes.
+enum class ChildStdout {
+  kFile,        ///< A file in the test's directory, read back into ChildResult::out.
+  kBrokenPipe,  ///< A pipe whose read end is closed before the child starts: every write to
+                ///< it fails (EPIPE, and SIGPIPE unless the child ignores it); `out` stays "".
+};
+
 /// VmHWM of process `pid` (KiB) from /proc/PID/status, or 0 when it cannot be read.
 inline long own_peak_rss_kib(pid_t pid) {
   std::ifstream f("/proc/" + std::to_string(pid) + "/status");
@@ -63,16 +70,23 @@ inline std::string read_file(const std::string& path) {
   return os.str();
 }
 
-/// Runs `argv` (argv[0] a path) with stdout / stderr redirected to files in `dir`; kills it
-/// (SIGKILL) if it runs past `deadline_s`.
+/// Runs `argv` (argv[0] a path) with stdout / stderr redirected to files in `dir` (stdout as
+/// `stdout_to` says); kills it (SIGKILL) if it runs past `deadline_s`.
 inline ChildResult run_child(const std::vector<std::string>& argv, const std::string& dir,
-                             double deadline_s, const ChildSignal& send = {}) {
+                             double deadline_s, const ChildSignal& send = {},
+                             ChildStdout stdout_to = ChildStdout::kFile) {
   const std::string out_path = dir + "/child.out", err_path = dir + "/child.err";
   posix_spawn_file_actions_t actions;
   posix_spawn_file_actions_init(&actions);
   posix_spawn_file_actions_addopen(&actions, STDIN_FILENO, "/dev/null", O_RDONLY, 0);
-  posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, out_path.c_str(),
-                                   O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  int pipe_ends[2] = {-1, -1};
+  if (stdout_to == ChildStdout::kBrokenPipe && ::pipe2(pipe_ends, O_CLOEXEC) == 0) {
+    ::close(pipe_ends[0]);  // no reader, from before the child's first write
+    posix_spawn_file_actions_adddup2(&actions, pipe_ends[1], STDOUT_FILENO);
+  } else {
+    posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, out_path.c_str(),
+                                     O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  }
   posix_spawn_file_actions_addopen(&actions, STDERR_FILENO, err_path.c_str(),
                                    O_WRONLY | O_CREAT | O_TRUNC, 0644);
   std::vector<char*> args;
@@ -84,12 +98,13 @@ inline ChildResult run_child(const std::vector<std::string>& argv, const std::st
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   };
   pid_t pid = -1;
-  if (posix_spawn(&pid, args[0], &actions, nullptr, args.data(), environ) != 0) {
-    posix_spawn_file_actions_destroy(&actions);
+  const int spawned = posix_spawn(&pid, args[0], &actions, nullptr, args.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  if (pipe_ends[1] >= 0) ::close(pipe_ends[1]);
+  if (spawned != 0) {
     r.err = "posix_spawn failed for " + argv[0];
     return r;
   }
-  posix_spawn_file_actions_destroy(&actions);
   bool signalled = send.signal == 0;
   int wstatus = 0;
   struct rusage usage {};
@@ -113,7 +128,7 @@ inline ChildResult run_child(const std::vector<std::string>& argv, const std::st
   r.wall_s = elapsed();
   r.max_rss_kib = own_peak_kib > 0 ? own_peak_kib : usage.ru_maxrss;
   r.status = WIFEXITED(wstatus) ? WEXITSTATUS(wstatus) : 128 + WTERMSIG(wstatus);
-  r.out = read_file(out_path);
+  r.out = pipe_ends[1] >= 0 ? std::string() : read_file(out_path);
   r.err = read_file(err_path);
   return r;
 }

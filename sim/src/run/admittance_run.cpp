@@ -258,7 +258,7 @@ RunSummary run_admittance_scene(const Scene& scene, const RunOptions& options) {
   bool stopped = false;
   for (std::int64_t k = 0; k < steps && !runner.diverged(); ++k) {
     if (options.stop != nullptr && options.stop->load(std::memory_order_relaxed)) {
-      stopped = true;  // SIGINT / SIGTERM (docs/inputs.md, "Signals")
+      stopped = true;  // SIGINT / SIGTERM / SIGHUP (docs/inputs.md, "Signals")
       break;
     }
     // SIGUSR1 (docs/safety.md, "How the control loop uses it")

@@ -458,9 +458,7 @@ RunSummary run_scene(const Scene& scene, const RunOptions& options) {
   RunSummary s = scene.admittance ? run_admittance_scene(scene, options)  // admittance_run.cpp
                                   : run_impedance_scene(scene, options);
   if (s.stopped && options.stop_signal != nullptr) s.stop_signal = options.stop_signal->load();
-  RunVerdict verdict = run_verdict(s);
-  s.exit_status = verdict.exit_status;
-  s.exit_reasons = std::move(verdict.reasons);
+  judge_run(s);
   return s;
 }
 

@@ -8,6 +8,7 @@
 #include <iomanip>
 #include <sstream>
 #include <string>
+#include <utility>
 
 #include "numen/sim/run/run_summary.hpp"
 
@@ -93,6 +94,8 @@ RunVerdict run_verdict(const RunSummary& s) {
     add(ExitStatus::kLostRecords, "--trace: " + n(s.trace_written) + " of " +
                                       n(s.trace_pushed + s.trace_dropped) + " records written (" +
                                       n(s.trace_io_errors) + " I/O errors)");
+  if (!s.stdout_error.empty())
+    add(ExitStatus::kLostRecords, "stdout: the summary was not written (" + s.stdout_error + ")");
   if (s.rejected_samples > 0)
     add(ExitStatus::kSamplesRejected, n(s.rejected_samples) + " axis samples rejected");
   // Frames on an encoder's COB-ID of the wrong kind or length: each rejected its axis's
@@ -134,6 +137,12 @@ RunVerdict run_verdict(const RunSummary& s) {
     if (v.status == ExitStatus::kClean && s.stop_signal > 0) v.exit_status = 128 + s.stop_signal;
   }
   return v;
+}
+
+void judge_run(RunSummary& s) {
+  RunVerdict verdict = run_verdict(s);
+  s.exit_status = verdict.exit_status;
+  s.exit_reasons = std::move(verdict.reasons);
 }
 
 const char* exit_status_name(int status) noexcept {

@@ -70,6 +70,31 @@ auto accuracy_lists() {
                                             [](auto& x, auto&& v) { reference_fields(x, v); }));
 }
 
+/// What the plan gives case `k` (merge_accuracy_shards()): one fit, one row per time step, and
+/// for the first integrator of a case without a closed form one reference check.
+void check_accuracy_case(const AccuracyResult& one, std::int64_t k, const std::string& file,
+                         const Json& manifest) {
+  bool quick = false;
+  std::vector<double> steps;
+  shard::read(shard::member(manifest, "quick", file, "manifest."), quick, file, "manifest.quick");
+  shard::read(shard::member(manifest, "steps", file, "manifest."), steps, file, "manifest.steps");
+  const Json& integrators = shard::member(manifest, "integrators", file, "manifest.");
+  if (!integrators.is_array())
+    throw InputError(file, 0, 0, "manifest.integrators", "not an array of integrator names");
+  const std::size_t n_steps = steps.empty() ? accuracy_default_steps(quick).size() : steps.size();
+  const std::size_t n_integrators =
+      integrators.empty() ? accuracy_default_integrators().size() : integrators.size();
+  shard::expect_records(file, k, "fits", one.fits.size(), 1, "one per case and integrator");
+  shard::expect_records(file, k, "rows", one.rows.size(), n_steps, "one per time step of the grid");
+  const std::string& name = one.fits.front().case_name;
+  const bool first = static_cast<std::size_t>(k) % n_integrators == 0;
+  const bool reference = first && !accuracy_case_has_closed_form(name);
+  shard::expect_records(file, k, "references", one.references.size(), reference ? 1 : 0,
+                        reference ? "the reference check of " + name + ", by its first integrator"
+                        : first   ? name + " has a closed form, no reference run"
+                                  : "reported by the case's first integrator only");
+}
+
 }  // namespace
 
 std::string accuracy_shard_document(const AccuracyResult& result, const AccuracyOptions& options) {
@@ -77,7 +102,8 @@ std::string accuracy_shard_document(const AccuracyResult& result, const Accuracy
 }
 
 AccuracyResult merge_accuracy_shards(const std::string& dir) {
-  return shard::merge_shard_set<AccuracyResult>(dir, "accuracy", accuracy_lists());
+  return shard::merge_shard_set<AccuracyResult>(dir, "accuracy", accuracy_lists(),
+                                                check_accuracy_case);
 }
 
 }  // namespace numen::sim

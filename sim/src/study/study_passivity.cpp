@@ -9,8 +9,8 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <limits>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -194,9 +194,8 @@ double bound_ratio(double measured, double bound) {
 PassivityBoundary measure_config(const PassivityConfig& c, const PassivityOptions& o,
                                  std::vector<PassivityRow>& rows) {
   PassivityPoint p = c.point;
-  const double step = o.quick ? 1.0 : 0.5;
-  for (double e = 1.0; e <= 7.0 + 1e-9; e += step) {
-    p.stiffness = std::pow(10.0, e);
+  for (const double k : passivity_grid(o.quick)) {
+    p.stiffness = k;
     rows.push_back(passivity_row_of(p, probe_passivity(p), "grid", c.info.index));
   }
   std::vector<PassivityRow> bisection;
@@ -216,6 +215,13 @@ void check_passivity_options(const PassivityOptions& o) {
 }
 
 }  // namespace
+
+std::vector<double> passivity_grid(bool quick) {
+  std::vector<double> k;
+  const double step = quick ? 1.0 : 0.5;
+  for (double e = 1.0; e <= 7.0 + 1e-9; e += step) k.push_back(std::pow(10.0, e));
+  return k;
+}
 
 PassivityBoundary find_passivity_boundary(const PassivityPoint& point, double tolerance,
                                           std::vector<PassivityRow>* rows) {
@@ -313,17 +319,14 @@ PassivityResult run_passivity_study(const PassivityOptions& options) {
 
 void write_passivity_csv(const PassivityResult& r, const std::string& dir) {
   std::filesystem::create_directories(dir);
-  const auto write = [&](const char* name, const auto& records, auto&& fields) {
-    const std::filesystem::path path = std::filesystem::path(dir) / name;
-    std::ofstream f(path);
-    if (!f) throw std::runtime_error("cannot write " + path.string());
-    f.precision(6);
-    write_fields_csv(f, records, fields);
-    if (!f) throw std::runtime_error("cannot write " + path.string());
-  };
-  write("passivity.csv", r.rows, [](auto& x, auto&& v) { passivity_row_fields(x, v); });
-  write("passivity_boundary.csv", r.boundaries,
-        [](auto& x, auto&& v) { passivity_boundary_fields(x, v); });
+  std::ostringstream rows, boundaries;
+  rows.precision(6);
+  boundaries.precision(6);
+  write_fields_csv(rows, r.rows, [](auto& x, auto&& v) { passivity_row_fields(x, v); });
+  write_fields_csv(boundaries, r.boundaries,
+                   [](auto& x, auto&& v) { passivity_boundary_fields(x, v); });
+  write_files_atomically(
+      dir, {{"passivity.csv", rows.str()}, {"passivity_boundary.csv", boundaries.str()}});
 }
 
 std::string format_passivity_table(const PassivityResult& r) {

@@ -136,7 +136,12 @@ std::string shard_file_name(const std::string& study, const Shard& shard) {
          ".json";
 }
 
-void write_file_atomically(const std::filesystem::path& path, std::string_view content) {
+namespace {
+
+/// Writes `content` into a new temporary file beside `path` (".NAME.XXXXXX", mkstemp), with the
+/// mode a plain create would give it, flushed to disk (fsync); returns its path. Throws
+/// std::runtime_error naming `path` and the system's reason (the temporary file removed).
+std::string write_temporary(const std::filesystem::path& path, std::string_view content) {
   const std::filesystem::path dir = path.has_parent_path() ? path.parent_path() : ".";
   std::string tmp = (dir / ("." + path.filename().string() + ".XXXXXX")).string();
   const int fd = ::mkstemp(tmp.data());
@@ -166,11 +171,41 @@ void write_file_atomically(const std::filesystem::path& path, std::string_view c
     ::unlink(tmp.c_str());
     throw std::runtime_error("cannot write " + path.string() + ": " + std::strerror(err));
   }
+  return tmp;
+}
+
+/// Renames temporary file `tmp` onto `path`; throws std::runtime_error (`tmp` removed).
+void rename_onto(const std::string& tmp, const std::filesystem::path& path) {
   if (::rename(tmp.c_str(), path.c_str()) != 0) {
     const int err = errno;
     ::unlink(tmp.c_str());
     throw std::runtime_error("cannot rename " + tmp + " to " + path.string() + ": " +
                              std::strerror(err));
+  }
+}
+
+}  // namespace
+
+void write_file_atomically(const std::filesystem::path& path, std::string_view content) {
+  rename_onto(write_temporary(path, content), path);
+}
+
+void write_files_atomically(const std::filesystem::path& dir, const OutputFiles& files) {
+  std::vector<std::string> written;  // the temporary files, in the order of `files`
+  try {
+    for (const auto& [name, content] : files)
+      written.push_back(write_temporary(dir / name, content));
+  } catch (...) {
+    for (const std::string& tmp : written) ::unlink(tmp.c_str());
+    throw;
+  }
+  for (std::size_t i = 0; i < files.size(); ++i) {
+    try {
+      rename_onto(written[i], dir / files[i].first);
+    } catch (...) {
+      for (std::size_t j = i + 1; j < written.size(); ++j) ::unlink(written[j].c_str());
+      throw;
+    }
   }
 }
 
@@ -207,7 +242,7 @@ double to_double(const Json& j, const std::string& file, const std::string& key)
     if (s == "nan" || s == "-nan" || s == "inf" || s == "-inf")
       return std::strtod(s.c_str(), nullptr);
   }
-  throw InputError(file, 0, 0, key, "not a number: " + j.dump());
+  throw InputError(file, 0, 0, key, "not a number: " + json_input::shown(j));
 }
 
 const Json& member(const Json& j, const char* key, const std::string& file,
@@ -228,32 +263,35 @@ void read(const Json& j, double& out, const std::string& file, const std::string
 }
 
 void read(const Json& j, std::int64_t& out, const std::string& file, const std::string& key) {
-  if (!j.is_number_integer()) throw InputError(file, 0, 0, key, "not an integer: " + j.dump());
+  if (!j.is_number_integer())
+    throw InputError(file, 0, 0, key, "not an integer: " + json_input::shown(j));
   if (j.is_number_unsigned() && j.get<std::uint64_t>() > static_cast<std::uint64_t>(INT64_MAX))
-    throw InputError(file, 0, 0, key, "out of range: " + j.dump());
+    throw InputError(file, 0, 0, key, "out of range: " + json_input::shown(j));
   out = j.get<std::int64_t>();
 }
 
 void read(const Json& j, int& out, const std::string& file, const std::string& key) {
   std::int64_t v = 0;
   read(j, v, file, key);
-  if (v < INT_MIN || v > INT_MAX) throw InputError(file, 0, 0, key, "out of range: " + j.dump());
+  if (v < INT_MIN || v > INT_MAX)
+    throw InputError(file, 0, 0, key, "out of range: " + json_input::shown(j));
   out = static_cast<int>(v);
 }
 
 void read(const Json& j, bool& out, const std::string& file, const std::string& key) {
-  if (!j.is_boolean()) throw InputError(file, 0, 0, key, "not true or false: " + j.dump());
+  if (!j.is_boolean())
+    throw InputError(file, 0, 0, key, "not true or false: " + json_input::shown(j));
   out = j.get<bool>();
 }
 
 void read(const Json& j, std::string& out, const std::string& file, const std::string& key) {
-  if (!j.is_string()) throw InputError(file, 0, 0, key, "not a string: " + j.dump());
+  if (!j.is_string()) throw InputError(file, 0, 0, key, "not a string: " + json_input::shown(j));
   out = j.get<std::string>();
 }
 
 void read(const Json& j, std::vector<double>& out, const std::string& file,
           const std::string& key) {
-  if (!j.is_array()) throw InputError(file, 0, 0, key, "not an array: " + j.dump());
+  if (!j.is_array()) throw InputError(file, 0, 0, key, "not an array: " + json_input::shown(j));
   out.clear();
   for (std::size_t i = 0; i < j.size(); ++i)
     out.push_back(to_double(j[i], file, key + "[" + std::to_string(i) + "]"));
@@ -295,6 +333,15 @@ std::string document(const std::string& study, const Shard& s, const Json& manif
   doc["wall_s"] = number(wall_s);
   doc["results"] = results;
   return doc.dump(1) + "\n";
+}
+
+void expect_records(const std::string& file, std::int64_t case_index, const char* list,
+                    std::size_t got, std::size_t want, const std::string& why) {
+  if (got == want) return;
+  throw InputError(file, 0, 0, "case " + std::to_string(case_index) + "." + list,
+                   std::to_string(got) + " in the file, but the study's plan gives the case " +
+                       std::to_string(want) + (why.empty() ? "" : " (" + why + ")") +
+                       ": the shard that ran it did not write it whole");
 }
 
 ShardSet read_shard_set(const std::filesystem::path& dir, const std::string& study) {
@@ -347,11 +394,15 @@ ShardSet read_shard_set(const std::filesystem::path& dir, const std::string& stu
     const Json doc = json_input::parse<Json>(text, syntax);
     if (doc.is_discarded()) {
       const auto [line, column] = json_input::line_column(text, syntax.byte);
-      throw InputError(path, line, column, "", "not a shard file: not JSON: " + syntax.reason);
+      throw InputError(path, line, column, "",
+                       std::string("not a shard file: ") + (syntax.too_deep ? "" : "not JSON: ") +
+                           syntax.reason);
     }
     const auto expect = [&](const char* key, const Json& want) {
       const Json& got = member(doc, key, path, "");
-      if (got != want) throw InputError(path, 0, 0, key, got.dump() + ", expected " + want.dump());
+      if (got != want)
+        throw InputError(path, 0, 0, key,
+                         json_input::shown(got) + ", expected " + json_input::shown(want));
     };
     expect("format", kFormat);
     expect("study", study);
@@ -371,9 +422,13 @@ ShardSet read_shard_set(const std::filesystem::path& dir, const std::string& stu
       for (const auto& [k, v] : manifest.items())
         if (key.empty() && !set.manifest.contains(k)) key = k;
       const auto shown = [&](const Json& m) {
-        return m.contains(key) ? m.at(key).dump() : std::string("absent");
+        return m.contains(key) ? json_input::shown(m.at(key)) : std::string("absent");
       };
-      throw InputError(path, 0, 0, "manifest." + key,
+      // The key is the file's: quoted by its first bytes, as the values are.
+      const std::string named = key.size() > json_input::kShownBytes
+                                    ? key.substr(0, json_input::kShownBytes) + "..."
+                                    : key;
+      throw InputError(path, 0, 0, "manifest." + named,
                        shown(manifest) + ", but " + shown(set.manifest) + " in " +
                            set.files.front() +
                            ": the shards ran with different options, grid or build");

@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <initializer_list>
+#include <iterator>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -88,19 +89,26 @@ class ResultsByCase {
 };
 
 /// Appends the records of list `list` of a case's result `entry` to `out`, read with `fields`
-/// and given `case_index`.
+/// and given `case_index`; a member's key in an error reads "case K.<list>[i].<member>".
 template <class Record, class Fields>
 void read_list(const Json& entry, const char* list, Fields&& fields, std::int64_t case_index,
                const std::string& file, std::vector<Record>& out) {
   const std::string where = "case " + std::to_string(case_index) + "." + list;
   const Json& items = member(entry, list, file, "case " + std::to_string(case_index) + ".");
   if (!items.is_array()) throw InputError(file, 0, 0, where, "not an array");
-  for (const Json& j : items) {
-    Record r = record_from<Record>(j, fields, file, where + ".");
+  for (std::size_t i = 0; i < items.size(); ++i) {
+    Record r = record_from<Record>(items[i], fields, file, where + "[" + std::to_string(i) + "].");
     r.case_index = case_index;
     out.push_back(std::move(r));
   }
 }
+
+/// Throws InputError(file, 0, 0, "case K.<list>", …) unless case `case_index` has `want`
+/// records of list `list` (`got`): the plan of every study gives each case a known number of
+/// records, and a shard file that lists a case with fewer or more is not merged. `why` (may be
+/// empty) says what makes up `want`, e.g. "13 grid points and 6 bisection probes".
+void expect_records(const std::string& file, std::int64_t case_index, const char* list,
+                    std::size_t got, std::size_t want, const std::string& why);
 
 /// The text of a shard file (pretty-printed JSON, one result per line is not required).
 std::string document(const std::string& study, const Shard& shard, const Json& manifest,
@@ -161,10 +169,13 @@ std::string shard_document(const std::string& study, const Result& result, const
 
 /// Reads the shard set of `study` in `dir` (read_shard_set()) into one result: the skipped
 /// cases, the case count, every case's records of the RecordLists in `lists` (a tuple) in case
-/// order, and the summed wall time.
-template <class Result, class... Lists>
+/// order, and the summed wall time. Each case's records are checked by `check_case(one, k, file,
+/// manifest)` before they join the result: `one` a Result holding case k's records only, `file`
+/// the shard file that holds them; it throws InputError (expect_records(), or a value the
+/// study's merge refuses) naming the file and the member.
+template <class Result, class CheckCase, class... Lists>
 Result merge_shard_set(const std::string& dir, const std::string& study,
-                       const std::tuple<Lists...>& lists) {
+                       const std::tuple<Lists...>& lists, CheckCase&& check_case) {
   const ShardSet set = read_shard_set(dir, study);
   Result result;
   result.skipped = set.skipped;
@@ -172,9 +183,20 @@ Result merge_shard_set(const std::string& dir, const std::string& study,
   for (std::size_t k = 0; k < set.results.size(); ++k) {
     const std::string& file = set.files[k % set.files.size()];
     const auto index = static_cast<std::int64_t>(k);
+    Result one;
     std::apply(
         [&](const Lists&... list) {
-          (read_list(set.results[k], list.name, list.fields, index, file, result.*(list.records)),
+          (read_list(set.results[k], list.name, list.fields, index, file, one.*(list.records)),
+           ...);
+        },
+        lists);
+    check_case(one, index, file, set.manifest);
+    std::apply(
+        [&](const Lists&... list) {
+          ((result.*(list.records))
+               .insert((result.*(list.records)).end(),
+                       std::make_move_iterator((one.*(list.records)).begin()),
+                       std::make_move_iterator((one.*(list.records)).end())),
            ...);
         },
         lists);

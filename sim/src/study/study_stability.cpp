@@ -10,7 +10,6 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <map>
 #include <sstream>
 #include <stdexcept>
@@ -225,28 +224,26 @@ const std::string& stability_csv_header() {
 
 void write_stability_csv(const StabilityResult& result, const std::string& dir) {
   std::filesystem::create_directories(dir);
-  std::map<std::string, std::ofstream> files;
+  std::map<std::string, std::ostringstream> families;  // stability_<family>.csv, by family
   for (const StabilityRow& r : result.rows) {
-    auto it = files.find(r.family);
-    if (it == files.end()) {
-      const std::string path = dir + "/stability_" + r.family + ".csv";
-      it = files.emplace(r.family, std::ofstream(path)).first;
-      if (!it->second) throw std::runtime_error("cannot write " + path);
+    auto it = families.find(r.family);
+    if (it == families.end()) {
+      it = families.emplace(r.family, std::ostringstream()).first;
       it->second << stability_csv_header() << '\n';
     }
-    std::ofstream& f = it->second;
+    std::ostringstream& f = it->second;
     bool first = true;
     stability_row_fields(r, [&](const char*, const auto& v) {
       f << (first ? "" : ",") << cell(v);
       first = false;
     });
     f << '\n';
-    if (!f) throw std::runtime_error("cannot write stability_" + r.family + ".csv in " + dir);
   }
+  OutputFiles files;
+  for (const auto& [family, text] : families)
+    files.emplace_back("stability_" + family + ".csv", text.str());
   if (!result.boundaries.empty()) {
-    const std::string path = dir + "/stability_boundary.csv";
-    std::ofstream f(path);
-    if (!f) throw std::runtime_error("cannot write " + path);
+    std::ostringstream f;
     f << "zeta,omega_dt,energy_ratio_max,growth_ratio,theory_omega_dt,measured_growth_omega_dt,"
          "measured_verdict_omega_dt,verdict_theory_omega_dt\n";
     for (const StabilityBoundary& b : result.boundaries)
@@ -255,8 +252,9 @@ void write_stability_csv(const StabilityResult& result, const std::string& dir) 
           << num(b.growth_ratio[i]) << ',' << num(b.theory_omega_dt) << ','
           << num(b.measured_growth_omega_dt) << ',' << num(b.measured_verdict_omega_dt) << ','
           << num(b.verdict_theory_omega_dt) << '\n';
-    if (!f) throw std::runtime_error("cannot write " + path);
+    files.emplace_back("stability_boundary.csv", f.str());
   }
+  write_files_atomically(dir, files);
 }
 
 std::string format_stability_tables(const StabilityResult& r) {

@@ -45,6 +45,19 @@ auto stability_lists() {
                          [](auto& x, auto&& v) { stability_boundary_fields(x, v); }));
 }
 
+/// What the plan gives case `k`: every case is one run, which gives one row, or for the
+/// boundary family one boundary.
+void check_stability_case(const StabilityResult& one, std::int64_t k, const std::string& file,
+                          const Json&) {
+  const char* why = "one run: its row, or the boundary family's boundary";
+  if (one.boundaries.empty())
+    shard::expect_records(file, k, "rows", one.rows.size(), 1, why);
+  else if (one.rows.empty())
+    shard::expect_records(file, k, "boundaries", one.boundaries.size(), 1, why);
+  else
+    shard::expect_records(file, k, "rows", one.rows.size(), 0, "a boundary case has no row");
+}
+
 }  // namespace
 
 std::string stability_shard_document(const StabilityResult& result,
@@ -53,7 +66,8 @@ std::string stability_shard_document(const StabilityResult& result,
 }
 
 StabilityResult merge_stability_shards(const std::string& dir) {
-  return shard::merge_shard_set<StabilityResult>(dir, "stability", stability_lists());
+  return shard::merge_shard_set<StabilityResult>(dir, "stability", stability_lists(),
+                                                 check_stability_case);
 }
 
 }  // namespace numen::sim

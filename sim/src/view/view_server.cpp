@@ -30,6 +30,7 @@
 #include <stdexcept>
 #include <thread>
 
+#include "input/json_input.hpp"
 #include "numen/sim/view/frame_layout_json.hpp"
 
 namespace numen::sim {
@@ -98,7 +99,8 @@ ViewClientRequest read_view_client_message(std::string_view message, bool text, 
                                            std::size_t frame_count) {
   using Kind = ViewClientRequest::Kind;
   if (!text) return {Kind::kBad, 0};
-  const nlohmann::json j = nlohmann::json::parse(message, nullptr, false);
+  json_input::SyntaxError syntax;  // not reported: the connection is closed and counted
+  const auto j = json_input::parse<nlohmann::json>(message, syntax);
   if (j.is_discarded()) return {Kind::kBad, 0};
   if (!replay) return {Kind::kIgnored, 0};
   if (!j.is_object() || j.size() != 1) return {Kind::kBad, 0};

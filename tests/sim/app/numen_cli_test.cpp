@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -107,7 +108,8 @@ TEST(NumenCli, PeakMemoryDoesNotGrowWithTheDuration) {
 }
 
 // Defect 1: SIGTERM while the input loads (here a trajectory file that is a FIFO nobody writes:
-// the loader blocks in open()) ends the process at once, with a message and 128 + SIGTERM.
+// the loader blocks in open()) ends the process at once, with a message and 128 + SIGTERM;
+// SIGHUP alike (129).
 TEST(NumenCli, StopSignalWhileLoadingEndsTheProcessAtOnce) {
   NUMEN_REQUIRE_ARTICULATION();  // the lattice scene has joints
   TempDir dir;
@@ -124,11 +126,30 @@ TEST(NumenCli, StopSignalWhileLoadingEndsTheProcessAtOnce) {
     writer = ::open(fifo.c_str(), O_WRONLY | O_NONBLOCK);
     return writer >= 0;
   };
-  const ChildResult r = run_child({kNumen, "run", scene}, dir.path(), 20, term);
-  if (writer >= 0) ::close(writer);
-  EXPECT_FALSE(r.timed_out) << "SIGTERM was ignored while loading";
-  EXPECT_EQ(r.status, 128 + SIGTERM) << r.out << r.err;
-  EXPECT_NE(r.err.find("stopped by a signal while loading"), std::string::npos) << r.err;
+  for (const int signal : {SIGTERM, SIGHUP}) {
+    term.signal = signal;
+    const ChildResult r = run_child({kNumen, "run", scene}, dir.path(), 20, term);
+    if (writer >= 0) ::close(writer);
+    writer = -1;
+    EXPECT_FALSE(r.timed_out) << "signal " << signal << " was ignored while loading";
+    EXPECT_EQ(r.status, 128 + signal) << r.out << r.err;
+    EXPECT_EQ(r.err, "numen: stopped by a signal while loading (nothing was commanded)\n");
+  }
+}
+
+/// A paced run of the lattice scene (60 s; overruns on a loaded machine are counted, never
+/// latched) with `extra` options, sent `signal` once it is past loading: its --record file in
+/// `dir` is open.
+ChildResult paced_run_stopped_by(int signal, const TempDir& dir,
+                                 const std::vector<std::string>& extra = {}) {
+  ChildSignal stop;
+  stop.signal = signal;
+  stop.ready = [&dir] { return writing(dir, "run.log"); };
+  std::vector<std::string> argv = {
+      kNumen, "run",        kLattice, "--realtime", "--overrun-limit",
+      "0",    "--duration", "60",     "--record",   (dir / "run.log").string()};
+  argv.insert(argv.end(), extra.begin(), extra.end());
+  return run_child(argv, dir.path(), 30, stop);
 }
 
 // Once running, SIGTERM ends the run cleanly: the summary is printed and the status is
@@ -138,13 +159,7 @@ TEST(NumenCli, StopSignalWhileLoadingEndsTheProcessAtOnce) {
 TEST(NumenCli, StopSignalWhileRunningPrintsTheSummary) {
   NUMEN_REQUIRE_ARTICULATION();
   TempDir dir;
-  const std::string log = (dir / "run.log").string();
-  ChildSignal term;
-  term.signal = SIGTERM;
-  term.ready = [&dir] { return writing(dir, "run.log"); };
-  const ChildResult r =
-      run_child({kNumen, "run", kLattice, "--realtime", "--overrun-limit", "0", "--duration", "60", "--record", log},
-                dir.path(), 30, term);  // overruns on a loaded machine count, never latch
+  const ChildResult r = paced_run_stopped_by(SIGTERM, dir);
   EXPECT_FALSE(r.timed_out);
   EXPECT_EQ(r.status, 128 + SIGTERM) << r.out << r.err;
   EXPECT_NE(r.out.find("exit status 143 (stopped by a signal): stopped by a signal: SIGTERM (15) "
@@ -153,6 +168,28 @@ TEST(NumenCli, StopSignalWhileRunningPrintsTheSummary) {
       << r.out;
   EXPECT_EQ(r.out.find("exit status 0"), std::string::npos) << r.out;
   EXPECT_LT(r.wall_s, 20.0);
+}
+
+// SIGHUP (the terminal or ssh session of a paced run closed) is a stop signal as SIGTERM is:
+// the run ends cleanly, prints its summary with status 129 and writes its trace. It used to
+// kill the process (status 129 from the default action): no summary, no trace file.
+TEST(NumenCli, HangupWhileRunningEndsTheRunCleanly) {
+  NUMEN_REQUIRE_ARTICULATION();
+  TempDir dir;
+  const std::string trace = (dir / "run.csv").string();
+  const ChildResult r = paced_run_stopped_by(SIGHUP, dir, {"--trace", trace});
+  EXPECT_FALSE(r.timed_out);
+  EXPECT_EQ(r.status, 128 + SIGHUP) << r.out << r.err;
+  const std::string stopped =
+      "  exit status 129 (stopped by a signal): stopped by a signal: SIGHUP (1) after ";
+  const std::size_t at = r.out.find(stopped);
+  ASSERT_NE(at, std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("  trace: " + trace + "\n"), std::string::npos) << r.out;
+  // The trace: its header and one record per period the run ran.
+  const long periods = std::atol(r.out.c_str() + at + stopped.size());
+  const std::string lines = numen::test::read_file(trace);
+  EXPECT_EQ(lines.rfind("time_s,", 0), 0u) << lines.substr(0, 100);
+  EXPECT_EQ(std::count(lines.begin(), lines.end(), '\n'), periods + 1);
 }
 
 // A stop is always heard: an offline run paced at --speed 1e-9 sleeps 10^6 s per period, in
@@ -210,13 +247,7 @@ TEST(NumenCli, RefusedRunLeavesItsOutputFilesByteIdentical) {
 TEST(NumenCli, StopSignalIsInTheJsonSummary) {
   NUMEN_REQUIRE_ARTICULATION();
   TempDir dir;
-  const std::string log = (dir / "run.log").string();
-  ChildSignal interrupt;
-  interrupt.signal = SIGINT;
-  interrupt.ready = [&dir] { return writing(dir, "run.log"); };
-  const ChildResult r = run_child({kNumen, "run", kLattice, "--realtime", "--overrun-limit", "0",
-                                   "--duration", "60", "--record", log, "--json"},
-                                  dir.path(), 30, interrupt);
+  const ChildResult r = paced_run_stopped_by(SIGINT, dir, {"--json"});
   EXPECT_FALSE(r.timed_out);
   ASSERT_EQ(r.status, 128 + SIGINT) << r.out << r.err;
   const nlohmann::json j = nlohmann::json::parse(r.out);
@@ -272,6 +303,65 @@ TEST(NumenCli, JsonCarriesTheExitStatus) {
   EXPECT_EQ(r.status, 0) << r.out << r.err;
   EXPECT_NE(r.out.find("\"exit_status\":0"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("\"exit_reasons\":[]"), std::string::npos) << r.out;
+}
+
+/// `numen args…` with its stdout closed (`>&-`), on /dev/full, or into a pipe whose reader has
+/// gone: what a lost stdout looks like to numen in each of the three ways.
+std::vector<std::pair<std::string, ChildResult>> with_stdout_lost(
+    const std::vector<std::string>& args, const TempDir& dir) {
+  std::string command = "exec " + kNumen;
+  std::vector<std::string> argv = {kNumen};
+  for (const std::string& a : args) {
+    command += " " + a;
+    argv.push_back(a);
+  }
+  return {
+      {"Bad file descriptor", run_child({"/bin/sh", "-c", command + " >&-"}, dir.path(), 120)},
+      {"No space left on device",
+       run_child({"/bin/sh", "-c", command + " >/dev/full"}, dir.path(), 120)},
+      {"Broken pipe", run_child(argv, dir.path(), 120, {}, numen::test::ChildStdout::kBrokenPipe)}};
+}
+
+// A run whose summary cannot be written on stdout lost its record: status 5, said on stderr
+// with the summary, whose status is the process's. It exited 0 with its output gone (closed
+// stdout, /dev/full), or died of SIGPIPE (141) after printing "exit status 0 (clean)" on stderr.
+TEST(NumenCli, RunWhoseSummaryStdoutRefusesIsLostRecords) {
+  NUMEN_REQUIRE_ARTICULATION();
+  TempDir dir;
+  for (const bool json : {false, true}) {
+    std::vector<std::string> args = {"run", kLattice, "--duration", "0.05"};
+    if (json) args.push_back("--json");
+    for (const auto& [reason, r] : with_stdout_lost(args, dir)) {
+      EXPECT_EQ(r.status, 5) << reason << ": " << r.err;
+      const std::string status_line =
+          "  exit status 5 (lost records): lost records: stdout: the summary was not written (" +
+          reason + ")\n";
+      EXPECT_NE(r.err.find(status_line), std::string::npos) << reason << ": " << r.err;
+      EXPECT_EQ(r.err.find("exit status 0"), std::string::npos) << reason << ": " << r.err;
+      if (!json)
+        EXPECT_EQ(r.err.rfind("numen: stdout: cannot write the summary (" + reason +
+                                  "); it follows on stderr\nscene ",
+                              0),
+                  0u)
+            << reason << ": " << r.err;
+    }
+  }
+}
+
+// Any other command whose stdout output cannot be written says so and exits 1 (error): `numen
+// info --json` and `numen study … --list` exited 0 with nothing printed.
+TEST(NumenCli, OutputThatStdoutRefusesIsAnError) {
+  NUMEN_REQUIRE_ARTICULATION();  // the lattice scene has joints
+  TempDir dir;
+  for (const std::vector<std::string>& args :
+       {std::vector<std::string>{"info", kLattice, "--json"},
+        std::vector<std::string>{"study", "stability", "--quick", "--family", "coupling", "--list",
+                                 "--shard", "0/1"}}) {
+    for (const auto& [reason, r] : with_stdout_lost(args, dir)) {
+      EXPECT_EQ(r.status, 1) << args[0] << ", " << reason << ": " << r.err;
+      EXPECT_EQ(r.err, "numen: stdout: cannot write the output (" + reason + ")\n") << args[0];
+    }
+  }
 }
 
 // Issue 18: one class per subcommand; each still answers --help, and `numen figures` prints the
@@ -715,6 +805,23 @@ TEST(NumenCli, ViewOfARecordingWithAMemberOfTheWrongTypeNamesTheFileAndTheKey) {
     EXPECT_EQ(r.err.find("json.exception"), std::string::npos) << r.err;
     EXPECT_EQ(r.out.find("open http://"), std::string::npos) << r.out;
   }
+}
+
+// `numen view` of a recording whose scene message is 200 000 nested arrays is input rejected at
+// the bracket that opens level 65 (byte 12 + 64); it crashed (SIGSEGV, status 139): the message
+// quoting the array dumped it whole, recursively.
+TEST(NumenCli, ViewOfARecordingNestedTooDeepIsInputRejected) {
+  TempDir dir;
+  const std::string scene = std::string(200000, '[') + std::string(200000, ']');
+  std::string bytes(numen::sim::kViewRecordingMagic, 8);
+  for (int i = 0; i < 4; ++i) bytes += static_cast<char>((scene.size() >> (8 * i)) & 0xFF);
+  const std::string file = dir.write("deep.nmv", bytes + scene);
+  const ChildResult r = run_child({kNumen, "view", file, "--port", "0"}, dir.path(), 30);
+  EXPECT_EQ(r.status, 2) << r.out << r.err;
+  EXPECT_EQ(r.err, "numen: " + file +
+                       ": byte 76: the scene message is not a numen-view JSON object (arrays and "
+                       "objects nested more than 64 deep)\n");
+  EXPECT_EQ(r.out.find("open http://"), std::string::npos) << r.out;
 }
 
 // Options a run would not apply, or values that do not fit them, are input rejected before

@@ -7,11 +7,13 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <functional>
 #include <sstream>
 #include <string>
 #include <vector>
 
 #include "child_process.hpp"
+#include "numen/sim/input/input_error.hpp"
 #include "numen/sim/study/study_accuracy.hpp"
 #include "numen/sim/study/study_shard.hpp"
 #include "temp_dir.hpp"
@@ -85,6 +87,57 @@ TEST(StudyAccuracyShard, MergeEqualsTheOneProcessRunExceptCpuTimes) {
     EXPECT_EQ(merged.rows[i].position_error_max_mm, one.rows[i].position_error_max_mm);
     EXPECT_EQ(merged.rows[i].orientation_error_rms_mrad, one.rows[i].orientation_error_rms_mrad);
   }
+}
+
+// A case is merged only with the records its plan gives it: one fit, a row per step, and
+// for a case's first integrator its reference check unless the case has a closed form (study
+// cases 0-2: free body, 3-5: wall, 3 integrators). Any other count was merged.
+TEST(StudyAccuracyShard, MergeRefusesACaseWithoutTheRecordsItsPlanGivesIt) {
+  const AccuracyOptions o = small_accuracy_grid();
+  const AccuracyResult whole = run_accuracy_study(o);
+  TempDir dir;
+  const std::string file = (dir / "accuracy-shard-0-of-1.json").string();
+  const auto merge_error = [&](const std::function<void(AccuracyResult&)>& edit) {
+    AccuracyResult r = whole;
+    edit(r);
+    write_file_atomically(file, accuracy_shard_document(r, o));
+    try {
+      (void)merge_accuracy_shards(dir.path().string());
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  const std::string tail = ": the shard that ran it did not write it whole";
+  EXPECT_EQ(merge_error([](AccuracyResult&) {}), "");
+  EXPECT_EQ(merge_error([](AccuracyResult& r) {
+              r.rows.erase(std::find_if(r.rows.begin(), r.rows.end(),
+                                        [](const AccuracyRow& x) { return x.case_index == 4; }));
+            }),
+            file +
+                ": case 4.rows: 2 in the file, but the study's plan gives the case 3 (one per "
+                "time step of the grid)" +
+                tail);
+  EXPECT_EQ(merge_error([](AccuracyResult& r) {
+              r.fits.erase(r.fits.begin() + 2);  // study case 2's
+            }),
+            file +
+                ": case 2.fits: 0 in the file, but the study's plan gives the case 1 (one per "
+                "case and integrator)" +
+                tail);
+  EXPECT_EQ(merge_error([](AccuracyResult& r) { r.references.clear(); }),
+            file +
+                ": case 3.references: 0 in the file, but the study's plan gives the case 1 "
+                "(the reference check of wall, by its first integrator)" +
+                tail);
+  EXPECT_EQ(merge_error([](AccuracyResult& r) {
+              r.references.push_back(r.references.front());
+              r.references.back().case_index = 0;  // the free body's first integrator
+            }),
+            file +
+                ": case 0.references: 1 in the file, but the study's plan gives the case 0 "
+                "(free-body has a closed form, no reference run)" +
+                tail);
 }
 
 TEST(StudyAccuracyShard, ListHasOneCasePerCaseAndIntegrator) {

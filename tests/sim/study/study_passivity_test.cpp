@@ -9,7 +9,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <filesystem>
+#include <functional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -208,26 +211,177 @@ TEST(StudyPassivity, CsvColumnsAreTheContract) {
       << boundary;
 }
 
-TEST(StudyPassivity, ShardFilesMergeIntoTheOneProcessCsv) {
-  const PassivityResult one = two_cases();
-  TempDir whole, shards;
-  write_passivity_csv(one, whole.path().string());
+/// Two configurations with the records the plan of a --quick study gives each: a row per
+/// point of the grid (made up: no probe), then the rows and the boundary of a real bisection.
+PassivityResult planned_two_cases() {
+  PassivityResult r;
+  r.cases = 2;
+  for (int k = 0; k < 2; ++k) {
+    const PassivityPoint p = wall(k ? 1e-4 : 1e-3, 1.0, 0.0, 0.0);
+    for (const double stiffness : passivity_grid(true)) {
+      PassivityRow row;
+      row.period_s = p.period_s;
+      row.device_damping = 1.0;
+      row.coupling = "wall";
+      row.stiffness = stiffness;
+      row.obstacle_stiffness = std::nan("");
+      row.kind = "grid";
+      row.case_index = k;
+      r.rows.push_back(row);
+    }
+    std::vector<PassivityRow> bisection;
+    PassivityBoundary b = find_passivity_boundary(p, 0.05, &bisection);
+    for (PassivityRow& row : bisection) {
+      row.case_index = k;
+      r.rows.push_back(row);
+    }
+    b.case_index = k;
+    r.boundaries.push_back(b);
+  }
+  return r;
+}
+
+/// Writes `one` into `dir` as shards 0 and 1 of 2 of a --quick study, each shard's part
+/// passed through `edit` first.
+void write_two_shards(const PassivityResult& one, const std::filesystem::path& dir,
+                      const std::function<void(PassivityResult&)>& edit = {}) {
   PassivityOptions o;
+  o.quick = true;
   for (int i = 0; i < 2; ++i) {
     PassivityResult part;
     part.cases = one.cases;
     part.shard = {i, 2};
-    part.rows = {one.rows[static_cast<std::size_t>(i)]};
-    part.boundaries = {one.boundaries[static_cast<std::size_t>(i)]};
+    for (const PassivityRow& row : one.rows)
+      if (row.case_index == i) part.rows.push_back(row);
+    for (const PassivityBoundary& b : one.boundaries)
+      if (b.case_index == i) part.boundaries.push_back(b);
+    if (edit) edit(part);
     o.shard = part.shard;
-    write_file_atomically(shards / shard_file_name("passivity", part.shard),
+    write_file_atomically(dir / shard_file_name("passivity", part.shard),
                           passivity_shard_document(part, o));
   }
+}
+
+/// The InputError merge_passivity_shards(`dir`) throws ("" for none).
+std::string passivity_merge_error(const std::filesystem::path& dir) {
+  try {
+    (void)merge_passivity_shards(dir.string());
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(StudyPassivity, ShardFilesMergeIntoTheOneProcessCsv) {
+  const PassivityResult one = planned_two_cases();
+  TempDir whole, shards;
+  write_passivity_csv(one, whole.path().string());
+  write_two_shards(one, shards.path());
   EXPECT_EQ(study_of_shard_dir(shards.path()), "passivity");
   const PassivityResult merged = merge_passivity_shards(shards.path().string());
   write_passivity_csv(merged, shards.path().string());
   for (const char* name : {"passivity.csv", "passivity_boundary.csv"})
     EXPECT_EQ(read_file((whole / name).string()), read_file((shards / name).string())) << name;
+}
+
+// A case is merged only with the records its plan gives it: one boundary, and a row per grid
+// point and per probe of its bisection. A shard file whose case 1 had "rows": [] was merged
+// (the --quick study's passivity.csv had 1 198 lines instead of 1 217, exit status 0).
+TEST(StudyPassivity, MergeRefusesACaseWithoutTheRecordsItsPlanGivesIt) {
+  const PassivityResult one = planned_two_cases();
+  const std::string grid = std::to_string(passivity_grid(true).size());
+  const std::int64_t probes = one.boundaries[1].evaluations;
+  const std::string rows = std::to_string(passivity_grid(true).size() + probes);
+  const std::string why = " (" + grid + " grid points and " + std::to_string(probes) +
+                          " bisection probes): the shard that ran it did not write it whole";
+  TempDir dir;
+  const std::string file = (dir / "passivity-shard-1-of-2.json").string();
+  write_two_shards(one, dir.path(), [](PassivityResult& p) {
+    if (p.shard.index == 1) p.rows.clear();
+  });
+  EXPECT_EQ(
+      passivity_merge_error(dir.path()),
+      file + ": case 1.rows: 0 in the file, but the study's plan gives the case " + rows + why);
+  write_two_shards(one, dir.path(), [](PassivityResult& p) {
+    if (p.shard.index == 1) p.rows.push_back(p.rows.back());
+  });
+  EXPECT_EQ(passivity_merge_error(dir.path()),
+            file + ": case 1.rows: " + std::to_string(std::stoi(rows) + 1) +
+                " in the file, but the study's plan gives the case " + rows + why);
+  write_two_shards(one, dir.path(), [](PassivityResult& p) {
+    if (p.shard.index == 1) p.boundaries.clear();
+  });
+  EXPECT_EQ(passivity_merge_error(dir.path()),
+            file +
+                ": case 1.boundaries: 0 in the file, but the study's plan gives the case 1 "
+                "(one per configuration): the shard that ran it did not write it whole");
+  write_two_shards(one, dir.path());
+  EXPECT_EQ(passivity_merge_error(dir.path()), "");
+}
+
+// A NaN where passivity_failures() would find one is refused naming the file and the member:
+// a merge reported "case 7: energy is NaN" after it had written both CSV files.
+TEST(StudyPassivity, MergeRefusesANanNamingTheFileAndTheMember) {
+  const PassivityResult one = planned_two_cases();
+  TempDir dir;
+  const std::vector<std::pair<std::function<void(PassivityResult&)>, std::string>> cases = {
+      {[](PassivityResult& p) {
+         if (p.shard.index == 1) p.rows[3].energy_min_j = std::nan("");
+       },
+       "passivity-shard-1-of-2.json: case 1.rows[3].energy_min_j: NaN (the energy at K = 10000 "
+       "N/m)"},
+      {[](PassivityResult& p) {
+         if (p.shard.index == 0) p.boundaries[0].k_max = std::nan("");
+       },
+       "passivity-shard-0-of-2.json: case 0.boundaries[0].k_max: NaN (the boundary K_max)"},
+  };
+  for (const auto& [edit, want] : cases) {
+    write_two_shards(one, dir.path(), edit);
+    EXPECT_EQ(passivity_merge_error(dir.path()),
+              dir.path().string() + "/" + want + ": the shard's probe failed; rerun that shard");
+  }
+}
+
+// `numen study merge` of a set it refuses writes nothing: no CSV file, and no --out directory
+// (a merge wrote both CSV files and then failed on a NaN); the set it accepts writes the
+// one-process run's files.
+TEST(StudyPassivity, MergeCommandWritesNothingFromARefusedSet) {
+  const PassivityResult one = planned_two_cases();
+  TempDir dir;
+  const std::string cli = NUMEN_CLI, shards = (dir / "shards").string();
+  const std::string out = (dir / "out").string();
+  std::filesystem::create_directories(shards);
+  const auto merge = [&] {
+    return test::run_child({cli, "study", "merge", shards, "--out", out}, dir.path().string(), 60);
+  };
+  write_two_shards(one, shards, [](PassivityResult& p) {
+    if (p.shard.index == 1) p.rows[0].contact_energy_min_j = std::nan("");
+  });
+  test::ChildResult r = merge();
+  EXPECT_EQ(r.status, 2) << r.out;
+  EXPECT_EQ(r.err, "numen: " + shards +
+                       "/passivity-shard-1-of-2.json: case 1.rows[0]."
+                       "contact_energy_min_j: NaN (the energy at K = 10 N/m): the shard's probe "
+                       "failed; rerun that shard\n");
+  EXPECT_EQ(r.out, "");
+  EXPECT_FALSE(std::filesystem::exists(out));
+  write_two_shards(one, shards, [](PassivityResult& p) {
+    if (p.shard.index == 1) p.rows.clear();
+  });
+  r = merge();
+  EXPECT_EQ(r.status, 2) << r.out;
+  EXPECT_EQ(r.err.rfind("numen: " + shards +
+                            "/passivity-shard-1-of-2.json: case 1.rows: 0 in the "
+                            "file, but the study's plan gives the case ",
+                        0),
+            0u)
+      << r.err;
+  EXPECT_FALSE(std::filesystem::exists(out));
+  write_two_shards(one, shards);
+  r = merge();
+  EXPECT_EQ(r.status, 0) << r.err;
+  const std::string csv = read_file(out + "/passivity.csv");
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), static_cast<long>(one.rows.size()) + 1);
 }
 
 TEST(StudyPassivity, ListHasOneCasePerConfigurationAndShardsSplitIt) {

@@ -8,6 +8,7 @@
 
 #include <filesystem>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <tuple>
 #include <vector>
@@ -171,6 +172,30 @@ TEST(StudyShard, AtomicWriteIntoAMissingDirectoryNamesIt) {
   EXPECT_FALSE(std::filesystem::exists(path));
 }
 
+// A set of output files (a study's CSV files) is written whole or not at all: one that cannot
+// be written leaves the files before it as they were, and no temporary file. The CSV writers
+// wrote file by file, so that a failure left the first files of the set new, the rest old.
+TEST(StudyShard, AFileSetIsWrittenWholeOrNotAtAll) {
+  TempDir dir;
+  dir.write("a.csv", "old\n");
+  try {
+    write_files_atomically(dir.path(), {{"a.csv", "new\n"}, {"missing/b.csv", "x"}});
+    FAIL() << "no error";
+  } catch (const std::runtime_error& e) {
+    EXPECT_EQ(std::string(e.what()), "cannot create a temporary file in " +
+                                         (dir / "missing").string() +
+                                         ": No such file or directory");
+  }
+  EXPECT_EQ(test::read_file((dir / "a.csv").string()), "old\n");
+  std::vector<std::string> names;
+  for (const auto& e : std::filesystem::directory_iterator(dir.path()))
+    names.push_back(e.path().filename().string());
+  EXPECT_EQ(names, std::vector<std::string>{"a.csv"});
+  write_files_atomically(dir.path(), {{"a.csv", "new\n"}, {"b.csv", "x"}});
+  EXPECT_EQ(test::read_file((dir / "a.csv").string()), "new\n");
+  EXPECT_EQ(test::read_file((dir / "b.csv").string()), "x");
+}
+
 TEST(StudyShard, DirectoryTellsItsStudy) {
   TempDir dir;
   EXPECT_NE(
@@ -191,13 +216,31 @@ TEST(StudyShard, DirectoryTellsItsStudy) {
             std::string::npos);
 }
 
+/// A stability row as a shard file holds it (compact JSON): a default StabilityRow, through
+/// stability_shard_document().
+std::string row_text() {
+  StabilityResult r;
+  r.cases = 1;
+  r.rows.resize(1);
+  r.rows[0].case_index = 0;
+  const auto doc = nlohmann::ordered_json::parse(stability_shard_document(r, StabilityOptions{}));
+  return doc["results"][0]["rows"][0].dump();
+}
+
+/// The "results" of shard_text(): two cases of one row each.
+std::string results_text() {
+  return R"([{"case": 0, "rows": [)" + row_text() + R"(], "boundaries": []}, )" +
+         R"({"case": 1, "rows": [)" + row_text() + R"(], "boundaries": []}])";
+}
+
 /// A one-shard stability file (stability-shard-0-of-1.json) with `replace` done on the text of
-/// a valid one of two cases (each with no rows and no boundaries).
+/// a valid one of two cases (each with its one row, as the plan gives every case but the
+/// boundary family's).
 std::string shard_text(const std::string& from = "", const std::string& to = "") {
   std::string t = R"({"format": "numen study shard 1", "study": "stability", "shard": 0, )"
                   R"("shards": 1, "manifest": {"quick": true, "skipped": ["a"], "cases": 2}, )"
-                  R"("wall_s": 0.5, "results": [{"case": 0, "rows": [], "boundaries": []}, )"
-                  R"({"case": 1, "rows": [], "boundaries": []}]})";
+                  R"("wall_s": 0.5, "results": )" +
+                  results_text() + "}";
   if (!from.empty()) {
     const std::size_t at = t.find(from);
     EXPECT_NE(at, std::string::npos) << from;
@@ -227,13 +270,15 @@ TEST(StudyShard, MergeNamesTheKeyOfAMemberOfTheWrongType) {
       {R"("skipped": ["a"])", R"("skipped": [1])", "manifest.skipped[0]"},
       {R"("skipped": ["a"], )", "", "manifest.skipped"},
       {R"("wall_s": 0.5)", R"("wall_s": [0.5])", "wall_s"},
-      {R"([{"case": 0, "rows": [], "boundaries": []}, {"case": 1, "rows": [], "boundaries": []}])",
-       R"({"case": 0})", "results"},
-      {R"({"case": 0, "rows": [], "boundaries": []})", "5", "results[0].case"},
+      {results_text(), R"({"case": 0})", "results"},
+      {R"({"case": 0, "rows": [)", R"(5, {"x": [)", "results[0].case"},
       {R"({"case": 0,)", R"({"case": -1,)", "results[0].case"},
       {R"({"case": 0,)", R"({"case": "0",)", "results[0].case"},
-      {R"({"case": 1, "rows": [])", R"({"case": 1, "rows": {})", "case 1.rows"},
-      {R"({"case": 1, "rows": [])", R"({"case": 1, "rows": [7])", "case 1.rows.family"},
+      {R"({"case": 1, "rows": [)", R"({"case": 1, "rows": {}, "x": [)", "case 1.rows"},
+      {R"({"case": 1, "rows": [)", R"({"case": 1, "rows": [7, )", "case 1.rows[0].family"},
+      // Every case of the plan is one run: one row (or the boundary family's one boundary).
+      {R"({"case": 1, "rows": [)" + row_text() + "]", R"({"case": 1, "rows": [])", "case 1.rows"},
+      {R"({"case": 1, "rows": [)", R"({"case": 1, "rows": [)" + row_text() + ", ", "case 1.rows"},
       // A count far above the results: the first missing case is named (nothing of the
       // count's size is allocated).
       {R"("cases": 2)", R"("cases": 18446744073709551615)", "results"},
@@ -256,6 +301,48 @@ TEST(StudyShard, MergeLocatesASyntaxErrorByLineAndColumn) {
   EXPECT_EQ(e.column(), 16) << e.what();
   EXPECT_NE(e.message().find("not a shard file: not JSON: syntax error"), std::string::npos)
       << e.what();
+}
+
+// Arrays and objects nested more than 64 deep are refused while the file is parsed, at the line
+// and column of the bracket that opens level 65, whatever member holds them (one the merge
+// does not read included); 200 000 deep in a case's entry crashed the merge (SIGSEGV: it
+// copies each entry, and nlohmann's copy recurses).
+TEST(StudyShard, MergeRefusesJsonNestedTooDeepAtItsPlace) {
+  TempDir dir;
+  const std::string path = (dir / "stability-shard-0-of-1.json").string();
+  const std::string entry = R"({"case": 1, "rows": [)";
+  const std::string before = shard_text(entry, "{\"case\": 1,\n  \"extra\": ");
+  const std::size_t first = before.find("\"extra\": ") + 9;         // offset of its first '{'
+  const int column = static_cast<int>(first - before.rfind('\n'));  // 1-based
+  for (const std::size_t depth : {std::size_t{65}, std::size_t{200000}}) {
+    std::string deep;
+    for (std::size_t i = 0; i < depth; ++i) deep += R"({"a": )";
+    deep += "1" + std::string(depth, '}') + R"(, "rows": [)";
+    dir.write("stability-shard-0-of-1.json",
+              shard_text(entry, "{\"case\": 1,\n  \"extra\": " + deep));
+    const InputError e = error_of([&] { (void)merge_stability_shards(dir.path().string()); });
+    EXPECT_EQ(e.file(), path);
+    EXPECT_EQ(e.line(), 2) << e.what();
+    // The entry is level 3 (the file's object, "results", the entry): level 65 opens at the
+    // 62nd `{"a": ` (6 bytes each) of the line.
+    EXPECT_EQ(e.column(), column + 61 * 6) << e.what();
+    EXPECT_EQ(e.key(), "");
+    EXPECT_EQ(e.message(), "not a shard file: arrays and objects nested more than 64 deep");
+  }
+}
+
+// A syntax error quotes the token it stopped in by its first 40 bytes: nlohmann's message
+// quoted a string without its closing quote whole (here 100 000 bytes).
+TEST(StudyShard, MergeQuotesTheTokenOfASyntaxErrorShort) {
+  TempDir dir;
+  dir.write("stability-shard-0-of-1.json", "{\"format\": \"" + std::string(100000, 'x'));
+  const InputError e = error_of([&] { (void)merge_stability_shards(dir.path().string()); });
+  EXPECT_EQ(e.line(), 1);
+  EXPECT_EQ(e.column(), 100013);
+  EXPECT_EQ(e.message(),
+            "not a shard file: not JSON: syntax error while parsing value - invalid string: "
+            "missing closing quote; last read: '\"" +
+                std::string(39, 'x') + "...'");
 }
 
 // A number beyond a double's range is refused where it stands (nlohmann reports it as an

@@ -178,6 +178,36 @@ TEST(ViewRecording, ASceneMessageMemberOfTheWrongTypeIsNamedByItsKey) {
             "");
 }
 
+// Arrays and objects nested more than 64 deep are refused while the scene message is parsed,
+// at the byte of the bracket that opens level 65 (12 + 64); a scene message of 200 000 nested
+// arrays crashed the reader (SIGSEGV: the error message quoted it through a recursive dump()).
+// A member of the wrong type is quoted by its first 40 bytes, however large or deep it is.
+TEST(ViewRecording, ADeeplyNestedSceneMessageIsRefusedWhereItGoesTooDeep) {
+  TempDir dir;
+  for (const std::size_t depth : {std::size_t{65}, std::size_t{200000}}) {
+    const std::string path = write_bytes(
+        dir, "deep.nmv", recording_bytes(std::string(depth, '[') + std::string(depth, ']')));
+    EXPECT_EQ(reader_error(path),
+              path +
+                  ": byte 76: the scene message is not a numen-view JSON object (arrays and "
+                  "objects nested more than 64 deep)")
+        << depth;
+  }
+  // 64 deep is JSON the reader reads: then refused for being an array, quoted short.
+  std::string path =
+      write_bytes(dir, "array.nmv", recording_bytes(std::string(64, '[') + std::string(64, ']')));
+  EXPECT_EQ(reader_error(path), path +
+                                    ": byte 12: the scene message is not a numen-view JSON "
+                                    "object but array [[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[...");
+  std::string zeros = "[0";
+  for (int i = 1; i < 100000; ++i) zeros += ",0";
+  path = write_bytes(dir, "format.nmv", recording_bytes(R"({"format": )" + zeros + "]}"));
+  EXPECT_EQ(reader_error(path), path +
+                                    ": format: byte 12: array "
+                                    "[0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0..., expected "
+                                    "string \"numen-view\": not a numen-view scene message");
+}
+
 TEST(ViewRecording, AnUnwritablePathIsAnInputErrorAtTheOption) {
   try {
     numen::sim::ViewRecordingWriter w("/nonexistent-dir/run.nmv", "{}");

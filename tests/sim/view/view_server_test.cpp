@@ -595,6 +595,12 @@ TEST(ViewServerSeam, ReadsClientMessagesLiveAndInReplay) {
   };
   EXPECT_EQ(read(R"({"anything": [1]})", true, false).kind, Kind::kIgnored);
   EXPECT_EQ(read("not json", true, false).kind, Kind::kBad);
+  // Nested 64 deep is JSON the server ignores; 65 deep, or 200 000, is refused while it is
+  // parsed (json_input::kMaxDepth, as every JSON numen reads from outside); it was ignored.
+  EXPECT_EQ(read(std::string(64, '[') + std::string(64, ']'), true, false).kind, Kind::kIgnored);
+  EXPECT_EQ(read(std::string(65, '[') + std::string(65, ']'), true, false).kind, Kind::kBad);
+  EXPECT_EQ(read(std::string(200000, '[') + std::string(200000, ']'), true, false).kind,
+            Kind::kBad);
   EXPECT_EQ(read(R"({"frame": 1})", false, false).kind, Kind::kBad);  // binary
   EXPECT_EQ(read(R"({"frame": 2})", true, true).kind, Kind::kFrame);
   EXPECT_EQ(read(R"({"frame": 2})", true, true).frame, 2u);

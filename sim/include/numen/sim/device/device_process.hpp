@@ -28,7 +28,7 @@ struct DeviceOptions {
   /// Interval of the time-driven part (DeviceEmulator::tick()), ns, > 0: at most this late
   /// for a heartbeat or a boot-up (the heartbeat periods are 10 ms by default).
   std::int64_t tick_ns = 1'000'000;
-  /// Set (SIGINT / SIGTERM handler) to end the run; nullptr: none.
+  /// Set (SIGINT / SIGTERM / SIGHUP handler) to end the run; nullptr: none.
   const std::atomic<bool>* stop = nullptr;
   /// Called once, on run_device()'s thread, when the device answers: the bus is open and the
   /// first pass of the loop has run, so that a managed device's nodes have left initialisation

@@ -78,7 +78,7 @@ struct RunOptions {
   /// the deadline. For a loop thread on a CPU of its own (rt.cpu_affinity, `--cpu`) on a
   /// kernel without PREEMPT_RT: check_run_options() refuses it otherwise, and at or above dt.
   std::int64_t spin_ns = 0;
-  /// Set (e.g. by a SIGINT / SIGTERM handler) to end the run early and cleanly: the loop
+  /// Set (e.g. by a SIGINT / SIGTERM / SIGHUP handler) to end the run early and cleanly: the loop
   /// shuts down (ControlLoop::shutdown(): zero torque, drives disabled) over at most
   /// shutdown_periods more periods and the summary is returned. nullptr: none.
   const std::atomic<bool>* stop = nullptr;

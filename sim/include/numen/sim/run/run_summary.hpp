@@ -322,6 +322,11 @@ struct RunSummary {
   std::int64_t trace_dropped = 0;          ///< ... refused by a full queue (must be 0).
   std::int64_t trace_written = 0;          ///< ... lines written to the file.
   std::int64_t trace_io_errors = 0;        ///< ... failed writes / flushes (disk full).
+  /// `numen run`: why its summary could not be written on stdout (the system's reason: "Broken
+  /// pipe", "No space left on device", "Bad file descriptor" for a closed stdout); empty: it
+  /// was, or has not been tried. Set after the run by the command, then judge_run() again:
+  /// lost records (docs/outputs.md, "Standard output").
+  std::string stdout_error;
   bool stopped = false;                    ///< Ended early by RunOptions::stop (signal).
   int stop_signal = 0;                     ///< ... by this signal (RunOptions::stop_signal; 0: unknown).
   std::int64_t rearm_requests = 0;         ///< RunOptions::rearm requests taken.

@@ -23,7 +23,8 @@ enum class ExitStatus : int {
                           ///< the managed start-up failed.
   kNonFinite = 4,         ///< A step produced non-finite state (core::Data::nonfinite_steps),
                           ///< or the final state is not finite.
-  kLostRecords = 5,       ///< Records of --record / --trace were dropped or not written.
+  kLostRecords = 5,       ///< Records of --record / --trace were dropped or not written, or
+                          ///< the summary could not be written on stdout.
   kSamplesRejected = 6,   ///< Input samples were rejected during the run (encoder values out
                           ///< of range, jumps, non-finite), no sample was ever valid in a run
                           ///< that was not stopped by a signal, or a replayed bus log gave no frame.
@@ -54,6 +55,10 @@ struct RunVerdict {
 /// (RunSummary::stopped) is judged on what it ran; its reasons name the signal, and its
 /// exit_status is 128 + the signal number when that verdict is clean.
 RunVerdict run_verdict(const RunSummary& summary);
+
+/// Sets `summary.exit_status` and `summary.exit_reasons` from run_verdict(summary) (run_scene()
+/// does; the command again once it knows whether the summary reached stdout).
+void judge_run(RunSummary& summary);
 
 /// Name of a process exit status: to_string() of an ExitStatus, "stopped by a signal" for
 /// 128 + a signal number (129..192), "?" for any other.

@@ -154,7 +154,8 @@ double fit_order(const std::vector<double>& dt, const std::vector<double>& error
                  int* used = nullptr, double* dt_min = nullptr, double* dt_max = nullptr);
 
 /// Writes accuracy.csv (rows), accuracy_orders.csv (fits) and accuracy_references.csv
-/// into `dir` (created if missing). Throws std::runtime_error if a file cannot be written.
+/// into `dir` (created if missing), as one set (write_files_atomically(): a file that cannot be
+/// written leaves all three as they were). Throws std::runtime_error naming it.
 void write_accuracy_csv(const AccuracyResult& result, const std::string& dir);
 
 /// The shard file of `result` (run with `options`; study_shard.hpp): the options and plan, per
@@ -162,11 +163,26 @@ void write_accuracy_csv(const AccuracyResult& result, const std::string& dir);
 /// (cpu_s_per_sim_s, cpu_at_1ms, ReferenceCheck::cpu_s) are those measured by this shard.
 std::string accuracy_shard_document(const AccuracyResult& result, const AccuracyOptions& options);
 
+/// The time steps (s) of AccuracyOptions::steps when it is empty: 10 ms / n for n = 1, 2, 5, 10,
+/// …, 1000 (1e-2 … 1e-5 s, 10 steps), or with `quick` up to n = 100 (1e-2 … 1e-4 s, 7 steps).
+std::vector<double> accuracy_default_steps(bool quick);
+
+/// The integrators of AccuracyOptions::integrators when it is empty: implicit Euler,
+/// symplectic Euler, trapezoidal, TR-BDF2.
+std::vector<core::Integrator> accuracy_default_integrators();
+
+/// True when accuracy case `name` ("free-body", "wall", …) is compared with a closed-form
+/// solution ("free-body"); the others with a reference run, checked once per case
+/// (ReferenceCheck, reported by its first integrator's study case).
+bool accuracy_case_has_closed_form(const std::string& name);
+
 /// Reads the N shard files of the accuracy study in `dir` and puts their cases back in the
 /// one-process order: write_accuracy_csv() of the result writes what the one-process run writes
 /// except the CPU-time columns, which are measurements (they differ between any two runs).
 /// Throws InputError for a missing shard, mismatched N or options, a file that is not a complete
-/// shard file.
+/// shard file, or a case without what its plan gives it: one fit, one row per time step, and
+/// for a case's first integrator one reference check unless the case has a closed form (key
+/// "case K.fits", "case K.rows" or "case K.references").
 AccuracyResult merge_accuracy_shards(const std::string& dir);
 
 /// The table of docs/accuracy.md: case, integrator, observed and theoretical order, error

@@ -172,6 +172,11 @@ struct PassivityResult {
   double wall_s = 0.0;
 };
 
+/// The stiffnesses K (N/m) of the grid every configuration is probed at before its bisection
+/// (rows of kind "grid"): 10^1 … 10^7 in steps of a decade (`quick`: 7 points) or of half a
+/// decade (13 points).
+std::vector<double> passivity_grid(bool quick);
+
 /// The boundary of one configuration (`point` without its stiffness): K_max by bisection on
 /// log K from a bracket around the smallest positive finite analytic bound (1000 N/m if none),
 /// widened ×4 up to 8 times each way, until K_hi/K_lo <= 1 + tolerance. Each probe's row is
@@ -188,7 +193,8 @@ std::vector<StudyCase> passivity_cases(const PassivityOptions& options);
 PassivityResult run_passivity_study(const PassivityOptions& options);
 
 /// Writes passivity.csv (rows) and passivity_boundary.csv (boundaries) into `dir` (created if
-/// missing). Throws std::runtime_error naming a file that cannot be written.
+/// missing), as one set (write_files_atomically(): a file that cannot be written leaves both as
+/// they were). Throws std::runtime_error naming it.
 void write_passivity_csv(const PassivityResult& result, const std::string& dir);
 
 /// The text summary: per configuration K_max against the bounds. Markdown.
@@ -204,7 +210,12 @@ std::vector<std::string> passivity_failures(const PassivityResult& result);
 std::string passivity_shard_document(const PassivityResult& result,
                                      const PassivityOptions& options);
 
-/// Reads the N shard files of the passivity study in `dir` (study_shard.hpp).
+/// Reads the N shard files of the passivity study in `dir` (study_shard.hpp). Each case must
+/// hold what its plan gives it: one boundary, and one row per point of passivity_grid() and per
+/// probe of its bisection (PassivityBoundary::evaluations); and no NaN where
+/// passivity_failures() would find one (a row's energy_min_j or contact_energy_min_j, the
+/// boundary's k_max): InputError naming the file and the member ("case 7.rows[3].energy_min_j"),
+/// so that nothing is written from such a set.
 PassivityResult merge_passivity_shards(const std::string& dir);
 
 }  // namespace numen::sim

@@ -15,6 +15,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 namespace numen::sim {
@@ -59,6 +60,16 @@ std::string shard_file_name(const std::string& study, const Shard& shard);
 /// flushed to disk (fsync), then renamed onto `path`; a reader sees the old file or the complete
 /// new one, never a part. Throws std::runtime_error naming the path and the system's reason.
 void write_file_atomically(const std::filesystem::path& path, std::string_view content);
+
+/// Files to write into one directory: (file name, content) in order.
+using OutputFiles = std::vector<std::pair<std::string, std::string>>;
+
+/// Writes every file of `files` into `dir` as a set: each into a temporary file beside it
+/// (write_file_atomically()), then, once all are written and flushed, each renamed onto its
+/// name. A failure to write any of them (disk full, no permission) leaves every file of `dir`
+/// as it was and no temporary file; only a failed rename (which needs no space) can leave the
+/// files before it replaced. Throws std::runtime_error naming the file and the system's reason.
+void write_files_atomically(const std::filesystem::path& dir, const OutputFiles& files);
 
 /// One line of `--list` (no newline): "<index>\t<family>\t<name>\t<parameters>".
 std::string format_case_line(const StudyCase& c);

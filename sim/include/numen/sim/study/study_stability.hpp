@@ -167,7 +167,8 @@ double input_work(const core::Model& model, const core::Data& data, double energ
                   double energy_after_inputs) noexcept;
 
 /// Writes stability_<family>.csv for every family present and stability_boundary.csv into `dir`
-/// (created if missing). Throws std::runtime_error if a file cannot be written.
+/// (created if missing), as one set (write_files_atomically(): a file that cannot be written
+/// leaves them all as they were). Throws std::runtime_error naming it.
 void write_stability_csv(const StabilityResult& result, const std::string& dir);
 
 /// The shard file of `result` (run with `options`; study_shard.hpp): the options and plan (the
@@ -179,7 +180,8 @@ std::string stability_shard_document(const StabilityResult& result,
 /// puts their cases back in the one-process order: write_stability_csv() of the result writes
 /// the same bytes as the one-process run, format_stability_tables() the same tables. Throws
 /// InputError for a missing shard (listing the indices), mismatched N or options, a file that is
-/// not a complete shard file.
+/// not a complete shard file, or a case without what its plan gives it (one run: one row, or
+/// for the boundary family one boundary; key "case K.rows" or "case K.boundaries").
 StabilityResult merge_stability_shards(const std::string& dir);
 
 /// The CSV header line of stability_<family>.csv (no newline); schema in docs/stability.md.

@@ -16,9 +16,10 @@
 /// accepts, "Replay" in docs/viewer.md); the page paces playback.
 ///
 /// Read-only: nothing a client sends reaches the run. Live, a text message of valid JSON up to
-/// max_client_message_bytes is ignored; a binary message, text that is not JSON, a message
-/// above the limit, and in replay any message that is not a valid request, close that
-/// connection and are counted (closed_bad_input).
+/// max_client_message_bytes, its arrays and objects nested at most 64 deep, is ignored; a
+/// binary message, text that is not JSON, JSON nested deeper, a message above the limit, and
+/// in replay any message that is not a valid request, close that connection and are counted
+/// (closed_bad_input).
 ///
 /// Bounded: at most max_http_connections HTTP connections (a new one past them closes the one
 /// that has waited longest for its request) and max_clients WebSocket clients; an accept that
@@ -149,7 +150,7 @@ ViewHttpAnswer answer_view_http_request(const ViewServerSettings& settings,
 /// What the server makes of one WebSocket message of a client.
 struct ViewClientRequest {
   enum class Kind : std::uint8_t {
-    kIgnored,  ///< Live: any text message that is JSON.
+    kIgnored,  ///< Live: any text message that is JSON nested at most 64 deep.
     kFrame,    ///< Replay: {"frame": I} with I < the frame count: send frame I.
     kBad,      ///< Anything else: the connection is closed and counted (closed_bad_input).
   };
