@@ -44,6 +44,8 @@ class Node {
         // Every SDO initiate request the node received, in order: {kind: 'download' |
         // 'upload', index, subIndex, value (expedited downloads; null otherwise)}.
         this.sdoLog = [];
+        // When each heartbeat was handed to the line, s of CLOCK_MONOTONIC (numen's clock).
+        this.heartbeatTimes = [];
     }
 
     get operational() {
@@ -191,8 +193,10 @@ class NodeSet {
         const id = m.id;
         if (id === 0x080 + node.id)
             ++node.counters.emcys;
-        else if (id === 0x700 + node.id && m.data[0] !== 0)
+        else if (id === 0x700 + node.id && m.data[0] !== 0) {
             ++node.counters.heartbeats;
+            node.heartbeatTimes.push(Number(process.hrtime.bigint()) * 1e-9);
+        }
         else if (node.device.pdo.transmitMap[id] !== undefined)
             ++node.counters.tpdos;
         if (this.link)
