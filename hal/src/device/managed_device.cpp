@@ -52,6 +52,10 @@ DeviceSupervision ManagedDevice::supervise(std::int64_t now_ns, bool overrun) no
   DeviceSupervision out;
   const LifecycleUpdate u = sup.update(now_ns, in);
   out.entered_safe_stop = u.entered_safe_stop;
+  if (fault_reset_after_startup_ && m.operational()) {
+    m.request_fault_reset();  // the re-arm's start-up is done: the drives now take it
+    fault_reset_after_startup_ = false;
+  }
   if (rearm_pending_ && sup.state() == LifecycleState::kFault && m.operational() &&
       sup.rearm() == LifecycleResult::kOk) {
     rearm_pending_ = false;
@@ -85,6 +89,7 @@ void ManagedDevice::on_non_finite_torque(int axis) noexcept {
 
 void ManagedDevice::on_shutdown() noexcept {
   rearm_pending_ = false;
+  fault_reset_after_startup_ = false;
   if (supervisor_->state() == LifecycleState::kActive) (void)supervisor_->deactivate();
 }
 
@@ -99,7 +104,10 @@ RearmResult ManagedDevice::rearm() noexcept {
   const bool latched = supervisor_->lifecycle().latched();
   if (!latched && !failed) return RearmResult::kNotLatched;
   master_->request_fault_reset();
-  if (failed || !master_->all_nodes_operational()) master_->restart_startup();
+  if (failed || !master_->all_nodes_operational()) {
+    master_->restart_startup();
+    fault_reset_after_startup_ = true;  // again once it is operational (supervise())
+  }
   rearm_pending_ = latched;
   return RearmResult::kAccepted;
 }

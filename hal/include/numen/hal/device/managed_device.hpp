@@ -66,6 +66,10 @@ class ManagedDevice final : public ImpedanceDevice {
   // Per axis: index of its drive in the master (-1: no drive).
   std::array<int, kMaxAxes> drive_of_axis_{};
   bool rearm_pending_ = false;
+  /// A re-arm reran the start-up: the drives' fault reset is requested once it is operational
+  /// (a reset sent while a node is pre-operational is ignored by its drive, and the master
+  /// gives it up after its transition timeout).
+  bool fault_reset_after_startup_ = false;
 };
 
 }  // namespace numen::hal
