@@ -13,7 +13,7 @@
 namespace {
 
 using numen::sim::StepTiming;
-using namespace numen::test::run_scenes;
+using numen::test::run_scenes::lattice_scene;
 
 TEST(StepTiming, TheLatticeScenesStepIsTimedAgainstItsPeriodAndFits) {
   NUMEN_REQUIRE_ARTICULATION();

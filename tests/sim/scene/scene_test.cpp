@@ -48,7 +48,7 @@ using numen::sim::load_scene;
 using numen::sim::Scene;
 using numen::sim::SceneOverrides;
 
-std::string construction_path() { return std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/construction.toml"; }
+std::string shipped_construction_path() { return std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/construction.toml"; }
 
 /// Angle (rad) between two rotations, q and -q being the same.
 using numen::test::angle_between;
@@ -150,7 +150,7 @@ TEST(Scene, LatticeSceneLoadsWhatItsFileDescribes) {
 }
 
 TEST(Scene, ConstructionSceneLoadsWhatItsFileDescribes) {
-  const Scene s = load_scene(construction_path());
+  const Scene s = load_scene(shipped_construction_path());
   EXPECT_EQ(s.name, "construction");
   ASSERT_EQ(s.model.num_bodies(), 12);
   for (const auto& b : s.model.bodies) {
@@ -200,7 +200,7 @@ TEST(Scene, AttachedBodyStartsAtTheDevicesFirstTarget) {
   EXPECT_LT((initial.orientation * Vec3::UnitZ() - shaft).norm(), 1e-9);
 
   // Construction scene: the pose tracker reports the hand pose itself.
-  const Scene c = load_scene(construction_path());
+  const Scene c = load_scene(shipped_construction_path());
   const numen::sim::SimulatedInstrument hand(c.device, c.trajectory);
   const auto& held = c.model.bodies[static_cast<std::size_t>(c.model.initial_attached_body)];
   EXPECT_LT((held.initial_pose.position - hand.controlled_pose_at(0).position).norm(), 1e-9);
@@ -209,9 +209,9 @@ TEST(Scene, AttachedBodyStartsAtTheDevicesFirstTarget) {
 
 TEST(Scene, CouplingOverrideChangesTheMode) {
   NUMEN_REQUIRE_ARTICULATION();
-  const Scene god = load_scene(construction_path());
+  const Scene god = load_scene(shipped_construction_path());
   EXPECT_EQ(god.model.coupling_mode, CouplingMode::kGodObject);
-  const Scene direct = load_scene(construction_path(), SceneOverrides{CouplingMode::kDirect});
+  const Scene direct = load_scene(shipped_construction_path(), SceneOverrides{CouplingMode::kDirect});
   EXPECT_EQ(direct.model.coupling_mode, CouplingMode::kDirect);
   const Scene first = load_scene(numen::test::lattice_scene_path(), SceneOverrides{CouplingMode::kFirstOrder});
   EXPECT_EQ(first.model.coupling_mode, CouplingMode::kFirstOrder);
