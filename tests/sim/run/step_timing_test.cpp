@@ -13,14 +13,16 @@
 namespace {
 
 using numen::sim::StepTiming;
-using numen::test::run_scenes::lattice_scene;
+
+/// The shipped lattice scene (qualified: a unity batch may hold another test's lattice_scene()).
+const numen::sim::Scene& step_timing_lattice() { return numen::test::run_scenes::lattice_scene(); }
 
 TEST(StepTiming, TheLatticeScenesStepIsTimedAgainstItsPeriodAndFits) {
   NUMEN_REQUIRE_ARTICULATION();
-  const StepTiming t = numen::sim::time_scene_step(lattice_scene(), 20, 10.0);
+  const StepTiming t = numen::sim::time_scene_step(step_timing_lattice(), 20, 10.0);
   EXPECT_EQ(t.steps, 20);
   EXPECT_FALSE(t.multirate);
-  EXPECT_EQ(t.period_s, lattice_scene().model.dt);
+  EXPECT_EQ(t.period_s, step_timing_lattice().model.dt);
   EXPECT_GT(t.median_us, 0.0);
   EXPECT_GE(t.max_us, t.median_us);
   std::printf("[   info   ] %s\n", numen::sim::describe_step_timing(t).c_str());
@@ -31,7 +33,7 @@ TEST(StepTiming, TheLatticeScenesStepIsTimedAgainstItsPeriodAndFits) {
 
 TEST(StepTiming, ABudgetStopsTheTimingAfterThreeSteps) {
   NUMEN_REQUIRE_ARTICULATION();
-  const StepTiming t = numen::sim::time_scene_step(lattice_scene(), 1000, 0.0);
+  const StepTiming t = numen::sim::time_scene_step(step_timing_lattice(), 1000, 0.0);
   EXPECT_EQ(t.steps, 3);
 }
 
