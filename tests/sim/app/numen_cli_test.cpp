@@ -889,7 +889,8 @@ TEST(NumenCli, LoadWarningsArePrintedWhenTheSceneLoadsAndKeptInTheSummary) {
 // "Before a paced run").
 TEST(NumenCli, InfoPrintsTheStepTimedAtLoad) {
   NUMEN_REQUIRE_ARTICULATION();
-  const ChildResult r = run_child({kNumen, "info", kLattice}, ".", 60);
+  TempDir dir;
+  const ChildResult r = run_child({kNumen, "info", kLattice}, dir.path(), 60);
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_NE(r.out.find("step at load: median "), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("steps, against the 1000 us period ("), std::string::npos) << r.out;
