@@ -11,6 +11,7 @@
 #include "numen/sim/input/cli_values.hpp"
 #include "numen/sim/input/input_error.hpp"
 #include "numen/sim/run/run_verdict.hpp"
+#include "numen/sim/run/step_timing.hpp"
 #include "numen/sim/scene/scene.hpp"
 #include "standard_streams.hpp"
 
@@ -72,9 +73,12 @@ std::string check_bus(const std::string& v, bool real_only) {
   }
 }
 
-void print_load_warnings(const sim::Scene& scene, std::ostream& err) {
+sim::StepTiming check_loaded_scene(sim::Scene& scene, std::ostream& err) {
+  const sim::StepTiming timing = sim::time_scene_step(scene);
+  if (const auto slow = sim::step_timing_warning(timing)) scene.warnings.push_back(*slow);
   for (const std::string& w : scene.warnings) err << "numen: warning: " << w << "\n";
   err.flush();
+  return timing;
 }
 
 }  // namespace numen::app

@@ -22,6 +22,7 @@
 
 namespace numen::sim {
 struct Scene;
+struct StepTiming;
 }  // namespace numen::sim
 
 namespace numen::app {
@@ -69,9 +70,11 @@ class RunCommand {
 /// The viewer page's folder: share/numen/viewer of the installed prefix, else the build
 /// tree's (build/viewer, sim/CMakeLists.txt); sim::shipped_viewer_dir().
 std::string viewer_page_dir();
-/// Prints each of the scene loader's warnings on `err` as "numen: warning: …", when the scene
-/// has loaded (a run keeps them in its summary too).
-void print_load_warnings(const sim::Scene& scene, std::ostream& err);
+/// When a scene has loaded (`numen run`, `numen info`): times its step (sim::time_scene_step()),
+/// adds step_timing_warning() to its warnings when the step does not fit the period, and prints
+/// each of its warnings on `err` as "numen: warning: …" (a run keeps them in its summary too).
+/// Returns the timing.
+sim::StepTiming check_loaded_scene(sim::Scene& scene, std::ostream& err);
 /// Prints a warning on `err` when the viewer's `host` is not a loopback address.
 void warn_if_exposed(const std::string& host, std::ostream& err);
 /// What the viewer's server turned away, for its closing line: ", N HTTP connections shed (more

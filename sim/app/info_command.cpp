@@ -23,9 +23,7 @@ int InfoCommand::execute() const {
   sim::SceneOverrides overrides;
   overrides.strict = strict_;
   sim::Scene scene = sim::load_scene(path, overrides);
-  const sim::StepTiming timing = sim::time_scene_step(scene);
-  if (const auto slow = sim::step_timing_warning(timing)) scene.warnings.push_back(*slow);
-  print_load_warnings(scene, std::cerr);
+  const sim::StepTiming timing = check_loaded_scene(scene, std::cerr);
   const sim::SceneInfo si = sim::describe_scene(scene);
   if (json_) {
     std::cout << sim::format_scene_info_json(si) << std::endl;

@@ -145,9 +145,7 @@ int RunCommand::execute() const {
   const std::string path = scene_path_.empty() ? sim::default_scene_path() : scene_path_;
   sim::Scene scene = sim::load_scene(path, overrides);
   // The load's warnings on stderr now (a paced run may last half an hour), and in the summary.
-  if (const auto slow = sim::step_timing_warning(sim::time_scene_step(scene)))
-    scene.warnings.push_back(*slow);
-  print_load_warnings(scene, std::cerr);
+  check_loaded_scene(scene, std::cerr);
   if (cli_->count("--view-rate") > 0 && view_rate_ * scene.model.dt > 1.0)
     std::cerr << "numen: --view-rate " << view_rate_ << " is above the device rate ("
               << 1.0 / scene.model.dt << " Hz): the stream sends every period" << std::endl;
@@ -171,8 +169,8 @@ int RunCommand::execute() const {
   options.view_rate_hz = view_rate_;
   options.view_speed = speed_;
   std::unique_ptr<sim::ViewServer> viewer;
+  sim::ViewServerSettings vs;
   if (!view_.empty()) {
-    sim::ViewServerSettings vs;
     const sim::ViewAddress address = sim::parse_view_address(view_);  // checked by the option
     vs.host = address.host;
     vs.port = address.port;
@@ -225,7 +223,7 @@ int RunCommand::execute() const {
     std::cerr << "  viewer: " << c.clients_total << " clients, " << c.frames_sent
               << " frames sent, " << c.frames_dropped << " dropped (slow clients), "
               << c.closed_bad_input << " connections closed for bad input"
-              << viewer_overload(c, sim::ViewServerSettings{}.max_http_connections) << "\n";
+              << viewer_overload(c, vs.max_http_connections) << "\n";
   }
   // A run stopped by a signal and otherwise clean exits 128 + the signal (shell convention):
   // run_verdict() put that status, and the signal's name, in the summary.

@@ -14,6 +14,21 @@ namespace numen::sim {
 
 using core::Vec3;
 
+namespace {
+
+/// The speed bound's measure of a motion: |v| + |ω| r (m/s), r a body's bounding radius.
+double reach_speed(const Vec3& linear, const Vec3& angular, double r) noexcept {
+  return linear.norm() + angular.norm() * r;
+}
+
+/// reach_speed() of body k's state.
+double body_speed(const core::Model& model, const core::Data& data, std::size_t k) noexcept {
+  const core::BodyState& s = data.bodies[k];
+  return reach_speed(s.linear_velocity, s.angular_velocity, model.bodies[k].bounding_radius);
+}
+
+}  // namespace
+
 DivergenceMonitor::DivergenceMonitor(const core::Model& model, const core::Data& data,
                                      const DivergenceLimits& limits)
     : limits_(limits),
@@ -137,10 +152,8 @@ void DivergenceMonitor::end_startup(const core::Model& model, const core::Data& 
   // What the push-out left moving keeps its room (10 x its speed); the start's contact energy
   // no longer counts.
   double fastest = 0.0;
-  for (int b = 0; b < model.num_bodies(); ++b) {
-    const auto k = static_cast<std::size_t>(b);
-    const core::BodyState& s = data.bodies[k];
-    const double v = s.linear_velocity.norm() + s.angular_velocity.norm() * model.bodies[k].bounding_radius;
+  for (std::size_t k = 0; k < data.bodies.size(); ++k) {
+    const double v = body_speed(model, data, k);
     if (std::isfinite(v)) fastest = std::max(fastest, v);
   }
   push_speed_mps_ = fastest;
@@ -163,13 +176,13 @@ bool DivergenceMonitor::observe(const core::Model& model, const core::Data& data
   if (held >= 0) {
     const auto h = static_cast<std::size_t>(held);
     const double r = model.bodies[h].bounding_radius;
-    const double v = data.target_twist.linear.norm() + data.target_twist.angular.norm() * r;
+    const double v = reach_speed(data.target_twist.linear, data.target_twist.angular, r);
     if (std::isfinite(v)) hand_speed_max_mps_ = std::max(hand_speed_max_mps_, v);
   }
   for (std::size_t k = 0; k < data.body_targets.size(); ++k) {
     const core::BodyTarget& t = data.body_targets[k];
     if (!t.enabled) continue;
-    const double v = t.twist.linear.norm() + t.twist.angular.norm() * model.bodies[k].bounding_radius;
+    const double v = reach_speed(t.twist.linear, t.twist.angular, model.bodies[k].bounding_radius);
     if (std::isfinite(v)) hand_speed_max_mps_ = std::max(hand_speed_max_mps_, v);
   }
   // A target that steps (samples held through a link outage, then the hand where it is now)
@@ -187,9 +200,7 @@ bool DivergenceMonitor::observe(const core::Model& model, const core::Data& data
   const double speed_limit = speed_limit_mps();
   bool breach = false;
   for (int b = 0; b < model.num_bodies() && !breach; ++b) {
-    const auto k = static_cast<std::size_t>(b);
-    const core::BodyState& s = data.bodies[k];
-    const double v = s.linear_velocity.norm() + s.angular_velocity.norm() * model.bodies[k].bounding_radius;
+    const double v = body_speed(model, data, static_cast<std::size_t>(b));
     speed_ratio_max_ = std::max(speed_ratio_max_, v / speed_limit);
     if (v > speed_limit) {
       latch("body speed", b, -1, v, speed_limit, period, time_s);
