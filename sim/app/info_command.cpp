@@ -26,7 +26,7 @@ int InfoCommand::execute() const {
   const sim::StepTiming timing = check_loaded_scene(scene, std::cerr);
   const sim::SceneInfo si = sim::describe_scene(scene);
   if (json_) {
-    std::cout << sim::format_scene_info_json(si) << std::endl;
+    std::cout << sim::with_step_timing_json(sim::format_scene_info_json(si), timing) << std::endl;
   } else {
     std::cout << sim::format_scene_info(si);
     std::cout << sim::describe_step_timing(timing) << "\n";

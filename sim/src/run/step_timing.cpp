@@ -5,7 +5,10 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <stdexcept>
 #include <vector>
+
+#include <nlohmann/json.hpp>
 
 #include "numen/core/data.hpp"
 #include "numen/core/step.hpp"
@@ -65,6 +68,17 @@ std::string describe_step_timing(const StepTiming& t) {
   return "step at load: median " + fixed(t.median_us, 1) + " us, max " + fixed(t.max_us, 1) +
          " us over " + std::to_string(t.steps) + " steps, against the " + period_text(t) + " (" +
          fixed(100.0 * t.median_us / (t.period_s * 1e6), 1) + "% of it)";
+}
+
+std::string with_step_timing_json(const std::string& json_object, const StepTiming& t) {
+  nlohmann::ordered_json j = nlohmann::ordered_json::parse(json_object, nullptr, false);
+  if (!j.is_object()) throw std::invalid_argument("with_step_timing_json: not a JSON object");
+  j["step_at_load"] = {{"median_us", t.median_us},
+                       {"max_us", t.max_us},
+                       {"steps", t.steps},
+                       {"period_s", t.period_s},
+                       {"multirate", t.multirate}};
+  return j.dump(-1, ' ', false, nlohmann::ordered_json::error_handler_t::replace);
 }
 
 }  // namespace numen::sim

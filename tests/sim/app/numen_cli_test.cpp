@@ -894,6 +894,17 @@ TEST(NumenCli, InfoPrintsTheStepTimedAtLoad) {
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_NE(r.out.find("step at load: median "), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("steps, against the 1000 us period ("), std::string::npos) << r.out;
+  // --json carries the same figures.
+  const ChildResult j = run_child({kNumen, "info", kLattice, "--json"}, dir.path(), 60);
+  ASSERT_EQ(j.status, 0) << j.err;
+  const nlohmann::json info = nlohmann::json::parse(j.out);
+  const nlohmann::json& step = info.at("step_at_load");
+  EXPECT_EQ(step.at("steps").get<int>(), 20);
+  EXPECT_GT(step.at("median_us").get<double>(), 0.0);
+  EXPECT_GE(step.at("max_us").get<double>(), step.at("median_us").get<double>());
+  EXPECT_EQ(step.at("period_s").get<double>(), 0.001);
+  EXPECT_FALSE(step.at("multirate").get<bool>());
+  EXPECT_TRUE(info.contains("stages")) << "the rest of the info is kept";
 }
 
 // Defect 1: --trace of a simulated run keeps one record per period; a run whose trace would

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <stdexcept>
 #include <string>
 
 #include "build_features.hpp"
@@ -59,6 +60,10 @@ TEST(StepTiming, AStepLongerThanItsPeriodIsAWarningWithTheFigures) {
   EXPECT_EQ(numen::sim::describe_step_timing(t),
             "step at load: median 5001.0 us, max 4100.0 us over 20 steps, against the 5000 us "
             "scene period (100.0% of it)");
+  EXPECT_EQ(numen::sim::with_step_timing_json(R"({"name":"x"})", t),
+            R"({"name":"x","step_at_load":{"median_us":5001.0,"max_us":4100.0,"steps":20,)"
+            R"("period_s":0.005,"multirate":true}})");
+  EXPECT_THROW(numen::sim::with_step_timing_json("[1]", t), std::invalid_argument);
 }
 
 }  // namespace

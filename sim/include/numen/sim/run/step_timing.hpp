@@ -39,4 +39,10 @@ std::optional<std::string> step_timing_warning(const StepTiming& timing);
 /// Z us period (A% of it)".
 std::string describe_step_timing(const StepTiming& timing);
 
+/// `numen info --json`: the JSON object `json_object` (one line, as format_scene_info_json()
+/// writes it) with the member "step_at_load": {"median_us", "max_us", "steps", "period_s",
+/// "multirate"} added last, the figures describe_step_timing() prints. Throws
+/// std::invalid_argument when `json_object` is not a JSON object.
+std::string with_step_timing_json(const std::string& json_object, const StepTiming& timing);
+
 }  // namespace numen::sim
