@@ -406,6 +406,7 @@ TEST(ControlLoopManaged, RearmThatRerunsTheStartUpDoesNotLatchOnTheEncodersItSil
   ASSERT_FALSE(m.all_nodes_operational());  // node 3 reports stopped in its heartbeats
   ASSERT_EQ(rig.sup().counters().latches, 1u);
 
+  numen::test::AllocationGuard guard;  // the re-arm and the start-up it reruns: no allocation
   EXPECT_EQ(rig.loop.rearm(), numen::platform::RearmResult::kAccepted);
   EXPECT_TRUE(rig.loop.rearm_pending());
   std::uint32_t silent = 0;       // periods in a row with the depth encoder timed out
@@ -420,6 +421,7 @@ TEST(ControlLoopManaged, RearmThatRerunsTheStartUpDoesNotLatchOnTheEncodersItSil
     ASSERT_EQ(rig.sup().counters().latches, 1u) << "latched again " << periods << " periods after the re-arm";
     ASSERT_NE(rig.sup().state(), LifecycleState::kSafeStop);
   }
+  EXPECT_EQ(guard.count(), 0);
   std::printf("[   info   ] re-arm with a start-up to torque: %d periods, encoders timed out in %u in a row\n",
               periods, most_silent);
   EXPECT_EQ(m.startup().attempts, 2u) << "the re-arm reran the start-up";
