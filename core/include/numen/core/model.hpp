@@ -15,6 +15,7 @@
 #include "numen/core/joint.hpp"
 #include "numen/core/mesh_shape.hpp"
 #include "numen/core/net_model.hpp"
+#include "numen/core/net_surface_map.hpp"
 #include "numen/core/types.hpp"
 
 namespace numen::core {
@@ -227,6 +228,17 @@ struct Model {
   /// normal (x1 − x0) × (x2 − x0); add_net() turns a mesh that encloses a negative volume).
   /// An organ's contacts with the tool are against them (net_surface.hpp).
   std::vector<std::array<int, 3>> net_faces;
+  /// Fine surfaces mapped onto nets (net_surface_map.hpp, add_net_surface()): every fine
+  /// vertex's embedding on a net triangle, per net NetModel::surface_point_begin/count.
+  std::vector<NetSurfacePoint> net_surface_points;
+  /// The fine surfaces' triangles as global indices into net_surface_points, wound outward (per
+  /// net NetModel::surface_face_begin/count). An organ with one meets the tool with these.
+  std::vector<std::array<int, 3>> net_surface_faces;
+  /// Which fine triangles ride on each net triangle (those with a vertex embedded on it):
+  /// net_face_surface_faces[net_face_surface_begin[f] .. net_face_surface_begin[f + 1]) for the
+  /// global net triangle f; size net_faces.size() + 1 once a fine surface is added, else empty.
+  std::vector<std::int32_t> net_face_surface_begin;
+  std::vector<std::int32_t> net_face_surface_faces;
   /// Order in which the solver's SSOR sweeps visit the nodes (net_solve.hpp):
   /// node_sweep_order[p] is the global node at sweep position p, a reverse
   /// Cuthill–McKee order of each net's spring graph within the net's own index

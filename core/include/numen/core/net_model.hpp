@@ -45,6 +45,14 @@ struct NetModel {
   int bending_count = 0;
   int face_begin = 0;  ///< First of the net's triangles in Model::net_faces.
   int face_count = 0;  ///< The mesh's triangles (0 for a net built by hand without faces).
+  /// The fine surface mapped on the net (add_net_surface(), net_surface_map.hpp): its vertices
+  /// [surface_point_begin, + surface_point_count) of Model::net_surface_points, its triangles
+  /// [surface_face_begin, + surface_face_count) of Model::net_surface_faces. Counts 0 without
+  /// one (the tool then touches the net's own triangles).
+  int surface_point_begin = 0;
+  int surface_point_count = 0;
+  int surface_face_begin = 0;
+  int surface_face_count = 0;
   /// Zero-length spring of every node to its rest position on the rigid
   /// component (paper §4.2): f = −k_tie (x − a) − γ_tie (v − v_a), a = x_b + R_b r.
   double tie_stiffness = 0.0;  ///< k_tie (N/m) per node, > 0.

@@ -1,0 +1,149 @@
+/// @file net_surface_map.cpp
+/// A fine surface mapped onto a net (net_surface_map.hpp; docs/organs.md, "A fine surface on a
+/// coarser net").
+
+#include "numen/core/net_surface_map.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+
+#include "detail/mesh_shape_query.hpp"
+#include "detail/net_surface_frame.hpp"
+#include "numen/core/data.hpp"
+#include "numen/core/model.hpp"
+
+namespace numen::core {
+
+std::string add_net_surface(Model& model, int net_index, std::span<const Vec3> vertices,
+                            std::span<const std::array<int, 3>> triangles,
+                            std::span<const int> nearest_face) {
+  if (net_index < 0 || net_index >= model.num_nets())
+    return "fine surface: net index " + std::to_string(net_index) + " is not a net of the model";
+  NetModel& net = model.nets[static_cast<std::size_t>(net_index)];
+  const std::string where = "net '" + net.name + "': fine surface: ";
+  if (net.surface_point_count > 0) return where + "the net has one already";
+  if (net.face_count == 0) return where + "the net has no triangles to carry it";
+  const auto nv = static_cast<int>(vertices.size());
+  if (nv < 3 || triangles.empty()) return where + "needs at least 3 vertices and one triangle";
+  if (nearest_face.size() != vertices.size())
+    return where + std::to_string(nearest_face.size()) + " nearest triangles for " +
+           std::to_string(nv) + " vertices";
+
+  // Embeddings: the foot point on the given net triangle at the rest shape.
+  std::vector<NetSurfacePoint> points(vertices.size());
+  for (int i = 0; i < nv; ++i) {
+    const Vec3& p = vertices[static_cast<std::size_t>(i)];
+    if (!p.allFinite()) return where + "vertex " + std::to_string(i) + " is not finite";
+    const int f = nearest_face[static_cast<std::size_t>(i)];
+    if (f < 0 || f >= net.face_count)
+      return where + "vertex " + std::to_string(i) + ": net triangle " + std::to_string(f) +
+             " out of range [0, " + std::to_string(net.face_count) + ")";
+    const int g = net.face_begin + f;
+    const std::array<int, 3>& t = model.net_faces[static_cast<std::size_t>(g)];
+    const Vec3& a = model.node_rest[static_cast<std::size_t>(t[0])];
+    const Vec3& b = model.node_rest[static_cast<std::size_t>(t[1])];
+    const Vec3& c = model.node_rest[static_cast<std::size_t>(t[2])];
+    Mat3 frame;
+    if (!detail::net_surface_frame(a, b, c, frame))
+      return where + "vertex " + std::to_string(i) + ": net triangle " + std::to_string(f) +
+             " is degenerate";
+    int feature = 0;
+    Vec3 w;
+    detail::closest_on_triangle(p, a, b, c, feature, w);
+    NetSurfacePoint& e = points[static_cast<std::size_t>(i)];
+    e.face = g;
+    e.weights = w.cwiseMax(0.0) / w.cwiseMax(0.0).sum();
+    e.offset = frame.transpose() * (p - (e.weights.x() * a + e.weights.y() * b + e.weights.z() * c));
+  }
+  // Triangles: indices checked, wound outward (signed volume about the vertices' centre).
+  Vec3 centre = Vec3::Zero();
+  for (const Vec3& v : vertices) centre += v;
+  centre /= nv;
+  double volume = 0.0;
+  for (std::size_t k = 0; k < triangles.size(); ++k) {
+    const std::array<int, 3>& t = triangles[k];
+    for (int m = 0; m < 3; ++m)
+      if (t[static_cast<std::size_t>(m)] < 0 || t[static_cast<std::size_t>(m)] >= nv)
+        return where + "triangle " + std::to_string(k) + ": vertex index " +
+               std::to_string(t[static_cast<std::size_t>(m)]) + " out of range [0, " +
+               std::to_string(nv) + ")";
+    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2])
+      return where + "triangle " + std::to_string(k) + " repeats a vertex";
+    const Vec3 a = vertices[static_cast<std::size_t>(t[0])] - centre;
+    const Vec3 b = vertices[static_cast<std::size_t>(t[1])] - centre;
+    const Vec3 c = vertices[static_cast<std::size_t>(t[2])] - centre;
+    volume += a.dot(b.cross(c));
+  }
+
+  const int point_begin = static_cast<int>(model.net_surface_points.size());
+  const int face_begin = static_cast<int>(model.net_surface_faces.size());
+  net.surface_point_begin = point_begin;
+  net.surface_point_count = nv;
+  net.surface_face_begin = face_begin;
+  net.surface_face_count = static_cast<int>(triangles.size());
+  model.net_surface_points.insert(model.net_surface_points.end(), points.begin(), points.end());
+  for (const std::array<int, 3>& t : triangles)
+    model.net_surface_faces.push_back(
+        volume < 0.0 ? std::array<int, 3>{point_begin + t[0], point_begin + t[2], point_begin + t[1]}
+                     : std::array<int, 3>{point_begin + t[0], point_begin + t[1], point_begin + t[2]});
+
+  // Net triangle → the fine triangles with a vertex on it (counting sort over every net).
+  const std::size_t num_faces = model.net_faces.size();
+  std::vector<std::int32_t> begin(num_faces + 1, 0);
+  const auto faces_of = [&](const std::array<int, 3>& t, std::array<int, 3>& out) {
+    int n = 0;
+    for (int m = 0; m < 3; ++m) {
+      const int f = model.net_surface_points[static_cast<std::size_t>(t[static_cast<std::size_t>(m)])].face;
+      if (std::find(out.begin(), out.begin() + n, f) == out.begin() + n) out[static_cast<std::size_t>(n++)] = f;
+    }
+    return n;
+  };
+  std::array<int, 3> fs{};
+  for (const std::array<int, 3>& t : model.net_surface_faces) {
+    const int n = faces_of(t, fs);
+    for (int m = 0; m < n; ++m) ++begin[static_cast<std::size_t>(fs[static_cast<std::size_t>(m)]) + 1];
+  }
+  for (std::size_t f = 0; f < num_faces; ++f) begin[f + 1] += begin[f];
+  std::vector<std::int32_t> list(static_cast<std::size_t>(begin[num_faces]));
+  std::vector<std::int32_t> next(begin.begin(), begin.end() - 1);
+  for (std::size_t k = 0; k < model.net_surface_faces.size(); ++k) {
+    const int n = faces_of(model.net_surface_faces[k], fs);
+    for (int m = 0; m < n; ++m)
+      list[static_cast<std::size_t>(next[static_cast<std::size_t>(fs[static_cast<std::size_t>(m)])]++)] =
+          static_cast<std::int32_t>(k);
+  }
+  model.net_face_surface_begin = std::move(begin);
+  model.net_face_surface_faces = std::move(list);
+  return "";
+}
+
+Vec3 net_surface_position(const Model& model, std::span<const NodeState> nodes, int point) noexcept {
+  const NetSurfacePoint& e = model.net_surface_points[static_cast<std::size_t>(point)];
+  const std::array<int, 3>& t = model.net_faces[static_cast<std::size_t>(e.face)];
+  const Vec3& a = nodes[static_cast<std::size_t>(t[0])].position;
+  const Vec3& b = nodes[static_cast<std::size_t>(t[1])].position;
+  const Vec3& c = nodes[static_cast<std::size_t>(t[2])].position;
+  return detail::net_surface_point(e, a, b, c);
+}
+
+int net_surface_positions(const Model& model, const Data& data, int net, std::span<Vec3> out) noexcept {
+  if (net < 0 || net >= model.num_nets()) return 0;
+  const NetModel& nm = model.nets[static_cast<std::size_t>(net)];
+  const int n = std::min(nm.surface_point_count, static_cast<int>(out.size()));
+  const std::span<const NodeState> nodes(data.nodes.data(), data.nodes.size());
+  for (int i = 0; i < n; ++i)
+    out[static_cast<std::size_t>(i)] = net_surface_position(model, nodes, nm.surface_point_begin + i);
+  return n;
+}
+
+double net_surface_max_offset(const Model& model, int net) noexcept {
+  if (net < 0 || net >= model.num_nets()) return 0.0;
+  const NetModel& nm = model.nets[static_cast<std::size_t>(net)];
+  double d = 0.0;
+  for (int i = nm.surface_point_begin; i < nm.surface_point_begin + nm.surface_point_count; ++i)
+    d = std::max(d, model.net_surface_points[static_cast<std::size_t>(i)].offset.norm());
+  return d;
+}
+
+}  // namespace numen::core
