@@ -70,7 +70,8 @@ DataFootprint data_footprint(const Data& d) noexcept {
            n.spring_constants.stiffness, n.spring_constants.damping, n.spring_length,
            n.spring_low_begin, n.spring_slot, n.near_obstacles, n.obstacle_axis,
            n.obstacle_rotation, n.near_bodies, n.near_sphere_end, n.near_spheres,
-           n.face_candidates, n.face_lo, n.face_hi)};
+           n.face_candidates, n.face_lo, n.face_hi, n.surface_candidates, n.surface_lo,
+           n.surface_hi, n.surface_face_stamp, n.surface_point_stamp, n.surface_position)};
   f.groups[6] = {"scratch block", sizeof(DataScratch)};
   return f;
 }
@@ -86,7 +87,9 @@ ModelFootprint model_footprint(const Model& m) noexcept {
                                    g.entries)};
   f.groups[2] = {"joints", heap(m.joints, t.nodes, t.body_node, t.joint_node, t.body_tree)};
   f.groups[3] = {"nets", heap(m.nets, m.net_springs, m.node_rest, m.node_mass, m.node_radius,
-                              m.node_net, m.node_sweep_order, m.net_faces)};
+                              m.node_net, m.node_sweep_order, m.net_faces, m.net_surface_points,
+                              m.net_surface_faces, m.net_face_surface_begin,
+                              m.net_face_surface_faces)};
   std::size_t meshes = heap(m.meshes);
   for (const MeshShape& s : m.meshes) meshes += s.memory_bytes();
   f.groups[4] = {"meshes", meshes};

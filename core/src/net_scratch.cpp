@@ -93,6 +93,16 @@ void NetScratch::resize(const Model& model) {
   face_candidates.assign(faces, 0);
   face_lo.assign(faces, Vec3::Zero());
   face_hi.assign(faces, Vec3::Zero());
+  std::size_t fine = 0;
+  for (const NetModel& net : model.nets) fine = std::max(fine, static_cast<std::size_t>(net.surface_face_count));
+  if (n == 0) fine = 0;
+  surface_candidates.assign(fine, 0);
+  surface_lo.assign(fine, Vec3::Zero());
+  surface_hi.assign(fine, Vec3::Zero());
+  surface_face_stamp.assign(n > 0 ? model.net_surface_faces.size() : 0, 0);
+  surface_point_stamp.assign(n > 0 ? model.net_surface_points.size() : 0, 0);
+  surface_position.assign(n > 0 ? model.net_surface_points.size() : 0, Vec3::Zero());
+  surface_stamp = 0;
 }
 
 }  // namespace numen::core

@@ -6,6 +6,7 @@
 
 #include "detail/net_surface.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <numbers>
@@ -13,6 +14,8 @@
 #include "collision_query.hpp"
 #include "detail/data_scratch.hpp"
 #include "detail/mesh_shape_query.hpp"
+#include "detail/net_scratch.hpp"
+#include "detail/net_surface_frame.hpp"
 #include "numen/core/data.hpp"
 
 namespace numen::core::detail {
@@ -50,57 +53,18 @@ double angle_at(int f, const Vec3& a, const Vec3& b, const Vec3& c) noexcept {
   }
 }
 
-}  // namespace
-
-void collide_net_faces(const Model& model, const Data& data, NetScratch& ns, const NetModel& net,
-                       int num_near, int mat_net, NodeContactSink& sink) noexcept {
+/// The near spheres (NetScratch::near_*) against the `nc` candidate triangles of bounds
+/// [flo, fhi]: `corner(m, k)` is corner k of candidate m at the current positions,
+/// `emit(m, w, body, sphere, material_pair, geometry, com)` writes a contact at the point of
+/// barycentric weights w of candidate m (net_surface.hpp, collide_net_faces()).
+template <typename Corner, typename Emit>
+void collide_candidates(const Model& model, const Data& data, const NetScratch& ns, int num_near,
+                        int mat_net, int nc, const Vec3* flo, const Vec3* fhi, Corner corner,
+                        Emit emit) noexcept {
   const CollisionScratch& cs = data.scratch->collision;
   const double* R = cs.sphere_r.data();
   const Vec3* sw = cs.sphere_world.data();
   const std::int32_t* near = ns.near_spheres.data();
-  const NodeState* nodes = data.nodes.data();
-  const int room = static_cast<int>(ns.face_candidates.size());
-
-  // The near spheres' bounds.
-  Vec3 qlo = Vec3::Constant(collision_detail::kInf), qhi = Vec3::Constant(-collision_detail::kInf);
-  const int num_spheres = ns.near_sphere_end[static_cast<std::size_t>(num_near - 1)];
-  for (int i = 0; i < num_spheres; ++i) {
-    const int s = near[i];
-    const Vec3 e = Vec3::Constant(R[s] + kMargin);
-    qlo = qlo.cwiseMin(sw[s] - e);
-    qhi = qhi.cwiseMax(sw[s] + e);
-  }
-  // Candidates: the triangles whose bounds meet them (non-finite nodes never do).
-  int nc = 0;
-  for (int f = net.face_begin; f < net.face_begin + net.face_count && nc < room; ++f) {
-    const std::array<int, 3>& t = model.net_faces[static_cast<std::size_t>(f)];
-    const Vec3& a = nodes[t[0]].position;
-    const Vec3& b = nodes[t[1]].position;
-    const Vec3& c = nodes[t[2]].position;
-    const Vec3 lo = a.cwiseMin(b).cwiseMin(c), hi = a.cwiseMax(b).cwiseMax(c);
-    if (!boxes_overlap(lo, hi, qlo, qhi) || !(lo.allFinite() && hi.allFinite())) continue;
-    const Vec3& ra = model.node_rest[static_cast<std::size_t>(t[0])];
-    const Vec3& rb = model.node_rest[static_cast<std::size_t>(t[1])];
-    const Vec3& rc = model.node_rest[static_cast<std::size_t>(t[2])];
-    constexpr double kTear2 = kTearStretch * kTearStretch;
-    if ((b - a).squaredNorm() > kTear2 * (rb - ra).squaredNorm() ||
-        (c - b).squaredNorm() > kTear2 * (rc - rb).squaredNorm() ||
-        (a - c).squaredNorm() > kTear2 * (ra - rc).squaredNorm())
-      continue;  // torn
-    ns.face_candidates[static_cast<std::size_t>(nc)] = f;
-    ns.face_lo[static_cast<std::size_t>(nc)] = lo;
-    ns.face_hi[static_cast<std::size_t>(nc)] = hi;
-    ++nc;
-  }
-  if (nc == 0) return;
-  const std::int32_t* cand = ns.face_candidates.data();
-  const Vec3* flo = ns.face_lo.data();
-  const Vec3* fhi = ns.face_hi.data();
-  // Corner k of candidate m at the nodes' current positions.
-  const auto corner = [&](int m, int k) -> const Vec3& {
-    return nodes[model.net_faces[static_cast<std::size_t>(cand[m])][static_cast<std::size_t>(k)]].position;
-  };
-
   int j = 0;
   for (int k = 0; k < num_near; ++k) {
     const int body = ns.near_bodies[static_cast<std::size_t>(k)];
@@ -123,7 +87,6 @@ void collide_net_faces(const Model& model, const Data& data, NetScratch& ns, con
       Vec3 q = Vec3::Zero(), w = Vec3::Zero();
       for (int m = 0; m < nc; ++m) {
         if (detail::box_distance2(centre, flo[m], fhi[m]) >= r * r) continue;
-        const std::array<int, 3>& t = model.net_faces[static_cast<std::size_t>(cand[m])];
         const Vec3 &a = corner(m, 0), &b = corner(m, 1), &c = corner(m, 2);
         int fm = kFace;
         Vec3 wm;
@@ -139,7 +102,7 @@ void collide_net_faces(const Model& model, const Data& data, NetScratch& ns, con
           g.depth = r - o.dot(centre - qm);
           g.normal = -o;
           g.position = 0.5 * (qm + centre - r * o);
-          sink.add_face(cand[m], t, wm, body, s, mat_net + bm.material, g, com);
+          emit(m, wm, body, s, mat_net + bm.material, g, com);
           face2 = std::min(face2, d2);
         } else if (d2 < best2) {
           best2 = d2;
@@ -179,10 +142,160 @@ void collide_net_faces(const Model& model, const Data& data, NetScratch& ns, con
       g.depth = r - (outside ? d : -d);
       g.normal = -o;
       g.position = 0.5 * (q + centre - r * o);
-      sink.add_face(cand[best], model.net_faces[static_cast<std::size_t>(cand[best])], w, body, s,
-                    mat_net + bm.material, g, com);
+      emit(best, w, body, s, mat_net + bm.material, g, com);
     }
   }
+}
+
+/// True when the net triangle `f` (global) has an edge stretched beyond kTearStretch times its
+/// rest length (torn: it meets no sphere, nor does the fine surface riding on it).
+bool torn(const Model& model, const NodeState* nodes, int f) noexcept {
+  const std::array<int, 3>& t = model.net_faces[static_cast<std::size_t>(f)];
+  const Vec3& a = nodes[t[0]].position;
+  const Vec3& b = nodes[t[1]].position;
+  const Vec3& c = nodes[t[2]].position;
+  const Vec3& ra = model.node_rest[static_cast<std::size_t>(t[0])];
+  const Vec3& rb = model.node_rest[static_cast<std::size_t>(t[1])];
+  const Vec3& rc = model.node_rest[static_cast<std::size_t>(t[2])];
+  constexpr double kTear2 = kTearStretch * kTearStretch;
+  return (b - a).squaredNorm() > kTear2 * (rb - ra).squaredNorm() ||
+         (c - b).squaredNorm() > kTear2 * (rc - rb).squaredNorm() ||
+         (a - c).squaredNorm() > kTear2 * (ra - rc).squaredNorm();
+}
+
+/// The bounds of the net triangle `f` (global) at the nodes' current positions.
+void net_face_bounds(const Model& model, const NodeState* nodes, int f, Vec3& lo, Vec3& hi) noexcept {
+  const std::array<int, 3>& t = model.net_faces[static_cast<std::size_t>(f)];
+  const Vec3& a = nodes[t[0]].position;
+  const Vec3& b = nodes[t[1]].position;
+  const Vec3& c = nodes[t[2]].position;
+  lo = a.cwiseMin(b).cwiseMin(c);
+  hi = a.cwiseMax(b).cwiseMax(c);
+}
+
+/// The fine triangles riding on the net triangles near [qlo, qhi] (within the net's
+/// surface_reach), whose bounds at their vertices' current positions meet [qlo, qhi] and which
+/// ride on no torn net triangle: into ns.surface_candidates / surface_lo / surface_hi, each once,
+/// their vertices' positions in ns.surface_position. Returns their count.
+int gather_surface_candidates(const Model& model, const Data& data, NetScratch& ns,
+                              const NetModel& net, const Vec3& qlo, const Vec3& qhi) noexcept {
+  const NodeState* nodes = data.nodes.data();
+  if (++ns.surface_stamp == 0) {  // wrapped: no entry may look stamped by this call
+    std::fill(ns.surface_face_stamp.begin(), ns.surface_face_stamp.end(), 0u);
+    std::fill(ns.surface_point_stamp.begin(), ns.surface_point_stamp.end(), 0u);
+    ns.surface_stamp = 1;
+  }
+  const std::uint32_t stamp = ns.surface_stamp;
+  const Vec3 reach = Vec3::Constant(net.surface_reach + kMargin);
+  const Vec3 plo = qlo - reach, phi = qhi + reach;
+  const int room = static_cast<int>(ns.surface_candidates.size());
+  const auto position = [&](int p) -> const Vec3& {
+    Vec3& x = ns.surface_position[static_cast<std::size_t>(p)];
+    std::uint32_t& st = ns.surface_point_stamp[static_cast<std::size_t>(p)];
+    if (st != stamp) {
+      st = stamp;
+      const NetSurfacePoint& e = model.net_surface_points[static_cast<std::size_t>(p)];
+      const std::array<int, 3>& t = model.net_faces[static_cast<std::size_t>(e.face)];
+      x = net_surface_point(e, nodes[t[0]].position, nodes[t[1]].position, nodes[t[2]].position);
+    }
+    return x;
+  };
+  int nc = 0;
+  for (int f = net.face_begin; f < net.face_begin + net.face_count; ++f) {
+    Vec3 lo, hi;
+    net_face_bounds(model, nodes, f, lo, hi);
+    if (!boxes_overlap(lo, hi, plo, phi) || !(lo.allFinite() && hi.allFinite())) continue;
+    const auto first = static_cast<std::size_t>(model.net_face_surface_begin[static_cast<std::size_t>(f)]);
+    const auto last = static_cast<std::size_t>(model.net_face_surface_begin[static_cast<std::size_t>(f) + 1]);
+    for (std::size_t k = first; k < last && nc < room; ++k) {
+      const std::int32_t F = model.net_face_surface_faces[k];
+      std::uint32_t& st = ns.surface_face_stamp[static_cast<std::size_t>(F)];
+      if (st == stamp) continue;
+      st = stamp;
+      const std::array<int, 3>& t = model.net_surface_faces[static_cast<std::size_t>(F)];
+      bool keep = true;
+      for (int m = 0; m < 3 && keep; ++m)
+        keep = !torn(model, nodes, model.net_surface_points[static_cast<std::size_t>(t[static_cast<std::size_t>(m)])].face);
+      if (!keep) continue;
+      const Vec3& a = position(t[0]);
+      const Vec3& b = position(t[1]);
+      const Vec3& c = position(t[2]);
+      const Vec3 flo = a.cwiseMin(b).cwiseMin(c), fhi = a.cwiseMax(b).cwiseMax(c);
+      if (!boxes_overlap(flo, fhi, qlo, qhi) || !(flo.allFinite() && fhi.allFinite())) continue;
+      ns.surface_candidates[static_cast<std::size_t>(nc)] = F;
+      ns.surface_lo[static_cast<std::size_t>(nc)] = flo;
+      ns.surface_hi[static_cast<std::size_t>(nc)] = fhi;
+      ++nc;
+    }
+  }
+  return nc;
+}
+
+}  // namespace
+
+void collide_net_faces(const Model& model, const Data& data, NetScratch& ns, const NetModel& net,
+                       int num_near, int mat_net, NodeContactSink& sink) noexcept {
+  const CollisionScratch& cs = data.scratch->collision;
+  const double* R = cs.sphere_r.data();
+  const Vec3* sw = cs.sphere_world.data();
+  const std::int32_t* near = ns.near_spheres.data();
+  const NodeState* nodes = data.nodes.data();
+
+  // The near spheres' bounds.
+  Vec3 qlo = Vec3::Constant(collision_detail::kInf), qhi = Vec3::Constant(-collision_detail::kInf);
+  const int num_spheres = ns.near_sphere_end[static_cast<std::size_t>(num_near - 1)];
+  for (int i = 0; i < num_spheres; ++i) {
+    const int s = near[i];
+    const Vec3 e = Vec3::Constant(R[s] + kMargin);
+    qlo = qlo.cwiseMin(sw[s] - e);
+    qhi = qhi.cwiseMax(sw[s] + e);
+  }
+
+  if (net.surface_face_count > 0) {  // the fine surface riding on the net
+    const int nc = gather_surface_candidates(model, data, ns, net, qlo, qhi);
+    if (nc == 0) return;
+    const std::int32_t* cand = ns.surface_candidates.data();
+    const Vec3* x = ns.surface_position.data();
+    const NetSurfacePoint* points = model.net_surface_points.data();
+    const auto corner = [&](int m, int k) -> const Vec3& {
+      return x[model.net_surface_faces[static_cast<std::size_t>(cand[m])][static_cast<std::size_t>(k)]];
+    };
+    const auto emit = [&](int m, const Vec3& w, int body, int sphere, int material_pair,
+                          const ContactGeometry& g, const Vec3& com) {
+      const std::array<int, 3>& t = model.net_surface_faces[static_cast<std::size_t>(cand[m])];
+      sink.add_surface_face({&points[t[0]], &points[t[1]], &points[t[2]]}, model.net_faces.data(), w,
+                            body, sphere, material_pair, g, com);
+    };
+    collide_candidates(model, data, ns, num_near, mat_net, nc, ns.surface_lo.data(),
+                       ns.surface_hi.data(), corner, emit);
+    return;
+  }
+
+  // Candidates: the net's triangles whose bounds meet them (non-finite nodes never do).
+  const int room = static_cast<int>(ns.face_candidates.size());
+  int nc = 0;
+  for (int f = net.face_begin; f < net.face_begin + net.face_count && nc < room; ++f) {
+    Vec3 lo, hi;
+    net_face_bounds(model, nodes, f, lo, hi);
+    if (!boxes_overlap(lo, hi, qlo, qhi) || !(lo.allFinite() && hi.allFinite())) continue;
+    if (torn(model, nodes, f)) continue;
+    ns.face_candidates[static_cast<std::size_t>(nc)] = f;
+    ns.face_lo[static_cast<std::size_t>(nc)] = lo;
+    ns.face_hi[static_cast<std::size_t>(nc)] = hi;
+    ++nc;
+  }
+  if (nc == 0) return;
+  const std::int32_t* cand = ns.face_candidates.data();
+  const auto corner = [&](int m, int k) -> const Vec3& {
+    return nodes[model.net_faces[static_cast<std::size_t>(cand[m])][static_cast<std::size_t>(k)]].position;
+  };
+  const auto emit = [&](int m, const Vec3& w, int body, int sphere, int material_pair,
+                        const ContactGeometry& g, const Vec3& com) {
+    sink.add_face(cand[m], model.net_faces[static_cast<std::size_t>(cand[m])], w, body, sphere,
+                  material_pair, g, com);
+  };
+  collide_candidates(model, data, ns, num_near, mat_net, nc, ns.face_lo.data(), ns.face_hi.data(),
+                     corner, emit);
 }
 
 }  // namespace numen::core::detail

@@ -60,7 +60,7 @@ std::string add_net_surface(Model& model, int net_index, std::span<const Vec3> v
   Vec3 centre = Vec3::Zero();
   for (const Vec3& v : vertices) centre += v;
   centre /= nv;
-  double volume = 0.0;
+  double volume = 0.0, longest_edge = 0.0;
   for (std::size_t k = 0; k < triangles.size(); ++k) {
     const std::array<int, 3>& t = triangles[k];
     for (int m = 0; m < 3; ++m)
@@ -74,6 +74,7 @@ std::string add_net_surface(Model& model, int net_index, std::span<const Vec3> v
     const Vec3 b = vertices[static_cast<std::size_t>(t[1])] - centre;
     const Vec3 c = vertices[static_cast<std::size_t>(t[2])] - centre;
     volume += a.dot(b.cross(c));
+    longest_edge = std::max({longest_edge, (b - a).norm(), (c - b).norm(), (a - c).norm()});
   }
 
   const int point_begin = static_cast<int>(model.net_surface_points.size());
@@ -82,6 +83,9 @@ std::string add_net_surface(Model& model, int net_index, std::span<const Vec3> v
   net.surface_point_count = nv;
   net.surface_face_begin = face_begin;
   net.surface_face_count = static_cast<int>(triangles.size());
+  double offset = 0.0;
+  for (const NetSurfacePoint& e : points) offset = std::max(offset, e.offset.norm());
+  net.surface_reach = offset + longest_edge;
   model.net_surface_points.insert(model.net_surface_points.end(), points.begin(), points.end());
   for (const std::array<int, 3>& t : triangles)
     model.net_surface_faces.push_back(

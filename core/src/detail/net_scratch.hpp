@@ -154,6 +154,17 @@ struct NetScratch {
   /// the largest NetModel::face_count.
   std::vector<std::int32_t> face_candidates;
   std::vector<Vec3> face_lo, face_hi;
+  /// An organ's fine surface (net_surface_map.hpp): the fine triangles (Model::net_surface_faces
+  /// indices) riding on the net triangles near the tool, whose bounds meet the near spheres'
+  /// bounds, and those bounds (m, world); sized by the largest NetModel::surface_face_count.
+  std::vector<std::int32_t> surface_candidates;
+  std::vector<Vec3> surface_lo, surface_hi;
+  /// Per fine triangle and per fine vertex (global): the stamp of the last call that gathered
+  /// it, and the vertex's position computed then (m, world): each is gathered and computed once
+  /// a call, whatever the number of net triangles it rides on.
+  std::vector<std::uint32_t> surface_face_stamp, surface_point_stamp;
+  std::vector<Vec3> surface_position;
+  std::uint32_t surface_stamp = 0;  ///< The current call's stamp (0: never; wraps by clearing).
   /// Sizes every buffer for `model` (all empty when it has no net). Allocates: make_data() only.
   void resize(const Model& model);
 };

@@ -33,6 +33,13 @@ namespace detail {
 /// angle-weighted pseudo-normal at q of the triangles that share it (Bærentzen & Aanæs 2005),
 /// depth r ∓ d. Normal −o (from the tool's sphere into the organ), position the middle of the
 /// overlap ½ (q + c − r o). `mat_net`: the net's row of Model::material_pairs.
+///
+/// A net with a fine surface (NetModel::surface_face_count > 0, net_surface_map.hpp) meets the
+/// spheres with the fine triangles instead, by the same tests: the candidates are the fine
+/// triangles riding on the net triangles within NetModel::surface_reach of the near spheres'
+/// bounds (Model::net_face_surface_faces), each gathered once, its vertices placed once per call
+/// (NetScratch::surface_*), those on a torn net triangle left out; a contact at a fine point is
+/// written on the net triangles its vertices ride on (NodeContactSink::add_surface_face()).
 void collide_net_faces(const Model& model, const Data& data, NetScratch& ns, const NetModel& net,
                        int num_near, int mat_net, NodeContactSink& sink) noexcept;
 

@@ -9,6 +9,7 @@
 
 #include "detail/narrowphase.hpp"
 #include "numen/core/net_state.hpp"
+#include "numen/core/net_surface_map.hpp"
 #include "numen/core/types.hpp"
 
 namespace numen::core::detail {
@@ -54,6 +55,52 @@ struct NodeContactSink {
       c.face = face;
       c.face_weights = w;
       c.share = w[m];
+    }
+  }
+
+  /// A contact of a fine surface's triangle (net_surface_map.hpp) at the point of barycentric
+  /// weights `w` over its vertices, embedded `e[i]` on the net triangles e[i]->face (node
+  /// indices `faces[e[i]->face]`, Model::net_faces): the point Σ_i w_i p_i moves with the nodes
+  /// as Σ_i w_i Σ_m b_i,m x_m (the offsets' turn frozen over the step, as the contact's normal
+  /// is). Written per distinct net triangle T as that triangle's contact: face_weights the
+  /// normalised Σ_{i on T} w_i b_i, each node's share its weight before normalising (the shares
+  /// of the whole contact sum to 1; a point within one net triangle is exactly one triangle
+  /// contact). All or none; a contact that does not fit whole is dropped and counted once.
+  void add_surface_face(const std::array<const NetSurfacePoint*, 3>& e,
+                        const std::array<int, 3>* faces, const Vec3& w, int body_b, int sphere_b,
+                        int material_pair, const ContactGeometry& g, const Vec3& com_b) noexcept {
+    net_max_depth = std::max(net_max_depth, g.depth);
+    std::array<int, 3> face{-1, -1, -1};
+    std::array<Vec3, 3> weight{Vec3::Zero(), Vec3::Zero(), Vec3::Zero()};
+    int groups = 0;
+    for (int i = 0; i < 3; ++i) {
+      if (!(w[i] > 0.0)) continue;
+      const int f = e[static_cast<std::size_t>(i)]->face;
+      int k = 0;
+      while (k < groups && face[static_cast<std::size_t>(k)] != f) ++k;
+      if (k == groups) face[static_cast<std::size_t>(groups++)] = f;
+      weight[static_cast<std::size_t>(k)] += w[i] * e[static_cast<std::size_t>(i)]->weights;
+    }
+    int entries = 0;
+    for (int k = 0; k < groups; ++k)
+      for (int m = 0; m < 3; ++m) entries += weight[static_cast<std::size_t>(k)][m] > 0.0 ? 1 : 0;
+    if (count + entries > capacity) {
+      ++dropped;
+      return;
+    }
+    for (int k = 0; k < groups; ++k) {
+      const Vec3& b = weight[static_cast<std::size_t>(k)];
+      const double sum = b.sum();
+      if (!(sum > 0.0)) continue;
+      const std::array<int, 3>& nodes = faces[face[static_cast<std::size_t>(k)]];
+      for (int m = 0; m < 3; ++m) {
+        if (!(b[m] > 0.0)) continue;
+        NodeContact& c = write(nodes[static_cast<std::size_t>(m)], body_b, -1, sphere_b,
+                               material_pair, g, com_b);
+        c.face = face[static_cast<std::size_t>(k)];
+        c.face_weights = b / sum;
+        c.share = b[m];
+      }
     }
   }
 

@@ -53,6 +53,10 @@ struct NetModel {
   int surface_point_count = 0;
   int surface_face_begin = 0;
   int surface_face_count = 0;
+  /// How far from a net triangle a fine triangle riding on it may reach at rest (m): the largest
+  /// |offset| of a fine vertex plus the longest fine edge. The organ's contacts look for the
+  /// fine triangles of the net triangles within this of the tool (net_surface.hpp).
+  double surface_reach = 0.0;
   /// Zero-length spring of every node to its rest position on the rigid
   /// component (paper §4.2): f = −k_tie (x − a) − γ_tie (v − v_a), a = x_b + R_b r.
   double tie_stiffness = 0.0;  ///< k_tie (N/m) per node, > 0.
