@@ -372,18 +372,23 @@ bool solve_net_eisenstat(const Model& model, Data& data) noexcept {
     if (!v.allFinite()) v.setZero();
   double ref = net_start_sweep(model, data, sys.xn, sys.wb, sys.wn, sys.tb);
   if (!std::isfinite(ref)) return poison_solve(data);
+  // The solution's least scale (SolverSettings::velocity_floor): the nets' kinetic energy at v_f.
+  const SolverSettings& set = model.solver;
+  double mass = 0.0;
+  for (const NetModel& net : model.nets) mass += net.mass;
+  const double floor = mass * set.velocity_floor * set.velocity_floor;
+  ref = std::max(ref, floor);
   sys.ref = ref > 0.0 ? ref : 1.0;
   const double rho = apply_block_diagonal(data, sys.wb, sys.wn, sys.qb, sys.qn);  // q = D̃ w
   const double rel = std::sqrt(rho / sys.ref);
 
   // The stopping rule: the energy-norm error estimate (error_estimate_delay ≥ 1),
-  // or the residual ratio ‖r‖_{M⁻¹}/‖b‖_{D̃⁻¹} (0).
+  // or the residual ratio ‖r‖_{M⁻¹}/max(‖b‖_{D̃⁻¹}, √F) (0), F the floor above.
   static_assert(kMaxErrorEstimateDelay <= kMaxPcgErrorDelay);
-  const SolverSettings& set = model.solver;
   PcgResult res;
   bool converged = false;
   if (set.error_estimate_delay > 0) {
-    const PcgErrorStop stop{set.tolerance, set.max_iterations, set.error_estimate_delay};
+    const PcgErrorStop stop{set.tolerance, set.max_iterations, set.error_estimate_delay, floor};
     res = pcg(sys, rho, stop);
     converged = res.converged(stop);
   } else {

@@ -306,3 +306,47 @@ TEST(PcgErrorRule, RunsTheDelaysIterationsAndReportsNoEstimateBefore) {
     EXPECT_TRUE(std::isnan(res.residual));
   }
 }
+
+TEST(PcgErrorRule, AFloorEndsTheSolveOfASolutionBelowItsScaleAndLeavesLargerOnesRelative) {
+  // The system scaled down to a right-hand side of rounding size (b ~ 1e-17, an organ at rest):
+  // the relative rule chases it over many iterations; with a floor F far above ‖x‖²_A, a start
+  // within √F · tolerance runs none, and one outside it stops as soon as the error is below
+  // tolerance · √F in absolute terms. A solution far above F is solved as without a floor.
+  const auto scaled = [](double scale) {
+    LaplacianSystem s;
+    s.b *= scale;
+    s.x *= scale;
+    s.r = s.b - s.a * s.x;
+    s.z = s.r.cwiseQuotient(s.a.diagonal());
+    s.p = s.z;
+    s.iterates.col(0) = s.x;
+    return s;
+  };
+  const double tolerance = 1e-4;
+  LaplacianSystem tiny = scaled(1e-17);
+  const detail::PcgResult chased = detail::pcg(tiny, tiny.rz0(), detail::PcgErrorStop{tolerance, 200, 1});
+  EXPECT_GE(chased.iterations, 5) << "without a floor the relative rule chases rounding";
+  tiny = scaled(1e-17);
+  const detail::PcgErrorStop floored{tolerance, 200, 1, 1e-20};  // √F = 1e-10 ≫ the start's error
+  const detail::PcgResult none = detail::pcg(tiny, tiny.rz0(), floored);
+  EXPECT_EQ(none.iterations, 0);
+  EXPECT_TRUE(none.converged(floored));
+  EXPECT_LE(none.residual, tolerance);
+  // A start just outside the floor's tolerance: iterations until the absolute error is below it.
+  LaplacianSystem small = scaled(1e-9);
+  const double floor = small.rz0() / (4.0 * tolerance * tolerance);  // √(rz0 / F) = 2 tolerance
+  const detail::PcgErrorStop near_floor{tolerance, 200, 1, floor};
+  const detail::PcgResult some = detail::pcg(small, small.rz0(), near_floor);
+  EXPECT_GE(some.iterations, 1);
+  EXPECT_TRUE(some.converged(near_floor));
+  const Eigen::VectorXd exact = small.a.ldlt().solve(small.b);
+  const Eigen::VectorXd e = exact - small.x;
+  EXPECT_LE(std::sqrt(e.dot(small.a * e)), 2.0 * tolerance * std::sqrt(floor)) << "absolute error";
+  // Far above the floor: the same iterations and iterate as without it.
+  LaplacianSystem a = scaled(1.0), b = scaled(1.0);
+  const detail::PcgResult ra = detail::pcg(a, a.rz0(), detail::PcgErrorStop{tolerance, 200, 1});
+  const detail::PcgResult rb = detail::pcg(b, b.rz0(), detail::PcgErrorStop{tolerance, 200, 1, 1e-20});
+  EXPECT_EQ(ra.iterations, rb.iterations);
+  EXPECT_EQ(ra.residual, rb.residual);
+  EXPECT_EQ((a.x - b.x).norm(), 0.0);
+}

@@ -61,6 +61,14 @@ struct PcgErrorStop {
   double tolerance = 0.0;  ///< On η, the relative energy-norm error (dimensionless).
   int max_iterations = 1;  ///< Iteration budget (at least one is run).
   int delay = 1;           ///< d, clamped to [1, kMaxPcgErrorDelay].
+  /// F ≥ 0, the least ‖x‖²_A the error is taken relative to (the system's energy units): η_k =
+  /// √(Σ α_j ρ_j / max(bᵀx_{k+d}, F)), and the start meets the rule when √(r0ᵀz0 / F) ≤ tolerance
+  /// (0 iterations: x0 is within the tolerance of F's scale, r0ᵀz0 standing for ‖x − x0‖²_A within
+  /// the preconditioner's condition number). A solution smaller than F's scale is then solved to
+  /// tolerance · √F in absolute terms instead of to a relative tolerance of its own vanishing size
+  /// (a system at rest: b of rounding size, which the relative rule chases over d + 4 or more
+  /// iterations). 0: the relative rule alone.
+  double floor = 0.0;
 };
 
 /// What pcg() ran.
@@ -100,6 +108,7 @@ struct Residual {
 struct EnergyError {
   double tolerance;
   int delay;
+  double floor = 0.0;  ///< PcgErrorStop::floor.
   double measure = std::numeric_limits<double>::infinity();
   std::array<double, kMaxPcgErrorDelay> ring{};
   int count = 0;
@@ -114,7 +123,7 @@ struct EnergyError {
     double decrease = 0.0;  // Σ of the last d α_j ρ_j, oldest first
     for (int j = count - delay; j < count; ++j) decrease += ring[static_cast<std::size_t>(j % delay)];
     const double energy = system.solution_energy();
-    const double norm2 = energy > 0.0 ? energy : total;
+    const double norm2 = std::max(energy > 0.0 ? energy : total, floor);
     if (!std::isfinite(energy)) {
       measure = std::numeric_limits<double>::quiet_NaN();
     } else if (decrease <= 0.0) {
@@ -189,15 +198,21 @@ PcgResult pcg(System& system, double residual0, double rz0, const PcgStop& stop)
 
 /// The same loop stopping on the energy-norm error estimate of PcgErrorStop
 /// (needs System::solution_energy()). The start meets the rule only when
-/// rz0 = r0ᵀ z0 is 0 (x0 solves the system; 0 iterations, estimate 0);
+/// rz0 = r0ᵀ z0 is 0 (x0 solves the system; 0 iterations, estimate 0) or, with a
+/// floor F, when √(rz0 / F) ≤ tolerance (0 iterations, that estimate);
 /// otherwise at least d iterations run (the budget permitting). A breakdown
 /// or the budget ends the loop with the last estimate (+∞ if fewer than d
 /// iterations ran), a vanishing r'ᵀz' with the iterate exact (estimate 0).
 /// bᵀx ≤ 0 (b = 0) makes the estimate relative to ‖x_k − x0‖_A instead.
 template <class System>
 PcgResult pcg(System& system, double rz0, const PcgErrorStop& stop) noexcept {
-  pcg_rule::EnergyError rule{stop.tolerance, std::clamp(stop.delay, 1, kMaxPcgErrorDelay)};
-  if (rz0 == 0.0) rule.measure = 0.0;
+  pcg_rule::EnergyError rule{stop.tolerance, std::clamp(stop.delay, 1, kMaxPcgErrorDelay),
+                             stop.floor > 0.0 ? stop.floor : 0.0};
+  if (rz0 == 0.0) {
+    rule.measure = 0.0;
+  } else if (rule.floor > 0.0 && std::isfinite(rz0) && std::sqrt(rz0 / rule.floor) <= stop.tolerance) {
+    rule.measure = std::sqrt(rz0 / rule.floor);  // the start is within the floor's tolerance
+  }
   return pcg_rule::run(system, rz0, stop.max_iterations, rule);
 }
 

@@ -168,6 +168,15 @@ struct SolverSettings {
   /// d, the delay of the nets' error estimate (iterations run past the estimated iterate; the
   /// solve returns the later one): 1 … kMaxErrorEstimateDelay, or 0 for the residual ratio.
   int error_estimate_delay = 1;
+  /// v_f (m/s, ≥ 0): the velocity below which the nets' solve without joints does not chase a
+  /// relative tolerance. Its rules are relative (to ‖x‖_A, or to ‖b‖); an organ at rest has a
+  /// right-hand side of rounding size (‖b‖² ~ 1e-34 J on the shipped organ), which they chase
+  /// over 5–7 iterations a step for nothing. Both take the solution's scale as at least the
+  /// nets' kinetic energy at v_f, F = Σ m_net v_f²: a step whose velocity change is below it is
+  /// solved to tolerance · v_f (mass-weighted) in absolute terms — 1e-10 m/s at the shipped 1e-4
+  /// and 1e-6 m/s, a drift of 1e-13 m a 1 ms step (docs/net-solver.md, "The floor"). 0: the
+  /// relative rules alone.
+  double velocity_floor = 1e-6;
   /// Contact time-constant floor, as ω_c h (dimensionless, > 0; +∞ switches it off): a penalty
   /// contact acts with the stiffness k_eff = min(k, m_eff (ω_c h / h)²), h = Model::dt, m_eff its
   /// effective mass along the normal (contact_effective_mass(); a net node's mass for node
