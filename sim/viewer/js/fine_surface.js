@@ -48,7 +48,7 @@ export function fineSurface(n) {
       const ux = x[b] - x[a], uy = x[b + 1] - x[a + 1], uz = x[b + 2] - x[a + 2];
       const vx = x[c] - x[a], vy = x[c + 1] - x[a + 1], vz = x[c + 2] - x[a + 2];
       let nx = uy * vz - uz * vy, ny = uz * vx - ux * vz, nz = ux * vy - uy * vx;
-      const lu = Math.hypot(ux, uy, uz), ln = Math.hypot(nx, ny, nz), o = 9 * f;
+      const lu = Math.sqrt(ux * ux + uy * uy + uz * uz), ln = Math.sqrt(nx * nx + ny * ny + nz * nz), o = 9 * f;
       if (!(lu > 0 && ln > 0 && Number.isFinite(lu) && Number.isFinite(ln))) {
         frame[o] = NaN;
         continue;
@@ -86,7 +86,7 @@ export function fineSurface(n) {
       acc[c] += nx; acc[c + 1] += ny; acc[c + 2] += nz;
     }
     for (let k = 0; k < 3 * V; k += 3) {
-      const l = Math.hypot(acc[k], acc[k + 1], acc[k + 2]) || 1;
+      const l = Math.sqrt(acc[k] * acc[k] + acc[k + 1] * acc[k + 1] + acc[k + 2] * acc[k + 2]) || 1;
       nor[k] = acc[k] / l; nor[k + 1] = acc[k + 1] / l; nor[k + 2] = acc[k + 2] / l;
     }
     geo.attributes.position.needsUpdate = true;
