@@ -4,6 +4,7 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <array>
 #include <exception>
 #include <memory>
 #include <optional>
@@ -22,6 +23,24 @@ namespace {
 py::array_t<double> to_array(const core::Vec3& v) { return py::array_t<double>(3, v.data()); }
 py::array_t<double> to_array(const core::Quat& q) {
   return py::array_t<double>(4, q.coeffs().data());
+}
+
+/// An (F, 3) NumPy copy of triangles given as index triples (Model::net_faces,
+/// Model::net_surface_faces).
+py::array_t<int> triangle_rows(const std::vector<std::array<int, 3>>& triangles) {
+  py::array_t<int> rows({static_cast<py::ssize_t>(triangles.size()), py::ssize_t{3}});
+  for (std::size_t f = 0; f < triangles.size(); ++f)
+    for (int k = 0; k < 3; ++k) rows.mutable_at(static_cast<py::ssize_t>(f), k) = triangles[f][static_cast<std::size_t>(k)];
+  return rows;
+}
+
+/// A (P, 3) NumPy copy of one Vec3 member of every Model::net_surface_points entry (its weights
+/// or its offset), in order.
+py::array_t<double> surface_point_rows(const core::Model& mo, core::Vec3 core::NetSurfacePoint::*member) {
+  py::array_t<double> rows({static_cast<py::ssize_t>(mo.net_surface_points.size()), py::ssize_t{3}});
+  for (std::size_t i = 0; i < mo.net_surface_points.size(); ++i)
+    for (int k = 0; k < 3; ++k) rows.mutable_at(static_cast<py::ssize_t>(i), k) = (mo.net_surface_points[i].*member)[k];
+  return rows;
 }
 
 }  // namespace
@@ -94,17 +113,61 @@ void bind_scene(py::module_& m) {
           "Joint names, in joint index order.")
       .def_property_readonly(
           "net_faces",
-          [](const core::Model& mo) {
-            py::array_t<int> faces({static_cast<py::ssize_t>(mo.net_faces.size()), py::ssize_t{3}});
-            for (std::size_t f = 0; f < mo.net_faces.size(); ++f)
-              for (int k = 0; k < 3; ++k)
-                faces.mutable_at(static_cast<py::ssize_t>(f), k) =
-                    mo.net_faces[f][static_cast<std::size_t>(k)];
-            return faces;
-          },
+          [](const core::Model& mo) { return triangle_rows(mo.net_faces); },
           "(F, 3) int copy of the nets' surface triangles as global node indices, outward "
           "(Model::net_faces; each net's rows [face_begin, face_begin + face_count)); (0, 3) "
           "without nets. Data.node_contact_faces index its rows.")
+      .def_property_readonly(
+          "net_surface_point_faces",
+          [](const core::Model& mo) {
+            py::array_t<int> faces(static_cast<py::ssize_t>(mo.net_surface_points.size()));
+            for (std::size_t i = 0; i < mo.net_surface_points.size(); ++i)
+              faces.mutable_at(static_cast<py::ssize_t>(i)) = mo.net_surface_points[i].face;
+            return faces;
+          },
+          "(P,) int copy: the net triangle each fine-surface vertex rides on, as a row of "
+          "net_faces (Model::net_surface_points[i].face, global; net_surface_map.hpp). The nets' "
+          "fine surfaces' vertices in order, each net's [surface_point_begin, + "
+          "surface_point_count) of net_surface_ranges; (0,) without a fine surface.")
+      .def_property_readonly(
+          "net_surface_point_weights",
+          [](const core::Model& mo) { return surface_point_rows(mo, &core::NetSurfacePoint::weights); },
+          "(P, 3) float copy: each fine-surface vertex's barycentric weights on the corners of its "
+          "net triangle (net_faces[net_surface_point_faces[i]], in that order; each >= 0, sum 1): "
+          "its foot point. (0, 3) without a fine surface.")
+      .def_property_readonly(
+          "net_surface_point_offsets",
+          [](const core::Model& mo) { return surface_point_rows(mo, &core::NetSurfacePoint::offset); },
+          "(P, 3) float copy: each fine-surface vertex's offset from its foot point (m) in its net "
+          "triangle's frame F = [e1, e2, n] (x0, x1, x2 its corners: e1 = (x1 - x0)/|x1 - x0|, "
+          "n = (x1 - x0) x (x2 - x0) normalised, e2 = n x e1); the vertex is "
+          "sum_m w_m x_m + F @ offset. (0, 3) without a fine surface.")
+      .def_property_readonly(
+          "net_surface_faces",
+          [](const core::Model& mo) { return triangle_rows(mo.net_surface_faces); },
+          "(S, 3) int copy of the fine surfaces' triangles as global indices into the "
+          "net_surface_point_* rows, outward (Model::net_surface_faces; each net's rows "
+          "[surface_face_begin, + surface_face_count) of net_surface_ranges); (0, 3) without a "
+          "fine surface.")
+      .def_property_readonly(
+          "net_surface_ranges",
+          [](const core::Model& mo) {
+            py::array_t<int> r({static_cast<py::ssize_t>(mo.nets.size()), py::ssize_t{4}});
+            for (std::size_t n = 0; n < mo.nets.size(); ++n) {
+              const core::NetModel& net = mo.nets[n];
+              const auto row = static_cast<py::ssize_t>(n);
+              r.mutable_at(row, 0) = net.surface_point_begin;
+              r.mutable_at(row, 1) = net.surface_point_count;
+              r.mutable_at(row, 2) = net.surface_face_begin;
+              r.mutable_at(row, 3) = net.surface_face_count;
+            }
+            return r;
+          },
+          "(num_nets, 4) int copy, per net (NetModel::surface_*): surface_point_begin, "
+          "surface_point_count (its fine vertices: rows of net_surface_point_*), "
+          "surface_face_begin, surface_face_count (its fine triangles: rows of "
+          "net_surface_faces); counts 0 for a net without a fine surface (the tool then touches "
+          "the net's own triangles).")
       .def_property_readonly("initial_attached_body",
                              [](const core::Model& mo) { return mo.initial_attached_body; },
                              "Body the device holds after a reset (-1: none).");

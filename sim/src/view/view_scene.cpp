@@ -1,6 +1,7 @@
 #include "numen/sim/view/view_scene.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 #include <nlohmann/json.hpp>
 
@@ -79,6 +80,40 @@ json obstacle(const core::Model& m, const core::Obstacle& o) {
   return j;
 }
 
+/// `x` rounded to `per_unit`ths (a power of ten): the double nearest k / per_unit, which the
+/// JSON writer prints with at most log10(per_unit) decimals.
+double rounded(double x, double per_unit) { return std::round(x * per_unit) / per_unit; }
+
+// Net `net`'s fine surface (core::add_net_surface()) as the scene message's "surface" of the
+// net (docs/viewer.md, "Scene message"): point_count, triangle_count, and, up to
+// kViewNetSurfaceMaxTriangles, the net's own triangles in the model's corner order (the order
+// that defines each triangle's frame) as net-local node indices, each fine vertex's net-local
+// triangle, barycentric weights (to 1e-6) and offset in the triangle's frame (m, to 0.1 µm),
+// and the fine triangles as fine-surface-local indices. Null without a fine surface.
+json net_surface(const core::Model& m, const core::NetModel& net) {
+  if (net.surface_point_count <= 0) return nullptr;
+  json j{{"point_count", net.surface_point_count}, {"triangle_count", net.surface_face_count}};
+  if (net.surface_face_count > kViewNetSurfaceMaxTriangles) return j;
+  json net_triangles = json::array(), face = json::array(), weights = json::array(),
+       offset = json::array(), triangles = json::array();
+  for (int f = net.face_begin; f < net.face_begin + net.face_count; ++f)
+    for (int k : m.net_faces[static_cast<std::size_t>(f)]) net_triangles.push_back(k - net.node_begin);
+  for (int i = net.surface_point_begin; i < net.surface_point_begin + net.surface_point_count; ++i) {
+    const core::NetSurfacePoint& e = m.net_surface_points[static_cast<std::size_t>(i)];
+    face.push_back(e.face - net.face_begin);
+    for (int k = 0; k < 3; ++k) weights.push_back(rounded(e.weights[k], 1e6));
+    for (int k = 0; k < 3; ++k) offset.push_back(rounded(e.offset[k], 1e7));
+  }
+  for (int t = net.surface_face_begin; t < net.surface_face_begin + net.surface_face_count; ++t)
+    for (int k : m.net_surface_faces[static_cast<std::size_t>(t)]) triangles.push_back(k - net.surface_point_begin);
+  j["net_triangles"] = std::move(net_triangles);
+  j["face"] = std::move(face);
+  j["weights"] = std::move(weights);
+  j["offset"] = std::move(offset);
+  j["triangles"] = std::move(triangles);
+  return j;
+}
+
 }  // namespace
 
 platform::StateFrameLayout view_frame_layout(const Scene& scene) {
@@ -118,12 +153,14 @@ std::string view_scene_message(const Scene& scene, const platform::StateFrameLay
       for (const auto& t : scene.net_triangles[n]) triangles.push_back(json::array({t[0], t[1], t[2]}));
     const double radius =
         net.node_count > 0 ? m.node_radius[static_cast<std::size_t>(net.node_begin)] : 0.0;
-    nets.push_back({{"name", net.name},
-                    {"body", net.body},
-                    {"node_begin", net.node_begin},
-                    {"node_count", net.node_count},
-                    {"node_radius", radius},
-                    {"triangles", std::move(triangles)}});
+    json entry{{"name", net.name},
+               {"body", net.body},
+               {"node_begin", net.node_begin},
+               {"node_count", net.node_count},
+               {"node_radius", radius},
+               {"triangles", std::move(triangles)}};
+    if (json surface = net_surface(m, net); !surface.is_null()) entry["surface"] = std::move(surface);
+    nets.push_back(std::move(entry));
   }
   json joints = json::array();
   for (const core::JointModel& j : m.joints)

@@ -3,10 +3,12 @@
 import * as THREE from 'three';
 import { scene3, v3, q } from './stage.js';
 import { FLOATS } from './protocol.js';
+import { hasFineSurface, fineSurface } from './fine_surface.js';
 
 /// Colours of what is drawn (the legend's too).
 export const COLORS = { tool: 0xff8800, body: 0x9aa4b0, ghost: 0x00c8ff, obstacle: 0xc0504d,
-                        plane: 0x707a68, box: 0xb09060, net: 0x60c060, spheres: 0xf0f0a0 };
+                        plane: 0x707a68, box: 0xb09060, net: 0x60c060, coarseNet: 0x1e5a1e,
+                        spheres: 0xf0f0a0 };
 export const sphereGeo = new THREE.SphereGeometry(1, 24, 16);
 /// Spheres of a set of many (an organ of hundreds): 10 × 7 facets each, a fifth of the triangles
 /// (software rendering draws every one; docs/viewer.md "What it costs").
@@ -140,7 +142,16 @@ export function showCollisionSpheres(on) {
     for (const c of g.children) if (c.userData.collision) c.visible = on;
 }
 
-/// What buildScene() made: one entry per body (its group and its ghost), net and joint.
+/// Shows or hides the coarse nets under the fine surfaces (wireframes; a net without a fine
+/// surface is always drawn as its own triangles).
+export function showCoarseNets(on) {
+  for (const { fine, obj } of G.nets) if (fine) obj.visible = on;
+}
+
+/// What buildScene() made: one entry per body (its group and its ghost), net and joint; a net's
+/// entry { net, obj, geo, fine, fineObj }: its node geometry and what draws it (obj: its
+/// triangles, or points without any; a wireframe under a fine surface), and its fine surface
+/// (fine_surface.js, null without one) and that surface's mesh.
 export const G = { bodies: [], ghosts: [], nets: [], jointAxes: [], obstacleBox: new THREE.Box3() };
 
 /// Builds the static world of the scene message `msg`.
@@ -201,8 +212,19 @@ export function buildScene(msg) {
     const geo = new THREE.BufferGeometry();
     geo.setAttribute('position', new THREE.BufferAttribute(new Float32Array(3 * n.node_count), 3));
     const mat = new THREE.MeshLambertMaterial({ color: COLORS.net, side: THREE.DoubleSide });
-    let obj;
-    if (n.triangles.length) {
+    let obj, fine = null, fineObj = null;
+    if (hasFineSurface(n)) {
+      // The organ is its fine surface, in the net's material; the net a wireframe under it.
+      fine = fineSurface(n);
+      fineObj = new THREE.Mesh(fine.geo, mat);
+      fineObj.frustumCulled = false;
+      fineObj.name = n.name;
+      scene3.add(fineObj);
+      geo.setIndex(n.surface.net_triangles);
+      obj = new THREE.Mesh(geo, new THREE.MeshBasicMaterial({ color: COLORS.coarseNet, wireframe: true }));
+      obj.visible = false;
+    } else if (n.triangles.length) {
+      if (n.surface) console.warn(`net ${n.name}: its fine surface of ${n.surface.triangle_count} triangles was too large to send: the net is drawn`);
       geo.setIndex(n.triangles.flat());
       obj = new THREE.Mesh(geo, mat);
     } else {
@@ -210,7 +232,7 @@ export function buildScene(msg) {
     }
     obj.frustumCulled = false;
     scene3.add(obj);
-    G.nets.push({ net: n, obj, geo });
+    G.nets.push({ net: n, obj, geo, fine, fineObj });
   }
   for (const j of msg.joints) {
     const a = new THREE.AxesHelper(1);
@@ -274,12 +296,13 @@ export function showBodies(fr) {
     G.ghosts[b].quaternion.set(t[3], t[4], t[5], t[6]);
     G.bodies[b].userData.material.color.setHex(b === h.attached_body ? COLORS.tool : COLORS.body);
   }
-  for (const { net, geo } of G.nets) {
+  for (const { net, geo, fine } of G.nets) {
     const pos = geo.attributes.position.array;
     const N = FLOATS.node_position;
     pos.set(fr.node_position.subarray(N * net.node_begin, N * (net.node_begin + net.node_count)));
     geo.attributes.position.needsUpdate = true;
-    if (geo.index) geo.computeVertexNormals();
+    if (fine) fine.update(pos);  // the net is then a wireframe: no normals
+    else if (geo.index) geo.computeVertexNormals();
     geo.computeBoundingSphere();
   }
 }

@@ -5,7 +5,7 @@ import { S, errors, setStatus, updateCounters, writeProbe } from './panel.js';
 import { FLOATS, setFrameLayout, LIFECYCLE, STARTUP, STEP, FLAGS, bits } from './protocol.js';
 import { params, renderer, scene3, camera, render, requestRender } from './stage.js';
 import { controls, fitCamera, followTool, preset, view } from './camera.js';
-import { COLORS, G, buildScene, addPlanes, frameBox, showBodies, showJointAxes, showCollisionSpheres, sizeCores } from './geometry.js';
+import { COLORS, G, buildScene, addPlanes, frameBox, showBodies, showJointAxes, showCollisionSpheres, showCoarseNets, sizeCores } from './geometry.js';
 import { buildContacts, showContacts, forceScale } from './contacts.js';
 import { showLegend } from './legend.js';
 import { showPick, pick } from './pick.js';
@@ -60,6 +60,7 @@ function draw(fr) {
   const { drawn, arrows, fmag } = showContacts(fr, contactsOn, toggles.springs.checked);
   showJointAxes(toggles.axes.checked);
   showCollisionSpheres(toggles.spheres.checked);
+  showCoarseNets(toggles.net.checked);
   showLegend(forceScale);
   banner = showFault(fr, managed);
   contactText = `contacts: ${h.num_contacts}${h.num_contacts > drawn && contactsOn ? ` (${drawn} drawn)` : ''}` +
@@ -102,7 +103,7 @@ function onFrame(fr) {
 }
 
 const toggles = {};
-for (const id of ['contacts', 'axes', 'spheres', 'springs']) {
+for (const id of ['contacts', 'axes', 'spheres', 'springs', 'net']) {
   toggles[id] = document.getElementById(id);
   toggles[id].onchange = () => { if (S.last) draw(S.last); };  // at once, paused or not
 }
@@ -191,6 +192,17 @@ window.numenView = {
       p.meshBodies.push({ name: b.name, sent: b.mesh.triangle_count, drawn: index ? index.count / 3 : 0,
                           position: Array.from(last.body_pose.subarray(P * i, P * i + 3)),
                           middle: middle?.toArray() ?? null, middlePx: middle ? projectPoint(middle) : null });
+    });
+    // The nets with a fine surface: its vertices and triangles sent and drawn, a few of its
+    // vertices in the frame shown (m, world: indices 0, V/3, 2V/3, V − 1), the middle of its box
+    // and whether the coarse net is shown.
+    p.netSurfaces = G.nets.filter((e) => e.fine).map(({ net, geo, fineObj }) => {
+      const V = net.surface.point_count, pos = fineObj.geometry.attributes.position.array;
+      const sample = [0, Math.floor(V / 3), Math.floor(2 * V / 3), V - 1];
+      const middle = new THREE.Box3().setFromBufferAttribute(fineObj.geometry.attributes.position).getCenter(new THREE.Vector3());
+      return { name: net.name, points: V, sent: net.surface.triangle_count, drawn: fineObj.geometry.index.count / 3,
+               sample, samplePositions: sample.map((i) => Array.from(pos.subarray(3 * i, 3 * i + 3))),
+               middle: middle.toArray(), middlePx: projectPoint(middle), coarseShown: G.nets.find((e) => e.geo === geo).obj.visible };
     });
     if (last) {
       // The force arrows of the first contacts: from the contact point to the arrow's tip (px).

@@ -7,9 +7,11 @@
 
 #include "build_features.hpp"
 #include "child_process.hpp"
+#include "fine_surface_organ.hpp"
 #include "numen/sim/input/input_error.hpp"
 #include "numen/sim/run/run.hpp"
 #include "numen/sim/scene/scene.hpp"
+#include "numen/sim/view/view_scene.hpp"
 #include "lattice_scene.hpp"
 #include "temp_dir.hpp"
 
@@ -82,6 +84,31 @@ TEST(ViewRecording, ARunRecordsEveryDueFrameInOrder) {
   float pose[7];
   view.body_pose(static_cast<std::uint32_t>(view.header().attached_body), pose);
   for (float v : pose) EXPECT_TRUE(std::isfinite(v));
+}
+
+// A run of an organ with a fine surface (mapped by hand: tests/support/fine_surface_organ.hpp)
+// records it in the scene message, and the reader `numen view` uses accepts the file: the
+// surface as the scene message of the run gives it, every frame of the layout.
+TEST(ViewRecording, ARunOfAnOrganWithAFineSurfaceRecordsItAndReadsBack) {
+  NUMEN_REQUIRE_DEFORMABLE();
+  TempDir dir;
+  numen::sim::Scene scene =
+      numen::sim::load_scene(std::string(NUMEN_TEST_DATA_DIR) + "/node_contacts.toml");
+  ASSERT_EQ(numen::test::map_fine_icosphere_onto_net(scene.model, 0, 3), "");
+  numen::sim::RunOptions options;
+  options.duration_s = 0.2;
+  options.record_view_path = (dir / "fine.nmv").string();
+  const numen::sim::RunSummary s = numen::sim::run_scene(scene, options);
+  ASSERT_EQ(s.exit_status, 0);
+  const ViewRecordingReader reader(options.record_view_path);
+  EXPECT_EQ(reader.size(), 12u);  // 0.2 s at 60 Hz
+  const auto recorded = nlohmann::json::parse(reader.scene_message());
+  const auto sent = nlohmann::json::parse(numen::sim::view_scene_message(
+      scene, numen::sim::view_frame_layout(scene), numen::sim::RunOptions{}.view_rate_hz));
+  ASSERT_TRUE(recorded["nets"][0].contains("surface"));
+  EXPECT_EQ(recorded["nets"][0]["surface"]["point_count"].get<int>(), 642);
+  EXPECT_EQ(recorded["nets"][0]["surface"], sent["nets"][0]["surface"]);
+  EXPECT_FALSE(recorded["nets"][1].contains("surface"));
 }
 
 TEST(ViewRecording, EveryDamagedFileIsRefusedWithItsByteOffset) {

@@ -5,12 +5,19 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
+#include <cmath>
 #include <filesystem>
 #include <nlohmann/json.hpp>
+#include <vector>
 
 #include "build_features.hpp"
+#include "fine_surface_organ.hpp"
+#include "numen/core/data.hpp"
 #include "numen/core/mesh_shape.hpp"
 #include "numen/core/model.hpp"
+#include "numen/core/net_surface_map.hpp"
 #include "numen/sim/scene/scene.hpp"
 
 namespace {
@@ -114,6 +121,85 @@ TEST(ViewSceneMessage, CarriesABodysMeshWithItsPoseInTheBodyFrame) {
   EXPECT_EQ(lobe["spheres"].size(), 4u);  // its feet stay: the page's toggle
   EXPECT_EQ(j["bodies"][1]["name"], "probe");
   EXPECT_FALSE(j["bodies"][1].contains("mesh"));
+}
+
+}  // namespace
+
+namespace {
+
+/// Fine vertex `i` of a net's scene-message "surface" `s` at the net's node positions `x`
+/// (net-local, m), as docs/viewer.md says the page computes it: p = Σ w x + F · offset, the
+/// weights divided by their sum, F = [e1, e2, n] of the net triangle in its corner order.
+numen::core::Vec3 fine_vertex_from_scene_message(const nlohmann::json& s, int i,
+                                                 const std::vector<numen::core::Vec3>& x) {
+  const int f = s["face"][static_cast<std::size_t>(i)].get<int>();
+  std::array<numen::core::Vec3, 3> c;
+  numen::core::Vec3 w, offset;
+  for (std::size_t k = 0; k < 3; ++k) {
+    c[k] = x[s["net_triangles"][3 * static_cast<std::size_t>(f) + k].get<std::size_t>()];
+    w[static_cast<int>(k)] = s["weights"][3 * static_cast<std::size_t>(i) + k].get<double>();
+    offset[static_cast<int>(k)] = s["offset"][3 * static_cast<std::size_t>(i) + k].get<double>();
+  }
+  w /= w.sum();
+  const numen::core::Vec3 e1 = (c[1] - c[0]).normalized();
+  const numen::core::Vec3 n = (c[1] - c[0]).cross(c[2] - c[0]).normalized();
+  return w[0] * c[0] + w[1] * c[1] + w[2] * c[2] + offset[0] * e1 + offset[1] * n.cross(e1) + offset[2] * n;
+}
+
+// A net with a fine surface (mapped by hand: tests/support/fine_surface_organ.hpp) carries it
+// in its entry's "surface": the net's triangles in the model's corner order, each fine vertex's
+// net-local triangle, weights and offset, the fine triangles; from them and the nodes' positions
+// the page's formula gives core::net_surface_positions() within the rounding sent (0.3 µm), at
+// rest and with the nodes moved. A net without one has no "surface".
+TEST(ViewSceneMessage, CarriesANetsFineSurfaceFromWhichThePagePlacesItsVertices) {
+  NUMEN_REQUIRE_DEFORMABLE();
+  numen::sim::Scene scene =
+      numen::sim::load_scene(std::string(NUMEN_TEST_DATA_DIR) + "/node_contacts.toml");
+  numen::core::Model& model = scene.model;
+  ASSERT_EQ(model.nets.size(), 2u);  // the organ (icosphere 2), the ball (icosphere 1)
+  ASSERT_EQ(numen::test::map_fine_icosphere_onto_net(model, 0, 4), "");
+  const numen::core::NetModel& net = model.nets[0];
+  ASSERT_EQ(net.surface_point_count, 2562);
+  ASSERT_EQ(net.surface_face_count, 5120);
+  const auto j = parsed_scene_message(scene);
+  EXPECT_FALSE(j["nets"][1].contains("surface"));
+  ASSERT_TRUE(j["nets"][0].contains("surface"));
+  const auto& s = j["nets"][0]["surface"];
+  EXPECT_EQ(s["point_count"].get<int>(), net.surface_point_count);
+  EXPECT_EQ(s["triangle_count"].get<int>(), net.surface_face_count);
+  ASSERT_EQ(s["net_triangles"].size(), 3u * static_cast<std::size_t>(net.face_count));
+  for (int f = 0; f < net.face_count; ++f)
+    for (int k = 0; k < 3; ++k)
+      ASSERT_EQ(s["net_triangles"][static_cast<std::size_t>(3 * f + k)].get<int>(),
+                model.net_faces[static_cast<std::size_t>(net.face_begin + f)][static_cast<std::size_t>(k)] -
+                    net.node_begin);
+  ASSERT_EQ(s["face"].size(), 2562u);
+  ASSERT_EQ(s["weights"].size(), 3u * 2562u);
+  ASSERT_EQ(s["offset"].size(), 3u * 2562u);
+  ASSERT_EQ(s["triangles"].size(), 3u * 5120u);
+  for (int t = 0; t < net.surface_face_count; ++t)
+    for (int k = 0; k < 3; ++k)
+      ASSERT_EQ(s["triangles"][static_cast<std::size_t>(3 * t + k)].get<int>(),
+                model.net_surface_faces[static_cast<std::size_t>(net.surface_face_begin + t)][static_cast<std::size_t>(k)] -
+                    net.surface_point_begin);
+  // Rounded as documented: weights to 1e-6, offsets to 1e-7 m (a short number each).
+  for (const auto& w : s["weights"]) EXPECT_LE(w.dump().size(), 8u) << w.dump();
+  for (const auto& o : s["offset"]) EXPECT_LE(o.dump().size(), 13u) << o.dump();
+
+  numen::core::Data data = numen::core::make_data(model);
+  std::vector<numen::core::Vec3> expected(2562);
+  for (const double moved : {0.0, 0.002}) {  // at rest, then every node moved by up to 2 mm
+    for (int i = 0; i < net.node_count; ++i)
+      data.nodes[static_cast<std::size_t>(net.node_begin + i)].position +=
+          moved * numen::core::Vec3(std::sin(1.7 * i), std::cos(2.3 * i), std::sin(0.9 * i + 1.0));
+    ASSERT_EQ(numen::core::net_surface_positions(model, data, 0, expected), 2562);
+    std::vector<numen::core::Vec3> x;
+    for (int i = 0; i < net.node_count; ++i) x.push_back(data.nodes[static_cast<std::size_t>(net.node_begin + i)].position);
+    double worst = 0.0;
+    for (int i = 0; i < 2562; ++i)
+      worst = std::max(worst, (fine_vertex_from_scene_message(s, i, x) - expected[static_cast<std::size_t>(i)]).norm());
+    EXPECT_LT(worst, 3e-7) << "nodes moved by up to " << moved << " m";
+  }
 }
 
 }  // namespace

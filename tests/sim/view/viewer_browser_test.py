@@ -21,6 +21,11 @@ it holds its frame while frames keep arriving, steps back, scrubs and returns to
 On a 2 s run of tests/data/mesh_body.toml (a probe pushing a free body whose shape is a mesh):
   - the body is drawn as its mesh (every triangle sent), in its grey where the surface's middle
     projects, and the surface moves with the body from the first frame to the last.
+On a run of tests/data/node_contacts.toml whose recording is given a fine surface on the organ's
+net (fine_surface_recording.py):
+  - the organ is drawn as its fine surface (every triangle sent), in the net's green where its
+    middle projects, with the coarse net hidden until its toggle shows it; the page's fine
+    vertices are where the formula of docs/viewer.md puts them from the frame's node positions.
 On a run that latches a fault (the lattice scene on a bus losing 30 % of its frames):
   - the fault banner shows, with its cause, and the replay timeline has its mark.
 Exit 0: passed; 1: failed; 77: skipped, only when Chromium is not installed.
@@ -32,6 +37,7 @@ Exit 0: passed; 1: failed; 77: skipped, only when Chromium is not installed.
 """
 import argparse
 import colorsys
+import math
 import os
 import re
 import shutil
@@ -42,6 +48,7 @@ import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import cdp  # noqa: E402
+import fine_surface_recording  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
 FIGURE_SCENES = [("default", None), ("lattice", "sim/scenes/lattice.toml"),
@@ -53,6 +60,9 @@ INSTRUMENT = ("default", "lattice")  # the scenes of the articulated instrument 
 # A probe pushing a free body whose shape is a mesh (docs/meshes.md "Mesh bodies"): its whole 2 s.
 MESH_BODY = os.path.join(ROOT, "tests", "data", "mesh_body.toml")
 MESH_BODY_S = 2.0
+# A probe pressed into a small icosphere organ (tests/data/node_contacts.toml, its 0.6 s), given a
+# fine surface on the organ's net (fine_surface_recording.py).
+FINE_SURFACE_SCENE = os.path.join(ROOT, "tests", "data", "node_contacts.toml")
 WIDTH, HEIGHT = 1200, 760  # the window
 VIEW_W, VIEW_H = 860, 760  # the 3D view in it (the rest: the side panel)
 RECONNECT_S = 5.0          # the page resumes within this after the server is back (backoff ≤ 2 s)
@@ -273,6 +283,68 @@ def check_mesh_bodies(page, probe, shot, name, frames):
             failures.append("%s: %s: the body's grey is not where its surface projects (%d pixels)" % (name, n, grey))
         if off > 0.5e-3:
             failures.append("%s: %s: the surface does not move with the body (%.2f mm apart)" % (name, n, 1e3 * off))
+    return failures
+
+
+def is_net(p):
+    """The nets' green (geometry.js COLORS.net, 0x60c060), lit: green well above red and blue
+    (the floor's 0x707a68 is not)."""
+    return p[1] > 60 and p[1] - p[0] > 25 and p[1] - p[2] > 25
+
+
+def check_fine_surface(numen, browser, out):
+    """A recording whose organ net carries a fine surface: drawn as that surface, in the net's
+    green, its vertices placed by the documented formula (within 2 µm of this script's, from
+    the same float32 node positions), the coarse net a toggle."""
+    from PIL import Image  # python3-pil
+    name = "fine_surface"
+    try:
+        plain, r = record(numen, out, name + "_plain", FINE_SURFACE_SCENE, 0.6)
+    except RuntimeError as e:
+        return [str(e)]
+    if r.returncode != 0:
+        return ["%s: exit %d\n%s" % (name, r.returncode, r.stderr)]
+    rec = os.path.join(out, name + ".nmv")
+    net, frames = fine_surface_recording.add_fine_surface(plain, rec, "organ")
+    surface = net["surface"]
+    viewer = Viewer(numen, rec)
+    failures = []
+    try:
+        last = len(frames) - 1
+        page = open_page(browser, viewer.url, "?frame=%d&w=%d&h=%d" % (last, VIEW_W, VIEW_H))
+        shot = os.path.join(out, "viewer_%s.png" % name)
+        page.screenshot(shot)
+        probe = page.eval("numenView.probe()")
+        shown = probe.get("netSurfaces", [])
+        if len(shown) != 1 or shown[0]["name"] != "organ":
+            return failures + ["%s: the page shows fine surfaces %s, not the organ's" % (name, shown)]
+        fs = shown[0]
+        x = fine_surface_recording.node_positions(frames[last])[net["node_begin"]:net["node_begin"] + net["node_count"]]
+        off = max(math.dist(fine_surface_recording.fine_vertex(surface, i, x), p)
+                  for i, p in zip(fs["sample"], fs["samplePositions"]))
+        px = fs["middlePx"]
+        img = Image.open(shot).convert("RGB")
+        green = near_colour(img, px["x"], px["y"], 3, is_net) if px["inside"] else 0
+        print("%s: %d fine vertices, %d of %d triangles drawn on a net of %d nodes, %d net-green pixels at "
+              "its middle, sample vertices %.2g m from the formula's"
+              % (name, fs["points"], fs["drawn"], fs["sent"], net["node_count"], green, off))
+        if fs["points"] != surface["point_count"] or fs["drawn"] != surface["triangle_count"] or fs["sent"] != fs["drawn"]:
+            failures.append("%s: %d triangles drawn of the %d sent (%d vertices)" % (name, fs["drawn"], fs["sent"], fs["points"]))
+        if off > 2e-6:
+            failures.append("%s: the page's fine vertices are %.3g m from where the formula puts them" % (name, off))
+        if green < 10:
+            failures.append("%s: the net's green is not where the fine surface's middle projects (%d pixels)" % (name, green))
+        if fs["coarseShown"]:
+            failures.append("%s: the coarse net is shown before its toggle is" % name)
+        page.eval("document.getElementById('net').click()")
+        if page.wait("numenView.probe().netSurfaces[0].coarseShown", 5) is None:
+            failures.append("%s: the coarse-net toggle does not show the net" % name)
+        failures += page_failures(page, name)
+        page.send("Page.close")
+    finally:
+        f = viewer.stop()
+        if f:
+            failures.append(f)
     return failures
 
 
@@ -578,6 +650,7 @@ def main():
             failures += check_scene(a.numen, browser, a.out, name, scene, duration, figure)
         if not a.scene and not a.figures:
             failures += check_live(a.numen, browser)
+            failures += check_fine_surface(a.numen, browser, a.out)
             failures += check_fault(a.numen, browser, a.out)
     shutil.rmtree(profile, ignore_errors=True)
     for f in failures:

@@ -19,6 +19,12 @@ inline constexpr int kViewSceneVersion = 1;
 /// larger mesh is sent as its bounds ("aabb") and triangle count only.
 inline constexpr int kViewMeshMaxTriangles = 200'000;
 
+/// Most triangles of a net's fine surface (core::add_net_surface()) the scene message carries
+/// with its embeddings (about 100 bytes of JSON per fine vertex: ~20 MB at this bound); a larger
+/// one is sent as its point and triangle counts only, and the page draws the net's own
+/// triangles.
+inline constexpr int kViewNetSurfaceMaxTriangles = 400'000;
+
 /// The frame layout of a run of `scene`: its bodies, net nodes and axes, and room for every
 /// contact the model can report (core::kMaxContacts rigid + the nets' node contacts).
 platform::StateFrameLayout view_frame_layout(const Scene& scene);
@@ -32,10 +38,16 @@ platform::StateFrameLayout view_frame_layout(const Scene& scene);
 /// half_length / spheres in the world frame; a mesh: triangle_count, and vertices (flat x y z,
 /// m, in the obstacle's frame) and triangles (flat i j k, outward), or above
 /// kViewMeshMaxTriangles its aabb [[min], [max]] only), nets (name, rigid body, node_begin,
-/// node_count, node radius, triangles as local node indices), joints (name, type, parent, child
+/// node_count, node radius, triangles as local node indices; a net with a fine surface
+/// (core::NetModel::surface_point_count > 0) also "surface": point_count, triangle_count and, up
+/// to kViewNetSurfaceMaxTriangles, net_triangles (the net's Model::net_faces as flat local node
+/// indices, corner order kept: it defines each triangle's frame), face (per fine vertex, the
+/// index of its triangle in net_triangles), weights (flat, 3 per vertex, to 1e-6), offset (flat,
+/// 3 per vertex, m, in the triangle's frame, to 1e-7) and triangles (flat i j k, indices of the
+/// fine surface's vertices, outward): docs/viewer.md, "Scene message"), joints (name, type, parent, child
 /// (−1: world), frame in the parent and in the child), the device (name, kind, protocol "managed" |
 /// "minimal" | "admittance", axis names) and the initially attached body. Numbers are the
-/// model's doubles.
+/// model's doubles, but for a fine surface's weights and offsets (rounded as said).
 std::string view_scene_message(const Scene& scene, const platform::StateFrameLayout& layout,
                                double display_rate_hz);
 
