@@ -36,7 +36,9 @@ struct NetSurfacePoint {
   Vec3 offset = Vec3::Zero();     ///< Foot point to vertex in the triangle's frame F (m).
 };
 
-/// Maps a fine surface onto net `net` of `model` (after add_net(), before finalize_model()).
+/// Maps a fine surface onto net `net` of `model`: after add_net(), before or after
+/// finalize_model() (which reads nothing of it), before make_data() (which sizes the contacts'
+/// scratch by it).
 ///
 /// `vertices`: the fine surface's vertices in the net's rigid component's body frame (the frame
 /// of Model::node_rest; m), size V ≥ 3. `triangles`: the fine surface's triangles as indices into
