@@ -414,7 +414,9 @@ TEST(RealtimeSetup, TimerSlackIsSetOnTheCallingThreadAndReadBackThere) {
   EXPECT_EQ(current_timer_slack_ns(), main_before);  // this thread's is its own
   const auto lines = describe(r);
   EXPECT_EQ(lines.back(), "timer slack: applied: " + r.timer_slack.message);
-  EXPECT_TRUE(any_step_requested(RealtimeSettings{.timer_slack_ns = 1}));
+  RealtimeSettings slack_only;
+  slack_only.timer_slack_ns = 1;
+  EXPECT_TRUE(any_step_requested(slack_only));
   EXPECT_FALSE(any_step_requested(RealtimeSettings{}));
   EXPECT_EQ(describe(apply_realtime(RealtimeSettings{})).back(), "timer slack: not requested");
 }

@@ -338,12 +338,13 @@ TEST(NumenCli, RunWhoseSummaryStdoutRefusesIsLostRecords) {
           reason + ")\n";
       EXPECT_NE(r.err.find(status_line), std::string::npos) << reason << ": " << r.err;
       EXPECT_EQ(r.err.find("exit status 0"), std::string::npos) << reason << ": " << r.err;
-      if (!json)
+      if (!json) {
         EXPECT_EQ(r.err.rfind("numen: stdout: cannot write the summary (" + reason +
                                   "); it follows on stderr\nscene ",
                               0),
                   0u)
             << reason << ": " << r.err;
+      }
     }
   }
 }
