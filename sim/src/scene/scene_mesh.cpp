@@ -9,11 +9,10 @@
 #include <system_error>
 #include <utility>
 
-#include <time.h>
-
 #include "numen/core/mesh_shape.hpp"
 #include "numen/sim/scene/mesh_cache.hpp"
 #include "numen/sim/scene/mesh_file.hpp"
+#include "numen/sim/study/study_common.hpp"  // thread_cpu_seconds(): a build's cost, whatever else runs
 
 namespace numen::sim {
 namespace {
@@ -22,13 +21,6 @@ namespace {
 long triangle_index(const core::TriangleMesh& mesh, const std::array<int, 3>& tri) {
   const auto it = std::find(mesh.triangles.begin(), mesh.triangles.end(), tri);
   return it == mesh.triangles.end() ? -1 : static_cast<long>(it - mesh.triangles.begin());
-}
-
-/// CPU time of the calling thread (s): a build's cost, whatever else the machine runs.
-double thread_cpu_seconds() {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
 }
 
 }  // namespace
@@ -151,14 +143,14 @@ int add_mesh_shape(const TomlTable& t, const std::filesystem::path& scene_dir, c
       t.fail("cache", "expected true, false or a file path (a string)");
     }
   }
-  const double t0 = thread_cpu_seconds();
+  const double t0 = study::thread_cpu_seconds();
   MeshCacheOutcome outcome;
   const std::string err =
       cache.empty() ? core::build_mesh_shape(file.mesh, shape, options)
                     : build_mesh_shape_cached(file.mesh, options, cache, shape, outcome);
   if (!err.empty()) t.fail("file", file.path + ": " + err);
   if (!outcome.note.empty()) warnings.push_back(mesh_warning(t, "cache", file.path, outcome.note));
-  const double seconds = thread_cpu_seconds() - t0;
+  const double seconds = study::thread_cpu_seconds() - t0;
   if (!outcome.loaded && seconds >= kSlowMeshBuildSeconds) {
     std::ostringstream os;
     os.precision(2);
