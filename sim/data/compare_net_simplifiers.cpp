@@ -1,14 +1,15 @@
 /// @file compare_net_simplifiers.cpp
 /// Measures the two simplifiers Debian 12 packages for making an organ's coarse simulation net
 /// out of a fine surface (docs/organs.md, "A fine surface on a coarser net"): CGAL 5.5's
-/// Surface_mesh_simplification (edge collapse, Lindstrom–Turk cost and placement, link condition)
-/// and meshoptimizer 0.18's meshopt_simplify (edge collapse onto existing vertices, quadric error).
+/// Surface_mesh_simplification (edge collapse, link condition) with Lindstrom–Turk cost and
+/// placement ("CGAL", what numen uses) and with Garland–Heckbert plane quadrics ("CGAL-GH"), and
+/// meshoptimizer 0.18's meshopt_simplify (edge collapse onto existing vertices, quadric error).
 /// Not part of the build: a measurement, run by hand.
 ///
 ///     python3 sim/data/make_fine_ellipsoid.py 32 > /tmp/e20k.obj    # 20 480 triangles
 ///     python3 sim/data/make_fine_ellipsoid.py 100 > /tmp/e200k.obj  # 200 000 triangles
-///     g++ -O2 -std=c++20 -DNDEBUG sim/data/compare_net_simplifiers.cpp -lmeshoptimizer \
-///         -o /tmp/compare_net_simplifiers
+///     g++ -O2 -std=c++20 -DNDEBUG -DCGAL_EIGEN3_ENABLED -I/usr/include/eigen3 \
+///         sim/data/compare_net_simplifiers.cpp -lmeshoptimizer -o /tmp/compare_net_simplifiers
 ///     /tmp/compare_net_simplifiers 1024 /tmp/e20k.obj /tmp/e200k.obj
 ///
 /// Per mesh and simplifier, one line: wall and thread CPU time (medians of 5 runs, the mesh already in memory,
@@ -35,6 +36,7 @@
 #include <CGAL/Simple_cartesian.h>
 #include <CGAL/Surface_mesh.h>
 #include <CGAL/Surface_mesh_simplification/Policies/Edge_collapse/Count_stop_predicate.h>
+#include <CGAL/Surface_mesh_simplification/Policies/Edge_collapse/GarlandHeckbert_plane_policies.h>
 #include <CGAL/Surface_mesh_simplification/edge_collapse.h>
 #include <meshoptimizer.h>
 #include <time.h>
@@ -75,8 +77,11 @@ Surface read_obj(const char* path) {
   return s;
 }
 
-Surface simplify_cgal(const Surface& fine, int nodes) {
-  using Mesh = CGAL::Surface_mesh<Point>;
+using Mesh = CGAL::Surface_mesh<Point>;
+
+/// CGAL's edge collapse to `nodes` vertices, Lindstrom–Turk (`garland_heckbert` false, CGAL's
+/// default policies) or Garland–Heckbert plane quadrics.
+Surface simplify_cgal(const Surface& fine, int nodes, bool garland_heckbert) {
   Mesh m;
   std::vector<Mesh::Vertex_index> vi;
   for (const Point& p : fine.v) vi.push_back(m.add_vertex(p));
@@ -85,7 +90,13 @@ Surface simplify_cgal(const Surface& fine, int nodes) {
   // A collapse takes one vertex and three edges away from a closed manifold surface.
   const long stop = e0 - 3L * (static_cast<long>(fine.v.size()) - nodes) + 1;
   CGAL::Surface_mesh_simplification::Count_stop_predicate<Mesh> until(static_cast<std::size_t>(stop));
-  CGAL::Surface_mesh_simplification::edge_collapse(m, until);
+  if (garland_heckbert) {
+    CGAL::Surface_mesh_simplification::GarlandHeckbert_plane_policies<Mesh, Kernel> gh(m);
+    CGAL::Surface_mesh_simplification::edge_collapse(
+        m, until, CGAL::parameters::get_cost(gh.get_cost()).get_placement(gh.get_placement()));
+  } else {
+    CGAL::Surface_mesh_simplification::edge_collapse(m, until);
+  }
   m.collect_garbage();
   Surface out;
   for (Mesh::Vertex_index v : m.vertices()) out.v.push_back(m.point(v));
@@ -225,7 +236,8 @@ int main(int argc, char** argv) {
   const int nodes = std::atoi(argv[1]);
   for (int i = 2; i < argc; ++i) {
     const Surface fine = read_obj(argv[i]);
-    measure("CGAL", fine, nodes, simplify_cgal);
+    measure("CGAL", fine, nodes, [](const Surface& f, int n) { return simplify_cgal(f, n, false); });
+    measure("CGAL-GH", fine, nodes, [](const Surface& f, int n) { return simplify_cgal(f, n, true); });
     measure("meshopt", fine, nodes, simplify_meshopt);
   }
 }
