@@ -15,6 +15,7 @@
 
 #include "numen/core/capacity.hpp"
 #include "numen/core/data.hpp"
+#include "numen/core/features.hpp"
 #include "numen/core/mesh_shape.hpp"
 #include "numen/core/net_surface_map.hpp"
 #include "numen/core/step_stages.hpp"
@@ -96,7 +97,8 @@ std::vector<MeshLine> mesh_lines(const Scene& scene) {
     }
     l.fine_vertices = n.surface_point_count;
     l.fine_triangles = n.surface_face_count;
-    l.fine_max_distance_m = core::net_surface_max_offset(m, static_cast<int>(k));
+    if constexpr (core::kWithDeformable)  // net_surface_map.cpp is built with the nets only
+      l.fine_max_distance_m = core::net_surface_max_offset(m, static_cast<int>(k));
     l.map_heap = map_bytes(m, n);
     out.push_back(std::move(l));
   }

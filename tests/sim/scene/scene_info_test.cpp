@@ -19,7 +19,7 @@
 #include "numen/core/data.hpp"
 #include "numen/core/features.hpp"
 #include "numen/core/mesh_shape.hpp"
-#include "numen/core/net_surface_map.hpp"
+#include "numen/core/net_surface_map.hpp"  // NetSurfacePoint
 #include "numen/core/step.hpp"
 #include "numen/core/step_stages.hpp"
 #include "numen/hal/features.hpp"
@@ -286,8 +286,8 @@ TEST(SceneInfo, ASimplifiedOrgansNetAndFineSurface) {
   EXPECT_EQ(l->mesh_triangles, 5120);
   EXPECT_EQ(l->fine_vertices, 2562);
   EXPECT_EQ(l->fine_triangles, 5120);
-  EXPECT_EQ(l->fine_max_distance_m, core::net_surface_max_offset(scene.model, 0));
-  EXPECT_GT(l->fine_max_distance_m, 0.0);
+  EXPECT_GT(l->fine_max_distance_m, 0.0);  // core::net_surface_max_offset()
+  EXPECT_LT(l->fine_max_distance_m, 0.5e-3);
   EXPECT_GT(l->simplify_cpu_s, 0.0);
   // Embeddings, fine triangles, and per net triangle its list's start and its fine triangles.
   EXPECT_GE(l->map_heap, 2562 * sizeof(core::NetSurfacePoint) + 5120 * 3 * sizeof(int) +
