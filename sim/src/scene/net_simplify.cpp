@@ -13,6 +13,7 @@
 #include <CGAL/AABB_tree.h>
 #include <CGAL/AABB_triangle_primitive.h>
 #include <CGAL/Simple_cartesian.h>
+#include <CGAL/version.h>
 #include <CGAL/Surface_mesh.h>
 #include <CGAL/Surface_mesh_simplification/Policies/Edge_collapse/Count_stop_predicate.h>
 #include <CGAL/Surface_mesh_simplification/Policies/Edge_collapse/LindstromTurk_cost.h>
@@ -72,6 +73,8 @@ std::string simplify_to_net(const core::TriangleMesh& fine, int nodes, core::Tri
   }
   return "";
 }
+
+std::uint64_t net_simplifier_version() { return static_cast<std::uint64_t>(CGAL_VERSION_NR); }
 
 std::vector<int> nearest_net_triangles(const core::TriangleMesh& net,
                                        std::span<const core::Vec3> points) {

@@ -6,6 +6,7 @@
 /// condition keeping the surface manifold) and its AABB tree. CGAL's headers are included by
 /// net_simplify.cpp only (a heavy compile). Private to numen::sim; load time only (allocates).
 
+#include <cstdint>
 #include <span>
 #include <string>
 #include <vector>
@@ -25,6 +26,10 @@ namespace numen::sim {
 /// that does not make a manifold, consistently wound surface with the ones before it, by index);
 /// `net` is then empty.
 std::string simplify_to_net(const core::TriangleMesh& fine, int nodes, core::TriangleMesh& net);
+
+/// The simplifier's identity for a cache of its nets (mesh_cache.hpp, net_cache_key()): CGAL's
+/// CGAL_VERSION_NR, so that another CGAL's nets are made again.
+std::uint64_t net_simplifier_version();
 
 /// For each point of `points` (the frame of `net`'s vertices, m), the index of `net`'s triangle
 /// nearest to it (CGAL's AABB tree, exact closest-point distances; ties to the first found).

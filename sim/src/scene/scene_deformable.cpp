@@ -15,6 +15,7 @@
 #include "numen/core/mesh.hpp"
 #include "numen/core/net_model.hpp"
 #include "numen/core/net_surface_map.hpp"
+#include "numen/sim/scene/mesh_cache.hpp"
 #include "numen/sim/study/study_common.hpp"  // thread_cpu_seconds()
 #include "net_simplify.hpp"
 #include "scene_mesh.hpp"
@@ -137,7 +138,7 @@ core::TriangleMesh parse_mesh(const TomlTable& t, const std::filesystem::path& s
   }
   // "obj" (the key's first name) and "file": any format the mesh reader takes.
   // Its node count is checked once the net's size is known (net_size()).
-  t.allow_only({NUMEN_DEFORMABLE_COMMON_KEYS, "file", "units", "nodes", "edge_length"});
+  t.allow_only({NUMEN_DEFORMABLE_COMMON_KEYS, "file", "units", "nodes", "edge_length", "cache"});
   return read_scene_mesh_file(t, scene_dir).mesh;
 }
 
@@ -194,13 +195,15 @@ int net_size(const TomlTable& t, const core::TriangleMesh& mesh, NetLoad& load) 
 }
 
 /// Simplifies mesh file `mesh` (scaled and placed, m) to a net of about `nodes` nodes
-/// (simplify_to_net()). Fails, located at `key` (the key that asked for it) and naming the file:
-/// a mesh that is not closed (a hole: the net would be open where the organ is closed), a
-/// simplification that fails or gives a net that is not a valid, closed surface. Appends a
-/// warning when the net keeps more nodes than asked.
-core::TriangleMesh simplify_mesh_file(const TomlTable& t, std::string_view key,
-                                      const core::TriangleMesh& mesh, int nodes,
-                                      std::vector<std::string>& warnings) {
+/// (simplify_to_net()), or reads that net from the cache file `cache` names (mesh_cache.hpp,
+/// simplify_net_cached(); `load` records which). Fails, located at `key` (the key that asked for
+/// it) and naming the file: a mesh that is not closed (a hole: the net would be open where the
+/// organ is closed), a simplification that fails or gives a net that is not a valid, closed
+/// surface. Appends a warning when the net keeps more nodes than asked, and at `cache` when a
+/// cache file is stale, damaged or cannot be written.
+core::TriangleMesh simplify_mesh_file(const TomlTable& t, const std::filesystem::path& scene_dir,
+                                      std::string_view key, const core::TriangleMesh& mesh,
+                                      int nodes, NetLoad& load, std::vector<std::string>& warnings) {
   const std::string file = t.string("file");
   const int boundary = core::build_mesh_topology(mesh).boundary_edges;
   if (boundary > 0)
@@ -209,10 +212,24 @@ core::TriangleMesh simplify_mesh_file(const TomlTable& t, std::string_view key,
                     " on one triangle only (holes): a net is simplified from a closed surface "
                     "only (every edge in two triangles); close the mesh, or give nodes = " +
                     std::to_string(mesh.num_vertices()) + " to make the mesh itself the net");
+  const std::filesystem::path cache = scene_cache_path(
+      t, scene_dir, file,
+      [&] {
+        return net_cache_file_name(std::filesystem::path(file).stem().string(),
+                                   net_cache_key(mesh, nodes, net_simplifier_version()));
+      },
+      "the net is simplified at every load", warnings);
   core::TriangleMesh net;
-  const std::string err = simplify_to_net(mesh, nodes, net);
+  MeshCacheOutcome outcome;
+  const auto simplify = [&](core::TriangleMesh& out) { return simplify_to_net(mesh, nodes, out); };
+  const std::string err =
+      cache.empty() ? simplify(net)
+                    : simplify_net_cached(mesh, nodes, net_simplifier_version(), cache, simplify,
+                                          net, outcome);
   if (!err.empty()) t.fail(key, file + ": simplifying the mesh to " + std::to_string(nodes) +
                                     " nodes failed: " + err);
+  if (!outcome.note.empty()) warnings.push_back(mesh_warning(t, "cache", file, outcome.note));
+  load.cache_loaded = outcome.loaded;
   std::string invalid = core::validate_mesh(net);
   if (invalid.empty() && core::build_mesh_topology(net).boundary_edges > 0)
     invalid = "it has edges on one triangle only";
@@ -304,7 +321,8 @@ void parse_deformable(const TomlTable& t, const std::filesystem::path& scene_dir
   if (simplify) {  // a coarser net, the file's surface on it
     const std::string key = load.nodes_from == "default" ? std::string("file") : load.nodes_from;
     const double t0 = study::thread_cpu_seconds();
-    core::TriangleMesh net = simplify_mesh_file(t, key, mesh, load.nodes_asked, warnings);
+    core::TriangleMesh net =
+        simplify_mesh_file(t, scene_dir, key, mesh, load.nodes_asked, load, warnings);
     check_node_count(t, key, net.num_vertices());
     warn_self_intersections(t, key, t.string("file"), net, core::find_self_intersections(net),
                             "the net simplified from the mesh passes through itself: ask for more "
@@ -318,6 +336,9 @@ void parse_deformable(const TomlTable& t, const std::filesystem::path& scene_dir
     triangles.push_back(std::move(net.triangles));  // node i of the net is vertex i of `net`
   } else {
     if (file) check_node_count(t, "file", mesh.num_vertices());
+    if (t.has("cache"))
+      warnings.push_back(mesh_warning(t, "cache", t.string("file"),
+                                      "the mesh is its own net (not simplified): nothing to cache"));
     const std::string err = core::add_net(m, mesh, settings);
     if (!err.empty()) t.fail_at(nullptr, t.path(), err);
     triangles.push_back(std::move(mesh.triangles));  // node i of the net is vertex i of the mesh

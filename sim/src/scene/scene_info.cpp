@@ -94,6 +94,7 @@ std::vector<MeshLine> mesh_lines(const Scene& scene) {
       l.mesh_vertices = load.mesh_vertices;
       l.mesh_triangles = load.mesh_triangles;
       l.simplify_cpu_s = load.simplify_seconds;
+      l.cache_loaded = load.cache_loaded;
     }
     l.fine_vertices = n.surface_point_count;
     l.fine_triangles = n.surface_face_count;
@@ -204,7 +205,8 @@ std::string format_scene_info(const SceneInfo& i) {
     if (l.kind == "net" && l.simplified)
       os << "    simplified from its mesh file (" << l.mesh_vertices << " vertices, "
          << l.mesh_triangles << " triangles) to " << l.vertices << " nodes ("
-         << (l.nodes_from == "default" ? "the default net size" : l.nodes_from) << ") in "
+         << (l.nodes_from == "default" ? "the default net size" : l.nodes_from) << ")"
+         << (l.cache_loaded ? ", read from its cache file," : "") << " in "
          << std::fixed << std::setprecision(3) << l.simplify_cpu_s << std::defaultfloat
          << " s of CPU; fine surface " << l.fine_vertices << " vertices, " << l.fine_triangles
          << " triangles, up to " << std::fixed << std::setprecision(3)
@@ -283,6 +285,7 @@ std::string format_scene_info_json(const SceneInfo& i) {
                                    {"fine_triangles", l.fine_triangles},
                                    {"fine_max_distance_m", l.fine_max_distance_m},
                                    {"simplify_cpu_s", l.simplify_cpu_s},
+                                   {"cache_loaded", l.cache_loaded},
                                    {"map_heap", l.map_heap}};
   }
   j["meshes"] = std::move(meshes);

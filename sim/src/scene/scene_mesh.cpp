@@ -105,6 +105,33 @@ void warn_self_intersections(const TomlTable& t, std::string_view key, const std
           std::string(consequence)));
 }
 
+std::filesystem::path scene_cache_path(const TomlTable& t, const std::filesystem::path& scene_dir,
+                                       const std::string& what,
+                                       const std::function<std::string()>& default_name,
+                                       std::string_view without, std::vector<std::string>& warnings) {
+  std::filesystem::path cache;  // empty: no cache file
+  if (!t.has("cache")) return cache;
+  const toml::node* n = t.node("cache");
+  if (const auto* on = n->as_boolean()) {
+    if (on->get()) {
+      const std::filesystem::path dir = default_mesh_cache_dir();
+      if (dir.empty())
+        warnings.push_back(mesh_warning(t, "cache", what,
+                                        "no cache folder ($XDG_CACHE_HOME and $HOME are unset): " +
+                                            std::string(without)));
+      else
+        cache = dir / default_name();
+    }
+  } else if (n->is_string()) {
+    cache = t.string("cache");
+    if (cache.empty()) t.fail("cache", "expected a file path, true or false");
+    if (cache.is_relative()) cache = scene_dir / cache;
+  } else {
+    t.fail("cache", "expected true, false or a file path (a string)");
+  }
+  return cache;
+}
+
 int add_mesh_shape(const TomlTable& t, const std::filesystem::path& scene_dir, core::Model& m,
                    std::vector<std::string>& warnings) {
   SceneMeshFile file = read_scene_mesh_file(t, scene_dir);
@@ -121,28 +148,13 @@ int add_mesh_shape(const TomlTable& t, const std::filesystem::path& scene_dir, c
   for (const core::Sphere& sp : m.body_spheres) largest = std::max(largest, sp.radius);
   options.band = largest > 0.0 ? largest + kMeshBandMargin : core::kMeshDefaultBand;
   core::MeshShape shape;
-  std::filesystem::path cache;  // empty: no cache file
-  if (t.has("cache")) {
-    const toml::node* n = t.node("cache");
-    if (const auto* on = n->as_boolean()) {
-      if (on->get()) {
-        const std::filesystem::path dir = default_mesh_cache_dir();
-        if (dir.empty())
-          warnings.push_back(mesh_warning(t, "cache", file.path,
-                                          "no cache folder ($XDG_CACHE_HOME and $HOME are unset): "
-                                          "the shape is built at every load"));
-        else
-          cache = dir / mesh_cache_file_name(std::filesystem::path(file.path).stem().string(),
-                                             mesh_cache_key(file.mesh, options));
-      }
-    } else if (n->is_string()) {
-      cache = t.string("cache");
-      if (cache.empty()) t.fail("cache", "expected a file path, true or false");
-      if (cache.is_relative()) cache = scene_dir / cache;
-    } else {
-      t.fail("cache", "expected true, false or a file path (a string)");
-    }
-  }
+  const std::filesystem::path cache = scene_cache_path(
+      t, scene_dir, file.path,
+      [&] {
+        return mesh_cache_file_name(std::filesystem::path(file.path).stem().string(),
+                                    mesh_cache_key(file.mesh, options));
+      },
+      "the shape is built at every load", warnings);
   const double t0 = study::thread_cpu_seconds();
   MeshCacheOutcome outcome;
   const std::string err =

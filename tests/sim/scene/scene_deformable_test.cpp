@@ -752,6 +752,51 @@ TEST(DeformableNetSize, FarFineSurfaceIsAWarningWithTheDistance) {
   }
 }
 
+// `cache` keeps the simplified net in a file (mesh_cache.hpp): the next load reads the same net;
+// a damaged or stale file is a warning at `cache` and the net is simplified again (and the file
+// rewritten); on a mesh that is its own net the key is a warning.
+TEST(DeformableNetSize, CacheFileKeepsTheSimplifiedNet) {
+  TempDir dir;
+  dir.write("fine.obj", numen::test::fine_ellipsoid_obj(4));
+  const std::string keys = "nodes = 300\ncache = \"organ.nmnet\"";
+  const auto load = [&](const std::string& k) { return load_scene(dir.write("organ.toml", fine_organ_scene(k))); };
+  const auto cache_warning = [](const Scene& s) {
+    const auto w = std::find_if(s.warnings.begin(), s.warnings.end(), [](const std::string& x) {
+      return x.find("deformable[0].cache") != std::string::npos;
+    });
+    return w == s.warnings.end() ? std::string() : *w;
+  };
+  const Scene made = load(keys);
+  EXPECT_FALSE(made.net_loads[0].cache_loaded);
+  EXPECT_EQ(cache_warning(made), "");
+  ASSERT_TRUE(std::filesystem::exists(dir / "organ.nmnet"));
+  const Scene read = load(keys);
+  EXPECT_TRUE(read.net_loads[0].cache_loaded);
+  EXPECT_EQ(cache_warning(read), "");
+  expect_fine_ellipsoid_on_net(read, 300, 1.0e-3);
+  EXPECT_EQ(read.model.node_rest, made.model.node_rest);
+  EXPECT_EQ(read.net_triangles, made.net_triangles);
+  // Damaged: simplified again, a warning, the file rewritten.
+  dir.write("organ.nmnet", "not a cache");
+  const Scene damaged = load(keys);
+  EXPECT_FALSE(damaged.net_loads[0].cache_loaded);
+  EXPECT_NE(cache_warning(damaged).find("organ.nmnet: damaged (not a numen net cache): simplified again"),
+            std::string::npos)
+      << cache_warning(damaged);
+  EXPECT_EQ(damaged.model.node_rest, made.model.node_rest);
+  EXPECT_TRUE(load(keys).net_loads[0].cache_loaded);
+  // Stale: another node count.
+  const Scene stale = load("nodes = 301\ncache = \"organ.nmnet\"");
+  EXPECT_FALSE(stale.net_loads[0].cache_loaded);
+  EXPECT_EQ(stale.model.nets[0].node_count, 301);
+  EXPECT_NE(cache_warning(stale).find("stale (simplified from another mesh, to another size"),
+            std::string::npos)
+      << cache_warning(stale);
+  // Nothing to cache.
+  EXPECT_NE(cache_warning(load("nodes = 2562\ncache = \"organ.nmnet\"")).find("nothing to cache"),
+            std::string::npos);
+}
+
 /// Expects loading fine_organ_scene(keys) (fine.obj with `holes` triangles removed) to fail at
 /// the value of the line holding `needle` (column of `value`), key `key`, with `phrase`.
 void expect_net_size_error(const std::string& keys, const std::string& needle,

@@ -61,8 +61,9 @@ struct NetLoad {
   int nodes_asked = 0;
   std::string nodes_from;   ///< Which rule set nodes_asked: "nodes", "edge_length", "default", "mesh".
   bool simplified = false;  ///< The net was simplified from the mesh, which is its fine surface.
-  /// Thread CPU time (s) of the simplification and the map (nearest net triangle of each fine
-  /// vertex, core::add_net_surface()); 0 when not simplified.
+  bool cache_loaded = false;  ///< That net was read from its cache file (scene key `cache`).
+  /// Thread CPU time (s) of the simplification (or the cache file's read) and the map (nearest
+  /// net triangle of each fine vertex, core::add_net_surface()); 0 when not simplified.
   double simplify_seconds = 0.0;
 };
 

@@ -63,6 +63,7 @@ struct MeshLine {
   /// Largest distance from a fine vertex to the net at rest (core::net_surface_max_offset(), m).
   double fine_max_distance_m = 0.0;
   double simplify_cpu_s = 0.0;  ///< NetLoad::simplify_seconds: simplification and map (CPU s).
+  bool cache_loaded = false;    ///< NetLoad::cache_loaded: the net read from its cache file.
   /// Heap bytes of the map: the fine vertices' embeddings, the fine triangles and the net
   /// triangle → fine triangles lists (Model::net_surface_*, net_face_surface_*).
   std::size_t map_heap = 0;
