@@ -2,12 +2,16 @@
 /// @file mesh_text.hpp
 /// Mesh files of the mesh-reader tests (tests/sim/scene/mesh_*_test.cpp, scene_mesh_test.cpp,
 /// the `numen` command's): the unit tetrahedron as an ASCII PLY with the counts a test puts in its
-/// header and as a glTF with the buffer URI it names, and the message of loading a file.
+/// header and as a glTF with the buffer URI it names, the message of loading a file, and a fine
+/// closed ellipsoid as a Wavefront OBJ (the organ tests' user mesh from CT, made coarse at load).
 /// Header-only; include from numen::sim test files only.
 
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
 #include <string>
+
+#include "numen/core/mesh.hpp"
 
 #include "numen/sim/input/input_error.hpp"
 #include "numen/sim/scene/mesh_file.hpp"
@@ -62,6 +66,29 @@ inline std::string mesh_load_message(const std::string& path) {
     return e.what();
   }
   return "";
+}
+
+/// A closed ellipsoid of semi-axes 35 × 25 × 20 (the shipped organ's, in millimetres: give the
+/// scene `units = "mm"`) as a Wavefront OBJ: core::make_icosphere(1, subdivisions) scaled,
+/// 10·4^s + 2 vertices and 20·4^s triangles (s = 4: 2562 and 5120), outward. Optionally without
+/// its last `holes` triangles (an open surface), and with its first vertex `spike` times as far
+/// from the centre (a thin spike). The fine organ surface of the net-size tests (docs/organs.md,
+/// "A fine surface on a coarser net").
+inline std::string fine_ellipsoid_obj(int subdivisions, int holes = 0, double spike = 1.0) {
+  core::TriangleMesh m = core::make_icosphere(1.0, subdivisions);
+  m.vertices.front() *= spike;
+  std::string out = "# fine ellipsoid 35 x 25 x 20 mm\n";
+  char line[96];
+  for (const core::Vec3& v : m.vertices) {
+    std::snprintf(line, sizeof line, "v %.9f %.9f %.9f\n", 35.0 * v.x(), 25.0 * v.y(), 20.0 * v.z());
+    out += line;
+  }
+  for (int i = 0; i + holes < m.num_triangles(); ++i) {
+    const auto& t = m.triangles[static_cast<std::size_t>(i)];
+    std::snprintf(line, sizeof line, "f %d %d %d\n", t[0] + 1, t[1] + 1, t[2] + 1);
+    out += line;
+  }
+  return out;
 }
 
 }  // namespace numen::test

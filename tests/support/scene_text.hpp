@@ -132,6 +132,30 @@ inline std::string replace(std::string text, const std::string& from, const std:
   return text;
 }
 
+/// kMiniScene with a deformable organ "organ" made of mesh file `file` (beside the scene, in
+/// millimetres) on a hidden core body 0.1 m along y from the tool, `keys` (e.g. "nodes = 300")
+/// added to its [[deformable]] table. Needs a build with deformable nets.
+inline std::string with_organ_mesh_file(const std::string& file, const std::string& keys = "") {
+  return kMiniScene + R"(
+[[body]]
+name = "core"
+mass = 0.05
+inertia = [1.0e-5, 1.0e-5, 1.0e-5]
+material = "steel"
+position = [0.0, 0.1, 0.0]
+
+[[deformable]]
+name = "organ"
+body = "core"
+mesh = "file"
+file = ")" + file + R"("
+units = "mm"
+mass = 0.01
+stiffness = 200.0
+tie_stiffness = 500.0
+)" + keys + "\n";
+}
+
 /// kMiniScene with a mesh obstacle named "organ" of `keys` (after name and type: `file`, `units`,
 /// `scale`, ...) in place of its floor.
 inline std::string with_mesh_obstacle(const std::string& keys) {

@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <functional>
 #include <system_error>
 #include <type_traits>
 #include <utility>
@@ -39,6 +40,14 @@ struct Hash {
   void value(const T& v) noexcept {
     static_assert(std::is_trivially_copyable_v<T>);
     bytes(&v, sizeof v);
+  }
+  /// A mesh's vertex count, vertices, triangle count and triangles.
+  void mesh(const core::TriangleMesh& m) noexcept {
+    value(static_cast<std::uint64_t>(m.vertices.size()));
+    for (const core::Vec3& v : m.vertices)
+      for (int k = 0; k < 3; ++k) value(v[k]);
+    value(static_cast<std::uint64_t>(m.triangles.size()));
+    bytes(m.triangles.data(), m.triangles.size() * sizeof(m.triangles[0]));
   }
 };
 
@@ -219,34 +228,50 @@ std::string check_shape(const core::MeshShape& s) {
 }
 
 /// Reads `path` into `out` when its key is `key`: "" then, else why not ("missing" when absent).
-std::string read_cache(const std::filesystem::path& path, std::uint64_t key, core::MeshShape& out) {
+/// Reads cache file `path` into `data` and checks its header (`magic`, `version`, `key`, payload
+/// size, checksum): "" with `r` at the payload, else why not ("missing", "stale (…)",
+/// "damaged (…)"; `kind` names the cache, "mesh" or "net"; `stale` says why a key differs).
+std::string open_cache(const std::filesystem::path& path, const char (&magic)[8], const char* kind,
+                       std::uint32_t version, std::uint64_t key, const char* stale,
+                       std::string& data, Reader& r) {
   std::ifstream in(path, std::ios::binary | std::ios::ate);
   if (!in) return "missing";
   const std::streamoff bytes = in.tellg();
   if (bytes < 0) return "damaged (a read error)";
-  std::string data(static_cast<std::size_t>(bytes), '\0');
+  data.assign(static_cast<std::size_t>(bytes), '\0');
   in.seekg(0);
   if (!in.read(data.data(), bytes)) return "damaged (a read error)";
-  Reader r{data.data(), data.data() + data.size()};
-  char magic[8] = {};
-  for (char& c : magic) r.value(c);
-  std::uint32_t version = 0;
+  r = Reader{data.data(), data.data() + data.size()};
+  char file_magic[8] = {};
+  for (char& c : file_magic) r.value(c);
+  std::uint32_t file_version = 0;
   std::uint64_t file_key = 0, size = 0, checksum = 0;
-  r.value(version);
+  r.value(file_version);
   r.value(file_key);
   r.value(size);
   r.value(checksum);
-  if (!r.ok || std::memcmp(magic, kMagic, sizeof magic) != 0) return "damaged (not a numen mesh cache)";
-  if (version != kMeshCacheVersion)
-    return "stale (format version " + std::to_string(version) + ", this numen writes " +
-           std::to_string(kMeshCacheVersion) + ")";
-  if (file_key != key) return "stale (built from other triangles or band settings)";
+  if (!r.ok || std::memcmp(file_magic, magic, sizeof magic) != 0)
+    return std::string("damaged (not a numen ") + kind + " cache)";
+  if (file_version != version)
+    return "stale (format version " + std::to_string(file_version) + ", this numen writes " +
+           std::to_string(version) + ")";
+  if (file_key != key) return std::string("stale (") + stale + ")";
   if (size != data.size() - kHeaderBytes)
     return "damaged (" + std::to_string(data.size() - kHeaderBytes) + " payload bytes, the header says " +
            std::to_string(size) + ")";
   Hash h;
   h.bytes(data.data() + kHeaderBytes, static_cast<std::size_t>(size));
   if (h.h != checksum) return "damaged (checksum mismatch)";
+  return "";
+}
+
+std::string read_cache(const std::filesystem::path& path, std::uint64_t key, core::MeshShape& out) {
+  std::string data;
+  Reader r{nullptr, nullptr};
+  if (std::string why = open_cache(path, kMagic, "mesh", kMeshCacheVersion, key,
+                                   "built from other triangles or band settings", data, r);
+      !why.empty())
+    return why;
   core::MeshShape s;
   fields(r, s);
   if (!r.ok || r.p != r.end) return "damaged (the payload does not parse)";
@@ -255,17 +280,17 @@ std::string read_cache(const std::filesystem::path& path, std::uint64_t key, cor
   return "";
 }
 
-/// Writes `s` to `path` through a temporary file beside it: "" or why not.
-std::string write_cache(const std::filesystem::path& path, std::uint64_t key, const core::MeshShape& s) {
-  Writer payload;
-  fields(payload, s);
+/// Writes `payload` to cache file `path` after its header (`magic`, `version`, `key`, size,
+/// checksum), through a temporary file renamed over it; "" or why it could not.
+std::string write_cache_file(const std::filesystem::path& path, const char (&magic)[8],
+                             std::uint32_t version, std::uint64_t key, const std::string& payload) {
   Hash h;
-  h.bytes(payload.out.data(), payload.out.size());
+  h.bytes(payload.data(), payload.size());
   Writer w;
-  for (char c : kMagic) w.value(c);
-  w.value(kMeshCacheVersion);
+  for (char c : magic) w.value(c);
+  w.value(version);
   w.value(key);
-  w.value(static_cast<std::uint64_t>(payload.out.size()));
+  w.value(static_cast<std::uint64_t>(payload.size()));
   w.value(h.h);
   std::error_code ec;
   if (path.has_parent_path()) std::filesystem::create_directories(path.parent_path(), ec);
@@ -274,7 +299,7 @@ std::string write_cache(const std::filesystem::path& path, std::uint64_t key, co
   {
     std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
     out.write(w.out.data(), static_cast<std::streamsize>(w.out.size()));
-    out.write(payload.out.data(), static_cast<std::streamsize>(payload.out.size()));
+    out.write(payload.data(), static_cast<std::streamsize>(payload.size()));
     out.close();
     if (!out) {
       std::filesystem::remove(tmp, ec);
@@ -290,16 +315,39 @@ std::string write_cache(const std::filesystem::path& path, std::uint64_t key, co
   return "";
 }
 
+std::string write_cache(const std::filesystem::path& path, std::uint64_t key, const core::MeshShape& s) {
+  Writer payload;
+  fields(payload, s);
+  return write_cache_file(path, kMagic, kMeshCacheVersion, key, payload.out);
+}
+
+constexpr char kNetMagic[8] = {'N', 'U', 'M', 'E', 'N', 'N', 'E', 'T'};
+
+std::string read_net_cache(const std::filesystem::path& path, std::uint64_t key,
+                           core::TriangleMesh& out) {
+  std::string data;
+  Reader r{nullptr, nullptr};
+  if (std::string why = open_cache(path, kNetMagic, "net", kNetCacheVersion, key,
+                                   "simplified from another mesh, to another size or by another "
+                                   "simplifier",
+                                   data, r);
+      !why.empty())
+    return why;
+  core::TriangleMesh net;
+  r.array(net.vertices);
+  r.array(net.triangles);
+  if (!r.ok || r.p != r.end) return "damaged (the payload does not parse)";
+  if (std::string bad = core::validate_mesh(net); !bad.empty()) return "damaged (" + bad + ")";
+  out = std::move(net);
+  return "";
+}
+
 }  // namespace
 
 std::uint64_t mesh_cache_key(const core::TriangleMesh& mesh, const core::MeshShapeOptions& options) {
   Hash h;
   h.value(kMeshCacheVersion);
-  h.value(static_cast<std::uint64_t>(mesh.vertices.size()));
-  for (const core::Vec3& v : mesh.vertices)
-    for (int k = 0; k < 3; ++k) h.value(v[k]);
-  h.value(static_cast<std::uint64_t>(mesh.triangles.size()));
-  h.bytes(mesh.triangles.data(), mesh.triangles.size() * sizeof(mesh.triangles[0]));
+  h.mesh(mesh);
   h.value(options.band);
   h.value(options.cell_factor);
   h.value(static_cast<std::uint64_t>(options.max_band_bytes));
@@ -317,10 +365,19 @@ std::filesystem::path default_mesh_cache_dir() {
   return {};
 }
 
-std::string mesh_cache_file_name(const std::string& stem, std::uint64_t key) {
+namespace {
+
+/// "<stem>-<key, 16 hex digits><extension>".
+std::string cache_file_name(const std::string& stem, std::uint64_t key, const char* extension) {
   char hex[17];
   std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(key));
-  return stem + "-" + hex + ".nmshape";
+  return stem + "-" + hex + extension;
+}
+
+}  // namespace
+
+std::string mesh_cache_file_name(const std::string& stem, std::uint64_t key) {
+  return cache_file_name(stem, key, ".nmshape");
 }
 
 std::string build_mesh_shape_cached(const core::TriangleMesh& mesh,
@@ -338,6 +395,42 @@ std::string build_mesh_shape_cached(const core::TriangleMesh& mesh,
   const std::string err = core::build_mesh_shape(mesh, out, options);
   if (!err.empty()) return err;
   const std::string written = write_cache(path, key, out);
+  outcome.written = written.empty();
+  if (!written.empty()) outcome.note += (outcome.note.empty() ? "" : "; ") + written;
+  return "";
+}
+
+std::uint64_t net_cache_key(const core::TriangleMesh& mesh, int nodes, std::uint64_t simplifier) {
+  Hash h;
+  h.value(kNetCacheVersion);
+  h.mesh(mesh);
+  h.value(nodes);
+  h.value(simplifier);
+  return h.h;
+}
+
+std::string net_cache_file_name(const std::string& stem, std::uint64_t key) {
+  return cache_file_name(stem, key, ".nmnet");
+}
+
+std::string simplify_net_cached(const core::TriangleMesh& mesh, int nodes, std::uint64_t simplifier,
+                                const std::filesystem::path& path,
+                                const std::function<std::string(core::TriangleMesh&)>& simplify,
+                                core::TriangleMesh& net, MeshCacheOutcome& outcome) {
+  outcome = MeshCacheOutcome{};
+  const std::uint64_t key = net_cache_key(mesh, nodes, simplifier);
+  const std::string why = read_net_cache(path, key, net);
+  if (why.empty()) {
+    outcome.loaded = true;
+    return "";
+  }
+  if (why != "missing") outcome.note = path.string() + ": " + why + ": simplified again";
+  const std::string err = simplify(net);
+  if (!err.empty()) return err;
+  Writer payload;
+  payload.array(net.vertices);
+  payload.array(net.triangles);
+  const std::string written = write_cache_file(path, kNetMagic, kNetCacheVersion, key, payload.out);
   outcome.written = written.empty();
   if (!written.empty()) outcome.note += (outcome.note.empty() ? "" : "; ") + written;
   return "";

@@ -363,7 +363,7 @@ Scene load_scene(const std::string& path, const SceneOverrides& overrides) {
   parse_articulation(root, body_tables, scene);
   // Nets after the bodies' starting poses are known (their nodes start there).
   if constexpr (core::kWithDeformable)
-    parse_deformables(root, dir, scene.model, scene.net_triangles, scene.warnings);
+    parse_deformables(root, dir, scene.model, scene.net_triangles, scene.net_loads, scene.warnings);
 
   // Bus between controller and instrument.
   double latency = 100e-6;

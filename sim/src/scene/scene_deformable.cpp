@@ -8,11 +8,16 @@
 #include <cstdint>
 #include <limits>
 #include <numbers>
+#include <numeric>
 #include <string>
 #include <vector>
 
 #include "numen/core/mesh.hpp"
 #include "numen/core/net_model.hpp"
+#include "numen/core/net_surface_map.hpp"
+#include "numen/sim/scene/mesh_cache.hpp"
+#include "numen/sim/study/study_common.hpp"  // thread_cpu_seconds()
+#include "net_simplify.hpp"
 #include "scene_mesh.hpp"
 
 namespace numen::sim {
@@ -81,12 +86,22 @@ int default_cylinder_rings(double radius, double half_length, int rings) {
 /// benchmark, far below what would exhaust memory at load.
 constexpr double kMaxNetNodes = 65536.0;
 
-/// Fails at `key` when a built-in mesh would have more than kMaxNetNodes nodes.
-void check_node_count(const TomlTable& t, const char* key, double nodes) {
+/// Fails at `key` when a net would have more than kMaxNetNodes nodes (a built-in mesh, a mesh
+/// file used as it is, or the size a mesh file is simplified to).
+void check_node_count(const TomlTable& t, std::string_view key, double nodes) {
   if (nodes > kMaxNetNodes)
     t.fail(key, "this mesh would have " + std::to_string(static_cast<long long>(nodes)) +
                     " nodes, more than the " + std::to_string(static_cast<int>(kMaxNetNodes)) +
                     " a net may have");
+}
+
+/// Fails when a built-in mesh's table sets the size of a net made from a mesh file: a built-in
+/// shape is its own net, sized by its own keys (`own_keys`).
+void refuse_net_size_keys(const TomlTable& t, const std::string& kind, const char* own_keys) {
+  for (const char* key : {"nodes", "edge_length"})
+    if (t.has(key))
+      t.fail(key, std::string("sets the size of a net simplified from a mesh file (mesh = \"file\"); "
+                              "the built-in ") + kind + " is its own net, sized by " + own_keys);
 }
 
 /// The mesh of one [[deformable]] in its own frame (before scale and placement).
@@ -94,11 +109,13 @@ core::TriangleMesh parse_mesh(const TomlTable& t, const std::filesystem::path& s
   const std::string kind =
       t.choice("mesh", {"icosphere", "capsule", "box", "obj", "file"}, std::nullopt);
   if (kind == "icosphere") {
+    refuse_net_size_keys(t, kind, "radius and subdivisions");
     t.allow_only({NUMEN_DEFORMABLE_COMMON_KEYS, "radius", "subdivisions"});
     const double r = t.number_in("radius", 1e-6, kInf, std::nullopt);
     return core::make_icosphere(r, integer_in(t, "subdivisions", 0, 6, 2));
   }
   if (kind == "capsule") {
+    refuse_net_size_keys(t, kind, "segments, rings and cylinder_rings");
     t.allow_only({NUMEN_DEFORMABLE_COMMON_KEYS, "radius", "half_length", "segments", "rings",
                   "cylinder_rings"});
     const double r = t.number_in("radius", 1e-6, kInf, std::nullopt);
@@ -111,6 +128,7 @@ core::TriangleMesh parse_mesh(const TomlTable& t, const std::filesystem::path& s
     return core::make_capsule(r, h, segments, rings, cylinder_rings);
   }
   if (kind == "box") {
+    refuse_net_size_keys(t, kind, "subdivisions");
     t.allow_only({NUMEN_DEFORMABLE_COMMON_KEYS, "half_extents", "subdivisions"});
     const Vec3 h = t.vec3("half_extents");
     if (!(h.minCoeff() > 0.0)) t.fail("half_extents", "must all be > 0");
@@ -120,14 +138,149 @@ core::TriangleMesh parse_mesh(const TomlTable& t, const std::filesystem::path& s
     return core::make_box(h, n);
   }
   // "obj" (the key's first name) and "file": any format the mesh reader takes.
-  t.allow_only({NUMEN_DEFORMABLE_COMMON_KEYS, "file", "units"});
-  core::TriangleMesh mesh = read_scene_mesh_file(t, scene_dir).mesh;
-  check_node_count(t, "file", mesh.num_vertices());
-  return mesh;
+  // Its node count is checked once the net's size is known (net_size()).
+  t.allow_only({NUMEN_DEFORMABLE_COMMON_KEYS, "file", "units", "nodes", "edge_length", "cache"});
+  return read_scene_mesh_file(t, scene_dir).mesh;
+}
+
+/// The fewest nodes of a closed surface: a tetrahedron's.
+constexpr int kMinClosedNodes = 4;
+
+/// Node count of the net made from mesh file `mesh` (scaled and placed, m): `nodes`, or the count
+/// `edge_length` gives (a closed surface of area A tiled by equilateral triangles of side L has
+/// F = A / (√3 L² / 4) triangles and F / 2 + 2 vertices), or kDefaultNetNodes for a mesh of more
+/// vertices than that; `load` records which. A count at or above the mesh's own is the mesh as it
+/// is. Fails, located at the key: both keys, a count below kMinClosedNodes or above the mesh's
+/// vertices, a length that is not > 0.
+int net_size(const TomlTable& t, const core::TriangleMesh& mesh, NetLoad& load) {
+  const int vertices = mesh.num_vertices();
+  const std::string file = t.string("file");
+  if (t.has("nodes") && t.has("edge_length"))
+    t.fail("edge_length", "give nodes or edge_length, not both (both size the net of " + file + ")");
+  if (t.has("nodes")) {
+    const std::int64_t n = t.integer("nodes");
+    if (n < kMinClosedNodes)
+      t.fail("nodes", "a closed net needs at least " + std::to_string(kMinClosedNodes) +
+                          " nodes (a tetrahedron), got " + std::to_string(n));
+    if (n > vertices)
+      t.fail("nodes", std::to_string(n) + " nodes is more than the " + std::to_string(vertices) +
+                          " vertices of " + file + ": the net is made by simplifying the mesh, "
+                          "never by refining it (at most " + std::to_string(vertices) +
+                          ", which is the mesh itself)");
+    load.nodes_from = "nodes";
+    return static_cast<int>(n);
+  }
+  if (t.has("edge_length")) {
+    const double length = t.number("edge_length");
+    if (!(length > 0.0) || !std::isfinite(length))
+      t.fail("edge_length", "must be a length > 0 (m, in the frame of the scaled mesh), got " +
+                                format_input_number(length));
+    const std::vector<double> areas = core::vertex_areas(mesh);
+    const double area = std::accumulate(areas.begin(), areas.end(), 0.0);
+    const double nodes = 2.0 * area / (std::sqrt(3.0) * length * length) + 2.0;
+    if (!(nodes >= kMinClosedNodes - 0.5))
+      t.fail("edge_length", format_input_number(length) + " m edges on the " +
+                                format_input_number(area * 1e4) + " cm² surface of " + file +
+                                " make " + format_input_number(std::round(nodes)) +
+                                " nodes, fewer than the " + std::to_string(kMinClosedNodes) +
+                                " of a closed net (a tetrahedron): give a shorter length");
+    load.nodes_from = "edge_length";
+    return nodes >= vertices ? vertices : static_cast<int>(std::lround(nodes));
+  }
+  if (vertices > kDefaultNetNodes) {
+    load.nodes_from = "default";
+    return kDefaultNetNodes;
+  }
+  load.nodes_from = "mesh";
+  return vertices;
+}
+
+/// Simplifies mesh file `mesh` (scaled and placed, m) to a net of about `nodes` nodes
+/// (simplify_to_net()), or reads that net from the cache file `cache` names (mesh_cache.hpp,
+/// simplify_net_cached(); `load` records which). Fails, located at `key` (the key that asked for
+/// it) and naming the file: a mesh that is not closed (a hole: the net would be open where the
+/// organ is closed), a simplification that fails or gives a net that is not a valid, closed
+/// surface. Appends a warning when the net keeps more nodes than asked, and at `cache` when a
+/// cache file is stale, damaged or cannot be written.
+core::TriangleMesh simplify_mesh_file(const TomlTable& t, const std::filesystem::path& scene_dir,
+                                      std::string_view key, const core::TriangleMesh& mesh,
+                                      int nodes, NetLoad& load, std::vector<std::string>& warnings) {
+  const std::string file = t.string("file");
+  const int boundary = core::build_mesh_topology(mesh).boundary_edges;
+  if (boundary > 0)
+    t.fail(key, file + ": the mesh has " + std::to_string(boundary) + " edge" +
+                    (boundary == 1 ? "" : "s") +
+                    " on one triangle only (holes): a net is simplified from a closed surface "
+                    "only (every edge in two triangles); close the mesh, or give nodes = " +
+                    std::to_string(mesh.num_vertices()) + " to make the mesh itself the net");
+  const std::filesystem::path cache = scene_cache_path(
+      t, scene_dir, file,
+      [&] {
+        return net_cache_file_name(std::filesystem::path(file).stem().string(),
+                                   net_cache_key(mesh, nodes, net_simplifier_version()));
+      },
+      "the net is simplified at every load", warnings);
+  core::TriangleMesh net;
+  MeshCacheOutcome outcome;
+  const auto simplify = [&](core::TriangleMesh& out) { return simplify_to_net(mesh, nodes, out); };
+  const std::string err =
+      cache.empty() ? simplify(net)
+                    : simplify_net_cached(mesh, nodes, net_simplifier_version(), cache, simplify,
+                                          net, outcome);
+  if (!err.empty()) t.fail(key, file + ": simplifying the mesh to " + std::to_string(nodes) +
+                                    " nodes failed: " + err);
+  if (!outcome.note.empty()) warnings.push_back(mesh_warning(t, "cache", file, outcome.note));
+  load.cache_loaded = outcome.loaded;
+  std::string invalid = core::validate_mesh(net);
+  if (invalid.empty() && core::build_mesh_topology(net).boundary_edges > 0)
+    invalid = "it has edges on one triangle only";
+  if (!invalid.empty())
+    t.fail(key, file + ": the net simplified to " + std::to_string(nodes) +
+                    " nodes is not a closed, valid surface: " + invalid);
+  if (net.num_vertices() != nodes)
+    warnings.push_back(mesh_warning(
+        t, key, file,
+        "the net simplified from the mesh keeps " + std::to_string(net.num_vertices()) +
+            " nodes, not the " + std::to_string(nodes) +
+            " asked: further edge collapses would have made it non-manifold"));
+  return net;
+}
+
+/// Mean edge length of `mesh` (m).
+double mean_edge_length(const core::TriangleMesh& mesh) {
+  const core::MeshTopology topo = core::build_mesh_topology(mesh);
+  double sum = 0.0;
+  for (const auto& [a, b] : topo.edges)
+    sum += (mesh.vertices[static_cast<std::size_t>(a)] - mesh.vertices[static_cast<std::size_t>(b)]).norm();
+  return topo.edges.empty() ? 0.0 : sum / static_cast<double>(topo.edges.size());
+}
+
+/// Maps fine surface `fine` on net `net` of `m` (made from `coarse`, in the same frame: the net's
+/// rigid component's body frame) with core::add_net_surface(), each fine vertex on its nearest
+/// net triangle at rest. Appends a warning when a fine vertex stands off the net by more than
+/// half the net's mean edge length: beyond that it lies outside the band the net's node spheres
+/// cover (radius edge / √3 by default, core::add_net()), so the net's contacts and its fine surface
+/// disagree, and the offset carried in a bent triangle's frame distorts the surface.
+void map_fine_surface(const TomlTable& t, core::Model& m, int net, const core::TriangleMesh& coarse,
+                      const core::TriangleMesh& fine, std::vector<std::string>& warnings) {
+  const std::vector<int> nearest = nearest_net_triangles(coarse, fine.vertices);
+  const std::string err = core::add_net_surface(m, net, fine.vertices, fine.triangles, nearest);
+  if (!err.empty()) t.fail_at(nullptr, t.path(), err);
+  const double offset = core::net_surface_max_offset(m, net);
+  const double bound = 0.5 * mean_edge_length(coarse);
+  if (offset > bound)
+    warnings.push_back(mesh_warning(
+        t, "file", t.string("file"),
+        "the fine surface stands up to " + format_input_number(offset * 1e3) +
+            " mm off the net simplified from it, more than half the net's mean edge (" +
+            format_input_number(bound * 1e3) +
+            " mm): the node spheres no longer cover it and a bent net triangle distorts it; "
+            "ask for more nodes"));
 }
 
 void parse_deformable(const TomlTable& t, const std::filesystem::path& scene_dir, core::Model& m,
-                      std::vector<NetTriangles>& triangles, std::vector<std::string>& warnings) {
+                      std::vector<NetTriangles>& triangles, std::vector<NetLoad>& loads,
+                      std::vector<std::string>& warnings) {
   core::NetSettings settings;
   settings.name = t.string("name");
   for (const core::NetModel& other : m.nets)
@@ -143,9 +296,18 @@ void parse_deformable(const TomlTable& t, const std::filesystem::path& scene_dir
   const bool file = t.has("file");
   check_mesh_size(t, mesh, file ? "file" : "mesh", t.string(file ? "file" : "mesh"));
   if (file) check_scaled_mesh(t, mesh, t.string("file"));
+  NetLoad load;
+  load.mesh_vertices = mesh.num_vertices();
+  load.mesh_triangles = mesh.num_triangles();
+  load.nodes_asked = mesh.num_vertices();
+  load.nodes_from = "mesh";
+  if (file) load.nodes_asked = net_size(t, mesh, load);
+  const bool simplify = load.nodes_asked < mesh.num_vertices();
   warn_self_intersections(t, file ? "file" : "mesh", t.string(file ? "file" : "mesh"), mesh,
                           core::find_self_intersections(mesh),
-                          "the net's rest surface passes through itself", warnings);
+                          simplify ? "the organ's fine surface passes through itself"
+                                   : "the net's rest surface passes through itself",
+                          warnings);
 
   settings.material = net_material(t, m, settings.body);
   settings.mass = t.number_in("mass", 1e-12, kInf, std::nullopt);
@@ -157,9 +319,32 @@ void parse_deformable(const TomlTable& t, const std::filesystem::path& scene_dir
   settings.tie_damping = t.number_in("tie_damping", 0.0, kInf, 0.0);
   settings.node_radius = t.number_in("node_radius", 1e-9, kInf, 0.0);
 
-  const std::string err = core::add_net(m, mesh, settings);
-  if (!err.empty()) t.fail_at(nullptr, t.path(), err);
-  triangles.push_back(std::move(mesh.triangles));  // node i of the net is vertex i of the mesh
+  if (simplify) {  // a coarser net, the file's surface on it
+    const std::string key = load.nodes_from == "default" ? std::string("file") : load.nodes_from;
+    check_node_count(t, key, load.nodes_asked);  // before the simplification's time is spent
+    const double t0 = study::thread_cpu_seconds();
+    core::TriangleMesh net =
+        simplify_mesh_file(t, scene_dir, key, mesh, load.nodes_asked, load, warnings);
+    warn_self_intersections(t, key, t.string("file"), net, core::find_self_intersections(net),
+                            "the net simplified from the mesh passes through itself: ask for more "
+                            "nodes",
+                            warnings);
+    const std::string err = core::add_net(m, net, settings);
+    if (!err.empty()) t.fail_at(nullptr, t.path(), err);
+    map_fine_surface(t, m, m.num_nets() - 1, net, mesh, warnings);
+    load.simplified = true;
+    load.simplify_seconds = study::thread_cpu_seconds() - t0;
+    triangles.push_back(std::move(net.triangles));  // node i of the net is vertex i of `net`
+  } else {
+    if (file) check_node_count(t, "file", mesh.num_vertices());
+    if (t.has("cache"))
+      warnings.push_back(mesh_warning(t, "cache", t.string("file"),
+                                      "the mesh is its own net (not simplified): nothing to cache"));
+    const std::string err = core::add_net(m, mesh, settings);
+    if (!err.empty()) t.fail_at(nullptr, t.path(), err);
+    triangles.push_back(std::move(mesh.triangles));  // node i of the net is vertex i of the mesh
+  }
+  loads.push_back(std::move(load));
 }
 
 #undef NUMEN_DEFORMABLE_COMMON_KEYS
@@ -168,9 +353,9 @@ void parse_deformable(const TomlTable& t, const std::filesystem::path& scene_dir
 
 void parse_deformables(const TomlTable& root, const std::filesystem::path& scene_dir,
                        core::Model& model, std::vector<NetTriangles>& triangles,
-                       std::vector<std::string>& warnings) {
+                       std::vector<NetLoad>& loads, std::vector<std::string>& warnings) {
   for (const TomlTable& t : root.tables("deformable"))
-    parse_deformable(t, scene_dir, model, triangles, warnings);
+    parse_deformable(t, scene_dir, model, triangles, loads, warnings);
 }
 
 namespace {

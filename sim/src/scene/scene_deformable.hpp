@@ -23,12 +23,18 @@ namespace numen::sim {
 /// keys, unknown body or material, a rigid component with spheres, unknown
 /// mesh kind, missing OBJ file, numbers out of range; core::add_net()'s own
 /// message is located at the deformable's table. Appends each net's triangles (node indices
-/// local to the net) to `triangles`, in the order of model.nets. Appends to `warnings` a mesh
-/// whose surface intersects itself (core::find_self_intersections(), at `file`, or at `mesh`
-/// for a built-in one; docs/meshes.md, "Self-intersections").
+/// local to the net) to `triangles`, and how it was made to `loads`, in the order of model.nets.
+/// A mesh file of more vertices than the net asked for (`nodes`, `edge_length`, else
+/// kDefaultNetNodes) is simplified into the net (net_simplify.hpp) and rides on it as its fine
+/// surface (core::add_net_surface(); docs/organs.md, "A fine surface on a coarser net"); bad
+/// sizes, a mesh with holes and a failed simplification are errors located at the key that asked
+/// for the net's size (`file` for the default). Appends to `warnings` a mesh whose surface
+/// intersects itself (core::find_self_intersections(), at `file`, or at `mesh` for a built-in
+/// one; docs/meshes.md, "Self-intersections"), a simplified net that does too, and a fine surface
+/// standing off its net by more than half the net's mean edge length.
 void parse_deformables(const TomlTable& root, const std::filesystem::path& scene_dir,
                        core::Model& model, std::vector<NetTriangles>& triangles,
-                       std::vector<std::string>& warnings);
+                       std::vector<NetLoad>& loads, std::vector<std::string>& warnings);
 
 /// Load-time check of the deformable organs (nets on an anchored body, core::BodyModel::anchored)
 /// against the bodies that move (the tool), at their starting poses: appends one warning per

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <iomanip>
@@ -14,7 +15,9 @@
 
 #include "numen/core/capacity.hpp"
 #include "numen/core/data.hpp"
+#include "numen/core/features.hpp"
 #include "numen/core/mesh_shape.hpp"
+#include "numen/core/net_surface_map.hpp"
 #include "numen/core/step_stages.hpp"
 #include "numen/sim/scene/scene.hpp"
 
@@ -51,8 +54,23 @@ MeshLine shape_line(const char* kind, const std::string& name, const core::MeshS
   return l;
 }
 
-/// Every mesh of `m` (SceneInfo::meshes).
-std::vector<MeshLine> mesh_lines(const core::Model& m) {
+/// Heap bytes of net `n`'s fine-surface map in `m` (MeshLine::map_heap).
+std::size_t map_bytes(const core::Model& m, const core::NetModel& n) {
+  if (n.surface_point_count == 0) return 0;
+  std::size_t lists = 0;  // the net's triangles' rows of net_face_surface_begin / _faces
+  if (m.net_face_surface_begin.size() > static_cast<std::size_t>(n.face_begin + n.face_count)) {
+    const auto b = [&](int f) { return m.net_face_surface_begin[static_cast<std::size_t>(f)]; };
+    lists = (static_cast<std::size_t>(n.face_count) +
+             static_cast<std::size_t>(b(n.face_begin + n.face_count) - b(n.face_begin))) *
+            sizeof(std::int32_t);
+  }
+  return static_cast<std::size_t>(n.surface_point_count) * sizeof(core::NetSurfacePoint) +
+         static_cast<std::size_t>(n.surface_face_count) * sizeof(m.net_surface_faces[0]) + lists;
+}
+
+/// Every mesh of `scene`'s model (SceneInfo::meshes).
+std::vector<MeshLine> mesh_lines(const Scene& scene) {
+  const core::Model& m = scene.model;
   std::vector<MeshLine> out;
   for (const core::Obstacle& o : m.obstacles)
     if (o.type == core::ShapeType::kMesh)
@@ -60,7 +78,8 @@ std::vector<MeshLine> mesh_lines(const core::Model& m) {
   for (const core::BodyModel& b : m.bodies)
     if (b.mesh >= 0)
       out.push_back(shape_line("body", b.name, m.meshes[static_cast<std::size_t>(b.mesh)]));
-  for (const core::NetModel& n : m.nets) {
+  for (std::size_t k = 0; k < m.nets.size(); ++k) {
+    const core::NetModel& n = m.nets[k];
     if (n.face_count == 0) continue;
     MeshLine l;
     l.kind = "net";
@@ -68,6 +87,20 @@ std::vector<MeshLine> mesh_lines(const core::Model& m) {
     l.triangles = n.face_count;
     l.vertices = n.node_count;
     l.heap = static_cast<std::size_t>(n.face_count) * sizeof(m.net_faces[0]);
+    if (k < scene.net_loads.size()) {
+      const NetLoad& load = scene.net_loads[k];
+      l.simplified = load.simplified;
+      l.nodes_from = load.nodes_from;
+      l.mesh_vertices = load.mesh_vertices;
+      l.mesh_triangles = load.mesh_triangles;
+      l.simplify_cpu_s = load.simplify_seconds;
+      l.cache_loaded = load.cache_loaded;
+    }
+    l.fine_vertices = n.surface_point_count;
+    l.fine_triangles = n.surface_face_count;
+    if constexpr (core::kWithDeformable)  // net_surface_map.cpp is built with the nets only
+      l.fine_max_distance_m = core::net_surface_max_offset(m, static_cast<int>(k));
+    l.map_heap = map_bytes(m, n);
     out.push_back(std::move(l));
   }
   return out;
@@ -108,7 +141,7 @@ SceneInfo describe_scene(const Scene& scene) {
   const core::Data data = core::make_data(m);
   info.node_contact_capacity = static_cast<int>(data.node_contacts.size());
   info.model_bytes = core::model_footprint(m);
-  info.meshes = mesh_lines(m);
+  info.meshes = mesh_lines(scene);
   info.data_bytes = core::data_footprint(data);
   const hal::DeviceConfig& device = scene.device;
   info.device_name = device.name;
@@ -169,6 +202,19 @@ std::string format_scene_info(const SceneInfo& i) {
     else
       os << ", " << (l.band_note.empty() ? "no narrow band" : l.band_note);
     os << "\n";
+    if (l.kind == "net" && l.simplified)
+      os << "    simplified from its mesh file (" << l.mesh_vertices << " vertices, "
+         << l.mesh_triangles << " triangles) to " << l.vertices << " nodes ("
+         << (l.nodes_from == "default" ? "the default net size" : l.nodes_from) << ")"
+         << (l.cache_loaded ? ", read from its cache file," : "") << " in "
+         << std::fixed << std::setprecision(3) << l.simplify_cpu_s << std::defaultfloat
+         << " s of CPU; fine surface " << l.fine_vertices << " vertices, " << l.fine_triangles
+         << " triangles, up to " << std::fixed << std::setprecision(3)
+         << l.fine_max_distance_m * 1e3 << std::defaultfloat << " mm off the net; map "
+         << bytes(l.map_heap) << "\n";
+    else if (l.kind == "net")
+      os << "    its mesh as it is (" << l.mesh_vertices << " vertices, not simplified), no fine "
+            "surface\n";
   }
   os << "  Data: sizeof " << bytes(i.data_bytes.sizeof_data) << " (contact array "
      << i.max_contacts << " x " << sizeof(core::Contact) << " B inside), heap "
@@ -221,7 +267,7 @@ std::string format_scene_info_json(const SceneInfo& i) {
                       {"heap", i.model_bytes.heap_bytes()},
                       {"groups", json_groups(i.model_bytes.groups)}};
   nlohmann::ordered_json meshes = nlohmann::ordered_json::array();
-  for (const MeshLine& l : i.meshes)
+  for (const MeshLine& l : i.meshes) {
     meshes.push_back({{"kind", l.kind},
                       {"name", l.name},
                       {"triangles", l.triangles},
@@ -230,6 +276,18 @@ std::string format_scene_info_json(const SceneInfo& i) {
                       {"band_heap", l.band_heap},
                       {"band_width_m", l.band_width_m},
                       {"band_note", l.band_note}});
+    if (l.kind == "net")
+      meshes.back()["net_load"] = {{"simplified", l.simplified},
+                                   {"nodes_from", l.nodes_from},
+                                   {"mesh_vertices", l.mesh_vertices},
+                                   {"mesh_triangles", l.mesh_triangles},
+                                   {"fine_vertices", l.fine_vertices},
+                                   {"fine_triangles", l.fine_triangles},
+                                   {"fine_max_distance_m", l.fine_max_distance_m},
+                                   {"simplify_cpu_s", l.simplify_cpu_s},
+                                   {"cache_loaded", l.cache_loaded},
+                                   {"map_heap", l.map_heap}};
+  }
   j["meshes"] = std::move(meshes);
   j["data_bytes"] = {{"sizeof", i.data_bytes.sizeof_data},
                      {"heap", i.data_bytes.heap_bytes()},

@@ -9,11 +9,10 @@
 #include <system_error>
 #include <utility>
 
-#include <time.h>
-
 #include "numen/core/mesh_shape.hpp"
 #include "numen/sim/scene/mesh_cache.hpp"
 #include "numen/sim/scene/mesh_file.hpp"
+#include "numen/sim/study/study_common.hpp"  // thread_cpu_seconds(): a build's cost, whatever else runs
 
 namespace numen::sim {
 namespace {
@@ -22,13 +21,6 @@ namespace {
 long triangle_index(const core::TriangleMesh& mesh, const std::array<int, 3>& tri) {
   const auto it = std::find(mesh.triangles.begin(), mesh.triangles.end(), tri);
   return it == mesh.triangles.end() ? -1 : static_cast<long>(it - mesh.triangles.begin());
-}
-
-/// CPU time of the calling thread (s): a build's cost, whatever else the machine runs.
-double thread_cpu_seconds() {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
 }
 
 }  // namespace
@@ -113,6 +105,33 @@ void warn_self_intersections(const TomlTable& t, std::string_view key, const std
           std::string(consequence)));
 }
 
+std::filesystem::path scene_cache_path(const TomlTable& t, const std::filesystem::path& scene_dir,
+                                       const std::string& what,
+                                       const std::function<std::string()>& default_name,
+                                       std::string_view without, std::vector<std::string>& warnings) {
+  std::filesystem::path cache;  // empty: no cache file
+  if (!t.has("cache")) return cache;
+  const toml::node* n = t.node("cache");
+  if (const auto* on = n->as_boolean()) {
+    if (on->get()) {
+      const std::filesystem::path dir = default_mesh_cache_dir();
+      if (dir.empty())
+        warnings.push_back(mesh_warning(t, "cache", what,
+                                        "no cache folder ($XDG_CACHE_HOME and $HOME are unset): " +
+                                            std::string(without)));
+      else
+        cache = dir / default_name();
+    }
+  } else if (n->is_string()) {
+    cache = t.string("cache");
+    if (cache.empty()) t.fail("cache", "expected a file path, true or false");
+    if (cache.is_relative()) cache = scene_dir / cache;
+  } else {
+    t.fail("cache", "expected true, false or a file path (a string)");
+  }
+  return cache;
+}
+
 int add_mesh_shape(const TomlTable& t, const std::filesystem::path& scene_dir, core::Model& m,
                    std::vector<std::string>& warnings) {
   SceneMeshFile file = read_scene_mesh_file(t, scene_dir);
@@ -129,36 +148,21 @@ int add_mesh_shape(const TomlTable& t, const std::filesystem::path& scene_dir, c
   for (const core::Sphere& sp : m.body_spheres) largest = std::max(largest, sp.radius);
   options.band = largest > 0.0 ? largest + kMeshBandMargin : core::kMeshDefaultBand;
   core::MeshShape shape;
-  std::filesystem::path cache;  // empty: no cache file
-  if (t.has("cache")) {
-    const toml::node* n = t.node("cache");
-    if (const auto* on = n->as_boolean()) {
-      if (on->get()) {
-        const std::filesystem::path dir = default_mesh_cache_dir();
-        if (dir.empty())
-          warnings.push_back(mesh_warning(t, "cache", file.path,
-                                          "no cache folder ($XDG_CACHE_HOME and $HOME are unset): "
-                                          "the shape is built at every load"));
-        else
-          cache = dir / mesh_cache_file_name(std::filesystem::path(file.path).stem().string(),
-                                             mesh_cache_key(file.mesh, options));
-      }
-    } else if (n->is_string()) {
-      cache = t.string("cache");
-      if (cache.empty()) t.fail("cache", "expected a file path, true or false");
-      if (cache.is_relative()) cache = scene_dir / cache;
-    } else {
-      t.fail("cache", "expected true, false or a file path (a string)");
-    }
-  }
-  const double t0 = thread_cpu_seconds();
+  const std::filesystem::path cache = scene_cache_path(
+      t, scene_dir, file.path,
+      [&] {
+        return mesh_cache_file_name(std::filesystem::path(file.path).stem().string(),
+                                    mesh_cache_key(file.mesh, options));
+      },
+      "the shape is built at every load", warnings);
+  const double t0 = study::thread_cpu_seconds();
   MeshCacheOutcome outcome;
   const std::string err =
       cache.empty() ? core::build_mesh_shape(file.mesh, shape, options)
                     : build_mesh_shape_cached(file.mesh, options, cache, shape, outcome);
   if (!err.empty()) t.fail("file", file.path + ": " + err);
   if (!outcome.note.empty()) warnings.push_back(mesh_warning(t, "cache", file.path, outcome.note));
-  const double seconds = thread_cpu_seconds() - t0;
+  const double seconds = study::thread_cpu_seconds() - t0;
   if (!outcome.loaded && seconds >= kSlowMeshBuildSeconds) {
     std::ostringstream os;
     os.precision(2);

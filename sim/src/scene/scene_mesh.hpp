@@ -6,6 +6,7 @@
 /// Load time only (allocates, throws InputError located at the key, naming the mesh file).
 
 #include <filesystem>
+#include <functional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -73,6 +74,15 @@ inline constexpr double kMeshBandMargin = 0.001;
 /// A build that takes at least this much CPU time (s, the loading thread's) is reported with its
 /// time and memory, a warning at `file` (docs/meshes.md, "Build cache").
 inline constexpr double kSlowMeshBuildSeconds = 1.0;
+
+/// The cache file that `t`'s optional `cache` key names for mesh file `what` (its path): true,
+/// `default_name()` in default_mesh_cache_dir() (no cache, with a warning at `cache` saying
+/// `without` happens instead, when that folder is unknown); a string, that file (relative to
+/// `scene_dir`); false or absent, none (an empty path). Anything else fails at `cache`.
+std::filesystem::path scene_cache_path(const TomlTable& t, const std::filesystem::path& scene_dir,
+                                       const std::string& what,
+                                       const std::function<std::string()>& default_name,
+                                       std::string_view without, std::vector<std::string>& warnings);
 
 /// The closed mesh of `t`'s `file` (`units`, `scale`), built as a collision shape
 /// (core::build_mesh_shape()) in its own frame and appended to `m.meshes`; returns its index. Its

@@ -908,6 +908,31 @@ TEST(NumenCli, InfoPrintsTheStepTimedAtLoad) {
   EXPECT_TRUE(info.contains("stages")) << "the rest of the info is kept";
 }
 
+// An organ from a fine mesh file: numen info says its net was simplified (from how many vertices
+// and triangles, to how many nodes), the fine surface on it and how far it stands off the net.
+TEST(NumenCli, InfoPrintsTheFineSurfaceOfASimplifiedOrgan) {
+  NUMEN_REQUIRE_DEFORMABLE();
+  TempDir dir;
+  dir.write("fine.obj", numen::test::fine_ellipsoid_obj(4));
+  const std::string scene =
+      dir.write("organ.toml", numen::test::with_organ_mesh_file("fine.obj", "nodes = 500"));
+  const ChildResult r = run_child({kNumen, "info", scene}, dir.path(), 60);
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.out.find("  mesh net organ: 996 triangles, 500 nodes, "), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("    simplified from its mesh file (2562 vertices, 5120 triangles) to 500 "
+                       "nodes (nodes) in "),
+            std::string::npos)
+      << r.out;
+  EXPECT_NE(r.out.find("fine surface 2562 vertices, 5120 triangles, up to "), std::string::npos)
+      << r.out;
+  const ChildResult j = run_child({kNumen, "info", scene, "--json"}, dir.path(), 60);
+  ASSERT_EQ(j.status, 0) << j.err;
+  const nlohmann::json load = nlohmann::json::parse(j.out).at("meshes").at(0).at("net_load");
+  EXPECT_TRUE(load.at("simplified").get<bool>());
+  EXPECT_EQ(load.at("fine_vertices").get<int>(), 2562);
+  EXPECT_GT(load.at("fine_max_distance_m").get<double>(), 0.0);
+}
+
 // Defect 1: --trace of a simulated run keeps one record per period; a run whose trace would
 // outgrow the budget (kMaxInMemoryTraceBytes) is refused before anything is allocated.
 TEST(NumenCli, TraceThatWouldOutgrowItsBudgetIsRefusedBeforeTheRun) {

@@ -16,6 +16,8 @@
 #include <vector>
 
 #include "build_features.hpp"
+#include "mesh_text.hpp"
+#include "numen/core/net_surface_map.hpp"
 #include "numen/core/mesh.hpp"
 #include "numen/hal/device/kinematics_factory.hpp"
 #include "numen/sim/device/simulated_instrument.hpp"
@@ -296,10 +298,13 @@ std::string with_deformable(const std::string& table) {
 
 /// Expects the error of `text` at the value of the first line containing
 /// `needle` (column of `value` there), with dotted key `key` and `phrase` in
-/// the message; the formatted what() carries file:line:column: key.
+/// the message; the formatted what() carries file:line:column: key. `fine_obj`, when not empty,
+/// is written beside the scene as fine.obj.
 void expect_error_at(const std::string& text, const std::string& needle, const std::string& value,
-                     const std::string& key, const std::string& phrase) {
+                     const std::string& key, const std::string& phrase,
+                     const std::string& fine_obj = "") {
   TempDir dir;
+  if (!fine_obj.empty()) dir.write("fine.obj", fine_obj);
   const InputError e = load_error(dir, text);
   EXPECT_EQ(e.file(), (dir / "bad.toml").string());
   EXPECT_EQ(e.line(), line_of(text, needle)) << e.what();
@@ -608,6 +613,234 @@ TEST(DeformableLoaderErrors, UnknownMaterial) {
       replace(kMiniNet, "tie_stiffness = 500.0", "tie_stiffness = 500.0\nmaterial = \"gold\"");
   expect_error_at(text, "material = \"gold\"", "\"gold\"", "deformable[0].material",
                   "unknown material");
+}
+
+// ---------------------------------------------------------------- net size of a mesh file
+
+// A fine organ surface from a mesh file, simplified into a coarser net at load (docs/organs.md,
+// "A fine surface on a coarser net"): kMiniNet's deformable made of fine.obj (the 35 × 25 × 20 mm
+// ellipsoid, 2562 vertices, in mm), placed off the core's origin, with `keys` added.
+std::string fine_organ_scene(const std::string& keys) {
+  return replace(kMiniNet, "mesh = \"icosphere\"\nradius = 0.01\nsubdivisions = 1",
+                 "mesh = \"file\"\nfile = \"fine.obj\"\nunits = \"mm\"\nposition = [0.005, 0.0, "
+                 "0.0]\norientation = [0.9238795, 0.0, 0.3826834, 0.0]" +
+                     (keys.empty() ? "" : "\n" + keys));
+}
+
+/// Loads fine_organ_scene(keys) with fine.obj (fine_ellipsoid_obj(4, holes, spike)) beside it.
+Scene load_fine_organ(const std::string& keys, int holes = 0, double spike = 1.0) {
+  TempDir dir;
+  dir.write("fine.obj", numen::test::fine_ellipsoid_obj(4, holes, spike));
+  return load_scene(dir.write("organ.toml", fine_organ_scene(keys)));
+}
+
+/// The net of `s` (its one net) is closed and manifold with `nodes` nodes, and the fine ellipsoid
+/// (2562 vertices, 5120 triangles) rides on it, every fine vertex within `distance` m of it.
+void expect_fine_ellipsoid_on_net(const Scene& s, int nodes, double distance) {
+  ASSERT_EQ(s.model.num_nets(), 1);
+  const NetModel& net = s.model.nets[0];
+  ASSERT_EQ(s.net_triangles.size(), 1u);
+  numen::core::TriangleMesh rest;
+  rest.vertices.assign(s.model.node_rest.begin() + net.node_begin,
+                       s.model.node_rest.begin() + net.node_begin + net.node_count);
+  rest.triangles = s.net_triangles[0];
+  EXPECT_EQ(numen::core::validate_mesh(rest), "");  // no edge in more than two triangles
+  // Closed (no edge on one triangle), genus 0: F = 2V − 4, E = 3V − 6. (A coarse net has fewer
+  // bending springs than edges: a pair that is also an edge is skipped, core::build_mesh_topology.)
+  const numen::core::MeshTopology topo = numen::core::build_mesh_topology(rest);
+  EXPECT_EQ(topo.boundary_edges, 0);
+  EXPECT_EQ(net.node_count, nodes);
+  EXPECT_EQ(rest.num_triangles(), 2 * nodes - 4);
+  EXPECT_EQ(static_cast<int>(topo.edges.size()), 3 * nodes - 6);
+  EXPECT_EQ(net.structural_count, 3 * nodes - 6);
+  EXPECT_EQ(net.bending_count, static_cast<int>(topo.bending_pairs.size()));
+  EXPECT_EQ(net.surface_point_count, 2562);
+  EXPECT_EQ(net.surface_face_count, 5120);
+  const double offset = numen::core::net_surface_max_offset(s.model, 0);
+  EXPECT_GT(offset, 0.0);
+  EXPECT_LT(offset, distance);
+  ASSERT_EQ(s.net_loads.size(), 1u);
+  EXPECT_TRUE(s.net_loads[0].simplified);
+  EXPECT_EQ(s.net_loads[0].mesh_vertices, 2562);
+  EXPECT_EQ(s.net_loads[0].mesh_triangles, 5120);
+  EXPECT_EQ(s.net_loads[0].nodes_asked, nodes);
+}
+
+// A mesh file of more vertices than the default net size gets a net of that size; the fine
+// surface is given in the net's frame (placed and turned like the net: a frame mismatch would put
+// it millimetres off).
+TEST(DeformableNetSize, FineMeshFileGetsTheDefaultNetSize) {
+  const Scene s = load_fine_organ("");
+  expect_fine_ellipsoid_on_net(s, numen::sim::kDefaultNetNodes, 0.5e-3);
+  EXPECT_EQ(s.net_loads[0].nodes_from, "default");
+}
+
+TEST(DeformableNetSize, NodesSetsTheNetSize) {
+  const Scene s = load_fine_organ("nodes = 300");
+  expect_fine_ellipsoid_on_net(s, 300, 1.0e-3);
+  EXPECT_EQ(s.net_loads[0].nodes_from, "nodes");
+  // The mesh's own vertex count is the mesh itself: no fine surface.
+  const Scene own = load_fine_organ("nodes = 2562");
+  EXPECT_EQ(own.model.nets[0].node_count, 2562);
+  EXPECT_EQ(own.model.nets[0].surface_point_count, 0);
+  EXPECT_TRUE(own.model.net_surface_points.empty());
+  EXPECT_FALSE(own.net_loads[0].simplified);
+}
+
+// edge_length L (m) asks for the node count of equilateral triangles of side L tiling the
+// surface: 2 A / (√3 L²) + 2.
+TEST(DeformableNetSize, EdgeLengthSetsTheNetSize) {
+  const Scene s = load_fine_organ("edge_length = 0.004");
+  const NetModel& net = s.model.nets[0];
+  double area = 0.0;  // of the fine surface at rest: its triangles' areas
+  numen::core::TriangleMesh fine = numen::core::make_icosphere(1.0, 4);
+  for (Vec3& v : fine.vertices) v = Vec3(0.035 * v.x(), 0.025 * v.y(), 0.020 * v.z());
+  for (double a : numen::core::vertex_areas(fine)) area += a;
+  const int nodes = static_cast<int>(std::lround(2.0 * area / (std::sqrt(3.0) * 0.004 * 0.004))) + 2;
+  expect_fine_ellipsoid_on_net(s, nodes, 1.0e-3);
+  EXPECT_EQ(s.net_loads[0].nodes_from, "edge_length");
+  double sum = 0.0;  // the structural springs' rest lengths are the net's edges
+  for (int i = 0; i < net.structural_count; ++i)
+    sum += s.model.net_springs[static_cast<std::size_t>(net.spring_begin + i)].rest_length;
+  EXPECT_NEAR(sum / net.structural_count, 0.004, 0.001);
+  // A length finer than the mesh's own edges is the mesh itself.
+  const Scene own = load_fine_organ("edge_length = 0.0005");
+  EXPECT_EQ(own.model.nets[0].node_count, 2562);
+  EXPECT_EQ(own.model.nets[0].surface_point_count, 0);
+}
+
+// The shipped organ (1002 vertices, at or below the default net size) stays one node per vertex,
+// without a fine surface: the default scene's figures are unchanged.
+TEST(DeformableNetSize, ShippedOrganIsItsOwnNet) {
+  NUMEN_REQUIRE_ARTICULATION();  // the default scene's instrument has joints
+  const Scene s = load_scene(scene_path("default"));
+  ASSERT_EQ(s.model.num_nets(), 1);
+  EXPECT_EQ(s.model.nets[0].node_count, 1002);
+  EXPECT_EQ(s.model.nets[0].surface_point_count, 0);
+  EXPECT_TRUE(s.model.net_surface_points.empty());
+  ASSERT_EQ(s.net_loads.size(), 1u);
+  EXPECT_FALSE(s.net_loads[0].simplified);
+  EXPECT_EQ(s.net_loads[0].nodes_from, "mesh");
+  EXPECT_EQ(s.net_loads[0].mesh_vertices, 1002);
+}
+
+// A fine surface standing off its net by more than half the net's mean edge length is a load
+// warning with the distance, and only then: the ellipsoid at a handful of nodes and at 300, and
+// one with a thin spike (a vertex 3 times as far out) that a coarse net cuts off.
+TEST(DeformableNetSize, FarFineSurfaceIsAWarningWithTheDistance) {
+  for (const int nodes : {4, 12, 300, -12}) {
+    const double spike = nodes < 0 ? 3.0 : 1.0;
+    const Scene s = load_fine_organ("nodes = " + std::to_string(std::abs(nodes)), 0, spike);
+    const NetModel& net = s.model.nets[0];
+    double sum = 0.0;
+    for (int i = 0; i < net.structural_count; ++i)
+      sum += s.model.net_springs[static_cast<std::size_t>(net.spring_begin + i)].rest_length;
+    const double bound = 0.5 * sum / net.structural_count;
+    const double offset = numen::core::net_surface_max_offset(s.model, 0);
+    const auto w = std::find_if(s.warnings.begin(), s.warnings.end(), [](const std::string& x) {
+      return x.find("mm off the net simplified from it") != std::string::npos;
+    });
+    EXPECT_EQ(w != s.warnings.end(), offset > bound) << nodes << " nodes: offset " << offset
+                                                     << " m, bound " << bound << " m";
+    if (w != s.warnings.end()) {
+      EXPECT_NE(w->find("fine.obj"), std::string::npos) << *w;
+      EXPECT_NE(w->find("deformable[0].file"), std::string::npos) << *w;
+    }
+    if (spike > 1.0) {
+      EXPECT_NE(w, s.warnings.end()) << "the spike is cut off the 12-node net";
+    }
+  }
+}
+
+// `cache` keeps the simplified net in a file (mesh_cache.hpp): the next load reads the same net;
+// a damaged or stale file is a warning at `cache` and the net is simplified again (and the file
+// rewritten); on a mesh that is its own net the key is a warning.
+TEST(DeformableNetSize, CacheFileKeepsTheSimplifiedNet) {
+  TempDir dir;
+  dir.write("fine.obj", numen::test::fine_ellipsoid_obj(4));
+  const std::string keys = "nodes = 300\ncache = \"organ.nmnet\"";
+  const auto load = [&](const std::string& k) { return load_scene(dir.write("organ.toml", fine_organ_scene(k))); };
+  const auto cache_warning = [](const Scene& s) {
+    const auto w = std::find_if(s.warnings.begin(), s.warnings.end(), [](const std::string& x) {
+      return x.find("deformable[0].cache") != std::string::npos;
+    });
+    return w == s.warnings.end() ? std::string() : *w;
+  };
+  const Scene made = load(keys);
+  EXPECT_FALSE(made.net_loads[0].cache_loaded);
+  EXPECT_EQ(cache_warning(made), "");
+  ASSERT_TRUE(std::filesystem::exists(dir / "organ.nmnet"));
+  const Scene read = load(keys);
+  EXPECT_TRUE(read.net_loads[0].cache_loaded);
+  EXPECT_EQ(cache_warning(read), "");
+  expect_fine_ellipsoid_on_net(read, 300, 1.0e-3);
+  EXPECT_EQ(read.model.node_rest, made.model.node_rest);
+  EXPECT_EQ(read.net_triangles, made.net_triangles);
+  // Damaged: simplified again, a warning, the file rewritten.
+  dir.write("organ.nmnet", "not a cache");
+  const Scene damaged = load(keys);
+  EXPECT_FALSE(damaged.net_loads[0].cache_loaded);
+  EXPECT_NE(cache_warning(damaged).find("organ.nmnet: damaged (not a numen net cache): simplified again"),
+            std::string::npos)
+      << cache_warning(damaged);
+  EXPECT_EQ(damaged.model.node_rest, made.model.node_rest);
+  EXPECT_TRUE(load(keys).net_loads[0].cache_loaded);
+  // Stale: another node count.
+  const Scene stale = load("nodes = 301\ncache = \"organ.nmnet\"");
+  EXPECT_FALSE(stale.net_loads[0].cache_loaded);
+  EXPECT_EQ(stale.model.nets[0].node_count, 301);
+  EXPECT_NE(cache_warning(stale).find("stale (simplified from another mesh, to another size"),
+            std::string::npos)
+      << cache_warning(stale);
+  // Nothing to cache.
+  EXPECT_NE(cache_warning(load("nodes = 2562\ncache = \"organ.nmnet\"")).find("nothing to cache"),
+            std::string::npos);
+}
+
+/// Expects loading fine_organ_scene(keys) (fine.obj with `holes` triangles removed) to fail at
+/// the value of the line holding `needle` (column of `value`), key `key`, with `phrase`.
+void expect_net_size_error(const std::string& keys, const std::string& needle,
+                           const std::string& value, const std::string& key,
+                           const std::string& phrase, int holes = 0) {
+  expect_error_at(fine_organ_scene(keys), needle, value, key, phrase,
+                  numen::test::fine_ellipsoid_obj(4, holes));
+}
+
+TEST(DeformableNetSizeErrors, BadNodeCountsAreLocated) {
+  expect_net_size_error("nodes = 3", "nodes = 3", "3", "deformable[0].nodes",
+                        "at least 4 nodes (a tetrahedron), got 3");
+  expect_net_size_error("nodes = -5", "nodes = -5", "-5", "deformable[0].nodes", "at least 4 nodes");
+  expect_net_size_error("nodes = 2563", "nodes = 2563", "2563", "deformable[0].nodes",
+                        "more than the 2562 vertices of fine.obj");
+  expect_net_size_error("nodes = 500.5", "nodes = 500.5", "500.5", "deformable[0].nodes",
+                        "expected an integer");
+  expect_net_size_error("nodes = 500\nedge_length = 0.004", "edge_length = ", "0.004",
+                        "deformable[0].edge_length", "give nodes or edge_length, not both");
+  expect_net_size_error("edge_length = 0.0", "edge_length = ", "0.0", "deformable[0].edge_length",
+                        "must be a length > 0");
+  expect_net_size_error("edge_length = 1.0", "edge_length = ", "1.0", "deformable[0].edge_length",
+                        "fewer than the 4 of a closed net");
+}
+
+// A mesh with holes is refused before it is simplified, at the key that asked for the net's size
+// (the file for the default size), naming the file.
+TEST(DeformableNetSizeErrors, MeshWithHolesIsNotSimplified) {
+  expect_net_size_error("", "file = ", "\"fine.obj\"", "deformable[0].file",
+                        "fine.obj: the mesh has 3 edges on one triangle only (holes)", 1);
+  expect_net_size_error("nodes = 300", "nodes = 300", "300", "deformable[0].nodes",
+                        "a net is simplified from a closed surface only", 1);
+  // Used as it is, the open mesh is a net as before.
+  const Scene s = load_fine_organ("nodes = 2562", 1);
+  EXPECT_EQ(s.model.nets[0].node_count, 2562);
+}
+
+TEST(DeformableNetSizeErrors, BuiltInMeshesRefuseTheNetSizeKeys) {
+  expect_error_at(replace(kMiniNet, "subdivisions = 1", "subdivisions = 1\nnodes = 20"),
+                  "nodes = 20", "20", "deformable[0].nodes",
+                  "the built-in icosphere is its own net, sized by radius and subdivisions");
+  expect_error_at(replace(kMiniNet, "subdivisions = 1", "subdivisions = 1\nedge_length = 0.002"),
+                  "edge_length = ", "0.002", "deformable[0].edge_length",
+                  "sets the size of a net simplified from a mesh file");
 }
 
 }  // namespace

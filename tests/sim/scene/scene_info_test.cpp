@@ -13,14 +13,19 @@
 #include <nlohmann/json.hpp>
 
 #include "alloc_counter.hpp"
+#include "build_features.hpp"
+#include "mesh_text.hpp"
 #include "numen/core/capacity.hpp"
 #include "numen/core/data.hpp"
 #include "numen/core/features.hpp"
 #include "numen/core/mesh_shape.hpp"
+#include "numen/core/net_surface_map.hpp"  // NetSurfacePoint
 #include "numen/core/step.hpp"
 #include "numen/core/step_stages.hpp"
 #include "numen/hal/features.hpp"
 #include "numen/sim/scene/scene.hpp"
+#include "scene_text.hpp"
+#include "temp_dir.hpp"
 
 namespace core = numen::core;
 namespace sim = numen::sim;
@@ -258,4 +263,53 @@ TEST(SceneInfo, ASceneWithoutMeshesListsNone) {
   EXPECT_TRUE(i.meshes.empty());
   EXPECT_TRUE(nlohmann::json::parse(sim::format_scene_info_json(i)).at("meshes").empty());
   EXPECT_EQ(sim::format_scene_info(i).find("  mesh "), std::string::npos);
+}
+
+// An organ whose net was simplified from its mesh file: the net's line, then how it was made
+// (from how many vertices and triangles, to how many nodes by which rule, in what CPU time), the
+// fine surface on it, its largest distance off the net and the map's bytes; --json the same.
+TEST(SceneInfo, ASimplifiedOrgansNetAndFineSurface) {
+  NUMEN_REQUIRE_DEFORMABLE();
+  numen::test::TempDir dir;
+  dir.write("fine.obj", numen::test::fine_ellipsoid_obj(4));
+  const sim::Scene scene =
+      sim::load_scene(dir.write("organ.toml", numen::test::with_organ_mesh_file("fine.obj")));
+  const sim::SceneInfo i = sim::describe_scene(scene);
+  const auto l = std::find_if(i.meshes.begin(), i.meshes.end(),
+                              [](const sim::MeshLine& x) { return x.kind == "net"; });
+  ASSERT_NE(l, i.meshes.end());
+  EXPECT_EQ(l->vertices, sim::kDefaultNetNodes);
+  EXPECT_EQ(l->triangles, 2 * sim::kDefaultNetNodes - 4);
+  EXPECT_TRUE(l->simplified);
+  EXPECT_EQ(l->nodes_from, "default");
+  EXPECT_EQ(l->mesh_vertices, 2562);
+  EXPECT_EQ(l->mesh_triangles, 5120);
+  EXPECT_EQ(l->fine_vertices, 2562);
+  EXPECT_EQ(l->fine_triangles, 5120);
+  EXPECT_GT(l->fine_max_distance_m, 0.0);  // core::net_surface_max_offset()
+  EXPECT_LT(l->fine_max_distance_m, 0.5e-3);
+  EXPECT_GT(l->simplify_cpu_s, 0.0);
+  // Embeddings, fine triangles, and per net triangle its list's start and its fine triangles.
+  EXPECT_GE(l->map_heap, 2562 * sizeof(core::NetSurfacePoint) + 5120 * 3 * sizeof(int) +
+                             static_cast<std::size_t>(l->triangles + 5120) * sizeof(int));
+  const std::string text = sim::format_scene_info(i);
+  EXPECT_NE(text.find("  mesh net organ: 2044 triangles, 1024 nodes, "), std::string::npos) << text;
+  EXPECT_NE(text.find("    simplified from its mesh file (2562 vertices, 5120 triangles) to 1024 "
+                      "nodes (the default net size) in "),
+            std::string::npos)
+      << text;
+  EXPECT_NE(text.find(" s of CPU; fine surface 2562 vertices, 5120 triangles, up to "),
+            std::string::npos)
+      << text;
+  const nlohmann::json json = nlohmann::json::parse(sim::format_scene_info_json(i));
+  const nlohmann::json& load = json.at("meshes").at(0).at("net_load");
+  EXPECT_TRUE(load.at("simplified").get<bool>());
+  EXPECT_EQ(load.at("nodes_from"), "default");
+  EXPECT_EQ(load.at("mesh_vertices"), 2562);
+  EXPECT_EQ(load.at("mesh_triangles"), 5120);
+  EXPECT_EQ(load.at("fine_vertices"), 2562);
+  EXPECT_EQ(load.at("fine_triangles"), 5120);
+  EXPECT_EQ(load.at("fine_max_distance_m").get<double>(), l->fine_max_distance_m);
+  EXPECT_EQ(load.at("simplify_cpu_s").get<double>(), l->simplify_cpu_s);
+  EXPECT_EQ(load.at("map_heap").get<std::size_t>(), l->map_heap);
 }

@@ -1,6 +1,7 @@
 #pragma once
 /// @file mesh_cache.hpp
-/// A cache file of a built core::MeshShape (docs/meshes.md, "Build cache"): the narrow band of a
+/// A cache file of a built core::MeshShape (docs/meshes.md, "Build cache"), and of a net
+/// simplified from a mesh file (at the end; docs/organs.md): the narrow band of a
 /// large mesh takes seconds to build (about 2 s at 100k triangles), its file a fraction of that
 /// to read. The file holds the whole shape (tree, normals, edges, grid, band) after a header:
 ///
@@ -16,6 +17,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <string>
 
 #include "numen/core/mesh.hpp"
@@ -56,5 +58,30 @@ std::string build_mesh_shape_cached(const core::TriangleMesh& mesh,
                                     const core::MeshShapeOptions& options,
                                     const std::filesystem::path& path, core::MeshShape& out,
                                     MeshCacheOutcome& outcome);
+
+/// Version of the simplified net's cache file format ("NUMENNET", the same header; part of the
+/// key).
+inline constexpr std::uint32_t kNetCacheVersion = 1;
+
+/// The key of the net simplified from `mesh` (as placed: after units, scale and placement) to
+/// `nodes` nodes by simplifier `simplifier` (its library's version, net_simplify.hpp): a 64-bit
+/// FNV-1a hash of the format version, the mesh's vertices and triangles, `nodes` and `simplifier`.
+std::uint64_t net_cache_key(const core::TriangleMesh& mesh, int nodes, std::uint64_t simplifier);
+
+/// The file name of a simplified net's cache in a cache folder: "<stem>-<key, 16 hex
+/// digits>.nmnet".
+std::string net_cache_file_name(const std::string& stem, std::uint64_t key);
+
+/// Fills `net` with the net simplified from `mesh` to `nodes` nodes (docs/organs.md, "A fine
+/// surface on a coarser net"): read from cache file `path` when it is there with the right key
+/// (net_cache_key()) and checksum and a valid mesh (core::validate_mesh()) as payload (the net's
+/// vertices, m, and triangles), else made by `simplify` (which fills its argument, "" or an
+/// error) and written to `path` as build_mesh_shape_cached() writes (a temporary file renamed
+/// over it). A file that cannot be used or written is never an error: `outcome.note` says why.
+/// Returns `simplify`'s error ("" on success; then nothing is written). Load time only.
+std::string simplify_net_cached(const core::TriangleMesh& mesh, int nodes, std::uint64_t simplifier,
+                                const std::filesystem::path& path,
+                                const std::function<std::string(core::TriangleMesh&)>& simplify,
+                                core::TriangleMesh& net, MeshCacheOutcome& outcome);
 
 }  // namespace numen::sim

@@ -48,6 +48,29 @@ struct AdmittanceScene {
 /// counter-clockwise seen from outside: for display (the dynamics use the springs).
 using NetTriangles = std::vector<std::array<int, 3>>;
 
+/// How one organ's net was made from its mesh (docs/organs.md, "A fine surface on a coarser
+/// net"; `numen info` reports it). A mesh file of more vertices than the net asked for (scene keys
+/// `nodes` or `edge_length`, else kDefaultNetNodes) is simplified into the net, and the file's
+/// own surface rides on it as the net's fine surface (core::add_net_surface(); the model's
+/// NetModel::surface_point_count and surface_face_count). Otherwise the mesh is the net.
+struct NetLoad {
+  int mesh_vertices = 0;   ///< Vertices of the mesh as read (file or built-in).
+  int mesh_triangles = 0;  ///< Its triangles.
+  /// The node count asked for: `nodes`, or the count `edge_length` gives, or kDefaultNetNodes;
+  /// the mesh's own vertex count where the mesh is the net.
+  int nodes_asked = 0;
+  std::string nodes_from;   ///< Which rule set nodes_asked: "nodes", "edge_length", "default", "mesh".
+  bool simplified = false;  ///< The net was simplified from the mesh, which is its fine surface.
+  bool cache_loaded = false;  ///< That net was read from its cache file (scene key `cache`).
+  /// Thread CPU time (s) of the simplification (or the cache file's read) and the map (nearest
+  /// net triangle of each fine vertex, core::add_net_surface()); 0 when not simplified.
+  double simplify_seconds = 0.0;
+};
+
+/// The node count of an organ's net made from a mesh file when the scene asks for none: a mesh
+/// of more vertices is simplified to it (the shipped organ, 1002 vertices, is its own net).
+inline constexpr int kDefaultNetNodes = 1024;
+
 /// A multirate god-object (scene `[multirate]`; docs/multirate.md, core::MultirateGodObject):
 /// the device loop at the scene's dt, the scene loop at scene_dt_s = ratio · dt.
 struct MultirateScene {
@@ -82,6 +105,8 @@ struct Scene {
   std::vector<AttachEvent> events;  ///< Sorted by time.
   /// Per net (model.nets order): its surface triangles (the viewer draws them).
   std::vector<NetTriangles> net_triangles;
+  /// Per net (model.nets order): how it was made from its mesh.
+  std::vector<NetLoad> net_loads;
   /// Set exactly when model.coupling_mode is kAdmittance (the loader requires both or neither).
   std::optional<AdmittanceScene> admittance;
   /// The simulated hand on the device (`[device.hand]`; hand.hpp): what holds the handle in

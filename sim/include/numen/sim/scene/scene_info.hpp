@@ -52,6 +52,21 @@ struct MeshLine {
   std::size_t band_heap = 0;  ///< Of which the narrow band (core::mesh_band_bytes()); a net: 0.
   double band_width_m = 0.0;  ///< The band's width B (m); 0: none.
   std::string band_note;      ///< Why a shape has no band (the memory cap), else "".
+  /// A net's: how it was made from its mesh (Scene::net_loads; docs/organs.md, "A fine surface
+  /// on a coarser net"). Zero, false or empty for the other meshes.
+  bool simplified = false;  ///< Simplified from its mesh file, whose surface rides on it.
+  std::string nodes_from;   ///< NetLoad::nodes_from: "nodes", "edge_length", "default", "mesh".
+  int mesh_vertices = 0;    ///< The mesh as read: its vertices (NetLoad::mesh_vertices).
+  int mesh_triangles = 0;   ///< And its triangles.
+  int fine_vertices = 0;    ///< The fine surface on the net (NetModel::surface_point_count).
+  int fine_triangles = 0;   ///< Its triangles (NetModel::surface_face_count).
+  /// Largest distance from a fine vertex to the net at rest (core::net_surface_max_offset(), m).
+  double fine_max_distance_m = 0.0;
+  double simplify_cpu_s = 0.0;  ///< NetLoad::simplify_seconds: simplification and map (CPU s).
+  bool cache_loaded = false;    ///< NetLoad::cache_loaded: the net read from its cache file.
+  /// Heap bytes of the map: the fine vertices' embeddings, the fine triangles and the net
+  /// triangle → fine triangles lists (Model::net_surface_*, net_face_surface_*).
+  std::size_t map_heap = 0;
 };
 
 /// What a scene compiles to.
