@@ -102,6 +102,9 @@ void NetScratch::resize(const Model& model) {
   surface_face_stamp.assign(n > 0 ? model.net_surface_faces.size() : 0, 0);
   surface_point_stamp.assign(n > 0 ? model.net_surface_points.size() : 0, 0);
   surface_position.assign(n > 0 ? model.net_surface_points.size() : 0, Vec3::Zero());
+  const std::size_t carriers = n > 0 && !model.net_surface_points.empty() ? model.net_faces.size() : 0;
+  surface_net_stamp.assign(carriers, 0);
+  surface_net_torn.assign(carriers, 0);
   surface_stamp = 0;
 }
 

@@ -173,21 +173,26 @@ void net_face_bounds(const Model& model, const NodeState* nodes, int f, Vec3& lo
   hi = a.cwiseMax(b).cwiseMax(c);
 }
 
-/// The fine triangles riding on the net triangles near [qlo, qhi] (within the net's
-/// surface_reach), whose bounds at their vertices' current positions meet [qlo, qhi] and which
-/// ride on no torn net triangle: into ns.surface_candidates / surface_lo / surface_hi, each once,
-/// their vertices' positions in ns.surface_position. Returns their count.
+/// The fine triangles riding on the net triangles near the `num_spheres` near spheres (a net
+/// triangle whose bounds come within a sphere's radius plus the net's surface_reach of its
+/// centre), whose bounds at their vertices' current positions meet [qlo, qhi] (the near spheres'
+/// bounds) and which ride on no torn net triangle: into ns.surface_candidates / surface_lo /
+/// surface_hi, each once, their vertices' positions in ns.surface_position. Every net
+/// triangle's tear is judged once a call (ns.surface_net_*). Returns their count.
 int gather_surface_candidates(const Model& model, const Data& data, NetScratch& ns,
-                              const NetModel& net, const Vec3& qlo, const Vec3& qhi) noexcept {
+                              const NetModel& net, int num_spheres, const Vec3& qlo,
+                              const Vec3& qhi) noexcept {
   const NodeState* nodes = data.nodes.data();
+  const CollisionScratch& cs = data.scratch->collision;
   if (++ns.surface_stamp == 0) {  // wrapped: no entry may look stamped by this call
     std::fill(ns.surface_face_stamp.begin(), ns.surface_face_stamp.end(), 0u);
     std::fill(ns.surface_point_stamp.begin(), ns.surface_point_stamp.end(), 0u);
+    std::fill(ns.surface_net_stamp.begin(), ns.surface_net_stamp.end(), 0u);
     ns.surface_stamp = 1;
   }
   const std::uint32_t stamp = ns.surface_stamp;
-  const Vec3 reach = Vec3::Constant(net.surface_reach + kMargin);
-  const Vec3 plo = qlo - reach, phi = qhi + reach;
+  const double reach = net.surface_reach + kMargin;
+  const Vec3 plo = qlo - Vec3::Constant(reach), phi = qhi + Vec3::Constant(reach);
   const int room = static_cast<int>(ns.surface_candidates.size());
   const auto position = [&](int p) -> const Vec3& {
     Vec3& x = ns.surface_position[static_cast<std::size_t>(p)];
@@ -200,11 +205,28 @@ int gather_surface_candidates(const Model& model, const Data& data, NetScratch& 
     }
     return x;
   };
+  const auto is_torn = [&](int f) {
+    std::uint32_t& st = ns.surface_net_stamp[static_cast<std::size_t>(f)];
+    std::uint8_t& torn_f = ns.surface_net_torn[static_cast<std::size_t>(f)];
+    if (st != stamp) {
+      st = stamp;
+      torn_f = torn(model, nodes, f) ? 1 : 0;
+    }
+    return torn_f != 0;
+  };
+  const std::int32_t* near = ns.near_spheres.data();
   int nc = 0;
   for (int f = net.face_begin; f < net.face_begin + net.face_count; ++f) {
     Vec3 lo, hi;
     net_face_bounds(model, nodes, f, lo, hi);
     if (!boxes_overlap(lo, hi, plo, phi) || !(lo.allFinite() && hi.allFinite())) continue;
+    bool close = false;  // within reach of one of the spheres, not only of their bounds
+    for (int i = 0; i < num_spheres && !close; ++i) {
+      const int sp = near[i];
+      const double d = cs.sphere_r[static_cast<std::size_t>(sp)] + reach;
+      close = detail::box_distance2(cs.sphere_world[static_cast<std::size_t>(sp)], lo, hi) < d * d;
+    }
+    if (!close) continue;
     const auto first = static_cast<std::size_t>(model.net_face_surface_begin[static_cast<std::size_t>(f)]);
     const auto last = static_cast<std::size_t>(model.net_face_surface_begin[static_cast<std::size_t>(f) + 1]);
     for (std::size_t k = first; k < last && nc < room; ++k) {
@@ -215,7 +237,7 @@ int gather_surface_candidates(const Model& model, const Data& data, NetScratch& 
       const std::array<int, 3>& t = model.net_surface_faces[static_cast<std::size_t>(F)];
       bool keep = true;
       for (int m = 0; m < 3 && keep; ++m)
-        keep = !torn(model, nodes, model.net_surface_points[static_cast<std::size_t>(t[static_cast<std::size_t>(m)])].face);
+        keep = !is_torn(model.net_surface_points[static_cast<std::size_t>(t[static_cast<std::size_t>(m)])].face);
       if (!keep) continue;
       const Vec3& a = position(t[0]);
       const Vec3& b = position(t[1]);
@@ -252,7 +274,7 @@ void collide_net_faces(const Model& model, const Data& data, NetScratch& ns, con
   }
 
   if (net.surface_face_count > 0) {  // the fine surface riding on the net
-    const int nc = gather_surface_candidates(model, data, ns, net, qlo, qhi);
+    const int nc = gather_surface_candidates(model, data, ns, net, num_spheres, qlo, qhi);
     if (nc == 0) return;
     const std::int32_t* cand = ns.surface_candidates.data();
     const Vec3* x = ns.surface_position.data();

@@ -164,6 +164,10 @@ struct NetScratch {
   /// a call, whatever the number of net triangles it rides on.
   std::vector<std::uint32_t> surface_face_stamp, surface_point_stamp;
   std::vector<Vec3> surface_position;
+  /// Per net triangle (global): the stamp of the call that judged its tear, and the verdict
+  /// (1: torn), once a call whatever the number of fine vertices riding on it.
+  std::vector<std::uint32_t> surface_net_stamp;
+  std::vector<std::uint8_t> surface_net_torn;
   std::uint32_t surface_stamp = 0;  ///< The current call's stamp (0: never; wraps by clearing).
   /// Sizes every buffer for `model` (all empty when it has no net). Allocates: make_data() only.
   void resize(const Model& model);
