@@ -203,11 +203,14 @@ struct IndentationSample {
 /// periods, and the fine run's fast node oscillations, which the coarse implicit step damps,
 /// average out).
 /// Fails the test on a step that is not kStepOk.
-inline std::vector<IndentationSample> indentation_curve(const core::Model& m, const Vec3& from,
-                                                        const Vec3& dir, double speed,
-                                                        double max_depth, int every) {
+/// `touch_at`: the first touch's distance from `from` when given (a net carrying a fine surface
+/// is touched where that surface is, not where its own triangles are), else first_touch()'s.
+inline std::vector<IndentationSample> indentation_curve(
+    const core::Model& m, const Vec3& from, const Vec3& dir, double speed, double max_depth,
+    int every, double touch_at = std::numeric_limits<double>::quiet_NaN()) {
   core::Data d = core::make_data(m);
-  const double touch = first_touch(m, from, dir, m.body_spheres[0].radius);
+  const double touch =
+      std::isnan(touch_at) ? first_touch(m, from, dir, m.body_spheres[0].radius) : touch_at;
   EXPECT_TRUE(std::isfinite(touch)) << "the tool's path misses the organ";
   std::vector<IndentationSample> out;
   double window = 0.0;  // Σ of the force over the steps since the last sample
