@@ -281,3 +281,71 @@ TEST(NetSurfaceMap, PressingAFineSurfaceStepsWithoutAllocating) {
   EXPECT_GT(max_contacts, 0);
   EXPECT_GT(d.nets[0].max_tie_stretch, 5e-4) << "the organ gave way under the tool";
 }
+
+TEST(NetSurfaceMap, ContactsAgainstEveryFineTriangle) {
+  // A deformed 162-node organ carrying a 2 562-vertex surface, a 2 mm sphere at random places
+  // around it: the contact points found (each a run of shares at one position) are those of a
+  // search over every fine triangle at its vertices' mapped positions — one per triangle whose
+  // closest point is inside it within r, with its depth, and one more at the nearest edge or
+  // vertex point when that is nearer — so narrowing the candidates to the net triangles within
+  // reach of a sphere misses none; each point's shares sum to 1.
+  const double r = 0.002;
+  const core::TriangleMesh fine = core::make_icosphere(0.02, 4);
+  const core::Model m = surface_map_organ(core::make_icosphere(0.02, 2), fine, r, Vec3(0, 0, 0.05));
+  core::Data d = core::make_data(m);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (core::NodeState& n : d.nodes) n.position += 4e-4 * Vec3(u(rng), u(rng), u(rng));
+  std::vector<Vec3> x(fine.vertices.size());
+  ASSERT_EQ(core::net_surface_positions(m, d, 0, x), fine.num_vertices());
+  int touching = 0, several = 0;
+  for (int trial = 0; trial < 300; ++trial) {
+    const Vec3 at = (0.02 + 0.004 * u(rng)) * Vec3(u(rng), u(rng), u(rng)).normalized();
+    d.bodies[1].position = at;
+    core::detect_contacts(m, d);
+    core::detect_node_contacts(m, d);
+    // Reference over every fine triangle.
+    std::vector<double> want;
+    double face_distance = r, edge = r;
+    for (const auto& t : m.net_surface_faces) {
+      const Vec3 &a = x[static_cast<std::size_t>(t[0])], &b = x[static_cast<std::size_t>(t[1])],
+                 &c = x[static_cast<std::size_t>(t[2])];
+      int feature = 0;
+      const Vec3 q = core::detail::closest_on_triangle(at, a, b, c, feature);
+      const double dist = (at - q).norm();
+      if (!(dist < r)) continue;
+      if (feature == core::detail::kFace) {
+        want.push_back(r - (b - a).cross(c - a).normalized().dot(at - q));
+        face_distance = std::min(face_distance, dist);
+      } else {
+        edge = std::min(edge, dist);
+      }
+    }
+    const bool with_edge = edge < face_distance;
+    // Found: the distinct contact points, their depths and share sums.
+    std::vector<double> got;
+    std::vector<double> sums;
+    for (int i = 0; i < d.num_node_contacts;) {
+      const core::NodeContact& c0 = d.node_contacts[static_cast<std::size_t>(i)];
+      double sum = 0.0;
+      int j = i;
+      for (; j < d.num_node_contacts && d.node_contacts[static_cast<std::size_t>(j)].position == c0.position; ++j)
+        sum += d.node_contacts[static_cast<std::size_t>(j)].share;
+      got.push_back(c0.depth);
+      sums.push_back(sum);
+      i = j;
+    }
+    ASSERT_EQ(got.size(), want.size() + (with_edge ? 1 : 0)) << "trial " << trial;
+    // The triangles' contacts come first (in the candidates' order), the edge's last.
+    std::sort(want.begin(), want.end());
+    std::sort(got.begin(), got.begin() + static_cast<std::ptrdiff_t>(want.size()));
+    for (std::size_t k = 0; k < want.size(); ++k) EXPECT_NEAR(got[k], want[k], 1e-12) << "trial " << trial;
+    for (const double s : sums) EXPECT_NEAR(s, 1.0, 1e-12) << "trial " << trial;
+    touching += got.empty() ? 0 : 1;
+    several += got.size() > 1 ? 1 : 0;
+  }
+  std::printf("[fine surface] %d of 300 spheres touching, %d with several contact points\n", touching,
+              several);
+  EXPECT_GT(touching, 100);
+  EXPECT_GT(several, 5);
+}
