@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "build_features.hpp"
 #include "child_process.hpp"
 #include "numen/core/data.hpp"
 #include "numen/core/step.hpp"
@@ -126,6 +127,8 @@ TEST(OrganScale, FineEllipsoidOrgansRunTheShippedExcerptOnANetOfTheDefaultSize) 
   // from the fine ellipsoid: loaded on a net of the default size carrying the file's surface, run
   // offline over the shipped excerpt, clean. Printed: the net, the load, the step times and the
   // real-time factor (docs/organs.md, "A fine surface on a coarser net").
+  NUMEN_REQUIRE_ARTICULATION();  // the default scene's instrument
+  NUMEN_REQUIRE_DEFORMABLE();
   TempDir dir;
   for (const int f : {32, 100}) {
     const std::string obj = (dir.path() / ("ellipsoid_" + std::to_string(f) + ".obj")).string();
@@ -171,6 +174,7 @@ TEST(OrganScale, ForceAgainstIndentationOnNetsOf1000To10242NodesOfTheSameMesh) {
   // tie_stiffness and tie_damping ∝ 1 / nodes, 100 N/m and 0.17 N·s/m at 1 000; the springs'
   // constants are per spring (the shipped organ's). Compared over 5 ms means against the
   // 10 242-node net at 0.1 ms (the reference): every net at 1 ms.
+  NUMEN_REQUIRE_DEFORMABLE();
   TempDir dir;
   const std::string obj = (dir.path() / "ellipsoid_32.obj").string();
   organ_scale_write_ellipsoid(32, obj);
