@@ -166,6 +166,9 @@ int RunCommand::execute() const {
   options.overrun_limit = overrun_limit_;
   options.rearm = &rearm_flag();
   options.record_view_path = record_view_path_;
+  if (!view_.empty() || !record_view_path_.empty())
+    for (const std::string& line : sim::view_scene_warnings(scene))
+      std::cerr << "numen: warning: " << line << std::endl;
   options.view_rate_hz = view_rate_;
   options.view_speed = speed_;
   std::unique_ptr<sim::ViewServer> viewer;

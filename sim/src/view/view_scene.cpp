@@ -204,4 +204,29 @@ std::string view_scene_message(const Scene& scene, const platform::StateFrameLay
   return message.dump(-1, ' ', false, json::error_handler_t::replace);
 }
 
+std::vector<std::string> view_scene_warnings(const Scene& scene) {
+  const core::Model& m = scene.model;
+  std::vector<std::string> out;
+  const auto mesh_line = [&](const std::string& what, const core::MeshShape& mesh) {
+    if (mesh.num_triangles() > kViewMeshMaxTriangles)
+      out.push_back(what + "'s mesh has " + std::to_string(mesh.num_triangles()) +
+                    " triangles, more than the " + std::to_string(kViewMeshMaxTriangles) +
+                    " the view sends: the view draws its bounding box");
+  };
+  for (const core::Obstacle& o : m.obstacles)
+    if (o.type == core::ShapeType::kMesh && o.mesh >= 0 && o.mesh < static_cast<int>(m.meshes.size()))
+      mesh_line("obstacle \"" + o.name + "\"", m.meshes[static_cast<std::size_t>(o.mesh)]);
+  for (const core::BodyModel& b : m.bodies)
+    if (b.mesh >= 0 && b.mesh < static_cast<int>(m.meshes.size()))
+      mesh_line("body \"" + b.name + "\"", m.meshes[static_cast<std::size_t>(b.mesh)]);
+  for (const core::NetModel& net : m.nets)
+    if (net.surface_face_count > kViewNetSurfaceMaxTriangles)
+      out.push_back("deformable \"" + net.name + "\"'s fine surface has " +
+                    std::to_string(net.surface_face_count) + " triangles, more than the " +
+                    std::to_string(kViewNetSurfaceMaxTriangles) +
+                    " the view sends: the view draws its " + std::to_string(net.node_count) +
+                    "-node net");
+  return out;
+}
+
 }  // namespace numen::sim

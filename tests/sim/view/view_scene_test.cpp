@@ -203,3 +203,25 @@ TEST(ViewSceneMessage, CarriesANetsFineSurfaceFromWhichThePagePlacesItsVertices)
 }
 
 }  // namespace
+
+TEST(ViewSceneWarnings, AFineSurfaceTheMessageLeavesOutIsSaid) {
+  // What the scene message leaves out is said (numen run --view / --record-view print it): a
+  // fine surface above kViewNetSurfaceMaxTriangles goes as its counts, and the page draws the
+  // net. Nothing to say for a scene the message carries whole.
+  NUMEN_REQUIRE_DEFORMABLE();
+  numen::sim::Scene scene =
+      numen::sim::load_scene(std::string(NUMEN_TEST_DATA_DIR) + "/node_contacts.toml");
+  EXPECT_TRUE(numen::sim::view_scene_warnings(scene).empty());
+  ASSERT_EQ(numen::test::map_fine_icosphere_onto_net(scene.model, 0, 3), "");
+  EXPECT_TRUE(numen::sim::view_scene_warnings(scene).empty()) << "1 280 fine triangles go whole";
+  // The count is all the message and the warning read of a surface that large.
+  scene.model.nets[0].surface_face_count = numen::sim::kViewNetSurfaceMaxTriangles + 1;
+  const std::vector<std::string> lines = numen::sim::view_scene_warnings(scene);
+  ASSERT_EQ(lines.size(), 1u);
+  EXPECT_EQ(lines[0], "deformable \"organ\"'s fine surface has 400001 triangles, more than the 400000 "
+                      "the view sends: the view draws its 162-node net");
+  const auto j = nlohmann::json::parse(numen::sim::view_scene_message(
+      scene, numen::sim::view_frame_layout(scene), 30.0));
+  EXPECT_FALSE(j["nets"][0]["surface"].contains("triangles"));
+  EXPECT_EQ(j["nets"][0]["surface"]["triangle_count"].get<int>(), 400001);
+}

@@ -6,6 +6,7 @@
 /// the joints, the device and the frame layout. Setup code (allocates).
 
 #include <string>
+#include <vector>
 
 #include "numen/platform/state_frame.hpp"
 #include "numen/sim/scene/scene.hpp"
@@ -50,5 +51,13 @@ platform::StateFrameLayout view_frame_layout(const Scene& scene);
 /// model's doubles, but for a fine surface's weights and offsets (rounded as said).
 std::string view_scene_message(const Scene& scene, const platform::StateFrameLayout& layout,
                                double display_rate_hz);
+
+/// What view_scene_message() leaves out of `scene`, one line each (empty when nothing): a mesh
+/// (an obstacle's or a body's) of more than kViewMeshMaxTriangles triangles, sent as its bounds
+/// (the page draws a box), and a net's fine surface of more than kViewNetSurfaceMaxTriangles,
+/// sent as its counts (the page draws the net's own triangles). `numen run --view` and
+/// `--record-view` print them on stderr, so that a view that draws less than the run simulates
+/// says so.
+std::vector<std::string> view_scene_warnings(const Scene& scene);
 
 }  // namespace numen::sim
