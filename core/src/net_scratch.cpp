@@ -87,15 +87,17 @@ void NetScratch::resize(const Model& model) {
   std::size_t body_spheres = 0;  // Σ sphere_count: room even if bodies shared a range
   for (const BodyModel& b : model.bodies) body_spheres += static_cast<std::size_t>(b.sphere_count);
   near_spheres.assign(n > 0 ? body_spheres : 0, 0);
-  std::size_t faces = 0;
-  for (const NetModel& net : model.nets) faces = std::max(faces, static_cast<std::size_t>(net.face_count));
-  if (n == 0) faces = 0;
+  // Room for the largest net's count of `what` (none without nodes).
+  const auto largest = [&](int NetModel::*what) {
+    std::size_t most = 0;
+    for (const NetModel& net : model.nets) most = std::max(most, static_cast<std::size_t>(net.*what));
+    return n > 0 ? most : std::size_t{0};
+  };
+  const std::size_t faces = largest(&NetModel::face_count);
   face_candidates.assign(faces, 0);
   face_lo.assign(faces, Vec3::Zero());
   face_hi.assign(faces, Vec3::Zero());
-  std::size_t fine = 0;
-  for (const NetModel& net : model.nets) fine = std::max(fine, static_cast<std::size_t>(net.surface_face_count));
-  if (n == 0) fine = 0;
+  const std::size_t fine = largest(&NetModel::surface_face_count);
   surface_candidates.assign(fine, 0);
   surface_lo.assign(fine, Vec3::Zero());
   surface_hi.assign(fine, Vec3::Zero());

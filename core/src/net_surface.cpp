@@ -10,13 +10,14 @@
 #include <cmath>
 #include <cstdint>
 #include <numbers>
+#include <span>
 
 #include "collision_query.hpp"
 #include "detail/data_scratch.hpp"
 #include "detail/mesh_shape_query.hpp"
 #include "detail/net_scratch.hpp"
-#include "detail/net_surface_frame.hpp"
 #include "numen/core/data.hpp"
+#include "numen/core/net_surface_map.hpp"
 
 namespace numen::core::detail {
 namespace {
@@ -194,14 +195,13 @@ int gather_surface_candidates(const Model& model, const Data& data, NetScratch& 
   const double reach = net.surface_reach + kMargin;
   const Vec3 plo = qlo - Vec3::Constant(reach), phi = qhi + Vec3::Constant(reach);
   const int room = static_cast<int>(ns.surface_candidates.size());
+  const std::span<const NodeState> node_states(data.nodes.data(), data.nodes.size());
   const auto position = [&](int p) -> const Vec3& {
     Vec3& x = ns.surface_position[static_cast<std::size_t>(p)];
     std::uint32_t& st = ns.surface_point_stamp[static_cast<std::size_t>(p)];
     if (st != stamp) {
       st = stamp;
-      const NetSurfacePoint& e = model.net_surface_points[static_cast<std::size_t>(p)];
-      const std::array<int, 3>& t = model.net_faces[static_cast<std::size_t>(e.face)];
-      x = net_surface_point(e, nodes[t[0]].position, nodes[t[1]].position, nodes[t[2]].position);
+      x = net_surface_position(model, node_states, p);
     }
     return x;
   };

@@ -43,19 +43,11 @@ struct NodeContactSink {
                 int sphere_b, int material_pair, const ContactGeometry& g,
                 const Vec3& com_b) noexcept {
     net_max_depth = std::max(net_max_depth, g.depth);
-    const int entries = (w.x() > 0.0 ? 1 : 0) + (w.y() > 0.0 ? 1 : 0) + (w.z() > 0.0 ? 1 : 0);
-    if (count + entries > capacity) {
+    if (count + entries_of(w) > capacity) {
       ++dropped;
       return;
     }
-    for (int m = 0; m < 3; ++m) {
-      if (!(w[m] > 0.0)) continue;
-      NodeContact& c = write(nodes[static_cast<std::size_t>(m)], body_b, -1, sphere_b,
-                             material_pair, g, com_b);
-      c.face = face;
-      c.face_weights = w;
-      c.share = w[m];
-    }
+    write_triangle(face, nodes, w, w, body_b, sphere_b, material_pair, g, com_b);
   }
 
   /// A contact of a fine surface's triangle (net_surface_map.hpp) at the point of barycentric
@@ -82,8 +74,7 @@ struct NodeContactSink {
       weight[static_cast<std::size_t>(k)] += w[i] * e[static_cast<std::size_t>(i)]->weights;
     }
     int entries = 0;
-    for (int k = 0; k < groups; ++k)
-      for (int m = 0; m < 3; ++m) entries += weight[static_cast<std::size_t>(k)][m] > 0.0 ? 1 : 0;
+    for (int k = 0; k < groups; ++k) entries += entries_of(weight[static_cast<std::size_t>(k)]);
     if (count + entries > capacity) {
       ++dropped;
       return;
@@ -92,19 +83,33 @@ struct NodeContactSink {
       const Vec3& b = weight[static_cast<std::size_t>(k)];
       const double sum = b.sum();
       if (!(sum > 0.0)) continue;
-      const std::array<int, 3>& nodes = faces[face[static_cast<std::size_t>(k)]];
-      for (int m = 0; m < 3; ++m) {
-        if (!(b[m] > 0.0)) continue;
-        NodeContact& c = write(nodes[static_cast<std::size_t>(m)], body_b, -1, sphere_b,
-                               material_pair, g, com_b);
-        c.face = face[static_cast<std::size_t>(k)];
-        c.face_weights = b / sum;
-        c.share = b[m];
-      }
+      const int f = face[static_cast<std::size_t>(k)];
+      write_triangle(f, faces[f], b / sum, b, body_b, sphere_b, material_pair, g, com_b);
     }
   }
 
  private:
+  /// Entries a triangle contact of node weights `b` takes: one per weight > 0.
+  static int entries_of(const Vec3& b) noexcept {
+    return (b.x() > 0.0 ? 1 : 0) + (b.y() > 0.0 ? 1 : 0) + (b.z() > 0.0 ? 1 : 0);
+  }
+
+  /// The entries of a contact of the net triangle `face` (global node indices `nodes`): one per
+  /// node of share > 0, NodeContact::face_weights `weights`, share `shares[m]`. The caller checked
+  /// the room (entries_of(shares)).
+  void write_triangle(int face, const std::array<int, 3>& nodes, const Vec3& weights,
+                      const Vec3& shares, int body_b, int sphere_b, int material_pair,
+                      const ContactGeometry& g, const Vec3& com_b) noexcept {
+    for (int m = 0; m < 3; ++m) {
+      if (!(shares[m] > 0.0)) continue;
+      NodeContact& c = write(nodes[static_cast<std::size_t>(m)], body_b, -1, sphere_b,
+                             material_pair, g, com_b);
+      c.face = face;
+      c.face_weights = weights;
+      c.share = shares[m];
+    }
+  }
+
   NodeContact& write(int node, int body_b, int obstacle, int sphere_b, int material_pair,
                      const ContactGeometry& g, const Vec3& com_b) noexcept {
     NodeContact& c = out[count++];

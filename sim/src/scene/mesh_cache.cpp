@@ -380,24 +380,40 @@ std::string mesh_cache_file_name(const std::string& stem, std::uint64_t key) {
   return cache_file_name(stem, key, ".nmshape");
 }
 
-std::string build_mesh_shape_cached(const core::TriangleMesh& mesh,
-                                    const core::MeshShapeOptions& options,
-                                    const std::filesystem::path& path, core::MeshShape& out,
-                                    MeshCacheOutcome& outcome) {
+namespace {
+
+/// The cache protocol of both kinds: `read()` the file ("" when it held what is asked, else why
+/// not), else `make()` it ("" or the error, returned) and `write()` it, the outcome saying
+/// whether it was loaded or written and why not (`redo`: what was done instead, "rebuilt").
+template <typename Read, typename Make, typename Write>
+std::string through_cache(const std::filesystem::path& path, const char* redo, Read read, Make make,
+                          Write write, MeshCacheOutcome& outcome) {
   outcome = MeshCacheOutcome{};
-  const std::uint64_t key = mesh_cache_key(mesh, options);
-  const std::string why = read_cache(path, key, out);
+  const std::string why = read();
   if (why.empty()) {
     outcome.loaded = true;
     return "";
   }
-  if (why != "missing") outcome.note = path.string() + ": " + why + ": rebuilt";
-  const std::string err = core::build_mesh_shape(mesh, out, options);
+  if (why != "missing") outcome.note = path.string() + ": " + why + ": " + redo;
+  const std::string err = make();
   if (!err.empty()) return err;
-  const std::string written = write_cache(path, key, out);
+  const std::string written = write();
   outcome.written = written.empty();
   if (!written.empty()) outcome.note += (outcome.note.empty() ? "" : "; ") + written;
   return "";
+}
+
+}  // namespace
+
+std::string build_mesh_shape_cached(const core::TriangleMesh& mesh,
+                                    const core::MeshShapeOptions& options,
+                                    const std::filesystem::path& path, core::MeshShape& out,
+                                    MeshCacheOutcome& outcome) {
+  const std::uint64_t key = mesh_cache_key(mesh, options);
+  return through_cache(
+      path, "rebuilt", [&] { return read_cache(path, key, out); },
+      [&] { return core::build_mesh_shape(mesh, out, options); },
+      [&] { return write_cache(path, key, out); }, outcome);
 }
 
 std::uint64_t net_cache_key(const core::TriangleMesh& mesh, int nodes, std::uint64_t simplifier) {
@@ -417,23 +433,17 @@ std::string simplify_net_cached(const core::TriangleMesh& mesh, int nodes, std::
                                 const std::filesystem::path& path,
                                 const std::function<std::string(core::TriangleMesh&)>& simplify,
                                 core::TriangleMesh& net, MeshCacheOutcome& outcome) {
-  outcome = MeshCacheOutcome{};
   const std::uint64_t key = net_cache_key(mesh, nodes, simplifier);
-  const std::string why = read_net_cache(path, key, net);
-  if (why.empty()) {
-    outcome.loaded = true;
-    return "";
-  }
-  if (why != "missing") outcome.note = path.string() + ": " + why + ": simplified again";
-  const std::string err = simplify(net);
-  if (!err.empty()) return err;
-  Writer payload;
-  payload.array(net.vertices);
-  payload.array(net.triangles);
-  const std::string written = write_cache_file(path, kNetMagic, kNetCacheVersion, key, payload.out);
-  outcome.written = written.empty();
-  if (!written.empty()) outcome.note += (outcome.note.empty() ? "" : "; ") + written;
-  return "";
+  return through_cache(
+      path, "simplified again", [&] { return read_net_cache(path, key, net); },
+      [&] { return simplify(net); },
+      [&] {
+        Writer payload;
+        payload.array(net.vertices);
+        payload.array(net.triangles);
+        return write_cache_file(path, kNetMagic, kNetCacheVersion, key, payload.out);
+      },
+      outcome);
 }
 
 }  // namespace numen::sim
