@@ -12,6 +12,7 @@
 #include <cstdio>
 #include <limits>
 #include <map>
+#include <memory>
 #include <random>
 #include <vector>
 
@@ -19,6 +20,7 @@
 #include "numen/core/data.hpp"
 #include "numen/core/mesh.hpp"
 #include "numen/core/model.hpp"
+#include "numen/core/multirate.hpp"
 #include "numen/core/net_collision.hpp"
 #include "numen/core/net_surface_map.hpp"
 #include "numen/core/step.hpp"
@@ -348,4 +350,41 @@ TEST(NetSurfaceMap, ContactsAgainstEveryFineTriangle) {
               several);
   EXPECT_GT(touching, 100);
   EXPECT_GT(several, 5);
+}
+
+TEST(NetSurfaceMap, MultirateLoopsOnAFineSurfaceDoNotAllocate) {
+  // The multirate god-object (10 kHz device loop, 1 ms scene loop) pressed 3 mm into a 162-node
+  // organ carrying a 10 242-vertex surface and drawn along it: the scene loop's contacts are the
+  // fine surface's (split on the net triangles its vertices ride on), the device loop's planes
+  // and node carriers are built from them, and neither loop allocates.
+  const double dt = 1e-4;
+  const core::TriangleMesh fine = core::make_icosphere(0.02, 5);
+  core::Model m = numen::test::organ::organ_model(core::make_icosphere(0.02, 2),
+                                                  numen::test::organ::OrganParams{}, dt,
+                                                  core::CouplingMode::kGodObject, 0.0025,
+                                                  Vec3(0, 0, 0.03));
+  ASSERT_EQ(core::add_net_surface(m, 0, fine.vertices, fine.triangles,
+                                  surface_map_nearest_faces(m, fine.vertices)),
+            "");
+  auto owner = std::make_unique<core::MultirateGodObject>(m, 1, core::MultirateSettings{10, 0.002, {}});
+  core::MultirateGodObject& mr = *owner;
+  const int periods = numen::test::under_sanitizer() ? 1000 : 3000;
+  int planes = 0;
+  std::int64_t count = 0;
+  {
+    numen::test::AllocationGuard guard;
+    for (int k = 0; k < periods; ++k) {
+      const double t = k * dt;
+      mr.device_data().target.position =
+          Vec3(0.03 * std::max(0.0, t - 0.1), 0.0, 0.03 - 0.105 * std::min(t, 0.1));  // to 19.5 mm
+      mr.step();
+      ASSERT_EQ(mr.device_data().status, core::kStepOk) << k;
+      planes = std::max(planes, mr.planes().count);
+    }
+    count = guard.count();
+  }
+  std::printf("[fine surface multirate alloc] allocations %lld, planes <= %d\n",
+              static_cast<long long>(count), planes);
+  EXPECT_EQ(count, 0);
+  EXPECT_GT(planes, 0) << "the fine surface's contacts reach the device loop";
 }
