@@ -329,9 +329,14 @@ void MultirateGodObject::scene_step(const MultirateDeviceReport& in, MultirateSc
   scene_->attached_body = body;
   const std::vector<int>& scene_joints =
       scene_slot_ >= 0 ? slots_[static_cast<std::size_t>(scene_slot_)].scene_joints : free_joints_;
-  static const std::vector<int> kNone;
-  const std::vector<int>& device_body = scene_slot_ >= 0 ? slots_[static_cast<std::size_t>(scene_slot_)].device_body : kNone;
-  const std::vector<int>& god = scene_slot_ >= 0 ? slots_[static_cast<std::size_t>(scene_slot_)].bodies : kNone;
+  // Empty spans without a slot: no function-local static, whose first use registers its
+  // destructor with atexit(), which may allocate (the scene step never allocates).
+  const std::span<const int> device_body =
+      scene_slot_ >= 0 ? std::span<const int>(slots_[static_cast<std::size_t>(scene_slot_)].device_body)
+                       : std::span<const int>();
+  const std::span<const int> god =
+      scene_slot_ >= 0 ? std::span<const int>(slots_[static_cast<std::size_t>(scene_slot_)].bodies)
+                       : std::span<const int>();
   // The scene loop's model (this thread's: its dt is a sub-step's below, and the device loop
   // reads other fields of it, never dt).
   Model& model = scene_slot_ >= 0 ? slots_[static_cast<std::size_t>(scene_slot_)].scene_model
