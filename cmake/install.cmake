@@ -101,6 +101,10 @@ endif()
 if(NUMEN_WITH_EVDEV)
   list(APPEND _hal_headers numen/hal/input/evdev_pointer.hpp)
 endif()
+if(NUMEN_WITH_OPENIGTLINK)
+  list(APPEND _hal_headers numen/hal/igtl/igtl_message.hpp numen/hal/igtl/igtl_tracker_bus.hpp
+                           numen/hal/igtl/igtl_tracker_client.hpp)
+endif()
 numen_install_headers(${PROJECT_SOURCE_DIR}/hal/include ${_hal_headers})
 numen_install_headers(${PROJECT_BINARY_DIR}/hal/include numen/hal/features.hpp)  # generated
 

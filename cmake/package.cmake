@@ -124,7 +124,7 @@ if(TARGET numen_python AND NUMEN_PYTHON_VERSION MATCHES "^([0-9]+)\\.([0-9]+)$")
   string(APPEND CPACK_DEBIAN_PACKAGE_DEPENDS ", python3 (>= ${NUMEN_PYTHON_VERSION}),"
          " python3 (<< ${CMAKE_MATCH_1}.${_py_next}), python3-numpy")
 endif()
-set(CPACK_DEBIAN_PACKAGE_RECOMMENDS "cmake, g++, libeigen3-dev, libboost-dev, libassimp-dev, libinih-dev, libevdev-dev, pkg-config")
+set(CPACK_DEBIAN_PACKAGE_RECOMMENDS "cmake, g++, libeigen3-dev, libboost-dev, libassimp-dev, libinih-dev, libevdev-dev, libopenigtlink-dev, pkg-config")
 set(CPACK_DEBIAN_PACKAGE_CONTROL_EXTRA "${_pkg}/conffiles;${_pkg}/postinst")
 set(CPACK_DEBIAN_PACKAGE_CONTROL_STRICT_PERMISSION ON)
 set(CPACK_PACKAGING_INSTALL_PREFIX ${NUMEN_DEB_PREFIX})

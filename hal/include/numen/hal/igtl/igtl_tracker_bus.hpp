@@ -1,0 +1,144 @@
+#pragma once
+/// @file igtl_tracker_bus.hpp
+/// IgtlTrackerBus: an optical or electromagnetic tracker (NDI Polaris / Aurora, Atracsys,
+/// OptiTrack, through PLUS or a vendor's bridge) read over OpenIGTLink as the encoders of a
+/// pose-tracker instrument (DeviceKind::kPoseTracker, pose_tracker_kinematics.hpp), so that its
+/// poses go through the one device path numen has: the controller's SYNC, the six axis values
+/// (x, y, z, yaw, pitch, roll) as position TPDOs in the axes' counts, the instrument's checks
+/// (freshness against max_sample_age on the message's own timestamp, range, jump), the
+/// velocity estimate, the supervision and the summary. The tracker has no motors: the axes have
+/// no drive, so no feedback is sent (the paper's non-haptic absolute-position device, its Fig. 1).
+///
+/// Each SYNC written (bus time t, set_time_ns()) takes the tool's TRANSFORMs queued by the
+/// receiver thread (IgtlTrackerClient) and answers with the newest one's six TPDOs, stamped with
+/// the message's time on the bus clock:
+///  - following the tracker (`wait_for_tracker`, offline runs): message k's bus time is its
+///    timestamp minus the first message's (the first message is bus time 0); the SYNC takes every
+///    pose stamped <= t and waits (at most wait_timeout_ns, counted) until a later one is queued or
+///    the receiver has ended — the run goes at the tracker's pace, deterministic for a replay;
+///  - paced (a real-time run): the SYNC takes every queued pose and never waits; a message's bus
+///    time is its timestamp + the smallest (receive time − timestamp) seen so far, the clock
+///    offset of the sender (Cristian's bound), on the monotonic clock shifted to bus time.
+/// A pose is the tool tip's (the tracked frame's) world pose tip = registration · [R, units · t] ·
+/// calibration (the tool-tip calibration in the tracked marker's frame, the registration
+/// tracker → scene); the axes are those that put the tracked frame there:
+/// PoseTrackerKinematics::inverse() of the controlled frame tip · tool_offset (its base applies
+/// as for any pose tracker). Before the first pose nothing answers (the sample is not ready); a pose
+/// that is not renewed ages and the instrument rejects it as stale, exactly as a stale encoder.
+///
+/// Not thread safe (one control loop). read / write / set_time_ns never allocate, throw or lock;
+/// they never block, except a SYNC following the tracker (bounded by wait_timeout_ns).
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "numen/core/types.hpp"
+#include "numen/hal/device/device_config.hpp"
+#include "numen/hal/device/kinematics.hpp"
+#include "numen/hal/igtl/igtl_tracker_client.hpp"
+#include "numen/hal/transport/bus.hpp"
+
+namespace numen::hal {
+
+/// The tracker of a scene ([device.igtl], docs/openigtlink.md).
+struct IgtlTrackerSettings {
+  IgtlTrackerClientSettings client;  ///< Server, device name, queue, reconnection.
+  /// Metres per unit of the message's translation: 1e-3 for millimetres (PLUS), 1 for metres.
+  double metres_per_unit = 1e-3;
+  /// Tool-tip calibration: the tool tip (the tracked frame) in the marker's frame (m, unit
+  /// quaternion).
+  core::Pose calibration;
+  /// Registration: the tracker's frame in the scene's world (m, unit quaternion).
+  core::Pose registration;
+  /// Follow the tracker's clock (offline) instead of the period's (see the file comment).
+  bool wait_for_tracker = false;
+  /// Longest wait of one SYNC following the tracker, ns (> 0).
+  std::int64_t wait_timeout_ns = 2'000'000'000;
+  /// Latencies kept for latency_ns() (received → taken by a SYNC), >= 1.
+  std::size_t latency_capacity = 1 << 16;
+};
+
+/// Counters of an IgtlTrackerBus since construction.
+struct IgtlBusCounters {
+  std::uint64_t syncs = 0;            ///< SYNCs written.
+  std::uint64_t syncs_without_pose = 0;  ///< SYNCs answered by nothing (no pose yet).
+  std::uint64_t poses_taken = 0;      ///< Poses taken from the queue.
+  std::uint64_t poses_superseded = 0; ///< ... of which a newer one replaced in the same SYNC.
+  std::uint64_t wait_timeouts = 0;    ///< SYNCs following the tracker whose wait ran out.
+  std::uint64_t out_of_order = 0;     ///< Poses stamped before the previous one (taken as due).
+  /// SYNCs that found every pose taken and the receiver ended (the stream over: a replay's end,
+  /// or a server gone with reconnect off).
+  std::uint64_t syncs_after_end = 0;
+};
+
+/// The tracker as a bus (see the file comment).
+class IgtlTrackerBus final : public Bus {
+ public:
+  /// `config`: the pose tracker's device configuration (validated; DeviceKind::kPoseTracker,
+  /// six axes, their encoder COB-IDs and counts); `kinematics` its kinematics (kept). Starts the
+  /// receiver (IgtlTrackerClient). Throws std::invalid_argument: another kind, metres_per_unit
+  /// not finite and > 0, a quaternion not of unit length within 1e-6, wait_timeout_ns <= 0,
+  /// or the client's settings.
+  IgtlTrackerBus(const DeviceConfig& config, std::unique_ptr<const Kinematics> kinematics,
+                 IgtlTrackerSettings settings);
+  ~IgtlTrackerBus() override;
+
+  /// The next pending TPDO (kOk), or kWouldBlock.
+  IoStatus read(CanFrame& frame) noexcept override;
+  /// A SYNC (is_sync()) takes the due poses and queues the six TPDOs; any other well-formed frame
+  /// is accepted and discarded (kOk); a malformed one is kError.
+  IoStatus write(const CanFrame& frame) noexcept override;
+  /// kOk while connected or before the first connection; kBusOff once the receiver has ended
+  /// (connection refused or lost with reconnect off).
+  BusState state() const noexcept override;
+  /// frames_rx: TPDOs read; frames_tx: frames written; errors: malformed writes.
+  BusCounters counters() const noexcept override { return counters_; }
+  /// Sets the bus clock, ns (non-decreasing).
+  void set_time_ns(std::int64_t t_ns) noexcept;
+
+  /// This bus's counters.
+  const IgtlBusCounters& tracker_counters() const noexcept { return tracker_counters_; }
+  /// The receiver (its counters, faults, names seen).
+  const IgtlTrackerClient& client() const noexcept { return *client_; }
+  /// Same, mutable (stop()).
+  IgtlTrackerClient& client() noexcept { return *client_; }
+  /// Latencies from a TRANSFORM received (IgtlPose::received_mono_ns) to the SYNC that took it
+  /// (CLOCK_MONOTONIC), ns, in order, the first latency_capacity of the run.
+  std::vector<std::int64_t> latency_ns() const;
+  /// The tool tip's world pose of the newest pose taken (identity before any).
+  const core::Pose& last_pose() const noexcept { return last_pose_; }
+  /// The settings.
+  const IgtlTrackerSettings& settings() const noexcept { return settings_; }
+
+ private:
+  // The bus time of `p` (see the file comment).
+  std::int64_t bus_time_of(const IgtlPose& p) noexcept;
+  void take(const IgtlPose& p, std::int64_t now_mono) noexcept;
+  void on_sync() noexcept;
+
+  DeviceConfig config_;
+  std::unique_ptr<const Kinematics> kinematics_;
+  IgtlTrackerSettings settings_;
+  std::unique_ptr<IgtlTrackerClient> client_;
+  std::array<CanFrame, kMaxAxes> pending_{};
+  int pending_count_ = 0;
+  int pending_next_ = 0;
+  bool has_pose_ = false;
+  AxisVector q_;
+  std::int64_t pose_time_ns_ = 0;  // bus time of the newest pose
+  core::Pose last_pose_;
+  std::int64_t now_ns_ = 0;
+  bool has_origin_ = false;
+  std::int64_t origin_mono_ns_ = 0;   // paced: CLOCK_MONOTONIC of bus time 0
+  bool has_first_stamp_ = false;
+  std::int64_t first_stamp_ns_ = 0;   // following: the first message's stamp
+  bool has_offset_ = false;
+  std::int64_t offset_ns_ = 0;        // paced: min(received − stamp)
+  std::vector<std::int64_t> latencies_;  // reserved at construction
+  BusCounters counters_;
+  IgtlBusCounters tracker_counters_;
+};
+
+}  // namespace numen::hal

@@ -1,0 +1,177 @@
+/// @file igtl_tracker_bus.cpp
+/// The OpenIGTLink tracker as the encoders of a pose tracker (igtl_tracker_bus.hpp).
+
+#include "numen/hal/igtl/igtl_tracker_bus.hpp"
+
+#include <time.h>
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "numen/hal/canopen/canopen.hpp"
+#include "numen/hal/device/axis.hpp"
+
+namespace numen::hal {
+
+namespace {
+
+std::int64_t igtl_bus_mono_ns() noexcept {
+  timespec ts{};
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
+}
+
+void check_igtl_pose(const core::Pose& p, const char* name) {
+  if (!p.position.allFinite() || !(std::abs(p.orientation.norm() - 1.0) <= 1e-6))
+    throw std::invalid_argument(std::string("OpenIGTLink tracker: ") + name +
+                                " must have a finite position and a unit quaternion");
+}
+
+}  // namespace
+
+IgtlTrackerBus::IgtlTrackerBus(const DeviceConfig& config,
+                               std::unique_ptr<const Kinematics> kinematics,
+                               IgtlTrackerSettings settings)
+    : config_(config), kinematics_(std::move(kinematics)), settings_(std::move(settings)) {
+  if (config_.kind != DeviceKind::kPoseTracker)
+    throw std::invalid_argument(
+        "OpenIGTLink tracker: the device must be a pose tracker (kind = \"pose-tracker\")");
+  if (!kinematics_ || kinematics_->num_axes() != static_cast<int>(config_.axes.size()))
+    throw std::invalid_argument("OpenIGTLink tracker: the kinematics must have the device's axes");
+  if (!std::isfinite(settings_.metres_per_unit) || !(settings_.metres_per_unit > 0.0))
+    throw std::invalid_argument("OpenIGTLink tracker: metres_per_unit must be finite and > 0");
+  if (settings_.wait_timeout_ns <= 0)
+    throw std::invalid_argument("OpenIGTLink tracker: wait_timeout_ns must be > 0");
+  check_igtl_pose(settings_.calibration, "calibration");
+  check_igtl_pose(settings_.registration, "registration");
+  settings_.calibration.orientation.normalize();
+  settings_.registration.orientation.normalize();
+  q_ = AxisVector::Zero(kinematics_->num_axes());
+  latencies_.reserve(std::max<std::size_t>(settings_.latency_capacity, 1));
+  IgtlTrackerClientSettings cs = settings_.client;
+  cs.wait_when_full = settings_.wait_for_tracker;
+  cs.reconnect = cs.reconnect && !settings_.wait_for_tracker;  // a replay's end is the end
+  client_ = std::make_unique<IgtlTrackerClient>(cs);
+}
+
+IgtlTrackerBus::~IgtlTrackerBus() = default;
+
+BusState IgtlTrackerBus::state() const noexcept {
+  return client_->ended() && !client_->connected() && client_->counters().connects == 0
+             ? BusState::kBusOff
+             : BusState::kOk;
+}
+
+void IgtlTrackerBus::set_time_ns(std::int64_t t_ns) noexcept {
+  now_ns_ = t_ns;
+  if (!has_origin_) {
+    origin_mono_ns_ = igtl_bus_mono_ns() - t_ns;
+    has_origin_ = true;
+  }
+}
+
+std::int64_t IgtlTrackerBus::bus_time_of(const IgtlPose& p) noexcept {
+  if (settings_.wait_for_tracker) {
+    if (!has_first_stamp_) {
+      first_stamp_ns_ = p.stamp_ns;
+      has_first_stamp_ = true;
+    }
+    return p.stamp_ns - first_stamp_ns_;
+  }
+  // Paced: the sender's clock through the smallest one-way delay seen (an unstamped message,
+  // stamp 0, is its receive time).
+  if (p.stamp_ns == 0) return p.received_mono_ns - origin_mono_ns_;
+  const std::int64_t offset = p.received_mono_ns - p.stamp_ns;
+  if (!has_offset_ || offset < offset_ns_) {
+    offset_ns_ = offset;
+    has_offset_ = true;
+  }
+  return p.stamp_ns + offset_ns_ - origin_mono_ns_;
+}
+
+void IgtlTrackerBus::take(const IgtlPose& p, std::int64_t now_mono) noexcept {
+  const std::int64_t t = bus_time_of(p);
+  const bool first = tracker_counters_.poses_taken == 0;
+  if (!first && t < pose_time_ns_) ++tracker_counters_.out_of_order;
+  ++tracker_counters_.poses_taken;
+  if (latencies_.size() < latencies_.capacity()) latencies_.push_back(now_mono - p.received_mono_ns);
+  // The tip in the world: registration · marker · calibration
+  const core::Quat marker_q(p.rotation);
+  const core::Vec3 marker_p = p.translation * settings_.metres_per_unit;
+  const core::Pose& reg = settings_.registration;
+  const core::Pose& cal = settings_.calibration;
+  core::Pose world;
+  world.orientation = (reg.orientation * marker_q * cal.orientation).normalized();
+  world.position = reg.position + reg.orientation * (marker_p + marker_q * cal.position);
+  last_pose_ = world;
+  // The controlled frame the kinematics inverts: the tip · tool_offset (as forward() makes it).
+  const core::Pose& off = config_.tool_offset;
+  const core::Pose controlled{world.position + world.orientation * off.position,
+                              (world.orientation * off.orientation).normalized()};
+  q_ = kinematics_->inverse(controlled, q_);
+  pose_time_ns_ = first ? t : std::max(t, pose_time_ns_);  // a stamp never goes back
+  has_pose_ = true;
+}
+
+void IgtlTrackerBus::on_sync() noexcept {
+  ++tracker_counters_.syncs;
+  int taken = 0;
+  const std::int64_t wait_until =
+      settings_.wait_for_tracker ? igtl_bus_mono_ns() + settings_.wait_timeout_ns : 0;
+  for (;;) {
+    const IgtlPose* p = client_->front();
+    if (p == nullptr) {
+      // Following the tracker: wait for a pose after t unless the receiver has ended.
+      if (client_->ended()) {
+        if (taken == 0) ++tracker_counters_.syncs_after_end;
+        break;
+      }
+      if (!settings_.wait_for_tracker) break;
+      if (igtl_bus_mono_ns() >= wait_until) {
+        ++tracker_counters_.wait_timeouts;
+        break;
+      }
+      const timespec ts{0, 20'000};
+      nanosleep(&ts, nullptr);
+      continue;
+    }
+    if (settings_.wait_for_tracker && has_first_stamp_ && p->stamp_ns - first_stamp_ns_ > now_ns_)
+      break;  // due later
+    if (taken++ > 0) ++tracker_counters_.poses_superseded;
+    take(*p, igtl_bus_mono_ns());
+    client_->pop();
+  }
+  pending_count_ = 0;
+  pending_next_ = 0;
+  if (!has_pose_) {
+    ++tracker_counters_.syncs_without_pose;
+    return;
+  }
+  for (std::size_t i = 0; i < config_.axes.size(); ++i) {
+    const AxisConfig& a = config_.axes[i];
+    pending_[static_cast<std::size_t>(pending_count_++)] = encode_position_pdo(
+        a.encoder_cob_id, value_to_counts(a, q_(static_cast<Eigen::Index>(i))), pose_time_ns_);
+  }
+}
+
+IoStatus IgtlTrackerBus::read(CanFrame& frame) noexcept {
+  if (pending_next_ >= pending_count_) return IoStatus::kWouldBlock;
+  frame = pending_[static_cast<std::size_t>(pending_next_++)];
+  ++counters_.frames_rx;
+  return IoStatus::kOk;
+}
+
+IoStatus IgtlTrackerBus::write(const CanFrame& frame) noexcept {
+  if (check_frame(frame) != FrameError::kNone) {
+    ++counters_.errors;
+    return IoStatus::kError;
+  }
+  ++counters_.frames_tx;
+  if (is_sync(frame)) on_sync();
+  return IoStatus::kOk;
+}
+
+std::vector<std::int64_t> IgtlTrackerBus::latency_ns() const { return latencies_; }
+
+}  // namespace numen::hal

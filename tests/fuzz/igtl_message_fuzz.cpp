@@ -1,0 +1,62 @@
+/// @file igtl_message_fuzz.cpp
+/// libFuzzer harness of the OpenIGTLink message decoder (hal/igtl/igtl_message.hpp): every input
+/// through decode_igtl_message() as the tracker's receiver decodes a message off the network.
+/// A fault must be located inside the message (its byte offset within the header and the body
+/// the header announces); a decoded TRANSFORM must be finite, its rotation orthonormal
+/// (|RᵀR − I| ≤ the tolerance, det > 0); a decode must not depend on the bytes after the body
+/// the header announces. Inputs longer than a TRANSFORM also go through with their body's
+/// CRC-64 made right (packed again by the library), so that the checks behind the CRC (NaN,
+/// rigidity) are reached.
+
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <vector>
+
+#include "fuzz_input.hpp"
+#include "numen/hal/igtl/igtl_message.hpp"
+
+namespace {
+
+void igtl_fuzz_check(numen::hal::IgtlDecoder& decoder, const std::uint8_t* data, std::size_t size) {
+  using numen::fuzz::finding;
+  namespace hal = numen::hal;
+  hal::IgtlHeader header;
+  hal::IgtlTransform tf;
+  const hal::IgtlDecodeResult r = hal::decode_igtl_message(
+      decoder, std::span<const std::uint8_t>(data, size), 1 << 20, header, tf);
+  if (!r.ok()) {
+    if (r.byte_offset > hal::kIgtlHeaderBytes + hal::kIgtlTransformBodyBytes &&
+        r.byte_offset > size)
+      finding("igtl: a fault located past the message");
+    return;
+  }
+  if (header.type != "TRANSFORM") return;
+  if (!tf.rotation.allFinite() || !tf.translation.allFinite())
+    finding("igtl: a decoded TRANSFORM is not finite");
+  const double err =
+      (tf.rotation.transpose() * tf.rotation - numen::core::Mat3::Identity()).cwiseAbs().maxCoeff();
+  if (!(err <= hal::kIgtlRigidTolerance) || !(tf.rotation.determinant() > 0.0))
+    finding("igtl: a decoded TRANSFORM is not rigid");
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  static numen::hal::IgtlDecoder decoder;  // made once, as the receiver's
+  igtl_fuzz_check(decoder, data, size);
+  // The same header and body with a right CRC: the body's checks past the CRC.
+  constexpr std::size_t n = numen::hal::kIgtlHeaderBytes + numen::hal::kIgtlTransformBodyBytes;
+  if (size >= n) {
+    numen::core::Mat3 rot;
+    numen::core::Vec3 t;
+    float f[12];
+    std::memcpy(f, data + numen::hal::kIgtlHeaderBytes, sizeof f);
+    for (int c = 0; c < 3; ++c)
+      for (int r = 0; r < 3; ++r) rot(r, c) = f[3 * c + r];
+    t = numen::core::Vec3(f[9], f[10], f[11]);
+    const std::string packed = numen::hal::pack_igtl_transform("Fuzz", 0, rot, t);
+    igtl_fuzz_check(decoder, reinterpret_cast<const std::uint8_t*>(packed.data()), packed.size());
+  }
+  return 0;
+}

@@ -1,0 +1,170 @@
+/// @file igtl_tracker_bus_test.cpp
+/// The OpenIGTLink tracker as a pose tracker's encoders (hal/igtl/igtl_tracker_bus.hpp) against
+/// a loopback server: a TRANSFORM becomes the six TPDOs that put the tracked frame at
+/// registration · marker · calibration; following the tracker takes the poses by their stamps;
+/// the paced period neither allocates nor waits.
+
+#include "numen/hal/igtl/igtl_tracker_bus.hpp"
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <thread>
+
+#include "alloc_counter.hpp"
+#include "igtl_test_server.hpp"
+#include "numen/hal/canopen/canopen.hpp"
+#include "numen/hal/device/axis.hpp"
+#include "numen/hal/device/kinematics_factory.hpp"
+
+namespace {
+
+numen::hal::DeviceConfig igtl_bus_test_config() {
+  numen::hal::DeviceConfig c = numen::hal::make_default_pose_tracker_config(1);
+  c.tool_offset.position = numen::core::Vec3(0.0, 0.0, -0.04);
+  return c;
+}
+
+numen::hal::IgtlTrackerSettings igtl_bus_test_settings(std::uint16_t port, bool follow) {
+  numen::hal::IgtlTrackerSettings s;
+  s.client.port = port;
+  s.client.device_name = "StylusToTracker";
+  s.metres_per_unit = 1e-3;
+  s.calibration.position = numen::core::Vec3(0.0, 0.0, 0.15);
+  s.registration.position = numen::core::Vec3(0.1, -0.2, 0.9);
+  s.registration.orientation =
+      numen::core::Quat(Eigen::AngleAxisd(0.785398, numen::core::Vec3::UnitZ()));
+  s.wait_for_tracker = follow;
+  s.wait_timeout_ns = 2'000'000'000;
+  return s;
+}
+
+// The tracked frame (the tip) the six TPDOs of one SYNC put in the world.
+numen::core::Pose igtl_bus_test_tip(numen::hal::IgtlTrackerBus& bus,
+                                    const numen::hal::DeviceConfig& config) {
+  numen::hal::AxisVector q = numen::hal::AxisVector::Zero(6);
+  numen::hal::CanFrame f;
+  int n = 0;
+  while (bus.read(f) == numen::hal::IoStatus::kOk) {
+    for (std::size_t i = 0; i < config.axes.size(); ++i) {
+      std::int32_t counts = 0;
+      if (numen::hal::decode_position_pdo(f, config.axes[i].encoder_cob_id, counts) ==
+          numen::hal::DecodeStatus::kOk) {
+        q(static_cast<Eigen::Index>(i)) = numen::hal::counts_to_value(config.axes[i], counts);
+        ++n;
+      }
+    }
+  }
+  EXPECT_EQ(n, 6);
+  const numen::core::Pose c = numen::hal::make_kinematics(config)->forward(q);
+  numen::core::Pose tip;
+  tip.orientation = c.orientation * config.tool_offset.orientation.conjugate();
+  tip.position = c.position - tip.orientation * config.tool_offset.position;
+  return tip;
+}
+
+}  // namespace
+
+TEST(IgtlTrackerBus, ATransformBecomesTheEncoderFramesOfTheTrackedFrame) {
+  namespace hal = numen::hal;
+  const numen::core::Quat mq(Eigen::AngleAxisd(0.4, numen::core::Vec3(0.2, -1.0, 0.5).normalized()));
+  const numen::core::Vec3 mp(-120.0, 250.0, -820.0);  // mm, in the tracker's frame
+  numen::test::IgtlTestServer server(
+      {hal::pack_igtl_transform("StylusToTracker", 5'000'000'000, mq.toRotationMatrix(), mp)},
+      true);  // then the stream ends: the follower does not wait for a later pose
+  const hal::DeviceConfig config = igtl_bus_test_config();
+  const hal::IgtlTrackerSettings s = igtl_bus_test_settings(server.port(), true);
+  hal::IgtlTrackerBus bus(config, hal::make_kinematics(config), s);
+  bus.set_time_ns(0);
+  ASSERT_EQ(bus.write(hal::make_sync(0)), hal::IoStatus::kOk);
+  const numen::core::Pose tip = igtl_bus_test_tip(bus, config);
+  // tip = registration · marker · calibration, to the encoders' 1 µm / 1 µrad.
+  const numen::core::Quat want_q = s.registration.orientation * mq * s.calibration.orientation;
+  const numen::core::Vec3 want_p =
+      s.registration.position + s.registration.orientation * (mp * 1e-3 + mq * s.calibration.position);
+  EXPECT_LT((tip.position - want_p).norm(), 3e-6);
+  EXPECT_LT(tip.orientation.angularDistance(want_q), 1e-5);
+  EXPECT_LT((bus.last_pose().position - want_p).norm(), 1e-6);  // float32 of the message
+  EXPECT_EQ(bus.tracker_counters().poses_taken, 1u);
+  EXPECT_EQ(bus.tracker_counters().wait_timeouts, 0u);
+  EXPECT_EQ(bus.latency_ns().size(), 1u);
+}
+
+TEST(IgtlTrackerBus, FollowingTheTrackerTakesEachPoseAtItsStamp) {
+  namespace hal = numen::hal;
+  std::vector<std::string> poses;
+  const std::int64_t t0 = 1'700'000'000'000'000'000;
+  for (int k = 0; k < 5; ++k)
+    poses.push_back(hal::pack_igtl_transform("StylusToTracker", t0 + k * 1'000'000,
+                                             numen::core::Mat3::Identity(),
+                                             numen::core::Vec3(10.0 * k, 0.0, -800.0)));
+  numen::test::IgtlTestServer server(poses, true);
+  const hal::DeviceConfig config = igtl_bus_test_config();
+  hal::IgtlTrackerSettings s = igtl_bus_test_settings(server.port(), true);
+  s.registration = numen::core::Pose{};
+  s.calibration = numen::core::Pose{};
+  hal::IgtlTrackerBus bus(config, hal::make_kinematics(config), s);
+  for (int k = 0; k < 5; ++k) {
+    bus.set_time_ns(k * 1'000'000);
+    bus.write(hal::make_sync(k * 1'000'000));
+    const numen::core::Pose tip = igtl_bus_test_tip(bus, config);
+    EXPECT_NEAR(tip.position.x(), 0.01 * k, 2e-6) << "period " << k;
+  }
+  // After the last pose the stream ends: the SYNC takes nothing new and does not wait.
+  bus.set_time_ns(5'000'000);
+  bus.write(hal::make_sync(5'000'000));
+  EXPECT_NEAR(igtl_bus_test_tip(bus, config).position.x(), 0.04, 2e-6);
+  EXPECT_EQ(bus.tracker_counters().poses_taken, 5u);
+  EXPECT_EQ(bus.tracker_counters().poses_superseded, 0u);
+  EXPECT_EQ(bus.tracker_counters().wait_timeouts, 0u);
+}
+
+TEST(IgtlTrackerBus, NoPoseNoFramesAndTheStateSaysTheServerIsGone) {
+  namespace hal = numen::hal;
+  const hal::DeviceConfig config = igtl_bus_test_config();
+  hal::IgtlTrackerSettings s = igtl_bus_test_settings(numen::test::IgtlTestServer::closed_port(), true);
+  hal::IgtlTrackerBus bus(config, hal::make_kinematics(config), s);
+  bus.set_time_ns(0);
+  bus.write(hal::make_sync(0));  // waits for nothing: the receiver ended at the refusal
+  hal::CanFrame f;
+  EXPECT_EQ(bus.read(f), hal::IoStatus::kWouldBlock);
+  EXPECT_EQ(bus.tracker_counters().syncs_without_pose, 1u);
+  EXPECT_EQ(bus.state(), hal::BusState::kBusOff);
+  EXPECT_GE(bus.client().counters().connect_failures, 1u);
+}
+
+TEST(IgtlTrackerBus, ThePacedPeriodNeitherAllocatesNorWaits) {
+  namespace hal = numen::hal;
+  std::vector<std::string> poses;
+  for (int k = 0; k < 3000; ++k)
+    poses.push_back(hal::pack_igtl_transform("StylusToTracker", 0, numen::core::Mat3::Identity(),
+                                             numen::core::Vec3(0.01 * k, 0.0, -800.0)));
+  numen::test::IgtlTestServer server(poses);
+  const hal::DeviceConfig config = igtl_bus_test_config();
+  hal::IgtlTrackerBus bus(config, hal::make_kinematics(config),
+                          igtl_bus_test_settings(server.port(), false));
+  for (int i = 0; i < 5000 && bus.client().counters().poses == 0; ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  ASSERT_GT(bus.client().counters().poses, 0u);
+  hal::CanFrame f;
+  std::uint64_t frames = 0;
+  std::int64_t longest = 0;
+  {
+    numen::test::AllocationGuard guard;
+    for (std::int64_t k = 0; k < 2000; ++k) {
+      const auto a = std::chrono::steady_clock::now();
+      bus.set_time_ns(k * 100'000);
+      bus.write(hal::make_sync(k * 100'000));
+      while (bus.read(f) == hal::IoStatus::kOk) ++frames;
+      longest = std::max<std::int64_t>(
+          longest, std::chrono::duration_cast<std::chrono::nanoseconds>(
+                       std::chrono::steady_clock::now() - a).count());
+    }
+    EXPECT_EQ(guard.count(), 0);
+  }
+  EXPECT_GT(frames, 0u);
+  EXPECT_GT(bus.tracker_counters().poses_taken, 0u);
+  // Never the 2 s wait of a follower: a period takes what is there (a generous bound for a
+  // loaded CI machine).
+  EXPECT_LT(longest, 200'000'000);
+}
