@@ -2,7 +2,7 @@
 /// @file commands.hpp
 /// The subcommands of `numen`, one class each (one file each: run_command.cpp,
 /// device_command.cpp, info_command.cpp, figures_command.cpp, study_command.cpp,
-/// view_command.cpp, scan_command.cpp, sdo_command.cpp). A command
+/// view_command.cpp, scan_command.cpp, sdo_command.cpp, igtl_replay_command.cpp). A command
 /// declares its options on construction and does its work in execute(), which returns the
 /// exit status (docs/inputs.md, "Exit statuses") and may throw (run_guarded()). The options
 /// are bound to the command's members: construct it in place and keep it there.
@@ -122,6 +122,23 @@ class ScanCommand {
   std::string bus_;
   double listen_s_ = 1.5, timeout_s_ = 0.5;
   bool json_ = false;
+};
+
+/// `numen igtl-replay [SCENE] [--host H] [--port P] [--rate HZ] [--duration S] [--realtime]`:
+/// plays the scene's trajectory as an OpenIGTLink tracker server (sim/device/igtl_replay.hpp;
+/// docs/openigtlink.md).
+class IgtlReplayCommand {
+ public:
+  explicit IgtlReplayCommand(CLI::App& parent);
+  bool parsed() const { return cli_->parsed(); }
+  int execute() const;
+
+ private:
+  CLI::App* cli_;
+  std::string scene_, host_ = "127.0.0.1";
+  int port_ = 18944;
+  double rate_ = 0.0, duration_ = -1.0, accept_timeout_ = 30.0;
+  bool realtime_ = false;
 };
 
 /// `numen sdo --bus ... NODE read|write INDEX:SUB [VALUE] [--type T]`: one SDO transfer.

@@ -3,7 +3,8 @@
 /// command line and runs the one given.
 ///   numen --version
 ///   numen run [SCENE] [--duration S] [--trace FILE.csv] [--json] [--realtime] [--coupling MODE]
-///             [--bus sim|log:FILE|can:IFACE|serial:PATH[@BAUD]] [--record FILE.log] [--phase S]
+///             [--bus sim|log:FILE|can:IFACE|serial:PATH[@BAUD]|igtl[:[HOST:]PORT]]
+///             [--record FILE.log] [--phase S]
 ///             [--rt-priority N] [--lock-memory] [--prefault-stack BYTES] [--cpu LIST] [--rt-strict]
 ///             [--scene-rt-priority N] [--scene-cpu LIST]
 ///   numen device [SCENE] --bus can:IFACE|serial:PATH[@BAUD] [--duration S] [--ready]
@@ -12,6 +13,7 @@
 ///   numen view FILE.nmv [--port P] [--host H] [--page DIR]
 ///   numen scan --bus can:IFACE|serial:PATH[@BAUD] [--listen S] [--timeout S] [--json]
 ///   numen sdo --bus can:IFACE|serial:PATH[@BAUD] NODE read|write INDEX:SUB [VALUE] [--type T]
+///   numen igtl-replay [SCENE] [--host H] [--port P] [--rate HZ] [--duration S] [--realtime]
 ///   numen study accuracy [--out DIR] [--quick] [--case NAME]...
 ///   numen study stability [--out DIR] [--quick] [--family NAME]...
 ///   numen study passivity [--out DIR] [--quick]
@@ -65,6 +67,7 @@ int main(int argc, char** argv) {
   const ViewCommand view(app);
   const ScanCommand scan(app);
   const SdoCommand sdo(app);
+  const IgtlReplayCommand igtl_replay(app);
   CLI::App* study = app.add_subcommand("study", "Measure the integrators and the device (docs/results.md)");
   study->require_subcommand(1);
   const AccuracyStudyCommand accuracy(*study);
@@ -99,6 +102,7 @@ int main(int argc, char** argv) {
   if (view.parsed()) return run_guarded([&] { return view.execute(); });
   if (scan.parsed()) return run_guarded([&] { return scan.execute(); });
   if (sdo.parsed()) return run_guarded([&] { return sdo.execute(); });
+  if (igtl_replay.parsed()) return run_guarded([&] { return igtl_replay.execute(); });
   if (info.parsed()) return run_guarded([&] { return info.execute(); });
   if (device.parsed()) return run_guarded([&] { return device.execute(); });
   if (run.parsed()) return run_guarded([&] { return run.execute(); });

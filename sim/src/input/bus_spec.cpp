@@ -50,6 +50,24 @@ BusSpec parse_bus_spec(const std::string& spec) {
     return std::invalid_argument("--bus '" + spec + "': " + why);
   };
   if (spec == "sim") return out;
+  if (spec == "igtl" || starts_with(spec, "igtl:")) {
+    out.kind = BusKind::kIgtl;
+    if (spec == "igtl") return out;
+    const std::string rest = spec.substr(5);
+    const std::size_t colon = rest.rfind(':');
+    const std::string p = colon == std::string::npos ? rest : rest.substr(colon + 1);
+    std::uint32_t port = 0;
+    const auto r = std::from_chars(p.data(), p.data() + p.size(), port);
+    if (p.empty() || r.ec != std::errc() || r.ptr != p.data() + p.size() || port < 1 || port > 65535)
+      throw bad("port '" + p + "' is not a TCP port in [1, 65535]");
+    out.igtl_port = static_cast<std::uint16_t>(port);
+    if (colon != std::string::npos) {
+      out.igtl_host = rest.substr(0, colon);
+      if (out.igtl_host.empty()) throw bad("empty host before ':PORT'");
+    }
+    out.target = rest;
+    return out;
+  }
   if (starts_with(spec, "log:")) {
     out.kind = BusKind::kLog;
     out.target = spec.substr(4);
@@ -77,7 +95,7 @@ BusSpec parse_bus_spec(const std::string& spec) {
     }
     out.target = rest;
   } else {
-    throw bad("expected sim, log:FILE, can:IFACE or serial:PATH[@BAUD]");
+    throw bad("expected sim, log:FILE, can:IFACE, serial:PATH[@BAUD] or igtl[:[HOST:]PORT]");
   }
   if (out.target.empty()) throw bad("nothing after the prefix");
   return out;
@@ -125,6 +143,8 @@ std::string missing_backend(const BusSpec& spec) {
     return "bus '" + scheme + spec.target + "' needs SocketCAN: this build has NUMEN_WITH_SOCKETCAN=OFF";
   if (spec.kind == BusKind::kSerial && !hal::kWithSerial)
     return "bus '" + scheme + spec.target + "' needs the serial backend: this build has NUMEN_WITH_SERIAL=OFF";
+  if (spec.kind == BusKind::kIgtl && !hal::kWithOpenIgtLink)
+    return "bus 'igtl' needs OpenIGTLink: this build has NUMEN_WITH_OPENIGTLINK=OFF";
   return {};
 }
 

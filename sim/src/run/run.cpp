@@ -126,6 +126,7 @@ SceneRunner::SceneRunner(const Scene& scene, std::size_t trace_capacity, const B
       bus_(scene.bus),
       real_bus_(spec_.real() ? open_real_bus(spec_, controller_filters(scene.device)) : nullptr),
       log_bus_(make_log_bus(scene, spec_, realtime, log_stats_)),
+      igtl_(make_igtl_run(scene, spec_, realtime)),
       writer_(bus.record_path.empty()
                   ? nullptr
                   : std::make_unique<hal::CandumpWriter>(
@@ -133,16 +134,20 @@ SceneRunner::SceneRunner(const Scene& scene, std::size_t trace_capacity, const B
       recorder_(writer_ ? std::make_unique<hal::RecordingBus>(
                               real_bus_  ? *real_bus_
                               : log_bus_ ? static_cast<hal::Bus&>(*log_bus_)
+                              : igtl_    ? igtl_->bus()
                                          : bus_.controller(),
                               *writer_, spec_.kind == BusKind::kCan ? spec_.target : "sim0")
                         : nullptr),
       port_(recorder_   ? static_cast<hal::Bus*>(recorder_.get())
             : real_bus_ ? real_bus_.get()
             : log_bus_  ? static_cast<hal::Bus*>(log_bus_.get())
+            : igtl_     ? &igtl_->bus()
                         : static_cast<hal::Bus*>(&bus_.controller())),
-      // The emulated device runs on the simulated bus only (a log or a real bus brings its own).
+      // The emulated device runs on the simulated bus only (a log, a tracker or a real bus
+      // brings its own).
       instrument_(scene.device, scene.trajectory,
-                  scene.plant && !real_bus_ && !log_bus_ ? &*scene.plant : nullptr, scene.hand),
+                  scene.plant && !real_bus_ && !log_bus_ && !igtl_ ? &*scene.plant : nullptr,
+                  scene.hand),
       device_(scene.device),
       data_(core::make_data(scene.model)),
       ghost_(core::make_data(scene.model)),
@@ -253,6 +258,12 @@ const platform::PeriodReport& SceneRunner::exchange(std::int64_t t, std::int64_t
     log_bus_->set_time_ns(t + phase_ns_);
     return loop_.end_period(t + phase_ns_);
   }
+  if (igtl_) {  // the tracker's poses: taken at the SYNC, stamped with their messages' times
+    igtl_->set_time_ns(t);
+    loop_.begin_period(t, deadline_mono_ns, woke_mono_ns);
+    igtl_->set_time_ns(t + phase_ns_);
+    return loop_.end_period(t + phase_ns_);
+  }
   bus_.set_time_ns(t);
   loop_.begin_period(t, deadline_mono_ns, woke_mono_ns);
   bus_.set_time_ns(t + scene_->bus.latency_ns);
@@ -340,6 +351,7 @@ platform::StateFrameFigures SceneRunner::view_figures(const PeriodContacts& c) c
 
 void SceneRunner::finish() {
   multirate_.stop();
+  if (igtl_) igtl_->finish();
   if (writer_) writer_->close();              // the log and the trace appear under their
   if (trace_writer_) trace_writer_->close();  // paths, a failed close counted in the summary
   if (view_) view_->finish();

@@ -18,6 +18,7 @@
 
 #include "numen/sim/input/bus_spec.hpp"
 #include "numen/sim/input/input_error.hpp"
+#include "numen/sim/run/igtl_run.hpp"
 #include "numen/sim/run/trace.hpp"
 #include "numen/sim/scene/scene.hpp"
 
@@ -197,6 +198,9 @@ void check_run_options(const Scene& scene, const RunOptions& options) {
   // Every refusal comes before any output is opened, and the output checks touch nothing: a
   // refused run leaves every file as it was (docs/inputs.md, "Outputs").
   check_option_values(scene, options);
+  if (const std::string why = igtl_run_refusal(scene, parse_bus_spec(options.bus.spec));
+      !why.empty())
+    throw InputError("", 0, 0, "--bus", why);
   if (!options.trace_path.empty()) check_output_path(options.trace_path, "--trace");
   // (an admittance run refuses --record: run_admittance_scene)
   if (!options.bus.record_path.empty() && !scene.admittance)

@@ -80,7 +80,7 @@ RunSummary SceneRunner::summary() const {
   s.tracking_error_free_rms_mm = s.free_steps ? std::sqrt(free_sq_ / static_cast<double>(s.free_steps)) * 1e3 : 0.0;
   s.soft_start_s = scene_->device.soft_start_s;
   // On a real bus or a replayed log the device is not this process's: what moves it is unknown.
-  if (real_bus_ || log_bus_) s.device_loop = "external";
+  if (real_bus_ || log_bus_ || igtl_) s.device_loop = "external";
   if (const PlantMotion* plant = instrument_.plant()) {
     const PlantFigures& f = plant->figures();
     s.device_loop = "closed";
@@ -172,6 +172,7 @@ RunSummary SceneRunner::summary() const {
   }
   if (view_) view_->summarize(s);
   summarize_divergence(divergence_, scene_->model, s);
+  if (igtl_) igtl_->summarize(s);
   if (log_bus_) {
     s.bus_frames_replayed = static_cast<std::int64_t>(log_bus_->log_counters().replayed);
     s.bus_log_records = static_cast<std::int64_t>(log_stats_.records);

@@ -113,6 +113,18 @@ constexpr RunSummarySegment kLayout[] = {
     {"  bus {bus}: {bus_frames_replayed} frames replayed of {bus_log_records} records; lost by "
      "the recording {bus_log_lost_frames}, out of order {bus_log_out_of_order}\n",
      {"bus", T::kLogBus}},
+    // The OpenIGTLink tracker (--bus igtl; docs/openigtlink.md).
+    {"  OpenIGTLink {igtl}: {igtl_messages} messages, tool poses {igtl_poses} (taken "
+     "{igtl_poses_taken}), other devices {igtl_other_devices}, ignored {igtl_ignored}; rejected "
+     "{igtl_faults}, dropped {igtl_dropped}; connections {igtl_connects}, refused "
+     "{igtl_connect_failures}, lost {igtl_disconnects}; periods before the first pose "
+     "{igtl_syncs_without_pose}, waits run out {igtl_wait_timeouts}, periods after the stream's "
+     "end {igtl_periods_after_end}; "
+     "received to applied us: median {igtl_latency_us.median}, p99 {igtl_latency_us.p99}, max "
+     "{igtl_latency_us.max}; following the tracker's clock {igtl_follows}\n",
+     set("igtl")},
+    {"  OpenIGTLink rejected: {*}\n", set("igtl"), {}, {}, "igtl_fault_records"},
+    {"  OpenIGTLink other device names: {*}\n", set("igtl"), {}, {}, "igtl_names_seen"},
     // Real buses (can:, serial:).
     {"  bus {bus}: frames rx {port_frames_rx}, tx {port_frames_tx}, dropped {port_dropped}, "
      "errors {port_errors}, would-block {port_would_block}; state {bus_state}, error periods "

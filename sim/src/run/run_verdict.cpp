@@ -125,6 +125,41 @@ RunVerdict run_verdict(const RunSummary& s) {
     else
       add(ExitStatus::kSamplesRejected, "no period had a valid sample");
   }
+  // The OpenIGTLink tracker (--bus igtl): every message rejected, pose lost, connection lost
+  // and a tool never heard of is input the run did not get (docs/openigtlink.md).
+  if (!s.igtl.empty()) {
+    if (s.igtl_faults > 0) {
+      std::string where;
+      for (const std::string& r : s.igtl_fault_records) where += (where.empty() ? "" : "; ") + r;
+      add(ExitStatus::kSamplesRejected,
+          n(s.igtl_faults) + " OpenIGTLink messages rejected (" + where + ")");
+    }
+    if (s.igtl_dropped > 0)
+      add(ExitStatus::kSamplesRejected,
+          n(s.igtl_dropped) + " OpenIGTLink poses dropped: the queue was full (a flood)");
+    // Following a replay, its end is the stream's: a fault only when the run outlasted it.
+    if (s.igtl_disconnects > 0 && !s.igtl_follows)
+      add(ExitStatus::kSamplesRejected,
+          "the OpenIGTLink server " + s.igtl + " closed the connection " + n(s.igtl_disconnects) +
+              " times");
+    if (s.igtl_periods_after_end > 0 && s.igtl_poses > 0)
+      add(ExitStatus::kSamplesRejected,
+          "the tracker's stream ended " + n(s.igtl_periods_after_end) +
+              " periods before the run did (" + n(s.igtl_disconnects) + " connection(s) lost)");
+    if (s.igtl_wait_timeouts > 0)
+      add(ExitStatus::kSamplesRejected,
+          n(s.igtl_wait_timeouts) + " periods waited for the tracker in vain");
+    if (s.igtl_poses == 0) {
+      std::string names;
+      for (const std::string& x : s.igtl_names_seen) names += (names.empty() ? "'" : ", '") + x + "'";
+      add(ExitStatus::kSamplesRejected,
+          s.igtl_connects == 0
+              ? "no connection to the OpenIGTLink server " + s.igtl + " (" +
+                    n(s.igtl_connect_failures) + " attempts refused or timed out)"
+              : "no TRANSFORM of the tool " + s.igtl + " in " + n(s.igtl_messages) +
+                    " messages" + (names.empty() ? "" : " (device names sent: " + names + ")"));
+    }
+  }
   if (s.bus.rfind("log:", 0) == 0 && s.bus_frames_replayed == 0)
     add(ExitStatus::kSamplesRejected, "the bus log gave no frame");
   v.exit_status = code(v.status);

@@ -437,6 +437,41 @@ int body_index(const TomlTable& t, std::string_view key, const core::Model& m) {
   t.fail(key, "no body named \"" + name + "\" (use a [[body]] name or \"none\")");
 }
 
+/// A pose of a fixed transform table (`position` m, `orientation` [w, x, y, z]; identity absent).
+core::Pose igtl_fixed_pose(const TomlTable& t, std::string_view key) {
+  core::Pose p;
+  if (auto f = t.table(key)) {
+    f->allow_only({"position", "orientation"});
+    p.position = f->vec3_or("position", Vec3::Zero());
+    p.orientation = f->quaternion_or("orientation", Quat::Identity());
+  }
+  return p;
+}
+
+/// `[device.igtl]` (docs/openigtlink.md, docs/scenes.md): the OpenIGTLink tracker of a pose
+/// tracker.
+void parse_igtl(const TomlTable& dev, Scene& scene, const hal::DeviceConfig& cfg) {
+  auto g = dev.table("igtl");
+  if (!g) return;
+  if (cfg.kind != hal::DeviceKind::kPoseTracker)
+    dev.fail("igtl", "an OpenIGTLink tracker is a pose tracker's: needs kind = \"pose-tracker\"");
+  g->allow_only({"host", "port", "device_name", "units", "calibration", "registration"});
+  IgtlTrackerScene t;
+  t.host = g->string_or("host", t.host);
+  if (t.host.empty()) g->fail("host", "must not be empty");
+  const std::int64_t port = g->integer_or("port", t.port);
+  if (port < 1 || port > 65535) g->fail("port", "must be a TCP port in [1, 65535]");
+  t.port = static_cast<std::uint16_t>(port);
+  t.device_name = g->string("device_name");
+  if (t.device_name.empty() || t.device_name.size() > 20)
+    g->fail("device_name", "must have 1 to 20 characters (an OpenIGTLink device name)");
+  t.units = g->choice("units", {"mm", "cm", "m"}, "mm");
+  t.metres_per_unit = t.units == "mm" ? 1e-3 : t.units == "cm" ? 1e-2 : 1.0;
+  t.calibration = igtl_fixed_pose(*g, "calibration");
+  t.registration = igtl_fixed_pose(*g, "registration");
+  scene.igtl = std::move(t);
+}
+
 void parse_device(const TomlTable& root, Scene& scene, const TomlTable*& body_table_of_attached,
                   const std::vector<TomlTable>& body_tables) {
   auto dev = root.table("device");
@@ -444,7 +479,7 @@ void parse_device(const TomlTable& root, Scene& scene, const TomlTable*& body_ta
   dev->allow_only({"kind", "name", "attach", "max_sample_age", "jump_tolerance_counts",
                    "velocity_cutoff", "velocity_estimator", "foaw_max_window", "foaw_noise_counts",
                    "soft_start", "first_node_id", "tool_offset", "trocar", "tracker", "phantom",
-                   "feedback", "axis", "canopen", "admittance", "hand", "plant", "passivity"});
+                   "feedback", "axis", "canopen", "admittance", "hand", "plant", "passivity", "igtl"});
   const std::string kind =
       dev->choice("kind", {"trocar-instrument", "pose-tracker", "phantom"}, std::nullopt);
   const auto node = dev->integer_or("first_node_id", 1);
@@ -555,6 +590,7 @@ void parse_device(const TomlTable& root, Scene& scene, const TomlTable*& body_ta
   parse_admittance(*dev, scene, cfg);
   parse_plant(*dev, scene, cfg);
   parse_passivity(*dev, scene, cfg);
+  parse_igtl(*dev, scene, cfg);
   scene.model.initial_attached_body = dev->has("attach") ? body_index(*dev, "attach", scene.model) : -1;
   body_table_of_attached = nullptr;
   if (scene.model.initial_attached_body >= 0)

@@ -517,7 +517,7 @@ TEST(NumenCli, UnknownSubcommandIsNamedWithTheKnownOnes) {
   EXPECT_EQ(r.status, 2) << r.out << r.err;
   EXPECT_EQ(r.err,
             "numen: unknown subcommand 'frobnicate' of numen; the subcommands are: run, device, "
-            "info, figures, view, scan, sdo, study\n");
+            "info, figures, view, scan, sdo, igtl-replay, study\n");
   const ChildResult study = run_child({kNumen, "study", "frob", "--quick"}, dir.path(), 30);
   EXPECT_EQ(study.status, 2) << study.out << study.err;
   EXPECT_EQ(study.err,

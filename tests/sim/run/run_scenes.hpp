@@ -29,6 +29,7 @@ constexpr const char* kDeformableRunTooSlow =
 
 using numen::core::CouplingMode;
 using numen::core::Vec3;
+using numen::sim::RunOptions;
 using numen::sim::RunSummary;
 using numen::sim::Scene;
 using numen::sim::SceneRunner;

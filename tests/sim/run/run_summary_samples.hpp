@@ -231,4 +231,33 @@ inline sim::RunSummary admittance_summary() {
   return s;
 }
 
+/// A run on --bus igtl (the OpenIGTLink tracker) with every igtl_* figure set.
+inline sim::RunSummary igtl_summary() {
+  sim::RunSummary s = full_managed_summary();
+  s.managed = false;
+  s.real_bus = false;
+  s.bus = "igtl:127.0.0.1:18944";
+  s.igtl = "127.0.0.1:18944 'StylusToTracker'";
+  s.igtl_messages = 1203;
+  s.igtl_poses = 1000;
+  s.igtl_poses_taken = 990;
+  s.igtl_other_devices = 200;
+  s.igtl_ignored = 1;
+  s.igtl_faults = 2;
+  s.igtl_dropped = 10;
+  s.igtl_connects = 1;
+  s.igtl_connect_failures = 3;
+  s.igtl_disconnects = 1;
+  s.igtl_wait_timeouts = 0;
+  s.igtl_syncs_without_pose = 4;
+  s.igtl_follows = true;
+  s.igtl_periods_after_end = 5;
+  s.igtl_fault_records = {
+      "CRC mismatch: TRANSFORM 'StylusToTracker', message 12 at stream byte 1272, field at byte "
+      "50 (2 such)"};
+  s.igtl_names_seen = {"PointerToTracker"};
+  s.igtl_latency_us = {320.0, 610.0, 900.0, 5700.0, 340.0};
+  return s;
+}
+
 }  // namespace numen::test

@@ -46,7 +46,8 @@ TEST(RunSummaryText, LayoutNamesOnlyFiguresOfTheTable) {
 TEST(RunSummaryText, EveryFigureOfTheTableIsPrinted) {
   std::set<std::string_view> written;
   for (const numen::sim::RunSummary& s :
-       {numen::test::full_managed_summary(), numen::test::admittance_summary()}) {
+       {numen::test::full_managed_summary(), numen::test::admittance_summary(),
+        numen::test::igtl_summary()}) {
     std::vector<std::string_view> names;
     const std::string text = numen::sim::format_summary_text(s, &names);
     EXPECT_EQ(text, numen::sim::format_summary(s));

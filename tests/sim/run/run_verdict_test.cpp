@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "numen/sim/run/run_summary.hpp"
+#include "run_summary_samples.hpp"
 
 namespace {
 
@@ -207,3 +208,31 @@ TEST(RunVerdict, StatusesAreDistinctAndNamed) {
 }
 
 }  // namespace
+
+// --bus igtl: every message rejected, pose dropped, stream ended early is a reason of its own;
+// a lost connection is one only in a paced run (following a replay, its end is the stream's).
+TEST(RunVerdict, TheTrackersRejectedInputIsNamed) {
+  numen::sim::RunSummary s = numen::test::igtl_summary();
+  numen::sim::RunVerdict v = numen::sim::run_verdict(s);
+  const auto says = [&v](const std::string& what) {
+    for (const std::string& r : v.reasons)
+      if (r.find(what) != std::string::npos) return true;
+    return false;
+  };
+  EXPECT_TRUE(says("samples rejected: 2 OpenIGTLink messages rejected (CRC mismatch: TRANSFORM 'StylusToTracker', "
+                   "message 12 at stream byte 1272, field at byte 50 (2 such))"));
+  EXPECT_TRUE(says("10 OpenIGTLink poses dropped: the queue was full (a flood)"));
+  EXPECT_TRUE(says("the tracker's stream ended 5 periods before the run did"));
+  EXPECT_FALSE(says("closed the connection"));
+  s.igtl_follows = false;
+  v = numen::sim::run_verdict(s);
+  EXPECT_TRUE(says("the OpenIGTLink server 127.0.0.1:18944 'StylusToTracker' closed the connection 1 times"));
+  s = numen::test::igtl_summary();
+  s.igtl_faults = 0;
+  s.igtl_dropped = 0;
+  s.igtl_periods_after_end = 0;
+  s.igtl_poses = 0;
+  v = numen::sim::run_verdict(s);
+  EXPECT_TRUE(says("no TRANSFORM of the tool 127.0.0.1:18944 'StylusToTracker' in 1203 messages "
+                   "(device names sent: 'PointerToTracker')"));
+}

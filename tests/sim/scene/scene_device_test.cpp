@@ -282,3 +282,49 @@ TEST(ScenePassivity, ErrorsAreLocated) {
                    c.message);
   }
 }
+
+// ---------------------------------------------------------------- [device.igtl]
+
+TEST(SceneIgtl, KeysAreReadWithPlusDefaults) {
+  const TempDir dir;
+  const std::string text = replace(
+      kMiniScene, "attach = \"tool\"\n",
+      "attach = \"tool\"\n\n[device.igtl]\ndevice_name = \"StylusToTracker\"\nport = 18945\n"
+      "calibration = { position = [0.0, 0.0, 0.15] }\n"
+      "registration = { position = [0.1, 0.0, 1.0], orientation = [0.0, 0.0, 0.0, 1.0] }\n\n");
+  const Scene s = load_scene(dir.write("igtl.toml", text));
+  ASSERT_TRUE(s.igtl.has_value());
+  EXPECT_EQ(s.igtl->host, "127.0.0.1");
+  EXPECT_EQ(s.igtl->port, 18945);
+  EXPECT_EQ(s.igtl->device_name, "StylusToTracker");
+  EXPECT_EQ(s.igtl->units, "mm");
+  EXPECT_DOUBLE_EQ(s.igtl->metres_per_unit, 1e-3);
+  EXPECT_DOUBLE_EQ(s.igtl->calibration.position.z(), 0.15);
+  EXPECT_DOUBLE_EQ(s.igtl->registration.orientation.z(), 1.0);
+  // Without the table: no tracker.
+  EXPECT_FALSE(load_scene(dir.write("plain.toml", kMiniScene)).igtl.has_value());
+}
+
+TEST(SceneIgtl, ErrorsAreLocatedAtTheirKeys) {
+  const TempDir dir;
+  const std::string base = replace(kMiniScene, "attach = \"tool\"\n",
+                                   "attach = \"tool\"\n\n[device.igtl]\ndevice_name = \"Stylus\"\n"
+                                   "port = 18944\nunits = \"mm\"\n\n");
+  const std::string port = replace(base, "port = 18944", "port = 70000");
+  const InputError e = load_error(dir, port, "port.toml");
+  expect_located(e, (dir.path() / "port.toml").string(), line_of(port, "port = 70000"),
+                 column_of(port, "port = 70000", "70000"), "device.igtl.port",
+                 "must be a TCP port in [1, 65535]");
+  const std::string units = replace(base, "units = \"mm\"", "units = \"inch\"");
+  const InputError e2 = load_error(dir, units, "units.toml");
+  EXPECT_EQ(e2.line(), line_of(units, "units = \"inch\""));
+  EXPECT_EQ(e2.key(), "device.igtl.units");
+  const std::string name = replace(base, "device_name = \"Stylus\"", "device_name = \"ABCDEFGHIJKLMNOPQRSTUVWXYZ\"");
+  EXPECT_EQ(load_error(dir, name, "name.toml").key(), "device.igtl.device_name");
+  const std::string typo = replace(base, "units = \"mm\"", "unit = \"mm\"");
+  EXPECT_NE(std::string(load_error(dir, typo, "typo.toml").what()).find("unit"), std::string::npos);
+  const std::string phantom = replace(base, "kind = \"pose-tracker\"", "kind = \"phantom\"");
+  const InputError e3 = load_error(dir, phantom, "phantom.toml");
+  EXPECT_EQ(e3.key(), "device.igtl");
+  EXPECT_NE(std::string(e3.what()).find("pose-tracker"), std::string::npos);
+}

@@ -21,6 +21,10 @@ enum class BusKind : std::uint8_t {
   kLog,     ///< "log:FILE": a candump log replayed (numen run only).
   kCan,     ///< "can:IFACE": a SocketCAN interface (can0, vcan0, ...).
   kSerial,  ///< "serial:PATH[@BAUD]": a serial line (tty, USB adapter, pseudo-terminal).
+  /// "igtl", "igtl:PORT" or "igtl:HOST:PORT": the scene's OpenIGTLink tracker ([device.igtl])
+  /// read as the pose tracker's encoders (hal/igtl/igtl_tracker_bus.hpp; numen run only), at
+  /// the scene's server or this one.
+  kIgtl,
 };
 
 /// A parsed `--bus` spec.
@@ -30,12 +34,16 @@ struct BusSpec {
   std::string target;
   /// kSerial: line speed, bit/s (default 1 000 000; one of hal::serial_supported_bauds()).
   std::uint32_t baud = 1'000'000;
+  /// kIgtl: the server's host ("" : the scene's) and port (0: the scene's).
+  std::string igtl_host;
+  std::uint16_t igtl_port = 0;
   /// True for kCan and kSerial: a bus shared with a device in another process (or real
   /// hardware), on which time is CLOCK_MONOTONIC and the periods are paced.
   bool real() const noexcept { return kind == BusKind::kCan || kind == BusKind::kSerial; }
 };
 
-/// Parses "sim", "log:FILE", "can:IFACE" or "serial:PATH[@BAUD]" (BAUD decimal bit/s). Throws
+/// Parses "sim", "log:FILE", "can:IFACE", "serial:PATH[@BAUD]" (BAUD decimal bit/s) or
+/// "igtl[:[HOST:]PORT]" (PORT decimal 1..65535). Throws
 /// std::invalid_argument naming the spec and what is wrong (empty target, unknown prefix, a
 /// baud that is not a number or not a supported termios speed).
 BusSpec parse_bus_spec(const std::string& spec);

@@ -27,6 +27,7 @@
 #include "numen/sim/device/simulated_instrument.hpp"
 #include "numen/sim/input/bus_spec.hpp"
 #include "numen/sim/run/divergence.hpp"
+#include "numen/sim/run/igtl_run.hpp"
 #include "numen/sim/run/multirate_run.hpp"
 #include "numen/sim/run/run_options.hpp"
 #include "numen/sim/run/run_summary.hpp"
@@ -251,6 +252,7 @@ class SceneRunner {
   std::unique_ptr<hal::Bus> real_bus_;            // --bus can:IFACE / serial:PATH
   hal::CandumpLoadStats log_stats_;               // --bus log:FILE, what the loader counted
   std::unique_ptr<hal::LogBus> log_bus_;          // --bus log:FILE
+  std::unique_ptr<IgtlRun> igtl_;                 // --bus igtl: the OpenIGTLink tracker
   std::unique_ptr<hal::CandumpWriter> writer_;    // --record FILE
   std::unique_ptr<hal::RecordingBus> recorder_;   // --record FILE, around the controller port
   hal::Bus* port_;                                // what the control loop reads and writes

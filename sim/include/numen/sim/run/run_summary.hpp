@@ -219,6 +219,31 @@ struct RunSummary {
   std::int64_t bus_log_lost_frames = 0;    ///< log: frames the recording itself lost (DROPCOUNT notes).
   std::int64_t bus_log_out_of_order = 0;   ///< log: records earlier than a record before them
                                            ///< (another interface or direction).
+  // --bus igtl: the OpenIGTLink tracker (igtl_run.hpp, docs/openigtlink.md); empty / 0 otherwise.
+  std::string igtl;                        ///< igtl: "HOST:PORT 'DEVICE'"; empty on other buses.
+  std::int64_t igtl_messages = 0;          ///< igtl: messages read (every type and name).
+  std::int64_t igtl_poses = 0;             ///< igtl: the tool's TRANSFORMs accepted.
+  std::int64_t igtl_poses_taken = 0;       ///< igtl: ... taken by the controller's SYNCs.
+  std::int64_t igtl_other_devices = 0;     ///< igtl: good TRANSFORMs of other device names.
+  std::int64_t igtl_ignored = 0;           ///< igtl: other known message types, skipped.
+  std::int64_t igtl_faults = 0;            ///< igtl: messages rejected (igtl_fault_records).
+  std::int64_t igtl_dropped = 0;           ///< igtl: poses dropped by a full queue (paced).
+  std::int64_t igtl_connects = 0;          ///< igtl: connections made.
+  std::int64_t igtl_connect_failures = 0;  ///< igtl: connection attempts refused / timed out.
+  std::int64_t igtl_disconnects = 0;       ///< igtl: connections lost.
+  std::int64_t igtl_wait_timeouts = 0;     ///< igtl: SYNCs whose wait for the tracker ran out.
+  std::int64_t igtl_syncs_without_pose = 0;  ///< igtl: SYNCs before the first pose.
+  /// igtl: the run followed the tracker's clock (offline: a replay's end is the stream's end);
+  /// false: paced (a live tracker: a lost connection is a fault).
+  bool igtl_follows = false;
+  /// igtl: periods that found the stream over (every pose taken, the receiver ended).
+  std::int64_t igtl_periods_after_end = 0;
+  /// igtl: the first message of each fault kind: "CRC mismatch: TRANSFORM 'Stylus', message 3
+  /// at stream byte 318, field at byte 50 (2 such)".
+  std::vector<std::string> igtl_fault_records;
+  std::vector<std::string> igtl_names_seen;  ///< igtl: other TRANSFORM device names (≤ 8).
+  /// igtl: from a TRANSFORM received to the SYNC that applied it (µs).
+  DurationSummary igtl_latency_us;
   std::int64_t bus_frames_recorded = 0;    ///< --record: frames queued for the log.
   std::int64_t bus_record_dropped = 0;     ///< --record: lost to a full queue (paced runs).
   std::int64_t bus_record_written = 0;     ///< --record: lines the writer thread wrote.

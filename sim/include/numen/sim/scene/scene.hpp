@@ -36,6 +36,21 @@ struct AttachEvent {
   int body = -1;
 };
 
+/// An OpenIGTLink tracker as the pose tracker's encoders (scene `[device.igtl]`;
+/// docs/openigtlink.md): what `numen run --bus igtl` connects to and how it turns a TRANSFORM
+/// into the tool tip's world pose, tip = registration · [R, metres_per_unit · t] · calibration
+/// (hal/igtl/igtl_tracker_bus.hpp). Plain data: the scene reads it whatever the
+/// build (NUMEN_WITH_OPENIGTLINK decides whether a run can use it).
+struct IgtlTrackerScene {
+  std::string host = "127.0.0.1";  ///< The OpenIGTLink server (PLUS, a bridge, numen igtl-replay).
+  std::uint16_t port = 18944;      ///< Its TCP port (OpenIGTLink's default 18944).
+  std::string device_name;         ///< The tool's TRANSFORM device name, e.g. "StylusToTracker".
+  double metres_per_unit = 1e-3;   ///< `units`: "mm" (PLUS) 1e-3, "cm" 1e-2, "m" 1.
+  std::string units = "mm";        ///< As the scene gives it.
+  core::Pose calibration;          ///< Tool tip (the tracked frame) in the marker's frame, m.
+  core::Pose registration;         ///< Tracker frame in the scene's world, m.
+};
+
 /// An admittance device (scene `[device.admittance]`, with `coupling = "admittance"`; paper
 /// Fig. 2 note): the force sensor and csp RPDOs, and the emulated device's hand and drives.
 struct AdmittanceScene {
@@ -116,6 +131,9 @@ struct Scene {
   /// under the drives' torques and the hand (closed loop, PlantMotion); unset, it replays the
   /// trajectory whatever the torques. torque_phase_s is compute_phase_s.
   std::optional<DevicePlantSettings> plant;
+  /// The OpenIGTLink tracker (`[device.igtl]`, pose trackers only): the device `--bus igtl`
+  /// reads; unset, `--bus igtl` is refused.
+  std::optional<IgtlTrackerScene> igtl;
   /// The passivity lint of the plant against the feedback coupling (passivity_lint.hpp; empty
   /// in replay). A failing row is also a warning.
   std::vector<PassivityLintRow> passivity_lint;

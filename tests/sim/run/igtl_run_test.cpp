@@ -1,0 +1,174 @@
+/// @file igtl_run_test.cpp
+/// `numen run --bus igtl` (sim/run/igtl_run.hpp) on loopback: the shipped tracker scene's motion
+/// replayed as an OpenIGTLink server (numen igtl-replay, sim/device/igtl_replay.hpp, an
+/// ephemeral port) drives the god-object as the simulated bus does, to the encoders'
+/// quantisation; a server that goes away mid-run, a tool never sent and a scene without a
+/// tracker are said in the summary and fail the run.
+
+#include "numen/sim/run/igtl_run.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <atomic>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "numen/sim/device/igtl_replay.hpp"
+#include "numen/sim/input/input_error.hpp"
+#include "numen/sim/run/run.hpp"
+#include "numen/sim/run/run_verdict.hpp"
+#include "numen/sim/scene/scene.hpp"
+
+namespace {
+
+const numen::sim::Scene& igtl_run_test_scene() {
+  static const numen::sim::Scene s =
+      numen::sim::load_scene(std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/tracker.toml");
+  return s;
+}
+
+/// A replay of `scene` on an ephemeral loopback port, served in a thread.
+class IgtlRunTestReplay {
+ public:
+  IgtlRunTestReplay(const numen::sim::Scene& scene, numen::sim::IgtlReplaySettings s)
+      : server_(scene, with_port_zero(s)), thread_([this] { result_ = server_.serve(&stop_); }) {}
+  ~IgtlRunTestReplay() {
+    stop_ = true;
+    thread_.join();
+  }
+  std::string spec() const { return "igtl:127.0.0.1:" + std::to_string(server_.port()); }
+
+ private:
+  static numen::sim::IgtlReplaySettings with_port_zero(numen::sim::IgtlReplaySettings s) {
+    s.port = 0;
+    s.accept_timeout_s = 10.0;
+    return s;
+  }
+  numen::sim::IgtlReplayServer server_;
+  std::atomic<bool> stop_{false};
+  numen::sim::IgtlReplayResult result_;
+  std::thread thread_;
+};
+
+// `scene` run for `duration_s` on --bus igtl against a replay of `played` (offline: following).
+numen::sim::RunSummary igtl_run_test_against(const numen::sim::Scene& scene,
+                                             const numen::sim::Scene& played,
+                                             const numen::sim::IgtlReplaySettings& rs,
+                                             double duration_s) {
+  IgtlRunTestReplay replay(played, rs);
+  numen::sim::RunOptions o;
+  o.bus.spec = replay.spec();
+  o.duration_s = duration_s;
+  return numen::sim::run_scene(scene, o);
+}
+
+bool igtl_run_test_says(const numen::sim::RunSummary& s, const std::string& what) {
+  return std::any_of(s.exit_reasons.begin(), s.exit_reasons.end(),
+                     [&](const std::string& r) { return r.find(what) != std::string::npos; });
+}
+
+}  // namespace
+
+TEST(IgtlRun, TheReplayedTrackerDrivesTheGodObjectAsTheSimulatedBusDoes) {
+  const numen::sim::Scene& scene = igtl_run_test_scene();
+  constexpr int kPeriods = 10000;  // 10 s of the recording: it goes into the tissue at 8.6 s
+  std::vector<numen::core::Vec3> sim_p, net_p;
+  numen::sim::RunSummary sim_s, net_s;
+  {
+    numen::sim::SceneRunner runner(scene);
+    for (int k = 0; k < kPeriods; ++k) {
+      runner.period();
+      sim_p.push_back(runner.data().bodies[0].position);
+    }
+    sim_s = runner.summary();
+  }
+  {
+    numen::sim::IgtlReplaySettings rs;
+    rs.duration_s = kPeriods * scene.model.dt;
+    IgtlRunTestReplay replay(scene, rs);
+    numen::sim::BusChoice bus;
+    bus.spec = replay.spec();
+    numen::sim::SceneRunner runner(scene, 0, bus);
+    for (int k = 0; k < kPeriods; ++k) {
+      runner.period();
+      net_p.push_back(runner.data().bodies[0].position);
+    }
+    runner.finish();
+    net_s = runner.summary();
+  }
+  // Every pose came, none was refused, dropped or waited for in vain.
+  EXPECT_EQ(net_s.igtl_poses_taken, kPeriods);
+  EXPECT_EQ(net_s.igtl_faults, 0);
+  EXPECT_EQ(net_s.igtl_dropped, 0);
+  EXPECT_EQ(net_s.igtl_wait_timeouts, 0);
+  EXPECT_EQ(net_s.invalid_periods, sim_s.invalid_periods);
+  EXPECT_EQ(net_s.rejected_samples, 0);
+  // The god-object's path: the same to the encoders' quantisation (1 µm, 1 µrad: a count that
+  // a float32 message rounds the other way, carried by the dynamics).
+  double worst = 0.0;
+  for (int k = 0; k < kPeriods; ++k)
+    worst = std::max(worst, (net_p[static_cast<std::size_t>(k)] - sim_p[static_cast<std::size_t>(k)]).norm());
+  EXPECT_LT(worst, 20e-6);
+  EXPECT_GT((sim_p.back() - sim_p.front()).norm(), 1e-3);  // it moved
+  // The run's figures.
+  EXPECT_GT(sim_s.target_penetration_max_mm, 0.5);  // the recording goes into the tissue
+  EXPECT_NEAR(net_s.target_penetration_max_mm, sim_s.target_penetration_max_mm, 0.01);
+  EXPECT_NEAR(net_s.tool_penetration_max_mm, sim_s.tool_penetration_max_mm, 0.01);
+  EXPECT_NEAR(net_s.tracking_error_free_rms_mm, sim_s.tracking_error_free_rms_mm, 0.01);
+  EXPECT_EQ(net_s.device_loop, "external");
+}
+
+TEST(IgtlRun, AServerThatGoesAwayMidRunIsSaidAndFailsTheRun) {
+  const numen::sim::Scene& scene = igtl_run_test_scene();
+  numen::sim::IgtlReplaySettings rs;
+  rs.disconnect_after = 300;
+  const numen::sim::RunSummary s = igtl_run_test_against(scene, scene, rs, 0.6);
+  EXPECT_EQ(s.igtl_disconnects, 1);
+  EXPECT_EQ(s.igtl_poses, 300);
+  EXPECT_EQ(s.igtl_periods_after_end, 300);  // periods 300..599 found the stream ended
+  EXPECT_GT(s.rejected_samples, 0);  // the last pose went stale after max_sample_age
+  EXPECT_EQ(s.exit_status, numen::sim::code(numen::sim::ExitStatus::kSamplesRejected));
+  EXPECT_TRUE(igtl_run_test_says(s, "the tracker's stream ended 300 periods before the run did"))
+      << s.exit_reasons.front();
+}
+
+TEST(IgtlRun, AToolNeverSentIsNamedWithTheNamesThatWere) {
+  numen::sim::Scene other = numen::sim::load_scene(std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/tracker.toml");
+  other.igtl->device_name = "PointerToTracker";
+  numen::sim::IgtlReplaySettings rs;
+  rs.duration_s = 0.2;
+  const numen::sim::RunSummary s = igtl_run_test_against(igtl_run_test_scene(), other, rs, 0.2);
+  EXPECT_EQ(s.igtl_poses, 0);
+  EXPECT_EQ(s.igtl_other_devices, 201);
+  EXPECT_EQ(s.exit_status, numen::sim::code(numen::sim::ExitStatus::kSamplesRejected));
+  EXPECT_TRUE(igtl_run_test_says(
+      s, "'StylusToTracker' in 201 messages (device names sent: 'PointerToTracker')"));
+  EXPECT_TRUE(igtl_run_test_says(s, "no TRANSFORM of the tool 127.0.0.1:"));
+}
+
+TEST(IgtlRun, AServerThatNeverAnswersIsSaid) {
+  numen::sim::RunOptions o;
+  o.bus.spec = "igtl:127.0.0.1:1";  // a privileged port nobody listens on
+  o.duration_s = 0.05;
+  const numen::sim::RunSummary s = numen::sim::run_scene(igtl_run_test_scene(), o);
+  EXPECT_EQ(s.igtl_connects, 0);
+  EXPECT_GE(s.igtl_connect_failures, 1);
+  EXPECT_EQ(s.exit_status, numen::sim::code(numen::sim::ExitStatus::kSamplesRejected));
+  EXPECT_TRUE(igtl_run_test_says(s, "no connection to the OpenIGTLink server 127.0.0.1:1"));
+}
+
+TEST(IgtlRun, ASceneWithoutATrackerIsRefusedAtTheBusOption) {
+  const numen::sim::Scene scene =
+      numen::sim::load_scene(std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/mouse.toml");
+  numen::sim::RunOptions o;
+  o.bus.spec = "igtl:18944";
+  try {
+    numen::sim::run_scene(scene, o);
+    FAIL() << "refused";
+  } catch (const numen::sim::InputError& e) {
+    EXPECT_EQ(e.key(), "--bus");
+    EXPECT_NE(std::string(e.what()).find("[device.igtl]"), std::string::npos) << e.what();
+  }
+}
