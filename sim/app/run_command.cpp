@@ -41,8 +41,9 @@ RunCommand::RunCommand(CLI::App& parent)
   run->add_flag("--realtime", realtime_, "Pace the loop to wall-clock time");
   run->add_option("--bus", bus_,
                   "The controller's bus: sim (simulated instrument, default), log:FILE "
-                  "(replay a candump log's encoder frames), can:IFACE (SocketCAN) or "
-                  "serial:PATH[@BAUD] (serial line); a real bus is paced to CLOCK_MONOTONIC")
+                  "(replay a candump log's encoder frames), can:IFACE (SocketCAN), "
+                  "serial:PATH[@BAUD] (serial line) or igtl[:[HOST:]PORT] (the scene's "
+                  "[device.igtl] OpenIGTLink tracker); a real bus is paced to CLOCK_MONOTONIC")
       ->check([](const std::string& v) { return check_bus(v, false); });
   run->add_option("--phase", phase_,
                   "Seconds after the SYNC to read the device's answers and step (any bus; "

@@ -26,6 +26,7 @@
 
 namespace numen::sim {
 
+#if NUMEN_WITH_OPENIGTLINK
 namespace {
 
 std::int64_t igtl_replay_clock_ns(clockid_t clock) noexcept {
@@ -54,6 +55,7 @@ bool igtl_replay_send_all(int fd, const std::string& data, const std::atomic<boo
 }
 
 }  // namespace
+#endif
 
 IgtlReplayServer::IgtlReplayServer(const Scene& scene, IgtlReplaySettings settings)
     : scene_(&scene), settings_(std::move(settings)) {

@@ -268,7 +268,7 @@ constexpr RunFigure kFigures[] = {
      K::kTextList, [](const S& s) noexcept { return list(s.igtl_fault_records); }},
     {"igtl_names_seen", "", "igtl: other TRANSFORM device names", K::kTextList,
      [](const S& s) noexcept { return list(s.igtl_names_seen); }},
-    {"igtl_latency_us.median", "us", "igtl: TRANSFORM received to applied: median", K::kReal,
+    {"igtl_latency_us.median", "us", "igtl: TRANSFORM received to applied (paced runs; following, the queue runs ahead): median", K::kReal,
      [](const S& s) noexcept { return real(s.igtl_latency_us.median); }},
     {"igtl_latency_us.p99", "us", "... 99th percentile", K::kReal,
      [](const S& s) noexcept { return real(s.igtl_latency_us.p99); }},

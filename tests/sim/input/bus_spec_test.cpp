@@ -18,6 +18,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "numen/hal/features.hpp"
 #include "numen/hal/transport/can_filter.hpp"
 #include "numen/sim/scene/scene.hpp"
 #include "build_features.hpp"
@@ -209,3 +210,29 @@ TEST(BusSpec, WaitBusTimesOutOnASilentLineAndWakesOnData) {
 }
 
 }  // namespace
+
+// igtl[:[HOST:]PORT]: the scene's OpenIGTLink tracker (docs/openigtlink.md), at the scene's
+// server or this one; refused whole by a build without OpenIGTLink.
+TEST(BusSpec, IgtlTakesAnOptionalHostAndPort) {
+  const BusSpec plain = parse_bus_spec("igtl");
+  EXPECT_EQ(plain.kind, numen::sim::BusKind::kIgtl);
+  EXPECT_EQ(plain.igtl_port, 0);
+  EXPECT_TRUE(plain.igtl_host.empty());
+  EXPECT_FALSE(plain.real());
+  const BusSpec port = parse_bus_spec("igtl:18945");
+  EXPECT_EQ(port.igtl_port, 18945);
+  EXPECT_TRUE(port.igtl_host.empty());
+  const BusSpec both = parse_bus_spec("igtl:192.168.1.20:18944");
+  EXPECT_EQ(both.igtl_host, "192.168.1.20");
+  EXPECT_EQ(both.igtl_port, 18944);
+  EXPECT_NE(error_of("igtl:0").find("--bus 'igtl:0': port '0' is not a TCP port"), std::string::npos);
+  EXPECT_NE(error_of("igtl:65536").find("port '65536'"), std::string::npos);
+  EXPECT_NE(error_of("igtl:host:").find("port ''"), std::string::npos);
+  EXPECT_NE(error_of("igtl::18944").find("empty host"), std::string::npos);
+  EXPECT_EQ(numen::sim::missing_backend(port).empty(), numen::hal::kWithOpenIgtLink)
+      << numen::sim::missing_backend(port);
+  if (!numen::hal::kWithOpenIgtLink) {
+    EXPECT_EQ(numen::sim::missing_backend(port),
+              "bus 'igtl' needs OpenIGTLink: this build has NUMEN_WITH_OPENIGTLINK=OFF");
+  }
+}
