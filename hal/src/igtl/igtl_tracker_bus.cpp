@@ -127,9 +127,12 @@ void IgtlTrackerBus::on_sync() noexcept {
         if (taken == 0) ++tracker_counters_.syncs_after_end;
         break;
       }
-      if (!settings_.wait_for_tracker) break;
+      // A wait that ran out is not repeated every period: the SYNCs go on without waiting
+      // until a pose comes again (a silent server holds the run up once, not once a period).
+      if (!settings_.wait_for_tracker || starved_) break;
       if (igtl_bus_mono_ns() >= wait_until) {
         ++tracker_counters_.wait_timeouts;
+        starved_ = true;
         break;
       }
       const timespec ts{0, 20'000};
@@ -138,6 +141,7 @@ void IgtlTrackerBus::on_sync() noexcept {
     }
     if (settings_.wait_for_tracker && has_first_stamp_ && p->stamp_ns - first_stamp_ns_ > now_ns_)
       break;  // due later
+    starved_ = false;
     if (taken++ > 0) ++tracker_counters_.poses_superseded;
     take(*p, igtl_bus_mono_ns());
     client_->pop();

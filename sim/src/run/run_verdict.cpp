@@ -148,7 +148,8 @@ RunVerdict run_verdict(const RunSummary& s) {
               " periods before the run did (" + n(s.igtl_disconnects) + " connection(s) lost)");
     if (s.igtl_wait_timeouts > 0)
       add(ExitStatus::kSamplesRejected,
-          n(s.igtl_wait_timeouts) + " periods waited for the tracker in vain");
+          n(s.igtl_wait_timeouts) + " waits for the tracker ran out (the run went on without "
+                                     "its poses until one came)");
     if (s.igtl_poses == 0) {
       std::string names;
       for (const std::string& x : s.igtl_names_seen) names += (names.empty() ? "'" : ", '") + x + "'";

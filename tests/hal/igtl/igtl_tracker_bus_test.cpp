@@ -133,6 +133,26 @@ TEST(IgtlTrackerBus, NoPoseNoFramesAndTheStateSaysTheServerIsGone) {
   EXPECT_GE(bus.client().counters().connect_failures, 1u);
 }
 
+TEST(IgtlTrackerBus, ASilentServerIsWaitedForOnceNotEveryPeriod) {
+  namespace hal = numen::hal;
+  numen::test::IgtlTestServer server({});  // accepts, then sends nothing
+  const hal::DeviceConfig config = igtl_bus_test_config();
+  hal::IgtlTrackerSettings s = igtl_bus_test_settings(server.port(), true);
+  s.wait_timeout_ns = 50'000'000;
+  hal::IgtlTrackerBus bus(config, hal::make_kinematics(config), s);
+  const auto t0 = std::chrono::steady_clock::now();
+  for (std::int64_t k = 0; k < 100; ++k) {
+    bus.set_time_ns(k * 1'000'000);
+    bus.write(hal::make_sync(k * 1'000'000));
+  }
+  const double waited_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  // One wait of 50 ms, then the SYNCs go on without one until a pose comes (not 100 × 50 ms).
+  EXPECT_EQ(bus.tracker_counters().wait_timeouts, 1u);
+  EXPECT_EQ(bus.tracker_counters().syncs_without_pose, 100u);
+  EXPECT_LT(waited_s, 1.0);
+}
+
 TEST(IgtlTrackerBus, ThePacedPeriodNeitherAllocatesNorWaits) {
   namespace hal = numen::hal;
   std::vector<std::string> poses;

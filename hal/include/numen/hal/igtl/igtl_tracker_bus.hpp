@@ -15,7 +15,8 @@
 ///  - following the tracker (`wait_for_tracker`, offline runs): message k's bus time is its
 ///    timestamp minus the first message's (the first message is bus time 0); the SYNC takes every
 ///    pose stamped <= t and waits (at most wait_timeout_ns, counted) until a later one is queued or
-///    the receiver has ended — the run goes at the tracker's pace, deterministic for a replay;
+///    the receiver has ended — the run goes at the tracker's pace, deterministic for a replay. A
+///    wait that runs out is not repeated: the following SYNCs do not wait until a pose comes;
 ///  - paced (a real-time run): the SYNC takes every queued pose and never waits; a message's bus
 ///    time is its timestamp + the smallest (receive time − timestamp) seen so far, the clock
 ///    offset of the sender (Cristian's bound), on the monotonic clock shifted to bus time.
@@ -66,7 +67,9 @@ struct IgtlBusCounters {
   std::uint64_t syncs_without_pose = 0;  ///< SYNCs answered by nothing (no pose yet).
   std::uint64_t poses_taken = 0;      ///< Poses taken from the queue.
   std::uint64_t poses_superseded = 0; ///< ... of which a newer one replaced in the same SYNC.
-  std::uint64_t wait_timeouts = 0;    ///< SYNCs following the tracker whose wait ran out.
+  /// SYNCs following the tracker whose wait ran out (each starts a stretch without waits that
+  /// ends at the next pose).
+  std::uint64_t wait_timeouts = 0;
   std::uint64_t out_of_order = 0;     ///< Poses stamped before the previous one (taken as due).
   /// SYNCs that found every pose taken and the receiver ended (the stream over: a replay's end,
   /// or a server gone with reconnect off).
@@ -126,6 +129,7 @@ class IgtlTrackerBus final : public Bus {
   int pending_count_ = 0;
   int pending_next_ = 0;
   bool has_pose_ = false;
+  bool starved_ = false;  // following: a wait ran out and no pose has come since
   AxisVector q_;
   std::int64_t pose_time_ns_ = 0;  // bus time of the newest pose
   core::Pose last_pose_;
