@@ -11,10 +11,13 @@
 
 #include <algorithm>
 #include <atomic>
+#include <fstream>
+#include <iterator>
 #include <string>
 #include <thread>
 #include <vector>
 
+#include "temp_dir.hpp"
 #include "numen/sim/device/igtl_replay.hpp"
 #include "numen/sim/input/input_error.hpp"
 #include "numen/sim/run/run.hpp"
@@ -118,6 +121,36 @@ TEST(IgtlRun, TheReplayedTrackerDrivesTheGodObjectAsTheSimulatedBusDoes) {
   EXPECT_NEAR(net_s.tool_penetration_max_mm, sim_s.tool_penetration_max_mm, 0.01);
   EXPECT_NEAR(net_s.tracking_error_free_rms_mm, sim_s.tracking_error_free_rms_mm, 0.01);
   EXPECT_EQ(net_s.device_loop, "external");
+}
+
+// The multirate god-object (a [multirate] table: the scene loop every 10 ms) on the tracker bus:
+// the device loop reads the tracker as the single-rate run does, with the same figures.
+TEST(IgtlRun, AMultirateRunOnTheReplayedTrackerHasTheSimulatedBusFigures) {
+  const numen::test::TempDir dir;
+  std::ifstream in(std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/tracker.toml");
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string data = "file = \"../data/";
+  ASSERT_NE(text.find(data), std::string::npos);
+  text.replace(text.find(data), data.size(),
+               "file = \"" + std::string(NUMEN_SOURCE_DIR) + "/sim/data/");
+  text += "\n[multirate]\nscene_dt = 0.01\nmargin = 0.005\n";
+  const numen::sim::Scene scene = numen::sim::load_scene(dir.write("tracker_multirate.toml", text));
+  ASSERT_TRUE(scene.multirate.has_value());
+  numen::sim::RunOptions o;
+  o.duration_s = 10.0;  // into the tissue at 8.6 s
+  const numen::sim::RunSummary sim_s = numen::sim::run_scene(scene, o);
+  numen::sim::IgtlReplaySettings rs;
+  rs.duration_s = 10.0;
+  const numen::sim::RunSummary net_s = igtl_run_test_against(scene, scene, rs, 10.0);
+  EXPECT_TRUE(net_s.multirate.enabled);
+  EXPECT_EQ(net_s.multirate.scene_steps, sim_s.multirate.scene_steps);
+  EXPECT_EQ(net_s.igtl_poses_taken, net_s.steps);
+  EXPECT_EQ(net_s.exit_status, 0) << net_s.exit_reasons.front();
+  EXPECT_EQ(sim_s.exit_status, 0);
+  EXPECT_GT(sim_s.target_penetration_max_mm, 0.5);
+  EXPECT_NEAR(net_s.target_penetration_max_mm, sim_s.target_penetration_max_mm, 0.01);
+  EXPECT_NEAR(net_s.tool_penetration_max_mm, sim_s.tool_penetration_max_mm, 0.01);
+  EXPECT_NEAR(net_s.tracking_error_free_max_mm, sim_s.tracking_error_free_max_mm, 0.01);
 }
 
 TEST(IgtlRun, AServerThatGoesAwayMidRunIsSaidAndFailsTheRun) {
