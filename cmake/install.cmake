@@ -143,6 +143,7 @@ numen_install_headers(${PROJECT_SOURCE_DIR}/sim/include
   numen/sim/run/trace.hpp
   numen/sim/study/study_accuracy.hpp numen/sim/study/study_shard.hpp
   numen/sim/study/study_stability.hpp
+  numen/sim/view/igtl_world_server.hpp
   numen/sim/view/view_output.hpp numen/sim/view/view_recording.hpp numen/sim/view/view_scene.hpp
   numen/sim/view/view_server.hpp)
 

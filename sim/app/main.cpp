@@ -4,7 +4,7 @@
 ///   numen --version
 ///   numen run [SCENE] [--duration S] [--trace FILE.csv] [--json] [--realtime] [--coupling MODE]
 ///             [--bus sim|log:FILE|can:IFACE|serial:PATH[@BAUD]|igtl[:[HOST:]PORT]]
-///             [--record FILE.log] [--phase S]
+///             [--record FILE.log] [--phase S] [--igtl [HOST:]PORT]
 ///             [--rt-priority N] [--lock-memory] [--prefault-stack BYTES] [--cpu LIST] [--rt-strict]
 ///             [--scene-rt-priority N] [--scene-cpu LIST]
 ///   numen device [SCENE] --bus can:IFACE|serial:PATH[@BAUD] [--duration S] [--ready]

@@ -12,10 +12,12 @@
 #include <string>
 
 #include "commands.hpp"
+#include "numen/hal/features.hpp"
 #include "numen/sim/input/bus_spec.hpp"
 #include "numen/sim/input/cli_values.hpp"
 #include "numen/sim/input/input_error.hpp"
 #include "numen/sim/input/view_address.hpp"
+#include "numen/sim/view/igtl_world_server.hpp"
 #include "numen/sim/run/run.hpp"
 #include "numen/sim/run/run_verdict.hpp"
 #include "numen/sim/run/step_timing.hpp"
@@ -99,6 +101,20 @@ RunCommand::RunCommand(CLI::App& parent)
           return e.what();
         }
       });
+  run->add_option("--igtl", igtl_,
+                  "Serve the god-object world over OpenIGTLink on [HOST:]PORT (IPv4, default host "
+                  "127.0.0.1): a TRANSFORM per body and per target, in mm, for 3D Slicer "
+                  "(docs/openigtlink.md); an offline run is then paced at real time (--speed)")
+      ->check([](const std::string& v) -> std::string {
+        try {
+          (void)sim::parse_view_address(v);
+          if (!hal::kWithOpenIgtLink)
+            return "needs OpenIGTLink: this build has NUMEN_WITH_OPENIGTLINK=OFF";
+          return {};
+        } catch (const std::invalid_argument& e) {
+          return e.what();
+        }
+      });
   run->add_flag("--wait-for-viewer{60}", wait_for_viewer_,
                "With --view: start the run when the first page connects, waiting at most this "
                "many seconds (--wait-for-viewer=S; default 60); none connected: exit 1")
@@ -121,10 +137,10 @@ RunCommand::RunCommand(CLI::App& parent)
 
 int RunCommand::execute() const {
   // Modifiers of something not asked for would do nothing: refused (status 2).
-  if (cli_->count("--view-rate") > 0 && view_.empty() && record_view_path_.empty())
+  if (cli_->count("--view-rate") > 0 && view_.empty() && igtl_.empty() && record_view_path_.empty())
     throw sim::InputError("", 0, 0, "--view-rate",
-                          "sets the state stream's rate; without --view or --record-view there "
-                          "is no stream");
+                          "sets the state stream's rate; without --view, --igtl or --record-view "
+                          "there is no stream");
   if (cli_->count("--wait-for-viewer") > 0 && view_.empty())
     throw sim::InputError("", 0, 0, "--wait-for-viewer",
                           "waits for a page of the live viewer; without --view there is none");
@@ -201,6 +217,21 @@ int RunCommand::execute() const {
     if (options.view_speed <= 0.0 && !realtime_ && !sim::parse_bus_spec(bus_).real())
       options.view_speed = 1.0;
   }
+  std::unique_ptr<sim::IgtlWorldServer> igtl_world;
+  if (!igtl_.empty()) {
+    const sim::ViewAddress address = sim::parse_view_address(igtl_);  // checked by the option
+    sim::IgtlWorldSettings ws;
+    ws.host = address.host;
+    ws.port = address.port;
+    std::vector<std::string> names;
+    for (const core::BodyModel& b : scene.model.bodies) names.push_back(b.name);
+    igtl_world = std::make_unique<sim::IgtlWorldServer>(std::move(names), ws);
+    std::cerr << "numen: OpenIGTLink world on " << ws.host << ":" << igtl_world->port()
+              << std::endl;
+    options.view_sinks.push_back(igtl_world.get());
+    if (options.view_speed <= 0.0 && !realtime_ && !sim::parse_bus_spec(bus_).real())
+      options.view_speed = 1.0;
+  }
   loading_done();  // from here a signal ends the run cleanly
   sim::RunSummary summary = sim::run_scene(scene, options);
   // The summary on stdout first: if it cannot be written, the run lost its record (status 5 at
@@ -228,6 +259,12 @@ int RunCommand::execute() const {
               << " frames sent, " << c.frames_dropped << " dropped (slow clients), "
               << c.closed_bad_input << " connections closed for bad input"
               << viewer_overload(c, vs.max_http_connections) << "\n";
+  }
+  if (igtl_world) {
+    const sim::IgtlWorldCounters& c = igtl_world->counters();
+    std::cerr << "  OpenIGTLink world: " << c.clients_total << " clients, " << c.messages
+              << " TRANSFORMs, " << c.frames_skipped << " client-frames skipped (slow clients), "
+              << c.clients_refused << " clients refused\n";
   }
   // A run stopped by a signal and otherwise clean exits 128 + the signal (shell convention):
   // run_verdict() put that status, and the signal's name, in the summary.

@@ -4,7 +4,6 @@
 
 #include "numen/sim/device/igtl_replay.hpp"
 
-#include <arpa/inet.h>
 #include <netinet/in.h>
 #include <netinet/tcp.h>
 #include <poll.h>
@@ -14,12 +13,12 @@
 
 #include <cerrno>
 #include <cmath>
-#include <cstring>
 #include <stdexcept>
 
 #include "numen/hal/features.hpp"
 #include "numen/sim/device/simulated_instrument.hpp"
 #include "numen/sim/input/input_error.hpp"
+#include "net/tcp_listen.hpp"
 #if NUMEN_WITH_OPENIGTLINK
 #include "numen/hal/igtl/igtl_message.hpp"
 #endif
@@ -68,25 +67,9 @@ IgtlReplayServer::IgtlReplayServer(const Scene& scene, IgtlReplaySettings settin
     throw std::invalid_argument("igtl-replay: accept timeout must be > 0");
   if (!hal::kWithOpenIgtLink)
     throw std::runtime_error("igtl-replay needs OpenIGTLink: this build has NUMEN_WITH_OPENIGTLINK=OFF");
-  sockaddr_in addr{};
-  addr.sin_family = AF_INET;
-  addr.sin_port = htons(settings_.port);
-  if (inet_pton(AF_INET, settings_.host.c_str(), &addr.sin_addr) != 1)
-    throw std::runtime_error("igtl-replay: '" + settings_.host + "' is not an IPv4 address");
-  listen_fd_ = socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
-  if (listen_fd_ < 0) throw std::runtime_error(std::string("igtl-replay: socket: ") + std::strerror(errno));
-  const int one = 1;
-  setsockopt(listen_fd_, SOL_SOCKET, SO_REUSEADDR, &one, sizeof one);
-  if (bind(listen_fd_, reinterpret_cast<const sockaddr*>(&addr), sizeof addr) != 0 ||
-      listen(listen_fd_, 1) != 0) {
-    const std::string why = std::strerror(errno);
-    close(listen_fd_);
-    throw std::runtime_error("igtl-replay: cannot listen on " + settings_.host + ":" +
-                             std::to_string(settings_.port) + ": " + why);
-  }
-  socklen_t len = sizeof addr;
-  getsockname(listen_fd_, reinterpret_cast<sockaddr*>(&addr), &len);
-  port_ = ntohs(addr.sin_port);
+  const TcpListener l = tcp_listen(settings_.host, settings_.port, false, 1, "igtl-replay");
+  listen_fd_ = l.fd;
+  port_ = l.port;
 }
 
 IgtlReplayServer::~IgtlReplayServer() {
