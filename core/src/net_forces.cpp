@@ -15,6 +15,7 @@
 #include "numen/core/step_stages.hpp"
 
 #include "detail/data_scratch.hpp"
+#include "detail/implicit_system.hpp"
 #include "detail/net_solve.hpp"
 #include "detail/net_surface.hpp"
 
@@ -137,6 +138,62 @@ inline void one_spring_linearization(const SpringPass& a, std::int32_t j, const 
   a.rhs[hi] -= kv;
 }
 
+/// The linearisation's per-node accumulators of two springs at a time (one lane each): the
+/// weights' sums (upper triangle) and the right-hand side.
+struct PairSums {
+  Pair bx = Pair::Zero(), by = Pair::Zero(), bz = Pair::Zero();
+  Pair s00 = Pair::Zero(), s01 = Pair::Zero(), s02 = Pair::Zero(), s11 = Pair::Zero(),
+       s12 = Pair::Zero(), s22 = Pair::Zero();
+  /// Adds the lanes into `sum` (the rhs and the weights' sums; the force is left alone).
+  void add_to(NodeSums& sum) const noexcept {
+    sum.rhs = Vec3(bx(0) + bx(1), by(0) + by(1), bz(0) + bz(1));
+    sum.w00 = s00(0) + s00(1);
+    sum.w01 = s01(0) + s01(1);
+    sum.w02 = s02(0) + s02(1);
+    sum.w11 = s11(0) + s11(1);
+    sum.w12 = s12(0) + s12(1);
+    sum.w22 = s22(0) + s22(1);
+  }
+};
+
+/// Springs j and j + 1 of node k (later nodes h0, h1), linearised (the law of
+/// one_spring_linearization(), lane by lane: the same operations and roundings) from their
+/// inverse length 1/l, direction n and the velocity difference dv = v_high − v_k with
+/// n · dv: stores α and β, adds W_e to the later nodes' blocks and −h² k K̃ dv to their rows,
+/// and both to the node's own sums.
+inline void linearize_pair(const SpringPass& a, std::int32_t j, std::size_t h0, std::size_t h1,
+                           const Pair& inv_l, const Pair& nx, const Pair& ny,
+                           const Pair& nz, const Pair& dvx, const Pair& dvy, const Pair& dvz,
+                           const Pair& n_dv, PairSums& sums) noexcept {
+  const Pair rest = load_pair(a.rest_length + j);
+  const Pair stiffness = load_pair(a.stiffness + j), damping = load_pair(a.damping + j);
+  const Pair hk = Pair::Constant(a.h2) * stiffness;
+  // β = hk (1 − L/l) if l > L else 0, as max(0, ·) (SSE2 maxpd; Eigen's pmax(a, b)
+  // returns a when b is NaN: 0 for l = 0, as the comparison gives).
+  const Pair beta = Pair::Zero().max(hk * (1.0 - rest * inv_l));
+  const Pair alpha = Pair::Constant(a.h) * damping + hk - beta;
+  store_pair(a.weight_axial + j, alpha);
+  store_pair(a.weight_isotropic + j, beta);
+  const Pair ax = alpha * nx, ay = alpha * ny, az = alpha * nz;
+  const Pair w00 = ax * nx + beta, w11 = ay * ny + beta, w22 = az * nz + beta;
+  const Pair w01 = ax * ny, w02 = ax * nz, w12 = ay * nz;
+  sums.s00 += w00;
+  sums.s01 += w01;
+  sums.s02 += w02;
+  sums.s11 += w11;
+  sums.s12 += w12;
+  sums.s22 += w22;
+  add_symmetric(a.spring_block[h0], w00(0), w01(0), w02(0), w11(0), w12(0), w22(0));
+  add_symmetric(a.spring_block[h1], w00(1), w01(1), w02(1), w11(1), w12(1), w22(1));
+  const Pair c = (hk - beta) * n_dv;
+  const Pair kx = c * nx + beta * dvx, ky = c * ny + beta * dvy, kz = c * nz + beta * dvz;
+  sums.bx += kx;
+  sums.by += ky;
+  sums.bz += kz;
+  a.rhs[h0] -= Vec3(kx(0), ky(0), kz(0));
+  a.rhs[h1] -= Vec3(kx(1), ky(1), kz(1));
+}
+
 /// The arrays of the springs' passes for `h` (h_s of the linearised system; unused by the
 /// forces' pass).
 SpringPass spring_arrays(Data& data, double h) noexcept {
@@ -164,11 +221,15 @@ SpringPass spring_arrays(Data& data, double h) noexcept {
 /// their earlier node k in Model::node_sweep_order, whose sums stay in
 /// registers), two springs of a node at a time (the same law as
 /// one_spring(), lane by lane: the same operations and roundings): forces,
-/// and the directions and lengths linearization_pass() starts from.
-/// Expects force = gravity + ties on entry.
-void spring_pass(const Model& model, Data& data) noexcept {
+/// and the directions and lengths linearization_pass() starts from. With
+/// `kLinearize`, the same pass also linearises each spring over a.h as
+/// linearization_pass() would from what it stored (linearize_pair(): bit-identical, one pass
+/// over the springs and the nodes' states instead of two). Expects force = gravity + ties on
+/// entry, and with `kLinearize` spring_block = 0 and rhs = 0.
+template <bool kLinearize>
+void spring_pass(const Model& model, Data& data, double h) noexcept {
   const NetScratch& s = data.scratch->net;
-  const SpringPass a = spring_arrays(data, 0.0);
+  const SpringPass a = spring_arrays(data, h);
   const std::int32_t* low_begin = s.spring_low_begin.data();
   const std::int32_t* order = model.node_sweep_order.data();
   const std::size_t n = data.nodes.size();
@@ -181,6 +242,7 @@ void spring_pass(const Model& model, Data& data) noexcept {
     const Pair vx = Pair::Constant(vk.x()), vy = Pair::Constant(vk.y()),
                vz = Pair::Constant(vk.z());
     Pair fx = Pair::Zero(), fy = Pair::Zero(), fz = Pair::Zero();
+    PairSums lin;
     std::int32_t j = low_begin[p];
     const std::int32_t end = low_begin[p + 1];
     for (; j + 1 < end; j += 2) {
@@ -219,17 +281,26 @@ void spring_pass(const Model& model, Data& data) noexcept {
       fz += gz;
       a.force[h0] -= Vec3(gx(0), gy(0), gz(0));
       a.force[h1] -= Vec3(gx(1), gy(1), gz(1));
+      if constexpr (kLinearize)
+        linearize_pair(a, j, h0, h1, inv_l, nx, ny, nz, dvx, dvy, dvz, n_dv, lin);
     }
     NodeSums sum;
+    if constexpr (kLinearize) lin.add_to(sum);
     sum.force = Vec3(fx(0) + fx(1), fy(0) + fy(1), fz(0) + fz(1));
-    if (j < end) one_spring(a, j, xk, vk, sum);
+    if (j < end) {
+      one_spring(a, j, xk, vk, sum);
+      if constexpr (kLinearize) one_spring_linearization(a, j, vk, sum);
+    }
     a.force[k] += sum.force;
+    if constexpr (kLinearize) {
+      a.rhs[k] += sum.rhs;
+      add_symmetric(a.spring_block[k], sum.w00, sum.w01, sum.w02, sum.w11, sum.w12, sum.w22);
+    }
   }
 }
 
 /// The springs' linearisation for the implicit solve (linearize_nets()), in the
-/// order of spring_pass() and two springs at a time (the same operations and
-/// roundings as one_spring_linearization(), lane by lane), from the directions
+/// order of spring_pass() and two springs at a time (linearize_pair()), from the directions
 /// and lengths spring_pass() stored: the weights W_e = α d̂d̂ᵀ + β I
 /// (SweepSprings), their sum at both nodes (NetScratch::spring_block: 6
 /// entries, the later node's scattered two at a time), and the spring part of
@@ -241,16 +312,13 @@ void linearization_pass(const Model& model, Data& data, double h) noexcept {
   const SpringPass a = spring_arrays(data, h);
   const std::int32_t* low_begin = s.spring_low_begin.data();
   const std::int32_t* order = model.node_sweep_order.data();
-  const Pair hp = Pair::Constant(a.h), h2p = Pair::Constant(a.h2);
   const std::size_t n = data.nodes.size();
   for (std::size_t p = 0; p < n; ++p) {
     const auto k = static_cast<std::size_t>(order[p]);
     const Vec3 vk = a.nodes[k].velocity;
     const Pair vx = Pair::Constant(vk.x()), vy = Pair::Constant(vk.y()),
                vz = Pair::Constant(vk.z());
-    Pair bx = Pair::Zero(), by = Pair::Zero(), bz = Pair::Zero();
-    Pair s00 = Pair::Zero(), s01 = Pair::Zero(), s02 = Pair::Zero(), s11 = Pair::Zero(),
-         s12 = Pair::Zero(), s22 = Pair::Zero();
+    PairSums lin;
     std::int32_t j = low_begin[p];
     const std::int32_t end = low_begin[p + 1];
     for (; j + 1 < end; j += 2) {
@@ -258,54 +326,37 @@ void linearization_pass(const Model& model, Data& data, double h) noexcept {
       const auto h1 = static_cast<std::size_t>(a.high[j + 1]);
       const NodeState& n0 = a.nodes[h0];
       const NodeState& n1 = a.nodes[h1];
-      const Pair l = load_pair(a.length + j);
-      const Pair inv_l = l.inverse();
-      const Pair rest = load_pair(a.rest_length + j);
+      const Pair inv_l = load_pair(a.length + j).inverse();
       const Pair nx = load_pair(a.dir_x + j), ny = load_pair(a.dir_y + j),
                  nz = load_pair(a.dir_z + j);
       const Pair dvx = Pair(n0.velocity.x(), n1.velocity.x()) - vx;
       const Pair dvy = Pair(n0.velocity.y(), n1.velocity.y()) - vy;
       const Pair dvz = Pair(n0.velocity.z(), n1.velocity.z()) - vz;
       const Pair n_dv = nx * dvx + ny * dvy + nz * dvz;
-      const Pair stiffness = load_pair(a.stiffness + j), damping = load_pair(a.damping + j);
-      const Pair hk = h2p * stiffness;
-      // β = hk (1 − L/l) if l > L else 0, as max(0, ·) (SSE2 maxpd; Eigen's pmax(a, b)
-      // returns a when b is NaN: 0 for l = 0, as the comparison gives).
-      const Pair beta = Pair::Zero().max(hk * (1.0 - rest * inv_l));
-      const Pair alpha = hp * damping + hk - beta;
-      store_pair(a.weight_axial + j, alpha);
-      store_pair(a.weight_isotropic + j, beta);
-      const Pair ax = alpha * nx, ay = alpha * ny, az = alpha * nz;
-      const Pair w00 = ax * nx + beta, w11 = ay * ny + beta, w22 = az * nz + beta;
-      const Pair w01 = ax * ny, w02 = ax * nz, w12 = ay * nz;
-      s00 += w00;
-      s01 += w01;
-      s02 += w02;
-      s11 += w11;
-      s12 += w12;
-      s22 += w22;
-      add_symmetric(a.spring_block[h0], w00(0), w01(0), w02(0), w11(0), w12(0), w22(0));
-      add_symmetric(a.spring_block[h1], w00(1), w01(1), w02(1), w11(1), w12(1), w22(1));
-      const Pair c = (hk - beta) * n_dv;
-      const Pair kx = c * nx + beta * dvx, ky = c * ny + beta * dvy, kz = c * nz + beta * dvz;
-      bx += kx;
-      by += ky;
-      bz += kz;
-      a.rhs[h0] -= Vec3(kx(0), ky(0), kz(0));
-      a.rhs[h1] -= Vec3(kx(1), ky(1), kz(1));
+      linearize_pair(a, j, h0, h1, inv_l, nx, ny, nz, dvx, dvy, dvz, n_dv, lin);
     }
     NodeSums sum;
-    sum.rhs = Vec3(bx(0) + bx(1), by(0) + by(1), bz(0) + bz(1));
-    sum.w00 = s00(0) + s00(1);
-    sum.w01 = s01(0) + s01(1);
-    sum.w02 = s02(0) + s02(1);
-    sum.w11 = s11(0) + s11(1);
-    sum.w12 = s12(0) + s12(1);
-    sum.w22 = s22(0) + s22(1);
+    lin.add_to(sum);
     if (j < end) one_spring_linearization(a, j, vk, sum);
     a.rhs[k] += sum.rhs;
     add_symmetric(a.spring_block[k], sum.w00, sum.w01, sum.w02, sum.w11, sum.w12, sum.w22);
   }
+}
+
+}  // namespace
+
+namespace {
+
+/// h_s of the one linearisation a step of this model makes at its start (the linearly implicit
+/// Euler: h; the trapezoidal rule: h/2), for compute_net_forces() to linearise the springs in
+/// its pass; 0 where the nets are not solved implicitly or the integrator linearises more than
+/// once a step (TR-BDF2: a second time at its stage's end).
+double fused_linearization_step(const Model& model) noexcept {
+  if (!(model.stage_plan & kStageNetSolve)) return 0.0;
+  if (model.integrator != Integrator::kLinearlyImplicitEuler &&
+      model.integrator != Integrator::kTrapezoidal)
+    return 0.0;
+  return linearized_system_step(model);
 }
 
 }  // namespace
@@ -346,8 +397,20 @@ void compute_net_forces(const Model& model, Data& data) noexcept {
     data.nets[k].tie_wrench = reaction;
   }
 
-  // Structural and bending springs.
-  spring_pass(model, data);
+  // Structural and bending springs. A model stepped by a one-stage linearised integrator
+  // linearises them over h_s in the same pass (linearize_nets() then skips its own:
+  // NetScratch::springs_linearized_for).
+  const double fused_step = fused_linearization_step(model);
+  if (fused_step > 0.0) {
+    for (std::size_t i = 0; i < data.nodes.size(); ++i) {
+      s.spring_block[i] = SymmetricBlock{};
+      s.rhs[i].setZero();
+    }
+    spring_pass<true>(model, data, fused_step);
+  } else {
+    spring_pass<false>(model, data, 0.0);
+  }
+  s.springs_linearized_for = fused_step;
 
   // Node contacts (penalty law of contact_force.hpp, the node on side a). A triangle contact's
   // share (NodeContact::face) takes the law at the triangle's point, Σ w_m v_m, and keeps its
@@ -476,6 +539,7 @@ void linearize_nets(const Model& model, Data& data, double system_step) noexcept
   const Vec3* lever_in = s.lever.data();
   Vec3* rhs = s.rhs.data();
   SymmetricBlock* spring_block = s.spring_block.data();
+  const bool fused = s.springs_linearized_for == system_step;
   for (std::size_t k = 0; k < model.nets.size(); ++k) {
     const NetModel& net = model.nets[k];
     const BodyState& body = data.bodies[static_cast<std::size_t>(net.body)];
@@ -487,8 +551,10 @@ void linearize_nets(const Model& model, Data& data, double system_step) noexcept
       const Vec3 lever = lever_in[i];
       const Vec3 anchor_velocity = body.linear_velocity + body.angular_velocity.cross(lever);
       const Vec3 dv = nodes[i].velocity - anchor_velocity;
-      spring_block[i] = SymmetricBlock{};
-      rhs[i].setZero();
+      if (!fused) {
+        spring_block[i] = SymmetricBlock{};
+        rhs[i].setZero();
+      }
       sum_r += lever;
       rr00 += lever.x() * lever.x();
       rr01 += lever.x() * lever.y();
@@ -504,8 +570,10 @@ void linearize_nets(const Model& model, Data& data, double system_step) noexcept
     t.lever_moment << rr00, rr01, rr02, rr01, rr11, rr12, rr02, rr12, rr22;
     t.relative << sum_dv, sum_r_dv;
   }
-  // The springs' weights, their sums per node and their part of the node rows' b.
-  linearization_pass(model, data, system_step);
+  // The springs' weights, their sums per node and their part of the node rows' b (made by the
+  // forces' pass already where it linearised over this h_s).
+  if (!fused) linearization_pass(model, data, system_step);
+  s.springs_linearized_for = 0.0;
 }
 
 void integrate_nodes_symplectic(const Model& model, Data& data) noexcept {
@@ -528,6 +596,65 @@ void integrate_nodes_implicit(const Model& model, Data& data) noexcept {
   }
 }
 
+namespace {
+
+/// A net's springs at the step's end: Σ ½ k (l − L)² over all, and the largest and smallest
+/// l²/L² of the structural ones (1 without any).
+struct SpringMeasures {
+  double energy = 0.0;
+  double ratio2_max = 1.0;
+  double ratio2_min = 1.0;
+};
+
+/// The springs of `net` in the sweep order, two at a time (NetScratch::sweep_springs: the
+/// constants' arrays read in order, as the forces' pass reads them). A NaN length is kept in
+/// the energy and the largest ratio.
+SpringMeasures measure_springs(const Model& model, const Data& data, const NetModel& net) noexcept {
+  const NetScratch& s = data.scratch->net;
+  const NodeState* nodes = data.nodes.data();
+  const std::int32_t* order = model.node_sweep_order.data();
+  const std::int32_t* low_begin = s.spring_low_begin.data();
+  const std::int32_t* high = s.sweep_springs.high.data();
+  const double* rest_length = s.spring_constants.rest_length.data();
+  const double* stiffness = s.spring_constants.stiffness.data();
+  const double* structural = s.spring_constants.structural.data();
+  Pair energy = Pair::Zero(), r2_max = Pair::Ones(), r2_min = Pair::Ones();
+  const auto add = [&](const Pair& l2, const Pair& rest, const Pair& k, const Pair& is_structural) {
+    const Pair stretch = l2.sqrt() - rest;
+    energy += 0.5 * k * stretch * stretch;
+    const Pair r2 = (is_structural > 0.0).select(l2 / (rest * rest), Pair::Ones());
+    r2_max = r2_max.max(r2);
+    r2_min = r2_min.min(r2);
+  };
+  for (int p = net.node_begin; p < net.node_begin + net.node_count; ++p) {
+    const Vec3& xk = nodes[order[p]].position;
+    std::int32_t j = low_begin[p];
+    const std::int32_t end = low_begin[p + 1];
+    for (; j + 1 < end; j += 2) {
+      const Vec3& x0 = nodes[high[j]].position;
+      const Vec3& x1 = nodes[high[j + 1]].position;
+      const Pair dx = Pair(x0.x(), x1.x()) - xk.x();
+      const Pair dy = Pair(x0.y(), x1.y()) - xk.y();
+      const Pair dz = Pair(x0.z(), x1.z()) - xk.z();
+      add(dx * dx + dy * dy + dz * dz, load_pair(rest_length + j), load_pair(stiffness + j),
+          load_pair(structural + j));
+    }
+    if (j < end) {  // the node's odd spring out, in lane 0 (lane 1: a spring at rest, not structural)
+      const double l2 = (nodes[high[j]].position - xk).squaredNorm();
+      add(Pair(l2, 1.0), Pair(rest_length[j], 1.0), Pair(stiffness[j], 0.0),
+          Pair(structural[j], 0.0));
+    }
+  }
+  SpringMeasures m;
+  m.energy = energy(0) + energy(1);
+  m.ratio2_max = std::max(r2_max(0), r2_max(1));
+  m.ratio2_min = std::min(r2_min(0), r2_min(1));
+  if (std::isnan(m.energy)) m.ratio2_max = m.energy;  // a NaN met is kept (raise_max)
+  return m;
+}
+
+}  // namespace
+
 void measure_nets(const Model& model, Data& data) noexcept {
   data.stages_run |= kStageMeasureNets;  // the stage report (step_stages.hpp)
   for (std::size_t k = 0; k < model.nets.size(); ++k) {
@@ -538,33 +665,31 @@ void measure_nets(const Model& model, Data& data) noexcept {
     double stretch2 = 0.0;
     double speed2 = 0.0;
     double kinetic = 0.0;
+    double tie2 = 0.0;      // Σ |x − a|²
+    Vec3 mass_moment = Vec3::Zero();  // Σ m x
     for (int v = net.node_begin; v < net.node_begin + net.node_count; ++v) {
       const auto i = static_cast<std::size_t>(v);
       const NodeState& st = data.nodes[i];
       const Vec3 anchor = body.position + rot * model.node_rest[i];
-      raise_max(stretch2, (st.position - anchor).squaredNorm());
+      const double s2 = (st.position - anchor).squaredNorm();
+      raise_max(stretch2, s2);
+      tie2 += s2;
       const double v2 = st.velocity.squaredNorm();
       raise_max(speed2, v2);
       kinetic += 0.5 * model.node_mass[i] * v2;
+      mass_moment += model.node_mass[i] * st.position;
     }
     // |l − L| / L = |√(l²/L²) − 1| is largest at the largest or the smallest
-    // l²/L²: one square root per net, not per spring.
-    double ratio2_max = 1.0;
-    double ratio2_min = 1.0;
-    for (int e = net.spring_begin; e < net.spring_begin + net.structural_count; ++e) {
-      const NetSpring& sp = model.net_springs[static_cast<std::size_t>(e)];
-      const double l2 = (data.nodes[static_cast<std::size_t>(sp.node_b)].position -
-                         data.nodes[static_cast<std::size_t>(sp.node_a)].position)
-                            .squaredNorm();
-      const double ratio2 = l2 / (sp.rest_length * sp.rest_length);
-      raise_max(ratio2_max, ratio2);
-      if (ratio2 < ratio2_min) ratio2_min = ratio2;
-    }
+    // l²/L²: one square root per net, not per spring (the energy takes one per spring).
+    const SpringMeasures springs = measure_springs(model, data, net);
     out.max_tie_stretch = std::sqrt(stretch2);
     out.max_node_speed = std::sqrt(speed2);
     out.kinetic_energy = kinetic;
-    out.max_strain = std::max(std::sqrt(ratio2_max) - 1.0, 1.0 - std::sqrt(ratio2_min));
-    if (std::isnan(ratio2_max)) out.max_strain = ratio2_max;  // a NaN met is kept (raise_max)
+    out.elastic_energy = 0.5 * net.tie_stiffness * tie2 + springs.energy;
+    out.gravity_energy = -model.gravity.dot(mass_moment);
+    out.max_strain =
+        std::max(std::sqrt(springs.ratio2_max) - 1.0, 1.0 - std::sqrt(springs.ratio2_min));
+    if (std::isnan(springs.ratio2_max)) out.max_strain = springs.ratio2_max;  // a NaN met is kept
   }
 }
 

@@ -8,6 +8,7 @@
 #include <limits>
 
 #include "numen/core/coupling.hpp"
+#include "numen/core/step_stages.hpp"
 #include "numen/sim/run/energy.hpp"
 
 namespace numen::sim {
@@ -211,8 +212,15 @@ bool DivergenceMonitor::observe(const core::Model& model, const core::Data& data
   // An organ's new state is judged in organ_slices_ parts, one a call (set_organ_slices()):
   // this call judges its parts [first, last). A new state before the last one's parts are done
   // (or the first call) is judged whole.
+  // A state whose step measured its nets (core::measure_nets(): NetOutput's largest node speed
+  // and tie stretch, its energies) is judged from those, O(nets); one the run changed by hand
+  // or a view without its scene step's measures, node by node.
+  const bool measured = (data.stages_run & core::kStageMeasureNets) != 0;
   int first = organ_slice_, last = std::min(organ_slice_ + 1, organ_slices_);
-  if (!organs_unchanged || !net_energy_taken_) {
+  if (measured) {
+    first = 0;
+    last = organ_slices_;
+  } else if (!organs_unchanged || !net_energy_taken_) {
     first = 0;
     last = organ_slice_ < organ_slices_ || !net_energy_taken_ ? organ_slices_ : 1;
   }
@@ -227,6 +235,23 @@ bool DivergenceMonitor::observe(const core::Model& model, const core::Data& data
     const core::BodyState& body = data.bodies[static_cast<std::size_t>(net.body)];
     const double stretch_limit =
         limits_.stretch_factor * net_radius_m_[n] + 2.0 * base_stretch_m_[n];
+    if (measured) {
+      const core::NetOutput& out = data.nets[n];
+      const double v = out.max_node_speed;
+      speed_ratio_max_ = std::max(speed_ratio_max_, v / speed_limit);
+      if (v > speed_limit) {
+        latch("node speed", net.body, static_cast<int>(n), v, speed_limit, period, time_s);
+        breach = true;
+        break;
+      }
+      const double stretch = out.max_tie_stretch;
+      if (stretch_limit > 0.0) stretch_ratio_max_ = std::max(stretch_ratio_max_, stretch / stretch_limit);
+      if (stretch_limit > 0.0 && stretch > stretch_limit) {
+        latch("tie stretch", net.body, static_cast<int>(n), stretch, stretch_limit, period, time_s);
+        breach = true;
+      }
+      continue;
+    }
     const IndexRange nodes =
         part
             ? IndexRange{part_of_range(net.node_begin, net.node_count, first, organ_slices_).begin,
@@ -259,7 +284,10 @@ bool DivergenceMonitor::observe(const core::Model& model, const core::Data& data
     held_energy += gravity - gravity0_;
     for (int n = 0; n < model.num_nets(); ++n) {
       const auto k = static_cast<std::size_t>(n);
-      if (!organ(model.nets[k])) {
+      if (measured) {
+        const core::NetOutput& out = data.nets[k];
+        net_energy_[k] = out.kinetic_energy + out.elastic_energy + out.gravity_energy;
+      } else if (!organ(model.nets[k])) {
         double net_gravity = 0.0;
         net_energy_[k] = net_energy(model, data, n, &net_gravity) + net_gravity;
       } else if (first < last) {

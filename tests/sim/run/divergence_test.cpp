@@ -15,7 +15,9 @@
 #include "build_features.hpp"
 #include "lean_scenes.hpp"
 #include "numen/core/data.hpp"
+#include "numen/core/net_forces.hpp"
 #include "numen/core/step.hpp"
+#include "numen/core/step_stages.hpp"
 #include "numen/sim/run/energy.hpp"
 #include "organ_indentation.hpp"
 
@@ -367,3 +369,44 @@ TEST(DivergenceMonitor, ObserveDoesNotAllocate) {
 }
 
 }  // namespace
+
+TEST(DivergenceMonitor, AStepsMeasuredStateIsJudgedFromItsNetOutputsAsNodeByNode) {
+  NUMEN_REQUIRE_DEFORMABLE();
+  // The tool pressed 3 mm into a flat organ with gravity, stepped: the monitor reads the nets'
+  // measures (NetOutput) where the step made them, and its figures are those of its own pass
+  // over the nodes and springs (the same state with kStageMeasureNets cleared).
+  Model m = flat_organ();
+  m.gravity = Vec3(0.0, 0.0, -9.81);
+  ASSERT_EQ(numen::core::finalize_model(m), "");
+  Data d = held_at_rest(m, 1);
+  const double pressed = m.bodies[1].bounding_radius - 0.003;  // the sphere's centre, the surface at z = 0
+  DivergenceMonitor measured(m, d), node_by_node(m, d);
+  std::int64_t allocations = 0;
+  for (int k = 0; k < 300; ++k) {
+    d.target.position.z() = std::max(d.target.position.z() - 1e-4, pressed);
+    numen::core::step(m, d);
+    ASSERT_NE(d.stages_run & numen::core::kStageMeasureNets, 0u);
+    Data by_hand = d;
+    by_hand.stages_run &= ~numen::core::kStageMeasureNets;
+    {
+      numen::test::AllocationGuard guard;
+      EXPECT_FALSE(measured.observe(m, d, k, k * m.dt));
+      allocations += guard.count();
+    }
+    EXPECT_FALSE(node_by_node.observe(m, by_hand, k, k * m.dt));
+  }
+  EXPECT_EQ(allocations, 0);
+  EXPECT_GT(d.num_node_contacts, 0) << "the tool is on the organ";
+  EXPECT_GT(node_by_node.energy_ratio_max(), 0.0);
+  EXPECT_NEAR(measured.energy_ratio_max(), node_by_node.energy_ratio_max(),
+              1e-12 * node_by_node.energy_ratio_max());
+  EXPECT_DOUBLE_EQ(measured.speed_ratio_max(), node_by_node.speed_ratio_max());
+  EXPECT_GT(node_by_node.stretch_ratio_max(), 0.0);
+  EXPECT_NEAR(measured.stretch_ratio_max(), node_by_node.stretch_ratio_max(),
+              1e-12 * node_by_node.stretch_ratio_max());
+  // A node torn from its anchor in a measured state: latched from NetOutput's largest stretch.
+  d.nodes[5].position.z() += 0.1;
+  numen::core::measure_nets(m, d);
+  EXPECT_TRUE(measured.observe(m, d, 300, 300 * m.dt));
+  EXPECT_EQ(std::string(measured.divergence().cause), "tie stretch");
+}

@@ -55,7 +55,9 @@ void integrate_nodes_implicit(const Model& model, Data& data) noexcept;
 
 /// End-of-step observables of every net into Data::nets (NetOutput):
 /// largest tie stretch |x − a| against the rigid component's end pose,
-/// largest structural strain, kinetic energy, largest node speed. Sets its bit
+/// largest structural strain, kinetic energy, largest node speed, the ties' and springs'
+/// elastic energy and gravity's potential energy (one pass over the springs in the sweep order,
+/// two at a time). Sets its bit
 /// of Data::stages_run (kStageMeasureNets, step_stages.hpp).
 void measure_nets(const Model& model, Data& data) noexcept;
 

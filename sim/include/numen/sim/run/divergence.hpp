@@ -85,8 +85,11 @@ double step_response_speed(const core::Model& model, const core::Data& data, int
                            const core::Twist& twist) noexcept;
 
 /// Per-period divergence monitor of one run. Construction allocates (setup); observe() never
-/// allocates, throws, locks or blocks, and costs O(bodies + nodes + springs) (O(bodies + the
-/// god-object's nets + (an organ's nodes + springs) / organ_slices()) in a multirate run).
+/// allocates, throws, locks or blocks, and costs O(bodies + nets) on a state whose step measured
+/// its nets (Data::stages_run has core::kStageMeasureNets: every core::step of a model with nets;
+/// the nets are judged from core::NetOutput), else O(bodies + nodes + springs) (O(bodies + the
+/// god-object's nets + (an organ's nodes + springs) / organ_slices()) in a multirate run's
+/// periods between scene samples).
 class DivergenceMonitor {
  public:
   /// Sizes the monitor for `model` and takes the scene's scale from `data` (the state at the
@@ -96,6 +99,10 @@ class DivergenceMonitor {
 
   /// Judges the state after period `period` (simulated time `time_s`). Returns true in the
   /// period of the first breach (then latched: later calls return false and change nothing).
+  /// Where `data.stages_run` has core::kStageMeasureNets, each net's node speeds, tie stretches
+  /// and energy are its NetOutput's (largest node speed, largest tie stretch, kinetic + elastic
+  /// + gravity energy): `data` must then be the state that step measured (a state changed by
+  /// hand after the step needs stages_run cleared of that bit).
   /// `organs_unchanged`: the nodes of the organs (nets on anchored bodies) are those of the last
   /// call (a multirate run's view between two scene samples, MultirateRun::took_model()), so
   /// that a device period does not pay O(nodes + springs) for a state the scene loop has not
