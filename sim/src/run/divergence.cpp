@@ -36,7 +36,6 @@ DivergenceMonitor::DivergenceMonitor(const core::Model& model, const core::Data&
       net_radius_m_(model.nets.size(), 0.0),
       base_stretch_m_(model.nets.size(), 0.0),
       net_energy_(model.nets.size(), 0.0),
-      organ_energy_sum_(model.nets.size(), 0.0),
       prev_bodies_(data.bodies),
       prev_targets_(data.bodies.size()),
       prev_coupled_(data.bodies.size(), 0) {
@@ -209,71 +208,43 @@ bool DivergenceMonitor::observe(const core::Model& model, const core::Data& data
     }
   }
   // ---- nodes: speeds and ties ----
-  // An organ's new state is judged in organ_slices_ parts, one a call (set_organ_slices()):
-  // this call judges its parts [first, last). A new state before the last one's parts are done
-  // (or the first call) is judged whole.
   // A state whose step measured its nets (core::measure_nets(): NetOutput's largest node speed
-  // and tie stretch, its energies) is judged from those, O(nets); one the run changed by hand
-  // or a view without its scene step's measures, node by node.
+  // and tie stretch, its energies) is judged from those, O(nets); any other node by node,
+  // except the organs (nets on anchored bodies) of a state the caller says they are unchanged
+  // in (organs_unchanged: a multirate run's device periods between two scene samples), which
+  // keep the last judgement.
   const bool measured = (data.stages_run & core::kStageMeasureNets) != 0;
-  int first = organ_slice_, last = std::min(organ_slice_ + 1, organ_slices_);
-  if (measured) {
-    first = 0;
-    last = organ_slices_;
-  } else if (!organs_unchanged || !net_energy_taken_) {
-    first = 0;
-    last = organ_slice_ < organ_slices_ || !net_energy_taken_ ? organ_slices_ : 1;
-  }
-  organ_slice_ = last;
+  const bool skip_organs = !measured && organs_unchanged && net_energy_taken_;
   const auto organ = [&](const core::NetModel& net) {
     return model.bodies[static_cast<std::size_t>(net.body)].anchored;
   };
   for (std::size_t n = 0; n < model.nets.size() && !breach; ++n) {
     const core::NetModel& net = model.nets[n];
-    const bool part = organ(net);
-    if (part && first >= last) continue;
+    if (skip_organs && organ(net)) continue;
     const core::BodyState& body = data.bodies[static_cast<std::size_t>(net.body)];
     const double stretch_limit =
         limits_.stretch_factor * net_radius_m_[n] + 2.0 * base_stretch_m_[n];
-    if (measured) {
-      const core::NetOutput& out = data.nets[n];
-      const double v = out.max_node_speed;
-      speed_ratio_max_ = std::max(speed_ratio_max_, v / speed_limit);
-      if (v > speed_limit) {
-        latch("node speed", net.body, static_cast<int>(n), v, speed_limit, period, time_s);
-        breach = true;
-        break;
+    const auto judge = [&](double speed, double stretch) {
+      speed_ratio_max_ = std::max(speed_ratio_max_, speed / speed_limit);
+      if (speed > speed_limit) {
+        latch("node speed", net.body, static_cast<int>(n), speed, speed_limit, period, time_s);
+        return true;
       }
-      const double stretch = out.max_tie_stretch;
       if (stretch_limit > 0.0) stretch_ratio_max_ = std::max(stretch_ratio_max_, stretch / stretch_limit);
       if (stretch_limit > 0.0 && stretch > stretch_limit) {
         latch("tie stretch", net.body, static_cast<int>(n), stretch, stretch_limit, period, time_s);
-        breach = true;
+        return true;
       }
+      return false;
+    };
+    if (measured) {
+      breach = judge(data.nets[n].max_node_speed, data.nets[n].max_tie_stretch);
       continue;
     }
-    const IndexRange nodes =
-        part
-            ? IndexRange{part_of_range(net.node_begin, net.node_count, first, organ_slices_).begin,
-                         part_of_range(net.node_begin, net.node_count, last - 1, organ_slices_).end}
-            : IndexRange{net.node_begin, net.node_begin + net.node_count};
-    for (int i = nodes.begin; i < nodes.end; ++i) {
+    for (int i = net.node_begin; i < net.node_begin + net.node_count && !breach; ++i) {
       const auto k = static_cast<std::size_t>(i);
-      const double v = data.nodes[k].velocity.norm();
-      speed_ratio_max_ = std::max(speed_ratio_max_, v / speed_limit);
-      if (v > speed_limit) {
-        latch("node speed", net.body, static_cast<int>(n), v, speed_limit, period, time_s);
-        breach = true;
-        break;
-      }
       const Vec3 anchor = body.position + body.orientation * model.node_rest[k];
-      const double stretch = (data.nodes[k].position - anchor).norm();
-      if (stretch_limit > 0.0) stretch_ratio_max_ = std::max(stretch_ratio_max_, stretch / stretch_limit);
-      if (stretch_limit > 0.0 && stretch > stretch_limit) {
-        latch("tie stretch", net.body, static_cast<int>(n), stretch, stretch_limit, period, time_s);
-        breach = true;
-        break;
-      }
+      breach = judge(data.nodes[k].velocity.norm(), (data.nodes[k].position - anchor).norm());
     }
   }
   if (springs && !breach) {
@@ -287,17 +258,9 @@ bool DivergenceMonitor::observe(const core::Model& model, const core::Data& data
       if (measured) {
         const core::NetOutput& out = data.nets[k];
         net_energy_[k] = out.kinetic_energy + out.elastic_energy + out.gravity_energy;
-      } else if (!organ(model.nets[k])) {
+      } else if (!skip_organs || !organ(model.nets[k])) {
         double net_gravity = 0.0;
         net_energy_[k] = net_energy(model, data, n, &net_gravity) + net_gravity;
-      } else if (first < last) {
-        if (first == 0) organ_energy_sum_[k] = 0.0;
-        for (int p = first; p < last; ++p) {
-          double net_gravity = 0.0;
-          organ_energy_sum_[k] +=
-              net_energy_part(model, data, n, p, organ_slices_, &net_gravity) + net_gravity;
-        }
-        if (last == organ_slices_) net_energy_[k] = organ_energy_sum_[k];  // judged whole
       }
       held_energy += net_energy_[k];
     }

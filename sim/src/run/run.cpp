@@ -155,10 +155,7 @@ SceneRunner::SceneRunner(const Scene& scene, std::size_t trace_capacity, const B
           std::max<std::int64_t>(1, std::llround(kStartupSettle / scene.model.dt))),
       divergence_(scene.model, data_) {
   if (multirate_.enabled()) loop_.set_step_function(&SceneRunner::step_multirate, this);
-  // The organs change at the scene samples only: their O(nodes + springs) judged over half the
-  // device periods of a scene period (DivergenceMonitor::set_organ_slices()).
   if (multirate_.enabled() && scene.multirate) {
-    divergence_.set_organ_slices(scene.multirate->ratio / 2);
     ghost_every_ = std::max<std::int64_t>(1, std::llround(1e-3 / scene.model.dt));
   }
   explicit_bound_ = platform::explicitly_bound_bodies(scene.binding, scene.model.num_bodies());
