@@ -15,7 +15,6 @@
 #include "numen/core/step_stages.hpp"
 
 #include "detail/data_scratch.hpp"
-#include "detail/implicit_system.hpp"
 #include "detail/net_solve.hpp"
 #include "detail/net_surface.hpp"
 
@@ -57,6 +56,7 @@ struct SpringPass {
 /// sum (symmetric, upper triangle) and the right-hand side.
 struct NodeSums {
   Vec3 force = Vec3::Zero();
+  double energy = 0.0;  ///< Σ k (l − L)² (twice the springs' elastic energy, J).
   Vec3 rhs = Vec3::Zero();
   double w00 = 0.0, w01 = 0.0, w02 = 0.0, w11 = 0.0, w12 = 0.0, w22 = 0.0;
 };
@@ -99,7 +99,9 @@ inline void one_spring(const SpringPass& a, std::int32_t j, const Vec3& xk, cons
   const Vec3 n(a.dir_x[j], a.dir_y[j], a.dir_z[j]);
   const Vec3 dv = a.nodes[hi].velocity - vk;
   const double n_dv = n.dot(dv);
-  const Vec3 f = (a.stiffness[j] * (l - rest) + a.damping[j] * n_dv) * n;
+  const double stretch = l - rest;
+  sum.energy += a.stiffness[j] * stretch * stretch;
+  const Vec3 f = (a.stiffness[j] * stretch + a.damping[j] * n_dv) * n;
   sum.force += f;
   a.force[hi] -= f;
 }
@@ -221,17 +223,16 @@ SpringPass spring_arrays(Data& data, double h) noexcept {
 /// their earlier node k in Model::node_sweep_order, whose sums stay in
 /// registers), two springs of a node at a time (the same law as
 /// one_spring(), lane by lane: the same operations and roundings): forces,
-/// and the directions and lengths linearization_pass() starts from. With
-/// `kLinearize`, the same pass also linearises each spring over a.h as
-/// linearization_pass() would from what it stored (linearize_pair(): bit-identical, one pass
-/// over the springs and the nodes' states instead of two). Expects force = gravity + ties on
-/// entry, and with `kLinearize` spring_block = 0 and rhs = 0.
-template <bool kLinearize>
-void spring_pass(const Model& model, Data& data, double h) noexcept {
+/// and the directions and lengths linearization_pass() starts from; adds the springs' elastic
+/// energy to their net's NetOutput::start_energy. Expects force = gravity + ties on entry.
+/// (Linearising in the same pass was measured and not kept: docs/net-solver.md.)
+void spring_pass(const Model& model, Data& data) noexcept {
   const NetScratch& s = data.scratch->net;
-  const SpringPass a = spring_arrays(data, h);
+  const SpringPass a = spring_arrays(data, 0.0);
   const std::int32_t* low_begin = s.spring_low_begin.data();
   const std::int32_t* order = model.node_sweep_order.data();
+  const int* node_net = model.node_net.data();
+  NetOutput* out = data.nets.data();
   const std::size_t n = data.nodes.size();
   for (std::size_t p = 0; p < n; ++p) {
     const auto k = static_cast<std::size_t>(order[p]);
@@ -242,7 +243,7 @@ void spring_pass(const Model& model, Data& data, double h) noexcept {
     const Pair vx = Pair::Constant(vk.x()), vy = Pair::Constant(vk.y()),
                vz = Pair::Constant(vk.z());
     Pair fx = Pair::Zero(), fy = Pair::Zero(), fz = Pair::Zero();
-    PairSums lin;
+    Pair energy = Pair::Zero();  // Σ k (l − L)² of the node's springs
     std::int32_t j = low_begin[p];
     const std::int32_t end = low_begin[p + 1];
     for (; j + 1 < end; j += 2) {
@@ -274,28 +275,21 @@ void spring_pass(const Model& model, Data& data, double h) noexcept {
       const Pair dvz = Pair(n0.velocity.z(), n1.velocity.z()) - vz;
       const Pair n_dv = nx * dvx + ny * dvy + nz * dvz;
       const Pair stiffness = load_pair(a.stiffness + j), damping = load_pair(a.damping + j);
-      const Pair fs = stiffness * (l - rest) + damping * n_dv;
+      const Pair stretch = l - rest;
+      energy += stiffness * stretch * stretch;
+      const Pair fs = stiffness * stretch + damping * n_dv;
       const Pair gx = fs * nx, gy = fs * ny, gz = fs * nz;
       fx += gx;
       fy += gy;
       fz += gz;
       a.force[h0] -= Vec3(gx(0), gy(0), gz(0));
       a.force[h1] -= Vec3(gx(1), gy(1), gz(1));
-      if constexpr (kLinearize)
-        linearize_pair(a, j, h0, h1, inv_l, nx, ny, nz, dvx, dvy, dvz, n_dv, lin);
     }
     NodeSums sum;
-    if constexpr (kLinearize) lin.add_to(sum);
     sum.force = Vec3(fx(0) + fx(1), fy(0) + fy(1), fz(0) + fz(1));
-    if (j < end) {
-      one_spring(a, j, xk, vk, sum);
-      if constexpr (kLinearize) one_spring_linearization(a, j, vk, sum);
-    }
+    if (j < end) one_spring(a, j, xk, vk, sum);
     a.force[k] += sum.force;
-    if constexpr (kLinearize) {
-      a.rhs[k] += sum.rhs;
-      add_symmetric(a.spring_block[k], sum.w00, sum.w01, sum.w02, sum.w11, sum.w12, sum.w22);
-    }
+    out[node_net[k]].start_energy += 0.5 * (energy(0) + energy(1) + sum.energy);
   }
 }
 
@@ -345,22 +339,6 @@ void linearization_pass(const Model& model, Data& data, double h) noexcept {
 
 }  // namespace
 
-namespace {
-
-/// h_s of the one linearisation a step of this model makes at its start (the linearly implicit
-/// Euler: h; the trapezoidal rule: h/2), for compute_net_forces() to linearise the springs in
-/// its pass; 0 where the nets are not solved implicitly or the integrator linearises more than
-/// once a step (TR-BDF2: a second time at its stage's end).
-double fused_linearization_step(const Model& model) noexcept {
-  if (!(model.stage_plan & kStageNetSolve)) return 0.0;
-  if (model.integrator != Integrator::kLinearlyImplicitEuler &&
-      model.integrator != Integrator::kTrapezoidal)
-    return 0.0;
-  return linearized_system_step(model);
-}
-
-}  // namespace
-
 void compute_net_forces(const Model& model, Data& data) noexcept {
   if (model.nets.empty()) return;
   data.stages_run |= kStageNetForces;  // the stage report (step_stages.hpp)
@@ -380,6 +358,8 @@ void compute_net_forces(const Model& model, Data& data) noexcept {
     const BodyState& body = data.bodies[bi];
     const Mat3 rot = body.orientation.toRotationMatrix();
     Wrench reaction;
+    double twice_kinetic = 0.0, tie2 = 0.0;  // Σ m |v|², Σ |x − a|²
+    Vec3 mass_moment = Vec3::Zero();         // Σ m x
     for (int v = net.node_begin; v < net.node_begin + net.node_count; ++v) {
       const auto i = static_cast<std::size_t>(v);
       const Vec3 lever = rot * rest[i];
@@ -387,30 +367,25 @@ void compute_net_forces(const Model& model, Data& data) noexcept {
       const Vec3 anchor = body.position + lever;
       const Vec3 anchor_velocity = body.linear_velocity + body.angular_velocity.cross(lever);
       const Vec3 dv = nodes[i].velocity - anchor_velocity;
-      const Vec3 f = -net.tie_stiffness * (nodes[i].position - anchor) - net.tie_damping * dv;
+      const Vec3 stretch = nodes[i].position - anchor;
+      const Vec3 f = -net.tie_stiffness * stretch - net.tie_damping * dv;
       force[i] = mass[i] * model.gravity + f;
       reaction.force -= f;
       reaction.torque -= lever.cross(f);
+      twice_kinetic += mass[i] * nodes[i].velocity.squaredNorm();
+      tie2 += stretch.squaredNorm();
+      mass_moment += mass[i] * nodes[i].position;
     }
+    // The springs' part is added by spring_pass().
+    data.nets[k].start_energy = 0.5 * twice_kinetic + 0.5 * net.tie_stiffness * tie2 -
+                                model.gravity.dot(mass_moment);
     data.body_wrench[bi].force += reaction.force;
     data.body_wrench[bi].torque += reaction.torque;
     data.nets[k].tie_wrench = reaction;
   }
 
-  // Structural and bending springs. A model stepped by a one-stage linearised integrator
-  // linearises them over h_s in the same pass (linearize_nets() then skips its own:
-  // NetScratch::springs_linearized_for).
-  const double fused_step = fused_linearization_step(model);
-  if (fused_step > 0.0) {
-    for (std::size_t i = 0; i < data.nodes.size(); ++i) {
-      s.spring_block[i] = SymmetricBlock{};
-      s.rhs[i].setZero();
-    }
-    spring_pass<true>(model, data, fused_step);
-  } else {
-    spring_pass<false>(model, data, 0.0);
-  }
-  s.springs_linearized_for = fused_step;
+  // Structural and bending springs.
+  spring_pass(model, data);
 
   // Node contacts (penalty law of contact_force.hpp, the node on side a). A triangle contact's
   // share (NodeContact::face) takes the law at the triangle's point, Σ w_m v_m, and keeps its
@@ -539,7 +514,6 @@ void linearize_nets(const Model& model, Data& data, double system_step) noexcept
   const Vec3* lever_in = s.lever.data();
   Vec3* rhs = s.rhs.data();
   SymmetricBlock* spring_block = s.spring_block.data();
-  const bool fused = s.springs_linearized_for == system_step;
   for (std::size_t k = 0; k < model.nets.size(); ++k) {
     const NetModel& net = model.nets[k];
     const BodyState& body = data.bodies[static_cast<std::size_t>(net.body)];
@@ -551,10 +525,8 @@ void linearize_nets(const Model& model, Data& data, double system_step) noexcept
       const Vec3 lever = lever_in[i];
       const Vec3 anchor_velocity = body.linear_velocity + body.angular_velocity.cross(lever);
       const Vec3 dv = nodes[i].velocity - anchor_velocity;
-      if (!fused) {
-        spring_block[i] = SymmetricBlock{};
-        rhs[i].setZero();
-      }
+      spring_block[i] = SymmetricBlock{};
+      rhs[i].setZero();
       sum_r += lever;
       rr00 += lever.x() * lever.x();
       rr01 += lever.x() * lever.y();
@@ -570,10 +542,8 @@ void linearize_nets(const Model& model, Data& data, double system_step) noexcept
     t.lever_moment << rr00, rr01, rr02, rr01, rr11, rr12, rr02, rr12, rr22;
     t.relative << sum_dv, sum_r_dv;
   }
-  // The springs' weights, their sums per node and their part of the node rows' b (made by the
-  // forces' pass already where it linearised over this h_s).
-  if (!fused) linearization_pass(model, data, system_step);
-  s.springs_linearized_for = 0.0;
+  // The springs' weights, their sums per node and their part of the node rows' b.
+  linearization_pass(model, data, system_step);
 }
 
 void integrate_nodes_symplectic(const Model& model, Data& data) noexcept {
@@ -596,65 +566,6 @@ void integrate_nodes_implicit(const Model& model, Data& data) noexcept {
   }
 }
 
-namespace {
-
-/// A net's springs at the step's end: Σ ½ k (l − L)² over all, and the largest and smallest
-/// l²/L² of the structural ones (1 without any).
-struct SpringMeasures {
-  double energy = 0.0;
-  double ratio2_max = 1.0;
-  double ratio2_min = 1.0;
-};
-
-/// The springs of `net` in the sweep order, two at a time (NetScratch::sweep_springs: the
-/// constants' arrays read in order, as the forces' pass reads them). A NaN length is kept in
-/// the energy and the largest ratio.
-SpringMeasures measure_springs(const Model& model, const Data& data, const NetModel& net) noexcept {
-  const NetScratch& s = data.scratch->net;
-  const NodeState* nodes = data.nodes.data();
-  const std::int32_t* order = model.node_sweep_order.data();
-  const std::int32_t* low_begin = s.spring_low_begin.data();
-  const std::int32_t* high = s.sweep_springs.high.data();
-  const double* rest_length = s.spring_constants.rest_length.data();
-  const double* stiffness = s.spring_constants.stiffness.data();
-  const double* structural = s.spring_constants.structural.data();
-  Pair energy = Pair::Zero(), r2_max = Pair::Ones(), r2_min = Pair::Ones();
-  const auto add = [&](const Pair& l2, const Pair& rest, const Pair& k, const Pair& is_structural) {
-    const Pair stretch = l2.sqrt() - rest;
-    energy += 0.5 * k * stretch * stretch;
-    const Pair r2 = (is_structural > 0.0).select(l2 / (rest * rest), Pair::Ones());
-    r2_max = r2_max.max(r2);
-    r2_min = r2_min.min(r2);
-  };
-  for (int p = net.node_begin; p < net.node_begin + net.node_count; ++p) {
-    const Vec3& xk = nodes[order[p]].position;
-    std::int32_t j = low_begin[p];
-    const std::int32_t end = low_begin[p + 1];
-    for (; j + 1 < end; j += 2) {
-      const Vec3& x0 = nodes[high[j]].position;
-      const Vec3& x1 = nodes[high[j + 1]].position;
-      const Pair dx = Pair(x0.x(), x1.x()) - xk.x();
-      const Pair dy = Pair(x0.y(), x1.y()) - xk.y();
-      const Pair dz = Pair(x0.z(), x1.z()) - xk.z();
-      add(dx * dx + dy * dy + dz * dz, load_pair(rest_length + j), load_pair(stiffness + j),
-          load_pair(structural + j));
-    }
-    if (j < end) {  // the node's odd spring out, in lane 0 (lane 1: a spring at rest, not structural)
-      const double l2 = (nodes[high[j]].position - xk).squaredNorm();
-      add(Pair(l2, 1.0), Pair(rest_length[j], 1.0), Pair(stiffness[j], 0.0),
-          Pair(structural[j], 0.0));
-    }
-  }
-  SpringMeasures m;
-  m.energy = energy(0) + energy(1);
-  m.ratio2_max = std::max(r2_max(0), r2_max(1));
-  m.ratio2_min = std::min(r2_min(0), r2_min(1));
-  if (std::isnan(m.energy)) m.ratio2_max = m.energy;  // a NaN met is kept (raise_max)
-  return m;
-}
-
-}  // namespace
-
 void measure_nets(const Model& model, Data& data) noexcept {
   data.stages_run |= kStageMeasureNets;  // the stage report (step_stages.hpp)
   for (std::size_t k = 0; k < model.nets.size(); ++k) {
@@ -665,31 +576,33 @@ void measure_nets(const Model& model, Data& data) noexcept {
     double stretch2 = 0.0;
     double speed2 = 0.0;
     double kinetic = 0.0;
-    double tie2 = 0.0;      // Σ |x − a|²
-    Vec3 mass_moment = Vec3::Zero();  // Σ m x
     for (int v = net.node_begin; v < net.node_begin + net.node_count; ++v) {
       const auto i = static_cast<std::size_t>(v);
       const NodeState& st = data.nodes[i];
       const Vec3 anchor = body.position + rot * model.node_rest[i];
-      const double s2 = (st.position - anchor).squaredNorm();
-      raise_max(stretch2, s2);
-      tie2 += s2;
+      raise_max(stretch2, (st.position - anchor).squaredNorm());
       const double v2 = st.velocity.squaredNorm();
       raise_max(speed2, v2);
       kinetic += 0.5 * model.node_mass[i] * v2;
-      mass_moment += model.node_mass[i] * st.position;
     }
     // |l − L| / L = |√(l²/L²) − 1| is largest at the largest or the smallest
-    // l²/L²: one square root per net, not per spring (the energy takes one per spring).
-    const SpringMeasures springs = measure_springs(model, data, net);
+    // l²/L²: one square root per net, not per spring.
+    double ratio2_max = 1.0;
+    double ratio2_min = 1.0;
+    for (int e = net.spring_begin; e < net.spring_begin + net.structural_count; ++e) {
+      const NetSpring& sp = model.net_springs[static_cast<std::size_t>(e)];
+      const double l2 = (data.nodes[static_cast<std::size_t>(sp.node_b)].position -
+                         data.nodes[static_cast<std::size_t>(sp.node_a)].position)
+                            .squaredNorm();
+      const double ratio2 = l2 / (sp.rest_length * sp.rest_length);
+      raise_max(ratio2_max, ratio2);
+      if (ratio2 < ratio2_min) ratio2_min = ratio2;
+    }
     out.max_tie_stretch = std::sqrt(stretch2);
     out.max_node_speed = std::sqrt(speed2);
     out.kinetic_energy = kinetic;
-    out.elastic_energy = 0.5 * net.tie_stiffness * tie2 + springs.energy;
-    out.gravity_energy = -model.gravity.dot(mass_moment);
-    out.max_strain =
-        std::max(std::sqrt(springs.ratio2_max) - 1.0, 1.0 - std::sqrt(springs.ratio2_min));
-    if (std::isnan(springs.ratio2_max)) out.max_strain = springs.ratio2_max;  // a NaN met is kept
+    out.max_strain = std::max(std::sqrt(ratio2_max) - 1.0, 1.0 - std::sqrt(ratio2_min));
+    if (std::isnan(ratio2_max)) out.max_strain = ratio2_max;  // a NaN met is kept (raise_max)
   }
 }
 

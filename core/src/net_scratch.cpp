@@ -56,7 +56,6 @@ void NetScratch::resize(const Model& model) {
   spring_constants.rest_length.assign(num_springs, 0.0);
   spring_constants.stiffness.assign(num_springs, 0.0);
   spring_constants.damping.assign(num_springs, 0.0);
-  spring_constants.structural.assign(num_springs, 0.0);
   spring_length.assign(num_springs, 0.0);
   spring_low_begin.assign(n > 0 ? n + 1 : 0, 0);
   spring_slot.assign(num_springs, 0);
@@ -78,9 +77,6 @@ void NetScratch::resize(const Model& model) {
       spring_constants.stiffness[j] = sp.stiffness;
       spring_constants.damping[j] = sp.damping;
     }
-    for (const NetModel& net : model.nets)
-      for (int e = net.spring_begin; e < net.spring_begin + net.structural_count; ++e)
-        spring_constants.structural[static_cast<std::size_t>(spring_slot[static_cast<std::size_t>(e)])] = 1.0;
   }
   const auto no = n > 0 ? model.obstacles.size() : 0;
   near_obstacles.assign(no, 0);

@@ -248,45 +248,37 @@ TEST(NetForces, SpringBlockAndTieSumsMatchTheirDefinitions) {
   EXPECT_GT(sum_r_dv.norm(), 1e-4);  // the perturbed velocities make every sum non-trivial
 }
 
-TEST(NetForces, TheForcesPassLinearisesTheSpringsAsTheSeparatePassWould) {
-  // A one-stage linearised integrator: compute_forces() linearises the springs over h_s in its
-  // own pass, and linearize_nets() over that h_s keeps it; the separate pass over the same state
-  // gives the same weights, blocks and right-hand side to the bit.
+TEST(NetForces, TheForcesStageGivesTheNetsEnergyAtTheStepsStart) {
+  // NetOutput::start_energy: ½ m |v|² + ½ k_tie |x − a|² over the nodes + ½ k (l − L)² over
+  // every spring (bending ones included) − Σ m g · x, from the forces stage's own terms (an
+  // odd spring out per node included: the icosphere's nodes have 5 or 6 springs of each kind).
   const core::Model m = scene(core::make_icosphere(0.04, 1));
-  ASSERT_EQ(m.integrator, core::Integrator::kLinearlyImplicitEuler);
   core::Data d = core::make_data(m);
-  numen::test::perturb_nodes(d, 3e-3, 0.2);
-  const core::NetSpring& zero = m.net_springs[0];
-  d.nodes[at(zero.node_b)].position = d.nodes[at(zero.node_a)].position;  // a spring of zero length
-  const double h = core::linearized_system_step(m);
-  core::compute_forces(m, d);
-  const core::NetScratch& s = d.scratch->net;
-  EXPECT_EQ(s.springs_linearized_for, h);
-  core::linearize_nets(m, d, h);
-  EXPECT_EQ(s.springs_linearized_for, 0.0) << "taken by linearize_nets()";
-  const std::vector<double> alpha = s.sweep_springs.weight_axial, beta = s.sweep_springs.weight_isotropic;
-  const std::vector<core::SymmetricBlock> blocks = s.spring_block;
-  const std::vector<Vec3> rhs = s.rhs;
-  core::linearize_nets(m, d, h);  // not made by the forces' pass this time: the pass of its own
-  ASSERT_GT(alpha.size(), 0u);
-  for (std::size_t j = 0; j < alpha.size(); ++j) {
-    EXPECT_EQ(s.sweep_springs.weight_axial[j], alpha[j]) << j;
-    EXPECT_EQ(s.sweep_springs.weight_isotropic[j], beta[j]) << j;
+  numen::test::perturb_nodes(d, 2e-3, 0.2);
+  const core::BodyState& b = d.bodies[0];
+  const core::NetModel& net = m.nets[0];
+  double kinetic = 0.0, elastic = 0.0, gravity = 0.0;
+  for (std::size_t i = 0; i < d.nodes.size(); ++i) {
+    const Vec3 a = b.position + b.orientation * m.node_rest[i];
+    kinetic += 0.5 * m.node_mass[i] * d.nodes[i].velocity.squaredNorm();
+    elastic += 0.5 * net.tie_stiffness * (d.nodes[i].position - a).squaredNorm();
+    gravity -= m.node_mass[i] * m.gravity.dot(d.nodes[i].position);
   }
-  double rhs_scale = 0.0;
-  for (std::size_t i = 0; i < rhs.size(); ++i) {
-    for (int c = 0; c < 6; ++c) EXPECT_EQ(s.spring_block[i].entry[c], blocks[i].entry[c]) << i;
-    EXPECT_EQ(s.rhs[i], rhs[i]) << i;
-    rhs_scale = std::max(rhs_scale, rhs[i].norm());
+  double springs = 0.0;
+  for (int e = 0; e < net.structural_count + net.bending_count; ++e) {
+    const core::NetSpring& s = m.net_springs[at(e)];
+    const double l = (d.nodes[at(s.node_b)].position - d.nodes[at(s.node_a)].position).norm();
+    springs += 0.5 * s.stiffness * (l - s.rest_length) * (l - s.rest_length);
   }
-  EXPECT_GT(rhs_scale, 0.0);
-  // TR-BDF2 linearises twice a step: its forces' pass leaves the springs to linearize_nets().
-  core::Model tr = m;
-  tr.integrator = core::Integrator::kTrBdf2;
-  ASSERT_EQ(core::finalize_model(tr), "");
-  core::Data e = core::make_data(tr);
-  core::compute_forces(tr, e);
-  EXPECT_EQ(e.scratch->net.springs_linearized_for, 0.0);
+  EXPECT_GT(kinetic, 0.0);
+  EXPECT_GT(springs, 0.0);
+  const double total = kinetic + elastic + springs + gravity;
+  forces(m, d);
+  EXPECT_NEAR(d.nets[0].start_energy, total, 1e-13 * (kinetic + elastic + springs + std::abs(gravity)));
+  // A NaN node is kept.
+  d.nodes[7].position.x() = std::numeric_limits<double>::quiet_NaN();
+  forces(m, d);
+  EXPECT_TRUE(std::isnan(d.nets[0].start_energy));
 }
 
 TEST(NetForces, AtRestOnTheRigidComponentOnlyGravityActs) {
@@ -572,22 +564,6 @@ TEST(NetForces, MeasureNetsObservables) {
   EXPECT_NEAR(d.nets[0].max_node_speed, speed, 1e-15);
   EXPECT_NEAR(d.nets[0].kinetic_energy, ke, 1e-15);
   EXPECT_NEAR(d.nets[0].max_strain, strain, 1e-14);  // structural springs only
-  // The energies: ½ k_tie |x − a|² over the nodes + ½ k (l − L)² over every spring (bending
-  // ones included), and −Σ m g · x.
-  double elastic = 0.0, gravity = 0.0;
-  for (std::size_t i = 0; i < d.nodes.size(); ++i) {
-    const Vec3 a = b.position + b.orientation * m.node_rest[i];
-    elastic += 0.5 * net.tie_stiffness * (d.nodes[i].position - a).squaredNorm();
-    gravity -= m.node_mass[i] * m.gravity.dot(d.nodes[i].position);
-  }
-  for (int e = 0; e < net.structural_count + net.bending_count; ++e) {
-    const core::NetSpring& s = m.net_springs[at(e)];
-    const double l = (d.nodes[at(s.node_b)].position - d.nodes[at(s.node_a)].position).norm();
-    elastic += 0.5 * s.stiffness * (l - s.rest_length) * (l - s.rest_length);
-  }
-  EXPECT_GT(elastic, 0.0);
-  EXPECT_NEAR(d.nets[0].elastic_energy, elastic, 1e-13 * elastic);
-  EXPECT_NEAR(d.nets[0].gravity_energy, gravity, 1e-13 * std::abs(gravity));
   // The strain is bounded by the ties: |l − L| ≤ |x_a − a_a| + |x_b − a_b|.
   double min_rest = 1.0;
   for (int e = 0; e < net.structural_count; ++e) min_rest = std::min(min_rest, m.net_springs[at(e)].rest_length);
@@ -606,8 +582,6 @@ TEST(NetForces, MeasureNetsDoesNotReportANonFiniteNetAsCalm) {
   EXPECT_TRUE(std::isnan(d.nets[0].max_node_speed));
   EXPECT_TRUE(std::isnan(d.nets[0].kinetic_energy));
   EXPECT_TRUE(std::isnan(d.nets[0].max_strain));
-  EXPECT_TRUE(std::isnan(d.nets[0].elastic_energy));
-  EXPECT_TRUE(std::isnan(d.nets[0].gravity_energy));
   // The first node too (the running maximum starts at 0).
   core::Data d0 = core::make_data(m);
   d0.nodes[0].position.z() = std::numeric_limits<double>::quiet_NaN();

@@ -61,9 +61,6 @@ struct SweepSpringConstants {
   std::vector<double> rest_length;  ///< L (m).
   std::vector<double> stiffness;    ///< k (N/m).
   std::vector<double> damping;      ///< γ (N·s/m).
-  /// 1 for a structural spring (NetModel::structural_count: its strain is measured), 0 for a
-  /// bending one.
-  std::vector<double> structural;
 };
 
 /// A node's part of the SSOR sweeps (net_solve.hpp), stored by sweep
@@ -140,10 +137,6 @@ struct NetScratch {
   SweepSprings sweep_springs;
   SweepSpringConstants spring_constants;  ///< Sweep order (fixed, resize()).
   std::vector<double> spring_length;  ///< l at the step's start (m), sweep order.
-  /// h_s over which compute_net_forces() linearised the springs in its own pass this step
-  /// (the weights, spring_block and the springs' part of rhs: what linearize_nets() makes), 0
-  /// when it did not; linearize_nets() over the same h_s skips that pass, and clears it.
-  double springs_linearized_for = 0.0;
   std::vector<std::int32_t> spring_low_begin;  ///< Per position, size num_nodes + 1 (fixed topology, resize()).
   std::vector<std::int32_t> spring_slot;       ///< Per Model::net_springs: its index in sweep_springs.
   // Collision stage (detect_node_contacts(), net_collision.hpp), rebuilt per

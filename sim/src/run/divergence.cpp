@@ -209,7 +209,8 @@ bool DivergenceMonitor::observe(const core::Model& model, const core::Data& data
   }
   // ---- nodes: speeds and ties ----
   // A state whose step measured its nets (core::measure_nets(): NetOutput's largest node speed
-  // and tie stretch, its energies) is judged from those, O(nets); any other node by node,
+  // and tie stretch; the energy the forces stage found at the step's start, one step behind) is
+  // judged from those, O(nets); any other node by node,
   // except the organs (nets on anchored bodies) of a state the caller says they are unchanged
   // in (organs_unchanged: a multirate run's device periods between two scene samples), which
   // keep the last judgement.
@@ -257,7 +258,7 @@ bool DivergenceMonitor::observe(const core::Model& model, const core::Data& data
       const auto k = static_cast<std::size_t>(n);
       if (measured) {
         const core::NetOutput& out = data.nets[k];
-        net_energy_[k] = out.kinetic_energy + out.elastic_energy + out.gravity_energy;
+        net_energy_[k] = out.start_energy;  // the energy of the state the step started from
       } else if (!skip_organs || !organ(model.nets[k])) {
         double net_gravity = 0.0;
         net_energy_[k] = net_energy(model, data, n, &net_gravity) + net_gravity;

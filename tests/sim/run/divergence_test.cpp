@@ -315,7 +315,7 @@ TEST(DivergenceMonitor, AStepsMeasuredStateIsJudgedFromItsNetOutputsAsNodeByNode
   NUMEN_REQUIRE_DEFORMABLE();
   // The tool pressed 3 mm into a flat organ with gravity, stepped: the monitor reads the nets'
   // measures (NetOutput) where the step made them, and its figures are those of its own pass
-  // over the nodes and springs (the same state with kStageMeasureNets cleared).
+  // over the nodes and springs (the same state with kStageMeasureNets cleared). No allocation.
   Model m = flat_organ();
   m.gravity = Vec3(0.0, 0.0, -9.81);
   ASSERT_EQ(numen::core::finalize_model(m), "");
@@ -338,9 +338,11 @@ TEST(DivergenceMonitor, AStepsMeasuredStateIsJudgedFromItsNetOutputsAsNodeByNode
   }
   EXPECT_EQ(allocations, 0);
   EXPECT_GT(d.num_node_contacts, 0) << "the tool is on the organ";
+  // The energy: the measured state's is the forces stage's at the step's start, one step
+  // behind; pressed and then held for 120 steps, the largest ratios agree to 1e-3.
   EXPECT_GT(node_by_node.energy_ratio_max(), 0.0);
   EXPECT_NEAR(measured.energy_ratio_max(), node_by_node.energy_ratio_max(),
-              1e-12 * node_by_node.energy_ratio_max());
+              1e-3 * node_by_node.energy_ratio_max());
   EXPECT_DOUBLE_EQ(measured.speed_ratio_max(), node_by_node.speed_ratio_max());
   EXPECT_GT(node_by_node.stretch_ratio_max(), 0.0);
   EXPECT_NEAR(measured.stretch_ratio_max(), node_by_node.stretch_ratio_max(),

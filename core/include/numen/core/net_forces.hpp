@@ -26,7 +26,8 @@ struct Data;
 /// from: spring directions (SweepSpring; a spring of zero length keeps its last
 /// direction) and lengths (NetScratch::spring_length), lever arms ρ = R_b r
 /// (NetScratch::lever), and each NodeContact's r_b, normal_velocity, active
-/// and force. Independent of the integrator: it reads no h_s.
+/// and force, and each net's energy at the step's start (NetOutput::start_energy, from the
+/// same lengths and tie stretches). Independent of the integrator: it reads no h_s.
 /// Call after compute_contact_forces() (body_wrench is reset by
 /// apply_external_forces()) and after detect_node_contacts(). Nothing to do
 /// without nets; with nets it sets its bit of Data::stages_run (kStageNetForces,
@@ -55,9 +56,7 @@ void integrate_nodes_implicit(const Model& model, Data& data) noexcept;
 
 /// End-of-step observables of every net into Data::nets (NetOutput):
 /// largest tie stretch |x − a| against the rigid component's end pose,
-/// largest structural strain, kinetic energy, largest node speed, the ties' and springs'
-/// elastic energy and gravity's potential energy (one pass over the springs in the sweep order,
-/// two at a time). Sets its bit
+/// largest structural strain, kinetic energy, largest node speed. Sets its bit
 /// of Data::stages_run (kStageMeasureNets, step_stages.hpp).
 void measure_nets(const Model& model, Data& data) noexcept;
 

@@ -98,10 +98,11 @@ class DivergenceMonitor {
 
   /// Judges the state after period `period` (simulated time `time_s`). Returns true in the
   /// period of the first breach (then latched: later calls return false and change nothing).
-  /// Where `data.stages_run` has core::kStageMeasureNets, each net's node speeds, tie stretches
-  /// and energy are its NetOutput's (largest node speed, largest tie stretch, kinetic + elastic
-  /// + gravity energy): `data` must then be the state that step measured (a state changed by
-  /// hand after the step needs stages_run cleared of that bit).
+  /// Where `data.stages_run` has core::kStageMeasureNets, each net's node speeds and tie
+  /// stretches are its NetOutput's largest (at the step's end) and its energy NetOutput's
+  /// start_energy (the forces stage's, at the step's start: the energy bound one step behind for
+  /// the nets): `data` must then be the state that step made (a state changed by hand after the
+  /// step needs stages_run cleared of that bit).
   /// `organs_unchanged`: the nodes of the organs (nets on anchored bodies) are those of the last
   /// call (a multirate run's view between two scene samples, whose Data carries no step's
   /// measures: MultirateRun::took_model()), so that a device period does not pay
