@@ -130,7 +130,7 @@ numen_install_headers(${PROJECT_SOURCE_DIR}/sim/include
   numen/sim/device/admittance_hand.hpp numen/sim/device/axis_plant.hpp
   numen/sim/device/device_process.hpp numen/sim/device/hand.hpp numen/sim/device/plant_motion.hpp
   numen/sim/device/sdo_session.hpp numen/sim/device/simulated_instrument.hpp
-  numen/sim/device/trajectory_motion.hpp
+  numen/sim/device/trajectory_motion.hpp numen/sim/device/instrument_targets.hpp
   numen/sim/run/admittance_run.hpp numen/sim/run/divergence.hpp numen/sim/run/energy.hpp
   numen/sim/run/multirate_run.hpp numen/sim/run/run.hpp numen/sim/run/run_figures.hpp
   numen/sim/run/run_options.hpp numen/sim/run/run_summary.hpp numen/sim/run/run_verdict.hpp

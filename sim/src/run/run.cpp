@@ -121,7 +121,7 @@ hal::CandumpWriterSettings recorder_settings(bool paced) noexcept {
 
 SceneRunner::SceneRunner(const Scene& scene, std::size_t trace_capacity, const BusChoice& bus,
                          bool realtime, std::uint32_t overrun_limit)
-    : scene_(&scene),
+    : scene_((require_runnable(scene), &scene)),
       spec_(parse_bus_spec(bus.spec)),
       bus_(scene.bus),
       real_bus_(spec_.real() ? open_real_bus(spec_, controller_filters(scene.device)) : nullptr),
@@ -451,6 +451,7 @@ RunSummary run_impedance_scene(const Scene& scene, const RunOptions& options) {
 }  // namespace
 
 RunSummary run_scene(const Scene& scene, const RunOptions& options) {
+  require_runnable(scene);  // a scene loaded to be stepped by its caller may lack both
   check_run_options(scene, options);  // every refusal before any output is opened
   RunSummary s = scene.admittance ? run_admittance_scene(scene, options)  // admittance_run.cpp
                                   : run_impedance_scene(scene, options);
