@@ -135,7 +135,7 @@ numen_install_headers(${PROJECT_SOURCE_DIR}/sim/include
   numen/sim/device/device_process.hpp numen/sim/device/hand.hpp
   numen/sim/device/igtl_replay.hpp numen/sim/device/plant_motion.hpp
   numen/sim/device/sdo_session.hpp numen/sim/device/simulated_instrument.hpp
-  numen/sim/device/trajectory_motion.hpp
+  numen/sim/device/trajectory_motion.hpp numen/sim/device/instrument_targets.hpp
   numen/sim/run/admittance_run.hpp numen/sim/run/divergence.hpp numen/sim/run/igtl_run.hpp
   numen/sim/run/energy.hpp
   numen/sim/run/multirate_run.hpp numen/sim/run/run.hpp numen/sim/run/run_figures.hpp

@@ -6,9 +6,11 @@ hand's pose) go into the organ and the tissue (docs/python.md).
     PYTHONPATH=build/sim/python /usr/bin/python3 examples/python_step.py \
         --out docs/figures/python_step_depth.png
 
-Two Data of the lattice scene are stepped with the same scripted target: the device target of
-the attached body is the scene trajectory's pose and twist at each step (no bus, no device
-kinematics; numen.run_scene runs the full control loop). One is the scene as it is (god-object
+Two Data of the lattice scene are stepped with the same targets: each step, Data.set_targets_at
+turns the scene trajectory's sample (the instrument's tip and jaw) into every body's target as
+`numen run` does from the encoders (the held tube's centre of mass 40 mm behind the tip, the
+sleeve at the trocar, the jaws imposed), without the bus (numen.run_scene runs the full control
+loop). One is the scene as it is (god-object
 coupling: springs pull the tool toward the target, contacts keep it out of the obstacles); the
 other is loaded with coupling "direct", which imposes the target pose on the attached body: it
 goes where the hand goes, through the obstacles. Depth is Data.max_penetration, the deepest
@@ -27,9 +29,7 @@ import numen  # noqa: E402
 
 
 def scripted_step(scene, data):
-    position, orientation, _jaw = scene.target_at(data.time)
-    linear, angular = scene.target_twist_at(data.time)
-    data.set_target(position, orientation, linear, angular)
+    data.set_targets_at(data.time)
     data.step(scene)
 
 
@@ -59,7 +59,7 @@ def main():
     ax.set_xlabel("time (s)")
     ax.set_ylabel("deepest contact (mm)")
     ax.set_title(f"numen from Python: scene '{tool_scene.name}', {steps} steps of "
-                 f"{tool_scene.dt * 1e3:g} ms, scripted target")
+                 f"{tool_scene.dt * 1e3:g} ms, targets set_targets_at")
     ax.grid(True, alpha=0.3)
     ax.legend()
     fig.tight_layout()

@@ -136,6 +136,7 @@ void reset_data(const Model& model, Data& data) noexcept {
   data.status = kStepOk;
   data.stages_run = 0;
   data.nonfinite_steps = 0;
+  data.invalid_target_steps = 0;
 }
 
 }  // namespace numen::core

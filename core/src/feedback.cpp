@@ -49,14 +49,17 @@ Wrench carry_wrench(const Wrench& w, const Vec3& from, const Vec3& to) noexcept 
 
 void compute_feedback(const Model& model, Data& data) noexcept {
   data.stages_run |= kStageFeedback;  // the stage report (step_stages.hpp)
+  const int a = data.attached_body;
+  const bool held = a >= 0 && a < model.num_bodies();
+  const bool spring = model.coupling_mode != CouplingMode::kDirect &&
+                      model.coupling_mode != CouplingMode::kAdmittance;
+  // The held body's target is not finite (kInvalidTarget, apply_coupling()): the device keeps
+  // the last step's wrench rather than a step to zero and back in the hand (docs/safety.md).
+  if (spring && held && !target_is_finite(data.target, data.target_twist)) return;
   data.feedback_wrench = Wrench{};
   for (Wrench& w : data.body_feedback) w = Wrench{};
-  if (model.coupling_mode == CouplingMode::kDirect ||
-      model.coupling_mode == CouplingMode::kAdmittance)
-    return;  // no spring to feed back: the device is position controlled (admittance)
-  const int a = data.attached_body;
-  const bool attached = a >= 0 && a < model.num_bodies() &&
-                        target_is_finite(data.target, data.target_twist);
+  if (!spring) return;  // no spring to feed back: the device is position controlled (admittance)
+  const bool attached = held;
   const Vec3 ref = attached ? data.target.position : Vec3::Zero();
   Wrench total;
   bool any = false;

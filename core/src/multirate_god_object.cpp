@@ -617,10 +617,12 @@ void MultirateGodObject::view(Data& out) const noexcept {
   out.coupling_wrench = Wrench{};
   out.device_wrench = Wrench{};
   out.feedback_wrench = Wrench{};
+  out.invalid_target_steps = 0;  // only the device loop's steps take the device targets
   for (const Slot& s : slots_) {
     out.contact_overflow_steps += s.device.contact_overflow_steps;
     out.contact_clamped_steps += s.device.contact_clamped_steps;
     out.nonfinite_steps += s.device.nonfinite_steps;
+    out.invalid_target_steps += s.device.invalid_target_steps;
   }
   if (slot_ >= 0) {
     const Slot& s = slot();

@@ -44,14 +44,7 @@ void apply_coupled(const Model& model, const Data& data, std::span<const Vec6> i
   const std::int32_t* order = model.node_sweep_order.data();
   for (std::size_t p = 0; p < in_n.size(); ++p) {
     const auto k = static_cast<std::size_t>(order[p]);
-    Vec3 acc = Vec3::Zero();
-    for (std::int32_t j = sp.low_begin[p]; j < sp.low_begin[p + 1]; ++j) {
-      const auto hi = static_cast<std::size_t>(sp.high[j]);
-      const Vec3 w = spring_times(sp, j, x[k] - x[hi]);
-      acc += w;
-      y[hi] -= w;
-    }
-    y[k] += acc;
+    y[k] += spring_differences(sp, sp.low_begin[p], sp.low_begin[p + 1], x[k], x, y);
   }
   const double h = data.scratch->solver.system_step;  // h_s of the linearised system (integrator.hpp)
   for (const NetModel& net : model.nets) {

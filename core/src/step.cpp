@@ -124,8 +124,9 @@ void run_step(const Model& model, Data& data, ContactWriter write, const void* c
   if constexpr (kWithDeformable) {
     if (plan & kStageMeasureNets) measure_nets(model, data);  // sets its bit
   }
-  compute_feedback(model, data);  // sets its bit
+  compute_feedback(model, data);  // sets its bit; holds the last feedback on an invalid target
   const bool accepted = check_finite(data);  // sets its bit
+  if (data.status & kInvalidTarget) ++data.invalid_target_steps;
   if constexpr (kWithDeformable) {
     if (!accepted && (plan & kStageMeasureNets)) {
       for (NetOutput& o : data.nets) o.tie_wrench = Wrench{};

@@ -1,20 +1,29 @@
 /// @file scene_step.cpp
-/// Loads a numen scene and steps its core directly with a scripted target: the attached
-/// tool's target moves on a straight line (20 mm along −z of the world in 0.5 s, then holds),
-/// without the scene's recorded trajectory, device or bus. Every 100 steps it prints the
-/// tool's pose (m, unit quaternion w x y z; world) and the device feedback wrench (N, N·m;
-/// world), and at the end the deepest contact (m).
+/// Loads a numen scene to step it from this program (SceneOverrides::caller_steps: a scene
+/// without [trajectory] or [device], such as the shipped probe.toml, loads) and steps its core
+/// directly with a custom target: the target of the held body's centre of mass (Data::target,
+/// world; not the instrument's tool frame of the scene's trajectory) moves on a straight line,
+/// 20 mm along −z of the world in 0.5 s, then holds, without the scene's trajectory, device or
+/// bus. Every 100 steps it prints the held body's pose (m, unit quaternion w x y z; world) and
+/// the device feedback wrench (N, N·m; world), and at the end the deepest contact (m) with the
+/// obstacle (or body) it touches and the steps whose target was invalid. For a scene with a
+/// trajectory it first prints how far the trajectory's sample (the tool frame: a trocar
+/// instrument's tip) is from the held body's target that sample gives (sim::InstrumentTargets,
+/// what `numen run` sets from the encoders).
 ///
 ///   scene_step [SCENE.toml] [--steps N]     default: the installed default scene, 1000 steps
 ///
 /// Exit status: 0, or 1 when the scene is refused (its located message on stderr).
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
 
 #include "numen/core/data.hpp"
 #include "numen/core/step.hpp"
+#include "numen/sim/device/instrument_targets.hpp"
 #include "numen/sim/input/input_error.hpp"
 #include "numen/sim/scene/scene.hpp"
 #include "numen/version.hpp"
@@ -33,7 +42,9 @@ int main(int argc, char** argv) {
 
   numen::sim::Scene scene;
   try {
-    scene = numen::sim::load_scene(path);
+    numen::sim::SceneOverrides overrides;
+    overrides.caller_steps = true;  // this program sets the targets: no trajectory needed
+    scene = numen::sim::load_scene(path, overrides);
   } catch (const numen::sim::InputError& e) {
     std::fprintf(stderr, "scene_step: %s\n", e.what());
     return 1;
@@ -46,6 +57,17 @@ int main(int argc, char** argv) {
   }
   std::printf("numen %s, scene '%s', dt %g s, %d bodies\n", NUMEN_VERSION, scene.name.c_str(),
               model.dt, model.num_bodies());
+  for (const std::string& w : scene.warnings) std::printf("warning: %s\n", w.c_str());
+  if (scene.has_trajectory) {  // the trajectory's frame is not the held body's
+    numen::core::Data probe = numen::core::make_data(model);
+    const numen::sim::TrajectorySample tip = scene.trajectory.at(0.0);
+    numen::sim::InstrumentTargets(scene).set(tip, probe);
+    const double angle = 2.0 * std::acos(std::min(1.0, std::abs(tip.pose.orientation.dot(
+                                                           probe.target.orientation))));
+    std::printf("trajectory sample at 0 s (tool frame) to the held body's target: %.1f mm, "
+                "%.1f deg\n", (tip.pose.position - probe.target.position).norm() * 1e3,
+                angle * 180.0 / 3.14159265358979323846);
+  }
 
   // The scripted target: from the tool's initial pose, 20 mm down in 0.5 s, then held.
   const int tool = data.attached_body;
@@ -71,5 +93,16 @@ int main(int argc, char** argv) {
     }
   }
   std::printf("max penetration %.6f m\n", data.max_penetration);
+  int deepest = -1;
+  for (int c = 0; c < data.num_contacts; ++c)
+    if (deepest < 0 || data.contacts[c].depth > data.contacts[deepest].depth) deepest = c;
+  if (deepest >= 0) {
+    const numen::core::Contact& c = data.contacts[deepest];
+    const std::string on = c.body_b >= 0 ? "body '" + model.bodies[c.body_b].name + "'"
+                                         : "obstacle '" + model.obstacles[c.obstacle].name + "'";
+    std::printf("deepest contact %.6f m: body '%s' on %s\n", c.depth,
+                model.bodies[c.body_a].name.c_str(), on.c_str());
+  }
+  std::printf("invalid target steps %lld\n", static_cast<long long>(data.invalid_target_steps));
   return 0;
 }

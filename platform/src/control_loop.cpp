@@ -99,21 +99,13 @@ void ControlLoop::apply_targets(const hal::DeviceSample& sample) noexcept {
   core::Data& d = *data_;
   for (std::size_t k = 0; k < binding_.links.size(); ++k) {
     const LinkBinding& b = binding_.links[k];
-    const int body = bound_body(b, d, explicit_bound_);
-    bound_body_[k] = body;
-    const core::Pose& link = sample.link_targets[static_cast<std::size_t>(b.link)];
-    core::Pose pose;
-    core::Twist twist;
-    body_target_of(b, link, sample.link_twists[static_cast<std::size_t>(b.link)], pose, twist);
-    link_origin_[k] = link.position;
-    body_target_[k] = pose.position;
-    if (body >= 0) set_body_target(d, body, pose, twist);
+    const auto l = static_cast<std::size_t>(b.link);
+    link_origin_[k] = sample.link_targets[l].position;
+    bound_body_[k] = apply_link_target(b, sample.link_targets[l], sample.link_twists[l], d,
+                                       explicit_bound_, &body_target_[k]);
   }
-  for (const AxisPrescription& p : binding_.prescriptions) {
-    core::JointPrescription& jp = d.joint_prescribed[static_cast<std::size_t>(p.joint)];
-    jp.value = p.scale * sample.q(p.axis) + p.offset;
-    jp.rate = p.scale * sample.qdot(p.axis);
-  }
+  for (const AxisPrescription& p : binding_.prescriptions)
+    apply_prescription(p, sample.q(p.axis), sample.qdot(p.axis), d);
 }
 
 void ControlLoop::gather_link_wrenches() noexcept {

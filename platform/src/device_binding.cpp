@@ -49,4 +49,22 @@ void set_body_target(core::Data& d, int body, const core::Pose& pose, const core
   t.enabled = true;
 }
 
+int apply_link_target(const LinkBinding& b, const core::Pose& link, const core::Twist& link_twist,
+                      core::Data& d, std::span<const std::uint8_t> explicit_bound,
+                      core::Vec3* body_point) noexcept {
+  const int body = bound_body(b, d, explicit_bound);
+  core::Pose pose;
+  core::Twist twist;
+  body_target_of(b, link, link_twist, pose, twist);
+  if (body_point != nullptr) *body_point = pose.position;
+  if (body >= 0) set_body_target(d, body, pose, twist);
+  return body;
+}
+
+void apply_prescription(const AxisPrescription& p, double q, double qdot, core::Data& d) noexcept {
+  core::JointPrescription& jp = d.joint_prescribed[static_cast<std::size_t>(p.joint)];
+  jp.value = p.scale * q + p.offset;
+  jp.rate = p.scale * qdot;
+}
+
 }  // namespace numen::platform

@@ -7,10 +7,12 @@
 
 #include <pybind11/pybind11.h>
 
+#include <filesystem>
 #include <memory>
 
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"
+#include "numen/sim/device/instrument_targets.hpp"
 #include "numen/sim/scene/scene.hpp"
 
 namespace numen::python {
@@ -22,7 +24,19 @@ struct DataHandle {
   std::shared_ptr<const sim::Scene> scene;  ///< Owner of *model.
   const core::Model* model = nullptr;       ///< The model `data` was made for.
   core::Data data;
+  /// The scene's device and binding (sim::InstrumentTargets), made by the first
+  /// Data.set_targets_at() or Data.set_tool_sample().
+  std::unique_ptr<sim::InstrumentTargets> instrument;
 };
+
+/// The located error of the scene's missing `part` ("trajectory" or "device": one of
+/// Scene::run_missing) when the scene has none, to be thrown; nullptr when it has one.
+const sim::InputError* missing_part(const sim::Scene& scene, const char* part);
+
+/// The root of the shipped scenes and data as this module sees it: share/numen of the prefix it
+/// is installed in (NUMEN_DATA_FROM_MODULE from its directory), else the executable's or the
+/// source tree's (sim::shipped_data_dir_from()).
+std::filesystem::path module_data_dir();
 
 /// numen.InputError, load_scene, default_scene_path, Scene, Model.
 void bind_scene(pybind11::module_& m);

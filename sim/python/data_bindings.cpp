@@ -3,16 +3,24 @@
 /// numen._testing.step_loop (the same scripted loop in C++, for the tests and the benchmark).
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <cstdio>
+#include <initializer_list>
+#include <memory>
 #include <stdexcept>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "bindings.hpp"
 #include "numen/core/step.hpp"
+#include "numen/platform/device_binding.hpp"
 
 namespace py = pybind11;
 
@@ -117,6 +125,108 @@ void read_vector(const py::handle& arg, double* out, py::ssize_t n, const char* 
   for (py::ssize_t i = 0; i < n; ++i) out[i] = a.at(i);
 }
 
+/// Number of the arguments given (not None) among `args`.
+int given(std::initializer_list<const py::handle*> args) {
+  int n = 0;
+  for (const py::handle* a : args) n += a->is_none() ? 0 : 1;
+  return n;
+}
+
+/// A quaternion argument of the Python API (docs/python.md "Quaternions"): exactly one of
+/// `positional` (numen's Python order x, y, z, w), `xyzw` or `wxyz` (by name). A positional one
+/// whose first component is above 1/√2 of its norm is refused: read in the scene files' order
+/// (w, x, y, z) it would be a turn of less than 90°, in (x, y, z, w) one of more than 90° about
+/// an axis near x ([1, 0, 0, 0] meant as the identity turns a probe by 180°). Values are taken
+/// as given otherwise (a zero or non-finite quaternion makes the step flag an invalid target).
+core::Quat read_quaternion(const py::handle& positional, const py::handle& xyzw,
+                           const py::handle& wxyz, const std::string& what) {
+  const int n = given({&positional, &xyzw, &wxyz});
+  if (n != 1)
+    throw py::value_error(what + ": give the orientation once, " +
+                          (n == 0 ? std::string("as ") : std::string("either ")) +
+                          "xyzw=(x, y, z, w) or wxyz=(w, x, y, z) (docs/python.md \"Quaternions\")");
+  double c[4];
+  core::Quat q;
+  if (!wxyz.is_none()) {
+    read_vector(wxyz, c, 4, (what + " wxyz").c_str());
+    q = core::Quat(c[0], c[1], c[2], c[3]);  // Eigen's constructor takes w, x, y, z
+    return q;
+  }
+  read_vector(xyzw.is_none() ? positional : xyzw, q.coeffs().data(), 4, (what + " xyzw").c_str());
+  const double norm = q.coeffs().norm();
+  if (xyzw.is_none() && std::abs(q.x()) > norm / std::sqrt(2.0)) {
+    const auto turn_deg = [norm](double w) {
+      return 2.0 * std::acos(std::min(1.0, std::abs(w) / norm)) * 180.0 / 3.14159265358979323846;
+    };
+    char text[400];
+    std::snprintf(text, sizeof text,
+                  "%s (%g, %g, %g, %g) given without a name is ambiguous: read as (x, y, z, w), "
+                  "numen's Python order, it turns by %.1f°; read as (w, x, y, z), the scene files' "
+                  "order, by %.1f°. Pass it by name: xyzw=... or wxyz=... (docs/python.md "
+                  "\"Quaternions\")",
+                  what.c_str(), q.x(), q.y(), q.z(), q.w(), turn_deg(q.w()), turn_deg(q.x()));
+    throw py::value_error(text);
+  }
+  return q;
+}
+
+/// A body argument: its index or its name (Model.body_names); ValueError otherwise.
+int body_arg(const core::Model& model, const py::handle& body) {
+  if (py::isinstance<py::str>(body)) {
+    const std::string name = body.cast<std::string>();
+    for (int b = 0; b < model.num_bodies(); ++b)
+      if (model.bodies[static_cast<std::size_t>(b)].name == name) return b;
+    throw py::value_error("no body named '" + name + "' (Model.body_names)");
+  }
+  const int b = body.cast<int>();
+  if (b < 0 || b >= model.num_bodies())
+    throw py::value_error("body " + std::to_string(b) + " out of range [0, " +
+                          std::to_string(model.num_bodies()) + ")");
+  return b;
+}
+
+/// A prescribed joint argument: its index or its name (Model.joint_names); ValueError for
+/// another joint or none.
+int prescribed_joint_arg(const core::Model& model, const py::handle& joint) {
+  int j = -1;
+  if (py::isinstance<py::str>(joint)) {
+    const std::string name = joint.cast<std::string>();
+    for (int k = 0; k < model.num_joints() && j < 0; ++k)
+      if (model.joints[static_cast<std::size_t>(k)].name == name) j = k;
+    if (j < 0) throw py::value_error("no joint named '" + name + "' (Model.joint_names)");
+  } else {
+    j = joint.cast<int>();
+    if (j < 0 || j >= model.num_joints())
+      throw py::value_error("joint " + std::to_string(j) + " out of range [0, " +
+                            std::to_string(model.num_joints()) + ")");
+  }
+  const core::JointModel& jm = model.joints[static_cast<std::size_t>(j)];
+  if (!jm.prescribed)
+    throw py::value_error("joint '" + jm.name + "' is not prescribed (scene key `prescribed`): "
+                          "the solve sets its coordinate");
+  return j;
+}
+
+/// The target pose and twist of the set_*target methods (position (3,), the orientation by
+/// read_quaternion(), optional velocities (3,), zero by default).
+void read_target(const py::handle& position, const py::handle& orientation,
+                 const py::handle& xyzw, const py::handle& wxyz,
+                 const py::handle& linear_velocity, const py::handle& angular_velocity,
+                 core::Pose& pose, core::Twist& twist) {
+  read_vector(position, pose.position.data(), 3, "position");
+  pose.orientation = read_quaternion(orientation, xyzw, wxyz, "orientation");
+  twist = core::Twist{};
+  if (!linear_velocity.is_none()) read_vector(linear_velocity, twist.linear.data(), 3, "linear_velocity");
+  if (!angular_velocity.is_none())
+    read_vector(angular_velocity, twist.angular.data(), 3, "angular_velocity");
+}
+
+/// The DataHandle's sim::InstrumentTargets, made on first use.
+const sim::InstrumentTargets& instrument_of(DataHandle& h) {
+  if (!h.instrument) h.instrument = std::make_unique<sim::InstrumentTargets>(*h.scene);
+  return *h.instrument;
+}
+
 /// The scripted loop of the tests and of the benchmark (docs/python.md), in C++: `steps` times,
 /// target := the scene trajectory's pose and twist at data.time, then core::step. Returns
 /// copies of the end state, the wall time of the loop and the summed time of the step calls
@@ -195,25 +305,129 @@ void bind_data(py::module_& m) {
       .def(
           "set_target",
           [](DataHandle& h, const py::handle& position, const py::handle& orientation,
-             const py::handle& linear_velocity, const py::handle& angular_velocity) {
+             const py::handle& linear_velocity, const py::handle& angular_velocity,
+             const py::handle& xyzw, const py::handle& wxyz) {
+            if (h.data.attached_body < 0)
+              throw py::value_error("set_target: no body is held (attached_body is -1): the "
+                                    "target would drive nothing; set data.attached_body first");
             core::Pose pose;
             core::Twist twist;
-            read_vector(position, pose.position.data(), 3, "position");
-            read_vector(orientation, pose.orientation.coeffs().data(), 4, "orientation");
-            if (!linear_velocity.is_none())
-              read_vector(linear_velocity, twist.linear.data(), 3, "linear_velocity");
-            if (!angular_velocity.is_none())
-              read_vector(angular_velocity, twist.angular.data(), 3, "angular_velocity");
+            read_target(position, orientation, xyzw, wxyz, linear_velocity, angular_velocity,
+                        pose, twist);
             h.data.target = pose;
             h.data.target_twist = twist;
           },
-          py::arg("position"), py::arg("orientation"), py::arg("linear_velocity") = py::none(),
-          py::arg("angular_velocity") = py::none(),
-          "Sets the device target of the attached body's COM frame (Data::target, "
-          "target_twist; world): position (3,) m, orientation (4,) unit quaternion (x, y, z, "
-          "w), linear velocity (3,) m/s and angular velocity (3,) rad/s (default zero). Values "
-          "are taken as given (a non-finite target makes the next step skip the coupling and set "
-          "STATUS_INVALID_TARGET). ValueError for a wrong length.")
+          py::arg("position"), py::arg("orientation") = py::none(),
+          py::arg("linear_velocity") = py::none(), py::arg("angular_velocity") = py::none(),
+          py::kw_only(), py::arg("xyzw") = py::none(), py::arg("wxyz") = py::none(),
+          "Sets the device target of the held body's centre-of-mass frame (Data::target, "
+          "target_twist; world) — not the instrument's tool frame that Scene.target_at gives "
+          "(set_targets_at / set_tool_sample turn that into this target): position (3,) m, the "
+          "orientation once, as a unit quaternion: `orientation` (x, y, z, w), or by name "
+          "xyzw=(x, y, z, w) or wxyz=(w, x, y, z) (the scene files' order); a positional one "
+          "whose x is above 1/√2 of its norm is refused as ambiguous (docs/python.md "
+          "\"Quaternions\"); linear velocity (3,) m/s and angular velocity (3,) rad/s (default "
+          "zero). Values are taken as given: a non-finite target makes the next step skip the "
+          "coupling, hold the feedback, set STATUS_INVALID_TARGET and count "
+          "invalid_target_steps. ValueError for a wrong length, an orientation given twice, "
+          "none or ambiguous, or no held body (attached_body -1).")
+      .def(
+          "set_body_target",
+          [](DataHandle& h, const py::handle& body, const py::handle& position,
+             const py::handle& linear_velocity, const py::handle& angular_velocity,
+             const py::handle& xyzw, const py::handle& wxyz) {
+            const int b = body_arg(*h.model, body);
+            core::Pose pose;
+            core::Twist twist;
+            read_target(position, py::none(), xyzw, wxyz, linear_velocity, angular_velocity,
+                        pose, twist);
+            platform::set_body_target(h.data, b, pose, twist);
+          },
+          py::arg("body"), py::arg("position"), py::arg("linear_velocity") = py::none(),
+          py::arg("angular_velocity") = py::none(), py::kw_only(), py::arg("xyzw") = py::none(),
+          py::arg("wxyz") = py::none(),
+          "Sets body `body`'s own coupling target (paper Eq. 6; index or name of "
+          "Model.body_names): its centre-of-mass frame's pose, position (3,) m and orientation "
+          "by name, xyzw=(x, y, z, w) or wxyz=(w, x, y, z), and twist (m/s, rad/s; default "
+          "zero), world. The held body's is Data::target (as set_target); any other's is its "
+          "enabled Data::body_targets entry: its spring acts and its Eq. 8 wrench joins the "
+          "feedback (carried to the held body's target point) until clear_body_target.")
+      .def(
+          "clear_body_target",
+          [](DataHandle& h, const py::handle& body) {
+            const int b = body_arg(*h.model, body);
+            h.data.body_targets[static_cast<std::size_t>(b)] = core::BodyTarget{};
+          },
+          py::arg("body"),
+          "Disables body `body`'s own target (Data::body_targets): left to the simulation (the "
+          "held body's Data::target is not affected).")
+      .def_property_readonly(
+          "body_targets_enabled",
+          [](const DataHandle& h) {
+            std::vector<bool> on;
+            for (const core::BodyTarget& t : h.data.body_targets) on.push_back(t.enabled);
+            return on;
+          },
+          "Per body (list of bool, a copy): its own target is enabled (Data::body_targets).")
+      .def(
+          "set_joint_prescribed",
+          [](DataHandle& h, const py::handle& joint, double value, double rate) {
+            const int j = prescribed_joint_arg(*h.model, joint);
+            h.data.joint_prescribed[static_cast<std::size_t>(j)] = core::JointPrescription{value, rate};
+          },
+          py::arg("joint"), py::arg("value"), py::arg("rate") = 0.0,
+          "Imposes prescribed joint `joint`'s coordinate (index or name of Model.joint_names; "
+          "the scene's `prescribed` joints, e.g. the default scene's jaw hinges): value (rad "
+          "for a revolute, m for a prismatic) and rate (per s); the step aims at value + dt · "
+          "rate (Data::joint_prescribed). ValueError for a joint that is not prescribed.")
+      .def_property_readonly(
+          "joint_prescribed",
+          [](const DataHandle& h) {
+            py::array_t<double> rows({static_cast<py::ssize_t>(h.data.joint_prescribed.size()),
+                                      py::ssize_t{2}});
+            for (std::size_t j = 0; j < h.data.joint_prescribed.size(); ++j) {
+              rows.mutable_at(static_cast<py::ssize_t>(j), 0) = h.data.joint_prescribed[j].value;
+              rows.mutable_at(static_cast<py::ssize_t>(j), 1) = h.data.joint_prescribed[j].rate;
+            }
+            return rows;
+          },
+          "(J, 2) copy: per joint, the imposed (value, rate) of Data::joint_prescribed (read "
+          "for prescribed joints only).")
+      .def(
+          "set_targets_at",
+          [](DataHandle& h, std::optional<double> t) {
+            if (const sim::InputError* e = missing_part(*h.scene, "trajectory")) throw *e;
+            instrument_of(h).set_at(h.scene->trajectory, t ? *t : h.data.time, h.data);
+          },
+          py::arg("t") = py::none(),
+          "Sets every target the scene's device drives from its trajectory at time t (s; "
+          "None: data.time), as `numen run`'s control loop does from the encoders "
+          "(sim::InstrumentTargets): the trajectory's sample (the instrument's tool frame, "
+          "Scene.target_at: the tip and the jaw) goes through the device's kinematics (the "
+          "trocar, tool_offset) to the links, each linked body's target is its link's pose · "
+          "link_offset (the held body's Data::target, the others' body targets) and each "
+          "prescribed joint gets its axis (the jaw); the rates are the difference to the "
+          "sample a trajectory period later. Raises InputError for a scene without "
+          "[trajectory].")
+      .def(
+          "set_tool_sample",
+          [](DataHandle& h, const py::handle& position, const py::handle& xyzw,
+             const py::handle& wxyz, double jaw) {
+            sim::TrajectorySample s;
+            read_vector(position, s.pose.position.data(), 3, "position");
+            s.pose.orientation = read_quaternion(py::none(), xyzw, wxyz, "orientation");
+            s.jaw = jaw;
+            instrument_of(h).set(s, h.data);
+          },
+          py::arg("position"), py::kw_only(), py::arg("xyzw") = py::none(),
+          py::arg("wxyz") = py::none(), py::arg("jaw") = 0.0,
+          "Sets every target the scene's device drives from one instrument sample, as "
+          "set_targets_at does from the trajectory's: the world pose of the instrument's tool "
+          "frame (trocar instrument: the tip, z along the shaft; pose tracker: the tracked "
+          "frame), position (3,) m and orientation by name, xyzw=(x, y, z, w) or "
+          "wxyz=(w, x, y, z), and the jaw opening (rad). The targets are at rest (zero "
+          "rates). A scene without [device] has the identity pose tracker: the sample is the "
+          "held body's centre-of-mass target.")
       .def_property(
           "attached_body", [](const DataHandle& h) { return h.data.attached_body; },
           [](DataHandle& h, int body) { core::set_attached_body(*h.model, h.data, body); },
@@ -227,6 +441,10 @@ void bind_data(py::module_& m) {
       .def_property_readonly("nonfinite_steps",
                              [](const DataHandle& h) { return h.data.nonfinite_steps; },
                              "Steps whose result was rejected as non-finite (rolled back).")
+      .def_property_readonly(
+          "invalid_target_steps", [](const DataHandle& h) { return h.data.invalid_target_steps; },
+          "Steps since reset whose device target was not finite (STATUS_INVALID_TARGET): "
+          "coupling skipped, feedback held at its last value (docs/safety.md).")
       .def_property_readonly("num_contacts", [](const DataHandle& h) { return h.data.num_contacts; },
                              "Contacts C of the last step.")
       .def_property_readonly("max_penetration",
@@ -317,7 +535,18 @@ void bind_data(py::module_& m) {
                         {static_cast<py::ssize_t>(sizeof(core::Contact)),
                          byte_offset(&d.contacts[0].body_a, &d.contacts[0].body_b)});
           },
-          "View (C, 2) int of (body_a, body_b) per contact; body_b -1: a static obstacle.")
+          "View (C, 2) int of (body_a, body_b) per contact: body_a receives +force; body_b the "
+          "other body (-force), or -1 when body_a touches a static obstacle (then "
+          "contact_obstacles names it).")
+      .def_property_readonly(
+          "contact_obstacles",
+          [](py::object self) {
+            const core::Data& d = handle(self).data;
+            return view(self, &d.contacts[0].obstacle, {static_cast<py::ssize_t>(d.num_contacts)},
+                        {static_cast<py::ssize_t>(sizeof(core::Contact))});
+          },
+          "View (C,) int per contact: the static obstacle's index (row of "
+          "Model.obstacle_names) where body_b is -1, else -1 (core::Contact::obstacle).")
       // The nets' node contacts (core::NodeContact, net_state.hpp): a node sphere's contact, or
       // one node's share of a surface triangle's contact (docs/organs.md "Surface contacts").
       .def_property_readonly(

@@ -103,6 +103,7 @@ void bind_run(py::module_& m) {
          const std::vector<std::string>& integrators, int grid_steps) {
         sim::StabilityOptions options;
         options.quick = quick;
+        options.scene_dir = (module_data_dir() / "scenes").string();  // the module's prefix's
         for (const std::string& f : families)
           check_member("family", f, sim::stability_family_names());
         options.families = families;
@@ -118,7 +119,7 @@ void bind_run(py::module_& m) {
       py::arg("quick") = true, py::arg("families") = std::vector<std::string>{},
       py::arg("integrators") = std::vector<std::string>{}, py::arg("grid_steps") = -1,
       "The stability study (`numen study stability`, docs/results.md): stiff and extreme runs, "
-      "a verdict each. quick: coarse grids, short runs (seconds); families: subset of "
+      "a verdict each, on the shipped scenes beside default_scene_path(). quick: coarse grids, short runs (seconds); families: subset of "
       "'coupling', 'contact', 'articulation', 'extreme', 'boundary', 'scenes' (empty: all); "
       "integrators: scene-file names (empty: all); grid_steps: steps per grid run (<= 0: the "
       "study's). Returns one dict per run: family, case, integrator, dt_s, mass_kg, stiffness "
@@ -132,6 +133,7 @@ void bind_run(py::module_& m) {
          const std::vector<std::string>& integrators) {
         sim::AccuracyOptions options;
         options.quick = quick;
+        options.scene_dir = (module_data_dir() / "scenes").string();  // the module's prefix's
         for (const std::string& c : cases) check_member("case", c, sim::accuracy_case_names());
         options.cases = cases;
         options.integrators = integrators_named(integrators);
@@ -145,7 +147,7 @@ void bind_run(py::module_& m) {
       py::arg("quick") = true, py::arg("cases") = std::vector<std::string>{},
       py::arg("integrators") = std::vector<std::string>{},
       "The accuracy study (`numen study accuracy`, docs/results.md): error against a reference "
-      "over a grid of time steps. quick: coarse grid (1e-2 ... 1e-4 s), short horizons; cases: "
+      "over a grid of time steps, on the shipped scenes beside default_scene_path(). quick: coarse grid (1e-2 ... 1e-4 s), short horizons; cases: "
       "subset of 'free-body', 'wall', 'articulated', 'deformable' (empty: all); integrators: "
       "scene-file names (empty: all). Returns one dict per run: case, integrator, dt_s, steps, "
       "horizon_s, position_error_max_mm, position_error_rms_mm, orientation_error_max_mrad, "

@@ -13,6 +13,7 @@
 
 #include "bindings.hpp"
 #include "numen/sim/input/input_error.hpp"
+#include "numen/sim/input/shipped_files.hpp"
 
 namespace py = pybind11;
 
@@ -44,6 +45,20 @@ py::array_t<double> surface_point_rows(const core::Model& mo, core::Vec3 core::N
 }
 
 }  // namespace
+
+std::filesystem::path module_data_dir() {
+#ifndef NUMEN_DATA_FROM_MODULE
+#define NUMEN_DATA_FROM_MODULE "../../../share/numen"
+#endif
+  const std::string file = py::module_::import("numen").attr("__file__").cast<std::string>();
+  return sim::shipped_data_dir_from(std::filesystem::path(file).parent_path(), NUMEN_DATA_FROM_MODULE);
+}
+
+const sim::InputError* missing_part(const sim::Scene& scene, const char* part) {
+  for (const sim::InputError& e : scene.run_missing)
+    if (e.key() == part) return &e;
+  return nullptr;
+}
 
 void bind_scene(py::module_& m) {
   // numen.InputError(ValueError): raised for a bad scene or input file; str() is sim::InputError's
@@ -168,6 +183,15 @@ void bind_scene(py::module_& m) {
           "surface_face_begin, surface_face_count (its fine triangles: rows of "
           "net_surface_faces); counts 0 for a net without a fine surface (the tool then touches "
           "the net's own triangles).")
+      .def_property_readonly(
+          "obstacle_names",
+          [](const core::Model& mo) {
+            std::vector<std::string> names;
+            for (const core::Obstacle& o : mo.obstacles) names.push_back(o.name);
+            return names;
+          },
+          "Static obstacle names, in obstacle index order (the values of "
+          "Data.contact_obstacles).")
       .def_property_readonly("initial_attached_body",
                              [](const core::Model& mo) { return mo.initial_attached_body; },
                              "Body the device holds after a reset (-1: none).");
@@ -185,7 +209,14 @@ void bind_scene(py::module_& m) {
       .def_property_readonly("duration", [](const sim::Scene& s) { return s.duration_s; },
                              "Default run length (s).")
       .def_property_readonly("warnings", [](const sim::Scene& s) { return s.warnings; },
-                             "Non-fatal remarks of the loader.")
+                             "Non-fatal remarks of the loader (list of str), e.g. 'no feedback: "
+                             "...' for a device without [device.feedback] (docs/scenes.md).")
+      .def_property_readonly("has_trajectory", [](const sim::Scene& s) { return s.has_trajectory; },
+                             "The scene has a [trajectory] (target_at, set_targets_at, run_scene "
+                             "need one).")
+      .def_property_readonly("has_device", [](const sim::Scene& s) { return s.has_device; },
+                             "The scene has a [device] (run_scene needs one; without it the "
+                             "held body's target is set directly).")
       .def_property_readonly(
           "model", [](const sim::Scene& s) -> const core::Model& { return s.model; },
           py::return_value_policy::reference_internal,
@@ -196,13 +227,17 @@ void bind_scene(py::module_& m) {
       .def(
           "target_at",
           [](const sim::Scene& s, double t) {
+            if (const sim::InputError* e = missing_part(s, "trajectory")) throw *e;
             const sim::TrajectorySample x = s.trajectory.at(t);
             return py::make_tuple(to_array(x.pose.position), to_array(x.pose.orientation), x.jaw);
           },
           py::arg("t"),
-          "Target of the instrument's tool frame (trocar instrument: the tip) at time t (s) of "
-          "the scene's trajectory: (position (3,) m, orientation (4,) unit quaternion x, y, z, "
-          "w, jaw angle rad), world frame; copies.")
+          "The scene trajectory's sample at time t (s): the instrument's tool frame (trocar "
+          "instrument: the tip, z along the shaft, with the recorded wrist) — not the held "
+          "body's centre-of-mass frame that Data.set_target takes (Data.set_targets_at turns "
+          "it into the bodies' targets): (position (3,) m, orientation (4,) unit quaternion in "
+          "the order (x, y, z, w), jaw angle rad), world frame; copies. InputError for a scene "
+          "without [trajectory].")
       .def(
           "target_twist_at",
           [](const sim::Scene& s, double t) {
@@ -228,17 +263,24 @@ void bind_scene(py::module_& m) {
       "load_scene",
       [](const std::string& path, const std::optional<std::string>& coupling) {
         sim::SceneOverrides overrides;
+        overrides.caller_steps = true;
         if (coupling) overrides.coupling = sim::parse_coupling_mode(*coupling);
         return std::make_shared<sim::Scene>(sim::load_scene(path, overrides));
       },
       py::arg("path"), py::arg("coupling") = py::none(),
       "Loads and compiles the scene file at `path` (TOML, docs/scenes.md); `coupling` "
       "('god-object', 'first-order', 'direct'; None: the scene's) overrides the scene's "
-      "coupling mode like `numen run --coupling`. Raises "
+      "coupling mode like `numen run --coupling`. The scene is to be stepped by the caller: "
+      "[trajectory] and [device] may be left out (docs/scenes.md \"Drive it from your own "
+      "program\"; run_scene then refuses it). Raises "
       "numen.InputError (a ValueError) with the located message 'file:line:column: key: "
       "message' and its parts as attributes.");
-  m.def("default_scene_path", &sim::default_scene_path,
-        "Path of the shipped default scene (sim/scenes/default.toml of the source tree).");
+  m.def(
+      "default_scene_path", [] { return (module_data_dir() / "scenes" / "default.toml").string(); },
+      "Path of the shipped default scene: share/numen/scenes/default.toml of the prefix this "
+      "module is installed in (found relative to the module, as the installed `numen` finds it "
+      "relative to itself), else sim/scenes/default.toml of the source tree it was built from. "
+      "The other shipped scenes (lattice.toml, probe.toml, ...) sit beside it.");
 }
 
 }  // namespace numen::python

@@ -248,6 +248,39 @@ TEST(NetForces, SpringBlockAndTieSumsMatchTheirDefinitions) {
   EXPECT_GT(sum_r_dv.norm(), 1e-4);  // the perturbed velocities make every sum non-trivial
 }
 
+TEST(NetForces, TheForcesStageGivesTheNetsEnergyAtTheStepsStart) {
+  // NetOutput::start_energy: ½ m |v|² + ½ k_tie |x − a|² over the nodes + ½ k (l − L)² over
+  // every spring (bending ones included) − Σ m g · x, from the forces stage's own terms (an
+  // odd spring out per node included: the icosphere's nodes have 5 or 6 springs of each kind).
+  const core::Model m = scene(core::make_icosphere(0.04, 1));
+  core::Data d = core::make_data(m);
+  numen::test::perturb_nodes(d, 2e-3, 0.2);
+  const core::BodyState& b = d.bodies[0];
+  const core::NetModel& net = m.nets[0];
+  double kinetic = 0.0, elastic = 0.0, gravity = 0.0;
+  for (std::size_t i = 0; i < d.nodes.size(); ++i) {
+    const Vec3 a = b.position + b.orientation * m.node_rest[i];
+    kinetic += 0.5 * m.node_mass[i] * d.nodes[i].velocity.squaredNorm();
+    elastic += 0.5 * net.tie_stiffness * (d.nodes[i].position - a).squaredNorm();
+    gravity -= m.node_mass[i] * m.gravity.dot(d.nodes[i].position);
+  }
+  double springs = 0.0;
+  for (int e = 0; e < net.structural_count + net.bending_count; ++e) {
+    const core::NetSpring& s = m.net_springs[at(e)];
+    const double l = (d.nodes[at(s.node_b)].position - d.nodes[at(s.node_a)].position).norm();
+    springs += 0.5 * s.stiffness * (l - s.rest_length) * (l - s.rest_length);
+  }
+  EXPECT_GT(kinetic, 0.0);
+  EXPECT_GT(springs, 0.0);
+  const double total = kinetic + elastic + springs + gravity;
+  forces(m, d);
+  EXPECT_NEAR(d.nets[0].start_energy, total, 1e-13 * (kinetic + elastic + springs + std::abs(gravity)));
+  // A NaN node is kept.
+  d.nodes[7].position.x() = std::numeric_limits<double>::quiet_NaN();
+  forces(m, d);
+  EXPECT_TRUE(std::isnan(d.nets[0].start_energy));
+}
+
 TEST(NetForces, AtRestOnTheRigidComponentOnlyGravityActs) {
   const core::Model m = scene(core::make_icosphere(0.04, 1));
   core::Data d = core::make_data(m);

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <limits>
 
@@ -154,17 +155,72 @@ TEST(Step, NonFiniteTargetIsReportedAndTheStateStaysFinite) {
       drive_target(m, d, i);
       core::step(m, d);
     }
+    const core::Wrench before = d.feedback_wrench;
     d.target.position.y() = std::numeric_limits<double>::quiet_NaN();
     core::step(m, d);
     EXPECT_TRUE(d.status & core::kInvalidTarget) << static_cast<int>(mode);
     EXPECT_EQ(d.status & core::kNonFinite, 0u);
+    EXPECT_EQ(d.invalid_target_steps, 1);
     for (const auto& s : d.bodies) EXPECT_TRUE(core::state_is_finite(s));
-    EXPECT_TRUE(d.feedback_wrench.force.isZero(0.0));
-    // Status is reset each step.
+    // The feedback is held at the last step's (zero in direct coupling: no spring).
+    EXPECT_EQ(d.feedback_wrench.force, before.force) << static_cast<int>(mode);
+    EXPECT_EQ(d.feedback_wrench.torque, before.torque) << static_cast<int>(mode);
+    // Status is reset each step; the count stays.
     drive_target(m, d, 11);
     core::step(m, d);
     EXPECT_EQ(d.status & core::kInvalidTarget, 0u);
+    EXPECT_EQ(d.invalid_target_steps, 1);
+    core::reset_data(m, d);
+    EXPECT_EQ(d.invalid_target_steps, 0);
   }
+}
+
+TEST(Step, AnInvalidTargetHoldsTheFeedbackInsteadOfDroppingItAndDoesNotAllocate) {
+  // The held body pressed on the floor by its moving target: a NaN target at step 300 (what a
+  // caller's broken sample gives). Without the hold the feedback went to zero for one period and
+  // back (issue 56: +4.42 → 0 → +4.55 N on the default scene): a jump of the full wrench, twice.
+  const core::Model m = thirteen_bodies(core::Integrator::kLinearlyImplicitEuler,
+                                        core::CouplingMode::kGodObject);
+  core::Data clean = core::make_data(m), broken = core::make_data(m);
+  double clean_jump = 0.0, broken_jump = 0.0, at_gap = 0.0, out_of_gap = 0.0;
+  core::Vec3 clean_last = core::Vec3::Zero(), broken_last = core::Vec3::Zero();
+  std::int64_t allocations = -1;
+  {
+    numen::test::AllocationGuard guard;
+    for (int i = 0; i < 600; ++i) {
+      drive_target(m, clean, i);
+      drive_target(m, broken, i);
+      if (i == 300) broken.target.position.z() = std::numeric_limits<double>::quiet_NaN();
+      core::step(m, clean);
+      core::step(m, broken);
+      if (i == 300) {
+        EXPECT_EQ(broken.status, static_cast<std::uint32_t>(core::kInvalidTarget));
+        EXPECT_EQ(broken.feedback_wrench.force, broken_last);  // held, bit for bit
+        at_gap = broken_last.norm();
+      }
+      if (i == 301) out_of_gap = (broken.feedback_wrench.force - broken_last).norm();
+      if (i > 0) {
+        clean_jump = std::max(clean_jump, (clean.feedback_wrench.force - clean_last).norm());
+        broken_jump = std::max(broken_jump, (broken.feedback_wrench.force - broken_last).norm());
+      }
+      clean_last = clean.feedback_wrench.force;
+      broken_last = broken.feedback_wrench.force;
+    }
+    allocations = guard.count();
+  }
+  EXPECT_EQ(allocations, 0);
+  EXPECT_EQ(broken.invalid_target_steps, 1);
+  EXPECT_EQ(clean.invalid_target_steps, 0);
+  EXPECT_EQ(broken.nonfinite_steps, 0);
+  // The largest period-to-period change of the feedback over the run is the clean run's: the
+  // hold puts two periods' change into the step after the gap, far below the 0.98 N a drop to
+  // zero and back would have been, twice.
+  std::printf("feedback at the gap %.4f N, change out of the gap %.4f N; largest change per "
+              "period: clean %.4f N, with the NaN target %.4f N\n",
+              at_gap, out_of_gap, clean_jump, broken_jump);
+  EXPECT_NEAR(at_gap, 0.9803, 5e-5);
+  EXPECT_LT(out_of_gap, 0.05 * at_gap);
+  EXPECT_EQ(broken_jump, clean_jump);
 }
 
 TEST(Step, NonFiniteResultIsRolledBack) {

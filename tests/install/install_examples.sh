@@ -1,9 +1,12 @@
 #!/usr/bin/env bash
 # CTest install_examples (tests/CMakeLists.txt, docs/architecture.md "Installed package"):
 # installs the build tree into a temporary prefix, then, against that prefix only
-# (CMAKE_PREFIX_PATH, never the build tree), configures, builds and runs the two examples
-# (examples/scene_step, examples/minimal_core) and compiles every installed header on its own
-# (tests/install/header_check).
+# (CMAKE_PREFIX_PATH, never the build tree), configures, builds and runs the two C++ examples
+# (examples/scene_step on the installed probe.toml and SCENE_NAME, examples/minimal_core) and
+# compiles every installed header on its own (tests/install/header_check); where the build made
+# the Python module, imports it from the prefix alone (PYTHONPATH the prefix's, run from outside
+# the source tree), checks that it finds the prefix's share/numen, and runs the README's Python
+# loop as written there and examples/python_push.py. The figures the examples print are checked.
 #
 #   install_examples.sh BUILD_DIR SOURCE_DIR WORK_DIR CXX SCENE_NAME DEFAULT_LOADS
 #
@@ -51,6 +54,24 @@ if [ "$default_loads" = yes ]; then
     || { cat "$work/scene_step_default.out"; fail "scene_step without a scene"; }
 fi
 tail -n 3 "$work/scene_step.out"
+# The lattice scene's trajectory is the instrument's tip: the held tube's centre of mass is 40 mm
+# behind it, and the recorded wrist 16.5° off the shaft (docs/scenes.md "Drive it from your own
+# program").
+if [ "$scene" = lattice.toml ]; then
+  grep -qx "trajectory sample at 0 s (tool frame) to the held body's target: 40.0 mm, 16.5 deg" \
+    "$work/scene_step.out" || { cat "$work/scene_step.out"; fail "scene_step: tool frame offset"; }
+fi
+# The library scene (no [trajectory]): the probe's target 20 mm down from 5 mm above the box; the
+# probe stays on the box's top face, under 1 mm in, and the feedback pushes the hand up.
+"$work/scene_step/scene_step" "$prefix/share/numen/scenes/probe.toml" >"$work/scene_step_probe.out" 2>&1 \
+  || { cat "$work/scene_step_probe.out"; fail "scene_step probe.toml"; }
+finite_only "$work/scene_step_probe.out"
+grep -q "^deepest contact .* body 'probe' on obstacle 'box'$" "$work/scene_step_probe.out" \
+  && grep -qx "invalid target steps 0" "$work/scene_step_probe.out" \
+  && awk '/^max penetration/ { p = $3 } /^t 1.000/ { f = $15 }
+          END { exit (p > 0 && p < 1e-3 && f > 0) ? 0 : 1 }' "$work/scene_step_probe.out" \
+  || { cat "$work/scene_step_probe.out"; fail "scene_step probe.toml: contact on 'box' under 1 mm, feedback up"; }
+tail -n 3 "$work/scene_step_probe.out"
 
 configure_build minimal_core "$src/examples/minimal_core"
 "$work/minimal_core/minimal_core" >"$work/minimal_core.out" 2>&1 || { cat "$work/minimal_core.out"; fail "minimal_core"; }
@@ -62,18 +83,52 @@ awk '/^final penetration/ { p = $3; f = $7; ok = (p > 0 && p < 1e-3 && f > 0) }
      END { exit ok ? 0 : 1 }' "$work/minimal_core.out" \
   || fail "minimal_core: final penetration not in (0, 1 mm) or feedback not upward"
 
-# The Python module, when the build made it (NUMEN_PYTHON): imported from the prefix alone runs
-# the installed scene through the simulated bus.
+# The Python module, when the build made it (NUMEN_PYTHON): imported from the prefix alone (run
+# from the work folder, PYTHONPATH the prefix's only), it finds the prefix's share/numen as the
+# installed `numen` does (not the source tree it was built from), and runs the installed scene
+# through the simulated bus.
 module=$(find "$prefix" -name 'numen*.so' -path '*dist-packages*' | head -n 1)
 if [ -n "$module" ]; then
-  PYTHONPATH=$(dirname "$module") /usr/bin/python3 -c "
-import numen, sys
+  pythonpath=$(dirname "$module")
+  [ "$pythonpath" = "$prefix/lib/python3/dist-packages" ] || fail "module in $pythonpath, not where the README says"
+  (cd "$work" && PYTHONPATH=$pythonpath /usr/bin/python3 -c "
+import numen, os, sys
 assert numen.__file__.startswith('$prefix'), numen.__file__
-s = numen.load_scene('$prefix/share/numen/scenes/$scene')
+default = numen.default_scene_path()
+assert default == os.path.join('$prefix', 'share/numen/scenes/default.toml'), default
+s = numen.load_scene(os.path.join(os.path.dirname(default), '$scene'))
+assert s.file.startswith('$prefix'), s.file
+if '$default_loads' == 'yes':
+    d = numen.load_scene(default)
+    print('python: default scene', d.name, 'from', os.path.dirname(d.file))
 r = numen.run_scene(s, duration=0.2)
 print('python: numen from the prefix, run exit status', r['exit_status'])
-sys.exit(r['exit_status'])" >"$work/python.out" 2>&1 || { cat "$work/python.out"; fail "import numen from $prefix"; }
+sys.exit(r['exit_status'])") >"$work/python.out" 2>&1 || { cat "$work/python.out"; fail "import numen from $prefix"; }
   cat "$work/python.out"
+  # The README's Python loop, as written there, with the installed PYTHONPATH.
+  if [ "$default_loads" = yes ]; then
+    sed -n '/^PYTHONPATH=build\/sim\/python \/usr\/bin\/python3 -c "$/,/"$/p' "$src/README.md" \
+      | sed "s|^PYTHONPATH=build/sim/python |PYTHONPATH=$pythonpath |" >"$work/readme_loop.sh"
+    [ "$(wc -l <"$work/readme_loop.sh")" -ge 5 ] || fail "no Python loop found in README.md"
+    (cd "$work" && bash "$work/readme_loop.sh") >"$work/readme_loop.out" 2>&1 \
+      || { cat "$work/readme_loop.out"; fail "the README's Python loop"; }
+    [ "$(tail -n 1 "$work/readme_loop.out")" = 0 ] || { cat "$work/readme_loop.out"; fail "README loop: run exit status"; }
+    tail -n 2 "$work/readme_loop.out"
+  fi
+  # examples/python_push.py on the installed probe.toml: the probe rests on the box under 1 mm
+  # in, the feedback is the Eq. 8 spring 200 N/m × (probe − target) (< 1 % off: its damping
+  # term is the probe's rest), pushing up.
+  (cd "$work" && PYTHONPATH=$pythonpath /usr/bin/python3 "$src/examples/python_push.py") \
+    >"$work/python_push.out" 2>&1 || { cat "$work/python_push.out"; fail "examples/python_push.py"; }
+  finite_only "$work/python_push.out"
+  awk '/ into the box$/ { target = $7; centre = $11; depth = $13 }
+       /^contacts 1 on box;/ { box = 1 }
+       /^feedback force/ { f = $3; invalid = $NF }
+       END { spring = 200 * (centre - target) / 1000
+             exit (box && depth > 0 && depth < 1 && f > 0 && invalid == 0 &&
+                   (f - spring) < 0.01 * spring && (spring - f) < 0.01 * spring) ? 0 : 1 }' \
+    "$work/python_push.out" || { cat "$work/python_push.out"; fail "python_push.py figures"; }
+  cat "$work/python_push.out"
 fi
 
 configure_build header_check "$src/tests/install/header_check"

@@ -14,6 +14,7 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "numen/sim/input/input_error.hpp"
 #include "numen/sim/scene/scene.hpp"
@@ -70,6 +71,16 @@ type = "hold"
 duration = 0.25
 )";
 
+
+/// `s`'s warnings but the load note of a device without feedback ("no feedback: ...",
+/// docs/scenes.md "Device"), which a pose tracker without [device.feedback] (the mini scene's)
+/// always carries: for the tests of the other warnings.
+inline std::vector<std::string> warnings_besides_no_feedback(const sim::Scene& s) {
+  std::vector<std::string> rest;
+  for (const std::string& w : s.warnings)
+    if (w.rfind("no feedback: ", 0) != 0) rest.push_back(w);
+  return rest;
+}
 
 /// The shipped JIGSAWS excerpt (sim/data) the scene tests load.
 inline std::string jigsaws_excerpt_path() {

@@ -121,6 +121,41 @@ inline Pair load_pair(const double* p) noexcept { return Eigen::Map<const Pair>(
   return sum;
 }
 
+/// The springs [begin, end) of node k (value xk) in a product with A: w_j = W_j (xk − x_high(j))
+/// is taken from out_high(j), and Σ_j w_j returned for row k; two springs at a time. Always
+/// inlined, as gather_springs().
+[[gnu::always_inline]] inline Vec3 spring_differences(const SpringView& s, std::int32_t begin,
+                                                      std::int32_t end, const Vec3& xk,
+                                                      const Vec3* x, Vec3* out) noexcept {
+  const Pair kx = Pair::Constant(xk.x()), ky = Pair::Constant(xk.y()), kz = Pair::Constant(xk.z());
+  Pair ax = Pair::Zero(), ay = Pair::Zero(), az = Pair::Zero();
+  std::int32_t j = begin;
+  for (; j + 1 < end; j += 2) {
+    const auto h0 = static_cast<std::size_t>(s.high[j]);
+    const auto h1 = static_cast<std::size_t>(s.high[j + 1]);
+    const Vec3& a = x[h0];
+    const Vec3& b = x[h1];
+    const Pair dx = kx - Pair(a.x(), b.x()), dy = ky - Pair(a.y(), b.y()), dz = kz - Pair(a.z(), b.z());
+    const Pair nx = load_pair(s.nx + j), ny = load_pair(s.ny + j), nz = load_pair(s.nz + j);
+    const Pair t = load_pair(s.alpha + j) * (nx * dx + ny * dy + nz * dz);
+    const Pair beta = load_pair(s.beta + j);
+    const Pair wx = t * nx + beta * dx, wy = t * ny + beta * dy, wz = t * nz + beta * dz;
+    ax += wx;
+    ay += wy;
+    az += wz;
+    out[h0] -= Vec3(wx(0), wy(0), wz(0));
+    out[h1] -= Vec3(wx(1), wy(1), wz(1));
+  }
+  Vec3 sum(ax(0) + ax(1), ay(0) + ay(1), az(0) + az(1));
+  if (j < end) {
+    const auto h = static_cast<std::size_t>(s.high[j]);
+    const Vec3 w = spring_times(s, j, xk - x[h]);
+    sum += w;
+    out[h] -= w;
+  }
+  return sum;
+}
+
 /// out_high(j) += W_j y over springs [begin, end) (the forward sweep's scatter).
 [[gnu::always_inline]] inline void scatter_springs(const SpringView& s, std::int32_t begin,
                                                    std::int32_t end, const Vec3& y,

@@ -15,13 +15,19 @@
 namespace numen::sim {
 namespace {
 
-/// `<executable dir>/NUMEN_DATA_FROM_BIN` if `probe` exists under it; empty otherwise.
-std::filesystem::path installed_dir_holding(const std::filesystem::path& probe) {
-  const std::filesystem::path exe = executable_dir();
-  if (exe.empty()) return {};
-  const std::filesystem::path dir = (exe / NUMEN_DATA_FROM_BIN).lexically_normal();
+/// `<from>/<relative>` if `probe` exists under it; empty otherwise (and for an empty `from`).
+std::filesystem::path dir_holding(const std::filesystem::path& from,
+                                  const std::filesystem::path& relative,
+                                  const std::filesystem::path& probe) {
+  if (from.empty()) return {};
+  const std::filesystem::path dir = (from / relative).lexically_normal();
   std::error_code ec;
   return std::filesystem::exists(dir / probe, ec) ? dir : std::filesystem::path{};
+}
+
+/// `<executable dir>/NUMEN_DATA_FROM_BIN` if `probe` exists under it; empty otherwise.
+std::filesystem::path installed_dir_holding(const std::filesystem::path& probe) {
+  return dir_holding(executable_dir(), NUMEN_DATA_FROM_BIN, probe);
 }
 
 }  // namespace
@@ -35,6 +41,12 @@ std::filesystem::path executable_dir() {
 std::filesystem::path shipped_data_dir() {
   std::filesystem::path dir = installed_dir_holding("scenes/default.toml");
   return dir.empty() ? std::filesystem::path(NUMEN_SOURCE_SIM_DIR) : dir;
+}
+
+std::filesystem::path shipped_data_dir_from(const std::filesystem::path& module_dir,
+                                            const std::filesystem::path& data_from_module) {
+  std::filesystem::path dir = dir_holding(module_dir, data_from_module, "scenes/default.toml");
+  return dir.empty() ? shipped_data_dir() : dir;
 }
 
 std::filesystem::path shipped_viewer_dir(const std::filesystem::path& build_tree_dir) {

@@ -203,6 +203,7 @@ RunSummary AdmittanceRunner::summary() const {
   s.step_time_us = summarize_ns(step_time_);
   s.solver_iterations_mean = k_ > 0 ? solver_iterations_sum_ / static_cast<double>(k_) : 0.0;
   s.nonfinite_steps = data_.nonfinite_steps;
+  s.invalid_target_steps = data_.invalid_target_steps;
   s.nan_detected = data_.nonfinite_steps > 0;
   s.contact_overflow = data_.contact_overflow_steps;
   for (auto dir :

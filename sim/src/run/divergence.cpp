@@ -8,6 +8,7 @@
 #include <limits>
 
 #include "numen/core/coupling.hpp"
+#include "numen/core/step_stages.hpp"
 #include "numen/sim/run/energy.hpp"
 
 namespace numen::sim {
@@ -35,7 +36,6 @@ DivergenceMonitor::DivergenceMonitor(const core::Model& model, const core::Data&
       net_radius_m_(model.nets.size(), 0.0),
       base_stretch_m_(model.nets.size(), 0.0),
       net_energy_(model.nets.size(), 0.0),
-      organ_energy_sum_(model.nets.size(), 0.0),
       prev_bodies_(data.bodies),
       prev_targets_(data.bodies.size()),
       prev_coupled_(data.bodies.size(), 0) {
@@ -208,47 +208,44 @@ bool DivergenceMonitor::observe(const core::Model& model, const core::Data& data
     }
   }
   // ---- nodes: speeds and ties ----
-  // An organ's new state is judged in organ_slices_ parts, one a call (set_organ_slices()):
-  // this call judges its parts [first, last). A new state before the last one's parts are done
-  // (or the first call) is judged whole.
-  int first = organ_slice_, last = std::min(organ_slice_ + 1, organ_slices_);
-  if (!organs_unchanged || !net_energy_taken_) {
-    first = 0;
-    last = organ_slice_ < organ_slices_ || !net_energy_taken_ ? organ_slices_ : 1;
-  }
-  organ_slice_ = last;
+  // A state whose step measured its nets (core::measure_nets(): NetOutput's largest node speed
+  // and tie stretch; the energy the forces stage found at the step's start, one step behind) is
+  // judged from those, O(nets); any other node by node,
+  // except the organs (nets on anchored bodies) of a state the caller says they are unchanged
+  // in (organs_unchanged: a multirate run's device periods between two scene samples), which
+  // keep the last judgement.
+  const bool measured = (data.stages_run & core::kStageMeasureNets) != 0;
+  const bool skip_organs = !measured && organs_unchanged && net_energy_taken_;
   const auto organ = [&](const core::NetModel& net) {
     return model.bodies[static_cast<std::size_t>(net.body)].anchored;
   };
   for (std::size_t n = 0; n < model.nets.size() && !breach; ++n) {
     const core::NetModel& net = model.nets[n];
-    const bool part = organ(net);
-    if (part && first >= last) continue;
+    if (skip_organs && organ(net)) continue;
     const core::BodyState& body = data.bodies[static_cast<std::size_t>(net.body)];
     const double stretch_limit =
         limits_.stretch_factor * net_radius_m_[n] + 2.0 * base_stretch_m_[n];
-    const IndexRange nodes =
-        part
-            ? IndexRange{part_of_range(net.node_begin, net.node_count, first, organ_slices_).begin,
-                         part_of_range(net.node_begin, net.node_count, last - 1, organ_slices_).end}
-            : IndexRange{net.node_begin, net.node_begin + net.node_count};
-    for (int i = nodes.begin; i < nodes.end; ++i) {
-      const auto k = static_cast<std::size_t>(i);
-      const double v = data.nodes[k].velocity.norm();
-      speed_ratio_max_ = std::max(speed_ratio_max_, v / speed_limit);
-      if (v > speed_limit) {
-        latch("node speed", net.body, static_cast<int>(n), v, speed_limit, period, time_s);
-        breach = true;
-        break;
+    const auto judge = [&](double speed, double stretch) {
+      speed_ratio_max_ = std::max(speed_ratio_max_, speed / speed_limit);
+      if (speed > speed_limit) {
+        latch("node speed", net.body, static_cast<int>(n), speed, speed_limit, period, time_s);
+        return true;
       }
-      const Vec3 anchor = body.position + body.orientation * model.node_rest[k];
-      const double stretch = (data.nodes[k].position - anchor).norm();
       if (stretch_limit > 0.0) stretch_ratio_max_ = std::max(stretch_ratio_max_, stretch / stretch_limit);
       if (stretch_limit > 0.0 && stretch > stretch_limit) {
         latch("tie stretch", net.body, static_cast<int>(n), stretch, stretch_limit, period, time_s);
-        breach = true;
-        break;
+        return true;
       }
+      return false;
+    };
+    if (measured) {
+      breach = judge(data.nets[n].max_node_speed, data.nets[n].max_tie_stretch);
+      continue;
+    }
+    for (int i = net.node_begin; i < net.node_begin + net.node_count && !breach; ++i) {
+      const auto k = static_cast<std::size_t>(i);
+      const Vec3 anchor = body.position + body.orientation * model.node_rest[k];
+      breach = judge(data.nodes[k].velocity.norm(), (data.nodes[k].position - anchor).norm());
     }
   }
   if (springs && !breach) {
@@ -259,17 +256,12 @@ bool DivergenceMonitor::observe(const core::Model& model, const core::Data& data
     held_energy += gravity - gravity0_;
     for (int n = 0; n < model.num_nets(); ++n) {
       const auto k = static_cast<std::size_t>(n);
-      if (!organ(model.nets[k])) {
+      if (measured) {
+        const core::NetOutput& out = data.nets[k];
+        net_energy_[k] = out.start_energy;  // the energy of the state the step started from
+      } else if (!skip_organs || !organ(model.nets[k])) {
         double net_gravity = 0.0;
         net_energy_[k] = net_energy(model, data, n, &net_gravity) + net_gravity;
-      } else if (first < last) {
-        if (first == 0) organ_energy_sum_[k] = 0.0;
-        for (int p = first; p < last; ++p) {
-          double net_gravity = 0.0;
-          organ_energy_sum_[k] +=
-              net_energy_part(model, data, n, p, organ_slices_, &net_gravity) + net_gravity;
-        }
-        if (last == organ_slices_) net_energy_[k] = organ_energy_sum_[k];  // judged whole
       }
       held_energy += net_energy_[k];
     }

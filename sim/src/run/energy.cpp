@@ -4,7 +4,6 @@
 #include "numen/sim/run/energy.hpp"
 
 #include <cmath>
-#include <cstdint>
 
 #include "numen/core/coupling.hpp"
 
@@ -70,34 +69,19 @@ double body_energy(const core::Model& model, const core::Data& data, double* gra
 
 double net_energy(const core::Model& model, const core::Data& data, int n,
                   double* gravity) noexcept {
-  return net_energy_part(model, data, n, 0, 1, gravity);
-}
-
-IndexRange part_of_range(int first, int count, int part, int parts) noexcept {
-  const auto at = [&](int p) {
-    return first + static_cast<int>(static_cast<std::int64_t>(count) * p / parts);
-  };
-  return {at(part), at(part + 1)};
-}
-
-double net_energy_part(const core::Model& model, const core::Data& data, int n, int part, int parts,
-                       double* gravity) noexcept {
   if (gravity != nullptr) *gravity = 0.0;
-  if (n < 0 || n >= model.num_nets() || parts < 1 || part < 0 || part >= parts) return 0.0;
+  if (n < 0 || n >= model.num_nets()) return 0.0;
   const core::NetModel& net = model.nets[static_cast<std::size_t>(n)];
   const core::BodyState& body = data.bodies[static_cast<std::size_t>(net.body)];
   double e = 0.0, u = 0.0;
-  const IndexRange nodes = part_of_range(net.node_begin, net.node_count, part, parts);
-  for (int i = nodes.begin; i < nodes.end; ++i) {
+  for (int i = net.node_begin; i < net.node_begin + net.node_count; ++i) {
     const auto k = static_cast<std::size_t>(i);
     e += 0.5 * model.node_mass[k] * data.nodes[k].velocity.squaredNorm();
     const Vec3 anchor = body.position + body.orientation * model.node_rest[k];
     e += 0.5 * net.tie_stiffness * (data.nodes[k].position - anchor).squaredNorm();
     u -= model.node_mass[k] * model.gravity.dot(data.nodes[k].position);
   }
-  const IndexRange springs =
-      part_of_range(net.spring_begin, net.structural_count + net.bending_count, part, parts);
-  for (int s = springs.begin; s < springs.end; ++s) {
+  for (int s = net.spring_begin; s < net.spring_begin + net.structural_count + net.bending_count; ++s) {
     const core::NetSpring& sp = model.net_springs[static_cast<std::size_t>(s)];
     const double l = (data.nodes[static_cast<std::size_t>(sp.node_b)].position -
                       data.nodes[static_cast<std::size_t>(sp.node_a)].position)

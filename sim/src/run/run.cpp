@@ -121,7 +121,7 @@ hal::CandumpWriterSettings recorder_settings(bool paced) noexcept {
 
 SceneRunner::SceneRunner(const Scene& scene, std::size_t trace_capacity, const BusChoice& bus,
                          bool realtime, std::uint32_t overrun_limit)
-    : scene_(&scene),
+    : scene_((require_runnable(scene), &scene)),
       spec_(parse_bus_spec(bus.spec)),
       bus_(scene.bus),
       real_bus_(spec_.real() ? open_real_bus(spec_, controller_filters(scene.device)) : nullptr),
@@ -160,10 +160,7 @@ SceneRunner::SceneRunner(const Scene& scene, std::size_t trace_capacity, const B
           std::max<std::int64_t>(1, std::llround(kStartupSettle / scene.model.dt))),
       divergence_(scene.model, data_) {
   if (multirate_.enabled()) loop_.set_step_function(&SceneRunner::step_multirate, this);
-  // The organs change at the scene samples only: their O(nodes + springs) judged over half the
-  // device periods of a scene period (DivergenceMonitor::set_organ_slices()).
   if (multirate_.enabled() && scene.multirate) {
-    divergence_.set_organ_slices(scene.multirate->ratio / 2);
     ghost_every_ = std::max<std::int64_t>(1, std::llround(1e-3 / scene.model.dt));
   }
   explicit_bound_ = platform::explicitly_bound_bodies(scene.binding, scene.model.num_bodies());
@@ -466,6 +463,7 @@ RunSummary run_impedance_scene(const Scene& scene, const RunOptions& options) {
 }  // namespace
 
 RunSummary run_scene(const Scene& scene, const RunOptions& options) {
+  require_runnable(scene);  // a scene loaded to be stepped by its caller may lack both
   check_run_options(scene, options);  // every refusal before any output is opened
   RunSummary s = scene.admittance ? run_admittance_scene(scene, options)  // admittance_run.cpp
                                   : run_impedance_scene(scene, options);

@@ -220,6 +220,8 @@ constexpr RunFigure kFigures[] = {
      [](const S& s) noexcept { return real(s.net_node_speed_max_mps); }},
     {"nonfinite_steps", "", "Steps that produced a non-finite state", K::kCount,
      [](const S& s) noexcept { return count(s.nonfinite_steps); }},
+    {"invalid_target_steps", "", "Steps whose device target was not finite (coupling skipped, feedback held)",
+     K::kCount, [](const S& s) noexcept { return count(s.invalid_target_steps); }},
     {"bus_frames_dropped", "", "Simulated bus: frames the link dropped", K::kCount,
      [](const S& s) noexcept { return count(s.bus_frames_dropped); }},
     {"bus_frames_corrupted", "", "Simulated bus: frames the link corrupted", K::kCount,

@@ -131,6 +131,7 @@ RunSummary SceneRunner::summary() const {
   s.contact_clamped_steps = data_.contact_clamped_steps;
   s.net_crossed_steps = data_.net_crossed_steps;
   s.nonfinite_steps = data_.nonfinite_steps;
+  s.invalid_target_steps = data_.invalid_target_steps;
   multirate_.summarize(s);
   s.nan_detected = data_.nonfinite_steps > 0;
   for (const auto& b : data_.bodies)

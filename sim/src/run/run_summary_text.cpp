@@ -222,6 +222,8 @@ constexpr RunSummarySegment kLayout[] = {
     {"  nan detected: YES", set("nan_detected")},
     {"  nan detected: no", unset("nan_detected")},
     {" (non-finite steps {nonfinite_steps})"},
+    {"; INVALID TARGETS: {invalid_target_steps} steps (coupling skipped, feedback held)",
+     set("invalid_target_steps")},
     // Speed and stretch are ratios to their limits; energy_ratio_max is E / (E0 + W_in), whose
     // limit is DivergenceLimits::energy_factor (static_assert below).
     {"\n  divergence: speed {divergence.speed_ratio_max}, tie stretch "

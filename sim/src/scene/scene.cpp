@@ -131,11 +131,23 @@ TrajectorySample parse_start(const TomlTable& t) {
   traj.fail_at(nullptr, e.key().empty() ? traj.path() : e.key(), e.message());
 }
 
+/// The located error of a scene without its [trajectory] or [device] (`part`), which a run
+/// through the control loop needs and a scene stepped by the caller may leave out.
+InputError missing_part(const TomlTable& root, const std::string& part) {
+  return root.error(part, "missing: `numen run` needs a [" + part + "] (" +
+                              (part == "trajectory"
+                                   ? "source = \"jigsaws\", \"scripted\" or \"pointer\""
+                                   : "the tracked instrument: kind = \"trocar-instrument\", "
+                                     "\"pose-tracker\" or \"phantom\"") +
+                              "); a scene stepped by your own program (Python load_scene, "
+                              "SceneOverrides::caller_steps) may leave it out (docs/scenes.md, "
+                              "\"Drive it from your own program\")");
+}
+
 Trajectory parse_trajectory(const TomlTable& root, double dt, const std::filesystem::path& scene_dir,
                             std::vector<std::string>& warnings) {
   auto t = root.table("trajectory");
-  if (!t)
-    root.fail("trajectory", "missing: a scene needs a [trajectory] (source = \"jigsaws\", \"scripted\" or \"pointer\")");
+  if (!t) throw missing_part(root, "trajectory");
   const std::string source = t->choice("source", {"jigsaws", "scripted", "pointer"}, std::nullopt);
   Trajectory recorded;
   if (source == "pointer") {
@@ -226,6 +238,10 @@ const char* to_string(core::Integrator integrator) noexcept {
     case core::Integrator::kLinearlyImplicitEuler:
     default: return "implicit-euler";
   }
+}
+
+void require_runnable(const Scene& scene) {
+  if (!scene.run_missing.empty()) throw scene.run_missing.front();
 }
 
 std::string default_scene_path() { return (shipped_data_dir() / "scenes" / "default.toml").string(); }
@@ -351,12 +367,21 @@ Scene load_scene(const std::string& path, const SceneOverrides& overrides) {
                            : "an impedance scene cannot be overridden to the admittance coupling");
     scene.model.coupling_mode = *overrides.coupling;
   }
-  scene.trajectory = parse_trajectory(root, scene.model.dt, dir, scene.warnings);
+  for (const char* part : {"trajectory", "device"}) {
+    if (root.has(part)) continue;
+    if (!overrides.caller_steps) throw missing_part(root, part);
+    scene.run_missing.push_back(missing_part(root, part));
+  }
+  scene.has_trajectory = root.has("trajectory");
+  scene.has_device = root.has("device");
+  if (scene.has_trajectory)
+    scene.trajectory = parse_trajectory(root, scene.model.dt, dir, scene.warnings);
 
   const std::vector<TomlTable> body_tables = root.tables("body");
   const TomlTable* attached_table = nullptr;
   parse_device(root, scene, attached_table, body_tables);
-  if (attached_table && !attached_table->has("position") && !attached_table->has("link")) {
+  if (attached_table && scene.has_trajectory && !attached_table->has("position") &&
+      !attached_table->has("link")) {
     core::BodyModel& b = scene.model.bodies[static_cast<std::size_t>(scene.model.initial_attached_body)];
     b.initial_pose = first_device_pose(scene);
   }
@@ -411,7 +436,8 @@ Scene load_scene(const std::string& path, const SceneOverrides& overrides) {
                    [](const AttachEvent& a, const AttachEvent& b) { return a.time_s < b.time_s; });
 
   scene.duration_s = root.number_in("duration", 1e-9, kMaxRunDuration, scene.trajectory.duration());
-  if (std::llround(scene.duration_s / scene.model.dt) < 1) {  // a run of this scene has no step
+  if (std::llround(scene.duration_s / scene.model.dt) < 1 &&
+      (scene.has_trajectory || root.has("duration"))) {  // a run of this scene has no step
     const std::string why = format_input_number(scene.duration_s) +
                             " s is shorter than one period (dt = " +
                             format_input_number(scene.model.dt) + " s): a run would have no step";

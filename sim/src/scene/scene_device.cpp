@@ -24,6 +24,10 @@ namespace {
 using core::Quat;
 using core::Vec3;
 
+/// The start of the load warning of a scene whose device has neither drives nor
+/// [device.feedback] (docs/scenes.md "[device.feedback]").
+constexpr char kNoFeedbackNonHaptic[] = "no feedback: non-haptic device";
+
 /// The hand's keys present in `h` (each finite and >= 0; absent: `hand` keeps its value).
 void read_hand(const TomlTable& h, HandSettings& hand) {
   hand.mass = h.number_in("mass", 0.0, kInf, hand.mass);
@@ -230,6 +234,25 @@ void parse_canopen(const TomlTable& dev, hal::DeviceConfig& cfg) {
     if (what.find("canopen") != std::string::npos) c->fail_at(nullptr, c->path(), what);
   }
   parse_dcfs(*c, axes, cfg);
+}
+
+/// A device without [device.feedback] sends no force to the hand (Model::feedback all zero): said
+/// at load in Scene::warnings, as the motors it has or not (docs/scenes.md "[device.feedback]").
+/// An admittance device has no feedback spring (its drives are position controlled): nothing.
+void warn_no_feedback(const TomlTable& dev, const hal::DeviceConfig& cfg, Scene& scene) {
+  if (dev.has("feedback") || scene.model.coupling_mode == core::CouplingMode::kAdmittance) return;
+  std::string driven;
+  for (const hal::AxisConfig& a : cfg.axes)
+    if (a.has_drive()) driven += (driven.empty() ? "" : ", ") + a.name;
+  if (driven.empty()) {
+    scene.warnings.push_back(kNoFeedbackNonHaptic + (" (device \"" + cfg.name +
+                             "\" has no drives and no [device.feedback]): feedback_wrench stays 0"));
+    return;
+  }
+  scene.warnings.push_back("no feedback: device \"" + cfg.name + "\" has motors (drives on " +
+                           driven + ") but no [device.feedback]: feedback_wrench stays 0 and the "
+                           "drives are sent no torque; give [device.feedback] stiffness and "
+                           "damping (docs/scenes.md)");
 }
 
 void parse_feedback(const TomlTable& dev, core::FeedbackGains& f) {
@@ -475,7 +498,18 @@ void parse_igtl(const TomlTable& dev, Scene& scene, const hal::DeviceConfig& cfg
 void parse_device(const TomlTable& root, Scene& scene, const TomlTable*& body_table_of_attached,
                   const std::vector<TomlTable>& body_tables) {
   auto dev = root.table("device");
-  if (!dev) root.fail("device", "missing: a scene needs a [device] (the tracked instrument)");
+  if (!dev) {  // a scene stepped by the caller (load_scene() checked SceneOverrides::caller_steps)
+    scene.device = hal::make_default_pose_tracker_config();
+    scene.device.control_period_s = scene.model.dt;
+    scene.model.initial_attached_body = -1;
+    for (int b = 0; b < scene.model.num_bodies() && scene.model.initial_attached_body < 0; ++b)
+      if (!scene.model.bodies[static_cast<std::size_t>(b)].anchored)
+        scene.model.initial_attached_body = b;
+    body_table_of_attached = nullptr;
+    scene.warnings.push_back(kNoFeedbackNonHaptic + std::string(" (the scene has no [device]): "
+                             "feedback_wrench stays 0; a [device.feedback] table gives it"));
+    return;
+  }
   dev->allow_only({"kind", "name", "attach", "max_sample_age", "jump_tolerance_counts",
                    "velocity_cutoff", "velocity_estimator", "foaw_max_window", "foaw_noise_counts",
                    "soft_start", "first_node_id", "tool_offset", "trocar", "tracker", "phantom",
@@ -586,6 +620,7 @@ void parse_device(const TomlTable& root, Scene& scene, const TomlTable*& body_ta
     dev->fail("axis", e.what());
   }
   parse_feedback(*dev, scene.model.feedback);
+  warn_no_feedback(*dev, cfg, scene);
   parse_hand(*dev, scene.hand);
   parse_admittance(*dev, scene, cfg);
   parse_plant(*dev, scene, cfg);

@@ -13,17 +13,27 @@ std::string TomlTable::key_path(std::string_view key) const {
   return path_.empty() ? std::string(key) : path_ + "." + std::string(key);
 }
 
+namespace {
+InputError located_error(const toml::node& node, const std::string& file, const std::string& key,
+                         const std::string& message) {
+  const toml::source_region& src = node.source();
+  return InputError(file, static_cast<int>(src.begin.line), static_cast<int>(src.begin.column),
+                    key, message);
+}
+}  // namespace
+
 void TomlTable::fail_at(const toml::node* node, const std::string& key,
                         const std::string& message) const {
-  int line = 0, column = 0;
-  const toml::source_region& src = node ? node->source() : table_->source();
-  line = static_cast<int>(src.begin.line);
-  column = static_cast<int>(src.begin.column);
-  throw InputError(*file_, line, column, key, message);
+  throw located_error(node ? *node : *table_, *file_, key, message);
 }
 
 void TomlTable::fail(std::string_view key, const std::string& message) const {
-  fail_at(table_->get(key), key_path(key), message);
+  throw error(key, message);
+}
+
+InputError TomlTable::error(std::string_view key, const std::string& message) const {
+  const toml::node* node = table_->get(key);
+  return located_error(node ? *node : *table_, *file_, key_path(key), message);
 }
 
 namespace {

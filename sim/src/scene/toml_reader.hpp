@@ -60,8 +60,10 @@ class TomlTable {
   /// Rejects keys not listed: a typo in a scene must not pass silently.
   void allow_only(std::initializer_list<std::string_view> keys) const;
 
-  /// Throws InputError located at `key`'s value (or at this table if absent).
+  /// Throws error(key, message).
   [[noreturn]] void fail(std::string_view key, const std::string& message) const;
+  /// The InputError located at `key`'s value (or at this table if absent), not thrown.
+  InputError error(std::string_view key, const std::string& message) const;
   /// Throws InputError located at `node`, with the given dotted key.
   [[noreturn]] void fail_at(const toml::node* node, const std::string& key,
                             const std::string& message) const;

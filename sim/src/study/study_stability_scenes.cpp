@@ -1,6 +1,7 @@
 /// @file study_stability_scenes.cpp
 /// Family "scenes" of `numen study stability` (study_stability.hpp): every shipped scene
-/// (sim/scenes/*.toml) run as `numen run` runs it (run_scene(): simulated bus, encoders, device
+/// (sim/scenes/*.toml) that `numen run` runs (not probe.toml, which has no trajectory: a scene
+/// stepped by its caller, Scene::run_missing) run as `numen run` runs it (run_scene(): simulated bus, encoders, device
 /// checks, the control loop, the core), with one stiffness swept over decades up to 1e12 N/m:
 ///  - "contact-stiffness": every material pair's penalty stiffness k_c (bodies' and net nodes'
 ///    contacts), damping and friction as shipped;
@@ -128,7 +129,12 @@ void plan_scene_stiffness(const StabilityOptions& o, const std::string& dir, Pla
     const std::string name = std::filesystem::path(file).stem().string();
     std::shared_ptr<const Scene> scene;
     try {
-      scene = std::make_shared<const Scene>(study::load_replayed_scene(file));
+      SceneOverrides caller;  // loaded as a caller would, to tell a scene that cannot run
+      caller.caller_steps = true;
+      Scene loaded = load_scene(file, caller);
+      if (!loaded.run_missing.empty()) continue;  // stepped by its caller: nothing to run
+      loaded.plant.reset();  // study::load_replayed_scene()
+      scene = std::make_shared<const Scene>(std::move(loaded));
     } catch (const std::exception& e) {  // a part this build left out (NUMEN_WITH_*)
       const std::string missing = study::missing_parts(true, true);
       if (missing.empty()) throw;

@@ -1059,3 +1059,32 @@ TEST(NumenCli, InstalledExecutableFindsTheDefaultSceneRelativeToItself) {
   const std::string expected = (prefix / "share/numen/scenes/default.toml").string();
   EXPECT_NE(r.out.find("\"file\":\"" + expected + "\""), std::string::npos) << r.out.substr(0, 300);
 }
+
+// Issue 56: what a user's scene leaves out is said, not silent. A device with motors but no
+// [device.feedback] (the lattice scene without its table) warns on stderr and in the summary;
+// a scene made to be stepped by its caller (the shipped probe.toml: no trajectory) is refused by
+// `numen run` with the located error that says so.
+TEST(NumenCli, RunSaysWhatTheSceneLeavesOut) {
+  NUMEN_REQUIRE_ARTICULATION();
+  TempDir dir;
+  std::string text = lattice_scene_copy({});
+  const auto from = text.find("[device.feedback]");
+  ASSERT_NE(from, std::string::npos);
+  text.erase(from, text.find("max_torque = 0.3", from) - from);
+  text = numen::test::replace(text, "max_torque = 0.3 ", "# max_torque = 0.3 ");
+  const std::string scene = dir.write("nofeedback.toml", text);
+  const ChildResult r = run_child({kNumen, "run", scene, "--duration", "0.05"}, dir.path(), 120);
+  EXPECT_EQ(r.status, 0) << r.err;
+  const std::string warning =
+      "no feedback: device \"laparoscopic_trainer\" has motors (drives on pivot_x, pivot_y, depth) "
+      "but no [device.feedback]: feedback_wrench stays 0 and the drives are sent no torque";
+  EXPECT_NE(r.err.find("numen: warning: " + warning), std::string::npos) << r.err;
+  EXPECT_NE(r.out.find("  warning: " + warning), std::string::npos) << r.out;
+
+  const std::string probe =
+      (std::filesystem::path(numen::sim::default_scene_path()).parent_path() / "probe.toml").string();
+  const ChildResult p = run_child({kNumen, "run", probe}, dir.path(), 30);
+  EXPECT_EQ(p.status, 2);
+  EXPECT_NE(p.err.find(probe + ":1:1: trajectory: missing: `numen run` needs a [trajectory]"),
+            std::string::npos) << p.err;
+}

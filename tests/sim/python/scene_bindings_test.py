@@ -57,3 +57,34 @@ def test_coupling_override():
     with pytest.raises(numen.InputError) as info:
         numen.load_scene(path, coupling="nonsense")
     assert info.value.key == "coupling"
+
+
+def test_a_library_scene_needs_no_trajectory_and_run_scene_refuses_it():
+    path = os.path.join(os.path.dirname(numen.default_scene_path()), "probe.toml")
+    scene = numen.load_scene(path)
+    assert not scene.has_trajectory and scene.has_device
+    assert scene.warnings == []
+    assert scene.model.body_names[scene.model.initial_attached_body] == "probe"
+    assert scene.model.obstacle_names == ["box"]
+    with pytest.raises(numen.InputError) as info:
+        scene.target_at(0.0)
+    assert info.value.key == "trajectory" and info.value.file == path
+    assert "`numen run` needs a [trajectory]" in info.value.message
+    with pytest.raises(numen.InputError) as run:
+        numen.run_scene(scene)
+    assert str(run.value) == str(info.value)
+
+
+def test_a_scene_without_device_or_feedback_says_so(tmp_path):
+    path = tmp_path / "ball.toml"
+    path.write_text('[[material]]\nname = "m"\n[[body]]\nname = "ball"\nmass = 0.1\n'
+                    'spheres = [[0.0, 0.0, 0.0, 0.01]]\n[body.coupling]\nstiffness = 100.0\n')
+    scene = numen.load_scene(str(path))
+    assert not scene.has_device and not scene.has_trajectory
+    assert scene.warnings == ["no feedback: non-haptic device (the scene has no [device]): "
+                              "feedback_wrench stays 0; a [device.feedback] table gives it"]
+    data = scene.make_data()
+    assert data.attached_body == 0
+    data.set_target([0.0, 0.0, 0.01], xyzw=[0, 0, 0, 1])
+    data.step(scene)
+    assert data.coupling_wrench[2] > 0 and np.all(data.feedback_wrench == 0)

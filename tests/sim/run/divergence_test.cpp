@@ -15,7 +15,9 @@
 #include "build_features.hpp"
 #include "lean_scenes.hpp"
 #include "numen/core/data.hpp"
+#include "numen/core/net_forces.hpp"
 #include "numen/core/step.hpp"
+#include "numen/core/step_stages.hpp"
 #include "numen/sim/run/energy.hpp"
 #include "organ_indentation.hpp"
 
@@ -195,65 +197,6 @@ TEST(DivergenceMonitor, AnOrgansEnergyIsItsNetsPartAndIsTakenOnceWhileItIsUnchan
   EXPECT_EQ(std::string(once.divergence().cause), "tie stretch");
 }
 
-TEST(DivergenceMonitor, AnOrgansNewStateIsJudgedInSlicesAndWholeWhenTheNextComesEarly) {
-  NUMEN_REQUIRE_DEFORMABLE();
-  const Model m = flat_organ();
-  Data d = held_at_rest(m, 1);
-  for (std::size_t i = 0; i < d.nodes.size(); i += 7) d.nodes[i].velocity = Vec3(0.0, 0.01, -0.02);
-  // The parts of an organ's energy sum to its whole (net_energy_part(), 4 and 7 parts).
-  for (const int parts : {4, 7}) {
-    double sum = 0.0, gravity_sum = 0.0;
-    for (int p = 0; p < parts; ++p) {
-      double g = 0.0;
-      sum += numen::sim::net_energy_part(m, d, 0, p, parts, &g);
-      gravity_sum += g;
-    }
-    double gravity = 0.0;
-    EXPECT_NEAR(sum, numen::sim::net_energy(m, d, 0, &gravity), 1e-15) << parts;
-    EXPECT_NEAR(gravity_sum, gravity, 1e-15) << parts;
-  }
-  EXPECT_EQ(numen::sim::net_energy_part(m, d, 0, 4, 4, nullptr), 0.0) << "a part out of range";
-  Data base = d;
-  DivergenceMonitor every(m, base), sliced(m, base);
-  sliced.set_organ_slices(4);
-  EXPECT_EQ(sliced.organ_slices(), 4);
-  EXPECT_FALSE(every.observe(m, d, 0, 0.0));
-  EXPECT_FALSE(sliced.observe(m, d, 0, 0.0, false));  // the first state: judged whole
-  EXPECT_DOUBLE_EQ(sliced.energy_ratio_max(), every.energy_ratio_max());
-  // A new, deeper dent: its energy counts once its four parts are judged (periods 1-4).
-  for (std::size_t i = 0; i < d.nodes.size(); i += 5) d.nodes[i].position.z() -= 0.002;
-  EXPECT_FALSE(every.observe(m, d, 1, m.dt));
-  std::int64_t allocations = 0;
-  for (int k = 1; k <= 4; ++k) {
-    numen::test::AllocationGuard guard;
-    EXPECT_FALSE(sliced.observe(m, d, k, k * m.dt, /*organs_unchanged=*/k > 1));
-    allocations += guard.count();
-    if (k < 4) {
-      EXPECT_LT(sliced.energy_ratio_max(), every.energy_ratio_max()) << k;
-    }
-  }
-  EXPECT_EQ(allocations, 0);
-  EXPECT_NEAR(sliced.energy_ratio_max(), every.energy_ratio_max(),
-              1e-12 * every.energy_ratio_max());
-  EXPECT_DOUBLE_EQ(sliced.stretch_ratio_max(), every.stretch_ratio_max());
-  // A node torn from its anchor in the last part: latched in the fourth call of its state.
-  Data torn = d;
-  torn.nodes.back().position.z() += 0.1;
-  EXPECT_FALSE(sliced.observe(m, torn, 5, 5 * m.dt, false));
-  EXPECT_FALSE(sliced.observe(m, torn, 6, 6 * m.dt, true));
-  EXPECT_FALSE(sliced.observe(m, torn, 7, 7 * m.dt, true));
-  EXPECT_TRUE(sliced.observe(m, torn, 8, 8 * m.dt, true));
-  EXPECT_EQ(std::string(sliced.divergence().cause), "tie stretch");
-  EXPECT_EQ(sliced.divergence().period, 8);
-  // A new state before the last one's parts are done is judged whole at once.
-  DivergenceMonitor early(m, base);
-  early.set_organ_slices(4);
-  EXPECT_FALSE(early.observe(m, d, 0, 0.0, false));
-  EXPECT_FALSE(early.observe(m, d, 1, m.dt, false));  // a new state: part 0 of 4
-  EXPECT_TRUE(early.observe(m, torn, 2, 2 * m.dt, false));
-  EXPECT_EQ(std::string(early.divergence().cause), "tie stretch");
-}
-
 TEST(DivergenceMonitor, EnergyNobodyPutInLatchesEnergy) {
   Model m = numen::test::make_lean_model(LeanPart::kNone);
   m.bodies[0].mass = 100.0;  // heavy and slow: below every speed limit, far above the energy
@@ -367,3 +310,46 @@ TEST(DivergenceMonitor, ObserveDoesNotAllocate) {
 }
 
 }  // namespace
+
+TEST(DivergenceMonitor, AStepsMeasuredStateIsJudgedFromItsNetOutputsAsNodeByNode) {
+  NUMEN_REQUIRE_DEFORMABLE();
+  // The tool pressed 3 mm into a flat organ with gravity, stepped: the monitor reads the nets'
+  // measures (NetOutput) where the step made them, and its figures are those of its own pass
+  // over the nodes and springs (the same state with kStageMeasureNets cleared). No allocation.
+  Model m = flat_organ();
+  m.gravity = Vec3(0.0, 0.0, -9.81);
+  ASSERT_EQ(numen::core::finalize_model(m), "");
+  Data d = held_at_rest(m, 1);
+  const double pressed = m.bodies[1].bounding_radius - 0.003;  // the sphere's centre, the surface at z = 0
+  DivergenceMonitor measured(m, d), node_by_node(m, d);
+  std::int64_t allocations = 0;
+  for (int k = 0; k < 300; ++k) {
+    d.target.position.z() = std::max(d.target.position.z() - 1e-4, pressed);
+    numen::core::step(m, d);
+    ASSERT_NE(d.stages_run & numen::core::kStageMeasureNets, 0u);
+    Data by_hand = d;
+    by_hand.stages_run &= ~numen::core::kStageMeasureNets;
+    {
+      numen::test::AllocationGuard guard;
+      EXPECT_FALSE(measured.observe(m, d, k, k * m.dt));
+      allocations += guard.count();
+    }
+    EXPECT_FALSE(node_by_node.observe(m, by_hand, k, k * m.dt));
+  }
+  EXPECT_EQ(allocations, 0);
+  EXPECT_GT(d.num_node_contacts, 0) << "the tool is on the organ";
+  // The energy: the measured state's is the forces stage's at the step's start, one step
+  // behind; pressed and then held for 120 steps, the largest ratios agree to 1e-3.
+  EXPECT_GT(node_by_node.energy_ratio_max(), 0.0);
+  EXPECT_NEAR(measured.energy_ratio_max(), node_by_node.energy_ratio_max(),
+              1e-3 * node_by_node.energy_ratio_max());
+  EXPECT_DOUBLE_EQ(measured.speed_ratio_max(), node_by_node.speed_ratio_max());
+  EXPECT_GT(node_by_node.stretch_ratio_max(), 0.0);
+  EXPECT_NEAR(measured.stretch_ratio_max(), node_by_node.stretch_ratio_max(),
+              1e-12 * node_by_node.stretch_ratio_max());
+  // A node torn from its anchor in a measured state: latched from NetOutput's largest stretch.
+  d.nodes[5].position.z() += 0.1;
+  numen::core::measure_nets(m, d);
+  EXPECT_TRUE(measured.observe(m, d, 300, 300 * m.dt));
+  EXPECT_EQ(std::string(measured.divergence().cause), "tie stretch");
+}

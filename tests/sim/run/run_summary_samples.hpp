@@ -74,6 +74,7 @@ inline sim::RunSummary full_managed_summary() {
   s.net_node_speed_max_mps = 0.0625;
   s.nan_detected = true;
   s.nonfinite_steps = 14;
+  s.invalid_target_steps = 3;
   s.divergence.latched = true;
   s.divergence.cause = "node speed";
   s.divergence.subject = "net \"bag\"";

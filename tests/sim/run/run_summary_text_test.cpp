@@ -87,7 +87,8 @@ TEST(RunSummaryText, PrintsTheValuesInTheirFormats) {
            "  re-arm: 2 request(s), 1 accepted, first before period 59\n",
            "  soft start: feedback ramped in over 100.000 ms, 2 ramp(s)\n",
            "  drives: yaw: operation enabled, pitch: switch on disabled\n",
-           "  nan detected: YES (non-finite steps 14)\n  divergence: speed 38.125, tie stretch "
+           "  nan detected: YES (non-finite steps 14); INVALID TARGETS: 3 steps (coupling "
+           "skipped, feedback held)\n  divergence: speed 38.125, tie stretch "
            "0.250 of their limits; energy 0.875x what the scene started with plus the hand's work "
            "(limit 100x) (speed limit 24.500 m/s, scene 0.291 m); DIVERGED "
            "at 0.412 s (period 412): node speed of net \"bag\" 933.500, limit 24.500\n  realtime "

@@ -328,3 +328,47 @@ TEST(SceneIgtl, ErrorsAreLocatedAtTheirKeys) {
   EXPECT_EQ(e3.key(), "device.igtl");
   EXPECT_NE(std::string(e3.what()).find("pose-tracker"), std::string::npos);
 }
+
+// ---------------------------------------------------------------- no [device.feedback]
+
+TEST(SceneDevice, AHapticDeviceWithoutFeedbackWarnsAtLoad) {
+  NUMEN_REQUIRE_ARTICULATION();  // the lattice scene has joints
+  // The lattice scene without its [device.feedback]: a trainer with drives on its pivots and
+  // insertion whose feedback would stay exactly 0 (issue 56: coupling −12.2 N, feedback 0).
+  std::string text = numen::test::shipped_scene_text("lattice.toml");
+  const auto from = text.find("[device.feedback]");
+  const auto to = text.find("max_torque = 0.3", from);
+  ASSERT_NE(from, std::string::npos);
+  ASSERT_NE(to, std::string::npos);
+  text.erase(from, text.find('\n', to) + 1 - from);
+  const std::string data = "\"" + std::string(NUMEN_SOURCE_DIR) + "/sim/data/";
+  for (auto at = text.find("\"../data/"); at != std::string::npos; at = text.find("\"../data/", at))
+    text.replace(at, 9, data);
+  TempDir dir;
+  const Scene s = load_scene(dir.write("lattice.toml", text));
+  EXPECT_EQ(s.model.feedback.k_t, 0.0);
+  const std::string expected =
+      "no feedback: device \"laparoscopic_trainer\" has motors (drives on pivot_x, pivot_y, "
+      "depth) but no [device.feedback]: feedback_wrench stays 0 and the drives are sent no "
+      "torque; give [device.feedback] stiffness and damping (docs/scenes.md)";
+  EXPECT_EQ(std::count(s.warnings.begin(), s.warnings.end(), expected), 1)
+      << (s.warnings.empty() ? std::string("no warning") : s.warnings.front());
+  // The shipped scene, with its table: no such warning.
+  const Scene shipped = load_scene(std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/lattice.toml");
+  for (const std::string& w : shipped.warnings) EXPECT_EQ(w.rfind("no feedback", 0), std::string::npos) << w;
+}
+
+TEST(SceneDevice, ADeviceWithoutMotorsSaysItHasNoFeedback) {
+  // The mini scene's pose tracker: no drives, no [device.feedback].
+  TempDir dir;
+  const Scene s = load_scene(dir.write("mini.toml", numen::test::kMiniScene));
+  ASSERT_EQ(s.warnings.size(), 1u);
+  EXPECT_EQ(s.warnings[0], "no feedback: non-haptic device (device \"pose_tracker\" has no drives and "
+                           "no [device.feedback]): feedback_wrench stays 0");
+  // With the table: no warning; the gains are read.
+  const Scene fed = load_scene(dir.write(
+      "fed.toml", replace(numen::test::kMiniScene, "attach = \"tool\"\n",
+                          "attach = \"tool\"\n[device.feedback]\nstiffness = 50.0\n")));
+  EXPECT_TRUE(fed.warnings.empty()) << fed.warnings.front();
+  EXPECT_EQ(fed.model.feedback.k_t, 50.0);
+}

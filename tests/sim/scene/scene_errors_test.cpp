@@ -60,7 +60,7 @@ TEST(SceneErrors, TheTemplateIsValid) {
   EXPECT_EQ(s.name, "mini");
   EXPECT_EQ(s.model.num_bodies(), 1);
   EXPECT_NEAR(s.trajectory.duration(), 0.75, 1e-9);
-  EXPECT_TRUE(s.warnings.empty());
+  EXPECT_TRUE(numen::test::warnings_besides_no_feedback(s).empty());  // a pose tracker: no feedback
 }
 
 TEST(SceneErrors, NegativeContactOnsetDepthNamesTheKey) {
@@ -357,18 +357,19 @@ TEST(SceneErrors, AContactStiffnessTheStepCannotResolveIsAWarningNamingTheBody) 
   TempDir dir;
   const std::string stiff = kMiniScene + "\n[contact_default]\nstiffness = 1e9\n";
   const Scene s = load_scene(dir.write("stiff.toml", stiff));
-  ASSERT_EQ(s.warnings.size(), 1u);
-  const std::string& w = s.warnings[0];
+  const std::vector<std::string> warnings = numen::test::warnings_besides_no_feedback(s);
+  ASSERT_EQ(warnings.size(), 1u);
+  const std::string& w = warnings[0];
   EXPECT_NE(w.find("body \"tool\""), std::string::npos) << w;
   EXPECT_NE(w.find("1e+09 N/m"), std::string::npos) << w;
   EXPECT_NE(w.find("2.5e+06 N/m"), std::string::npos) << w;
   EXPECT_NE(w.find("contact_max_omega_dt"), std::string::npos) << w;
   // Below the floor, or with the floor raised in [solver]: no warning.
   const Scene soft = load_scene(dir.write("soft.toml", kMiniScene + "\n[contact_default]\nstiffness = 2e6\n"));
-  EXPECT_TRUE(soft.warnings.empty());
+  EXPECT_TRUE(numen::test::warnings_besides_no_feedback(soft).empty());
   const Scene raised = load_scene(
       dir.write("raised.toml", kMiniScene + "\n[contact_default]\nstiffness = 1e9\n[solver]\ncontact_max_omega_dt = 100.0\n"));
-  EXPECT_TRUE(raised.warnings.empty()) << raised.warnings.front();
+  EXPECT_TRUE(numen::test::warnings_besides_no_feedback(raised).empty());
   EXPECT_DOUBLE_EQ(raised.model.solver.contact_max_omega_dt, 100.0);
   // Out of range: an error naming the key.
   const InputError e = load_error(dir, kMiniScene + "\n[solver]\ncontact_max_omega_dt = 0.0\n");
@@ -380,8 +381,9 @@ TEST(SceneErrors, DampingOutsideThePapersRuleIsAWarningNotAnError) {
   // ζ = 0.5 → γ/√(mk) = 1.0 < 1.4.
   const std::string low = replace(kMiniScene, "damping_ratio = 0.85", "damping_ratio = 0.5");
   const Scene s = load_scene(dir.write("low.toml", low));
-  ASSERT_EQ(s.warnings.size(), 1u);
-  const std::string& w = s.warnings[0];
+  const std::vector<std::string> warnings = numen::test::warnings_besides_no_feedback(s);
+  ASSERT_EQ(warnings.size(), 1u);
+  const std::string& w = warnings[0];
   EXPECT_NE(w.find("low.toml"), std::string::npos) << w;
   EXPECT_NE(w.find("body[0].coupling"), std::string::npos) << w;
   EXPECT_NE(w.find("1.4"), std::string::npos) << w;
@@ -389,12 +391,13 @@ TEST(SceneErrors, DampingOutsideThePapersRuleIsAWarningNotAnError) {
   const double gamma = 2.5 * std::sqrt(0.1 * 100.0);
   const std::string high = replace(kMiniScene, "damping_ratio = 0.85", "damping = " + std::to_string(gamma));
   const Scene h = load_scene(dir.write("high.toml", high));
-  ASSERT_EQ(h.warnings.size(), 1u);
-  EXPECT_NE(h.warnings[0].find("body[0].coupling.damping"), std::string::npos) << h.warnings[0];
+  const std::vector<std::string> high_warnings = numen::test::warnings_besides_no_feedback(h);
+  ASSERT_EQ(high_warnings.size(), 1u);
+  EXPECT_NE(high_warnings[0].find("body[0].coupling.damping"), std::string::npos) << high_warnings[0];
   EXPECT_NEAR(h.model.bodies[0].coupling.gamma_t, gamma, 1e-6);
   // Inside the rule (γ/√(mk) = 1.6): no warning.
   const std::string ok = replace(kMiniScene, "damping_ratio = 0.85", "damping_ratio = 0.8");
-  EXPECT_TRUE(load_scene(dir.write("ok.toml", ok)).warnings.empty());
+  EXPECT_TRUE(numen::test::warnings_besides_no_feedback(load_scene(dir.write("ok.toml", ok))).empty());
 }
 
 TEST(SceneErrors, MissingDevice) {
@@ -407,7 +410,27 @@ TEST(SceneErrors, MissingDevice) {
   EXPECT_NE(what.find("bad.toml"), std::string::npos);
   EXPECT_EQ(e.key(), "device");
   EXPECT_NE(what.find("device: missing"), std::string::npos);
-  EXPECT_NE(e.message().find("[device]"), std::string::npos);
+  EXPECT_NE(e.message().find("`numen run` needs a [device]"), std::string::npos);
+  EXPECT_NE(e.message().find("stepped by your own program"), std::string::npos);
+  // Loaded to be stepped by the caller: no error; the same located error waits for a run.
+  numen::sim::SceneOverrides caller;
+  caller.caller_steps = true;
+  const Scene s = load_scene((dir.path() / "bad.toml").string(), caller);
+  EXPECT_FALSE(s.has_device);
+  EXPECT_TRUE(s.has_trajectory);
+  EXPECT_EQ(s.model.initial_attached_body, 0);  // the first body that is not anchored
+  EXPECT_EQ(s.model.feedback.k_t, 0.0);
+  ASSERT_EQ(s.run_missing.size(), 1u);
+  EXPECT_STREQ(s.run_missing[0].what(), e.what());
+  try {
+    numen::sim::require_runnable(s);
+    ADD_FAILURE() << "require_runnable() accepted a scene without [device]";
+  } catch (const InputError& r) {
+    EXPECT_STREQ(r.what(), e.what());
+  }
+  ASSERT_EQ(s.warnings.size(), 1u);
+  EXPECT_EQ(s.warnings[0], "no feedback: non-haptic device (the scene has no [device]): "
+                           "feedback_wrench stays 0; a [device.feedback] table gives it");
 }
 
 TEST(SceneErrors, MissingTrajectory) {
@@ -420,7 +443,20 @@ TEST(SceneErrors, MissingTrajectory) {
   EXPECT_NE(what.find("bad.toml"), std::string::npos);
   EXPECT_EQ(e.key(), "trajectory");
   EXPECT_NE(what.find("trajectory: missing"), std::string::npos);
-  EXPECT_NE(e.message().find("[trajectory]"), std::string::npos);
+  EXPECT_NE(e.message().find("`numen run` needs a [trajectory]"), std::string::npos);
+  // Loaded to be stepped by the caller: no error, no trajectory, no duration; a run refuses it
+  // with the same located error.
+  numen::sim::SceneOverrides caller;
+  caller.caller_steps = true;
+  const Scene s = load_scene((dir.path() / "bad.toml").string(), caller);
+  EXPECT_FALSE(s.has_trajectory);
+  EXPECT_TRUE(s.has_device);
+  EXPECT_TRUE(s.trajectory.empty());
+  EXPECT_EQ(s.duration_s, 0.0);
+  EXPECT_EQ(s.model.initial_attached_body, 0);
+  ASSERT_EQ(s.run_missing.size(), 1u);
+  EXPECT_STREQ(s.run_missing[0].what(), e.what());
+  EXPECT_THROW(numen::sim::require_runnable(s), InputError);
 }
 
 // ---------------------------------------------------------------- input plausibility (issue 17)

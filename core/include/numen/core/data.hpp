@@ -100,7 +100,9 @@ enum StepStatus : std::uint32_t {
   kContactOverflow = 1u << 0,      ///< More contacts than kMaxContacts: the rest were dropped.
   kNonFinite = 1u << 1,            ///< A NaN/Inf appeared; the state was restored from the last step.
   kSolverNotConverged = 1u << 2,   ///< The implicit solve hit max_iterations above tolerance.
-  kInvalidTarget = 1u << 3,        ///< The device target was not finite: coupling skipped this step.
+  /// The device target was not finite: coupling skipped this step, the feedback held at the
+  /// last step's value (compute_feedback()), Data::invalid_target_steps counted.
+  kInvalidTarget = 1u << 3,
 };
 
 /// All mutable state of a scene.
@@ -143,7 +145,8 @@ struct Data {
   Wrench coupling_wrench;          ///< Coupling (Eq. 2) on the attached body, at its COM.
   /// Device feedback, world, about the attached body's target point: Eq. 8 of
   /// the attached body plus, by Eq. 9, every other targeted body's Eq. 8
-  /// wrench carried to that point. Saturated.
+  /// wrench carried to that point. Saturated. Held at the last step's value in a
+  /// step whose held body's target is not finite (kInvalidTarget; compute_feedback()).
   Wrench feedback_wrench;
   /// Per body: Eq. 8 wrench of a targeted body about its own target point
   /// (world, unsaturated); zero for bodies without a target.
@@ -171,6 +174,10 @@ struct Data {
   /// its stage; equal to Model::stage_plan after any step. 0 before the first step.
   std::uint32_t stages_run = 0;
   std::int64_t nonfinite_steps = 0;  ///< Steps whose result was rejected as non-finite.
+  /// Steps since reset that set kInvalidTarget: a device target that was not finite (the held
+  /// body's Data::target / target_twist, an enabled Data::body_targets entry, or in
+  /// CouplingMode::kAdmittance Data::device_wrench), ignored for the step.
+  std::int64_t invalid_target_steps = 0;
 
   // ---- scratch (sized once) ----
   std::vector<Wrench> body_wrench; ///< Accumulated explicit wrench per body (N, N·m, at COM).

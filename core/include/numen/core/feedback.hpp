@@ -42,8 +42,11 @@ Wrench carry_wrench(const Wrench& w, const Vec3& from, const Vec3& to) noexcept;
 /// to the held body), saturated by one ratio r = min(F_max/|F|, T_max/|T|, 1)
 /// that also scales every per-body wrench, so that the per-body wrenches
 /// carried to that point sum to the composite exactly. When no body is
-/// attached (or its target is not finite) the composite is zero and each
-/// per-body wrench is saturated on its own. All zero in CouplingMode::kDirect.
+/// attached the composite is zero and each per-body wrench is saturated on its
+/// own. When the attached body's target is not finite (kInvalidTarget) the
+/// composite and the per-body wrenches keep the values of the last step (a
+/// hold, not a drop to zero: docs/safety.md "Invalid targets"). All zero in
+/// CouplingMode::kDirect and kAdmittance.
 /// Sets its bit of Data::stages_run (kStageFeedback, step_stages.hpp).
 void compute_feedback(const Model& model, Data& data) noexcept;
 

@@ -26,7 +26,8 @@ struct Data;
 /// from: spring directions (SweepSpring; a spring of zero length keeps its last
 /// direction) and lengths (NetScratch::spring_length), lever arms ρ = R_b r
 /// (NetScratch::lever), and each NodeContact's r_b, normal_velocity, active
-/// and force. Independent of the integrator: it reads no h_s.
+/// and force, and each net's energy at the step's start (NetOutput::start_energy, from the
+/// same lengths and tie stretches). Independent of the integrator: it reads no h_s.
 /// Call after compute_contact_forces() (body_wrench is reset by
 /// apply_external_forces()) and after detect_node_contacts(). Nothing to do
 /// without nets; with nets it sets its bit of Data::stages_run (kStageNetForces,

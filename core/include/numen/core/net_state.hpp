@@ -84,6 +84,12 @@ struct NetOutput {
   double max_strain = 0.0;         ///< Largest |l − L|/L of a structural spring, step's end.
   double kinetic_energy = 0.0;     ///< Σ ½ m |v|² of the nodes, step's end (J).
   double max_node_speed = 0.0;     ///< Largest |v| of a node, step's end (m/s).
+  /// The net's mechanical energy at the step's start (J), from the forces stage's own terms:
+  /// Σ ½ m |v|² + Σ ½ k_tie |x − a|² (a the anchors on the rigid component's start pose)
+  /// + Σ ½ k (l − L)² over the structural and bending springs − Σ m g · x (gravity's potential
+  /// from the world origin) — paper §4.2's laws. That is the energy of the state the last step
+  /// ended in, one step behind the other measures here.
+  double start_energy = 0.0;
   Wrench tie_wrench;               ///< Σ tie forces on the rigid component at its COM, step's start (N, N·m).
   double max_penetration = 0.0;    ///< Deepest node contact this step (m), crossed ones included.
   /// Multirate scene loop only (0 in a single-rate step, which takes every contact): contacts of

@@ -25,7 +25,8 @@ struct Data;
 ///      one system (the net solve, which then takes the joints); with
 ///      symplectic Euler the nodes are stepped explicitly; then the nets'
 ///      observables are measured (measure_nets)
-///   4. feedback — Eq. 8 per targeted body, Eq. 9 composite, saturated
+///   4. feedback — Eq. 8 per targeted body, Eq. 9 composite, saturated; held at
+///      the last step's value when the held body's target is not finite
 ///   5. checks — non-finite results are rejected: every body goes back to its
 ///      pose before the step with zero twist, every node to its position with
 ///      zero velocity, the feedback (composite and per body), the joint
@@ -33,7 +34,8 @@ struct Data;
 ///      re-measured on the restored nodes (tie wrench zeroed),
 ///      kNonFinite is set and Data::nonfinite_steps counted
 /// Data::status is cleared first (then detect_contacts may set
-/// kContactOverflow and count contact_overflow_steps);
+/// kContactOverflow and count contact_overflow_steps); a step that sets kInvalidTarget
+/// (a device target that is not finite, coupling.hpp) counts Data::invalid_target_steps;
 /// The stages are those Model::stage_plan names (computed once by finalize_model();
 /// step_stages.hpp: a model without joints or nets runs no pass for them; a plan left
 /// stale by an edit after finalize_model() fails an assertion in builds without NDEBUG);

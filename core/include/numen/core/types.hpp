@@ -13,9 +13,15 @@ using Vec3 = Eigen::Vector3d;     ///< 3-vector (m, m/s, N, rad/s, ... by contex
 using Mat3 = Eigen::Matrix3d;     ///< 3x3 matrix (rotation, inertia kg·m², ...).
 using Vec6 = Eigen::Matrix<double, 6, 1>;  ///< Stacked (linear; angular) 6-vector.
 using Mat6 = Eigen::Matrix<double, 6, 6>;  ///< 6x6 block (mass, Jacobian blocks).
-using Quat = Eigen::Quaterniond;  ///< Unit quaternion, Hamilton convention.
+/// Unit quaternion, Hamilton convention. Component order: constructed as Quat(w, x, y, z)
+/// (Eigen's constructor), stored and read by coeffs() as (x, y, z, w) — the order of the Python
+/// module's arrays; scene files write [w, x, y, z] (docs/scenes.md "Drive it from your own
+/// program").
+using Quat = Eigen::Quaterniond;
 
-/// Rigid pose of a frame in the world: position (m) and orientation.
+/// Rigid pose of a frame in the world: position (m) and orientation (frame → world; Quat's
+/// component orders above). Which frame is stated where a Pose is declared: Data::target is the
+/// held body's centre-of-mass frame, a trajectory sample the instrument's tool frame.
 struct Pose {
   Vec3 position = Vec3::Zero();
   Quat orientation = Quat::Identity();

@@ -66,4 +66,17 @@ void body_target_of(const LinkBinding& b, const core::Pose& link, const core::Tw
 /// attached body, its BodyTarget (enabled) for any other. `body` must be in range.
 void set_body_target(core::Data& d, int body, const core::Pose& pose, const core::Twist& twist) noexcept;
 
+/// One link binding's share of a period (the control loop's and sim::InstrumentTargets'): the
+/// body `b` drives in `d` (bound_body()) gets the target of its link, at pose `link` with twist
+/// `link_twist` (world; body_target_of(), set_body_target()). Returns that body, −1 for none
+/// (then nothing is set). `body_point`, if not null, receives the target's position (m, world:
+/// the point its feedback is about), set even when no body is driven. Real-time safe.
+int apply_link_target(const LinkBinding& b, const core::Pose& link, const core::Twist& link_twist,
+                      core::Data& d, std::span<const std::uint8_t> explicit_bound,
+                      core::Vec3* body_point) noexcept;
+
+/// A prescribed joint's coordinate from its axis value `q` and rate `qdot` (m or rad, and per
+/// s): Data::joint_prescribed[p.joint] = {scale · q + offset, scale · qdot}. Real-time safe.
+void apply_prescription(const AxisPrescription& p, double q, double qdot, core::Data& d) noexcept;
+
 }  // namespace numen::platform

@@ -19,6 +19,13 @@ std::filesystem::path executable_dir();
 /// "../data/..." paths resolve in both layouts.
 std::filesystem::path shipped_data_dir();
 
+/// The root of the shipped scenes and data for a module loaded from `module_dir` (the Python
+/// module's directory): `module_dir/data_from_module` (an installed prefix's share/numen as seen
+/// from the module's install directory, e.g. "../../../share/numen" from
+/// lib/python3/dist-packages) when it holds scenes/default.toml, else shipped_data_dir().
+std::filesystem::path shipped_data_dir_from(const std::filesystem::path& module_dir,
+                                            const std::filesystem::path& data_from_module);
+
 /// The viewer page directory (index.html, viewer.js, vendor/): `<shipped data dir>/viewer`
 /// of an installed prefix when it holds index.html, else `build_tree_dir` (the build tree's
 /// page, which the `numen` target passes).

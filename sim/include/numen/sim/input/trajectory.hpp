@@ -37,7 +37,10 @@ inline constexpr double kMaxTargetDistance = 10.0;
 /// One sample of a target motion.
 struct TrajectorySample {
   double time = 0.0;  ///< Time since the start of the trajectory (s).
-  core::Pose pose;    ///< Tool tip frame in the world: position (m), orientation (unit quaternion).
+  /// The instrument's tool frame in the world (trocar instrument: the tip, z along the shaft;
+  /// pose tracker: the tracked frame): position (m), orientation (unit quaternion). Not the held
+  /// body's centre-of-mass frame: InstrumentTargets (instrument_targets.hpp) turns it into that.
+  core::Pose pose;
   double jaw = 0.0;   ///< Jaw / gripper opening angle (rad).
 };
 

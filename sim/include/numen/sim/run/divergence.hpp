@@ -85,8 +85,10 @@ double step_response_speed(const core::Model& model, const core::Data& data, int
                            const core::Twist& twist) noexcept;
 
 /// Per-period divergence monitor of one run. Construction allocates (setup); observe() never
-/// allocates, throws, locks or blocks, and costs O(bodies + nodes + springs) (O(bodies + the
-/// god-object's nets + (an organ's nodes + springs) / organ_slices()) in a multirate run).
+/// allocates, throws, locks or blocks, and costs O(bodies + nets) on a state whose step measured
+/// its nets (Data::stages_run has core::kStageMeasureNets: every core::step of a model with nets;
+/// the nets are judged from core::NetOutput), else O(bodies + nodes + springs), less the organs'
+/// where the caller says they are unchanged.
 class DivergenceMonitor {
  public:
   /// Sizes the monitor for `model` and takes the scene's scale from `data` (the state at the
@@ -96,30 +98,23 @@ class DivergenceMonitor {
 
   /// Judges the state after period `period` (simulated time `time_s`). Returns true in the
   /// period of the first breach (then latched: later calls return false and change nothing).
+  /// Where `data.stages_run` has core::kStageMeasureNets, each net's node speeds and tie
+  /// stretches are its NetOutput's largest (at the step's end) and its energy NetOutput's
+  /// start_energy (the forces stage's, at the step's start: the energy bound one step behind for
+  /// the nets): `data` must then be the state that step made (a state changed by hand after the
+  /// step needs stages_run cleared of that bit).
   /// `organs_unchanged`: the nodes of the organs (nets on anchored bodies) are those of the last
-  /// call (a multirate run's view between two scene samples, MultirateRun::took_model()), so
-  /// that a device period does not pay O(nodes + springs) for a state the scene loop has not
-  /// changed: an organ's new state is judged (node speeds, tie stretches, its energy) in
-  /// organ_slices() parts, one a call from the call that brings it, the energy bound taking the
-  /// organ's energy from the last state judged whole; a new state that comes before the parts of
-  /// the last are done is judged whole at once. With organ_slices() = 1 (the default) each new
-  /// state is judged whole in the call that brings it.
+  /// call (a multirate run's view between two scene samples, whose Data carries no step's
+  /// measures: MultirateRun::took_model()), so that a device period does not pay
+  /// O(nodes + springs) for a state the scene loop has not changed: the organs keep their last
+  /// judgement (the energy bound their last energy). Ignored on a measured state and on the
+  /// first call.
   bool observe(const core::Model& model, const core::Data& data, std::int64_t period, double time_s,
                bool organs_unchanged = false) noexcept;
 
   /// The run's start-up push-out ended with `data` (see the file comment): the speed bound's
   /// push speed and the energy base E₀ + W_in are rebased on this state. No allocation.
   void end_startup(const core::Model& model, const core::Data& data) noexcept;
-
-  /// Judges each new state of the organs over `slices` calls (observe(); at least 1): a
-  /// multirate run's runner sets about half the device periods of a scene period, so that the
-  /// O(nodes + springs) of a scene sample is spread over the periods until the next.
-  void set_organ_slices(int slices) noexcept {
-    organ_slices_ = std::max(1, slices);
-    organ_slice_ = organ_slices_;
-  }
-  /// The parts an organ's new state is judged in (set_organ_slices()).
-  int organ_slices() const noexcept { return organ_slices_; }
 
   /// Latches a breach found outside the monitor (e.g. "device plant": the emulated device's
   /// mechanics ran away, PlantMotion) with `cause` (a static string), the axis or body index
@@ -175,10 +170,7 @@ class DivergenceMonitor {
   std::vector<double> net_radius_m_;       // per net: max |rest offset| of its nodes
   std::vector<double> base_stretch_m_;     // per net: largest tie stretch at the (re)base
   std::vector<double> net_energy_;         // per net: its energy and gravity potential, last taken
-  std::vector<double> organ_energy_sum_;   // per organ: its parts' energy and gravity so far
   bool net_energy_taken_ = false;          // net_energy_ holds every net's
-  int organ_slices_ = 1;                   // set_organ_slices()
-  int organ_slice_ = 1;                    // the organs' next part; organ_slices_: all judged
   std::vector<core::BodyState> prev_bodies_;
   std::vector<core::Pose> prev_targets_;   // per body: its coupling target in the last period
   std::vector<char> prev_coupled_;         // per body: it had a coupling target then

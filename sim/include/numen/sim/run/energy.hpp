@@ -34,26 +34,6 @@ double body_energy(const core::Model& model, const core::Data& data, double* gra
 double net_energy(const core::Model& model, const core::Data& data, int n,
                   double* gravity) noexcept;
 
-/// Part `part` of `parts` of net_energy(): the nodes and springs of net `n` cut into `parts`
-/// contiguous ranges of near-equal size (the nodes [begin + count·part/parts, begin +
-/// count·(part+1)/parts), the springs likewise), so that the parts 0 … parts − 1 sum to
-/// net_energy() (and their `*gravity` to its gravity potential) while each costs
-/// O((nodes + springs) / parts). 0 for `n` out of range, `parts` < 1 or `part` outside
-/// [0, parts).
-double net_energy_part(const core::Model& model, const core::Data& data, int n, int part, int parts,
-                       double* gravity) noexcept;
-
-/// A half-open range of indices [begin, end).
-struct IndexRange {
-  int begin = 0;
-  int end = 0;
-};
-
-/// Part `part` of `parts` (parts ≥ 1) of the `count` indices from `first`: [first + count·part /
-/// parts, first + count·(part + 1) / parts), the cut of net_energy_part(); the parts of 0 …
-/// parts − 1 tile the range.
-IndexRange part_of_range(int first, int count, int part, int parts) noexcept;
-
 /// ½ k d² of every body and node contact of the last step (depths at its start; stiffness of
 /// the contact's material pair), J.
 double contact_energy(const core::Model& model, const core::Data& data) noexcept;

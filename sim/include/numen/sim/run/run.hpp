@@ -111,7 +111,8 @@ class SceneRunner {
   /// `scene` must outlive the runner. `trace_capacity` records are reserved.
   /// `bus` chooses the controller's bus; a log is loaded and a recording
   /// opened (its writer thread started) here. Throws std::invalid_argument
-  /// for an unknown bus spec, std::runtime_error ("file:line:column: what")
+  /// for an unknown bus spec, InputError for a scene without [trajectory] or [device]
+  /// (require_runnable()), std::runtime_error ("file:line:column: what")
   /// for a log that cannot be read or a recording that cannot be written.
   /// `realtime`: the periods are paced to CLOCK_MONOTONIC (run_scene with
   /// RunOptions::realtime), so overruns are supervised (control_loop_settings()) with
@@ -298,7 +299,8 @@ class SceneRunner {
 
 /// Runs `scene` for options.duration_s (or the scene's duration) and judges it
 /// (RunSummary::exit_status, run_verdict()).
-/// Throws std::runtime_error if the trace cannot be written.
+/// Throws InputError for a scene without [trajectory] or [device] (require_runnable()),
+/// std::runtime_error if the trace cannot be written.
 RunSummary run_scene(const Scene& scene, const RunOptions& options);
 
 }  // namespace numen::sim

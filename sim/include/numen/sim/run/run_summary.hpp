@@ -211,6 +211,9 @@ struct RunSummary {
   double net_node_speed_max_mps = 0.0;  ///< Fastest node (m/s).
   bool nan_detected = false;
   std::int64_t nonfinite_steps = 0;
+  /// Steps whose device target was not finite (core::Data::invalid_target_steps): coupling
+  /// skipped, feedback held at its last value.
+  std::int64_t invalid_target_steps = 0;
   std::int64_t bus_frames_dropped = 0;
   std::int64_t bus_frames_corrupted = 0;
   std::string bus = "sim";                 ///< BusChoice::spec of the run.

@@ -19,6 +19,7 @@
 #include "numen/sim/device/admittance_hand.hpp"
 #include "numen/sim/device/hand.hpp"
 #include "numen/sim/device/plant_motion.hpp"
+#include "numen/sim/input/input_error.hpp"
 #include "numen/sim/input/trajectory.hpp"
 #include "numen/sim/scene/passivity_lint.hpp"
 
@@ -115,8 +116,22 @@ struct Scene {
   /// steps (s, in (2·latency, dt)): one SYNC round trip fits in the period.
   double compute_phase_s = 0.0;
   /// Target of the instrument's tool frame (trocar instrument: the tip) in the
-  /// world, sampled at model.dt.
+  /// world, sampled at model.dt; empty when has_trajectory is false. Not the held body's
+  /// target: InstrumentTargets (instrument_targets.hpp) turns a sample into the bodies'.
   Trajectory trajectory;
+  /// The scene has a [trajectory]. Only a scene loaded with SceneOverrides::caller_steps may
+  /// leave it out (run_missing then says so).
+  bool has_trajectory = true;
+  /// The scene has a [device]. Only a scene loaded with SceneOverrides::caller_steps may leave
+  /// it out: `device` is then hal::make_default_pose_tracker_config() (no drives, identity base
+  /// and tool offset: a sample is the held body's COM-frame target), the feedback gains are
+  /// zero and the held body is the first body that is not anchored (-1: none).
+  bool has_device = true;
+  /// What a run through the control loop (`numen run`, Python run_scene, SceneRunner) needs
+  /// and this scene left out, as the located errors load_scene() throws without
+  /// SceneOverrides::caller_steps (a missing [trajectory], then a missing [device]); empty when
+  /// it can run. require_runnable() throws the first.
+  std::vector<InputError> run_missing;
   std::vector<AttachEvent> events;  ///< Sorted by time.
   /// Per net (model.nets order): its surface triangles (the viewer draws them).
   std::vector<NetTriangles> net_triangles;
@@ -140,7 +155,8 @@ struct Scene {
   /// Set by a [multirate] table: the god-object runs at dt against an intermediate contact
   /// model the scene loop refreshes every scene_dt (the run harness, SceneRunner).
   std::optional<MultirateScene> multirate;
-  double duration_s = 0.0;          ///< Default run length (s).
+  /// Default run length (s): `duration`, else the trajectory's; 0 without either.
+  double duration_s = 0.0;
   std::vector<std::string> warnings;  ///< Non-fatal remarks of the loader.
   /// How the trocar point was placed (for the summary), empty if not a trocar.
   std::string trocar_note;
@@ -158,10 +174,19 @@ struct SceneOverrides {
   /// The passivity lint's findings are errors (`--strict`): InputError at [device.plant]
   /// damping instead of a warning (passivity_lint.hpp).
   bool strict = false;
+  /// The scene is loaded to be stepped by the caller (the Python module's load_scene, a
+  /// program of one's own setting the targets and calling core::step), not run through the
+  /// control loop: [trajectory] and [device] may be left out (Scene::has_trajectory,
+  /// Scene::has_device; Scene::run_missing holds the errors a run would raise).
+  bool caller_steps = false;
 };
 
 /// Loads and compiles `path`. Throws InputError.
 Scene load_scene(const std::string& path, const SceneOverrides& overrides = {});
+
+/// Throws the first of scene.run_missing (the located error of a missing [trajectory] or
+/// [device], which a run through the control loop needs); returns when there is none.
+void require_runnable(const Scene& scene);
 
 /// The shipped default scene: share/numen/scenes/default.toml of the installed prefix the
 /// running executable belongs to, else sim/scenes/default.toml of the source tree
