@@ -140,62 +140,6 @@ inline void one_spring_linearization(const SpringPass& a, std::int32_t j, const 
   a.rhs[hi] -= kv;
 }
 
-/// The linearisation's per-node accumulators of two springs at a time (one lane each): the
-/// weights' sums (upper triangle) and the right-hand side.
-struct PairSums {
-  Pair bx = Pair::Zero(), by = Pair::Zero(), bz = Pair::Zero();
-  Pair s00 = Pair::Zero(), s01 = Pair::Zero(), s02 = Pair::Zero(), s11 = Pair::Zero(),
-       s12 = Pair::Zero(), s22 = Pair::Zero();
-  /// Adds the lanes into `sum` (the rhs and the weights' sums; the force is left alone).
-  void add_to(NodeSums& sum) const noexcept {
-    sum.rhs = Vec3(bx(0) + bx(1), by(0) + by(1), bz(0) + bz(1));
-    sum.w00 = s00(0) + s00(1);
-    sum.w01 = s01(0) + s01(1);
-    sum.w02 = s02(0) + s02(1);
-    sum.w11 = s11(0) + s11(1);
-    sum.w12 = s12(0) + s12(1);
-    sum.w22 = s22(0) + s22(1);
-  }
-};
-
-/// Springs j and j + 1 of node k (later nodes h0, h1), linearised (the law of
-/// one_spring_linearization(), lane by lane: the same operations and roundings) from their
-/// inverse length 1/l, direction n and the velocity difference dv = v_high − v_k with
-/// n · dv: stores α and β, adds W_e to the later nodes' blocks and −h² k K̃ dv to their rows,
-/// and both to the node's own sums.
-inline void linearize_pair(const SpringPass& a, std::int32_t j, std::size_t h0, std::size_t h1,
-                           const Pair& inv_l, const Pair& nx, const Pair& ny,
-                           const Pair& nz, const Pair& dvx, const Pair& dvy, const Pair& dvz,
-                           const Pair& n_dv, PairSums& sums) noexcept {
-  const Pair rest = load_pair(a.rest_length + j);
-  const Pair stiffness = load_pair(a.stiffness + j), damping = load_pair(a.damping + j);
-  const Pair hk = Pair::Constant(a.h2) * stiffness;
-  // β = hk (1 − L/l) if l > L else 0, as max(0, ·) (SSE2 maxpd; Eigen's pmax(a, b)
-  // returns a when b is NaN: 0 for l = 0, as the comparison gives).
-  const Pair beta = Pair::Zero().max(hk * (1.0 - rest * inv_l));
-  const Pair alpha = Pair::Constant(a.h) * damping + hk - beta;
-  store_pair(a.weight_axial + j, alpha);
-  store_pair(a.weight_isotropic + j, beta);
-  const Pair ax = alpha * nx, ay = alpha * ny, az = alpha * nz;
-  const Pair w00 = ax * nx + beta, w11 = ay * ny + beta, w22 = az * nz + beta;
-  const Pair w01 = ax * ny, w02 = ax * nz, w12 = ay * nz;
-  sums.s00 += w00;
-  sums.s01 += w01;
-  sums.s02 += w02;
-  sums.s11 += w11;
-  sums.s12 += w12;
-  sums.s22 += w22;
-  add_symmetric(a.spring_block[h0], w00(0), w01(0), w02(0), w11(0), w12(0), w22(0));
-  add_symmetric(a.spring_block[h1], w00(1), w01(1), w02(1), w11(1), w12(1), w22(1));
-  const Pair c = (hk - beta) * n_dv;
-  const Pair kx = c * nx + beta * dvx, ky = c * ny + beta * dvy, kz = c * nz + beta * dvz;
-  sums.bx += kx;
-  sums.by += ky;
-  sums.bz += kz;
-  a.rhs[h0] -= Vec3(kx(0), ky(0), kz(0));
-  a.rhs[h1] -= Vec3(kx(1), ky(1), kz(1));
-}
-
 /// The arrays of the springs' passes for `h` (h_s of the linearised system; unused by the
 /// forces' pass).
 SpringPass spring_arrays(Data& data, double h) noexcept {
@@ -294,7 +238,8 @@ void spring_pass(const Model& model, Data& data) noexcept {
 }
 
 /// The springs' linearisation for the implicit solve (linearize_nets()), in the
-/// order of spring_pass() and two springs at a time (linearize_pair()), from the directions
+/// order of spring_pass() and two springs at a time (the same operations and
+/// roundings as one_spring_linearization(), lane by lane), from the directions
 /// and lengths spring_pass() stored: the weights W_e = α d̂d̂ᵀ + β I
 /// (SweepSprings), their sum at both nodes (NetScratch::spring_block: 6
 /// entries, the later node's scattered two at a time), and the spring part of
@@ -306,13 +251,16 @@ void linearization_pass(const Model& model, Data& data, double h) noexcept {
   const SpringPass a = spring_arrays(data, h);
   const std::int32_t* low_begin = s.spring_low_begin.data();
   const std::int32_t* order = model.node_sweep_order.data();
+  const Pair hp = Pair::Constant(a.h), h2p = Pair::Constant(a.h2);
   const std::size_t n = data.nodes.size();
   for (std::size_t p = 0; p < n; ++p) {
     const auto k = static_cast<std::size_t>(order[p]);
     const Vec3 vk = a.nodes[k].velocity;
     const Pair vx = Pair::Constant(vk.x()), vy = Pair::Constant(vk.y()),
                vz = Pair::Constant(vk.z());
-    PairSums lin;
+    Pair bx = Pair::Zero(), by = Pair::Zero(), bz = Pair::Zero();
+    Pair s00 = Pair::Zero(), s01 = Pair::Zero(), s02 = Pair::Zero(), s11 = Pair::Zero(),
+         s12 = Pair::Zero(), s22 = Pair::Zero();
     std::int32_t j = low_begin[p];
     const std::int32_t end = low_begin[p + 1];
     for (; j + 1 < end; j += 2) {
@@ -320,17 +268,50 @@ void linearization_pass(const Model& model, Data& data, double h) noexcept {
       const auto h1 = static_cast<std::size_t>(a.high[j + 1]);
       const NodeState& n0 = a.nodes[h0];
       const NodeState& n1 = a.nodes[h1];
-      const Pair inv_l = load_pair(a.length + j).inverse();
+      const Pair l = load_pair(a.length + j);
+      const Pair inv_l = l.inverse();
+      const Pair rest = load_pair(a.rest_length + j);
       const Pair nx = load_pair(a.dir_x + j), ny = load_pair(a.dir_y + j),
                  nz = load_pair(a.dir_z + j);
       const Pair dvx = Pair(n0.velocity.x(), n1.velocity.x()) - vx;
       const Pair dvy = Pair(n0.velocity.y(), n1.velocity.y()) - vy;
       const Pair dvz = Pair(n0.velocity.z(), n1.velocity.z()) - vz;
       const Pair n_dv = nx * dvx + ny * dvy + nz * dvz;
-      linearize_pair(a, j, h0, h1, inv_l, nx, ny, nz, dvx, dvy, dvz, n_dv, lin);
+      const Pair stiffness = load_pair(a.stiffness + j), damping = load_pair(a.damping + j);
+      const Pair hk = h2p * stiffness;
+      // β = hk (1 − L/l) if l > L else 0, as max(0, ·) (SSE2 maxpd; Eigen's pmax(a, b)
+      // returns a when b is NaN: 0 for l = 0, as the comparison gives).
+      const Pair beta = Pair::Zero().max(hk * (1.0 - rest * inv_l));
+      const Pair alpha = hp * damping + hk - beta;
+      store_pair(a.weight_axial + j, alpha);
+      store_pair(a.weight_isotropic + j, beta);
+      const Pair ax = alpha * nx, ay = alpha * ny, az = alpha * nz;
+      const Pair w00 = ax * nx + beta, w11 = ay * ny + beta, w22 = az * nz + beta;
+      const Pair w01 = ax * ny, w02 = ax * nz, w12 = ay * nz;
+      s00 += w00;
+      s01 += w01;
+      s02 += w02;
+      s11 += w11;
+      s12 += w12;
+      s22 += w22;
+      add_symmetric(a.spring_block[h0], w00(0), w01(0), w02(0), w11(0), w12(0), w22(0));
+      add_symmetric(a.spring_block[h1], w00(1), w01(1), w02(1), w11(1), w12(1), w22(1));
+      const Pair c = (hk - beta) * n_dv;
+      const Pair kx = c * nx + beta * dvx, ky = c * ny + beta * dvy, kz = c * nz + beta * dvz;
+      bx += kx;
+      by += ky;
+      bz += kz;
+      a.rhs[h0] -= Vec3(kx(0), ky(0), kz(0));
+      a.rhs[h1] -= Vec3(kx(1), ky(1), kz(1));
     }
     NodeSums sum;
-    lin.add_to(sum);
+    sum.rhs = Vec3(bx(0) + bx(1), by(0) + by(1), bz(0) + bz(1));
+    sum.w00 = s00(0) + s00(1);
+    sum.w01 = s01(0) + s01(1);
+    sum.w02 = s02(0) + s02(1);
+    sum.w11 = s11(0) + s11(1);
+    sum.w12 = s12(0) + s12(1);
+    sum.w22 = s22(0) + s22(1);
     if (j < end) one_spring_linearization(a, j, vk, sum);
     a.rhs[k] += sum.rhs;
     add_symmetric(a.spring_block[k], sum.w00, sum.w01, sum.w02, sum.w11, sum.w12, sum.w22);
