@@ -98,6 +98,10 @@ RunVerdict run_verdict(const RunSummary& s) {
     add(ExitStatus::kLostRecords, "stdout: the summary was not written (" + s.stdout_error + ")");
   if (s.rejected_samples > 0)
     add(ExitStatus::kSamplesRejected, n(s.rejected_samples) + " axis samples rejected");
+  if (s.invalid_target_steps > 0)  // core::kInvalidTarget: the step skipped the coupling
+    add(ExitStatus::kSamplesRejected, n(s.invalid_target_steps) +
+                                          " steps with a non-finite device target (coupling "
+                                          "skipped, feedback held)");
   // Frames on an encoder's COB-ID of the wrong kind or length: each rejected its axis's
   // sample. Named, whatever else the run latched (every encoder frame sent as CAN FD read
   // "first: drive stuck" and nothing about the frames).

@@ -44,6 +44,16 @@ void plant_ran_away(RunSummary& s, double speed, double limit, double time_s) {
   s.divergence.time_s = time_s;
 }
 
+TEST(RunVerdict, AStepWithANonFiniteDeviceTargetIsARejectedSample) {
+  RunSummary s = clean();
+  s.invalid_target_steps = 2;
+  const auto v = run_verdict(s);
+  EXPECT_EQ(v.status, ExitStatus::kSamplesRejected);
+  ASSERT_EQ(v.reasons.size(), 1u);
+  EXPECT_EQ(v.reasons[0], "samples rejected: 2 steps with a non-finite device target (coupling "
+                          "skipped, feedback held)");
+}
+
 TEST(RunVerdict, CleanRunIsZeroWithNoReason) {
   const auto v = run_verdict(clean());
   EXPECT_EQ(v.status, ExitStatus::kClean);

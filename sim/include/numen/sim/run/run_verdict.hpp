@@ -26,7 +26,7 @@ enum class ExitStatus : int {
   kLostRecords = 5,       ///< Records of --record / --trace were dropped or not written, or
                           ///< the summary could not be written on stdout.
   kSamplesRejected = 6,   ///< Input samples were rejected during the run (encoder values out
-                          ///< of range, jumps, non-finite), no sample was ever valid in a run
+                          ///< of range, jumps, non-finite; a step's device target not finite), no sample was ever valid in a run
                           ///< that was not stopped by a signal, or a replayed bus log gave no frame.
   kDiverged = 7,          ///< The divergence monitor latched: finite state that physics bounds
                           ///< (speeds, tie stretch, energy) say is not a simulation any more
