@@ -73,6 +73,7 @@ Data make_data(const Model& model) {
   data.nodes.resize(static_cast<std::size_t>(model.num_nodes()));
   data.node_contacts.resize(model.num_nodes() > 0 ? static_cast<std::size_t>(kMaxNodeContacts) : 0);
   data.nets.resize(static_cast<std::size_t>(model.num_nets()));
+  data.grasps.resize(static_cast<std::size_t>(model.num_grasps()));
   data.applied_wrench.resize(n);
   data.body_wrench.resize(n);
   data.body_targets.resize(n);
@@ -123,6 +124,7 @@ void reset_data(const Model& model, Data& data) noexcept {
   data.num_contacts = 0;
   data.num_node_contacts = 0;
   for (NetOutput& o : data.nets) o = NetOutput{};
+  for (GraspState& g : data.grasps) g = GraspState{};
   data.contacts_dropped = 0;
   data.contact_overflow_steps = 0;
   data.net_crossed_steps = 0;

@@ -20,6 +20,7 @@
 #include "numen/core/step_stages.hpp"
 
 #include "detail/data_scratch.hpp"
+#include "detail/grasp_terms.hpp"
 #include "detail/implicit_system.hpp"
 #include "detail/joint_system.hpp"
 #include "detail/net_solve.hpp"
@@ -144,7 +145,9 @@ void SolverScratch::resize(const Model& model) {
   block_factor.assign(n, BlockCholesky{});
   in_solve.assign(n, 1);
   contact_terms.assign(static_cast<std::size_t>(contact_capacity(model)), ContactTerm{});
-  cross_contacts.assign(static_cast<std::size_t>(cross_contact_capacity(model)), CrossContact{});
+  cross_contacts.assign(
+      static_cast<std::size_t>(cross_contact_capacity(model) + detail::grasp_point_capacity(model)),
+      CrossContact{});
   num_cross_contacts = 0;
   coupled.assign(n, 0);
   const auto nj = static_cast<std::size_t>(model.num_joints());
@@ -263,6 +266,7 @@ void build_implicit_system(const Model& model, Data& data) noexcept {
     }
   }
 
+  detail::add_grasp_terms(model, data);  // the held bodies' springs
   if constexpr (kWithDeformable)
     add_net_body_terms(model, data);  // ties and node contacts of the deformable nets
   for (std::size_t i = 0; i < n; ++i) {

@@ -259,6 +259,7 @@ std::string finalize_model(Model& model) {
     set_unjointed_topology(model);
   }
   build_collision_structures(model);
+  if (std::string e = finalize_grasps(model); !e.empty()) return e;
   model.stage_plan = compiled_stages(model);  // reads the articulation's body trees: last
   return {};
 }

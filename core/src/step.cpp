@@ -11,6 +11,7 @@
 #include "numen/core/data.hpp"
 #include "numen/core/features.hpp"
 #include "numen/core/feedback.hpp"
+#include "numen/core/grasp.hpp"
 #include "numen/core/integrator.hpp"
 #include "numen/core/model.hpp"
 #include "numen/core/net_collision.hpp"
@@ -70,6 +71,7 @@ void compute_forces(const Model& model, Data& data) noexcept {
   apply_external_forces(model, data);
   apply_coupling(model, data);
   compute_contact_forces(model, data);
+  apply_grasp_forces(model, data);
   data.stages_run |= kStageBodyForces;
   if constexpr (kWithDeformable) {
     if (model.stage_plan & kStageNetForces) compute_net_forces(model, data);  // sets its bit
@@ -115,6 +117,7 @@ void run_step(const Model& model, Data& data, ContactWriter write, const void* c
         detect_node_contacts(model, data);  // sets its bit
     }
   }
+  if (plan & kStageGrasp) update_grasps(model, data);  // sets its bit; drops the held bodies' contacts
   compute_forces(model, data);
   if (data.contacts_clamped > 0) ++data.contact_clamped_steps;  // body and node contacts
   integrate(model, data);  // sets its bit, and kStageNetSolve or kStageJointSolve if run

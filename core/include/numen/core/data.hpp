@@ -13,6 +13,7 @@
 
 #include "numen/core/capacity.hpp"
 #include "numen/core/contact.hpp"
+#include "numen/core/grasp.hpp"
 #include "numen/core/joint.hpp"
 #include "numen/core/net_state.hpp"
 #include "numen/core/types.hpp"
@@ -161,6 +162,8 @@ struct Data {
   std::vector<NodeContact> node_contacts;
   int num_node_contacts = 0;
   std::vector<NetOutput> nets;     ///< Per net (Model::nets).
+  /// Per grasper (Model::grasps): what it holds, its springs and this step's event (grasp.hpp).
+  std::vector<GraspState> grasps;
   int solver_iterations = 0;       ///< Iterations of the implicit solve this step (bodies and nets).
   /// The measure the solve stopped on (SolverSettings::tolerance): the relative residual
   /// ‖r‖/‖b‖; for a model with nets and no joints the estimated relative energy-norm error

@@ -12,6 +12,7 @@
 
 #include "numen/core/articulation.hpp"
 #include "numen/core/broadphase.hpp"
+#include "numen/core/grasp.hpp"
 #include "numen/core/joint.hpp"
 #include "numen/core/mesh_shape.hpp"
 #include "numen/core/net_model.hpp"
@@ -259,6 +260,8 @@ struct Model {
   /// (docs/deformable.md). Derived by finalize_model() (order_net_nodes()).
   std::vector<std::int32_t> node_sweep_order;
 
+  /// Graspers (grasp.hpp, docs/grasping.md): an instrument's two jaws and their grasp rules.
+  std::vector<GraspModel> grasps;
   std::vector<std::string> material_names;  ///< Size num_materials.
   std::vector<MaterialPair> material_pairs; ///< num_materials², symmetric, row-major.
 
@@ -295,6 +298,7 @@ struct Model {
   int num_bodies() const noexcept { return static_cast<int>(bodies.size()); }
   int num_joints() const noexcept { return static_cast<int>(joints.size()); }
   int num_nets() const noexcept { return static_cast<int>(nets.size()); }
+  int num_grasps() const noexcept { return static_cast<int>(grasps.size()); }
   int num_nodes() const noexcept { return static_cast<int>(node_rest.size()); }
 };
 
