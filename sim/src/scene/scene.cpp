@@ -18,6 +18,7 @@
 #include "numen/sim/input/shipped_files.hpp"
 #include "numen/sim/device/simulated_instrument.hpp"
 #include "scene_articulation.hpp"
+#include "scene_grasp.hpp"
 #include "scene_multirate.hpp"
 #include "scene_deformable.hpp"
 #include "scene_device.hpp"
@@ -343,7 +344,7 @@ Scene load_scene(const std::string& path, const SceneOverrides& overrides) {
                    "integrator", "coupling",    "solver",   "material",  "contact_default",
                    "contact",    "body",        "obstacle", "device",    "bus",
                    "trajectory", "event",       "joint",    "baumgarte", "deformable",
-                   "multirate"});
+                   "multirate",  "grasp"});
   scene.name = root.string_or("name", std::filesystem::path(path).stem().string());
   scene.description = root.string_or("description", "");
   // Parts this build left out (features.hpp): refused before anything else is read.
@@ -386,6 +387,7 @@ Scene load_scene(const std::string& path, const SceneOverrides& overrides) {
     b.initial_pose = first_device_pose(scene);
   }
   parse_articulation(root, body_tables, scene);
+  parse_grasps(root, scene);
   // Nets after the bodies' starting poses are known (their nodes start there).
   if constexpr (core::kWithDeformable)
     parse_deformables(root, dir, scene.model, scene.net_triangles, scene.net_loads, scene.warnings);
@@ -449,6 +451,9 @@ Scene load_scene(const std::string& path, const SceneOverrides& overrides) {
     // Errors of the joint tree name the joint: point at its table.
     for (const TomlTable& j : root.tables("joint"))
       if (j.has("name") && err.rfind("joint '" + j.string("name") + "'", 0) == 0) j.fail("child", err);
+    // Errors of a grasper name it: point at its jaws.
+    for (const TomlTable& g : root.tables("grasp"))
+      if (g.has("name") && err.rfind("grasp '" + g.string("name") + "'", 0) == 0) g.fail("jaws", err);
     // An integrator that cannot run the coupling mode: point at the integrator key.
     if (err.rfind("integrator ", 0) == 0 && root.has("integrator")) root.fail("integrator", err);
     root.fail_at(nullptr, "", err);
