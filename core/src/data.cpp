@@ -71,7 +71,12 @@ Data make_data(const Model& model) {
   const auto n = static_cast<std::size_t>(model.num_bodies());
   data.bodies.resize(n);
   data.nodes.resize(static_cast<std::size_t>(model.num_nodes()));
-  data.node_contacts.resize(model.num_nodes() > 0 ? static_cast<std::size_t>(kMaxNodeContacts) : 0);
+  // Room for the penalty contacts (detection stops at kMaxNodeContacts) and the held nodes'
+  // grasp springs after them (grasp.hpp).
+  data.node_contacts.resize(model.num_nodes() > 0
+                                ? static_cast<std::size_t>(kMaxNodeContacts + model.num_grasps() *
+                                                                                  kMaxGraspNodes * kGraspSpringsPerNode)
+                                : 0);
   data.nets.resize(static_cast<std::size_t>(model.num_nets()));
   data.grasps.resize(static_cast<std::size_t>(model.num_grasps()));
   data.applied_wrench.resize(n);
@@ -123,6 +128,7 @@ void reset_data(const Model& model, Data& data) noexcept {
   }
   data.num_contacts = 0;
   data.num_node_contacts = 0;
+  data.num_node_grasp_springs = 0;
   for (NetOutput& o : data.nets) o = NetOutput{};
   for (GraspState& g : data.grasps) g = GraspState{};
   data.contacts_dropped = 0;

@@ -56,7 +56,12 @@ int grasped_side(const Model& model, const GraspModel& g, const Contact& c, int*
   return other;
 }
 
-Vec3 world_point(const BodyState& s, const Vec3& local) noexcept { return s.position + s.orientation * local; }
+/// A grasp started at `time` (s): the event and the count.
+void begin_grasp(GraspState& st, double time) noexcept {
+  st.started = time;
+  st.event = GraspEvent::kGrasp;
+  ++st.grasps;
+}
 
 /// Starts a grasp of `g` if both jaws touch one body this step: per jaw, five springs over its
 /// grip (GraspModel::grip_radius) — at the mean point of its contacts with the body, and at ±r
@@ -111,27 +116,92 @@ void try_grasp(const Model& model, Data& data, const GraspModel& g, GraspState& 
     }
   }
   st.body = body;
-  st.started = data.time;
-  st.event = GraspEvent::kGrasp;
-  ++st.grasps;
+  begin_grasp(st, data.time);
 }
 
 /// Drops this step's contacts between the jaws of `g` and the body it holds.
 void drop_held_contacts(const Model& model, Data& data, const GraspModel& g, const GraspState& st) noexcept {
   const int nc = std::clamp(data.num_contacts, 0, kMaxContacts);
-  int kept = 0;
-  double deepest = 0.0;
-  for (int i = 0; i < nc; ++i) {
-    const Contact& c = data.contacts[static_cast<std::size_t>(i)];
+  Contact* first = data.contacts.data();
+  Contact* last = std::remove_if(first, first + nc, [&](const Contact& c) {
     int jaw = -1;
-    if (grasped_side(model, g, c, &jaw) == st.body) continue;
-    deepest = std::max(deepest, c.depth);
-    if (kept != i) data.contacts[static_cast<std::size_t>(kept)] = c;
-    ++kept;
+    return grasped_side(model, g, c, &jaw) == st.body;
+  });
+  if (last == first + nc) return;
+  data.num_contacts = static_cast<int>(last - first);
+  data.max_penetration = 0.0;
+  for (const Contact* c = first; c != last; ++c) data.max_penetration = std::max(data.max_penetration, c->depth);
+}
+
+/// Starts a grasp of tissue if both jaws touch one net's nodes this step: each node a jaw touches
+/// (up to kMaxGraspNodes) tied to the first jaw that touched it.
+void try_grasp_tissue(const Model& model, Data& data, const GraspModel& g, GraspState& st) noexcept {
+  const int nc = std::clamp(data.num_node_contacts, 0, static_cast<int>(data.node_contacts.size()));
+  int net = -1;
+  for (int i = 0; i < nc && net < 0; ++i) {
+    const NodeContact& a = data.node_contacts[static_cast<std::size_t>(i)];
+    if (a.body_b < 0 || a.body_b != g.jaws[0]) continue;
+    const int n = model.node_net[static_cast<std::size_t>(a.node)];
+    for (int k = 0; k < nc; ++k) {
+      const NodeContact& b = data.node_contacts[static_cast<std::size_t>(k)];
+      if (b.body_b == g.jaws[1] && model.node_net[static_cast<std::size_t>(b.node)] == n) {
+        net = n;
+        break;
+      }
+    }
   }
-  if (kept == nc) return;
-  data.num_contacts = kept;
-  data.max_penetration = deepest;
+  if (net < 0) return;
+  st.num_nodes = 0;
+  for (int i = 0; i < nc && st.num_nodes < kMaxGraspNodes; ++i) {
+    const NodeContact& c = data.node_contacts[static_cast<std::size_t>(i)];
+    if (jaw_index(g, c.body_b) < 0 || model.node_net[static_cast<std::size_t>(c.node)] != net) continue;
+    bool known = false;
+    for (int k = 0; k < st.num_nodes; ++k) known = known || st.nodes[static_cast<std::size_t>(k)].node == c.node;
+    if (known) continue;
+    const BodyState& js = data.bodies[static_cast<std::size_t>(c.body_b)];
+    GraspNode& n = st.nodes[static_cast<std::size_t>(st.num_nodes++)];
+    n.node = c.node;
+    n.jaw = c.body_b;
+    n.jaw_point = js.orientation.conjugate() * (data.nodes[static_cast<std::size_t>(c.node)].position - js.position);
+    n.force.setZero();
+  }
+  st.net = net;
+  begin_grasp(st, data.time);
+}
+
+/// Drops this step's node contacts between the jaws of `g` and the net whose tissue it holds.
+void drop_held_node_contacts(const Model& model, Data& data, const GraspModel& g, const GraspState& st) noexcept {
+  const int nc = std::clamp(data.num_node_contacts, 0, static_cast<int>(data.node_contacts.size()));
+  NodeContact* first = data.node_contacts.data();
+  NodeContact* last = std::remove_if(first, first + nc, [&](const NodeContact& c) {
+    return jaw_index(g, c.body_b) >= 0 && model.node_net[static_cast<std::size_t>(c.node)] == st.net;
+  });
+  data.num_node_contacts = static_cast<int>(last - first);
+}
+
+/// Writes the held nodes' springs of `g` after the node contacts (NodeContact::held): three per
+/// node along the world's axes.
+void write_node_springs(Data& data, const GraspModel& g, const GraspState& st) noexcept {
+  for (int k = 0; k < st.num_nodes; ++k) {
+    const GraspNode& n = st.nodes[static_cast<std::size_t>(k)];
+    const BodyState& jaw = data.bodies[static_cast<std::size_t>(n.jaw)];
+    const Vec3 r = jaw.orientation * n.jaw_point;
+    for (int axis = 0; axis < kGraspSpringsPerNode; ++axis) {
+      const auto at = static_cast<std::size_t>(data.num_node_contacts + data.num_node_grasp_springs);
+      if (at >= data.node_contacts.size()) return;  // make_data() gave them room: not reached
+      NodeContact& c = data.node_contacts[at];
+      c = NodeContact{};
+      c.node = n.node;
+      c.body_b = n.jaw;
+      c.position = jaw.position + r;
+      c.r_b = r;
+      c.normal = Vec3::Unit(axis);
+      c.stiffness = g.stiffness;
+      c.damping = g.damping;
+      c.held = true;
+      ++data.num_node_grasp_springs;
+    }
+  }
 }
 
 }  // namespace
@@ -148,6 +218,7 @@ const char* to_string(GraspEvent event) noexcept {
 
 void update_grasps(const Model& model, Data& data) noexcept {
   data.stages_run |= kStageGrasp;
+  data.num_node_grasp_springs = 0;
   for (std::size_t i = 0; i < model.grasps.size(); ++i) {
     const GraspModel& g = model.grasps[i];
     GraspState& st = data.grasps[i];
@@ -157,17 +228,22 @@ void update_grasps(const Model& model, Data& data) noexcept {
       if (st.opening > g.open_angle) {
         st.body = -1;
         st.num_points = 0;
+        st.net = -1;
+        st.num_nodes = 0;
         st.event = GraspEvent::kRelease;
         ++st.releases;
       } else {
-        // The grip slips when the springs' net pull on the body at the last step exceeded its
-        // limit (a NaN too).
+        // The grip slips when the springs' net pull on what it holds at the last step exceeded
+        // its limit (a NaN too).
         Vec3 pull = Vec3::Zero();
         for (int k = 0; k < st.num_points; ++k) pull += st.points[static_cast<std::size_t>(k)].force;
+        for (int k = 0; k < st.num_nodes; ++k) pull += st.nodes[static_cast<std::size_t>(k)].force;
         st.grip_force = pull.norm();
         if (!(st.grip_force <= g.max_force)) {
           st.body = -1;
           st.num_points = 0;
+          st.net = -1;
+          st.num_nodes = 0;
           st.event = GraspEvent::kSlip;
           st.armed = false;  // no new grasp until the jaws open past θ_o
           ++st.slips;
@@ -177,16 +253,30 @@ void update_grasps(const Model& model, Data& data) noexcept {
       st.armed = true;
     } else if (st.armed && st.opening < g.close_angle) {
       try_grasp(model, data, g, st);
+      if (!st.holding() && g.tissue && model.num_nets() > 0) try_grasp_tissue(model, data, g, st);
     }
-    if (st.holding()) drop_held_contacts(model, data, g, st);
+    if (st.body >= 0) drop_held_contacts(model, data, g, st);
+    if (st.net >= 0) drop_held_node_contacts(model, data, g, st);
   }
+  // The held nodes' springs after the node contacts the drops left.
+  for (std::size_t i = 0; i < model.grasps.size(); ++i)
+    if (data.grasps[i].net >= 0) write_node_springs(data, model.grasps[i], data.grasps[i]);
 }
 
 void apply_grasp_forces(const Model& model, Data& data) noexcept {
   for (std::size_t i = 0; i < model.grasps.size(); ++i) {
     const GraspModel& g = model.grasps[i];
     GraspState& st = data.grasps[i];
-    if (!st.holding()) continue;
+    for (int k = 0; k < st.num_nodes; ++k) {  // applied by the nets' forces stage (NodeContact::held)
+      GraspNode& n = st.nodes[static_cast<std::size_t>(k)];
+      const BodyState& jaw = data.bodies[static_cast<std::size_t>(n.jaw)];
+      const NodeState& node = data.nodes[static_cast<std::size_t>(n.node)];
+      const Vec3 r = jaw.orientation * n.jaw_point;
+      n.force = grasp_spring_force(g.stiffness, g.damping, jaw.position + r,
+                                   jaw.linear_velocity + jaw.angular_velocity.cross(r), node.position,
+                                   node.velocity);
+    }
+    if (st.body < 0) continue;
     const auto b = static_cast<std::size_t>(st.body);
     const BodyState& held = data.bodies[b];
     for (int k = 0; k < st.num_points; ++k) {
@@ -195,9 +285,9 @@ void apply_grasp_forces(const Model& model, Data& data) noexcept {
       const BodyState& jaw = data.bodies[j];
       const Vec3 r_j = jaw.orientation * p.jaw_point;
       const Vec3 r_b = held.orientation * p.body_point;
-      const Vec3 v_rel = (jaw.linear_velocity + jaw.angular_velocity.cross(r_j)) -
-                         (held.linear_velocity + held.angular_velocity.cross(r_b));
-      p.force = g.stiffness * ((jaw.position + r_j) - (held.position + r_b)) + g.damping * v_rel;
+      p.force = grasp_spring_force(g.stiffness, g.damping, jaw.position + r_j,
+                                   jaw.linear_velocity + jaw.angular_velocity.cross(r_j), held.position + r_b,
+                                   held.linear_velocity + held.angular_velocity.cross(r_b));
       data.body_wrench[b].force += p.force;
       data.body_wrench[b].torque += r_b.cross(p.force);
       data.body_wrench[j].force -= p.force;
@@ -216,7 +306,7 @@ void add_grasp_terms(const Model& model, Data& data) noexcept {
   for (std::size_t i = 0; i < model.grasps.size(); ++i) {
     const GraspModel& g = model.grasps[i];
     const GraspState& st = data.grasps[i];
-    if (!st.holding()) continue;
+    if (st.body < 0) continue;  // held nodes: their springs are node contacts (NodeContact::held)
     // W = β I, β = h c + h² k; b += −h² k Gᵀ (G u0) with G u0 the points' relative velocity.
     const double beta = h * g.damping + h * h * g.stiffness;
     const auto a = static_cast<std::size_t>(st.body);

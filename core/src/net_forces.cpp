@@ -17,6 +17,7 @@
 #include "detail/data_scratch.hpp"
 #include "detail/net_solve.hpp"
 #include "detail/net_surface.hpp"
+#include "detail/net_terms.hpp"
 
 namespace numen::core {
 namespace {
@@ -371,7 +372,7 @@ void compute_net_forces(const Model& model, Data& data) noexcept {
   // Node contacts (penalty law of contact_force.hpp, the node on side a). A triangle contact's
   // share (NodeContact::face) takes the law at the triangle's point, Σ w_m v_m, and keeps its
   // node's share w of the force and of the Jacobian's coefficients (net_surface.hpp).
-  const int nc = std::clamp(data.num_node_contacts, 0, static_cast<int>(data.node_contacts.size()));
+  const int nc = detail::node_contact_count(data);  // the held nodes' grasp springs included
   const NodeState* node_states = data.nodes.data();
   // The look-ahead of a triangle contact (NodeContact::engaged, face ≥ 0), decided for all its
   // shares alike before any contact force joins the nodes' forces: each node of the triangle
@@ -401,6 +402,21 @@ void compute_net_forces(const Model& model, Data& data) noexcept {
   for (int c = 0; c < nc; ++c) {
     NodeContact& ct = data.node_contacts[static_cast<std::size_t>(c)];
     const auto i = static_cast<std::size_t>(ct.node);
+    if (ct.held) {  // a grasp spring along its axis (grasp.hpp): k and c stay the grasper's
+      const BodyState& jaw = data.bodies[static_cast<std::size_t>(ct.body_b)];
+      const Vec3 v_jaw = jaw.linear_velocity + jaw.angular_velocity.cross(ct.r_b);
+      const Vec3 f = grasp_spring_force(ct.stiffness, ct.damping, ct.position, v_jaw,
+                                        node_states[i].position, node_states[i].velocity);
+      ct.force = ct.normal.dot(f) * ct.normal;
+      ct.normal_velocity = ct.normal.dot(node_states[i].velocity - v_jaw);
+      ct.friction = 0.0;
+      ct.active = true;
+      s.force[i] += ct.force;
+      Wrench& w = data.body_wrench[static_cast<std::size_t>(ct.body_b)];
+      w.force -= ct.force;
+      w.torque -= ct.r_b.cross(ct.force);
+      continue;
+    }
     const Vec3 v_point = detail::contact_node_value(
         model, ct, [&](int v) -> const Vec3& { return node_states[v].velocity; });
     Vec3 v_rel = v_point;

@@ -16,20 +16,17 @@
 #include "numen/core/model.hpp"
 #include "numen/core/step.hpp"
 #include "numen/core/step_stages.hpp"
+#include "grasper_rig.hpp"
 #include "rotation.hpp"
 
 namespace {
 
 namespace core = numen::core;
 
-constexpr double kGraspDeg = M_PI / 180.0;
+constexpr double kGraspDeg = numen::test::kGraspDeg;
 
-/// A grasper pointing down and a thin upright plate between its jaws:
-/// - body 0, the tube (60 g, no spheres), its COM at `tube_at`, its z axis down (turned π about
-///   x); the device holds it (god-object coupling 1000 N/m, ζ 0.85);
-/// - bodies 1 and 2, the jaws (5 g each), hinged at the tube's tip (40 mm along its z) about its
-///   x axis by prescribed revolute joints (±θ/2), each a line of four 1.5 mm spheres 2–11 mm
-///   from the hinge;
+/// A grasper pointing down (numen::test::add_grasper(): bodies 0–2, its hinge at z = 0.02 m)
+/// and a thin upright plate between its jaws:
 /// - body 3, the plate (`plate_mass`): 11 × 13 spheres of 0.5 mm at 1 mm spacing in the world's
 ///   x–z plane (1 mm thick along y), its top 7 mm below the hinge, so that only the jaws'
 ///   second-to-last spheres (8 mm from the hinge) reach it: they touch it below θ = 29°.
@@ -41,52 +38,7 @@ core::Model grasp_rig(double gravity, double plate_mass, double max_force, const
   m.gravity = core::Vec3(0, 0, -gravity);
   m.material_names = {"steel"};
   m.material_pairs = {core::MaterialPair{2e4, 10.0, 0.5}};
-  const core::Vec3 tube_at(0, 0, 0.06);
-  const core::Quat down = numen::test::rot(M_PI, core::Vec3::UnitX());
-  core::BodyModel tube;
-  tube.name = "tube";
-  tube.mass = 0.06;
-  tube.inertia_body = core::Vec3(2e-5, 2e-5, 1e-6).asDiagonal();
-  tube.coupling = core::CouplingGains{1000.0, core::damping_from_ratio(0.85, 0.07, 1000.0), 1.0,
-                                      core::damping_from_ratio(0.85, 2e-5, 1.0)};
-  tube.initial_pose = core::Pose{tube_at, down};
-  m.bodies.push_back(tube);
-  for (int k = 0; k < 2; ++k) {
-    core::BodyModel jaw;
-    jaw.name = k == 0 ? "jaw_1" : "jaw_2";
-    jaw.mass = 0.005;
-    jaw.inertia_body = core::Vec3(6e-8, 6e-8, 6e-9).asDiagonal();
-    jaw.sphere_begin = static_cast<int>(m.body_spheres.size());
-    for (int i = 0; i < 4; ++i)
-      m.body_spheres.push_back(core::Sphere{core::Vec3(0, 0, -0.004 + 0.003 * i), 0.0015});
-    jaw.sphere_count = 4;
-    jaw.initial_pose = core::Pose{tube_at + down * core::Vec3(0, 0, 0.046), down};
-    m.bodies.push_back(jaw);
-    const core::Quat z_to_x = numen::test::rot(M_PI / 2, core::Vec3::UnitY());
-    core::JointModel hinge;
-    hinge.name = k == 0 ? "jaw_1_hinge" : "jaw_2_hinge";
-    hinge.type = core::JointType::kRevolute;
-    hinge.parent = 0;
-    hinge.child = 1 + k;
-    hinge.frame_parent = core::Pose{core::Vec3(0, 0, 0.04), z_to_x};
-    hinge.frame_child = core::Pose{core::Vec3(0, 0, -0.006), z_to_x};
-    hinge.prescribed = true;
-    // The jaw turned by ±opening/2 about the hinge (the tube's x axis, the world's): the sign
-    // that gives the prescribed coordinate's.
-    const double half = (k == 0 ? 0.5 : -0.5) * opening;
-    const core::Vec3 pivot = tube_at + down * core::Vec3(0, 0, 0.04);
-    core::BodyState tube_state{tube_at, down, core::Vec3::Zero(), core::Vec3::Zero()};
-    for (double sign : {1.0, -1.0}) {
-      const core::Quat turn = numen::test::rot(sign * half, core::Vec3::UnitX());
-      core::BodyState jaw_state{pivot + turn * (jaw.initial_pose.position - pivot), turn * down,
-                                core::Vec3::Zero(), core::Vec3::Zero()};
-      if (std::abs(core::joint_coordinate(hinge, &tube_state, jaw_state) - half) < 1e-9) {
-        m.bodies.back().initial_pose = core::Pose{jaw_state.position, jaw_state.orientation};
-        break;
-      }
-    }
-    m.joints.push_back(hinge);
-  }
+  numen::test::add_grasper(m, core::Vec3(0, 0, 0.06), opening, max_force);
   core::BodyModel plate;
   plate.name = "plate";
   plate.mass = plate_mass;
@@ -102,31 +54,9 @@ core::Model grasp_rig(double gravity, double plate_mass, double max_force, const
   // The hinge is at z = 0.02; the plate's top sphere (its centre +6 mm) 7.5 mm below it.
   plate.initial_pose = core::Pose{core::Vec3(0, 0, 0.02 - 0.0075 - 0.006) + plate_offset, core::Quat::Identity()};
   m.bodies.push_back(plate);
-  core::GraspModel g;
-  g.name = "grasper";
-  g.jaws = {1, 2};
-  g.close_angle = 30 * kGraspDeg;
-  g.open_angle = 40 * kGraspDeg;
-  g.stiffness = 2000.0;
-  g.damping = 2.0;
-  g.max_force = max_force;
-  m.grasps.push_back(g);
-  m.initial_attached_body = 0;
   const std::string err = core::finalize_model(m);
   EXPECT_EQ(err, "");
   return m;
-}
-
-/// Sets the jaws to opening θ (rad) moving at θ̇ (rad/s).
-void set_opening(core::Data& d, double theta, double rate) {
-  d.joint_prescribed[0] = core::JointPrescription{0.5 * theta, 0.5 * rate};
-  d.joint_prescribed[1] = core::JointPrescription{-0.5 * theta, -0.5 * rate};
-}
-
-/// The tube's target at `at` moving at `v`, turned down.
-void set_tube_target(core::Data& d, const core::Vec3& at, const core::Vec3& v) {
-  d.target = core::Pose{at, numen::test::rot(M_PI, core::Vec3::UnitX())};
-  d.target_twist = core::Twist{v, core::Vec3::Zero()};
 }
 
 /// The plate's centre in jaw 1's frame (m).
@@ -142,7 +72,7 @@ TEST(Grasp, StartsBelowTheCloseAngleWithBothJawsTouchingAndEndsAboveTheOpenAngle
   // to 35° (between the two angles: still held) and then to 45°.
   const core::Model m = grasp_rig(0.0, 0.02, 1e9, core::Vec3::Zero(), 60 * kGraspDeg);
   core::Data d = core::make_data(m);
-  set_tube_target(d, core::Vec3(0, 0, 0.06), core::Vec3::Zero());
+  numen::test::set_grasper_target(d, core::Vec3(0, 0, 0.06), core::Vec3::Zero());
   double theta = 60 * kGraspDeg;
   const double rate = 100 * kGraspDeg;
   int grasp_step = -1;
@@ -150,7 +80,7 @@ TEST(Grasp, StartsBelowTheCloseAngleWithBothJawsTouchingAndEndsAboveTheOpenAngle
   for (int s = 0; s < 600; ++s) {
     const double target = 25 * kGraspDeg;
     const double r = theta > target ? -rate : 0.0;
-    set_opening(d, theta, r);
+    numen::test::set_grasper_opening(d, theta, r);
     core::step(m, d);
     ASSERT_EQ(d.status & core::kNonFinite, 0u) << s;
     theta = std::max(target, theta + r * m.dt);
@@ -194,7 +124,7 @@ TEST(Grasp, StartsBelowTheCloseAngleWithBothJawsTouchingAndEndsAboveTheOpenAngle
   for (int s = 0; s < 400; ++s) {
     const double target = s < 200 ? 35 * kGraspDeg : 45 * kGraspDeg;
     const double r = theta < target ? rate : 0.0;
-    set_opening(d, theta, r);
+    numen::test::set_grasper_opening(d, theta, r);
     core::step(m, d);
     theta = std::min(target, theta + r * m.dt);
     if (s < 200) {
@@ -232,8 +162,8 @@ GraspHold grasp_hold_run(const core::Model& m) {
   GraspHold out;
   core::Data d = core::make_data(m);
   const core::Vec3 start(0, 0, 0.06);
-  set_tube_target(d, start, core::Vec3::Zero());
-  set_opening(d, 25 * kGraspDeg, 0.0);
+  numen::test::set_grasper_target(d, start, core::Vec3::Zero());
+  numen::test::set_grasper_opening(d, 25 * kGraspDeg, 0.0);
   core::step(m, d);
   const core::Vec3 grasped = plate_in_jaw(d);
   double energy_prev = 0.0;
@@ -256,7 +186,7 @@ GraspHold grasp_hold_run(const core::Model& m) {
         v.x() = amp * (de * std::sin(w * ts) + e * w * std::cos(w * ts));
       }
     }
-    set_tube_target(d, at, v);
+    numen::test::set_grasper_target(d, at, v);
     core::step(m, d);
     if (d.status & core::kNonFinite) {
       ADD_FAILURE() << "non-finite step " << s;
@@ -338,8 +268,8 @@ TEST(Grasp, TheHandFeelsTheHeldBlocksWeight) {
                                      core::damping_from_ratio(0.85, 2e-5, 1.0)};
     EXPECT_EQ(core::finalize_model(m), "");
     core::Data d = core::make_data(m);
-    set_tube_target(d, core::Vec3(0, 0, 0.06), core::Vec3::Zero());
-    set_opening(d, 25 * kGraspDeg, 0.0);
+    numen::test::set_grasper_target(d, core::Vec3(0, 0, 0.06), core::Vec3::Zero());
+    numen::test::set_grasper_opening(d, 25 * kGraspDeg, 0.0);
     for (int s = 0; s < 1000; ++s) core::step(m, d);
     return std::make_pair(d.feedback_wrench.force, d.grasps[0].holding());
   };
@@ -358,8 +288,8 @@ TEST(Grasp, ABodyHeavierThanTheGripSlipsOutAndFalls) {
   // with the jaws are on again and do not hold it either).
   const core::Model m = grasp_rig(9.81, 5.0, 5.0, core::Vec3::Zero());
   core::Data d = core::make_data(m);
-  set_tube_target(d, core::Vec3(0, 0, 0.06), core::Vec3::Zero());
-  set_opening(d, 25 * kGraspDeg, 0.0);
+  numen::test::set_grasper_target(d, core::Vec3(0, 0, 0.06), core::Vec3::Zero());
+  numen::test::set_grasper_opening(d, 25 * kGraspDeg, 0.0);
   core::step(m, d);
   ASSERT_TRUE(d.grasps[0].holding());
   const double z0 = d.bodies[3].position.z();

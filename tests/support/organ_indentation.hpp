@@ -81,6 +81,34 @@ inline core::TriangleMesh flat_patch(int n, double spacing) {
   return m;
 }
 
+/// "organ_core": the organ's rigid component, 0.1 kg, anchored at the origin, no spheres,
+/// material 1 ("tissue").
+inline core::BodyModel organ_core_body() {
+  core::BodyModel anchor;
+  anchor.name = "organ_core";
+  anchor.mass = 0.1;
+  anchor.inertia_body = 1e-4 * core::Mat3::Identity();
+  anchor.material = 1;
+  anchor.anchored = true;
+  return anchor;
+}
+
+/// Net "organ" of `mesh` on body 0, material 1, with the constants `p` per spring and per node.
+inline core::NetSettings organ_net_settings(const core::TriangleMesh& mesh, const OrganParams& p) {
+  core::NetSettings s;
+  s.name = "organ";
+  s.body = 0;
+  s.material = 1;
+  s.mass = p.node_mass * mesh.num_vertices();
+  s.stiffness = p.k;
+  s.damping = p.gamma;
+  s.bending_stiffness = p.k_bend;
+  s.bending_damping = p.gamma_bend;
+  s.tie_stiffness = p.k_tie;
+  s.tie_damping = p.gamma_tie;
+  return s;
+}
+
 /// Body 0: "organ_core", anchored at the origin (no spheres), carrying net "organ" from `mesh`;
 /// body 1: "tool", one sphere of `tool_radius` at its COM, 50 g, held by the device from
 /// `tool_start` (kDirect: imposed; kGodObject: coupled at 1000 N/m, ζ = 0.85). Materials "steel"
@@ -97,12 +125,7 @@ inline core::Model organ_model(const core::TriangleMesh& mesh, const OrganParams
   m.solver.max_iterations = 200;
   m.material_names = {"steel", "tissue"};
   m.material_pairs.assign(4, core::MaterialPair{2e4, 10.0, 0.0});
-  core::BodyModel anchor;
-  anchor.name = "organ_core";
-  anchor.mass = 0.1;
-  anchor.inertia_body = 1e-4 * core::Mat3::Identity();
-  anchor.material = 1;
-  anchor.anchored = true;
+  const core::BodyModel anchor = organ_core_body();
   core::BodyModel tool;
   tool.name = "tool";
   tool.mass = 0.05;
@@ -118,18 +141,7 @@ inline core::Model organ_model(const core::TriangleMesh& mesh, const OrganParams
   m.initial_attached_body = 1;
   m.feedback.k_t = 300.0;
   m.feedback.gamma_t = 1.0;
-  core::NetSettings s;
-  s.name = "organ";
-  s.body = 0;
-  s.material = 1;
-  s.mass = p.node_mass * mesh.num_vertices();
-  s.stiffness = p.k;
-  s.damping = p.gamma;
-  s.bending_stiffness = p.k_bend;
-  s.bending_damping = p.gamma_bend;
-  s.tie_stiffness = p.k_tie;
-  s.tie_damping = p.gamma_tie;
-  EXPECT_EQ(core::add_net(m, mesh, s), "");
+  EXPECT_EQ(core::add_net(m, mesh, organ_net_settings(mesh, p)), "");
   EXPECT_EQ(core::finalize_model(m), "");
   return m;
 }

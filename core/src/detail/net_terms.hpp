@@ -29,9 +29,11 @@ inline Vec3 weight_times(double alpha, double beta, const Vec3& n, const Vec3& v
   return (alpha * n.dot(v)) * n + beta * v;
 }
 
-/// Node contacts of this step within the scratch (Data::node_contacts).
+/// Node contacts of this step within the scratch (Data::node_contacts), the grasp springs on held
+/// nodes after them (Data::num_node_grasp_springs) included: what the solve takes.
 inline int node_contact_count(const Data& data) noexcept {
-  return std::clamp(data.num_node_contacts, 0, static_cast<int>(data.node_contacts.size()));
+  return std::clamp(data.num_node_contacts + data.num_node_grasp_springs, 0,
+                    static_cast<int>(data.node_contacts.size()));
 }
 
 /// A node contact with a dynamic body in the solve: an off-diagonal block.

@@ -469,6 +469,10 @@ Scene load_scene(const std::string& path, const SceneOverrides& overrides) {
   warn_clamped_contacts(scene.model, scene.warnings);
   warn_yielding_coupling(scene.model, scene.warnings);
   parse_multirate(root, scene);
+  if (scene.multirate && !scene.model.grasps.empty())
+    root.tables("grasp").front().fail(
+        "name", "grasping runs in the single-rate step: a scene with [multirate] has no grasper yet "
+                "(docs/grasping.md, \"Not yet\")");
   if (overrides.replay) scene.plant.reset();
   scene.passivity_lint = passivity_lint(scene);
   for (const PassivityLintRow& row : scene.passivity_lint) {

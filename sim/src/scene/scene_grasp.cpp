@@ -37,7 +37,7 @@ void parse_grasps(const TomlTable& root, Scene& scene) {
   core::Model& m = scene.model;
   for (const TomlTable& t : root.tables("grasp")) {
     t.allow_only({"name", "jaws", "close_angle_deg", "open_angle_deg", "stiffness", "damping",
-                  "grip_radius", "max_force"});
+                  "grip_radius", "max_force", "tissue"});
     core::GraspModel g;
     g.name = t.string("name");
     for (const core::GraspModel& other : m.grasps)
@@ -63,6 +63,7 @@ void parse_grasps(const TomlTable& root, Scene& scene) {
     g.grip_radius = t.number_in("grip_radius", 0.0, 0.1, g.grip_radius);
     if (!(g.grip_radius > 0.0)) t.fail("grip_radius", "must be > 0 (m)");
     g.max_force = t.number_in("max_force", 0.0, kInf, g.max_force);
+    g.tissue = t.boolean_or("tissue", true);
     if (!(g.max_force > 0.0)) t.fail("max_force", "must be > 0 (N)");
     // A body the grip cannot hold against gravity: said at load, with the numbers.
     const double gravity = m.gravity.norm();

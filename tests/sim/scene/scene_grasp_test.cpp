@@ -51,6 +51,7 @@ stiffness = 5000.0
 damping = 3.0
 grip_radius = 0.002
 max_force = 12.0
+tissue = false
 )");
   const numen::sim::Scene s = numen::sim::load_scene(dir.write("grasp.toml", text));
   ASSERT_EQ(s.model.grasps.size(), 2u);
@@ -78,6 +79,8 @@ max_force = 12.0
   EXPECT_EQ(t.damping, 3.0);
   EXPECT_EQ(t.grip_radius, 0.002);
   EXPECT_EQ(t.max_force, 12.0);
+  EXPECT_TRUE(g.tissue);
+  EXPECT_FALSE(t.tissue);
   EXPECT_NE(s.model.stage_plan & numen::core::kStageGrasp, 0u);
 }
 
@@ -99,6 +102,7 @@ TEST(SceneGrasp, ErrorsAreLocatedAtTheirKeys) {
        "15.0", "grasp[0].open_angle_deg", "must exceed close_angle_deg"},
       {"jaws = [\"jaw_1\", \"jaw_2\"]\nstiffness = 0.0\n", "stiffness = 0.0", "0.0", "grasp[0].stiffness", "must be > 0"},
       {"jaws = [\"jaw_1\", \"jaw_2\"]\ngrip = 0.002\n", "grip = ", "0.002", "grasp[0].grip", "grip"},
+      {"jaws = [\"jaw_1\", \"jaw_2\"]\ntissue = 1\n", "tissue = ", "1", "grasp[0].tissue", "expected true or false"},
   };
   for (const Case& c : cases) {
     SCOPED_TRACE(c.keys);
@@ -122,4 +126,15 @@ TEST(SceneGrasp, ABodyHeavierThanTheGripHoldsIsWarnedWithTheNumbers) {
     warned = warned || (w.find("grasp \"grasper\": body \"block\" weighs 9.81 N (1 kg), more than the grip's "
                                "max_force 5 N") != std::string::npos);
   EXPECT_TRUE(warned);
+}
+
+TEST(SceneGrasp, AMultirateSceneIsRefusedAtTheGrasp) {
+  numen::test::TempDir dir;
+  const std::string text = default_with_grasp(
+      "\n[multirate]\nscene_dt = 0.002\nmargin = 0.002\n\n[[grasp]]\nname = \"grasper\"\njaws = [\"jaw_1\", \"jaw_2\"]\n");
+  const std::string& dt_text = text;
+  const std::size_t at = dt_text.rfind("name = \"grasper\"");
+  const int line = 1 + static_cast<int>(std::count(dt_text.begin(), dt_text.begin() + static_cast<std::ptrdiff_t>(at), '\n'));
+  numen::test::expect_located(numen::test::load_error(dir, dt_text), (dir / "bad.toml").string(), line, 0,
+                              "grasp[0].name", "grasping runs in the single-rate step");
 }

@@ -161,6 +161,10 @@ struct Data {
   /// kMaxNodeContacts when the model has nets, else 0.
   std::vector<NodeContact> node_contacts;
   int num_node_contacts = 0;
+  /// Grasp springs on held net nodes (NodeContact::held), in node_contacts right after the
+  /// num_node_contacts penalty contacts; written by the grasp stage (grasp.hpp), 0 without a
+  /// held net. The solve takes both; the contact reports count only num_node_contacts.
+  int num_node_grasp_springs = 0;
   std::vector<NetOutput> nets;     ///< Per net (Model::nets).
   /// Per grasper (Model::grasps): what it holds, its springs and this step's event (grasp.hpp).
   std::vector<GraspState> grasps;

@@ -35,6 +35,10 @@ struct Data;
 inline constexpr int kGripPointsPerJaw = 5;
 /// Spring points of one grasp (both jaws).
 inline constexpr int kMaxGraspPoints = 2 * kGripPointsPerJaw;
+/// Net nodes one grasp of tissue holds at most (the first the jaws touch, in contact order).
+inline constexpr int kMaxGraspNodes = 16;
+/// Node contacts' room for the grasp springs of held nodes: three per node (NodeContact::held).
+inline constexpr int kGraspSpringsPerNode = 3;
 
 /// An instrument's grasper: its two jaws and the rules and springs of its grasps. Model::grasps.
 struct GraspModel {
@@ -54,9 +58,20 @@ struct GraspModel {
   /// along two axes of its face (the plane normal to the contacts' mean normal). About a jaw
   /// face's half width.
   double grip_radius = 0.0015;
-  /// Largest net pull (N) of the springs on the held body before it slips out of the grip (the
-  /// friction limit μ·squeeze of a real grip); +∞: never.
+  /// Largest net pull (N) of the springs on the held body (or tissue) before it slips out of the
+  /// grip (the friction limit μ·squeeze of a real grip); +∞: never.
   double max_force = 5.0;
+  /// Grasp a deformable net's tissue when the jaws touch no body: the nodes the jaws touch are
+  /// tied to them (GraspState::nodes).
+  bool tissue = true;
+};
+
+/// A held node of tissue: tied to a point of the jaw that touched it by the grasper's spring.
+struct GraspNode {
+  int node = -1;                   ///< Global node index.
+  int jaw = -1;                    ///< The jaw's body.
+  Vec3 jaw_point = Vec3::Zero();   ///< The node's place at the grasp's start, in the jaw's frame (m).
+  Vec3 force = Vec3::Zero();       ///< The spring's force on the node at the step's start (N, world).
 };
 
 /// One spring of a grasp: a point of a jaw tied to a point of the held body.
@@ -82,9 +97,12 @@ const char* to_string(GraspEvent event) noexcept;
 
 /// State of one grasper (Data::grasps, one per Model::grasps). Written by the grasp stage.
 struct GraspState {
-  int body = -1;          ///< The held body; -1: nothing held.
+  int body = -1;          ///< The held body; -1: none.
   int num_points = 0;     ///< Springs in use, [0, num_points) of `points`.
   std::array<GraspPoint, kMaxGraspPoints> points{};
+  int net = -1;           ///< The net whose tissue is held; -1: none.
+  int num_nodes = 0;      ///< Held nodes, [0, num_nodes) of `nodes`.
+  std::array<GraspNode, kMaxGraspNodes> nodes{};
   double opening = 0.0;   ///< The jaws' opening this step (rad).
   GraspEvent event = GraspEvent::kNone;  ///< This step's event.
   double started = 0.0;   ///< Simulated time (s) the current grasp started.
@@ -96,7 +114,7 @@ struct GraspState {
   std::int64_t slips = 0;     ///< Grasps ended by slipping (the net pull past max_force).
   /// ‖Σ GraspPoint::force‖ at the last step's start (N): the pull the grip transmits.
   double grip_force = 0.0;
-  bool holding() const noexcept { return body >= 0; }
+  bool holding() const noexcept { return body >= 0 || net >= 0; }
 };
 
 /// The grasp stage (step(), after the contacts): for each grasper, reads the opening; ends a
@@ -104,14 +122,25 @@ struct GraspState {
 /// max_force (slip); starts a grasp when the opening is below θ_c, nothing is held, the grasper
 /// is armed (GraspState::armed: no slip since the jaws last opened past θ_o), and both
 /// jaws touch one dynamic body outside their articulation — kGripPointsPerJaw springs on each
-/// jaw's grip; then removes this step's contacts between the jaws and the body they hold. Sets
-/// kStageGrasp in Data::stages_run. No allocation.
+/// jaw's grip — or, when they touch no body but both touch one net's nodes (GraspModel::tissue),
+/// ties each node they touch (up to kMaxGraspNodes) to the jaw that touched it. Then removes this
+/// step's contacts between the jaws and what they hold, and writes the held nodes' springs after
+/// the node contacts (NodeContact::held, Data::num_node_grasp_springs). Sets kStageGrasp in
+/// Data::stages_run. No allocation.
 void update_grasps(const Model& model, Data& data) noexcept;
 
 /// The springs' forces at the step's start into Data::body_wrench (the held body gets
-/// GraspPoint::force at its point, the jaw the opposite at its own) and GraspPoint::force.
-/// Part of the body forces stage. No allocation.
+/// GraspPoint::force at its point, the jaw the opposite at its own) and GraspPoint::force; a held
+/// node's GraspNode::force (the forces stage of the nets applies it, NodeContact::held). Part of
+/// the body forces stage. No allocation.
 void apply_grasp_forces(const Model& model, Data& data) noexcept;
+
+/// The force (N, world) of a zero-length damped spring of stiffness k (N/m) and damping c
+/// (N·s/m) on a point at x moving at v, tied to a point at p moving at v_p.
+inline Vec3 grasp_spring_force(double k, double c, const Vec3& p, const Vec3& v_p, const Vec3& x,
+                               const Vec3& v) noexcept {
+  return k * (p - x) + c * (v_p - v);
+}
 
 /// Finds each grasper's jaw joints (GraspModel::jaw_joints) and checks it; returns "" or a
 /// message naming the grasper and the field. Called by finalize_model().

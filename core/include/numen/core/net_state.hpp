@@ -76,6 +76,12 @@ struct NodeContact {
   /// (sum 1, each ≥ 0); unused when face < 0.
   Vec3 face_weights = Vec3::Zero();
   double share = 1.0;  ///< This node's weight w in face_weights (1 for a node sphere's contact).
+  /// A grasp spring along `normal` (grasp.hpp), not a penalty contact: written by the grasp stage
+  /// after the node contacts (Data::num_node_grasp_springs of them), three per held node (the
+  /// world's axes), `position` the jaw's point at the step's start, `stiffness` and `damping` the
+  /// grasper's; the forces stage gives it f = (k n · (p − x) − c n · (v − v_p)) n on the node,
+  /// its opposite on the jaw, and the solve its Jacobian as a contact's.
+  bool held = false;
 };
 
 /// What a net did in the last step (observable; traces and studies).
