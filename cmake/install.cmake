@@ -51,6 +51,7 @@ numen_install_headers(${PROJECT_SOURCE_DIR}/core/include
   numen/core/articulation.hpp numen/core/broadphase.hpp numen/core/capacity.hpp
   numen/core/collision.hpp numen/core/contact.hpp numen/core/contact_force.hpp
   numen/core/coupling.hpp numen/core/data.hpp numen/core/data_size.hpp numen/core/feedback.hpp
+  numen/core/grasp.hpp
   numen/core/integrator.hpp numen/core/joint.hpp numen/core/mesh.hpp numen/core/mesh_shape.hpp numen/core/model.hpp
   numen/core/multirate.hpp numen/core/net_collision.hpp numen/core/net_forces.hpp numen/core/net_model.hpp
   numen/core/net_surface_map.hpp
