@@ -380,6 +380,39 @@ void bind_data(py::module_& m) {
           "the scene's `prescribed` joints, e.g. the default scene's jaw hinges): value (rad "
           "for a revolute, m for a prismatic) and rate (per s); the step aims at value + dt · "
           "rate (Data::joint_prescribed). ValueError for a joint that is not prescribed.")
+      .def(
+          "grasp",
+          [](const DataHandle& h, int index) {
+            if (index < 0 || index >= h.model->num_grasps())
+              throw py::index_error("no grasper " + std::to_string(index) + " (Model.grasp_names has " +
+                                    std::to_string(h.model->num_grasps()) + ")");
+            const core::GraspState& g = h.data.grasps[static_cast<std::size_t>(index)];
+            py::list nodes;
+            for (int k = 0; k < g.num_nodes; ++k) nodes.append(g.nodes[static_cast<std::size_t>(k)].node);
+            py::dict out;
+            out["holding"] = g.holding();
+            out["body"] = g.body;
+            out["net"] = g.net;
+            out["nodes"] = nodes;
+            out["points"] = g.num_points;
+            out["opening"] = g.opening;
+            out["event"] = core::to_string(g.event);
+            out["started"] = g.started;
+            out["grip_force"] = g.grip_force;
+            out["armed"] = g.armed;
+            out["grasps"] = g.grasps;
+            out["releases"] = g.releases;
+            out["slips"] = g.slips;
+            return out;
+          },
+          py::arg("index"),
+          "Grasper `index`'s state after the last step (core::GraspState, docs/grasping.md), a "
+          "dict (a copy): holding (bool); body (the held body, -1) or net (the net whose tissue "
+          "is held, -1) and nodes (its held global node indices); points (the grip's springs on "
+          "a held body); opening (rad, the jaws' |q1 - q2|); event ('none', 'grasp', 'release', "
+          "'slip': this step's); started (s, the current grasp's start); grip_force (N, the "
+          "springs' net pull at the last step's start); armed; grasps, releases, slips (counts "
+          "since reset). IndexError for an index outside Model.grasp_names.")
       .def_property_readonly(
           "joint_prescribed",
           [](const DataHandle& h) {

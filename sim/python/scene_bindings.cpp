@@ -184,6 +184,14 @@ void bind_scene(py::module_& m) {
           "net_surface_faces); counts 0 for a net without a fine surface (the tool then touches "
           "the net's own triangles).")
       .def_property_readonly(
+          "grasp_names",
+          [](const core::Model& mo) {
+            std::vector<std::string> names;
+            for (const core::GraspModel& g : mo.grasps) names.push_back(g.name);
+            return names;
+          },
+          "Grasper names ([[grasp]] tables), in the order of Data.grasp(index).")
+      .def_property_readonly(
           "obstacle_names",
           [](const core::Model& mo) {
             std::vector<std::string> names;

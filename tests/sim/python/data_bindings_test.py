@@ -357,3 +357,32 @@ def test_contacts_name_their_obstacle():
     assert data.contact_obstacles.tolist() == [0]
     assert scene.model.obstacle_names[data.contact_obstacles[0]] == "box"
     assert data.contact_obstacles.base is not None  # a view, like the other contact views
+
+
+def test_grasp_state_is_read_per_grasper(tmp_path):
+    """A [[grasp]] on the lattice scene's jaws: Model.grasp_names and Data.grasp(i) mirror
+    core::GraspState; closing the jaws on nothing grasps nothing (docs/grasping.md)."""
+    if not numen.features["articulation"]:
+        pytest.skip("the lattice scene's jaws are on hinges")
+    shipped = os.path.join(os.path.dirname(numen.default_scene_path()), "lattice.toml")
+    with open(shipped) as f:
+        text = f.read()
+    scenes = os.path.dirname(shipped)
+    text = text.replace('"../data/', '"' + os.path.join(os.path.dirname(scenes), "data") + "/")
+    text = text.replace('dcf = "devices/', 'dcf = "' + os.path.join(scenes, "devices") + "/")
+    path = tmp_path / "grasp.toml"
+    path.write_text(text + '\n[[grasp]]\nname = "grasper"\njaws = ["jaw_1", "jaw_2"]\n')
+    scene = numen.load_scene(str(path))
+    assert scene.model.grasp_names == ["grasper"]
+    data = scene.make_data()
+    for _ in range(50):  # the jaws 0.2 rad apart, the instrument held where it starts
+        data.set_joint_prescribed("jaw_1_hinge", 0.1)
+        data.set_joint_prescribed("jaw_2_hinge", -0.1)
+        data.step(scene)
+    g = data.grasp(0)
+    assert g["opening"] == pytest.approx(0.2, abs=0.01)
+    assert not g["holding"] and g["body"] == -1 and g["net"] == -1 and g["nodes"] == []
+    assert g["event"] == "none" and g["grasps"] == g["releases"] == g["slips"] == 0
+    assert g["armed"]
+    with pytest.raises(IndexError, match="no grasper 1"):
+        data.grasp(1)
