@@ -56,11 +56,18 @@ int grasped_side(const Model& model, const GraspModel& g, const Contact& c, int*
   return other;
 }
 
-/// A grasp started at `time` (s): the event and the count.
+/// Logs this step's event of `st` (GraspState::log), if there is room.
+void log_event(GraspState& st, double time, int body, int net, int count) noexcept {
+  if (st.logged >= kGraspLogSize) return;
+  st.log[static_cast<std::size_t>(st.logged++)] = GraspRecord{time, st.event, body, net, count, st.grip_force};
+}
+
+/// A grasp started at `time` (s): the event, the count and the log.
 void begin_grasp(GraspState& st, double time) noexcept {
   st.started = time;
   st.event = GraspEvent::kGrasp;
   ++st.grasps;
+  log_event(st, time, st.body, st.net, st.body >= 0 ? st.num_points : st.num_nodes);
 }
 
 /// Starts a grasp of `g` if both jaws touch one body this step: per jaw, five springs over its
@@ -225,6 +232,8 @@ void update_grasps(const Model& model, Data& data) noexcept {
     st.event = GraspEvent::kNone;
     st.opening = std::abs(jaw_angle(model, data, g.jaw_joints[0]) - jaw_angle(model, data, g.jaw_joints[1]));
     if (st.holding()) {
+      const int held_body = st.body, held_net = st.net;
+      const int held_count = st.body >= 0 ? st.num_points : st.num_nodes;
       if (st.opening > g.open_angle) {
         st.body = -1;
         st.num_points = 0;
@@ -232,6 +241,7 @@ void update_grasps(const Model& model, Data& data) noexcept {
         st.num_nodes = 0;
         st.event = GraspEvent::kRelease;
         ++st.releases;
+        log_event(st, data.time, held_body, held_net, held_count);
       } else {
         // The grip slips when the springs' net pull on what it holds at the last step exceeded
         // its limit (a NaN too).
@@ -247,6 +257,7 @@ void update_grasps(const Model& model, Data& data) noexcept {
           st.event = GraspEvent::kSlip;
           st.armed = false;  // no new grasp until the jaws open past θ_o
           ++st.slips;
+          log_event(st, data.time, held_body, held_net, held_count);
         }
       }
     } else if (st.opening > g.open_angle) {

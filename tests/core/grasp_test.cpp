@@ -142,6 +142,17 @@ TEST(Grasp, StartsBelowTheCloseAngleWithBothJawsTouchingAndEndsAboveTheOpenAngle
   EXPECT_EQ(d.grasps[0].grasps, 1);
   EXPECT_EQ(d.grasps[0].releases, 1);
   EXPECT_EQ(d.grasps[0].slips, 0);
+  // Both logged, with their steps' times and the plate.
+  ASSERT_EQ(d.grasps[0].logged, 2);
+  const core::GraspRecord& first = d.grasps[0].log[0];
+  const core::GraspRecord& second = d.grasps[0].log[1];
+  EXPECT_EQ(first.event, core::GraspEvent::kGrasp);
+  EXPECT_NEAR(first.time, grasp_step * m.dt, 1e-12);
+  EXPECT_EQ(first.body, 3);
+  EXPECT_EQ(first.nodes, 2 * core::kGripPointsPerJaw);
+  EXPECT_EQ(second.event, core::GraspEvent::kRelease);
+  EXPECT_NEAR(second.time, (600 + release_step) * m.dt, 1e-12);
+  EXPECT_EQ(second.body, 3);
 }
 
 namespace {

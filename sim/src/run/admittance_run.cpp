@@ -12,6 +12,7 @@
 #include "numen/platform/monotonic_clock.hpp"
 #include "numen/platform/periodic_timer.hpp"
 #include "numen/sim/device/simulated_instrument.hpp"
+#include "numen/sim/run/grasp_summary.hpp"
 #include "numen/sim/input/input_error.hpp"
 #include "numen/sim/run/run.hpp"
 
@@ -204,6 +205,7 @@ RunSummary AdmittanceRunner::summary() const {
   s.solver_iterations_mean = k_ > 0 ? solver_iterations_sum_ / static_cast<double>(k_) : 0.0;
   s.nonfinite_steps = data_.nonfinite_steps;
   s.invalid_target_steps = data_.invalid_target_steps;
+  summarize_grasps(scene_->model, data_, s);
   s.nan_detected = data_.nonfinite_steps > 0;
   s.contact_overflow = data_.contact_overflow_steps;
   for (auto dir :

@@ -59,6 +59,7 @@ constexpr FigureValue list(const std::vector<std::string>& v) noexcept {
 }
 constexpr bool admittance_run(const S& s) noexcept { return s.admittance.enabled; }
 constexpr bool multirate_run(const S& s) noexcept { return s.multirate.enabled; }
+constexpr bool grasping(const S& s) noexcept { return s.grasping; }
 /// A multirate run that sends feedback forces (not an admittance run, which sends poses).
 constexpr bool multirate_force_run(const S& s) noexcept {
   return s.multirate.enabled && !s.admittance.enabled;
@@ -222,6 +223,14 @@ constexpr RunFigure kFigures[] = {
      [](const S& s) noexcept { return count(s.nonfinite_steps); }},
     {"invalid_target_steps", "", "Steps whose device target was not finite (coupling skipped, feedback held)",
      K::kCount, [](const S& s) noexcept { return count(s.invalid_target_steps); }},
+    {"grasp.started", "", "Grasps started (jaws closed below close_angle_deg on a body or tissue)",
+     K::kCount, [](const S& s) noexcept { return count(s.grasps_started); }, grasping},
+    {"grasp.released", "", "Grasps ended by the jaws opening past open_angle_deg", K::kCount,
+     [](const S& s) noexcept { return count(s.grasps_released); }, grasping},
+    {"grasp.slipped", "", "Grasps ended by a pull past the grip's max_force", K::kCount,
+     [](const S& s) noexcept { return count(s.grasps_slipped); }, grasping},
+    {"grasp.events", "", "Each grasp, release and slip: time, grasper, what it held", K::kTextList,
+     [](const S& s) noexcept { return list(s.grasp_events); }, grasping},
     {"bus_frames_dropped", "", "Simulated bus: frames the link dropped", K::kCount,
      [](const S& s) noexcept { return count(s.bus_frames_dropped); }},
     {"bus_frames_corrupted", "", "Simulated bus: frames the link corrupted", K::kCount,

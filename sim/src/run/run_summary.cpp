@@ -12,6 +12,7 @@
 
 #include "numen/hal/canopen/emcy.hpp"
 #include "numen/hal/canopen/heartbeat.hpp"
+#include "numen/sim/run/grasp_summary.hpp"
 #include "numen/sim/run/run.hpp"
 #include "numen/sim/run/run_summary.hpp"
 
@@ -132,6 +133,7 @@ RunSummary SceneRunner::summary() const {
   s.net_crossed_steps = data_.net_crossed_steps;
   s.nonfinite_steps = data_.nonfinite_steps;
   s.invalid_target_steps = data_.invalid_target_steps;
+  summarize_grasps(scene_->model, data_, s);
   multirate_.summarize(s);
   s.nan_detected = data_.nonfinite_steps > 0;
   for (const auto& b : data_.bodies)

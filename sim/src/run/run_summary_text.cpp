@@ -224,6 +224,9 @@ constexpr RunSummarySegment kLayout[] = {
     {" (non-finite steps {nonfinite_steps})"},
     {"; INVALID TARGETS: {invalid_target_steps} steps (coupling skipped, feedback held)",
      set("invalid_target_steps")},
+    {"\n  grasps: {grasp.started} started, {grasp.released} released, {grasp.slipped} slipped",
+     set("grasp.started")},
+    {"\n  grasp event: {*}", set("grasp.started"), {}, {}, "grasp.events"},
     // Speed and stretch are ratios to their limits; energy_ratio_max is E / (E0 + W_in), whose
     // limit is DivergenceLimits::energy_factor (static_assert below).
     {"\n  divergence: speed {divergence.speed_ratio_max}, tie stretch "

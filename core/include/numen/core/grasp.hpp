@@ -95,6 +95,19 @@ enum class GraspEvent : std::uint8_t {
 /// Short English name of a GraspEvent (static string).
 const char* to_string(GraspEvent event) noexcept;
 
+/// One grasp event as logged (GraspState::log): when, what, and what was held.
+struct GraspRecord {
+  double time = 0.0;                      ///< Simulated time of the step (s, Data::time at its start).
+  GraspEvent event = GraspEvent::kNone;   ///< kGrasp, kRelease or kSlip.
+  int body = -1;                          ///< The body grasped or let go, or -1 for tissue.
+  int net = -1;                           ///< The net whose tissue was grasped or let go, or -1.
+  int nodes = 0;                          ///< Held nodes (tissue), or the grip's springs (a body).
+  double grip_force = 0.0;                ///< GraspState::grip_force then (N): the pull at a release or slip.
+};
+
+/// Events one grasper logs (GraspState::log): the first ones of a run; the counts go on.
+inline constexpr int kGraspLogSize = 64;
+
 /// State of one grasper (Data::grasps, one per Model::grasps). Written by the grasp stage.
 struct GraspState {
   int body = -1;          ///< The held body; -1: none.
@@ -114,6 +127,10 @@ struct GraspState {
   std::int64_t slips = 0;     ///< Grasps ended by slipping (the net pull past max_force).
   /// ‖Σ GraspPoint::force‖ at the last step's start (N): the pull the grip transmits.
   double grip_force = 0.0;
+  /// The first kGraspLogSize events since reset, [0, logged) (the run's summary lists them);
+  /// grasps + releases + slips count them all.
+  std::array<GraspRecord, kGraspLogSize> log{};
+  int logged = 0;
   bool holding() const noexcept { return body >= 0 || net >= 0; }
 };
 

@@ -214,6 +214,13 @@ struct RunSummary {
   /// Steps whose device target was not finite (core::Data::invalid_target_steps): coupling
   /// skipped, feedback held at its last value.
   std::int64_t invalid_target_steps = 0;
+  // Grasping (docs/grasping.md; summarize_grasps()): sums over the scene's graspers.
+  bool grasping = false;                 ///< The scene has a grasper ([[grasp]]).
+  std::int64_t grasps_started = 0;       ///< Grasps that started.
+  std::int64_t grasps_released = 0;      ///< Grasps the jaws' opening ended.
+  std::int64_t grasps_slipped = 0;       ///< Grasps that slipped (pull past max_force).
+  /// Each grasper's logged events, "6.961 s grasp grasper: organ (7 nodes)" (format_grasp_event()).
+  std::vector<std::string> grasp_events;
   std::int64_t bus_frames_dropped = 0;
   std::int64_t bus_frames_corrupted = 0;
   std::string bus = "sim";                 ///< BusChoice::spec of the run.

@@ -1,0 +1,73 @@
+// Tests of sim/run/grasp_summary: the grasps of a run in its summary (docs/grasping.md,
+// docs/outputs.md `grasp.*`).
+
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "build_features.hpp"
+#include "numen/core/grasp.hpp"
+#include "numen/core/model.hpp"
+#include "numen/sim/run/grasp_summary.hpp"
+#include "numen/sim/run/run.hpp"
+#include "numen/sim/run/run_summary.hpp"
+#include "numen/sim/scene/scene.hpp"
+#include "scene_text.hpp"
+#include "temp_dir.hpp"
+
+TEST(GraspSummary, AnEventReadsAsTimeWhatWhoAndWhat) {
+  numen::core::Model m;
+  m.bodies.resize(2);
+  m.bodies[1].name = "block";
+  m.nets.resize(1);
+  m.nets[0].name = "organ";
+  numen::core::GraspModel g;
+  g.name = "grasper";
+  using numen::core::GraspEvent;
+  EXPECT_EQ(numen::sim::format_grasp_event(m, g, {6.9614, GraspEvent::kGrasp, -1, 0, 7, 0.0}),
+            "6.961 s grasp grasper: organ (7 nodes)");
+  EXPECT_EQ(numen::sim::format_grasp_event(m, g, {8.611, GraspEvent::kSlip, -1, 0, 4, 5.0049}),
+            "8.611 s slip grasper: organ (4 nodes, pull 5.005 N)");
+  EXPECT_EQ(numen::sim::format_grasp_event(m, g, {1.0, GraspEvent::kRelease, 1, -1, 10, 0.25}),
+            "1.000 s release grasper: block (10 grip springs, pull 0.250 N)");
+}
+
+// The default scene's recording with a grasper on its jaws: the recorded suturing motion closes
+// the jaws on the organ (docs/grasping.md, "On the shipped recording"); the summary counts and
+// lists each grasp, release and slip in JSON and text.
+TEST(GraspSummary, TheDefaultRecordingGraspsTheOrgansTissueAndTheSummaryListsIt) {
+  NUMEN_REQUIRE_ARTICULATION();
+  NUMEN_REQUIRE_DEFORMABLE();
+  numen::test::TempDir dir;
+  std::string text = numen::test::shipped_scene_text("default.toml");
+  const std::string from = "\"../data/", to = "\"" + std::string(NUMEN_SOURCE_DIR) + "/sim/data/";
+  for (std::size_t at = text.find(from); at != std::string::npos; at = text.find(from, at + to.size()))
+    text.replace(at, from.size(), to);
+  text += "\n[[grasp]]\nname = \"grasper\"\njaws = [\"jaw_1\", \"jaw_2\"]\n";
+  const numen::sim::Scene scene = numen::sim::load_scene(dir.write("grasp.toml", text));
+  numen::sim::RunOptions opt;
+  opt.duration_s = 9.0;
+  const numen::sim::RunSummary s = numen::sim::run_scene(scene, opt);
+  EXPECT_FALSE(s.nan_detected);
+  EXPECT_TRUE(s.grasping);
+  EXPECT_GE(s.grasps_started, 1);
+  ASSERT_EQ(static_cast<std::int64_t>(s.grasp_events.size()),
+            s.grasps_started + s.grasps_released + s.grasps_slipped);
+  EXPECT_NE(s.grasp_events[0].find(" grasp grasper: organ ("), std::string::npos) << s.grasp_events[0];
+  for (const std::string& e : s.grasp_events) std::printf("[   info   ] %s\n", e.c_str());
+  const nlohmann::json j = nlohmann::json::parse(numen::sim::format_summary_json(s));
+  EXPECT_EQ(j["grasp"]["started"].get<std::int64_t>(), s.grasps_started);
+  EXPECT_EQ(j["grasp"]["events"].size(), s.grasp_events.size());
+  const std::string summary = numen::sim::format_summary(s);
+  EXPECT_NE(summary.find("grasps: " + std::to_string(s.grasps_started) + " started"), std::string::npos)
+      << summary;
+  EXPECT_NE(summary.find("grasp event: " + s.grasp_events[0]), std::string::npos) << summary;
+}
+
+TEST(GraspSummary, ASceneWithoutAGrasperWritesNoGraspFigures) {
+  numen::sim::RunSummary s;
+  const nlohmann::json j = nlohmann::json::parse(numen::sim::format_summary_json(s));
+  EXPECT_FALSE(j.contains("grasp"));
+}
