@@ -48,6 +48,9 @@ constexpr RunSummarySegment kLayout[] = {
     {"  device: limit cycle at {limit_cycle_time_s} s: {limit_cycle_amplitude_mm} mm at "
      "{limit_cycle_hz} Hz\n",
      set("limit_cycle_detected")},
+    {"  grasps: {grasp.started} started, {grasp.released} released, {grasp.slipped} slipped\n",
+     set("grasp.started")},
+    {"  grasp event: {*}\n", set("grasp.started"), {}, {}, "grasp.events"},
 
     {"  tracking error in free space (tool and hand out of contact): rms "
      "{tracking_error_free_rms_mm} mm, max {tracking_error_free_max_mm} mm over {free_steps} "
@@ -224,9 +227,7 @@ constexpr RunSummarySegment kLayout[] = {
     {" (non-finite steps {nonfinite_steps})"},
     {"; INVALID TARGETS: {invalid_target_steps} steps (coupling skipped, feedback held)",
      set("invalid_target_steps")},
-    {"\n  grasps: {grasp.started} started, {grasp.released} released, {grasp.slipped} slipped",
-     set("grasp.started")},
-    {"\n  grasp event: {*}", set("grasp.started"), {}, {}, "grasp.events"},
+
     // Speed and stretch are ratios to their limits; energy_ratio_max is E / (E0 + W_in), whose
     // limit is DivergenceLimits::energy_factor (static_assert below).
     {"\n  divergence: speed {divergence.speed_ratio_max}, tie stretch "

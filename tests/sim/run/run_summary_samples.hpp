@@ -75,6 +75,12 @@ inline sim::RunSummary full_managed_summary() {
   s.nan_detected = true;
   s.nonfinite_steps = 14;
   s.invalid_target_steps = 3;
+  s.grasping = true;
+  s.grasps_started = 2;
+  s.grasps_released = 1;
+  s.grasps_slipped = 1;
+  s.grasp_events = {"6.968 s grasp grasper: organ (5 nodes)",
+                    "7.026 s release grasper: organ (5 nodes, pull 0.738 N)"};
   s.divergence.latched = true;
   s.divergence.cause = "node speed";
   s.divergence.subject = "net \"bag\"";

@@ -64,6 +64,8 @@ TEST(RunSummaryText, PrintsTheValuesInTheirFormats) {
            "  closed loop: hand 24.250 mm deep, handle 1.250 mm; force on the hand max 5.500 N, "
            "hand–handle separation max 29.500 mm; port energy 0.080 J, min -0.013 J at 0.125 s\n",
            "  device: limit cycle at 0.375 s: 1.875 mm at 15.000 Hz\n",
+           "  grasps: 2 started, 1 released, 1 slipped\n  grasp event: 6.968 s grasp grasper: organ "
+           "(5 nodes)\n  grasp event: 7.026 s release grasper: organ (5 nodes, pull 0.738 N)\n",
            "  trocar placed at the port\n",
            "  500 steps, 0.500 s simulated in 0.250 s wall (2.000x real time)\n",
            " after a start-up of 3 steps from 2.500 mm (the tool started inside); any body 3.500 mm\n",
