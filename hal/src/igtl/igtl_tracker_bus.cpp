@@ -58,9 +58,10 @@ IgtlTrackerBus::IgtlTrackerBus(const DeviceConfig& config,
 IgtlTrackerBus::~IgtlTrackerBus() = default;
 
 BusState IgtlTrackerBus::state() const noexcept {
-  return client_->ended() && !client_->connected() && client_->counters().connects == 0
-             ? BusState::kBusOff
-             : BusState::kOk;
+  if (client_->connected()) return BusState::kOk;
+  const IgtlClientCounters c = client_->counters();
+  return c.connects > 0 || c.connect_failures > 0 || client_->ended() ? BusState::kBusOff
+                                                                      : BusState::kOk;
 }
 
 void IgtlTrackerBus::set_time_ns(std::int64_t t_ns) noexcept {

@@ -188,3 +188,29 @@ TEST(IgtlTrackerBus, ThePacedPeriodNeitherAllocatesNorWaits) {
   // loaded CI machine).
   EXPECT_LT(longest, 200'000'000);
 }
+
+// The bus's state is the connection's: kOk while connected, kBusOff once it is lost (here the
+// server closes after its message and the follower does not reconnect), so that the run's
+// frames (kFrameBusDown) and its bus error periods show a lost tracker.
+TEST(IgtlTrackerBus, TheStateIsOkWhileConnectedAndBusOffOnceTheConnectionIsLost) {
+  namespace hal = numen::hal;
+  const hal::DeviceConfig config = igtl_bus_test_config();
+  const std::string pose = hal::pack_igtl_transform("StylusToTracker", 1'000'000'000,
+                                                    numen::core::Mat3::Identity(),
+                                                    numen::core::Vec3(1.0, 2.0, 3.0));
+  {
+    numen::test::IgtlTestServer server({pose});  // keeps the connection open
+    hal::IgtlTrackerBus bus(config, hal::make_kinematics(config), igtl_bus_test_settings(server.port(), true));
+    for (int i = 0; i < 5000 && !bus.client().connected(); ++i)
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    ASSERT_TRUE(bus.client().connected());
+    EXPECT_EQ(bus.state(), hal::BusState::kOk);
+  }
+  numen::test::IgtlTestServer server({pose}, true);  // closes once it has sent
+  hal::IgtlTrackerBus bus(config, hal::make_kinematics(config), igtl_bus_test_settings(server.port(), true));
+  for (int i = 0; i < 5000 && !bus.client().ended(); ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  ASSERT_TRUE(bus.client().ended());
+  EXPECT_EQ(bus.client().counters().connects, 1u);
+  EXPECT_EQ(bus.state(), hal::BusState::kBusOff);
+}

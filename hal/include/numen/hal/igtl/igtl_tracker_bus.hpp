@@ -93,8 +93,9 @@ class IgtlTrackerBus final : public Bus {
   /// A SYNC (is_sync()) takes the due poses and queues the six TPDOs; any other well-formed frame
   /// is accepted and discarded (kOk); a malformed one is kError.
   IoStatus write(const CanFrame& frame) noexcept override;
-  /// kOk while connected or before the first connection; kBusOff once the receiver has ended
-  /// (connection refused or lost with reconnect off).
+  /// kOk while connected, and before the first connection attempt has concluded; kBusOff while
+  /// not connected after that (an attempt refused or timed out, the connection lost, the
+  /// receiver ended) until a connection is made again. Lock free (the receiver's atomics).
   BusState state() const noexcept override;
   /// frames_rx: TPDOs read; frames_tx: frames written; errors: malformed writes.
   BusCounters counters() const noexcept override { return counters_; }
