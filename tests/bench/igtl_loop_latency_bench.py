@@ -10,15 +10,15 @@ and received by a client: the path a tracked tool takes to 3D Slicer (docs/openi
 This program is both ends, on loopback, on one clock (CLOCK_MONOTONIC): the tracker server
 (the scene's tool, as PLUS sends it: device name and units of its [device.igtl], paced at
 --rate on absolute deadlines and stamped with them on the wall clock) and the Slicer-side
-client. The tool's pose is the first pose `numen igtl-replay` sends for the scene (a pose the scene accepts), moved
-by 0.02 mm along the tracker's x every `toggle` messages (10 ms: every 10th message at 1 kHz,
-every message at 60 Hz) and back. Each move is one sample: from its first message's send() to
-the recv() of the first world frame whose `<body>_target` TRANSFORM (the ghost: the tracker's
-pose as the god-object step took it; the frame's god-object TRANSFORM is in the same send)
-shows it. numen runs paced (`--realtime`), the state stream at --view-rate (a frame every
-period at 1000 on a 1 kHz scene). Prints the samples' median, p99 and max (µs) and numen's own
-summary figure of the received → applied part (igtl_latency_us), as JSON with --json; fails
-(exit 1, with numen's stderr) when numen's run does not exit 0.
+client. The tool's pose is the first pose `numen igtl-replay` sends for the scene (a pose the
+scene accepts), moved by 0.02 mm along the tracker's x every `toggle` messages (10 ms: every
+10th message at 1 kHz, every message at 60 Hz) and back. Each move is one sample: from its
+first message's send() to the recv() of the first world frame whose `<body>_target` TRANSFORM
+(the ghost: the tracker's pose as the god-object step took it; the frame's god-object TRANSFORM
+is in the same send) shows it. numen runs paced (`--realtime`), the state stream at
+--view-rate (a frame every period at 1000 on a 1 kHz scene). Prints the samples' median, p99 and
+max (µs) and numen's own summary figure of the received → applied part (igtl_latency_us), as
+JSON with --json; fails (exit 1, with numen's stderr) when numen's run does not exit 0.
 """
 import argparse
 import json
@@ -148,7 +148,8 @@ def main():
         world = socket.create_connection(("127.0.0.1", wport), timeout=10)
     except OSError as e:
         proc.kill()
-        sys.exit("cannot reach numen's world (%s); numen's stderr:\n%s" % (e, proc.communicate()[1]))
+        sys.exit("cannot reach numen's world (%s); numen's stderr:\n%s"
+                 % (e, proc.communicate()[1]))
     world.setblocking(False)
     conn.setblocking(False)
 
@@ -222,8 +223,8 @@ def main():
                  (len(lat), len(moves), proc.returncode, events[:6], err))
     lat.sort()
     summary = json.loads(out) if out.strip().startswith("{") else {}
-    fig = {key: v for key, v in summary.get("figures", summary).items()
-           if isinstance(key, str) and key.startswith("igtl_latency")} if isinstance(summary, dict) else {}
+    figures = summary.get("figures", summary) if isinstance(summary, dict) else {}
+    fig = {key: v for key, v in figures.items() if key.startswith("igtl_latency")}
     res = {"rate_hz": a.rate, "view_rate_hz": a.view_rate, "moves": len(moves),
            "samples": len(lat), "median_us": round(statistics.median(lat), 1),
            "p99_us": round(lat[min(len(lat) - 1, int(0.99 * len(lat)))], 1),

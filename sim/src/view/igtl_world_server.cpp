@@ -12,7 +12,10 @@
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
+#include <cstdio>
 #include <stdexcept>
+#include <string>
+#include <utility>
 
 #include "net/tcp_listen.hpp"
 #include "numen/core/net_surface_map.hpp"
