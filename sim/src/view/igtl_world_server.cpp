@@ -281,7 +281,7 @@ bool IgtlWorldServer::write_frame(std::span<const std::byte> frame) noexcept {
     add_events(view);  // the changes are tracked with or without clients
     if (clients_.empty()) return true;
     batch_.clear();
-    batch_transforms_ = batch_polydata_ = 0;
+    batch_transforms_ = 0;
     const std::size_t n = std::min<std::size_t>(h.num_bodies, names_.size());
     const auto add = [&](const std::string& name, const float p[7]) {
       const core::Quat q(p[6], p[3], p[4], p[5]);
@@ -308,19 +308,10 @@ bool IgtlWorldServer::write_frame(std::span<const std::byte> frame) noexcept {
         organ_sent_ = true;
       }
     }
-    std::string organs;
+    std::string organs;  // every deformable's POLYDATA at this frame
     if (organ_due || any_fresh) add_organs(organs, view);
-    if (organ_due) {
-      batch_ += organs;
-      batch_polydata_ = organs_.size();
-    }
-    intro_.clear();
-    std::uint64_t intro_polydata = 0;
-    if (any_fresh) {  // the shapes (unless in the batch) and the current state, first
-      if (!organ_due) {
-        intro_ = organs;
-        intro_polydata = organs_.size();
-      }
+    intro_.clear();  // a new client's state, after its shapes
+    if (any_fresh) {
       const auto cause = static_cast<hal::FaultCause>(last_.fault_cause);
       if (last_.fault_cause != 0)
         add_status(intro_, h.time_ns, 3, last_.fault_cause, hal::to_string(cause),
@@ -329,20 +320,27 @@ bool IgtlWorldServer::write_frame(std::span<const std::byte> frame) noexcept {
         add_status(intro_, h.time_ns, 1, 0, "ok", "numen world " + at_time(h.time_ns));
     }
     const std::size_t limit =
-        std::max(settings_.max_backlog_bytes, 2 * (batch_.size() + intro_.size()));
+        std::max(settings_.max_backlog_bytes, 2 * (organs.size() + intro_.size() + batch_.size()));
+    // In each client's stream: the shapes (at its first frame, then when due), its state when it
+    // is new, the frame's TRANSFORMs, the frame's events.
     for (Client& c : clients_) {
       if (c.fresh) {
+        c.backlog += organs;
         c.backlog += intro_;
-        counters_.polydata += intro_polydata;
+        c.backlog += batch_;
+        counters_.polydata += organs_.size();
         ++counters_.statuses;
+        counters_.messages += batch_transforms_;
         c.fresh = false;
-      }
-      if (c.backlog.size() + batch_.size() > limit) {
+      } else if (c.backlog.size() + (organ_due ? organs.size() : 0) + batch_.size() > limit) {
         ++counters_.frames_skipped;  // a slow client misses this frame's poses and shapes
       } else {
+        if (organ_due) {
+          c.backlog += organs;
+          counters_.polydata += organs_.size();
+        }
         c.backlog += batch_;
         counters_.messages += batch_transforms_;
-        counters_.polydata += batch_polydata_;
       }
       if (c.backlog.size() + events_.size() <= limit + kEventsAllowance) {
         c.backlog += events_;  // small and rare: kept when the frame is not

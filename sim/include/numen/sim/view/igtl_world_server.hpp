@@ -22,7 +22,10 @@
 ///   valid again (code 1); the device's bus down (StateFrameFlag kFrameBusDown: a tracker's
 ///   connection lost, a CAN bus off; code 7) or back (code 1). A grasp or a release (the held
 ///   body changes) is a STRING only. A client that connects gets the current state as a STATUS
-///   first (code 1, or the latched fault's).
+///   (code 1, or the latched fault's) at its first frame.
+///
+/// In each client's stream, per frame: the shapes (at its first frame, then when due), its state
+/// (at its first frame), the TRANSFORMs, the frame's STATUS and STRING.
 ///
 /// Translations and points in millimetres (Slicer's unit), world frame; rotations as they are;
 /// the timestamp is the frame's simulated time (ns since the run's start). The period never
@@ -143,11 +146,10 @@ class IgtlWorldServer final : public platform::StateFrameSink {
   std::int64_t organ_due_ns_ = 0;       // next frame time an organ update is due
   bool organ_sent_ = false;
   Last last_;
-  std::string batch_;   // one frame's messages for every client (reused)
+  std::string batch_;   // one frame's TRANSFORMs for every client (reused)
   std::string events_;  // one frame's STATUS / STRING (reused)
-  std::string intro_;   // a new client's first messages (reused)
-  std::uint64_t batch_polydata_ = 0, batch_transforms_ = 0, events_statuses_ = 0,
-                events_strings_ = 0;
+  std::string intro_;   // a new client's STATUS of the current state (reused)
+  std::uint64_t batch_transforms_ = 0, events_statuses_ = 0, events_strings_ = 0;
   IgtlWorldCounters counters_;
 };
 
