@@ -8,9 +8,10 @@
 #include <igtlStatusMessage.h>
 #include <igtlStringMessage.h>
 #include <igtlTransformMessage.h>
+#include <igtl_polydata.h>
+#include <igtl_util.h>
 
 #include <cstring>
-#include <list>
 #include <stdexcept>
 
 #include "igtl_stamp.hpp"
@@ -146,29 +147,36 @@ IgtlUnpacked unpack_igtl(std::span<const std::uint8_t> bytes) {
       out.translation(r) = mat[r][3];
     }
   } else if (out.type == "POLYDATA") {
-    igtl::PolyDataMessage::Pointer m = igtl::PolyDataMessage::New();
-    unpack_body(*m, header, body, what);
-    if (igtl::PolyDataPointArray* p = m->GetPoints()) {
-      out.points.resize(static_cast<std::size_t>(p->GetNumberOfPoints()));
-      for (std::size_t i = 0; i < out.points.size(); ++i) {
-        igtlFloat32 x[3];
-        p->GetPoint(static_cast<unsigned int>(i), x);
-        out.points[i] = core::Vec3(x[0], x[1], x[2]);
-      }
+    // The library's C codec, not igtl::PolyDataMessage::Unpack(): libOpenIGTLink 1.11's
+    // UnpackBody() never frees the arrays igtl_polydata_unpack() allocates (a leak per message;
+    // its PackBody() frees them). The body's CRC-64 is checked first, as Unpack(1) does.
+    std::uint64_t crc = 0;
+    for (int i = 0; i < 8; ++i) crc = (crc << 8) | bytes[kIgtlCrcOffset + static_cast<std::size_t>(i)];
+    std::vector<unsigned char> copy(body.begin(), body.end());  // unpacked in place
+    if (crc64(copy.data(), copy.size(), 0) != crc)
+      throw std::invalid_argument(what + ": CRC mismatch or a body that does not unpack");
+    igtl_polydata_info info;
+    igtl_polydata_init_info(&info);
+    if (igtl_polydata_unpack(IGTL_TYPE_PREFIX_NONE, copy.data(), &info, copy.size()) == 0) {
+      igtl_polydata_free_info(&info);
+      throw std::invalid_argument(what + ": a body that does not unpack");
     }
-    if (igtl::PolyDataCellArray* c = m->GetPolygons()) {
-      for (igtlUint32 i = 0; i < c->GetNumberOfCells(); ++i) {
-        std::list<igtlUint32> cell;
-        c->GetCell(i, cell);
-        if (cell.size() != 3)
-          throw std::invalid_argument(what + ": polygon " + std::to_string(i) + " has " +
-                                      std::to_string(cell.size()) + " points, not 3");
-        auto it = cell.begin();
-        std::array<std::uint32_t, 3> t{};
-        for (std::uint32_t& k : t) k = *it++;
-        out.triangles.push_back(t);
+    out.points.resize(info.header.npoints);
+    for (std::size_t i = 0; i < out.points.size(); ++i)
+      out.points[i] = core::Vec3(info.points[3 * i], info.points[3 * i + 1], info.points[3 * i + 2]);
+    const igtlUint32* cell = info.polygons;
+    std::string bad;
+    for (igtlUint32 t = 0; t < info.header.npolygons && bad.empty(); ++t) {
+      if (cell[0] != 3) {
+        bad = what + ": polygon " + std::to_string(t) + " has " + std::to_string(cell[0]) +
+              " points, not 3";
+        break;
       }
+      out.triangles.push_back({cell[1], cell[2], cell[3]});
+      cell += 4;
     }
+    igtl_polydata_free_info(&info);
+    if (!bad.empty()) throw std::invalid_argument(bad);
   } else if (out.type == "STATUS") {
     igtl::StatusMessage::Pointer m = igtl::StatusMessage::New();
     unpack_body(*m, header, body, what);

@@ -70,6 +70,7 @@ void IgtlTrackerBus::take_registration() {
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
     r = client_->registration();
   }
+  if (!r) r = client_->registration();  // it may have come just before the stream ended
   if (!r) {
     const IgtlClientCounters c = client_->counters();
     std::string names;
