@@ -155,7 +155,8 @@ std::size_t encode_state_frame(const StateFrameLayout& layout, const core::Data&
                               (report.torque_commanded ? kFrameTorqueCommanded : 0u) |
                               (report.overrun ? kFrameOverrun : 0u) |
                               (report.target_ready ? kFrameTargetReady : 0u) |
-                              (rigid + nodal > contacts ? kFrameContactsTruncated : 0u);
+                              (rigid + nodal > contacts ? kFrameContactsTruncated : 0u) |
+                              (figures.bus_down ? kFrameBusDown : 0u);
   put_field<FrameField::kFlags>(h, flags);
   const std::int64_t step_ns =
       std::clamp<std::int64_t>(report.step_ns, 0, std::numeric_limits<std::uint32_t>::max());
@@ -163,7 +164,7 @@ std::size_t encode_state_frame(const StateFrameLayout& layout, const core::Data&
   put_field<FrameField::kLifecycle>(h, static_cast<std::uint8_t>(report.lifecycle));
   put_field<FrameField::kStartup>(h, static_cast<std::uint8_t>(report.startup));
   put_field<FrameField::kFaultCause>(h, static_cast<std::uint8_t>(report.fault_cause));
-  put_field<FrameField::kReserved>(h, 0);
+  put_field<FrameField::kSampleFaults>(h, report.sample_faults);
 
   // Each array from its declared offset (kStateFrameArrays), items in order.
   auto array = [&](FrameArray a) { return out.data() + o.at[array_index(a)]; };
@@ -297,6 +298,7 @@ StateFrameDecodeResult StateFrameDecoder::decode(std::span<const std::byte> byte
   hd.lifecycle = get_field<FrameField::kLifecycle>(h);
   hd.startup = get_field<FrameField::kStartup>(h);
   hd.fault_cause = get_field<FrameField::kFaultCause>(h);
+  hd.sample_faults = get_field<FrameField::kSampleFaults>(h);
   if (hd.frame_bytes != bytes.size())
     return fail(FrameField::kFrameBytes, "frame size field says " + std::to_string(hd.frame_bytes) +
                                              " bytes, the frame has " +

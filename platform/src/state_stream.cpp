@@ -76,6 +76,9 @@ bool StateStream::publish(const core::Data& data, const PeriodReport& report,
                           std::span<const double> axis_torques,
                           const StateFrameFigures& figures) noexcept {
   periods_.fetch_add(1, std::memory_order_relaxed);
+  // What happened since the last frame reaches the next one (decimated or dropped periods).
+  pending_sample_faults_ |= report.sample_faults;
+  pending_bus_down_ = pending_bus_down_ || figures.bus_down;
   const double t = data.time * 1e9;
   const std::int64_t t_ns = std::isfinite(t) && std::abs(t) < 9e18 ? std::llround(t) : 0;
   if (have_published_ && interval_s_ > 0.0 && t_ns < next_due_ns_) {
@@ -99,13 +102,20 @@ bool StateStream::publish(const core::Data& data, const PeriodReport& report,
     return false;
   }
   const std::span<std::byte> buffer(pool_.data() + slot * frame_capacity_, frame_capacity_);
-  const std::size_t bytes = encode_state_frame(layout_, data, report, axis_torques, figures, buffer);
+  PeriodReport since = report;  // the period's, with the sample faults since the last frame
+  since.sample_faults = pending_sample_faults_;
+  StateFrameFigures figures_since = figures;
+  figures_since.bus_down = pending_bus_down_;
+  const std::size_t bytes =
+      encode_state_frame(layout_, data, since, axis_torques, figures_since, buffer);
   if (bytes == 0) {
     encode_failures_.fetch_add(1, std::memory_order_relaxed);
     loop_slot_ = slot;  // kept for the next period: only the consumer pushes on the free list
     have_loop_slot_ = true;
     return false;
   }
+  pending_sample_faults_ = 0;
+  pending_bus_down_ = false;
   frame_bytes_[slot] = static_cast<std::uint32_t>(bytes);
   queue_.push(slot);  // capacity == pool size: never full while we hold a buffer
   published_.fetch_add(1, std::memory_order_relaxed);

@@ -59,6 +59,7 @@ class RunCommand {
   CLI::App* cli_;
   std::string scene_path_, trace_path_, coupling_, bus_ = "sim", record_path_, record_view_path_, view_;
   std::string igtl_;  // --igtl [HOST:]PORT: the world out over OpenIGTLink
+  double igtl_organ_rate_ = 30.0;  // --igtl-organ-rate HZ: POLYDATA updates per simulated second
   double duration_ = -1.0, phase_ = -1.0, view_rate_ = 60.0, speed_ = 0.0, spin_us_ = 0.0;
   std::int64_t timer_slack_ns_ = 1;
   std::string wait_for_viewer_;  // --wait-for-viewer[=S] as given (a flag: CLI11 would round a number)
@@ -76,8 +77,9 @@ std::string viewer_page_dir();
 /// each of its warnings on `err` as "numen: warning: …" (a run keeps them in its summary too).
 /// Returns the timing.
 sim::StepTiming check_loaded_scene(sim::Scene& scene, std::ostream& err);
-/// Prints a warning on `err` when the viewer's `host` is not a loopback address.
-void warn_if_exposed(const std::string& host, std::ostream& err);
+/// Prints a warning on `err` when `what` (the viewer, the OpenIGTLink world) listens on a `host`
+/// that is not a loopback address.
+void warn_if_exposed(const std::string& host, std::ostream& err, const char* what = "the viewer");
 /// What the viewer's server turned away, for its closing line: ", N HTTP connections shed (more
 /// than M open), K accepts failed (out of descriptors or memory)", each part only when not 0;
 /// "" when none.

@@ -16,7 +16,9 @@ IgtlReplayCommand::IgtlReplayCommand(CLI::App& parent)
           "igtl-replay", "Play a scene's trajectory as an OpenIGTLink tracker server (the TRANSFORMs "
                          "of its [device.igtl] tool), for numen run --bus igtl")) {
   cli_->add_option("scene", scene_, "Scene file (TOML) with a [device.igtl]");
-  cli_->add_option("--host", host_, "IPv4 address to listen on (default 127.0.0.1)");
+  cli_->add_option("--host", host_,
+                   "Address to listen on: IPv4, IPv6 (without brackets) or localhost (default "
+                   "127.0.0.1)");
   cli_->add_option("--port", port_, "TCP port (default 18944; 0: any free port, printed)")
       ->check(count_check(0, 65535));
   cli_->add_option("--rate", rate_, "Messages per second (default: 1 / the scene's dt)")

@@ -102,9 +102,11 @@ RunCommand::RunCommand(CLI::App& parent)
         }
       });
   run->add_option("--igtl", igtl_,
-                  "Serve the god-object world over OpenIGTLink on [HOST:]PORT (IPv4, default host "
-                  "127.0.0.1): a TRANSFORM per body and per target, in mm, for 3D Slicer "
-                  "(docs/openigtlink.md); an offline run is then paced at real time (--speed)")
+                  "Serve the god-object world over OpenIGTLink on [HOST:]PORT (default host "
+                  "127.0.0.1; localhost, or an IPv6 host in brackets: [::1]:18944): a TRANSFORM "
+                  "per body and per target, each deformable's surface as POLYDATA, faults and "
+                  "events as STATUS and STRING, in mm, for 3D Slicer (docs/openigtlink.md); an "
+                  "offline run is then paced at real time (--speed)")
       ->check([](const std::string& v) -> std::string {
         try {
           (void)sim::parse_view_address(v);
@@ -115,6 +117,10 @@ RunCommand::RunCommand(CLI::App& parent)
           return e.what();
         }
       });
+  run->add_option("--igtl-organ-rate", igtl_organ_rate_,
+                  "With --igtl: POLYDATA updates of each deformable per second of simulated time "
+                  "(default 30; 0: the shape once per client); at most the stream's --view-rate")
+      ->check(number_check(0.0, 1e6, false));
   run->add_flag("--wait-for-viewer{60}", wait_for_viewer_,
                "With --view: start the run when the first page connects, waiting at most this "
                "many seconds (--wait-for-viewer=S; default 60); none connected: exit 1")
@@ -141,6 +147,10 @@ int RunCommand::execute() const {
     throw sim::InputError("", 0, 0, "--view-rate",
                           "sets the state stream's rate; without --view, --igtl or --record-view "
                           "there is no stream");
+  if (cli_->count("--igtl-organ-rate") > 0 && igtl_.empty())
+    throw sim::InputError("", 0, 0, "--igtl-organ-rate",
+                          "sets the rate of the OpenIGTLink world's POLYDATA; without --igtl "
+                          "there is none");
   if (cli_->count("--wait-for-viewer") > 0 && view_.empty())
     throw sim::InputError("", 0, 0, "--wait-for-viewer",
                           "waits for a page of the live viewer; without --view there is none");
@@ -223,11 +233,12 @@ int RunCommand::execute() const {
     sim::IgtlWorldSettings ws;
     ws.host = address.host;
     ws.port = address.port;
-    std::vector<std::string> names;
-    for (const core::BodyModel& b : scene.model.bodies) names.push_back(b.name);
-    igtl_world = std::make_unique<sim::IgtlWorldServer>(std::move(names), ws);
-    std::cerr << "numen: OpenIGTLink world on " << ws.host << ":" << igtl_world->port()
-              << std::endl;
+    ws.organ_rate_hz = igtl_organ_rate_;
+    warn_if_exposed(ws.host, std::cerr, "the OpenIGTLink world");
+    igtl_world = std::make_unique<sim::IgtlWorldServer>(scene.model, ws);
+    const bool v6 = ws.host.find(':') != std::string::npos;
+    std::cerr << "numen: OpenIGTLink world on " << (v6 ? "[" : "") << ws.host << (v6 ? "]" : "")
+              << ":" << igtl_world->port() << std::endl;
     options.view_sinks.push_back(igtl_world.get());
     if (options.view_speed <= 0.0 && !realtime_ && !sim::parse_bus_spec(bus_).real())
       options.view_speed = 1.0;
@@ -263,8 +274,10 @@ int RunCommand::execute() const {
   if (igtl_world) {
     const sim::IgtlWorldCounters& c = igtl_world->counters();
     std::cerr << "  OpenIGTLink world: " << c.clients_total << " clients, " << c.messages
-              << " TRANSFORMs, " << c.frames_skipped << " client-frames skipped (slow clients), "
-              << c.clients_refused << " clients refused\n";
+              << " TRANSFORMs, " << c.polydata << " POLYDATA, " << c.statuses << " STATUS, "
+              << c.strings << " STRING (" << c.events << " events), " << c.frames_skipped
+              << " client-frames skipped (slow clients), " << c.clients_refused
+              << " clients refused\n";
   }
   // A run stopped by a signal and otherwise clean exits 128 + the signal (shell convention):
   // run_verdict() put that status, and the signal's name, in the summary.

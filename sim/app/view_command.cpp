@@ -35,9 +35,9 @@ class RecordingSource final : public sim::ViewFrameSource {
 
 std::string viewer_page_dir() { return sim::shipped_viewer_dir(NUMEN_VIEWER_DIR).string(); }
 
-void warn_if_exposed(const std::string& host, std::ostream& err) {
+void warn_if_exposed(const std::string& host, std::ostream& err, const char* what) {
   if (!sim::ViewServer::is_loopback_address(host))
-    err << "numen: warning: the viewer listens on " << host
+    err << "numen: warning: " << what << " listens on " << host
         << ", reachable from the network; anyone who can reach it sees the run (read-only)\n";
 }
 

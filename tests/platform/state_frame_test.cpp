@@ -61,6 +61,7 @@ struct Period {
     report.step_ns = 12345;
     report.lifecycle = numen::hal::LifecycleState::kActive;
     report.startup = numen::hal::StartupPhase::kOperational;
+    report.sample_faults = numen::hal::SampleFault::kJump;
     report.feedback.force = Vec3(1.0, 2.0, 3.0);
     report.feedback.torque = Vec3(-0.1, 0.2, -0.3);
   }
@@ -98,6 +99,7 @@ TEST(StateFrame, RoundTripsEveryField) {
   EXPECT_EQ(h.step_ns, 12345u);
   EXPECT_EQ(h.lifecycle, static_cast<std::uint8_t>(numen::hal::LifecycleState::kActive));
   EXPECT_EQ(h.startup, static_cast<std::uint8_t>(numen::hal::StartupPhase::kOperational));
+  EXPECT_EQ(h.sample_faults, numen::hal::SampleFault::kJump);
 
   float pose[7];
   v.body_pose(0, pose);
@@ -179,7 +181,7 @@ TEST(StateFrame, EachDeclaredFieldIsAtItsDeclaredOffset) {
         want = static_cast<std::uint64_t>(numen::hal::StartupPhase::kOperational);
         break;
       case FrameField::kFaultCause: want = 0; break;  // none latched
-      case FrameField::kReserved: want = 0; break;
+      case FrameField::kSampleFaults: want = numen::hal::SampleFault::kJump; break;
     }
     EXPECT_EQ(got, want) << f.name << " at byte " << f.offset;
   }

@@ -30,7 +30,11 @@ class RecordingSink final : public numen::platform::StateFrameSink {
     StateFrameView v;
     const bool ok = StateFrameDecoder::decode(frame, v).ok();
     std::lock_guard<std::mutex> lock(mutex);
-    if (ok) periods.push_back(v.header().period);
+    if (ok) {
+      periods.push_back(v.header().period);
+      sample_faults.push_back(v.header().sample_faults);
+      bus_down.push_back((v.header().flags & numen::platform::kFrameBusDown) != 0);
+    }
     else ++malformed;
     return ok && !fail;
   }
@@ -38,6 +42,8 @@ class RecordingSink final : public numen::platform::StateFrameSink {
   bool fail = false;
   std::mutex mutex;
   std::vector<std::uint64_t> periods;
+  std::vector<std::uint8_t> sample_faults;  // each frame's
+  std::vector<bool> bus_down;               // each frame's kFrameBusDown
   int malformed = 0;
 };
 
@@ -81,6 +87,32 @@ TEST(StateStream, DecimatesToTheDisplayRateAndCountsTheRest) {
     EXPECT_TRUE(gap == 16 || gap == 17) << "frame " << i << " gap " << gap;
   }
   EXPECT_EQ(sink.malformed, 0);
+}
+
+// What the decimated periods saw reaches the next frame: its sample_faults are the OR of the
+// periods' since the previous frame, its kFrameBusDown set when one of them had the bus down.
+TEST(StateStream, AFramesSampleFaultsAndBusDownAreThoseOfThePeriodsSinceThePreviousFrame) {
+  Loop loop;
+  RecordingSink sink;
+  StateStreamSettings every_10th;  // 100 Hz of a 1 kHz run, every frame delivered
+  every_10th.display_rate_hz = 100.0;
+  every_10th.full_queue = numen::hal::FullQueuePolicy::kWait;
+  StateStream stream(loop.layout, {&sink}, every_10th);
+  stream.start();
+  for (int k = 0; k < 40; ++k) {  // frames at periods 0, 10, 20, 30
+    loop.data.time = k * loop.model.dt;
+    loop.report.sample_faults = k == 3 ? numen::hal::SampleFault::kJump
+                                : k == 14 || k == 20 ? numen::hal::SampleFault::kStale
+                                                     : numen::hal::SampleFault::kNone;
+    numen::platform::StateFrameFigures figures{static_cast<std::uint64_t>(k), 0.0, 0.0};
+    figures.bus_down = k == 25;
+    stream.publish(loop.data, loop.report, {}, figures);
+  }
+  stream.stop();
+  ASSERT_EQ(sink.periods, (std::vector<std::uint64_t>{0, 10, 20, 30}));
+  EXPECT_EQ(sink.sample_faults, (std::vector<std::uint8_t>{0, numen::hal::SampleFault::kJump,
+                                                           numen::hal::SampleFault::kStale, 0}));
+  EXPECT_EQ(sink.bus_down, (std::vector<bool>{false, false, false, true}));
 }
 
 TEST(StateStream, WithoutAConsumerFramesAreDroppedAndCountedNeverWaitedFor) {

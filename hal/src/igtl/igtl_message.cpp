@@ -11,6 +11,8 @@
 #include <cmath>
 #include <cstring>
 
+#include "igtl_stamp.hpp"
+
 namespace numen::hal {
 
 namespace {
@@ -161,12 +163,7 @@ std::string pack_igtl_transform(const std::string& device_name, std::int64_t tim
     mat[r][3] = static_cast<float>(translation(r));
   }
   m->SetMatrix(mat);
-  const auto ns = static_cast<std::uint64_t>(std::max<std::int64_t>(timestamp_ns, 0));
-  const std::uint64_t sec = ns / 1'000'000'000u;
-  const std::uint64_t sub = ns % 1'000'000'000u;
-  const std::uint64_t frac = std::min<std::uint64_t>(
-      ((sub << 32) + 500'000'000u) / 1'000'000'000u, 0xFFFFFFFFu);
-  m->SetTimeStamp(static_cast<unsigned int>(sec), static_cast<unsigned int>(frac));
+  igtl_set_stamp_ns(*m, timestamp_ns);
   m->Pack();
   return std::string(static_cast<const char*>(m->GetPackPointer()),
                      static_cast<std::size_t>(m->GetPackSize()));

@@ -5,9 +5,13 @@
 
 #include <time.h>
 
+#include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <optional>
 #include <stdexcept>
 #include <string>
+#include <thread>
 
 #include "numen/hal/canopen/canopen.hpp"
 #include "numen/hal/device/axis.hpp"
@@ -52,15 +56,49 @@ IgtlTrackerBus::IgtlTrackerBus(const DeviceConfig& config,
   IgtlTrackerClientSettings cs = settings_.client;
   cs.wait_when_full = settings_.wait_for_tracker;
   cs.reconnect = cs.reconnect && !settings_.wait_for_tracker;  // a replay's end is the end
+  if (settings_.registration_wait_ns <= 0)
+    throw std::invalid_argument("OpenIGTLink tracker: registration_wait_ns must be > 0");
   client_ = std::make_unique<IgtlTrackerClient>(cs);
+  if (!cs.registration_name.empty()) take_registration();
+}
+
+void IgtlTrackerBus::take_registration() {
+  const IgtlTrackerClientSettings& cs = client_->settings();
+  const std::int64_t end = igtl_bus_mono_ns() + settings_.registration_wait_ns;
+  std::optional<IgtlTransform> r = client_->registration();
+  while (!r && igtl_bus_mono_ns() < end && !(client_->ended() && !client_->connected())) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    r = client_->registration();
+  }
+  if (!r) r = client_->registration();  // it may have come just before the stream ended
+  if (!r) {
+    const IgtlClientCounters c = client_->counters();
+    std::string names;
+    for (const std::string& n : client_->names_seen()) names += (names.empty() ? "'" : ", '") + n + "'";
+    char wait[32];
+    std::snprintf(wait, sizeof wait, "%g s", static_cast<double>(settings_.registration_wait_ns) * 1e-9);
+    const std::string what =
+        "no TRANSFORM '" + cs.registration_name + "' (the registration) from " + cs.host + ":" +
+        std::to_string(cs.port);
+    if (c.connects == 0)
+      throw IgtlRegistrationMissing(what + ": never connected (" +
+                                    std::to_string(c.connect_failures) +
+                                    " attempts refused or timed out)");
+    throw IgtlRegistrationMissing(what + " within " + wait + " (" + std::to_string(c.messages) +
+                                  " messages; other device names sent: " +
+                                  (names.empty() ? "none" : names) + ")");
+  }
+  settings_.registration = core::Pose{r->translation * settings_.metres_per_unit,
+                                      core::Quat(r->rotation).normalized()};
 }
 
 IgtlTrackerBus::~IgtlTrackerBus() = default;
 
 BusState IgtlTrackerBus::state() const noexcept {
-  return client_->ended() && !client_->connected() && client_->counters().connects == 0
-             ? BusState::kBusOff
-             : BusState::kOk;
+  if (client_->connected()) return BusState::kOk;
+  const IgtlClientCounters c = client_->counters();
+  return c.connects > 0 || c.connect_failures > 0 || client_->ended() ? BusState::kBusOff
+                                                                      : BusState::kOk;
 }
 
 void IgtlTrackerBus::set_time_ns(std::int64_t t_ns) noexcept {

@@ -45,6 +45,9 @@ IgtlTrackerClient::IgtlTrackerClient(IgtlTrackerClientSettings settings)
   };
   if (settings_.device_name.empty() || settings_.device_name.size() > 20)
     throw bad("device_name '" + settings_.device_name + "' must have 1 to 20 characters");
+  if (settings_.registration_name.size() > 20 || settings_.registration_name == settings_.device_name)
+    throw bad("registration_name '" + settings_.registration_name +
+              "' must have at most 20 characters and not be the tool's device name");
   if (settings_.port == 0) throw bad("port must be 1..65535");
   if (settings_.host.empty()) throw bad("host is empty");
   if (settings_.queue_poses == 0) throw bad("queue_poses must be >= 1");
@@ -90,6 +93,11 @@ IgtlClientCounters IgtlTrackerClient::counters() const noexcept {
 std::vector<IgtlFaultRecord> IgtlTrackerClient::fault_records() const {
   std::lock_guard<std::mutex> lock(records_mutex_);
   return records_;
+}
+
+std::optional<IgtlTransform> IgtlTrackerClient::registration() const {
+  std::lock_guard<std::mutex> lock(records_mutex_);
+  return registration_;
 }
 
 std::vector<std::string> IgtlTrackerClient::names_seen() const {
@@ -211,6 +219,10 @@ void IgtlTrackerClient::session(int fd) {
         pose.rotation = tf.rotation;
         pose.translation = tf.translation;
         push(pose);
+      } else if (!settings_.registration_name.empty() &&
+                 h.device_name == settings_.registration_name) {
+        std::lock_guard<std::mutex> lock(records_mutex_);
+        registration_ = tf;
       } else {
         count(other_devices_);
         std::lock_guard<std::mutex> lock(records_mutex_);

@@ -61,6 +61,13 @@ IgtlReplayServer::IgtlReplayServer(const Scene& scene, IgtlReplaySettings settin
   if (!scene.igtl)
     throw InputError(scene.file, 0, 0, "igtl",
                      "the scene has no [device.igtl]: nothing names the tool to replay");
+  if (const IgtlTrackerScene& t = *scene.igtl; !t.registration_name.empty())
+    throw InputError(t.registration_file, t.registration_line, t.registration_column,
+                     "device.igtl.registration",
+                     "igtl-replay places the tool in the tracker's frame with the scene's "
+                     "registration; this one is read from the TRANSFORM '" + t.registration_name +
+                         "' at start, which the replay does not have: give a fixed registration "
+                         "= { position, orientation } to replay");
   if (!std::isfinite(settings_.rate_hz) || settings_.rate_hz < 0.0)
     throw std::invalid_argument("igtl-replay: rate must be finite and >= 0");
   if (!(settings_.accept_timeout_s > 0.0))

@@ -1,6 +1,6 @@
 #pragma once
 /// @file tcp_listen.hpp
-/// A listening IPv4 TCP socket for numen's OpenIGTLink servers (the replay, igtl_replay.cpp; the
+/// A listening TCP socket for numen's OpenIGTLink servers (the replay, igtl_replay.cpp; the
 /// world out, igtl_world_server.cpp). Private to sim.
 
 #include <cstdint>
@@ -14,10 +14,12 @@ struct TcpListener {
   std::uint16_t port = 0;  ///< The port bound (the ephemeral one when 0 was asked).
 };
 
-/// Binds `host` (an IPv4 address literal) : `port` (0: an ephemeral port) with SO_REUSEADDR,
-/// close-on-exec, non-blocking when `nonblocking`, and listens (`backlog`). Throws
-/// std::runtime_error "`what`: cannot listen on HOST:PORT: <errno text>" (or "… is not an IPv4
-/// address"). The caller closes the fd.
+/// Binds `host` : `port` (0: an ephemeral port) with SO_REUSEADDR, close-on-exec, non-blocking
+/// when `nonblocking`, and listens (`backlog`). `host` is an IPv4 or IPv6 literal (without
+/// brackets) or a name, resolved by getaddrinfo(); of its addresses the IPv4 ones are tried
+/// first (so "localhost" is 127.0.0.1 where it has both, as the viewer's), then the IPv6 ones
+/// (an IPv6 socket is IPv6 only). Throws std::runtime_error "`what`: cannot listen on
+/// HOST:PORT: <reason>" (the resolver's or the last bind's). The caller closes the fd.
 TcpListener tcp_listen(const std::string& host, std::uint16_t port, bool nonblocking, int backlog,
                        const std::string& what);
 

@@ -3,6 +3,8 @@
 
 #include "numen/sim/run/igtl_run.hpp"
 
+#include <cmath>
+
 #include "numen/hal/features.hpp"
 #include "numen/platform/latency_histogram.hpp"
 #include "numen/sim/input/input_error.hpp"
@@ -32,7 +34,7 @@ namespace {
 class IgtlRunImpl final : public IgtlRun {
  public:
   IgtlRunImpl(const Scene& scene, hal::IgtlTrackerSettings settings)
-      : bus_(scene.device, hal::make_kinematics(scene.device), std::move(settings)) {}
+      : bus_(make_bus(scene, std::move(settings))) {}
   hal::Bus& bus() noexcept override { return bus_; }
   void set_time_ns(std::int64_t t_ns) noexcept override { bus_.set_time_ns(t_ns); }
   void finish() override { bus_.client().stop(); }
@@ -67,6 +69,16 @@ class IgtlRunImpl final : public IgtlRun {
   }
 
  private:
+  // The bus; a registration TRANSFORM that never came is an error at the scene's key.
+  static hal::IgtlTrackerBus make_bus(const Scene& scene, hal::IgtlTrackerSettings settings) {
+    try {
+      return hal::IgtlTrackerBus(scene.device, hal::make_kinematics(scene.device), std::move(settings));
+    } catch (const hal::IgtlRegistrationMissing& e) {
+      const IgtlTrackerScene& t = *scene.igtl;
+      throw InputError(t.registration_file, t.registration_line, t.registration_column,
+                       "device.igtl.registration", e.what());
+    }
+  }
   hal::IgtlTrackerBus bus_;
 };
 
@@ -84,6 +96,8 @@ std::unique_ptr<IgtlRun> make_igtl_run(const Scene& scene, const BusSpec& spec, 
   s.metres_per_unit = t.metres_per_unit;
   s.calibration = t.calibration;
   s.registration = t.registration;
+  s.client.registration_name = t.registration_name;
+  s.registration_wait_ns = std::llround(t.registration_wait_s * 1e9);
   s.wait_for_tracker = !paced;
   return std::make_unique<IgtlRunImpl>(scene, std::move(s));
 }

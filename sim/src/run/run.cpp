@@ -339,6 +339,7 @@ void SceneRunner::record(const platform::PeriodReport& report, const PeriodConta
 platform::StateFrameFigures SceneRunner::view_figures(const PeriodContacts& c) const noexcept {
   platform::StateFrameFigures f{static_cast<std::uint64_t>(k_ - 1), c.tool_pen, c.target_pen,
                                 c.hand_pen, 0.0, 0.0};
+  f.bus_down = port_->state() != hal::BusState::kOk;  // a tracker's connection lost, a bus off
   if (const PlantMotion* plant = instrument_.plant()) {
     f.handle_force = plant->figures().handle_force_n;
     f.device_port_energy = plant->figures().port_energy_j;

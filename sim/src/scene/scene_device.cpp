@@ -478,7 +478,8 @@ void parse_igtl(const TomlTable& dev, Scene& scene, const hal::DeviceConfig& cfg
   if (!g) return;
   if (cfg.kind != hal::DeviceKind::kPoseTracker)
     dev.fail("igtl", "an OpenIGTLink tracker is a pose tracker's: needs kind = \"pose-tracker\"");
-  g->allow_only({"host", "port", "device_name", "units", "calibration", "registration"});
+  g->allow_only({"host", "port", "device_name", "units", "calibration", "registration",
+                 "registration_wait"});
   IgtlTrackerScene t;
   t.host = g->string_or("host", t.host);
   if (t.host.empty()) g->fail("host", "must not be empty");
@@ -491,7 +492,22 @@ void parse_igtl(const TomlTable& dev, Scene& scene, const hal::DeviceConfig& cfg
   t.units = g->choice("units", {"mm", "cm", "m"}, "mm");
   t.metres_per_unit = t.units == "mm" ? 1e-3 : t.units == "cm" ? 1e-2 : 1.0;
   t.calibration = igtl_fixed_pose(*g, "calibration");
-  t.registration = igtl_fixed_pose(*g, "registration");
+  if (const toml::node* r = g->node("registration"); r != nullptr && r->is_string()) {
+    t.registration_name = g->string("registration");
+    if (t.registration_name.empty() || t.registration_name.size() > 20 ||
+        t.registration_name == t.device_name)
+      g->fail("registration", "a registration read from a TRANSFORM names it: 1 to 20 "
+                              "characters, not the tool's device_name");
+    t.registration_file = g->file();
+    t.registration_line = static_cast<int>(r->source().begin.line);
+    t.registration_column = static_cast<int>(r->source().begin.column);
+    t.registration_wait_s = g->number_in("registration_wait", 1e-3, 600.0, 5.0);
+  } else {
+    if (g->has("registration_wait"))
+      g->fail("registration_wait", "waits for a registration read from a TRANSFORM; "
+                                   "registration is a fixed transform here");
+    t.registration = igtl_fixed_pose(*g, "registration");
+  }
   scene.igtl = std::move(t);
 }
 

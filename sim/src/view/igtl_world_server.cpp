@@ -1,6 +1,6 @@
 /// @file igtl_world_server.cpp
-/// The god-object world as OpenIGTLink TRANSFORMs (igtl_world_server.hpp): POSIX sockets,
-/// messages packed by the library (hal::pack_igtl_transform()).
+/// The god-object world as OpenIGTLink messages (igtl_world_server.hpp): POSIX sockets,
+/// messages packed by the library (hal::pack_igtl_transform(), hal/igtl/igtl_pack.hpp).
 
 #include "numen/sim/view/igtl_world_server.hpp"
 
@@ -11,25 +11,112 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cmath>
+#include <cstdio>
 #include <stdexcept>
+#include <string>
+#include <utility>
 
+#include "net/tcp_listen.hpp"
+#include "numen/core/net_surface_map.hpp"
+#include "numen/hal/device/safety_supervisor.hpp"
+#include "numen/hal/device/sample_check.hpp"
 #include "numen/hal/features.hpp"
 #include "numen/platform/state_frame.hpp"
-#include "net/tcp_listen.hpp"
 #if NUMEN_WITH_OPENIGTLINK
 #include "numen/hal/igtl/igtl_message.hpp"
+#include "numen/hal/igtl/igtl_pack.hpp"
 #endif
 
 namespace numen::sim {
 
-IgtlWorldServer::IgtlWorldServer(std::vector<std::string> body_names, IgtlWorldSettings settings)
-    : names_(std::move(body_names)), settings_(std::move(settings)) {
+namespace {
+
+/// The rejection bits of a sample's FaultMask in words ("stale, jump"); kNoData is not one.
+std::string rejection_words(std::uint8_t mask) {
+  static constexpr std::pair<hal::FaultMask, const char*> kBits[] = {
+      {hal::SampleFault::kMalformed, "malformed"}, {hal::SampleFault::kNonFinite, "non-finite"},
+      {hal::SampleFault::kOutOfRange, "out of range"}, {hal::SampleFault::kStale, "stale"},
+      {hal::SampleFault::kJump, "jump"}};
+  std::string out;
+  for (const auto& [bit, word] : kBits)
+    if ((mask & bit) != 0) out += (out.empty() ? "" : ", ") + std::string(word);
+  return out;
+}
+
+/// Bytes of events a client's backlog may hold above its limit (a client that reads nothing
+/// for long loses them too: memory stays bounded).
+constexpr std::size_t kEventsAllowance = std::size_t{64} << 10;
+
+constexpr std::uint8_t kRejectionBits =
+    static_cast<std::uint8_t>(~hal::SampleFault::kNoData & 0xFFu);
+
+std::string at_time(std::int64_t t_ns) {
+  char buf[48];
+  std::snprintf(buf, sizeof buf, "at t = %.3f s", static_cast<double>(t_ns) * 1e-9);
+  return buf;
+}
+
+}  // namespace
+
+/// One deformable's POLYDATA: its points are the net's nodes, or its fine surface's vertices.
+struct IgtlWorldServer::Organ {
+  int net = -1;
+  bool fine = false;
+  std::vector<core::Vec3> points;  // mm, this frame's
+#if NUMEN_WITH_OPENIGTLINK
+  std::unique_ptr<hal::IgtlPolyDataPacker> packer;
+#endif
+};
+
+IgtlWorldServer::IgtlWorldServer(const core::Model& model, IgtlWorldSettings settings)
+    : model_(model), settings_(std::move(settings)) {
   if (!hal::kWithOpenIgtLink)
     throw std::runtime_error("--igtl needs OpenIGTLink: this build has NUMEN_WITH_OPENIGTLINK=OFF");
-  for (const std::string& n : names_)
-    if (n.size() > 13)
-      throw std::invalid_argument("--igtl: body name '" + n + "' is longer than 13 characters ('" +
-                                  n + "_target' must fit OpenIGTLink's 20)");
+  if (!std::isfinite(settings_.organ_rate_hz) || settings_.organ_rate_hz < 0.0)
+    throw std::invalid_argument("--igtl-organ-rate: " + std::to_string(settings_.organ_rate_hz) +
+                                " is not a finite rate >= 0");
+  for (const core::BodyModel& b : model_.bodies) {
+    if (b.name.size() > 13)
+      throw std::invalid_argument("--igtl: body name '" + b.name +
+                                  "' is longer than 13 characters ('" + b.name +
+                                  "_target' must fit OpenIGTLink's 20)");
+    names_.push_back(b.name);
+  }
+#if NUMEN_WITH_OPENIGTLINK
+  for (int n = 0; n < static_cast<int>(model_.nets.size()); ++n) {
+    const core::NetModel& net = model_.nets[static_cast<std::size_t>(n)];
+    if (net.name.empty() || net.name.size() > 20)
+      throw std::invalid_argument("--igtl: deformable name '" + net.name +
+                                  "' must have 1 to 20 characters (OpenIGTLink's device name)");
+    Organ o;
+    o.net = n;
+    o.fine = net.surface_point_count > 0;
+    std::vector<std::array<std::uint32_t, 3>> triangles;
+    if (o.fine) {
+      for (int t = net.surface_face_begin; t < net.surface_face_begin + net.surface_face_count; ++t) {
+        const std::array<int, 3>& f = model_.net_surface_faces[static_cast<std::size_t>(t)];
+        triangles.push_back({static_cast<std::uint32_t>(f[0] - net.surface_point_begin),
+                             static_cast<std::uint32_t>(f[1] - net.surface_point_begin),
+                             static_cast<std::uint32_t>(f[2] - net.surface_point_begin)});
+      }
+    } else {
+      for (int t = net.face_begin; t < net.face_begin + net.face_count; ++t) {
+        const std::array<int, 3>& f = model_.net_faces[static_cast<std::size_t>(t)];
+        triangles.push_back({static_cast<std::uint32_t>(f[0] - net.node_begin),
+                             static_cast<std::uint32_t>(f[1] - net.node_begin),
+                             static_cast<std::uint32_t>(f[2] - net.node_begin)});
+      }
+    }
+    const std::size_t count =
+        static_cast<std::size_t>(o.fine ? net.surface_point_count : net.node_count);
+    if (count == 0) continue;  // a net without nodes has nothing to draw
+    o.points.resize(count);
+    o.packer = std::make_unique<hal::IgtlPolyDataPacker>(net.name, count, triangles);
+    organs_.push_back(std::move(o));
+  }
+#endif
+  nodes_.resize(static_cast<std::size_t>(model_.num_nodes()));
   const TcpListener l = tcp_listen(settings_.host, settings_.port, true, 8, "--igtl");
   listen_fd_ = l.fd;
   port_ = l.port;
@@ -52,7 +139,7 @@ std::size_t IgtlWorldServer::accept_clients() noexcept {
     }
     const int one = 1;
     setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
-    clients_.push_back(Client{fd, {}});
+    clients_.push_back(Client{fd, {}, true});
     ++counters_.clients_total;
   }
   return clients_.size();
@@ -79,6 +166,107 @@ void IgtlWorldServer::drop_gone() noexcept {
   clients_.erase(gone, clients_.end());
 }
 
+void IgtlWorldServer::add_status(std::string& out, std::int64_t t_ns, int code,
+                                 std::int64_t subcode, const std::string& name,
+                                 const std::string& message) {
+#if NUMEN_WITH_OPENIGTLINK
+  out += hal::pack_igtl_status(kIgtlStatusDevice, t_ns, static_cast<hal::IgtlStatusCode>(code),
+                               subcode, name, message);
+#else
+  (void)out, (void)t_ns, (void)code, (void)subcode, (void)name, (void)message;
+#endif
+}
+
+void IgtlWorldServer::add_string(std::string& out, std::int64_t t_ns, const std::string& text) {
+#if NUMEN_WITH_OPENIGTLINK
+  out += hal::pack_igtl_string(kIgtlEventsDevice, t_ns, text);
+#else
+  (void)out, (void)t_ns, (void)text;
+#endif
+}
+
+// The changes this frame shows against the previous one, as STATUS and STRING into events_.
+void IgtlWorldServer::add_events(const platform::StateFrameView& view) {
+  events_.clear();
+  events_statuses_ = events_strings_ = 0;
+  const platform::StateFrameHeader& h = view.header();
+  const std::int64_t t = h.time_ns;
+  const std::uint8_t rejected = h.sample_faults & kRejectionBits;
+  const bool bus_down = (h.flags & platform::kFrameBusDown) != 0;
+  // The first frame is compared with a fresh device (no fault, no rejection, bus up), holding
+  // what it holds.
+  const Last was = last_.seen ? last_ : Last{true, 0, 0, false, h.attached_body};
+  const auto event = [&](int code, std::int64_t subcode, const std::string& name,
+                         const std::string& text) {
+    add_status(events_, t, code, subcode, name, text);
+    add_string(events_, t, text);
+    ++events_statuses_;
+    ++events_strings_;
+    ++counters_.events;
+  };
+  if (h.fault_cause != was.fault_cause) {
+    const auto cause = static_cast<hal::FaultCause>(h.fault_cause);
+    if (h.fault_cause != 0)
+      event(3, h.fault_cause, hal::to_string(cause),
+            std::string("the device latched its safe state ") + at_time(t) + ": " +
+                hal::to_string(cause));
+    else
+      event(1, 0, "safe state cleared", "the device's safe state was cleared (re-armed) " + at_time(t));
+  }
+  if (rejected != (was.sample_faults & kRejectionBits)) {
+    if (rejected != 0)
+      event((rejected & hal::SampleFault::kStale) != 0 ? 7 : 2, rejected, "samples rejected",
+            "the device's samples were rejected " + at_time(t) + " (" + rejection_words(rejected) +
+                ")");
+    else
+      event(1, 0, "samples valid", "the device's samples are accepted again " + at_time(t));
+  }
+  if (bus_down != was.bus_down) {
+    if (bus_down)
+      event(7, 0, "bus down",
+            "the device's bus is down " + at_time(t) + " (a tracker's connection lost, a CAN bus off)");
+    else
+      event(1, 0, "bus up", "the device's bus is back " + at_time(t));
+  }
+  if (h.attached_body != was.attached_body) {
+    const auto name = [&](std::int32_t b) {
+      return b >= 0 && static_cast<std::size_t>(b) < names_.size() ? "'" + names_[static_cast<std::size_t>(b)] + "'"
+                                                                   : "body " + std::to_string(b);
+    };
+    add_string(events_, t,
+               h.attached_body >= 0
+                   ? "the device holds " + name(h.attached_body) + " " + at_time(t)
+                   : "the device released " + name(was.attached_body) + " " + at_time(t));
+    ++events_strings_;
+    ++counters_.events;
+  }
+  last_ = Last{true, h.fault_cause, h.sample_faults, bus_down, h.attached_body};
+}
+
+// Every deformable's POLYDATA at this frame's node positions into `out`.
+void IgtlWorldServer::add_organs(std::string& out, const platform::StateFrameView& view) {
+#if NUMEN_WITH_OPENIGTLINK
+  const platform::StateFrameHeader& h = view.header();
+  const std::size_t n = std::min<std::size_t>(h.num_nodes, nodes_.size());
+  float x[3];
+  for (std::size_t i = 0; i < n; ++i) {
+    view.node_position(static_cast<std::uint32_t>(i), x);
+    nodes_[i].position = core::Vec3(x[0], x[1], x[2]);
+  }
+  for (Organ& o : organs_) {
+    const core::NetModel& net = model_.nets[static_cast<std::size_t>(o.net)];
+    for (std::size_t i = 0; i < o.points.size(); ++i) {
+      const int k = static_cast<int>(i);
+      o.points[i] = 1e3 * (o.fine ? core::net_surface_position(model_, nodes_, net.surface_point_begin + k)
+                                  : nodes_[static_cast<std::size_t>(net.node_begin + k)].position);
+    }
+    o.packer->pack(h.time_ns, o.points, out);
+  }
+#else
+  (void)out, (void)view;
+#endif
+}
+
 bool IgtlWorldServer::write_frame(std::span<const std::byte> frame) noexcept {
   ++counters_.frames;
   accept_clients();
@@ -87,18 +275,19 @@ bool IgtlWorldServer::write_frame(std::span<const std::byte> frame) noexcept {
     ++counters_.frames_bad;
     return false;
   }
-  if (clients_.empty()) return true;
 #if NUMEN_WITH_OPENIGTLINK
   try {
-    batch_.clear();
     const platform::StateFrameHeader& h = view.header();
+    add_events(view);  // the changes are tracked with or without clients
+    if (clients_.empty()) return true;
+    batch_.clear();
+    batch_transforms_ = 0;
     const std::size_t n = std::min<std::size_t>(h.num_bodies, names_.size());
-    std::size_t messages = 0;
     const auto add = [&](const std::string& name, const float p[7]) {
       const core::Quat q(p[6], p[3], p[4], p[5]);
       batch_ += hal::pack_igtl_transform(name, h.time_ns, q.normalized().toRotationMatrix(),
                                          core::Vec3(p[0], p[1], p[2]) * 1e3);  // mm
-      ++messages;
+      ++batch_transforms_;
     };
     float pose[7];
     for (std::size_t b = 0; b < n; ++b) {
@@ -106,12 +295,59 @@ bool IgtlWorldServer::write_frame(std::span<const std::byte> frame) noexcept {
       add(names_[b], pose);
       if (view.target_pose(static_cast<std::uint32_t>(b), pose)) add(names_[b] + "_target", pose);
     }
+    // The organs: due on the grid of organ_rate_hz in simulated time (no burst after a gap).
+    const bool any_fresh =
+        std::any_of(clients_.begin(), clients_.end(), [](const Client& c) { return c.fresh; });
+    bool organ_due = false;
+    if (settings_.organ_rate_hz > 0.0 && !organs_.empty()) {
+      const auto interval = static_cast<std::int64_t>(std::llround(1e9 / settings_.organ_rate_hz));
+      if (!organ_sent_ || h.time_ns >= organ_due_ns_) {
+        organ_due = true;
+        organ_due_ns_ = organ_sent_ ? organ_due_ns_ + interval : h.time_ns + interval;
+        if (organ_due_ns_ <= h.time_ns) organ_due_ns_ = h.time_ns + interval;
+        organ_sent_ = true;
+      }
+    }
+    std::string organs;  // every deformable's POLYDATA at this frame
+    if (organ_due || any_fresh) add_organs(organs, view);
+    intro_.clear();  // a new client's state, after its shapes
+    if (any_fresh) {
+      const auto cause = static_cast<hal::FaultCause>(last_.fault_cause);
+      if (last_.fault_cause != 0)
+        add_status(intro_, h.time_ns, 3, last_.fault_cause, hal::to_string(cause),
+                   std::string("the device is in its safe state: ") + hal::to_string(cause));
+      else
+        add_status(intro_, h.time_ns, 1, 0, "ok", "numen world " + at_time(h.time_ns));
+    }
+    const std::size_t limit =
+        std::max(settings_.max_backlog_bytes, 2 * (organs.size() + intro_.size() + batch_.size()));
+    // In each client's stream: the shapes (at its first frame, then when due), its state when it
+    // is new, the frame's TRANSFORMs, the frame's events.
     for (Client& c : clients_) {
-      if (c.backlog.size() + batch_.size() > settings_.max_backlog_bytes) {
-        ++counters_.frames_skipped;  // a slow client misses this frame
-      } else {
+      if (c.fresh) {
+        c.backlog += organs;
+        c.backlog += intro_;
         c.backlog += batch_;
-        counters_.messages += messages;
+        counters_.polydata += organs_.size();
+        ++counters_.statuses;
+        counters_.messages += batch_transforms_;
+        c.fresh = false;
+      } else if (c.backlog.size() + (organ_due ? organs.size() : 0) + batch_.size() > limit) {
+        ++counters_.frames_skipped;  // a slow client misses this frame's poses and shapes
+      } else {
+        if (organ_due) {
+          c.backlog += organs;
+          counters_.polydata += organs_.size();
+        }
+        c.backlog += batch_;
+        counters_.messages += batch_transforms_;
+      }
+      if (c.backlog.size() + events_.size() <= limit + kEventsAllowance) {
+        c.backlog += events_;  // small and rare: kept when the frame is not
+        counters_.statuses += events_statuses_;
+        counters_.strings += events_strings_;
+      } else if (!events_.empty()) {
+        ++counters_.events_skipped;
       }
       send_some(c);
     }

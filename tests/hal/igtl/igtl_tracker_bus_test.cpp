@@ -188,3 +188,87 @@ TEST(IgtlTrackerBus, ThePacedPeriodNeitherAllocatesNorWaits) {
   // loaded CI machine).
   EXPECT_LT(longest, 200'000'000);
 }
+
+// The bus's state is the connection's: kOk while connected, kBusOff once it is lost (here the
+// server closes after its message and the follower does not reconnect), so that the run's
+// frames (kFrameBusDown) and its bus error periods show a lost tracker.
+TEST(IgtlTrackerBus, TheStateIsOkWhileConnectedAndBusOffOnceTheConnectionIsLost) {
+  namespace hal = numen::hal;
+  const hal::DeviceConfig config = igtl_bus_test_config();
+  const std::string pose = hal::pack_igtl_transform("StylusToTracker", 1'000'000'000,
+                                                    numen::core::Mat3::Identity(),
+                                                    numen::core::Vec3(1.0, 2.0, 3.0));
+  {
+    numen::test::IgtlTestServer server({pose});  // keeps the connection open
+    hal::IgtlTrackerBus bus(config, hal::make_kinematics(config), igtl_bus_test_settings(server.port(), true));
+    for (int i = 0; i < 5000 && !bus.client().connected(); ++i)
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    ASSERT_TRUE(bus.client().connected());
+    EXPECT_EQ(bus.state(), hal::BusState::kOk);
+  }
+  numen::test::IgtlTestServer server({pose}, true);  // closes once it has sent
+  hal::IgtlTrackerBus bus(config, hal::make_kinematics(config), igtl_bus_test_settings(server.port(), true));
+  for (int i = 0; i < 5000 && !bus.client().ended(); ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  ASSERT_TRUE(bus.client().ended());
+  EXPECT_EQ(bus.client().counters().connects, 1u);
+  EXPECT_EQ(bus.state(), hal::BusState::kBusOff);
+}
+
+// registration = "TrackerToScene": the registration is that TRANSFORM, read at start (its
+// translation in the tool's units), and the tool's poses are placed with it as with a fixed one.
+TEST(IgtlTrackerBus, TheRegistrationIsReadFromItsNamedTransformAtStart) {
+  namespace hal = numen::hal;
+  const numen::core::Quat rq(Eigen::AngleAxisd(0.785398, numen::core::Vec3::UnitZ()));
+  const numen::core::Quat mq(Eigen::AngleAxisd(0.4, numen::core::Vec3(0.2, -1.0, 0.5).normalized()));
+  const numen::core::Vec3 mp(-120.0, 250.0, -820.0);  // mm
+  numen::test::IgtlTestServer server(
+      {hal::pack_igtl_transform("TrackerToScene", 4'000'000'000, rq.toRotationMatrix(),
+                                numen::core::Vec3(100.0, -200.0, 900.0)),
+       hal::pack_igtl_transform("StylusToTracker", 5'000'000'000, mq.toRotationMatrix(), mp)},
+      true);
+  const hal::DeviceConfig config = igtl_bus_test_config();
+  hal::IgtlTrackerSettings s = igtl_bus_test_settings(server.port(), true);
+  const numen::core::Pose fixed = s.registration;  // what the message says, as a fixed transform
+  s.registration = numen::core::Pose{};
+  s.client.registration_name = "TrackerToScene";
+  hal::IgtlTrackerBus bus(config, hal::make_kinematics(config), s);
+  EXPECT_LT((bus.settings().registration.position - fixed.position).norm(), 1e-9);
+  EXPECT_LT(bus.settings().registration.orientation.angularDistance(fixed.orientation), 1e-6);
+  EXPECT_EQ(bus.client().counters().other_devices, 0u);  // the registration is not another tool
+  bus.set_time_ns(0);
+  ASSERT_EQ(bus.write(hal::make_sync(0)), hal::IoStatus::kOk);
+  const numen::core::Pose tip = igtl_bus_test_tip(bus, config);
+  const numen::core::Vec3 want_p =
+      fixed.position + fixed.orientation * (mp * 1e-3 + mq * s.calibration.position);
+  EXPECT_LT((tip.position - want_p).norm(), 3e-6);
+}
+
+// A registration never sent: the construction waits at most registration_wait_ns and says so.
+TEST(IgtlTrackerBus, ARegistrationNeverSentIsSaidAfterABoundedWait) {
+  namespace hal = numen::hal;
+  numen::test::IgtlTestServer server({hal::pack_igtl_transform(
+      "StylusToTracker", 5'000'000'000, numen::core::Mat3::Identity(), numen::core::Vec3::Zero())});
+  const hal::DeviceConfig config = igtl_bus_test_config();
+  hal::IgtlTrackerSettings s = igtl_bus_test_settings(server.port(), false);
+  s.client.registration_name = "TrackerToScene";
+  s.registration_wait_ns = 200'000'000;
+  try {
+    hal::IgtlTrackerBus bus(config, hal::make_kinematics(config), s);
+    ADD_FAILURE() << "made without its registration";
+  } catch (const hal::IgtlRegistrationMissing& e) {
+    EXPECT_NE(std::string(e.what()).find("no TRANSFORM 'TrackerToScene' (the registration) from 127.0.0.1:" +
+                                         std::to_string(server.port()) + " within 0.2 s"),
+              std::string::npos)
+        << e.what();
+  }
+  // No server at all: said at once (the follower's receiver ends at the refusal).
+  s = igtl_bus_test_settings(numen::test::IgtlTestServer::closed_port(), true);
+  s.client.registration_name = "TrackerToScene";
+  try {
+    hal::IgtlTrackerBus bus(config, hal::make_kinematics(config), s);
+    ADD_FAILURE() << "made without its registration";
+  } catch (const hal::IgtlRegistrationMissing& e) {
+    EXPECT_NE(std::string(e.what()).find(": never connected"), std::string::npos) << e.what();
+  }
+}

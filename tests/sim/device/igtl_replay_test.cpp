@@ -71,10 +71,21 @@ TEST(IgtlReplay, MessageKIsTheTrackedTipAtItsSyncInTheTrackersFrame) {
   }
 }
 
-TEST(IgtlReplay, ASceneWithoutATrackerIsRefused) {
+TEST(IgtlReplay, ASceneWithoutATrackerOrWithARegistrationReadAtStartIsRefused) {
   const numen::sim::Scene scene =
       numen::sim::load_scene(std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/mouse.toml");
   numen::sim::IgtlReplaySettings rs;
   rs.port = 0;
   EXPECT_THROW(numen::sim::IgtlReplayServer(scene, rs), numen::sim::InputError);
+  // A registration read from a TRANSFORM: the replay has no value to place the tool with.
+  numen::sim::Scene named =
+      numen::sim::load_scene(std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/tracker.toml");
+  named.igtl->registration_name = "TrackerToScene";
+  try {
+    numen::sim::IgtlReplayServer server(named, rs);
+    ADD_FAILURE() << "replayed without a registration";
+  } catch (const numen::sim::InputError& e) {
+    EXPECT_EQ(e.key(), "device.igtl.registration");
+    EXPECT_NE(std::string(e.what()).find("TrackerToScene"), std::string::npos) << e.what();
+  }
 }

@@ -205,3 +205,34 @@ TEST(IgtlRun, ASceneWithoutATrackerIsRefusedAtTheBusOption) {
     EXPECT_NE(std::string(e.what()).find("[device.igtl]"), std::string::npos) << e.what();
   }
 }
+
+// A registration named in the scene that never comes (here: no server) fails the run's start
+// with an error located at the scene's key.
+TEST(IgtlRun, ARegistrationNeverSentIsAnErrorAtItsKey) {
+  const numen::test::TempDir dir;
+  std::ifstream in(std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/tracker.toml");
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const auto at = text.find("registration = {");
+  ASSERT_NE(at, std::string::npos);
+  text.replace(at, text.find('\n', at) - at, "registration = \"TrackerToScene\"");
+  // The scene's recording is relative to the shipped scene's folder.
+  for (auto p = text.find("\"../"); p != std::string::npos; p = text.find("\"../", p))
+    text.replace(p, 4, "\"" + std::string(NUMEN_SOURCE_DIR) + "/sim/");
+  const std::string file = dir.write("named.toml", text);
+  const numen::sim::Scene scene = numen::sim::load_scene(file);
+  numen::sim::RunOptions o;
+  o.bus.spec = "igtl:127.0.0.1:1";  // a privileged port nobody listens on
+  o.duration_s = 0.05;
+  try {
+    numen::sim::run_scene(scene, o);
+    FAIL() << "ran without its registration";
+  } catch (const numen::sim::InputError& e) {
+    EXPECT_EQ(e.key(), "device.igtl.registration");
+    EXPECT_EQ(e.file(), file);
+    EXPECT_GT(e.line(), 0);
+    EXPECT_NE(std::string(e.what()).find("no TRANSFORM 'TrackerToScene' (the registration) from "
+                                         "127.0.0.1:1: never connected"),
+              std::string::npos)
+        << e.what();
+  }
+}

@@ -285,13 +285,19 @@ TEST(ScenePassivity, ErrorsAreLocated) {
 
 // ---------------------------------------------------------------- [device.igtl]
 
+namespace {
+// The mini scene with a [device.igtl] of these keys (lines ending in \n).
+std::string scene_igtl_text(const std::string& keys) {
+  return replace(kMiniScene, "attach = \"tool\"\n", "attach = \"tool\"\n\n[device.igtl]\n" + keys + "\n");
+}
+}  // namespace
+
 TEST(SceneIgtl, KeysAreReadWithPlusDefaults) {
   const TempDir dir;
-  const std::string text = replace(
-      kMiniScene, "attach = \"tool\"\n",
-      "attach = \"tool\"\n\n[device.igtl]\ndevice_name = \"StylusToTracker\"\nport = 18945\n"
+  const std::string text = scene_igtl_text(
+      "device_name = \"StylusToTracker\"\nport = 18945\n"
       "calibration = { position = [0.0, 0.0, 0.15] }\n"
-      "registration = { position = [0.1, 0.0, 1.0], orientation = [0.0, 0.0, 0.0, 1.0] }\n\n");
+      "registration = { position = [0.1, 0.0, 1.0], orientation = [0.0, 0.0, 0.0, 1.0] }\n");
   const Scene s = load_scene(dir.write("igtl.toml", text));
   ASSERT_TRUE(s.igtl.has_value());
   EXPECT_EQ(s.igtl->host, "127.0.0.1");
@@ -327,6 +333,25 @@ TEST(SceneIgtl, ErrorsAreLocatedAtTheirKeys) {
   const InputError e3 = load_error(dir, phantom, "phantom.toml");
   EXPECT_EQ(e3.key(), "device.igtl");
   EXPECT_NE(std::string(e3.what()).find("pose-tracker"), std::string::npos);
+}
+
+// registration = "NAME": read from that TRANSFORM at start, with a bounded wait; errors located.
+TEST(SceneIgtl, ARegistrationNamedIsReadFromItsTransformAndErrorsAreLocated) {
+  const TempDir dir;
+  const std::string text = scene_igtl_text(
+      "device_name = \"StylusToTracker\"\nregistration = \"TrackerToScene\"\nregistration_wait = 2.5\n");
+  const Scene s = load_scene(dir.write("named.toml", text));
+  ASSERT_TRUE(s.igtl.has_value());
+  EXPECT_EQ(s.igtl->registration_name, "TrackerToScene");
+  EXPECT_DOUBLE_EQ(s.igtl->registration_wait_s, 2.5);
+  EXPECT_EQ(s.igtl->registration_line, line_of(text, "registration = \"TrackerToScene\""));
+  const std::string fixed_wait = replace(text, "registration = \"TrackerToScene\"",
+                                         "registration = { position = [0.0, 0.0, 1.0] }");
+  EXPECT_EQ(load_error(dir, fixed_wait, "fixed.toml").key(), "device.igtl.registration_wait");
+  const std::string tool = replace(text, "\"TrackerToScene\"", "\"StylusToTracker\"");
+  EXPECT_EQ(load_error(dir, tool, "tool.toml").key(), "device.igtl.registration");
+  const std::string wait = replace(text, "registration_wait = 2.5", "registration_wait = 0.0");
+  EXPECT_EQ(load_error(dir, wait, "wait.toml").key(), "device.igtl.registration_wait");
 }
 
 // ---------------------------------------------------------------- no [device.feedback]

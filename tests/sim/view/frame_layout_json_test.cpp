@@ -122,7 +122,7 @@ TEST(FrameLayoutJson, AFrameDecodedFromTheJsonReadsWhatTheViewReads) {
       {"fault_cause", h.fault_cause},
       {"version", 2},
       {"header_bytes", 64},
-      {"reserved", 0}};
+      {"sample_faults", h.sample_faults}};
   const auto j = nlohmann::json::parse(numen::sim::state_frame_layout_json());
   std::map<std::string, std::int64_t> fields;
   for (const auto& f : j.at("header")) {

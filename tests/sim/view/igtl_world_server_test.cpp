@@ -1,8 +1,10 @@
 /// @file igtl_world_server_test.cpp
 /// The world out over OpenIGTLink (sim/view/igtl_world_server.hpp) on loopback (an ephemeral
-/// port), read back by the tracker's receiver (the library's decoder): the TRANSFORMs of the
-/// god-object and of its target are the trace's poses at the frames' times; a client that
-/// connects late gets the frames from then on, one that leaves is dropped.
+/// port), read back by the tracker's receiver and a plain client (the library's decoders): the
+/// TRANSFORMs of the god-object and of its target are the trace's poses at the frames' times; a
+/// client that connects late gets the frames from then on, one that leaves is dropped; the
+/// organs' POLYDATA are their (fine) surfaces at the frames' times, a late client gets the shapes
+/// first; faults and events are STATUS and STRING messages; the server listens on IPv6 too.
 
 #include "numen/sim/view/igtl_world_server.hpp"
 
@@ -11,12 +13,23 @@
 #include <chrono>
 #include <cmath>
 #include <map>
+#include <string>
+#include <vector>
 #include <memory>
 #include <thread>
 
+#include "build_features.hpp"
+#include "fine_surface_organ.hpp"
+#include "igtl_test_reader.hpp"
+#include "numen/core/net_surface_map.hpp"
+#include "numen/hal/device/safety_supervisor.hpp"
+#include "numen/hal/device/sample_check.hpp"
+#include "numen/hal/igtl/igtl_pack.hpp"
 #include "numen/hal/igtl/igtl_tracker_client.hpp"
+#include "numen/platform/state_frame.hpp"
 #include "numen/sim/run/run.hpp"
 #include "numen/sim/scene/scene.hpp"
+#include "numen/sim/view/view_scene.hpp"
 
 namespace {
 
@@ -46,7 +59,7 @@ TEST(IgtlWorldServer, TheTransformsReadBackAreTheTracesPosesAndLateClientsJoin) 
   ASSERT_EQ(scene.model.bodies[0].name, "stylus");
   numen::sim::IgtlWorldSettings ws;
   ws.port = 0;
-  numen::sim::IgtlWorldServer server({"stylus"}, ws);
+  numen::sim::IgtlWorldServer server(scene.model, ws);
   auto body = igtl_world_test_client(server.port(), "stylus");
   auto target = igtl_world_test_client(server.port(), "stylus_target");
   ASSERT_TRUE(igtl_world_test_wait([&] { return server.accept_clients() == 2; }));
@@ -89,4 +102,285 @@ TEST(IgtlWorldServer, TheTransformsReadBackAreTheTracesPosesAndLateClientsJoin) 
   }
   EXPECT_EQ(compared, 2 * static_cast<int>(server.counters().frames));
   EXPECT_GE(server.counters().frames, 200u);
+}
+
+namespace {
+
+// One frame of `data` (the frames the stream would send), with `report` and `figures`.
+std::vector<std::byte> igtl_world_test_frame(const numen::platform::StateFrameLayout& layout,
+                                             const numen::core::Data& data,
+                                             const numen::platform::PeriodReport& report,
+                                             const numen::platform::StateFrameFigures& figures) {
+  std::vector<std::byte> frame(layout.max_frame_bytes());
+  const std::vector<double> torques(layout.num_axes, 0.0);
+  frame.resize(numen::platform::encode_state_frame(layout, data, report, torques, figures, frame));
+  return frame;
+}
+
+// The messages of `reader` of type `type` and device `name`, decoded.
+std::vector<numen::hal::IgtlUnpacked> igtl_world_test_of(const numen::test::IgtlTestReader& reader,
+                                                         const std::string& type,
+                                                         const std::string& name) {
+  std::vector<numen::hal::IgtlUnpacked> out;
+  for (const std::string& m : reader.messages())
+    if (numen::test::IgtlTestReader::type_of(m) == type &&
+        numen::test::IgtlTestReader::name_of(m) == name)
+      out.push_back(numen::hal::unpack_igtl(std::span(
+          reinterpret_cast<const std::uint8_t*>(m.data()), m.size())));
+  return out;
+}
+
+}  // namespace
+
+// The organs out: each deformable's POLYDATA (the fine surface of the net that carries one, the
+// net's own nodes and triangles of the other) at the frames due at the organ rate, its points
+// the state's (fine) surface vertices at that frame's time in mm, its triangles the model's; a
+// client that connects late gets the shapes first, at the frame it joins.
+TEST(IgtlWorldServer, TheOrgansPolyDataIsTheirSurfaceAtTheFramesTimeAndLateClientsGetItFirst) {
+  NUMEN_REQUIRE_DEFORMABLE();
+  numen::sim::Scene scene =
+      numen::sim::load_scene(std::string(NUMEN_TEST_DATA_DIR) + "/node_contacts.toml");
+  numen::core::Model& model = scene.model;
+  ASSERT_EQ(model.nets.size(), 2u);  // the organ (fine icosphere 3 mapped on it), the ball
+  ASSERT_EQ(numen::test::map_fine_icosphere_onto_net(model, 0, 3), "");
+  const numen::core::NetModel& organ = model.nets[0];
+  const numen::core::NetModel& ball = model.nets[1];
+  ASSERT_EQ(organ.surface_point_count, 642);
+  ASSERT_EQ(ball.surface_point_count, 0);
+  numen::sim::IgtlWorldSettings ws;
+  ws.port = 0;
+  ws.organ_rate_hz = 25.0;  // frames at 100 Hz: an organ update every 4th frame
+  numen::sim::IgtlWorldServer server(model, ws);
+  numen::test::IgtlTestReader early(server.port());
+  ASSERT_TRUE(early.connected());
+  std::unique_ptr<numen::test::IgtlTestReader> late;
+  const numen::platform::StateFrameLayout layout = numen::sim::view_frame_layout(scene);
+  numen::core::Data data = numen::core::make_data(model);
+  std::map<std::int64_t, std::vector<numen::core::Vec3>> fine_at, ball_at;  // mm, by ns
+  constexpr int kFrames = 20;
+  for (int k = 0; k < kFrames; ++k) {
+    data.time = 0.01 * k;
+    for (int i = 0; i < model.num_nodes(); ++i)  // every node moved by up to 2 mm, differently each frame
+      data.nodes[static_cast<std::size_t>(i)].position =
+          model.node_rest[static_cast<std::size_t>(i)] +
+          0.002 * numen::core::Vec3(std::sin(1.7 * i + k), std::cos(2.3 * i - k), std::sin(0.9 * i + 0.3 * k));
+    const std::int64_t t_ns = std::llround(data.time * 1e9);
+    std::vector<numen::core::Vec3> fine(642);
+    ASSERT_EQ(numen::core::net_surface_positions(model, data, 0, fine), 642);
+    for (numen::core::Vec3& p : fine) p *= 1e3;
+    fine_at[t_ns] = fine;
+    for (int i = 0; i < ball.node_count; ++i)
+      ball_at[t_ns].push_back(1e3 * data.nodes[static_cast<std::size_t>(ball.node_begin + i)].position);
+    if (k == 10) {  // t = 0.10 s: between the updates of 0.08 and 0.12 s
+      late = std::make_unique<numen::test::IgtlTestReader>(server.port());
+      ASSERT_TRUE(late->connected());
+    }
+    const std::vector<std::byte> frame = igtl_world_test_frame(layout, data, {}, {});
+    ASSERT_FALSE(frame.empty());
+    ASSERT_TRUE(server.write_frame(frame));
+  }
+  // Updates at 0, 0.04, ..., 0.16 s: five of each organ to the early client, and the late one's
+  // shapes at 0.10 s then 0.12 and 0.16 s.
+  const auto count_polydata = [](const numen::test::IgtlTestReader& r) {
+    int n = 0;
+    for (const std::string& m : r.messages()) n += numen::test::IgtlTestReader::type_of(m) == "POLYDATA";
+    return n;
+  };
+  const auto flush = [&] { server.flush(); };
+  ASSERT_TRUE(early.read_until([&] { return count_polydata(early) >= 10; }, flush));
+  ASSERT_TRUE(late->read_until([&] { return count_polydata(*late) >= 6; }, flush));
+  EXPECT_EQ(server.counters().polydata, 16u);
+  // The late client's first message is a shape, at the frame it joined.
+  ASSERT_FALSE(late->messages().empty());
+  EXPECT_EQ(numen::test::IgtlTestReader::type_of(late->messages().front()), "POLYDATA");
+  const std::vector<std::int64_t> early_times{0, 40'000'000, 80'000'000, 120'000'000, 160'000'000};
+  const std::vector<std::int64_t> late_times{100'000'000, 120'000'000, 160'000'000};
+  for (const auto* reader : {&early, late.get()}) {
+    const auto& want_times = reader == &early ? early_times : late_times;
+    for (const char* name : {"organ", "ball"}) {
+      const std::vector<numen::hal::IgtlUnpacked> got = igtl_world_test_of(*reader, "POLYDATA", name);
+      ASSERT_EQ(got.size(), want_times.size()) << name;
+      const bool is_organ = std::string(name) == "organ";
+      const numen::core::NetModel& net = is_organ ? organ : ball;
+      for (std::size_t u = 0; u < got.size(); ++u) {
+        const numen::hal::IgtlUnpacked& p = got[u];
+        EXPECT_EQ(p.timestamp_ns, want_times[u]) << name;
+        const auto& want = (is_organ ? fine_at : ball_at).at(p.timestamp_ns);
+        ASSERT_EQ(p.points.size(), want.size()) << name;
+        double worst = 0.0;
+        for (std::size_t i = 0; i < want.size(); ++i) worst = std::max(worst, (p.points[i] - want[i]).norm());
+        EXPECT_LT(worst, 1e-3) << name << " at " << p.timestamp_ns << " ns (mm)";  // 1 µm: float32
+        ASSERT_EQ(p.triangles.size(),
+                  static_cast<std::size_t>(is_organ ? net.surface_face_count : net.face_count));
+        for (std::size_t t = 0; t < p.triangles.size(); ++t)
+          for (int c = 0; c < 3; ++c)
+            ASSERT_EQ(static_cast<int>(p.triangles[t][static_cast<std::size_t>(c)]),
+                      is_organ ? model.net_surface_faces[static_cast<std::size_t>(net.surface_face_begin) + t][static_cast<std::size_t>(c)] -
+                                     net.surface_point_begin
+                               : model.net_faces[static_cast<std::size_t>(net.face_begin) + t][static_cast<std::size_t>(c)] -
+                                     net.node_begin);
+      }
+    }
+  }
+}
+
+// Organ rate 0: the shapes once per client (at its first frame), never again.
+TEST(IgtlWorldServer, AnOrganRateOfZeroSendsTheShapeOncePerClient) {
+  NUMEN_REQUIRE_DEFORMABLE();
+  const numen::sim::Scene scene =
+      numen::sim::load_scene(std::string(NUMEN_TEST_DATA_DIR) + "/node_contacts.toml");
+  numen::sim::IgtlWorldSettings ws;
+  ws.port = 0;
+  ws.organ_rate_hz = 0.0;
+  numen::sim::IgtlWorldServer server(scene.model, ws);
+  numen::test::IgtlTestReader a(server.port());
+  const numen::platform::StateFrameLayout layout = numen::sim::view_frame_layout(scene);
+  numen::core::Data data = numen::core::make_data(scene.model);
+  std::unique_ptr<numen::test::IgtlTestReader> b;
+  for (int k = 0; k < 10; ++k) {
+    data.time = 0.01 * k;
+    if (k == 5) b = std::make_unique<numen::test::IgtlTestReader>(server.port());
+    ASSERT_TRUE(server.write_frame(igtl_world_test_frame(layout, data, {}, {})));
+  }
+  const auto transforms = [](const numen::test::IgtlTestReader& r) {
+    int n = 0;
+    for (const std::string& m : r.messages()) n += numen::test::IgtlTestReader::type_of(m) == "TRANSFORM";
+    return n;
+  };
+  const auto flush = [&] { server.flush(); };
+  const int per_frame = static_cast<int>(scene.model.num_bodies());  // no targets: no device run
+  ASSERT_TRUE(a.read_until([&] { return transforms(a) >= 10 * per_frame; }, flush));
+  ASSERT_TRUE(b->read_until([&] { return transforms(*b) >= 5 * per_frame; }, flush));
+  for (const char* name : {"organ", "ball"}) {
+    const auto at_a = igtl_world_test_of(a, "POLYDATA", name);
+    const auto at_b = igtl_world_test_of(*b, "POLYDATA", name);
+    ASSERT_EQ(at_a.size(), 1u) << name;
+    ASSERT_EQ(at_b.size(), 1u) << name;
+    EXPECT_EQ(at_a[0].timestamp_ns, 0);
+    EXPECT_EQ(at_b[0].timestamp_ns, 50'000'000);
+  }
+  EXPECT_EQ(server.counters().polydata, 4u);
+}
+
+// Faults and events: each change the frames show is a STATUS (code and subcode as
+// docs/openigtlink.md says) and a STRING, at the frame that shows it; a grasp is a STRING; a
+// client that connects gets the current state first.
+TEST(IgtlWorldServer, FaultsRejectionsTheBusAndGraspsAreStatusAndStringMessages) {
+  const numen::sim::Scene scene =
+      numen::sim::load_scene(std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/tracker.toml");
+  numen::sim::IgtlWorldSettings ws;
+  ws.port = 0;
+  numen::sim::IgtlWorldServer server(scene.model, ws);
+  numen::test::IgtlTestReader early(server.port());
+  const numen::platform::StateFrameLayout layout = numen::sim::view_frame_layout(scene);
+  numen::core::Data data = numen::core::make_data(scene.model);
+  const int held = data.attached_body;
+  ASSERT_EQ(held, 0);
+  using numen::hal::FaultCause;
+  using numen::hal::SampleFault;
+  struct Step {
+    numen::hal::FaultMask sample_faults;
+    bool bus_down;
+    FaultCause cause;
+    int attached;
+  };
+  const std::vector<Step> steps{
+      {SampleFault::kNoData, false, FaultCause::kNone, 0},   // start: no sample yet (no event)
+      {SampleFault::kNone, false, FaultCause::kNone, 0},     // valid (no event)
+      {SampleFault::kStale, true, FaultCause::kNone, 0},     // stale, the tracker's connection lost
+      {SampleFault::kStale, true, FaultCause::kEncoderTimeout, 0},  // the safe state latches
+      {SampleFault::kStale, true, FaultCause::kEncoderTimeout, 0},  // nothing new
+      {SampleFault::kNone, false, FaultCause::kNone, -1},    // all back; the tool released
+      {SampleFault::kJump, false, FaultCause::kNone, -1},    // a jump rejected
+  };
+  std::unique_ptr<numen::test::IgtlTestReader> late;
+  for (std::size_t k = 0; k < steps.size(); ++k) {
+    data.time = 0.01 * static_cast<double>(k);
+    data.attached_body = steps[k].attached;
+    numen::platform::PeriodReport report;
+    report.sample_faults = steps[k].sample_faults;
+    report.fault_cause = steps[k].cause;
+    numen::platform::StateFrameFigures figures;
+    figures.bus_down = steps[k].bus_down;
+    if (k == 4) late = std::make_unique<numen::test::IgtlTestReader>(server.port());
+    ASSERT_TRUE(server.write_frame(igtl_world_test_frame(layout, data, report, figures)));
+  }
+  const auto flush = [&] { server.flush(); };
+  const auto statuses = [](const numen::test::IgtlTestReader& r) {
+    int n = 0;
+    for (const std::string& m : r.messages()) n += numen::test::IgtlTestReader::type_of(m) == "STATUS";
+    return n;
+  };
+  // early: its intro (ok), then 2: rejected + bus down, 3: latched, 5: cleared, valid, bus up,
+  // 6: rejected (jump).
+  ASSERT_TRUE(early.read_until([&] { return statuses(early) >= 8; }, flush));
+  const std::vector<numen::hal::IgtlUnpacked> s = igtl_world_test_of(early, "STATUS", "numen");
+  ASSERT_EQ(s.size(), 8u);
+  const auto expect = [](const numen::hal::IgtlUnpacked& m, int code, std::int64_t subcode,
+                         const std::string& name, std::int64_t t_ns) {
+    EXPECT_EQ(m.status_code, code) << m.text;
+    EXPECT_EQ(m.status_subcode, subcode) << m.text;
+    EXPECT_EQ(m.error_name, name) << m.text;
+    EXPECT_EQ(m.timestamp_ns, t_ns) << m.text;
+  };
+  expect(s[0], 1, 0, "ok", 0);
+  expect(s[1], 7, SampleFault::kStale, "samples rejected", 20'000'000);
+  expect(s[2], 7, 0, "bus down", 20'000'000);
+  expect(s[3], 3, static_cast<int>(FaultCause::kEncoderTimeout),
+         numen::hal::to_string(FaultCause::kEncoderTimeout), 30'000'000);
+  expect(s[4], 1, 0, "safe state cleared", 50'000'000);
+  expect(s[5], 1, 0, "samples valid", 50'000'000);
+  expect(s[6], 1, 0, "bus up", 50'000'000);
+  expect(s[7], 2, SampleFault::kJump, "samples rejected", 60'000'000);
+  EXPECT_NE(s[1].text.find("stale"), std::string::npos) << s[1].text;
+  EXPECT_NE(s[7].text.find("jump"), std::string::npos) << s[7].text;
+  // The STRINGs say the same in words, and the release.
+  const std::vector<numen::hal::IgtlUnpacked> w = igtl_world_test_of(early, "STRING", "numen_events");
+  ASSERT_EQ(w.size(), 8u);  // seven events with a STATUS, and the release
+  EXPECT_EQ(w[6].text, "the device released 'stylus' at t = 0.050 s");
+  EXPECT_EQ(server.counters().events, 8u);
+  // The late client (joined at 0.04 s, the safe state latched): the fault first.
+  ASSERT_TRUE(late->read_until([&] { return statuses(*late) >= 5; }, flush));
+  const std::vector<numen::hal::IgtlUnpacked> l = igtl_world_test_of(*late, "STATUS", "numen");
+  ASSERT_EQ(l.size(), 5u);
+  EXPECT_EQ(numen::test::IgtlTestReader::type_of(late->messages().front()), "STATUS");
+  expect(l[0], 3, static_cast<int>(FaultCause::kEncoderTimeout),
+         numen::hal::to_string(FaultCause::kEncoderTimeout), 40'000'000);
+}
+
+// Listening on IPv6 ([::1]) and on "localhost" (127.0.0.1): a client of each gets the frames.
+TEST(IgtlWorldServer, ListensOnIpv6AndOnLocalhost) {
+  const numen::sim::Scene scene =
+      numen::sim::load_scene(std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/tracker.toml");
+  const numen::platform::StateFrameLayout layout = numen::sim::view_frame_layout(scene);
+  const numen::core::Data data = numen::core::make_data(scene.model);
+  for (const char* host : {"localhost", "::1"}) {
+    numen::sim::IgtlWorldSettings ws;
+    ws.host = host;
+    ws.port = 0;
+    std::unique_ptr<numen::sim::IgtlWorldServer> server;
+    try {
+      server = std::make_unique<numen::sim::IgtlWorldServer>(scene.model, ws);
+    } catch (const std::runtime_error& e) {  // a host without IPv6 (a container without ::1)
+      if (std::string(host) == "::1") GTEST_SKIP() << e.what();
+      throw;
+    }
+    numen::test::IgtlTestReader reader(server->port(), std::string(host) == "::1");
+    ASSERT_TRUE(reader.connected()) << host;
+    ASSERT_TRUE(server->write_frame(igtl_world_test_frame(layout, data, {}, {})));
+    ASSERT_TRUE(reader.read_until([&] { return !igtl_world_test_of(reader, "TRANSFORM", "stylus").empty(); },
+                                  [&] { server->flush(); }))
+        << host;
+  }
+  // A host that is no address of this machine: the error names it.
+  numen::sim::IgtlWorldSettings ws;
+  ws.host = "192.0.2.1";  // TEST-NET-1 (RFC 5737): never local
+  ws.port = 0;
+  try {
+    numen::sim::IgtlWorldServer server(scene.model, ws);
+    ADD_FAILURE() << "listened on 192.0.2.1";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("--igtl: cannot listen on 192.0.2.1:0"), std::string::npos)
+        << e.what();
+  }
 }

@@ -78,7 +78,7 @@ constexpr std::string_view frame_field_type_name(FrameFieldType t) noexcept {
 enum class FrameField : std::uint8_t {
   kMagic, kVersion, kHeaderBytes, kFrameBytes, kNumBodies, kNumNodes, kNumContacts, kNumAxes,
   kAttachedBody, kPeriod, kTimeNs, kStepStatus, kFlags, kStepNs, kLifecycle, kStartup, kFaultCause,
-  kReserved
+  kSampleFaults
 };
 
 /// One field of the header.
@@ -109,7 +109,9 @@ struct StateFrameField {
 ///     startup        hal::StartupPhase
 ///     fault_cause    hal::FaultCause of the latched safe state (the device's first_fault()),
 ///                    0 (kNone) while none is latched
-///     reserved       0
+///     sample_faults  hal::SampleFault bits of the device's samples in the periods since the
+///                    previous frame of the stream (OR'ed: a rejection between two frames is
+///                    not lost to the decimation); the period's own when every period is sent
 inline constexpr std::array<StateFrameField, 18> kStateFrameFields{{
     {FrameField::kMagic, "magic", 0, FrameFieldType::kChar4},
     {FrameField::kVersion, "version", 4, FrameFieldType::kU16},
@@ -128,7 +130,7 @@ inline constexpr std::array<StateFrameField, 18> kStateFrameFields{{
     {FrameField::kLifecycle, "lifecycle", 60, FrameFieldType::kU8},
     {FrameField::kStartup, "startup", 61, FrameFieldType::kU8},
     {FrameField::kFaultCause, "fault_cause", 62, FrameFieldType::kU8},
-    {FrameField::kReserved, "reserved", 63, FrameFieldType::kU8},
+    {FrameField::kSampleFaults, "sample_faults", 63, FrameFieldType::kU8},
 }};
 
 /// The declaration of header field `f`.
@@ -237,6 +239,9 @@ enum StateFrameFlag : std::uint32_t {
   kFrameTargetReady = 1u << 3,      ///< The device has a target (possibly held).
   kFrameContactsTruncated = 1u << 4,  ///< More contacts than the frame's capacity: the rest
                                       ///< were left out (StateFrameLayout::max_contacts).
+  kFrameBusDown = 1u << 5,  ///< The device's bus is not working (hal::BusState other than kOk:
+                            ///< a CAN bus off or error passive, a network tracker's connection
+                            ///< lost; StateFrameFigures::bus_down).
 };
 
 /// What fixes a frame's size: the scene's counts and the contact capacity. B, N, A are the
@@ -275,6 +280,7 @@ struct StateFrameHeader {
   std::uint8_t lifecycle = 0;     ///< hal::LifecycleState.
   std::uint8_t startup = 0;       ///< hal::StartupPhase.
   std::uint8_t fault_cause = 0;   ///< hal::FaultCause of the latched safe state (0: none).
+  std::uint8_t sample_faults = 0; ///< hal::SampleFault bits since the previous frame (OR'ed).
 };
 
 /// A checked frame: the header and the offsets of its arrays in the bytes it was decoded from
@@ -341,11 +347,15 @@ struct StateFrameFigures {
   double hand_penetration = 0.0;
   double handle_force = 0.0;  ///< N: |force of the hand on the handle| (closed loop; 0 in replay).
   double device_port_energy = 0.0;  ///< J: energy into the device port so far (0 in replay).
+  /// The device's bus is not working this period (hal::Bus::state() other than kOk): the
+  /// frame's kFrameBusDown.
+  bool bus_down = false;
 };
 
 /// Writes the frame of the period that just ended into `out`: poses, targets, nodes and
 /// contacts from `data` (after core::step), time from data.time, status from
-/// data.status, flags, step time, lifecycle and the feedback wrench sent from `report`, the
+/// data.status, flags, step time, lifecycle, fault cause, sample faults and the feedback wrench
+/// sent from `report` (kFrameBusDown from figures.bus_down), the
 /// axis torques sent from `axis_torques` (layout.num_axes values), the rest from `figures`.
 /// Rigid contacts come first, then node contacts, at most layout.max_contacts in all (the
 /// rest are cut and kFrameContactsTruncated is set). Targets: the attached body's is

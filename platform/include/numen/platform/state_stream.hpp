@@ -15,7 +15,9 @@
 /// Decimation: a run at 1 kHz shown at 60 Hz publishes the first period and then every period
 /// whose simulated time reaches the next display instant of the grid t₀ + j/display_rate_hz
 /// (t₀: the first period's time); a grid instant more than one interval behind is skipped,
-/// so the display rate holds on average for any dt and never bursts.
+/// so the display rate holds on average for any dt and never bursts. What the skipped periods
+/// saw is not lost: a frame's sample_faults are the OR of the periods' since the previous frame,
+/// and its kFrameBusDown is set when any of them had the bus down.
 /// Periods not published are counted (decimated). A period that is due but finds no free
 /// buffer (the sinks are slower than the display rate) is dropped and counted (dropped);
 /// under FullQueuePolicy::kWait (offline runs with a recording, no deadline) the loop instead
@@ -131,6 +133,8 @@ class StateStream final : private hal::RecordSink<std::uint32_t> {
   std::int64_t grid_index_ = 0;   // j of the next due instant t0 + j/rate
   std::int64_t next_due_ns_ = 0;  // that instant, ns
   double interval_s_ = 0.0;       // 1/display_rate_hz; 0: every period
+  hal::FaultMask pending_sample_faults_ = 0;  // OR of the periods' since the last frame
+  bool pending_bus_down_ = false;              // a period since the last frame had its bus down
   std::atomic<std::uint64_t> periods_{0}, published_{0}, decimated_{0}, dropped_{0},
       encode_failures_{0}, delivered_{0}, bytes_{0};  // waits, sink errors: queue_'s counters
 };

@@ -33,6 +33,7 @@
 #include <array>
 #include <cstdint>
 #include <memory>
+#include <stdexcept>
 #include <vector>
 
 #include "numen/core/types.hpp"
@@ -51,14 +52,26 @@ struct IgtlTrackerSettings {
   /// Tool-tip calibration: the tool tip (the tracked frame) in the marker's frame (m, unit
   /// quaternion).
   core::Pose calibration;
-  /// Registration: the tracker's frame in the scene's world (m, unit quaternion).
+  /// Registration: the tracker's frame in the scene's world (m, unit quaternion). Replaced by
+  /// the TRANSFORM client.registration_name when that is set (its translation in the message's
+  /// units, as the tool's).
   core::Pose registration;
+  /// With client.registration_name: the construction waits at most this long (ns, > 0) for that
+  /// TRANSFORM, then throws IgtlRegistrationMissing.
+  std::int64_t registration_wait_ns = 5'000'000'000;
   /// Follow the tracker's clock (offline) instead of the period's (see the file comment).
   bool wait_for_tracker = false;
   /// Longest wait of one SYNC following the tracker, ns (> 0).
   std::int64_t wait_timeout_ns = 2'000'000'000;
   /// Latencies kept for latency_ns() (received → taken by a SYNC), >= 1.
   std::size_t latency_capacity = 1 << 16;
+};
+
+/// The registration TRANSFORM named by the settings did not come within registration_wait_ns
+/// (what() names the server, the name, the wait, whether it connected and the names it sent).
+class IgtlRegistrationMissing : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
 };
 
 /// Counters of an IgtlTrackerBus since construction.
@@ -82,8 +95,10 @@ class IgtlTrackerBus final : public Bus {
   /// `config`: the pose tracker's device configuration (validated; DeviceKind::kPoseTracker,
   /// six axes, their encoder COB-IDs and counts); `kinematics` its kinematics (kept). Starts the
   /// receiver (IgtlTrackerClient). Throws std::invalid_argument: another kind, metres_per_unit
-  /// not finite and > 0, a quaternion not of unit length within 1e-6, wait_timeout_ns <= 0,
-  /// or the client's settings.
+  /// not finite and > 0, a quaternion not of unit length within 1e-6, wait_timeout_ns or
+  /// registration_wait_ns <= 0, or the client's settings. With client.registration_name, waits
+  /// (on the calling thread: the setup's, never a period) for that TRANSFORM and takes it as the
+  /// registration; throws IgtlRegistrationMissing when it does not come in time.
   IgtlTrackerBus(const DeviceConfig& config, std::unique_ptr<const Kinematics> kinematics,
                  IgtlTrackerSettings settings);
   ~IgtlTrackerBus() override;
@@ -93,8 +108,9 @@ class IgtlTrackerBus final : public Bus {
   /// A SYNC (is_sync()) takes the due poses and queues the six TPDOs; any other well-formed frame
   /// is accepted and discarded (kOk); a malformed one is kError.
   IoStatus write(const CanFrame& frame) noexcept override;
-  /// kOk while connected or before the first connection; kBusOff once the receiver has ended
-  /// (connection refused or lost with reconnect off).
+  /// kOk while connected, and before the first connection attempt has concluded; kBusOff while
+  /// not connected after that (an attempt refused or timed out, the connection lost, the
+  /// receiver ended) until a connection is made again. Lock free (the receiver's atomics).
   BusState state() const noexcept override;
   /// frames_rx: TPDOs read; frames_tx: frames written; errors: malformed writes.
   BusCounters counters() const noexcept override { return counters_; }
@@ -120,6 +136,8 @@ class IgtlTrackerBus final : public Bus {
   std::int64_t bus_time_of(const IgtlPose& p) noexcept;
   void take(const IgtlPose& p, std::int64_t now_mono) noexcept;
   void on_sync() noexcept;
+  // Waits for the registration TRANSFORM (construction; see the constructor).
+  void take_registration();
 
   DeviceConfig config_;
   std::unique_ptr<const Kinematics> kinematics_;

@@ -26,6 +26,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -58,6 +59,9 @@ struct IgtlTrackerClientSettings {
   std::int64_t reconnect_interval_ns = 200'000'000;   ///< Between attempts, > 0.
   std::size_t max_body_bytes = std::size_t{1} << 24;  ///< Larger bodies lose the framing.
   double rigid_tolerance = kIgtlRigidTolerance;       ///< IgtlDecoder::decode_transform().
+  /// The device name of a TRANSFORM kept as the registration (registration(): the newest one
+  /// received); empty: none. Not the tool's name.
+  std::string registration_name;
 };
 
 /// One accepted TRANSFORM of the tool.
@@ -130,8 +134,12 @@ class IgtlTrackerClient {
   // ---- not real-time ----
   /// The first record of each fault kind seen (allocates; locks a mutex the period never takes).
   std::vector<IgtlFaultRecord> fault_records() const;
-  /// Device names of the other TRANSFORMs (at most kIgtlMaxNamesSeen).
+  /// Device names of the other TRANSFORMs (at most kIgtlMaxNamesSeen; the registration's is not
+  /// one).
   std::vector<std::string> names_seen() const;
+  /// The newest TRANSFORM named settings().registration_name (checked as the tool's: finite,
+  /// rigid), or none yet (locks the mutex the period never takes).
+  std::optional<IgtlTransform> registration() const;
   /// The settings.
   const IgtlTrackerClientSettings& settings() const noexcept { return settings_; }
   /// Stops the thread and waits for it (idempotent).
@@ -162,6 +170,7 @@ class IgtlTrackerClient {
   mutable std::mutex records_mutex_;  // records_ and names_: the thread and the summary only
   std::vector<IgtlFaultRecord> records_;
   std::vector<std::string> names_;
+  std::optional<IgtlTransform> registration_;  // under records_mutex_
   std::thread thread_;
 };
 

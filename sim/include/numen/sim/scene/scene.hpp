@@ -50,6 +50,14 @@ struct IgtlTrackerScene {
   std::string units = "mm";        ///< As the scene gives it.
   core::Pose calibration;          ///< Tool tip (the tracked frame) in the marker's frame, m.
   core::Pose registration;         ///< Tracker frame in the scene's world, m.
+  /// `registration = "TrackerToScene"`: the registration is the TRANSFORM of this device name,
+  /// read at start (replaces `registration`); empty: the fixed transform.
+  std::string registration_name;
+  double registration_wait_s = 5.0;  ///< `registration_wait`: the longest wait for it, s.
+  /// Where `registration` is in the scene file (file, 1-based line and column), for the error
+  /// when the named TRANSFORM never comes.
+  std::string registration_file;
+  int registration_line = 0, registration_column = 0;
 };
 
 /// An admittance device (scene `[device.admittance]`, with `coupling = "admittance"`; paper
