@@ -10,7 +10,6 @@
 #include "numen/core/feedback.hpp"
 #include "numen/core/joint.hpp"
 #include "numen/core/rigid_body.hpp"
-#include "numen/core/step.hpp"
 #include "numen/platform/monotonic_clock.hpp"
 
 namespace numen::platform {
@@ -152,10 +151,7 @@ void ControlLoop::begin_period(std::int64_t now_ns, std::int64_t deadline_mono_n
 
 void ControlLoop::step_model() noexcept {
   report_.step_begin_ns = monotonic_now_ns();
-  if (step_function_ != nullptr)
-    step_function_(step_context_);
-  else
-    core::step(*model_, *data_);
+  stepper_->step(*model_, *data_);
   report_.step_end_ns = monotonic_now_ns();
   report_.step_ns = report_.step_end_ns - report_.step_begin_ns;
   step_time_.record(report_.step_ns);
@@ -183,6 +179,7 @@ const PeriodReport& ControlLoop::end_period(std::int64_t now_ns) noexcept {
     admittance_period(now_ns);
   else
     impedance_period(now_ns);
+  stepper_->finish(*model_, *data_);  // outside the timed step, after the commands
   report_.lifecycle = device_->lifecycle();  // after the write: a non-finite τ trips it
   if (const hal::FaultRecord* f = device_->first_fault()) report_.fault_cause = f->cause;
   if (!report_.torque_commanded) ++counters_.periods_zero_torque;

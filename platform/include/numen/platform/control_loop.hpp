@@ -44,6 +44,7 @@
 #include "numen/platform/device_binding.hpp"
 #include "numen/platform/latency_histogram.hpp"
 #include "numen/platform/loop_statistics.hpp"
+#include "numen/platform/stepper.hpp"
 
 namespace numen::platform {
 
@@ -176,7 +177,7 @@ class ControlLoop {
   ///     the bound bodies' targets — body pose = link pose · body_in_link, twist carried to the
   ///     body's origin; the attached body's into data.target, the others into
   ///     data.body_targets (paper Eq. 6) — and the prescribed joints' values;
-  ///  4. step: one core::step;
+  ///  4. step: one Stepper::step() (core::step unless set_stepper());
   ///  5. map: w_l = the bound bodies' Eq. 8 feedback (data.body_feedback) carried to their
   ///     link's origin (Eq. 9), τ = Σ_l J_lᵀ w_l (InstrumentDevice::torques_for(): computed
   ///     as it is, NaN included; 0 for a link without a driven body);
@@ -184,6 +185,8 @@ class ControlLoop {
   ///     shutdown, and — managed — the lifecycle active and the drive's master allowing
   ///     torque), clamped to ±max_torque and scaled by the soft start's r there, once; then
   ///     the torque frames.
+  ///  7. finish: Stepper::finish() completes the Data the measurements read (a multirate run's
+  ///     single-rate view), outside the timed step.
   const PeriodReport& end_period(std::int64_t now_ns) noexcept;
 
   /// Re-arms after a latched fault or a failed start-up (for the CLI and tests): asks every
@@ -231,18 +234,12 @@ class ControlLoop {
   /// Period index at which non-zero torque was first commanded; -1 if never.
   std::int64_t first_torque_period() const noexcept { return first_torque_period_; }
 
-  /// What end_period()'s step 4 calls instead of core::step(model, data): a function of
-  /// `context` that advances the loop's Data by one control period as core::step() would —
-  /// reads its targets (data.target, target_twist, body_targets, joint_prescribed), leaves the
-  /// bodies' states, contacts and body_feedback (Eq. 8) in it — e.g. the multirate god-object's
-  /// device period and its single-rate view (core::MultirateGodObject::step(), view()). Null
-  /// restores core::step. Must not allocate, throw, lock or block: it runs in the real-time
-  /// period. Not while end_period() runs.
-  using StepFunction = void (*)(void* context) noexcept;
-  void set_step_function(StepFunction step, void* context) noexcept {
-    step_function_ = step;
-    step_context_ = context;
-  }
+  /// The step stage's dynamics (step 4 of end_period()): `stepper`'s step() over the loop's
+  /// Model and Data, and its finish() after the commands were sent (outside the timed step),
+  /// e.g. the multirate god-object's device period and its single-rate view
+  /// (sim::MultirateRun). Null restores core::step (CoreStepper). Keeps a pointer: `stepper`
+  /// must outlive the loop or be replaced first. Not while end_period() runs.
+  void set_stepper(Stepper* stepper) noexcept { stepper_ = stepper != nullptr ? stepper : &core_stepper_; }
 
   /// Wall time of core::step per period (ns).
   const LatencyHistogram& step_time() const noexcept { return step_time_; }
@@ -287,8 +284,8 @@ class ControlLoop {
   bool last_overrun_ = false;  // the previous period overran (LoopStatistics)
   std::int64_t first_active_period_ = -1;
   std::int64_t first_torque_period_ = -1;
-  StepFunction step_function_ = nullptr;  // null: core::step(*model_, *data_)
-  void* step_context_ = nullptr;
+  CoreStepper core_stepper_;
+  Stepper* stepper_ = &core_stepper_;  // never null
 };
 
 }  // namespace numen::platform
