@@ -77,6 +77,7 @@ set(_hal_headers
   numen/hal/device/kinematics.hpp numen/hal/device/kinematics_factory.hpp
   numen/hal/device/managed_device.hpp numen/hal/device/minimal_device.hpp
   numen/hal/device/phantom_kinematics.hpp numen/hal/device/pose_tracker_kinematics.hpp
+  numen/hal/device/device_state.hpp
   numen/hal/device/safety_supervisor.hpp numen/hal/device/sample_check.hpp
   numen/hal/device/trocar_kinematics.hpp
   numen/hal/emulation/admittance_emulator.hpp numen/hal/emulation/device_emulator.hpp

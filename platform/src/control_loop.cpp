@@ -27,10 +27,11 @@ ControlLoop::ControlLoop(const core::Model& model, core::Data& data, hal::Bus& b
                          const ControlLoopSettings& settings)
     : model_(&model),
       data_(&data),
-      instrument_(&device),
-      impedance_(hal::make_device(device, bus, period_of(device.config()),
-                                  static_cast<const hal::DeviceSettings&>(settings))),
-      device_(impedance_.get()),
+      owned_(hal::make_device(device, bus, period_of(device.config()),
+                              static_cast<const hal::DeviceSettings&>(settings))),
+      device_(owned_.get()),
+      bind_(&ControlLoop::bind_link_targets),
+      command_(&ControlLoop::map_feedback),
       binding_(std::move(binding)),
       settings_(settings),
       stats_(std::make_unique<LoopStatistics>(period_of(device.config()))) {
@@ -85,8 +86,9 @@ ControlLoop::ControlLoop(const core::Model& model, core::Data& data,
                          hal::AdmittanceDevice& device, const ControlLoopSettings& settings)
     : model_(&model),
       data_(&data),
-      admittance_(&device),
       device_(&device),
+      bind_(&ControlLoop::bind_measured_wrench),
+      command_(&ControlLoop::command_held_pose),
       settings_(settings),
       stats_(std::make_unique<LoopStatistics>(period_of(device.config()))) {
   if (model.coupling_mode != core::CouplingMode::kAdmittance)
@@ -94,17 +96,19 @@ ControlLoop::ControlLoop(const core::Model& model, core::Data& data,
                                 "': the model's coupling mode must be admittance");
 }
 
-void ControlLoop::apply_targets(const hal::DeviceSample& sample) noexcept {
+void ControlLoop::bind_link_targets(const hal::DeviceState& state) noexcept {
+  // When the device is ready (a rejected sample keeps the last good target).
+  if (!state.ready) return;
   core::Data& d = *data_;
   for (std::size_t k = 0; k < binding_.links.size(); ++k) {
     const LinkBinding& b = binding_.links[k];
     const auto l = static_cast<std::size_t>(b.link);
-    link_origin_[k] = sample.link_targets[l].position;
-    bound_body_[k] = apply_link_target(b, sample.link_targets[l], sample.link_twists[l], d,
+    link_origin_[k] = state.link_poses[l].position;
+    bound_body_[k] = apply_link_target(b, state.link_poses[l], state.link_twists[l], d,
                                        explicit_bound_, &body_target_[k]);
   }
   for (const AxisPrescription& p : binding_.prescriptions)
-    apply_prescription(p, sample.q(p.axis), sample.qdot(p.axis), d);
+    apply_prescription(p, state.q(p.axis), state.qdot(p.axis), d);
 }
 
 void ControlLoop::gather_link_wrenches() noexcept {
@@ -121,22 +125,26 @@ void ControlLoop::gather_link_wrenches() noexcept {
   }
 }
 
-void ControlLoop::map_feedback() noexcept {
+void ControlLoop::map_feedback(const hal::DeviceState& state, hal::DeviceCommand& command) noexcept {
   // Computes and never gates: a link without a driven body has w = 0, and whether τ is sent
-  // is ImpedanceDevice::write()'s decision alone (a non-finite τ trips its latch there).
+  // is the device's write() decision alone (a non-finite τ trips its latch there).
   report_.feedback = core::Wrench{};
-  const auto links = static_cast<std::size_t>(instrument_->num_links());
+  const auto links = static_cast<std::size_t>(state.num_links);
   gather_link_wrenches();
-  instrument_->torques_for(std::span<const core::Wrench>(link_wrench_.data(), links), tau_);
+  // τ = Σ_l J_lᵀ w_l with the Jacobians of this period's state (computed as it is, NaN
+  // included: the device's write() trips on a non-finite τ).
+  if (!hal::all_finite(std::span<const core::Wrench>(link_wrench_.data(), links)))
+    ++counters_.non_finite_wrenches;
+  hal::torques_from_link_wrenches(std::span<const hal::Jacobian>(state.link_jacobians.data(), links),
+                                  std::span<const core::Wrench>(link_wrench_.data(), links), tau_);
   // The wrench the drives are asked to render, about link 0's origin (Eq. 9).
-  const hal::DeviceSample& sample = instrument_->last_sample();
-  const core::Vec3 origin0 = sample.link_targets[0].position;
+  const core::Vec3 origin0 = state.link_poses[0].position;
   for (std::size_t l = 0; l < links; ++l) {
-    const core::Wrench w =
-        core::carry_wrench(link_wrench_[l], sample.link_targets[l].position, origin0);
+    const core::Wrench w = core::carry_wrench(link_wrench_[l], state.link_poses[l].position, origin0);
     report_.feedback.force += w.force;
     report_.feedback.torque += w.torque;
   }
+  command.torques = std::span<const double>(tau_.data(), static_cast<std::size_t>(tau_.size()));
 }
 
 void ControlLoop::begin_period(std::int64_t now_ns, std::int64_t deadline_mono_ns,
@@ -163,10 +171,10 @@ const PeriodReport& ControlLoop::end_period(std::int64_t now_ns) noexcept {
   const auto period = static_cast<std::int64_t>(counters_.periods) - 1;
   // 1. read
   report_.input_begin_ns = monotonic_now_ns();
-  const hal::DeviceRead& read = device_->read(now_ns);
+  const hal::DeviceState& state = device_->read(now_ns);
   report_.input_end_ns = monotonic_now_ns();
-  report_.frames_read = read.frames_read;
-  if (read.read_error) ++counters_.read_errors;
+  report_.frames_read = state.frames_read;
+  if (state.read_error) ++counters_.read_errors;
   // 2. supervise
   const hal::DeviceSupervision sup =
       device_->supervise(now_ns, settings_.supervise_overruns && last_overrun_);
@@ -174,11 +182,29 @@ const PeriodReport& ControlLoop::end_period(std::int64_t now_ns) noexcept {
   report_.activated = sup.activated;
   report_.startup = sup.startup;
   if (report_.activated && first_active_period_ < 0) first_active_period_ = period;
-  // 3.–6. the kind's exchange
-  if (admittance_ != nullptr)
-    admittance_period(now_ns);
-  else
-    impedance_period(now_ns);
+  report_.sample_valid = state.valid;
+  report_.target_ready = state.ready;
+  report_.sample_faults = state.faults;
+  // 3. targets (the kind's, chosen at construction)
+  (this->*bind_)(state);
+  // 4. step
+  step_model();
+  // 5. map (the kind's), 6. write
+  report_.output_begin_ns = monotonic_now_ns();
+  hal::DeviceCommand command;
+  (this->*command_)(state, command);
+  const hal::DeviceOutput& out = device_->write(command, now_ns);
+  report_.output_end_ns = monotonic_now_ns();
+  report_.command_status = out.status;
+  report_.soft_start_ramp = out.ramp;
+  report_.controlword = out.controlword;
+  report_.torque_commanded = out.torque_commanded;
+  if (out.gated) {
+    report_.feedback = core::Wrench{};
+  } else if (out.ramp < 1.0) {  // what the drives render: the soft start scaled every τ_i
+    report_.feedback.force *= out.ramp;
+    report_.feedback.torque *= out.ramp;
+  }
   stepper_->finish(*model_, *data_);  // outside the timed step, after the commands
   report_.lifecycle = device_->lifecycle();  // after the write: a non-finite τ trips it
   if (const hal::FaultRecord* f = device_->first_fault()) report_.fault_cause = f->cause;
@@ -189,31 +215,6 @@ const PeriodReport& ControlLoop::end_period(std::int64_t now_ns) noexcept {
   report_.overrun = v.overrun;
   last_overrun_ = v.overrun;
   return report_;
-}
-
-void ControlLoop::impedance_period(std::int64_t now_ns) noexcept {
-  const hal::DeviceSample& sample = impedance_->sample();
-  report_.sample_valid = sample.valid;
-  report_.target_ready = sample.ready;
-  report_.sample_faults = sample.faults;
-  // 3. targets, 4. step
-  if (sample.ready) apply_targets(sample);
-  step_model();
-  // 5. map, 6. write
-  report_.output_begin_ns = monotonic_now_ns();
-  map_feedback();
-  report_.command_status = impedance_->write(
-      std::span<const double>(tau_.data(), static_cast<std::size_t>(tau_.size())), now_ns);
-  report_.output_end_ns = monotonic_now_ns();
-  const hal::SentTorques& sent = impedance_->sent_torques();
-  report_.soft_start_ramp = sent.ramp;
-  if (sent.gated) {
-    report_.feedback = core::Wrench{};
-  } else if (sent.ramp < 1.0) {  // what the drives render: the soft start scaled every τ_i
-    report_.feedback.force *= sent.ramp;
-    report_.feedback.torque *= sent.ramp;
-  }
-  report_.torque_commanded = sent.any();
 }
 
 void ControlLoop::brake_held_body() noexcept {
@@ -231,38 +232,33 @@ void ControlLoop::brake_held_body() noexcept {
       -k * (core::world_inertia(s.orientation, bm.inertia_body) * s.angular_velocity);
 }
 
-void ControlLoop::admittance_period(std::int64_t now_ns) noexcept {
-  hal::AdmittanceDevice& dev = *admittance_;
-  const hal::ForceSample& sample = dev.force_sample();
-  report_.sample_valid = sample.valid;
-  report_.target_ready = true;
-  report_.sample_faults = sample.faults;
+void ControlLoop::bind_measured_wrench(const hal::DeviceState& state) noexcept {
+  // The input: the last accepted reading (held up to the timeout), in the world, carried to the
+  // held body's COM (in kActive, a body held); else the brake.
   core::Data& d = *data_;
   const int a = d.attached_body;
   const bool held = a >= 0 && a < model_->num_bodies();
-  const bool active = dev.lifecycle() == hal::LifecycleState::kActive && !dev.shutting_down();
-  // 3. the input: the last accepted reading (held up to the timeout), in the world, about the
-  // held body's COM; or the brake.
+  const bool active = device_->lifecycle() == hal::LifecycleState::kActive && !device_->shutting_down();
   if (active && held) {
-    d.device_wrench = dev.world_wrench(sample.wrench, d.bodies[static_cast<std::size_t>(a)].position);
+    d.device_wrench = core::carry_wrench(state.wrench, state.wrench_point,
+                                         d.bodies[static_cast<std::size_t>(a)].position);
     report_.feedback = d.device_wrench;
     report_.driven = true;
   } else {
     brake_held_body();
     report_.feedback = core::Wrench{};
   }
-  // 4. step
-  step_model();
-  // 5.–6. the held body's pose to the drives (held set-points and shutdown outside kActive)
-  report_.output_begin_ns = monotonic_now_ns();
-  core::Pose pose;
-  if (held) {
-    const core::BodyState& s = d.bodies[static_cast<std::size_t>(a)];
-    pose = core::Pose{s.position, s.orientation};
-  }
-  report_.command_status = dev.write_pose(held ? &pose : nullptr, now_ns);
-  report_.output_end_ns = monotonic_now_ns();
-  report_.controlword = dev.controlword();
+}
+
+void ControlLoop::command_held_pose(const hal::DeviceState& state, hal::DeviceCommand& command) noexcept {
+  (void)state;
+  // The held body's pose to the drives (the device holds the set-points outside kActive).
+  const core::Data& d = *data_;
+  const int a = d.attached_body;
+  if (a < 0 || a >= model_->num_bodies()) return;
+  const core::BodyState& s = d.bodies[static_cast<std::size_t>(a)];
+  held_pose_ = core::Pose{s.position, s.orientation};
+  command.pose = &held_pose_;
 }
 
 RearmResult ControlLoop::rearm() noexcept { return device_->rearm(); }

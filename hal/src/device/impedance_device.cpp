@@ -108,6 +108,35 @@ IoStatus ImpedanceDevice::write(std::span<const double> torques, std::int64_t no
   return s;
 }
 
+void ImpedanceDevice::end_read(std::int64_t now_ns, DeviceState& state) noexcept {
+  (void)instrument_->sample(now_ns);
+  const DeviceSample& s = instrument_->last_sample();
+  const int n = instrument_->num_axes();
+  state.valid = s.valid;
+  state.ready = s.ready;
+  state.faults = s.faults;
+  state.num_axes = n;
+  state.axis_faults = s.axis_faults;
+  state.periods_since_accepted = s.periods_since_accepted;
+  state.q = s.q;
+  state.qdot = s.qdot;
+  state.num_links = s.num_links;
+  state.link_poses = s.link_targets;
+  state.link_twists = s.link_twists;
+  for (int l = 0; l < s.num_links; ++l)
+    state.link_jacobians[static_cast<std::size_t>(l)] = instrument_->link_jacobian(l);
+}
+
+const DeviceOutput& ImpedanceDevice::write(const DeviceCommand& command, std::int64_t now_ns) noexcept {
+  output_.status = write(command.torques, now_ns);
+  output_.torque_commanded = sent_.any();
+  output_.gated = sent_.gated;
+  output_.ramp = sent_.ramp;
+  output_.controlword = 0;
+  output_.torque = std::span<const double>(sent_.torque.data(), static_cast<std::size_t>(sent_.torque.size()));
+  return output_;
+}
+
 std::unique_ptr<ImpedanceDevice> make_device(InstrumentDevice& instrument, Bus& bus,
                                              std::int64_t period_ns,
                                              const DeviceSettings& settings) {

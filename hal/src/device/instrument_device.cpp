@@ -249,20 +249,15 @@ DeviceSample InstrumentDevice::sample(std::int64_t now_ns) noexcept {
 void InstrumentDevice::torques_for(std::span<const core::Wrench> link_wrenches,
                                    AxisVector& tau) noexcept {
   ++counters_.commands;
-  tau = AxisVector::Zero(n_);
   std::size_t used = link_wrenches.size();
   if (used > static_cast<std::size_t>(num_links_)) {
     ++counters_.extra_link_wrenches;
     used = static_cast<std::size_t>(num_links_);
   }
-  bool finite = true;
-  for (std::size_t l = 0; l < used; ++l) {
-    finite = finite && link_wrenches[l].force.allFinite() && link_wrenches[l].torque.allFinite();
-  }
-  if (!finite) ++counters_.non_finite_wrenches;
-  for (std::size_t l = 0; l < used; ++l) {
-    tau += torques_from_wrench(link_jacobians_[l], link_wrenches[l]);
-  }
+  if (!all_finite(link_wrenches.first(used))) ++counters_.non_finite_wrenches;
+  tau = AxisVector::Zero(n_);
+  torques_from_link_wrenches(std::span<const Jacobian>(link_jacobians_.data(), used),
+                             link_wrenches.first(used), tau);
 }
 
 }  // namespace numen::hal

@@ -132,6 +132,9 @@ struct ControlLoopCounters {
   std::uint64_t periods_zero_torque = 0;  ///< Periods that sent zero torque on every drive (no
                                           ///< body held, no valid sample, gated, or a zero τ).
   std::uint64_t read_errors = 0;          ///< Bus reads that returned kError.
+  /// Periods whose bound bodies' feedback had a NaN / inf wrench (mapped all the same: the
+  /// device's write() trips on the non-finite τ, FaultCause::kNonFiniteTorque).
+  std::uint64_t non_finite_wrenches = 0;
 };
 
 /// The control loop of one instrument driving one core::Data.
@@ -216,10 +219,15 @@ class ControlLoop {
   bool managed() const noexcept { return device_->canopen() != nullptr; }
   /// The device (protocol, supervision), of either kind.
   const hal::Device& device() const noexcept { return *device_; }
-  /// The impedance device (the torques sent); precondition: !admittance().
-  const hal::ImpedanceDevice& impedance() const noexcept { return *impedance_; }
+  /// The impedance device (the torques sent); precondition: the loop was built for one
+  /// (admittance() is null).
+  const hal::ImpedanceDevice& impedance() const noexcept {
+    return static_cast<const hal::ImpedanceDevice&>(*device_);
+  }
   /// The admittance device (nullptr for an impedance device).
-  const hal::AdmittanceDevice* admittance() const noexcept { return admittance_; }
+  const hal::AdmittanceDevice* admittance() const noexcept {
+    return dynamic_cast<const hal::AdmittanceDevice*>(device_);
+  }
   /// The CANopen master (nullptr in the minimal protocol).
   const hal::CanopenMaster* canopen() const noexcept { return device_->canopen(); }
   /// The CANopen master, e.g. to queue an NMT command (nullptr in the minimal protocol).
@@ -249,25 +257,34 @@ class ControlLoop {
   const PeriodReport& last_report() const noexcept { return report_; }
 
  private:
-  void apply_targets(const hal::DeviceSample& sample) noexcept;
+  // The kind's step 3 (targets from the state) and step 5 (the command from the step), chosen
+  // once at construction: no period branches on the kind of device.
+  using BindStage = void (ControlLoop::*)(const hal::DeviceState& state) noexcept;
+  using CommandStage = void (ControlLoop::*)(const hal::DeviceState& state,
+                                             hal::DeviceCommand& command) noexcept;
+  // Impedance, step 3: the bound bodies' targets and the prescribed joints (when ready).
+  void bind_link_targets(const hal::DeviceState& state) noexcept;
   // Σ of the bound bodies' Eq. 8 wrenches per link into link_wrench_ (0 for a link without one).
   void gather_link_wrenches() noexcept;
-  // Step 5: link_wrench_ → tau_ (τ = Σ J_lᵀ w_l) and report_.feedback; computes, never gates.
-  void map_feedback() noexcept;
+  // Impedance, step 5: link_wrench_ → tau_ (τ = Σ J_lᵀ w_l with the state's Jacobians) and
+  // report_.feedback; computes, never gates.
+  void map_feedback(const hal::DeviceState& state, hal::DeviceCommand& command) noexcept;
+  // Admittance, step 3: the measured wrench at the held body's COM (kActive, a body held), or
+  // the brake.
+  void bind_measured_wrench(const hal::DeviceState& state) noexcept;
+  // Admittance, step 5: the held body's pose (none held: no pose, the set-points are held).
+  void command_held_pose(const hal::DeviceState& state, hal::DeviceCommand& command) noexcept;
   void step_model() noexcept;
-  // Steps 3–6 of an impedance device (targets, step, map, write τ).
-  void impedance_period(std::int64_t now_ns) noexcept;
-  // The same of an admittance device (measured wrench or brake, step, write the pose).
-  void admittance_period(std::int64_t now_ns) noexcept;
   // Admittance outside kActive: data.device_wrench halves the held body's twist each step.
   void brake_held_body() noexcept;
 
   const core::Model* model_;
   core::Data* data_;
-  hal::InstrumentDevice* instrument_ = nullptr;      // impedance
-  std::unique_ptr<hal::ImpedanceDevice> impedance_;  // impedance: built around instrument_
-  hal::AdmittanceDevice* admittance_ = nullptr;      // admittance: the caller's
-  hal::Device* device_ = nullptr;                    // the one of the two
+  std::unique_ptr<hal::Device> owned_;  // impedance: built around the caller's instrument
+  hal::Device* device_ = nullptr;       // the device, of either kind (owned_ or the caller's)
+  BindStage bind_ = nullptr;
+  CommandStage command_ = nullptr;
+  core::Pose held_pose_;                // admittance: the pose command_held_pose() sends
   DeviceBinding binding_;
   std::vector<core::Vec3> link_origin_;   // per binding: world origin of its link this period
   std::vector<core::Vec3> body_target_;   // per binding: target point of its body this period

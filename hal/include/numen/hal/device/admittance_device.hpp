@@ -122,6 +122,8 @@ class AdmittanceDevice final : public Device {
   /// one gate of the admittance output. Returns kOk if every RPDO was accepted, else the first
   /// failure.
   IoStatus write_pose(const core::Pose* pose, std::int64_t now_ns) noexcept;
+  /// Device::write(): write_pose(command.pose, now_ns); gated while the set-points are held.
+  const DeviceOutput& write(const DeviceCommand& command, std::int64_t now_ns) noexcept override;
   /// The controlword of the last write_pose() (0 before the first).
   std::uint16_t controlword() const noexcept { return controlword_; }
   /// New set-points for the controlled frame at `pose` (world): inverse kinematics seeded with
@@ -155,7 +157,11 @@ class AdmittanceDevice final : public Device {
     ++counters_.ignored_frames;
     return false;
   }
-  void end_read(std::int64_t now_ns) noexcept override { sample_ = sensor_.sample(now_ns); }
+  // The checked reading (ForceSensor::sample()) as the state: the wrench in the world about the
+  // sensor's origin (world_wrench()).
+  void end_read(std::int64_t now_ns, DeviceState& state) noexcept override;
+  // `sensor_wrench` in the world, about the sensor origin; `origin` gets that origin (world).
+  core::Wrench sensor_to_world(const core::Wrench& sensor_wrench, core::Vec3& origin) const noexcept;
   void on_shutdown() noexcept override;
 
   DeviceConfig device_;
@@ -166,6 +172,7 @@ class AdmittanceDevice final : public Device {
   PdoMapping rpdo_map_;
   DeviceLifecycle lifecycle_;
   ForceSample sample_;
+  DeviceOutput output_;
   AxisVector q_;
   std::array<std::int32_t, kMaxAxes> counts_{};
   AdmittanceDeviceCounters counters_;

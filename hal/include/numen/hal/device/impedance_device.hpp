@@ -117,6 +117,8 @@ class ImpedanceDevice : public Device {
   /// driven axis; managed: controlword + target torque RPDO per drive). Returns kOk if every
   /// write succeeded, else kError if one failed, else kWouldBlock.
   IoStatus write(std::span<const double> torques, std::int64_t now_ns) noexcept;
+  /// Device::write(): write(command.torques, now_ns); the output of sent_torques().
+  const DeviceOutput& write(const DeviceCommand& command, std::int64_t now_ns) noexcept override;
 
   /// The controller-side instrument driver (sample, kinematics, mapping τ = Σ J_lᵀ w_l).
   const InstrumentDevice& instrument() const noexcept { return *instrument_; }
@@ -154,9 +156,11 @@ class ImpedanceDevice : public Device {
 
  private:
   bool on_input_frame(const CanFrame& frame) noexcept override { return instrument_->on_frame(frame); }
-  void end_read(std::int64_t now_ns) noexcept override { (void)instrument_->sample(now_ns); }
+  // The sample (InstrumentDevice::sample(): decoded and checked there, once) as the state.
+  void end_read(std::int64_t now_ns, DeviceState& state) noexcept override;
 
   SentTorques sent_;
+  DeviceOutput output_;
   TorqueCounters torque_counters_;
   PassivityController passivity_;
   // The passivity controller's rate: the last sample's axis values and their backward

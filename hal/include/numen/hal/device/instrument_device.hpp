@@ -152,6 +152,11 @@ class InstrumentDevice {
 
   /// The last sample() result (default-constructed with q = 0 before the first call).
   const DeviceSample& last_sample() const noexcept { return last_sample_; }
+  /// Geometric Jacobian of link `link` (0 <= link < num_links(); 6 × n, world, linear part at
+  /// the link's origin) at the last sample's axis values (Kinematics::link_jacobian()).
+  const Jacobian& link_jacobian(int link) const noexcept {
+    return link_jacobians_[static_cast<std::size_t>(link)];
+  }
   /// Counters.
   const DeviceCounters& counters() const noexcept { return counters_; }
   /// Zeroes the counters.
