@@ -181,7 +181,8 @@ class InstrumentDevice {
     // Range faults of values overwritten by a newer frame before sample() read them: a bad
     // value is a fault even if a good one follows within the period (docs/safety.md).
     FaultMask superseded = SampleFault::kNone;
-    std::int32_t pending_counts = 0;
+    double pending_value = 0.0;    // the pending frame's value, m or rad (counts_to_value)
+    FaultMask pending_range = SampleFault::kNone;  // its range check, made where it was decoded
     std::int64_t pending_stamp_ns = 0;
     bool has_value = false;  // an accepted value exists
     AcceptedValue last;      // last accepted value
