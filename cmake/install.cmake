@@ -117,6 +117,7 @@ numen_install_headers(${PROJECT_SOURCE_DIR}/platform/include
   numen/platform/loop_statistics.hpp numen/platform/monotonic_clock.hpp
   numen/platform/multirate_threads.hpp numen/platform/periodic_timer.hpp
   numen/platform/realtime_setup.hpp numen/platform/state_frame.hpp
+  numen/platform/period_data.hpp numen/platform/period_stages.hpp
   numen/platform/state_stream.hpp numen/platform/stepper.hpp numen/platform/trace_queue.hpp
   numen/platform/triple_buffer.hpp)
 

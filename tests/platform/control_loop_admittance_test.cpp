@@ -10,6 +10,7 @@
 #include <stdexcept>
 
 #include "alloc_counter.hpp"
+#include "control_loop_fixtures.hpp"
 #include "spring_hand.hpp"
 #include "numen/core/rigid_body.hpp"
 #include "numen/hal/emulation/admittance_emulator.hpp"
@@ -25,20 +26,7 @@ using core::Vec3;
 namespace {
 
 core::Model ball_model(core::CouplingMode mode = core::CouplingMode::kAdmittance) {
-  core::Model m;
-  m.gravity = Vec3::Zero();
-  m.coupling_mode = mode;
-  m.material_pairs = {core::MaterialPair{}};
-  m.body_spheres = {core::Sphere{Vec3::Zero(), 0.005}};
-  core::BodyModel b;
-  b.name = "probe";
-  b.mass = 0.05;
-  b.inertia_body = core::Mat3::Identity() * 1e-4;
-  b.sphere_count = 1;
-  m.bodies = {b};
-  m.initial_attached_body = 0;
-  EXPECT_EQ(core::finalize_model(m), "");
-  return m;
+  return numen::test::control_loop_fixtures::probe_model(mode);
 }
 
 hal::DeviceConfig tracker() {

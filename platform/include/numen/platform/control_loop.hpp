@@ -44,69 +44,11 @@
 #include "numen/platform/device_binding.hpp"
 #include "numen/platform/latency_histogram.hpp"
 #include "numen/platform/loop_statistics.hpp"
+#include "numen/platform/period_data.hpp"
+#include "numen/platform/period_stages.hpp"
 #include "numen/platform/stepper.hpp"
 
 namespace numen::platform {
-
-/// What one period did (begin_period() + end_period()). The *_ns stamps are CLOCK_MONOTONIC
-/// (monotonic_now_ns()), in the order of PeriodTimes (loop_statistics.hpp); times() gives
-/// that struct.
-struct PeriodReport {
-  int frames_read = 0;              ///< Frames taken from the bus this period.
-  bool sample_valid = false;        ///< Every axis fresh and plausible this period.
-  bool target_ready = false;        ///< The device has a target (possibly held from earlier).
-  std::int64_t step_ns = 0;         ///< Wall time of core::step (ns, CLOCK_MONOTONIC).
-  hal::IoStatus command_status = hal::IoStatus::kOk;  ///< Result of the torque writes.
-  /// Non-zero torque was commanded on at least one drive this period.
-  bool torque_commanded = false;
-  /// The device wrench of this period. Admittance: the measured wrench that drove the held
-  /// body (world, N and N·m about its COM; zero when not driven). Impedance: the feedback
-  /// wrench the drives were sent this period: the bound bodies' Eq. 8 wrenches
-  /// carried to their links (Eq. 9) and summed about link 0's origin (world, N and N·m) — the
-  /// wrench whose τ = Σ J_lᵀ w_l went to ImpedanceDevice::write() — times the soft-start factor
-  /// (soft_start_ramp), and zero when write() gated every axis. Per-axis clamping acts on τ
-  /// (hal::SentTorques::clamped counts it), not on this.
-  core::Wrench feedback;
-  /// Admittance: the measured wrench drove the held body this period (kActive, a body held).
-  bool driven = false;
-  /// Admittance: the controlword sent with the set-points (CiA 402: enable operation or
-  /// shutdown); 0 for an impedance device.
-  std::uint16_t controlword = 0;
-  /// The sample's SampleFault bits this period (impedance: the union over the axes; admittance:
-  /// the force reading's).
-  hal::FaultMask sample_faults = 0;
-  /// The soft-start factor r in [0, 1] ImpedanceDevice::write() applied this period
-  /// (hal::SentTorques::ramp; 1 once the ramp is over or with the soft start off).
-  double soft_start_ramp = 1.0;
-  // Timestamps (CLOCK_MONOTONIC ns).
-  std::int64_t deadline_ns = 0;      ///< The period's deadline (begin_period's argument, or
-                                     ///< its start when none was given).
-  std::int64_t woke_ns = 0;          ///< When the thread resumed (idem).
-  std::int64_t sync_sent_ns = 0;     ///< SYNC (+ NMT, heartbeat) written.
-  std::int64_t input_begin_ns = 0;   ///< Reading the frames started.
-  std::int64_t input_end_ns = 0;     ///< The frames were read.
-  std::int64_t step_begin_ns = 0;    ///< core::step started.
-  std::int64_t step_end_ns = 0;      ///< core::step returned.
-  std::int64_t output_begin_ns = 0;  ///< The torque writes started.
-  std::int64_t output_end_ns = 0;    ///< The torque writes returned.
-  bool overrun = false;              ///< LoopStatistics found this period overran.
-  // Managed stack (defaults in the minimal protocol).
-  hal::LifecycleState lifecycle = hal::LifecycleState::kUnconfigured;  ///< After this period.
-  hal::StartupPhase startup = hal::StartupPhase::kResetCommunication;  ///< After this period.
-  /// The safe state latched in this period (the supervisor's first_fault() says why).
-  bool entered_safe_stop = false;
-  /// After this period: the cause of the latched safe state (hal::Device::first_fault(),
-  /// cleared by a re-arm); kNone while none is latched.
-  hal::FaultCause fault_cause = hal::FaultCause::kNone;
-  /// The lifecycle entered kActive in this period.
-  bool activated = false;
-
-  /// The stamps as LoopStatistics takes them.
-  PeriodTimes times() const noexcept {
-    return PeriodTimes{deadline_ns,    woke_ns,     sync_sent_ns,    input_begin_ns, input_end_ns,
-                       step_begin_ns,  step_end_ns, output_begin_ns, output_end_ns,  0};
-  }
-};
 
 /// Creation settings of a ControlLoop (the managed stack's supervision; the minimal protocol
 /// uses none of them but the statistics).
@@ -123,19 +65,6 @@ struct ControlLoopSettings : hal::DeviceSettings {
 using RearmResult = hal::RearmResult;
 /// Short English name of a RearmResult (hal::to_string()).
 inline const char* to_string(RearmResult result) noexcept { return hal::to_string(result); }
-
-/// Counters since construction.
-struct ControlLoopCounters {
-  std::uint64_t periods = 0;          ///< end_period() calls.
-  std::uint64_t sync_write_failures = 0;  ///< SYNC writes not accepted by the bus.
-  std::uint64_t command_failures = 0;     ///< Periods whose torque writes did not all succeed.
-  std::uint64_t periods_zero_torque = 0;  ///< Periods that sent zero torque on every drive (no
-                                          ///< body held, no valid sample, gated, or a zero τ).
-  std::uint64_t read_errors = 0;          ///< Bus reads that returned kError.
-  /// Periods whose bound bodies' feedback had a NaN / inf wrench (mapped all the same: the
-  /// device's write() trips on the non-finite τ, FaultCause::kNonFiniteTorque).
-  std::uint64_t non_finite_wrenches = 0;
-};
 
 /// The control loop of one instrument driving one core::Data.
 /// Not thread safe: one real-time thread owns it.
@@ -190,7 +119,10 @@ class ControlLoop {
   ///     the torque frames.
   ///  7. finish: Stepper::finish() completes the Data the measurements read (a multirate run's
   ///     single-rate view), outside the timed step.
-  const PeriodReport& end_period(std::int64_t now_ns) noexcept;
+  /// The steps are the stage list fixed at construction (period_stages.hpp) over the loop's
+  /// PeriodData (period_data()); `observer`, if not null, sees the record after each stage
+  /// (tests, tracing).
+  const PeriodReport& end_period(std::int64_t now_ns, PeriodObserver* observer = nullptr) noexcept;
 
   /// Re-arms after a latched fault or a failed start-up (for the CLI and tests): asks every
   /// drive's master for a fault reset, reruns the NMT start-up if a node is not operational (or
@@ -198,7 +130,7 @@ class ControlLoop {
   /// in which no cause is present; the automatic activation then follows. Never blocks.
   RearmResult rearm() noexcept;
   /// A re-arm was accepted and has not happened yet.
-  bool rearm_pending() const noexcept { return device_->rearm_pending(); }
+  bool rearm_pending() const noexcept { return context_.device->rearm_pending(); }
   /// Managed stack: kInactive → kActive now (SafetySupervisor::activate()); kNotInactive in the
   /// minimal protocol.
   hal::LifecycleResult activate() noexcept;
@@ -211,98 +143,68 @@ class ControlLoop {
   /// protocol has no lifecycle: its periods send zero torque from now on. Never blocks.
   void shutdown() noexcept;
   /// shutdown() was called.
-  bool shutting_down() const noexcept { return device_->shutting_down(); }
+  bool shutting_down() const noexcept { return context_.device->shutting_down(); }
   /// Managed: every drive's master reports a disabled state (not energised: switch on
   /// disabled, ready to switch on, not ready, fault); minimal protocol: true.
   bool drives_disabled() const noexcept;
   /// True for the managed stack.
-  bool managed() const noexcept { return device_->canopen() != nullptr; }
+  bool managed() const noexcept { return context_.device->canopen() != nullptr; }
   /// The device (protocol, supervision), of either kind.
-  const hal::Device& device() const noexcept { return *device_; }
+  const hal::Device& device() const noexcept { return *context_.device; }
   /// The impedance device (the torques sent); precondition: the loop was built for one
   /// (admittance() is null).
   const hal::ImpedanceDevice& impedance() const noexcept {
-    return static_cast<const hal::ImpedanceDevice&>(*device_);
+    return static_cast<const hal::ImpedanceDevice&>(*context_.device);
   }
   /// The admittance device (nullptr for an impedance device).
   const hal::AdmittanceDevice* admittance() const noexcept {
-    return dynamic_cast<const hal::AdmittanceDevice*>(device_);
+    return dynamic_cast<const hal::AdmittanceDevice*>(context_.device);
   }
   /// The CANopen master (nullptr in the minimal protocol).
-  const hal::CanopenMaster* canopen() const noexcept { return device_->canopen(); }
+  const hal::CanopenMaster* canopen() const noexcept { return context_.device->canopen(); }
   /// The CANopen master, e.g. to queue an NMT command (nullptr in the minimal protocol).
-  hal::CanopenMaster* canopen() noexcept { return device_->canopen(); }
+  hal::CanopenMaster* canopen() noexcept { return context_.device->canopen(); }
   /// The safety supervisor and lifecycle (nullptr in the minimal protocol).
-  const hal::SafetySupervisor* supervisor() const noexcept { return device_->supervisor(); }
+  const hal::SafetySupervisor* supervisor() const noexcept { return context_.device->supervisor(); }
   /// Timing statistics of the periods (wake-up, step, bus I/O, end-to-end, overruns).
   const LoopStatistics& statistics() const noexcept { return *stats_; }
   /// Period index (0-based end_period() count) at which the lifecycle first became active;
   /// -1 if never.
-  std::int64_t first_active_period() const noexcept { return first_active_period_; }
+  std::int64_t first_active_period() const noexcept { return context_.first_active_period; }
   /// Period index at which non-zero torque was first commanded; -1 if never.
-  std::int64_t first_torque_period() const noexcept { return first_torque_period_; }
+  std::int64_t first_torque_period() const noexcept { return context_.first_torque_period; }
 
   /// The step stage's dynamics (step 4 of end_period()): `stepper`'s step() over the loop's
   /// Model and Data, and its finish() after the commands were sent (outside the timed step),
   /// e.g. the multirate god-object's device period and its single-rate view
   /// (sim::MultirateRun). Null restores core::step (CoreStepper). Keeps a pointer: `stepper`
   /// must outlive the loop or be replaced first. Not while end_period() runs.
-  void set_stepper(Stepper* stepper) noexcept { stepper_ = stepper != nullptr ? stepper : &core_stepper_; }
+  void set_stepper(Stepper* stepper) noexcept {
+    context_.stepper = stepper != nullptr ? stepper : &core_stepper_;
+  }
 
   /// Wall time of core::step per period (ns).
-  const LatencyHistogram& step_time() const noexcept { return step_time_; }
+  const LatencyHistogram& step_time() const noexcept { return context_.step_time; }
   /// Counters since construction.
-  const ControlLoopCounters& counters() const noexcept { return counters_; }
+  const ControlLoopCounters& counters() const noexcept { return context_.counters; }
   /// What the last end_period() did.
-  const PeriodReport& last_report() const noexcept { return report_; }
+  const PeriodReport& last_report() const noexcept { return period_.report; }
+  /// The period record (what the last period's stages wrote).
+  const PeriodData& period_data() const noexcept { return period_; }
+  /// The stage list end_period() runs (fixed at construction by the kind of device).
+  std::span<const PeriodStageEntry> stages() const noexcept { return stages_; }
 
  private:
-  // The kind's step 3 (targets from the state) and step 5 (the command from the step), chosen
-  // once at construction: no period branches on the kind of device.
-  using BindStage = void (ControlLoop::*)(const hal::DeviceState& state) noexcept;
-  using CommandStage = void (ControlLoop::*)(const hal::DeviceState& state,
-                                             hal::DeviceCommand& command) noexcept;
-  // Impedance, step 3: the bound bodies' targets and the prescribed joints (when ready).
-  void bind_link_targets(const hal::DeviceState& state) noexcept;
-  // Σ of the bound bodies' Eq. 8 wrenches per link into link_wrench_ (0 for a link without one).
-  void gather_link_wrenches() noexcept;
-  // Impedance, step 5: link_wrench_ → tau_ (τ = Σ J_lᵀ w_l with the state's Jacobians) and
-  // report_.feedback; computes, never gates.
-  void map_feedback(const hal::DeviceState& state, hal::DeviceCommand& command) noexcept;
-  // Admittance, step 3: the measured wrench at the held body's COM (kActive, a body held), or
-  // the brake.
-  void bind_measured_wrench(const hal::DeviceState& state) noexcept;
-  // Admittance, step 5: the held body's pose (none held: no pose, the set-points are held).
-  void command_held_pose(const hal::DeviceState& state, hal::DeviceCommand& command) noexcept;
-  void step_model() noexcept;
-  // Admittance outside kActive: data.device_wrench halves the held body's twist each step.
-  void brake_held_body() noexcept;
+  // The context's fixed part (construction).
+  void init_context(const core::Model& model, core::Data& data, hal::Device& device,
+                    const ControlLoopSettings& settings);
 
-  const core::Model* model_;
-  core::Data* data_;
-  std::unique_ptr<hal::Device> owned_;  // impedance: built around the caller's instrument
-  hal::Device* device_ = nullptr;       // the device, of either kind (owned_ or the caller's)
-  BindStage bind_ = nullptr;
-  CommandStage command_ = nullptr;
-  core::Pose held_pose_;                // admittance: the pose command_held_pose() sends
-  DeviceBinding binding_;
-  std::vector<core::Vec3> link_origin_;   // per binding: world origin of its link this period
-  std::vector<core::Vec3> body_target_;   // per binding: target point of its body this period
-  std::vector<int> bound_body_;           // per binding: body driven this period (-1: none)
-  std::vector<std::uint8_t> explicit_bound_;  // per body: 1 if a binding names it
-  std::array<core::Wrench, hal::kMaxLinks> link_wrench_{};
-  hal::AxisVector tau_;
-  LatencyHistogram step_time_;
-  ControlLoopCounters counters_;
-  PeriodReport report_;
-  PeriodReport begin_;  // stamps of begin_period()
-  ControlLoopSettings settings_;
-  std::unique_ptr<LoopStatistics> stats_;
-  bool last_overrun_ = false;  // the previous period overran (LoopStatistics)
-  std::int64_t first_active_period_ = -1;
-  std::int64_t first_torque_period_ = -1;
   CoreStepper core_stepper_;
-  Stepper* stepper_ = &core_stepper_;  // never null
+  std::unique_ptr<hal::Device> owned_;     // impedance: built around the caller's instrument
+  std::unique_ptr<LoopStatistics> stats_;
+  PeriodContext context_;                  // the device (owned_ or the caller's), binding, tallies
+  PeriodData period_;
+  std::span<const PeriodStageEntry> stages_;
 };
 
 }  // namespace numen::platform
