@@ -23,7 +23,7 @@ ControlLoop::ControlLoop(const core::Model& model, core::Data& data, hal::Bus& b
                          hal::InstrumentDevice& device, DeviceBinding binding,
                          const ControlLoopSettings& settings)
     : owned_(hal::make_device(device, bus, period_of(device.config()),
-                              static_cast<const hal::DeviceSettings&>(settings))),
+                              static_cast<const hal::ImpedanceSettings&>(settings))),
       stats_(std::make_unique<LoopStatistics>(period_of(device.config()))),
       stages_(impedance_period_stages()) {
   init_context(model, data, *owned_, settings);

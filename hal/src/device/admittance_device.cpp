@@ -60,14 +60,12 @@ void validate(const DeviceConfig& device, const AdmittanceConfig& admittance) {
 
 namespace {
 
-LifecycleSettings lifecycle_settings(const std::string& name, const AdmittanceSettings& s) {
+const LifecycleSettings& lifecycle_settings(const std::string& name, const AdmittanceSettings& s) {
   if (s.force_timeout_periods == 0)
     throw std::invalid_argument(name + ": force_timeout_periods must be >= 1");
   if (s.safe_stop_timeout_periods == 0)
     throw std::invalid_argument(name + ": safe_stop_timeout_periods must be >= 1");
-  LifecycleSettings l;
-  l.safe_stop_timeout_periods = s.safe_stop_timeout_periods;
-  return l;
+  return s;  // the lifecycle's settings are the base of the device's
 }
 
 }  // namespace

@@ -139,7 +139,7 @@ const DeviceOutput& ImpedanceDevice::write(const DeviceCommand& command, std::in
 
 std::unique_ptr<ImpedanceDevice> make_device(InstrumentDevice& instrument, Bus& bus,
                                              std::int64_t period_ns,
-                                             const DeviceSettings& settings) {
+                                             const ImpedanceSettings& settings) {
   if (instrument.config().canopen.managed) {
     return std::make_unique<ManagedDevice>(instrument, bus, period_ns, settings);
   }

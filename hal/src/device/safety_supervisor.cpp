@@ -35,12 +35,6 @@ constexpr bool is_disabled(PowerState s) noexcept {
          s == PowerState::kFault;
 }
 
-LifecycleSettings lifecycle_settings(const SafetySettings& s) {
-  LifecycleSettings l;
-  l.safe_stop_timeout_periods = s.safe_stop_timeout_periods;
-  return l;
-}
-
 const SafetySettings& validated(const SafetySettings& s) {
   auto fail = [](const std::string& what) {
     throw std::invalid_argument("SafetySettings." + what);
@@ -101,7 +95,7 @@ const char* to_string(FaultCause cause) noexcept {
 }
 
 SafetySupervisor::SafetySupervisor(const SafetySettings& settings)
-    : settings_(validated(settings)), lifecycle_(lifecycle_settings(settings)) {
+    : settings_(validated(settings)), lifecycle_(settings) {
   n_ = settings_.num_axes;
 }
 

@@ -10,6 +10,9 @@
 ///                 torque now) → bound bodies' targets into core::Data → core::step
 ///                 → map: the bound bodies' Eq. 8 wrenches carried to their links (Eq. 9),
 ///                 τ = Σ_l J_lᵀ w_l → ImpedanceDevice::write (gate and clamp, once; the torque frames).
+/// The period is a fixed list of free-function stages over one PeriodData (period_stages.hpp,
+/// period_data.hpp), and the device is seen through one face: Device::read() returns a
+/// hal::DeviceState, Device::write() takes a hal::DeviceCommand (device_state.hpp).
 /// An admittance device (hal::AdmittanceDevice; paper Fig. 2 note; docs/dynamics.md
 /// "Admittance devices", docs/protocol.md "Admittance devices"):
 ///   begin_period: Device::begin_period — SYNC;
@@ -18,10 +21,10 @@
 ///                 → data.device_wrench = the measured wrench in the world, about the held
 ///                 body's COM (in kActive), else a brake that halves the held body's twist
 ///                 each step → core::step (CouplingMode::kAdmittance) → the held body's pose
-///                 → AdmittanceDevice::write_pose (inverse kinematics, csp RPDOs; the
+///                 → AdmittanceDevice::write → write_pose (inverse kinematics, csp RPDOs; the
 ///                 set-points held with controlword shutdown outside kActive).
 /// The kind and protocol (DeviceConfig::canopen.managed) are chosen once, at construction
-/// (hal::make_device()); no period branches on it. The same object runs against SimBus in
+/// (hal::make_device(); the stage list); no period branches on them. The same object runs against SimBus in
 /// simulation and SocketCAN on hardware. Construction may allocate; begin_period / end_period /
 /// rearm never allocate, throw, lock or block.
 
@@ -52,10 +55,10 @@ namespace numen::platform {
 
 /// Creation settings of a ControlLoop (the managed stack's supervision; the minimal protocol
 /// uses none of them but the statistics).
-/// The device's supervision settings (hal::DeviceSettings: encoder timeout, overrun limit,
+/// The device's supervision settings (hal::ImpedanceSettings: encoder timeout, overrun limit,
 /// safe-stop timeout, auto-activation, drive settings; kept there once and handed to
 /// hal::make_device() as they are) and the loop's own.
-struct ControlLoopSettings : hal::DeviceSettings {
+struct ControlLoopSettings : hal::ImpedanceSettings {
   /// Feed LoopStatistics' overrun verdict to the supervisor. Only meaningful when periods are
   /// paced to a clock (a simulation run as fast as possible has no deadlines).
   bool supervise_overruns = false;
@@ -101,7 +104,7 @@ class ControlLoop {
                     std::int64_t woke_mono_ns = -1) noexcept;
 
   /// Ends the period at bus time `now_ns` (after the encoders answered), in this order:
-  ///  1. read: Device::read() — every pending frame, the checked sample;
+  ///  1. read: Device::read() — every pending frame, the period's hal::DeviceState;
   ///  2. supervise: Device::supervise() (managed: CanopenMaster::update(), SafetySupervisor,
   ///     re-arm, automatic activation, the drives' CiA 402 target; a fault latches the safe
   ///     state in this very period);
@@ -111,12 +114,12 @@ class ControlLoop {
   ///     data.body_targets (paper Eq. 6) — and the prescribed joints' values;
   ///  4. step: one Stepper::step() (core::step unless set_stepper());
   ///  5. map: w_l = the bound bodies' Eq. 8 feedback (data.body_feedback) carried to their
-  ///     link's origin (Eq. 9), τ = Σ_l J_lᵀ w_l (InstrumentDevice::torques_for(): computed
-  ///     as it is, NaN included; 0 for a link without a driven body);
-  ///  6. write: ImpedanceDevice::write(τ) — gated (zero unless this period's sample is valid, no
+  ///     link's origin (Eq. 9), τ = Σ_l J_lᵀ w_l with the state's Jacobians (computed as it
+  ///     is, NaN included; 0 for a link without a driven body);
+  ///  6. send: Device::write(DeviceCommand) → ImpedanceDevice::write(τ) — gated (zero unless this period's sample is valid, no
   ///     shutdown, and — managed — the lifecycle active and the drive's master allowing
   ///     torque), clamped to ±max_torque and scaled by the soft start's r there, once; then
-  ///     the torque frames.
+  ///     the torque frames; the report's feedback from what it applied;
   ///  7. finish: Stepper::finish() completes the Data the measurements read (a multirate run's
   ///     single-rate view), outside the timed step.
   /// The steps are the stage list fixed at construction (period_stages.hpp) over the loop's

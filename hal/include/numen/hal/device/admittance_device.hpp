@@ -55,17 +55,16 @@ struct AdmittanceDeviceCounters {
   std::uint64_t ignored_frames = 0;    ///< Frames read that were not the sensor's.
 };
 
-/// Creation settings of an admittance device's supervision (docs/safety.md).
-struct AdmittanceSettings {
+/// Creation settings of an admittance device's supervision (docs/safety.md): the lifecycle's
+/// (LifecycleSettings::safe_stop_timeout_periods, >= 1, its base) and the device's own.
+struct AdmittanceSettings : LifecycleSettings {
   /// Consecutive periods without a valid force reading that latch the safe state, >= 1 (the
   /// last accepted reading drives the god-object meanwhile).
   std::uint32_t force_timeout_periods = 3;
-  /// LifecycleSettings::safe_stop_timeout_periods, >= 1.
-  std::uint32_t safe_stop_timeout_periods = 100;
   /// Activate on its own in the first period with a valid reading (else call activate()).
   bool auto_activate = true;
   /// Consecutive overrun periods (supervise()'s `overrun`) that latch the safe state, as the
-  /// impedance stack's DeviceSettings::overrun_limit; 0: overruns are never latched (offline
+  /// impedance stack's ImpedanceSettings::overrun_limit; 0: overruns are never latched (offline
   /// runs, where there is no deadline to miss).
   std::uint32_t overrun_limit = 0;
 };

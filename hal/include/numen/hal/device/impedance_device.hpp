@@ -54,14 +54,10 @@
 
 namespace numen::hal {
 
-/// Creation settings of an impedance device's supervision (the minimal protocol uses none).
-struct DeviceSettings {
-  /// SafetySettings::encoder_timeout_periods, >= 1.
-  std::uint32_t encoder_timeout_periods = 3;
-  /// SafetySettings::overrun_limit, >= 1.
-  std::uint32_t overrun_limit = 3;
-  /// SafetySettings::safe_stop_timeout_periods, >= 1.
-  std::uint32_t safe_stop_timeout_periods = 100;
+/// Creation settings of an impedance device's supervision (the minimal protocol uses none):
+/// the supervision settings (SupervisionSettings: encoder timeout, overrun limit, safe-stop
+/// timeout, defined once there) and the device's own.
+struct ImpedanceSettings : SupervisionSettings {
   /// Activate the lifecycle on its own once the start-up is complete and no fault cause is
   /// present; false: the caller calls activate().
   bool auto_activate = true;
@@ -179,6 +175,6 @@ class ImpedanceDevice : public Device {
 /// bad settings (construction only).
 std::unique_ptr<ImpedanceDevice> make_device(InstrumentDevice& instrument, Bus& bus,
                                              std::int64_t period_ns,
-                                             const DeviceSettings& settings = {});
+                                             const ImpedanceSettings& settings = {});
 
 }  // namespace numen::hal
