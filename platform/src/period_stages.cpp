@@ -46,11 +46,9 @@ std::size_t offset_in(const PeriodData& p, const void* member) noexcept {
 
 std::array<PeriodField, 38> make_period_fields() noexcept {
   const PeriodData p;
-  const PeriodReport& r = p.report;
 #define NUMEN_FIELD(member, writers) \
   PeriodField{#member, offset_in(p, &(p.member)), sizeof(p.member), static_cast<std::uint16_t>(writers)}
   using S = PeriodStage;
-  (void)r;
   return {{
       NUMEN_FIELD(state, bit(S::kRead)),
       NUMEN_FIELD(supervision, bit(S::kSupervise)),

@@ -152,6 +152,13 @@ class ImpedanceDevice : public Device {
 
  private:
   bool on_input_frame(const CanFrame& frame) noexcept override { return instrument_->on_frame(frame); }
+  // The conditioning's sub-stages, in write()'s order, each applied once (the file comment):
+  // the gate and the non-finite trip (returns the axes that passed, bit i; 0: every axis
+  // gated), the passivity controller, the soft start's r, the clamp and × r.
+  std::uint32_t gate(std::span<const double> torques) noexcept;
+  void control_passivity(std::uint32_t open) noexcept;
+  void advance_soft_start(bool open) noexcept;
+  void clamp_and_ramp(bool open) noexcept;
   // The sample (InstrumentDevice::sample(): decoded and checked there, once) as the state.
   void end_read(std::int64_t now_ns, DeviceState& state) noexcept override;
 
