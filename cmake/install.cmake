@@ -78,6 +78,7 @@ set(_hal_headers
   numen/hal/device/kinematics.hpp numen/hal/device/kinematics_factory.hpp
   numen/hal/device/managed_device.hpp numen/hal/device/minimal_device.hpp
   numen/hal/device/phantom_kinematics.hpp numen/hal/device/pose_tracker_kinematics.hpp
+  numen/hal/device/device_state.hpp
   numen/hal/device/safety_supervisor.hpp numen/hal/device/sample_check.hpp
   numen/hal/device/trocar_kinematics.hpp
   numen/hal/emulation/admittance_emulator.hpp numen/hal/emulation/device_emulator.hpp
@@ -117,7 +118,8 @@ numen_install_headers(${PROJECT_SOURCE_DIR}/platform/include
   numen/platform/loop_statistics.hpp numen/platform/monotonic_clock.hpp
   numen/platform/multirate_threads.hpp numen/platform/periodic_timer.hpp
   numen/platform/realtime_setup.hpp numen/platform/state_frame.hpp
-  numen/platform/state_stream.hpp numen/platform/trace_queue.hpp
+  numen/platform/period_data.hpp numen/platform/period_stages.hpp
+  numen/platform/state_stream.hpp numen/platform/stepper.hpp numen/platform/trace_queue.hpp
   numen/platform/triple_buffer.hpp)
 
 # sim: scenes (load_scene, run_scene), trajectories, simulated instruments, traces, studies,

@@ -91,6 +91,24 @@ void detect_and_build_planes(const Model& model, Data& data, const void* context
   }
 }
 
+// The sub-steps of a folded scene step of `h` s (MultirateSettings::fold_step): 1 unless the
+// step is longer than fold_step.
+int fold_substeps(double h, double fold_step) noexcept {
+  if constexpr (!kWithDeformable) return 1;
+  return h > fold_step ? static_cast<int>(std::min(std::ceil(h / fold_step), 1000.0)) : 1;
+}
+
+// The model of one sub-step of a folded scene step: `scene_loop` (finalized) with dt = its dt
+// / `substeps`, finalized. Built once, at construction: no Model is written at run time.
+Model fold_model_of(const Model& scene_loop, int substeps) {
+  if (substeps <= 1) return Model{};
+  Model m = scene_loop;
+  m.dt = scene_loop.dt / substeps;
+  if (std::string error = finalize_model(m); !error.empty())
+    throw std::invalid_argument("multirate: folded scene-loop model: " + error);
+  return m;
+}
+
 }  // namespace
 
 MultirateGodObject::MultirateGodObject(const Model& scene, int body,
@@ -98,6 +116,7 @@ MultirateGodObject::MultirateGodObject(const Model& scene, int body,
     : ratio_(settings.ratio),
       margin_(settings.margin),
       fold_step_(settings.fold_step),
+      fold_substeps_(fold_substeps(scene.dt * settings.ratio, settings.fold_step)),
       body_(body) {
   if (settings.ratio < 1)
     throw std::invalid_argument("multirate: the rate ratio scene_dt / dt must be >= 1 (got " +
@@ -146,6 +165,7 @@ MultirateGodObject::MultirateGodObject(const Model& scene, int body,
     s.scene_model.caller_node_contacts = s.scene_model.num_nets() > 0;
     error = finalize_model(s.scene_model);
     if (!error.empty()) throw std::invalid_argument("multirate: scene-loop model: " + error);
+    s.fold_model = fold_model_of(s.scene_model, fold_substeps_);
     s.device = make_data(s.device_model);
     s.scene = make_data(s.scene_model);
     slots_.push_back(std::move(s));
@@ -166,6 +186,7 @@ MultirateGodObject::MultirateGodObject(const Model& scene, int body,
   free_scene_model_.initial_attached_body = -1;
   if (std::string error = finalize_model(free_scene_model_); !error.empty())
     throw std::invalid_argument("multirate: scene-loop model: " + error);
+  free_fold_model_ = fold_model_of(free_scene_model_, fold_substeps_);
   free_scene_ = make_data(free_scene_model_);
   for (std::size_t j = 0; j < scene.joints.size(); ++j) free_joints_.push_back(static_cast<int>(j));
   scene_slot_ = slot_ = body >= 0 ? 0 : -1;
@@ -337,10 +358,13 @@ void MultirateGodObject::scene_step(const MultirateDeviceReport& in, MultirateSc
   const std::span<const int> god =
       scene_slot_ >= 0 ? std::span<const int>(slots_[static_cast<std::size_t>(scene_slot_)].bodies)
                        : std::span<const int>();
-  // The scene loop's model (this thread's: its dt is a sub-step's below, and the device loop
-  // reads other fields of it, never dt).
-  Model& model = scene_slot_ >= 0 ? slots_[static_cast<std::size_t>(scene_slot_)].scene_model
-                                  : free_scene_model_;
+  // The scene loop's model and its folded sub-step's (both finalized at construction and never
+  // written: a folded step's dt is the second's).
+  const Model& model = scene_slot_ >= 0 ? slots_[static_cast<std::size_t>(scene_slot_)].scene_model
+                                        : free_scene_model_;
+  const Model& fold_model = scene_slot_ >= 0
+                                ? slots_[static_cast<std::size_t>(scene_slot_)].fold_model
+                                : free_fold_model_;
   const double h = model.dt;
   const std::size_t nb = owed_.size();
   // What the device loop's planes gave each body since the last scene step.
@@ -387,12 +411,11 @@ void MultirateGodObject::scene_step(const MultirateDeviceReport& in, MultirateSc
   // most fold_step_ (MultirateSettings::fold_step), the god-object imposed along its twist.
   int substeps = 1;
   if constexpr (kWithDeformable) {
-    if (h > fold_step_ && detail::organ_surface_folded(model, *scene_))
-      substeps = static_cast<int>(std::min(std::ceil(h / fold_step_), 1000.0));
+    if (fold_substeps_ > 1 && detail::organ_surface_folded(model, *scene_)) substeps = fold_substeps_;
   }
   if (substeps > 1) ++counters_.folded_scene_steps;
-  const double hs = h / substeps;
-  model.dt = hs;
+  const Model& step_model = substeps > 1 ? fold_model : model;
+  const double hs = step_model.dt;  // h / substeps
   const bool implicit = model.integrator == Integrator::kLinearlyImplicitEuler;
   // The god-object's imposed poses moved along their twists to a sub-step's start.
   const auto advance_imposed = [&](double dt) noexcept {
@@ -413,7 +436,7 @@ void MultirateGodObject::scene_step(const MultirateDeviceReport& in, MultirateSc
       if constexpr (kWithDeformable) detail::drop_look_ahead_contacts(*scene_);
       advance_imposed(hs);
     }
-    step_with_contacts(model, *scene_, &detect_and_build_planes, &context);
+    step_with_contacts(step_model, *scene_, &detect_and_build_planes, &context);
     rejected = (scene_->status & kNonFinite) != 0;
     if (rejected) break;
     stepped_time += hs;
@@ -440,7 +463,6 @@ void MultirateGodObject::scene_step(const MultirateDeviceReport& in, MultirateSc
       ++counters_.scene_contacts;
     }
   }
-  model.dt = h;
   if constexpr (kWithDeformable) detail::drop_look_ahead_contacts(*scene_);
   for (std::size_t b = 0; b < nb; ++b) {
     if (rejected) {  // rolled back: what was owed over the rest of the step is still owed

@@ -7,11 +7,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "numen/core/feedback.hpp"
 #include "numen/core/joint.hpp"
-#include "numen/core/rigid_body.hpp"
-#include "numen/core/step.hpp"
-#include "numen/platform/monotonic_clock.hpp"
 
 namespace numen::platform {
 
@@ -26,25 +22,27 @@ std::int64_t period_of(const hal::DeviceConfig& config) {
 ControlLoop::ControlLoop(const core::Model& model, core::Data& data, hal::Bus& bus,
                          hal::InstrumentDevice& device, DeviceBinding binding,
                          const ControlLoopSettings& settings)
-    : model_(&model),
-      data_(&data),
-      instrument_(&device),
-      impedance_(hal::make_device(device, bus, period_of(device.config()),
-                                  static_cast<const hal::DeviceSettings&>(settings))),
-      device_(impedance_.get()),
-      binding_(std::move(binding)),
-      settings_(settings),
-      stats_(std::make_unique<LoopStatistics>(period_of(device.config()))) {
-  if (binding_.links.empty()) binding_.links = DeviceBinding::rigid().links;  // see DeviceBinding
+    : owned_(hal::make_device(device, bus, period_of(device.config()),
+                              static_cast<const hal::ImpedanceSettings&>(settings))),
+      stats_(std::make_unique<LoopStatistics>(period_of(device.config()))),
+      stages_(impedance_period_stages()) {
+  init_context(model, data, *owned_, settings);
+  context_.binding = std::move(binding);
+  if (context_.binding.links.empty())
+    context_.binding.links = DeviceBinding::rigid().links;  // see DeviceBinding
+  const DeviceBinding& wiring = context_.binding;
+  if (wiring.links.size() > static_cast<std::size_t>(kMaxLinkBindings))
+    throw std::invalid_argument("device binding: " + std::to_string(wiring.links.size()) +
+                                " link bindings (at most " + std::to_string(kMaxLinkBindings) + ")");
   const int links = device.kinematics().num_links();
-  for (const LinkBinding& b : binding_.links) {
+  for (const LinkBinding& b : wiring.links) {
     if (b.link < 0 || b.link >= links || b.link >= hal::kMaxLinks)
       throw std::invalid_argument("device binding: link " + std::to_string(b.link) +
                                   " out of range (the device has " + std::to_string(links) + ")");
     if (b.body < -1 || b.body >= model.num_bodies())
       throw std::invalid_argument("device binding: body " + std::to_string(b.body) + " out of range");
   }
-  for (const AxisPrescription& p : binding_.prescriptions) {
+  for (const AxisPrescription& p : wiring.prescriptions) {
     if (p.joint < 0 || p.joint >= model.num_joints() ||
         !model.joints[static_cast<std::size_t>(p.joint)].prescribed)
       throw std::invalid_argument("device binding: joint " + std::to_string(p.joint) +
@@ -52,13 +50,11 @@ ControlLoop::ControlLoop(const core::Model& model, core::Data& data, hal::Bus& b
     if (p.axis < 0 || p.axis >= device.num_axes())
       throw std::invalid_argument("device binding: axis " + std::to_string(p.axis) + " out of range");
   }
-  explicit_bound_ = explicitly_bound_bodies(binding_, model.num_bodies());
-  link_origin_.assign(binding_.links.size(), core::Vec3::Zero());
-  body_target_.assign(binding_.links.size(), core::Vec3::Zero());
-  bound_body_.assign(binding_.links.size(), -1);
+  context_.explicit_bound = explicitly_bound_bodies(wiring, model.num_bodies());
+  period_.bound_body.fill(-1);
   // Until the device has a target, the prescribed joints hold their starting coordinates (the
   // managed stack's start-up has no encoder values for its first periods).
-  for (const AxisPrescription& p : binding_.prescriptions) {
+  for (const AxisPrescription& p : wiring.prescriptions) {
     const core::JointModel& jm = model.joints[static_cast<std::size_t>(p.joint)];
     const core::BodyState* parent =
         jm.parent >= 0 ? &data.bodies[static_cast<std::size_t>(jm.parent)] : nullptr;
@@ -70,7 +66,7 @@ ControlLoop::ControlLoop(const core::Model& model, core::Data& data, hal::Bus& b
   // direct coupling it is then left to its joints alone, and a body jointed both to the world and
   // to the imposed held body (the default scene's trocar sleeve) is over-constrained — a singular
   // solve and a rolled-back, non-finite step in every period before the first sample.
-  for (const LinkBinding& b : binding_.links) {
+  for (const LinkBinding& b : wiring.links) {
     if (b.body < 0 || b.body == data.attached_body) continue;
     const core::BodyState& start = data.bodies[static_cast<std::size_t>(b.body)];
     core::BodyTarget& t = data.body_targets[static_cast<std::size_t>(b.body)];
@@ -79,207 +75,56 @@ ControlLoop::ControlLoop(const core::Model& model, core::Data& data, hal::Bus& b
     t.twist = core::Twist{};
     t.enabled = true;
   }
-  tau_ = hal::AxisVector::Zero(device.num_axes());
+  period_.tau = hal::AxisVector::Zero(device.num_axes());
 }
 
 ControlLoop::ControlLoop(const core::Model& model, core::Data& data,
                          hal::AdmittanceDevice& device, const ControlLoopSettings& settings)
-    : model_(&model),
-      data_(&data),
-      admittance_(&device),
-      device_(&device),
-      settings_(settings),
-      stats_(std::make_unique<LoopStatistics>(period_of(device.config()))) {
+    : stats_(std::make_unique<LoopStatistics>(period_of(device.config()))),
+      stages_(admittance_period_stages()) {
   if (model.coupling_mode != core::CouplingMode::kAdmittance)
     throw std::invalid_argument("admittance device '" + device.config().name +
                                 "': the model's coupling mode must be admittance");
+  init_context(model, data, device, settings);
+  period_.bound_body.fill(-1);
 }
 
-void ControlLoop::apply_targets(const hal::DeviceSample& sample) noexcept {
-  core::Data& d = *data_;
-  for (std::size_t k = 0; k < binding_.links.size(); ++k) {
-    const LinkBinding& b = binding_.links[k];
-    const auto l = static_cast<std::size_t>(b.link);
-    link_origin_[k] = sample.link_targets[l].position;
-    bound_body_[k] = apply_link_target(b, sample.link_targets[l], sample.link_twists[l], d,
-                                       explicit_bound_, &body_target_[k]);
-  }
-  for (const AxisPrescription& p : binding_.prescriptions)
-    apply_prescription(p, sample.q(p.axis), sample.qdot(p.axis), d);
-}
-
-void ControlLoop::gather_link_wrenches() noexcept {
-  const core::Data& d = *data_;
-  for (core::Wrench& w : link_wrench_) w = core::Wrench{};
-  for (std::size_t k = 0; k < binding_.links.size(); ++k) {
-    const int body = bound_body_[k];
-    if (body < 0) continue;
-    const core::Wrench w = core::carry_wrench(d.body_feedback[static_cast<std::size_t>(body)],
-                                              body_target_[k], link_origin_[k]);  // Eq. 9
-    core::Wrench& acc = link_wrench_[static_cast<std::size_t>(binding_.links[k].link)];
-    acc.force += w.force;
-    acc.torque += w.torque;
-  }
-}
-
-void ControlLoop::map_feedback() noexcept {
-  // Computes and never gates: a link without a driven body has w = 0, and whether τ is sent
-  // is ImpedanceDevice::write()'s decision alone (a non-finite τ trips its latch there).
-  report_.feedback = core::Wrench{};
-  const auto links = static_cast<std::size_t>(instrument_->num_links());
-  gather_link_wrenches();
-  instrument_->torques_for(std::span<const core::Wrench>(link_wrench_.data(), links), tau_);
-  // The wrench the drives are asked to render, about link 0's origin (Eq. 9).
-  const hal::DeviceSample& sample = instrument_->last_sample();
-  const core::Vec3 origin0 = sample.link_targets[0].position;
-  for (std::size_t l = 0; l < links; ++l) {
-    const core::Wrench w =
-        core::carry_wrench(link_wrench_[l], sample.link_targets[l].position, origin0);
-    report_.feedback.force += w.force;
-    report_.feedback.torque += w.torque;
-  }
+void ControlLoop::init_context(const core::Model& model, core::Data& data, hal::Device& device,
+                               const ControlLoopSettings& settings) {
+  context_.model = &model;
+  context_.data = &data;
+  context_.device = &device;
+  context_.stepper = &core_stepper_;
+  context_.supervise_overruns = settings.supervise_overruns;
+  context_.stats = stats_.get();
 }
 
 void ControlLoop::begin_period(std::int64_t now_ns, std::int64_t deadline_mono_ns,
                                std::int64_t woke_mono_ns) noexcept {
-  const std::int64_t t = monotonic_now_ns();
-  begin_.woke_ns = woke_mono_ns >= 0 ? woke_mono_ns : t;
-  begin_.deadline_ns = deadline_mono_ns >= 0 ? deadline_mono_ns : begin_.woke_ns;
-  if (begin_.deadline_ns > begin_.woke_ns) begin_.deadline_ns = begin_.woke_ns;
-  if (device_->begin_period(now_ns) != hal::IoStatus::kOk) ++counters_.sync_write_failures;
-  begin_.sync_sent_ns = monotonic_now_ns();
+  begin_device_period(context_, period_, now_ns, deadline_mono_ns, woke_mono_ns);
 }
 
-void ControlLoop::step_model() noexcept {
-  report_.step_begin_ns = monotonic_now_ns();
-  if (step_function_ != nullptr)
-    step_function_(step_context_);
-  else
-    core::step(*model_, *data_);
-  report_.step_end_ns = monotonic_now_ns();
-  report_.step_ns = report_.step_end_ns - report_.step_begin_ns;
-  step_time_.record(report_.step_ns);
-}
-
-const PeriodReport& ControlLoop::end_period(std::int64_t now_ns) noexcept {
-  report_ = begin_;
-  ++counters_.periods;
-  const auto period = static_cast<std::int64_t>(counters_.periods) - 1;
-  // 1. read
-  report_.input_begin_ns = monotonic_now_ns();
-  const hal::DeviceRead& read = device_->read(now_ns);
-  report_.input_end_ns = monotonic_now_ns();
-  report_.frames_read = read.frames_read;
-  if (read.read_error) ++counters_.read_errors;
-  // 2. supervise
-  const hal::DeviceSupervision sup =
-      device_->supervise(now_ns, settings_.supervise_overruns && last_overrun_);
-  report_.entered_safe_stop = sup.entered_safe_stop;
-  report_.activated = sup.activated;
-  report_.startup = sup.startup;
-  if (report_.activated && first_active_period_ < 0) first_active_period_ = period;
-  // 3.–6. the kind's exchange
-  if (admittance_ != nullptr)
-    admittance_period(now_ns);
-  else
-    impedance_period(now_ns);
-  report_.lifecycle = device_->lifecycle();  // after the write: a non-finite τ trips it
-  if (const hal::FaultRecord* f = device_->first_fault()) report_.fault_cause = f->cause;
-  if (!report_.torque_commanded) ++counters_.periods_zero_torque;
-  if (report_.torque_commanded && first_torque_period_ < 0) first_torque_period_ = period;
-  if (report_.command_status != hal::IoStatus::kOk) ++counters_.command_failures;
-  const PeriodVerdict v = stats_->record_period(report_.times());
-  report_.overrun = v.overrun;
-  last_overrun_ = v.overrun;
-  return report_;
-}
-
-void ControlLoop::impedance_period(std::int64_t now_ns) noexcept {
-  const hal::DeviceSample& sample = impedance_->sample();
-  report_.sample_valid = sample.valid;
-  report_.target_ready = sample.ready;
-  report_.sample_faults = sample.faults;
-  // 3. targets, 4. step
-  if (sample.ready) apply_targets(sample);
-  step_model();
-  // 5. map, 6. write
-  report_.output_begin_ns = monotonic_now_ns();
-  map_feedback();
-  report_.command_status = impedance_->write(
-      std::span<const double>(tau_.data(), static_cast<std::size_t>(tau_.size())), now_ns);
-  report_.output_end_ns = monotonic_now_ns();
-  const hal::SentTorques& sent = impedance_->sent_torques();
-  report_.soft_start_ramp = sent.ramp;
-  if (sent.gated) {
-    report_.feedback = core::Wrench{};
-  } else if (sent.ramp < 1.0) {  // what the drives render: the soft start scaled every τ_i
-    report_.feedback.force *= sent.ramp;
-    report_.feedback.torque *= sent.ramp;
+const PeriodReport& ControlLoop::end_period(std::int64_t now_ns, PeriodObserver* observer) noexcept {
+  ++context_.counters.periods;
+  for (const PeriodStageEntry& stage : stages_) {
+    stage.run(context_, period_, now_ns);
+    if (observer != nullptr) observer->after_stage(stage, period_);
   }
-  report_.torque_commanded = sent.any();
+  return period_.report;
 }
 
-void ControlLoop::brake_held_body() noexcept {
-  // Explicit brake that halves the held body's twist every step (stable in both integrators:
-  // h·b/m = 0.5): −0.5 m v / h, −0.5 I_w ω / h.
-  core::Data& d = *data_;
-  d.device_wrench = core::Wrench{};
-  const int a = d.attached_body;
-  if (a < 0 || a >= model_->num_bodies()) return;
-  const core::BodyModel& bm = model_->bodies[static_cast<std::size_t>(a)];
-  const core::BodyState& s = d.bodies[static_cast<std::size_t>(a)];
-  const double k = 0.5 / model_->dt;
-  d.device_wrench.force = -k * bm.mass * s.linear_velocity;
-  d.device_wrench.torque =
-      -k * (core::world_inertia(s.orientation, bm.inertia_body) * s.angular_velocity);
-}
-
-void ControlLoop::admittance_period(std::int64_t now_ns) noexcept {
-  hal::AdmittanceDevice& dev = *admittance_;
-  const hal::ForceSample& sample = dev.force_sample();
-  report_.sample_valid = sample.valid;
-  report_.target_ready = true;
-  report_.sample_faults = sample.faults;
-  core::Data& d = *data_;
-  const int a = d.attached_body;
-  const bool held = a >= 0 && a < model_->num_bodies();
-  const bool active = dev.lifecycle() == hal::LifecycleState::kActive && !dev.shutting_down();
-  // 3. the input: the last accepted reading (held up to the timeout), in the world, about the
-  // held body's COM; or the brake.
-  if (active && held) {
-    d.device_wrench = dev.world_wrench(sample.wrench, d.bodies[static_cast<std::size_t>(a)].position);
-    report_.feedback = d.device_wrench;
-    report_.driven = true;
-  } else {
-    brake_held_body();
-    report_.feedback = core::Wrench{};
-  }
-  // 4. step
-  step_model();
-  // 5.–6. the held body's pose to the drives (held set-points and shutdown outside kActive)
-  report_.output_begin_ns = monotonic_now_ns();
-  core::Pose pose;
-  if (held) {
-    const core::BodyState& s = d.bodies[static_cast<std::size_t>(a)];
-    pose = core::Pose{s.position, s.orientation};
-  }
-  report_.command_status = dev.write_pose(held ? &pose : nullptr, now_ns);
-  report_.output_end_ns = monotonic_now_ns();
-  report_.controlword = dev.controlword();
-}
-
-RearmResult ControlLoop::rearm() noexcept { return device_->rearm(); }
+RearmResult ControlLoop::rearm() noexcept { return context_.device->rearm(); }
 
 hal::LifecycleResult ControlLoop::activate() noexcept {
-  const hal::LifecycleResult r = device_->activate();
-  if (r == hal::LifecycleResult::kOk && first_active_period_ < 0) {
-    first_active_period_ = static_cast<std::int64_t>(counters_.periods) - 1;
+  const hal::LifecycleResult r = context_.device->activate();
+  if (r == hal::LifecycleResult::kOk && context_.first_active_period < 0) {
+    context_.first_active_period = static_cast<std::int64_t>(context_.counters.periods) - 1;
   }
   return r;
 }
 
-void ControlLoop::shutdown() noexcept { device_->shutdown(); }
+void ControlLoop::shutdown() noexcept { context_.device->shutdown(); }
 
-bool ControlLoop::drives_disabled() const noexcept { return device_->drives_disabled(); }
+bool ControlLoop::drives_disabled() const noexcept { return context_.device->drives_disabled(); }
 
 }  // namespace numen::platform

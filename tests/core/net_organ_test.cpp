@@ -426,6 +426,9 @@ struct FoldCount {
   bool folded_before = true;     // detail::organ_surface_folded() on the pressed patch
   bool folded_after = false;     // ... with the triangle turned over
   std::int64_t allocations = 0;  // in the ten periods after the turn
+  double scene_dt_before = 0.0;  // the scene loop's Model::dt before and after those periods
+  double scene_dt_after = 0.0;
+  double scene_time = 0.0;       // the scene loop's time those periods advanced (s)
 };
 FoldCount fold_count(double fold_step) {
   const core::Model m = organ_model(patch(), OrganParams{}, 1e-4, core::CouplingMode::kGodObject,
@@ -448,12 +451,16 @@ FoldCount fold_count(double fold_step) {
   std::swap(scene.nodes[static_cast<std::size_t>(tri[1])].position,
             scene.nodes[static_cast<std::size_t>(tri[2])].position);
   f.folded_after = core::detail::organ_surface_folded(m, scene);
+  f.scene_dt_before = mr.scene_model().dt;
+  const double time_before = mr.scene_data().time;
   numen::test::AllocationGuard guard;
   for (int k = 0; k < 10; ++k) {
     mr.device_data().target.position = Vec3(0.0, 0.0, 0.0035);
     mr.step();
   }
   f.allocations = guard.count();
+  f.scene_dt_after = mr.scene_model().dt;
+  f.scene_time = mr.scene_data().time - time_before;
   f.after = mr.counters().folded_scene_steps;
   return f;
 }
@@ -470,6 +477,12 @@ TEST(NetOrgan, MultirateSceneStepIsSubSteppedWhereTheOrgansSurfaceHasFolded) {
   EXPECT_EQ(f.before, 0);
   EXPECT_EQ(f.after, 1) << "the scene step after the turn";
   EXPECT_EQ(f.allocations, 0) << "a sub-stepped scene step";
+  // The sub-steps run on a model of their own, built at construction: the scene loop's Model
+  // is never written at run time (scene_step() holds it const), and the sub-steps still cover
+  // the whole scene period.
+  EXPECT_EQ(f.scene_dt_before, 1e-4 * 10);
+  EXPECT_EQ(f.scene_dt_after, f.scene_dt_before);
+  EXPECT_NEAR(f.scene_time, 1e-3, 1e-15);
   // A fold_step of the scene period or more never sub-steps.
   const FoldCount never = fold_count(1e-3);
   EXPECT_TRUE(never.folded_after);

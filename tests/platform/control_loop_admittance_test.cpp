@@ -10,6 +10,7 @@
 #include <stdexcept>
 
 #include "alloc_counter.hpp"
+#include "control_loop_fixtures.hpp"
 #include "spring_hand.hpp"
 #include "numen/core/rigid_body.hpp"
 #include "numen/hal/emulation/admittance_emulator.hpp"
@@ -25,20 +26,7 @@ using core::Vec3;
 namespace {
 
 core::Model ball_model(core::CouplingMode mode = core::CouplingMode::kAdmittance) {
-  core::Model m;
-  m.gravity = Vec3::Zero();
-  m.coupling_mode = mode;
-  m.material_pairs = {core::MaterialPair{}};
-  m.body_spheres = {core::Sphere{Vec3::Zero(), 0.005}};
-  core::BodyModel b;
-  b.name = "probe";
-  b.mass = 0.05;
-  b.inertia_body = core::Mat3::Identity() * 1e-4;
-  b.sphere_count = 1;
-  m.bodies = {b};
-  m.initial_attached_body = 0;
-  EXPECT_EQ(core::finalize_model(m), "");
-  return m;
+  return numen::test::control_loop_fixtures::probe_model(mode);
 }
 
 hal::DeviceConfig tracker() {
@@ -279,25 +267,35 @@ TEST(ControlLoopAdmittance, OverrunLatchAndRearmDoNotAllocate) {
   EXPECT_EQ(latches, 50);  // each streak latched once, each re-arm was taken
 }
 
-// set_step_function (the multirate device period, docs/multirate.md): the loop calls it once
-// per period instead of core::step, with the measured wrench in data.device_wrench, and
-// commands the device to where it left the held body; null restores core::step.
-TEST(ControlLoopAdmittance, AStepFunctionReplacesCoreStep) {
+// A Stepper (the multirate device period, docs/multirate.md): the loop calls its step() once
+// per period instead of core::step, over the loop's own Model and Data, with the measured
+// wrench in data.device_wrench, and commands the device to where it left the held body; then
+// its finish(), after the commands; null restores core::step.
+struct AdmittanceSeenStepper final : platform::Stepper {
+  const core::Model* model = nullptr;
+  core::Data* data = nullptr;
+  int calls = 0;
+  int finishes = 0;
+  bool same_objects = true;  // every call got the loop's Model and Data
+  Vec3 force = Vec3::Zero();
+  void step(const core::Model& m, core::Data& d) noexcept override {
+    ++calls;
+    same_objects = same_objects && &m == model && &d == data;
+    force = d.device_wrench.force;
+    d.bodies[0].position = Vec3(0.0, 0.0, 0.004);  // not where a core::step would go
+  }
+  void finish(const core::Model& m, core::Data& d) noexcept override {
+    ++finishes;
+    same_objects = same_objects && &m == model && &d == data;
+  }
+};
+
+TEST(ControlLoopAdmittance, AStepperReplacesCoreStep) {
   Rig rig(hand_settings());
-  struct Seen {
-    core::Data* data = nullptr;
-    int calls = 0;
-    Vec3 force = Vec3::Zero();
-  } seen;
+  AdmittanceSeenStepper seen;
+  seen.model = &rig.model;
   seen.data = &rig.data;
-  rig.loop.set_step_function(
-      [](void* context) noexcept {
-        Seen& s = *static_cast<Seen*>(context);
-        ++s.calls;
-        s.force = s.data->device_wrench.force;
-        s.data->bodies[0].position = Vec3(0.0, 0.0, 0.004);  // not where a core::step would go
-      },
-      &seen);
+  rig.loop.set_stepper(&seen);
   rig.hand.position = Vec3(0.02, 0.0, 0.0);  // 200 N/m × 20 mm along x
   const platform::PeriodReport& r = rig.period();
   ASSERT_TRUE(r.driven);
@@ -308,9 +306,12 @@ TEST(ControlLoopAdmittance, AStepFunctionReplacesCoreStep) {
   EXPECT_EQ(rig.data.step_count, 0);               // core::step never ran
   EXPECT_NEAR(rig.device.setpoints()[2], 0.004, 1e-9);  // the device follows the step's pose
   EXPECT_NEAR(rig.device.setpoints()[0], 0.0, 1e-9);
-  rig.loop.set_step_function(nullptr, nullptr);
+  EXPECT_EQ(seen.finishes, 11);
+  EXPECT_TRUE(seen.same_objects);
+  rig.loop.set_stepper(nullptr);
   rig.period();
   EXPECT_EQ(seen.calls, 11);
+  EXPECT_EQ(seen.finishes, 11);
   EXPECT_EQ(rig.data.step_count, 1);
   EXPECT_GT(rig.data.bodies[0].position.x(), 0.0);  // the measured force moved it
 }

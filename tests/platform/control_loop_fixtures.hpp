@@ -77,4 +77,23 @@ inline numen::core::Model small_model() {
 
 const double kQ[5] = {0.1, -0.2, 0.1, 0.5, 0.3};
 
+/// The admittance loops' model: one 50 g probe (a 5 mm sphere), no gravity, coupling `mode`.
+inline numen::core::Model probe_model(
+    numen::core::CouplingMode mode = numen::core::CouplingMode::kAdmittance) {
+  numen::core::Model m;
+  m.gravity = Vec3::Zero();
+  m.coupling_mode = mode;
+  m.material_pairs = {numen::core::MaterialPair{}};
+  m.body_spheres = {numen::core::Sphere{Vec3::Zero(), 0.005}};
+  numen::core::BodyModel b;
+  b.name = "probe";
+  b.mass = 0.05;
+  b.inertia_body = numen::core::Mat3::Identity() * 1e-4;
+  b.sphere_count = 1;
+  m.bodies = {b};
+  m.initial_attached_body = 0;
+  EXPECT_EQ(numen::core::finalize_model(m), "");
+  return m;
+}
+
 }  // namespace numen::test::control_loop_fixtures

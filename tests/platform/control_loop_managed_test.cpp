@@ -294,28 +294,24 @@ TEST(ControlLoopManaged, ANaNWrenchLatchesNonFiniteTorque) {
   rig.run_to_torque();
   for (int i = 0; i < 5; ++i) rig.period();
   ASSERT_TRUE(any_torque(rig));
-  struct Poison {
-    numen::core::Model* model;
-    numen::core::Data* data;
-  } poison{&rig.model, &rig.data};
-  rig.loop.set_step_function(
-      [](void* c) noexcept {
-        auto* p = static_cast<Poison*>(c);
-        numen::core::step(*p->model, *p->data);
-        p->data->body_feedback[0].force.x() = std::numeric_limits<double>::quiet_NaN();
-      },
-      &poison);
+  struct PoisonStepper final : numen::platform::Stepper {
+    void step(const numen::core::Model& m, numen::core::Data& d) noexcept override {
+      numen::core::step(m, d);
+      d.body_feedback[0].force.x() = std::numeric_limits<double>::quiet_NaN();
+    }
+  } poison;
+  rig.loop.set_stepper(&poison);
   const std::uint64_t trips = rig.loop.impedance().torque_counters().non_finite;
   const PeriodReport& r = rig.period();
   EXPECT_FALSE(r.torque_commanded);
   EXPECT_FALSE(any_torque(rig));
   EXPECT_EQ(rig.loop.impedance().torque_counters().non_finite, trips + 1);
-  EXPECT_EQ(rig.device.counters().non_finite_wrenches, 1u);
+  EXPECT_EQ(rig.loop.counters().non_finite_wrenches, 1u);  // the map stage's count
   EXPECT_TRUE(r.lifecycle == LifecycleState::kSafeStop || r.lifecycle == LifecycleState::kFault)
       << numen::hal::to_string(r.lifecycle);
   ASSERT_NE(rig.sup().first_fault(), nullptr);
   EXPECT_EQ(rig.sup().first_fault()->cause, FaultCause::kNonFiniteTorque);
-  rig.loop.set_step_function(nullptr, nullptr);
+  rig.loop.set_stepper(nullptr);
   for (int i = 0; i < 20; ++i) {
     rig.period();
     ASSERT_FALSE(any_torque(rig)) << "latched: no torque until a re-arm, period " << i;

@@ -9,6 +9,7 @@
 #include <string>
 
 #include "numen/hal/canopen/cia402.hpp"
+#include "numen/core/feedback.hpp"
 #include "numen/hal/device/kinematics_factory.hpp"
 
 namespace numen::hal {
@@ -59,14 +60,12 @@ void validate(const DeviceConfig& device, const AdmittanceConfig& admittance) {
 
 namespace {
 
-LifecycleSettings lifecycle_settings(const std::string& name, const AdmittanceSettings& s) {
+const LifecycleSettings& lifecycle_settings(const std::string& name, const AdmittanceSettings& s) {
   if (s.force_timeout_periods == 0)
     throw std::invalid_argument(name + ": force_timeout_periods must be >= 1");
   if (s.safe_stop_timeout_periods == 0)
     throw std::invalid_argument(name + ": safe_stop_timeout_periods must be >= 1");
-  LifecycleSettings l;
-  l.safe_stop_timeout_periods = s.safe_stop_timeout_periods;
-  return l;
+  return s;  // the lifecycle's settings are the base of the device's
 }
 
 }  // namespace
@@ -162,16 +161,40 @@ IoStatus AdmittanceDevice::write_pose(const core::Pose* pose, std::int64_t now_n
   return s;
 }
 
-core::Wrench AdmittanceDevice::world_wrench(const core::Wrench& sensor_wrench,
-                                            const core::Vec3& about) const noexcept {
+core::Wrench AdmittanceDevice::sensor_to_world(const core::Wrench& sensor_wrench,
+                                               core::Vec3& origin) const noexcept {
   const core::Pose tool = kinematics_->forward(q_);
   const core::Pose& s = admittance_.sensor.sensor_in_tool;
   const core::Quat r = tool.orientation * s.orientation;
-  const core::Vec3 origin = tool.position + tool.orientation * s.position;
+  origin = tool.position + tool.orientation * s.position;
   core::Wrench w;
   w.force = r * sensor_wrench.force;
-  w.torque = r * sensor_wrench.torque + (origin - about).cross(w.force);
+  w.torque = r * sensor_wrench.torque;
   return w;
+}
+
+core::Wrench AdmittanceDevice::world_wrench(const core::Wrench& sensor_wrench,
+                                            const core::Vec3& about) const noexcept {
+  core::Vec3 origin;
+  const core::Wrench w = sensor_to_world(sensor_wrench, origin);
+  return core::carry_wrench(w, origin, about);
+}
+
+void AdmittanceDevice::end_read(std::int64_t now_ns, DeviceState& state) noexcept {
+  sample_ = sensor_.sample(now_ns);
+  state.valid = sample_.valid;
+  state.ready = true;
+  state.faults = sample_.faults;
+  state.wrench = sensor_to_world(sample_.wrench, state.wrench_point);
+}
+
+const DeviceOutput& AdmittanceDevice::write(const DeviceCommand& command, std::int64_t now_ns) noexcept {
+  output_.status = write_pose(command.pose, now_ns);
+  output_.controlword = controlword_;
+  output_.gated = controlword_ != Controlword::kEnableOperation;
+  output_.torque_commanded = false;
+  output_.ramp = 1.0;
+  return output_;
 }
 
 const AxisVector& AdmittanceDevice::set_pose(const core::Pose& pose) noexcept {

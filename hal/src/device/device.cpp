@@ -28,21 +28,24 @@ IoStatus Device::begin_period(std::int64_t now_ns) noexcept {
   return s;
 }
 
-const DeviceRead& Device::read(std::int64_t now_ns) noexcept {
-  read_ = DeviceRead{};
+const DeviceState& Device::read(std::int64_t now_ns) noexcept {
+  state_.frames_read = 0;
+  state_.read_error = false;
+  state_.input_frames = 0;
+  state_.time_ns = now_ns;
   CanFrame frame;
   for (int i = 0; i < 1024; ++i) {
     const IoStatus s = bus_->read(frame);
     if (s == IoStatus::kError) {
-      read_.read_error = true;
+      state_.read_error = true;
       io_error_ = true;
     }
     if (s != IoStatus::kOk) break;
-    ++read_.frames_read;
-    if (!take_frame(frame) && on_input_frame(frame)) ++read_.input_frames;
+    ++state_.frames_read;
+    if (!take_frame(frame) && on_input_frame(frame)) ++state_.input_frames;
   }
-  end_read(now_ns);
-  return read_;
+  end_read(now_ns, state_);
+  return state_;
 }
 
 void Device::shutdown() noexcept {

@@ -26,15 +26,30 @@ ImpedanceDevice::ImpedanceDevice(InstrumentDevice& instrument, Bus& bus)
 }
 
 IoStatus ImpedanceDevice::write(std::span<const double> torques, std::int64_t now_ns) noexcept {
-  const DeviceConfig& config = instrument_->config();
   const int n = instrument_->num_axes();
   ++torque_counters_.writes;
   sent_.per_mille = {};
   sent_.clamped = 0;
-  sent_.gated = true;
-  // The gate: this period's sample, no shutdown, and per axis the protocol's permission.
+  // The conditioning: its sub-stages in the order of the file comment, each once.
+  const std::uint32_t open = gate(torques);  // bit i: axis i passed (0: every axis gated)
+  control_passivity(open);
+  advance_soft_start(open != 0);
+  clamp_and_ramp(open != 0);
+  if (passivity_.num_axes() > 0 && open != 0)  // the controller books what was sent
+    passivity_.sent(std::span<const double>(sent_.torque.data(), static_cast<std::size_t>(n)));
+  sent_.gated = open == 0;
+  torque_counters_.saturations += static_cast<std::uint64_t>(sent_.clamped);
+  if (sent_.gated) ++torque_counters_.gated_writes;
+  const IoStatus s = send(sent_, now_ns);
+  note(s);
+  return s;
+}
+
+std::uint32_t ImpedanceDevice::gate(std::span<const double> torques) noexcept {
+  const DeviceConfig& config = instrument_->config();
+  const int n = instrument_->num_axes();
+  // This period's sample, no shutdown, and per axis the protocol's permission.
   const bool open = sample().valid && !shutting_down();
-  bool any_allowed = false;
   std::uint32_t allowed_mask = 0;  // bit i: axis i passed the gate
   int non_finite_axis = -1;
   for (int i = 0; i < n; ++i) {
@@ -42,50 +57,56 @@ IoStatus ImpedanceDevice::write(std::span<const double> torques, std::int64_t no
     const double tau = k < torques.size() ? torques[k] : 0.0;
     const bool allowed = open && config.axes[k].has_drive() && torque_allowed(i);
     sent_.torque[i] = allowed ? tau : 0.0;
-    any_allowed = any_allowed || allowed;
     if (allowed) allowed_mask |= 1u << static_cast<unsigned>(i);
     if (allowed && !std::isfinite(tau) && non_finite_axis < 0) non_finite_axis = i;
   }
-  if (non_finite_axis >= 0) {
-    sent_.torque.setZero();
-    ++torque_counters_.non_finite;
-    on_non_finite_torque(non_finite_axis);
-    any_allowed = false;
+  if (non_finite_axis < 0) return allowed_mask;
+  // The non-finite trip: every axis zeroed (the managed stack latches the safe state).
+  sent_.torque.setZero();
+  ++torque_counters_.non_finite;
+  on_non_finite_torque(non_finite_axis);
+  return 0;
+}
+
+void ImpedanceDevice::control_passivity(std::uint32_t open) noexcept {
+  if (passivity_.num_axes() == 0) return;
+  const DeviceConfig& config = instrument_->config();
+  const int n = instrument_->num_axes();
+  // Its rate: the backward difference of this period's axis values (Hannaford & Ryu's), not
+  // the filtered q̇ (docs/passivity.md "Passivity controller": the filter's lag hides the
+  // energy a render produces). 0 for the first valid sample after an invalid one.
+  const AxisVector& q = sample().q;
+  const double dt = config.control_period_s;
+  for (int i = 0; i < n; ++i) {
+    const bool wraps = config.axes[static_cast<std::size_t>(i)].wraps;  // across ±π: the short way
+    passivity_rate_[i] = passivity_primed_ ? axis_difference(q[i], passivity_q_[i], wraps) / dt : 0.0;
+    passivity_q_[i] = q[i];
   }
-  // The passivity controller: observer and damper on the gated torques, before the clamp.
-  if (!any_allowed) allowed_mask = 0;
-  if (passivity_.num_axes() > 0) {
-    // Its rate: the backward difference of this period's axis values (Hannaford & Ryu's),
-    // not the filtered q̇ (docs/passivity.md "Passivity controller": the filter's lag hides
-    // the energy a render produces). 0 for the first valid sample after an invalid one.
-    const AxisVector& q = sample().q;
-    const double dt = config.control_period_s;
-    for (int i = 0; i < n; ++i) {
-      const bool wraps = config.axes[static_cast<std::size_t>(i)].wraps;  // across ±π: the short way
-      passivity_rate_[i] =
-          passivity_primed_ ? axis_difference(q[i], passivity_q_[i], wraps) / dt : 0.0;
-      passivity_q_[i] = q[i];
-    }
-    passivity_primed_ = sample().valid;
-    if (allowed_mask != 0)
-      (void)passivity_.apply(
-          std::span<double>(sent_.torque.data(), static_cast<std::size_t>(n)),
-          std::span<const double>(passivity_rate_.data(), static_cast<std::size_t>(n)),
-          allowed_mask);
+  passivity_primed_ = sample().valid;
+  // The observer and damper on the gated torques, before the clamp.
+  if (open != 0)
+    (void)passivity_.apply(std::span<double>(sent_.torque.data(), static_cast<std::size_t>(n)),
+                           std::span<const double>(passivity_rate_.data(), static_cast<std::size_t>(n)),
+                           open);
+}
+
+void ImpedanceDevice::advance_soft_start(bool open) noexcept {
+  if (ramp_step_ <= 0.0) return;
+  // r = min(1, k · dt / T) in the k-th write since torque was enabled.
+  if (ramp_writes_ < 0 && open) {
+    ramp_writes_ = 0;
+    ++torque_counters_.soft_starts;
   }
-  // The soft start: r = min(1, k · dt / T) in the k-th write since torque was enabled.
-  if (ramp_step_ > 0.0) {
-    if (ramp_writes_ < 0 && any_allowed) {
-      ramp_writes_ = 0;
-      ++torque_counters_.soft_starts;
-    }
-    if (ramp_writes_ >= 0 && static_cast<double>(ramp_writes_) * ramp_step_ < 1.0) ++ramp_writes_;
-    sent_.ramp = ramp_writes_ < 0 ? 0.0
-                                   : std::min(1.0, static_cast<double>(ramp_writes_) * ramp_step_);
-    if (any_allowed && sent_.ramp < 1.0) ++torque_counters_.ramped_writes;
-  }
-  // The clamp: |τ_i| <= torque_limit(axis i) (max_torque, within the RPDO's range), then r.
-  for (int i = 0; i < n && any_allowed; ++i) {
+  if (ramp_writes_ >= 0 && static_cast<double>(ramp_writes_) * ramp_step_ < 1.0) ++ramp_writes_;
+  sent_.ramp = ramp_writes_ < 0 ? 0.0 : std::min(1.0, static_cast<double>(ramp_writes_) * ramp_step_);
+  if (open && sent_.ramp < 1.0) ++torque_counters_.ramped_writes;
+}
+
+void ImpedanceDevice::clamp_and_ramp(bool open) noexcept {
+  const DeviceConfig& config = instrument_->config();
+  const int n = instrument_->num_axes();
+  // |τ_i| <= torque_limit(axis i) (max_torque, within the RPDO's range), then × r; per mille.
+  for (int i = 0; i < n && open; ++i) {
     const auto k = static_cast<std::size_t>(i);
     const AxisConfig& a = config.axes[k];
     const double lim = torque_limit(a);
@@ -98,19 +119,40 @@ IoStatus ImpedanceDevice::write(std::span<const double> torques, std::int64_t no
     t *= sent_.ramp;
     sent_.per_mille[k] = torque_per_mille(a, t);
   }
-  if (passivity_.num_axes() > 0 && allowed_mask != 0)
-    passivity_.sent(std::span<const double>(sent_.torque.data(), static_cast<std::size_t>(n)));
-  sent_.gated = !any_allowed;
-  torque_counters_.saturations += static_cast<std::uint64_t>(sent_.clamped);
-  if (sent_.gated) ++torque_counters_.gated_writes;
-  const IoStatus s = send(sent_, now_ns);
-  note(s);
-  return s;
+}
+
+void ImpedanceDevice::end_read(std::int64_t now_ns, DeviceState& state) noexcept {
+  (void)instrument_->sample(now_ns);
+  const DeviceSample& s = instrument_->last_sample();
+  const int n = instrument_->num_axes();
+  state.valid = s.valid;
+  state.ready = s.ready;
+  state.faults = s.faults;
+  state.num_axes = n;
+  state.axis_faults = s.axis_faults;
+  state.periods_since_accepted = s.periods_since_accepted;
+  state.q = s.q;
+  state.qdot = s.qdot;
+  state.num_links = s.num_links;
+  state.link_poses = s.link_targets;
+  state.link_twists = s.link_twists;
+  for (int l = 0; l < s.num_links; ++l)
+    state.link_jacobians[static_cast<std::size_t>(l)] = instrument_->link_jacobian(l);
+}
+
+const DeviceOutput& ImpedanceDevice::write(const DeviceCommand& command, std::int64_t now_ns) noexcept {
+  output_.status = write(command.torques, now_ns);
+  output_.torque_commanded = sent_.any();
+  output_.gated = sent_.gated;
+  output_.ramp = sent_.ramp;
+  output_.controlword = 0;
+  output_.torque = std::span<const double>(sent_.torque.data(), static_cast<std::size_t>(sent_.torque.size()));
+  return output_;
 }
 
 std::unique_ptr<ImpedanceDevice> make_device(InstrumentDevice& instrument, Bus& bus,
                                              std::int64_t period_ns,
-                                             const DeviceSettings& settings) {
+                                             const ImpedanceSettings& settings) {
   if (instrument.config().canopen.managed) {
     return std::make_unique<ManagedDevice>(instrument, bus, period_ns, settings);
   }

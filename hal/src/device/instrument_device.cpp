@@ -128,17 +128,19 @@ bool InstrumentDevice::on_frame(const CanFrame& frame) noexcept {
       }
     }
     switch (status) {
-      case DecodeStatus::kOk:
+      case DecodeStatus::kOk: {
         ++counters_.frames_decoded;
-        if (st.pending) {
-          st.superseded |= check_range(limits_[static_cast<std::size_t>(i)],
-                                       counts_to_value(a, st.pending_counts));
-        }
+        // The value and its range check, once, where it is decoded; a value that a newer
+        // frame replaces before sample() keeps its range fault (superseded).
+        const double v = counts_to_value(a, counts);
+        if (st.pending) st.superseded |= st.pending_range;
         st.pending = true;
         st.malformed = false;
-        st.pending_counts = counts;
+        st.pending_value = v;
+        st.pending_range = check_range(limits_[static_cast<std::size_t>(i)], v);
         st.pending_stamp_ns = frame.timestamp_ns;
         break;
+      }
       case DecodeStatus::kWrongLength:
         ++counters_.frames_wrong_length;
         st.pending = false;
@@ -176,9 +178,15 @@ DeviceSample InstrumentDevice::sample(std::int64_t now_ns) noexcept {
     if (st.malformed) {
       f |= SampleFault::kMalformed;
     } else if (st.pending) {
-      const double v = counts_to_value(a, st.pending_counts);
+      // The range was checked where the value was decoded (on_frame); here its freshness and
+      // its jump from the last accepted value (check_sample()'s rule: a non-finite value is
+      // checked for nothing else).
+      const double v = st.pending_value;
       const FaultMask c =
-          check_sample(lim, v, st.pending_stamp_ns, now_ns, st.has_value ? &st.last : nullptr) |
+          ((st.pending_range & SampleFault::kNonFinite) != 0
+               ? st.pending_range
+               : st.pending_range | check_fresh(lim, st.pending_stamp_ns, now_ns) |
+                     check_jump(lim, v, st.pending_stamp_ns, st.has_value ? &st.last : nullptr)) |
           st.superseded;
       if (c == SampleFault::kNone) {
         if (use_foaw_) {
@@ -249,20 +257,15 @@ DeviceSample InstrumentDevice::sample(std::int64_t now_ns) noexcept {
 void InstrumentDevice::torques_for(std::span<const core::Wrench> link_wrenches,
                                    AxisVector& tau) noexcept {
   ++counters_.commands;
-  tau = AxisVector::Zero(n_);
   std::size_t used = link_wrenches.size();
   if (used > static_cast<std::size_t>(num_links_)) {
     ++counters_.extra_link_wrenches;
     used = static_cast<std::size_t>(num_links_);
   }
-  bool finite = true;
-  for (std::size_t l = 0; l < used; ++l) {
-    finite = finite && link_wrenches[l].force.allFinite() && link_wrenches[l].torque.allFinite();
-  }
-  if (!finite) ++counters_.non_finite_wrenches;
-  for (std::size_t l = 0; l < used; ++l) {
-    tau += torques_from_wrench(link_jacobians_[l], link_wrenches[l]);
-  }
+  if (!all_finite(link_wrenches.first(used))) ++counters_.non_finite_wrenches;
+  tau = AxisVector::Zero(n_);
+  torques_from_link_wrenches(std::span<const Jacobian>(link_jacobians_.data(), used),
+                             link_wrenches.first(used), tau);
 }
 
 }  // namespace numen::hal

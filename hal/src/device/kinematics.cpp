@@ -3,6 +3,8 @@
 
 #include "numen/hal/device/kinematics.hpp"
 
+#include <algorithm>
+
 #include <cstring>
 
 namespace numen::hal {
@@ -33,6 +35,20 @@ AxisVector torques_from_wrench(const Jacobian& jacobian, const core::Wrench& wre
   AxisVector tau(jacobian.cols());
   for (Eigen::Index i = 0; i < jacobian.cols(); ++i) tau[i] = jacobian.col(i).dot(w);
   return tau;
+}
+
+void torques_from_link_wrenches(std::span<const Jacobian> jacobians,
+                                std::span<const core::Wrench> wrenches, AxisVector& tau) noexcept {
+  if (!jacobians.empty()) tau.resize(jacobians[0].cols());
+  tau.setZero();
+  const std::size_t used = std::min(jacobians.size(), wrenches.size());
+  for (std::size_t l = 0; l < used; ++l) tau += torques_from_wrench(jacobians[l], wrenches[l]);
+}
+
+bool all_finite(std::span<const core::Wrench> wrenches) noexcept {
+  bool finite = true;
+  for (const core::Wrench& w : wrenches) finite = finite && w.force.allFinite() && w.torque.allFinite();
+  return finite;
 }
 
 }  // namespace numen::hal

@@ -8,11 +8,9 @@
 namespace numen::hal {
 namespace {
 
-SafetySettings safety_settings(const InstrumentDevice& instrument, const DeviceSettings& s) {
+SafetySettings safety_settings(const InstrumentDevice& instrument, const ImpedanceSettings& s) {
   SafetySettings out;
-  out.encoder_timeout_periods = s.encoder_timeout_periods;
-  out.overrun_limit = s.overrun_limit;
-  out.safe_stop_timeout_periods = s.safe_stop_timeout_periods;
+  static_cast<SupervisionSettings&>(out) = s;  // the device's supervision settings, as they are
   out.num_axes = static_cast<std::size_t>(instrument.num_axes());
   return out;
 }
@@ -20,7 +18,7 @@ SafetySettings safety_settings(const InstrumentDevice& instrument, const DeviceS
 }  // namespace
 
 ManagedDevice::ManagedDevice(InstrumentDevice& instrument, Bus& bus, std::int64_t period_ns,
-                             const DeviceSettings& settings)
+                             const ImpedanceSettings& settings)
     : ImpedanceDevice(instrument, bus),
       master_(std::make_unique<CanopenMaster>(instrument.config(), period_ns,
                                               settings.drive_settings)),

@@ -12,20 +12,27 @@
 namespace numen::hal {
 namespace {
 
-// Sample check bits that latch; kStale and kMalformed only reject (the timeout covers them).
+// The sample check bits that latch and the cause each latches, in the order update() records
+// them and find_present() reports the first present: the one map from a sample fault to a
+// fault cause. kStale and kMalformed only reject (the encoder timeout covers them).
+struct SampleFaultCause {
+  FaultMask bit;
+  FaultCause cause;
+};
+constexpr std::array<SampleFaultCause, 3> kSampleFaultCauses{{
+    {SampleFault::kNonFinite, FaultCause::kNonFinite},
+    {SampleFault::kOutOfRange, FaultCause::kOutOfRange},
+    {SampleFault::kJump, FaultCause::kEncoderJump},
+}};
 constexpr FaultMask kLatchingSampleBits =
     SampleFault::kNonFinite | SampleFault::kOutOfRange | SampleFault::kJump;
+static_assert((kSampleFaultCauses[0].bit | kSampleFaultCauses[1].bit | kSampleFaultCauses[2].bit) ==
+              kLatchingSampleBits);
 
 // CiA 402 states in which the power stage applies no torque and the drive is disabled.
 constexpr bool is_disabled(PowerState s) noexcept {
   return s == PowerState::kNotReadyToSwitchOn || s == PowerState::kSwitchOnDisabled ||
          s == PowerState::kFault;
-}
-
-LifecycleSettings lifecycle_settings(const SafetySettings& s) {
-  LifecycleSettings l;
-  l.safe_stop_timeout_periods = s.safe_stop_timeout_periods;
-  return l;
 }
 
 const SafetySettings& validated(const SafetySettings& s) {
@@ -88,7 +95,7 @@ const char* to_string(FaultCause cause) noexcept {
 }
 
 SafetySupervisor::SafetySupervisor(const SafetySettings& settings)
-    : settings_(validated(settings)), lifecycle_(lifecycle_settings(settings)) {
+    : settings_(validated(settings)), lifecycle_(settings) {
   n_ = settings_.num_axes;
 }
 
@@ -164,9 +171,8 @@ FaultRecord SafetySupervisor::find_present(const SafetyInputs& in,
   }
   for (std::size_t a = 0; a < n_; ++a) {
     const FaultMask m = in.axis_faults[a];
-    if (m & SampleFault::kNonFinite) return found(FaultCause::kNonFinite, a, m);
-    if (m & SampleFault::kOutOfRange) return found(FaultCause::kOutOfRange, a, m);
-    if (m & SampleFault::kJump) return found(FaultCause::kEncoderJump, a, m);
+    for (const SampleFaultCause& c : kSampleFaultCauses)
+      if (m & c.bit) return found(c.cause, a, m);
     const std::uint32_t age = in.periods_since_fresh[a];
     if ((m & SampleFault::kNoData) || age >= settings_.encoder_timeout_periods) {
       return found(FaultCause::kEncoderTimeout, a, age);
@@ -260,9 +266,8 @@ LifecycleUpdate SafetySupervisor::update(std::int64_t now_ns, const SafetyInputs
                                   ? in.periods_since_fresh[a]
                                   : std::numeric_limits<std::uint32_t>::max();
     const FaultMask rising = static_cast<FaultMask>(m & ~prev_mask_[a]);
-    if (rising & SampleFault::kNonFinite) event(FaultCause::kNonFinite, a, m);
-    if (rising & SampleFault::kOutOfRange) event(FaultCause::kOutOfRange, a, m);
-    if (rising & SampleFault::kJump) event(FaultCause::kEncoderJump, a, m);
+    for (const SampleFaultCause& c : kSampleFaultCauses)
+      if (rising & c.bit) event(c.cause, a, m);
     // The timeout is armed once the axis has had a value; in kActive always (an axis that lost
     // its value while active, e.g. after InstrumentDevice::reset(), must time out too).
     const bool armed = st == LifecycleState::kActive || (m & SampleFault::kNoData) == 0;

@@ -56,20 +56,21 @@ FaultMask check_range(const AxisCheckLimits& limits, double value) noexcept {
   return (value < limits.min || value > limits.max) ? SampleFault::kOutOfRange : SampleFault::kNone;
 }
 
+FaultMask check_jump(const AxisCheckLimits& limits, double value, std::int64_t stamp_ns,
+                     const AcceptedValue* last) noexcept {
+  if (last == nullptr || !std::isfinite(limits.max_speed)) return SampleFault::kNone;
+  const double dt =
+      stamp_ns > last->time_ns ? static_cast<double>(stamp_ns - last->time_ns) * 1e-9 : 0.0;
+  const double allowed = limits.max_speed * dt + limits.jump_tolerance;
+  return std::abs(axis_difference(value, last->value, limits.wraps)) > allowed ? SampleFault::kJump
+                                                                               : SampleFault::kNone;
+}
+
 FaultMask check_sample(const AxisCheckLimits& limits, double value, std::int64_t stamp_ns,
                        std::int64_t now_ns, const AcceptedValue* last) noexcept {
   if (!std::isfinite(value)) return SampleFault::kNonFinite;
-  FaultMask f = check_range(limits, value);
-  f |= check_fresh(limits, stamp_ns, now_ns);
-  if (last != nullptr && std::isfinite(limits.max_speed)) {
-    const double dt =
-        stamp_ns > last->time_ns ? static_cast<double>(stamp_ns - last->time_ns) * 1e-9 : 0.0;
-    const double allowed = limits.max_speed * dt + limits.jump_tolerance;
-    if (std::abs(axis_difference(value, last->value, limits.wraps)) > allowed) {
-      f |= SampleFault::kJump;
-    }
-  }
-  return f;
+  return check_range(limits, value) | check_fresh(limits, stamp_ns, now_ns) |
+         check_jump(limits, value, stamp_ns, last);
 }
 
 }  // namespace numen::hal

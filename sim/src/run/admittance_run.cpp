@@ -83,13 +83,7 @@ AdmittanceRunner::AdmittanceRunner(const Scene& scene, std::size_t trace_capacit
   emulator_.set_axis_values(device_.setpoints());
   hand_motion_.set_axis_values(device_.setpoints());
   emulator_.set_motion(&hand_motion_);
-  if (multirate_.enabled())
-    loop_.set_step_function(
-        [](void* self) noexcept {
-          auto& r = *static_cast<AdmittanceRunner*>(self);
-          r.multirate_.step(r.data_);
-        },
-        this);
+  if (multirate_.enabled()) loop_.set_stepper(&multirate_);
   describe_scene(scene, acc_);
   acc_.admittance.enabled = true;
   acc_.device_loop = "admittance";
@@ -131,8 +125,7 @@ void AdmittanceRunner::period(std::int64_t deadline_mono_ns, std::int64_t woke_m
   bus_.set_time_ns(t + phase_ns_);
   const platform::PeriodReport& r = loop_.end_period(t + phase_ns_);
   step_time_.record(r.step_ns);
-  ++k_;
-  multirate_.view(data_);  // a multirate run: both loops as one single-rate Data
+  ++k_;  // (a multirate run: the loop's Stepper::finish() left both loops' single-rate view)
 
   // ---- measurements ----
   RunSummary& s = acc_;

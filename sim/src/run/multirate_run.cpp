@@ -19,7 +19,8 @@ MultirateRun::MultirateRun(const Scene& scene) : scene_(&scene) {
 
 MultirateRun::~MultirateRun() { stop(); }
 
-void MultirateRun::step(core::Data& run_data) noexcept {
+void MultirateRun::step(const core::Model& model, core::Data& run_data) noexcept {
+  (void)model;
   if (!god_object_) return;
   core::MultirateGodObject& m = *god_object_;
   m.select(run_data.attached_body);  // every held body is one of the tools (parse_multirate)
@@ -31,7 +32,8 @@ void MultirateRun::step(core::Data& run_data) noexcept {
   m.write_feedback(run_data);  // what the loop maps to commands; the rest of the view in view()
 }
 
-void MultirateRun::view(core::Data& run_data) const noexcept {
+void MultirateRun::finish(const core::Model& model, core::Data& run_data) noexcept {
+  (void)model;
   if (god_object_) god_object_->view(run_data);
 }
 

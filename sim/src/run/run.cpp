@@ -159,7 +159,7 @@ SceneRunner::SceneRunner(const Scene& scene, std::size_t trace_capacity, const B
       startup_settle_periods_(
           std::max<std::int64_t>(1, std::llround(kStartupSettle / scene.model.dt))),
       divergence_(scene.model, data_) {
-  if (multirate_.enabled()) loop_.set_step_function(&SceneRunner::step_multirate, this);
+  if (multirate_.enabled()) loop_.set_stepper(&multirate_);
   if (multirate_.enabled() && scene.multirate) {
     ghost_every_ = std::max<std::int64_t>(1, std::llround(1e-3 / scene.model.dt));
   }
@@ -195,7 +195,6 @@ void SceneRunner::period(std::int64_t deadline_mono_ns, std::int64_t woke_mono_n
   const platform::PeriodReport& report = exchange(t, deadline_mono_ns, woke_mono_ns);
   ++k_;
   // ---- measurements (outside the timed step) ----
-  multirate_.view(data_);  // a multirate run: both loops as one single-rate Data
   count_period(report);
 
   const PeriodContacts contacts = measure_contacts();
@@ -203,7 +202,7 @@ void SceneRunner::period(std::int64_t deadline_mono_ns, std::int64_t woke_mono_n
   track_startup(contacts);
   accumulate_step_figures(report, contacts);
   record(report, contacts);
-  // A multirate run's organs change only at the scene samples (MultirateRun::view()).
+  // A multirate run's organs change only at the scene samples (MultirateRun::finish()).
   bool diverged = divergence_.observe(scene_->model, data_, k_ - 1, static_cast<double>(t) * 1e-9,
                                       multirate_.enabled() && !multirate_.took_model());
   if (const PlantMotion* plant = instrument_.plant(); plant && plant->figures().diverged)
@@ -218,11 +217,6 @@ void SceneRunner::period(std::int64_t deadline_mono_ns, std::int64_t woke_mono_n
                           std::span<const double>(loop_.impedance().sent_torques().torque.data(),
                                                   static_cast<std::size_t>(loop_.impedance().sent_torques().torque.size())),
                           view_figures(contacts));
-}
-
-void SceneRunner::step_multirate(void* runner) noexcept {
-  SceneRunner& r = *static_cast<SceneRunner*>(runner);
-  r.multirate_.step(r.data_);
 }
 
 void SceneRunner::start_scene_thread(const platform::SceneThreadSettings& settings) {

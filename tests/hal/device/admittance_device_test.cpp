@@ -10,6 +10,7 @@
 #include "alloc_counter.hpp"
 #include "admittance_tracker.hpp"
 #include "fixed_motion.hpp"
+#include "numen/core/feedback.hpp"
 #include "numen/hal/emulation/admittance_emulator.hpp"
 #include "numen/hal/canopen/canopen.hpp"
 #include "numen/hal/canopen/cia402.hpp"
@@ -99,13 +100,25 @@ TEST(AdmittanceDevice, SetPointsAreClampedToTheRangeAndRateLimited) {
   EXPECT_GE(dev.counters().clamped_to_range, 1u);
 }
 
-TEST(AdmittanceDevice, MeasuredWrenchGoesToTheWorldAboutThePointAsked) {
-  hal::SimBus bus{hal::SimBusSettings{}};
+/// The tracker's admittance config with the sensor 20 mm up the tool's z, turned 90° about it.
+hal::AdmittanceConfig admittance_sensor_up_20mm_turned() {
   hal::AdmittanceConfig a = hal::make_admittance_config(tracker());
   a.sensor.sensor_in_tool.position = Vec3(0.0, 0.0, 0.02);
   a.sensor.sensor_in_tool.orientation = Quat(Eigen::AngleAxisd(M_PI / 2, Vec3::UnitZ()));
+  return a;
+}
+
+/// The tracker's axis values with the tool at (x, 0, 0), identity orientation.
+hal::AxisVector admittance_tool_at_x(double x) {
   hal::AxisVector q = zeros();
-  q[0] = 0.1;  // tool at (0.1, 0, 0), identity orientation
+  q[0] = x;
+  return q;
+}
+
+TEST(AdmittanceDevice, MeasuredWrenchGoesToTheWorldAboutThePointAsked) {
+  hal::SimBus bus{hal::SimBusSettings{}};
+  const hal::AdmittanceConfig a = admittance_sensor_up_20mm_turned();
+  const hal::AxisVector q = admittance_tool_at_x(0.1);  // tool at (0.1, 0, 0), identity orientation
   hal::AdmittanceDevice dev(tracker(), a, bus.controller(), q);
   core::Wrench s;
   s.force = Vec3(1.0, 0.0, 0.0);  // sensor x = world y
@@ -114,6 +127,55 @@ TEST(AdmittanceDevice, MeasuredWrenchGoesToTheWorldAboutThePointAsked) {
   EXPECT_TRUE(w.force.isApprox(Vec3(0.0, 1.0, 0.0), 1e-12));
   // Torque about the tool origin: 0.01 z + (0, 0, 0.02) × (0, 1, 0) = (−0.02, 0, 0.01).
   EXPECT_TRUE(w.torque.isApprox(Vec3(-0.02, 0.0, 0.01), 1e-12));
+}
+
+// read() returns the measured wrench as the period's DeviceState: in the world, about the
+// sensor's origin (wrench_point), the same wrench world_wrench() carries to any point; no axes
+// or links (the admittance kind reads none). write(DeviceCommand) sends the pose's set-points.
+TEST(AdmittanceDevice, ReadReturnsTheMeasuredWrenchInTheWorldAsTheState) {
+  hal::SimBus bus{hal::SimBusSettings{}};
+  const hal::AdmittanceConfig a = admittance_sensor_up_20mm_turned();
+  const hal::AxisVector q = admittance_tool_at_x(0.1);  // tool at (0.1, 0, 0), identity orientation
+  hal::AdmittanceEmulator emu(tracker(), a);
+  numen::test::FixedMotion motion(6);
+  emu.set_motion(&motion);
+  emu.set_axis_values(q);
+  hal::AdmittanceDevice dev(tracker(), a, bus.controller(), q);
+  motion.state.handle_wrench.force = Vec3(2.0, 0.5, -1.0);
+  motion.state.handle_wrench.torque = Vec3(0.01, -0.02, 0.03);
+  const hal::DeviceState* s = nullptr;
+  for (int i = 0; i < 3; ++i) {
+    const std::int64_t t = i * 1'000'000LL;
+    bus.set_time_ns(t);
+    dev.begin_period(t);
+    emu.poll(bus.device());
+    s = &dev.read(t);
+  }
+  ASSERT_TRUE(s->valid);
+  EXPECT_TRUE(s->ready);
+  EXPECT_EQ(s->num_axes, 0);
+  EXPECT_EQ(s->num_links, 0);
+  EXPECT_GT(s->input_frames, 0);
+  EXPECT_GT(s->wrench.force.norm(), 1.0);
+  // The sensor's origin: the tool at (0.1, 0, 0), the sensor 20 mm up its z.
+  EXPECT_TRUE(s->wrench_point.isApprox(Vec3(0.1, 0.0, 0.02), 1e-12));
+  const Vec3 about(0.05, -0.01, 0.3);
+  const core::Wrench by_state = core::carry_wrench(s->wrench, s->wrench_point, about);
+  const core::Wrench by_device = dev.world_wrench(dev.force_sample().wrench, about);
+  EXPECT_EQ(by_state.force, by_device.force);
+  EXPECT_EQ(by_state.torque, by_device.torque);
+  (void)dev.supervise(0, false);
+  ASSERT_EQ(dev.lifecycle(), hal::LifecycleState::kActive);
+  core::Pose p = dev.commanded_pose();
+  p.position.x() += 1e-5;
+  hal::DeviceCommand c;
+  c.pose = &p;
+  const hal::DeviceOutput& out = dev.write(c, 0);
+  EXPECT_EQ(out.status, hal::IoStatus::kOk);
+  EXPECT_FALSE(out.gated);
+  EXPECT_FALSE(out.torque_commanded);
+  EXPECT_EQ(out.controlword, hal::Controlword::kEnableOperation);
+  EXPECT_NEAR(dev.setpoints()[0], 0.1 + 1e-5, 1e-12);
 }
 
 // One period as a control loop runs it: begin_period (SYNC), read (the sensor's TPDOs),

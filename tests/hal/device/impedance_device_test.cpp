@@ -80,15 +80,15 @@ struct ImpedanceRig {
       : bus(SimBusSettings{}), instrument(c), dev(instrument, bus.controller()) {}
 
   // The encoders answer with kQ0 (plus `depth` m on the depth axis) at t, then the device
-  // reads at t.
-  void answer_and_read(std::int64_t t, double depth = 0.0) {
+  // reads at t: the period's state.
+  const DeviceState& answer_and_read(std::int64_t t, double depth = 0.0) {
     bus.set_time_ns(t);  // the bus stamps the frames it delivers
     for (int i = 0; i < instrument.num_axes(); ++i) {
       const AxisConfig& a = instrument.config().axes[static_cast<std::size_t>(i)];
       const double q = kQ0[i] + (i == TrocarKinematics::kDepth ? depth : 0.0);
       bus.device().write(encode_position_pdo(a.encoder_cob_id, value_to_counts(a, q), t));
     }
-    dev.read(t);
+    return dev.read(t);
   }
   IoStatus write(std::vector<double> tau) {
     return dev.write(std::span<const double>(tau.data(), tau.size()), 0);
@@ -124,6 +124,63 @@ TEST(ImpedanceDevice, ReadGivesTheProtocolItsFramesFirstAndTheInstrumentTheRest)
   EXPECT_TRUE(r.dev.sample().valid);
   r.bus.set_state(BusState::kBusOff);
   EXPECT_TRUE(r.dev.read(kMs).read_error);
+}
+
+// read() returns the period's DeviceState: the checked sample as InstrumentDevice::sample()
+// left it (values, rates, validity, per-axis faults and freshness), the links' poses, twists
+// and Jacobians at its axis values, and the frames read; τ = Σ J_lᵀ w_l of the state's
+// Jacobians is the instrument's own map. write(DeviceCommand) sends the torques as
+// write(τ) does and reports what went out.
+TEST(ImpedanceDevice, ReadReturnsTheCheckedSampleAndItsJacobiansAsTheState) {
+  ImpedanceRig r;
+  (void)r.answer_and_read(0);
+  const DeviceState& s = r.answer_and_read(kMs, 1e-4);
+  const DeviceSample& d = r.instrument.last_sample();
+  EXPECT_EQ(s.frames_read, 5);
+  EXPECT_EQ(s.input_frames, 5);
+  EXPECT_FALSE(s.read_error);
+  EXPECT_EQ(s.time_ns, kMs);
+  EXPECT_TRUE(s.valid);
+  EXPECT_TRUE(s.ready);
+  EXPECT_EQ(s.faults, d.faults);
+  ASSERT_EQ(s.num_axes, r.instrument.num_axes());
+  ASSERT_EQ(s.num_links, r.instrument.num_links());
+  for (int i = 0; i < s.num_axes; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    EXPECT_EQ(s.q[i], d.q[i]);
+    EXPECT_EQ(s.qdot[i], d.qdot[i]);
+    EXPECT_EQ(s.axis_faults[k], d.axis_faults[k]);
+    EXPECT_EQ(s.periods_since_accepted[k], 0u);
+  }
+  EXPECT_GT(s.qdot[TrocarKinematics::kDepth], 0.0);  // 0.1 mm in one period: the rate moved
+  for (int l = 0; l < s.num_links; ++l) {
+    const auto k = static_cast<std::size_t>(l);
+    EXPECT_EQ(s.link_poses[k].position, d.link_targets[k].position);
+    EXPECT_EQ(s.link_twists[k].linear, d.link_twists[k].linear);
+    const Jacobian j = l == 0 ? r.instrument.kinematics().jacobian(d.q)
+                              : r.instrument.kinematics().link_jacobian(l, d.q);
+    EXPECT_EQ(s.link_jacobians[k], j) << "link " << l;
+  }
+  numen::core::Wrench w;
+  w.force = numen::core::Vec3(1.0, -2.0, 3.0);
+  w.torque = numen::core::Vec3(0.1, 0.2, -0.3);
+  AxisVector by_instrument;
+  AxisVector by_state;
+  r.instrument.torques_for(std::span<const numen::core::Wrench>(&w, 1), by_instrument);
+  torques_from_link_wrenches(std::span<const Jacobian>(s.link_jacobians.data(), 1),
+                             std::span<const numen::core::Wrench>(&w, 1), by_state);
+  EXPECT_EQ(by_state, by_instrument);
+  const std::vector<double> tau{0.1, 0.0, -0.1, 0.0, 0.0};
+  DeviceCommand c;
+  c.torques = std::span<const double>(tau.data(), tau.size());
+  const DeviceOutput& out = r.dev.write(c, kMs);
+  EXPECT_EQ(out.status, IoStatus::kOk);
+  EXPECT_FALSE(out.gated);
+  EXPECT_TRUE(out.torque_commanded);
+  EXPECT_EQ(out.ramp, 1.0);
+  ASSERT_EQ(out.torque.size(), 5u);
+  for (std::size_t i = 0; i < 5; ++i) EXPECT_EQ(out.torque[i], r.dev.sent_torques().torque[static_cast<int>(i)]);
+  EXPECT_EQ(r.dev.sends, 1);
 }
 
 TEST(ImpedanceDevice, WriteGatesEveryAxisWithoutAValidSampleOrAfterShutdown) {

@@ -482,6 +482,7 @@ class MultirateGodObject {
     Model device_model;
     Data device;
     Model scene_model;             // the proximity model, the god-object's joints removed
+    Model fold_model;              // scene_model at a folded step's sub-step (fold_substeps_ > 1)
     Data scene;                    // the scene loop's Data while this god-object is held
     std::vector<int> scene_joints; // per scene_model joint: its scene joint index
   };
@@ -496,8 +497,10 @@ class MultirateGodObject {
   int ratio_;
   double margin_;
   double fold_step_;              // MultirateSettings::fold_step
+  int fold_substeps_ = 1;         // sub-steps of a folded scene step: ⌈scene_dt / fold_step⌉
   std::vector<Slot> slots_;       // one per body the device may hold (at least one)
   Model free_scene_model_;        // the scene loop without a god-object
+  Model free_fold_model_;         // ... at a folded step's sub-step (fold_substeps_ > 1)
   // Device loop.
   int body_;
   int slot_ = -1;                 // the held body's slot; -1: none held

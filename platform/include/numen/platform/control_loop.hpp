@@ -10,6 +10,9 @@
 ///                 torque now) → bound bodies' targets into core::Data → core::step
 ///                 → map: the bound bodies' Eq. 8 wrenches carried to their links (Eq. 9),
 ///                 τ = Σ_l J_lᵀ w_l → ImpedanceDevice::write (gate and clamp, once; the torque frames).
+/// The period is a fixed list of free-function stages over one PeriodData (period_stages.hpp,
+/// period_data.hpp), and the device is seen through one face: Device::read() returns a
+/// hal::DeviceState, Device::write() takes a hal::DeviceCommand (device_state.hpp).
 /// An admittance device (hal::AdmittanceDevice; paper Fig. 2 note; docs/dynamics.md
 /// "Admittance devices", docs/protocol.md "Admittance devices"):
 ///   begin_period: Device::begin_period — SYNC;
@@ -18,10 +21,10 @@
 ///                 → data.device_wrench = the measured wrench in the world, about the held
 ///                 body's COM (in kActive), else a brake that halves the held body's twist
 ///                 each step → core::step (CouplingMode::kAdmittance) → the held body's pose
-///                 → AdmittanceDevice::write_pose (inverse kinematics, csp RPDOs; the
+///                 → AdmittanceDevice::write → write_pose (inverse kinematics, csp RPDOs; the
 ///                 set-points held with controlword shutdown outside kActive).
 /// The kind and protocol (DeviceConfig::canopen.managed) are chosen once, at construction
-/// (hal::make_device()); no period branches on it. The same object runs against SimBus in
+/// (hal::make_device(); the stage list); no period branches on them. The same object runs against SimBus in
 /// simulation and SocketCAN on hardware. Construction may allocate; begin_period / end_period /
 /// rearm never allocate, throw, lock or block.
 
@@ -44,75 +47,18 @@
 #include "numen/platform/device_binding.hpp"
 #include "numen/platform/latency_histogram.hpp"
 #include "numen/platform/loop_statistics.hpp"
+#include "numen/platform/period_data.hpp"
+#include "numen/platform/period_stages.hpp"
+#include "numen/platform/stepper.hpp"
 
 namespace numen::platform {
 
-/// What one period did (begin_period() + end_period()). The *_ns stamps are CLOCK_MONOTONIC
-/// (monotonic_now_ns()), in the order of PeriodTimes (loop_statistics.hpp); times() gives
-/// that struct.
-struct PeriodReport {
-  int frames_read = 0;              ///< Frames taken from the bus this period.
-  bool sample_valid = false;        ///< Every axis fresh and plausible this period.
-  bool target_ready = false;        ///< The device has a target (possibly held from earlier).
-  std::int64_t step_ns = 0;         ///< Wall time of core::step (ns, CLOCK_MONOTONIC).
-  hal::IoStatus command_status = hal::IoStatus::kOk;  ///< Result of the torque writes.
-  /// Non-zero torque was commanded on at least one drive this period.
-  bool torque_commanded = false;
-  /// The device wrench of this period. Admittance: the measured wrench that drove the held
-  /// body (world, N and N·m about its COM; zero when not driven). Impedance: the feedback
-  /// wrench the drives were sent this period: the bound bodies' Eq. 8 wrenches
-  /// carried to their links (Eq. 9) and summed about link 0's origin (world, N and N·m) — the
-  /// wrench whose τ = Σ J_lᵀ w_l went to ImpedanceDevice::write() — times the soft-start factor
-  /// (soft_start_ramp), and zero when write() gated every axis. Per-axis clamping acts on τ
-  /// (hal::SentTorques::clamped counts it), not on this.
-  core::Wrench feedback;
-  /// Admittance: the measured wrench drove the held body this period (kActive, a body held).
-  bool driven = false;
-  /// Admittance: the controlword sent with the set-points (CiA 402: enable operation or
-  /// shutdown); 0 for an impedance device.
-  std::uint16_t controlword = 0;
-  /// The sample's SampleFault bits this period (impedance: the union over the axes; admittance:
-  /// the force reading's).
-  hal::FaultMask sample_faults = 0;
-  /// The soft-start factor r in [0, 1] ImpedanceDevice::write() applied this period
-  /// (hal::SentTorques::ramp; 1 once the ramp is over or with the soft start off).
-  double soft_start_ramp = 1.0;
-  // Timestamps (CLOCK_MONOTONIC ns).
-  std::int64_t deadline_ns = 0;      ///< The period's deadline (begin_period's argument, or
-                                     ///< its start when none was given).
-  std::int64_t woke_ns = 0;          ///< When the thread resumed (idem).
-  std::int64_t sync_sent_ns = 0;     ///< SYNC (+ NMT, heartbeat) written.
-  std::int64_t input_begin_ns = 0;   ///< Reading the frames started.
-  std::int64_t input_end_ns = 0;     ///< The frames were read.
-  std::int64_t step_begin_ns = 0;    ///< core::step started.
-  std::int64_t step_end_ns = 0;      ///< core::step returned.
-  std::int64_t output_begin_ns = 0;  ///< The torque writes started.
-  std::int64_t output_end_ns = 0;    ///< The torque writes returned.
-  bool overrun = false;              ///< LoopStatistics found this period overran.
-  // Managed stack (defaults in the minimal protocol).
-  hal::LifecycleState lifecycle = hal::LifecycleState::kUnconfigured;  ///< After this period.
-  hal::StartupPhase startup = hal::StartupPhase::kResetCommunication;  ///< After this period.
-  /// The safe state latched in this period (the supervisor's first_fault() says why).
-  bool entered_safe_stop = false;
-  /// After this period: the cause of the latched safe state (hal::Device::first_fault(),
-  /// cleared by a re-arm); kNone while none is latched.
-  hal::FaultCause fault_cause = hal::FaultCause::kNone;
-  /// The lifecycle entered kActive in this period.
-  bool activated = false;
-
-  /// The stamps as LoopStatistics takes them.
-  PeriodTimes times() const noexcept {
-    return PeriodTimes{deadline_ns,    woke_ns,     sync_sent_ns,    input_begin_ns, input_end_ns,
-                       step_begin_ns,  step_end_ns, output_begin_ns, output_end_ns,  0};
-  }
-};
-
 /// Creation settings of a ControlLoop (the managed stack's supervision; the minimal protocol
 /// uses none of them but the statistics).
-/// The device's supervision settings (hal::DeviceSettings: encoder timeout, overrun limit,
+/// The device's supervision settings (hal::ImpedanceSettings: encoder timeout, overrun limit,
 /// safe-stop timeout, auto-activation, drive settings; kept there once and handed to
 /// hal::make_device() as they are) and the loop's own.
-struct ControlLoopSettings : hal::DeviceSettings {
+struct ControlLoopSettings : hal::ImpedanceSettings {
   /// Feed LoopStatistics' overrun verdict to the supervisor. Only meaningful when periods are
   /// paced to a clock (a simulation run as fast as possible has no deadlines).
   bool supervise_overruns = false;
@@ -122,16 +68,6 @@ struct ControlLoopSettings : hal::DeviceSettings {
 using RearmResult = hal::RearmResult;
 /// Short English name of a RearmResult (hal::to_string()).
 inline const char* to_string(RearmResult result) noexcept { return hal::to_string(result); }
-
-/// Counters since construction.
-struct ControlLoopCounters {
-  std::uint64_t periods = 0;          ///< end_period() calls.
-  std::uint64_t sync_write_failures = 0;  ///< SYNC writes not accepted by the bus.
-  std::uint64_t command_failures = 0;     ///< Periods whose torque writes did not all succeed.
-  std::uint64_t periods_zero_torque = 0;  ///< Periods that sent zero torque on every drive (no
-                                          ///< body held, no valid sample, gated, or a zero τ).
-  std::uint64_t read_errors = 0;          ///< Bus reads that returned kError.
-};
 
 /// The control loop of one instrument driving one core::Data.
 /// Not thread safe: one real-time thread owns it.
@@ -168,7 +104,7 @@ class ControlLoop {
                     std::int64_t woke_mono_ns = -1) noexcept;
 
   /// Ends the period at bus time `now_ns` (after the encoders answered), in this order:
-  ///  1. read: Device::read() — every pending frame, the checked sample;
+  ///  1. read: Device::read() — every pending frame, the period's hal::DeviceState;
   ///  2. supervise: Device::supervise() (managed: CanopenMaster::update(), SafetySupervisor,
   ///     re-arm, automatic activation, the drives' CiA 402 target; a fault latches the safe
   ///     state in this very period);
@@ -176,15 +112,20 @@ class ControlLoop {
   ///     the bound bodies' targets — body pose = link pose · body_in_link, twist carried to the
   ///     body's origin; the attached body's into data.target, the others into
   ///     data.body_targets (paper Eq. 6) — and the prescribed joints' values;
-  ///  4. step: one core::step;
+  ///  4. step: one Stepper::step() (core::step unless set_stepper());
   ///  5. map: w_l = the bound bodies' Eq. 8 feedback (data.body_feedback) carried to their
-  ///     link's origin (Eq. 9), τ = Σ_l J_lᵀ w_l (InstrumentDevice::torques_for(): computed
-  ///     as it is, NaN included; 0 for a link without a driven body);
-  ///  6. write: ImpedanceDevice::write(τ) — gated (zero unless this period's sample is valid, no
+  ///     link's origin (Eq. 9), τ = Σ_l J_lᵀ w_l with the state's Jacobians (computed as it
+  ///     is, NaN included; 0 for a link without a driven body);
+  ///  6. send: Device::write(DeviceCommand) → ImpedanceDevice::write(τ) — gated (zero unless this period's sample is valid, no
   ///     shutdown, and — managed — the lifecycle active and the drive's master allowing
   ///     torque), clamped to ±max_torque and scaled by the soft start's r there, once; then
-  ///     the torque frames.
-  const PeriodReport& end_period(std::int64_t now_ns) noexcept;
+  ///     the torque frames; the report's feedback from what it applied;
+  ///  7. finish: Stepper::finish() completes the Data the measurements read (a multirate run's
+  ///     single-rate view), outside the timed step.
+  /// The steps are the stage list fixed at construction (period_stages.hpp) over the loop's
+  /// PeriodData (period_data()); `observer`, if not null, sees the record after each stage
+  /// (tests, tracing).
+  const PeriodReport& end_period(std::int64_t now_ns, PeriodObserver* observer = nullptr) noexcept;
 
   /// Re-arms after a latched fault or a failed start-up (for the CLI and tests): asks every
   /// drive's master for a fault reset, reruns the NMT start-up if a node is not operational (or
@@ -192,7 +133,7 @@ class ControlLoop {
   /// in which no cause is present; the automatic activation then follows. Never blocks.
   RearmResult rearm() noexcept;
   /// A re-arm was accepted and has not happened yet.
-  bool rearm_pending() const noexcept { return device_->rearm_pending(); }
+  bool rearm_pending() const noexcept { return context_.device->rearm_pending(); }
   /// Managed stack: kInactive → kActive now (SafetySupervisor::activate()); kNotInactive in the
   /// minimal protocol.
   hal::LifecycleResult activate() noexcept;
@@ -205,90 +146,68 @@ class ControlLoop {
   /// protocol has no lifecycle: its periods send zero torque from now on. Never blocks.
   void shutdown() noexcept;
   /// shutdown() was called.
-  bool shutting_down() const noexcept { return device_->shutting_down(); }
+  bool shutting_down() const noexcept { return context_.device->shutting_down(); }
   /// Managed: every drive's master reports a disabled state (not energised: switch on
   /// disabled, ready to switch on, not ready, fault); minimal protocol: true.
   bool drives_disabled() const noexcept;
   /// True for the managed stack.
-  bool managed() const noexcept { return device_->canopen() != nullptr; }
+  bool managed() const noexcept { return context_.device->canopen() != nullptr; }
   /// The device (protocol, supervision), of either kind.
-  const hal::Device& device() const noexcept { return *device_; }
-  /// The impedance device (the torques sent); precondition: !admittance().
-  const hal::ImpedanceDevice& impedance() const noexcept { return *impedance_; }
+  const hal::Device& device() const noexcept { return *context_.device; }
+  /// The impedance device (the torques sent); precondition: the loop was built for one
+  /// (admittance() is null).
+  const hal::ImpedanceDevice& impedance() const noexcept {
+    return static_cast<const hal::ImpedanceDevice&>(*context_.device);
+  }
   /// The admittance device (nullptr for an impedance device).
-  const hal::AdmittanceDevice* admittance() const noexcept { return admittance_; }
+  const hal::AdmittanceDevice* admittance() const noexcept {
+    return dynamic_cast<const hal::AdmittanceDevice*>(context_.device);
+  }
   /// The CANopen master (nullptr in the minimal protocol).
-  const hal::CanopenMaster* canopen() const noexcept { return device_->canopen(); }
+  const hal::CanopenMaster* canopen() const noexcept { return context_.device->canopen(); }
   /// The CANopen master, e.g. to queue an NMT command (nullptr in the minimal protocol).
-  hal::CanopenMaster* canopen() noexcept { return device_->canopen(); }
+  hal::CanopenMaster* canopen() noexcept { return context_.device->canopen(); }
   /// The safety supervisor and lifecycle (nullptr in the minimal protocol).
-  const hal::SafetySupervisor* supervisor() const noexcept { return device_->supervisor(); }
+  const hal::SafetySupervisor* supervisor() const noexcept { return context_.device->supervisor(); }
   /// Timing statistics of the periods (wake-up, step, bus I/O, end-to-end, overruns).
   const LoopStatistics& statistics() const noexcept { return *stats_; }
   /// Period index (0-based end_period() count) at which the lifecycle first became active;
   /// -1 if never.
-  std::int64_t first_active_period() const noexcept { return first_active_period_; }
+  std::int64_t first_active_period() const noexcept { return context_.first_active_period; }
   /// Period index at which non-zero torque was first commanded; -1 if never.
-  std::int64_t first_torque_period() const noexcept { return first_torque_period_; }
+  std::int64_t first_torque_period() const noexcept { return context_.first_torque_period; }
 
-  /// What end_period()'s step 4 calls instead of core::step(model, data): a function of
-  /// `context` that advances the loop's Data by one control period as core::step() would —
-  /// reads its targets (data.target, target_twist, body_targets, joint_prescribed), leaves the
-  /// bodies' states, contacts and body_feedback (Eq. 8) in it — e.g. the multirate god-object's
-  /// device period and its single-rate view (core::MultirateGodObject::step(), view()). Null
-  /// restores core::step. Must not allocate, throw, lock or block: it runs in the real-time
-  /// period. Not while end_period() runs.
-  using StepFunction = void (*)(void* context) noexcept;
-  void set_step_function(StepFunction step, void* context) noexcept {
-    step_function_ = step;
-    step_context_ = context;
+  /// The step stage's dynamics (step 4 of end_period()): `stepper`'s step() over the loop's
+  /// Model and Data, and its finish() after the commands were sent (outside the timed step),
+  /// e.g. the multirate god-object's device period and its single-rate view
+  /// (sim::MultirateRun). Null restores core::step (CoreStepper). Keeps a pointer: `stepper`
+  /// must outlive the loop or be replaced first. Not while end_period() runs.
+  void set_stepper(Stepper* stepper) noexcept {
+    context_.stepper = stepper != nullptr ? stepper : &core_stepper_;
   }
 
   /// Wall time of core::step per period (ns).
-  const LatencyHistogram& step_time() const noexcept { return step_time_; }
+  const LatencyHistogram& step_time() const noexcept { return context_.step_time; }
   /// Counters since construction.
-  const ControlLoopCounters& counters() const noexcept { return counters_; }
+  const ControlLoopCounters& counters() const noexcept { return context_.counters; }
   /// What the last end_period() did.
-  const PeriodReport& last_report() const noexcept { return report_; }
+  const PeriodReport& last_report() const noexcept { return period_.report; }
+  /// The period record (what the last period's stages wrote).
+  const PeriodData& period_data() const noexcept { return period_; }
+  /// The stage list end_period() runs (fixed at construction by the kind of device).
+  std::span<const PeriodStageEntry> stages() const noexcept { return stages_; }
 
  private:
-  void apply_targets(const hal::DeviceSample& sample) noexcept;
-  // Σ of the bound bodies' Eq. 8 wrenches per link into link_wrench_ (0 for a link without one).
-  void gather_link_wrenches() noexcept;
-  // Step 5: link_wrench_ → tau_ (τ = Σ J_lᵀ w_l) and report_.feedback; computes, never gates.
-  void map_feedback() noexcept;
-  void step_model() noexcept;
-  // Steps 3–6 of an impedance device (targets, step, map, write τ).
-  void impedance_period(std::int64_t now_ns) noexcept;
-  // The same of an admittance device (measured wrench or brake, step, write the pose).
-  void admittance_period(std::int64_t now_ns) noexcept;
-  // Admittance outside kActive: data.device_wrench halves the held body's twist each step.
-  void brake_held_body() noexcept;
+  // The context's fixed part (construction).
+  void init_context(const core::Model& model, core::Data& data, hal::Device& device,
+                    const ControlLoopSettings& settings);
 
-  const core::Model* model_;
-  core::Data* data_;
-  hal::InstrumentDevice* instrument_ = nullptr;      // impedance
-  std::unique_ptr<hal::ImpedanceDevice> impedance_;  // impedance: built around instrument_
-  hal::AdmittanceDevice* admittance_ = nullptr;      // admittance: the caller's
-  hal::Device* device_ = nullptr;                    // the one of the two
-  DeviceBinding binding_;
-  std::vector<core::Vec3> link_origin_;   // per binding: world origin of its link this period
-  std::vector<core::Vec3> body_target_;   // per binding: target point of its body this period
-  std::vector<int> bound_body_;           // per binding: body driven this period (-1: none)
-  std::vector<std::uint8_t> explicit_bound_;  // per body: 1 if a binding names it
-  std::array<core::Wrench, hal::kMaxLinks> link_wrench_{};
-  hal::AxisVector tau_;
-  LatencyHistogram step_time_;
-  ControlLoopCounters counters_;
-  PeriodReport report_;
-  PeriodReport begin_;  // stamps of begin_period()
-  ControlLoopSettings settings_;
+  CoreStepper core_stepper_;
+  std::unique_ptr<hal::Device> owned_;     // impedance: built around the caller's instrument
   std::unique_ptr<LoopStatistics> stats_;
-  bool last_overrun_ = false;  // the previous period overran (LoopStatistics)
-  std::int64_t first_active_period_ = -1;
-  std::int64_t first_torque_period_ = -1;
-  StepFunction step_function_ = nullptr;  // null: core::step(*model_, *data_)
-  void* step_context_ = nullptr;
+  PeriodContext context_;                  // the device (owned_ or the caller's), binding, tallies
+  PeriodData period_;
+  std::span<const PeriodStageEntry> stages_;
 };
 
 }  // namespace numen::platform

@@ -55,17 +55,16 @@ struct AdmittanceDeviceCounters {
   std::uint64_t ignored_frames = 0;    ///< Frames read that were not the sensor's.
 };
 
-/// Creation settings of an admittance device's supervision (docs/safety.md).
-struct AdmittanceSettings {
+/// Creation settings of an admittance device's supervision (docs/safety.md): the lifecycle's
+/// (LifecycleSettings::safe_stop_timeout_periods, >= 1, its base) and the device's own.
+struct AdmittanceSettings : LifecycleSettings {
   /// Consecutive periods without a valid force reading that latch the safe state, >= 1 (the
   /// last accepted reading drives the god-object meanwhile).
   std::uint32_t force_timeout_periods = 3;
-  /// LifecycleSettings::safe_stop_timeout_periods, >= 1.
-  std::uint32_t safe_stop_timeout_periods = 100;
   /// Activate on its own in the first period with a valid reading (else call activate()).
   bool auto_activate = true;
   /// Consecutive overrun periods (supervise()'s `overrun`) that latch the safe state, as the
-  /// impedance stack's DeviceSettings::overrun_limit; 0: overruns are never latched (offline
+  /// impedance stack's ImpedanceSettings::overrun_limit; 0: overruns are never latched (offline
   /// runs, where there is no deadline to miss).
   std::uint32_t overrun_limit = 0;
 };
@@ -122,6 +121,8 @@ class AdmittanceDevice final : public Device {
   /// one gate of the admittance output. Returns kOk if every RPDO was accepted, else the first
   /// failure.
   IoStatus write_pose(const core::Pose* pose, std::int64_t now_ns) noexcept;
+  /// Device::write(): write_pose(command.pose, now_ns); gated while the set-points are held.
+  const DeviceOutput& write(const DeviceCommand& command, std::int64_t now_ns) noexcept override;
   /// The controlword of the last write_pose() (0 before the first).
   std::uint16_t controlword() const noexcept { return controlword_; }
   /// New set-points for the controlled frame at `pose` (world): inverse kinematics seeded with
@@ -155,7 +156,11 @@ class AdmittanceDevice final : public Device {
     ++counters_.ignored_frames;
     return false;
   }
-  void end_read(std::int64_t now_ns) noexcept override { sample_ = sensor_.sample(now_ns); }
+  // The checked reading (ForceSensor::sample()) as the state: the wrench in the world about the
+  // sensor's origin (world_wrench()).
+  void end_read(std::int64_t now_ns, DeviceState& state) noexcept override;
+  // `sensor_wrench` in the world, about the sensor origin; `origin` gets that origin (world).
+  core::Wrench sensor_to_world(const core::Wrench& sensor_wrench, core::Vec3& origin) const noexcept;
   void on_shutdown() noexcept override;
 
   DeviceConfig device_;
@@ -166,6 +171,7 @@ class AdmittanceDevice final : public Device {
   PdoMapping rpdo_map_;
   DeviceLifecycle lifecycle_;
   ForceSample sample_;
+  DeviceOutput output_;
   AxisVector q_;
   std::array<std::int32_t, kMaxAxes> counts_{};
   AdmittanceDeviceCounters counters_;

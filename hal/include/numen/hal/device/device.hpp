@@ -23,17 +23,11 @@
 
 #include "numen/hal/canopen/canopen_master.hpp"
 #include "numen/hal/canopen/device_lifecycle.hpp"
+#include "numen/hal/device/device_state.hpp"
 #include "numen/hal/device/safety_supervisor.hpp"
 #include "numen/hal/transport/bus.hpp"
 
 namespace numen::hal {
-
-/// What Device::read() found this period.
-struct DeviceRead {
-  int frames_read = 0;       ///< Frames taken from the bus.
-  bool read_error = false;   ///< A Bus::read() returned IoStatus::kError (the reads stopped).
-  int input_frames = 0;      ///< Frames the kind's input took (encoder or force TPDOs).
-};
 
 /// What Device::supervise() decided this period (minimal protocol: the defaults).
 struct DeviceSupervision {
@@ -72,8 +66,17 @@ class Device {
 
   /// Reads every pending frame (at most 1024), gives each to the protocol (take_frame: managed,
   /// drive TPDOs, heartbeats, EMCY) or else to the kind's input (on_input_frame: encoder or
-  /// force TPDOs), then checks the kind's sample at `now_ns` (end_read).
-  const DeviceRead& read(std::int64_t now_ns) noexcept;
+  /// force TPDOs), then checks the kind's input at `now_ns` (end_read): the period's
+  /// DeviceState (device_state.hpp), valid until the next read().
+  const DeviceState& read(std::int64_t now_ns) noexcept;
+
+  /// Sends the period's command at `now_ns`, gated here (the one gate of the device's output):
+  /// an impedance device the axis torques (DeviceCommand::torques: gate, passivity controller,
+  /// clamp, soft start, then the torque frames; ImpedanceDevice::write()), an admittance device
+  /// the held body's pose (DeviceCommand::pose: inverse kinematics and csp set-points in
+  /// kActive, held with controlword shutdown otherwise; AdmittanceDevice::write_pose()).
+  /// Returns what was sent, valid until the next write().
+  virtual const DeviceOutput& write(const DeviceCommand& command, std::int64_t now_ns) noexcept = 0;
 
   /// Watchdogs and lifecycle at `now_ns` after read(): whether the device may be driven this
   /// period (a fault latches the safe state in this very period). `overrun`: the previous
@@ -121,8 +124,9 @@ class Device {
   }
   /// The kind's input frame (encoder TPDOs, force TPDOs): true if it was one.
   virtual bool on_input_frame(const CanFrame& frame) noexcept = 0;
-  /// After the frames: the kind's sample at `now_ns`.
-  virtual void end_read(std::int64_t now_ns) noexcept = 0;
+  /// After the frames: the kind's checked input at `now_ns` into `state` (its bus fields and
+  /// time_ns are set).
+  virtual void end_read(std::int64_t now_ns, DeviceState& state) noexcept = 0;
   /// Protocol frames at the start of a period, after the SYNC (managed: NMT, heartbeat).
   virtual IoStatus begin_protocol(std::int64_t now_ns) noexcept {
     (void)now_ns;
@@ -144,7 +148,7 @@ class Device {
   Bus* bus_;
 
  private:
-  DeviceRead read_;
+  DeviceState state_;
   std::uint8_t sync_counter_ = 0;
   bool io_error_ = false;
   bool shutting_down_ = false;

@@ -54,14 +54,10 @@
 
 namespace numen::hal {
 
-/// Creation settings of an impedance device's supervision (the minimal protocol uses none).
-struct DeviceSettings {
-  /// SafetySettings::encoder_timeout_periods, >= 1.
-  std::uint32_t encoder_timeout_periods = 3;
-  /// SafetySettings::overrun_limit, >= 1.
-  std::uint32_t overrun_limit = 3;
-  /// SafetySettings::safe_stop_timeout_periods, >= 1.
-  std::uint32_t safe_stop_timeout_periods = 100;
+/// Creation settings of an impedance device's supervision (the minimal protocol uses none):
+/// the supervision settings (SupervisionSettings: encoder timeout, overrun limit, safe-stop
+/// timeout, defined once there) and the device's own.
+struct ImpedanceSettings : SupervisionSettings {
   /// Activate the lifecycle on its own once the start-up is complete and no fault cause is
   /// present; false: the caller calls activate().
   bool auto_activate = true;
@@ -117,6 +113,8 @@ class ImpedanceDevice : public Device {
   /// driven axis; managed: controlword + target torque RPDO per drive). Returns kOk if every
   /// write succeeded, else kError if one failed, else kWouldBlock.
   IoStatus write(std::span<const double> torques, std::int64_t now_ns) noexcept;
+  /// Device::write(): write(command.torques, now_ns); the output of sent_torques().
+  const DeviceOutput& write(const DeviceCommand& command, std::int64_t now_ns) noexcept override;
 
   /// The controller-side instrument driver (sample, kinematics, mapping τ = Σ J_lᵀ w_l).
   const InstrumentDevice& instrument() const noexcept { return *instrument_; }
@@ -154,9 +152,18 @@ class ImpedanceDevice : public Device {
 
  private:
   bool on_input_frame(const CanFrame& frame) noexcept override { return instrument_->on_frame(frame); }
-  void end_read(std::int64_t now_ns) noexcept override { (void)instrument_->sample(now_ns); }
+  // The conditioning's sub-stages, in write()'s order, each applied once (the file comment):
+  // the gate and the non-finite trip (returns the axes that passed, bit i; 0: every axis
+  // gated), the passivity controller, the soft start's r, the clamp and × r.
+  std::uint32_t gate(std::span<const double> torques) noexcept;
+  void control_passivity(std::uint32_t open) noexcept;
+  void advance_soft_start(bool open) noexcept;
+  void clamp_and_ramp(bool open) noexcept;
+  // The sample (InstrumentDevice::sample(): decoded and checked there, once) as the state.
+  void end_read(std::int64_t now_ns, DeviceState& state) noexcept override;
 
   SentTorques sent_;
+  DeviceOutput output_;
   TorqueCounters torque_counters_;
   PassivityController passivity_;
   // The passivity controller's rate: the last sample's axis values and their backward
@@ -175,6 +182,6 @@ class ImpedanceDevice : public Device {
 /// bad settings (construction only).
 std::unique_ptr<ImpedanceDevice> make_device(InstrumentDevice& instrument, Bus& bus,
                                              std::int64_t period_ns,
-                                             const DeviceSettings& settings = {});
+                                             const ImpedanceSettings& settings = {});
 
 }  // namespace numen::hal

@@ -152,6 +152,11 @@ class InstrumentDevice {
 
   /// The last sample() result (default-constructed with q = 0 before the first call).
   const DeviceSample& last_sample() const noexcept { return last_sample_; }
+  /// Geometric Jacobian of link `link` (0 <= link < num_links(); 6 × n, world, linear part at
+  /// the link's origin) at the last sample's axis values (Kinematics::link_jacobian()).
+  const Jacobian& link_jacobian(int link) const noexcept {
+    return link_jacobians_[static_cast<std::size_t>(link)];
+  }
   /// Counters.
   const DeviceCounters& counters() const noexcept { return counters_; }
   /// Zeroes the counters.
@@ -176,7 +181,8 @@ class InstrumentDevice {
     // Range faults of values overwritten by a newer frame before sample() read them: a bad
     // value is a fault even if a good one follows within the period (docs/safety.md).
     FaultMask superseded = SampleFault::kNone;
-    std::int32_t pending_counts = 0;
+    double pending_value = 0.0;    // the pending frame's value, m or rad (counts_to_value)
+    FaultMask pending_range = SampleFault::kNone;  // its range check, made where it was decoded
     std::int64_t pending_stamp_ns = 0;
     bool has_value = false;  // an accepted value exists
     AcceptedValue last;      // last accepted value

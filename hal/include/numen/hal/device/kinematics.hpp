@@ -8,6 +8,8 @@
 
 #include <Eigen/Core>
 
+#include <span>
+
 #include "numen/core/types.hpp"
 
 namespace numen::hal {
@@ -86,5 +88,16 @@ core::Twist twist_from_rates(const Jacobian& jacobian, const AxisVector& qdot) n
 /// Axis torques balancing a wrench applied at the controlled frame's origin (world frame):
 /// τ = Jᵀ [force; torque] (principle of virtual work). Result has J.cols() entries, N or N·m.
 AxisVector torques_from_wrench(const Jacobian& jacobian, const core::Wrench& wrench) noexcept;
+
+/// The axis torques of one wrench per link (paper Eq. 8 per body, mapped by virtual work):
+/// τ = Σ_l J_lᵀ [force_l; torque_l] into `tau`, over the first min(jacobians, wrenches) links,
+/// w_l in world coordinates about link l's origin and J_l that link's Jacobian (6 × n). `tau`
+/// gets n = jacobians[0].cols() entries (its size unchanged without a Jacobian), zero before
+/// the sum. Computes as it is: a non-finite wrench gives a non-finite τ.
+void torques_from_link_wrenches(std::span<const Jacobian> jacobians,
+                                std::span<const core::Wrench> wrenches, AxisVector& tau) noexcept;
+
+/// Every force and torque of `wrenches` is finite.
+bool all_finite(std::span<const core::Wrench> wrenches) noexcept;
 
 }  // namespace numen::hal

@@ -33,7 +33,7 @@ class ManagedDevice final : public ImpedanceDevice {
   /// per instrument axis) and configures the lifecycle. Throws std::invalid_argument for a
   /// configuration that is not managed or bad settings.
   ManagedDevice(InstrumentDevice& instrument, Bus& bus, std::int64_t period_ns,
-                const DeviceSettings& settings = {});
+                const ImpedanceSettings& settings = {});
 
   DeviceSupervision supervise(std::int64_t now_ns, bool overrun) noexcept override;
 
@@ -62,7 +62,7 @@ class ManagedDevice final : public ImpedanceDevice {
 
   std::unique_ptr<CanopenMaster> master_;
   std::unique_ptr<SafetySupervisor> supervisor_;
-  DeviceSettings settings_;
+  ImpedanceSettings settings_;
   // Per axis: index of its drive in the master (-1: no drive).
   std::array<int, kMaxAxes> drive_of_axis_{};
   bool rearm_pending_ = false;

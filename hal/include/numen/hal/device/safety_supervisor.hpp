@@ -108,17 +108,22 @@ inline constexpr std::size_t kMaxSupervisedDrives = 16;
 /// Capacity of the fault log (records; the oldest is overwritten).
 inline constexpr std::size_t kFaultLogCapacity = 64;
 
-/// Creation settings of a SafetySupervisor.
-struct SafetySettings {
+/// The watchdog settings of an impedance device's supervision, defined once: a
+/// SafetySupervisor's (SafetySettings) and an impedance device's (ImpedanceSettings) are this
+/// struct and add their own, so a setting is not copied field by field on its way down. The
+/// lifecycle's (LifecycleSettings::safe_stop_timeout_periods, >= 1: periods kSafeStop waits for
+/// the drives to report disabled before it latches kFault anyway) is its base.
+struct SupervisionSettings : LifecycleSettings {
   /// Periods, >= 1, without an accepted encoder frame after which an axis's encoder has timed
   /// out (the N-th period without one latches). Fewer only reject the sample.
   std::uint32_t encoder_timeout_periods = 3;
   /// Consecutive overrun periods, >= 1, that latch (an overrun followed by a period on time
   /// restarts the count).
   std::uint32_t overrun_limit = 3;
-  /// Periods, >= 1, that kSafeStop waits for the drives to report disabled before it latches
-  /// kFault anyway (LifecycleSettings::safe_stop_timeout_periods).
-  std::uint32_t safe_stop_timeout_periods = 100;
+};
+
+/// Creation settings of a SafetySupervisor: the supervision settings and the device's axes.
+struct SafetySettings : SupervisionSettings {
   /// Number of axes n of the device, 1..kMaxAxes (SafetyInputs carry n axis entries).
   std::size_t num_axes = 0;
 };

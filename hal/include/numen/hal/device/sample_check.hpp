@@ -63,6 +63,12 @@ FaultMask check_fresh(const AxisCheckLimits& limits, std::int64_t stamp_ns,
 /// Range alone: kNonFinite for a non-finite value, kOutOfRange outside [min, max], else kNone.
 FaultMask check_range(const AxisCheckLimits& limits, double value) noexcept;
 
+/// Jump alone: kJump if |value ⊖ last.value| > max_speed · Δt + jump_tolerance, Δt = max(0,
+/// stamp − last.time) (⊖ wrapped on a wrapping axis); kNone without a last value or with
+/// max_speed = +∞.
+FaultMask check_jump(const AxisCheckLimits& limits, double value, std::int64_t stamp_ns,
+                     const AcceptedValue* last) noexcept;
+
 /// All checks of a newly decoded `value` stamped `stamp_ns`, at time `now_ns`, against the
 /// last accepted value `last` (nullptr before the first): non-finite (then nothing else is
 /// checked), out of range, stale, jump (Δt = max(0, stamp − last.time)). Returns the union of

@@ -109,7 +109,7 @@ class AdmittanceRunner {
   core::Data data_;
   core::Data ghost_;  // the held body placed at the hand, for measurement
   platform::ControlLoop loop_;
-  /// Stepped in place of core::step by the loop (ControlLoop::set_step_function) with
+  /// Stepped in place of core::step by the loop (its platform::Stepper, ControlLoop::set_stepper()) with
   /// [multirate]; not enabled in a single-rate run.
   MultirateRun multirate_;
   platform::LatencyHistogram step_time_;

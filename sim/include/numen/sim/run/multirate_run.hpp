@@ -3,7 +3,7 @@
 /// The multirate god-object of a run (scene [multirate]; docs/multirate.md), shared by the two
 /// run harnesses (SceneRunner and AdmittanceRunner, each through its platform::ControlLoop):
 /// the core::MultirateGodObject the loop steps in place of
-/// core::step (their set_step_function()), its scene thread in a paced run
+/// core::step (a platform::Stepper given to ControlLoop::set_stepper()), its scene thread in a paced run
 /// (platform::MultirateThreads), the single-rate view the measurements read, and the run
 /// summary's multirate figures.
 
@@ -15,6 +15,7 @@
 #include "numen/core/data.hpp"
 #include "numen/core/multirate.hpp"
 #include "numen/platform/multirate_threads.hpp"
+#include "numen/platform/stepper.hpp"
 #include "numen/sim/scene/scene.hpp"
 
 namespace numen::sim {
@@ -23,7 +24,7 @@ struct RunSummary;  // run_summary.hpp
 
 /// A scene's multirate god-object wired for a run. Empty (enabled() false) for a single-rate
 /// scene; then every member does nothing.
-class MultirateRun {
+class MultirateRun final : public platform::Stepper {
  public:
   /// The empty run of a single-rate scene (enabled() false).
   MultirateRun() = default;
@@ -31,23 +32,25 @@ class MultirateRun {
   /// holds Model::initial_attached_body, may switch to any of MultirateScene::tools. Allocates;
   /// throws std::invalid_argument with core::MultirateGodObject's message.
   explicit MultirateRun(const Scene& scene);
-  ~MultirateRun();  ///< Stops the scene thread.
+  ~MultirateRun() override;  ///< Stops the scene thread.
   MultirateRun(const MultirateRun&) = delete;
   MultirateRun& operator=(const MultirateRun&) = delete;
 
   /// True when the scene has [multirate] (a god-object was built).
   bool enabled() const noexcept { return god_object_ != nullptr; }
 
-  /// One device period in place of core::step(model, run_data), `run_data` the loop's Data of
-  /// the scene: the device holds run_data.attached_body (tool switching), the device loop gets
-  /// run_data's targets and measured device wrench (core::MultirateGodObject::take_targets()),
-  /// the device period runs (and the scene period on one thread, or the newest model from the
-  /// scene thread), run_data gets the god-object's state and feedback (write_feedback()).
-  /// Never allocates, throws, locks or blocks.
-  void step(core::Data& run_data) noexcept;
+  /// One device period in place of core::step(model, run_data) (the loop's step stage),
+  /// `run_data` the loop's Data of the scene (`model`, the scene's, is not read: the
+  /// god-object has its own): the device holds run_data.attached_body (tool switching), the
+  /// device loop gets run_data's targets and measured device wrench
+  /// (core::MultirateGodObject::take_targets()), the device period runs (and the scene period
+  /// on one thread, or the newest model from the scene thread), run_data gets the god-object's
+  /// state and feedback (write_feedback()). Never allocates, throws, locks or blocks.
+  void step(const core::Model& model, core::Data& run_data) noexcept override;
   /// The single-rate view of both loops into `run_data` (core::MultirateGodObject::view()),
-  /// after the timed step, before measuring. Never allocates.
-  void view(core::Data& run_data) const noexcept;
+  /// called by the loop after the commands were sent (outside the timed step), before the
+  /// run measures. Never allocates.
+  void finish(const core::Model& model, core::Data& run_data) noexcept override;
   /// The last device period took a new scene model (a scene-step boundary).
   bool took_model() const noexcept { return god_object_ && god_object_->took_model(); }
 

@@ -243,9 +243,6 @@ class SceneRunner {
   /// hand penetration, handle force and port energy (the target's penetration and zeros in
   /// replay, as the trace's columns).
   platform::StateFrameFigures view_figures(const PeriodContacts& c) const noexcept;
-  /// The loop's step in a multirate run: MultirateRun::step(data_); period() writes the rest
-  /// of the single-rate view (MultirateRun::view()) after the timed step, before measuring.
-  static void step_multirate(void* runner) noexcept;
 
   const Scene* scene_;
   BusSpec spec_;
@@ -271,7 +268,7 @@ class SceneRunner {
   TargetContacts target_{};  // the target's contacts, last measured
   platform::ControlLoop loop_;
   /// The multirate god-object (scene [multirate]), stepped in place of core::step by the
-  /// loop (ControlLoop::set_step_function); not enabled in a single-rate run.
+  /// loop (its platform::Stepper, ControlLoop::set_stepper()); not enabled in a single-rate run.
   MultirateRun multirate_;
   Trace trace_;
   std::int64_t k_ = 0;

@@ -1,0 +1,299 @@
+/// @file period_stages.cpp
+/// The stages of a control period (period_stages.hpp) and PeriodData's writer table.
+
+#include "numen/platform/period_stages.hpp"
+
+#include <array>
+
+#include "numen/core/feedback.hpp"
+#include "numen/core/rigid_body.hpp"
+#include "numen/platform/monotonic_clock.hpp"
+
+namespace numen::platform {
+
+const char* to_string(PeriodStage stage) noexcept {
+  switch (stage) {
+    case PeriodStage::kNone:
+      return "none";
+    case PeriodStage::kBegin:
+      return "begin";
+    case PeriodStage::kRead:
+      return "read";
+    case PeriodStage::kSupervise:
+      return "supervise";
+    case PeriodStage::kBind:
+      return "bind";
+    case PeriodStage::kStep:
+      return "step";
+    case PeriodStage::kMap:
+      return "map";
+    case PeriodStage::kSend:
+      return "send";
+    case PeriodStage::kFinish:
+      return "finish";
+  }
+  return "unknown";
+}
+
+namespace {
+
+constexpr std::uint16_t bit(PeriodStage s) noexcept { return static_cast<std::uint16_t>(s); }
+
+std::size_t offset_in(const PeriodData& p, const void* member) noexcept {
+  return static_cast<std::size_t>(static_cast<const char*>(member) -
+                                  reinterpret_cast<const char*>(&p));
+}
+
+std::array<PeriodField, 38> make_period_fields() noexcept {
+  const PeriodData p;
+#define NUMEN_FIELD(member, writers) \
+  PeriodField{#member, offset_in(p, &(p.member)), sizeof(p.member), static_cast<std::uint16_t>(writers)}
+  using S = PeriodStage;
+  return {{
+      NUMEN_FIELD(state, bit(S::kRead)),
+      NUMEN_FIELD(supervision, bit(S::kSupervise)),
+      NUMEN_FIELD(link_origin, bit(S::kBind)),
+      NUMEN_FIELD(body_point, bit(S::kBind)),
+      NUMEN_FIELD(bound_body, bit(S::kBind)),
+      NUMEN_FIELD(link_wrench, bit(S::kMap)),
+      NUMEN_FIELD(tau, bit(S::kMap)),
+      NUMEN_FIELD(wrench, bit(S::kBind) | bit(S::kMap)),
+      NUMEN_FIELD(held_pose, bit(S::kMap)),
+      NUMEN_FIELD(command, bit(S::kMap)),
+      NUMEN_FIELD(output, bit(S::kSend)),
+      NUMEN_FIELD(report.frames_read, bit(S::kRead)),
+      NUMEN_FIELD(report.sample_valid, bit(S::kRead)),
+      NUMEN_FIELD(report.target_ready, bit(S::kRead)),
+      NUMEN_FIELD(report.step_ns, bit(S::kStep)),
+      NUMEN_FIELD(report.command_status, bit(S::kSend)),
+      NUMEN_FIELD(report.torque_commanded, bit(S::kSend)),
+      NUMEN_FIELD(report.feedback, bit(S::kSend)),
+      NUMEN_FIELD(report.driven, bit(S::kBind)),
+      NUMEN_FIELD(report.controlword, bit(S::kSend)),
+      NUMEN_FIELD(report.sample_faults, bit(S::kRead)),
+      NUMEN_FIELD(report.soft_start_ramp, bit(S::kSend)),
+      NUMEN_FIELD(report.deadline_ns, bit(S::kBegin)),
+      NUMEN_FIELD(report.woke_ns, bit(S::kBegin)),
+      NUMEN_FIELD(report.sync_sent_ns, bit(S::kBegin)),
+      NUMEN_FIELD(report.input_begin_ns, bit(S::kRead)),
+      NUMEN_FIELD(report.input_end_ns, bit(S::kRead)),
+      NUMEN_FIELD(report.step_begin_ns, bit(S::kStep)),
+      NUMEN_FIELD(report.step_end_ns, bit(S::kStep)),
+      NUMEN_FIELD(report.output_begin_ns, bit(S::kMap)),
+      NUMEN_FIELD(report.output_end_ns, bit(S::kSend)),
+      NUMEN_FIELD(report.overrun, bit(S::kFinish)),
+      NUMEN_FIELD(report.lifecycle, bit(S::kFinish)),
+      NUMEN_FIELD(report.startup, bit(S::kSupervise)),
+      NUMEN_FIELD(report.entered_safe_stop, bit(S::kSupervise)),
+      NUMEN_FIELD(report.fault_cause, bit(S::kFinish)),
+      NUMEN_FIELD(report.activated, bit(S::kSupervise)),
+      NUMEN_FIELD(report, 0),  // the whole report: its fields are listed above
+  }};
+#undef NUMEN_FIELD
+}
+
+constexpr std::array<PeriodStageEntry, 7> kImpedanceStages{{
+    {PeriodStage::kRead, "read_device", &read_device},
+    {PeriodStage::kSupervise, "supervise_device", &supervise_device},
+    {PeriodStage::kBind, "bind_link_targets", &bind_link_targets},
+    {PeriodStage::kStep, "step_dynamics", &step_dynamics},
+    {PeriodStage::kMap, "map_link_wrenches", &map_link_wrenches},
+    {PeriodStage::kSend, "send_command", &send_command},
+    {PeriodStage::kFinish, "finish_period", &finish_period},
+}};
+
+constexpr std::array<PeriodStageEntry, 7> kAdmittanceStages{{
+    {PeriodStage::kRead, "read_device", &read_device},
+    {PeriodStage::kSupervise, "supervise_device", &supervise_device},
+    {PeriodStage::kBind, "bind_measured_wrench", &bind_measured_wrench},
+    {PeriodStage::kStep, "step_dynamics", &step_dynamics},
+    {PeriodStage::kMap, "map_held_pose", &map_held_pose},
+    {PeriodStage::kSend, "send_command", &send_command},
+    {PeriodStage::kFinish, "finish_period", &finish_period},
+}};
+
+}  // namespace
+
+std::span<const PeriodField> period_data_fields() noexcept {
+  static const std::array<PeriodField, 38> fields = make_period_fields();
+  return fields;
+}
+
+std::span<const PeriodStageEntry> impedance_period_stages() noexcept { return kImpedanceStages; }
+std::span<const PeriodStageEntry> admittance_period_stages() noexcept { return kAdmittanceStages; }
+
+void begin_device_period(PeriodContext& c, PeriodData& p, std::int64_t now_ns,
+                         std::int64_t deadline_mono_ns, std::int64_t woke_mono_ns) noexcept {
+  PeriodReport& r = p.report;
+  const std::int64_t t = monotonic_now_ns();
+  r.woke_ns = woke_mono_ns >= 0 ? woke_mono_ns : t;
+  r.deadline_ns = deadline_mono_ns >= 0 ? deadline_mono_ns : r.woke_ns;
+  if (r.deadline_ns > r.woke_ns) r.deadline_ns = r.woke_ns;
+  if (c.device->begin_period(now_ns) != hal::IoStatus::kOk) ++c.counters.sync_write_failures;
+  r.sync_sent_ns = monotonic_now_ns();
+}
+
+void read_device(PeriodContext& c, PeriodData& p, std::int64_t now_ns) noexcept {
+  PeriodReport& r = p.report;
+  r.input_begin_ns = monotonic_now_ns();
+  const hal::DeviceState& state = c.device->read(now_ns);
+  r.input_end_ns = monotonic_now_ns();
+  p.state = &state;
+  r.frames_read = state.frames_read;
+  r.sample_valid = state.valid;
+  r.target_ready = state.ready;
+  r.sample_faults = state.faults;
+  if (state.read_error) ++c.counters.read_errors;
+}
+
+void supervise_device(PeriodContext& c, PeriodData& p, std::int64_t now_ns) noexcept {
+  PeriodReport& r = p.report;
+  // report.overrun is still the previous period's verdict (finish writes this one's).
+  p.supervision = c.device->supervise(now_ns, c.supervise_overruns && r.overrun);
+  r.entered_safe_stop = p.supervision.entered_safe_stop;
+  r.activated = p.supervision.activated;
+  r.startup = p.supervision.startup;
+  if (r.activated && c.first_active_period < 0)
+    c.first_active_period = static_cast<std::int64_t>(c.counters.periods) - 1;
+}
+
+void bind_link_targets(PeriodContext& c, PeriodData& p, std::int64_t now_ns) noexcept {
+  (void)now_ns;
+  const hal::DeviceState& state = *p.state;
+  if (!state.ready) return;  // a rejected sample keeps the last good target
+  core::Data& d = *c.data;
+  for (std::size_t k = 0; k < c.binding.links.size(); ++k) {
+    const LinkBinding& b = c.binding.links[k];
+    const auto l = static_cast<std::size_t>(b.link);
+    p.link_origin[k] = state.link_poses[l].position;
+    p.bound_body[k] = apply_link_target(b, state.link_poses[l], state.link_twists[l], d,
+                                        c.explicit_bound, &p.body_point[k]);
+  }
+  for (const AxisPrescription& a : c.binding.prescriptions)
+    apply_prescription(a, state.q(a.axis), state.qdot(a.axis), d);
+}
+
+void bind_measured_wrench(PeriodContext& c, PeriodData& p, std::int64_t now_ns) noexcept {
+  (void)now_ns;
+  core::Data& d = *c.data;
+  const core::Model& m = *c.model;
+  const int a = d.attached_body;
+  const bool held = a >= 0 && a < m.num_bodies();
+  const bool active =
+      c.device->lifecycle() == hal::LifecycleState::kActive && !c.device->shutting_down();
+  p.report.driven = active && held;
+  if (p.report.driven) {
+    // The last accepted reading (held up to the timeout), in the world, about the held body's COM.
+    d.device_wrench = core::carry_wrench(p.state->wrench, p.state->wrench_point,
+                                         d.bodies[static_cast<std::size_t>(a)].position);
+    p.wrench = d.device_wrench;
+    return;
+  }
+  // The brake: halves the held body's twist every step (stable in both integrators:
+  // h·b/m = 0.5): −0.5 m v / h, −0.5 I_w ω / h.
+  p.wrench = core::Wrench{};
+  d.device_wrench = core::Wrench{};
+  if (!held) return;
+  const core::BodyModel& bm = m.bodies[static_cast<std::size_t>(a)];
+  const core::BodyState& s = d.bodies[static_cast<std::size_t>(a)];
+  const double k = 0.5 / m.dt;
+  d.device_wrench.force = -k * bm.mass * s.linear_velocity;
+  d.device_wrench.torque =
+      -k * (core::world_inertia(s.orientation, bm.inertia_body) * s.angular_velocity);
+}
+
+void step_dynamics(PeriodContext& c, PeriodData& p, std::int64_t now_ns) noexcept {
+  (void)now_ns;
+  PeriodReport& r = p.report;
+  r.step_begin_ns = monotonic_now_ns();
+  c.stepper->step(*c.model, *c.data);
+  r.step_end_ns = monotonic_now_ns();
+  r.step_ns = r.step_end_ns - r.step_begin_ns;
+  c.step_time.record(r.step_ns);
+}
+
+void map_link_wrenches(PeriodContext& c, PeriodData& p, std::int64_t now_ns) noexcept {
+  (void)now_ns;
+  p.report.output_begin_ns = monotonic_now_ns();
+  const hal::DeviceState& state = *p.state;
+  const core::Data& d = *c.data;
+  // Σ of the bound bodies' Eq. 8 wrenches per link, each carried to its link's origin (Eq. 9).
+  for (core::Wrench& w : p.link_wrench) w = core::Wrench{};
+  for (std::size_t k = 0; k < c.binding.links.size(); ++k) {
+    const int body = p.bound_body[k];
+    if (body < 0) continue;
+    const core::Wrench w = core::carry_wrench(d.body_feedback[static_cast<std::size_t>(body)],
+                                              p.body_point[k], p.link_origin[k]);
+    core::Wrench& acc = p.link_wrench[static_cast<std::size_t>(c.binding.links[k].link)];
+    acc.force += w.force;
+    acc.torque += w.torque;
+  }
+  // τ = Σ_l J_lᵀ w_l with the Jacobians of this period's state: computed as it is, NaN
+  // included (the device's write() trips on a non-finite τ); a link without a driven body has
+  // w = 0.
+  const auto links = static_cast<std::size_t>(state.num_links);
+  const std::span<const core::Wrench> w(p.link_wrench.data(), links);
+  if (!hal::all_finite(w)) ++c.counters.non_finite_wrenches;
+  hal::torques_from_link_wrenches(std::span<const hal::Jacobian>(state.link_jacobians.data(), links),
+                                  w, p.tau);
+  // The wrench the drives are asked to render, about link 0's origin (Eq. 9).
+  p.wrench = core::Wrench{};
+  const core::Vec3 origin0 = state.link_poses[0].position;
+  for (std::size_t l = 0; l < links; ++l) {
+    const core::Wrench carried =
+        core::carry_wrench(p.link_wrench[l], state.link_poses[l].position, origin0);
+    p.wrench.force += carried.force;
+    p.wrench.torque += carried.torque;
+  }
+  p.command.torques = std::span<const double>(p.tau.data(), static_cast<std::size_t>(p.tau.size()));
+  p.command.pose = nullptr;
+}
+
+void map_held_pose(PeriodContext& c, PeriodData& p, std::int64_t now_ns) noexcept {
+  (void)now_ns;
+  p.report.output_begin_ns = monotonic_now_ns();
+  const core::Data& d = *c.data;
+  const int a = d.attached_body;
+  p.command.torques = {};
+  p.command.pose = nullptr;
+  if (a < 0 || a >= c.model->num_bodies()) return;  // none held: the set-points are held
+  const core::BodyState& s = d.bodies[static_cast<std::size_t>(a)];
+  p.held_pose = core::Pose{s.position, s.orientation};
+  p.command.pose = &p.held_pose;
+}
+
+void send_command(PeriodContext& c, PeriodData& p, std::int64_t now_ns) noexcept {
+  PeriodReport& r = p.report;
+  const hal::DeviceOutput& out = c.device->write(p.command, now_ns);
+  r.output_end_ns = monotonic_now_ns();
+  p.output = &out;
+  r.command_status = out.status;
+  r.soft_start_ramp = out.ramp;
+  r.controlword = out.controlword;
+  r.torque_commanded = out.torque_commanded;
+  // What the drives render: zero when gated, the soft start's r times the wrench otherwise.
+  if (out.gated) {
+    r.feedback = core::Wrench{};
+  } else if (out.ramp < 1.0) {
+    r.feedback.force = p.wrench.force * out.ramp;
+    r.feedback.torque = p.wrench.torque * out.ramp;
+  } else {
+    r.feedback = p.wrench;
+  }
+}
+
+void finish_period(PeriodContext& c, PeriodData& p, std::int64_t now_ns) noexcept {
+  (void)now_ns;
+  PeriodReport& r = p.report;
+  c.stepper->finish(*c.model, *c.data);  // outside the timed step, after the commands
+  r.lifecycle = c.device->lifecycle();    // after the write: a non-finite τ trips it
+  const hal::FaultRecord* f = c.device->first_fault();
+  r.fault_cause = f != nullptr ? f->cause : hal::FaultCause::kNone;
+  const auto period = static_cast<std::int64_t>(c.counters.periods) - 1;
+  if (!r.torque_commanded) ++c.counters.periods_zero_torque;
+  if (r.torque_commanded && c.first_torque_period < 0) c.first_torque_period = period;
+  if (r.command_status != hal::IoStatus::kOk) ++c.counters.command_failures;
+  r.overrun = c.stats->record_period(r.times()).overrun;
+}
+
+}  // namespace numen::platform
