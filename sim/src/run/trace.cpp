@@ -46,6 +46,7 @@ TraceRecord make_trace_record(const core::Data& data, int held, int tool_contact
     r.baumgarte_rhs_max = std::max(r.baumgarte_rhs_max, j.baumgarte_rhs.cwiseAbs().maxCoeff());
   }
   r.node_contacts = data.num_node_contacts;
+  for (const core::GraspState& g : data.grasps) r.grasps_held += g.holding() ? 1 : 0;
   for (const core::NetOutput& n : data.nets) {
     r.net_penetration_mm = std::max(r.net_penetration_mm, n.max_penetration * 1e3);
     r.net_tie_stretch_mm = std::max(r.net_tie_stretch_mm, n.max_tie_stretch * 1e3);

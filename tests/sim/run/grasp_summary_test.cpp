@@ -3,6 +3,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <fstream>
 #include <string>
 
 #include <nlohmann/json.hpp>
@@ -49,6 +51,7 @@ TEST(GraspSummary, TheDefaultRecordingGraspsTheOrgansTissueAndTheSummaryListsIt)
   const numen::sim::Scene scene = numen::sim::load_scene(dir.write("grasp.toml", text));
   numen::sim::RunOptions opt;
   opt.duration_s = 9.0;
+  opt.trace_path = (dir / "trace.csv").string();
   const numen::sim::RunSummary s = numen::sim::run_scene(scene, opt);
   EXPECT_FALSE(s.nan_detected);
   EXPECT_TRUE(s.grasping);
@@ -64,6 +67,22 @@ TEST(GraspSummary, TheDefaultRecordingGraspsTheOrgansTissueAndTheSummaryListsIt)
   EXPECT_NE(summary.find("grasps: " + std::to_string(s.grasps_started) + " started"), std::string::npos)
       << summary;
   EXPECT_NE(summary.find("grasp event: " + s.grasp_events[0]), std::string::npos) << summary;
+  // The trace's grasps_held column goes 0 → 1 at each grasp and back at each release or slip.
+  std::ifstream in(opt.trace_path);
+  std::string line;
+  ASSERT_TRUE(std::getline(in, line));
+  const std::size_t commas = static_cast<std::size_t>(std::count(line.begin(), line.end(), ','));
+  ASSERT_EQ(line.substr(line.rfind(',') + 1), "grasps_held");
+  int changes_up = 0, changes_down = 0, last = 0;
+  while (std::getline(in, line)) {
+    ASSERT_EQ(static_cast<std::size_t>(std::count(line.begin(), line.end(), ',')), commas);
+    const int held = std::stoi(line.substr(line.rfind(',') + 1));
+    changes_up += held > last ? 1 : 0;
+    changes_down += held < last ? 1 : 0;
+    last = held;
+  }
+  EXPECT_EQ(changes_up, s.grasps_started);
+  EXPECT_EQ(changes_down, s.grasps_released + s.grasps_slipped);
 }
 
 TEST(GraspSummary, ASceneWithoutAGrasperWritesNoGraspFigures) {

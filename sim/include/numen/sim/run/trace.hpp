@@ -62,6 +62,9 @@ struct TraceRecord {
   int emcys = 0;          ///< EMCY messages received this period.
   int emcy_node = 0;      ///< Node id of the newest of them (0: none this period).
   int emcy_code = 0;      ///< Its emergency error code (0: none); named in the summary's EMCY list.
+  /// Graspers holding a body or tissue after the step (core::GraspState::holding(); a grasp, a
+  /// release or a slip changes it; the summary's grasp.events names each).
+  int grasps_held = 0;
 };
 
 /// Builds a record from the state after a step: `report.feedback` is the feedback wrench whose
