@@ -115,7 +115,6 @@ MultirateGodObject::MultirateGodObject(const Model& scene, int body,
                                        const MultirateSettings& settings)
     : ratio_(settings.ratio),
       margin_(settings.margin),
-      fold_step_(settings.fold_step),
       fold_substeps_(fold_substeps(scene.dt * settings.ratio, settings.fold_step)),
       body_(body) {
   if (settings.ratio < 1)
@@ -408,7 +407,7 @@ void MultirateGodObject::scene_step(const MultirateDeviceReport& in, MultirateSc
                         detail::NodePlaneScratch{node_slot_, slot_node_, node_stiffness_, plane_slot_,
                                                  planes_stiffness_, planes_depth_, node_force_}};
   // Where an organ's surface has folded under the tool, the step is taken in sub-steps of at
-  // most fold_step_ (MultirateSettings::fold_step), the god-object imposed along its twist.
+  // most MultirateSettings::fold_step (fold_substeps_ of them), the god-object imposed along its twist.
   int substeps = 1;
   if constexpr (kWithDeformable) {
     if (fold_substeps_ > 1 && detail::organ_surface_folded(model, *scene_)) substeps = fold_substeps_;

@@ -496,7 +496,6 @@ class MultirateGodObject {
 
   int ratio_;
   double margin_;
-  double fold_step_;              // MultirateSettings::fold_step
   int fold_substeps_ = 1;         // sub-steps of a folded scene step: ⌈scene_dt / fold_step⌉
   std::vector<Slot> slots_;       // one per body the device may hold (at least one)
   Model free_scene_model_;        // the scene loop without a god-object
