@@ -2,7 +2,7 @@
 // an emulated pose tracker, hal::InstrumentDevice and core): the three rate estimators
 // (DeviceConfig::velocity_estimator: the bare difference, the 50 Hz filter, FOAW) side by side
 // on a 1 m target jump (with and without the axes' speed bound) and on a 2 Hz sine, at 1 and
-// 10 kHz. Figures: docs/architecture.md, "Target velocity from encoders".
+// 10 kHz. Figures: docs/target_velocity.md.
 //
 // A pose tracker (minimal protocol) holds a rigid body with the default scene's held-body
 // coupling (the tube: 50 g, k_t = 1000 N/m, damping ratio 0.85, implicit Euler). The rate held

@@ -39,7 +39,7 @@ const char* to_string(DeviceKind kind) noexcept;
 int expected_axis_count(DeviceKind kind) noexcept;
 
 /// How InstrumentDevice estimates each axis's rate q̇ from its accepted encoder values
-/// (docs/architecture.md, "Target velocity from encoders"). Every choice is bounded by the
+/// (docs/target_velocity.md). Every choice is bounded by the
 /// axis's max_speed and handles missing, rejected and stale values the same way.
 enum class VelocityEstimator : std::uint8_t {
   kDifference,  ///< The bare backward difference (RateEstimator at f_c = +∞).
@@ -165,7 +165,7 @@ struct DeviceConfig {
   /// 1/(2π f_c) (3.2 ms at the default 50 Hz) and is bounded by each axis's max_speed.
   double velocity_cutoff_hz = kDefaultVelocityCutoffHz;
   /// Rate estimator of every axis (scene key `[device] velocity_estimator`); FOAW by default,
-  /// chosen by measurement (docs/architecture.md "Target velocity from encoders").
+  /// chosen by measurement (docs/target_velocity.md).
   VelocityEstimator velocity_estimator = VelocityEstimator::kFoaw;
   /// kFoaw: the largest window, sample intervals, 1 … kFoawMaxWindow (1 = the bounded bare
   /// difference).

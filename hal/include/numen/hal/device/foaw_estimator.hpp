@@ -3,8 +3,7 @@
 /// FoawEstimator: the velocity of one encoder axis from its accepted values by first-order
 /// adaptive windowing, end-fit variant (FOAW-end; Janabi-Sharifi, Hayward & Chen, "Discrete-time
 /// adaptive windowing for velocity estimation", IEEE Trans. Control Systems Technology 8(6),
-/// 2000), bounded like RateEstimator (docs/architecture.md, "Target velocity from
-/// encoders").
+/// 2000), bounded like RateEstimator (docs/target_velocity.md).
 ///
 /// For accepted values y_k at bus timestamps t_k, a window of n intervals is the line through
 /// the newest value and the one n samples back (the end-fit line):

@@ -2,7 +2,7 @@
 /// @file rate_estimator.hpp
 /// RateEstimator: the velocity of one encoder axis from its accepted values — a bounded,
 /// first-order low-pass filtered backward difference, discretised exactly for each actual
-/// sample interval (docs/architecture.md, "Target velocity from encoders"). Its output is the
+/// sample interval (docs/target_velocity.md). Its output is the
 /// axis rate q̇ behind the target twist J(q) q̇ that the coupling's damper (paper Eq. 2) and the
 /// feedback's damper (Eq. 8) use.
 ///
@@ -34,7 +34,7 @@
 /// passes with a gain above 0.98, while the quantisation bound of the default trocar's
 /// 14-bit pivots is 0.12 rad/s at any rate (bare difference: 0.38 rad/s at 1 kHz, 3.8 rad/s
 /// at 10 kHz). The alternative, first-order adaptive windowing, is FoawEstimator
-/// (foaw_estimator.hpp); DeviceConfig::velocity_estimator picks one, and docs/architecture.md
+/// (foaw_estimator.hpp); DeviceConfig::velocity_estimator picks one, and docs/target_velocity.md
 /// compares the three on the same cases.
 ///
 /// Allocation free, noexcept, no locks; one instance per axis (InstrumentDevice's fixed

@@ -40,8 +40,8 @@ struct PassivityPoint {
   /// The controller's energy limit E_max (J, > 0; +inf: the paper's observer), see
   /// hal::PassivitySettings::energy_limit.
   double passivity_energy_limit_j = std::numeric_limits<double>::infinity();
-  /// The controller's velocity estimate v̂ from the encoder readings (docs/architecture.md
-  /// "Target velocity from encoders"): "difference" (the bare backward difference, the
+  /// The controller's velocity estimate v̂ from the encoder readings
+  /// (docs/target_velocity.md): "difference" (the bare backward difference, the
   /// theory's), "filter" (hal::RateEstimator at kPassivityFilterCutoffHz, the device's
   /// default cutoff) or "foaw" (hal::FoawEstimator, 32 intervals, a band of half a count).
   /// The passivity controller's own rate stays the backward difference, as on the device.
