@@ -20,6 +20,13 @@
 namespace numen::core {
 namespace {
 
+/// The force (N, world) of a zero-length damped spring of stiffness k (N/m) and damping c
+/// (N·s/m) on a point at x moving at v, tied to a point at p moving at v_p.
+Vec3 grasp_spring_force(double k, double c, const Vec3& p, const Vec3& v_p, const Vec3& x,
+                        const Vec3& v) noexcept {
+  return k * (p - x) + c * (v_p - v);
+}
+
 /// The jaw's turn about its joint (rad); 0 for a fixed jaw.
 double jaw_angle(const Model& model, const Data& data, int joint) noexcept {
   if (joint < 0) return 0.0;
@@ -187,12 +194,16 @@ void drop_held_node_contacts(const Model& model, Data& data, const GraspModel& g
 }
 
 /// Writes the held nodes' springs of `g` after the node contacts (NodeContact::held): three per
-/// node along the world's axes.
-void write_node_springs(Data& data, const GraspModel& g, const GraspState& st) noexcept {
+/// node along the world's axes, each with its share of the spring's force at the step's start
+/// (GraspNode::force, computed here once; the nets' forces stage applies them).
+void write_node_springs(Data& data, const GraspModel& g, GraspState& st) noexcept {
   for (int k = 0; k < st.num_nodes; ++k) {
-    const GraspNode& n = st.nodes[static_cast<std::size_t>(k)];
+    GraspNode& n = st.nodes[static_cast<std::size_t>(k)];
     const BodyState& jaw = data.bodies[static_cast<std::size_t>(n.jaw)];
+    const NodeState& node = data.nodes[static_cast<std::size_t>(n.node)];
     const Vec3 r = jaw.orientation * n.jaw_point;
+    const Vec3 v_jaw = jaw.linear_velocity + jaw.angular_velocity.cross(r);
+    n.force = grasp_spring_force(g.stiffness, g.damping, jaw.position + r, v_jaw, node.position, node.velocity);
     for (int axis = 0; axis < kGraspSpringsPerNode; ++axis) {
       const auto at = static_cast<std::size_t>(data.num_node_contacts + data.num_node_grasp_springs);
       if (at >= data.node_contacts.size()) return;  // make_data() gave them room: not reached
@@ -205,6 +216,9 @@ void write_node_springs(Data& data, const GraspModel& g, const GraspState& st) n
       c.normal = Vec3::Unit(axis);
       c.stiffness = g.stiffness;
       c.damping = g.damping;
+      c.force = c.normal.dot(n.force) * c.normal;
+      c.normal_velocity = c.normal.dot(node.velocity - v_jaw);
+      c.active = true;
       c.held = true;
       ++data.num_node_grasp_springs;
     }
@@ -278,16 +292,7 @@ void apply_grasp_forces(const Model& model, Data& data) noexcept {
   for (std::size_t i = 0; i < model.grasps.size(); ++i) {
     const GraspModel& g = model.grasps[i];
     GraspState& st = data.grasps[i];
-    for (int k = 0; k < st.num_nodes; ++k) {  // applied by the nets' forces stage (NodeContact::held)
-      GraspNode& n = st.nodes[static_cast<std::size_t>(k)];
-      const BodyState& jaw = data.bodies[static_cast<std::size_t>(n.jaw)];
-      const NodeState& node = data.nodes[static_cast<std::size_t>(n.node)];
-      const Vec3 r = jaw.orientation * n.jaw_point;
-      n.force = grasp_spring_force(g.stiffness, g.damping, jaw.position + r,
-                                   jaw.linear_velocity + jaw.angular_velocity.cross(r), node.position,
-                                   node.velocity);
-    }
-    if (st.body < 0) continue;
+    if (st.body < 0) continue;  // held nodes: their forces are the nets' (write_node_springs())
     const auto b = static_cast<std::size_t>(st.body);
     const BodyState& held = data.bodies[b];
     for (int k = 0; k < st.num_points; ++k) {

@@ -402,15 +402,7 @@ void compute_net_forces(const Model& model, Data& data) noexcept {
   for (int c = 0; c < nc; ++c) {
     NodeContact& ct = data.node_contacts[static_cast<std::size_t>(c)];
     const auto i = static_cast<std::size_t>(ct.node);
-    if (ct.held) {  // a grasp spring along its axis (grasp.hpp): k and c stay the grasper's
-      const BodyState& jaw = data.bodies[static_cast<std::size_t>(ct.body_b)];
-      const Vec3 v_jaw = jaw.linear_velocity + jaw.angular_velocity.cross(ct.r_b);
-      const Vec3 f = grasp_spring_force(ct.stiffness, ct.damping, ct.position, v_jaw,
-                                        node_states[i].position, node_states[i].velocity);
-      ct.force = ct.normal.dot(f) * ct.normal;
-      ct.normal_velocity = ct.normal.dot(node_states[i].velocity - v_jaw);
-      ct.friction = 0.0;
-      ct.active = true;
+    if (ct.held) {  // a grasp spring along its axis, its force set by the grasp stage (grasp.hpp)
       s.force[i] += ct.force;
       Wrench& w = data.body_wrench[static_cast<std::size_t>(ct.body_b)];
       w.force -= ct.force;

@@ -146,18 +146,11 @@ struct GraspState {
 /// Data::stages_run. No allocation.
 void update_grasps(const Model& model, Data& data) noexcept;
 
-/// The springs' forces at the step's start into Data::body_wrench (the held body gets
-/// GraspPoint::force at its point, the jaw the opposite at its own) and GraspPoint::force; a held
-/// node's GraspNode::force (the forces stage of the nets applies it, NodeContact::held). Part of
-/// the body forces stage. No allocation.
+/// The held bodies' springs' forces at the step's start into Data::body_wrench (the held body
+/// gets GraspPoint::force at its point, the jaw the opposite at its own) and GraspPoint::force.
+/// Part of the body forces stage. (Held nodes' forces are set by the grasp stage and applied by
+/// the nets' forces stage: NodeContact::held.) No allocation.
 void apply_grasp_forces(const Model& model, Data& data) noexcept;
-
-/// The force (N, world) of a zero-length damped spring of stiffness k (N/m) and damping c
-/// (N·s/m) on a point at x moving at v, tied to a point at p moving at v_p.
-inline Vec3 grasp_spring_force(double k, double c, const Vec3& p, const Vec3& v_p, const Vec3& x,
-                               const Vec3& v) noexcept {
-  return k * (p - x) + c * (v_p - v);
-}
 
 /// Finds each grasper's jaw joints (GraspModel::jaw_joints) and checks it; returns "" or a
 /// message naming the grasper and the field. Called by finalize_model().

@@ -79,8 +79,9 @@ struct NodeContact {
   /// A grasp spring along `normal` (grasp.hpp), not a penalty contact: written by the grasp stage
   /// after the node contacts (Data::num_node_grasp_springs of them), three per held node (the
   /// world's axes), `position` the jaw's point at the step's start, `stiffness` and `damping` the
-  /// grasper's; the forces stage gives it f = (k n · (p − x) − c n · (v − v_p)) n on the node,
-  /// its opposite on the jaw, and the solve its Jacobian as a contact's.
+  /// grasper's, `force` the spring's share along `normal` at the step's start, f = (k n · (p − x)
+  /// − c n · (v − v_p)) n; the forces stage applies it to the node and its opposite to the jaw,
+  /// and the solve takes its Jacobian as a contact's.
   bool held = false;
 };
 
