@@ -83,6 +83,7 @@ void MultirateThreads::run() noexcept {
   setup_done_.notify_one();
   if (!setup_error_.empty()) return;
   PeriodicTimer timer(period_ns_, monotonic_now_ns());
+  timer.set_spin_ns(settings_.spin_ns);
   while (!stop_.load(std::memory_order_relaxed)) {
     const Wakeup w = timer.wait_next(&stop_, kStopSliceNs);  // stop() heard in a long period
     if (w.stopped) break;

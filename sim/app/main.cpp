@@ -6,7 +6,7 @@
 ///             [--bus sim|log:FILE|can:IFACE|serial:PATH[@BAUD]|igtl[:[HOST:]PORT]]
 ///             [--record FILE.log] [--phase S] [--igtl [HOST:]PORT]
 ///             [--rt-priority N] [--lock-memory] [--prefault-stack BYTES] [--cpu LIST] [--rt-strict]
-///             [--scene-rt-priority N] [--scene-cpu LIST]
+///             [--spin US] [--scene-rt-priority N] [--scene-cpu LIST] [--scene-spin US]
 ///   numen device [SCENE] --bus can:IFACE|serial:PATH[@BAUD] [--duration S] [--ready]
 ///   numen info [SCENE] [--json]
 ///   numen figures

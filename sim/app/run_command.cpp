@@ -82,6 +82,11 @@ RunCommand::RunCommand(CLI::App& parent)
                   "Multirate scene, paced run: CPUs the scene thread may run on, e.g. --scene-cpu 0")
       ->delimiter(',')
       ->check(CLI::Range(0, CPU_SETSIZE - 1));
+  run->add_option("--scene-spin", scene_spin_us_,
+                  "Multirate scene, paced run with --scene-cpu: end each scene period's wait in a "
+                  "busy-wait of this many microseconds before its deadline (default 0: sleep to "
+                  "it; docs/realtime.md)")
+      ->check(number_check(0.0, 1e6, false));
   run->add_option("--record", record_path_,
                   "Record the controller's bus traffic into this candump log (can-utils format); "
                   "a paced run drops (and counts) what its writer cannot keep up with, an offline "
@@ -185,6 +190,7 @@ int RunCommand::execute() const {
   options.rt = rt_;
   options.scene_thread = scene_thread_;
   options.scene_thread.strict = rt_.strict;
+  options.scene_thread.spin_ns = std::llround(scene_spin_us_ * 1e3);
   options.timer_slack_ns = timer_slack_ns_;
   options.spin_ns = std::llround(spin_us_ * 1e3);
   options.stop = &stop_flag();

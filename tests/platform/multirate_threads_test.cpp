@@ -13,6 +13,8 @@
 #include <stdexcept>
 #include <string>
 
+#include <time.h>
+
 #include "alloc_counter.hpp"
 #include "numen/core/model.hpp"
 #include "numen/platform/monotonic_clock.hpp"
@@ -188,6 +190,39 @@ TEST(MultirateThreads, TheSceneThreadsTimerSlackIsSetOnIt) {
   EXPECT_EQ(slack.message.rfind("1 ns (was ", 0), 0u) << slack.message;
   EXPECT_EQ(numen::platform::current_timer_slack_ns(), mine);  // not the starting thread's
   threads.stop();
+}
+
+// The scene thread's spin (SceneThreadSettings::spin_ns, `numen run --scene-spin`): its wait
+// ends in a busy-wait on its CPU. Ten 10 ms scene periods with a 5 ms spin take tens of ms of the
+// process's CPU time (the scene step here is a few µs; a sleep to the deadline takes almost
+// none): at least a tenth of the 50 ms on a machine shared with other work, and far more than
+// the same run without the spin.
+TEST(MultirateThreads, ASceneSpinEndsEachScenePeriodsWaitOnTheSceneThreadsCpu) {
+  const core::Model scene = press_scene(1e-3);
+  auto god = std::make_unique<core::MultirateGodObject>(scene, 0, core::MultirateSettings{10, 0.01, {}});
+  auto process_cpu_ns = [] {
+    timespec ts{};
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+    return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
+  };
+  auto cpu_over_ten_scene_periods = [&](std::int64_t spin_ns) {
+    numen::platform::SceneThreadSettings settings;
+    settings.spin_ns = spin_ns;
+    numen::platform::MultirateThreads threads(*god, 10'000'000, settings);
+    const std::int64_t cpu0 = process_cpu_ns();
+    threads.start();
+    const timespec ts{0, 100'000'000};
+    nanosleep(&ts, nullptr);  // this thread sleeps: the CPU time is the scene thread's
+    threads.stop();
+    return process_cpu_ns() - cpu0;
+  };
+  const std::int64_t asleep = cpu_over_ten_scene_periods(0);
+  const std::int64_t spinning = cpu_over_ten_scene_periods(5'000'000);
+  std::printf("[   info   ] 100 ms of 10 ms scene periods: %.1f ms of CPU time sleeping, %.1f ms "
+              "with a 5 ms spin\n",
+              static_cast<double>(asleep) * 1e-6, static_cast<double>(spinning) * 1e-6);
+  EXPECT_GT(spinning, 5'000'000);
+  EXPECT_GT(spinning, 2 * asleep);
 }
 
 }  // namespace

@@ -62,6 +62,24 @@ void check_pacing_options(const Scene& scene, const RunOptions& options, bool pa
                          format_input_number(scene.model.dt * 1e6) + " us");
 }
 
+/// Refuses a --scene-spin that would take the scene thread's CPU from others or fill its
+/// whole period (InputError naming the option); the scene thread runs (a paced multirate run).
+void check_scene_spin(const MultirateScene& multirate, const platform::SceneThreadSettings& st) {
+  if (st.spin_ns == 0) return;
+  const std::string spin = format_input_number(static_cast<double>(st.spin_ns) * 1e-3) + " us";
+  if (st.spin_ns < 0)
+    throw InputError("", 0, 0, "--scene-spin", "must be >= 0 us (got " + spin + ")");
+  if (st.cpu_affinity.empty())
+    throw InputError("", 0, 0, "--scene-spin",
+                     "busy-waits up to " + spin +
+                         " a scene period on the scene thread's CPU: give it a CPU of its own "
+                         "with --scene-cpu (docs/realtime.md, \"Paced on a 16-core machine\")");
+  if (static_cast<double>(st.spin_ns) >= multirate.scene_dt_s * 1e9)
+    throw InputError("", 0, 0, "--scene-spin",
+                     spin + " must be below the scene period scene_dt = " +
+                         format_input_number(multirate.scene_dt_s * 1e6) + " us");
+}
+
 /// Refuses options that this run would not apply (InputError naming the option): nothing a
 /// user asks for is dropped without a word.
 void check_option_values(const Scene& scene, const RunOptions& options) {
@@ -83,8 +101,10 @@ void check_option_values(const Scene& scene, const RunOptions& options) {
   if (!options.trace_path.empty() && (scene.admittance || !parse_bus_spec(options.bus.spec).real()))
     in_memory_trace_capacity(std::llround(duration / scene.model.dt));
   const platform::SceneThreadSettings& st = options.scene_thread;
-  if (st.fifo_priority == 0 && st.cpu_affinity.empty()) return;
-  const std::string key = st.fifo_priority != 0 ? "--scene-rt-priority" : "--scene-cpu";
+  if (st.fifo_priority == 0 && st.cpu_affinity.empty() && st.spin_ns == 0) return;
+  const std::string key = st.fifo_priority != 0    ? "--scene-rt-priority"
+                          : !st.cpu_affinity.empty() ? "--scene-cpu"
+                                                     : "--scene-spin";
   if (!scene.multirate)
     throw InputError("", 0, 0, key,
                      "scene \"" + scene.name + "\" has no [multirate]: there is no scene thread");
@@ -99,6 +119,7 @@ void check_option_values(const Scene& scene, const RunOptions& options) {
                               ? std::string("(--rt-priority not given: not real-time)")
                               : "--rt-priority " + std::to_string(options.rt.fifo_priority)) +
                          ": the scene thread would pre-empt the device loop");
+  check_scene_spin(*scene.multirate, st);
 }
 
 /// Refuses an output path (--trace, --record, --record-view) that cannot be written before the

@@ -848,6 +848,7 @@ TEST(NumenCli, OptionsARunWouldNotApplyAreInputRejected) {
       {{"--spin", "100"}, "--spin"},              // ... and no wait to spin
       {{"--realtime", "--spin", "100"}, "--spin"},  // a spin needs a CPU of its own (--cpu)
       {{"--realtime", "--cpu", "0", "--spin", "1000"}, "--spin"},  // not below dt = 1 ms
+      {{"--realtime", "--scene-spin", "100"}, "--scene-spin"},  // no [multirate]: no scene thread
   };
   for (const auto& [extra, key] : cases) {
     std::vector<std::string> args = {kNumen, "run", kLattice, "--duration", "0.05"};

@@ -529,6 +529,45 @@ TEST(RunMultirate, SceneThreadOptionsThatWouldNotApplyAreRefused) {
   EXPECT_EQ(refused(options), "--scene-rt-priority");  // not below the loop's
 }
 
+// --scene-spin (SceneThreadSettings::spin_ns) busy-waits on the scene thread's CPU: a paced
+// multirate run with a scene CPU of its own and a spin below scene_dt only, refused elsewhere
+// with the option named and why.
+TEST(RunMultirate, ASceneSpinIsRefusedWhereItWouldNotApplyOrWouldTakeASharedCpu) {
+  numen::test::TempDir dir;
+  const Scene scene = construction_multirate(dir, 0.01, 0.01);
+  auto refusal = [&](const numen::sim::RunOptions& o) -> std::string {
+    try {
+      numen::sim::check_run_options(scene, o);
+    } catch (const numen::sim::InputError& e) {
+      return e.what();
+    }
+    return "";
+  };
+  numen::sim::RunOptions options;
+  options.scene_thread.spin_ns = 2'000'000;
+  EXPECT_NE(refusal(options).find("--scene-spin: an offline run steps both loops on one thread"),
+            std::string::npos)
+      << refusal(options);
+  options.realtime = true;
+  EXPECT_NE(refusal(options).find("--scene-spin: busy-waits up to 2000 us a scene period on the "
+                                  "scene thread's CPU: give it a CPU of its own with --scene-cpu"),
+            std::string::npos)
+      << refusal(options);
+  options.scene_thread.cpu_affinity = {0};
+  EXPECT_EQ(refusal(options), "");
+  options.scene_thread.spin_ns = 10'000'000;  // scene_dt = 10 ms
+  EXPECT_NE(refusal(options).find("--scene-spin: 10000 us must be below the scene period "
+                                  "scene_dt = 10000 us"),
+            std::string::npos)
+      << refusal(options);
+  options.scene_thread.spin_ns = 2'000'000;
+  options.duration_s = 0.1;
+  options.overrun_limit = 0;
+  const RunSummary s = numen::sim::run_scene(scene, options);
+  EXPECT_TRUE(s.multirate.scene_thread);
+  EXPECT_GE(s.multirate.scene_steps, 5);
+}
+
 namespace {
 
 /// `periods` periods (default: the scene's duration) of an admittance scene through an

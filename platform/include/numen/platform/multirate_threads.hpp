@@ -32,6 +32,12 @@ struct SceneThreadSettings {
   std::vector<int> cpu_affinity;
   /// Timer slack of the scene thread (ns), as RealtimeSettings::timer_slack_ns; 0: leave it.
   std::int64_t timer_slack_ns = 0;
+  /// The scene thread's wait before each scene period sleeps until this long before the
+  /// deadline and then reads CLOCK_MONOTONIC until it (ns; PeriodicTimer::set_spin_ns(),
+  /// clamped to [0, the scene period]; `numen run --scene-spin`): its CPU stays busy, so a
+  /// virtual CPU is not halted between scene steps (docs/realtime.md, "Paced on a 16-core
+  /// machine"). Needs a CPU of its own (cpu_affinity). 0 (default): one sleep to the deadline.
+  std::int64_t spin_ns = 0;
   /// Like RealtimeSettings::strict: a step that fails stops the thread and start() throws
   /// (else the failure is reported in realtime_report() and the thread runs on).
   bool strict = false;

@@ -64,7 +64,7 @@ struct RunOptions {
   /// anything is requested; each step's outcome is in RunSummary::realtime_setup. Lack of
   /// privilege is reported, not fatal, unless rt.strict.
   platform::RealtimeSettings rt;
-  /// A multirate scene's scene thread in a paced run (scheduling, CPUs; docs/multirate.md):
+  /// A multirate scene's scene thread in a paced run (scheduling, CPUs, spin; docs/multirate.md):
   /// paced runs step the scene loop on it, offline runs interleave both loops on one thread.
   platform::SceneThreadSettings scene_thread;
   /// Timer slack (ns) that a paced run gives its loop thread and its scene thread
@@ -127,8 +127,8 @@ std::int64_t compute_phase_override_ns(const Scene& scene, const RunOptions& opt
 /// negative or not finite or with a paced run, a --duration shorter than half a period,
 /// --phase not below dt, an in-memory --trace over kMaxInMemoryTraceBytes, a --spin in an
 /// offline run, without --cpu or not below dt, a --timer-slack in an offline run, a scene thread
-/// (--scene-rt-priority, --scene-cpu) that the run would not start or that would pre-empt the
-/// device loop, an output path (--trace, --record, --record-view) that cannot be opened for
+/// (--scene-rt-priority, --scene-cpu, --scene-spin) that the run would not start or that would
+/// pre-empt the device loop, a --scene-spin without --scene-cpu or not below scene_dt, an output path (--trace, --record, --record-view) that cannot be opened for
 /// writing, and an output on the regular file of another output, of the scene file or of the
 /// `--bus log:` log (it would replace it). Touches no file: a refused run leaves every file as
 /// it was (docs/inputs.md, "Outputs").
