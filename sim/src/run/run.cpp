@@ -150,7 +150,8 @@ SceneRunner::SceneRunner(const Scene& scene, std::size_t trace_capacity, const B
                   scene.hand),
       device_(scene.device),
       data_(core::make_data(scene.model)),
-      ghost_(core::make_data(scene.model)),
+      target_measurement_(scene.model),
+      target_inputs_(make_target_inputs(scene.model)),
       loop_(scene.model, data_, *port_, device_, scene.binding,
             control_loop_settings(realtime || spec_.real(), overrun_limit)),
       multirate_(scene),
@@ -221,6 +222,19 @@ void SceneRunner::period(std::int64_t deadline_mono_ns, std::int64_t woke_mono_n
 
 void SceneRunner::start_scene_thread(const platform::SceneThreadSettings& settings) {
   multirate_.start_scene_thread(settings);
+}
+
+void SceneRunner::start_target_thread() {
+  target_thread_ = std::make_unique<TargetMeasurementThread>(scene_->model);
+  target_thread_->start();
+}
+
+void SceneRunner::describe_target_thread(std::vector<std::string>& lines) const {
+  if (!target_thread_) return;
+  lines.push_back("target measurement: on its own thread, " +
+                  std::to_string(target_thread_->measured()) + " of " +
+                  std::to_string(target_thread_->submitted()) +
+                  " submitted targets measured (the newest is measured; docs/outputs.md)");
 }
 
 void SceneRunner::apply_due_events(std::int64_t t_ns) noexcept {
@@ -343,6 +357,7 @@ platform::StateFrameFigures SceneRunner::view_figures(const PeriodContacts& c) c
 
 void SceneRunner::finish() {
   multirate_.stop();
+  if (target_thread_) target_thread_->stop();
   if (igtl_) igtl_->finish();
   if (writer_) writer_->close();              // the log and the trace appear under their
   if (trace_writer_) trace_writer_->close();  // paths, a failed close counted in the summary
@@ -379,7 +394,10 @@ RunSummary run_impedance_scene(const Scene& scene, const RunOptions& options) {
   // The writer threads and a multirate scene's scene thread are started before the real-time
   // setup pins and promotes this thread.
   if (real && !options.trace_path.empty()) runner.stream_trace(options.trace_path);
-  if (options.realtime || real) runner.start_scene_thread(paced_scene_thread(options));
+  if (options.realtime || real) {
+    runner.start_scene_thread(paced_scene_thread(options));
+    runner.start_target_thread();
+  }
   if (!options.record_view_path.empty() || !options.view_sinks.empty())
     runner.stream_view(options.record_view_path, options.view_sinks, options.view_rate_hz,
                        !(options.realtime || real));
@@ -447,6 +465,7 @@ RunSummary run_impedance_scene(const Scene& scene, const RunOptions& options) {
   s.realtime_setup = std::move(rt_lines);
   // The scene thread's own scheduling and CPUs (--scene-rt-priority, --scene-cpu), if asked.
   runner.multirate().describe_scene_thread(paced_scene_thread(options), s.realtime_setup);
+  runner.describe_target_thread(s.realtime_setup);
   s.stopped = stopped;
   s.shutdown_periods = shutdown;
   s.drives_disabled = runner.loop().drives_disabled();

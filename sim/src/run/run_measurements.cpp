@@ -6,103 +6,14 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
 
-#include "numen/core/collision.hpp"
 #include "numen/core/data.hpp"
-#include "numen/core/features.hpp"
-#include "numen/core/net_collision.hpp"
 #include "numen/sim/run/run.hpp"
 
+#include "contact_depths.hpp"
+
 namespace numen::sim {
-namespace {
-
-/// Deepest contact (m) involving `body` among data's contacts; 0 if none.
-/// `count` receives their number, `deepest_index` the index of the deepest (unchanged if none).
-double deepest_contact_of(const core::Data& data, int body, int* count = nullptr,
-                          int* deepest_index = nullptr) {
-  double deepest = 0.0;
-  int n = 0;
-  for (int i = 0; i < data.num_contacts; ++i) {
-    const core::Contact& c = data.contacts[static_cast<std::size_t>(i)];
-    if (c.body_a == body || c.body_b == body) {
-      if (c.depth > deepest && deepest_index) *deepest_index = i;
-      deepest = std::max(deepest, c.depth);
-      ++n;
-    }
-  }
-  if (count) *count = n;
-  return deepest;
-}
-
-/// Deepest node contact (m) of the nets whose rigid component belongs to
-/// articulation `tree`; 0 if none. `count` receives their number.
-double deepest_node_contact_of_tree(const core::Model& model, const core::Data& data, int tree,
-                                    int* count) {
-  double deepest = 0.0;
-  int n = 0;
-  for (int i = 0; i < data.num_node_contacts; ++i) {
-    const core::NodeContact& c = data.node_contacts[static_cast<std::size_t>(i)];
-    const int net = model.node_net[static_cast<std::size_t>(c.node)];
-    const int body = model.nets[static_cast<std::size_t>(net)].body;
-    if (model.articulation.body_tree[static_cast<std::size_t>(body)] != tree) continue;
-    deepest = std::max(deepest, c.depth);
-    ++n;
-  }
-  if (count) *count = n;
-  return deepest;
-}
-
-/// Deepest node contact (m) of the nets of other bodies (an organ's, on an anchored body) with
-/// the bodies of articulation `tree` (the tool pushing the organ); 0 if none. `count` receives
-/// their number.
-double deepest_tool_contact_on_nets(const core::Model& model, const core::Data& data, int tree,
-                                    int* count) {
-  double deepest = 0.0;
-  int n = 0;
-  const std::vector<int>& tree_of = model.articulation.body_tree;
-  for (int i = 0; i < data.num_node_contacts; ++i) {
-    const core::NodeContact& c = data.node_contacts[static_cast<std::size_t>(i)];
-    if (c.body_b < 0 || tree_of[static_cast<std::size_t>(c.body_b)] != tree) continue;
-    const int net = model.node_net[static_cast<std::size_t>(c.node)];
-    if (tree_of[static_cast<std::size_t>(model.nets[static_cast<std::size_t>(net)].body)] == tree)
-      continue;
-    deepest = std::max(deepest, c.depth);
-    ++n;
-  }
-  if (count) *count = n;
-  return deepest;
-}
-
-/// The ghost's nodes (the undeformed tool where the hand is, and what the hand would meet): the
-/// nodes of the nets whose rigid component belongs to articulation `tree` at their rest
-/// positions on that body's pose in `ghost`, those of the anchored bodies' nets (the organs,
-/// undeformed) at their rest positions — written once (`organs_placed`): an anchored body never
-/// moves — and the other nets' as `data` has them. O(the nodes of the tool's and the other nets):
-/// an organ's nodes cost nothing per period.
-void place_ghost_nodes(const core::Model& model, const core::Data& data, core::Data& ghost,
-                       int tree, bool& organs_placed) {
-  for (const core::NetModel& net : model.nets) {
-    const bool organ = model.bodies[static_cast<std::size_t>(net.body)].anchored;
-    const bool tool = model.articulation.body_tree[static_cast<std::size_t>(net.body)] == tree;
-    const auto begin = static_cast<std::size_t>(net.node_begin);
-    const auto end = begin + static_cast<std::size_t>(net.node_count);
-    if (!organ && !tool) {
-      std::copy(data.nodes.begin() + static_cast<std::ptrdiff_t>(begin),
-                data.nodes.begin() + static_cast<std::ptrdiff_t>(end),
-                ghost.nodes.begin() + static_cast<std::ptrdiff_t>(begin));
-      continue;
-    }
-    if (organ && organs_placed) continue;
-    const core::BodyState& b = ghost.bodies[static_cast<std::size_t>(net.body)];
-    for (std::size_t n = begin; n < end; ++n) {
-      ghost.nodes[n].position = b.position + b.orientation * model.node_rest[n];
-      ghost.nodes[n].velocity.setZero();
-    }
-  }
-  organs_placed = true;
-}
-
-}  // namespace
 
 SceneRunner::PeriodContacts SceneRunner::measure_contacts() noexcept {
   const core::Model& model = scene_->model;
@@ -116,7 +27,7 @@ SceneRunner::PeriodContacts SceneRunner::measure_contacts() noexcept {
   for (int b = 0; b < model.num_bodies(); ++b) {
     if (model.articulation.body_tree[static_cast<std::size_t>(b)] != tree) continue;
     int n = 0, deepest = -1;
-    const double pen = deepest_contact_of(data_, b, &n, &deepest);
+    const double pen = detail::deepest_contact_of(data_, b, &n, &deepest);
     if (pen > c.tool_pen) {
       c.deepest_tool_contact = deepest;
       c.deepest_tool_body = b;
@@ -128,80 +39,55 @@ SceneRunner::PeriodContacts SceneRunner::measure_contacts() noexcept {
     // The tool's nets as deformed (god-object), and the tool on the organs (nets of anchored
     // bodies) as they are.
     int n = 0;
-    c.tool_pen = std::max(c.tool_pen, deepest_node_contact_of_tree(model, data_, tree, &n));
+    c.tool_pen = std::max(c.tool_pen, detail::deepest_node_contact_of_tree(model, data_, tree, &n));
     c.tool_contacts += n;
-    c.tool_pen = std::max(c.tool_pen, deepest_tool_contact_on_nets(model, data_, tree, &n));
+    c.tool_pen = std::max(c.tool_pen, detail::deepest_tool_contact_on_nets(model, data_, tree, &n));
     c.tool_contacts += n;
   }
-  // The target (and the closed loop's hand) is detected anew on ghost_ in its periods only
+  // The target (and the closed loop's hand) is detected anew in its periods only
   // (ghost_every_: every period but in a multirate run, where it is at most 1 kHz), and held
   // between them.
+  // A paced run measures it on its own thread (target_measurement.hpp): the loop hands over
+  // its inputs and reads the newest result.
   if ((k_ - 1) % ghost_every_ == 0 || held != ghost_held_) {
-    measure_target(tree);
+    if (target_thread_) {
+      fill_target_inputs(tree, target_thread_->inputs());
+      target_thread_->submit();
+    } else {
+      fill_target_inputs(tree, target_inputs_);
+      target_ = target_measurement_.measure(target_inputs_);
+    }
     ghost_held_ = held;
   }
+  if (target_thread_) target_ = target_thread_->latest();
   c.target_pen = target_.target_pen;
   c.target_contacts = target_.target_contacts;
   c.hand_pen = target_.hand_pen;
   return c;
 }
 
-void SceneRunner::measure_target(int tree) noexcept {
-  const core::Model& model = scene_->model;
-  const auto h = static_cast<std::size_t>(data_.attached_body);
-  TargetContacts& c = target_;
-  c = TargetContacts{};
-  // The target: the tool's bodies placed where the device puts them (held body at
-  // data.target, the others at their own targets, Eq. 6).
-  ghost_.bodies = data_.bodies;  // same size: no allocation
-  ghost_.bodies[h].position = data_.target.position;
-  ghost_.bodies[h].orientation = data_.target.orientation;
-  for (std::size_t b = 0; b < data_.bodies.size(); ++b) {
-    const core::BodyTarget& bt = data_.body_targets[b];
-    if (b == h || !bt.enabled) continue;
-    ghost_.bodies[b].position = bt.pose.position;
-    ghost_.bodies[b].orientation = bt.pose.orientation;
-  }
-  core::detect_contacts(model, ghost_);
-  for (int b = 0; b < model.num_bodies(); ++b) {
-    if (model.articulation.body_tree[static_cast<std::size_t>(b)] != tree) continue;
-    int m = 0;
-    c.target_pen = std::max(c.target_pen, deepest_contact_of(ghost_, b, &m));
-    c.target_contacts += m;
-  }
-  c.hand_pen = c.target_pen;  // replay: the encoders read the hand
+void SceneRunner::fill_target_inputs(int tree, TargetInputs& in) const noexcept {
+  in.bodies = data_.bodies;              // same sizes: no allocation
+  in.body_targets = data_.body_targets;
+  if (!in.nodes.empty()) in.nodes = data_.nodes;
+  in.target = data_.target;
+  in.held = data_.attached_body;
+  in.tree = tree;
+  in.closed_loop = false;
   if (const PlantMotion* plant = instrument_.plant()) {
-    // Closed loop: the tool's bodies where the hand means to be (each bound body at its link's
-    // pose at the intent's axis values, this period's SYNC), the rest as above.
+    // Closed loop: each bound body at its link's pose at the intent's axis values (this
+    // period's SYNC).
+    in.closed_loop = true;
+    std::fill(in.hand_bound.begin(), in.hand_bound.end(), std::uint8_t{0});
     const hal::Kinematics& kin = instrument_.kinematics();
     for (const platform::LinkBinding& lb : scene_->binding.links) {
       const int b = platform::bound_body(lb, data_, explicit_bound_);
       if (b < 0) continue;
-      core::Pose pose;
       core::Twist twist;
       platform::body_target_of(lb, kin.link_pose(lb.link, plant->intent_axes()), core::Twist{},
-                               pose, twist);
-      ghost_.bodies[static_cast<std::size_t>(b)].position = pose.position;
-      ghost_.bodies[static_cast<std::size_t>(b)].orientation = pose.orientation;
+                               in.hand_pose[static_cast<std::size_t>(b)], twist);
+      in.hand_bound[static_cast<std::size_t>(b)] = 1;
     }
-    core::detect_contacts(model, ghost_);
-    c.hand_pen = 0.0;
-    for (int b = 0; b < model.num_bodies(); ++b)
-      if (model.articulation.body_tree[static_cast<std::size_t>(b)] == tree)
-        c.hand_pen = std::max(c.hand_pen, deepest_contact_of(ghost_, b));
-  }
-  if (model.num_nets() > 0) {
-    // The tool's nets in their rest shape on the target poses, and the target's tool on the
-    // organs' rest shapes (what the hand would meet).
-    place_ghost_nodes(model, data_, ghost_, tree, ghost_organs_placed_);
-    if constexpr (core::kWithDeformable) core::detect_node_contacts(model, ghost_);
-    int m = 0;
-    c.target_pen = std::max(c.target_pen, deepest_node_contact_of_tree(model, ghost_, tree, &m));
-    c.target_contacts += m;
-    const double organ = deepest_tool_contact_on_nets(model, ghost_, tree, &m);
-    c.target_pen = std::max(c.target_pen, organ);
-    c.target_contacts += m;
-    c.hand_pen = std::max(c.hand_pen, organ);
   }
 }
 

@@ -31,6 +31,7 @@
 #include "numen/sim/run/multirate_run.hpp"
 #include "numen/sim/run/run_options.hpp"
 #include "numen/sim/run/run_summary.hpp"
+#include "numen/sim/run/target_measurement.hpp"
 #include "numen/sim/run/trace.hpp"
 #include "numen/sim/scene/scene.hpp"
 #include "numen/sim/view/view_output.hpp"
@@ -167,6 +168,14 @@ class SceneRunner {
   /// Allocates (call before the first period). Throws std::system_error if the thread cannot
   /// start.
   void start_scene_thread(const platform::SceneThreadSettings& settings);
+  /// A paced run: measures the target (the summary's "penetration max: target", the hand's
+  /// depth) on a thread of its own from now on (TargetMeasurementThread), the loop handing
+  /// over its inputs and reading the newest result, until finish(). Allocates (call before the
+  /// first period). Throws std::system_error if the thread cannot start.
+  void start_target_thread();
+  /// The target thread's line for the summary's real-time setup ("target measurement: …"),
+  /// appended to `lines` after finish(); nothing when the target was measured inline.
+  void describe_target_thread(std::vector<std::string>& lines) const;
   /// The multirate god-object (MultirateRun::enabled() false in a single-rate run) and its
   /// scene thread; read the thread's realtime_report() after finish().
   const MultirateRun& multirate() const noexcept { return multirate_; }
@@ -206,12 +215,6 @@ class SceneRunner {
     int deepest_tool_contact = -1;  ///< Index of the tool's deepest rigid contact (-1: none).
     int deepest_tool_body = -1;     ///< Its tool body.
   };
-  /// What measure_target() found (penetrations in m; PeriodContacts' fields of the same names).
-  struct TargetContacts {
-    double target_pen = 0.0;
-    double hand_pen = 0.0;
-    int target_contacts = 0;
-  };
   /// Attaches the bodies of the tool-switching events due at bus time `t_ns`.
   void apply_due_events(std::int64_t t_ns) noexcept;
   /// The bus side of the period at bus time `t` (ns): the simulated bus and instrument, the
@@ -227,10 +230,10 @@ class SceneRunner {
   /// The tool's contacts (as the step found them) and the target's (measure_target(), in its
   /// periods; held between them).
   PeriodContacts measure_contacts() noexcept;
-  /// The target's and the closed loop's hand's contacts into target_: the tool of articulation
-  /// `tree` detected anew on ghost_ at the target (and at the hand's intent), its nets at rest,
-  /// against the organs' rest shapes. O(the scene's contact detection).
-  void measure_target(int tree) noexcept;
+  /// The inputs of the target's measurement (target_measurement.hpp) at this period: the tool
+  /// of articulation `tree` at the target and, closed loop, at the hand's intent. Never
+  /// allocates (`in` sized by make_target_inputs()).
+  void fill_target_inputs(int tree, TargetInputs& in) const noexcept;
   /// The free-space tracking error (RunSummary::tracking_error_free_rms_mm).
   void track_free_space(const PeriodContacts& c) noexcept;
   /// The start-up push-out and the god-object's penetration after it (RunSummary).
@@ -258,14 +261,15 @@ class SceneRunner {
   std::vector<std::uint8_t> explicit_bound_;  // per body: 1 if a binding names it
   hal::InstrumentDevice device_;
   core::Data data_;
-  core::Data ghost_;  // the held body placed at the target, for measurement
-  bool ghost_organs_placed_ = false;  // ghost_'s organs at rest (measure_target())
+  TargetMeasurement target_measurement_;  // offline: the target measured inline
+  TargetInputs target_inputs_;            // its inputs
+  std::unique_ptr<TargetMeasurementThread> target_thread_;  // paced: on its own thread
   /// The target is measured every ghost_every_ periods: 1, but in a multirate run at most at
   /// 1 kHz (round(1 ms / dt) periods), so that a 10 kHz device loop's thread does not detect the
   /// whole scene again every period (docs/outputs.md).
   std::int64_t ghost_every_ = 1;
   int ghost_held_ = -1;      // the held body when the target was last measured
-  TargetContacts target_{};  // the target's contacts, last measured
+  TargetContacts target_{};  // the target's contacts, last measured (or taken from the thread)
   platform::ControlLoop loop_;
   /// The multirate god-object (scene [multirate]), stepped in place of core::step by the
   /// loop (its platform::Stepper, ControlLoop::set_stepper()); not enabled in a single-rate run.
