@@ -563,9 +563,10 @@ TEST(RunMultirate, ASceneSpinIsRefusedWhereItWouldNotApplyOrWouldTakeASharedCpu)
   options.scene_thread.spin_ns = 2'000'000;
   options.duration_s = 0.1;
   options.overrun_limit = 0;
-  const RunSummary s = numen::sim::run_scene(scene, options);
+  const RunSummary s = numen::sim::run_scene(scene, options);  // applied: the run goes through
   EXPECT_TRUE(s.multirate.scene_thread);
-  EXPECT_GE(s.multirate.scene_steps, 5);
+  EXPECT_EQ(s.steps, 100);
+  EXPECT_GE(s.multirate.scene_steps, 1);  // about 10; a loaded machine delays the thread
 }
 
 namespace {
