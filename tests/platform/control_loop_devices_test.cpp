@@ -234,6 +234,52 @@ TEST(ControlLoopDevices, EachDeviceSendsOneSyncPerBus) {
   EXPECT_EQ(rig.bus.pending(hal::SimBus::Direction::kControllerToDevice), 1u);  // one SYNC
 }
 
+TEST(ControlLoopDevices, DevicesOnTwoBusesEachGetTheirOwnSyncAndFrames) {
+  // One instrument per bus: no sharing, each device its bus's SYNC producer; both drive.
+  const hal::DeviceConfig c0 = instrument_config(1, false, 0.0);
+  const hal::DeviceConfig c1 = instrument_config(11, false, 0.1);
+  hal::InstrumentDevice i0{c0}, i1{c1};
+  hal::DeviceEmulator e0{c0}, e1{c1};
+  hal::SimBus bus0{fx::bus_settings()}, bus1{fx::bus_settings()};
+  const core::Model model = two_body_model();
+  core::Data data = core::make_data(model);
+  std::vector<platform::LoopDevice> d(2);
+  d[0].bus = &bus0.controller();
+  d[0].instrument = &i0;
+  d[0].binding = drive_body(0);
+  d[1].bus = &bus1.controller();
+  d[1].instrument = &i1;
+  d[1].binding = drive_body(1);
+  platform::ControlLoop loop(model, data, d);
+  e0.set_axis_values(fx::kQ);
+  e1.set_axis_values(fx::kQ);
+  for (std::int64_t k = 0; k < 20; ++k) {
+    const std::int64_t t = k * fx::kMs;
+    bus0.set_time_ns(t);
+    bus1.set_time_ns(t);
+    loop.begin_period(t);
+    EXPECT_EQ(bus0.pending(hal::SimBus::Direction::kControllerToDevice), 1u);  // its SYNC
+    EXPECT_EQ(bus1.pending(hal::SimBus::Direction::kControllerToDevice), 1u);
+    bus0.set_time_ns(t + fx::kLatency);
+    bus1.set_time_ns(t + fx::kLatency);
+    e0.poll(bus0.device());
+    e1.poll(bus1.device());
+    bus0.set_time_ns(t + fx::kPhase);
+    bus1.set_time_ns(t + fx::kPhase);
+    loop.end_period(t + fx::kPhase);
+    bus0.set_time_ns(t + fx::kPhase + fx::kLatency);
+    bus1.set_time_ns(t + fx::kPhase + fx::kLatency);
+    e0.poll(bus0.device());
+    e1.poll(bus1.device());
+  }
+  EXPECT_TRUE(loop.last_report(0).torque_commanded);
+  EXPECT_TRUE(loop.last_report(1).torque_commanded);
+  EXPECT_GT(i0.counters().frames_decoded, 0u);
+  EXPECT_GT(i1.counters().frames_decoded, 0u);
+  EXPECT_EQ(i0.counters().frames_unknown_id, 0u);
+  EXPECT_EQ(i1.counters().frames_unknown_id, 0u);
+}
+
 TEST(ControlLoopDevices, RefusesWiringsThatCannotRun) {
   const hal::DeviceConfig c0 = instrument_config(1, false, 0.0);
   const hal::DeviceConfig c1 = instrument_config(11, false, 0.1);
