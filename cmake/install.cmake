@@ -78,7 +78,8 @@ set(_hal_headers
   numen/hal/device/kinematics.hpp numen/hal/device/kinematics_factory.hpp
   numen/hal/device/managed_device.hpp numen/hal/device/minimal_device.hpp
   numen/hal/device/phantom_kinematics.hpp numen/hal/device/pose_tracker_kinematics.hpp
-  numen/hal/device/device_state.hpp
+  numen/hal/device/bus_filters.hpp numen/hal/device/device_state.hpp
+  numen/hal/device/device_status.hpp
   numen/hal/device/safety_supervisor.hpp numen/hal/device/sample_check.hpp
   numen/hal/device/trocar_kinematics.hpp
   numen/hal/emulation/admittance_emulator.hpp numen/hal/emulation/device_emulator.hpp
@@ -88,7 +89,8 @@ set(_hal_headers
   numen/hal/input/evemu_replay.hpp numen/hal/input/input_event.hpp
   numen/hal/input/relative_pose_integrator.hpp
   numen/hal/transport/async_record_writer.hpp numen/hal/transport/bus.hpp
-  numen/hal/transport/bus_recorder.hpp numen/hal/transport/can_filter.hpp
+  numen/hal/transport/bus_recorder.hpp numen/hal/transport/bus_share.hpp
+  numen/hal/transport/can_filter.hpp
   numen/hal/transport/can_frame.hpp numen/hal/transport/candump_log.hpp
   numen/hal/transport/line_file.hpp numen/hal/transport/line_reader.hpp
   numen/hal/transport/log_bus.hpp

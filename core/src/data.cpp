@@ -82,6 +82,7 @@ Data make_data(const Model& model) {
   data.applied_wrench.resize(n);
   data.body_wrench.resize(n);
   data.body_targets.resize(n);
+  data.feedback_group.assign(n, 0);
   data.body_feedback.resize(n);
   data.joint_prescribed.resize(static_cast<std::size_t>(model.num_joints()));
   data.joints.resize(static_cast<std::size_t>(model.num_joints()));

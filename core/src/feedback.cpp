@@ -60,9 +60,8 @@ void compute_feedback(const Model& model, Data& data) noexcept {
   for (Wrench& w : data.body_feedback) w = Wrench{};
   if (!spring) return;  // no spring to feed back: the device is position controlled (admittance)
   const bool attached = held;
-  const Vec3 ref = attached ? data.target.position : Vec3::Zero();
-  Wrench total;
   bool any = false;
+  int last_group = 0;
   for (std::size_t i = 0; i < data.bodies.size(); ++i) {
     const bool own = data.body_targets[i].enabled && static_cast<int>(i) != a;
     const Pose* target = nullptr;
@@ -76,11 +75,8 @@ void compute_feedback(const Model& model, Data& data) noexcept {
     } else {
       continue;
     }
-    const Wrench w = feedback_wrench_unsaturated(model.feedback, *target, *twist, data.bodies[i]);
-    data.body_feedback[i] = w;
-    const Wrench carried = carry_wrench(w, target->position, ref);  // Eq. 9
-    total.force += carried.force;
-    total.torque += carried.torque;
+    data.body_feedback[i] = feedback_wrench_unsaturated(model.feedback, *target, *twist, data.bodies[i]);
+    last_group = std::max(last_group, data.feedback_group[i]);
     any = true;
   }
   if (!any) return;
@@ -90,22 +86,47 @@ void compute_feedback(const Model& model, Data& data) noexcept {
       w = saturate_wrench(w, model.feedback.max_force, model.feedback.max_torque);
     return;
   }
-  // Saturate the composite by one ratio for force and torque, and scale the
-  // per-body wrenches by it: carried to the reference point (Eq. 9) they sum
-  // to the saturated composite exactly, so the motors (Σ J_lᵀ w_l) get the
-  // wrench that is logged.
-  const Wrench sat = saturate_wrench(total, model.feedback.max_force, model.feedback.max_torque);
-  const double fn = total.force.norm();
-  const double tn = total.torque.norm();
-  const double sf = fn > 0.0 ? sat.force.norm() / fn : 1.0;
-  const double st = tn > 0.0 ? sat.torque.norm() / tn : 1.0;
-  const double ratio = std::min(sf, st);
-  data.feedback_wrench = Wrench{ratio * total.force, ratio * total.torque};
-  if (ratio < 1.0)
-    for (Wrench& w : data.body_feedback) {
-      w.force *= ratio;
-      w.torque *= ratio;
+  // Per group (one device's bodies; Data::feedback_group): saturate the composite by one ratio
+  // for force and torque, and scale the group's per-body wrenches by it: carried to the
+  // reference point (Eq. 9) they sum to the saturated composite exactly, so the motors
+  // (Σ J_lᵀ w_l) get the wrench that is logged. The held body's group's composite, about its
+  // target, is the feedback wrench; another group's is about its first body's target.
+  const int held_group = data.feedback_group[static_cast<std::size_t>(a)];
+  for (int g = 0; g <= last_group; ++g) {
+    Wrench total;
+    bool in_group = false;
+    Vec3 ref = data.target.position;
+    for (std::size_t i = 0; i < data.bodies.size(); ++i) {
+      if (data.feedback_group[i] != g) continue;
+      const Pose* target = nullptr;
+      if (static_cast<int>(i) == a)
+        target = &data.target;
+      else if (data.body_targets[i].enabled &&
+               target_is_finite(data.body_targets[i].pose, data.body_targets[i].twist))
+        target = &data.body_targets[i].pose;
+      else
+        continue;
+      if (!in_group && g != held_group) ref = target->position;
+      in_group = true;
+      const Wrench carried = carry_wrench(data.body_feedback[i], target->position, ref);  // Eq. 9
+      total.force += carried.force;
+      total.torque += carried.torque;
     }
+    if (!in_group) continue;
+    const Wrench sat = saturate_wrench(total, model.feedback.max_force, model.feedback.max_torque);
+    const double fn = total.force.norm();
+    const double tn = total.torque.norm();
+    const double sf = fn > 0.0 ? sat.force.norm() / fn : 1.0;
+    const double st = tn > 0.0 ? sat.torque.norm() / tn : 1.0;
+    const double ratio = std::min(sf, st);
+    if (g == held_group) data.feedback_wrench = Wrench{ratio * total.force, ratio * total.torque};
+    if (ratio < 1.0)
+      for (std::size_t i = 0; i < data.bodies.size(); ++i) {
+        if (data.feedback_group[i] != g) continue;
+        data.body_feedback[i].force *= ratio;
+        data.body_feedback[i].torque *= ratio;
+      }
+  }
 }
 
 }  // namespace numen::core

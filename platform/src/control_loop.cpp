@@ -2,12 +2,14 @@
 
 #include "numen/platform/control_loop.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <span>
 #include <stdexcept>
 #include <string>
 
 #include "numen/core/joint.hpp"
+#include "numen/hal/device/bus_filters.hpp"
 
 namespace numen::platform {
 
@@ -17,41 +19,140 @@ std::int64_t period_of(const hal::DeviceConfig& config) {
   return static_cast<std::int64_t>(std::llround(config.control_period_s * 1e9));
 }
 
+// The devices of the LoopDevice constructor, checked (count, pointers, one control period).
+std::span<const LoopDevice> checked(std::span<const LoopDevice> devices) {
+  if (devices.empty() || devices.size() > static_cast<std::size_t>(kMaxLoopDevices))
+    throw std::invalid_argument("control loop: " + std::to_string(devices.size()) +
+                                " devices (1 to " + std::to_string(kMaxLoopDevices) + ")");
+  for (std::size_t i = 0; i < devices.size(); ++i) {
+    const LoopDevice& d = devices[i];
+    if (d.bus == nullptr || d.instrument == nullptr)
+      throw std::invalid_argument("control loop: device " + std::to_string(i) +
+                                  " has no bus or no instrument");
+    if (period_of(d.instrument->config()) != period_of(devices[0].instrument->config()))
+      throw std::invalid_argument("control loop: device " + std::to_string(i) + " ('" +
+                                  d.instrument->config().name +
+                                  "') has another control period than device 0");
+  }
+  return devices;
+}
+
 }  // namespace
 
 ControlLoop::ControlLoop(const core::Model& model, core::Data& data, hal::Bus& bus,
                          hal::InstrumentDevice& device, DeviceBinding binding,
                          const ControlLoopSettings& settings)
-    : owned_(hal::make_device(device, bus, period_of(device.config()),
-                              static_cast<const hal::ImpedanceSettings&>(settings))),
-      stats_(std::make_unique<LoopStatistics>(period_of(device.config()))),
+    : ControlLoop(model, data,
+                  std::span<const LoopDevice>(std::array<LoopDevice, 1>{LoopDevice{
+                      &bus, &device, std::move(binding),
+                      static_cast<const hal::ImpedanceSettings&>(settings)}}),
+                  settings) {}
+
+ControlLoop::ControlLoop(const core::Model& model, core::Data& data,
+                         std::span<const LoopDevice> devices, const ControlLoopSettings& settings)
+    : stats_(std::make_unique<LoopStatistics>(period_of(checked(devices)[0].instrument->config()))),
+      num_devices_(devices.size()),
       stages_(impedance_period_stages()) {
-  init_context(model, data, *owned_, settings);
-  context_.binding = std::move(binding);
-  if (context_.binding.links.empty())
-    context_.binding.links = DeviceBinding::rigid().links;  // see DeviceBinding
-  const DeviceBinding& wiring = context_.binding;
+  // The buses several devices share: one BusShare each, a port per device with its filters;
+  // the first device on a bus sends the SYNC.
+  std::array<hal::Bus*, kMaxLoopDevices> port{};
+  std::array<bool, kMaxLoopDevices> sync_producer{};
+  for (std::size_t i = 0; i < devices.size(); ++i) {
+    std::size_t first = i;
+    std::size_t users = 0;
+    for (std::size_t j = 0; j < devices.size(); ++j) {
+      if (devices[j].bus != devices[i].bus) continue;
+      if (j < first) first = j;
+      ++users;
+    }
+    sync_producer[i] = first == i;
+    if (users == 1) {
+      port[i] = devices[i].bus;
+      continue;
+    }
+    if (first == i) shares_.push_back(std::make_unique<hal::BusShare>(*devices[i].bus));
+    hal::BusShare* share = nullptr;
+    for (const std::unique_ptr<hal::BusShare>& s : shares_)
+      if (&s->bus() == devices[i].bus) share = s.get();
+    port[i] = &share->add_port(hal::controller_filters(devices[i].instrument->config()));
+  }
+  // Every device's bodies: bound at most once over the loop (explicitly_bound_bodies() throws
+  // for a body bound twice), the held body by one rigid binding at most.
+  DeviceBinding all;
+  int rigid_user = -1;
+  for (std::size_t i = 0; i < devices.size(); ++i) {
+    const std::vector<LinkBinding>& links =
+        devices[i].binding.links.empty() ? DeviceBinding::rigid().links : devices[i].binding.links;
+    for (const LinkBinding& b : links) {
+      all.links.push_back(b);
+      if (b.body >= 0) continue;
+      if (rigid_user >= 0 && rigid_user != static_cast<int>(i))
+        throw std::invalid_argument("control loop: devices " + std::to_string(rigid_user) +
+                                    " and " + std::to_string(i) +
+                                    " both drive the held body (link binding body -1)");
+      rigid_user = static_cast<int>(i);
+    }
+  }
+  for (std::size_t i = 0; i < devices.size(); ++i) {
+    const LoopDevice& d = devices[i];
+    owned_[i] = hal::make_device(*d.instrument, *port[i], period_of(d.instrument->config()),
+                                 d.settings);
+    owned_[i]->set_sync_producer(sync_producer[i]);
+    init_context(i, model, data, *owned_[i], settings);
+    bind(i, model, data, *d.instrument, d.binding);
+  }
+  const std::vector<std::uint8_t> bound = explicitly_bound_bodies(all, model.num_bodies());
+  for (std::size_t i = 0; i < devices.size(); ++i) contexts_[i].explicit_bound = bound;
+  // Each body's feedback is its driver's (core::Data::feedback_group): a body bound by a
+  // device is that device's, any other (the held body when it has no binding of its own) the
+  // rigid binding's device's — so one device's load never scales another's feedback.
+  std::fill(data.feedback_group.begin(), data.feedback_group.end(), std::max(rigid_user, 0));
+  for (std::size_t i = 0; i < devices.size(); ++i)
+    for (const LinkBinding& b : contexts_[i].binding.links)
+      if (b.body >= 0) data.feedback_group[static_cast<std::size_t>(b.body)] = static_cast<int>(i);
+}
+
+ControlLoop::ControlLoop(const core::Model& model, core::Data& data,
+                         hal::AdmittanceDevice& device, const ControlLoopSettings& settings)
+    : stats_(std::make_unique<LoopStatistics>(period_of(device.config()))),
+      stages_(admittance_period_stages()) {
+  if (model.coupling_mode != core::CouplingMode::kAdmittance)
+    throw std::invalid_argument("admittance device '" + device.config().name +
+                                "': the model's coupling mode must be admittance");
+  init_context(0, model, data, device, settings);
+  periods_[0].bound_body.fill(-1);
+}
+
+void ControlLoop::bind(std::size_t i, const core::Model& model, core::Data& data,
+                       const hal::InstrumentDevice& instrument, DeviceBinding binding) {
+  PeriodContext& c = contexts_[i];
+  c.binding = std::move(binding);
+  if (c.binding.links.empty()) c.binding.links = DeviceBinding::rigid().links;  // see DeviceBinding
+  const DeviceBinding& wiring = c.binding;
+  const std::string who = num_devices_ > 1 ? "device " + std::to_string(i) + " binding: "
+                                           : std::string("device binding: ");
   if (wiring.links.size() > static_cast<std::size_t>(kMaxLinkBindings))
-    throw std::invalid_argument("device binding: " + std::to_string(wiring.links.size()) +
+    throw std::invalid_argument(who + std::to_string(wiring.links.size()) +
                                 " link bindings (at most " + std::to_string(kMaxLinkBindings) + ")");
-  const int links = device.kinematics().num_links();
+  const int links = instrument.kinematics().num_links();
   for (const LinkBinding& b : wiring.links) {
     if (b.link < 0 || b.link >= links || b.link >= hal::kMaxLinks)
-      throw std::invalid_argument("device binding: link " + std::to_string(b.link) +
+      throw std::invalid_argument(who + "link " + std::to_string(b.link) +
                                   " out of range (the device has " + std::to_string(links) + ")");
     if (b.body < -1 || b.body >= model.num_bodies())
-      throw std::invalid_argument("device binding: body " + std::to_string(b.body) + " out of range");
+      throw std::invalid_argument(who + "body " + std::to_string(b.body) + " out of range");
   }
   for (const AxisPrescription& p : wiring.prescriptions) {
     if (p.joint < 0 || p.joint >= model.num_joints() ||
         !model.joints[static_cast<std::size_t>(p.joint)].prescribed)
-      throw std::invalid_argument("device binding: joint " + std::to_string(p.joint) +
+      throw std::invalid_argument(who + "joint " + std::to_string(p.joint) +
                                   " is not a prescribed joint");
-    if (p.axis < 0 || p.axis >= device.num_axes())
-      throw std::invalid_argument("device binding: axis " + std::to_string(p.axis) + " out of range");
+    if (p.axis < 0 || p.axis >= instrument.num_axes())
+      throw std::invalid_argument(who + "axis " + std::to_string(p.axis) + " out of range");
   }
-  context_.explicit_bound = explicitly_bound_bodies(wiring, model.num_bodies());
-  period_.bound_body.fill(-1);
+  c.explicit_bound = explicitly_bound_bodies(wiring, model.num_bodies());
+  PeriodData& period = periods_[i];
+  period.bound_body.fill(-1);
   // Until the device has a target, the prescribed joints hold their starting coordinates (the
   // managed stack's start-up has no encoder values for its first periods).
   for (const AxisPrescription& p : wiring.prescriptions) {
@@ -75,56 +176,80 @@ ControlLoop::ControlLoop(const core::Model& model, core::Data& data, hal::Bus& b
     t.twist = core::Twist{};
     t.enabled = true;
   }
-  period_.tau = hal::AxisVector::Zero(device.num_axes());
+  period.tau = hal::AxisVector::Zero(instrument.num_axes());
 }
 
-ControlLoop::ControlLoop(const core::Model& model, core::Data& data,
-                         hal::AdmittanceDevice& device, const ControlLoopSettings& settings)
-    : stats_(std::make_unique<LoopStatistics>(period_of(device.config()))),
-      stages_(admittance_period_stages()) {
-  if (model.coupling_mode != core::CouplingMode::kAdmittance)
-    throw std::invalid_argument("admittance device '" + device.config().name +
-                                "': the model's coupling mode must be admittance");
-  init_context(model, data, device, settings);
-  period_.bound_body.fill(-1);
-}
-
-void ControlLoop::init_context(const core::Model& model, core::Data& data, hal::Device& device,
-                               const ControlLoopSettings& settings) {
-  context_.model = &model;
-  context_.data = &data;
-  context_.device = &device;
-  context_.stepper = &core_stepper_;
-  context_.supervise_overruns = settings.supervise_overruns;
-  context_.stats = stats_.get();
+void ControlLoop::init_context(std::size_t i, const core::Model& model, core::Data& data,
+                               hal::Device& device, const ControlLoopSettings& settings) {
+  PeriodContext& c = contexts_[i];
+  c.model = &model;
+  c.data = &data;
+  c.device = &device;
+  c.stepper = &core_stepper_;
+  c.supervise_overruns = settings.supervise_overruns;
+  c.stats = stats_.get();
+  c.index = static_cast<int>(i);
+  c.records = std::span<const PeriodData>(periods_.data(), num_devices_);
 }
 
 void ControlLoop::begin_period(std::int64_t now_ns, std::int64_t deadline_mono_ns,
                                std::int64_t woke_mono_ns) noexcept {
-  begin_device_period(context_, period_, now_ns, deadline_mono_ns, woke_mono_ns);
+  for (std::size_t i = 0; i < num_devices_; ++i)
+    begin_device_period(contexts_[i], periods_[i], now_ns, deadline_mono_ns, woke_mono_ns);
 }
 
 const PeriodReport& ControlLoop::end_period(std::int64_t now_ns, PeriodObserver* observer) noexcept {
-  ++context_.counters.periods;
+  for (std::size_t i = 0; i < num_devices_; ++i) ++contexts_[i].counters.periods;
   for (const PeriodStageEntry& stage : stages_) {
-    stage.run(context_, period_, now_ns);
-    if (observer != nullptr) observer->after_stage(stage, period_);
+    for (std::size_t i = 0; i < num_devices_; ++i) {
+      stage.run(contexts_[i], periods_[i], now_ns);
+      if (observer != nullptr) observer->after_stage(stage, periods_[i]);
+    }
   }
-  return period_.report;
+  return periods_[0].report;
 }
 
-RearmResult ControlLoop::rearm() noexcept { return context_.device->rearm(); }
+void ControlLoop::set_stepper(Stepper* stepper) noexcept {
+  for (PeriodContext& c : contexts_) c.stepper = stepper != nullptr ? stepper : &core_stepper_;
+}
+
+RearmResult ControlLoop::rearm() noexcept {
+  RearmResult first = RearmResult::kNotLatched;
+  bool accepted = false;
+  for (std::size_t i = 0; i < num_devices_; ++i) {
+    const RearmResult r = contexts_[i].device->rearm();
+    if (i == 0) first = r;
+    accepted = accepted || r == RearmResult::kAccepted;
+  }
+  return accepted ? RearmResult::kAccepted : first;
+}
+
+bool ControlLoop::rearm_pending() const noexcept {
+  for (std::size_t i = 0; i < num_devices_; ++i)
+    if (contexts_[i].device->rearm_pending()) return true;
+  return false;
+}
 
 hal::LifecycleResult ControlLoop::activate() noexcept {
-  const hal::LifecycleResult r = context_.device->activate();
-  if (r == hal::LifecycleResult::kOk && context_.first_active_period < 0) {
-    context_.first_active_period = static_cast<std::int64_t>(context_.counters.periods) - 1;
+  hal::LifecycleResult result = hal::LifecycleResult::kOk;
+  for (std::size_t i = 0; i < num_devices_; ++i) {
+    PeriodContext& c = contexts_[i];
+    const hal::LifecycleResult r = c.device->activate();
+    if (r == hal::LifecycleResult::kOk && c.first_active_period < 0)
+      c.first_active_period = static_cast<std::int64_t>(c.counters.periods) - 1;
+    if (r != hal::LifecycleResult::kOk && result == hal::LifecycleResult::kOk) result = r;
   }
-  return r;
+  return result;
 }
 
-void ControlLoop::shutdown() noexcept { context_.device->shutdown(); }
+void ControlLoop::shutdown() noexcept {
+  for (std::size_t i = 0; i < num_devices_; ++i) contexts_[i].device->shutdown();
+}
 
-bool ControlLoop::drives_disabled() const noexcept { return context_.device->drives_disabled(); }
+bool ControlLoop::drives_disabled() const noexcept {
+  for (std::size_t i = 0; i < num_devices_; ++i)
+    if (!contexts_[i].device->drives_disabled()) return false;
+  return true;
+}
 
 }  // namespace numen::platform

@@ -205,6 +205,13 @@ void bind_measured_wrench(PeriodContext& c, PeriodData& p, std::int64_t now_ns) 
 void step_dynamics(PeriodContext& c, PeriodData& p, std::int64_t now_ns) noexcept {
   (void)now_ns;
   PeriodReport& r = p.report;
+  if (c.index > 0) {  // one step a period (device 0's): the others take its stamps
+    const PeriodReport& lead = c.records[0].report;
+    r.step_begin_ns = lead.step_begin_ns;
+    r.step_end_ns = lead.step_end_ns;
+    r.step_ns = lead.step_ns;
+    return;
+  }
   r.step_begin_ns = monotonic_now_ns();
   c.stepper->step(*c.model, *c.data);
   r.step_end_ns = monotonic_now_ns();
@@ -262,8 +269,30 @@ void map_held_pose(PeriodContext& c, PeriodData& p, std::int64_t now_ns) noexcep
   p.command.pose = &p.held_pose;
 }
 
+namespace {
+
+bool in_safe_state(hal::LifecycleState s) noexcept {
+  return s == hal::LifecycleState::kSafeStop || s == hal::LifecycleState::kFault;
+}
+
+// The fault policy between the loop's devices (docs/safety.md "Several devices"): the first
+// other device in its safe state after this period's supervision, −1 for none.
+int peer_in_safe_state(const PeriodContext& c) noexcept {
+  for (std::size_t j = 0; j < c.records.size(); ++j) {
+    if (static_cast<int>(j) != c.index && in_safe_state(c.records[j].supervision.lifecycle))
+      return static_cast<int>(j);
+  }
+  return -1;
+}
+
+}  // namespace
+
 void send_command(PeriodContext& c, PeriodData& p, std::int64_t now_ns) noexcept {
   PeriodReport& r = p.report;
+  const int peer = peer_in_safe_state(c);
+  if (peer >= 0 && c.device->lifecycle() == hal::LifecycleState::kActive)
+    c.device->latch_safe_state(hal::FaultCause::kPeerFault, static_cast<std::uint8_t>(peer));
+  c.device->hold_activation(peer >= 0);
   const hal::DeviceOutput& out = c.device->write(p.command, now_ns);
   r.output_end_ns = monotonic_now_ns();
   p.output = &out;
@@ -285,7 +314,8 @@ void send_command(PeriodContext& c, PeriodData& p, std::int64_t now_ns) noexcept
 void finish_period(PeriodContext& c, PeriodData& p, std::int64_t now_ns) noexcept {
   (void)now_ns;
   PeriodReport& r = p.report;
-  c.stepper->finish(*c.model, *c.data);  // outside the timed step, after the commands
+  // Outside the timed step, after every device's commands (stage by stage: all sent).
+  if (c.index == 0) c.stepper->finish(*c.model, *c.data);
   r.lifecycle = c.device->lifecycle();    // after the write: a non-finite τ trips it
   const hal::FaultRecord* f = c.device->first_fault();
   r.fault_cause = f != nullptr ? f->cause : hal::FaultCause::kNone;
@@ -293,7 +323,18 @@ void finish_period(PeriodContext& c, PeriodData& p, std::int64_t now_ns) noexcep
   if (!r.torque_commanded) ++c.counters.periods_zero_torque;
   if (r.torque_commanded && c.first_torque_period < 0) c.first_torque_period = period;
   if (r.command_status != hal::IoStatus::kOk) ++c.counters.command_failures;
-  r.overrun = c.stats->record_period(r.times()).overrun;
+  r.overrun = c.index == 0 ? c.stats->record_period(loop_period_times(c.records)).overrun
+                           : c.records[0].report.overrun;
+}
+
+PeriodTimes loop_period_times(std::span<const PeriodData> records) noexcept {
+  const PeriodReport& first = records.front().report;
+  const PeriodReport& last = records.back().report;
+  PeriodTimes t = first.times();
+  t.sync_sent_ns = last.sync_sent_ns;
+  t.input_end_ns = last.input_end_ns;
+  t.output_end_ns = last.output_end_ns;
+  return t;
 }
 
 }  // namespace numen::platform

@@ -114,3 +114,27 @@ TEST(Feedback, ZeroInDirectMode) {
   core::step(m, d);
   EXPECT_TRUE(d.feedback_wrench.force.isZero(0.0) && d.feedback_wrench.torque.isZero(0.0));
 }
+
+TEST(Feedback, EachFeedbackGroupIsSaturatedOnItsOwn) {
+  // Two bodies, each pulled by its device: body 0 (held) 0.15 m from its target (15 N), body 1
+  // 0.3 m (30 N), limit 20 N. One group (one tool): the composite's 45 N scales both by 20/45.
+  // A group each (two devices, Data::feedback_group): body 1 saturates alone at 20 N and body
+  // 0 keeps its 15 N — one device's load does not scale the other's feedback.
+  core::Model m = feedback_model(core::CouplingMode::kGodObject);
+  m.bodies.push_back(m.bodies[0]);
+  ASSERT_EQ(core::finalize_model(m), "");
+  core::Data d = core::make_data(m);
+  ASSERT_EQ(d.attached_body, 0);
+  d.target.position = Vec3(-0.15, 0.0, 0.0);
+  d.body_targets[1].pose.position = Vec3(-0.3, 0.0, 0.0);
+  d.body_targets[1].enabled = true;
+  core::compute_feedback(m, d);
+  EXPECT_NEAR(d.body_feedback[0].force.x(), 15.0 * 20.0 / 45.0, 1e-12);
+  EXPECT_NEAR(d.body_feedback[1].force.x(), 30.0 * 20.0 / 45.0, 1e-12);
+  EXPECT_NEAR(d.feedback_wrench.force.norm(), 20.0, 1e-12);
+  d.feedback_group[1] = 1;
+  core::compute_feedback(m, d);
+  EXPECT_NEAR(d.body_feedback[0].force.x(), 15.0, 1e-12);
+  EXPECT_NEAR(d.body_feedback[1].force.x(), 20.0, 1e-12);
+  EXPECT_NEAR(d.feedback_wrench.force.x(), 15.0, 1e-12);  // the held body's group's composite
+}

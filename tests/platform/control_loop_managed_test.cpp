@@ -25,6 +25,7 @@
 #include "numen/hal/canopen/emcy.hpp"
 #include "numen/hal/canopen/nmt.hpp"
 #include "numen/hal/device/instrument_device.hpp"
+#include "numen/hal/device/managed_device.hpp"
 #include "numen/hal/device/rate_estimator.hpp"
 #include "numen/hal/transport/sim_bus.hpp"
 
@@ -52,6 +53,15 @@ numen::hal::DeviceConfig managed_config(double soft_start_s) {
   numen::hal::DeviceConfig c = managed_config();
   c.soft_start_s = soft_start_s;
   return c;
+}
+
+/// The loop's managed device (its CANopen master and supervisor: the test reaches past the
+/// face the code above hal reads, hal::DeviceReport).
+const numen::hal::ManagedDevice& managed_device(const ControlLoop& loop) {
+  return dynamic_cast<const numen::hal::ManagedDevice&>(loop.device());
+}
+numen::hal::ManagedDevice& managed_device(ControlLoop& loop) {
+  return dynamic_cast<numen::hal::ManagedDevice&>(loop.device());
 }
 
 /// The full stack: SimBus, managed DeviceEmulator (NMT, heartbeats, CiA 402 drives), the loop.
@@ -88,7 +98,7 @@ struct Rig {
   void run_to_torque(int max = 100) {
     for (int i = 0; i < max && loop.first_torque_period() < 0; ++i) period();
   }
-  const numen::hal::SafetySupervisor& sup() const { return *loop.supervisor(); }
+  const numen::hal::SafetySupervisor& sup() const { return *managed_device(loop).supervisor(); }
 };
 
 /// True if any drive RPDO of this period carried a non-zero target torque (emulator view).
@@ -109,7 +119,7 @@ TEST(ControlLoopManaged, StartUpReachesActiveInAnExactNumberOfPeriods) {
   Rig rig;
   ASSERT_TRUE(rig.loop.managed());
   EXPECT_EQ(rig.sup().state(), LifecycleState::kInactive);  // configured at construction
-  const numen::hal::CanopenMaster& m = *rig.loop.canopen();
+  const numen::hal::CanopenMaster& m = *managed_device(rig.loop).canopen();
   for (int i = 0; i < 40; ++i) {
     const PeriodReport& r = rig.period();
     const std::int64_t k = rig.k - 1;
@@ -212,7 +222,7 @@ TEST(ControlLoopManaged, DriveFaultEmcyReportedSafeStateDrivesDisabledLatchedRea
   EXPECT_EQ(f->id, 2);  // node 2
   EXPECT_EQ(f->value, 0x2310);
   EXPECT_EQ(f->period, static_cast<std::uint64_t>(fault_at));
-  const numen::hal::EmcyRecord* e = rig.loop.canopen()->emcy_log().newest();
+  const numen::hal::EmcyRecord* e = managed_device(rig.loop).canopen()->emcy_log().newest();
   ASSERT_NE(e, nullptr);
   EXPECT_EQ(e->message.node_id, 2);
   EXPECT_EQ(e->message.error_code, 0x2310);
@@ -248,7 +258,7 @@ TEST(ControlLoopManaged, DriveFaultEmcyReportedSafeStateDrivesDisabledLatchedRea
   for (int a = 0; a < 3; ++a) EXPECT_EQ(rig.emulator.drive(a)->state(), PowerState::kOperationEnabled);
   EXPECT_EQ(rig.sup().counters().latches, 1u);
   EXPECT_EQ(rig.sup().lifecycle().counters().rearms, 1u);
-  EXPECT_EQ(rig.loop.canopen()->emcy_log().counters().resets, 1u);  // 0x0000 after the reset
+  EXPECT_EQ(managed_device(rig.loop).canopen()->emcy_log().counters().resets, 1u);  // 0x0000 after the reset
   EXPECT_EQ(rig.loop.rearm(), numen::platform::RearmResult::kNotLatched);
 }
 
@@ -358,7 +368,7 @@ TEST(ControlLoopManaged, NmtStopStopsTheTpdosAndTheEncoderTimesOut) {
   Rig rig;
   rig.run_to_torque();
   for (int i = 0; i < 3; ++i) rig.period();
-  ASSERT_TRUE(rig.loop.canopen()->request_nmt(numen::hal::NmtCommand::kStopRemoteNode, 3));
+  ASSERT_TRUE(managed_device(rig.loop).canopen()->request_nmt(numen::hal::NmtCommand::kStopRemoteNode, 3));
   const std::int64_t p = rig.k;
   rig.period();  // period p: SYNC answered, then the stop command
   EXPECT_EQ(rig.emulator.node_state(2), numen::hal::NmtState::kStopped);
@@ -391,8 +401,8 @@ TEST(ControlLoopManaged, RearmThatRerunsTheStartUpDoesNotLatchOnTheEncodersItSil
   Rig rig;
   rig.run_to_torque();
   for (int i = 0; i < 3; ++i) rig.period();
-  const numen::hal::CanopenMaster& m = *rig.loop.canopen();
-  ASSERT_TRUE(rig.loop.canopen()->request_nmt(numen::hal::NmtCommand::kStopRemoteNode, 3));
+  const numen::hal::CanopenMaster& m = *managed_device(rig.loop).canopen();
+  ASSERT_TRUE(managed_device(rig.loop).canopen()->request_nmt(numen::hal::NmtCommand::kStopRemoteNode, 3));
   // kFault once the drives report disabled, or after the safe stop's timeout (the stopped
   // node's drive sends no statusword).
   for (int i = 0; i < 1000 && rig.sup().state() != LifecycleState::kFault; ++i) rig.period();
@@ -526,7 +536,7 @@ TEST(ControlLoopManaged, TorquesAreSaturatedPerAxis) {
   EXPECT_DOUBLE_EQ(clamped_peak, low.config.axes[0].max_torque);
   EXPECT_GT(loop.impedance().torque_counters().axis_saturations[0], 0u);
   EXPECT_EQ(loop.impedance().torque_counters().axis_saturations[3], 0u);  // roll: no drive, τ = 0
-  EXPECT_EQ(loop.supervisor()->state(), LifecycleState::kActive);
+  EXPECT_EQ(managed_device(loop).supervisor()->state(), LifecycleState::kActive);
 }
 
 /// Runs a scripted session (start-up, torque, drive fault, re-arm, kill) and returns every

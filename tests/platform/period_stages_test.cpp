@@ -9,6 +9,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <map>
 #include <set>
 #include <string>
 #include <vector>
@@ -16,9 +17,11 @@
 #include "alloc_counter.hpp"
 #include "control_loop_fixtures.hpp"
 #include "fixed_motion.hpp"
+#include "numen/hal/device/bus_filters.hpp"
 #include "numen/hal/device/instrument_device.hpp"
 #include "numen/hal/emulation/admittance_emulator.hpp"
 #include "numen/hal/emulation/device_emulator.hpp"
+#include "numen/hal/transport/bus_share.hpp"
 #include "numen/platform/control_loop.hpp"
 #include "numen/platform/monotonic_clock.hpp"
 
@@ -31,10 +34,13 @@ using platform::PeriodStage;
 
 constexpr std::uint16_t stage_bit(PeriodStage s) { return static_cast<std::uint16_t>(s); }
 
-/// Checks each stage against the writer table: the bytes of every field before and after it.
+/// Checks each stage against the writer table: the bytes of every field before and after it,
+/// per record (a loop of several devices shows each device's record after each stage).
 class WriterCheck final : public platform::PeriodObserver {
  public:
-  explicit WriterCheck(const platform::PeriodData& p) { snapshot(p, before_); }
+  explicit WriterCheck(const platform::PeriodData& p) { snapshot(p, before_[&p]); }
+  /// Also watches `p` (another device's record).
+  void watch(const platform::PeriodData& p) { snapshot(p, before_[&p]); }
 
   /// The begin stage (begin_period(), outside end_period()).
   void after_begin(const platform::PeriodData& p) { compare(PeriodStage::kBegin, "begin", p); }
@@ -56,17 +62,18 @@ class WriterCheck final : public platform::PeriodObserver {
   void compare(PeriodStage s, const char* name, const platform::PeriodData& p) {
     std::vector<unsigned char> now;
     snapshot(p, now);
+    std::vector<unsigned char>& before = before_.at(&p);
     for (const platform::PeriodField& f : platform::period_data_fields()) {
       if (f.writers == 0) continue;  // the whole report: its fields are listed one by one
-      if (std::memcmp(before_.data() + f.offset, now.data() + f.offset, f.size) == 0) continue;
+      if (std::memcmp(before.data() + f.offset, now.data() + f.offset, f.size) == 0) continue;
       if ((f.writers & stage_bit(s)) == 0)
         violations.push_back(std::string(name) + " wrote " + f.name);
       else
         stages_that_wrote |= stage_bit(s);
     }
-    before_ = std::move(now);
+    before = std::move(now);
   }
-  std::vector<unsigned char> before_;
+  std::map<const platform::PeriodData*, std::vector<unsigned char>> before_;
 };
 
 void expect_stage_list(std::span<const platform::PeriodStageEntry> list) {
@@ -191,6 +198,62 @@ TEST(PeriodStages, EachStageOfAnAdmittancePeriodWritesOnlyItsFields) {
                         PeriodStage::kBind, PeriodStage::kStep, PeriodStage::kMap,
                         PeriodStage::kSend, PeriodStage::kFinish})
     EXPECT_NE(check.stages_that_wrote & stage_bit(s), 0) << platform::to_string(s);
+}
+
+TEST(PeriodStages, EachStageOfATwoDevicePeriodWritesOnlyItsFieldsInEachDevicesRecord) {
+  // Two minimal-protocol trocars on one bus (the loop shares it), one body each: every stage
+  // runs over both records, the step once (device 1 takes device 0's stamps: the step stage's
+  // own fields), and neither record is written outside its writer table.
+  numen::hal::DeviceConfig c0 = trocar_config();
+  numen::hal::DeviceConfig c1 = numen::hal::make_default_trocar_config(11);
+  c1.canopen.managed = false;
+  c1.control_period_s = c0.control_period_s;
+  SimBus bus{bus_settings()};
+  numen::hal::BusShare device_side(bus.device());
+  numen::hal::Bus& port0 = device_side.add_port(numen::hal::device_filters(c0));
+  numen::hal::Bus& port1 = device_side.add_port(numen::hal::device_filters(c1));
+  numen::hal::DeviceEmulator e0{c0}, e1{c1};
+  numen::hal::InstrumentDevice i0{c0}, i1{c1};
+  core::Model model = small_model();
+  model.bodies.push_back(model.bodies[0]);
+  ASSERT_EQ(core::finalize_model(model), "");
+  core::Data data = core::make_data(model);
+  std::vector<platform::LoopDevice> devices(2);
+  devices[0].bus = &bus.controller();
+  devices[0].instrument = &i0;
+  devices[0].binding = platform::DeviceBinding{{platform::LinkBinding{0, 0, {}}}, {}};
+  devices[1].bus = &bus.controller();
+  devices[1].instrument = &i1;
+  devices[1].binding = platform::DeviceBinding{{platform::LinkBinding{0, 1, {}}}, {}};
+  platform::ControlLoop loop(model, data, devices);
+  WriterCheck check(loop.period_data(0));
+  check.watch(loop.period_data(1));
+  e0.set_axis_values(kQ);
+  e1.set_axis_values(kQ);
+  for (std::int64_t k = 0; k < 60; ++k) {
+    const std::int64_t t = k * kMs;
+    bus.set_time_ns(t);
+    loop.begin_period(t);
+    check.after_begin(loop.period_data(0));
+    check.after_begin(loop.period_data(1));
+    bus.set_time_ns(t + kLatency);
+    e0.poll(port0);
+    e1.poll(port1);
+    bus.set_time_ns(t + kPhase);
+    check.order_.clear();
+    loop.end_period(t + kPhase, &check);
+    ASSERT_EQ(check.order_.size(), 14u);  // 7 stages × 2 devices, stage by stage
+    EXPECT_EQ(check.order_[6], PeriodStage::kStep);
+    EXPECT_EQ(check.order_[7], PeriodStage::kStep);
+    bus.set_time_ns(t + kPhase + kLatency);
+    e0.poll(port0);
+    e1.poll(port1);
+  }
+  for (const std::string& v : check.violations) ADD_FAILURE() << v;
+  EXPECT_TRUE(loop.last_report(0).torque_commanded);
+  EXPECT_TRUE(loop.last_report(1).torque_commanded);
+  EXPECT_EQ(loop.last_report(1).step_ns, loop.last_report(0).step_ns);  // one step
+  EXPECT_EQ(loop.step_time().count(), 60);
 }
 
 }  // namespace period_stages_test

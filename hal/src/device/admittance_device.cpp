@@ -126,7 +126,7 @@ DeviceSupervision AdmittanceDevice::supervise(std::int64_t now_ns, bool overrun)
     rearm_pending_ = false;
     has_first_fault_ = false;
   }
-  if (!shutting_down() && settings_.auto_activate &&
+  if (!shutting_down() && !activation_held() && settings_.auto_activate &&
       lifecycle_.state() == LifecycleState::kInactive && sample_.valid) {
     out.activated = lifecycle_.activate() == LifecycleResult::kOk;
   }

@@ -21,9 +21,12 @@ const char* to_string(RearmResult result) noexcept {
 
 IoStatus Device::begin_period(std::int64_t now_ns) noexcept {
   // CiA 301 SYNC counter runs 1..240 when used.
-  sync_counter_ = static_cast<std::uint8_t>(sync_counter_ >= 240 ? 1 : sync_counter_ + 1);
-  const IoStatus s = bus_->write(make_sync(now_ns, sync_counter_));
-  note(s);
+  IoStatus s = IoStatus::kOk;
+  if (sync_producer_) {
+    sync_counter_ = static_cast<std::uint8_t>(sync_counter_ >= 240 ? 1 : sync_counter_ + 1);
+    s = bus_->write(make_sync(now_ns, sync_counter_));
+    note(s);
+  }
   note(begin_protocol(now_ns));
   return s;
 }

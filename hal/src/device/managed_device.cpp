@@ -3,7 +3,11 @@
 
 #include "numen/hal/device/managed_device.hpp"
 
+#include <cstdio>
 #include <span>
+
+#include "numen/hal/canopen/emcy.hpp"
+#include "numen/hal/canopen/heartbeat.hpp"
 
 namespace numen::hal {
 namespace {
@@ -58,7 +62,8 @@ DeviceSupervision ManagedDevice::supervise(std::int64_t now_ns, bool overrun) no
       sup.rearm() == LifecycleResult::kOk) {
     rearm_pending_ = false;
   }
-  if (!shutting_down() && settings_.auto_activate && sup.state() == LifecycleState::kInactive &&
+  if (!shutting_down() && !activation_held() && settings_.auto_activate &&
+      sup.state() == LifecycleState::kInactive &&
       m.operational() && sup.blocking().cause == FaultCause::kNone) {
     out.activated = sup.activate() == LifecycleResult::kOk;
   }
@@ -123,6 +128,62 @@ bool ManagedDevice::drives_disabled() const noexcept {
     }
   }
   return true;
+}
+
+
+DeviceReport ManagedDevice::report() const noexcept {
+  const CanopenMaster& m = *master_;
+  const SafetySupervisor& sup = *supervisor_;
+  DeviceReport r;
+  r.managed = true;
+  r.startup = m.startup();  // its StartupStatus part
+  r.lifecycle = sup.state();
+  r.latches = sup.counters().latches;
+  r.fault_records = sup.counters().records;
+  r.emcys = m.emcy_log().counters().received;
+  r.emcy_faults = m.emcy_log().counters().faults;
+  if (const EmcyRecord* e = m.emcy_log().newest()) {
+    r.has_emcy = true;
+    r.newest_emcy_node = e->message.node_id;
+    r.newest_emcy_code = e->message.error_code;
+  }
+  r.configured_nodes = m.counters().configurations;
+  if (const SdoPoller* p = m.sdo_poller()) {
+    r.sdo_polled = true;
+    r.sdo_reads = p->counters().completed;
+    r.sdo_read_errors = p->counters().aborted + p->counters().timeouts;
+  }
+  for (const HeartbeatConsumer& c : m.heartbeats()) r.heartbeat_losses += c.counters().losses;
+  r.malformed_drive_frames = m.counters().drive_tpdos_malformed;
+  return r;
+}
+
+DeviceNotes ManagedDevice::notes() const {
+  const CanopenMaster& m = *master_;
+  const DeviceConfig& config = instrument_->config();
+  DeviceNotes n;
+  if (m.startup().configuration_failed) n.configuration_error = m.configuration_error();
+  for (std::size_t i = 0; i < m.emcy_log().size(); ++i) {
+    const EmcyRecord& r = *m.emcy_log().at(i);
+    // A drive node's codes by the CiA 402 table (its device profile), others by CiA 301's.
+    std::uint16_t profile = 301;
+    for (std::size_t d = 0; d < m.num_drives(); ++d) {
+      const auto axis = static_cast<std::size_t>(m.drive_axis(d));
+      if (config.canopen.axes[axis].node_id == r.message.node_id) profile = 402;
+    }
+    char line[200];
+    std::snprintf(line, sizeof line, "node %d at %.3f s: 0x%04X %s (register 0x%02X)",
+                  r.message.node_id, static_cast<double>(r.timestamp_ns) * 1e-9,
+                  r.message.error_code, describe_emcy_code(r.message.error_code, profile),
+                  r.message.error_register);
+    n.emcy_messages.push_back(line);
+  }
+  for (std::size_t i = 0; i < m.num_drives(); ++i) {
+    const int axis = m.drive_axis(i);
+    n.drive_states.push_back(config.axes[static_cast<std::size_t>(axis)].name + ": " +
+                             to_string(m.drive_outputs()[i].state));
+  }
+  return n;
 }
 
 }  // namespace numen::hal

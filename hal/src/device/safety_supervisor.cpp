@@ -90,6 +90,8 @@ const char* to_string(FaultCause cause) noexcept {
       return "force out of range";
     case FaultCause::kForceTimeout:
       return "force reading timeout";
+    case FaultCause::kPeerFault:
+      return "peer fault";
   }
   return "unknown";
 }
@@ -297,8 +299,12 @@ LifecycleUpdate SafetySupervisor::update(std::int64_t now_ns, const SafetyInputs
 
 void SafetySupervisor::trip_non_finite_torque(std::size_t axis) noexcept {
   ++counters_.non_finite_torques;
+  trip(FaultCause::kNonFiniteTorque, static_cast<std::uint8_t>(axis), 0.0);
+}
+
+void SafetySupervisor::trip(FaultCause cause, std::uint8_t id, double value) noexcept {
   latch_this_period_ = false;
-  record(FaultCause::kNonFiniteTorque, static_cast<std::uint8_t>(axis), 0.0, true);
+  record(cause, id, value, true);
   if (lifecycle_.trip().entered_safe_stop) ++counters_.latches;
 }
 

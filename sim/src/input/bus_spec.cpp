@@ -12,11 +12,6 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "numen/hal/canopen/canopen.hpp"
-#include "numen/hal/canopen/emcy.hpp"
-#include "numen/hal/canopen/heartbeat.hpp"
-#include "numen/hal/canopen/nmt.hpp"
-#include "numen/hal/canopen/sdo.hpp"
 #include "numen/hal/features.hpp"
 #if NUMEN_WITH_SERIAL
 #include "numen/hal/transport/serial_bus.hpp"
@@ -27,16 +22,6 @@
 
 namespace numen::sim {
 namespace {
-
-void add_unique(std::vector<hal::CanFilter>& out, const hal::CanFilter& f) {
-  for (const hal::CanFilter& g : out)
-    if (g.id == f.id && g.mask == f.mask) return;
-  out.push_back(f);
-}
-
-void add_unique(std::vector<hal::CanFilter>& out, std::uint32_t cob_id) {
-  add_unique(out, hal::exact_standard_filter(cob_id));
-}
 
 bool starts_with(const std::string& s, const char* prefix) {
   return s.rfind(prefix, 0) == 0;
@@ -98,42 +83,6 @@ BusSpec parse_bus_spec(const std::string& spec) {
     throw bad("expected sim, log:FILE, can:IFACE, serial:PATH[@BAUD] or igtl[:[HOST:]PORT]");
   }
   if (out.target.empty()) throw bad("nothing after the prefix");
-  return out;
-}
-
-std::vector<hal::CanFilter> controller_filters(const hal::DeviceConfig& config) {
-  std::vector<hal::CanFilter> out;
-  // An encoder's COB-ID passes whole: a remote request on it is a malformed sample and a
-  // 29-bit frame of its number an unknown id (InstrumentDevice::on_frame()), counted in the
-  // summary (frames rejected, unknown id) instead of vanishing in the filter.
-  for (const hal::AxisConfig& axis : config.axes) {
-    add_unique(out, hal::standard_id_filter(axis.encoder_cob_id));
-    add_unique(out, hal::extended_id_filter(axis.encoder_cob_id));
-  }
-  if (config.canopen.managed) {
-    for (const hal::CanopenAxisConfig& x : config.canopen.axes) {
-      if (x.drive_tpdo_cob_id != 0) add_unique(out, x.drive_tpdo_cob_id);
-      add_unique(out, hal::heartbeat_cob_id(x.node_id));
-      add_unique(out, hal::emcy_cob_id(x.node_id));
-      // SDO responses: the node's configuration from its DCF, the in-loop reads.
-      if (x.dcf || config.canopen.sdo_poll_period_ms > 0)
-        add_unique(out, hal::sdo_response_cob_id(x.node_id));
-    }
-  }
-  return out;
-}
-
-std::vector<hal::CanFilter> device_filters(const hal::DeviceConfig& config) {
-  std::vector<hal::CanFilter> out;
-  add_unique(out, hal::kSyncCobId);
-  for (const hal::AxisConfig& axis : config.axes)
-    if (axis.drive_cob_id != 0) add_unique(out, axis.drive_cob_id);
-  if (config.canopen.managed) {
-    add_unique(out, hal::kNmtCobId);
-    add_unique(out, hal::heartbeat_cob_id(config.canopen.controller_node_id));
-    for (const hal::CanopenAxisConfig& x : config.canopen.axes)  // each node's SDO server
-      add_unique(out, hal::sdo_request_cob_id(x.node_id));
-  }
   return out;
 }
 

@@ -305,9 +305,9 @@ void SceneRunner::count_period(const platform::PeriodReport& report) noexcept {
     ++s.bus_error_periods;
   if (!report.sample_valid) ++s.invalid_periods;
   if (!report.torque_commanded) count_zero_torque(report, s);
-  if (report.entered_safe_stop && !has_first_fault_ && loop_.supervisor() != nullptr &&
-      loop_.supervisor()->first_fault() != nullptr) {
-    first_fault_ = *loop_.supervisor()->first_fault();
+  if (report.entered_safe_stop && !has_first_fault_ && loop_.managed() &&
+      loop_.device().first_fault() != nullptr) {
+    first_fault_ = *loop_.device().first_fault();
     has_first_fault_ = true;
   }
 }
@@ -320,15 +320,14 @@ void SceneRunner::record(const platform::PeriodReport& report, const PeriodConta
     rec.handle_force_n = plant->figures().handle_force_n;
     rec.device_port_energy_j = plant->figures().port_energy_j;
   }
-  if (const hal::CanopenMaster* m = loop_.canopen()) {
-    const std::uint64_t received = m->emcy_log().counters().received;
-    if (received > emcys_traced_) {
-      rec.emcys = static_cast<int>(std::min<std::uint64_t>(received - emcys_traced_, 1'000'000));
-      if (const hal::EmcyRecord* e = m->emcy_log().newest()) {
-        rec.emcy_node = e->message.node_id;
-        rec.emcy_code = e->message.error_code;
+  if (const hal::DeviceReport d = loop_.device().report(); d.managed) {
+    if (d.emcys > emcys_traced_) {
+      rec.emcys = static_cast<int>(std::min<std::uint64_t>(d.emcys - emcys_traced_, 1'000'000));
+      if (d.has_emcy) {
+        rec.emcy_node = d.newest_emcy_node;
+        rec.emcy_code = d.newest_emcy_code;
       }
-      emcys_traced_ = received;
+      emcys_traced_ = d.emcys;
     }
   }
   if (trace_writer_) {

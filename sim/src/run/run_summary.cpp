@@ -10,8 +10,6 @@
 #include <string>
 #include <string_view>
 
-#include "numen/hal/canopen/emcy.hpp"
-#include "numen/hal/canopen/heartbeat.hpp"
 #include "numen/sim/run/grasp_summary.hpp"
 #include "numen/sim/run/run.hpp"
 #include "numen/sim/run/run_summary.hpp"
@@ -163,8 +161,7 @@ RunSummary SceneRunner::summary() const {
     s.encoder_frames_wrong_length = static_cast<std::int64_t>(d.frames_wrong_length);
     s.values_out_of_range = static_cast<std::int64_t>(d.rejected_out_of_range);
     s.values_jump = static_cast<std::int64_t>(d.rejected_jump);
-    if (const hal::CanopenMaster* m = loop_.canopen())
-      s.frames_rejected += static_cast<std::int64_t>(m->counters().drive_tpdos_malformed);
+    s.frames_rejected += static_cast<std::int64_t>(loop_.device().report().malformed_drive_frames);
   }
   if (trace_writer_) {
     const platform::TraceWriterCounters c = trace_writer_->counters();
@@ -201,20 +198,20 @@ RunSummary SceneRunner::summary() const {
     s.bus_record_io_errors = static_cast<std::int64_t>(w.io_errors);
     s.bus_record_format_errors = static_cast<std::int64_t>(w.format_errors);
   }
-  if (const hal::CanopenMaster* m = loop_.canopen()) {
-    const hal::SafetySupervisor& sup = *loop_.supervisor();
-    const hal::StartupReport& st = m->startup();
+  if (const hal::DeviceReport d = loop_.device().report(); d.managed) {
+    const hal::DeviceNotes notes = loop_.device().notes();
+    const hal::StartupStatus& st = d.startup;
     s.startup = hal::to_string(st.phase);
     if (st.phase == hal::StartupPhase::kFailed)
       s.startup += " (node " + std::to_string(st.missing_node) + ")";
-    if (st.configuration_failed) s.startup += ": " + m->configuration_error();
+    if (st.configuration_failed) s.startup += ": " + notes.configuration_error;
     if (st.phase == hal::StartupPhase::kOperational || st.attempts > 1)
       s.periods_to_operational = static_cast<std::int64_t>(st.done_period);
     s.periods_to_active = loop_.first_active_period();
     s.periods_to_torque = loop_.first_torque_period();
-    s.lifecycle = hal::to_string(sup.state());
-    s.faults = static_cast<std::int64_t>(sup.counters().latches);
-    s.fault_records = static_cast<std::int64_t>(sup.counters().records);
+    s.lifecycle = hal::to_string(d.lifecycle);
+    s.faults = static_cast<std::int64_t>(d.latches);
+    s.fault_records = static_cast<std::int64_t>(d.fault_records);
     if (has_first_fault_) {
       s.first_fault = hal::to_string(first_fault_.cause);
       s.first_fault_id = first_fault_.id;
@@ -222,35 +219,16 @@ RunSummary SceneRunner::summary() const {
       s.first_fault_time_s = static_cast<double>(first_fault_.time_ns) * 1e-9;
       s.first_fault_period = static_cast<std::int64_t>(first_fault_.period);
     }
-    s.emcys = static_cast<std::int64_t>(m->emcy_log().counters().received);
-    s.emcy_faults = static_cast<std::int64_t>(m->emcy_log().counters().faults);
-    s.configured_nodes = static_cast<std::int64_t>(m->counters().configurations);
-    if (const hal::SdoPoller* p = m->sdo_poller()) {
-      s.sdo_reads = static_cast<std::int64_t>(p->counters().completed);
-      s.sdo_read_errors = static_cast<std::int64_t>(p->counters().aborted + p->counters().timeouts);
+    s.emcys = static_cast<std::int64_t>(d.emcys);
+    s.emcy_faults = static_cast<std::int64_t>(d.emcy_faults);
+    s.configured_nodes = static_cast<std::int64_t>(d.configured_nodes);
+    if (d.sdo_polled) {
+      s.sdo_reads = static_cast<std::int64_t>(d.sdo_reads);
+      s.sdo_read_errors = static_cast<std::int64_t>(d.sdo_read_errors);
     }
-    for (std::size_t i = 0; i < m->emcy_log().size(); ++i) {
-      const hal::EmcyRecord& r = *m->emcy_log().at(i);
-      // A drive node's codes by the CiA 402 table (its device profile), others by CiA 301's.
-      std::uint16_t profile = 301;
-      for (std::size_t d = 0; d < m->num_drives(); ++d) {
-        const auto axis = static_cast<std::size_t>(m->drive_axis(d));
-        if (scene_->device.canopen.axes[axis].node_id == r.message.node_id) profile = 402;
-      }
-      char line[200];
-      std::snprintf(line, sizeof line, "node %d at %.3f s: 0x%04X %s (register 0x%02X)",
-                    r.message.node_id, static_cast<double>(r.timestamp_ns) * 1e-9,
-                    r.message.error_code, hal::describe_emcy_code(r.message.error_code, profile),
-                    r.message.error_register);
-      s.emcy_messages.push_back(line);
-    }
-    for (const hal::HeartbeatConsumer& c : m->heartbeats())
-      s.heartbeat_losses += static_cast<std::int64_t>(c.counters().losses);
-    for (std::size_t i = 0; i < m->num_drives(); ++i) {
-      const int axis = m->drive_axis(i);
-      s.drive_states.push_back(scene_->device.axes[static_cast<std::size_t>(axis)].name + ": " +
-                               hal::to_string(m->drive_outputs()[i].state));
-    }
+    s.emcy_messages = notes.emcy_messages;
+    s.heartbeat_losses += static_cast<std::int64_t>(d.heartbeat_losses);
+    s.drive_states = notes.drive_states;
   }
   return s;
 }

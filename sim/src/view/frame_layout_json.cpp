@@ -6,7 +6,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "numen/hal/device/safety_supervisor.hpp"
+#include "numen/hal/device/device_status.hpp"
 #include "numen/platform/state_frame.hpp"
 
 namespace numen::sim {

@@ -368,8 +368,9 @@ TEST(ImpedanceDevice, MakeDeviceFollowsTheConfiguredProtocol) {
   InstrumentDevice minimal(m);
   const auto a = make_device(minimal, bus.controller(), 1'000'000);
   EXPECT_NE(dynamic_cast<MinimalDevice*>(a.get()), nullptr);
-  EXPECT_EQ(a->canopen(), nullptr);
-  EXPECT_EQ(a->supervisor(), nullptr);
+  EXPECT_FALSE(a->report().managed);  // no CANopen master, no supervisor
+  EXPECT_EQ(a->report().lifecycle, LifecycleState::kUnconfigured);
+  EXPECT_TRUE(a->notes().drive_states.empty());
   EXPECT_EQ(a->rearm(), RearmResult::kMinimalProtocol);
   EXPECT_EQ(a->activate(), LifecycleResult::kNotInactive);
   DeviceConfig c = make_default_trocar_config(1);
@@ -377,8 +378,11 @@ TEST(ImpedanceDevice, MakeDeviceFollowsTheConfiguredProtocol) {
   InstrumentDevice managed(c);
   const auto b = make_device(managed, bus.controller(), 1'000'000);
   ASSERT_NE(dynamic_cast<ManagedDevice*>(b.get()), nullptr);
-  ASSERT_NE(b->canopen(), nullptr);
-  ASSERT_NE(b->supervisor(), nullptr);
+  ASSERT_NE(dynamic_cast<ManagedDevice*>(b.get())->canopen(), nullptr);
+  ASSERT_NE(dynamic_cast<ManagedDevice*>(b.get())->supervisor(), nullptr);
+  EXPECT_TRUE(b->report().managed);
+  EXPECT_EQ(b->report().lifecycle, LifecycleState::kInactive);
+  EXPECT_EQ(b->notes().drive_states.size(), 3u);  // the trocar's three driven axes
   EXPECT_EQ(b->lifecycle(), LifecycleState::kInactive);  // configured at construction
   EXPECT_EQ(b->rearm(), RearmResult::kNotLatched);
   EXPECT_THROW(make_device(managed, bus.controller(), 0), std::invalid_argument);

@@ -128,6 +128,13 @@ struct Data {
   /// Per body: its own device target (Eq. 6) besides the attached body's
   /// `target`. An enabled entry of the attached body itself is ignored.
   std::vector<BodyTarget> body_targets;
+  /// Per body, ≥ 0: the device whose feedback the body's Eq. 8 wrench is (compute_feedback()):
+  /// with a body held, the wrenches of one group's bodies are saturated as one composite (their
+  /// Eq. 9 sum), each group on its own, so that one device's load never scales another's
+  /// feedback. The control loop sets it at construction to the index of the device that drives
+  /// the body (platform::ControlLoop with several devices); 0 for every body by default (one
+  /// device). Wiring, not state: reset_data() keeps it.
+  std::vector<int> feedback_group;
   std::vector<JointPrescription> joint_prescribed;  ///< Per joint; read for prescribed joints only.
 
   // ---- outputs of the last step ----

@@ -24,26 +24,29 @@
 ///                 → AdmittanceDevice::write → write_pose (inverse kinematics, csp RPDOs; the
 ///                 set-points held with controlword shutdown outside kActive).
 /// The kind and protocol (DeviceConfig::canopen.managed) are chosen once, at construction
-/// (hal::make_device(); the stage list); no period branches on them. The same object runs against SimBus in
+/// (hal::make_device(); the stage list); no period branches on them. A loop may run several
+/// impedance devices (at most kMaxLoopDevices; LoopDevice), on one bus or on several, each with
+/// its binding to the bodies it drives, its own supervision and its own safe state; each stage
+/// runs over every device, the step once (period_stages.hpp), and one device's safe state
+/// latches the others' (docs/safety.md "Several devices"). The same object runs against SimBus in
 /// simulation and SocketCAN on hardware. Construction may allocate; begin_period / end_period /
 /// rearm never allocate, throw, lock or block.
 
 #include <array>
 #include <cstdint>
 #include <memory>
+#include <span>
 #include <vector>
 
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"
 #include "numen/hal/transport/bus.hpp"
-#include "numen/hal/canopen/canopen_master.hpp"
-#include "numen/hal/canopen/cia402.hpp"
+#include "numen/hal/transport/bus_share.hpp"
 #include "numen/hal/device/admittance_device.hpp"
 #include "numen/hal/device/device.hpp"
+#include "numen/hal/device/device_status.hpp"
 #include "numen/hal/device/impedance_device.hpp"
-#include "numen/hal/canopen/device_lifecycle.hpp"
 #include "numen/hal/device/instrument_device.hpp"
-#include "numen/hal/device/safety_supervisor.hpp"
 #include "numen/platform/device_binding.hpp"
 #include "numen/platform/latency_histogram.hpp"
 #include "numen/platform/loop_statistics.hpp"
@@ -64,13 +67,32 @@ struct ControlLoopSettings : hal::ImpedanceSettings {
   bool supervise_overruns = false;
 };
 
+/// One device of a ControlLoop that runs several (the LoopDevice constructor): an impedance
+/// instrument on a bus, the bodies it drives and its supervision.
+struct LoopDevice {
+  /// Its bus (must outlive the loop). Devices that name the same Bus share it: the loop reads
+  /// it through one hal::BusShare port per device, filtered to that device's frames
+  /// (hal::controller_filters()), and the first of them sends the period's SYNC.
+  hal::Bus* bus = nullptr;
+  /// The instrument (configuration, kinematics, decoding; must outlive the loop); its
+  /// DeviceConfig::canopen.managed picks the protocol (hal::make_device()).
+  hal::InstrumentDevice* instrument = nullptr;
+  /// Which bodies its links drive and which prescribed joints its axes impose (an empty link
+  /// list: the rigid binding, link 0 → the held body).
+  DeviceBinding binding = DeviceBinding::rigid();
+  /// Its supervision (encoder timeout, overrun limit, safe-stop timeout, auto-activation,
+  /// drive settings).
+  hal::ImpedanceSettings settings;
+};
+
 /// Result of ControlLoop::rearm() (hal::Device::rearm()).
 using RearmResult = hal::RearmResult;
 /// Short English name of a RearmResult (hal::to_string()).
 inline const char* to_string(RearmResult result) noexcept { return hal::to_string(result); }
 
-/// The control loop of one instrument driving one core::Data.
-/// Not thread safe: one real-time thread owns it.
+/// The control loop of one instrument (or several: LoopDevice) driving one core::Data.
+/// Not thread safe: one real-time thread owns it. Accessors that take a device index `i`
+/// (in [0, num_devices()); default 0) read that device's part.
 class ControlLoop {
  public:
   /// Keeps references: `model`, `data`, `bus` and `device` must outlive the loop.
@@ -88,6 +110,16 @@ class ControlLoop {
   ControlLoop(const core::Model& model, core::Data& data, hal::Bus& bus,
               hal::InstrumentDevice& device, DeviceBinding binding = DeviceBinding::rigid(),
               const ControlLoopSettings& settings = {});
+  /// The loop of `devices` (1 to kMaxLoopDevices impedance instruments, device i = devices[i])
+  /// driving one `data`: each device's binding and supervision as for one device (above),
+  /// plus: a body is bound by at most one device, and at most one device drives the held
+  /// body through the rigid binding (LinkBinding::body = −1); all devices have the same
+  /// control period. Devices naming the same Bus share it (LoopDevice::bus). `settings`:
+  /// supervise_overruns only (each device's supervision is its LoopDevice::settings). Throws
+  /// std::invalid_argument naming the device for any of these, a null bus or instrument,
+  /// or no device / more than kMaxLoopDevices. Allocates (construction only).
+  ControlLoop(const core::Model& model, core::Data& data, std::span<const LoopDevice> devices,
+              const ControlLoopSettings& settings = {});
   /// The loop of an admittance device (built by the caller on its bus, with its supervision
   /// settings: hal::AdmittanceSettings); keeps references to `model`, `data` and `device`.
   /// Throws std::invalid_argument if the model's coupling mode is not kAdmittance. `settings`:
@@ -96,8 +128,13 @@ class ControlLoop {
   ControlLoop(const core::Model& model, core::Data& data, hal::AdmittanceDevice& device,
               const ControlLoopSettings& settings = {});
 
-  /// Starts period k: writes a SYNC (CANopen COB-ID 0x080) stamped `now_ns` (bus clock);
-  /// managed stack: then the NMT command due and the controller's heartbeat when due.
+  /// Not copied or moved: the devices' contexts point at the loop's own records.
+  ControlLoop(const ControlLoop&) = delete;
+  ControlLoop& operator=(const ControlLoop&) = delete;
+
+  /// Starts period k: writes a SYNC (CANopen COB-ID 0x080) stamped `now_ns` (bus clock), one
+  /// per bus; managed stack: then the NMT command due and the controller's heartbeat when due
+  /// (each device's, in device order).
   /// `deadline_mono_ns` / `woke_mono_ns` (CLOCK_MONOTONIC, from PeriodicTimer::wait_next()) stamp
   /// the period for LoopStatistics; < 0: the time of this call.
   void begin_period(std::int64_t now_ns, std::int64_t deadline_mono_ns = -1,
@@ -116,97 +153,113 @@ class ControlLoop {
   ///  5. map: w_l = the bound bodies' Eq. 8 feedback (data.body_feedback) carried to their
   ///     link's origin (Eq. 9), τ = Σ_l J_lᵀ w_l with the state's Jacobians (computed as it
   ///     is, NaN included; 0 for a link without a driven body);
-  ///  6. send: Device::write(DeviceCommand) → ImpedanceDevice::write(τ) — gated (zero unless this period's sample is valid, no
+  ///  6. send: the fault policy between devices (another device in its safe state latches
+  ///     this one's: docs/safety.md "Several devices"), then Device::write(DeviceCommand) →
+  ///     ImpedanceDevice::write(τ) — gated (zero unless this period's sample is valid, no
   ///     shutdown, and — managed — the lifecycle active and the drive's master allowing
   ///     torque), clamped to ±max_torque and scaled by the soft start's r there, once; then
   ///     the torque frames; the report's feedback from what it applied;
   ///  7. finish: Stepper::finish() completes the Data the measurements read (a multirate run's
   ///     single-rate view), outside the timed step.
-  /// The steps are the stage list fixed at construction (period_stages.hpp) over the loop's
-  /// PeriodData (period_data()); `observer`, if not null, sees the record after each stage
-  /// (tests, tracing).
+  /// The steps are the stage list fixed at construction (period_stages.hpp) over each device's
+  /// PeriodData (period_data(i)), stage by stage over the devices, the step once;
+  /// `observer`, if not null, sees each device's record after each stage (tests, tracing).
+  /// Returns device 0's report.
   const PeriodReport& end_period(std::int64_t now_ns, PeriodObserver* observer = nullptr) noexcept;
 
-  /// Re-arms after a latched fault or a failed start-up (for the CLI and tests): asks every
-  /// drive's master for a fault reset, reruns the NMT start-up if a node is not operational (or
-  /// the start-up failed), and re-arms the lifecycle (kFault → kInactive) in the first period
-  /// in which no cause is present; the automatic activation then follows. Never blocks.
+  /// Re-arms after a latched fault or a failed start-up (for the CLI and tests), every device:
+  /// asks every drive's master for a fault reset, reruns the NMT start-up if a node is not
+  /// operational (or the start-up failed), and re-arms the lifecycle (kFault → kInactive) in the
+  /// first period in which no cause is present; the automatic activation then follows (with
+  /// several devices, once none is in its safe state). Never blocks. kAccepted if any device
+  /// accepted, else device 0's result.
   RearmResult rearm() noexcept;
-  /// A re-arm was accepted and has not happened yet.
-  bool rearm_pending() const noexcept { return context_.device->rearm_pending(); }
-  /// Managed stack: kInactive → kActive now (SafetySupervisor::activate()); kNotInactive in the
-  /// minimal protocol.
+  /// A re-arm was accepted and has not happened yet (on any device).
+  bool rearm_pending() const noexcept;
+  /// Managed stack: kInactive → kActive now (SafetySupervisor::activate()), every device;
+  /// kNotInactive in the minimal protocol. The first result that is not kOk, else kOk.
   hal::LifecycleResult activate() noexcept;
 
-  /// Orderly stop (Ctrl-C / SIGTERM, the end of a run on a real bus): from now on no automatic
-  /// activation or pending re-arm, and the lifecycle leaves kActive for kInactive (managed:
-  /// SafetySupervisor::deactivate()), so every following period sends zero torque and the
-  /// drives' masters are asked for kDisabled (disable voltage, CiA 402 §6.3). The caller then
+  /// Orderly stop (Ctrl-C / SIGTERM, the end of a run on a real bus), every device: from now on
+  /// no automatic activation or pending re-arm, and the lifecycle leaves kActive for kInactive
+  /// (managed: SafetySupervisor::deactivate()), so every following period sends zero torque and
+  /// the drives' masters are asked for kDisabled (disable voltage, CiA 402 §6.3). The caller then
   /// runs periods until drives_disabled() (or a bound) so the controlwords go out. The minimal
   /// protocol has no lifecycle: its periods send zero torque from now on. Never blocks.
   void shutdown() noexcept;
   /// shutdown() was called.
-  bool shutting_down() const noexcept { return context_.device->shutting_down(); }
-  /// Managed: every drive's master reports a disabled state (not energised: switch on
-  /// disabled, ready to switch on, not ready, fault); minimal protocol: true.
+  bool shutting_down() const noexcept { return contexts_[0].device->shutting_down(); }
+  /// Managed: every drive's master of every device reports a disabled state (not energised:
+  /// switch on disabled, ready to switch on, not ready, fault); minimal protocol: true.
   bool drives_disabled() const noexcept;
-  /// True for the managed stack.
-  bool managed() const noexcept { return context_.device->canopen() != nullptr; }
-  /// The device (protocol, supervision), of either kind.
-  const hal::Device& device() const noexcept { return *context_.device; }
-  /// The impedance device (the torques sent); precondition: the loop was built for one
-  /// (admittance() is null).
-  const hal::ImpedanceDevice& impedance() const noexcept {
-    return static_cast<const hal::ImpedanceDevice&>(*context_.device);
+  /// True for the managed stack (device 0's protocol; hal::DeviceReport::managed).
+  bool managed() const noexcept { return contexts_[0].device->report().managed; }
+  /// The number of devices, in [1, kMaxLoopDevices].
+  std::size_t num_devices() const noexcept { return num_devices_; }
+  /// Device `i` (protocol, supervision), of either kind.
+  const hal::Device& device(std::size_t i = 0) const noexcept { return *contexts_[i].device; }
+  /// Same, mutable (tests: e.g. to reach a managed device's CANopen master). Not while
+  /// end_period() runs.
+  hal::Device& device(std::size_t i = 0) noexcept { return *contexts_[i].device; }
+  /// Impedance device `i` (the torques sent); precondition: the loop was built for impedance
+  /// devices (admittance() is null).
+  const hal::ImpedanceDevice& impedance(std::size_t i = 0) const noexcept {
+    return static_cast<const hal::ImpedanceDevice&>(*contexts_[i].device);
   }
   /// The admittance device (nullptr for an impedance device).
   const hal::AdmittanceDevice* admittance() const noexcept {
-    return dynamic_cast<const hal::AdmittanceDevice*>(context_.device);
+    return dynamic_cast<const hal::AdmittanceDevice*>(contexts_[0].device);
   }
-  /// The CANopen master (nullptr in the minimal protocol).
-  const hal::CanopenMaster* canopen() const noexcept { return context_.device->canopen(); }
-  /// The CANopen master, e.g. to queue an NMT command (nullptr in the minimal protocol).
-  hal::CanopenMaster* canopen() noexcept { return context_.device->canopen(); }
-  /// The safety supervisor and lifecycle (nullptr in the minimal protocol).
-  const hal::SafetySupervisor* supervisor() const noexcept { return context_.device->supervisor(); }
-  /// Timing statistics of the periods (wake-up, step, bus I/O, end-to-end, overruns).
+  /// Timing statistics of the periods (wake-up, step, bus I/O, end-to-end, overruns; with
+  /// several devices from the first device's read to the last one's writes).
   const LoopStatistics& statistics() const noexcept { return *stats_; }
-  /// Period index (0-based end_period() count) at which the lifecycle first became active;
-  /// -1 if never.
-  std::int64_t first_active_period() const noexcept { return context_.first_active_period; }
-  /// Period index at which non-zero torque was first commanded; -1 if never.
-  std::int64_t first_torque_period() const noexcept { return context_.first_torque_period; }
+  /// Period index (0-based end_period() count) at which device i's lifecycle first became
+  /// active; -1 if never.
+  std::int64_t first_active_period(std::size_t i = 0) const noexcept {
+    return contexts_[i].first_active_period;
+  }
+  /// Period index at which device i first commanded non-zero torque; -1 if never.
+  std::int64_t first_torque_period(std::size_t i = 0) const noexcept {
+    return contexts_[i].first_torque_period;
+  }
 
   /// The step stage's dynamics (step 4 of end_period()): `stepper`'s step() over the loop's
   /// Model and Data, and its finish() after the commands were sent (outside the timed step),
   /// e.g. the multirate god-object's device period and its single-rate view
   /// (sim::MultirateRun). Null restores core::step (CoreStepper). Keeps a pointer: `stepper`
   /// must outlive the loop or be replaced first. Not while end_period() runs.
-  void set_stepper(Stepper* stepper) noexcept {
-    context_.stepper = stepper != nullptr ? stepper : &core_stepper_;
-  }
+  void set_stepper(Stepper* stepper) noexcept;
 
   /// Wall time of core::step per period (ns).
-  const LatencyHistogram& step_time() const noexcept { return context_.step_time; }
-  /// Counters since construction.
-  const ControlLoopCounters& counters() const noexcept { return context_.counters; }
-  /// What the last end_period() did.
-  const PeriodReport& last_report() const noexcept { return period_.report; }
-  /// The period record (what the last period's stages wrote).
-  const PeriodData& period_data() const noexcept { return period_; }
+  const LatencyHistogram& step_time() const noexcept { return contexts_[0].step_time; }
+  /// Device i's counters since construction.
+  const ControlLoopCounters& counters(std::size_t i = 0) const noexcept {
+    return contexts_[i].counters;
+  }
+  /// What the last end_period() did (device i's report).
+  const PeriodReport& last_report(std::size_t i = 0) const noexcept { return periods_[i].report; }
+  /// Device i's period record (what the last period's stages wrote).
+  const PeriodData& period_data(std::size_t i = 0) const noexcept { return periods_[i]; }
   /// The stage list end_period() runs (fixed at construction by the kind of device).
   std::span<const PeriodStageEntry> stages() const noexcept { return stages_; }
 
  private:
-  // The context's fixed part (construction).
-  void init_context(const core::Model& model, core::Data& data, hal::Device& device,
-                    const ControlLoopSettings& settings);
+  // Device i's context: its fixed part (construction).
+  void init_context(std::size_t i, const core::Model& model, core::Data& data,
+                    hal::Device& device, const ControlLoopSettings& settings);
+  // Device i's binding: checked against the model and the device, kept, and the bodies and
+  // prescribed joints it drives set to hold where they start.
+  void bind(std::size_t i, const core::Model& model, core::Data& data,
+            const hal::InstrumentDevice& instrument, DeviceBinding binding);
 
   CoreStepper core_stepper_;
-  std::unique_ptr<hal::Device> owned_;     // impedance: built around the caller's instrument
+  std::vector<std::unique_ptr<hal::BusShare>> shares_;  // one per bus several devices share
+  std::array<std::unique_ptr<hal::Device>, kMaxLoopDevices> owned_;  // impedance devices
   std::unique_ptr<LoopStatistics> stats_;
-  PeriodContext context_;                  // the device (owned_ or the caller's), binding, tallies
-  PeriodData period_;
+  std::size_t num_devices_ = 1;
+  // Per device: the device (owned_ or the caller's), binding, tallies; and its record.
+  std::array<PeriodContext, kMaxLoopDevices> contexts_;
+  std::array<PeriodData, kMaxLoopDevices> periods_;
   std::span<const PeriodStageEntry> stages_;
 };
 

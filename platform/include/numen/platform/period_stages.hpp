@@ -9,7 +9,12 @@
 ///   impedance:  read → supervise → bind_link_targets → step → map_link_wrenches → send → finish
 ///   admittance: read → supervise → bind_measured_wrench → step → map_held_pose → send → finish
 ///
-/// so that no period branches on the kind of device. The torques' conditioning (gate,
+/// so that no period branches on the kind of device. A loop with several devices runs each
+/// stage over every device in turn (stage by stage: every device's read, then every device's
+/// supervision, ...), each over its own context and record; the loop's shared work — the one
+/// step, Stepper::finish() and LoopStatistics — is device 0's, and the other devices' step and
+/// finish stages take its figures from its record. The send stage applies the fault policy
+/// between devices (docs/safety.md "Several devices"). The torques' conditioning (gate,
 /// passivity controller, clamp, soft start) is the send stage's, inside the device's write()
 /// (hal::ImpedanceDevice::write(), once; docs/safety.md). Every stage is noexcept, allocation
 /// free, lock free and never blocks; each writes only the PeriodData fields whose writer it is
@@ -43,8 +48,12 @@ struct ControlLoopCounters {
   std::uint64_t non_finite_wrenches = 0;
 };
 
+/// Most devices one ControlLoop runs (its constructor refuses more): the contexts and records
+/// are fixed arrays of this size in the loop, nothing is allocated per device in a period.
+inline constexpr int kMaxLoopDevices = 4;
+
 /// What one device's period stages read besides PeriodData (fixed at construction) and the
-/// tallies they keep across periods. Owned by the ControlLoop.
+/// tallies they keep across periods. Owned by the ControlLoop, one per device.
 struct PeriodContext {
   const core::Model* model = nullptr;  ///< The model (never written).
   core::Data* data = nullptr;          ///< The Data the device drives.
@@ -60,6 +69,12 @@ struct PeriodContext {
   LoopStatistics* stats = nullptr;         ///< The period's timing statistics.
   std::int64_t first_active_period = -1;   ///< Period the lifecycle first became active.
   std::int64_t first_torque_period = -1;   ///< Period non-zero torque was first commanded.
+  /// This device's index in the loop, in [0, records.size()). Device 0 does the loop's shared
+  /// work (the step, Stepper::finish(), LoopStatistics) for all.
+  int index = 0;
+  /// Every device's record of the loop, [number of devices] (this device's is records[index]):
+  /// device 0's step and statistics figures, the peers' supervision for the fault policy.
+  std::span<const PeriodData> records;
 };
 
 /// One stage: runs over `context` and `period` at bus time `now_ns`.
@@ -104,7 +119,8 @@ void bind_link_targets(PeriodContext& context, PeriodData& period, std::int64_t 
 /// held body's COM into Data::device_wrench; otherwise a brake that halves the held body's
 /// twist each step.
 void bind_measured_wrench(PeriodContext& context, PeriodData& period, std::int64_t now_ns) noexcept;
-/// step: Stepper::step() over (Model, Data), timed.
+/// step: Stepper::step() over (Model, Data), timed — once a period, by device 0; device i > 0
+/// takes device 0's step stamps into its record.
 void step_dynamics(PeriodContext& context, PeriodData& period, std::int64_t now_ns) noexcept;
 /// map (impedance): w_l = the bound bodies' Eq. 8 wrenches carried to their link's origin
 /// (Eq. 9, once), τ = Σ_l J_lᵀ w_l with the state's Jacobians, and their sum about link 0's
@@ -112,12 +128,24 @@ void step_dynamics(PeriodContext& context, PeriodData& period, std::int64_t now_
 void map_link_wrenches(PeriodContext& context, PeriodData& period, std::int64_t now_ns) noexcept;
 /// map (admittance): the held body's pose (none held: no pose, the set-points are held).
 void map_held_pose(PeriodContext& context, PeriodData& period, std::int64_t now_ns) noexcept;
-/// send: hal::Device::write() — gated, conditioned and sent there, once; the report's
-/// feedback from what it applied (gated: 0; else × the soft start's r).
+/// send: first the fault policy between the loop's devices (docs/safety.md "Several
+/// devices"): while another device is in its safe state (kSafeStop or kFault after this
+/// period's supervision), this device, if active, latches its own now
+/// (hal::Device::latch_safe_state(), FaultCause::kPeerFault, id = the peer's index), and is
+/// held out of an automatic activation (hal::Device::hold_activation()); then
+/// hal::Device::write() — gated, conditioned and sent there, once; the report's feedback from
+/// what it applied (gated: 0; else × the soft start's r).
 void send_command(PeriodContext& context, PeriodData& period, std::int64_t now_ns) noexcept;
 /// finish: Stepper::finish() (outside the timed step), the lifecycle and fault cause after the
-/// write, the counters, LoopStatistics' verdict.
+/// write, the counters, LoopStatistics' verdict. Device 0 finishes the step and records the
+/// loop's period (from its deadline to the last device's writes; loop_period_times()); the
+/// others take its overrun verdict.
 void finish_period(PeriodContext& context, PeriodData& period, std::int64_t now_ns) noexcept;
+
+/// The stamps of one loop period over the records of all its devices, [N]: the deadline,
+/// wake-up, input and output starts of the first device; the SYNC, input and output ends of
+/// the last; the step's (device 0's). For one device: its record's times().
+PeriodTimes loop_period_times(std::span<const PeriodData> records) noexcept;
 
 /// The impedance device's stage list (see the file comment).
 std::span<const PeriodStageEntry> impedance_period_stages() noexcept;

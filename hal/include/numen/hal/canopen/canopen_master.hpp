@@ -54,37 +54,18 @@
 #include "numen/hal/canopen/nmt.hpp"
 #include "numen/hal/canopen/pdo_mapping.hpp"
 
+#include "numen/hal/device/device_status.hpp"
+
 namespace numen::hal {
 
-/// Phases of the NMT start-up.
-enum class StartupPhase : std::uint8_t {
-  kResetCommunication,  ///< Reset communication (all nodes) is sent at the next begin_period().
-  kWaitBootUp,          ///< Waiting for every node's boot-up message.
-  kStartNodes,          ///< Start remote node (all nodes) is sent at the next begin_period().
-  kWaitOperational,     ///< Waiting for every node's heartbeat to report operational.
-  kOperational,         ///< Every node was heard operational: the start-up is complete.
-  kFailed,              ///< startup_timeout_ms passed first, or a node's configuration failed
-                        ///< (StartupReport says which node).
-  kConfigure,           ///< Every node booted; the nodes with a DCF are being configured over
-                        ///< SDO (pre-operational), then kStartNodes. (Last in the enum only to
-                        ///< keep the other values, which state frames carry, unchanged.)
-};
-
-/// Short English name of a StartupPhase (static string), e.g. "wait boot-up".
-const char* to_string(StartupPhase phase) noexcept;
 
 /// What the last start-up did.
-struct StartupReport {
-  StartupPhase phase = StartupPhase::kResetCommunication;  ///< Current phase.
+/// Its base, StartupStatus (device_status.hpp), is what a DeviceReport carries of it.
+struct StartupReport : StartupStatus {
   std::uint64_t began_period = 0;  ///< update() index of the period the start-up began in.
   std::int64_t began_ns = 0;       ///< Time the reset communication was sent, ns.
-  std::uint64_t done_period = 0;   ///< update() index at which kOperational / kFailed was reached.
   std::int64_t done_ns = 0;        ///< Its time, ns.
-  std::uint8_t missing_node = 0;   ///< kFailed: the first node not booted / not operational /
-                                   ///< not configured.
-  bool configuration_failed = false;  ///< kFailed by a node's configuration (configuration_error()).
   std::int64_t configure_ns = 0;   ///< Time spent in kConfigure in this start-up, ns.
-  std::uint32_t attempts = 0;      ///< Start-ups begun (1 after the first).
 };
 
 /// Counters of a CanopenMaster since construction.

@@ -25,45 +25,10 @@
 
 #include "numen/hal/canopen/cia402.hpp"
 
+#include "numen/hal/device/device_status.hpp"
+
 namespace numen::hal {
 
-/// States of a DeviceLifecycle.
-enum class LifecycleState : std::uint8_t {
-  kUnconfigured,  ///< Not configured: nothing is read or supervised, zero torque.
-  kInactive,      ///< Configured: inputs are read and supervised, zero torque, drives disabled.
-  kActive,        ///< Torque commands allowed (the only such state), drives enabled.
-  kSafeStop,      ///< A fault was detected: zero torque, drives being disabled (CiA 402).
-  kFault,         ///< Latched safe state: zero torque, drives disabled (or timed out); only
-                  ///< rearm() leaves it.
-};
-
-/// Short English name of a LifecycleState (static string), e.g. "safe stop".
-const char* to_string(LifecycleState state) noexcept;
-
-/// Outcome of a lifecycle transition request.
-enum class LifecycleResult : std::uint8_t {
-  kOk,                  ///< The transition was made.
-  kNotUnconfigured,     ///< configure() outside kUnconfigured.
-  kNotInactive,         ///< activate() or cleanup() outside kInactive.
-  kNotActive,           ///< deactivate() outside kActive.
-  kFaultLatched,        ///< configure/activate/deactivate/cleanup while kSafeStop or kFault:
-                        ///< only rearm() leaves the safe state.
-  kSafeStopInProgress,  ///< rearm() while kSafeStop: the drives have not yet been disabled.
-  kNotFaulted,          ///< rearm() outside kSafeStop / kFault: there is nothing to re-arm.
-  kCausePresent,        ///< activate() or rearm() while a fault condition is present (the
-                        ///< supervisor's last verdict; SafetySupervisor::blocking() says which).
-};
-
-/// Short English reason for a LifecycleResult (static string), e.g. "a fault cause is still
-/// present".
-const char* to_string(LifecycleResult result) noexcept;
-
-/// Creation settings of a DeviceLifecycle.
-struct LifecycleSettings {
-  /// Periods, >= 1, that kSafeStop waits for every drive to report a disabled state before it
-  /// gives up and latches kFault anyway (recorded as a timeout). 100 = 0.1 s at 1 kHz.
-  std::uint32_t safe_stop_timeout_periods = 100;
-};
 
 /// The supervisor's verdict for one period (input of DeviceLifecycle::update()).
 struct LifecycleInputs {

@@ -21,10 +21,8 @@
 
 #include <cstdint>
 
-#include "numen/hal/canopen/canopen_master.hpp"
-#include "numen/hal/canopen/device_lifecycle.hpp"
 #include "numen/hal/device/device_state.hpp"
-#include "numen/hal/device/safety_supervisor.hpp"
+#include "numen/hal/device/device_status.hpp"
 #include "numen/hal/transport/bus.hpp"
 
 namespace numen::hal {
@@ -58,11 +56,16 @@ class Device {
   Device(const Device&) = delete;
   Device& operator=(const Device&) = delete;
 
-  /// Starts period k at bus time `now_ns`: a SYNC (COB-ID 0x080, counter 1..240), then the
-  /// protocol's period-start frames (managed: the NMT command due, the controller heartbeat).
-  /// Returns the SYNC write's status; a kError (of any of these writes) is an I/O error for
-  /// the supervision.
+  /// Starts period k at bus time `now_ns`: a SYNC (COB-ID 0x080, counter 1..240) if this
+  /// device produces it (set_sync_producer()), then the protocol's period-start frames
+  /// (managed: the NMT command due, the controller heartbeat). Returns the SYNC write's status
+  /// (kOk without one); a kError (of any of these writes) is an I/O error for the supervision.
   IoStatus begin_period(std::int64_t now_ns) noexcept;
+
+  /// Whether begin_period() writes the SYNC (default true). One SYNC producer per bus
+  /// (CiA 301 §7.2.5): of several devices on one bus, the control loop leaves it to the first.
+  /// Construction time.
+  void set_sync_producer(bool produce) noexcept { sync_producer_ = produce; }
 
   /// Reads every pending frame (at most 1024), gives each to the protocol (take_frame: managed,
   /// drive TPDOs, heartbeats, EMCY) or else to the kind's input (on_input_frame: encoder or
@@ -104,14 +107,31 @@ class Device {
   /// (nullptr: none, or no supervision).
   virtual const FaultRecord* first_fault() const noexcept { return nullptr; }
 
+  // ---- several devices in one loop (docs/safety.md "Several devices") ----
+  /// Latches the safe state now for a cause found outside the device (the control loop's
+  /// FaultCause::kPeerFault, `id` = the peer's index in the loop): zero torque from this
+  /// period's write on, until rearm(). Without a lifecycle (the minimal protocol) nothing
+  /// latches.
+  virtual void latch_safe_state(FaultCause cause, std::uint8_t id) noexcept {
+    (void)cause;
+    (void)id;
+  }
+  /// While held, supervise() makes no automatic activation (the lifecycle stays out of
+  /// kActive): the control loop holds a device while another of its devices is in its safe
+  /// state, so that the devices return to kActive together. Default: not held.
+  void hold_activation(bool held) noexcept { activation_held_ = held; }
+  /// hold_activation(true) is in force.
+  bool activation_held() const noexcept { return activation_held_; }
+
   /// The bus.
   const Bus& bus() const noexcept { return *bus_; }
-  /// The CANopen master (nullptr without the managed stack).
-  virtual const CanopenMaster* canopen() const noexcept { return nullptr; }
-  /// Same, mutable (e.g. to queue an NMT command).
-  virtual CanopenMaster* canopen() noexcept { return nullptr; }
-  /// The impedance stack's safety supervisor and lifecycle (nullptr otherwise).
-  virtual const SafetySupervisor* supervisor() const noexcept { return nullptr; }
+  /// The protocol's and the supervision's figures now (device_status.hpp): the face through
+  /// which the code above hal reads them, without naming the protocol (the minimal protocol:
+  /// `managed` false and the defaults). Never allocates.
+  virtual DeviceReport report() const noexcept { return {}; }
+  /// The same in words for a summary (EMCY messages, drive states, a configuration error).
+  /// Allocates: never in a period.
+  virtual DeviceNotes notes() const { return {}; }
 
  protected:
   /// Keeps a reference: `bus` must outlive the device.
@@ -150,6 +170,8 @@ class Device {
  private:
   DeviceState state_;
   std::uint8_t sync_counter_ = 0;
+  bool sync_producer_ = true;
+  bool activation_held_ = false;
   bool io_error_ = false;
   bool shutting_down_ = false;
 };

@@ -48,6 +48,7 @@
 
 #include "numen/hal/canopen/cia402.hpp"
 #include "numen/hal/device/device.hpp"
+#include "numen/hal/device/device_status.hpp"
 #include "numen/hal/device/instrument_device.hpp"
 #include "numen/hal/device/kinematics.hpp"
 #include "numen/hal/device/passivity_controller.hpp"

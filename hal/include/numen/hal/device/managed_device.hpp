@@ -20,6 +20,7 @@
 #include <cstdint>
 #include <memory>
 
+#include "numen/hal/canopen/canopen_master.hpp"
 #include "numen/hal/device/impedance_device.hpp"
 #include "numen/hal/device/safety_supervisor.hpp"
 
@@ -45,10 +46,20 @@ class ManagedDevice final : public ImpedanceDevice {
   bool rearm_pending() const noexcept override { return rearm_pending_; }
   bool drives_disabled() const noexcept override;
 
-  const CanopenMaster* canopen() const noexcept override { return master_.get(); }
-  CanopenMaster* canopen() noexcept override { return master_.get(); }
-  const SafetySupervisor* supervisor() const noexcept override { return supervisor_.get(); }
+  DeviceReport report() const noexcept override;
+  DeviceNotes notes() const override;
+
+  /// The CANopen master (hal and tests; the code above hal reads report()).
+  const CanopenMaster* canopen() const noexcept { return master_.get(); }
+  /// Same, mutable (e.g. to queue an NMT command).
+  CanopenMaster* canopen() noexcept { return master_.get(); }
+  /// The safety supervisor and lifecycle (hal and tests; above hal: report(), first_fault()).
+  const SafetySupervisor* supervisor() const noexcept { return supervisor_.get(); }
   const FaultRecord* first_fault() const noexcept override { return supervisor_->first_fault(); }
+  /// SafetySupervisor::trip(cause, id, 0).
+  void latch_safe_state(FaultCause cause, std::uint8_t id) noexcept override {
+    supervisor_->trip(cause, id, 0.0);
+  }
 
  private:
   bool take_frame(const CanFrame& frame) noexcept override { return master_->on_frame(frame); }

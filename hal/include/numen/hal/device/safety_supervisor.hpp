@@ -43,84 +43,15 @@
 #include "numen/hal/device/kinematics.hpp"
 #include "numen/hal/device/sample_check.hpp"
 
+#include "numen/hal/device/device_status.hpp"
+
 namespace numen::hal {
 
-/// Why the safe state latched (or would latch).
-enum class FaultCause : std::uint8_t {
-  kNone,             ///< No fault.
-  kBadInput,         ///< SafetyInputs spans do not match the configuration (fewer axis
-                     ///< entries than axes, more drives than kMaxSupervisedDrives).
-  kBusOff,           ///< The CAN controller is bus off (ISO 11898-1 §12).
-  kIoError,          ///< A Bus read or write returned IoStatus::kError this period.
-  kHeartbeatLost,    ///< A heartbeat consumer lost its node (CiA 301 §7.2.8.3.2.2).
-  kNodeReset,        ///< A node sent a boot-up message after it had been heard (it reset).
-  kEmcy,             ///< An EMCY message reporting a fault (CiA 301 §7.2.7).
-  kDriveFault,       ///< A CiA 402 drive in fault reaction active / fault (Cia402Master).
-  kDriveStuck,       ///< A CiA 402 drive did not make the awaited transition in time.
-  kDriveEnergized,   ///< Readiness only: a drive is not in a disabled state while it should be.
-  kOverruns,         ///< overrun_limit consecutive control periods overran.
-  kEncoderTimeout,   ///< No accepted encoder frame on an axis for encoder_timeout_periods.
-  kEncoderJump,      ///< An encoder value moved faster than the axis's max speed allows.
-  kOutOfRange,       ///< An encoder value outside the axis's [min, max].
-  kNonFinite,        ///< An encoder value that is NaN or infinite.
-  kNonFiniteTorque,  ///< A NaN or infinite axis torque reached the gate (ImpedanceDevice::write(),
-                     ///< trip_non_finite_torque()).
-  kSafeStopTimeout,  ///< The drives did not report disabled within safe_stop_timeout_periods.
-  kForceOutOfRange,  ///< Admittance: a force/torque reading outside the sensor's range
-                     ///< (AdmittanceDevice; SampleFault::kOutOfRange).
-  kForceTimeout,     ///< Admittance: no valid force reading for force_timeout_periods.
-};
-
-/// The last FaultCause (the values run from kNone = 0 to it): a new cause goes before this
-/// line and becomes it. Readers that list every cause (the view's frame layout) stop here.
-inline constexpr FaultCause kLastFaultCause = FaultCause::kForceTimeout;
-
-/// Short English name of a FaultCause (static string), e.g. "encoder timeout".
-const char* to_string(FaultCause cause) noexcept;
-
-/// One recorded fault. `id` and `value` depend on the cause:
-///
-/// | cause | id | value |
-/// | --- | --- | --- |
-/// | kEncoderTimeout | axis | periods without an accepted frame |
-/// | kEncoderJump, kOutOfRange, kNonFinite | axis | the axis's FaultMask this period |
-/// | kHeartbeatLost, kNodeReset | node id | s from the node's last message to its fault |
-/// | kEmcy | node id | emergency error code (0 if no EMCY record was given) |
-/// | kDriveFault, kDriveStuck, kDriveEnergized | drive index | PowerState as a number |
-/// | kOverruns | 0 | consecutive overrun periods |
-/// | kBusOff | 0 | BusState as a number |
-/// | kIoError, kNonFiniteTorque | 0 / axis | 0 |
-/// | kSafeStopTimeout | first drive not disabled | periods waited |
-/// | kForceOutOfRange | 0 | the reading's FaultMask |
-/// | kForceTimeout | 0 | periods without a valid reading |
-/// | kBadInput | 0 | 0 |
-struct FaultRecord {
-  FaultCause cause = FaultCause::kNone;  ///< What.
-  std::uint8_t id = 0;                   ///< Axis index, node id or drive index (table above).
-  double value = 0.0;                    ///< Cause-specific value (table above).
-  std::int64_t time_ns = 0;              ///< `now_ns` of the period it was detected in, ns.
-  std::uint64_t period = 0;              ///< That period's index (0 = first update()).
-  bool latched = false;                  ///< This record moved the device into kSafeStop.
-};
 
 /// Most drives one SafetySupervisor watches.
 inline constexpr std::size_t kMaxSupervisedDrives = 16;
 /// Capacity of the fault log (records; the oldest is overwritten).
 inline constexpr std::size_t kFaultLogCapacity = 64;
-
-/// The watchdog settings of an impedance device's supervision, defined once: a
-/// SafetySupervisor's (SafetySettings) and an impedance device's (ImpedanceSettings) are this
-/// struct and add their own, so a setting is not copied field by field on its way down. The
-/// lifecycle's (LifecycleSettings::safe_stop_timeout_periods, >= 1: periods kSafeStop waits for
-/// the drives to report disabled before it latches kFault anyway) is its base.
-struct SupervisionSettings : LifecycleSettings {
-  /// Periods, >= 1, without an accepted encoder frame after which an axis's encoder has timed
-  /// out (the N-th period without one latches). Fewer only reject the sample.
-  std::uint32_t encoder_timeout_periods = 3;
-  /// Consecutive overrun periods, >= 1, that latch (an overrun followed by a period on time
-  /// restarts the count).
-  std::uint32_t overrun_limit = 3;
-};
 
 /// Creation settings of a SafetySupervisor: the supervision settings and the device's axes.
 struct SafetySettings : SupervisionSettings {
@@ -210,6 +141,12 @@ class SafetySupervisor {
   /// A NaN or infinite torque reached the torque gate on `axis` (ImpedanceDevice::write(), which sends
   /// zeros): records kNonFiniteTorque (id = axis) and latches the safe state at once.
   void trip_non_finite_torque(std::size_t axis) noexcept;
+
+  /// Latches the safe state at once for a cause found outside this supervisor's inputs
+  /// (kNonFiniteTorque from the gate, kPeerFault from the control loop): records `cause` with
+  /// `id` and `value` (the table above) as the latching record; the lifecycle leaves kActive
+  /// (or kInactive) for kSafeStop. Counts a latch if it entered the safe state.
+  void trip(FaultCause cause, std::uint8_t id, double value) noexcept;
 
   /// True only in kActive: torques may be sent (still gate each drive with its
   /// Cia402MasterOutput::torque_allowed). False: the caller must command zero this period.

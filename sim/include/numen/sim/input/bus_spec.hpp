@@ -11,6 +11,7 @@
 
 #include "numen/hal/transport/bus.hpp"
 #include "numen/hal/transport/can_filter.hpp"
+#include "numen/hal/device/bus_filters.hpp"
 #include "numen/hal/device/device_config.hpp"
 
 namespace numen::sim {
@@ -48,18 +49,11 @@ struct BusSpec {
 /// baud that is not a number or not a supported termios speed).
 BusSpec parse_bus_spec(const std::string& spec);
 
-/// Filters for every frame the controller reads from the device of `config`: each axis's
-/// encoder COB-ID whole (hal::standard_id_filter(): data and remote; hal::extended_id_filter():
-/// the 29-bit frame of that number), so that the frames the device counts as rejected or of
-/// an unknown id reach it; managed stack: exact 11-bit filters (exact_standard_filter()) for
-/// each drive TPDO, each node's heartbeat (0x700 + node, also its boot-up), EMCY (0x080 +
-/// node) and, when configured or polled, SDO response. Filters are deduplicated.
-std::vector<hal::CanFilter> controller_filters(const hal::DeviceConfig& config);
-
-/// Exact 11-bit filters for every frame the device of `config` reads: SYNC (0x080), each
-/// driven axis's drive / torque RPDO; managed stack: NMT (0x000), the controller's heartbeat
-/// (0x700 + controller_node_id) and each node's SDO requests (0x600 + node).
-std::vector<hal::CanFilter> device_filters(const hal::DeviceConfig& config);
+/// The acceptance filters of each side of a device's bus (hal/device/bus_filters.hpp): what the
+/// controller reads (a real bus opened for `numen run`) and what the device reads (`numen
+/// device`).
+using hal::controller_filters;
+using hal::device_filters;
 
 /// Empty if this build has the backend `spec` needs (hal/features.hpp), else the error:
 /// "bus 'can:vcan0' needs SocketCAN: this build has NUMEN_WITH_SOCKETCAN=OFF" (likewise

@@ -1,0 +1,319 @@
+// Tests of platform/control_loop with several devices: two emulated instruments on one SimBus
+// (one BusShare port each on both sides) through one loop. Each device's feedback goes only to
+// its own motors (its τ is the one a loop of that device alone computes); one device's fault
+// latches its safe state and, in the same period, the other's (FaultCause::kPeerFault;
+// docs/safety.md "Several devices"); no allocation in the period; bad wirings are refused.
+#include "numen/platform/control_loop.hpp"
+
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cmath>
+#include <numbers>
+#include <stdexcept>
+#include <vector>
+
+#include "alloc_counter.hpp"
+#include "control_loop_fixtures.hpp"
+#include "numen/core/data.hpp"
+#include "numen/core/model.hpp"
+#include "numen/hal/device/bus_filters.hpp"
+#include "numen/hal/device/device_config.hpp"
+#include "numen/hal/device/impedance_device.hpp"
+#include "numen/hal/device/instrument_device.hpp"
+#include "numen/hal/emulation/device_emulator.hpp"
+#include "numen/hal/transport/bus_share.hpp"
+#include "numen/hal/transport/sim_bus.hpp"
+
+namespace control_loop_devices_test {  // named: the unity build shares a TU with other test files
+
+namespace core = numen::core;
+namespace hal = numen::hal;
+namespace platform = numen::platform;
+namespace fx = numen::test::control_loop_fixtures;
+
+/// Two free bodies (no spheres: they never touch), the first the held one; the fixtures'
+/// gains.
+core::Model two_body_model() {
+  core::Model m = fx::small_model();
+  core::BodyModel right = m.bodies[0];
+  right.name = "right";
+  m.bodies[0].name = "left";
+  m.bodies.push_back(right);
+  m.initial_attached_body = 0;
+  EXPECT_EQ(core::finalize_model(m), "");
+  return m;
+}
+
+/// The trocar instrument on nodes first_node .. +4, its trocar point `x` m along x.
+hal::DeviceConfig instrument_config(std::uint8_t first_node, bool managed, double x) {
+  hal::DeviceConfig c = hal::make_default_trocar_config(first_node);
+  c.canopen.managed = managed;
+  c.trocar.point = core::Vec3(x, 0.0, 0.2);
+  c.trocar.orientation = core::Quat(Eigen::AngleAxisd(std::numbers::pi, core::Vec3::UnitX()));
+  c.control_period_s = 1e-3;
+  return c;
+}
+
+/// Link 0 of a device drives `body`.
+platform::DeviceBinding drive_body(int body) {
+  return platform::DeviceBinding{{platform::LinkBinding{0, body, {}}}, {}};
+}
+
+/// Device i of `n` instruments on one SimBus, each with its emulator on its own BusShare port
+/// of the device side; `loop_bodies` says which body each device of the loop drives.
+struct Rig {
+  Rig(bool managed, std::vector<int> devices_in_loop)
+      : configs{instrument_config(1, managed, 0.0), instrument_config(11, managed, 0.1)},
+        share(bus.device()),
+        emulators{hal::DeviceEmulator{configs[0]}, hal::DeviceEmulator{configs[1]}},
+        instruments{hal::InstrumentDevice{configs[0]}, hal::InstrumentDevice{configs[1]}},
+        ports{&share.add_port(hal::device_filters(configs[0])),
+              &share.add_port(hal::device_filters(configs[1]))},
+        in_loop(std::move(devices_in_loop)),
+        model(two_body_model()),
+        data(core::make_data(model)),
+        loop(model, data, loop_devices(), platform::ControlLoopSettings{}) {
+    move(0);
+  }
+
+  std::vector<platform::LoopDevice> loop_devices() {
+    std::vector<platform::LoopDevice> out;
+    for (int i : in_loop) {
+      platform::LoopDevice d;
+      d.bus = &bus.controller();
+      d.instrument = &instruments[static_cast<std::size_t>(i)];
+      d.binding = drive_body(i);
+      out.push_back(d);
+    }
+    return out;
+  }
+
+  /// The axes at period k: instrument 0 still, instrument 1's insertion depth oscillating.
+  void move(std::int64_t k) {
+    emulators[0].set_axis_values(fx::kQ);
+    double q[5] = {fx::kQ[0], fx::kQ[1], fx::kQ[2], fx::kQ[3], fx::kQ[4]};
+    q[3] += 0.02 * std::sin(0.05 * static_cast<double>(k));
+    emulators[1].set_axis_values(q);
+  }
+
+  /// Period k as SceneRunner runs it; the emulators then take the torque RPDOs.
+  const platform::PeriodReport& period() {
+    const std::int64_t t = k * fx::kMs;
+    move(k);
+    ++k;
+    bus.set_time_ns(t);
+    loop.begin_period(t);
+    bus.set_time_ns(t + fx::kLatency);
+    for (std::size_t i = 0; i < 2; ++i) {
+      emulators[i].poll(*ports[i]);
+      emulators[i].tick(t + fx::kLatency, *ports[i]);
+    }
+    bus.set_time_ns(t + fx::kPhase);
+    const platform::PeriodReport& r = loop.end_period(t + fx::kPhase);
+    bus.set_time_ns(t + fx::kPhase + fx::kLatency);
+    for (std::size_t i = 0; i < 2; ++i) emulators[i].poll(*ports[i]);
+    return r;
+  }
+
+  std::array<hal::DeviceConfig, 2> configs;
+  hal::SimBus bus{fx::bus_settings()};
+  hal::BusShare share;
+  std::array<hal::DeviceEmulator, 2> emulators;
+  std::array<hal::InstrumentDevice, 2> instruments;
+  std::array<hal::Bus*, 2> ports;
+  std::vector<int> in_loop;
+  core::Model model;
+  core::Data data;
+  platform::ControlLoop loop;
+  std::int64_t k = 0;
+};
+
+/// The torques device `i` of `rig`'s loop computed this period (its map stage's τ).
+std::vector<double> tau_of(const Rig& rig, std::size_t i) {
+  const hal::AxisVector& tau = rig.loop.period_data(i).tau;
+  return std::vector<double>(tau.data(), tau.data() + tau.size());
+}
+
+TEST(ControlLoopDevices, EachDevicesFeedbackGoesOnlyToItsOwnMotors) {
+  // The pair through one loop against each instrument alone (the other body then undriven):
+  // the bodies never touch, so each device's τ must be what its own loop computes, period by
+  // period — a device that got the other's feedback would carry the moving instrument's
+  // wrench while its own body rests.
+  Rig both(false, {0, 1});
+  Rig left(false, {0});
+  Rig right(false, {1});
+  ASSERT_EQ(both.loop.num_devices(), 2u);
+  double apart = 0.0, right_max = 0.0;
+  for (int p = 0; p < 300; ++p) {
+    both.period();
+    left.period();
+    right.period();
+    const std::vector<double> t0 = tau_of(both, 0), t1 = tau_of(both, 1);
+    const std::vector<double> a = tau_of(left, 0), b = tau_of(right, 0);
+    ASSERT_EQ(t0.size(), a.size());
+    ASSERT_EQ(t1.size(), b.size());
+    for (std::size_t j = 0; j < a.size(); ++j) {
+      EXPECT_NEAR(t0[j], a[j], 1e-9) << "period " << p << " axis " << j;
+      EXPECT_NEAR(t1[j], b[j], 1e-9) << "period " << p << " axis " << j;
+      apart = std::max(apart, std::abs(t0[j] - t1[j]));
+      right_max = std::max(right_max, std::abs(t1[j]));
+    }
+    // Each device's torque frames carry its own τ: the drives of each instrument received them.
+    const hal::SentTorques& s0 = both.loop.impedance(0).sent_torques();
+    const hal::SentTorques& s1 = both.loop.impedance(1).sent_torques();
+    EXPECT_EQ(s0.per_mille, left.loop.impedance(0).sent_torques().per_mille) << "period " << p;
+    EXPECT_EQ(s1.per_mille, right.loop.impedance(0).sent_torques().per_mille) << "period " << p;
+  }
+  // Not blind: the two devices' torques differ (a device fed the other's feedback would
+  // carry it), and the moving one's are not small.
+  EXPECT_GT(apart, 0.1);
+  EXPECT_GT(right_max, 0.1);
+  EXPECT_TRUE(both.loop.period_data(1).report.torque_commanded);
+  EXPECT_EQ(both.loop.period_data(1).bound_body[0], 1);
+  EXPECT_EQ(both.loop.period_data(0).bound_body[0], 0);
+  // Each instrument's encoders reached its own device only: no frame of an unknown id.
+  EXPECT_EQ(both.instruments[0].counters().frames_unknown_id, 0u);
+  EXPECT_EQ(both.instruments[1].counters().frames_unknown_id, 0u);
+}
+
+TEST(ControlLoopDevices, OneDevicesFaultLatchesItsSafeStateAndThePeersInTheSamePeriod) {
+  Rig rig(true, {0, 1});
+  for (int i = 0; i < 100 && (rig.loop.first_torque_period(0) < 0 || rig.loop.first_torque_period(1) < 0); ++i)
+    rig.period();
+  ASSERT_GE(rig.loop.first_torque_period(0), 0);
+  ASSERT_GE(rig.loop.first_torque_period(1), 0);
+  for (int i = 0; i < 20; ++i) rig.period();  // both run with torque
+  ASSERT_EQ(rig.loop.device(0).lifecycle(), hal::LifecycleState::kActive);
+  ASSERT_EQ(rig.loop.device(1).lifecycle(), hal::LifecycleState::kActive);
+
+  // Instrument 1's depth encoder falls silent: after encoder_timeout_periods its device
+  // latches kEncoderTimeout, and device 0 latches kPeerFault in that very period.
+  rig.emulators[1].set_encoder_silent(3, true);
+  numen::test::AllocationGuard guard;
+  int latched_at = -1;
+  for (int i = 0; i < 20 && latched_at < 0; ++i) {
+    rig.period();
+    if (rig.loop.period_data(1).report.entered_safe_stop) latched_at = i;
+  }
+  ASSERT_GE(latched_at, 0);
+  const platform::PeriodReport& r0 = rig.loop.period_data(0).report;
+  const platform::PeriodReport& r1 = rig.loop.period_data(1).report;
+  EXPECT_EQ(r1.fault_cause, hal::FaultCause::kEncoderTimeout);
+  EXPECT_EQ(r0.fault_cause, hal::FaultCause::kPeerFault);
+  ASSERT_NE(rig.loop.device(0).first_fault(), nullptr);
+  EXPECT_EQ(rig.loop.device(0).first_fault()->id, 1);  // the peer's index in the loop
+  EXPECT_EQ(r0.lifecycle, hal::LifecycleState::kSafeStop);
+  EXPECT_EQ(r1.lifecycle, hal::LifecycleState::kSafeStop);
+  EXPECT_FALSE(r0.torque_commanded);  // zero torque on both from the same period
+  EXPECT_FALSE(r1.torque_commanded);
+  for (int i = 0; i < 50; ++i) {
+    rig.period();
+    EXPECT_FALSE(rig.loop.period_data(0).report.torque_commanded);
+    EXPECT_FALSE(rig.loop.period_data(1).report.torque_commanded);
+  }
+  EXPECT_EQ(rig.loop.device(0).lifecycle(), hal::LifecycleState::kFault);
+  EXPECT_EQ(rig.loop.device(1).lifecycle(), hal::LifecycleState::kFault);
+  EXPECT_EQ(guard.count(), 0);
+
+  // Re-armed while instrument 1 is still silent: device 0 may re-arm but is latched again by
+  // its still-faulted peer; once the encoder answers again both re-arm and torque returns.
+  rig.emulators[1].set_encoder_silent(3, false);
+  ASSERT_EQ(rig.loop.rearm(), platform::RearmResult::kAccepted);
+  for (int i = 0; i < 200 && !(rig.loop.period_data(0).report.torque_commanded &&
+                               rig.loop.period_data(1).report.torque_commanded); ++i)
+    rig.period();
+  EXPECT_TRUE(rig.loop.period_data(0).report.torque_commanded);
+  EXPECT_TRUE(rig.loop.period_data(1).report.torque_commanded);
+}
+
+TEST(ControlLoopDevices, EachDeviceSendsOneSyncPerBus) {
+  Rig rig(false, {0, 1});
+  rig.bus.set_time_ns(0);
+  rig.loop.begin_period(0);
+  EXPECT_EQ(rig.bus.pending(hal::SimBus::Direction::kControllerToDevice), 1u);  // one SYNC
+}
+
+TEST(ControlLoopDevices, DevicesOnTwoBusesEachGetTheirOwnSyncAndFrames) {
+  // One instrument per bus: no sharing, each device its bus's SYNC producer; both drive.
+  const hal::DeviceConfig c0 = instrument_config(1, false, 0.0);
+  const hal::DeviceConfig c1 = instrument_config(11, false, 0.1);
+  hal::InstrumentDevice i0{c0}, i1{c1};
+  hal::DeviceEmulator e0{c0}, e1{c1};
+  hal::SimBus bus0{fx::bus_settings()}, bus1{fx::bus_settings()};
+  const core::Model model = two_body_model();
+  core::Data data = core::make_data(model);
+  std::vector<platform::LoopDevice> d(2);
+  d[0].bus = &bus0.controller();
+  d[0].instrument = &i0;
+  d[0].binding = drive_body(0);
+  d[1].bus = &bus1.controller();
+  d[1].instrument = &i1;
+  d[1].binding = drive_body(1);
+  platform::ControlLoop loop(model, data, d);
+  e0.set_axis_values(fx::kQ);
+  e1.set_axis_values(fx::kQ);
+  for (std::int64_t k = 0; k < 20; ++k) {
+    const std::int64_t t = k * fx::kMs;
+    bus0.set_time_ns(t);
+    bus1.set_time_ns(t);
+    loop.begin_period(t);
+    EXPECT_EQ(bus0.pending(hal::SimBus::Direction::kControllerToDevice), 1u);  // its SYNC
+    EXPECT_EQ(bus1.pending(hal::SimBus::Direction::kControllerToDevice), 1u);
+    bus0.set_time_ns(t + fx::kLatency);
+    bus1.set_time_ns(t + fx::kLatency);
+    e0.poll(bus0.device());
+    e1.poll(bus1.device());
+    bus0.set_time_ns(t + fx::kPhase);
+    bus1.set_time_ns(t + fx::kPhase);
+    loop.end_period(t + fx::kPhase);
+    bus0.set_time_ns(t + fx::kPhase + fx::kLatency);
+    bus1.set_time_ns(t + fx::kPhase + fx::kLatency);
+    e0.poll(bus0.device());
+    e1.poll(bus1.device());
+  }
+  EXPECT_TRUE(loop.last_report(0).torque_commanded);
+  EXPECT_TRUE(loop.last_report(1).torque_commanded);
+  EXPECT_GT(i0.counters().frames_decoded, 0u);
+  EXPECT_GT(i1.counters().frames_decoded, 0u);
+  EXPECT_EQ(i0.counters().frames_unknown_id, 0u);
+  EXPECT_EQ(i1.counters().frames_unknown_id, 0u);
+}
+
+TEST(ControlLoopDevices, RefusesWiringsThatCannotRun) {
+  const hal::DeviceConfig c0 = instrument_config(1, false, 0.0);
+  const hal::DeviceConfig c1 = instrument_config(11, false, 0.1);
+  hal::InstrumentDevice i0{c0}, i1{c1};
+  hal::SimBus bus{fx::bus_settings()};
+  const core::Model model = two_body_model();
+  core::Data data = core::make_data(model);
+  auto make = [&](platform::DeviceBinding b0, platform::DeviceBinding b1) {
+    std::vector<platform::LoopDevice> d(2);
+    d[0].bus = &bus.controller();
+    d[0].instrument = &i0;
+    d[0].binding = std::move(b0);
+    d[1].bus = &bus.controller();
+    d[1].instrument = &i1;
+    d[1].binding = std::move(b1);
+    return platform::ControlLoop(model, data, d);
+  };
+  // Two devices on one body, or both on the held body (the default rigid binding).
+  EXPECT_THROW(make(drive_body(1), drive_body(1)), std::invalid_argument);
+  EXPECT_THROW(make(platform::DeviceBinding::rigid(), platform::DeviceBinding::rigid()),
+               std::invalid_argument);
+  EXPECT_NO_THROW(make(drive_body(0), drive_body(1)));
+  // No device, more than kMaxLoopDevices, a missing bus.
+  EXPECT_THROW(platform::ControlLoop(model, data, std::span<const platform::LoopDevice>{}),
+               std::invalid_argument);
+  std::vector<platform::LoopDevice> many(platform::kMaxLoopDevices + 1);
+  for (platform::LoopDevice& d : many) {
+    d.bus = &bus.controller();
+    d.instrument = &i0;
+  }
+  EXPECT_THROW(platform::ControlLoop(model, data, many), std::invalid_argument);
+  std::vector<platform::LoopDevice> no_bus(1);
+  no_bus[0].instrument = &i0;
+  EXPECT_THROW(platform::ControlLoop(model, data, no_bus), std::invalid_argument);
+}
+
+}  // namespace control_loop_devices_test
