@@ -5,10 +5,13 @@
 
 #include <igtlMessageHeader.h>
 #include <igtlPolyDataMessage.h>
+#include <igtlPositionMessage.h>
 #include <igtlStatusMessage.h>
 #include <igtlStringMessage.h>
 #include <igtlTransformMessage.h>
+#include <igtl_header.h>
 #include <igtl_polydata.h>
+#include <igtl_qtrans.h>
 #include <igtl_util.h>
 
 #include <cstring>
@@ -102,6 +105,47 @@ std::string pack_igtl_string(const std::string& device_name, std::int64_t timest
   m->SetString(text.substr(0, 65535).c_str());
   igtl_set_stamp_ns(*m, timestamp_ns);
   return packed(*m);
+}
+
+std::string pack_igtl_position(const std::string& device_name, std::int64_t timestamp_ns,
+                               const core::Quat& orientation, const core::Vec3& translation,
+                               bool quaternion3) {
+  check_device_name(device_name, "POSITION");
+  core::Quat q = orientation;
+  if (quaternion3 && q.w() < 0.0) q.coeffs() = -q.coeffs();  // the receiver makes W >= 0
+  igtl::PositionMessage::Pointer m = igtl::PositionMessage::New();
+  m->SetDeviceName(device_name.c_str());
+  m->SetPackType(quaternion3 ? igtl::PositionMessage::WITH_QUATERNION3
+                             : igtl::PositionMessage::ALL);
+  m->SetPosition(static_cast<float>(translation.x()), static_cast<float>(translation.y()),
+                 static_cast<float>(translation.z()));
+  m->SetQuaternion(static_cast<float>(q.x()), static_cast<float>(q.y()),
+                   static_cast<float>(q.z()), static_cast<float>(q.w()));
+  igtl_set_stamp_ns(*m, timestamp_ns);
+  return packed(*m);
+}
+
+std::string pack_igtl_qtrans(const std::string& device_name, std::int64_t timestamp_ns,
+                             const core::Quat& orientation, const core::Vec3& translation) {
+  check_device_name(device_name, "QTRANS");
+  igtl_qtrans body{};
+  for (int i = 0; i < 3; ++i) body.qtrans[i] = static_cast<igtl_float32>(translation(i));
+  body.quaternion[0] = static_cast<igtl_float32>(orientation.x());
+  body.quaternion[1] = static_cast<igtl_float32>(orientation.y());
+  body.quaternion[2] = static_cast<igtl_float32>(orientation.z());
+  body.quaternion[3] = static_cast<igtl_float32>(orientation.w());
+  igtl_qtrans_convert_byte_order(&body);  // to network order; the CRC is of the bytes sent
+  igtl_header h{};
+  h.version = IGTL_HEADER_VERSION;
+  std::memcpy(h.name, "QTRANS", 6);
+  std::memcpy(h.device_name, device_name.data(), device_name.size());  // <= 20, NUL padded
+  h.timestamp = igtl_stamp_raw(timestamp_ns);
+  h.body_size = sizeof body;
+  h.crc = igtl_qtrans_get_crc(&body);
+  igtl_header_convert_byte_order(&h);
+  std::string out(reinterpret_cast<const char*>(&h), sizeof h);
+  out.append(reinterpret_cast<const char*>(&body), sizeof body);
+  return out;
 }
 
 namespace {

@@ -204,12 +204,11 @@ void IgtlTrackerClient::session(int fd) {
       fault(hr.fault, h, message, at, hr.byte_offset);
       return;
     }
-    const bool transform = h.type == "TRANSFORM" && h.body_size == kIgtlTransformBodyBytes;
-    if (transform) {
-      if (read_fully(fd, scratch.data(), kIgtlTransformBodyBytes) != ReadResult::kOk) return;
-      const IgtlDecodeResult br = decoder.decode_transform(
-          h, std::span<const std::uint8_t>(scratch.data(), kIgtlTransformBodyBytes), tf,
-          settings_.rigid_tolerance);
+    if (igtl_pose_body_size_ok(h.type, h.body_size)) {  // TRANSFORM, POSITION, QTRANS
+      const auto n = static_cast<std::size_t>(h.body_size);
+      if (read_fully(fd, scratch.data(), n) != ReadResult::kOk) return;
+      const IgtlDecodeResult br = decoder.decode_pose(
+          h, std::span<const std::uint8_t>(scratch.data(), n), tf, settings_.rigid_tolerance);
       if (!br.ok()) {
         fault(br.fault, h, message, at, br.byte_offset);
       } else if (h.device_name == settings_.device_name) {
@@ -231,7 +230,7 @@ void IgtlTrackerClient::session(int fd) {
           names_.push_back(h.device_name);
       }
     } else {
-      if (h.type == "TRANSFORM")
+      if (igtl_pose_type(h.type))
         fault(IgtlFault::kBodySizeMismatch, h, message, at, kIgtlBodySizeOffset);
       else if (!igtl_known_type(h.type))
         fault(IgtlFault::kUnknownType, h, message, at, kIgtlTypeOffset);

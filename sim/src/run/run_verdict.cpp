@@ -161,7 +161,7 @@ RunVerdict run_verdict(const RunSummary& s) {
           s.igtl_connects == 0
               ? "no connection to the OpenIGTLink server " + s.igtl + " (" +
                     n(s.igtl_connect_failures) + " attempts refused or timed out)"
-              : "no TRANSFORM of the tool " + s.igtl + " in " + n(s.igtl_messages) +
+              : "no pose (TRANSFORM, POSITION or QTRANS) of the tool " + s.igtl + " in " + n(s.igtl_messages) +
                     " messages" + (names.empty() ? "" : " (device names sent: " + names + ")"));
     }
   }

@@ -16,6 +16,7 @@
 #include "numen/hal/canopen/canopen.hpp"
 #include "numen/hal/device/axis.hpp"
 #include "numen/hal/device/kinematics_factory.hpp"
+#include "numen/hal/igtl/igtl_pack.hpp"
 
 namespace {
 
@@ -88,6 +89,35 @@ TEST(IgtlTrackerBus, ATransformBecomesTheEncoderFramesOfTheTrackedFrame) {
   EXPECT_EQ(bus.tracker_counters().poses_taken, 1u);
   EXPECT_EQ(bus.tracker_counters().wait_timeouts, 0u);
   EXPECT_EQ(bus.latency_ns().size(), 1u);
+}
+
+TEST(IgtlTrackerBus, APositionOrAQtransIsTheTrackedFrameOfItsTransform) {
+  namespace hal = numen::hal;
+  const numen::core::Quat mq(Eigen::AngleAxisd(2.5, numen::core::Vec3(0.6, 0.3, -0.7).normalized()));
+  const numen::core::Vec3 mp(80.0, -140.0, -905.0);  // mm
+  const hal::DeviceConfig config = igtl_bus_test_config();
+  const std::string sent[] = {
+      hal::pack_igtl_transform("StylusToTracker", 5'000'000'000, mq.toRotationMatrix(), mp),
+      hal::pack_igtl_position("StylusToTracker", 5'000'000'000, mq, mp),
+      hal::pack_igtl_position("StylusToTracker", 5'000'000'000, mq, mp, true),
+      hal::pack_igtl_qtrans("StylusToTracker", 5'000'000'000, mq, mp)};
+  std::vector<numen::core::Pose> tips;
+  for (const std::string& m : sent) {
+    numen::test::IgtlTestServer server({m}, true);
+    hal::IgtlTrackerBus bus(config, hal::make_kinematics(config),
+                            igtl_bus_test_settings(server.port(), true));
+    bus.set_time_ns(0);
+    ASSERT_EQ(bus.write(hal::make_sync(0)), hal::IoStatus::kOk);
+    tips.push_back(igtl_bus_test_tip(bus, config));
+    EXPECT_EQ(bus.tracker_counters().poses_taken, 1u);
+    EXPECT_EQ(bus.client().counters().faults_total(), 0u);
+  }
+  // The same encoder frames to a count: 1 µm, 1 µrad (float32 matrix and quaternion differ in
+  // their last bits only).
+  for (std::size_t k = 1; k < tips.size(); ++k) {
+    EXPECT_LT((tips[k].position - tips[0].position).norm(), 3e-6) << k;
+    EXPECT_LT(tips[k].orientation.angularDistance(tips[0].orientation), 1e-5) << k;
+  }
 }
 
 TEST(IgtlTrackerBus, FollowingTheTrackerTakesEachPoseAtItsStamp) {

@@ -3,17 +3,19 @@
 /// IgtlTrackerClient: the receiver thread of the OpenIGTLink tracker bus (igtl_tracker_bus.hpp).
 /// It connects to an OpenIGTLink server (a PLUS server, a tracker's bridge, `numen igtl-replay`)
 /// over TCP, reads its messages, decodes and checks them (igtl_message.hpp) and pushes the
-/// TRANSFORMs of one device name (the tracked tool, e.g. "StylusToTracker") into a bounded
+/// poses (TRANSFORM, POSITION or QTRANS messages, mixed as the server likes) of one device name
+/// (the tracked tool, e.g. "StylusToTracker") into a bounded
 /// single-producer / single-consumer lock-free queue (boost::lockfree::spsc_queue, its capacity
 /// fixed at construction) that the control period drains without blocking, locking or
 /// allocating. The network is read here, never in the period.
 ///
 /// Bad input is counted and located, never fatal: a message whose header is not OpenIGTLink
 /// (version, type name) or whose body size is above the limit loses the stream's framing, so the
-/// connection is closed and made again; a TRANSFORM with a CRC mismatch, a body size that is not
-/// 48 bytes, a NaN or a rotation that is not orthonormal is skipped; a type that OpenIGTLink v2
+/// connection is closed and made again; a pose message with a CRC mismatch, a body size that is
+/// not its type's, a NaN, a rotation that is not orthonormal or a quaternion that is not of unit
+/// length is skipped; a type that OpenIGTLink v2
 /// does not have is skipped (its body read and discarded through a fixed buffer: memory never
-/// grows with what the server sends); the TRANSFORMs of other device names are counted and their
+/// grows with what the server sends); the poses of other device names are counted and their
 /// names kept (at most kIgtlMaxNamesSeen). A full queue (a flood, or a consumer that stopped)
 /// drops the newest pose and counts it, unless `wait_when_full` (an offline run that follows the
 /// tracker's clock: the receiver then waits, and TCP's flow control slows the server).
@@ -47,7 +49,7 @@ inline constexpr std::size_t kIgtlMaxNamesSeen = 8;
 struct IgtlTrackerClientSettings {
   std::string host = "127.0.0.1";        ///< Server: an IPv4 address or a host name.
   std::uint16_t port = kIgtlDefaultPort; ///< Server's TCP port, > 0.
-  std::string device_name;               ///< The tool's TRANSFORM device name, 1..20 characters.
+  std::string device_name;               ///< The tool's device name, 1..20 characters.
   std::size_t queue_poses = 1024;        ///< Capacity of the pose queue, >= 1.
   /// Full queue: true, the receiver waits for room (offline runs); false, the newest pose is
   /// dropped and counted (IgtlClientCounters::dropped_full).
@@ -64,7 +66,7 @@ struct IgtlTrackerClientSettings {
   std::string registration_name;
 };
 
-/// One accepted TRANSFORM of the tool.
+/// One accepted pose message (TRANSFORM, POSITION or QTRANS) of the tool.
 struct IgtlPose {
   /// The message's timestamp, ns since the sender's epoch (0: the sender set none).
   std::int64_t stamp_ns = 0;
@@ -78,8 +80,8 @@ struct IgtlPose {
 struct IgtlClientCounters {
   std::uint64_t messages = 0;           ///< Headers read.
   std::uint64_t bytes = 0;              ///< Bytes read.
-  std::uint64_t poses = 0;              ///< The tool's TRANSFORMs accepted (queued or dropped).
-  std::uint64_t other_devices = 0;      ///< Good TRANSFORMs of other device names.
+  std::uint64_t poses = 0;              ///< The tool's poses accepted (queued or dropped).
+  std::uint64_t other_devices = 0;      ///< Good poses of other device names.
   std::uint64_t ignored = 0;            ///< Other known message types (skipped).
   std::array<std::uint64_t, kIgtlFaultCount> faults{};  ///< Per IgtlFault (index 0 unused).
   std::uint64_t dropped_full = 0;       ///< Poses dropped: the queue was full.
@@ -134,11 +136,11 @@ class IgtlTrackerClient {
   // ---- not real-time ----
   /// The first record of each fault kind seen (allocates; locks a mutex the period never takes).
   std::vector<IgtlFaultRecord> fault_records() const;
-  /// Device names of the other TRANSFORMs (at most kIgtlMaxNamesSeen; the registration's is not
+  /// Device names of the other poses (at most kIgtlMaxNamesSeen; the registration's is not
   /// one).
   std::vector<std::string> names_seen() const;
-  /// The newest TRANSFORM named settings().registration_name (checked as the tool's: finite,
-  /// rigid), or none yet (locks the mutex the period never takes).
+  /// The newest pose named settings().registration_name (a TRANSFORM, POSITION or QTRANS,
+  /// checked as the tool's), or none yet (locks the mutex the period never takes).
   std::optional<IgtlTransform> registration() const;
   /// The settings.
   const IgtlTrackerClientSettings& settings() const noexcept { return settings_; }
