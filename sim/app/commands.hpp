@@ -60,6 +60,7 @@ class RunCommand {
   std::string scene_path_, trace_path_, coupling_, bus_ = "sim", record_path_, record_view_path_, view_;
   std::string igtl_;  // --igtl [HOST:]PORT: the world out over OpenIGTLink
   double igtl_organ_rate_ = 30.0;  // --igtl-organ-rate HZ: POLYDATA updates per simulated second
+  std::string igtl_names_ = "numen";  // --igtl-names numen|plus: how the TRANSFORMs are named
   double duration_ = -1.0, phase_ = -1.0, view_rate_ = 60.0, speed_ = 0.0, spin_us_ = 0.0;
   std::int64_t timer_slack_ns_ = 1;
   std::string wait_for_viewer_;  // --wait-for-viewer[=S] as given (a flag: CLI11 would round a number)
