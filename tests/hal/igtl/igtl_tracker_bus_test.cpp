@@ -120,6 +120,58 @@ TEST(IgtlTrackerBus, APositionOrAQtransIsTheTrackedFrameOfItsTransform) {
   }
 }
 
+TEST(IgtlTrackerBus, TwoToolsOnOneConnectionEachFeedTheirOwnBus) {
+  namespace hal = numen::hal;
+  // PLUS-like: per frame (1 ms apart) one message of each tool, the pointer's as a POSITION,
+  // and the pointer appears from frame 1 on.
+  const std::int64_t t0 = 1'700'000'000'000'000'000;
+  const numen::core::Quat pq(Eigen::AngleAxisd(0.5, numen::core::Vec3::UnitX()));
+  std::vector<std::string> sent;
+  for (int k = 0; k < 5; ++k) {
+    sent.push_back(hal::pack_igtl_transform("StylusToTracker", t0 + k * 1'000'000,
+                                            numen::core::Mat3::Identity(),
+                                            numen::core::Vec3(10.0 * k, 0.0, -800.0)));
+    if (k > 0)
+      sent.push_back(hal::pack_igtl_position("PointerToTracker", t0 + k * 1'000'000, pq,
+                                             numen::core::Vec3(0.0, -20.0 * k, -700.0)));
+  }
+  numen::test::IgtlTestServer server(sent, true);
+  const hal::DeviceConfig config = igtl_bus_test_config();
+  hal::IgtlTrackerSettings s = igtl_bus_test_settings(server.port(), true);
+  s.registration = numen::core::Pose{};
+  s.calibration = numen::core::Pose{};
+  s.client.more_device_names = {"PointerToTracker"};
+  const std::shared_ptr<hal::IgtlTrackerClient> client = hal::make_igtl_tracker_client(s);
+  EXPECT_EQ(client->tool_count(), 2u);
+  hal::IgtlTrackerBus stylus(config, hal::make_kinematics(config), s, client, 0);
+  hal::IgtlTrackerBus pointer(config, hal::make_kinematics(config), s, client, 1);
+  EXPECT_THROW(hal::IgtlTrackerBus(config, hal::make_kinematics(config), s, client, 2),
+               std::invalid_argument);
+  for (int k = 0; k < 5; ++k) {  // the loop's order: one bus, then the other, each period
+    for (hal::IgtlTrackerBus* bus : {&stylus, &pointer}) {
+      bus->set_time_ns(k * 1'000'000);
+      bus->write(hal::make_sync(k * 1'000'000));
+    }
+    EXPECT_NEAR(igtl_bus_test_tip(stylus, config).position.x(), 0.01 * k, 2e-6) << k;
+    if (k == 0) {  // the pointer's first pose is stamped 1 ms after the connection's first
+      hal::CanFrame f;
+      EXPECT_EQ(pointer.read(f), hal::IoStatus::kWouldBlock);
+      continue;
+    }
+    const numen::core::Pose tip = igtl_bus_test_tip(pointer, config);
+    EXPECT_NEAR(tip.position.y(), -0.02 * k, 2e-6) << k;
+    EXPECT_LT(tip.orientation.angularDistance(pq), 1e-5) << k;
+  }
+  EXPECT_EQ(stylus.tracker_counters().poses_taken, 5u);
+  EXPECT_EQ(pointer.tracker_counters().poses_taken, 4u);
+  EXPECT_EQ(pointer.tracker_counters().syncs_without_pose, 1u);
+  EXPECT_EQ(stylus.tracker_counters().wait_timeouts + pointer.tracker_counters().wait_timeouts, 0u);
+  const hal::IgtlClientCounters c = client->counters();
+  EXPECT_EQ(c.tool_poses[0], 5u);
+  EXPECT_EQ(c.tool_poses[1], 4u);
+  EXPECT_EQ(c.other_devices, 0u);
+}
+
 TEST(IgtlTrackerBus, FollowingTheTrackerTakesEachPoseAtItsStamp) {
   namespace hal = numen::hal;
   std::vector<std::string> poses;

@@ -219,4 +219,20 @@ TEST(IgtlTrackerClient, SettingsAreChecked) {
   s.device_name = "Stylus";
   s.port = 0;
   EXPECT_THROW(hal::IgtlTrackerClient{s}, std::invalid_argument);
+  s.port = numen::test::IgtlTestServer::closed_port();
+  s.reconnect = false;
+  s.more_device_names = {"Pointer", "Stylus"};  // two tools of one name
+  EXPECT_THROW(hal::IgtlTrackerClient{s}, std::invalid_argument);
+  s.more_device_names = {"A", "B", "C", "D"};  // five tools
+  EXPECT_THROW(hal::IgtlTrackerClient{s}, std::invalid_argument);
+  s.more_device_names = {"Pointer", ""};
+  EXPECT_THROW(hal::IgtlTrackerClient{s}, std::invalid_argument);
+  s.more_device_names = {"Pointer"};
+  s.registration_name = "Pointer";  // a tool's name
+  EXPECT_THROW(hal::IgtlTrackerClient{s}, std::invalid_argument);
+  s.registration_name = "TrackerToScene";
+  hal::IgtlTrackerClient two(s);
+  EXPECT_EQ(two.tool_count(), 2u);
+  EXPECT_EQ(two.front(1), nullptr);
+  EXPECT_EQ(two.front(2), nullptr);  // no such tool: none, not a crash
 }
