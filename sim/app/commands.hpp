@@ -143,6 +143,7 @@ class IgtlReplayCommand {
   int port_ = 18944;
   double rate_ = 0.0, duration_ = -1.0, accept_timeout_ = 30.0;
   bool realtime_ = false;
+  std::string message_ = "transform";  // --message transform|position|qtrans
 };
 
 /// `numen sdo --bus ... NODE read|write INDEX:SUB [VALUE] [--type T]`: one SDO transfer.
