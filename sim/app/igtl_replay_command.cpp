@@ -52,7 +52,9 @@ int IgtlReplayCommand::execute() const {
   std::cerr << "numen igtl-replay: listening on " << host_ << ":" << server.port() << "\n";
   loading_done();
   const sim::IgtlReplayResult r = server.serve(&stop_flag());
-  const std::string type = message_ == "qtrans" ? "QTRANS" : message_ == "position" ? "POSITION" : "TRANSFORM";
+  const std::string type = message_ == "qtrans"     ? "QTRANS"
+                           : message_ == "position" ? "POSITION"
+                                                    : "TRANSFORM";
   std::cerr << "numen igtl-replay: " << r.messages_sent << " " << type << "s sent"
             << (r.client_connected ? "" : " (no client connected)")
             << (r.client_gone ? " (the client left early)" : "") << "\n";

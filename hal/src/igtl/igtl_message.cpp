@@ -208,11 +208,13 @@ IgtlDecodeResult IgtlDecoder::decode_pose(const IgtlHeader& header,
     double v2 = 0.0;
     for (std::size_t i = 0; i < 3; ++i) {
       const std::size_t at = 12 + 4 * i;
-      f[3 + i] = std::bit_cast<float>(static_cast<std::uint32_t>(igtl_read_be(body.data() + at, 4)));
+      const auto bits = static_cast<std::uint32_t>(igtl_read_be(body.data() + at, 4));
+      f[3 + i] = std::bit_cast<float>(bits);
       if (!std::isfinite(f[3 + i])) return {IgtlFault::kNonFinite, kIgtlHeaderBytes + at};
       v2 += static_cast<double>(f[3 + i]) * f[3 + i];
     }
-    if (!(v2 <= 1.0 + rigid_tolerance)) return {IgtlFault::kNotUnitQuaternion, kIgtlHeaderBytes + 12};
+    if (!(v2 <= 1.0 + rigid_tolerance))
+      return {IgtlFault::kNotUnitQuaternion, kIgtlHeaderBytes + 12};
     f[6] = static_cast<float>(std::sqrt(std::max(0.0, 1.0 - v2)));
   }
   return igtl_quaternion_pose(f, rigid_tolerance, out);

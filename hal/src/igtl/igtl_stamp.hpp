@@ -25,7 +25,8 @@ inline std::uint64_t igtl_stamp_raw(std::int64_t timestamp_ns) noexcept {
 /// Sets `m`'s timestamp to `timestamp_ns` (igtl_stamp_raw()).
 inline void igtl_set_stamp_ns(igtl::MessageBase& m, std::int64_t timestamp_ns) {
   const std::uint64_t raw = igtl_stamp_raw(timestamp_ns);
-  m.SetTimeStamp(static_cast<unsigned int>(raw >> 32), static_cast<unsigned int>(raw & 0xFFFFFFFFu));
+  m.SetTimeStamp(static_cast<unsigned int>(raw >> 32),
+                 static_cast<unsigned int>(raw & 0xFFFFFFFFu));
 }
 
 }  // namespace numen::hal

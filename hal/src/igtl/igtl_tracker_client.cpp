@@ -64,7 +64,8 @@ IgtlTrackerClient::IgtlTrackerClient(IgtlTrackerClientSettings settings)
   if (settings_.connect_timeout_ns <= 0 || settings_.reconnect_interval_ns <= 0)
     throw bad("connect_timeout_ns and reconnect_interval_ns must be > 0");
   for (std::size_t k = 0; k < tools.size(); ++k)
-    queues_.push_back(std::make_unique<boost::lockfree::spsc_queue<IgtlPose>>(settings_.queue_poses));
+    queues_.push_back(
+        std::make_unique<boost::lockfree::spsc_queue<IgtlPose>>(settings_.queue_poses));
   records_.reserve(kIgtlFaultCount);
   names_.reserve(kIgtlMaxNamesSeen);
   thread_ = std::thread([this] { run(); });

@@ -87,8 +87,8 @@ std::string igtl_world_transform_name(const std::string& body, bool target, Igtl
         std::islower(static_cast<unsigned char>(name[i + 2])) == 0)
       ++to;
   if (to != 1)
-    throw bad("holds 'To' before a character that is not a lower-case letter: PLUS would read " +
-              std::to_string(to) + " frame pairs in '" + name + "'");
+    throw bad("holds 'To' before a character that is not a lower-case letter: PLUS's parser "
+              "needs exactly one such 'To' and finds " + std::to_string(to) + " in '" + name + "'");
   return name;
 }
 

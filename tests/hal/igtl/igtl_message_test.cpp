@@ -160,7 +160,8 @@ TEST(IgtlMessage, APositionAndAQtransReadBackAsTheTransformsPose) {
     hal::IgtlHeader h;
     hal::IgtlTransform tf;
     const hal::IgtlDecodeResult res = igtl_message_test_decode(m.bytes, h, tf);
-    ASSERT_TRUE(res.ok()) << m.type << ": " << hal::to_string(res.fault) << " at " << res.byte_offset;
+    ASSERT_TRUE(res.ok()) << m.type << ": " << hal::to_string(res.fault) << " at "
+                          << res.byte_offset;
     EXPECT_EQ(h.type, m.type);
     EXPECT_EQ(h.device_name, "StylusToTracker");
     EXPECT_EQ(hal::igtl_stamp_ns(h.timestamp_raw), stamp) << m.type;

@@ -93,7 +93,8 @@ TEST(IgtlTrackerBus, ATransformBecomesTheEncoderFramesOfTheTrackedFrame) {
 
 TEST(IgtlTrackerBus, APositionOrAQtransIsTheTrackedFrameOfItsTransform) {
   namespace hal = numen::hal;
-  const numen::core::Quat mq(Eigen::AngleAxisd(2.5, numen::core::Vec3(0.6, 0.3, -0.7).normalized()));
+  const numen::core::Quat mq(
+      Eigen::AngleAxisd(2.5, numen::core::Vec3(0.6, 0.3, -0.7).normalized()));
   const numen::core::Vec3 mp(80.0, -140.0, -905.0);  // mm
   const hal::DeviceConfig config = igtl_bus_test_config();
   const std::string sent[] = {

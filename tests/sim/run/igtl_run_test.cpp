@@ -213,7 +213,8 @@ TEST(IgtlRun, AToolNeverSentIsNamedWithTheNamesThatWere) {
   EXPECT_EQ(s.exit_status, numen::sim::code(numen::sim::ExitStatus::kSamplesRejected));
   EXPECT_TRUE(igtl_run_test_says(
       s, "'StylusToTracker' in 201 messages (device names sent: 'PointerToTracker')"));
-  EXPECT_TRUE(igtl_run_test_says(s, "no pose (TRANSFORM, POSITION or QTRANS) of the tool 127.0.0.1:"));
+  EXPECT_TRUE(
+      igtl_run_test_says(s, "no pose (TRANSFORM, POSITION or QTRANS) of the tool 127.0.0.1:"));
 }
 
 TEST(IgtlRun, AServerThatNeverAnswersIsSaid) {

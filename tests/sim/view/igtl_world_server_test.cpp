@@ -125,7 +125,7 @@ TEST(IgtlWorldServer, PlusNamesAreSentAsFromToSceneAndBodiesTheyCannotNameAreRef
   refused("needle_driver", IgtlNameStyle::kPlus, "1 to 7 characters");  // 26 with TargetToScene
   refused("needle_driver_2", IgtlNameStyle::kNumen, "1 to 13 characters");
   refused("2arm", IgtlNameStyle::kPlus, "start with a letter");
-  refused("goToX", IgtlNameStyle::kPlus, "PLUS would read 2 frame pairs in 'GoToXTargetToScene'");
+  refused("goToX", IgtlNameStyle::kPlus, "finds 2 in 'GoToXTargetToScene'");
   refused("to_b", IgtlNameStyle::kPlus, "'To_bTargetToScene'");  // "To_": not lower case
   // The names a client receives: each TRANSFORM by its PLUS name, and no other.
   const numen::sim::Scene scene =

@@ -46,8 +46,6 @@ inline constexpr std::size_t kIgtlPositionBodyBytes = 28;
 inline constexpr std::size_t kIgtlPositionQuaternion3BodyBytes = 24;
 /// Size of a QTRANS body, bytes (7 float32).
 inline constexpr std::size_t kIgtlQtransBodyBytes = 28;
-/// Largest body of a pose message (TRANSFORM's).
-inline constexpr std::size_t kIgtlMaxPoseBodyBytes = kIgtlTransformBodyBytes;
 /// Byte offsets of the header's fields (the file comment).
 inline constexpr std::size_t kIgtlVersionOffset = 0;
 inline constexpr std::size_t kIgtlTypeOffset = 2;         ///< Type name, char[12].

@@ -88,8 +88,8 @@ std::string pack_igtl_string(const std::string& device_name, std::int64_t timest
 /// form that leaves W out (the receiver makes W = √(1 − |v|²) ≥ 0, so the vector part sent is
 /// that of the representative with W ≥ 0; packed with the library's C codec, igtl_position.h:
 /// 1.11's class writes 4 bytes past the body of this form), else the whole quaternion (28
-/// bytes). Stamped
-/// `timestamp_ns` (as pack_igtl_transform()). For the replay server and tests. Allocates.
+/// bytes). Stamped `timestamp_ns` (as pack_igtl_transform()). For the replay server and tests.
+/// Allocates.
 std::string pack_igtl_position(const std::string& device_name, std::int64_t timestamp_ns,
                                const core::Quat& orientation, const core::Vec3& translation,
                                bool quaternion3 = false);

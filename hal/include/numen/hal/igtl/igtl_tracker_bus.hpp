@@ -121,8 +121,9 @@ class IgtlTrackerBus final : public Bus {
   /// The bus of tool `tool` of a shared receiver `client` (make_igtl_tracker_client() of
   /// settings whose client lists the tools; settings.client is not used again: the receiver
   /// has its own). `config`, `kinematics`, settings' calibration and units are this tool's.
-  /// Throws as the other constructor, and std::invalid_argument for no client or a tool it
-  /// does not read. With client's registration_name, waits for it as the other does (the
+  /// `client` null: one is made, make_igtl_tracker_client(settings) (the other constructor).
+  /// Throws as the other constructor, and std::invalid_argument for a tool the client does
+  /// not read. With the client's registration_name, waits for it as the other does (the
   /// second bus of a connection finds it at once).
   IgtlTrackerBus(const DeviceConfig& config, std::unique_ptr<const Kinematics> kinematics,
                  IgtlTrackerSettings settings, std::shared_ptr<IgtlTrackerClient> client,

@@ -14,12 +14,12 @@
 /// (version, type name) or whose body size is above the limit loses the stream's framing, so the
 /// connection is closed and made again; a pose message with a CRC mismatch, a body size that is
 /// not its type's, a NaN, a rotation that is not orthonormal or a quaternion that is not of unit
-/// length is skipped; a type that OpenIGTLink v2
-/// does not have is skipped (its body read and discarded through a fixed buffer: memory never
-/// grows with what the server sends); the poses of other device names are counted and their
-/// names kept (at most kIgtlMaxNamesSeen). A full queue (a flood, or a consumer that stopped)
-/// drops the newest pose and counts it, unless `wait_when_full` (an offline run that follows the
-/// tracker's clock: the receiver then waits, and TCP's flow control slows the server).
+/// length is skipped; a type that OpenIGTLink v2 does not have is skipped (its body read and
+/// discarded through a fixed buffer: memory never grows with what the server sends); the poses
+/// of other device names are counted and their names kept (at most kIgtlMaxNamesSeen). A full
+/// queue (a flood, or a consumer that stopped) drops the newest pose and counts it, unless
+/// `wait_when_full` (an offline run that follows the tracker's clock: the receiver then waits,
+/// and TCP's flow control slows the server).
 /// Construction allocates and may throw; the thread's work allocates (the library's message
 /// objects are made once); the consumer side (pop(), front(), counters()) is noexcept, lock free
 /// and allocation free.
