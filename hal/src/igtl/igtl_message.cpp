@@ -55,6 +55,7 @@ const char* to_string(IgtlFault fault) noexcept {
     case IgtlFault::kNonFinite: return "non-finite value";
     case IgtlFault::kNotRigid: return "non-rigid matrix";
     case IgtlFault::kNotUnitQuaternion: return "non-unit quaternion";
+    case IgtlFault::kUnsupportedVersion: return "unsupported header version";
   }
   return "?";
 }
@@ -139,6 +140,7 @@ IgtlDecodeResult IgtlDecoder::decode_header(std::span<const std::uint8_t, kIgtlH
 IgtlDecodeResult IgtlDecoder::decode_transform(const IgtlHeader& header,
                                                std::span<const std::uint8_t> body,
                                                IgtlTransform& out, double rigid_tolerance) {
+  if (header.version != 1) return {IgtlFault::kUnsupportedVersion, kIgtlVersionOffset};
   if (header.body_size != kIgtlTransformBodyBytes)
     return {IgtlFault::kBodySizeMismatch, kIgtlBodySizeOffset};
   if (body.size() < kIgtlTransformBodyBytes)
@@ -146,6 +148,8 @@ IgtlDecodeResult IgtlDecoder::decode_transform(const IgtlHeader& header,
   igtl::TransformMessage& m = *impl_->transform;
   m.SetMessageHeader(impl_->header);  // the header of decode_header()
   m.AllocatePack();
+  if (static_cast<std::size_t>(m.GetPackBodySize()) != kIgtlTransformBodyBytes)
+    return {IgtlFault::kBodySizeMismatch, kIgtlBodySizeOffset};
   std::memcpy(m.GetPackBodyPointer(), body.data(), kIgtlTransformBodyBytes);
   const int r = m.Unpack(1);  // 1: check the CRC
   if ((r & igtl::MessageHeader::UNPACK_BODY) == 0) return {IgtlFault::kCrcMismatch, kIgtlCrcOffset};
@@ -174,6 +178,7 @@ IgtlDecodeResult IgtlDecoder::decode_pose(const IgtlHeader& header,
                                           double rigid_tolerance) {
   if (header.type == "TRANSFORM") return decode_transform(header, body, out, rigid_tolerance);
   if (!igtl_pose_type(header.type)) return {IgtlFault::kUnknownType, kIgtlTypeOffset};
+  if (header.version != 1) return {IgtlFault::kUnsupportedVersion, kIgtlVersionOffset};
   if (!igtl_pose_body_size_ok(header.type, header.body_size))
     return {IgtlFault::kBodySizeMismatch, kIgtlBodySizeOffset};
   const auto n = static_cast<std::size_t>(header.body_size);
@@ -193,6 +198,10 @@ IgtlDecodeResult IgtlDecoder::decode_pose(const IgtlHeader& header,
   igtl::PositionMessage& m = *impl_->position;
   m.SetMessageHeader(impl_->header);  // the header of decode_header(); the pack type by size
   m.AllocatePack();
+  // The library sizes the body from its own reading of the header (a header it did not read
+  // leaves the size of the previous message's form): never copy past what it allocated.
+  if (static_cast<std::size_t>(m.GetPackBodySize()) != n)
+    return {IgtlFault::kBodySizeMismatch, kIgtlBodySizeOffset};
   std::memcpy(m.GetPackBodyPointer(), body.data(), n);
   const int r = m.Unpack(1);  // 1: check the CRC
   if ((r & igtl::MessageHeader::UNPACK_BODY) == 0) return {IgtlFault::kCrcMismatch, kIgtlCrcOffset};

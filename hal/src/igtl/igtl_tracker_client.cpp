@@ -232,7 +232,7 @@ void IgtlTrackerClient::session(int fd) {
       fault(hr.fault, h, message, at, hr.byte_offset);
       return;
     }
-    if (igtl_pose_body_size_ok(h.type, h.body_size)) {  // TRANSFORM, POSITION, QTRANS
+    if (h.version == 1 && igtl_pose_body_size_ok(h.type, h.body_size)) {  // a pose message
       const auto n = static_cast<std::size_t>(h.body_size);
       if (read_fully(fd, scratch.data(), n) != ReadResult::kOk) return;
       const IgtlDecodeResult br = decoder.decode_pose(
@@ -258,7 +258,9 @@ void IgtlTrackerClient::session(int fd) {
           names_.push_back(h.device_name);
       }
     } else {
-      if (igtl_pose_type(h.type))
+      if (igtl_pose_type(h.type) && h.version != 1)
+        fault(IgtlFault::kUnsupportedVersion, h, message, at, kIgtlVersionOffset);
+      else if (igtl_pose_type(h.type))
         fault(IgtlFault::kBodySizeMismatch, h, message, at, kIgtlBodySizeOffset);
       else if (!igtl_known_type(h.type))
         fault(IgtlFault::kUnknownType, h, message, at, kIgtlTypeOffset);

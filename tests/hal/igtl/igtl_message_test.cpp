@@ -221,3 +221,37 @@ TEST(IgtlMessage, ABadPositionOrQtransIsLocated) {
   igtl_message_test_expect(hal::pack_igtl_position("Stylus", 0, q, t).substr(0, body + 20),
                            hal::IgtlFault::kBodySizeMismatch, body + 20);
 }
+
+TEST(IgtlMessage, AHeaderOfVersion2IsNotReadAndSaysSo) {
+  namespace hal = numen::hal;
+  // OpenIGTLink 3's header version 2 opens the body with an extended header that
+  // libOpenIGTLink 1.11 cannot read. The decoder is reused as the receiver's is: a 24-byte
+  // POSITION first (the library keeps that form), then 28-byte bodies under a version-2 header
+  // (the fuzz finding: the library sized the body from the previous form, 24 bytes, and the
+  // copy of 28 ran past it).
+  const numen::core::Quat q(igtl_message_test_rotation());
+  const numen::core::Vec3 t(1, 2, 3);
+  hal::IgtlDecoder decoder;
+  hal::IgtlHeader h;
+  hal::IgtlTransform tf;
+  const auto decode = [&](const std::string& m) {
+    return hal::decode_igtl_message(
+        decoder,
+        std::span<const std::uint8_t>(reinterpret_cast<const std::uint8_t*>(m.data()), m.size()),
+        1 << 20, h, tf);
+  };
+  ASSERT_TRUE(decode(hal::pack_igtl_position("Stylus", 0, q, t, true)).ok());
+  for (std::string m : {hal::pack_igtl_position("Stylus", 0, q, t),
+                        hal::pack_igtl_qtrans("Stylus", 0, q, t), igtl_message_test_good()}) {
+    m[1] = 2;  // version 2
+    const hal::IgtlDecodeResult r = decode(m);
+    EXPECT_EQ(r.fault, hal::IgtlFault::kUnsupportedVersion)
+        << h.type << ": " << hal::to_string(r.fault);
+    EXPECT_EQ(r.byte_offset, hal::kIgtlVersionOffset) << h.type;
+  }
+  EXPECT_STREQ(hal::to_string(hal::IgtlFault::kUnsupportedVersion), "unsupported header version");
+  // The same messages with header version 1 still read.
+  EXPECT_TRUE(decode(hal::pack_igtl_position("Stylus", 0, q, t)).ok());
+  EXPECT_TRUE(decode(hal::pack_igtl_position("Stylus", 0, q, t, true)).ok());
+  EXPECT_TRUE(decode(igtl_message_test_good()).ok());
+}

@@ -115,6 +115,8 @@ TEST(IgtlTrackerClient, PositionAndQtransPosesPassAndTheirFaultsAreLocated) {
   position_only.resize(hal::kIgtlHeaderBytes + 12);  // X Y Z: no orientation
   for (int i = 0; i < 8; ++i)
     position_only[hal::kIgtlBodySizeOffset + static_cast<std::size_t>(i)] = i == 7 ? 12 : 0;
+  std::string version2 = hal::pack_igtl_position("StylusToTracker", 0, q, at_x(7.0));
+  version2[1] = 2;  // OpenIGTLink 3's header version: its body is not read, its framing holds
   const std::vector<std::string> sent = {
       hal::pack_igtl_position("StylusToTracker", 0, q, at_x(1.0)),
       hal::pack_igtl_qtrans("StylusToTracker", 0, q, at_x(2.0)),
@@ -122,17 +124,19 @@ TEST(IgtlTrackerClient, PositionAndQtransPosesPassAndTheirFaultsAreLocated) {
       not_unit,
       position_only,
       hal::pack_igtl_qtrans("PointerToTracker", 0, q, at_x(5.0)),
-      igtl_client_test_transform("StylusToTracker", 6.0)};
+      igtl_client_test_transform("StylusToTracker", 6.0),
+      version2};
   numen::test::IgtlTestServer server(sent, true);
   hal::IgtlTrackerClient client(igtl_client_test_settings(server.port()));
   ASSERT_TRUE(igtl_client_test_wait([&] { return client.ended(); }));
   const hal::IgtlClientCounters c = client.counters();
-  EXPECT_EQ(c.messages, 7u);
+  EXPECT_EQ(c.messages, 8u);
   EXPECT_EQ(c.poses, 4u);
   EXPECT_EQ(c.other_devices, 1u);
   EXPECT_EQ(c.faults[static_cast<std::size_t>(hal::IgtlFault::kNotUnitQuaternion)], 1u);
   EXPECT_EQ(c.faults[static_cast<std::size_t>(hal::IgtlFault::kBodySizeMismatch)], 1u);
-  EXPECT_EQ(c.faults_total(), 2u);
+  EXPECT_EQ(c.faults[static_cast<std::size_t>(hal::IgtlFault::kUnsupportedVersion)], 1u);
+  EXPECT_EQ(c.faults_total(), 3u);
   EXPECT_EQ(c.disconnects, 1u);  // the server closed: the framing held across the sizes
   for (double x : {1.0, 2.0, 3.0, 6.0}) {
     const hal::IgtlPose* p = client.front();
@@ -144,7 +148,7 @@ TEST(IgtlTrackerClient, PositionAndQtransPosesPassAndTheirFaultsAreLocated) {
   }
   EXPECT_EQ(client.front(), nullptr);
   const std::vector<hal::IgtlFaultRecord> records = client.fault_records();
-  ASSERT_EQ(records.size(), 2u);
+  ASSERT_EQ(records.size(), 3u);
   std::uint64_t at = 0;
   for (std::size_t k = 0; k < 3; ++k) at += sent[k].size();
   EXPECT_EQ(hal::describe(records[0]),
@@ -155,6 +159,9 @@ TEST(IgtlTrackerClient, PositionAndQtransPosesPassAndTheirFaultsAreLocated) {
   EXPECT_EQ(records[1].message, 4u);
   EXPECT_EQ(records[1].stream_offset, at + not_unit.size());
   EXPECT_EQ(records[1].byte_offset, hal::kIgtlBodySizeOffset);
+  EXPECT_EQ(records[2].fault, hal::IgtlFault::kUnsupportedVersion);
+  EXPECT_EQ(records[2].message, 7u);
+  EXPECT_EQ(records[2].byte_offset, hal::kIgtlVersionOffset);
   EXPECT_EQ(client.names_seen(), std::vector<std::string>{"PointerToTracker"});
 }
 

@@ -2,7 +2,9 @@
 /// @file igtl_message.hpp
 /// OpenIGTLink message decoding for the tracker bus (igtl_tracker_bus.hpp): the 58-byte header
 /// and the bodies of the three pose messages, TRANSFORM, POSITION and QTRANS, checked, through
-/// the OpenIGTLink library (libOpenIGTLink 1.11, protocol version 1 and 2 headers; Tokuda et al.,
+/// the OpenIGTLink library (libOpenIGTLink 1.11: OpenIGTLink 1 and 2, header version 1; a header
+/// of version 2 — OpenIGTLink 3's, whose body opens with an extended header the library cannot
+/// read — frames its body but is not read; Tokuda et al.,
 /// "OpenIGTLink: an open network protocol for image-guided therapy environment", Int J Med Robot
 /// 5(4), 2009; the protocol description at openigtlink.org, "Header", "TRANSFORM", "POSITION",
 /// "QTRANS"): TRANSFORM through igtl::TransformMessage, POSITION through igtl::PositionMessage,
@@ -72,9 +74,11 @@ enum class IgtlFault : std::uint8_t {
   kNotRigid,         ///< A TRANSFORM whose rotation is not orthonormal with determinant +1.
   kNotUnitQuaternion,  ///< A POSITION or QTRANS whose quaternion is not of unit length
                        ///< (|‖q‖² − 1| above the tolerance; 24-byte POSITION: OX² + OY² + OZ² > 1).
+  kUnsupportedVersion, ///< A pose message with header version 2 (OpenIGTLink 3's extended
+                       ///< header, which libOpenIGTLink 1.11 does not read): skipped.
 };
 /// Number of IgtlFault values.
-inline constexpr int kIgtlFaultCount = 9;
+inline constexpr int kIgtlFaultCount = 10;
 
 /// Short English name of an IgtlFault ("CRC mismatch", ...; static string).
 const char* to_string(IgtlFault fault) noexcept;
@@ -138,7 +142,9 @@ class IgtlDecoder {
                                  std::size_t max_body_bytes, IgtlHeader& header);
 
   /// Decodes the body of a TRANSFORM whose header is `header` (decode_header()'s, of the same
-  /// bytes) into `out`, checking in this order: body size 48 (kBodySizeMismatch, offset 42),
+  /// bytes) into `out`, checking in this order: header version 1 (kUnsupportedVersion, offset
+  /// 0), body size 48 (kBodySizeMismatch, offset 42; also when the library's message would not
+  /// hold the header's body size),
   /// `body` holding header.body_size bytes (kBodySizeMismatch, offset 58 + body.size()), the
   /// header's CRC-64 (kCrcMismatch, offset 50), every entry finite (kNonFinite, offset of the
   /// first bad float), |RᵀR − I| ≤ `rigid_tolerance` entrywise and det R > 0 (kNotRigid,
@@ -148,8 +154,10 @@ class IgtlDecoder {
                                     double rigid_tolerance = kIgtlRigidTolerance);
 
   /// Decodes the body of a pose message of any of the three types (igtl_pose_type()) into
-  /// `out`: a TRANSFORM as decode_transform(); a POSITION or QTRANS checked in this order: body
-  /// size (igtl_pose_body_size_ok(), kBodySizeMismatch at offset 42; fewer bytes than the header
+  /// `out`: a TRANSFORM as decode_transform(); a POSITION or QTRANS checked in this order: header
+  /// version 1 (kUnsupportedVersion, offset 0), body size (igtl_pose_body_size_ok(),
+  /// kBodySizeMismatch at offset 42, as when the library's message would not hold it; fewer
+  /// bytes than the header
   /// says, at 58 + body.size()), the CRC-64 (kCrcMismatch, offset 50), every float finite in the
   /// order sent X Y Z OX OY OZ W (kNonFinite, offset of the first bad one), the quaternion of
   /// unit length, |‖q‖² − 1| ≤ `rigid_tolerance` (kNotUnitQuaternion, offset 70: OX). The
