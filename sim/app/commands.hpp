@@ -60,6 +60,7 @@ class RunCommand {
   std::string scene_path_, trace_path_, coupling_, bus_ = "sim", record_path_, record_view_path_, view_;
   std::string igtl_;  // --igtl [HOST:]PORT: the world out over OpenIGTLink
   double igtl_organ_rate_ = 30.0;  // --igtl-organ-rate HZ: POLYDATA updates per simulated second
+  std::string igtl_names_ = "numen";  // --igtl-names numen|plus: how the TRANSFORMs are named
   double duration_ = -1.0, phase_ = -1.0, view_rate_ = 60.0, speed_ = 0.0, spin_us_ = 0.0,
          scene_spin_us_ = 0.0;
   std::int64_t timer_slack_ns_ = 1;
@@ -143,6 +144,7 @@ class IgtlReplayCommand {
   int port_ = 18944;
   double rate_ = 0.0, duration_ = -1.0, accept_timeout_ = 30.0;
   bool realtime_ = false;
+  std::string message_ = "transform";  // --message transform|position|qtrans
 };
 
 /// `numen sdo --bus ... NODE read|write INDEX:SUB [VALUE] [--type T]`: one SDO transfer.

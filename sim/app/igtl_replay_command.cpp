@@ -27,6 +27,10 @@ IgtlReplayCommand::IgtlReplayCommand(CLI::App& parent)
       ->check(seconds_check(0.0, 1e6, false));
   cli_->add_option("--accept-timeout", accept_timeout_, "Seconds to wait for a client (default 30)")
       ->check(seconds_check(0.0, 1e6, true));
+  cli_->add_option("--message", message_,
+                   "The pose message sent: transform (default, as PLUS), position (POSITION, "
+                   "position and quaternion) or qtrans")
+      ->check(CLI::IsMember({"transform", "position", "qtrans"}));
   cli_->add_flag("--realtime", realtime_,
                  "Send at the trajectory's pace (a live tracker) instead of as fast as the client reads");
 }
@@ -41,11 +45,17 @@ int IgtlReplayCommand::execute() const {
   settings.duration_s = duration_;
   settings.paced = realtime_;
   settings.accept_timeout_s = accept_timeout_;
+  settings.message = message_ == "position" ? sim::IgtlReplayMessage::kPosition
+                     : message_ == "qtrans" ? sim::IgtlReplayMessage::kQtrans
+                                            : sim::IgtlReplayMessage::kTransform;
   sim::IgtlReplayServer server(scene, settings);
   std::cerr << "numen igtl-replay: listening on " << host_ << ":" << server.port() << "\n";
   loading_done();
   const sim::IgtlReplayResult r = server.serve(&stop_flag());
-  std::cerr << "numen igtl-replay: " << r.messages_sent << " TRANSFORMs sent"
+  const std::string type = message_ == "qtrans"     ? "QTRANS"
+                           : message_ == "position" ? "POSITION"
+                                                    : "TRANSFORM";
+  std::cerr << "numen igtl-replay: " << r.messages_sent << " " << type << "s sent"
             << (r.client_connected ? "" : " (no client connected)")
             << (r.client_gone ? " (the client left early)" : "") << "\n";
   return r.client_connected && !r.client_gone ? 0 : 1;

@@ -126,6 +126,11 @@ RunCommand::RunCommand(CLI::App& parent)
                   "With --igtl: POLYDATA updates of each deformable per second of simulated time "
                   "(default 30; 0: the shape once per client); at most the stream's --view-rate")
       ->check(number_check(0.0, 1e6, false));
+  run->add_option("--igtl-names", igtl_names_,
+                  "With --igtl: how the TRANSFORMs are named: numen (default: '<body>', "
+                  "'<body>_target') or plus (PLUS's and Slicer's '<From>To<To>': "
+                  "'<Body>ToScene', '<Body>TargetToScene')")
+      ->check(CLI::IsMember({"numen", "plus"}));
   run->add_flag("--wait-for-viewer{60}", wait_for_viewer_,
                "With --view: start the run when the first page connects, waiting at most this "
                "many seconds (--wait-for-viewer=S; default 60); none connected: exit 1")
@@ -156,6 +161,10 @@ int RunCommand::execute() const {
     throw sim::InputError("", 0, 0, "--igtl-organ-rate",
                           "sets the rate of the OpenIGTLink world's POLYDATA; without --igtl "
                           "there is none");
+  if (cli_->count("--igtl-names") > 0 && igtl_.empty())
+    throw sim::InputError("", 0, 0, "--igtl-names",
+                          "names the OpenIGTLink world's TRANSFORMs; without --igtl there are "
+                          "none");
   if (cli_->count("--wait-for-viewer") > 0 && view_.empty())
     throw sim::InputError("", 0, 0, "--wait-for-viewer",
                           "waits for a page of the live viewer; without --view there is none");
@@ -240,6 +249,7 @@ int RunCommand::execute() const {
     ws.host = address.host;
     ws.port = address.port;
     ws.organ_rate_hz = igtl_organ_rate_;
+    ws.names = igtl_names_ == "plus" ? sim::IgtlNameStyle::kPlus : sim::IgtlNameStyle::kNumen;
     warn_if_exposed(ws.host, std::cerr, "the OpenIGTLink world");
     igtl_world = std::make_unique<sim::IgtlWorldServer>(scene.model, ws);
     const bool v6 = ws.host.find(':') != std::string::npos;

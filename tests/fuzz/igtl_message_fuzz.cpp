@@ -2,11 +2,12 @@
 /// libFuzzer harness of the OpenIGTLink message decoder (hal/igtl/igtl_message.hpp): every input
 /// through decode_igtl_message() as the tracker's receiver decodes a message off the network.
 /// A fault must be located inside the message (its byte offset within the header and the body
-/// the header announces); a decoded TRANSFORM must be finite, its rotation orthonormal
-/// (|RᵀR − I| ≤ the tolerance, det > 0); a decode must not depend on the bytes after the body
-/// the header announces. Inputs longer than a TRANSFORM also go through with their body's
-/// CRC-64 made right (packed again by the library), so that the checks behind the CRC (NaN,
-/// rigidity) are reached.
+/// the header announces); a decoded pose (TRANSFORM, POSITION, QTRANS) must be finite, its
+/// rotation orthonormal (|RᵀR − I| ≤ the tolerance, det > 0). Inputs long enough also go
+/// through with their body's CRC-64 made right (their floats packed again by the library as a
+/// TRANSFORM, a POSITION of 28 and of 24 bytes, and a QTRANS), so that the checks behind the
+/// CRC (NaN, rigidity, unit quaternion) are reached; then the input once more, the decoder
+/// holding the state those left.
 
 #include <cmath>
 #include <cstdint>
@@ -15,6 +16,7 @@
 
 #include "fuzz_input.hpp"
 #include "numen/hal/igtl/igtl_message.hpp"
+#include "numen/hal/igtl/igtl_pack.hpp"
 
 namespace {
 
@@ -31,13 +33,13 @@ void igtl_fuzz_check(numen::hal::IgtlDecoder& decoder, const std::uint8_t* data,
       finding("igtl: a fault located past the message");
     return;
   }
-  if (header.type != "TRANSFORM") return;
+  if (!hal::igtl_pose_type(header.type)) return;
   if (!tf.rotation.allFinite() || !tf.translation.allFinite())
-    finding("igtl: a decoded TRANSFORM is not finite");
+    finding("igtl: a decoded pose is not finite");
   const double err =
       (tf.rotation.transpose() * tf.rotation - numen::core::Mat3::Identity()).cwiseAbs().maxCoeff();
   if (!(err <= hal::kIgtlRigidTolerance) || !(tf.rotation.determinant() > 0.0))
-    finding("igtl: a decoded TRANSFORM is not rigid");
+    finding("igtl: a decoded pose is not rigid");
 }
 
 }  // namespace
@@ -45,18 +47,34 @@ void igtl_fuzz_check(numen::hal::IgtlDecoder& decoder, const std::uint8_t* data,
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   static numen::hal::IgtlDecoder decoder;  // made once, as the receiver's
   igtl_fuzz_check(decoder, data, size);
-  // The same header and body with a right CRC: the body's checks past the CRC.
-  constexpr std::size_t n = numen::hal::kIgtlHeaderBytes + numen::hal::kIgtlTransformBodyBytes;
+  // The same floats with a right CRC: the body's checks past the CRC.
+  namespace hal = numen::hal;
+  constexpr std::size_t n = hal::kIgtlHeaderBytes + hal::kIgtlTransformBodyBytes;
+  const auto check = [&](const std::string& packed) {
+    igtl_fuzz_check(decoder, reinterpret_cast<const std::uint8_t*>(packed.data()), packed.size());
+  };
+  if (size >= hal::kIgtlHeaderBytes + hal::kIgtlQtransBodyBytes) {
+    float f[7];
+    std::memcpy(f, data + hal::kIgtlHeaderBytes, sizeof f);
+    const numen::core::Vec3 t(f[0], f[1], f[2]);
+    const numen::core::Quat q(f[6], f[3], f[4], f[5]);  // w, x, y, z
+    check(hal::pack_igtl_position("Fuzz", 0, q, t));
+    check(hal::pack_igtl_position("Fuzz", 0, q, t, true));
+    check(hal::pack_igtl_qtrans("Fuzz", 0, q, t));
+  }
   if (size >= n) {
     numen::core::Mat3 rot;
     numen::core::Vec3 t;
     float f[12];
-    std::memcpy(f, data + numen::hal::kIgtlHeaderBytes, sizeof f);
+    std::memcpy(f, data + hal::kIgtlHeaderBytes, sizeof f);
     for (int c = 0; c < 3; ++c)
       for (int r = 0; r < 3; ++r) rot(r, c) = f[3 * c + r];
     t = numen::core::Vec3(f[9], f[10], f[11]);
-    const std::string packed = numen::hal::pack_igtl_transform("Fuzz", 0, rot, t);
-    igtl_fuzz_check(decoder, reinterpret_cast<const std::uint8_t*>(packed.data()), packed.size());
+    check(hal::pack_igtl_transform("Fuzz", 0, rot, t));
   }
+  // The input again, after the decoder read the other forms: a receiver's decoder is reused,
+  // and the library's message objects keep the previous message's form (a finding: a 28-byte
+  // body under a header the library did not read, after a 24-byte POSITION).
+  igtl_fuzz_check(decoder, data, size);
   return 0;
 }

@@ -1,13 +1,17 @@
 /// @file igtl_message.cpp
-/// OpenIGTLink header and TRANSFORM decoding through libOpenIGTLink (igtl_message.hpp).
+/// OpenIGTLink header and pose (TRANSFORM, POSITION, QTRANS) decoding through libOpenIGTLink
+/// (igtl_message.hpp).
 
 #include "numen/hal/igtl/igtl_message.hpp"
 
 #include <igtlMessageHeader.h>
+#include <igtlPositionMessage.h>
 #include <igtlTransformMessage.h>
+#include <igtl_qtrans.h>
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
 #include <cstring>
 
@@ -48,8 +52,10 @@ const char* to_string(IgtlFault fault) noexcept {
     case IgtlFault::kBodySizeMismatch: return "body size mismatch";
     case IgtlFault::kCrcMismatch: return "CRC mismatch";
     case IgtlFault::kUnknownType: return "unknown type";
-    case IgtlFault::kNonFinite: return "non-finite matrix";
+    case IgtlFault::kNonFinite: return "non-finite value";
     case IgtlFault::kNotRigid: return "non-rigid matrix";
+    case IgtlFault::kNotUnitQuaternion: return "non-unit quaternion";
+    case IgtlFault::kUnsupportedVersion: return "unsupported header version";
   }
   return "?";
 }
@@ -70,9 +76,40 @@ bool igtl_known_type(const std::string& type) noexcept {
   return false;
 }
 
+bool igtl_pose_type(const std::string& type) noexcept {
+  return type == "TRANSFORM" || type == "POSITION" || type == "QTRANS";
+}
+
+bool igtl_pose_body_size_ok(const std::string& type, std::uint64_t body_size) noexcept {
+  if (type == "TRANSFORM") return body_size == kIgtlTransformBodyBytes;
+  if (type == "POSITION")
+    return body_size == kIgtlPositionBodyBytes || body_size == kIgtlPositionQuaternion3BodyBytes;
+  if (type == "QTRANS") return body_size == kIgtlQtransBodyBytes;
+  return false;
+}
+
+namespace {
+
+// The checks of a position + quaternion body (POSITION, QTRANS) after the library decoded it:
+// `f` = X Y Z OX OY OZ W in the order sent.
+IgtlDecodeResult igtl_quaternion_pose(const std::array<float, 7>& f, double tolerance,
+                                      IgtlTransform& out) {
+  for (std::size_t i = 0; i < f.size(); ++i)
+    if (!std::isfinite(f[i])) return {IgtlFault::kNonFinite, kIgtlHeaderBytes + 4 * i};
+  const core::Quat q(f[6], f[3], f[4], f[5]);  // Eigen: w, x, y, z
+  if (!(std::abs(q.squaredNorm() - 1.0) <= tolerance))
+    return {IgtlFault::kNotUnitQuaternion, kIgtlHeaderBytes + 12};
+  out.rotation = q.normalized().toRotationMatrix();
+  out.translation = core::Vec3(f[0], f[1], f[2]);
+  return {};
+}
+
+}  // namespace
+
 struct IgtlDecoder::Impl {
   igtl::MessageHeader::Pointer header = igtl::MessageHeader::New();
   igtl::TransformMessage::Pointer transform = igtl::TransformMessage::New();
+  igtl::PositionMessage::Pointer position = igtl::PositionMessage::New();
 };
 
 IgtlDecoder::IgtlDecoder() : impl_(std::make_unique<Impl>()) {}
@@ -103,6 +140,7 @@ IgtlDecodeResult IgtlDecoder::decode_header(std::span<const std::uint8_t, kIgtlH
 IgtlDecodeResult IgtlDecoder::decode_transform(const IgtlHeader& header,
                                                std::span<const std::uint8_t> body,
                                                IgtlTransform& out, double rigid_tolerance) {
+  if (header.version != 1) return {IgtlFault::kUnsupportedVersion, kIgtlVersionOffset};
   if (header.body_size != kIgtlTransformBodyBytes)
     return {IgtlFault::kBodySizeMismatch, kIgtlBodySizeOffset};
   if (body.size() < kIgtlTransformBodyBytes)
@@ -110,6 +148,8 @@ IgtlDecodeResult IgtlDecoder::decode_transform(const IgtlHeader& header,
   igtl::TransformMessage& m = *impl_->transform;
   m.SetMessageHeader(impl_->header);  // the header of decode_header()
   m.AllocatePack();
+  if (static_cast<std::size_t>(m.GetPackBodySize()) != kIgtlTransformBodyBytes)
+    return {IgtlFault::kBodySizeMismatch, kIgtlBodySizeOffset};
   std::memcpy(m.GetPackBodyPointer(), body.data(), kIgtlTransformBodyBytes);
   const int r = m.Unpack(1);  // 1: check the CRC
   if ((r & igtl::MessageHeader::UNPACK_BODY) == 0) return {IgtlFault::kCrcMismatch, kIgtlCrcOffset};
@@ -133,6 +173,62 @@ IgtlDecodeResult IgtlDecoder::decode_transform(const IgtlHeader& header,
   return {};
 }
 
+IgtlDecodeResult IgtlDecoder::decode_pose(const IgtlHeader& header,
+                                          std::span<const std::uint8_t> body, IgtlTransform& out,
+                                          double rigid_tolerance) {
+  if (header.type == "TRANSFORM") return decode_transform(header, body, out, rigid_tolerance);
+  if (!igtl_pose_type(header.type)) return {IgtlFault::kUnknownType, kIgtlTypeOffset};
+  if (header.version != 1) return {IgtlFault::kUnsupportedVersion, kIgtlVersionOffset};
+  if (!igtl_pose_body_size_ok(header.type, header.body_size))
+    return {IgtlFault::kBodySizeMismatch, kIgtlBodySizeOffset};
+  const auto n = static_cast<std::size_t>(header.body_size);
+  if (body.size() < n) return {IgtlFault::kBodySizeMismatch, kIgtlHeaderBytes + body.size()};
+  std::array<float, 7> f{};
+  if (header.type == "QTRANS") {
+    // The library's C codec (1.11 has no igtl::QTransMessage): the CRC over the bytes as sent,
+    // then the byte order.
+    igtl_qtrans q{};
+    std::memcpy(&q, body.data(), kIgtlQtransBodyBytes);
+    if (igtl_qtrans_get_crc(&q) != header.crc) return {IgtlFault::kCrcMismatch, kIgtlCrcOffset};
+    igtl_qtrans_convert_byte_order(&q);
+    std::copy(std::begin(q.qtrans), std::end(q.qtrans), f.begin());
+    std::copy(std::begin(q.quaternion), std::end(q.quaternion), f.begin() + 3);
+    return igtl_quaternion_pose(f, rigid_tolerance, out);
+  }
+  igtl::PositionMessage& m = *impl_->position;
+  m.SetMessageHeader(impl_->header);  // the header of decode_header(); the pack type by size
+  m.AllocatePack();
+  // The library sizes the body from its own reading of the header (a header it did not read
+  // leaves the size of the previous message's form): never copy past what it allocated.
+  if (static_cast<std::size_t>(m.GetPackBodySize()) != n)
+    return {IgtlFault::kBodySizeMismatch, kIgtlBodySizeOffset};
+  std::memcpy(m.GetPackBodyPointer(), body.data(), n);
+  const int r = m.Unpack(1);  // 1: check the CRC
+  if ((r & igtl::MessageHeader::UNPACK_BODY) == 0) return {IgtlFault::kCrcMismatch, kIgtlCrcOffset};
+  m.GetPosition(f.data());
+  m.GetQuaternion(f.data() + 3);
+  if (n == kIgtlPositionQuaternion3BodyBytes) {
+    // The library makes W = √(1 − |v|²), but answers the identity (0, 0, 0, 1) without a word
+    // when |v|² > 1 or an element is infinite, and a float32 unit vector part (W ≈ 0) may have
+    // |v|² a little above 1: the identity for a half turn. So the vector part is taken as sent
+    // (three big-endian float32 at OX) and W made here, |v|² ≤ 1 + tolerance.
+    for (std::size_t i = 0; i < 3; ++i)
+      if (!std::isfinite(f[i])) return {IgtlFault::kNonFinite, kIgtlHeaderBytes + 4 * i};
+    double v2 = 0.0;
+    for (std::size_t i = 0; i < 3; ++i) {
+      const std::size_t at = 12 + 4 * i;
+      const auto bits = static_cast<std::uint32_t>(igtl_read_be(body.data() + at, 4));
+      f[3 + i] = std::bit_cast<float>(bits);
+      if (!std::isfinite(f[3 + i])) return {IgtlFault::kNonFinite, kIgtlHeaderBytes + at};
+      v2 += static_cast<double>(f[3 + i]) * f[3 + i];
+    }
+    if (!(v2 <= 1.0 + rigid_tolerance))
+      return {IgtlFault::kNotUnitQuaternion, kIgtlHeaderBytes + 12};
+    f[6] = static_cast<float>(std::sqrt(std::max(0.0, 1.0 - v2)));
+  }
+  return igtl_quaternion_pose(f, rigid_tolerance, out);
+}
+
 IgtlDecodeResult decode_igtl_message(IgtlDecoder& decoder, std::span<const std::uint8_t> bytes,
                                      std::size_t max_body_bytes, IgtlHeader& header,
                                      IgtlTransform& transform) {
@@ -141,8 +237,8 @@ IgtlDecodeResult decode_igtl_message(IgtlDecoder& decoder, std::span<const std::
       decoder.decode_header(bytes.first<kIgtlHeaderBytes>(), max_body_bytes, header);
   if (!h.ok()) return h;
   if (!igtl_known_type(header.type)) return {IgtlFault::kUnknownType, kIgtlTypeOffset};
-  if (header.type != "TRANSFORM") return {};
-  return decoder.decode_transform(header, bytes.subspan(kIgtlHeaderBytes), transform);
+  if (!igtl_pose_type(header.type)) return {};
+  return decoder.decode_pose(header, bytes.subspan(kIgtlHeaderBytes), transform);
 }
 
 std::int64_t igtl_stamp_ns(std::uint64_t raw) noexcept {

@@ -5,10 +5,14 @@
 
 #include <igtlMessageHeader.h>
 #include <igtlPolyDataMessage.h>
+#include <igtlPositionMessage.h>
 #include <igtlStatusMessage.h>
 #include <igtlStringMessage.h>
 #include <igtlTransformMessage.h>
+#include <igtl_header.h>
 #include <igtl_polydata.h>
+#include <igtl_position.h>
+#include <igtl_qtrans.h>
 #include <igtl_util.h>
 
 #include <cstring>
@@ -102,6 +106,69 @@ std::string pack_igtl_string(const std::string& device_name, std::int64_t timest
   m->SetString(text.substr(0, 65535).c_str());
   igtl_set_stamp_ns(*m, timestamp_ns);
   return packed(*m);
+}
+
+namespace {
+
+// A message whose body `body` (n bytes, in network byte order) is packed by the caller with the
+// library's C codec: the header made with it too (version 1, the CRC-64 of the body).
+std::string igtl_c_message(const char* type, const std::string& device_name,
+                           std::int64_t timestamp_ns, const void* body, std::size_t n) {
+  igtl_header h{};
+  h.version = IGTL_HEADER_VERSION;
+  std::memcpy(h.name, type, std::strlen(type));                      // <= 12, NUL padded
+  std::memcpy(h.device_name, device_name.data(), device_name.size());  // <= 20, NUL padded
+  h.timestamp = igtl_stamp_raw(timestamp_ns);
+  h.body_size = n;
+  h.crc = crc64(static_cast<unsigned char*>(const_cast<void*>(body)), n, 0);
+  igtl_header_convert_byte_order(&h);
+  std::string out(reinterpret_cast<const char*>(&h), sizeof h);
+  out.append(static_cast<const char*>(body), n);
+  return out;
+}
+
+}  // namespace
+
+std::string pack_igtl_position(const std::string& device_name, std::int64_t timestamp_ns,
+                               const core::Quat& orientation, const core::Vec3& translation,
+                               bool quaternion3) {
+  check_device_name(device_name, "POSITION");
+  if (quaternion3) {
+    // The library's C codec: libOpenIGTLink 1.11's igtl::PositionMessage packs this form with
+    // the 28-byte byte-order conversion, writing 4 bytes past its 24-byte body (valgrind).
+    core::Quat q = orientation;
+    if (q.w() < 0.0) q.coeffs() = -q.coeffs();  // the receiver makes W >= 0
+    igtl_position body{};
+    for (int i = 0; i < 3; ++i) body.position[i] = static_cast<igtl_float32>(translation(i));
+    body.quaternion[0] = static_cast<igtl_float32>(q.x());
+    body.quaternion[1] = static_cast<igtl_float32>(q.y());
+    body.quaternion[2] = static_cast<igtl_float32>(q.z());
+    igtl_position_convert_byte_order_quaternion3(&body);
+    return igtl_c_message("POSITION", device_name, timestamp_ns, &body,
+                          IGTL_POSITION_MESSAGE_WITH_QUATERNION3_SIZE);
+  }
+  igtl::PositionMessage::Pointer m = igtl::PositionMessage::New();
+  m->SetDeviceName(device_name.c_str());
+  m->SetPackType(igtl::PositionMessage::ALL);
+  m->SetPosition(static_cast<float>(translation.x()), static_cast<float>(translation.y()),
+                 static_cast<float>(translation.z()));
+  m->SetQuaternion(static_cast<float>(orientation.x()), static_cast<float>(orientation.y()),
+                   static_cast<float>(orientation.z()), static_cast<float>(orientation.w()));
+  igtl_set_stamp_ns(*m, timestamp_ns);
+  return packed(*m);
+}
+
+std::string pack_igtl_qtrans(const std::string& device_name, std::int64_t timestamp_ns,
+                             const core::Quat& orientation, const core::Vec3& translation) {
+  check_device_name(device_name, "QTRANS");
+  igtl_qtrans body{};
+  for (int i = 0; i < 3; ++i) body.qtrans[i] = static_cast<igtl_float32>(translation(i));
+  body.quaternion[0] = static_cast<igtl_float32>(orientation.x());
+  body.quaternion[1] = static_cast<igtl_float32>(orientation.y());
+  body.quaternion[2] = static_cast<igtl_float32>(orientation.z());
+  body.quaternion[3] = static_cast<igtl_float32>(orientation.w());
+  igtl_qtrans_convert_byte_order(&body);  // to network order; the CRC is of the bytes sent
+  return igtl_c_message("QTRANS", device_name, timestamp_ns, &body, sizeof body);
 }
 
 namespace {

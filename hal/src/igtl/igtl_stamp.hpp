@@ -11,14 +11,22 @@
 
 namespace numen::hal {
 
-/// Sets `m`'s timestamp to `timestamp_ns` (ns since the sender's epoch; negative: 0).
-inline void igtl_set_stamp_ns(igtl::MessageBase& m, std::int64_t timestamp_ns) {
+/// The raw 64-bit timestamp of `timestamp_ns` (ns since the sender's epoch; negative: 0): the
+/// seconds in the upper 32 bits, the fraction in 2⁻³² s in the lower 32.
+inline std::uint64_t igtl_stamp_raw(std::int64_t timestamp_ns) noexcept {
   const auto ns = static_cast<std::uint64_t>(std::max<std::int64_t>(timestamp_ns, 0));
   const std::uint64_t sec = ns / 1'000'000'000u;
   const std::uint64_t sub = ns % 1'000'000'000u;
   const std::uint64_t frac =
       std::min<std::uint64_t>(((sub << 32) + 500'000'000u) / 1'000'000'000u, 0xFFFFFFFFu);
-  m.SetTimeStamp(static_cast<unsigned int>(sec), static_cast<unsigned int>(frac));
+  return (sec << 32) | frac;
+}
+
+/// Sets `m`'s timestamp to `timestamp_ns` (igtl_stamp_raw()).
+inline void igtl_set_stamp_ns(igtl::MessageBase& m, std::int64_t timestamp_ns) {
+  const std::uint64_t raw = igtl_stamp_raw(timestamp_ns);
+  m.SetTimeStamp(static_cast<unsigned int>(raw >> 32),
+                 static_cast<unsigned int>(raw & 0xFFFFFFFFu));
 }
 
 }  // namespace numen::hal

@@ -34,10 +34,24 @@ void check_igtl_pose(const core::Pose& p, const char* name) {
 
 }  // namespace
 
+std::shared_ptr<IgtlTrackerClient> make_igtl_tracker_client(const IgtlTrackerSettings& settings) {
+  IgtlTrackerClientSettings cs = settings.client;
+  cs.wait_when_full = settings.wait_for_tracker;
+  cs.reconnect = cs.reconnect && !settings.wait_for_tracker;  // a replay's end is the end
+  return std::make_shared<IgtlTrackerClient>(std::move(cs));
+}
+
 IgtlTrackerBus::IgtlTrackerBus(const DeviceConfig& config,
                                std::unique_ptr<const Kinematics> kinematics,
                                IgtlTrackerSettings settings)
-    : config_(config), kinematics_(std::move(kinematics)), settings_(std::move(settings)) {
+    : IgtlTrackerBus(config, std::move(kinematics), settings, nullptr, 0) {}
+
+IgtlTrackerBus::IgtlTrackerBus(const DeviceConfig& config,
+                               std::unique_ptr<const Kinematics> kinematics,
+                               IgtlTrackerSettings settings,
+                               std::shared_ptr<IgtlTrackerClient> client, std::size_t tool)
+    : config_(config), kinematics_(std::move(kinematics)), settings_(std::move(settings)),
+      tool_(tool) {
   if (config_.kind != DeviceKind::kPoseTracker)
     throw std::invalid_argument(
         "OpenIGTLink tracker: the device must be a pose tracker (kind = \"pose-tracker\")");
@@ -53,13 +67,13 @@ IgtlTrackerBus::IgtlTrackerBus(const DeviceConfig& config,
   settings_.registration.orientation.normalize();
   q_ = AxisVector::Zero(kinematics_->num_axes());
   latencies_.reserve(std::max<std::size_t>(settings_.latency_capacity, 1));
-  IgtlTrackerClientSettings cs = settings_.client;
-  cs.wait_when_full = settings_.wait_for_tracker;
-  cs.reconnect = cs.reconnect && !settings_.wait_for_tracker;  // a replay's end is the end
   if (settings_.registration_wait_ns <= 0)
     throw std::invalid_argument("OpenIGTLink tracker: registration_wait_ns must be > 0");
-  client_ = std::make_unique<IgtlTrackerClient>(cs);
-  if (!cs.registration_name.empty()) take_registration();
+  client_ = client ? std::move(client) : make_igtl_tracker_client(settings_);
+  if (tool_ >= client_->tool_count())
+    throw std::invalid_argument("OpenIGTLink tracker: tool " + std::to_string(tool_) +
+                                " of a receiver of " + std::to_string(client_->tool_count()));
+  if (!client_->settings().registration_name.empty()) take_registration();
 }
 
 void IgtlTrackerBus::take_registration() {
@@ -158,7 +172,7 @@ void IgtlTrackerBus::on_sync() noexcept {
   const std::int64_t wait_until =
       settings_.wait_for_tracker ? igtl_bus_mono_ns() + settings_.wait_timeout_ns : 0;
   for (;;) {
-    const IgtlPose* p = client_->front();
+    const IgtlPose* p = client_->front(tool_);
     if (p == nullptr) {
       // Following the tracker: wait for a pose after t unless the receiver has ended.
       if (client_->ended()) {
@@ -177,12 +191,16 @@ void IgtlTrackerBus::on_sync() noexcept {
       nanosleep(&ts, nullptr);
       continue;
     }
+    // Following: the time origin is the connection's first pose, of any tool (the buses of
+    // one connection share it); set before that pose was queued.
+    if (settings_.wait_for_tracker && !has_first_stamp_)
+      has_first_stamp_ = client_->first_stamp_ns(first_stamp_ns_);
     if (settings_.wait_for_tracker && has_first_stamp_ && p->stamp_ns - first_stamp_ns_ > now_ns_)
       break;  // due later
     starved_ = false;
     if (taken++ > 0) ++tracker_counters_.poses_superseded;
     take(*p, igtl_bus_mono_ns());
-    client_->pop();
+    client_->pop(tool_);
   }
   pending_count_ = 0;
   pending_next_ = 0;

@@ -39,20 +39,33 @@ std::string describe(const IgtlFaultRecord& r) {
 }
 
 IgtlTrackerClient::IgtlTrackerClient(IgtlTrackerClientSettings settings)
-    : settings_(std::move(settings)), queue_(std::max<std::size_t>(settings_.queue_poses, 1)) {
+    : settings_(std::move(settings)) {
   const auto bad = [](const std::string& what) {
     return std::invalid_argument("OpenIGTLink tracker client: " + what);
   };
-  if (settings_.device_name.empty() || settings_.device_name.size() > 20)
-    throw bad("device_name '" + settings_.device_name + "' must have 1 to 20 characters");
-  if (settings_.registration_name.size() > 20 || settings_.registration_name == settings_.device_name)
+  std::vector<std::string> tools = {settings_.device_name};
+  tools.insert(tools.end(), settings_.more_device_names.begin(), settings_.more_device_names.end());
+  if (tools.size() > kIgtlMaxTools)
+    throw bad(std::to_string(tools.size()) + " tools: at most " + std::to_string(kIgtlMaxTools));
+  for (std::size_t k = 0; k < tools.size(); ++k) {
+    if (tools[k].empty() || tools[k].size() > 20)
+      throw bad("device_name '" + tools[k] + "' must have 1 to 20 characters");
+    if (std::find(tools.begin(), tools.begin() + static_cast<std::ptrdiff_t>(k), tools[k]) !=
+        tools.begin() + static_cast<std::ptrdiff_t>(k))
+      throw bad("device_name '" + tools[k] + "' names two tools");
+  }
+  if (settings_.registration_name.size() > 20 ||
+      std::find(tools.begin(), tools.end(), settings_.registration_name) != tools.end())
     throw bad("registration_name '" + settings_.registration_name +
-              "' must have at most 20 characters and not be the tool's device name");
+              "' must have at most 20 characters and not be a tool's device name");
   if (settings_.port == 0) throw bad("port must be 1..65535");
   if (settings_.host.empty()) throw bad("host is empty");
   if (settings_.queue_poses == 0) throw bad("queue_poses must be >= 1");
   if (settings_.connect_timeout_ns <= 0 || settings_.reconnect_interval_ns <= 0)
     throw bad("connect_timeout_ns and reconnect_interval_ns must be > 0");
+  for (std::size_t k = 0; k < tools.size(); ++k)
+    queues_.push_back(
+        std::make_unique<boost::lockfree::spsc_queue<IgtlPose>>(settings_.queue_poses));
   records_.reserve(kIgtlFaultCount);
   names_.reserve(kIgtlMaxNamesSeen);
   thread_ = std::thread([this] { run(); });
@@ -65,12 +78,14 @@ void IgtlTrackerClient::stop() {
   if (thread_.joinable()) thread_.join();
 }
 
-const IgtlPose* IgtlTrackerClient::front() noexcept {
-  if (queue_.read_available() == 0) return nullptr;
-  return &queue_.front();
+const IgtlPose* IgtlTrackerClient::front(std::size_t tool) noexcept {
+  if (tool >= queues_.size() || queues_[tool]->read_available() == 0) return nullptr;
+  return &queues_[tool]->front();
 }
 
-void IgtlTrackerClient::pop() noexcept { queue_.pop(); }
+void IgtlTrackerClient::pop(std::size_t tool) noexcept {
+  if (tool < queues_.size()) queues_[tool]->pop();
+}
 
 IgtlClientCounters IgtlTrackerClient::counters() const noexcept {
   IgtlClientCounters c;
@@ -80,6 +95,7 @@ IgtlClientCounters IgtlTrackerClient::counters() const noexcept {
   c.messages = get(messages_);
   c.bytes = get(bytes_);
   c.poses = get(poses_);
+  for (std::size_t i = 0; i < tool_poses_.size(); ++i) c.tool_poses[i] = get(tool_poses_[i]);
   c.other_devices = get(other_devices_);
   c.ignored = get(ignored_);
   for (std::size_t i = 0; i < faults_.size(); ++i) c.faults[i] = get(faults_[i]);
@@ -114,9 +130,21 @@ void IgtlTrackerClient::fault(IgtlFault f, const IgtlHeader& h, std::uint64_t me
   records_.push_back(IgtlFaultRecord{f, h.type, h.device_name, message, at, offset});
 }
 
-void IgtlTrackerClient::push(const IgtlPose& pose) {
+std::size_t IgtlTrackerClient::tool_of(const std::string& name) const noexcept {
+  if (name == settings_.device_name) return 0;
+  for (std::size_t k = 0; k < settings_.more_device_names.size(); ++k)
+    if (name == settings_.more_device_names[k]) return k + 1;
+  return queues_.size();
+}
+
+void IgtlTrackerClient::push(const IgtlPose& pose, std::size_t tool) {
   count(poses_);
-  while (!queue_.push(pose)) {
+  count(tool_poses_[tool]);
+  if (!has_first_stamp_.load(std::memory_order_relaxed)) {  // this thread is the only writer
+    first_stamp_ns_ = pose.stamp_ns;
+    has_first_stamp_.store(true, std::memory_order_release);
+  }
+  while (!queues_[tool]->push(pose)) {
     if (!settings_.wait_when_full) {
       count(dropped_full_);
       return;
@@ -204,21 +232,20 @@ void IgtlTrackerClient::session(int fd) {
       fault(hr.fault, h, message, at, hr.byte_offset);
       return;
     }
-    const bool transform = h.type == "TRANSFORM" && h.body_size == kIgtlTransformBodyBytes;
-    if (transform) {
-      if (read_fully(fd, scratch.data(), kIgtlTransformBodyBytes) != ReadResult::kOk) return;
-      const IgtlDecodeResult br = decoder.decode_transform(
-          h, std::span<const std::uint8_t>(scratch.data(), kIgtlTransformBodyBytes), tf,
-          settings_.rigid_tolerance);
+    if (h.version == 1 && igtl_pose_body_size_ok(h.type, h.body_size)) {  // a pose message
+      const auto n = static_cast<std::size_t>(h.body_size);
+      if (read_fully(fd, scratch.data(), n) != ReadResult::kOk) return;
+      const IgtlDecodeResult br = decoder.decode_pose(
+          h, std::span<const std::uint8_t>(scratch.data(), n), tf, settings_.rigid_tolerance);
       if (!br.ok()) {
         fault(br.fault, h, message, at, br.byte_offset);
-      } else if (h.device_name == settings_.device_name) {
+      } else if (const std::size_t tool = tool_of(h.device_name); tool < queues_.size()) {
         IgtlPose pose;
         pose.stamp_ns = igtl_stamp_ns(h.timestamp_raw);
         pose.received_mono_ns = igtl_mono_now_ns();
         pose.rotation = tf.rotation;
         pose.translation = tf.translation;
-        push(pose);
+        push(pose, tool);
       } else if (!settings_.registration_name.empty() &&
                  h.device_name == settings_.registration_name) {
         std::lock_guard<std::mutex> lock(records_mutex_);
@@ -231,7 +258,9 @@ void IgtlTrackerClient::session(int fd) {
           names_.push_back(h.device_name);
       }
     } else {
-      if (h.type == "TRANSFORM")
+      if (igtl_pose_type(h.type) && h.version != 1)
+        fault(IgtlFault::kUnsupportedVersion, h, message, at, kIgtlVersionOffset);
+      else if (igtl_pose_type(h.type))
         fault(IgtlFault::kBodySizeMismatch, h, message, at, kIgtlBodySizeOffset);
       else if (!igtl_known_type(h.type))
         fault(IgtlFault::kUnknownType, h, message, at, kIgtlTypeOffset);

@@ -1,6 +1,6 @@
 /// @file igtl_replay.cpp
 /// The OpenIGTLink replay server (igtl_replay.hpp): POSIX sockets, messages packed by the
-/// OpenIGTLink library (hal::pack_igtl_transform()).
+/// OpenIGTLink library (hal::pack_igtl_transform(), pack_igtl_position(), pack_igtl_qtrans()).
 
 #include "numen/sim/device/igtl_replay.hpp"
 
@@ -21,6 +21,7 @@
 #include "net/tcp_listen.hpp"
 #if NUMEN_WITH_OPENIGTLINK
 #include "numen/hal/igtl/igtl_message.hpp"
+#include "numen/hal/igtl/igtl_pack.hpp"
 #endif
 
 namespace numen::sim {
@@ -126,9 +127,14 @@ IgtlReplayResult IgtlReplayServer::serve(const std::atomic<bool>* stop) {
     // M = registration⁻¹ · tip · calibration⁻¹
     const core::Quat mq = (reg_inv * p.orientation * cal_inv).normalized();
     const core::Vec3 mp = reg_inv * (p.position - t.registration.position) - mq * t.calibration.position;
-    const std::string msg = hal::pack_igtl_transform(
-        t.device_name, t0_real + tk_ns, mq.toRotationMatrix(),
-        mp / t.metres_per_unit);
+    const std::int64_t stamp = t0_real + tk_ns;
+    const core::Vec3 sent_p = mp / t.metres_per_unit;
+    const std::string msg =
+        settings_.message == IgtlReplayMessage::kPosition
+            ? hal::pack_igtl_position(t.device_name, stamp, mq, sent_p)
+        : settings_.message == IgtlReplayMessage::kQtrans
+            ? hal::pack_igtl_qtrans(t.device_name, stamp, mq, sent_p)
+            : hal::pack_igtl_transform(t.device_name, stamp, mq.toRotationMatrix(), sent_p);
     if (!igtl_replay_send_all(fd, msg, stop)) {
       result.client_gone = !stopped();
       break;

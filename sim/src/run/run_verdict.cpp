@@ -161,8 +161,9 @@ RunVerdict run_verdict(const RunSummary& s) {
           s.igtl_connects == 0
               ? "no connection to the OpenIGTLink server " + s.igtl + " (" +
                     n(s.igtl_connect_failures) + " attempts refused or timed out)"
-              : "no TRANSFORM of the tool " + s.igtl + " in " + n(s.igtl_messages) +
-                    " messages" + (names.empty() ? "" : " (device names sent: " + names + ")"));
+              : "no pose (TRANSFORM, POSITION or QTRANS) of the tool " + s.igtl + " in " +
+                    n(s.igtl_messages) + " messages" +
+                    (names.empty() ? "" : " (device names sent: " + names + ")"));
     }
   }
   if (s.bus.rfind("log:", 0) == 0 && s.bus_frames_replayed == 0)

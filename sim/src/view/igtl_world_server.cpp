@@ -10,6 +10,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -59,6 +60,38 @@ std::string at_time(std::int64_t t_ns) {
 
 }  // namespace
 
+std::string igtl_world_transform_name(const std::string& body, bool target, IgtlNameStyle style) {
+  const auto bad = [&](const std::string& why) {
+    return std::invalid_argument(std::string("--igtl") +
+                                 (style == IgtlNameStyle::kPlus ? "-names plus" : "") +
+                                 ": body name '" + body + "' " + why);
+  };
+  if (style == IgtlNameStyle::kNumen) {
+    if (body.empty() || body.size() > 13)
+      throw bad("must have 1 to 13 characters ('" + body +
+                "_target' must fit OpenIGTLink's 20)");
+    return target ? body + "_target" : body;
+  }
+  if (body.empty() || body.size() > 7)
+    throw bad("must have 1 to 7 characters with PLUS's names ('" + body +
+              "TargetToScene' must fit OpenIGTLink's 20)");
+  const auto c0 = static_cast<unsigned char>(body[0]);
+  if (!((c0 >= 'a' && c0 <= 'z') || (c0 >= 'A' && c0 <= 'Z')))
+    throw bad("must start with a letter for PLUS's names (a frame name starts upper case)");
+  std::string name = body;
+  name[0] = static_cast<char>(std::toupper(c0));
+  name += target ? "TargetToScene" : "ToScene";
+  int to = 0;  // PLUS's rule: a "To" before a character that is not lower case parts two frames
+  for (std::size_t i = 0; i + 2 < name.size(); ++i)
+    if (name[i] == 'T' && name[i + 1] == 'o' &&
+        std::islower(static_cast<unsigned char>(name[i + 2])) == 0)
+      ++to;
+  if (to != 1)
+    throw bad("holds 'To' before a character that is not a lower-case letter: PLUS's parser "
+              "needs exactly one such 'To' and finds " + std::to_string(to) + " in '" + name + "'");
+  return name;
+}
+
 /// One deformable's POLYDATA: its points are the net's nodes, or its fine surface's vertices.
 struct IgtlWorldServer::Organ {
   int net = -1;
@@ -77,11 +110,9 @@ IgtlWorldServer::IgtlWorldServer(const core::Model& model, IgtlWorldSettings set
     throw std::invalid_argument("--igtl-organ-rate: " + std::to_string(settings_.organ_rate_hz) +
                                 " is not a finite rate >= 0");
   for (const core::BodyModel& b : model_.bodies) {
-    if (b.name.size() > 13)
-      throw std::invalid_argument("--igtl: body name '" + b.name +
-                                  "' is longer than 13 characters ('" + b.name +
-                                  "_target' must fit OpenIGTLink's 20)");
     names_.push_back(b.name);
+    pose_names_.push_back(igtl_world_transform_name(b.name, false, settings_.names));
+    target_names_.push_back(igtl_world_transform_name(b.name, true, settings_.names));
   }
 #if NUMEN_WITH_OPENIGTLINK
   for (int n = 0; n < static_cast<int>(model_.nets.size()); ++n) {
@@ -292,8 +323,8 @@ bool IgtlWorldServer::write_frame(std::span<const std::byte> frame) noexcept {
     float pose[7];
     for (std::size_t b = 0; b < n; ++b) {
       view.body_pose(static_cast<std::uint32_t>(b), pose);
-      add(names_[b], pose);
-      if (view.target_pose(static_cast<std::uint32_t>(b), pose)) add(names_[b] + "_target", pose);
+      add(pose_names_[b], pose);
+      if (view.target_pose(static_cast<std::uint32_t>(b), pose)) add(target_names_[b], pose);
     }
     // The organs: due on the grid of organ_rate_hz in simulated time (no burst after a gap).
     const bool any_fresh =

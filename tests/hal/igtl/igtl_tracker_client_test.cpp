@@ -2,7 +2,7 @@
 /// The OpenIGTLink receiver (hal/igtl/igtl_tracker_client.hpp) against a loopback server
 /// (support/igtl_test_server.hpp, an ephemeral port): bad input counted and located, a server
 /// that never answers, one that goes away, a flood into a small queue (memory does not grow:
-/// the newest poses are dropped and counted).
+/// the newest poses are dropped and counted); POSITION and QTRANS poses among TRANSFORMs.
 
 #include "numen/hal/igtl/igtl_tracker_client.hpp"
 
@@ -14,6 +14,7 @@
 #include <thread>
 
 #include "igtl_test_server.hpp"
+#include "numen/hal/igtl/igtl_pack.hpp"
 
 namespace {
 
@@ -103,6 +104,67 @@ TEST(IgtlTrackerClient, BadInputIsCountedAndLocatedAndGoodPosesPass) {
   EXPECT_EQ(client.names_seen(), std::vector<std::string>{"PointerToTracker"});
 }
 
+TEST(IgtlTrackerClient, PositionAndQtransPosesPassAndTheirFaultsAreLocated) {
+  namespace hal = numen::hal;
+  const numen::core::Quat q(Eigen::AngleAxisd(0.3, numen::core::Vec3::UnitY()));
+  const numen::core::Vec3 t(0.0, 0.0, -800.0);
+  const auto at_x = [&](double x) { return numen::core::Vec3(x, t.y(), t.z()); };
+  const std::string not_unit =
+      hal::pack_igtl_position("StylusToTracker", 0, numen::core::Quat(0.9, 0.5, 0.0, 0.0), t);
+  std::string position_only = hal::pack_igtl_position("StylusToTracker", 0, q, t);
+  position_only.resize(hal::kIgtlHeaderBytes + 12);  // X Y Z: no orientation
+  for (int i = 0; i < 8; ++i)
+    position_only[hal::kIgtlBodySizeOffset + static_cast<std::size_t>(i)] = i == 7 ? 12 : 0;
+  std::string version2 = hal::pack_igtl_position("StylusToTracker", 0, q, at_x(7.0));
+  version2[1] = 2;  // OpenIGTLink 3's header version: its body is not read, its framing holds
+  const std::vector<std::string> sent = {
+      hal::pack_igtl_position("StylusToTracker", 0, q, at_x(1.0)),
+      hal::pack_igtl_qtrans("StylusToTracker", 0, q, at_x(2.0)),
+      hal::pack_igtl_position("StylusToTracker", 0, q, at_x(3.0), true),
+      not_unit,
+      position_only,
+      hal::pack_igtl_qtrans("PointerToTracker", 0, q, at_x(5.0)),
+      igtl_client_test_transform("StylusToTracker", 6.0),
+      version2};
+  numen::test::IgtlTestServer server(sent, true);
+  hal::IgtlTrackerClient client(igtl_client_test_settings(server.port()));
+  ASSERT_TRUE(igtl_client_test_wait([&] { return client.ended(); }));
+  const hal::IgtlClientCounters c = client.counters();
+  EXPECT_EQ(c.messages, 8u);
+  EXPECT_EQ(c.poses, 4u);
+  EXPECT_EQ(c.other_devices, 1u);
+  EXPECT_EQ(c.faults[static_cast<std::size_t>(hal::IgtlFault::kNotUnitQuaternion)], 1u);
+  EXPECT_EQ(c.faults[static_cast<std::size_t>(hal::IgtlFault::kBodySizeMismatch)], 1u);
+  EXPECT_EQ(c.faults[static_cast<std::size_t>(hal::IgtlFault::kUnsupportedVersion)], 1u);
+  EXPECT_EQ(c.faults_total(), 3u);
+  EXPECT_EQ(c.disconnects, 1u);  // the server closed: the framing held across the sizes
+  for (double x : {1.0, 2.0, 3.0, 6.0}) {
+    const hal::IgtlPose* p = client.front();
+    ASSERT_NE(p, nullptr) << x;
+    EXPECT_NEAR(p->translation.x(), x, 1e-6);
+    const numen::core::Mat3 want = x == 6.0 ? numen::core::Mat3::Identity() : q.toRotationMatrix();
+    EXPECT_LT((p->rotation - want).cwiseAbs().maxCoeff(), 1e-6) << x;
+    client.pop();
+  }
+  EXPECT_EQ(client.front(), nullptr);
+  const std::vector<hal::IgtlFaultRecord> records = client.fault_records();
+  ASSERT_EQ(records.size(), 3u);
+  std::uint64_t at = 0;
+  for (std::size_t k = 0; k < 3; ++k) at += sent[k].size();
+  EXPECT_EQ(hal::describe(records[0]),
+            "non-unit quaternion: POSITION 'StylusToTracker', message 3 at stream byte " +
+                std::to_string(at) + ", field at byte 70");
+  EXPECT_EQ(records[1].fault, hal::IgtlFault::kBodySizeMismatch);
+  EXPECT_EQ(records[1].type, "POSITION");
+  EXPECT_EQ(records[1].message, 4u);
+  EXPECT_EQ(records[1].stream_offset, at + not_unit.size());
+  EXPECT_EQ(records[1].byte_offset, hal::kIgtlBodySizeOffset);
+  EXPECT_EQ(records[2].fault, hal::IgtlFault::kUnsupportedVersion);
+  EXPECT_EQ(records[2].message, 7u);
+  EXPECT_EQ(records[2].byte_offset, hal::kIgtlVersionOffset);
+  EXPECT_EQ(client.names_seen(), std::vector<std::string>{"PointerToTracker"});
+}
+
 TEST(IgtlTrackerClient, AServerThatNeverAnswersIsCounted) {
   namespace hal = numen::hal;
   hal::IgtlTrackerClientSettings s = igtl_client_test_settings(numen::test::IgtlTestServer::closed_port());
@@ -164,4 +226,20 @@ TEST(IgtlTrackerClient, SettingsAreChecked) {
   s.device_name = "Stylus";
   s.port = 0;
   EXPECT_THROW(hal::IgtlTrackerClient{s}, std::invalid_argument);
+  s.port = numen::test::IgtlTestServer::closed_port();
+  s.reconnect = false;
+  s.more_device_names = {"Pointer", "Stylus"};  // two tools of one name
+  EXPECT_THROW(hal::IgtlTrackerClient{s}, std::invalid_argument);
+  s.more_device_names = {"A", "B", "C", "D"};  // five tools
+  EXPECT_THROW(hal::IgtlTrackerClient{s}, std::invalid_argument);
+  s.more_device_names = {"Pointer", ""};
+  EXPECT_THROW(hal::IgtlTrackerClient{s}, std::invalid_argument);
+  s.more_device_names = {"Pointer"};
+  s.registration_name = "Pointer";  // a tool's name
+  EXPECT_THROW(hal::IgtlTrackerClient{s}, std::invalid_argument);
+  s.registration_name = "TrackerToScene";
+  hal::IgtlTrackerClient two(s);
+  EXPECT_EQ(two.tool_count(), 2u);
+  EXPECT_EQ(two.front(1), nullptr);
+  EXPECT_EQ(two.front(2), nullptr);  // no such tool: none, not a crash
 }

@@ -842,6 +842,8 @@ TEST(NumenCli, OptionsARunWouldNotApplyAreInputRejected) {
       {{"--record", (dir / "no_dir" / "x.log").string()}, "--record"},
       {{"--view-rate", "30"}, "--view-rate"},  // no stream to set the rate of
       {{"--igtl-organ-rate", "5"}, "--igtl-organ-rate"},  // no OpenIGTLink world (--igtl)
+      {{"--igtl-names", "plus"}, "--igtl-names"},  // no OpenIGTLink world to name
+      {{"--igtl-names", "slicer"}, "--igtl-names"},  // not a style
       {{"--wait-for-viewer"}, "--wait-for-viewer"},  // no viewer to wait for
       {{"--rt-strict"}, "--rt-strict"},        // no real-time step to make fatal
       {{"--timer-slack", "1"}, "--timer-slack"},  // an offline run has no deadlines

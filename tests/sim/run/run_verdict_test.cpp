@@ -243,6 +243,6 @@ TEST(RunVerdict, TheTrackersRejectedInputIsNamed) {
   s.igtl_periods_after_end = 0;
   s.igtl_poses = 0;
   v = numen::sim::run_verdict(s);
-  EXPECT_TRUE(says("no TRANSFORM of the tool 127.0.0.1:18944 'StylusToTracker' in 1203 messages "
-                   "(device names sent: 'PointerToTracker')"));
+  EXPECT_TRUE(says("no pose (TRANSFORM, POSITION or QTRANS) of the tool 127.0.0.1:18944 "
+                   "'StylusToTracker' in 1203 messages (device names sent: 'PointerToTracker')"));
 }

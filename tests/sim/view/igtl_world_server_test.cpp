@@ -104,6 +104,59 @@ TEST(IgtlWorldServer, TheTransformsReadBackAreTheTracesPosesAndLateClientsJoin) 
   EXPECT_GE(server.counters().frames, 200u);
 }
 
+TEST(IgtlWorldServer, PlusNamesAreSentAsFromToSceneAndBodiesTheyCannotNameAreRefused) {
+  using numen::sim::IgtlNameStyle;
+  using numen::sim::igtl_world_transform_name;
+  EXPECT_EQ(igtl_world_transform_name("stylus", false, IgtlNameStyle::kNumen), "stylus");
+  EXPECT_EQ(igtl_world_transform_name("stylus", true, IgtlNameStyle::kNumen), "stylus_target");
+  EXPECT_EQ(igtl_world_transform_name("stylus", false, IgtlNameStyle::kPlus), "StylusToScene");
+  EXPECT_EQ(igtl_world_transform_name("stylus", true, IgtlNameStyle::kPlus), "StylusTargetToScene");
+  EXPECT_EQ(igtl_world_transform_name("tool", false, IgtlNameStyle::kPlus), "ToolToScene");
+  EXPECT_EQ(igtl_world_transform_name("jaw_2", true, IgtlNameStyle::kPlus), "Jaw_2TargetToScene");
+  const auto refused = [](const std::string& body, IgtlNameStyle style, const std::string& says) {
+    try {
+      (void)igtl_world_transform_name(body, true, style);
+      ADD_FAILURE() << body << ": not refused";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(says), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("'" + body + "'"), std::string::npos) << e.what();
+    }
+  };
+  refused("needle_driver", IgtlNameStyle::kPlus, "1 to 7 characters");  // 26 with TargetToScene
+  refused("needle_driver_2", IgtlNameStyle::kNumen, "1 to 13 characters");
+  refused("2arm", IgtlNameStyle::kPlus, "start with a letter");
+  refused("goToX", IgtlNameStyle::kPlus, "finds 2 in 'GoToXTargetToScene'");
+  refused("to_b", IgtlNameStyle::kPlus, "'To_bTargetToScene'");  // "To_": not lower case
+  // The names a client receives: each TRANSFORM by its PLUS name, and no other.
+  const numen::sim::Scene scene =
+      numen::sim::load_scene(std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/tracker.toml");
+  numen::sim::IgtlWorldSettings ws;
+  ws.port = 0;
+  ws.names = IgtlNameStyle::kPlus;
+  numen::sim::IgtlWorldServer server(scene.model, ws);
+  auto body = igtl_world_test_client(server.port(), "StylusToScene");
+  auto target = igtl_world_test_client(server.port(), "StylusTargetToScene");
+  ASSERT_TRUE(igtl_world_test_wait([&] { return server.accept_clients() == 2; }));
+  constexpr int kPeriods = 500;
+  numen::sim::SceneRunner runner(scene, kPeriods);
+  runner.stream_view("", {&server}, 100.0, true);
+  for (int k = 0; k < kPeriods; ++k) runner.period();
+  runner.finish();
+  const std::uint64_t frames = server.counters().frames;
+  ASSERT_GE(frames, 40u);
+  ASSERT_TRUE(igtl_world_test_wait([&] { return body->counters().poses >= frames; }));
+  ASSERT_TRUE(igtl_world_test_wait([&] { return target->counters().poses >= frames; }));
+  EXPECT_EQ(body->names_seen(), std::vector<std::string>{"StylusTargetToScene"});
+  EXPECT_EQ(target->names_seen(), std::vector<std::string>{"StylusToScene"});
+  EXPECT_EQ(body->counters().other_devices, frames);  // the target's, one a frame
+  // A scene whose body PLUS cannot name: refused at construction, naming it.
+  numen::core::Model model = scene.model;
+  model.bodies[0].name = "pointer";  // 7 characters: "PointerTargetToScene" is 20
+  EXPECT_NO_THROW(numen::sim::IgtlWorldServer(model, ws));
+  model.bodies[0].name = "stylus_2";
+  EXPECT_THROW(numen::sim::IgtlWorldServer(model, ws), std::invalid_argument);
+}
+
 namespace {
 
 // One frame of `data` (the frames the stream would send), with `report` and `figures`.

@@ -2,7 +2,8 @@
 /// @file igtl_pack.hpp
 /// The OpenIGTLink messages numen sends besides TRANSFORM (igtl_message.hpp's
 /// pack_igtl_transform()): POLYDATA (a triangle surface: the organ), STATUS (a fault or an
-/// event, with the protocol's status code) and STRING (a line of text), packed by the library
+/// event, with the protocol's status code) and STRING (a line of text), and the tracker's other
+/// pose messages POSITION and QTRANS (for the replay and tests), packed by the library
 /// (libOpenIGTLink 1.11: igtl::PolyDataMessage, igtl::StatusMessage, igtl::StringMessage;
 /// openigtlink.org, "POLYDATA", "STATUS", "STRING"), and read back through the same classes,
 /// with the body's CRC-64 checked, for the tests and any reader of numen's world
@@ -80,6 +81,25 @@ std::string pack_igtl_status(const std::string& device_name, std::int64_t timest
 /// Packs a STRING message (encoding 3, US-ASCII; ≤ 65535 bytes, cut), stamped `timestamp_ns`.
 std::string pack_igtl_string(const std::string& device_name, std::int64_t timestamp_ns,
                              const std::string& text);
+
+/// Packs a POSITION message with the library (igtl::PositionMessage, header version 1): the
+/// position `translation` (the sender's units) and the orientation `orientation` (OX OY OZ W)
+/// as given, not normalised, so that a test can send a faulty one; `quaternion3`: the 24-byte
+/// form that leaves W out (the receiver makes W = √(1 − |v|²) ≥ 0, so the vector part sent is
+/// that of the representative with W ≥ 0; packed with the library's C codec, igtl_position.h:
+/// 1.11's class writes 4 bytes past the body of this form), else the whole quaternion (28
+/// bytes). Stamped `timestamp_ns` (as pack_igtl_transform()). For the replay server and tests.
+/// Allocates.
+std::string pack_igtl_position(const std::string& device_name, std::int64_t timestamp_ns,
+                               const core::Quat& orientation, const core::Vec3& translation,
+                               bool quaternion3 = false);
+
+/// Packs a QTRANS message (28 bytes: X Y Z OX OY OZ W, the quaternion as given) with the
+/// library's C codec (igtl_header.h, igtl_qtrans.h: libOpenIGTLink 1.11 has no C++ class for
+/// QTRANS), header version 1, stamped `timestamp_ns`. For the replay server and tests.
+/// Allocates.
+std::string pack_igtl_qtrans(const std::string& device_name, std::int64_t timestamp_ns,
+                             const core::Quat& orientation, const core::Vec3& translation);
 
 /// A message read back (unpack_igtl()): the header's type, device name and timestamp, and the
 /// body's content by type (TRANSFORM: rotation and translation; POLYDATA: points and

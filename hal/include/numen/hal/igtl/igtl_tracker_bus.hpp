@@ -27,6 +27,17 @@
 /// as for any pose tracker). Before the first pose nothing answers (the sample is not ready); a pose
 /// that is not renewed ages and the instrument rejects it as stale, exactly as a stale encoder.
 ///
+/// Several tools on one connection (PLUS sends every tool's transform on one): one receiver
+/// (make_igtl_tracker_client(), the tools' device names in its settings) shared by one
+/// IgtlTrackerBus per tool, each a pose tracker device of its own (its configuration, tool
+/// offset and calibration) reading its tool's queue; the registration is the connection's.
+/// Following the tracker, the buses share the time origin (the first pose of any tool) and
+/// each SYNC waits for its own tool, so a loop that runs them one after the other goes at the
+/// tracker's pace (a tool whose queue fills — 1024 poses ahead of the others — holds the
+/// receiver, and the other's SYNC waits out its wait_timeout_ns: a server must interleave its
+/// tools, as PLUS does, one message of each per frame). docs/openigtlink.md "Several tracked
+/// tools".
+///
 /// Not thread safe (one control loop). read / write / set_time_ns never allocate, throw or lock;
 /// they never block, except a SYNC following the tracker (bounded by wait_timeout_ns).
 
@@ -89,6 +100,12 @@ struct IgtlBusCounters {
   std::uint64_t syncs_after_end = 0;
 };
 
+/// The receiver for `settings`: settings.client with the connection's behaviour of the clock
+/// (following the tracker: a full queue waits, and the stream's end is not reconnected). For
+/// several tools, list them in settings.client (device_name, more_device_names) and give the
+/// result to one IgtlTrackerBus per tool. Throws as IgtlTrackerClient's constructor.
+std::shared_ptr<IgtlTrackerClient> make_igtl_tracker_client(const IgtlTrackerSettings& settings);
+
 /// The tracker as a bus (see the file comment).
 class IgtlTrackerBus final : public Bus {
  public:
@@ -101,6 +118,16 @@ class IgtlTrackerBus final : public Bus {
   /// registration; throws IgtlRegistrationMissing when it does not come in time.
   IgtlTrackerBus(const DeviceConfig& config, std::unique_ptr<const Kinematics> kinematics,
                  IgtlTrackerSettings settings);
+  /// The bus of tool `tool` of a shared receiver `client` (make_igtl_tracker_client() of
+  /// settings whose client lists the tools; settings.client is not used again: the receiver
+  /// has its own). `config`, `kinematics`, settings' calibration and units are this tool's.
+  /// `client` null: one is made, make_igtl_tracker_client(settings) (the other constructor).
+  /// Throws as the other constructor, and std::invalid_argument for a tool the client does
+  /// not read. With the client's registration_name, waits for it as the other does (the
+  /// second bus of a connection finds it at once).
+  IgtlTrackerBus(const DeviceConfig& config, std::unique_ptr<const Kinematics> kinematics,
+                 IgtlTrackerSettings settings, std::shared_ptr<IgtlTrackerClient> client,
+                 std::size_t tool);
   ~IgtlTrackerBus() override;
 
   /// The next pending TPDO (kOk), or kWouldBlock.
@@ -119,8 +146,10 @@ class IgtlTrackerBus final : public Bus {
 
   /// This bus's counters.
   const IgtlBusCounters& tracker_counters() const noexcept { return tracker_counters_; }
-  /// The receiver (its counters, faults, names seen).
+  /// The receiver (its counters, faults, names seen), shared by the tools' buses.
   const IgtlTrackerClient& client() const noexcept { return *client_; }
+  /// This bus's tool in client() (0: its device_name).
+  std::size_t tool() const noexcept { return tool_; }
   /// Same, mutable (stop()).
   IgtlTrackerClient& client() noexcept { return *client_; }
   /// Latencies from a TRANSFORM received (IgtlPose::received_mono_ns) to the SYNC that took it
@@ -142,7 +171,8 @@ class IgtlTrackerBus final : public Bus {
   DeviceConfig config_;
   std::unique_ptr<const Kinematics> kinematics_;
   IgtlTrackerSettings settings_;
-  std::unique_ptr<IgtlTrackerClient> client_;
+  std::shared_ptr<IgtlTrackerClient> client_;
+  std::size_t tool_ = 0;
   std::array<CanFrame, kMaxAxes> pending_{};
   int pending_count_ = 0;
   int pending_next_ = 0;

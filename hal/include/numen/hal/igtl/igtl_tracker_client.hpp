@@ -3,20 +3,23 @@
 /// IgtlTrackerClient: the receiver thread of the OpenIGTLink tracker bus (igtl_tracker_bus.hpp).
 /// It connects to an OpenIGTLink server (a PLUS server, a tracker's bridge, `numen igtl-replay`)
 /// over TCP, reads its messages, decodes and checks them (igtl_message.hpp) and pushes the
-/// TRANSFORMs of one device name (the tracked tool, e.g. "StylusToTracker") into a bounded
-/// single-producer / single-consumer lock-free queue (boost::lockfree::spsc_queue, its capacity
-/// fixed at construction) that the control period drains without blocking, locking or
-/// allocating. The network is read here, never in the period.
+/// poses (TRANSFORM, POSITION or QTRANS messages, mixed as the server likes) of the tracked
+/// tools — one device name each, e.g. "StylusToTracker"; several tools share one connection,
+/// as PLUS sends them — into a bounded single-producer / single-consumer lock-free queue per
+/// tool (boost::lockfree::spsc_queue, its capacity fixed at construction) that the control
+/// period drains without blocking, locking or allocating. The network is read here, never in
+/// the period.
 ///
 /// Bad input is counted and located, never fatal: a message whose header is not OpenIGTLink
 /// (version, type name) or whose body size is above the limit loses the stream's framing, so the
-/// connection is closed and made again; a TRANSFORM with a CRC mismatch, a body size that is not
-/// 48 bytes, a NaN or a rotation that is not orthonormal is skipped; a type that OpenIGTLink v2
-/// does not have is skipped (its body read and discarded through a fixed buffer: memory never
-/// grows with what the server sends); the TRANSFORMs of other device names are counted and their
-/// names kept (at most kIgtlMaxNamesSeen). A full queue (a flood, or a consumer that stopped)
-/// drops the newest pose and counts it, unless `wait_when_full` (an offline run that follows the
-/// tracker's clock: the receiver then waits, and TCP's flow control slows the server).
+/// connection is closed and made again; a pose message with a CRC mismatch, a body size that is
+/// not its type's, a NaN, a rotation that is not orthonormal or a quaternion that is not of unit
+/// length is skipped; a type that OpenIGTLink v2 does not have is skipped (its body read and
+/// discarded through a fixed buffer: memory never grows with what the server sends); the poses
+/// of other device names are counted and their names kept (at most kIgtlMaxNamesSeen). A full
+/// queue (a flood, or a consumer that stopped) drops the newest pose and counts it, unless
+/// `wait_when_full` (an offline run that follows the tracker's clock: the receiver then waits,
+/// and TCP's flow control slows the server).
 /// Construction allocates and may throw; the thread's work allocates (the library's message
 /// objects are made once); the consumer side (pop(), front(), counters()) is noexcept, lock free
 /// and allocation free.
@@ -25,6 +28,7 @@
 #include <atomic>
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <mutex>
 #include <optional>
 #include <string>
@@ -42,13 +46,18 @@ namespace numen::hal {
 inline constexpr std::uint16_t kIgtlDefaultPort = 18944;
 /// Other device names an IgtlTrackerClient keeps (to say which names a server does send).
 inline constexpr std::size_t kIgtlMaxNamesSeen = 8;
+/// Tools one IgtlTrackerClient reads (device_name and more_device_names).
+inline constexpr std::size_t kIgtlMaxTools = 4;
 
 /// Creation settings of an IgtlTrackerClient.
 struct IgtlTrackerClientSettings {
   std::string host = "127.0.0.1";        ///< Server: an IPv4 address or a host name.
   std::uint16_t port = kIgtlDefaultPort; ///< Server's TCP port, > 0.
-  std::string device_name;               ///< The tool's TRANSFORM device name, 1..20 characters.
-  std::size_t queue_poses = 1024;        ///< Capacity of the pose queue, >= 1.
+  std::string device_name;               ///< The tool's device name, 1..20 characters (tool 0).
+  /// Other tools on the same connection, tools 1, 2, ... (each 1..20 characters, all names
+  /// distinct; at most kIgtlMaxTools − 1), each into its own queue of queue_poses.
+  std::vector<std::string> more_device_names;
+  std::size_t queue_poses = 1024;        ///< Capacity of each tool's pose queue, >= 1.
   /// Full queue: true, the receiver waits for room (offline runs); false, the newest pose is
   /// dropped and counted (IgtlClientCounters::dropped_full).
   bool wait_when_full = false;
@@ -64,7 +73,7 @@ struct IgtlTrackerClientSettings {
   std::string registration_name;
 };
 
-/// One accepted TRANSFORM of the tool.
+/// One accepted pose message (TRANSFORM, POSITION or QTRANS) of the tool.
 struct IgtlPose {
   /// The message's timestamp, ns since the sender's epoch (0: the sender set none).
   std::int64_t stamp_ns = 0;
@@ -78,8 +87,9 @@ struct IgtlPose {
 struct IgtlClientCounters {
   std::uint64_t messages = 0;           ///< Headers read.
   std::uint64_t bytes = 0;              ///< Bytes read.
-  std::uint64_t poses = 0;              ///< The tool's TRANSFORMs accepted (queued or dropped).
-  std::uint64_t other_devices = 0;      ///< Good TRANSFORMs of other device names.
+  std::uint64_t poses = 0;              ///< The tools' poses accepted (queued or dropped).
+  std::array<std::uint64_t, kIgtlMaxTools> tool_poses{};  ///< ... per tool.
+  std::uint64_t other_devices = 0;      ///< Good poses of other device names.
   std::uint64_t ignored = 0;            ///< Other known message types (skipped).
   std::array<std::uint64_t, kIgtlFaultCount> faults{};  ///< Per IgtlFault (index 0 unused).
   std::uint64_t dropped_full = 0;       ///< Poses dropped: the queue was full.
@@ -111,6 +121,7 @@ std::string describe(const IgtlFaultRecord& record);
 class IgtlTrackerClient {
  public:
   /// Checks `settings` (std::invalid_argument naming the field: an empty or too long device name,
+  /// two tools of one name, more than kIgtlMaxTools tools, a registration named as a tool,
   /// port 0, queue_poses 0, non-positive times) and starts the thread, which connects at once.
   explicit IgtlTrackerClient(IgtlTrackerClientSettings settings);
   /// Stops the thread (within ~50 ms) and closes the connection.
@@ -119,10 +130,20 @@ class IgtlTrackerClient {
   IgtlTrackerClient& operator=(const IgtlTrackerClient&) = delete;
 
   // ---- consumer side: noexcept, lock free, allocation free ----
-  /// The oldest queued pose, or nullptr if none. Valid until pop().
-  const IgtlPose* front() noexcept;
-  /// Removes the oldest queued pose (precondition: front() != nullptr).
-  void pop() noexcept;
+  /// The oldest queued pose of tool `tool` (0: device_name, k: more_device_names[k − 1]; one
+  /// consumer thread per tool), or nullptr if none (or no such tool). Valid until pop(tool).
+  const IgtlPose* front(std::size_t tool = 0) noexcept;
+  /// Removes the oldest queued pose of `tool` (precondition: front(tool) != nullptr).
+  void pop(std::size_t tool = 0) noexcept;
+  /// Tools read: 1 + more_device_names.size().
+  std::size_t tool_count() const noexcept { return queues_.size(); }
+  /// The stamp of the first pose accepted on this client, of any tool (IgtlPose::stamp_ns);
+  /// false before one. Set before that pose is queued: a consumer that has a pose sees it.
+  bool first_stamp_ns(std::int64_t& out) const noexcept {
+    if (!has_first_stamp_.load(std::memory_order_acquire)) return false;
+    out = first_stamp_ns_;
+    return true;
+  }
   /// Connected to the server now.
   bool connected() const noexcept { return connected_.load(std::memory_order_acquire); }
   /// The thread has ended: stop requested, or (reconnect off) the connection refused or lost.
@@ -134,11 +155,11 @@ class IgtlTrackerClient {
   // ---- not real-time ----
   /// The first record of each fault kind seen (allocates; locks a mutex the period never takes).
   std::vector<IgtlFaultRecord> fault_records() const;
-  /// Device names of the other TRANSFORMs (at most kIgtlMaxNamesSeen; the registration's is not
+  /// Device names of the other poses (at most kIgtlMaxNamesSeen; the registration's is not
   /// one).
   std::vector<std::string> names_seen() const;
-  /// The newest TRANSFORM named settings().registration_name (checked as the tool's: finite,
-  /// rigid), or none yet (locks the mutex the period never takes).
+  /// The newest pose named settings().registration_name (a TRANSFORM, POSITION or QTRANS,
+  /// checked as the tool's), or none yet (locks the mutex the period never takes).
   std::optional<IgtlTransform> registration() const;
   /// The settings.
   const IgtlTrackerClientSettings& settings() const noexcept { return settings_; }
@@ -154,19 +175,24 @@ class IgtlTrackerClient {
   void session(int fd);
   void fault(IgtlFault f, const IgtlHeader& h, std::uint64_t message, std::uint64_t at,
              std::size_t offset);
-  void push(const IgtlPose& pose);
+  void push(const IgtlPose& pose, std::size_t tool);
+  // The tool of device name `name`, or tool_count() if none.
+  std::size_t tool_of(const std::string& name) const noexcept;
   void count(std::atomic<std::uint64_t>& c, std::uint64_t n = 1) noexcept {
     c.fetch_add(n, std::memory_order_relaxed);
   }
 
   IgtlTrackerClientSettings settings_;
-  boost::lockfree::spsc_queue<IgtlPose> queue_;
+  std::vector<std::unique_ptr<boost::lockfree::spsc_queue<IgtlPose>>> queues_;  // per tool
+  std::int64_t first_stamp_ns_ = 0;  // written once, before has_first_stamp_ (release)
+  std::atomic<bool> has_first_stamp_{false};
   std::atomic<bool> stop_{false};
   std::atomic<bool> connected_{false};
   std::atomic<bool> ended_{false};
   std::atomic<std::uint64_t> messages_{0}, bytes_{0}, poses_{0}, other_devices_{0}, ignored_{0},
       dropped_full_{0}, connects_{0}, connect_failures_{0}, disconnects_{0};
   std::array<std::atomic<std::uint64_t>, kIgtlFaultCount> faults_{};
+  std::array<std::atomic<std::uint64_t>, kIgtlMaxTools> tool_poses_{};
   mutable std::mutex records_mutex_;  // records_ and names_: the thread and the summary only
   std::vector<IgtlFaultRecord> records_;
   std::vector<std::string> names_;

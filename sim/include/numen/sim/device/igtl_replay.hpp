@@ -2,7 +2,8 @@
 /// @file igtl_replay.hpp
 /// A tracker replayed over OpenIGTLink (`numen igtl-replay`; docs/openigtlink.md): an
 /// OpenIGTLink server that plays a scene's trajectory (its recorded or scripted motion) as the
-/// TRANSFORMs of the scene's tracked tool ([device.igtl] device_name), as a PLUS server plays a
+/// TRANSFORMs (or POSITIONs, QTRANSs: IgtlReplaySettings::message) of the scene's tracked tool
+/// ([device.igtl] device_name), as a PLUS server plays a
 /// tracker — so that `numen run --bus igtl` on that scene runs the sim-bus run's motion through
 /// the network, and the tests run it on loopback.
 ///
@@ -22,6 +23,13 @@
 
 namespace numen::sim {
 
+/// The pose message a replay sends (docs/openigtlink.md "Pose messages").
+enum class IgtlReplayMessage : std::uint8_t {
+  kTransform,  ///< TRANSFORM (as PLUS sends), the default.
+  kPosition,   ///< POSITION, 28 bytes (position and quaternion).
+  kQtrans,     ///< QTRANS.
+};
+
 /// Settings of a replay.
 struct IgtlReplaySettings {
   std::string host = "127.0.0.1";  ///< Address to listen on (loopback by default).
@@ -34,11 +42,13 @@ struct IgtlReplaySettings {
   double accept_timeout_s = 30.0;
   /// Stop after this many messages and close (a server that goes away mid-run); < 0: never.
   std::int64_t disconnect_after = -1;
+  /// The message each pose is sent as.
+  IgtlReplayMessage message = IgtlReplayMessage::kTransform;
 };
 
 /// What a replay did.
 struct IgtlReplayResult {
-  std::int64_t messages_sent = 0;  ///< TRANSFORMs sent in full.
+  std::int64_t messages_sent = 0;  ///< Messages sent in full.
   bool client_connected = false;   ///< A client connected before the timeout.
   bool client_gone = false;        ///< The client closed the connection before the end.
 };

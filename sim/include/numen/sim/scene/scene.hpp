@@ -45,7 +45,8 @@ struct AttachEvent {
 struct IgtlTrackerScene {
   std::string host = "127.0.0.1";  ///< The OpenIGTLink server (PLUS, a bridge, numen igtl-replay).
   std::uint16_t port = 18944;      ///< Its TCP port (OpenIGTLink's default 18944).
-  std::string device_name;         ///< The tool's TRANSFORM device name, e.g. "StylusToTracker".
+  /// The tool's device name, e.g. "StylusToTracker" (its TRANSFORM, POSITION or QTRANS messages).
+  std::string device_name;
   double metres_per_unit = 1e-3;   ///< `units`: "mm" (PLUS) 1e-3, "cm" 1e-2, "m" 1.
   std::string units = "mm";        ///< As the scene gives it.
   core::Pose calibration;          ///< Tool tip (the tracked frame) in the marker's frame, m.

@@ -5,8 +5,10 @@
 /// is, on the stream's thread, never the loop's) that serves each frame to every connected client
 /// (3D Slicer's OpenIGTLinkIF, any OpenIGTLink client):
 ///
-/// - TRANSFORM, every frame: one per body named after the body (its pose: the god-object), and
-///   one per body with a target named "<body>_target" (where the device puts it: the ghost).
+/// - TRANSFORM, every frame: one per body (its pose: the god-object) and one per body with a
+///   target (where the device puts it: the ghost), named by IgtlNameStyle: "<body>" and
+///   "<body>_target" (numen's names, the default), or PLUS's "<Body>ToScene" and
+///   "<Body>TargetToScene" (igtl_world_transform_name()).
 /// - POLYDATA, one per deformable named after it: its surface (the fine surface when the net
 ///   carries one, docs/organs.md "A fine surface on a coarser net"; else the net's nodes and
 ///   triangles), points and triangles, to each client when it connects (at the frame it is
@@ -56,6 +58,27 @@ inline constexpr const char* kIgtlStatusDevice = "numen";
 /// Device name of the world's STRING messages (events in words).
 inline constexpr const char* kIgtlEventsDevice = "numen_events";
 
+/// How the world's TRANSFORMs are named (`numen run --igtl-names`; docs/openigtlink.md).
+enum class IgtlNameStyle : std::uint8_t {
+  /// "<body>" and "<body>_target" (the body's name as the scene gives it): numen's names, the
+  /// default, kept as they are (clients configured for them).
+  kNumen,
+  /// PLUS's and 3D Slicer's "<From>To<To>": the transform that maps the From frame's
+  /// coordinates into the To frame's; From is the body ("<Body>", its name with the first letter
+  /// upper case) or its target ("<Body>Target"), To is "Scene" (numen's world, the frame a
+  /// "TrackerToScene" registration maps into): "StylusToScene", "StylusTargetToScene".
+  kPlus,
+};
+
+/// The TRANSFORM device name of body `body`'s pose (`target`: of its target's) in `style`.
+/// Throws std::invalid_argument naming the body when the name would not be a valid one:
+/// longer than OpenIGTLink's 20 characters (kNumen: a body name of more than 13 characters, for
+/// "<body>_target"; kPlus: more than 7, for "<Body>TargetToScene"), or, kPlus, a body name that
+/// does not start with an ASCII letter or that holds "To" followed by a character that is not
+/// a lower-case letter (PLUS's transform-name parser takes exactly one such "To": the one
+/// before "Scene").
+std::string igtl_world_transform_name(const std::string& body, bool target, IgtlNameStyle style);
+
 /// Creation settings of an IgtlWorldServer.
 struct IgtlWorldSettings {
   /// Address to listen on: an IPv4 or IPv6 literal or a name (getaddrinfo(), e.g. localhost);
@@ -68,6 +91,8 @@ struct IgtlWorldSettings {
   /// shape once per client only). At most one per frame: the stream's rate (--view-rate) bounds
   /// it.
   double organ_rate_hz = 30.0;
+  /// How the TRANSFORMs are named.
+  IgtlNameStyle names = IgtlNameStyle::kNumen;
 };
 
 /// Counters of an IgtlWorldServer.
@@ -93,8 +118,8 @@ class IgtlWorldServer final : public platform::StateFrameSink {
   /// `model`: the run's model (its bodies in order are the frames' body indices, its nets the
   /// deformables; kept by reference: it must outlive the server). Binds and listens; throws
   /// std::runtime_error naming the address when it cannot (or when the build has no
-  /// OpenIGTLink), std::invalid_argument for a body name longer than OpenIGTLink's 20
-  /// characters less "_target" (13), a deformable's name longer than 20, or an organ rate not
+  /// OpenIGTLink), std::invalid_argument for a body name that igtl_world_transform_name()
+  /// refuses in settings.names, a deformable's name longer than 20, or an organ rate not
   /// finite and ≥ 0.
   IgtlWorldServer(const core::Model& model, IgtlWorldSettings settings);
   ~IgtlWorldServer() override;
@@ -136,7 +161,9 @@ class IgtlWorldServer final : public platform::StateFrameSink {
   void add_organs(std::string& out, const platform::StateFrameView& view);
 
   const core::Model& model_;
-  std::vector<std::string> names_;
+  std::vector<std::string> names_;         // the bodies' names (events' text)
+  std::vector<std::string> pose_names_;    // their TRANSFORMs' device names
+  std::vector<std::string> target_names_;  // their targets'
   IgtlWorldSettings settings_;
   int listen_fd_ = -1;
   std::uint16_t port_ = 0;
