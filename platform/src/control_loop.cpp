@@ -168,7 +168,7 @@ void ControlLoop::bind(std::size_t i, const core::Model& model, core::Data& data
   // to the imposed held body (the default scene's trocar sleeve) is over-constrained — a singular
   // solve and a rolled-back, non-finite step in every period before the first sample.
   for (const LinkBinding& b : wiring.links) {
-    if (b.body < 0 || b.body == data.attached_body) continue;
+    if (b.body < 0 || b.body == data.held_body) continue;
     const core::BodyState& start = data.bodies[static_cast<std::size_t>(b.body)];
     core::BodyTarget& t = data.body_targets[static_cast<std::size_t>(b.body)];
     t.pose.position = start.position;

@@ -185,13 +185,13 @@ TEST(ControlLoop, ZeroTorqueAndTargetUntouchedBeforeTheDeviceIsReady) {
 
 TEST(ControlLoop, ZeroTorqueWhileNoBodyIsHeld) {
   Rig rig;
-  numen::core::set_attached_body(rig.model, rig.data, -1);
+  numen::core::set_held_body(rig.model, rig.data, -1);
   for (int k = 0; k < 4; ++k) rig.period(k);
   EXPECT_EQ(rig.loop.counters().periods_zero_torque, 4u);
   EXPECT_TRUE(rig.loop.last_report().target_ready);
   for (int i = 0; i < 5; ++i) EXPECT_EQ(rig.emulator.last_torques()[i], 0.0) << i;
   // Holding again: torque is commanded.
-  numen::core::set_attached_body(rig.model, rig.data, 0);
+  numen::core::set_held_body(rig.model, rig.data, 0);
   rig.period(4);
   EXPECT_EQ(rig.loop.counters().periods_zero_torque, 4u);
   EXPECT_GT(rig.emulator.last_torques().cwiseAbs().maxCoeff(), 0.0);

@@ -97,10 +97,10 @@ class ControlLoop {
  public:
   /// Keeps references: `model`, `data`, `bus` and `device` must outlive the loop.
   /// `binding` says which bodies the device's links drive and which prescribed
-  /// joints its axes impose (copied; the default drives the attached body by
+  /// joints its axes impose (copied; the default drives the held body by
   /// link 0). Throws std::invalid_argument if a link, body, joint or axis index
   /// of the binding is out of range, a body is bound to two links, or a
-  /// prescription names a joint that is not prescribed. The attached body
+  /// prescription names a joint that is not prescribed. The held body
   /// follows its own binding if it has one, else the binding with body = -1.
   /// Allocates (construction only).
   /// Builds the hal::Device of `device`'s protocol around `device` and `bus`
@@ -147,7 +147,7 @@ class ControlLoop {
   ///     state in this very period);
   ///  3. targets: when the device is ready (a rejected sample keeps the last good target),
   ///     the bound bodies' targets — body pose = link pose · body_in_link, twist carried to the
-  ///     body's origin; the attached body's into data.target, the others into
+  ///     body's origin; the held body's into data.target, the others into
   ///     data.body_targets (paper Eq. 6) — and the prescribed joints' values;
   ///  4. step: one Stepper::step() (core::step unless set_stepper());
   ///  5. map: w_l = the bound bodies' Eq. 8 feedback (data.body_feedback) carried to their
