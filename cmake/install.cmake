@@ -145,7 +145,7 @@ numen_install_headers(${PROJECT_SOURCE_DIR}/sim/include
   numen/sim/run/energy.hpp
   numen/sim/run/multirate_run.hpp numen/sim/run/run.hpp numen/sim/run/run_figures.hpp
   numen/sim/run/run_options.hpp numen/sim/run/run_summary.hpp numen/sim/run/run_verdict.hpp
-  numen/sim/run/trace.hpp
+  numen/sim/run/target_measurement.hpp numen/sim/run/trace.hpp
   numen/sim/study/study_accuracy.hpp numen/sim/study/study_shard.hpp
   numen/sim/study/study_stability.hpp
   numen/sim/view/igtl_world_server.hpp
