@@ -105,16 +105,17 @@ class ControlLoop {
   /// Allocates (construction only).
   /// Builds the hal::Device of `device`'s protocol around `device` and `bus`
   /// (hal::make_device(): managed — CanopenMaster, SafetySupervisor, lifecycle configured to
-  /// kInactive; or minimal); throws std::invalid_argument for bad settings. The
-  /// LoopStatistics period is the device's control period.
+  /// kInactive; or minimal); throws std::invalid_argument for bad settings or a device whose
+  /// control_period_s is not model.dt (one period steps the model once). The LoopStatistics
+  /// period is that control period.
   ControlLoop(const core::Model& model, core::Data& data, hal::Bus& bus,
               hal::InstrumentDevice& device, DeviceBinding binding = DeviceBinding::rigid(),
               const ControlLoopSettings& settings = {});
   /// The loop of `devices` (1 to kMaxLoopDevices impedance instruments, device i = devices[i])
   /// driving one `data`: each device's binding and supervision as for one device (above),
   /// plus: a body is bound by at most one device, and at most one device drives the held
-  /// body through the rigid binding (LinkBinding::body = −1); all devices have the same
-  /// control period. Devices naming the same Bus share it (LoopDevice::bus). `settings`:
+  /// body through the rigid binding (LinkBinding::body = −1); every device's control period
+  /// is model.dt. Devices naming the same Bus share it (LoopDevice::bus). `settings`:
   /// supervise_overruns only (each device's supervision is its LoopDevice::settings). Throws
   /// std::invalid_argument naming the device for any of these, a null bus or instrument,
   /// or no device / more than kMaxLoopDevices. Allocates (construction only).
@@ -122,9 +123,9 @@ class ControlLoop {
               const ControlLoopSettings& settings = {});
   /// The loop of an admittance device (built by the caller on its bus, with its supervision
   /// settings: hal::AdmittanceSettings); keeps references to `model`, `data` and `device`.
-  /// Throws std::invalid_argument if the model's coupling mode is not kAdmittance. `settings`:
-  /// supervise_overruns only (the device's own settings supervise). The LoopStatistics period
-  /// is the device's control period.
+  /// Throws std::invalid_argument if the model's coupling mode is not kAdmittance or the
+  /// device's control_period_s is not model.dt. `settings`: supervise_overruns only (the
+  /// device's own settings supervise). The LoopStatistics period is that control period.
   ControlLoop(const core::Model& model, core::Data& data, hal::AdmittanceDevice& device,
               const ControlLoopSettings& settings = {});
 
