@@ -12,7 +12,7 @@ turns the scene trajectory's sample (the instrument's tip and jaw) into every bo
 sleeve at the trocar, the jaws imposed), without the bus (numen.run_scene runs the full control
 loop). One is the scene as it is (god-object
 coupling: springs pull the tool toward the target, contacts keep it out of the obstacles); the
-other is loaded with coupling "direct", which imposes the target pose on the attached body: it
+other is loaded with coupling "direct", which imposes the target pose on the held body: it
 goes where the hand goes, through the obstacles. Depth is Data.max_penetration, the deepest
 contact of the step (mm). Needs matplotlib (python3-matplotlib); Agg backend, no display.
 """

@@ -62,22 +62,22 @@ void impose(Data& data, std::size_t i, const Pose& target, const Twist& twist) n
   s.angular_velocity = twist.angular;
 }
 
-/// True when body i has its own enabled target (Eq. 6) other than the attached body's.
+/// True when body i has its own enabled target (Eq. 6) other than the held body's.
 bool has_own_target(const Data& data, std::size_t i) noexcept {
-  return data.body_targets[i].enabled && static_cast<int>(i) != data.attached_body;
+  return data.body_targets[i].enabled && static_cast<int>(i) != data.held_body;
 }
 
 }  // namespace
 
 void apply_device_wrench(const Model& model, Data& data) noexcept {
-  if (model.coupling_mode != CouplingMode::kAdmittance || !valid_body(model, data.attached_body))
+  if (model.coupling_mode != CouplingMode::kAdmittance || !valid_body(model, data.held_body))
     return;
   const Wrench& w = data.device_wrench;
   if (!(w.force.allFinite() && w.torque.allFinite())) {
     data.status |= kInvalidTarget;
     return;
   }
-  const auto i = static_cast<std::size_t>(data.attached_body);
+  const auto i = static_cast<std::size_t>(data.held_body);
   data.coupling_wrench = w;
   data.body_wrench[i].force += w.force;
   data.body_wrench[i].torque += w.torque;
@@ -90,8 +90,8 @@ void impose_direct_target(const Model& model, Data& data) noexcept {
   for (std::size_t i = 0; i < model.bodies.size(); ++i)  // static bodies: where they started
     if (model.bodies[i].anchored) impose(data, i, model.bodies[i].initial_pose, Twist{});
   if (model.coupling_mode != CouplingMode::kDirect) return;
-  if (valid_body(model, data.attached_body))
-    impose(data, static_cast<std::size_t>(data.attached_body), data.target, data.target_twist);
+  if (valid_body(model, data.held_body))
+    impose(data, static_cast<std::size_t>(data.held_body), data.target, data.target_twist);
   for (std::size_t i = 0; i < data.bodies.size(); ++i)
     if (has_own_target(data, i))
       impose(data, i, data.body_targets[i].pose, data.body_targets[i].twist);
@@ -106,17 +106,17 @@ void apply_coupling(const Model& model, Data& data) noexcept {
   if (model.coupling_mode == CouplingMode::kDirect) return;
   if (model.coupling_mode == CouplingMode::kAdmittance) {
     apply_device_wrench(model, data);
-  } else if (valid_body(model, data.attached_body)) {
+  } else if (valid_body(model, data.held_body)) {
     if (!target_is_finite(data.target, data.target_twist)) {
       data.status |= kInvalidTarget;
     } else {
-      const auto i = static_cast<std::size_t>(data.attached_body);
+      const auto i = static_cast<std::size_t>(data.held_body);
       const CouplingGains& gains = model.bodies[i].coupling;
       const Wrench w = coupling_wrench(gains, data.target, data.target_twist, data.bodies[i]);
       data.coupling_wrench = w;
       data.body_wrench[i].force += w.force;
       data.body_wrench[i].torque += w.torque;
-      s.coupled_body = data.attached_body;
+      s.coupled_body = data.held_body;
       s.target_coupled[i] = 1;
       s.first_order =
           model.coupling_mode == CouplingMode::kFirstOrder && first_order_applicable(gains);

@@ -118,9 +118,9 @@ void reset_data(const Model& model, Data& data) noexcept {
   for (Vec6& v : data.scratch->solver.delta) v.setZero();  // Δu_prev of the joint rows (joint_system.hpp)
   data.max_joint_drift = 0.0;
   data.max_joint_angle_drift = 0.0;
-  data.attached_body = model.initial_attached_body;
-  if (data.attached_body >= 0) {
-    const BodyState& s = data.bodies[static_cast<std::size_t>(data.attached_body)];
+  data.held_body = model.initial_held_body;
+  if (data.held_body >= 0) {
+    const BodyState& s = data.bodies[static_cast<std::size_t>(data.held_body)];
     data.target = Pose{s.position, s.orientation};
     data.target_twist = Twist{s.linear_velocity, s.angular_velocity};
   } else {

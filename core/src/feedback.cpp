@@ -49,7 +49,7 @@ Wrench carry_wrench(const Wrench& w, const Vec3& from, const Vec3& to) noexcept 
 
 void compute_feedback(const Model& model, Data& data) noexcept {
   data.stages_run |= kStageFeedback;  // the stage report (step_stages.hpp)
-  const int a = data.attached_body;
+  const int a = data.held_body;
   const bool held = a >= 0 && a < model.num_bodies();
   const bool spring = model.coupling_mode != CouplingMode::kDirect &&
                       model.coupling_mode != CouplingMode::kAdmittance;
@@ -59,14 +59,13 @@ void compute_feedback(const Model& model, Data& data) noexcept {
   data.feedback_wrench = Wrench{};
   for (Wrench& w : data.body_feedback) w = Wrench{};
   if (!spring) return;  // no spring to feed back: the device is position controlled (admittance)
-  const bool attached = held;
   bool any = false;
   int last_group = 0;
   for (std::size_t i = 0; i < data.bodies.size(); ++i) {
     const bool own = data.body_targets[i].enabled && static_cast<int>(i) != a;
     const Pose* target = nullptr;
     const Twist* twist = nullptr;
-    if (attached && static_cast<int>(i) == a) {
+    if (held && static_cast<int>(i) == a) {
       target = &data.target;
       twist = &data.target_twist;
     } else if (own && target_is_finite(data.body_targets[i].pose, data.body_targets[i].twist)) {
@@ -80,7 +79,7 @@ void compute_feedback(const Model& model, Data& data) noexcept {
     any = true;
   }
   if (!any) return;
-  if (!attached) {
+  if (!held) {
     // Nothing held: no composite; each body's wrench is clamped on its own.
     for (Wrench& w : data.body_feedback)
       w = saturate_wrench(w, model.feedback.max_force, model.feedback.max_torque);

@@ -608,7 +608,7 @@ void integrate_trapezoidal(const Model& model, Data& data) noexcept {
 
 namespace {
 
-/// Massless limit of Eq. 2 for the first-order attached body:
+/// Massless limit of Eq. 2 for the first-order held body:
 /// k e + γ (v_t − v) + F_other = 0 per axis group; sets its twist.
 void set_first_order_velocity(const Model& model, Data& data, std::size_t i) noexcept {
   BodyState& st = data.bodies[i];

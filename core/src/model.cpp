@@ -210,11 +210,11 @@ std::string finalize_model(Model& model) {
   for (double v : {f.k_t, f.gamma_t, f.k_r, f.gamma_r})
     if (!(v >= 0.0) || !std::isfinite(v)) return "feedback gains must be finite and >= 0";
   if (!(f.max_force >= 0.0) || !(f.max_torque >= 0.0)) return "feedback saturation must be >= 0";
-  if (model.initial_attached_body < -1 || model.initial_attached_body >= model.num_bodies())
-    return "initial attached body index out of range";
-  if (model.initial_attached_body >= 0 &&
-      model.bodies[static_cast<std::size_t>(model.initial_attached_body)].anchored)
-    return "body '" + model.bodies[static_cast<std::size_t>(model.initial_attached_body)].name +
+  if (model.initial_held_body < -1 || model.initial_held_body >= model.num_bodies())
+    return "initial held body index out of range";
+  if (model.initial_held_body >= 0 &&
+      model.bodies[static_cast<std::size_t>(model.initial_held_body)].anchored)
+    return "body '" + model.bodies[static_cast<std::size_t>(model.initial_held_body)].name +
            "': anchored (a static body) cannot be held by the device";
   if (model.solver.max_iterations < 1 || !(model.solver.tolerance > 0.0))
     return "solver needs max_iterations >= 1 and tolerance > 0";

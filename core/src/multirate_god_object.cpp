@@ -152,7 +152,7 @@ MultirateGodObject::MultirateGodObject(const Model& scene, int body,
     // infinitely heavy body for the scene's implicit solve: the held body by the target, the
     // rest of its articulation by their body targets), its joints left to the device loop.
     s.scene_model.coupling_mode = CouplingMode::kDirect;
-    s.scene_model.initial_attached_body = b;
+    s.scene_model.initial_held_body = b;
     std::vector<JointModel> kept;
     for (std::size_t j = 0; j < s.scene_model.joints.size(); ++j)
       if (s.device_body[static_cast<std::size_t>(s.scene_model.joints[j].child)] < 0) {
@@ -182,7 +182,7 @@ MultirateGodObject::MultirateGodObject(const Model& scene, int body,
   }
   free_scene_model_ = scene;
   free_scene_model_.dt = scene.dt * settings.ratio;
-  free_scene_model_.initial_attached_body = -1;
+  free_scene_model_.initial_held_body = -1;
   if (std::string error = finalize_model(free_scene_model_); !error.empty())
     throw std::invalid_argument("multirate: scene-loop model: " + error);
   free_fold_model_ = fold_model_of(free_scene_model_, fold_substeps_);
@@ -190,7 +190,7 @@ MultirateGodObject::MultirateGodObject(const Model& scene, int body,
   for (std::size_t j = 0; j < scene.joints.size(); ++j) free_joints_.push_back(static_cast<int>(j));
   scene_slot_ = slot_ = body >= 0 ? 0 : -1;
   scene_ = body >= 0 ? &slots_[0].scene : &free_scene_;
-  scene_->attached_body = body;
+  scene_->held_body = body;
   for (Slot& s : slots_)
     for (std::size_t i = 0; i < s.bodies.size(); ++i)
       s.device.bodies[i] = scene_->bodies[static_cast<std::size_t>(s.bodies[i])];
@@ -346,7 +346,7 @@ void MultirateGodObject::scene_step(const MultirateDeviceReport& in, MultirateSc
     scene_ = &next;
     scene_slot_ = next_slot;
   }
-  scene_->attached_body = body;
+  scene_->held_body = body;
   const std::vector<int>& scene_joints =
       scene_slot_ >= 0 ? slots_[static_cast<std::size_t>(scene_slot_)].scene_joints : free_joints_;
   // Empty spans without a slot: no function-local static, whose first use registers its

@@ -149,8 +149,8 @@ void step_with_contacts(const Model& model, Data& data, ContactWriter write,
   run_step(model, data, write, context);
 }
 
-void set_attached_body(const Model& model, Data& data, int body) noexcept {
-  data.attached_body = (body >= 0 && body < model.num_bodies()) ? body : -1;
+void set_held_body(const Model& model, Data& data, int body) noexcept {
+  data.held_body = (body >= 0 && body < model.num_bodies()) ? body : -1;
 }
 
 }  // namespace numen::core

@@ -40,7 +40,7 @@ int main() {
   model.obstacles.push_back(floor);
 
   model.feedback = core::FeedbackGains{100.0, 1.0, 0.0, 0.0, 10.0, 1.0};  // Eq. 8, 10 N clamp
-  model.initial_attached_body = 0;
+  model.initial_held_body = 0;
   if (const std::string err = core::finalize_model(model); !err.empty()) {
     std::fprintf(stderr, "minimal_core: %s\n", err.c_str());
     return 1;

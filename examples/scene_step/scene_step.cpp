@@ -51,8 +51,8 @@ int main(int argc, char** argv) {
   }
   const numen::core::Model& model = scene.model;
   numen::core::Data data = numen::core::make_data(model);
-  if (data.attached_body < 0) {
-    std::fprintf(stderr, "scene_step: %s: no body is attached to the device\n", path.c_str());
+  if (data.held_body < 0) {
+    std::fprintf(stderr, "scene_step: %s: the device holds no body\n", path.c_str());
     return 1;
   }
   std::printf("numen %s, scene '%s', dt %g s, %d bodies\n", NUMEN_VERSION, scene.name.c_str(),
@@ -70,7 +70,7 @@ int main(int argc, char** argv) {
   }
 
   // The scripted target: from the tool's initial pose, 20 mm down in 0.5 s, then held.
-  const int tool = data.attached_body;
+  const int tool = data.held_body;
   const numen::core::Vec3 start = data.bodies[tool].position;
   const numen::core::Vec3 direction(0.0, 0.0, -1.0);
   const double length = 0.020, travel_time = 0.5;

@@ -19,6 +19,18 @@ std::int64_t period_of(const hal::DeviceConfig& config) {
   return static_cast<std::int64_t>(std::llround(config.control_period_s * 1e9));
 }
 
+// The device's control period when it is the model's step (Model::dt, the one source of the
+// period: the scene copies it into DeviceConfig::control_period_s); throws otherwise.
+std::int64_t period_of(const hal::DeviceConfig& config, const core::Model& model) {
+  const std::int64_t period = period_of(config);
+  if (period != static_cast<std::int64_t>(std::llround(model.dt * 1e9)))
+    throw std::invalid_argument("device '" + config.name + "': control_period_s " +
+                                std::to_string(config.control_period_s) +
+                                " s is not the model's step dt " + std::to_string(model.dt) +
+                                " s (one period steps the model once)");
+  return period;
+}
+
 // The devices of the LoopDevice constructor, checked (count, pointers, one control period).
 std::span<const LoopDevice> checked(std::span<const LoopDevice> devices) {
   if (devices.empty() || devices.size() > static_cast<std::size_t>(kMaxLoopDevices))
@@ -50,7 +62,8 @@ ControlLoop::ControlLoop(const core::Model& model, core::Data& data, hal::Bus& b
 
 ControlLoop::ControlLoop(const core::Model& model, core::Data& data,
                          std::span<const LoopDevice> devices, const ControlLoopSettings& settings)
-    : stats_(std::make_unique<LoopStatistics>(period_of(checked(devices)[0].instrument->config()))),
+    : stats_(std::make_unique<LoopStatistics>(
+          period_of(checked(devices)[0].instrument->config(), model))),
       num_devices_(devices.size()),
       stages_(impedance_period_stages()) {
   // The buses several devices share: one BusShare each, a port per device with its filters;
@@ -114,7 +127,7 @@ ControlLoop::ControlLoop(const core::Model& model, core::Data& data,
 
 ControlLoop::ControlLoop(const core::Model& model, core::Data& data,
                          hal::AdmittanceDevice& device, const ControlLoopSettings& settings)
-    : stats_(std::make_unique<LoopStatistics>(period_of(device.config()))),
+    : stats_(std::make_unique<LoopStatistics>(period_of(device.config(), model))),
       stages_(admittance_period_stages()) {
   if (model.coupling_mode != core::CouplingMode::kAdmittance)
     throw std::invalid_argument("admittance device '" + device.config().name +
@@ -168,7 +181,7 @@ void ControlLoop::bind(std::size_t i, const core::Model& model, core::Data& data
   // to the imposed held body (the default scene's trocar sleeve) is over-constrained — a singular
   // solve and a rolled-back, non-finite step in every period before the first sample.
   for (const LinkBinding& b : wiring.links) {
-    if (b.body < 0 || b.body == data.attached_body) continue;
+    if (b.body < 0 || b.body == data.held_body) continue;
     const core::BodyState& start = data.bodies[static_cast<std::size_t>(b.body)];
     core::BodyTarget& t = data.body_targets[static_cast<std::size_t>(b.body)];
     t.pose.position = start.position;

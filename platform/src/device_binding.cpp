@@ -24,7 +24,7 @@ std::vector<std::uint8_t> explicitly_bound_bodies(const DeviceBinding& binding, 
 int bound_body(const LinkBinding& b, const core::Data& d,
                std::span<const std::uint8_t> explicit_bound) noexcept {
   if (b.body >= 0) return b.body;
-  const int body = d.attached_body;
+  const int body = d.held_body;
   if (body < 0 || static_cast<std::size_t>(body) >= explicit_bound.size()) return -1;
   return explicit_bound[static_cast<std::size_t>(body)] ? -1 : body;
 }
@@ -38,7 +38,7 @@ void body_target_of(const LinkBinding& b, const core::Pose& link, const core::Tw
 }
 
 void set_body_target(core::Data& d, int body, const core::Pose& pose, const core::Twist& twist) noexcept {
-  if (body == d.attached_body) {
+  if (body == d.held_body) {
     d.target = pose;
     d.target_twist = twist;
     return;

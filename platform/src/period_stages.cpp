@@ -177,7 +177,7 @@ void bind_measured_wrench(PeriodContext& c, PeriodData& p, std::int64_t now_ns) 
   (void)now_ns;
   core::Data& d = *c.data;
   const core::Model& m = *c.model;
-  const int a = d.attached_body;
+  const int a = d.held_body;
   const bool held = a >= 0 && a < m.num_bodies();
   const bool active =
       c.device->lifecycle() == hal::LifecycleState::kActive && !c.device->shutting_down();
@@ -260,7 +260,7 @@ void map_held_pose(PeriodContext& c, PeriodData& p, std::int64_t now_ns) noexcep
   (void)now_ns;
   p.report.output_begin_ns = monotonic_now_ns();
   const core::Data& d = *c.data;
-  const int a = d.attached_body;
+  const int a = d.held_body;
   p.command.torques = {};
   p.command.pose = nullptr;
   if (a < 0 || a >= c.model->num_bodies()) return;  // none held: the set-points are held

@@ -145,7 +145,7 @@ std::size_t encode_state_frame(const StateFrameLayout& layout, const core::Data&
   put_field<FrameField::kNumNodes>(h, layout.num_nodes);
   put_field<FrameField::kNumContacts>(h, contacts);
   put_field<FrameField::kNumAxes>(h, layout.num_axes);
-  put_field<FrameField::kAttachedBody>(h, data.attached_body);
+  put_field<FrameField::kHeldBody>(h, data.held_body);
   put_field<FrameField::kPeriod>(h, figures.period);
   const double t_ns = data.time * 1e9;
   const bool t_fits = std::isfinite(t_ns) && std::abs(t_ns) < 9e18;
@@ -172,9 +172,9 @@ std::size_t encode_state_frame(const StateFrameLayout& layout, const core::Data&
   for (const core::BodyState& b : data.bodies) p = put_pose(p, core::Pose{b.position, b.orientation});
   p = array(FrameArray::kTargetPose);
   for (std::uint32_t b = 0; b < layout.num_bodies; ++b) {
-    const bool attached = static_cast<std::int32_t>(b) == data.attached_body;
+    const bool held = static_cast<std::int32_t>(b) == data.held_body;
     const bool has_own = b < data.body_targets.size() && data.body_targets[b].enabled;
-    const core::Pose* target = attached  ? &data.target
+    const core::Pose* target = held      ? &data.target
                                : has_own ? &data.body_targets[b].pose
                                          : nullptr;
     if (target != nullptr) {
@@ -289,7 +289,7 @@ StateFrameDecodeResult StateFrameDecoder::decode(std::span<const std::byte> byte
   hd.num_nodes = get_field<FrameField::kNumNodes>(h);
   hd.num_contacts = get_field<FrameField::kNumContacts>(h);
   hd.num_axes = get_field<FrameField::kNumAxes>(h);
-  hd.attached_body = get_field<FrameField::kAttachedBody>(h);
+  hd.held_body = get_field<FrameField::kHeldBody>(h);
   hd.period = get_field<FrameField::kPeriod>(h);
   hd.time_ns = get_field<FrameField::kTimeNs>(h);
   hd.step_status = get_field<FrameField::kStepStatus>(h);
@@ -311,10 +311,10 @@ StateFrameDecodeResult StateFrameDecoder::decode(std::span<const std::byte> byte
                     std::to_string(hd.num_nodes) + ", contacts " + std::to_string(hd.num_contacts) +
                     ", axes " + std::to_string(hd.num_axes) + ") need " + std::to_string(o.end) +
                     " bytes, the frame has " + std::to_string(bytes.size()));
-  if (hd.attached_body < -1 || hd.attached_body >= static_cast<std::int64_t>(hd.num_bodies))
-    return fail(FrameField::kAttachedBody, "attached body " + std::to_string(hd.attached_body) +
-                                               " is not -1 or a body index below " +
-                                               std::to_string(hd.num_bodies));
+  if (hd.held_body < -1 || hd.held_body >= static_cast<std::int64_t>(hd.num_bodies))
+    return fail(FrameField::kHeldBody, "held body " + std::to_string(hd.held_body) +
+                                           " is not -1 or a body index below " +
+                                           std::to_string(hd.num_bodies));
   view.bytes_ = bytes.data();
   view.header_ = hd;
   view.at_ = o.at;

@@ -286,7 +286,7 @@ void bind_data(py::module_& m) {
   py::class_<DataHandle>(
       m, "Data",
       "All mutable state of a scene (core::Data), made by Scene.make_data(). Inputs are set "
-      "with set_target() / attached_body; step() advances model.dt. The array properties are "
+      "with set_target() / held_body; step() advances model.dt. The array properties are "
       "read-only NumPy views of this Data's memory (no copy; the Data is their base and lives "
       "as long as they do): a view taken once shows the values of every later step. Contact "
       "views cover the contacts of the last step at the time they are taken. SI units, world "
@@ -301,15 +301,15 @@ void bind_data(py::module_& m) {
            "made this Data (ValueError otherwise). Never fails otherwise: problems are status bits.")
       .def("reset", [](DataHandle& h) { core::reset_data(*h.model, h.data); },
            "Back to the initial state (core::reset_data): bodies at their initial pose and "
-           "twist, inputs, outputs and counters cleared, device on the initial attached body.")
+           "twist, inputs, outputs and counters cleared, device on the initial held body.")
       .def(
           "set_target",
           [](DataHandle& h, const py::handle& position, const py::handle& orientation,
              const py::handle& linear_velocity, const py::handle& angular_velocity,
              const py::handle& xyzw, const py::handle& wxyz) {
-            if (h.data.attached_body < 0)
-              throw py::value_error("set_target: no body is held (attached_body is -1): the "
-                                    "target would drive nothing; set data.attached_body first");
+            if (h.data.held_body < 0)
+              throw py::value_error("set_target: no body is held (held_body is -1): the "
+                                    "target would drive nothing; set data.held_body first");
             core::Pose pose;
             core::Twist twist;
             read_target(position, orientation, xyzw, wxyz, linear_velocity, angular_velocity,
@@ -330,7 +330,7 @@ void bind_data(py::module_& m) {
           "zero). Values are taken as given: a non-finite target makes the next step skip the "
           "coupling, hold the feedback, set STATUS_INVALID_TARGET and count "
           "invalid_target_steps. ValueError for a wrong length, an orientation given twice, "
-          "none or ambiguous, or no held body (attached_body -1).")
+          "none or ambiguous, or no held body (held_body -1).")
       .def(
           "set_body_target",
           [](DataHandle& h, const py::handle& body, const py::handle& position,
@@ -462,10 +462,14 @@ void bind_data(py::module_& m) {
           "rates). A scene without [device] has the identity pose tracker: the sample is the "
           "held body's centre-of-mass target.")
       .def_property(
-          "attached_body", [](const DataHandle& h) { return h.data.attached_body; },
-          [](DataHandle& h, int body) { core::set_attached_body(*h.model, h.data, body); },
+          "held_body", [](const DataHandle& h) { return h.data.held_body; },
+          [](DataHandle& h, int body) { core::set_held_body(*h.model, h.data, body); },
           "Body the device drives (-1: none); setting an out-of-range index detaches "
-          "(core::set_attached_body: tool switching).")
+          "(core::set_held_body: tool switching).")
+      .def_property(
+          "attached_body", [](const DataHandle& h) { return h.data.held_body; },
+          [](DataHandle& h, int body) { core::set_held_body(*h.model, h.data, body); },
+          "Alias of held_body, kept for existing scripts.")
       .def_property_readonly("time", [](const DataHandle& h) { return h.data.time; },
                              "Simulated time (s).")
       .def_property_readonly("step_count", [](const DataHandle& h) { return h.data.step_count; })
@@ -533,14 +537,14 @@ void bind_data(py::module_& m) {
             return view(self, d.feedback_wrench.force.data(), {6}, {sizeof(double)});
           },
           "View (6,) of the device feedback: force (N) then torque (N·m), world, about the "
-          "attached body's target point; saturated (paper Eq. 8-9).")
+          "held body's target point; saturated (paper Eq. 8-9).")
       .def_property_readonly(
           "coupling_wrench",
           [](py::object self) {
             const core::Data& d = handle(self).data;
             return view(self, d.coupling_wrench.force.data(), {6}, {sizeof(double)});
           },
-          "View (6,) of the coupling (Eq. 2) on the attached body: force (N), torque (N·m) at "
+          "View (6,) of the coupling (Eq. 2) on the held body: force (N), torque (N·m) at "
           "its COM, world.")
       .def_property_readonly(
           "contact_points", contact_rows(&core::Contact::position),

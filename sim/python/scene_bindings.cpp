@@ -200,9 +200,12 @@ void bind_scene(py::module_& m) {
           },
           "Static obstacle names, in obstacle index order (the values of "
           "Data.contact_obstacles).")
+      .def_property_readonly("initial_held_body",
+                             [](const core::Model& mo) { return mo.initial_held_body; },
+                             "Body the device holds after a reset (-1: none).")
       .def_property_readonly("initial_attached_body",
-                             [](const core::Model& mo) { return mo.initial_attached_body; },
-                             "Body the device holds after a reset (-1: none).");
+                             [](const core::Model& mo) { return mo.initial_held_body; },
+                             "Alias of initial_held_body, kept for existing scripts.");
 
   py::class_<sim::Scene, std::shared_ptr<sim::Scene>>(
       m, "Scene",

@@ -2,7 +2,7 @@
 // solve of articulation.hpp, Baraff 96). A chain of N rigid links (0.05 m,
 // 0.1 kg) along x, body 0 hinged to the world, each link to the previous one;
 // gravity on, no obstacles, implicit integrator (default). The last link is
-// attached to the device target, which moves along a 1 cm circle, so the
+// held, coupled to the device target, which moves along a 1 cm circle, so the
 // coupling springs (Eq. 2) are in the solve. Revolute joints (axis y, 5 rows)
 // and spherical joints (3 rows) show the effect of the row count.
 // 200 warm-up steps, then each iteration times one core::step (manual timing).
@@ -59,7 +59,7 @@ core::Model make_chain(int n, core::JointType type) {
   tip.coupling.gamma_t = core::damping_from_ratio(1.0, kMass, tip.coupling.k_t);
   tip.coupling.k_r = 0.5;
   tip.coupling.gamma_r = 2.0 * std::sqrt(tip.inertia_body(1, 1) * tip.coupling.k_r);
-  m.initial_attached_body = n - 1;
+  m.initial_held_body = n - 1;
   const std::string err = core::finalize_model(m);
   if (!err.empty()) throw std::runtime_error(err);
   return m;
@@ -69,7 +69,7 @@ core::Model make_chain(int n, core::JointType type) {
 void set_target(const core::Model& m, core::Data& d, std::int64_t k) {
   const double w = 2.0 * M_PI, t = static_cast<double>(k) * m.dt;
   const Vec3 c = m.bodies.back().initial_pose.position;
-  d.attached_body = m.num_bodies() - 1;
+  d.held_body = m.num_bodies() - 1;
   d.target.position = c + 0.01 * Vec3(std::cos(w * t), 0, std::sin(w * t));
   d.target_twist.linear = 0.01 * w * Vec3(-std::sin(w * t), 0, std::cos(w * t));
 }

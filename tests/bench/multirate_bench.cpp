@@ -55,7 +55,7 @@ void multirate_time(benchmark::State& state, const char* name, double speed) {
     state.SkipWithError(e.what());
     return;
   }
-  const int body = scene.model.initial_attached_body;
+  const int body = scene.model.initial_held_body;
   // The margin covers `speed` of tool travel over a scene period (docs/multirate.md).
   const numen::core::MultirateSettings settings{ratio, speed * scene.model.dt * ratio, {}};
   const auto periods = static_cast<std::int64_t>(scene.duration_s / scene.model.dt);
@@ -72,7 +72,7 @@ void multirate_time(benchmark::State& state, const char* name, double speed) {
   for (auto _ : state) {
     // Replay from the start at the scene's end and at its first tool switch (the multirate
     // god-object holds one body: docs/multirate.md).
-    if (runner->periods() >= periods || runner->data().attached_body != body) {
+    if (runner->periods() >= periods || runner->data().held_body != body) {
       state.PauseTiming();
       single_tool_pen = std::max(single_tool_pen, runner->summary().tool_penetration_max_mm);
       restart();

@@ -57,7 +57,7 @@ numen::core::Model organ_scene(double dt) {
                                       core::damping_from_ratio(0.85, 5e-7, 0.01)};
   m.body_spheres = {core::Sphere{Vec3::Zero(), 0.005}};
   m.bodies = {anchor, tool};
-  m.initial_attached_body = 1;
+  m.initial_held_body = 1;
   m.feedback.k_t = 300.0;
   m.feedback.gamma_t = 1.0;
   const core::TriangleMesh mesh = core::make_icosphere(0.03, 4);

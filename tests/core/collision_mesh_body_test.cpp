@@ -52,14 +52,14 @@ TriangleMesh torus_mesh() { return make_torus(0.04, 0.015, 64, 32); }
 /// flat (on the torus's tube the rest is unstable, and rounding grows along the fall off it).
 TriangleMesh slab_mesh() { return make_box(Vec3(0.06, 0.06, 0.015), 4); }
 
-/// Materials, `mesh` in m.meshes[0], nothing attached.
+/// Materials, `mesh` in m.meshes[0], nothing held.
 Model base(Integrator integrator, const Vec3& gravity, const TriangleMesh& mesh = torus_mesh()) {
   Model m;
   m.integrator = integrator;
   m.gravity = gravity;
   m.material_names = {"a"};
   m.material_pairs.assign(1, MaterialPair{3000.0, 3.0, 0.2});
-  m.initial_attached_body = -1;
+  m.initial_held_body = -1;
   m.meshes.emplace_back();
   EXPECT_EQ(build_mesh_shape(mesh, m.meshes.back()), "");
   return m;

@@ -25,7 +25,7 @@ Model torus_scene(const std::vector<Sphere>& spheres, const Pose& pose) {
   Model m;
   m.material_names = {"a"};
   m.material_pairs.assign(1, MaterialPair{});
-  m.initial_attached_body = -1;
+  m.initial_held_body = -1;
   BodyModel b;
   b.name = "tool";
   b.sphere_count = static_cast<int>(spheres.size());

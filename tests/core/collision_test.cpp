@@ -35,7 +35,7 @@ struct Scene {
     for (int i = 0; i < num_materials; ++i) model.material_names.push_back(std::to_string(i));
     model.material_pairs.assign(static_cast<std::size_t>(num_materials * num_materials),
                                 MaterialPair{});
-    model.initial_attached_body = -1;
+    model.initial_held_body = -1;
   }
   int body(const Vec3& position, const Quat& orientation, const std::vector<Sphere>& spheres,
            int material = 0) {

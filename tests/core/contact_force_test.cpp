@@ -223,7 +223,7 @@ TEST(ContactForce, StageAppliesEqualAndOppositeWrenchesAboutEachCom) {
   m.material_pairs = {kMat};
   core::BodyModel b;
   m.bodies = {b, b};
-  m.initial_attached_body = -1;
+  m.initial_held_body = -1;
   ASSERT_EQ(core::finalize_model(m), "");
   core::Data d = core::make_data(m);
   d.bodies[0].position = Vec3(0.0, 0.0, 0.1);
@@ -428,7 +428,7 @@ core::Data ball_step(double k, double max_omega_dt, core::Model* out = nullptr) 
   b.initial_pose.position = Vec3(0.0, 0.0, 0.009);
   b.initial_twist.linear = Vec3(0.02, 0.0, -0.1);
   m.bodies = {b};
-  m.initial_attached_body = -1;
+  m.initial_held_body = -1;
   EXPECT_EQ(core::finalize_model(m), "");
   core::Data d = core::make_data(m);
   core::step(m, d);

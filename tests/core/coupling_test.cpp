@@ -44,7 +44,7 @@ core::Model coupled_model(core::Integrator integrator, core::CouplingMode mode, 
   b.inertia_body = Vec3(0.02, 0.03, 0.04).asDiagonal();
   b.coupling = gains;
   m.bodies.push_back(b);
-  m.initial_attached_body = 0;
+  m.initial_held_body = 0;
   EXPECT_EQ(core::finalize_model(m), "");
   return m;
 }
@@ -120,7 +120,7 @@ TEST(Coupling, WrenchPullsTowardsTargetAndDampsRelativeVelocity) {
   EXPECT_TRUE(w.torque.isApprox(Vec3(0.0, 0.0, 0.2), 1e-12));
 }
 
-TEST(Coupling, StageCouplesOnlyTheAttachedBody) {
+TEST(Coupling, StageCouplesOnlyTheHeldBody) {
   core::Model m = coupled_model(core::Integrator::kLinearlyImplicitEuler,
                                 core::CouplingMode::kGodObject, 1e-3, {100.0, 2.0, 1.0, 0.1});
   m.bodies.push_back(m.bodies[0]);
@@ -133,14 +133,14 @@ TEST(Coupling, StageCouplesOnlyTheAttachedBody) {
   EXPECT_TRUE(d.body_wrench[0].force.isApprox(Vec3(0, 0, 100.0)));
   EXPECT_TRUE(d.body_wrench[1].force.isZero(0.0));
   EXPECT_EQ(d.scratch->solver.coupled_body, 0);
-  core::set_attached_body(m, d, 1);  // tool switching
+  core::set_held_body(m, d, 1);  // tool switching
   core::apply_external_forces(m, d);
   core::apply_coupling(m, d);
   EXPECT_TRUE(d.body_wrench[0].force.isZero(0.0));
   EXPECT_TRUE(d.body_wrench[1].force.isApprox(Vec3(0, 0, 1000.0)));
   EXPECT_TRUE(d.coupling_wrench.force.isApprox(Vec3(0, 0, 1000.0)));
-  core::set_attached_body(m, d, 7);  // out of range → detached
-  EXPECT_EQ(d.attached_body, -1);
+  core::set_held_body(m, d, 7);  // out of range → detached
+  EXPECT_EQ(d.held_body, -1);
   core::apply_external_forces(m, d);
   core::apply_coupling(m, d);
   EXPECT_TRUE(d.body_wrench[1].force.isZero(0.0));
@@ -356,7 +356,7 @@ core::Model admittance_model(core::Integrator integrator, bool wall, double k_c 
   b.initial_pose.position = Vec3(-0.05, 0.0, 0.0);
   m.bodies = {b};
   m.feedback = {400.0, 2.0, 0.5, 0.01, 10.0, 1.0};  // must have no effect either
-  m.initial_attached_body = 0;
+  m.initial_held_body = 0;
   EXPECT_EQ(core::finalize_model(m), "");
   return m;
 }

@@ -23,7 +23,7 @@ using numen::test::make_lean_model;
 
 namespace {
 
-/// Drives the attached body down onto the floor (kObstacle) and sideways, so
+/// Drives the held body down onto the floor (kObstacle) and sideways, so
 /// that contacts, warm starts and the sort-and-sweep order are in the scratch.
 void drive(core::Data& d, int k) {
   d.target.position = core::Vec3(1e-4 * k, 0.0, 0.1 - 1e-3 * k);

@@ -90,7 +90,7 @@ core::Model feedback_model(core::CouplingMode mode) {
 
 }  // namespace
 
-TEST(Feedback, StageFollowsTheAttachedBodyAfterIntegration) {
+TEST(Feedback, StageFollowsTheHeldBodyAfterIntegration) {
   const core::Model m = feedback_model(core::CouplingMode::kGodObject);
   core::Data d = core::make_data(m);
   d.target.position = Vec3(0.05, 0.0, 0.0);
@@ -101,7 +101,7 @@ TEST(Feedback, StageFollowsTheAttachedBodyAfterIntegration) {
   EXPECT_LT(d.feedback_wrench.force.x(), 0.0);
   EXPECT_LE(d.feedback_wrench.force.norm(), 20.0);
   // Detached: zero.
-  core::set_attached_body(m, d, -1);
+  core::set_held_body(m, d, -1);
   core::step(m, d);
   EXPECT_TRUE(d.feedback_wrench.force.isZero(0.0) && d.feedback_wrench.torque.isZero(0.0));
 }
@@ -124,7 +124,7 @@ TEST(Feedback, EachFeedbackGroupIsSaturatedOnItsOwn) {
   m.bodies.push_back(m.bodies[0]);
   ASSERT_EQ(core::finalize_model(m), "");
   core::Data d = core::make_data(m);
-  ASSERT_EQ(d.attached_body, 0);
+  ASSERT_EQ(d.held_body, 0);
   d.target.position = Vec3(-0.15, 0.0, 0.0);
   d.body_targets[1].pose.position = Vec3(-0.3, 0.0, 0.0);
   d.body_targets[1].enabled = true;

@@ -70,7 +70,7 @@ core::Model single_body(core::Integrator integ, double dt, double mass, const Ma
   b.inertia_body = inertia;
   b.coupling = gains;
   m.bodies = {b};
-  m.initial_attached_body = 0;
+  m.initial_held_body = 0;
   EXPECT_EQ(core::finalize_model(m), "");
   return m;
 }
@@ -200,7 +200,7 @@ TEST(Integrator, TrapezoidalFreeFallIsExact) {
   core::Model m =
       single_body(core::Integrator::kTrapezoidal, 1e-3, 2.0, 0.01 * Mat3::Identity(), {});
   m.gravity = Vec3(0.0, 0.0, -9.81);
-  m.initial_attached_body = -1;
+  m.initial_held_body = -1;
   core::Data d = core::make_data(m);
   for (int i = 0; i < 1000; ++i) core::step(m, d);
   EXPECT_NEAR(d.bodies[0].linear_velocity.z(), -9.81, 1e-10);
@@ -286,7 +286,7 @@ TEST(Integrator, FreeFallIsExactForTheVelocity) {
   for (auto integ : {core::Integrator::kLinearlyImplicitEuler, core::Integrator::kSymplecticEuler}) {
     core::Model m = single_body(integ, 1e-3, 2.0, 0.01 * Mat3::Identity(), {});
     m.gravity = Vec3(0.0, 0.0, -9.81);
-    m.initial_attached_body = -1;
+    m.initial_held_body = -1;
     core::Data d = core::make_data(m);
     for (int i = 0; i < 1000; ++i) core::step(m, d);
     EXPECT_NEAR(d.bodies[0].linear_velocity.z(), -9.81, 1e-10) << name(integ);
@@ -351,7 +351,7 @@ core::Model stack_model(core::Integrator integ) {
     m.bodies.push_back(b);
   }
   m.bodies[1].coupling = {300.0, 5.0, 0.5, 0.02};
-  m.initial_attached_body = 1;
+  m.initial_held_body = 1;
   m.solver.tolerance = 1e-13;
   EXPECT_EQ(core::finalize_model(m), "");
   return m;
@@ -520,7 +520,7 @@ TEST(Integrator, FastSpinAboutTheIntermediateAxisStaysBounded) {
   // perturbation: the unstable (tumbling) axis. 10 s at 1 ms.
   const Mat3 ib = Vec3(1e-3, 2e-3, 3e-3).asDiagonal();
   core::Model m = single_body(core::Integrator::kLinearlyImplicitEuler, 1e-3, 0.5, ib, {});
-  m.initial_attached_body = -1;
+  m.initial_held_body = -1;
   m.bodies[0].initial_twist.angular = Vec3(0.1, 100.0, 0.1);
   ASSERT_EQ(core::finalize_model(m), "");
   for (auto integ : {core::Integrator::kLinearlyImplicitEuler, core::Integrator::kSymplecticEuler}) {

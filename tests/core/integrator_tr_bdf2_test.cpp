@@ -40,7 +40,7 @@ core::Model one_body(core::Integrator integ, double dt, double mass, double iner
   b.inertia_body = inertia * Mat3::Identity();
   b.coupling = gains;
   m.bodies = {b};
-  m.initial_attached_body = 0;
+  m.initial_held_body = 0;
   EXPECT_EQ(core::finalize_model(m), "");
   return m;
 }
@@ -168,7 +168,7 @@ TEST(TrBdf2, FreeFallIsExact) {
   // Second order and exact on quadratics: x = −g t²/2 with no O(h) term.
   core::Model m = one_body(core::Integrator::kTrBdf2, 1e-3, 2.0, 0.01, {});
   m.gravity = Vec3(0.0, 0.0, -9.81);
-  m.initial_attached_body = -1;
+  m.initial_held_body = -1;
   core::Data d = core::make_data(m);
   for (int i = 0; i < 1000; ++i) core::step(m, d);
   EXPECT_NEAR(d.bodies[0].linear_velocity.z(), -9.81, 1e-10);
@@ -224,7 +224,7 @@ TEST(TrBdf2, BodyRestsOnAPlaneWhereTheContactCarriesItsWeight) {
   // rest at depth m g / k; 1000 steps with contacts do not allocate.
   core::Model m = one_body(core::Integrator::kTrBdf2, 1e-3, 0.1, 4e-6, {});
   m.gravity = Vec3(0.0, 0.0, -9.81);
-  m.initial_attached_body = -1;
+  m.initial_held_body = -1;
   m.material_pairs = {core::MaterialPair{2e4, 10.0, 0.5}};
   m.body_spheres = {core::Sphere{Vec3::Zero(), 0.01}};
   m.bodies[0].sphere_begin = 0;

@@ -69,7 +69,7 @@ core::Model tool_scene(double dt, double stiffness, double damping, const Vec3& 
   block.initial_pose.position = Vec3(-0.3, 0.0, 0.02);
   m.bodies = {tool, block};
   m.feedback = {300.0, 1.0, 0.5, 0.005, 8.0, 0.3};
-  m.initial_attached_body = 0;
+  m.initial_held_body = 0;
   EXPECT_EQ(core::finalize_model(m), "");
   return m;
 }

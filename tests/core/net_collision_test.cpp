@@ -38,7 +38,7 @@ namespace net_collision_test {
 /// the nets (no spheres) at the origin.
 Model net_model_base(int materials = 3) {
   Model m;
-  m.initial_attached_body = -1;
+  m.initial_held_body = -1;
   for (int i = 0; i < materials; ++i) m.material_names.push_back("mat" + std::to_string(i));
   m.material_pairs.assign(static_cast<std::size_t>(materials * materials), MaterialPair{});
   BodyModel tool;

@@ -71,7 +71,7 @@ core::Model scene(const core::TriangleMesh& mesh, double k = 50.0, double gamma 
   other.initial_twist.linear = Vec3(-0.2, 0.0, 0.1);
   other.initial_twist.angular = Vec3(0.0, 3.0, -1.0);
   m.bodies = {b, other};
-  m.initial_attached_body = -1;
+  m.initial_held_body = -1;
   core::NetSettings s;
   s.name = "net";
   s.body = 0;

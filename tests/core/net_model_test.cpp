@@ -43,7 +43,7 @@ core::Model base_model() {
   b.initial_twist.linear = Vec3(0.2, 0.0, -0.1);
   b.initial_twist.angular = Vec3(1.0, -2.0, 0.5);
   m.bodies = {a, b};
-  m.initial_attached_body = -1;
+  m.initial_held_body = -1;
   return m;
 }
 

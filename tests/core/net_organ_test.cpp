@@ -499,7 +499,7 @@ TEST(NetOrgan, ModelRefusesAnAnchoredBodyThatSomethingWouldMove) {
                                  0.005, Vec3(0, 0, 0.02));
   {
     core::Model m = base;
-    m.initial_attached_body = 0;
+    m.initial_held_body = 0;
     EXPECT_EQ(core::finalize_model(m),
               "body 'organ_core': anchored (a static body) cannot be held by the device");
   }

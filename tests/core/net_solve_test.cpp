@@ -92,7 +92,7 @@ core::Model scene(Variant v) {
   probe.initial_twist.linear = Vec3(-0.03, 0.0, 0.02);
   probe.initial_twist.angular = Vec3(0.0, 0.5, -0.3);
   m.bodies = {b, probe};
-  m.initial_attached_body = 0;
+  m.initial_held_body = 0;
   if (v == Variant::kJointed) {
     core::BodyModel handle = b;
     handle.name = "handle";
@@ -103,7 +103,7 @@ core::Model scene(Variant v) {
         b.initial_pose.position + b.initial_pose.orientation * Vec3(0, 0, 0.1);
     handle.initial_twist = b.initial_twist;
     m.bodies.push_back(handle);
-    m.initial_attached_body = 2;
+    m.initial_held_body = 2;
     core::JointModel j;
     j.name = "wrist";
     j.type = core::JointType::kRevolute;

@@ -72,7 +72,7 @@ core::Model double_pendulum(core::Integrator integ, double length = 0.3) {
   elbow.child = 1;
   elbow.frame_parent = core::Pose{Vec3(length / 2, 0, 0), kZtoY};
   m.joints = {shoulder, elbow};
-  m.initial_attached_body = -1;
+  m.initial_held_body = -1;
   EXPECT_EQ(core::finalize_model(m), "");
   return m;
 }
@@ -176,7 +176,7 @@ TEST(StepArticulated, BaumgarteErrorFollowsTheDiscreteCriticallyDampedLaw) {
     j.name = "ball_joint";
     j.type = core::JointType::kSpherical;
     m.joints = {j};
-    m.initial_attached_body = -1;
+    m.initial_held_body = -1;
     ASSERT_EQ(core::finalize_model(m), "");
     core::Data d = core::make_data(m);
     // The discrete map on (C, h Ċ): d1 = (d0 − β h² C0)/s, C1 = C0 + d1.
@@ -252,7 +252,7 @@ core::Model trocar_tool(double k_t, bool with_wall, double contact_stiffness = 1
     wall.pose.position = Vec3(0, 0, -0.22);
     m.obstacles = {wall};
   }
-  m.initial_attached_body = 0;
+  m.initial_held_body = 0;
   EXPECT_EQ(core::finalize_model(m), "");
   return m;
 }
@@ -307,7 +307,7 @@ TEST(StepArticulated, PartialControlLeavesTheUncontrolledBodySwingingUnderGravit
   m.bodies[0].coupling = {2000.0, core::damping_from_ratio(0.9, 1.0, 2000.0), 50.0,
                           core::damping_from_ratio(0.9, 1.0 * 0.09 / 12, 50.0)};
   m.joints.erase(m.joints.begin());  // body 0 is free, held only by its coupling
-  m.initial_attached_body = 0;
+  m.initial_held_body = 0;
   ASSERT_EQ(core::finalize_model(m), "");
   core::Data d = core::make_data(m);
   const core::Pose home = m.bodies[0].initial_pose;
@@ -501,7 +501,7 @@ TEST(StepArticulated, PerBodyFeedbackSumsToTheSaturatedComposite) {
   // ratio: carried back, the per-body wrenches give the composite exactly.
   core::Model m = double_pendulum(core::Integrator::kLinearlyImplicitEuler);
   m.feedback = {400.0, 2.0, 0.5, 0.01, 1.0, 0.05};  // max 1 N, 0.05 N·m: saturates
-  m.initial_attached_body = 0;
+  m.initial_held_body = 0;
   ASSERT_EQ(core::finalize_model(m), "");
   core::Data d = core::make_data(m);
   d.target = core::Pose{m.bodies[0].initial_pose.position + Vec3(0, 0, 0.05), Quat::Identity()};

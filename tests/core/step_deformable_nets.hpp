@@ -2,7 +2,7 @@
 /// @file step_deformable_nets.hpp
 /// Held nets shared by the tests of core/step with deformable god-objects
 /// (step_deformable_test.cpp, step_deformable_fast_motion_test.cpp,
-/// step_deformable_pressing_test.cpp): a net on a rigid component attached to the device, the
+/// step_deformable_pressing_test.cpp): a net on a rigid component held by the device, the
 /// nodes' offsets from their anchors and the linear static solution they sag to.
 
 #include <cmath>
@@ -57,7 +57,7 @@ struct NetParams {
   double k_tie = 100.0, gamma_tie = 0.5;
 };
 
-/// Body 0, the rigid component of one net (no spheres), attached to the
+/// Body 0, the rigid component of one net (no spheres), held by the
 /// device; its target starts at its initial pose.
 inline core::Model net_model(core::Integrator integ, core::CouplingMode mode, double dt,
                              const core::TriangleMesh& mesh, const NetParams& p,
@@ -75,7 +75,7 @@ inline core::Model net_model(core::Integrator integ, core::CouplingMode mode, do
   b.inertia_body = 1e-4 * Mat3::Identity();
   b.initial_pose = core::Pose{Vec3(0.0, 0.0, 0.3), rot(0.3, Vec3(1, -2, 0.5))};
   m.bodies = {b};
-  m.initial_attached_body = 0;
+  m.initial_held_body = 0;
   core::NetSettings s;
   s.name = "bag";
   s.body = 0;

@@ -61,13 +61,13 @@ core::Model pressing_scene(core::Integrator integ, bool joints) {
   b.initial_pose.position = Vec3(0.0, 0.0, 0.055);
   b.coupling = {500.0, core::damping_from_ratio(0.9, 0.2, 500.0), 0.5, core::damping_from_ratio(0.9, 2.7e-4, 0.5)};
   m.bodies = {b};
-  m.initial_attached_body = 0;
+  m.initial_held_body = 0;
   if (joints) {
     core::BodyModel handle = b;
     handle.name = "handle";
     handle.initial_pose.position = Vec3(0.0, 0.0, 0.155);
     m.bodies.push_back(handle);
-    m.initial_attached_body = 1;
+    m.initial_held_body = 1;
     core::JointModel j;
     j.name = "wrist";
     j.type = core::JointType::kRevolute;
@@ -95,7 +95,7 @@ core::Model pressing_scene(core::Integrator integ, bool joints) {
 
 void drive(const core::Model& m, core::Data& d, int k) {
   const double t = k * m.dt;
-  const core::Pose& home = m.bodies[at(m.initial_attached_body)].initial_pose;
+  const core::Pose& home = m.bodies[at(m.initial_held_body)].initial_pose;
   d.target.position = home.position + Vec3(0.04 * std::sin(2.0 * t), 0.01 * std::sin(3.0 * t), -0.012);
   d.target.orientation = rot(0.2 * std::sin(1.5 * t), Vec3(0.3, 1.0, 0.0)) * home.orientation;
   d.target_twist.linear = Vec3(0.08 * std::cos(2.0 * t), 0.03 * std::cos(3.0 * t), 0.0);

@@ -53,16 +53,16 @@ core::Model thirteen_bodies(core::Integrator integ, core::CouplingMode mode) {
     m.bodies.push_back(b);
   }
   m.feedback = {400.0, 2.0, 0.5, 0.01, 10.0, 1.0};
-  m.initial_attached_body = 0;
+  m.initial_held_body = 0;
   EXPECT_EQ(core::finalize_model(m), "");
   return m;
 }
 
-/// Device motion around the attached body's initial pose (a tool switch
+/// Device motion around the held body's initial pose (a tool switch
 /// does not make the new tool jump across the scene).
 void drive_target(const core::Model& m, core::Data& d, int i) {
   const double t = 1e-3 * i;
-  const core::Pose& home = m.bodies[static_cast<std::size_t>(std::max(0, d.attached_body))].initial_pose;
+  const core::Pose& home = m.bodies[static_cast<std::size_t>(std::max(0, d.held_body))].initial_pose;
   d.target.position = home.position + Vec3(0.03 * std::sin(2.0 * t), 0.02 * std::cos(3.0 * t),
                                             0.02 + 0.03 * std::sin(t));
   d.target.orientation = rot(0.5 * std::sin(t), Vec3(0.0, 1.0, 1.0)) * home.orientation;
@@ -96,7 +96,7 @@ TEST(Step, TenThousandStepsOfThirteenBodiesDoNotAllocate) {
         numen::test::AllocationGuard guard;
         for (int i = 0; i < steps; ++i) {
           drive_target(m, d, i);
-          if (i == steps / 2) core::set_attached_body(m, d, 3);  // tool switching
+          if (i == steps / 2) core::set_held_body(m, d, 3);  // tool switching
           core::step(m, d);
           if (d.status != core::kStepOk && first_bad < 0) {
             first_bad = i;
@@ -250,19 +250,19 @@ TEST(Step, NonFiniteResultIsRolledBack) {
   EXPECT_EQ(d.nonfinite_steps, 1);
 }
 
-TEST(Step, SetAttachedBodyRangeChecks) {
+TEST(Step, SetHeldBodyRangeChecks) {
   const core::Model m = thirteen_bodies(core::Integrator::kLinearlyImplicitEuler, core::CouplingMode::kGodObject);
   core::Data d = core::make_data(m);
-  core::set_attached_body(m, d, 12);
-  EXPECT_EQ(d.attached_body, 12);
-  core::set_attached_body(m, d, 13);
-  EXPECT_EQ(d.attached_body, -1);
-  core::set_attached_body(m, d, -5);
-  EXPECT_EQ(d.attached_body, -1);
-  core::set_attached_body(m, d, 0);
-  EXPECT_EQ(d.attached_body, 0);
-  // An attached-body index written directly out of range is treated as none.
-  d.attached_body = 99;
+  core::set_held_body(m, d, 12);
+  EXPECT_EQ(d.held_body, 12);
+  core::set_held_body(m, d, 13);
+  EXPECT_EQ(d.held_body, -1);
+  core::set_held_body(m, d, -5);
+  EXPECT_EQ(d.held_body, -1);
+  core::set_held_body(m, d, 0);
+  EXPECT_EQ(d.held_body, 0);
+  // A held-body index written directly out of range is treated as none.
+  d.held_body = 99;
   core::step(m, d);
   EXPECT_TRUE(d.coupling_wrench.force.isZero(0.0));
   EXPECT_EQ(d.status, core::kStepOk);
@@ -296,7 +296,7 @@ core::Model block_on_board(core::Integrator integ) {
   b.sphere_count = 8;
   b.initial_pose.position = Vec3(0.05, -0.02, 0.02);
   m.bodies = {b};
-  m.initial_attached_body = -1;
+  m.initial_held_body = -1;
   EXPECT_EQ(core::finalize_model(m), "");
   return m;
 }
@@ -342,7 +342,7 @@ TEST(StepBehaviour, GodObjectPushedIntoAWallStaysOutsideWithinThePenaltyBound) {
   b.coupling = {k_t, core::damping_from_ratio(0.85, 0.05, k_t), 0.0, 0.0};
   b.initial_pose.position = Vec3(-0.05, 0.0, 0.0);
   m.bodies = {b};
-  m.initial_attached_body = 0;
+  m.initial_held_body = 0;
   ASSERT_EQ(core::finalize_model(m), "");
   core::Data d = core::make_data(m);
   const double x_end = 0.05;  // target 50 mm inside the wall
@@ -384,7 +384,7 @@ core::Model stiff_rod(double k_c) {
   rod.coupling = {1000.0, core::damping_from_ratio(0.85, rod.mass, 1000.0), 1.0, 2e-3};
   rod.initial_pose = core::Pose{Vec3(0, 0, -0.05), rot(M_PI, Vec3::UnitX())};
   m.bodies = {rod};
-  m.initial_attached_body = 0;
+  m.initial_held_body = 0;
   EXPECT_EQ(core::finalize_model(m), "");
   return m;
 }

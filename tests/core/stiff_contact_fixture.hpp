@@ -47,7 +47,7 @@ struct PressedRun {
   std::int64_t allocations = 0;  ///< Heap allocations inside core::step (must stay 0).
 };
 
-/// Runs `steps` steps of 1 ms: the hand (the attached body's target, its COM starting at
+/// Runs `steps` steps of 1 ms: the hand (the held body's target, its COM starting at
 /// (0, 0, −0.05) with the body z axis pointing down) descends at 0.05 m/s to 30 mm below its
 /// start, while circling with `radius` (m) at `hz` and tilting the shaft ±0.3 rad. Fails the
 /// test (and stops) at the first non-finite step.

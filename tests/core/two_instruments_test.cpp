@@ -34,7 +34,7 @@ core::Model handover_rig() {
   numen::test::add_grasper(m, core::Vec3(-0.008, 0, 0.06), 25 * numen::test::kGraspDeg, 5.0);
   numen::test::add_grasper(m, core::Vec3(0.008, 0, 0.08), 60 * numen::test::kGraspDeg, 5.0);
   m.grasps[1].name = "grasper_b";
-  m.initial_attached_body = 0;
+  m.initial_held_body = 0;
   core::BodyModel plate;
   plate.name = "plate";
   plate.mass = 0.02;
@@ -144,7 +144,7 @@ TEST(TwoInstruments, TheirTubesClashAtHalfAMetreASecondWithoutPassingThroughEach
     tube.initial_pose = core::Pose{core::Vec3(0, k == 0 ? -0.02 : 0.02, 0), along};
     m.bodies.push_back(tube);
   }
-  m.initial_attached_body = 0;
+  m.initial_held_body = 0;
   ASSERT_EQ(core::finalize_model(m), "");
   core::Data d = core::make_data(m);
   double closest = 1.0;

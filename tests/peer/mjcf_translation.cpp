@@ -264,8 +264,7 @@ MjcfTranslation translate_to_mjcf(const core::Model& model, Drive drive,
       x << "    <weld name=\"" << out.weld_names[static_cast<std::size_t>(b)] << "\" body1=\""
         << out.body_names[static_cast<std::size_t>(b)] << "\" body2=\""
         << out.mocap_names[static_cast<std::size_t>(b)] << "\" relpose=\"0 0 0 1 0 0 0\" active=\""
-        << (b == model.initial_attached_body ? "true" : "false") << "\" " << soft_attrs(sc)
-        << "/>\n";
+        << (b == model.initial_held_body ? "true" : "false") << "\" " << soft_attrs(sc) << "/>\n";
     }
   }
   for (int j = 0; j < model.num_joints(); ++j) {

@@ -74,7 +74,7 @@ void MujocoEngine::apply(const StepInput& in) noexcept {
     for (int b = 0; b < nb; ++b) {
       const auto i = static_cast<std::size_t>(b);
       if (weld_id_[i] < 0) continue;
-      const bool held = b == in.attached_body;
+      const bool held = b == in.held_body;
       m_->eq_active[weld_id_[i]] = held ? 1 : 0;
       if (!held) continue;
       mjtNum* p = d_->mocap_pos + 3 * mocap_id_[i];
@@ -90,7 +90,7 @@ void MujocoEngine::apply(const StepInput& in) noexcept {
       const auto i = static_cast<std::size_t>(b);
       const core::BodyTarget* own =
           i < in.body_targets.size() && in.body_targets[i].enabled ? &in.body_targets[i] : nullptr;
-      const bool held = b == in.attached_body;
+      const bool held = b == in.held_body;
       if (!held && !own) continue;
       core::BodyState s;
       read_state(b, s);

@@ -22,7 +22,7 @@ void MetricAccumulator::add(const StepInput& input,
       ++acc_.nonfinite_steps;
       return;
     }
-  const int held = input.attached_body;
+  const int held = input.held_body;
   if (held < 0 || held >= model.num_bodies()) return;
   std::copy(bodies.begin(), bodies.end(), ghost_.bodies.begin());
   core::detect_contacts(model, ghost_);

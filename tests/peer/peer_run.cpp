@@ -15,9 +15,8 @@ namespace numen::peer {
 std::vector<int> held_bodies(const InputRecording& inputs) {
   std::vector<int> held;
   for (const StepInput& in : inputs)
-    if (in.attached_body >= 0 &&
-        std::find(held.begin(), held.end(), in.attached_body) == held.end())
-      held.push_back(in.attached_body);
+    if (in.held_body >= 0 && std::find(held.begin(), held.end(), in.held_body) == held.end())
+      held.push_back(in.held_body);
   std::sort(held.begin(), held.end());
   return held;
 }

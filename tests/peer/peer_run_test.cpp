@@ -62,8 +62,7 @@ TEST(PeerRun, NumensReplayIsTheRunOfTheSceneRunnerBitForBit) {
     for (int k = 0; k < steps; ++k) {
       runner->period();
       const core::Data& r = runner->data();
-      peer::StepInput in{r.attached_body, r.target, r.target_twist, r.body_targets,
-                         r.joint_prescribed};
+      peer::StepInput in{r.held_body, r.target, r.target_twist, r.body_targets, r.joint_prescribed};
       peer::apply_step_input(scene.model, in, d);
       core::step(scene.model, d);
     }
@@ -91,12 +90,12 @@ TEST(PeerRun, PercentilesAreNearestRank) {
   EXPECT_DOUBLE_EQ(p99, 990.0);
 }
 
-TEST(PeerRun, HeldBodiesAreTheDistinctAttachedOnes) {
+TEST(PeerRun, HeldBodiesAreTheDistinctOnesHeld) {
   peer::InputRecording rec(5);
-  rec[0].attached_body = 3;
-  rec[1].attached_body = -1;
-  rec[2].attached_body = 0;
-  rec[3].attached_body = 3;
-  rec[4].attached_body = -1;
+  rec[0].held_body = 3;
+  rec[1].held_body = -1;
+  rec[2].held_body = 0;
+  rec[3].held_body = 3;
+  rec[4].held_body = -1;
   EXPECT_EQ(peer::held_bodies(rec), (std::vector<int>{0, 3}));
 }

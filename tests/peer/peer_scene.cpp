@@ -36,7 +36,7 @@ PeerScene make_wall_scene(double duration_s) {
   b.coupling = {k_t, core::damping_from_ratio(0.85, mass, k_t), 0.0, 0.0};
   b.initial_pose.position = core::Vec3(-0.05, 0.0, 0.0);
   m.bodies = {b};
-  m.initial_attached_body = 0;
+  m.initial_held_body = 0;
   const std::string err = core::finalize_model(m);
   if (!err.empty()) throw std::logic_error("wall scene: " + err);
 
@@ -46,7 +46,7 @@ PeerScene make_wall_scene(double duration_s) {
   for (int i = 0; i < steps; ++i) {
     const double t = m.dt * i;  // the same schedule as the core test
     StepInput in;
-    in.attached_body = 0;
+    in.held_body = 0;
     const double x = -0.05 + speed * t;
     in.target.position = core::Vec3(std::min(x, x_end), 0.0, 0.0);
     in.target_twist.linear = core::Vec3(x < x_end ? speed : 0.0, 0.0, 0.0);

@@ -68,7 +68,7 @@ core::Model ball_on_floor(double k, double c, double m) {
   b.sphere_count = 1;
   b.initial_pose.position = core::Vec3(0.0, 0.0, 0.01);
   model.bodies = {b};
-  model.initial_attached_body = -1;
+  model.initial_held_body = -1;
   EXPECT_EQ(core::finalize_model(model), "");
   return model;
 }

@@ -19,7 +19,7 @@ InputRecording record_scene_inputs(const sim::Scene& scene, int steps) {
     runner->period();
     const core::Data& d = runner->data();
     StepInput in;
-    in.attached_body = d.attached_body;
+    in.held_body = d.held_body;
     in.target = d.target;
     in.target_twist = d.target_twist;
     in.body_targets = d.body_targets;
@@ -30,8 +30,7 @@ InputRecording record_scene_inputs(const sim::Scene& scene, int steps) {
 }
 
 void apply_step_input(const core::Model& model, const StepInput& input, core::Data& data) noexcept {
-  if (data.attached_body != input.attached_body)
-    core::set_attached_body(model, data, input.attached_body);
+  if (data.held_body != input.held_body) core::set_held_body(model, data, input.held_body);
   data.target = input.target;
   data.target_twist = input.target_twist;
   std::copy(input.body_targets.begin(), input.body_targets.end(), data.body_targets.begin());

@@ -15,8 +15,8 @@ namespace numen::peer {
 
 /// What core::step reads from the device in one period (the inputs of core::Data).
 struct StepInput {
-  int attached_body = -1;    ///< Body the device holds (-1: none); tool switching.
-  core::Pose target;         ///< Target of the attached body's COM frame (world, m).
+  int held_body = -1;        ///< Body the device holds (-1: none); tool switching.
+  core::Pose target;         ///< Target of the held body's COM frame (world, m).
   core::Twist target_twist;  ///< Its twist (world; m/s, rad/s).
   /// Per body: its own target (Eq. 6), disabled for bodies the device does not measure.
   std::vector<core::BodyTarget> body_targets;
@@ -32,8 +32,8 @@ using InputRecording = std::vector<StepInput>;
 /// SceneRunner throws.
 InputRecording record_scene_inputs(const sim::Scene& scene, int steps);
 
-/// Writes `input` into `data` before core::step: attaches the device to input.attached_body
-/// (core::set_attached_body, only when it changes) and copies the targets and prescriptions.
+/// Writes `input` into `data` before core::step: the device holds input.held_body
+/// (core::set_held_body, only when it changes) and copies the targets and prescriptions.
 /// `data` must come from make_data(model) and `input` have the model's body and joint counts.
 /// No allocation.
 void apply_step_input(const core::Model& model, const StepInput& input, core::Data& data) noexcept;

@@ -40,7 +40,7 @@ core::Model two_body_model() {
   right.name = "right";
   m.bodies[0].name = "left";
   m.bodies.push_back(right);
-  m.initial_attached_body = 0;
+  m.initial_held_body = 0;
   EXPECT_EQ(core::finalize_model(m), "");
   return m;
 }

@@ -69,7 +69,7 @@ inline numen::core::Model small_model() {
   m.feedback.gamma_t = 0.1;
   m.feedback.max_force = 5.0;
   m.feedback.max_torque = 0.5;
-  m.initial_attached_body = 0;
+  m.initial_held_body = 0;
   const std::string err = numen::core::finalize_model(m);
   EXPECT_TRUE(err.empty()) << err;
   return m;
@@ -91,7 +91,7 @@ inline numen::core::Model probe_model(
   b.inertia_body = numen::core::Mat3::Identity() * 1e-4;
   b.sphere_count = 1;
   m.bodies = {b};
-  m.initial_attached_body = 0;
+  m.initial_held_body = 0;
   EXPECT_EQ(numen::core::finalize_model(m), "");
   return m;
 }

@@ -33,7 +33,7 @@
 using namespace numen::test::control_loop_fixtures;
 
 // ------------------------------------------------------------- link bindings
-// An articulated binding (paper Eq. 6, Eq. 9): link "tube" drives the attached
+// An articulated binding (paper Eq. 6, Eq. 9): link "tube" drives the held
 // body through an offset, link "jaw_1" another body through another offset,
 // and the jaw axis imposes a prescribed revolute joint between them.
 
@@ -79,7 +79,7 @@ Pose jaw_offset() {
   return p;
 }
 
-/// Two bodies ("tube" attached, "jaw") a little off their link targets, a
+/// Two bodies ("tube" held, "jaw") a little off their link targets, a
 /// revolute tube–jaw joint (prescribed or not), small feedback gains.
 numen::core::Model linked_model(bool prescribed) {
   const numen::hal::DeviceConfig c = trocar_config();
@@ -122,7 +122,7 @@ numen::core::Model linked_model(bool prescribed) {
   m.feedback.gamma_r = 1e-4;
   m.feedback.max_force = 1e9;
   m.feedback.max_torque = 1e9;
-  m.initial_attached_body = 0;
+  m.initial_held_body = 0;
   const std::string err = numen::core::finalize_model(m);
   EXPECT_TRUE(err.empty()) << err;
   return m;
@@ -206,7 +206,7 @@ TEST(ControlLoopLinks, BoundBodiesGetTheirLinkTargetsAndPrescribedJointsTheirAxi
     EXPECT_TRUE(bt.enabled);
     EXPECT_LT((bt.pose.position - jaw.position).norm(), 1e-12);
     EXPECT_LT(bt.pose.orientation.angularDistance(jaw.orientation), 1e-9);
-    EXPECT_FALSE(rig.data.body_targets[0].enabled) << "the attached body's target goes to data.target";
+    EXPECT_FALSE(rig.data.body_targets[0].enabled) << "the held body's target goes to data.target";
     EXPECT_NEAR(rig.data.joint_prescribed[0].value, 0.5 * q[TrocarKinematics::kJaw] + 0.1, 1e-12);
     EXPECT_EQ(rig.data.joint_prescribed[0].rate, 0.0);
   }
@@ -333,7 +333,7 @@ TEST(ControlLoopLinks, ConstructorRejectsBindingsOutOfRange) {
   }
   {
     DeviceBinding b = linked_binding();
-    b.links[1].body = -1;  // whichever body is attached: valid
+    b.links[1].body = -1;  // whichever body is held: valid
     EXPECT_NO_THROW(make(b));
   }
   {
@@ -381,14 +381,14 @@ TEST(ControlLoopLinks, TheHeldBodyFollowsItsOwnLinkAcrossToolSwitches) {
   EXPECT_LT((rig.data.target.position - (tube.position + tube.orientation * off.position)).norm(), 1e-12);
   // Switch the hold to body 1: it keeps its own link ("jaw_1") and the target
   // of the held body comes from that binding.
-  numen::core::set_attached_body(rig.model, rig.data, 1);
+  numen::core::set_held_body(rig.model, rig.data, 1);
   rig.period(1);
   const Pose jaw = kin.link_pose(TrocarKinematics::kLinkJaw1, rig.device.last_sample().q);
   const Pose off1 = b.links[1].body_in_link;
   EXPECT_LT((rig.data.target.position - (jaw.position + jaw.orientation * off1.position)).norm(), 1e-12);
   // Nothing held: the held target is left alone, the bound bodies keep theirs.
   const Pose held_before = rig.data.target;
-  numen::core::set_attached_body(rig.model, rig.data, -1);
+  numen::core::set_held_body(rig.model, rig.data, -1);
   rig.period(2);
   EXPECT_EQ(rig.data.target.position, held_before.position);
   EXPECT_TRUE(rig.data.body_targets[0].enabled);

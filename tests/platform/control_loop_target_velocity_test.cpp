@@ -68,7 +68,7 @@ void run_tracker(const Setting& s, double period_s, double duration_s,
   b.coupling.gamma_r = numen::core::damping_from_ratio(0.85, 1e-5, b.coupling.k_r);
   b.initial_pose.position = Vec3(x_of_t(0.0), 0.0, 0.0);
   m.bodies.push_back(b);
-  m.initial_attached_body = 0;
+  m.initial_held_body = 0;
   const std::string err = numen::core::finalize_model(m);
   ASSERT_TRUE(err.empty()) << err;
   numen::core::Data data = numen::core::make_data(m);

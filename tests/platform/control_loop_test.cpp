@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -66,6 +67,28 @@ struct Rig {
     return device.kinematics().forward(q);
   }
 };
+
+// One period steps the model once: the device's control period is Model::dt (the scene copies
+// it into DeviceConfig::control_period_s), and a loop whose device disagrees is refused.
+TEST(ControlLoop, RefusesADeviceWhoseControlPeriodIsNotTheModelsStep) {
+  numen::hal::DeviceConfig config = trocar_config();
+  SimBus bus{bus_settings()};
+  numen::core::Model model = small_model();
+  numen::core::Data data = numen::core::make_data(model);
+  ASSERT_EQ(config.control_period_s, model.dt);
+  config.control_period_s = 2.0 * model.dt;
+  numen::hal::InstrumentDevice slow{config};
+  try {
+    ControlLoop loop{model, data, bus.controller(), slow};
+    ADD_FAILURE() << "a 2 ms device period ran a 1 ms model";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("control_period_s"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("model's step dt"), std::string::npos) << e.what();
+  }
+  config.control_period_s = model.dt;
+  numen::hal::InstrumentDevice same{config};
+  EXPECT_NO_THROW((ControlLoop{model, data, bus.controller(), same}));
+}
 
 TEST(ControlLoop, BeginPeriodWritesASyncWithACounter) {
   Rig rig;
@@ -185,13 +208,13 @@ TEST(ControlLoop, ZeroTorqueAndTargetUntouchedBeforeTheDeviceIsReady) {
 
 TEST(ControlLoop, ZeroTorqueWhileNoBodyIsHeld) {
   Rig rig;
-  numen::core::set_attached_body(rig.model, rig.data, -1);
+  numen::core::set_held_body(rig.model, rig.data, -1);
   for (int k = 0; k < 4; ++k) rig.period(k);
   EXPECT_EQ(rig.loop.counters().periods_zero_torque, 4u);
   EXPECT_TRUE(rig.loop.last_report().target_ready);
   for (int i = 0; i < 5; ++i) EXPECT_EQ(rig.emulator.last_torques()[i], 0.0) << i;
   // Holding again: torque is commanded.
-  numen::core::set_attached_body(rig.model, rig.data, 0);
+  numen::core::set_held_body(rig.model, rig.data, 0);
   rig.period(4);
   EXPECT_EQ(rig.loop.counters().periods_zero_torque, 4u);
   EXPECT_GT(rig.emulator.last_torques().cwiseAbs().maxCoeff(), 0.0);

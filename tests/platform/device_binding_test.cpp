@@ -51,17 +51,17 @@ TEST(DeviceBinding, ABodyBoundTwiceOrOutOfRangeIsRefused) {
             "device binding: body 2 out of range (2 bodies)");
 }
 
-TEST(DeviceBinding, TheAttachedBindingServesOnlyAHeldBodyWithoutALinkOfItsOwn) {
+TEST(DeviceBinding, TheHeldBindingServesOnlyAHeldBodyWithoutALinkOfItsOwn) {
   const core::Model m = test::free_bodies_model({"a", "b", "c"});
   core::Data d = core::make_data(m);
   const std::vector<std::uint8_t> own = {0, 1, 0};  // body 1 has its own link
-  const LinkBinding attached = link_to(0, -1);
-  d.attached_body = 0;
-  EXPECT_EQ(bound_body(attached, d, own), 0);
-  d.attached_body = 1;  // held body 1 follows its own link, not the attached binding
-  EXPECT_EQ(bound_body(attached, d, own), -1);
-  d.attached_body = -1;
-  EXPECT_EQ(bound_body(attached, d, own), -1);
+  const LinkBinding held = link_to(0, -1);
+  d.held_body = 0;
+  EXPECT_EQ(bound_body(held, d, own), 0);
+  d.held_body = 1;  // held body 1 follows its own link, not the held binding
+  EXPECT_EQ(bound_body(held, d, own), -1);
+  d.held_body = -1;
+  EXPECT_EQ(bound_body(held, d, own), -1);
   EXPECT_EQ(bound_body(link_to(1, 1), d, own), 1);
 }
 
@@ -86,10 +86,10 @@ TEST(DeviceBinding, TheBodyTargetIsTheLinkPoseTimesTheOffsetWithTheRigidTwistTra
   EXPECT_EQ(twist.angular, lt.angular);
 }
 
-TEST(DeviceBinding, TheAttachedBodysTargetIsTheDeviceTargetAndAnotherBodysIsItsOwn) {
+TEST(DeviceBinding, TheHeldBodysTargetIsTheDeviceTargetAndAnotherBodysIsItsOwn) {
   const core::Model m = test::free_bodies_model({"a", "b"});
   core::Data d = core::make_data(m);
-  d.attached_body = 0;
+  d.held_body = 0;
   Pose pose;
   pose.position = Vec3(0.1, 0.2, 0.3);
   Twist twist;

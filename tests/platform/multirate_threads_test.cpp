@@ -55,7 +55,7 @@ core::Model press_scene(double dt) {
   block.sphere_count = 1;
   block.initial_pose.position = Vec3(0.0, 0.0, 0.0199);
   m.bodies = {tool, block};
-  m.initial_attached_body = 0;
+  m.initial_held_body = 0;
   EXPECT_EQ(core::finalize_model(m), "");
   return m;
 }

@@ -29,7 +29,7 @@ using numen::platform::StateFrameFigures;
 using numen::platform::StateFrameLayout;
 using numen::platform::StateFrameView;
 
-/// The two bodies of every frame here: "tool" (attached) at the origin, "block" at (0.1, 0.2, 0.3).
+/// The two bodies of every frame here: "tool" (held) at the origin, "block" at (0.1, 0.2, 0.3).
 numen::core::Model two_bodies() {
   return numen::test::free_bodies_model({"tool", "block"}, [](numen::core::Model& m) {
     m.bodies[1].initial_pose.position = Vec3(0.1, 0.2, 0.3);
@@ -91,7 +91,7 @@ TEST(StateFrame, RoundTripsEveryField) {
   EXPECT_EQ(h.num_nodes, 0u);
   EXPECT_EQ(h.num_contacts, 1u);
   EXPECT_EQ(h.num_axes, 3u);
-  EXPECT_EQ(h.attached_body, 0);
+  EXPECT_EQ(h.held_body, 0);
   EXPECT_EQ(h.period, 42u);
   EXPECT_EQ(h.time_ns, 42'000'000);
   EXPECT_EQ(h.step_status, numen::core::kContactOverflow);
@@ -109,7 +109,7 @@ TEST(StateFrame, RoundTripsEveryField) {
   EXPECT_FLOAT_EQ(pose[6], static_cast<float>(std::cos(0.15)));
   v.body_pose(1, pose);
   EXPECT_FLOAT_EQ(pose[1], 0.2F);
-  EXPECT_TRUE(v.target_pose(0, pose));  // the attached body: Data::target
+  EXPECT_TRUE(v.target_pose(0, pose));  // the held body: Data::target
   EXPECT_FLOAT_EQ(pose[2], 0.02F);
   EXPECT_FALSE(v.target_pose(1, pose));  // no own target: its own pose, flagged off
   EXPECT_FLOAT_EQ(pose[2], 0.3F);
@@ -166,7 +166,7 @@ TEST(StateFrame, EachDeclaredFieldIsAtItsDeclaredOffset) {
       case FrameField::kNumNodes: want = 0; break;
       case FrameField::kNumContacts: want = 1; break;
       case FrameField::kNumAxes: want = 3; break;
-      case FrameField::kAttachedBody: want = 0; break;
+      case FrameField::kHeldBody: want = 0; break;
       case FrameField::kPeriod: want = 42; break;
       case FrameField::kTimeNs: want = 42'000'000; break;
       case FrameField::kStepStatus: want = numen::core::kContactOverflow; break;
@@ -315,7 +315,7 @@ TEST(StateFrameDecoder, RejectsEveryMalformedFrameWithItsOffset) {
   EXPECT_NE(decode(b).find("byte 12: counts"), std::string::npos);
   b = buf;
   b[28] = std::byte{5};
-  EXPECT_NE(decode(b).find("byte 28: attached body 5"), std::string::npos);
+  EXPECT_NE(decode(b).find("byte 28: held body 5"), std::string::npos);
   EXPECT_EQ(decode(buf), "");
 }
 

@@ -69,7 +69,7 @@ inline core::Model make_deformable_ball(int subdivisions, double dt = 1e-3, doub
   b.coupling.k_r = 1.0;
   b.coupling.gamma_r = 0.02;
   m.bodies.push_back(b);
-  m.initial_attached_body = 0;
+  m.initial_held_body = 0;
   core::Obstacle floor;
   floor.name = "floor";
   m.obstacles.push_back(floor);

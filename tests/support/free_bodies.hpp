@@ -3,7 +3,7 @@
 /// A model of free rigid bodies for the tests of what reads a core::Data without stepping it
 /// much (the state frame and the state stream, tests/platform/state_frame_test.cpp and
 /// state_stream_test.cpp): each body 0.1 kg with inertia 1e-4 kg·m² · I about its centre of
-/// mass, coupling k_t = 100 N/m; no gravity; dt = 1 ms; one material; the first body attached to
+/// mass, coupling k_t = 100 N/m; no gravity; dt = 1 ms; one material; the first body held by
 /// the device. Header-only; needs only numen::core and GoogleTest.
 
 #include <gtest/gtest.h>
@@ -33,7 +33,7 @@ inline core::Model free_bodies_model(std::initializer_list<const char*> names,
     b.coupling.k_t = 100.0;
     m.bodies.push_back(b);
   }
-  m.initial_attached_body = 0;
+  m.initial_held_body = 0;
   if (edit) edit(m);
   const std::string err = core::finalize_model(m);
   EXPECT_TRUE(err.empty()) << err;

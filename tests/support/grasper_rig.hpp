@@ -78,7 +78,7 @@ inline int add_grasper(core::Model& m, const core::Vec3& tube_at, double opening
   g.damping = 2.0;
   g.max_force = max_force;
   m.grasps.push_back(g);
-  m.initial_attached_body = tube_index;
+  m.initial_held_body = tube_index;
   return tube_index;
 }
 

@@ -49,7 +49,7 @@ inline core::Model make_lean_model(LeanPart part) {
     m.bodies.push_back(b);
   };
   add_body(core::Vec3(0.0, 0.0, 0.1));
-  m.initial_attached_body = 0;
+  m.initial_held_body = 0;
   m.feedback = {400.0, 2.0, 0.5, 0.01, 10.0, 1.0};
   std::string err;
   const bool joint = part == LeanPart::kJoint || part == LeanPart::kJointAndNet;

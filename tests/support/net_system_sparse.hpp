@@ -9,7 +9,7 @@
 /// and be handed to other solvers on the identical system
 /// (tests/bench/net_solve_peer_bench.cpp). Terms: mass and world inertia,
 /// implicit gyroscopic split (u* of implicit_gyroscopic_velocity()), the
-/// attached body's coupling springs (Eq. 2; kGodObject), net springs
+/// held body's coupling springs (Eq. 2; kGodObject), net springs
 /// (S = h γ d̂d̂ᵀ + h² k K̃, K̃ = (1 − τ) d̂d̂ᵀ + τ I, τ = max(0, 1 − L/l)),
 /// ties (c = h γ_tie + h² k_tie; A_ii += c I, A_ib = −c J_i,
 /// A_bb += c J_iᵀ J_i, J_i = [I, −[ρ_i]×]), node contacts on obstacles and
@@ -57,7 +57,7 @@ struct NetSystemInputs {
   std::vector<std::uint8_t> imposed;         ///< SolverScratch::imposed (kDirect bodies)
   core::Pose target;                         ///< the device's target pose (world)
   core::Twist target_twist;                  ///< its twist (world)
-  int attached = -1;                         ///< Data::attached_body
+  int held = -1;                             ///< Data::held_body
 };
 
 /// Copies the inputs of the system from `data` (see NetSystemInputs for when).
@@ -71,7 +71,7 @@ inline NetSystemInputs take_net_system_inputs(const core::Data& data) {
   s.imposed = data.scratch->solver.imposed;
   s.target = data.target;
   s.target_twist = data.target_twist;
-  s.attached = data.attached_body;
+  s.held = data.held_body;
   return s;
 }
 
@@ -161,7 +161,7 @@ inline NetSystem assemble_net_system(const core::Model& m, const NetSystemInputs
         core::implicit_gyroscopic_velocity(r, bm.inertia_body, st.angular_velocity, h);
     b.segment<3>(bi(k) + 3) += iw * (w_star - st.angular_velocity);
     fb[at(k)].head<3>() += bm.mass * m.gravity;
-    if (k == s.attached && m.coupling_mode == core::CouplingMode::kGodObject) {
+    if (k == s.held && m.coupling_mode == core::CouplingMode::kGodObject) {
       const core::CouplingGains& g = bm.coupling;
       const core::Wrench w = core::coupling_wrench(g, s.target, s.target_twist, st);
       fb[at(k)] += (Vec6() << w.force, w.torque).finished();

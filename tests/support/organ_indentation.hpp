@@ -138,7 +138,7 @@ inline core::Model organ_model(const core::TriangleMesh& mesh, const OrganParams
                                       core::damping_from_ratio(0.85, 1e-5, 1.0)};
   m.body_spheres = {core::Sphere{Vec3::Zero(), tool_radius}};
   m.bodies = {anchor, tool};
-  m.initial_attached_body = 1;
+  m.initial_held_body = 1;
   m.feedback.k_t = 300.0;
   m.feedback.gamma_t = 1.0;
   EXPECT_EQ(core::add_net(m, mesh, organ_net_settings(mesh, p)), "");

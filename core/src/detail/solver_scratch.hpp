@@ -94,7 +94,7 @@ struct SolverScratch {
   std::vector<Vec6> projected_residual;       ///< Gᵀ yz per body (projected CG residual update).
 
   /// Per body: 1 if its own coupling springs (Eq. 6, Data::body_targets or
-  /// the attached body's target) act this step; their stiffness and damping
+  /// the held body's target) act this step; their stiffness and damping
   /// enter the body's block of A.
   std::vector<std::uint8_t> target_coupled;
 
@@ -130,7 +130,7 @@ struct SolverScratch {
   int coupled_body = -1;     ///< Body whose coupling springs act this step (-1: none).
   bool first_order = false;  ///< coupled_body uses the massless (first-order) model this step.
   /// Per body: 1 if its pose and twist are imposed from the device this step
-  /// (CouplingMode::kDirect: the attached body and every targeted body).
+  /// (CouplingMode::kDirect: the held body and every targeted body).
   std::vector<std::uint8_t> imposed;
 
   /// Sizes every buffer for `model`. Allocates: make_data() only.

@@ -44,7 +44,7 @@ double deepest_of(const core::Data& data, int body, int* count = nullptr) noexce
 /// Axis values that put the device's controlled frame at the held body's initial pose.
 hal::AxisVector initial_axes(const Scene& scene) {
   const auto kin = hal::make_kinematics(scene.device);
-  const int held = scene.model.initial_attached_body;
+  const int held = scene.model.initial_held_body;
   const core::Pose pose = held >= 0
                               ? scene.model.bodies[static_cast<std::size_t>(held)].initial_pose
                               : kin->forward(hal::AxisVector::Zero(kin->num_axes()));
@@ -130,7 +130,7 @@ void AdmittanceRunner::period(std::int64_t deadline_mono_ns, std::int64_t woke_m
   // ---- measurements ----
   RunSummary& s = acc_;
   AdmittanceSummary& a = s.admittance;
-  const int held = data_.attached_body;
+  const int held = data_.held_body;
   hand_pen_ = tool_pen_ = 0.0;
   int tool_contacts = 0;
   const core::Vec3 x_dev = emulator_.pose().position;

@@ -118,7 +118,7 @@ double step_response_speed(const core::Model& model, const core::Data& data, int
 
 void DivergenceMonitor::remember(const core::Data& data) noexcept {
   std::copy(data.bodies.begin(), data.bodies.end(), prev_bodies_.begin());  // same size
-  prev_attached_ = data.attached_body;
+  prev_held_ = data.held_body;
 }
 
 void DivergenceMonitor::rebase(const core::Model& model, const core::Data& data) noexcept {
@@ -166,13 +166,13 @@ bool DivergenceMonitor::observe(const core::Model& model, const core::Data& data
   if (latched_.cause != nullptr) return false;
   // ---- energy against what the hand put in ----
   const bool springs = coupling_springs_act(model);
-  if (prev_attached_ != data.attached_body) {  // the first period, or a new held body: the base
+  if (prev_held_ != data.held_body) {  // the first period, or a new held body: the base
     rebase(model, data);
   } else if (springs) {
     work_in_ += input_work(model, data);
   }
   // ---- speeds against the hand's and gravity's ----
-  const int held = data.attached_body;
+  const int held = data.held_body;
   if (held >= 0) {
     const auto h = static_cast<std::size_t>(held);
     const double r = model.bodies[h].bounding_radius;
@@ -187,7 +187,7 @@ bool DivergenceMonitor::observe(const core::Model& model, const core::Data& data
   }
   // A target that steps (samples held through a link outage, then the hand where it is now)
   // swings the coupling spring: a mass on a spring k stepped by Δ peaks at Δ √(k/m).
-  if (springs && prev_attached_ == data.attached_body) {
+  if (springs && prev_held_ == data.held_body) {
     for (int b = 0; b < model.num_bodies(); ++b) {
       const auto k = static_cast<std::size_t>(b);
       const core::Twist* twist = nullptr;

@@ -32,7 +32,7 @@ bool coupling_springs_act(const core::Model& model) noexcept {
 const core::Pose* coupling_target(const core::Model& model, const core::Data& data, int b,
                                   const core::Twist** twist) noexcept {
   if (!coupling_springs_act(model)) return nullptr;
-  if (b == data.attached_body) {
+  if (b == data.held_body) {
     *twist = &data.target_twist;
     return &data.target;
   }

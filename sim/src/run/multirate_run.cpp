@@ -14,7 +14,7 @@ MultirateRun::MultirateRun(const Scene& scene) : scene_(&scene) {
   const core::MultirateSettings settings{scene.multirate->ratio, scene.multirate->margin_m,
                                          scene.multirate->tools, scene.multirate->fold_step_s};
   god_object_ = std::make_unique<core::MultirateGodObject>(
-      scene.model, scene.model.initial_attached_body, settings);
+      scene.model, scene.model.initial_held_body, settings);
 }
 
 MultirateRun::~MultirateRun() { stop(); }
@@ -23,7 +23,7 @@ void MultirateRun::step(const core::Model& model, core::Data& run_data) noexcept
   (void)model;
   if (!god_object_) return;
   core::MultirateGodObject& m = *god_object_;
-  m.select(run_data.attached_body);  // every held body is one of the tools (parse_multirate)
+  m.select(run_data.held_body);  // every held body is one of the tools (parse_multirate)
   m.take_targets(run_data);
   if (scene_thread_)
     scene_thread_->device_step();

@@ -240,7 +240,7 @@ void SceneRunner::describe_target_thread(std::vector<std::string>& lines) const 
 void SceneRunner::apply_due_events(std::int64_t t_ns) noexcept {
   while (next_event_ < scene_->events.size() &&
          scene_->events[next_event_].time_s * 1e9 <= static_cast<double>(t_ns) + 0.5) {
-    core::set_attached_body(scene_->model, data_, scene_->events[next_event_].body);
+    core::set_held_body(scene_->model, data_, scene_->events[next_event_].body);
     ++next_event_;
   }
 }
@@ -313,7 +313,7 @@ void SceneRunner::count_period(const platform::PeriodReport& report) noexcept {
 }
 
 void SceneRunner::record(const platform::PeriodReport& report, const PeriodContacts& c) noexcept {
-  TraceRecord rec = make_trace_record(data_, data_.attached_body, c.tool_contacts, c.tool_pen,
+  TraceRecord rec = make_trace_record(data_, data_.held_body, c.tool_contacts, c.tool_pen,
                                       c.target_pen, report, loop_.impedance().sent_torques().torque);
   if (const PlantMotion* plant = instrument_.plant()) {
     rec.hand_penetration_mm = c.hand_pen * 1e3;

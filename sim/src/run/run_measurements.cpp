@@ -18,7 +18,7 @@ namespace numen::sim {
 SceneRunner::PeriodContacts SceneRunner::measure_contacts() noexcept {
   const core::Model& model = scene_->model;
   PeriodContacts c;
-  const int held = data_.attached_body;
+  const int held = data_.held_body;
   if (held < 0) return c;
   c.held = true;
   // The tool: every body of the held body's articulation (the held body alone for a rigid
@@ -71,7 +71,7 @@ void SceneRunner::fill_target_inputs(int tree, TargetInputs& in) const noexcept 
   in.body_targets = data_.body_targets;
   if (!in.nodes.empty()) in.nodes = data_.nodes;
   in.target = data_.target;
-  in.held = data_.attached_body;
+  in.held = data_.held_body;
   in.tree = tree;
   in.closed_loop = false;
   if (const PlantMotion* plant = instrument_.plant()) {
@@ -97,7 +97,7 @@ void SceneRunner::track_free_space(const PeriodContacts& c) noexcept {
   // tracking: the error there is the god-object's constraint, not its lag.
   if (!c.held || c.tool_contacts != 0 || c.target_contacts != 0) return;
   const double e =
-      (data_.bodies[static_cast<std::size_t>(data_.attached_body)].position - data_.target.position)
+      (data_.bodies[static_cast<std::size_t>(data_.held_body)].position - data_.target.position)
           .norm();
   free_sq_ += e * e;
   acc_.tracking_error_free_max_mm = std::max(acc_.tracking_error_free_max_mm, e * 1e3);
@@ -163,7 +163,7 @@ void SceneRunner::accumulate_step_figures(const platform::PeriodReport& report,
   s.feedback_torque_max_nm = std::max(s.feedback_torque_max_nm, report.feedback.torque.norm());
   const hal::AxisVector& tau = loop_.impedance().sent_torques().torque;
   if (tau.size() > 0) s.axis_torque_max = std::max(s.axis_torque_max, tau.cwiseAbs().maxCoeff());
-  const int held = data_.attached_body;
+  const int held = data_.held_body;
   const int held_tree = held >= 0 ? model.articulation.body_tree[static_cast<std::size_t>(held)] : -1;
   for (int b = 0; b < model.num_bodies(); ++b)
     if (model.articulation.body_tree[static_cast<std::size_t>(b)] != held_tree)

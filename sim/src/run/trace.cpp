@@ -18,7 +18,7 @@ TraceRecord make_trace_record(const core::Data& data, int held, int tool_contact
                               const hal::AxisVector& axis_torques) noexcept {
   TraceRecord r;
   r.time_s = data.time;
-  r.attached_body = held;
+  r.held_body = held;
   r.frames_read = report.frames_read;
   r.sample_valid = report.sample_valid;
   r.torque_commanded = report.torque_commanded;

@@ -15,8 +15,9 @@ using R = TraceRecord;
 constexpr TraceColumn kColumns[] = {
     {"time_s", "s", "Simulated time after the step",
      [](const R& r, int) noexcept { return r.time_s; }},
+    // The column keeps its earlier name (a contract, docs/outputs.md): the held body's index.
     {"attached_body", "", "Held body index (-1: none)",
-     [](const R& r, int) noexcept { return static_cast<double>(r.attached_body); }},
+     [](const R& r, int) noexcept { return static_cast<double>(r.held_body); }},
     {"frames_read", "", "Frames taken from the bus this period",
      [](const R& r, int) noexcept { return static_cast<double>(r.frames_read); }, false, true},
     {"sample_valid", "", "1: the period's sample was valid",

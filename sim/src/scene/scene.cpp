@@ -379,11 +379,11 @@ Scene load_scene(const std::string& path, const SceneOverrides& overrides) {
     scene.trajectory = parse_trajectory(root, scene.model.dt, dir, scene.warnings);
 
   const std::vector<TomlTable> body_tables = root.tables("body");
-  const TomlTable* attached_table = nullptr;
-  parse_device(root, scene, attached_table, body_tables);
-  if (attached_table && scene.has_trajectory && !attached_table->has("position") &&
-      !attached_table->has("link")) {
-    core::BodyModel& b = scene.model.bodies[static_cast<std::size_t>(scene.model.initial_attached_body)];
+  const TomlTable* held_table = nullptr;
+  parse_device(root, scene, held_table, body_tables);
+  if (held_table && scene.has_trajectory && !held_table->has("position") &&
+      !held_table->has("link")) {
+    core::BodyModel& b = scene.model.bodies[static_cast<std::size_t>(scene.model.initial_held_body)];
     b.initial_pose = first_device_pose(scene);
   }
   parse_articulation(root, body_tables, scene);

@@ -511,17 +511,17 @@ void parse_igtl(const TomlTable& dev, Scene& scene, const hal::DeviceConfig& cfg
   scene.igtl = std::move(t);
 }
 
-void parse_device(const TomlTable& root, Scene& scene, const TomlTable*& body_table_of_attached,
+void parse_device(const TomlTable& root, Scene& scene, const TomlTable*& held_body_table,
                   const std::vector<TomlTable>& body_tables) {
   auto dev = root.table("device");
   if (!dev) {  // a scene stepped by the caller (load_scene() checked SceneOverrides::caller_steps)
     scene.device = hal::make_default_pose_tracker_config();
     scene.device.control_period_s = scene.model.dt;
-    scene.model.initial_attached_body = -1;
-    for (int b = 0; b < scene.model.num_bodies() && scene.model.initial_attached_body < 0; ++b)
+    scene.model.initial_held_body = -1;
+    for (int b = 0; b < scene.model.num_bodies() && scene.model.initial_held_body < 0; ++b)
       if (!scene.model.bodies[static_cast<std::size_t>(b)].anchored)
-        scene.model.initial_attached_body = b;
-    body_table_of_attached = nullptr;
+        scene.model.initial_held_body = b;
+    held_body_table = nullptr;
     scene.warnings.push_back(kNoFeedbackNonHaptic + std::string(" (the scene has no [device]): "
                              "feedback_wrench stays 0; a [device.feedback] table gives it"));
     return;
@@ -642,10 +642,10 @@ void parse_device(const TomlTable& root, Scene& scene, const TomlTable*& body_ta
   parse_plant(*dev, scene, cfg);
   parse_passivity(*dev, scene, cfg);
   parse_igtl(*dev, scene, cfg);
-  scene.model.initial_attached_body = dev->has("attach") ? body_index(*dev, "attach", scene.model) : -1;
-  body_table_of_attached = nullptr;
-  if (scene.model.initial_attached_body >= 0)
-    body_table_of_attached = &body_tables[static_cast<std::size_t>(scene.model.initial_attached_body)];
+  scene.model.initial_held_body = dev->has("attach") ? body_index(*dev, "attach", scene.model) : -1;
+  held_body_table = nullptr;
+  if (scene.model.initial_held_body >= 0)
+    held_body_table = &body_tables[static_cast<std::size_t>(scene.model.initial_held_body)];
   scene.device = std::move(cfg);
 }
 

@@ -18,12 +18,12 @@ namespace numen::sim {
 int body_index(const TomlTable& t, std::string_view key, const core::Model& m);
 
 /// Reads `[device]` of `root` into scene.device, scene.model.feedback, the admittance settings,
-/// scene.trocar_note and scene.model.initial_attached_body (`attach`); `body_table_of_attached`
-/// is then the [[body]] table of the attached body (of `body_tables`, one per body), or null.
+/// scene.trocar_note and scene.model.initial_held_body (`attach`); `held_body_table`
+/// is then the [[body]] table of the held body (of `body_tables`, one per body), or null.
 /// Needs scene.model.dt (the control period) and coupling_mode, the bodies' names and
 /// scene.trajectory (a trocar placed from the approach). Throws InputError (file, line, column,
 /// key) for a missing [device], an unknown key or a bad value.
-void parse_device(const TomlTable& root, Scene& scene, const TomlTable*& body_table_of_attached,
+void parse_device(const TomlTable& root, Scene& scene, const TomlTable*& held_body_table,
                   const std::vector<TomlTable>& body_tables);
 
 }  // namespace numen::sim

@@ -440,7 +440,7 @@ core::Model parse_scene_model(const TomlTable& root, const std::filesystem::path
   parse_bodies(root, m, warnings);
   parse_body_meshes(root, scene_dir, m, warnings);
   parse_obstacles(root, scene_dir, m, warnings);
-  m.initial_attached_body = -1;  // set by the device section (scene.cpp), which finalizes
+  m.initial_held_body = -1;  // set by the device section (scene.cpp), which finalizes
   return m;
 }
 

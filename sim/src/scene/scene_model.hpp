@@ -14,7 +14,7 @@
 namespace numen::sim {
 
 /// Reads the top-level physics keys and tables of `root` into a core::Model
-/// (not yet finalized: the caller sets the attached body, then finalizes). Throws InputError (file, line, column, key). Warnings that do
+/// (not yet finalized: the caller sets the held body, then finalizes). Throws InputError (file, line, column, key). Warnings that do
 /// not stop the load (e.g. damping outside the paper's rule) are appended. Mesh files
 /// (obstacles of type "mesh") are relative to `scene_dir`.
 core::Model parse_scene_model(const TomlTable& root, const std::filesystem::path& scene_dir,

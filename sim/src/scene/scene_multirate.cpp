@@ -39,7 +39,7 @@ void parse_multirate(const TomlTable& root, Scene& scene) {
   m.fold_step_s = table->number_in("fold_step", 1e-6, 10.0, core::MultirateSettings{}.fold_step);
   const core::Model& model = scene.model;
   std::vector<int> bodies;
-  if (model.initial_attached_body >= 0) bodies.push_back(model.initial_attached_body);
+  if (model.initial_held_body >= 0) bodies.push_back(model.initial_held_body);
   for (const AttachEvent& e : scene.events)
     if (e.body >= 0 && std::find(bodies.begin(), bodies.end(), e.body) == bodies.end())
       bodies.push_back(e.body);

@@ -55,7 +55,7 @@ class FreeBodyCase final : public AccuracyCase {
     b.initial_pose.position = target_.position + offset_;
     b.initial_pose.orientation = Quat(Eigen::AngleAxisd(kAngle0, axis_)) * target_.orientation;
     model_.bodies = {b};
-    model_.initial_attached_body = 0;
+    model_.initial_held_body = 0;
   }
 
   double default_horizon() const override { return 1.0; }

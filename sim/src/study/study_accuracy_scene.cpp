@@ -79,7 +79,7 @@ class SceneCase final : public AccuracyCase {
     tight.solver.max_iterations = std::max(tight.solver.max_iterations, 1000);
     const core::Model model = with_scheme(tight, integrator, dt);
     core::Data data = core::make_data(model);
-    data.attached_body = model.initial_attached_body;
+    data.held_body = model.initial_held_body;
     apply_inputs(0.0, 0.0, data);
     place_at_targets(model, data);
     const int nb = model.num_bodies();
@@ -149,11 +149,11 @@ class SceneCase final : public AccuracyCase {
     for (int i = 0; i < model.num_bodies(); ++i) {
       const auto b = static_cast<std::size_t>(i);
       const core::BodyTarget* t = nullptr;
-      core::BodyTarget attached;
-      if (i == d.attached_body) {
-        attached.pose = d.target;
-        attached.twist = d.target_twist;
-        t = &attached;
+      core::BodyTarget held;
+      if (i == d.held_body) {
+        held.pose = d.target;
+        held.twist = d.target_twist;
+        t = &held;
       } else if (d.body_targets[b].enabled) {
         t = &d.body_targets[b];
       }

@@ -47,7 +47,7 @@ class WallCase final : public AccuracyCase {
     wall.name = "wall";
     wall.type = core::ShapeType::kPlane;  // normal +z through the origin
     model_.obstacles = {wall};
-    model_.initial_attached_body = 0;
+    model_.initial_held_body = 0;
   }
 
   double default_horizon() const override { return 1.0; }

@@ -61,7 +61,7 @@ StabilityRow articulation_run(core::Integrator integrator, double h, double rati
   j.frame_parent.position = Vec3(kLever, 0.0, 0.0);
   j.frame_child.position = Vec3(-kLever, 0.0, 0.0);
   base.joints = {j};
-  base.initial_attached_body = 0;
+  base.initial_held_body = 0;
   const core::Model model = study::with_scheme(base, integrator, h, "stability study");
   core::Data data = core::make_data(model);
   data.target.position = Vec3(0.0, 0.02, 0.0);

@@ -50,7 +50,7 @@ StabilityRow teleport_run(core::Integrator integrator, double h, double k_t, boo
   b.coupling.k_r = 1e-3 * k_t / 200.0;
   b.coupling.gamma_r = core::damping_from_ratio(0.85, b.inertia_body(0, 0), b.coupling.k_r);
   base.bodies = {b};
-  base.initial_attached_body = 0;
+  base.initial_held_body = 0;
   if (wall) {
     core::Obstacle plane;
     plane.name = "wall";
@@ -101,7 +101,7 @@ StabilityRow spin_run(core::Integrator integrator, double h, double k_r,
   b.coupling.k_r = k_r;
   b.coupling.gamma_r = core::damping_from_ratio(0.85, 2e-5, k_r);
   base.bodies = {b};
-  base.initial_attached_body = 0;
+  base.initial_held_body = 0;
   const core::Model model = study::with_scheme(base, integrator, h, "stability study");
   core::Data data = core::make_data(model);
   const Vec3 axis = Vec3(1.0, 1.0, 1.0).normalized();
@@ -159,7 +159,7 @@ StabilityRow capacity_run(core::Integrator integrator, double h, const Stability
   plane.name = "floor";
   plane.type = core::ShapeType::kPlane;
   base.obstacles = {plane};
-  base.initial_attached_body = 0;
+  base.initial_held_body = 0;
   const core::Model model = study::with_scheme(base, integrator, h, "stability study");
   core::Data data = core::make_data(model);
   data.target.position = Vec3(0.0, 0.0, kR - kPushZ);

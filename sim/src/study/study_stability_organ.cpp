@@ -37,11 +37,11 @@ core::Model plunge_model(const Scene& scene, double radius, const Vec3& start) {
   int k = -1;
   for (int i = 0; i < s.num_nets() && k < 0; ++i)
     if (s.bodies[static_cast<std::size_t>(s.nets[static_cast<std::size_t>(i)].body)].anchored) k = i;
-  if (k < 0 || s.initial_attached_body < 0)
+  if (k < 0 || s.initial_held_body < 0)
     throw std::invalid_argument("organ-plunge: the scene has no organ (a net on an anchored body) "
                                 "or no held body");
   const core::NetModel& net = s.nets[static_cast<std::size_t>(k)];
-  const core::BodyModel& held = s.bodies[static_cast<std::size_t>(s.initial_attached_body)];
+  const core::BodyModel& held = s.bodies[static_cast<std::size_t>(s.initial_held_body)];
   core::Model m;
   m.dt = s.dt;
   m.gravity = Vec3::Zero();
@@ -61,7 +61,7 @@ core::Model plunge_model(const Scene& scene, double radius, const Vec3& start) {
   anchor.sphere_begin = 0;  // no spheres, in this model's (one-sphere) table
   anchor.mesh = -1;         // the organ is its net and the mesh obstacles below
   m.bodies = {anchor, tool};
-  m.initial_attached_body = 1;
+  m.initial_held_body = 1;
   // The scene's mesh obstacles: the organ's rigid core under its surface (default.toml).
   for (const core::Obstacle& o : s.obstacles) {
     if (o.type != core::ShapeType::kMesh) continue;

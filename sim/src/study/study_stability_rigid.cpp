@@ -60,7 +60,7 @@ StabilityRow coupling_run(core::Integrator integrator, double h, double m, doubl
   b.coupling.gamma_t = core::damping_from_ratio(zeta, m, k);
   b.initial_pose.position = Vec3(kOffset, 0.0, 0.0);
   base.bodies = {b};
-  base.initial_attached_body = 0;
+  base.initial_held_body = 0;
   const core::Model model = study::with_scheme(base, integrator, h, "stability study");
   core::Data data = core::make_data(model);
   data.target = core::Pose{};  // make_data puts the target on the body: pull it back to the origin
@@ -111,7 +111,7 @@ StabilityRow contact_run(core::Integrator integrator, double h, double m, double
   plane.name = "wall";
   plane.type = core::ShapeType::kPlane;  // z < 0 is solid
   base.obstacles = {plane};
-  base.initial_attached_body = 0;
+  base.initial_held_body = 0;
   const core::Model model = study::with_scheme(base, integrator, h, "stability study");
   core::Data data = core::make_data(model);
   data.target.position = Vec3(0.0, 0.0, kRadius - kPush);

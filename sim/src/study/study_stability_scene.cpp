@@ -138,7 +138,7 @@ StabilityRow deformable_run(const Scene& scene, core::Integrator integrator, dou
                             const StabilityLimits& limits, double horizon) {
   core::Model base = scene.model;
   base.gravity = Vec3::Zero();
-  const int held = base.initial_attached_body;
+  const int held = base.initial_held_body;
   // The post: the first capsule. The probe starts 10 cm from its axis (perpendicular to it, on the
   // side where the scene places the probe) and 2 mm off-centre, as the scene's pass; the target
   // then jumps onto the post's axis.

@@ -226,7 +226,7 @@ void IgtlWorldServer::add_events(const platform::StateFrameView& view) {
   const bool bus_down = (h.flags & platform::kFrameBusDown) != 0;
   // The first frame is compared with a fresh device (no fault, no rejection, bus up), holding
   // what it holds.
-  const Last was = last_.seen ? last_ : Last{true, 0, 0, false, h.attached_body};
+  const Last was = last_.seen ? last_ : Last{true, 0, 0, false, h.held_body};
   const auto event = [&](int code, std::int64_t subcode, const std::string& name,
                          const std::string& text) {
     add_status(events_, t, code, subcode, name, text);
@@ -259,19 +259,19 @@ void IgtlWorldServer::add_events(const platform::StateFrameView& view) {
     else
       event(1, 0, "bus up", "the device's bus is back " + at_time(t));
   }
-  if (h.attached_body != was.attached_body) {
+  if (h.held_body != was.held_body) {
     const auto name = [&](std::int32_t b) {
       return b >= 0 && static_cast<std::size_t>(b) < names_.size() ? "'" + names_[static_cast<std::size_t>(b)] + "'"
                                                                    : "body " + std::to_string(b);
     };
     add_string(events_, t,
-               h.attached_body >= 0
-                   ? "the device holds " + name(h.attached_body) + " " + at_time(t)
-                   : "the device released " + name(was.attached_body) + " " + at_time(t));
+               h.held_body >= 0
+                   ? "the device holds " + name(h.held_body) + " " + at_time(t)
+                   : "the device released " + name(was.held_body) + " " + at_time(t));
     ++events_strings_;
     ++counters_.events;
   }
-  last_ = Last{true, h.fault_cause, h.sample_faults, bus_down, h.attached_body};
+  last_ = Last{true, h.fault_cause, h.sample_faults, bus_down, h.held_body};
 }
 
 // Every deformable's POLYDATA at this frame's node positions into `out`.

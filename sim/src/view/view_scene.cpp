@@ -187,7 +187,7 @@ std::string view_scene_message(const Scene& scene, const platform::StateFrameLay
         {"nodes", layout.num_nodes},
         {"axes", layout.num_axes},
         {"max_contacts", layout.max_contacts}}},
-      {"attached_body", m.initial_attached_body},
+      {"attached_body", m.initial_held_body},
       {"bodies", std::move(bodies)},
       {"obstacles", std::move(obstacles)},
       {"nets", std::move(nets)},

@@ -108,7 +108,7 @@ for (const id of ['contacts', 'axes', 'spheres', 'springs', 'net']) {
   toggles[id].onchange = () => { if (S.last) draw(S.last); };  // at once, paused or not
 }
 
-/// The instrument: { position: the attached body's origin, tip: its farthest sphere along its
+/// The instrument: { position: the held body's origin, tip: its farthest sphere along its
 /// spheres' line (else the origin), axis: towards the tip (world) } or null without one.
 function toolInfo(fr = S.last) {
   const b = fr ? fr.h.attached_body : -1;

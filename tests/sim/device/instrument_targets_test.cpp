@@ -45,7 +45,7 @@ TEST(InstrumentTargets, TheTrajectorySampleIsTheTipFortyMillimetresAheadOfTheHel
   const sim::Scene scene = instrument_targets_lattice();
   core::Data data = core::make_data(scene.model);
   const int tube = instrument_targets_body(scene.model, "tube");
-  ASSERT_EQ(data.attached_body, tube);
+  ASSERT_EQ(data.held_body, tube);
   const sim::TrajectorySample tip = scene.trajectory.at(0.0);
   const sim::InstrumentTargets targets(scene);
   targets.set(tip, data);
@@ -117,7 +117,7 @@ spheres = [[0.0, 0.0, 0.0, 0.01]]
   const sim::Scene scene = sim::load_scene(path, caller);
   ASSERT_FALSE(scene.has_device);
   core::Data data = core::make_data(scene.model);
-  ASSERT_EQ(data.attached_body, 0);
+  ASSERT_EQ(data.held_body, 0);
   sim::TrajectorySample s;
   s.pose.position = core::Vec3(0.01, -0.02, 0.03);
   s.pose.orientation = core::Quat(Eigen::AngleAxisd(0.3, core::Vec3::UnitY()));

@@ -254,9 +254,23 @@ def test_an_ambiguous_positional_quaternion_is_refused_and_named_forms_agree():
 def test_set_target_without_a_held_body_is_refused():
     scene = probe_scene()
     data = scene.make_data()
-    data.attached_body = -1
+    data.held_body = -1
     with pytest.raises(ValueError, match="no body is held"):
         data.set_target([0, 0, 0.01], xyzw=[0, 0, 0, 1])
+
+
+def test_attached_body_is_an_alias_of_held_body():
+    scene = probe_scene()
+    data = scene.make_data()
+    probe = scene.model.body_names.index("probe")
+    assert data.attached_body == data.held_body == scene.model.initial_held_body == probe
+    assert scene.model.initial_attached_body == probe
+    data.attached_body = -1
+    assert data.held_body == -1
+    data.held_body = probe
+    assert data.attached_body == probe
+    data.attached_body = 99  # out of range: none, as through held_body (core::set_held_body)
+    assert data.held_body == -1
 
 
 def test_set_targets_at_gives_the_held_tube_its_centre_of_mass_target(scene):
@@ -265,7 +279,7 @@ def test_set_targets_at_gives_the_held_tube_its_centre_of_mass_target(scene):
     data = scene.make_data()
     tip, tip_q, jaw = scene.target_at(0.0)
     data.set_targets_at(0.0)
-    assert scene.model.body_names[data.attached_body] == "tube"
+    assert scene.model.body_names[data.held_body] == "tube"
     # The tube's centre of mass is 40 mm behind the tip along the shaft; the recorded
     # orientation (with the surgeon's wrist) is 16.5° off the shaft through the trocar.
     offset = tip - data.target_position
@@ -281,7 +295,7 @@ def test_set_targets_at_gives_the_held_tube_its_centre_of_mass_target(scene):
         data.set_targets_at()
         data.step(scene)
     assert data.status == 0 and data.invalid_target_steps == 0
-    tube = data.attached_body
+    tube = data.held_body
     assert np.linalg.norm(data.body_positions[tube] - data.target_position) < 0.005
 
 

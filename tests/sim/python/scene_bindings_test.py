@@ -64,7 +64,7 @@ def test_a_library_scene_needs_no_trajectory_and_run_scene_refuses_it():
     scene = numen.load_scene(path)
     assert not scene.has_trajectory and scene.has_device
     assert scene.warnings == []
-    assert scene.model.body_names[scene.model.initial_attached_body] == "probe"
+    assert scene.model.body_names[scene.model.initial_held_body] == "probe"
     assert scene.model.obstacle_names == ["box"]
     with pytest.raises(numen.InputError) as info:
         scene.target_at(0.0)
@@ -84,7 +84,7 @@ def test_a_scene_without_device_or_feedback_says_so(tmp_path):
     assert scene.warnings == ["no feedback: non-haptic device (the scene has no [device]): "
                               "feedback_wrench stays 0; a [device.feedback] table gives it"]
     data = scene.make_data()
-    assert data.attached_body == 0
+    assert data.held_body == 0
     data.set_target([0.0, 0.0, 0.01], xyzw=[0, 0, 0, 1])
     data.step(scene)
     assert data.coupling_wrench[2] > 0 and np.all(data.feedback_wrench == 0)

@@ -157,7 +157,7 @@ TEST(AdmittanceScene, RecordsTheHandAsGhostAndTheMeasuredWrench) {
   numen::platform::StateFrameView v;
   ASSERT_TRUE(numen::platform::StateFrameDecoder::decode(bytes, v).ok());
   EXPECT_EQ(v.header().period, 2699u);
-  const auto held = static_cast<std::uint32_t>(v.header().attached_body);
+  const auto held = static_cast<std::uint32_t>(v.header().held_body);
   float ghost[7], wrench[6];
   ASSERT_TRUE(v.target_pose(held, ghost));
   for (int i = 0; i < 3; ++i) EXPECT_NEAR(ghost[i], r.hand_pose().position[i], 1e-6);

@@ -96,7 +96,7 @@ TEST(RunBadBus, CorruptedAndLostFramesAreRejectedWithoutHarm) {
   }
   EXPECT_EQ(torque_after_fault, 0);
   // Positions stay near the recorded workspace (no wild jump from a bad frame).
-  const Vec3 p = runner.data().bodies[static_cast<std::size_t>(runner.data().attached_body)].position;
+  const Vec3 p = runner.data().bodies[static_cast<std::size_t>(runner.data().held_body)].position;
   EXPECT_TRUE(p.allFinite());
   EXPECT_LT((p - runner.data().target.position).norm(), 0.05);
 }
@@ -117,7 +117,7 @@ TEST(RunBusLog, RecordedRunReplaysBitIdentically) {
     SceneRunner runner(scene, 0, bus);
     for (int k = 0; k < kPeriods; ++k) {
       runner.period();
-      recorded.push_back(runner.data().bodies[static_cast<std::size_t>(std::max(0, runner.data().attached_body))].position);
+      recorded.push_back(runner.data().bodies[static_cast<std::size_t>(std::max(0, runner.data().held_body))].position);
     }
     const RunSummary s = runner.summary();
     EXPECT_EQ(s.bus_record_dropped, 0);
@@ -129,7 +129,7 @@ TEST(RunBusLog, RecordedRunReplaysBitIdentically) {
   SceneRunner runner(scene, 0, bus);
   for (int k = 0; k < kPeriods; ++k) {
     runner.period();
-    replayed.push_back(runner.data().bodies[static_cast<std::size_t>(std::max(0, runner.data().attached_body))].position);
+    replayed.push_back(runner.data().bodies[static_cast<std::size_t>(std::max(0, runner.data().held_body))].position);
   }
   const RunSummary s = runner.summary();
   EXPECT_GT(s.bus_frames_replayed, kPeriods);

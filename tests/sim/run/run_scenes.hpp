@@ -66,7 +66,7 @@ inline bool same_bits(const numen::core::Quat& a, const numen::core::Quat& b) {
 
 /// Every field of two trace records, bit for bit, except the wall-clock step time.
 inline bool same_record(const TraceRecord& a, const TraceRecord& b) {
-  bool same = same_bits(a.time_s, b.time_s) && a.attached_body == b.attached_body &&
+  bool same = same_bits(a.time_s, b.time_s) && a.held_body == b.held_body &&
               a.sample_valid == b.sample_valid && same_bits(a.target.position, b.target.position) &&
               same_bits(a.target.orientation, b.target.orientation) &&
               same_bits(a.tool.position, b.tool.position) &&

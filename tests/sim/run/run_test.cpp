@@ -127,7 +127,7 @@ TEST(RunLatticeScene, GodObjectStaysOnTheSurfaceWhileTheHandGoesThrough) {
     ASSERT_TRUE(all_finite(r)) << "period " << i;
     ASSERT_LE(r.feedback.force.norm(), scene.model.feedback.max_force + 1e-9) << "period " << i;
     ASSERT_NEAR(r.time_s, static_cast<double>(i + 1) * scene.model.dt, 1e-9);
-    ASSERT_EQ(r.attached_body, scene.model.initial_attached_body);
+    ASSERT_EQ(r.held_body, scene.model.initial_held_body);
     ASSERT_EQ(r.num_axes, 5);
     deepest_target = std::max(deepest_target, r.target_penetration_mm);
   }
@@ -212,7 +212,7 @@ TEST(RunLatticeScene, NoJumpAtStart) {
   const Scene& scene = lattice_scene();
   SceneRunner runner(scene);
   runner.period();
-  const auto held0 = static_cast<std::size_t>(runner.data().attached_body);
+  const auto held0 = static_cast<std::size_t>(runner.data().held_body);
   const numen::core::Vec3 start = runner.data().bodies[held0].position;
   const numen::core::Quat start_q = runner.data().bodies[held0].orientation;
   EXPECT_FALSE(runner.device().last_sample().valid);
@@ -222,7 +222,7 @@ TEST(RunLatticeScene, NoJumpAtStart) {
   }
   const auto& d = runner.data();
   ASSERT_TRUE(runner.device().last_sample().valid);
-  const auto held = static_cast<std::size_t>(d.attached_body);
+  const auto held = static_cast<std::size_t>(d.held_body);
   const double gap = (d.bodies[held].position - d.target.position).norm();
   const double tilt = d.bodies[held].orientation.angularDistance(d.target.orientation);
   const double hand = (d.target.position - start).norm();
@@ -373,12 +373,12 @@ TEST(RunConstructionScene, DirectCouplingPenetratesTenTimesMoreThanTheGodObject)
   ASSERT_GE(loose_1, 0);
   for (std::size_t i = 0; i < rec.size(); ++i) {
     const double t_start = static_cast<double>(i) * god_scene.model.dt;  // period i starts at i·dt
-    const int expected = t_start < 5.7 - 1e-9 ? god_scene.model.initial_attached_body
+    const int expected = t_start < 5.7 - 1e-9 ? god_scene.model.initial_held_body
                          : t_start < 7.2 - 1e-9 ? -1
                                                 : loose_1;
-    ASSERT_EQ(rec[i].attached_body, expected) << "period " << i << " (t = " << t_start << " s)";
+    ASSERT_EQ(rec[i].held_body, expected) << "period " << i << " (t = " << t_start << " s)";
   }
-  EXPECT_EQ(god.data().attached_body, loose_1);
+  EXPECT_EQ(god.data().held_body, loose_1);
 }
 
 // Issue 17, defect 4: direct coupling on the default scene reported "nan detected: YES" for its

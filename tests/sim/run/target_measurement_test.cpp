@@ -27,7 +27,7 @@ numen::sim::TargetInputs probe_pressed_in(const numen::sim::Scene& scene, double
   numen::sim::TargetInputs in = numen::sim::make_target_inputs(scene.model);
   in.bodies = data.bodies;
   in.body_targets = data.body_targets;
-  in.held = data.attached_body;
+  in.held = data.held_body;
   in.tree = scene.model.articulation.body_tree[static_cast<std::size_t>(in.held)];
   in.target.position = numen::core::Vec3(-0.02, 0.0, 0.055 - depth);
   in.target.orientation = data.bodies[static_cast<std::size_t>(in.held)].orientation;

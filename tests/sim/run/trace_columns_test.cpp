@@ -36,7 +36,7 @@ TraceRecord distinct_record() {
   double v = 0.0;
   const auto next = [&v] { return v += 0.125; };
   r.time_s = next();
-  r.attached_body = 2;
+  r.held_body = 2;
   r.frames_read = 7;
   r.sample_valid = true;
   r.torque_commanded = true;

@@ -39,7 +39,7 @@ using numen::test::split_csv;
 TraceRecord record(int i) {
   TraceRecord r;
   r.time_s = 0.001 * (i + 1);
-  r.attached_body = i % 2;
+  r.held_body = i % 2;
   r.sample_valid = i != 1;
   r.target.position = Vec3(0.1 * i, 0.2, -0.3);
   r.tool.position = Vec3(0.1 * i, 0.2, -0.25);
@@ -91,7 +91,7 @@ TEST(Trace, WriteCsvHasAHeaderAndOneRowPerRecord) {
     ASSERT_EQ(row.size(), header.size()) << "row " << i;
     const TraceRecord r = record(i);
     EXPECT_DOUBLE_EQ(std::stod(row[static_cast<std::size_t>(column(header, "time_s"))]), r.time_s);
-    EXPECT_EQ(std::stoi(row[static_cast<std::size_t>(column(header, "attached_body"))]), r.attached_body);
+    EXPECT_EQ(std::stoi(row[static_cast<std::size_t>(column(header, "attached_body"))]), r.held_body);
     EXPECT_EQ(std::stoi(row[static_cast<std::size_t>(column(header, "sample_valid"))]), r.sample_valid ? 1 : 0);
     EXPECT_DOUBLE_EQ(std::stod(row[static_cast<std::size_t>(column(header, "target_x"))]), r.target.position.x());
     EXPECT_DOUBLE_EQ(std::stod(row[static_cast<std::size_t>(column(header, "tool_z"))]), r.tool.position.z());
@@ -238,7 +238,7 @@ TEST(Trace, MakeTraceRecordReadsTheStateAfterTheStep) {
 
   const TraceRecord r = numen::sim::make_trace_record(data, 1, 2, 0.0015, 0.012, report, tau);
   EXPECT_EQ(r.time_s, 0.123);
-  EXPECT_EQ(r.attached_body, 1);
+  EXPECT_EQ(r.held_body, 1);
   EXPECT_TRUE(r.sample_valid);
   EXPECT_EQ(r.tool.position, data.bodies[1].position);
   EXPECT_TRUE(r.tool.orientation.isApprox(data.bodies[1].orientation));
@@ -256,7 +256,7 @@ TEST(Trace, MakeTraceRecordReadsTheStateAfterTheStep) {
 
   // No body held: the tool pose is the zero pose.
   const TraceRecord none = numen::sim::make_trace_record(data, -1, 0, 0.0, 0.0, report, tau);
-  EXPECT_EQ(none.attached_body, -1);
+  EXPECT_EQ(none.held_body, -1);
   EXPECT_EQ(none.tool.position, Vec3::Zero());
 }
 

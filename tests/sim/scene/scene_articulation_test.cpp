@@ -283,7 +283,7 @@ TEST(SceneArticulation, LinkedBodiesWithoutPositionStartAtTheirLinkPose) {
     EXPECT_LT((got.position - p).norm(), 1e-12) << s.model.bodies[static_cast<std::size_t>(b)].name;
     EXPECT_LT(angle_between(got.orientation, r), 1e-9) << s.model.bodies[static_cast<std::size_t>(b)].name;
   }
-  // The tube (attached, link "tube", offset −40 mm): the tip is 40 mm ahead.
+  // The tube (held, link "tube", offset −40 mm): the tip is 40 mm ahead.
   const Pose& tube = s.model.bodies[1].initial_pose;
   EXPECT_LT((tube.position + tube.orientation * Vec3(0.0, 0.0, 0.04) - s.trajectory[0].pose.position).norm(), 1e-9);
   // The sleeve starts at the trocar point.
@@ -292,9 +292,9 @@ TEST(SceneArticulation, LinkedBodiesWithoutPositionStartAtTheirLinkPose) {
   EXPECT_EQ(s.model.bodies[4].initial_pose.position, Vec3(0.3, 0.2, 0.1));
 }
 
-TEST(SceneArticulation, AnUnboundAttachedBodyKeepsTheRigidLinkZeroBinding) {
+TEST(SceneArticulation, AnUnboundHeldBodyKeepsTheRigidLinkZeroBinding) {
   TempDir dir;
-  // The tube has no link: the others are bound, and link 0 drives the attached body.
+  // The tube has no link: the others are bound, and link 0 drives the held body.
   std::string text = replace(art_scene(), "link = \"tube\"\nlink_offset = { position = [0.0, 0.0, -0.04] }\n", "");
   const Scene s = load_text(dir, text);
   ASSERT_EQ(s.binding.links.size(), 5u);

@@ -88,7 +88,7 @@ TEST(DeformableShippedScene, ProbeIsACapsuleNetOnAHiddenCore) {
   ASSERT_GE(core, 0);
   EXPECT_EQ(net.body, core);
   EXPECT_EQ(m.bodies[static_cast<std::size_t>(core)].sphere_count, 0) << "the rigid core is hidden";
-  EXPECT_EQ(m.initial_attached_body, core);
+  EXPECT_EQ(m.initial_held_body, core);
   EXPECT_EQ(m.material_names[static_cast<std::size_t>(net.material)], "silicone");
 
   // Capsule r = 6 mm, h = 14 mm, 16 segments, 4 rings per hemisphere, and

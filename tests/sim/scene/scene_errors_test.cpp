@@ -418,7 +418,7 @@ TEST(SceneErrors, MissingDevice) {
   const Scene s = load_scene((dir.path() / "bad.toml").string(), caller);
   EXPECT_FALSE(s.has_device);
   EXPECT_TRUE(s.has_trajectory);
-  EXPECT_EQ(s.model.initial_attached_body, 0);  // the first body that is not anchored
+  EXPECT_EQ(s.model.initial_held_body, 0);  // the first body that is not anchored
   EXPECT_EQ(s.model.feedback.k_t, 0.0);
   ASSERT_EQ(s.run_missing.size(), 1u);
   EXPECT_STREQ(s.run_missing[0].what(), e.what());
@@ -453,7 +453,7 @@ TEST(SceneErrors, MissingTrajectory) {
   EXPECT_TRUE(s.has_device);
   EXPECT_TRUE(s.trajectory.empty());
   EXPECT_EQ(s.duration_s, 0.0);
-  EXPECT_EQ(s.model.initial_attached_body, 0);
+  EXPECT_EQ(s.model.initial_held_body, 0);
   ASSERT_EQ(s.run_missing.size(), 1u);
   EXPECT_STREQ(s.run_missing[0].what(), e.what());
   EXPECT_THROW(numen::sim::require_runnable(s), InputError);

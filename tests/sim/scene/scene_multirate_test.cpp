@@ -138,7 +138,7 @@ TEST(SceneMultirate, AnArticulatedToolIsOneGodObject) {
   EXPECT_EQ(device.num_bodies(), 4);
   EXPECT_EQ(device.num_joints(), 4);
   EXPECT_TRUE(device.obstacles.empty());
-  EXPECT_EQ(device.bodies[static_cast<std::size_t>(device.initial_attached_body)].name,
+  EXPECT_EQ(device.bodies[static_cast<std::size_t>(device.initial_held_body)].name,
             s.model.bodies[static_cast<std::size_t>(s.multirate->tools[0])].name);
 }
 

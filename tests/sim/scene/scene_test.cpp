@@ -77,7 +77,7 @@ TEST(Scene, LatticeSceneLoadsWhatItsFileDescribes) {
   EXPECT_EQ(s.model.bodies[1].name, "tube");
   EXPECT_EQ(s.model.bodies[1].sphere_count, 30);  // [[body.sphere_line]] count = 30
   EXPECT_DOUBLE_EQ(s.model.bodies[1].mass, 0.05);
-  EXPECT_EQ(s.model.initial_attached_body, 1);
+  EXPECT_EQ(s.model.initial_held_body, 1);
   ASSERT_EQ(s.model.num_joints(), 4);
   EXPECT_EQ(s.model.joints[0].type, numen::core::JointType::kSpherical);
   EXPECT_EQ(s.model.joints[0].parent, -1);
@@ -163,8 +163,8 @@ TEST(Scene, ConstructionSceneLoadsWhatItsFileDescribes) {
   EXPECT_EQ(s.model.gravity, Vec3(0.0, 0.0, -9.81));
   EXPECT_EQ(s.device.kind, numen::hal::DeviceKind::kPoseTracker);
   EXPECT_EQ(s.device.axes.size(), 6u);
-  ASSERT_GE(s.model.initial_attached_body, 0);
-  EXPECT_EQ(s.model.bodies[static_cast<std::size_t>(s.model.initial_attached_body)].name, "held");
+  ASSERT_GE(s.model.initial_held_body, 0);
+  EXPECT_EQ(s.model.bodies[static_cast<std::size_t>(s.model.initial_held_body)].name, "held");
   EXPECT_DOUBLE_EQ(s.duration_s, 9.0);
   // Segments: 0.5 + 1 + 0.4 + 1 + 1.5 + 1 + 0.3 + 1.5 + 1 + 0.8 = 9 s.
   EXPECT_NEAR(s.trajectory.duration(), 9.0, 1e-9);
@@ -176,17 +176,17 @@ TEST(Scene, ConstructionSceneLoadsWhatItsFileDescribes) {
   EXPECT_EQ(s.model.bodies[static_cast<std::size_t>(s.events[1].body)].name, "loose_1");
   EXPECT_TRUE(s.trocar_note.empty());
   // The held block starts where the hand starts.
-  const Vec3 p0 = s.model.bodies[static_cast<std::size_t>(s.model.initial_attached_body)].initial_pose.position;
+  const Vec3 p0 = s.model.bodies[static_cast<std::size_t>(s.model.initial_held_body)].initial_pose.position;
   EXPECT_LT((p0 - s.trajectory[0].pose.position).norm(), 1e-12);
 }
 
-TEST(Scene, AttachedBodyStartsAtTheDevicesFirstTarget) {
+TEST(Scene, HeldBodyStartsAtTheDevicesFirstTarget) {
   NUMEN_REQUIRE_ARTICULATION();
   // Lattice scene (the default scene's instrument): the instrument's position is omitted, so it
   // starts at the device's first controlled pose (no jump at start).
   const Scene s = load_scene(numen::test::lattice_scene_path());
   const numen::core::Pose initial =
-      s.model.bodies[static_cast<std::size_t>(s.model.initial_attached_body)].initial_pose;
+      s.model.bodies[static_cast<std::size_t>(s.model.initial_held_body)].initial_pose;
   const numen::sim::SimulatedInstrument inst(s.device, s.trajectory);
   const numen::core::Pose first = inst.controlled_pose_at(0);
   EXPECT_LT((initial.position - first.position).norm(), 1e-12);
@@ -202,7 +202,7 @@ TEST(Scene, AttachedBodyStartsAtTheDevicesFirstTarget) {
   // Construction scene: the pose tracker reports the hand pose itself.
   const Scene c = load_scene(shipped_construction_path());
   const numen::sim::SimulatedInstrument hand(c.device, c.trajectory);
-  const auto& held = c.model.bodies[static_cast<std::size_t>(c.model.initial_attached_body)];
+  const auto& held = c.model.bodies[static_cast<std::size_t>(c.model.initial_held_body)];
   EXPECT_LT((held.initial_pose.position - hand.controlled_pose_at(0).position).norm(), 1e-9);
   EXPECT_LT(angle_between(held.initial_pose.orientation, hand.controlled_pose_at(0).orientation), 1e-9);
 }

@@ -201,7 +201,7 @@ TEST(StudyStability, StoredEnergyMatchesClosedForm) {
   b.coupling.gamma_t = 5.0;
   b.coupling.k_r = 3.0;
   m.bodies = {b};
-  m.initial_attached_body = 0;
+  m.initial_held_body = 0;
   ASSERT_EQ(core::finalize_model(m), "");
   core::Data d = core::make_data(m);
   d.bodies[0].linear_velocity = Vec3(1.0, 0.0, 0.0);

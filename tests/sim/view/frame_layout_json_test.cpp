@@ -111,7 +111,7 @@ TEST(FrameLayoutJson, AFrameDecodedFromTheJsonReadsWhatTheViewReads) {
       {"num_nodes", h.num_nodes},
       {"num_contacts", h.num_contacts},
       {"num_axes", h.num_axes},
-      {"attached_body", h.attached_body},
+      {"attached_body", h.held_body},
       {"period", static_cast<std::int64_t>(h.period)},
       {"time_ns", h.time_ns},
       {"step_status", h.step_status},

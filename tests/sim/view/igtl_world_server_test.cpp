@@ -327,7 +327,7 @@ TEST(IgtlWorldServer, FaultsRejectionsTheBusAndGraspsAreStatusAndStringMessages)
   numen::test::IgtlTestReader early(server.port());
   const numen::platform::StateFrameLayout layout = numen::sim::view_frame_layout(scene);
   numen::core::Data data = numen::core::make_data(scene.model);
-  const int held = data.attached_body;
+  const int held = data.held_body;
   ASSERT_EQ(held, 0);
   using numen::hal::FaultCause;
   using numen::hal::SampleFault;
@@ -335,7 +335,7 @@ TEST(IgtlWorldServer, FaultsRejectionsTheBusAndGraspsAreStatusAndStringMessages)
     numen::hal::FaultMask sample_faults;
     bool bus_down;
     FaultCause cause;
-    int attached;
+    int held;
   };
   const std::vector<Step> steps{
       {SampleFault::kNoData, false, FaultCause::kNone, 0},   // start: no sample yet (no event)
@@ -349,7 +349,7 @@ TEST(IgtlWorldServer, FaultsRejectionsTheBusAndGraspsAreStatusAndStringMessages)
   std::unique_ptr<numen::test::IgtlTestReader> late;
   for (std::size_t k = 0; k < steps.size(); ++k) {
     data.time = 0.01 * static_cast<double>(k);
-    data.attached_body = steps[k].attached;
+    data.held_body = steps[k].held;
     numen::platform::PeriodReport report;
     report.sample_faults = steps[k].sample_faults;
     report.fault_cause = steps[k].cause;

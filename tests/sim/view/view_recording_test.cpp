@@ -82,7 +82,7 @@ TEST(ViewRecording, ARunRecordsEveryDueFrameInOrder) {
   ASSERT_TRUE(numen::platform::StateFrameDecoder::decode(frame, view).ok());
   // The last frame's tool pose is finite and where a 0.5 s run of the default scene has it.
   float pose[7];
-  view.body_pose(static_cast<std::uint32_t>(view.header().attached_body), pose);
+  view.body_pose(static_cast<std::uint32_t>(view.header().held_body), pose);
   for (float v : pose) EXPECT_TRUE(std::isfinite(v));
 }
 

@@ -3,15 +3,15 @@
 /// Coupling of the god-object to the device target (paper Eq. 2, §3, Fig. 5):
 ///   F = k_t (x_t − x) + γ_t (v_t − v),
 ///   T = k_r θu + γ_r (ω_t − ω),   θu = shortest-arc angle-axis of q_t q⁻¹,
-/// a zero-length damped spring pair acting at the COM of the attached body
-/// (Data::attached_body, Data::target; gains BodyModel::coupling) and, for an
+/// a zero-length damped spring pair acting at the COM of the held body
+/// (Data::held_body, Data::target; gains BodyModel::coupling) and, for an
 /// articulated tool, of every body with its own enabled target
 /// (Data::body_targets, paper Eq. 6: one spring per body; bodies without a
 /// target are left to the simulation). Modes
 /// (Model::coupling_mode): kGodObject (this wrench on a body with mass),
 /// kFirstOrder (massless limit, handled by the integrator), kDirect (pose and
 /// twist imposed: impose_direct_target()), kAdmittance (no spring: the measured
-/// device wrench Data::device_wrench on the attached body, apply_device_wrench()).
+/// device wrench Data::device_wrench on the held body, apply_device_wrench()).
 
 #include "numen/core/types.hpp"
 
@@ -44,7 +44,7 @@ bool target_is_finite(const Pose& target, const Twist& target_twist) noexcept;
 bool first_order_applicable(const CouplingGains& gains) noexcept;
 
 /// Imposes every anchored body (BodyModel::anchored) at its initial pose with a zero twist,
-/// in every coupling mode; then, in kDirect only, imposes x, q, v, ω of the attached
+/// in every coupling mode; then, in kDirect only, imposes x, q, v, ω of the held
 /// body := Data::target / target_twist, and of every other body with an
 /// enabled Data::body_targets entry := that target (q normalised), and marks
 /// them in SolverScratch::imposed, i.e. moving bodies of infinite mass for the
@@ -56,19 +56,19 @@ bool first_order_applicable(const CouplingGains& gains) noexcept;
 /// Call before detect_contacts() so that contacts see the imposed pose.
 void impose_direct_target(const Model& model, Data& data) noexcept;
 
-/// kAdmittance only (no-op otherwise, and without an attached body): adds Data::device_wrench
-/// (world; N at, N·m about, the attached body's COM) to the attached body's explicit wrench
+/// kAdmittance only (no-op otherwise, and without a held body): adds Data::device_wrench
+/// (world; N at, N·m about, the held body's COM) to the held body's explicit wrench
 /// and copies it to Data::coupling_wrench (the wrench that drives the god-object). A
 /// non-finite device wrench is ignored for the step and sets kInvalidTarget. Called by
 /// apply_coupling().
 void apply_device_wrench(const Model& model, Data& data) noexcept;
 
 /// Coupling stage (Eq. 2, Eq. 6): computes Data::coupling_wrench for the
-/// attached body and adds it to body_wrench, adds the springs of every other
+/// held body and adds it to body_wrench, adds the springs of every other
 /// body with an enabled Data::body_targets entry (always second order), and
 /// records in Data::solver which bodies are coupled (target_coupled,
-/// coupled_body) and whether the attached one is first order (first_order).
-/// Nothing in kDirect mode; in kAdmittance the attached body gets apply_device_wrench()
+/// coupled_body) and whether the held one is first order (first_order).
+/// Nothing in kDirect mode; in kAdmittance the held body gets apply_device_wrench()
 /// instead of the spring (the other bodies' Eq. 6 springs are kept); a body whose target is not finite gets no spring
 /// this step and kInvalidTarget is set in Data::status. Call after
 /// apply_external_forces().

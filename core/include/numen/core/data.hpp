@@ -115,18 +115,18 @@ struct Data {
   std::vector<NodeState> nodes;    ///< Net nodes, size Model::num_nodes() (net_state.hpp).
 
   // ---- inputs (written by the caller before step) ----
-  int attached_body = -1;          ///< Body the device drives; -1: none (tool switching).
-  Pose target;                     ///< Device target pose of the attached body's COM frame (world).
+  int held_body = -1;              ///< Body the device drives; -1: none (tool switching).
+  Pose target;                     ///< Device target pose of the held body's COM frame (world).
   Twist target_twist;              ///< Device target twist (world).
   std::vector<Wrench> applied_wrench;  ///< Per body, world, at the COM (N, N·m): explicit external wrench.
   /// CouplingMode::kAdmittance only: the wrench the user applies to the device, as measured by
-  /// its force/torque sensor, carried to the attached body (world frame; N at, and N·m about,
-  /// the attached body's COM). Added to the attached body as an explicit external wrench in both
+  /// its force/torque sensor, carried to the held body (world frame; N at, and N·m about,
+  /// the held body's COM). Added to the held body as an explicit external wrench in both
   /// integrators (no spring, no Jacobian term). A non-finite value is ignored for the step
   /// (kInvalidTarget). Ignored in the other modes.
   Wrench device_wrench;
-  /// Per body: its own device target (Eq. 6) besides the attached body's
-  /// `target`. An enabled entry of the attached body itself is ignored.
+  /// Per body: its own device target (Eq. 6) besides the held body's
+  /// `target`. An enabled entry of the held body itself is ignored.
   std::vector<BodyTarget> body_targets;
   /// Per body, ≥ 0: the device whose feedback the body's Eq. 8 wrench is (compute_feedback()):
   /// with a body held, the wrenches of one group's bodies are saturated as one composite (their
@@ -150,9 +150,9 @@ struct Data {
   /// (SolverSettings::contact_max_omega_dt; they act with k_eff < k, so penetrate more).
   int contacts_clamped = 0;
   std::int64_t contact_clamped_steps = 0;  ///< Steps with a clamped contact since reset.
-  Wrench coupling_wrench;          ///< Coupling (Eq. 2) on the attached body, at its COM.
-  /// Device feedback, world, about the attached body's target point: Eq. 8 of
-  /// the attached body plus, by Eq. 9, every other targeted body's Eq. 8
+  Wrench coupling_wrench;                  ///< Coupling (Eq. 2) on the held body, at its COM.
+  /// Device feedback, world, about the held body's target point: Eq. 8 of
+  /// the held body plus, by Eq. 9, every other targeted body's Eq. 8
   /// wrench carried to that point. Saturated. Held at the last step's value in a
   /// step whose held body's target is not finite (kInvalidTarget; compute_feedback()).
   Wrench feedback_wrench;
@@ -209,7 +209,7 @@ struct Data {
 Data make_data(const Model& model);
 
 /// Puts every body back at its initial pose and twist, clears inputs, outputs
-/// and counters; attaches the device to Model::initial_attached_body.
+/// and counters; the device holds Model::initial_held_body.
 /// No allocation.
 void reset_data(const Model& model, Data& data) noexcept;
 

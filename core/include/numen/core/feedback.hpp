@@ -34,16 +34,16 @@ Wrench feedback_wrench_unsaturated(const FeedbackGains& gains, const Pose& targe
 /// `to`: force unchanged, torque + (from − to) × force. World frame, m, N, N·m.
 Wrench carry_wrench(const Wrench& w, const Vec3& from, const Vec3& to) noexcept;
 
-/// Feedback stage, after integration. For the attached body (target
+/// Feedback stage, after integration. For the held body (target
 /// Data::target) and every body with its own enabled target (Eq. 6,
 /// Data::body_targets): Data::body_feedback[i] = Eq. 8 about that body's
-/// target point. Data::feedback_wrench = Σ of these carried to the attached
+/// target point. Data::feedback_wrench = Σ of these carried to the held
 /// body's target point (Eq. 9: a child's feedback carried to its parent, up
 /// to the held body), saturated by one ratio r = min(F_max/|F|, T_max/|T|, 1)
 /// that also scales every per-body wrench, so that the per-body wrenches
 /// carried to that point sum to the composite exactly. When no body is
-/// attached the composite is zero and each per-body wrench is saturated on its
-/// own. When the attached body's target is not finite (kInvalidTarget) the
+/// held the composite is zero and each per-body wrench is saturated on its
+/// own. When the held body's target is not finite (kInvalidTarget) the
 /// composite and the per-body wrenches keep the values of the last step (a
 /// hold, not a drop to zero: docs/safety.md "Invalid targets"). All zero in
 /// CouplingMode::kDirect and kAdmittance.

@@ -40,11 +40,11 @@ void integrate(const Model& model, Data& data) noexcept;
 /// Symplectic (semi-implicit) Euler, the explicit baseline (paper §5):
 ///   v1 = v0 + h F/m,  ω1 = ω0 + h I_w⁻¹ (T − ω0 × I_w ω0),
 ///   x1 = x0 + h v1,   q1 = exp(½ h ω1) ⊗ q0.
-/// kFirstOrder attached body (γ_t, γ_r > 0): v1 = v_t + (k_t e + F_other)/γ_t,
+/// kFirstOrder held body (γ_t, γ_r > 0): v1 = v_t + (k_t e + F_other)/γ_t,
 /// ω1 = ω_t + (k_r θu + T_other)/γ_r (massless limit of Eq. 2, explicit;
 /// F_other, T_other: every other force on the body — gravity, applied
 /// wrench, contacts; stable for h k/γ < 2).
-/// kDirect attached body: left at the imposed target. Sets solver_iterations
+/// kDirect held body: left at the imposed target. Sets solver_iterations
 /// and solver_residual to 0. Conditionally stable: h √(k/m) < 2.
 void integrate_symplectic_euler(const Model& model, Data& data) noexcept;
 

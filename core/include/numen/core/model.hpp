@@ -41,13 +41,13 @@ enum class Integrator : std::uint8_t {
   kTrBdf2,
 };
 
-/// How the attached body follows the device target (paper §3, Fig. 5, footnote).
+/// How the held body follows the device target (paper §3, Fig. 5, footnote).
 enum class CouplingMode : std::uint8_t {
   kGodObject,   ///< Second order: damped springs of Eq. 2 on a body with mass (the paper's method).
   kFirstOrder,  ///< Massless limit of Eq. 2: γ(v_t − v) + k e + F_ext = 0, i.e. velocity
                 ///< proportional to the error (the paper's footnote).
   kDirect,      ///< Pose and twist imposed from the device (paper Fig. 5): no god-object.
-  kAdmittance,  ///< Admittance device (paper Fig. 2 note): no coupling spring; the attached
+  kAdmittance,  ///< Admittance device (paper Fig. 2 note): no coupling spring; the held
                 ///< body is driven by the force the user applies to the device
                 ///< (Data::device_wrench, explicit external wrench) and the device is
                 ///< commanded the body's pose. No feedback wrench (docs/dynamics.md).
@@ -90,7 +90,7 @@ struct BodyModel {
   int sphere_begin = 0;                     ///< First sphere in Model::body_spheres.
   int sphere_count = 0;                     ///< Number of spheres (0: the body never collides).
   int material = 0;                         ///< Index into the material table.
-  CouplingGains coupling;                   ///< Used while the device is attached to this body.
+  CouplingGains coupling;                   ///< Used while the device holds this body.
   Pose initial_pose;                        ///< World pose of the COM frame at reset.
   Twist initial_twist;                      ///< World twist at reset.
   double bounding_radius = 0.0;             ///< Derived: max |c| + r over its spheres (m).
@@ -266,7 +266,7 @@ struct Model {
   std::vector<MaterialPair> material_pairs; ///< num_materials², symmetric, row-major.
 
   FeedbackGains feedback;          ///< Device virtual coupling (Eq. 8).
-  int initial_attached_body = 0;   ///< Body the device holds at reset; -1 for none.
+  int initial_held_body = 0;       ///< Body the device holds at reset; -1 for none.
   /// The contacts are written by the caller, not detected (the god-object model of the
   /// multirate device loop, multirate.hpp): contact_capacity() gives the model the room of
   /// kMaxContacts, step_with_contacts() steps it.

@@ -178,8 +178,8 @@ std::vector<int> god_object_bodies(const Model& scene, int body);
 /// body and its articulation, with their masses, inertias, spheres, materials, coupling gains,
 /// and the joints among them and to the world, prescribed ones included), with the scene's
 /// materials, integrator, coupling mode, gravity, Baumgarte and solver settings and device
-/// feedback, no obstacles, no other body, no nets, step `device_dt` (s, > 0), the held body
-/// attached, Model::caller_contacts set (its contacts are the planes'). A net whose rigid
+/// feedback, no obstacles, no other body, no nets, step `device_dt` (s, > 0), the device
+/// holding the held body, Model::caller_contacts set (its contacts are the planes'). A net whose rigid
 /// component is a body of the god-object is lumped onto it: the body's mass and inertia gain the
 /// nodes' (at their rest positions); the net itself stays in the scene loop. Returns "" and
 /// fills `out`, or a message naming what refuses: a body out of range, a net on the god-object
@@ -402,7 +402,7 @@ class MultirateGodObject {
   void step() noexcept;
 
   /// Device loop: the device Data's targets from `scene_data`, a Data of the scene (the run's,
-  /// which the control loop fills): the attached body's target and target twist (Eq. 2), the
+  /// which the control loop fills): the held body's target and target twist (Eq. 2), the
   /// measured device wrench (Data::device_wrench, CouplingMode::kAdmittance), and the body
   /// targets (Eq. 6) and prescribed joint values of the god-object's other bodies and joints.
   /// Never allocates.
@@ -447,7 +447,7 @@ class MultirateGodObject {
   /// step's in the period that took its model, each loop's report its own model's
   /// Model::stage_plan; the *_steps counters summed); the joint states (the articulation's
   /// from the device loop, the others from the snapshot) and the larger drift; time and
-  /// step_count of the device periods. Leaves the caller's fields (attached_body, targets,
+  /// step_count of the device periods. Leaves the caller's fields (held_body, targets,
   /// applied wrenches) alone. Never allocates.
   void view(Data& out) const noexcept;
 

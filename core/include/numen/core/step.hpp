@@ -11,7 +11,7 @@ struct Data;
 ///   1. detect_contacts — collision geometry (collision.hpp), skipped when
 ///      nothing can collide (contact_capacity() == 0: no contact scratch);
 ///      with nets, then detect_node_contacts (net_collision.hpp)
-///   2. forces — gravity, applied wrenches, coupling (Eq. 2) on the attached
+///   2. forces — gravity, applied wrenches, coupling (Eq. 2) on the held
 ///      body and (Eq. 6) on every body with its own target, penalty contact
 ///      forces (compute_forces); the gyroscopic term is applied by the
 ///      integrator (implicit step or explicit torque)
@@ -41,7 +41,7 @@ struct Data;
 /// stale by an edit after finalize_model() fails an assertion in builds without NDEBUG);
 /// each stage function sets its own bit of Data::stages_run where it runs (the caller's
 /// contact writer's bits are set for it, step_with_contacts()), so that field is what
-/// ran; time += dt and ++step_count at the end. In kDirect the attached body's
+/// ran; time += dt and ++step_count at the end. In kDirect the held body's
 /// pose/twist are imposed before detect_contacts.
 /// Never allocates, throws, locks or calls the OS. Deterministic.
 void step(const Model& model, Data& data) noexcept;
@@ -61,7 +61,7 @@ void step_with_contacts(const Model& model, Data& data, ContactWriter write,
                         const void* context) noexcept;
 
 /// Forces stage of step(): body_wrench := gravity + applied wrench
-/// (apply_external_forces), + coupling on the attached body (apply_coupling,
+/// (apply_external_forces), + coupling on the held body (apply_coupling,
 /// Eq. 2), + penalty contact forces of data.contacts (compute_contact_forces),
 /// + the nets' forces and their reactions (compute_net_forces, when
 /// Model::stage_plan has kStageNetForces). Sets kStageBodyForces of
@@ -71,8 +71,8 @@ void step_with_contacts(const Model& model, Data& data, ContactWriter write,
 /// run this step. No allocation.
 void compute_forces(const Model& model, Data& data) noexcept;
 
-/// Attaches the device to body `body` (or detaches with -1); out-of-range
-/// values detach. Tool switching of the paper's construction game.
-void set_attached_body(const Model& model, Data& data, int body) noexcept;
+/// Makes `body` the held body (the device drives it), or none with -1; out-of-range
+/// values give none. Tool switching of the paper's construction game.
+void set_held_body(const Model& model, Data& data, int body) noexcept;
 
 }  // namespace numen::core

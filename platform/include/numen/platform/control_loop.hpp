@@ -97,24 +97,25 @@ class ControlLoop {
  public:
   /// Keeps references: `model`, `data`, `bus` and `device` must outlive the loop.
   /// `binding` says which bodies the device's links drive and which prescribed
-  /// joints its axes impose (copied; the default drives the attached body by
+  /// joints its axes impose (copied; the default drives the held body by
   /// link 0). Throws std::invalid_argument if a link, body, joint or axis index
   /// of the binding is out of range, a body is bound to two links, or a
-  /// prescription names a joint that is not prescribed. The attached body
+  /// prescription names a joint that is not prescribed. The held body
   /// follows its own binding if it has one, else the binding with body = -1.
   /// Allocates (construction only).
   /// Builds the hal::Device of `device`'s protocol around `device` and `bus`
   /// (hal::make_device(): managed — CanopenMaster, SafetySupervisor, lifecycle configured to
-  /// kInactive; or minimal); throws std::invalid_argument for bad settings. The
-  /// LoopStatistics period is the device's control period.
+  /// kInactive; or minimal); throws std::invalid_argument for bad settings or a device whose
+  /// control_period_s is not model.dt (one period steps the model once). The LoopStatistics
+  /// period is that control period.
   ControlLoop(const core::Model& model, core::Data& data, hal::Bus& bus,
               hal::InstrumentDevice& device, DeviceBinding binding = DeviceBinding::rigid(),
               const ControlLoopSettings& settings = {});
   /// The loop of `devices` (1 to kMaxLoopDevices impedance instruments, device i = devices[i])
   /// driving one `data`: each device's binding and supervision as for one device (above),
   /// plus: a body is bound by at most one device, and at most one device drives the held
-  /// body through the rigid binding (LinkBinding::body = −1); all devices have the same
-  /// control period. Devices naming the same Bus share it (LoopDevice::bus). `settings`:
+  /// body through the rigid binding (LinkBinding::body = −1); every device's control period
+  /// is model.dt. Devices naming the same Bus share it (LoopDevice::bus). `settings`:
   /// supervise_overruns only (each device's supervision is its LoopDevice::settings). Throws
   /// std::invalid_argument naming the device for any of these, a null bus or instrument,
   /// or no device / more than kMaxLoopDevices. Allocates (construction only).
@@ -122,9 +123,9 @@ class ControlLoop {
               const ControlLoopSettings& settings = {});
   /// The loop of an admittance device (built by the caller on its bus, with its supervision
   /// settings: hal::AdmittanceSettings); keeps references to `model`, `data` and `device`.
-  /// Throws std::invalid_argument if the model's coupling mode is not kAdmittance. `settings`:
-  /// supervise_overruns only (the device's own settings supervise). The LoopStatistics period
-  /// is the device's control period.
+  /// Throws std::invalid_argument if the model's coupling mode is not kAdmittance or the
+  /// device's control_period_s is not model.dt. `settings`: supervise_overruns only (the
+  /// device's own settings supervise). The LoopStatistics period is that control period.
   ControlLoop(const core::Model& model, core::Data& data, hal::AdmittanceDevice& device,
               const ControlLoopSettings& settings = {});
 
@@ -147,7 +148,7 @@ class ControlLoop {
   ///     state in this very period);
   ///  3. targets: when the device is ready (a rejected sample keeps the last good target),
   ///     the bound bodies' targets — body pose = link pose · body_in_link, twist carried to the
-  ///     body's origin; the attached body's into data.target, the others into
+  ///     body's origin; the held body's into data.target, the others into
   ///     data.body_targets (paper Eq. 6) — and the prescribed joints' values;
   ///  4. step: one Stepper::step() (core::step unless set_stepper());
   ///  5. map: w_l = the bound bodies' Eq. 8 feedback (data.body_feedback) carried to their

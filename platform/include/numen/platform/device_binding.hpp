@@ -18,7 +18,7 @@ namespace numen::platform {
 /// One body driven by one link of the instrument.
 struct LinkBinding {
   int link = 0;    ///< Link index of the instrument's kinematics (0: the controlled frame).
-  int body = -1;   ///< Body index; -1: whichever body is attached (Data::attached_body).
+  int body = -1;   ///< Body index; -1: whichever body is held (Data::held_body).
   /// Pose of the body's COM frame in the link frame: target = link_pose · body_in_link.
   core::Pose body_in_link;
 };
@@ -35,11 +35,11 @@ struct AxisPrescription {
 /// The wiring between one instrument and one core::Data.
 struct DeviceBinding {
   /// Bodies driven by links. Empty: the legacy rigid binding {link 0 → the
-  /// attached body, identity}.
+  /// held body, identity}.
   std::vector<LinkBinding> links;
   std::vector<AxisPrescription> prescriptions;
 
-  /// The binding used when a scene says nothing: link 0 drives the attached body.
+  /// The binding used when a scene says nothing: link 0 drives the held body.
   static DeviceBinding rigid() { return DeviceBinding{{LinkBinding{}}, {}}; }
 };
 
@@ -48,8 +48,8 @@ struct DeviceBinding {
 /// body is bound to two links or a binding names a body out of [0, num_bodies).
 std::vector<std::uint8_t> explicitly_bound_bodies(const DeviceBinding& binding, int num_bodies);
 
-/// The body `b` drives in `d` this period, −1 for none: its own body, or, for the "attached"
-/// binding (body −1), the attached body (Data::attached_body) unless that body has a link of its
+/// The body `b` drives in `d` this period, −1 for none: its own body, or, for the "held"
+/// binding (body −1), the held body (Data::held_body) unless that body has a link of its
 /// own (`explicit_bound`, from explicitly_bound_bodies()), which it then follows (tool
 /// switching). Real-time safe.
 int bound_body(const LinkBinding& b, const core::Data& d,
@@ -63,7 +63,7 @@ void body_target_of(const LinkBinding& b, const core::Pose& link, const core::Tw
                     core::Pose& pose, core::Twist& twist) noexcept;
 
 /// Sets body `body`'s coupling target in `d`: Data::target and Data::target_twist for the
-/// attached body, its BodyTarget (enabled) for any other. `body` must be in range.
+/// held body, its BodyTarget (enabled) for any other. `body` must be in range.
 void set_body_target(core::Data& d, int body, const core::Pose& pose, const core::Twist& twist) noexcept;
 
 /// One link binding's share of a period (the control loop's and sim::InstrumentTargets'): the

@@ -74,10 +74,11 @@ constexpr std::string_view frame_field_type_name(FrameFieldType t) noexcept {
   return "";
 }
 
-/// The header's fields, in their order: each one's index in kStateFrameFields.
+/// The header's fields, in their order: each one's index in kStateFrameFields. kHeldBody's
+/// name on the wire is `attached_body` (the viewer's protocol, kept).
 enum class FrameField : std::uint8_t {
   kMagic, kVersion, kHeaderBytes, kFrameBytes, kNumBodies, kNumNodes, kNumContacts, kNumAxes,
-  kAttachedBody, kPeriod, kTimeNs, kStepStatus, kFlags, kStepNs, kLifecycle, kStartup, kFaultCause,
+  kHeldBody, kPeriod, kTimeNs, kStepStatus, kFlags, kStepNs, kLifecycle, kStartup, kFaultCause,
   kSampleFaults
 };
 
@@ -121,7 +122,7 @@ inline constexpr std::array<StateFrameField, 18> kStateFrameFields{{
     {FrameField::kNumNodes, "num_nodes", 16, FrameFieldType::kU32},
     {FrameField::kNumContacts, "num_contacts", 20, FrameFieldType::kU32},
     {FrameField::kNumAxes, "num_axes", 24, FrameFieldType::kU32},
-    {FrameField::kAttachedBody, "attached_body", 28, FrameFieldType::kI32},
+    {FrameField::kHeldBody, "attached_body", 28, FrameFieldType::kI32},
     {FrameField::kPeriod, "period", 32, FrameFieldType::kU64},
     {FrameField::kTimeNs, "time_ns", 40, FrameFieldType::kI64},
     {FrameField::kStepStatus, "step_status", 48, FrameFieldType::kU32},
@@ -271,7 +272,7 @@ struct FrameContact {
 struct StateFrameHeader {
   std::uint32_t frame_bytes = 0;
   std::uint32_t num_bodies = 0, num_nodes = 0, num_contacts = 0, num_axes = 0;
-  std::int32_t attached_body = -1;
+  std::int32_t held_body = -1;
   std::uint64_t period = 0;       ///< Period index k.
   std::int64_t time_ns = 0;       ///< Simulated time, ns.
   std::uint32_t step_status = 0;  ///< core::StepStatus bits.
@@ -300,7 +301,7 @@ class StateFrameView {
   void feedback(float out[6]) const noexcept;
   /// Torque or force sent to axis a (N·m or N).
   float axis_torque(std::uint32_t a) const noexcept;
-  /// Tool penetration (m): deepest contact of the attached body this period.
+  /// Tool penetration (m): deepest contact of the held body this period.
   float tool_penetration() const noexcept;
   /// Hand penetration (m): how deep the target pose would sit in the obstacles.
   float target_penetration() const noexcept;
@@ -341,7 +342,7 @@ class StateFrameDecoder {
 /// Figures of a period that the loop does not hold (the runner measures them).
 struct StateFrameFigures {
   std::uint64_t period = 0;         ///< Period index k.
-  double tool_penetration = 0.0;    ///< m: deepest contact of the attached body.
+  double tool_penetration = 0.0;    ///< m: deepest contact of the held body.
   double target_penetration = 0.0;  ///< m: how deep the target pose sits in the obstacles.
   /// m: how deep the hand's intent sits in the obstacles (closed loop; the target's in replay).
   double hand_penetration = 0.0;
@@ -358,7 +359,7 @@ struct StateFrameFigures {
 /// sent from `report` (kFrameBusDown from figures.bus_down), the
 /// axis torques sent from `axis_torques` (layout.num_axes values), the rest from `figures`.
 /// Rigid contacts come first, then node contacts, at most layout.max_contacts in all (the
-/// rest are cut and kFrameContactsTruncated is set). Targets: the attached body's is
+/// rest are cut and kFrameContactsTruncated is set). Targets: the held body's is
 /// data.target, the others' data.body_targets. Returns the bytes written, or 0 when `data`
 /// or `axis_torques` do not match the layout or `out` is shorter than
 /// layout.max_frame_bytes() (nothing is written then). noexcept, no allocation.

@@ -174,7 +174,7 @@ class DivergenceMonitor {
   std::vector<core::BodyState> prev_bodies_;
   std::vector<core::Pose> prev_targets_;   // per body: its coupling target in the last period
   std::vector<char> prev_coupled_;         // per body: it had a coupling target then
-  int prev_attached_ = -2;                 // -2: nothing observed yet
+  int prev_held_ = -2;                     // -2: nothing observed yet
   double energy0_ = 0.0;                   // stored energy at the (re)base
   double gravity0_ = 0.0;                  // gravity's potential at the (re)base
   double work_in_ = 0.0;                   // W_in since the (re)base

@@ -11,7 +11,7 @@
 namespace numen::sim {
 
 /// Stored mechanical energy (J), gravity left out (gravity_potential()): Σ ½ m v² +
-/// ½ ωᵀ I_w ω of the bodies, Σ ½ m v² of the net nodes, the coupling springs of the attached
+/// ½ ωᵀ I_w ω of the bodies, Σ ½ m v² of the net nodes, the coupling springs of the held
 /// body (Data::target) and of every enabled body target (½ k_t |e|² + ½ k_r θ², θ on the shortest
 /// arc; god-object and first-order modes), ½ k (l − L)² of every net spring and ½ k_tie |x −
 /// anchor|² of every tie. The penalty contacts' potential is left out (contact_energy()): contacts

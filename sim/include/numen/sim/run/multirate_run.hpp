@@ -29,7 +29,7 @@ class MultirateRun final : public platform::Stepper {
   /// The empty run of a single-rate scene (enabled() false).
   MultirateRun() = default;
   /// Builds the god-object for `scene` (must outlive this) if it has [multirate]: the device
-  /// holds Model::initial_attached_body, may switch to any of MultirateScene::tools. Allocates;
+  /// holds Model::initial_held_body, may switch to any of MultirateScene::tools. Allocates;
   /// throws std::invalid_argument with core::MultirateGodObject's message.
   explicit MultirateRun(const Scene& scene);
   ~MultirateRun() override;  ///< Stops the scene thread.
@@ -41,7 +41,7 @@ class MultirateRun final : public platform::Stepper {
 
   /// One device period in place of core::step(model, run_data) (the loop's step stage),
   /// `run_data` the loop's Data of the scene (`model`, the scene's, is not read: the
-  /// god-object has its own): the device holds run_data.attached_body (tool switching), the
+  /// god-object has its own): the device holds run_data.held_body (tool switching), the
   /// device loop gets run_data's targets and measured device wrench
   /// (core::MultirateGodObject::take_targets()), the device period runs (and the scene period
   /// on one thread, or the newest model from the scene thread), run_data gets the god-object's

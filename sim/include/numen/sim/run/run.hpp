@@ -215,7 +215,7 @@ class SceneRunner {
     int deepest_tool_contact = -1;  ///< Index of the tool's deepest rigid contact (-1: none).
     int deepest_tool_body = -1;     ///< Its tool body.
   };
-  /// Attaches the bodies of the tool-switching events due at bus time `t_ns`.
+  /// Holds the bodies of the tool-switching events due at bus time `t_ns`.
   void apply_due_events(std::int64_t t_ns) noexcept;
   /// The bus side of the period at bus time `t` (ns): the simulated bus and instrument, the
   /// log replay or the real bus around ControlLoop::begin_period / end_period.

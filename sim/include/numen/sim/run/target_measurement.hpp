@@ -46,7 +46,7 @@ struct TargetInputs {
   std::vector<core::Pose> hand_pose;
   std::vector<std::uint8_t> hand_bound;         ///< Per body: 1 where hand_pose is set.
   bool closed_loop = false;                     ///< The hand is simulated (a plant).
-  int held = -1;                                ///< The held body (Data::attached_body).
+  int held = -1;                                ///< The held body (Data::held_body).
   int tree = -1;                                ///< Its articulation (Articulation::body_tree).
 };
 

@@ -22,7 +22,7 @@ namespace numen::sim {
 /// One control period. World frame, SI units except where the name says mm/µs.
 struct TraceRecord {
   double time_s = 0.0;
-  int attached_body = -1;
+  int held_body = -1;
   // What the control loop did (platform::PeriodReport).
   int frames_read = 0;            ///< Frames taken from the bus this period.
   bool sample_valid = false;      ///< Every axis fresh and plausible this period.

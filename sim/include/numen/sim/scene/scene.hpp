@@ -105,7 +105,7 @@ struct MultirateScene {
   /// Longest step (s) of a scene step where an organ's surface has folded under the tool
   /// (core::MultirateSettings::fold_step; scene key `fold_step`, default 0.5 ms).
   double fold_step_s = 5e-4;
-  /// The bodies the device holds in the run (the attached one, then the events' in order).
+  /// The bodies the device holds in the run (the initially held one, then the events' in order).
   std::vector<int> tools;
 };
 
@@ -118,7 +118,7 @@ struct Scene {
   hal::DeviceConfig device;  ///< Validated; control_period_s = model.dt.
   /// Which bodies the device's links drive and which joints its axes impose
   /// (bodies' `link` keys, joints' `prescribed`); the rigid binding (link 0 →
-  /// the attached body) when the scene binds nothing.
+  /// the held body) when the scene binds nothing.
   platform::DeviceBinding binding;
   hal::SimBusSettings bus;   ///< The simulated bus between controller and instrument.
   /// Bus time after SYNC at which the controller reads the encoder answers and

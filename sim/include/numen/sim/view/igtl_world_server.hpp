@@ -150,7 +150,7 @@ class IgtlWorldServer final : public platform::StateFrameSink {
     std::uint8_t fault_cause = 0;
     std::uint8_t sample_faults = 0;
     bool bus_down = false;
-    std::int32_t attached_body = -1;
+    std::int32_t held_body = -1;
   };
   void send_some(Client& c) noexcept;
   void drop_gone() noexcept;

@@ -47,7 +47,7 @@ platform::StateFrameLayout view_frame_layout(const Scene& scene);
 /// 3 per vertex, m, in the triangle's frame, to 1e-7) and triangles (flat i j k, indices of the
 /// fine surface's vertices, outward): docs/viewer.md, "Scene message"), joints (name, type, parent, child
 /// (−1: world), frame in the parent and in the child), the device (name, kind, protocol "managed" |
-/// "minimal" | "admittance", axis names) and the initially attached body. Numbers are the
+/// "minimal" | "admittance", axis names) and the initially held body. Numbers are the
 /// model's doubles, but for a fine surface's weights and offsets (rounded as said).
 std::string view_scene_message(const Scene& scene, const platform::StateFrameLayout& layout,
                                double display_rate_hz);
