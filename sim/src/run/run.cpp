@@ -224,14 +224,15 @@ void SceneRunner::start_scene_thread(const platform::SceneThreadSettings& settin
   multirate_.start_scene_thread(settings);
 }
 
-void SceneRunner::start_target_thread() {
+void SceneRunner::start_target_thread(const std::vector<int>& avoid_cpus) {
   target_thread_ = std::make_unique<TargetMeasurementThread>(scene_->model);
-  target_thread_->start();
+  target_thread_pinned_ = target_thread_->start(avoid_cpus);
 }
 
 void SceneRunner::describe_target_thread(std::vector<std::string>& lines) const {
   if (!target_thread_) return;
-  lines.push_back("target measurement: on its own thread, " +
+  lines.push_back(std::string("target measurement: on its own thread") +
+                  (target_thread_pinned_ ? " off the loop's and the scene thread's CPUs, " : ", ") +
                   std::to_string(target_thread_->measured()) + " of " +
                   std::to_string(target_thread_->submitted()) +
                   " submitted targets measured (the newest is measured; docs/outputs.md)");
@@ -395,7 +396,10 @@ RunSummary run_impedance_scene(const Scene& scene, const RunOptions& options) {
   if (real && !options.trace_path.empty()) runner.stream_trace(options.trace_path);
   if (options.realtime || real) {
     runner.start_scene_thread(paced_scene_thread(options));
-    runner.start_target_thread();
+    std::vector<int> busy = options.rt.cpu_affinity;  // the measurement keeps off these
+    busy.insert(busy.end(), options.scene_thread.cpu_affinity.begin(),
+                options.scene_thread.cpu_affinity.end());
+    runner.start_target_thread(busy);
   }
   if (!options.record_view_path.empty() || !options.view_sinks.empty())
     runner.stream_view(options.record_view_path, options.view_sinks, options.view_rate_hz,

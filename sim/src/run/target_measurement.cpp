@@ -4,6 +4,8 @@
 
 #include "numen/sim/run/target_measurement.hpp"
 
+#include <pthread.h>
+#include <sched.h>
 #include <time.h>
 
 #include <algorithm>
@@ -131,9 +133,17 @@ TargetMeasurementThread::TargetMeasurementThread(const core::Model& model)
 
 TargetMeasurementThread::~TargetMeasurementThread() { stop(); }
 
-void TargetMeasurementThread::start() {
+bool TargetMeasurementThread::start(const std::vector<int>& avoid_cpus) {
   stop_.store(false);
   thread_ = std::thread([this] { run(); });
+  if (avoid_cpus.empty()) return false;
+  cpu_set_t set;
+  CPU_ZERO(&set);
+  if (sched_getaffinity(0, sizeof(set), &set) != 0) return false;  // the process's CPUs
+  for (const int c : avoid_cpus)
+    if (c >= 0 && c < CPU_SETSIZE) CPU_CLR(c, &set);
+  if (CPU_COUNT(&set) == 0) return false;  // nothing left: the scheduler's choice
+  return pthread_setaffinity_np(thread_.native_handle(), sizeof(set), &set) == 0;
 }
 
 void TargetMeasurementThread::stop() noexcept {

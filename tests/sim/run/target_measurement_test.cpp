@@ -8,9 +8,12 @@
 
 #include <gtest/gtest.h>
 
+#include <sched.h>
+
 #include <chrono>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "alloc_counter.hpp"
 #include "run_scenes.hpp"
@@ -119,4 +122,35 @@ TEST(TargetMeasurement, APacedRunMeasuresTheTargetOffTheLoopThreadWithTheOffline
   EXPECT_GE(b.target_penetration_max_mm, 0.98 * a.target_penetration_max_mm);
   for (const std::string& l : a.realtime_setup)
     EXPECT_EQ(l.find("target measurement"), std::string::npos) << "offline: measured inline";
+}
+
+// The measuring thread keeps off the CPUs it is told to avoid (the loop's and the scene
+// thread's pinned CPUs) where the process has another; with none left it runs where the
+// scheduler puts it, and says so (start() false).
+TEST(TargetMeasurement, TheThreadKeepsOffTheLoopsCpusWhereAnotherIsLeft) {
+  const numen::sim::Scene& scene = numen::test::run_scenes::mesh_scene();
+  cpu_set_t mine;
+  CPU_ZERO(&mine);
+  ASSERT_EQ(sched_getaffinity(0, sizeof(mine), &mine), 0);
+  std::vector<int> all;
+  for (int c = 0; c < CPU_SETSIZE; ++c)
+    if (CPU_ISSET(c, &mine)) all.push_back(c);
+  {
+    numen::sim::TargetMeasurementThread t(scene.model);
+    EXPECT_FALSE(t.start());  // nothing to avoid
+  }
+  {
+    numen::sim::TargetMeasurementThread t(scene.model);
+    EXPECT_FALSE(t.start(all));  // no CPU left
+  }
+  if (all.size() < 2) GTEST_SKIP() << "one CPU: nothing to keep off";
+  numen::sim::TargetMeasurementThread t(scene.model);
+  EXPECT_TRUE(t.start({all.front()}));
+  t.inputs() = probe_pressed_in(scene, 0.008);  // it still measures
+  t.submit();
+  const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  while (t.measured() == 0 && std::chrono::steady_clock::now() < give_up)
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  EXPECT_EQ(t.measured(), 1);
+  EXPECT_GT(t.latest().target_pen, 0.0);
 }

@@ -169,10 +169,11 @@ class SceneRunner {
   /// start.
   void start_scene_thread(const platform::SceneThreadSettings& settings);
   /// A paced run: measures the target (the summary's "penetration max: target", the hand's
-  /// depth) on a thread of its own from now on (TargetMeasurementThread), the loop handing
-  /// over its inputs and reading the newest result, until finish(). Allocates (call before the
-  /// first period). Throws std::system_error if the thread cannot start.
-  void start_target_thread();
+  /// depth) on a thread of its own from now on (TargetMeasurementThread), kept off
+  /// `avoid_cpus` (the loop's and the scene thread's), the loop handing over its inputs and
+  /// reading the newest result, until finish(). Allocates (call before the first period).
+  /// Throws std::system_error if the thread cannot start.
+  void start_target_thread(const std::vector<int>& avoid_cpus);
   /// The target thread's line for the summary's real-time setup ("target measurement: …"),
   /// appended to `lines` after finish(); nothing when the target was measured inline.
   void describe_target_thread(std::vector<std::string>& lines) const;
@@ -264,6 +265,7 @@ class SceneRunner {
   TargetMeasurement target_measurement_;  // offline: the target measured inline
   TargetInputs target_inputs_;            // its inputs
   std::unique_ptr<TargetMeasurementThread> target_thread_;  // paced: on its own thread
+  bool target_thread_pinned_ = false;  // kept off the loop's and the scene thread's CPUs
   /// The target is measured every ghost_every_ periods: 1, but in a multirate run at most at
   /// 1 kHz (round(1 ms / dt) periods), so that a 10 kHz device loop's thread does not detect the
   /// whole scene again every period (docs/outputs.md).

@@ -68,15 +68,16 @@ class TargetMeasurement {
   bool organs_placed_ = false;  // the anchored bodies' nets placed at rest in ghost_
 };
 
-/// A TargetMeasurement on a thread of its own (SCHED_OTHER, no affinity: the scheduler gives
-/// it a free CPU). One producer (the loop thread: inputs(), submit(), latest()) and the
+/// A TargetMeasurement on a thread of its own (SCHED_OTHER, on the CPUs the process may use
+/// but those of the loop and the scene thread: start()). One producer (the loop thread: inputs(), submit(), latest()) and the
 /// measuring thread; neither waits for the other (platform::TripleBuffer both ways). The thread
 /// polls for new inputs every kPollNs when idle. What passes is the newest: inputs submitted
 /// faster than they are measured are skipped (submitted() − measured()).
 class TargetMeasurementThread {
  public:
-  /// How long the measuring thread sleeps when no new inputs have come (ns).
-  static constexpr std::int64_t kPollNs = 100'000;
+  /// How long the measuring thread sleeps when no new inputs have come (ns): half the
+  /// shortest spacing of its inputs (at most 1 kHz, a run's ghost_every_).
+  static constexpr std::int64_t kPollNs = 500'000;
   /// Sizes the buffers for `model` (allocates); does not start the thread.
   explicit TargetMeasurementThread(const core::Model& model);
   /// Stops the thread (stop()).
@@ -84,8 +85,11 @@ class TargetMeasurementThread {
   TargetMeasurementThread(const TargetMeasurementThread&) = delete;
   TargetMeasurementThread& operator=(const TargetMeasurementThread&) = delete;
 
-  /// Starts the measuring thread. Throws std::system_error if it cannot start.
-  void start();
+  /// Starts the measuring thread, kept off `avoid_cpus` (the loop's and the scene thread's
+  /// pinned CPUs: the measurement must not take their time) where the process's affinity
+  /// leaves another CPU; returns whether it was (false: none asked, or no CPU left, and the
+  /// thread runs where the scheduler puts it). Throws std::system_error if it cannot start.
+  bool start(const std::vector<int>& avoid_cpus = {});
   /// Stops and joins the thread; idempotent.
   void stop() noexcept;
   /// Loop thread: the inputs to fill for the next submit() (an older value's storage).
