@@ -109,8 +109,13 @@ Json parse(std::string_view text, SyntaxError& error) {
     constexpr std::string_view kLastRead = "last read: '";
     if (const std::size_t quote = error.reason.find(kLastRead); quote != std::string::npos) {
       const std::size_t from = quote + kLastRead.size();
+      // nlohmann's own suffix ("'; expected end of input", "… '[', '{', or a literal") is
+      // short: a longer tail after an "'; expected " is the token's own text (a string that
+      // holds those bytes), quoted with the rest of the token.
+      constexpr std::size_t kSuffixBytes = 64;
       const std::size_t expected = error.reason.rfind("'; expected ");
-      const std::size_t to = expected != std::string::npos && expected >= from
+      const std::size_t to = expected != std::string::npos && expected >= from &&
+                                     error.reason.size() - expected <= kSuffixBytes
                                  ? expected
                                  : error.reason.size() - 1;  // the closing '
       if (to > from + kShownBytes)

@@ -343,6 +343,16 @@ TEST(StudyShard, MergeQuotesTheTokenOfASyntaxErrorShort) {
             "not a shard file: not JSON: syntax error while parsing value - invalid string: "
             "missing closing quote; last read: '\"" +
                 std::string(39, 'x') + "...'");
+  // A token that holds nlohmann's own "'; expected " (a fuzz finding: the text after it was
+  // taken for the parser's suffix and quoted whole) is cut as well.
+  dir.write("stability-shard-0-of-1.json",
+            "{\"format\": \"" + std::string(80, '[') + "'; expected " + std::string(3000, '[') + "\xff\"}");
+  const InputError f = error_of([&] { (void)merge_stability_shards(dir.path().string()); });
+  EXPECT_LT(f.message().size(), 200u) << f.message();
+  EXPECT_EQ(f.message(),
+            "not a shard file: not JSON: syntax error while parsing value - invalid string: "
+            "ill-formed UTF-8 byte; last read: '\"" +
+                std::string(39, '[') + "...'");
 }
 
 // A number beyond a double's range is refused where it stands (nlohmann reports it as an
