@@ -40,44 +40,54 @@ std::size_t in_memory_trace_capacity(std::int64_t periods) {
 
 namespace {
 
+/// The thread a busy-wait option spins on: the option, its CPU option, the words the
+/// messages use and the period it must stay below.
+struct SpinThread {
+  const char* key;         ///< "--spin", "--scene-spin"
+  const char* cpu_option;  ///< "--cpu", "--scene-cpu"
+  const char* period;      ///< "period", "scene period"
+  const char* thread;      ///< "loop thread", "scene thread"
+  const char* doc;         ///< docs/realtime.md's section
+  const char* period_name; ///< "dt", "scene_dt"
+  double period_s;
+};
+
+/// Refuses a spin that is negative, that would take a CPU the thread does not have to itself,
+/// or that fills the whole period (InputError naming the option).
+void check_spin(const SpinThread& t, std::int64_t spin_ns, bool own_cpu) {
+  const std::string spin = format_input_number(static_cast<double>(spin_ns) * 1e-3) + " us";
+  if (spin_ns < 0) throw InputError("", 0, 0, t.key, "must be >= 0 us (got " + spin + ")");
+  if (!own_cpu)
+    throw InputError("", 0, 0, t.key,
+                     "busy-waits up to " + spin + " a " + t.period + " on the " + t.thread +
+                         "'s CPU: give it a CPU of its own with " + t.cpu_option +
+                         " (docs/realtime.md, \"" + t.doc + "\")");
+  if (static_cast<double>(spin_ns) >= t.period_s * 1e9)
+    throw InputError("", 0, 0, t.key,
+                     spin + " must be below the " + t.period + " " + t.period_name + " = " +
+                         format_input_number(t.period_s * 1e6) + " us");
+}
+
 /// Refuses a --spin that this run would not apply or that would take the loop's CPU from
 /// others (InputError naming the option).
 void check_pacing_options(const Scene& scene, const RunOptions& options, bool paced) {
   if (options.spin_ns == 0) return;
-  const std::string spin = format_input_number(static_cast<double>(options.spin_ns) * 1e-3) + " us";
-  if (options.spin_ns < 0)
-    throw InputError("", 0, 0, "--spin", "must be >= 0 us (got " + spin + ")");
-  if (!paced)
+  if (options.spin_ns > 0 && !paced)
     throw InputError("", 0, 0, "--spin",
                      "ends a paced period's wait in a busy-wait; this run is offline (no "
                      "--realtime, no real bus)");
-  if (options.rt.cpu_affinity.empty())
-    throw InputError("", 0, 0, "--spin",
-                     "busy-waits up to " + spin +
-                         " a period on the loop thread's CPU: give it a CPU of its own with "
-                         "--cpu (docs/realtime.md, \"Spinning the end of the wait\")");
-  if (static_cast<double>(options.spin_ns) >= scene.model.dt * 1e9)
-    throw InputError("", 0, 0, "--spin",
-                     spin + " must be below the period dt = " +
-                         format_input_number(scene.model.dt * 1e6) + " us");
+  check_spin({"--spin", "--cpu", "period", "loop thread", "Spinning the end of the wait", "dt",
+              scene.model.dt},
+             options.spin_ns, !options.rt.cpu_affinity.empty());
 }
 
 /// Refuses a --scene-spin that would take the scene thread's CPU from others or fill its
 /// whole period (InputError naming the option); the scene thread runs (a paced multirate run).
 void check_scene_spin(const MultirateScene& multirate, const platform::SceneThreadSettings& st) {
   if (st.spin_ns == 0) return;
-  const std::string spin = format_input_number(static_cast<double>(st.spin_ns) * 1e-3) + " us";
-  if (st.spin_ns < 0)
-    throw InputError("", 0, 0, "--scene-spin", "must be >= 0 us (got " + spin + ")");
-  if (st.cpu_affinity.empty())
-    throw InputError("", 0, 0, "--scene-spin",
-                     "busy-waits up to " + spin +
-                         " a scene period on the scene thread's CPU: give it a CPU of its own "
-                         "with --scene-cpu (docs/realtime.md, \"Paced on a 16-core machine\")");
-  if (static_cast<double>(st.spin_ns) >= multirate.scene_dt_s * 1e9)
-    throw InputError("", 0, 0, "--scene-spin",
-                     spin + " must be below the scene period scene_dt = " +
-                         format_input_number(multirate.scene_dt_s * 1e6) + " us");
+  check_spin({"--scene-spin", "--scene-cpu", "scene period", "scene thread",
+              "Paced on a 16-core machine", "scene_dt", multirate.scene_dt_s},
+             st.spin_ns, !st.cpu_affinity.empty());
 }
 
 /// Refuses options that this run would not apply (InputError naming the option): nothing a
