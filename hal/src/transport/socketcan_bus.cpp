@@ -18,6 +18,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <cstring>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -406,14 +407,19 @@ IoStatus SocketCanBus::read(CanFrame& frame) noexcept {
     std::int64_t mono_now = 0;
     if (have_time) {
       // Realtime read on both sides of the monotonic read, midpoint: the pair's skew is half
-      // the window. One more try if a preemption widened the window beyond 20 us.
+      // the window. Up to two more tries while a preemption widened the window beyond 20 us,
+      // the narrowest window's pair kept.
       std::int64_t real_now = 0;
-      for (int pair = 0; pair < 2; ++pair) {
+      std::int64_t narrowest = std::numeric_limits<std::int64_t>::max();
+      for (int pair = 0; pair < 3 && narrowest >= 20'000; ++pair) {
         const std::int64_t r1 = clock_ns(CLOCK_REALTIME);
-        mono_now = clock_ns(CLOCK_MONOTONIC);
+        const std::int64_t m = clock_ns(CLOCK_MONOTONIC);
         const std::int64_t r2 = clock_ns(CLOCK_REALTIME);
-        real_now = r1 + (r2 - r1) / 2;
-        if (r2 - r1 < 20'000) break;
+        if (r2 - r1 < narrowest) {
+          narrowest = r2 - r1;
+          real_now = r1 + (r2 - r1) / 2;
+          mono_now = m;
+        }
       }
       frame.timestamp_ns = realtime_to_monotonic_ns(realtime_ns, real_now, mono_now);
     } else {
