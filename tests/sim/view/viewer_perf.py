@@ -8,7 +8,7 @@ page drew and rendered, the time in its draw() (JavaScript: poses, contacts, arr
 in renderer.render() followed by gl.finish() (?perf=1: the rendering itself), and the mean
 contacts and nodes per frame. Prints a Markdown table.
 
-    tests/sim/view/viewer_perf.py --numen build/numen --out /tmp/perf
+    tests/sim/view/viewer_perf.py --numen build/numen --out /tmp/perf [--scene NAME=PATH ...]
 """
 import argparse
 import os
@@ -21,7 +21,7 @@ import cdp  # noqa: E402
 from viewer_browser_test import (ROOT, WIDTH, HEIGHT, VIEW_W, VIEW_H, Viewer, chromium_path,  # noqa: E402
                                  record)
 
-SCENES = [("lattice", "sim/scenes/lattice.toml"), ("construction", "sim/scenes/construction.toml"),
+SCENES = [("default", None), ("lattice", "sim/scenes/lattice.toml"), ("construction", "sim/scenes/construction.toml"),
           ("deformable", "sim/scenes/deformable.toml"), ("endobag", "sim/scenes/endobag.toml")]
 WARMUP_S, MEASURE_S = 2.0, 8.0
 
@@ -50,7 +50,17 @@ def main():
     ap.add_argument("--duration", type=float, default=12.0)
     ap.add_argument("--query", default="", help="more URL parameters of the page, e.g. &aa=1")
     ap.add_argument("--scenes", default=",".join(n for n, _ in SCENES), help="names, comma-separated")
+    ap.add_argument("--scene", action="append", default=[], metavar="NAME=PATH",
+                    help="one more scene file to measure (repeatable), e.g. an organ of the user's size")
     a = ap.parse_args()
+    extra = []
+    for item in a.scene:
+        name, sep, path = item.partition("=")
+        if not sep or not name or not path:
+            ap.error("--scene %r: expected NAME=PATH" % item)
+        if not os.path.isfile(path):
+            ap.error("--scene %s: no such file: %s" % (name, path))
+        extra.append((name, os.path.abspath(path)))
     exe = chromium_path()
     if not exe:
         print("chromium is not installed")
@@ -60,7 +70,7 @@ def main():
     profile = os.path.join(a.out, "chromium-profile")
     shutil.rmtree(profile, ignore_errors=True)
     with cdp.Browser(exe, profile, (WIDTH, HEIGHT)) as browser:
-        for name, scene in [x for x in SCENES if x[0] in a.scenes.split(",")]:
+        for name, scene in [x for x in SCENES if x[0] in a.scenes.split(",")] + extra:
             rec, r = record(a.numen, a.out, name, os.path.join(ROOT, scene) if scene else None, a.duration)
             viewer = Viewer(a.numen, rec)
             try:
