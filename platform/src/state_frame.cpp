@@ -60,12 +60,13 @@ field_t<F> get_field(const std::byte* frame) noexcept {
 constexpr std::size_t offset_of(FrameField f) noexcept { return frame_field(f).offset; }
 
 // Byte offsets of the arrays after the header (kStateFrameArrays, in order) and of the end,
-// for counts B, N, C, A.
+// for counts B, N, C, A, G.
 struct Offsets {
   std::array<std::size_t, kStateFrameArrays.size()> at;
   std::size_t end;
 };
-Offsets offsets(std::uint64_t b, std::uint64_t n, std::uint64_t c, std::uint64_t a) noexcept {
+Offsets offsets(std::uint64_t b, std::uint64_t n, std::uint64_t c, std::uint64_t a,
+                std::uint64_t g) noexcept {
   Offsets o{};
   std::size_t at = kStateFrameHeaderBytes;
   for (std::size_t i = 0; i < kStateFrameArrays.size(); ++i) {
@@ -76,6 +77,7 @@ Offsets offsets(std::uint64_t b, std::uint64_t n, std::uint64_t c, std::uint64_t
         case FrameField::kNumBodies: items = b; break;
         case FrameField::kNumNodes: items = n; break;
         case FrameField::kNumContacts: items = c; break;
+        case FrameField::kNumGrasps: items = g; break;
         default: items = a; break;  // kNumAxes (frame_arrays_are_well_formed())
       }
     }
@@ -122,19 +124,21 @@ std::byte* put_contact(std::byte* p, const core::Vec3& point, const core::Vec3& 
 }  // namespace
 
 std::size_t StateFrameLayout::frame_bytes(std::uint32_t contacts) const noexcept {
-  return offsets(num_bodies, num_nodes, contacts, num_axes).end;
+  return offsets(num_bodies, num_nodes, contacts, num_axes, num_grasps).end;
 }
 
 std::size_t encode_state_frame(const StateFrameLayout& layout, const core::Data& data,
                                const PeriodReport& report, std::span<const double> axis_torques,
                                const StateFrameFigures& figures, std::span<std::byte> out) noexcept {
   if (data.bodies.size() != layout.num_bodies || data.nodes.size() != layout.num_nodes ||
-      axis_torques.size() != layout.num_axes || out.size() < layout.max_frame_bytes())
+      data.grasps.size() != layout.num_grasps || axis_torques.size() != layout.num_axes ||
+      out.size() < layout.max_frame_bytes())
     return 0;
   const auto rigid = static_cast<std::uint32_t>(std::max(data.num_contacts, 0));
   const auto nodal = static_cast<std::uint32_t>(std::max(data.num_node_contacts, 0));
   const std::uint32_t contacts = std::min(rigid + nodal, layout.max_contacts);
-  const Offsets o = offsets(layout.num_bodies, layout.num_nodes, contacts, layout.num_axes);
+  const Offsets o =
+      offsets(layout.num_bodies, layout.num_nodes, contacts, layout.num_axes, layout.num_grasps);
 
   std::byte* h = out.data();
   std::memcpy(h + offset_of(FrameField::kMagic), kStateFrameMagic, sizeof kStateFrameMagic);
@@ -165,6 +169,7 @@ std::size_t encode_state_frame(const StateFrameLayout& layout, const core::Data&
   put_field<FrameField::kStartup>(h, static_cast<std::uint8_t>(report.startup));
   put_field<FrameField::kFaultCause>(h, static_cast<std::uint8_t>(report.fault_cause));
   put_field<FrameField::kSampleFaults>(h, report.sample_faults);
+  put_field<FrameField::kNumGrasps>(h, layout.num_grasps);
 
   // Each array from its declared offset (kStateFrameArrays), items in order.
   auto array = [&](FrameArray a) { return out.data() + o.at[array_index(a)]; };
@@ -203,6 +208,10 @@ std::size_t encode_state_frame(const StateFrameLayout& layout, const core::Data&
   put_floats(array(FrameArray::kPenetration), figures.tool_penetration, figures.target_penetration);
   put_floats(array(FrameArray::kDeviceLoop), figures.hand_penetration, figures.handle_force,
              figures.device_port_energy);
+  p = array(FrameArray::kGrasp);
+  for (const core::GraspState& g : data.grasps)
+    p = put_floats(p, g.body, g.net, g.body >= 0 ? g.num_points : g.num_nodes, g.opening,
+                   g.grip_force, g.grasps, g.releases, g.slips);
   return o.end;
 }
 
@@ -260,6 +269,13 @@ void StateFrameView::device_loop(float out[3]) const noexcept {
   f32s(item(FrameArray::kDeviceLoop, 0), out, kFrameDeviceLoopFloats);
 }
 
+FrameGrasp StateFrameView::grasp(std::uint32_t g) const noexcept {
+  float v[kFrameGraspFloats];
+  f32s(item(FrameArray::kGrasp, g), v, kFrameGraspFloats);
+  static_assert(kFrameGraspFloats == 8);
+  return FrameGrasp{v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7]};
+}
+
 StateFrameDecodeResult StateFrameDecoder::decode(std::span<const std::byte> bytes,
                                                  StateFrameView& view) {
   auto fail = [](FrameField at, const std::string& what) {
@@ -299,17 +315,20 @@ StateFrameDecodeResult StateFrameDecoder::decode(std::span<const std::byte> byte
   hd.startup = get_field<FrameField::kStartup>(h);
   hd.fault_cause = get_field<FrameField::kFaultCause>(h);
   hd.sample_faults = get_field<FrameField::kSampleFaults>(h);
+  hd.num_grasps = get_field<FrameField::kNumGrasps>(h);
   if (hd.frame_bytes != bytes.size())
     return fail(FrameField::kFrameBytes, "frame size field says " + std::to_string(hd.frame_bytes) +
                                              " bytes, the frame has " +
                                              std::to_string(bytes.size()));
   // Counts are u32: the offsets below are computed in 64 bits and cannot overflow.
-  const Offsets o = offsets(hd.num_bodies, hd.num_nodes, hd.num_contacts, hd.num_axes);
+  const Offsets o =
+      offsets(hd.num_bodies, hd.num_nodes, hd.num_contacts, hd.num_axes, hd.num_grasps);
   if (o.end != bytes.size())
     return fail(FrameField::kNumBodies,
                 "counts (bodies " + std::to_string(hd.num_bodies) + ", nodes " +
                     std::to_string(hd.num_nodes) + ", contacts " + std::to_string(hd.num_contacts) +
-                    ", axes " + std::to_string(hd.num_axes) + ") need " + std::to_string(o.end) +
+                    ", axes " + std::to_string(hd.num_axes) + ", graspers " +
+                    std::to_string(hd.num_grasps) + ") need " + std::to_string(o.end) +
                     " bytes, the frame has " + std::to_string(bytes.size()));
   if (hd.held_body < -1 || hd.held_body >= static_cast<std::int64_t>(hd.num_bodies))
     return fail(FrameField::kHeldBody, "held body " + std::to_string(hd.held_body) +

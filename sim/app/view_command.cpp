@@ -17,21 +17,6 @@
 #include "signals.hpp"
 
 namespace numen::app {
-namespace {
-
-/// A view recording as the server's frame source (I/O thread only).
-class RecordingSource final : public sim::ViewFrameSource {
- public:
-  explicit RecordingSource(const sim::ViewRecordingReader& r) : r_(r) {}
-  std::size_t frame_count() const override { return r_.size(); }
-  std::int64_t frame_time_ns(std::size_t i) const override { return r_.time_ns(i); }
-  void read_frame(std::size_t i, std::vector<std::byte>& out) override { r_.frame(i, out); }
-
- private:
-  const sim::ViewRecordingReader& r_;
-};
-
-}  // namespace
 
 std::string viewer_page_dir() { return sim::shipped_viewer_dir(NUMEN_VIEWER_DIR).string(); }
 
@@ -72,7 +57,7 @@ int ViewCommand::execute() const {
     throw sim::InputError("", 0, 0, "--page",
                           page_dir_ + ": no index.html there (the folder of the viewer page)");
   const sim::ViewRecordingReader reader(file_);
-  RecordingSource source(reader);
+  sim::ViewRecordingSource source(reader);
   sim::ViewServerSettings settings;
   settings.host = host_;
   settings.port = port_;

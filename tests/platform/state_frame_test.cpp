@@ -43,9 +43,20 @@ struct Period {
   numen::platform::PeriodReport report;
   std::array<double, 3> torques{0.25, -0.5, 1.5};
   StateFrameFigures figures{42, 0.0015, 0.012, 0.02, 3.5, -0.25};
-  StateFrameLayout layout{2, 0, 3, 4};
+  StateFrameLayout layout{2, 0, 3, 4, 1};
 
   Period() {
+    // One grasper holding the block with 10 grip springs (a model of one [[grasp]] would size
+    // Data::grasps so; the encoder reads Data alone).
+    data.grasps.resize(1);
+    numen::core::GraspState& g = data.grasps[0];
+    g.body = 1;
+    g.num_points = 10;
+    g.num_nodes = 3;  // not read while a body is held
+    g.opening = 0.1;
+    g.grip_force = 1.5;
+    g.grasps = 2;
+    g.releases = 1;
     data.time = 0.042;
     data.bodies[0].position = Vec3(0.01, 0.02, 0.03);
     data.bodies[0].orientation = numen::core::Quat(Eigen::AngleAxisd(0.3, Vec3::UnitZ()));
@@ -68,10 +79,10 @@ struct Period {
 };
 
 TEST(StateFrame, SizeFollowsTheLayout) {
-  const StateFrameLayout layout{2, 10, 3, 5};
-  // 64 header + 2·28 poses + 2·32 targets + 10·12 nodes + c·40 contacts + 24 wrench + 4·3 axes
-  // + 8 penetrations + 12 closed-loop figures.
-  EXPECT_EQ(layout.frame_bytes(0), 64u + 56 + 64 + 120 + 24 + 12 + 8 + 12);
+  const StateFrameLayout layout{2, 10, 3, 5, 2};
+  // 68 header + 2·28 poses + 2·32 targets + 10·12 nodes + c·40 contacts + 24 wrench + 4·3 axes
+  // + 8 penetrations + 12 closed-loop figures + 2·32 graspers.
+  EXPECT_EQ(layout.frame_bytes(0), 68u + 56 + 64 + 120 + 24 + 12 + 8 + 12 + 64);
   EXPECT_EQ(layout.frame_bytes(4), layout.frame_bytes(0) + 160);
   EXPECT_EQ(layout.max_frame_bytes(), layout.frame_bytes(5));
 }
@@ -100,6 +111,7 @@ TEST(StateFrame, RoundTripsEveryField) {
   EXPECT_EQ(h.lifecycle, static_cast<std::uint8_t>(numen::hal::LifecycleState::kActive));
   EXPECT_EQ(h.startup, static_cast<std::uint8_t>(numen::hal::StartupPhase::kOperational));
   EXPECT_EQ(h.sample_faults, numen::hal::SampleFault::kJump);
+  EXPECT_EQ(h.num_grasps, 1u);
 
   float pose[7];
   v.body_pose(0, pose);
@@ -132,6 +144,33 @@ TEST(StateFrame, RoundTripsEveryField) {
   EXPECT_FLOAT_EQ(loop[0], 0.02F);   // hand penetration
   EXPECT_FLOAT_EQ(loop[1], 3.5F);    // handle force
   EXPECT_FLOAT_EQ(loop[2], -0.25F);  // port energy
+  const numen::platform::FrameGrasp g = v.grasp(0);
+  EXPECT_FLOAT_EQ(g.body, 1.0F);
+  EXPECT_FLOAT_EQ(g.net, -1.0F);
+  EXPECT_FLOAT_EQ(g.held, 10.0F);  // a body held: its grip springs
+  EXPECT_FLOAT_EQ(g.opening, 0.1F);
+  EXPECT_FLOAT_EQ(g.grip_force, 1.5F);
+  EXPECT_FLOAT_EQ(g.grasps, 2.0F);
+  EXPECT_FLOAT_EQ(g.releases, 1.0F);
+  EXPECT_FLOAT_EQ(g.slips, 0.0F);
+}
+
+// Tissue held: the grasp item carries the net and its held nodes.
+TEST(StateFrame, CarriesAGraspOfTissue) {
+  Period p;
+  p.data.grasps[0].body = -1;
+  p.data.grasps[0].net = 0;
+  p.data.grasps[0].slips = 4;
+  std::vector<std::byte> buf(p.layout.max_frame_bytes());
+  const std::size_t n =
+      numen::platform::encode_state_frame(p.layout, p.data, p.report, p.torques, p.figures, buf);
+  StateFrameView v;
+  ASSERT_TRUE(StateFrameDecoder::decode(std::span(buf.data(), n), v).ok());
+  const numen::platform::FrameGrasp g = v.grasp(0);
+  EXPECT_FLOAT_EQ(g.body, -1.0F);
+  EXPECT_FLOAT_EQ(g.net, 0.0F);
+  EXPECT_FLOAT_EQ(g.held, 3.0F);  // held nodes
+  EXPECT_FLOAT_EQ(g.slips, 4.0F);
 }
 
 /// The `bytes` bytes at `at`, little-endian, as an unsigned number.
@@ -159,8 +198,8 @@ TEST(StateFrame, EachDeclaredFieldIsAtItsDeclaredOffset) {
     std::uint64_t want = 0;
     switch (f.id) {
       case FrameField::kMagic: want = 0x46564D4E; break;  // "NMVF"
-      case FrameField::kVersion: want = 2; break;
-      case FrameField::kHeaderBytes: want = 64; break;
+      case FrameField::kVersion: want = 3; break;
+      case FrameField::kHeaderBytes: want = 68; break;
       case FrameField::kFrameBytes: want = n; break;
       case FrameField::kNumBodies: want = 2; break;
       case FrameField::kNumNodes: want = 0; break;
@@ -182,10 +221,12 @@ TEST(StateFrame, EachDeclaredFieldIsAtItsDeclaredOffset) {
         break;
       case FrameField::kFaultCause: want = 0; break;  // none latched
       case FrameField::kSampleFaults: want = numen::hal::SampleFault::kJump; break;
+      case FrameField::kNumGrasps: want = 1; break;
     }
     EXPECT_EQ(got, want) << f.name << " at byte " << f.offset;
   }
-  // Counts B = 2, N = 0, C = 1, A = 3: each array's first float where the declaration puts it.
+  // Counts B = 2, N = 0, C = 1, A = 3, G = 1: each array's first float where the declaration
+  // puts it.
   std::size_t at = numen::platform::kStateFrameHeaderBytes;
   for (const numen::platform::StateFrameArray& a : numen::platform::kStateFrameArrays) {
     std::size_t items = 1;
@@ -193,6 +234,7 @@ TEST(StateFrame, EachDeclaredFieldIsAtItsDeclaredOffset) {
     if (a.count == FrameField::kNumNodes) items = 0;
     if (a.count == FrameField::kNumContacts) items = 1;
     if (a.count == FrameField::kNumAxes) items = 3;
+    if (a.count == FrameField::kNumGrasps) items = 1;
     float want = 0.0F;
     switch (a.id) {
       case FrameArray::kBodyPose: want = 0.01F; break;    // body 0's x
@@ -203,6 +245,7 @@ TEST(StateFrame, EachDeclaredFieldIsAtItsDeclaredOffset) {
       case FrameArray::kAxisTorque: want = 0.25F; break;  // axis 0
       case FrameArray::kPenetration: want = 0.0015F; break;  // tool penetration
       case FrameArray::kDeviceLoop: want = 0.02F; break;     // hand penetration
+      case FrameArray::kGrasp: want = 1.0F; break;           // the held body
     }
     if (items > 0) {
       const auto bits = static_cast<std::uint32_t>(frame_le_bytes(buf, at, 4));
@@ -218,14 +261,14 @@ TEST(StateFrame, IsLittleEndianOnTheWire) {
   std::vector<std::byte> buf(p.layout.max_frame_bytes());
   const std::size_t n =
       numen::platform::encode_state_frame(p.layout, p.data, p.report, p.torques, p.figures, buf);
-  ASSERT_GT(n, 64u);
+  ASSERT_GT(n, 68u);
   EXPECT_EQ(std::memcmp(buf.data(), "NMVF", 4), 0);
-  EXPECT_EQ(std::to_integer<int>(buf[4]), 2);  // version, low byte first
+  EXPECT_EQ(std::to_integer<int>(buf[4]), 3);  // version, low byte first
   EXPECT_EQ(std::to_integer<int>(buf[5]), 0);
   EXPECT_EQ(std::to_integer<int>(buf[32]), 42);  // period 42, low byte first
   // body 0's x = 0.01f: 0x3C23D70A, bytes 0A D7 23 3C
-  EXPECT_EQ(std::to_integer<int>(buf[64]), 0x0A);
-  EXPECT_EQ(std::to_integer<int>(buf[67]), 0x3C);
+  EXPECT_EQ(std::to_integer<int>(buf[68]), 0x0A);
+  EXPECT_EQ(std::to_integer<int>(buf[71]), 0x3C);
 }
 
 TEST(StateFrame, ContactsBeyondTheCapacityAreCutAndFlagged) {
@@ -249,6 +292,10 @@ TEST(StateFrame, RefusesDataThatDoesNotMatchTheLayout) {
   StateFrameLayout wrong = p.layout;
   wrong.num_bodies = 3;
   std::vector<std::byte> big(wrong.max_frame_bytes());
+  EXPECT_EQ(numen::platform::encode_state_frame(wrong, p.data, p.report, p.torques, p.figures, big), 0u);
+  wrong = p.layout;
+  wrong.num_grasps = 2;  // one grasper in the Data
+  big.resize(wrong.max_frame_bytes());
   EXPECT_EQ(numen::platform::encode_state_frame(wrong, p.data, p.report, p.torques, p.figures, big), 0u);
   const std::array<double, 2> two{0.0, 0.0};
   EXPECT_EQ(numen::platform::encode_state_frame(p.layout, p.data, p.report, two, p.figures, buf), 0u);
@@ -297,13 +344,13 @@ TEST(StateFrameDecoder, RejectsEveryMalformedFrameWithItsOffset) {
   buf.resize(n);
   StateFrameView v;
   auto decode = [&](std::vector<std::byte> b) { return StateFrameDecoder::decode(b, v).error; };
-  EXPECT_NE(decode({}).find("shorter than its 64-byte header"), std::string::npos);
+  EXPECT_NE(decode({}).find("shorter than its 68-byte header"), std::string::npos);
   auto b = buf;
   b[0] = std::byte{'X'};
   EXPECT_NE(decode(b).find("byte 0: not a state frame"), std::string::npos);
   b = buf;
-  b[4] = std::byte{3};
-  EXPECT_NE(decode(b).find("byte 4: frame version 3"), std::string::npos);
+  b[4] = std::byte{2};  // the version before the graspers
+  EXPECT_NE(decode(b).find("byte 4: frame version 2, this reader knows 3"), std::string::npos);
   b = buf;
   b.pop_back();
   EXPECT_NE(decode(b).find("byte 8: frame size field"), std::string::npos);
@@ -313,6 +360,9 @@ TEST(StateFrameDecoder, RejectsEveryMalformedFrameWithItsOffset) {
   b = buf;
   b[19] = std::byte{0xFF};  // ~4e9 nodes: no overflow, no read past the end
   EXPECT_NE(decode(b).find("byte 12: counts"), std::string::npos);
+  b = buf;
+  b[64] = std::byte{2};  // two graspers, one there
+  EXPECT_NE(decode(b).find("graspers 2) need"), std::string::npos) << decode(b);
   b = buf;
   b[28] = std::byte{5};
   EXPECT_NE(decode(b).find("byte 28: held body 5"), std::string::npos);

@@ -143,7 +143,8 @@ ViewRecordingReader::ViewRecordingReader(const std::string& path) : path_(path) 
         throw bad(name, json_input::shown(*it) + ", expected a count (a whole number >= 0)");
       return it->get<std::uint64_t>();
     };
-    const std::uint64_t bodies = count("bodies"), nodes = count("nodes"), axes = count("axes");
+    const std::uint64_t bodies = count("bodies"), nodes = count("nodes"), axes = count("axes"),
+                        grasps = count("grasps");
     at += *scene_bytes;
 
     std::vector<std::byte> buffer;
@@ -160,11 +161,13 @@ ViewRecordingReader::ViewRecordingReader(const std::string& path) : path_(path) 
       if (!result.ok())
         throw fail(at, "frame " + std::to_string(index_.size()) + ": " + result.error);
       const auto& h = view.header();
-      if (h.num_bodies != bodies || h.num_nodes != nodes || h.num_axes != axes)
+      if (h.num_bodies != bodies || h.num_nodes != nodes || h.num_axes != axes ||
+          h.num_grasps != grasps)
         throw fail(at, "frame " + std::to_string(index_.size()) + " has " + std::to_string(h.num_bodies) +
                            " bodies, " + std::to_string(h.num_nodes) + " nodes, " + std::to_string(h.num_axes) +
-                           " axes; the scene message says " + std::to_string(bodies) + ", " +
-                           std::to_string(nodes) + ", " + std::to_string(axes));
+                           " axes, " + std::to_string(h.num_grasps) + " graspers; the scene message says " +
+                           std::to_string(bodies) + ", " + std::to_string(nodes) + ", " +
+                           std::to_string(axes) + ", " + std::to_string(grasps));
       if (!index_.empty() && h.period <= index_.back().period)
         throw fail(at, "frame " + std::to_string(index_.size()) + " is period " + std::to_string(h.period) +
                            ", not after the previous frame's " + std::to_string(index_.back().period));

@@ -124,6 +124,7 @@ platform::StateFrameLayout view_frame_layout(const Scene& scene) {
   layout.num_axes = static_cast<std::uint32_t>(scene.device.axes.size());
   layout.max_contacts =
       static_cast<std::uint32_t>(core::kMaxContacts + (m.num_nets() > 0 ? core::kMaxNodeContacts : 0));
+  layout.num_grasps = static_cast<std::uint32_t>(m.grasps.size());
   return layout;
 }
 
@@ -173,6 +174,9 @@ std::string view_scene_message(const Scene& scene, const platform::StateFrameLay
                       {"frame_child", pose(j.frame_child)}});
   json axes = json::array();
   for (const hal::AxisConfig& a : scene.device.axes) axes.push_back(a.name);
+  json grasps = json::array();
+  for (const core::GraspModel& g : m.grasps)
+    grasps.push_back({{"name", g.name}, {"jaws", json::array({g.jaws[0], g.jaws[1]})}});
   const json message{
       {"format", "numen-view"},
       {"version", kViewSceneVersion},
@@ -186,12 +190,14 @@ std::string view_scene_message(const Scene& scene, const platform::StateFrameLay
        {{"bodies", layout.num_bodies},
         {"nodes", layout.num_nodes},
         {"axes", layout.num_axes},
-        {"max_contacts", layout.max_contacts}}},
+        {"max_contacts", layout.max_contacts},
+        {"grasps", layout.num_grasps}}},
       {"attached_body", m.initial_held_body},
       {"bodies", std::move(bodies)},
       {"obstacles", std::move(obstacles)},
       {"nets", std::move(nets)},
       {"joints", std::move(joints)},
+      {"grasps", std::move(grasps)},
       {"device",
        {{"name", scene.device.name},
         {"kind", hal::to_string(scene.device.kind)},

@@ -4,10 +4,12 @@
 #include "numen/sim/view/view_series.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
+#include <utility>
 #include <vector>
 
 #include "numen/platform/state_frame.hpp"
@@ -32,8 +34,9 @@ std::string view_replay_series(ViewFrameSource& source, std::size_t max_points) 
   const std::size_t n = source.frame_count();
   std::vector<FramePoint> all(n);
   std::vector<std::byte> bytes;
-  nlohmann::json events = nlohmann::json::array();
-  std::size_t event_count = 0;
+  nlohmann::json events = nlohmann::json::array(), grasp_events = nlohmann::json::array();
+  std::size_t event_count = 0, grasp_event_count = 0;
+  std::vector<platform::FrameGrasp> grasps;  // the previous frame's graspers
   for (std::size_t k = 0; k < n; ++k) {
     source.read_frame(k, bytes);
     platform::StateFrameView v;
@@ -61,6 +64,28 @@ std::string view_replay_series(ViewFrameSource& source, std::size_t max_points) 
         events.push_back({{"frame", k}, {"t", round6(p.t)}, {"lifecycle", p.lifecycle},
                           {"step_status", p.step_status}, {"fault_cause", p.fault_cause}});
       ++event_count;
+    }
+    // Grasp events: a grasper's grasp, release or slip count grew since the previous frame.
+    if (k == 0) grasps.assign(h.num_grasps, platform::FrameGrasp{-1, -1, 0, 0, 0, 0, 0, 0});
+    for (std::uint32_t g = 0; g < h.num_grasps && g < grasps.size(); ++g) {
+      const platform::FrameGrasp now = v.grasp(g), before = grasps[g];
+      // In the order they happened: holding now, the last one is the grasp (an end before it
+      // let go of what the previous frame held); not holding, the grasp came first.
+      const bool holding = now.body >= 0 || now.net >= 0;
+      const std::pair<const char*, double> grasp{"grasp", now.grasps - before.grasps},
+          release{"release", now.releases - before.releases}, slip{"slip", now.slips - before.slips};
+      const std::array<std::pair<const char*, double>, 3> kinds =
+          holding ? std::array{release, slip, grasp} : std::array{grasp, release, slip};
+      for (const auto& [kind, grew] : kinds) {
+        if (!(grew > 0)) continue;
+        const bool ended = kind[0] != 'g';
+        if (grasp_events.size() < kViewSeriesMaxEvents)
+          grasp_events.push_back({{"frame", k}, {"t", round6(p.t)}, {"grasper", g}, {"event", kind},
+                                  {"body", static_cast<int>(ended ? before.body : now.body)},
+                                  {"net", static_cast<int>(ended ? before.net : now.net)}});
+        ++grasp_event_count;
+      }
+      grasps[g] = now;
     }
   }
   const std::size_t stride = std::max<std::size_t>(1, (n + max_points - 1) / std::max<std::size_t>(1, max_points));
@@ -102,7 +127,8 @@ std::string view_replay_series(ViewFrameSource& source, std::size_t max_points) 
                          {"intent_mm", intent},
                          {"force_n", force},    {"step_us", step},       {"contacts", contacts},
                          {"lifecycle", lifecycle}, {"step_status", status}, {"events", events},
-                         {"event_count", event_count}};
+                         {"event_count", event_count}, {"grasp_events", grasp_events},
+                         {"grasp_event_count", grasp_event_count}};
   return j.dump();
 }
 

@@ -47,9 +47,11 @@ export function showFault(fr, managed) {
   return banner.textContent;
 }
 
-/// Marks the replay timeline (#marks, under the slider) at the series' events; a click on a
-/// mark calls seek(frame). Returns the marks drawn.
-export function markTimeline(series, frames, seek) {
+/// Marks the replay timeline (#marks, under the slider) at the series' events and its grasp
+/// events (`grasperName(i)`, `objectName(body, net)` name them in the mark's tooltip); a click on
+/// a mark calls seek(frame). Returns the marks drawn.
+export function markTimeline(series, frames, seek, grasperName = (i) => 'grasper ' + i,
+                             objectName = (b, n) => (b >= 0 ? 'body ' + b : n >= 0 ? 'net ' + n : '?')) {
   const el = document.getElementById('marks');
   el.textContent = '';
   if (!series || !frames) return 0;
@@ -64,6 +66,15 @@ export function markTimeline(series, frames, seek) {
     m.title = `t = ${e.t.toFixed(3)} s: ${LIFECYCLE[e.lifecycle] ?? e.lifecycle}` +
               (e.fault_cause ? ' (' + (FAULT_CAUSES[e.fault_cause] ?? e.fault_cause) + ')' : '') +
               (e.step_status ? ', step: ' + bits(e.step_status, STEP) : '');
+    m.onclick = () => seek(e.frame);
+    el.appendChild(m);
+    ++n;
+  }
+  for (const e of series.grasp_events ?? []) {
+    const m = document.createElement('span');
+    m.className = 'mark ' + e.event;  // grasp, release, slip
+    m.style.left = (100 * e.frame / Math.max(1, frames - 1)) + '%';
+    m.title = `t = ${e.t.toFixed(3)} s: ${e.event} ${grasperName(e.grasper)}: ${objectName(e.body, e.net)}`;
     m.onclick = () => seek(e.frame);
     el.appendChild(m);
     ++n;

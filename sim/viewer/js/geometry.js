@@ -6,7 +6,7 @@ import { FLOATS } from './protocol.js';
 import { hasFineSurface, fineSurface } from './fine_surface.js';
 
 /// Colours of what is drawn (the legend's too).
-export const COLORS = { tool: 0xff8800, body: 0x9aa4b0, ghost: 0x00c8ff, obstacle: 0xc0504d,
+export const COLORS = { tool: 0xff8800, body: 0x9aa4b0, held: 0xd040d0, ghost: 0x00c8ff, obstacle: 0xc0504d,
                         plane: 0x707a68, box: 0xb09060, net: 0x60c060, coarseNet: 0x1e5a1e,
                         spheres: 0xf0f0a0 };
 export const sphereGeo = new THREE.SphereGeometry(1, 24, 16);
@@ -286,6 +286,7 @@ export function showBodies(fr) {
   const { h } = fr;
   if (h.num_bodies !== G.bodies.length) throw new Error('frame has ' + h.num_bodies + ' bodies, scene ' + G.bodies.length);
   const P = FLOATS.body_pose, T = FLOATS.target_pose;
+  const held = heldBodies(fr);
   for (let b = 0; b < h.num_bodies; ++b) {
     const p = fr.body_pose.subarray(P * b, P * b + P);
     G.bodies[b].position.set(p[0], p[1], p[2]);
@@ -294,7 +295,7 @@ export function showBodies(fr) {
     G.ghosts[b].visible = t[T - 1] !== 0;  // the target flag, after the pose
     G.ghosts[b].position.set(t[0], t[1], t[2]);
     G.ghosts[b].quaternion.set(t[3], t[4], t[5], t[6]);
-    G.bodies[b].userData.material.color.setHex(b === h.attached_body ? COLORS.tool : COLORS.body);
+    G.bodies[b].userData.material.color.setHex(b === h.attached_body ? COLORS.tool : held.has(b) ? COLORS.held : COLORS.body);
   }
   for (const { net, geo, fine } of G.nets) {
     const pos = geo.attributes.position.array;
@@ -305,6 +306,13 @@ export function showBodies(fr) {
     else if (geo.index) geo.computeVertexNormals();
     geo.computeBoundingSphere();
   }
+}
+
+/// The bodies the frame's graspers hold (its grasp array: the held body first of each item).
+export function heldBodies(fr) {
+  const out = new Set(), K = FLOATS.grasp, g = fr.grasp;
+  for (let i = 0; g && i < fr.h.num_grasps; ++i) if (g[K * i] >= 0) out.add(g[K * i]);
+  return out;
 }
 
 /// Shows the joint axes (each joint's frame on its child) or hides them.

@@ -33,7 +33,7 @@ function onSession(m) {
   S.session = m;
   if (m.mode === 'replay') {
     setupReplay(params.has('frame') ? Number(params.get('frame')) : null);
-    marks = markTimeline(m.series, m.frames, seek);
+    marks = markTimeline(m.series, m.frames, seek, grasperName, objectName);
     plotSeries(m.series, seek);
   } else {
     liveReset();  // a new connection is a new run: its frames start again
@@ -42,7 +42,27 @@ function onSession(m) {
   if (!S.last) setStatus(m.mode === 'live' ? 'live: waiting for frames…' : 'replay');
 }
 
-let banner = '', contactText = '';
+let banner = '', contactText = '', graspText = '';
+
+/// The scene's name of grasper i, of what a grasp holds (a body or a net's tissue).
+const grasperName = (i) => S.scene?.grasps?.[i]?.name ?? 'grasper ' + i;
+const objectName = (b, n) => (b >= 0 ? S.scene.bodies[b]?.name ?? 'body ' + b
+                              : n >= 0 ? (S.scene.nets[n]?.name ?? 'net ' + n) + ' (tissue)' : 'something');
+
+/// One line per grasper of frame fr: what it holds (the grip's springs or the held nodes, its
+/// pull) or that it is open, with its jaws' opening; '' without graspers.
+function graspLines(fr) {
+  const K = FLOATS.grasp, g = fr.grasp;
+  let out = '';
+  for (let i = 0; i < fr.h.num_grasps; ++i) {
+    const [body, net, held, opening, pull] = g.subarray(K * i, K * i + 5);
+    const deg = (opening * 180 / Math.PI).toFixed(1);
+    out += `\ngrasp ${grasperName(i)}: ` + (body >= 0 || net >= 0
+      ? `holds ${objectName(body, net)} (${held} ${body >= 0 ? 'springs' : 'nodes'}, pull ${pull.toFixed(2)} N)`
+      : 'empty') + `, jaws ${deg}°`;
+  }
+  return out;
+}
 /// Draws frame fr (the view, the banner, the status); the toggles redraw the frame shown.
 function draw(fr) {
   const { h } = fr;
@@ -65,11 +85,12 @@ function draw(fr) {
   banner = showFault(fr, managed);
   contactText = `contacts: ${h.num_contacts}${h.num_contacts > drawn && contactsOn ? ` (${drawn} drawn)` : ''}` +
                 `${contactsOn ? `, ${arrows} force arrows` : ''}   |F| = ${fmag.toFixed(2)} N`;
+  graspText = graspLines(fr);
   setStatus(
     `t = ${fr.time_s.toFixed(3)} s   period ${h.period}\n` +
     `lifecycle: ${LIFECYCLE[h.lifecycle] ?? h.lifecycle}` +
     (managed ? `   start-up: ${STARTUP[h.startup] ?? h.startup}` : `   (${protocol} protocol)`) + '\n' +
-    `flags: ${bits(h.flags, FLAGS)}\nstep: ${h.step_status ? bits(h.step_status, STEP) : 'ok'}\n` + contactText);
+    `flags: ${bits(h.flags, FLAGS)}\nstep: ${h.step_status ? bits(h.step_status, STEP) : 'ok'}\n` + contactText + graspText);
   showPick(fr);
   requestRender();
   return fmag;
@@ -161,9 +182,9 @@ window.numenView = {
   probe() {
     const last = S.last;
     const p = { errors, framesShown: S.framesShown, framesReceived: S.framesReceived, mode: S.session?.mode ?? null,
-                period: last?.h.period ?? null, colors: { tool: COLORS.tool, ghost: COLORS.ghost },
+                period: last?.h.period ?? null, colors: { tool: COLORS.tool, ghost: COLORS.ghost, held: COLORS.held },
                 link: { state: link.state, reconnects: link.reconnects, attempts: link.attempts },
-                banner, marks };
+                banner, marks, grasps: graspText.trim() };
     if (last && last.h.attached_body >= 0) {
       const b = last.h.attached_body;
       p.tool = project(G.bodies[b], b);
@@ -175,6 +196,7 @@ window.numenView = {
     if (S.session?.mode === 'replay') p.index = replay.index;
     else p.live = { buffered: live.frames.length, paused: live.paused, firstPeriod: live.frames[0]?.h.period ?? null };
     p.plotPoints = plotPoints();
+    p.graspEvents = S.session?.series?.grasp_events ?? [];
     p.series = S.session?.series ? { frames: S.session.series.frames, stride: S.session.series.stride } : null;
     p.pick = pick;
     p.scale = { ...forceScale };

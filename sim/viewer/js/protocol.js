@@ -12,9 +12,9 @@ const READ = {
 // What this page reads of a frame: a layout without one of these is refused by name.
 const USED_FIELDS = ['magic', 'version', 'header_bytes', 'frame_bytes', 'num_bodies', 'num_nodes',
                      'num_contacts', 'num_axes', 'attached_body', 'period', 'time_ns', 'step_status',
-                     'flags', 'step_ns', 'lifecycle', 'startup', 'fault_cause'];
+                     'flags', 'step_ns', 'lifecycle', 'startup', 'fault_cause', 'num_grasps'];
 const USED_ARRAYS = ['body_pose', 'target_pose', 'node_position', 'contact', 'feedback', 'penetration',
-                     'device_loop'];
+                     'device_loop', 'grasp'];
 let frameLayout = null;  // the session message's frame_layout, checked
 /// Floats per item, by array name (from the layout).
 export const FLOATS = {};

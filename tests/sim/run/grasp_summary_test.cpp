@@ -16,6 +16,8 @@
 #include "numen/sim/run/run.hpp"
 #include "numen/sim/run/run_summary.hpp"
 #include "numen/sim/scene/scene.hpp"
+#include "numen/sim/view/view_recording.hpp"
+#include "numen/sim/view/view_series.hpp"
 #include "scene_text.hpp"
 #include "temp_dir.hpp"
 
@@ -52,6 +54,7 @@ TEST(GraspSummary, TheDefaultRecordingGraspsTheOrgansTissueAndTheSummaryListsIt)
   numen::sim::RunOptions opt;
   opt.duration_s = 9.0;
   opt.trace_path = (dir / "trace.csv").string();
+  opt.record_view_path = (dir / "run.nmv").string();
   const numen::sim::RunSummary s = numen::sim::run_scene(scene, opt);
   EXPECT_FALSE(s.nan_detected);
   EXPECT_TRUE(s.grasping);
@@ -83,6 +86,22 @@ TEST(GraspSummary, TheDefaultRecordingGraspsTheOrgansTissueAndTheSummaryListsIt)
   }
   EXPECT_EQ(changes_up, s.grasps_started);
   EXPECT_EQ(changes_down, s.grasps_released + s.grasps_slipped);
+  // The view recording's frames (60 Hz) carry the grasper: its replay series lists the same
+  // events, each at the first frame after it (docs/viewer.md, "Plots over the whole recording").
+  const numen::sim::ViewRecordingReader reader(opt.record_view_path);
+  numen::sim::ViewRecordingSource source(reader);
+  const nlohmann::json series = nlohmann::json::parse(numen::sim::view_replay_series(source));
+  ASSERT_EQ(series["grasp_event_count"].get<std::size_t>(), s.grasp_events.size()) << series["grasp_events"];
+  for (std::size_t i = 0; i < s.grasp_events.size(); ++i) {
+    const nlohmann::json& e = series["grasp_events"][i];
+    const double t = std::stod(s.grasp_events[i]);  // "6.968 s grasp grasper: organ (5 nodes)"
+    EXPECT_NE(s.grasp_events[i].find(" " + e["event"].get<std::string>() + " grasper: organ"), std::string::npos)
+        << s.grasp_events[i] << " against " << e;
+    EXPECT_GE(e["t"].get<double>(), t - 1e-3) << e;
+    EXPECT_LE(e["t"].get<double>(), t + 1.0 / 60.0 + 2e-3) << e;
+    EXPECT_EQ(e["grasper"], 0);
+    EXPECT_EQ(e["net"], 0) << e;  // the organ's tissue
+  }
 }
 
 TEST(GraspSummary, ASceneWithoutAGrasperWritesNoGraspFigures) {

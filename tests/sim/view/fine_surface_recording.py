@@ -43,8 +43,9 @@ def write_recording(path, scene, frames):
 
 def node_positions(frame):
     """The frame's node positions (docs/viewer.md "Frames"): [(x, y, z)] float32 as sent."""
+    (header_bytes,) = struct.unpack_from("<H", frame, 6)
     num_bodies, num_nodes = struct.unpack_from("<II", frame, 12)
-    off = 64 + 4 * (7 + 8) * num_bodies
+    off = header_bytes + 4 * (7 + 8) * num_bodies
     xs = struct.unpack_from("<%df" % (3 * num_nodes), frame, off)
     return [xs[3 * i:3 * i + 3] for i in range(num_nodes)]
 

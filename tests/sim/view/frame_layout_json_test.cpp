@@ -120,9 +120,10 @@ TEST(FrameLayoutJson, AFrameDecodedFromTheJsonReadsWhatTheViewReads) {
       {"lifecycle", h.lifecycle},
       {"startup", h.startup},
       {"fault_cause", h.fault_cause},
-      {"version", 2},
-      {"header_bytes", 64},
-      {"sample_faults", h.sample_faults}};
+      {"version", 3},
+      {"header_bytes", 68},
+      {"sample_faults", h.sample_faults},
+      {"num_grasps", h.num_grasps}};
   const auto j = nlohmann::json::parse(numen::sim::state_frame_layout_json());
   std::map<std::string, std::int64_t> fields;
   for (const auto& f : j.at("header")) {

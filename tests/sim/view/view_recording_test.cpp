@@ -167,20 +167,28 @@ std::string recording_bytes(const std::string& scene) {
 // nothing ("[json.exception.type_error.302] type must be string, but is object").
 TEST(ViewRecording, ASceneMessageMemberOfTheWrongTypeIsNamedByItsKey) {
   TempDir dir;
-  const std::string layout = R"("layout": {"bodies": 2, "nodes": 0, "axes": 3})";
+  const std::string layout = R"("layout": {"bodies": 2, "nodes": 0, "axes": 3, "grasps": 0})";
+  const std::string v = std::to_string(numen::sim::kViewSceneVersion);
   const std::vector<std::pair<std::string, std::string>> cases = {
-      {R"({"format": {"a": 1}, "version": 1, )" + layout + "}", "format"},
-      {R"({"format": 1, "version": 1, )" + layout + "}", "format"},
-      {R"({"format": "numen-view", "version": "1", )" + layout + "}", "version"},
+      {R"({"format": {"a": 1}, "version": )" + v + ", " + layout + "}", "format"},
+      {R"({"format": 1, "version": )" + v + ", " + layout + "}", "format"},
+      {R"({"format": "numen-view", "version": ")" + v + "\", " + layout + "}", "version"},
       {R"({"format": "numen-view", "version": 1.5, )" + layout + "}", "version"},
-      {R"({"format": "numen-view", "version": 1})", "layout"},
-      {R"({"format": "numen-view", "version": 1, "layout": [2, 0, 3]})", "layout"},
-      {R"({"format": "numen-view", "version": 1, "layout": {"bodies": -2, "nodes": 0, "axes": 3}})",
+      {R"({"format": "numen-view", "version": )" + std::to_string(numen::sim::kViewSceneVersion - 1) +
+           ", " + layout + "}",
+       "version"},
+      {R"({"format": "numen-view", "version": )" + v + "}", "layout"},
+      {R"({"format": "numen-view", "version": )" + v + R"(, "layout": [2, 0, 3]})", "layout"},
+      {R"({"format": "numen-view", "version": )" + v +
+           R"(, "layout": {"bodies": -2, "nodes": 0, "axes": 3, "grasps": 0}})",
        "layout.bodies"},
-      {R"({"format": "numen-view", "version": 1, "layout": {"bodies": 2, "nodes": "0", "axes": 3}})",
+      {R"({"format": "numen-view", "version": )" + v +
+           R"(, "layout": {"bodies": 2, "nodes": "0", "axes": 3, "grasps": 0}})",
        "layout.nodes"},
-      {R"({"format": "numen-view", "version": 1, "layout": {"bodies": 2, "nodes": 0}})",
+      {R"({"format": "numen-view", "version": )" + v + R"(, "layout": {"bodies": 2, "nodes": 0, "grasps": 0}})",
        "layout.axes"},
+      {R"({"format": "numen-view", "version": )" + v + R"(, "layout": {"bodies": 2, "nodes": 0, "axes": 3}})",
+       "layout.grasps"},
   };
   for (const auto& [scene, key] : cases) {
     const std::string path = write_bytes(dir, "bad.nmv", recording_bytes(scene));
@@ -201,7 +209,7 @@ TEST(ViewRecording, ASceneMessageMemberOfTheWrongTypeIsNamedByItsKey) {
   // The members as a recorder writes them: accepted (no frames).
   EXPECT_EQ(reader_error(write_bytes(
                 dir, "good.nmv",
-                recording_bytes(R"({"format": "numen-view", "version": 1, )" + layout + "}"))),
+                recording_bytes(R"({"format": "numen-view", "version": )" + v + ", " + layout + "}"))),
             "");
 }
 

@@ -28,6 +28,10 @@ net (fine_surface_recording.py):
     vertices are where the formula of docs/viewer.md puts them from the frame's node positions.
 On a run that latches a fault (the lattice scene on a bus losing 30 % of its frames):
   - the fault banner shows, with its cause, and the replay timeline has its mark.
+
+On the default scene with a grasper on its jaws (7.3 s of the recording, which grasps the organ):
+  - the timeline marks each grasp and release, and at the grasp's frame the panel names what
+    the grasper holds.
 Exit 0: passed; 1: failed; 77: skipped, only when Chromium is not installed.
 
     tests/sim/view/viewer_browser_test.py --numen build/numen --out DIR \\
@@ -525,24 +529,31 @@ def check_live(numen, browser, duration=8.0):
     return failures
 
 
-def check_fault(numen, browser, out):
-    """A run that latches (the default scene on a bus losing 30 % of its frames): the replay's
-    last frame shows the fault banner with its cause, and the timeline marks it."""
-    scenes = os.path.join(out, "latch", "scenes")
+def record_scene_text(numen, out, name, text, duration):
+    """Records `duration` s of the scene `text` (a shipped scene changed) as record() does; the
+    scene is written to OUT/NAME/scenes/NAME.toml beside links to the shipped data and device
+    files, so that it finds them by the shipped scenes' relative paths."""
+    scenes = os.path.join(out, name, "scenes")
     os.makedirs(scenes, exist_ok=True)
-    for link, target in ((os.path.join(out, "latch", "data"), os.path.join(ROOT, "sim", "data")),
+    for link, target in ((os.path.join(out, name, "data"), os.path.join(ROOT, "sim", "data")),
                          (os.path.join(scenes, "devices"), os.path.join(ROOT, "sim", "scenes", "devices"))):
         if not os.path.islink(link):
             os.symlink(target, link)
+    scene = os.path.join(scenes, name + ".toml")
+    with open(scene, "w") as f:
+        f.write(text)
+    return record(numen, out, name, scene, duration)
+
+
+def check_fault(numen, browser, out):
+    """A run that latches (the default scene on a bus losing 30 % of its frames): the replay's
+    last frame shows the fault banner with its cause, and the timeline marks it."""
     with open(LATTICE) as f:
         text = f.read()
     text, n = re.subn(r"(?m)^drop_probability = 0\.0", "drop_probability = 0.3", text)
     if n != 1:
         return ["fault: lattice.toml has no [bus] drop_probability = 0.0 line to change"]
-    scene = os.path.join(scenes, "latch.toml")
-    with open(scene, "w") as f:
-        f.write(text)
-    rec, r = record(numen, out, "latch", scene, 2.0)
+    rec, r = record_scene_text(numen, out, "latch", text, 2.0)
     if r.returncode != 3:
         return ["fault: the lossy-bus run exited %d, not 3 (safety stop)\n%s" % (r.returncode, r.stderr)]
     viewer = Viewer(numen, rec)
@@ -565,6 +576,48 @@ def check_fault(numen, browser, out):
         if p["marks"] < 1:
             failures.append("fault: the replay timeline has no mark")
         failures += page_failures(page, "fault")
+    finally:
+        f = viewer.stop()
+        if f:
+            failures.append(f)
+    return failures
+
+
+def check_grasp(numen, browser, out):
+    """The default scene with a grasper on its jaws (docs/grasping.md "On the shipped recording":
+    the recorded motion grasps the organ's tissue at ~6.97 s): the replay timeline marks each
+    grasp and release of the recording's series, and at a grasp's frame the panel says what the
+    grasper holds."""
+    with open(os.path.join(ROOT, "sim", "scenes", "default.toml")) as f:
+        text = f.read()
+    text += '\n[[grasp]]\nname = "grasper"\njaws = ["jaw_1", "jaw_2"]\n'
+    rec, r = record_scene_text(numen, out, "grasp", text, 7.3)
+    if r.returncode != 0:
+        return ["grasp: the run exited %d\n%s" % (r.returncode, r.stderr)]
+    viewer = Viewer(numen, rec)
+    failures = []
+    try:
+        page = open_page(browser, viewer.url, "?frame=0&w=%d&h=%d" % (VIEW_W, VIEW_H))
+        p = page.eval("numenView.probe()")
+        events = p["graspEvents"]
+        kinds = [e["event"] for e in events]
+        print("grasp: the series' grasp events %s, %d timeline marks" % (kinds, p["marks"]))
+        if "grasp" not in kinds or "release" not in kinds:
+            failures.append("grasp: the recording's series has no grasp and release (%s)" % events)
+        elif p["marks"] < len(events):
+            failures.append("grasp: %d timeline marks for %d grasp events" % (p["marks"], len(events)))
+        else:
+            first = next(e for e in events if e["event"] == "grasp")
+            page.eval("numenView.seek(%d)" % first["frame"])
+            if page.wait("numenView.probe().index === %d" % first["frame"], 10) is None:
+                failures.append("grasp: frame %d never shown" % first["frame"])
+            else:
+                text = page.eval("numenView.probe().grasps")
+                print("grasp: at frame %d (t = %.3f s) the panel says %r" % (first["frame"], first["t"], text))
+                if "grasp grasper: holds organ (tissue)" not in text:
+                    failures.append("grasp: at the grasp's frame the panel says %r" % text)
+        failures += page_failures(page, "grasp")
+        page.send("Page.close")
     finally:
         f = viewer.stop()
         if f:
@@ -652,6 +705,7 @@ def main():
             failures += check_live(a.numen, browser)
             failures += check_fine_surface(a.numen, browser, a.out)
             failures += check_fault(a.numen, browser, a.out)
+            failures += check_grasp(a.numen, browser, a.out)
     shutil.rmtree(profile, ignore_errors=True)
     for f in failures:
         print("FAIL: " + f)

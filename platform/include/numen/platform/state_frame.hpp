@@ -1,9 +1,9 @@
 #pragma once
 /// @file state_frame.hpp
 /// The state frame: one period of the simulated world, as the viewer and any other renderer
-/// receive it (docs/viewer.md, "Frames"). A frame is a little-endian byte string of a 64-byte
+/// receive it (docs/viewer.md, "Frames"). A frame is a little-endian byte string of a 68-byte
 /// header followed by float32 arrays; its size depends only on the scene (bodies, net nodes,
-/// axes) and on the contacts of the period. The loop writes it straight into a preallocated
+/// axes, graspers) and on the contacts of the period. The loop writes it straight into a preallocated
 /// buffer (encode_state_frame(): noexcept, no allocation); readers check it with
 /// decode_state_frame(), which never reads past the bytes it is given.
 ///
@@ -33,9 +33,9 @@ namespace numen::platform {
 /// First bytes of every frame.
 inline constexpr char kStateFrameMagic[4] = {'N', 'M', 'V', 'F'};
 /// Version written by encode_state_frame() and the only one decode_state_frame() accepts.
-inline constexpr std::uint16_t kStateFrameVersion = 2;
+inline constexpr std::uint16_t kStateFrameVersion = 3;
 /// Size of the fixed header, bytes.
-inline constexpr std::size_t kStateFrameHeaderBytes = 64;
+inline constexpr std::size_t kStateFrameHeaderBytes = 68;
 
 /// Bytes of each float32 of the arrays.
 inline constexpr std::size_t kFrameFloatBytes = sizeof(float);
@@ -79,7 +79,7 @@ constexpr std::string_view frame_field_type_name(FrameFieldType t) noexcept {
 enum class FrameField : std::uint8_t {
   kMagic, kVersion, kHeaderBytes, kFrameBytes, kNumBodies, kNumNodes, kNumContacts, kNumAxes,
   kHeldBody, kPeriod, kTimeNs, kStepStatus, kFlags, kStepNs, kLifecycle, kStartup, kFaultCause,
-  kSampleFaults
+  kSampleFaults, kNumGrasps
 };
 
 /// One field of the header.
@@ -90,11 +90,11 @@ struct StateFrameField {
   FrameFieldType type;    ///< Wire type (its size: frame_field_bytes()).
 };
 
-/// The 64-byte header, field by field (names as StateFrameHeader's members):
+/// The 68-byte header, field by field (names as StateFrameHeader's members):
 ///
 ///     magic          "NMVF" (kStateFrameMagic)
-///     version        kStateFrameVersion (2)
-///     header_bytes   kStateFrameHeaderBytes (64)
+///     version        kStateFrameVersion (3)
+///     header_bytes   kStateFrameHeaderBytes (68)
 ///     frame_bytes    the whole frame, bytes
 ///     num_bodies     B: bodies
 ///     num_nodes      N: net nodes
@@ -113,7 +113,8 @@ struct StateFrameField {
 ///     sample_faults  hal::SampleFault bits of the device's samples in the periods since the
 ///                    previous frame of the stream (OR'ed: a rejection between two frames is
 ///                    not lost to the decimation); the period's own when every period is sent
-inline constexpr std::array<StateFrameField, 18> kStateFrameFields{{
+///     num_grasps     G: graspers (core::Model::grasps)
+inline constexpr std::array<StateFrameField, 19> kStateFrameFields{{
     {FrameField::kMagic, "magic", 0, FrameFieldType::kChar4},
     {FrameField::kVersion, "version", 4, FrameFieldType::kU16},
     {FrameField::kHeaderBytes, "header_bytes", 6, FrameFieldType::kU16},
@@ -132,6 +133,7 @@ inline constexpr std::array<StateFrameField, 18> kStateFrameFields{{
     {FrameField::kStartup, "startup", 61, FrameFieldType::kU8},
     {FrameField::kFaultCause, "fault_cause", 62, FrameFieldType::kU8},
     {FrameField::kSampleFaults, "sample_faults", 63, FrameFieldType::kU8},
+    {FrameField::kNumGrasps, "num_grasps", 64, FrameFieldType::kU32},
 }};
 
 /// The declaration of header field `f`.
@@ -142,7 +144,7 @@ constexpr const StateFrameField& frame_field(FrameField f) noexcept {
 /// The arrays after the header, in their order: each one's index in kStateFrameArrays.
 enum class FrameArray : std::uint8_t {
   kBodyPose, kTargetPose, kNodePosition, kContact, kFeedback, kAxisTorque, kPenetration,
-  kDeviceLoop
+  kDeviceLoop, kGrasp
 };
 
 /// One float32 array after the header: `count` items of `floats` floats each.
@@ -150,7 +152,7 @@ struct StateFrameArray {
   FrameArray id;                    ///< Its index in kStateFrameArrays.
   std::string_view name;            ///< The name StateFrameView's accessor and the page use.
   std::size_t floats;               ///< float32 values per item.
-  std::optional<FrameField> count;  ///< Header count of items (B, N, C, A); none: one item.
+  std::optional<FrameField> count;  ///< Header count of items (B, N, C, A, G); none: one item.
 };
 
 /// The arrays, in order from byte kStateFrameHeaderBytes, each item's floats:
@@ -171,7 +173,13 @@ struct StateFrameArray {
 ///                            force of the hand on the handle (N, 0 in replay), the energy
 ///                            that flowed into the device port so far (J, Hannaford & Ryu's
 ///                            observer; 0 in replay)
-inline constexpr std::array<StateFrameArray, 8> kStateFrameArrays{{
+///     grasp          G × 8   each grasper (core::GraspState, docs/grasping.md): the held body
+///                            (−1: none), the net whose tissue it holds (−1: none), the held
+///                            nodes (tissue) or grip springs (a body), the jaws' opening (rad),
+///                            the grip's pull (N), and its grasps, releases and slips since
+///                            the run's start (counts: a grasp that starts and ends between two
+///                            frames of a decimated stream still shows in them)
+inline constexpr std::array<StateFrameArray, 9> kStateFrameArrays{{
     {FrameArray::kBodyPose, "body_pose", 7, FrameField::kNumBodies},
     {FrameArray::kTargetPose, "target_pose", 8, FrameField::kNumBodies},
     {FrameArray::kNodePosition, "node_position", 3, FrameField::kNumNodes},
@@ -180,6 +188,7 @@ inline constexpr std::array<StateFrameArray, 8> kStateFrameArrays{{
     {FrameArray::kAxisTorque, "axis_torque", 1, FrameField::kNumAxes},
     {FrameArray::kPenetration, "penetration", 2, std::nullopt},
     {FrameArray::kDeviceLoop, "device_loop", 3, std::nullopt},
+    {FrameArray::kGrasp, "grasp", 8, FrameField::kNumGrasps},
 }};
 
 /// The declaration of array `a`.
@@ -208,16 +217,17 @@ constexpr bool frame_arrays_are_well_formed() noexcept {
     const StateFrameArray& a = kStateFrameArrays[i];
     if (static_cast<std::size_t>(a.id) != i || a.floats == 0 || a.name.empty()) return false;
     if (a.count && *a.count != FrameField::kNumBodies && *a.count != FrameField::kNumNodes &&
-        *a.count != FrameField::kNumContacts && *a.count != FrameField::kNumAxes)
+        *a.count != FrameField::kNumContacts && *a.count != FrameField::kNumAxes &&
+        *a.count != FrameField::kNumGrasps)
       return false;
   }
   return true;
 }
 }  // namespace detail
 static_assert(detail::frame_fields_tile_the_header(),
-              "kStateFrameFields must tile the 64-byte header in order, without overlap");
+              "kStateFrameFields must tile the 68-byte header in order, without overlap");
 static_assert(detail::frame_arrays_are_well_formed(),
-              "kStateFrameArrays: ids in order, floats > 0, counts of bodies/nodes/contacts/axes");
+              "kStateFrameArrays: ids in order, floats > 0, counts of bodies/nodes/contacts/axes/graspers");
 static_assert(frame_field(FrameField::kMagic).type == FrameFieldType::kChar4 &&
               sizeof kStateFrameMagic == frame_field_bytes(FrameFieldType::kChar4));
 
@@ -229,7 +239,8 @@ inline constexpr std::size_t kFramePoseFloats = frame_array(FrameArray::kBodyPos
                              kFrameContactFloats = frame_array(FrameArray::kContact).floats,
                              kFrameWrenchFloats = frame_array(FrameArray::kFeedback).floats,
                              kFrameFigureFloats = frame_array(FrameArray::kPenetration).floats,
-                             kFrameDeviceLoopFloats = frame_array(FrameArray::kDeviceLoop).floats;
+                             kFrameDeviceLoopFloats = frame_array(FrameArray::kDeviceLoop).floats,
+                             kFrameGraspFloats = frame_array(FrameArray::kGrasp).floats;
 static_assert(kFrameTargetFloats == kFramePoseFloats + 1, "a target is a pose and its flag");
 
 /// Bits of the header's flags word.
@@ -245,18 +256,31 @@ enum StateFrameFlag : std::uint32_t {
                             ///< lost; StateFrameFigures::bus_down).
 };
 
-/// What fixes a frame's size: the scene's counts and the contact capacity. B, N, A are the
+/// What fixes a frame's size: the scene's counts and the contact capacity. B, N, A, G are the
 /// same in every frame of a run; C varies per period, up to max_contacts.
 struct StateFrameLayout {
   std::uint32_t num_bodies = 0;    ///< B: core::Model::num_bodies().
   std::uint32_t num_nodes = 0;     ///< N: core::Model::num_nodes().
   std::uint32_t num_axes = 0;      ///< A: the device's axes.
   std::uint32_t max_contacts = 0;  ///< Contacts a frame carries at most (rigid + node).
+  std::uint32_t num_grasps = 0;    ///< G: core::Model::grasps.size().
 
   /// Bytes of a frame with `contacts` contacts.
   std::size_t frame_bytes(std::uint32_t contacts) const noexcept;
   /// Bytes of the largest frame (max_contacts contacts): the buffer a writer needs.
   std::size_t max_frame_bytes() const noexcept { return frame_bytes(max_contacts); }
+};
+
+/// One grasper of a frame (kStateFrameArrays' grasp item; core::GraspState).
+struct FrameGrasp {
+  float body;       ///< The held body, −1: none.
+  float net;        ///< The net whose tissue is held, −1: none.
+  float held;       ///< Held nodes (tissue) or grip springs (a body); 0: nothing held.
+  float opening;    ///< The jaws' opening (rad).
+  float grip_force; ///< The grip's pull on what it holds (N).
+  float grasps;     ///< Grasps started since the run's start.
+  float releases;   ///< Grasps ended by the jaws opening.
+  float slips;      ///< Grasps ended by the pull exceeding the grip's limit.
 };
 
 /// One contact of a frame, in the frame's order.
@@ -282,6 +306,7 @@ struct StateFrameHeader {
   std::uint8_t startup = 0;       ///< hal::StartupPhase.
   std::uint8_t fault_cause = 0;   ///< hal::FaultCause of the latched safe state (0: none).
   std::uint8_t sample_faults = 0; ///< hal::SampleFault bits since the previous frame (OR'ed).
+  std::uint32_t num_grasps = 0;   ///< G: graspers.
 };
 
 /// A checked frame: the header and the offsets of its arrays in the bytes it was decoded from
@@ -308,6 +333,8 @@ class StateFrameView {
   /// The closed loop's figures (kStateFrameArrays' device_loop): hand penetration (m), force
   /// on the handle (N), device port energy (J).
   void device_loop(float out[3]) const noexcept;
+  /// Grasper g; g < num_grasps.
+  FrameGrasp grasp(std::uint32_t g) const noexcept;
 
  private:
   friend class StateFrameDecoder;
@@ -360,8 +387,9 @@ struct StateFrameFigures {
 /// axis torques sent from `axis_torques` (layout.num_axes values), the rest from `figures`.
 /// Rigid contacts come first, then node contacts, at most layout.max_contacts in all (the
 /// rest are cut and kFrameContactsTruncated is set). Targets: the held body's is
-/// data.target, the others' data.body_targets. Returns the bytes written, or 0 when `data`
-/// or `axis_torques` do not match the layout or `out` is shorter than
+/// data.target, the others' data.body_targets. Graspers from data.grasps. Returns the bytes
+/// written, or 0 when `data` (bodies, nodes, graspers) or `axis_torques` do not match the
+/// layout or `out` is shorter than
 /// layout.max_frame_bytes() (nothing is written then). noexcept, no allocation.
 std::size_t encode_state_frame(const StateFrameLayout& layout, const core::Data& data,
                                const PeriodReport& report, std::span<const double> axis_torques,

@@ -20,6 +20,7 @@
 
 #include "numen/hal/transport/line_file.hpp"
 #include "numen/platform/state_stream.hpp"
+#include "numen/sim/view/view_server.hpp"
 
 namespace numen::sim {
 
@@ -60,12 +61,13 @@ class ViewRecordingReader {
   /// Opens and checks `path`. Throws InputError (file = path, key empty) with the byte offset
   /// and what is wrong: cannot open, not a view recording, a length above kViewRecordMaxBytes,
   /// a scene message that is not a JSON object (the offset of the syntax error), a frame cut
-  /// short, a malformed frame (StateFrameDecoder's reason), a frame whose bodies, nodes or axes
-  /// differ from the scene message's layout, a period not after its predecessor's, or a time
+  /// short, a malformed frame (StateFrameDecoder's reason), a frame whose bodies, nodes, axes or
+  /// graspers differ from the scene message's layout, a period not after its predecessor's, or a time
   /// before its predecessor's (found by fuzzing: frame_at_or_after() searched unsorted times). A member
   /// of the scene message that is missing or of the wrong JSON type or value names its key
   /// ("format": string "numen-view", "version": integer kViewSceneVersion, "layout": object,
-  /// "layout.bodies", "layout.nodes", "layout.axes": whole numbers) with the message's offset.
+  /// "layout.bodies", "layout.nodes", "layout.axes", "layout.grasps": whole numbers) with the
+  /// message's offset.
   /// No other exception escapes but std::bad_alloc.
   explicit ViewRecordingReader(const std::string& path);
   ~ViewRecordingReader();
@@ -98,6 +100,19 @@ class ViewRecordingReader {
   std::FILE* file_ = nullptr;
   std::string scene_message_;
   std::vector<Entry> index_;
+};
+
+/// A view recording as a replay's frame source (`numen view`, view_replay_series()): the
+/// reader's frames, read on demand. The reader must outlive it; one thread at a time.
+class ViewRecordingSource final : public ViewFrameSource {
+ public:
+  explicit ViewRecordingSource(const ViewRecordingReader& reader) : reader_(reader) {}
+  std::size_t frame_count() const override { return reader_.size(); }
+  std::int64_t frame_time_ns(std::size_t i) const override { return reader_.time_ns(i); }
+  void read_frame(std::size_t i, std::vector<std::byte>& out) override { reader_.frame(i, out); }
+
+ private:
+  const ViewRecordingReader& reader_;
 };
 
 }  // namespace numen::sim

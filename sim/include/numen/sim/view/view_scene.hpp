@@ -14,7 +14,7 @@
 namespace numen::sim {
 
 /// Version of the scene message's schema (its "version" key); bumped with the frame version.
-inline constexpr int kViewSceneVersion = 1;
+inline constexpr int kViewSceneVersion = 2;
 
 /// Most triangles of a mesh (obstacle or body) the scene message carries (about 5 MB of JSON); a
 /// larger mesh is sent as its bounds ("aabb") and triangle count only.
