@@ -243,11 +243,6 @@ const char* to_string(core::Integrator integrator) noexcept {
 
 void require_runnable(const Scene& scene) {
   if (!scene.run_missing.empty()) throw scene.run_missing.front();
-  if (!scene.extra_devices.empty())
-    throw InputError(scene.file, 0, 0, "device",
-                     "scene \"" + scene.name + "\" has " + std::to_string(num_devices(scene)) +
-                         " devices ([[device]]): a run through the control loop drives one device "
-                         "yet (docs/scenes.md, \"Several devices\")");
 }
 
 std::string default_scene_path() { return (shipped_data_dir() / "scenes" / "default.toml").string(); }
@@ -388,23 +383,28 @@ Scene load_scene(const std::string& path, const SceneOverrides& overrides) {
   scene.has_device = root.has("device");
   Trajectory shared;
   if (auto t = root.table("trajectory")) shared = parse_trajectory(*t, scene.model.dt, dir, scene.warnings);
+  // (A recording may be large: the last device on the scene's [trajectory] takes it, the others
+  // copy it.)
+  const auto users = static_cast<std::size_t>(std::count_if(
+      device_tables.begin(), device_tables.end(), [&](const TomlTable& d) { return !own(d); }));
+  std::size_t used = 0;
   std::vector<Trajectory> trajectories;
   for (const TomlTable& d : device_tables) {
     if (auto t = d.table("trajectory"))
       trajectories.push_back(parse_trajectory(*t, scene.model.dt, dir, scene.warnings));
-    else if (root.has("trajectory") || !some_device_has_one)
-      trajectories.push_back(shared);  // (none at all: a scene the caller steps, run_missing says so)
+    else if (root.has("trajectory") || !some_device_has_one)  // (none at all: a scene the caller
+      trajectories.push_back(++used < users ? shared : std::move(shared));  // steps: run_missing)
     else
       d.fail_at(nullptr, d.path(), "device \"" + d.string_or("name", d.path()) +
                                        "\" has no trajectory: give it a [device.trajectory] or "
                                        "give the scene a [trajectory]");
   }
   scene.has_trajectory = root.has("trajectory") || every_device_has_one;
-  scene.trajectory = trajectories.empty() ? std::move(shared) : trajectories.front();
+  if (device_tables.empty()) scene.trajectory = std::move(shared);  // else device 0's (parse_device)
 
   const std::vector<TomlTable> body_tables = root.tables("body");
   const TomlTable* held_table = nullptr;
-  parse_device(root, scene, held_table, body_tables, trajectories);
+  parse_device(root, scene, held_table, body_tables, std::move(trajectories));
   if (held_table && scene.has_trajectory && !held_table->has("position") &&
       !held_table->has("link")) {
     core::BodyModel& b = scene.model.bodies[static_cast<std::size_t>(scene.model.initial_held_body)];
@@ -504,6 +504,10 @@ Scene load_scene(const std::string& path, const SceneOverrides& overrides) {
   warn_clamped_contacts(scene.model, scene.warnings);
   warn_yielding_coupling(scene.model, scene.warnings);
   parse_multirate(root, scene);
+  if (scene.multirate && !scene.extra_devices.empty())
+    root.fail("multirate", "the multirate god-object runs one device yet: this scene has " +
+                               std::to_string(num_devices(scene)) +
+                               " ([[device]]; docs/scenes.md, \"Several devices\")");
   if (scene.multirate && !scene.model.grasps.empty())
     root.tables("grasp").front().fail(
         "name", "grasping runs in the single-rate step: a scene with [multirate] has no grasper yet "

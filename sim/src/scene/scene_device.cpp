@@ -516,11 +516,13 @@ void parse_igtl(const TomlTable& dev, Scene& scene, const hal::DeviceConfig& cfg
 namespace {
 
 /// One device table `dev` (`[device]`, or an entry of `[[device]]`) into `out` (its trajectory
-/// already set): kinematics, axes, CANopen nodes and DCFs, feedback, hand, plant, passivity.
+/// already set) and `feedback` (its Eq. 8 gains): kinematics, axes, CANopen nodes and DCFs,
+/// feedback, hand, plant, passivity.
 /// `first`: device 0, which alone may hold the held body (`attach`, into
 /// scene.model.initial_held_body), be an admittance device or read an OpenIGTLink tracker
 /// (into scene.admittance and scene.igtl; its hand is scene.hand).
-void parse_device_table(const TomlTable& dev, Scene& scene, SceneDevice& out, bool first) {
+void parse_device_table(const TomlTable& dev, Scene& scene, SceneDevice& out,
+                        core::FeedbackGains& feedback, bool first) {
   dev.allow_only({"kind", "name", "attach", "max_sample_age", "jump_tolerance_counts",
                   "velocity_cutoff", "velocity_estimator", "foaw_max_window", "foaw_noise_counts",
                   "soft_start", "first_node_id", "tool_offset", "trocar", "tracker", "phantom",
@@ -641,7 +643,7 @@ void parse_device_table(const TomlTable& dev, Scene& scene, SceneDevice& out, bo
   } catch (const std::invalid_argument& e) {
     dev.fail("axis", e.what());
   }
-  parse_feedback(dev, out.feedback);
+  parse_feedback(dev, feedback);
   warn_no_feedback(dev, cfg, scene);
   parse_hand(dev, out.hand);
   if (first) {
@@ -721,7 +723,7 @@ void check_devices_apart(const std::vector<TomlTable>& tables,
 
 void parse_device(const TomlTable& root, Scene& scene, const TomlTable*& held_body_table,
                   const std::vector<TomlTable>& body_tables,
-                  const std::vector<Trajectory>& trajectories) {
+                  std::vector<Trajectory> trajectories) {
   const std::vector<TomlTable> devs = root.tables("device");
   if (devs.empty()) {  // a scene stepped by the caller (load_scene() checked SceneOverrides::caller_steps)
     scene.device = hal::make_default_pose_tracker_config();
@@ -740,16 +742,18 @@ void parse_device(const TomlTable& root, Scene& scene, const TomlTable*& held_bo
     devs[kMax].fail_at(nullptr, devs[kMax].path(),
                        "a scene drives at most " + std::to_string(kMax) + " devices (one control loop)");
   std::vector<SceneDevice> parsed(devs.size());
+  scene.model.extra_feedback.assign(devs.size() - 1, core::FeedbackGains{});
   for (std::size_t i = 0; i < devs.size(); ++i) {
-    parsed[i].trajectory = trajectories[i];
-    parse_device_table(devs[i], scene, parsed[i], i == 0);
+    parsed[i].trajectory = std::move(trajectories[i]);
+    parse_device_table(devs[i], scene, parsed[i],
+                       i == 0 ? scene.model.feedback : scene.model.extra_feedback[i - 1], i == 0);
   }
   std::vector<const hal::DeviceConfig*> configs;
   for (const SceneDevice& d : parsed) configs.push_back(&d.device);
   check_devices_apart(devs, configs);
   SceneDevice& first = parsed.front();
   scene.device = std::move(first.device);
-  scene.model.feedback = first.feedback;
+  scene.trajectory = std::move(first.trajectory);
   scene.hand = first.hand;
   scene.plant = std::move(first.plant);
   scene.trocar_note = std::move(first.trocar_note);

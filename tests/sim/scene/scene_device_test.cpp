@@ -411,8 +411,11 @@ TEST(SceneDevices, EachDeviceHasItsNodesFeedbackAndTrajectory) {
   EXPECT_EQ(right.device.name, "right");
   EXPECT_EQ(right.device.canopen.axes.front().node_id, 7);
   EXPECT_EQ(right.device.canopen.axes.back().node_id, 12);
-  EXPECT_DOUBLE_EQ(right.feedback.k_t, 80.0);
-  EXPECT_DOUBLE_EQ(right.feedback.gamma_t, 0.8);
+  ASSERT_EQ(s.model.extra_feedback.size(), 1u);
+  EXPECT_DOUBLE_EQ(s.model.extra_feedback[0].k_t, 80.0);
+  EXPECT_DOUBLE_EQ(s.model.extra_feedback[0].gamma_t, 0.8);
+  EXPECT_DOUBLE_EQ(numen::core::feedback_gains(s.model, 1).k_t, 80.0);
+  EXPECT_DOUBLE_EQ(numen::core::feedback_gains(s.model, 0).k_t, 50.0);
   // Each its own path: the left one starts at the origin, the right one 5 cm along y; the scene
   // lasts as long as the longer (0.75 s).
   EXPECT_NEAR(s.trajectory.at(0.0).pose.position.y(), 0.0, 1e-12);

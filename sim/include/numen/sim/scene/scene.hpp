@@ -111,7 +111,8 @@ struct MultirateScene {
 
 /// One device of a scene beyond the first: entries 1 .. N−1 of a `[[device]]` array (docs/scenes.md,
 /// "Several devices"); entry 0 is the scene's own fields (Scene::device, binding, trajectory,
-/// hand, plant, model.feedback), as for a single `[device]`. Each device is an impedance
+/// hand, plant, model.feedback), as for a single `[device]`; its Eq. 8 gains are in the model
+/// (core::Model::extra_feedback). Each device is an impedance
 /// instrument on the scene's one simulated bus (its own CANopen nodes: no node id or COB-ID of
 /// another device), driving the bodies whose `link` key names it (`device = "<name>"` on the
 /// [[body]] table) and the joints whose `prescribed` table names it.
@@ -123,8 +124,6 @@ struct SceneDevice {
   /// Target of its tool frame in the world: its `[device.trajectory]`, else the scene's
   /// `[trajectory]` (same units and frame as Scene::trajectory).
   Trajectory trajectory;
-  /// Its Eq. 8 virtual coupling (`[device.feedback]`; all zero without: non-haptic).
-  core::FeedbackGains feedback;
   HandSettings hand;  ///< Its simulated hand (`[device.hand]`).
   /// Its mechanics (`[device.plant]`; unset: the emulated instrument replays its trajectory).
   std::optional<DevicePlantSettings> plant;
@@ -192,7 +191,8 @@ struct Scene {
   /// How the trocar point was placed (for the summary), empty if not a trocar.
   std::string trocar_note;
   /// Devices 1 .. N−1 of a `[[device]]` array, in file order; empty for one device (`[device]`
-  /// or a `[[device]]` of one entry). Device 0 is the fields above.
+  /// or a `[[device]]` of one entry). Device 0 is the fields above. Device i's Eq. 8 gains
+  /// (`[device.feedback]`) are model.extra_feedback[i − 1] (core::feedback_gains()).
   std::vector<SceneDevice> extra_devices;
 };
 
@@ -222,8 +222,7 @@ struct SceneOverrides {
 Scene load_scene(const std::string& path, const SceneOverrides& overrides = {});
 
 /// Throws the first of scene.run_missing (the located error of a missing [trajectory] or
-/// [device], which a run through the control loop needs), or an InputError (key "device") for a
-/// scene of several devices; returns when there is none.
+/// [device], which a run through the control loop needs); returns when there is none.
 void require_runnable(const Scene& scene);
 
 /// The shipped default scene: share/numen/scenes/default.toml of the installed prefix the
