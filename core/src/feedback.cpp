@@ -74,15 +74,18 @@ void compute_feedback(const Model& model, Data& data) noexcept {
     } else {
       continue;
     }
-    data.body_feedback[i] = feedback_wrench_unsaturated(model.feedback, *target, *twist, data.bodies[i]);
+    data.body_feedback[i] = feedback_wrench_unsaturated(feedback_gains(model, data.feedback_group[i]),
+                                                        *target, *twist, data.bodies[i]);
     last_group = std::max(last_group, data.feedback_group[i]);
     any = true;
   }
   if (!any) return;
   if (!held) {
     // Nothing held: no composite; each body's wrench is clamped on its own.
-    for (Wrench& w : data.body_feedback)
-      w = saturate_wrench(w, model.feedback.max_force, model.feedback.max_torque);
+    for (std::size_t i = 0; i < data.body_feedback.size(); ++i) {
+      const FeedbackGains& f = feedback_gains(model, data.feedback_group[i]);
+      data.body_feedback[i] = saturate_wrench(data.body_feedback[i], f.max_force, f.max_torque);
+    }
     return;
   }
   // Per group (one device's bodies; Data::feedback_group): saturate the composite by one ratio
@@ -112,7 +115,8 @@ void compute_feedback(const Model& model, Data& data) noexcept {
       total.torque += carried.torque;
     }
     if (!in_group) continue;
-    const Wrench sat = saturate_wrench(total, model.feedback.max_force, model.feedback.max_torque);
+    const FeedbackGains& f = feedback_gains(model, g);  // the group's device's saturation
+    const Wrench sat = saturate_wrench(total, f.max_force, f.max_torque);
     const double fn = total.force.norm();
     const double tn = total.torque.norm();
     const double sf = fn > 0.0 ? sat.force.norm() / fn : 1.0;

@@ -206,10 +206,12 @@ std::string finalize_model(Model& model) {
       return "static sphere " + std::to_string(i) + " needs a finite centre and radius > 0";
   }
   for (Obstacle& o : model.obstacles) o.pose.orientation.normalize();
-  const FeedbackGains& f = model.feedback;
-  for (double v : {f.k_t, f.gamma_t, f.k_r, f.gamma_r})
-    if (!(v >= 0.0) || !std::isfinite(v)) return "feedback gains must be finite and >= 0";
-  if (!(f.max_force >= 0.0) || !(f.max_torque >= 0.0)) return "feedback saturation must be >= 0";
+  for (std::size_t g = 0; g <= model.extra_feedback.size(); ++g) {
+    const FeedbackGains& f = g == 0 ? model.feedback : model.extra_feedback[g - 1];
+    for (double v : {f.k_t, f.gamma_t, f.k_r, f.gamma_r})
+      if (!(v >= 0.0) || !std::isfinite(v)) return "feedback gains must be finite and >= 0";
+    if (!(f.max_force >= 0.0) || !(f.max_torque >= 0.0)) return "feedback saturation must be >= 0";
+  }
   if (model.initial_held_body < -1 || model.initial_held_body >= model.num_bodies())
     return "initial held body index out of range";
   if (model.initial_held_body >= 0 &&

@@ -138,3 +138,33 @@ TEST(Feedback, EachFeedbackGroupIsSaturatedOnItsOwn) {
   EXPECT_NEAR(d.body_feedback[1].force.x(), 20.0, 1e-12);
   EXPECT_NEAR(d.feedback_wrench.force.x(), 15.0, 1e-12);  // the held body's group's composite
 }
+
+TEST(Feedback, EachFeedbackGroupHasItsDevicesGains) {
+  // The same two bodies, a group each: device 1's own gains (Model::extra_feedback[0]: half the
+  // stiffness, a 5 N saturation) make body 1's wrench; device 0's (Model::feedback) body 0's.
+  core::Model m = feedback_model(core::CouplingMode::kGodObject);
+  m.bodies.push_back(m.bodies[0]);
+  core::FeedbackGains other = m.feedback;
+  other.k_t = 0.5 * m.feedback.k_t;
+  other.max_force = 5.0;
+  m.extra_feedback.push_back(other);
+  ASSERT_EQ(core::finalize_model(m), "");
+  EXPECT_EQ(&core::feedback_gains(m, 0), &m.feedback);
+  EXPECT_EQ(&core::feedback_gains(m, 1), &m.extra_feedback[0]);
+  EXPECT_EQ(&core::feedback_gains(m, 2), &m.feedback);  // no gains of its own: device 0's
+  core::Data d = core::make_data(m);
+  d.feedback_group[1] = 1;
+  d.target.position = Vec3(-0.15, 0.0, 0.0);
+  d.body_targets[1].pose.position = Vec3(-0.04, 0.0, 0.0);  // 0.04 m · 50 N/m = 2 N: unsaturated
+  d.body_targets[1].enabled = true;
+  core::compute_feedback(m, d);
+  EXPECT_NEAR(d.body_feedback[0].force.x(), 15.0, 1e-12);
+  EXPECT_NEAR(d.body_feedback[1].force.x(), 0.04 * other.k_t, 1e-12);
+  d.body_targets[1].pose.position = Vec3(-0.3, 0.0, 0.0);  // 15 N asked: its own 5 N limit
+  core::compute_feedback(m, d);
+  EXPECT_NEAR(d.body_feedback[0].force.x(), 15.0, 1e-12);
+  EXPECT_NEAR(d.body_feedback[1].force.x(), 5.0, 1e-12);
+  // A group's gains are checked as device 0's are.
+  m.extra_feedback[0].k_t = -1.0;
+  EXPECT_EQ(core::finalize_model(m), "feedback gains must be finite and >= 0");
+}

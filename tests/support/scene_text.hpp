@@ -72,6 +72,68 @@ duration = 0.25
 )";
 
 
+/// A small valid scene of two devices (`[[device]]`, docs/scenes.md "Several devices"): pose
+/// trackers "left" (nodes 1–6, holds "left_tool") and "right" (nodes 7–12, drives "right_tool"
+/// through its link), each on its own scripted path ([device.trajectory]). The tests of several
+/// devices change one thing in it.
+inline const std::string kTwoDeviceScene = R"(name = "two"
+dt = 0.001
+gravity = [0.0, 0.0, 0.0]
+
+[[material]]
+name = "steel"
+
+[[body]]
+name = "left_tool"
+mass = 0.1
+material = "steel"
+spheres = [[0.0, 0.0, 0.0, 0.01]]
+[body.coupling]
+stiffness = 100.0
+damping_ratio = 0.85
+
+[[body]]
+name = "right_tool"
+mass = 0.1
+material = "steel"
+spheres = [[0.0, 0.0, 0.0, 0.01]]
+link = "tool"
+device = "right"
+[body.coupling]
+stiffness = 100.0
+damping_ratio = 0.85
+
+[[device]]
+kind = "pose-tracker"
+name = "left"
+attach = "left_tool"
+[device.feedback]
+stiffness = 50.0
+damping = 0.5
+[device.trajectory]
+source = "scripted"
+start = { position = [0.0, 0.0, 0.0] }
+[[device.trajectory.segment]]
+type = "line"
+to = [0.01, 0.0, 0.0]
+duration = 0.5
+
+[[device]]
+kind = "pose-tracker"
+name = "right"
+first_node_id = 7
+[device.feedback]
+stiffness = 80.0
+damping = 0.8
+[device.trajectory]
+source = "scripted"
+start = { position = [0.0, 0.05, 0.0] }
+[[device.trajectory.segment]]
+type = "line"
+to = [0.0, 0.06, 0.0]
+duration = 0.75
+)";
+
 /// `s`'s warnings but the load note of a device without feedback ("no feedback: ...",
 /// docs/scenes.md "Device"), which a pose tracker without [device.feedback] (the mini scene's)
 /// always carries: for the tests of the other warnings.

@@ -31,6 +31,11 @@ DeviceSummary run_device(const Scene& scene, const DeviceOptions& options) {
     throw InputError(scene.file, 0, 0, "scene",
                      "scene \"" + scene.name + "\" has an admittance device: numen device emulates "
                      "impedance instruments only (run it with numen run on the simulated bus)");
+  if (!scene.extra_devices.empty())
+    throw InputError(scene.file, 0, 0, "device",
+                     "scene \"" + scene.name + "\" has " + std::to_string(num_devices(scene)) +
+                         " devices ([[device]]): numen device emulates one instrument (run the "
+                         "scene with numen run on the simulated bus)");
   const BusSpec spec = parse_bus_spec(options.bus);
   if (!spec.real())
     throw std::invalid_argument("numen device --bus '" + options.bus +

@@ -16,6 +16,7 @@
 #include <stdexcept>
 
 #include "numen/core/step.hpp"
+#include "numen/hal/device/bus_filters.hpp"
 #include "numen/platform/monotonic_clock.hpp"
 #include "numen/sim/input/input_error.hpp"
 #include "numen/sim/run/admittance_run.hpp"
@@ -104,6 +105,58 @@ std::unique_ptr<hal::LogBus> make_log_bus(const Scene& scene, const BusSpec& spe
   return bus;
 }
 
+/// The bus spec `text` of a run of `scene` (parse_bus_spec()); a scene of several devices runs
+/// on the simulated bus only (its emulated instruments share it): InputError at --bus otherwise.
+BusSpec bus_spec_for(const Scene& scene, const std::string& text) {
+  BusSpec spec = parse_bus_spec(text);
+  if (!scene.extra_devices.empty() && spec.kind != BusKind::kSim)
+    throw InputError("", 0, 0, "--bus",
+                     "scene \"" + scene.name + "\" has " + std::to_string(num_devices(scene)) +
+                         " devices: it runs on the simulated bus only (--bus sim)");
+  return spec;
+}
+
+/// Devices 1 .. N−1 of `scene`, each its InstrumentDevice.
+std::vector<std::unique_ptr<hal::InstrumentDevice>> make_extra_devices(const Scene& scene) {
+  std::vector<std::unique_ptr<hal::InstrumentDevice>> out;
+  for (const SceneDevice& d : scene.extra_devices)
+    out.push_back(std::make_unique<hal::InstrumentDevice>(d.device));
+  return out;
+}
+
+/// Devices 1 .. N−1 of `scene` emulated: each on its trajectory, closed loop with its plant and
+/// hand where it has a plant.
+std::vector<std::unique_ptr<SimulatedInstrument>> make_extra_instruments(const Scene& scene) {
+  std::vector<std::unique_ptr<SimulatedInstrument>> out;
+  for (const SceneDevice& d : scene.extra_devices)
+    out.push_back(std::make_unique<SimulatedInstrument>(d.device, d.trajectory,
+                                                        d.plant ? &*d.plant : nullptr, d.hand));
+  return out;
+}
+
+/// The simulated bus's device side shared by the emulated instruments of a scene of several
+/// devices, a port each with its frames (hal::device_filters()); null for one device.
+std::unique_ptr<hal::BusShare> make_device_share(const Scene& scene, hal::SimBus& bus,
+                                                 bool several) {
+  if (!several) return nullptr;
+  auto share = std::make_unique<hal::BusShare>(bus.device(), scene.bus.capacity);
+  share->add_port(hal::device_filters(scene.device));
+  for (const SceneDevice& d : scene.extra_devices) share->add_port(hal::device_filters(d.device));
+  return share;
+}
+
+/// The loop's devices: device 0 on `port`, the others on it too (ControlLoop shares it).
+std::vector<platform::LoopDevice> loop_devices(
+    const Scene& scene, hal::Bus& port, hal::InstrumentDevice& first,
+    const std::vector<std::unique_ptr<hal::InstrumentDevice>>& extra,
+    const platform::ControlLoopSettings& settings) {
+  std::vector<platform::LoopDevice> out;
+  out.push_back(platform::LoopDevice{&port, &first, scene.binding, settings});
+  for (std::size_t i = 0; i < extra.size(); ++i)
+    out.push_back(platform::LoopDevice{&port, extra[i].get(), scene.extra_devices[i].binding, settings});
+  return out;
+}
+
 }  // namespace
 
 platform::ControlLoopSettings control_loop_settings(bool paced, std::uint32_t overrun_limit) noexcept {
@@ -122,7 +175,7 @@ hal::CandumpWriterSettings recorder_settings(bool paced) noexcept {
 SceneRunner::SceneRunner(const Scene& scene, std::size_t trace_capacity, const BusChoice& bus,
                          bool realtime, std::uint32_t overrun_limit)
     : scene_((require_runnable(scene), &scene)),
-      spec_(parse_bus_spec(bus.spec)),
+      spec_(bus_spec_for(scene, bus.spec)),
       bus_(scene.bus),
       real_bus_(spec_.real() ? open_real_bus(spec_, controller_filters(scene.device)) : nullptr),
       log_bus_(make_log_bus(scene, spec_, realtime, log_stats_)),
@@ -152,7 +205,12 @@ SceneRunner::SceneRunner(const Scene& scene, std::size_t trace_capacity, const B
       data_(core::make_data(scene.model)),
       target_measurement_(scene.model),
       target_inputs_(make_target_inputs(scene.model)),
-      loop_(scene.model, data_, *port_, device_, scene.binding,
+      extra_instruments_(make_extra_instruments(scene)),
+      extra_devices_(make_extra_devices(scene)),
+      device_share_(make_device_share(scene, bus_, !extra_devices_.empty())),
+      loop_(scene.model, data_,
+            loop_devices(scene, *port_, device_, extra_devices_,
+                         control_loop_settings(realtime || spec_.real(), overrun_limit)),
             control_loop_settings(realtime || spec_.real(), overrun_limit)),
       multirate_(scene),
       period_ns_(static_cast<std::int64_t>(std::llround(scene.model.dt * 1e9))),
@@ -197,6 +255,7 @@ void SceneRunner::period(std::int64_t deadline_mono_ns, std::int64_t woke_mono_n
   ++k_;
   // ---- measurements (outside the timed step) ----
   count_period(report);
+  if (!extra_devices_.empty()) tally_devices();
 
   const PeriodContacts contacts = measure_contacts();
   track_free_space(contacts);
@@ -206,11 +265,13 @@ void SceneRunner::period(std::int64_t deadline_mono_ns, std::int64_t woke_mono_n
   // A multirate run's organs change only at the scene samples (MultirateRun::finish()).
   bool diverged = divergence_.observe(scene_->model, data_, k_ - 1, static_cast<double>(t) * 1e-9,
                                       multirate_.enabled() && !multirate_.took_model());
-  if (const PlantMotion* plant = instrument_.plant(); plant && plant->figures().diverged)
-    diverged = divergence_.latch_external(
-                   "device plant", plant->figures().diverged_axis, plant->figures().diverged_speed,
-                   plant->figures().diverged_speed_limit, k_ - 1, static_cast<double>(t) * 1e-9) ||
-               diverged;
+  for (std::size_t i = 0; i <= extra_instruments_.size(); ++i)  // every device's plant
+    if (const PlantMotion* plant = instrument(i).plant(); plant && plant->figures().diverged)
+      diverged = divergence_.latch_external("device plant", plant->figures().diverged_axis,
+                                            plant->figures().diverged_speed,
+                                            plant->figures().diverged_speed_limit, k_ - 1,
+                                            static_cast<double>(t) * 1e-9) ||
+                 diverged;
   if (diverged)
     loop_.shutdown();  // zero torque from the next write on; the run stops after this period
   if (view_)
@@ -218,6 +279,17 @@ void SceneRunner::period(std::int64_t deadline_mono_ns, std::int64_t woke_mono_n
                           std::span<const double>(loop_.impedance().sent_torques().torque.data(),
                                                   static_cast<std::size_t>(loop_.impedance().sent_torques().torque.size())),
                           view_figures(contacts));
+}
+
+void SceneRunner::tally_devices() noexcept {
+  for (std::size_t i = 0; i < loop_.num_devices(); ++i) {
+    const platform::PeriodReport& r = loop_.last_report(i);
+    DeviceTally& t = device_tally_[i];
+    t.force_max = std::max(t.force_max, r.feedback.force.norm());
+    t.torque_max = std::max(t.torque_max, r.feedback.torque.norm());
+    t.torque_periods += r.torque_commanded ? 1 : 0;
+    t.invalid_periods += r.sample_valid ? 0 : 1;
+  }
 }
 
 void SceneRunner::start_scene_thread(const platform::SceneThreadSettings& settings) {
@@ -273,7 +345,14 @@ const platform::PeriodReport& SceneRunner::exchange(std::int64_t t, std::int64_t
   bus_.set_time_ns(t);
   loop_.begin_period(t, deadline_mono_ns, woke_mono_ns);
   bus_.set_time_ns(t + scene_->bus.latency_ns);
-  instrument_.poll(bus_.device(), t + scene_->bus.latency_ns);  // encoders latch at SYNC and answer
+  // The encoders latch at SYNC and answer; several devices: each on its port of the device side.
+  if (device_share_) {
+    instrument_.poll(device_share_->port(0), t + scene_->bus.latency_ns);
+    for (std::size_t i = 0; i < extra_instruments_.size(); ++i)
+      extra_instruments_[i]->poll(device_share_->port(i + 1), t + scene_->bus.latency_ns);
+  } else {
+    instrument_.poll(bus_.device(), t + scene_->bus.latency_ns);
+  }
   bus_.set_time_ns(t + phase_ns_);
   return loop_.end_period(t + phase_ns_);
 }

@@ -231,6 +231,10 @@ constexpr RunFigure kFigures[] = {
      [](const S& s) noexcept { return count(s.grasps_slipped); }, grasping},
     {"grasp.events", "", "Each grasp, release and slip: time, grasper, what it held", K::kTextList,
      [](const S& s) noexcept { return list(s.grasp_events); }, grasping},
+    {"device_lines", "", "A scene of several devices: one line per device (feedback, hand force, "
+     "samples, faults); the JSON's `devices` array holds the same figures", K::kTextList,
+     [](const S& s) noexcept { return list(s.device_lines); },
+     [](const S& s) noexcept { return !s.device_lines.empty(); }},
     {"bus_frames_dropped", "", "Simulated bus: frames the link dropped", K::kCount,
      [](const S& s) noexcept { return count(s.bus_frames_dropped); }},
     {"bus_frames_corrupted", "", "Simulated bus: frames the link corrupted", K::kCount,

@@ -69,6 +69,46 @@ void describe_scene(const Scene& scene, RunSummary& s) {
   }
 }
 
+std::string format_device_line(const DeviceRunSummary& d) {
+  std::ostringstream os;
+  os << std::fixed << std::setprecision(3) << d.name << ": feedback force max "
+     << d.feedback_force_max_n << " N, torque max " << d.feedback_torque_max_nm << " N·m, torque sent in "
+     << d.torque_periods << " periods";
+  if (d.closed_loop)
+    os << "; closed loop: force on the hand max " << d.handle_force_max_n
+       << " N, hand–handle separation max " << d.hand_separation_max_mm << " mm, port energy "
+       << d.device_port_energy_j << " J";
+  os << "; invalid periods " << d.invalid_periods << ", rejected samples " << d.rejected_samples;
+  if (!d.lifecycle.empty()) os << ", lifecycle " << d.lifecycle << ", safe states " << d.faults;
+  return os.str();
+}
+
+void SceneRunner::summarize_devices(RunSummary& s) const {
+  if (extra_devices_.empty()) return;
+  for (std::size_t i = 0; i < loop_.num_devices(); ++i) {
+    DeviceRunSummary d;
+    const hal::InstrumentDevice& dev = i == 0 ? device_ : *extra_devices_[i - 1];
+    d.name = dev.config().name;
+    d.feedback_force_max_n = device_tally_[i].force_max;
+    d.feedback_torque_max_nm = device_tally_[i].torque_max;
+    d.torque_periods = device_tally_[i].torque_periods;
+    d.invalid_periods = device_tally_[i].invalid_periods;
+    d.rejected_samples = static_cast<std::int64_t>(dev.counters().values_rejected);
+    if (const hal::DeviceReport r = loop_.device(i).report(); r.managed) {
+      d.lifecycle = hal::to_string(r.lifecycle);
+      d.faults = static_cast<std::int64_t>(r.latches);
+    }
+    if (const PlantMotion* plant = instrument(i).plant()) {
+      d.closed_loop = true;
+      d.handle_force_max_n = plant->figures().handle_force_max_n;
+      d.hand_separation_max_mm = plant->figures().hand_separation_max_mm;
+      d.device_port_energy_j = plant->figures().port_energy_j;
+    }
+    s.device_lines.push_back(format_device_line(d));
+    s.devices.push_back(std::move(d));
+  }
+}
+
 RunSummary SceneRunner::summary() const {
   RunSummary s = acc_;
   s.steps = k_;
@@ -132,6 +172,7 @@ RunSummary SceneRunner::summary() const {
   s.nonfinite_steps = data_.nonfinite_steps;
   s.invalid_target_steps = data_.invalid_target_steps;
   summarize_grasps(scene_->model, data_, s);
+  summarize_devices(s);
   multirate_.summarize(s);
   s.nan_detected = data_.nonfinite_steps > 0;
   for (const auto& b : data_.bodies)

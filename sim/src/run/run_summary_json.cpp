@@ -31,6 +31,28 @@ std::string format_summary_json(const RunSummary& s) {
       case FigureKind::kTextList: value = *v.list; break;
     }
   }
+  // A scene of several devices: each device's figures (DeviceRunSummary).
+  if (!s.devices.empty()) {
+    nlohmann::ordered_json& devices = j["devices"] = nlohmann::ordered_json::array();
+    for (const DeviceRunSummary& d : s.devices) {
+      nlohmann::ordered_json o = nlohmann::ordered_json::object();
+      o["name"] = d.name;
+      o["feedback_force_max_n"] = d.feedback_force_max_n;
+      o["feedback_torque_max_nm"] = d.feedback_torque_max_nm;
+      o["torque_periods"] = d.torque_periods;
+      o["invalid_periods"] = d.invalid_periods;
+      o["rejected_samples"] = d.rejected_samples;
+      o["faults"] = d.faults;
+      o["lifecycle"] = d.lifecycle;
+      o["closed_loop"] = d.closed_loop;
+      if (d.closed_loop) {
+        o["handle_force_max_n"] = d.handle_force_max_n;
+        o["hand_separation_max_mm"] = d.hand_separation_max_mm;
+        o["device_port_energy_j"] = d.device_port_energy_j;
+      }
+      devices.push_back(std::move(o));
+    }
+  }
   // Scene names, paths and messages may hold bytes that are not UTF-8: replaced by U+FFFD
   // instead of throwing.
   return j.dump(-1, ' ', false, nlohmann::ordered_json::error_handler_t::replace);

@@ -51,6 +51,7 @@ constexpr RunSummarySegment kLayout[] = {
     {"  grasps: {grasp.started} started, {grasp.released} released, {grasp.slipped} slipped\n",
      set("grasp.started")},
     {"  grasp event: {*}\n", set("grasp.started"), {}, {}, "grasp.events"},
+    {"  device {*}\n", set("device_lines"), {}, {}, "device_lines"},
 
     {"  tracking error in free space (tool and hand out of contact): rms "
      "{tracking_error_free_rms_mm} mm, max {tracking_error_free_max_mm} mm over {free_steps} "

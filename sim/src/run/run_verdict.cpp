@@ -74,6 +74,10 @@ RunVerdict run_verdict(const RunSummary& s) {
   }
   if (s.faults > 0)
     add(ExitStatus::kSafetyStop, n(s.faults) + " safe state(s) latched, first: " + s.first_fault);
+  for (std::size_t i = 1; i < s.devices.size(); ++i)
+    if (s.devices[i].faults > 0)
+      add(ExitStatus::kSafetyStop,
+          n(s.devices[i].faults) + " safe state(s) latched (device \"" + s.devices[i].name + "\")");
   if (s.managed && s.startup.rfind("failed", 0) == 0)
     add(ExitStatus::kSafetyStop, "start-up " + s.startup);
   if (s.bus_record_dropped > 0)
@@ -98,6 +102,10 @@ RunVerdict run_verdict(const RunSummary& s) {
     add(ExitStatus::kLostRecords, "stdout: the summary was not written (" + s.stdout_error + ")");
   if (s.rejected_samples > 0)
     add(ExitStatus::kSamplesRejected, n(s.rejected_samples) + " axis samples rejected");
+  for (std::size_t i = 1; i < s.devices.size(); ++i)  // device 0's are the summary's own
+    if (s.devices[i].rejected_samples > 0)
+      add(ExitStatus::kSamplesRejected, n(s.devices[i].rejected_samples) +
+                                            " axis samples rejected (device \"" + s.devices[i].name + "\")");
   if (s.invalid_target_steps > 0)  // core::kInvalidTarget: the step skipped the coupling
     add(ExitStatus::kSamplesRejected, n(s.invalid_target_steps) +
                                           " steps with a non-finite device target (coupling "

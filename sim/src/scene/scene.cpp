@@ -145,62 +145,62 @@ InputError missing_part(const TomlTable& root, const std::string& part) {
                               "\"Drive it from your own program\")");
 }
 
-Trajectory parse_trajectory(const TomlTable& root, double dt, const std::filesystem::path& scene_dir,
+/// A trajectory table (`[trajectory]`, or a device's `[device.trajectory]`) sampled for the
+/// period `dt`.
+Trajectory parse_trajectory(const TomlTable& t, double dt, const std::filesystem::path& scene_dir,
                             std::vector<std::string>& warnings) {
-  auto t = root.table("trajectory");
-  if (!t) throw missing_part(root, "trajectory");
-  const std::string source = t->choice("source", {"jigsaws", "scripted", "pointer"}, std::nullopt);
+  const std::string source = t.choice("source", {"jigsaws", "scripted", "pointer"}, std::nullopt);
   Trajectory recorded;
   if (source == "pointer") {
     // The recording replayed through the relative-pose integrator (scene_pointer.cpp); the
     // integrator's settings place it in the world, so there is no [trajectory.placement].
-    recorded = parse_pointer_trajectory(*t, dt, scene_dir, parse_start(*t), warnings);
+    recorded = parse_pointer_trajectory(t, dt, scene_dir, parse_start(t), warnings);
   } else if (source == "jigsaws") {
-    t->allow_only({"source", "file", "manipulator", "start_time", "end_time", "placement"});
-    std::filesystem::path file = t->string("file");
+    t.allow_only({"source", "file", "manipulator", "start_time", "end_time", "placement"});
+    std::filesystem::path file = t.string("file");
     if (file.is_relative()) file = scene_dir / file;
     if (!std::filesystem::exists(file))
-      t->fail("file", "trajectory file not found: " + file.string());
+      t.fail("file", "trajectory file not found: " + file.string());
     if (std::filesystem::is_directory(file))
-      t->fail("file", "is a directory, not a JIGSAWS kinematics file: " + file.string());
+      t.fail("file", "is a directory, not a JIGSAWS kinematics file: " + file.string());
     JigsawsManipulator arm;
     try {
-      arm = parse_jigsaws_manipulator(t->string_or("manipulator", "slave_right"), t->key_path("manipulator"));
+      arm = parse_jigsaws_manipulator(t.string_or("manipulator", "slave_right"), t.key_path("manipulator"));
     } catch (const InputError& e) {
-      t->fail("manipulator", e.message());
+      t.fail("manipulator", e.message());
     }
     JigsawsOptions opt;
-    if (t->has("start_time")) opt.start_time = t->number_in("start_time", 0.0, kInf, std::nullopt);
-    if (t->has("end_time")) opt.end_time = t->number_in("end_time", 0.0, kInf, std::nullopt);
+    if (t.has("start_time")) opt.start_time = t.number_in("start_time", 0.0, kInf, std::nullopt);
+    if (t.has("end_time")) opt.end_time = t.number_in("end_time", 0.0, kInf, std::nullopt);
     recorded = load_jigsaws(file, arm, opt).trajectory;  // errors name the data file and line
     if (recorded.size() < 2) {  // no motion and no duration: the run would have no step
       const std::string why = " holds one row of " + file.filename().string() +
                               "; a trajectory needs at least two (1/30 s)";
-      if (t->has("end_time")) t->fail("end_time", "the window from start_time to end_time" + why);
-      t->fail("file", "the recording" + why);
+      if (t.has("end_time")) t.fail("end_time", "the window from start_time to end_time" + why);
+      t.fail("file", "the recording" + why);
     }
   } else {
-    t->allow_only({"source", "start", "segment", "placement"});
-    const TrajectorySample start = parse_start(*t);
-    const std::vector<TomlTable> segs = t->tables("segment");
-    if (segs.empty()) t->fail("segment", "a scripted trajectory needs at least one [[trajectory.segment]]");
+    t.allow_only({"source", "start", "segment", "placement"});
+    const TrajectorySample start = parse_start(t);
+    const std::vector<TomlTable> segs = t.tables("segment");
+    if (segs.empty()) t.fail("segment", "a scripted trajectory needs at least one [[trajectory.segment]]");
     try {
       std::vector<PathSegment> segments;
       for (const TomlTable& s : segs) segments.push_back(parse_segment(s));
-      ScriptedPath path(std::move(segments), start, t->key_path("segment"));
+      ScriptedPath path(std::move(segments), start, t.key_path("segment"));
       recorded = path.sample(dt);
     } catch (const InputError& e) {
       if (e.line() > 0) throw;
-      relocate(e, *t, segs);
+      relocate(e, t, segs);
     }
   }
   try {
     // No resampling at dt: the loop interpolates the knots at each period's time
     // (memory independent of dt and of the run's duration).
-    return transformed(recorded, parse_placement(*t));
+    return transformed(recorded, parse_placement(t));
   } catch (const InputError& e) {
     if (e.line() > 0) throw;
-    t->fail("placement", e.message());
+    t.fail("placement", e.message());
   }
 }
 
@@ -368,19 +368,43 @@ Scene load_scene(const std::string& path, const SceneOverrides& overrides) {
                            : "an impedance scene cannot be overridden to the admittance coupling");
     scene.model.coupling_mode = *overrides.coupling;
   }
+  // Each device's trajectory: its [device.trajectory], else the scene's [trajectory].
+  const std::vector<TomlTable> device_tables = root.tables("device");
+  const auto own = [](const TomlTable& d) { return d.has("trajectory"); };
+  const bool every_device_has_one =
+      !device_tables.empty() && std::all_of(device_tables.begin(), device_tables.end(), own);
+  const bool some_device_has_one = std::any_of(device_tables.begin(), device_tables.end(), own);
   for (const char* part : {"trajectory", "device"}) {
-    if (root.has(part)) continue;
+    // (A device without one, beside others with theirs, is named below.)
+    if (root.has(part) || (part == std::string("trajectory") && some_device_has_one)) continue;
     if (!overrides.caller_steps) throw missing_part(root, part);
     scene.run_missing.push_back(missing_part(root, part));
   }
-  scene.has_trajectory = root.has("trajectory");
   scene.has_device = root.has("device");
-  if (scene.has_trajectory)
-    scene.trajectory = parse_trajectory(root, scene.model.dt, dir, scene.warnings);
+  Trajectory shared;
+  if (auto t = root.table("trajectory")) shared = parse_trajectory(*t, scene.model.dt, dir, scene.warnings);
+  // (A recording may be large: the last device on the scene's [trajectory] takes it, the others
+  // copy it.)
+  const auto users = static_cast<std::size_t>(std::count_if(
+      device_tables.begin(), device_tables.end(), [&](const TomlTable& d) { return !own(d); }));
+  std::size_t used = 0;
+  std::vector<Trajectory> trajectories;
+  for (const TomlTable& d : device_tables) {
+    if (auto t = d.table("trajectory"))
+      trajectories.push_back(parse_trajectory(*t, scene.model.dt, dir, scene.warnings));
+    else if (root.has("trajectory") || !some_device_has_one)  // (none at all: a scene the caller
+      trajectories.push_back(++used < users ? shared : std::move(shared));  // steps: run_missing)
+    else
+      d.fail_at(nullptr, d.path(), "device \"" + d.string_or("name", d.path()) +
+                                       "\" has no trajectory: give it a [device.trajectory] or "
+                                       "give the scene a [trajectory]");
+  }
+  scene.has_trajectory = root.has("trajectory") || every_device_has_one;
+  if (device_tables.empty()) scene.trajectory = std::move(shared);  // else device 0's (parse_device)
 
   const std::vector<TomlTable> body_tables = root.tables("body");
   const TomlTable* held_table = nullptr;
-  parse_device(root, scene, held_table, body_tables);
+  parse_device(root, scene, held_table, body_tables, std::move(trajectories));
   if (held_table && scene.has_trajectory && !held_table->has("position") &&
       !held_table->has("link")) {
     core::BodyModel& b = scene.model.bodies[static_cast<std::size_t>(scene.model.initial_held_body)];
@@ -420,6 +444,8 @@ Scene load_scene(const std::string& path, const SceneOverrides& overrides) {
   if (std::llround(scene.compute_phase_s * 1e9) < 2 * scene.bus.latency_ns)  // after rounding to ns
     scene.compute_phase_s = 2.0 * static_cast<double>(scene.bus.latency_ns) * 1e-9;
   if (scene.plant) scene.plant->torque_phase_s = scene.compute_phase_s;
+  for (SceneDevice& d : scene.extra_devices)
+    if (d.plant) d.plant->torque_phase_s = scene.compute_phase_s;
   if (!(scene.compute_phase_s < scene.model.dt))
     root.fail("dt", "the period " + format_input_number(scene.model.dt) +
                         " s is not longer than the compute phase " +
@@ -431,13 +457,22 @@ Scene load_scene(const std::string& path, const SceneOverrides& overrides) {
 
   for (const TomlTable& e : root.tables("event")) {
     e.allow_only({"time", "attach"});
-    scene.events.push_back(AttachEvent{e.number_in("time", 0.0, kInf, std::nullopt),
-                                       body_index(e, "attach", scene.model)});
+    const int body = body_index(e, "attach", scene.model);
+    for (const SceneDevice& d : scene.extra_devices)  // the held body is device 0's
+      for (const platform::LinkBinding& l : d.binding.links)
+        if (body >= 0 && l.body == body)
+          e.fail("attach", "body \"" + scene.model.bodies[static_cast<std::size_t>(body)].name +
+                               "\" is driven by device \"" + d.device.name +
+                               "\" (its link): the held body is the first device's, a body is "
+                               "driven by one device");
+    scene.events.push_back(AttachEvent{e.number_in("time", 0.0, kInf, std::nullopt), body});
   }
   std::stable_sort(scene.events.begin(), scene.events.end(),
                    [](const AttachEvent& a, const AttachEvent& b) { return a.time_s < b.time_s; });
 
-  scene.duration_s = root.number_in("duration", 1e-9, kMaxRunDuration, scene.trajectory.duration());
+  double longest = scene.trajectory.duration();  // the longest of the devices' trajectories
+  for (const SceneDevice& d : scene.extra_devices) longest = std::max(longest, d.trajectory.duration());
+  scene.duration_s = root.number_in("duration", 1e-9, kMaxRunDuration, longest);
   if (std::llround(scene.duration_s / scene.model.dt) < 1 &&
       (scene.has_trajectory || root.has("duration"))) {  // a run of this scene has no step
     const std::string why = format_input_number(scene.duration_s) +
@@ -469,11 +504,18 @@ Scene load_scene(const std::string& path, const SceneOverrides& overrides) {
   warn_clamped_contacts(scene.model, scene.warnings);
   warn_yielding_coupling(scene.model, scene.warnings);
   parse_multirate(root, scene);
+  if (scene.multirate && !scene.extra_devices.empty())
+    root.fail("multirate", "the multirate god-object runs one device yet: this scene has " +
+                               std::to_string(num_devices(scene)) +
+                               " ([[device]]; docs/scenes.md, \"Several devices\")");
   if (scene.multirate && !scene.model.grasps.empty())
     root.tables("grasp").front().fail(
         "name", "grasping runs in the single-rate step: a scene with [multirate] has no grasper yet "
                 "(docs/grasping.md, \"Not yet\")");
-  if (overrides.replay) scene.plant.reset();
+  if (overrides.replay) {
+    scene.plant.reset();
+    for (SceneDevice& d : scene.extra_devices) d.plant.reset();
+  }
   scene.passivity_lint = passivity_lint(scene);
   for (const PassivityLintRow& row : scene.passivity_lint) {
     if (row.passes) continue;

@@ -15,6 +15,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "numen/platform/period_stages.hpp"
 #include "numen/sim/scene/trocar_placement.hpp"
 #include "toml_reader.hpp"
 
@@ -362,7 +363,8 @@ std::vector<double> per_axis(const TomlTable& t, std::string_view key, int n, do
 
 /// `[device.plant]` (docs/scenes.md, docs/device_plant.md): the impedance device's mechanics;
 /// the emulated device then moves under the drives' torques (closed loop).
-void parse_plant(const TomlTable& dev, Scene& scene, const hal::DeviceConfig& cfg) {
+void parse_plant(const TomlTable& dev, const Scene& scene, const hal::DeviceConfig& cfg,
+                 std::optional<DevicePlantSettings>& out) {
   auto p = dev.table("plant");
   if (!p) return;
   if (scene.model.coupling_mode == core::CouplingMode::kAdmittance)
@@ -397,7 +399,7 @@ void parse_plant(const TomlTable& dev, Scene& scene, const hal::DeviceConfig& cf
     a.max_torque = cfg.axes[k].max_torque > 0.0 ? cfg.axes[k].max_torque : kInf;
     plant.axes.push_back(a);
   }
-  scene.plant = std::move(plant);
+  out = std::move(plant);
 }
 
 /// `[device.passivity]` (docs/scenes.md, docs/passivity.md "Passivity controller"): the
@@ -511,10 +513,219 @@ void parse_igtl(const TomlTable& dev, Scene& scene, const hal::DeviceConfig& cfg
   scene.igtl = std::move(t);
 }
 
+namespace {
+
+/// One device table `dev` (`[device]`, or an entry of `[[device]]`) into `out` (its trajectory
+/// already set) and `feedback` (its Eq. 8 gains): kinematics, axes, CANopen nodes and DCFs,
+/// feedback, hand, plant, passivity.
+/// `first`: device 0, which alone may hold the held body (`attach`, into
+/// scene.model.initial_held_body), be an admittance device or read an OpenIGTLink tracker
+/// (into scene.admittance and scene.igtl; its hand is scene.hand).
+void parse_device_table(const TomlTable& dev, Scene& scene, SceneDevice& out,
+                        core::FeedbackGains& feedback, bool first) {
+  dev.allow_only({"kind", "name", "attach", "max_sample_age", "jump_tolerance_counts",
+                  "velocity_cutoff", "velocity_estimator", "foaw_max_window", "foaw_noise_counts",
+                  "soft_start", "first_node_id", "tool_offset", "trocar", "tracker", "phantom",
+                  "feedback", "axis", "canopen", "admittance", "hand", "plant", "passivity", "igtl",
+                  "trajectory"});
+  if (!first) {
+    // Device 0 alone holds the held body and may be of the scene-wide kinds of one device.
+    if (dev.has("attach"))
+      dev.fail("attach", "the held body is the first device's (tool switching, [[event]] attach): "
+                         "bind this device's bodies with their link and device = \"<name>\" keys");
+    for (const char* one : {"admittance", "igtl"})
+      if (dev.has(one))
+        dev.fail(one, std::string("[device.") + one + "] is a scene of one device's; this scene has "
+                      "several ([[device]] entries)");
+  }
+  const std::string kind =
+      dev.choice("kind", {"trocar-instrument", "pose-tracker", "phantom"}, std::nullopt);
+  const auto node = dev.integer_or("first_node_id", 1);
+  if (node < 1 || node > 120) dev.fail("first_node_id", "must be a CANopen node id in [1, 120]");
+  hal::DeviceConfig cfg;
+  try {
+    const auto id = static_cast<std::uint8_t>(node);
+    cfg = kind == "trocar-instrument" ? hal::make_default_trocar_config(id)
+          : kind == "phantom"         ? hal::make_default_phantom_config(id)
+                                      : hal::make_default_pose_tracker_config(id);
+  } catch (const std::invalid_argument& e) {
+    dev.fail("first_node_id", e.what());
+  }
+  cfg.name = dev.string_or("name", cfg.name);
+  cfg.control_period_s = scene.model.dt;
+  if (dev.has("max_sample_age"))
+    cfg.max_sample_age_s = dev.number_in("max_sample_age", 1e-9, kInf, std::nullopt);
+  cfg.jump_tolerance_counts = dev.number_in("jump_tolerance_counts", 0.0, kInf, cfg.jump_tolerance_counts);
+  cfg.velocity_cutoff_hz = dev.number_in("velocity_cutoff", 1e-6, kInf, cfg.velocity_cutoff_hz);
+  {
+    const std::string est = dev.choice("velocity_estimator", {"difference", "filter", "foaw"},
+                                        hal::to_string(cfg.velocity_estimator));
+    cfg.velocity_estimator = est == "difference" ? hal::VelocityEstimator::kDifference
+                             : est == "foaw"     ? hal::VelocityEstimator::kFoaw
+                                                 : hal::VelocityEstimator::kFilter;
+  }
+  const auto window = dev.integer_or("foaw_max_window", cfg.foaw_max_window);
+  if (window < 1 || window > hal::kFoawMaxWindow)
+    dev.fail("foaw_max_window", "must be in [1, " + std::to_string(hal::kFoawMaxWindow) +
+                                     "] sample intervals");
+  cfg.foaw_max_window = static_cast<int>(window);
+  cfg.foaw_noise_counts = dev.number_in("foaw_noise_counts", 0.0, 1e6, cfg.foaw_noise_counts);
+  cfg.soft_start_s =
+      dev.number_in("soft_start", 0.0, hal::kMaxSoftStartS, hal::kDefaultSceneSoftStartS);
+  if (auto off = dev.table("tool_offset")) {
+    off->allow_only({"position", "orientation"});
+    cfg.tool_offset.position = off->vec3_or("position", Vec3::Zero());
+    cfg.tool_offset.orientation = off->quaternion_or("orientation", Quat::Identity());
+  }
+  const std::vector<TomlTable> axes = dev.tables("axis");
+  if (!axes.empty()) {
+    if (axes.size() != cfg.axes.size())
+      dev.fail("axis", "a " + kind + " has " + std::to_string(cfg.axes.size()) + " axes, " +
+                            std::to_string(axes.size()) + " given (give all or none)");
+    for (std::size_t i = 0; i < axes.size(); ++i) cfg.axes[i] = parse_axis(axes[i], cfg.axes[i]);
+  }
+  if (kind == "trocar-instrument") {
+    cfg.kind = hal::DeviceKind::kTrocarInstrument;
+    auto tr = dev.table("trocar");
+    if (!tr) dev.fail("trocar", "missing: give point = [x, y, z] or placement = \"approach\"");
+    tr->allow_only({"point", "orientation", "placement", "standoff"});
+    const std::string placement = tr->choice("placement", {"explicit", "approach"},
+                                             tr->has("point") ? "explicit" : "approach");
+    Vec3 centroid = Vec3::Zero();
+    for (std::size_t i = 0; i < out.trajectory.size(); ++i) centroid += out.trajectory[i].pose.position;
+    centroid /= static_cast<double>(std::max<std::size_t>(1, out.trajectory.size()));
+    if (placement == "approach") {
+      if (tr->has("point")) tr->fail("point", "give either point or placement = \"approach\"");
+      const double standoff = tr->number_in("standoff", 1e-6, kInf, 0.12);
+      ApproachTrocar a;
+      try {
+        a = trocar_from_approach(out.trajectory, standoff);
+      } catch (const InputError& e) {
+        tr->fail("standoff", e.message());
+      }
+      cfg.trocar.point = a.point;
+      cfg.trocar.orientation = core::rotation_between(Vec3::UnitZ(), a.approach);
+      std::ostringstream os;
+      os << std::fixed << std::setprecision(1)
+         << "trocar placed behind the recorded tip centroid along the mean approach axis, standoff "
+         << standoff * 1e3 << " mm (recorded tip " << a.min_depth * 1e3 << "–" << a.max_depth * 1e3
+         << " mm from the trocar point)";
+      out.trocar_note = os.str();
+    } else {
+      cfg.trocar.point = tr->vec3("point");
+      const Vec3 toward = centroid - cfg.trocar.point;
+      cfg.trocar.orientation = tr->quaternion_or(
+          "orientation",
+          toward.norm() > 1e-9 ? core::rotation_between(Vec3::UnitZ(), toward) : Quat::Identity());
+      out.trocar_note = "trocar point given in the scene";
+    }
+    if (tr->has("orientation") && placement == "approach") tr->fail("orientation", "set by placement = \"approach\"");
+  } else if (kind == "phantom") {
+    cfg.kind = hal::DeviceKind::kPhantom;
+    if (auto ph = dev.table("phantom")) {
+      ph->allow_only({"position", "orientation", "upper_arm", "forearm"});
+      cfg.phantom.base.position = ph->vec3_or("position", Vec3::Zero());
+      cfg.phantom.base.orientation = ph->quaternion_or("orientation", Quat::Identity());
+      cfg.phantom.l1 = ph->number_in("upper_arm", 1e-3, 10.0, cfg.phantom.l1);
+      cfg.phantom.l2 = ph->number_in("forearm", 1e-3, 10.0, cfg.phantom.l2);
+    }
+  } else {
+    cfg.kind = hal::DeviceKind::kPoseTracker;
+    if (auto tk = dev.table("tracker")) {
+      tk->allow_only({"position", "orientation"});
+      cfg.tracker.base.position = tk->vec3_or("position", Vec3::Zero());
+      cfg.tracker.base.orientation = tk->quaternion_or("orientation", Quat::Identity());
+    }
+  }
+  parse_canopen(dev, cfg);
+  try {
+    hal::validate(cfg);
+  } catch (const std::invalid_argument& e) {
+    dev.fail("axis", e.what());
+  }
+  parse_feedback(dev, feedback);
+  warn_no_feedback(dev, cfg, scene);
+  parse_hand(dev, out.hand);
+  if (first) {
+    scene.hand = out.hand;  // an admittance device's force sensor reads the hand
+    parse_admittance(dev, scene, cfg);
+    out.hand = scene.hand;
+  } else if (scene.model.coupling_mode == core::CouplingMode::kAdmittance) {
+    dev.fail_at(nullptr, dev.path(), "an admittance scene (coupling = \"admittance\") has one device");
+  }
+  parse_plant(dev, scene, cfg, out.plant);
+  parse_passivity(dev, scene, cfg);
+  if (first) {
+    parse_igtl(dev, scene, cfg);
+    scene.model.initial_held_body = dev.has("attach") ? body_index(dev, "attach", scene.model) : -1;
+  }
+  out.device = std::move(cfg);
+}
+
+/// Where device `d`'s CANopen node `node` (or its axis `axis`) is set in its table, for a
+/// located error: the node id of its [[device.canopen.axis]], else `first_node_id`, else the
+/// device table itself.
+void fail_at_node(const TomlTable& d, std::size_t axis, const std::string& message) {
+  if (auto c = d.table("canopen")) {
+    const std::vector<TomlTable> axes = c->tables("axis");
+    if (axis < axes.size() && axes[axis].has("node_id")) axes[axis].fail("node_id", message);
+  }
+  if (d.has("first_node_id")) d.fail("first_node_id", message);
+  d.fail_at(nullptr, d.path(), message);
+}
+
+/// The devices of `tables` (one per device, `configs` in the same order) share one bus: each
+/// name, CANopen node id and COB-ID belongs to one device. Throws InputError at the later
+/// device's key (name, node id, COB-ID) naming the earlier device.
+void check_devices_apart(const std::vector<TomlTable>& tables,
+                         const std::vector<const hal::DeviceConfig*>& configs) {
+  for (std::size_t j = 1; j < configs.size(); ++j) {
+    const hal::DeviceConfig& b = *configs[j];
+    for (std::size_t i = 0; i < j; ++i) {
+      const hal::DeviceConfig& a = *configs[i];
+      if (a.name == b.name) {
+        const std::string m = "device name \"" + b.name + "\" is used twice (" + tables[i].path() +
+                              " has it): give each device its own name";
+        if (tables[j].has("name")) tables[j].fail("name", m);
+        tables[j].fail_at(nullptr, tables[j].path(), m + " (name = \"...\")");
+      }
+      for (std::size_t y = 0; y < b.canopen.axes.size(); ++y)
+        for (std::size_t x = 0; x < a.canopen.axes.size(); ++x)
+          if (a.canopen.axes[x].node_id == b.canopen.axes[y].node_id)
+            fail_at_node(tables[j], y,
+                         "CANopen node id " + std::to_string(b.canopen.axes[y].node_id) + " of axis \"" +
+                             b.axes[y].name + "\" of device \"" + b.name + "\" is device \"" +
+                             a.name + "\"'s too (axis \"" + a.axes[x].name +
+                             "\"): the devices share one bus, one node id per node (set first_node_id "
+                             "past the other device's nodes)");
+      for (std::size_t y = 0; y < b.axes.size(); ++y)
+        for (const std::uint32_t cob : {b.axes[y].encoder_cob_id, b.axes[y].drive_cob_id}) {
+          if (cob == 0) continue;
+          for (std::size_t x = 0; x < a.axes.size(); ++x)
+            if (cob == a.axes[x].encoder_cob_id || cob == a.axes[x].drive_cob_id) {
+              char buf[16];
+              std::snprintf(buf, sizeof buf, "0x%03X", cob);
+              const std::string m = std::string("COB-ID ") + buf + " of axis \"" + b.axes[y].name +
+                                    "\" of device \"" + b.name + "\" is device \"" + a.name +
+                                    "\"'s too (axis \"" + a.axes[x].name +
+                                    "\"): the devices share one bus, one COB-ID per frame";
+              const std::vector<TomlTable> axes = tables[j].tables("axis");
+              const char* key = cob == b.axes[y].encoder_cob_id ? "encoder_cob_id" : "drive_cob_id";
+              if (y < axes.size() && axes[y].has(key)) axes[y].fail(key, m);
+              fail_at_node(tables[j], y, m);
+            }
+        }
+    }
+  }
+}
+
+}  // namespace
+
 void parse_device(const TomlTable& root, Scene& scene, const TomlTable*& held_body_table,
-                  const std::vector<TomlTable>& body_tables) {
-  auto dev = root.table("device");
-  if (!dev) {  // a scene stepped by the caller (load_scene() checked SceneOverrides::caller_steps)
+                  const std::vector<TomlTable>& body_tables,
+                  std::vector<Trajectory> trajectories) {
+  const std::vector<TomlTable> devs = root.tables("device");
+  if (devs.empty()) {  // a scene stepped by the caller (load_scene() checked SceneOverrides::caller_steps)
     scene.device = hal::make_default_pose_tracker_config();
     scene.device.control_period_s = scene.model.dt;
     scene.model.initial_held_body = -1;
@@ -526,127 +737,31 @@ void parse_device(const TomlTable& root, Scene& scene, const TomlTable*& held_bo
                              "feedback_wrench stays 0; a [device.feedback] table gives it"));
     return;
   }
-  dev->allow_only({"kind", "name", "attach", "max_sample_age", "jump_tolerance_counts",
-                   "velocity_cutoff", "velocity_estimator", "foaw_max_window", "foaw_noise_counts",
-                   "soft_start", "first_node_id", "tool_offset", "trocar", "tracker", "phantom",
-                   "feedback", "axis", "canopen", "admittance", "hand", "plant", "passivity", "igtl"});
-  const std::string kind =
-      dev->choice("kind", {"trocar-instrument", "pose-tracker", "phantom"}, std::nullopt);
-  const auto node = dev->integer_or("first_node_id", 1);
-  if (node < 1 || node > 120) dev->fail("first_node_id", "must be a CANopen node id in [1, 120]");
-  hal::DeviceConfig cfg;
-  try {
-    const auto id = static_cast<std::uint8_t>(node);
-    cfg = kind == "trocar-instrument" ? hal::make_default_trocar_config(id)
-          : kind == "phantom"         ? hal::make_default_phantom_config(id)
-                                      : hal::make_default_pose_tracker_config(id);
-  } catch (const std::invalid_argument& e) {
-    dev->fail("first_node_id", e.what());
+  constexpr auto kMax = static_cast<std::size_t>(platform::kMaxLoopDevices);
+  if (devs.size() > kMax)
+    devs[kMax].fail_at(nullptr, devs[kMax].path(),
+                       "a scene drives at most " + std::to_string(kMax) + " devices (one control loop)");
+  std::vector<SceneDevice> parsed(devs.size());
+  scene.model.extra_feedback.assign(devs.size() - 1, core::FeedbackGains{});
+  for (std::size_t i = 0; i < devs.size(); ++i) {
+    parsed[i].trajectory = std::move(trajectories[i]);
+    parse_device_table(devs[i], scene, parsed[i],
+                       i == 0 ? scene.model.feedback : scene.model.extra_feedback[i - 1], i == 0);
   }
-  cfg.name = dev->string_or("name", cfg.name);
-  cfg.control_period_s = scene.model.dt;
-  if (dev->has("max_sample_age"))
-    cfg.max_sample_age_s = dev->number_in("max_sample_age", 1e-9, kInf, std::nullopt);
-  cfg.jump_tolerance_counts = dev->number_in("jump_tolerance_counts", 0.0, kInf, cfg.jump_tolerance_counts);
-  cfg.velocity_cutoff_hz = dev->number_in("velocity_cutoff", 1e-6, kInf, cfg.velocity_cutoff_hz);
-  {
-    const std::string est = dev->choice("velocity_estimator", {"difference", "filter", "foaw"},
-                                        hal::to_string(cfg.velocity_estimator));
-    cfg.velocity_estimator = est == "difference" ? hal::VelocityEstimator::kDifference
-                             : est == "foaw"     ? hal::VelocityEstimator::kFoaw
-                                                 : hal::VelocityEstimator::kFilter;
-  }
-  const auto window = dev->integer_or("foaw_max_window", cfg.foaw_max_window);
-  if (window < 1 || window > hal::kFoawMaxWindow)
-    dev->fail("foaw_max_window", "must be in [1, " + std::to_string(hal::kFoawMaxWindow) +
-                                     "] sample intervals");
-  cfg.foaw_max_window = static_cast<int>(window);
-  cfg.foaw_noise_counts = dev->number_in("foaw_noise_counts", 0.0, 1e6, cfg.foaw_noise_counts);
-  cfg.soft_start_s =
-      dev->number_in("soft_start", 0.0, hal::kMaxSoftStartS, hal::kDefaultSceneSoftStartS);
-  if (auto off = dev->table("tool_offset")) {
-    off->allow_only({"position", "orientation"});
-    cfg.tool_offset.position = off->vec3_or("position", Vec3::Zero());
-    cfg.tool_offset.orientation = off->quaternion_or("orientation", Quat::Identity());
-  }
-  const std::vector<TomlTable> axes = dev->tables("axis");
-  if (!axes.empty()) {
-    if (axes.size() != cfg.axes.size())
-      dev->fail("axis", "a " + kind + " has " + std::to_string(cfg.axes.size()) + " axes, " +
-                            std::to_string(axes.size()) + " given (give all or none)");
-    for (std::size_t i = 0; i < axes.size(); ++i) cfg.axes[i] = parse_axis(axes[i], cfg.axes[i]);
-  }
-  if (kind == "trocar-instrument") {
-    cfg.kind = hal::DeviceKind::kTrocarInstrument;
-    auto tr = dev->table("trocar");
-    if (!tr) dev->fail("trocar", "missing: give point = [x, y, z] or placement = \"approach\"");
-    tr->allow_only({"point", "orientation", "placement", "standoff"});
-    const std::string placement = tr->choice("placement", {"explicit", "approach"},
-                                             tr->has("point") ? "explicit" : "approach");
-    Vec3 centroid = Vec3::Zero();
-    for (std::size_t i = 0; i < scene.trajectory.size(); ++i) centroid += scene.trajectory[i].pose.position;
-    centroid /= static_cast<double>(std::max<std::size_t>(1, scene.trajectory.size()));
-    if (placement == "approach") {
-      if (tr->has("point")) tr->fail("point", "give either point or placement = \"approach\"");
-      const double standoff = tr->number_in("standoff", 1e-6, kInf, 0.12);
-      ApproachTrocar a;
-      try {
-        a = trocar_from_approach(scene.trajectory, standoff);
-      } catch (const InputError& e) {
-        tr->fail("standoff", e.message());
-      }
-      cfg.trocar.point = a.point;
-      cfg.trocar.orientation = core::rotation_between(Vec3::UnitZ(), a.approach);
-      std::ostringstream os;
-      os << std::fixed << std::setprecision(1)
-         << "trocar placed behind the recorded tip centroid along the mean approach axis, standoff "
-         << standoff * 1e3 << " mm (recorded tip " << a.min_depth * 1e3 << "–" << a.max_depth * 1e3
-         << " mm from the trocar point)";
-      scene.trocar_note = os.str();
-    } else {
-      cfg.trocar.point = tr->vec3("point");
-      const Vec3 toward = centroid - cfg.trocar.point;
-      cfg.trocar.orientation = tr->quaternion_or(
-          "orientation",
-          toward.norm() > 1e-9 ? core::rotation_between(Vec3::UnitZ(), toward) : Quat::Identity());
-      scene.trocar_note = "trocar point given in the scene";
-    }
-    if (tr->has("orientation") && placement == "approach") tr->fail("orientation", "set by placement = \"approach\"");
-  } else if (kind == "phantom") {
-    cfg.kind = hal::DeviceKind::kPhantom;
-    if (auto ph = dev->table("phantom")) {
-      ph->allow_only({"position", "orientation", "upper_arm", "forearm"});
-      cfg.phantom.base.position = ph->vec3_or("position", Vec3::Zero());
-      cfg.phantom.base.orientation = ph->quaternion_or("orientation", Quat::Identity());
-      cfg.phantom.l1 = ph->number_in("upper_arm", 1e-3, 10.0, cfg.phantom.l1);
-      cfg.phantom.l2 = ph->number_in("forearm", 1e-3, 10.0, cfg.phantom.l2);
-    }
-  } else {
-    cfg.kind = hal::DeviceKind::kPoseTracker;
-    if (auto tk = dev->table("tracker")) {
-      tk->allow_only({"position", "orientation"});
-      cfg.tracker.base.position = tk->vec3_or("position", Vec3::Zero());
-      cfg.tracker.base.orientation = tk->quaternion_or("orientation", Quat::Identity());
-    }
-  }
-  parse_canopen(*dev, cfg);
-  try {
-    hal::validate(cfg);
-  } catch (const std::invalid_argument& e) {
-    dev->fail("axis", e.what());
-  }
-  parse_feedback(*dev, scene.model.feedback);
-  warn_no_feedback(*dev, cfg, scene);
-  parse_hand(*dev, scene.hand);
-  parse_admittance(*dev, scene, cfg);
-  parse_plant(*dev, scene, cfg);
-  parse_passivity(*dev, scene, cfg);
-  parse_igtl(*dev, scene, cfg);
-  scene.model.initial_held_body = dev->has("attach") ? body_index(*dev, "attach", scene.model) : -1;
+  std::vector<const hal::DeviceConfig*> configs;
+  for (const SceneDevice& d : parsed) configs.push_back(&d.device);
+  check_devices_apart(devs, configs);
+  SceneDevice& first = parsed.front();
+  scene.device = std::move(first.device);
+  scene.trajectory = std::move(first.trajectory);
+  scene.hand = first.hand;
+  scene.plant = std::move(first.plant);
+  scene.trocar_note = std::move(first.trocar_note);
+  scene.extra_devices.assign(std::make_move_iterator(parsed.begin() + 1),
+                             std::make_move_iterator(parsed.end()));
   held_body_table = nullptr;
   if (scene.model.initial_held_body >= 0)
     held_body_table = &body_tables[static_cast<std::size_t>(scene.model.initial_held_body)];
-  scene.device = std::move(cfg);
 }
 
 }  // namespace numen::sim

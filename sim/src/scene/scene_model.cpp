@@ -274,7 +274,7 @@ void parse_bodies(const TomlTable& root, core::Model& m, std::vector<std::string
   for (const TomlTable& t : root.tables("body")) {
     t.allow_only({"name", "mass", "inertia", "material", "position", "orientation",
                   "linear_velocity", "angular_velocity", "spheres", "sphere_line",
-                  "sphere_grid", "coupling", "link", "link_offset", "anchored", "mesh"});
+                  "sphere_grid", "coupling", "link", "link_offset", "device", "anchored", "mesh"});
     core::BodyModel b;
     b.name = t.string("name");
     for (const auto& other : m.bodies)
@@ -295,7 +295,7 @@ void parse_bodies(const TomlTable& root, core::Model& m, std::vector<std::string
     b.coupling = parse_coupling(t, b.mass, b.inertia_body, warnings);
     b.anchored = t.boolean_or("anchored", false);
     if (b.anchored) {  // a static body: nothing drives or moves it
-      for (const char* key : {"link", "coupling", "linear_velocity", "angular_velocity"})
+      for (const char* key : {"link", "device", "coupling", "linear_velocity", "angular_velocity"})
         if (t.has(key))
           t.fail(key, "body \"" + b.name + "\" is anchored (a static body held where it starts): "
                       "it takes no " + key);

@@ -23,6 +23,8 @@
 #include "numen/sim/device/device_process.hpp"
 #include "numen/sim/scene/scene.hpp"
 #include "lattice_scene.hpp"
+#include "scene_text.hpp"
+#include "temp_dir.hpp"
 #include "pseudo_terminal.hpp"
 #include "serial_test_frames.hpp"
 
@@ -131,3 +133,19 @@ TEST(DeviceProcess, AnSdoRequestSentWhenReadyIsAnswered) {
 }
 
 }  // namespace
+
+TEST(DeviceProcess, ASceneOfSeveralDevicesIsRefused) {
+  // numen device emulates one instrument; a [[device]] scene of two is refused, not halved.
+  numen::test::TempDir dir;
+  const numen::sim::Scene scene =
+      numen::sim::load_scene(dir.write("two.toml", numen::test::kTwoDeviceScene));
+  numen::sim::DeviceOptions options;
+  options.bus = "serial:/dev/null";
+  try {
+    (void)numen::sim::run_device(scene, options);
+    FAIL() << "a scene of two devices was emulated";
+  } catch (const numen::sim::InputError& e) {
+    EXPECT_EQ(e.key(), "device");
+    EXPECT_NE(e.message().find("has 2 devices"), std::string::npos) << e.what();
+  }
+}

@@ -80,6 +80,9 @@ TEST(RecordNames, JsonSummaryCarriesTheRunFiguresNames) {
   const sim::RunSummary s = numen::test::full_managed_summary();
   std::set<std::string> json;
   leaf_names(nlohmann::json::parse(sim::format_summary_json(s)), "", json);
+  // A scene of several devices also has the `devices` array, written apart from the figure
+  // table (one object per device; docs/outputs.md "Several devices").
+  EXPECT_EQ(json.erase("devices"), s.devices.empty() ? 0u : 1u);
   std::set<std::string> figures;
   for (const sim::RunFigure& f : sim::run_figures())
     if (f.present == nullptr || f.present(s)) figures.emplace(f.name);

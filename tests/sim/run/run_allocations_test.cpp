@@ -129,3 +129,32 @@ TEST(RunAllocations, MouseScenePeriodNeverAllocates) {
 }
 
 }  // namespace
+
+TEST(RunAllocations, TwoDevicePeriodNeverAllocates) {
+  // kTwoDeviceScene with a wall the right device's tool presses into (y = 0.065: the tool's
+  // 10 mm sphere reaches it from y = 0.055): two devices read, supervised, stepped and sent
+  // their torques every period, the contact path exercised, nothing allocated.
+  numen::test::TempDir dir;
+  const std::string text = numen::test::kTwoDeviceScene + R"(
+[[obstacle]]
+name = "wall"
+type = "plane"
+point = [0.0, 0.065, 0.0]
+normal = [0.0, -1.0, 0.0]
+)";
+  const Scene scene = numen::sim::load_scene(dir.write("two.toml", text));
+  SceneRunner runner(scene, 1000);
+  std::int64_t count = -1;
+  {
+    numen::test::AllocationGuard guard;
+    for (int k = 0; k < 1000; ++k) runner.period();
+    count = guard.count();
+  }
+  EXPECT_EQ(count, 0) << "heap allocations in 1,000 periods of two devices";
+  runner.finish();
+  const RunSummary s = runner.summary();
+  EXPECT_GT(s.contacts_max, 0) << "the contact path was not exercised";
+  ASSERT_EQ(s.devices.size(), 2u);
+  EXPECT_LT(s.devices[1].invalid_periods, 100);
+  EXPECT_FALSE(s.nan_detected);
+}

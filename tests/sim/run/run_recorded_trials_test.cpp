@@ -81,32 +81,35 @@ std::vector<fs::path> jigsaws_scenes() {
   return out;
 }
 
-/// The text of the shipped scene `scene` reading `trial` instead of its excerpt, with `extra`
-/// lines added to its [trajectory] (the last table of each of these scenes) and `trocar`
-/// replacing its approach placement when not empty; its DCFs and other ../data files by
-/// absolute paths.
+/// The text of the shipped scene `scene` reading `trial` instead of its excerpt (every device's
+/// trajectory: bimanual.toml has two), with `extra` lines added to each trajectory table and
+/// `trocars[i]` replacing the i-th approach placement (device i's) where given; its DCFs and
+/// other ../data files by absolute paths.
 std::string scene_on_trial(const fs::path& scene, const fs::path& trial, const std::string& extra,
-                           const std::string& trocar = "") {
+                           const std::vector<std::string>& trocars = {}) {
   std::ifstream in(scene);
   std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   const std::string file_line = "file = \"../data/jigsaws_suturing_b002_excerpt.txt\"";
-  const auto at = text.find(file_line);
-  EXPECT_NE(at, std::string::npos) << "test bug: " << scene << " does not read the excerpt";
-  if (at != std::string::npos)
-    text.replace(at, file_line.size(), "file = \"" + fs::absolute(trial).string() + "\"\n" + extra);
+  const std::string on_trial = "file = \"" + fs::absolute(trial).string() + "\"\n" + extra;
+  EXPECT_NE(text.find(file_line), std::string::npos) << "test bug: " << scene << " does not read the excerpt";
+  for (auto at = text.find(file_line); at != std::string::npos; at = text.find(file_line, at + on_trial.size()))
+    text.replace(at, file_line.size(), on_trial);
   text = numen::test::with_absolute_dcf_paths(text, fs::absolute(scene).parent_path().string());
   // Other shipped data the scene reads (the organ scene's mesh), from the copy's directory.
   const std::string data = "file = \"../data/";
   const std::string data_abs = "file = \"" + (fs::absolute(scene).parent_path() / ".." / "data").string() + "/";
   for (auto p = text.find(data); p != std::string::npos; p = text.find(data, p + data_abs.size()))
     text.replace(p, data.size(), data_abs);
-  if (!trocar.empty()) {
+  std::size_t from = 0;
+  for (const std::string& trocar : trocars) {
     const std::string approach = "placement = \"approach\"";
-    const auto p = text.find(approach);
+    const auto p = text.find(approach, from);
     EXPECT_NE(p, std::string::npos) << "test bug: " << scene << " has no approach placement";
-    if (p != std::string::npos) text.replace(p, approach.size(), trocar);
+    if (p == std::string::npos) break;
+    text.replace(p, approach.size(), trocar);
     const auto standoff = text.find("standoff = ", p);
     if (standoff != std::string::npos) text.insert(standoff, "# ");
+    from = p + trocar.size();
   }
   return text;
 }
@@ -213,19 +216,26 @@ TEST(RunRecordedTrials, EveryTrialRunsThroughEveryJigsawsSceneWithoutASafetyStop
       (void)axis_violations(full, &closest);
       const double start = std::clamp(closest - kWindow / 2, 0.0,
                                        std::max(0.0, full.trajectory.duration() - kWindow));
-      const numen::core::Vec3& p = full.device.trocar.point;
-      const numen::core::Quat& q = full.device.trocar.orientation;
-      char trocar[256];
-      std::snprintf(trocar, sizeof trocar,
-                    "point = [%.17g, %.17g, %.17g]\norientation = [%.17g, %.17g, %.17g, %.17g]",
-                    p.x(), p.y(), p.z(), q.w(), q.x(), q.y(), q.z());
+      // Each device's trocar (bimanual.toml has two) as the whole trial placed it.
+      std::vector<std::string> trocars;
+      for (std::size_t i = 0; i < numen::sim::num_devices(full); ++i) {
+        const numen::hal::DeviceConfig& c = i == 0 ? full.device : full.extra_devices[i - 1].device;
+        const numen::core::Vec3& p = c.trocar.point;
+        const numen::core::Quat& q = c.trocar.orientation;
+        char trocar[256];
+        std::snprintf(trocar, sizeof trocar,
+                      "point = [%.17g, %.17g, %.17g]\norientation = [%.17g, %.17g, %.17g, %.17g]",
+                      p.x(), p.y(), p.z(), q.w(), q.x(), q.y(), q.z());
+        trocars.push_back(trocar);
+      }
       char window[128];
       std::snprintf(window, sizeof window, "start_time = %.17g\nend_time = %.17g", start,
                     start + kWindow);
       // A trocar instrument keeps the whole trial's trocar; a pose tracker (tracker.toml) has none.
       const bool trocar_scene = full.device.kind == numen::hal::DeviceKind::kTrocarInstrument;
       const Scene s = numen::sim::load_scene(dir.write(
-          "window.toml", scene_on_trial(scene_path, trial, window, trocar_scene ? trocar : "")));
+          "window.toml", scene_on_trial(scene_path, trial, window,
+                                        trocar_scene ? trocars : std::vector<std::string>{})));
       numen::sim::RunOptions opt;
       const auto t0 = std::chrono::steady_clock::now();
       const RunSummary r = numen::sim::run_scene(s, opt);
@@ -251,6 +261,14 @@ TEST(RunRecordedTrials, EveryTrialRunsThroughEveryJigsawsSceneWithoutASafetyStop
       EXPECT_EQ(r.device_loop, s.plant ? "closed" : "replay");
       EXPECT_FALSE(r.limit_cycle_detected) << r.limit_cycle_amplitude_mm << " mm at "
                                            << r.limit_cycle_hz << " Hz";
+      for (const numen::sim::DeviceRunSummary& d : r.devices) {  // bimanual.toml: each device
+        EXPECT_EQ(d.faults, 0) << d.name;
+        EXPECT_EQ(d.rejected_samples, 0) << d.name;
+        EXPECT_EQ(d.lifecycle, "active") << d.name;
+        EXPECT_TRUE(d.closed_loop) << d.name;
+      }
+      EXPECT_EQ(r.devices.size(), s.extra_devices.empty() ? 0u : numen::sim::num_devices(s));
+      if (!r.devices.empty()) EXPECT_EQ(r.exit_status, 0);
     }
   }
   if (!numen::test::jigsaws_trials_dir())

@@ -92,3 +92,21 @@ TEST(RunSummaryJson, KeysKeepTheirOrderAndNonFiniteIsNull) {
 }
 
 }  // namespace
+
+TEST(RunSummaryJson, SeveralDevicesHaveADevicesArrayOneDeviceNone) {
+  const numen::sim::RunSummary two = numen::test::full_managed_summary();
+  const nlohmann::json j = nlohmann::json::parse(numen::sim::format_summary_json(two));
+  ASSERT_EQ(j.at("devices").size(), 2u);
+  EXPECT_EQ(j.at("devices")[0].at("name"), "left");
+  EXPECT_EQ(j.at("devices")[1].at("name"), "right");
+  EXPECT_EQ(j.at("devices")[1].at("feedback_force_max_n"), 1.5);
+  EXPECT_EQ(j.at("devices")[1].at("handle_force_max_n"), 2.25);  // closed loop: its hand's figures
+  EXPECT_EQ(j.at("devices")[1].at("lifecycle"), "active");
+  EXPECT_EQ(j.at("device_lines").size(), 2u);
+  numen::sim::RunSummary one = two;
+  one.devices.clear();
+  one.device_lines.clear();
+  const nlohmann::json j1 = nlohmann::json::parse(numen::sim::format_summary_json(one));
+  EXPECT_FALSE(j1.contains("devices"));
+  EXPECT_FALSE(j1.contains("device_lines"));
+}

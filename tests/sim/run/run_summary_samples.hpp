@@ -81,6 +81,17 @@ inline sim::RunSummary full_managed_summary() {
   s.grasps_slipped = 1;
   s.grasp_events = {"6.968 s grasp grasper: organ (5 nodes)",
                     "7.026 s release grasper: organ (5 nodes, pull 0.738 N)"};
+  // Two devices (a [[device]] scene): device 0's figures are the summary's own.
+  for (const char* name : {"left", "right"}) {
+    sim::DeviceRunSummary d;
+    d.name = name;
+    d.feedback_force_max_n = 1.5;
+    d.closed_loop = true;
+    d.handle_force_max_n = 2.25;
+    d.lifecycle = "active";
+    s.device_lines.push_back(sim::format_device_line(d));
+    s.devices.push_back(d);
+  }
   s.divergence.latched = true;
   s.divergence.cause = "node speed";
   s.divergence.subject = "net \"bag\"";

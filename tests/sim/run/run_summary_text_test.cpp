@@ -66,6 +66,10 @@ TEST(RunSummaryText, PrintsTheValuesInTheirFormats) {
            "  device: limit cycle at 0.375 s: 1.875 mm at 15.000 Hz\n",
            "  grasps: 2 started, 1 released, 1 slipped\n  grasp event: 6.968 s grasp grasper: organ "
            "(5 nodes)\n  grasp event: 7.026 s release grasper: organ (5 nodes, pull 0.738 N)\n",
+           "  device left: feedback force max 1.500 N, torque max 0.000 N·m, torque sent in 0 "
+           "periods; closed loop: force on the hand max 2.250 N, hand–handle separation max 0.000 "
+           "mm, port energy 0.000 J; invalid periods 0, rejected samples 0, lifecycle active, safe "
+           "states 0\n  device right: ",
            "  trocar placed at the port\n",
            "  500 steps, 0.500 s simulated in 0.250 s wall (2.000x real time)\n",
            " after a start-up of 3 steps from 2.500 mm (the tool started inside); any body 3.500 mm\n",

@@ -487,3 +487,61 @@ TEST(RunArticulated, PhantomArmStopsOnTheDeskAndItsMotorsGetJointTorques) {
 }
 
 }  // namespace
+
+// ---------------------------------------------------------------- several devices
+
+TEST(RunDevices, EachDeviceDrivesItsBodyOnTheSharedBusAndIsSummarized) {
+  // kTwoDeviceScene: "left" holds left_tool on a line to (0.01, 0, 0), "right" drives right_tool
+  // through its link on a line from (0, 0.05, 0) to (0, 0.06, 0), both on the one simulated
+  // bus (nodes 1–6 and 7–12, managed stack). Each body ends near its own device's path's end.
+  numen::test::TempDir dir;
+  const Scene scene = numen::sim::load_scene(dir.write("two.toml", numen::test::kTwoDeviceScene));
+  SceneRunner runner(scene, 1000);
+  for (int k = 0; k < 750; ++k) runner.period();
+  runner.finish();
+  EXPECT_EQ(runner.loop().num_devices(), 2u);
+  const numen::core::Data& d = runner.data();
+  EXPECT_NEAR((d.bodies[0].position - Vec3(0.01, 0.0, 0.0)).norm(), 0.0, 2e-3);
+  EXPECT_NEAR((d.bodies[1].position - Vec3(0.0, 0.06, 0.0)).norm(), 0.0, 2e-3);
+  const RunSummary s = runner.summary();
+  ASSERT_EQ(s.devices.size(), 2u);
+  EXPECT_EQ(s.devices[0].name, "left");
+  EXPECT_EQ(s.devices[1].name, "right");
+  for (const numen::sim::DeviceRunSummary& dev : s.devices) {
+    EXPECT_LT(dev.invalid_periods, 100) << dev.name << ": its samples reached the loop";
+    EXPECT_EQ(dev.rejected_samples, 0) << dev.name;
+    EXPECT_EQ(dev.faults, 0) << dev.name;
+    EXPECT_EQ(dev.lifecycle, "active") << dev.name;
+  }
+  EXPECT_EQ(s.devices[0].invalid_periods, s.invalid_periods);  // device 0's are the summary's
+  // The JSON's devices array and the text's line per device.
+  const nlohmann::json j = nlohmann::json::parse(numen::sim::format_summary_json(s));
+  ASSERT_EQ(j.at("devices").size(), 2u);
+  EXPECT_EQ(j.at("devices")[1].at("name"), "right");
+  EXPECT_EQ(j.at("devices")[1].at("invalid_periods").get<std::int64_t>(), s.devices[1].invalid_periods);
+  const std::string text = numen::sim::format_summary(s);
+  EXPECT_NE(text.find("  device left: feedback force max"), std::string::npos) << text;
+  EXPECT_NE(text.find("  device right: feedback force max"), std::string::npos) << text;
+  // One device's scene has no devices array (its summary keys are unchanged).
+  const Scene one = numen::sim::load_scene(dir.write("mini.toml", numen::test::kMiniScene));
+  SceneRunner single(one, 10);
+  for (int k = 0; k < 10; ++k) single.period();
+  single.finish();
+  const nlohmann::json j1 = nlohmann::json::parse(numen::sim::format_summary_json(single.summary()));
+  EXPECT_FALSE(j1.contains("devices"));
+  EXPECT_FALSE(j1.contains("device_lines"));
+}
+
+TEST(RunDevices, ASceneOfSeveralDevicesRunsOnTheSimulatedBusOnly) {
+  numen::test::TempDir dir;
+  const Scene scene = numen::sim::load_scene(dir.write("two.toml", numen::test::kTwoDeviceScene));
+  numen::sim::BusChoice log;
+  log.spec = "log:" + dir.write("empty.log", "");
+  try {
+    SceneRunner runner(scene, 0, log);
+    FAIL() << "a log bus was accepted for two devices";
+  } catch (const numen::sim::InputError& e) {
+    EXPECT_EQ(e.key(), "--bus");
+    EXPECT_NE(e.message().find("has 2 devices"), std::string::npos) << e.what();
+  }
+}

@@ -6,6 +6,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -245,4 +247,25 @@ TEST(RunVerdict, TheTrackersRejectedInputIsNamed) {
   v = numen::sim::run_verdict(s);
   EXPECT_TRUE(says("no pose (TRANSFORM, POSITION or QTRANS) of the tool 127.0.0.1:18944 "
                    "'StylusToTracker' in 1203 messages (device names sent: 'PointerToTracker')"));
+}
+
+TEST(RunVerdict, AnotherDevicesRejectedSamplesAndSafeStatesAreNamed) {
+  // A scene of two devices: device 0's figures are the summary's own; device 1's rejected
+  // samples and latched safe states set the status too, named with the device.
+  RunSummary s = clean();
+  numen::sim::DeviceRunSummary left, right;
+  left.name = "left";
+  right.name = "right";
+  right.rejected_samples = 3;
+  s.devices = {left, right};
+  const auto v = run_verdict(s);
+  EXPECT_EQ(v.status, ExitStatus::kSamplesRejected);
+  ASSERT_EQ(v.reasons.size(), 1u);
+  EXPECT_EQ(v.reasons[0], "samples rejected: 3 axis samples rejected (device \"right\")");
+  s.devices[1].faults = 1;
+  const auto w = run_verdict(s);
+  EXPECT_EQ(w.status, ExitStatus::kSafetyStop);
+  EXPECT_NE(std::find(w.reasons.begin(), w.reasons.end(),
+                      "safety stop: 1 safe state(s) latched (device \"right\")"),
+            w.reasons.end());
 }

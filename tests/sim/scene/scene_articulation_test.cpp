@@ -504,3 +504,57 @@ TEST(SceneArticulationErrors, LinkedBodyWithOrientationButNoPosition) {
 }
 
 }  // namespace
+
+// ---------------------------------------------------------------- several devices ([[device]])
+
+TEST(SceneArticulationDevices, EachBodyIsBoundToTheDeviceItsKeyNames) {
+  numen::test::TempDir dir;
+  const std::string& two = numen::test::kTwoDeviceScene;
+  const numen::sim::Scene s = numen::sim::load_scene(dir.write("two.toml", two));
+  ASSERT_EQ(s.extra_devices.size(), 1u);
+  // Device 0: the rigid binding (link 0 → the held body "left_tool"); device 1: its link → body 1.
+  ASSERT_EQ(s.binding.links.size(), 1u);
+  EXPECT_EQ(s.binding.links[0].body, -1);
+  const numen::platform::DeviceBinding& right = s.extra_devices[0].binding;
+  ASSERT_EQ(right.links.size(), 1u);
+  EXPECT_EQ(right.links[0].body, 1);
+  EXPECT_EQ(right.links[0].link, 0);
+  // The right tool starts where its device's path starts (5 cm along y), not the left one's.
+  EXPECT_NEAR(s.model.bodies[1].initial_pose.position.y(), 0.05, 1e-9);
+}
+
+TEST(SceneArticulationDevices, ABindingWithoutItsDeviceOrToAnotherDevicesHeldBodyIsLocated) {
+  numen::test::TempDir dir;
+  const std::string& two = numen::test::kTwoDeviceScene;
+  // No device key with two devices: at the link.
+  const std::string nodev = replace(two, "device = \"right\"\n", "");
+  const numen::sim::InputError e1 = load_error(dir, nodev, "nodev.toml");
+  numen::test::expect_located(e1, (dir.path() / "nodev.toml").string(), line_of(nodev, "link = \"tool\""),
+                              column_of(nodev, "link = ", "\"tool\""), "body[1].link",
+                              "the scene has several devices (\"left\", \"right\")");
+  // A device that does not exist: at the key.
+  const std::string unknown = replace(two, "device = \"right\"", "device = \"middle\"");
+  const numen::sim::InputError e2 = load_error(dir, unknown, "unknown.toml");
+  numen::test::expect_located(e2, (dir.path() / "unknown.toml").string(),
+                              line_of(unknown, "device = \"middle\""),
+                              column_of(unknown, "device = ", "\"middle\""), "body[1].device",
+                              "no device named \"middle\"");
+  // Two bindings to one body: the left device holds the body the right one's link drives.
+  const std::string twice = replace(two, "attach = \"left_tool\"", "attach = \"right_tool\"");
+  const numen::sim::InputError e3 = load_error(dir, twice, "twice.toml");
+  numen::test::expect_located(e3, (dir.path() / "twice.toml").string(),
+                              line_of(twice, "attach = \"right_tool\""),
+                              column_of(twice, "attach = ", "\"right_tool\""), "device[0].attach",
+                              "body \"right_tool\" is bound twice");
+  // A tool switch to the right device's body: at the event's attach.
+  const std::string event = two + "\n[[event]]\ntime = 0.1\nattach = \"right_tool\"\n";
+  const numen::sim::InputError e4 = load_error(dir, event, "event.toml");
+  numen::test::expect_located(e4, (dir.path() / "event.toml").string(),
+                              line_of(event, "attach = \"right_tool\""),
+                              column_of(event, "attach = ", "\"right_tool\""), "event[0].attach",
+                              "is driven by device \"right\"");
+  // A device key on a body without a link.
+  const std::string nolink = replace(two, "link = \"tool\"\n", "");
+  const numen::sim::InputError e5 = load_error(dir, nolink, "nolink.toml");
+  EXPECT_EQ(e5.key(), "body[1].device") << e5.what();
+}

@@ -397,3 +397,115 @@ TEST(SceneDevice, ADeviceWithoutMotorsSaysItHasNoFeedback) {
   EXPECT_TRUE(fed.warnings.empty()) << fed.warnings.front();
   EXPECT_EQ(fed.model.feedback.k_t, 50.0);
 }
+
+// ---------------------------------------------------------------- several devices ([[device]])
+
+TEST(SceneDevices, EachDeviceHasItsNodesFeedbackAndTrajectory) {
+  TempDir dir;
+  const Scene s = load_scene(dir.write("two.toml", numen::test::kTwoDeviceScene));
+  ASSERT_EQ(numen::sim::num_devices(s), 2u);
+  EXPECT_EQ(s.device.name, "left");
+  EXPECT_EQ(s.device.canopen.axes.front().node_id, 1);
+  EXPECT_DOUBLE_EQ(s.model.feedback.k_t, 50.0);
+  const numen::sim::SceneDevice& right = s.extra_devices.front();
+  EXPECT_EQ(right.device.name, "right");
+  EXPECT_EQ(right.device.canopen.axes.front().node_id, 7);
+  EXPECT_EQ(right.device.canopen.axes.back().node_id, 12);
+  ASSERT_EQ(s.model.extra_feedback.size(), 1u);
+  EXPECT_DOUBLE_EQ(s.model.extra_feedback[0].k_t, 80.0);
+  EXPECT_DOUBLE_EQ(s.model.extra_feedback[0].gamma_t, 0.8);
+  EXPECT_DOUBLE_EQ(numen::core::feedback_gains(s.model, 1).k_t, 80.0);
+  EXPECT_DOUBLE_EQ(numen::core::feedback_gains(s.model, 0).k_t, 50.0);
+  // Each its own path: the left one starts at the origin, the right one 5 cm along y; the scene
+  // lasts as long as the longer (0.75 s).
+  EXPECT_NEAR(s.trajectory.at(0.0).pose.position.y(), 0.0, 1e-12);
+  EXPECT_NEAR(right.trajectory.at(0.0).pose.position.y(), 0.05, 1e-12);
+  EXPECT_NEAR(s.duration_s, 0.75, 1e-9);
+  EXPECT_EQ(s.model.initial_held_body, 0);
+}
+
+TEST(SceneDevices, ASingleDeviceArrayIsTheSingleDevice) {
+  TempDir dir;
+  const Scene one = load_scene(dir.write("one.toml", kMiniScene));
+  const Scene arr = load_scene(dir.write("arr.toml", replace(kMiniScene, "[device]", "[[device]]")));
+  EXPECT_TRUE(arr.extra_devices.empty());
+  EXPECT_EQ(arr.device.name, one.device.name);
+  EXPECT_EQ(arr.binding.links.size(), one.binding.links.size());
+  EXPECT_DOUBLE_EQ(arr.duration_s, one.duration_s);
+}
+
+TEST(SceneDevices, ClashesOnTheSharedBusAreLocated) {
+  TempDir dir;
+  const std::string& two = numen::test::kTwoDeviceScene;
+  // One node id for two devices: at the second's first_node_id, naming both.
+  const std::string node = replace(two, "first_node_id = 7", "first_node_id = 6");
+  const InputError e1 = load_error(dir, node, "node.toml");
+  expect_located(e1, (dir.path() / "node.toml").string(), line_of(node, "first_node_id = 6"),
+                 column_of(node, "first_node_id", "6"), "device[1].first_node_id",
+                 "CANopen node id 6 of axis \"x\" of device \"right\" is device \"left\"'s too");
+  // One name for two devices: at the second's name.
+  const std::string name = replace(two, "name = \"right\"", "name = \"left\"");
+  const std::string named = replace(name, "device = \"right\"", "device = \"left\"");
+  const InputError e2 = load_error(dir, named, "name.toml");
+  expect_located(e2, (dir.path() / "name.toml").string(), line_of(named, "name = \"left\"", 2),
+                 0, "device[1].name",
+                 "device name \"left\" is used twice");
+  // One COB-ID for two devices (an axis's encoder COB-ID given by hand): at that key.
+  const std::string cob = replace(two, "first_node_id = 7\n", R"(first_node_id = 7
+[[device.axis]]
+encoder_cob_id = 0x181
+[[device.axis]]
+[[device.axis]]
+[[device.axis]]
+[[device.axis]]
+[[device.axis]]
+)");
+  const InputError e3 = load_error(dir, cob, "cob.toml");
+  expect_located(e3, (dir.path() / "cob.toml").string(), line_of(cob, "encoder_cob_id = 0x181"),
+                 column_of(cob, "encoder_cob_id", "0x181"), "device[1].axis[0].encoder_cob_id",
+                 "COB-ID 0x181 of axis \"x\" of device \"right\" is device \"left\"'s too");
+}
+
+TEST(SceneDevices, OnlyTheFirstDeviceHoldsAndEachNeedsATrajectory) {
+  TempDir dir;
+  const std::string& two = numen::test::kTwoDeviceScene;
+  const std::string attach = replace(two, "first_node_id = 7\n", "first_node_id = 7\nattach = \"right_tool\"\n");
+  const InputError e1 = load_error(dir, attach, "attach.toml");
+  expect_located(e1, (dir.path() / "attach.toml").string(), line_of(attach, "attach = \"right_tool\""),
+                 column_of(attach, "attach = ", "\"right_tool\""), "device[1].attach",
+                 "the held body is the first device's");
+  // The second device's path removed, and no scene [trajectory] to fall back on.
+  std::string bare = two.substr(0, two.rfind("[device.trajectory]"));
+  const InputError e2 = load_error(dir, bare, "bare.toml");
+  EXPECT_EQ(e2.line(), line_of(bare, "[[device]]", 2)) << e2.what();
+  EXPECT_NE(e2.message().find("device \"right\" has no trajectory"), std::string::npos) << e2.what();
+  // With the scene's [trajectory], the second device runs it.
+  const std::string shared = bare + R"(
+[trajectory]
+source = "scripted"
+start = { position = [0.0, 0.02, 0.0] }
+[[trajectory.segment]]
+type = "hold"
+duration = 0.25
+)";
+  const Scene s = load_scene(dir.write("shared.toml", shared));
+  ASSERT_EQ(s.extra_devices.size(), 1u);
+  EXPECT_NEAR(s.extra_devices[0].trajectory.at(0.0).pose.position.y(), 0.02, 1e-12);
+  EXPECT_NEAR(s.trajectory.at(0.0).pose.position.y(), 0.0, 1e-12);  // the left one's own
+}
+
+TEST(SceneDevices, AManipulatorTheRecordingDoesNotHaveIsLocated) {
+  TempDir dir;
+  const std::string jig = replace(numen::test::kTwoDeviceScene, R"(source = "scripted"
+start = { position = [0.0, 0.05, 0.0] }
+[[device.trajectory.segment]]
+type = "line"
+to = [0.0, 0.06, 0.0]
+duration = 0.75
+)", "source = \"jigsaws\"\nfile = \"" + numen::test::jigsaws_excerpt_path() +
+                                           "\"\nmanipulator = \"slave_centre\"\n");
+  const InputError e = load_error(dir, jig, "jig.toml");
+  expect_located(e, (dir.path() / "jig.toml").string(), line_of(jig, "slave_centre"),
+                 column_of(jig, "manipulator", "\"slave_centre\""), "device[1].trajectory.manipulator",
+                 "slave_left");
+}

@@ -265,7 +265,11 @@ struct Model {
   std::vector<std::string> material_names;  ///< Size num_materials.
   std::vector<MaterialPair> material_pairs; ///< num_materials², symmetric, row-major.
 
-  FeedbackGains feedback;          ///< Device virtual coupling (Eq. 8).
+  FeedbackGains feedback;          ///< Device virtual coupling (Eq. 8); device 0's with several.
+  /// Eq. 8 gains of devices 1 .. N−1 of a loop that runs several (feedback group g ≥ 1 of
+  /// Data::feedback_group is extra_feedback[g − 1]; feedback_gains()). Empty: one device, or
+  /// every device with `feedback`.
+  std::vector<FeedbackGains> extra_feedback;
   int initial_held_body = 0;       ///< Body the device holds at reset; -1 for none.
   /// The contacts are written by the caller, not detected (the god-object model of the
   /// multirate device loop, multirate.hpp): contact_capacity() gives the model the room of
@@ -313,5 +317,14 @@ std::string finalize_model(Model& model);
 /// Default damping from a damping ratio ζ for a spring k acting on mass m:
 /// γ = 2 ζ √(m k). The paper's rule 1.4 ≤ γ/√(mk) ≤ 2 is ζ in [0.7, 1].
 double damping_from_ratio(double zeta, double mass, double stiffness) noexcept;
+
+/// The Eq. 8 gains of feedback group `group` (Data::feedback_group, the index of the device
+/// that drives the body): Model::extra_feedback[group − 1] for a group ≥ 1 it holds, else
+/// Model::feedback. Real-time safe.
+inline const FeedbackGains& feedback_gains(const Model& model, int group) noexcept {
+  return group >= 1 && static_cast<std::size_t>(group) <= model.extra_feedback.size()
+             ? model.extra_feedback[static_cast<std::size_t>(group - 1)]
+             : model.feedback;
+}
 
 }  // namespace numen::core

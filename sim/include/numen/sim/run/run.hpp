@@ -6,6 +6,7 @@
 /// the summary and an optional per-step trace. The options of a run are in
 /// run_options.hpp, what it measured in run_summary.hpp.
 
+#include <array>
 #include <atomic>
 #include <cstdint>
 #include <memory>
@@ -15,6 +16,7 @@
 #include "numen/core/data.hpp"
 #include "numen/hal/device/instrument_device.hpp"
 #include "numen/hal/transport/bus_recorder.hpp"
+#include "numen/hal/transport/bus_share.hpp"
 #include "numen/hal/transport/log_bus.hpp"
 #include "numen/hal/transport/sim_bus.hpp"
 #include "numen/platform/control_loop.hpp"
@@ -109,7 +111,10 @@ void write_in_memory_trace(const Trace& trace, const std::string& path, RunSumma
 /// same loop can be driven by a test, a benchmark or `numen run`.
 class SceneRunner {
  public:
-  /// `scene` must outlive the runner. `trace_capacity` records are reserved.
+  /// `scene` must outlive the runner; each of its devices (Scene::extra_devices beside the
+  /// first) is emulated on the simulated bus and driven by the one ControlLoop (a LoopDevice
+  /// each); a scene of several devices runs on the simulated bus only (InputError at --bus
+  /// otherwise). `trace_capacity` records are reserved.
   /// `bus` chooses the controller's bus; a log is loaded and a recording
   /// opened (its writer thread started) here. Throws std::invalid_argument
   /// for an unknown bus spec, InputError for a scene without [trajectory] or [device]
@@ -196,6 +201,10 @@ class SceneRunner {
   const SimulatedInstrument& instrument() const noexcept { return instrument_; }
   /// The simulated instrument, for fault injection in tests.
   SimulatedInstrument& instrument() noexcept { return instrument_; }
+  /// The emulated instrument of device `i` (< num_devices(*scene); 0: instrument()).
+  const SimulatedInstrument& instrument(std::size_t i) const noexcept {
+    return i == 0 ? instrument_ : *extra_instruments_[i - 1];
+  }
   /// The control loop (lifecycle, supervisor, CANopen master, statistics, rearm()).
   const platform::ControlLoop& loop() const noexcept { return loop_; }
   platform::ControlLoop& loop() noexcept { return loop_; }
@@ -272,6 +281,25 @@ class SceneRunner {
   std::int64_t ghost_every_ = 1;
   int ghost_held_ = -1;      // the held body when the target was last measured
   TargetContacts target_{};  // the target's contacts, last measured (or taken from the thread)
+  // Devices 1 .. N−1 of a scene of several ([[device]]; docs/scenes.md "Several devices"),
+  // simulated bus only: each its emulated instrument (its own trajectory, plant and hand) and
+  // its InstrumentDevice; with several devices each emulated instrument reads the simulated
+  // bus's device side through its own port of device_share_ (its frames only), port i for
+  // device i.
+  std::vector<std::unique_ptr<SimulatedInstrument>> extra_instruments_;
+  std::vector<std::unique_ptr<hal::InstrumentDevice>> extra_devices_;
+  std::unique_ptr<hal::BusShare> device_share_;
+  // Per device of a scene of several: its period figures (DeviceRunSummary), kept by
+  // tally_devices().
+  struct DeviceTally {
+    double force_max = 0.0, torque_max = 0.0;
+    std::int64_t torque_periods = 0, invalid_periods = 0;
+  };
+  std::array<DeviceTally, platform::kMaxLoopDevices> device_tally_{};
+  // A scene of several devices: each device's report of the period into device_tally_.
+  void tally_devices() noexcept;
+  // A scene of several devices: each device's figures into s.devices and s.device_lines.
+  void summarize_devices(RunSummary& s) const;
   platform::ControlLoop loop_;
   /// The multirate god-object (scene [multirate]), stepped in place of core::step by the
   /// loop (its platform::Stepper, ControlLoop::set_stepper()); not enabled in a single-rate run.

@@ -115,6 +115,26 @@ struct AdmittanceSummary {
 /// 21 mm into the tissue: 90 periods, pauses of up to 6). Its depth is
 /// startup_tool_penetration_mm (with a warning naming the obstacle), and
 /// tool_penetration_max_mm covers every period after it.
+/// One device's figures in a run of a scene of several devices (RunSummary::devices;
+/// docs/outputs.md, "Several devices"). Device 0's are also the summary's own keys.
+struct DeviceRunSummary {
+  std::string name;                    ///< Its DeviceConfig::name (the scene's `name`).
+  double feedback_force_max_n = 0.0;   ///< Largest |feedback force| sent to it (N).
+  double feedback_torque_max_nm = 0.0; ///< Largest |feedback torque| sent to it (N·m).
+  std::int64_t torque_periods = 0;     ///< Periods in which it was sent non-zero torque.
+  std::int64_t invalid_periods = 0;    ///< Periods whose sample was not valid (target held).
+  std::int64_t rejected_samples = 0;   ///< Its axis samples rejected by the checks.
+  std::int64_t faults = 0;             ///< Managed stack: its safe states latched.
+  std::string lifecycle;               ///< Managed stack: its lifecycle state at the end.
+  bool closed_loop = false;            ///< Its emulated device moved under its torques (a plant).
+  double handle_force_max_n = 0.0;     ///< Closed loop: largest force of its hand on the handle (N).
+  double hand_separation_max_mm = 0.0; ///< Closed loop: largest hand–handle separation (mm).
+  double device_port_energy_j = 0.0;   ///< Closed loop: energy into its handle's port (J).
+};
+
+/// The text line of one device (RunSummary::device_lines): "NAME: feedback force max F N, ...".
+std::string format_device_line(const DeviceRunSummary& d);
+
 struct RunSummary {
   std::string scene;
   std::string coupling;
@@ -221,6 +241,11 @@ struct RunSummary {
   std::int64_t grasps_slipped = 0;       ///< Grasps that slipped (pull past max_force).
   /// Each grasper's logged events, "6.961 s grasp grasper: organ (7 nodes)" (format_grasp_event()).
   std::vector<std::string> grasp_events;
+  /// Per device of a scene of several (docs/scenes.md "Several devices"), device 0 first;
+  /// empty for one device. The JSON summary's `devices` array.
+  std::vector<DeviceRunSummary> devices;
+  /// The text summary's line of each of `devices` (format_device_line()); empty for one device.
+  std::vector<std::string> device_lines;
   std::int64_t bus_frames_dropped = 0;
   std::int64_t bus_frames_corrupted = 0;
   std::string bus = "sim";                 ///< BusChoice::spec of the run.

@@ -109,6 +109,27 @@ struct MultirateScene {
   std::vector<int> tools;
 };
 
+/// One device of a scene beyond the first: entries 1 .. N−1 of a `[[device]]` array (docs/scenes.md,
+/// "Several devices"); entry 0 is the scene's own fields (Scene::device, binding, trajectory,
+/// hand, plant, model.feedback), as for a single `[device]`; its Eq. 8 gains are in the model
+/// (core::Model::extra_feedback). Each device is an impedance
+/// instrument on the scene's one simulated bus (its own CANopen nodes: no node id or COB-ID of
+/// another device), driving the bodies whose `link` key names it (`device = "<name>"` on the
+/// [[body]] table) and the joints whose `prescribed` table names it.
+struct SceneDevice {
+  hal::DeviceConfig device;  ///< Validated; control_period_s = model.dt; name unique in the scene.
+  /// Which bodies its links drive and which prescribed joints its axes impose. No rigid binding
+  /// (link 0 → the held body): the held body is device 0's (`attach`).
+  platform::DeviceBinding binding;
+  /// Target of its tool frame in the world: its `[device.trajectory]`, else the scene's
+  /// `[trajectory]` (same units and frame as Scene::trajectory).
+  Trajectory trajectory;
+  HandSettings hand;  ///< Its simulated hand (`[device.hand]`).
+  /// Its mechanics (`[device.plant]`; unset: the emulated instrument replays its trajectory).
+  std::optional<DevicePlantSettings> plant;
+  std::string trocar_note;  ///< How its trocar point was placed; empty if not a trocar.
+};
+
 /// Everything a run of a scene needs.
 struct Scene {
   std::string file;          ///< Path of the scene file, as given.
@@ -169,7 +190,14 @@ struct Scene {
   std::vector<std::string> warnings;  ///< Non-fatal remarks of the loader.
   /// How the trocar point was placed (for the summary), empty if not a trocar.
   std::string trocar_note;
+  /// Devices 1 .. N−1 of a `[[device]]` array, in file order; empty for one device (`[device]`
+  /// or a `[[device]]` of one entry). Device 0 is the fields above. Device i's Eq. 8 gains
+  /// (`[device.feedback]`) are model.extra_feedback[i − 1] (core::feedback_gains()).
+  std::vector<SceneDevice> extra_devices;
 };
+
+/// The number of devices of `scene`: 1 + scene.extra_devices.size().
+inline std::size_t num_devices(const Scene& scene) noexcept { return 1 + scene.extra_devices.size(); }
 
 /// Changes a caller may impose on a scene at load time (command line).
 struct SceneOverrides {
