@@ -55,6 +55,8 @@
 
 namespace numen::hal {
 
+class NmtMaster;  // nmt_master.hpp: the NMT master the managed devices on one bus share
+
 /// Creation settings of an impedance device's supervision (the minimal protocol uses none):
 /// the supervision settings (SupervisionSettings: encoder timeout, overrun limit, safe-stop
 /// timeout, defined once there) and the device's own.
@@ -179,10 +181,13 @@ class ImpedanceDevice : public Device {
 };
 
 /// The device `instrument.config()` asks for: ManagedDevice if canopen.managed, else
-/// MinimalDevice, with `period_ns` the control period (> 0). Throws std::invalid_argument for
-/// bad settings (construction only).
+/// MinimalDevice, with `period_ns` the control period (> 0). `network`: the NMT master the
+/// managed devices on `bus` share (ManagedDevice; the minimal protocol has no NMT and ignores
+/// it); nullptr: the device alone on its bus. Throws std::invalid_argument for bad settings
+/// (construction only).
 std::unique_ptr<ImpedanceDevice> make_device(InstrumentDevice& instrument, Bus& bus,
                                              std::int64_t period_ns,
-                                             const ImpedanceSettings& settings = {});
+                                             const ImpedanceSettings& settings = {},
+                                             NmtMaster* network = nullptr);
 
 }  // namespace numen::hal
