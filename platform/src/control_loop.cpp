@@ -10,6 +10,7 @@
 
 #include "numen/core/joint.hpp"
 #include "numen/hal/canopen/nmt_master.hpp"
+#include "numen/hal/device/admittance_device.hpp"
 #include "numen/hal/device/bus_filters.hpp"
 
 namespace numen::platform {
@@ -228,6 +229,10 @@ const PeriodReport& ControlLoop::end_period(std::int64_t now_ns, PeriodObserver*
     }
   }
   return periods_[0].report;
+}
+
+const hal::AdmittanceDevice* ControlLoop::admittance() const noexcept {
+  return dynamic_cast<const hal::AdmittanceDevice*>(contexts_[0].device);
 }
 
 void ControlLoop::set_stepper(Stepper* stepper) noexcept {

@@ -190,7 +190,7 @@ IoStatus CanopenMaster::send(const CanFrame& frame, Bus& bus, std::uint64_t* sen
   return s;
 }
 
-void CanopenMaster::send_nmt(NmtCommand command, std::uint8_t node) noexcept {
+void CanopenMaster::ask_nmt(NmtCommand command, std::uint8_t node) noexcept {
   (void)nmt_->request(nmt_device_, command, node);  // valid: its own nodes, or request_nmt()'s
 }
 
@@ -209,7 +209,7 @@ IoStatus CanopenMaster::begin_period(std::int64_t now_ns, Bus& bus) noexcept {
   last_now_ns_ = now_ns;
   switch (startup_.phase) {
     case StartupPhase::kResetCommunication:
-      send_nmt(NmtCommand::kResetCommunication, kNmtAllNodes);
+      ask_nmt(NmtCommand::kResetCommunication, kNmtAllNodes);
       startup_.phase = StartupPhase::kWaitBootUp;
       startup_.began_ns = now_ns;
       startup_.began_period = periods_;
@@ -221,13 +221,13 @@ IoStatus CanopenMaster::begin_period(std::int64_t now_ns, Bus& bus) noexcept {
       for (std::size_t j = 0; j < num_nodes_; ++j) {
         NodeState& n = nodes_[j];
         if (n.booted || now_ns - n.last_command_ns < retry_ns_) continue;
-        send_nmt(NmtCommand::kResetCommunication, node_ids_[j]);
+        ask_nmt(NmtCommand::kResetCommunication, node_ids_[j]);
         n.last_command_ns = now_ns;
         ++counters_.nmt_retries;
       }
       break;
     case StartupPhase::kStartNodes:
-      send_nmt(NmtCommand::kStartRemoteNode, kNmtAllNodes);
+      ask_nmt(NmtCommand::kStartRemoteNode, kNmtAllNodes);
       startup_.phase = StartupPhase::kWaitOperational;
       for (std::size_t j = 0; j < num_nodes_; ++j) nodes_[j].last_command_ns = now_ns;
       break;
@@ -239,7 +239,7 @@ IoStatus CanopenMaster::begin_period(std::int64_t now_ns, Bus& bus) noexcept {
                         c->last_state() == NmtState::kOperational;
         if (op && !n.restart) continue;
         if (!n.restart && now_ns - n.last_command_ns < retry_ns_) continue;
-        send_nmt(NmtCommand::kStartRemoteNode, node_ids_[j]);
+        ask_nmt(NmtCommand::kStartRemoteNode, node_ids_[j]);
         n.last_command_ns = now_ns;
         n.restart = false;
         ++counters_.nmt_retries;
@@ -259,7 +259,7 @@ IoStatus CanopenMaster::begin_period(std::int64_t now_ns, Bus& bus) noexcept {
   }
   if (nmt_queued_) {
     nmt_queued_ = false;
-    send_nmt(queued_.command, queued_.node_id);
+    ask_nmt(queued_.command, queued_.node_id);
   }
   // The network's NMT master sends the period's commands and the controller heartbeat once
   // every device on the bus has submitted (at once for a private one).

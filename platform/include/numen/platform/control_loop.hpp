@@ -42,7 +42,6 @@
 #include "numen/core/model.hpp"
 #include "numen/hal/transport/bus.hpp"
 #include "numen/hal/transport/bus_share.hpp"
-#include "numen/hal/device/admittance_device.hpp"
 #include "numen/hal/device/device.hpp"
 #include "numen/hal/device/device_status.hpp"
 #include "numen/hal/device/impedance_device.hpp"
@@ -55,7 +54,8 @@
 #include "numen/platform/stepper.hpp"
 
 namespace numen::hal {
-class NmtMaster;  // the NMT master the managed devices on one bus share (built with them)
+class AdmittanceDevice;  // admittance_device.hpp: the loop's second kind of device
+class NmtMaster;         // the NMT master the managed devices on one bus share (built with them)
 }  // namespace numen::hal
 
 namespace numen::platform {
@@ -218,9 +218,7 @@ class ControlLoop {
     return static_cast<const hal::ImpedanceDevice&>(*contexts_[i].device);
   }
   /// The admittance device (nullptr for an impedance device).
-  const hal::AdmittanceDevice* admittance() const noexcept {
-    return dynamic_cast<const hal::AdmittanceDevice*>(contexts_[0].device);
-  }
+  const hal::AdmittanceDevice* admittance() const noexcept;
   /// Timing statistics of the periods (wake-up, step, bus I/O, end-to-end, overruns; with
   /// several devices from the first device's read to the last one's writes).
   const LoopStatistics& statistics() const noexcept { return *stats_; }

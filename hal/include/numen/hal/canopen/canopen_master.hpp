@@ -221,7 +221,7 @@ class CanopenMaster {
     std::int16_t torque_actual = 0;
   };
 
-  void send_nmt(NmtCommand command, std::uint8_t node) noexcept;
+  void ask_nmt(NmtCommand command, std::uint8_t node) noexcept;
   IoStatus send(const CanFrame& frame, Bus& bus, std::uint64_t* sent) noexcept;
   int node_index(std::uint8_t node_id) const noexcept;
   void finish(StartupPhase phase, std::uint8_t missing, std::int64_t now_ns) noexcept;

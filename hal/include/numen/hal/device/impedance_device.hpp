@@ -46,7 +46,6 @@
 #include <memory>
 #include <span>
 
-#include "numen/hal/canopen/cia402.hpp"
 #include "numen/hal/device/device.hpp"
 #include "numen/hal/device/device_status.hpp"
 #include "numen/hal/device/instrument_device.hpp"
