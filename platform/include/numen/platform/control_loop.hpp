@@ -137,6 +137,7 @@ class ControlLoop {
   ControlLoop(const core::Model& model, core::Data& data, hal::AdmittanceDevice& device,
               const ControlLoopSettings& settings = {});
 
+  /// Out of line: the header declares the bus's NMT master (hal::NmtMaster) only.
   ~ControlLoop();
   /// Not copied or moved: the devices' contexts point at the loop's own records.
   ControlLoop(const ControlLoop&) = delete;

@@ -194,8 +194,6 @@ class CanopenMaster {
   std::uint64_t periods() const noexcept { return periods_; }
   /// Counters (its NMT and heartbeat part from the NmtMaster).
   CanopenMasterCounters counters() const noexcept;
-  /// This device's index in its network's NmtMaster.
-  int nmt_device() const noexcept { return nmt_device_; }
 
  private:
   struct NodeState {
@@ -221,6 +219,7 @@ class CanopenMaster {
     std::int16_t torque_actual = 0;
   };
 
+  // Asks the network's NmtMaster for `command` to `node` (kNmtAllNodes: its own nodes).
   void ask_nmt(NmtCommand command, std::uint8_t node) noexcept;
   IoStatus send(const CanFrame& frame, Bus& bus, std::uint64_t* sent) noexcept;
   int node_index(std::uint8_t node_id) const noexcept;
