@@ -67,7 +67,8 @@ set(_hal_headers
   numen/hal/canopen/canopen.hpp numen/hal/canopen/canopen_master.hpp numen/hal/canopen/cia402.hpp
   numen/hal/canopen/dcf.hpp numen/hal/canopen/dcf_configuration.hpp
   numen/hal/canopen/device_lifecycle.hpp numen/hal/canopen/emcy.hpp
-  numen/hal/canopen/heartbeat.hpp numen/hal/canopen/nmt.hpp numen/hal/canopen/pdo_mapping.hpp
+  numen/hal/canopen/heartbeat.hpp numen/hal/canopen/nmt.hpp numen/hal/canopen/nmt_master.hpp
+  numen/hal/canopen/pdo_mapping.hpp
   numen/hal/canopen/sdo.hpp numen/hal/canopen/sdo_poller.hpp
   numen/hal/device/admittance_device.hpp numen/hal/device/axis.hpp
   numen/hal/device/device.hpp numen/hal/device/device_config.hpp

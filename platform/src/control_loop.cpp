@@ -9,6 +9,8 @@
 #include <string>
 
 #include "numen/core/joint.hpp"
+#include "numen/hal/canopen/nmt_master.hpp"
+#include "numen/hal/device/admittance_device.hpp"
 #include "numen/hal/device/bus_filters.hpp"
 
 namespace numen::platform {
@@ -67,8 +69,10 @@ ControlLoop::ControlLoop(const core::Model& model, core::Data& data,
       num_devices_(devices.size()),
       stages_(impedance_period_stages()) {
   // The buses several devices share: one BusShare each, a port per device with its filters;
-  // the first device on a bus sends the SYNC.
+  // the first device on a bus sends the SYNC; its managed devices share one NMT master.
+  static_assert(static_cast<std::size_t>(kMaxLoopDevices) <= hal::kMaxNmtDevices);
   std::array<hal::Bus*, kMaxLoopDevices> port{};
+  std::array<hal::NmtMaster*, kMaxLoopDevices> network{};
   std::array<bool, kMaxLoopDevices> sync_producer{};
   for (std::size_t i = 0; i < devices.size(); ++i) {
     std::size_t first = i;
@@ -83,11 +87,14 @@ ControlLoop::ControlLoop(const core::Model& model, core::Data& data,
       port[i] = devices[i].bus;
       continue;
     }
-    if (first == i) shares_.push_back(std::make_unique<hal::BusShare>(*devices[i].bus));
-    hal::BusShare* share = nullptr;
-    for (const std::unique_ptr<hal::BusShare>& s : shares_)
-      if (&s->bus() == devices[i].bus) share = s.get();
-    port[i] = &share->add_port(hal::controller_filters(devices[i].instrument->config()));
+    if (first == i) {
+      shares_.push_back(std::make_unique<hal::BusShare>(*devices[i].bus));
+      networks_.push_back(std::make_unique<hal::NmtMaster>());
+    }
+    std::size_t s = 0;
+    while (&shares_[s]->bus() != devices[i].bus) ++s;
+    port[i] = &shares_[s]->add_port(hal::controller_filters(devices[i].instrument->config()));
+    network[i] = networks_[s].get();
   }
   // Every device's bodies: bound at most once over the loop (explicitly_bound_bodies() throws
   // for a body bound twice), the held body by one rigid binding at most.
@@ -109,7 +116,7 @@ ControlLoop::ControlLoop(const core::Model& model, core::Data& data,
   for (std::size_t i = 0; i < devices.size(); ++i) {
     const LoopDevice& d = devices[i];
     owned_[i] = hal::make_device(*d.instrument, *port[i], period_of(d.instrument->config()),
-                                 d.settings);
+                                 d.settings, network[i]);
     owned_[i]->set_sync_producer(sync_producer[i]);
     init_context(i, model, data, *owned_[i], settings);
     bind(i, model, data, *d.instrument, d.binding);
@@ -124,6 +131,8 @@ ControlLoop::ControlLoop(const core::Model& model, core::Data& data,
     for (const LinkBinding& b : contexts_[i].binding.links)
       if (b.body >= 0) data.feedback_group[static_cast<std::size_t>(b.body)] = static_cast<int>(i);
 }
+
+ControlLoop::~ControlLoop() = default;
 
 ControlLoop::ControlLoop(const core::Model& model, core::Data& data,
                          hal::AdmittanceDevice& device, const ControlLoopSettings& settings)
@@ -220,6 +229,10 @@ const PeriodReport& ControlLoop::end_period(std::int64_t now_ns, PeriodObserver*
     }
   }
   return periods_[0].report;
+}
+
+const hal::AdmittanceDevice* ControlLoop::admittance() const noexcept {
+  return dynamic_cast<const hal::AdmittanceDevice*>(contexts_[0].device);
 }
 
 void ControlLoop::set_stepper(Stepper* stepper) noexcept {

@@ -2,7 +2,9 @@
 // (one BusShare port each on both sides) through one loop. Each device's feedback goes only to
 // its own motors (its τ is the one a loop of that device alone computes); one device's fault
 // latches its safe state and, in the same period, the other's (FaultCause::kPeerFault;
-// docs/safety.md "Several devices"); no allocation in the period; bad wirings are refused.
+// docs/safety.md "Several devices"); managed devices on one bus share one NMT master (one
+// broadcast start-up when they start together; re-arming one never resets the other's nodes);
+// no allocation in the period; bad wirings are refused.
 #include "numen/platform/control_loop.hpp"
 
 #include <gtest/gtest.h>
@@ -11,6 +13,7 @@
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
+#include <utility>
 #include <vector>
 
 #include "alloc_counter.hpp"
@@ -21,6 +24,7 @@
 #include "numen/hal/device/device_config.hpp"
 #include "numen/hal/device/impedance_device.hpp"
 #include "numen/hal/device/instrument_device.hpp"
+#include "numen/hal/canopen/nmt.hpp"
 #include "numen/hal/emulation/device_emulator.hpp"
 #include "numen/hal/transport/bus_share.hpp"
 #include "numen/hal/transport/sim_bus.hpp"
@@ -60,11 +64,52 @@ platform::DeviceBinding drive_body(int body) {
   return platform::DeviceBinding{{platform::LinkBinding{0, body, {}}}, {}};
 }
 
+/// Instrument i0 on bus b0 driving body 0 and i1 on bus b1 driving body 1 (b0 may be b1).
+std::vector<platform::LoopDevice> pair_on(hal::Bus& b0, hal::InstrumentDevice& i0, hal::Bus& b1,
+                                          hal::InstrumentDevice& i1) {
+  std::vector<platform::LoopDevice> d(2);
+  d[0].bus = &b0;
+  d[0].instrument = &i0;
+  d[0].binding = drive_body(0);
+  d[1].bus = &b1;
+  d[1].instrument = &i1;
+  d[1].binding = drive_body(1);
+  return d;
+}
+
+/// The controller's side of a bus that keeps the NMT messages written through it (fixed
+/// storage: no allocation), as (command specifier, node id).
+class NmtTap final : public hal::Bus {
+ public:
+  explicit NmtTap(hal::Bus& bus) : bus_(&bus) {}
+  hal::IoStatus read(hal::CanFrame& frame) noexcept override { return bus_->read(frame); }
+  hal::IoStatus write(const hal::CanFrame& frame) noexcept override {
+    hal::NmtMessage m;
+    if (hal::decode_nmt(frame, m) == hal::NmtDecodeStatus::kOk && count_ < sent_.size())
+      sent_[count_++] = {static_cast<int>(m.command), static_cast<int>(m.node_id)};
+    return bus_->write(frame);
+  }
+  hal::BusState state() const noexcept override { return bus_->state(); }
+  hal::BusCounters counters() const noexcept override { return bus_->counters(); }
+  /// The NMT messages written since the last clear().
+  std::vector<std::pair<int, int>> sent() const {
+    return std::vector<std::pair<int, int>>(sent_.begin(), sent_.begin() + static_cast<long>(count_));
+  }
+  void clear() noexcept { count_ = 0; }
+
+ private:
+  hal::Bus* bus_;
+  std::array<std::pair<int, int>, 256> sent_{};
+  std::size_t count_ = 0;
+};
+
 /// Device i of `n` instruments on one SimBus, each with its emulator on its own BusShare port
 /// of the device side; `loop_bodies` says which body each device of the loop drives.
 struct Rig {
-  Rig(bool managed, std::vector<int> devices_in_loop)
-      : configs{instrument_config(1, managed, 0.0), instrument_config(11, managed, 0.1)},
+  /// `startup_timeout_ms`: both instruments' CanopenConfig::startup_timeout_ms.
+  Rig(bool managed, std::vector<int> devices_in_loop, std::uint32_t startup_timeout_ms = 1000)
+      : configs{with_startup_timeout(instrument_config(1, managed, 0.0), startup_timeout_ms),
+                with_startup_timeout(instrument_config(11, managed, 0.1), startup_timeout_ms)},
         share(bus.device()),
         emulators{hal::DeviceEmulator{configs[0]}, hal::DeviceEmulator{configs[1]}},
         instruments{hal::InstrumentDevice{configs[0]}, hal::InstrumentDevice{configs[1]}},
@@ -77,11 +122,16 @@ struct Rig {
     move(0);
   }
 
+  static hal::DeviceConfig with_startup_timeout(hal::DeviceConfig c, std::uint32_t ms) {
+    c.canopen.startup_timeout_ms = ms;
+    return c;
+  }
+
   std::vector<platform::LoopDevice> loop_devices() {
     std::vector<platform::LoopDevice> out;
     for (int i : in_loop) {
       platform::LoopDevice d;
-      d.bus = &bus.controller();
+      d.bus = &tap;
       d.instrument = &instruments[static_cast<std::size_t>(i)];
       d.binding = drive_body(i);
       out.push_back(d);
@@ -123,6 +173,7 @@ struct Rig {
   std::array<hal::InstrumentDevice, 2> instruments;
   std::array<hal::Bus*, 2> ports;
   std::vector<int> in_loop;
+  NmtTap tap{bus.controller()};  // the loop's side of the bus
   core::Model model;
   core::Data data;
   platform::ControlLoop loop;
@@ -234,6 +285,100 @@ TEST(ControlLoopDevices, EachDeviceSendsOneSyncPerBus) {
   EXPECT_EQ(rig.bus.pending(hal::SimBus::Direction::kControllerToDevice), 1u);  // one SYNC
 }
 
+TEST(ControlLoopDevices, ManagedDevicesStartingTogetherShareOneBroadcastStartUp) {
+  // One NMT master per bus: both devices ask for the reset communication (then the start) of
+  // all their nodes in the same period, so one broadcast each goes out, not one per device.
+  Rig rig(true, {0, 1});
+  rig.bus.set_time_ns(0);
+  rig.loop.begin_period(0);
+  EXPECT_EQ(rig.bus.pending(hal::SimBus::Direction::kControllerToDevice), 2u);  // SYNC, 000#8200
+  rig.loop.end_period(fx::kPhase);
+  for (int i = 0; i < 100 && (rig.loop.first_torque_period(0) < 0 || rig.loop.first_torque_period(1) < 0); ++i)
+    rig.period();
+  ASSERT_GE(rig.loop.first_torque_period(0), 0);
+  ASSERT_GE(rig.loop.first_torque_period(1), 0);
+  // The whole start-up: one reset communication and one start to all nodes (one master per
+  // device would have sent each twice).
+  EXPECT_EQ(rig.tap.sent(), (std::vector<std::pair<int, int>>{{0x82, 0}, {0x01, 0}}));
+  EXPECT_EQ(rig.loop.device(0).report().heartbeat_losses, 0u);
+  EXPECT_EQ(rig.loop.device(1).report().heartbeat_losses, 0u);
+}
+
+TEST(ControlLoopDevices, ReArmingOneManagedDeviceNeverResetsTheOthersNodes) {
+  // Instrument 1 is off when the loop starts: its start-up fails (30 ms), device 0 starts
+  // alone and drives. Instrument 1 is switched on and re-armed: its start-up reruns (reset
+  // communication, boot-up, start) through the bus's one NMT master, addressed to its nodes
+  // 11-15, so device 0's nodes never leave operational and device 0 never misses a period:
+  // its encoders in every period, torque in every period, no latch. A broadcast reset (one
+  // master per device) would reset nodes 1-5: device 0 would latch a node reset.
+  Rig rig(true, {0, 1}, 30);
+  rig.emulators[1].kill(true);
+  for (int i = 0; i < 200 && !(rig.loop.first_torque_period(0) >= 0 &&
+                               rig.loop.period_data(1).report.startup == hal::StartupPhase::kFailed);
+       ++i)
+    rig.period();
+  ASSERT_GE(rig.loop.first_torque_period(0), 0);
+  ASSERT_EQ(rig.loop.period_data(1).report.startup, hal::StartupPhase::kFailed);
+  ASSERT_EQ(rig.loop.device(1).lifecycle(), hal::LifecycleState::kInactive);  // no latch
+  for (int i = 0; i < 20; ++i) rig.period();
+  ASSERT_TRUE(rig.loop.period_data(0).report.torque_commanded);
+  const std::uint64_t nmt0 = rig.emulators[0].counters().nmt_commands;
+  const std::uint64_t attempts1 = rig.loop.device(1).report().startup.attempts;
+
+  rig.emulators[1].kill(false);  // switched on: its nodes boot (power-on) and wait
+  rig.tap.clear();
+  numen::test::AllocationGuard guard;
+  ASSERT_EQ(rig.loop.rearm(), platform::RearmResult::kAccepted);  // device 1's (0: not latched)
+  int periods = 0;
+  for (; periods < 300 && !rig.loop.period_data(1).report.torque_commanded; ++periods) {
+    rig.period();
+    const platform::PeriodReport& r0 = rig.loop.period_data(0).report;
+    ASSERT_TRUE(r0.sample_valid) << "device 0 without its encoders in period " << periods;
+    ASSERT_TRUE(r0.torque_commanded) << "device 0 without torque in period " << periods;
+    ASSERT_EQ(r0.lifecycle, hal::LifecycleState::kActive) << "period " << periods;
+    for (int a = 0; a < 5; ++a)
+      ASSERT_EQ(rig.emulators[0].node_state(a), hal::NmtState::kOperational)
+          << "node " << (1 + a) << " in period " << periods;
+  }
+  EXPECT_EQ(guard.count(), 0);
+  // Device 1 ran its start-up again and drives; device 0 was never addressed.
+  EXPECT_TRUE(rig.loop.period_data(1).report.torque_commanded);
+  EXPECT_EQ(rig.loop.device(1).report().startup.phase, hal::StartupPhase::kOperational);
+  EXPECT_EQ(rig.loop.device(1).report().startup.attempts, attempts1 + 1);
+  EXPECT_EQ(rig.emulators[0].counters().nmt_commands, nmt0);
+  // Reset communication, then start, to each node of device 1, and nothing else.
+  EXPECT_EQ(rig.tap.sent(), (std::vector<std::pair<int, int>>{{0x82, 11}, {0x82, 12}, {0x82, 13},
+                                                              {0x82, 14}, {0x82, 15}, {0x01, 11},
+                                                              {0x01, 12}, {0x01, 13}, {0x01, 14},
+                                                              {0x01, 15}}));
+  EXPECT_EQ(rig.loop.device(0).report().latches, 0u);
+  EXPECT_EQ(rig.loop.device(0).first_fault(), nullptr);
+  EXPECT_LT(periods, 100);  // reset, boot-ups, start, the first operational heartbeats
+}
+
+TEST(ControlLoopDevices, RefusesManagedDevicesOneBusCannotHold) {
+  // One NMT master per bus: two devices on one node, or two controller node ids, are refused.
+  hal::DeviceConfig c0 = instrument_config(1, true, 0.0);
+  hal::DeviceConfig c1 = instrument_config(3, true, 0.1);  // nodes 3-7: 3, 4, 5 are c0's too
+  hal::InstrumentDevice i0{c0}, i1{c1};
+  hal::SimBus bus{fx::bus_settings()};
+  const core::Model model = two_body_model();
+  core::Data data = core::make_data(model);
+  std::vector<platform::LoopDevice> d = pair_on(bus.controller(), i0, bus.controller(), i1);
+  EXPECT_THROW(platform::ControlLoop(model, data, d), std::invalid_argument);
+  hal::DeviceConfig c2 = instrument_config(11, true, 0.1);
+  c2.canopen.controller_node_id = 100;
+  hal::InstrumentDevice i2{c2};
+  d[1].instrument = &i2;
+  EXPECT_THROW(platform::ControlLoop(model, data, d), std::invalid_argument);
+  // On two buses, each device is its bus's only one: both wirings run.
+  hal::SimBus other{fx::bus_settings()};
+  d[1].bus = &other.controller();
+  EXPECT_NO_THROW(platform::ControlLoop(model, data, d));
+  d[1].instrument = &i1;
+  EXPECT_NO_THROW(platform::ControlLoop(model, data, d));
+}
+
 TEST(ControlLoopDevices, DevicesOnTwoBusesEachGetTheirOwnSyncAndFrames) {
   // One instrument per bus: no sharing, each device its bus's SYNC producer; both drive.
   const hal::DeviceConfig c0 = instrument_config(1, false, 0.0);
@@ -243,14 +388,7 @@ TEST(ControlLoopDevices, DevicesOnTwoBusesEachGetTheirOwnSyncAndFrames) {
   hal::SimBus bus0{fx::bus_settings()}, bus1{fx::bus_settings()};
   const core::Model model = two_body_model();
   core::Data data = core::make_data(model);
-  std::vector<platform::LoopDevice> d(2);
-  d[0].bus = &bus0.controller();
-  d[0].instrument = &i0;
-  d[0].binding = drive_body(0);
-  d[1].bus = &bus1.controller();
-  d[1].instrument = &i1;
-  d[1].binding = drive_body(1);
-  platform::ControlLoop loop(model, data, d);
+  platform::ControlLoop loop(model, data, pair_on(bus0.controller(), i0, bus1.controller(), i1));
   e0.set_axis_values(fx::kQ);
   e1.set_axis_values(fx::kQ);
   for (std::int64_t k = 0; k < 20; ++k) {

@@ -42,9 +42,7 @@ const char* to_string(StartupPhase phase) noexcept {
 }
 
 CanopenMaster::CanopenMaster(const DeviceConfig& config, std::int64_t period_ns,
-                             const Cia402MasterSettings& drive_settings)
-    : producer_(config.canopen.controller_node_id == 0 ? 1 : config.canopen.controller_node_id,
-                ms_to_ns(config.canopen.controller_heartbeat_period_ms)) {
+                             const Cia402MasterSettings& drive_settings, NmtMaster* network) {
   validate(config);
   const std::string dev = "device '" + config.name + "'";
   if (!config.canopen.managed) {
@@ -54,6 +52,12 @@ CanopenMaster::CanopenMaster(const DeviceConfig& config, std::int64_t period_ns,
     throw std::invalid_argument(dev + ": CanopenMaster period_ns must be > 0 (got " +
                                 std::to_string(period_ns) + ")");
   }
+  if (network == nullptr) {
+    own_nmt_ = std::make_unique<NmtMaster>();
+    network = own_nmt_.get();
+  }
+  nmt_device_ = network->add_device(config);
+  nmt_ = network;
   const CanopenConfig& co = config.canopen;
   retry_ns_ = ms_to_ns(co.startup_retry_ms);
   timeout_ns_ = ms_to_ns(co.startup_timeout_ms);
@@ -186,11 +190,18 @@ IoStatus CanopenMaster::send(const CanFrame& frame, Bus& bus, std::uint64_t* sen
   return s;
 }
 
-IoStatus CanopenMaster::send_nmt(NmtCommand command, std::uint8_t node, std::int64_t now_ns,
-                                 Bus& bus) noexcept {
-  CanFrame f;
-  if (!encode_nmt(command, node, now_ns, f)) return IoStatus::kError;
-  return send(f, bus, &counters_.nmt_sent);
+void CanopenMaster::ask_nmt(NmtCommand command, std::uint8_t node) noexcept {
+  (void)nmt_->request(nmt_device_, command, node);  // valid: its own nodes, or request_nmt()'s
+}
+
+CanopenMasterCounters CanopenMaster::counters() const noexcept {
+  CanopenMasterCounters c = counters_;
+  const NmtDeviceCounters& n = nmt_->counters(nmt_device_);
+  c.nmt_sent = n.nmt_sent;
+  c.heartbeats_sent = n.heartbeats_sent;
+  c.write_would_block += n.write_would_block;
+  c.write_errors += n.write_errors;
+  return c;
 }
 
 IoStatus CanopenMaster::begin_period(std::int64_t now_ns, Bus& bus) noexcept {
@@ -198,7 +209,7 @@ IoStatus CanopenMaster::begin_period(std::int64_t now_ns, Bus& bus) noexcept {
   last_now_ns_ = now_ns;
   switch (startup_.phase) {
     case StartupPhase::kResetCommunication:
-      status = worst(status, send_nmt(NmtCommand::kResetCommunication, kNmtAllNodes, now_ns, bus));
+      ask_nmt(NmtCommand::kResetCommunication, kNmtAllNodes);
       startup_.phase = StartupPhase::kWaitBootUp;
       startup_.began_ns = now_ns;
       startup_.began_period = periods_;
@@ -210,14 +221,13 @@ IoStatus CanopenMaster::begin_period(std::int64_t now_ns, Bus& bus) noexcept {
       for (std::size_t j = 0; j < num_nodes_; ++j) {
         NodeState& n = nodes_[j];
         if (n.booted || now_ns - n.last_command_ns < retry_ns_) continue;
-        status =
-            worst(status, send_nmt(NmtCommand::kResetCommunication, node_ids_[j], now_ns, bus));
+        ask_nmt(NmtCommand::kResetCommunication, node_ids_[j]);
         n.last_command_ns = now_ns;
         ++counters_.nmt_retries;
       }
       break;
     case StartupPhase::kStartNodes:
-      status = worst(status, send_nmt(NmtCommand::kStartRemoteNode, kNmtAllNodes, now_ns, bus));
+      ask_nmt(NmtCommand::kStartRemoteNode, kNmtAllNodes);
       startup_.phase = StartupPhase::kWaitOperational;
       for (std::size_t j = 0; j < num_nodes_; ++j) nodes_[j].last_command_ns = now_ns;
       break;
@@ -229,7 +239,7 @@ IoStatus CanopenMaster::begin_period(std::int64_t now_ns, Bus& bus) noexcept {
                         c->last_state() == NmtState::kOperational;
         if (op && !n.restart) continue;
         if (!n.restart && now_ns - n.last_command_ns < retry_ns_) continue;
-        status = worst(status, send_nmt(NmtCommand::kStartRemoteNode, node_ids_[j], now_ns, bus));
+        ask_nmt(NmtCommand::kStartRemoteNode, node_ids_[j]);
         n.last_command_ns = now_ns;
         n.restart = false;
         ++counters_.nmt_retries;
@@ -249,17 +259,12 @@ IoStatus CanopenMaster::begin_period(std::int64_t now_ns, Bus& bus) noexcept {
   }
   if (nmt_queued_) {
     nmt_queued_ = false;
-    status = worst(status, send_nmt(queued_.command, queued_.node_id, now_ns, bus));
+    ask_nmt(queued_.command, queued_.node_id);
   }
-  if (!producer_started_) {
-    producer_.start(now_ns);
-    producer_started_ = true;
-  }
-  CanFrame hb;
-  if (producer_.poll(now_ns, NmtState::kOperational, hb)) {
-    status = worst(status, send(hb, bus, &counters_.heartbeats_sent));
-  }
-  return status;
+  // The network's NMT master sends the period's commands and the controller heartbeat once
+  // every device on the bus has submitted (at once for a private one).
+  (void)nmt_->submit(nmt_device_, now_ns, bus);
+  return worst(status, take_nmt_status());  // its part of what was sent
 }
 
 bool CanopenMaster::on_frame(const CanFrame& frame) noexcept {

@@ -152,9 +152,10 @@ const DeviceOutput& ImpedanceDevice::write(const DeviceCommand& command, std::in
 
 std::unique_ptr<ImpedanceDevice> make_device(InstrumentDevice& instrument, Bus& bus,
                                              std::int64_t period_ns,
-                                             const ImpedanceSettings& settings) {
+                                             const ImpedanceSettings& settings,
+                                             NmtMaster* network) {
   if (instrument.config().canopen.managed) {
-    return std::make_unique<ManagedDevice>(instrument, bus, period_ns, settings);
+    return std::make_unique<ManagedDevice>(instrument, bus, period_ns, settings, network);
   }
   return std::make_unique<MinimalDevice>(instrument, bus);
 }

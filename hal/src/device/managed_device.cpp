@@ -22,10 +22,10 @@ SafetySettings safety_settings(const InstrumentDevice& instrument, const Impedan
 }  // namespace
 
 ManagedDevice::ManagedDevice(InstrumentDevice& instrument, Bus& bus, std::int64_t period_ns,
-                             const ImpedanceSettings& settings)
+                             const ImpedanceSettings& settings, NmtMaster* network)
     : ImpedanceDevice(instrument, bus),
       master_(std::make_unique<CanopenMaster>(instrument.config(), period_ns,
-                                              settings.drive_settings)),
+                                              settings.drive_settings, network)),
       supervisor_(std::make_unique<SafetySupervisor>(safety_settings(instrument, settings))),
       settings_(settings) {
   drive_of_axis_.fill(-1);
@@ -50,6 +50,7 @@ DeviceSupervision ManagedDevice::supervise(std::int64_t now_ns, bool overrun) no
   in.drives = m.drive_outputs();
   in.overrun = overrun;
   in.bus_state = bus_->state();
+  note(m.take_nmt_status());  // on a shared bus its NMT frames went out after its begin_period
   in.io_error = take_io_error();
   DeviceSupervision out;
   const LifecycleUpdate u = sup.update(now_ns, in);

@@ -42,7 +42,6 @@
 #include "numen/core/model.hpp"
 #include "numen/hal/transport/bus.hpp"
 #include "numen/hal/transport/bus_share.hpp"
-#include "numen/hal/device/admittance_device.hpp"
 #include "numen/hal/device/device.hpp"
 #include "numen/hal/device/device_status.hpp"
 #include "numen/hal/device/impedance_device.hpp"
@@ -53,6 +52,11 @@
 #include "numen/platform/period_data.hpp"
 #include "numen/platform/period_stages.hpp"
 #include "numen/platform/stepper.hpp"
+
+namespace numen::hal {
+class AdmittanceDevice;  // admittance_device.hpp: the loop's second kind of device
+class NmtMaster;         // the NMT master the managed devices on one bus share (built with them)
+}  // namespace numen::hal
 
 namespace numen::platform {
 
@@ -72,7 +76,9 @@ struct ControlLoopSettings : hal::ImpedanceSettings {
 struct LoopDevice {
   /// Its bus (must outlive the loop). Devices that name the same Bus share it: the loop reads
   /// it through one hal::BusShare port per device, filtered to that device's frames
-  /// (hal::controller_filters()), and the first of them sends the period's SYNC.
+  /// (hal::controller_filters()), the first of them sends the period's SYNC, and the managed
+  /// ones share one NMT master and controller heartbeat (hal::make_device()'s `network`), so
+  /// that one device's NMT commands (its start-up, a re-arm's) reach its own nodes only.
   hal::Bus* bus = nullptr;
   /// The instrument (configuration, kinematics, decoding; must outlive the loop); its
   /// DeviceConfig::canopen.managed picks the protocol (hal::make_device()).
@@ -118,7 +124,9 @@ class ControlLoop {
   /// is model.dt. Devices naming the same Bus share it (LoopDevice::bus). `settings`:
   /// supervise_overruns only (each device's supervision is its LoopDevice::settings). Throws
   /// std::invalid_argument naming the device for any of these, a null bus or instrument,
-  /// or no device / more than kMaxLoopDevices. Allocates (construction only).
+  /// no device / more than kMaxLoopDevices, or managed devices on one bus whose CANopen
+  /// nodes overlap or whose controller node id or heartbeat period differ (one NMT master
+  /// per bus). Allocates (construction only).
   ControlLoop(const core::Model& model, core::Data& data, std::span<const LoopDevice> devices,
               const ControlLoopSettings& settings = {});
   /// The loop of an admittance device (built by the caller on its bus, with its supervision
@@ -129,13 +137,15 @@ class ControlLoop {
   ControlLoop(const core::Model& model, core::Data& data, hal::AdmittanceDevice& device,
               const ControlLoopSettings& settings = {});
 
+  /// Out of line: the header declares the bus's NMT master (hal::NmtMaster) only.
+  ~ControlLoop();
   /// Not copied or moved: the devices' contexts point at the loop's own records.
   ControlLoop(const ControlLoop&) = delete;
   ControlLoop& operator=(const ControlLoop&) = delete;
 
   /// Starts period k: writes a SYNC (CANopen COB-ID 0x080) stamped `now_ns` (bus clock), one
-  /// per bus; managed stack: then the NMT command due and the controller's heartbeat when due
-  /// (each device's, in device order).
+  /// per bus; managed stack: then the NMT commands due and the controller's heartbeat when due,
+  /// one NMT master per bus (its devices' commands go out after the last of them began).
   /// `deadline_mono_ns` / `woke_mono_ns` (CLOCK_MONOTONIC, from PeriodicTimer::wait_next()) stamp
   /// the period for LoopStatistics; < 0: the time of this call.
   void begin_period(std::int64_t now_ns, std::int64_t deadline_mono_ns = -1,
@@ -170,10 +180,11 @@ class ControlLoop {
 
   /// Re-arms after a latched fault or a failed start-up (for the CLI and tests), every device:
   /// asks every drive's master for a fault reset, reruns the NMT start-up if a node is not
-  /// operational (or the start-up failed), and re-arms the lifecycle (kFault → kInactive) in the
-  /// first period in which no cause is present; the automatic activation then follows (with
-  /// several devices, once none is in its safe state). Never blocks. kAccepted if any device
-  /// accepted, else device 0's result.
+  /// operational (or the start-up failed; on a shared bus its NMT commands go to its own nodes
+  /// only, so a device that runs on is not reset), and re-arms the lifecycle (kFault →
+  /// kInactive) in the first period in which no cause is present; the automatic activation
+  /// then follows (with several devices, once none is in its safe state). Never blocks.
+  /// kAccepted if any device accepted, else device 0's result.
   RearmResult rearm() noexcept;
   /// A re-arm was accepted and has not happened yet (on any device).
   bool rearm_pending() const noexcept;
@@ -208,9 +219,7 @@ class ControlLoop {
     return static_cast<const hal::ImpedanceDevice&>(*contexts_[i].device);
   }
   /// The admittance device (nullptr for an impedance device).
-  const hal::AdmittanceDevice* admittance() const noexcept {
-    return dynamic_cast<const hal::AdmittanceDevice*>(contexts_[0].device);
-  }
+  const hal::AdmittanceDevice* admittance() const noexcept;
   /// Timing statistics of the periods (wake-up, step, bus I/O, end-to-end, overruns; with
   /// several devices from the first device's read to the last one's writes).
   const LoopStatistics& statistics() const noexcept { return *stats_; }
@@ -255,6 +264,7 @@ class ControlLoop {
 
   CoreStepper core_stepper_;
   std::vector<std::unique_ptr<hal::BusShare>> shares_;  // one per bus several devices share
+  std::vector<std::unique_ptr<hal::NmtMaster>> networks_;  // same order: their NMT master
   std::array<std::unique_ptr<hal::Device>, kMaxLoopDevices> owned_;  // impedance devices
   std::unique_ptr<LoopStatistics> stats_;
   std::size_t num_devices_ = 1;

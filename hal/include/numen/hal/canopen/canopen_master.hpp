@@ -1,13 +1,18 @@
 #pragma once
 /// @file canopen_master.hpp
 /// CanopenMaster: the controller's side of the managed CANopen stack for one device's nodes
-/// (docs/protocol.md, docs/canopen.md). It is the NMT master and heartbeat consumer of the nodes,
-/// the controller's heartbeat producer, the EMCY consumer and the CiA 402 master of each drive:
+/// (docs/protocol.md, docs/canopen.md). It runs the NMT start-up of the nodes and is their
+/// heartbeat consumer, the EMCY consumer and the CiA 402 master of each drive; its NMT commands
+/// and the controller's heartbeat go out through the network's NmtMaster (nmt_master.hpp: its
+/// own, or the one the devices on its bus share, so that its commands reach its nodes only):
 ///
 ///   start-up (once, and again on restart_startup()):
-///     reset communication (000#8200) → every node's boot-up message (0x700 + id, 00)
-///     → [nodes with a DCF: configured over SDO and read back, kConfigure]
-///     → start remote node (000#0100) → every node heard in operational → kOperational.
+///     reset communication of its nodes (alone on its network: 000#8200) → every node's
+///     boot-up message (0x700 + id, 00) → [nodes with a DCF: configured over SDO and read
+///     back, kConfigure] → start remote node of its nodes (alone: 000#0100) → every node heard
+///     in operational → kOperational. On a shared network a command goes to all nodes (id 0)
+///     only when every device asks for it in the same period (NmtMaster), otherwise to each
+///     of its nodes (000#82<id>, 000#01<id>).
 ///     The configuration (dcf_configuration.hpp) runs one SDO transfer per node at a time, all
 ///     nodes in parallel, advanced once per period; a refused write, a silent node (the
 ///     transfer's sdo_timeout_ms) or a read-back mismatch fails the start-up at once (kFailed,
@@ -21,7 +26,8 @@
 ///     a node that boots again while being started is started again; past startup_timeout_ms
 ///     the start-up has failed (kFailed, with the first missing node).
 ///   every period:
-///     begin_period(): NMT commands due, the controller's heartbeat when due;
+///     begin_period(): NMT commands due, submitted to the NmtMaster (which sends them and the
+///       controller's heartbeat when due once every device of the network has submitted);
 ///     on_frame(): drive TPDOs (statusword, torque actual) by their static mapping, heartbeats
 ///       (HeartbeatMonitor; a node's frames reach it only from its boot-up after the reset on,
 ///       so earlier heartbeats cannot read as an unexpected reset), EMCY (EmcyLog);
@@ -52,6 +58,7 @@
 #include "numen/hal/canopen/heartbeat.hpp"
 #include "numen/hal/device/kinematics.hpp"
 #include "numen/hal/canopen/nmt.hpp"
+#include "numen/hal/canopen/nmt_master.hpp"
 #include "numen/hal/canopen/pdo_mapping.hpp"
 
 #include "numen/hal/device/device_status.hpp"
@@ -70,9 +77,10 @@ struct StartupReport : StartupStatus {
 
 /// Counters of a CanopenMaster since construction.
 struct CanopenMasterCounters {
-  std::uint64_t nmt_sent = 0;         ///< NMT commands written with kOk.
+  std::uint64_t nmt_sent = 0;         ///< NMT messages written with kOk that carried a command
+                                      ///< of this device (NmtDeviceCounters::nmt_sent).
   std::uint64_t nmt_retries = 0;      ///< NMT commands repeated to a node during a start-up.
-  std::uint64_t heartbeats_sent = 0;  ///< Controller heartbeats written with kOk.
+  std::uint64_t heartbeats_sent = 0;  ///< Controller heartbeats written with kOk (the network's).
   std::uint64_t drive_tpdos = 0;      ///< Drive TPDOs unpacked.
   std::uint64_t drive_tpdos_malformed =
       0;                                 ///< Frames on a drive TPDO COB-ID refused by its mapping.
@@ -80,15 +88,12 @@ struct CanopenMasterCounters {
   std::uint64_t frames_before_boot = 0;  ///< Heartbeats of a node dropped while waiting for its
                                          ///< boot-up after the reset.
   std::uint64_t unknown_nodes = 0;       ///< Heartbeats of nodes the device does not have.
-  std::uint64_t write_would_block = 0;   ///< Writes refused (queue full).
-  std::uint64_t write_errors = 0;        ///< Writes that failed (kError).
+  std::uint64_t write_would_block = 0;   ///< Writes refused (queue full), its NMT part included.
+  std::uint64_t write_errors = 0;        ///< Writes that failed (kError), its NMT part included.
   std::uint64_t sdo_requests = 0;        ///< SDO requests written with kOk (configuration).
   std::uint64_t sdo_responses = 0;       ///< SDO responses taken (configuration).
   std::uint64_t configurations = 0;      ///< Node configurations completed (read back equal).
 };
-
-/// Most nodes of one device (one per axis at most).
-inline constexpr std::size_t kMaxDeviceNodes = static_cast<std::size_t>(kMaxAxes);
 
 /// The controller's side of the managed CANopen stack of one device (see the file comment).
 /// Not thread safe: one control loop owns it.
@@ -96,16 +101,25 @@ class CanopenMaster {
  public:
   /// Builds the nodes, heartbeat consumers (timeout per node), drive mappings and CiA 402
   /// masters from `config` (validated; must be managed). `period_ns` (> 0) is the control
-  /// period, used to turn the start-up times into periods. Throws std::invalid_argument naming
-  /// the device otherwise.
+  /// period, used to turn the start-up times into periods. `network`: the NMT master the
+  /// devices on this device's bus share (must outlive this master; the device is registered
+  /// there, NmtMaster::add_device()); nullptr: a private one (the device alone on its bus).
+  /// Throws std::invalid_argument naming the device otherwise, or as add_device() does.
   CanopenMaster(const DeviceConfig& config, std::int64_t period_ns,
-                const Cia402MasterSettings& drive_settings = {});
+                const Cia402MasterSettings& drive_settings = {}, NmtMaster* network = nullptr);
 
   /// Start of a period at `now_ns`: the start-up's NMT command due (reset communication, start,
-  /// repeats), a command queued by request_nmt(), and the controller's heartbeat when due
-  /// (producer started at the first call). Write failures are counted; returns kError if a write
-  /// failed, else kWouldBlock if one was refused, else kOk.
+  /// repeats) and a command queued by request_nmt(), submitted to the NmtMaster, which sends
+  /// them and the controller's heartbeat when due (producer started at the first sending) once
+  /// every device of the network has submitted — at once for a private one. Write failures
+  /// are counted; returns kError if a write failed, else kWouldBlock if one was refused, else
+  /// kOk (its NMT part as far as known: take_nmt_status()).
   IoStatus begin_period(std::int64_t now_ns, Bus& bus) noexcept;
+  /// The worst status of the writes of the network's NmtMaster that carried this device's
+  /// commands or the heartbeat since the last call (NmtMaster::take_status()): on a shared
+  /// network they go out at the last device's begin_period(), so an earlier device learns of a
+  /// failure here (ManagedDevice::supervise()).
+  IoStatus take_nmt_status() noexcept { return nmt_->take_status(nmt_device_); }
 
   /// Takes one received frame if it is a drive TPDO, a heartbeat / boot-up message (0x701–
   /// 0x77F) or an EMCY (0x081–0x0FF) on its 11-bit identifier (can_frame.hpp, frame
@@ -129,8 +143,9 @@ class CanopenMaster {
   IoStatus write_drive_rpdos(std::int64_t now_ns, std::span<const std::int16_t> per_mille,
                              Bus& bus) noexcept;
 
-  /// Queues an NMT command for `node_id` (0 = all nodes), sent at the next begin_period(). One
-  /// command is queued at a time; false if one is already queued or the command is invalid.
+  /// Queues an NMT command for `node_id` (0 = every node of this device: all nodes when it is
+  /// alone on its network), sent at the next begin_period(). One command is queued at a time;
+  /// false if one is already queued or the command is invalid.
   bool request_nmt(NmtCommand command, std::uint8_t node_id) noexcept;
   /// Runs the start-up again from reset communication (after a failure, or to bring back nodes
   /// that reset or were stopped).
@@ -177,8 +192,8 @@ class CanopenMaster {
   std::span<const std::uint8_t> node_ids() const noexcept { return {node_ids_.data(), num_nodes_}; }
   /// update() calls so far.
   std::uint64_t periods() const noexcept { return periods_; }
-  /// Counters.
-  const CanopenMasterCounters& counters() const noexcept { return counters_; }
+  /// Counters (its NMT and heartbeat part from the NmtMaster).
+  CanopenMasterCounters counters() const noexcept;
 
  private:
   struct NodeState {
@@ -204,7 +219,8 @@ class CanopenMaster {
     std::int16_t torque_actual = 0;
   };
 
-  IoStatus send_nmt(NmtCommand command, std::uint8_t node, std::int64_t now_ns, Bus& bus) noexcept;
+  // Asks the network's NmtMaster for `command` to `node` (kNmtAllNodes: its own nodes).
+  void ask_nmt(NmtCommand command, std::uint8_t node) noexcept;
   IoStatus send(const CanFrame& frame, Bus& bus, std::uint64_t* sent) noexcept;
   int node_index(std::uint8_t node_id) const noexcept;
   void finish(StartupPhase phase, std::uint8_t missing, std::int64_t now_ns) noexcept;
@@ -223,10 +239,11 @@ class CanopenMaster {
   std::unique_ptr<SdoPoller> poller_;
   std::array<Cia402MasterOutput, kMaxDeviceNodes> outputs_{};
   HeartbeatMonitor<kMaxDeviceNodes> monitor_;
-  HeartbeatProducer producer_;
+  std::unique_ptr<NmtMaster> own_nmt_;  // without a shared one
+  NmtMaster* nmt_ = nullptr;            // the network's (own_nmt_ or the shared one)
+  int nmt_device_ = 0;                  // this device's index there
   EmcyLog<> emcy_;
   StartupReport startup_;
-  bool producer_started_ = false;
   bool nmt_queued_ = false;
   NmtMessage queued_{};
   std::int64_t last_now_ns_ = 0;

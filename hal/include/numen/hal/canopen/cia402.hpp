@@ -16,6 +16,8 @@
 
 #include <cstdint>
 
+#include "numen/hal/device/device_status.hpp"  // Cia402MasterSettings: a supervision setting
+
 namespace numen::hal {
 
 // ---------------------------------------------------------------------------------------------
@@ -228,14 +230,6 @@ enum class Cia402Target : std::uint8_t {
 
 /// Short English name of a Cia402Target (static string).
 const char* to_string(Cia402Target target) noexcept;
-
-/// Creation settings of a Cia402Master.
-struct Cia402MasterSettings {
-  /// Periods, >= 3, that the drive may stay in one state while the master waits for a
-  /// transition (towards the target, or out of fault after a reset) before it is reported
-  /// stuck. At 1 kHz the default is 0.5 s; a drive's power-up (not ready to switch on) counts.
-  std::uint32_t transition_timeout_periods = 500;
-};
 
 /// What the master decided for one period.
 struct Cia402MasterOutput {

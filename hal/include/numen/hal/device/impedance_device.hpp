@@ -46,7 +46,6 @@
 #include <memory>
 #include <span>
 
-#include "numen/hal/canopen/cia402.hpp"
 #include "numen/hal/device/device.hpp"
 #include "numen/hal/device/device_status.hpp"
 #include "numen/hal/device/instrument_device.hpp"
@@ -54,6 +53,8 @@
 #include "numen/hal/device/passivity_controller.hpp"
 
 namespace numen::hal {
+
+class NmtMaster;  // nmt_master.hpp: the NMT master the managed devices on one bus share
 
 /// Creation settings of an impedance device's supervision (the minimal protocol uses none):
 /// the supervision settings (SupervisionSettings: encoder timeout, overrun limit, safe-stop
@@ -179,10 +180,13 @@ class ImpedanceDevice : public Device {
 };
 
 /// The device `instrument.config()` asks for: ManagedDevice if canopen.managed, else
-/// MinimalDevice, with `period_ns` the control period (> 0). Throws std::invalid_argument for
-/// bad settings (construction only).
+/// MinimalDevice, with `period_ns` the control period (> 0). `network`: the NMT master the
+/// managed devices on `bus` share (ManagedDevice; the minimal protocol has no NMT and ignores
+/// it); nullptr: the device alone on its bus. Throws std::invalid_argument for bad settings
+/// (construction only).
 std::unique_ptr<ImpedanceDevice> make_device(InstrumentDevice& instrument, Bus& bus,
                                              std::int64_t period_ns,
-                                             const ImpedanceSettings& settings = {});
+                                             const ImpedanceSettings& settings = {},
+                                             NmtMaster* network = nullptr);
 
 }  // namespace numen::hal

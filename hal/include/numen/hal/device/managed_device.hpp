@@ -4,7 +4,8 @@
 /// docs/canopen.md, docs/safety.md). It owns the CanopenMaster (NMT start-up,
 /// heartbeats both ways, EMCY log, one Cia402Master per drive) and the SafetySupervisor with
 /// its DeviceLifecycle, configured at construction (kUnconfigured → kInactive). One period:
-///   begin_period: SYNC, the NMT command due, the controller heartbeat;
+///   begin_period: SYNC, the NMT command due and the controller heartbeat (through the bus's
+///                 NmtMaster: one device's commands reach its own nodes only);
 ///   read:         drive TPDOs, heartbeats, EMCY → CanopenMaster; encoder TPDOs →
 ///                 InstrumentDevice; the sample;
 ///   supervise:    CanopenMaster::update(); SafetySupervisor::update() (encoder timeout /
@@ -30,11 +31,13 @@ namespace numen::hal {
 class ManagedDevice final : public ImpedanceDevice {
  public:
   /// Keeps references: `instrument` and `bus` must outlive the device. Builds the
-  /// CanopenMaster (`period_ns` > 0, the control period) and the SafetySupervisor (one axis
-  /// per instrument axis) and configures the lifecycle. Throws std::invalid_argument for a
-  /// configuration that is not managed or bad settings.
+  /// CanopenMaster (`period_ns` > 0, the control period; its NMT commands through `network`,
+  /// the NMT master the managed devices on `bus` share, or a private one when nullptr) and the
+  /// SafetySupervisor (one axis per instrument axis) and configures the lifecycle. Throws
+  /// std::invalid_argument for a configuration that is not managed, bad settings, or nodes or
+  /// a controller node that `network`'s other devices make impossible (NmtMaster::add_device()).
   ManagedDevice(InstrumentDevice& instrument, Bus& bus, std::int64_t period_ns,
-                const ImpedanceSettings& settings = {});
+                const ImpedanceSettings& settings = {}, NmtMaster* network = nullptr);
 
   DeviceSupervision supervise(std::int64_t now_ns, bool overrun) noexcept override;
 
