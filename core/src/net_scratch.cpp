@@ -91,7 +91,6 @@ void NetScratch::resize(const Model& model) {
   }
   active_count.assign(n > 0 ? model.nets.size() : 0, 0);
   pass_count.assign(active_count.size(), 0);
-  rest_changed.assign(active_count.size(), 0);
   for (std::size_t k = 0; k < active_count.size(); ++k) {
     active_count[k] = model.nets[k].node_count;
     pass_count[k] = model.nets[k].node_count;

@@ -182,8 +182,6 @@ struct NetScratch {
   /// pass_positions[node_begin, node_begin + pass_count[k]) for net k.
   std::vector<std::int32_t> pass_positions;
   std::vector<int> active_count, pass_count;  ///< Per net.
-  /// Per net: a node became or stopped being calm, or came to rest, since its lists were made.
-  std::vector<std::uint8_t> rest_changed;
   /// Sizes every buffer for `model` (all empty when it has no net). Allocates: make_data() only.
   void resize(const Model& model);
 };
