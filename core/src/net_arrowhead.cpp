@@ -12,6 +12,7 @@
 #include "detail/data_scratch.hpp"
 #include "detail/implicit_system.hpp"
 #include "detail/joint_system.hpp"
+#include "detail/net_rest.hpp"
 #include "detail/net_solve.hpp"
 #include "detail/net_terms.hpp"
 #include "detail/pcg.hpp"
@@ -35,16 +36,22 @@ void apply_coupled(const Model& model, const Data& data, std::span<const Vec6> i
   // Node rows: (m + c) p_i, then each spring's S (p_a − p_b) (its diagonal and
   // off-diagonal blocks at once), each node contact's W p_i, the ties' and
   // node–body contacts' off-diagonal blocks.
-  for (std::size_t i = 0; i < in_n.size(); ++i) out_n[i] = ns.node_diagonal[i] * in_n[i];
+  // The rows of the nodes in the solve (net_rest.hpp); a resting node's entry of `in` is 0
+  // (the Dirichlet value) and its row of `out` is never read.
+  for_active_nodes(model, ns, [&](std::size_t i) { out_n[i] = ns.node_diagonal[i] * in_n[i]; });
   // Springs by their earlier node k in the sweep order: w = W_e (p_k − p_high), + on row k,
-  // − on row high.
+  // − on row high; those that touch a node in the solve.
   const Vec3* x = in_n.data();
   Vec3* y = out_n.data();
   const SpringView sp(ns);
   const std::int32_t* order = model.node_sweep_order.data();
-  for (std::size_t p = 0; p < in_n.size(); ++p) {
-    const auto k = static_cast<std::size_t>(order[p]);
-    y[k] += spring_differences(sp, sp.low_begin[p], sp.low_begin[p + 1], x[k], x, y);
+  for (std::size_t n = 0; n < model.nets.size(); ++n) {
+    const std::int32_t* positions = ns.pass_positions.data() + model.nets[n].node_begin;
+    for (int a = 0; a < ns.pass_count[n]; ++a) {
+      const auto p = static_cast<std::size_t>(positions[a]);
+      const auto k = static_cast<std::size_t>(order[p]);
+      y[k] += spring_differences(sp, sp.low_begin[p], sp.low_begin[p + 1], x[k], x, y);
+    }
   }
   const double h = data.scratch->solver.system_step;  // h_s of the linearised system (integrator.hpp)
   for (const NetModel& net : model.nets) {
@@ -93,7 +100,8 @@ struct ArrowheadSystem {
     const SolverScratch& s = data.scratch->solver;
     const NetScratch& ns = data.scratch->net;
     const double h = s.system_step;  // h_s of the linearised system (integrator.hpp)
-    for (std::size_t i = 0; i < rn.size(); ++i) zn[i].noalias() = ns.block_inverse[i] * rn[i];
+    for_active_nodes(model, ns,
+                     [&](std::size_t i) { zn[i].noalias() = ns.block_inverse[i] * rn[i]; });
     for (std::size_t b = 0; b < rb.size(); ++b) tb[b] = rb[b];
     add_tie_transpose(model, data, zn, tb);
     solve_articulation(model, data.scratch->articulation, tb, constraint_rhs, zb, yz);
@@ -119,27 +127,34 @@ struct ArrowheadSystem {
   double project() noexcept {
     precondition_with(data.scratch->solver.joint_rhs);
     update_residual();
-    return std::sqrt(dot(rb, rb) + dot(rn, rn)) / ref;
+    return std::sqrt(dot(rb, rb) + node_dot(rn, rn)) / ref;
+  }
+  /// Σ a_i · b_i over the nodes in the solve.
+  double node_dot(std::span<const Vec3> a, std::span<const Vec3> b) const noexcept {
+    double sum = 0.0;
+    for_active_nodes(model, data.scratch->net, [&](std::size_t i) { sum += a[i].dot(b[i]); });
+    return sum;
   }
   double apply() noexcept {
     apply_coupled(model, data, pb, pn, apb, apn);
-    return dot(pb, apb) + dot(pn, apn);
+    return dot(pb, apb) + node_dot(pn, apn);
   }
   double advance(double alpha) noexcept {
     for (std::size_t b = 0; b < xb.size(); ++b) {
       xb[b] += alpha * pb[b];
       rb[b] -= alpha * apb[b];
     }
-    for (std::size_t i = 0; i < xn.size(); ++i) {
+    for_active_nodes(model, data.scratch->net, [&](std::size_t i) {
       xn[i] += alpha * pn[i];
       rn[i] -= alpha * apn[i];
-    }
+    });
     return project();
   }
-  double precondition() noexcept { return dot(rb, zb) + dot(rn, zn); }  // z: project()'s
+  double precondition() noexcept { return dot(rb, zb) + node_dot(rn, zn); }  // z: project()'s
   void direction(double beta) noexcept {
     for (std::size_t b = 0; b < pb.size(); ++b) pb[b] = zb[b] + beta * pb[b];
-    for (std::size_t i = 0; i < pn.size(); ++i) pn[i] = zn[i] + beta * pn[i];
+    for_active_nodes(model, data.scratch->net,
+                     [&](std::size_t i) { pn[i] = zn[i] + beta * pn[i]; });
   }
 };
 
@@ -182,8 +197,8 @@ bool solve_net_arrowhead(const Model& model, Data& data) noexcept {
   apply_coupled(model, data, sys.xb, sys.xn, sys.apb, sys.apn);
   for (std::size_t b = 0; b < nb; ++b)
     sys.rb[b] = s.in_solve[b] ? Vec6(bb[b] - sys.apb[b]) : Vec6::Zero();
-  for (std::size_t i = 0; i < sys.rn.size(); ++i) sys.rn[i] = bn[i] - sys.apn[i];
-  double ref = std::sqrt(dot(bb, bb) + dot(bn, bn));
+  for_active_nodes(model, ns, [&](std::size_t i) { sys.rn[i] = bn[i] - sys.apn[i]; });
+  double ref = std::sqrt(dot(bb, bb) + sys.node_dot(bn, bn));
   if (!std::isfinite(ref)) return poison_solve(data);
 
   {
@@ -191,11 +206,11 @@ bool solve_net_arrowhead(const Model& model, Data& data) noexcept {
     sys.precondition_with(s.joint_rhs);
     for (std::size_t j = 0; j < sys.y.size(); ++j) sys.y[j] = sys.yz[j];
     for (std::size_t b = 0; b < nb; ++b) sys.xb[b] += sys.zb[b];
-    for (std::size_t i = 0; i < sys.xn.size(); ++i) sys.xn[i] += sys.zn[i];
+    for_active_nodes(model, ns, [&](std::size_t i) { sys.xn[i] += sys.zn[i]; });
     apply_coupled(model, data, sys.zb, sys.zn, sys.apb, sys.apn);
-    ref = std::max(ref, std::sqrt(dot(sys.apb, sys.apb) + dot(sys.apn, sys.apn)));
+    ref = std::max(ref, std::sqrt(dot(sys.apb, sys.apb) + sys.node_dot(sys.apn, sys.apn)));
     for (std::size_t b = 0; b < nb; ++b) sys.rb[b] -= sys.apb[b];
-    for (std::size_t i = 0; i < sys.rn.size(); ++i) sys.rn[i] -= sys.apn[i];
+    for_active_nodes(model, ns, [&](std::size_t i) { sys.rn[i] -= sys.apn[i]; });
     for (std::size_t b = 0; b < nb; ++b) sys.rp[b].setZero();
     add_joint_transpose(model, data, sys.y, sys.rp);
     for (std::size_t b = 0; b < nb; ++b) sys.rb[b] -= sys.rp[b];
@@ -206,7 +221,7 @@ bool solve_net_arrowhead(const Model& model, Data& data) noexcept {
   const double rel = sys.project();
   const double rz = sys.precondition();
   for (std::size_t b = 0; b < nb; ++b) sys.pb[b] = sys.zb[b];
-  for (std::size_t i = 0; i < sys.pn.size(); ++i) sys.pn[i] = sys.zn[i];
+  for_active_nodes(model, ns, [&](std::size_t i) { sys.pn[i] = sys.zn[i]; });
   const PcgStop stop{model.solver.tolerance, model.solver.max_iterations};
   const PcgResult res = pcg(sys, rel, rz, stop);
   if (!res.finite) return poison_solve(data);

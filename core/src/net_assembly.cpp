@@ -117,12 +117,16 @@ void build_net_system(const Model& model, Data& data) noexcept {
   const NodeState* nodes = data.nodes.data();
   Mat3* block = ns.block.data();
   Vec3* rhs = ns.rhs.data();
-  for (const NetModel& net : model.nets) {
+  // The nodes in the solve (NetScratch::active_nodes: every node when none rests,
+  // net_rest.hpp); a resting node's row is out of the system.
+  for (std::size_t n = 0; n < model.nets.size(); ++n) {
+    const NetModel& net = model.nets[n];
     const Vec6 u0 = s.twist0[static_cast<std::size_t>(net.body)];
     const double c = tie_weight(net, h);
     const double hk = h2 * net.tie_stiffness;
-    for (int v = net.node_begin; v < net.node_begin + net.node_count; ++v) {
-      const auto i = static_cast<std::size_t>(v);
+    const std::int32_t* active = ns.active_nodes.data() + net.node_begin;
+    for (int a = 0; a < ns.active_count[n]; ++a) {
+      const auto i = static_cast<std::size_t>(active[a]);
       const double diagonal = model.node_mass[i] + c;
       ns.node_diagonal[i] = diagonal;
       const SymmetricBlock w = spring_block[i];
@@ -143,23 +147,31 @@ void build_net_system(const Model& model, Data& data) noexcept {
   if (model.joints.empty()) {  // the SSOR sweeps' A_kk⁻¹, in their order
     const std::int32_t* order = model.node_sweep_order.data();
     SweepNode* sweep_nodes = ns.sweep_nodes.data();
-    const std::size_t n = ns.sweep_nodes.size();
-    for (std::size_t p = 0; p < n; ++p) {
-      const auto k = static_cast<std::size_t>(order[p]);
-      Mat3 x;
-      inverse_symmetric(block[k], x);
-      SweepNode& nd = sweep_nodes[p];
-      nd.inverse[0] = x(0, 0);
-      nd.inverse[1] = x(0, 1);
-      nd.inverse[2] = x(0, 2);
-      nd.inverse[3] = x(1, 1);
-      nd.inverse[4] = x(1, 2);
-      nd.inverse[5] = x(2, 2);
-      nd.lever = lever[k];
+    for (std::size_t n = 0; n < model.nets.size(); ++n) {
+      const std::int32_t* positions = ns.active_positions.data() + model.nets[n].node_begin;
+      for (int a = 0; a < ns.active_count[n]; ++a) {
+        const auto p = static_cast<std::size_t>(positions[a]);
+        const auto k = static_cast<std::size_t>(order[p]);
+        Mat3 x;
+        inverse_symmetric(block[k], x);
+        SweepNode& nd = sweep_nodes[p];
+        nd.inverse[0] = x(0, 0);
+        nd.inverse[1] = x(0, 1);
+        nd.inverse[2] = x(0, 2);
+        nd.inverse[3] = x(1, 1);
+        nd.inverse[4] = x(1, 2);
+        nd.inverse[5] = x(2, 2);
+        nd.lever = lever[k];
+      }
     }
   } else {
-    for (std::size_t i = 0; i < ns.block.size(); ++i)
-      inverse_symmetric(ns.block[i], ns.block_inverse[i]);
+    for (std::size_t n = 0; n < model.nets.size(); ++n) {
+      const std::int32_t* active = ns.active_nodes.data() + model.nets[n].node_begin;
+      for (int a = 0; a < ns.active_count[n]; ++a) {
+        const auto i = static_cast<std::size_t>(active[a]);
+        inverse_symmetric(ns.block[i], ns.block_inverse[i]);
+      }
+    }
   }
 
   // The arrowhead preconditioner of the jointed solve: Schur blocks of the

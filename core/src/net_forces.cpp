@@ -15,6 +15,7 @@
 #include "numen/core/step_stages.hpp"
 
 #include "detail/data_scratch.hpp"
+#include "detail/net_rest.hpp"
 #include "detail/net_solve.hpp"
 #include "detail/net_surface.hpp"
 #include "detail/net_terms.hpp"
@@ -253,69 +254,75 @@ void linearization_pass(const Model& model, Data& data, double h) noexcept {
   const std::int32_t* low_begin = s.spring_low_begin.data();
   const std::int32_t* order = model.node_sweep_order.data();
   const Pair hp = Pair::Constant(a.h), h2p = Pair::Constant(a.h2);
-  const std::size_t n = data.nodes.size();
-  for (std::size_t p = 0; p < n; ++p) {
-    const auto k = static_cast<std::size_t>(order[p]);
-    const Vec3 vk = a.nodes[k].velocity;
-    const Pair vx = Pair::Constant(vk.x()), vy = Pair::Constant(vk.y()),
-               vz = Pair::Constant(vk.z());
-    Pair bx = Pair::Zero(), by = Pair::Zero(), bz = Pair::Zero();
-    Pair s00 = Pair::Zero(), s01 = Pair::Zero(), s02 = Pair::Zero(), s11 = Pair::Zero(),
-         s12 = Pair::Zero(), s22 = Pair::Zero();
-    std::int32_t j = low_begin[p];
-    const std::int32_t end = low_begin[p + 1];
-    for (; j + 1 < end; j += 2) {
-      const auto h0 = static_cast<std::size_t>(a.high[j]);
-      const auto h1 = static_cast<std::size_t>(a.high[j + 1]);
-      const NodeState& n0 = a.nodes[h0];
-      const NodeState& n1 = a.nodes[h1];
-      const Pair l = load_pair(a.length + j);
-      const Pair inv_l = l.inverse();
-      const Pair rest = load_pair(a.rest_length + j);
-      const Pair nx = load_pair(a.dir_x + j), ny = load_pair(a.dir_y + j),
-                 nz = load_pair(a.dir_z + j);
-      const Pair dvx = Pair(n0.velocity.x(), n1.velocity.x()) - vx;
-      const Pair dvy = Pair(n0.velocity.y(), n1.velocity.y()) - vy;
-      const Pair dvz = Pair(n0.velocity.z(), n1.velocity.z()) - vz;
-      const Pair n_dv = nx * dvx + ny * dvy + nz * dvz;
-      const Pair stiffness = load_pair(a.stiffness + j), damping = load_pair(a.damping + j);
-      const Pair hk = h2p * stiffness;
-      // β = hk (1 − L/l) if l > L else 0, as max(0, ·) (SSE2 maxpd; Eigen's pmax(a, b)
-      // returns a when b is NaN: 0 for l = 0, as the comparison gives).
-      const Pair beta = Pair::Zero().max(hk * (1.0 - rest * inv_l));
-      const Pair alpha = hp * damping + hk - beta;
-      store_pair(a.weight_axial + j, alpha);
-      store_pair(a.weight_isotropic + j, beta);
-      const Pair ax = alpha * nx, ay = alpha * ny, az = alpha * nz;
-      const Pair w00 = ax * nx + beta, w11 = ay * ny + beta, w22 = az * nz + beta;
-      const Pair w01 = ax * ny, w02 = ax * nz, w12 = ay * nz;
-      s00 += w00;
-      s01 += w01;
-      s02 += w02;
-      s11 += w11;
-      s12 += w12;
-      s22 += w22;
-      add_symmetric(a.spring_block[h0], w00(0), w01(0), w02(0), w11(0), w12(0), w22(0));
-      add_symmetric(a.spring_block[h1], w00(1), w01(1), w02(1), w11(1), w12(1), w22(1));
-      const Pair c = (hk - beta) * n_dv;
-      const Pair kx = c * nx + beta * dvx, ky = c * ny + beta * dvy, kz = c * nz + beta * dvz;
-      bx += kx;
-      by += ky;
-      bz += kz;
-      a.rhs[h0] -= Vec3(kx(0), ky(0), kz(0));
-      a.rhs[h1] -= Vec3(kx(1), ky(1), kz(1));
+  // The springs that touch a node in the solve (NetScratch::pass_positions: every node's
+  // when none rests, net_rest.hpp).
+  for (std::size_t net = 0; net < model.nets.size(); ++net) {
+    const std::int32_t* positions = s.pass_positions.data() + model.nets[net].node_begin;
+    const int count = s.pass_count[net];
+    for (int q = 0; q < count; ++q) {
+      const auto p = static_cast<std::size_t>(positions[q]);
+      const auto k = static_cast<std::size_t>(order[p]);
+      const Vec3 vk = a.nodes[k].velocity;
+      const Pair vx = Pair::Constant(vk.x()), vy = Pair::Constant(vk.y()),
+                 vz = Pair::Constant(vk.z());
+      Pair bx = Pair::Zero(), by = Pair::Zero(), bz = Pair::Zero();
+      Pair s00 = Pair::Zero(), s01 = Pair::Zero(), s02 = Pair::Zero(), s11 = Pair::Zero(),
+           s12 = Pair::Zero(), s22 = Pair::Zero();
+      std::int32_t j = low_begin[p];
+      const std::int32_t end = low_begin[p + 1];
+      for (; j + 1 < end; j += 2) {
+        const auto h0 = static_cast<std::size_t>(a.high[j]);
+        const auto h1 = static_cast<std::size_t>(a.high[j + 1]);
+        const NodeState& n0 = a.nodes[h0];
+        const NodeState& n1 = a.nodes[h1];
+        const Pair l = load_pair(a.length + j);
+        const Pair inv_l = l.inverse();
+        const Pair rest = load_pair(a.rest_length + j);
+        const Pair nx = load_pair(a.dir_x + j), ny = load_pair(a.dir_y + j),
+                   nz = load_pair(a.dir_z + j);
+        const Pair dvx = Pair(n0.velocity.x(), n1.velocity.x()) - vx;
+        const Pair dvy = Pair(n0.velocity.y(), n1.velocity.y()) - vy;
+        const Pair dvz = Pair(n0.velocity.z(), n1.velocity.z()) - vz;
+        const Pair n_dv = nx * dvx + ny * dvy + nz * dvz;
+        const Pair stiffness = load_pair(a.stiffness + j), damping = load_pair(a.damping + j);
+        const Pair hk = h2p * stiffness;
+        // β = hk (1 − L/l) if l > L else 0, as max(0, ·) (SSE2 maxpd; Eigen's pmax(a, b)
+        // returns a when b is NaN: 0 for l = 0, as the comparison gives).
+        const Pair beta = Pair::Zero().max(hk * (1.0 - rest * inv_l));
+        const Pair alpha = hp * damping + hk - beta;
+        store_pair(a.weight_axial + j, alpha);
+        store_pair(a.weight_isotropic + j, beta);
+        const Pair ax = alpha * nx, ay = alpha * ny, az = alpha * nz;
+        const Pair w00 = ax * nx + beta, w11 = ay * ny + beta, w22 = az * nz + beta;
+        const Pair w01 = ax * ny, w02 = ax * nz, w12 = ay * nz;
+        s00 += w00;
+        s01 += w01;
+        s02 += w02;
+        s11 += w11;
+        s12 += w12;
+        s22 += w22;
+        add_symmetric(a.spring_block[h0], w00(0), w01(0), w02(0), w11(0), w12(0), w22(0));
+        add_symmetric(a.spring_block[h1], w00(1), w01(1), w02(1), w11(1), w12(1), w22(1));
+        const Pair c = (hk - beta) * n_dv;
+        const Pair kx = c * nx + beta * dvx, ky = c * ny + beta * dvy, kz = c * nz + beta * dvz;
+        bx += kx;
+        by += ky;
+        bz += kz;
+        a.rhs[h0] -= Vec3(kx(0), ky(0), kz(0));
+        a.rhs[h1] -= Vec3(kx(1), ky(1), kz(1));
+      }
+      NodeSums sum;
+      sum.rhs = Vec3(bx(0) + bx(1), by(0) + by(1), bz(0) + bz(1));
+      sum.w00 = s00(0) + s00(1);
+      sum.w01 = s01(0) + s01(1);
+      sum.w02 = s02(0) + s02(1);
+      sum.w11 = s11(0) + s11(1);
+      sum.w12 = s12(0) + s12(1);
+      sum.w22 = s22(0) + s22(1);
+      if (j < end) one_spring_linearization(a, j, vk, sum);
+      a.rhs[k] += sum.rhs;
+      add_symmetric(a.spring_block[k], sum.w00, sum.w01, sum.w02, sum.w11, sum.w12, sum.w22);
     }
-    NodeSums sum;
-    sum.rhs = Vec3(bx(0) + bx(1), by(0) + by(1), bz(0) + bz(1));
-    sum.w00 = s00(0) + s00(1);
-    sum.w01 = s01(0) + s01(1);
-    sum.w02 = s02(0) + s02(1);
-    sum.w11 = s11(0) + s11(1);
-    sum.w12 = s12(0) + s12(1);
-    sum.w22 = s22(0) + s22(1);
-    if (j < end) one_spring_linearization(a, j, vk, sum);
-    a.rhs[k] += sum.rhs;
-    add_symmetric(a.spring_block[k], sum.w00, sum.w01, sum.w02, sum.w11, sum.w12, sum.w22);
   }
 }
 
@@ -325,6 +332,7 @@ void compute_net_forces(const Model& model, Data& data) noexcept {
   if (model.nets.empty()) return;
   data.stages_run |= kStageNetForces;  // the stage report (step_stages.hpp)
   NetScratch& s = data.scratch->net;
+  detail::hold_resting_nodes(model, data);  // the nodes found at rest last step: held, v = 0
 
   // Gravity, and the zero-length ties to the rigid component with their
   // reaction on it. Raw pointers: the stores would otherwise make the
@@ -359,8 +367,8 @@ void compute_net_forces(const Model& model, Data& data) noexcept {
       mass_moment += mass[i] * nodes[i].position;
     }
     // The springs' part is added by spring_pass().
-    data.nets[k].start_energy = 0.5 * twice_kinetic + 0.5 * net.tie_stiffness * tie2 -
-                                model.gravity.dot(mass_moment);
+    data.nets[k].start_energy =
+        0.5 * twice_kinetic + 0.5 * net.tie_stiffness * tie2 - model.gravity.dot(mass_moment);
     data.body_wrench[bi].force += reaction.force;
     data.body_wrench[bi].torque += reaction.torque;
     data.nets[k].tie_wrench = reaction;
@@ -389,8 +397,9 @@ void compute_net_forces(const Model& model, Data& data) noexcept {
       const NetModel& net = model.nets[static_cast<std::size_t>(model.node_net[v])];
       const BodyState& body = data.bodies[static_cast<std::size_t>(net.body)];
       const Vec3 anchor_velocity = body.linear_velocity + body.angular_velocity.cross(s.lever[v]);
-      const Vec3 dv = h * (s.force[v] - h * net.tie_stiffness * (node_states[v].velocity - anchor_velocity)) /
-                      (model.node_mass[v] + h * net.tie_damping + h * h * net.tie_stiffness);
+      const Vec3 dv =
+          h * (s.force[v] - h * net.tie_stiffness * (node_states[v].velocity - anchor_velocity)) /
+          (model.node_mass[v] + h * net.tie_damping + h * h * net.tie_stiffness);
       v_point += ct.face_weights[m] * (node_states[v].velocity + dv);
     }
     if (ct.body_b >= 0) {
@@ -422,9 +431,11 @@ void compute_net_forces(const Model& model, Data& data) noexcept {
     // the node is a point mass; a body on the
     // other side adds its mobility along n at the contact point (imposed: none).
     MaterialPair mp = model.material_pairs[static_cast<std::size_t>(ct.material_pair)];
-    if (mp.stiffness > 0.0 && model.solver.node_contact_max_omega_dt < std::numeric_limits<double>::infinity()) {
+    if (mp.stiffness > 0.0 &&
+        model.solver.node_contact_max_omega_dt < std::numeric_limits<double>::infinity()) {
       double inv_mass = detail::contact_node_inverse_mass(model, ct);
-      if (ct.body_b >= 0 && data.scratch->solver.imposed[static_cast<std::size_t>(ct.body_b)] == 0) {
+      if (ct.body_b >= 0 &&
+          data.scratch->solver.imposed[static_cast<std::size_t>(ct.body_b)] == 0) {
         const auto b = static_cast<std::size_t>(ct.body_b);
         inv_mass += 1.0 / contact_effective_mass(model.bodies[b], data.bodies[b], ct.r_b, false,
                                                  nullptr, nullptr, ct.r_b, false, ct.normal);
@@ -452,8 +463,9 @@ void compute_net_forces(const Model& model, Data& data) noexcept {
       const BodyState& body = data.bodies[static_cast<std::size_t>(net.body)];
       const Vec3 anchor_velocity = body.linear_velocity + body.angular_velocity.cross(s.lever[i]);
       const double h = model.dt;
-      const Vec3 dv = h * (s.force[i] - h * net.tie_stiffness * (data.nodes[i].velocity - anchor_velocity)) /
-                      (model.node_mass[i] + h * net.tie_damping + h * h * net.tie_stiffness);
+      const Vec3 dv =
+          h * (s.force[i] - h * net.tie_stiffness * (data.nodes[i].velocity - anchor_velocity)) /
+          (model.node_mass[i] + h * net.tie_damping + h * h * net.tie_stiffness);
       ct.engaged = ct.depth - h * ct.normal.dot(v_rel + dv) > 0.0;
       if (ct.engaged) {  // below the surface at the step's end: k d − c v_n, unclamped
         r.normal_force = mp.stiffness * ct.depth - mp.damping * ct.normal.dot(v_rel);
@@ -463,8 +475,10 @@ void compute_net_forces(const Model& model, Data& data) noexcept {
         r.damping = mp.damping;
         r.friction = 0.0;
       }
-    } else if (ct.engaged && !r.active) {  // a triangle's, decided above: its share of k d − c v_n ≥ 0
-      r.normal_force = ct.share * std::max(0.0, mp.stiffness * ct.depth - mp.damping * ct.normal.dot(v_rel));
+    } else if (ct.engaged &&
+               !r.active) {  // a triangle's, decided above: its share of k d − c v_n ≥ 0
+      r.normal_force =
+          ct.share * std::max(0.0, mp.stiffness * ct.depth - mp.damping * ct.normal.dot(v_rel));
       r.force = r.normal_force * ct.normal;
       r.active = true;
       r.stiffness = ct.share * mp.stiffness;
@@ -481,7 +495,8 @@ void compute_net_forces(const Model& model, Data& data) noexcept {
     // The implicit step's h² K v₀ term uses the node's own relative velocity: with a triangle
     // contact's Jacobian lumped on its nodes (docs/organs.md, "Surface contacts") the same
     // K̃ must stand on both sides, else the triangle's nodes chatter.
-    ct.normal_velocity = ct.normal.dot(ct.face < 0 ? v_rel : Vec3(v_rel - v_point + data.nodes[i].velocity));
+    ct.normal_velocity =
+        ct.normal.dot(ct.face < 0 ? v_rel : Vec3(v_rel - v_point + data.nodes[i].velocity));
     if (!r.active) continue;
     s.force[i] += r.force;
     if (ct.body_b >= 0) {
@@ -490,6 +505,8 @@ void compute_net_forces(const Model& model, Data& data) noexcept {
       w.torque -= ct.r_b.cross(r.force);
     }
   }
+  // Which nodes rest in this step's solve, from their forces and contacts (net_rest.hpp).
+  detail::update_resting_nodes(model, data);
 }
 
 void linearize_nets(const Model& model, Data& data, double system_step) noexcept {

@@ -38,7 +38,8 @@ std::string add_net(Model& model, const TriangleMesh& mesh, const NetSettings& s
                 {"bending_stiffness", settings.bending_stiffness},
                 {"bending_damping", settings.bending_damping},
                 {"tie_damping", settings.tie_damping},
-                {"node_radius", settings.node_radius}};
+                {"node_radius", settings.node_radius},
+                {"rest_speed", settings.rest_speed}};
   for (const auto& p : nonneg)
     if (!finite_nonnegative(p.value)) return where + p.name + " must be finite and >= 0";
   if (const std::string err = validate_mesh(mesh); !err.empty()) return where + "mesh: " + err;
@@ -58,6 +59,7 @@ std::string add_net(Model& model, const TriangleMesh& mesh, const NetSettings& s
   net.material = settings.material;
   net.tie_stiffness = settings.tie_stiffness;
   net.tie_damping = settings.tie_damping;
+  net.rest_speed = settings.rest_speed;
   net.node_begin = model.num_nodes();
   net.node_count = mesh.num_vertices();
   net.spring_begin = static_cast<int>(model.net_springs.size());

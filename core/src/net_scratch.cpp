@@ -78,6 +78,23 @@ void NetScratch::resize(const Model& model) {
       spring_constants.damping[j] = sp.damping;
     }
   }
+  // Resting nodes (net_rest.hpp): none yet, every node in the solve.
+  rest_count.assign(n, 0);
+  rest_flags.assign(n, 0);
+  active_nodes.assign(n, 0);
+  active_positions.assign(n, 0);
+  pass_positions.assign(n, 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    active_nodes[i] = static_cast<std::int32_t>(i);
+    active_positions[i] = static_cast<std::int32_t>(i);
+    pass_positions[i] = static_cast<std::int32_t>(i);
+  }
+  active_count.assign(n > 0 ? model.nets.size() : 0, 0);
+  pass_count.assign(active_count.size(), 0);
+  for (std::size_t k = 0; k < active_count.size(); ++k) {
+    active_count[k] = model.nets[k].node_count;
+    pass_count[k] = model.nets[k].node_count;
+  }
   const auto no = n > 0 ? model.obstacles.size() : 0;
   near_obstacles.assign(no, 0);
   obstacle_axis.assign(no, Vec3::UnitZ());

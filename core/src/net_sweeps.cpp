@@ -9,6 +9,7 @@
 
 #include "detail/data_scratch.hpp"
 #include "detail/implicit_system.hpp"
+#include "detail/net_rest.hpp"
 #include "detail/net_solve.hpp"
 #include "detail/net_terms.hpp"
 #include "detail/pcg.hpp"
@@ -21,8 +22,9 @@ namespace {
 
 /// D̃ v: blockdiag(SolverScratch::block, NetScratch::block) times v, into
 /// out; returns vᵀ D̃ v. Bodies not in the solve give 0.
-double apply_block_diagonal(const Data& data, std::span<const Vec6> v_b, std::span<const Vec3> v_n,
-                            std::span<Vec6> out_b, std::span<Vec3> out_n) noexcept {
+double apply_block_diagonal(const Model& model, const Data& data, std::span<const Vec6> v_b,
+                            std::span<const Vec3> v_n, std::span<Vec6> out_b,
+                            std::span<Vec3> out_n) noexcept {
   const SolverScratch& s = data.scratch->solver;
   const NetScratch& ns = data.scratch->net;
   double vdv = 0.0;
@@ -34,24 +36,25 @@ double apply_block_diagonal(const Data& data, std::span<const Vec6> v_b, std::sp
       out_b[b].setZero();
     }
   }
-  for (std::size_t i = 0; i < v_n.size(); ++i) {
+  for_active_nodes(model, ns, [&](std::size_t i) {  // the nodes in the solve (net_rest.hpp)
     out_n[i].noalias() = ns.block[i] * v_n[i];
     vdv += v_n[i].dot(out_n[i]);
-  }
+  });
   return vdv;
 }
 
-/// The node loop of backward_sweep() over one net's sweep positions
-/// [begin, end), last to first: g_k = −Σ W_e t_j over node k's springs to
-/// later nodes, (with kUpdateQ) q_k ← d_k + β q_k, t_k = A_kk⁻¹ (q_k − g_k).
-/// Returns Σ J_kᵀ t_k over the net when kTied (else 0). A function of its
-/// own, as forward_nodes().
+/// The node loop of backward_sweep() over one net's sweep positions in the solve
+/// (positions[0, count): NetScratch::active_positions, net_rest.hpp), last to first: g_k = −Σ W_e
+/// t_j over node k's springs to later nodes, (with kUpdateQ) q_k ← d_k + β q_k, t_k = A_kk⁻¹ (q_k −
+/// g_k). Returns Σ J_kᵀ t_k over the net when kTied (else 0). A function of its own, as
+/// forward_nodes().
 template <bool kUpdateQ, bool kTied>
 Vec6 backward_nodes(const SpringView& sp, const std::int32_t* order, const SweepNode* nodes,
-                    int begin, int end, double beta, const Vec3* d_n, Vec3* q_n, Vec3* t_n,
-                    Vec3* g_n) noexcept {
+                    const std::int32_t* positions, int count, double beta, const Vec3* d_n,
+                    Vec3* q_n, Vec3* t_n, Vec3* g_n) noexcept {
   Vec3 force = Vec3::Zero(), torque = Vec3::Zero();  // Σ J_iᵀ t_i = (Σ t_i, Σ ρ_i × t_i)
-  for (int p = end - 1; p >= begin; --p) {
+  for (int a = count - 1; a >= 0; --a) {
+    const auto p = static_cast<std::size_t>(positions[a]);
     const auto k = static_cast<std::size_t>(order[p]);
     const Vec3 sum = gather_springs(sp, sp.low_begin[p], sp.low_begin[p + 1], t_n);
     g_n[k] = -sum;
@@ -87,16 +90,19 @@ void backward_sweep(const Model& model, const Data& data, double beta, const Vec
   // −W_e towards every later node of a spring (and nothing towards the
   // bodies, which come first): t_k = A_kk⁻¹ (q_k + Σ W_e t_j), g_k = (Lᵀ t)_k
   // = −Σ W_e t_j, gathered over node k's springs (grouped by their earlier node).
-  // Nets share no spring, so they are swept one after the other.
-  for (auto net = model.nets.rbegin(); net != model.nets.rend(); ++net) {
-    const auto body = static_cast<std::size_t>(net->body);
-    const int begin = net->node_begin, end = net->node_begin + net->node_count;
+  // Nets share no spring, so they are swept one after the other. A resting node (net_rest.hpp)
+  // is out: its t is 0 (the Dirichlet value) where a spring gathers it.
+  for (std::size_t n = model.nets.size(); n-- > 0;) {
+    const NetModel& net = model.nets[n];
+    const auto body = static_cast<std::size_t>(net.body);
+    const std::int32_t* positions = ns.active_positions.data() + net.node_begin;
+    const int count = ns.active_count[n];
     if (s.in_solve[body] != 0) {
-      const Vec6 tie =
-          backward_nodes<kUpdateQ, true>(sp, order, nodes, begin, end, beta, d_n, q_n, t_n, g_n);
-      g_b[body] -= tie_weight(*net, h) * tie;  // A_bi = −c J_iᵀ
+      const Vec6 tie = backward_nodes<kUpdateQ, true>(sp, order, nodes, positions, count, beta, d_n,
+                                                      q_n, t_n, g_n);
+      g_b[body] -= tie_weight(net, h) * tie;  // A_bi = −c J_iᵀ
     } else {
-      backward_nodes<kUpdateQ, false>(sp, order, nodes, begin, end, beta, d_n, q_n, t_n, g_n);
+      backward_nodes<kUpdateQ, false>(sp, order, nodes, positions, count, beta, d_n, q_n, t_n, g_n);
     }
   }
   // Node contacts with a body: A_bi = −J_rᵀ W.
@@ -120,18 +126,18 @@ void backward_sweep(const Model& model, const Data& data, double beta, const Vec
   add_cross_contact_terms(s, t_b, g_b);
 }
 
-/// The node loop of forward_sweep() over one net's sweep positions
-/// [begin, end): y_k = A_kk⁻¹ (y_k + c J_k y_b) with c J_k y_b = cv + cw × ρ_k
-/// when kTied, then the scatter of W_e y_k to the later nodes; with kAddT
-/// y_k ← y_k + t_k and the return is Σ q_k · y_k over the net (else 0).
-/// A function of its own, the net's constants hoisted: the node loop's
-/// pointers stay in registers.
+/// The node loop of forward_sweep() over one net's sweep positions in the solve
+/// (positions[0, count), as backward_nodes()): y_k = A_kk⁻¹ (y_k + c J_k y_b) with c J_k y_b = cv +
+/// cw × ρ_k when kTied, then the scatter of W_e y_k to the later nodes; with kAddT y_k ← y_k + t_k
+/// and the return is Σ q_k · y_k over the net (else 0). A function of its own, the net's constants
+/// hoisted: the node loop's pointers stay in registers.
 template <bool kAddT, bool kTied>
 double forward_nodes(const SpringView& sp, const std::int32_t* order, const SweepNode* nodes,
-                     int begin, int end, const Vec3 cv, const Vec3 cw, Vec3* y_n, const Vec3* t_n,
-                     const Vec3* q_n) noexcept {
+                     const std::int32_t* positions, int count, const Vec3 cv, const Vec3 cw,
+                     Vec3* y_n, const Vec3* t_n, const Vec3* q_n) noexcept {
   double qkq = 0.0;
-  for (int p = begin; p < end; ++p) {
+  for (int a = 0; a < count; ++a) {
+    const auto p = static_cast<std::size_t>(positions[a]);
     const auto k = static_cast<std::size_t>(order[p]);
     Vec3 acc = y_n[k];
     if constexpr (kTied) acc += cv + cw.cross(nodes[p].lever);
@@ -186,18 +192,21 @@ double forward_sweep(const Model& model, const Data& data, std::span<const Vec6>
   // Σ W_e y_j) over the springs to earlier nodes j, each of which has already
   // added its W_e y_j to y_k (scattered over its springs, grouped by their
   // earlier node).
+  // A resting node (net_rest.hpp) is out: what its springs scatter to it is never read.
   double qkq = 0.0;
-  for (const NetModel& net : model.nets) {
+  for (std::size_t n = 0; n < model.nets.size(); ++n) {
+    const NetModel& net = model.nets[n];
     const auto body = static_cast<std::size_t>(net.body);
-    const int begin = net.node_begin, end = net.node_begin + net.node_count;
+    const std::int32_t* positions = ns.active_positions.data() + net.node_begin;
+    const int count = ns.active_count[n];
     if (s.in_solve[body] != 0) {
       // c J_k y_b = c v_b + (c ω_b) × ρ_k.
       const double c = tie_weight(net, h);
       const Vec3 cv = c * y_b[body].head<3>(), cw = c * y_b[body].tail<3>();
-      qkq += forward_nodes<kAddT, true>(sp, order, nodes, begin, end, cv, cw, y_n, t_n, q_n);
+      qkq += forward_nodes<kAddT, true>(sp, order, nodes, positions, count, cv, cw, y_n, t_n, q_n);
     } else {
-      qkq += forward_nodes<kAddT, false>(sp, order, nodes, begin, end, Vec3::Zero(), Vec3::Zero(),
-                                         y_n, t_n, q_n);
+      qkq += forward_nodes<kAddT, false>(sp, order, nodes, positions, count, Vec3::Zero(),
+                                         Vec3::Zero(), y_n, t_n, q_n);
     }
   }
   if constexpr (kAddT) {
@@ -264,11 +273,14 @@ double net_start_sweep(const Model& model, Data& data, std::span<const Vec3> x0_
   Vec3* w = w_n.data();
   const Vec3* rhs = ns.rhs.data();
   const Vec3* x0 = x0_n.data();
-  for (const NetModel& net : model.nets) {
+  for (std::size_t n = 0; n < model.nets.size(); ++n) {  // the nodes in the solve (net_rest.hpp)
+    const NetModel& net = model.nets[n];
     const auto body = static_cast<std::size_t>(net.body);
     const bool tied = s.in_solve[body] != 0;
     const double c = tie_weight(net, h);
-    for (int p = net.node_begin; p < net.node_begin + net.node_count; ++p) {
+    const std::int32_t* positions = ns.active_positions.data() + net.node_begin;
+    for (int a = 0; a < ns.active_count[n]; ++a) {
+      const auto p = static_cast<std::size_t>(positions[a]);
       const auto k = static_cast<std::size_t>(order[p]);
       Vec3 acc_w = w[k];
       if (tied) acc_w += c * point_velocity(w_b[body], nodes[p].lever);
@@ -327,12 +339,12 @@ struct EisenstatSystem {
       rho += wb[b].dot(s.block[b] * wb[b]);
     }
     const Mat3* block = data.scratch->net.block.data();
-    for (std::size_t i = 0; i < xn.size(); ++i) {
+    for_active_nodes(model, data.scratch->net, [&](std::size_t i) {
       xn[i] += alpha * tn[i];
       wn[i] -= alpha * kqn[i];
       dn[i].noalias() = block[i] * wn[i];
       rho += wn[i].dot(dn[i]);
-    }
+    });
     rho_new = rho;
     return std::sqrt(rho / ref);
   }
@@ -345,7 +357,7 @@ struct EisenstatSystem {
     for (std::size_t b = 0; b < xb.size(); ++b)
       if (s.in_solve[b]) e += s.rhs[b].dot(xb[b]);
     const Vec3* rhs = data.scratch->net.rhs.data();
-    for (std::size_t i = 0; i < xn.size(); ++i) e += rhs[i].dot(xn[i]);
+    for_active_nodes(model, data.scratch->net, [&](std::size_t i) { e += rhs[i].dot(xn[i]); });
     return e;
   }
   void direction(double b) noexcept {
@@ -379,7 +391,7 @@ bool solve_net_eisenstat(const Model& model, Data& data) noexcept {
   const double floor = mass * set.velocity_floor * set.velocity_floor;
   ref = std::max(ref, floor);
   sys.ref = ref > 0.0 ? ref : 1.0;
-  const double rho = apply_block_diagonal(data, sys.wb, sys.wn, sys.qb, sys.qn);  // q = D̃ w
+  const double rho = apply_block_diagonal(model, data, sys.wb, sys.wn, sys.qb, sys.qn);  // q = D̃ w
   const double rel = std::sqrt(rho / sys.ref);
 
   // The stopping rule: the energy-norm error estimate (error_estimate_delay ≥ 1),

@@ -169,6 +169,19 @@ struct NetScratch {
   std::vector<std::uint32_t> surface_net_stamp;
   std::vector<std::uint8_t> surface_net_torn;
   std::uint32_t surface_stamp = 0;  ///< The current call's stamp (0: never; wraps by clearing).
+  // Resting nodes (net_rest.hpp): per node, its consecutive quiet steps (saturating at
+  // detail::kRestSteps) and its state bits (resting, eligible, boundary; net_rest.cpp).
+  std::vector<std::uint8_t> rest_count;
+  std::vector<std::uint8_t> rest_flags;
+  /// The nodes in the solve (not resting), each net's in its own slots: net k's are
+  /// active_nodes[node_begin, node_begin + active_count[k]) as node indices (ascending) and
+  /// active_positions[the same] as sweep positions (ascending); every node when none rests.
+  std::vector<std::int32_t> active_nodes, active_positions;
+  /// The sweep positions whose springs (grouped by their earlier node) touch a node in the
+  /// solve: those of the nodes in the solve and of the resting nodes next to one;
+  /// pass_positions[node_begin, node_begin + pass_count[k]) for net k.
+  std::vector<std::int32_t> pass_positions;
+  std::vector<int> active_count, pass_count;  ///< Per net.
   /// Sizes every buffer for `model` (all empty when it has no net). Allocates: make_data() only.
   void resize(const Model& model);
 };

@@ -30,7 +30,7 @@ using core::Vec3;
 #define NUMEN_DEFORMABLE_COMMON_KEYS                                                          \
   "name", "body", "mesh", "scale", "position", "orientation", "mass", "stiffness", "damping", \
       "bending_stiffness", "bending_damping", "tie_stiffness", "tie_damping", "node_radius",  \
-      "material"
+      "material", "rest_speed"
 
 /// An integer key in [lo, hi], or `fallback` when absent.
 int integer_in(const TomlTable& t, std::string_view key, int lo, int hi, int fallback) {
@@ -318,6 +318,7 @@ void parse_deformable(const TomlTable& t, const std::filesystem::path& scene_dir
   settings.tie_stiffness = t.number_in("tie_stiffness", 1e-12, kInf, std::nullopt);
   settings.tie_damping = t.number_in("tie_damping", 0.0, kInf, 0.0);
   settings.node_radius = t.number_in("node_radius", 1e-9, kInf, 0.0);
+  settings.rest_speed = t.number_in("rest_speed", 0.0, kInf, core::NetSettings{}.rest_speed);
 
   if (simplify) {  // a coarser net, the file's surface on it
     const std::string key = load.nodes_from == "default" ? std::string("file") : load.nodes_from;

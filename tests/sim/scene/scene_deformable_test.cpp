@@ -340,6 +340,20 @@ TEST(DeformableLoader, MiniSceneLoadsWithDefaults) {
     EXPECT_GT(r, 0.002);
     EXPECT_LT(r, 0.006);
   }
+  EXPECT_EQ(net.rest_speed, 1e-5);  // resting nodes (core::NetSettings' default)
+}
+
+TEST(DeformableLoader, RestSpeedSetsOrSwitchesOffTheNetsRestingNodes) {
+  TempDir dir;
+  const std::string off =
+      replace(kMiniNet, "tie_stiffness = 500.0", "tie_stiffness = 500.0\nrest_speed = 0.0");
+  EXPECT_EQ(load_scene(dir.write("off.toml", off)).model.nets[0].rest_speed, 0.0);
+  const std::string set =
+      replace(kMiniNet, "tie_stiffness = 500.0", "tie_stiffness = 500.0\nrest_speed = 1e-4");
+  EXPECT_EQ(load_scene(dir.write("set.toml", set)).model.nets[0].rest_speed, 1e-4);
+  expect_error_at(
+      replace(kMiniNet, "tie_stiffness = 500.0", "tie_stiffness = 500.0\nrest_speed = -1e-6"),
+      "rest_speed = ", "-1e-6", "deformable[0].rest_speed", "must be in");
 }
 
 TEST(DeformableLoader, MeshKindsScaleAndPlacement) {

@@ -109,6 +109,9 @@ struct NetOutput {
   /// The deepest true depth of those (m, from r to 2 r; 0 without one): how far the sphere is
   /// past the surface, counted in max_penetration.
   double crossed_depth = 0.0;
+  /// Nodes held out of this step's solve, at rest (NetModel::rest_speed; docs/organs.md,
+  /// "Resting nodes"); 0 when the net's nodes may not rest.
+  int resting_nodes = 0;
 };
 
 }  // namespace numen::core

@@ -1,0 +1,72 @@
+#pragma once
+/// @file net_rest.hpp
+/// Private to numen::core (core/src/detail; tests reach it through numen_core_internal).
+/// Resting nodes of an organ's net (docs/organs.md, "Resting nodes"): the sleeping
+/// (deactivation) of rigid-body engines — Bullet's activation states, PhysX's sleep
+/// threshold — applied node by node to a deformable net on an anchored body. A node that
+/// has been quiet for kRestSteps steps in a row — speed at most NetModel::rest_speed v_r,
+/// explicit force at most the rest force f_r (below), no node contact of any kind (candidate,
+/// look-ahead, grasp) — and whose neighbours (every node it shares a spring with) are quiet
+/// as long, rests: from the next step it is held where it is with a zero velocity, and the
+/// step solves the same linear system restricted to the other nodes, the resting ones as a
+/// Dirichlet boundary (Δv = 0: their columns meet zero, their rows are left out). The force
+/// pass still runs over every node and spring (the energies, the tie wrench and the wake test
+/// are exact); the springs' linearisation, the node rows' assembly and the solve run over the
+/// nodes in the solve (NetScratch::active_*) and the springs that touch one.
+///
+/// A resting node wakes, in the step where it happens and before that step's linearisation,
+/// when its force exceeds f_r, a node contact reaches it, or a neighbour stops being quiet.
+/// The rest force is the force that would change the node's speed by v_r in one step, the node
+/// alone on its tie (the look-ahead's estimate, net_forces.cpp):
+///   f_r,i = v_r (m_i + h γ_tie + h² k_tie) / h.
+/// Held with a velocity below v_r dropped: the kinetic energy given up is below ½ m_i v_r² per
+/// node (3.5e-15 J for a 70 mg node at the default 1e-5 m/s).
+///
+/// Only nets on an anchored body (BodyModel::anchored, whose anchors never move) with
+/// rest_speed > 0, and only with the linearly implicit Euler or the trapezoidal rule (one
+/// linearised solve a step); every other net keeps every node in the solve.
+
+#include <cstddef>
+#include <cstdint>
+
+#include "detail/net_scratch.hpp"
+#include "numen/core/model.hpp"
+
+namespace numen::core {
+
+struct Data;
+
+namespace detail {
+
+/// Consecutive quiet steps a node and its neighbours need before it rests.
+inline constexpr std::uint8_t kRestSteps = 10;
+
+/// Whether `net`'s nodes may rest in `model` (see file comment).
+bool net_can_rest(const Model& model, const NetModel& net) noexcept;
+
+/// Holds the nodes found eligible at the last step's update_resting_nodes(): a zero velocity,
+/// and (newly resting) zero entries in the solve's node vectors (the warm start and the CG
+/// vectors the restricted sweeps read). Called at the start of compute_net_forces(), before
+/// any force is computed. No allocation.
+void hold_resting_nodes(const Model& model, Data& data) noexcept;
+
+/// After the force pass and the node contacts (end of compute_net_forces()): counts each
+/// node's quiet steps (NetScratch::rest_count), wakes the resting nodes that are no longer
+/// eligible, marks those eligible for the next step, and rebuilds the lists of the nodes in
+/// the solve (NetScratch::active_nodes, active_positions, pass_positions) and
+/// NetOutput::resting_nodes. No allocation.
+void update_resting_nodes(const Model& model, Data& data) noexcept;
+
+/// Calls f(i) for every node i in the solve (NetScratch::active_nodes), net by net, each in
+/// ascending order: every node when none rests.
+template <class F>
+[[gnu::always_inline]] inline void for_active_nodes(const Model& model, const NetScratch& s,
+                                                    F&& f) noexcept {
+  for (std::size_t n = 0; n < model.nets.size(); ++n) {
+    const std::int32_t* active = s.active_nodes.data() + model.nets[n].node_begin;
+    for (int a = 0, end = s.active_count[n]; a < end; ++a) f(static_cast<std::size_t>(active[a]));
+  }
+}
+
+}  // namespace detail
+}  // namespace numen::core
