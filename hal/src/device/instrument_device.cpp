@@ -170,7 +170,6 @@ DeviceSample InstrumentDevice::sample(std::int64_t now_ns) noexcept {
   bool ready = true;
   for (int i = 0; i < n_; ++i) {
     const auto k = static_cast<std::size_t>(i);
-    const AxisConfig& a = config_.axes[k];
     const AxisCheckLimits& lim = limits_[k];
     AxisState& st = axes_[k];
     FaultMask f = SampleFault::kNone;
