@@ -268,7 +268,9 @@ TEST(RunRecordedTrials, EveryTrialRunsThroughEveryJigsawsSceneWithoutASafetyStop
         EXPECT_TRUE(d.closed_loop) << d.name;
       }
       EXPECT_EQ(r.devices.size(), s.extra_devices.empty() ? 0u : numen::sim::num_devices(s));
-      if (!r.devices.empty()) EXPECT_EQ(r.exit_status, 0);
+      if (!r.devices.empty()) {
+        EXPECT_EQ(r.exit_status, 0);
+      }
     }
   }
   if (!numen::test::jigsaws_trials_dir())

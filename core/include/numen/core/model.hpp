@@ -267,8 +267,8 @@ struct Model {
 
   FeedbackGains feedback;          ///< Device virtual coupling (Eq. 8); device 0's with several.
   /// Eq. 8 gains of devices 1 .. N−1 of a loop that runs several (feedback group g ≥ 1 of
-  /// Data::feedback_group is extra_feedback[g − 1]; feedback_gains()). Empty: one device, or
-  /// every device with `feedback`.
+  /// Data::feedback_group is extra_feedback[g − 1]; feedback_gains()). Empty: every group uses
+  /// `feedback`.
   std::vector<FeedbackGains> extra_feedback;
   int initial_held_body = 0;       ///< Body the device holds at reset; -1 for none.
   /// The contacts are written by the caller, not detected (the god-object model of the

@@ -109,10 +109,10 @@ struct MultirateScene {
   std::vector<int> tools;
 };
 
-/// One device of a scene beyond the first: entries 1 .. N−1 of a `[[device]]` array (docs/scenes.md,
-/// "Several devices"); entry 0 is the scene's own fields (Scene::device, binding, trajectory,
-/// hand, plant, model.feedback), as for a single `[device]`; its Eq. 8 gains are in the model
-/// (core::Model::extra_feedback). Each device is an impedance
+/// One device of a scene beyond the first: entries 1 .. N−1 of a `[[device]]` array
+/// (docs/scenes.md, "Several devices"); entry 0 is the scene's own fields (Scene::device,
+/// binding, trajectory, hand, plant, model.feedback), as for a single `[device]`; its Eq. 8
+/// gains are in the model (core::Model::extra_feedback). Each device is an impedance
 /// instrument on the scene's one simulated bus (its own CANopen nodes: no node id or COB-ID of
 /// another device), driving the bodies whose `link` key names it (`device = "<name>"` on the
 /// [[body]] table) and the joints whose `prescribed` table names it.
