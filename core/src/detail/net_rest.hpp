@@ -63,8 +63,15 @@ template <class F>
 [[gnu::always_inline]] inline void for_active_nodes(const Model& model, const NetScratch& s,
                                                     F&& f) noexcept {
   for (std::size_t n = 0; n < model.nets.size(); ++n) {
-    const std::int32_t* active = s.active_nodes.data() + model.nets[n].node_begin;
-    for (int a = 0, end = s.active_count[n]; a < end; ++a) f(static_cast<std::size_t>(active[a]));
+    const NetModel& net = model.nets[n];
+    const int end = s.active_count[n];
+    if (end == net.node_count) {  // every node in the solve: the contiguous loop (vectorised)
+      for (int v = net.node_begin; v < net.node_begin + net.node_count; ++v)
+        f(static_cast<std::size_t>(v));
+      continue;
+    }
+    const std::int32_t* active = s.active_nodes.data() + net.node_begin;
+    for (int a = 0; a < end; ++a) f(static_cast<std::size_t>(active[a]));
   }
 }
 
