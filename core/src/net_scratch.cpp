@@ -114,6 +114,7 @@ void NetScratch::resize(const Model& model) {
   face_candidates.assign(faces, 0);
   face_lo.assign(faces, Vec3::Zero());
   face_hi.assign(faces, Vec3::Zero());
+  node_outcode.assign(faces > 0 ? n : 0, 0);
   const std::size_t fine = largest(&NetModel::surface_face_count);
   surface_candidates.assign(fine, 0);
   surface_lo.assign(fine, Vec3::Zero());

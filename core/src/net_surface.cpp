@@ -164,6 +164,36 @@ bool torn(const Model& model, const NodeState* nodes, int f) noexcept {
          (a - c).squaredNorm() > kTear2 * (ra - rc).squaredNorm();
 }
 
+/// Cohen–Sutherland outcodes of the net's nodes against the box [lo, hi] widened by kMargin, into
+/// ns.node_outcode: bit 2a when node coordinate a is not ≥ lo_a − kMargin (below, or not a
+/// number), bit 2a + 1 when it is not ≤ hi_a + kMargin. A triangle whose three codes share a bit
+/// lies wholly on one side of the box along that axis, so its bounds fail
+/// collision_detail::boxes_overlap() against the box (the test compares each bound through
+/// lo_a ≤ max + kMargin and min ≤ hi_a + kMargin, and rounding x + kMargin is monotone in x, so
+/// the test on the three nodes is the test on their bounds): cull_face() skips it without its
+/// bounds, and the triangles it keeps are tested as before.
+void node_outcodes(const Data& data, NetScratch& ns, const NetModel& net, const Vec3& lo,
+                   const Vec3& hi) noexcept {
+  const NodeState* nodes = data.nodes.data();
+  std::uint8_t* code = ns.node_outcode.data();
+  for (int i = net.node_begin; i < net.node_begin + net.node_count; ++i) {
+    const Vec3& x = nodes[i].position;
+    unsigned c = 0;
+    for (int a = 0; a < 3; ++a) {
+      c |= (x[a] + kMargin >= lo[a] ? 0u : 1u) << (2 * a);
+      c |= (x[a] <= hi[a] + kMargin ? 0u : 2u) << (2 * a);
+    }
+    code[i] = static_cast<std::uint8_t>(c);
+  }
+}
+
+/// Whether net triangle `f` (global) lies wholly on one side of node_outcodes()' box.
+inline bool cull_face(const Model& model, const NetScratch& ns, int f) noexcept {
+  const std::array<int, 3>& t = model.net_faces[static_cast<std::size_t>(f)];
+  const std::uint8_t* code = ns.node_outcode.data();
+  return (code[t[0]] & code[t[1]] & code[t[2]]) != 0;
+}
+
 /// The bounds of the net triangle `f` (global) at the nodes' current positions.
 void net_face_bounds(const Model& model, const NodeState* nodes, int f, Vec3& lo, Vec3& hi) noexcept {
   const std::array<int, 3>& t = model.net_faces[static_cast<std::size_t>(f)];
@@ -216,7 +246,9 @@ int gather_surface_candidates(const Model& model, const Data& data, NetScratch& 
   };
   const std::int32_t* near = ns.near_spheres.data();
   int nc = 0;
+  node_outcodes(data, ns, net, plo, phi);
   for (int f = net.face_begin; f < net.face_begin + net.face_count; ++f) {
+    if (cull_face(model, ns, f)) continue;
     Vec3 lo, hi;
     net_face_bounds(model, nodes, f, lo, hi);
     if (!boxes_overlap(lo, hi, plo, phi) || !(lo.allFinite() && hi.allFinite())) continue;
@@ -296,7 +328,9 @@ void collide_net_faces(const Model& model, const Data& data, NetScratch& ns, con
   // Candidates: the net's triangles whose bounds meet them (non-finite nodes never do).
   const int room = static_cast<int>(ns.face_candidates.size());
   int nc = 0;
+  node_outcodes(data, ns, net, qlo, qhi);
   for (int f = net.face_begin; f < net.face_begin + net.face_count && nc < room; ++f) {
+    if (cull_face(model, ns, f)) continue;
     Vec3 lo, hi;
     net_face_bounds(model, nodes, f, lo, hi);
     if (!boxes_overlap(lo, hi, qlo, qhi) || !(lo.allFinite() && hi.allFinite())) continue;

@@ -154,6 +154,9 @@ struct NetScratch {
   /// the largest NetModel::face_count.
   std::vector<std::int32_t> face_candidates;
   std::vector<Vec3> face_lo, face_hi;
+  /// Per node (global): its outcode against the query box of the net's last surface cull
+  /// (net_surface.cpp, node_outcodes()): per axis one bit for "below the box", one for "above".
+  std::vector<std::uint8_t> node_outcode;
   /// An organ's fine surface (net_surface_map.hpp): the fine triangles (Model::net_surface_faces
   /// indices) riding on the net triangles near the tool, whose bounds meet the near spheres'
   /// bounds, and those bounds (m, world); sized by the largest NetModel::surface_face_count.
