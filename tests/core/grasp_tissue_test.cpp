@@ -4,8 +4,11 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Dense>
+
 #include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include "alloc_counter.hpp"
 #include "grasper_rig.hpp"
@@ -72,6 +75,95 @@ int close_and_lift(const core::Model& m, core::Data& d, double lift) {
   return grasped;
 }
 
+/// The patch's statics from its constants alone, independently of the step: the free nodes'
+/// positions minimising the energy of its springs, ½ k (l − L)² (Model::net_springs, structural
+/// and bending), and of its zero-length ties, ½ k_tie |x − r|² (the core at the origin, r =
+/// Model::node_rest), the held nodes fixed where the grasp holds them now; Newton's method from
+/// the rest shape on the dense Hessian (the springs' transverse term kept only where stretched),
+/// with a backtracking line search, to a gradient of 1e-10 N. Returns the force the grip must
+/// pull the held nodes with to hold them there, Σ ∂E/∂x_held (N, world).
+core::Vec3 patch_statics_grip_pull(const core::Model& m, const core::Data& d,
+                                   const core::GraspState& g) {
+  const core::NetModel& net = m.nets[0];
+  const int n = net.node_count;
+  std::vector<char> held(static_cast<std::size_t>(n), 0);
+  for (int k = 0; k < g.num_nodes; ++k)
+    held[static_cast<std::size_t>(g.nodes[static_cast<std::size_t>(k)].node - net.node_begin)] = 1;
+  std::vector<core::Vec3> x(static_cast<std::size_t>(n));
+  for (int i = 0; i < n; ++i) {
+    const auto v = static_cast<std::size_t>(net.node_begin + i);
+    x[static_cast<std::size_t>(i)] = held[static_cast<std::size_t>(i)] ? d.nodes[v].position : m.node_rest[v];
+  }
+  const auto energy_and_derivatives = [&](const std::vector<core::Vec3>& at, Eigen::VectorXd* grad,
+                                          Eigen::MatrixXd* hess) {
+    double e = 0.0;
+    if (grad) grad->setZero(3 * n);
+    if (hess) hess->setZero(3 * n, 3 * n);
+    for (int i = 0; i < n; ++i) {
+      const core::Vec3 u = at[static_cast<std::size_t>(i)] - m.node_rest[static_cast<std::size_t>(net.node_begin + i)];
+      e += 0.5 * net.tie_stiffness * u.squaredNorm();
+      if (grad) grad->segment<3>(3 * i) += net.tie_stiffness * u;
+      if (hess) hess->block<3, 3>(3 * i, 3 * i) += net.tie_stiffness * core::Mat3::Identity();
+    }
+    for (int s = net.spring_begin; s < net.spring_begin + net.structural_count + net.bending_count; ++s) {
+      const core::NetSpring& sp = m.net_springs[static_cast<std::size_t>(s)];
+      const int a = sp.node_a - net.node_begin, b = sp.node_b - net.node_begin;
+      const core::Vec3 dx = at[static_cast<std::size_t>(b)] - at[static_cast<std::size_t>(a)];
+      const double l = dx.norm();
+      e += 0.5 * sp.stiffness * (l - sp.rest_length) * (l - sp.rest_length);
+      const core::Vec3 dir = dx / l;
+      if (grad) {
+        const core::Vec3 f = sp.stiffness * (l - sp.rest_length) * dir;
+        grad->segment<3>(3 * b) += f;
+        grad->segment<3>(3 * a) -= f;
+      }
+      if (hess) {
+        const core::Mat3 nn = dir * dir.transpose();
+        const core::Mat3 k = sp.stiffness * (nn + std::max(0.0, 1.0 - sp.rest_length / l) *
+                                                      (core::Mat3::Identity() - nn));
+        hess->block<3, 3>(3 * a, 3 * a) += k;
+        hess->block<3, 3>(3 * b, 3 * b) += k;
+        hess->block<3, 3>(3 * a, 3 * b) -= k;
+        hess->block<3, 3>(3 * b, 3 * a) -= k;
+      }
+    }
+    return e;
+  };
+  Eigen::VectorXd grad;
+  Eigen::MatrixXd hess;
+  for (int iteration = 0; iteration < 100; ++iteration) {
+    const double e = energy_and_derivatives(x, &grad, &hess);
+    for (int i = 0; i < n; ++i)  // the held nodes are fixed: identity rows, no step
+      if (held[static_cast<std::size_t>(i)]) {
+        grad.segment<3>(3 * i).setZero();
+        hess.middleRows(3 * i, 3).setZero();
+        hess.middleCols(3 * i, 3).setZero();
+        hess.block<3, 3>(3 * i, 3 * i).setIdentity();
+      }
+    if (grad.norm() < 1e-10) break;
+    const Eigen::VectorXd step = hess.ldlt().solve(-grad);
+    double t = 1.0;
+    std::vector<core::Vec3> trial(x.size());
+    for (int halving = 0; halving < 30; ++halving, t *= 0.5) {
+      for (int i = 0; i < n; ++i)
+        trial[static_cast<std::size_t>(i)] = x[static_cast<std::size_t>(i)] + t * step.segment<3>(3 * i);
+      if (energy_and_derivatives(trial, nullptr, nullptr) <= e) break;
+    }
+    x = trial;
+  }
+  energy_and_derivatives(x, &grad, nullptr);
+  EXPECT_LT([&] {
+    double free_gradient = 0.0;
+    for (int i = 0; i < n; ++i)
+      if (!held[static_cast<std::size_t>(i)]) free_gradient = std::max(free_gradient, grad.segment<3>(3 * i).norm());
+    return free_gradient;
+  }(), 1e-8) << "N: the reference statics did not converge";
+  core::Vec3 pull = core::Vec3::Zero();
+  for (int i = 0; i < n; ++i)
+    if (held[static_cast<std::size_t>(i)]) pull += grad.segment<3>(3 * i);
+  return pull;
+}
+
 }  // namespace
 
 TEST(GraspTissue, TheJawsHoldTheTissueTheyCloseOnAndTheHandFeelsItsPull) {
@@ -116,6 +208,13 @@ TEST(GraspTissue, TheJawsHoldTheTissueTheyCloseOnAndTheHandFeelsItsPull) {
   EXPECT_GT(pull.z(), 0.1) << "N: the tissue is pulled up";
   EXPECT_NEAR(ties.z(), pull.z(), 0.01 * pull.z());
   EXPECT_NEAR(d.feedback_wrench.force.z(), -pull.z(), 0.02 * pull.z()) << "the hand feels the tissue pull down";
+  // Against the net's constants: the patch's statics with the held nodes where the grip holds
+  // them (Newton on the springs' and ties' energy, not the step) asks the same pull of the grip.
+  const core::Vec3 statics = patch_statics_grip_pull(m, d, g);
+  std::printf("retraction 10 mm: statics of the patch's ties and springs %.6f N against the grip's %.6f N (x %.4f, y %.4f)\n",
+              statics.z(), pull.z(), statics.x(), statics.y());
+  EXPECT_NEAR(statics.z(), pull.z(), 1e-3 * pull.z()) << "N: the grip's pull is not the net's statics";
+  EXPECT_NEAR((statics - pull).norm(), 0.0, 1e-3 * pull.norm());
   // The jaws' own contacts with the held tissue are off: no node contact with them.
   for (int c = 0; c < d.num_node_contacts; ++c) {
     const core::NodeContact& ct = d.node_contacts[static_cast<std::size_t>(c)];
