@@ -69,7 +69,8 @@ ControlLoop::ControlLoop(const core::Model& model, core::Data& data,
       num_devices_(devices.size()),
       stages_(impedance_period_stages()) {
   // The buses several devices share: one BusShare each, a port per device with its filters;
-  // the first device on a bus sends the SYNC; its managed devices share one NMT master.
+  // the first device on a bus sends the SYNC; its managed devices share one NMT master, which
+  // knows its minimal devices too (it then addresses every command).
   static_assert(static_cast<std::size_t>(kMaxLoopDevices) <= hal::kMaxNmtDevices);
   std::array<hal::Bus*, kMaxLoopDevices> port{};
   std::array<hal::NmtMaster*, kMaxLoopDevices> network{};
@@ -95,6 +96,10 @@ ControlLoop::ControlLoop(const core::Model& model, core::Data& data,
     while (&shares_[s]->bus() != devices[i].bus) ++s;
     port[i] = &shares_[s]->add_port(hal::controller_filters(devices[i].instrument->config()));
     network[i] = networks_[s].get();
+    // A minimal device's self-starting nodes share the network: no NMT broadcast may reach
+    // them (its managed peers' commands go to their own nodes, addressed).
+    const hal::DeviceConfig& config = devices[i].instrument->config();
+    if (!config.canopen.managed) networks_[s]->add_bystander(config);
   }
   // Every device's bodies: bound at most once over the loop (explicitly_bound_bodies() throws
   // for a body bound twice), the held body by one rigid binding at most.

@@ -33,7 +33,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       [&](std::int64_t now_ns) {
         bus.set_time_ns(now_ns);
         const numen::hal::DeviceSample s = device.sample(now_ns);
-        if (!finite(s.target)) numen::fuzz::finding("instrument_device: non-finite target pose");
+        if (!finite(s.pose)) numen::fuzz::finding("instrument_device: non-finite target pose");
         numen::core::Wrench w;
         w.force = numen::core::Vec3(1.0, -2.0, 0.5);
         numen::hal::AxisVector tau;

@@ -3,7 +3,8 @@
 // its own motors (its τ is the one a loop of that device alone computes); one device's fault
 // latches its safe state and, in the same period, the other's (FaultCause::kPeerFault;
 // docs/safety.md "Several devices"); managed devices on one bus share one NMT master (one
-// broadcast start-up when they start together; re-arming one never resets the other's nodes);
+// broadcast start-up when they start together; re-arming one never resets the other's nodes;
+// a minimal device's nodes on the bus get no NMT message at all);
 // no allocation in the period; bad wirings are refused.
 #include "numen/platform/control_loop.hpp"
 
@@ -108,8 +109,13 @@ class NmtTap final : public hal::Bus {
 struct Rig {
   /// `startup_timeout_ms`: both instruments' CanopenConfig::startup_timeout_ms.
   Rig(bool managed, std::vector<int> devices_in_loop, std::uint32_t startup_timeout_ms = 1000)
-      : configs{with_startup_timeout(instrument_config(1, managed, 0.0), startup_timeout_ms),
-                with_startup_timeout(instrument_config(11, managed, 0.1), startup_timeout_ms)},
+      : Rig(std::array<bool, 2>{managed, managed}, std::move(devices_in_loop),
+            startup_timeout_ms) {}
+  /// `managed[i]`: instrument i's protocol (the managed stack, or the minimal protocol).
+  Rig(std::array<bool, 2> managed, std::vector<int> devices_in_loop,
+      std::uint32_t startup_timeout_ms = 1000)
+      : configs{with_startup_timeout(instrument_config(1, managed[0], 0.0), startup_timeout_ms),
+                with_startup_timeout(instrument_config(11, managed[1], 0.1), startup_timeout_ms)},
         share(bus.device()),
         emulators{hal::DeviceEmulator{configs[0]}, hal::DeviceEmulator{configs[1]}},
         instruments{hal::InstrumentDevice{configs[0]}, hal::InstrumentDevice{configs[1]}},
@@ -354,6 +360,39 @@ TEST(ControlLoopDevices, ReArmingOneManagedDeviceNeverResetsTheOthersNodes) {
   EXPECT_EQ(rig.loop.device(0).report().latches, 0u);
   EXPECT_EQ(rig.loop.device(0).first_fault(), nullptr);
   EXPECT_LT(periods, 100);  // reset, boot-ups, start, the first operational heartbeats
+}
+
+TEST(ControlLoopDevices, AMinimalDevicesNodesGetNoNmtFromItsManagedPeer) {
+  // A minimal device (self-starting encoders on nodes 1-5, no NMT of its own) and a managed
+  // one (nodes 11-15) on one bus. The managed device's start-up asks for the reset
+  // communication and the start of all its nodes; the bus's NMT master knows the minimal
+  // device is there, so neither goes out as a broadcast (node id 0 would reset the minimal
+  // device's encoders and restart their PDOs mid-run): both are addressed to nodes 11-15, and
+  // no NMT message names node 0 or nodes 1-5. The minimal device drives from its first
+  // sample and keeps its encoders and torque through its peer's whole start-up; no allocation.
+  Rig rig(std::array<bool, 2>{false, true}, {0, 1});
+  numen::test::AllocationGuard guard;
+  int minimal_torque = 0;
+  int periods = 0;
+  for (; periods < 200 && rig.loop.first_torque_period(1) < 0; ++periods) {
+    rig.period();
+    const platform::PeriodReport& r0 = rig.loop.period_data(0).report;
+    if (rig.loop.first_torque_period(0) < 0) continue;
+    ASSERT_TRUE(r0.sample_valid) << "minimal device without its encoders in period " << periods;
+    ASSERT_TRUE(r0.torque_commanded) << "minimal device without torque in period " << periods;
+    ++minimal_torque;
+  }
+  EXPECT_EQ(guard.count(), 0);
+  ASSERT_GE(rig.loop.first_torque_period(1), 0);  // the managed device started and drives
+  EXPECT_EQ(rig.loop.device(1).report().startup.phase, hal::StartupPhase::kOperational);
+  EXPECT_LE(rig.loop.first_torque_period(0), 2);  // the minimal device drove from the start
+  EXPECT_GT(minimal_torque, 10);
+  EXPECT_EQ(rig.tap.sent(), (std::vector<std::pair<int, int>>{{0x82, 11}, {0x82, 12}, {0x82, 13},
+                                                              {0x82, 14}, {0x82, 15}, {0x01, 11},
+                                                              {0x01, 12}, {0x01, 13}, {0x01, 14},
+                                                              {0x01, 15}}));
+  for (int a = 0; a < 5; ++a)
+    EXPECT_EQ(rig.emulators[1].node_state(a), hal::NmtState::kOperational) << "node " << 11 + a;
 }
 
 TEST(ControlLoopDevices, RefusesManagedDevicesOneBusCannotHold) {

@@ -129,7 +129,7 @@ TEST(ControlLoop, EndPeriodSetsTheTargetFromTheDeviceAndStepsOnce) {
   const Pose expected = rig.expected_target();
   EXPECT_LT((rig.data.target.position - expected.position).norm(), 1e-12);
   EXPECT_LT(rig.data.target.orientation.angularDistance(expected.orientation), 1e-9);
-  EXPECT_EQ(rig.data.target.position, rig.device.last_sample().target.position);
+  EXPECT_EQ(rig.data.target.position, rig.device.last_sample().pose.position);
   EXPECT_EQ(rig.loop.counters().periods, 1u);
   EXPECT_EQ(rig.loop.counters().periods_zero_torque, 0u);
   EXPECT_EQ(rig.loop.step_time().count(), 1);

@@ -44,9 +44,9 @@ int NmtMaster::add_device(const DeviceConfig& config) {
   const std::string dev = "device '" + config.name + "'";
   const CanopenConfig& co = config.canopen;
   if (!co.managed) throw std::invalid_argument(dev + ": the NMT master needs canopen.managed = true");
-  if (num_devices_ >= kMaxNmtDevices)
+  if (num_devices_ + num_bystanders_ >= kMaxNmtDevices)
     throw std::invalid_argument(dev + ": more than " + std::to_string(kMaxNmtDevices) +
-                                " managed devices on one bus");
+                                " devices on one bus");
   const std::int64_t heartbeat_ns =
       static_cast<std::int64_t>(co.controller_heartbeat_period_ms) * 1'000'000;
   if (heartbeat_) {
@@ -87,6 +87,16 @@ int NmtMaster::add_device(const DeviceConfig& config) {
   devices_[num_devices_] = slot;
   names_[num_devices_] = config.name;
   return static_cast<int>(num_devices_++);
+}
+
+void NmtMaster::add_bystander(const DeviceConfig& config) {
+  const std::string dev = "device '" + config.name + "'";
+  if (config.canopen.managed)
+    throw std::invalid_argument(dev + ": a managed device is add_device()'s, not a bystander");
+  if (num_devices_ + num_bystanders_ >= kMaxNmtDevices)
+    throw std::invalid_argument(dev + ": more than " + std::to_string(kMaxNmtDevices) +
+                                " devices on one bus");
+  ++num_bystanders_;
 }
 
 bool NmtMaster::request(int device, NmtCommand command, std::uint8_t node_id) noexcept {
@@ -151,9 +161,11 @@ IoStatus NmtMaster::flush(std::int64_t now_ns, Bus& bus) noexcept {
   for (std::size_t k = 0; k < num_ordered_; ++k) {
     const NmtCommand command = order_[k];
     const Requests& r = requests_[slot_of(command)];
-    bool every_device = true;
+    // The whole network asked for it, and every node on it is a managed device's: one
+    // message to all nodes (with a bystander on the bus, node id 0 would reach its nodes too).
+    bool every_device = num_bystanders_ == 0;
     for (std::size_t d = 0; d < num_devices_; ++d) every_device = every_device && r.whole[d];
-    if (every_device) {  // the whole network asked for it: one message to all nodes
+    if (every_device) {
       status = worst(status, send_command(command, kNmtAllNodes, now_ns, bus, -1));
       continue;
     }

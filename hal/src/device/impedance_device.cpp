@@ -15,7 +15,6 @@ namespace numen::hal {
 ImpedanceDevice::ImpedanceDevice(InstrumentDevice& instrument, Bus& bus)
     : Device(bus), instrument_(&instrument) {
   sent_.torque = AxisVector::Zero(instrument.num_axes());
-  passivity_q_ = AxisVector::Zero(instrument.num_axes());
   passivity_rate_ = AxisVector::Zero(instrument.num_axes());
   const DeviceConfig& c = instrument.config();
   // validate() bounds both; a hand-built config outside them gets no ramp rather than r = 0.
@@ -70,19 +69,14 @@ std::uint32_t ImpedanceDevice::gate(std::span<const double> torques) noexcept {
 
 void ImpedanceDevice::control_passivity(std::uint32_t open) noexcept {
   if (passivity_.num_axes() == 0) return;
-  const DeviceConfig& config = instrument_->config();
   const int n = instrument_->num_axes();
-  // Its rate: the backward difference of this period's axis values (Hannaford & Ryu's), not
-  // the filtered q̇ (docs/passivity.md "Passivity controller": the filter's lag hides the
-  // energy a render produces). 0 for the first valid sample after an invalid one.
-  const AxisVector& q = sample().q;
-  const double dt = config.control_period_s;
-  for (int i = 0; i < n; ++i) {
-    const bool wraps = config.axes[static_cast<std::size_t>(i)].wraps;  // across ±π: the short way
-    passivity_rate_[i] = passivity_primed_ ? axis_difference(q[i], passivity_q_[i], wraps) / dt : 0.0;
-    passivity_q_[i] = q[i];
-  }
-  passivity_primed_ = sample().valid;
+  // Its port's flow: the period's displacement of the axis values the sample decoded
+  // (DeviceSample::dq) over the period T (Hannaford & Ryu's), not the filtered q̇
+  // (docs/passivity.md "Passivity controller": the filter's lag hides the energy a render
+  // produces). 0 for the first valid sample after an invalid one.
+  const AxisVector& dq = sample().dq;
+  const double dt = instrument_->config().control_period_s;
+  for (int i = 0; i < n; ++i) passivity_rate_[i] = dq[i] / dt;
   // The observer and damper on the gated torques, before the clamp.
   if (open != 0)
     (void)passivity_.apply(std::span<double>(sent_.torque.data(), static_cast<std::size_t>(n)),
@@ -133,8 +127,9 @@ void ImpedanceDevice::end_read(std::int64_t now_ns, DeviceState& state) noexcept
   state.periods_since_accepted = s.periods_since_accepted;
   state.q = s.q;
   state.qdot = s.qdot;
+  state.dq = s.dq;
   state.num_links = s.num_links;
-  state.link_poses = s.link_targets;
+  state.link_poses = s.link_poses;
   state.link_twists = s.link_twists;
   for (int l = 0; l < s.num_links; ++l)
     state.link_jacobians[static_cast<std::size_t>(l)] = instrument_->link_jacobian(l);

@@ -75,7 +75,8 @@ void InstrumentDevice::reset() noexcept {
   last_sample_ = DeviceSample{};
   last_sample_.q = hold_;
   last_sample_.qdot = AxisVector::Zero(n_);
-  last_sample_.target = kinematics_->forward(hold_);
+  last_sample_.dq = AxisVector::Zero(n_);
+  last_sample_.pose = kinematics_->forward(hold_);
   for (int i = 0; i < n_; ++i)
     last_sample_.axis_faults[static_cast<std::size_t>(i)] = SampleFault::kNoData;
   last_sample_.faults = n_ > 0 ? SampleFault::kNoData : SampleFault::kNone;
@@ -84,14 +85,14 @@ void InstrumentDevice::reset() noexcept {
 
 void InstrumentDevice::evaluate_links(DeviceSample& s) noexcept {
   s.num_links = num_links_;
-  s.target = kinematics_->forward(s.q);
+  s.pose = kinematics_->forward(s.q);
   link_jacobians_[0] = kinematics_->jacobian(s.q);
   s.twist = twist_from_rates(link_jacobians_[0], s.qdot);
-  s.link_targets[0] = s.target;
+  s.link_poses[0] = s.pose;
   s.link_twists[0] = s.twist;
   for (int l = 1; l < num_links_; ++l) {
     const auto k = static_cast<std::size_t>(l);
-    s.link_targets[k] = kinematics_->link_pose(l, s.q);
+    s.link_poses[k] = kinematics_->link_pose(l, s.q);
     link_jacobians_[k] = kinematics_->link_jacobian(l, s.q);
     s.link_twists[k] = twist_from_rates(link_jacobians_[k], s.qdot);
   }
@@ -132,12 +133,12 @@ bool InstrumentDevice::on_frame(const CanFrame& frame) noexcept {
         ++counters_.frames_decoded;
         // The value and its range check, once, where it is decoded; a value that a newer
         // frame replaces before sample() keeps its range fault (superseded).
-        const double v = counts_to_value(a, counts);
+        const double q = counts_to_value(a, counts);
         if (st.pending) st.superseded |= st.pending_range;
         st.pending = true;
         st.malformed = false;
-        st.pending_value = v;
-        st.pending_range = check_range(limits_[static_cast<std::size_t>(i)], v);
+        st.pending_q = q;
+        st.pending_range = check_range(limits_[static_cast<std::size_t>(i)], q);
         st.pending_stamp_ns = frame.timestamp_ns;
         break;
       }
@@ -164,6 +165,8 @@ bool InstrumentDevice::on_frame(const CanFrame& frame) noexcept {
 
 DeviceSample InstrumentDevice::sample(std::int64_t now_ns) noexcept {
   DeviceSample& s = last_sample_;
+  // The displacement's base: the last sample's values, if that sample was valid.
+  const bool moved_from_valid = s.valid;
   s.time_ns = now_ns;
   s.faults = SampleFault::kNone;
   s.axis_faults = {};
@@ -180,20 +183,20 @@ DeviceSample InstrumentDevice::sample(std::int64_t now_ns) noexcept {
       // The range was checked where the value was decoded (on_frame); here its freshness and
       // its jump from the last accepted value (check_sample()'s rule: a non-finite value is
       // checked for nothing else).
-      const double v = st.pending_value;
+      const double q = st.pending_q;
       const FaultMask c =
           ((st.pending_range & SampleFault::kNonFinite) != 0
                ? st.pending_range
                : st.pending_range | check_fresh(lim, st.pending_stamp_ns, now_ns) |
-                     check_jump(lim, v, st.pending_stamp_ns, st.has_value ? &st.last : nullptr)) |
+                     check_jump(lim, q, st.pending_stamp_ns, st.has_value ? &st.last : nullptr)) |
           st.superseded;
       if (c == SampleFault::kNone) {
         if (use_foaw_) {
-          foaws_[k].update(v, st.pending_stamp_ns);
+          foaws_[k].update(q, st.pending_stamp_ns);
         } else {
-          rates_[k].update(v, st.pending_stamp_ns);
+          rates_[k].update(q, st.pending_stamp_ns);
         }
-        st.last = AcceptedValue{v, st.pending_stamp_ns};
+        st.last = AcceptedValue{q, st.pending_stamp_ns};
         st.has_value = true;
         accepted = true;
         ++counters_.values_accepted;
@@ -234,7 +237,9 @@ DeviceSample InstrumentDevice::sample(std::int64_t now_ns) noexcept {
       f |= SampleFault::kNoData;
       ready = false;
     }
-    s.q[i] = st.has_value ? st.last.value : hold_[i];
+    const double q = st.has_value ? st.last.q : hold_[i];
+    s.dq[i] = moved_from_valid ? axis_difference(q, s.q[i], config_.axes[k].wraps) : 0.0;
+    s.q[i] = q;
     s.qdot[i] = use_foaw_ ? foaws_[k].rate() : rates_[k].rate();
     if (accepted) {
       st.periods_since_accepted = 0;

@@ -42,7 +42,7 @@ DeviceSupervision ManagedDevice::supervise(std::int64_t now_ns, bool overrun) no
   m.update(now_ns);
   SafetyInputs in;
   const auto n = static_cast<std::size_t>(instrument_->num_axes());
-  in.periods_since_fresh = std::span<const std::uint32_t>(sample.periods_since_accepted.data(), n);
+  in.periods_since_accepted = std::span<const std::uint32_t>(sample.periods_since_accepted.data(), n);
   in.axis_faults = std::span<const FaultMask>(sample.axis_faults.data(), n);
   in.heartbeats = m.heartbeats();
   in.emcy_faults = m.emcy_log().counters().faults;

@@ -141,7 +141,7 @@ FaultRecord SafetySupervisor::find_present(const SafetyInputs& in,
     p.value = value;
     return p;
   };
-  if (in.periods_since_fresh.size() < n_ || in.axis_faults.size() < n_ ||
+  if (in.periods_since_accepted.size() < n_ || in.axis_faults.size() < n_ ||
       in.drives.size() > kMaxSupervisedDrives) {
     return found(FaultCause::kBadInput, 0, 0.0);
   }
@@ -175,7 +175,7 @@ FaultRecord SafetySupervisor::find_present(const SafetyInputs& in,
     const FaultMask m = in.axis_faults[a];
     for (const SampleFaultCause& c : kSampleFaultCauses)
       if (m & c.bit) return found(c.cause, a, m);
-    const std::uint32_t age = in.periods_since_fresh[a];
+    const std::uint32_t age = in.periods_since_accepted[a];
     if ((m & SampleFault::kNoData) || age >= settings_.encoder_timeout_periods) {
       return found(FaultCause::kEncoderTimeout, a, age);
     }
@@ -200,7 +200,7 @@ LifecycleUpdate SafetySupervisor::update(std::int64_t now_ns, const SafetyInputs
   };
 
   // Inputs that do not match the configuration: missing axes read as "no data".
-  const bool bad_input = in.periods_since_fresh.size() < n_ || in.axis_faults.size() < n_ ||
+  const bool bad_input = in.periods_since_accepted.size() < n_ || in.axis_faults.size() < n_ ||
                          in.drives.size() > kMaxSupervisedDrives;
   if (bad_input && !bad_input_prev_) event(FaultCause::kBadInput, 0, 0.0);
   bad_input_prev_ = bad_input;
@@ -264,8 +264,8 @@ LifecycleUpdate SafetySupervisor::update(std::int64_t now_ns, const SafetyInputs
   for (std::size_t a = 0; a < n_; ++a) {
     const FaultMask m = a < in.axis_faults.size() ? in.axis_faults[a]
                                                   : static_cast<FaultMask>(SampleFault::kNoData);
-    const std::uint32_t age = a < in.periods_since_fresh.size()
-                                  ? in.periods_since_fresh[a]
+    const std::uint32_t age = a < in.periods_since_accepted.size()
+                                  ? in.periods_since_accepted[a]
                                   : std::numeric_limits<std::uint32_t>::max();
     const FaultMask rising = static_cast<FaultMask>(m & ~prev_mask_[a]);
     for (const SampleFaultCause& c : kSampleFaultCauses)

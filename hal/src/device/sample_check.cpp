@@ -62,7 +62,7 @@ FaultMask check_jump(const AxisCheckLimits& limits, double value, std::int64_t s
   const double dt =
       stamp_ns > last->time_ns ? static_cast<double>(stamp_ns - last->time_ns) * 1e-9 : 0.0;
   const double allowed = limits.max_speed * dt + limits.jump_tolerance;
-  return std::abs(axis_difference(value, last->value, limits.wraps)) > allowed ? SampleFault::kJump
+  return std::abs(axis_difference(value, last->q, limits.wraps)) > allowed ? SampleFault::kJump
                                                                                : SampleFault::kNone;
 }
 

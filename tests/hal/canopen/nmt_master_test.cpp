@@ -2,7 +2,8 @@
 // masters. A command every device asks for all its nodes in one period is one broadcast; any
 // other is node-addressed to the nodes asked for, so one device's commands never reach another
 // device's nodes; the period's commands go out once every device has submitted; one controller
-// heartbeat per network; the wirings one network cannot hold are refused; no allocation.
+// heartbeat per network; with a minimal device's nodes on the network (a bystander) nothing is
+// broadcast; the wirings one network cannot hold are refused; no allocation.
 #include "numen/hal/canopen/nmt_master.hpp"
 
 #include <gtest/gtest.h>
@@ -178,6 +179,58 @@ TEST(NmtMaster, RefusesDevicesOneNetworkCannotHold) {
   EXPECT_EQ(nmt.add_device(managed_config(21, "c")), 2);
   EXPECT_EQ(nmt.add_device(managed_config(31, "d")), 3);
   EXPECT_THROW(nmt.add_device(managed_config(41, "e")), std::invalid_argument);
+}
+
+TEST(NmtMaster, WithAMinimalDeviceOnTheNetworkNothingIsBroadcast) {
+  // One managed device asks for the reset communication, then the start, of all its nodes —
+  // alone on its network that is one broadcast each (its start-up's frames as a lone master
+  // sends them). With a minimal device's self-starting nodes 11-15 on the network, node id 0
+  // would reach them too: each command goes to nodes 1-5, addressed, and to nothing else.
+  for (const bool bystander : {false, true}) {
+    hal::NmtMaster nmt;
+    hal::SimBus bus{hal::SimBusSettings{}};
+    ASSERT_EQ(nmt.add_device(managed_config(1, "managed")), 0);
+    if (bystander) {
+      hal::DeviceConfig minimal = managed_config(11, "minimal");
+      minimal.canopen.managed = false;
+      nmt.add_bystander(minimal);
+    }
+    EXPECT_EQ(nmt.num_bystanders(), bystander ? 1 : 0);
+    EXPECT_TRUE(nmt.request(0, hal::NmtCommand::kResetCommunication, hal::kNmtAllNodes));
+    EXPECT_EQ(nmt.submit(0, 0, bus.controller()), hal::IoStatus::kOk);
+    EXPECT_TRUE(nmt.request(0, hal::NmtCommand::kStartRemoteNode, hal::kNmtAllNodes));
+    EXPECT_EQ(nmt.submit(0, 1'000'000, bus.controller()), hal::IoStatus::kOk);
+    const std::vector<std::pair<int, int>> wire = nmt_of(sent(bus, 1'000'000));
+    if (!bystander) {
+      EXPECT_EQ(wire, (std::vector<std::pair<int, int>>{{kReset, 0}, {kStart, 0}}));
+      EXPECT_EQ(nmt.broadcasts(), 2u);
+      continue;
+    }
+    EXPECT_EQ(wire, (std::vector<std::pair<int, int>>{{kReset, 1}, {kReset, 2}, {kReset, 3},
+                                                      {kReset, 4}, {kReset, 5}, {kStart, 1},
+                                                      {kStart, 2}, {kStart, 3}, {kStart, 4},
+                                                      {kStart, 5}}));
+    EXPECT_EQ(nmt.broadcasts(), 0u);
+    EXPECT_EQ(nmt.counters(0).nmt_sent, 10u);
+  }
+}
+
+TEST(NmtMaster, RefusesBystandersItCannotHold) {
+  // A managed device is not a bystander; bystanders count against the network's devices.
+  hal::NmtMaster nmt;
+  EXPECT_THROW(nmt.add_bystander(managed_config(1, "managed")), std::invalid_argument);
+  hal::DeviceConfig minimal = managed_config(1, "minimal");
+  minimal.canopen.managed = false;
+  for (int i = 0; i < 3; ++i) nmt.add_bystander(minimal);
+  EXPECT_EQ(nmt.add_device(managed_config(11, "last")), 0);
+  EXPECT_THROW(nmt.add_bystander(minimal), std::invalid_argument);
+  EXPECT_THROW(nmt.add_device(managed_config(21, "fifth")), std::invalid_argument);
+  try {
+    nmt.add_bystander(managed_config(21, "m"));
+    FAIL() << "no exception";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_STREQ(e.what(), "device 'm': a managed device is add_device()'s, not a bystander");
+  }
 }
 
 TEST(NmtMaster, RequestsAndSubmitsNeverAllocate) {

@@ -155,7 +155,7 @@ TEST(ImpedanceDevice, ReadReturnsTheCheckedSampleAndItsJacobiansAsTheState) {
   EXPECT_GT(s.qdot[TrocarKinematics::kDepth], 0.0);  // 0.1 mm in one period: the rate moved
   for (int l = 0; l < s.num_links; ++l) {
     const auto k = static_cast<std::size_t>(l);
-    EXPECT_EQ(s.link_poses[k].position, d.link_targets[k].position);
+    EXPECT_EQ(s.link_poses[k].position, d.link_poses[k].position);
     EXPECT_EQ(s.link_twists[k].linear, d.link_twists[k].linear);
     const Jacobian j = l == 0 ? r.instrument.kinematics().jacobian(d.q)
                               : r.instrument.kinematics().link_jacobian(l, d.q);

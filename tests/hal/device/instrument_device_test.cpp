@@ -49,7 +49,7 @@ TEST(InstrumentDevice, NotValidBeforeEveryAxisHasASample) {
   EXPECT_FALSE(s.valid);
   EXPECT_FALSE(s.ready);
   EXPECT_TRUE(s.faults & SampleFault::kNoData);
-  EXPECT_TRUE(s.target.position.allFinite());
+  EXPECT_TRUE(s.pose.position.allFinite());
   // Four of five axes.
   for (int i = 0; i < 4; ++i) {
     const AxisConfig& a = dev.config().axes[static_cast<std::size_t>(i)];
@@ -76,7 +76,7 @@ TEST(InstrumentDevice, TargetIsTheForwardKinematicsOfTheDecodedAxes) {
     EXPECT_NEAR(s.q[i], kQ0[i], quant + 1e-15) << i;
   }
   const numen::core::Pose p = dev.kinematics().forward(s.q);
-  EXPECT_TRUE(s.target.position.isApprox(p.position, 1e-15));
+  EXPECT_TRUE(s.pose.position.isApprox(p.position, 1e-15));
   EXPECT_EQ(dev.counters().values_accepted, 5u);
   EXPECT_EQ(dev.counters().frames_decoded, 5u);
 }
@@ -278,7 +278,7 @@ TEST(InstrumentDevice, OutOfRangeIsRejectedAndTheTargetHeld) {
   EXPECT_TRUE(s.ready);
   EXPECT_TRUE(s.axis_faults[TK::kDepth] & SampleFault::kOutOfRange);
   EXPECT_EQ(s.q[TK::kDepth], good.q[TK::kDepth]);
-  EXPECT_EQ(s.target.position, good.target.position);
+  EXPECT_EQ(s.pose.position, good.pose.position);
   EXPECT_EQ(dev.counters().rejected_out_of_range, 1u);
   EXPECT_EQ(dev.counters().values_rejected, 1u);
 }
@@ -324,6 +324,53 @@ TEST(InstrumentDevice, JumpIsRejectedUntilTimeMakesItPlausible) {
   EXPECT_EQ(dev.counters().rejected_jump, 9u);
 }
 
+TEST(InstrumentDevice, TheDisplacementIsThePeriodsStepOfTheValuesAndZeroAfterAnInvalidSample) {
+  // DeviceSample::dq, the passivity port's flow × T: q of this sample − q of the last one,
+  // computed where the values are decoded; 0 when the last sample was not valid.
+  DeviceConfig c = trocar_config();
+  c.control_period_s = 1e-3;  // max age 3 ms
+  InstrumentDevice dev(c);
+  double q0_set[5];
+  for (int i = 0; i < 5; ++i) q0_set[i] = kQ0[i];
+  q0_set[3] = 3.13;  // roll (wraps) near +π: it crosses it below
+  feed(dev, q0_set, 0);
+  DeviceSample s = dev.sample(0);
+  ASSERT_TRUE(s.valid);
+  EXPECT_EQ(s.dq.norm(), 0.0);  // the sample before was not valid (no data)
+  const AxisVector q0 = s.q;
+  double q1[5];
+  for (int i = 0; i < 5; ++i) q1[i] = q0_set[i] + 1e-3;
+  feed(dev, q1, kMs);
+  s = dev.sample(kMs);
+  ASSERT_TRUE(s.valid);
+  for (int i = 0; i < 5; ++i) EXPECT_EQ(s.dq[i], s.q[i] - q0[i]) << i;
+  EXPECT_GT(s.dq[0], 0.0);
+  const AxisVector q1_used = s.q;
+  q1[3] = -3.14;  // across +π: 12 mrad the short way
+  feed(dev, q1, 2 * kMs);
+  s = dev.sample(2 * kMs);
+  ASSERT_TRUE(s.valid);
+  EXPECT_NEAR(s.dq[3], s.q[3] - q1_used[3] + 2.0 * std::numbers::pi, 1e-12);  // not −6.27
+  EXPECT_GT(s.dq[3], 0.0);
+  EXPECT_EQ(s.dq[0], 0.0);  // the other axes did not move
+  s = dev.sample(3 * kMs);  // nothing new: the values held, no displacement
+  ASSERT_TRUE(s.valid);
+  EXPECT_EQ(s.dq.norm(), 0.0);
+  s = dev.sample(6 * kMs);  // stale
+  ASSERT_FALSE(s.valid);
+  EXPECT_EQ(s.dq.norm(), 0.0);
+  double q2[5];
+  for (int i = 0; i < 5; ++i) q2[i] = q1[i] + 1e-3;
+  feed(dev, q2, 7 * kMs);
+  s = dev.sample(7 * kMs);
+  ASSERT_TRUE(s.valid);
+  EXPECT_EQ(s.dq.norm(), 0.0);  // moved, but from an invalid sample: no step is booked
+  feed(dev, q1, 8 * kMs);
+  s = dev.sample(8 * kMs);
+  ASSERT_TRUE(s.valid);
+  EXPECT_LT(s.dq[0], 0.0);
+}
+
 TEST(InstrumentDevice, StaleWhenNoFrameArrivesAndVelocityDropsToZero) {
   DeviceConfig c = trocar_config();
   c.control_period_s = 1e-3;  // max age 3 ms
@@ -336,7 +383,7 @@ TEST(InstrumentDevice, StaleWhenNoFrameArrivesAndVelocityDropsToZero) {
   DeviceSample s = dev.sample(kMs);
   ASSERT_TRUE(s.valid);
   EXPECT_NE(s.qdot[0], 0.0);
-  const numen::core::Pose held = s.target;
+  const numen::core::Pose held = s.pose;
   for (int k = 2; k <= 4; ++k) {
     s = dev.sample(k * kMs);  // nothing new: fresh until 3 ms old
     EXPECT_TRUE(s.valid) << k;
@@ -344,7 +391,7 @@ TEST(InstrumentDevice, StaleWhenNoFrameArrivesAndVelocityDropsToZero) {
   s = dev.sample(5 * kMs);
   EXPECT_FALSE(s.valid);
   EXPECT_EQ(s.faults, SampleFault::kStale);
-  EXPECT_EQ(s.target.position, held.position);
+  EXPECT_EQ(s.pose.position, held.position);
   EXPECT_EQ(s.qdot.norm(), 0.0);
   EXPECT_EQ(s.twist.linear.norm(), 0.0);
   EXPECT_EQ(dev.counters().rejected_stale, 5u);  // one per axis
@@ -531,17 +578,17 @@ TEST(InstrumentDeviceLinks, LinkTargetsAreTheLinkPosesOfTheDecodedAxes) {
   for (int l = 0; l < 5; ++l) {
     const auto m = static_cast<std::size_t>(l);
     const Pose p = k.link_pose(l, s.q);
-    EXPECT_EQ(s.link_targets[m].position, p.position) << k.link_name(l);
-    EXPECT_EQ(s.link_targets[m].orientation.coeffs(), p.orientation.coeffs()) << k.link_name(l);
+    EXPECT_EQ(s.link_poses[m].position, p.position) << k.link_name(l);
+    EXPECT_EQ(s.link_poses[m].orientation.coeffs(), p.orientation.coeffs()) << k.link_name(l);
     const numen::core::Twist t = twist_from_rates(k.link_jacobian(l, s.q), s.qdot);
     EXPECT_EQ(s.link_twists[m].linear, t.linear) << k.link_name(l);
     EXPECT_EQ(s.link_twists[m].angular, t.angular) << k.link_name(l);
   }
-  EXPECT_EQ(s.link_targets[0].position, s.target.position);
+  EXPECT_EQ(s.link_poses[0].position, s.pose.position);
   EXPECT_EQ(s.link_twists[0].linear, s.twist.linear);
   // The links are distinct frames: the forearm's origin is the elbow, 0.14 m from the turret.
   EXPECT_NEAR(
-      (s.link_targets[PK::kLinkForearm].position - s.link_targets[PK::kLinkTurret].position).norm(),
+      (s.link_poses[PK::kLinkForearm].position - s.link_poses[PK::kLinkTurret].position).norm(),
       0.14, 1e-12);
   EXPECT_EQ(s.link_twists[PK::kLinkTurret].linear.norm(), 0.0);  // fixed origin
   EXPECT_GT(s.link_twists[PK::kLinkStylus].angular.norm(), 0.1);

@@ -149,7 +149,7 @@ struct ClosedLoopRig {
     monitor.poll(t);
     out = master.update(statusword);
     SafetyInputs in;
-    in.periods_since_fresh = std::span<const std::uint32_t>(s.periods_since_accepted.data(), 5);
+    in.periods_since_accepted = std::span<const std::uint32_t>(s.periods_since_accepted.data(), 5);
     in.axis_faults = std::span<const FaultMask>(s.axis_faults.data(), 5);
     in.heartbeats = monitor.consumers();
     in.emcy_faults = emcy.counters().faults;

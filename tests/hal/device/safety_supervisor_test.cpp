@@ -72,7 +72,7 @@ struct SupervisorRig {
     }
     hb.poll(t);
     SafetyInputs in;
-    in.periods_since_fresh = std::span<const std::uint32_t>(age.data(), axis_entries);
+    in.periods_since_accepted = std::span<const std::uint32_t>(age.data(), axis_entries);
     in.axis_faults = std::span<const FaultMask>(mask.data(), axis_entries);
     in.heartbeats = hb.consumers();
     in.emcy_faults = emcy.counters().faults;

@@ -127,8 +127,8 @@ TEST(DeviceEmulator, ControllerSamplesThePoseTheEmulatorWasGiven) {
   AxisVector qv(5);
   for (int i = 0; i < 5; ++i) qv[i] = q[i];
   const numen::core::Pose truth = rig.device.kinematics().forward(qv);
-  EXPECT_LT((s.target.position - truth.position).norm(), 1e-4);  // 0.25 m × 1/5215 rad
-  EXPECT_LT(s.target.orientation.angularDistance(truth.orientation), 1e-3);
+  EXPECT_LT((s.pose.position - truth.position).norm(), 1e-4);  // 0.25 m × 1/5215 rad
+  EXPECT_LT(s.pose.orientation.angularDistance(truth.orientation), 1e-3);
   // Sample age: TPDO delivered at t − P/2 + latency, well inside 3 periods.
   EXPECT_EQ(rig.device.counters().rejected_stale, 0u);
 }
@@ -201,7 +201,7 @@ TEST(DeviceEmulator, OutOfRangeValueIsRejectedAndTheTargetHeld) {
   EXPECT_FALSE(s.valid);
   EXPECT_TRUE(s.axis_faults[TK::kDepth] & SampleFault::kOutOfRange);
   EXPECT_EQ(s.q[TK::kDepth], good.q[TK::kDepth]);
-  EXPECT_EQ(s.target.position, good.target.position);
+  EXPECT_EQ(s.pose.position, good.pose.position);
   EXPECT_GE(rig.device.counters().rejected_out_of_range, 1u);
   rig.emulator.set_axis_values(q);
   rig.period(5, Wrench{});
@@ -220,7 +220,7 @@ TEST(DeviceEmulator, SilentDeviceBecomesStaleAndTheTargetStays) {
   int first_stale = -1;
   for (int k = 4; k < 20; ++k) {
     const DeviceSample s = rig.period(k, Wrench{});
-    EXPECT_EQ(s.target.position, good.target.position) << k;
+    EXPECT_EQ(s.pose.position, good.pose.position) << k;
     if (!s.valid && first_stale < 0) {
       first_stale = k;
       EXPECT_EQ(s.faults, SampleFault::kStale);
@@ -251,7 +251,7 @@ TEST(DeviceEmulator, JumpIsRejectedAndCounted) {
   const DeviceSample s = rig.period(4, Wrench{});
   EXPECT_TRUE(s.axis_faults[TK::kPivotY] & SampleFault::kJump);
   EXPECT_EQ(s.q[TK::kPivotY], good.q[TK::kPivotY]);
-  EXPECT_EQ(s.target.position, good.target.position);
+  EXPECT_EQ(s.pose.position, good.pose.position);
   EXPECT_EQ(rig.device.counters().rejected_jump, 1u);
 }
 
@@ -266,7 +266,7 @@ DeviceCounters run_faulty(const SimBusSettings& settings, int periods, EmulatorR
   std::vector<std::array<double, 5>> sent{{q[0], q[1], q[2], q[3], q[4]}};
   for (int k = 0; k < periods; ++k) {
     const DeviceSample s = rig.period(k, Wrench{});
-    EXPECT_TRUE(s.target.position.allFinite());
+    EXPECT_TRUE(s.pose.position.allFinite());
     if (k > 0 && prev.ready) {
       for (int i = 0; i < 5; ++i) {
         const auto ui = static_cast<std::size_t>(i);
@@ -348,7 +348,7 @@ Trace run_trace(std::uint64_t seed) {
     w.force = Vec3(std::sin(0.01 * k), 0.5, -0.2);
     const DeviceSample smp = rig.period(k, w);
     for (int i = 0; i < 5; ++i) tr.values.push_back(smp.q[i]);
-    tr.values.push_back(smp.target.position.x());
+    tr.values.push_back(smp.pose.position.x());
     tr.values.push_back(smp.twist.angular.z());
     tr.values.push_back(rig.emulator.last_torques()[0]);
     tr.faults.push_back(smp.faults);
@@ -412,8 +412,8 @@ TEST(DeviceEmulator, PoseTrackerEndToEnd) {
   AxisVector qv(6);
   for (int i = 0; i < 6; ++i) qv[i] = q[i];
   const numen::core::Pose truth = PoseTrackerKinematics().forward(qv);
-  EXPECT_LT((s.target.position - truth.position).norm(), 1e-6);
-  EXPECT_LT(s.target.orientation.angularDistance(truth.orientation), 3e-6);
+  EXPECT_LT((s.pose.position - truth.position).norm(), 1e-6);
+  EXPECT_LT(s.pose.orientation.angularDistance(truth.orientation), 3e-6);
   EXPECT_EQ(rig.emulator.counters().rpdos, 0u);  // no drives: nothing commanded
 }
 
@@ -433,11 +433,11 @@ TEST(DeviceEmulator, PhantomEndToEnd) {
   for (int i = 0; i < 6; ++i) qv[i] = q[i];
   const PhantomKinematics truth_k(c.phantom, c.tool_offset);
   const numen::core::Pose truth = truth_k.forward(qv);
-  EXPECT_LT((s.target.position - truth.position).norm(), 1e-5);
-  EXPECT_LT(s.target.orientation.angularDistance(truth.orientation), 1e-3);
+  EXPECT_LT((s.pose.position - truth.position).norm(), 1e-5);
+  EXPECT_LT(s.pose.orientation.angularDistance(truth.orientation), 1e-3);
   ASSERT_EQ(s.num_links, 5);
   const numen::core::Pose elbow = truth_k.link_pose(PhantomKinematics::kLinkForearm, qv);
-  EXPECT_LT((s.link_targets[PhantomKinematics::kLinkForearm].position - elbow.position).norm(),
+  EXPECT_LT((s.link_poses[PhantomKinematics::kLinkForearm].position - elbow.position).norm(),
             1e-5);
   // Link wrenches -> RPDOs on the three drives only -> the emulated drives.
   std::array<Wrench, PhantomKinematics::kNumLinks> w{};

@@ -494,6 +494,22 @@ duration = 0.25
   EXPECT_NEAR(s.trajectory.at(0.0).pose.position.y(), 0.0, 1e-12);  // the left one's own
 }
 
+TEST(SceneDevices, AnAdmittanceSceneOfTwoDevicesIsRefusedAtTheSecond) {
+  // One admittance device per loop (docs/safety.md "Admittance devices": core::Data has one
+  // measured wrench, on the held body): a second device of an admittance scene is refused at
+  // its table, naming it.
+  TempDir dir;
+  const std::string two = replace(
+      replace(numen::test::kTwoDeviceScene, "dt = 0.001\n", "dt = 0.001\ncoupling = \"admittance\"\n"),
+      "attach = \"left_tool\"\n", "attach = \"left_tool\"\n[device.admittance]\n");
+  const InputError e = load_error(dir, two, "admittance.toml");
+  EXPECT_EQ(e.key(), "device[1]") << e.what();
+  EXPECT_EQ(e.line(), line_of(two, "[[device]]", 2)) << e.what();
+  EXPECT_NE(e.message().find("an admittance scene (coupling = \"admittance\") has one device"),
+            std::string::npos)
+      << e.what();
+}
+
 TEST(SceneDevices, AManipulatorTheRecordingDoesNotHaveIsLocated) {
   TempDir dir;
   const std::string jig = replace(numen::test::kTwoDeviceScene, R"(source = "scripted"

@@ -11,7 +11,9 @@
 ///   submits (submit()). When every device of the network has submitted, the period's commands
 ///   go out in the order first requested:
 ///     - a command every device of the network asked for all of its nodes: one broadcast
-///       (node id 0), as one device alone sends its start-up's reset communication and start;
+///       (node id 0), as one device alone sends its start-up's reset communication and start
+///       — unless the network also carries a device it does not manage (add_bystander(): the
+///       minimal protocol's self-starting nodes), which a broadcast would reach too;
 ///     - otherwise one node-addressed message per node asked for (ascending node id), so
 ///       re-arming one device never resets, stops or starts another device's nodes;
 ///   then the controller's heartbeat when due.
@@ -60,6 +62,18 @@ class NmtMaster {
   /// or if its controller node id or heartbeat period differs from the first device's (one
   /// controller node per network). Construction only.
   int add_device(const DeviceConfig& config);
+
+  /// Registers a device on the network that this master does not manage (canopen.managed =
+  /// false: the minimal protocol, whose self-starting nodes no NMT command is meant for): from
+  /// then on no command is broadcast, every command is addressed to the nodes of the devices
+  /// that asked for it (CiA 301 §7.2.8.3.1: node id 0 reaches every node of the network, the
+  /// bystander's too — a reset communication would restart its encoders, an enter
+  /// pre-operational would stop their TPDOs). Throws std::invalid_argument naming the device if
+  /// `config` is managed, or if the network has kMaxNmtDevices devices (managed or not)
+  /// already. Construction only.
+  void add_bystander(const DeviceConfig& config);
+  /// Devices registered with add_bystander().
+  int num_bystanders() const noexcept { return static_cast<int>(num_bystanders_); }
 
   /// Asks for `command` to `node_id` (1–127; kNmtAllNodes: every node of `device`) in this
   /// period, sent once every device has submitted. A node asked for twice in a period gets one
@@ -114,6 +128,7 @@ class NmtMaster {
   std::array<DeviceSlot, kMaxNmtDevices> devices_{};
   std::array<std::string, kMaxNmtDevices> names_;  // for the messages of add_device()
   std::size_t num_devices_ = 0;
+  std::size_t num_bystanders_ = 0;  // devices on the network it does not manage: no broadcast
   std::array<std::int8_t, kMaxNodeId + 1> owner_ = make_owners();  // device per node, -1: none
   std::array<Requests, kCommands> requests_ = make_requests();
   std::array<NmtCommand, kCommands> order_{};  // commands in the order first requested

@@ -45,6 +45,9 @@ struct DeviceState {
   std::array<std::uint32_t, kMaxAxes> periods_since_accepted{};
   AxisVector q;     ///< Axis values, m or rad (the last accepted, held through a rejection).
   AxisVector qdot;  ///< Axis rates, m/s or rad/s (DeviceSample::qdot: the one estimate).
+  /// Axis displacements over the period, m or rad (DeviceSample::dq: the passivity port's flow
+  /// times T, 0 after a sample that was not valid).
+  AxisVector dq;
   // ---- impedance: links (num_links entries) ----
   int num_links = 0;  ///< Links of the kinematics, 1..kMaxLinks; 0 for an admittance device.
   /// Pose of each link, world (Kinematics::link_pose(l, q); link 0: the controlled frame).

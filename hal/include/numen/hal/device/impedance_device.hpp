@@ -17,9 +17,10 @@
 ///  - non-finite: a NaN or infinite τ on an allowed axis zeroes every axis (the managed stack
 ///    latches the safe state, FaultCause::kNonFiniteTorque);
 ///  - passivity controller (DeviceConfig::passivity enabled; passivity_controller.hpp): on
-///    the allowed axes of its mask, the observer books E_i −= T τ_i v_i (v_i: the backward
-///    difference of the axis value over the period, Hannaford & Ryu's rate, not the filtered
-///    DeviceSample::qdot) and, while E_i < 0, the damper −α v_i is added to τ_i. It runs
+///    the allowed axes of its mask, the observer books E_i −= T τ_i v_i (v_i = Δq_i / T, the
+///    axis's displacement over the period decoded with the sample, DeviceSample::dq:
+///    Hannaford & Ryu's flow, not the filtered DeviceSample::qdot) and, while E_i < 0, the
+///    damper −α v_i is added to τ_i. It runs
 ///    after the gate (a gated axis gets no damping) and before the clamp and the soft start,
 ///    so the clamp still bounds what is sent; what they take away is booked back into E
 ///    (PassivityController::sent());
@@ -168,11 +169,8 @@ class ImpedanceDevice : public Device {
   DeviceOutput output_;
   TorqueCounters torque_counters_;
   PassivityController passivity_;
-  // The passivity controller's rate: the last sample's axis values and their backward
-  // difference (primed: the last sample was valid).
-  AxisVector passivity_q_;
+  // The passivity controller's port flow this period: DeviceSample::dq / T per axis.
   AxisVector passivity_rate_;
-  bool passivity_primed_ = false;
   // Soft start: dt / T (0: off) and the writes since the ramp began (-1: armed, waiting for an
   // open gate; counting stops once r reached 1).
   double ramp_step_ = 0.0;

@@ -30,16 +30,17 @@ namespace numen::hal {
 
 /// The outcome of one InstrumentDevice::sample().
 struct DeviceSample {
-  /// True if every axis has an accepted value and no check failed this period: the target is
+  /// True if every axis has an accepted value and no check failed this period: the pose is
   /// fresh and plausible.
   bool valid = false;
-  /// True once every axis has had at least one accepted value (the target is meaningful; it
+  /// True once every axis has had at least one accepted value (the pose is meaningful; it
   /// may be held from an earlier period if `valid` is false).
   bool ready = false;
-  /// Controlled frame's target pose, world. Always finite; built from the last accepted axis
-  /// values (0 clamped into [min, max] for an axis without one).
-  core::Pose target;
-  /// Controlled frame's target twist, world: J(q) q̇. q̇ of an axis is the estimate of
+  /// Controlled frame's pose, world (hal's name for it: the loop binds it as the god-object's
+  /// target). Always finite; built from the last accepted axis values (0 clamped into
+  /// [min, max] for an axis without one). link_poses[0].
+  core::Pose pose;
+  /// Controlled frame's twist, world: J(q) q̇. q̇ of an axis is the estimate of
   /// DeviceConfig::velocity_estimator from the accepted values, bounded by the axis's
   /// max_speed: the backward difference, or it low-pass filtered at
   /// DeviceConfig::velocity_cutoff_hz (RateEstimator, rate_estimator.hpp), or the adaptive
@@ -48,19 +49,26 @@ struct DeviceSample {
   /// the estimator restarted) once the held value is stale.
   core::Twist twist;
   /// Number of links of the kinematics (Kinematics::num_links(), 1..kMaxLinks): entries
-  /// [0, num_links) of link_targets and link_twists are valid, the others are left default.
+  /// [0, num_links) of link_poses and link_twists are valid, the others are left default.
   int num_links = 1;
-  /// Target pose of each link, world: Kinematics::link_pose(l, q), from the same held axis
-  /// values as `target`. link_targets[0] == target.
-  std::array<core::Pose, kMaxLinks> link_targets{};
-  /// Target twist of each link, world, linear part at the link's origin: J_l(q) q̇ with
+  /// Pose of each link, world: Kinematics::link_pose(l, q), from the same held axis values as
+  /// `pose`. link_poses[0] == pose.
+  std::array<core::Pose, kMaxLinks> link_poses{};
+  /// Twist of each link, world, linear part at the link's origin: J_l(q) q̇ with
   /// J_l = Kinematics::link_jacobian(l, q). link_twists[0] == twist.
   std::array<core::Twist, kMaxLinks> link_twists{};
-  /// Axis values used for `target`, m or rad (n entries).
+  /// Axis values used for `pose`, m or rad (n entries).
   AxisVector q;
   /// Axis rates used for `twist`, m/s or rad/s (n entries): the estimates described at
-  /// `twist`, |q̇_i| <= axes[i].max_speed.
+  /// `twist`, |q̇_i| <= axes[i].max_speed. The one speed estimate of an axis.
   AxisVector qdot;
+  /// The period's displacement of each axis, m or rad (n entries): q of this sample minus q of
+  /// the last one (the short way across ±π on a wrapping axis), 0 when the last sample was not
+  /// valid (and after construction or reset()). Not a speed estimate: the motion of the values
+  /// the control periods used, from one period to the next — the flow Δq_i = v_i T of
+  /// the passivity observer's port (Hannaford & Ryu's E −= τ Δq; ImpedanceDevice::write()),
+  /// which must see every step the rendered torque was applied over, unfiltered.
+  AxisVector dq;
   /// Union of the failed checks over all axes this period (SampleFault bits).
   FaultMask faults = SampleFault::kNone;
   /// Failed checks per axis this period (entries >= n are 0).
@@ -68,7 +76,7 @@ struct DeviceSample {
   /// Per axis: sample() calls since the axis last accepted a value — 0 if it accepted one in
   /// this call; counted from construction / reset() while it has none (saturates at 2³²−1).
   /// An axis holding a not-yet-stale value still counts up: this is the encoder watchdog's
-  /// input (SafetyInputs::periods_since_fresh). Entries >= n are 0.
+  /// input (SafetyInputs::periods_since_accepted). Entries >= n are 0.
   std::array<std::uint32_t, kMaxAxes> periods_since_accepted{};
   /// `now_ns` given to sample().
   std::int64_t time_ns = 0;
@@ -181,7 +189,7 @@ class InstrumentDevice {
     // Range faults of values overwritten by a newer frame before sample() read them: a bad
     // value is a fault even if a good one follows within the period (docs/safety.md).
     FaultMask superseded = SampleFault::kNone;
-    double pending_value = 0.0;    // the pending frame's value, m or rad (counts_to_value)
+    double pending_q = 0.0;        // the pending frame's axis value, m or rad (counts_to_value)
     FaultMask pending_range = SampleFault::kNone;  // its range check, made where it was decoded
     std::int64_t pending_stamp_ns = 0;
     bool has_value = false;  // an accepted value exists

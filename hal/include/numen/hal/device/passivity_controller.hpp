@@ -8,7 +8,8 @@
 /// Port variables of axis i in period n (impedance causality: the device imposes the flow, the
 /// rendered environment answers with the effort):
 ///   v(n)  the axis rate (m/s or rad/s): ImpedanceDevice::write() gives the backward
-///         difference (q(n) − q(n−1))/T of the axis values, as the paper does;
+///         difference (q(n) − q(n−1))/T of the axis values, as the paper does — the period's
+///         displacement Δq the sample decoded (DeviceSample::dq) over T;
 ///   τ(n)  the axis torque the rendered environment sends to the device (N or N·m);
 ///   f(n) = −τ(n)  the effort the device's motion meets at the environment's port, so that
 ///         f·v is the power flowing INTO the rendered environment (a virtual spring being

@@ -64,7 +64,7 @@ struct SafetySettings : SupervisionSettings {
 struct SafetyInputs {
   /// Per axis (n entries): periods since the axis last had an accepted encoder frame
   /// (DeviceSample::periods_since_accepted; 0 = accepted this period).
-  std::span<const std::uint32_t> periods_since_fresh;
+  std::span<const std::uint32_t> periods_since_accepted;
   /// Per axis (n entries): the sample check's FaultMask this period (DeviceSample::
   /// axis_faults). kNoData marks an axis that has never had an accepted value.
   std::span<const FaultMask> axis_faults;

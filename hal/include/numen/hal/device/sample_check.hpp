@@ -52,7 +52,7 @@ AxisCheckLimits make_check_limits(const AxisConfig& axis, double max_sample_age_
 
 /// The last accepted value of an axis, for the jump check.
 struct AcceptedValue {
-  double value = 0.0;        ///< m or rad.
+  double q = 0.0;            ///< The axis value, m or rad.
   std::int64_t time_ns = 0;  ///< Bus timestamp of its frame.
 };
 
@@ -63,7 +63,7 @@ FaultMask check_fresh(const AxisCheckLimits& limits, std::int64_t stamp_ns,
 /// Range alone: kNonFinite for a non-finite value, kOutOfRange outside [min, max], else kNone.
 FaultMask check_range(const AxisCheckLimits& limits, double value) noexcept;
 
-/// Jump alone: kJump if |value ⊖ last.value| > max_speed · Δt + jump_tolerance, Δt = max(0,
+/// Jump alone: kJump if |value ⊖ last.q| > max_speed · Δt + jump_tolerance, Δt = max(0,
 /// stamp − last.time) (⊖ wrapped on a wrapping axis); kNone without a last value or with
 /// max_speed = +∞.
 FaultMask check_jump(const AxisCheckLimits& limits, double value, std::int64_t stamp_ns,
