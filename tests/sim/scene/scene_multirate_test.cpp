@@ -176,3 +176,36 @@ TEST(SceneMultirate, ANetOnABodyNoGodObjectHoldsIsRefused) {
   EXPECT_NE(std::string(e.what()).find("net 'probe' is on body 'spare', which is in no body's god-object"),
             std::string::npos) << e.what();
 }
+
+// Several devices (issue 54): the bimanual scene with [multirate] (its graspers left out:
+// grasping runs in the single-rate step) loads; the second device's first body is in
+// MultirateScene::other_devices, and the god-object holds both instruments (eight bodies, eight
+// joints), the held one by the target.
+TEST(SceneMultirate, SeveralDevicesMakeOneCompositeGodObject) {
+  NUMEN_REQUIRE_DEFORMABLE();
+  NUMEN_REQUIRE_ARTICULATION();
+  TempDir dir;
+  std::string text = numen::test::shipped_scene_text("bimanual.toml") +
+                     "\n[multirate]\nscene_dt = 0.005\nmargin = 0.005\n";
+  for (const char* grasp : {"[[grasp]]\nname = \"left_grasper\"\njaws = [\"jaw_1_l\", \"jaw_2_l\"]\n",
+                            "[[grasp]]\nname = \"right_grasper\"\njaws = [\"jaw_1_r\", \"jaw_2_r\"]\n"})
+    text = replace(text, grasp, "");
+  const std::string data = std::string("\"") + NUMEN_SOURCE_DIR + "/sim/data/";
+  for (int i = 0; i < 4; ++i) text = replace(text, "\"../data/", data);
+  const std::string dcf = std::string("dcf = \"") + NUMEN_SOURCE_DIR + "/sim/scenes/devices/";
+  while (text.find("dcf = \"devices/") != std::string::npos) text = replace(text, "dcf = \"devices/", dcf);
+  const Scene s = numen::sim::load_scene(dir.write("bimanual_mr.toml", text));
+  ASSERT_TRUE(s.multirate.has_value());
+  ASSERT_EQ(s.multirate->other_devices.size(), 1u);
+  const numen::core::Model& m = s.model;
+  EXPECT_EQ(m.bodies[static_cast<std::size_t>(s.multirate->other_devices[0])].name.back(), 'r')
+      << "a body of device \"right\"";
+  const std::vector<int> god =
+      numen::core::god_object_bodies(m, s.multirate->tools[0], s.multirate->other_devices);
+  EXPECT_EQ(god.size(), 8u) << "both instruments' sleeve, tube and jaws";
+  numen::core::Model device;
+  ASSERT_EQ(numen::core::make_god_object_model(m, s.multirate->tools[0], m.dt, device, s.multirate->other_devices), "");
+  EXPECT_EQ(device.num_bodies(), 8);
+  EXPECT_EQ(device.num_joints(), 8);
+  EXPECT_EQ(device.bodies[static_cast<std::size_t>(device.initial_held_body)].name, "tube_l");
+}
