@@ -9,6 +9,7 @@
 //   scene_p50_us                   periods with one: scene step + device step
 //   single_p50_us                  the single-rate core::step of the same period
 //   device_vs_single               device_p50 / single_p50
+// multirate_organ_two_instruments: two devices' instruments in the device loop (below).
 //
 //   ./build/tests/numen_bench --benchmark_filter=multirate_organ
 
