@@ -139,11 +139,14 @@ TEST(MultirateDevices, EachDeviceGetsItsOwnFeedback) {
   // At rest after the clash, each hand 20 mm past the other's tube: the couplings pull 20 N
   // against the contact, so each device's Eq. 8 wrench saturates at its own limit (3 N, 2 N) and
   // points back from its tube's target to its tube.
+  // The targets and feedback groups come from the run's Data (take_targets()), as a control
+  // loop of two devices sets them.
   const core::Model m = two_tubes(1e-4);
   auto mr = two_device_god_object(m, 10);
-  core::Data& d = mr->device_data();
+  core::Data run = core::make_data(m);
   for (int s = 0; s < 2000; ++s) {
-    drive_tubes(mr->device_model(), d, s * m.dt);
+    drive_tubes(m, run, s * m.dt);
+    mr->take_targets(run);
     mr->step();
   }
   core::Data out = core::make_data(m);
