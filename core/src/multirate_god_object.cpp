@@ -126,6 +126,10 @@ MultirateGodObject::MultirateGodObject(const Model& scene, int body,
   if (!(settings.margin >= 0.0) || !std::isfinite(settings.margin))
     throw std::invalid_argument("multirate: the contact margin must be >= 0 m and finite (got " +
                                 std::to_string(settings.margin) + ")");
+  if (!settings.other_devices.empty() && body < 0)
+    throw std::invalid_argument("multirate: with other devices the first device must hold a body "
+                                "from the start: their instruments ride in its god-object");
+  other_devices_ = !settings.other_devices.empty();
   std::vector<int> bodies;
   if (body >= 0) bodies.push_back(body);
   for (int t : settings.tools)
@@ -279,6 +283,7 @@ void MultirateGodObject::take_targets(const Data& scene_data) noexcept {
 
 bool MultirateGodObject::select(int body) noexcept {
   if (body == body_) return true;
+  if (body < 0 && other_devices_) return false;  // the other devices' instruments ride in it
   const int next = body >= 0 ? slot_of(body) : -1;
   if (body >= 0 && next < 0) return false;
   released_body_ = body_;

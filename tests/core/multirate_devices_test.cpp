@@ -96,6 +96,25 @@ TEST(MultirateDevices, TheGodObjectHoldsEveryDevicesArticulation) {
   EXPECT_NEAR(p.body_spheres[34].radius, 0.005, 1e-15);
 }
 
+TEST(MultirateDevices, TheFirstDeviceHoldsABodyThroughout) {
+  // The other device's instrument rides in the held body's god-object: nothing held would leave
+  // it to the scene loop without its target.
+  const core::Model m = two_tubes(1e-4);
+  core::MultirateSettings settings;
+  settings.ratio = 10;
+  settings.other_devices = {1};
+  try {
+    (void)std::make_unique<core::MultirateGodObject>(m, -1, settings);
+    ADD_FAILURE() << "a composite god-object with no body held accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("must hold a body"), std::string::npos) << e.what();
+  }
+  auto mr = two_device_god_object(m, 10);
+  EXPECT_FALSE(mr->select(-1));
+  EXPECT_EQ(mr->body(), 0);
+  EXPECT_EQ(mr->god_object().size(), 2u);
+}
+
 TEST(MultirateDevices, TubesClashAtHalfAMetreASecondInTheDeviceLoopWithoutPassingThrough) {
   // The tubes of tests/core/two_instruments_test.cpp's clash, at a 10 kHz device loop with the
   // scene loop at 100 Hz: between two samples the tubes close by 10 mm, twice the 5 mm gap at

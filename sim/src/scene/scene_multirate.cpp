@@ -44,6 +44,19 @@ void parse_multirate(const TomlTable& root, Scene& scene) {
   for (const AttachEvent& e : scene.events)
     if (e.body >= 0 && std::find(bodies.begin(), bodies.end(), e.body) == bodies.end())
       bodies.push_back(e.body);
+  // Several devices: the first device holds a body throughout (the other instruments ride in
+  // its god-object; with none held the scene loop would step them without their targets).
+  if (!scene.extra_devices.empty()) {
+    if (model.initial_held_body < 0)
+      table->fail("scene_dt", "a scene of several devices runs multirate with the first device "
+                              "holding a body from the start (its `attach`): the other devices' "
+                              "instruments ride in its god-object");
+    for (const TomlTable& e : root.tables("event"))
+      if (e.has("attach") && e.string("attach") == "none")
+        e.fail("attach", "\"none\" in a scene of several devices with [multirate]: the first "
+                         "device holds a body throughout (the other devices' instruments ride in "
+                         "its god-object)");
+  }
   if (bodies.empty()) table->fail("scene_dt", "the device holds no body, now or later: nothing to run at the device rate");
   // Several devices: each other device's first bound body; its articulation joins every
   // god-object (a composite god-object, core::MultirateSettings::other_devices).

@@ -18,7 +18,9 @@ namespace numen::sim {
 /// device's (its first bound body's: MultirateScene::other_devices, a composite god-object). Refuses (located at the table) what a multirate
 /// god-object cannot run: the admittance coupling, a tool that make_god_object_model() refuses
 /// (a net on it whose centre of mass is off its component's, an integrator without an
-/// effective contact force), another device that drives no body, and a device binding (any
+/// effective contact force), another device that drives no body, a scene of several devices
+/// whose first device holds no body at the start or releases it (`[[event]] attach = "none"`,
+/// located there), and a device binding (any
 /// device's) that drives a body or prescribes a joint outside every tool's god-object, and a net on a
 /// body outside them. Needs a finalized scene.model, scene.binding
 /// and scene.events. Throws InputError (file, line, column, key). Load time: allocates.

@@ -177,14 +177,12 @@ TEST(SceneMultirate, ANetOnABodyNoGodObjectHoldsIsRefused) {
             std::string::npos) << e.what();
 }
 
-// Several devices (issue 54): the bimanual scene with [multirate] (its graspers left out:
-// grasping runs in the single-rate step) loads; the second device's first body is in
-// MultirateScene::other_devices, and the god-object holds both instruments (eight bodies, eight
-// joints), the held one by the target.
-TEST(SceneMultirate, SeveralDevicesMakeOneCompositeGodObject) {
-  NUMEN_REQUIRE_DEFORMABLE();
-  NUMEN_REQUIRE_ARTICULATION();
-  TempDir dir;
+namespace {
+
+/// The shipped bimanual scene (two devices) with [multirate] at 5 ms, its graspers left out
+/// (grasping runs in the single-rate step), its files where the shipped scene is, `edit` (from,
+/// to) made when given.
+std::string bimanual_multirate_text(const std::string& from = "", const std::string& to = "") {
   std::string text = numen::test::shipped_scene_text("bimanual.toml") +
                      "\n[multirate]\nscene_dt = 0.005\nmargin = 0.005\n";
   for (const char* grasp : {"[[grasp]]\nname = \"left_grasper\"\njaws = [\"jaw_1_l\", \"jaw_2_l\"]\n",
@@ -194,7 +192,20 @@ TEST(SceneMultirate, SeveralDevicesMakeOneCompositeGodObject) {
   for (int i = 0; i < 4; ++i) text = replace(text, "\"../data/", data);
   const std::string dcf = std::string("dcf = \"") + NUMEN_SOURCE_DIR + "/sim/scenes/devices/";
   while (text.find("dcf = \"devices/") != std::string::npos) text = replace(text, "dcf = \"devices/", dcf);
-  const Scene s = numen::sim::load_scene(dir.write("bimanual_mr.toml", text));
+  if (!from.empty()) text = replace(text, from, to);
+  return text;
+}
+
+}  // namespace
+
+// Several devices (issue 54): the bimanual scene with [multirate] loads; the second device's
+// first body is in MultirateScene::other_devices, and the god-object holds both instruments
+// (eight bodies, eight joints), the held one by the target.
+TEST(SceneMultirate, SeveralDevicesMakeOneCompositeGodObject) {
+  NUMEN_REQUIRE_DEFORMABLE();
+  NUMEN_REQUIRE_ARTICULATION();
+  TempDir dir;
+  const Scene s = numen::sim::load_scene(dir.write("bimanual_mr.toml", bimanual_multirate_text()));
   ASSERT_TRUE(s.multirate.has_value());
   ASSERT_EQ(s.multirate->other_devices.size(), 1u);
   const numen::core::Model& m = s.model;
@@ -208,4 +219,21 @@ TEST(SceneMultirate, SeveralDevicesMakeOneCompositeGodObject) {
   EXPECT_EQ(device.num_bodies(), 8);
   EXPECT_EQ(device.num_joints(), 8);
   EXPECT_EQ(device.bodies[static_cast<std::size_t>(device.initial_held_body)].name, "tube_l");
+}
+
+// With several devices the first holds a body throughout: a release (`attach = "none"`) is
+// refused at the event's key, and so is a first device without `attach`.
+TEST(SceneMultirate, SeveralDevicesRefuseAReleaseOfTheHeldBody) {
+  NUMEN_REQUIRE_DEFORMABLE();
+  NUMEN_REQUIRE_ARTICULATION();
+  TempDir dir;
+  const InputError release = load_error(
+      dir, bimanual_multirate_text("\n[multirate]", "\n[[event]]\ntime = 1.0\nattach = \"none\"\n\n[multirate]"),
+      "release.toml");
+  EXPECT_EQ(release.key(), "event[0].attach") << release.what();
+  EXPECT_NE(std::string(release.what()).find("holds a body throughout"), std::string::npos) << release.what();
+  const InputError unheld =
+      load_error(dir, bimanual_multirate_text("attach = \"tube_l\"\n", ""), "unheld.toml");
+  EXPECT_EQ(unheld.key(), "multirate.scene_dt") << unheld.what();
+  EXPECT_NE(std::string(unheld.what()).find("holding a body from the start"), std::string::npos) << unheld.what();
 }

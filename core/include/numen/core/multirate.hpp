@@ -410,7 +410,8 @@ class MultirateGodObject {
   /// dt = N·scene.dt, the articulation imposed: CouplingMode::kDirect, its joints removed) and
   /// its Data; and the scene-loop model and Data without a god-object (all reset from `scene`). Throws std::invalid_argument with the
   /// message of make_god_object_model() / make_proximity_model(), for N < 1, a margin < 0, no
-  /// body at all (`body` −1 and no tools), or a net on a body in none of their god-objects
+  /// body at all (`body` −1 and no tools), `body` −1 with other devices (settings.other_devices:
+  /// the first device holds a body from the start), or a net on a body in none of their god-objects
   /// and not anchored (the device loop feels a net only through its god-object's node planes,
   /// or an organ's through planes on the god-object's spheres). Allocates (load time).
   MultirateGodObject(const Model& scene, int body, const MultirateSettings& settings);
@@ -447,7 +448,9 @@ class MultirateGodObject {
   /// Device loop: makes `body` the god-object from the next period on (−1: none). The released
   /// body continues in the scene loop from the god-object's pose and twist; the new one starts
   /// from its state in the last model. Returns false, changing nothing, for a body that was not
-  /// one of the constructor's. Never allocates.
+  /// one of the constructor's, and for −1 with other devices (MultirateSettings::other_devices:
+  /// their instruments ride in every god-object, and with none held the scene loop would step
+  /// them without their targets). Never allocates.
   bool select(int body) noexcept;
 
   /// Device loop: what a control loop reads of the device period, into `out` (a Data of the
@@ -516,6 +519,7 @@ class MultirateGodObject {
 
   int ratio_;
   double margin_;
+  bool other_devices_ = false;    // several devices: a body is held throughout (select())
   int fold_substeps_ = 1;         // sub-steps of a folded scene step: ⌈scene_dt / fold_step⌉
   std::vector<Slot> slots_;       // one per body the device may hold (at least one)
   Model free_scene_model_;        // the scene loop without a god-object
