@@ -2,6 +2,7 @@
 // devices"): a composite god-object holds every device's articulation, so that one device step
 // advances both instruments; their mutual contacts are the device step's (no pass-through at
 // 0.5 m/s each with the scene loop at 100 Hz); each device gets its own Eq. 8 feedback; the
+// first device holds a body throughout, and its tool switch keeps the other instrument; the
 // device period never allocates with two devices.
 #include <gtest/gtest.h>
 
@@ -190,4 +191,46 @@ TEST(MultirateDevices, TwoDevicePeriodsNeverAllocate) {
   }
   EXPECT_EQ(guard.count(), 0) << "heap allocations in 2 000 device periods, 200 scene periods";
   EXPECT_GT(clashes, 0);
+}
+
+TEST(MultirateDevices, AToolSwitchOfTheFirstDeviceKeepsTheOtherInstrument) {
+  // Device 0 switches from its tube (body 0) to the ball (body 2, a tool): the new god-object is
+  // the ball with device 1's tube, which keeps following its own target through the switch; the
+  // released tube continues in the scene loop.
+  const core::Model m = two_tubes(1e-4);
+  core::MultirateSettings settings;
+  settings.ratio = 10;
+  settings.margin = 0.005;
+  settings.tools = {2};
+  settings.other_devices = {1};
+  core::MultirateGodObject mr(m, 0, settings);
+  core::Data run = core::make_data(m);
+  // Every hand holds its body where it starts.
+  const auto hold = [&](int body) {
+    return core::Pose{m.bodies[static_cast<std::size_t>(body)].initial_pose.position,
+                      m.bodies[static_cast<std::size_t>(body)].initial_pose.orientation};
+  };
+  run.held_body = 0;
+  run.target = hold(0);
+  run.body_targets[1] = core::BodyTarget{hold(1), core::Twist{}, true};
+  double worst = 0.0;
+  numen::test::AllocationGuard guard;
+  for (int s = 0; s < 1000; ++s) {
+    if (s == 500) {
+      ASSERT_TRUE(mr.select(2));
+      run.held_body = 2;
+      run.target = hold(2);
+    }
+    mr.take_targets(run);
+    mr.step();
+    if (s >= 500) {
+      ASSERT_EQ(mr.god_object().size(), 2u);
+      EXPECT_EQ(mr.god_object()[0], 1);
+      EXPECT_EQ(mr.god_object()[1], 2);
+      worst = std::max(worst, (mr.device_data().bodies[0].position - hold(1).position).norm());
+    }
+  }
+  EXPECT_EQ(guard.count(), 0) << "heap allocations across the switch";
+  EXPECT_EQ(mr.counters().switches, 1);
+  EXPECT_LT(worst, 1e-4) << "m: device 1's tube left its target at the switch";
 }
