@@ -7,6 +7,8 @@
 #include <array>
 #include <cmath>
 
+#include "numen/core/capacity.hpp"
+#include "numen/core/collision.hpp"
 #include "numen/core/contact_force.hpp"
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"
@@ -36,25 +38,42 @@ std::string body_error(const Model& scene, int body) {
 
 }  // namespace
 
-std::vector<int> god_object_bodies(const Model& scene, int body) {
+std::vector<int> god_object_bodies(const Model& scene, int body, std::span<const int> others) {
   std::vector<int> out;
   if (body < 0 || body >= scene.num_bodies()) return out;
   const std::vector<int>& tree = scene.articulation.body_tree;
-  if (tree.size() != scene.bodies.size()) return {body};
+  std::vector<char> in(scene.bodies.size(), 0);
+  const auto add = [&](int root) {
+    if (root < 0 || root >= scene.num_bodies()) return;
+    if (tree.size() != scene.bodies.size()) {
+      in[static_cast<std::size_t>(root)] = 1;
+      return;
+    }
+    for (int b = 0; b < scene.num_bodies(); ++b)
+      if (tree[static_cast<std::size_t>(b)] == tree[static_cast<std::size_t>(root)])
+        in[static_cast<std::size_t>(b)] = 1;
+  };
+  add(body);
+  for (int o : others) add(o);
   for (int b = 0; b < scene.num_bodies(); ++b)
-    if (tree[static_cast<std::size_t>(b)] == tree[static_cast<std::size_t>(body)]) out.push_back(b);
+    if (in[static_cast<std::size_t>(b)]) out.push_back(b);
   return out;
 }
 
-std::string make_god_object_model(const Model& scene, int body, double device_dt, Model& out) {
+std::string make_god_object_model(const Model& scene, int body, double device_dt, Model& out,
+                                  std::span<const int> others) {
   if (std::string e = body_error(scene, body); !e.empty()) return e;
+  for (int o : others)
+    if (o < 0 || o >= scene.num_bodies())
+      return "multirate: another device's body " + std::to_string(o) + " is not a body of the scene (" +
+             std::to_string(scene.num_bodies()) + " bodies)";
   if (!(device_dt > 0.0) || !std::isfinite(device_dt))
     return "multirate: the device period must be > 0 s and finite (got " + std::to_string(device_dt) + ")";
   if (scene.integrator != Integrator::kLinearlyImplicitEuler &&
       scene.integrator != Integrator::kSymplecticEuler)
     return "multirate: the god-object's integrator must be the linearly implicit or the "
            "symplectic Euler (the impulse hand-back needs the step's effective contact force)";
-  const std::vector<int> bodies = god_object_bodies(scene, body);
+  const std::vector<int> bodies = god_object_bodies(scene, body, others);
   for (int b : bodies)
     if (scene.bodies[static_cast<std::size_t>(b)].mesh >= 0)
       return "multirate: god-object body '" + scene.bodies[static_cast<std::size_t>(b)].name +
@@ -103,13 +122,14 @@ std::string make_god_object_model(const Model& scene, int body, double device_dt
   return "";
 }
 
-std::string make_proximity_model(const Model& scene, int body, double margin, Model& out) {
+std::string make_proximity_model(const Model& scene, int body, double margin, Model& out,
+                                 std::span<const int> others) {
   if (std::string e = body_error(scene, body); !e.empty()) return e;
   if (!(margin >= 0.0) || !std::isfinite(margin))
     return "multirate: the contact margin must be >= 0 m and finite (got " + std::to_string(margin) + ")";
   Model m = scene;
   std::vector<int> device_body(scene.bodies.size(), -1);
-  for (int g : god_object_bodies(scene, body)) {
+  for (int g : god_object_bodies(scene, body, others)) {
     device_body[static_cast<std::size_t>(g)] = 0;
     const BodyModel& b = m.bodies[static_cast<std::size_t>(g)];
     for (int s = b.sphere_begin; s < b.sphere_begin + b.sphere_count; ++s)
@@ -308,9 +328,16 @@ double plane_elastic_energy(const Model& model, const ContactPlaneSet& planes,
 }
 
 void write_plane_contacts(const Model& model, const ContactPlaneSet& planes, Data& data) noexcept {
-  data.num_contacts = 0;
-  data.max_penetration = 0.0;
-  data.contacts_dropped = 0;
+  // A composite god-object (several devices): its articulations' mutual contacts, at the device
+  // rate, as the single-rate step finds them (the model has no obstacle, net or mesh).
+  if (cross_contact_capacity(model) > 0) {
+    detect_contacts(model, data);
+  } else {
+    data.num_contacts = 0;
+    data.max_penetration = 0.0;
+    data.contacts_dropped = 0;
+  }
+  const bool overflowed = data.contacts_dropped > 0;  // counted by detect_contacts()
   const int n = std::clamp(planes.count, 0, kMaxContactPlanes);
   for (int i = 0; i < n; ++i) {
     const PlaneAtPose a = plane_at_pose(model, planes, i, data);
@@ -341,7 +368,7 @@ void write_plane_contacts(const Model& model, const ContactPlaneSet& planes, Dat
     // The overlap itself (a node plane's depth holds the node's deflection too).
     data.max_penetration = std::max(data.max_penetration, node ? depth - p.depth_offset : depth);
   }
-  if (data.contacts_dropped > 0) {
+  if (data.contacts_dropped > 0 && !overflowed) {
     data.status |= kContactOverflow;
     ++data.contact_overflow_steps;
   }
@@ -367,7 +394,8 @@ void step_god_object(const Model& model, ContactPlaneSet& planes, Data& data) no
     for (int i = 0; i < n; ++i) {
       const Contact& c = data.contacts[static_cast<std::size_t>(i)];
       const ContactTerm& t = data.scratch->solver.contact_terms[static_cast<std::size_t>(i)];
-      if (!t.active || c.sphere_b < 0 || c.sphere_b >= np) continue;
+      // Not a plane's: a contact between two of its articulations (body_b ≥ 0).
+      if (!t.active || c.body_b >= 0 || c.sphere_b < 0 || c.sphere_b >= np) continue;
       ContactPlane& p = planes.planes[static_cast<std::size_t>(c.sphere_b)];
       // The plane's motion is prescribed over the period: the relative velocity's change is
       // the god-object's alone.

@@ -126,6 +126,10 @@ MultirateGodObject::MultirateGodObject(const Model& scene, int body,
   if (!(settings.margin >= 0.0) || !std::isfinite(settings.margin))
     throw std::invalid_argument("multirate: the contact margin must be >= 0 m and finite (got " +
                                 std::to_string(settings.margin) + ")");
+  if (!settings.other_devices.empty() && body < 0)
+    throw std::invalid_argument("multirate: with other devices the first device must hold a body "
+                                "from the start: their instruments ride in its god-object");
+  other_devices_ = !settings.other_devices.empty();
   std::vector<int> bodies;
   if (body >= 0) bodies.push_back(body);
   for (int t : settings.tools)
@@ -136,10 +140,11 @@ MultirateGodObject::MultirateGodObject(const Model& scene, int body,
   for (int b : bodies) {
     Slot s;
     s.body = b;
-    std::string error = make_god_object_model(scene, b, scene.dt, s.device_model);
-    if (error.empty()) error = make_proximity_model(scene, b, settings.margin, s.scene_model);
+    const std::span<const int> others(settings.other_devices);
+    std::string error = make_god_object_model(scene, b, scene.dt, s.device_model, others);
+    if (error.empty()) error = make_proximity_model(scene, b, settings.margin, s.scene_model, others);
     if (!error.empty()) throw std::invalid_argument(error);
-    s.bodies = god_object_bodies(scene, b);
+    s.bodies = god_object_bodies(scene, b, others);
     s.device_body.assign(scene.bodies.size(), -1);
     for (std::size_t i = 0; i < s.bodies.size(); ++i)
       s.device_body[static_cast<std::size_t>(s.bodies[i])] = static_cast<int>(i);
@@ -267,6 +272,8 @@ void MultirateGodObject::take_targets(const Data& scene_data) noexcept {
   for (std::size_t i = 0; i < s.bodies.size(); ++i) {
     const auto b = static_cast<std::size_t>(s.bodies[i]);
     if (b < scene_data.body_targets.size()) d.body_targets[i] = scene_data.body_targets[b];
+    // Each body's Eq. 8 gains and saturation are its device's (several devices).
+    if (b < scene_data.feedback_group.size()) d.feedback_group[i] = scene_data.feedback_group[b];
   }
   for (std::size_t j = 0; j < s.joints.size(); ++j) {
     const auto sj = static_cast<std::size_t>(s.joints[j]);
@@ -276,6 +283,7 @@ void MultirateGodObject::take_targets(const Data& scene_data) noexcept {
 
 bool MultirateGodObject::select(int body) noexcept {
   if (body == body_) return true;
+  if (body < 0 && other_devices_) return false;  // the other devices' instruments ride in it
   const int next = body >= 0 ? slot_of(body) : -1;
   if (body >= 0 && next < 0) return false;
   released_body_ = body_;
@@ -662,17 +670,26 @@ void MultirateGodObject::view(Data& out) const noexcept {
         continue;
       }
       Contact c = d.contacts[static_cast<std::size_t>(i)];
-      const ContactPlane& p =
-          planes_.planes[static_cast<std::size_t>(std::clamp(c.sphere_b, 0, kMaxContactPlanes - 1))];
-      if (p.node >= 0) continue;  // the net's contact: the scene loop's node contact, above
-      const int local = std::clamp(c.body_a, 0, static_cast<int>(s.bodies.size()) - 1);
-      const int g = s.bodies[static_cast<std::size_t>(local)];
-      c.sphere_a = s.scene_model.bodies[static_cast<std::size_t>(g)].sphere_begin +
-                   (c.sphere_a - s.device_model.bodies[static_cast<std::size_t>(local)].sphere_begin);
-      c.body_a = g;
-      c.body_b = p.other_body;
-      c.obstacle = p.obstacle;
-      c.sphere_b = p.other_sphere;
+      // A god-object body's sphere index and body in the scene.
+      const auto to_scene = [&](int& body, int& sphere) noexcept {
+        const int local = std::clamp(body, 0, static_cast<int>(s.bodies.size()) - 1);
+        const int g = s.bodies[static_cast<std::size_t>(local)];
+        sphere = s.scene_model.bodies[static_cast<std::size_t>(g)].sphere_begin +
+                 (sphere - s.device_model.bodies[static_cast<std::size_t>(local)].sphere_begin);
+        body = g;
+      };
+      if (c.body_b >= 0) {  // two of a composite god-object's instruments
+        to_scene(c.body_a, c.sphere_a);
+        to_scene(c.body_b, c.sphere_b);
+      } else {
+        const ContactPlane& p =
+            planes_.planes[static_cast<std::size_t>(std::clamp(c.sphere_b, 0, kMaxContactPlanes - 1))];
+        if (p.node >= 0) continue;  // the net's contact: the scene loop's node contact, above
+        to_scene(c.body_a, c.sphere_a);
+        c.body_b = p.other_body;
+        c.obstacle = p.obstacle;
+        c.sphere_b = p.other_sphere;
+      }
       out.contacts[static_cast<std::size_t>(count++)] = c;
       deepest = std::max(deepest, c.depth);
     }

@@ -9,6 +9,7 @@
 //   scene_p50_us                   periods with one: scene step + device step
 //   single_p50_us                  the single-rate core::step of the same period
 //   device_vs_single               device_p50 / single_p50
+// multirate_organ_two_instruments: two devices' instruments in the device loop (below).
 //
 //   ./build/tests/numen_bench --benchmark_filter=multirate_organ
 
@@ -17,6 +18,7 @@
 #include <cmath>
 #include <cstdint>
 #include <stdexcept>
+#include <string>
 
 #include "numen/core/mesh.hpp"
 #include "numen/core/model.hpp"
@@ -130,3 +132,93 @@ void multirate_organ(benchmark::State& state) {
 }  // namespace
 
 BENCHMARK(multirate_organ)->Arg(10)->UseManualTime()->Iterations(4000);
+
+namespace {
+
+/// organ_scene() with a second instrument (body 2, a device of its own: feedback group 1, Eq. 8
+/// gains as the first's): a sphere like the first, starting below the organ.
+numen::core::Model organ_scene_two_instruments(double dt) {
+  namespace core = numen::core;
+  core::Model m = organ_scene(dt);
+  core::BodyModel second = m.bodies[1];
+  second.name = "tool_2";
+  second.sphere_begin = static_cast<int>(m.body_spheres.size());
+  m.body_spheres.push_back(core::Sphere{Vec3::Zero(), 0.005});
+  second.initial_pose.position = Vec3(0.0, 0.0, -0.04);
+  m.bodies.push_back(second);
+  m.extra_feedback = {m.feedback};
+  if (std::string error = core::finalize_model(m); !error.empty()) throw std::runtime_error(error);
+  return m;
+}
+
+/// The second instrument's target (body 2's own, Eq. 6): organ_scene()'s circle about the
+/// organ's other pole, half a turn behind.
+void set_second_target(numen::core::Data& d, int body, std::int64_t k, double dt) {
+  const double t = static_cast<double>(k) * dt, w = 2.0 * M_PI;
+  const double r = 0.005;
+  numen::core::BodyTarget& b = d.body_targets[static_cast<std::size_t>(body)];
+  b.pose.position = Vec3(-r * std::cos(w * t), -r * std::sin(w * t), -0.029);
+  b.pose.orientation = numen::core::Quat::Identity();
+  b.twist.linear = Vec3(r * w * std::sin(w * t), -r * w * std::cos(w * t), 0.0);
+  b.twist.angular.setZero();
+  b.enabled = true;
+  d.feedback_group[static_cast<std::size_t>(body)] = 1;
+}
+
+/// Two devices (issue 54): the device step of a composite god-object — both instruments in the
+/// device loop at 10 kHz, each pressed 6 mm into the organ at its own pole — against the
+/// one-instrument device step of multirate_organ, both in this run, alternated period by period
+/// (same machine state):
+///   one_device_p50_us, two_device_p50_us, two_device_p99_us   periods without a scene step
+///   two_vs_one                                                two_device_p50 / one_device_p50
+///   two_scene_p50_us                                          periods with a scene step
+void multirate_organ_two_instruments(benchmark::State& state) {
+  const int ratio = static_cast<int>(state.range(0));
+  const double dt = 1e-4;
+  const numen::core::Model one = organ_scene(dt);
+  const numen::core::Model two = organ_scene_two_instruments(dt);
+  numen::core::MultirateGodObject mr1(one, 1, {ratio, 0.001, {}});
+  numen::core::MultirateSettings settings{ratio, 0.001, {}};
+  settings.other_devices = {2};
+  numen::core::MultirateGodObject mr2(two, 1, settings);
+  numen::platform::LatencyHistogram device_one, device_two, scene_two;
+  double depth_one = 0.0, depth_two = 0.0;
+  std::int64_t k = 0;
+  for (auto _ : state) {
+    set_target(mr1.device_data(), k, dt);
+    std::int64_t t0 = numen::platform::monotonic_now_ns();
+    mr1.step();
+    const std::int64_t t1 = numen::platform::monotonic_now_ns() - t0;
+    set_target(mr2.device_data(), k, dt);
+    set_second_target(mr2.device_data(), 1, k, dt);  // body 2 is the device model's body 1
+    t0 = numen::platform::monotonic_now_ns();
+    mr2.step();
+    const std::int64_t t2 = numen::platform::monotonic_now_ns() - t0;
+    state.SetIterationTime(static_cast<double>(t2) * 1e-9);
+    if (k % ratio == 0) {
+      scene_two.record(t2);
+    } else {
+      device_one.record(t1);
+      device_two.record(t2);
+    }
+    // Each instrument's depth below the organ's rest surface (a sphere of radius 30 mm).
+    const numen::core::Data& d = mr2.device_data();
+    depth_one = std::max(depth_one, 0.035 - d.bodies[0].position.norm());
+    depth_two = std::max(depth_two, 0.035 - d.bodies[1].position.norm());
+    ++k;
+  }
+  const double one_p50 = static_cast<double>(device_one.quantile(0.5)) * 1e-3;
+  const double two_p50 = static_cast<double>(device_two.quantile(0.5)) * 1e-3;
+  state.counters["one_device_p50_us"] = one_p50;
+  state.counters["two_device_p50_us"] = two_p50;
+  state.counters["two_device_p99_us"] = static_cast<double>(device_two.quantile(0.99)) * 1e-3;
+  state.counters["two_scene_p50_us"] = static_cast<double>(scene_two.quantile(0.5)) * 1e-3;
+  state.counters["two_vs_one"] = one_p50 > 0.0 ? two_p50 / one_p50 : 0.0;
+  state.counters["planes_max"] = static_cast<double>(mr2.counters().planes_max);
+  state.counters["depth_1_mm"] = 1e3 * depth_one;
+  state.counters["depth_2_mm"] = 1e3 * depth_two;
+}
+
+}  // namespace
+
+BENCHMARK(multirate_organ_two_instruments)->Arg(10)->UseManualTime()->Iterations(4000);

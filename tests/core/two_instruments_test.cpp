@@ -10,6 +10,7 @@
 #include <cstdio>
 
 #include "alloc_counter.hpp"
+#include "clash_tubes.hpp"
 #include "grasper_rig.hpp"
 #include "numen/core/data.hpp"
 #include "numen/core/grasp.hpp"
@@ -129,21 +130,7 @@ TEST(TwoInstruments, TheirTubesClashAtHalfAMetreASecondWithoutPassingThroughEach
   m.gravity = core::Vec3::Zero();
   m.material_names = {"steel"};
   m.material_pairs = {core::MaterialPair{2e4, 10.0, 0.5}};
-  for (int k = 0; k < 2; ++k) {
-    core::BodyModel tube;
-    tube.name = k == 0 ? "tube_left" : "tube_right";
-    tube.mass = 0.05;
-    tube.inertia_body = core::Vec3(3e-5, 3e-5, 2e-7).asDiagonal();
-    tube.sphere_begin = static_cast<int>(m.body_spheres.size());
-    for (int i = 0; i < 17; ++i)
-      m.body_spheres.push_back(core::Sphere{core::Vec3(0, 0, -0.04 + 0.005 * i), 0.0025});
-    tube.sphere_count = 17;
-    tube.coupling = core::CouplingGains{1000.0, core::damping_from_ratio(0.85, 0.05, 1000.0), 1.0,
-                                        core::damping_from_ratio(0.85, 3e-5, 1.0)};
-    const core::Quat along = k == 0 ? numen::test::rot(M_PI / 2, core::Vec3::UnitY()) : core::Quat::Identity();
-    tube.initial_pose = core::Pose{core::Vec3(0, k == 0 ? -0.02 : 0.02, 0), along};
-    m.bodies.push_back(tube);
-  }
+  numen::test::add_clash_tubes(m);
   m.initial_held_body = 0;
   ASSERT_EQ(core::finalize_model(m), "");
   core::Data d = core::make_data(m);
@@ -152,14 +139,7 @@ TEST(TwoInstruments, TheirTubesClashAtHalfAMetreASecondWithoutPassingThroughEach
   for (int s = 0; s < 200; ++s) {
     const double t = s * m.dt;
     // Each hand moves 0.5 m/s towards and past the other's line for 80 ms (40 mm), then holds.
-    const double travel = std::min(t, 0.08) * 0.5;
-    const double v = t < 0.08 ? 0.5 : 0.0;
-    d.target = core::Pose{core::Vec3(0, -0.02 + travel, 0), m.bodies[0].initial_pose.orientation};
-    d.target_twist = core::Twist{core::Vec3(0, v, 0), core::Vec3::Zero()};
-    core::BodyTarget& right = d.body_targets[1];
-    right.pose = core::Pose{core::Vec3(0, 0.02 - travel, 0), m.bodies[1].initial_pose.orientation};
-    right.twist = core::Twist{core::Vec3(0, -v, 0), core::Vec3::Zero()};
-    right.enabled = true;
+    numen::test::set_clash_targets(m, d, t);
     core::step(m, d);
     ASSERT_EQ(d.status & core::kNonFinite, 0u) << s;
     const double gap = d.bodies[1].position.y() - d.bodies[0].position.y();

@@ -12,7 +12,8 @@ namespace numen::sim {
 MultirateRun::MultirateRun(const Scene& scene) : scene_(&scene) {
   if (!scene.multirate) return;
   const core::MultirateSettings settings{scene.multirate->ratio, scene.multirate->margin_m,
-                                         scene.multirate->tools, scene.multirate->fold_step_s};
+                                         scene.multirate->tools, scene.multirate->fold_step_s,
+                                         scene.multirate->other_devices};
   god_object_ = std::make_unique<core::MultirateGodObject>(
       scene.model, scene.model.initial_held_body, settings);
 }

@@ -504,10 +504,6 @@ Scene load_scene(const std::string& path, const SceneOverrides& overrides) {
   warn_clamped_contacts(scene.model, scene.warnings);
   warn_yielding_coupling(scene.model, scene.warnings);
   parse_multirate(root, scene);
-  if (scene.multirate && !scene.extra_devices.empty())
-    root.fail("multirate", "the multirate god-object runs one device yet: this scene has " +
-                               std::to_string(num_devices(scene)) +
-                               " ([[device]]; docs/scenes.md, \"Several devices\")");
   if (scene.multirate && !scene.model.grasps.empty())
     root.tables("grasp").front().fail(
         "name", "grasping runs in the single-rate step: a scene with [multirate] has no grasper yet "

@@ -9,6 +9,7 @@
 #include <iomanip>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "numen/core/model.hpp"
@@ -43,21 +44,49 @@ void parse_multirate(const TomlTable& root, Scene& scene) {
   for (const AttachEvent& e : scene.events)
     if (e.body >= 0 && std::find(bodies.begin(), bodies.end(), e.body) == bodies.end())
       bodies.push_back(e.body);
+  // Several devices: the first device holds a body throughout (the other instruments ride in
+  // its god-object; with none held the scene loop would step them without their targets).
+  if (!scene.extra_devices.empty()) {
+    if (model.initial_held_body < 0)
+      table->fail("scene_dt", "a scene of several devices runs multirate with the first device "
+                              "holding a body from the start (its `attach`): the other devices' "
+                              "instruments ride in its god-object");
+    for (const TomlTable& e : root.tables("event"))
+      if (e.has("attach") && e.string("attach") == "none")
+        e.fail("attach", "\"none\" in a scene of several devices with [multirate]: the first "
+                         "device holds a body throughout (the other devices' instruments ride in "
+                         "its god-object)");
+  }
   if (bodies.empty()) table->fail("scene_dt", "the device holds no body, now or later: nothing to run at the device rate");
+  // Several devices: each other device's first bound body; its articulation joins every
+  // god-object (a composite god-object, core::MultirateSettings::other_devices).
+  for (const SceneDevice& d : scene.extra_devices) {
+    int driven = -1;
+    for (const platform::LinkBinding& b : d.binding.links)
+      if (b.body >= 0 && driven < 0) driven = b.body;
+    if (driven < 0)
+      table->fail("scene_dt", "device '" + d.device.name + "' drives no body (no [[body]] has "
+                              "device = \"" + d.device.name + "\" and a link): nothing of it to run "
+                              "at the device rate");
+    m.other_devices.push_back(driven);
+  }
   std::vector<char> in_god_object(model.bodies.size(), 0);
   for (int b : bodies) {
     core::Model device;
-    const std::string error = core::make_god_object_model(model, b, dt, device);
+    const std::string error = core::make_god_object_model(model, b, dt, device, m.other_devices);
     if (!error.empty()) table->fail("scene_dt", error);
-    for (int g : core::god_object_bodies(model, b)) in_god_object[static_cast<std::size_t>(g)] = 1;
+    for (int g : core::god_object_bodies(model, b, m.other_devices)) in_god_object[static_cast<std::size_t>(g)] = 1;
     m.tools.push_back(b);
   }
-  // The device drives the god-object's bodies and joints only: the rest is the scene loop's.
-  for (const platform::LinkBinding& b : scene.binding.links)
-    if (b.body >= 0 && !in_god_object[static_cast<std::size_t>(b.body)])
-      table->fail("scene_dt", "body '" + model.bodies[static_cast<std::size_t>(b.body)].name +
-                                  "' is bound to a device link but is not in a held body's "
-                                  "articulation: the device loop steps only the god-object");
+  // The devices drive the god-object's bodies and joints only: the rest is the scene loop's.
+  std::vector<const platform::DeviceBinding*> bindings{&scene.binding};
+  for (const SceneDevice& d : scene.extra_devices) bindings.push_back(&d.binding);
+  for (const platform::DeviceBinding* binding : bindings)
+    for (const platform::LinkBinding& b : binding->links)
+      if (b.body >= 0 && !in_god_object[static_cast<std::size_t>(b.body)])
+        table->fail("scene_dt", "body '" + model.bodies[static_cast<std::size_t>(b.body)].name +
+                                    "' is bound to a device link but is not in a held body's "
+                                    "articulation: the device loop steps only the god-object");
   // A net is the scene loop's; the device loop feels it only as its god-object's own.
   // An organ (a net on an anchored body) is the scene loop's too, felt through planes on the
   // god-object's spheres.
@@ -68,25 +97,30 @@ void parse_multirate(const TomlTable& root, Scene& scene) {
                                   model.bodies[static_cast<std::size_t>(net.body)].name +
                                   "', which is in no body's god-object the device holds: the "
                                   "device loop would not feel it");
-  for (const platform::AxisPrescription& p : scene.binding.prescriptions)
-    if (!in_god_object[static_cast<std::size_t>(model.joints[static_cast<std::size_t>(p.joint)].child)])
-      table->fail("scene_dt", "joint '" + model.joints[static_cast<std::size_t>(p.joint)].name +
-                                  "' is prescribed by the device but is not in a held body's "
-                                  "articulation: the device loop steps only the god-object");
-  // The margin must cover the hand's travel towards a surface in one scene period: compare it
-  // with the target's largest travel over a scene period of the trajectory.
-  if (m.ratio > 1 && !scene.trajectory.empty()) {
+  for (const platform::DeviceBinding* binding : bindings)
+    for (const platform::AxisPrescription& p : binding->prescriptions)
+      if (!in_god_object[static_cast<std::size_t>(model.joints[static_cast<std::size_t>(p.joint)].child)])
+        table->fail("scene_dt", "joint '" + model.joints[static_cast<std::size_t>(p.joint)].name +
+                                    "' is prescribed by the device but is not in a held body's "
+                                    "articulation: the device loop steps only the god-object");
+  // The margin must cover each hand's travel towards a surface in one scene period: compare it
+  // with the target's largest travel over a scene period of each device's trajectory.
+  std::vector<std::pair<const Trajectory*, std::string>> trajectories{{&scene.trajectory, ""}};
+  for (const SceneDevice& d : scene.extra_devices)
+    trajectories.emplace_back(&d.trajectory, " of device '" + d.device.name + "'");
+  for (const auto& [trajectory, whose] : trajectories) {
+    if (!(m.ratio > 1 && !trajectory->empty())) continue;
     // At most kScanPoints window starts, dt apart or evenly spread over a longer trajectory
     // (a fuzzed scene may last 10^6 s at a microsecond dt: the scan stays bounded).
     constexpr double kScanPoints = 200'000.0;
     double travel = 0.0, at = 0.0;
-    const double span = scene.trajectory.duration() - m.scene_dt_s;
+    const double span = trajectory->duration() - m.scene_dt_s;
     const double stride = std::max(dt, span / kScanPoints);
     const auto starts = span >= 0.0 ? static_cast<std::int64_t>(std::floor(span / stride)) + 1 : 0;
     for (std::int64_t k = 0; k < starts; ++k) {
       const double t = static_cast<double>(k) * stride;
-      const double d = (scene.trajectory.at(t + m.scene_dt_s).pose.position -
-                        scene.trajectory.at(t).pose.position).norm();
+      const double d = (trajectory->at(t + m.scene_dt_s).pose.position -
+                        trajectory->at(t).pose.position).norm();
       if (d > travel) {
         travel = d;
         at = t;
@@ -94,7 +128,7 @@ void parse_multirate(const TomlTable& root, Scene& scene) {
     }
     if (travel > m.margin_m) {
       std::ostringstream os;
-      os << std::setprecision(3) << "multirate: the hand travels up to " << travel * 1e3
+      os << std::setprecision(3) << "multirate: the hand" << whose << " travels up to " << travel * 1e3
          << " mm in one scene period (" << m.scene_dt_s * 1e3 << " ms, from t = " << at
          << " s) but the margin is " << m.margin_m * 1e3 << " mm: a surface the tool reaches "
          << "between two scene samples has no plane until the next one, and the tool may go "

@@ -9,6 +9,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -166,16 +167,16 @@ TEST(RunMultirate, CountsSinceResetCarryOverAToolSwitch) {
 
 namespace {
 
-/// 10 000 periods of `scene` under the allocation counter; the summary after.
-RunSummary run_without_allocation(const Scene& scene, const char* name) {
-  SceneRunner runner(scene, 10'000);
+/// `periods` periods of `scene` under the allocation counter; the summary after.
+RunSummary run_without_allocation(const Scene& scene, const char* name, int periods = 10'000) {
+  SceneRunner runner(scene, static_cast<std::size_t>(periods));
   std::int64_t count = -1;
   {
     numen::test::AllocationGuard guard;
-    for (int k = 0; k < 10'000; ++k) runner.period();
+    for (int k = 0; k < periods; ++k) runner.period();
     count = guard.count();
   }
-  EXPECT_EQ(count, 0) << name << ": heap allocations in 10 000 multirate periods";
+  EXPECT_EQ(count, 0) << name << ": heap allocations in " << periods << " multirate periods";
   runner.finish();
   const RunSummary s = runner.summary();
   EXPECT_GT(s.contacts_max + s.node_contacts_max, 0) << name;
@@ -717,4 +718,154 @@ TEST(RunMultirate, APacedAdmittanceRunStepsTheSceneOnItsOwnThread) {
   const std::string text = numen::sim::format_summary(s);
   EXPECT_NE(text.find("realtime: wake-up latency us median"), std::string::npos) << text;
   EXPECT_NE(text.find("overrun policy: count only"), std::string::npos) << text;
+}
+
+namespace {
+
+/// The shipped bimanual scene (both JIGSAWS manipulators, each an articulated trocar instrument
+/// on its own device, against the default scene's organ) without its graspers (grasping runs in
+/// the single-rate step: docs/grasping.md, "Not yet"), both devices in replay (the same hands in
+/// every run), each over 1.5 s of the recording, their trocars where the whole recording places
+/// them; with [multirate] scene_dt, margin (m) when scene_dt > 0.
+Scene bimanual_window(numen::test::TempDir& dir, double scene_dt, double margin) {
+  // Each hand 1.5 s from a time its tip is off the organ (where the whole run has dented it, the
+  // recorded tip lies inside the organ's rest shape): "left" from 7.6 s (it touches at 8.3 s),
+  // "right" from 3.5 s (at 3.75 s).
+  const char* left_window = "start_time = 7.6\nend_time = 9.1\n";
+  const char* right_window = "start_time = 3.5\nend_time = 5.0\n";
+  const std::string left = "manipulator = \"slave_left\"\n", right = "manipulator = \"slave_right\"\n";
+  std::string text = numen::test::shipped_scene_text("bimanual.toml");
+  // Its files (the recording, the organ's mesh, the drives' DCFs) where the shipped scene is.
+  for (const auto& [from, to] : {std::pair<std::string, std::string>{"\"../data/", "/sim/data/"},
+                                 std::pair<std::string, std::string>{"dcf = \"devices/", "/sim/scenes/devices/"}}) {
+    const std::string prefix = from.substr(0, from.find('"') + 1) + NUMEN_SOURCE_DIR + to;
+    for (std::size_t at = text.find(from); at != std::string::npos; at = text.find(from, at + prefix.size()))
+      text.replace(at, from.size(), prefix);
+  }
+  // Each trocar where the whole recording puts it (placed from a window's approach it moves).
+  const Scene whole = numen::sim::load_scene(dir.write("bimanual_whole.toml", text));
+  for (const numen::hal::DeviceConfig* device : {&whole.device, &whole.extra_devices.at(0).device}) {
+    const numen::core::Vec3& p = device->trocar.point;
+    const numen::core::Quat& q = device->trocar.orientation;
+    char trocar[256];
+    std::snprintf(trocar, sizeof trocar, "point = [%.17g, %.17g, %.17g]\norientation = [%.17g, %.17g, %.17g, %.17g]\n",
+                  p.x(), p.y(), p.z(), q.w(), q.x(), q.y(), q.z());
+    text = numen::test::replace(
+        text, "placement = \"approach\"   # behind the recorded workspace along its mean approach axis\nstandoff = 0.12\n",
+        trocar);
+  }
+  text = numen::test::replace(text, left, left + left_window);
+  text = numen::test::replace(text, right, right + right_window);
+  text = numen::test::replace(text, "[[grasp]]\nname = \"left_grasper\"\njaws = [\"jaw_1_l\", \"jaw_2_l\"]\n", "");
+  text = numen::test::replace(text, "[[grasp]]\nname = \"right_grasper\"\njaws = [\"jaw_1_r\", \"jaw_2_r\"]\n", "");
+  if (scene_dt > 0.0) {
+    char table[128];
+    std::snprintf(table, sizeof table, "\n[multirate]\nscene_dt = %.17g\nmargin = %.17g\n", scene_dt, margin);
+    text += table;
+  }
+  Scene s = numen::sim::load_scene(dir.write("multirate_bimanual.toml", text));
+  s.plant.reset();
+  for (numen::sim::SceneDevice& d : s.extra_devices) d.plant.reset();
+  return s;
+}
+
+/// One device's figures in a run of several: the deepest contact of the bodies it drives (mm;
+/// the run's body and node contacts, each period) and the largest feedback force sent to it (N).
+struct BimanualDevice {
+  double deepest_mm = 0.0;
+  double force_max_n = 0.0;
+};
+
+/// Runs `scene` whole; per device (0: the scene's own, then Scene::extra_devices) its figures.
+std::vector<BimanualDevice> run_bimanual(const Scene& scene, RunSummary& summary) {
+  std::vector<const numen::platform::DeviceBinding*> bindings{&scene.binding};
+  for (const numen::sim::SceneDevice& d : scene.extra_devices) bindings.push_back(&d.binding);
+  std::vector<int> device_of(scene.model.bodies.size(), -1);
+  for (std::size_t i = 0; i < bindings.size(); ++i)
+    for (const numen::platform::LinkBinding& l : bindings[i]->links)
+      if (l.body >= 0) device_of[static_cast<std::size_t>(l.body)] = static_cast<int>(i);
+  std::vector<BimanualDevice> out(bindings.size());
+  const auto touch = [&](int body, double depth) {
+    if (body < 0 || device_of[static_cast<std::size_t>(body)] < 0) return;
+    double& deepest = out[static_cast<std::size_t>(device_of[static_cast<std::size_t>(body)])].deepest_mm;
+    deepest = std::max(deepest, depth * 1e3);
+  };
+  SceneRunner runner(scene);
+  const auto periods = std::llround(scene.duration_s / scene.model.dt);
+  for (std::int64_t k = 0; k < periods; ++k) {
+    runner.period();
+    const numen::core::Data& d = runner.data();
+    for (int i = 0; i < d.num_contacts; ++i) {
+      const numen::core::Contact& c = d.contacts[static_cast<std::size_t>(i)];
+      touch(c.body_a, c.depth);
+      touch(c.body_b, c.depth);
+    }
+    for (int i = 0; i < d.num_node_contacts; ++i) {
+      const numen::core::NodeContact& c = d.node_contacts[static_cast<std::size_t>(i)];
+      touch(c.body_b, c.depth);
+    }
+  }
+  runner.finish();
+  summary = runner.summary();
+  for (std::size_t i = 0; i < out.size() && i < summary.devices.size(); ++i)
+    out[i].force_max_n = summary.devices[i].feedback_force_max_n;
+  return out;
+}
+
+}  // namespace
+
+// Two devices in the multirate god-object (issue 54; docs/multirate.md, "Several devices"): the
+// bimanual scene's two instruments, each on its own device, both in the device loop (a composite
+// god-object), the organ in the scene loop; 1.5 s of each hand pressing the organ. Against the
+// single-rate run, at scene rates of 1 kHz and 100 Hz: every period clean, both devices touch the
+// organ and feel it, each device's largest feedback force within 35 % of single-rate's; the
+// deepest contact of each within 3x single-rate's at 1 kHz and under 2 mm at 100 Hz: the organ
+// in the scene loop goes deeper than single-rate, with one device as with two (docs/organs.md,
+// "Organs in multirate").
+TEST(RunMultirate, BimanualSceneBothDevicesInTheDeviceLoopAgainstSingleRate) {
+  NUMEN_SKIP_UNDER_SANITIZER("three runs compare figures, which is not what a sanitizer checks "
+                             "(RunMultirate.BimanualScenePeriodNeverAllocates runs the same path)");
+  NUMEN_REQUIRE_DEFORMABLE();
+  NUMEN_REQUIRE_ARTICULATION();
+  numen::test::TempDir dir;
+  RunSummary single_summary;
+  const std::vector<BimanualDevice> single = run_bimanual(bimanual_window(dir, 0.0, 0.0), single_summary);
+  ASSERT_EQ(single.size(), 2u);
+  for (std::size_t i = 0; i < 2; ++i) {
+    std::printf("single-rate 1 kHz       device %zu: deepest %.3f mm, force max %.3f N\n", i,
+                single[i].deepest_mm, single[i].force_max_n);
+    ASSERT_GT(single[i].deepest_mm, 0.0) << "device " << i << " touches the organ";
+  }
+  for (const double scene_dt : {0.001, 0.01}) {
+    RunSummary s;
+    const std::vector<BimanualDevice> multi =
+        run_bimanual(bimanual_window(dir, scene_dt, scene_dt > 0.0015 ? 0.005 : 0.002), s);
+    const numen::sim::RunVerdict v = numen::sim::run_verdict(s);
+    EXPECT_EQ(v.status, numen::sim::ExitStatus::kClean) << (v.reasons.empty() ? "" : v.reasons.front());
+    EXPECT_EQ(s.multirate.planes_dropped, 0);
+    ASSERT_EQ(multi.size(), 2u);
+    for (std::size_t i = 0; i < 2; ++i) {
+      std::printf("multirate scene %4.0f Hz device %zu: deepest %.3f mm, force max %.3f N\n",
+                  1.0 / scene_dt, i, multi[i].deepest_mm, multi[i].force_max_n);
+      EXPECT_GT(multi[i].deepest_mm, 0.0) << "device " << i << " touches the organ";
+      EXPECT_NEAR(multi[i].force_max_n, single[i].force_max_n, 0.35 * single[i].force_max_n)
+          << "N: device " << i << " at " << scene_dt << " s";
+      if (scene_dt < 0.0015)
+        EXPECT_LE(multi[i].deepest_mm, 3.0 * single[i].deepest_mm) << "device " << i;
+      else
+        EXPECT_LT(multi[i].deepest_mm, 2.0) << "mm: device " << i;
+    }
+  }
+}
+
+// Zero allocations with two devices: the bimanual scene's periods in multirate (1 500 device
+// periods, 150 scene periods: the whole window, both hands on the organ), both instruments in
+// the device loop, the organ in the scene loop.
+TEST(RunMultirate, BimanualScenePeriodNeverAllocates) {
+  NUMEN_REQUIRE_DEFORMABLE();
+  NUMEN_REQUIRE_ARTICULATION();
+  numen::test::TempDir dir;
+  const RunSummary s = run_without_allocation(bimanual_window(dir, 0.01, 0.005), "bimanual", 1500);
+  EXPECT_EQ(s.multirate.scene_steps, 150);
+  EXPECT_EQ(s.devices.size(), 2u);
 }

@@ -176,3 +176,64 @@ TEST(SceneMultirate, ANetOnABodyNoGodObjectHoldsIsRefused) {
   EXPECT_NE(std::string(e.what()).find("net 'probe' is on body 'spare', which is in no body's god-object"),
             std::string::npos) << e.what();
 }
+
+namespace {
+
+/// The shipped bimanual scene (two devices) with [multirate] at 5 ms, its graspers left out
+/// (grasping runs in the single-rate step), its files where the shipped scene is, `edit` (from,
+/// to) made when given.
+std::string bimanual_multirate_text(const std::string& from = "", const std::string& to = "") {
+  std::string text = numen::test::shipped_scene_text("bimanual.toml") +
+                     "\n[multirate]\nscene_dt = 0.005\nmargin = 0.005\n";
+  for (const char* grasp : {"[[grasp]]\nname = \"left_grasper\"\njaws = [\"jaw_1_l\", \"jaw_2_l\"]\n",
+                            "[[grasp]]\nname = \"right_grasper\"\njaws = [\"jaw_1_r\", \"jaw_2_r\"]\n"})
+    text = replace(text, grasp, "");
+  const std::string data = std::string("\"") + NUMEN_SOURCE_DIR + "/sim/data/";
+  for (int i = 0; i < 4; ++i) text = replace(text, "\"../data/", data);
+  const std::string dcf = std::string("dcf = \"") + NUMEN_SOURCE_DIR + "/sim/scenes/devices/";
+  while (text.find("dcf = \"devices/") != std::string::npos) text = replace(text, "dcf = \"devices/", dcf);
+  if (!from.empty()) text = replace(text, from, to);
+  return text;
+}
+
+}  // namespace
+
+// Several devices (issue 54): the bimanual scene with [multirate] loads; the second device's
+// first body is in MultirateScene::other_devices, and the god-object holds both instruments
+// (eight bodies, eight joints), the held one by the target.
+TEST(SceneMultirate, SeveralDevicesMakeOneCompositeGodObject) {
+  NUMEN_REQUIRE_DEFORMABLE();
+  NUMEN_REQUIRE_ARTICULATION();
+  TempDir dir;
+  const Scene s = numen::sim::load_scene(dir.write("bimanual_mr.toml", bimanual_multirate_text()));
+  ASSERT_TRUE(s.multirate.has_value());
+  ASSERT_EQ(s.multirate->other_devices.size(), 1u);
+  const numen::core::Model& m = s.model;
+  EXPECT_EQ(m.bodies[static_cast<std::size_t>(s.multirate->other_devices[0])].name.back(), 'r')
+      << "a body of device \"right\"";
+  const std::vector<int> god =
+      numen::core::god_object_bodies(m, s.multirate->tools[0], s.multirate->other_devices);
+  EXPECT_EQ(god.size(), 8u) << "both instruments' sleeve, tube and jaws";
+  numen::core::Model device;
+  ASSERT_EQ(numen::core::make_god_object_model(m, s.multirate->tools[0], m.dt, device, s.multirate->other_devices), "");
+  EXPECT_EQ(device.num_bodies(), 8);
+  EXPECT_EQ(device.num_joints(), 8);
+  EXPECT_EQ(device.bodies[static_cast<std::size_t>(device.initial_held_body)].name, "tube_l");
+}
+
+// With several devices the first holds a body throughout: a release (`attach = "none"`) is
+// refused at the event's key, and so is a first device without `attach`.
+TEST(SceneMultirate, SeveralDevicesRefuseAReleaseOfTheHeldBody) {
+  NUMEN_REQUIRE_DEFORMABLE();
+  NUMEN_REQUIRE_ARTICULATION();
+  TempDir dir;
+  const InputError release = load_error(
+      dir, bimanual_multirate_text("\n[multirate]", "\n[[event]]\ntime = 1.0\nattach = \"none\"\n\n[multirate]"),
+      "release.toml");
+  EXPECT_EQ(release.key(), "event[0].attach") << release.what();
+  EXPECT_NE(std::string(release.what()).find("holds a body throughout"), std::string::npos) << release.what();
+  const InputError unheld =
+      load_error(dir, bimanual_multirate_text("attach = \"tube_l\"\n", ""), "unheld.toml");
+  EXPECT_EQ(unheld.key(), "multirate.scene_dt") << unheld.what();
+  EXPECT_NE(std::string(unheld.what()).find("holding a body from the start"), std::string::npos) << unheld.what();
+}

@@ -170,9 +170,12 @@ struct ContactPlaneSet {
 
 /// The god-object of held body `body` in `scene`: `body` and every body joined to it by joints
 /// (its articulation, ArticulationTopology::body_tree; the default scene's sleeve, tube and
-/// jaws), in index order — the god-object model's bodies in the same order. Empty for a body
-/// out of range. Load time: allocates.
-std::vector<int> god_object_bodies(const Model& scene, int body);
+/// jaws), with, for a loop of several devices, the articulation of each body of `others` (the
+/// bodies the other devices drive, MultirateSettings::other_devices: a composite god-object, each
+/// instrument its own articulation), in index order — the god-object model's bodies in the same
+/// order. Empty for a body out of range; a body of `others` out of range is skipped. Load time:
+/// allocates.
+std::vector<int> god_object_bodies(const Model& scene, int body, std::span<const int> others = {});
 
 /// The model the device loop steps: the god-object of `body` (god_object_bodies(): the held
 /// body and its articulation, with their masses, inertias, spheres, materials, coupling gains,
@@ -187,15 +190,23 @@ std::vector<int> god_object_bodies(const Model& scene, int body);
 /// linearly implicit or symplectic Euler (the impulse hand-back needs the step's effective
 /// contact force, MultirateGodObject), a device_dt ≤ 0 or not finite, a body of the god-object
 /// with a mesh (BodyModel::mesh: the planes stand for its spheres only; the tool's spheres against
-/// another body's mesh are planes like any contact). Load time: allocates.
-std::string make_god_object_model(const Model& scene, int body, double device_dt, Model& out);
+/// another body's mesh are planes like any contact). With `others` (several devices,
+/// god_object_bodies()), the model holds every device's articulation, each body driven as in the
+/// scene (the held body by the target, the others by their body targets, Eq. 6; each body's
+/// Eq. 8 gains its device's, Model::extra_feedback), and the bodies of two articulations collide
+/// with each other in the device step (step_god_object(): instrument clashes at the device
+/// rate); refused: a body of `others` out of range. Load time: allocates.
+std::string make_god_object_model(const Model& scene, int body, double device_dt, Model& out,
+                                  std::span<const int> others = {});
 
 /// A copy of `scene` in which every sphere of the god-object of `body` (god_object_bodies()),
 /// and every node sphere of a net on it, has its radius grown by `margin` (m, ≥ 0): the scene loop detects the god-object's contacts
 /// on it, so that a contact is found, and its plane built, while the sphere is still up to
 /// `margin` away from the surface. Returns "" and fills `out`, or a message (body out of range,
-/// margin < 0 or not finite). Load time: allocates.
-std::string make_proximity_model(const Model& scene, int body, double margin, Model& out);
+/// margin < 0 or not finite). `others`: the other devices' bodies (god_object_bodies()), whose
+/// articulations' spheres are grown too. Load time: allocates.
+std::string make_proximity_model(const Model& scene, int body, double margin, Model& out,
+                                 std::span<const int> others = {});
 
 /// The planes of the god-object's contacts in `data` (after detect_contacts on the proximity
 /// model `scene`, whose god-object spheres are grown by `margin`); `device_body[b]` is scene
@@ -215,8 +226,11 @@ void build_contact_planes(const Model& scene, const Data& data, std::span<const 
 /// model `model`), each plane moved by its carrier: every plane with d > 0 (see ContactPlane;
 /// a node plane with d + depth_offset > 0, its Contact::stiffness_scale s and damping_scale s²)
 /// becomes a contact of its body against a static side moving with the carrier's point velocity
-/// (Contact::surface_velocity), its Contact::sphere_b the plane's index in `planes`. No
-/// allocation.
+/// (Contact::surface_velocity), its Contact::sphere_b the plane's index in `planes`. A model of
+/// several articulations (a composite god-object, make_god_object_model() with other devices)
+/// first gets the sphere contacts between bodies of different articulations (detect_contacts():
+/// the god-object model has no obstacle, net or mesh), body_b ≥ 0, then the planes' (body_b −1).
+/// No allocation.
 void write_plane_contacts(const Model& model, const ContactPlaneSet& planes, Data& data) noexcept;
 
 /// The elastic energy (J) the contact law stores in the planes of `planes` at the god-object's
@@ -256,6 +270,12 @@ struct MultirateSettings {
   /// fold_step⌉ sub-steps, the god-object imposed along its twist (docs/organs.md, "Organs in
   /// multirate": the organ's coarse step folds its surface over the tool).
   double fold_step = 5e-4;
+  /// Several devices in one loop (issue 54): a body each of the other devices (1 .. N−1) drives.
+  /// Their articulations join the held body's in every god-object (god_object_bodies(): a
+  /// composite god-object), so that one device step advances every instrument, each by its own
+  /// target (Eq. 6) and with its own Eq. 8 feedback (Data::feedback_group), and their mutual
+  /// contacts are the device step's (write_plane_contacts()). Empty: one device.
+  std::vector<int> other_devices{};
 };
 
 /// Counters of a MultirateGodObject. The device loop writes device_steps, stale_models,
@@ -390,7 +410,8 @@ class MultirateGodObject {
   /// dt = N·scene.dt, the articulation imposed: CouplingMode::kDirect, its joints removed) and
   /// its Data; and the scene-loop model and Data without a god-object (all reset from `scene`). Throws std::invalid_argument with the
   /// message of make_god_object_model() / make_proximity_model(), for N < 1, a margin < 0, no
-  /// body at all (`body` −1 and no tools), or a net on a body in none of their god-objects
+  /// body at all (`body` −1 and no tools), `body` −1 with other devices (settings.other_devices:
+  /// the first device holds a body from the start), or a net on a body in none of their god-objects
   /// and not anchored (the device loop feels a net only through its god-object's node planes,
   /// or an organ's through planes on the god-object's spheres). Allocates (load time).
   MultirateGodObject(const Model& scene, int body, const MultirateSettings& settings);
@@ -427,7 +448,9 @@ class MultirateGodObject {
   /// Device loop: makes `body` the god-object from the next period on (−1: none). The released
   /// body continues in the scene loop from the god-object's pose and twist; the new one starts
   /// from its state in the last model. Returns false, changing nothing, for a body that was not
-  /// one of the constructor's. Never allocates.
+  /// one of the constructor's, and for −1 with other devices (MultirateSettings::other_devices:
+  /// their instruments ride in every god-object, and with none held the scene loop would step
+  /// them without their targets). Never allocates.
   bool select(int body) noexcept;
 
   /// Device loop: what a control loop reads of the device period, into `out` (a Data of the
@@ -496,6 +519,7 @@ class MultirateGodObject {
 
   int ratio_;
   double margin_;
+  bool other_devices_ = false;    // several devices: a body is held throughout (select())
   int fold_substeps_ = 1;         // sub-steps of a folded scene step: ⌈scene_dt / fold_step⌉
   std::vector<Slot> slots_;       // one per body the device may hold (at least one)
   Model free_scene_model_;        // the scene loop without a god-object

@@ -107,6 +107,10 @@ struct MultirateScene {
   double fold_step_s = 5e-4;
   /// The bodies the device holds in the run (the initially held one, then the events' in order).
   std::vector<int> tools;
+  /// Several devices: the first body each of Scene::extra_devices drives (its binding's first
+  /// link to a body), whose articulation joins the god-object (core::MultirateSettings::
+  /// other_devices).
+  std::vector<int> other_devices;
 };
 
 /// One device of a scene beyond the first: entries 1 .. N−1 of a `[[device]]` array
