@@ -243,7 +243,7 @@ constexpr RunFigure kFigures[] = {
      [](const S& s) noexcept { return count(s.task.placed); }, task},
     {"task.handovers", "", "[task]: hand-overs (a grasper let go of an object another held)", K::kCount,
      [](const S& s) noexcept { return count(s.task.handovers); }, task},
-    {"task.drops", "", "[task]: objects let go with no grasper holding them, but where placed", K::kCount,
+    {"task.drops", "", "[task]: let-gos (release or slip) that left an object held by no grasper, its placement excepted", K::kCount,
      [](const S& s) noexcept { return count(s.task.drops); }, task},
     {"task.time_s", "s", "[task]: first grasp of an object to the last placement", K::kReal,
      [](const S& s) noexcept { return real(s.task.time_s); }, task},

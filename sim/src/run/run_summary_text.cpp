@@ -52,8 +52,8 @@ constexpr RunSummarySegment kLayout[] = {
      set("grasp.started")},
     {"  grasp event: {*}\n", set("grasp.started"), {}, {}, "grasp.events"},
     {"  grasper {*}\n", set("grasp.graspers"), {}, {}, "grasp.graspers"},
-    {"  task: {task.transferred} of {task.objects} objects transferred ({task.placed} placed), "
-     "{task.handovers} hand-overs, {task.drops} drops, in {task.time_s} s\n",
+    {"  task: {task.transferred} of {task.objects} objects transferred ({task.placed} placed); "
+     "hand-overs {task.handovers}, drops {task.drops}; time {task.time_s} s\n",
      set("task.objects")},
     {"  task object: {*}\n", set("task.objects"), {}, {}, "task.lines"},
     {"  device {*}\n", set("device_lines"), {}, {}, "device_lines"},

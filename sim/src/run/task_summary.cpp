@@ -24,28 +24,11 @@ struct ObjectEvent {
   bool slip = false;
 };
 
-/// Whether `binding` drives a jaw of `g` (prescribes its joint or links its body).
-bool drives(const platform::DeviceBinding& binding, const core::GraspModel& g) noexcept {
-  for (const platform::AxisPrescription& p : binding.prescriptions)
-    if (p.joint == g.jaw_joints[0] || p.joint == g.jaw_joints[1]) return true;
-  for (const platform::LinkBinding& l : binding.links)
-    if (l.body >= 0 && (l.body == g.jaws[0] || l.body == g.jaws[1])) return true;
-  return false;
-}
-
 std::string plural(std::int64_t n, const char* one, const char* many) {
   return std::to_string(n) + " " + (n == 1 ? one : many);
 }
 
 }  // namespace
-
-int grasper_device(const Scene& scene, int grasper) noexcept {
-  const core::GraspModel& g = scene.model.grasps[static_cast<std::size_t>(grasper)];
-  if (drives(scene.binding, g)) return 0;
-  for (std::size_t i = 0; i < scene.extra_devices.size(); ++i)
-    if (drives(scene.extra_devices[i].binding, g)) return static_cast<int>(i + 1);
-  return -1;
-}
 
 double distance_to_capsule_axis(const core::Obstacle& o, const core::Vec3& p) noexcept {
   const core::Vec3 axis = o.pose.orientation * core::Vec3::UnitZ();

@@ -13,10 +13,6 @@ namespace numen::sim {
 
 struct RunSummary;
 
-/// The grasper of `scene` whose jaws a device drives (the device whose binding prescribes a
-/// jaw's joint, or links a jaw's body): its index, device 0 first; -1 when none does.
-int grasper_device(const Scene& scene, int grasper) noexcept;
-
 /// Fills RunSummary::task from `data` after a run of `scene` (nothing without a [task]). Per
 /// object, the events of every grasper's log that name it are merged in time (a grasp before a
 /// let-go in the same step): a let-go while another grasper holds it is a hand-over; a let-go

@@ -209,6 +209,11 @@ struct Scene {
   std::optional<SceneTask> task;
 };
 
+/// The device that turns the jaws of grasper `grasper` of `scene` (model.grasps): the device
+/// whose binding prescribes a jaw's joint or links a jaw's body, as an index (0: Scene::device,
+/// i: extra_devices[i − 1]); -1 when none does.
+int grasper_device(const Scene& scene, int grasper) noexcept;
+
 /// The number of devices of `scene`: 1 + scene.extra_devices.size().
 inline std::size_t num_devices(const Scene& scene) noexcept { return 1 + scene.extra_devices.size(); }
 
