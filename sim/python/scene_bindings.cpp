@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "bindings.hpp"
+#include "numen/sim/scene/scene_info.hpp"
 #include "numen/sim/input/input_error.hpp"
 #include "numen/sim/input/shipped_files.hpp"
 
@@ -228,6 +229,25 @@ void bind_scene(py::module_& m) {
       .def_property_readonly("has_device", [](const sim::Scene& s) { return s.has_device; },
                              "The scene has a [device] (run_scene needs one; without it the "
                              "held body's target is set directly).")
+      .def_property_readonly(
+          "devices",
+          [](const sim::Scene& s) {
+            py::list out;
+            for (const sim::DeviceLine& d : sim::device_lines(s)) {
+              py::dict e;
+              e["name"] = d.name;
+              e["kind"] = d.kind;
+              e["axes"] = d.axes;
+              e["node_ids"] = d.node_ids;
+              e["bodies"] = d.bodies;
+              e["graspers"] = d.graspers;
+              out.append(std::move(e));
+            }
+            return out;
+          },
+          "Every device, device 0 first (docs/scenes.md \"Several devices\"): a dict each of "
+          "name, kind, axes (count), node_ids (its CANopen nodes; empty: minimal protocol), "
+          "bodies (those its links drive) and graspers (whose jaws its axes turn).")
       .def_property_readonly(
           "model", [](const sim::Scene& s) -> const core::Model& { return s.model; },
           py::return_value_policy::reference_internal,

@@ -99,6 +99,7 @@ ScriptedPath::ScriptedPath(std::vector<PathSegment> segments, const TrajectorySa
     s.spin = in.angular_velocity;
     if (in.jaw) check.finite("jaw", *in.jaw);
     s.jaw = in.jaw.value_or(previous.jaw);
+    s.jaw0 = previous.jaw;
 
     if (const auto* line = std::get_if<LineSegment>(&in.shape)) {
       s.kind = Kind::line;
@@ -159,6 +160,10 @@ ScriptedPath::ScriptedPath(std::vector<PathSegment> segments, const TrajectorySa
       s.step_time = step.step_time;
       if (step.to_orientation) s.q1 = check.unit("to_orientation", *step.to_orientation);
     }
+    if (!std::isfinite(in.jaw_time) || in.jaw_time < 0.0 || in.jaw_time > s.duration)
+      check.fail("jaw_time", "must be in [0, duration] = [0, " + number(s.duration) + "] s, got " +
+                                 number(in.jaw_time));
+    s.jaw_time = in.jaw_time;
     segments_.push_back(s);
     previous = evaluate_segment(s, s.duration);
     t0 += s.duration;
@@ -174,7 +179,7 @@ double ScriptedPath::segment_start(std::size_t i) const noexcept { return segmen
 
 TrajectorySample ScriptedPath::evaluate_segment(const Resolved& s, double tau) noexcept {
   TrajectorySample out;
-  out.jaw = s.jaw;
+  out.jaw = tau < s.jaw_time ? s.jaw0 + (s.jaw - s.jaw0) * (tau / s.jaw_time) : s.jaw;
   core::Quat base = s.q0;
   switch (s.kind) {
     case Kind::line:

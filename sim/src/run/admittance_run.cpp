@@ -13,6 +13,7 @@
 #include "numen/platform/periodic_timer.hpp"
 #include "numen/sim/device/simulated_instrument.hpp"
 #include "numen/sim/run/grasp_summary.hpp"
+#include "numen/sim/run/task_summary.hpp"
 #include "numen/sim/input/input_error.hpp"
 #include "numen/sim/run/run.hpp"
 
@@ -199,6 +200,7 @@ RunSummary AdmittanceRunner::summary() const {
   s.nonfinite_steps = data_.nonfinite_steps;
   s.invalid_target_steps = data_.invalid_target_steps;
   summarize_grasps(scene_->model, data_, s);
+  summarize_task(*scene_, data_, s);
   s.nan_detected = data_.nonfinite_steps > 0;
   s.contact_overflow = data_.contact_overflow_steps;
   for (auto dir :

@@ -18,8 +18,9 @@ std::vector<RecordList> record_lists() {
   lists.push_back({"run summary: `numen run --json`, the text summary, numen.run_scene",
                    "run_figures()", std::move(figures)});
   const std::vector<std::string> axis = {"<axis>"};
+  const std::vector<std::string> device = {"<device>"};
   lists.push_back({"trace: `numen run --trace` CSV", "trace_columns()",
-                   trace_column_names(TraceKind::kCsv, axis)});
+                   trace_column_names(TraceKind::kCsv, axis, device)});
   std::vector<std::string> stream = {"period", "time_ns", "flags"};
   for (std::string& n : trace_column_names(TraceKind::kStream, axis))
     stream.push_back(std::move(n));

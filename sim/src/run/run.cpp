@@ -227,6 +227,12 @@ SceneRunner::SceneRunner(const Scene& scene, std::size_t trace_capacity, const B
   std::vector<std::string> axis_names;
   for (const hal::AxisConfig& a : scene.device.axes) axis_names.push_back(a.name);
   trace_.set_axis_names(std::move(axis_names));
+  std::vector<std::string> device_names;
+  for (std::size_t i = 0; i < scene.extra_devices.size() && i < extra_trace_body_.size(); ++i) {
+    device_names.push_back(scene.extra_devices[i].device.name);
+    extra_trace_body_[i] = extra_device_body(scene, i);
+  }
+  trace_.set_device_names(std::move(device_names));
   if (writer_) writer_->start();
   acc_.bus = bus.spec;
   describe_scene(scene, acc_);
@@ -400,6 +406,20 @@ void SceneRunner::record(const platform::PeriodReport& report, const PeriodConta
     rec.handle_force_n = plant->figures().handle_force_n;
     rec.device_port_energy_j = plant->figures().port_energy_j;
   }
+  rec.num_extra_devices = static_cast<int>(std::min(extra_devices_.size(), extra_trace_body_.size()));
+  for (int i = 0; i < rec.num_extra_devices; ++i) {
+    const platform::PeriodReport& r = loop_.last_report(static_cast<std::size_t>(i) + 1);
+    DeviceTraceRecord& t = rec.devices[static_cast<std::size_t>(i)];
+    const auto single = [](const core::Vec3& v) {
+      return std::array<float, 3>{static_cast<float>(v.x()), static_cast<float>(v.y()), static_cast<float>(v.z())};
+    };
+    t.sample_valid = r.sample_valid;
+    t.feedback_force = single(r.feedback.force);
+    if (const int b = extra_trace_body_[static_cast<std::size_t>(i)]; b >= 0) {
+      t.target = single(data_.body_targets[static_cast<std::size_t>(b)].pose.position);
+      t.tool = single(data_.bodies[static_cast<std::size_t>(b)].position);
+    }
+  }
   if (const hal::DeviceReport d = loop_.device().report(); d.managed) {
     if (d.emcys > emcys_traced_) {
       rec.emcys = static_cast<int>(std::min<std::uint64_t>(d.emcys - emcys_traced_, 1'000'000));
@@ -566,6 +586,15 @@ RunSummary run_scene(const Scene& scene, const RunOptions& options) {
   if (s.stopped && options.stop_signal != nullptr) s.stop_signal = options.stop_signal->load();
   judge_run(s);
   return s;
+}
+
+int extra_device_body(const Scene& scene, std::size_t i) noexcept {
+  const SceneDevice& d = scene.extra_devices[i];
+  for (const platform::LinkBinding& l : d.binding.links)
+    if (l.link == 0 && l.body >= 0) return l.body;
+  for (const platform::LinkBinding& l : d.binding.links)
+    if (l.body >= 0 && scene.model.bodies[static_cast<std::size_t>(l.body)].sphere_count > 0) return l.body;
+  return -1;
 }
 
 }  // namespace numen::sim

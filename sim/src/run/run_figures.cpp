@@ -60,6 +60,7 @@ constexpr FigureValue list(const std::vector<std::string>& v) noexcept {
 constexpr bool admittance_run(const S& s) noexcept { return s.admittance.enabled; }
 constexpr bool multirate_run(const S& s) noexcept { return s.multirate.enabled; }
 constexpr bool grasping(const S& s) noexcept { return s.grasping; }
+constexpr bool task(const S& s) noexcept { return s.task.enabled; }
 /// A multirate run that sends feedback forces (not an admittance run, which sends poses).
 constexpr bool multirate_force_run(const S& s) noexcept {
   return s.multirate.enabled && !s.admittance.enabled;
@@ -231,6 +232,23 @@ constexpr RunFigure kFigures[] = {
      [](const S& s) noexcept { return count(s.grasps_slipped); }, grasping},
     {"grasp.events", "", "Each grasp, release and slip: time, grasper, what it held", K::kTextList,
      [](const S& s) noexcept { return list(s.grasp_events); }, grasping},
+    {"grasp.graspers", "", "Each grasper: its device, its counts, the hand-overs it gave and took ([task]), "
+     "the largest feedback force on its device's hand", K::kTextList,
+     [](const S& s) noexcept { return list(s.grasper_lines); }, grasping},
+    {"task.objects", "", "[task]: objects the task names", K::kCount,
+     [](const S& s) noexcept { return count(s.task.objects); }, task},
+    {"task.transferred", "", "[task]: objects placed on a peg after a hand-over", K::kCount,
+     [](const S& s) noexcept { return count(s.task.transferred); }, task},
+    {"task.placed", "", "[task]: objects released onto a peg (within reach of its axis at the end)", K::kCount,
+     [](const S& s) noexcept { return count(s.task.placed); }, task},
+    {"task.handovers", "", "[task]: hand-overs (a grasper let go of an object another held)", K::kCount,
+     [](const S& s) noexcept { return count(s.task.handovers); }, task},
+    {"task.drops", "", "[task]: let-gos (release or slip) that left an object held by no grasper, its placement excepted", K::kCount,
+     [](const S& s) noexcept { return count(s.task.drops); }, task},
+    {"task.time_s", "s", "[task]: first grasp of an object to the last placement", K::kReal,
+     [](const S& s) noexcept { return real(s.task.time_s); }, task},
+    {"task.lines", "", "[task]: each object's grasps, hand-overs, drops and where it ends", K::kTextList,
+     [](const S& s) noexcept { return list(s.task.lines); }, task},
     {"device_lines", "", "A scene of several devices: one line per device (feedback, hand force, "
      "samples, faults); the JSON's `devices` array holds the same figures", K::kTextList,
      [](const S& s) noexcept { return list(s.device_lines); },

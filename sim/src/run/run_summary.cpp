@@ -13,6 +13,7 @@
 #include "numen/sim/run/grasp_summary.hpp"
 #include "numen/sim/run/run.hpp"
 #include "numen/sim/run/run_summary.hpp"
+#include "numen/sim/run/task_summary.hpp"
 
 namespace numen::sim {
 
@@ -173,6 +174,7 @@ RunSummary SceneRunner::summary() const {
   s.invalid_target_steps = data_.invalid_target_steps;
   summarize_grasps(scene_->model, data_, s);
   summarize_devices(s);
+  summarize_task(*scene_, data_, s);
   multirate_.summarize(s);
   s.nan_detected = data_.nonfinite_steps > 0;
   for (const auto& b : data_.bodies)

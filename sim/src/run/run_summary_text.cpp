@@ -51,6 +51,11 @@ constexpr RunSummarySegment kLayout[] = {
     {"  grasps: {grasp.started} started, {grasp.released} released, {grasp.slipped} slipped\n",
      set("grasp.started")},
     {"  grasp event: {*}\n", set("grasp.started"), {}, {}, "grasp.events"},
+    {"  grasper {*}\n", set("grasp.graspers"), {}, {}, "grasp.graspers"},
+    {"  task: {task.transferred} of {task.objects} objects transferred ({task.placed} placed); "
+     "hand-overs {task.handovers}, drops {task.drops}; time {task.time_s} s\n",
+     set("task.objects")},
+    {"  task object: {*}\n", set("task.objects"), {}, {}, "task.lines"},
     {"  device {*}\n", set("device_lines"), {}, {}, "device_lines"},
 
     {"  tracking error in free space (tool and hand out of contact): rms "

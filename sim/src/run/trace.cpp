@@ -65,13 +65,19 @@ void Trace::write_csv(const std::string& path) const {
     axis_names.push_back(static_cast<std::size_t>(i) < axis_names_.size()
                              ? axis_names_[static_cast<std::size_t>(i)]
                              : std::to_string(i));
-  const std::vector<std::string> names = trace_column_names(TraceKind::kCsv, axis_names);
+  const int devices = records_.empty() ? 0 : records_.front().num_extra_devices;
+  std::vector<std::string> device_names;
+  for (int i = 0; i < devices; ++i)
+    device_names.push_back(static_cast<std::size_t>(i) < device_names_.size()
+                               ? device_names_[static_cast<std::size_t>(i)]
+                               : std::to_string(i + 1));
+  const std::vector<std::string> names = trace_column_names(TraceKind::kCsv, axis_names, device_names);
   for (std::size_t c = 0; c < names.size(); ++c) out << (c ? "," : "") << names[c];
   out << '\n';
   out.precision(9);
   std::vector<double> row(names.size());
   for (const TraceRecord& r : records_) {
-    const std::size_t n = trace_column_values(TraceKind::kCsv, r, axes, std::span(row));
+    const std::size_t n = trace_column_values(TraceKind::kCsv, r, axes, std::span(row), devices);
     for (std::size_t c = 0; c < n; ++c) out << (c ? "," : "") << row[c];
     out << '\n';
   }

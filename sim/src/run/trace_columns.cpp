@@ -10,6 +10,11 @@ namespace {
 
 using R = TraceRecord;
 
+/// Device `i` + 1's record of `r` (a zero record past the trace's devices).
+DeviceTraceRecord device(const R& r, int i) noexcept {
+  return i >= 0 && i < r.num_extra_devices ? r.devices[static_cast<std::size_t>(i)] : DeviceTraceRecord{};
+}
+
 // The streamed columns keep their order (tests/hil/scenarios read frames_read … target_z by
 // position: columns 4–10 after period, time_ns, flags).
 constexpr TraceColumn kColumns[] = {
@@ -119,6 +124,23 @@ constexpr TraceColumn kColumns[] = {
      [](const R& r, int) noexcept { return static_cast<double>(r.emcy_code); }, false, true},
     {"grasps_held", "", "Graspers holding a body or tissue after the step (docs/grasping.md)",
      [](const R& r, int) noexcept { return static_cast<double>(r.grasps_held); }},
+    // Devices 1 .. N−1 of a scene of several (device 0's are the columns above).
+    {"sample_valid@", "", "Each other device (a scene of several): 1: its sample was valid",
+     [](const R& r, int i) noexcept { return device(r, i).sample_valid ? 1.0 : 0.0; }, false, false, true},
+    {"target_x@", "m", "... the coupling target of the body it drives (its tool link's, else the first with spheres): x",
+     [](const R& r, int i) noexcept { return static_cast<double>(device(r, i).target[0]); }, false, false, true},
+    {"target_y@", "m", "... y", [](const R& r, int i) noexcept { return static_cast<double>(device(r, i).target[1]); }, false, false, true},
+    {"target_z@", "m", "... z", [](const R& r, int i) noexcept { return static_cast<double>(device(r, i).target[2]); }, false, false, true},
+    {"tool_x@", "m", "... that body's position: x",
+     [](const R& r, int i) noexcept { return static_cast<double>(device(r, i).tool[0]); }, false, false, true},
+    {"tool_y@", "m", "... y", [](const R& r, int i) noexcept { return static_cast<double>(device(r, i).tool[1]); }, false, false, true},
+    {"tool_z@", "m", "... z", [](const R& r, int i) noexcept { return static_cast<double>(device(r, i).tool[2]); }, false, false, true},
+    {"feedback_fx@", "N", "... the feedback force sent to it (Eq. 8): x",
+     [](const R& r, int i) noexcept { return static_cast<double>(device(r, i).feedback_force[0]); }, false, false, true},
+    {"feedback_fy@", "N", "... y",
+     [](const R& r, int i) noexcept { return static_cast<double>(device(r, i).feedback_force[1]); }, false, false, true},
+    {"feedback_fz@", "N", "... z",
+     [](const R& r, int i) noexcept { return static_cast<double>(device(r, i).feedback_force[2]); }, false, false, true},
 };
 
 }  // namespace
@@ -126,10 +148,15 @@ constexpr TraceColumn kColumns[] = {
 std::span<const TraceColumn> trace_columns() noexcept { return kColumns; }
 
 std::vector<std::string> trace_column_names(TraceKind kind,
-                                            std::span<const std::string> axis_names) {
+                                            std::span<const std::string> axis_names,
+                                            std::span<const std::string> device_names) {
   std::vector<std::string> names;
   for (const TraceColumn& c : kColumns) {
     if (!in_trace(c, kind)) continue;
+    if (c.per_device) {
+      for (const std::string& d : device_names) names.push_back(std::string(c.name) + d);
+      continue;
+    }
     if (!c.per_axis) {
       names.emplace_back(c.name);
       continue;
@@ -140,11 +167,11 @@ std::vector<std::string> trace_column_names(TraceKind kind,
 }
 
 std::size_t trace_column_values(TraceKind kind, const TraceRecord& row, int num_axes,
-                                std::span<double> out) noexcept {
+                                std::span<double> out, int num_extra_devices) noexcept {
   std::size_t n = 0;
   for (const TraceColumn& c : kColumns) {
     if (!in_trace(c, kind)) continue;
-    const int repeat = c.per_axis ? num_axes : 1;
+    const int repeat = c.per_device ? num_extra_devices : c.per_axis ? num_axes : 1;
     for (int a = 0; a < repeat && n < out.size(); ++a) out[n++] = c.get(row, a);
   }
   return n;
@@ -156,6 +183,7 @@ std::string format_trace_columns_markdown() {
     out += "| `";
     out += c.name;
     if (c.per_axis) out += "<axis>";
+    if (c.per_device) out += "<device>";
     out += "` | ";
     out += c.unit;
     out += c.streamed ? " | csv, stream | " : " | csv | ";

@@ -19,6 +19,7 @@
 #include "numen/sim/device/simulated_instrument.hpp"
 #include "scene_articulation.hpp"
 #include "scene_grasp.hpp"
+#include "scene_task.hpp"
 #include "scene_multirate.hpp"
 #include "scene_deformable.hpp"
 #include "scene_device.hpp"
@@ -61,15 +62,16 @@ PathSegment parse_segment(const TomlTable& s) {
   seg.orientation = optional_quat(s, "orientation");
   seg.angular_velocity = s.vec3_or("angular_velocity", Vec3::Zero());
   if (s.has("jaw")) seg.jaw = s.number("jaw");
+  seg.jaw_time = s.number_or("jaw_time", 0.0);
   if (type == "line") {
-    s.allow_only({"type", "orientation", "angular_velocity", "jaw", "from", "to", "duration"});
+    s.allow_only({"type", "orientation", "angular_velocity", "jaw", "jaw_time", "from", "to", "duration"});
     LineSegment l;
     l.from = optional_vec3(s, "from");
     l.to = s.vec3("to");
     l.duration = s.number("duration");
     seg.shape = l;
   } else if (type == "circle") {
-    s.allow_only({"type", "orientation", "angular_velocity", "jaw", "centre", "radius", "axis",
+    s.allow_only({"type", "orientation", "angular_velocity", "jaw", "jaw_time", "centre", "radius", "axis",
                   "period", "start_phase", "duration"});
     CircleSegment c;
     c.centre = optional_vec3(s, "centre");
@@ -80,13 +82,13 @@ PathSegment parse_segment(const TomlTable& s) {
     c.duration = s.number("duration");
     seg.shape = c;
   } else if (type == "hold") {
-    s.allow_only({"type", "orientation", "angular_velocity", "jaw", "position", "duration"});
+    s.allow_only({"type", "orientation", "angular_velocity", "jaw", "jaw_time", "position", "duration"});
     HoldSegment h;
     h.position = optional_vec3(s, "position");
     h.duration = s.number("duration");
     seg.shape = h;
   } else {
-    s.allow_only({"type", "orientation", "angular_velocity", "jaw", "from", "to", "to_orientation",
+    s.allow_only({"type", "orientation", "angular_velocity", "jaw", "jaw_time", "from", "to", "to_orientation",
                   "step_time", "duration"});
     StepSegment st;
     st.from = optional_vec3(s, "from");
@@ -344,7 +346,7 @@ Scene load_scene(const std::string& path, const SceneOverrides& overrides) {
                    "integrator", "coupling",    "solver",   "material",  "contact_default",
                    "contact",    "body",        "obstacle", "device",    "bus",
                    "trajectory", "event",       "joint",    "baumgarte", "deformable",
-                   "multirate",  "grasp"});
+                   "multirate",  "grasp",       "task"});
   scene.name = root.string_or("name", std::filesystem::path(path).stem().string());
   scene.description = root.string_or("description", "");
   // Parts this build left out (features.hpp): refused before anything else is read.
@@ -412,6 +414,7 @@ Scene load_scene(const std::string& path, const SceneOverrides& overrides) {
   }
   parse_articulation(root, body_tables, scene);
   parse_grasps(root, scene);
+  parse_task(root, scene);
   // Nets after the bodies' starting poses are known (their nodes start there).
   if constexpr (core::kWithDeformable)
     parse_deformables(root, dir, scene.model, scene.net_triangles, scene.net_loads, scene.warnings);

@@ -31,7 +31,24 @@ int jaw_body(const TomlTable& t, const toml::array& jaws, std::size_t k, const c
   t.fail("jaws", "no body named \"" + name->get() + "\"");
 }
 
+/// Whether `binding` drives a jaw of `g` (prescribes its joint or links its body).
+bool drives_jaws(const platform::DeviceBinding& binding, const core::GraspModel& g) noexcept {
+  for (const platform::AxisPrescription& p : binding.prescriptions)
+    if (p.joint == g.jaw_joints[0] || p.joint == g.jaw_joints[1]) return true;
+  for (const platform::LinkBinding& l : binding.links)
+    if (l.body >= 0 && (l.body == g.jaws[0] || l.body == g.jaws[1])) return true;
+  return false;
+}
+
 }  // namespace
+
+int grasper_device(const Scene& scene, int grasper) noexcept {
+  const core::GraspModel& g = scene.model.grasps[static_cast<std::size_t>(grasper)];
+  if (drives_jaws(scene.binding, g)) return 0;
+  for (std::size_t i = 0; i < scene.extra_devices.size(); ++i)
+    if (drives_jaws(scene.extra_devices[i].binding, g)) return static_cast<int>(i + 1);
+  return -1;
+}
 
 void parse_grasps(const TomlTable& root, Scene& scene) {
   core::Model& m = scene.model;

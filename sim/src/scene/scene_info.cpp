@@ -165,7 +165,33 @@ SceneInfo describe_scene(const Scene& scene) {
       node->axes.push_back(static_cast<int>(a));
     }
   }
+  info.devices = device_lines(scene);
   return info;
+}
+
+std::vector<DeviceLine> device_lines(const Scene& scene) {
+  std::vector<DeviceLine> lines;
+  const core::Model& m = scene.model;
+  for (std::size_t d = 0; d < num_devices(scene); ++d) {
+    const hal::DeviceConfig& config = d == 0 ? scene.device : scene.extra_devices[d - 1].device;
+    const platform::DeviceBinding& binding = d == 0 ? scene.binding : scene.extra_devices[d - 1].binding;
+    DeviceLine l;
+    l.name = config.name;
+    l.kind = hal::to_string(config.kind);
+    l.axes = static_cast<int>(config.axes.size());
+    if (config.canopen.managed)
+      for (const hal::CanopenAxisConfig& c : config.canopen.axes) l.node_ids.push_back(c.node_id);
+    if (d == 0 && m.initial_held_body >= 0) l.bodies.push_back(m.bodies[static_cast<std::size_t>(m.initial_held_body)].name);
+    for (const platform::LinkBinding& b : binding.links) {
+      if (b.body < 0) continue;
+      const std::string& name = m.bodies[static_cast<std::size_t>(b.body)].name;
+      if (std::find(l.bodies.begin(), l.bodies.end(), name) == l.bodies.end()) l.bodies.push_back(name);
+    }
+    for (std::size_t g = 0; g < m.grasps.size(); ++g)
+      if (grasper_device(scene, static_cast<int>(g)) == static_cast<int>(d)) l.graspers.push_back(m.grasps[g].name);
+    lines.push_back(std::move(l));
+  }
+  return lines;
 }
 
 std::string format_scene_info(const SceneInfo& i) {
@@ -229,6 +255,19 @@ std::string format_scene_info(const SceneInfo& i) {
     os << (n.dcf.empty() ? " (no DCF)" : ", DCF " + n.dcf) << "\n";
   }
   os << "  device loop: " << i.device_loop << "\n";
+  os << "  devices: " << i.devices.size() << "\n";
+  for (const DeviceLine& d : i.devices) {
+    os << "    " << d.name << ": " << d.kind << ", " << d.axes << " axes";
+    if (!d.node_ids.empty()) {
+      os << ", nodes";
+      for (int n : d.node_ids) os << " " << n;
+    }
+    os << "; drives";
+    for (const std::string& b : d.bodies) os << " " << b;
+    if (d.bodies.empty()) os << " nothing";
+    for (const std::string& g : d.graspers) os << "; grasper " << g;
+    os << "\n";
+  }
   for (const PassivityLintRow& r : i.passivity_lint)
     os << "    passivity of " << r.axis_name << ": K " << r.stiffness << ", B " << r.damping
        << " rendered at T " << r.period_s << " s; b " << r.device_damping << " against K T/2 + |B| "
@@ -303,6 +342,15 @@ std::string format_scene_info_json(const SceneInfo& i) {
                  {"axes", std::move(axes)},
                  {"nodes", std::move(nodes)},
                  {"loop", i.device_loop}};
+  nlohmann::ordered_json devices = nlohmann::ordered_json::array();
+  for (const DeviceLine& d : i.devices)
+    devices.push_back({{"name", d.name},
+                       {"kind", d.kind},
+                       {"axes", d.axes},
+                       {"node_ids", d.node_ids},
+                       {"bodies", d.bodies},
+                       {"graspers", d.graspers}});
+  j["devices"] = std::move(devices);
   nlohmann::ordered_json lint = nlohmann::ordered_json::array();
   for (const PassivityLintRow& r : i.passivity_lint)
     lint.push_back({{"axis", r.axis_name},

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <vector>
@@ -98,6 +99,44 @@ TEST(ScriptedPath, SegmentsStartWhereThePreviousEnded) {
   EXPECT_NEAR(mid.pose.orientation.angularDistance(q), 0.0, 1e-15);  // orientation carried on
   EXPECT_EQ(mid.jaw, 0.3);                                           // jaw carried on
   EXPECT_NEAR((path.evaluate(1.9).pose.position - Vec3(0.1, 0.0, 0.1)).norm(), 0.0, 1e-15);
+}
+
+TEST(ScriptedPath, TheJawRampsOverJawTimeFromThePreviousAngle) {
+  // Open at 1.0 rad, then a segment closing to 0.2 rad over its first 0.4 s (jaw_time), then
+  // one without jaw_time: a jump back to 1.0 at its start.
+  numen::sim::TrajectorySample start;
+  start.jaw = 1.0;
+  PathSegment close = hold(Vec3::Zero(), 1.0);
+  close.jaw = 0.2;
+  close.jaw_time = 0.4;
+  PathSegment open = hold(std::nullopt, 0.5);
+  open.jaw = 1.0;
+  const ScriptedPath path({close, open}, start);
+  EXPECT_DOUBLE_EQ(path.evaluate(0.0).jaw, 1.0);
+  EXPECT_NEAR(path.evaluate(0.1).jaw, 0.8, 1e-12);
+  EXPECT_NEAR(path.evaluate(0.3).jaw, 0.4, 1e-12);
+  EXPECT_DOUBLE_EQ(path.evaluate(0.4).jaw, 0.2);
+  EXPECT_DOUBLE_EQ(path.evaluate(0.9).jaw, 0.2);
+  EXPECT_DOUBLE_EQ(path.evaluate(1.0).jaw, 1.0);
+  // Sampled at 1 ms, the ramp moves the jaw 2 mrad a sample (0.8 rad over 400 samples).
+  const auto tr = path.sample(1e-3);
+  double largest = 0.0;
+  for (std::size_t k = 1; k < 1000; ++k) largest = std::max(largest, std::abs(tr[k].jaw - tr[k - 1].jaw));
+  EXPECT_NEAR(largest, 0.002, 1e-9);
+  // A ramp longer than its segment, or negative, is refused at the key.
+  EXPECT_EQ(error_key([] {
+              PathSegment s = hold(Vec3::Zero(), 0.5);
+              s.jaw = 0.1;
+              s.jaw_time = 0.6;
+              ScriptedPath({s});
+            }),
+            "path[0].jaw_time");
+  EXPECT_EQ(error_key([] {
+              PathSegment s = hold(Vec3::Zero(), 0.5);
+              s.jaw_time = -0.1;
+              ScriptedPath({s});
+            }),
+            "path[0].jaw_time");
 }
 
 TEST(ScriptedPath, FirstSegmentStartsAtTheGivenStart) {

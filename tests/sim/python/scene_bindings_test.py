@@ -88,3 +88,16 @@ def test_a_scene_without_device_or_feedback_says_so(tmp_path):
     data.set_target([0.0, 0.0, 0.01], xyzw=[0, 0, 0, 1])
     data.step(scene)
     assert data.coupling_wrench[2] > 0 and np.all(data.feedback_wrench == 0)
+
+
+def test_devices_lists_each_device_with_what_it_drives():
+    if not numen.features["articulation"]:
+        pytest.skip("the peg transfer's instruments have joints")
+    from conftest import load_or_skip
+    peg = load_or_skip("peg_transfer.toml")
+    devices = peg.devices
+    assert [d["name"] for d in devices] == ["left", "right"]
+    assert devices[1]["kind"] == "trocar instrument" and devices[1]["axes"] == 5
+    assert devices[1]["node_ids"] == [6, 7, 8, 9, 10]
+    assert devices[1]["bodies"] == ["sleeve_r", "tube_r", "jaw_1_r", "jaw_2_r"]
+    assert devices[0]["graspers"] == ["left_grasper"]

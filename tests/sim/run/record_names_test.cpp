@@ -128,7 +128,7 @@ TEST(RecordNames, StreamedTraceIsTheCsvTracesStreamedColumnsUnderTheSameNames) {
     listed_stream.push_back(n);
   EXPECT_EQ(list_of(lists, "streamed").names, listed_stream);
   EXPECT_EQ(list_of(lists, "`numen run --trace` CSV").names,
-            sim::trace_column_names(sim::TraceKind::kCsv, axis));
+            sim::trace_column_names(sim::TraceKind::kCsv, axis, std::vector<std::string>{"<device>"}));
 }
 
 // A quantity that is a summary figure has the figure's name in the traces.

@@ -81,6 +81,17 @@ inline sim::RunSummary full_managed_summary() {
   s.grasps_slipped = 1;
   s.grasp_events = {"6.968 s grasp grasper: organ (5 nodes)",
                     "7.026 s release grasper: organ (5 nodes, pull 0.738 N)"};
+  s.grasper_lines = {"grasper (device left): 2 started, 1 released, 1 slipped; hand-overs 1 given, 0 taken; "
+                     "feedback force on its hand max 1.500 N"};
+  s.task.enabled = true;
+  s.task.objects = 2;
+  s.task.transferred = 1;
+  s.task.placed = 1;
+  s.task.handovers = 1;
+  s.task.drops = 1;
+  s.task.time_s = 4.25;
+  s.task.lines = {"ring_1: 2 grasps, 1 hand-over, 0 drops; placed on peg_1 at 5.470 s",
+                  "ring_2: 1 grasp, 0 hand-overs, 1 drop; ends on no peg at (-6.1, -17.8, 2.0) mm"};
   // Two devices (a [[device]] scene): device 0's figures are the summary's own.
   for (const char* name : {"left", "right"}) {
     sim::DeviceRunSummary d;

@@ -66,6 +66,10 @@ TEST(RunSummaryText, PrintsTheValuesInTheirFormats) {
            "  device: limit cycle at 0.375 s: 1.875 mm at 15.000 Hz\n",
            "  grasps: 2 started, 1 released, 1 slipped\n  grasp event: 6.968 s grasp grasper: organ "
            "(5 nodes)\n  grasp event: 7.026 s release grasper: organ (5 nodes, pull 0.738 N)\n",
+           "  grasper grasper (device left): 2 started, 1 released, 1 slipped; hand-overs 1 given, 0 taken; "
+           "feedback force on its hand max 1.500 N\n  task: 1 of 2 objects transferred (1 placed); hand-overs 1, "
+           "drops 1; time 4.250 s\n  task object: ring_1: 2 grasps, 1 hand-over, 0 drops; placed on peg_1 at 5.470 s\n"
+           "  task object: ring_2: ",
            "  device left: feedback force max 1.500 N, torque max 0.000 N·m, torque sent in 0 "
            "periods; closed loop: force on the hand max 2.250 N, hand–handle separation max 0.000 "
            "mm, port energy 0.000 J; invalid periods 0, rejected samples 0, lifecycle active, safe "

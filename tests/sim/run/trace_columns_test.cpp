@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <span>
@@ -20,6 +21,7 @@
 #include "csv_lines.hpp"
 #include "numen/sim/run/run.hpp"
 #include "numen/sim/scene/scene.hpp"
+#include "scene_text.hpp"
 #include "temp_dir.hpp"
 
 namespace {
@@ -66,6 +68,12 @@ TraceRecord distinct_record() {
   r.net_tie_stretch_mm = next();
   r.net_strain_max = next();
   r.solver_residual = next();
+  r.num_extra_devices = 1;  // one device beside device 0: its columns "…@1" (no names given)
+  r.devices[0].sample_valid = true;
+  const auto single = [&next] { return static_cast<float>(next()); };  // 0.125 steps: exact in a float
+  r.devices[0].target = {single(), single(), single()};
+  r.devices[0].tool = {single(), single(), single()};
+  r.devices[0].feedback_force = {single(), single(), single()};
   return r;
 }
 
@@ -79,16 +87,18 @@ TEST(TraceColumns, CsvHeaderIsTheTableAndRowsHoldItsValuesInOrder) {
   const std::vector<std::string> lines = read_lines(dir / "t.csv");
   ASSERT_EQ(lines.size(), 2u);
   const std::vector<std::string> axes = {"0", "1", "2"};
+  const std::vector<std::string> devices = {"1"};
   const std::vector<std::string> names =
-      numen::sim::trace_column_names(numen::sim::TraceKind::kCsv, axes);
+      numen::sim::trace_column_names(numen::sim::TraceKind::kCsv, axes, devices);
   EXPECT_EQ(split_csv(lines[0]), names);
-  // Every column of the table is in the header (per-axis ones once per axis).
+  // Every column of the table is in the header (per-axis ones once per axis, per-device ones
+  // once per other device).
   for (const auto& c : numen::sim::trace_columns()) {
-    const std::string first = std::string(c.name) + (c.per_axis ? "0" : "");
+    const std::string first = std::string(c.name) + (c.per_axis ? "0" : c.per_device ? "1" : "");
     EXPECT_NE(std::find(names.begin(), names.end(), first), names.end()) << c.name;
   }
   std::vector<double> values(names.size());
-  ASSERT_EQ(numen::sim::trace_column_values(numen::sim::TraceKind::kCsv, r, 3, std::span(values)),
+  ASSERT_EQ(numen::sim::trace_column_values(numen::sim::TraceKind::kCsv, r, 3, std::span(values), 1),
             names.size());
   const std::vector<std::string> row = split_csv(lines[1]);
   ASSERT_EQ(row.size(), names.size());
@@ -101,6 +111,9 @@ TEST(TraceColumns, CsvHeaderIsTheTableAndRowsHoldItsValuesInOrder) {
   EXPECT_EQ(std::stod(row[static_cast<std::size_t>(
                 std::find(names.begin(), names.end(), "solver_residual") - names.begin())]),
             r.solver_residual);
+  EXPECT_EQ(std::stod(row[static_cast<std::size_t>(
+                std::find(names.begin(), names.end(), "tool_y@1") - names.begin())]),
+            static_cast<double>(r.devices[0].tool[1]));
 }
 
 TEST(TraceColumns, ValuesStopWhereTheOutputEnds) {
@@ -153,3 +166,49 @@ TEST(TraceColumns, StreamedTraceHeaderIsTheTableAndRowsHoldItsValuesWithoutAlloc
 }
 
 }  // namespace
+
+// A scene of several devices (kTwoDeviceScene): device 0's columns keep their names, each other
+// device's follow them named "<column>@<device>" (docs/outputs.md, "Trace columns"), with its
+// body's target and pose — right_tool ends at its path's end, (0, 0.06, 0).
+TEST(TraceColumns, EachOtherDeviceHasItsColumnsNamedAfterIt) {
+  numen::test::TempDir dir;
+  const numen::sim::Scene scene = numen::sim::load_scene(dir.write("two.toml", numen::test::kTwoDeviceScene));
+  numen::sim::SceneRunner runner(scene, 800);
+  for (int k = 0; k < 750; ++k) runner.period();
+  runner.finish();
+  runner.trace().write_csv((dir / "trace.csv").string());
+  const std::vector<std::string> lines = numen::test::read_lines(dir / "trace.csv");
+  const std::vector<std::string> header = numen::test::split_csv(lines.at(0));
+  const auto column = [&header](const std::string& name) {
+    const auto at = std::find(header.begin(), header.end(), name);
+    EXPECT_NE(at, header.end()) << name;
+    return static_cast<std::size_t>(at - header.begin());
+  };
+  for (const char* name : {"target_x", "tool_x", "feedback_fx", "sample_valid@right", "target_x@right",
+                           "target_y@right", "target_z@right", "tool_x@right", "tool_y@right", "tool_z@right",
+                           "feedback_fx@right", "feedback_fy@right", "feedback_fz@right"})
+    column(name);
+  EXPECT_EQ(std::count_if(header.begin(), header.end(), [](const std::string& n) { return n.find('@') != std::string::npos; }),
+            10);
+  const std::vector<std::string> last = numen::test::split_csv(lines.back());
+  ASSERT_EQ(last.size(), header.size());
+  EXPECT_NEAR(std::stod(last[column("tool_y@right")]), 0.06, 2e-3);
+  EXPECT_NEAR(std::stod(last[column("target_y@right")]), 0.06, 1e-4);
+  EXPECT_NEAR(std::stod(last[column("tool_x")]), 0.01, 2e-3);  // device 0's "left_tool"
+  EXPECT_EQ(last[column("sample_valid@right")], "1");
+  // On the way the right tool lags its target (its own columns, not device 0's).
+  double largest = 0.0;
+  for (std::size_t k = 1; k < lines.size(); ++k) {
+    const std::vector<std::string> row = numen::test::split_csv(lines[k]);
+    largest = std::max(largest, std::abs(std::stod(row[column("target_y@right")]) - std::stod(row[column("tool_y@right")])));
+  }
+  EXPECT_GT(largest, 1e-5);
+  EXPECT_LT(largest, 2e-3);
+  // A scene of one device has no such column.
+  const numen::sim::Scene one = numen::sim::load_scene(dir.write("mini.toml", numen::test::kMiniScene));
+  numen::sim::SceneRunner single(one, 10);
+  for (int k = 0; k < 10; ++k) single.period();
+  single.finish();
+  single.trace().write_csv((dir / "one.csv").string());
+  EXPECT_EQ(numen::test::read_lines(dir / "one.csv").at(0).find('@'), std::string::npos);
+}

@@ -37,7 +37,7 @@ namespace {
 std::vector<std::string> shipped_scenes() {
   std::vector<std::string> out{"construction", "admittance"};
   if (numen::hal::kWithEvdev) out.push_back("mouse");
-  if (core::kWithArticulation) out.insert(out.end(), {"lattice", "phantom"});
+  if (core::kWithArticulation) out.insert(out.end(), {"lattice", "phantom", "peg_transfer"});
   if (core::kWithDeformable) out.push_back("deformable");
   if (core::kWithArticulation && core::kWithDeformable) out.insert(out.end(), {"endobag", "default"});
   return out;
@@ -312,4 +312,34 @@ TEST(SceneInfo, ASimplifiedOrgansNetAndFineSurface) {
   EXPECT_EQ(load.at("fine_max_distance_m").get<double>(), l->fine_max_distance_m);
   EXPECT_EQ(load.at("simplify_cpu_s").get<double>(), l->simplify_cpu_s);
   EXPECT_EQ(load.at("map_heap").get<std::size_t>(), l->map_heap);
+}
+
+// `numen info` lists every device (docs/scenes.md, "Several devices"): the peg transfer's two,
+// each with its CANopen nodes, the bodies its links drive and its grasper; text and JSON agree.
+TEST(SceneInfo, EveryDeviceIsListedWithItsNodesBodiesAndGrasper) {
+  NUMEN_REQUIRE_ARTICULATION();
+  const sim::Scene scene = sim::load_scene(shipped_path("peg_transfer"));
+  const sim::SceneInfo i = sim::describe_scene(scene);
+  ASSERT_EQ(i.devices.size(), 2u);
+  EXPECT_EQ(i.devices[0].name, "left");
+  EXPECT_EQ(i.devices[1].name, "right");
+  EXPECT_EQ(i.devices[1].kind, "trocar instrument");
+  EXPECT_EQ(i.devices[1].axes, 5);
+  EXPECT_EQ(i.devices[0].node_ids, (std::vector<int>{1, 2, 3, 4, 5}));
+  EXPECT_EQ(i.devices[1].node_ids, (std::vector<int>{6, 7, 8, 9, 10}));
+  EXPECT_EQ(i.devices[0].bodies, (std::vector<std::string>{"tube_l", "sleeve_l", "jaw_1_l", "jaw_2_l"}));
+  EXPECT_EQ(i.devices[1].bodies, (std::vector<std::string>{"sleeve_r", "tube_r", "jaw_1_r", "jaw_2_r"}));
+  EXPECT_EQ(i.devices[0].graspers, (std::vector<std::string>{"left_grasper"}));
+  EXPECT_EQ(i.devices[1].graspers, (std::vector<std::string>{"right_grasper"}));
+  const std::string text = sim::format_scene_info(i);
+  EXPECT_NE(text.find("  devices: 2\n    left: trocar instrument, 5 axes, nodes 1 2 3 4 5; drives tube_l sleeve_l "
+                      "jaw_1_l jaw_2_l; grasper left_grasper\n    right: "),
+            std::string::npos)
+      << text;
+  const nlohmann::json j = nlohmann::json::parse(sim::format_scene_info_json(i));
+  ASSERT_EQ(j.at("devices").size(), 2u);
+  EXPECT_EQ(j.at("devices")[1].at("graspers")[0], "right_grasper");
+  EXPECT_EQ(j.at("devices")[1].at("node_ids").size(), 5u);
+  // A scene of one device lists it alone.
+  EXPECT_EQ(sim::describe_scene(sim::load_scene(shipped_path("construction"))).devices.size(), 1u);
 }

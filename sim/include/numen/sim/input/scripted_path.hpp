@@ -86,6 +86,10 @@ struct PathSegment {
   /// a rotation about a fixed world axis at |ω| rad/s. Zero = constant orientation.
   core::Vec3 angular_velocity = core::Vec3::Zero();
   std::optional<double> jaw;  ///< Jaw angle over the segment (rad); none = the previous one.
+  /// Time (s, ≥ 0, ≤ duration) over which the jaw goes linearly from the previous segment's
+  /// angle to `jaw` at the segment's start; 0: it jumps there (a jaw encoder's jump check,
+  /// max_speed · dt, refuses a jump larger than one period's travel).
+  double jaw_time = 0.0;
 };
 
 /// A validated sequence of segments with their starts resolved; a ComputedMotion.
@@ -95,7 +99,7 @@ class ScriptedPath final : public ComputedMotion {
   /// pose and jaw before the first segment (time ignored); `key_prefix` names
   /// the list in error keys ("path" gives "path[2].radius").
   /// Throws InputError (file and line 0, key "<prefix>[i].<field>") for an
-  /// empty list, a duration not finite and > 0, a radius or period not finite
+  /// empty list, a duration not finite and > 0, a jaw_time not in [0, duration], a radius or period not finite
   /// and > 0, a zero or non-finite axis, a step_time outside [0, duration], a
   /// quaternion of zero norm, any non-finite number, or a position (start,
   /// from, to, position, centre; a circle's centre distance + radius) farther
@@ -150,6 +154,8 @@ class ScriptedPath final : public ComputedMotion {
     core::Quat q1 = core::Quat::Identity();  // step: orientation after the jump
     core::Vec3 spin = core::Vec3::Zero();    // world angular velocity (rad/s)
     double jaw = 0.0;                        // rad
+    double jaw0 = 0.0;                       // rad: the jaw before the segment (ramp start)
+    double jaw_time = 0.0;                   // s: the ramp from jaw0 to jaw (0: a jump)
   };
   static TrajectorySample evaluate_segment(const Resolved& s, double tau) noexcept;
 

@@ -296,6 +296,9 @@ class SceneRunner {
     std::int64_t torque_periods = 0, invalid_periods = 0;
   };
   std::array<DeviceTally, platform::kMaxLoopDevices> device_tally_{};
+  // Devices 1 .. N−1: the body whose target and pose the trace's per-device columns carry
+  // (extra_device_body(); -1: none).
+  std::array<int, kMaxTraceExtraDevices> extra_trace_body_{-1, -1, -1};
   // A scene of several devices: each device's report of the period into device_tally_.
   void tally_devices() noexcept;
   // A scene of several devices: each device's figures into s.devices and s.device_lines.
@@ -327,6 +330,11 @@ class SceneRunner {
   core::Vec3 last_feedback_force_ = core::Vec3::Zero();  // sent the period before (N)
   DivergenceMonitor divergence_;  // judged after each period's measurements
 };
+
+/// The body device `i` + 1 of `scene` (extra_devices[i]) drives that the trace's per-device
+/// columns follow: the one its `tool` link (link 0) drives, else the first body with spheres its
+/// links drive; -1 when none (docs/outputs.md, "Trace columns").
+int extra_device_body(const Scene& scene, std::size_t i) noexcept;
 
 /// Runs `scene` for options.duration_s (or the scene's duration) and judges it
 /// (RunSummary::exit_status, run_verdict()).

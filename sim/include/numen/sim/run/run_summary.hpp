@@ -135,6 +135,25 @@ struct DeviceRunSummary {
 /// The text line of one device (RunSummary::device_lines): "NAME: feedback force max F N, ...".
 std::string format_device_line(const DeviceRunSummary& d);
 
+/// The figures of a scene's [task] (summarize_task(); docs/outputs.md, "task.*").
+struct TaskSummary {
+  bool enabled = false;           ///< The scene has a [task].
+  std::int64_t objects = 0;       ///< Objects the task names.
+  /// Objects placed (let go by a release, held by no grasper, and resting within `reach` of a
+  /// peg at the end) after at least one hand-over: the task's transfers.
+  std::int64_t transferred = 0;
+  std::int64_t placed = 0;        ///< Objects placed, handed over or not.
+  /// Hand-overs: a grasper let an object go while another held it.
+  std::int64_t handovers = 0;
+  /// Drops: an object let go (released or slipped) with no other grasper holding it, but for
+  /// the release that placed it.
+  std::int64_t drops = 0;
+  /// The task's time (s): from the first grasp of an object to the last placement (0: none placed).
+  double time_s = 0.0;
+  /// Per object: "NAME: 2 grasps, 1 hand-over, 0 drops; placed on PEG at T s" (or where it ends).
+  std::vector<std::string> lines;
+};
+
 struct RunSummary {
   std::string scene;
   std::string coupling;
@@ -241,6 +260,12 @@ struct RunSummary {
   std::int64_t grasps_slipped = 0;       ///< Grasps that slipped (pull past max_force).
   /// Each grasper's logged events, "6.961 s grasp grasper: organ (7 nodes)" (format_grasp_event()).
   std::vector<std::string> grasp_events;
+  /// Per grasper (summarize_graspers()), in [[grasp]] order: "NAME (device D): …" with its own
+  /// counts, the hand-overs it gave and took and the largest feedback force on its device's hand.
+  std::vector<std::string> grasper_lines;
+  /// The scene's [task] (task_summary.hpp; docs/grasping.md "Peg transfer"): what became of
+  /// each object, from the graspers' logs and the objects' final poses.
+  TaskSummary task;
   /// Per device of a scene of several (docs/scenes.md "Several devices"), device 0 first;
   /// empty for one device. The JSON summary's `devices` array.
   std::vector<DeviceRunSummary> devices;

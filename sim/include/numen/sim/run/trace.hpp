@@ -19,6 +19,21 @@
 
 namespace numen::sim {
 
+/// Devices beside device 0 a trace record carries (platform::kMaxLoopDevices − 1).
+inline constexpr int kMaxTraceExtraDevices = 3;
+
+/// A device other than device 0 in one period, in a scene of several (docs/outputs.md, "Trace
+/// columns": the columns `<name>@<device>`). Its body is the one its `tool` link drives, else the
+/// first body its links drive that has spheres (SceneRunner; -1: none, the pose columns read 0).
+/// Single precision (a trace holds one record per period of the whole run, reserved up front:
+/// 40 bytes a device; 0.1 m to 6 nm): what a trace shows, not a state to restart from.
+struct DeviceTraceRecord {
+  std::array<float, 3> target{};          ///< Its body's coupling target (m, world).
+  std::array<float, 3> tool{};            ///< Its body's position (m, world).
+  std::array<float, 3> feedback_force{};  ///< Eq. 8 force sent to it (N, world).
+  bool sample_valid = false;              ///< Its period's sample was valid.
+};
+
 /// One control period. World frame, SI units except where the name says mm/µs.
 struct TraceRecord {
   double time_s = 0.0;
@@ -65,6 +80,9 @@ struct TraceRecord {
   /// Graspers holding a body or tissue after the step (core::GraspState::holding(); a grasp, a
   /// release or a slip changes it; the summary's grasp.events names each).
   int grasps_held = 0;
+  /// Devices 1 .. num_extra_devices of a scene of several, in order (empty for one device).
+  std::array<DeviceTraceRecord, kMaxTraceExtraDevices> devices{};
+  int num_extra_devices = 0;
 };
 
 /// Builds a record from the state after a step: `report.feedback` is the feedback wrench whose
@@ -89,6 +107,9 @@ class Trace {
   /// Names the device's axes for the per-axis columns ("axis_torque_<name>"; setup only).
   /// Without names the axes are named by their index ("axis_torque_0").
   void set_axis_names(std::vector<std::string> names) { axis_names_ = std::move(names); }
+  /// Names devices 1 .. N−1 of a scene of several for the per-device columns ("target_x@right";
+  /// setup only). Without names they are numbered from 1 ("target_x@1").
+  void set_device_names(std::vector<std::string> names) { device_names_ = std::move(names); }
   /// Writes a header line and one CSV row per record, the columns of trace_columns()
   /// (trace_columns.hpp). Throws std::runtime_error naming the path if it cannot be written.
   void write_csv(const std::string& path) const;
@@ -96,6 +117,7 @@ class Trace {
  private:
   std::vector<TraceRecord> records_;
   std::vector<std::string> axis_names_;
+  std::vector<std::string> device_names_;
   std::uint64_t dropped_ = 0;
 };
 

@@ -134,6 +134,17 @@ struct SceneDevice {
   std::string trocar_note;  ///< How its trocar point was placed; empty if not a trocar.
 };
 
+/// A scene's task (`[task]`; docs/grasping.md, "Peg transfer"): the bodies a bimanual task moves
+/// and the pegs they go to. The run's summary counts each object's grasps, hand-overs, drops and
+/// whether it ended on a peg (task_summary.hpp), from the graspers' logs and the final poses.
+struct SceneTask {
+  std::vector<int> objects;  ///< Body indices (dynamic, distinct), in `objects` order.
+  std::vector<int> pegs;     ///< Obstacle indices (capsules), in `pegs` order.
+  /// An object is on a peg when its centre of mass is within this distance (m, > 0) of the
+  /// peg's axis segment (the capsule's from–to).
+  double reach = 0.005;
+};
+
 /// Everything a run of a scene needs.
 struct Scene {
   std::string file;          ///< Path of the scene file, as given.
@@ -198,7 +209,14 @@ struct Scene {
   /// or a `[[device]]` of one entry). Device 0 is the fields above. Device i's Eq. 8 gains
   /// (`[device.feedback]`) are model.extra_feedback[i − 1] (core::feedback_gains()).
   std::vector<SceneDevice> extra_devices;
+  /// The scene's `[task]`, if it has one.
+  std::optional<SceneTask> task;
 };
+
+/// The device that turns the jaws of grasper `grasper` of `scene` (model.grasps): the device
+/// whose binding prescribes a jaw's joint or links a jaw's body, as an index (0: Scene::device,
+/// i: extra_devices[i − 1]); -1 when none does.
+int grasper_device(const Scene& scene, int grasper) noexcept;
 
 /// The number of devices of `scene`: 1 + scene.extra_devices.size().
 inline std::size_t num_devices(const Scene& scene) noexcept { return 1 + scene.extra_devices.size(); }

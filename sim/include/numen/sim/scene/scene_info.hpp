@@ -69,6 +69,16 @@ struct MeshLine {
   std::size_t map_heap = 0;
 };
 
+/// One device of the scene, device 0 first (docs/scenes.md, "Several devices").
+struct DeviceLine {
+  std::string name;                   ///< Its `name`.
+  std::string kind;                   ///< hal::to_string(DeviceKind).
+  int axes = 0;                       ///< Its axes.
+  std::vector<int> node_ids;          ///< Managed stack: its CANopen nodes, in axis order; else empty.
+  std::vector<std::string> bodies;    ///< The bodies its links drive (device 0: with the held body).
+  std::vector<std::string> graspers;  ///< The graspers whose jaws its axes turn.
+};
+
 /// What a scene compiles to.
 struct SceneInfo {
   std::string name;
@@ -95,9 +105,15 @@ struct SceneInfo {
   std::vector<DeviceNodeLine> device_nodes;  ///< Managed stack only; else empty.
   /// "closed" (the scene declares [device.plant]) or "replay".
   std::string device_loop;
+  /// Every device, device 0 first (one entry for a scene of one device).
+  std::vector<DeviceLine> devices;
   /// The passivity lint of each driven plant axis (Scene::passivity_lint).
   std::vector<PassivityLintRow> passivity_lint;
 };
+
+/// Every device of `scene`, device 0 first: its name, kind, axes, CANopen nodes, the bodies its
+/// links drive and the graspers whose jaws it turns. Load time only: allocates.
+std::vector<DeviceLine> device_lines(const Scene& scene);
 
 /// Describes a loaded scene (makes one Data to measure it). Load time only: allocates.
 SceneInfo describe_scene(const Scene& scene);
@@ -109,7 +125,8 @@ std::string format_scene_info(const SceneInfo& info);
 /// integrator, coupling, dt_s, sizes{...}, stages[{name, runs, skipped_why}],
 /// capacities{...}, model_bytes{sizeof, heap, groups{...}}, meshes[{kind, name, triangles,
 /// vertices, heap, band_heap, band_width_m, band_note}], data_bytes{...},
-/// device{name, kind, managed, axes[{name, rated_torque}], nodes[{node_id, dcf, axes[]}]}.
+/// device{name, kind, managed, axes[{name, rated_torque}], nodes[{node_id, dcf, axes[]}]},
+/// devices[{name, kind, axes, node_ids[], bodies[], graspers[]}].
 std::string format_scene_info_json(const SceneInfo& info);
 
 }  // namespace numen::sim
