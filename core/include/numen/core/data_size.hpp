@@ -25,7 +25,7 @@ struct BufferGroupBytes {
 /// kMaxContacts × sizeof(Contact)) and its heap buffers by group.
 struct DataFootprint {
   std::size_t sizeof_data = 0;
-  /// bodies (states, inputs, outputs, wrenches), collision scratch, contact
+  /// bodies (states, inputs, outputs, wrenches, grasps), collision scratch, contact
   /// solver scratch (capacity.hpp), body solver scratch, joints (states,
   /// prescriptions, joint rows, tree solve), nets (nodes, node contacts,
   /// outputs, net scratch), and the scratch block itself: the one heap object
