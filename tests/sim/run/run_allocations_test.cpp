@@ -59,7 +59,8 @@ class CountingViewSink final : public numen::platform::StateFrameSink {
   std::atomic<std::int64_t> frames{0}, bytes{0};
 };
 
-void expect_no_allocation(const Scene& scene, const char* name) {
+/// Returns the run's summary (the callers may check what the 10,000 periods exercised).
+RunSummary expect_no_allocation(const Scene& scene, const char* name) {
   SceneRunner runner(scene, 10'000);  // construction allocates (trace storage too)
   // A viewer is connected: the state stream publishes every period (1 kHz, its worst case).
   CountingViewSink viewer;
@@ -83,6 +84,7 @@ void expect_no_allocation(const Scene& scene, const char* name) {
     EXPECT_GT(s.node_contacts_max, 0) << name << ": the nets never touched anything";
   }
   EXPECT_FALSE(s.nan_detected);
+  return s;
 }
 
 TEST(RunAllocations, LatticeScenePeriodNeverAllocates) {
@@ -121,6 +123,26 @@ TEST(RunAllocations, OrganScenePeriodNeverAllocates) {
 
 TEST(RunAllocations, MeshObstacleScenePeriodNeverAllocates) {
   expect_no_allocation(mesh_scene(), "mesh");  // the probe presses the mesh lobe at 1–2.7 s
+}
+
+TEST(RunAllocations, BimanualScenePeriodNeverAllocates) {
+  // Two closed-loop devices on one bus, their graspers, the organ: the right hand grasps the
+  // organ's tissue from 6.968 s (docs/grasping.md, "In a run").
+  NUMEN_SKIP_UNDER_SANITIZER(kDeformableRunTooSlow);
+  NUMEN_REQUIRE_DEFORMABLE();
+  NUMEN_REQUIRE_ARTICULATION();
+  const Scene scene = numen::sim::load_scene(std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/bimanual.toml");
+  const RunSummary s = expect_no_allocation(scene, "bimanual");
+  EXPECT_GT(s.grasps_started, 0) << "the grasp path was not exercised";
+}
+
+TEST(RunAllocations, PegTransferScenePeriodNeverAllocates) {
+  // Two devices, rigid objects grasped, carried and handed over in mid-air: the first object
+  // is lifted at 1.434 s and handed over at 3.134 s (docs/grasping.md, "Peg transfer").
+  NUMEN_REQUIRE_ARTICULATION();
+  const Scene scene = numen::sim::load_scene(std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/peg_transfer.toml");
+  const RunSummary s = expect_no_allocation(scene, "peg_transfer");
+  EXPECT_GE(s.grasps_started, 3) << "the grasp and hand-over path was not exercised";
 }
 
 TEST(RunAllocations, MouseScenePeriodNeverAllocates) {
