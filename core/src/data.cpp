@@ -91,7 +91,11 @@ Data make_data(const Model& model) {
     if (model.num_joints() > 0) scratch.articulation.resize(model);
   scratch.collision.resize(model);
   scratch.solver.resize(model);
-  if constexpr (kWithDeformable) scratch.net.resize(model);  // empty without nets
+  if constexpr (kWithDeformable) {
+    scratch.net.resize(model);  // empty without nets
+    // The arrowhead preconditioner's contacts by node (joints only; net_scratch.hpp).
+    scratch.net.node_contact_next.assign(model.joints.empty() ? 0 : data.node_contacts.size(), -1);
+  }
   reset_data(model, data);
   return data;
 }

@@ -42,6 +42,7 @@ void NetScratch::resize(const Model& model) {
   a_direction.assign(n, Vec3::Zero());
   sweep.assign(n, Vec3::Zero());
   body_schur.assign(nb, Mat6::Identity());
+  node_contact_head.assign(model.joints.empty() ? 0 : n, -1);  // arrowhead only
   body_tmp.assign(nb, Vec6::Zero());
   // Positions in the sweep order Model::node_sweep_order (reverse Cuthill–McKee per net).
   sweep_position.assign(n, 0);

@@ -114,8 +114,12 @@ inline core::NetSettings organ_net_settings(const core::TriangleMesh& mesh, cons
 /// `tool_start` (kDirect: imposed; kGodObject: coupled at 1000 N/m, ζ = 0.85). Materials "steel"
 /// (tool) and "tissue" (net): 2e4 N/m, 10 N·s/m, no friction. Implicit Euler, no gravity.
 /// Feedback gains 300 N/m, 1 N·s/m (as the shipped scenes).
+/// With `handle`, body 2 "handle" (100 g, 40 mm above the tool) is the held body instead, the
+/// tool on a revolute joint under it (axis x): the instrument's joints, which take the nets' solve
+/// to the arrowhead preconditioner (docs/net-solver.md).
 inline core::Model organ_model(const core::TriangleMesh& mesh, const OrganParams& p, double dt,
-                               core::CouplingMode mode, double tool_radius, const Vec3& tool_start) {
+                               core::CouplingMode mode, double tool_radius, const Vec3& tool_start,
+                               bool handle = false) {
   core::Model m;
   m.dt = dt;
   m.gravity = Vec3::Zero();
@@ -139,6 +143,23 @@ inline core::Model organ_model(const core::TriangleMesh& mesh, const OrganParams
   m.body_spheres = {core::Sphere{Vec3::Zero(), tool_radius}};
   m.bodies = {anchor, tool};
   m.initial_held_body = 1;
+  if (handle) {
+    core::BodyModel h = tool;
+    h.name = "handle";
+    h.mass = 0.1;
+    h.sphere_count = 0;
+    h.initial_pose.position = tool_start - Vec3(0.0, 0.0, 0.04);
+    m.bodies.push_back(h);
+    m.initial_held_body = 2;
+    core::JointModel j;
+    j.name = "wrist";
+    j.type = core::JointType::kRevolute;
+    j.parent = 2;
+    j.child = 1;
+    j.frame_parent = core::Pose{Vec3(0.0, 0.0, 0.04), core::Quat(Eigen::AngleAxisd(std::acos(0.0), Vec3::UnitY()))};
+    j.frame_child = core::Pose{Vec3::Zero(), core::Quat(Eigen::AngleAxisd(std::acos(0.0), Vec3::UnitY()))};
+    m.joints = {j};
+  }
   m.feedback.k_t = 300.0;
   m.feedback.gamma_t = 1.0;
   EXPECT_EQ(core::add_net(m, mesh, organ_net_settings(mesh, p)), "");
