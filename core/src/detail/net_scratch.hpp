@@ -120,8 +120,8 @@ struct NetScratch {
   std::vector<Mat6> body_schur;     ///< Per body: Schur block S_b of the arrowhead preconditioner (joints).
   /// The arrowhead preconditioner's node contacts grouped by node (joints; build_net_system()):
   /// per node the last of its body-coupling contacts in Data::node_contacts, or -1 (reset to -1
-  /// after use), and per contact the node's previous one, or -1. Sized by resize() for a model
-  /// with joints only.
+  /// after use), and per contact the node's previous one, or -1. For a model with joints only:
+  /// the heads sized by resize(), the links by make_data() (Data::node_contacts' capacity).
   std::vector<std::int32_t> node_contact_head, node_contact_next;
   std::vector<Vec6> body_tmp;       ///< Per body: reduced residual (joints) or g (no joints).
   /// The SSOR sweeps (net_solve.hpp) visit the nodes in the order
