@@ -114,7 +114,7 @@ inline core::NetSettings organ_net_settings(const core::TriangleMesh& mesh, cons
 /// `tool_start` (kDirect: imposed; kGodObject: coupled at 1000 N/m, ζ = 0.85). Materials "steel"
 /// (tool) and "tissue" (net): 2e4 N/m, 10 N·s/m, no friction. Implicit Euler, no gravity.
 /// Feedback gains 300 N/m, 1 N·s/m (as the shipped scenes).
-/// With `handle`, body 2 "handle" (100 g, 40 mm above the tool) is the held body instead, the
+/// With `handle`, body 2 "handle" (100 g, 40 mm behind the tool along −z) is the held body, the
 /// tool on a revolute joint under it (axis x): the instrument's joints, which take the nets' solve
 /// to the arrowhead preconditioner (docs/net-solver.md).
 inline core::Model organ_model(const core::TriangleMesh& mesh, const OrganParams& p, double dt,
