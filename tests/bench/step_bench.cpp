@@ -76,7 +76,7 @@ void step_time(benchmark::State& state, const char* name, const char* coupling,
   if (dense_organ) densify_organ(scene);
   const auto periods = static_cast<std::int64_t>(scene.duration_s / scene.model.dt);
   auto runner = std::make_unique<numen::sim::SceneRunner>(scene);
-  std::int64_t contacts = 0;
+  std::int64_t contacts = 0, iterations = 0;
   numen::platform::LatencyHistogram hist;  // per-step distribution (the time above is a mean)
   for (auto _ : state) {
     if (runner->periods() >= periods) {  // replay the scene from the start
@@ -88,9 +88,12 @@ void step_time(benchmark::State& state, const char* name, const char* coupling,
     state.SetIterationTime(static_cast<double>(runner->last_report().step_ns) * 1e-9);
     hist.record(runner->last_report().step_ns);
     contacts += runner->data().num_contacts;
+    iterations += runner->data().solver_iterations;  // the step's CG iterations: load-independent
   }
   state.counters["contacts_per_step"] =
       benchmark::Counter(static_cast<double>(contacts), benchmark::Counter::kAvgIterations);
+  state.counters["solver_iterations_per_step"] =
+      benchmark::Counter(static_cast<double>(iterations), benchmark::Counter::kAvgIterations);
   state.counters["bodies"] = scene.model.num_bodies();
   state.counters["static_spheres"] = static_cast<double>(scene.model.static_spheres.size());
   state.counters["step_p50_us"] = static_cast<double>(hist.quantile(0.5)) * 1e-3;
