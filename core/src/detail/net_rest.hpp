@@ -20,7 +20,7 @@
 /// alone on its tie (the look-ahead's estimate, net_forces.cpp):
 ///   f_r,i = v_r (m_i + h γ_tie + h² k_tie) / h.
 /// Held with a velocity below v_r dropped: the kinetic energy given up is below ½ m_i v_r² per
-/// node (3.5e-15 J for a 70 mg node at the default 1e-5 m/s).
+/// node (3.2e-14 J for a 70 mg node at the default 3e-5 m/s).
 ///
 /// Only nets on an anchored body (BodyModel::anchored, whose anchors never move) with
 /// rest_speed > 0, and only with the linearly implicit Euler or the trapezoidal rule (one
