@@ -67,10 +67,12 @@ def check(path, every):
     for k, (scene, fr) in enumerate(frames(path)):
         if rest is not None and k % every:
             continue
+        header = struct.unpack_from("<H", fr, 6)[0]  # docs/viewer.md "Frames": header_bytes
         bodies, nodes = struct.unpack_from("<II", fr, 12)
         t = struct.unpack_from("<q", fr, 40)[0] * 1e-9
-        pose = np.frombuffer(fr, "<f4", 7 * bodies, 64).reshape(bodies, 7).astype(float)
-        x = np.frombuffer(fr, "<f4", 3 * nodes, 64 + 60 * bodies).reshape(nodes, 3).astype(float)
+        # body_pose (7 floats a body), target_pose (8 a body), then node_position.
+        pose = np.frombuffer(fr, "<f4", 7 * bodies, header).reshape(bodies, 7).astype(float)
+        x = np.frombuffer(fr, "<f4", 3 * nodes, header + 60 * bodies).reshape(nodes, 3).astype(float)
         if rest is None:
             net = scene["nets"][0]
             begin = net["node_begin"]
