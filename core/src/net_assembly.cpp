@@ -234,8 +234,8 @@ void build_net_system(const Model& model, Data& data) noexcept {
       for (std::int32_t q = a; q >= 0; q = next[q]) {
         const NodeContact& ct = data.node_contacts[static_cast<std::size_t>(q)];
         if (ct.body_b != body) continue;
-        Mat3 w = ct.weight_normal * (ct.normal * ct.normal.transpose());
-        w.diagonal().array() += ct.weight_isotropic;
+        Mat3 w = Mat3::Zero();
+        add_weight(ct.weight_normal, ct.weight_isotropic, ct.normal, w);
         f.leftCols<3>() += w;
         // −W [r]×: column j is −W (r × e_j) = W (e_j × r).
         for (int j = 0; j < 3; ++j) f.col(3 + j) += w * Vec3::Unit(j).cross(ct.r_b);
