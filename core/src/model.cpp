@@ -220,6 +220,8 @@ std::string finalize_model(Model& model) {
            "': anchored (a static body) cannot be held by the device";
   if (model.solver.max_iterations < 1 || !(model.solver.tolerance > 0.0))
     return "solver needs max_iterations >= 1 and tolerance > 0";
+  if (!std::isfinite(model.solver.error_tolerance))
+    return "solver error_tolerance must be finite (<= 0: the tolerance)";
   if (model.solver.error_estimate_delay < 0 ||
       model.solver.error_estimate_delay > kMaxErrorEstimateDelay)
     return "solver error_estimate_delay must be in [0, " + std::to_string(kMaxErrorEstimateDelay) +
@@ -252,7 +254,10 @@ std::string finalize_model(Model& model) {
   if (std::string e = validate_nets(model); !e.empty()) return e;
   if (!kWithDeformable && !model.nets.empty())
     return "nets: this build has NUMEN_WITH_DEFORMABLE=OFF (no deformable nets)";
-  if constexpr (kWithDeformable) order_net_nodes(model);  // Model::node_sweep_order
+  if constexpr (kWithDeformable) {
+    order_net_nodes(model);     // Model::node_sweep_order
+    index_node_springs(model);  // Model::node_spring_begin, node_springs
+  }
   if constexpr (kWithArticulation) {
     if (std::string e = build_articulation_topology(model); !e.empty()) return e;
   } else {

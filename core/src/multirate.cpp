@@ -114,6 +114,8 @@ std::string make_god_object_model(const Model& scene, int body, double device_dt
   m.node_radius.clear();
   m.node_net.clear();
   m.node_sweep_order.clear();
+  m.node_spring_begin.clear();
+  m.node_springs.clear();
   m.initial_held_body = local[static_cast<std::size_t>(body)];
   m.caller_contacts = true;
   std::string error = finalize_model(m);

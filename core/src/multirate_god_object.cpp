@@ -218,6 +218,7 @@ MultirateGodObject::MultirateGodObject(const Model& scene, int body,
     planes_stiffness_.assign(kMaxContactPlanes, 0.0);
     planes_depth_.assign(kMaxContactPlanes, 0.0);
     node_force_.assign(kMaxContactPlanes, Vec3::Zero());
+    plane_springs_.assign(scene.node_springs.size(), 0);
   }
   report_ = make_report();
   model_ = make_scene_model();
@@ -413,7 +414,8 @@ void MultirateGodObject::scene_step(const MultirateDeviceReport& in, MultirateSc
   SampleContext context{&out.planes, std::span<const int>(device_body.data(), device_body.size()),
                         body >= 0 ? margin_ : 0.0, slots_.front().device_model.dt,
                         detail::NodePlaneScratch{node_slot_, slot_node_, node_stiffness_, plane_slot_,
-                                                 planes_stiffness_, planes_depth_, node_force_}};
+                                                 planes_stiffness_, planes_depth_, node_force_,
+                                                 plane_springs_}};
   // Where an organ's surface has folded under the tool, the step is taken in sub-steps of at
   // most MultirateSettings::fold_step (fold_substeps_ of them), the god-object imposed along its twist.
   int substeps = 1;

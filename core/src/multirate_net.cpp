@@ -158,36 +158,51 @@ void build_node_planes(const Model& scene, const Data& data, std::span<const int
     p.impulse_point = p.point;
   }
   if (out.count == first) return;
+  // The springs at the nodes with planes (those with a slot), ascending: the passes below take
+  // them in the order of Model::net_springs, as a pass over every spring would, a few nodes'
+  // springs instead of every one (~190 k instructions a scene step on the shipped organ).
+  int spring_count = 0;
+  if (scene.node_spring_begin.size() == static_cast<std::size_t>(scene.num_nodes()) + 1) {
+    for (int s = 0; s < slots; ++s) {
+      const auto u = static_cast<std::size_t>(scratch.slot_node[static_cast<std::size_t>(s)]);
+      for (std::int32_t e = scene.node_spring_begin[u]; e < scene.node_spring_begin[u + 1]; ++e)
+        if (spring_count < static_cast<int>(scratch.springs.size()))
+          scratch.springs[static_cast<std::size_t>(spring_count++)] =
+              scene.node_springs[static_cast<std::size_t>(e)];
+    }
+  }
+  const auto springs_begin = scratch.springs.begin();
+  std::sort(springs_begin, springs_begin + spring_count);
+  spring_count = static_cast<int>(std::unique(springs_begin, springs_begin + spring_count) - springs_begin);
+  const std::span<const std::int32_t> plane_springs(scratch.springs.data(),
+                                                    static_cast<std::size_t>(spring_count));
   // The springs of the nodes with planes, their neighbours moving with the component.
-  for (int k = 0; k < scene.num_nets(); ++k) {
-    const NetModel& nm = scene.nets[static_cast<std::size_t>(k)];
+  for (const std::int32_t s : plane_springs) {
+    const NetSpring& sp = scene.net_springs[static_cast<std::size_t>(s)];
+    if (sp.node_a < 0 || sp.node_a >= num_nodes || sp.node_b < 0 || sp.node_b >= num_nodes) continue;
+    const int k = scene.node_net[static_cast<std::size_t>(sp.node_a)];
     const bool organ = organ_net(k);
     if (!organ && !net_on_god_object(scene, device_body, k)) continue;
-    const int end = nm.spring_begin + nm.structural_count + nm.bending_count;
-    for (int s = nm.spring_begin; s < end; ++s) {
-      const NetSpring& sp = scene.net_springs[static_cast<std::size_t>(s)];
-      if (sp.node_a < 0 || sp.node_a >= num_nodes || sp.node_b < 0 || sp.node_b >= num_nodes) continue;
-      const int sa = scratch.slot_of_node[static_cast<std::size_t>(sp.node_a)];
-      const int sb = scratch.slot_of_node[static_cast<std::size_t>(sp.node_b)];
-      if (sa < 0 && sb < 0) continue;
-      // An organ's spring between two nodes with planes: a triangle contact loads its nodes
-      // together, so the spring moves with both and holds neither (counted, it makes the device
-      // loop ~20 % stiffer than the net: docs/organs.md, "Organs in multirate").
-      Vec3 e = data.nodes[static_cast<std::size_t>(sp.node_b)].position -
-               data.nodes[static_cast<std::size_t>(sp.node_a)].position;
-      const double l = e.norm();
-      if (!(l > 0.0)) continue;
-      e /= l;
-      if (organ) {  // the spring's elastic force on node_a (an organ's contacts start from it)
-        const Vec3 f_a = sp.stiffness * (l - sp.rest_length) * e;
-        if (sa >= 0) scratch.force[static_cast<std::size_t>(sa)] += f_a;
-        if (sb >= 0) scratch.force[static_cast<std::size_t>(sb)] -= f_a;
-        if (sa >= 0 && sb >= 0) continue;
-      }
-      const Mat3 k_e = sp.stiffness * (e * e.transpose());
-      if (sa >= 0) scratch.stiffness[static_cast<std::size_t>(sa)] += k_e;
-      if (sb >= 0) scratch.stiffness[static_cast<std::size_t>(sb)] += k_e;
+    const int sa = scratch.slot_of_node[static_cast<std::size_t>(sp.node_a)];
+    const int sb = scratch.slot_of_node[static_cast<std::size_t>(sp.node_b)];
+    if (sa < 0 && sb < 0) continue;
+    // An organ's spring between two nodes with planes: a triangle contact loads its nodes
+    // together, so the spring moves with both and holds neither (counted, it makes the device
+    // loop ~20 % stiffer than the net: docs/organs.md, "Organs in multirate").
+    Vec3 e = data.nodes[static_cast<std::size_t>(sp.node_b)].position -
+             data.nodes[static_cast<std::size_t>(sp.node_a)].position;
+    const double l = e.norm();
+    if (!(l > 0.0)) continue;
+    e /= l;
+    if (organ) {  // the spring's elastic force on node_a (an organ's contacts start from it)
+      const Vec3 f_a = sp.stiffness * (l - sp.rest_length) * e;
+      if (sa >= 0) scratch.force[static_cast<std::size_t>(sa)] += f_a;
+      if (sb >= 0) scratch.force[static_cast<std::size_t>(sb)] -= f_a;
+      if (sa >= 0 && sb >= 0) continue;
     }
+    const Mat3 k_e = sp.stiffness * (e * e.transpose());
+    if (sa >= 0) scratch.stiffness[static_cast<std::size_t>(sa)] += k_e;
+    if (sb >= 0) scratch.stiffness[static_cast<std::size_t>(sb)] += k_e;
   }
   // A god-object node's deflection from its rest position on the component along n (it is
   // pushed along its plane's normal), e₀ ≥ 0, is what its tie and springs carried to the
@@ -285,46 +300,43 @@ void build_node_planes(const Model& scene, const Data& data, std::span<const int
   // The organ's springs at the node carriers: their damping in D_n, and a spring between two
   // carriers in both carriers' K_n and D_n, with a link through which each meets the other's
   // motion.
-  for (int k = 0; k < scene.num_nets() && out.carrier_count > first_carrier; ++k) {
-    if (!organ_net(k)) continue;
-    const NetModel& nm = scene.nets[static_cast<std::size_t>(k)];
-    const int end = nm.spring_begin + nm.structural_count + nm.bending_count;
-    for (int s = nm.spring_begin; s < end; ++s) {
-      const NetSpring& sp = scene.net_springs[static_cast<std::size_t>(s)];
-      if (sp.node_a < 0 || sp.node_a >= num_nodes || sp.node_b < 0 || sp.node_b >= num_nodes ||
-          (scratch.slot_of_node[static_cast<std::size_t>(sp.node_a)] < 0 &&
-           scratch.slot_of_node[static_cast<std::size_t>(sp.node_b)] < 0))
-        continue;
-      int a = first_carrier, b = first_carrier;
-      while (a < out.carrier_count && out.carriers[static_cast<std::size_t>(a)].node != sp.node_a)
-        ++a;
-      while (b < out.carrier_count && out.carriers[static_cast<std::size_t>(b)].node != sp.node_b)
-        ++b;
-      const bool has_a = a < out.carrier_count, has_b = b < out.carrier_count;
-      if (!has_a && !has_b) continue;
-      Vec3 e = data.nodes[static_cast<std::size_t>(sp.node_b)].position -
-               data.nodes[static_cast<std::size_t>(sp.node_a)].position;
-      const double l = e.norm();
-      if (!(l > 0.0)) continue;
-      e /= l;
-      const Mat3 ee = e * e.transpose();
-      if (has_a) out.carriers[static_cast<std::size_t>(a)].node_damping += sp.damping * ee;
-      if (has_b) out.carriers[static_cast<std::size_t>(b)].node_damping += sp.damping * ee;
-      // Left out of K_n above where both its nodes have planes: a carrier counts it, the other
-      // end linked to it, or held still like its other neighbours where it has no carrier.
-      if (scratch.slot_of_node[static_cast<std::size_t>(sp.node_a)] < 0 ||
-          scratch.slot_of_node[static_cast<std::size_t>(sp.node_b)] < 0)
-        continue;
-      if (has_a)
-        out.carriers[static_cast<std::size_t>(a)].stiffness.topLeftCorner<3, 3>() +=
-            sp.stiffness * ee;
-      if (has_b)
-        out.carriers[static_cast<std::size_t>(b)].stiffness.topLeftCorner<3, 3>() +=
-            sp.stiffness * ee;
-      if (has_a && has_b && out.link_count < kMaxCarrierLinks)
-        out.links[static_cast<std::size_t>(out.link_count++)] =
-            CarrierLink{a, b, sp.stiffness * ee, sp.damping * ee};
-    }
+  for (const std::int32_t s : plane_springs) {
+    if (out.carrier_count == first_carrier) break;
+    const NetSpring& sp = scene.net_springs[static_cast<std::size_t>(s)];
+    if (sp.node_a < 0 || sp.node_a >= num_nodes || sp.node_b < 0 || sp.node_b >= num_nodes ||
+        !organ_net(scene.node_net[static_cast<std::size_t>(sp.node_a)]) ||
+        (scratch.slot_of_node[static_cast<std::size_t>(sp.node_a)] < 0 &&
+         scratch.slot_of_node[static_cast<std::size_t>(sp.node_b)] < 0))
+      continue;
+    int a = first_carrier, b = first_carrier;
+    while (a < out.carrier_count && out.carriers[static_cast<std::size_t>(a)].node != sp.node_a)
+      ++a;
+    while (b < out.carrier_count && out.carriers[static_cast<std::size_t>(b)].node != sp.node_b)
+      ++b;
+    const bool has_a = a < out.carrier_count, has_b = b < out.carrier_count;
+    if (!has_a && !has_b) continue;
+    Vec3 e = data.nodes[static_cast<std::size_t>(sp.node_b)].position -
+             data.nodes[static_cast<std::size_t>(sp.node_a)].position;
+    const double l = e.norm();
+    if (!(l > 0.0)) continue;
+    e /= l;
+    const Mat3 ee = e * e.transpose();
+    if (has_a) out.carriers[static_cast<std::size_t>(a)].node_damping += sp.damping * ee;
+    if (has_b) out.carriers[static_cast<std::size_t>(b)].node_damping += sp.damping * ee;
+    // Left out of K_n above where both its nodes have planes: a carrier counts it, the other
+    // end linked to it, or held still like its other neighbours where it has no carrier.
+    if (scratch.slot_of_node[static_cast<std::size_t>(sp.node_a)] < 0 ||
+        scratch.slot_of_node[static_cast<std::size_t>(sp.node_b)] < 0)
+      continue;
+    if (has_a)
+      out.carriers[static_cast<std::size_t>(a)].stiffness.topLeftCorner<3, 3>() +=
+          sp.stiffness * ee;
+    if (has_b)
+      out.carriers[static_cast<std::size_t>(b)].stiffness.topLeftCorner<3, 3>() +=
+          sp.stiffness * ee;
+    if (has_a && has_b && out.link_count < kMaxCarrierLinks)
+      out.links[static_cast<std::size_t>(out.link_count++)] =
+          CarrierLink{a, b, sp.stiffness * ee, sp.damping * ee};
   }
   for (int s = 0; s < slots; ++s)
     scratch.slot_of_node[static_cast<std::size_t>(scratch.slot_node[static_cast<std::size_t>(s)])] = -1;

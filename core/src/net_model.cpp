@@ -145,4 +145,23 @@ void order_net_nodes(Model& model) {
   }
 }
 
+void index_node_springs(Model& model) {
+  const auto n = static_cast<std::size_t>(model.num_nodes());
+  model.node_spring_begin.assign(n > 0 ? n + 1 : 0, 0);
+  model.node_springs.assign(n > 0 ? 2 * model.net_springs.size() : 0, 0);
+  if (n == 0) return;
+  for (const NetSpring& sp : model.net_springs) {  // counts, then a prefix sum (counting sort)
+    ++model.node_spring_begin[static_cast<std::size_t>(sp.node_a) + 1];
+    ++model.node_spring_begin[static_cast<std::size_t>(sp.node_b) + 1];
+  }
+  for (std::size_t i = 0; i < n; ++i) model.node_spring_begin[i + 1] += model.node_spring_begin[i];
+  std::vector<std::int32_t> fill(model.node_spring_begin.begin(), model.node_spring_begin.end() - 1);
+  for (std::size_t e = 0; e < model.net_springs.size(); ++e) {
+    const NetSpring& sp = model.net_springs[e];
+    for (const int v : {sp.node_a, sp.node_b})
+      model.node_springs[static_cast<std::size_t>(fill[static_cast<std::size_t>(v)]++)] =
+          static_cast<std::int32_t>(e);
+  }
+}
+
 }  // namespace numen::core

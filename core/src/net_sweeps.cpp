@@ -400,7 +400,8 @@ bool solve_net_eisenstat(const Model& model, Data& data) noexcept {
   PcgResult res;
   bool converged = false;
   if (set.error_estimate_delay > 0) {
-    const PcgErrorStop stop{set.tolerance, set.max_iterations, set.error_estimate_delay, floor};
+    const double tolerance = set.error_tolerance > 0.0 ? set.error_tolerance : set.tolerance;
+    const PcgErrorStop stop{tolerance, set.max_iterations, set.error_estimate_delay, floor};
     res = pcg(sys, rho, stop);
     converged = res.converged(stop);
   } else {

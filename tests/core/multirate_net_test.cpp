@@ -61,10 +61,12 @@ Vec3 plane_force(const SettledBall& ball, const core::Model& device, const Vec3&
   std::vector<core::Mat3> stiffness(core::kMaxContactPlanes);
   std::vector<double> planes_stiffness(core::kMaxContactPlanes), planes_depth(core::kMaxContactPlanes);
   std::vector<Vec3> force(core::kMaxContactPlanes);
+  std::vector<std::int32_t> springs(proximity.node_springs.size());
   auto planes = std::make_unique<core::ContactPlaneSet>();
   const std::vector<int> device_body = {0};
   core::detail::build_node_planes(proximity, pd, device_body, margin,
-                                  {slot_of_node, slot_node, stiffness, plane_slot, planes_stiffness, planes_depth, force}, *planes);
+                                  {slot_of_node, slot_node, stiffness, plane_slot, planes_stiffness, planes_depth, force, springs},
+                                  *planes);
   EXPECT_GT(planes->count, 10);
   EXPECT_EQ(planes->dropped, 0);
   core::Data d = core::make_data(device);

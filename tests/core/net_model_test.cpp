@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <string>
 #include <vector>
@@ -68,6 +69,17 @@ core::TriangleMesh strip() {
   core::TriangleMesh m;
   m.vertices = {Vec3(0, 0, 0), Vec3(0.1, 0, 0), Vec3(0, 0.05, 0), Vec3(0.12, 0.09, 0.01)};
   m.triangles = {{0, 1, 2}, {1, 3, 2}};
+  return m;
+}
+
+/// base_model() with two nets: "a", a 42-node icosphere on body 1, then "b", strip() on body 0.
+core::Model icosphere_and_strip_nets() {
+  core::Model m = base_model();
+  EXPECT_EQ(core::add_net(m, core::make_icosphere(0.05, 1), settings("a")), "");
+  core::NetSettings s = settings("b");
+  s.body = 0;
+  s.material = 0;
+  EXPECT_EQ(core::add_net(m, strip(), s), "");
   return m;
 }
 
@@ -169,12 +181,7 @@ TEST(NetModel, DefaultNodeRadiusIsTheMeanIncidentEdgeOverRootThree) {
 }
 
 TEST(NetModel, SecondNetFollowsTheFirstInEveryArray) {
-  core::Model m = base_model();
-  ASSERT_EQ(core::add_net(m, core::make_icosphere(0.05, 1), settings("a")), "");
-  core::NetSettings s = settings("b");
-  s.body = 0;
-  s.material = 0;
-  ASSERT_EQ(core::add_net(m, strip(), s), "");
+  core::Model m = icosphere_and_strip_nets();
   ASSERT_EQ(m.num_nets(), 2);
   const core::NetModel& b = m.nets[1];
   EXPECT_EQ(b.node_begin, 42);
@@ -192,6 +199,32 @@ TEST(NetModel, SecondNetFollowsTheFirstInEveryArray) {
   for (int i = 42; i < 46; ++i) EXPECT_EQ(m.node_net[at(i)], 1);
   EXPECT_EQ(m.num_nodes(), 46);
   EXPECT_EQ(core::finalize_model(m), "");
+}
+
+TEST(NetModel, FinalizeListsEachSpringAtBothItsNodesInAscendingOrder) {
+  core::Model m = icosphere_and_strip_nets();
+  ASSERT_EQ(m.num_nets(), 2);
+  ASSERT_EQ(core::finalize_model(m), "");
+  ASSERT_EQ(m.node_spring_begin.size(), at(m.num_nodes() + 1));
+  ASSERT_EQ(m.node_springs.size(), 2 * m.net_springs.size());
+  EXPECT_EQ(m.node_spring_begin.front(), 0);
+  EXPECT_EQ(m.node_spring_begin.back(), static_cast<std::int32_t>(m.node_springs.size()));
+  // Brute force: node i's springs are exactly those with i as an end, ascending.
+  for (int i = 0; i < m.num_nodes(); ++i) {
+    std::vector<std::int32_t> expected;
+    for (std::size_t e = 0; e < m.net_springs.size(); ++e)
+      if (m.net_springs[e].node_a == i || m.net_springs[e].node_b == i)
+        expected.push_back(static_cast<std::int32_t>(e));
+    const std::vector<std::int32_t> listed(m.node_springs.begin() + m.node_spring_begin[at(i)],
+                                           m.node_springs.begin() + m.node_spring_begin[at(i + 1)]);
+    EXPECT_EQ(listed, expected) << "node " << i;
+  }
+  // The icosphere's node 0 has 5 structural springs and 5 bending (one across each edge).
+  EXPECT_EQ(m.node_spring_begin[1] - m.node_spring_begin[0], 10);
+  core::Model none = base_model();
+  ASSERT_EQ(core::finalize_model(none), "");
+  EXPECT_TRUE(none.node_spring_begin.empty());
+  EXPECT_TRUE(none.node_springs.empty());
 }
 
 TEST(NetModel, NodesStartAtTheirRestPositionsMovingWithTheRigidComponent) {

@@ -576,12 +576,14 @@ struct Staged {
   bool converged = false;
 };
 
-/// `delay`: SolverSettings::error_estimate_delay (0: the residual rule).
+/// `delay`: SolverSettings::error_estimate_delay (0: the residual rule); `error_tolerance`:
+/// SolverSettings::error_tolerance (≤ 0: `tolerance`).
 Staged staged_body_contact(double tolerance = 1e-12,
                            int delay = core::SolverSettings{}.error_estimate_delay,
-                           int max_iterations = 500) {
+                           int max_iterations = 500, double error_tolerance = 0.0) {
   Staged st{scene(Variant::kFree), {}, {}, {}, false};
   st.m.solver.tolerance = tolerance;
+  st.m.solver.error_tolerance = error_tolerance;
   st.m.solver.error_estimate_delay = delay;
   st.m.solver.max_iterations = max_iterations;
   st.d = core::make_data(st.m);
@@ -712,6 +714,26 @@ TEST(NetSolve, ReportsTheEnergyNormErrorEstimateOfTheIterateTheDelayBack) {
   EXPECT_NEAR(eta * eta * b.dot(x), e_k - e_last, 1e-6 * (e_k - e_last));
   EXPECT_LE(eta * x_norm, std::sqrt(e_k) * (1.0 + 1e-6));  // a lower bound of x_k's error
   EXPECT_LE(std::sqrt(e_last), std::sqrt(e_k));             // the returned iterate is better
+}
+
+TEST(NetSolve, ErrorToleranceStopsTheErrorRuleInPlaceOfTheTolerance) {
+  // SolverSettings::error_tolerance sets the energy-norm error rule's tolerance apart from
+  // `tolerance` (which the jointed solve's ‖r‖/‖b‖ keeps): the same staged solve stops at the
+  // error tolerance, looser or tighter than `tolerance`, and ≤ 0 leaves `tolerance`.
+  const Staged tight = staged_body_contact(1e-10);
+  const Staged loose = staged_body_contact(1e-10, 1, 500, 1e-3);
+  const Staged unset = staged_body_contact(1e-3);
+  const Staged tightened = staged_body_contact(1e-3, 1, 500, 1e-10);
+  ASSERT_TRUE(tight.converged && loose.converged && unset.converged && tightened.converged);
+  std::printf("[net solve error tolerance] iterations: 1e-10 %d, error_tolerance 1e-3 %d\n",
+              tight.d.solver_iterations, loose.d.solver_iterations);
+  EXPECT_LE(loose.d.solver_residual, 1e-3);
+  EXPECT_GT(loose.d.solver_residual, 1e-10);
+  EXPECT_LT(loose.d.solver_iterations, tight.d.solver_iterations);
+  EXPECT_EQ(loose.d.solver_iterations, unset.d.solver_iterations);  // as tolerance = 1e-3
+  EXPECT_EQ(loose.d.solver_residual, unset.d.solver_residual);
+  EXPECT_EQ(tightened.d.solver_iterations, tight.d.solver_iterations);
+  EXPECT_EQ(tightened.d.solver_residual, tight.d.solver_residual);
 }
 
 TEST(NetSolve, BodyContactAndNodeContactWithAProbeMatchTheDenseSolve) {

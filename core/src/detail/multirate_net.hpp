@@ -17,7 +17,8 @@
 namespace numen::core::detail {
 
 /// Scratch of build_node_planes(), sized at load time: `slot_of_node` one entry per scene node,
-/// all −1 between calls; `slot_node`, `stiffness` and `plane_slot` kMaxContactPlanes entries.
+/// all −1 between calls; `slot_node`, `stiffness` and `plane_slot` kMaxContactPlanes entries;
+/// `springs` Model::node_springs.size() entries.
 struct NodePlaneScratch {
   std::span<int> slot_of_node;  ///< Per scene node: its slot (a node with planes), or −1.
   std::span<int> slot_node;     ///< Per slot: its node.
@@ -27,6 +28,10 @@ struct NodePlaneScratch {
   std::span<double> planes_depth;      ///< Per slot: Σ d₀ over its planes in contact (m).
   std::span<Vec3> force;  ///< Per slot of an organ's node: its tie's and springs' elastic force (N,
                           ///< world); 0 otherwise.
+  /// The springs at the nodes with planes (indices into Model::net_springs, ascending, each
+  /// once): gathered from Model::node_springs, so that the springs' passes touch a few nodes'
+  /// springs, not every spring of the scene.
+  std::span<std::int32_t> springs;
 };
 
 /// True when scene body `b` is a body of the god-object (`device_body`: per scene body, its

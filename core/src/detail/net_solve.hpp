@@ -105,7 +105,8 @@ void build_net_system(const Model& model, Data& data) noexcept;
 /// iterate Model::solver.error_estimate_delay = d iterations before the returned one
 /// (detail::PcgErrorStop), or with d = 0 ‖r‖_{M⁻¹} / ‖b‖_{D̃⁻¹} (M the SSOR
 /// preconditioner, D̃ its block diagonal); with joints ‖r‖ / ‖b‖.
-/// Returns true when converged to Model::solver.tolerance within
+/// Returns true when converged to Model::solver.tolerance (the error rule: its
+/// error_tolerance where set) within
 /// Model::solver.max_iterations. A non-finite system gives NaN unknowns
 /// (rejected by step()'s checks). Deterministic; no allocation.
 bool solve_net_system(const Model& model, Data& data) noexcept;

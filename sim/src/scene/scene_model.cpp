@@ -420,8 +420,8 @@ core::Model parse_scene_model(const TomlTable& root, const std::filesystem::path
                     : coupling == "direct"      ? core::CouplingMode::kDirect
                                                 : core::CouplingMode::kAdmittance;
   if (auto s = root.table("solver")) {
-    s->allow_only({"max_iterations", "tolerance", "error_estimate_delay", "contact_max_omega_dt",
-                   "node_contact_max_omega_dt"});
+    s->allow_only({"max_iterations", "tolerance", "error_tolerance", "error_estimate_delay",
+                   "contact_max_omega_dt", "node_contact_max_omega_dt"});
     const auto it = s->integer_or("max_iterations", m.solver.max_iterations);
     if (it < 1 || it > 100000) s->fail("max_iterations", "must be in [1, 100000]");
     m.solver.max_iterations = static_cast<int>(it);
@@ -431,6 +431,8 @@ core::Model parse_scene_model(const TomlTable& root, const std::filesystem::path
               "must be in [0, " + std::to_string(core::kMaxErrorEstimateDelay) + "]");
     m.solver.error_estimate_delay = static_cast<int>(delay);
     m.solver.tolerance = s->number_in("tolerance", 1e-300, 1.0, m.solver.tolerance);
+    if (s->has("error_tolerance"))
+      m.solver.error_tolerance = s->number_in("error_tolerance", 1e-300, 1.0, m.solver.tolerance);
     m.solver.contact_max_omega_dt =
         s->number_in("contact_max_omega_dt", 1e-3, kInf, m.solver.contact_max_omega_dt);
     m.solver.node_contact_max_omega_dt = s->number_in("node_contact_max_omega_dt", 1e-3, kInf,

@@ -76,6 +76,8 @@ class SceneCase final : public AccuracyCase {
       throw std::invalid_argument("accuracy study: horizon beyond the case's input window");
     core::Model tight = scene_.model;
     tight.solver.tolerance = std::min(tight.solver.tolerance, kSolverTolerance);
+    if (tight.solver.error_tolerance > 0.0)
+      tight.solver.error_tolerance = std::min(tight.solver.error_tolerance, kSolverTolerance);
     tight.solver.max_iterations = std::max(tight.solver.max_iterations, 1000);
     const core::Model model = with_scheme(tight, integrator, dt);
     core::Data data = core::make_data(model);

@@ -483,6 +483,21 @@ TEST(DeformableLoaderErrors, SolverErrorEstimateDelayOutOfRange) {
             numen::core::SolverSettings{}.error_estimate_delay);
 }
 
+TEST(DeformableLoaderErrors, SolverErrorToleranceOutOfRange) {
+  const std::string solver = "[solver]\ntolerance = 1.0e-4\nerror_tolerance = ";
+  expect_error_at(replace(kMiniNet, "[[material]]", solver + "0.0\n\n[[material]]"),
+                  "error_tolerance = 0.0", "0.0", "solver.error_tolerance", "must be in");
+  expect_error_at(replace(kMiniNet, "[[material]]", solver + "2.0\n\n[[material]]"),
+                  "error_tolerance = 2.0", "2.0", "solver.error_tolerance", "must be in");
+  TempDir dir;
+  const Scene s = load_scene(
+      dir.write("error.toml", replace(kMiniNet, "[[material]]", solver + "3.0e-4\n\n[[material]]")));
+  EXPECT_EQ(s.model.solver.tolerance, 1e-4);
+  EXPECT_EQ(s.model.solver.error_tolerance, 3e-4);
+  // Unset: ≤ 0, the error rule takes `tolerance`.
+  EXPECT_LE(load_scene(dir.write("mini.toml", kMiniNet)).model.solver.error_tolerance, 0.0);
+}
+
 TEST(DeformableLoaderErrors, UnknownMeshKind) {
   const std::string text = replace(kMiniNet, "mesh = \"icosphere\"", "mesh = \"torus\"");
   expect_error_at(text, "mesh = \"torus\"", "\"torus\"", "deformable[0].mesh",

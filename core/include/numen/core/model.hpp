@@ -166,6 +166,13 @@ struct SolverSettings {
   /// docs/deformable.md, "The stopping test"); with d = 0 the residual ratio
   /// ‖r‖_{M⁻¹}/‖b‖_{D̃⁻¹} instead.
   double tolerance = 1e-10;
+  /// The tolerance of the energy-norm error rule alone (the nets' solve without joints with
+  /// error_estimate_delay d ≥ 1), where a model sets it apart from `tolerance`; ≤ 0 (the
+  /// default): `tolerance`. The two rules measure different things — ‖r‖/‖b‖ weighs each row
+  /// by its own scale, the error rule the step's energy — so a scene whose jointed solve and
+  /// whose solve without joints (the multirate scene loop, which leaves the instrument's joints
+  /// to the device loop) both run may set each its own (docs/net-solver.md, "Solver tolerance").
+  double error_tolerance = 0.0;
   /// d, the delay of the nets' error estimate (iterations run past the estimated iterate; the
   /// solve returns the later one): 1 … kMaxErrorEstimateDelay, or 0 for the residual ratio.
   int error_estimate_delay = 1;
@@ -259,6 +266,14 @@ struct Model {
   /// than the mesh's vertex order, whose refinement levels interleave
   /// (docs/deformable.md). Derived by finalize_model() (order_net_nodes()).
   std::vector<std::int32_t> node_sweep_order;
+  /// The springs at each node: node_springs[node_spring_begin[i] .. node_spring_begin[i + 1])
+  /// are the indices into net_springs of node i's springs (structural and bending, ascending);
+  /// every spring is listed at both its nodes. Sizes num_nodes() + 1 and 2 net_springs.size()
+  /// (both empty without nets). What works on a few nodes' springs (the multirate node planes,
+  /// multirate_net.hpp) reads them there instead of passing over every spring. Derived by
+  /// finalize_model() (index_node_springs()).
+  std::vector<std::int32_t> node_spring_begin;
+  std::vector<std::int32_t> node_springs;
 
   /// Graspers (grasp.hpp, docs/grasping.md): an instrument's two jaws and their grasp rules.
   std::vector<GraspModel> grasps;

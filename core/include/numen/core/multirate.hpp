@@ -553,6 +553,7 @@ class MultirateGodObject {
   std::vector<double> planes_stiffness_;
   std::vector<double> planes_depth_;
   std::vector<Vec3> node_force_;
+  std::vector<std::int32_t> plane_springs_;
   // One thread (step()).
   MultirateDeviceReport report_;
   MultirateSceneModel model_;

@@ -111,4 +111,10 @@ std::string add_net(Model& model, const TriangleMesh& mesh, const NetSettings& s
 /// time only.
 void order_net_nodes(Model& model);
 
+/// Fills Model::node_spring_begin and Model::node_springs, the springs at each node (a
+/// compressed incidence list: each spring at both its nodes, ascending within a node), from
+/// Model::net_springs. Called by finalize_model() after the nets are validated. Allocates: load
+/// time only.
+void index_node_springs(Model& model);
+
 }  // namespace numen::core
