@@ -1,7 +1,8 @@
 // Resting nodes of an organ's net (core/src/net_rest.cpp; docs/organs.md, "Resting nodes"):
 // the shipped organ at rest rests whole and stays exactly where it was; pressed by a sphere,
 // the nodes it reaches wake, and the forces on the tool and the organ's energy are those of
-// the solve with every node in it; the step does not allocate while nodes rest and wake.
+// the solve with every node in it; the lists the solve runs on follow the rules; the step
+// does not allocate while nodes rest and wake.
 
 #include "detail/net_rest.hpp"
 
@@ -9,12 +10,15 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
+#include <functional>
 #include <vector>
 
 #include "alloc_counter.hpp"
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"
+#include "detail/data_scratch.hpp"
 #include "numen/core/step.hpp"
 #include "organ_indentation.hpp"
 
@@ -51,8 +55,11 @@ struct RestRun {
   long allocations = 0;  ///< While stepping, after the first 20 steps.
 };
 
+/// Called after each step of run_rest_organ() with the step's index.
+using RestStepObserver = std::function<void(const core::Model&, const core::Data&, int)>;
+
 RestRun run_rest_organ(double rest_speed, double velocity_floor, double press, int approach,
-                       int steps) {
+                       int steps, const RestStepObserver& observe = {}) {
   core::Model m = rest_test_organ(rest_speed);
   m.solver.tolerance = 1e-4;
   m.solver.velocity_floor = velocity_floor;
@@ -80,6 +87,7 @@ RestRun run_rest_organ(double rest_speed, double velocity_floor, double press, i
     r.energy.push_back(d.nets[0].start_energy);
     r.resting.push_back(d.nets[0].resting_nodes);
     r.iterations.push_back(d.solver_iterations);
+    if (observe) observe(m, d, k);
     if (k + 1 == steps / 2)
       for (const core::NodeState& n : d.nodes) r.nodes_mid.push_back(n.position);
   }
@@ -159,6 +167,54 @@ TEST(NetRest, APressedOrganGivesTheForceAndEnergyOfTheSolveWithEveryNode) {
   EXPECT_LT(energy_diff, 1e-6 * energy_peak);
   EXPECT_LT(rest_largest_distance(on.nodes_end, off.nodes_end), 1e-7);
   EXPECT_EQ(on.allocations, 0);
+}
+
+TEST(NetRest, EveryUnquietNodeAndItsNeighboursAreSolvedAndTheEdgeOfTheRestIsPassed) {
+  // The lists the solve runs on, against the rules recomputed by brute force after every step
+  // of the pressed organ: a node not quiet for kRestSteps steps (NetScratch::rest_count), and
+  // each of its spring neighbours (Model::node_springs), is in the solve (active_nodes, and the
+  // same nodes' sweep positions ascending in active_positions); the springs' passes visit
+  // exactly the nodes in the solve and the resting nodes next to one (pass_positions).
+  int checked = 0, with_edge = 0;
+  const auto check = [&](const core::Model& m, const core::Data& d, int k) {
+    const core::NetScratch& ns = d.scratch->net;
+    const auto n = static_cast<std::size_t>(m.num_nodes());
+    std::vector<char> active(n, 0);
+    for (int a = 0; a < ns.active_count[0]; ++a)
+      active[static_cast<std::size_t>(ns.active_nodes[static_cast<std::size_t>(a)])] = 1;
+    const auto neighbour = [&](std::size_t i, std::int32_t e) {
+      const core::NetSpring& sp = m.net_springs[static_cast<std::size_t>(e)];
+      return static_cast<std::size_t>(sp.node_a == static_cast<int>(i) ? sp.node_b : sp.node_a);
+    };
+    std::vector<std::int32_t> positions, passed;
+    for (std::size_t p = 0; p < n; ++p) {
+      const auto i = static_cast<std::size_t>(m.node_sweep_order[p]);
+      bool near_active = false;
+      for (std::int32_t e = m.node_spring_begin[i]; e < m.node_spring_begin[i + 1]; ++e) {
+        const std::size_t j = neighbour(i, m.node_springs[static_cast<std::size_t>(e)]);
+        near_active = near_active || active[j];
+        if (ns.rest_count[i] < core::detail::kRestSteps)
+          ASSERT_TRUE(active[j]) << "step " << k << ": node " << j << " beside unquiet node " << i;
+      }
+      if (ns.rest_count[i] < core::detail::kRestSteps)
+        ASSERT_TRUE(active[i]) << "step " << k << ": unquiet node " << i;
+      if (active[i]) positions.push_back(static_cast<std::int32_t>(p));
+      if (active[i] || near_active) passed.push_back(static_cast<std::int32_t>(p));
+    }
+    ASSERT_EQ(std::vector<std::int32_t>(ns.active_positions.begin(),
+                                        ns.active_positions.begin() + ns.active_count[0]),
+              positions) << "step " << k;
+    ASSERT_EQ(std::vector<std::int32_t>(ns.pass_positions.begin(),
+                                        ns.pass_positions.begin() + ns.pass_count[0]),
+              passed) << "step " << k;
+    ++checked;
+    if (ns.active_count[0] > 0 && ns.pass_count[0] > ns.active_count[0]) ++with_edge;
+  };
+  run_rest_organ(core::NetSettings{}.rest_speed, 1e-6, 0.003, 400, 700, check);
+  std::printf("[organ rest lists] %d steps checked, %d with nodes resting at the edge of the solve\n",
+              checked, with_edge);
+  EXPECT_EQ(checked, 700);
+  EXPECT_GE(with_edge, 100) << "the organ rests in part while pressed";
 }
 
 TEST(NetRest, NoNodeRestsOnANetThatIsNotAnOrganOrWithRestSpeedZero) {
