@@ -173,7 +173,8 @@ void build_node_planes(const Model& scene, const Data& data, std::span<const int
   }
   const auto springs_begin = scratch.springs.begin();
   std::sort(springs_begin, springs_begin + spring_count);
-  spring_count = static_cast<int>(std::unique(springs_begin, springs_begin + spring_count) - springs_begin);
+  spring_count =
+      static_cast<int>(std::unique(springs_begin, springs_begin + spring_count) - springs_begin);
   const std::span<const std::int32_t> plane_springs(scratch.springs.data(),
                                                     static_cast<std::size_t>(spring_count));
   // The springs of the nodes with planes, their neighbours moving with the component.

@@ -65,8 +65,8 @@ int select_resting_nodes(const Model& model, Data& data, std::size_t k) noexcept
   const int begin = net.node_begin, end = net.node_begin + net.node_count;
   // Eligible: quiet long enough, and every neighbour too. The spring passes below are
   // branch-free (a node's bits are and-ed or or-ed with masks): which neighbours are calm or at
-  // rest follows the tool, not a pattern a branch predictor learns (a branch per spring took
-  // ~13 % of the multirate scene step's time on the shipped organ).
+  // rest follows the tool, not a pattern a branch predictor learns (with a branch per spring
+  // this selection took ~13 % of the multirate scene step's time on the shipped organ).
   static_assert(kRestingBit << 2 == kBoundaryBit);
   for (int v = begin; v < end; ++v) {
     const auto i = static_cast<std::size_t>(v);

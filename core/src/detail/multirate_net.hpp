@@ -100,7 +100,8 @@ void grow_god_object_nodes(std::span<const int> device_body, double margin, Mode
 /// their CarrierLink, F₀ its tie's and springs' elastic force at the sample plus its weight) and
 /// its planes move with it at w k from their true depth (stiffness_scale w, no offset): the
 /// static start above is kept only for nodes beyond the carriers' room. Counts planes beyond the
-/// room in out.dropped. No allocation.
+/// room in out.dropped. `scene` finalized (its nodes' springs are read from Model::node_springs).
+/// No allocation.
 void build_node_planes(const Model& scene, const Data& data, std::span<const int> device_body,
                        double margin, NodePlaneScratch scratch, ContactPlaneSet& out) noexcept;
 
