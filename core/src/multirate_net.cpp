@@ -54,10 +54,16 @@ void grow_god_object_nodes(std::span<const int> device_body, double margin, Mode
 void build_node_planes(const Model& scene, const Data& data, std::span<const int> device_body,
                        double margin, NodePlaneScratch scratch, ContactPlaneSet& out) noexcept {
   const int first = out.count;
-  const int room = static_cast<int>(std::min({scratch.slot_node.size(), scratch.stiffness.size(),
-                                               scratch.plane_slot.size(), scratch.planes_stiffness.size(),
-                                               scratch.planes_depth.size(), scratch.force.size()}));
   const int num_nodes = std::min(scene.num_nodes(), static_cast<int>(scratch.slot_of_node.size()));
+  // The nodes' springs come from Model::node_springs into `scratch.springs`: without the lists
+  // (a scene not finalized) or their room, there is no room for any plane (counted, dropped).
+  const bool spring_lists =
+      scene.node_spring_begin.size() == static_cast<std::size_t>(scene.num_nodes()) + 1 &&
+      scratch.springs.size() >= scene.node_springs.size();
+  const int room = !spring_lists ? 0
+                   : static_cast<int>(std::min({scratch.slot_node.size(), scratch.stiffness.size(),
+                                                scratch.plane_slot.size(), scratch.planes_stiffness.size(),
+                                                scratch.planes_depth.size(), scratch.force.size()}));
   const int np = static_cast<int>(scene.material_pairs.size());
   int slots = 0;
   // An organ's net: on an anchored body, which no device holds (its contacts with the god-object's
@@ -161,15 +167,13 @@ void build_node_planes(const Model& scene, const Data& data, std::span<const int
   // The springs at the nodes with planes (those with a slot), ascending: the passes below take
   // them in the order of Model::net_springs, as a pass over every spring would, a few nodes'
   // springs instead of every one (~190 k instructions a scene step on the shipped organ).
+  // Each slot's node is distinct, so they fit in node_springs.size() (the room checked above).
   int spring_count = 0;
-  if (scene.node_spring_begin.size() == static_cast<std::size_t>(scene.num_nodes()) + 1) {
-    for (int s = 0; s < slots; ++s) {
-      const auto u = static_cast<std::size_t>(scratch.slot_node[static_cast<std::size_t>(s)]);
-      for (std::int32_t e = scene.node_spring_begin[u]; e < scene.node_spring_begin[u + 1]; ++e)
-        if (spring_count < static_cast<int>(scratch.springs.size()))
-          scratch.springs[static_cast<std::size_t>(spring_count++)] =
-              scene.node_springs[static_cast<std::size_t>(e)];
-    }
+  for (int s = 0; s < slots; ++s) {
+    const auto u = static_cast<std::size_t>(scratch.slot_node[static_cast<std::size_t>(s)]);
+    for (std::int32_t e = scene.node_spring_begin[u]; e < scene.node_spring_begin[u + 1]; ++e)
+      scratch.springs[static_cast<std::size_t>(spring_count++)] =
+          scene.node_springs[static_cast<std::size_t>(e)];
   }
   const auto springs_begin = scratch.springs.begin();
   std::sort(springs_begin, springs_begin + spring_count);
@@ -181,12 +185,11 @@ void build_node_planes(const Model& scene, const Data& data, std::span<const int
   for (const std::int32_t s : plane_springs) {
     const NetSpring& sp = scene.net_springs[static_cast<std::size_t>(s)];
     if (sp.node_a < 0 || sp.node_a >= num_nodes || sp.node_b < 0 || sp.node_b >= num_nodes) continue;
-    const int k = scene.node_net[static_cast<std::size_t>(sp.node_a)];
-    const bool organ = organ_net(k);
-    if (!organ && !net_on_god_object(scene, device_body, k)) continue;
+    // A spring at a node with a slot (sa or sb ≥ 0): its net is an organ's or on the god-object
+    // (the slots' condition above).
+    const bool organ = organ_net(scene.node_net[static_cast<std::size_t>(sp.node_a)]);
     const int sa = scratch.slot_of_node[static_cast<std::size_t>(sp.node_a)];
     const int sb = scratch.slot_of_node[static_cast<std::size_t>(sp.node_b)];
-    if (sa < 0 && sb < 0) continue;
     // An organ's spring between two nodes with planes: a triangle contact loads its nodes
     // together, so the spring moves with both and holds neither (counted, it makes the device
     // loop ~20 % stiffer than the net: docs/organs.md, "Organs in multirate").
@@ -301,43 +304,42 @@ void build_node_planes(const Model& scene, const Data& data, std::span<const int
   // The organ's springs at the node carriers: their damping in D_n, and a spring between two
   // carriers in both carriers' K_n and D_n, with a link through which each meets the other's
   // motion.
-  for (const std::int32_t s : plane_springs) {
-    if (out.carrier_count == first_carrier) break;
-    const NetSpring& sp = scene.net_springs[static_cast<std::size_t>(s)];
-    if (sp.node_a < 0 || sp.node_a >= num_nodes || sp.node_b < 0 || sp.node_b >= num_nodes ||
-        !organ_net(scene.node_net[static_cast<std::size_t>(sp.node_a)]) ||
-        (scratch.slot_of_node[static_cast<std::size_t>(sp.node_a)] < 0 &&
-         scratch.slot_of_node[static_cast<std::size_t>(sp.node_b)] < 0))
-      continue;
-    int a = first_carrier, b = first_carrier;
-    while (a < out.carrier_count && out.carriers[static_cast<std::size_t>(a)].node != sp.node_a)
-      ++a;
-    while (b < out.carrier_count && out.carriers[static_cast<std::size_t>(b)].node != sp.node_b)
-      ++b;
-    const bool has_a = a < out.carrier_count, has_b = b < out.carrier_count;
-    if (!has_a && !has_b) continue;
-    Vec3 e = data.nodes[static_cast<std::size_t>(sp.node_b)].position -
-             data.nodes[static_cast<std::size_t>(sp.node_a)].position;
-    const double l = e.norm();
-    if (!(l > 0.0)) continue;
-    e /= l;
-    const Mat3 ee = e * e.transpose();
-    if (has_a) out.carriers[static_cast<std::size_t>(a)].node_damping += sp.damping * ee;
-    if (has_b) out.carriers[static_cast<std::size_t>(b)].node_damping += sp.damping * ee;
-    // Left out of K_n above where both its nodes have planes: a carrier counts it, the other
-    // end linked to it, or held still like its other neighbours where it has no carrier.
-    if (scratch.slot_of_node[static_cast<std::size_t>(sp.node_a)] < 0 ||
-        scratch.slot_of_node[static_cast<std::size_t>(sp.node_b)] < 0)
-      continue;
-    if (has_a)
-      out.carriers[static_cast<std::size_t>(a)].stiffness.topLeftCorner<3, 3>() +=
-          sp.stiffness * ee;
-    if (has_b)
-      out.carriers[static_cast<std::size_t>(b)].stiffness.topLeftCorner<3, 3>() +=
-          sp.stiffness * ee;
-    if (has_a && has_b && out.link_count < kMaxCarrierLinks)
-      out.links[static_cast<std::size_t>(out.link_count++)] =
-          CarrierLink{a, b, sp.stiffness * ee, sp.damping * ee};
+  if (out.carrier_count > first_carrier) {
+    for (const std::int32_t s : plane_springs) {
+      const NetSpring& sp = scene.net_springs[static_cast<std::size_t>(s)];
+      if (sp.node_a < 0 || sp.node_a >= num_nodes || sp.node_b < 0 || sp.node_b >= num_nodes ||
+          !organ_net(scene.node_net[static_cast<std::size_t>(sp.node_a)]))
+        continue;
+      int a = first_carrier, b = first_carrier;
+      while (a < out.carrier_count && out.carriers[static_cast<std::size_t>(a)].node != sp.node_a)
+        ++a;
+      while (b < out.carrier_count && out.carriers[static_cast<std::size_t>(b)].node != sp.node_b)
+        ++b;
+      const bool has_a = a < out.carrier_count, has_b = b < out.carrier_count;
+      if (!has_a && !has_b) continue;
+      Vec3 e = data.nodes[static_cast<std::size_t>(sp.node_b)].position -
+               data.nodes[static_cast<std::size_t>(sp.node_a)].position;
+      const double l = e.norm();
+      if (!(l > 0.0)) continue;
+      e /= l;
+      const Mat3 ee = e * e.transpose();
+      if (has_a) out.carriers[static_cast<std::size_t>(a)].node_damping += sp.damping * ee;
+      if (has_b) out.carriers[static_cast<std::size_t>(b)].node_damping += sp.damping * ee;
+      // Left out of K_n above where both its nodes have planes: a carrier counts it, the other
+      // end linked to it, or held still like its other neighbours where it has no carrier.
+      if (scratch.slot_of_node[static_cast<std::size_t>(sp.node_a)] < 0 ||
+          scratch.slot_of_node[static_cast<std::size_t>(sp.node_b)] < 0)
+        continue;
+      if (has_a)
+        out.carriers[static_cast<std::size_t>(a)].stiffness.topLeftCorner<3, 3>() +=
+            sp.stiffness * ee;
+      if (has_b)
+        out.carriers[static_cast<std::size_t>(b)].stiffness.topLeftCorner<3, 3>() +=
+            sp.stiffness * ee;
+      if (has_a && has_b && out.link_count < kMaxCarrierLinks)
+        out.links[static_cast<std::size_t>(out.link_count++)] =
+            CarrierLink{a, b, sp.stiffness * ee, sp.damping * ee};
+    }
   }
   for (int s = 0; s < slots; ++s)
     scratch.slot_of_node[static_cast<std::size_t>(scratch.slot_node[static_cast<std::size_t>(s)])] = -1;

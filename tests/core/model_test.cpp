@@ -47,6 +47,15 @@ TEST(Model, RejectsBadBodiesNamingThem) {
   EXPECT_NE(core::finalize_model(m).find("sphere 0"), std::string::npos);
 }
 
+TEST(Model, RejectsANonFiniteErrorTolerance) {
+  core::Model m = one_ball();
+  m.solver.error_tolerance = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(core::finalize_model(m), "solver error_tolerance must be finite (<= 0: the tolerance)");
+  m = one_ball();
+  m.solver.error_tolerance = 3e-4;
+  EXPECT_EQ(core::finalize_model(m), "");
+}
+
 TEST(Model, RejectsBadObstaclesAndStaticSpheres) {
   core::Model m = one_ball();
   core::Obstacle box;

@@ -5,7 +5,9 @@
 // quasi-static stiffness, both against the full net model.
 #include <gtest/gtest.h>
 
+#include <cstdint>
 #include <cstdio>
+#include <memory>
 #include <vector>
 
 #include "build_features.hpp"
@@ -45,11 +47,11 @@ struct SettledBall {
   }
 };
 
-/// The node planes of `ball`'s state (its component is the god-object; detected on the
-/// proximity model of `margin`, m), written as contacts of the god-object model `device` at the
-/// component's pose shifted by `shift` (m), at rest; returns the planes' total force on the
-/// component (N).
-Vec3 plane_force(const SettledBall& ball, const core::Model& device, const Vec3& shift, double margin = 0.0) {
+/// The node planes of `ball`'s state (its component is the god-object), detected on the
+/// proximity model of `margin` (m), with room for `spring_room` springs at the planes' nodes
+/// (−1: Model::node_springs.size(), the room MultirateGodObject gives).
+std::unique_ptr<core::ContactPlaneSet> ball_node_planes(const SettledBall& ball, double margin,
+                                                        int spring_room = -1) {
   core::Model proximity;
   EXPECT_EQ(core::make_proximity_model(ball.model, 0, margin, proximity), "");
   core::Data pd = core::make_data(proximity);
@@ -61,12 +63,21 @@ Vec3 plane_force(const SettledBall& ball, const core::Model& device, const Vec3&
   std::vector<core::Mat3> stiffness(core::kMaxContactPlanes);
   std::vector<double> planes_stiffness(core::kMaxContactPlanes), planes_depth(core::kMaxContactPlanes);
   std::vector<Vec3> force(core::kMaxContactPlanes);
-  std::vector<std::int32_t> springs(proximity.node_springs.size());
+  std::vector<std::int32_t> springs(spring_room < 0 ? proximity.node_springs.size()
+                                                    : static_cast<std::size_t>(spring_room));
   auto planes = std::make_unique<core::ContactPlaneSet>();
   const std::vector<int> device_body = {0};
   core::detail::build_node_planes(proximity, pd, device_body, margin,
                                   {slot_of_node, slot_node, stiffness, plane_slot, planes_stiffness, planes_depth, force, springs},
                                   *planes);
+  return planes;
+}
+
+/// The node planes of `ball`'s state (ball_node_planes()), written as contacts of the
+/// god-object model `device` at the component's pose shifted by `shift` (m), at rest; returns
+/// the planes' total force on the component (N).
+Vec3 plane_force(const SettledBall& ball, const core::Model& device, const Vec3& shift, double margin = 0.0) {
+  const std::unique_ptr<core::ContactPlaneSet> planes = ball_node_planes(ball, margin);
   EXPECT_GT(planes->count, 10);
   EXPECT_EQ(planes->dropped, 0);
   core::Data d = core::make_data(device);
@@ -195,6 +206,21 @@ TEST(MultirateNet, NodePlanesOfATurnedCoreFoundWithAMargin) {
 
 // A plane set is reused sample after sample: a sphere plane written where a node plane was has
 // none of its fields (the node, its scale, its offset).
+// The planes read their nodes' springs from Model::node_springs into the scratch's room for
+// them: without that room no plane is built, and every one is counted as dropped (the run's
+// summary reports multirate.planes_dropped), none silently missing its springs.
+TEST(MultirateNet, NodePlanesWithoutRoomForTheirSpringsAreDroppedAndCounted) {
+  NUMEN_SKIP_UNDER_SANITIZER("settles a 642-node net over 3 000 steps");
+  NUMEN_REQUIRE_DEFORMABLE();
+  const SettledBall ball(400.0);
+  const std::unique_ptr<core::ContactPlaneSet> full = ball_node_planes(ball, 0.0);
+  ASSERT_GT(full->count, 10);
+  EXPECT_EQ(full->dropped, 0);
+  const std::unique_ptr<core::ContactPlaneSet> short_room = ball_node_planes(ball, 0.0, 1);
+  EXPECT_EQ(short_room->count, 0);
+  EXPECT_EQ(short_room->dropped, full->count);
+}
+
 TEST(MultirateNet, ASpherePlaneKeepsNothingOfTheNodePlaneBeforeIt) {
   core::Model m;
   m.material_names = {"steel"};

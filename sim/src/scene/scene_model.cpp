@@ -432,7 +432,7 @@ core::Model parse_scene_model(const TomlTable& root, const std::filesystem::path
     m.solver.error_estimate_delay = static_cast<int>(delay);
     m.solver.tolerance = s->number_in("tolerance", 1e-300, 1.0, m.solver.tolerance);
     if (s->has("error_tolerance"))
-      m.solver.error_tolerance = s->number_in("error_tolerance", 1e-300, 1.0, m.solver.tolerance);
+      m.solver.error_tolerance = s->number_in("error_tolerance", 1e-300, 1.0, std::nullopt);
     m.solver.contact_max_omega_dt =
         s->number_in("contact_max_omega_dt", 1e-3, kInf, m.solver.contact_max_omega_dt);
     m.solver.node_contact_max_omega_dt = s->number_in("node_contact_max_omega_dt", 1e-3, kInf,
