@@ -203,7 +203,14 @@ TEST(IgtlTrackerClient, AFloodFillsTheQueueAndTheNewestAreDropped) {
   hal::IgtlTrackerClientSettings s = igtl_client_test_settings(server.port());
   s.queue_poses = 16;
   hal::IgtlTrackerClient client(s);
-  ASSERT_TRUE(igtl_client_test_wait([&] { return client.counters().messages == 2000; }));
+  // A message is counted when its header is read, its pose after its body is decoded, and a
+  // drop last: wait for all three, else the check can run between them (a race CI's ASan build
+  // once lost). A client that loses or double-counts poses times out here.
+  ASSERT_TRUE(igtl_client_test_wait([&] {
+    const hal::IgtlClientCounters c = client.counters();
+    return c.messages == 2000 && c.poses == 2000 && c.dropped_full == 2000u - 16u;
+  }));
+  EXPECT_EQ(client.counters().messages, 2000u);
   EXPECT_EQ(client.counters().poses, 2000u);
   EXPECT_EQ(client.counters().dropped_full, 2000u - 16u);
   // The queue holds the oldest 16, in order.
