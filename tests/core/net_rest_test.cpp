@@ -193,11 +193,13 @@ TEST(NetRest, EveryUnquietNodeAndItsNeighboursAreSolvedAndTheEdgeOfTheRestIsPass
       for (std::int32_t e = m.node_spring_begin[i]; e < m.node_spring_begin[i + 1]; ++e) {
         const std::size_t j = neighbour(i, m.node_springs[static_cast<std::size_t>(e)]);
         near_active = near_active || active[j];
-        if (ns.rest_count[i] < core::detail::kRestSteps)
+        if (ns.rest_count[i] < core::detail::kRestSteps) {
           ASSERT_TRUE(active[j]) << "step " << k << ": node " << j << " beside unquiet node " << i;
+        }
       }
-      if (ns.rest_count[i] < core::detail::kRestSteps)
+      if (ns.rest_count[i] < core::detail::kRestSteps) {
         ASSERT_TRUE(active[i]) << "step " << k << ": unquiet node " << i;
+      }
       if (active[i]) positions.push_back(static_cast<std::int32_t>(p));
       if (active[i] || near_active) passed.push_back(static_cast<std::int32_t>(p));
     }
