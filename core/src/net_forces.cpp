@@ -17,6 +17,7 @@
 #include "detail/data_scratch.hpp"
 #include "detail/net_rest.hpp"
 #include "detail/net_solve.hpp"
+#include "detail/net_still.hpp"
 #include "detail/net_surface.hpp"
 #include "detail/net_terms.hpp"
 
@@ -172,16 +173,39 @@ SpringPass spring_arrays(Data& data, double h) noexcept {
 /// and the directions and lengths linearization_pass() starts from; adds the springs' elastic
 /// energy to their net's NetOutput::start_energy. Expects force = gravity + ties on entry.
 /// (Linearising in the same pass was measured and not kept: docs/net-solver.md.)
+///
+/// With kStill (net_still.hpp; NetScratch::still_flags marked for this pass): a still node's
+/// force after the springs and its energy term are its last pass's (NetScratch::still_force,
+/// still_energy), and its springs to still later nodes are skipped when all of them are; a node
+/// not still stores its own for the next pass. The same results to the bit as without.
+template <bool kStill>
 void spring_pass(const Model& model, Data& data) noexcept {
-  const NetScratch& s = data.scratch->net;
+  NetScratch& s = data.scratch->net;
   const SpringPass a = spring_arrays(data, 0.0);
   const std::int32_t* low_begin = s.spring_low_begin.data();
   const std::int32_t* order = model.node_sweep_order.data();
   const int* node_net = model.node_net.data();
+  const std::uint8_t* still = s.still_flags.data();
+  Vec3* still_force = s.still_force.data();
+  double* still_energy = s.still_energy.data();
   NetOutput* out = data.nets.data();
   const std::size_t n = data.nodes.size();
   for (std::size_t p = 0; p < n; ++p) {
     const auto k = static_cast<std::size_t>(order[p]);
+    if constexpr (kStill) {
+      if (still[k] == 0) {
+        // Every spring to a later node skipped if that node is still too: its force and its
+        // lengths come from the pass that last computed them, from the same states.
+        std::uint8_t later = 0;
+        for (std::int32_t j = low_begin[p]; j < low_begin[p + 1]; ++j)
+          later |= still[static_cast<std::size_t>(a.high[j])];
+        if (later == 0) {
+          a.force[k] = still_force[k];
+          out[node_net[k]].start_energy += still_energy[k];
+          continue;
+        }
+      }
+    }
     const Vec3 xk = a.nodes[k].position;
     const Vec3 vk = a.nodes[k].velocity;
     const Pair xx = Pair::Constant(xk.x()), xy = Pair::Constant(xk.y()),
@@ -235,7 +259,16 @@ void spring_pass(const Model& model, Data& data) noexcept {
     sum.force = Vec3(fx(0) + fx(1), fy(0) + fy(1), fz(0) + fz(1));
     if (j < end) one_spring(a, j, xk, vk, sum);
     a.force[k] += sum.force;
-    out[node_net[k]].start_energy += 0.5 * (energy(0) + energy(1) + sum.energy);
+    const double node_energy = 0.5 * (energy(0) + energy(1) + sum.energy);
+    out[node_net[k]].start_energy += node_energy;
+    if constexpr (kStill) {
+      if (still[k] == 0) {
+        a.force[k] = still_force[k];  // an earlier still node skipped its springs to this one
+      } else {
+        still_force[k] = a.force[k];
+        still_energy[k] = node_energy;
+      }
+    }
   }
 }
 
@@ -374,8 +407,11 @@ void compute_net_forces(const Model& model, Data& data) noexcept {
     data.nets[k].tie_wrench = reaction;
   }
 
-  // Structural and bending springs.
-  spring_pass(model, data);
+  // Structural and bending springs; a still node's from its last pass (net_still.hpp).
+  if (detail::mark_still_nodes(model, data))
+    spring_pass<true>(model, data);
+  else
+    spring_pass<false>(model, data);
 
   // Node contacts (penalty law of contact_force.hpp, the node on side a). A triangle contact's
   // share (NodeContact::face) takes the law at the triangle's point, Σ w_m v_m, and keeps its

@@ -82,6 +82,12 @@ void NetScratch::resize(const Model& model) {
   // Resting nodes (net_rest.hpp): none yet, every node in the solve.
   rest_count.assign(n, 0);
   rest_flags.assign(n, 0);
+  pass_position.assign(n, Vec3::Zero());
+  pass_velocity.assign(n, Vec3::Zero());
+  pass_stored = false;
+  still_flags.assign(n, 0);
+  still_force.assign(n, Vec3::Zero());
+  still_energy.assign(n, 0.0);
   active_nodes.assign(n, 0);
   active_positions.assign(n, 0);
   pass_positions.assign(n, 0);

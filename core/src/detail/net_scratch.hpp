@@ -181,6 +181,14 @@ struct NetScratch {
   // detail::kRestSteps) and its state bits (resting, eligible, boundary; net_rest.cpp).
   std::vector<std::uint8_t> rest_count;
   std::vector<std::uint8_t> rest_flags;
+  /// Still neighbourhoods (net_still.hpp), per node: its state at the net's last force pass
+  /// (NaN before the first), its bits (0: still), and its force after the springs (N) and its
+  /// springs' energy term (J) from the last pass that computed them (net_forces.cpp).
+  std::vector<Vec3> pass_position, pass_velocity;
+  bool pass_stored = false;  ///< Whether pass_position and pass_velocity hold a pass's states.
+  std::vector<std::uint8_t> still_flags;
+  std::vector<Vec3> still_force;
+  std::vector<double> still_energy;
   /// The nodes in the solve (not resting), each net's in its own slots: net k's are
   /// active_nodes[node_begin, node_begin + active_count[k]) as node indices (ascending) and
   /// active_positions[the same] as sweep positions (ascending); every node when none rests.
