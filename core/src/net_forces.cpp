@@ -558,7 +558,18 @@ void linearize_nets(const Model& model, Data& data, double system_step) noexcept
   SymmetricBlock* spring_block = s.spring_block.data();
   for (std::size_t k = 0; k < model.nets.size(); ++k) {
     const NetModel& net = model.nets[k];
-    const BodyState& body = data.bodies[static_cast<std::size_t>(net.body)];
+    const auto bi = static_cast<std::size_t>(net.body);
+    if (data.scratch->solver.imposed[bi]) {
+      // A body imposed this step (kDirect, or anchored: an organ's) is not in the solve: its
+      // rows and so these sums are not used (add_net_body_terms()); only the clearing.
+      for (int v = net.node_begin; v < net.node_begin + net.node_count; ++v) {
+        spring_block[static_cast<std::size_t>(v)] = SymmetricBlock{};
+        rhs[static_cast<std::size_t>(v)].setZero();
+      }
+      s.tie_sums[k] = NetTieSums{};
+      continue;
+    }
+    const BodyState& body = data.bodies[bi];
     Vec3 sum_r = Vec3::Zero();
     double rr00 = 0.0, rr01 = 0.0, rr02 = 0.0, rr11 = 0.0, rr12 = 0.0, rr22 = 0.0;
     Vec3 sum_dv = Vec3::Zero(), sum_r_dv = Vec3::Zero();

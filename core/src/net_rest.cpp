@@ -60,49 +60,34 @@ int select_resting_nodes(const Model& model, Data& data, std::size_t k) noexcept
   const std::uint8_t* count = s.rest_count.data();
   std::uint8_t* flags = s.rest_flags.data();
   const std::int32_t* order = model.node_sweep_order.data();
-  const std::int32_t* high = s.sweep_springs.high.data();
-  const std::int32_t* low_begin = s.spring_low_begin.data();
   const int begin = net.node_begin, end = net.node_begin + net.node_count;
-  // Eligible: quiet long enough, and every neighbour too. The spring passes below are
-  // branch-free (a node's bits are and-ed or or-ed with masks): which neighbours are calm or at
-  // rest follows the tool, not a pattern a branch predictor learns (with a branch per spring
-  // this selection took ~13 % of the multirate scene step's time on the shipped organ).
-  static_assert(kRestingBit << 2 == kBoundaryBit);
+  // Eligible: quiet long enough, and every neighbour too. A node not calm takes the bit from
+  // each neighbour through its own springs (Model::node_springs): most of an organ is calm, so
+  // this passes over the springs of the few nodes that move (the same bits as a pass over every
+  // spring; one branch per node, none per spring).
+  const NodeNeighbours neighbours(model);
   for (int v = begin; v < end; ++v) {
     const auto i = static_cast<std::size_t>(v);
     const auto calm = static_cast<std::uint8_t>(count[i] >= kRestSteps ? kEligibleBit : 0);
     flags[i] = static_cast<std::uint8_t>((flags[i] & kRestingBit) | calm);
   }
-  for (int p = begin; p < end; ++p) {
-    const auto a = static_cast<std::size_t>(order[p]);
-    // kEligibleBit of a node kept while it and each neighbour are calm.
-    const auto mask_a = static_cast<std::uint8_t>(count[a] >= kRestSteps ? 0xff : ~kEligibleBit);
-    std::uint8_t keep_a = 0xff;
-    for (std::int32_t j = low_begin[p]; j < low_begin[p + 1]; ++j) {
-      const auto b = static_cast<std::size_t>(high[j]);
-      keep_a &= static_cast<std::uint8_t>(count[b] >= kRestSteps ? 0xff : ~kEligibleBit);
-      flags[b] &= mask_a;
-    }
-    flags[a] &= keep_a;
+  for (int v = begin; v < end; ++v) {
+    if (count[static_cast<std::size_t>(v)] >= kRestSteps) continue;
+    neighbours.for_each(v, [&](std::size_t j) { flags[j] &= static_cast<std::uint8_t>(~kEligibleBit); });
   }
   // Woken: a resting node no longer eligible (its force, a contact, a neighbour).
   for (int v = begin; v < end; ++v) {
     const auto i = static_cast<std::size_t>(v);
     flags[i] &= static_cast<std::uint8_t>(((flags[i] & kEligibleBit) >> 1) | ~kRestingBit);
   }
-  // Boundary: resting with a neighbour in the solve (its springs reach a node in the solve):
-  // a node's kBoundaryBit (its kRestingBit shifted) set where it rests and the other does not.
-  for (int p = begin; p < end; ++p) {
-    const auto a = static_cast<std::size_t>(order[p]);
-    const std::uint8_t rest_a = flags[a] & kRestingBit;
-    std::uint8_t boundary_a = 0;
-    for (std::int32_t j = low_begin[p]; j < low_begin[p + 1]; ++j) {
-      const auto b = static_cast<std::size_t>(high[j]);
-      const std::uint8_t rest_b = flags[b] & kRestingBit;
-      boundary_a |= static_cast<std::uint8_t>(rest_a & ~rest_b);
-      flags[b] |= static_cast<std::uint8_t>((rest_b & ~rest_a) << 2);
-    }
-    flags[a] |= static_cast<std::uint8_t>(boundary_a << 2);
+  // Boundary: resting with a neighbour in the solve: a node in the solve sets the bit (its
+  // neighbour's kRestingBit shifted) on each resting neighbour, through its own springs.
+  static_assert(kRestingBit << 2 == kBoundaryBit);
+  for (int v = begin; v < end; ++v) {
+    if (flags[static_cast<std::size_t>(v)] & kRestingBit) continue;
+    neighbours.for_each(v, [&](std::size_t j) {
+      flags[j] |= static_cast<std::uint8_t>((flags[j] & kRestingBit) << 2);
+    });
   }
   // The lists, in the net's own slots [begin, begin + count).
   int active = 0, pass = 0;
@@ -126,7 +111,9 @@ int select_resting_nodes(const Model& model, Data& data, std::size_t k) noexcept
 bool net_can_rest(const Model& model, const NetModel& net) noexcept {
   return net.rest_speed > 0.0 && model.bodies[static_cast<std::size_t>(net.body)].anchored &&
          (model.integrator == Integrator::kLinearlyImplicitEuler ||
-          model.integrator == Integrator::kTrapezoidal);
+          model.integrator == Integrator::kTrapezoidal) &&
+         model.node_spring_begin.size() == static_cast<std::size_t>(model.num_nodes()) + 1 &&
+         model.node_springs.size() == 2 * model.net_springs.size();
 }
 
 void hold_resting_nodes(const Model& model, Data& data) noexcept {

@@ -10,8 +10,8 @@
 /// as long, rests: from the next step it is held where it is with a zero velocity, and the
 /// step solves the same linear system restricted to the other nodes, the resting ones as a
 /// Dirichlet boundary (Δv = 0: their columns meet zero, their rows are left out). The force
-/// pass still runs over every node and spring (the energies, the tie wrench and the wake test
-/// are exact); the springs' linearisation, the node rows' assembly and the solve run over the
+/// pass runs over every node (the energies, the tie wrench and the wake test are exact), but
+/// takes the still ones' from its last pass (net_still.hpp); the springs' linearisation, the node rows' assembly and the solve run over the
 /// nodes in the solve (NetScratch::active_*) and the springs that touch one.
 ///
 /// A resting node wakes, in the step where it happens and before that step's linearisation,
@@ -24,7 +24,8 @@
 ///
 /// Only nets on an anchored body (BodyModel::anchored, whose anchors never move) with
 /// rest_speed > 0, and only with the linearly implicit Euler or the trapezoidal rule (one
-/// linearised solve a step); every other net keeps every node in the solve.
+/// linearised solve a step); every other net keeps every node in the solve. The passes over a
+/// node's neighbours go through the springs of the nodes that move (Model::node_springs).
 
 #include <cstddef>
 #include <cstdint>
@@ -41,8 +42,31 @@ namespace detail {
 /// Consecutive quiet steps a node and its neighbours need before it rests.
 inline constexpr std::uint8_t kRestSteps = 10;
 
-/// Whether `net`'s nodes may rest in `model` (see file comment).
+/// Whether `net`'s nodes may rest in `model` (see file comment; and the model's per-node spring
+/// lists, Model::node_springs, made by finalize_model(), are there).
 bool net_can_rest(const Model& model, const NetModel& net) noexcept;
+
+/// Each node's neighbours, through its springs in Model::node_springs (made by
+/// finalize_model()). Raw pointers: the passes store through std::uint8_t*, which may alias the
+/// vectors' own pointers and would make them reloaded per spring.
+struct NodeNeighbours {
+  const std::int32_t* spring_begin;  ///< Model::node_spring_begin.
+  const std::int32_t* springs;       ///< Model::node_springs.
+  const NetSpring* net_springs;      ///< Model::net_springs.
+  explicit NodeNeighbours(const Model& model) noexcept
+      : spring_begin(model.node_spring_begin.data()),
+        springs(model.node_springs.data()),
+        net_springs(model.net_springs.data()) {}
+  /// Calls f(j) for the other node j of each spring at node v, in Model::node_springs order.
+  template <class F>
+  void for_each(int v, F f) const noexcept {
+    const auto i = static_cast<std::size_t>(v);
+    for (std::int32_t q = spring_begin[i]; q < spring_begin[i + 1]; ++q) {
+      const NetSpring& e = net_springs[springs[q]];
+      f(static_cast<std::size_t>(e.node_a == v ? e.node_b : e.node_a));
+    }
+  }
+};
 
 /// Holds the nodes found eligible at the last step's update_resting_nodes(): a zero velocity,
 /// and (newly resting) zero entries in the solve's node vectors (the warm start and the CG
