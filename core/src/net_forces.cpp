@@ -624,15 +624,20 @@ void measure_nets(const Model& model, Data& data) noexcept {
   for (std::size_t k = 0; k < model.nets.size(); ++k) {
     const NetModel& net = model.nets[k];
     NetOutput& out = data.nets[k];
-    const BodyState& body = data.bodies[static_cast<std::size_t>(net.body)];
+    const auto bi = static_cast<std::size_t>(net.body);
+    const BodyState& body = data.bodies[bi];
     const Mat3 rot = body.orientation.toRotationMatrix();
+    // A body imposed this step (an anchored organ's) is where the force pass found it: its
+    // levers R r_i are the ones that pass stored (NetScratch::lever), the same to the bit.
+    const bool imposed = data.scratch->solver.imposed[bi] != 0;
+    const Vec3* lever = data.scratch->net.lever.data();
     double stretch2 = 0.0;
     double speed2 = 0.0;
     double kinetic = 0.0;
     for (int v = net.node_begin; v < net.node_begin + net.node_count; ++v) {
       const auto i = static_cast<std::size_t>(v);
       const NodeState& st = data.nodes[i];
-      const Vec3 anchor = body.position + rot * model.node_rest[i];
+      const Vec3 anchor = body.position + (imposed ? lever[i] : Vec3(rot * model.node_rest[i]));
       raise_max(stretch2, (st.position - anchor).squaredNorm());
       const double v2 = st.velocity.squaredNorm();
       raise_max(speed2, v2);
