@@ -627,9 +627,10 @@ void measure_nets(const Model& model, Data& data) noexcept {
     const auto bi = static_cast<std::size_t>(net.body);
     const BodyState& body = data.bodies[bi];
     const Mat3 rot = body.orientation.toRotationMatrix();
-    // A body imposed this step (an anchored organ's) is where the force pass found it: its
-    // levers R r_i are the ones that pass stored (NetScratch::lever), the same to the bit.
-    const bool imposed = data.scratch->solver.imposed[bi] != 0;
+    // An anchored body (an organ's) is imposed at the same pose every step, also after a
+    // rollback: its levers R r_i are the ones the force pass stored (NetScratch::lever), the
+    // same to the bit. (Not a kDirect body's: a rollback restores the pose it had before.)
+    const bool anchored = model.bodies[bi].anchored;
     const Vec3* lever = data.scratch->net.lever.data();
     double stretch2 = 0.0;
     double speed2 = 0.0;
@@ -637,7 +638,7 @@ void measure_nets(const Model& model, Data& data) noexcept {
     for (int v = net.node_begin; v < net.node_begin + net.node_count; ++v) {
       const auto i = static_cast<std::size_t>(v);
       const NodeState& st = data.nodes[i];
-      const Vec3 anchor = body.position + (imposed ? lever[i] : Vec3(rot * model.node_rest[i]));
+      const Vec3 anchor = body.position + (anchored ? lever[i] : Vec3(rot * model.node_rest[i]));
       raise_max(stretch2, (st.position - anchor).squaredNorm());
       const double v2 = st.velocity.squaredNorm();
       raise_max(speed2, v2);

@@ -73,7 +73,8 @@ int select_resting_nodes(const Model& model, Data& data, std::size_t k) noexcept
   }
   for (int v = begin; v < end; ++v) {
     if (count[static_cast<std::size_t>(v)] >= kRestSteps) continue;
-    neighbours.for_each(v, [&](std::size_t j) { flags[j] &= static_cast<std::uint8_t>(~kEligibleBit); });
+    neighbours.for_each(
+        v, [&](std::size_t j) { flags[j] &= static_cast<std::uint8_t>(~kEligibleBit); });
   }
   // Woken: a resting node no longer eligible (its force, a contact, a neighbour).
   for (int v = begin; v < end; ++v) {

@@ -44,8 +44,8 @@ bool mark_still_nodes(const Model& model, Data& data) noexcept {
       const auto i = static_cast<std::size_t>(v);
       const std::uint64_t diff = differing_bits(nodes[i].position, position[i]) |
                                  differing_bits(nodes[i].velocity, velocity[i]);
-      flags[i] = static_cast<std::uint8_t>(
-          none | (diff != 0 ? kStateChangedBit | kNearChangeBit : 0));
+      flags[i] =
+          static_cast<std::uint8_t>(none | (diff != 0 ? kStateChangedBit | kNearChangeBit : 0));
       position[i] = nodes[i].position;
       velocity[i] = nodes[i].velocity;
     }

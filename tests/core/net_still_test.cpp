@@ -32,23 +32,26 @@ namespace still_organ = numen::test::organ;
 /// default rest speed (`rest_speed` 0: off, the net cannot rest).
 struct StillOrgan {
   core::Model model;
-  core::Vec3 dir;  ///< The sphere's path (world).
+  core::Vec3 dir;      ///< The sphere's path (world).
   double touch = 0.0;  ///< Distance along dir to its first touch (m).
 };
 
 StillOrgan still_test_organ(double rest_speed) {
   StillOrgan o;
-  o.model = still_organ::organ_model(still_organ::shipped_organ_mesh(), still_organ::OrganParams{},
-                                     1e-3, core::CouplingMode::kDirect, 0.0025,
-                                     core::Vec3(0, 0, -0.03));
+  o.model =
+      still_organ::organ_model(still_organ::shipped_organ_mesh(), still_organ::OrganParams{}, 1e-3,
+                               core::CouplingMode::kDirect, 0.0025, core::Vec3(0, 0, -0.03));
   o.model.nets[0].rest_speed = rest_speed;
   o.model.solver.tolerance = 1e-4;
-  const core::Pose place{core::Vec3(0.01, -0.02, 0.035),
-                         core::Quat(Eigen::AngleAxisd(0.6, core::Vec3(0.3, -1.0, 0.2).normalized()))};
+  const core::Pose place{
+      core::Vec3(0.01, -0.02, 0.035),
+      core::Quat(Eigen::AngleAxisd(0.6, core::Vec3(0.3, -1.0, 0.2).normalized()))};
   o.model.bodies[0].initial_pose = place;
-  o.model.bodies[1].initial_pose.position = place.position + place.orientation * core::Vec3(0, 0, -0.03);
+  o.model.bodies[1].initial_pose.position =
+      place.position + place.orientation * core::Vec3(0, 0, -0.03);
   o.dir = place.orientation * core::Vec3::UnitZ();
-  o.touch = still_organ::first_touch(o.model, o.model.bodies[1].initial_pose.position, o.dir, 0.0025);
+  o.touch =
+      still_organ::first_touch(o.model, o.model.bodies[1].initial_pose.position, o.dir, 0.0025);
   return o;
 }
 
@@ -89,13 +92,14 @@ long still_against_full(const StillOrgan& o, double press, int steps,
     std::vector<core::Vec3> pa, pb, va, vb;
     for (const core::NodeState& n : d.nodes) pa.push_back(n.position), va.push_back(n.velocity);
     for (const core::NodeState& n : full.nodes) pb.push_back(n.position), vb.push_back(n.velocity);
-    const bool same = still_same_bits(a.force, b.force) && still_same_bits(a.spring_length, b.spring_length) &&
-                      still_same_bits(a.sweep_springs.direction_x, b.sweep_springs.direction_x) &&
-                      still_same_bits(a.sweep_springs.direction_y, b.sweep_springs.direction_y) &&
-                      still_same_bits(a.sweep_springs.direction_z, b.sweep_springs.direction_z) &&
-                      std::memcmp(&d.nets[0].start_energy, &full.nets[0].start_energy, sizeof(double)) == 0 &&
-                      still_same_bits(pa, pb) && still_same_bits(va, vb) &&
-                      d.nets[0].resting_nodes == full.nets[0].resting_nodes;
+    const bool same =
+        still_same_bits(a.force, b.force) && still_same_bits(a.spring_length, b.spring_length) &&
+        still_same_bits(a.sweep_springs.direction_x, b.sweep_springs.direction_x) &&
+        still_same_bits(a.sweep_springs.direction_y, b.sweep_springs.direction_y) &&
+        still_same_bits(a.sweep_springs.direction_z, b.sweep_springs.direction_z) &&
+        std::memcmp(&d.nets[0].start_energy, &full.nets[0].start_energy, sizeof(double)) == 0 &&
+        still_same_bits(pa, pb) && still_same_bits(va, vb) &&
+        d.nets[0].resting_nodes == full.nets[0].resting_nodes;
     EXPECT_TRUE(same) << "step " << k << ": energy " << d.nets[0].start_energy << " against "
                       << full.nets[0].start_energy;
     if (!same) break;
@@ -177,10 +181,13 @@ TEST(NetStill, WithoutTheModelsSpringListsNoNodeRestsNorIsStill) {
     core::step(off.model, b);
     ASSERT_EQ(a.nets[0].resting_nodes, 0) << k;
     for (const std::uint8_t f : a.scratch->net.still_flags) ASSERT_NE(f, 0) << k;
-    ASSERT_EQ(std::memcmp(&a.nets[0].start_energy, &b.nets[0].start_energy, sizeof(double)), 0) << k;
+    ASSERT_EQ(std::memcmp(&a.nets[0].start_energy, &b.nets[0].start_energy, sizeof(double)), 0)
+        << k;
   }
   for (std::size_t i = 0; i < a.nodes.size(); ++i) {
-    ASSERT_EQ(std::memcmp(a.nodes[i].position.data(), b.nodes[i].position.data(), 3 * sizeof(double)), 0) << i;
+    ASSERT_EQ(
+        std::memcmp(a.nodes[i].position.data(), b.nodes[i].position.data(), 3 * sizeof(double)), 0)
+        << i;
   }
 }
 

@@ -10,9 +10,10 @@
 /// as long, rests: from the next step it is held where it is with a zero velocity, and the
 /// step solves the same linear system restricted to the other nodes, the resting ones as a
 /// Dirichlet boundary (Δv = 0: their columns meet zero, their rows are left out). The force
-/// pass runs over every node (the energies, the tie wrench and the wake test are exact), but
-/// takes the still ones' from its last pass (net_still.hpp); the springs' linearisation, the node rows' assembly and the solve run over the
-/// nodes in the solve (NetScratch::active_*) and the springs that touch one.
+/// pass covers every node (the energies, the tie wrench and the wake test are exact), taking
+/// the still ones' from its last pass (net_still.hpp); the springs' linearisation, the node
+/// rows' assembly and the solve run over the nodes in the solve (NetScratch::active_*) and the
+/// springs that touch one.
 ///
 /// A resting node wakes, in the step where it happens and before that step's linearisation,
 /// when its force exceeds f_r, a node contact reaches it, or a neighbour stops being quiet.
