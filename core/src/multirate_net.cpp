@@ -58,8 +58,7 @@ void build_node_planes(const Model& scene, const Data& data, std::span<const int
   // The nodes' springs come from Model::node_springs into `scratch.springs`: without the lists
   // (a scene not finalized) or their room, there is no room for any plane (counted, dropped).
   const bool spring_lists =
-      scene.node_spring_begin.size() == static_cast<std::size_t>(scene.num_nodes()) + 1 &&
-      scratch.springs.size() >= scene.node_springs.size();
+      node_springs_indexed(scene) && scratch.springs.size() >= scene.node_springs.size();
   const int room = !spring_lists ? 0
                    : static_cast<int>(std::min({scratch.slot_node.size(), scratch.stiffness.size(),
                                                 scratch.plane_slot.size(), scratch.planes_stiffness.size(),

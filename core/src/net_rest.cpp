@@ -113,8 +113,7 @@ bool net_can_rest(const Model& model, const NetModel& net) noexcept {
   return net.rest_speed > 0.0 && model.bodies[static_cast<std::size_t>(net.body)].anchored &&
          (model.integrator == Integrator::kLinearlyImplicitEuler ||
           model.integrator == Integrator::kTrapezoidal) &&
-         model.node_spring_begin.size() == static_cast<std::size_t>(model.num_nodes()) + 1 &&
-         model.node_springs.size() == 2 * model.net_springs.size();
+         node_springs_indexed(model);
 }
 
 void hold_resting_nodes(const Model& model, Data& data) noexcept {

@@ -329,6 +329,14 @@ struct Model {
 /// model. Allocates: load time only.
 std::string finalize_model(Model& model);
 
+/// Whether `model` has nodes and Model::node_spring_begin and Model::node_springs have the sizes
+/// index_node_springs() gives them (finalize_model() ran since the nets last changed): what reads
+/// a node's springs there (the resting nodes, the multirate node planes) checks this first.
+inline bool node_springs_indexed(const Model& model) noexcept {
+  return model.node_spring_begin.size() == static_cast<std::size_t>(model.num_nodes()) + 1 &&
+         model.node_springs.size() == 2 * model.net_springs.size();
+}
+
 /// Default damping from a damping ratio ζ for a spring k acting on mass m:
 /// γ = 2 ζ √(m k). The paper's rule 1.4 ≤ γ/√(mk) ≤ 2 is ζ in [0.7, 1].
 double damping_from_ratio(double zeta, double mass, double stiffness) noexcept;
