@@ -158,7 +158,9 @@ numen_install_headers(${PROJECT_SOURCE_DIR}/sim/include
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/sim/scenes ${PROJECT_SOURCE_DIR}/sim/data
         DESTINATION ${NUMEN_INSTALL_DATADIR})
 install(DIRECTORY ${PROJECT_BINARY_DIR}/viewer/ DESTINATION ${NUMEN_INSTALL_DATADIR}/viewer)  # sim/CMakeLists.txt
-install(DIRECTORY ${PROJECT_SOURCE_DIR}/docs/ DESTINATION ${CMAKE_INSTALL_DOCDIR})
+# docs/ as share/doc/numen/docs, beside the top-level README.md: the README's links (docs/...)
+# resolve, and docs/README.md (the docs' index) no longer overwrites it (or is overwritten).
+install(DIRECTORY ${PROJECT_SOURCE_DIR}/docs/ DESTINATION ${CMAKE_INSTALL_DOCDIR}/docs)
 install(FILES ${PROJECT_SOURCE_DIR}/README.md DESTINATION ${CMAKE_INSTALL_DOCDIR})
 
 # --- Python module (sim/python, pybind11): installed by sim/python/CMakeLists.txt into

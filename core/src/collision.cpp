@@ -163,6 +163,92 @@ void collide_body_grid(const Model& model, Data& data, int b, ContactSink& sink)
   }
 }
 
+/// The pair (sa, sb) if it was held back at the last call, or null (pairs_prev; the look-up
+/// starts after the last match: the pairs come in the same order every step).
+SpherePairRecord* find_held_pair(CollisionScratch& cs, int sa, int sb) noexcept {
+  const int n = cs.num_pairs_prev;
+  SpherePairRecord* prev = cs.pairs_prev.data();
+  int k = cs.pair_cursor < n ? cs.pair_cursor : 0;
+  for (int tried = 0; tried < n; ++tried, k = (k + 1 == n) ? 0 : k + 1) {
+    if (prev[k].sphere_a == sa && prev[k].sphere_b == sb) {
+      cs.pair_cursor = k + 1;
+      return &prev[k];
+    }
+  }
+  return nullptr;
+}
+
+/// Crossing (collision.hpp): the contact `g` between sphere sa of body a and sphere sb of body
+/// b keeps the normal of its approach when their centres went past each other within the step.
+/// The reference normal is the one the pair was held back along at the last call, else that of
+/// the relative motion over the step, r(t) = r₁ − (1 − t) Δt v_rel (r₁ = c_a − c_b, v_rel the
+/// relative velocity of the two centres: the step's motion under the integrators'
+/// x₁ = x₀ + Δt v₁): at first touch, |r(t)| = r_a + r_b, for a pair apart at the step's start,
+/// else at the start, r(0)/|r(0)|. When r₁ lies behind it (r₁·n < 0), the contact takes n and
+/// the depth r_a + r_b − r₁·n (> r_a + r_b): the penalty pushes the pair back the way it came
+/// instead of on through. Counts it in data.crossed_contacts and remembers the pair in cs.pairs
+/// (within capacity) for the next call. Bodies at rest: the contact as sphere_sphere() gave it.
+void hold_back_crossing(const Model& model, Data& data, int a, int b, int sa, int sb,
+                        ContactGeometry& g) noexcept {
+  CollisionScratch& cs = data.scratch->collision;
+  const Vec3* sw = cs.sphere_world.data();
+  const double rsum =
+      cs.sphere_r[static_cast<std::size_t>(sa)] + cs.sphere_r[static_cast<std::size_t>(sb)];
+  const Vec3 r1 = sw[sa] - sw[sb];
+  Vec3 ref = Vec3::Zero();
+  if (SpherePairRecord* p = cs.num_pairs_prev > 0 ? find_held_pair(cs, sa, sb) : nullptr) {
+    p->matched = true;
+    ref = p->normal;
+  } else {
+    const BodyState& A = data.bodies[static_cast<std::size_t>(a)];
+    const BodyState& B = data.bodies[static_cast<std::size_t>(b)];
+    const Vec3 v_rel = A.linear_velocity + A.angular_velocity.cross(sw[sa] - A.position) -
+                       B.linear_velocity - B.angular_velocity.cross(sw[sb] - B.position);
+    const Vec3 d = model.dt * v_rel;  // relative displacement over the step
+    const Vec3 r0 = r1 - d;           // the offset at the step's start
+    const double c = r0.squaredNorm() - rsum * rsum;
+    const double bq = r0.dot(d);
+    const double dd = d.squaredNorm();
+    Vec3 at = r0;  // overlapping at the start: the start's normal
+    if (c > 0.0 && bq < 0.0) {
+      // Apart at the start and closing: first touch at the smaller root of |r0 + t d| = rsum.
+      const double disc = std::max(0.0, bq * bq - dd * c);
+      at = r0 + std::clamp((-bq - std::sqrt(disc)) / dd, 0.0, 1.0) * d;
+    }
+    const double len2 = at.squaredNorm();
+    if (len2 > kDegenerateDistance2) ref = at / std::sqrt(len2);
+  }
+  if (!(r1.dot(ref) < 0.0)) return;  // not past each other (or no reference)
+  const double rb = cs.sphere_r[static_cast<std::size_t>(sb)];
+  g.normal = ref;
+  g.depth = rsum - r1.dot(ref);
+  g.position = sw[sb] + (rb - 0.5 * g.depth) * ref;  // as sphere_sphere: middle of the overlap
+  ++data.crossed_contacts;
+  if (cs.num_pairs < static_cast<int>(cs.pairs.size())) {
+    SpherePairRecord& rec = cs.pairs[static_cast<std::size_t>(cs.num_pairs++)];
+    rec.sphere_a = sa;
+    rec.sphere_b = sb;
+    rec.normal = ref;
+    rec.matched = false;
+  }
+}
+
+/// After the body–body phase: a pair held back at the last call and out of contact now, its
+/// centres still past each other along the held normal, went through (data.pass_throughs).
+/// Then this call's held pairs become the last call's.
+void finish_pairs(Data& data) noexcept {
+  CollisionScratch& cs = data.scratch->collision;
+  const Vec3* sw = cs.sphere_world.data();
+  for (int k = 0; k < cs.num_pairs_prev; ++k) {
+    const SpherePairRecord& p = cs.pairs_prev[static_cast<std::size_t>(k)];
+    if (!p.matched && (sw[p.sphere_a] - sw[p.sphere_b]).dot(p.normal) < 0.0) ++data.pass_throughs;
+  }
+  std::swap(cs.pairs, cs.pairs_prev);  // no allocation: the buffers trade places
+  cs.num_pairs_prev = cs.num_pairs;
+  cs.num_pairs = 0;
+  cs.pair_cursor = 0;
+}
+
 /// Spheres of body a against spheres of body b (a < b): only the spheres of
 /// each body whose box meets the overlap of the two bodies' AABBs are paired
 /// (a face layer of each when blocks touch), in sphere index order. Prefilters
@@ -203,7 +289,9 @@ void collide_bodies(const Model& model, Data& data, int a, int b, ContactSink& s
       const double sr = ra + R[sb];
       // Conservative (relative slack 1e-12): the exact test is sphere_sphere's.
       if (dx * dx + dy * dy + dz * dz > sr * sr * (1.0 + 1e-12)) continue;
-      if (sphere_sphere(sw[sa], ra, sw[sb], R[sb], fb, g)) sink.add(a, b, -1, sa, sb, mat, g);
+      if (!sphere_sphere(sw[sa], ra, sw[sb], R[sb], fb, g)) continue;
+      hold_back_crossing(model, data, a, b, sa, sb, g);
+      sink.add(a, b, -1, sa, sb, mat, g);
     }
   }
 }
@@ -267,6 +355,9 @@ void CollisionScratch::resize(const Model& model) {
     if (model.bodies[b].mesh >= 0) mesh_bodies.push_back(static_cast<std::int32_t>(b));
   entry_stamp.assign(static_cast<std::size_t>(model.static_grid.num_entries), 0u);
   stamp = 0;
+  pairs.assign(static_cast<std::size_t>(cross_contact_capacity(model)), SpherePairRecord{});
+  pairs_prev.assign(pairs.size(), SpherePairRecord{});
+  num_pairs = num_pairs_prev = pair_cursor = 0;
 }
 
 void build_collision_structures(Model& model) {
@@ -385,7 +476,9 @@ void detect_contacts(const Model& model, Data& data) noexcept {
       collide_body_grid(model, data, b, sink);
   }
 
-  // 3. Body against body: sort-and-sweep along x.
+  // 3. Body against body: sort-and-sweep along x; crossings held back (hold_back_crossing()).
+  data.crossed_contacts = 0;
+  cs.num_pairs = 0;
   const int ns = static_cast<int>(cs.sweep_order.size());
   if (ns > 1) {
     std::int32_t* order = cs.sweep_order.data();
@@ -406,6 +499,8 @@ void detect_contacts(const Model& model, Data& data) noexcept {
       }
     }
   }
+  finish_pairs(data);
+  if (data.crossed_contacts > 0) ++data.crossed_contact_steps;
 
   // 4. Spheres against the meshes of the other bodies (BodyModel::mesh): the mesh's world box
   //    from its local box at the body's pose, then the bodies of other articulations whose

@@ -3,6 +3,7 @@
 
 #include "numen/core/data.hpp"
 
+#include <limits>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -83,6 +84,8 @@ Data make_data(const Model& model) {
   data.body_wrench.resize(n);
   data.body_targets.resize(n);
   data.feedback_group.assign(n, 0);
+  data.feedback_point.assign(model.extra_feedback.size() + 1,
+                             Vec3::Constant(std::numeric_limits<double>::quiet_NaN()));
   data.body_feedback.resize(n);
   data.joint_prescribed.resize(static_cast<std::size_t>(model.num_joints()));
   data.joints.resize(static_cast<std::size_t>(model.num_joints()));
@@ -139,6 +142,11 @@ void reset_data(const Model& model, Data& data) noexcept {
   data.contacts_dropped = 0;
   data.contact_overflow_steps = 0;
   data.net_crossed_steps = 0;
+  data.crossed_contacts = 0;
+  data.crossed_contact_steps = 0;
+  data.pass_throughs = 0;
+  data.scratch->collision.num_pairs = 0;  // no contact remembered (collision.hpp, "Crossing")
+  data.scratch->collision.num_pairs_prev = 0;
   data.contacts_clamped = 0;
   data.contact_clamped_steps = 0;
   data.max_penetration = 0.0;

@@ -92,12 +92,18 @@ void compute_feedback(const Model& model, Data& data) noexcept {
   // for force and torque, and scale the group's per-body wrenches by it: carried to the
   // reference point (Eq. 9) they sum to the saturated composite exactly, so the motors
   // (Σ J_lᵀ w_l) get the wrench that is logged. The held body's group's composite, about its
-  // target, is the feedback wrench; another group's is about its first body's target.
+  // target, is the feedback wrench; another group's is about its device's controlled frame
+  // (Data::feedback_point: its tool, as the held body's target is device 0's — about a point
+  // behind the tool, a trocar, the force's moment would take the torque limit and scale the
+  // whole wrench down), or its first body's target without one.
   const int held_group = data.feedback_group[static_cast<std::size_t>(a)];
   for (int g = 0; g <= last_group; ++g) {
     Wrench total;
     bool in_group = false;
-    Vec3 ref = data.target.position;
+    const auto gi = static_cast<std::size_t>(g);
+    const bool own_point =
+        g != held_group && gi < data.feedback_point.size() && data.feedback_point[gi].allFinite();
+    Vec3 ref = own_point ? data.feedback_point[gi] : data.target.position;
     for (std::size_t i = 0; i < data.bodies.size(); ++i) {
       if (data.feedback_group[i] != g) continue;
       const Pose* target = nullptr;
@@ -108,7 +114,7 @@ void compute_feedback(const Model& model, Data& data) noexcept {
         target = &data.body_targets[i].pose;
       else
         continue;
-      if (!in_group && g != held_group) ref = target->position;
+      if (!in_group && g != held_group && !own_point) ref = target->position;
       in_group = true;
       const Wrench carried = carry_wrench(data.body_feedback[i], target->position, ref);  // Eq. 9
       total.force += carried.force;

@@ -25,14 +25,17 @@ namespace numen::core {
 namespace {
 
 /// The counts since reset (steps with a contact overflow, a clamped contact stiffness, a sphere
-/// behind a net's surface, a non-finite state) from `from` to `to`, each a Data or a
-/// MultirateSceneSnapshot: the scene-loop model's Data, its snapshot, the device loop's copy of
-/// it, the view, and the next scene-loop model's Data at a tool switch carry the same counts.
+/// behind a net's surface, a body–body crossing, pass-throughs, a non-finite state) from `from` to
+/// `to`, each a Data or a MultirateSceneSnapshot: the scene-loop model's Data, its snapshot, the
+/// device loop's copy of it, the view, and the next scene-loop model's Data at a tool switch carry
+/// the same counts.
 template <typename From, typename To>
 void copy_counts(const From& from, To& to) noexcept {
   to.contact_overflow_steps = from.contact_overflow_steps;
   to.contact_clamped_steps = from.contact_clamped_steps;
   to.net_crossed_steps = from.net_crossed_steps;
+  to.crossed_contact_steps = from.crossed_contact_steps;
+  to.pass_throughs = from.pass_throughs;
   to.nonfinite_steps = from.nonfinite_steps;
 }
 
@@ -276,6 +279,8 @@ void MultirateGodObject::take_targets(const Data& scene_data) noexcept {
     // Each body's Eq. 8 gains and saturation are its device's (several devices).
     if (b < scene_data.feedback_group.size()) d.feedback_group[i] = scene_data.feedback_group[b];
   }
+  for (std::size_t g = 0; g < d.feedback_point.size() && g < scene_data.feedback_point.size(); ++g)
+    d.feedback_point[g] = scene_data.feedback_point[g];  // each device's saturation point
   for (std::size_t j = 0; j < s.joints.size(); ++j) {
     const auto sj = static_cast<std::size_t>(s.joints[j]);
     if (sj < scene_data.joint_prescribed.size()) d.joint_prescribed[j] = scene_data.joint_prescribed[sj];

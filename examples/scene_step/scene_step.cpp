@@ -29,7 +29,9 @@
 #include "numen/version.hpp"
 
 int main(int argc, char** argv) {
-  std::string path = NUMEN_EXAMPLE_SCENE;
+  // The installed default scene: default_scene_path() finds the prefix this program was built
+  // against (find_package(numen) adds the hook; shipped_files.hpp), not numen's source tree.
+  std::string path = numen::sim::default_scene_path();
   int steps = 1000;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
@@ -57,6 +59,7 @@ int main(int argc, char** argv) {
   }
   std::printf("numen %s, scene '%s', dt %g s, %d bodies\n", NUMEN_VERSION, scene.name.c_str(),
               model.dt, model.num_bodies());
+  std::printf("default scene %s\n", numen::sim::default_scene_path().c_str());
   for (const std::string& w : scene.warnings) std::printf("warning: %s\n", w.c_str());
   if (scene.has_trajectory) {  // the trajectory's frame is not the held body's
     numen::core::Data probe = numen::core::make_data(model);

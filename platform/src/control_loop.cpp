@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <span>
 #include <stdexcept>
 #include <string>
@@ -106,15 +107,21 @@ ControlLoop::ControlLoop(const core::Model& model, core::Data& data,
   DeviceBinding all;
   int rigid_user = -1;
   for (std::size_t i = 0; i < devices.size(); ++i) {
-    const std::vector<LinkBinding>& links =
-        devices[i].binding.links.empty() ? DeviceBinding::rigid().links : devices[i].binding.links;
+    const std::vector<LinkBinding>& links = is_default_rigid(devices[i].binding)
+                                                ? DeviceBinding::rigid().links
+                                                : devices[i].binding.links;
     for (const LinkBinding& b : links) {
       all.links.push_back(b);
       if (b.body >= 0) continue;
       if (rigid_user >= 0 && rigid_user != static_cast<int>(i))
-        throw std::invalid_argument("control loop: devices " + std::to_string(rigid_user) +
-                                    " and " + std::to_string(i) +
-                                    " both drive the held body (link binding body -1)");
+        throw std::invalid_argument(
+            "control loop: devices " + std::to_string(rigid_user) + " and " + std::to_string(i) +
+            " both drive the held body (a link binding of body -1" +
+            (is_default_rigid(devices[i].binding)
+                 ? ": device " + std::to_string(i) +
+                       "'s binding is empty, which is the rigid binding, link 0 -> the held "
+                       "body; bind it to a body of its own)"
+                 : std::string(")")));
       rigid_user = static_cast<int>(i);
     }
   }
@@ -135,6 +142,10 @@ ControlLoop::ControlLoop(const core::Model& model, core::Data& data,
   for (std::size_t i = 0; i < devices.size(); ++i)
     for (const LinkBinding& b : contexts_[i].binding.links)
       if (b.body >= 0) data.feedback_group[static_cast<std::size_t>(b.body)] = static_cast<int>(i);
+  // ... taken about each device's own tool (core::Data::feedback_point, written every period).
+  if (data.feedback_point.size() < devices.size())
+    data.feedback_point.resize(devices.size(),
+                               core::Vec3::Constant(std::numeric_limits<double>::quiet_NaN()));
 }
 
 ControlLoop::~ControlLoop() = default;
@@ -154,7 +165,7 @@ void ControlLoop::bind(std::size_t i, const core::Model& model, core::Data& data
                        const hal::InstrumentDevice& instrument, DeviceBinding binding) {
   PeriodContext& c = contexts_[i];
   c.binding = std::move(binding);
-  if (c.binding.links.empty()) c.binding.links = DeviceBinding::rigid().links;  // see DeviceBinding
+  if (is_default_rigid(c.binding)) c.binding.links = DeviceBinding::rigid().links;  // see there
   const DeviceBinding& wiring = c.binding;
   const std::string who = num_devices_ > 1 ? "device " + std::to_string(i) + " binding: "
                                            : std::string("device binding: ");
@@ -214,6 +225,7 @@ void ControlLoop::init_context(std::size_t i, const core::Model& model, core::Da
   c.device = &device;
   c.stepper = &core_stepper_;
   c.supervise_overruns = settings.supervise_overruns;
+  c.place_pending = settings.place_at_first_sample;
   c.stats = stats_.get();
   c.index = static_cast<int>(i);
   c.records = std::span<const PeriodData>(periods_.data(), num_devices_);

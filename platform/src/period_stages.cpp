@@ -162,6 +162,10 @@ void bind_link_targets(PeriodContext& c, PeriodData& p, std::int64_t now_ns) noe
   const hal::DeviceState& state = *p.state;
   if (!state.ready) return;  // a rejected sample keeps the last good target
   core::Data& d = *c.data;
+  // This device's composite feedback is taken and saturated about its controlled frame (link
+  // 0, the tool), where its limits are rated (core::Data::feedback_point).
+  if (const auto g = static_cast<std::size_t>(c.index); g < d.feedback_point.size())
+    d.feedback_point[g] = state.link_poses[0].position;
   for (std::size_t k = 0; k < c.binding.links.size(); ++k) {
     const LinkBinding& b = c.binding.links[k];
     const auto l = static_cast<std::size_t>(b.link);
@@ -171,6 +175,25 @@ void bind_link_targets(PeriodContext& c, PeriodData& p, std::int64_t now_ns) noe
   }
   for (const AxisPrescription& a : c.binding.prescriptions)
     apply_prescription(a, state.q(a.axis), state.qdot(a.axis), d);
+  if (c.place_pending) {
+    // A live input's first sample (ControlLoopSettings::place_at_first_sample): each bound
+    // body is brought to its target, where the instrument lies, before the step.
+    for (std::size_t k = 0; k < c.binding.links.size(); ++k) {
+      const int body = p.bound_body[k];
+      if (body < 0) continue;
+      const bool held = body == d.held_body;
+      const core::BodyTarget& t = d.body_targets[static_cast<std::size_t>(body)];
+      const core::Pose& pose = held ? d.target : t.pose;
+      const core::Twist& twist = held ? d.target_twist : t.twist;
+      core::BodyState& s = d.bodies[static_cast<std::size_t>(body)];
+      s.position = pose.position;
+      s.orientation = pose.orientation;
+      s.linear_velocity = twist.linear;
+      s.angular_velocity = twist.angular;
+    }
+    c.place_pending = false;
+    c.placed_period = static_cast<std::int64_t>(c.counters.periods) - 1;
+  }
 }
 
 void bind_measured_wrench(PeriodContext& c, PeriodData& p, std::int64_t now_ns) noexcept {

@@ -1,11 +1,13 @@
 /// @file realtime_setup.cpp
 /// SCHED_FIFO, mlockall, stack prefault, CPU affinity and timer slack for the calling thread,
 /// each step checked and reported (sched(7), mlockall(2), sched_setaffinity(2),
-/// pthread_getattr_np(3), prctl(2) PR_SET_TIMERSLACK).
+/// pthread_getattr_np(3), prctl(2) PR_SET_TIMERSLACK); the PM QoS CPU latency request
+/// (/dev/cpu_dma_latency) held for a run.
 
 #include "numen/platform/realtime_setup.hpp"
 
 #include <alloca.h>
+#include <fcntl.h>
 #include <pthread.h>
 #include <sched.h>
 #include <sys/prctl.h>
@@ -19,6 +21,7 @@
 #include <cstdio>
 #include <cstring>
 #include <stdexcept>
+#include <utility>
 
 namespace numen::platform {
 namespace {
@@ -308,6 +311,78 @@ std::vector<std::string> describe(const RealtimeReport& r) {
                   limit_text(r.memlock_limit_bytes, " bytes"));
   lines.push_back(step_line("timer slack", r.timer_slack));
   return lines;
+}
+
+namespace {
+
+/// The 32-bit latency (µs) that `fd` reads at offset 0, or -1 if it reads none.
+std::int64_t read_latency(int fd) {
+  std::int32_t v = 0;
+  return pread(fd, &v, sizeof v, 0) == static_cast<ssize_t>(sizeof v) ? v : -1;
+}
+
+}  // namespace
+
+CpuLatencyRequest::CpuLatencyRequest(std::int32_t max_latency_us, const std::string& path) {
+  if (max_latency_us < 0)
+    throw std::invalid_argument("CPU latency request must be >= 0 us, got " +
+                                std::to_string(max_latency_us));
+  const std::string what = path + " " + std::to_string(max_latency_us) + " us";
+  const int fd = ::open(path.c_str(), O_RDWR | O_CLOEXEC);
+  if (fd < 0) {
+    const int err = errno;
+    std::string m = "cannot open " + path + ": " + errno_text(err);
+    if (err == EACCES || err == EPERM)
+      m += " — run as root, or let the user write it (udev rule: KERNEL==\"cpu_dma_latency\", "
+           "GROUP=\"realtime\", MODE=\"0660\"); without it an idle CPU may halt between periods "
+           "and wake later";
+    else if (err == ENOENT)
+      m += " — the kernel has no CPU latency QoS device, or a container lacks it (docker run "
+           "--device /dev/cpu_dma_latency)";
+    step_ = failed(err, m);
+    return;
+  }
+  const std::int64_t before = read_latency(fd);
+  const std::int32_t v = max_latency_us;
+  if (::write(fd, &v, sizeof v) != static_cast<ssize_t>(sizeof v)) {
+    const int err = errno;
+    ::close(fd);
+    step_ = failed(err, what + " refused: " + errno_text(err));
+    return;
+  }
+  const std::int64_t now = read_latency(fd);
+  if (now > max_latency_us) {
+    ::close(fd);
+    step_ = failed(EINVAL,
+                   what + " written but the kernel's limit reads " + std::to_string(now) + " us");
+    return;
+  }
+  fd_ = fd;
+  std::string m = what + " held for the run";
+  if (before >= 0) m += " (the kernel's limit was " + std::to_string(before) + " us)";
+  m += max_latency_us == 0 ? ": idle CPUs poll instead of halting"
+                           : ": idle CPUs stay in states they leave within it";
+  step_ = applied(std::move(m));
+}
+
+CpuLatencyRequest::~CpuLatencyRequest() {
+  if (fd_ >= 0) ::close(fd_);
+}
+
+CpuLatencyRequest::CpuLatencyRequest(CpuLatencyRequest&& other) noexcept
+    : fd_(std::exchange(other.fd_, -1)), step_(std::move(other.step_)) {}
+
+CpuLatencyRequest& CpuLatencyRequest::operator=(CpuLatencyRequest&& other) noexcept {
+  if (this != &other) {
+    if (fd_ >= 0) ::close(fd_);
+    fd_ = std::exchange(other.fd_, -1);
+    step_ = std::move(other.step_);
+  }
+  return *this;
+}
+
+std::string describe_cpu_latency(const CpuLatencyRequest& request) {
+  return step_line("cpu latency", request.step());
 }
 
 }  // namespace numen::platform

@@ -55,7 +55,15 @@ class RunCommand {
   bool parsed() const { return cli_->parsed(); }
   int execute() const;
 
+  /// The stack a paced run prefaults on its loop thread unless --prefault-stack is given.
+  static constexpr std::size_t kPacedPrefaultStackBytes = 256 * 1024;
+
  private:
+  /// The loop thread's real-time settings as asked (--rt-priority, --lock-memory, ...), with a
+  /// `paced` run's defaults: memory locked (unless --no-lock-memory) and
+  /// kPacedPrefaultStackBytes of stack prefaulted (unless --prefault-stack).
+  platform::RealtimeSettings paced_realtime_settings(bool paced) const;
+
   CLI::App* cli_;
   std::string scene_path_, trace_path_, coupling_, bus_ = "sim", record_path_, record_view_path_, view_;
   std::string igtl_;  // --igtl [HOST:]PORT: the world out over OpenIGTLink
@@ -64,6 +72,8 @@ class RunCommand {
   double duration_ = -1.0, phase_ = -1.0, view_rate_ = 60.0, speed_ = 0.0, spin_us_ = 0.0,
          scene_spin_us_ = 0.0;
   std::int64_t timer_slack_ns_ = 1;
+  std::int32_t cpu_dma_latency_us_ = 0;  // --cpu-dma-latency US: a paced run's PM QoS request
+  bool no_lock_memory_ = false, no_cpu_dma_latency_ = false;  // a paced run's defaults left
   std::string wait_for_viewer_;  // --wait-for-viewer[=S] as given (a flag: CLI11 would round a number)
   bool json_ = false, realtime_ = false, replay_ = false, strict_ = false;
   platform::RealtimeSettings rt_;

@@ -1,6 +1,7 @@
 /// @file info_command.cpp
 /// `numen info`: what a scene compiles to (sizes, stages, capacities, bytes).
 
+#include <chrono>
 #include <iostream>
 
 #include "commands.hpp"
@@ -22,9 +23,13 @@ int InfoCommand::execute() const {
   const std::string path = scene_.empty() ? sim::default_scene_path() : scene_;
   sim::SceneOverrides overrides;
   overrides.strict = strict_;
+  const auto t0 = std::chrono::steady_clock::now();
   sim::Scene scene = sim::load_scene(path, overrides);
+  const double load_wall_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const sim::StepTiming timing = check_loaded_scene(scene, std::cerr);
-  const sim::SceneInfo si = sim::describe_scene(scene);
+  sim::SceneInfo si = sim::describe_scene(scene);
+  si.load_wall_s = load_wall_s;
   if (json_) {
     std::cout << sim::with_step_timing_json(sim::format_scene_info_json(si), timing) << std::endl;
   } else {

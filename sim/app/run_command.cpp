@@ -10,6 +10,7 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include "commands.hpp"
 #include "numen/hal/features.hpp"
@@ -52,12 +53,18 @@ RunCommand::RunCommand(CLI::App& parent)
                   "default: the scene's [bus] compute_phase)")
       ->check(seconds_check(0.0, 1.0, false));
   run->add_option("--rt-priority", rt_.fifo_priority,
-                  "SCHED_FIFO priority 1-99 of the loop thread (0: leave the scheduler alone)")
+                  "Paced run: SCHED_FIFO priority 1-99 of the loop thread (0: leave the scheduler "
+                  "alone); refused in an offline run (no --realtime, no real bus)")
       ->check(CLI::Range(0, 99));
-  run->add_flag("--lock-memory", rt_.lock_memory, "mlockall(MCL_CURRENT|MCL_FUTURE) before the loop");
+  CLI::Option* lock =
+      run->add_flag("--lock-memory", rt_.lock_memory,
+                    "mlockall(MCL_CURRENT|MCL_FUTURE) before the loop (a paced run's default)");
+  run->add_flag("--no-lock-memory", no_lock_memory_,
+                "Paced run: leave the process's memory unlocked (default: locked)")
+      ->excludes(lock);
   run->add_option("--prefault-stack", rt_.prefault_stack_bytes,
-                  "Bytes of the loop thread's stack to touch before the loop (e.g. 262144), at "
-                  "most 1 GiB")
+                  "Bytes of the loop thread's stack to touch before the loop, at most 1 GiB "
+                  "(a paced run's default: 262144; 0: none)")
       ->check(CLI::Range(0.0, 1073741824.0));  // checked as a number: "-1" would wrap to SIZE_MAX
   run->add_option("--cpu", rt_.cpu_affinity, "CPUs the loop thread may run on, e.g. --cpu 1 or --cpu 2,3")
       ->delimiter(',')
@@ -68,8 +75,17 @@ RunCommand::RunCommand(CLI::App& parent)
   run->add_option("--timer-slack", timer_slack_ns_,
                   "Paced run: timer slack in ns of the loop and scene threads (prctl "
                   "PR_SET_TIMERSLACK), whatever their scheduling; default 1, 0 leaves the "
-                  "kernel's (50000 for SCHED_OTHER)")
+                  "kernel's (50000 for SCHED_OTHER); at most the period dt (1000000 at 1 kHz)")
       ->check(CLI::Range(std::int64_t{0}, std::int64_t{1'000'000'000}));
+  CLI::Option* latency =
+      run->add_option("--cpu-dma-latency", cpu_dma_latency_us_,
+                      "Paced run: PM QoS CPU latency in us held while it runs "
+                      "(/dev/cpu_dma_latency, as cyclictest); default 0: idle CPUs poll instead "
+                      "of halting (docs/realtime.md)")
+          ->check(CLI::Range(0, 2'000'000'000));
+  run->add_flag("--no-cpu-dma-latency", no_cpu_dma_latency_,
+                "Paced run: leave the host's CPU latency (idle CPUs may halt between periods)")
+      ->excludes(latency);
   run->add_option("--spin", spin_us_,
                   "Paced run with --cpu: end each period's wait in a busy-wait of this many "
                   "microseconds before the deadline (default 0: sleep to it; docs/realtime.md)")
@@ -140,7 +156,8 @@ RunCommand::RunCommand(CLI::App& parent)
       ->check(number_check(0.0, 1e6, true));
   run->add_option("--speed", speed_,
                   "Pace an offline run at this factor of real time (e.g. 1 for a live viewer; "
-                  "default: as fast as it goes)")
+                  "default: as fast as it goes); the paced run, duration / speed, may last at "
+                  "most 1e7 s of wall time")
       ->check(number_check(0.0, 1e6, true));
   run->add_option("--overrun-limit", overrun_limit_,
                   "Paced run: consecutive overruns that latch the safe state (default 3); 0 counts "
@@ -149,6 +166,16 @@ RunCommand::RunCommand(CLI::App& parent)
   run->add_option("--coupling", coupling_, "Override the scene's coupling mode")
       ->check(CLI::IsMember({"god-object", "first-order", "direct"}));
   add_scene_flags(run, &replay_, strict_);
+}
+
+platform::RealtimeSettings RunCommand::paced_realtime_settings(bool paced) const {
+  platform::RealtimeSettings rt = rt_;
+  if (!paced) return rt;
+  // A paced run locks its memory and prefaults its loop thread's stack unless told otherwise,
+  // as cyclictest -m does: no page fault in the loop's first periods (docs/realtime.md).
+  if (!no_lock_memory_) rt.lock_memory = true;
+  if (cli_->count("--prefault-stack") == 0) rt.prefault_stack_bytes = kPacedPrefaultStackBytes;
+  return rt;
 }
 
 int RunCommand::execute() const {
@@ -168,17 +195,25 @@ int RunCommand::execute() const {
   if (cli_->count("--wait-for-viewer") > 0 && view_.empty())
     throw sim::InputError("", 0, 0, "--wait-for-viewer",
                           "waits for a page of the live viewer; without --view there is none");
-  const bool rt_asked = platform::any_step_requested(rt_) || scene_thread_.fifo_priority != 0 ||
+  const bool paced = realtime_ || sim::parse_bus_spec(bus_).real();
+  const platform::RealtimeSettings rt = paced_realtime_settings(paced);
+  const bool rt_asked = platform::any_step_requested(rt) || scene_thread_.fifo_priority != 0 ||
                         !scene_thread_.cpu_affinity.empty();
   if (rt_.strict && !rt_asked)
     throw sim::InputError("", 0, 0, "--rt-strict",
                           "makes a failed real-time step fatal; no real-time step was asked "
                           "(--rt-priority, --lock-memory, --prefault-stack, --cpu, "
                           "--scene-rt-priority, --scene-cpu)");
-  if (cli_->count("--timer-slack") > 0 && !realtime_ && !sim::parse_bus_spec(bus_).real())
-    throw sim::InputError("", 0, 0, "--timer-slack",
-                          "sets the timer slack of a paced run's threads; this run is offline "
-                          "(no --realtime, no real bus)");
+  // What only a paced run does (an offline run has no deadlines).
+  const std::pair<const char*, const char*> paced_only[] = {
+      {"--timer-slack", "sets the timer slack of a paced run's threads"},
+      {"--cpu-dma-latency", "sets the CPU latency a paced run holds"},
+      {"--no-cpu-dma-latency", "leaves the CPU latency a paced run would hold"},
+      {"--no-lock-memory", "leaves a paced run's memory unlocked"}};
+  for (const auto& [key, what] : paced_only)
+    if (cli_->count(key) > 0 && !paced)
+      throw sim::InputError(
+          "", 0, 0, key, std::string(what) + "; this run is offline (no --realtime, no real bus)");
   sim::SceneOverrides overrides;
   if (!coupling_.empty()) overrides.coupling = sim::parse_coupling_mode(coupling_);
   overrides.replay = replay_;
@@ -196,11 +231,12 @@ int RunCommand::execute() const {
   options.trace_path = trace_path_;
   options.bus.spec = bus_;
   options.bus.record_path = record_path_;
-  options.rt = rt_;
+  options.rt = rt;
   options.scene_thread = scene_thread_;
   options.scene_thread.strict = rt_.strict;
   options.scene_thread.spin_ns = std::llround(scene_spin_us_ * 1e3);
   options.timer_slack_ns = timer_slack_ns_;
+  options.cpu_dma_latency_us = no_cpu_dma_latency_ ? -1 : cpu_dma_latency_us_;
   options.spin_ns = std::llround(spin_us_ * 1e3);
   options.stop = &stop_flag();
   options.stop_signal = &stop_signal_number();

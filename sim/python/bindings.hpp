@@ -38,6 +38,10 @@ const sim::InputError* missing_part(const sim::Scene& scene, const char* part);
 /// source tree's (sim::shipped_data_dir_from()).
 std::filesystem::path module_data_dir();
 
+/// `t` (s) if it is finite, else ValueError naming `what` (the function and argument, e.g.
+/// "Scene.target_at: t"): a NaN time would read the trajectory's first sample without a word.
+double finite_time(double t, const char* what);
+
 /// numen.InputError, load_scene, default_scene_path, Scene, Model.
 void bind_scene(pybind11::module_& m);
 /// numen.Data, numen.step, numen._testing.step_loop.

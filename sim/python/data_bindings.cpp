@@ -52,6 +52,14 @@ py::array view(const py::object& self, const T* first, std::vector<py::ssize_t> 
 
 DataHandle& handle(const py::object& self) { return self.cast<DataHandle&>(); }
 
+/// numen.QuaternionOrderWarning (a UserWarning), made by bind_data(): an orientation given
+/// without a name (read_quaternion()).
+py::object& quaternion_order_warning() {
+  static py::object* category = nullptr;  // the module's attribute; lives as long as the process
+  if (category == nullptr) category = new py::object();
+  return *category;
+}
+
 /// (n, 3) view of one Vec3 member of `n` consecutive structs of type Item, whose first
 /// element's member starts at `first` (nullptr when n is 0; the view then points at `self`'s Data).
 template <typename Item>
@@ -103,9 +111,23 @@ auto node_contact_column(T core::NodeContact::*member) {
 }
 
 /// The model a step argument names: a numen.Scene (its model) or a numen.Model.
-const core::Model& model_of(const py::object& scene_or_model) {
+/// TypeError naming `what` (the call and its argument) for anything else, e.g. an int.
+const core::Model& model_of(const py::object& scene_or_model, const char* what) {
   if (py::isinstance<sim::Scene>(scene_or_model)) return scene_or_model.cast<const sim::Scene&>().model;
-  return scene_or_model.cast<const core::Model&>();
+  if (py::isinstance<core::Model>(scene_or_model)) return scene_or_model.cast<const core::Model&>();
+  throw py::type_error(std::string(what) +
+                       " must be the numen.Scene (or its Scene.model) whose make_data() made the "
+                       "Data, got " +
+                       py::str(py::type::of(scene_or_model).attr("__name__")).cast<std::string>() +
+                       " " + py::repr(scene_or_model).cast<std::string>());
+}
+
+/// The DataHandle of `data`; TypeError naming `what` when it is not a numen.Data.
+DataHandle& data_arg(const py::object& data, const char* what) {
+  if (!py::isinstance<DataHandle>(data))
+    throw py::type_error(std::string(what) + " must be a numen.Data (Scene.make_data()), got " +
+                         py::str(py::type::of(data).attr("__name__")).cast<std::string>());
+  return data.cast<DataHandle&>();
 }
 
 /// core::step(model, data) after checking that `data` was made for `model` (a Data of another
@@ -132,12 +154,22 @@ int given(std::initializer_list<const py::handle*> args) {
   return n;
 }
 
+/// Largest |‖q‖ − 1| of an orientation the setters take: a rounded unit quaternion typed by hand
+/// (0.7071, 0, 0, 0.7071: 2e-5) passes; [1, 0, 0, 1], a zero quaternion or angles in degrees
+/// do not.
+constexpr double kUnitTolerance = 1e-3;
+
 /// A quaternion argument of the Python API (docs/python.md "Quaternions"): exactly one of
-/// `positional` (numen's Python order x, y, z, w), `xyzw` or `wxyz` (by name). A positional one
-/// whose first component is above 1/√2 of its norm is refused: read in the scene files' order
-/// (w, x, y, z) it would be a turn of less than 90°, in (x, y, z, w) one of more than 90° about
-/// an axis near x ([1, 0, 0, 0] meant as the identity turns a probe by 180°). Values are taken
-/// as given otherwise (a zero or non-finite quaternion makes the step flag an invalid target).
+/// `positional` (numen's Python order x, y, z, w), `xyzw` or `wxyz` (by name); `what` names the
+/// argument in the messages. ValueError for a wrong length, none or several, a finite one that
+/// is not unit (|‖q‖ − 1| > kUnitTolerance: normalise it; a non-finite one is taken as given:
+/// the step flags an invalid target), and a positional one whose first component is above 1/√2
+/// of its norm (read in the scene files' order (w, x, y, z) it would be a turn of less than 90°,
+/// in (x, y, z, w) one of more than 90° about an axis near x: [1, 0, 0, 0] meant as the identity
+/// turns a probe by 180°). Any other positional one is taken as (x, y, z, w) with a
+/// numen.QuaternionOrderWarning (a UserWarning; Python shows it once per calling line): no
+/// value tells the two orders apart. Otherwise taken as given (not normalised: a Python loop
+/// stays bit-identical to the same loop in C++).
 core::Quat read_quaternion(const py::handle& positional, const py::handle& xyzw,
                            const py::handle& wxyz, const std::string& what) {
   const int n = given({&positional, &xyzw, &wxyz});
@@ -147,18 +179,30 @@ core::Quat read_quaternion(const py::handle& positional, const py::handle& xyzw,
                           "xyzw=(x, y, z, w) or wxyz=(w, x, y, z) (docs/python.md \"Quaternions\")");
   double c[4];
   core::Quat q;
+  std::string form;
   if (!wxyz.is_none()) {
     read_vector(wxyz, c, 4, (what + " wxyz").c_str());
     q = core::Quat(c[0], c[1], c[2], c[3]);  // Eigen's constructor takes w, x, y, z
-    return q;
+    form = "wxyz=";
+  } else {
+    read_vector(xyzw.is_none() ? positional : xyzw, q.coeffs().data(), 4, (what + " xyzw").c_str());
+    form = xyzw.is_none() ? "" : "xyzw=";
   }
-  read_vector(xyzw.is_none() ? positional : xyzw, q.coeffs().data(), 4, (what + " xyzw").c_str());
   const double norm = q.coeffs().norm();
-  if (xyzw.is_none() && std::abs(q.x()) > norm / std::sqrt(2.0)) {
-    const auto turn_deg = [norm](double w) {
-      return 2.0 * std::acos(std::min(1.0, std::abs(w) / norm)) * 180.0 / 3.14159265358979323846;
-    };
-    char text[400];
+  char text[480];
+  if (std::isfinite(norm) && std::abs(norm - 1.0) > kUnitTolerance) {
+    const double* v = form == "wxyz=" ? c : q.coeffs().data();
+    std::snprintf(text, sizeof text,
+                  "%s %s(%g, %g, %g, %g) is not a unit quaternion (norm %g): a rotation is one of "
+                  "norm 1 (within %g); divide it by its norm (docs/python.md \"Quaternions\")",
+                  what.c_str(), form.c_str(), v[0], v[1], v[2], v[3], norm, kUnitTolerance);
+    throw py::value_error(text);
+  }
+  if (!form.empty()) return q;
+  const auto turn_deg = [norm](double w) {
+    return 2.0 * std::acos(std::min(1.0, std::abs(w) / norm)) * 180.0 / 3.14159265358979323846;
+  };
+  if (std::abs(q.x()) > norm / std::sqrt(2.0)) {
     std::snprintf(text, sizeof text,
                   "%s (%g, %g, %g, %g) given without a name is ambiguous: read as (x, y, z, w), "
                   "numen's Python order, it turns by %.1f°; read as (w, x, y, z), the scene files' "
@@ -167,6 +211,12 @@ core::Quat read_quaternion(const py::handle& positional, const py::handle& xyzw,
                   what.c_str(), q.x(), q.y(), q.z(), q.w(), turn_deg(q.w()), turn_deg(q.x()));
     throw py::value_error(text);
   }
+  std::snprintf(text, sizeof text,
+                "%s (%g, %g, %g, %g) given without a name is read as (x, y, z, w), numen's Python "
+                "order (a turn of %.1f°; as (w, x, y, z), the scene files' order, it would turn by "
+                "%.1f°): pass it by name, xyzw=... or wxyz=... (docs/python.md \"Quaternions\")",
+                what.c_str(), q.x(), q.y(), q.z(), q.w(), turn_deg(q.w()), turn_deg(q.x()));
+  if (PyErr_WarnEx(quaternion_order_warning().ptr(), text, 1) != 0) throw py::error_already_set();
   return q;
 }
 
@@ -183,6 +233,30 @@ int body_arg(const core::Model& model, const py::handle& body) {
     throw py::value_error("body " + std::to_string(b) + " out of range [0, " +
                           std::to_string(model.num_bodies()) + ")");
   return b;
+}
+
+/// Data.held_body = body: -1 (none), a body index or a body name; ValueError naming `what`
+/// otherwise (core::set_held_body() turns an out-of-range index into none: the instrument would
+/// be dropped without a word).
+void set_held(DataHandle& h, const py::handle& body, const char* what) {
+  if (py::isinstance<py::str>(body)) {
+    core::set_held_body(*h.model, h.data, body_arg(*h.model, body));
+    return;
+  }
+  // Any integer (int, numpy.int64, ...: __index__), not a float or a bool.
+  PyObject* index = py::isinstance<py::bool_>(body) ? nullptr : PyNumber_Index(body.ptr());
+  if (index == nullptr) {
+    PyErr_Clear();
+    throw py::type_error(std::string(what) +
+                         " must be a body index, a body name or -1 (none), got " +
+                         py::str(py::type::of(body).attr("__name__")).cast<std::string>());
+  }
+  const auto v = py::reinterpret_steal<py::int_>(index);
+  if (!(v.equal(py::int_(-1)) || (v >= py::int_(0) && v < py::int_(h.model->num_bodies()))))
+    throw py::value_error(std::string(what) + " must be -1 (none) or a body index in [0, " +
+                          std::to_string(h.model->num_bodies()) + ") (Model.body_names), got " +
+                          py::str(body).cast<std::string>());
+  core::set_held_body(*h.model, h.data, v.cast<int>());
 }
 
 /// A prescribed joint argument: its index or its name (Model.joint_names); ValueError for
@@ -228,17 +302,19 @@ const sim::InstrumentTargets& instrument_of(DataHandle& h) {
 }
 
 /// The scripted loop of the tests and of the benchmark (docs/python.md), in C++: `steps` times,
-/// target := the scene trajectory's pose and twist at data.time, then core::step. Returns
+/// every target from the scene trajectory's sample at data.time through the device
+/// (sim::InstrumentTargets::set_at: the held body's centre-of-mass frame, not the tip; Python's
+/// Data.set_targets_at()), then core::step. Returns
 /// copies of the end state, the wall time of the loop and the summed time of the step calls
 /// (each bracketed by steady_clock, like the step_time benchmark's manual timing).
 py::dict step_loop(const sim::Scene& scene, std::int64_t steps) {
   core::Data data = core::make_data(scene.model);
+  const sim::InstrumentTargets targets(scene);
   using Clock = std::chrono::steady_clock;
   Clock::duration in_step{};
   const Clock::time_point t0 = Clock::now();
   for (std::int64_t k = 0; k < steps; ++k) {
-    data.target = scene.trajectory.at(data.time).pose;
-    data.target_twist = scene.trajectory.twist_at(data.time);
+    targets.set_at(scene.trajectory, data.time, data);
     const Clock::time_point s0 = Clock::now();
     core::step(scene.model, data);
     in_step += Clock::now() - s0;
@@ -293,12 +369,14 @@ void bind_data(py::module_& m) {
       "frame; quaternions (x, y, z, w), body to world; rows in body index order "
       "(Model.body_names).")
       .def("step", [](py::object self, const py::object& scene_or_model) {
-             checked_step(model_of(scene_or_model), handle(self));
+             checked_step(model_of(scene_or_model, "Data.step(scene_or_model): scene_or_model"),
+                          handle(self));
            },
            py::arg("scene_or_model"),
            "Advances the state by model.dt (core::step: contacts, forces, implicit solve, "
            "feedback, non-finite checks). The Scene or Model must be the one whose make_data() "
-           "made this Data (ValueError otherwise). Never fails otherwise: problems are status bits.")
+           "made this Data (ValueError for another's, TypeError for anything else). Never fails "
+           "otherwise: problems are status bits.")
       .def("reset", [](DataHandle& h) { core::reset_data(*h.model, h.data); },
            "Back to the initial state (core::reset_data): bodies at their initial pose and "
            "twist, inputs, outputs and counters cleared, device on the initial held body.")
@@ -325,12 +403,13 @@ void bind_data(py::module_& m) {
           "(set_targets_at / set_tool_sample turn that into this target): position (3,) m, the "
           "orientation once, as a unit quaternion: `orientation` (x, y, z, w), or by name "
           "xyzw=(x, y, z, w) or wxyz=(w, x, y, z) (the scene files' order); a positional one "
-          "whose x is above 1/√2 of its norm is refused as ambiguous (docs/python.md "
-          "\"Quaternions\"); linear velocity (3,) m/s and angular velocity (3,) rad/s (default "
-          "zero). Values are taken as given: a non-finite target makes the next step skip the "
-          "coupling, hold the feedback, set STATUS_INVALID_TARGET and count "
-          "invalid_target_steps. ValueError for a wrong length, an orientation given twice, "
-          "none or ambiguous, or no held body (held_body -1).")
+          "whose x is above 1/√2 of its norm is refused as ambiguous, any other positional one "
+          "warns (numen.QuaternionOrderWarning; docs/python.md \"Quaternions\"); linear "
+          "velocity (3,) m/s and angular velocity (3,) rad/s (default zero). Values are taken "
+          "as given: a non-finite target makes the next step skip the coupling, hold the "
+          "feedback, set STATUS_INVALID_TARGET and count invalid_target_steps. ValueError for "
+          "a wrong length, an orientation given twice, none, ambiguous or finite but not unit "
+          "(|norm - 1| > 1e-3), or no held body (held_body -1).")
       .def(
           "set_body_target",
           [](DataHandle& h, const py::handle& body, const py::handle& position,
@@ -430,7 +509,9 @@ void bind_data(py::module_& m) {
           "set_targets_at",
           [](DataHandle& h, std::optional<double> t) {
             if (const sim::InputError* e = missing_part(*h.scene, "trajectory")) throw *e;
-            instrument_of(h).set_at(h.scene->trajectory, t ? *t : h.data.time, h.data);
+            instrument_of(h).set_at(h.scene->trajectory,
+                                    t ? finite_time(*t, "Data.set_targets_at: t") : h.data.time,
+                                    h.data);
           },
           py::arg("t") = py::none(),
           "Sets every target the scene's device drives from its trajectory at time t (s; "
@@ -441,7 +522,7 @@ void bind_data(py::module_& m) {
           "link_offset (the held body's Data::target, the others' body targets) and each "
           "prescribed joint gets its axis (the jaw); the rates are the difference to the "
           "sample a trajectory period later. Raises InputError for a scene without "
-          "[trajectory].")
+          "[trajectory], ValueError for a t that is not finite.")
       .def(
           "set_tool_sample",
           [](DataHandle& h, const py::handle& position, const py::handle& xyzw,
@@ -461,14 +542,61 @@ void bind_data(py::module_& m) {
           "wxyz=(w, x, y, z), and the jaw opening (rad). The targets are at rest (zero "
           "rates). A scene without [device] has the identity pose tracker: the sample is the "
           "held body's centre-of-mass target.")
+      .def(
+          "tool_to_body",
+          [](DataHandle& h, const py::handle& position, const py::handle& xyzw,
+             const py::handle& wxyz) {
+            sim::TrajectorySample s;
+            read_vector(position, s.pose.position.data(), 3, "position");
+            s.pose.orientation = read_quaternion(py::none(), xyzw, wxyz, "orientation");
+            core::Pose body;
+            if (!instrument_of(h).held_body_target(s, h.data, body))
+              throw py::value_error(
+                  "tool_to_body: no body is held (held_body -1) or no link of the device drives "
+                  "it");
+            return py::make_tuple(py::array_t<double>(3, body.position.data()),
+                                  py::array_t<double>(4, body.orientation.coeffs().data()));
+          },
+          py::arg("position"), py::kw_only(), py::arg("xyzw") = py::none(),
+          py::arg("wxyz") = py::none(),
+          "The held body's centre-of-mass pose for an instrument tool-frame pose (the frame of "
+          "Scene.target_at: a trocar instrument's tip), world: (position (3,) m, orientation "
+          "(4,) x y z w), copies — the pose to give set_target when you have the tip "
+          "(sim::InstrumentTargets::held_body_target: through the device's kinematics, "
+          "tool_offset and the body's link_offset, as set_tool_sample sets it). The tool pose: "
+          "position (3,) m, orientation by name, xyzw= or wxyz=. Sets nothing. ValueError "
+          "without a held body.")
+      .def(
+          "tool_in_held_body",
+          [](DataHandle& h, const py::handle& position, const py::handle& xyzw,
+             const py::handle& wxyz) {
+            sim::TrajectorySample s;
+            read_vector(position, s.pose.position.data(), 3, "position");
+            s.pose.orientation = read_quaternion(py::none(), xyzw, wxyz, "orientation");
+            core::Pose tip;
+            if (!instrument_of(h).tool_in_held_body(s, h.data, tip))
+              throw py::value_error(
+                  "tool_in_held_body: no body is held (held_body -1) or no link of the device "
+                  "drives it");
+            return py::make_tuple(py::array_t<double>(3, tip.position.data()),
+                                  py::array_t<double>(4, tip.orientation.coeffs().data()));
+          },
+          py::arg("position"), py::kw_only(), py::arg("xyzw") = py::none(),
+          py::arg("wxyz") = py::none(),
+          "The instrument's tool frame (its tip) in the held body's centre-of-mass frame when "
+          "the tool is at the given world pose: (position (3,) m, orientation (4,) x y z w), "
+          "body frame, copies (sim::InstrumentTargets::tool_in_held_body). The tip's offset "
+          "from the centre of mass: (0, 0, 0.04) on the lattice scene's tube, zero on "
+          "probe.toml. ValueError without a held body.")
       .def_property(
           "held_body", [](const DataHandle& h) { return h.data.held_body; },
-          [](DataHandle& h, int body) { core::set_held_body(*h.model, h.data, body); },
-          "Body the device drives (-1: none); setting an out-of-range index detaches "
-          "(core::set_held_body: tool switching).")
+          [](DataHandle& h, const py::handle& body) { set_held(h, body, "held_body"); },
+          "Body the device drives (-1: none); set it to a body index or name (Model.body_names) "
+          "or -1 to let go (core::set_held_body: tool switching). ValueError for an index out "
+          "of range or an unknown name (core::set_held_body alone would let go of the body).")
       .def_property(
           "attached_body", [](const DataHandle& h) { return h.data.held_body; },
-          [](DataHandle& h, int body) { core::set_held_body(*h.model, h.data, body); },
+          [](DataHandle& h, const py::handle& body) { set_held(h, body, "attached_body"); },
           "Alias of held_body, kept for existing scripts.")
       .def_property_readonly("time", [](const DataHandle& h) { return h.data.time; },
                              "Simulated time (s).")
@@ -628,11 +756,58 @@ void bind_data(py::module_& m) {
           "View (K,) of this node's weight among face_weights (1 for a node sphere's contact).");
 
   m.def("step", [](const py::object& model, py::object data) {
-          checked_step(model_of(model), handle(data));
+          checked_step(model_of(model, "numen.step(model, data): model"),
+                       data_arg(data, "numen.step(model, data): data"));
         },
         py::arg("model"), py::arg("data"),
         "numen.step(model, data): data.step(model) (core::step), model a Model or a Scene.");
 
+  py::class_<sim::FeedbackRamp>(
+      m, "FeedbackRamp",
+      "The device's soft start for a loop that steps the scene itself and renders "
+      "Data.feedback_wrench (sim::FeedbackRamp; docs/python.md \"Soft start\"): `numen run`'s "
+      "device ramps its torques in over [device] soft_start (0.1 s by default), core::step does "
+      "not. After each step, apply(data) gives the wrench to render: (1 - r) w_from + r "
+      "feedback_wrench, r = min(1, k dt / soft_start), k the steps since the ramp began; w_from "
+      "zero at start-up, the held wrench after an invalid-target dropout.")
+      .def(py::init([](const sim::Scene& scene, std::optional<double> soft_start) {
+             if (!soft_start) return sim::FeedbackRamp(scene);
+             if (!std::isfinite(*soft_start) || *soft_start < 0.0)
+               throw py::value_error("FeedbackRamp: soft_start must be a finite number of "
+                                     "seconds >= 0, got " + sim::format_input_number(*soft_start));
+             return sim::FeedbackRamp(*soft_start, scene.model.dt);
+           }),
+           py::arg("scene"), py::arg("soft_start") = py::none(),
+           "The ramp of `scene` (its dt), over soft_start s (None: the scene's [device] "
+           "soft_start, 0.1 s unless it says; 0: off).")
+      .def(
+          "apply",
+          [](sim::FeedbackRamp& r, const py::object& data) {
+            const core::Wrench w = r.apply(data_arg(data, "FeedbackRamp.apply(data): data").data);
+            py::array_t<double> out(6);
+            for (int c = 0; c < 3; ++c) {
+              out.mutable_at(c) = w.force[c];
+              out.mutable_at(c + 3) = w.torque[c];
+            }
+            return out;
+          },
+          py::arg("data"),
+          "Call once after each step: the wrench to render (6,) copy, force (N) then torque "
+          "(N·m), world, as Data.feedback_wrench.")
+      .def("restart", &sim::FeedbackRamp::restart,
+           "Starts the ramp again from zero (a re-arm, or after Data.reset()).")
+      .def_property_readonly("ramp", &sim::FeedbackRamp::ramp,
+                             "The factor r of the last apply() (1: ramp over or off).");
+
+  quaternion_order_warning() = py::reinterpret_steal<py::object>(PyErr_NewExceptionWithDoc(
+      "numen.QuaternionOrderWarning",
+      "An orientation was given to a numen.Data setter without a name: it is read as (x, y, z, "
+      "w), numen's Python order, and may have been meant as (w, x, y, z), the scene files' "
+      "order. Pass it as xyzw=... or wxyz=... (docs/python.md \"Quaternions\"); "
+      "warnings.simplefilter('error', numen.QuaternionOrderWarning) makes it an error.",
+      PyExc_UserWarning, nullptr));
+  if (!quaternion_order_warning()) throw py::error_already_set();
+  m.attr("QuaternionOrderWarning") = quaternion_order_warning();
   m.attr("STATUS_CONTACT_OVERFLOW") = static_cast<std::uint32_t>(core::kContactOverflow);
   m.attr("STATUS_NON_FINITE") = static_cast<std::uint32_t>(core::kNonFinite);
   m.attr("STATUS_SOLVER_NOT_CONVERGED") = static_cast<std::uint32_t>(core::kSolverNotConverged);
@@ -641,8 +816,8 @@ void bind_data(py::module_& m) {
   py::module_ testing = m.def_submodule(
       "_testing", "Helpers of the tests and the benchmark (not API).");
   testing.def("step_loop", &step_loop, py::arg("scene"), py::arg("steps"),
-              "The scripted loop in C++: `steps` times, target := scene.target_at(data.time) "
-              "and its twist, then core::step, on a new Data. Returns a dict of copies of the end "
+              "The scripted loop in C++: `steps` times, the targets from the scene's trajectory "
+              "at data.time as Data.set_targets_at() sets them, then core::step, on a new Data. Returns a dict of copies of the end "
               "state (same keys as the Data views), wall_s, the loop's wall time (s), and step_s, the "
               "sum of the steady-clock time of each core::step call (s).");
 }

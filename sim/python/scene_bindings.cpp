@@ -5,6 +5,7 @@
 #include <pybind11/stl.h>
 
 #include <array>
+#include <cmath>
 #include <exception>
 #include <memory>
 #include <optional>
@@ -55,6 +56,13 @@ std::filesystem::path module_data_dir() {
   return sim::shipped_data_dir_from(std::filesystem::path(file).parent_path(), NUMEN_DATA_FROM_MODULE);
 }
 
+double finite_time(double t, const char* what) {
+  if (!std::isfinite(t))
+    throw py::value_error(std::string(what) + " must be a finite time in seconds, got " +
+                          sim::format_input_number(t));
+  return t;
+}
+
 const sim::InputError* missing_part(const sim::Scene& scene, const char* part) {
   for (const sim::InputError& e : scene.run_missing)
     if (e.key() == part) return &e;
@@ -84,6 +92,18 @@ void bind_scene(py::module_& m) {
       PyErr_SetObject(input_error.ptr(), error.ptr());
     }
   });
+
+  // numen.SceneWarning(UserWarning): a load warning of Scene.warnings, raised by load_scene.
+  // Never destroyed (a static py::object would be released after the interpreter is gone).
+  static py::object* const scene_warning =
+      new py::object(py::reinterpret_steal<py::object>(PyErr_NewExceptionWithDoc(
+          "numen.SceneWarning",
+          "A remark of the scene loader (one entry of Scene.warnings, e.g. 'no feedback: ...'), "
+          "warned by load_scene, with the scene file's path in front when it is not located. "
+          "warnings.simplefilter('error', numen.SceneWarning) makes it an error.",
+          PyExc_UserWarning, nullptr)));
+  if (!*scene_warning) throw py::error_already_set();
+  m.attr("SceneWarning") = *scene_warning;
 
   py::class_<core::Model>(m, "Model",
                           "The compiled, immutable model of a scene (core::Model), read-only. "
@@ -119,6 +139,27 @@ void bind_scene(py::module_& m) {
             return masses;
           },
           "Body masses (kg), in body index order.")
+      .def(
+          "body_spheres",
+          [](const core::Model& mo, int body) {
+            if (body < 0 || body >= mo.num_bodies())
+              throw py::index_error("body " + std::to_string(body) + " out of range [0, " +
+                                    std::to_string(mo.num_bodies()) + ") (Model.body_names)");
+            const core::BodyModel& b = mo.bodies[static_cast<std::size_t>(body)];
+            py::array_t<double> rows({static_cast<py::ssize_t>(b.sphere_count), py::ssize_t{4}});
+            for (int i = 0; i < b.sphere_count; ++i) {
+              const core::Sphere& sp =
+                  mo.body_spheres[static_cast<std::size_t>(b.sphere_begin + i)];
+              for (int k = 0; k < 3; ++k) rows.mutable_at(i, k) = sp.center[k];
+              rows.mutable_at(i, 3) = sp.radius;
+            }
+            return rows;
+          },
+          py::arg("body"),
+          "(S, 4) copy of body `body`'s collision spheres: centre x, y, z (m, in its "
+          "centre-of-mass frame) and radius (m) (Model::body_spheres; (0, 4) for a body without "
+          "spheres, e.g. a mesh body). With Data.body_positions / body_orientations they give "
+          "where its surface is, e.g. a probe's lowest point.")
       .def_property_readonly(
           "joint_names",
           [](const core::Model& mo) {
@@ -259,7 +300,7 @@ void bind_scene(py::module_& m) {
           "target_at",
           [](const sim::Scene& s, double t) {
             if (const sim::InputError* e = missing_part(s, "trajectory")) throw *e;
-            const sim::TrajectorySample x = s.trajectory.at(t);
+            const sim::TrajectorySample x = s.trajectory.at(finite_time(t, "Scene.target_at: t"));
             return py::make_tuple(to_array(x.pose.position), to_array(x.pose.orientation), x.jaw);
           },
           py::arg("t"),
@@ -268,16 +309,18 @@ void bind_scene(py::module_& m) {
           "body's centre-of-mass frame that Data.set_target takes (Data.set_targets_at turns "
           "it into the bodies' targets): (position (3,) m, orientation (4,) unit quaternion in "
           "the order (x, y, z, w), jaw angle rad), world frame; copies. InputError for a scene "
-          "without [trajectory].")
+          "without [trajectory], ValueError for a t that is not finite.")
       .def(
           "target_twist_at",
           [](const sim::Scene& s, double t) {
-            const core::Twist w = s.trajectory.twist_at(t);
+            if (const sim::InputError* e = missing_part(s, "trajectory")) throw *e;
+            const core::Twist w = s.trajectory.twist_at(finite_time(t, "Scene.target_twist_at: t"));
             return py::make_tuple(to_array(w.linear), to_array(w.angular));
           },
           py::arg("t"),
           "Twist of the trajectory at time t (s): (linear (3,) m/s, angular (3,) rad/s), world "
-          "frame; copies.")
+          "frame; copies. InputError for a scene without [trajectory], ValueError for a t that is "
+          "not finite.")
       .def(
           "make_data",
           [](const std::shared_ptr<sim::Scene>& s) {
@@ -296,7 +339,16 @@ void bind_scene(py::module_& m) {
         sim::SceneOverrides overrides;
         overrides.caller_steps = true;
         if (coupling) overrides.coupling = sim::parse_coupling_mode(*coupling);
-        return std::make_shared<sim::Scene>(sim::load_scene(path, overrides));
+        auto scene = std::make_shared<sim::Scene>(sim::load_scene(path, overrides));
+        // Each load warning (Scene.warnings) as a Python warning too: `no feedback: ...` is
+        // otherwise only in a list nobody reads (`numen run` prints them on stderr).
+        for (const std::string& w : scene->warnings) {
+          const bool located = w.rfind(scene->file + ":", 0) == 0;  // "file:line:col: key: ..."
+          if (PyErr_WarnEx(scene_warning->ptr(), (located ? w : scene->file + ": " + w).c_str(),
+                           1) != 0)
+            throw py::error_already_set();
+        }
+        return scene;
       },
       py::arg("path"), py::arg("coupling") = py::none(),
       "Loads and compiles the scene file at `path` (TOML, docs/scenes.md); `coupling` "
@@ -305,7 +357,8 @@ void bind_scene(py::module_& m) {
       "[trajectory] and [device] may be left out (docs/scenes.md \"Drive it from your own "
       "program\"; run_scene then refuses it). Raises "
       "numen.InputError (a ValueError) with the located message 'file:line:column: key: "
-      "message' and its parts as attributes.");
+      "message' and its parts as attributes. Each load warning (Scene.warnings) is also "
+      "warned as a numen.SceneWarning.");
   m.def(
       "default_scene_path", [] { return (module_data_dir() / "scenes" / "default.toml").string(); },
       "Path of the shipped default scene: share/numen/scenes/default.toml of the prefix this "

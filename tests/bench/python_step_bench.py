@@ -5,16 +5,16 @@ scene with a rigid sphere-lattice organ; docs/python.md "Overhead"). A benchmark
     PYTHONPATH=build/sim/python /usr/bin/python3 tests/bench/python_step_bench.py \
         [--steps 20000] [--rounds 5] [--cpp-bench build/tests/numen_bench]
 
-Each round runs the scripted loop (target := the scene trajectory's pose and twist at
-data.time, then step; numen._testing.step_loop) twice on a new Data, alternately:
+Each round runs the scripted loop (every target from the scene trajectory's sample at data.time
+through the device, Data.set_targets_at(), then step; numen._testing.step_loop) twice on a new Data, alternately:
   python: the loop in Python; each data.step(scene) call is bracketed by time.perf_counter_ns
           (the cost of the bracket itself, measured on an empty bracket, is subtracted);
   c++:    the same loop in C++, each core::step bracketed by steady_clock.
 Both loops step the same states bit for bit (tests/sim/python/data_bindings_test.py), so the
 difference is the cost of the call from Python: argument conversion, the model check, the
 binding's dispatch. Reported: medians over the rounds of the mean per call (µs), their ratio and
-difference (the per-call overhead), and the whole Python loop per step (target_at,
-target_twist_at, set_target and step). With --cpp-bench, the C++ benchmark
+difference (the per-call overhead), and the whole Python loop per step (set_targets_at and
+step). With --cpp-bench, the C++ benchmark
 step_time/LatticeScene (Google Benchmark; core::step within the full control period of the
 simulated bus) is run in the same process run for reference.
 """
@@ -35,9 +35,7 @@ def python_loop(scene, steps):
     in_step = 0
     t0 = clock()
     for _ in range(steps):
-        position, orientation, _jaw = scene.target_at(data.time)
-        linear, angular = scene.target_twist_at(data.time)
-        data.set_target(position, orientation, linear, angular)
+        data.set_targets_at()  # the trajectory's tip through the device to the tube's COM
         s0 = clock()
         data.step(scene)
         in_step += clock() - s0
@@ -89,8 +87,7 @@ def main():
     print(f"  ratio Python/C++                {m(py_step) / m(cpp_step):8.2f}")
     print(f"  overhead per call               {m(py_step) - m(cpp_step):8.3f} us")
     print(f"  C++   loop per step             {m(cpp_loop):8.3f} us (target sampling + step)")
-    print(f"  Python loop per step            {m(py_loop):8.3f} us (target_at, target_twist_at, "
-          f"set_target, step)")
+    print(f"  Python loop per step            {m(py_loop):8.3f} us (set_targets_at, step)")
     if args.cpp_bench:
         mean_us, p50 = cpp_benchmark(args.cpp_bench)
         print(f"  numen_bench step_time/LatticeScene: mean {mean_us:.3f} us, p50 {p50} us "

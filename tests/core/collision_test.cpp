@@ -462,6 +462,102 @@ TEST(CollisionStage, CoincidentCentresOfTwoBodiesSeparateAlongTheirCentresOfMass
   EXPECT_NEAR(c.depth, 0.2, 1e-12);
 }
 
+// ---- crossing (collision.hpp, "Crossing"; issue 70) ------------------------------------------
+
+/// Two bodies of one 1.5 mm sphere each, body 0 at x = +x0 and body 1 at −x0 (centres 2 x0 apart
+/// along x, body 0 on the +x side), moving along x at +v and −v.
+void place_pair(Data& d, double x0, double v) {
+  d.bodies[0].position = Vec3(x0, 0, 0);
+  d.bodies[1].position = Vec3(-x0, 0, 0);
+  d.bodies[0].linear_velocity = Vec3(v, 0, 0);
+  d.bodies[1].linear_velocity = Vec3(-v, 0, 0);
+}
+
+Scene jaw_tip_pair() {
+  Scene sc;
+  sc.body(Vec3(0.01, 0, 0), Quat::Identity(), {{Vec3::Zero(), 0.0015}});
+  sc.body(Vec3(-0.01, 0, 0), Quat::Identity(), {{Vec3::Zero(), 0.0015}});
+  sc.model.dt = 1e-3;
+  sc.finalize();
+  return sc;
+}
+
+TEST(CollisionCrossing, SpheresThatCrossedWithinAStepArePushedBackTheWayTheyCame) {
+  // Two jaw-tip spheres (1.5 mm) closing at 2.5 m/s each: 5 mm in the 1 ms step, from 4 mm apart
+  // (centres) to 1 mm past each other. The overlap's own normal (+x on body 0) would push them
+  // on through; the approach's (−x) pushes them back, 3 + 1 mm deep.
+  const Scene sc = jaw_tip_pair();
+  Data d = make_data(sc.model);
+  place_pair(d, 0.0005, 2.5);
+  detect_contacts(sc.model, d);
+  ASSERT_EQ(d.num_contacts, 1);
+  const Contact& c = d.contacts[0];
+  EXPECT_EQ(c.body_a, 0);
+  EXPECT_EQ(c.body_b, 1);
+  EXPECT_LT((c.normal - Vec3(-1, 0, 0)).norm(), 1e-12) << "pushed back, not on through";
+  EXPECT_NEAR(c.depth, 0.004, 1e-12);
+  EXPECT_LT(c.position.norm(), 1e-12) << "the middle of the overlap";
+  EXPECT_EQ(d.max_penetration, c.depth) << "reported deeper than the spheres' radii";
+  EXPECT_EQ(d.crossed_contacts, 1);
+  EXPECT_EQ(d.crossed_contact_steps, 1);
+  EXPECT_EQ(d.pass_throughs, 0);
+
+  // Next step, still past each other and now at rest: held back along the same normal.
+  place_pair(d, 0.0008, 0.0);
+  detect_contacts(sc.model, d);
+  ASSERT_EQ(d.num_contacts, 1);
+  EXPECT_LT((d.contacts[0].normal - Vec3(-1, 0, 0)).norm(), 1e-12);
+  EXPECT_NEAR(d.contacts[0].depth, 0.0046, 1e-12);
+  EXPECT_EQ(d.crossed_contact_steps, 2);
+
+  // Then apart on the far side: they went through, counted once.
+  place_pair(d, 0.002, 0.0);
+  detect_contacts(sc.model, d);
+  EXPECT_EQ(d.num_contacts, 0);
+  EXPECT_EQ(d.crossed_contacts, 0);
+  EXPECT_EQ(d.pass_throughs, 1);
+  detect_contacts(sc.model, d);
+  EXPECT_EQ(d.pass_throughs, 1);
+  reset_data(sc.model, d);
+  EXPECT_EQ(d.pass_throughs, 0);
+  EXPECT_EQ(d.crossed_contact_steps, 0);
+}
+
+TEST(CollisionCrossing, AnOverlapThatGoesPastTheCentreIsHeldBackAndReleasedInFront) {
+  // Overlapping at the step's start (centres 0.6 mm, body 0 on the −x side) and 0.4 mm past each
+  // other at its end: the start's normal (−x) holds; back in front, the overlap's own normal.
+  const Scene sc = jaw_tip_pair();
+  Data d = make_data(sc.model);
+  place_pair(d, 0.0002, 0.5);
+  detect_contacts(sc.model, d);
+  ASSERT_EQ(d.num_contacts, 1);
+  EXPECT_LT((d.contacts[0].normal - Vec3(-1, 0, 0)).norm(), 1e-12);
+  EXPECT_NEAR(d.contacts[0].depth, 0.0034, 1e-12);
+  place_pair(d, -0.0005, -0.7);  // pushed back to the −x side: 1 mm in front
+  detect_contacts(sc.model, d);
+  ASSERT_EQ(d.num_contacts, 1);
+  EXPECT_LT((d.contacts[0].normal - Vec3(-1, 0, 0)).norm(), 1e-12);
+  EXPECT_NEAR(d.contacts[0].depth, 0.002, 1e-12);
+  EXPECT_EQ(d.crossed_contacts, 0);
+  EXPECT_EQ(d.crossed_contact_steps, 1);
+  EXPECT_EQ(d.pass_throughs, 0);
+}
+
+TEST(CollisionCrossing, SlowOrRestingPairsKeepTheirOwnNormal) {
+  // The same offset (body 0 1 mm on the +x side) at rest and approaching slowly: the overlap's
+  // own normal, +x; nothing counted.
+  const Scene sc = jaw_tip_pair();
+  Data d = make_data(sc.model);
+  for (const double v : {0.0, -0.1, 0.1}) {
+    place_pair(d, 0.0005, v);
+    detect_contacts(sc.model, d);
+    ASSERT_EQ(d.num_contacts, 1);
+    EXPECT_LT((d.contacts[0].normal - Vec3(1, 0, 0)).norm(), 1e-12) << v;
+    EXPECT_NEAR(d.contacts[0].depth, 0.002, 1e-12) << v;
+  }
+  EXPECT_EQ(d.crossed_contact_steps, 0);
+}
+
 TEST(CollisionStage, SphereSetContactsNameTheStaticSphereAndObstacle) {
   Scene sc(2);
   sc.plane(Vec3(0, 0, -5), Vec3::UnitZ());

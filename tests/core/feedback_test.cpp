@@ -168,3 +168,73 @@ TEST(Feedback, EachFeedbackGroupHasItsDevicesGains) {
   m.extra_feedback[0].k_t = -1.0;
   EXPECT_EQ(core::finalize_model(m), "feedback gains must be finite and >= 0");
 }
+
+TEST(Feedback, MirroredDevicesFeelTheSameForceEachAboutItsOwnTool) {
+  // Two trocar instruments on mirror-image paths (mirrored in the plane x = 0), each a sleeve
+  // at its trocar (its own rotational lag) and a tube 0.12 m below it lagging its target by the
+  // same 30 mm across the shaft: 9 N asked of each against an 8 N, 0.3 N·m device. Device 0
+  // holds its tube (its composite about the tube's target); device 1's tube and sleeve have
+  // their own targets, its composite about its controlled frame, the tube's target
+  // (Data::feedback_point, as the control loop writes it). Both get 8 N; taken about device 1's
+  // trocar instead, the force's 1.1 N·m moment would take the torque limit and scale its
+  // whole wrench to 2.2 N.
+  core::Model m = feedback_model(core::CouplingMode::kGodObject);
+  m.bodies.resize(4, m.bodies[0]);  // 0 sleeve_0, 1 tube_0 (held), 2 sleeve_1, 3 tube_1
+  m.initial_held_body = 1;
+  m.feedback = {300.0, 1.0, 0.5, 0.005, 8.0, 0.3};
+  m.extra_feedback = {m.feedback};
+  ASSERT_EQ(core::finalize_model(m), "");
+  core::Data d = core::make_data(m);
+  ASSERT_EQ(d.held_body, 1);
+  ASSERT_EQ(d.feedback_point.size(), 2u);
+  d.feedback_group = {0, 0, 1, 1};
+  const auto mirror = [](const Vec3& p) { return Vec3(-p.x(), p.y(), p.z()); };
+  // The mirror of a rotation by a about u is a rotation by −a about the mirrored u.
+  const Vec3 trocar0(-0.05, 0.01, 0.12), tool0(-0.05, 0.01, 0.0), lag0(0.03, 0.0, 0.0);
+  const double sleeve_turn = 0.1;
+  const Vec3 sleeve_axis = Vec3(0.3, 1.0, 0.2).normalized();
+  d.bodies[0].position = trocar0;
+  d.bodies[0].orientation = rot(sleeve_turn, sleeve_axis);
+  d.body_targets[0] = {core::Pose{trocar0, Quat::Identity()}, core::Twist{}, true};
+  d.target = core::Pose{tool0, Quat::Identity()};
+  d.bodies[1].position = tool0 + lag0;
+  d.bodies[2].position = mirror(trocar0);
+  d.bodies[2].orientation = rot(-sleeve_turn, mirror(sleeve_axis));
+  d.body_targets[2] = {core::Pose{mirror(trocar0), Quat::Identity()}, core::Twist{}, true};
+  d.body_targets[3] = {core::Pose{mirror(tool0), Quat::Identity()}, core::Twist{}, true};
+  d.bodies[3].position = mirror(tool0 + lag0);
+  d.feedback_point[1] = mirror(tool0);  // device 1's controlled frame: its tube's target
+  core::compute_feedback(m, d);
+  // Each device's composite, about its own tool.
+  const auto composite = [&](int first, const Vec3& about) {
+    core::Wrench w;
+    for (int b = first; b < first + 2; ++b) {
+      const Vec3 at =
+          b == 1 ? d.target.position : d.body_targets[static_cast<std::size_t>(b)].pose.position;
+      const core::Wrench c =
+          core::carry_wrench(d.body_feedback[static_cast<std::size_t>(b)], at, about);
+      w.force += c.force;
+      w.torque += c.torque;
+    }
+    return w;
+  };
+  const core::Wrench w0 = composite(0, tool0);
+  const core::Wrench w1 = composite(2, mirror(tool0));
+  EXPECT_NEAR(w0.force.norm(), 8.0, 1e-9);  // 9 N asked, saturated at 8 N
+  EXPECT_NEAR(w1.force.norm(), w0.force.norm(), 1e-9);
+  EXPECT_NEAR(w1.torque.norm(), w0.torque.norm(), 1e-9);
+  EXPECT_TRUE(w1.force.isApprox(mirror(w0.force), 1e-9));
+  EXPECT_NEAR(d.body_feedback[3].force.norm(), d.body_feedback[1].force.norm(), 1e-9);
+  EXPECT_TRUE(d.feedback_wrench.force.isApprox(w0.force, 1e-12));
+  // Swapped (device 1's tube held, device 0's on its own target): the same magnitudes.
+  core::set_held_body(m, d, 3);
+  d.feedback_group = {1, 1, 0, 0};
+  d.body_targets[1] = {core::Pose{tool0, Quat::Identity()}, core::Twist{}, true};
+  d.target = core::Pose{mirror(tool0), Quat::Identity()};
+  d.bodies[1].position = tool0 + lag0;
+  d.bodies[3].position = mirror(tool0 + lag0);
+  d.feedback_point[1] = tool0;
+  core::compute_feedback(m, d);
+  EXPECT_NEAR(d.body_feedback[1].force.norm(), 8.0, 1e-9);
+  EXPECT_NEAR(d.body_feedback[3].force.norm(), 8.0, 1e-9);
+}

@@ -38,7 +38,7 @@ for f in /usr/bin/numen \
          /usr/include/numen/core/features.hpp /usr/include/numen/sim/scene/scene.hpp \
          /usr/lib/cmake/numen/numenConfig.cmake /usr/lib/cmake/numen/numenConfigVersion.cmake \
          /usr/lib/cmake/numen/numenTargets.cmake \
-         /usr/share/doc/numen/copyright /usr/share/doc/numen/deploy.md \
+         /usr/share/doc/numen/copyright /usr/share/doc/numen/docs/deploy.md \
          /lib/systemd/system/numen.service /etc/numen/scene.toml \
          /etc/security/limits.d/numen.conf; do
   grep -qx "$f" "$work/contents.txt" || fail "$f is not in the package"

@@ -25,6 +25,12 @@ fail() { echo "install_examples: FAILED: $*" >&2; exit 1; }
 cmake --install "$build" --prefix "$prefix" >"$work/install.log" || { cat "$work/install.log"; fail "cmake --install"; }
 [ -f "$prefix/lib/cmake/numen/numenConfig.cmake" ] || [ -n "$(find "$prefix" -name numenConfig.cmake)" ] \
   || fail "no numenConfig.cmake under $prefix"
+# The docs: the top-level README and docs/README.md (the docs' index) under their own names (both
+# went to share/doc/numen/README.md, the one installed last winning).
+cmp -s "$src/README.md" "$prefix/share/doc/numen/README.md" || fail "share/doc/numen/README.md is not README.md"
+cmp -s "$src/docs/README.md" "$prefix/share/doc/numen/docs/README.md" \
+  || fail "share/doc/numen/docs/README.md is not docs/README.md"
+[ -f "$prefix/share/doc/numen/docs/python.md" ] || fail "docs/ is not in share/doc/numen/docs"
 # The build tree must not be what the consumers find.
 export CMAKE_PREFIX_PATH=$prefix
 unset numen_DIR || true
@@ -48,7 +54,7 @@ configure_build scene_step "$src/examples/scene_step"
   || { cat "$work/scene_step.out"; fail "scene_step $scene"; }
 finite_only "$work/scene_step.out"
 [ "$(grep -c '^t ' "$work/scene_step.out")" -ge 10 ] || { cat "$work/scene_step.out"; fail "scene_step printed too few steps"; }
-# With no argument it loads the installed default scene (numen_DEFAULT_SCENE).
+# With no argument it loads the installed default scene (sim::default_scene_path()).
 if [ "$default_loads" = yes ]; then
   "$work/scene_step/scene_step" --steps 10 >"$work/scene_step_default.out" 2>&1 \
     || { cat "$work/scene_step_default.out"; fail "scene_step without a scene"; }
@@ -66,6 +72,10 @@ fi
 "$work/scene_step/scene_step" "$prefix/share/numen/scenes/probe.toml" >"$work/scene_step_probe.out" 2>&1 \
   || { cat "$work/scene_step_probe.out"; fail "scene_step probe.toml"; }
 finite_only "$work/scene_step_probe.out"
+# sim::default_scene_path() of a program built on the installed package is the prefix's (it was
+# numen's source tree's: only numen_DATA_DIR in CMake gave the prefix's).
+grep -qx "default scene $prefix/share/numen/scenes/default.toml" "$work/scene_step_probe.out" \
+  || { cat "$work/scene_step_probe.out"; fail "scene_step: default_scene_path() is not the prefix's"; }
 grep -q "^deepest contact .* body 'probe' on obstacle 'box'$" "$work/scene_step_probe.out" \
   && grep -qx "invalid target steps 0" "$work/scene_step_probe.out" \
   && awk '/^max penetration/ { p = $3 } /^t 1.000/ { f = $15 }

@@ -145,10 +145,12 @@ struct Rig {
     return out;
   }
 
-  /// The axes at period k: instrument 0 still, instrument 1's insertion depth oscillating.
+  /// The axes at period k: instrument 0 still, instrument 1's insertion depth oscillating
+  /// (plus offset1: a break in its recording).
   void move(std::int64_t k) {
     emulators[0].set_axis_values(fx::kQ);
     double q[5] = {fx::kQ[0], fx::kQ[1], fx::kQ[2], fx::kQ[3], fx::kQ[4]};
+    for (std::size_t a = 0; a < 5; ++a) q[a] += offset1[a];
     q[3] += 0.02 * std::sin(0.05 * static_cast<double>(k));
     emulators[1].set_axis_values(q);
   }
@@ -179,6 +181,7 @@ struct Rig {
   std::array<hal::InstrumentDevice, 2> instruments;
   std::array<hal::Bus*, 2> ports;
   std::vector<int> in_loop;
+  std::array<double, 5> offset1{};  // added to instrument 1's axes (move())
   NmtTap tap{bus.controller()};  // the loop's side of the bus
   core::Model model;
   core::Data data;
@@ -282,6 +285,69 @@ TEST(ControlLoopDevices, OneDevicesFaultLatchesItsSafeStateAndThePeersInTheSameP
     rig.period();
   EXPECT_TRUE(rig.loop.period_data(0).report.torque_commanded);
   EXPECT_TRUE(rig.loop.period_data(1).report.torque_commanded);
+}
+
+// The policy for the other hand at a recording break (docs/safety.md "Recording breaks"):
+// instrument 1's roll steps by 1.7 rad (~100°) in one period and goes on from there, as
+// Suturing_D001's left tip at rows 857→858. Its device refuses the sample and latches
+// kEncoderJump; device 0 latches kPeerFault in the same period. Neither re-arms by itself: both
+// stay latched (zero torque) while instrument 1's samples are accepted again (the jump check
+// accepts the new value once max_speed · Δt covers it, 1.7 rad / 30 rad/s ≈ 57 ms) and for as
+// long as nobody re-arms; one re-arm (the operator's: ControlLoop::rearm(), `numen run`'s
+// SIGUSR1) brings both back.
+TEST(ControlLoopDevices, ARecordingBreakOnOneHandLatchesBothHandsUntilTheOperatorReArms) {
+  Rig rig(true, {0, 1});
+  for (int i = 0;
+       i < 100 && (rig.loop.first_torque_period(0) < 0 || rig.loop.first_torque_period(1) < 0); ++i)
+    rig.period();
+  for (int i = 0; i < 20; ++i) rig.period();
+  ASSERT_TRUE(rig.loop.period_data(0).report.torque_commanded);
+  ASSERT_TRUE(rig.loop.period_data(1).report.torque_commanded);
+
+  rig.offset1[3] = 1.7;  // the break: instrument 1's roll, +1.7 rad in one period, for good
+  int latched_at = -1;
+  for (int i = 0; i < 5 && latched_at < 0; ++i) {
+    rig.period();
+    if (rig.loop.period_data(1).report.entered_safe_stop) latched_at = i;
+  }
+  ASSERT_GE(latched_at, 0);
+  EXPECT_EQ(rig.loop.period_data(1).report.fault_cause, hal::FaultCause::kEncoderJump);
+  EXPECT_EQ(rig.loop.period_data(0).report.fault_cause, hal::FaultCause::kPeerFault);
+  EXPECT_FALSE(rig.loop.period_data(0).report.torque_commanded);  // both, in the same period
+  EXPECT_FALSE(rig.loop.period_data(1).report.torque_commanded);
+  // No re-arm of its own: 2 s later both are still latched, though instrument 1's samples
+  // have long been accepted again.
+  int valid_after = 0;
+  for (int i = 0; i < 2000; ++i) {
+    rig.period();
+    EXPECT_FALSE(rig.loop.period_data(0).report.torque_commanded) << "period " << i;
+    EXPECT_FALSE(rig.loop.period_data(1).report.torque_commanded) << "period " << i;
+    valid_after += rig.loop.period_data(1).report.sample_valid ? 1 : 0;
+  }
+  EXPECT_GT(valid_after, 1900);
+  EXPECT_EQ(rig.loop.device(0).lifecycle(), hal::LifecycleState::kFault);
+  EXPECT_EQ(rig.loop.device(1).lifecycle(), hal::LifecycleState::kFault);
+  // The operator's re-arm: both come back, active with nothing latched (each through its soft
+  // start; the hands at rest by now, their bodies on their targets: little torque to send).
+  ASSERT_EQ(rig.loop.rearm(), platform::RearmResult::kAccepted);
+  const auto state = [&](std::size_t i) {
+    const platform::PeriodReport& r = rig.loop.period_data(i).report;
+    return std::string(hal::to_string(r.lifecycle)) + " (" + hal::to_string(r.fault_cause) + ")";
+  };
+  const auto back = [&](std::size_t i) {
+    const platform::PeriodReport& r = rig.loop.period_data(i).report;
+    return r.lifecycle == hal::LifecycleState::kActive && r.fault_cause == hal::FaultCause::kNone;
+  };
+  int both_back = -1;
+  for (int i = 0; i < 200 && both_back < 0; ++i) {
+    rig.period();
+    if (back(0) && back(1)) both_back = i;
+  }
+  EXPECT_GE(both_back, 0) << "device 0 " << state(0) << ", device 1 " << state(1);
+  for (int i = 0; i < 100; ++i) {  // and stay so
+    rig.period();
+    EXPECT_TRUE(back(0) && back(1)) << "device 0 " << state(0) << ", device 1 " << state(1);
+  }
 }
 
 TEST(ControlLoopDevices, EachDeviceSendsOneSyncPerBus) {
@@ -479,6 +545,18 @@ TEST(ControlLoopDevices, RefusesWiringsThatCannotRun) {
   EXPECT_THROW(make(platform::DeviceBinding::rigid(), platform::DeviceBinding::rigid()),
                std::invalid_argument);
   EXPECT_NO_THROW(make(drive_body(0), drive_body(1)));
+  // A device whose binding is empty gets the rigid one: the refusal says so (issue 66: it
+  // said "both drive the held body (link binding body -1)" of a device the scene bound to
+  // nothing).
+  try {
+    (void)make(platform::DeviceBinding::rigid(), platform::DeviceBinding{});
+    ADD_FAILURE() << "two devices on the held body accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("device 1's binding is empty, which is the rigid "
+                                         "binding, link 0 -> the held body"),
+              std::string::npos)
+        << e.what();
+  }
   // No device, more than kMaxLoopDevices, a missing bus.
   EXPECT_THROW(platform::ControlLoop(model, data, std::span<const platform::LoopDevice>{}),
                std::invalid_argument);

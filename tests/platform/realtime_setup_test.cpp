@@ -4,6 +4,7 @@
 #include "numen/platform/realtime_setup.hpp"
 
 #include <alloca.h>
+#include <fcntl.h>
 #include <gtest/gtest.h>
 
 #include <limits>
@@ -17,8 +18,10 @@
 
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <iterator>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -425,4 +428,95 @@ TEST(RealtimeSetup, NegativeTimerSlackIsAConfigurationError) {
   RealtimeSettings s;
   s.timer_slack_ns = -1;
   EXPECT_THROW(apply_realtime(s), std::invalid_argument);
+}
+
+namespace {
+
+/// The kernel's PM QoS CPU latency limit in µs (/dev/cpu_dma_latency read), or -1 when the
+/// device cannot be read (not root, no such device).
+std::int64_t kernel_cpu_latency_us() {
+  const int fd = ::open(numen::platform::kCpuDmaLatencyPath, O_RDONLY | O_CLOEXEC);
+  if (fd < 0) return -1;
+  std::int32_t v = -1;
+  const bool ok = ::read(fd, &v, sizeof v) == static_cast<ssize_t>(sizeof v);
+  ::close(fd);
+  return ok ? v : -1;
+}
+
+std::size_t open_descriptors() {
+  std::size_t n = 0;
+  for (const auto& e : std::filesystem::directory_iterator("/proc/self/fd"))
+    n += e.exists() ? 1 : 0;
+  return n;
+}
+
+}  // namespace
+
+// Issue 66: on an idle virtual machine numen's wake-up median was about twice cyclictest's
+// average at the same priority. cyclictest holds a PM QoS CPU latency request of 0 us
+// (/dev/cpu_dma_latency) while it runs, so that idle CPUs poll instead of halting; numen held
+// none. The request writes the 32-bit latency, reads back the limit, reports it as a step and
+// is held until the object goes (its file closed).
+TEST(CpuLatencyRequest, WritesTheLatencyAndHoldsItWhileItLives) {
+  using numen::platform::CpuLatencyRequest;
+  char path[] = "/tmp/numen_cpu_latency_XXXXXX";  // a regular file stands for the device
+  const int tmp = mkstemp(path);
+  ASSERT_GE(tmp, 0);
+  ::close(tmp);
+  const std::size_t fds = open_descriptors();
+  {
+    CpuLatencyRequest r(0, path);
+    EXPECT_TRUE(r.held());
+    EXPECT_EQ(r.step().status, RealtimeStepStatus::kApplied) << r.step().message;
+    EXPECT_EQ(numen::platform::describe_cpu_latency(r),
+              std::string("cpu latency: applied: ") + path +
+                  " 0 us held for the run: idle CPUs poll instead of halting");
+    EXPECT_EQ(open_descriptors(), fds + 1);
+    CpuLatencyRequest moved = std::move(r);  // the request goes with the file
+    EXPECT_TRUE(moved.held());
+    EXPECT_FALSE(r.held());
+    EXPECT_EQ(open_descriptors(), fds + 1);
+  }
+  EXPECT_EQ(open_descriptors(), fds);  // closed: the request ended
+  std::ifstream in(path, std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(bytes, std::string(4, '\0'));  // one native 32-bit 0, as the kernel reads it
+  std::remove(path);
+  EXPECT_EQ(CpuLatencyRequest().step().status, RealtimeStepStatus::kNotRequested);
+  EXPECT_THROW(CpuLatencyRequest(-1, "/dev/null"), std::invalid_argument);
+
+  // The kernel's own device (root): its limit is 0 while a request of 0 is held, and what it
+  // was once the request has gone.
+  const std::int64_t before = kernel_cpu_latency_us();
+  if (before < 0) GTEST_SKIP() << numen::platform::kCpuDmaLatencyPath << " cannot be read here";
+  {
+    CpuLatencyRequest r(0);
+    ASSERT_TRUE(r.held()) << r.step().message;
+    EXPECT_EQ(kernel_cpu_latency_us(), 0);
+    EXPECT_NE(r.step().message.find("(the kernel's limit was " + std::to_string(before) + " us)"),
+              std::string::npos)
+        << r.step().message;
+  }
+  if (before > 0) {  // else another process holds 0
+    EXPECT_EQ(kernel_cpu_latency_us(), before);
+  }
+}
+
+// A request that cannot be made is a failed step naming the file, the errno and what to do;
+// nothing is held and nothing throws.
+TEST(CpuLatencyRequest, AFileThatCannotBeWrittenIsAFailedStepThatSaysWhatToDo) {
+  using numen::platform::CpuLatencyRequest;
+  const CpuLatencyRequest missing(0, "/nonexistent/cpu_dma_latency");
+  EXPECT_FALSE(missing.held());
+  EXPECT_EQ(missing.step().status, RealtimeStepStatus::kFailed);
+  EXPECT_EQ(missing.step().error, ENOENT);
+  EXPECT_EQ(missing.step().message.rfind("cannot open /nonexistent/cpu_dma_latency: No such file "
+                                         "or directory — the kernel has no CPU latency QoS device",
+                                         0),
+            0u)
+      << missing.step().message;
+  const CpuLatencyRequest dir(0, "/tmp");
+  EXPECT_EQ(dir.step().error, EISDIR);
+  EXPECT_EQ(numen::platform::describe_cpu_latency(dir),
+            "cpu latency: FAILED: cannot open /tmp: Is a directory");
 }

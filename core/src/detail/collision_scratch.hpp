@@ -15,6 +15,15 @@ namespace numen::core {
 
 struct Model;
 
+/// A sphere pair of two bodies held back at a detect_contacts() call: its centres were past
+/// each other and its contact kept the normal of its approach (collision.hpp, "Crossing").
+struct SpherePairRecord {
+  std::int32_t sphere_a = -1;   ///< Index into Model::body_spheres (the lower body's).
+  std::int32_t sphere_b = -1;   ///< Same, the other body's.
+  Vec3 normal = Vec3::UnitZ();  ///< The normal it was held back along (from b towards a, world).
+  bool matched = false;         ///< Found in contact again by the next call.
+};
+
 /// Scratch of the collision stage, sized once by resize().
 struct CollisionScratch {
   std::vector<Vec3> sphere_world;                    ///< World centres of Model::body_spheres (m).
@@ -29,6 +38,12 @@ struct CollisionScratch {
   std::vector<std::int32_t> mesh_bodies;  ///< Bodies with a mesh (BodyModel::mesh), index order.
   std::vector<std::uint32_t> entry_stamp;  ///< Per static grid entry: last query that tested it.
   std::uint32_t stamp = 0;  ///< Current query id (wraps: the stamps are then cleared).
+  /// Body–body sphere pairs held back at this call (`pairs`, written by the body–body phase)
+  /// and at the last one (`pairs_prev`); swapped at the end of each call. Capacity
+  /// cross_contact_capacity() each (capacity.hpp); a pair beyond it is not remembered.
+  std::vector<SpherePairRecord> pairs, pairs_prev;
+  int num_pairs = 0, num_pairs_prev = 0;
+  int pair_cursor = 0;  ///< Where the next look-up in pairs_prev starts (after the last match).
   /// Sizes every buffer for `model`. Allocates: make_data() only.
   void resize(const Model& model);
 };

@@ -69,6 +69,10 @@ IgtlTrackerBus::IgtlTrackerBus(const DeviceConfig& config,
   latencies_.reserve(std::max<std::size_t>(settings_.latency_capacity, 1));
   if (settings_.registration_wait_ns <= 0)
     throw std::invalid_argument("OpenIGTLink tracker: registration_wait_ns must be > 0");
+  if (settings_.max_stamp_gap_ns <= 0)
+    throw std::invalid_argument("OpenIGTLink tracker: max_stamp_gap_ns must be > 0");
+  if (settings_.resync_after < 2)
+    throw std::invalid_argument("OpenIGTLink tracker: resync_after must be >= 2");
   client_ = client ? std::move(client) : make_igtl_tracker_client(settings_);
   if (tool_ >= client_->tool_count())
     throw std::invalid_argument("OpenIGTLink tracker: tool " + std::to_string(tool_) +
@@ -94,6 +98,12 @@ void IgtlTrackerBus::take_registration() {
     const std::string what =
         "no TRANSFORM '" + cs.registration_name + "' (the registration) from " + cs.host + ":" +
         std::to_string(cs.port);
+    if (const std::optional<IgtlFaultRecord> refused = client_->registration_refused())
+      throw IgtlRegistrationMissing("a " + refused->type + " '" + cs.registration_name +
+                                    "' (the registration) from " + cs.host + ":" +
+                                    std::to_string(cs.port) +
+                                    " arrived and was refused: " + to_string(refused->fault) +
+                                    " (" + describe(*refused) + "); none accepted within " + wait);
     if (c.connects == 0)
       throw IgtlRegistrationMissing(what + ": never connected (" +
                                     std::to_string(c.connect_failures) +
@@ -129,7 +139,7 @@ std::int64_t IgtlTrackerBus::bus_time_of(const IgtlPose& p) noexcept {
       first_stamp_ns_ = p.stamp_ns;
       has_first_stamp_ = true;
     }
-    return p.stamp_ns - first_stamp_ns_;
+    return p.stamp_ns - first_stamp_ns_ + shift_ns_;
   }
   // Paced: the sender's clock through the smallest one-way delay seen (an unstamped message,
   // stamp 0, is its receive time).
@@ -142,10 +152,44 @@ std::int64_t IgtlTrackerBus::bus_time_of(const IgtlPose& p) noexcept {
   return p.stamp_ns + offset_ns_ - origin_mono_ns_;
 }
 
+bool IgtlTrackerBus::stamp_acceptable(const IgtlPose& p) noexcept {
+  if (p.stamp_ns == 0) {
+    if (!settings_.wait_for_tracker) return true;  // paced: its receive time
+    ++tracker_counters_.stamps_unstamped;          // following: no place on the tracker's clock
+    return false;
+  }
+  if (!has_last_stamp_) return true;
+  const std::int64_t gap = p.stamp_ns - last_stamp_ns_;
+  const bool backwards = gap < 0;
+  if (!backwards && gap <= settings_.max_stamp_gap_ns) {
+    refused_run_ = 0;
+    return true;
+  }
+  // Going on from the previous refused pose: a clock that jumped, not one bad stamp.
+  const std::int64_t on = p.stamp_ns - refused_stamp_ns_;
+  refused_run_ =
+      refused_run_ > 0 && on >= 0 && on <= settings_.max_stamp_gap_ns ? refused_run_ + 1 : 1;
+  refused_stamp_ns_ = p.stamp_ns;
+  if (refused_run_ >= settings_.resync_after) {  // re-based on this pose
+    ++tracker_counters_.stamp_resyncs;
+    refused_run_ = 0;
+    if (settings_.wait_for_tracker)
+      shift_ns_ = now_ns_ - (p.stamp_ns - first_stamp_ns_);  // due at this SYNC
+    else
+      has_offset_ = false;  // the sender's clock offset measured again from this pose
+    return true;
+  }
+  ++(backwards ? tracker_counters_.stamps_backwards : tracker_counters_.stamps_ahead);
+  return false;
+}
+
 void IgtlTrackerBus::take(const IgtlPose& p, std::int64_t now_mono) noexcept {
   const std::int64_t t = bus_time_of(p);
   const bool first = tracker_counters_.poses_taken == 0;
-  if (!first && t < pose_time_ns_) ++tracker_counters_.out_of_order;
+  if (p.stamp_ns != 0) {
+    last_stamp_ns_ = p.stamp_ns;
+    has_last_stamp_ = true;
+  }
   ++tracker_counters_.poses_taken;
   if (latencies_.size() < latencies_.capacity()) latencies_.push_back(now_mono - p.received_mono_ns);
   // The tip in the world: registration · marker · calibration
@@ -195,7 +239,12 @@ void IgtlTrackerBus::on_sync() noexcept {
     // one connection share it); set before that pose was queued.
     if (settings_.wait_for_tracker && !has_first_stamp_)
       has_first_stamp_ = client_->first_stamp_ns(first_stamp_ns_);
-    if (settings_.wait_for_tracker && has_first_stamp_ && p->stamp_ns - first_stamp_ns_ > now_ns_)
+    if (!stamp_acceptable(*p)) {  // refused and counted: the next pose is looked at
+      client_->pop(tool_);
+      continue;
+    }
+    if (settings_.wait_for_tracker && has_first_stamp_ &&
+        p->stamp_ns - first_stamp_ns_ + shift_ns_ > now_ns_)
       break;  // due later
     starved_ = false;
     if (taken++ > 0) ++tracker_counters_.poses_superseded;

@@ -116,6 +116,11 @@ std::optional<IgtlTransform> IgtlTrackerClient::registration() const {
   return registration_;
 }
 
+std::optional<IgtlFaultRecord> IgtlTrackerClient::registration_refused() const {
+  std::lock_guard<std::mutex> lock(records_mutex_);
+  return registration_refused_;
+}
+
 std::vector<std::string> IgtlTrackerClient::names_seen() const {
   std::lock_guard<std::mutex> lock(records_mutex_);
   return names_;
@@ -140,7 +145,8 @@ std::size_t IgtlTrackerClient::tool_of(const std::string& name) const noexcept {
 void IgtlTrackerClient::push(const IgtlPose& pose, std::size_t tool) {
   count(poses_);
   count(tool_poses_[tool]);
-  if (!has_first_stamp_.load(std::memory_order_relaxed)) {  // this thread is the only writer
+  // The time origin is the first stamped pose: an unstamped one (0) has no place on the clock.
+  if (!has_first_stamp_.load(std::memory_order_relaxed) && pose.stamp_ns != 0) {  // one writer
     first_stamp_ns_ = pose.stamp_ns;
     has_first_stamp_.store(true, std::memory_order_release);
   }
@@ -239,6 +245,11 @@ void IgtlTrackerClient::session(int fd) {
           h, std::span<const std::uint8_t>(scratch.data(), n), tf, settings_.rigid_tolerance);
       if (!br.ok()) {
         fault(br.fault, h, message, at, br.byte_offset);
+        if (!settings_.registration_name.empty() && h.device_name == settings_.registration_name) {
+          std::lock_guard<std::mutex> lock(records_mutex_);
+          registration_refused_ =
+              IgtlFaultRecord{br.fault, h.type, h.device_name, message, at, br.byte_offset};
+        }
       } else if (const std::size_t tool = tool_of(h.device_name); tool < queues_.size()) {
         IgtlPose pose;
         pose.stamp_ns = igtl_stamp_ns(h.timestamp_raw);

@@ -3,10 +3,13 @@
 
 #include "numen/sim/input/bus_spec.hpp"
 
+#include <arpa/inet.h>
+#include <netinet/in.h>
 #include <poll.h>
 #include <time.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <charconv>
 #include <sstream>
@@ -49,6 +52,26 @@ BusSpec parse_bus_spec(const std::string& spec) {
     if (colon != std::string::npos) {
       out.igtl_host = rest.substr(0, colon);
       if (out.igtl_host.empty()) throw bad("empty host before ':PORT'");
+      // One port: a host with a colon is an IPv6 address ([::1] or ::1), nothing else
+      // ("igtl:127.0.0.1:19098:5" was taken as host "127.0.0.1:19098" and failed at run time).
+      std::string host = out.igtl_host;
+      if (host.size() > 2 && host.front() == '[' && host.back() == ']')
+        host = host.substr(1, host.size() - 2);
+      in6_addr v6{};
+      if (host.find(':') != std::string::npos) {
+        if (::inet_pton(AF_INET6, host.c_str(), &v6) != 1)
+          throw bad("host '" + out.igtl_host +
+                    "' is not an IPv6 address, and the spec has one port: igtl[:[HOST:]PORT], "
+                    "an IPv6 host as [::1]:PORT");
+      } else if (host != out.igtl_host || !std::all_of(host.begin(), host.end(), [](char c) {
+                   return std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '-' ||
+                          c == '_';
+                 })) {
+        throw bad("host '" + out.igtl_host +
+                  "' is not a host name or an IP address (letters, digits, '.', '-', '_'; an "
+                  "IPv6 address in brackets)");
+      }
+      out.igtl_host = host;
     }
     out.target = rest;
     return out;

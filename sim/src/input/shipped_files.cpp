@@ -40,6 +40,9 @@ std::filesystem::path executable_dir() {
 
 std::filesystem::path shipped_data_dir() {
   std::filesystem::path dir = installed_dir_holding("scenes/default.toml");
+  // A program built on the installed package: its prefix's (numenConfig.cmake's hook).
+  if (dir.empty() && numen_installed_data_dir != nullptr)
+    dir = dir_holding(numen_installed_data_dir(), ".", "scenes/default.toml");
   return dir.empty() ? std::filesystem::path(NUMEN_SOURCE_SIM_DIR) : dir;
 }
 

@@ -247,7 +247,7 @@ RunSummary run_admittance_scene(const Scene& scene, const RunOptions& options) {
   if (!options.record_view_path.empty() || !options.view_sinks.empty())
     runner.stream_view(options.record_view_path, options.view_sinks, options.view_rate_hz,
                        !options.realtime);
-  std::vector<std::string> rt_lines = apply_run_realtime(options, options.realtime);
+  RunRealtime rt_setup = apply_run_realtime(options, options.realtime);  // held until the end
   const std::int64_t wall0 = platform::monotonic_now_ns();
   platform::PeriodicTimer timer = run_timer(options, scene.model.dt, wall0);
   ViewPacer view_pacer(scene.model.dt, options.realtime ? 0.0 : options.view_speed, wall0,
@@ -282,7 +282,7 @@ RunSummary run_admittance_scene(const Scene& scene, const RunOptions& options) {
   s.wall_time_s = static_cast<double>(platform::monotonic_now_ns() - wall0) * 1e-9;
   tally.write(s);
   s.overrun_limit = overrun_limit;
-  s.realtime_setup = std::move(rt_lines);
+  s.realtime_setup = std::move(rt_setup.lines);
   runner.multirate().describe_scene_thread(paced_scene_thread(options), s.realtime_setup);
   s.stopped = stopped;
   if (!options.trace_path.empty()) write_in_memory_trace(runner.trace(), options.trace_path, s);

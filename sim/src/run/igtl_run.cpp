@@ -55,6 +55,10 @@ class IgtlRunImpl final : public IgtlRun {
     s.igtl_disconnects = static_cast<std::int64_t>(c.disconnects);
     s.igtl_wait_timeouts = static_cast<std::int64_t>(b.wait_timeouts);
     s.igtl_syncs_without_pose = static_cast<std::int64_t>(b.syncs_without_pose);
+    s.igtl_stamps_backwards = static_cast<std::int64_t>(b.stamps_backwards);
+    s.igtl_stamps_ahead = static_cast<std::int64_t>(b.stamps_ahead);
+    s.igtl_stamps_unstamped = static_cast<std::int64_t>(b.stamps_unstamped);
+    s.igtl_stamp_resyncs = static_cast<std::int64_t>(b.stamp_resyncs);
     s.igtl_follows = bus_.settings().wait_for_tracker;
     s.igtl_periods_after_end = static_cast<std::int64_t>(b.syncs_after_end);
     s.igtl_fault_records.clear();

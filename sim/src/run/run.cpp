@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
+#include <numbers>
 #include <cstdio>
 #include <filesystem>
 #include <span>
@@ -47,11 +48,19 @@ void RunLoopTally::write(RunSummary& s) const {
   s.rearm_first_period = rearm_first_;
 }
 
-std::vector<std::string> apply_run_realtime(const RunOptions& options, bool paced) {
+RunRealtime apply_run_realtime(const RunOptions& options, bool paced) {
   platform::RealtimeSettings rt = options.rt;
   if (paced) rt.timer_slack_ns = options.timer_slack_ns;
-  if (!platform::any_step_requested(rt)) return {};
-  return platform::describe(platform::apply_realtime(rt));  // throws only if strict
+  RunRealtime out;
+  if (platform::any_step_requested(rt))
+    out.lines = platform::describe(platform::apply_realtime(rt));  // throws only if strict
+  if (paced && options.cpu_dma_latency_us >= 0) {
+    out.cpu_latency = platform::CpuLatencyRequest(options.cpu_dma_latency_us);
+    out.lines.push_back(platform::describe_cpu_latency(out.cpu_latency));
+    if (rt.strict && out.cpu_latency.step().failed())
+      throw std::runtime_error("real-time setup failed (strict):\n  " + out.lines.back());
+  }
+  return out;
 }
 
 platform::SceneThreadSettings paced_scene_thread(const RunOptions& options) {
@@ -166,6 +175,15 @@ platform::ControlLoopSettings control_loop_settings(bool paced, std::uint32_t ov
   return s;
 }
 
+// `s` for a run whose input is `live` (a real bus, an OpenIGTLink tracker: the instrument lies
+// wherever it lies, not at the recording's start): its bodies are brought to the first sample
+// (docs/safety.md "A live input's start"). Not with a multirate god-object (its own copy).
+platform::ControlLoopSettings with_live_start(platform::ControlLoopSettings s, bool live,
+                                              const Scene& scene) noexcept {
+  s.place_at_first_sample = live && !scene.multirate;
+  return s;
+}
+
 hal::CandumpWriterSettings recorder_settings(bool paced) noexcept {
   hal::CandumpWriterSettings s;
   s.full_queue = paced ? hal::FullQueuePolicy::kDrop : hal::FullQueuePolicy::kWait;
@@ -209,9 +227,12 @@ SceneRunner::SceneRunner(const Scene& scene, std::size_t trace_capacity, const B
       extra_devices_(make_extra_devices(scene)),
       device_share_(make_device_share(scene, bus_, !extra_devices_.empty())),
       loop_(scene.model, data_,
-            loop_devices(scene, *port_, device_, extra_devices_,
-                         control_loop_settings(realtime || spec_.real(), overrun_limit)),
-            control_loop_settings(realtime || spec_.real(), overrun_limit)),
+            loop_devices(
+                scene, *port_, device_, extra_devices_,
+                with_live_start(control_loop_settings(realtime || spec_.real(), overrun_limit),
+                                spec_.real() || igtl_ != nullptr, scene)),
+            with_live_start(control_loop_settings(realtime || spec_.real(), overrun_limit),
+                            spec_.real() || igtl_ != nullptr, scene)),
       multirate_(scene),
       period_ns_(static_cast<std::int64_t>(std::llround(scene.model.dt * 1e9))),
       phase_ns_(static_cast<std::int64_t>(std::llround(scene.compute_phase_s * 1e9))),
@@ -260,6 +281,7 @@ void SceneRunner::period(std::int64_t deadline_mono_ns, std::int64_t woke_mono_n
   const platform::PeriodReport& report = exchange(t, deadline_mono_ns, woke_mono_ns);
   ++k_;
   // ---- measurements (outside the timed step) ----
+  if (loop_.placed_period(0) == k_ - 1) note_live_start();
   count_period(report);
   if (!extra_devices_.empty()) tally_devices();
 
@@ -285,6 +307,22 @@ void SceneRunner::period(std::int64_t deadline_mono_ns, std::int64_t woke_mono_n
                           std::span<const double>(loop_.impedance().sent_torques().torque.data(),
                                                   static_cast<std::size_t>(loop_.impedance().sent_torques().torque.size())),
                           view_figures(contacts));
+}
+
+void SceneRunner::note_live_start() noexcept {
+  // A live input's first sample brought the tool where the instrument lies (the loop's
+  // place_at_first_sample, before this period's step): the start-up and the divergence bounds
+  // begin here, as at a first period.
+  startup_from_ = k_;
+  in_startup_ = false;
+  acc_.startup_steps = 0;
+  divergence_.restart();
+  const int held = data_.held_body;
+  if (held < 0) return;
+  const core::Pose& start = scene_->model.bodies[static_cast<std::size_t>(held)].initial_pose;
+  live_start_mm_ = (data_.target.position - start.position).norm() * 1e3;
+  live_start_deg_ =
+      data_.target.orientation.angularDistance(start.orientation) * 180.0 / std::numbers::pi;
 }
 
 void SceneRunner::tally_devices() noexcept {
@@ -504,7 +542,7 @@ RunSummary run_impedance_scene(const Scene& scene, const RunOptions& options) {
     runner.stream_view(options.record_view_path, options.view_sinks, options.view_rate_hz,
                        !(options.realtime || real));
   const bool paced = options.realtime || real;
-  std::vector<std::string> rt_lines = apply_run_realtime(options, paced);
+  RunRealtime rt_setup = apply_run_realtime(options, paced);  // held until the run ends
   RunLoopTally tally;
   const std::int64_t wall0 = platform::monotonic_now_ns();
   platform::PeriodicTimer timer = run_timer(options, scene.model.dt, wall0);
@@ -564,7 +602,7 @@ RunSummary run_impedance_scene(const Scene& scene, const RunOptions& options) {
   // them), and only in a paced run (an offline run has no deadlines): any other run reports
   // the policy it has, count only.
   s.overrun_limit = s.managed && paced ? options.overrun_limit : 0;
-  s.realtime_setup = std::move(rt_lines);
+  s.realtime_setup = std::move(rt_setup.lines);
   // The scene thread's own scheduling and CPUs (--scene-rt-priority, --scene-cpu), if asked.
   runner.multirate().describe_scene_thread(paced_scene_thread(options), s.realtime_setup);
   runner.describe_target_thread(s.realtime_setup);

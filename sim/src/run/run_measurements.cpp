@@ -104,13 +104,83 @@ void SceneRunner::track_free_space(const PeriodContacts& c) noexcept {
   ++acc_.free_steps;
 }
 
+bool SceneRunner::any_startup() const noexcept {
+  if (in_startup_) return true;
+  for (const DeviceStartup& u : device_startup_)
+    if (u.in) return true;
+  return false;
+}
+
+bool SceneRunner::track_device_startups() noexcept {
+  const core::Model& model = scene_->model;
+  const std::vector<int>& trees = model.articulation.body_tree;
+  const int held = data_.held_body;
+  const int held_tree = held >= 0 ? trees[static_cast<std::size_t>(held)] : -1;
+  bool ended = false;
+  for (std::size_t i = 0; i < extra_devices_.size() && i < device_startup_.size(); ++i) {
+    const int body = extra_trace_body_[i];
+    if (body < 0) continue;
+    const int tree = trees[static_cast<std::size_t>(body)];
+    if (tree == held_tree) continue;  // device 0's tool: track_startup() itself
+    // Its tool (every body of its articulation), as measure_contacts() takes device 0's.
+    double pen = 0.0;
+    int contacts = 0, deepest = -1, deepest_body = -1;
+    for (int b = 0; b < model.num_bodies(); ++b) {
+      if (trees[static_cast<std::size_t>(b)] != tree) continue;
+      int n = 0, d = -1;
+      const double p = detail::deepest_contact_of(data_, b, &n, &d);
+      if (p > pen) {
+        deepest = d;
+        deepest_body = b;
+      }
+      pen = std::max(pen, p);
+      contacts += n;
+    }
+    if (model.num_nets() > 0) {
+      int n = 0;
+      pen = std::max(pen, detail::deepest_node_contact_of_tree(model, data_, tree, &n));
+      contacts += n;
+      pen = std::max(pen, detail::deepest_tool_contact_on_nets(model, data_, tree, &n));
+      contacts += n;
+    }
+    DeviceStartup& u = device_startup_[i];
+    const std::int64_t k = k_ - startup_from_ + 1;  // periods since the start-up's first
+    if (k == 1 && contacts > 0) {
+      u = DeviceStartup{};
+      u.in = true;
+      u.min = pen;
+      u.first_mm = pen * 1e3;
+      u.steps = 1;
+      if (deepest >= 0) {
+        const core::Contact& d = data_.contacts[static_cast<std::size_t>(deepest)];
+        u.obstacle = d.obstacle;
+        u.other_body = d.body_a == deepest_body ? d.body_b : d.body_a;
+      }
+    } else if (u.in) {
+      if (contacts > 0 && pen < u.min) {  // still being pushed out
+        u.min = pen;
+        u.steps = k;
+      } else if (contacts == 0 || k - u.steps >= startup_settle_periods_) {
+        u.in = false;
+        ended = true;
+      }
+    }
+  }
+  return ended;
+}
+
 void SceneRunner::track_startup(const PeriodContacts& c) noexcept {
   RunSummary& s = acc_;
   // Start-up (RunSummary): the tool was spawned where the hand is, inside an obstacle, and the
-  // contact forces push it out. It runs from the first period through the last period that
-  // lowers the tool's penetration to a new minimum before kStartupSettle without one (or a
-  // period without contact); the periods after that minimum count as the god-object's again.
-  if (k_ == 1 && c.tool_contacts > 0) {
+  // contact forces push it out. It runs from the first period (startup_from_: a live input's,
+  // the period its first sample placed the tool) through the last period that lowers the
+  // tool's penetration to a new minimum before kStartupSettle without one (or a period without
+  // contact); the periods after that minimum count as the god-object's again. Every other
+  // device's tool likewise (track_device_startups()); the divergence bounds leave the push-out
+  // when no tool is being pushed out any more.
+  const std::int64_t k = k_ - startup_from_ + 1;
+  bool ended = track_device_startups();
+  if (k == 1 && c.tool_contacts > 0) {
     in_startup_ = true;
     startup_min_ = c.tool_pen;
     startup_window_max_ = 0.0;
@@ -125,16 +195,18 @@ void SceneRunner::track_startup(const PeriodContacts& c) noexcept {
     if (c.tool_contacts > 0 && c.tool_pen < startup_min_) {  // still being pushed out
       startup_min_ = c.tool_pen;
       startup_window_max_ = 0.0;
-      s.startup_steps = k_;
+      s.startup_steps = k;
     } else {
       startup_window_max_ = std::max(startup_window_max_, c.tool_pen);
-      if (c.tool_contacts == 0 || k_ - s.startup_steps >= startup_settle_periods_) {
+      if (c.tool_contacts == 0 || k - s.startup_steps >= startup_settle_periods_) {
         in_startup_ = false;
         s.tool_penetration_max_mm = std::max(s.tool_penetration_max_mm, startup_window_max_ * 1e3);
-        divergence_.end_startup(scene_->model, data_);  // the push-out no longer sets its bounds
+        ended = true;
       }
     }
   }
+  if (ended && !any_startup())
+    divergence_.end_startup(scene_->model, data_);  // the push-out no longer sets its bounds
   if (!in_startup_)
     s.tool_penetration_max_mm = std::max(s.tool_penetration_max_mm, c.tool_pen * 1e3);
 }
@@ -170,6 +242,7 @@ void SceneRunner::accumulate_step_figures(const platform::PeriodReport& report,
       s.free_body_speed_max_mps = std::max(
           s.free_body_speed_max_mps, data_.bodies[static_cast<std::size_t>(b)].linear_velocity.norm());
   s.contacts_max = std::max(s.contacts_max, data_.num_contacts);
+  if (s.first_pass_through_s < 0.0 && data_.pass_throughs > 0) s.first_pass_through_s = data_.time;
   s.solver_iterations_max = std::max(s.solver_iterations_max, data_.solver_iterations);
   solver_iterations_sum_ += data_.solver_iterations;
   // A NaN residual (a rejected solve) is kept, not dropped by std::max.

@@ -105,6 +105,31 @@ void check_option_values(const Scene& scene, const RunOptions& options) {
     throw InputError("", 0, 0, "--speed",
                      "paces an offline run; this run is paced at real time already (--realtime "
                      "or a real bus)");
+  // A paced offline run lasts duration / speed of wall time: at most kMaxRunDuration, the cap
+  // of a paced run's --duration (--speed 1e-9 made a 30 s scene take 3e10 s).
+  if (options.view_speed > 0.0 && duration / options.view_speed > kMaxRunDuration)
+    throw InputError(
+        "", 0, 0, "--speed",
+        format_input_number(options.view_speed) + " paces the " + format_input_number(duration) +
+            " s run to " + format_input_number(duration / options.view_speed) +
+            " s of wall time, more than the " + format_input_number(kMaxRunDuration) +
+            " s a run may last (at least " + format_input_number(duration / kMaxRunDuration) + ")");
+  // SCHED_FIFO on a loop that is not paced (an offline run never sleeps) takes its CPU from
+  // every thread of lower priority for the whole run: refused, as --timer-slack is.
+  if (options.rt.fifo_priority != 0 && !paced)
+    throw InputError("", 0, 0, "--rt-priority",
+                     "gives a paced run's loop thread SCHED_FIFO; this run is offline (no "
+                     "--realtime, no real bus): its loop is not paced to deadlines, and run "
+                     "flat out under SCHED_FIFO it would hold its CPU from every thread of "
+                     "lower priority");
+  // Timer slack lets a wake-up come that late: more than a period, and the loop would wake a
+  // period late or more (--timer-slack 1000000000: 60 periods in 60 s).
+  if (paced && static_cast<double>(options.timer_slack_ns) > scene.model.dt * 1e9)
+    throw InputError("", 0, 0, "--timer-slack",
+                     std::to_string(options.timer_slack_ns) +
+                         " ns must be at most the period dt = " +
+                         std::to_string(std::llround(scene.model.dt * 1e9)) +
+                         " ns: a timer may fire that late, and each period would wake late");
   compute_phase_override_ns(scene, options);  // --phase at or above dt
   check_pacing_options(scene, options, paced);
   // A simulated run's trace is kept in memory until it ends (a real bus streams it).

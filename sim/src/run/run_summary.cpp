@@ -10,6 +10,7 @@
 #include <string>
 #include <string_view>
 
+#include "numen/hal/device/instrument_device.hpp"
 #include "numen/sim/run/grasp_summary.hpp"
 #include "numen/sim/run/run.hpp"
 #include "numen/sim/run/run_summary.hpp"
@@ -70,6 +71,21 @@ void describe_scene(const Scene& scene, RunSummary& s) {
   }
 }
 
+std::string rejection_causes(const hal::DeviceCounters& c) {
+  std::string out;
+  const auto add = [&out](std::uint64_t n, const char* what) {
+    if (n == 0) return;
+    if (!out.empty()) out += ", ";
+    out += std::to_string(n) + " " + what;
+  };
+  add(c.rejected_stale, "stale (older than max_sample_age, or none came)");
+  add(c.rejected_jump, "implausible jump");
+  add(c.rejected_out_of_range, "out of range");
+  add(c.rejected_malformed, "malformed");
+  add(c.rejected_non_finite, "non-finite");
+  return out;
+}
+
 std::string format_device_line(const DeviceRunSummary& d) {
   std::ostringstream os;
   os << std::fixed << std::setprecision(3) << d.name << ": feedback force max "
@@ -80,6 +96,7 @@ std::string format_device_line(const DeviceRunSummary& d) {
        << " N, hand–handle separation max " << d.hand_separation_max_mm << " mm, port energy "
        << d.device_port_energy_j << " J";
   os << "; invalid periods " << d.invalid_periods << ", rejected samples " << d.rejected_samples;
+  if (!d.rejected_causes.empty()) os << " (" << d.rejected_causes << ")";
   if (!d.lifecycle.empty()) os << ", lifecycle " << d.lifecycle << ", safe states " << d.faults;
   return os.str();
 }
@@ -95,6 +112,7 @@ void SceneRunner::summarize_devices(RunSummary& s) const {
     d.torque_periods = device_tally_[i].torque_periods;
     d.invalid_periods = device_tally_[i].invalid_periods;
     d.rejected_samples = static_cast<std::int64_t>(dev.counters().values_rejected);
+    d.rejected_causes = rejection_causes(dev.counters());
     if (const hal::DeviceReport r = loop_.device(i).report(); r.managed) {
       d.lifecycle = hal::to_string(r.lifecycle);
       d.faults = static_cast<std::int64_t>(r.latches);
@@ -166,10 +184,46 @@ RunSummary SceneRunner::summary() const {
        << " s) that pushed it out are reported apart, not in the god-object penetration max";
     s.warnings.push_back(os.str());
   }
+  for (std::size_t i = 0; i < extra_devices_.size() && i < device_startup_.size(); ++i) {
+    const DeviceStartup& u = device_startup_[i];
+    if (u.steps == 0) continue;
+    const core::Model& model = scene_->model;
+    std::string what = "an obstacle";
+    if (u.obstacle >= 0)
+      what = "obstacle '" + model.obstacles[static_cast<std::size_t>(u.obstacle)].name + "'";
+    else if (u.other_body >= 0)
+      what = "body '" + model.bodies[static_cast<std::size_t>(u.other_body)].name + "'";
+    std::ostringstream os;
+    os << std::fixed << std::setprecision(1) << "device '" << extra_devices_[i]->config().name
+       << "': the tool started inside " << what << ", " << u.first_mm
+       << " mm deep (the god-object is spawned where the hand is): the " << u.steps
+       << " start-up steps (" << std::setprecision(3) << static_cast<double>(u.steps) * model.dt
+       << " s) pushed it out";
+    s.warnings.push_back(os.str());
+  }
+  if (live_start_mm_ >= 0.0 && (live_start_mm_ > 1.0 || live_start_deg_ > 1.0)) {
+    std::ostringstream os;
+    os << std::fixed << std::setprecision(1) << "the live input's first sample (period "
+       << startup_from_ - 1 << ") put the tool " << live_start_mm_ << " mm and " << live_start_deg_
+       << " deg from the scene's start: it was brought there, the start-up "
+       << "and the divergence bounds taken from there (docs/safety.md \"A live input's start\")";
+    s.warnings.push_back(os.str());
+  }
   s.rejected_samples = static_cast<std::int64_t>(device_.counters().values_rejected);
+  s.rejected_causes = rejection_causes(device_.counters());
   s.contact_overflow = data_.contact_overflow_steps;
   s.contact_clamped_steps = data_.contact_clamped_steps;
   s.net_crossed_steps = data_.net_crossed_steps;
+  s.crossed_contact_steps = data_.crossed_contact_steps;
+  s.pass_throughs = data_.pass_throughs;
+  if (s.pass_throughs > 0) {
+    std::ostringstream os;
+    os << std::fixed << std::setprecision(3) << s.pass_throughs
+       << " sphere pair(s) of two bodies went through each other, the first at "
+       << s.first_pass_through_s
+       << " s: faster than the contacts can hold (docs/dynamics.md, \"Crossing\")";
+    s.warnings.push_back(os.str());
+  }
   s.nonfinite_steps = data_.nonfinite_steps;
   s.invalid_target_steps = data_.invalid_target_steps;
   summarize_grasps(scene_->model, data_, s);

@@ -42,6 +42,7 @@ std::string format_summary_json(const RunSummary& s) {
       o["torque_periods"] = d.torque_periods;
       o["invalid_periods"] = d.invalid_periods;
       o["rejected_samples"] = d.rejected_samples;
+      o["rejected_causes"] = d.rejected_causes;
       o["faults"] = d.faults;
       o["lifecycle"] = d.lifecycle;
       o["closed_loop"] = d.closed_loop;

@@ -8,6 +8,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "numen/sim/input/input_error.hpp"
 #include "numen/sim/run/divergence.hpp"
 #include "numen/sim/run/run_figures.hpp"
 #include "numen/sim/run/run_summary.hpp"
@@ -117,6 +118,13 @@ constexpr RunSummarySegment kLayout[] = {
     {"  stiff contacts: stiffness clamped to the time-constant floor in {contact_clamped_steps} "
      "steps (docs/dynamics.md, \"Stiff contacts\")\n",
      set("contact_clamped_steps")},
+    {"  instruments crossing: a sphere pair of two bodies past each other, pushed back the way "
+     "it came, in {crossed_contact_steps} steps; went through {pass_throughs} times\n",
+     set("crossed_contact_steps")},
+    {"  pass-through: sphere pairs of two bodies went through each other {pass_throughs} "
+     "times, the first at {first_pass_through_s} s (docs/dynamics.md, \"Crossing\")\n",
+     set("pass_throughs")},
+    {"  rejected samples: {rejected_causes}\n", set("rejected_causes")},
     {"  bus: rejected samples {rejected_samples}, invalid periods {invalid_periods}, frames "
      "dropped {bus_frames_dropped}, corrupted {bus_frames_corrupted}\n"},
     {"  bus {bus}: {bus_frames_replayed} frames replayed of {bus_log_records} records; lost by "
@@ -128,7 +136,9 @@ constexpr RunSummarySegment kLayout[] = {
      "{igtl_faults}, dropped {igtl_dropped}; connections {igtl_connects}, refused "
      "{igtl_connect_failures}, lost {igtl_disconnects}; periods before the first pose "
      "{igtl_syncs_without_pose}, waits run out {igtl_wait_timeouts}, periods after the stream's "
-     "end {igtl_periods_after_end}; "
+     "end {igtl_periods_after_end}; stamps refused: backwards {igtl_stamps_backwards}, ahead "
+     "{igtl_stamps_ahead}, unstamped {igtl_stamps_unstamped}, clock re-basings "
+     "{igtl_stamp_resyncs}; "
      "received to applied us: median {igtl_latency_us.median}, p99 {igtl_latency_us.p99}, max "
      "{igtl_latency_us.max}; following the tracker's clock {igtl_follows}\n",
      set("igtl")},
@@ -311,7 +321,7 @@ void write_value(std::ostream& os, const FigureValue& v, std::string_view spec) 
       break;
     }
     case FigureKind::kFlag: os << (v.flag ? "true" : "false"); break;
-    case FigureKind::kText: os << v.text; break;
+    case FigureKind::kText: os << InputError::visible(v.text); break;
     case FigureKind::kTextList:
       throw std::logic_error("text summary layout: a list figure outside `each`");
   }
@@ -333,7 +343,9 @@ void write_template(std::ostream& os, const RunSummary& s, std::string_view text
       throw std::logic_error("text summary layout: unclosed '{' in " + std::string(text));
     const std::string_view field = text.substr(open + 1, close - open - 1);
     if (field == "*") {
-      os << element;
+      // Names come from scene files and the network: a control byte is written as \xNN, so
+      // that a grasper named "g\x1B[2J" cannot clear the terminal or forge a summary line.
+      os << InputError::visible(element);
     } else {
       const std::size_t colon = field.find(':');
       const std::string_view name = field.substr(0, colon);

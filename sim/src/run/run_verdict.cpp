@@ -101,11 +101,15 @@ RunVerdict run_verdict(const RunSummary& s) {
   if (!s.stdout_error.empty())
     add(ExitStatus::kLostRecords, "stdout: the summary was not written (" + s.stdout_error + ")");
   if (s.rejected_samples > 0)
-    add(ExitStatus::kSamplesRejected, n(s.rejected_samples) + " axis samples rejected");
+    add(ExitStatus::kSamplesRejected,
+        n(s.rejected_samples) + " axis samples rejected" +
+            (s.rejected_causes.empty() ? "" : ": " + s.rejected_causes));
   for (std::size_t i = 1; i < s.devices.size(); ++i)  // device 0's are the summary's own
     if (s.devices[i].rejected_samples > 0)
-      add(ExitStatus::kSamplesRejected, n(s.devices[i].rejected_samples) +
-                                            " axis samples rejected (device \"" + s.devices[i].name + "\")");
+      add(ExitStatus::kSamplesRejected,
+          n(s.devices[i].rejected_samples) + " axis samples rejected (device \"" +
+              s.devices[i].name + "\")" +
+              (s.devices[i].rejected_causes.empty() ? "" : ": " + s.devices[i].rejected_causes));
   if (s.invalid_target_steps > 0)  // core::kInvalidTarget: the step skipped the coupling
     add(ExitStatus::kSamplesRejected, n(s.invalid_target_steps) +
                                           " steps with a non-finite device target (coupling "
@@ -149,6 +153,16 @@ RunVerdict run_verdict(const RunSummary& s) {
     if (s.igtl_dropped > 0)
       add(ExitStatus::kSamplesRejected,
           n(s.igtl_dropped) + " OpenIGTLink poses dropped: the queue was full (a flood)");
+    // Poses refused for their timestamps, per reason (the stream went on with the next pose).
+    if (const std::int64_t refused =
+            s.igtl_stamps_backwards + s.igtl_stamps_ahead + s.igtl_stamps_unstamped;
+        refused > 0)
+      add(ExitStatus::kSamplesRejected,
+          n(refused) + " tracker poses refused for their timestamps (" +
+              n(s.igtl_stamps_backwards) + " before the last pose taken, " +
+              n(s.igtl_stamps_ahead) + " more than 10 s after it, " + n(s.igtl_stamps_unstamped) +
+              " unstamped while following the tracker's clock; " + n(s.igtl_stamp_resyncs) +
+              " re-basings on a clock that jumped)");
     // Following a replay, its end is the stream's: a fault only when the run outlasted it.
     if (s.igtl_disconnects > 0 && !s.igtl_follows)
       add(ExitStatus::kSamplesRejected,

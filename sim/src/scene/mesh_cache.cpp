@@ -3,19 +3,20 @@
 
 #include "numen/sim/scene/mesh_cache.hpp"
 
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <array>
 #include <cerrno>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
-#include <fstream>
 #include <functional>
 #include <system_error>
 #include <type_traits>
 #include <utility>
 #include <vector>
-
-#include <unistd.h>
 
 namespace numen::sim {
 namespace {
@@ -227,117 +228,238 @@ std::string check_shape(const core::MeshShape& s) {
   return "";
 }
 
-/// Reads `path` into `out` when its key is `key`: "" then, else why not ("missing" when absent).
-/// Reads cache file `path` into `data` and checks its header (`magic`, `version`, `key`, payload
-/// size, checksum): "" with `r` at the payload, else why not ("missing", "stale (…)",
-/// "damaged (…)"; `kind` names the cache, "mesh" or "net"; `stale` says why a key differs).
-std::string open_cache(const std::filesystem::path& path, const char (&magic)[8], const char* kind,
-                       std::uint32_t version, std::uint64_t key, const char* stale,
-                       std::string& data, Reader& r) {
-  std::ifstream in(path, std::ios::binary | std::ios::ate);
-  if (!in) return "missing";
-  const std::streamoff bytes = in.tellg();
-  if (bytes < 0) return "damaged (a read error)";
-  data.assign(static_cast<std::size_t>(bytes), '\0');
-  in.seekg(0);
-  if (!in.read(data.data(), bytes)) return "damaged (a read error)";
-  r = Reader{data.data(), data.data() + data.size()};
-  char file_magic[8] = {};
-  for (char& c : file_magic) r.value(c);
+constexpr char kNetMagic[8] = {'N', 'U', 'M', 'E', 'N', 'N', 'E', 'T'};
+
+/// The cache kind whose magic the 8 bytes at `head` are ("mesh-shape", "net"), or nullptr.
+const char* cache_kind_of(const char* head) {
+  if (std::memcmp(head, kMagic, sizeof kMagic) == 0) return "mesh-shape";
+  if (std::memcmp(head, kNetMagic, sizeof kNetMagic) == 0) return "net";
+  return nullptr;
+}
+
+/// What a file of mode `mode` is, when it is not a regular file ("a directory", …), else "".
+std::string not_a_regular_file(mode_t mode) {
+  if (S_ISREG(mode)) return "";
+  if (S_ISLNK(mode)) return "a symbolic link";
+  if (S_ISDIR(mode)) return "a directory";
+  if (S_ISFIFO(mode)) return "a FIFO (named pipe)";
+  if (S_ISCHR(mode)) return "a character device";
+  if (S_ISBLK(mode)) return "a block device";
+  if (S_ISSOCK(mode)) return "a socket";
+  return "not a regular file";
+}
+
+/// A file descriptor closed when it goes out of scope.
+struct Fd {
+  int fd = -1;
+  Fd() = default;
+  Fd(const Fd&) = delete;
+  Fd& operator=(const Fd&) = delete;
+  ~Fd() {
+    if (fd >= 0) ::close(fd);
+  }
+};
+
+/// Reads `n` bytes of `fd` into `out`: false at a read error or an early end.
+bool read_exactly(int fd, char* out, std::size_t n) {
+  while (n > 0) {
+    const ssize_t got = ::read(fd, out, n);
+    if (got < 0 && errno == EINTR) continue;
+    if (got <= 0) return false;
+    out += got;
+    n -= static_cast<std::size_t>(got);
+  }
+  return true;
+}
+
+/// Writes the `n` bytes at `data` to `fd`: false at an error.
+bool write_all(int fd, const char* data, std::size_t n) {
+  while (n > 0) {
+    const ssize_t put = ::write(fd, data, n);
+    if (put < 0 && errno == EINTR) continue;
+    if (put <= 0) return false;
+    data += put;
+    n -= static_cast<std::size_t>(put);
+  }
+  return true;
+}
+
+/// One cache file's kind: its magic, its name in messages ("mesh-shape", "net") and its format
+/// version.
+struct CacheKind {
+  const char* magic;  ///< 8 bytes.
+  const char* name;
+  std::uint32_t version;
+};
+
+/// Looks at what cache path `path` names, following no link and opening nothing that could
+/// block: "" when it may be `kind`'s cache, `exists` then saying whether a file of that kind is
+/// there (its descriptor left open in `fd`, `bytes` its size) or nothing is (its folder exists);
+/// else why `path` may be neither read nor written as that cache (a symbolic link, a directory,
+/// a FIFO, a device node, a socket; a file that does not start with `kind`'s magic, which it
+/// would overwrite; a folder that does not exist), naming `path`.
+std::string inspect_cache_path(const std::filesystem::path& path, const CacheKind& kind, Fd& fd,
+                               bool& exists, std::uint64_t& bytes) {
+  exists = false;
+  bytes = 0;
+  const std::string name = path.string();
+  struct stat st {};
+  if (::lstat(path.c_str(), &st) != 0) {
+    if (errno != ENOENT) return name + ": cannot look at it (" + std::strerror(errno) + ")";
+    const std::filesystem::path dir = path.has_parent_path() ? path.parent_path() : ".";
+    struct stat ds {};
+    if (::stat(dir.c_str(), &ds) != 0)
+      return name + ": its folder " + dir.string() + " does not exist (" + std::strerror(errno) +
+             "): numen makes no folder for a cache file; make it, or name a file in an existing "
+             "folder";
+    if (!S_ISDIR(ds.st_mode)) return name + ": " + dir.string() + " is not a folder";
+    return "";
+  }
+  if (const std::string what = not_a_regular_file(st.st_mode); !what.empty())
+    return name + " is " + what + ", not a cache file: a cache path must name a regular file or " +
+           "nothing (numen neither follows, reads nor replaces anything else)";
+  fd.fd = ::open(path.c_str(), O_RDONLY | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC);
+  if (fd.fd < 0)
+    return name + ": cannot read it (" + std::strerror(errno) +
+           "), so numen cannot tell whether it is its cache: refusing to overwrite it";
+  if (::fstat(fd.fd, &st) != 0 || !S_ISREG(st.st_mode))  // replaced since the lstat()
+    return name + " is not a regular file: refusing to use it as a cache";
+  char head[8] = {};
+  const bool whole =
+      st.st_size >= static_cast<off_t>(sizeof head) && read_exactly(fd.fd, head, sizeof head);
+  const char* other = whole ? cache_kind_of(head) : nullptr;
+  if (other == nullptr)
+    return name + ": not a numen cache (it does not start with \"" + std::string(kind.magic, 8) +
+           "\"); refusing to overwrite it: name a file of its own for the cache";
+  if (std::memcmp(head, kind.magic, 8) != 0)
+    return name + ": a numen " + other + " cache, not a " + kind.name +
+           " cache; refusing to overwrite it: give each cache a file of its own";
+  exists = true;
+  bytes = static_cast<std::uint64_t>(st.st_size);
+  return "";
+}
+
+/// Reads cache file `path` of `kind` and checks its header (version, `key`, payload size,
+/// checksum): "" with `payload` filled, else why not ("missing", "stale (…)", "damaged (…)";
+/// `stale` says why a key differs); or, in `refused`, why `path` cannot be this cache
+/// (inspect_cache_path()).
+std::string open_cache(const std::filesystem::path& path, const CacheKind& kind, std::uint64_t key,
+                       const char* stale, std::string& payload, std::string& refused) {
+  Fd fd;
+  bool exists = false;
+  std::uint64_t bytes = 0;
+  refused = inspect_cache_path(path, kind, fd, exists, bytes);
+  if (!refused.empty()) return refused;
+  if (!exists) return "missing";
+  char header[kHeaderBytes - 8];
+  if (bytes < kHeaderBytes || !read_exactly(fd.fd, header, sizeof header))
+    return "damaged (" + std::to_string(bytes) + " bytes, shorter than its header)";
+  Reader r{header, header + sizeof header};
   std::uint32_t file_version = 0;
   std::uint64_t file_key = 0, size = 0, checksum = 0;
   r.value(file_version);
   r.value(file_key);
   r.value(size);
   r.value(checksum);
-  if (!r.ok || std::memcmp(file_magic, magic, sizeof magic) != 0)
-    return std::string("damaged (not a numen ") + kind + " cache)";
-  if (file_version != version)
+  if (file_version != kind.version)
     return "stale (format version " + std::to_string(file_version) + ", this numen writes " +
-           std::to_string(version) + ")";
+           std::to_string(kind.version) + ")";
   if (file_key != key) return std::string("stale (") + stale + ")";
-  if (size != data.size() - kHeaderBytes)
-    return "damaged (" + std::to_string(data.size() - kHeaderBytes) + " payload bytes, the header says " +
+  if (size != bytes - kHeaderBytes)
+    return "damaged (" + std::to_string(bytes - kHeaderBytes) + " payload bytes, the header says " +
            std::to_string(size) + ")";
+  payload.assign(static_cast<std::size_t>(size), '\0');
+  if (!read_exactly(fd.fd, payload.data(), payload.size())) return "damaged (a read error)";
   Hash h;
-  h.bytes(data.data() + kHeaderBytes, static_cast<std::size_t>(size));
+  h.bytes(payload.data(), payload.size());
   if (h.h != checksum) return "damaged (checksum mismatch)";
   return "";
 }
 
-std::string read_cache(const std::filesystem::path& path, std::uint64_t key, core::MeshShape& out) {
-  std::string data;
-  Reader r{nullptr, nullptr};
-  if (std::string why = open_cache(path, kMagic, "mesh", kMeshCacheVersion, key,
-                                   "built from other triangles or band settings", data, r);
-      !why.empty())
-    return why;
+/// Parses a mesh-shape cache's payload into `out`: "" or why it is not the shape of `mesh`
+/// ("damaged (…)").
+std::string parse_shape(const std::string& payload, const core::TriangleMesh& mesh,
+                        core::MeshShape& out) {
+  Reader r{payload.data(), payload.data() + payload.size()};
   core::MeshShape s;
   fields(r, s);
   if (!r.ok || r.p != r.end) return "damaged (the payload does not parse)";
   if (std::string bad = check_shape(s); !bad.empty()) return "damaged (" + bad + ")";
+  if (s.vertices != mesh.vertices)
+    return "damaged (its key is this mesh's, its vertices another mesh's)";
   out = std::move(s);
   return "";
 }
 
-/// Writes `payload` to cache file `path` after its header (`magic`, `version`, `key`, size,
-/// checksum), through a temporary file renamed over it; "" or why it could not.
-std::string write_cache_file(const std::filesystem::path& path, const char (&magic)[8],
-                             std::uint32_t version, std::uint64_t key, const std::string& payload) {
+/// Writes `payload` to cache file `path` of `kind` after its header (magic, version, `key`,
+/// size, checksum), through a temporary file in the same folder renamed over it, after looking
+/// again at what `path` names (inspect_cache_path(): never over anything but a cache of `kind`);
+/// "" or why it could not.
+std::string write_cache_file(const std::filesystem::path& path, const CacheKind& kind,
+                             std::uint64_t key, const std::string& payload) {
   Hash h;
   h.bytes(payload.data(), payload.size());
   Writer w;
-  for (char c : magic) w.value(c);
-  w.value(version);
+  for (int k = 0; k < 8; ++k) w.value(kind.magic[k]);
+  w.value(kind.version);
   w.value(key);
   w.value(static_cast<std::uint64_t>(payload.size()));
   w.value(h.h);
-  std::error_code ec;
-  if (path.has_parent_path()) std::filesystem::create_directories(path.parent_path(), ec);
-  if (ec) return "cannot write " + path.string() + ": cannot make its folder (" + ec.message() + ")";
-  const std::filesystem::path tmp = path.string() + ".tmp" + std::to_string(::getpid());
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    out.write(w.out.data(), static_cast<std::streamsize>(w.out.size()));
-    out.write(payload.data(), static_cast<std::streamsize>(payload.size()));
-    out.close();
-    if (!out) {
-      std::filesystem::remove(tmp, ec);
-      return "cannot write " + path.string() + " (" + std::strerror(errno) + ")";
-    }
+  std::string tmp = path.string() + ".XXXXXX";
+  Fd out;
+  out.fd = ::mkstemp(tmp.data());  // O_EXCL: never an existing file
+  if (out.fd < 0) return "cannot write " + path.string() + " (" + std::strerror(errno) + ")";
+  ::fchmod(out.fd, 0644);
+  const bool ok = write_all(out.fd, w.out.data(), w.out.size()) &&
+                  write_all(out.fd, payload.data(), payload.size());
+  const int write_errno = errno;
+  const bool closed = ::close(out.fd) == 0;
+  out.fd = -1;
+  std::string why;
+  if (!ok || !closed) {
+    why = "cannot write " + path.string() + " (" + std::strerror(ok ? errno : write_errno) + ")";
+  } else {
+    Fd look;
+    bool exists = false;
+    std::uint64_t bytes = 0;
+    if (std::string refused = inspect_cache_path(path, kind, look, exists, bytes); !refused.empty())
+      why = "not written: " + refused;
+    else if (::rename(tmp.c_str(), path.c_str()) != 0)
+      why = "cannot write " + path.string() + " (" + std::strerror(errno) + ")";
   }
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) {
-    std::error_code ignored;
-    std::filesystem::remove(tmp, ignored);
-    return "cannot write " + path.string() + " (" + ec.message() + ")";
-  }
-  return "";
+  if (!why.empty()) ::unlink(tmp.c_str());
+  return why;
 }
 
-std::string write_cache(const std::filesystem::path& path, std::uint64_t key, const core::MeshShape& s) {
-  Writer payload;
-  fields(payload, s);
-  return write_cache_file(path, kMagic, kMeshCacheVersion, key, payload.out);
-}
+constexpr CacheKind kShapeCache{kMagic, "mesh-shape", kMeshCacheVersion};
+constexpr CacheKind kNetCache{kNetMagic, "net", kNetCacheVersion};
 
-constexpr char kNetMagic[8] = {'N', 'U', 'M', 'E', 'N', 'N', 'E', 'T'};
-
-std::string read_net_cache(const std::filesystem::path& path, std::uint64_t key,
-                           core::TriangleMesh& out) {
-  std::string data;
-  Reader r{nullptr, nullptr};
-  if (std::string why = open_cache(path, kNetMagic, "net", kNetCacheVersion, key,
-                                   "simplified from another mesh, to another size or by another "
-                                   "simplifier",
-                                   data, r);
-      !why.empty())
-    return why;
+/// Parses a net cache's payload into `out`: "" or why it is not a net of `mesh` ("damaged
+/// (…)"): not a valid, closed surface, fewer nodes than a tetrahedron's or as many as the mesh's
+/// vertices, nodes farther outside the mesh's bounding box than its longest side.
+std::string parse_net(const std::string& payload, const core::TriangleMesh& mesh,
+                      core::TriangleMesh& out) {
+  Reader r{payload.data(), payload.data() + payload.size()};
   core::TriangleMesh net;
   r.array(net.vertices);
   r.array(net.triangles);
   if (!r.ok || r.p != r.end) return "damaged (the payload does not parse)";
   if (std::string bad = core::validate_mesh(net); !bad.empty()) return "damaged (" + bad + ")";
+  if (core::build_mesh_topology(net).boundary_edges > 0)
+    return "damaged (its net has edges on one triangle only)";
+  if (net.num_vertices() < 4 || net.num_vertices() >= mesh.num_vertices())
+    return "damaged (its net has " + std::to_string(net.num_vertices()) + " nodes, the mesh " +
+           std::to_string(mesh.num_vertices()) + " vertices)";
+  core::Vec3 lo = mesh.vertices.front(), hi = lo;
+  for (const core::Vec3& v : mesh.vertices) {
+    lo = lo.cwiseMin(v);
+    hi = hi.cwiseMax(v);
+  }
+  const double side = (hi - lo).maxCoeff();
+  for (const core::Vec3& v : net.vertices)
+    if (!((v - hi).maxCoeff() <= side && (lo - v).maxCoeff() <= side))
+      return "damaged (its net lies off this mesh: a node more than the mesh's size outside its "
+             "bounding box)";
   out = std::move(net);
   return "";
 }
@@ -382,14 +504,24 @@ std::string mesh_cache_file_name(const std::string& stem, std::uint64_t key) {
 
 namespace {
 
-/// The cache protocol of both kinds: `read()` the file ("" when it held what is asked, else why
-/// not), else `make()` it ("" or the error, returned) and `write()` it, the outcome saying
-/// whether it was loaded or written and why not (`redo`: what was done instead, "rebuilt").
-template <typename Read, typename Make, typename Write>
-std::string through_cache(const std::filesystem::path& path, const char* redo, Read read, Make make,
-                          Write write, MeshCacheOutcome& outcome) {
+/// The cache protocol of both kinds: read cache file `path` of `kind` (open_cache(), `stale`
+/// saying why a key differs) and `parse()` its payload ("" when it held what is asked, else why
+/// not), else `make()` it ("" or the error, returned) and `write()` it (its payload), the outcome
+/// saying whether it was loaded or written and why not (`redo`: what was done instead,
+/// "rebuilt"). A path that cannot be this cache is returned at once, nothing made
+/// (MeshCacheOutcome::cache_refused).
+template <typename Parse, typename Make, typename Payload>
+std::string through_cache(const std::filesystem::path& path, const CacheKind& kind,
+                          std::uint64_t key, const char* stale, const char* redo, Parse parse,
+                          Make make, Payload payload, MeshCacheOutcome& outcome) {
   outcome = MeshCacheOutcome{};
-  const std::string why = read();
+  std::string bytes, refused;
+  std::string why = open_cache(path, kind, key, stale, bytes, refused);
+  if (!refused.empty()) {
+    outcome.cache_refused = true;
+    return refused;
+  }
+  if (why.empty()) why = parse(bytes);
   if (why.empty()) {
     outcome.loaded = true;
     return "";
@@ -397,7 +529,7 @@ std::string through_cache(const std::filesystem::path& path, const char* redo, R
   if (why != "missing") outcome.note = path.string() + ": " + why + ": " + redo;
   const std::string err = make();
   if (!err.empty()) return err;
-  const std::string written = write();
+  const std::string written = write_cache_file(path, kind, key, payload());
   outcome.written = written.empty();
   if (!written.empty()) outcome.note += (outcome.note.empty() ? "" : "; ") + written;
   return "";
@@ -409,11 +541,17 @@ std::string build_mesh_shape_cached(const core::TriangleMesh& mesh,
                                     const core::MeshShapeOptions& options,
                                     const std::filesystem::path& path, core::MeshShape& out,
                                     MeshCacheOutcome& outcome) {
-  const std::uint64_t key = mesh_cache_key(mesh, options);
   return through_cache(
-      path, "rebuilt", [&] { return read_cache(path, key, out); },
+      path, kShapeCache, mesh_cache_key(mesh, options),
+      "built from other triangles or band settings", "rebuilt",
+      [&](const std::string& bytes) { return parse_shape(bytes, mesh, out); },
       [&] { return core::build_mesh_shape(mesh, out, options); },
-      [&] { return write_cache(path, key, out); }, outcome);
+      [&] {
+        Writer payload;
+        fields(payload, out);
+        return std::move(payload.out);
+      },
+      outcome);
 }
 
 std::uint64_t net_cache_key(const core::TriangleMesh& mesh, int nodes, std::uint64_t simplifier) {
@@ -433,17 +571,27 @@ std::string simplify_net_cached(const core::TriangleMesh& mesh, int nodes, std::
                                 const std::filesystem::path& path,
                                 const std::function<std::string(core::TriangleMesh&)>& simplify,
                                 core::TriangleMesh& net, MeshCacheOutcome& outcome) {
-  const std::uint64_t key = net_cache_key(mesh, nodes, simplifier);
   return through_cache(
-      path, "simplified again", [&] { return read_net_cache(path, key, net); },
+      path, kNetCache, net_cache_key(mesh, nodes, simplifier),
+      "simplified from another mesh, to another size or by another simplifier", "simplified again",
+      [&](const std::string& bytes) { return parse_net(bytes, mesh, net); },
       [&] { return simplify(net); },
       [&] {
         Writer payload;
         payload.array(net.vertices);
         payload.array(net.triangles);
-        return write_cache_file(path, kNetMagic, kNetCacheVersion, key, payload.out);
+        return std::move(payload.out);
       },
       outcome);
+}
+
+std::optional<std::string> slow_net_simplification_hint(double wall_s, int nodes, bool cached) {
+  if (cached || !(wall_s >= kSlowNetSimplifySeconds)) return std::nullopt;
+  char seconds[32];
+  std::snprintf(seconds, sizeof seconds, "%.1f", wall_s);
+  return "simplified to " + std::to_string(nodes) + " nodes in " + seconds +
+         " s (wall clock) at every load: `cache = true` (or a file path) keeps the net for the "
+         "next load";
 }
 
 }  // namespace numen::sim

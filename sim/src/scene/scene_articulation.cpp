@@ -207,6 +207,25 @@ void parse_articulation(const TomlTable& root, const std::vector<TomlTable>& bod
     }
     m.joints.push_back(std::move(j));
   }
+
+  // A device after the first that neither links a body nor prescribes a joint drives nothing:
+  // the control loop would take its empty binding for the rigid one (link 0 → the held body,
+  // the first device's) and refuse the run unlocated ("devices 0 and 2 both drive the held
+  // body").
+  const std::vector<TomlTable> device_tables = root.tables("device");
+  for (std::size_t i = 1; i < devices.size() && i < device_tables.size(); ++i) {
+    const platform::DeviceBinding& b = *devices[i].binding;
+    if (!platform::is_default_rigid(b)) continue;
+    const std::string& name = devices[i].config->name;
+    device_tables[i].fail_at(nullptr, device_tables[i].path(),
+                             "device \"" + name +
+                                 "\" drives nothing: no [[body]] has link = "
+                                 "\"...\" with device = \"" +
+                                 name +
+                                 "\" and no [joint.prescribed] "
+                                 "has device = \"" +
+                                 name + "\" (the held body is the first device's)");
+  }
 }
 
 }  // namespace numen::sim

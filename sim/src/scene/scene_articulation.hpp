@@ -23,7 +23,8 @@ namespace numen::sim {
 /// Bodies bound to a link that give no `position` start at the link's pose for its device's
 /// trajectory's first sample · link_offset. Needs the devices (parse_device()). Throws
 /// InputError (file, line, column, key), also for device 0's `attach` body driven by another
-/// device's link (a body bound twice).
+/// device's link (a body bound twice) and, at its [[device]] table, for a device after the
+/// first that drives nothing (no body's link, no prescribed joint).
 void parse_articulation(const TomlTable& root, const std::vector<TomlTable>& body_tables,
                         Scene& scene);
 

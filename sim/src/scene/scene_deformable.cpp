@@ -4,6 +4,7 @@
 #include "scene_deformable.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -12,12 +13,12 @@
 #include <string>
 #include <vector>
 
+#include "net_simplify.hpp"
 #include "numen/core/mesh.hpp"
 #include "numen/core/net_model.hpp"
 #include "numen/core/net_surface_map.hpp"
 #include "numen/sim/scene/mesh_cache.hpp"
 #include "numen/sim/study/study_common.hpp"  // thread_cpu_seconds()
-#include "net_simplify.hpp"
 #include "scene_mesh.hpp"
 
 namespace numen::sim {
@@ -162,11 +163,20 @@ int net_size(const TomlTable& t, const core::TriangleMesh& mesh, NetLoad& load) 
     if (n < kMinClosedNodes)
       t.fail("nodes", "a closed net needs at least " + std::to_string(kMinClosedNodes) +
                           " nodes (a tetrahedron), got " + std::to_string(n));
+    const bool capped = vertices > kMaxNetNodes;  // the cap, not the mesh, bounds the count
+    const std::string most =
+        capped ? std::to_string(static_cast<int>(kMaxNetNodes)) + ", the most a net may have"
+               : std::to_string(vertices) + ", which is the mesh itself";
     if (n > vertices)
       t.fail("nodes", std::to_string(n) + " nodes is more than the " + std::to_string(vertices) +
-                          " vertices of " + file + ": the net is made by simplifying the mesh, "
-                          "never by refining it (at most " + std::to_string(vertices) +
-                          ", which is the mesh itself)");
+                          " vertices of " + file +
+                          ": the net is made by simplifying the mesh, "
+                          "never by refining it (at most " +
+                          most + ")");
+    if (n > kMaxNetNodes)
+      t.fail("nodes", std::to_string(n) + " nodes is more than the " +
+                          std::to_string(static_cast<int>(kMaxNetNodes)) +
+                          " a net may have (at most " + most + ")");
     load.nodes_from = "nodes";
     return static_cast<int>(n);
   }
@@ -197,14 +207,19 @@ int net_size(const TomlTable& t, const core::TriangleMesh& mesh, NetLoad& load) 
 
 /// Simplifies mesh file `mesh` (scaled and placed, m) to a net of about `nodes` nodes
 /// (simplify_to_net()), or reads that net from the cache file `cache` names (mesh_cache.hpp,
-/// simplify_net_cached(); `load` records which). Fails, located at `key` (the key that asked for
-/// it) and naming the file: a mesh that is not closed (a hole: the net would be open where the
-/// organ is closed), a simplification that fails or gives a net that is not a valid, closed
-/// surface. Appends a warning when the net keeps more nodes than asked, and at `cache` when a
-/// cache file is stale, damaged or cannot be written.
+/// simplify_net_cached(); `load` records which, `source` says "the net simplified from it" or
+/// "the net read from cache file <path>"). Fails, located at `key` (the key that asked for it)
+/// and naming the file: a mesh that is not closed (a hole: the net would be open where the organ
+/// is closed), a simplification that fails or gives a net that is not a valid, closed surface;
+/// at `cache`: a path that is not nothing or a numen net cache (simplify_net_cached()), before
+/// the simplification. Appends a warning when the net keeps more nodes than asked, at `cache`
+/// when a cache file is stale, damaged or cannot be written, and at `key` when the
+/// simplification took kSlowNetSimplifySeconds or more of wall-clock time without a cache
+/// (slow_net_simplification_hint()).
 core::TriangleMesh simplify_mesh_file(const TomlTable& t, const std::filesystem::path& scene_dir,
                                       std::string_view key, const core::TriangleMesh& mesh,
-                                      int nodes, NetLoad& load, std::vector<std::string>& warnings) {
+                                      int nodes, NetLoad& load, std::string& source,
+                                      std::vector<std::string>& warnings) {
   const std::string file = t.string("file");
   const int boundary = core::build_mesh_topology(mesh).boundary_edges;
   if (boundary > 0)
@@ -222,28 +237,50 @@ core::TriangleMesh simplify_mesh_file(const TomlTable& t, const std::filesystem:
       "the net is simplified at every load", warnings);
   core::TriangleMesh net;
   MeshCacheOutcome outcome;
-  const auto simplify = [&](core::TriangleMesh& out) { return simplify_to_net(mesh, nodes, out); };
+  double simplify_wall_s = 0.0;  // of simplify_to_net() alone
+  const auto simplify = [&](core::TriangleMesh& out) {
+    const auto t0 = std::chrono::steady_clock::now();
+    std::string e = simplify_to_net(mesh, nodes, out);
+    simplify_wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    return e;
+  };
   const std::string err =
       cache.empty() ? simplify(net)
                     : simplify_net_cached(mesh, nodes, net_simplifier_version(), cache, simplify,
                                           net, outcome);
+  if (outcome.cache_refused) t.fail("cache", err);
   if (!err.empty()) t.fail(key, file + ": simplifying the mesh to " + std::to_string(nodes) +
                                     " nodes failed: " + err);
   if (!outcome.note.empty()) warnings.push_back(mesh_warning(t, "cache", file, outcome.note));
+  if (const auto hint = slow_net_simplification_hint(simplify_wall_s, nodes, !cache.empty()))
+    warnings.push_back(mesh_warning(t, key, file, *hint));
   load.cache_loaded = outcome.loaded;
+  source = outcome.loaded ? "the net read from cache file " + cache.string()
+                          : std::string("the net simplified from it");
   std::string invalid = core::validate_mesh(net);
   if (invalid.empty() && core::build_mesh_topology(net).boundary_edges > 0)
     invalid = "it has edges on one triangle only";
   if (!invalid.empty())
-    t.fail(key, file + ": the net simplified to " + std::to_string(nodes) +
+    t.fail(key, file + ": " + source + " to " + std::to_string(nodes) +
                     " nodes is not a closed, valid surface: " + invalid);
   if (net.num_vertices() != nodes)
-    warnings.push_back(mesh_warning(
-        t, key, file,
-        "the net simplified from the mesh keeps " + std::to_string(net.num_vertices()) +
-            " nodes, not the " + std::to_string(nodes) +
-            " asked: further edge collapses would have made it non-manifold"));
+    warnings.push_back(
+        mesh_warning(t, key, file,
+                     source + " keeps " + std::to_string(net.num_vertices()) + " nodes, not the " +
+                         std::to_string(nodes) +
+                         " asked: further edge collapses would have made it non-manifold"));
   return net;
+}
+
+/// The longest side of `mesh`'s bounding box (m).
+double mesh_size(const core::TriangleMesh& mesh) {
+  if (mesh.vertices.empty()) return 0.0;
+  Vec3 lo = mesh.vertices.front(), hi = lo;
+  for (const Vec3& v : mesh.vertices) {
+    lo = lo.cwiseMin(v);
+    hi = hi.cwiseMax(v);
+  }
+  return (hi - lo).maxCoeff();
 }
 
 /// Mean edge length of `mesh` (m).
@@ -256,26 +293,35 @@ double mean_edge_length(const core::TriangleMesh& mesh) {
 }
 
 /// Maps fine surface `fine` on net `net` of `m` (made from `coarse`, in the same frame: the net's
-/// rigid component's body frame) with core::add_net_surface(), each fine vertex on its nearest
-/// net triangle at rest. Appends a warning when a fine vertex stands off the net by more than
-/// half the net's mean edge length: beyond that it lies outside the band the net's node spheres
-/// cover (radius edge / √3 by default, core::add_net()), so the net's contacts and its fine surface
-/// disagree, and the offset carried in a bent triangle's frame distorts the surface.
+/// rigid component's body frame; `source` says where the net came from, simplify_mesh_file())
+/// with core::add_net_surface(), each fine vertex on its nearest net triangle at rest. Appends a
+/// warning when a fine vertex stands off the net by more than net_surface_offset_bound(): beyond
+/// half the net's mean edge the fine surface lies outside the band the net's node spheres cover
+/// (radius edge / √3 by default, core::add_net()), so the net's contacts and its fine surface
+/// disagree, and the offset carried in a bent triangle's frame distorts the surface; beyond
+/// kMaxFineOffsetShare of the organ's size the net simulates another shape than the organ's,
+/// however coarse its edges.
 void map_fine_surface(const TomlTable& t, core::Model& m, int net, const core::TriangleMesh& coarse,
-                      const core::TriangleMesh& fine, std::vector<std::string>& warnings) {
+                      const core::TriangleMesh& fine, const std::string& source,
+                      std::vector<std::string>& warnings) {
   const std::vector<int> nearest = nearest_net_triangles(coarse, fine.vertices);
   const std::string err = core::add_net_surface(m, net, fine.vertices, fine.triangles, nearest);
-  if (!err.empty()) t.fail_at(nullptr, t.path(), err);
+  if (!err.empty()) t.fail_at(nullptr, t.path(), source + ": " + err);
   const double offset = core::net_surface_max_offset(m, net);
-  const double bound = 0.5 * mean_edge_length(coarse);
+  const double half_edge = 0.5 * mean_edge_length(coarse);
+  const double size = mesh_size(fine);
+  const double bound = net_surface_offset_bound(half_edge, size);
   if (offset > bound)
     warnings.push_back(mesh_warning(
         t, "file", t.string("file"),
-        "the fine surface stands up to " + format_input_number(offset * 1e3) +
-            " mm off the net simplified from it, more than half the net's mean edge (" +
-            format_input_number(bound * 1e3) +
-            " mm): the node spheres no longer cover it and a bent net triangle distorts it; "
-            "ask for more nodes"));
+        "the fine surface stands up to " + format_input_number(offset * 1e3) + " mm off " + source +
+            ", more than " + format_input_number(bound * 1e3) +
+            " mm (the smaller of half the net's mean edge, " +
+            format_input_number(half_edge * 1e3) + " mm, and " +
+            format_input_number(kMaxFineOffsetShare * 100.0) + " % of the organ's " +
+            format_input_number(size * 1e3) +
+            " mm size): the net is not the organ's shape there, its node spheres may not cover "
+            "the surface and a bent net triangle distorts it; ask for more nodes"));
 }
 
 void parse_deformable(const TomlTable& t, const std::filesystem::path& scene_dir, core::Model& m,
@@ -324,20 +370,21 @@ void parse_deformable(const TomlTable& t, const std::filesystem::path& scene_dir
     const std::string key = load.nodes_from == "default" ? std::string("file") : load.nodes_from;
     check_node_count(t, key, load.nodes_asked);  // before the simplification's time is spent
     const double t0 = study::thread_cpu_seconds();
+    std::string source;
     core::TriangleMesh net =
-        simplify_mesh_file(t, scene_dir, key, mesh, load.nodes_asked, load, warnings);
+        simplify_mesh_file(t, scene_dir, key, mesh, load.nodes_asked, load, source, warnings);
     warn_self_intersections(t, key, t.string("file"), net, core::find_self_intersections(net),
-                            "the net simplified from the mesh passes through itself: ask for more "
-                            "nodes",
-                            warnings);
+                            source + " passes through itself: ask for more nodes", warnings);
     const std::string err = core::add_net(m, net, settings);
-    if (!err.empty()) t.fail_at(nullptr, t.path(), err);
-    map_fine_surface(t, m, m.num_nets() - 1, net, mesh, warnings);
+    if (!err.empty()) t.fail_at(nullptr, t.path(), load.cache_loaded ? source + ": " + err : err);
+    map_fine_surface(t, m, m.num_nets() - 1, net, mesh, source, warnings);
     load.simplified = true;
     load.simplify_seconds = study::thread_cpu_seconds() - t0;
     triangles.push_back(std::move(net.triangles));  // node i of the net is vertex i of `net`
   } else {
-    if (file) check_node_count(t, "file", mesh.num_vertices());
+    if (file)  // at the key that made the mesh its own net
+      check_node_count(t, load.nodes_from == "edge_length" ? "edge_length" : "file",
+                       mesh.num_vertices());
     if (t.has("cache"))
       warnings.push_back(mesh_warning(t, "cache", t.string("file"),
                                       "the mesh is its own net (not simplified): nothing to cache"));
@@ -351,6 +398,10 @@ void parse_deformable(const TomlTable& t, const std::filesystem::path& scene_dir
 #undef NUMEN_DEFORMABLE_COMMON_KEYS
 
 }  // namespace
+
+double net_surface_offset_bound(double half_edge, double organ_size) {
+  return std::min(half_edge, kMaxFineOffsetShare * organ_size);
+}
 
 void parse_deformables(const TomlTable& root, const std::filesystem::path& scene_dir,
                        core::Model& model, std::vector<NetTriangles>& triangles,

@@ -30,11 +30,26 @@ namespace numen::sim {
 /// sizes, a mesh with holes and a failed simplification are errors located at the key that asked
 /// for the net's size (`file` for the default). Appends to `warnings` a mesh whose surface
 /// intersects itself (core::find_self_intersections(), at `file`, or at `mesh` for a built-in
-/// one; docs/meshes.md, "Self-intersections"), a simplified net that does too, and a fine surface
-/// standing off its net by more than half the net's mean edge length.
+/// one; docs/meshes.md, "Self-intersections"), a simplified net that does too, a fine surface
+/// standing off its net by more than net_surface_offset_bound(), and a slow simplification
+/// without a cache (mesh_cache.hpp, slow_net_simplification_hint()). A `cache` path that names
+/// anything but nothing or a numen net cache fails at `cache` (mesh_cache.hpp,
+/// simplify_net_cached()).
 void parse_deformables(const TomlTable& root, const std::filesystem::path& scene_dir,
                        core::Model& model, std::vector<NetTriangles>& triangles,
                        std::vector<NetLoad>& loads, std::vector<std::string>& warnings);
+
+/// Largest distance from an organ's fine surface to the net simplified from it, as a share of
+/// the organ's size (the longest side of the fine mesh's bounding box), before a load warning
+/// (docs/organs.md, "A fine surface on a coarser net"): 2 %, 1.4 mm on the 70 mm shipped
+/// ellipsoid, where a 1024-node net stands 0.07–0.1 mm off.
+inline constexpr double kMaxFineOffsetShare = 0.02;
+
+/// The distance (m) a fine surface may stand off its net before the load warns: the smaller of
+/// `half_edge` (half the net's mean edge: within it the node spheres, radius edge / √3, reach the
+/// fine surface) and kMaxFineOffsetShare times `organ_size` (m; a bound that does not grow as
+/// the net coarsens).
+double net_surface_offset_bound(double half_edge, double organ_size);
 
 /// Load-time check of the deformable organs (nets on an anchored body, core::BodyModel::anchored)
 /// against the bodies that move (the tool), at their starting poses: appends one warning per

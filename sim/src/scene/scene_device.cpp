@@ -515,14 +515,19 @@ void parse_igtl(const TomlTable& dev, Scene& scene, const hal::DeviceConfig& cfg
 
 namespace {
 
+void check_cob_ids_apart(const TomlTable& tb, const hal::DeviceConfig& b,
+                         const hal::DeviceConfig& a, bool given_only);
+
 /// One device table `dev` (`[device]`, or an entry of `[[device]]`) into `out` (its trajectory
 /// already set) and `feedback` (its Eq. 8 gains): kinematics, axes, CANopen nodes and DCFs,
 /// feedback, hand, plant, passivity.
 /// `first`: device 0, which alone may hold the held body (`attach`, into
 /// scene.model.initial_held_body), be an admittance device or read an OpenIGTLink tracker
 /// (into scene.admittance and scene.igtl; its hand is scene.hand).
+/// `earlier`: the devices before it on the bus (its COB-IDs must not be theirs).
 void parse_device_table(const TomlTable& dev, Scene& scene, SceneDevice& out,
-                        core::FeedbackGains& feedback, bool first) {
+                        core::FeedbackGains& feedback, bool first,
+                        const std::vector<const hal::DeviceConfig*>& earlier) {
   dev.allow_only({"kind", "name", "attach", "max_sample_age", "jump_tolerance_counts",
                   "velocity_cutoff", "velocity_estimator", "foaw_max_window", "foaw_noise_counts",
                   "soft_start", "first_node_id", "tool_offset", "trocar", "tracker", "phantom",
@@ -637,6 +642,9 @@ void parse_device_table(const TomlTable& dev, Scene& scene, SceneDevice& out,
       cfg.tracker.base.orientation = tk->quaternion_or("orientation", Quat::Identity());
     }
   }
+  // A COB-ID of an earlier device's, at this device's key: before the DCFs are checked against
+  // the axes (where it would read as a DCF mismatch at the DCF's line).
+  for (const hal::DeviceConfig* a : earlier) check_cob_ids_apart(dev, cfg, *a, true);
   parse_canopen(dev, cfg);
   try {
     hal::validate(cfg);
@@ -674,6 +682,33 @@ void fail_at_node(const TomlTable& d, std::size_t axis, const std::string& messa
   d.fail_at(nullptr, d.path(), message);
 }
 
+/// Device `b` (its table `tb`) against an earlier device `a` on the same bus: each axis's encoder
+/// and drive COB-ID belongs to one device. Throws InputError at b's axis key naming a's axis.
+/// `given_only`: only the COB-IDs given in b's [[device.axis]] tables (a default one follows
+/// the node id, whose clash check_devices_apart() reports as such).
+void check_cob_ids_apart(const TomlTable& tb, const hal::DeviceConfig& b,
+                         const hal::DeviceConfig& a, bool given_only) {
+  const std::vector<TomlTable> axes = tb.tables("axis");
+  for (std::size_t y = 0; y < b.axes.size(); ++y)
+    for (const std::uint32_t cob : {b.axes[y].encoder_cob_id, b.axes[y].drive_cob_id}) {
+      if (cob == 0) continue;
+      const char* key = cob == b.axes[y].encoder_cob_id ? "encoder_cob_id" : "drive_cob_id";
+      const bool given = y < axes.size() && axes[y].has(key);
+      if (given_only && !given) continue;
+      for (std::size_t x = 0; x < a.axes.size(); ++x)
+        if (cob == a.axes[x].encoder_cob_id || cob == a.axes[x].drive_cob_id) {
+          char buf[16];
+          std::snprintf(buf, sizeof buf, "0x%03X", cob);
+          const std::string m = std::string("COB-ID ") + buf + " of axis \"" + b.axes[y].name +
+                                "\" of device \"" + b.name + "\" is device \"" + a.name +
+                                "\"'s too (axis \"" + a.axes[x].name +
+                                "\"): the devices share one bus, one COB-ID per frame";
+          if (given) axes[y].fail(key, m);
+          fail_at_node(tb, y, m);
+        }
+    }
+}
+
 /// The devices of `tables` (one per device, `configs` in the same order) share one bus: each
 /// name, CANopen node id and COB-ID belongs to one device. Throws InputError at the later
 /// device's key (name, node id, COB-ID) naming the earlier device.
@@ -698,23 +733,7 @@ void check_devices_apart(const std::vector<TomlTable>& tables,
                              a.name + "\"'s too (axis \"" + a.axes[x].name +
                              "\"): the devices share one bus, one node id per node (set first_node_id "
                              "past the other device's nodes)");
-      for (std::size_t y = 0; y < b.axes.size(); ++y)
-        for (const std::uint32_t cob : {b.axes[y].encoder_cob_id, b.axes[y].drive_cob_id}) {
-          if (cob == 0) continue;
-          for (std::size_t x = 0; x < a.axes.size(); ++x)
-            if (cob == a.axes[x].encoder_cob_id || cob == a.axes[x].drive_cob_id) {
-              char buf[16];
-              std::snprintf(buf, sizeof buf, "0x%03X", cob);
-              const std::string m = std::string("COB-ID ") + buf + " of axis \"" + b.axes[y].name +
-                                    "\" of device \"" + b.name + "\" is device \"" + a.name +
-                                    "\"'s too (axis \"" + a.axes[x].name +
-                                    "\"): the devices share one bus, one COB-ID per frame";
-              const std::vector<TomlTable> axes = tables[j].tables("axis");
-              const char* key = cob == b.axes[y].encoder_cob_id ? "encoder_cob_id" : "drive_cob_id";
-              if (y < axes.size() && axes[y].has(key)) axes[y].fail(key, m);
-              fail_at_node(tables[j], y, m);
-            }
-        }
+      check_cob_ids_apart(tables[j], b, a, false);
     }
   }
 }
@@ -733,8 +752,15 @@ void parse_device(const TomlTable& root, Scene& scene, const TomlTable*& held_bo
       if (!scene.model.bodies[static_cast<std::size_t>(b)].anchored)
         scene.model.initial_held_body = b;
     held_body_table = nullptr;
+    // The advice is what loads: [device.feedback] alone is refused (device.kind: missing).
+    const int held = scene.model.initial_held_body;
+    const std::string body =
+        held >= 0 ? scene.model.bodies[static_cast<std::size_t>(held)].name : std::string("BODY");
     scene.warnings.push_back(kNoFeedbackNonHaptic + std::string(" (the scene has no [device]): "
-                             "feedback_wrench stays 0; a [device.feedback] table gives it"));
+                             "feedback_wrench stays 0; a [device] table with kind = \"pose-tracker\" "
+                             "and attach = \"") + body + "\", and under it a [device.feedback] "
+                             "table with stiffness (N/m) and damping (N·s/m), give it (as "
+                             "sim/scenes/probe.toml)");
     return;
   }
   constexpr auto kMax = static_cast<std::size_t>(platform::kMaxLoopDevices);
@@ -743,10 +769,13 @@ void parse_device(const TomlTable& root, Scene& scene, const TomlTable*& held_bo
                        "a scene drives at most " + std::to_string(kMax) + " devices (one control loop)");
   std::vector<SceneDevice> parsed(devs.size());
   scene.model.extra_feedback.assign(devs.size() - 1, core::FeedbackGains{});
+  std::vector<const hal::DeviceConfig*> earlier;
   for (std::size_t i = 0; i < devs.size(); ++i) {
     parsed[i].trajectory = std::move(trajectories[i]);
     parse_device_table(devs[i], scene, parsed[i],
-                       i == 0 ? scene.model.feedback : scene.model.extra_feedback[i - 1], i == 0);
+                       i == 0 ? scene.model.feedback : scene.model.extra_feedback[i - 1], i == 0,
+                       earlier);
+    earlier.push_back(&parsed[i].device);
   }
   std::vector<const hal::DeviceConfig*> configs;
   for (const SceneDevice& d : parsed) configs.push_back(&d.device);

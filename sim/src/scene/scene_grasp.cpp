@@ -6,6 +6,7 @@
 #include <cmath>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "numen/core/grasp.hpp"
 #include "numen/core/model.hpp"
@@ -82,11 +83,26 @@ void parse_grasps(const TomlTable& root, Scene& scene) {
     g.max_force = t.number_in("max_force", 0.0, kInf, g.max_force);
     g.tissue = t.boolean_or("tissue", true);
     if (!(g.max_force > 0.0)) t.fail("max_force", "must be > 0 (N)");
-    // A body the grip cannot hold against gravity: said at load, with the numbers.
+    // A body the grip cannot hold against gravity: said at load, with the numbers. Not the
+    // grasper's own instrument: its jaws and every body joined to them (its tube, its sleeve).
+    std::vector<char> own(m.bodies.size(), 0);
+    own[static_cast<std::size_t>(g.jaws[0])] = own[static_cast<std::size_t>(g.jaws[1])] = 1;
+    for (bool grew = true; grew;) {
+      grew = false;
+      for (const core::JointModel& j : m.joints) {
+        if (j.parent < 0) continue;
+        char& p = own[static_cast<std::size_t>(j.parent)];
+        char& c = own[static_cast<std::size_t>(j.child)];
+        if (p != c) {
+          p = c = 1;
+          grew = true;
+        }
+      }
+    }
     const double gravity = m.gravity.norm();
-    for (const core::BodyModel& b : m.bodies) {
-      if (b.anchored || b.sphere_count == 0 || &b == &m.bodies[static_cast<std::size_t>(g.jaws[0])] ||
-          &b == &m.bodies[static_cast<std::size_t>(g.jaws[1])] || !(b.mass * gravity > g.max_force))
+    for (std::size_t i = 0; i < m.bodies.size(); ++i) {
+      const core::BodyModel& b = m.bodies[i];
+      if (b.anchored || b.sphere_count == 0 || own[i] || !(b.mass * gravity > g.max_force))
         continue;
       std::ostringstream os;
       os << "grasp \"" << g.name << "\": body \"" << b.name << "\" weighs " << b.mass * gravity

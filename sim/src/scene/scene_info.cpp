@@ -203,6 +203,19 @@ std::string format_scene_info(const SceneInfo& i) {
      << " joints (" << i.joint_rows << " rows), " << i.nets << " nets (" << i.nodes << " nodes, "
      << i.net_springs << " springs), " << i.obstacles << " obstacles (" << i.static_spheres
      << " static spheres), " << i.materials << " materials\n";
+  if (i.load_wall_s >= 0.0) {
+    int simplified = 0, cached = 0;
+    for (const MeshLine& l : i.meshes) {
+      simplified += l.simplified ? 1 : 0;
+      cached += l.simplified && l.cache_loaded ? 1 : 0;
+    }
+    os << "  load: " << std::fixed << std::setprecision(3) << i.load_wall_s << std::defaultfloat
+       << " s wall clock";
+    if (simplified > 0)
+      os << "; organ nets simplified from a mesh file: " << simplified << ", of which " << cached
+         << " read from " << (cached == 1 ? "its" : "their") << " cache file";
+    os << "\n";
+  }
   os << "  stages of step(), in order:\n";
   int k = 1;
   for (const StageLine& s : i.stages) {
@@ -364,6 +377,15 @@ std::string format_scene_info_json(const SceneInfo& i) {
                     {"abbott_okamura_bound", r.abbott_okamura_bound},
                     {"passive", r.passes}});
   j["passivity_lint"] = std::move(lint);
+  if (i.load_wall_s >= 0.0) {
+    int simplified = 0, cached = 0;
+    for (const MeshLine& l : i.meshes) {
+      simplified += l.simplified ? 1 : 0;
+      cached += l.simplified && l.cache_loaded ? 1 : 0;
+    }
+    j["load"] = {
+        {"wall_s", i.load_wall_s}, {"nets_simplified", simplified}, {"nets_from_cache", cached}};
+  }
   // A scene's file name may hold bytes that are not UTF-8: replaced by U+FFFD instead of throwing.
   return j.dump(-1, ' ', false, nlohmann::ordered_json::error_handler_t::replace);
 }

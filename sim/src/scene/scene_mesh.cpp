@@ -115,10 +115,15 @@ std::filesystem::path scene_cache_path(const TomlTable& t, const std::filesystem
   if (const auto* on = n->as_boolean()) {
     if (on->get()) {
       const std::filesystem::path dir = default_mesh_cache_dir();
+      std::error_code ec;
       if (dir.empty())
         warnings.push_back(mesh_warning(t, "cache", what,
                                         "no cache folder ($XDG_CACHE_HOME and $HOME are unset): " +
                                             std::string(without)));
+      else if (std::filesystem::create_directories(dir, ec); ec)  // numen's own folder only
+        warnings.push_back(mesh_warning(t, "cache", what,
+                                        "cannot make the cache folder " + dir.string() + " (" +
+                                            ec.message() + "): " + std::string(without)));
       else
         cache = dir / default_name();
     }
@@ -160,6 +165,7 @@ int add_mesh_shape(const TomlTable& t, const std::filesystem::path& scene_dir, c
   const std::string err =
       cache.empty() ? core::build_mesh_shape(file.mesh, shape, options)
                     : build_mesh_shape_cached(file.mesh, options, cache, shape, outcome);
+  if (outcome.cache_refused) t.fail("cache", err);
   if (!err.empty()) t.fail("file", file.path + ": " + err);
   if (!outcome.note.empty()) warnings.push_back(mesh_warning(t, "cache", file.path, outcome.note));
   const double seconds = study::thread_cpu_seconds() - t0;

@@ -76,9 +76,10 @@ inline constexpr double kMeshBandMargin = 0.001;
 inline constexpr double kSlowMeshBuildSeconds = 1.0;
 
 /// The cache file that `t`'s optional `cache` key names for mesh file `what` (its path): true,
-/// `default_name()` in default_mesh_cache_dir() (no cache, with a warning at `cache` saying
-/// `without` happens instead, when that folder is unknown); a string, that file (relative to
-/// `scene_dir`); false or absent, none (an empty path). Anything else fails at `cache`.
+/// `default_name()` in default_mesh_cache_dir(), that folder made when missing (no cache, with a
+/// warning at `cache` saying `without` happens instead, when that folder is unknown or cannot be
+/// made); a string, that file (relative to `scene_dir`; no folder is made for it); false or
+/// absent, none (an empty path). Anything else fails at `cache`.
 std::filesystem::path scene_cache_path(const TomlTable& t, const std::filesystem::path& scene_dir,
                                        const std::string& what,
                                        const std::function<std::string()>& default_name,
@@ -93,7 +94,9 @@ std::filesystem::path scene_cache_path(const TomlTable& t, const std::filesystem
 /// memory). `cache` (optional): true reads and writes the built shape in
 /// default_mesh_cache_dir(), a string in that file (relative to `scene_dir`), false or absent
 /// builds it at every load (mesh_cache.hpp); a stale or damaged cache file, or one that cannot be
-/// written, is a warning at `cache` and the shape is built. Load time only.
+/// written, is a warning at `cache` and the shape is built; a path that names anything but
+/// nothing or a numen mesh-shape cache (build_mesh_shape_cached()) fails at `cache`, before the
+/// build. Load time only.
 int add_mesh_shape(const TomlTable& t, const std::filesystem::path& scene_dir, core::Model& m,
                    std::vector<std::string>& warnings);
 

@@ -7,11 +7,16 @@
 #include "numen/hal/igtl/igtl_tracker_bus.hpp"
 
 #include <gtest/gtest.h>
+#include <time.h>
 
 #include <algorithm>
 #include <chrono>
+#include <cstdlib>
 #include <initializer_list>
+#include <limits>
+#include <string>
 #include <thread>
+#include <vector>
 
 #include "alloc_counter.hpp"
 #include "igtl_test_server.hpp"
@@ -398,4 +403,145 @@ TEST(IgtlTrackerBus, ARegistrationNeverSentIsSaidAfterABoundedWait) {
   } catch (const hal::IgtlRegistrationMissing& e) {
     EXPECT_NE(std::string(e.what()).find(": never connected"), std::string::npos) << e.what();
   }
+}
+
+// Issue 66: a registration TRANSFORM with a NaN was said as "no TRANSFORM ... within 1 s",
+// though one arrived (and was refused, as the tool's poses are). It is said as refused, with
+// the fault and where it was in the stream.
+TEST(IgtlTrackerBus, ARegistrationThatArrivedAndWasRefusedIsSaidAsRefused) {
+  namespace hal = numen::hal;
+  numen::test::IgtlTestServer server(
+      {hal::pack_igtl_transform(
+           "TrackerToScene", 4'000'000'000, numen::core::Mat3::Identity(),
+           numen::core::Vec3(std::numeric_limits<double>::quiet_NaN(), 0.0, 0.0)),
+       hal::pack_igtl_transform("StylusToTracker", 5'000'000'000, numen::core::Mat3::Identity(),
+                                numen::core::Vec3::Zero())});
+  const hal::DeviceConfig config = igtl_bus_test_config();
+  hal::IgtlTrackerSettings s = igtl_bus_test_settings(server.port(), false);
+  s.client.registration_name = "TrackerToScene";
+  s.registration_wait_ns = 300'000'000;
+  try {
+    hal::IgtlTrackerBus bus(config, hal::make_kinematics(config), s);
+    ADD_FAILURE() << "made without its registration";
+  } catch (const hal::IgtlRegistrationMissing& e) {
+    const std::string what = e.what();
+    EXPECT_NE(
+        what.find("a TRANSFORM 'TrackerToScene' (the registration) from 127.0.0.1:" +
+                  std::to_string(server.port()) +
+                  " arrived and was refused: non-finite value (non-finite value: "
+                  "TRANSFORM 'TrackerToScene', message 0 at stream byte 0, field at byte 94)"),
+        std::string::npos)
+        << what;
+    EXPECT_NE(what.find("none accepted within 0.3 s"), std::string::npos) << what;
+    EXPECT_EQ(what.find("no TRANSFORM"), std::string::npos) << what;
+  }
+}
+
+namespace {
+
+// Poses of "StylusToTracker" at x = 10 k mm, each stamped `stamps[k]` (ns).
+std::vector<std::string> igtl_bus_test_stamped(const std::vector<std::int64_t>& stamps) {
+  std::vector<std::string> poses;
+  for (std::size_t k = 0; k < stamps.size(); ++k)
+    poses.push_back(numen::hal::pack_igtl_transform(
+        "StylusToTracker", stamps[k], numen::core::Mat3::Identity(),
+        numen::core::Vec3(10.0 * static_cast<double>(k), 0.0, -800.0)));
+  return poses;
+}
+
+}  // namespace
+
+// Issue 66: following the tracker, one pose stamped 10^6 s ahead was "due later" for the rest of
+// the run and held every pose behind it (300 of 3 000 used); backwards and zero stamps were
+// taken at once, as due, and the stream ran out early ("the tracker's stream ended 1699 periods
+// before the run did"). Each is refused and counted, and the stream goes on with the next pose.
+TEST(IgtlTrackerBus, FollowingTheTrackerRefusesBadStampsAndGoesOn) {
+  namespace hal = numen::hal;
+  const std::int64_t t0 = 1'700'000'000'000'000'000;
+  std::vector<std::int64_t> stamps;
+  for (int k = 0; k < 10; ++k) stamps.push_back(t0 + k * 1'000'000);
+  stamps[3] = t0 + 1'000'000'000'000'000;  // 10^6 s ahead
+  stamps[5] = 0;                           // unstamped
+  stamps[7] = t0 + 1'000'000;              // before pose 6's
+  numen::test::IgtlTestServer server(igtl_bus_test_stamped(stamps), true);
+  const hal::DeviceConfig config = igtl_bus_test_config();
+  hal::IgtlTrackerSettings s = igtl_bus_test_settings(server.port(), true);
+  s.registration = numen::core::Pose{};
+  s.calibration = numen::core::Pose{};
+  hal::IgtlTrackerBus bus(config, hal::make_kinematics(config), s);
+  for (int k = 0; k < 10; ++k) {
+    bus.set_time_ns(k * 1'000'000);
+    bus.write(hal::make_sync(k * 1'000'000));
+    // Each period has its own pose, or the last good one before it.
+    const int want = k == 3 ? 2 : k == 5 ? 4 : k == 7 ? 6 : k;
+    EXPECT_NEAR(igtl_bus_test_tip(bus, config).position.x(), 0.01 * want, 2e-6) << "period " << k;
+  }
+  const hal::IgtlBusCounters& c = bus.tracker_counters();
+  EXPECT_EQ(c.poses_taken, 7u);
+  EXPECT_EQ(c.stamps_ahead, 1u);
+  EXPECT_EQ(c.stamps_unstamped, 1u);
+  EXPECT_EQ(c.stamps_backwards, 1u);
+  EXPECT_EQ(c.stamp_resyncs, 0u);
+  EXPECT_EQ(c.wait_timeouts, 0u);
+}
+
+// A clock that jumped (a tracker restarted: its stamps go on 100 s earlier) is not a bad stamp:
+// after resync_after (3) poses in a row going on from one another, the stream is re-based on the
+// third, taken at that SYNC, and the following poses at their stamps from there.
+TEST(IgtlTrackerBus, AClockThatJumpedIsResynchronisedAfterThreePoses) {
+  namespace hal = numen::hal;
+  const std::int64_t t0 = 1'700'000'000'000'000'000;
+  std::vector<std::int64_t> stamps;
+  for (int k = 0; k < 10; ++k)
+    stamps.push_back(t0 + k * 1'000'000 - (k >= 5 ? 100'000'000'000 : 0));
+  numen::test::IgtlTestServer server(igtl_bus_test_stamped(stamps), true);
+  const hal::DeviceConfig config = igtl_bus_test_config();
+  hal::IgtlTrackerSettings s = igtl_bus_test_settings(server.port(), true);
+  s.registration = numen::core::Pose{};
+  s.calibration = numen::core::Pose{};
+  hal::IgtlTrackerBus bus(config, hal::make_kinematics(config), s);
+  std::vector<double> x;
+  for (int k = 0; k < 9; ++k) {
+    bus.set_time_ns(k * 1'000'000);
+    bus.write(hal::make_sync(k * 1'000'000));
+    x.push_back(igtl_bus_test_tip(bus, config).position.x());
+  }
+  // Periods 0-3: poses 0-3; period 4: pose 4, then 5 and 6 refused (looked at as they come,
+  // due or not) and 7 re-based, due at that SYNC, taken; then 8 and 9, one a period.
+  for (int k = 0; k < 4; ++k) EXPECT_NEAR(x[static_cast<std::size_t>(k)], 0.01 * k, 2e-6) << k;
+  EXPECT_NEAR(x[4], 0.07, 2e-6);
+  EXPECT_NEAR(x[5], 0.08, 2e-6);
+  EXPECT_NEAR(x[6], 0.09, 2e-6);
+  EXPECT_NEAR(x[8], 0.09, 2e-6);  // the stream over: the last pose holds
+  const hal::IgtlBusCounters& c = bus.tracker_counters();
+  EXPECT_EQ(c.stamps_backwards, 2u);
+  EXPECT_EQ(c.stamp_resyncs, 1u);
+  EXPECT_EQ(c.poses_taken, 8u);
+}
+
+// Paced, a pose stamped 10^6 s ahead made the sender's clock offset 10^6 s off: every later pose
+// was placed 10^6 s in the past, the pose time held at the bad pose's (a stamp never goes back)
+// and the samples went stale. It is refused and counted; the pose time is the good stamps'.
+TEST(IgtlTrackerBus, PacedAStampFarAheadIsRefusedAndDoesNotMoveTheClockOffset) {
+  namespace hal = numen::hal;
+  timespec ts{};
+  clock_gettime(CLOCK_REALTIME, &ts);
+  const std::int64_t now = static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
+  std::vector<std::int64_t> stamps = {now, now + 1'000'000, now + 1'000'000'000'000'000,
+                                      now + 2'000'000, now + 3'000'000};
+  numen::test::IgtlTestServer server(igtl_bus_test_stamped(stamps));
+  const hal::DeviceConfig config = igtl_bus_test_config();
+  hal::IgtlTrackerSettings s = igtl_bus_test_settings(server.port(), false);
+  hal::IgtlTrackerBus bus(config, hal::make_kinematics(config), s);
+  for (int i = 0; i < 200 && bus.client().counters().tool_poses[0] < 5; ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  ASSERT_EQ(bus.client().counters().tool_poses[0], 5u);
+  bus.set_time_ns(0);
+  bus.write(hal::make_sync(0));
+  hal::CanFrame f;
+  ASSERT_EQ(bus.read(f), hal::IoStatus::kOk);
+  // The newest pose's bus time: within a second of the SYNC (not 10^6 s before it).
+  EXPECT_LT(std::abs(f.timestamp_ns), 1'000'000'000) << f.timestamp_ns;
+  EXPECT_EQ(bus.tracker_counters().stamps_ahead, 1u);
+  EXPECT_EQ(bus.tracker_counters().poses_taken, 4u);
 }

@@ -2,8 +2,19 @@
 # encoder value of 167 m (out of range): the safe state latches (zero torque, drives disabled).
 # `kill -USR1` then asks numen run to re-arm (fault resets, drives enabled again once no cause
 # is present). Pass: torque was commanded before the bad value, none between it and the re-arm
-# request (for >= 1 s), the request was accepted, and torque is commanded again for >= 0.5 s
-# after it.
+# request (for >= 1 s), every request was accepted, and torque is commanded again for >= 0.5 s
+# after the last one.
+#
+# A re-arm clears what latched; it does not hold off what comes after it (docs/safety.md,
+# "Re-arm"): a guest the host stalls stops the device's frames, and their encoder timeout latches
+# the safe state again, rightly. Such a latch after a re-arm that took (torque came back, then 1 s
+# without it) is counted as what it is — a timing fault, shown by >= 3 periods in a row without a
+# device frame after that re-arm — and the operator's re-arm is repeated (at most REARM_TRIES
+# requests) until a quiet interval gives the 0.5 s of torque. A latch after a re-arm without such
+# a silence fails (the re-arm did not clear it, or something else latched); every re-arm
+# re-latched by timing faults, and none left 0.5 s of torque, is inconclusive. (Issue 66: under
+# load, 4 of 5 attempts of the former single re-arm re-latched on an encoder timeout and the
+# scenario failed.)
 #
 # Each step waits for the run's own trace, never for a fixed wall-clock time: a real bus
 # streams its trace while it runs (to /tmp/.rearm.csv.XXXXXX, renamed to /tmp/rearm.csv when the
@@ -20,7 +31,8 @@ period_us=${HIL_PAIR_PERIOD_US:-1000}
 pair_scene "$period_us"
 TORQUE_WAIT_S=30    # the start-up to torque: 0.5-1.4 s in the TCG guest
 STOP_WAIT_S=20      # the latch, then 1 s of periods without torque
-RETORQUE_WAIT_S=20  # the re-arm's start-up, then 0.5 s of periods with torque
+RETORQUE_WAIT_S=20  # per re-arm: its start-up, then 0.5 s of periods with torque (or a re-latch)
+REARM_TRIES=5       # re-arm requests at most (the first, then one per timing re-latch)
 stopped_periods=$((1000000 / period_us))  # 1 s
 again_periods=$((500000 / period_us))     # 0.5 s
 # Each poll reads the trace's last 1.5 s of rows only (tail -n): a poll that comes later than
@@ -88,29 +100,61 @@ torque_stopped() {  # 1 s of periods written after the last one with torque
   [ "$last_torque" -gt 0 ] && [ $(($1 - last_torque)) -ge "$stopped_periods" ]
 }
 again=0
-torque_again() {  # 0.5 s of periods with torque after the request
+outcome=none
+torque_again_or_relatched() {  # after a request: 0.5 s of periods with torque, or a re-latch
   again=$((again + $3))
-  [ "$again" -ge "$again_periods" ]
+  [ "$2" -gt 0 ] && last_torque=$2
+  if [ "$again" -ge "$again_periods" ]; then
+    outcome=torque
+    return 0
+  fi
+  # Torque came back after the request, then 1 s of periods without it: latched again.
+  if [ "$again" -gt 0 ] && [ $(($1 - last_torque)) -ge "$stopped_periods" ]; then
+    outcome=relatched
+    return 0
+  fi
+  return 1
+}
+# silent_run FROM TO: the most periods in a row without a device frame (column 4, frames_read)
+# in periods (FROM, TO] of the final trace (TO empty: to the end). 3 are an encoder timeout (the
+# device's frames stalled with the guest), which latches the safe state.
+silent_run() {
+  awk -F, -v a="$1" -v b="${2:-}" 'NR > 1 && $1 > a && (b == "" || $1 <= b) {
+    r = $4 == 0 ? r + 1 : 0; if (r > m) m = r } END { print m + 0 }' /tmp/rearm.csv
 }
 
 # 1. Torque flowing, then the bad value.
-t_stop="-" t_again="-"
+t_stop="-" t_again="-" sent=0 sent_at=""
 if until_trace "$TORQUE_WAIT_S" torque_seen; then
   t_torque=$waited
   cansend vcan0 183#FFFFFF00
   # 2. The safe state: 1 s of periods without torque.
   until_trace "$STOP_WAIT_S" torque_stopped
   t_stop=$waited
-  kill -USR1 "$run" 2>/dev/null
-  # 3. Torque again for 0.5 s of periods after the request (the rows polled from here on),
-  # then the end of the run.
-  until_trace "$RETORQUE_WAIT_S" torque_again
-  t_again=$waited
+  # 3. The re-arm: torque again for 0.5 s of periods after the request (the rows polled from
+  # here on); a re-latch after torque came back (a stalled guest's encoder timeout, checked
+  # below) is re-armed again, at most REARM_TRIES requests. Each request's period is the last
+  # one written when it was sent (`polled`): the loop takes it at a later period, and between
+  # the two no torque flows (the safe state is latched).
+  t_again=""
+  while :; do
+    sent_at="$sent_at $polled"
+    sent=$((sent + 1))
+    kill -USR1 "$run" 2>/dev/null
+    again=0
+    outcome=none
+    until_trace "$RETORQUE_WAIT_S" torque_again_or_relatched
+    t_again="$t_again${t_again:+, }$waited"
+    [ "$outcome" = relatched ] && [ "$sent" -lt "$REARM_TRIES" ] && kill -0 "$run" 2>/dev/null ||
+      break
+  done
 else
   t_torque=$waited
   # No torque to act on: the bad value and the request all the same (the checks below count
   # them), no waiting for what cannot come.
   cansend vcan0 183#FFFFFF00
+  sent_at="$sent_at $polled"
+  sent=$((sent + 1))
   kill -USR1 "$run" 2>/dev/null
 fi
 kill -TERM "$run" 2>/dev/null
@@ -127,14 +171,30 @@ accepted=$(grep -o 're-arm: [0-9]* request(s), [0-9]*' /tmp/run.txt | sed 's/.* 
 at=$(field /tmp/run.txt 'accepted, first before period ')
 before=$(awk -F, -v a="$at" 'NR > 1 && $1 < a && $6 == 1 { n++ } END { print n + 0 }' /tmp/rearm.csv)
 last_before=$(awk -F, -v a="$at" 'NR > 1 && $1 < a && $6 == 1 { t = $1 } END { print t + 0 }' /tmp/rearm.csv)
-after=$(awk -F, -v a="$at" 'NR > 1 && $1 >= a && $6 == 1 { n++ } END { print n + 0 }' /tmp/rearm.csv)
+# The re-arm requests' periods as sent (the first one: the loop's own, from the summary).
+# shellcheck disable=SC2086
+set -- $sent_at
+shift
+req_periods="$at $*"
+last_req=$(echo "$req_periods" | awk '{ print $NF }')
+after=$(awk -F, -v a="$last_req" 'NR > 1 && $1 >= a && $6 == 1 { n++ } END { print n + 0 }' /tmp/rearm.csv)
 first_after=$(awk -F, -v a="$at" 'NR > 1 && $1 >= a && $6 == 1 { print $1; exit }' /tmp/rearm.csv)
-# The most periods in a row without a device frame (column 4, frames_read) from the re-arm on:
-# 3 are an encoder timeout (the device's frames stalled with the guest), which latches the safe
-# state again.
-silent=$(awk -F, -v a="$at" 'NR > 1 && $1 >= a { r = $4 == 0 ? r + 1 : 0; if (r > m) m = r } END { print m + 0 }' /tmp/rearm.csv)
+# Each re-latch (between one request and the next): its longest run of periods without a device
+# frame; and after the last request.
+relatches=$(($(echo "$req_periods" | wc -w) - 1))
+silences=""
+untimed=0
+# shellcheck disable=SC2086
+set -- $req_periods
+while [ $# -ge 2 ]; do
+  n=$(silent_run "$1" "$2")
+  silences="$silences${silences:+, }$n"
+  [ "$n" -ge 3 ] || untimed=$((untimed + 1))
+  shift
+done
+silent=$(silent_run "$last_req")
 first=$(first_fault /tmp/run.txt)
-detail="period $period_us us; values out of range $range, $first; torque in $before periods before the re-arm (last at period $last_before); re-arm requests $requests, accepted $accepted, taken before period $at; torque again from period $first_after, in $after periods; at most $silent periods in a row without a device frame after the re-arm; waited ${t_torque} s for torque, ${t_stop} s for the stop, ${t_again} s for torque again"
+detail="period $period_us us; values out of range $range, $first; torque in $before periods before the re-arm (last at period $last_before); re-arm requests $requests (sent $sent), accepted $accepted, the first taken before period $at; re-latched after a re-arm $relatches time(s) (periods in a row without a device frame before each next request: ${silences:-none}); torque again from period $first_after, in $after periods after the last request; at most $silent periods in a row without a device frame after it; waited ${t_torque} s for torque, ${t_stop} s for the stop, ${t_again} s for torque again"
 [ "$range" -ge 1 ] || fail "the out-of-range value was not counted: $detail"
 [ "$before" -gt 0 ] || fail_premise "$first" "no torque before the bad value: $detail"
 # The safe state latched for the bad value, not for a stalled guest before it came.
@@ -142,10 +202,14 @@ detail="period $period_us us; values out of range $range, $first; torque in $bef
   fail_premise "$first" "the first safe stop was not the out-of-range value: $detail"
 [ -n "$at" ] && [ $((at - last_before)) -ge "$stopped_periods" ] ||
   fail_timing /tmp/run.txt "torque did not stop for the bad value: $detail"
-[ "$requests" = 1 ] && [ "$accepted" = 1 ] || fail_timing /tmp/run.txt "the re-arm was not accepted: $detail"
+[ "$requests" = "$sent" ] && [ "$accepted" = "$sent" ] ||
+  fail_timing /tmp/run.txt "a re-arm request was not taken or not accepted: $detail"
+# A re-latch after a re-arm with no stall of the device's frames: not a timing fault.
+[ "$untimed" -eq 0 ] ||
+  fail_timing /tmp/run.txt "latched again after a re-arm without a stall of the device's frames: $detail"
 if [ "$after" -lt "$again_periods" ]; then
   [ "$silent" -lt 3 ] ||
-    inconclusive "no torque after the re-arm, the device's frames missing for $silent periods in a row after it (an encoder timeout of a stalled guest latches again): $detail"
+    inconclusive "no 0.5 s of torque after $sent re-arm(s), each re-latched by an encoder timeout of a stalled guest (the device's frames missing for $silent periods in a row after the last): $detail"
   fail_timing /tmp/run.txt "no torque after the re-arm: $detail"
 fi
 pass "$detail"

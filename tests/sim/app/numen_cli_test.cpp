@@ -869,6 +869,95 @@ TEST(NumenCli, OptionsARunWouldNotApplyAreInputRejected) {
   EXPECT_EQ(v.out.find("open http://"), std::string::npos) << v.out;
 }
 
+// Issue 66: bounds a run had not. `--timer-slack 1000000000` was accepted (a paced run woke 60
+// times in 60 s), `--speed 1e-9` too (the 0.05 s run would take 5e7 s), `--rt-priority 80`
+// without --realtime set SCHED_FIFO on an offline loop that never sleeps, and `--bus
+// igtl:127.0.0.1:19098:5` failed only at run time. Each is refused before the run, naming it.
+TEST(NumenCli, Issue66BoundsAreInputRejectedNamingTheOption) {
+  NUMEN_REQUIRE_ARTICULATION();  // the lattice scene has joints
+  TempDir dir;
+  const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
+      {{"--realtime", "--timer-slack", "1000000000"},
+       "--timer-slack: 1000000000 ns must be at most the period dt = 1000000 ns"},
+      {{"--speed", "1e-9"}, "--speed: 1e-09 paces the 0.05 s run to 5e+07 s of wall time"},
+      {{"--rt-priority", "80"},
+       "--rt-priority: gives a paced run's loop thread SCHED_FIFO; this "
+       "run is offline"},
+      {{"--bus", "igtl:127.0.0.1:19098:5"}, "host '127.0.0.1:19098' is not an IPv6 address"},
+  };
+  for (const auto& [extra, message] : cases) {
+    std::vector<std::string> args = {kNumen, "run", kLattice, "--duration", "0.05"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    const ChildResult r = run_child(args, dir.path(), 30);
+    EXPECT_EQ(r.status, 2) << extra.front() << ": " << r.out << r.err;
+    EXPECT_NE(r.err.find(message), std::string::npos) << extra.front() << ": " << r.err;
+  }
+  // At the bound, accepted (the 2-period run may end before a valid sample: status 6, not 2).
+  const ChildResult ok = run_child({kNumen, "run", kLattice, "--duration", "0.002", "--realtime",
+                                    "--overrun-limit", "0", "--timer-slack", "1000000"},
+                                   dir.path(), 30);
+  EXPECT_NE(ok.status, 2) << ok.out << ok.err;
+  EXPECT_EQ(ok.err.find("--timer-slack"), std::string::npos) << ok.err;
+}
+
+// Issue 66: a paced run took page faults in its first periods unless asked not to
+// (--lock-memory, --prefault-stack were off by default; cyclictest -m locks its memory). A paced
+// run now locks memory, prefaults 256 KiB of the loop thread's stack and holds a 0 us CPU
+// latency request unless told otherwise (--no-lock-memory, --prefault-stack N,
+// --no-cpu-dma-latency); the setup lines say what was asked (applied, or FAILED without the
+// privilege). An offline run does none of it and refuses the options that would only change it.
+TEST(NumenCli, APacedRunLocksMemoryPrefaultsItsStackAndHoldsTheCpuLatency) {
+  NUMEN_REQUIRE_ARTICULATION();
+  TempDir dir;
+  auto setup = [&](const std::vector<std::string>& extra) {
+    // 0.1 s: past the managed start-up (50 periods), a clean run
+    std::vector<std::string> args = {kNumen, "run", kLattice, "--duration", "0.1", "--json"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    const ChildResult r = run_child(args, dir.path(), 60);
+    EXPECT_EQ(r.status, 0) << r.out << r.err;
+    std::vector<std::string> lines;
+    if (r.status == 0)
+      lines = nlohmann::json::parse(r.out).at("realtime_setup").get<std::vector<std::string>>();
+    return lines;
+  };
+  // The line of `step` ("memory lock"), or "" if there is none.
+  auto line = [](const std::vector<std::string>& lines, const std::string& step) {
+    for (const std::string& l : lines)
+      if (l.rfind(step + ": ", 0) == 0) return l;
+    return std::string();
+  };
+  const std::vector<std::string> paced = setup({"--realtime", "--overrun-limit", "0"});
+  EXPECT_EQ(line(paced, "memory lock").find("memory lock: not requested"), std::string::npos)
+      << line(paced, "memory lock");
+  EXPECT_NE(line(paced, "memory lock").find("mlockall(MCL_CURRENT|MCL_FUTURE)"), std::string::npos);
+  EXPECT_EQ(line(paced, "stack prefault").rfind("stack prefault: applied: 262144 bytes touched", 0),
+            0u)
+      << line(paced, "stack prefault");
+  EXPECT_NE(line(paced, "cpu latency"), "");
+  const std::vector<std::string> left =
+      setup({"--realtime", "--overrun-limit", "0", "--no-lock-memory", "--prefault-stack", "0",
+             "--no-cpu-dma-latency"});
+  EXPECT_EQ(line(left, "memory lock"), "memory lock: not requested");
+  EXPECT_EQ(line(left, "stack prefault"), "stack prefault: not requested");
+  EXPECT_EQ(line(left, "cpu latency"), "");
+  EXPECT_TRUE(setup({}).empty());  // offline: nothing asked, nothing reported
+  for (const std::vector<std::string>& extra : {std::vector<std::string>{"--no-lock-memory"},
+                                                {"--no-cpu-dma-latency"},
+                                                {"--cpu-dma-latency", "10"}}) {
+    const std::string& key = extra.front();
+    std::vector<std::string> args = {kNumen, "run", kLattice, "--duration", "0.01"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    const ChildResult r = run_child(args, dir.path(), 30);
+    EXPECT_EQ(r.status, 2) << key << ": " << r.out << r.err;
+    EXPECT_NE(r.err.find(key + ": "), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("this run is offline"), std::string::npos) << r.err;
+  }
+  const ChildResult both = run_child({kNumen, "run", kLattice, "--duration", "0.01", "--realtime",
+                                      "--lock-memory", "--no-lock-memory"},
+                                     dir.path(), 30);
+  EXPECT_EQ(both.status, 2) << both.out << both.err;
+}
+
 // The defects issue: the load's warnings were printed only in the summary, at the end of the run
 // (a 30-minute paced run's user saw them after it). They are on stderr when the scene has loaded,
 // before the run's summary (here on stderr too: --json), and still in the summary.
@@ -899,6 +988,7 @@ TEST(NumenCli, InfoPrintsTheStepTimedAtLoad) {
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_NE(r.out.find("step at load: median "), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("steps, against the 1000 us period ("), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("\n  load: "), std::string::npos) << r.out;  // the load's wall clock
   // --json carries the same figures.
   const ChildResult j = run_child({kNumen, "info", kLattice, "--json"}, dir.path(), 60);
   ASSERT_EQ(j.status, 0) << j.err;
@@ -910,6 +1000,8 @@ TEST(NumenCli, InfoPrintsTheStepTimedAtLoad) {
   EXPECT_EQ(step.at("period_s").get<double>(), 0.001);
   EXPECT_FALSE(step.at("multirate").get<bool>());
   EXPECT_TRUE(info.contains("stages")) << "the rest of the info is kept";
+  EXPECT_GT(info.at("load").at("wall_s").get<double>(), 0.0);
+  EXPECT_EQ(info.at("load").at("nets_simplified").get<int>(), 0);
 }
 
 // An organ from a fine mesh file: numen info says its net was simplified (from how many vertices

@@ -3,9 +3,13 @@
 // prescribed joints' — the frame a caller stepping a scene itself must give core::step.
 #include "numen/sim/device/instrument_targets.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <numbers>
+#include <stdexcept>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -124,4 +128,104 @@ spheres = [[0.0, 0.0, 0.0, 0.01]]
   sim::InstrumentTargets(scene).set(s, data);
   EXPECT_NEAR((data.target.position - s.pose.position).norm(), 0.0, 1e-15);
   EXPECT_NEAR(instrument_targets_angle_deg(data.target.orientation, s.pose.orientation), 0.0, 1e-6);
+}
+
+TEST(InstrumentTargets, TheHeldBodysTargetAndTheTipOffsetAreReadWithoutSettingAnything) {
+  NUMEN_REQUIRE_ARTICULATION();  // the lattice scene has joints
+  const sim::Scene scene = instrument_targets_lattice();
+  const sim::InstrumentTargets targets(scene);
+  const sim::TrajectorySample tip = scene.trajectory.at(1.0);
+  core::Data data = core::make_data(scene.model);
+  const core::Pose before = data.target;
+  core::Pose body, offset;
+  ASSERT_TRUE(targets.held_body_target(tip, data, body));
+  ASSERT_TRUE(targets.tool_in_held_body(tip, data, offset));
+  // Nothing set; then set() gives the held body the same target.
+  EXPECT_TRUE(data.target.position == before.position);
+  targets.set(tip, data);
+  EXPECT_NEAR((data.target.position - body.position).norm(), 0.0, 1e-15);
+  EXPECT_NEAR(instrument_targets_angle_deg(data.target.orientation, body.orientation), 0.0, 1e-6);
+  // The tip in the tube's centre-of-mass frame: 40 mm ahead along its z (the shaft).
+  EXPECT_NEAR((offset.position - core::Vec3(0.0, 0.0, 0.040)).norm(), 0.0, 1e-12)
+      << offset.position.transpose();
+  // With no body held there is no such target.
+  data.held_body = -1;
+  EXPECT_FALSE(targets.held_body_target(tip, data, body));
+}
+
+TEST(InstrumentTargets, OnTheProbeSceneTheToolFrameIsTheProbesCentreOfMass) {
+  sim::SceneOverrides caller;
+  caller.caller_steps = true;
+  const sim::Scene scene =
+      sim::load_scene(std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/probe.toml", caller);
+  const core::Data data = core::make_data(scene.model);
+  sim::TrajectorySample s;
+  s.pose.position = core::Vec3(0.01, 0.0, -0.004);
+  core::Pose offset;
+  ASSERT_TRUE(sim::InstrumentTargets(scene).tool_in_held_body(s, data, offset));
+  EXPECT_NEAR(offset.position.norm(), 0.0, 1e-15);
+  EXPECT_NEAR(instrument_targets_angle_deg(offset.orientation, core::Quat::Identity()), 0.0, 1e-6);
+}
+
+/// The probe scene's feedback while the caller steps it: its target 20 mm beside the probe from
+/// the first step, a 100-step dropout (a NaN target) from step 300 while the hand goes 5 mm
+/// further. Returns |force| per step, raw (Data::feedback_wrench) and through `ramp`.
+static void feedback_ramp_run(sim::FeedbackRamp& ramp, std::vector<double>& raw,
+                              std::vector<double>& ramped) {
+  sim::SceneOverrides caller;
+  caller.caller_steps = true;
+  const sim::Scene scene =
+      sim::load_scene(std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/probe.toml", caller);
+  core::Data data = core::make_data(scene.model);
+  for (int k = 0; k < 600; ++k) {
+    const double x = k < 300 ? 0.020 : 0.025;
+    data.target.position = core::Vec3(300 <= k && k < 400 ? std::nan("") : x, 0.0, 0.01);
+    core::step(scene.model, data);
+    raw.push_back(data.feedback_wrench.force.norm());
+    ramped.push_back(ramp.apply(data).force.norm());
+  }
+  ASSERT_EQ(data.invalid_target_steps, 100);
+}
+
+TEST(FeedbackRamp, TakesTheKickOutOfTheFirstTargetAndOfTheJumpAfterADropout) {
+  sim::SceneOverrides caller;
+  caller.caller_steps = true;
+  const sim::Scene scene =
+      sim::load_scene(std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/probe.toml", caller);
+  ASSERT_EQ(scene.device.soft_start_s, 0.1);  // the scenes' default
+  sim::FeedbackRamp ramp(scene);
+  std::vector<double> raw, ramped;
+  feedback_ramp_run(ramp, raw, ramped);
+  // Raw: the whole 20 mm spring at step 0 (3.9 N), and the 5 mm the hand went during the
+  // dropout in one step (0.98 N). Ramped over 0.1 s: 1 % of them.
+  EXPECT_NEAR(raw[0], 3.9136, 1e-4);
+  EXPECT_NEAR(ramped[0], 0.01 * raw[0], 1e-12);
+  EXPECT_NEAR(raw[400] - raw[399], 0.9784, 1e-4);
+  EXPECT_LT(std::abs(ramped[400] - ramped[399]), 0.011);
+  double largest = 0.0;
+  for (std::size_t k = 1; k < ramped.size(); ++k)
+    largest = std::max(largest, std::abs(ramped[k] - ramped[k - 1]));
+  EXPECT_LT(largest, 0.04);  // at most the first step's 1 % of 3.9 N
+  // Held through the dropout, back to the raw feedback once the ramp is over.
+  EXPECT_EQ(ramped[350], ramped[299]);
+  EXPECT_NEAR(ramped[599], raw[599], 1e-12);
+  EXPECT_EQ(ramp.ramp(), 1.0);
+  // Off (soft_start 0): the raw feedback, as it is.
+  sim::FeedbackRamp off(0.0, scene.model.dt);
+  std::vector<double> raw_off, same;
+  feedback_ramp_run(off, raw_off, same);
+  EXPECT_EQ(same, raw_off);
+  EXPECT_THROW(sim::FeedbackRamp(-1.0, 0.001), std::invalid_argument);
+  // apply() does not allocate.
+  core::Data data = core::make_data(scene.model);
+  std::int64_t allocations = -1;
+  {
+    numen::test::AllocationGuard guard;
+    for (int k = 0; k < 10; ++k) {
+      core::step(scene.model, data);
+      ramp.apply(data);
+    }
+    allocations = guard.count();
+  }
+  EXPECT_EQ(allocations, 0);
 }

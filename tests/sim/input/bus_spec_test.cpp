@@ -236,3 +236,19 @@ TEST(BusSpec, IgtlTakesAnOptionalHostAndPort) {
               "bus 'igtl' needs OpenIGTLink: this build has NUMEN_WITH_OPENIGTLINK=OFF");
   }
 }
+
+// Issue 66: "igtl:127.0.0.1:19098:5" was accepted (host "127.0.0.1:19098", port 5) and failed
+// only at run time; the spec has one port, a host with a colon is an IPv6 address.
+TEST(BusSpec, IgtlHostIsANameOrAnAddressRefusedAtParseOtherwise) {
+  EXPECT_NE(error_of("igtl:127.0.0.1:19098:5")
+                .find("--bus 'igtl:127.0.0.1:19098:5': host '127.0.0.1:19098' is not an IPv6 "
+                      "address, and the spec has one port"),
+            std::string::npos)
+      << error_of("igtl:127.0.0.1:19098:5");
+  EXPECT_NE(error_of("igtl:a b:18944").find("host 'a b' is not a host name"), std::string::npos);
+  EXPECT_NE(error_of("igtl:[tracker]:18944").find("host '[tracker]'"), std::string::npos);
+  EXPECT_EQ(parse_bus_spec("igtl:[::1]:18944").igtl_host, "::1");
+  EXPECT_EQ(parse_bus_spec("igtl:::1:18944").igtl_host, "::1");
+  EXPECT_EQ(parse_bus_spec("igtl:tracker-2.local:18944").igtl_host, "tracker-2.local");
+  EXPECT_EQ(parse_bus_spec("igtl:[::1]:18944").igtl_port, 18944);
+}

@@ -32,11 +32,9 @@ def scene():
 
 
 def scripted_step(scene, data):
-    """One step of the scripted loop of numen._testing.step_loop: the device target is the
-    scene trajectory's pose and twist at data.time, then core::step. (The trajectory's pose is
-    the tool frame, not the held body's: a loop that drives the instrument as `numen run` does
-    uses data.set_targets_at; this one is the benchmark's, the same as in C++.)"""
-    position, orientation, _jaw = scene.target_at(data.time)
-    linear, angular = scene.target_twist_at(data.time)
-    data.set_target(position, xyzw=orientation, linear_velocity=linear, angular_velocity=angular)
+    """One step of the scripted loop of numen._testing.step_loop: every target from the scene
+    trajectory's sample at data.time, through the device to the held body's centre-of-mass frame
+    (Data.set_targets_at, as `numen run` sets them from the encoders; the sample itself is the
+    tool tip, not the frame set_target takes), then core::step."""
+    data.set_targets_at()
     data.step(scene)

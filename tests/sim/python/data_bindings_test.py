@@ -1,6 +1,7 @@
 """numen.Data: stepping from Python against the same loop in C++, and the NumPy views
 (sim/python/data_bindings.cpp)."""
 import os
+import warnings
 
 import numpy as np
 import pytest
@@ -8,7 +9,10 @@ import pytest
 import numen
 from conftest import load_or_skip, scripted_step
 
-STEPS = 400  # 0.4 s of the lattice scene: the tool reaches the organ (contacts)
+STEPS = 400  # 0.4 s of the lattice scene
+# 3.7 s of the lattice scene: driven as `numen run` drives it (Data.set_targets_at: the tube's
+# centre of mass 40 mm behind the recorded tip), the tool first touches the organ at 3.672 s.
+CONTACT_STEPS = 3700
 
 
 def bits(a):
@@ -22,11 +26,11 @@ VIEWS = ["body_positions", "body_orientations", "body_linear_velocities",
 
 def test_python_loop_is_bit_identical_to_cpp(scene):
     data = scene.make_data()
-    for _ in range(STEPS):
+    for _ in range(CONTACT_STEPS):
         scripted_step(scene, data)
-    ref = numen._testing.step_loop(scene, STEPS)
-    before = numen._testing.step_loop(scene, STEPS - 1)
-    assert data.time == ref["time"] and data.step_count == ref["step_count"] == STEPS
+    ref = numen._testing.step_loop(scene, CONTACT_STEPS)
+    before = numen._testing.step_loop(scene, CONTACT_STEPS - 1)
+    assert data.time == ref["time"] and data.step_count == ref["step_count"] == CONTACT_STEPS
     assert data.num_contacts == ref["num_contacts"]
     for name in VIEWS:
         assert bits(getattr(data, name)) == bits(ref[name]), name
@@ -38,10 +42,7 @@ def test_module_step_function_and_model_argument(scene):
     a, b = scene.make_data(), scene.make_data()
     for _ in range(20):
         scripted_step(scene, a)
-        position, orientation, _ = scene.target_at(b.time)
-        linear, angular = scene.target_twist_at(b.time)
-        b.set_target(position, xyzw=orientation, linear_velocity=linear,
-                     angular_velocity=angular)
+        b.set_targets_at()
         numen.step(scene.model, b)
     assert bits(a.body_positions) == bits(b.body_positions)
 
@@ -96,7 +97,7 @@ def test_views_outlive_their_data_object(scene):
 
 def test_contact_views(scene):
     data = scene.make_data()
-    for _ in range(STEPS):
+    for _ in range(CONTACT_STEPS):
         scripted_step(scene, data)
         if data.num_contacts > 0:
             break
@@ -129,14 +130,14 @@ def test_node_views_of_a_net_scene():
 
 def test_target_views_and_reset(scene):
     data = scene.make_data()
-    data.set_target([0.1, 0.2, 0.3], [0.0, 0.0, 0.0, 1.0])
+    data.set_target([0.1, 0.2, 0.3], xyzw=[0.0, 0.0, 0.0, 1.0])
     assert np.array_equal(data.target_position, [0.1, 0.2, 0.3])
     assert np.array_equal(data.target_orientation, [0.0, 0.0, 0.0, 1.0])
     scripted_step(scene, data)
     assert data.time > 0 and data.status == 0 and data.nonfinite_steps == 0
     data.reset()
     assert data.time == 0 and data.step_count == 0
-    data.set_target([np.nan, 0, 0], [0, 0, 0, 1])
+    data.set_target([np.nan, 0, 0], xyzw=[0, 0, 0, 1])
     data.step(scene)
     assert data.status & numen.STATUS_INVALID_TARGET
 
@@ -242,7 +243,8 @@ def test_an_ambiguous_positional_quaternion_is_refused_and_named_forms_agree():
     data.set_target([0, 0, 0.01], xyzw=[1, 0, 0, 0])
     assert turn_deg(data.target_orientation) == 180.0
     q = [0.1, 0.2, 0.3, 0.927]  # (x, y, z, w): x well under 1/√2 of the norm, accepted as is
-    data.set_target([0, 0, 0.01], q)
+    with pytest.warns(numen.QuaternionOrderWarning):  # read as (x, y, z, w), with a warning
+        data.set_target([0, 0, 0.01], q)
     assert np.array_equal(data.target_orientation, q)
     data.set_target([0, 0, 0.01], wxyz=[q[3], q[0], q[1], q[2]])
     assert np.array_equal(data.target_orientation, q)
@@ -269,8 +271,96 @@ def test_attached_body_is_an_alias_of_held_body():
     assert data.held_body == -1
     data.held_body = probe
     assert data.attached_body == probe
-    data.attached_body = 99  # out of range: none, as through held_body (core::set_held_body)
+    # Out of range: refused, the instrument stays held (core::set_held_body alone would let go).
+    for bad in (99, scene.model.num_bodies, -2):
+        for name in ("held_body", "attached_body"):
+            with pytest.raises(ValueError, match=rf"{name} must be -1 \(none\) or a body index "
+                                                 rf"in \[0, 1\) \(Model.body_names\), got {bad}"):
+                setattr(data, name, bad)
+            assert data.held_body == probe
+    with pytest.raises(ValueError, match="no body named 'nope'"):
+        data.held_body = "nope"
+    with pytest.raises(TypeError, match="held_body must be a body index, a body name or -1"):
+        data.held_body = 0.0
+    data.held_body = -1
+    data.held_body = "probe"  # by name, or any integer type
+    assert data.held_body == probe
+    data.held_body = np.int64(-1)
     assert data.held_body == -1
+
+
+def test_step_of_something_else_is_a_type_error_saying_what_step_takes(scene):
+    data = scene.make_data()
+    with pytest.raises(TypeError) as info:
+        data.step(5)
+    assert str(info.value) == (
+        "Data.step(scene_or_model): scene_or_model must be the numen.Scene (or its Scene.model) "
+        "whose make_data() made the Data, got int 5")
+    with pytest.raises(TypeError, match=r"numen.step\(model, data\): model must be the "
+                                        r"numen.Scene .* got str 'scene'"):
+        numen.step("scene", data)
+    with pytest.raises(TypeError, match=r"numen.step\(model, data\): data must be a numen.Data "
+                                        r"\(Scene.make_data\(\)\), got int"):
+        numen.step(scene, 5)
+    assert data.step_count == 0
+
+
+def test_set_targets_at_a_time_that_is_not_finite_is_refused(scene):
+    data = scene.make_data()
+    data.set_targets_at(0.0)
+    before = data.target_position.copy()
+    for t in (np.nan, np.inf, -np.inf):
+        with pytest.raises(ValueError, match="Data.set_targets_at: t must be a finite time in "
+                                             "seconds, got"):
+            data.set_targets_at(t)
+    assert np.array_equal(data.target_position, before)
+
+
+def test_a_quaternion_that_is_not_unit_is_refused():
+    scene = probe_scene()
+    data = scene.make_data()
+    with pytest.raises(ValueError) as info:
+        data.set_target([0, 0, 0.01], xyzw=[1, 0, 0, 1])
+    assert str(info.value) == (
+        "orientation xyzw=(1, 0, 0, 1) is not a unit quaternion (norm 1.41421): a rotation is one "
+        "of norm 1 (within 0.001); divide it by its norm (docs/python.md \"Quaternions\")")
+    for bad in ({"wxyz": [0, 0, 0, 0]}, {"wxyz": [90, 0, 0, 0]}, {"xyzw": [0, 0, 0, 0.99]}):
+        with pytest.raises(ValueError, match="is not a unit quaternion"):
+            data.set_target([0, 0, 0.01], **bad)
+        with pytest.raises(ValueError, match="is not a unit quaternion"):
+            data.set_tool_sample([0, 0, 0.01], **bad)
+        with pytest.raises(ValueError, match="is not a unit quaternion"):
+            data.set_body_target("probe", [0, 0, 0.01], **bad)
+    # A hand-typed rounding passes as given; a non-finite one is the invalid-target path.
+    data.set_target([0, 0, 0.01], xyzw=[0.7071, 0, 0, 0.7071])
+    assert np.array_equal(data.target_orientation, [0.7071, 0, 0, 0.7071])
+    data.set_target([0, 0, 0.01], xyzw=[np.nan, 0, 0, 1])
+    data.step(scene)
+    assert data.status & numen.STATUS_INVALID_TARGET
+
+
+def test_a_positional_quaternion_warns_that_it_is_read_as_xyzw():
+    scene = probe_scene()
+    data = scene.make_data()
+    # (w, x, y, z) of a 180° turn about z, passed without a name: read as (x, y, z, w) it is the
+    # identity. No value tells the orders apart: every positional orientation warns.
+    with pytest.warns(numen.QuaternionOrderWarning) as record:
+        data.set_target([0, 0, 0.01], [0, 0, 0, 1])
+    assert len(record) == 1 and record[0].filename == __file__
+    assert str(record[0].message) == (
+        "orientation (0, 0, 0, 1) given without a name is read as (x, y, z, w), numen's Python "
+        "order (a turn of 0.0°; as (w, x, y, z), the scene files' order, it would turn by "
+        "180.0°): pass it by name, xyzw=... or wxyz=... (docs/python.md \"Quaternions\")")
+    assert issubclass(numen.QuaternionOrderWarning, UserWarning)
+    assert np.array_equal(data.target_orientation, [0, 0, 0, 1])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # by name: no warning
+        data.set_target([0, 0, 0.01], xyzw=[0, 0, 0, 1])
+        data.set_target([0, 0, 0.01], wxyz=[1, 0, 0, 0])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", numen.QuaternionOrderWarning)  # the strict form
+        with pytest.raises(numen.QuaternionOrderWarning):
+            data.set_target([0, 0, 0.01], [0, 0, 0, 1])
 
 
 def test_set_targets_at_gives_the_held_tube_its_centre_of_mass_target(scene):
@@ -400,3 +490,77 @@ def test_grasp_state_is_read_per_grasper(tmp_path):
     assert g["armed"]
     with pytest.raises(IndexError, match="no grasper 1"):
         data.grasp(1)
+
+
+def test_the_tip_and_the_centre_of_mass_frames_are_one_call_apart(scene):
+    if not numen.features["articulation"]:
+        pytest.skip("the lattice scene has joints")
+    data = scene.make_data()
+    tip, tip_q, _jaw = scene.target_at(1.0)
+    # The tube's centre-of-mass pose for the recorded tip: what set_tool_sample / set_targets_at
+    # give Data.target, read without setting anything.
+    position, orientation = data.tool_to_body(tip, xyzw=tip_q)
+    assert np.linalg.norm(tip - position) == pytest.approx(0.040, abs=1e-12)
+    data.set_tool_sample(tip, xyzw=tip_q)
+    assert np.allclose(data.target_position, position, atol=1e-15)
+    assert abs(abs(np.dot(data.target_orientation, orientation)) - 1) < 1e-12
+    # The tip in the tube's frame: 40 mm ahead along its z (the shaft).
+    offset, _q = data.tool_in_held_body(tip, xyzw=tip_q)
+    assert np.allclose(offset, [0, 0, 0.040], atol=1e-12)
+    # Given the tip where the centre of mass is meant, the feedback is the 40 mm spring's (and
+    # the tube is pulled into contact); given its centre-of-mass pose, a fraction of it.
+    tipped, right = scene.make_data(), scene.make_data()
+    for _ in range(200):
+        p, q, _ = scene.target_at(tipped.time)
+        tipped.set_target(p, xyzw=q)
+        tipped.step(scene)
+        com, com_q = right.tool_to_body(p, xyzw=q)
+        right.set_target(com, xyzw=com_q)
+        right.step(scene)
+    f_tip = np.linalg.norm(tipped.feedback_wrench[:3])
+    f_right = np.linalg.norm(right.feedback_wrench[:3])
+    print(f"feedback after 0.2 s: tip as the target {f_tip:.4f} N, "
+          f"its centre-of-mass pose {f_right:.4f} N")
+    assert right.num_contacts == 0
+    assert f_tip > 10 * f_right
+    data.held_body = -1
+    with pytest.raises(ValueError, match="no body is held"):
+        data.tool_to_body(tip, xyzw=tip_q)
+
+
+def test_a_probe_scene_tells_its_shape_and_has_no_tool_offset():
+    scene = probe_scene()
+    data = scene.make_data()
+    spheres = scene.model.body_spheres(0)
+    assert spheres.shape == (1, 4) and np.array_equal(spheres, [[0, 0, 0, 0.005]])
+    offset, q = data.tool_in_held_body([0, 0, 0.01], xyzw=[0, 0, 0, 1])
+    assert np.array_equal(offset, [0, 0, 0]) and np.allclose(q, [0, 0, 0, 1])
+    # The probe's lowest point: its centre of mass minus the sphere's radius.
+    lowest = data.body_positions[0][2] + spheres[0, 2] - spheres[0, 3]
+    assert lowest == pytest.approx(0.005)
+    with pytest.raises(IndexError, match=r"body 1 out of range \[0, 1\)"):
+        scene.model.body_spheres(1)
+
+
+def test_the_feedback_ramp_takes_the_kick_out_of_a_first_target():
+    scene = probe_scene()
+    data = scene.make_data()
+    ramp = numen.FeedbackRamp(scene)  # the scene's [device] soft_start: 0.1 s by default
+    raw, ramped = [], []
+    for k in range(600):
+        x = 0.020 if k < 300 else 0.025  # 20 mm beside the probe; the hand 5 mm on in a dropout
+        data.set_target([np.nan if 300 <= k < 400 else x, 0, 0.01], xyzw=[0, 0, 0, 1])
+        data.step(scene)
+        raw.append(np.linalg.norm(data.feedback_wrench[:3]))
+        ramped.append(np.linalg.norm(ramp.apply(data)[:3]))
+    raw, ramped = np.array(raw), np.array(ramped)
+    print(f"step 0: {raw[0]:.4f} N raw, {ramped[0]:.4f} N ramped; after the dropout: a jump of "
+          f"{raw[400] - raw[399]:.4f} N raw, {ramped[400] - ramped[399]:.4f} N ramped")
+    assert raw[0] == pytest.approx(3.9136, abs=1e-4) and ramped[0] == pytest.approx(0.01 * raw[0])
+    assert raw[400] - raw[399] == pytest.approx(0.9784, abs=1e-4)
+    assert np.abs(np.diff(ramped)).max() < 0.04
+    assert ramped[599] == pytest.approx(raw[599]) and ramp.ramp == 1.0
+    off = numen.FeedbackRamp(scene, soft_start=0.0)
+    assert np.array_equal(off.apply(data), data.feedback_wrench)
+    with pytest.raises(ValueError, match="soft_start must be a finite number of seconds >= 0"):
+        numen.FeedbackRamp(scene, soft_start=-1.0)

@@ -1,5 +1,6 @@
 """numen.load_scene, Scene, Model and numen.InputError (sim/python/scene_bindings.cpp)."""
 import os
+import warnings
 
 import numpy as np
 import pytest
@@ -26,6 +27,16 @@ def test_target_at_is_a_unit_pose(scene):
     assert np.isfinite(jaw)
     linear, angular = scene.target_twist_at(0.1)
     assert linear.shape == (3,) and angular.shape == (3,)
+
+
+def test_target_at_a_time_that_is_not_finite_is_refused(scene):
+    # Before, target_at(nan) gave the trajectory's first sample without a word.
+    for t in (float("nan"), float("inf")):
+        with pytest.raises(ValueError, match=r"Scene.target_at: t must be a finite time in "
+                                             r"seconds, got (nan|inf)"):
+            scene.target_at(t)
+        with pytest.raises(ValueError, match="Scene.target_twist_at: t must be a finite time"):
+            scene.target_twist_at(t)
 
 
 def test_bad_scene_raises_located_input_error(tmp_path):
@@ -79,15 +90,33 @@ def test_a_scene_without_device_or_feedback_says_so(tmp_path):
     path = tmp_path / "ball.toml"
     path.write_text('[[material]]\nname = "m"\n[[body]]\nname = "ball"\nmass = 0.1\n'
                     'spheres = [[0.0, 0.0, 0.0, 0.01]]\n[body.coupling]\nstiffness = 100.0\n')
-    scene = numen.load_scene(str(path))
+    advice = ("no feedback: non-haptic device (the scene has no [device]): feedback_wrench "
+              "stays 0; a [device] table with kind = \"pose-tracker\" and attach = \"ball\", and "
+              "under it a [device.feedback] table with stiffness (N/m) and damping (N·s/m), give "
+              "it (as sim/scenes/probe.toml)")
+    with pytest.warns(numen.SceneWarning) as record:  # not only in a list: a Python warning
+        scene = numen.load_scene(str(path))
+    assert [str(w.message) for w in record] == [f"{path}: {advice}"]
+    assert record[0].filename == __file__
     assert not scene.has_device and not scene.has_trajectory
-    assert scene.warnings == ["no feedback: non-haptic device (the scene has no [device]): "
-                              "feedback_wrench stays 0; a [device.feedback] table gives it"]
+    assert scene.warnings == [advice]
     data = scene.make_data()
     assert data.held_body == 0
     data.set_target([0.0, 0.0, 0.01], xyzw=[0, 0, 0, 1])
     data.step(scene)
     assert data.coupling_wrench[2] > 0 and np.all(data.feedback_wrench == 0)
+    # The advice, followed, loads without a warning and gives feedback.
+    fed = tmp_path / "fed.toml"
+    fed.write_text(path.read_text() + '[device]\nkind = "pose-tracker"\nattach = "ball"\n'
+                   '[device.feedback]\nstiffness = 100.0\ndamping = 1.0\n')
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        scene = numen.load_scene(str(fed))
+    assert scene.warnings == []
+    data = scene.make_data()
+    data.set_target([0.0, 0.0, 0.01], xyzw=[0, 0, 0, 1])
+    data.step(scene)
+    assert np.linalg.norm(data.feedback_wrench[:3]) > 0
 
 
 def test_devices_lists_each_device_with_what_it_drives():

@@ -306,4 +306,30 @@ TEST(RunBusLog, BadBusSpecAndBadLogAreClearErrors) {
   }
 }
 
+TEST(RunBadBus, TheSummaryAndTheVerdictSayTheRejectedSamplesWereStale) {
+  // Issue 70: samples lost on the bus go stale; the summary said "rejected samples N" only. Now
+  // by cause: the summary's rejected_causes, its text line and the verdict's reason.
+  NUMEN_REQUIRE_ARTICULATION();
+  Scene scene = lattice_scene();  // a copy
+  scene.bus.drop_probability = 0.3;
+  scene.bus.seed = 7;
+  for (numen::hal::CanopenAxisConfig& x : scene.device.canopen.axes) x.dcf = nullptr;
+  const std::int64_t n = periods_for(scene, 1.0);
+  SceneRunner runner(scene, static_cast<std::size_t>(n));
+  for (std::int64_t k = 0; k < n; ++k) runner.period();
+  const RunSummary s = runner.summary();
+  ASSERT_GT(s.rejected_samples, 0);
+  EXPECT_NE(s.rejected_causes.find(" stale (older than max_sample_age, or none came)"),
+            std::string::npos)
+      << s.rejected_causes;
+  EXPECT_NE(numen::sim::format_summary(s).find("  rejected samples: " + s.rejected_causes),
+            std::string::npos);
+  const numen::sim::RunVerdict v = numen::sim::run_verdict(s);
+  EXPECT_NE(std::find(v.reasons.begin(), v.reasons.end(),
+                      "samples rejected: " + std::to_string(s.rejected_samples) +
+                          " axis samples rejected: " + s.rejected_causes),
+            v.reasons.end())
+      << ::testing::PrintToString(v.reasons);
+}
+
 }  // namespace

@@ -59,6 +59,10 @@ inline sim::RunSummary full_managed_summary() {
   s.invalid_periods = 6;
   s.contact_overflow = 7;
   s.contact_clamped_steps = 8;
+  s.rejected_causes = "4 stale (older than max_sample_age, or none came), 1 implausible jump";
+  s.crossed_contact_steps = 15;
+  s.pass_throughs = 2;
+  s.first_pass_through_s = 0.125;
   s.contacts_max = 9;
   s.solver_iterations_max = 10;
   s.solver_iterations_mean = 4.5;
@@ -279,6 +283,10 @@ inline sim::RunSummary igtl_summary() {
   s.igtl_disconnects = 1;
   s.igtl_wait_timeouts = 0;
   s.igtl_syncs_without_pose = 4;
+  s.igtl_stamps_backwards = 6;
+  s.igtl_stamps_ahead = 7;
+  s.igtl_stamps_unstamped = 8;
+  s.igtl_stamp_resyncs = 1;
   s.igtl_follows = true;
   s.igtl_periods_after_end = 5;
   s.igtl_fault_records = {

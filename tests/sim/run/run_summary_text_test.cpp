@@ -124,4 +124,20 @@ TEST(RunSummaryText, PrintsTheValuesInTheirFormats) {
   EXPECT_EQ(adm.find("canopen:"), std::string::npos);
 }
 
+// Issue 66: a grasper's name with control characters was printed raw (an escape sequence in a
+// scene file reached the terminal). Text from a scene or the network is printed with each
+// control byte as \xNN; UTF-8 stays as it is.
+TEST(RunSummaryText, ControlCharactersOfNamesAreEscaped) {
+  numen::sim::RunSummary s = numen::test::full_managed_summary();
+  s.grasper_lines = {"g\x1B[2J\rfake (device left): 0 started"};
+  s.scene = "sc\x07\xC3\xA9ne";
+  const std::string text = numen::sim::format_summary(s);
+  EXPECT_NE(text.find("  grasper g\\x1B[2J\\x0Dfake (device left): 0 started\n"), std::string::npos)
+      << text;
+  EXPECT_NE(text.find("scene sc\\x07\xC3\xA9ne:"), std::string::npos) << text;
+  EXPECT_EQ(text.find('\x1B'), std::string::npos);
+  EXPECT_EQ(text.find('\r'), std::string::npos);
+  EXPECT_EQ(text.find('\x07'), std::string::npos);
+}
+
 }  // namespace

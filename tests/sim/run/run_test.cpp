@@ -532,6 +532,34 @@ TEST(RunDevices, EachDeviceDrivesItsBodyOnTheSharedBusAndIsSummarized) {
   EXPECT_FALSE(j1.contains("device_lines"));
 }
 
+// Issue 66: a device after the first that only prescribes a joint (no body's link) was given
+// the rigid binding by the control loop — the held body, the first device's — and the run
+// failed with "devices 0 and 1 both drive the held body". Its binding drives its joint only.
+TEST(RunDevices, ADeviceThatOnlyPrescribesAJointRuns) {
+  NUMEN_REQUIRE_ARTICULATION();  // a prescribed joint
+  numen::test::TempDir dir;
+  const std::string text =
+      numen::test::replace(numen::test::kTwoDeviceScene, "link = \"tool\"\ndevice = \"right\"\n",
+                           "") +
+      R"(
+[[joint]]
+name = "slide"
+type = "prismatic"
+parent = "world"
+parent_frame = { position = [0.0, 0.05, 0.0] }
+child = "right_tool"
+prescribed = { axis = "y", scale = 1.0, offset = -0.05, device = "right" }
+)";
+  const Scene scene = numen::sim::load_scene(dir.write("slide.toml", text));
+  ASSERT_TRUE(scene.extra_devices.at(0).binding.links.empty());
+  ASSERT_EQ(scene.extra_devices.at(0).binding.prescriptions.size(), 1u);
+  SceneRunner runner(scene, 100);
+  for (int k = 0; k < 100; ++k) runner.period();
+  runner.finish();
+  EXPECT_EQ(runner.loop().num_devices(), 2u);
+  EXPECT_TRUE(std::isfinite(runner.data().bodies[1].position.y()));
+}
+
 TEST(RunDevices, ASceneOfSeveralDevicesRunsOnTheSimulatedBusOnly) {
   numen::test::TempDir dir;
   const Scene scene = numen::sim::load_scene(dir.write("two.toml", numen::test::kTwoDeviceScene));

@@ -249,6 +249,26 @@ TEST(RunVerdict, TheTrackersRejectedInputIsNamed) {
                    "'StylusToTracker' in 1203 messages (device names sent: 'PointerToTracker')"));
 }
 
+// Issue 66: poses refused for their timestamps are said per reason (a pose 10^6 s ahead had
+// been "9606 axis samples rejected" only; backwards or zero stamps "the tracker's stream ended
+// 1699 periods before the run did").
+TEST(RunVerdict, TrackerPosesRefusedForTheirStampsAreCountedPerReason) {
+  numen::sim::RunSummary s = numen::test::igtl_summary();
+  s.igtl_faults = 0;
+  s.igtl_dropped = 0;
+  s.igtl_periods_after_end = 0;
+  const numen::sim::RunVerdict v = numen::sim::run_verdict(s);
+  EXPECT_NE(std::find(v.reasons.begin(), v.reasons.end(),
+                      "samples rejected: 21 tracker poses refused for their timestamps (6 before "
+                      "the last pose taken, 7 more than 10 s after it, 8 unstamped while "
+                      "following the tracker's clock; 1 re-basings on a clock that jumped)"),
+            v.reasons.end())
+      << ::testing::PrintToString(v.reasons);
+  s.igtl_stamps_backwards = s.igtl_stamps_ahead = s.igtl_stamps_unstamped = 0;
+  for (const std::string& r : numen::sim::run_verdict(s).reasons)
+    EXPECT_EQ(r.find("timestamps"), std::string::npos) << r;
+}
+
 TEST(RunVerdict, AnotherDevicesRejectedSamplesAndSafeStatesAreNamed) {
   // A scene of two devices: device 0's figures are the summary's own; device 1's rejected
   // samples and latched safe states set the status too, named with the device.

@@ -5,11 +5,15 @@
 // formulas; the recorded target really goes through the deformable scene's
 // post; every error names the file, line, column and dotted key.
 #include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <sys/sysmacros.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <numbers>
 #include <sstream>
 #include <string>
@@ -17,11 +21,12 @@
 
 #include "build_features.hpp"
 #include "mesh_text.hpp"
-#include "numen/core/net_surface_map.hpp"
 #include "numen/core/mesh.hpp"
+#include "numen/core/net_surface_map.hpp"
 #include "numen/hal/device/kinematics_factory.hpp"
 #include "numen/sim/device/simulated_instrument.hpp"
 #include "numen/sim/input/input_error.hpp"
+#include "numen/sim/scene/mesh_cache.hpp"
 #include "numen/sim/scene/scene.hpp"
 #include "scene_text.hpp"
 #include "temp_dir.hpp"
@@ -753,19 +758,36 @@ TEST(DeformableNetSize, ShippedOrganIsItsOwnNet) {
   EXPECT_EQ(s.net_loads[0].mesh_vertices, 1002);
 }
 
-// A fine surface standing off its net by more than half the net's mean edge length is a load
-// warning with the distance, and only then: the ellipsoid at a handful of nodes and at 300, and
-// one with a thin spike (a vertex 3 times as far out) that a coarse net cuts off.
+// A fine surface standing off its net by more than the smaller of half the net's mean edge
+// length and 2 % of the organ's size is a load warning with the distance, and only then: the
+// ellipsoid at a handful of nodes and at 300, and one with a thin spike (a vertex 3 times as far
+// out) that a coarse net cuts off. The organ's share does not grow with a coarser net's edge: a
+// net so coarse that its surface is millimetres off, within half its long edges, is warned too.
 TEST(DeformableNetSize, FarFineSurfaceIsAWarningWithTheDistance) {
-  for (const int nodes : {4, 12, 300, -12}) {
+  int within_half_edge = 0;  // warned cases the half edge alone would have let through
+  for (const int nodes : {4, 12, 40, 300, -12}) {
     const double spike = nodes < 0 ? 3.0 : 1.0;
     const Scene s = load_fine_organ("nodes = " + std::to_string(std::abs(nodes)), 0, spike);
     const NetModel& net = s.model.nets[0];
     double sum = 0.0;
     for (int i = 0; i < net.structural_count; ++i)
       sum += s.model.net_springs[static_cast<std::size_t>(net.spring_begin + i)].rest_length;
-    const double bound = 0.5 * sum / net.structural_count;
+    const double half_edge = 0.5 * sum / net.structural_count;
+    // The organ's size: the longest side of the placed fine surface's bounding box.
+    numen::core::TriangleMesh fine = numen::core::make_icosphere(1.0, 4);
+    fine.vertices.front() *= spike;
+    const Quat q(0.9238795, 0.0, 0.3826834, 0.0);
+    Vec3 lo = Vec3::Constant(1e9), hi = -lo;
+    for (const Vec3& v : fine.vertices) {
+      const Vec3 p = q.normalized() * Vec3(0.035 * v.x(), 0.025 * v.y(), 0.020 * v.z());
+      lo = lo.cwiseMin(p);
+      hi = hi.cwiseMax(p);
+    }
+    const double bound = std::min(half_edge, 0.02 * (hi - lo).maxCoeff());  // kMaxFineOffsetShare
     const double offset = numen::core::net_surface_max_offset(s.model, 0);
+    if (offset > bound && offset <= half_edge) ++within_half_edge;
+    std::printf("[   info   ] %d nodes: offset %.3f mm, half edge %.3f mm, bound %.3f mm\n", nodes,
+                offset * 1e3, half_edge * 1e3, bound * 1e3);
     const auto w = std::find_if(s.warnings.begin(), s.warnings.end(), [](const std::string& x) {
       return x.find("mm off the net simplified from it") != std::string::npos;
     });
@@ -779,6 +801,13 @@ TEST(DeformableNetSize, FarFineSurfaceIsAWarningWithTheDistance) {
       EXPECT_NE(w, s.warnings.end()) << "the spike is cut off the 12-node net";
     }
   }
+  EXPECT_GT(within_half_edge, 0) << "no net coarse enough that only the organ's share warns";
+}
+
+/// The bytes of `path`.
+std::string file_bytes(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
 }
 
 // `cache` keeps the simplified net in a file (mesh_cache.hpp): the next load reads the same net;
@@ -805,12 +834,15 @@ TEST(DeformableNetSize, CacheFileKeepsTheSimplifiedNet) {
   expect_fine_ellipsoid_on_net(read, 300, 1.0e-3);
   EXPECT_EQ(read.model.node_rest, made.model.node_rest);
   EXPECT_EQ(read.net_triangles, made.net_triangles);
-  // Damaged: simplified again, a warning, the file rewritten.
-  dir.write("organ.nmnet", "not a cache");
+  // Damaged (a flipped byte): simplified again, a warning, the file rewritten.
+  std::string bytes = file_bytes(dir / "organ.nmnet");
+  bytes.back() = static_cast<char>(bytes.back() ^ 0x10);
+  dir.write("organ.nmnet", bytes);
   const Scene damaged = load(keys);
   EXPECT_FALSE(damaged.net_loads[0].cache_loaded);
-  EXPECT_NE(cache_warning(damaged).find("organ.nmnet: damaged (not a numen net cache): simplified again"),
-            std::string::npos)
+  EXPECT_NE(
+      cache_warning(damaged).find("organ.nmnet: damaged (checksum mismatch): simplified again"),
+      std::string::npos)
       << cache_warning(damaged);
   EXPECT_EQ(damaged.model.node_rest, made.model.node_rest);
   EXPECT_TRUE(load(keys).net_loads[0].cache_loaded);
@@ -826,6 +858,86 @@ TEST(DeformableNetSize, CacheFileKeepsTheSimplifiedNet) {
             std::string::npos);
 }
 
+/// Expects fine_organ_scene(`cache = "<cache>"`, with `keys`) in `dir` (fine.obj beside it) to fail
+/// at `cache`, located, with `phrase`.
+void expect_cache_refused(const TempDir& dir, const std::string& cache, const std::string& phrase,
+                          const std::string& keys = "nodes = 300") {
+  const std::string text = fine_organ_scene(keys + "\ncache = \"" + cache + "\"");
+  const InputError e = load_error(dir, text);
+  EXPECT_EQ(e.key(), "deformable[0].cache") << e.what();
+  EXPECT_EQ(e.line(), line_of(text, "cache = ")) << e.what();
+  EXPECT_EQ(e.column(), column_of(text, "cache = ", "\"" + cache + "\"")) << e.what();
+  EXPECT_NE(e.message().find(phrase), std::string::npos) << e.what();
+}
+
+// A `cache` path never clobbers what is not numen's own net cache (issue 66): the organ's own
+// mesh, a text file, the scene file, a symlink and a device node were replaced, a FIFO blocked
+// the load, a directory was "out of memory", a missing folder was made. Each is an error at
+// `cache`, before the simplification, and the thing is left as it was.
+TEST(DeformableNetSizeErrors, ACachePathThatIsNotANetCacheIsRefusedAtCache) {
+  TempDir dir;
+  const std::string mesh = numen::test::fine_ellipsoid_obj(4);
+  dir.write("fine.obj", mesh);
+  expect_cache_refused(dir, "fine.obj",
+                       "fine.obj: not a numen cache (it does not start with \"NUMENNET\"); "
+                       "refusing to overwrite it");
+  EXPECT_EQ(file_bytes(dir / "fine.obj"), mesh);
+  expect_cache_refused(dir, "bad.toml", "not a numen cache");  // the scene file itself
+  EXPECT_NE(file_bytes(dir / "bad.toml").find("[[deformable]]"), std::string::npos);
+  dir.write("notes.txt", "notes\n");
+  expect_cache_refused(dir, "notes.txt", "refusing to overwrite it");
+  EXPECT_EQ(file_bytes(dir / "notes.txt"), "notes\n");
+  std::filesystem::create_symlink(dir / "notes.txt", dir / "link.nmnet");
+  expect_cache_refused(dir, "link.nmnet", "is a symbolic link, not a cache file");
+  EXPECT_TRUE(std::filesystem::is_symlink(dir / "link.nmnet"));
+  std::filesystem::create_directory(dir / "folder.nmnet");
+  expect_cache_refused(dir, "folder.nmnet", "is a directory, not a cache file");
+  ASSERT_EQ(::mkfifo((dir / "pipe.nmnet").c_str(), 0644), 0);
+  expect_cache_refused(dir, "pipe.nmnet", "is a FIFO (named pipe), not a cache file");
+  EXPECT_TRUE(std::filesystem::is_fifo(dir / "pipe.nmnet"));
+  if (::mknod((dir / "null").c_str(), S_IFCHR | 0666, ::makedev(1, 3)) == 0) {  // needs root
+    expect_cache_refused(dir, "null", "is a character device, not a cache file");
+    EXPECT_TRUE(std::filesystem::is_character_file(dir / "null"));
+  }
+  expect_cache_refused(dir, "nonexistent/dir/x.nmnet", "does not exist");
+  EXPECT_FALSE(std::filesystem::exists(dir / "nonexistent"));
+  dir.write("tet.nmshape", std::string("NUMENMSH") + std::string(40, '\0'));
+  expect_cache_refused(dir, "tet.nmshape", "a numen mesh-shape cache, not a net cache");
+}
+
+// A net cache whose header is this mesh's (key and all) but whose net, with a valid checksum, was
+// simplified from another mesh (the organ 5 times as large) is not used: a warning at `cache`
+// naming the file, the net simplified again.
+TEST(DeformableNetSize, ANetCacheOfAnotherMeshIsNamedAndNotUsed) {
+  TempDir dir;
+  dir.write("fine.obj", numen::test::fine_ellipsoid_obj(4));
+  const auto load = [&](const std::string& k) {
+    return load_scene(dir.write("organ.toml", fine_organ_scene(k)));
+  };
+  const Scene made = load("nodes = 300\ncache = \"a.nmnet\"");
+  (void)load("nodes = 300\nscale = 5.0\ncache = \"b.nmnet\"");
+  const std::string a = file_bytes(dir / "a.nmnet"), b = file_bytes(dir / "b.nmnet");
+  dir.write("a.nmnet", a.substr(0, 20) + b.substr(20));  // a's magic, version, key; b's net
+  const Scene s = load("nodes = 300\ncache = \"a.nmnet\"");
+  EXPECT_FALSE(s.net_loads[0].cache_loaded);
+  EXPECT_EQ(s.model.node_rest, made.model.node_rest);
+  std::string warning;
+  for (const std::string& w : s.warnings)
+    if (w.find("deformable[0].cache") != std::string::npos) warning = w;
+  EXPECT_NE(warning.find((dir / "a.nmnet").string() + ": damaged (its net lies off this mesh"),
+            std::string::npos)
+      << warning;
+  EXPECT_NE(warning.find("simplified again"), std::string::npos) << warning;
+}
+
+/// Expects loading fine_organ_scene(keys) with `obj` as fine.obj to fail at the value of the line
+/// holding `needle` (column of `value`), key `key`, with `phrase`.
+void expect_net_size_error_with(const std::string& keys, const std::string& needle,
+                                const std::string& value, const std::string& key,
+                                const std::string& phrase, const std::string& obj) {
+  expect_error_at(fine_organ_scene(keys), needle, value, key, phrase, obj);
+}
+
 /// Expects loading fine_organ_scene(keys) (fine.obj with `holes` triangles removed) to fail at
 /// the value of the line holding `needle` (column of `value`), key `key`, with `phrase`.
 void expect_net_size_error(const std::string& keys, const std::string& needle,
@@ -833,6 +945,70 @@ void expect_net_size_error(const std::string& keys, const std::string& needle,
                            const std::string& phrase, int holes = 0) {
   expect_error_at(fine_organ_scene(keys), needle, value, key, phrase,
                   numen::test::fine_ellipsoid_obj(4, holes));
+}
+
+/// A closed latitude-longitude sphere of radius 20 mm in mm: two poles and `rings` − 1 rings of
+/// `segments` vertices.
+std::string uv_sphere_obj(int rings, int segments) {
+  std::string out;
+  char line[96];
+  std::snprintf(line, sizeof line, "v 0 0 20\n");
+  out += line;
+  for (int i = 1; i < rings; ++i)
+    for (int j = 0; j < segments; ++j) {
+      const double th = std::numbers::pi * i / rings, ph = 2.0 * std::numbers::pi * j / segments;
+      std::snprintf(line, sizeof line, "v %.9f %.9f %.9f\n", 20.0 * std::sin(th) * std::cos(ph),
+                    20.0 * std::sin(th) * std::sin(ph), 20.0 * std::cos(th));
+      out += line;
+    }
+  out += "v 0 0 -20\n";
+  const int south = 2 + (rings - 1) * segments;  // OBJ indices from 1
+  const auto at = [&](int ring, int j) { return 2 + (ring - 1) * segments + (j % segments); };
+  for (int j = 0; j < segments; ++j) {
+    std::snprintf(line, sizeof line, "f 1 %d %d\n", at(1, j), at(1, j + 1));
+    out += line;
+    std::snprintf(line, sizeof line, "f %d %d %d\n", south, at(rings - 1, j + 1), at(rings - 1, j));
+    out += line;
+    for (int i = 1; i + 1 < rings; ++i) {
+      std::snprintf(line, sizeof line, "f %d %d %d\nf %d %d %d\n", at(i, j), at(i + 1, j),
+                    at(i + 1, j + 1), at(i, j), at(i + 1, j + 1), at(i, j + 1));
+      out += line;
+    }
+  }
+  return out;
+}
+
+// `nodes` is capped by the net's largest size (65 536 nodes), not only by the mesh's vertices:
+// 163 843 nodes on a 163 842-vertex mesh said "at most 163842", which was then refused at `file`.
+// Here a 65 538-vertex sphere.
+TEST(DeformableNetSizeErrors, NodesAboveTheNetCapAreRefusedAtNodesWithTheCap) {
+  const std::string obj = uv_sphere_obj(257, 256);  // 2 + 256 · 256 = 65 538 vertices
+  expect_net_size_error_with("nodes = 65539", "nodes = 65539", "65539", "deformable[0].nodes",
+                             "65539 nodes is more than the 65538 vertices of fine.obj: the net is "
+                             "made by simplifying the mesh, never by refining it (at most 65536, "
+                             "the most a net may have)",
+                             obj);
+  expect_net_size_error_with("nodes = 65538", "nodes = 65538", "65538", "deformable[0].nodes",
+                             "65538 nodes is more than the 65536 a net may have (at most 65536, "
+                             "the most a net may have)",
+                             obj);
+}
+
+// The hint to set `cache` after a slow simplification (kSlowNetSimplifySeconds of wall clock, a
+// 327 680-triangle organ takes 6-7 s), and none with a cache or under the threshold.
+TEST(DeformableNetSize, ASlowSimplificationWithoutACacheHintsAtCache) {
+  using numen::sim::slow_net_simplification_hint;
+  const auto hint = slow_net_simplification_hint(6.5, 1024, false);
+  ASSERT_TRUE(hint.has_value());
+  EXPECT_EQ(*hint,
+            "simplified to 1024 nodes in 6.5 s (wall clock) at every load: `cache = true` "
+            "(or a file path) keeps the net for the next load");
+  EXPECT_TRUE(slow_net_simplification_hint(numen::sim::kSlowNetSimplifySeconds, 8, false));
+  EXPECT_FALSE(slow_net_simplification_hint(6.5, 1024, true));
+  EXPECT_FALSE(slow_net_simplification_hint(1.9, 1024, false));
+  // A quick one in a scene: no hint.
+  for (const std::string& w : load_fine_organ("nodes = 300").warnings)
+    EXPECT_EQ(w.find("wall clock"), std::string::npos) << w;
 }
 
 TEST(DeformableNetSizeErrors, BadNodeCountsAreLocated) {

@@ -466,6 +466,23 @@ encoder_cob_id = 0x181
                  "COB-ID 0x181 of axis \"x\" of device \"right\" is device \"left\"'s too");
 }
 
+TEST(SceneDevices, ACobIdOfTwoDevicesWithDcfsIsLocatedAtTheSceneKey) {
+  // Issue 70: the two instruments of tests/data/tube_clash.toml, each node configured by its DCF;
+  // the right one's pivot_x encoder given the left one's COB-ID (0x181). Its DCF (node 6) has
+  // no TPDO 0x181: that mismatch, at the DCF's line, was the error, with no scene line.
+  TempDir dir;
+  std::ifstream in(std::string(NUMEN_SOURCE_DIR) + "/tests/data/tube_clash.toml");
+  std::ostringstream os;
+  os << in.rdbuf();
+  const std::string text = numen::test::with_absolute_dcf_paths(
+      replace(os.str(), "encoder_cob_id = 0x186", "encoder_cob_id = 0x181"),
+      std::string(NUMEN_SOURCE_DIR) + "/sim/scenes");
+  const InputError e = load_error(dir, text, "cob.toml");
+  expect_located(e, (dir.path() / "cob.toml").string(), line_of(text, "encoder_cob_id = 0x181", 2),
+                 column_of(text, "encoder_cob_id = 0x181", "0x181"), "device[1].axis[0].encoder_cob_id",
+                 "COB-ID 0x181 of axis \"pivot_x\" of device \"right\" is device \"left\"'s too");
+}
+
 TEST(SceneDevices, OnlyTheFirstDeviceHoldsAndEachNeedsATrajectory) {
   TempDir dir;
   const std::string& two = numen::test::kTwoDeviceScene;
@@ -524,4 +541,20 @@ duration = 0.75
   expect_located(e, (dir.path() / "jig.toml").string(), line_of(jig, "slave_centre"),
                  column_of(jig, "manipulator", "\"slave_centre\""), "device[1].trajectory.manipulator",
                  "slave_left");
+}
+
+// Issue 66: a device after the first that drives nothing (no body's link, no prescribed joint)
+// loaded, and the run exited 1 with "control loop: devices 0 and 1 both drive the held body
+// (link binding body -1)", unlocated and untrue. It is refused at its [[device]] table.
+TEST(SceneDevices, ADeviceThatDrivesNothingIsRefusedAtItsTable) {
+  TempDir dir;
+  const std::string idle =
+      replace(numen::test::kTwoDeviceScene, "link = \"tool\"\ndevice = \"right\"\n", "");
+  const InputError e = load_error(dir, idle, "idle.toml");
+  EXPECT_EQ(e.key(), "device[1]") << e.what();
+  EXPECT_EQ(e.line(), line_of(idle, "[[device]]", 2)) << e.what();
+  EXPECT_NE(e.message().find("device \"right\" drives nothing: no [[body]] has link = \"...\" "
+                             "with device = \"right\""),
+            std::string::npos)
+      << e.what();
 }

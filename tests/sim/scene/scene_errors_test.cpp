@@ -430,7 +430,16 @@ TEST(SceneErrors, MissingDevice) {
   }
   ASSERT_EQ(s.warnings.size(), 1u);
   EXPECT_EQ(s.warnings[0], "no feedback: non-haptic device (the scene has no [device]): "
-                           "feedback_wrench stays 0; a [device.feedback] table gives it");
+                           "feedback_wrench stays 0; a [device] table with kind = \"pose-tracker\" "
+                           "and attach = \"tool\", and under it a [device.feedback] table with "
+                           "stiffness (N/m) and damping (N·s/m), give it (as sim/scenes/probe.toml)");
+  // The advice loads and gives feedback ([device.feedback] alone is refused: device.kind missing).
+  const Scene fed = load_scene(
+      dir.write("fed.toml", text + "\n[device]\nkind = \"pose-tracker\"\nattach = \"tool\"\n"
+                                   "[device.feedback]\nstiffness = 100.0\ndamping = 1.0\n"),
+      caller);
+  EXPECT_TRUE(fed.warnings.empty()) << fed.warnings.front();
+  EXPECT_EQ(fed.model.feedback.k_t, 100.0);
 }
 
 TEST(SceneErrors, MissingTrajectory) {

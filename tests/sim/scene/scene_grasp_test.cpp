@@ -128,6 +128,23 @@ TEST(SceneGrasp, ABodyHeavierThanTheGripHoldsIsWarnedWithTheNumbers) {
   EXPECT_TRUE(warned);
 }
 
+TEST(SceneGrasp, TheHeavyBodyWarningLeavesOutTheGraspersOwnInstrument) {
+  // Issue 70: a grip of 0.1 N and gravity on: the 20 g block (0.196 N) is warned; the grasper's
+  // own tube (50 g, 0.49 N; joined to its jaws) is not something it grasps, and was warned too.
+  numen::test::TempDir dir;
+  std::string text = default_with_grasp(
+      "\n[[grasp]]\nname = \"grasper\"\njaws = [\"jaw_1\", \"jaw_2\"]\nmax_force = 0.1\n");
+  text = numen::test::replace(text, "gravity = [0.0, 0.0, 0.0]", "gravity = [0.0, 0.0, -9.81]");
+  const numen::sim::Scene s = numen::sim::load_scene(dir.write("heavy.toml", text));
+  int block = 0, own = 0;
+  for (const std::string& w : s.warnings) {
+    block += w.find("grasp \"grasper\": body \"block\" weighs") != std::string::npos ? 1 : 0;
+    own += w.find("grasp \"grasper\": body \"tube\"") != std::string::npos ? 1 : 0;
+  }
+  EXPECT_EQ(block, 1);
+  EXPECT_EQ(own, 0) << "the grasper's own tube is listed as a heavy body";
+}
+
 TEST(SceneGrasp, AMultirateSceneIsRefusedAtTheGrasp) {
   numen::test::TempDir dir;
   const std::string text = default_with_grasp(

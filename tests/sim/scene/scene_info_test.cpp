@@ -314,6 +314,37 @@ TEST(SceneInfo, ASimplifiedOrgansNetAndFineSurface) {
   EXPECT_EQ(load.at("map_heap").get<std::size_t>(), l->map_heap);
 }
 
+// `numen info` prints the load's wall-clock time (as the command timed load_scene()) and how many
+// simplified nets came from their cache file; untimed (describe_scene() alone), neither.
+TEST(SceneInfo, TheLoadsWallClockTimeAndTheNetsReadFromTheirCache) {
+  NUMEN_REQUIRE_DEFORMABLE();
+  numen::test::TempDir dir;
+  dir.write("fine.obj", numen::test::fine_ellipsoid_obj(4));
+  const std::string path = dir.write(
+      "organ.toml", numen::test::with_organ_mesh_file("fine.obj", "cache = \"fine.nmnet\""));
+  sim::SceneInfo made = sim::describe_scene(sim::load_scene(path));
+  EXPECT_LT(made.load_wall_s, 0.0);
+  EXPECT_EQ(sim::format_scene_info(made).find("  load: "), std::string::npos);
+  EXPECT_FALSE(nlohmann::json::parse(sim::format_scene_info_json(made)).contains("load"));
+  made.load_wall_s = 2.5;
+  EXPECT_NE(sim::format_scene_info(made).find(
+                "  load: 2.500 s wall clock; organ nets simplified from a mesh file: 1, of which 0 "
+                "read from their cache file\n"),
+            std::string::npos)
+      << sim::format_scene_info(made);
+  sim::SceneInfo read = sim::describe_scene(sim::load_scene(path));  // from the cache file now
+  read.load_wall_s = 0.25;
+  EXPECT_NE(sim::format_scene_info(read).find(
+                "  load: 0.250 s wall clock; organ nets simplified from a mesh file: 1, of which 1 "
+                "read from its cache file\n"),
+            std::string::npos)
+      << sim::format_scene_info(read);
+  const nlohmann::json json = nlohmann::json::parse(sim::format_scene_info_json(read));
+  EXPECT_EQ(json.at("load").at("wall_s").get<double>(), 0.25);
+  EXPECT_EQ(json.at("load").at("nets_simplified"), 1);
+  EXPECT_EQ(json.at("load").at("nets_from_cache"), 1);
+}
+
 // `numen info` lists every device (docs/scenes.md, "Several devices"): the peg transfer's two,
 // each with its CANopen nodes, the bodies its links drive and its grasper; text and JSON agree.
 TEST(SceneInfo, EveryDeviceIsListedWithItsNodesBodiesAndGrasper) {

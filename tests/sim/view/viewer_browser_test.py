@@ -32,7 +32,8 @@ On a run that latches a fault (the lattice scene on a bus losing 30 % of its fra
 On the default scene with a grasper on its jaws (7.3 s of the recording, which grasps the organ):
   - the timeline marks each grasp and release, and at the grasp's frame the panel names what
     the grasper holds.
-Exit 0: passed; 1: failed; 77: skipped, only when Chromium is not installed.
+Exit 0: passed; 1: failed; 77: skipped, only when Chromium or the Python module PIL
+(python3-pil) is not installed.
 
     tests/sim/view/viewer_browser_test.py --numen build/numen --out DIR \\
         [--scene FILE] [--figure PNG]
@@ -690,6 +691,12 @@ def main():
     if not exe:
         print("SKIPPED: chromium is not installed (Debian: apt-get install chromium; "
               "CI installs it: .ci/run, viewer step)")
+        return 77
+    try:  # the screenshots' checks read the pixels with PIL: without it the test cannot judge
+        import PIL.Image  # noqa: F401  (python3-pil)
+    except ImportError:
+        print("SKIPPED: the Python module PIL is not installed: the screenshots' pixels cannot be "
+              "checked (Debian: apt-get install python3-pil; CI installs it: .ci/run, viewer step)")
         return 77
     os.makedirs(a.out, exist_ok=True)
     jobs = ([(n, s, a.duration, os.path.join(a.figures, "viewer_%s.png" % n)) for n, s in FIGURE_SCENES]

@@ -26,6 +26,20 @@
 /// The order of the contacts is a pure function of the model and the body
 /// states (deterministic, independent of the scratch's history).
 ///
+/// Crossing (body–body sphere pairs, e.g. two instruments' jaws): a fast pair can go from
+/// apart to centres past each other within one step, where the overlap's own normal would push
+/// it on through. Each body–body contact takes a reference normal from the relative motion of
+/// its two centres over the step (the bodies' point velocities × Model::dt, back from where
+/// they are): the normal at first touch, or at the step's start for a pair overlapping then.
+/// When the centre offset c_a − c_b lies behind it ((c_a − c_b)·n < 0), the contact keeps n with
+/// the depth r_a + r_b − (c_a − c_b)·n, larger than r_a + r_b: it is pushed back the way it came
+/// (Data::crossed_contacts). Such a pair is remembered (in the scratch) and held back along the
+/// same normal at the next call until its centres are back in front; one found apart with its
+/// centres still behind counts in Data::pass_throughs. With the bodies at rest the contacts are
+/// a pure function of the poses (below); moving, of the poses, the velocities and the pairs held
+/// back at the last call. A pair that goes from apart to apart within one step (relative motion
+/// over 2 (r_a + r_b) a step head-on) is not seen.
+///
 /// Coincident sphere centres (narrowphase.hpp fallbacks): against a static
 /// sphere or a sphere-set sphere, the normal points from that centre to the
 /// body's centre of mass; between two bodies, from b's centre of mass to a's;
@@ -48,6 +62,8 @@ void build_collision_structures(Model& model);
 /// 0 if none). Overflow beyond kMaxContacts keeps the first kMaxContacts,
 /// counts the rest in data.contacts_dropped, ORs StepStatus::kContactOverflow
 /// into data.status and increments data.contact_overflow_steps (once per call).
+/// Sets data.crossed_contacts, counts data.crossed_contact_steps and data.pass_throughs
+/// ("Crossing" above; one call per step: the pairs held back are the last call's).
 /// Clears only the kContactOverflow bit of data.status on entry. Sets its bit
 /// of data.stages_run (kStageContacts, step_stages.hpp). Requires
 /// a Data made by make_data() for `model`. No allocation, no exception.

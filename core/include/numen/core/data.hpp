@@ -116,7 +116,10 @@ struct Data {
 
   // ---- inputs (written by the caller before step) ----
   int held_body = -1;              ///< Body the device drives; -1: none (tool switching).
-  Pose target;                     ///< Device target pose of the held body's COM frame (world).
+  /// Device target pose of the held body's COM frame (world) — not the instrument's tool frame
+  /// (a trocar instrument's tip: sim::InstrumentTargets::held_body_target() converts). Its
+  /// orientation: Quat::Identity() for none, never Quat(0, 0, 0, 1) (a half turn; types.hpp).
+  Pose target;
   Twist target_twist;              ///< Device target twist (world).
   std::vector<Wrench> applied_wrench;  ///< Per body, world, at the COM (N, N·m): explicit external wrench.
   /// CouplingMode::kAdmittance only: the wrench the user applies to the device, as measured by
@@ -135,6 +138,14 @@ struct Data {
   /// the body (platform::ControlLoop with several devices); 0 for every body by default (one
   /// device). Wiring, not state: reset_data() keeps it.
   std::vector<int> feedback_group;
+  /// Per feedback group g (index g): the point (world, m) about which group g's composite is
+  /// taken and saturated (compute_feedback()) when the held body is not in the group — its
+  /// device's controlled frame (link 0, the tool), where its max_force and max_torque are
+  /// rated, as the held body's target is for the held body's group (device 0's). The
+  /// control loop writes it every period from the device's sample (platform::ControlLoop with
+  /// several devices). Not finite, or no entry: the group's first targeted body's target point.
+  /// make_data() sizes it 1 + Model::extra_feedback.size(), NaN; wiring: reset_data() keeps it.
+  std::vector<Vec3> feedback_point;
   std::vector<JointPrescription> joint_prescribed;  ///< Per joint; read for prescribed joints only.
 
   // ---- outputs of the last step ----
@@ -146,6 +157,13 @@ struct Data {
   /// (NetOutput::crossed_contacts > 0 for some net); 0 single-rate.
   std::int64_t net_crossed_steps = 0;
   double max_penetration = 0.0;    ///< Deepest contact this step (m).
+  /// Body–body sphere contacts this step whose centres had gone past each other along the
+  /// pair's approach normal: held back along it (detect_contacts(), collision.hpp "Crossing").
+  int crossed_contacts = 0;
+  std::int64_t crossed_contact_steps = 0;  ///< Steps with crossed_contacts > 0 since reset.
+  /// Body–body sphere pairs since reset that left contact with their centres past each other
+  /// (a crossing not held back: the two bodies went through each other there).
+  std::int64_t pass_throughs = 0;
   /// Contacts whose stiffness the time-constant floor lowered this step
   /// (SolverSettings::contact_max_omega_dt; they act with k_eff < k, so penetrate more).
   int contacts_clamped = 0;

@@ -41,7 +41,11 @@ Wrench carry_wrench(const Wrench& w, const Vec3& from, const Vec3& to) noexcept;
 /// body's target point (Eq. 9: a child's feedback carried to its parent, up
 /// to the held body), saturated by one ratio r = min(F_max/|F|, T_max/|T|, 1)
 /// that also scales every per-body wrench, so that the per-body wrenches
-/// carried to that point sum to the composite exactly. When no body is
+/// carried to that point sum to the composite exactly. Each feedback group
+/// (device, Data::feedback_group) is saturated on its own with its own
+/// limits (feedback_gains()): the held body's group about the held body's
+/// target, another group about its device's controlled frame
+/// (Data::feedback_point; its first targeted body's target without one). When no body is
 /// held the composite is zero and each per-body wrench is saturated on its
 /// own. When the held body's target is not finite (kInvalidTarget) the
 /// composite and the per-body wrenches keep the values of the last step (a

@@ -336,6 +336,8 @@ struct MultirateSceneSnapshot {
   std::int64_t contact_overflow_steps = 0;
   std::int64_t contact_clamped_steps = 0;
   std::int64_t net_crossed_steps = 0;  ///< Data::net_crossed_steps.
+  std::int64_t crossed_contact_steps = 0;  ///< Data::crossed_contact_steps.
+  std::int64_t pass_throughs = 0;          ///< Data::pass_throughs.
   std::int64_t nonfinite_steps = 0;
   std::uint32_t status = 0;
   std::uint32_t stages_run = 0;

@@ -16,7 +16,8 @@ using Mat6 = Eigen::Matrix<double, 6, 6>;  ///< 6x6 block (mass, Jacobian blocks
 /// Unit quaternion, Hamilton convention. Component order: constructed as Quat(w, x, y, z)
 /// (Eigen's constructor), stored and read by coeffs() as (x, y, z, w) — the order of the Python
 /// module's arrays; scene files write [w, x, y, z] (docs/scenes.md "Drive it from your own
-/// program").
+/// program"). The identity is Quat::Identity(): Quat(0, 0, 0, 1), (x, y, z, w) read as the
+/// constructor's (w, x, y, z), is a half turn about z, taken without a word (Data::target).
 using Quat = Eigen::Quaterniond;
 
 /// Rigid pose of a frame in the world: position (m) and orientation (frame → world; Quat's

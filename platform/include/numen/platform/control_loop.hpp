@@ -69,6 +69,14 @@ struct ControlLoopSettings : hal::ImpedanceSettings {
   /// Feed LoopStatistics' overrun verdict to the supervisor. Only meaningful when periods are
   /// paced to a clock (a simulation run as fast as possible has no deadlines).
   bool supervise_overruns = false;
+  /// Bring each device's bound bodies to their targets at its first ready sample: each bound
+  /// body's pose is set to its link's target and its twist to the target's (the held body's too),
+  /// before that period's step. A live input (an OpenIGTLink tracker, a real device) starts
+  /// wherever the instrument lies, not where the scene's recording starts: without this its
+  /// springs would pull the god-object across the gap in one swing (a tracker turned 90° and
+  /// 100 mm away: 14 m/s). ControlLoop::placed_period() says when. Off: the bodies start where
+  /// the scene put them. Not for a multirate stepper (its god-object is its own copy).
+  bool place_at_first_sample = false;
 };
 
 /// One device of a ControlLoop that runs several (the LoopDevice constructor): an impedance
@@ -231,6 +239,11 @@ class ControlLoop {
   /// Period index at which device i first commanded non-zero torque; -1 if never.
   std::int64_t first_torque_period(std::size_t i = 0) const noexcept {
     return contexts_[i].first_torque_period;
+  }
+  /// Period index at which device i's bodies were brought to its first ready sample
+  /// (ControlLoopSettings::place_at_first_sample); -1 if not (yet, or the setting is off).
+  std::int64_t placed_period(std::size_t i = 0) const noexcept {
+    return contexts_[i].placed_period;
   }
 
   /// The step stage's dynamics (step 4 of end_period()): `stepper`'s step() over the loop's

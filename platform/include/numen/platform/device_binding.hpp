@@ -34,14 +34,21 @@ struct AxisPrescription {
 
 /// The wiring between one instrument and one core::Data.
 struct DeviceBinding {
-  /// Bodies driven by links. Empty: the legacy rigid binding {link 0 → the
-  /// held body, identity}.
+  /// Bodies driven by links. Empty with no prescriptions either (is_default_rigid()): the legacy
+  /// rigid binding {link 0 → the held body, identity}; empty with prescriptions: a device that
+  /// drives joints only, no body.
   std::vector<LinkBinding> links;
   std::vector<AxisPrescription> prescriptions;
 
   /// The binding used when a scene says nothing: link 0 drives the held body.
   static DeviceBinding rigid() { return DeviceBinding{{LinkBinding{}}, {}}; }
 };
+
+/// True when `b` says nothing (no link, no prescription): the control loop then drives the held
+/// body by the rigid binding (DeviceBinding::rigid()).
+inline bool is_default_rigid(const DeviceBinding& b) noexcept {
+  return b.links.empty() && b.prescriptions.empty();
+}
 
 /// Per body of a model of `num_bodies` bodies: 1 if a link binding of `binding` names it
 /// (LinkBinding::body ≥ 0), else 0. Load time (allocates). Throws std::invalid_argument if a

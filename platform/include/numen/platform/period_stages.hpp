@@ -69,6 +69,10 @@ struct PeriodContext {
   LoopStatistics* stats = nullptr;         ///< The period's timing statistics.
   std::int64_t first_active_period = -1;   ///< Period the lifecycle first became active.
   std::int64_t first_torque_period = -1;   ///< Period non-zero torque was first commanded.
+  /// The bound bodies are to be brought to the first ready sample's targets
+  /// (ControlLoopSettings::place_at_first_sample); cleared by bind_link_targets() when done.
+  bool place_pending = false;
+  std::int64_t placed_period = -1;  ///< Period they were brought there; -1 if not.
   /// This device's index in the loop, in [0, records.size()). Device 0 does the loop's shared
   /// work (the step, Stepper::finish(), LoopStatistics) for all.
   int index = 0;

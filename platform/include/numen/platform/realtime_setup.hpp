@@ -7,7 +7,8 @@
 /// (sched_setaffinity(2) with pid 0: the calling thread), the thread's timer slack
 /// (prctl(2) PR_SET_TIMERSLACK: how late the kernel may fire its timers to coalesce wake-ups,
 /// 50 µs by default for a SCHED_OTHER thread). And whether the kernel itself is PREEMPT_RT
-/// (/sys/kernel/realtime, uname -v).
+/// (/sys/kernel/realtime, uname -v). Apart: the PM QoS CPU latency request that a paced run
+/// holds while it lasts (CpuLatencyRequest, /dev/cpu_dma_latency).
 ///
 /// Lack of privilege is not an exception: every step is reported as not requested, applied
 /// or failed (errno and a message that says how to grant the privilege), and a non-real-time
@@ -131,5 +132,51 @@ std::vector<std::string> describe(const RealtimeReport& report);
 
 /// The calling thread's timer slack in ns (prctl(PR_GET_TIMERSLACK)); -1 if it cannot be read.
 std::int64_t current_timer_slack_ns() noexcept;
+
+/// The kernel's PM QoS CPU latency file (Linux Documentation/power/pm_qos_interface.rst): a
+/// process that opens it and writes a 32-bit latency in µs keeps every CPU out of the idle
+/// states that take longer than that to leave, until it closes the file.
+inline constexpr const char* kCpuDmaLatencyPath = "/dev/cpu_dma_latency";
+
+/// A PM QoS CPU latency request, held while this object lives (what cyclictest does by
+/// default, and the reason its wake-up latency on an idle virtual machine was half numen's:
+/// docs/realtime.md "CPU latency"). With 0 µs an idle CPU polls
+/// (cpuidle's POLL state) instead of halting, so a timer's wake-up needs no exit from a halt;
+/// on a virtual machine a halted vCPU is descheduled by the host. Machine-wide (every CPU),
+/// at the price of idle CPUs that never sleep while it is held. The request ends when the file
+/// is closed: by the destructor, or by the kernel when the process ends however it ends.
+/// Setup code: allocates (its message); the loop only keeps it alive. Move-only.
+class CpuLatencyRequest {
+ public:
+  /// Holds nothing; step() is "not requested".
+  CpuLatencyRequest() = default;
+  /// Opens `path` (read-write) and writes `max_latency_us` as a native 32-bit integer, then
+  /// reads back the latency the kernel now enforces (the smallest request of any process):
+  /// step() is applied with it and the value before, or failed with the errno and what to do
+  /// (no privilege: root, or a udev rule giving a group write access; no such file: a kernel
+  /// without CPU latency QoS or a container without the device). Never throws for these;
+  /// std::invalid_argument if `max_latency_us` < 0.
+  explicit CpuLatencyRequest(std::int32_t max_latency_us,
+                             const std::string& path = kCpuDmaLatencyPath);
+  /// Closes the file: the request ends.
+  ~CpuLatencyRequest();
+  CpuLatencyRequest(CpuLatencyRequest&& other) noexcept;
+  CpuLatencyRequest& operator=(CpuLatencyRequest&& other) noexcept;
+  CpuLatencyRequest(const CpuLatencyRequest&) = delete;
+  CpuLatencyRequest& operator=(const CpuLatencyRequest&) = delete;
+  /// The outcome, as a step of apply_realtime() (describe_cpu_latency() gives its line).
+  const RealtimeStep& step() const noexcept { return step_; }
+  /// The request is held (the file is open and was written).
+  bool held() const noexcept { return fd_ >= 0; }
+
+ private:
+  int fd_ = -1;
+  RealtimeStep step_;
+};
+
+/// The line of a CPU latency request's step, as describe()'s lines:
+///   "cpu latency: applied: /dev/cpu_dma_latency 0 us held for the run (the kernel's limit was
+///    2000000000 us): idle CPUs poll instead of halting"
+std::string describe_cpu_latency(const CpuLatencyRequest& request);
 
 }  // namespace numen::platform

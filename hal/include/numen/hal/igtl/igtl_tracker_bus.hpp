@@ -20,12 +20,25 @@
 ///  - paced (a real-time run): the SYNC takes every queued pose and never waits; a message's bus
 ///    time is its timestamp + the smallest (receive time − timestamp) seen so far, the clock
 ///    offset of the sender (Cristian's bound), on the monotonic clock shifted to bus time.
+/// A pose's timestamp is checked before it is taken, against the stamp of the last pose taken
+/// (both modes): one stamped before it (backwards), or more than max_stamp_gap_ns after it (far
+/// ahead: a clock that jumped, a garbled stamp), is refused and counted, and the stream goes on
+/// with the next pose — one bad stamp neither holds the queue (following: a pose 10^6 s ahead
+/// was "due later" for the rest of the run) nor moves the clock offset (paced). Following the
+/// tracker, an unstamped pose (stamp 0) is refused too: it has no place on the tracker's clock
+/// (paced, it is its receive time, as before). Resynchronisation: resync_after poses in a row
+/// refused as backwards or ahead whose stamps go on from one another (each at most
+/// max_stamp_gap_ns after the previous refused one, not before it) are a clock that jumped (a
+/// tracker restarted): the last of them is taken and the stream is re-based on it (following:
+/// its bus time is the SYNC's; paced: the clock offset is measured again), counted in
+/// stamp_resyncs.
 /// A pose is the tool tip's (the tracked frame's) world pose tip = registration · [R, units · t] ·
 /// calibration (the tool-tip calibration in the tracked marker's frame, the registration
 /// tracker → scene); the axes are those that put the tracked frame there:
 /// PoseTrackerKinematics::inverse() of the controlled frame tip · tool_offset (its base applies
-/// as for any pose tracker). Before the first pose nothing answers (the sample is not ready); a pose
-/// that is not renewed ages and the instrument rejects it as stale, exactly as a stale encoder.
+/// as for any pose tracker). Before the first pose nothing answers (the sample is not ready); a
+/// pose that is not renewed ages and the instrument rejects it as stale, exactly as a stale
+/// encoder.
 ///
 /// Several tools on one connection (PLUS sends every tool's transform on one): one receiver
 /// (make_igtl_tracker_client(), the tools' device names in its settings) shared by one
@@ -76,6 +89,13 @@ struct IgtlTrackerSettings {
   std::int64_t wait_timeout_ns = 2'000'000'000;
   /// Latencies kept for latency_ns() (received → taken by a SYNC), >= 1.
   std::size_t latency_capacity = 1 << 16;
+  /// A pose stamped more than this after the last pose taken is refused as far ahead (ns, > 0;
+  /// 10 s: longer than a tracker's dropout of a hidden marker, shorter than any clock jump the
+  /// run could wait out).
+  std::int64_t max_stamp_gap_ns = 10'000'000'000;
+  /// Poses in a row refused for their stamps, going on from one another, that re-base the
+  /// stream on the last of them (>= 2; see the file comment).
+  int resync_after = 3;
 };
 
 /// The registration TRANSFORM named by the settings did not come within registration_wait_ns
@@ -94,7 +114,12 @@ struct IgtlBusCounters {
   /// SYNCs following the tracker whose wait ran out (each starts a stretch without waits that
   /// ends at the next pose).
   std::uint64_t wait_timeouts = 0;
-  std::uint64_t out_of_order = 0;     ///< Poses stamped before the previous one (taken as due).
+  std::uint64_t stamps_backwards = 0;  ///< Poses refused: stamped before the last pose taken.
+  /// Poses refused: stamped more than max_stamp_gap_ns after the last pose taken.
+  std::uint64_t stamps_ahead = 0;
+  std::uint64_t stamps_unstamped = 0;  ///< Poses refused following the tracker: stamp 0.
+  /// Re-basings on a clock that jumped (resync_after refused poses going on from one another).
+  std::uint64_t stamp_resyncs = 0;
   /// SYNCs that found every pose taken and the receiver ended (the stream over: a replay's end,
   /// or a server gone with reconnect off).
   std::uint64_t syncs_after_end = 0;
@@ -113,7 +138,8 @@ class IgtlTrackerBus final : public Bus {
   /// six axes, their encoder COB-IDs and counts); `kinematics` its kinematics (kept). Starts the
   /// receiver (IgtlTrackerClient). Throws std::invalid_argument: another kind, metres_per_unit
   /// not finite and > 0, a quaternion not of unit length within 1e-6, wait_timeout_ns or
-  /// registration_wait_ns <= 0, or the client's settings. With client.registration_name, waits
+  /// registration_wait_ns <= 0, max_stamp_gap_ns <= 0, resync_after < 2, or the client's
+  /// settings. With client.registration_name, waits
   /// (on the calling thread: the setup's, never a period) for that TRANSFORM and takes it as the
   /// registration; throws IgtlRegistrationMissing when it does not come in time.
   IgtlTrackerBus(const DeviceConfig& config, std::unique_ptr<const Kinematics> kinematics,
@@ -163,6 +189,8 @@ class IgtlTrackerBus final : public Bus {
  private:
   // The bus time of `p` (see the file comment).
   std::int64_t bus_time_of(const IgtlPose& p) noexcept;
+  // Whether `p`'s stamp may be taken (counts a refusal; re-bases after resync_after).
+  bool stamp_acceptable(const IgtlPose& p) noexcept;
   void take(const IgtlPose& p, std::int64_t now_mono) noexcept;
   void on_sync() noexcept;
   // Waits for the registration TRANSFORM (construction; see the constructor).
@@ -188,6 +216,11 @@ class IgtlTrackerBus final : public Bus {
   std::int64_t first_stamp_ns_ = 0;   // following: the first message's stamp
   bool has_offset_ = false;
   std::int64_t offset_ns_ = 0;        // paced: min(received − stamp)
+  std::int64_t shift_ns_ = 0;         // following: added to stamp − first stamp (re-basings)
+  bool has_last_stamp_ = false;
+  std::int64_t last_stamp_ns_ = 0;  // the stamp of the last pose taken (0: unstamped)
+  int refused_run_ = 0;             // poses in a row refused for stamps going on from one another
+  std::int64_t refused_stamp_ns_ = 0;    // the last of them
   std::vector<std::int64_t> latencies_;  // reserved at construction
   BusCounters counters_;
   IgtlBusCounters tracker_counters_;

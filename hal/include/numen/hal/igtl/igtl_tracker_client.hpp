@@ -137,8 +137,9 @@ class IgtlTrackerClient {
   void pop(std::size_t tool = 0) noexcept;
   /// Tools read: 1 + more_device_names.size().
   std::size_t tool_count() const noexcept { return queues_.size(); }
-  /// The stamp of the first pose accepted on this client, of any tool (IgtlPose::stamp_ns);
-  /// false before one. Set before that pose is queued: a consumer that has a pose sees it.
+  /// The stamp of the first stamped pose accepted on this client (stamp not 0), of any tool
+  /// (IgtlPose::stamp_ns); false before one. Set before that pose is queued: a consumer that has a
+  /// pose sees it.
   bool first_stamp_ns(std::int64_t& out) const noexcept {
     if (!has_first_stamp_.load(std::memory_order_acquire)) return false;
     out = first_stamp_ns_;
@@ -161,6 +162,11 @@ class IgtlTrackerClient {
   /// The newest pose named settings().registration_name (a TRANSFORM, POSITION or QTRANS,
   /// checked as the tool's), or none yet (locks the mutex the period never takes).
   std::optional<IgtlTransform> registration() const;
+  /// The newest pose message named settings().registration_name that was refused (its fault:
+  /// a NaN, a rotation that is not rigid, a CRC mismatch, ...), or none (locks the mutex the
+  /// period never takes). A registration that arrived and was refused is said as such, not as
+  /// one that never came.
+  std::optional<IgtlFaultRecord> registration_refused() const;
   /// The settings.
   const IgtlTrackerClientSettings& settings() const noexcept { return settings_; }
   /// Stops the thread and waits for it (idempotent).
@@ -197,6 +203,7 @@ class IgtlTrackerClient {
   std::vector<IgtlFaultRecord> records_;
   std::vector<std::string> names_;
   std::optional<IgtlTransform> registration_;  // under records_mutex_
+  std::optional<IgtlFaultRecord> registration_refused_;  // under records_mutex_
   std::thread thread_;
 };
 

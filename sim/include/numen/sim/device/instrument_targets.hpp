@@ -13,6 +13,9 @@
 /// the instrument's tip, 40 mm ahead of the tube's centre of mass along the shaft, and its
 /// orientation keeps the recorded wrist, 16.5° off the shaft through the trocar at t = 0.
 /// Construction allocates; the rest is noexcept and allocation free.
+///
+/// Also FeedbackRamp: the device's soft start (`[device] soft_start`) for such a caller, who
+/// renders Data::feedback_wrench itself.
 
 #include <cstdint>
 #include <memory>
@@ -66,6 +69,22 @@ class InstrumentTargets {
   /// Trajectory::twist_at() takes for the tool frame.
   void set_at(const Trajectory& trajectory, double t, core::Data& data) const noexcept;
 
+  /// The pose the held body's centre-of-mass frame gets for the instrument sample `tool`
+  /// (world): what set(tool, data) writes into Data::target — the frame Data::target (Python
+  /// Data.set_target) takes — written to `pose` without setting anything. Returns false (and
+  /// leaves `pose`) when data holds no body or no link of the binding drives the held body.
+  bool held_body_target(const TrajectorySample& tool, const core::Data& data,
+                        core::Pose& pose) const noexcept;
+
+  /// The instrument's tool frame (the trajectory's frame: a trocar instrument's tip) in the held
+  /// body's centre-of-mass frame when the instrument is at `tool`: held_body_target()⁻¹ ·
+  /// tool.pose (position m and orientation, body frame). On the default and lattice scenes the
+  /// tube's tip is (0, 0, 0.040) (its link_offset; the orientation is the recorded wrist, off
+  /// the shaft by a sample's own angle); the identity on probe.toml (a pose tracker without
+  /// offset). Returns false as held_body_target().
+  bool tool_in_held_body(const TrajectorySample& tool, const core::Data& data,
+                         core::Pose& pose) const noexcept;
+
   /// Number of axes of the device.
   int num_axes() const noexcept { return kinematics_->num_axes(); }
   /// The device's kinematics (controlled frame = tool frame · tool_offset).
@@ -76,6 +95,43 @@ class InstrumentTargets {
   std::unique_ptr<hal::Kinematics> kinematics_;
   platform::DeviceBinding binding_;
   std::vector<std::uint8_t> explicit_bound_;
+};
+
+/// The device's soft start for a caller that steps the scene itself and renders
+/// Data::feedback_wrench (docs/scenes.md "Drive it from your own program"): `numen run`'s
+/// device ramps its torques in over `[device] soft_start` (hal::ImpedanceDevice, 0.1 s by
+/// default) at start-up and after each re-arm; core::step does not, so a first target 20 mm
+/// from the held body gives the probe scene's full 4.2 N in the first step, and a target that
+/// comes back after a dropout (held feedback, docs/safety.md "Invalid targets") jumps to the
+/// new spring force in one step. apply(data) after each core::step returns the wrench to render:
+///   w = (1 − r) · w_from + r · Data::feedback_wrench,  r = min(1, k · dt / soft_start_s),
+/// k = 1, 2, … the steps since the ramp began (the hal device's r in its k-th write), w_from
+/// the wrench rendered when it began: zero at start-up (the device's ramp), the held wrench
+/// after a dropout (from the held force to the new one). A step flagged
+/// core::kInvalidTarget renders the held wrench and (re)starts the ramp at the next valid
+/// step. soft_start_s 0: apply() is Data::feedback_wrench. noexcept, allocation free.
+class FeedbackRamp {
+ public:
+  /// Over `soft_start_s` (s, >= 0; Scene::device.soft_start_s, the scene's `[device]
+  /// soft_start`) at steps of `dt` (s, > 0; the model's dt). Throws std::invalid_argument
+  /// otherwise.
+  FeedbackRamp(double soft_start_s, double dt);
+  /// The ramp of `scene`: its device's soft start (0.1 s unless the scene says) at its dt.
+  explicit FeedbackRamp(const Scene& scene);
+
+  /// The wrench to render after the step that produced `data` (force N, torque N·m, world,
+  /// about the held body's target point, as Data::feedback_wrench).
+  core::Wrench apply(const core::Data& data) noexcept;
+  /// Starts the ramp again from zero at the next apply() (a re-arm; after Data reset).
+  void restart() noexcept;
+  /// The factor r of the last apply() (1: the ramp is over, or soft_start_s is 0).
+  double ramp() const noexcept { return ramp_; }
+
+ private:
+  double step_ = 0.0;   // dt / soft_start_s; 0: no ramp
+  std::int64_t k_ = 0;  // steps since the ramp began; -1: begins at the next valid step
+  double ramp_ = 1.0;
+  core::Wrench from_, last_;  // rendered when the ramp began; rendered last
 };
 
 }  // namespace numen::sim

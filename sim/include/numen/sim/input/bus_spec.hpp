@@ -44,9 +44,11 @@ struct BusSpec {
 };
 
 /// Parses "sim", "log:FILE", "can:IFACE", "serial:PATH[@BAUD]" (BAUD decimal bit/s) or
-/// "igtl[:[HOST:]PORT]" (PORT decimal 1..65535). Throws
-/// std::invalid_argument naming the spec and what is wrong (empty target, unknown prefix, a
-/// baud that is not a number or not a supported termios speed).
+/// "igtl[:[HOST:]PORT]" (PORT decimal 1..65535; HOST a host name or IPv4 address of letters,
+/// digits, '.', '-' and '_', or an IPv6 address, bare or in brackets: BusSpec::igtl_host has it
+/// without them). Throws std::invalid_argument naming the spec and what is wrong (empty target,
+/// unknown prefix, a baud that is not a number or not a supported termios speed, a port out of
+/// range, a host that is none of those, such as "127.0.0.1:19098" of "igtl:127.0.0.1:19098:5").
 BusSpec parse_bus_spec(const std::string& spec);
 
 /// The acceptance filters of each side of a device's bus (hal/device/bus_filters.hpp): what the

@@ -116,6 +116,17 @@ class DivergenceMonitor {
   /// push speed and the energy base E₀ + W_in are rebased on this state. No allocation.
   void end_startup(const core::Model& model, const core::Data& data) noexcept;
 
+  /// A live input's first sample brought the tool to where the instrument lies, far from the
+  /// scene's start (platform::ControlLoopSettings::place_at_first_sample): what came before is
+  /// not the run's. The next observe() takes its base (E₀ + W_in, the contacts' push speed) from
+  /// that state as at a first period, and neither the hand's speed so far nor the targets' jump
+  /// from the scene's start to the live pose raises the speed limit. No allocation.
+  void restart() noexcept {
+    prev_held_ = -2;
+    hand_speed_max_mps_ = 0.0;
+    push_speed_mps_ = 0.0;
+  }
+
   /// Latches a breach found outside the monitor (e.g. "device plant": the emulated device's
   /// mechanics ran away, PlantMotion) with `cause` (a static string), the axis or body index
   /// `subject` in Divergence::body, the quantity `value` that breached its `limit` (the device

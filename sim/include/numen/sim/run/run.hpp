@@ -66,11 +66,24 @@ class RunLoopTally {
   std::int64_t rearm_requests_ = 0, rearms_accepted_ = 0, rearm_first_ = -1;
 };
 
+/// A run's real-time setup (apply_run_realtime()): what its loop thread got, and what the run
+/// holds for as long as this lives (keep it until the last period).
+struct RunRealtime {
+  /// The PM QoS CPU latency request of a paced run (RunOptions::cpu_dma_latency_us); not held
+  /// in an offline run or when the run asks none. Released with this object.
+  platform::CpuLatencyRequest cpu_latency;
+  /// The setup's lines (RunSummary::realtime_setup): apply_realtime()'s, then the CPU latency
+  /// request's ("cpu latency: ..."); empty when nothing was asked.
+  std::vector<std::string> lines;
+};
+
 /// The real-time setup of a run's loop thread: apply_realtime() of options.rt described line by
 /// line, or nothing if it asks for no step. A `paced` run also sets the thread's timer slack to
-/// options.timer_slack_ns whatever its scheduling (docs/realtime.md "Timer slack"); an offline
-/// run leaves it. Throws as apply_realtime() (a failed step only if strict).
-std::vector<std::string> apply_run_realtime(const RunOptions& options, bool paced);
+/// options.timer_slack_ns whatever its scheduling (docs/realtime.md "Timer slack") and holds
+/// the CPU latency request of options.cpu_dma_latency_us (docs/realtime.md "CPU latency"); an
+/// offline run leaves both. Throws as apply_realtime() (a failed step only if strict; with
+/// strict, a failed CPU latency request too).
+RunRealtime apply_run_realtime(const RunOptions& options, bool paced);
 
 /// The scene thread's settings of a paced run: options.scene_thread with the timer slack of
 /// options.timer_slack_ns.
@@ -324,6 +337,30 @@ class SceneRunner {
   double startup_window_max_ = 0.0;  // deepest tool penetration since that minimum (m)
   int startup_obstacle_ = -1;     // obstacle of the deepest start-up contact (-1: none)
   int startup_other_body_ = -1;   // ... or the other body
+  // The period (k_) whose contacts open the start-up: 1, or the period after a live input's
+  // first sample brought the tool there (ControlLoop::placed_period()).
+  std::int64_t startup_from_ = 1;
+  // A live input's first sample, where it put the held body's target: its distance (mm; -1:
+  // no such start) and angle (°) from the body's scene start (note_live_start()).
+  double live_start_mm_ = -1.0;
+  double live_start_deg_ = 0.0;
+  // The loop brought the tool to a live input's first sample in this period.
+  void note_live_start() noexcept;
+  // Devices 1 .. N−1 (index i for device i + 1): the start-up push-out of each one's tool (the
+  // articulation of extra_trace_body_[i], when it is not the held body's), as device 0's above.
+  struct DeviceStartup {
+    bool in = false;         // its tool is being pushed out
+    double min = 0.0;        // lowest penetration of the start-up so far (m)
+    double first_mm = 0.0;   // penetration in the start-up's first period (mm)
+    std::int64_t steps = 0;  // periods of the start-up (0: started free)
+    int obstacle = -1;       // obstacle of the deepest first contact (-1: none)
+    int other_body = -1;     // ... or the other body
+  };
+  std::array<DeviceStartup, kMaxTraceExtraDevices> device_startup_{};
+  // The other devices' start-ups of this period (track_startup()); true when one ended.
+  bool track_device_startups() noexcept;
+  // A device's tool is still being pushed out (the divergence bounds keep the push-out's).
+  bool any_startup() const noexcept;
   hal::FaultRecord first_fault_;  // the first latched fault of the run (kept across re-arms)
   bool has_first_fault_ = false;
   std::uint64_t emcys_traced_ = 0;  // EMCY messages received up to the last trace record

@@ -73,6 +73,14 @@ struct RunOptions {
   /// (docs/realtime.md "Timer slack"). 1 (the minimum) by default; 0 leaves the kernel's.
   /// Offline runs leave it.
   std::int64_t timer_slack_ns = 1;
+  /// PM QoS CPU latency (µs) that a paced run requests for as long as it runs
+  /// (platform::CpuLatencyRequest on /dev/cpu_dma_latency, `--cpu-dma-latency`), as cyclictest
+  /// does: 0 (the default) keeps idle CPUs polling instead of halting, so that the loop's timer
+  /// does not wait for a halted CPU to come back (on an idle virtual machine it halved the
+  /// wake-up latency: docs/realtime.md "CPU latency"). < 0 (`--no-cpu-dma-latency`) leaves the
+  /// host's. Offline runs leave it. Without the privilege the step is reported as failed (fatal
+  /// with rt.strict).
+  std::int32_t cpu_dma_latency_us = 0;
   /// Paced run: the loop thread's period wait ends in a busy-wait of this long before each
   /// deadline (ns, `--spin`; platform::PeriodicTimer::set_spin_ns); 0 (default): it sleeps to
   /// the deadline. For a loop thread on a CPU of its own (rt.cpu_affinity, `--cpu`) on a
@@ -124,7 +132,9 @@ std::int64_t compute_phase_override_ns(const Scene& scene, const RunOptions& opt
 
 /// Refuses options that a run of `scene` would not apply or whose outputs it could not write,
 /// before anything is opened (InputError naming the option): --view-rate not > 0, --speed
-/// negative or not finite or with a paced run, a --duration shorter than half a period,
+/// negative or not finite or with a paced run or pacing the run past kMaxRunDuration of wall
+/// time, --rt-priority in an offline run, --timer-slack above dt in a paced run, a --duration
+/// shorter than half a period,
 /// --phase not below dt, an in-memory --trace over kMaxInMemoryTraceBytes, a --spin in an
 /// offline run, without --cpu or not below dt, a --timer-slack in an offline run, a scene thread
 /// (--scene-rt-priority, --scene-cpu, --scene-spin) that the run would not start or that would

@@ -124,6 +124,9 @@ struct DeviceRunSummary {
   std::int64_t torque_periods = 0;     ///< Periods in which it was sent non-zero torque.
   std::int64_t invalid_periods = 0;    ///< Periods whose sample was not valid (target held).
   std::int64_t rejected_samples = 0;   ///< Its axis samples rejected by the checks.
+  /// The same by cause ("1500 stale (older than max_sample_age, or none came), 2 implausible
+  /// jump"; rejection_causes()); "" for none.
+  std::string rejected_causes;
   std::int64_t faults = 0;             ///< Managed stack: its safe states latched.
   std::string lifecycle;               ///< Managed stack: its lifecycle state at the end.
   bool closed_loop = false;            ///< Its emulated device moved under its torques (a plant).
@@ -131,6 +134,19 @@ struct DeviceRunSummary {
   double hand_separation_max_mm = 0.0; ///< Closed loop: largest hand–handle separation (mm).
   double device_port_energy_j = 0.0;   ///< Closed loop: energy into its handle's port (J).
 };
+
+}  // namespace numen::sim
+
+namespace numen::hal {
+struct DeviceCounters;
+}  // namespace numen::hal
+
+namespace numen::sim {
+
+/// The axis samples a device rejected, by cause, from its counters: "N stale (older than
+/// max_sample_age, or none came)", "N implausible jump", "N out of range", "N malformed",
+/// "N non-finite", the non-zero ones joined by ", "; "" when none was rejected.
+std::string rejection_causes(const hal::DeviceCounters& c);
 
 /// The text line of one device (RunSummary::device_lines): "NAME: feedback force max F N, ...".
 std::string format_device_line(const DeviceRunSummary& d);
@@ -224,11 +240,21 @@ struct RunSummary {
   double joint_drift_max_mm = 0.0;         ///< Largest linear joint error |C| after a step (mm).
   double joint_angle_drift_max_mrad = 0.0; ///< Largest angular joint error |C| after a step (mrad).
   std::int64_t rejected_samples = 0;       ///< Axis samples rejected by the checks.
+  /// The same by cause (DeviceRunSummary::rejected_causes); "" for none.
+  std::string rejected_causes;
   std::int64_t invalid_periods = 0;        ///< Periods whose sample was not valid (target held).
   std::int64_t contact_overflow = 0;       ///< Steps that ran out of contact capacity.
   /// Steps with a contact whose stiffness the time-constant floor lowered
   /// (core::Data::contact_clamped_steps; core::SolverSettings::contact_max_omega_dt).
   std::int64_t contact_clamped_steps = 0;
+  /// Steps in which a sphere pair of two bodies (e.g. the two instruments' jaws) had its centres
+  /// past each other and was pushed back along its approach normal
+  /// (core::Data::crossed_contact_steps; docs/dynamics.md, "Crossing").
+  std::int64_t crossed_contact_steps = 0;
+  /// Sphere pairs of two bodies that went through each other: left contact with their centres
+  /// past each other (core::Data::pass_throughs). A warning names the first.
+  std::int64_t pass_throughs = 0;
+  double first_pass_through_s = -1.0;  ///< Simulated time of the first, s; −1: none.
   int contacts_max = 0;           ///< Rigid sphere contacts in one step (node contacts apart).
   int solver_iterations_max = 0;  ///< Iterations of the implicit solve in one step.
   double solver_iterations_mean = 0.0;  ///< Mean over the steps.
@@ -293,6 +319,13 @@ struct RunSummary {
   std::int64_t igtl_disconnects = 0;       ///< igtl: connections lost.
   std::int64_t igtl_wait_timeouts = 0;     ///< igtl: SYNCs whose wait for the tracker ran out.
   std::int64_t igtl_syncs_without_pose = 0;  ///< igtl: SYNCs before the first pose.
+  /// igtl: poses refused for their timestamps (hal::IgtlBusCounters): stamped before the last
+  /// pose taken, more than 10 s after it (IgtlTrackerSettings::max_stamp_gap_ns), unstamped
+  /// (following the tracker's clock); and the re-basings on a clock that jumped.
+  std::int64_t igtl_stamps_backwards = 0;
+  std::int64_t igtl_stamps_ahead = 0;
+  std::int64_t igtl_stamps_unstamped = 0;
+  std::int64_t igtl_stamp_resyncs = 0;
   /// igtl: the run followed the tracker's clock (offline: a replay's end is the stream's end);
   /// false: paced (a live tracker: a lost connection is a fault).
   bool igtl_follows = false;

@@ -3,9 +3,10 @@
 /// A short timing of a scene's step at load (`numen run`, `numen info`): whether the scene's
 /// world can keep its period on this machine before a paced run finds out by overrunning.
 /// The step is core::step() of the whole model from its loaded state (the tool at rest where
-/// the scene puts it, the organ's nets included): a lower bound of a run's step, which adds the
-/// contacts the hand makes, the device and the run's measurements (docs/realtime.md, "Before a
-/// paced run").
+/// the scene puts it, the organ's nets included, their nodes resting only after ten quiet
+/// steps): not a bound of a run's step either way — a run adds the contacts the hand makes, the
+/// device and the run's measurements, and saves the work of the organ's resting nodes
+/// (docs/realtime.md, "Before a paced run").
 
 #include <optional>
 #include <string>
@@ -30,9 +31,16 @@ struct StepTiming {
 /// (a 200 000-triangle organ must not make the load wait). Setup code: allocates the copy.
 StepTiming time_scene_step(const Scene& scene, int max_steps = 20, double budget_s = 0.25);
 
-/// The warning of a timing whose median step does not fit its period (a paced run would
-/// overrun every period, an offline run runs slower than real time), else nothing. Names the
-/// median, the steps, the period and the real-time factor the step allows.
+/// A median step at load above this share of its period is a warning: a run's step adds what
+/// the timing leaves out (the hand's contacts, the run's measurements), so a paced run may not
+/// keep the period (docs/realtime.md, "Before a paced run").
+inline constexpr double kStepTimingWarnShare = 0.5;
+
+/// The warning of a timing whose median step is above kStepTimingWarnShare of its period, else
+/// nothing: above the period, a paced run will overrun its periods; between, it may. Names the
+/// median, the steps, the period and what the timing leaves out; it claims no offline real-time
+/// factor (the timing bounds a run's step neither way: the run adds contacts and measurements,
+/// its resting nodes save work).
 std::optional<std::string> step_timing_warning(const StepTiming& timing);
 
 /// One line for `numen info`: "step at load: median X us, max Y us over N steps, against the

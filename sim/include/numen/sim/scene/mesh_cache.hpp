@@ -13,11 +13,14 @@
 /// scale and winding), the build options (band width, cell factor, memory cap) and the shape's
 /// compile-time constants (leaf size, grid and brick cells): any change of what the build would
 /// produce changes it. The checksum (the same hash of the payload) finds a damaged file; the
-/// payload is then checked for sizes and index ranges before it is trusted. Load time only.
+/// payload is then checked for sizes and index ranges before it is trusted. A cache path is
+/// only ever read or replaced when it names a regular file that starts with its kind's magic, or
+/// nothing in a folder that exists (docs/meshes.md, "Build cache"). Load time only.
 
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <optional>
 #include <string>
 
 #include "numen/core/mesh.hpp"
@@ -46,14 +49,24 @@ struct MeshCacheOutcome {
   /// "" or why the file was not used or not written: "stale (…)", "damaged (…)", "cannot write
   /// …" — the caller's warning. A missing file is no warning (the first load writes it).
   std::string note;
+  /// The returned error is the cache path's, not the build's: it names something that is not
+  /// this kind of numen cache file and is never read or replaced — a symbolic link, a directory,
+  /// a FIFO, a device node, a socket, a file that does not start with the cache's magic (or
+  /// starts with the other kind's), one that cannot be read, a folder that does not exist.
+  /// Nothing was built; the caller's error at its `cache` key.
+  bool cache_refused = false;
 };
 
 /// Fills `out` with the shape of `mesh` built with `options`: read from `path` when the file is
-/// there with the right key and checksum and a consistent payload, else built
-/// (core::build_mesh_shape()) and written to `path` (through a temporary file renamed over it;
-/// its folder made when missing). A file that cannot be used or written is never an error: the
-/// shape is built, and `outcome.note` says why. Returns build_mesh_shape()'s error ("" on
-/// success; then nothing is written). Load time only.
+/// there with the right key and checksum and a consistent payload (the vertices `mesh`'s), else
+/// built (core::build_mesh_shape()) and written to `path` (through a temporary file in its folder
+/// renamed over it; no folder is made). `path` must name nothing or a numen mesh-shape cache
+/// (a regular file starting with "NUMENMSH"): anything else is returned as the error at once,
+/// nothing read, built or written (`outcome.cache_refused`; lstat() first and an open with
+/// O_NOFOLLOW | O_NONBLOCK, so a FIFO or a device never blocks the load). A cache file that is
+/// stale, damaged or cannot be written is not an error: the shape is built, and `outcome.note`
+/// says why. Returns that refusal or build_mesh_shape()'s error ("" on success; then nothing is
+/// written). Load time only.
 std::string build_mesh_shape_cached(const core::TriangleMesh& mesh,
                                     const core::MeshShapeOptions& options,
                                     const std::filesystem::path& path, core::MeshShape& out,
@@ -74,14 +87,28 @@ std::string net_cache_file_name(const std::string& stem, std::uint64_t key);
 
 /// Fills `net` with the net simplified from `mesh` to `nodes` nodes (docs/organs.md, "A fine
 /// surface on a coarser net"): read from cache file `path` when it is there with the right key
-/// (net_cache_key()) and checksum and a valid mesh (core::validate_mesh()) as payload (the net's
+/// (net_cache_key()) and checksum and a closed, valid mesh (core::validate_mesh()) of 4 to fewer
+/// than `mesh`'s vertices within `mesh`'s size of its bounding box as payload (the net's
 /// vertices, m, and triangles), else made by `simplify` (which fills its argument, "" or an
 /// error) and written to `path` as build_mesh_shape_cached() writes (a temporary file renamed
-/// over it). A file that cannot be used or written is never an error: `outcome.note` says why.
-/// Returns `simplify`'s error ("" on success; then nothing is written). Load time only.
+/// over it). `path` must name nothing or a numen net cache ("NUMENNET"): anything else is
+/// refused as build_mesh_shape_cached() refuses it (`outcome.cache_refused`, nothing simplified).
+/// A stale or damaged file, or one that cannot be written, is not an error: `outcome.note` says
+/// why. Returns the refusal or `simplify`'s error ("" on success; then nothing is written). Load
+/// time only.
 std::string simplify_net_cached(const core::TriangleMesh& mesh, int nodes, std::uint64_t simplifier,
                                 const std::filesystem::path& path,
                                 const std::function<std::string(core::TriangleMesh&)>& simplify,
                                 core::TriangleMesh& net, MeshCacheOutcome& outcome);
+
+/// A net simplification of at least this wall-clock time (s) without a cache file gets a hint to
+/// set one (docs/organs.md, "Load time, and the cache file").
+inline constexpr double kSlowNetSimplifySeconds = 2.0;
+
+/// The load warning of a net simplified to `nodes` nodes in `wall_s` seconds of wall clock with
+/// no cache file (`cached` false): "simplified to N nodes in X s (wall clock) at every load:
+/// `cache = true` (or a file path) keeps the net for the next load" when `wall_s` ≥
+/// kSlowNetSimplifySeconds, else nothing.
+std::optional<std::string> slow_net_simplification_hint(double wall_s, int nodes, bool cached);
 
 }  // namespace numen::sim

@@ -109,6 +109,9 @@ struct SceneInfo {
   std::vector<DeviceLine> devices;
   /// The passivity lint of each driven plant axis (Scene::passivity_lint).
   std::vector<PassivityLintRow> passivity_lint;
+  /// Wall-clock time of the scene's load (s; sim::load_scene(), as its caller timed it: `numen
+  /// info`); negative when not timed (then not printed). describe_scene() leaves it negative.
+  double load_wall_s = -1.0;
 };
 
 /// Every device of `scene`, device 0 first: its name, kind, axes, CANopen nodes, the bodies its
@@ -118,7 +121,9 @@ std::vector<DeviceLine> device_lines(const Scene& scene);
 /// Describes a loaded scene (makes one Data to measure it). Load time only: allocates.
 SceneInfo describe_scene(const Scene& scene);
 
-/// Human-readable report, several lines ending in '\n'.
+/// Human-readable report, several lines ending in '\n'; when the load was timed
+/// (SceneInfo::load_wall_s ≥ 0), a line "  load: X s wall clock" with, for a scene whose organs'
+/// nets were simplified, how many of them were read from their cache file.
 std::string format_scene_info(const SceneInfo& info);
 
 /// The same as one JSON object (no trailing newline): keys name, file,
@@ -126,7 +131,8 @@ std::string format_scene_info(const SceneInfo& info);
 /// capacities{...}, model_bytes{sizeof, heap, groups{...}}, meshes[{kind, name, triangles,
 /// vertices, heap, band_heap, band_width_m, band_note}], data_bytes{...},
 /// device{name, kind, managed, axes[{name, rated_torque}], nodes[{node_id, dcf, axes[]}]},
-/// devices[{name, kind, axes, node_ids[], bodies[], graspers[]}].
+/// devices[{name, kind, axes, node_ids[], bodies[], graspers[]}]; and, when timed (load_wall_s
+/// ≥ 0), load{wall_s, nets_simplified, nets_from_cache}.
 std::string format_scene_info_json(const SceneInfo& info);
 
 }  // namespace numen::sim
