@@ -46,7 +46,7 @@ DataFootprint data_footprint(const Data& d) noexcept {
   f.groups[1] = {"collision scratch",
                  heap(c.sphere_world, c.sphere_x, c.sphere_y, c.sphere_z, c.sphere_r,
                       c.body_aabb_min, c.body_aabb_max, c.sweep_order, c.near_a, c.near_b,
-                      c.entry_stamp)};
+                      c.entry_stamp, c.pairs, c.pairs_prev)};
   f.groups[2] = {"contact solver scratch", heap(s.contact_terms, s.cross_contacts)};
   f.groups[3] = {"body solver scratch",
                  heap(s.saved_state, s.inertia_world, s.twist0, s.rhs, s.delta, s.residual,
