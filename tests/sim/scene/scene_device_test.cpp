@@ -467,6 +467,7 @@ encoder_cob_id = 0x181
 }
 
 TEST(SceneDevices, ACobIdOfTwoDevicesWithDcfsIsLocatedAtTheSceneKey) {
+  NUMEN_REQUIRE_ARTICULATION();  // tube_clash.toml's instruments are on joints
   // Issue 70: the two instruments of tests/data/tube_clash.toml, each node configured by its DCF;
   // the right one's pivot_x encoder given the left one's COB-ID (0x181). Its DCF (node 6) has
   // no TPDO 0x181: that mismatch, at the DCF's line, was the error, with no scene line.
