@@ -18,14 +18,19 @@ bool finite_nonnegative(double v) noexcept { return std::isfinite(v) && v >= 0.0
 
 }  // namespace
 
+std::string validate_net_owner(const Model& model, int body, int material) {
+  if (body < 0 || body >= model.num_bodies())
+    return "rigid component body index " + std::to_string(body) + " is not a body of the model";
+  // A model without materials yet gets "default" from finalize_model(): material 0.
+  if (material < 0 || material >= std::max(1, model.num_materials()))
+    return "material index " + std::to_string(material) + " out of range";
+  return "";
+}
+
 std::string add_net(Model& model, const TriangleMesh& mesh, const NetSettings& settings) {
   const std::string where = "net '" + settings.name + "': ";
-  if (settings.body < 0 || settings.body >= model.num_bodies())
-    return where + "rigid component body index " + std::to_string(settings.body) +
-           " is not a body of the model";
-  // A model without materials yet gets "default" from finalize_model(): material 0.
-  if (settings.material < 0 || settings.material >= std::max(1, model.num_materials()))
-    return where + "material index " + std::to_string(settings.material) + " out of range";
+  if (const std::string err = validate_net_owner(model, settings.body, settings.material); !err.empty())
+    return where + err;
   if (!(std::isfinite(settings.mass) && settings.mass > 0.0))
     return where + "mass must be finite and > 0 kg";
   if (!(std::isfinite(settings.tie_stiffness) && settings.tie_stiffness > 0.0))

@@ -17,6 +17,15 @@ For either law the force is E times a function of (nu, delta): the script report
   /usr/bin/python3 docs/figures/indentation_reference.py            # table + checks, writes the CSV
   /usr/bin/python3 docs/figures/indentation_reference.py --quick    # Hertz at delta <= 0.1 R, coarse
 
+Block mode (numen's material net, core/include/numen/core/net_material.hpp): the same sphere pressed
+into a cylinder block of radius RB and height HB (mm), every boundary free but the contact, held
+only by an elastic foundation in its volume, a body force -kappa u (reference volume),
+kappa = E_net / l^2, E_net = (15/16) E / (1 - nu^2), l the support length:
+  /usr/bin/python3 docs/figures/indentation_reference.py --block 30 30 --support-length 30 \
+      [--nu 0.45] [--law linear|neo] [--net-continuum] [--mesh-scale S] [--out FILE.csv]
+--net-continuum solves the continuum numen's net converges to: E_net and nu = 1/4 in place of E, nu
+(kappa the same). F/E is always over the true E; Hertz alongside with E* = E / (1 - nu^2).
+
 Exit status: 0 checks passed, 1 a check failed, 77 python3-getfem (or numpy) missing (a skip).
 """
 import os
@@ -63,18 +72,20 @@ def sneddon(delta, nu):
     return 0.5 / (1.0 - nu * nu) * ((a * a + R * R) * math.log((R + a) / (R - a)) - 2.0 * a * R)
 
 
-def graded_mesh(L, s, h0=0.25, grade=0.25, patch=8.0):
-    """Triangles on [0, L]^2 (r, z), refined (Bank) until every triangle's diameter is at most
-    h(x) = s (h0 + grade * dist(x, contact patch)), the patch being the top segment r <= patch
-    (mm) at z = L. s scales the whole size field: s = 1/2 halves every element."""
-    m = gf.Mesh("regular simplices", np.linspace(0.0, L, 5), np.linspace(0.0, L, 5))
+def graded_mesh(L, s, h0=0.25, grade=0.25, patch=8.0, H=None):
+    """Triangles on [0, L] x [0, H] (r, z; H = L when not given), refined (Bank) until every
+    triangle's diameter is at most h(x) = s (h0 + grade * dist(x, contact patch)), the patch being
+    the top segment r <= patch (mm) at z = H. s scales the whole size field: s = 1/2 halves every
+    element."""
+    H = L if H is None else H
+    m = gf.Mesh("regular simplices", np.linspace(0.0, L, 5), np.linspace(0.0, H, 5))
     for _ in range(100):
         cv = m.cvid()
         ids, idx = m.pid_from_cvid(cv)
         P = m.pts()[:, ids].reshape(2, -1, 3)  # every triangle has 3 points: (2, ncv, 3)
         cen = P.mean(axis=2)
         diam = np.max([np.hypot(*(P[:, :, i] - P[:, :, j])) for i, j in ((0, 1), (1, 2), (0, 2))], axis=0)
-        dist = np.hypot(np.maximum(cen[0] - patch, 0.0), L - cen[1])
+        dist = np.hypot(np.maximum(cen[0] - patch, 0.0), H - cen[1])
         big = cv[diam > s * (h0 + grade * dist)]
         if len(big) == 0:
             return m
@@ -83,16 +94,19 @@ def graded_mesh(L, s, h0=0.25, grade=0.25, patch=8.0):
 
 
 class Indentation:
-    """One block, one law, one nu: the model, stepped in delta."""
+    """One block, one law, one nu: the model, stepped in delta. The block is a cylinder of radius
+    L and height H (mm; H = L when not given). kappa None: bottom fixed (the reference table);
+    kappa > 0 (E/mm^2): no fixed boundary, an elastic foundation -kappa u in the volume instead."""
 
-    def __init__(self, law, nu, E=1.0, L=400.0, s=1.0, contact="exact", rc=10.0):
-        self.law, self.nu, self.E, self.L, self.s = law, nu, E, L, s
-        m = self.mesh = graded_mesh(L, s)
+    def __init__(self, law, nu, E=1.0, L=400.0, s=1.0, contact="exact", rc=10.0, H=None, kappa=None):
+        H = L if H is None else H
+        self.law, self.nu, self.E, self.L, self.H, self.s, self.kappa = law, nu, E, L, H, s, kappa
+        m = self.mesh = graded_mesh(L, s, H=H)
         m.set_region(TOP, m.outer_faces_with_direction([0.0, 1.0], 0.01))
         m.set_region(BOTTOM, m.outer_faces_with_direction([0.0, -1.0], 0.01))
         m.set_region(AXIS, m.outer_faces_with_direction([-1.0, 0.0], 0.01))
         # Faces that may touch the sphere: the top out to rc (the contact never reaches r = R).
-        m.set_region(CONTACT, m.outer_faces_in_box([-1.0, L - 1e-9], [rc, L + 1.0]))
+        m.set_region(CONTACT, m.outer_faces_in_box([-1.0, H - 1e-9], [min(rc, L), H + 1.0]))
         mf = gf.MeshFem(m, 1)  # u_r and u_z: two scalar P2 fields (u_r = 0 on the axis)
         mf.set_classical_fem(2)
         mfp = self.mfp = gf.MeshFem(m, 1)  # contact pressure: P1 on the contact faces
@@ -125,11 +139,15 @@ class Indentation:
             md.add_nonlinear_term(mim, "r*(S(1,:).Grad_Test_ur + S(2,:).Grad_Test_uz) + Stt*Test_ur")
         else:
             raise ValueError(law)
-        md.add_Dirichlet_condition_with_simplification("ur", BOTTOM)
-        md.add_Dirichlet_condition_with_simplification("uz", BOTTOM)
+        if kappa is None:
+            md.add_Dirichlet_condition_with_simplification("ur", BOTTOM)
+            md.add_Dirichlet_condition_with_simplification("uz", BOTTOM)
+        else:  # the foundation per radian: int kappa u.v r dr dz (reference volume, any law)
+            md.add_initialized_data("kappa", kappa)
+            md.add_linear_term(mim, "r*kappa*(ur*Test_ur + uz*Test_uz)")
         md.add_Dirichlet_condition_with_simplification("ur", AXIS)
-        # The sphere: centre (0, zc), zc = L + R - delta.
-        md.add_initialized_data("zc", L + R)
+        # The sphere: centre (0, zc), zc = H + R - delta.
+        md.add_initialized_data("zc", H + R)
         md.add_initialized_data("Rs", R)
         md.add_initialized_data("ra", E / (s * 0.25))  # augmentation ~ E / h at the contact
         if contact == "exact":  # gap and normal of the displaced point to the sphere
@@ -167,7 +185,7 @@ class Indentation:
             self._set({v: self.state[v] + w * (self.state[v] - st0[v]) for v in self.state})
         else:
             self._set(self.state)
-        self.md.set_variable("zc", [self.L + R - delta])
+        self.md.set_variable("zc", [self.H + R - delta])
         try:
             it, conv = self.md.solve("max_iter", 25, "max_res", 1e-9 * self.E, "lsearch", "simplest",
                                      "lsolver", "mumps")
@@ -232,10 +250,59 @@ def run(law, nu, deltas, **kw):
     ind = Indentation(law, nu, **kw)
     res = ind.sweep(deltas)
     dt = time.time() - t
-    print(f"  {law:6s} nu={nu:<4} L={ind.L:g} {kw.get('contact', 'exact'):10s} dofs={ind.md.nbdof():6d}"
+    size = f"L={ind.L:g}" if ind.kappa is None else f"block {ind.L:g}x{ind.H:g} kappa={ind.kappa:.4g}"
+    print(f"  {law:6s} nu={nu:<4} {size} {kw.get('contact', 'exact'):10s} dofs={ind.md.nbdof():6d}"
           f" cells={ind.mesh.nbcvs():5d} Newton {ind.iterations:3d} it in {ind.newton_calls:3d} solves,"
           f" {dt:5.1f} s", flush=True)
     return res
+
+
+def net_modulus(E, nu):
+    """numen's net modulus E_net = (15/16) E / (1 - nu^2) (net_material.hpp, its affine
+    correction 1): a continuum of (E_net, 1/4) has the plane-strain modulus E / (1 - nu^2)."""
+    return 15.0 / 16.0 * E / (1.0 - nu * nu)
+
+
+def block(args):
+    """The block mode: F/E at DELTAS in a free cylinder block held by the volumetric foundation."""
+    rb, hb = args.block
+    ell, nu, E = args.support_length, args.nu, 1.0
+    if not (rb > 0.0 and hb > 0.0 and ell > 0.0 and -1.0 < nu < 0.5):
+        print("block: need RADIUS_MM, HEIGHT_MM, --support-length > 0 and --nu in (-1, 0.5)")
+        return 2
+    e_net = net_modulus(E, nu)
+    kappa = e_net / (ell * ell)  # E/mm^2
+    # The solved continuum: the material itself, or the one numen's net converges to.
+    e_solved, nu_solved = (e_net, 0.25) if args.net_continuum else (E, nu)
+    model = "net-continuum" if args.net_continuum else "material"
+    t0 = time.time()
+    print(f"block {rb:g} x {hb:g} mm (radius x height), support length {ell:g} mm, kappa = {kappa:.6g} E/mm^2;"
+          f" {args.law}, {model}: E_solved = {e_solved:.6g} E, nu_solved = {nu_solved:g}; mesh scale {args.mesh_scale:g}")
+    res = run(args.law, nu_solved, DELTAS, E=e_solved, L=rb, H=hb, s=args.mesh_scale, kappa=kappa)
+    dt = time.time() - t0
+    rows = [(d, res[d][0] * e_solved / E, hertz(d, nu)) for d in DELTAS]
+    print("  delta_mm   F/E_mm2    Hertz   vs Hertz")
+    for d, f, h in rows:
+        print(f"  {d:6.2f}  {f:9.5f}  {h:9.5f}  {pct(f, h):+7.2f} %")
+    if args.out:
+        with open(args.out, "w") as out:
+            out.write("# Rigid frictionless sphere (R = 5 mm) pressed delta into a free cylinder block held by an\n"
+                      "# elastic foundation in its volume (body force -kappa u, kappa = E_net / l^2,\n"
+                      "# E_net = (15/16) E / (1 - nu^2)), static, GetFEM (docs/figures/indentation_reference.py\n"
+                      "# --block, docs/indentation-reference.md). Command:\n"
+                      f"#   /usr/bin/python3 docs/figures/indentation_reference.py {' '.join(sys.argv[1:])}\n"
+                      f"# block radius {rb:g} mm, height {hb:g} mm, support length l = {ell:g} mm, law {args.law},\n"
+                      f"# model {model}: solved with E_solved = {e_solved:.6g} E, nu_solved = {nu_solved:g}\n"
+                      "# (material: the true E, nu; net-continuum: E_net and 1/4, what numen's net converges to).\n"
+                      "# force_over_E_mm2 = F/E over the TRUE E, in mm^2: F[N] = E[MPa] * value = E[kPa] * 1e-3 * value.\n"
+                      "# hertz_over_E_mm2 = 4/3 / (1 - nu^2) * sqrt(R) * delta^1.5 (true nu; same units).\n")
+            out.write("law,model,nu,block_radius_mm,block_height_mm,support_length_mm,delta_mm,"
+                      "force_over_E_mm2,hertz_over_E_mm2\n")
+            for d, f, h in rows:
+                out.write(f"{args.law},{model},{nu},{rb:g},{hb:g},{ell:g},{d},{f:.6g},{h:.6g}\n")
+        print(f"wrote {args.out}")
+    print(f"block: done in {dt:.1f} s")
+    return 0
 
 
 def quick():
@@ -259,8 +326,25 @@ def main():
     ap.add_argument("--quick", action="store_true", help="coarse Hertz check only (< 60 s)")
     ap.add_argument("--csv", default=os.path.join(os.path.dirname(os.path.abspath(__file__)),
                                                   "indentation_reference.csv"))
+    blk = ap.add_argument_group("block mode (numen's material net: free block, volumetric foundation)")
+    blk.add_argument("--block", nargs=2, type=float, metavar=("RADIUS_MM", "HEIGHT_MM"),
+                     help="solve the free cylinder block of this radius and height instead of the table")
+    blk.add_argument("--support-length", type=float, metavar="L_MM",
+                     help="support length l: foundation kappa = (15/16) E / (1 - nu^2) / l^2")
+    blk.add_argument("--nu", type=float, default=0.45, help="the material's Poisson ratio (0.45)")
+    blk.add_argument("--law", choices=LAWS, default="linear")
+    blk.add_argument("--net-continuum", action="store_true",
+                     help="solve with E_net and nu = 1/4 (what numen's net converges to)")
+    blk.add_argument("--mesh-scale", type=float, default=1.0, help="size field factor s (1)")
+    blk.add_argument("--out", help="CSV to write (block mode)")
     args = ap.parse_args()
+    if args.block is None and (args.support_length is not None or args.net_continuum or args.out):
+        ap.error("--support-length, --net-continuum and --out need --block")
+    if args.block is not None and (args.support_length is None or args.quick):
+        ap.error("--block needs --support-length and excludes --quick")
     gf.util_trace_level(0)
+    if args.block is not None:
+        return block(args)
     t0 = time.time()
     if args.quick:
         ok = quick()

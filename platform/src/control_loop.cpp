@@ -189,6 +189,12 @@ void ControlLoop::bind(std::size_t i, const core::Model& model, core::Data& data
       throw std::invalid_argument(who + "axis " + std::to_string(p.axis) + " out of range");
   }
   c.explicit_bound = explicitly_bound_bodies(wiring, model.num_bodies());
+  // The glide after stale samples lasts the device's soft start (at least a period when there
+  // is one).
+  const double soft_start = instrument.config().soft_start_s;
+  c.rejoin_steps = std::isfinite(soft_start) && soft_start > 0.0 && model.dt > 0.0
+                       ? std::max(1, static_cast<int>(std::lround(soft_start / model.dt)))
+                       : 0;
   PeriodData& period = periods_[i];
   period.bound_body.fill(-1);
   // Until the device has a target, the prescribed joints hold their starting coordinates (the
@@ -226,6 +232,7 @@ void ControlLoop::init_context(std::size_t i, const core::Model& model, core::Da
   c.stepper = &core_stepper_;
   c.supervise_overruns = settings.supervise_overruns;
   c.place_pending = settings.place_at_first_sample;
+  c.rejoin_after_stale = settings.rejoin_after_stale;
   c.stats = stats_.get();
   c.index = static_cast<int>(i);
   c.records = std::span<const PeriodData>(periods_.data(), num_devices_);

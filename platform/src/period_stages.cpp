@@ -3,7 +3,9 @@
 
 #include "numen/platform/period_stages.hpp"
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 
 #include "numen/core/feedback.hpp"
 #include "numen/core/rigid_body.hpp"
@@ -157,11 +159,83 @@ void supervise_device(PeriodContext& c, PeriodData& p, std::int64_t now_ns) noex
     c.first_active_period = static_cast<std::int64_t>(c.counters.periods) - 1;
 }
 
+namespace {
+
+// The target body `body` has in `d` (the held body's is Data::target).
+core::Pose body_target_pose(const core::Data& d, int body) noexcept {
+  return body == d.held_body ? d.target : d.body_targets[static_cast<std::size_t>(body)].pose;
+}
+core::Twist body_target_twist(const core::Data& d, int body) noexcept {
+  return body == d.held_body ? d.target_twist : d.body_targets[static_cast<std::size_t>(body)].twist;
+}
+
+// The samples came back valid after stale ones (ControlLoopSettings::rejoin_after_stale): the
+// targets held until now are where the glide starts; the feedback ramps in again.
+void begin_rejoin(PeriodContext& c, const core::Data& d) noexcept {
+  c.stale_seen = false;
+  for (std::size_t k = 0; k < c.binding.links.size(); ++k) {
+    const int body = bound_body(c.binding.links[k], d, c.explicit_bound);
+    c.rejoin_from[k] = body >= 0 ? body_target_pose(d, body) : core::Pose{};
+  }
+  for (std::size_t a = 0; a < c.binding.prescriptions.size() && a < c.rejoin_from_q.size(); ++a)
+    c.rejoin_from_q[a] =
+        d.joint_prescribed[static_cast<std::size_t>(c.binding.prescriptions[a].joint)].value;
+  c.rejoin_k = c.rejoin_steps > 0 ? 0 : -1;
+  c.device->ramp_feedback_again();
+  ++c.rejoin.rejoins;
+  c.rejoin.last_period = static_cast<std::int64_t>(c.counters.periods) - 1;
+}
+
+// One period of the glide: each bound body's target (and prescribed value) from where it was
+// held to the sample's just applied, on r = 3s² − 2s³ of s = k / steps; the twist the glide's
+// rate plus r times the sample's. The first period measures the gap.
+void glide_targets(PeriodContext& c, PeriodData& p) noexcept {
+  core::Data& d = *c.data;
+  const bool first = c.rejoin_k == 0;
+  const double steps = static_cast<double>(c.rejoin_steps);
+  const double s = static_cast<double>(++c.rejoin_k) / steps;
+  const double r = s * s * (3.0 - 2.0 * s);
+  const double rate = 6.0 * s * (1.0 - s) / (steps * c.model->dt);  // dr/dt, 1/s
+  for (std::size_t k = 0; k < c.binding.links.size(); ++k) {
+    const int body = p.bound_body[k];
+    if (body < 0) continue;
+    const core::Pose live = body_target_pose(d, body);
+    const core::Twist live_twist = body_target_twist(d, body);
+    const core::Pose& from = c.rejoin_from[k];
+    const core::Vec3 gap = live.position - from.position;
+    const Eigen::AngleAxisd turn(live.orientation * from.orientation.conjugate());
+    if (first) {
+      c.rejoin.gap_max_m = std::max(c.rejoin.gap_max_m, gap.norm());
+      c.rejoin.gap_max_rad = std::max(c.rejoin.gap_max_rad, std::abs(turn.angle()));
+    }
+    core::Pose pose{from.position + r * gap,
+                    from.orientation.slerp(r, live.orientation).normalized()};
+    core::Twist twist;
+    twist.linear = r * live_twist.linear + rate * gap;
+    twist.angular = r * live_twist.angular + rate * turn.angle() * turn.axis();
+    set_body_target(d, body, pose, twist);
+    p.body_point[k] = pose.position;
+  }
+  for (std::size_t a = 0; a < c.binding.prescriptions.size() && a < c.rejoin_from_q.size(); ++a) {
+    core::JointPrescription& jp =
+        d.joint_prescribed[static_cast<std::size_t>(c.binding.prescriptions[a].joint)];
+    const double gap = jp.value - c.rejoin_from_q[a];
+    jp.value = c.rejoin_from_q[a] + r * gap;
+    jp.rate = r * jp.rate + rate * gap;
+  }
+  if (c.rejoin_k >= c.rejoin_steps) c.rejoin_k = -1;
+}
+
+}  // namespace
+
 void bind_link_targets(PeriodContext& c, PeriodData& p, std::int64_t now_ns) noexcept {
   (void)now_ns;
   const hal::DeviceState& state = *p.state;
+  if (c.rejoin_after_stale && state.ready && (state.faults & hal::SampleFault::kStale) != 0)
+    c.stale_seen = true;
   if (!state.ready) return;  // a rejected sample keeps the last good target
   core::Data& d = *c.data;
+  if (c.rejoin_after_stale && c.stale_seen && state.valid) begin_rejoin(c, d);
   // This device's composite feedback is taken and saturated about its controlled frame (link
   // 0, the tool), where its limits are rated (core::Data::feedback_point).
   if (const auto g = static_cast<std::size_t>(c.index); g < d.feedback_point.size())
@@ -175,6 +249,7 @@ void bind_link_targets(PeriodContext& c, PeriodData& p, std::int64_t now_ns) noe
   }
   for (const AxisPrescription& a : c.binding.prescriptions)
     apply_prescription(a, state.q(a.axis), state.qdot(a.axis), d);
+  if (c.rejoin_k >= 0) glide_targets(c, p);
   if (c.place_pending) {
     // A live input's first sample (ControlLoopSettings::place_at_first_sample): each bound
     // body is brought to its target, where the instrument lies, before the step.

@@ -60,13 +60,13 @@ field_t<F> get_field(const std::byte* frame) noexcept {
 constexpr std::size_t offset_of(FrameField f) noexcept { return frame_field(f).offset; }
 
 // Byte offsets of the arrays after the header (kStateFrameArrays, in order) and of the end,
-// for counts B, N, C, A, G.
+// for counts B, N, C, A, G, D, E.
 struct Offsets {
   std::array<std::size_t, kStateFrameArrays.size()> at;
   std::size_t end;
 };
 Offsets offsets(std::uint64_t b, std::uint64_t n, std::uint64_t c, std::uint64_t a,
-                std::uint64_t g) noexcept {
+                std::uint64_t g, std::uint64_t d, std::uint64_t e) noexcept {
   Offsets o{};
   std::size_t at = kStateFrameHeaderBytes;
   for (std::size_t i = 0; i < kStateFrameArrays.size(); ++i) {
@@ -78,6 +78,8 @@ Offsets offsets(std::uint64_t b, std::uint64_t n, std::uint64_t c, std::uint64_t
         case FrameField::kNumNodes: items = n; break;
         case FrameField::kNumContacts: items = c; break;
         case FrameField::kNumGrasps: items = g; break;
+        case FrameField::kNumExtraDevices: items = d; break;
+        case FrameField::kNumExtraAxes: items = e; break;
         default: items = a; break;  // kNumAxes (frame_arrays_are_well_formed())
       }
     }
@@ -124,21 +126,29 @@ std::byte* put_contact(std::byte* p, const core::Vec3& point, const core::Vec3& 
 }  // namespace
 
 std::size_t StateFrameLayout::frame_bytes(std::uint32_t contacts) const noexcept {
-  return offsets(num_bodies, num_nodes, contacts, num_axes, num_grasps).end;
+  return offsets(num_bodies, num_nodes, contacts, num_axes, num_grasps, num_extra_devices,
+                 num_extra_axes).end;
 }
 
 std::size_t encode_state_frame(const StateFrameLayout& layout, const core::Data& data,
                                const PeriodReport& report, std::span<const double> axis_torques,
-                               const StateFrameFigures& figures, std::span<std::byte> out) noexcept {
+                               const StateFrameFigures& figures, std::span<std::byte> out,
+                               std::span<const FrameDeviceInput> extra_devices) noexcept {
   if (data.bodies.size() != layout.num_bodies || data.nodes.size() != layout.num_nodes ||
       data.grasps.size() != layout.num_grasps || axis_torques.size() != layout.num_axes ||
-      out.size() < layout.max_frame_bytes())
+      extra_devices.size() != layout.num_extra_devices || out.size() < layout.max_frame_bytes())
     return 0;
+  std::size_t extra_axes = 0;
+  for (const FrameDeviceInput& d : extra_devices) {
+    if (d.report == nullptr) return 0;
+    extra_axes += d.axis_torques.size();
+  }
+  if (extra_axes != layout.num_extra_axes) return 0;
   const auto rigid = static_cast<std::uint32_t>(std::max(data.num_contacts, 0));
   const auto nodal = static_cast<std::uint32_t>(std::max(data.num_node_contacts, 0));
   const std::uint32_t contacts = std::min(rigid + nodal, layout.max_contacts);
-  const Offsets o =
-      offsets(layout.num_bodies, layout.num_nodes, contacts, layout.num_axes, layout.num_grasps);
+  const Offsets o = offsets(layout.num_bodies, layout.num_nodes, contacts, layout.num_axes,
+                            layout.num_grasps, layout.num_extra_devices, layout.num_extra_axes);
 
   std::byte* h = out.data();
   std::memcpy(h + offset_of(FrameField::kMagic), kStateFrameMagic, sizeof kStateFrameMagic);
@@ -170,6 +180,8 @@ std::size_t encode_state_frame(const StateFrameLayout& layout, const core::Data&
   put_field<FrameField::kFaultCause>(h, static_cast<std::uint8_t>(report.fault_cause));
   put_field<FrameField::kSampleFaults>(h, report.sample_faults);
   put_field<FrameField::kNumGrasps>(h, layout.num_grasps);
+  put_field<FrameField::kNumExtraDevices>(h, layout.num_extra_devices);
+  put_field<FrameField::kNumExtraAxes>(h, layout.num_extra_axes);
 
   // Each array from its declared offset (kStateFrameArrays), items in order.
   auto array = [&](FrameArray a) { return out.data() + o.at[array_index(a)]; };
@@ -212,6 +224,20 @@ std::size_t encode_state_frame(const StateFrameLayout& layout, const core::Data&
   for (const core::GraspState& g : data.grasps)
     p = put_floats(p, g.body, g.net, g.body >= 0 ? g.num_points : g.num_nodes, g.opening,
                    g.grip_force, g.grasps, g.releases, g.slips);
+  p = array(FrameArray::kExtraDevice);
+  std::byte* t = array(FrameArray::kExtraAxisTorque);
+  for (const FrameDeviceInput& d : extra_devices) {
+    const PeriodReport& r = *d.report;
+    const std::uint32_t device_flags = (r.sample_valid ? kFrameSampleValid : 0u) |
+                                       (r.torque_commanded ? kFrameTorqueCommanded : 0u) |
+                                       (r.target_ready ? kFrameTargetReady : 0u) |
+                                       (d.bus_down ? kFrameBusDown : 0u);
+    p = put_floats(p, device_flags, static_cast<std::uint8_t>(r.lifecycle),
+                   static_cast<std::uint8_t>(r.startup), static_cast<std::uint8_t>(r.fault_cause),
+                   r.sample_faults, d.axis_torques.size());
+    p = put_vec3(put_vec3(p, r.feedback.force), r.feedback.torque);
+    for (double tau : d.axis_torques) t = put_floats(t, tau);
+  }
   return o.end;
 }
 
@@ -276,6 +302,32 @@ FrameGrasp StateFrameView::grasp(std::uint32_t g) const noexcept {
   return FrameGrasp{v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7]};
 }
 
+FrameDevice StateFrameView::extra_device(std::uint32_t d) const noexcept {
+  float v[kFrameDeviceFloats];
+  f32s(item(FrameArray::kExtraDevice, d), v, kFrameDeviceFloats);
+  static_assert(kFrameDeviceFloats == 12);
+  // The small integers were written as floats (exact); a garbled one is cut to its type.
+  const auto u8 = [](float x) {
+    return static_cast<std::uint8_t>(x >= 0.0F && x <= 255.0F ? static_cast<unsigned>(x) : 0u);
+  };
+  const auto u32 = [](float x) {
+    return x >= 0.0F && x < 4294967296.0F ? static_cast<std::uint32_t>(x) : 0u;
+  };
+  FrameDevice out;
+  out.flags = u32(v[0]);
+  out.lifecycle = u8(v[1]);
+  out.startup = u8(v[2]);
+  out.fault_cause = u8(v[3]);
+  out.sample_faults = u8(v[4]);
+  out.num_axes = u32(v[5]);
+  std::copy(v + 6, v + 12, out.feedback);
+  return out;
+}
+
+float StateFrameView::extra_axis_torque(std::uint32_t a) const noexcept {
+  return f32(item(FrameArray::kExtraAxisTorque, a));
+}
+
 StateFrameDecodeResult StateFrameDecoder::decode(std::span<const std::byte> bytes,
                                                  StateFrameView& view) {
   auto fail = [](FrameField at, const std::string& what) {
@@ -316,27 +368,42 @@ StateFrameDecodeResult StateFrameDecoder::decode(std::span<const std::byte> byte
   hd.fault_cause = get_field<FrameField::kFaultCause>(h);
   hd.sample_faults = get_field<FrameField::kSampleFaults>(h);
   hd.num_grasps = get_field<FrameField::kNumGrasps>(h);
+  hd.num_extra_devices = get_field<FrameField::kNumExtraDevices>(h);
+  hd.num_extra_axes = get_field<FrameField::kNumExtraAxes>(h);
   if (hd.frame_bytes != bytes.size())
     return fail(FrameField::kFrameBytes, "frame size field says " + std::to_string(hd.frame_bytes) +
                                              " bytes, the frame has " +
                                              std::to_string(bytes.size()));
   // Counts are u32: the offsets below are computed in 64 bits and cannot overflow.
-  const Offsets o =
-      offsets(hd.num_bodies, hd.num_nodes, hd.num_contacts, hd.num_axes, hd.num_grasps);
+  const Offsets o = offsets(hd.num_bodies, hd.num_nodes, hd.num_contacts, hd.num_axes,
+                            hd.num_grasps, hd.num_extra_devices, hd.num_extra_axes);
   if (o.end != bytes.size())
     return fail(FrameField::kNumBodies,
                 "counts (bodies " + std::to_string(hd.num_bodies) + ", nodes " +
                     std::to_string(hd.num_nodes) + ", contacts " + std::to_string(hd.num_contacts) +
                     ", axes " + std::to_string(hd.num_axes) + ", graspers " +
-                    std::to_string(hd.num_grasps) + ") need " + std::to_string(o.end) +
+                    std::to_string(hd.num_grasps) + ", other devices " +
+                    std::to_string(hd.num_extra_devices) + ", their axes " +
+                    std::to_string(hd.num_extra_axes) + ") need " + std::to_string(o.end) +
                     " bytes, the frame has " + std::to_string(bytes.size()));
   if (hd.held_body < -1 || hd.held_body >= static_cast<std::int64_t>(hd.num_bodies))
     return fail(FrameField::kHeldBody, "held body " + std::to_string(hd.held_body) +
                                            " is not -1 or a body index below " +
                                            std::to_string(hd.num_bodies));
-  view.bytes_ = bytes.data();
-  view.header_ = hd;
-  view.at_ = o.at;
+  StateFrameView checked;
+  checked.bytes_ = bytes.data();
+  checked.header_ = hd;
+  checked.at_ = o.at;
+  // The other devices' axis counts add up to the values of extra_axis_torque (a reader walks
+  // them device by device).
+  std::uint64_t extra_axes = 0;
+  for (std::uint32_t d = 0; d < hd.num_extra_devices; ++d)
+    extra_axes += checked.extra_device(d).num_axes;
+  if (extra_axes != hd.num_extra_axes)
+    return fail(FrameField::kNumExtraAxes,
+                "the other devices' axis counts add up to " + std::to_string(extra_axes) +
+                    ", the header says " + std::to_string(hd.num_extra_axes));
+  view = checked;
   return {};
 }
 

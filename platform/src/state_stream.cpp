@@ -74,11 +74,18 @@ bool StateStream::take_buffer(std::uint32_t& slot) noexcept {
 
 bool StateStream::publish(const core::Data& data, const PeriodReport& report,
                           std::span<const double> axis_torques,
-                          const StateFrameFigures& figures) noexcept {
+                          const StateFrameFigures& figures,
+                          std::span<const FrameDeviceInput> extra_devices) noexcept {
   periods_.fetch_add(1, std::memory_order_relaxed);
   // What happened since the last frame reaches the next one (decimated or dropped periods).
   pending_sample_faults_ |= report.sample_faults;
   pending_bus_down_ = pending_bus_down_ || figures.bus_down;
+  const std::size_t extras = std::min(extra_devices.size(), extra_inputs_.size());
+  for (std::size_t i = 0; i < extras; ++i) {
+    if (extra_devices[i].report != nullptr)
+      extra_pending_faults_[i] |= extra_devices[i].report->sample_faults;
+    extra_pending_bus_down_[i] = extra_pending_bus_down_[i] || extra_devices[i].bus_down;
+  }
   const double t = data.time * 1e9;
   const std::int64_t t_ns = std::isfinite(t) && std::abs(t) < 9e18 ? std::llround(t) : 0;
   if (have_published_ && interval_s_ > 0.0 && t_ns < next_due_ns_) {
@@ -106,8 +113,21 @@ bool StateStream::publish(const core::Data& data, const PeriodReport& report,
   since.sample_faults = pending_sample_faults_;
   StateFrameFigures figures_since = figures;
   figures_since.bus_down = pending_bus_down_;
-  const std::size_t bytes =
-      encode_state_frame(layout_, data, since, axis_torques, figures_since, buffer);
+  for (std::size_t i = 0; i < extras; ++i) {  // each device's, likewise
+    extra_inputs_[i] = extra_devices[i];
+    if (extra_devices[i].report == nullptr) continue;  // refused by the encoder
+    extra_reports_[i] = *extra_devices[i].report;
+    extra_reports_[i].sample_faults = extra_pending_faults_[i];
+    extra_inputs_[i].report = &extra_reports_[i];
+    extra_inputs_[i].bus_down = extra_pending_bus_down_[i];
+  }
+  // More devices than a loop runs do not match any layout: the encoder refuses them.
+  const std::span<const FrameDeviceInput> extra_since =
+      extra_devices.size() > extra_inputs_.size()
+          ? extra_devices
+          : std::span<const FrameDeviceInput>(extra_inputs_.data(), extras);
+  const std::size_t bytes = encode_state_frame(layout_, data, since, axis_torques, figures_since,
+                                               buffer, extra_since);
   if (bytes == 0) {
     encode_failures_.fetch_add(1, std::memory_order_relaxed);
     loop_slot_ = slot;  // kept for the next period: only the consumer pushes on the free list
@@ -116,6 +136,8 @@ bool StateStream::publish(const core::Data& data, const PeriodReport& report,
   }
   pending_sample_faults_ = 0;
   pending_bus_down_ = false;
+  extra_pending_faults_.fill(0);
+  extra_pending_bus_down_.fill(false);
   frame_bytes_[slot] = static_cast<std::uint32_t>(bytes);
   queue_.push(slot);  // capacity == pool size: never full while we hold a buffer
   published_.fetch_add(1, std::memory_order_relaxed);

@@ -139,8 +139,8 @@ class ScanCommand {
   bool json_ = false;
 };
 
-/// `numen igtl-replay [SCENE] [--host H] [--port P] [--rate HZ] [--duration S] [--realtime]`:
-/// plays the scene's trajectory as an OpenIGTLink tracker server (sim/device/igtl_replay.hpp;
+/// `numen igtl-replay [SCENE] [--host H] [--port P] [--rate HZ] [--duration S] [--realtime]
+/// [--stall-at S --stall S]`: plays the scene's trajectory as an OpenIGTLink tracker server (sim/device/igtl_replay.hpp;
 /// docs/openigtlink.md).
 class IgtlReplayCommand {
  public:
@@ -153,6 +153,7 @@ class IgtlReplayCommand {
   std::string scene_, host_ = "127.0.0.1";
   int port_ = 18944;
   double rate_ = 0.0, duration_ = -1.0, accept_timeout_ = 30.0;
+  double stall_at_ = 0.0, stall_ = 0.0;  // --stall-at, --stall (IgtlReplaySettings)
   bool realtime_ = false;
   std::string message_ = "transform";  // --message transform|position|qtrans
 };

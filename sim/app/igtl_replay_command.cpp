@@ -31,6 +31,12 @@ IgtlReplayCommand::IgtlReplayCommand(CLI::App& parent)
                    "The pose message sent: transform (default, as PLUS), position (POSITION, "
                    "position and quaternion) or qtrans")
       ->check(CLI::IsMember({"transform", "position", "qtrans"}));
+  cli_->add_option("--stall", stall_,
+                   "Seconds the tracker goes silent (a hidden marker): the poses of that "
+                   "stretch are not sent, and the server waits as long (default 0: none)")
+      ->check(seconds_check(0.0, 1e6, false));
+  cli_->add_option("--stall-at", stall_at_, "Trajectory time the --stall begins, s (default 0)")
+      ->check(seconds_check(0.0, 1e6, false));
   cli_->add_flag("--realtime", realtime_,
                  "Send at the trajectory's pace (a live tracker) instead of as fast as the client reads");
 }
@@ -44,6 +50,8 @@ int IgtlReplayCommand::execute() const {
   settings.rate_hz = rate_;
   settings.duration_s = duration_;
   settings.paced = realtime_;
+  settings.stall_at_s = stall_at_;
+  settings.stall_s = stall_;
   settings.accept_timeout_s = accept_timeout_;
   settings.message = message_ == "position" ? sim::IgtlReplayMessage::kPosition
                      : message_ == "qtrans" ? sim::IgtlReplayMessage::kQtrans

@@ -15,6 +15,7 @@
 ///   numen scan --bus can:IFACE|serial:PATH[@BAUD] [--listen S] [--timeout S] [--json]
 ///   numen sdo --bus can:IFACE|serial:PATH[@BAUD] NODE read|write INDEX:SUB [VALUE] [--type T]
 ///   numen igtl-replay [SCENE] [--host H] [--port P] [--rate HZ] [--duration S] [--realtime]
+///                     [--stall-at S --stall S]
 ///   numen study accuracy [--out DIR] [--quick] [--case NAME]...
 ///   numen study stability [--out DIR] [--quick] [--family NAME]...
 ///   numen study passivity [--out DIR] [--quick]

@@ -286,6 +286,8 @@ int RunCommand::execute() const {
     ws.port = address.port;
     ws.organ_rate_hz = igtl_organ_rate_;
     ws.names = igtl_names_ == "plus" ? sim::IgtlNameStyle::kPlus : sim::IgtlNameStyle::kNumen;
+    ws.device_names.push_back(scene.device.name);  // the other devices' STATUS name them
+    for (const sim::SceneDevice& d : scene.extra_devices) ws.device_names.push_back(d.device.name);
     warn_if_exposed(ws.host, std::cerr, "the OpenIGTLink world");
     igtl_world = std::make_unique<sim::IgtlWorldServer>(scene.model, ws);
     const bool v6 = ws.host.find(':') != std::string::npos;

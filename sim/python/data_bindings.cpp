@@ -301,6 +301,32 @@ const sim::InstrumentTargets& instrument_of(DataHandle& h) {
   return *h.instrument;
 }
 
+/// An instrument sample from Python arguments: the tool frame's world position (3,) m and its
+/// orientation by name, xyzw= or wxyz= (read_quaternion()); jaw 0.
+sim::TrajectorySample tool_sample(const py::handle& position, const py::handle& xyzw,
+                                  const py::handle& wxyz) {
+  sim::TrajectorySample s;
+  read_vector(position, s.pose.position.data(), 3, "position");
+  s.pose.orientation = read_quaternion(py::none(), xyzw, wxyz, "orientation");
+  return s;
+}
+
+/// What `pose_of` (sim::InstrumentTargets::held_body_target or tool_in_held_body) gives for the
+/// sample `s` on `h`'s data, as (position (3,), orientation (4,) x y z w) copies. ValueError
+/// naming `what` when it gives none (no body held, or no link of the device drives it).
+py::tuple held_body_pose(DataHandle& h, const sim::TrajectorySample& s,
+                         bool (sim::InstrumentTargets::*pose_of)(const sim::TrajectorySample&,
+                                                                 const core::Data&, core::Pose&)
+                             const noexcept,
+                         const char* what) {
+  core::Pose pose;
+  if (!(instrument_of(h).*pose_of)(s, h.data, pose))
+    throw py::value_error(std::string(what) +
+                          ": no body is held (held_body -1) or no link of the device drives it");
+  return py::make_tuple(py::array_t<double>(3, pose.position.data()),
+                        py::array_t<double>(4, pose.orientation.coeffs().data()));
+}
+
 /// The scripted loop of the tests and of the benchmark (docs/python.md), in C++: `steps` times,
 /// every target from the scene trajectory's sample at data.time through the device
 /// (sim::InstrumentTargets::set_at: the held body's centre-of-mass frame, not the tip; Python's
@@ -527,9 +553,7 @@ void bind_data(py::module_& m) {
           "set_tool_sample",
           [](DataHandle& h, const py::handle& position, const py::handle& xyzw,
              const py::handle& wxyz, double jaw) {
-            sim::TrajectorySample s;
-            read_vector(position, s.pose.position.data(), 3, "position");
-            s.pose.orientation = read_quaternion(py::none(), xyzw, wxyz, "orientation");
+            sim::TrajectorySample s = tool_sample(position, xyzw, wxyz);
             s.jaw = jaw;
             instrument_of(h).set(s, h.data);
           },
@@ -546,16 +570,8 @@ void bind_data(py::module_& m) {
           "tool_to_body",
           [](DataHandle& h, const py::handle& position, const py::handle& xyzw,
              const py::handle& wxyz) {
-            sim::TrajectorySample s;
-            read_vector(position, s.pose.position.data(), 3, "position");
-            s.pose.orientation = read_quaternion(py::none(), xyzw, wxyz, "orientation");
-            core::Pose body;
-            if (!instrument_of(h).held_body_target(s, h.data, body))
-              throw py::value_error(
-                  "tool_to_body: no body is held (held_body -1) or no link of the device drives "
-                  "it");
-            return py::make_tuple(py::array_t<double>(3, body.position.data()),
-                                  py::array_t<double>(4, body.orientation.coeffs().data()));
+            return held_body_pose(h, tool_sample(position, xyzw, wxyz),
+                                  &sim::InstrumentTargets::held_body_target, "tool_to_body");
           },
           py::arg("position"), py::kw_only(), py::arg("xyzw") = py::none(),
           py::arg("wxyz") = py::none(),
@@ -570,16 +586,8 @@ void bind_data(py::module_& m) {
           "tool_in_held_body",
           [](DataHandle& h, const py::handle& position, const py::handle& xyzw,
              const py::handle& wxyz) {
-            sim::TrajectorySample s;
-            read_vector(position, s.pose.position.data(), 3, "position");
-            s.pose.orientation = read_quaternion(py::none(), xyzw, wxyz, "orientation");
-            core::Pose tip;
-            if (!instrument_of(h).tool_in_held_body(s, h.data, tip))
-              throw py::value_error(
-                  "tool_in_held_body: no body is held (held_body -1) or no link of the device "
-                  "drives it");
-            return py::make_tuple(py::array_t<double>(3, tip.position.data()),
-                                  py::array_t<double>(4, tip.orientation.coeffs().data()));
+            return held_body_pose(h, tool_sample(position, xyzw, wxyz),
+                                  &sim::InstrumentTargets::tool_in_held_body, "tool_in_held_body");
           },
           py::arg("position"), py::kw_only(), py::arg("xyzw") = py::none(),
           py::arg("wxyz") = py::none(),

@@ -86,11 +86,17 @@ auto interruptible(std::atomic<bool>& stop, Work work) -> decltype(work()) {
   return std::move(*result);
 }
 
-/// A study's progress callback that ends the study (throws Interrupted) once `stop` is set.
-auto stop_between_runs(const std::atomic<bool>& stop) {
-  return [&stop](double, double, const std::string&) {
+/// `study` (sim::run_stability_study, sim::run_accuracy_study) run with `options` by
+/// interruptible(): its progress callback (options.progress, replaced; the caller's options are
+/// for this call only, the callback refers to a local) throws Interrupted once Ctrl-C was seen,
+/// which ends the study between two runs.
+template <typename Options, typename Study>
+auto interruptible_study(Options& options, Study study) {
+  std::atomic<bool> stop{false};
+  options.progress = [&stop](double, double, const std::string&) {
     if (stop.load()) throw Interrupted{};
   };
+  return interruptible(stop, [&options, study] { return study(options); });
 }
 
 /// Integrators by their scene-file names ("implicit-euler", ...); empty: all (the studies'
@@ -197,10 +203,7 @@ void bind_run(py::module_& m) {
                                 " steps per grid run (<= 0: the study's, 300 quick or 2000), got " +
                                 std::to_string(grid_steps));
         options.grid_steps = grid_steps;
-        std::atomic<bool> stop{false};
-        options.progress = stop_between_runs(stop);
-        return rows_list(
-            interruptible(stop, [&options] { return sim::run_stability_study(options); }).rows);
+        return rows_list(interruptible_study(options, sim::run_stability_study).rows);
       },
       py::arg("quick") = true, py::arg("families") = std::vector<std::string>{},
       py::arg("integrators") = std::vector<std::string>{}, py::arg("grid_steps") = -1,
@@ -225,10 +228,7 @@ void bind_run(py::module_& m) {
         for (const std::string& c : cases) check_member("case", c, sim::accuracy_case_names());
         options.cases = cases;
         options.integrators = integrators_named(integrators);
-        std::atomic<bool> stop{false};
-        options.progress = stop_between_runs(stop);
-        return rows_list(
-            interruptible(stop, [&options] { return sim::run_accuracy_study(options); }).rows);
+        return rows_list(interruptible_study(options, sim::run_accuracy_study).rows);
       },
       py::arg("quick") = true, py::arg("cases") = std::vector<std::string>{},
       py::arg("integrators") = std::vector<std::string>{},

@@ -33,15 +33,22 @@ namespace control_loop_test {  // named: the unity build shares a TU with other 
 
 /// Bus, emulated instrument, controller-side device, model, data and the loop.
 struct Rig {
-  numen::hal::DeviceConfig config = trocar_config();
+  numen::hal::DeviceConfig config;
   SimBus bus{bus_settings()};
   numen::hal::DeviceEmulator emulator{config};
   numen::hal::InstrumentDevice device{config};
   numen::core::Model model = small_model();
   numen::core::Data data = numen::core::make_data(model);
-  ControlLoop loop{model, data, bus.controller(), device};
+  ControlLoop loop;
 
-  Rig() { emulator.set_axis_values(kQ); }
+  /// The trocar instrument (`c`) on the loop of `settings`, its axes at kQ.
+  explicit Rig(numen::hal::DeviceConfig c = trocar_config(),
+               const numen::platform::ControlLoopSettings& settings = {})
+      : config(std::move(c)),
+        loop{model, data, bus.controller(), device, numen::platform::DeviceBinding::rigid(),
+             settings} {
+    emulator.set_axis_values(kQ);
+  }
 
   /// Period k as SceneRunner runs it; the emulator then takes the torque RPDOs.
   const PeriodReport& period(std::int64_t k) {
@@ -247,6 +254,63 @@ TEST(ControlLoop, BusOffIsCountedAndStaleSamplesGetZeroTorque) {
   EXPECT_EQ(rig.loop.counters().command_failures, 5u);
   EXPECT_EQ(rig.loop.counters().sync_write_failures, 5u);
   EXPECT_TRUE(rig.loop.last_report().sample_valid);
+}
+
+// Issue 70: a device whose samples went stale (here the bus off for 10 periods) while the hand
+// moved: when they come back, its target stepped to the resumed pose in one period and the
+// feedback came back at full force. With ControlLoopSettings::rejoin_after_stale (live inputs)
+// the target glides there over the soft start (10 periods, no step over 0.15 of the gap) and the
+// torques ramp in again from zero.
+TEST(ControlLoop, AfterStaleSamplesTheTargetGlidesToTheResumedPoseAndTheFeedbackRampsInAgain) {
+  for (const bool rejoin : {false, true}) {
+    numen::hal::DeviceConfig config = trocar_config();
+    config.soft_start_s = 0.01;  // 10 periods
+    numen::platform::ControlLoopSettings settings;
+    settings.rejoin_after_stale = rejoin;
+    Rig rig(config, settings);
+    ControlLoop& loop = rig.loop;
+    numen::core::Data& data = rig.data;
+    const auto period = [&](std::int64_t k) { rig.period(k); };
+    for (int k = 0; k < 20; ++k) period(k);  // the start's soft start is over
+    ASSERT_DOUBLE_EQ(loop.impedance().sent_torques().ramp, 1.0);
+    rig.bus.set_state(numen::hal::BusState::kBusOff);
+    for (int k = 20; k < 30; ++k) period(k);
+    ASSERT_FALSE(loop.last_report().sample_valid);
+    const Vec3 held = data.target.position;
+    double moved[5];
+    for (int i = 0; i < 5; ++i) moved[i] = kQ[i] + 0.02;  // the hand moved meanwhile
+    rig.emulator.set_axis_values(moved);
+    rig.bus.set_state(numen::hal::BusState::kOk);
+    std::vector<Vec3> targets;
+    std::vector<double> ramps;
+    for (int k = 30; k < 45; ++k) {
+      period(k);
+      EXPECT_TRUE(loop.last_report().sample_valid) << k;
+      targets.push_back(data.target.position);
+      ramps.push_back(loop.impedance().sent_torques().ramp);
+    }
+    const Vec3 resumed = rig.device.last_sample().pose.position;
+    const double gap = (resumed - held).norm();
+    ASSERT_GT(gap, 1e-3);
+    double step_max = (targets[0] - held).norm();
+    for (std::size_t i = 1; i < targets.size(); ++i)
+      step_max = std::max(step_max, (targets[i] - targets[i - 1]).norm());
+    if (!rejoin) {
+      EXPECT_NEAR(step_max, gap, 1e-9);  // one step
+      EXPECT_DOUBLE_EQ(ramps[0], 1.0);
+      EXPECT_EQ(loop.rejoins().rejoins, 0u);
+      continue;
+    }
+    EXPECT_LT(step_max, 0.16 * gap);  // the smoothstep's fastest: 1.5 / 10 of the gap
+    EXPECT_GT((targets[0] - held).norm(), 0.0);
+    EXPECT_LT((targets[9] - resumed).norm(), 1e-12);  // there at the 10th period
+    EXPECT_NEAR(ramps[0], 0.1, 1e-12);  // the feedback ramps in again from zero
+    EXPECT_NEAR(ramps[4], 0.5, 1e-12);
+    EXPECT_DOUBLE_EQ(ramps[9], 1.0);
+    EXPECT_EQ(loop.rejoins().rejoins, 1u);
+    EXPECT_EQ(loop.rejoins().last_period, 30);
+    EXPECT_NEAR(loop.rejoins().gap_max_m, gap, 1e-9);
+  }
 }
 
 // Issue 17 #7, end to end: controller error reports (as SocketCanBus::read returns them) whose

@@ -80,11 +80,16 @@ struct Period {
 
 TEST(StateFrame, SizeFollowsTheLayout) {
   const StateFrameLayout layout{2, 10, 3, 5, 2};
-  // 68 header + 2·28 poses + 2·32 targets + 10·12 nodes + c·40 contacts + 24 wrench + 4·3 axes
+  // 76 header + 2·28 poses + 2·32 targets + 10·12 nodes + c·40 contacts + 24 wrench + 4·3 axes
   // + 8 penetrations + 12 closed-loop figures + 2·32 graspers.
-  EXPECT_EQ(layout.frame_bytes(0), 68u + 56 + 64 + 120 + 24 + 12 + 8 + 12 + 64);
+  EXPECT_EQ(layout.frame_bytes(0), 76u + 56 + 64 + 120 + 24 + 12 + 8 + 12 + 64);
   EXPECT_EQ(layout.frame_bytes(4), layout.frame_bytes(0) + 160);
   EXPECT_EQ(layout.max_frame_bytes(), layout.frame_bytes(5));
+  // Two other devices of 6 and 7 axes: 2·48 + 13·4.
+  StateFrameLayout two_more = layout;
+  two_more.num_extra_devices = 2;
+  two_more.num_extra_axes = 13;
+  EXPECT_EQ(two_more.frame_bytes(0), layout.frame_bytes(0) + 96 + 52);
 }
 
 TEST(StateFrame, RoundTripsEveryField) {
@@ -173,6 +178,94 @@ TEST(StateFrame, CarriesAGraspOfTissue) {
   EXPECT_FLOAT_EQ(g.slips, 4.0F);
 }
 
+// Issue 70: the frame carried device 0's state alone. The loop's other devices come after the
+// graspers, each its flags, lifecycle, start-up, fault, sample faults, axis count and feedback,
+// their axis torques in one array; device 0's header fields and arrays are as they were.
+TEST(StateFrame, CarriesTheLoopsOtherDevices) {
+  namespace hal = numen::hal;
+  Period p;
+  p.layout.num_extra_devices = 2;
+  p.layout.num_extra_axes = 5;
+  numen::platform::PeriodReport second;  // device 1: safe state latched, stale samples
+  second.sample_valid = false;
+  second.target_ready = true;
+  second.lifecycle = hal::LifecycleState::kFault;
+  second.startup = hal::StartupPhase::kOperational;
+  second.fault_cause = hal::FaultCause::kEncoderTimeout;
+  second.sample_faults = hal::SampleFault::kStale;
+  numen::platform::PeriodReport third;  // device 2: rendering 3.6 N
+  third.sample_valid = true;
+  third.torque_commanded = true;
+  third.lifecycle = hal::LifecycleState::kActive;
+  third.feedback.force = Vec3(0.0, -3.6, 0.0);
+  third.feedback.torque = Vec3(0.0, 0.0, 0.05);
+  const std::array<double, 2> second_tau{0.0, 0.0};
+  const std::array<double, 3> third_tau{-0.125, 0.5, 2.25};
+  const std::array<numen::platform::FrameDeviceInput, 2> extra{{
+      {&second, second_tau, true}, {&third, third_tau, false}}};
+  std::vector<std::byte> buf(p.layout.max_frame_bytes());
+  const std::size_t n = numen::platform::encode_state_frame(p.layout, p.data, p.report, p.torques,
+                                                            p.figures, buf, extra);
+  ASSERT_EQ(n, p.layout.frame_bytes(1));
+  StateFrameView v;
+  const auto r = StateFrameDecoder::decode(std::span(buf.data(), n), v);
+  ASSERT_TRUE(r.ok()) << r.error;
+  EXPECT_EQ(v.header().num_extra_devices, 2u);
+  EXPECT_EQ(v.header().num_extra_axes, 5u);
+  // Device 0's, unchanged.
+  EXPECT_EQ(v.header().flags, numen::platform::kFrameSampleValid | numen::platform::kFrameTorqueCommanded);
+  EXPECT_EQ(v.header().fault_cause, 0u);
+  EXPECT_EQ(v.header().sample_faults, hal::SampleFault::kJump);
+  float w[6];
+  v.feedback(w);
+  EXPECT_FLOAT_EQ(w[0], 1.0F);
+  EXPECT_FLOAT_EQ(v.axis_torque(2), 1.5F);
+  // The others'.
+  const numen::platform::FrameDevice d1 = v.extra_device(0);
+  EXPECT_EQ(d1.flags, numen::platform::kFrameTargetReady | numen::platform::kFrameBusDown);
+  EXPECT_EQ(d1.lifecycle, static_cast<std::uint8_t>(hal::LifecycleState::kFault));
+  EXPECT_EQ(d1.startup, static_cast<std::uint8_t>(hal::StartupPhase::kOperational));
+  EXPECT_EQ(d1.fault_cause, static_cast<std::uint8_t>(hal::FaultCause::kEncoderTimeout));
+  EXPECT_EQ(d1.sample_faults, hal::SampleFault::kStale);
+  EXPECT_EQ(d1.num_axes, 2u);
+  EXPECT_FLOAT_EQ(d1.feedback[1], 0.0F);
+  const numen::platform::FrameDevice d2 = v.extra_device(1);
+  EXPECT_EQ(d2.flags, numen::platform::kFrameSampleValid | numen::platform::kFrameTorqueCommanded);
+  EXPECT_EQ(d2.lifecycle, static_cast<std::uint8_t>(hal::LifecycleState::kActive));
+  EXPECT_EQ(d2.fault_cause, 0u);
+  EXPECT_EQ(d2.num_axes, 3u);
+  EXPECT_FLOAT_EQ(d2.feedback[1], -3.6F);
+  EXPECT_FLOAT_EQ(d2.feedback[5], 0.05F);
+  EXPECT_FLOAT_EQ(v.extra_axis_torque(0), 0.0F);  // device 1's two axes, then device 2's three
+  EXPECT_FLOAT_EQ(v.extra_axis_torque(2), -0.125F);
+  EXPECT_FLOAT_EQ(v.extra_axis_torque(4), 2.25F);
+  // Inputs that do not match the layout are refused: one device short, an axis short, no report.
+  EXPECT_EQ(numen::platform::encode_state_frame(p.layout, p.data, p.report, p.torques, p.figures,
+                                                buf, std::span(extra.data(), 1)),
+            0u);
+  auto short_axis = extra;
+  short_axis[1].axis_torques = std::span(third_tau.data(), 2);
+  EXPECT_EQ(numen::platform::encode_state_frame(p.layout, p.data, p.report, p.torques, p.figures,
+                                                buf, short_axis),
+            0u);
+  auto no_report = extra;
+  no_report[0].report = nullptr;
+  EXPECT_EQ(numen::platform::encode_state_frame(p.layout, p.data, p.report, p.torques, p.figures,
+                                                buf, no_report),
+            0u);
+  // A frame whose devices' axis counts do not add up to num_extra_axes is refused by name.
+  std::vector<std::byte> bad(buf.begin(), buf.begin() + static_cast<std::ptrdiff_t>(n));
+  const std::size_t count_at =
+      n - 4 * 5 - 4 * 12 * 2 + 4 * 5;  // device 1's axis count: its item's sixth float
+  const float three = 3.0F;
+  std::memcpy(bad.data() + count_at, &three, 4);  // little-endian hosts
+  StateFrameView u;
+  EXPECT_NE(StateFrameDecoder::decode(bad, u).error.find(
+                "byte 72: the other devices' axis counts add up to 6, the header says 5"),
+            std::string::npos)
+      << StateFrameDecoder::decode(bad, u).error;
+}
+
 /// The `bytes` bytes at `at`, little-endian, as an unsigned number.
 std::uint64_t frame_le_bytes(const std::vector<std::byte>& frame, std::size_t at,
                              std::size_t bytes) {
@@ -198,8 +291,8 @@ TEST(StateFrame, EachDeclaredFieldIsAtItsDeclaredOffset) {
     std::uint64_t want = 0;
     switch (f.id) {
       case FrameField::kMagic: want = 0x46564D4E; break;  // "NMVF"
-      case FrameField::kVersion: want = 3; break;
-      case FrameField::kHeaderBytes: want = 68; break;
+      case FrameField::kVersion: want = 4; break;
+      case FrameField::kHeaderBytes: want = 76; break;
       case FrameField::kFrameBytes: want = n; break;
       case FrameField::kNumBodies: want = 2; break;
       case FrameField::kNumNodes: want = 0; break;
@@ -222,6 +315,8 @@ TEST(StateFrame, EachDeclaredFieldIsAtItsDeclaredOffset) {
       case FrameField::kFaultCause: want = 0; break;  // none latched
       case FrameField::kSampleFaults: want = numen::hal::SampleFault::kJump; break;
       case FrameField::kNumGrasps: want = 1; break;
+      case FrameField::kNumExtraDevices: want = 0; break;  // one device
+      case FrameField::kNumExtraAxes: want = 0; break;
     }
     EXPECT_EQ(got, want) << f.name << " at byte " << f.offset;
   }
@@ -235,6 +330,7 @@ TEST(StateFrame, EachDeclaredFieldIsAtItsDeclaredOffset) {
     if (a.count == FrameField::kNumContacts) items = 1;
     if (a.count == FrameField::kNumAxes) items = 3;
     if (a.count == FrameField::kNumGrasps) items = 1;
+    if (a.count == FrameField::kNumExtraDevices || a.count == FrameField::kNumExtraAxes) items = 0;
     float want = 0.0F;
     switch (a.id) {
       case FrameArray::kBodyPose: want = 0.01F; break;    // body 0's x
@@ -246,6 +342,8 @@ TEST(StateFrame, EachDeclaredFieldIsAtItsDeclaredOffset) {
       case FrameArray::kPenetration: want = 0.0015F; break;  // tool penetration
       case FrameArray::kDeviceLoop: want = 0.02F; break;     // hand penetration
       case FrameArray::kGrasp: want = 1.0F; break;           // the held body
+      case FrameArray::kExtraDevice:                         // none: one device
+      case FrameArray::kExtraAxisTorque: break;
     }
     if (items > 0) {
       const auto bits = static_cast<std::uint32_t>(frame_le_bytes(buf, at, 4));
@@ -261,14 +359,14 @@ TEST(StateFrame, IsLittleEndianOnTheWire) {
   std::vector<std::byte> buf(p.layout.max_frame_bytes());
   const std::size_t n =
       numen::platform::encode_state_frame(p.layout, p.data, p.report, p.torques, p.figures, buf);
-  ASSERT_GT(n, 68u);
+  ASSERT_GT(n, 76u);
   EXPECT_EQ(std::memcmp(buf.data(), "NMVF", 4), 0);
-  EXPECT_EQ(std::to_integer<int>(buf[4]), 3);  // version, low byte first
+  EXPECT_EQ(std::to_integer<int>(buf[4]), 4);  // version, low byte first
   EXPECT_EQ(std::to_integer<int>(buf[5]), 0);
   EXPECT_EQ(std::to_integer<int>(buf[32]), 42);  // period 42, low byte first
   // body 0's x = 0.01f: 0x3C23D70A, bytes 0A D7 23 3C
-  EXPECT_EQ(std::to_integer<int>(buf[68]), 0x0A);
-  EXPECT_EQ(std::to_integer<int>(buf[71]), 0x3C);
+  EXPECT_EQ(std::to_integer<int>(buf[76]), 0x0A);
+  EXPECT_EQ(std::to_integer<int>(buf[79]), 0x3C);
 }
 
 TEST(StateFrame, ContactsBeyondTheCapacityAreCutAndFlagged) {
@@ -344,13 +442,13 @@ TEST(StateFrameDecoder, RejectsEveryMalformedFrameWithItsOffset) {
   buf.resize(n);
   StateFrameView v;
   auto decode = [&](std::vector<std::byte> b) { return StateFrameDecoder::decode(b, v).error; };
-  EXPECT_NE(decode({}).find("shorter than its 68-byte header"), std::string::npos);
+  EXPECT_NE(decode({}).find("shorter than its 76-byte header"), std::string::npos);
   auto b = buf;
   b[0] = std::byte{'X'};
   EXPECT_NE(decode(b).find("byte 0: not a state frame"), std::string::npos);
   b = buf;
-  b[4] = std::byte{2};  // the version before the graspers
-  EXPECT_NE(decode(b).find("byte 4: frame version 2, this reader knows 3"), std::string::npos);
+  b[4] = std::byte{3};  // the version before the other devices
+  EXPECT_NE(decode(b).find("byte 4: frame version 3, this reader knows 4"), std::string::npos);
   b = buf;
   b.pop_back();
   EXPECT_NE(decode(b).find("byte 8: frame size field"), std::string::npos);
@@ -362,7 +460,8 @@ TEST(StateFrameDecoder, RejectsEveryMalformedFrameWithItsOffset) {
   EXPECT_NE(decode(b).find("byte 12: counts"), std::string::npos);
   b = buf;
   b[64] = std::byte{2};  // two graspers, one there
-  EXPECT_NE(decode(b).find("graspers 2) need"), std::string::npos) << decode(b);
+  EXPECT_NE(decode(b).find("graspers 2, other devices 0, their axes 0) need"), std::string::npos)
+      << decode(b);
   b = buf;
   b[28] = std::byte{5};
   EXPECT_NE(decode(b).find("byte 28: held body 5"), std::string::npos);

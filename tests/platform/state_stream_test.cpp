@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <mutex>
@@ -34,6 +35,12 @@ class RecordingSink final : public numen::platform::StateFrameSink {
       periods.push_back(v.header().period);
       sample_faults.push_back(v.header().sample_faults);
       bus_down.push_back((v.header().flags & numen::platform::kFrameBusDown) != 0);
+      if (v.header().num_extra_devices > 0) {
+        const numen::platform::FrameDevice d = v.extra_device(0);
+        second_faults.push_back(d.sample_faults);
+        second_bus_down.push_back((d.flags & numen::platform::kFrameBusDown) != 0);
+        second_force_y.push_back(d.feedback[1]);
+      }
     }
     else ++malformed;
     return ok && !fail;
@@ -44,6 +51,10 @@ class RecordingSink final : public numen::platform::StateFrameSink {
   std::vector<std::uint64_t> periods;
   std::vector<std::uint8_t> sample_faults;  // each frame's
   std::vector<bool> bus_down;               // each frame's kFrameBusDown
+  // The loop's device 1 (frames with other devices): its sample faults, bus down, feedback's y.
+  std::vector<std::uint8_t> second_faults;
+  std::vector<bool> second_bus_down;
+  std::vector<float> second_force_y;
   int malformed = 0;
 };
 
@@ -113,6 +124,38 @@ TEST(StateStream, AFramesSampleFaultsAndBusDownAreThoseOfThePeriodsSinceThePrevi
   EXPECT_EQ(sink.sample_faults, (std::vector<std::uint8_t>{0, numen::hal::SampleFault::kJump,
                                                            numen::hal::SampleFault::kStale, 0}));
   EXPECT_EQ(sink.bus_down, (std::vector<bool>{false, false, false, true}));
+}
+
+// Issue 70: the loop's other devices' sample faults and bus are kept between frames as device
+// 0's are, each its own; the rest of their item is the published period's.
+TEST(StateStream, EachOtherDevicesSampleFaultsAreThoseOfThePeriodsSinceThePreviousFrame) {
+  Loop loop;
+  loop.layout.num_extra_devices = 1;
+  loop.layout.num_extra_axes = 1;
+  RecordingSink sink;
+  StateStreamSettings every_10th;
+  every_10th.display_rate_hz = 100.0;
+  every_10th.full_queue = numen::hal::FullQueuePolicy::kWait;
+  StateStream stream(loop.layout, {&sink}, every_10th);
+  stream.start();
+  numen::platform::PeriodReport second;
+  const std::array<double, 1> tau{0.5};
+  for (int k = 0; k < 40; ++k) {  // frames at periods 0, 10, 20, 30
+    loop.data.time = k * loop.model.dt;
+    loop.report.sample_faults = k == 3 ? numen::hal::SampleFault::kJump : numen::hal::SampleFault::kNone;
+    second.sample_faults = k == 14 ? numen::hal::SampleFault::kStale : numen::hal::SampleFault::kNone;
+    second.feedback.force.y() = k;
+    const std::array<numen::platform::FrameDeviceInput, 1> extra{{{&second, tau, k == 25}}};
+    numen::platform::StateFrameFigures figures{static_cast<std::uint64_t>(k), 0.0, 0.0};
+    stream.publish(loop.data, loop.report, {}, figures, extra);
+  }
+  stream.stop();
+  ASSERT_EQ(sink.periods, (std::vector<std::uint64_t>{0, 10, 20, 30}));
+  EXPECT_EQ(sink.sample_faults, (std::vector<std::uint8_t>{0, numen::hal::SampleFault::kJump, 0, 0}));
+  EXPECT_EQ(sink.bus_down, (std::vector<bool>{false, false, false, false}));
+  EXPECT_EQ(sink.second_faults, (std::vector<std::uint8_t>{0, 0, numen::hal::SampleFault::kStale, 0}));
+  EXPECT_EQ(sink.second_bus_down, (std::vector<bool>{false, false, false, true}));
+  EXPECT_EQ(sink.second_force_y, (std::vector<float>{0.0F, 10.0F, 20.0F, 30.0F}));
 }
 
 TEST(StateStream, WithoutAConsumerFramesAreDroppedAndCountedNeverWaitedFor) {

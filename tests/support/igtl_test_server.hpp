@@ -4,7 +4,8 @@
 /// ephemeral port (bind port 0: parallel ctest runs never clash), accepts one client in a thread
 /// and sends it the given byte strings in order (OpenIGTLink messages, or garbage), then keeps
 /// the connection open until close_client() or destruction (or closes it at once when asked:
-/// a server that goes away). Never hangs: accept waits at most `accept_timeout_ms`.
+/// a server that goes away), optionally pausing before one of them (a tracker that stalls). Never
+/// hangs: accept waits at most `accept_timeout_ms`.
 
 #include <arpa/inet.h>
 #include <netinet/in.h>
@@ -16,6 +17,7 @@
 #include <cerrno>
 
 #include <atomic>
+#include <chrono>
 #include <cstdint>
 #include <string>
 #include <thread>
@@ -27,10 +29,12 @@ namespace numen::test {
 class IgtlTestServer {
  public:
   /// Starts listening; the thread accepts and sends `messages`; `close_after`: close the
-  /// connection once they are sent.
+  /// connection once they are sent; `pause_ms` ms of silence before message `pause_at`.
   explicit IgtlTestServer(std::vector<std::string> messages, bool close_after = false,
-                          int accept_timeout_ms = 5000)
-      : messages_(std::move(messages)), close_after_(close_after) {
+                          int accept_timeout_ms = 5000, std::size_t pause_at = SIZE_MAX,
+                          int pause_ms = 0)
+      : messages_(std::move(messages)), close_after_(close_after), pause_at_(pause_at),
+        pause_ms_(pause_ms) {
     fd_ = socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
     sockaddr_in a{};
     a.sin_family = AF_INET;
@@ -78,7 +82,12 @@ class IgtlTestServer {
     if (c < 0) return;
     const timeval slice{0, 100'000};  // a blocked send() rechecks done_ every 100 ms
     setsockopt(c, SOL_SOCKET, SO_SNDTIMEO, &slice, sizeof slice);
-    for (const std::string& m : messages_) {
+    for (std::size_t i = 0; i < messages_.size(); ++i) {
+      const std::string& m = messages_[i];
+      if (i == pause_at_) {  // the silence, to the millisecond (a stop heard within one)
+        const auto until = std::chrono::steady_clock::now() + std::chrono::milliseconds(pause_ms_);
+        while (!done_ && std::chrono::steady_clock::now() < until) usleep(1000);
+      }
       std::size_t sent = 0;
       while (sent < m.size() && !done_) {
         const ssize_t k = send(c, m.data() + sent, m.size() - sent, MSG_NOSIGNAL);
@@ -94,6 +103,8 @@ class IgtlTestServer {
 
   std::vector<std::string> messages_;
   bool close_after_;
+  std::size_t pause_at_;
+  int pause_ms_;
   int fd_ = -1;
   std::uint16_t port_ = 0;
   std::atomic<bool> done_{false};

@@ -21,6 +21,7 @@
 #include "numen/core/data.hpp"
 #include "numen/core/mesh.hpp"
 #include "numen/core/model.hpp"
+#include "numen/core/net_material.hpp"
 #include "numen/core/step.hpp"
 
 #include "detail/mesh_shape_query.hpp"
@@ -109,17 +110,15 @@ inline core::NetSettings organ_net_settings(const core::TriangleMesh& mesh, cons
   return s;
 }
 
-/// Body 0: "organ_core", anchored at the origin (no spheres), carrying net "organ" from `mesh`;
-/// body 1: "tool", one sphere of `tool_radius` at its COM, 50 g, held by the device from
+/// Body 0: "organ_core", anchored at the origin (no spheres), without its net yet; body 1: "tool", one sphere of `tool_radius` at its COM, 50 g, held by the device from
 /// `tool_start` (kDirect: imposed; kGodObject: coupled at 1000 N/m, ζ = 0.85). Materials "steel"
 /// (tool) and "tissue" (net): 2e4 N/m, 10 N·s/m, no friction. Implicit Euler, no gravity.
 /// Feedback gains 300 N/m, 1 N·s/m (as the shipped scenes).
 /// With `handle`, body 2 "handle" (100 g, 40 mm behind the tool along −z) is the held body, the
 /// tool on a revolute joint under it (axis x): the instrument's joints, which take the nets' solve
 /// to the arrowhead preconditioner (docs/net-solver.md).
-inline core::Model organ_model(const core::TriangleMesh& mesh, const OrganParams& p, double dt,
-                               core::CouplingMode mode, double tool_radius, const Vec3& tool_start,
-                               bool handle = false) {
+inline core::Model organ_bodies(double dt, core::CouplingMode mode, double tool_radius,
+                                const Vec3& tool_start, bool handle = false) {
   core::Model m;
   m.dt = dt;
   m.gravity = Vec3::Zero();
@@ -162,7 +161,30 @@ inline core::Model organ_model(const core::TriangleMesh& mesh, const OrganParams
   }
   m.feedback.k_t = 300.0;
   m.feedback.gamma_t = 1.0;
+  return m;
+}
+
+/// organ_bodies() with net "organ" from `mesh`, the constants `p` per spring and per node.
+inline core::Model organ_model(const core::TriangleMesh& mesh, const OrganParams& p, double dt,
+                               core::CouplingMode mode, double tool_radius, const Vec3& tool_start,
+                               bool handle = false) {
+  core::Model m = organ_bodies(dt, mode, tool_radius, tool_start, handle);
   EXPECT_EQ(core::add_net(m, mesh, organ_net_settings(mesh, p)), "");
+  EXPECT_EQ(core::finalize_model(m), "");
+  return m;
+}
+
+/// organ_bodies() with net "organ" given by its material (core::add_material_net()) on `mesh`.
+inline core::Model tissue_model(const core::TetrahedralMesh& mesh, const core::NetMaterial& tissue,
+                                double dt, core::CouplingMode mode, double tool_radius,
+                                const Vec3& tool_start) {
+  core::Model m = organ_bodies(dt, mode, tool_radius, tool_start);
+  core::MaterialNetSettings s;
+  s.name = "organ";
+  s.body = 0;
+  s.material = 1;
+  s.tissue = tissue;
+  EXPECT_EQ(core::add_material_net(m, mesh, s), "");
   EXPECT_EQ(core::finalize_model(m), "");
   return m;
 }

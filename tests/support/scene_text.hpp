@@ -72,6 +72,68 @@ duration = 0.25
 )";
 
 
+/// An indentation bench as a scene (docs/organs.md, "Force against indentation"; docs/tissue.md):
+/// body 0 "organ_core" anchored at the origin carrying [[deformable]] "organ" (material
+/// "tissue", its other keys `deformable`), body 1 "probe" (one sphere of `probe_radius` m,
+/// imposed on the device's pose: coupling "direct") 30 mm below the origin; contacts 2e4 N/m and
+/// 10 N·s/m, implicit Euler at `dt`, the nets' solve to 3e-4 in at most 200 iterations. The
+/// harness of organ_indentation.hpp drives the probe (body 1).
+inline std::string indentation_bench_scene(const std::string& deformable, double probe_radius = 0.0025,
+                                           double dt = 0.001) {
+  return "name = \"indentation-bench\"\ndt = " + std::to_string(dt) + R"(
+gravity = [0.0, 0.0, 0.0]
+integrator = "implicit-euler"
+coupling = "direct"
+
+[solver]
+tolerance = 3.0e-4
+max_iterations = 200
+
+[[material]]
+name = "steel"
+
+[[material]]
+name = "tissue"
+
+[contact_default]
+stiffness = 2.0e4
+damping = 10.0
+
+[[body]]
+name = "organ_core"
+mass = 0.1
+inertia = [1.0e-4, 1.0e-4, 1.0e-4]
+anchored = true
+material = "tissue"
+
+[[body]]
+name = "probe"
+mass = 0.05
+inertia = [1.0e-5, 1.0e-5, 1.0e-5]
+material = "steel"
+spheres = [[0.0, 0.0, 0.0, )" + std::to_string(probe_radius) + R"(]]
+position = [0.0, 0.0, -0.03]
+
+[[deformable]]
+name = "organ"
+body = "organ_core"
+material = "tissue"
+)" + deformable + R"(
+
+[device]
+kind = "pose-tracker"
+attach = "probe"
+
+[trajectory]
+source = "scripted"
+start = { position = [0.0, 0.0, -0.03] }
+
+[[trajectory.segment]]
+type = "hold"
+duration = 0.1
+)";
+}
+
 /// A small valid scene of two devices (`[[device]]`, docs/scenes.md "Several devices"): pose
 /// trackers "left" (nodes 1–6, holds "left_tool") and "right" (nodes 7–12, drives "right_tool"
 /// through its link), each on its own scripted path ([device.trajectory]). The tests of several

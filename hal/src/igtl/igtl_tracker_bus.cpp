@@ -66,6 +66,7 @@ IgtlTrackerBus::IgtlTrackerBus(const DeviceConfig& config,
   settings_.calibration.orientation.normalize();
   settings_.registration.orientation.normalize();
   q_ = AxisVector::Zero(kinematics_->num_axes());
+  max_sample_age_ns_ = std::llround(std::min(config_.effective_max_sample_age_s(), 1e6) * 1e9);
   latencies_.reserve(std::max<std::size_t>(settings_.latency_capacity, 1));
   if (settings_.registration_wait_ns <= 0)
     throw std::invalid_argument("OpenIGTLink tracker: registration_wait_ns must be > 0");
@@ -184,8 +185,20 @@ bool IgtlTrackerBus::stamp_acceptable(const IgtlPose& p) noexcept {
 }
 
 void IgtlTrackerBus::take(const IgtlPose& p, std::int64_t now_mono) noexcept {
-  const std::int64_t t = bus_time_of(p);
+  std::int64_t t = bus_time_of(p);
   const bool first = tracker_counters_.poses_taken == 0;
+  // After a silence, a pose that would arrive stale (a sender that paused and goes on from its
+  // old stamps): the stream is re-based on it, taken at this SYNC (the file comment).
+  if (!first && now_ns_ - pose_time_ns_ > max_sample_age_ns_ && t < now_ns_ - max_sample_age_ns_) {
+    ++tracker_counters_.silence_rebases;
+    if (settings_.wait_for_tracker) {
+      shift_ns_ += now_ns_ - t;
+      t = now_ns_;
+    } else {
+      has_offset_ = false;  // the sender's clock offset measured again from this pose
+      t = bus_time_of(p);
+    }
+  }
   if (p.stamp_ns != 0) {
     last_stamp_ns_ = p.stamp_ns;
     has_last_stamp_ = true;
@@ -207,12 +220,14 @@ void IgtlTrackerBus::take(const IgtlPose& p, std::int64_t now_mono) noexcept {
                               (world.orientation * off.orientation).normalized()};
   q_ = kinematics_->inverse(controlled, q_);
   pose_time_ns_ = first ? t : std::max(t, pose_time_ns_);  // a stamp never goes back
+  pose_received_mono_ns_ = p.received_mono_ns;
   has_pose_ = true;
 }
 
 void IgtlTrackerBus::on_sync() noexcept {
   ++tracker_counters_.syncs;
   int taken = 0;
+  bool paced_this_sync = false;
   const std::int64_t wait_until =
       settings_.wait_for_tracker ? igtl_bus_mono_ns() + settings_.wait_timeout_ns : 0;
   for (;;) {
@@ -223,10 +238,19 @@ void IgtlTrackerBus::on_sync() noexcept {
         if (taken == 0) ++tracker_counters_.syncs_after_end;
         break;
       }
-      // A wait that ran out is not repeated every period: the SYNCs go on without waiting
-      // until a pose comes again (a silent server holds the run up once, not once a period).
-      if (!settings_.wait_for_tracker || starved_) break;
-      if (igtl_bus_mono_ns() >= wait_until) {
+      if (!settings_.wait_for_tracker) break;
+      if (starved_) {
+        // A wait that ran out is not repeated every period (a silent server holds the run up
+        // once, not once a period), but the SYNCs go no faster than the tracker's clock: real
+        // time since its newest pose (at once before any).
+        if (!has_pose_) break;
+        const std::int64_t due = pose_received_mono_ns_ + (now_ns_ - pose_time_ns_);
+        if (igtl_bus_mono_ns() >= due) break;
+        if (!paced_this_sync) {
+          paced_this_sync = true;
+          ++tracker_counters_.silent_paced_syncs;
+        }
+      } else if (igtl_bus_mono_ns() >= wait_until) {
         ++tracker_counters_.wait_timeouts;
         starved_ = true;
         break;

@@ -71,6 +71,9 @@ IgtlReplayServer::IgtlReplayServer(const Scene& scene, IgtlReplaySettings settin
                          "= { position, orientation } to replay");
   if (!std::isfinite(settings_.rate_hz) || settings_.rate_hz < 0.0)
     throw std::invalid_argument("igtl-replay: rate must be finite and >= 0");
+  if (!std::isfinite(settings_.stall_at_s) || settings_.stall_at_s < 0.0 ||
+      !std::isfinite(settings_.stall_s) || settings_.stall_s < 0.0)
+    throw std::invalid_argument("igtl-replay: a stall's time and length must be finite and >= 0");
   if (!(settings_.accept_timeout_s > 0.0))
     throw std::invalid_argument("igtl-replay: accept timeout must be > 0");
   if (!hal::kWithOpenIgtLink)
@@ -109,9 +112,25 @@ IgtlReplayResult IgtlReplayServer::serve(const std::atomic<bool>* stop) {
   const std::int64_t t0_mono = igtl_replay_clock_ns(CLOCK_MONOTONIC);
   const core::Quat reg_inv = t.registration.orientation.conjugate();
   const core::Quat cal_inv = t.calibration.orientation.conjugate();
+  // The stall: the poses of [stall_from, stall_to) are not sent; the first one after it waits
+  // for the stall's wall time (paced: its own time, which is as long).
+  const std::int64_t stall_from = std::llround(settings_.stall_at_s * 1e9);
+  const std::int64_t stall_to = stall_from + std::llround(settings_.stall_s * 1e9);
+  bool stalled = false;
   for (std::int64_t k = 0; k < count && !stopped(); ++k) {
     if (settings_.disconnect_after >= 0 && k >= settings_.disconnect_after) break;
     const auto tk_ns = static_cast<std::int64_t>(std::llround(static_cast<double>(k) * period * 1e9));
+    if (settings_.stall_s > 0.0 && tk_ns >= stall_from && tk_ns < stall_to) continue;
+    if (settings_.stall_s > 0.0 && tk_ns >= stall_to && !stalled) {
+      stalled = true;
+      if (!settings_.paced) {  // a silence of stall_s in wall time, a stop heard within 10 ms
+        const std::int64_t until = igtl_replay_clock_ns(CLOCK_MONOTONIC) + (stall_to - stall_from);
+        while (!stopped() && igtl_replay_clock_ns(CLOCK_MONOTONIC) < until) {
+          const timespec slice{0, 10'000'000};
+          nanosleep(&slice, nullptr);
+        }
+      }
+    }
     if (settings_.paced) {
       const std::int64_t due = t0_mono + tk_ns;
       const timespec ts{static_cast<time_t>(due / 1'000'000'000), static_cast<long>(due % 1'000'000'000)};

@@ -59,6 +59,7 @@ class IgtlRunImpl final : public IgtlRun {
     s.igtl_stamps_ahead = static_cast<std::int64_t>(b.stamps_ahead);
     s.igtl_stamps_unstamped = static_cast<std::int64_t>(b.stamps_unstamped);
     s.igtl_stamp_resyncs = static_cast<std::int64_t>(b.stamp_resyncs);
+    s.igtl_silence_rebases = static_cast<std::int64_t>(b.silence_rebases);
     s.igtl_follows = bus_.settings().wait_for_tracker;
     s.igtl_periods_after_end = static_cast<std::int64_t>(b.syncs_after_end);
     s.igtl_fault_records.clear();

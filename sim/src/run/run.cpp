@@ -177,10 +177,13 @@ platform::ControlLoopSettings control_loop_settings(bool paced, std::uint32_t ov
 
 // `s` for a run whose input is `live` (a real bus, an OpenIGTLink tracker: the instrument lies
 // wherever it lies, not at the recording's start): its bodies are brought to the first sample
-// (docs/safety.md "A live input's start"). Not with a multirate god-object (its own copy).
+// (docs/safety.md "A live input's start"; not with a multirate god-object: its own copy), and
+// after a stall (samples stale, then valid again) its targets glide to the resumed pose and its
+// feedback ramps in again (docs/safety.md "A stalled input").
 platform::ControlLoopSettings with_live_start(platform::ControlLoopSettings s, bool live,
                                               const Scene& scene) noexcept {
   s.place_at_first_sample = live && !scene.multirate;
+  s.rejoin_after_stale = live;
   return s;
 }
 
@@ -302,11 +305,23 @@ void SceneRunner::period(std::int64_t deadline_mono_ns, std::int64_t woke_mono_n
                  diverged;
   if (diverged)
     loop_.shutdown();  // zero torque from the next write on; the run stops after this period
-  if (view_)
-    view_->publish(data_, report,
-                          std::span<const double>(loop_.impedance().sent_torques().torque.data(),
-                                                  static_cast<std::size_t>(loop_.impedance().sent_torques().torque.size())),
-                          view_figures(contacts));
+  if (view_) publish_view(report, contacts);
+}
+
+void SceneRunner::publish_view(const platform::PeriodReport& report,
+                               const PeriodContacts& contacts) noexcept {
+  const auto sent = [&](std::size_t i) {
+    const hal::AxisVector& tau = loop_.impedance(i).sent_torques().torque;
+    return std::span<const double>(tau.data(), static_cast<std::size_t>(tau.size()));
+  };
+  // The loop's other devices: each its report and torques (one bus: device 0's state).
+  std::array<platform::FrameDeviceInput, platform::kMaxLoopDevices> extra{};
+  const std::size_t n = std::min(loop_.num_devices(), extra.size() + 1) - 1;
+  const bool bus_down = port_->state() != hal::BusState::kOk;
+  for (std::size_t i = 0; i < n; ++i)
+    extra[i] = platform::FrameDeviceInput{&loop_.last_report(i + 1), sent(i + 1), bus_down};
+  view_->publish(data_, report, sent(0), view_figures(contacts),
+                 std::span<const platform::FrameDeviceInput>(extra.data(), n));
 }
 
 void SceneRunner::note_live_start() noexcept {
@@ -428,12 +443,29 @@ void SceneRunner::count_period(const platform::PeriodReport& report) noexcept {
   if (port_->state() != hal::BusState::kOk || report.command_status == hal::IoStatus::kError)
     ++s.bus_error_periods;
   if (!report.sample_valid) ++s.invalid_periods;
+  tally_stale((report.sample_faults & hal::SampleFault::kStale) != 0);
   if (!report.torque_commanded) count_zero_torque(report, s);
   if (report.entered_safe_stop && !has_first_fault_ && loop_.managed() &&
       loop_.device().first_fault() != nullptr) {
     first_fault_ = *loop_.device().first_fault();
     has_first_fault_ = true;
   }
+}
+
+void SceneRunner::tally_stale(bool stale) noexcept {
+  if (stale) {
+    if (stale_run_++ == 0) {
+      stale_from_ = k_ - 1;
+      ++acc_.stale_stretches;
+    }
+    ++acc_.stale_periods;
+    if (stale_run_ > stale_longest_) {
+      stale_longest_ = stale_run_;
+      stale_longest_from_ = stale_from_;
+    }
+    return;
+  }
+  stale_run_ = 0;
 }
 
 void SceneRunner::record(const platform::PeriodReport& report, const PeriodContacts& c) noexcept {

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <iomanip>
+#include <numbers>
 #include <sstream>
 #include <string>
 #include <string_view>
@@ -207,6 +208,27 @@ RunSummary SceneRunner::summary() const {
        << startup_from_ - 1 << ") put the tool " << live_start_mm_ << " mm and " << live_start_deg_
        << " deg from the scene's start: it was brought there, the start-up "
        << "and the divergence bounds taken from there (docs/safety.md \"A live input's start\")";
+    s.warnings.push_back(os.str());
+  }
+  s.stale_longest_s = static_cast<double>(stale_longest_) * scene_->model.dt;
+  s.stale_longest_from_s = static_cast<double>(stale_longest_from_) * scene_->model.dt;
+  const platform::RejoinTally& rejoin = loop_.rejoins(0);
+  s.stale_rejoins = static_cast<std::int64_t>(rejoin.rejoins);
+  s.stale_rejoin_gap_mm = rejoin.gap_max_m * 1e3;
+  s.stale_rejoin_gap_deg = rejoin.gap_max_rad * 180.0 / std::numbers::pi;
+  if (s.stale_stretches > 0) {
+    std::ostringstream os;
+    os << std::fixed << std::setprecision(3) << "the device's samples went stale "
+       << s.stale_stretches << " time(s), " << s.stale_periods
+       << " periods in all (the input stalled, or sent nothing for longer than max_sample_age): "
+       << "the longest stretch " << s.stale_longest_s << " s (" << stale_longest_
+       << " periods) from t = " << s.stale_longest_from_s << " s";
+    if (s.stale_rejoins > 0)
+      os << std::setprecision(1) << "; " << s.stale_rejoins
+         << " time(s) they came back, the target was brought to the resumed pose over the soft "
+            "start (the largest gap "
+         << s.stale_rejoin_gap_mm << " mm and " << s.stale_rejoin_gap_deg
+         << " deg) and the feedback ramped in again (docs/safety.md \"A stalled input\")";
     s.warnings.push_back(os.str());
   }
   s.rejected_samples = static_cast<std::int64_t>(device_.counters().values_rejected);

@@ -125,6 +125,10 @@ constexpr RunSummarySegment kLayout[] = {
      "times, the first at {first_pass_through_s} s (docs/dynamics.md, \"Crossing\")\n",
      set("pass_throughs")},
     {"  rejected samples: {rejected_causes}\n", set("rejected_causes")},
+    {"  stale samples: {stale_stretches} stretch(es), {stale_periods} periods; the longest "
+     "{stale_longest_s} s from t = {stale_longest_from_s} s; {stale_rejoins} return(s) glided "
+     "the target over at most {stale_rejoin_gap_mm} mm and {stale_rejoin_gap_deg} deg\n",
+     set("stale_stretches")},
     {"  bus: rejected samples {rejected_samples}, invalid periods {invalid_periods}, frames "
      "dropped {bus_frames_dropped}, corrupted {bus_frames_corrupted}\n"},
     {"  bus {bus}: {bus_frames_replayed} frames replayed of {bus_log_records} records; lost by "
@@ -138,7 +142,7 @@ constexpr RunSummarySegment kLayout[] = {
      "{igtl_syncs_without_pose}, waits run out {igtl_wait_timeouts}, periods after the stream's "
      "end {igtl_periods_after_end}; stamps refused: backwards {igtl_stamps_backwards}, ahead "
      "{igtl_stamps_ahead}, unstamped {igtl_stamps_unstamped}, clock re-basings "
-     "{igtl_stamp_resyncs}; "
+     "{igtl_stamp_resyncs}, re-basings after a silence {igtl_silence_rebases}; "
      "received to applied us: median {igtl_latency_us.median}, p99 {igtl_latency_us.p99}, max "
      "{igtl_latency_us.max}; following the tracker's clock {igtl_follows}\n",
      set("igtl")},

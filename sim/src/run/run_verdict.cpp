@@ -175,7 +175,7 @@ RunVerdict run_verdict(const RunSummary& s) {
     if (s.igtl_wait_timeouts > 0)
       add(ExitStatus::kSamplesRejected,
           n(s.igtl_wait_timeouts) + " waits for the tracker ran out (the run went on without "
-                                     "its poses until one came)");
+                                     "its poses, at its pace, until one came)");
     if (s.igtl_poses == 0) {
       std::string names;
       for (const std::string& x : s.igtl_names_seen) names += (names.empty() ? "'" : ", '") + x + "'";

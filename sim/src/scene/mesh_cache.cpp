@@ -260,28 +260,26 @@ struct Fd {
   }
 };
 
-/// Reads `n` bytes of `fd` into `out`: false at a read error or an early end.
-bool read_exactly(int fd, char* out, std::size_t n) {
+/// Moves all `n` bytes between `fd` and `buf` by `io` (::read or ::write), again after EINTR
+/// and a short count: false at an error or an early end.
+template <typename Byte, typename Io>
+bool transfer_all(int fd, Byte* buf, std::size_t n, Io io) {
   while (n > 0) {
-    const ssize_t got = ::read(fd, out, n);
-    if (got < 0 && errno == EINTR) continue;
-    if (got <= 0) return false;
-    out += got;
-    n -= static_cast<std::size_t>(got);
+    const ssize_t done = io(fd, buf, n);
+    if (done < 0 && errno == EINTR) continue;
+    if (done <= 0) return false;
+    buf += done;
+    n -= static_cast<std::size_t>(done);
   }
   return true;
 }
 
+/// Reads `n` bytes of `fd` into `out`: false at a read error or an early end.
+bool read_exactly(int fd, char* out, std::size_t n) { return transfer_all(fd, out, n, ::read); }
+
 /// Writes the `n` bytes at `data` to `fd`: false at an error.
 bool write_all(int fd, const char* data, std::size_t n) {
-  while (n > 0) {
-    const ssize_t put = ::write(fd, data, n);
-    if (put < 0 && errno == EINTR) continue;
-    if (put <= 0) return false;
-    data += put;
-    n -= static_cast<std::size_t>(put);
-  }
-  return true;
+  return transfer_all(fd, data, n, ::write);
 }
 
 /// One cache file's kind: its magic, its name in messages ("mesh-shape", "net") and its format

@@ -14,7 +14,9 @@
 #include <vector>
 
 #include "net_simplify.hpp"
+#include "net_tetrahedralize.hpp"
 #include "numen/core/mesh.hpp"
+#include "numen/core/net_material.hpp"
 #include "numen/core/net_model.hpp"
 #include "numen/core/net_surface_map.hpp"
 #include "numen/sim/scene/mesh_cache.hpp"
@@ -31,7 +33,17 @@ using core::Vec3;
 #define NUMEN_DEFORMABLE_COMMON_KEYS                                                          \
   "name", "body", "mesh", "scale", "position", "orientation", "mass", "stiffness", "damping", \
       "bending_stiffness", "bending_damping", "tie_stiffness", "tie_damping", "node_radius",  \
-      "material", "rest_speed"
+      "material", "rest_speed", "youngs_modulus_kpa", "poisson_ratio", "density",              \
+      "rayleigh_stiffness", "support_length"
+
+/// The keys of a net given by its constants per spring and per node (docs/scenes.md,
+/// "Deformables"), which a net given by its material derives (docs/tissue.md).
+constexpr const char* kSpringNetKeys[] = {"mass",           "stiffness",       "damping",
+                                          "bending_stiffness", "bending_damping", "tie_stiffness",
+                                          "tie_damping"};
+/// The keys of a net given by its material, beside `youngs_modulus_kpa`.
+constexpr const char* kMaterialKeys[] = {"poisson_ratio", "density", "rayleigh_stiffness",
+                                         "support_length"};
 
 /// An integer key in [lo, hi], or `fallback` when absent.
 int integer_in(const TomlTable& t, std::string_view key, int lo, int hi, int fallback) {
@@ -283,15 +295,6 @@ double mesh_size(const core::TriangleMesh& mesh) {
   return (hi - lo).maxCoeff();
 }
 
-/// Mean edge length of `mesh` (m).
-double mean_edge_length(const core::TriangleMesh& mesh) {
-  const core::MeshTopology topo = core::build_mesh_topology(mesh);
-  double sum = 0.0;
-  for (const auto& [a, b] : topo.edges)
-    sum += (mesh.vertices[static_cast<std::size_t>(a)] - mesh.vertices[static_cast<std::size_t>(b)]).norm();
-  return topo.edges.empty() ? 0.0 : sum / static_cast<double>(topo.edges.size());
-}
-
 /// Maps fine surface `fine` on net `net` of `m` (made from `coarse`, in the same frame: the net's
 /// rigid component's body frame; `source` says where the net came from, simplify_mesh_file())
 /// with core::add_net_surface(), each fine vertex on its nearest net triangle at rest. Appends a
@@ -322,6 +325,86 @@ void map_fine_surface(const TomlTable& t, core::Model& m, int net, const core::T
             format_input_number(size * 1e3) +
             " mm size): the net is not the organ's shape there, its node spheres may not cover "
             "the surface and a bent net triangle distorts it; ask for more nodes"));
+}
+
+/// The constants of a net given per spring and per node (docs/scenes.md, "Deformables").
+void read_spring_constants(const TomlTable& t, core::NetSettings& settings) {
+  settings.mass = t.number_in("mass", 1e-12, kInf, std::nullopt);
+  settings.stiffness = t.number_in("stiffness", 0.0, kInf, std::nullopt);
+  settings.damping = t.number_in("damping", 0.0, kInf, 0.0);
+  settings.bending_stiffness = t.number_in("bending_stiffness", 0.0, kInf, 0.0);
+  settings.bending_damping = t.number_in("bending_damping", 0.0, kInf, 0.0);
+  settings.tie_stiffness = t.number_in("tie_stiffness", 1e-12, kInf, std::nullopt);
+  settings.tie_damping = t.number_in("tie_damping", 0.0, kInf, 0.0);
+  settings.node_radius = t.number_in("node_radius", 1e-9, kInf, 0.0);
+  settings.rest_speed = t.number_in("rest_speed", 0.0, kInf, core::NetSettings{}.rest_speed);
+}
+
+/// The tissue of a [[deformable]] given by its material (`youngs_modulus_kpa` present): fails at a
+/// per-spring key beside it (what replaces it: the material), at a material key without it, and at
+/// the first bad material value (core::validate_material()). Returns whether the net is a material
+/// net (`settings` then filled but for the name and body).
+bool parse_tissue(const TomlTable& t, core::MaterialNetSettings& settings) {
+  if (!t.has("youngs_modulus_kpa")) {
+    for (const char* key : kMaterialKeys)
+      if (t.has(key))
+        t.fail(key, "belongs to an organ given by its material: set youngs_modulus_kpa as well "
+                    "(docs/tissue.md), or remove it for a net given per spring");
+    return false;
+  }
+  for (const char* key : kSpringNetKeys)
+    if (t.has(key))
+      t.fail(key, std::string("a net given by its material (youngs_modulus_kpa) derives its ") +
+                      "masses, springs and ties from youngs_modulus_kpa, poisson_ratio, density, "
+                      "rayleigh_stiffness and support_length (docs/tissue.md): remove " + key +
+                      ", or remove youngs_modulus_kpa for a net given per spring");
+  core::NetMaterial& mat = settings.tissue;
+  mat.youngs_modulus = 1e3 * t.number("youngs_modulus_kpa");
+  mat.poisson_ratio = t.number("poisson_ratio");
+  mat.density = t.number_or("density", 1000.0);
+  mat.rayleigh_stiffness = t.number_or("rayleigh_stiffness", 0.0);
+  mat.support_length = t.number("support_length");
+  const char* key = "";
+  if (const std::string err = core::validate_material(mat, &key); !err.empty()) t.fail(key, err);
+  settings.node_radius = t.number_in("node_radius", 1e-9, kInf, 0.0);
+  settings.rest_speed = t.number_in("rest_speed", 0.0, kInf, core::NetSettings{}.rest_speed);
+  return true;
+}
+
+/// Interior lattice spacing of an organ given by its material, in mean edges of its surface net: at
+/// 2 the shipped organ has 1 338 nodes (336 inside) and steps at 459 µs median, at 1 it has 4 293
+/// (3 291 inside) and steps at 1 769 µs, for the same feedback force within 1 % on the default
+/// scene's recording (docs/tissue.md, "Cost").
+constexpr double kInteriorSpacingEdges = 2.0;
+
+/// Appends the material net of closed surface `surface` (the net's triangles) to `m`: its volume
+/// tetrahedralised with interior nodes kInteriorSpacingEdges mean edges apart
+/// (tetrahedralize_net()), the constants derived
+/// (core::add_material_net()). Fails at `key` (the key that made the surface) naming `file` when
+/// the surface cannot be tetrahedralised, at the table for what add_material_net() refuses.
+/// Records the mesh and the constants in `load`; warns when the symplectic Euler integrator's
+/// step limit for the net is below the scene's dt.
+void add_tissue_net(const TomlTable& t, core::Model& m, const core::TriangleMesh& surface,
+                    const core::MaterialNetSettings& settings, std::string_view key,
+                    const std::string& file, NetLoad& load, std::vector<std::string>& warnings) {
+  core::TetrahedralMesh volume;
+  const double spacing = kInteriorSpacingEdges * mean_edge_length(surface);
+  if (const std::string err = tetrahedralize_net(surface, spacing, volume); !err.empty())
+    t.fail(key, file + ": the organ's volume cannot be tetrahedralised for its material: " + err);
+  core::MaterialNetConstants c;
+  if (const std::string err = core::add_material_net(m, volume, settings, &c); !err.empty())
+    t.fail_at(nullptr, t.path(), err);
+  load.material = true;
+  load.interior_nodes = static_cast<int>(volume.interior.size());
+  load.tetrahedra = static_cast<int>(volume.tetrahedra.size());
+  load.material_constants = c;
+  if (m.integrator == core::Integrator::kSymplecticEuler && m.dt > c.explicit_step_limit)
+    warnings.push_back(mesh_warning(
+        t, "youngs_modulus_kpa", file,
+        "the material's stiffest spring needs a step of at most " +
+            format_input_number(c.explicit_step_limit) + " s with the symplectic Euler integrator, "
+            "above the scene's dt = " + format_input_number(m.dt) +
+            " s: the net will blow up; use implicit-euler or tr-bdf2, a smaller dt, or fewer nodes"));
 }
 
 void parse_deformable(const TomlTable& t, const std::filesystem::path& scene_dir, core::Model& m,
@@ -356,15 +439,27 @@ void parse_deformable(const TomlTable& t, const std::filesystem::path& scene_dir
                           warnings);
 
   settings.material = net_material(t, m, settings.body);
-  settings.mass = t.number_in("mass", 1e-12, kInf, std::nullopt);
-  settings.stiffness = t.number_in("stiffness", 0.0, kInf, std::nullopt);
-  settings.damping = t.number_in("damping", 0.0, kInf, 0.0);
-  settings.bending_stiffness = t.number_in("bending_stiffness", 0.0, kInf, 0.0);
-  settings.bending_damping = t.number_in("bending_damping", 0.0, kInf, 0.0);
-  settings.tie_stiffness = t.number_in("tie_stiffness", 1e-12, kInf, std::nullopt);
-  settings.tie_damping = t.number_in("tie_damping", 0.0, kInf, 0.0);
-  settings.node_radius = t.number_in("node_radius", 1e-9, kInf, 0.0);
-  settings.rest_speed = t.number_in("rest_speed", 0.0, kInf, core::NetSettings{}.rest_speed);
+  core::MaterialNetSettings tissue;
+  const bool material = parse_tissue(t, tissue);
+  if (material && !m.bodies[static_cast<std::size_t>(settings.body)].anchored)
+    t.fail("youngs_modulus_kpa",
+           "a net given by its material is an organ's: its rigid component (body \"" +
+               m.bodies[static_cast<std::size_t>(settings.body)].name +
+               "\") must be anchored = true (a moving deformable's node spheres collide, and its "
+               "interior nodes' spheres would reach through its surface; docs/tissue.md)");
+  tissue.name = settings.name;
+  tissue.body = settings.body;
+  tissue.material = settings.material;
+  // A net given per spring: every constant of its own (docs/scenes.md, "Deformables").
+  const auto add = [&](const core::TriangleMesh& surface, std::string_view key) {
+    if (material) {
+      add_tissue_net(t, m, surface, tissue, key, t.string(t.has("file") ? "file" : "mesh"), load,
+                     warnings);
+      return std::string();
+    }
+    return core::add_net(m, surface, settings);
+  };
+  if (!material) read_spring_constants(t, settings);
 
   if (simplify) {  // a coarser net, the file's surface on it
     const std::string key = load.nodes_from == "default" ? std::string("file") : load.nodes_from;
@@ -375,7 +470,7 @@ void parse_deformable(const TomlTable& t, const std::filesystem::path& scene_dir
         simplify_mesh_file(t, scene_dir, key, mesh, load.nodes_asked, load, source, warnings);
     warn_self_intersections(t, key, t.string("file"), net, core::find_self_intersections(net),
                             source + " passes through itself: ask for more nodes", warnings);
-    const std::string err = core::add_net(m, net, settings);
+    const std::string err = add(net, key);
     if (!err.empty()) t.fail_at(nullptr, t.path(), load.cache_loaded ? source + ": " + err : err);
     map_fine_surface(t, m, m.num_nets() - 1, net, mesh, source, warnings);
     load.simplified = true;
@@ -388,7 +483,7 @@ void parse_deformable(const TomlTable& t, const std::filesystem::path& scene_dir
     if (t.has("cache"))
       warnings.push_back(mesh_warning(t, "cache", t.string("file"),
                                       "the mesh is its own net (not simplified): nothing to cache"));
-    const std::string err = core::add_net(m, mesh, settings);
+    const std::string err = add(mesh, file ? "file" : "mesh");
     if (!err.empty()) t.fail_at(nullptr, t.path(), err);
     triangles.push_back(std::move(mesh.triangles));  // node i of the net is vertex i of the mesh
   }

@@ -95,6 +95,11 @@ std::vector<MeshLine> mesh_lines(const Scene& scene) {
       l.mesh_triangles = load.mesh_triangles;
       l.simplify_cpu_s = load.simplify_seconds;
       l.cache_loaded = load.cache_loaded;
+      l.material = load.material;
+      l.interior_nodes = load.interior_nodes;
+      l.tetrahedra = load.tetrahedra;
+      l.material_constants = load.material_constants;
+      l.vertices -= load.interior_nodes;
     }
     l.fine_vertices = n.surface_point_count;
     l.fine_triangles = n.surface_face_count;
@@ -254,6 +259,15 @@ std::string format_scene_info(const SceneInfo& i) {
     else if (l.kind == "net")
       os << "    its mesh as it is (" << l.mesh_vertices << " vertices, not simplified), no fine "
             "surface\n";
+    if (l.material) {
+      const core::MaterialNetConstants& c = l.material_constants;
+      os << "    given by its material (docs/tissue.md): " << l.interior_nodes
+         << " interior nodes, " << l.tetrahedra << " tetrahedra, " << std::setprecision(4)
+         << c.volume * 1e6 << " cm^3, " << c.mass * 1e3 << " g; E_net " << c.net_modulus * 1e-3
+         << " kPa, springs " << c.spring_stiffness_min << " to " << c.spring_stiffness_max
+         << " N/m, ties " << c.tie_stiffness << " N/m per node; symplectic Euler step at most "
+         << c.explicit_step_limit << " s" << std::defaultfloat << std::setprecision(6) << "\n";
+    }
   }
   os << "  Data: sizeof " << bytes(i.data_bytes.sizeof_data) << " (contact array "
      << i.max_contacts << " x " << sizeof(core::Contact) << " B inside), heap "
@@ -339,6 +353,19 @@ std::string format_scene_info_json(const SceneInfo& i) {
                                    {"simplify_cpu_s", l.simplify_cpu_s},
                                    {"cache_loaded", l.cache_loaded},
                                    {"map_heap", l.map_heap}};
+    if (l.material) {
+      const core::MaterialNetConstants& c = l.material_constants;
+      meshes.back()["material"] = {{"interior_nodes", l.interior_nodes},
+                                   {"tetrahedra", l.tetrahedra},
+                                   {"volume_m3", c.volume},
+                                   {"mass_kg", c.mass},
+                                   {"net_modulus_pa", c.net_modulus},
+                                   {"spring_stiffness_min_n_per_m", c.spring_stiffness_min},
+                                   {"spring_stiffness_max_n_per_m", c.spring_stiffness_max},
+                                   {"tie_stiffness_n_per_m", c.tie_stiffness},
+                                   {"tie_damping_ns_per_m", c.tie_damping},
+                                   {"explicit_step_limit_s", c.explicit_step_limit}};
+    }
   }
   j["meshes"] = std::move(meshes);
   j["data_bytes"] = {{"sizeof", i.data_bytes.sizeof_data},

@@ -60,6 +60,11 @@ std::string at_time(std::int64_t t_ns) {
 
 }  // namespace
 
+std::string igtl_world_status_name(std::size_t device) {
+  return device == 0 ? std::string(kIgtlStatusDevice)
+                     : std::string(kIgtlStatusDevice) + "_" + std::to_string(device);
+}
+
 std::string igtl_world_transform_name(const std::string& body, bool target, IgtlNameStyle style) {
   const auto bad = [&](const std::string& why) {
     return std::invalid_argument(std::string("--igtl") +
@@ -199,12 +204,12 @@ void IgtlWorldServer::drop_gone() noexcept {
 
 void IgtlWorldServer::add_status(std::string& out, std::int64_t t_ns, int code,
                                  std::int64_t subcode, const std::string& name,
-                                 const std::string& message) {
+                                 const std::string& message, std::size_t device) {
 #if NUMEN_WITH_OPENIGTLINK
-  out += hal::pack_igtl_status(kIgtlStatusDevice, t_ns, static_cast<hal::IgtlStatusCode>(code),
-                               subcode, name, message);
+  out += hal::pack_igtl_status(igtl_world_status_name(device), t_ns,
+                               static_cast<hal::IgtlStatusCode>(code), subcode, name, message);
 #else
-  (void)out, (void)t_ns, (void)code, (void)subcode, (void)name, (void)message;
+  (void)out, (void)t_ns, (void)code, (void)subcode, (void)name, (void)message, (void)device;
 #endif
 }
 
@@ -216,48 +221,83 @@ void IgtlWorldServer::add_string(std::string& out, std::int64_t t_ns, const std:
 #endif
 }
 
+std::string IgtlWorldServer::device_words(std::size_t device) const {
+  if (device == 0) return "the device";  // device 0's words, as before a loop ran several
+  std::string out = "device " + std::to_string(device);
+  if (device < settings_.device_names.size()) out += " '" + settings_.device_names[device] + "'";
+  return out;
+}
+
+// One device's changes between two frames, each a STATUS (under the device's name) and a STRING.
+void IgtlWorldServer::add_device_events(std::size_t device, const Last& was, const Last& now,
+                                        std::int64_t t) {
+  const std::string who = device_words(device);
+  const std::string whose = device == 0 ? "the device's" : who + ": its";
+  const auto event = [&](int code, std::int64_t subcode, const std::string& name,
+                         const std::string& text) {
+    add_status(events_, t, code, subcode, name, text, device);
+    add_string(events_, t, text);
+    ++events_statuses_;
+    ++events_strings_;
+    ++counters_.events;
+  };
+  if (now.fault_cause != was.fault_cause) {
+    const auto cause = static_cast<hal::FaultCause>(now.fault_cause);
+    if (now.fault_cause != 0)
+      event(3, now.fault_cause, hal::to_string(cause),
+            who + " latched its safe state " + at_time(t) + ": " + hal::to_string(cause));
+    else
+      event(1, 0, "safe state cleared", whose + " safe state was cleared (re-armed) " + at_time(t));
+  }
+  const std::uint8_t rejected = now.sample_faults & kRejectionBits;
+  if (rejected != (was.sample_faults & kRejectionBits)) {
+    if (rejected != 0)
+      event((rejected & hal::SampleFault::kStale) != 0 ? 7 : 2, rejected, "samples rejected",
+            whose + " samples were rejected " + at_time(t) + " (" + rejection_words(rejected) + ")");
+    else
+      event(1, 0, "samples valid", whose + " samples are accepted again " + at_time(t));
+  }
+  if (now.bus_down != was.bus_down) {
+    if (now.bus_down)
+      event(7, 0, "bus down",
+            whose + " bus is down " + at_time(t) + " (a tracker's connection lost, a CAN bus off)");
+    else
+      event(1, 0, "bus up", whose + " bus is back " + at_time(t));
+  }
+}
+
+void IgtlWorldServer::add_device_intro(std::size_t device, const Last& now, std::int64_t t) {
+  const auto cause = static_cast<hal::FaultCause>(now.fault_cause);
+  if (now.fault_cause != 0)
+    add_status(intro_, t, 3, now.fault_cause, hal::to_string(cause),
+               (device == 0 ? std::string("the device") : device_words(device)) +
+                   " is in its safe state: " + hal::to_string(cause),
+               device);
+  else if (device == 0)
+    add_status(intro_, t, 1, 0, "ok", "numen world " + at_time(t));
+  else
+    add_status(intro_, t, 1, 0, "ok", device_words(device) + " " + at_time(t), device);
+}
+
 // The changes this frame shows against the previous one, as STATUS and STRING into events_.
 void IgtlWorldServer::add_events(const platform::StateFrameView& view) {
   events_.clear();
   events_statuses_ = events_strings_ = 0;
   const platform::StateFrameHeader& h = view.header();
   const std::int64_t t = h.time_ns;
-  const std::uint8_t rejected = h.sample_faults & kRejectionBits;
   const bool bus_down = (h.flags & platform::kFrameBusDown) != 0;
   // The first frame is compared with a fresh device (no fault, no rejection, bus up), holding
   // what it holds.
   const Last was = last_.seen ? last_ : Last{true, 0, 0, false, h.held_body};
-  const auto event = [&](int code, std::int64_t subcode, const std::string& name,
-                         const std::string& text) {
-    add_status(events_, t, code, subcode, name, text);
-    add_string(events_, t, text);
-    ++events_statuses_;
-    ++events_strings_;
-    ++counters_.events;
-  };
-  if (h.fault_cause != was.fault_cause) {
-    const auto cause = static_cast<hal::FaultCause>(h.fault_cause);
-    if (h.fault_cause != 0)
-      event(3, h.fault_cause, hal::to_string(cause),
-            std::string("the device latched its safe state ") + at_time(t) + ": " +
-                hal::to_string(cause));
-    else
-      event(1, 0, "safe state cleared", "the device's safe state was cleared (re-armed) " + at_time(t));
-  }
-  if (rejected != (was.sample_faults & kRejectionBits)) {
-    if (rejected != 0)
-      event((rejected & hal::SampleFault::kStale) != 0 ? 7 : 2, rejected, "samples rejected",
-            "the device's samples were rejected " + at_time(t) + " (" + rejection_words(rejected) +
-                ")");
-    else
-      event(1, 0, "samples valid", "the device's samples are accepted again " + at_time(t));
-  }
-  if (bus_down != was.bus_down) {
-    if (bus_down)
-      event(7, 0, "bus down",
-            "the device's bus is down " + at_time(t) + " (a tracker's connection lost, a CAN bus off)");
-    else
-      event(1, 0, "bus up", "the device's bus is back " + at_time(t));
+  add_device_events(0, was, Last{true, h.fault_cause, h.sample_faults, bus_down, h.held_body}, t);
+  // The loop's other devices, each against its own previous frame.
+  if (extra_last_.size() != h.num_extra_devices) extra_last_.assign(h.num_extra_devices, Last{});
+  for (std::uint32_t d = 0; d < h.num_extra_devices; ++d) {
+    const platform::FrameDevice f = view.extra_device(d);
+    const Last now{true, f.fault_cause, f.sample_faults, (f.flags & platform::kFrameBusDown) != 0, -1};
+    add_device_events(d + 1, extra_last_[d].seen ? extra_last_[d] : Last{true, 0, 0, false, -1},
+                      now, t);
+    extra_last_[d] = now;
   }
   if (h.held_body != was.held_body) {
     const auto name = [&](std::int32_t b) {
@@ -341,14 +381,12 @@ bool IgtlWorldServer::write_frame(std::span<const std::byte> frame) noexcept {
     }
     std::string organs;  // every deformable's POLYDATA at this frame
     if (organ_due || any_fresh) add_organs(organs, view);
-    intro_.clear();  // a new client's state, after its shapes
+    intro_.clear();  // a new client's state, after its shapes: every device's
+    std::uint64_t intro_statuses = 0;
     if (any_fresh) {
-      const auto cause = static_cast<hal::FaultCause>(last_.fault_cause);
-      if (last_.fault_cause != 0)
-        add_status(intro_, h.time_ns, 3, last_.fault_cause, hal::to_string(cause),
-                   std::string("the device is in its safe state: ") + hal::to_string(cause));
-      else
-        add_status(intro_, h.time_ns, 1, 0, "ok", "numen world " + at_time(h.time_ns));
+      add_device_intro(0, last_, h.time_ns);
+      for (std::size_t d = 0; d < extra_last_.size(); ++d) add_device_intro(d + 1, extra_last_[d], h.time_ns);
+      intro_statuses = 1 + extra_last_.size();
     }
     const std::size_t limit =
         std::max(settings_.max_backlog_bytes, 2 * (organs.size() + intro_.size() + batch_.size()));
@@ -360,7 +398,7 @@ bool IgtlWorldServer::write_frame(std::span<const std::byte> frame) noexcept {
         c.backlog += intro_;
         c.backlog += batch_;
         counters_.polydata += organs_.size();
-        ++counters_.statuses;
+        counters_.statuses += intro_statuses;
         counters_.messages += batch_transforms_;
         c.fresh = false;
       } else if (c.backlog.size() + (organ_due ? organs.size() : 0) + batch_.size() > limit) {

@@ -144,7 +144,8 @@ ViewRecordingReader::ViewRecordingReader(const std::string& path) : path_(path) 
       return it->get<std::uint64_t>();
     };
     const std::uint64_t bodies = count("bodies"), nodes = count("nodes"), axes = count("axes"),
-                        grasps = count("grasps");
+                        grasps = count("grasps"), extra_devices = count("extra_devices"),
+                        extra_axes = count("extra_axes");
     at += *scene_bytes;
 
     std::vector<std::byte> buffer;
@@ -162,12 +163,16 @@ ViewRecordingReader::ViewRecordingReader(const std::string& path) : path_(path) 
         throw fail(at, "frame " + std::to_string(index_.size()) + ": " + result.error);
       const auto& h = view.header();
       if (h.num_bodies != bodies || h.num_nodes != nodes || h.num_axes != axes ||
-          h.num_grasps != grasps)
+          h.num_grasps != grasps || h.num_extra_devices != extra_devices ||
+          h.num_extra_axes != extra_axes)
         throw fail(at, "frame " + std::to_string(index_.size()) + " has " + std::to_string(h.num_bodies) +
                            " bodies, " + std::to_string(h.num_nodes) + " nodes, " + std::to_string(h.num_axes) +
-                           " axes, " + std::to_string(h.num_grasps) + " graspers; the scene message says " +
+                           " axes, " + std::to_string(h.num_grasps) + " graspers, " +
+                           std::to_string(h.num_extra_devices) + " other devices of " +
+                           std::to_string(h.num_extra_axes) + " axes; the scene message says " +
                            std::to_string(bodies) + ", " + std::to_string(nodes) + ", " +
-                           std::to_string(axes) + ", " + std::to_string(grasps));
+                           std::to_string(axes) + ", " + std::to_string(grasps) + ", " +
+                           std::to_string(extra_devices) + ", " + std::to_string(extra_axes));
       if (!index_.empty() && h.period <= index_.back().period)
         throw fail(at, "frame " + std::to_string(index_.size()) + " is period " + std::to_string(h.period) +
                            ", not after the previous frame's " + std::to_string(index_.back().period));

@@ -125,6 +125,9 @@ platform::StateFrameLayout view_frame_layout(const Scene& scene) {
   layout.max_contacts =
       static_cast<std::uint32_t>(core::kMaxContacts + (m.num_nets() > 0 ? core::kMaxNodeContacts : 0));
   layout.num_grasps = static_cast<std::uint32_t>(m.grasps.size());
+  layout.num_extra_devices = static_cast<std::uint32_t>(scene.extra_devices.size());
+  for (const SceneDevice& d : scene.extra_devices)
+    layout.num_extra_axes += static_cast<std::uint32_t>(d.device.axes.size());
   return layout;
 }
 
@@ -174,6 +177,16 @@ std::string view_scene_message(const Scene& scene, const platform::StateFrameLay
                       {"frame_child", pose(j.frame_child)}});
   json axes = json::array();
   for (const hal::AxisConfig& a : scene.device.axes) axes.push_back(a.name);
+  // The loop's other devices, in the frames' extra_device order.
+  json extra_devices = json::array();
+  for (const SceneDevice& d : scene.extra_devices) {
+    json names = json::array();
+    for (const hal::AxisConfig& a : d.device.axes) names.push_back(a.name);
+    extra_devices.push_back({{"name", d.device.name},
+                             {"kind", hal::to_string(d.device.kind)},
+                             {"protocol", d.device.canopen.managed ? "managed" : "minimal"},
+                             {"axes", std::move(names)}});
+  }
   json grasps = json::array();
   for (const core::GraspModel& g : m.grasps)
     grasps.push_back({{"name", g.name}, {"jaws", json::array({g.jaws[0], g.jaws[1]})}});
@@ -191,7 +204,9 @@ std::string view_scene_message(const Scene& scene, const platform::StateFrameLay
         {"nodes", layout.num_nodes},
         {"axes", layout.num_axes},
         {"max_contacts", layout.max_contacts},
-        {"grasps", layout.num_grasps}}},
+        {"grasps", layout.num_grasps},
+        {"extra_devices", layout.num_extra_devices},
+        {"extra_axes", layout.num_extra_axes}}},
       {"attached_body", m.initial_held_body},
       {"bodies", std::move(bodies)},
       {"obstacles", std::move(obstacles)},
@@ -205,7 +220,8 @@ std::string view_scene_message(const Scene& scene, const platform::StateFrameLay
         // "managed" CANopen (NMT start-up, CiA 402), "minimal" (no start-up), "admittance"
         // (no start-up; the wrench is the measured one, no axis torque).
         {"protocol", scene.admittance ? "admittance" : scene.device.canopen.managed ? "managed" : "minimal"},
-        {"axes", std::move(axes)}}}};
+        {"axes", std::move(axes)}}},
+      {"extra_devices", std::move(extra_devices)}};
   // Non-finite numbers (an infinite plane has none, but a user's scene might) become null.
   return message.dump(-1, ' ', false, json::error_handler_t::replace);
 }

@@ -1,7 +1,7 @@
 // Faults and safe states (docs/viewer.md "Page"): a banner over the view with what the frame
 // says caused them, and marks on the replay timeline at every change of the device's lifecycle
 // or the step's status (the replay session message's series.events, read from the whole file).
-import { LIFECYCLE, STARTUP, STEP, FLAGS, FAULT_CAUSES, bits } from './protocol.js';
+import { LIFECYCLE, STARTUP, STEP, FLAGS, FAULT_CAUSES, bits, extraDevices } from './protocol.js';
 
 const banner = document.getElementById('banner');
 let since = null;  // { t, period } of the first frame of the fault shown
@@ -27,9 +27,26 @@ export function faultOf(h, managed) {
   return null;
 }
 
-/// Shows or hides the banner for frame fr (time_s, h); returns the banner's text or ''.
-export function showFault(fr, managed) {
-  const f = faultOf(fr.h, managed);
+/// The loop's other devices in a safe state in frame fr, as one line ('' when none);
+/// `deviceName(i)` names device i.
+function extraFaults(fr, deviceName) {
+  if (!fr.extra_device) return '';
+  const out = [];
+  extraDevices(fr).forEach((d, i) => {
+    if (d.lifecycle !== 3 && d.lifecycle !== 4) return;
+    out.push(deviceName(i + 1) + ': ' + (d.lifecycle === 4 ? 'FAULT' : 'SAFE STOP') +
+             (d.fault_cause ? ' — ' + (FAULT_CAUSES[d.fault_cause] ?? 'cause ' + d.fault_cause) : ''));
+  });
+  return out.join('; ');
+}
+
+/// Shows or hides the banner for frame fr (time_s, h, the other devices); returns the banner's
+/// text or ''. `deviceName(i)` names the loop's device i (the other devices' faults are shown
+/// after device 0's).
+export function showFault(fr, managed, deviceName = (i) => 'device ' + i) {
+  const own = faultOf(fr.h, managed), others = extraFaults(fr, deviceName);
+  const f = own && others ? { level: own.level, text: own.text + ' | ' + others }
+          : own ?? (others ? { level: 'fault', text: others } : null);
   if (!f) {
     banner.hidden = true;
     since = null;

@@ -2,7 +2,7 @@
 // frame moves it and fills the panel; window.numenView exposes what a test reads.
 import * as THREE from 'three';
 import { S, errors, setStatus, updateCounters, writeProbe } from './panel.js';
-import { FLOATS, setFrameLayout, LIFECYCLE, STARTUP, STEP, FLAGS, bits } from './protocol.js';
+import { FLOATS, setFrameLayout, LIFECYCLE, STARTUP, STEP, FLAGS, SAMPLE, FAULT_CAUSES, bits, extraDevices } from './protocol.js';
 import { params, renderer, scene3, camera, render, requestRender } from './stage.js';
 import { controls, fitCamera, followTool, preset, view } from './camera.js';
 import { COLORS, G, buildScene, addPlanes, frameBox, showBodies, showJointAxes, showCollisionSpheres, showCoarseNets, sizeCores } from './geometry.js';
@@ -42,7 +42,27 @@ function onSession(m) {
   if (!S.last) setStatus(m.mode === 'live' ? 'live: waiting for frames…' : 'replay');
 }
 
-let banner = '', contactText = '', graspText = '';
+let banner = '', contactText = '', graspText = '', deviceText = '';
+
+/// The scene's name of the loop's device i (0: the scene message's device, then extra_devices).
+const deviceName = (i) => {
+  const d = i === 0 ? S.scene?.device : S.scene?.extra_devices?.[i - 1];
+  return 'device ' + i + (d ? ` '${d.name}'` : '');
+};
+
+/// One line per other device of the loop in frame fr (device 0's state is the lines above):
+/// its lifecycle, samples, latched fault, feedback force and the torques sent; '' for one device.
+function deviceLines(fr) {
+  let out = '';
+  extraDevices(fr).forEach((d, i) => {
+    const f = Math.hypot(d.feedback[0], d.feedback[1], d.feedback[2]);
+    out += `\n${deviceName(i + 1)}: ${LIFECYCLE[d.lifecycle] ?? d.lifecycle}` +
+           (d.fault_cause ? ` (${FAULT_CAUSES[d.fault_cause] ?? 'cause ' + d.fault_cause})` : '') +
+           `, samples ${d.flags & 1 ? 'valid' : 'rejected' + (d.sample_faults ? ' (' + bits(d.sample_faults, SAMPLE) + ')' : '')}` +
+           `, |F| = ${f.toFixed(2)} N, τ = [${d.torques.map((x) => x.toFixed(3)).join(', ')}]`;
+  });
+  return out;
+}
 
 /// The scene's name of grasper i, of what a grasp holds (a body or a net's tissue).
 const grasperName = (i) => S.scene?.grasps?.[i]?.name ?? 'grasper ' + i;
@@ -82,15 +102,17 @@ function draw(fr) {
   showCollisionSpheres(toggles.spheres.checked);
   showCoarseNets(toggles.net.checked);
   showLegend(forceScale);
-  banner = showFault(fr, managed);
+  banner = showFault(fr, managed, deviceName);
   contactText = `contacts: ${h.num_contacts}${h.num_contacts > drawn && contactsOn ? ` (${drawn} drawn)` : ''}` +
                 `${contactsOn ? `, ${arrows} force arrows` : ''}   |F| = ${fmag.toFixed(2)} N`;
   graspText = graspLines(fr);
+  deviceText = deviceLines(fr);
   setStatus(
     `t = ${fr.time_s.toFixed(3)} s   period ${h.period}\n` +
     `lifecycle: ${LIFECYCLE[h.lifecycle] ?? h.lifecycle}` +
     (managed ? `   start-up: ${STARTUP[h.startup] ?? h.startup}` : `   (${protocol} protocol)`) + '\n' +
-    `flags: ${bits(h.flags, FLAGS)}\nstep: ${h.step_status ? bits(h.step_status, STEP) : 'ok'}\n` + contactText + graspText);
+    `flags: ${bits(h.flags, FLAGS)}\nstep: ${h.step_status ? bits(h.step_status, STEP) : 'ok'}\n` + contactText + graspText +
+    deviceText);
   showPick(fr);
   requestRender();
   return fmag;
@@ -184,7 +206,7 @@ window.numenView = {
     const p = { errors, framesShown: S.framesShown, framesReceived: S.framesReceived, mode: S.session?.mode ?? null,
                 period: last?.h.period ?? null, colors: { tool: COLORS.tool, ghost: COLORS.ghost, held: COLORS.held },
                 link: { state: link.state, reconnects: link.reconnects, attempts: link.attempts },
-                banner, marks, grasps: graspText.trim() };
+                banner, marks, grasps: graspText.trim(), devices: deviceText.trim() };
     if (last && last.h.attached_body >= 0) {
       const b = last.h.attached_body;
       p.tool = project(G.bodies[b], b);

@@ -12,9 +12,10 @@ const READ = {
 // What this page reads of a frame: a layout without one of these is refused by name.
 const USED_FIELDS = ['magic', 'version', 'header_bytes', 'frame_bytes', 'num_bodies', 'num_nodes',
                      'num_contacts', 'num_axes', 'attached_body', 'period', 'time_ns', 'step_status',
-                     'flags', 'step_ns', 'lifecycle', 'startup', 'fault_cause', 'num_grasps'];
+                     'flags', 'step_ns', 'lifecycle', 'startup', 'fault_cause', 'num_grasps',
+                     'num_extra_devices', 'num_extra_axes'];
 const USED_ARRAYS = ['body_pose', 'target_pose', 'node_position', 'contact', 'feedback', 'penetration',
-                     'device_loop', 'grasp'];
+                     'device_loop', 'grasp', 'extra_device', 'extra_axis_torque'];
 let frameLayout = null;  // the session message's frame_layout, checked
 /// Floats per item, by array name (from the layout).
 export const FLOATS = {};
@@ -67,6 +68,23 @@ export function decodeFrame(buf) {
   for (const a of L.arrays) fr[a.name] = f.subarray(o, o += a.floats * (a.count === null ? 1 : h[a.count]));
   return fr;
 }
+
+/// The loop's other devices of frame fr (its extra_device items, docs/viewer.md "Frames"), each
+/// { flags, lifecycle, startup, fault_cause, sample_faults, feedback: [6], torques: [its axes] }.
+export function extraDevices(fr) {
+  const K = FLOATS.extra_device, d = fr.extra_device, tau = fr.extra_axis_torque;
+  const out = [];
+  for (let i = 0, a = 0; i < fr.h.num_extra_devices; ++i) {
+    const v = d.subarray(K * i, K * i + K), n = v[5];
+    out.push({ flags: v[0], lifecycle: v[1], startup: v[2], fault_cause: v[3], sample_faults: v[4],
+               feedback: Array.from(v.subarray(6, 12)), torques: Array.from(tau.subarray(a, a + n)) });
+    a += n;
+  }
+  return out;
+}
+
+/// Names of the header's sample check bits (hal::SampleFault).
+export const SAMPLE = ['malformed', 'non-finite', 'out of range', 'stale', 'jump', 'no data'];
 
 /// Names of the header's enumerations and bit sets (hal::LifecycleState, hal::StartupPhase,
 /// core::StepStatus, StateFrameFlag).

@@ -47,6 +47,21 @@ numen::hal::IgtlTrackerSettings igtl_bus_test_settings(std::uint16_t port, bool 
   return s;
 }
 
+// Following the tracker on `port` with the identity registration and calibration: the tip is
+// the marker's pose (in mm).
+numen::hal::IgtlTrackerSettings igtl_bus_test_bare_follower(std::uint16_t port) {
+  numen::hal::IgtlTrackerSettings s = igtl_bus_test_settings(port, true);
+  s.registration = numen::core::Pose{};
+  s.calibration = numen::core::Pose{};
+  return s;
+}
+
+// One period's SYNC at bus time `t_ns` (the bus's clock set to it first).
+void igtl_bus_test_sync(numen::hal::IgtlTrackerBus& bus, std::int64_t t_ns) {
+  bus.set_time_ns(t_ns);
+  bus.write(numen::hal::make_sync(t_ns));
+}
+
 // The tracked frame (the tip) the six TPDOs of one SYNC put in the world.
 numen::core::Pose igtl_bus_test_tip(numen::hal::IgtlTrackerBus& bus,
                                     const numen::hal::DeviceConfig& config) {
@@ -173,9 +188,7 @@ TEST(IgtlTrackerBus, TwoToolsOnOneConnectionEachFeedTheirOwnBus) {
   }
   numen::test::IgtlTestServer server(sent, true);
   const hal::DeviceConfig config = igtl_bus_test_config();
-  hal::IgtlTrackerSettings s = igtl_bus_test_settings(server.port(), true);
-  s.registration = numen::core::Pose{};
-  s.calibration = numen::core::Pose{};
+  hal::IgtlTrackerSettings s = igtl_bus_test_bare_follower(server.port());
   s.client.more_device_names = {"PointerToTracker"};
   const std::shared_ptr<hal::IgtlTrackerClient> client = hal::make_igtl_tracker_client(s);
   EXPECT_EQ(client->tool_count(), 2u);
@@ -218,19 +231,15 @@ TEST(IgtlTrackerBus, FollowingTheTrackerTakesEachPoseAtItsStamp) {
                                              numen::core::Vec3(10.0 * k, 0.0, -800.0)));
   numen::test::IgtlTestServer server(poses, true);
   const hal::DeviceConfig config = igtl_bus_test_config();
-  hal::IgtlTrackerSettings s = igtl_bus_test_settings(server.port(), true);
-  s.registration = numen::core::Pose{};
-  s.calibration = numen::core::Pose{};
+  hal::IgtlTrackerSettings s = igtl_bus_test_bare_follower(server.port());
   hal::IgtlTrackerBus bus(config, hal::make_kinematics(config), s);
   for (int k = 0; k < 5; ++k) {
-    bus.set_time_ns(k * 1'000'000);
-    bus.write(hal::make_sync(k * 1'000'000));
+    igtl_bus_test_sync(bus, k * 1'000'000);
     const numen::core::Pose tip = igtl_bus_test_tip(bus, config);
     EXPECT_NEAR(tip.position.x(), 0.01 * k, 2e-6) << "period " << k;
   }
   // After the last pose the stream ends: the SYNC takes nothing new and does not wait.
-  bus.set_time_ns(5'000'000);
-  bus.write(hal::make_sync(5'000'000));
+  igtl_bus_test_sync(bus, 5'000'000);
   EXPECT_NEAR(igtl_bus_test_tip(bus, config).position.x(), 0.04, 2e-6);
   EXPECT_EQ(bus.tracker_counters().poses_taken, 5u);
   EXPECT_EQ(bus.tracker_counters().poses_superseded, 0u);
@@ -242,8 +251,7 @@ TEST(IgtlTrackerBus, NoPoseNoFramesAndTheStateSaysTheServerIsGone) {
   const hal::DeviceConfig config = igtl_bus_test_config();
   hal::IgtlTrackerSettings s = igtl_bus_test_settings(numen::test::IgtlTestServer::closed_port(), true);
   hal::IgtlTrackerBus bus(config, hal::make_kinematics(config), s);
-  bus.set_time_ns(0);
-  bus.write(hal::make_sync(0));  // waits for nothing: the receiver ended at the refusal
+  igtl_bus_test_sync(bus, 0);  // waits for nothing: the receiver ended at the refusal
   hal::CanFrame f;
   EXPECT_EQ(bus.read(f), hal::IoStatus::kWouldBlock);
   EXPECT_EQ(bus.tracker_counters().syncs_without_pose, 1u);
@@ -260,8 +268,7 @@ TEST(IgtlTrackerBus, ASilentServerIsWaitedForOnceNotEveryPeriod) {
   hal::IgtlTrackerBus bus(config, hal::make_kinematics(config), s);
   const auto t0 = std::chrono::steady_clock::now();
   for (std::int64_t k = 0; k < 100; ++k) {
-    bus.set_time_ns(k * 1'000'000);
-    bus.write(hal::make_sync(k * 1'000'000));
+    igtl_bus_test_sync(bus, k * 1'000'000);
   }
   const double waited_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -376,33 +383,41 @@ TEST(IgtlTrackerBus, TheRegistrationIsReadFromItsNamedTransformAtStart) {
   EXPECT_LT((tip.position - want_p).norm(), 3e-6);
 }
 
+namespace {
+
+// What a bus with `s` (its registration_name set) says when made without its registration: the
+// IgtlRegistrationMissing's message ("" and a failure when it is made).
+std::string igtl_bus_test_registration_missing(const numen::hal::IgtlTrackerSettings& s) {
+  const numen::hal::DeviceConfig config = igtl_bus_test_config();
+  try {
+    numen::hal::IgtlTrackerBus bus(config, numen::hal::make_kinematics(config), s);
+    ADD_FAILURE() << "made without its registration";
+  } catch (const numen::hal::IgtlRegistrationMissing& e) {
+    return e.what();
+  }
+  return "";
+}
+
+}  // namespace
+
 // A registration never sent: the construction waits at most registration_wait_ns and says so.
 TEST(IgtlTrackerBus, ARegistrationNeverSentIsSaidAfterABoundedWait) {
   namespace hal = numen::hal;
   numen::test::IgtlTestServer server({hal::pack_igtl_transform(
       "StylusToTracker", 5'000'000'000, numen::core::Mat3::Identity(), numen::core::Vec3::Zero())});
-  const hal::DeviceConfig config = igtl_bus_test_config();
   hal::IgtlTrackerSettings s = igtl_bus_test_settings(server.port(), false);
   s.client.registration_name = "TrackerToScene";
   s.registration_wait_ns = 200'000'000;
-  try {
-    hal::IgtlTrackerBus bus(config, hal::make_kinematics(config), s);
-    ADD_FAILURE() << "made without its registration";
-  } catch (const hal::IgtlRegistrationMissing& e) {
-    EXPECT_NE(std::string(e.what()).find("no TRANSFORM 'TrackerToScene' (the registration) from 127.0.0.1:" +
-                                         std::to_string(server.port()) + " within 0.2 s"),
-              std::string::npos)
-        << e.what();
-  }
+  const std::string never = igtl_bus_test_registration_missing(s);
+  EXPECT_NE(never.find("no TRANSFORM 'TrackerToScene' (the registration) from 127.0.0.1:" +
+                       std::to_string(server.port()) + " within 0.2 s"),
+            std::string::npos)
+      << never;
   // No server at all: said at once (the follower's receiver ends at the refusal).
   s = igtl_bus_test_settings(numen::test::IgtlTestServer::closed_port(), true);
   s.client.registration_name = "TrackerToScene";
-  try {
-    hal::IgtlTrackerBus bus(config, hal::make_kinematics(config), s);
-    ADD_FAILURE() << "made without its registration";
-  } catch (const hal::IgtlRegistrationMissing& e) {
-    EXPECT_NE(std::string(e.what()).find(": never connected"), std::string::npos) << e.what();
-  }
+  const std::string unconnected = igtl_bus_test_registration_missing(s);
+  EXPECT_NE(unconnected.find(": never connected"), std::string::npos) << unconnected;
 }
 
 // Issue 66: a registration TRANSFORM with a NaN was said as "no TRANSFORM ... within 1 s",
@@ -416,25 +431,18 @@ TEST(IgtlTrackerBus, ARegistrationThatArrivedAndWasRefusedIsSaidAsRefused) {
            numen::core::Vec3(std::numeric_limits<double>::quiet_NaN(), 0.0, 0.0)),
        hal::pack_igtl_transform("StylusToTracker", 5'000'000'000, numen::core::Mat3::Identity(),
                                 numen::core::Vec3::Zero())});
-  const hal::DeviceConfig config = igtl_bus_test_config();
   hal::IgtlTrackerSettings s = igtl_bus_test_settings(server.port(), false);
   s.client.registration_name = "TrackerToScene";
   s.registration_wait_ns = 300'000'000;
-  try {
-    hal::IgtlTrackerBus bus(config, hal::make_kinematics(config), s);
-    ADD_FAILURE() << "made without its registration";
-  } catch (const hal::IgtlRegistrationMissing& e) {
-    const std::string what = e.what();
-    EXPECT_NE(
-        what.find("a TRANSFORM 'TrackerToScene' (the registration) from 127.0.0.1:" +
-                  std::to_string(server.port()) +
-                  " arrived and was refused: non-finite value (non-finite value: "
-                  "TRANSFORM 'TrackerToScene', message 0 at stream byte 0, field at byte 94)"),
-        std::string::npos)
-        << what;
-    EXPECT_NE(what.find("none accepted within 0.3 s"), std::string::npos) << what;
-    EXPECT_EQ(what.find("no TRANSFORM"), std::string::npos) << what;
-  }
+  const std::string what = igtl_bus_test_registration_missing(s);
+  EXPECT_NE(what.find("a TRANSFORM 'TrackerToScene' (the registration) from 127.0.0.1:" +
+                      std::to_string(server.port()) +
+                      " arrived and was refused: non-finite value (non-finite value: "
+                      "TRANSFORM 'TrackerToScene', message 0 at stream byte 0, field at byte 94)"),
+            std::string::npos)
+      << what;
+  EXPECT_NE(what.find("none accepted within 0.3 s"), std::string::npos) << what;
+  EXPECT_EQ(what.find("no TRANSFORM"), std::string::npos) << what;
 }
 
 namespace {
@@ -465,13 +473,10 @@ TEST(IgtlTrackerBus, FollowingTheTrackerRefusesBadStampsAndGoesOn) {
   stamps[7] = t0 + 1'000'000;              // before pose 6's
   numen::test::IgtlTestServer server(igtl_bus_test_stamped(stamps), true);
   const hal::DeviceConfig config = igtl_bus_test_config();
-  hal::IgtlTrackerSettings s = igtl_bus_test_settings(server.port(), true);
-  s.registration = numen::core::Pose{};
-  s.calibration = numen::core::Pose{};
+  hal::IgtlTrackerSettings s = igtl_bus_test_bare_follower(server.port());
   hal::IgtlTrackerBus bus(config, hal::make_kinematics(config), s);
   for (int k = 0; k < 10; ++k) {
-    bus.set_time_ns(k * 1'000'000);
-    bus.write(hal::make_sync(k * 1'000'000));
+    igtl_bus_test_sync(bus, k * 1'000'000);
     // Each period has its own pose, or the last good one before it.
     const int want = k == 3 ? 2 : k == 5 ? 4 : k == 7 ? 6 : k;
     EXPECT_NEAR(igtl_bus_test_tip(bus, config).position.x(), 0.01 * want, 2e-6) << "period " << k;
@@ -496,14 +501,11 @@ TEST(IgtlTrackerBus, AClockThatJumpedIsResynchronisedAfterThreePoses) {
     stamps.push_back(t0 + k * 1'000'000 - (k >= 5 ? 100'000'000'000 : 0));
   numen::test::IgtlTestServer server(igtl_bus_test_stamped(stamps), true);
   const hal::DeviceConfig config = igtl_bus_test_config();
-  hal::IgtlTrackerSettings s = igtl_bus_test_settings(server.port(), true);
-  s.registration = numen::core::Pose{};
-  s.calibration = numen::core::Pose{};
+  hal::IgtlTrackerSettings s = igtl_bus_test_bare_follower(server.port());
   hal::IgtlTrackerBus bus(config, hal::make_kinematics(config), s);
   std::vector<double> x;
   for (int k = 0; k < 9; ++k) {
-    bus.set_time_ns(k * 1'000'000);
-    bus.write(hal::make_sync(k * 1'000'000));
+    igtl_bus_test_sync(bus, k * 1'000'000);
     x.push_back(igtl_bus_test_tip(bus, config).position.x());
   }
   // Periods 0-3: poses 0-3; period 4: pose 4, then 5 and 6 refused (looked at as they come,
@@ -536,12 +538,131 @@ TEST(IgtlTrackerBus, PacedAStampFarAheadIsRefusedAndDoesNotMoveTheClockOffset) {
   for (int i = 0; i < 200 && bus.client().counters().tool_poses[0] < 5; ++i)
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   ASSERT_EQ(bus.client().counters().tool_poses[0], 5u);
-  bus.set_time_ns(0);
-  bus.write(hal::make_sync(0));
+  igtl_bus_test_sync(bus, 0);
   hal::CanFrame f;
   ASSERT_EQ(bus.read(f), hal::IoStatus::kOk);
   // The newest pose's bus time: within a second of the SYNC (not 10^6 s before it).
   EXPECT_LT(std::abs(f.timestamp_ns), 1'000'000'000) << f.timestamp_ns;
   EXPECT_EQ(bus.tracker_counters().stamps_ahead, 1u);
   EXPECT_EQ(bus.tracker_counters().poses_taken, 4u);
+}
+
+// The paced period's stamp checks (a real-time run's read path) allocate nothing: a flood in
+// which every fourth pose is stamped 10^6 s ahead and every fourth, two later, 1 s back is
+// refused pose by pose (never three in a row: no re-basing) within periods that neither
+// allocate nor wait.
+TEST(IgtlTrackerBus, PacedStampRefusalsNeitherAllocateNorWait) {
+  namespace hal = numen::hal;
+  timespec ts{};
+  clock_gettime(CLOCK_REALTIME, &ts);
+  const std::int64_t now = static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
+  std::vector<std::string> poses;
+  for (std::int64_t k = 0; k < 3000; ++k) {
+    const std::int64_t stamp = k % 4 == 1   ? now + 1'000'000'000'000'000  // far ahead
+                               : k % 4 == 3 ? now - 1'000'000'000           // backwards
+                                            : now + k * 100'000;
+    poses.push_back(hal::pack_igtl_transform("StylusToTracker", stamp, numen::core::Mat3::Identity(),
+                                             numen::core::Vec3(0.01 * static_cast<double>(k), 0.0, -800.0)));
+  }
+  numen::test::IgtlTestServer server(poses);
+  const hal::DeviceConfig config = igtl_bus_test_config();
+  hal::IgtlTrackerBus bus(config, hal::make_kinematics(config),
+                          igtl_bus_test_settings(server.port(), false));
+  for (int i = 0; i < 5000 && bus.client().counters().poses < 100; ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  ASSERT_GE(bus.client().counters().poses, 100u);
+  const IgtlBusTestPaced r = igtl_bus_test_paced_periods({&bus}, 2000);
+  EXPECT_EQ(r.allocations, 0);
+  EXPECT_GT(r.frames, 0u);
+  const hal::IgtlBusCounters& c = bus.tracker_counters();
+  EXPECT_GT(c.poses_taken, 0u);
+  EXPECT_GT(c.stamps_ahead, 0u);
+  EXPECT_GT(c.stamps_backwards, 0u);
+  EXPECT_EQ(c.stamp_resyncs, 0u);
+  EXPECT_LT(r.longest_ns, 200'000'000);  // never a follower's 2 s wait (a loaded machine's bound)
+}
+
+namespace {
+
+// What a follower saw of a tracker that stalled: the SYNC (1 ms of bus time each) that first
+// took the pose at x = 100 mm (message 10, the first after the stall; -1: none) and the bus time
+// its frames were stamped with; the loop's wall time (s).
+struct IgtlBusTestStall {
+  int resumed_sync = -1;
+  std::int64_t resumed_stamp_ns = 0;
+  double wall_s = 0.0;
+};
+
+// Messages 0-9 at x = 10 k mm stamped t0 + k ms, `pause_ms` of silence, then messages 10-19
+// stamped t0 + (`resume_k` + j) ms, then the server closes; a follower (wait_timeout 50 ms, max
+// sample age 50 ms) runs `syncs` SYNCs.
+IgtlBusTestStall igtl_bus_test_stall(int pause_ms, int resume_k, int syncs,
+                                     numen::hal::IgtlBusCounters& counters) {
+  namespace hal = numen::hal;
+  const std::int64_t t0 = 1'700'000'000'000'000'000;
+  std::vector<std::int64_t> stamps;
+  for (int k = 0; k < 20; ++k) stamps.push_back(t0 + (k < 10 ? k : resume_k + k - 10) * 1'000'000);
+  numen::test::IgtlTestServer server(igtl_bus_test_stamped(stamps), true, 5000, 10, pause_ms);
+  hal::DeviceConfig config = igtl_bus_test_config();
+  config.max_sample_age_s = 0.05;  // a loaded machine's lateness is not a stall
+  hal::IgtlTrackerSettings s = igtl_bus_test_bare_follower(server.port());
+  s.wait_timeout_ns = 50'000'000;
+  hal::IgtlTrackerBus bus(config, hal::make_kinematics(config), s);
+  IgtlBusTestStall out;
+  const auto w0 = std::chrono::steady_clock::now();
+  for (int k = 0; k < syncs; ++k) {
+    igtl_bus_test_sync(bus, k * 1'000'000);
+    hal::CanFrame f;
+    std::int64_t stamp = 0;
+    bool any = false;
+    while (bus.read(f) == hal::IoStatus::kOk) {
+      stamp = f.timestamp_ns;
+      any = true;
+    }
+    if (any && out.resumed_sync < 0 && std::abs(bus.last_pose().position.x() - 0.1) < 1e-6) {
+      out.resumed_sync = k;
+      out.resumed_stamp_ns = stamp;
+    }
+  }
+  out.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - w0).count();
+  counters = bus.tracker_counters();
+  return out;
+}
+
+}  // namespace
+
+// Issue 70: following the tracker, a wait that ran out let the SYNCs race on without the
+// tracker (no wait at all until a pose came): a live tracker silent for longer than the wait
+// (2 s in a run) came back with poses older than the run by however far it had raced, stale
+// until the tracker's clock caught up (a 2 s stall: invalid until 5.5 s; 3 s: to the run's end).
+// While the tracker is silent the SYNCs now go at its pace (real time since its newest pose):
+// here a 300 ms stall whose poses resume at their own 310 ms are taken at the SYNC of about
+// 310 ms (as late as the message arrived), fresh, not hundreds of SYNCs later (or never: the
+// loop ran out first).
+TEST(IgtlTrackerBus, AStalledTrackerIsFollowedAtItsPaceAndResumesFresh) {
+  numen::hal::IgtlBusCounters c;
+  const IgtlBusTestStall r = igtl_bus_test_stall(300, 310, 600, c);
+  EXPECT_EQ(c.wait_timeouts, 1u);
+  EXPECT_GT(c.silent_paced_syncs, 100u);
+  EXPECT_EQ(c.silence_rebases, 0u);  // its clock went on: its poses are due at their stamps
+  ASSERT_GE(r.resumed_sync, 0) << "the resumed pose was never taken (" << r.wall_s << " s)";
+  EXPECT_GE(r.resumed_sync, 310);
+  EXPECT_LT(r.resumed_sync, 340) << r.wall_s << " s";
+  EXPECT_EQ(r.resumed_stamp_ns, 310'000'000);  // its own stamp: within 30 ms of the SYNC
+  EXPECT_EQ(c.poses_taken, 20u);
+  EXPECT_GT(r.wall_s, 0.25);  // the silence took its time, in real time
+}
+
+// A sender that paused and goes on from its old stamps (message 10 stamped 10 ms after the
+// first, 300 ms later): its first pose after the silence would come 300 ms stale and keep the
+// samples invalid; the stream is re-based on it, taken at the SYNC it arrives at.
+TEST(IgtlTrackerBus, AFollowerReBasesOnAPausedSendersFirstPoseAfterTheSilence) {
+  numen::hal::IgtlBusCounters c;
+  const IgtlBusTestStall r = igtl_bus_test_stall(300, 10, 600, c);
+  EXPECT_EQ(c.wait_timeouts, 1u);
+  EXPECT_EQ(c.silence_rebases, 1u);
+  ASSERT_GE(r.resumed_sync, 0) << "the resumed pose was never taken (" << r.wall_s << " s)";
+  EXPECT_GT(r.resumed_sync, 200);  // after the silence, in the run's time too
+  EXPECT_EQ(r.resumed_stamp_ns, static_cast<std::int64_t>(r.resumed_sync) * 1'000'000);  // fresh
+  EXPECT_EQ(c.poses_taken, 20u);
 }

@@ -71,6 +71,20 @@ std::string lattice_scene_at(const std::string& dt) {
                              {"latency = 0.0001", "latency = 1e-6\ncompute_phase = 5e-6"}});
 }
 
+/// `numen run` of the lattice scene for 0.05 s with each case's options (in `dir`): input
+/// rejected (status 2), its stderr holding the case's text (the option's name, or its message).
+void expect_lattice_run_refused(
+    const TempDir& dir,
+    const std::vector<std::pair<std::vector<std::string>, std::string>>& cases) {
+  for (const auto& [extra, text] : cases) {
+    std::vector<std::string> args = {kNumen, "run", kLattice, "--duration", "0.05"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    const ChildResult r = run_child(args, dir.path(), 30);
+    EXPECT_EQ(r.status, 2) << extra.front() << ": " << r.out << r.err;
+    EXPECT_NE(r.err.find(text), std::string::npos) << extra.front() << ": " << r.err;
+  }
+}
+
 /// True once a record sink (hal::LineFile) writes `name` in `dir`: its temporary file
 /// `.NAME.XXXXXX` exists (the run is past loading and its outputs are open).
 bool writing(const TempDir& dir, const std::string& name) {
@@ -852,13 +866,7 @@ TEST(NumenCli, OptionsARunWouldNotApplyAreInputRejected) {
       {{"--realtime", "--cpu", "0", "--spin", "1000"}, "--spin"},  // not below dt = 1 ms
       {{"--realtime", "--scene-spin", "100"}, "--scene-spin"},  // no [multirate]: no scene thread
   };
-  for (const auto& [extra, key] : cases) {
-    std::vector<std::string> args = {kNumen, "run", kLattice, "--duration", "0.05"};
-    args.insert(args.end(), extra.begin(), extra.end());
-    const ChildResult r = run_child(args, dir.path(), 30);
-    EXPECT_EQ(r.status, 2) << extra.front() << ": " << r.out << r.err;
-    EXPECT_NE(r.err.find(key), std::string::npos) << extra.front() << ": " << r.err;
-  }
+  expect_lattice_run_refused(dir, cases);
   // `numen view --page` names a folder holding the page.
   const std::string rec = (dir / "run.nmv").string();
   ASSERT_EQ(run_child({kNumen, "run", kLattice, "--duration", "0.05", "--record-view", rec}, dir.path(), 30).status, 0);
@@ -885,13 +893,7 @@ TEST(NumenCli, Issue66BoundsAreInputRejectedNamingTheOption) {
        "run is offline"},
       {{"--bus", "igtl:127.0.0.1:19098:5"}, "host '127.0.0.1:19098' is not an IPv6 address"},
   };
-  for (const auto& [extra, message] : cases) {
-    std::vector<std::string> args = {kNumen, "run", kLattice, "--duration", "0.05"};
-    args.insert(args.end(), extra.begin(), extra.end());
-    const ChildResult r = run_child(args, dir.path(), 30);
-    EXPECT_EQ(r.status, 2) << extra.front() << ": " << r.out << r.err;
-    EXPECT_NE(r.err.find(message), std::string::npos) << extra.front() << ": " << r.err;
-  }
+  expect_lattice_run_refused(dir, cases);
   // At the bound, accepted (the 2-period run may end before a valid sample: status 6, not 2).
   const ChildResult ok = run_child({kNumen, "run", kLattice, "--duration", "0.002", "--realtime",
                                     "--overrun-limit", "0", "--timer-slack", "1000000"},

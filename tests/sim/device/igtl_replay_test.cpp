@@ -9,7 +9,11 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <limits>
+#include <memory>
+#include <stdexcept>
 #include <thread>
+#include <utility>
 
 #include "numen/hal/igtl/igtl_tracker_client.hpp"
 #include "numen/sim/device/simulated_instrument.hpp"
@@ -23,26 +27,37 @@ const numen::sim::Scene& igtl_replay_test_scene() {
   return s;
 }
 
-}  // namespace
-
-TEST(IgtlReplay, MessageKIsTheTrackedTipAtItsSyncInTheTrackersFrame) {
-  const numen::sim::Scene& scene = igtl_replay_test_scene();
-  numen::sim::IgtlReplaySettings rs;
+// `scene` replayed with `rs` (an ephemeral port) to a receiver that reads it to its end; the
+// replay's result in `result`.
+std::unique_ptr<numen::hal::IgtlTrackerClient> igtl_replay_test_read(
+    const numen::sim::Scene& scene, numen::sim::IgtlReplaySettings rs,
+    numen::sim::IgtlReplayResult& result) {
   rs.port = 0;
-  rs.duration_s = 0.049;  // 50 messages
-  rs.disconnect_after = -1;
   numen::sim::IgtlReplayServer server(scene, rs);
-  ASSERT_NE(server.port(), 0);
-  numen::sim::IgtlReplayResult result;
+  EXPECT_NE(server.port(), 0);
   std::thread serving([&] { result = server.serve(); });
   numen::hal::IgtlTrackerClientSettings cs;
   cs.port = server.port();
   cs.device_name = scene.igtl->device_name;
   cs.reconnect = false;
-  numen::hal::IgtlTrackerClient client(cs);
-  for (int i = 0; i < 5000 && !client.ended(); ++i)
+  auto client = std::make_unique<numen::hal::IgtlTrackerClient>(cs);
+  for (int i = 0; i < 5000 && !client->ended(); ++i)
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
   serving.join();
+  return client;
+}
+
+}  // namespace
+
+TEST(IgtlReplay, MessageKIsTheTrackedTipAtItsSyncInTheTrackersFrame) {
+  const numen::sim::Scene& scene = igtl_replay_test_scene();
+  numen::sim::IgtlReplaySettings rs;
+  rs.duration_s = 0.049;  // 50 messages
+  rs.disconnect_after = -1;
+  numen::sim::IgtlReplayResult result;
+  const std::unique_ptr<numen::hal::IgtlTrackerClient> reader =
+      igtl_replay_test_read(scene, rs, result);
+  numen::hal::IgtlTrackerClient& client = *reader;
   EXPECT_TRUE(result.client_connected);
   EXPECT_EQ(result.messages_sent, 50);
   EXPECT_EQ(client.counters().poses, 50u);
@@ -87,5 +102,40 @@ TEST(IgtlReplay, ASceneWithoutATrackerOrWithARegistrationReadAtStartIsRefused) {
   } catch (const numen::sim::InputError& e) {
     EXPECT_EQ(e.key(), "device.igtl.registration");
     EXPECT_NE(std::string(e.what()).find("TrackerToScene"), std::string::npos) << e.what();
+  }
+}
+
+// A stall (issue 70's tracker that loses its marker): from 0.02 s nothing for 0.2 s of wall
+// time, and the poses of that stretch never sent; the next is stamped where the tracker's clock
+// went on (0.22 s after the first). A stall's bad time or length is refused.
+TEST(IgtlReplay, AStallLeavesAGapInTheStreamItsStampsAndWallTime) {
+  const numen::sim::Scene& scene = igtl_replay_test_scene();
+  numen::sim::IgtlReplaySettings rs;
+  rs.duration_s = 0.249;  // 250 messages of the trajectory, 200 of them in the stall
+  rs.stall_at_s = 0.02;
+  rs.stall_s = 0.2;
+  numen::sim::IgtlReplayResult result;
+  const auto t0 = std::chrono::steady_clock::now();
+  const std::unique_ptr<numen::hal::IgtlTrackerClient> reader =
+      igtl_replay_test_read(scene, rs, result);
+  numen::hal::IgtlTrackerClient& client = *reader;
+  EXPECT_GE(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 0.2);
+  EXPECT_EQ(result.messages_sent, 50);
+  ASSERT_EQ(client.counters().poses, 50u);
+  std::int64_t first = 0;
+  for (int k = 0; k < 50; ++k) {
+    const numen::hal::IgtlPose* p = client.front();
+    ASSERT_NE(p, nullptr);
+    if (k == 0) first = p->stamp_ns;
+    EXPECT_EQ(p->stamp_ns - first, (k < 20 ? k : k + 200) * 1'000'000) << k;
+    client.pop();
+  }
+  for (const auto& [at, length] : {std::pair{-1.0, 1.0}, std::pair{0.0, -1.0},
+                                   std::pair{0.0, std::numeric_limits<double>::infinity()}}) {
+    numen::sim::IgtlReplaySettings bad;
+    bad.port = 0;
+    bad.stall_at_s = at;
+    bad.stall_s = length;
+    EXPECT_THROW(numen::sim::IgtlReplayServer(scene, bad), std::invalid_argument) << at << " " << length;
   }
 }

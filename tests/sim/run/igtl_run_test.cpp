@@ -69,6 +69,17 @@ numen::sim::RunSummary igtl_run_test_against(const numen::sim::Scene& scene,
   return numen::sim::run_scene(scene, o);
 }
 
+/// The shipped tracker scene's text, its files ("../data/...", relative to the shipped scene's
+/// folder) made absolute, so that an edited copy loads from another folder.
+std::string igtl_run_test_tracker_text() {
+  std::ifstream in(std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/tracker.toml");
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("\"../"), std::string::npos);
+  for (auto p = text.find("\"../"); p != std::string::npos; p = text.find("\"../", p))
+    text.replace(p, 4, "\"" + std::string(NUMEN_SOURCE_DIR) + "/sim/");
+  return text;
+}
+
 bool igtl_run_test_says(const numen::sim::RunSummary& s, const std::string& what) {
   return std::any_of(s.exit_reasons.begin(), s.exit_reasons.end(),
                      [&](const std::string& r) { return r.find(what) != std::string::npos; });
@@ -129,12 +140,7 @@ TEST(IgtlRun, TheReplayedTrackerDrivesTheGodObjectAsTheSimulatedBusDoes) {
 // the device loop reads the tracker as the single-rate run does, with the same figures.
 TEST(IgtlRun, AMultirateRunOnTheReplayedTrackerHasTheSimulatedBusFigures) {
   const numen::test::TempDir dir;
-  std::ifstream in(std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/tracker.toml");
-  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  const std::string data = "file = \"../data/";
-  ASSERT_NE(text.find(data), std::string::npos);
-  text.replace(text.find(data), data.size(),
-               "file = \"" + std::string(NUMEN_SOURCE_DIR) + "/sim/data/");
+  std::string text = igtl_run_test_tracker_text();
   text += "\n[multirate]\nscene_dt = 0.01\nmargin = 0.005\n";
   const numen::sim::Scene scene = numen::sim::load_scene(dir.write("tracker_multirate.toml", text));
   ASSERT_TRUE(scene.multirate.has_value());
@@ -165,12 +171,7 @@ TEST(IgtlRun, AMultirateRunOnTheReplayedTrackerHasTheSimulatedBusFigures) {
 // "diverged: body speed ... 14 above its limit 5").
 TEST(IgtlRun, ATrackerThatStartsFarFromTheRecordingBringsTheToolThereInsteadOfDiverging) {
   const numen::test::TempDir dir;
-  std::ifstream in(std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/tracker.toml");
-  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  const std::string data = "file = \"../data/";
-  ASSERT_NE(text.find(data), std::string::npos);
-  text.replace(text.find(data), data.size(),
-               "file = \"" + std::string(NUMEN_SOURCE_DIR) + "/sim/data/");
+  std::string text = igtl_run_test_tracker_text();
   const std::string manipulator = "manipulator = \"slave_right\"\n";
   const std::size_t at = text.rfind(manipulator);
   ASSERT_NE(at, std::string::npos);
@@ -195,6 +196,66 @@ TEST(IgtlRun, ATrackerThatStartsFarFromTheRecordingBringsTheToolThereInsteadOfDi
                "the live input's first sample (period 0) put the tool 100.0 mm and 90.0 deg "
                "from the scene's start: it was brought there") != std::string::npos;
   }));
+}
+
+// Issue 70: a live tracker that stalls for longer than the follower's wait (2 s) in following
+// mode. The run raced on without it once the wait ran out, so the poses it sent when it came
+// back were older than the run and stale until its clock caught up (a 2 s stall: invalid until
+// 5.5 s; here, 2.5 s: to the run's end); then the target stepped to the resumed pose in one
+// period (29 mm). Now the run keeps the tracker's pace while it is silent, the samples are valid
+// again within a few periods of the stream resuming, the target glides to the resumed pose over
+// the soft start (no step over a few mm a period), and the summary says the stall.
+TEST(IgtlRun, ATrackerThatStallsIsTakenBackAtOnceAndTheTargetGlidesToItsPose) {
+  const numen::sim::Scene& scene = igtl_run_test_scene();
+  constexpr int kPeriods = 4000;
+  numen::sim::IgtlReplaySettings rs;
+  rs.duration_s = kPeriods * scene.model.dt;
+  rs.paced = true;  // a live tracker: its clock is real time
+  rs.stall_at_s = 0.5;
+  rs.stall_s = 2.5;  // nothing from 0.5 s to 3.0 s
+  IgtlRunTestReplay replay(scene, rs);
+  numen::sim::BusChoice bus;
+  bus.spec = replay.spec();
+  numen::sim::SceneRunner runner(scene, 0, bus);
+  int first_invalid = -1, valid_again = -1;
+  double step_max_mm = 0.0, step_at_s = 0.0;
+  numen::core::Vec3 last = numen::core::Vec3::Zero();
+  for (int k = 0; k < kPeriods; ++k) {
+    runner.period();
+    const bool valid = runner.loop().last_report(0).sample_valid;
+    if (!valid && first_invalid < 0) first_invalid = k;
+    if (valid && first_invalid >= 0 && valid_again < 0) valid_again = k;
+    const numen::core::Vec3 target = runner.data().target.position;
+    if (k > 0 && (target - last).norm() * 1e3 > step_max_mm) {
+      step_max_mm = (target - last).norm() * 1e3;
+      step_at_s = k * scene.model.dt;
+    }
+    last = target;
+  }
+  runner.finish();
+  const numen::sim::RunSummary s = runner.summary();
+  for (const std::string& w : s.warnings) std::printf("[   info   ] %s\n", w.c_str());
+  // Stale from max_sample_age (0.1 s) after the last pose before the stall ...
+  EXPECT_NEAR(first_invalid, 600, 5);
+  // ... valid again within a few periods of the resumption at 3.0 s (its first pose's stamp).
+  EXPECT_GE(valid_again, 3000);
+  EXPECT_LE(valid_again, 3005) << "valid again at period " << valid_again;
+  // No step of the target: the largest move in one period is the glide's (a few mm), not the
+  // gap the hand moved during the stall.
+  EXPECT_LT(step_max_mm, 3.0) << "at " << step_at_s << " s";
+  EXPECT_EQ(s.stale_stretches, 1);
+  EXPECT_NEAR(s.stale_longest_s, 2.4, 0.01);
+  EXPECT_NEAR(s.stale_longest_from_s, 0.6, 0.005);
+  EXPECT_EQ(s.stale_rejoins, 1);
+  EXPECT_GT(s.stale_rejoin_gap_mm, 10.0);  // the hand moved during the stall
+  EXPECT_EQ(s.igtl_wait_timeouts, 1);
+  EXPECT_TRUE(std::any_of(s.warnings.begin(), s.warnings.end(), [](const std::string& w) {
+    return w.find("the device's samples went stale 1 time(s), 24") != std::string::npos &&
+           w.find("the longest stretch 2.4") != std::string::npos &&
+           w.find("the target was brought to the resumed pose over the soft start") !=
+               std::string::npos;
+  }));
+  EXPECT_FALSE(s.divergence.latched);
 }
 
 TEST(IgtlRun, APositionOrQtransReplayDrivesTheGodObjectAsTheTransformOne) {
@@ -290,14 +351,10 @@ TEST(IgtlRun, ASceneWithoutATrackerIsRefusedAtTheBusOption) {
 // with an error located at the scene's key.
 TEST(IgtlRun, ARegistrationNeverSentIsAnErrorAtItsKey) {
   const numen::test::TempDir dir;
-  std::ifstream in(std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/tracker.toml");
-  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::string text = igtl_run_test_tracker_text();
   const auto at = text.find("registration = {");
   ASSERT_NE(at, std::string::npos);
   text.replace(at, text.find('\n', at) - at, "registration = \"TrackerToScene\"");
-  // The scene's recording is relative to the shipped scene's folder.
-  for (auto p = text.find("\"../"); p != std::string::npos; p = text.find("\"../", p))
-    text.replace(p, 4, "\"" + std::string(NUMEN_SOURCE_DIR) + "/sim/");
   const std::string file = dir.write("named.toml", text);
   const numen::sim::Scene scene = numen::sim::load_scene(file);
   numen::sim::RunOptions o;

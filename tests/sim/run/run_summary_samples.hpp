@@ -57,6 +57,13 @@ inline sim::RunSummary full_managed_summary() {
   s.joint_angle_drift_max_mrad = 0.03125;
   s.rejected_samples = 5;
   s.invalid_periods = 6;
+  s.stale_stretches = 1;
+  s.stale_periods = 4;
+  s.stale_longest_s = 0.004;
+  s.stale_longest_from_s = 1.5;
+  s.stale_rejoins = 1;
+  s.stale_rejoin_gap_mm = 29.5;
+  s.stale_rejoin_gap_deg = 3.25;
   s.contact_overflow = 7;
   s.contact_clamped_steps = 8;
   s.rejected_causes = "4 stale (older than max_sample_age, or none came), 1 implausible jump";
@@ -287,6 +294,7 @@ inline sim::RunSummary igtl_summary() {
   s.igtl_stamps_ahead = 7;
   s.igtl_stamps_unstamped = 8;
   s.igtl_stamp_resyncs = 1;
+  s.igtl_silence_rebases = 1;
   s.igtl_follows = true;
   s.igtl_periods_after_end = 5;
   s.igtl_fault_records = {

@@ -53,64 +53,13 @@ std::string organ_scale_replace_all(std::string text, const std::string& from, c
 /// 2.5 mm probe imposed on the device's pose (direct coupling): the indentation scene.
 std::string organ_scale_probe_scene(const std::string& organ_keys, double tie_stiffness,
                                     double tie_damping, double spring_scale = 1.0) {
-  return R"(name = "organ-scale"
-dt = 0.001
-gravity = [0.0, 0.0, 0.0]
-integrator = "implicit-euler"
-coupling = "direct"
-
-[solver]
-tolerance = 3.0e-4
-max_iterations = 200
-
-[[material]]
-name = "steel"
-
-[[material]]
-name = "tissue"
-
-[contact_default]
-stiffness = 2.0e4
-damping = 10.0
-
-[[body]]
-name = "organ_core"
-mass = 0.1
-inertia = [1.0e-4, 1.0e-4, 1.0e-4]
-anchored = true
-material = "tissue"
-
-[[body]]
-name = "probe"
-mass = 0.05
-inertia = [1.0e-5, 1.0e-5, 1.0e-5]
-material = "steel"
-spheres = [[0.0, 0.0, 0.0, 0.0025]]
-position = [0.0, 0.0, -0.03]
-
-[[deformable]]
-name = "organ"
-body = "organ_core"
-mass = 0.07
-stiffness = )" + std::to_string(200.0 * spring_scale) + "\ndamping = " + std::to_string(0.1 * spring_scale) +
-         "\nbending_stiffness = " + std::to_string(50.0 * spring_scale) +
-         "\nbending_damping = " + std::to_string(0.03 * spring_scale) + R"(
-tie_stiffness = )" + std::to_string(tie_stiffness) +
-         "\ntie_damping = " + std::to_string(tie_damping) + "\nmaterial = \"tissue\"\n" + organ_keys +
-         R"(
-
-[device]
-kind = "pose-tracker"
-attach = "probe"
-
-[trajectory]
-source = "scripted"
-start = { position = [0.0, 0.0, -0.03] }
-
-[[trajectory.segment]]
-type = "hold"
-duration = 0.1
-)";
+  return numen::test::indentation_bench_scene(
+      "mass = 0.07\nstiffness = " + std::to_string(200.0 * spring_scale) +
+      "\ndamping = " + std::to_string(0.1 * spring_scale) +
+      "\nbending_stiffness = " + std::to_string(50.0 * spring_scale) +
+      "\nbending_damping = " + std::to_string(0.03 * spring_scale) +
+      "\ntie_stiffness = " + std::to_string(tie_stiffness) +
+      "\ntie_damping = " + std::to_string(tie_damping) + "\n" + organ_keys);
 }
 
 /// The scene `text` written to `dir`/`name` and loaded.

@@ -10,6 +10,7 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <map>
@@ -181,6 +182,23 @@ std::vector<numen::hal::IgtlUnpacked> igtl_world_test_of(const numen::test::Igtl
       out.push_back(numen::hal::unpack_igtl(std::span(
           reinterpret_cast<const std::uint8_t*>(m.data()), m.size())));
   return out;
+}
+
+// The STATUS messages `reader` has received.
+int igtl_world_test_statuses(const numen::test::IgtlTestReader& reader) {
+  int n = 0;
+  for (const std::string& m : reader.messages())
+    n += numen::test::IgtlTestReader::type_of(m) == "STATUS";
+  return n;
+}
+
+// STATUS `m` has code `code`, subcode `subcode`, error name `name` and timestamp `t_ns`.
+void igtl_world_test_expect(const numen::hal::IgtlUnpacked& m, int code, std::int64_t subcode,
+                            const std::string& name, std::int64_t t_ns) {
+  EXPECT_EQ(m.status_code, code) << m.text;
+  EXPECT_EQ(m.status_subcode, subcode) << m.text;
+  EXPECT_EQ(m.error_name, name) << m.text;
+  EXPECT_EQ(m.timestamp_ns, t_ns) << m.text;
 }
 
 }  // namespace
@@ -359,32 +377,20 @@ TEST(IgtlWorldServer, FaultsRejectionsTheBusAndGraspsAreStatusAndStringMessages)
     ASSERT_TRUE(server.write_frame(igtl_world_test_frame(layout, data, report, figures)));
   }
   const auto flush = [&] { server.flush(); };
-  const auto statuses = [](const numen::test::IgtlTestReader& r) {
-    int n = 0;
-    for (const std::string& m : r.messages()) n += numen::test::IgtlTestReader::type_of(m) == "STATUS";
-    return n;
-  };
   // early: its intro (ok), then 2: rejected + bus down, 3: latched, 5: cleared, valid, bus up,
   // 6: rejected (jump).
-  ASSERT_TRUE(early.read_until([&] { return statuses(early) >= 8; }, flush));
+  ASSERT_TRUE(early.read_until([&] { return igtl_world_test_statuses(early) >= 8; }, flush));
   const std::vector<numen::hal::IgtlUnpacked> s = igtl_world_test_of(early, "STATUS", "numen");
   ASSERT_EQ(s.size(), 8u);
-  const auto expect = [](const numen::hal::IgtlUnpacked& m, int code, std::int64_t subcode,
-                         const std::string& name, std::int64_t t_ns) {
-    EXPECT_EQ(m.status_code, code) << m.text;
-    EXPECT_EQ(m.status_subcode, subcode) << m.text;
-    EXPECT_EQ(m.error_name, name) << m.text;
-    EXPECT_EQ(m.timestamp_ns, t_ns) << m.text;
-  };
-  expect(s[0], 1, 0, "ok", 0);
-  expect(s[1], 7, SampleFault::kStale, "samples rejected", 20'000'000);
-  expect(s[2], 7, 0, "bus down", 20'000'000);
-  expect(s[3], 3, static_cast<int>(FaultCause::kEncoderTimeout),
-         numen::hal::to_string(FaultCause::kEncoderTimeout), 30'000'000);
-  expect(s[4], 1, 0, "safe state cleared", 50'000'000);
-  expect(s[5], 1, 0, "samples valid", 50'000'000);
-  expect(s[6], 1, 0, "bus up", 50'000'000);
-  expect(s[7], 2, SampleFault::kJump, "samples rejected", 60'000'000);
+  igtl_world_test_expect(s[0], 1, 0, "ok", 0);
+  igtl_world_test_expect(s[1], 7, SampleFault::kStale, "samples rejected", 20'000'000);
+  igtl_world_test_expect(s[2], 7, 0, "bus down", 20'000'000);
+  igtl_world_test_expect(s[3], 3, static_cast<int>(FaultCause::kEncoderTimeout),
+                         numen::hal::to_string(FaultCause::kEncoderTimeout), 30'000'000);
+  igtl_world_test_expect(s[4], 1, 0, "safe state cleared", 50'000'000);
+  igtl_world_test_expect(s[5], 1, 0, "samples valid", 50'000'000);
+  igtl_world_test_expect(s[6], 1, 0, "bus up", 50'000'000);
+  igtl_world_test_expect(s[7], 2, SampleFault::kJump, "samples rejected", 60'000'000);
   EXPECT_NE(s[1].text.find("stale"), std::string::npos) << s[1].text;
   EXPECT_NE(s[7].text.find("jump"), std::string::npos) << s[7].text;
   // The STRINGs say the same in words, and the release.
@@ -393,15 +399,99 @@ TEST(IgtlWorldServer, FaultsRejectionsTheBusAndGraspsAreStatusAndStringMessages)
   EXPECT_EQ(w[6].text, "the device released 'stylus' at t = 0.050 s");
   EXPECT_EQ(server.counters().events, 8u);
   // The late client (joined at 0.04 s, the safe state latched): the fault first.
-  ASSERT_TRUE(late->read_until([&] { return statuses(*late) >= 5; }, flush));
+  ASSERT_TRUE(late->read_until([&] { return igtl_world_test_statuses(*late) >= 5; }, flush));
   const std::vector<numen::hal::IgtlUnpacked> l = igtl_world_test_of(*late, "STATUS", "numen");
   ASSERT_EQ(l.size(), 5u);
   EXPECT_EQ(numen::test::IgtlTestReader::type_of(late->messages().front()), "STATUS");
-  expect(l[0], 3, static_cast<int>(FaultCause::kEncoderTimeout),
-         numen::hal::to_string(FaultCause::kEncoderTimeout), 40'000'000);
+  igtl_world_test_expect(l[0], 3, static_cast<int>(FaultCause::kEncoderTimeout),
+                         numen::hal::to_string(FaultCause::kEncoderTimeout), 40'000'000);
 }
 
 // Listening on IPv6 ([::1]) and on "localhost" (127.0.0.1): a client of each gets the frames.
+// Issue 70: the STATUS carried device 0's state alone. Each of the loop's other devices (here
+// bimanual.toml's "right") has its STATUS under its own name, "numen_1": its samples rejected
+// and valid again, its safe state latched and cleared, its bus; its STRINGs name it; a client
+// that connects gets every device's state. Device 0's STATUS "numen" and its words are as ever.
+TEST(IgtlWorldServer, EveryDevicesStateIsAStatusUnderItsOwnName) {
+  NUMEN_REQUIRE_ARTICULATION();
+  const numen::sim::Scene scene =
+      numen::sim::load_scene(std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/bimanual.toml");
+  ASSERT_EQ(scene.extra_devices.size(), 1u);
+  EXPECT_EQ(numen::sim::igtl_world_status_name(0), "numen");
+  EXPECT_EQ(numen::sim::igtl_world_status_name(1), "numen_1");
+  numen::sim::IgtlWorldSettings ws;
+  ws.port = 0;
+  ws.device_names = {scene.device.name, scene.extra_devices[0].device.name};
+  numen::sim::IgtlWorldServer server(scene.model, ws);
+  numen::test::IgtlTestReader early(server.port());
+  const numen::platform::StateFrameLayout layout = numen::sim::view_frame_layout(scene);
+  ASSERT_EQ(layout.num_extra_devices, 1u);
+  numen::core::Data data = numen::core::make_data(scene.model);
+  using numen::hal::FaultCause;
+  using numen::hal::SampleFault;
+  struct Step {
+    numen::hal::FaultMask second_faults;
+    bool second_bus_down;
+    FaultCause second_cause;
+  };
+  const std::vector<Step> steps{
+      {SampleFault::kNone, false, FaultCause::kNone},                  // both valid (no event)
+      {SampleFault::kStale, true, FaultCause::kNone},                  // device 1 stale, its bus down
+      {SampleFault::kStale, true, FaultCause::kEncoderTimeout},        // its safe state latches
+      {SampleFault::kStale, true, FaultCause::kEncoderTimeout},        // nothing new
+      {SampleFault::kNone, false, FaultCause::kNone},                  // all back
+  };
+  std::unique_ptr<numen::test::IgtlTestReader> late;
+  const std::vector<double> first_tau(layout.num_axes, 0.0), second_tau(layout.num_extra_axes, 0.0);
+  for (std::size_t k = 0; k < steps.size(); ++k) {
+    data.time = 0.01 * static_cast<double>(k);
+    numen::platform::PeriodReport first, second;  // device 0 valid throughout
+    second.sample_faults = steps[k].second_faults;
+    second.fault_cause = steps[k].second_cause;
+    const std::array<numen::platform::FrameDeviceInput, 1> extra{
+        {{&second, second_tau, steps[k].second_bus_down}}};
+    std::vector<std::byte> frame(layout.max_frame_bytes());
+    frame.resize(numen::platform::encode_state_frame(layout, data, first, first_tau, {}, frame, extra));
+    ASSERT_FALSE(frame.empty());
+    if (k == 3) late = std::make_unique<numen::test::IgtlTestReader>(server.port());
+    ASSERT_TRUE(server.write_frame(frame));
+  }
+  const auto flush = [&] { server.flush(); };
+  // early: both intros (ok), then device 1's 1: rejected, bus down; 2: latched; 4: cleared,
+  // valid, bus up.
+  ASSERT_TRUE(early.read_until([&] { return igtl_world_test_statuses(early) >= 8; }, flush));
+  const std::vector<numen::hal::IgtlUnpacked> zero = igtl_world_test_of(early, "STATUS", "numen");
+  ASSERT_EQ(zero.size(), 1u);  // device 0: its intro, nothing changed
+  EXPECT_EQ(zero[0].error_name, "ok");
+  const std::vector<numen::hal::IgtlUnpacked> s = igtl_world_test_of(early, "STATUS", "numen_1");
+  ASSERT_EQ(s.size(), 7u);
+  igtl_world_test_expect(s[0], 1, 0, "ok", 0);
+  igtl_world_test_expect(s[1], 7, SampleFault::kStale, "samples rejected", 10'000'000);
+  igtl_world_test_expect(s[2], 7, 0, "bus down", 10'000'000);
+  igtl_world_test_expect(s[3], 3, static_cast<int>(FaultCause::kEncoderTimeout),
+                         numen::hal::to_string(FaultCause::kEncoderTimeout), 20'000'000);
+  igtl_world_test_expect(s[4], 1, 0, "safe state cleared", 40'000'000);
+  igtl_world_test_expect(s[5], 1, 0, "samples valid", 40'000'000);
+  igtl_world_test_expect(s[6], 1, 0, "bus up", 40'000'000);
+  const std::vector<numen::hal::IgtlUnpacked> w = igtl_world_test_of(early, "STRING", "numen_events");
+  ASSERT_EQ(w.size(), 6u);
+  EXPECT_EQ(w[0].text, "device 1 'right': its samples were rejected at t = 0.010 s (stale)");
+  EXPECT_EQ(w[2].text, "device 1 'right' latched its safe state at t = 0.020 s: " +
+                           std::string(numen::hal::to_string(FaultCause::kEncoderTimeout)));
+  EXPECT_EQ(server.counters().events, 6u);
+  // The late client (joined at 0.03 s): device 0's state, then device 1's latched fault.
+  ASSERT_TRUE(late->read_until([&] { return igtl_world_test_statuses(*late) >= 5; }, flush));
+  const std::vector<numen::hal::IgtlUnpacked> l0 = igtl_world_test_of(*late, "STATUS", "numen");
+  const std::vector<numen::hal::IgtlUnpacked> l1 = igtl_world_test_of(*late, "STATUS", "numen_1");
+  ASSERT_EQ(l0.size(), 1u);
+  ASSERT_EQ(l1.size(), 4u);
+  igtl_world_test_expect(l0[0], 1, 0, "ok", 30'000'000);
+  igtl_world_test_expect(l1[0], 3, static_cast<int>(FaultCause::kEncoderTimeout),
+                         numen::hal::to_string(FaultCause::kEncoderTimeout), 30'000'000);
+  EXPECT_EQ(l1[0].text, "device 1 'right' is in its safe state: " +
+                            std::string(numen::hal::to_string(FaultCause::kEncoderTimeout)));
+}
+
 TEST(IgtlWorldServer, ListensOnIpv6AndOnLocalhost) {
   const numen::sim::Scene scene =
       numen::sim::load_scene(std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/tracker.toml");

@@ -2,7 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <fstream>
+#include <limits>
 #include <nlohmann/json.hpp>
 
 #include "build_features.hpp"
@@ -111,6 +114,59 @@ TEST(ViewRecording, ARunOfAnOrganWithAFineSurfaceRecordsItAndReadsBack) {
   EXPECT_FALSE(recorded["nets"][1].contains("surface"));
 }
 
+// Issue 70: the view carried device 0's feedback, axis torques and state alone. A run of the
+// two-device bimanual scene records both: device 0's in the header and its arrays as ever,
+// "right"'s in extra_device and extra_axis_torque, named in the scene message; every period
+// recorded, the largest feedback force of each device is the summary's for it.
+TEST(ViewRecording, ATwoDeviceRunRecordsEachDevicesFeedbackTorquesAndState) {
+  NUMEN_REQUIRE_DEFORMABLE();
+  NUMEN_REQUIRE_ARTICULATION();
+  TempDir dir;
+  const numen::sim::Scene scene =
+      numen::sim::load_scene(std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/bimanual.toml");
+  ASSERT_EQ(scene.extra_devices.size(), 1u);
+  numen::sim::RunOptions options;
+  options.duration_s = 0.3;
+  options.view_rate_hz = std::numeric_limits<double>::infinity();  // every period
+  options.record_view_path = (dir / "two.nmv").string();
+  const numen::sim::RunSummary s = numen::sim::run_scene(scene, options);
+  ASSERT_EQ(s.exit_status, 0) << s.exit_reasons.front();
+  ASSERT_EQ(s.devices.size(), 2u);
+  const ViewRecordingReader reader(options.record_view_path);
+  ASSERT_EQ(reader.size(), 300u);
+  const auto message = nlohmann::json::parse(reader.scene_message());
+  EXPECT_EQ(message["extra_devices"][0]["name"], "right");
+  EXPECT_EQ(message["layout"]["extra_devices"], 1);
+  const std::size_t axes = scene.extra_devices[0].device.axes.size();
+  EXPECT_EQ(message["layout"]["extra_axes"], axes);
+  double first_max = 0.0, second_max = 0.0, second_tau_max = 0.0;
+  std::vector<std::byte> bytes;
+  for (std::size_t i = 0; i < reader.size(); ++i) {
+    reader.frame(i, bytes);
+    numen::platform::StateFrameView v;
+    ASSERT_TRUE(numen::platform::StateFrameDecoder::decode(bytes, v).ok());
+    ASSERT_EQ(v.header().num_extra_devices, 1u);
+    ASSERT_EQ(v.header().num_extra_axes, axes);
+    float w[6];
+    v.feedback(w);
+    first_max = std::max(first_max, std::hypot(double{w[0]}, double{w[1]}, double{w[2]}));
+    const numen::platform::FrameDevice d = v.extra_device(0);
+    EXPECT_EQ(d.num_axes, axes);
+    second_max = std::max(second_max, std::hypot(double{d.feedback[0]}, double{d.feedback[1]},
+                                                 double{d.feedback[2]}));
+    for (std::uint32_t a = 0; a < axes; ++a)
+      second_tau_max = std::max(second_tau_max, std::abs(double{v.extra_axis_torque(a)}));
+    if (i == reader.size() - 1) {
+      EXPECT_TRUE(d.flags & numen::platform::kFrameSampleValid);
+      EXPECT_EQ(d.fault_cause, 0u);
+    }
+  }
+  EXPECT_GT(second_max, 0.01);  // device 1 renders a force of its own
+  EXPECT_GT(second_tau_max, 0.0);
+  EXPECT_NEAR(first_max, s.devices[0].feedback_force_max_n, 1e-5 * (1.0 + first_max));
+  EXPECT_NEAR(second_max, s.devices[1].feedback_force_max_n, 1e-5 * (1.0 + second_max));
+}
+
 TEST(ViewRecording, EveryDamagedFileIsRefusedWithItsByteOffset) {
   NUMEN_REQUIRE_ARTICULATION();
   TempDir dir;
@@ -167,7 +223,8 @@ std::string recording_bytes(const std::string& scene) {
 // nothing ("[json.exception.type_error.302] type must be string, but is object").
 TEST(ViewRecording, ASceneMessageMemberOfTheWrongTypeIsNamedByItsKey) {
   TempDir dir;
-  const std::string layout = R"("layout": {"bodies": 2, "nodes": 0, "axes": 3, "grasps": 0})";
+  const std::string layout =
+      R"("layout": {"bodies": 2, "nodes": 0, "axes": 3, "grasps": 0, "extra_devices": 0, "extra_axes": 0})";
   const std::string v = std::to_string(numen::sim::kViewSceneVersion);
   const std::vector<std::pair<std::string, std::string>> cases = {
       {R"({"format": {"a": 1}, "version": )" + v + ", " + layout + "}", "format"},
@@ -189,6 +246,12 @@ TEST(ViewRecording, ASceneMessageMemberOfTheWrongTypeIsNamedByItsKey) {
        "layout.axes"},
       {R"({"format": "numen-view", "version": )" + v + R"(, "layout": {"bodies": 2, "nodes": 0, "axes": 3}})",
        "layout.grasps"},
+      {R"({"format": "numen-view", "version": )" + v +
+           R"(, "layout": {"bodies": 2, "nodes": 0, "axes": 3, "grasps": 0, "extra_axes": 0}})",
+       "layout.extra_devices"},
+      {R"({"format": "numen-view", "version": )" + v +
+           R"(, "layout": {"bodies": 2, "nodes": 0, "axes": 3, "grasps": 0, "extra_devices": 1.5, "extra_axes": 0}})",
+       "layout.extra_devices"},
   };
   for (const auto& [scene, key] : cases) {
     const std::string path = write_bytes(dir, "bad.nmv", recording_bytes(scene));

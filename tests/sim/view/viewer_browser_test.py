@@ -32,6 +32,9 @@ On a run that latches a fault (the lattice scene on a bus losing 30 % of its fra
 On the default scene with a grasper on its jaws (7.3 s of the recording, which grasps the organ):
   - the timeline marks each grasp and release, and at the grasp's frame the panel names what
     the grasper holds.
+On 0.3 s of the two-device bimanual scene:
+  - the panel has a line for the second device ("right"): its state, feedback force and the
+    torques sent to its axes.
 Exit 0: passed; 1: failed; 77: skipped, only when Chromium or the Python module PIL
 (python3-pil) is not installed.
 
@@ -626,6 +629,42 @@ def check_grasp(numen, browser, out):
     return failures
 
 
+def check_devices(numen, browser, out):
+    """The two-device bimanual scene (issue 70: the view carried device 0's state alone): the
+    panel has a line for the loop's other device, "right", with its lifecycle, samples,
+    feedback force and the torques sent to its axes, and the page logs no error."""
+    rec, r = record(numen, out, "bimanual", os.path.join(ROOT, "sim", "scenes", "bimanual.toml"), 0.3)
+    if r.returncode != 0:
+        return ["bimanual: the run exited %d\n%s" % (r.returncode, r.stderr)]
+
+    def check(viewer):
+        last = viewer.frames - 1
+        page = open_page(browser, viewer.url, "?frame=%d&w=%d&h=%d" % (last, VIEW_W, VIEW_H))
+        text = page.eval("numenView.probe().devices")
+        print("bimanual: at frame %d the panel says %r" % (last, text))
+        failures = []
+        if not re.search(r"^device 1 'right': .*samples valid, \|F\| = \d+\.\d\d N, "
+                         r"τ = \[-?\d+\.\d{3}(, -?\d+\.\d{3})*\]$", text):
+            failures.append("bimanual: the panel's line of device 1 is %r" % text)
+        failures += page_failures(page, "bimanual")
+        page.send("Page.close")
+        return failures
+    return served(numen, rec, check)
+
+
+def served(numen, rec, check):
+    """`check(viewer)`'s failures on `rec` served by `numen view`, and the server's own."""
+    viewer = Viewer(numen, rec)
+    failures = []
+    try:
+        failures += check(viewer)
+    finally:
+        f = viewer.stop()
+        if f:
+            failures.append(f)
+    return failures
+
+
 def check_scene(numen, browser, out, name, scene, duration, figure):
     """Records, serves, shoots and checks one scene; returns a list of failures."""
     from PIL import Image  # python3-pil
@@ -713,6 +752,7 @@ def main():
             failures += check_fine_surface(a.numen, browser, a.out)
             failures += check_fault(a.numen, browser, a.out)
             failures += check_grasp(a.numen, browser, a.out)
+            failures += check_devices(a.numen, browser, a.out)
     shutil.rmtree(profile, ignore_errors=True)
     for f in failures:
         print("FAIL: " + f)

@@ -96,6 +96,12 @@ struct NetSettings {
   double rest_speed = 3e-5;
 };
 
+/// Checks a net's rigid component `body` (an index into Model::bodies) and contact `material`
+/// (an index into Model::material_names, or 0 in a model without materials yet, which
+/// finalize_model() gives "default"): "" when both are in range, else a message naming the
+/// first that is not. What add_net() and add_material_net() check first.
+std::string validate_net_owner(const Model& model, int body, int material);
+
 /// Appends a net to `model` from `mesh`, given in the rigid component's body
 /// frame (origin at its COM; the rest shape). Nodes start at their rest
 /// positions at the body's initial pose with its initial point velocities.

@@ -77,6 +77,15 @@ struct ControlLoopSettings : hal::ImpedanceSettings {
   /// 100 mm away: 14 m/s). ControlLoop::placed_period() says when. Off: the bodies start where
   /// the scene put them. Not for a multirate stepper (its god-object is its own copy).
   bool place_at_first_sample = false;
+  /// When a device's samples come back after going stale (a tracker that stalled, encoders
+  /// silent for longer than max_sample_age: the instrument moved while nothing was known of it),
+  /// bring each of its bound bodies' targets from where it was held to the resumed sample's over
+  /// the device's soft start (DeviceConfig::soft_start_s; 0: at once) on a smoothstep
+  /// r = 3s² − 2s³ (position lerped, orientation slerped, the twist the glide's plus r times the
+  /// sample's; its prescribed joints likewise), and ramp its feedback in again from zero over
+  /// the same time (hal::Device::ramp_feedback_again()). Off: the target steps to the resumed
+  /// pose in one period and the feedback comes back at once. ControlLoop::rejoins() counts them.
+  bool rejoin_after_stale = false;
 };
 
 /// One device of a ControlLoop that runs several (the LoopDevice constructor): an impedance
@@ -245,6 +254,8 @@ class ControlLoop {
   std::int64_t placed_period(std::size_t i = 0) const noexcept {
     return contexts_[i].placed_period;
   }
+  /// Device i's returns from stale samples (ControlLoopSettings::rejoin_after_stale).
+  const RejoinTally& rejoins(std::size_t i = 0) const noexcept { return contexts_[i].rejoin; }
 
   /// The step stage's dynamics (step 4 of end_period()): `stepper`'s step() over the loop's
   /// Model and Data, and its finish() after the commands were sent (outside the timed step),

@@ -20,6 +20,7 @@
 /// free, lock free and never blocks; each writes only the PeriodData fields whose writer it is
 /// (period_data_fields(); tests/platform/period_stages_test.cpp).
 
+#include <array>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -27,6 +28,7 @@
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"
 #include "numen/hal/device/device.hpp"
+#include "numen/hal/device/kinematics.hpp"
 #include "numen/platform/device_binding.hpp"
 #include "numen/platform/latency_histogram.hpp"
 #include "numen/platform/loop_statistics.hpp"
@@ -46,6 +48,14 @@ struct ControlLoopCounters {
   /// Periods whose bound bodies' feedback had a NaN / inf wrench (mapped all the same: the
   /// device's write() trips on the non-finite τ, FaultCause::kNonFiniteTorque).
   std::uint64_t non_finite_wrenches = 0;
+};
+
+/// What a device's returns from stale samples did (ControlLoopSettings::rejoin_after_stale).
+struct RejoinTally {
+  std::uint64_t rejoins = 0;       ///< Valid samples that came after stale ones.
+  std::int64_t last_period = -1;   ///< Period of the last of them (-1: none).
+  double gap_max_m = 0.0;          ///< Largest distance from a held target to the resumed one, m.
+  double gap_max_rad = 0.0;        ///< Largest angle between them, rad.
 };
 
 /// Most devices one ControlLoop runs (its constructor refuses more): the contexts and records
@@ -73,6 +83,15 @@ struct PeriodContext {
   /// (ControlLoopSettings::place_at_first_sample); cleared by bind_link_targets() when done.
   bool place_pending = false;
   std::int64_t placed_period = -1;  ///< Period they were brought there; -1 if not.
+  /// Glide the targets to the resumed samples after stale ones and ramp the feedback again
+  /// (ControlLoopSettings::rejoin_after_stale).
+  bool rejoin_after_stale = false;
+  int rejoin_steps = 0;      ///< Periods of the glide (the device's soft start; 0: none).
+  bool stale_seen = false;   ///< A stale sample came since the last valid one.
+  int rejoin_k = -1;         ///< Periods into the glide under way (-1: none).
+  std::array<core::Pose, kMaxLinkBindings> rejoin_from{};  ///< The held targets it leaves.
+  std::array<double, hal::kMaxAxes> rejoin_from_q{};       ///< The held prescribed values.
+  RejoinTally rejoin;        ///< What the returns did.
   /// This device's index in the loop, in [0, records.size()). Device 0 does the loop's shared
   /// work (the step, Stepper::finish(), LoopStatistics) for all.
   int index = 0;
@@ -117,7 +136,8 @@ void supervise_device(PeriodContext& context, PeriodData& period, std::int64_t n
 /// bind (impedance): while the state is ready (a rejected sample keeps the last good target),
 /// each bound body's target — link pose · body_in_link, the link's twist carried to the body's
 /// origin (Data::target of the held body, Data::body_targets of the others; paper Eq. 6) —
-/// and the prescribed joints' values.
+/// and the prescribed joints' values; after stale samples, glided from the held ones
+/// (ControlLoopSettings::rejoin_after_stale).
 void bind_link_targets(PeriodContext& context, PeriodData& period, std::int64_t now_ns) noexcept;
 /// bind (admittance): in kActive with a body held, the state's measured wrench carried to the
 /// held body's COM into Data::device_wrench; otherwise a brake that halves the held body's

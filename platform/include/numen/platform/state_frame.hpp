@@ -1,9 +1,9 @@
 #pragma once
 /// @file state_frame.hpp
 /// The state frame: one period of the simulated world, as the viewer and any other renderer
-/// receive it (docs/viewer.md, "Frames"). A frame is a little-endian byte string of a 68-byte
+/// receive it (docs/viewer.md, "Frames"). A frame is a little-endian byte string of a 76-byte
 /// header followed by float32 arrays; its size depends only on the scene (bodies, net nodes,
-/// axes, graspers) and on the contacts of the period. The loop writes it straight into a preallocated
+/// axes, graspers, the loop's other devices and their axes) and on the contacts of the period. The loop writes it straight into a preallocated
 /// buffer (encode_state_frame(): noexcept, no allocation); readers check it with
 /// decode_state_frame(), which never reads past the bytes it is given.
 ///
@@ -33,9 +33,9 @@ namespace numen::platform {
 /// First bytes of every frame.
 inline constexpr char kStateFrameMagic[4] = {'N', 'M', 'V', 'F'};
 /// Version written by encode_state_frame() and the only one decode_state_frame() accepts.
-inline constexpr std::uint16_t kStateFrameVersion = 3;
+inline constexpr std::uint16_t kStateFrameVersion = 4;
 /// Size of the fixed header, bytes.
-inline constexpr std::size_t kStateFrameHeaderBytes = 68;
+inline constexpr std::size_t kStateFrameHeaderBytes = 76;
 
 /// Bytes of each float32 of the arrays.
 inline constexpr std::size_t kFrameFloatBytes = sizeof(float);
@@ -79,7 +79,7 @@ constexpr std::string_view frame_field_type_name(FrameFieldType t) noexcept {
 enum class FrameField : std::uint8_t {
   kMagic, kVersion, kHeaderBytes, kFrameBytes, kNumBodies, kNumNodes, kNumContacts, kNumAxes,
   kHeldBody, kPeriod, kTimeNs, kStepStatus, kFlags, kStepNs, kLifecycle, kStartup, kFaultCause,
-  kSampleFaults, kNumGrasps
+  kSampleFaults, kNumGrasps, kNumExtraDevices, kNumExtraAxes
 };
 
 /// One field of the header.
@@ -90,11 +90,11 @@ struct StateFrameField {
   FrameFieldType type;    ///< Wire type (its size: frame_field_bytes()).
 };
 
-/// The 68-byte header, field by field (names as StateFrameHeader's members):
+/// The 76-byte header, field by field (names as StateFrameHeader's members):
 ///
 ///     magic          "NMVF" (kStateFrameMagic)
-///     version        kStateFrameVersion (3)
-///     header_bytes   kStateFrameHeaderBytes (68)
+///     version        kStateFrameVersion (4)
+///     header_bytes   kStateFrameHeaderBytes (76)
 ///     frame_bytes    the whole frame, bytes
 ///     num_bodies     B: bodies
 ///     num_nodes      N: net nodes
@@ -114,7 +114,14 @@ struct StateFrameField {
 ///                    previous frame of the stream (OR'ed: a rejection between two frames is
 ///                    not lost to the decimation); the period's own when every period is sent
 ///     num_grasps     G: graspers (core::Model::grasps)
-inline constexpr std::array<StateFrameField, 19> kStateFrameFields{{
+///     num_extra_devices  D: the loop's devices after the first (device 0, whose state the
+///                    fields above and the feedback and axis_torque arrays carry): 0 for one
+///                    device
+///     num_extra_axes E: their axes, all together
+/// The device fields above (flags but kFrameOverrun and kFrameContactsTruncated, lifecycle,
+/// startup, fault_cause, sample_faults) are device 0's; the other devices' are in the
+/// extra_device array.
+inline constexpr std::array<StateFrameField, 21> kStateFrameFields{{
     {FrameField::kMagic, "magic", 0, FrameFieldType::kChar4},
     {FrameField::kVersion, "version", 4, FrameFieldType::kU16},
     {FrameField::kHeaderBytes, "header_bytes", 6, FrameFieldType::kU16},
@@ -134,6 +141,8 @@ inline constexpr std::array<StateFrameField, 19> kStateFrameFields{{
     {FrameField::kFaultCause, "fault_cause", 62, FrameFieldType::kU8},
     {FrameField::kSampleFaults, "sample_faults", 63, FrameFieldType::kU8},
     {FrameField::kNumGrasps, "num_grasps", 64, FrameFieldType::kU32},
+    {FrameField::kNumExtraDevices, "num_extra_devices", 68, FrameFieldType::kU32},
+    {FrameField::kNumExtraAxes, "num_extra_axes", 72, FrameFieldType::kU32},
 }};
 
 /// The declaration of header field `f`.
@@ -144,7 +153,7 @@ constexpr const StateFrameField& frame_field(FrameField f) noexcept {
 /// The arrays after the header, in their order: each one's index in kStateFrameArrays.
 enum class FrameArray : std::uint8_t {
   kBodyPose, kTargetPose, kNodePosition, kContact, kFeedback, kAxisTorque, kPenetration,
-  kDeviceLoop, kGrasp
+  kDeviceLoop, kGrasp, kExtraDevice, kExtraAxisTorque
 };
 
 /// One float32 array after the header: `count` items of `floats` floats each.
@@ -152,7 +161,7 @@ struct StateFrameArray {
   FrameArray id;                    ///< Its index in kStateFrameArrays.
   std::string_view name;            ///< The name StateFrameView's accessor and the page use.
   std::size_t floats;               ///< float32 values per item.
-  std::optional<FrameField> count;  ///< Header count of items (B, N, C, A, G); none: one item.
+  std::optional<FrameField> count;  ///< Header count of items (B, N, C, A, G, D, E); none: one item.
 };
 
 /// The arrays, in order from byte kStateFrameHeaderBytes, each item's floats:
@@ -179,7 +188,17 @@ struct StateFrameArray {
 ///                            the grip's pull (N), and its grasps, releases and slips since
 ///                            the run's start (counts: a grasp that starts and ends between two
 ///                            frames of a decimated stream still shows in them)
-inline constexpr std::array<StateFrameArray, 9> kStateFrameArrays{{
+///     extra_device   D × 12  each of the loop's other devices (1, 2, … in the loop's order;
+///                            FrameDevice): its flags (StateFrameFlag bits kFrameSampleValid,
+///                            kFrameTorqueCommanded, kFrameTargetReady, kFrameBusDown),
+///                            lifecycle, startup, fault_cause, sample_faults (as device 0's
+///                            header fields, OR'ed since the previous frame likewise), its axis
+///                            count, its feedback wrench sent (force N x y z, torque N·m x y z,
+///                            world, about its link 0's origin, as feedback)
+///     extra_axis_torque E × 1 the torque or force sent to each axis of those devices, device
+///                            1's axes first, then device 2's, ... (each device's count in its
+///                            item)
+inline constexpr std::array<StateFrameArray, 11> kStateFrameArrays{{
     {FrameArray::kBodyPose, "body_pose", 7, FrameField::kNumBodies},
     {FrameArray::kTargetPose, "target_pose", 8, FrameField::kNumBodies},
     {FrameArray::kNodePosition, "node_position", 3, FrameField::kNumNodes},
@@ -189,6 +208,8 @@ inline constexpr std::array<StateFrameArray, 9> kStateFrameArrays{{
     {FrameArray::kPenetration, "penetration", 2, std::nullopt},
     {FrameArray::kDeviceLoop, "device_loop", 3, std::nullopt},
     {FrameArray::kGrasp, "grasp", 8, FrameField::kNumGrasps},
+    {FrameArray::kExtraDevice, "extra_device", 12, FrameField::kNumExtraDevices},
+    {FrameArray::kExtraAxisTorque, "extra_axis_torque", 1, FrameField::kNumExtraAxes},
 }};
 
 /// The declaration of array `a`.
@@ -218,16 +239,18 @@ constexpr bool frame_arrays_are_well_formed() noexcept {
     if (static_cast<std::size_t>(a.id) != i || a.floats == 0 || a.name.empty()) return false;
     if (a.count && *a.count != FrameField::kNumBodies && *a.count != FrameField::kNumNodes &&
         *a.count != FrameField::kNumContacts && *a.count != FrameField::kNumAxes &&
-        *a.count != FrameField::kNumGrasps)
+        *a.count != FrameField::kNumGrasps && *a.count != FrameField::kNumExtraDevices &&
+        *a.count != FrameField::kNumExtraAxes)
       return false;
   }
   return true;
 }
 }  // namespace detail
 static_assert(detail::frame_fields_tile_the_header(),
-              "kStateFrameFields must tile the 68-byte header in order, without overlap");
+              "kStateFrameFields must tile the 76-byte header in order, without overlap");
 static_assert(detail::frame_arrays_are_well_formed(),
-              "kStateFrameArrays: ids in order, floats > 0, counts of bodies/nodes/contacts/axes/graspers");
+              "kStateFrameArrays: ids in order, floats > 0, counts of bodies/nodes/contacts/axes/"
+              "graspers/devices/their axes");
 static_assert(frame_field(FrameField::kMagic).type == FrameFieldType::kChar4 &&
               sizeof kStateFrameMagic == frame_field_bytes(FrameFieldType::kChar4));
 
@@ -240,7 +263,8 @@ inline constexpr std::size_t kFramePoseFloats = frame_array(FrameArray::kBodyPos
                              kFrameWrenchFloats = frame_array(FrameArray::kFeedback).floats,
                              kFrameFigureFloats = frame_array(FrameArray::kPenetration).floats,
                              kFrameDeviceLoopFloats = frame_array(FrameArray::kDeviceLoop).floats,
-                             kFrameGraspFloats = frame_array(FrameArray::kGrasp).floats;
+                             kFrameGraspFloats = frame_array(FrameArray::kGrasp).floats,
+                             kFrameDeviceFloats = frame_array(FrameArray::kExtraDevice).floats;
 static_assert(kFrameTargetFloats == kFramePoseFloats + 1, "a target is a pose and its flag");
 
 /// Bits of the header's flags word.
@@ -256,14 +280,16 @@ enum StateFrameFlag : std::uint32_t {
                             ///< lost; StateFrameFigures::bus_down).
 };
 
-/// What fixes a frame's size: the scene's counts and the contact capacity. B, N, A, G are the
-/// same in every frame of a run; C varies per period, up to max_contacts.
+/// What fixes a frame's size: the scene's counts and the contact capacity. B, N, A, G, D, E are
+/// the same in every frame of a run; C varies per period, up to max_contacts.
 struct StateFrameLayout {
   std::uint32_t num_bodies = 0;    ///< B: core::Model::num_bodies().
   std::uint32_t num_nodes = 0;     ///< N: core::Model::num_nodes().
   std::uint32_t num_axes = 0;      ///< A: the device's axes.
   std::uint32_t max_contacts = 0;  ///< Contacts a frame carries at most (rigid + node).
   std::uint32_t num_grasps = 0;    ///< G: core::Model::grasps.size().
+  std::uint32_t num_extra_devices = 0;  ///< D: the loop's devices after device 0.
+  std::uint32_t num_extra_axes = 0;     ///< E: their axes, all together.
 
   /// Bytes of a frame with `contacts` contacts.
   std::size_t frame_bytes(std::uint32_t contacts) const noexcept;
@@ -281,6 +307,18 @@ struct FrameGrasp {
   float grasps;     ///< Grasps started since the run's start.
   float releases;   ///< Grasps ended by the jaws opening.
   float slips;      ///< Grasps ended by the pull exceeding the grip's limit.
+};
+
+/// One of the loop's other devices in a frame (kStateFrameArrays' extra_device item).
+struct FrameDevice {
+  std::uint32_t flags = 0;        ///< StateFrameFlag bits (sample valid, torque, target ready,
+                                  ///< bus down).
+  std::uint8_t lifecycle = 0;     ///< hal::LifecycleState.
+  std::uint8_t startup = 0;       ///< hal::StartupPhase.
+  std::uint8_t fault_cause = 0;   ///< hal::FaultCause of its latched safe state (0: none).
+  std::uint8_t sample_faults = 0; ///< hal::SampleFault bits since the previous frame (OR'ed).
+  std::uint32_t num_axes = 0;     ///< Its axes (its values in extra_axis_torque).
+  float feedback[6] = {};         ///< Feedback wrench sent: N x y z, N·m x y z, world.
 };
 
 /// One contact of a frame, in the frame's order.
@@ -307,6 +345,8 @@ struct StateFrameHeader {
   std::uint8_t fault_cause = 0;   ///< hal::FaultCause of the latched safe state (0: none).
   std::uint8_t sample_faults = 0; ///< hal::SampleFault bits since the previous frame (OR'ed).
   std::uint32_t num_grasps = 0;   ///< G: graspers.
+  std::uint32_t num_extra_devices = 0;  ///< D: the loop's devices after device 0.
+  std::uint32_t num_extra_axes = 0;     ///< E: their axes, all together.
 };
 
 /// A checked frame: the header and the offsets of its arrays in the bytes it was decoded from
@@ -335,6 +375,10 @@ class StateFrameView {
   void device_loop(float out[3]) const noexcept;
   /// Grasper g; g < num_grasps.
   FrameGrasp grasp(std::uint32_t g) const noexcept;
+  /// The loop's device d + 1 (d < num_extra_devices; device 0 is the header's).
+  FrameDevice extra_device(std::uint32_t d) const noexcept;
+  /// Torque or force sent to value a of extra_axis_torque (a < num_extra_axes).
+  float extra_axis_torque(std::uint32_t a) const noexcept;
 
  private:
   friend class StateFrameDecoder;
@@ -360,7 +404,8 @@ struct StateFrameDecodeResult {
 class StateFrameDecoder {
  public:
   /// Checks `bytes` as one frame: magic, version, header size, frame size equal to
-  /// bytes.size() and to the size its counts imply. On success `view` refers into `bytes`.
+  /// bytes.size() and to the size its counts imply, the other devices' axis counts adding up to
+  /// num_extra_axes. On success `view` refers into `bytes` (unchanged otherwise).
   /// A non-finite float is accepted (it is data); a malformed frame is never read past its
   /// end.
   static StateFrameDecodeResult decode(std::span<const std::byte> bytes, StateFrameView& view);
@@ -380,6 +425,16 @@ struct StateFrameFigures {
   bool bus_down = false;
 };
 
+/// One of the loop's other devices, as encode_state_frame() writes it (its extra_device item and
+/// its values of extra_axis_torque).
+struct FrameDeviceInput {
+  /// Its report of the period (flags, lifecycle, start-up, fault cause, sample faults, the
+  /// feedback wrench sent); not null.
+  const PeriodReport* report = nullptr;
+  std::span<const double> axis_torques;  ///< The torques or forces sent to its axes.
+  bool bus_down = false;                 ///< Its bus is not working (kFrameBusDown).
+};
+
 /// Writes the frame of the period that just ended into `out`: poses, targets, nodes and
 /// contacts from `data` (after core::step), time from data.time, status from
 /// data.status, flags, step time, lifecycle, fault cause, sample faults and the feedback wrench
@@ -387,12 +442,14 @@ struct StateFrameFigures {
 /// axis torques sent from `axis_torques` (layout.num_axes values), the rest from `figures`.
 /// Rigid contacts come first, then node contacts, at most layout.max_contacts in all (the
 /// rest are cut and kFrameContactsTruncated is set). Targets: the held body's is
-/// data.target, the others' data.body_targets. Graspers from data.grasps. Returns the bytes
-/// written, or 0 when `data` (bodies, nodes, graspers) or `axis_torques` do not match the
-/// layout or `out` is shorter than
+/// data.target, the others' data.body_targets. Graspers from data.grasps. The loop's other
+/// devices from `extra_devices` (layout.num_extra_devices of them, their axis torques
+/// layout.num_extra_axes in all). Returns the bytes written, or 0 when `data` (bodies, nodes,
+/// graspers), `axis_torques` or `extra_devices` do not match the layout or `out` is shorter than
 /// layout.max_frame_bytes() (nothing is written then). noexcept, no allocation.
 std::size_t encode_state_frame(const StateFrameLayout& layout, const core::Data& data,
                                const PeriodReport& report, std::span<const double> axis_torques,
-                               const StateFrameFigures& figures, std::span<std::byte> out) noexcept;
+                               const StateFrameFigures& figures, std::span<std::byte> out,
+                               std::span<const FrameDeviceInput> extra_devices = {}) noexcept;
 
 }  // namespace numen::platform

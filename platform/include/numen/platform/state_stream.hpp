@@ -17,7 +17,8 @@
 /// (t₀: the first period's time); a grid instant more than one interval behind is skipped,
 /// so the display rate holds on average for any dt and never bursts. What the skipped periods
 /// saw is not lost: a frame's sample_faults are the OR of the periods' since the previous frame,
-/// and its kFrameBusDown is set when any of them had the bus down.
+/// and its kFrameBusDown is set when any of them had the bus down (each device's: device 0's in
+/// the header, the loop's other devices' in their extra_device items).
 /// Periods not published are counted (decimated). A period that is due but finds no free
 /// buffer (the sinks are slower than the display rate) is dropped and counted (dropped);
 /// under FullQueuePolicy::kWait (offline runs with a recording, no deadline) the loop instead
@@ -26,6 +27,7 @@
 /// Threads: publish() belongs to the loop thread; start(), stop() and the destructor to the
 /// setup thread. The sinks run on the stream's thread (SCHED_OTHER, never the loop's).
 
+#include <array>
 #include <atomic>
 #include <boost/lockfree/spsc_queue.hpp>
 #include <cstddef>
@@ -101,10 +103,13 @@ class StateStream final : private hal::RecordSink<std::uint32_t> {
   void stop();
 
   /// The loop's side, once per period after core::step: publishes the period when the display
-  /// rate says so (see the file comment). Returns true when a frame was queued. noexcept, no
-  /// allocation, no lock; never blocks under kDrop.
+  /// rate says so (see the file comment). `report`, `axis_torques` and `figures.bus_down` are
+  /// device 0's, `extra_devices` the loop's other devices' (layout().num_extra_devices of them,
+  /// at most kMaxLoopDevices − 1; encode_state_frame()). Returns true when a frame was queued.
+  /// noexcept, no allocation, no lock; never blocks under kDrop.
   bool publish(const core::Data& data, const PeriodReport& report,
-               std::span<const double> axis_torques, const StateFrameFigures& figures) noexcept;
+               std::span<const double> axis_torques, const StateFrameFigures& figures,
+               std::span<const FrameDeviceInput> extra_devices = {}) noexcept;
 
   /// Counters (see StateStreamCounters).
   StateStreamCounters counters() const noexcept;
@@ -135,6 +140,12 @@ class StateStream final : private hal::RecordSink<std::uint32_t> {
   double interval_s_ = 0.0;       // 1/display_rate_hz; 0: every period
   hal::FaultMask pending_sample_faults_ = 0;  // OR of the periods' since the last frame
   bool pending_bus_down_ = false;              // a period since the last frame had its bus down
+  // The same for the loop's other devices, and their reports and inputs as encoded (fixed:
+  // nothing is allocated in a period).
+  std::array<hal::FaultMask, kMaxLoopDevices> extra_pending_faults_{};
+  std::array<bool, kMaxLoopDevices> extra_pending_bus_down_{};
+  std::array<PeriodReport, kMaxLoopDevices> extra_reports_{};
+  std::array<FrameDeviceInput, kMaxLoopDevices> extra_inputs_{};
   std::atomic<std::uint64_t> periods_{0}, published_{0}, decimated_{0}, dropped_{0},
       encode_failures_{0}, delivered_{0}, bytes_{0};  // waits, sink errors: queue_'s counters
 };

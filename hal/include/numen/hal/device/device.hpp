@@ -123,6 +123,13 @@ class Device {
   /// hold_activation(true) is in force.
   bool activation_held() const noexcept { return activation_held_; }
 
+  /// The feedback is ramped in again from zero (the soft start, DeviceConfig::soft_start_s)
+  /// from the next write whose gate is open: the control loop asks for it when a device's
+  /// samples come back after going stale (platform::ControlLoopSettings::rejoin_after_stale:
+  /// the instrument moved while nothing was known of it). No effect without a soft start, or for
+  /// a device that sends no torque.
+  virtual void ramp_feedback_again() noexcept {}
+
   /// The bus.
   const Bus& bus() const noexcept { return *bus_; }
   /// The protocol's and the supervision's figures now (device_status.hpp): the face through

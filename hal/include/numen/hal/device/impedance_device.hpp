@@ -118,6 +118,9 @@ class ImpedanceDevice : public Device {
   IoStatus write(std::span<const double> torques, std::int64_t now_ns) noexcept;
   /// Device::write(): write(command.torques, now_ns); the output of sent_torques().
   const DeviceOutput& write(const DeviceCommand& command, std::int64_t now_ns) noexcept override;
+  /// Device::ramp_feedback_again(): the soft start begins again at the next open write
+  /// (restart_soft_start()).
+  void ramp_feedback_again() noexcept override { restart_soft_start(); }
 
   /// The controller-side instrument driver (sample, kinematics, mapping τ = Σ J_lᵀ w_l).
   const InstrumentDevice& instrument() const noexcept { return *instrument_; }

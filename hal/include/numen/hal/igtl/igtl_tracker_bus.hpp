@@ -16,7 +16,12 @@
 ///    timestamp minus the first message's (the first message is bus time 0); the SYNC takes every
 ///    pose stamped <= t and waits (at most wait_timeout_ns, counted) until a later one is queued or
 ///    the receiver has ended — the run goes at the tracker's pace, deterministic for a replay. A
-///    wait that runs out is not repeated: the following SYNCs do not wait until a pose comes;
+///    wait that runs out is not repeated: the following SYNCs do not wait for a pose, but go at
+///    the tracker's pace while it is silent — each waits until CLOCK_MONOTONIC is as far past the
+///    newest pose's arrival as the SYNC's bus time is past that pose's (real time since the last
+///    pose; at once before any pose) or a pose comes — so that the run's clock stays the
+///    tracker's and the poses of a tracker that resumes are fresh, not older than the run by
+///    however far it raced ahead (issue 70: a 3 s stall ended the tracker's part of the run);
 ///  - paced (a real-time run): the SYNC takes every queued pose and never waits; a message's bus
 ///    time is its timestamp + the smallest (receive time − timestamp) seen so far, the clock
 ///    offset of the sender (Cristian's bound), on the monotonic clock shifted to bus time.
@@ -32,6 +37,12 @@
 /// tracker restarted): the last of them is taken and the stream is re-based on it (following:
 /// its bus time is the SYNC's; paced: the clock offset is measured again), counted in
 /// stamp_resyncs.
+/// After a silence (the newest pose taken older than the device's max sample age at the SYNC),
+/// a pose that would itself arrive stale (its bus time more than the max sample age before the
+/// SYNC: a sender that paused and goes on from the stamps where it stopped) re-bases the
+/// stream on it, as a clock that jumped (following: taken at this SYNC; paced: the clock offset
+/// measured again), counted in silence_rebases: the samples are valid again from the first pose
+/// after a stall.
 /// A pose is the tool tip's (the tracked frame's) world pose tip = registration · [R, units · t] ·
 /// calibration (the tool-tip calibration in the tracked marker's frame, the registration
 /// tracker → scene); the axes are those that put the tracked frame there:
@@ -52,7 +63,9 @@
 /// tools".
 ///
 /// Not thread safe (one control loop). read / write / set_time_ns never allocate, throw or lock;
-/// they never block, except a SYNC following the tracker (bounded by wait_timeout_ns).
+/// they never block, except a SYNC following the tracker (bounded by wait_timeout_ns; while the
+/// tracker is silent after a wait ran out, by the wall time its bus time is ahead of the newest
+/// pose's arrival: about a period's).
 
 #include <array>
 #include <cstdint>
@@ -120,6 +133,12 @@ struct IgtlBusCounters {
   std::uint64_t stamps_unstamped = 0;  ///< Poses refused following the tracker: stamp 0.
   /// Re-basings on a clock that jumped (resync_after refused poses going on from one another).
   std::uint64_t stamp_resyncs = 0;
+  /// Re-basings on the first pose after a silence that would have arrived stale (a sender that
+  /// paused: the file comment).
+  std::uint64_t silence_rebases = 0;
+  /// SYNCs following the tracker that waited for its pace while it was silent (after a wait ran
+  /// out; the file comment).
+  std::uint64_t silent_paced_syncs = 0;
   /// SYNCs that found every pose taken and the receiver ended (the stream over: a replay's end,
   /// or a server gone with reconnect off).
   std::uint64_t syncs_after_end = 0;
@@ -208,6 +227,8 @@ class IgtlTrackerBus final : public Bus {
   bool starved_ = false;  // following: a wait ran out and no pose has come since
   AxisVector q_;
   std::int64_t pose_time_ns_ = 0;  // bus time of the newest pose
+  std::int64_t pose_received_mono_ns_ = 0;  // when it arrived (CLOCK_MONOTONIC)
+  std::int64_t max_sample_age_ns_ = 0;      // the device's (DeviceConfig::effective_max_sample_age_s())
   core::Pose last_pose_;
   std::int64_t now_ns_ = 0;
   bool has_origin_ = false;

@@ -13,7 +13,9 @@
 /// into the marker's pose in the tracker's frame, M = registration⁻¹ · P · calibration⁻¹, its
 /// translation in the scene's
 /// units, and stamped T0 + k·T (T0: CLOCK_REALTIME when the client connected). A follower
-/// (hal::IgtlTrackerBus, offline) then takes message k at its period k exactly.
+/// (hal::IgtlTrackerBus, offline) then takes message k at its period k exactly. A stall
+/// (IgtlReplaySettings::stall_at_s, stall_s) leaves a gap in the stream, in its stamps and in
+/// wall time, as a tracker that loses its marker for a while.
 
 #include <atomic>
 #include <cstdint>
@@ -44,6 +46,12 @@ struct IgtlReplaySettings {
   std::int64_t disconnect_after = -1;
   /// The message each pose is sent as.
   IgtlReplayMessage message = IgtlReplayMessage::kTransform;
+  /// A stall (a marker hidden from the camera, a tracker that hangs): from trajectory time
+  /// stall_at_s (s, >= 0) the server sends nothing for stall_s (s, >= 0; 0: no stall) of wall
+  /// time, and the poses of that stretch are never sent — the tracker's clock goes on, the next
+  /// message is the first one at or after stall_at_s + stall_s, stamped as ever (T0 + k·T).
+  double stall_at_s = 0.0;
+  double stall_s = 0.0;  ///< See stall_at_s.
 };
 
 /// What a replay did.
@@ -57,7 +65,8 @@ struct IgtlReplayResult {
 class IgtlReplayServer {
  public:
   /// Binds and listens (SO_REUSEADDR). Throws InputError (key "igtl") if the scene has no
-  /// [device.igtl], std::invalid_argument for bad settings (rate not finite and >= 0), and
+  /// [device.igtl], std::invalid_argument for bad settings (rate not finite and >= 0, a stall's
+  /// time or length not finite and >= 0), and
   /// std::runtime_error naming the address if binding fails or the build has no OpenIGTLink.
   IgtlReplayServer(const Scene& scene, IgtlReplaySettings settings);
   ~IgtlReplayServer();

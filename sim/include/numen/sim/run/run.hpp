@@ -269,6 +269,9 @@ class SceneRunner {
   /// hand penetration, handle force and port energy (the target's penetration and zeros in
   /// replay, as the trace's columns).
   platform::StateFrameFigures view_figures(const PeriodContacts& c) const noexcept;
+  /// The period's state frame to the view (view_): device 0's report and torques, the loop's
+  /// other devices' (platform::FrameDeviceInput), the figures. Never allocates.
+  void publish_view(const platform::PeriodReport& report, const PeriodContacts& c) noexcept;
 
   const Scene* scene_;
   BusSpec spec_;
@@ -346,6 +349,14 @@ class SceneRunner {
   double live_start_deg_ = 0.0;
   // The loop brought the tool to a live input's first sample in this period.
   void note_live_start() noexcept;
+  // Device 0's stale stretches (RunSummary::stale_*): the one under way (its first period and
+  // length; 0: none) and the longest so far.
+  std::int64_t stale_from_ = 0;
+  std::int64_t stale_run_ = 0;
+  std::int64_t stale_longest_ = 0;
+  std::int64_t stale_longest_from_ = 0;
+  // A period's sample stale or not (count_period()).
+  void tally_stale(bool stale) noexcept;
   // Devices 1 .. N−1 (index i for device i + 1): the start-up push-out of each one's tool (the
   // articulation of extra_trace_body_[i], when it is not the held body's), as device 0's above.
   struct DeviceStartup {

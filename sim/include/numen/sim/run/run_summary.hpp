@@ -243,6 +243,18 @@ struct RunSummary {
   /// The same by cause (DeviceRunSummary::rejected_causes); "" for none.
   std::string rejected_causes;
   std::int64_t invalid_periods = 0;        ///< Periods whose sample was not valid (target held).
+  /// Stretches of consecutive periods whose sample (device 0's) was stale: an input that stalled
+  /// or went silent for longer than max_sample_age (a warning says the longest).
+  std::int64_t stale_stretches = 0;
+  std::int64_t stale_periods = 0;          ///< Periods whose sample was stale, all stretches.
+  double stale_longest_s = 0.0;            ///< The longest stretch, s (periods × dt).
+  double stale_longest_from_s = 0.0;       ///< Simulated time of its first period, s.
+  /// Times the samples came back valid after stale ones and the loop glided the target to the
+  /// resumed pose and ramped the feedback in again (live inputs;
+  /// platform::ControlLoopSettings::rejoin_after_stale).
+  std::int64_t stale_rejoins = 0;
+  double stale_rejoin_gap_mm = 0.0;        ///< The largest gap those glides bridged, mm.
+  double stale_rejoin_gap_deg = 0.0;       ///< ... and angle, degrees.
   std::int64_t contact_overflow = 0;       ///< Steps that ran out of contact capacity.
   /// Steps with a contact whose stiffness the time-constant floor lowered
   /// (core::Data::contact_clamped_steps; core::SolverSettings::contact_max_omega_dt).
@@ -326,6 +338,9 @@ struct RunSummary {
   std::int64_t igtl_stamps_ahead = 0;
   std::int64_t igtl_stamps_unstamped = 0;
   std::int64_t igtl_stamp_resyncs = 0;
+  /// igtl: re-basings on the first pose after a silence that would have come stale (a sender
+  /// that paused; hal::IgtlBusCounters::silence_rebases).
+  std::int64_t igtl_silence_rebases = 0;
   /// igtl: the run followed the tracker's clock (offline: a replay's end is the stream's end);
   /// false: paced (a live tracker: a lost connection is a fault).
   bool igtl_follows = false;

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "numen/core/model.hpp"
+#include "numen/core/net_material.hpp"
 #include "numen/hal/device/admittance_device.hpp"
 #include "numen/hal/device/device_config.hpp"
 #include "numen/hal/transport/sim_bus.hpp"
@@ -90,6 +91,12 @@ struct NetLoad {
   /// Thread CPU time (s) of the simplification (or the cache file's read) and the map (nearest
   /// net triangle of each fine vertex, core::add_net_surface()); 0 when not simplified.
   double simplify_seconds = 0.0;
+  /// The net is given by its material (docs/tissue.md): its surface's volume tetrahedralised,
+  /// interior_nodes more nodes inside, tetrahedra cells, the constants derived.
+  bool material = false;
+  int interior_nodes = 0;  ///< Nodes inside the surface (after the surface's own).
+  int tetrahedra = 0;      ///< Cells of the volume mesh.
+  core::MaterialNetConstants material_constants;  ///< What core::add_material_net() derived.
 };
 
 /// The node count of an organ's net made from a mesh file when the scene asks for none: a mesh

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "numen/core/net_material.hpp"
 #include "numen/sim/scene/passivity_lint.hpp"
 
 #include "numen/core/data_size.hpp"
@@ -45,7 +46,7 @@ struct MeshLine {
   std::string kind;  ///< "obstacle", "body" or "net".
   std::string name;  ///< The obstacle's, body's or net's name.
   int triangles = 0;
-  int vertices = 0;  ///< A net's: its nodes.
+  int vertices = 0;  ///< A net's: its surface's nodes (those of its triangles).
   /// Heap bytes: MeshShape::memory_bytes() (vertices, triangles, normals, edges, tree, grid and
   /// narrow band); a net's: its rows of Model::net_faces.
   std::size_t heap = 0;
@@ -67,6 +68,12 @@ struct MeshLine {
   /// Heap bytes of the map: the fine vertices' embeddings, the fine triangles and the net
   /// triangle → fine triangles lists (Model::net_surface_*, net_face_surface_*).
   std::size_t map_heap = 0;
+  /// A net given by its material (NetLoad::material; docs/tissue.md): its interior nodes,
+  /// tetrahedra and the constants derived; false, 0 and zeros otherwise.
+  bool material = false;
+  int interior_nodes = 0;
+  int tetrahedra = 0;
+  core::MaterialNetConstants material_constants;
 };
 
 /// One device of the scene, device 0 first (docs/scenes.md, "Several devices").

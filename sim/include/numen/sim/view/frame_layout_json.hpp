@@ -11,7 +11,7 @@ namespace numen::sim {
 
 /// The layout as compact JSON (UTF-8):
 ///
-///     {"magic": "NMVF", "version": 2, "header_bytes": 64, "float_bytes": 4,
+///     {"magic": "NMVF", "version": 4, "header_bytes": 76, "float_bytes": 4,
 ///      "header": [{"name": "magic", "offset": 0, "type": "char[4]"}, ...],
 ///      "arrays": [{"name": "body_pose", "floats": 7, "count": "num_bodies"}, ...,
 ///                 {"name": "feedback", "floats": 6, "count": null}, ...],

@@ -25,6 +25,10 @@
 ///   connection lost, a CAN bus off; code 7) or back (code 1). A grasp or a release (the held
 ///   body changes) is a STRING only. A client that connects gets the current state as a STATUS
 ///   (code 1, or the latched fault's) at its first frame.
+/// - The same for each of the loop's other devices (the frame's extra_device items): its STATUS
+///   under its own device name, igtl_world_status_name() ("numen_1", "numen_2", ...: device 0's
+///   STATUS stays "numen"), its STRING on "numen_events" naming it ("device 1 'psm_left' latched
+///   its safe state at t = ..."), and its current state to a client that connects.
 ///
 /// In each client's stream, per frame: the shapes (at its first frame, then when due), its state
 /// (at its first frame), the TRANSFORMs, the frame's STATUS and STRING.
@@ -53,8 +57,13 @@
 
 namespace numen::sim {
 
-/// Device name of the world's STATUS messages.
+/// Device name of the world's STATUS messages (device 0's: the loop's first device).
 inline constexpr const char* kIgtlStatusDevice = "numen";
+
+/// Device name of the STATUS messages of the loop's device `device`: kIgtlStatusDevice for
+/// device 0, "numen_<device>" for the others ("numen_1"; at most 20 characters for any device
+/// index a loop has).
+std::string igtl_world_status_name(std::size_t device);
 /// Device name of the world's STRING messages (events in words).
 inline constexpr const char* kIgtlEventsDevice = "numen_events";
 
@@ -93,6 +102,9 @@ struct IgtlWorldSettings {
   double organ_rate_hz = 30.0;
   /// How the TRANSFORMs are named.
   IgtlNameStyle names = IgtlNameStyle::kNumen;
+  /// The loop's devices' names in its order (Scene::device, then Scene::extra_devices): the
+  /// other devices' STRING and STATUS messages name them. Missing ones are "device <i>" only.
+  std::vector<std::string> device_names;
 };
 
 /// Counters of an IgtlWorldServer.
@@ -152,11 +164,18 @@ class IgtlWorldServer final : public platform::StateFrameSink {
     bool bus_down = false;
     std::int32_t held_body = -1;
   };
+  // One device's changes between `was` and `now` (device `device` of the loop) into events_.
+  void add_device_events(std::size_t device, const Last& was, const Last& now, std::int64_t t_ns);
+  // A new client's STATUS of device `device`'s state `now` into intro_.
+  void add_device_intro(std::size_t device, const Last& now, std::int64_t t_ns);
+  // "the device" (device 0, as ever) or "device 1 'psm_left'".
+  std::string device_words(std::size_t device) const;
   void send_some(Client& c) noexcept;
   void drop_gone() noexcept;
   void add_events(const platform::StateFrameView& view);
+  // A STATUS under device `device`'s name (igtl_world_status_name()).
   void add_status(std::string& out, std::int64_t t_ns, int code, std::int64_t subcode,
-                  const std::string& name, const std::string& message);
+                  const std::string& name, const std::string& message, std::size_t device = 0);
   void add_string(std::string& out, std::int64_t t_ns, const std::string& text);
   void add_organs(std::string& out, const platform::StateFrameView& view);
 
@@ -173,6 +192,7 @@ class IgtlWorldServer final : public platform::StateFrameSink {
   std::int64_t organ_due_ns_ = 0;       // next frame time an organ update is due
   bool organ_sent_ = false;
   Last last_;
+  std::vector<Last> extra_last_;  // the loop's other devices' (sized at the frames' count)
   std::string batch_;   // one frame's TRANSFORMs for every client (reused)
   std::string events_;  // one frame's STATUS / STRING (reused)
   std::string intro_;   // a new client's STATUS of the current state (reused)

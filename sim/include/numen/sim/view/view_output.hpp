@@ -36,12 +36,14 @@ class ViewOutput {
   ViewOutput(const ViewOutput&) = delete;
   ViewOutput& operator=(const ViewOutput&) = delete;
 
-  /// The loop's side (after core::step): platform::StateStream::publish(). noexcept, no
-  /// allocation, no lock; waits only when made with `wait`.
+  /// The loop's side (after core::step): platform::StateStream::publish() — device 0's
+  /// `report` and `axis_values`, the loop's other devices' `extra_devices` (as many as the
+  /// scene's Scene::extra_devices). noexcept, no allocation, no lock; waits only when made with
+  /// `wait`.
   void publish(const core::Data& data, const platform::PeriodReport& report,
-               std::span<const double> axis_values,
-               const platform::StateFrameFigures& figures) noexcept {
-    stream_.publish(data, report, axis_values, figures);
+               std::span<const double> axis_values, const platform::StateFrameFigures& figures,
+               std::span<const platform::FrameDeviceInput> extra_devices = {}) noexcept {
+    stream_.publish(data, report, axis_values, figures, extra_devices);
   }
   /// Delivers what is queued, stops the thread and closes the recording. Idempotent.
   void finish();

@@ -14,7 +14,7 @@
 namespace numen::sim {
 
 /// Version of the scene message's schema (its "version" key); bumped with the frame version.
-inline constexpr int kViewSceneVersion = 2;
+inline constexpr int kViewSceneVersion = 3;
 
 /// Most triangles of a mesh (obstacle or body) the scene message carries (about 5 MB of JSON); a
 /// larger mesh is sent as its bounds ("aabb") and triangle count only.
@@ -26,8 +26,9 @@ inline constexpr int kViewMeshMaxTriangles = 200'000;
 /// triangles.
 inline constexpr int kViewNetSurfaceMaxTriangles = 400'000;
 
-/// The frame layout of a run of `scene`: its bodies, net nodes and axes, and room for every
-/// contact the model can report (core::kMaxContacts rigid + the nets' node contacts).
+/// The frame layout of a run of `scene`: its bodies, net nodes, axes, graspers, other devices
+/// (Scene::extra_devices) and their axes, and room for every contact the model can report
+/// (core::kMaxContacts rigid + the nets' node contacts).
 platform::StateFrameLayout view_frame_layout(const Scene& scene);
 
 /// The scene message as compact JSON (UTF-8): format, version, scene name and description,
@@ -47,7 +48,8 @@ platform::StateFrameLayout view_frame_layout(const Scene& scene);
 /// 3 per vertex, m, in the triangle's frame, to 1e-7) and triangles (flat i j k, indices of the
 /// fine surface's vertices, outward): docs/viewer.md, "Scene message"), joints (name, type, parent, child
 /// (−1: world), frame in the parent and in the child), the device (name, kind, protocol "managed" |
-/// "minimal" | "admittance", axis names) and the initially held body. Numbers are the
+/// "minimal" | "admittance", axis names), the loop's other devices ("extra_devices", in the
+/// frames' extra_device order: name, kind, protocol, axis names) and the initially held body. Numbers are the
 /// model's doubles, but for a fine surface's weights and offsets (rounded as said).
 std::string view_scene_message(const Scene& scene, const platform::StateFrameLayout& layout,
                                double display_rate_hz);

@@ -1,0 +1,112 @@
+#pragma once
+/// @file net_material.hpp
+/// An organ given by its material: a volumetric spring net on a tetrahedral mesh of the organ,
+/// every constant derived from Young's modulus, Poisson's ratio, density and a Rayleigh damping
+/// coefficient and the geometry, whatever the net's size (docs/tissue.md).
+///
+/// The model. Every tetrahedron edge is a spring whose stiffness is identified from the
+/// continuum (Van Gelder 1998, "Approximate simulation of elastic membranes by triangulated
+/// spring meshes", J. Graphics Tools 3(2); Lloyd, Székely & Harders 2007, "Identification of
+/// spring parameters for deformable object simulation", IEEE TVCG 13(5)):
+///   k_e = E_net · Σ_{t ∋ e} V_t / L_e²,
+/// which under an affine strain ε stores the energy density (E_net/5)((tr ε)² + 2 ε:ε) for an
+/// isotropic spread of edge directions: a linear-elastic solid of modulus E_net and Poisson's
+/// ratio 1/4, whatever the tetrahedra's size. A central-force net has that Poisson's ratio
+/// only, so E_net is chosen to give the material's plane-strain modulus E* = E / (1 − ν²),
+/// the one constant that sets a half-space's response to any normal indentation (Hertz,
+/// Boussinesq): E_net = kNetAffineCorrection · (15/16) · E / (1 − ν²). Every node is held on
+/// the rigid component by a zero-length tie of the organ's support, a stiffness per volume
+/// κ = E_net / ℓ² (ℓ the support length) shared evenly: k_tie = κ V / N for the organ's volume V
+/// and N nodes (an elastic foundation in the volume: what holds the organ in the body, whose
+/// field decays over ℓ). Masses are lumped: ρ V_t / 4 on each corner of a tetrahedron.
+/// Damping is stiffness-proportional (Rayleigh): γ_e = β k_e on the springs, γ_tie = β k_tie.
+///
+/// Load time only: everything here allocates; nothing is called from step().
+
+#include <array>
+#include <string>
+#include <vector>
+
+#include "numen/core/mesh.hpp"
+#include "numen/core/types.hpp"
+
+namespace numen::core {
+
+struct Model;
+
+/// A tetrahedral mesh of a closed surface, in the rigid component's body frame (m).
+/// Node i < surface.num_vertices() is the surface's vertex i; node surface.num_vertices() + j
+/// is interior[j]. Every tetrahedron's indices are in [0, num_nodes()), distinct, its volume
+/// positive (any winding is accepted: the volume is taken as its absolute value) and every node
+/// a corner of at least one tetrahedron.
+struct TetrahedralMesh {
+  TriangleMesh surface;                        ///< Closed, outward winding; the net's triangles.
+  std::vector<Vec3> interior;                  ///< Nodes inside the surface (m).
+  std::vector<std::array<int, 4>> tetrahedra;  ///< Node indices.
+  int num_nodes() const noexcept {
+    return surface.num_vertices() + static_cast<int>(interior.size());
+  }
+  /// Node i's position (m).
+  const Vec3& node(int i) const noexcept {
+    return i < surface.num_vertices() ? surface.vertices[static_cast<std::size_t>(i)]
+                                      : interior[static_cast<std::size_t>(i - surface.num_vertices())];
+  }
+};
+
+/// Tissue as a material (SI units).
+struct NetMaterial {
+  double youngs_modulus = 0.0;      ///< E (Pa), > 0.
+  double poisson_ratio = 0.0;       ///< ν, in (−1, 0.5).
+  double density = 0.0;             ///< ρ (kg/m³), > 0.
+  double rayleigh_stiffness = 0.0;  ///< β (s), ≥ 0: γ = β k on every spring and tie.
+  double support_length = 0.0;      ///< ℓ (m), > 0: the ties' stiffness per volume κ = E_net/ℓ².
+};
+
+/// The constants add_material_net() derived (what `numen info` reports).
+struct MaterialNetConstants {
+  double net_modulus = 0.0;    ///< E_net (Pa).
+  double volume = 0.0;         ///< V (m³), Σ of the tetrahedra's volumes.
+  double mass = 0.0;           ///< ρ V (kg).
+  double tie_stiffness = 0.0;  ///< k_tie (N/m) per node.
+  double tie_damping = 0.0;    ///< γ_tie (N·s/m) per node.
+  double spring_stiffness_min = 0.0;  ///< Smallest k_e (N/m).
+  double spring_stiffness_max = 0.0;  ///< Largest k_e (N/m).
+  int springs = 0;             ///< Edges of the tetrahedra.
+  /// The largest time step of the explicit (symplectic Euler) integrator for this net,
+  /// 2 / ω_max with ω_max² ≤ max over nodes of (k_tie + Σ_{e ∋ i} 4 k_e) / m_i (Gershgorin bound
+  /// on the undamped net's stiffness over its mass) (s). The implicit integrators have none.
+  double explicit_step_limit = 0.0;
+};
+
+/// E_net / ((15/16) E / (1 − ν²)): the measured ratio of the net's plane-strain modulus under the
+/// affine identification to the one it gives once its nodes relax (a random net is softer than
+/// its affine bound). Measured on tetrahedralised blocks (tests/core/net_material_test.cpp,
+/// docs/tissue.md "Identification").
+inline constexpr double kNetAffineCorrection = 1.0;
+
+/// Settings of a material net.
+struct MaterialNetSettings {
+  std::string name;
+  int body = -1;       ///< Rigid component (index into Model::bodies).
+  int material = 0;    ///< Contact material (index into Model::material_names).
+  NetMaterial tissue;  ///< The tissue.
+  /// Collision sphere radius of every node (m); 0: the mean incident tetrahedron edge over √3.
+  double node_radius = 0.0;
+  double rest_speed = 3e-5;  ///< NetModel::rest_speed (m/s, ≥ 0).
+};
+
+/// Checks `material`: "" when valid, else a message on the first bad field; `key`, when given,
+/// is then set to that field's scene key (`youngs_modulus_kpa`, `poisson_ratio`, `density`,
+/// `rayleigh_stiffness`, `support_length`; docs/scenes.md), for a located error.
+std::string validate_material(const NetMaterial& material, const char** key = nullptr);
+
+/// Appends the material net of `mesh` to `model` (see the file comment): nodes in the mesh's
+/// order, one spring per tetrahedron edge (NetModel::structural_count; no bending springs), the
+/// surface's triangles as the net's faces. Call before finalize_model(). Returns "" on success
+/// (filling `constants` when given), else a message naming the net and the material field or
+/// the mesh element at fault; the model is then left as it was.
+std::string add_material_net(Model& model, const TetrahedralMesh& mesh,
+                             const MaterialNetSettings& settings,
+                             MaterialNetConstants* constants = nullptr);
+
+}  // namespace numen::core

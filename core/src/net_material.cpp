@@ -1,0 +1,203 @@
+/// @file net_material.cpp
+/// A material net (net_material.hpp): the springs, ties and masses of a tetrahedral mesh
+/// derived from the tissue's Young's modulus, Poisson's ratio, density and Rayleigh damping.
+
+#include "numen/core/net_material.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <utility>
+
+#include "numen/core/model.hpp"
+
+namespace numen::core {
+namespace {
+
+/// Signed volume of the tetrahedron (a, b, c, d) (m³): positive when d lies on the side of
+/// (b − a) × (c − a).
+double signed_volume(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) noexcept {
+  return (b - a).cross(c - a).dot(d - a) / 6.0;
+}
+
+}  // namespace
+
+std::string validate_material(const NetMaterial& m, const char** key) {
+  const auto bad = [key](const char* k, const char* message) {
+    if (key) *key = k;
+    return std::string(message);
+  };
+  if (!(std::isfinite(m.youngs_modulus) && m.youngs_modulus > 0.0))
+    return bad("youngs_modulus_kpa", "Young's modulus must be finite and > 0");
+  if (!(std::isfinite(m.poisson_ratio) && m.poisson_ratio > -1.0 && m.poisson_ratio < 0.5))
+    return bad("poisson_ratio",
+               "Poisson's ratio must be in (-1, 0.5): 0.5 (incompressible) has no formulation "
+               "here; near-incompressible tissue takes 0.45 to 0.49");
+  if (!(std::isfinite(m.density) && m.density > 0.0))
+    return bad("density", "the density must be finite and > 0 kg/m^3");
+  if (!(std::isfinite(m.rayleigh_stiffness) && m.rayleigh_stiffness >= 0.0))
+    return bad("rayleigh_stiffness", "the Rayleigh damping coefficient must be finite and >= 0 s");
+  if (!(std::isfinite(m.support_length) && m.support_length > 0.0))
+    return bad("support_length", "the support length must be finite and > 0 m");
+  return "";
+}
+
+std::string add_material_net(Model& model, const TetrahedralMesh& mesh,
+                             const MaterialNetSettings& settings, MaterialNetConstants* constants) {
+  const std::string where = "net '" + settings.name + "': ";
+  if (const std::string err = validate_net_owner(model, settings.body, settings.material); !err.empty())
+    return where + err;
+  const char* key = "";
+  if (const std::string err = validate_material(settings.tissue, &key); !err.empty())
+    return where + key + ": " + err;
+  if (!(std::isfinite(settings.node_radius) && settings.node_radius >= 0.0))
+    return where + "node_radius must be finite and >= 0";
+  if (!(std::isfinite(settings.rest_speed) && settings.rest_speed >= 0.0))
+    return where + "rest_speed must be finite and >= 0";
+  if (const std::string err = validate_mesh(mesh.surface); !err.empty())
+    return where + "surface: " + err;
+  const int n = mesh.num_nodes();
+  for (std::size_t j = 0; j < mesh.interior.size(); ++j)
+    if (!mesh.interior[j].allFinite())
+      return where + "interior node " + std::to_string(mesh.surface.num_vertices() + static_cast<int>(j)) +
+             " is not finite";
+  if (mesh.tetrahedra.empty()) return where + "the mesh has no tetrahedron";
+
+  const NetMaterial& mat = settings.tissue;
+  const double nu = mat.poisson_ratio;
+  const double net_modulus =
+      kNetAffineCorrection * (15.0 / 16.0) * mat.youngs_modulus / (1.0 - nu * nu);
+
+  // Per node: lumped volume (a quarter of each tetrahedron at the node); per edge: Σ V_t.
+  std::vector<double> node_volume(static_cast<std::size_t>(n), 0.0);
+  std::map<std::pair<int, int>, double> edge_volume;
+  double volume = 0.0;
+  for (std::size_t t = 0; t < mesh.tetrahedra.size(); ++t) {
+    const auto& q = mesh.tetrahedra[t];
+    for (int c = 0; c < 4; ++c) {
+      if (q[static_cast<std::size_t>(c)] < 0 || q[static_cast<std::size_t>(c)] >= n)
+        return where + "tetrahedron " + std::to_string(t) + " has node index " +
+               std::to_string(q[static_cast<std::size_t>(c)]) + " out of range [0, " +
+               std::to_string(n) + ")";
+      for (int d = 0; d < c; ++d)
+        if (q[static_cast<std::size_t>(c)] == q[static_cast<std::size_t>(d)])
+          return where + "tetrahedron " + std::to_string(t) + " repeats node " +
+                 std::to_string(q[static_cast<std::size_t>(c)]);
+    }
+    const double v = std::abs(signed_volume(mesh.node(q[0]), mesh.node(q[1]), mesh.node(q[2]),
+                                            mesh.node(q[3])));
+    if (!(v > 0.0) || !std::isfinite(v))
+      return where + "tetrahedron " + std::to_string(t) + " has zero or non-finite volume";
+    volume += v;
+    for (int c = 0; c < 4; ++c) {
+      node_volume[static_cast<std::size_t>(q[static_cast<std::size_t>(c)])] += 0.25 * v;
+      for (int d = c + 1; d < 4; ++d) {
+        const int a = std::min(q[static_cast<std::size_t>(c)], q[static_cast<std::size_t>(d)]);
+        const int b = std::max(q[static_cast<std::size_t>(c)], q[static_cast<std::size_t>(d)]);
+        edge_volume[{a, b}] += v;
+      }
+    }
+  }
+  for (int i = 0; i < n; ++i)
+    if (!(node_volume[static_cast<std::size_t>(i)] > 0.0))
+      return where + "node " + std::to_string(i) + " is in no tetrahedron";
+
+  NetModel net;
+  net.name = settings.name;
+  net.body = settings.body;
+  net.material = settings.material;
+  net.rest_speed = settings.rest_speed;
+  net.node_begin = model.num_nodes();
+  net.node_count = n;
+  net.spring_begin = static_cast<int>(model.net_springs.size());
+  const double kappa = net_modulus / (mat.support_length * mat.support_length);
+  net.tie_stiffness = kappa * volume / n;
+  net.tie_damping = mat.rayleigh_stiffness * net.tie_stiffness;
+  if (!(net.tie_stiffness > 0.0) || !std::isfinite(net.tie_stiffness))
+    return where + "the ties' stiffness " + std::to_string(net.tie_stiffness) +
+           " N/m is not finite and > 0 (a degenerate volume?)";
+
+  std::vector<NetSpring> springs;
+  springs.reserve(edge_volume.size());
+  std::vector<double> incident_length(static_cast<std::size_t>(n), 0.0);
+  std::vector<int> incident_count(static_cast<std::size_t>(n), 0);
+  std::vector<double> stiffness_sum(static_cast<std::size_t>(n), 0.0);
+  double k_min = HUGE_VAL, k_max = 0.0;
+  for (const auto& [edge, v] : edge_volume) {
+    NetSpring s;
+    s.node_a = net.node_begin + edge.first;
+    s.node_b = net.node_begin + edge.second;
+    s.rest_length = (mesh.node(edge.second) - mesh.node(edge.first)).norm();
+    if (!(s.rest_length > 0.0) || !std::isfinite(s.rest_length))
+      return where + "edge " + std::to_string(edge.first) + "-" + std::to_string(edge.second) +
+             " has zero or non-finite length";
+    s.stiffness = net_modulus * v / (s.rest_length * s.rest_length);
+    s.damping = mat.rayleigh_stiffness * s.stiffness;
+    k_min = std::min(k_min, s.stiffness);
+    k_max = std::max(k_max, s.stiffness);
+    for (const int i : {edge.first, edge.second}) {
+      incident_length[static_cast<std::size_t>(i)] += s.rest_length;
+      ++incident_count[static_cast<std::size_t>(i)];
+      stiffness_sum[static_cast<std::size_t>(i)] += s.stiffness;
+    }
+    springs.push_back(s);
+  }
+  net.structural_count = static_cast<int>(springs.size());
+  net.bending_count = 0;
+
+  // Masses, radii and the explicit step bound.
+  std::vector<double> mass(static_cast<std::size_t>(n)), radius(static_cast<std::size_t>(n));
+  double omega2_max = 0.0;
+  for (int i = 0; i < n; ++i) {
+    const auto u = static_cast<std::size_t>(i);
+    mass[u] = mat.density * node_volume[u];
+    radius[u] = settings.node_radius > 0.0
+                    ? settings.node_radius
+                    : incident_length[u] / std::max(1, incident_count[u]) / std::sqrt(3.0);
+    if (!(mass[u] > 0.0) || !std::isfinite(mass[u]) || !(radius[u] > 0.0) || !std::isfinite(radius[u]))
+      return where + "node " + std::to_string(i) +
+             " gets a mass or sphere radius that is not finite and > 0";
+    omega2_max = std::max(omega2_max, (net.tie_stiffness + 4.0 * stiffness_sum[u]) / mass[u]);
+    net.mass += mass[u];
+  }
+
+  // The surface's triangles wound outward (as add_net() does).
+  double enclosed = 0.0;
+  for (const auto& t : mesh.surface.triangles)
+    enclosed += mesh.surface.vertices[static_cast<std::size_t>(t[0])].dot(
+        mesh.surface.vertices[static_cast<std::size_t>(t[1])].cross(
+            mesh.surface.vertices[static_cast<std::size_t>(t[2])]));
+  net.face_begin = static_cast<int>(model.net_faces.size());
+  net.face_count = mesh.surface.num_triangles();
+
+  if (constants) {
+    constants->net_modulus = net_modulus;
+    constants->volume = volume;
+    constants->mass = net.mass;
+    constants->tie_stiffness = net.tie_stiffness;
+    constants->tie_damping = net.tie_damping;
+    constants->spring_stiffness_min = springs.empty() ? 0.0 : k_min;
+    constants->spring_stiffness_max = k_max;
+    constants->springs = static_cast<int>(springs.size());
+    constants->explicit_step_limit = omega2_max > 0.0 ? 2.0 / std::sqrt(omega2_max) : HUGE_VAL;
+  }
+
+  const int net_index = model.num_nets();
+  for (int i = 0; i < n; ++i) {
+    model.node_rest.push_back(mesh.node(i));
+    model.node_mass.push_back(mass[static_cast<std::size_t>(i)]);
+    model.node_radius.push_back(radius[static_cast<std::size_t>(i)]);
+    model.node_net.push_back(net_index);
+  }
+  model.net_springs.insert(model.net_springs.end(), springs.begin(), springs.end());
+  for (const auto& t : mesh.surface.triangles)
+    model.net_faces.push_back(enclosed < 0.0
+                                  ? std::array<int, 3>{net.node_begin + t[0], net.node_begin + t[2],
+                                                       net.node_begin + t[1]}
+                                  : std::array<int, 3>{net.node_begin + t[0], net.node_begin + t[1],
+                                                       net.node_begin + t[2]});
+  model.nets.push_back(std::move(net));
+  return "";
+}
+
+}  // namespace numen::core

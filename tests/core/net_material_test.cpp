@@ -1,0 +1,179 @@
+// Tests of the material net (core/include/numen/core/net_material.hpp; docs/tissue.md): the
+// constants add_material_net() derives from the tissue and the tetrahedra — every tetrahedron
+// edge a spring of E_net Σ V_t / L², masses ρ V_t / 4 per corner, ties κ V / N — checked against
+// the formulas on an octahedron with a centre node; a uniform dilatation stores the energy of a
+// solid of the net's modulus and Poisson's ratio 1/4 on any mesh; bad materials and meshes are
+// refused naming the scene key or the element, leaving the model as it was.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+
+#include "numen/core/model.hpp"
+#include "numen/core/net_material.hpp"
+
+namespace core = numen::core;
+using core::Vec3;
+
+namespace {
+
+/// A regular octahedron of half-diagonal `r` (m) with a node at its centre: 6 surface nodes,
+/// 8 faces wound outward, 8 tetrahedra (each face and the centre, node 6).
+core::TetrahedralMesh octahedron(double r) {
+  core::TetrahedralMesh m;
+  m.surface.vertices = {Vec3(r, 0, 0), Vec3(-r, 0, 0), Vec3(0, r, 0),
+                        Vec3(0, -r, 0), Vec3(0, 0, r), Vec3(0, 0, -r)};
+  m.surface.triangles = {{0, 2, 4}, {2, 1, 4}, {1, 3, 4}, {3, 0, 4},
+                         {2, 0, 5}, {1, 2, 5}, {3, 1, 5}, {0, 3, 5}};
+  m.interior = {Vec3::Zero()};
+  for (const auto& f : m.surface.triangles) m.tetrahedra.push_back({f[0], f[1], f[2], 6});
+  return m;
+}
+
+core::NetMaterial liver() {
+  core::NetMaterial t;
+  t.youngs_modulus = 10e3;
+  t.poisson_ratio = 0.45;
+  t.density = 1060.0;
+  t.rayleigh_stiffness = 2e-3;
+  t.support_length = 0.03;
+  return t;
+}
+
+/// A model with one anchored rigid component and the octahedron's material net.
+core::Model octahedron_model(const core::NetMaterial& tissue, core::MaterialNetConstants* c,
+                             std::string* err) {
+  core::Model m;
+  core::BodyModel anchor;
+  anchor.name = "core";
+  anchor.mass = 0.1;
+  anchor.inertia_body = 1e-4 * core::Mat3::Identity();
+  anchor.anchored = true;
+  m.bodies = {anchor};
+  core::MaterialNetSettings s;
+  s.name = "organ";
+  s.body = 0;
+  s.tissue = tissue;
+  *err = core::add_material_net(m, octahedron(0.01), s, c);
+  return m;
+}
+
+}  // namespace
+
+TEST(NetMaterial, EveryConstantFollowsFromTheMaterialAndTheTetrahedra) {
+  const core::NetMaterial t = liver();
+  core::MaterialNetConstants c;
+  std::string err;
+  core::Model m = octahedron_model(t, &c, &err);
+  ASSERT_EQ(err, "");
+  ASSERT_EQ(m.num_nets(), 1);
+  const core::NetModel& net = m.nets[0];
+  EXPECT_EQ(net.node_count, 7);
+  EXPECT_EQ(net.face_count, 8);
+  EXPECT_EQ(net.structural_count, 18);  // 12 octahedron edges + 6 spokes
+  EXPECT_EQ(net.bending_count, 0);
+
+  const double r = 0.01, volume = 4.0 / 3.0 * r * r * r;  // the octahedron's volume
+  const double e_net = (15.0 / 16.0) * t.youngs_modulus / (1.0 - t.poisson_ratio * t.poisson_ratio);
+  EXPECT_NEAR(c.volume, volume, 1e-15);
+  EXPECT_NEAR(c.net_modulus, core::kNetAffineCorrection * e_net, 1e-9);
+  EXPECT_NEAR(net.mass, t.density * volume, 1e-12);
+  const double k_tie = c.net_modulus / (t.support_length * t.support_length) * volume / 7.0;
+  EXPECT_NEAR(net.tie_stiffness, k_tie, 1e-9 * k_tie);
+  EXPECT_NEAR(net.tie_damping, t.rayleigh_stiffness * k_tie, 1e-9 * k_tie);
+  // The centre holds a quarter of every tetrahedron; a tip a quarter of its four.
+  EXPECT_NEAR(m.node_mass[6], t.density * volume / 4.0, 1e-12);
+  EXPECT_NEAR(m.node_mass[0], t.density * volume / 8.0, 1e-12);
+  // A spoke is in the four tetrahedra of its tip (Σ V_t = V/2, L = r); an octahedron edge in two
+  // (V/4, L = r√2).
+  for (int e = net.spring_begin; e < net.spring_begin + net.structural_count; ++e) {
+    const core::NetSpring& sp = m.net_springs[static_cast<std::size_t>(e)];
+    const bool spoke = sp.node_b == 6;
+    const double sum_v = spoke ? volume / 2.0 : volume / 4.0;
+    const double length = spoke ? r : r * std::sqrt(2.0);
+    EXPECT_NEAR(sp.rest_length, length, 1e-15);
+    EXPECT_NEAR(sp.stiffness, c.net_modulus * sum_v / (length * length), 1e-9 * sp.stiffness);
+    EXPECT_NEAR(sp.damping, t.rayleigh_stiffness * sp.stiffness, 1e-12 * sp.stiffness);
+  }
+  EXPECT_GT(c.explicit_step_limit, 0.0);
+  EXPECT_LT(c.explicit_step_limit, 1.0);
+}
+
+// Under a uniform dilatation ε I every edge stretches by ε L, so the springs store
+// ½ Σ k_e (ε L_e)² = ½ ε² E_net Σ_e Σ_{t∋e} V_t = 3 E_net ε² V, a solid's ½ K (3ε)² V with the
+// bulk modulus K = E_net / (3 (1 − 2·¼)) of Poisson's ratio 1/4: on any tetrahedral mesh.
+TEST(NetMaterial, AUniformDilatationStoresTheEnergyOfTheNetsSolid) {
+  core::MaterialNetConstants c;
+  std::string err;
+  const core::Model m = octahedron_model(liver(), &c, &err);
+  ASSERT_EQ(err, "");
+  const double eps = 1e-3;
+  double energy = 0.0;
+  for (const core::NetSpring& sp : m.net_springs)
+    energy += 0.5 * sp.stiffness * (eps * sp.rest_length) * (eps * sp.rest_length);
+  const double bulk = c.net_modulus / (3.0 * (1.0 - 2.0 * 0.25));
+  EXPECT_NEAR(energy, 0.5 * bulk * 9.0 * eps * eps * c.volume, 1e-9 * energy);
+}
+
+TEST(NetMaterial, ABadMaterialIsRefusedAtItsSceneKeyAndTheModelIsLeftAsItWas) {
+  struct Case {
+    void (*spoil)(core::NetMaterial&);
+    const char* key;
+  } cases[] = {
+      {[](core::NetMaterial& t) { t.youngs_modulus = 0.0; }, "youngs_modulus_kpa"},
+      {[](core::NetMaterial& t) { t.youngs_modulus = NAN; }, "youngs_modulus_kpa"},
+      {[](core::NetMaterial& t) { t.poisson_ratio = 0.5; }, "poisson_ratio"},
+      {[](core::NetMaterial& t) { t.poisson_ratio = -1.0; }, "poisson_ratio"},
+      {[](core::NetMaterial& t) { t.density = 0.0; }, "density"},
+      {[](core::NetMaterial& t) { t.rayleigh_stiffness = -1e-3; }, "rayleigh_stiffness"},
+      {[](core::NetMaterial& t) { t.support_length = 0.0; }, "support_length"},
+  };
+  for (const Case& k : cases) {
+    core::NetMaterial t = liver();
+    k.spoil(t);
+    const char* key = "";
+    EXPECT_NE(core::validate_material(t, &key), "");
+    EXPECT_STREQ(key, k.key);
+    std::string err;
+    const core::Model m = octahedron_model(t, nullptr, &err);
+    EXPECT_NE(err.find(std::string("net 'organ': ") + k.key), std::string::npos) << err;
+    EXPECT_EQ(m.num_nets(), 0);
+    EXPECT_EQ(m.num_nodes(), 0);
+    EXPECT_TRUE(m.net_springs.empty());
+  }
+  EXPECT_EQ(core::validate_material(liver()), "");
+}
+
+TEST(NetMaterial, ABadTetrahedralMeshIsRefusedNamingTheElement) {
+  core::Model m;
+  core::BodyModel anchor;
+  anchor.mass = 0.1;
+  anchor.inertia_body = 1e-4 * core::Mat3::Identity();
+  m.bodies = {anchor};
+  core::MaterialNetSettings s;
+  s.name = "organ";
+  s.body = 0;
+  s.tissue = liver();
+  const auto refused = [&](const core::TetrahedralMesh& mesh, const std::string& what) {
+    const std::string err = core::add_material_net(m, mesh, s);
+    EXPECT_NE(err.find(what), std::string::npos) << err;
+    EXPECT_EQ(m.num_nodes(), 0);
+  };
+  core::TetrahedralMesh mesh = octahedron(0.01);
+  mesh.tetrahedra[3][2] = 7;
+  refused(mesh, "tetrahedron 3 has node index 7 out of range");
+  mesh = octahedron(0.01);
+  mesh.tetrahedra[2][1] = mesh.tetrahedra[2][0];
+  refused(mesh, "tetrahedron 2 repeats node");
+  mesh = octahedron(0.01);
+  mesh.interior[0] = Vec3(0.0, 0.0, 0.01);  // on the top tip: the cells at it are flat
+  refused(mesh, "zero or non-finite volume");
+  mesh = octahedron(0.01);
+  mesh.interior.push_back(Vec3(0.001, 0.0, 0.0));  // node 7, in no tetrahedron
+  refused(mesh, "node 7 is in no tetrahedron");
+  mesh = octahedron(0.01);
+  mesh.tetrahedra.clear();
+  refused(mesh, "no tetrahedron");
+  s.body = 3;
+  refused(octahedron(0.01), "body index 3");
+}
