@@ -585,8 +585,8 @@ TEST(IgtlTrackerBus, PacedStampRefusalsNeitherAllocateNorWait) {
 namespace {
 
 // What a follower saw of a tracker that stalled: the SYNC (1 ms of bus time each) that first
-// took the pose at x = 100 mm (message 10, the first after the stall; -1: none) and the bus time
-// its frames were stamped with; the loop's wall time (s).
+// took a pose after the stall (message 10 at x = 100 mm, or a later one with it; -1: none) and
+// the bus time its last frame was stamped with; the loop's wall time (s).
 struct IgtlBusTestStall {
   int resumed_sync = -1;
   std::int64_t resumed_stamp_ns = 0;
@@ -595,7 +595,7 @@ struct IgtlBusTestStall {
 
 // Messages 0-9 at x = 10 k mm stamped t0 + k ms, `pause_ms` of silence, then messages 10-19
 // stamped t0 + (`resume_k` + j) ms, then the server closes; a follower (wait_timeout 50 ms, max
-// sample age 50 ms) runs `syncs` SYNCs.
+// sample age 50 ms) runs up to `syncs` SYNCs (50 after the resumed pose's).
 IgtlBusTestStall igtl_bus_test_stall(int pause_ms, int resume_k, int syncs,
                                      numen::hal::IgtlBusCounters& counters) {
   namespace hal = numen::hal;
@@ -610,7 +610,8 @@ IgtlBusTestStall igtl_bus_test_stall(int pause_ms, int resume_k, int syncs,
   hal::IgtlTrackerBus bus(config, hal::make_kinematics(config), s);
   IgtlBusTestStall out;
   const auto w0 = std::chrono::steady_clock::now();
-  for (int k = 0; k < syncs; ++k) {
+  // At most `syncs` SYNCs, and 50 more once the resumed pose is taken (the rest of the stream).
+  for (int k = 0; k < syncs && (out.resumed_sync < 0 || k < out.resumed_sync + 50); ++k) {
     igtl_bus_test_sync(bus, k * 1'000'000);
     hal::CanFrame f;
     std::int64_t stamp = 0;
@@ -619,7 +620,9 @@ IgtlBusTestStall igtl_bus_test_stall(int pause_ms, int resume_k, int syncs,
       stamp = f.timestamp_ns;
       any = true;
     }
-    if (any && out.resumed_sync < 0 && std::abs(bus.last_pose().position.x() - 0.1) < 1e-6) {
+    // A SYNC may take several resumed poses at once (x = 100, 110, ... mm): the first that
+    // takes any of them.
+    if (any && out.resumed_sync < 0 && bus.last_pose().position.x() > 0.1 - 1e-6) {
       out.resumed_sync = k;
       out.resumed_stamp_ns = stamp;
     }
@@ -641,14 +644,19 @@ IgtlBusTestStall igtl_bus_test_stall(int pause_ms, int resume_k, int syncs,
 // loop ran out first).
 TEST(IgtlTrackerBus, AStalledTrackerIsFollowedAtItsPaceAndResumesFresh) {
   numen::hal::IgtlBusCounters c;
-  const IgtlBusTestStall r = igtl_bus_test_stall(300, 310, 600, c);
+  const IgtlBusTestStall r = igtl_bus_test_stall(300, 310, 3000, c);
   EXPECT_EQ(c.wait_timeouts, 1u);
   EXPECT_GT(c.silent_paced_syncs, 100u);
   EXPECT_EQ(c.silence_rebases, 0u);  // its clock went on: its poses are due at their stamps
   ASSERT_GE(r.resumed_sync, 0) << "the resumed pose was never taken (" << r.wall_s << " s)";
   EXPECT_GE(r.resumed_sync, 310);
-  EXPECT_LT(r.resumed_sync, 340) << r.wall_s << " s";
-  EXPECT_EQ(r.resumed_stamp_ns, 310'000'000);  // its own stamp: within 30 ms of the SYNC
+  // About 310 (30 SYNCs' lateness on an idle machine); a loaded one (ctest -j2, a sanitizer)
+  // delivers the resumed message later in real time, so the bound is loose: racing SYNCs, the
+  // old behaviour, ran all 3000 within the silence and never took it.
+  EXPECT_LT(r.resumed_sync, 600) << r.wall_s << " s";
+  // Its own stamp (310 ms, or up to 319 ms for a later resumed pose taken with it).
+  EXPECT_GE(r.resumed_stamp_ns, 310'000'000);
+  EXPECT_LE(r.resumed_stamp_ns, 319'000'000);
   EXPECT_EQ(c.poses_taken, 20u);
   EXPECT_GT(r.wall_s, 0.25);  // the silence took its time, in real time
 }
@@ -658,7 +666,7 @@ TEST(IgtlTrackerBus, AStalledTrackerIsFollowedAtItsPaceAndResumesFresh) {
 // samples invalid; the stream is re-based on it, taken at the SYNC it arrives at.
 TEST(IgtlTrackerBus, AFollowerReBasesOnAPausedSendersFirstPoseAfterTheSilence) {
   numen::hal::IgtlBusCounters c;
-  const IgtlBusTestStall r = igtl_bus_test_stall(300, 10, 600, c);
+  const IgtlBusTestStall r = igtl_bus_test_stall(300, 10, 3000, c);
   EXPECT_EQ(c.wait_timeouts, 1u);
   EXPECT_EQ(c.silence_rebases, 1u);
   ASSERT_GE(r.resumed_sync, 0) << "the resumed pose was never taken (" << r.wall_s << " s)";

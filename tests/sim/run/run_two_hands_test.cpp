@@ -308,7 +308,9 @@ TEST(RunTwoHands, ClashSpeedAtWhichTheInstrumentsFirstPassThrough) {
     // a pair from apart to apart within one step is not seen (docs/dynamics.md, "Crossing").
     const bool seen = c.pairs_through > c.pairs_tunnelled;
     EXPECT_EQ(c.summary.pass_throughs > 0, seen) << "the summary's pass-throughs at " << v;
-    if (c.summary.pass_throughs > 0) EXPECT_GT(c.summary.first_pass_through_s, 0.1) << v;
+    if (c.summary.pass_throughs > 0) {
+      EXPECT_GT(c.summary.first_pass_through_s, 0.1) << v;
+    }
   }
   std::printf(
       "[   info   ] the instruments first pass through each other at %.2f m/s each "
