@@ -374,7 +374,7 @@ bool parse_tissue(const TomlTable& t, core::MaterialNetSettings& settings) {
 /// Interior lattice spacing of an organ given by its material, in mean edges of its surface net: at
 /// 2 the shipped organ has 1 338 nodes (336 inside) and steps at 459 µs median, at 1 it has 4 293
 /// (3 291 inside) and steps at 1 769 µs, for the same feedback force within 1 % on the default
-/// scene's recording (docs/tissue.md, "Cost").
+/// scene's recording (docs/tissue.md, "Measured").
 constexpr double kInteriorSpacingEdges = 2.0;
 
 /// Appends the material net of closed surface `surface` (the net's triangles) to `m`: its volume
