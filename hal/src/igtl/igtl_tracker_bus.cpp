@@ -174,14 +174,18 @@ bool IgtlTrackerBus::stamp_acceptable(const IgtlPose& p) noexcept {
   if (refused_run_ >= settings_.resync_after) {  // re-based on this pose
     ++tracker_counters_.stamp_resyncs;
     refused_run_ = 0;
-    if (settings_.wait_for_tracker)
-      shift_ns_ = now_ns_ - (p.stamp_ns - first_stamp_ns_);  // due at this SYNC
-    else
-      has_offset_ = false;  // the sender's clock offset measured again from this pose
+    rebase_on(p);
     return true;
   }
   ++(backwards ? tracker_counters_.stamps_backwards : tracker_counters_.stamps_ahead);
   return false;
+}
+
+void IgtlTrackerBus::rebase_on(const IgtlPose& p) noexcept {
+  if (settings_.wait_for_tracker)
+    shift_ns_ = now_ns_ - (p.stamp_ns - first_stamp_ns_);  // bus_time_of(p) = now_ns_
+  else
+    has_offset_ = false;  // the sender's clock offset measured again from this pose
 }
 
 void IgtlTrackerBus::take(const IgtlPose& p, std::int64_t now_mono) noexcept {
@@ -191,13 +195,8 @@ void IgtlTrackerBus::take(const IgtlPose& p, std::int64_t now_mono) noexcept {
   // old stamps): the stream is re-based on it, taken at this SYNC (the file comment).
   if (!first && now_ns_ - pose_time_ns_ > max_sample_age_ns_ && t < now_ns_ - max_sample_age_ns_) {
     ++tracker_counters_.silence_rebases;
-    if (settings_.wait_for_tracker) {
-      shift_ns_ += now_ns_ - t;
-      t = now_ns_;
-    } else {
-      has_offset_ = false;  // the sender's clock offset measured again from this pose
-      t = bus_time_of(p);
-    }
+    rebase_on(p);
+    t = bus_time_of(p);  // following: now_ns_
   }
   if (p.stamp_ns != 0) {
     last_stamp_ns_ = p.stamp_ns;

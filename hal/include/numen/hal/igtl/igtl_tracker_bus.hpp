@@ -210,6 +210,9 @@ class IgtlTrackerBus final : public Bus {
   std::int64_t bus_time_of(const IgtlPose& p) noexcept;
   // Whether `p`'s stamp may be taken (counts a refusal; re-bases after resync_after).
   bool stamp_acceptable(const IgtlPose& p) noexcept;
+  // Re-bases the stream on `p` (a clock that jumped, a sender that paused): following, `p` is
+  // due at this SYNC; paced, the sender's clock offset is measured again from it.
+  void rebase_on(const IgtlPose& p) noexcept;
   void take(const IgtlPose& p, std::int64_t now_mono) noexcept;
   void on_sync() noexcept;
   // Waits for the registration TRANSFORM (construction; see the constructor).
