@@ -274,7 +274,12 @@ TEST(ControlLoop, AfterStaleSamplesTheTargetGlidesToTheResumedPoseAndTheFeedback
     for (int k = 0; k < 20; ++k) period(k);  // the start's soft start is over
     ASSERT_DOUBLE_EQ(loop.impedance().sent_torques().ramp, 1.0);
     rig.bus.set_state(numen::hal::BusState::kBusOff);
-    for (int k = 20; k < 30; ++k) period(k);
+    std::int64_t allocations = 0;  // the stale periods and the glide allocate nothing
+    {
+      numen::test::AllocationGuard guard;
+      for (int k = 20; k < 30; ++k) period(k);
+      allocations += guard.count();
+    }
     ASSERT_FALSE(loop.last_report().sample_valid);
     const Vec3 held = data.target.position;
     double moved[5];
@@ -283,12 +288,19 @@ TEST(ControlLoop, AfterStaleSamplesTheTargetGlidesToTheResumedPoseAndTheFeedback
     rig.bus.set_state(numen::hal::BusState::kOk);
     std::vector<Vec3> targets;
     std::vector<double> ramps;
-    for (int k = 30; k < 45; ++k) {
-      period(k);
-      EXPECT_TRUE(loop.last_report().sample_valid) << k;
-      targets.push_back(data.target.position);
-      ramps.push_back(loop.impedance().sent_torques().ramp);
+    targets.reserve(15);
+    ramps.reserve(15);
+    {
+      numen::test::AllocationGuard guard;
+      for (int k = 30; k < 45; ++k) {
+        period(k);
+        EXPECT_TRUE(loop.last_report().sample_valid) << k;
+        targets.push_back(data.target.position);
+        ramps.push_back(loop.impedance().sent_torques().ramp);
+      }
+      allocations += guard.count();
     }
+    EXPECT_EQ(allocations, 0);
     const Vec3 resumed = rig.device.last_sample().pose.position;
     const double gap = (resumed - held).norm();
     ASSERT_GT(gap, 1e-3);
