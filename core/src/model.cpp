@@ -54,6 +54,20 @@ std::string validate_nets(const Model& model) {
     if (!(net.tie_stiffness > 0.0 && std::isfinite(net.tie_stiffness)) ||
         !(net.tie_damping >= 0.0 && std::isfinite(net.tie_damping)))
       return who + ": tie_stiffness must be finite and > 0, tie_damping finite and >= 0";
+    if (!net.tie_scale.empty()) {
+      if (static_cast<int>(net.tie_scale.size()) != net.node_count)
+        return who + ": tie_scale must be empty or hold one entry per node";
+      for (const double ts : net.tie_scale)
+        if (!(ts > 0.0 && std::isfinite(ts))) return who + ": tie_scale entries must be finite and > 0";
+      if (!model.bodies[static_cast<std::size_t>(net.body)].anchored)
+        return who + ": tie_scale (ties per node) needs an anchored rigid component";
+    }
+    if (!(net.load_patch_radius >= 0.0 && std::isfinite(net.load_patch_radius)) ||
+        !(net.contact_modulus >= 0.0 && std::isfinite(net.contact_modulus)) ||
+        (net.contact_modulus > 0.0 &&
+         (!(net.load_patch_radius > 0.0) ||
+          static_cast<int>(net.surface_node_area.size()) > net.node_count)))
+      return who + ": contact_modulus needs load_patch_radius > 0 and at most node_count surface areas";
     if (net.face_begin != next_face || net.face_count < 0)
       return who + ": face range must follow the previous net's";
     next_node += net.node_count;

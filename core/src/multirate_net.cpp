@@ -99,11 +99,12 @@ void build_node_planes(const Model& scene, const Data& data, std::span<const int
     if (slot < 0) {  // a node's first plane: its tie (its springs below)
       slot = slots++;
       scratch.slot_node[static_cast<std::size_t>(slot)] = c.node;
-      scratch.stiffness[static_cast<std::size_t>(slot)] = nm.tie_stiffness * Mat3::Identity();
+      const double ts = tie_scale(nm, c.node);  // 1 but on a material net
+      scratch.stiffness[static_cast<std::size_t>(slot)] = ts * nm.tie_stiffness * Mat3::Identity();
       scratch.planes_stiffness[static_cast<std::size_t>(slot)] = 0.0;
       scratch.planes_depth[static_cast<std::size_t>(slot)] = 0.0;
       scratch.force[static_cast<std::size_t>(slot)] =  // an organ's contacts start from it (below)
-          organ ? Vec3(-nm.tie_stiffness * (data.nodes[node].position - rest_anchor(c.node)))
+          organ ? Vec3(-ts * nm.tie_stiffness * (data.nodes[node].position - rest_anchor(c.node)))
                 : Vec3::Zero();
     }
     // A triangle contact's share w (NodeContact::share; 1 for a node sphere's contact) counts
@@ -293,8 +294,8 @@ void build_node_planes(const Model& scene, const Data& data, std::span<const int
       k.stiffness.topLeftCorner<3, 3>() = scratch.stiffness[static_cast<std::size_t>(slot)];
       k.wrench.head<3>() = scratch.force[static_cast<std::size_t>(slot)] + m * scene.gravity;
       k.inverse_mass = 1.0 / m;
-      k.node_damping =
-          scene.nets[static_cast<std::size_t>(scene.node_net[u])].tie_damping * Mat3::Identity();
+      const NetModel& carrier_net = scene.nets[static_cast<std::size_t>(scene.node_net[u])];
+      k.node_damping = tie_scale(carrier_net, p.node) * carrier_net.tie_damping * Mat3::Identity();
     }
     p.carrier = c;
     p.stiffness_scale = p.share;

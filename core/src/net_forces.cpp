@@ -12,6 +12,7 @@
 #include "numen/core/contact_force.hpp"
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"
+#include "numen/core/net_tissue_contact.hpp"
 #include "numen/core/step_stages.hpp"
 
 #include "detail/data_scratch.hpp"
@@ -361,6 +362,132 @@ void linearization_pass(const Model& model, Data& data, double h) noexcept {
 
 }  // namespace
 
+namespace {
+
+/// The net of an organ given by its material whose surface node contact `ct` is (a tool's
+/// sphere on its surface: the two-scale law of net_tissue_contact.hpp), else null.
+const NetModel* tissue_net(const Model& model, const NodeContact& ct) noexcept {
+  if (ct.face < 0 || ct.body_b < 0 || ct.sphere_b < 0) return nullptr;
+  const NetModel& net = model.nets[static_cast<std::size_t>(model.node_net[static_cast<std::size_t>(ct.node)])];
+  return net.contact_modulus > 0.0 ? &net : nullptr;
+}
+
+/// The two-scale law (net_tissue_contact.hpp) of the tissue contact `ct` on `net`, with the
+/// material pair `mp` (its stiffness already under the time-constant floor): at the sphere's
+/// deepest contact (NodeContact::primary, its depth seen through the load patch) F(d), and at
+/// every contact of the sphere the backstop, the pair's penalty with a C¹ onset over r / 4
+/// (kTissueBackstopOnset) on d_fine − 1.5 r once the touched fine surface is `fine_depth` > 1.5 r
+/// deep (kTissueBackstopDepth); − c v_n with the pair's damping scaled by
+/// the law's stiffness over the pair's (c = c_pair k(d) / k_pair: the pair's time constant), the
+/// pair's friction; never a pull. `elastic` gets the elastic force, `patch` F(d), the part laid
+/// on the load patch (the rest acts on the contact's own nodes).
+ContactForceResult tissue_contact_force(const Model& model, const NetModel& net, const NodeContact& ct,
+                                        double fine_depth, const Vec3& v_rel, const MaterialPair& mp,
+                                        double& elastic, double& patch) noexcept {
+  const double radius = model.body_spheres[static_cast<std::size_t>(ct.sphere_b)].radius;
+  TissueContactForce e;
+  if (ct.primary)
+    e = tissue_contact_force(
+        make_tissue_contact_law(net.contact_modulus, radius, net.load_patch_radius, mp.stiffness),
+        ct.depth);
+  // The backstop, its onset smoothed over a quarter radius (contact_force.hpp's C¹ onset).
+  MaterialPair onset = mp;
+  onset.onset_depth = kTissueBackstopOnset * radius;
+  const ContactForceResult b = contact_penalty_force(
+      ct.normal, fine_depth - kTissueBackstopDepth * radius, Vec3::Zero(), onset);
+  elastic = e.force + b.normal_force;
+  patch = e.force;
+  ContactForceResult r;
+  r.stiffness = e.stiffness + (b.active ? b.stiffness : 0.0);
+  r.damping = mp.stiffness > 0.0 ? mp.damping * r.stiffness / mp.stiffness : 0.0;
+  r.friction = mp.friction;
+  const double v_n = ct.normal.dot(v_rel);
+  r.normal_force = std::max(0.0, elastic - r.damping * v_n);
+  r.active = r.normal_force > 0.0;
+  if (r.active) r.force = r.normal_force * ct.normal - mp.friction * (v_rel - v_n * ct.normal);
+  return r;
+}
+
+/// The load patch (net_tissue_contact.hpp) of the tissue contact `ct` on `net` into
+/// NetScratch::patch_*: the surface nodes within ρ of the contact's material point Σ w_m r_m (the
+/// rest positions of its net triangle's nodes), weighted K(|r_j − p| / ρ) A_j and normalised (no
+/// node: patch_count 0). The last contact's patch is kept: the shares of one contact reuse it.
+void find_patch(const Model& model, NetScratch& s, const NetModel& net, const NodeContact& ct) noexcept {
+  if (s.patch_face == ct.face && s.patch_at == ct.face_weights) return;
+  const std::array<int, 3>& t = model.net_faces[static_cast<std::size_t>(ct.face)];
+  const Vec3 p = ct.face_weights.x() * model.node_rest[static_cast<std::size_t>(t[0])] +
+                 ct.face_weights.y() * model.node_rest[static_cast<std::size_t>(t[1])] +
+                 ct.face_weights.z() * model.node_rest[static_cast<std::size_t>(t[2])];
+  const double rho = net.load_patch_radius, rho2 = rho * rho;
+  const int count = static_cast<int>(net.surface_node_area.size());
+  int kept = 0;
+  double total = 0.0;
+  for (int j = 0; j < count; ++j) {
+    const int node = net.node_begin + j;
+    const double d2 = (model.node_rest[static_cast<std::size_t>(node)] - p).squaredNorm();
+    if (!(d2 < rho2)) continue;
+    const double w = load_patch_kernel(std::sqrt(d2) / rho) * net.surface_node_area[static_cast<std::size_t>(j)];
+    if (!(w > 0.0)) continue;
+    s.patch_nodes[static_cast<std::size_t>(kept)] = node;
+    s.patch_weights[static_cast<std::size_t>(kept)] = w;
+    total += w;
+    ++kept;
+  }
+  for (int k = 0; k < kept; ++k) s.patch_weights[static_cast<std::size_t>(k)] /= total;
+  s.patch_count = kept;
+  s.patch_face = ct.face;
+  s.patch_at = ct.face_weights;
+}
+
+/// The primary tissue contact `ct` (NodeContact::primary) seen through its load patch
+/// (net_tissue_contact.hpp): its depth and normal become the sphere's penetration into the plane
+/// through the touched point moved by the patch's mean displacement ū instead of its own
+/// triangle's, normal to the patch's mean rest normal (turned with the rigid component). Needs
+/// find_patch() of `ct`. A patch without a node leaves `ct` as detected.
+void see_through_patch(const Model& model, const Data& data, const NetScratch& s, const NetModel& net,
+                       NodeContact& ct) noexcept {
+  if (s.patch_count == 0) return;
+  const BodyState& body = data.bodies[static_cast<std::size_t>(net.body)];
+  const Mat3 rot = body.orientation.toRotationMatrix();
+  const auto move = [&](int v) -> Vec3 {  // u_v = x_v − a_v
+    const auto i = static_cast<std::size_t>(v);
+    return data.nodes[i].position - (body.position + rot * model.node_rest[i]);
+  };
+  Vec3 mean = Vec3::Zero(), normal = Vec3::Zero();
+  for (int k = 0; k < s.patch_count; ++k) {
+    const int v = s.patch_nodes[static_cast<std::size_t>(k)];
+    const double w = s.patch_weights[static_cast<std::size_t>(k)];
+    mean += w * move(v);
+    normal += w * net.surface_node_normal[static_cast<std::size_t>(v - net.node_begin)];
+  }
+  const double len = normal.norm();
+  if (!(len > 0.0)) return;
+  const Vec3 outward = rot * (normal / len);
+  const Vec3 own = detail::contact_node_value(model, ct, move);
+  const BodyState& tool = data.bodies[static_cast<std::size_t>(ct.body_b)];
+  const Sphere& sphere = model.body_spheres[static_cast<std::size_t>(ct.sphere_b)];
+  const Vec3 centre = tool.position + tool.orientation * sphere.center;
+  // The touched point (NodeContact::position is ½ (q + c − r o), o = −normal), moved by ū − u.
+  const Vec3 touched = 2.0 * ct.position - centre - sphere.radius * ct.normal + (mean - own);
+  ct.depth = sphere.radius - (centre - touched).dot(outward);
+  ct.normal = -outward;
+  ct.position = touched + 0.5 * ct.depth * outward;
+}
+
+/// Lays the force `f` (N, world) of a tissue contact on the load patch find_patch() found last
+/// (NetScratch::patch_*), or on `node` when it has no node.
+void lay_on_patch(NetScratch& s, int node, const Vec3& f) noexcept {
+  if (s.patch_count == 0) {
+    s.force[static_cast<std::size_t>(node)] += f;
+    return;
+  }
+  for (int k = 0; k < s.patch_count; ++k)
+    s.force[static_cast<std::size_t>(s.patch_nodes[static_cast<std::size_t>(k)])] +=
+        s.patch_weights[static_cast<std::size_t>(k)] * f;
+}
+
+}  // namespace
+
 void compute_net_forces(const Model& model, Data& data) noexcept {
   if (model.nets.empty()) return;
   data.stages_run |= kStageNetForces;  // the stage report (step_stages.hpp)
@@ -381,7 +508,7 @@ void compute_net_forces(const Model& model, Data& data) noexcept {
     const BodyState& body = data.bodies[bi];
     const Mat3 rot = body.orientation.toRotationMatrix();
     Wrench reaction;
-    double twice_kinetic = 0.0, tie2 = 0.0;  // Σ m |v|², Σ |x − a|²
+    double twice_kinetic = 0.0, tie2 = 0.0;  // Σ m |v|², Σ s |x − a|²
     Vec3 mass_moment = Vec3::Zero();         // Σ m x
     for (int v = net.node_begin; v < net.node_begin + net.node_count; ++v) {
       const auto i = static_cast<std::size_t>(v);
@@ -391,12 +518,13 @@ void compute_net_forces(const Model& model, Data& data) noexcept {
       const Vec3 anchor_velocity = body.linear_velocity + body.angular_velocity.cross(lever);
       const Vec3 dv = nodes[i].velocity - anchor_velocity;
       const Vec3 stretch = nodes[i].position - anchor;
-      const Vec3 f = -net.tie_stiffness * stretch - net.tie_damping * dv;
+      const double ts = tie_scale(net, v);
+      const Vec3 f = -(ts * net.tie_stiffness) * stretch - (ts * net.tie_damping) * dv;
       force[i] = mass[i] * model.gravity + f;
       reaction.force -= f;
       reaction.torque -= lever.cross(f);
       twice_kinetic += mass[i] * nodes[i].velocity.squaredNorm();
-      tie2 += stretch.squaredNorm();
+      tie2 += ts * stretch.squaredNorm();
       mass_moment += mass[i] * nodes[i].position;
     }
     // The springs' part is added by spring_pass().
@@ -433,9 +561,10 @@ void compute_net_forces(const Model& model, Data& data) noexcept {
       const NetModel& net = model.nets[static_cast<std::size_t>(model.node_net[v])];
       const BodyState& body = data.bodies[static_cast<std::size_t>(net.body)];
       const Vec3 anchor_velocity = body.linear_velocity + body.angular_velocity.cross(s.lever[v]);
+      const double ts = tie_scale(net, static_cast<int>(v));
       const Vec3 dv =
-          h * (s.force[v] - h * net.tie_stiffness * (node_states[v].velocity - anchor_velocity)) /
-          (model.node_mass[v] + h * net.tie_damping + h * h * net.tie_stiffness);
+          h * (s.force[v] - h * ts * net.tie_stiffness * (node_states[v].velocity - anchor_velocity)) /
+          (model.node_mass[v] + ts * (h * net.tie_damping + h * h * net.tie_stiffness));
       v_point += ct.face_weights[m] * (node_states[v].velocity + dv);
     }
     if (ct.body_b >= 0) {
@@ -484,7 +613,16 @@ void compute_net_forces(const Model& model, Data& data) noexcept {
       }
     }
     ct.stiffness = ct.share * mp.stiffness;
-    ContactForceResult r = contact_penalty_force(ct.normal, ct.depth, v_rel, mp);
+    const NetModel* tissue = tissue_net(model, ct);
+    const double fine_depth = ct.depth;  // as detected, on the fine surface
+    if (tissue && ct.primary) {  // the sphere's deepest contact: seen through its load patch
+      find_patch(model, s, *tissue, ct);
+      see_through_patch(model, data, s, *tissue, ct);
+    }
+    double elastic = 0.0, patch = 0.0;  // a tissue contact's elastic force, and F(d) of it
+    ContactForceResult r = tissue ? tissue_contact_force(model, *tissue, ct, fine_depth, v_rel, mp,
+                                                         elastic, patch)
+                                  : contact_penalty_force(ct.normal, ct.depth, v_rel, mp);
     if (ct.face >= 0) {  // the node's share of the triangle's contact
       r.force *= ct.share;
       r.normal_force *= ct.share;
@@ -499,9 +637,10 @@ void compute_net_forces(const Model& model, Data& data) noexcept {
       const BodyState& body = data.bodies[static_cast<std::size_t>(net.body)];
       const Vec3 anchor_velocity = body.linear_velocity + body.angular_velocity.cross(s.lever[i]);
       const double h = model.dt;
+      const double ts = tie_scale(net, static_cast<int>(i));
       const Vec3 dv =
-          h * (s.force[i] - h * net.tie_stiffness * (data.nodes[i].velocity - anchor_velocity)) /
-          (model.node_mass[i] + h * net.tie_damping + h * h * net.tie_stiffness);
+          h * (s.force[i] - h * ts * net.tie_stiffness * (data.nodes[i].velocity - anchor_velocity)) /
+          (model.node_mass[i] + ts * (h * net.tie_damping + h * h * net.tie_stiffness));
       ct.engaged = ct.depth - h * ct.normal.dot(v_rel + dv) > 0.0;
       if (ct.engaged) {  // below the surface at the step's end: k d − c v_n, unclamped
         r.normal_force = mp.stiffness * ct.depth - mp.damping * ct.normal.dot(v_rel);
@@ -511,6 +650,13 @@ void compute_net_forces(const Model& model, Data& data) noexcept {
         r.damping = mp.damping;
         r.friction = 0.0;
       }
+    } else if (ct.engaged && !r.active && tissue) {
+      // A tissue contact's, decided above: its share of F(d) − c v_n ≥ 0 (r's coefficients
+      // are the law's at d, already the share's).
+      r.normal_force = std::max(0.0, ct.share * elastic - r.damping * ct.normal.dot(v_rel));
+      r.force = r.normal_force * ct.normal;
+      r.active = true;
+      r.friction = 0.0;
     } else if (ct.engaged &&
                !r.active) {  // a triangle's, decided above: its share of k d − c v_n ≥ 0
       r.normal_force =
@@ -534,7 +680,13 @@ void compute_net_forces(const Model& model, Data& data) noexcept {
     ct.normal_velocity =
         ct.normal.dot(ct.face < 0 ? v_rel : Vec3(v_rel - v_point + data.nodes[i].velocity));
     if (!r.active) continue;
-    s.force[i] += r.force;
+    if (tissue) {  // F(d) on the load patch, the excess, damping and friction on the node
+      const Vec3 on_patch = std::min(ct.share * patch, r.normal_force) * ct.normal;
+      if (ct.primary) lay_on_patch(s, ct.node, on_patch);
+      s.force[i] += r.force - on_patch;
+    } else {
+      s.force[i] += r.force;
+    }
     if (ct.body_b >= 0) {
       Wrench& w = data.body_wrench[static_cast<std::size_t>(ct.body_b)];
       w.force -= r.force;

@@ -22,6 +22,10 @@ double signed_volume(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d)
 
 }  // namespace
 
+double default_load_patch_radius(double surface_area) noexcept {
+  return kLoadPatchEdges * std::sqrt(2.0 * surface_area / (std::sqrt(3.0) * kLoadPatchCoarsestNodes));
+}
+
 std::string validate_material(const NetMaterial& m, const char** key) {
   const auto bad = [key](const char* k, const char* message) {
     if (key) *key = k;
@@ -54,6 +58,8 @@ std::string add_material_net(Model& model, const TetrahedralMesh& mesh,
     return where + "node_radius must be finite and >= 0";
   if (!(std::isfinite(settings.rest_speed) && settings.rest_speed >= 0.0))
     return where + "rest_speed must be finite and >= 0";
+  if (!(std::isfinite(settings.load_patch_radius) && settings.load_patch_radius >= 0.0))
+    return where + "load_patch_radius must be finite and >= 0";
   if (const std::string err = validate_mesh(mesh.surface); !err.empty())
     return where + "surface: " + err;
   const int n = mesh.num_nodes();
@@ -117,6 +123,11 @@ std::string add_material_net(Model& model, const TetrahedralMesh& mesh,
     return where + "the ties' stiffness " + std::to_string(net.tie_stiffness) +
            " N/m is not finite and > 0 (a degenerate volume?)";
 
+  // The ties are a stiffness per volume: node i's is κ V_i (its lumped volume, as its mass).
+  net.tie_scale.resize(static_cast<std::size_t>(n));
+  for (int i = 0; i < n; ++i)
+    net.tie_scale[static_cast<std::size_t>(i)] = node_volume[static_cast<std::size_t>(i)] * n / volume;
+
   std::vector<NetSpring> springs;
   springs.reserve(edge_volume.size());
   std::vector<double> incident_length(static_cast<std::size_t>(n), 0.0);
@@ -157,7 +168,7 @@ std::string add_material_net(Model& model, const TetrahedralMesh& mesh,
     if (!(mass[u] > 0.0) || !std::isfinite(mass[u]) || !(radius[u] > 0.0) || !std::isfinite(radius[u]))
       return where + "node " + std::to_string(i) +
              " gets a mass or sphere radius that is not finite and > 0";
-    omega2_max = std::max(omega2_max, (net.tie_stiffness + 4.0 * stiffness_sum[u]) / mass[u]);
+    omega2_max = std::max(omega2_max, (net.tie_scale[u] * net.tie_stiffness + 4.0 * stiffness_sum[u]) / mass[u]);
     net.mass += mass[u];
   }
 
@@ -170,6 +181,34 @@ std::string add_material_net(Model& model, const TetrahedralMesh& mesh,
   net.face_begin = static_cast<int>(model.net_faces.size());
   net.face_count = mesh.surface.num_triangles();
 
+  // The contact law's constants: E*, the surface nodes' areas, the load patch.
+  net.contact_modulus = mat.youngs_modulus / (1.0 - nu * nu);
+  net.surface_node_area.assign(static_cast<std::size_t>(mesh.surface.num_vertices()), 0.0);
+  net.surface_node_normal.assign(static_cast<std::size_t>(mesh.surface.num_vertices()), Vec3::Zero());
+  double area = 0.0, edge_sum = 0.0;
+  for (const auto& t : mesh.surface.triangles) {
+    const Vec3& a = mesh.surface.vertices[static_cast<std::size_t>(t[0])];
+    const Vec3& b = mesh.surface.vertices[static_cast<std::size_t>(t[1])];
+    const Vec3& c = mesh.surface.vertices[static_cast<std::size_t>(t[2])];
+    const double at = 0.5 * (b - a).cross(c - a).norm();
+    area += at;
+    edge_sum += (b - a).norm() + (c - b).norm() + (a - c).norm();
+    const Vec3 outward = (enclosed < 0.0 ? -0.5 : 0.5) * (b - a).cross(c - a);  // area × normal
+    for (const int v : t) {
+      net.surface_node_area[static_cast<std::size_t>(v)] += at / 3.0;
+      net.surface_node_normal[static_cast<std::size_t>(v)] += outward;
+    }
+  }
+  for (Vec3& normal : net.surface_node_normal) {
+    const double len = normal.norm();
+    if (len > 0.0) normal /= len;
+  }
+  // Every edge is in two triangles of a closed surface: the mean edge is Σ / (3 T).
+  const double mean_edge = edge_sum / (3.0 * std::max(1, mesh.surface.num_triangles()));
+  net.load_patch_radius = settings.load_patch_radius > 0.0
+                              ? settings.load_patch_radius
+                              : default_load_patch_radius(area);
+
   if (constants) {
     constants->net_modulus = net_modulus;
     constants->volume = volume;
@@ -180,6 +219,9 @@ std::string add_material_net(Model& model, const TetrahedralMesh& mesh,
     constants->spring_stiffness_max = k_max;
     constants->springs = static_cast<int>(springs.size());
     constants->explicit_step_limit = omega2_max > 0.0 ? 2.0 / std::sqrt(omega2_max) : HUGE_VAL;
+    constants->contact_modulus = net.contact_modulus;
+    constants->load_patch_radius = net.load_patch_radius;
+    constants->surface_mean_edge = mean_edge;
   }
 
   const int net_index = model.num_nets();

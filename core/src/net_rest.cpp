@@ -43,7 +43,7 @@ void count_quiet_steps(const Model& model, Data& data, const NetModel& net) noex
   const double scale = net.rest_speed / h;                             // f_r,i = scale (m_i + tie)
   for (int v = net.node_begin; v < net.node_begin + net.node_count; ++v) {
     const auto i = static_cast<std::size_t>(v);
-    const double fr = scale * (model.node_mass[i] + tie);
+    const double fr = scale * (model.node_mass[i] + tie_scale(net, v) * tie);
     const bool quiet =
         data.nodes[i].velocity.squaredNorm() <= v2 && s.force[i].squaredNorm() <= fr * fr;
     std::uint8_t& c = s.rest_count[i];

@@ -133,6 +133,13 @@ void NetScratch::resize(const Model& model) {
   surface_net_stamp.assign(carriers, 0);
   surface_net_torn.assign(carriers, 0);
   surface_stamp = 0;
+  std::size_t patch = 0;
+  for (const NetModel& net : model.nets) patch = std::max(patch, net.surface_node_area.size());
+  patch_nodes.assign(n > 0 ? patch : 0, 0);
+  patch_weights.assign(n > 0 ? patch : 0, 0.0);
+  patch_count = 0;
+  patch_face = -1;
+  patch_at.setZero();
 }
 
 }  // namespace numen::core

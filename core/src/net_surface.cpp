@@ -58,10 +58,13 @@ double angle_at(int f, const Vec3& a, const Vec3& b, const Vec3& c) noexcept {
 /// [flo, fhi]: `corner(m, k)` is corner k of candidate m at the current positions,
 /// `emit(m, w, body, sphere, material_pair, geometry, com)` writes a contact at the point of
 /// barycentric weights w of candidate m (net_surface.hpp, collide_net_faces()).
+/// With `primary` (the sink, for an organ given by its material: NetModel::contact_modulus), the
+/// entries of each sphere's deepest contact are marked NodeContact::primary: the two-scale law
+/// (net_tissue_contact.hpp) is the whole sphere's and acts there.
 template <typename Corner, typename Emit>
 void collide_candidates(const Model& model, const Data& data, const NetScratch& ns, int num_near,
                         int mat_net, int nc, const Vec3* flo, const Vec3* fhi, Corner corner,
-                        Emit emit) noexcept {
+                        Emit emit_contact, NodeContactSink* primary) noexcept {
   const CollisionScratch& cs = data.scratch->collision;
   const double* R = cs.sphere_r.data();
   const Vec3* sw = cs.sphere_world.data();
@@ -78,6 +81,19 @@ void collide_candidates(const Model& model, const Data& data, const NetScratch& 
       const int s = near[i];
       const Vec3& centre = sw[s];
       const double r = R[s];
+      // The sphere's deepest contact's entries in the sink (primary only).
+      int deepest_begin = 0, deepest_end = 0;
+      double deepest = -1.0;
+      const auto emit = [&](int m, const Vec3& w, int body_, int sphere, int material_pair,
+                            const ContactGeometry& g, const Vec3& com_) {
+        const int before = primary ? primary->count : 0;
+        emit_contact(m, w, body_, sphere, material_pair, g, com_);
+        if (primary && primary->count > before && g.depth > deepest)
+          deepest = g.depth, deepest_begin = before, deepest_end = primary->count;
+      };
+      const auto mark = [&] {
+        for (int k = deepest_begin; k < deepest_end; ++k) primary->out[k].primary = true;
+      };
       // Every triangle whose closest point to the centre is inside it and within r is a
       // contact, along its own normal; the nearest point on an edge or a vertex is one more
       // when it is nearer than all of those (a convex edge or corner).
@@ -113,7 +129,10 @@ void collide_candidates(const Model& model, const Data& data, const NetScratch& 
           w = wm;
         }
       }
-      if (best < 0 || !(best2 < face2)) continue;
+      if (best < 0 || !(best2 < face2)) {
+        if (primary) mark();
+        continue;
+      }
       // The pseudo-normal at q: the angle-weighted normals of the triangles through q.
       Vec3 pn = Vec3::Zero();
       for (int m = 0; m < nc; ++m) {
@@ -136,7 +155,10 @@ void collide_candidates(const Model& model, const Data& data, const NetScratch& 
         o = (outside ? diff : Vec3(-diff)) / d;
       } else {
         const double len = pn.norm();
-        if (!(len > 0.0)) continue;
+        if (!(len > 0.0)) {
+          if (primary) mark();
+          continue;
+        }
         o = pn / len;
       }
       ContactGeometry g;
@@ -144,6 +166,7 @@ void collide_candidates(const Model& model, const Data& data, const NetScratch& 
       g.normal = -o;
       g.position = 0.5 * (q + centre - r * o);
       emit(best, w, body, s, mat_net + bm.material, g, com);
+      if (primary) mark();
     }
   }
 }
@@ -321,7 +344,7 @@ void collide_net_faces(const Model& model, const Data& data, NetScratch& ns, con
                             body, sphere, material_pair, g, com);
     };
     collide_candidates(model, data, ns, num_near, mat_net, nc, ns.surface_lo.data(),
-                       ns.surface_hi.data(), corner, emit);
+                       ns.surface_hi.data(), corner, emit, net.contact_modulus > 0.0 ? &sink : nullptr);
     return;
   }
 
@@ -351,7 +374,7 @@ void collide_net_faces(const Model& model, const Data& data, NetScratch& ns, con
                   material_pair, g, com);
   };
   collide_candidates(model, data, ns, num_near, mat_net, nc, ns.face_lo.data(), ns.face_hi.data(),
-                     corner, emit);
+                     corner, emit, net.contact_modulus > 0.0 ? &sink : nullptr);
 }
 
 }  // namespace numen::core::detail

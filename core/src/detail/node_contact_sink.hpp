@@ -129,6 +129,7 @@ struct NodeContactSink {
     c.normal_velocity = 0.0;
     c.active = false;
     c.engaged = false;
+    c.primary = false;
     c.weight_normal = 0.0;
     c.weight_isotropic = 0.0;
     c.face = -1;

@@ -78,7 +78,7 @@ double net_energy(const core::Model& model, const core::Data& data, int n,
     const auto k = static_cast<std::size_t>(i);
     e += 0.5 * model.node_mass[k] * data.nodes[k].velocity.squaredNorm();
     const Vec3 anchor = body.position + body.orientation * model.node_rest[k];
-    e += 0.5 * net.tie_stiffness * (data.nodes[k].position - anchor).squaredNorm();
+    e += 0.5 * core::tie_scale(net, i) * net.tie_stiffness * (data.nodes[k].position - anchor).squaredNorm();
     u -= model.node_mass[k] * model.gravity.dot(data.nodes[k].position);
   }
   for (int s = net.spring_begin; s < net.spring_begin + net.structural_count + net.bending_count; ++s) {

@@ -34,7 +34,7 @@ using core::Vec3;
   "name", "body", "mesh", "scale", "position", "orientation", "mass", "stiffness", "damping", \
       "bending_stiffness", "bending_damping", "tie_stiffness", "tie_damping", "node_radius",  \
       "material", "rest_speed", "youngs_modulus_kpa", "poisson_ratio", "density",              \
-      "rayleigh_stiffness", "support_length"
+      "rayleigh_stiffness", "support_length", "load_patch_radius"
 
 /// The keys of a net given by its constants per spring and per node (docs/scenes.md,
 /// "Deformables"), which a net given by its material derives (docs/tissue.md).
@@ -43,7 +43,7 @@ constexpr const char* kSpringNetKeys[] = {"mass",           "stiffness",       "
                                           "tie_damping"};
 /// The keys of a net given by its material, beside `youngs_modulus_kpa`.
 constexpr const char* kMaterialKeys[] = {"poisson_ratio", "density", "rayleigh_stiffness",
-                                         "support_length"};
+                                         "support_length", "load_patch_radius"};
 
 /// An integer key in [lo, hi], or `fallback` when absent.
 int integer_in(const TomlTable& t, std::string_view key, int lo, int hi, int fallback) {
@@ -368,6 +368,7 @@ bool parse_tissue(const TomlTable& t, core::MaterialNetSettings& settings) {
   if (const std::string err = core::validate_material(mat, &key); !err.empty()) t.fail(key, err);
   settings.node_radius = t.number_in("node_radius", 1e-9, kInf, 0.0);
   settings.rest_speed = t.number_in("rest_speed", 0.0, kInf, core::NetSettings{}.rest_speed);
+  settings.load_patch_radius = t.number_in("load_patch_radius", 1e-6, kInf, 0.0);
   return true;
 }
 
@@ -398,6 +399,15 @@ void add_tissue_net(const TomlTable& t, core::Model& m, const core::TriangleMesh
   load.interior_nodes = static_cast<int>(volume.interior.size());
   load.tetrahedra = static_cast<int>(volume.tetrahedra.size());
   load.material_constants = c;
+  if (c.surface_mean_edge > 0.5 * c.load_patch_radius)
+    warnings.push_back(mesh_warning(
+        t, t.has("load_patch_radius") ? "load_patch_radius" : "youngs_modulus_kpa", file,
+        "the net's mean edge " + format_input_number(c.surface_mean_edge) +
+            " m is above half the contact's load patch radius " +
+            format_input_number(c.load_patch_radius) +
+            " m: the net resolves the patch poorly and the organ feels stiffer or softer than "
+            "its material (docs/tissue.md, \"The contact\"); give it more nodes or a larger "
+            "load_patch_radius"));
   if (m.integrator == core::Integrator::kSymplecticEuler && m.dt > c.explicit_step_limit)
     warnings.push_back(mesh_warning(
         t, "youngs_modulus_kpa", file,

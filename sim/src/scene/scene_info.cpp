@@ -266,7 +266,9 @@ std::string format_scene_info(const SceneInfo& i) {
          << c.volume * 1e6 << " cm^3, " << c.mass * 1e3 << " g; E_net " << c.net_modulus * 1e-3
          << " kPa, springs " << c.spring_stiffness_min << " to " << c.spring_stiffness_max
          << " N/m, ties " << c.tie_stiffness << " N/m per node; symplectic Euler step at most "
-         << c.explicit_step_limit << " s" << std::defaultfloat << std::setprecision(6) << "\n";
+         << c.explicit_step_limit << " s; contact E* " << c.contact_modulus * 1e-3
+         << " kPa, load patch radius " << c.load_patch_radius * 1e3 << " mm" << std::defaultfloat
+         << std::setprecision(6) << "\n";
     }
   }
   os << "  Data: sizeof " << bytes(i.data_bytes.sizeof_data) << " (contact array "
@@ -364,7 +366,9 @@ std::string format_scene_info_json(const SceneInfo& i) {
                                    {"spring_stiffness_max_n_per_m", c.spring_stiffness_max},
                                    {"tie_stiffness_n_per_m", c.tie_stiffness},
                                    {"tie_damping_ns_per_m", c.tie_damping},
-                                   {"explicit_step_limit_s", c.explicit_step_limit}};
+                                   {"explicit_step_limit_s", c.explicit_step_limit},
+                                   {"contact_modulus_pa", c.contact_modulus},
+                                   {"load_patch_radius_m", c.load_patch_radius}};
     }
   }
   j["meshes"] = std::move(meshes);

@@ -74,7 +74,8 @@ std::string stiffest(const core::Model& model) {
   }
   for (const core::NetModel& net : model.nets)
     for (int i = net.node_begin; i < net.node_begin + net.node_count; ++i) {
-      const double w = std::sqrt(net.tie_stiffness / model.node_mass[static_cast<std::size_t>(i)]);
+      const double w =
+          std::sqrt(core::tie_scale(net, i) * net.tie_stiffness / model.node_mass[static_cast<std::size_t>(i)]);
       if (w > best) best = w, what = net.name + " tie";
     }
   char buf[128];
@@ -117,8 +118,8 @@ std::tuple<double, double, double> symplectic_net_limits(const core::Model& mode
         const Vec3 rho = model.node_rest[k];
         const double r2 = (rho - rho.dot(e) * e).squaredNorm();
         i_net += model.node_mass[k] * r2;
-        s_k += net.tie_stiffness * r2;
-        s_g += net.tie_damping * r2;
+        s_k += core::tie_scale(net, i) * net.tie_stiffness * r2;
+        s_g += core::tie_scale(net, i) * net.tie_damping * r2;
       }
       const double inertia = body.inertia_body(axis, axis);
       const double i_r = inertia * i_net / (inertia + i_net);
@@ -127,8 +128,10 @@ std::tuple<double, double, double> symplectic_net_limits(const core::Model& mode
     for (int i = net.node_begin; i < net.node_begin + net.node_count; ++i) {
       const auto k = static_cast<std::size_t>(i);
       node =
-          std::max(node, h * std::sqrt((net.tie_stiffness + 2.0 * k_sum[k]) / model.node_mass[k]));
-      damp = std::max(damp, h * (net.tie_damping + 2.0 * g_sum[k]) / model.node_mass[k]);
+          std::max(node, h * std::sqrt((core::tie_scale(net, i) * net.tie_stiffness + 2.0 * k_sum[k]) /
+                                       model.node_mass[k]));
+      damp = std::max(damp, h * (core::tie_scale(net, i) * net.tie_damping + 2.0 * g_sum[k]) /
+                                model.node_mass[k]);
     }
   }
   return {node, turn, damp};

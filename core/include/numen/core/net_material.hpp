@@ -16,10 +16,13 @@
 /// the one constant that sets a half-space's response to any normal indentation (Hertz,
 /// Boussinesq): E_net = kNetAffineCorrection · (15/16) · E / (1 − ν²). Every node is held on
 /// the rigid component by a zero-length tie of the organ's support, a stiffness per volume
-/// κ = E_net / ℓ² (ℓ the support length) shared evenly: k_tie = κ V / N for the organ's volume V
-/// and N nodes (an elastic foundation in the volume: what holds the organ in the body, whose
-/// field decays over ℓ). Masses are lumped: ρ V_t / 4 on each corner of a tetrahedron.
-/// Damping is stiffness-proportional (Rayleigh): γ_e = β k_e on the springs, γ_tie = β k_tie.
+/// κ = E_net / ℓ² (ℓ the support length) lumped as the masses are: node i's tie is κ V_i for its
+/// lumped volume V_i (NetModel::tie_stiffness the mean κ V / N, NetModel::tie_scale V_i N / V;
+/// an elastic foundation in the volume: what holds the organ in the body, whose field decays
+/// over ℓ). Masses are lumped: ρ V_t / 4 on each corner of a tetrahedron. Damping is
+/// stiffness-proportional (Rayleigh): γ_e = β k_e on the springs, γ_tie = β k_tie. The tools'
+/// spheres meet the surface through the two-scale contact law of net_tissue_contact.hpp
+/// (NetModel::contact_modulus, load_patch_radius, surface_node_area).
 ///
 /// Load time only: everything here allocates; nothing is called from step().
 
@@ -76,6 +79,9 @@ struct MaterialNetConstants {
   /// 2 / ω_max with ω_max² ≤ max over nodes of (k_tie + Σ_{e ∋ i} 4 k_e) / m_i (Gershgorin bound
   /// on the undamped net's stiffness over its mass) (s). The implicit integrators have none.
   double explicit_step_limit = 0.0;
+  double contact_modulus = 0.0;    ///< E* = E / (1 − ν²) (Pa) of the contact law.
+  double load_patch_radius = 0.0;  ///< ρ (m) of the contact law.
+  double surface_mean_edge = 0.0;  ///< The surface net's mean edge (m).
 };
 
 /// E_net / ((15/16) E / (1 − ν²)): the measured ratio of the net's plane-strain modulus under the
@@ -93,7 +99,26 @@ struct MaterialNetSettings {
   /// Collision sphere radius of every node (m); 0: the mean incident tetrahedron edge over √3.
   double node_radius = 0.0;
   double rest_speed = 3e-5;  ///< NetModel::rest_speed (m/s, ≥ 0).
+  /// ρ (m, ≥ 0): the contact's load patch radius (NetModel::load_patch_radius,
+  /// net_tissue_contact.hpp); 0: default_load_patch_radius().
+  double load_patch_radius = 0.0;
 };
+
+/// The edges a load patch's radius spans at the coarsest net it is made for, so that the net
+/// resolves the patch's load.
+inline constexpr double kLoadPatchEdges = 2.0;
+
+/// The surface node count whose net the default load patch is made for (issue 67's figure 1:
+/// nets from 500 to 10 000 nodes feel alike).
+inline constexpr int kLoadPatchCoarsestNodes = 500;
+
+/// The default load patch radius (m) of a surface of area `surface_area` (m², > 0):
+/// kLoadPatchEdges times the edge of the equilateral triangles of a kLoadPatchCoarsestNodes-node
+/// net of that area, √(2 A / (√3 N)) (a closed net of N nodes has about 2N triangles). The same
+/// for every net of the organ, whatever its size: what makes them feel alike. A net coarser than
+/// that resolves the patch poorly (the scene warns when its mean edge passes ρ / 2).
+double default_load_patch_radius(double surface_area) noexcept;
+
 
 /// Checks `material`: "" when valid, else a message on the first bad field; `key`, when given,
 /// is then set to that field's scene key (`youngs_modulus_kpa`, `poisson_ratio`, `density`,

@@ -69,7 +69,33 @@ struct NetModel {
   /// force, a contact or a neighbour wakes it (m/s, ≥ 0; 0: every node always in the solve).
   /// Ignored on a body that is not anchored.
   double rest_speed = 0.0;
+  /// An organ given by its material (add_material_net(), net_material.hpp): the tissue's
+  /// plane-strain modulus E* = E / (1 − ν²) (Pa) in the two-scale contact law of the tools'
+  /// spheres on its surface (net_tissue_contact.hpp; docs/tissue.md, "The contact"); 0: the
+  /// material pair's penalty law (contact_force.hpp), one contact per touching triangle.
+  double contact_modulus = 0.0;
+  /// ρ (m, > 0 with contact_modulus): the radius of the load patch that lays a contact's force
+  /// on the surface's nodes (net_tissue_contact.hpp).
+  double load_patch_radius = 0.0;
+  /// With contact_modulus: the surface's nodes are [node_begin, node_begin + size()) and this is
+  /// each one's share of the surface's area (m²: a third of every triangle at each corner), the
+  /// load patch's weights. Empty otherwise.
+  std::vector<double> surface_node_area;
+  /// With contact_modulus: each surface node's outward unit normal at rest (body frame; the
+  /// area-weighted normals of its triangles), the load patch's mean normal. Empty otherwise.
+  std::vector<Vec3> surface_node_normal;
+  /// Per node of the net (size node_count) or empty: node i's tie is s_i k_tie, s_i γ_tie
+  /// (tie_scale(); k_tie, γ_tie then the mean per node). A material net's ties are a stiffness
+  /// per volume, so s_i is its node's lumped volume over the mean (add_material_net()). Empty:
+  /// every node's tie is k_tie, γ_tie. Only on an anchored rigid component (its rows are not in
+  /// the solve, whose tie sums take every tie alike: finalize_model() checks).
+  std::vector<double> tie_scale;
 };
+
+/// s_v of node `v` (a global node index of `net`): NetModel::tie_scale's entry, or 1.
+inline double tie_scale(const NetModel& net, int v) noexcept {
+  return net.tie_scale.empty() ? 1.0 : net.tie_scale[static_cast<std::size_t>(v - net.node_begin)];
+}
 
 /// Creation settings of a net (SI units). Per-spring and per-node constants
 /// as in a mass-spring model: a finer mesh with the same constants is

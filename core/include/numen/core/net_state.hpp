@@ -58,6 +58,11 @@ struct NodeContact {
   /// and act with their share of max(0, k d − c v_n) at the start (never a pull there), k and c
   /// in the implicit step.
   bool engaged = false;
+  /// An organ given by its material (NetModel::contact_modulus): this entry belongs to the
+  /// deepest contact of its tool's sphere, where the two-scale law (net_tissue_contact.hpp) acts
+  /// with its load patch; the sphere's other contacts act only past the law's switch depth, by
+  /// the penalty (the net then carries the sphere itself). Set by detect_node_contacts().
+  bool primary = false;
   /// k_eff (N/m): the material pair's stiffness, clamped by the contact time-constant floor
   /// (SolverSettings::node_contact_max_omega_dt) on the node's mass and the body's effective mass.
   /// When active: the law's ∂f_n/∂d (contact_penalty_force(): k_eff for the linear law), the
