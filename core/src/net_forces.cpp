@@ -408,16 +408,11 @@ ContactForceResult tissue_contact_force(const Model& model, const NetModel& net,
   return r;
 }
 
-/// The load patch (net_tissue_contact.hpp) of the tissue contact `ct` on `net` into
-/// NetScratch::patch_*: the surface nodes within ρ of the contact's material point Σ w_m r_m (the
-/// rest positions of its net triangle's nodes), weighted K(|r_j − p| / ρ) A_j and normalised (no
-/// node: patch_count 0). The last contact's patch is kept: the shares of one contact reuse it.
-void find_patch(const Model& model, NetScratch& s, const NetModel& net, const NodeContact& ct) noexcept {
-  if (s.patch_face == ct.face && s.patch_at == ct.face_weights) return;
-  const std::array<int, 3>& t = model.net_faces[static_cast<std::size_t>(ct.face)];
-  const Vec3 p = ct.face_weights.x() * model.node_rest[static_cast<std::size_t>(t[0])] +
-                 ct.face_weights.y() * model.node_rest[static_cast<std::size_t>(t[1])] +
-                 ct.face_weights.z() * model.node_rest[static_cast<std::size_t>(t[2])];
+/// The load patch (net_tissue_contact.hpp) of `net` about the rest point `p` (body frame) into
+/// NetScratch::patch_*: the surface nodes within ρ of p, weighted K(|r_j − p| / ρ) A_j and
+/// normalised (no node: patch_count 0). The last patch is kept (NetScratch::patch_at).
+void find_patch(const Model& model, NetScratch& s, const NetModel& net, const Vec3& p) noexcept {
+  if (s.patch_net == net.node_begin && s.patch_at == p) return;
   const double rho = net.load_patch_radius, rho2 = rho * rho;
   const int count = static_cast<int>(net.surface_node_area.size());
   int kept = 0;
@@ -435,24 +430,51 @@ void find_patch(const Model& model, NetScratch& s, const NetModel& net, const No
   }
   for (int k = 0; k < kept; ++k) s.patch_weights[static_cast<std::size_t>(k)] /= total;
   s.patch_count = kept;
-  s.patch_face = ct.face;
-  s.patch_at = ct.face_weights;
+  s.patch_net = net.node_begin;
+  s.patch_at = p;
 }
 
-/// The primary tissue contact `ct` (NodeContact::primary) seen through its load patch
-/// (net_tissue_contact.hpp): its depth and normal become the sphere's penetration into the plane
-/// through the touched point moved by the patch's mean displacement ū instead of its own
-/// triangle's, normal to the patch's mean rest normal (turned with the rigid component). Needs
-/// find_patch() of `ct`. A patch without a node leaves `ct` as detected.
-void see_through_patch(const Model& model, const Data& data, const NetScratch& s, const NetModel& net,
-                       NodeContact& ct) noexcept {
-  if (s.patch_count == 0) return;
+/// Whether node contacts `a` and `b` are entries of one contact (the sink writes a contact's
+/// entries one after the other with the same sphere and point).
+inline bool same_contact(const NodeContact& a, const NodeContact& b) noexcept {
+  return a.primary == b.primary && a.body_b == b.body_b && a.sphere_b == b.sphere_b &&
+         a.position == b.position;
+}
+
+/// The primary tissue contact whose entries are data.node_contacts[first, last)
+/// (NodeContact::primary) seen through its load patch (net_tissue_contact.hpp): the patch about
+/// its material point p = Σ_e share_e r_e (rest positions of the entries' nodes), and in every
+/// entry the depth, normal and point of the sphere's penetration into the plane through the
+/// touched fine point moved by the patch's mean displacement ū instead of its own
+/// u = Σ_e share_e u_e, normal to the patch's mean rest normal (turned with the rigid
+/// component). A patch without a node leaves the entries as detected. Keeps the detected depth
+/// in NetScratch::patch_fine_depth.
+void see_through_patch(const Model& model, Data& data, NetScratch& s, const NetModel& net, int first,
+                       int last) noexcept {
+  s.patch_fine_depth = data.node_contacts[static_cast<std::size_t>(first)].depth;
   const BodyState& body = data.bodies[static_cast<std::size_t>(net.body)];
   const Mat3 rot = body.orientation.toRotationMatrix();
   const auto move = [&](int v) -> Vec3 {  // u_v = x_v − a_v
     const auto i = static_cast<std::size_t>(v);
     return data.nodes[i].position - (body.position + rot * model.node_rest[i]);
   };
+  Vec3 p = Vec3::Zero(), own = Vec3::Zero();
+  double shares = 0.0;
+  for (int c = first; c < last; ++c) {
+    const NodeContact& e = data.node_contacts[static_cast<std::size_t>(c)];
+    p += e.share * model.node_rest[static_cast<std::size_t>(e.node)];
+    own += e.share * move(e.node);
+    shares += e.share;
+  }
+  if (!(shares > 0.0)) {  // no patch: the force stays on the entries' nodes (lay_on_patch())
+    s.patch_count = 0;
+    s.patch_net = -1;
+    return;
+  }
+  p /= shares;
+  own /= shares;
+  find_patch(model, s, net, p);
+  if (s.patch_count == 0) return;
   Vec3 mean = Vec3::Zero(), normal = Vec3::Zero();
   for (int k = 0; k < s.patch_count; ++k) {
     const int v = s.patch_nodes[static_cast<std::size_t>(k)];
@@ -463,15 +485,31 @@ void see_through_patch(const Model& model, const Data& data, const NetScratch& s
   const double len = normal.norm();
   if (!(len > 0.0)) return;
   const Vec3 outward = rot * (normal / len);
-  const Vec3 own = detail::contact_node_value(model, ct, move);
+  NodeContact& ct = data.node_contacts[static_cast<std::size_t>(first)];
   const BodyState& tool = data.bodies[static_cast<std::size_t>(ct.body_b)];
   const Sphere& sphere = model.body_spheres[static_cast<std::size_t>(ct.sphere_b)];
   const Vec3 centre = tool.position + tool.orientation * sphere.center;
   // The touched point (NodeContact::position is ½ (q + c − r o), o = −normal), moved by ū − u.
   const Vec3 touched = 2.0 * ct.position - centre - sphere.radius * ct.normal + (mean - own);
-  ct.depth = sphere.radius - (centre - touched).dot(outward);
-  ct.normal = -outward;
-  ct.position = touched + 0.5 * ct.depth * outward;
+  const double depth = sphere.radius - (centre - touched).dot(outward);
+  const Vec3 position = touched + 0.5 * depth * outward;
+  for (int c = first; c < last; ++c) {
+    NodeContact& e = data.node_contacts[static_cast<std::size_t>(c)];
+    e.depth = depth;
+    e.normal = -outward;
+    e.position = position;
+  }
+}
+
+/// Σ w_j² / m_j over the load patch find_patch() found last (1/kg): a force F laid on it moves its
+/// weighted mean as a mass 1 / Σ w_j² / m_j would.
+double patch_inverse_mass(const Model& model, const NetScratch& s) noexcept {
+  double inv = 0.0;
+  for (int k = 0; k < s.patch_count; ++k) {
+    const double w = s.patch_weights[static_cast<std::size_t>(k)];
+    inv += w * w / model.node_mass[static_cast<std::size_t>(s.patch_nodes[static_cast<std::size_t>(k)])];
+  }
+  return inv;
 }
 
 /// Lays the force `f` (N, world) of a tissue contact on the load patch find_patch() found last
@@ -583,6 +621,17 @@ void compute_net_forces(const Model& model, Data& data) noexcept {
       w.torque -= ct.r_b.cross(ct.force);
       continue;
     }
+    const NetModel* tissue = tissue_net(model, ct);
+    if (tissue && ct.primary &&
+        (c == 0 || !same_contact(data.node_contacts[static_cast<std::size_t>(c - 1)], ct))) {
+      // The sphere's deepest contact, at its first entry: all its entries seen through its load
+      // patch (the others then find it in NetScratch::patch_*).
+      int last = c + 1;
+      while (last < nc && same_contact(data.node_contacts[static_cast<std::size_t>(last)], ct)) ++last;
+      see_through_patch(model, data, s, *tissue, c, last);
+    }
+    // As detected, on the fine surface: the backstop's depth.
+    const double fine_depth = tissue && ct.primary ? s.patch_fine_depth : ct.depth;
     const Vec3 v_point = detail::contact_node_value(
         model, ct, [&](int v) -> const Vec3& { return node_states[v].velocity; });
     Vec3 v_rel = v_point;
@@ -593,12 +642,14 @@ void compute_net_forces(const Model& model, Data& data) noexcept {
       v_rel -= b.linear_velocity + b.angular_velocity.cross(ct.r_b);
     }
     // The time-constant floor (contact_force.hpp, SolverSettings::node_contact_max_omega_dt):
-    // the node is a point mass; a body on the
-    // other side adds its mobility along n at the contact point (imposed: none).
+    // the node is a point mass (a tissue contact's load patch: the mass that moves its mean,
+    // 1 / Σ w_j² / m_j); a body on the other side adds its mobility along n at the contact point
+    // (imposed: none).
     MaterialPair mp = model.material_pairs[static_cast<std::size_t>(ct.material_pair)];
     if (mp.stiffness > 0.0 &&
         model.solver.node_contact_max_omega_dt < std::numeric_limits<double>::infinity()) {
-      double inv_mass = detail::contact_node_inverse_mass(model, ct);
+      double inv_mass = tissue && ct.primary && s.patch_count > 0 ? patch_inverse_mass(model, s)
+                                                                 : detail::contact_node_inverse_mass(model, ct);
       if (ct.body_b >= 0 &&
           data.scratch->solver.imposed[static_cast<std::size_t>(ct.body_b)] == 0) {
         const auto b = static_cast<std::size_t>(ct.body_b);
@@ -613,12 +664,6 @@ void compute_net_forces(const Model& model, Data& data) noexcept {
       }
     }
     ct.stiffness = ct.share * mp.stiffness;
-    const NetModel* tissue = tissue_net(model, ct);
-    const double fine_depth = ct.depth;  // as detected, on the fine surface
-    if (tissue && ct.primary) {  // the sphere's deepest contact: seen through its load patch
-      find_patch(model, s, *tissue, ct);
-      see_through_patch(model, data, s, *tissue, ct);
-    }
     double elastic = 0.0, patch = 0.0;  // a tissue contact's elastic force, and F(d) of it
     ContactForceResult r = tissue ? tissue_contact_force(model, *tissue, ct, fine_depth, v_rel, mp,
                                                          elastic, patch)

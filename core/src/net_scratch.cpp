@@ -138,8 +138,9 @@ void NetScratch::resize(const Model& model) {
   patch_nodes.assign(n > 0 ? patch : 0, 0);
   patch_weights.assign(n > 0 ? patch : 0, 0.0);
   patch_count = 0;
-  patch_face = -1;
+  patch_net = -1;
   patch_at.setZero();
+  patch_fine_depth = 0.0;
 }
 
 }  // namespace numen::core

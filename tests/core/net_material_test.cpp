@@ -1,6 +1,7 @@
 // Tests of the material net (core/include/numen/core/net_material.hpp; docs/tissue.md): the
 // constants add_material_net() derives from the tissue and the tetrahedra — every tetrahedron
-// edge a spring of E_net Σ V_t / L², masses ρ V_t / 4 per corner, ties κ V / N — checked against
+// edge a spring of E_net Σ V_t / L², masses ρ V_t / 4 per corner, ties κ V_i lumped as the masses,
+// the contact law's E*, surface areas and normals and load patch — checked against
 // the formulas on an octahedron with a centre node; a uniform dilatation stores the energy of a
 // solid of the net's modulus and Poisson's ratio 1/4 on any mesh; bad materials and meshes are
 // refused naming the scene key or the element, leaving the model as it was.
@@ -84,6 +85,28 @@ TEST(NetMaterial, EveryConstantFollowsFromTheMaterialAndTheTetrahedra) {
   // The centre holds a quarter of every tetrahedron; a tip a quarter of its four.
   EXPECT_NEAR(m.node_mass[6], t.density * volume / 4.0, 1e-12);
   EXPECT_NEAR(m.node_mass[0], t.density * volume / 8.0, 1e-12);
+  // The ties are lumped as the masses: node i's is κ V_i, κ V / N × tie_scale (mean 1).
+  ASSERT_EQ(net.tie_scale.size(), 7u);
+  const double kappa = c.net_modulus / (t.support_length * t.support_length);
+  EXPECT_NEAR(core::tie_scale(net, 6) * net.tie_stiffness, kappa * volume / 4.0, 1e-9 * k_tie);
+  EXPECT_NEAR(core::tie_scale(net, 0) * net.tie_stiffness, kappa * volume / 8.0, 1e-9 * k_tie);
+  // The contact: E* = E / (1 − ν²), each surface node a third of its four faces' area (the
+  // octahedron's faces are equilateral of side r√2), its normal outward, and the default patch
+  // twice the edge of a 500-node net of the surface.
+  EXPECT_NEAR(net.contact_modulus, t.youngs_modulus / (1.0 - t.poisson_ratio * t.poisson_ratio), 1e-9);
+  const double face = std::sqrt(3.0) / 4.0 * 2.0 * r * r;
+  ASSERT_EQ(net.surface_node_area.size(), 6u);
+  ASSERT_EQ(net.surface_node_normal.size(), 6u);
+  for (int v = 0; v < 6; ++v) {
+    EXPECT_NEAR(net.surface_node_area[static_cast<std::size_t>(v)], 4.0 * face / 3.0, 1e-15);
+    EXPECT_NEAR(net.surface_node_normal[static_cast<std::size_t>(v)].dot(m.node_rest[static_cast<std::size_t>(v)]) / r,
+                1.0, 1e-12);
+  }
+  EXPECT_NEAR(net.load_patch_radius, core::default_load_patch_radius(8.0 * face), 1e-15);
+  EXPECT_NEAR(core::default_load_patch_radius(8.0 * face),
+              2.0 * std::sqrt(2.0 * 8.0 * face / (std::sqrt(3.0) * 500.0)), 1e-15);
+  EXPECT_NEAR(c.load_patch_radius, net.load_patch_radius, 0.0);
+  EXPECT_NEAR(c.surface_mean_edge, r * std::sqrt(2.0), 1e-15);
   // A spoke is in the four tetrahedra of its tip (Σ V_t = V/2, L = r); an octahedron edge in two
   // (V/4, L = r√2).
   for (int e = net.spring_begin; e < net.spring_begin + net.structural_count; ++e) {

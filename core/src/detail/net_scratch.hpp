@@ -198,16 +198,17 @@ struct NetScratch {
   /// pass_positions[node_begin, node_begin + pass_count[k]) for net k.
   std::vector<std::int32_t> pass_positions;
   std::vector<int> active_count, pass_count;  ///< Per net.
-  /// The load patch of the last tissue contact laid on a net (net_forces.cpp;
-  /// net_tissue_contact.hpp): its surface nodes (global) and normalised weights, the first
-  /// patch_count of them, for the contact of the net triangle patch_face at the barycentric
-  /// weights patch_at (the shares of one contact follow one another and reuse it). Sized by the
-  /// largest NetModel::surface_node_area.
+  /// The load patch of the last tissue contact (net_forces.cpp; net_tissue_contact.hpp): its
+  /// surface nodes (global) and normalised weights, the first patch_count of them, about the
+  /// rest point patch_at of the net whose first node is patch_net (-1: none yet; the entries of
+  /// one contact follow one another and reuse it), and the contact's depth as detected on the
+  /// fine surface (m; its backstop's). Sized by the largest NetModel::surface_node_area.
   std::vector<std::int32_t> patch_nodes;
   std::vector<double> patch_weights;
   int patch_count = 0;
-  int patch_face = -1;
+  int patch_net = -1;
   Vec3 patch_at = Vec3::Zero();
+  double patch_fine_depth = 0.0;
   /// Sizes every buffer for `model` (all empty when it has no net). Allocates: make_data() only.
   void resize(const Model& model);
 };

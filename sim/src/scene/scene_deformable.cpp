@@ -378,6 +378,11 @@ bool parse_tissue(const TomlTable& t, core::MaterialNetSettings& settings) {
 /// scene's recording (docs/tissue.md, "Measured").
 constexpr double kInteriorSpacingEdges = 2.0;
 
+/// A material net whose surface's mean edge is above this many load patch radii is warned: it
+/// resolves the patch poorly (docs/tissue.md, "The contact"; the default patch is two edges of
+/// a 500-node net, whose simplified nets' mean edge is about 0.55 ρ).
+constexpr double kPatchEdgeWarning = 0.6;
+
 /// Appends the material net of closed surface `surface` (the net's triangles) to `m`: its volume
 /// tetrahedralised with interior nodes kInteriorSpacingEdges mean edges apart
 /// (tetrahedralize_net()), the constants derived
@@ -399,11 +404,11 @@ void add_tissue_net(const TomlTable& t, core::Model& m, const core::TriangleMesh
   load.interior_nodes = static_cast<int>(volume.interior.size());
   load.tetrahedra = static_cast<int>(volume.tetrahedra.size());
   load.material_constants = c;
-  if (c.surface_mean_edge > 0.5 * c.load_patch_radius)
+  if (c.surface_mean_edge > kPatchEdgeWarning * c.load_patch_radius)
     warnings.push_back(mesh_warning(
         t, t.has("load_patch_radius") ? "load_patch_radius" : "youngs_modulus_kpa", file,
         "the net's mean edge " + format_input_number(c.surface_mean_edge) +
-            " m is above half the contact's load patch radius " +
+            " m is above 0.6 times the contact's load patch radius " +
             format_input_number(c.load_patch_radius) +
             " m: the net resolves the patch poorly and the organ feels stiffer or softer than "
             "its material (docs/tissue.md, \"The contact\"); give it more nodes or a larger "

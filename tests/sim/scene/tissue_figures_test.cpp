@@ -150,13 +150,15 @@ void tissue_convergence(const char* label, bool ellipsoid, const Vec3& from, dou
   for (const auto& m : finest) peak = std::max(peak, m.force);
   for (std::size_t k = 0; k + 1 < curves.size(); ++k) {
     const auto means = organ::block_means(curves[k], 5);
-    double worst = 0.0, at = 0.0;
-    for (std::size_t i = 0; i < means.size() && i < finest.size(); ++i)
-      if (std::abs(means[i].force - finest[i].force) > worst)
-        worst = std::abs(means[i].force - finest[i].force), at = means[i].depth;
+    double worst = 0.0, at = 0.0, worst_55 = 0.0;  // over the whole curve, and to 5.5 mm
+    for (std::size_t i = 0; i < means.size() && i < finest.size(); ++i) {
+      const double diff = std::abs(means[i].force - finest[i].force);
+      if (diff > worst) worst = diff, at = means[i].depth;
+      if (means[i].depth <= 0.0055) worst_55 = std::max(worst_55, diff);
+    }
     std::printf("[tissue figure 1] %s, %d nodes: largest difference from 10 000 nodes %.4f N = %.1f %% "
-                "of its peak %.3f N (at %.2f mm)\n",
-                label, sizes[k], worst, 100.0 * worst / peak, peak, 1e3 * at);
+                "of its peak %.3f N (at %.2f mm); to 5.5 mm %.1f %%\n",
+                label, sizes[k], worst, 100.0 * worst / peak, peak, 1e3 * at, 100.0 * worst_55 / peak);
     EXPECT_LE(worst, bound * peak) << label << ", " << sizes[k] << " nodes";
     EXPECT_LE(jumps[k], jumps.back() * 1.0001 + 1e-9) << label << ", " << sizes[k] << " nodes";
   }
@@ -248,6 +250,8 @@ TEST(TissueFigures, TheShippedOrganWithItsMaterialKeepsItsFeel) {
     const double spring = tissue_force_at(curves[0], depth), tissue = tissue_force_at(curves[1], depth);
     std::printf("[tissue feel] depth %.0f mm: per spring %.3f N, material %.3f N (%+.1f %%)\n", 1e3 * depth,
                 spring, tissue, 100.0 * (tissue / spring - 1.0));
-    if (depth <= 0.004 + 1e-9) EXPECT_NEAR(tissue, spring, 0.10 * spring) << depth;
+    if (depth <= 0.004 + 1e-9) {
+      EXPECT_NEAR(tissue, spring, 0.10 * spring) << depth;
+    }
   }
 }

@@ -116,7 +116,7 @@ inline constexpr int kLoadPatchCoarsestNodes = 500;
 /// kLoadPatchEdges times the edge of the equilateral triangles of a kLoadPatchCoarsestNodes-node
 /// net of that area, √(2 A / (√3 N)) (a closed net of N nodes has about 2N triangles). The same
 /// for every net of the organ, whatever its size: what makes them feel alike. A net coarser than
-/// that resolves the patch poorly (the scene warns when its mean edge passes ρ / 2).
+/// that resolves the patch poorly (the scene warns when its mean edge passes 0.6 ρ).
 double default_load_patch_radius(double surface_area) noexcept;
 
 
