@@ -24,7 +24,8 @@
 /// and the sum of d and the net's move is the half-space's approach with the organ's far field
 /// on top, at any net size. The law is that relation inverted for F(d); where dd/dF falls to
 /// 1 / k (k the material pair's penalty stiffness: a patch too small for the sphere, c_ρ above
-/// the submerged sphere's compliance) it goes on linearly with slope k (C¹). A sphere pushed
+/// the submerged sphere's compliance) it goes on linearly with slope k (C¹ where that falls in
+/// Hertz's range; at F_R, where the submerged branch would be stiffer than k, C⁰). A sphere pushed
 /// past the net's resolution sinks below the net-carried surface (the tissue would wrap it;
 /// the net cannot): half its radius below the touched fine surface, the penalty of the pair
 /// joins on the touched triangles' nodes with a C¹ onset, as a net given per spring meets a tool
@@ -59,10 +60,6 @@ struct TissueContactLaw {
   double switch_depth = 0.0;    ///< d_s = d(F_s) (m; +∞: never).
 };
 
-/// The law for a tissue of plane-strain modulus `contact_modulus` E* (Pa, > 0), a sphere of
-/// `sphere_radius` R (m, > 0), a load patch of `patch_radius` ρ (m, > 0) and the pair's penalty
-/// stiffness `penalty` k (N/m, > 0). The switch: the force where dd/dF = 1/k, if any.
-
 /// The backstop depth of a tissue contact, in sphere radii: the touched fine surface's depth
 /// past which the pair's penalty joins the law (net_tissue_contact.hpp's file comment).
 inline constexpr double kTissueBackstopDepth = 1.5;
@@ -70,6 +67,10 @@ inline constexpr double kTissueBackstopDepth = 1.5;
 /// The backstop's onset, in sphere radii: the pair's penalty joins over it with contact_force.hpp's
 /// C¹ quadratic onset (MaterialPair::onset_depth), so that it never steps the force.
 inline constexpr double kTissueBackstopOnset = 0.25;
+
+/// The law for a tissue of plane-strain modulus `contact_modulus` E* (Pa, > 0), a sphere of
+/// `sphere_radius` R (m, > 0), a load patch of `patch_radius` ρ (m, > 0) and the pair's penalty
+/// stiffness `penalty` k (N/m, > 0). The switch: the force where dd/dF = 1/k, if any.
 TissueContactLaw make_tissue_contact_law(double contact_modulus, double sphere_radius,
                                          double patch_radius, double penalty) noexcept;
 
