@@ -125,17 +125,25 @@ void build_net_system(const Model& model, Data& data) noexcept {
     const double c = tie_weight(net, h);
     const double hk = h2 * net.tie_stiffness;
     const std::int32_t* active = ns.active_nodes.data() + net.node_begin;
-    for (int a = 0; a < ns.active_count[n]; ++a) {
-      const auto i = static_cast<std::size_t>(active[a]);
-      const double ts = tie_scale(net, active[a]);  // 1 but on a material net (anchored)
-      const double diagonal = model.node_mass[i] + ts * c;
-      ns.node_diagonal[i] = diagonal;
-      const SymmetricBlock w = spring_block[i];
-      block[i] << w.entry[0] + diagonal, w.entry[1], w.entry[2], w.entry[1], w.entry[3] + diagonal,
-          w.entry[4], w.entry[2], w.entry[4], w.entry[5] + diagonal;
-      const Vec3 relative = nodes[i].velocity - point_velocity(u0, lever[i]);
-      rhs[i] += h * force[i] - (ts * hk) * relative;
-    }
+    // kScaled: the ties per node (a material net's, anchored: NetModel::tie_scale); else every
+    // tie alike, s = 1 folded away.
+    const auto rows = [&]<bool kScaled>() {
+      for (int a = 0; a < ns.active_count[n]; ++a) {
+        const auto i = static_cast<std::size_t>(active[a]);
+        const double ts = kScaled ? net.tie_scale[static_cast<std::size_t>(active[a] - net.node_begin)] : 1.0;
+        const double diagonal = model.node_mass[i] + ts * c;
+        ns.node_diagonal[i] = diagonal;
+        const SymmetricBlock w = spring_block[i];
+        block[i] << w.entry[0] + diagonal, w.entry[1], w.entry[2], w.entry[1], w.entry[3] + diagonal,
+            w.entry[4], w.entry[2], w.entry[4], w.entry[5] + diagonal;
+        const Vec3 relative = nodes[i].velocity - point_velocity(u0, lever[i]);
+        rhs[i] += h * force[i] - (ts * hk) * relative;
+      }
+    };
+    if (net.tie_scale.empty())
+      rows.template operator()<false>();
+    else
+      rows.template operator()<true>();
   }
   const int nc = node_contact_count(data);
   for (int k = 0; k < nc; ++k) {

@@ -548,23 +548,30 @@ void compute_net_forces(const Model& model, Data& data) noexcept {
     Wrench reaction;
     double twice_kinetic = 0.0, tie2 = 0.0;  // Σ m |v|², Σ s |x − a|²
     Vec3 mass_moment = Vec3::Zero();         // Σ m x
-    for (int v = net.node_begin; v < net.node_begin + net.node_count; ++v) {
-      const auto i = static_cast<std::size_t>(v);
-      const Vec3 lever = rot * rest[i];
-      lever_out[i] = lever;
-      const Vec3 anchor = body.position + lever;
-      const Vec3 anchor_velocity = body.linear_velocity + body.angular_velocity.cross(lever);
-      const Vec3 dv = nodes[i].velocity - anchor_velocity;
-      const Vec3 stretch = nodes[i].position - anchor;
-      const double ts = tie_scale(net, v);
-      const Vec3 f = -(ts * net.tie_stiffness) * stretch - (ts * net.tie_damping) * dv;
-      force[i] = mass[i] * model.gravity + f;
-      reaction.force -= f;
-      reaction.torque -= lever.cross(f);
-      twice_kinetic += mass[i] * nodes[i].velocity.squaredNorm();
-      tie2 += ts * stretch.squaredNorm();
-      mass_moment += mass[i] * nodes[i].position;
-    }
+    // kScaled: the ties per node (NetModel::tie_scale); else every tie alike, s = 1 folded away.
+    const auto tie_pass = [&]<bool kScaled>() {
+      for (int v = net.node_begin; v < net.node_begin + net.node_count; ++v) {
+        const auto i = static_cast<std::size_t>(v);
+        const Vec3 lever = rot * rest[i];
+        lever_out[i] = lever;
+        const Vec3 anchor = body.position + lever;
+        const Vec3 anchor_velocity = body.linear_velocity + body.angular_velocity.cross(lever);
+        const Vec3 dv = nodes[i].velocity - anchor_velocity;
+        const Vec3 stretch = nodes[i].position - anchor;
+        const double ts = kScaled ? net.tie_scale[static_cast<std::size_t>(v - net.node_begin)] : 1.0;
+        const Vec3 f = -(ts * net.tie_stiffness) * stretch - (ts * net.tie_damping) * dv;
+        force[i] = mass[i] * model.gravity + f;
+        reaction.force -= f;
+        reaction.torque -= lever.cross(f);
+        twice_kinetic += mass[i] * nodes[i].velocity.squaredNorm();
+        tie2 += ts * stretch.squaredNorm();
+        mass_moment += mass[i] * nodes[i].position;
+      }
+    };
+    if (net.tie_scale.empty())
+      tie_pass.template operator()<false>();
+    else
+      tie_pass.template operator()<true>();
     // The springs' part is added by spring_pass().
     data.nets[k].start_energy =
         0.5 * twice_kinetic + 0.5 * net.tie_stiffness * tie2 - model.gravity.dot(mass_moment);

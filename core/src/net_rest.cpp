@@ -41,14 +41,22 @@ void count_quiet_steps(const Model& model, Data& data, const NetModel& net) noex
   const double v2 = net.rest_speed * net.rest_speed;
   const double tie = h * net.tie_damping + h * h * net.tie_stiffness;  // kg
   const double scale = net.rest_speed / h;                             // f_r,i = scale (m_i + tie)
-  for (int v = net.node_begin; v < net.node_begin + net.node_count; ++v) {
-    const auto i = static_cast<std::size_t>(v);
-    const double fr = scale * (model.node_mass[i] + tie_scale(net, v) * tie);
-    const bool quiet =
-        data.nodes[i].velocity.squaredNorm() <= v2 && s.force[i].squaredNorm() <= fr * fr;
-    std::uint8_t& c = s.rest_count[i];
-    c = quiet ? static_cast<std::uint8_t>(std::min<int>(c + 1, kRestSteps)) : std::uint8_t{0};
-  }
+  // kScaled: the ties per node (NetModel::tie_scale); else every tie alike, s = 1 folded away.
+  const auto count = [&]<bool kScaled>() {
+    for (int v = net.node_begin; v < net.node_begin + net.node_count; ++v) {
+      const auto i = static_cast<std::size_t>(v);
+      const double ts = kScaled ? net.tie_scale[static_cast<std::size_t>(v - net.node_begin)] : 1.0;
+      const double fr = scale * (model.node_mass[i] + ts * tie);
+      const bool quiet =
+          data.nodes[i].velocity.squaredNorm() <= v2 && s.force[i].squaredNorm() <= fr * fr;
+      std::uint8_t& c = s.rest_count[i];
+      c = quiet ? static_cast<std::uint8_t>(std::min<int>(c + 1, kRestSteps)) : std::uint8_t{0};
+    }
+  };
+  if (net.tie_scale.empty())
+    count.template operator()<false>();
+  else
+    count.template operator()<true>();
 }
 
 /// Net k's eligibility (quiet for kRestSteps, and its neighbours too), its resting nodes
