@@ -180,7 +180,7 @@ SpringPass spring_arrays(Data& data, double h) noexcept {
 /// still_energy), and its springs to still later nodes are skipped when all of them are; a node
 /// not still stores its own for the next pass. The same results to the bit as without.
 template <bool kStill>
-void spring_pass(const Model& model, Data& data) noexcept {
+[[gnu::always_inline]] inline void spring_pass(const Model& model, Data& data) noexcept {
   NetScratch& s = data.scratch->net;
   const SpringPass a = spring_arrays(data, 0.0);
   const std::int32_t* low_begin = s.spring_low_begin.data();
@@ -364,6 +364,8 @@ void linearization_pass(const Model& model, Data& data, double h) noexcept {
 
 namespace {
 
+/// (The tissue contact's functions below are kept out of line: nets given per spring never call
+/// them, and compute_net_forces() keeps its size, its spring pass inlined.)
 /// The net of an organ given by its material whose surface node contact `ct` is (a tool's
 /// sphere on its surface: the two-scale law of net_tissue_contact.hpp), else null.
 const NetModel* tissue_net(const Model& model, const NodeContact& ct) noexcept {
@@ -381,7 +383,7 @@ const NetModel* tissue_net(const Model& model, const NodeContact& ct) noexcept {
 /// the law's stiffness over the pair's (c = c_pair k(d) / k_pair: the pair's time constant), the
 /// pair's friction; never a pull. `elastic` gets the elastic force, `patch` F(d), the part laid
 /// on the load patch (the rest acts on the contact's own nodes).
-ContactForceResult tissue_contact_force(const Model& model, const NetModel& net, const NodeContact& ct,
+[[gnu::noinline]] ContactForceResult tissue_contact_force(const Model& model, const NetModel& net, const NodeContact& ct,
                                         double fine_depth, const Vec3& v_rel, const MaterialPair& mp,
                                         double& elastic, double& patch) noexcept {
   const double radius = model.body_spheres[static_cast<std::size_t>(ct.sphere_b)].radius;
@@ -411,7 +413,7 @@ ContactForceResult tissue_contact_force(const Model& model, const NetModel& net,
 /// The load patch (net_tissue_contact.hpp) of `net` about the rest point `p` (body frame) into
 /// NetScratch::patch_*: the surface nodes within ρ of p, weighted K(|r_j − p| / ρ) A_j and
 /// normalised (no node: patch_count 0). The last patch is kept (NetScratch::patch_at).
-void find_patch(const Model& model, NetScratch& s, const NetModel& net, const Vec3& p) noexcept {
+[[gnu::noinline]] void find_patch(const Model& model, NetScratch& s, const NetModel& net, const Vec3& p) noexcept {
   if (s.patch_net == net.node_begin && s.patch_at == p) return;
   const double rho = net.load_patch_radius, rho2 = rho * rho;
   const int count = static_cast<int>(net.surface_node_area.size());
@@ -449,7 +451,7 @@ inline bool same_contact(const NodeContact& a, const NodeContact& b) noexcept {
 /// u = Σ_e share_e u_e, normal to the patch's mean rest normal (turned with the rigid
 /// component). A patch without a node leaves the entries as detected. Keeps the detected depth
 /// in NetScratch::patch_fine_depth.
-void see_through_patch(const Model& model, Data& data, NetScratch& s, const NetModel& net, int first,
+[[gnu::noinline]] void see_through_patch(const Model& model, Data& data, NetScratch& s, const NetModel& net, int first,
                        int last) noexcept {
   s.patch_fine_depth = data.node_contacts[static_cast<std::size_t>(first)].depth;
   const BodyState& body = data.bodies[static_cast<std::size_t>(net.body)];
@@ -503,7 +505,7 @@ void see_through_patch(const Model& model, Data& data, NetScratch& s, const NetM
 
 /// Σ w_j² / m_j over the load patch find_patch() found last (1/kg): a force F laid on it moves its
 /// weighted mean as a mass 1 / Σ w_j² / m_j would.
-double patch_inverse_mass(const Model& model, const NetScratch& s) noexcept {
+[[gnu::noinline]] double patch_inverse_mass(const Model& model, const NetScratch& s) noexcept {
   double inv = 0.0;
   for (int k = 0; k < s.patch_count; ++k) {
     const double w = s.patch_weights[static_cast<std::size_t>(k)];
@@ -514,7 +516,7 @@ double patch_inverse_mass(const Model& model, const NetScratch& s) noexcept {
 
 /// Lays the force `f` (N, world) of a tissue contact on the load patch find_patch() found last
 /// (NetScratch::patch_*), or on `node` when it has no node.
-void lay_on_patch(NetScratch& s, int node, const Vec3& f) noexcept {
+[[gnu::noinline]] void lay_on_patch(NetScratch& s, int node, const Vec3& f) noexcept {
   if (s.patch_count == 0) {
     s.force[static_cast<std::size_t>(node)] += f;
     return;
@@ -618,6 +620,8 @@ void compute_net_forces(const Model& model, Data& data) noexcept {
     }
     ct.engaged = ct.depth - h * ct.normal.dot(v_point) > 0.0;
   }
+  bool any_tissue = false;  // an organ given by its material among the nets (tissue_net())
+  for (const NetModel& net : model.nets) any_tissue = any_tissue || net.contact_modulus > 0.0;
   for (int c = 0; c < nc; ++c) {
     NodeContact& ct = data.node_contacts[static_cast<std::size_t>(c)];
     const auto i = static_cast<std::size_t>(ct.node);
@@ -628,7 +632,7 @@ void compute_net_forces(const Model& model, Data& data) noexcept {
       w.torque -= ct.r_b.cross(ct.force);
       continue;
     }
-    const NetModel* tissue = tissue_net(model, ct);
+    const NetModel* tissue = any_tissue ? tissue_net(model, ct) : nullptr;
     if (tissue && ct.primary &&
         (c == 0 || !same_contact(data.node_contacts[static_cast<std::size_t>(c - 1)], ct))) {
       // The sphere's deepest contact, at its first entry: all its entries seen through its load
