@@ -66,8 +66,10 @@ std::string validate_nets(const Model& model) {
         !(net.contact_modulus >= 0.0 && std::isfinite(net.contact_modulus)) ||
         (net.contact_modulus > 0.0 &&
          (!(net.load_patch_radius > 0.0) ||
-          static_cast<int>(net.surface_node_area.size()) > net.node_count)))
-      return who + ": contact_modulus needs load_patch_radius > 0 and at most node_count surface areas";
+          static_cast<int>(net.surface_node_area.size()) > net.node_count ||
+          net.surface_node_normal.size() != net.surface_node_area.size())))
+      return who + ": contact_modulus needs load_patch_radius > 0 and at most node_count surface "
+                   "areas, one normal each";
     if (net.face_begin != next_face || net.face_count < 0)
       return who + ": face range must follow the previous net's";
     next_node += net.node_count;

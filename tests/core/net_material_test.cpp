@@ -200,3 +200,40 @@ TEST(NetMaterial, ABadTetrahedralMeshIsRefusedNamingTheElement) {
   s.body = 3;
   refused(octahedron(0.01), "body index 3");
 }
+
+// finalize_model() checks what the tissue contact and the ties per node read in the period: a
+// contact modulus needs a patch radius and a normal per surface area; ties per node need an
+// anchored rigid component (the solve's tie sums of a moving one take every tie alike).
+TEST(NetMaterial, FinalizeRefusesAnInconsistentTissueNet) {
+  core::MaterialNetConstants c;
+  std::string err;
+  core::Model good = octahedron_model(liver(), &c, &err);
+  ASSERT_EQ(err, "");
+  good.material_names = {"tissue"};
+  good.material_pairs.assign(1, core::MaterialPair{2e4, 10.0, 0.0});
+  good.initial_held_body = -1;  // the organ alone: no device
+  {
+    core::Model m = good;
+    EXPECT_EQ(core::finalize_model(m), "");
+  }
+  {
+    core::Model m = good;
+    m.nets[0].surface_node_normal.clear();
+    EXPECT_NE(core::finalize_model(m).find("one normal each"), std::string::npos);
+  }
+  {
+    core::Model m = good;
+    m.nets[0].load_patch_radius = 0.0;
+    EXPECT_NE(core::finalize_model(m).find("load_patch_radius > 0"), std::string::npos);
+  }
+  {
+    core::Model m = good;
+    m.bodies[0].anchored = false;
+    EXPECT_NE(core::finalize_model(m).find("needs an anchored rigid component"), std::string::npos);
+  }
+  {
+    core::Model m = good;
+    m.nets[0].tie_scale.pop_back();
+    EXPECT_NE(core::finalize_model(m).find("one entry per node"), std::string::npos);
+  }
+}
