@@ -189,6 +189,22 @@ inline core::Model tissue_model(const core::TetrahedralMesh& mesh, const core::N
   return m;
 }
 
+/// The smallest s in [0, 0.2] m at which `touches(s)` turns true, scanned in 0.05 mm steps and
+/// then bisected (+∞ when it never does): where a sphere moved along a path first touches.
+template <typename Touches>
+inline double first_true_along(Touches touches) {
+  double lo = 0.0;
+  for (double s = 0.0; s < 0.2; s += 5e-5) {
+    if (touches(s)) {
+      double hi = s;
+      for (int i = 0; i < 60; ++i) (touches(0.5 * (lo + hi)) ? hi : lo) = 0.5 * (lo + hi);
+      return hi;
+    }
+    lo = s;
+  }
+  return std::numeric_limits<double>::infinity();
+}
+
 /// Distance along unit `dir` from `from` at which a sphere of `radius` first touches the organ's
 /// rest shape (+∞ if it never does within 0.2 m): its surface triangles (the organ's contacts
 /// with the tool, net_surface.hpp; scanned in 0.05 mm steps, then bisected), or its node spheres
@@ -209,16 +225,7 @@ inline double first_touch(const core::Model& m, const Vec3& from, const Vec3& di
       }
       return false;
     };
-    double lo = 0.0;
-    for (double s = 0.0; s < 0.2; s += 5e-5) {
-      if (touches(s)) {
-        double hi = s;
-        for (int i = 0; i < 60; ++i) (touches(0.5 * (lo + hi)) ? hi : lo) = 0.5 * (lo + hi);
-        return hi;
-      }
-      lo = s;
-    }
-    return best;
+    return first_true_along(touches);
   }
   for (int i = 0; i < m.num_nodes(); ++i) {
     const auto k = static_cast<std::size_t>(i);

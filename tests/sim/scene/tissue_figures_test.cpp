@@ -12,7 +12,6 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
-#include <limits>
 #include <map>
 #include <span>
 #include <sstream>
@@ -87,16 +86,7 @@ double tissue_fine_touch(const core::Model& m, const Vec3& from, const Vec3& dir
     }
     return false;
   };
-  double lo = 0.0;
-  for (double s = 0.0; s < 0.2; s += 5e-5) {
-    if (touches(s)) {
-      double hi = s;
-      for (int i = 0; i < 60; ++i) (touches(0.5 * (lo + hi)) ? hi : lo) = 0.5 * (lo + hi);
-      return hi;
-    }
-    lo = s;
-  }
-  return std::numeric_limits<double>::infinity();
+  return organ::first_true_along(touches);
 }
 
 /// Writes the shipped organ's lobe at geodesic frequency `f` (10 f² + 2 vertices) to `path`
