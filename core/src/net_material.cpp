@@ -218,7 +218,10 @@ std::string add_material_net(Model& model, const TetrahedralMesh& mesh,
     constants->spring_stiffness_min = springs.empty() ? 0.0 : k_min;
     constants->spring_stiffness_max = k_max;
     constants->springs = static_cast<int>(springs.size());
-    constants->explicit_step_limit = omega2_max > 0.0 ? 2.0 / std::sqrt(omega2_max) : HUGE_VAL;
+    const double omega_max = std::sqrt(omega2_max);
+    const double zeta = 0.5 * mat.rayleigh_stiffness * omega_max;  // β ω / 2
+    constants->explicit_step_limit =
+        omega2_max > 0.0 ? 2.0 / omega_max * (std::sqrt(1.0 + zeta * zeta) - zeta) : HUGE_VAL;
     constants->contact_modulus = net.contact_modulus;
     constants->load_patch_radius = net.load_patch_radius;
     constants->surface_mean_edge = mean_edge;

@@ -372,12 +372,6 @@ bool parse_tissue(const TomlTable& t, core::MaterialNetSettings& settings) {
   return true;
 }
 
-/// Interior lattice spacing of an organ given by its material, in mean edges of its surface net: at
-/// 2 the shipped organ has 1 338 nodes (336 inside) and steps at 459 µs median, at 1 it has 4 293
-/// (3 291 inside) and steps at 1 769 µs, for the same feedback force within 1 % on the default
-/// scene's recording (docs/tissue.md, "Measured").
-constexpr double kInteriorSpacingEdges = 2.0;
-
 /// A material net whose surface's mean edge is above this many load patch radii is warned: it
 /// resolves the patch poorly (docs/tissue.md, "The contact"; the default patch is two edges of
 /// a 500-node net, whose simplified nets' mean edge is about 0.55 ρ).
@@ -416,7 +410,7 @@ void add_tissue_net(const TomlTable& t, core::Model& m, const core::TriangleMesh
   if (m.integrator == core::Integrator::kSymplecticEuler && m.dt > c.explicit_step_limit)
     warnings.push_back(mesh_warning(
         t, "youngs_modulus_kpa", file,
-        "the material's stiffest spring needs a step of at most " +
+        "the material's stiffest spring, with its damping, needs a step of at most " +
             format_input_number(c.explicit_step_limit) + " s with the symplectic Euler integrator, "
             "above the scene's dt = " + format_input_number(m.dt) +
             " s: the net will blow up; use implicit-euler or tr-bdf2, a smaller dt, or fewer nodes"));

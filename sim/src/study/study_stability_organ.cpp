@@ -10,6 +10,9 @@
 /// in a scene without one, into the hollow net). Core driven
 /// directly, gravity off. Verdict of study_stability.hpp (energy, finite states, penetration
 /// bound k_t × jump / k_contact on one node contact, as the deformable jump's).
+/// Case "organ-plunge-material": the same with the organ given by its material
+/// (kShippedOrganMaterial, docs/tissue.md): the same surface tetrahedralised as the scene loader
+/// does, the tissue contact law in place of the node contacts' penalty (issue 67's figure 5).
 
 #include <algorithm>
 #include <cmath>
@@ -18,10 +21,12 @@
 
 #include "numen/core/features.hpp"
 #include "numen/core/mesh.hpp"
+#include "numen/core/net_material.hpp"
 #include "numen/core/net_model.hpp"
 #include "numen/sim/scene/scene.hpp"
 #include "numen/sim/study/study_common.hpp"
 #include "numen/sim/study/study_stability_cases.hpp"
+#include "scene/net_tetrahedralize.hpp"
 
 namespace numen::sim::stability {
 namespace {
@@ -31,8 +36,11 @@ using core::Vec3;
 /// The organ of `scene` (its first net on an anchored body) and a one-sphere tool with the held
 /// body's mass and coupling, `radius` (m), starting at `start`: body 0 the organ's core, body 1
 /// the tool (held); the scene's mesh obstacles (the organ's rigid core surface). Materials and
-/// contact pairs as the scene's.
-core::Model plunge_model(const Scene& scene, double radius, const Vec3& start) {
+/// contact pairs as the scene's. With `material`, the net is the organ's surface given that
+/// material (tetrahedralised as the scene loader does: kInteriorSpacingEdges), else the scene's
+/// own constants per spring.
+core::Model plunge_model(const Scene& scene, double radius, const Vec3& start,
+                         const core::NetMaterial* material) {
   const core::Model& s = scene.model;
   int k = -1;
   for (int i = 0; i < s.num_nets() && k < 0; ++i)
@@ -74,27 +82,40 @@ core::Model plunge_model(const Scene& scene, double radius, const Vec3& start) {
   for (int i = 0; i < net.node_count; ++i)
     mesh.vertices.push_back(s.node_rest[static_cast<std::size_t>(net.node_begin + i)]);
   mesh.triangles = scene.net_triangles[static_cast<std::size_t>(k)];
-  const core::NetSpring& structural = s.net_springs[static_cast<std::size_t>(net.spring_begin)];
-  core::NetSettings settings;
-  settings.name = net.name;
-  settings.body = 0;
-  settings.material = net.material;
-  settings.mass = net.mass;
-  settings.stiffness = structural.stiffness;
-  settings.damping = structural.damping;
-  if (net.bending_count > 0) {
-    const core::NetSpring& bending =
-        s.net_springs[static_cast<std::size_t>(net.spring_begin + net.structural_count)];
-    settings.bending_stiffness = bending.stiffness;
-    settings.bending_damping = bending.damping;
-  }
-  settings.tie_stiffness = net.tie_stiffness;
-  settings.tie_damping = net.tie_damping;
-  settings.node_radius = s.node_radius[static_cast<std::size_t>(net.node_begin)];
 #if NUMEN_WITH_DEFORMABLE
-  std::string error = core::add_net(m, mesh, settings);
+  std::string error;
+  if (material != nullptr) {
+    core::TetrahedralMesh volume;
+    error = tetrahedralize_net(mesh, kInteriorSpacingEdges * mean_edge_length(mesh), volume);
+    core::MaterialNetSettings settings;
+    settings.name = net.name;
+    settings.body = 0;
+    settings.material = net.material;
+    settings.tissue = *material;
+    if (error.empty()) error = core::add_material_net(m, volume, settings);
+  } else {
+    const core::NetSpring& structural = s.net_springs[static_cast<std::size_t>(net.spring_begin)];
+    core::NetSettings settings;
+    settings.name = net.name;
+    settings.body = 0;
+    settings.material = net.material;
+    settings.mass = net.mass;
+    settings.stiffness = structural.stiffness;
+    settings.damping = structural.damping;
+    if (net.bending_count > 0) {
+      const core::NetSpring& bending =
+          s.net_springs[static_cast<std::size_t>(net.spring_begin + net.structural_count)];
+      settings.bending_stiffness = bending.stiffness;
+      settings.bending_damping = bending.damping;
+    }
+    settings.tie_stiffness = net.tie_stiffness;
+    settings.tie_damping = net.tie_damping;
+    settings.node_radius = s.node_radius[static_cast<std::size_t>(net.node_begin)];
+    error = core::add_net(m, mesh, settings);
+  }
 #else  // nets are compiled out: the plan skips this case before it runs (study_stability_scene.cpp)
   std::string error = "needs deformable nets: this build has NUMEN_WITH_DEFORMABLE=OFF";
+  (void)material;
 #endif
   if (error.empty()) error = core::finalize_model(m);
   if (!error.empty()) throw std::invalid_argument("organ-plunge: " + error);
@@ -104,7 +125,8 @@ core::Model plunge_model(const Scene& scene, double radius, const Vec3& start) {
 }  // namespace
 
 StabilityRow organ_run(const Scene& scene, core::Integrator integrator, double h,
-                       const StabilityLimits& limits, double horizon) {
+                       const StabilityLimits& limits, double horizon,
+                       const core::NetMaterial* material) {
   constexpr double kTubeRadius = 0.0025;  // m, the shipped instrument's tube
   // The organ's approach axis (its frame's z) and its rest surface's nearest point on it.
   const core::BodyModel* core_body = nullptr;
@@ -117,7 +139,7 @@ StabilityRow organ_run(const Scene& scene, core::Integrator integrator, double h
   for (const Vec3& r : scene.model.node_rest) face = std::max(face, -(core_body->initial_pose.orientation * r).dot(axis));
   const Vec3 start = centre - (face + 0.020) * axis;
   const Vec3 goal = centre - (face - 0.020) * axis;
-  core::Model base = plunge_model(scene, kTubeRadius, start);
+  core::Model base = plunge_model(scene, kTubeRadius, start, material);
   const core::Model model = study::with_scheme(base, integrator, h, "stability study");
   core::Data data = core::make_data(model);
   double k_contact = kInf;
@@ -136,8 +158,9 @@ StabilityRow organ_run(const Scene& scene, core::Integrator integrator, double h
         d.target_twist = core::Twist{};
       },
       monitor);
-  StabilityRow r = make_row("extreme", "organ-plunge", integrator, h, model.bodies[1].mass,
-                            model.nets[0].tie_stiffness, jump, "jump_m", kNaN);
+  StabilityRow r =
+      make_row("extreme", material ? "organ-plunge-material" : "organ-plunge", integrator, h,
+               model.bodies[1].mass, model.nets[0].tie_stiffness, jump, "jump_m", kNaN);
   r.energy_ratio_max = kNaN;
   monitor.fill(r);
   char note[200];

@@ -13,7 +13,7 @@
 ///  - "core-target-nonfinite": NaN / ±Inf written straight into core::Data's target pose and twist
 ///    for 20 steps (what the core does if anything non-finite ever got through);
 ///  - "organ-plunge" (study_stability_organ.cpp): the organ of sim/scenes/default.toml, plunged
-///    into.
+///    into; "organ-plunge-material" the same organ given its material (kShippedOrganMaterial).
 /// The loop cases' verdict: every period core::Data finite (bodies, nodes, target, feedback) and
 /// no rollback, nothing non-finite reaching the core (no kInvalidTarget), drive torques finite and
 /// within each axis's max_torque, zero in every period whose input was bad; tool speeds below
@@ -441,6 +441,7 @@ void plan_scene_extreme(const StabilityOptions& o, const std::string& dir, Plan&
   if (!no_nets.empty()) {
     plan.skipped.push_back("deformable-jump: " + no_nets);
     plan.skipped.push_back("organ-plunge: " + no_nets);
+    plan.skipped.push_back("organ-plunge-material: " + no_nets);
   }
   if (!no_joints.empty()) {
     for (const char* c : {"trocar-zero-insertion", "bus-nonfinite", "core-target-nonfinite"})
@@ -455,7 +456,10 @@ void plan_scene_extreme(const StabilityOptions& o, const std::string& dir, Plan&
       no_nets.empty() && no_joints.empty()
           ? std::make_shared<const Scene>(study::load_replayed_scene(dir + "/default.toml"))
           : nullptr;
-  if (no_nets.empty() && !no_joints.empty()) plan.skipped.push_back("organ-plunge: " + no_joints);
+  if (no_nets.empty() && !no_joints.empty()) {
+    plan.skipped.push_back("organ-plunge: " + no_joints);
+    plan.skipped.push_back("organ-plunge-material: " + no_joints);
+  }
   const std::shared_ptr<const Scene> trocar =
       no_joints.empty() ? std::make_shared<const Scene>(study::load_replayed_scene(dir + "/lattice.toml"))
                         : nullptr;
@@ -474,6 +478,12 @@ void plan_scene_extreme(const StabilityOptions& o, const std::string& dir, Plan&
       plan.add("extreme", "organ-plunge", case_parameters(integrator, {{"h", h}}),
                20.0 * kSceneWeight / 5.0, [=](StabilityResult& r) {
                  r.rows.push_back(organ_run(*organ, integrator, h, limits, jump_s));
+               });
+    for (double h : organ ? steps : std::vector<double>{})
+      plan.add("extreme", "organ-plunge-material", case_parameters(integrator, {{"h", h}}),
+               20.0 * kSceneWeight / 5.0, [=](StabilityResult& r) {
+                 r.rows.push_back(organ_run(*organ, integrator, h, limits, jump_s,
+                                            &kShippedOrganMaterial));
                });
     if (!trocar) continue;
     plan.add(

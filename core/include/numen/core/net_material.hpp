@@ -75,9 +75,15 @@ struct MaterialNetConstants {
   double spring_stiffness_min = 0.0;  ///< Smallest k_e (N/m).
   double spring_stiffness_max = 0.0;  ///< Largest k_e (N/m).
   int springs = 0;             ///< Edges of the tetrahedra.
-  /// The largest time step of the explicit (symplectic Euler) integrator for this net,
-  /// 2 / ω_max with ω_max² ≤ max over nodes of (k_tie + Σ_{e ∋ i} 4 k_e) / m_i (Gershgorin bound
-  /// on the undamped net's stiffness over its mass) (s). The implicit integrators have none.
+  /// The largest time step of the explicit (symplectic Euler) integrator for this net (s):
+  /// (2 / ω_max)(√(1 + ζ²) − ζ), ζ = β ω_max / 2 the Rayleigh damping's ratio at ω_max, with
+  /// ω_max² ≤ max over nodes of (k_tie + Σ_{e ∋ i} 4 k_e) / m_i (Gershgorin bound on the net's
+  /// stiffness over its mass). The limit of symplectic Euler with its damping explicit: on
+  /// x'' + 2ζω x' + ω² x = 0 its step matrix has determinant 1 − 2ζωh and trace
+  /// 2 − ω²h² − 2ζωh, inside the unit circle for ωh ≤ 2(√(1 + ζ²) − ζ) (Jury's test;
+  /// Belytschko, Liu & Moran, "Nonlinear Finite Elements", §6.3, for the central difference).
+  /// Stiffness-proportional damping lowers it: 2 / ω_max undamped, about 2 / (β ω_max²) once
+  /// ζ ≫ 1. The implicit integrators have none.
   double explicit_step_limit = 0.0;
   double contact_modulus = 0.0;    ///< E* = E / (1 − ν²) (Pa) of the contact law.
   double load_patch_radius = 0.0;  ///< ρ (m) of the contact law.

@@ -15,6 +15,7 @@
 
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"
+#include "numen/core/net_material.hpp"
 #include "numen/core/step.hpp"
 #include "numen/sim/scene/scene.hpp"
 #include "numen/sim/study/study_shard.hpp"
@@ -156,10 +157,19 @@ void plan_articulation(const StabilityOptions& o, Plan& plan);
 void plan_scene_extreme(const StabilityOptions& o, const std::string& scene_dir, Plan& plan);
 /// "organ-plunge" of "extreme" (study_stability_organ.cpp): the organ of `scene` (a net on an
 /// anchored body; sim/scenes/default.toml) and a one-sphere god-object of the held body's mass and
-/// coupling whose target jumps 40 mm into it in one period; `horizon` s of steps of `h`. Throws
-/// std::invalid_argument for a scene without an organ or a held body.
+/// coupling whose target jumps 40 mm into it in one period; `horizon` s of steps of `h`. With
+/// `material` ("organ-plunge-material"), the organ's surface is given that material (its volume
+/// tetrahedralised as the scene loader does, core::add_material_net(); docs/tissue.md) in place of
+/// the scene's constants per spring. Throws std::invalid_argument for a scene without an organ or
+/// a held body, or a surface the material net refuses.
 StabilityRow organ_run(const Scene& scene, core::Integrator integrator, double h,
-                       const StabilityLimits& limits, double horizon);
+                       const StabilityLimits& limits, double horizon,
+                       const core::NetMaterial* material = nullptr);
+
+/// The shipped organ's material (docs/tissue.md, "The shipped organ keeps its feel"): E = 100 kPa,
+/// ν = 0.45, ρ = 1000 kg/m³, β = 1 ms, ℓ = 20 mm; "organ-plunge-material" gives it the organ of
+/// sim/scenes/default.toml.
+inline constexpr core::NetMaterial kShippedOrganMaterial{100e3, 0.45, 1000.0, 1e-3, 0.020};
 /// "scenes": every shipped scene (`scene_dir`/*.toml) through run_scene() with its contact
 /// stiffness and, separately, its coupling stiffness swept to 1e12 N/m
 /// (study_stability_scenes.cpp). A scene this build cannot load (NUMEN_WITH_* options) gets one
