@@ -73,30 +73,55 @@ int select_resting_nodes(const Model& model, Data& data, std::size_t k) noexcept
   // each neighbour through its own springs (Model::node_springs): most of an organ is calm, so
   // this passes over the springs of the few nodes that move (the same bits as a pass over every
   // spring; one branch per node, none per spring).
+  // Where fewer nodes are calm than not (a net pressed as a whole: a material organ under the
+  // tool), the calm ones look at their neighbours instead — the same bits over fewer springs.
   const NodeNeighbours neighbours(model);
+  int calm_count = 0;
   for (int v = begin; v < end; ++v) {
     const auto i = static_cast<std::size_t>(v);
-    const auto calm = static_cast<std::uint8_t>(count[i] >= kRestSteps ? kEligibleBit : 0);
-    flags[i] = static_cast<std::uint8_t>((flags[i] & kRestingBit) | calm);
+    const bool calm = count[i] >= kRestSteps;
+    calm_count += calm;
+    flags[i] = static_cast<std::uint8_t>((flags[i] & kRestingBit) | (calm ? kEligibleBit : 0));
   }
-  for (int v = begin; v < end; ++v) {
-    if (count[static_cast<std::size_t>(v)] >= kRestSteps) continue;
-    neighbours.for_each(
-        v, [&](std::size_t j) { flags[j] &= static_cast<std::uint8_t>(~kEligibleBit); });
+  if (2 * calm_count >= net.node_count) {
+    for (int v = begin; v < end; ++v) {
+      if (count[static_cast<std::size_t>(v)] >= kRestSteps) continue;
+      neighbours.for_each(
+          v, [&](std::size_t j) { flags[j] &= static_cast<std::uint8_t>(~kEligibleBit); });
+    }
+  } else if (calm_count > 0) {
+    for (int v = begin; v < end; ++v) {
+      if (count[static_cast<std::size_t>(v)] < kRestSteps) continue;
+      bool all_calm = true;
+      neighbours.for_each(v, [&](std::size_t j) { all_calm &= count[j] >= kRestSteps; });
+      if (!all_calm) flags[static_cast<std::size_t>(v)] &= static_cast<std::uint8_t>(~kEligibleBit);
+    }
   }
   // Woken: a resting node no longer eligible (its force, a contact, a neighbour).
+  int resting = 0;
   for (int v = begin; v < end; ++v) {
     const auto i = static_cast<std::size_t>(v);
     flags[i] &= static_cast<std::uint8_t>(((flags[i] & kEligibleBit) >> 1) | ~kRestingBit);
+    resting += flags[i] & kRestingBit;
   }
   // Boundary: resting with a neighbour in the solve: a node in the solve sets the bit (its
-  // neighbour's kRestingBit shifted) on each resting neighbour, through its own springs.
+  // neighbour's kRestingBit shifted) on each resting neighbour, through its own springs; where
+  // fewer rest than not, each resting node looks at its neighbours instead (the same bits).
   static_assert(kRestingBit << 2 == kBoundaryBit);
-  for (int v = begin; v < end; ++v) {
-    if (flags[static_cast<std::size_t>(v)] & kRestingBit) continue;
-    neighbours.for_each(v, [&](std::size_t j) {
-      flags[j] |= static_cast<std::uint8_t>((flags[j] & kRestingBit) << 2);
-    });
+  if (2 * resting >= net.node_count) {
+    for (int v = begin; v < end; ++v) {
+      if (flags[static_cast<std::size_t>(v)] & kRestingBit) continue;
+      neighbours.for_each(v, [&](std::size_t j) {
+        flags[j] |= static_cast<std::uint8_t>((flags[j] & kRestingBit) << 2);
+      });
+    }
+  } else if (resting > 0) {
+    for (int v = begin; v < end; ++v) {
+      if (!(flags[static_cast<std::size_t>(v)] & kRestingBit)) continue;
+      bool any_active = false;
+      neighbours.for_each(v, [&](std::size_t j) { any_active |= !(flags[j] & kRestingBit); });
+      if (any_active) flags[static_cast<std::size_t>(v)] |= kBoundaryBit;
+    }
   }
   // The lists, in the net's own slots [begin, begin + count).
   int active = 0, pass = 0;

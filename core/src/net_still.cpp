@@ -40,20 +40,33 @@ bool mark_still_nodes(const Model& model, Data& data) noexcept {
     Vec3* position = s.pass_position.data();
     Vec3* velocity = s.pass_velocity.data();
     const std::uint8_t none = s.pass_stored ? 0 : kStateChangedBit | kNearChangeBit;
+    int changed = 0;
     for (int v = begin; v < end; ++v) {
       const auto i = static_cast<std::size_t>(v);
       const std::uint64_t diff = differing_bits(nodes[i].position, position[i]) |
                                  differing_bits(nodes[i].velocity, velocity[i]);
       flags[i] =
           static_cast<std::uint8_t>(none | (diff != 0 ? kStateChangedBit | kNearChangeBit : 0));
+      changed += (flags[i] & kStateChangedBit) != 0;
       position[i] = nodes[i].position;
       velocity[i] = nodes[i].velocity;
     }
     // kNearChangeBit where a neighbour changed, through the changed nodes' own springs: most of
-    // an organ is still, so few nodes changed (one branch per node, none per spring).
-    for (int v = begin; v < end; ++v) {
-      if (!(flags[static_cast<std::size_t>(v)] & kStateChangedBit)) continue;
-      neighbours.for_each(v, [&](std::size_t j) { flags[j] |= kNearChangeBit; });
+    // an organ is still, so few nodes changed (one branch per node, none per spring). Where
+    // most changed (a net moving as a whole: a material organ under the tool), each unchanged
+    // node looks at its neighbours instead — the same bits over fewer springs.
+    if (2 * changed <= net.node_count) {
+      for (int v = begin; v < end; ++v) {
+        if (!(flags[static_cast<std::size_t>(v)] & kStateChangedBit)) continue;
+        neighbours.for_each(v, [&](std::size_t j) { flags[j] |= kNearChangeBit; });
+      }
+    } else if (changed < net.node_count) {
+      for (int v = begin; v < end; ++v) {
+        if (flags[static_cast<std::size_t>(v)] & kStateChangedBit) continue;
+        bool near = false;
+        neighbours.for_each(v, [&](std::size_t j) { near |= (flags[j] & kStateChangedBit) != 0; });
+        if (near) flags[static_cast<std::size_t>(v)] |= kNearChangeBit;
+      }
     }
     any = true;
   }
