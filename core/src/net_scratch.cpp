@@ -126,6 +126,8 @@ void NetScratch::resize(const Model& model) {
   surface_candidates.assign(fine, 0);
   surface_lo.assign(fine, Vec3::Zero());
   surface_hi.assign(fine, Vec3::Zero());
+  surface_sphere_mask.assign(fine, 0);
+  surface_face_slot.assign(n > 0 ? model.net_surface_faces.size() : 0, -1);
   surface_face_stamp.assign(n > 0 ? model.net_surface_faces.size() : 0, 0);
   surface_point_stamp.assign(n > 0 ? model.net_surface_points.size() : 0, 0);
   surface_position.assign(n > 0 ? model.net_surface_points.size() : 0, Vec3::Zero());

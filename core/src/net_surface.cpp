@@ -54,6 +54,11 @@ double angle_at(int f, const Vec3& a, const Vec3& b, const Vec3& c) noexcept {
   }
 }
 
+/// Near sphere i's bit in NetScratch::surface_sphere_mask (bit 63 for every i ≥ 63).
+constexpr std::uint64_t sphere_bit(int i) noexcept {
+  return std::uint64_t{1} << (i < 63 ? i : 63);
+}
+
 /// The near spheres (NetScratch::near_*) against the `nc` candidate triangles of bounds
 /// [flo, fhi]: `corner(m, k)` is corner k of candidate m at the current positions,
 /// `emit(m, w, body, sphere, material_pair, geometry, com)` writes a contact at the point of
@@ -61,10 +66,14 @@ double angle_at(int f, const Vec3& a, const Vec3& b, const Vec3& c) noexcept {
 /// With `primary` (the sink, for an organ given by its material: NetModel::contact_modulus), the
 /// entries of each sphere's deepest contact are marked NodeContact::primary: the two-scale law
 /// (net_tissue_contact.hpp) is the whole sphere's and acts there.
+/// With `mask` (the fine surface's candidates, NetScratch::surface_sphere_mask), sphere i meets
+/// only the candidates whose mask has its bit (sphere_bit(i)): the others ride on no net
+/// triangle within its reach, so they are out of its radius (the same contacts, fewer tests).
 template <typename Corner, typename Emit>
 void collide_candidates(const Model& model, const Data& data, const NetScratch& ns, int num_near,
-                        int mat_net, int nc, const Vec3* flo, const Vec3* fhi, Corner corner,
-                        Emit emit_contact, NodeContactSink* primary) noexcept {
+                        int mat_net, int nc, const Vec3* flo, const Vec3* fhi,
+                        const std::uint64_t* mask, Corner corner, Emit emit_contact,
+                        NodeContactSink* primary) noexcept {
   const CollisionScratch& cs = data.scratch->collision;
   const double* R = cs.sphere_r.data();
   const Vec3* sw = cs.sphere_world.data();
@@ -102,7 +111,9 @@ void collide_candidates(const Model& model, const Data& data, const NetScratch& 
       int best = -1;
       int feature = kFace;
       Vec3 q = Vec3::Zero(), w = Vec3::Zero();
+      const std::uint64_t bit = sphere_bit(i);
       for (int m = 0; m < nc; ++m) {
+        if (mask && !(mask[m] & bit)) continue;
         if (detail::box_distance2(centre, flo[m], fhi[m]) >= r * r) continue;
         const Vec3 &a = corner(m, 0), &b = corner(m, 1), &c = corner(m, 2);
         int fm = kFace;
@@ -227,6 +238,11 @@ void net_face_bounds(const Model& model, const NodeState* nodes, int f, Vec3& lo
   hi = a.cwiseMax(b).cwiseMax(c);
 }
 
+/// Whether every component of `v` is finite (Eigen's allFinite(), without its loop).
+inline bool finite(const Vec3& v) noexcept {
+  return std::isfinite(v.x()) && std::isfinite(v.y()) && std::isfinite(v.z());
+}
+
 /// The fine triangles riding on the net triangles near the `num_spheres` near spheres (a net
 /// triangle whose bounds come within a sphere's radius plus the net's surface_reach of its
 /// centre), whose bounds at their vertices' current positions meet [qlo, qhi] (the near spheres'
@@ -274,21 +290,29 @@ int gather_surface_candidates(const Model& model, const Data& data, NetScratch& 
     if (cull_face(model, ns, f)) continue;
     Vec3 lo, hi;
     net_face_bounds(model, nodes, f, lo, hi);
-    if (!boxes_overlap(lo, hi, plo, phi) || !(lo.allFinite() && hi.allFinite())) continue;
-    bool close = false;  // within reach of one of the spheres, not only of their bounds
-    for (int i = 0; i < num_spheres && !close; ++i) {
+    if (!boxes_overlap(lo, hi, plo, phi) || !finite(lo) || !finite(hi)) continue;
+    // The spheres within reach of it, not only of their bounds: the only ones its fine
+    // triangles can touch.
+    std::uint64_t close = 0;
+    for (int i = 0; i < num_spheres; ++i) {
       const int sp = near[i];
       const double d = cs.sphere_r[static_cast<std::size_t>(sp)] + reach;
-      close = detail::box_distance2(cs.sphere_world[static_cast<std::size_t>(sp)], lo, hi) < d * d;
+      if (detail::box_distance2(cs.sphere_world[static_cast<std::size_t>(sp)], lo, hi) < d * d)
+        close |= sphere_bit(i);
     }
-    if (!close) continue;
+    if (close == 0) continue;
     const auto first = static_cast<std::size_t>(model.net_face_surface_begin[static_cast<std::size_t>(f)]);
     const auto last = static_cast<std::size_t>(model.net_face_surface_begin[static_cast<std::size_t>(f) + 1]);
     for (std::size_t k = first; k < last && nc < room; ++k) {
       const std::int32_t F = model.net_face_surface_faces[k];
       std::uint32_t& st = ns.surface_face_stamp[static_cast<std::size_t>(F)];
-      if (st == stamp) continue;
+      std::int32_t& slot = ns.surface_face_slot[static_cast<std::size_t>(F)];
+      if (st == stamp) {  // gathered from another net triangle it rides on: its spheres too
+        if (slot >= 0) ns.surface_sphere_mask[static_cast<std::size_t>(slot)] |= close;
+        continue;
+      }
       st = stamp;
+      slot = -1;
       const std::array<int, 3>& t = model.net_surface_faces[static_cast<std::size_t>(F)];
       bool keep = true;
       for (int m = 0; m < 3 && keep; ++m)
@@ -298,10 +322,12 @@ int gather_surface_candidates(const Model& model, const Data& data, NetScratch& 
       const Vec3& b = position(t[1]);
       const Vec3& c = position(t[2]);
       const Vec3 flo = a.cwiseMin(b).cwiseMin(c), fhi = a.cwiseMax(b).cwiseMax(c);
-      if (!boxes_overlap(flo, fhi, qlo, qhi) || !(flo.allFinite() && fhi.allFinite())) continue;
+      if (!boxes_overlap(flo, fhi, qlo, qhi) || !finite(flo) || !finite(fhi)) continue;
       ns.surface_candidates[static_cast<std::size_t>(nc)] = F;
       ns.surface_lo[static_cast<std::size_t>(nc)] = flo;
       ns.surface_hi[static_cast<std::size_t>(nc)] = fhi;
+      ns.surface_sphere_mask[static_cast<std::size_t>(nc)] = close;
+      slot = nc;
       ++nc;
     }
   }
@@ -344,7 +370,7 @@ void collide_net_faces(const Model& model, const Data& data, NetScratch& ns, con
                             body, sphere, material_pair, g, com);
     };
     collide_candidates(model, data, ns, num_near, mat_net, nc, ns.surface_lo.data(),
-                       ns.surface_hi.data(), corner, emit, net.contact_modulus > 0.0 ? &sink : nullptr);
+                       ns.surface_hi.data(), ns.surface_sphere_mask.data(), corner, emit, net.contact_modulus > 0.0 ? &sink : nullptr);
     return;
   }
 
@@ -374,7 +400,7 @@ void collide_net_faces(const Model& model, const Data& data, NetScratch& ns, con
                   material_pair, g, com);
   };
   collide_candidates(model, data, ns, num_near, mat_net, nc, ns.face_lo.data(), ns.face_hi.data(),
-                     corner, emit, net.contact_modulus > 0.0 ? &sink : nullptr);
+                     nullptr, corner, emit, net.contact_modulus > 0.0 ? &sink : nullptr);
 }
 
 }  // namespace numen::core::detail

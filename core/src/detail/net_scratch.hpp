@@ -167,6 +167,13 @@ struct NetScratch {
   /// bounds, and those bounds (m, world); sized by the largest NetModel::surface_face_count.
   std::vector<std::int32_t> surface_candidates;
   std::vector<Vec3> surface_lo, surface_hi;
+  /// Per candidate: bit i set where near sphere i (its index in near_spheres; bit 63 for every
+  /// index from 63 on) comes within its radius plus the net's surface_reach of a net triangle
+  /// the candidate rides on — the only spheres it can touch (net_surface.cpp).
+  std::vector<std::uint64_t> surface_sphere_mask;
+  /// Per fine triangle (global): its index among this call's candidates, −1 where the call
+  /// rejected it (valid where surface_face_stamp is the call's).
+  std::vector<std::int32_t> surface_face_slot;
   /// Per fine triangle and per fine vertex (global): the stamp of the last call that gathered
   /// it, and the vertex's position computed then (m, world): each is gathered and computed once
   /// a call, whatever the number of net triangles it rides on.
