@@ -133,7 +133,8 @@ std::string make_proximity_model(const Model& scene, int body, double margin, Mo
   std::vector<int> device_body(scene.bodies.size(), -1);
   for (int g : god_object_bodies(scene, body, others)) {
     device_body[static_cast<std::size_t>(g)] = 0;
-    const BodyModel& b = m.bodies[static_cast<std::size_t>(g)];
+    BodyModel& b = m.bodies[static_cast<std::size_t>(g)];
+    b.sphere_margin = margin;
     for (int s = b.sphere_begin; s < b.sphere_begin + b.sphere_count; ++s)
       m.body_spheres[static_cast<std::size_t>(s)].radius += margin;
   }

@@ -2,6 +2,7 @@
 /// The nets of a multirate god-object (detail/multirate_net.hpp, docs/multirate.md).
 
 #include "detail/multirate_net.hpp"
+#include "detail/net_tissue.hpp"
 #include "detail/net_surface.hpp"
 
 #include <algorithm>
@@ -51,7 +52,69 @@ void grow_god_object_nodes(std::span<const int> device_body, double margin, Mode
       m.node_radius[static_cast<std::size_t>(i)] += margin;
 }
 
-void build_node_planes(const Model& scene, const Data& data, std::span<const int> device_body,
+namespace {
+
+/// The tissue planes of build_node_planes() (multirate_net.hpp): one per sphere's primary contact
+/// on an organ given by its material, the contact's entries consecutive (the sink writes them so).
+void build_tissue_planes(const Model& scene, Data& data, std::span<const int> device_body,
+                         double margin, ContactPlaneSet& out) noexcept {
+  const int n = std::clamp(data.num_node_contacts, 0, static_cast<int>(data.node_contacts.size()));
+  const int np = static_cast<int>(scene.material_pairs.size());
+  const int num_spheres = static_cast<int>(scene.body_spheres.size());
+  for (int i = 0; i < n;) {
+    const NodeContact& c = data.node_contacts[static_cast<std::size_t>(i)];
+    int last = i + 1;  // the contact's entries: the same sphere and point
+    while (last < n && data.node_contacts[static_cast<std::size_t>(last)].primary == c.primary &&
+           data.node_contacts[static_cast<std::size_t>(last)].sphere_b == c.sphere_b &&
+           data.node_contacts[static_cast<std::size_t>(last)].body_b == c.body_b &&
+           data.node_contacts[static_cast<std::size_t>(last)].position == c.position)
+      ++last;
+    const int first = i;
+    i = last;
+    if (!c.primary || c.face < 0 || c.node < 0 || c.node >= scene.num_nodes() || c.material_pair < 0 ||
+        c.material_pair >= np || c.sphere_b < 0 || c.sphere_b >= num_spheres ||
+        !in_god_object(device_body, c.body_b))
+      continue;
+    const NetModel& nm = scene.nets[static_cast<std::size_t>(scene.node_net[static_cast<std::size_t>(c.node)])];
+    if (!(nm.contact_modulus > 0.0) || !scene.bodies[static_cast<std::size_t>(nm.body)].anchored) continue;
+    if (out.count >= kMaxContactPlanes) {
+      ++out.dropped;
+      continue;
+    }
+    const Sphere& sp = scene.body_spheres[static_cast<std::size_t>(c.sphere_b)];
+    const TissuePlane t = tissue_plane(scene, data, nm, first, last, sp.radius);
+    if (!t.valid) continue;
+    const double k = scene.material_pairs[static_cast<std::size_t>(c.material_pair)].stiffness;
+    const bool loaded = t.force > 0.0 && t.stiffness > 0.0;
+    const double slope = loaded ? t.stiffness : t.secant_stiffness;
+    if (!(k > 0.0) || !(slope > 0.0)) continue;
+    const double rendered = 1.0 / (1.0 / slope + t.patch_compliance);  // k s
+    ContactPlane& p = out.planes[static_cast<std::size_t>(out.count++)];
+    p = ContactPlane{};  // the set is reused
+    p.body = device_body[static_cast<std::size_t>(c.body_b)];
+    p.sphere = -1;
+    p.node = c.node;
+    p.local_point = sp.center;
+    p.radius = sp.radius - margin;
+    p.normal = t.normal;
+    p.point = t.point;
+    p.velocity = t.velocity;
+    p.material_pair = c.material_pair;
+    p.other_body = nm.body;
+    p.obstacle = -1;
+    p.other_sphere = -1;
+    p.carrier = -1;  // the plane stays for the scene period: c_ρ stands for the net's give
+    p.stiffness_scale = rendered / k;
+    p.share = p.stiffness_scale;  // damping c s (write_plane_contacts(): c s² / share)
+    p.depth_offset = loaded ? t.force / rendered - t.depth : 0.0;
+    p.impulse.setZero();
+    p.impulse_point = p.point;
+  }
+}
+
+}  // namespace
+
+void build_node_planes(const Model& scene, Data& data, std::span<const int> device_body,
                        double margin, NodePlaneScratch scratch, ContactPlaneSet& out) noexcept {
   const int first = out.count;
   const int num_nodes = std::min(scene.num_nodes(), static_cast<int>(scratch.slot_of_node.size()));
@@ -90,6 +153,7 @@ void build_node_planes(const Model& scene, const Data& data, std::span<const int
                        c.sphere_b < static_cast<int>(scene.body_spheres.size());
     if (!organ && (!net_on_god_object(scene, device_body, net) || in_god_object(device_body, c.body_b)))
       continue;
+    if (organ && nm.contact_modulus > 0.0) continue;  // a tissue plane (below)
     if (out.count >= kMaxContactPlanes || out.count >= room) {
       ++out.dropped;
       continue;
@@ -163,7 +227,10 @@ void build_node_planes(const Model& scene, const Data& data, std::span<const int
     p.impulse.setZero();
     p.impulse_point = p.point;
   }
-  if (out.count == first) return;
+  if (out.count == first) {  // no node plane (nothing touches a net given per spring)
+    build_tissue_planes(scene, data, device_body, margin, out);
+    return;
+  }
   // The springs at the nodes with planes (those with a slot), ascending: the passes below take
   // them in the order of Model::net_springs, as a pass over every spring would, a few nodes'
   // springs instead of every one (~190 k instructions a scene step on the shipped organ).
@@ -343,6 +410,7 @@ void build_node_planes(const Model& scene, const Data& data, std::span<const int
   }
   for (int s = 0; s < slots; ++s)
     scratch.slot_of_node[static_cast<std::size_t>(scratch.slot_node[static_cast<std::size_t>(s)])] = -1;
+  build_tissue_planes(scene, data, device_body, margin, out);
 }
 
 bool anchor_reaches(const Model& scene, const Data& data, const NodeContact& c, double step) noexcept {
@@ -377,6 +445,17 @@ void drop_back_face_contacts(const Model& scene, Data& data, std::span<const int
       // would push the triangle around the sphere's far side and hook it onto the tool.
       const double r = scene.body_spheres[static_cast<std::size_t>(c.sphere_b)].radius - margin;
       const double depth = c.depth - margin;
+      // An organ given by its material takes a sphere deeper than its radius (the half-space's
+      // approach; its law acts through the load patch's plane, not the triangle's):
+      // its contacts are kept to 2 r, the backstop's reach (net_tissue_contact.hpp).
+      const int tissue_net = c.node >= 0 && c.node < scene.num_nodes()
+                                 ? scene.node_net[static_cast<std::size_t>(c.node)]
+                                 : -1;
+      if (tissue_net >= 0 && scene.nets[static_cast<std::size_t>(tissue_net)].contact_modulus > 0.0 &&
+          depth < 2.0 * r) {
+        data.node_contacts[static_cast<std::size_t>(kept++)] = c;
+        continue;
+      }
       if (!(depth < r)) {
         // Below 2 r the true sphere overlaps the triangle from behind: the tool is past the
         // surface by that much, which is counted, not hidden (beyond, only the grown sphere

@@ -21,6 +21,7 @@
 #include "detail/net_still.hpp"
 #include "detail/net_surface.hpp"
 #include "detail/net_terms.hpp"
+#include "detail/net_tissue.hpp"
 
 namespace numen::core {
 namespace {
@@ -386,7 +387,8 @@ const NetModel* tissue_net(const Model& model, const NodeContact& ct) noexcept {
 [[gnu::noinline]] ContactForceResult tissue_contact_force(const Model& model, const NetModel& net, const NodeContact& ct,
                                         double fine_depth, const Vec3& v_rel, const MaterialPair& mp,
                                         double& elastic, double& patch) noexcept {
-  const double radius = model.body_spheres[static_cast<std::size_t>(ct.sphere_b)].radius;
+  const double radius = model.body_spheres[static_cast<std::size_t>(ct.sphere_b)].radius -
+                        model.bodies[static_cast<std::size_t>(ct.body_b)].sphere_margin;
   TissueContactForce e;
   if (ct.primary)
     e = tissue_contact_force(
@@ -443,17 +445,20 @@ inline bool same_contact(const NodeContact& a, const NodeContact& b) noexcept {
          a.position == b.position;
 }
 
-/// The primary tissue contact whose entries are data.node_contacts[first, last)
-/// (NodeContact::primary) seen through its load patch (net_tissue_contact.hpp): the patch about
-/// its material point p = Σ_e share_e r_e (rest positions of the entries' nodes), and in every
-/// entry the depth, normal and point of the sphere's penetration into the plane through the
-/// touched fine point moved by the patch's mean displacement ū instead of its own
-/// u = Σ_e share_e u_e, normal to the patch's mean rest normal (turned with the rigid
-/// component). A patch without a node leaves the entries as detected. Keeps the detected depth
-/// in NetScratch::patch_fine_depth.
-[[gnu::noinline]] void see_through_patch(const Model& model, Data& data, NetScratch& s, const NetModel& net, int first,
-                       int last) noexcept {
-  s.patch_fine_depth = data.node_contacts[static_cast<std::size_t>(first)].depth;
+/// The plane of the primary tissue contact whose entries are data.node_contacts[first, last)
+/// (NodeContact::primary; net_tissue_contact.hpp): the patch about its material point
+/// p = Σ_e share_e r_e (rest positions of the entries' nodes) into NetScratch::patch_*, and the
+/// plane through the touched fine point moved by the patch's mean displacement ū instead of its
+/// own u = Σ_e share_e u_e, normal to the patch's mean rest normal (turned with the rigid
+/// component): its point, outward normal and the true sphere's depth into it. The entries'
+/// position was made with a sphere of `position_radius`. False (patch_count 0 where the entries
+/// have no share) for a patch without a node or a normal.
+struct PatchPlane {
+  Vec3 touched, outward;
+  double depth;
+};
+bool patch_plane(const Model& model, const Data& data, NetScratch& s, const NetModel& net, int first,
+                 int last, double position_radius, PatchPlane& out) noexcept {
   const BodyState& body = data.bodies[static_cast<std::size_t>(net.body)];
   const Mat3 rot = body.orientation.toRotationMatrix();
   const auto move = [&](int v) -> Vec3 {  // u_v = x_v − a_v
@@ -471,12 +476,12 @@ inline bool same_contact(const NodeContact& a, const NodeContact& b) noexcept {
   if (!(shares > 0.0)) {  // no patch: the force stays on the entries' nodes (lay_on_patch())
     s.patch_count = 0;
     s.patch_net = -1;
-    return;
+    return false;
   }
   p /= shares;
   own /= shares;
   find_patch(model, s, net, p);
-  if (s.patch_count == 0) return;
+  if (s.patch_count == 0) return false;
   Vec3 mean = Vec3::Zero(), normal = Vec3::Zero();
   for (int k = 0; k < s.patch_count; ++k) {
     const int v = s.patch_nodes[static_cast<std::size_t>(k)];
@@ -485,20 +490,39 @@ inline bool same_contact(const NodeContact& a, const NodeContact& b) noexcept {
     normal += w * net.surface_node_normal[static_cast<std::size_t>(v - net.node_begin)];
   }
   const double len = normal.norm();
-  if (!(len > 0.0)) return;
-  const Vec3 outward = rot * (normal / len);
-  NodeContact& ct = data.node_contacts[static_cast<std::size_t>(first)];
+  if (!(len > 0.0)) return false;
+  out.outward = rot * (normal / len);
+  const NodeContact& ct = data.node_contacts[static_cast<std::size_t>(first)];
   const BodyState& tool = data.bodies[static_cast<std::size_t>(ct.body_b)];
   const Sphere& sphere = model.body_spheres[static_cast<std::size_t>(ct.sphere_b)];
   const Vec3 centre = tool.position + tool.orientation * sphere.center;
-  // The touched point (NodeContact::position is ½ (q + c − r o), o = −normal), moved by ū − u.
-  const Vec3 touched = 2.0 * ct.position - centre - sphere.radius * ct.normal + (mean - own);
-  const double depth = sphere.radius - (centre - touched).dot(outward);
-  const Vec3 position = touched + 0.5 * depth * outward;
+  // The true sphere's radius (a multirate scene loop grew it: BodyModel::sphere_margin).
+  const double radius = sphere.radius - model.bodies[static_cast<std::size_t>(ct.body_b)].sphere_margin;
+  // The touched point (NodeContact::position is ½ (q + c − r o), o = −normal, r the radius the
+  // contact was made with), moved by ū − u.
+  out.touched = 2.0 * ct.position - centre - position_radius * ct.normal + (mean - own);
+  out.depth = radius - (centre - out.touched).dot(out.outward);
+  return true;
+}
+
+/// The primary tissue contact whose entries are data.node_contacts[first, last) seen through
+/// its load patch (patch_plane()): in every entry the depth, normal and point of the sphere's
+/// penetration into the patch's plane. A patch without a node leaves the entries as detected.
+/// Keeps the detected depth in NetScratch::patch_fine_depth.
+[[gnu::noinline]] void see_through_patch(const Model& model, Data& data, NetScratch& s, const NetModel& net, int first,
+                       int last) noexcept {
+  const NodeContact& ct = data.node_contacts[static_cast<std::size_t>(first)];
+  s.patch_fine_depth = ct.depth;
+  // The entries were cut back to the true sphere (a multirate scene loop's) or made with it.
+  const double radius = model.body_spheres[static_cast<std::size_t>(ct.sphere_b)].radius -
+                        model.bodies[static_cast<std::size_t>(ct.body_b)].sphere_margin;
+  PatchPlane plane;
+  if (!patch_plane(model, data, s, net, first, last, radius, plane)) return;
+  const Vec3 position = plane.touched + 0.5 * plane.depth * plane.outward;
   for (int c = first; c < last; ++c) {
     NodeContact& e = data.node_contacts[static_cast<std::size_t>(c)];
-    e.depth = depth;
-    e.normal = -outward;
+    e.depth = plane.depth;
+    e.normal = -plane.outward;
     e.position = position;
   }
 }
@@ -527,6 +551,51 @@ inline bool same_contact(const NodeContact& a, const NodeContact& b) noexcept {
 }
 
 }  // namespace
+
+namespace detail {
+
+TissuePlane tissue_plane(const Model& model, Data& data, const NetModel& net, int first,
+                         int last, double position_radius) noexcept {
+  TissuePlane out;
+  NetScratch& s = data.scratch->net;
+  const NodeContact& ct = data.node_contacts[static_cast<std::size_t>(first)];
+  const double margin = model.bodies[static_cast<std::size_t>(ct.body_b)].sphere_margin;
+  const double radius = model.body_spheres[static_cast<std::size_t>(ct.sphere_b)].radius - margin;
+  PatchPlane plane;
+  if (!patch_plane(model, data, s, net, first, last, position_radius, plane)) return out;
+  out.valid = true;
+  out.point = plane.touched;
+  out.normal = plane.outward;
+  out.depth = plane.depth;
+  out.fine_depth = ct.depth - (position_radius - radius);  // the true sphere's
+  for (int k = 0; k < s.patch_count; ++k)
+    out.velocity += s.patch_weights[static_cast<std::size_t>(k)] *
+                    data.nodes[static_cast<std::size_t>(s.patch_nodes[static_cast<std::size_t>(k)])].velocity;
+  // The pair's stiffness under the time-constant floor on the patch's mass (the tool imposed, as
+  // in the scene loop), as compute_net_forces() takes it.
+  MaterialPair mp = model.material_pairs[static_cast<std::size_t>(ct.material_pair)];
+  if (mp.stiffness > 0.0 &&
+      model.solver.node_contact_max_omega_dt < std::numeric_limits<double>::infinity()) {
+    const double limit = contact_stiffness_limit(1.0 / patch_inverse_mass(model, s), model.dt,
+                                                 model.solver.node_contact_max_omega_dt);
+    mp.stiffness = std::min(mp.stiffness, limit);
+  }
+  const TissueContactLaw law =
+      make_tissue_contact_law(net.contact_modulus, radius, net.load_patch_radius, mp.stiffness);
+  const TissueContactForce e = tissue_contact_force(law, out.depth);
+  MaterialPair onset = mp;
+  onset.onset_depth = kTissueBackstopOnset * radius;
+  const ContactForceResult b = contact_penalty_force(
+      -out.normal, out.fine_depth - kTissueBackstopDepth * radius, Vec3::Zero(), onset);
+  out.force = e.force + b.normal_force;
+  out.stiffness = e.stiffness + (b.active ? b.stiffness : 0.0);
+  out.patch_compliance = law.patch;
+  const double d_ref = 0.01 * radius;
+  out.secant_stiffness = tissue_contact_force(law, d_ref).force / d_ref;
+  return out;
+}
+
+}  // namespace detail
 
 void compute_net_forces(const Model& model, Data& data) noexcept {
   if (model.nets.empty()) return;

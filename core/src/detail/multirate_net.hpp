@@ -101,8 +101,16 @@ void grow_god_object_nodes(std::span<const int> device_body, double margin, Mode
 /// its planes move with it at w k from their true depth (stiffness_scale w, no offset): the
 /// static start above is kept only for nodes beyond the carriers' room. Counts planes beyond the
 /// room in out.dropped. `scene` finalized (its nodes' springs are read from Model::node_springs).
-/// No allocation.
-void build_node_planes(const Model& scene, const Data& data, std::span<const int> device_body,
+/// An organ given by its material (NetModel::contact_modulus > 0) gives no node planes: each
+/// sphere's primary contact on it (NodeContact::primary, its first entry) gives one tissue plane
+/// on that sphere (detail::tissue_plane(): the load patch's plane at the sample, `node` the
+/// entry's node, no carrier), rendering the law linearised at the sample in series with the
+/// patch's compliance c_ρ — stiffness k s = 1 / (1 / F'(d₀) + c_ρ) (the plane stays for the scene
+/// period, so the device loop feels the net's share too), damping c s, from the offset that gives
+/// F(d₀) at the sample; with no force at the sample (the look-ahead), the law's secant at 1 % of
+/// the sphere's radius in series with c_ρ from the true depth (docs/tissue.md, "Multirate").
+/// Uses NetScratch's load patch (hence `data` not const). No allocation.
+void build_node_planes(const Model& scene, Data& data, std::span<const int> device_body,
                        double margin, NodePlaneScratch scratch, ContactPlaneSet& out) noexcept;
 
 /// The look-ahead's reach (m): a node of a net on the god-object within this distance of a
@@ -156,8 +164,10 @@ void cut_back_node_contacts(const Model& scene, Data& data, std::span<const int>
 /// from behind: a sphere past the surface, or the surface folded over it) are counted, not
 /// hidden: NetOutput::crossed_contacts and crossed_depth of their net (reset by every call;
 /// cut_back_node_contacts() puts crossed_depth in max_penetration) and, once per call with one,
-/// data.net_crossed_steps. Call before build_node_planes(). Keeps the order of the rest. No
-/// allocation.
+/// data.net_crossed_steps. An organ given by its material (NetModel::contact_modulus > 0) keeps
+/// its contacts up to 2 r deep, uncounted: a tool sinks into tissue deeper than its radius, and
+/// the law acts through the load patch's plane (docs/tissue.md, "Multirate"). Call before
+/// build_node_planes(). Keeps the order of the rest. No allocation.
 void drop_back_face_contacts(const Model& scene, Data& data, std::span<const int> device_body,
                              double margin) noexcept;
 

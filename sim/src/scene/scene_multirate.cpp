@@ -97,13 +97,6 @@ void parse_multirate(const TomlTable& root, Scene& scene) {
                                   model.bodies[static_cast<std::size_t>(net.body)].name +
                                   "', which is in no body's god-object the device holds: the "
                                   "device loop would not feel it");
-  // The device loop renders an organ's contacts with the pair's penalty through its node planes,
-  // not an organ material's two-scale law (docs/tissue.md, "What is left").
-  for (const core::NetModel& net : model.nets)
-    if (net.contact_modulus > 0.0)
-      table->fail("scene_dt", "net '" + net.name + "' is given by its material (youngs_modulus_kpa), "
-                              "whose contact law the device loop does not render yet: run it "
-                              "single-rate (remove [multirate]; docs/tissue.md)");
   for (const platform::DeviceBinding* binding : bindings)
     for (const platform::AxisPrescription& p : binding->prescriptions)
       if (!in_god_object[static_cast<std::size_t>(model.joints[static_cast<std::size_t>(p.joint)].child)])

@@ -94,6 +94,11 @@ struct BodyModel {
   Pose initial_pose;                        ///< World pose of the COM frame at reset.
   Twist initial_twist;                      ///< World twist at reset.
   double bounding_radius = 0.0;             ///< Derived: max |c| + r over its spheres (m).
+  /// The margin δ (m, ≥ 0) its spheres were grown by: 0 but in a multirate scene loop's
+  /// proximity model (make_proximity_model(), multirate.hpp), whose god-object spheres are the
+  /// true ones grown by δ. What needs the true sphere (an organ's tissue contact,
+  /// net_tissue_contact.hpp) takes its radius less δ.
+  double sphere_margin = 0.0;
   /// A static body: held at initial_pose with a zero twist in every step (a body of infinite
   /// mass that nothing moves; never integrated, never coupled to the device, no joint). The
   /// anchored rigid component of a deformable organ (docs/organs.md, "Organs"; Meseure &
