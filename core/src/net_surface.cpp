@@ -291,14 +291,21 @@ int gather_surface_candidates(const Model& model, const Data& data, NetScratch& 
     Vec3 lo, hi;
     net_face_bounds(model, nodes, f, lo, hi);
     if (!boxes_overlap(lo, hi, plo, phi) || !finite(lo) || !finite(hi)) continue;
-    // The spheres within reach of it, not only of their bounds: the only ones its fine
-    // triangles can touch.
+    // The spheres within reach of the triangle itself, not only of its bounds or theirs: the
+    // only ones its fine triangles can touch (each has a vertex whose foot is on it, and every
+    // point of it within `reach` of that foot).
     std::uint64_t close = 0;
+    const std::array<int, 3>& tri = model.net_faces[static_cast<std::size_t>(f)];
     for (int i = 0; i < num_spheres; ++i) {
       const int sp = near[i];
       const double d = cs.sphere_r[static_cast<std::size_t>(sp)] + reach;
-      if (detail::box_distance2(cs.sphere_world[static_cast<std::size_t>(sp)], lo, hi) < d * d)
-        close |= sphere_bit(i);
+      const Vec3& centre = cs.sphere_world[static_cast<std::size_t>(sp)];
+      if (!(detail::box_distance2(centre, lo, hi) < d * d)) continue;
+      int feature = kFace;
+      const Vec3 q = detail::closest_on_triangle(centre, nodes[tri[0]].position,
+                                                 nodes[tri[1]].position, nodes[tri[2]].position,
+                                                 feature);
+      if ((centre - q).squaredNorm() < d * d) close |= sphere_bit(i);
     }
     if (close == 0) continue;
     const auto first = static_cast<std::size_t>(model.net_face_surface_begin[static_cast<std::size_t>(f)]);
