@@ -72,8 +72,8 @@ DataFootprint data_footprint(const Data& d) noexcept {
            n.spring_low_begin, n.spring_slot, n.near_obstacles, n.obstacle_axis,
            n.obstacle_rotation, n.near_bodies, n.near_sphere_end, n.near_spheres,
            n.face_candidates, n.face_lo, n.face_hi, n.node_outcode, n.surface_candidates, n.surface_lo,
-           n.surface_hi, n.surface_sphere_mask, n.surface_face_slot, n.surface_face_stamp, n.surface_point_stamp, n.surface_position,
-           n.surface_net_stamp, n.surface_net_torn, n.rest_count, n.rest_flags, n.pass_position,
+           n.surface_hi, n.surface_sphere_mask, n.surface_face_slot, n.surface_face_stamp,
+           n.surface_point_stamp, n.surface_position, n.surface_net_stamp, n.surface_net_torn, n.rest_count, n.rest_flags, n.pass_position,
            n.pass_velocity, n.still_flags, n.still_force, n.still_energy, n.active_nodes,
            n.active_positions, n.pass_positions, n.active_count, n.pass_count)};
   f.groups[6] = {"scratch block", sizeof(DataScratch)};

@@ -25,12 +25,13 @@ struct TissuePlane {
 };
 
 /// The tissue plane of the sphere whose primary contact (NodeContact::primary) is
-/// data.node_contacts[first, last) on `net` (an organ given by its material), as compute_net_forces()
-/// sees it (`data` for NetScratch::patch_*, which it writes): the load patch about the contact's material point, the plane through the touched fine
-/// point moved by the patch's mean displacement, the law (and its backstop) at the true sphere's
-/// depth, the pair's stiffness under the time-constant floor on the patch's mass. The entries'
-/// NodeContact::position and depth were made with a sphere of `position_radius` (m): the grown
-/// sphere before detail::cut_back_node_contacts(), the true one after. Uses NetScratch::patch_*.
+/// data.node_contacts[first, last) on `net` (an organ given by its material), as
+/// compute_net_forces() sees it: the load patch about the contact's material point, the plane
+/// through the touched fine point moved by the patch's mean displacement, the law (and its
+/// backstop) at the true sphere's depth, the pair's stiffness under the time-constant floor on
+/// the patch's mass. The entries' NodeContact::position and depth were made with a sphere of
+/// `position_radius` (m): the grown sphere before detail::cut_back_node_contacts(), the true one
+/// after. Writes NetScratch::patch_* (the patch; hence `data` not const).
 TissuePlane tissue_plane(const Model& model, Data& data, const NetModel& net, int first,
                          int last, double position_radius) noexcept;
 
