@@ -4,6 +4,7 @@
 #include "detail/multirate_net.hpp"
 #include "detail/net_tissue.hpp"
 #include "detail/net_surface.hpp"
+#include "numen/core/features.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -58,6 +59,7 @@ namespace {
 /// on an organ given by its material, the contact's entries consecutive (the sink writes them so).
 void build_tissue_planes(const Model& scene, Data& data, std::span<const int> device_body,
                          double margin, ContactPlaneSet& out) noexcept {
+  if constexpr (!kWithDeformable) return;  // no nets: tissue_plane() is not built
   const int n = std::clamp(data.num_node_contacts, 0, static_cast<int>(data.node_contacts.size()));
   const int np = static_cast<int>(scene.material_pairs.size());
   const int num_spheres = static_cast<int>(scene.body_spheres.size());
@@ -82,7 +84,8 @@ void build_tissue_planes(const Model& scene, Data& data, std::span<const int> de
       continue;
     }
     const Sphere& sp = scene.body_spheres[static_cast<std::size_t>(c.sphere_b)];
-    const TissuePlane t = tissue_plane(scene, data, nm, first, last, sp.radius);
+    TissuePlane t;
+    if constexpr (kWithDeformable) t = tissue_plane(scene, data, nm, first, last, sp.radius);
     if (!t.valid) continue;
     const double k = scene.material_pairs[static_cast<std::size_t>(c.material_pair)].stiffness;
     const bool loaded = t.force > 0.0 && t.stiffness > 0.0;
