@@ -22,6 +22,7 @@
 #include "numen/core/net_surface_map.hpp"
 #include "numen/hal/device/safety_supervisor.hpp"
 #include "numen/hal/device/sample_check.hpp"
+#include "numen/core/features.hpp"
 #include "numen/hal/features.hpp"
 #include "numen/platform/state_frame.hpp"
 #if NUMEN_WITH_OPENIGTLINK
@@ -328,8 +329,14 @@ void IgtlWorldServer::add_organs(std::string& out, const platform::StateFrameVie
     const core::NetModel& net = model_.nets[static_cast<std::size_t>(o.net)];
     for (std::size_t i = 0; i < o.points.size(); ++i) {
       const int k = static_cast<int>(i);
-      o.points[i] = 1e3 * (o.fine ? core::net_surface_position(model_, nodes_, net.surface_point_begin + k)
-                                  : nodes_[static_cast<std::size_t>(net.node_begin + k)].position);
+      const core::Vec3& node = nodes_[static_cast<std::size_t>(net.node_begin + k)].position;
+      // A fine surface needs the nets' code (a build without it has no net to draw).
+      if constexpr (core::kWithDeformable)
+        o.points[i] =
+            1e3 * (o.fine ? core::net_surface_position(model_, nodes_, net.surface_point_begin + k)
+                          : node);
+      else
+        o.points[i] = 1e3 * node;
     }
     o.packer->pack(h.time_ns, o.points, out);
   }
