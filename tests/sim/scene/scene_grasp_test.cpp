@@ -8,6 +8,7 @@
 #include <cmath>
 #include <string>
 
+#include "build_features.hpp"
 #include "numen/core/grasp.hpp"
 #include "numen/core/step_stages.hpp"
 #include "numen/sim/scene/scene.hpp"
@@ -36,6 +37,7 @@ spheres = [[0.0, 0.0, 0.0, 0.004]]
 }  // namespace
 
 TEST(SceneGrasp, KeysAreReadWithTheirDefaults) {
+  NUMEN_REQUIRE_DEFORMABLE();  // the default scene has an organ
   numen::test::TempDir dir;
   const std::string text = default_with_grasp(R"(
 [[grasp]]
@@ -85,6 +87,7 @@ tissue = false
 }
 
 TEST(SceneGrasp, ErrorsAreLocatedAtTheirKeys) {
+  NUMEN_REQUIRE_DEFORMABLE();  // the default scene has an organ
   numen::test::TempDir dir;
   using numen::test::expect_located;
   using numen::test::load_error;
@@ -117,6 +120,7 @@ TEST(SceneGrasp, ErrorsAreLocatedAtTheirKeys) {
 }
 
 TEST(SceneGrasp, ABodyHeavierThanTheGripHoldsIsWarnedWithTheNumbers) {
+  NUMEN_REQUIRE_DEFORMABLE();  // the default scene has an organ
   numen::test::TempDir dir;
   std::string text = default_with_grasp("\n[[grasp]]\nname = \"grasper\"\njaws = [\"jaw_1\", \"jaw_2\"]\n", 1.0);
   text = numen::test::replace(text, "gravity = [0.0, 0.0, 0.0]", "gravity = [0.0, 0.0, -9.81]");
@@ -129,6 +133,7 @@ TEST(SceneGrasp, ABodyHeavierThanTheGripHoldsIsWarnedWithTheNumbers) {
 }
 
 TEST(SceneGrasp, TheHeavyBodyWarningLeavesOutTheGraspersOwnInstrument) {
+  NUMEN_REQUIRE_DEFORMABLE();  // the default scene has an organ
   // Issue 70: a grip of 0.1 N and gravity on: the 20 g block (0.196 N) is warned; the grasper's
   // own tube (50 g, 0.49 N; joined to its jaws) is not something it grasps, and was warned too.
   numen::test::TempDir dir;
@@ -146,6 +151,7 @@ TEST(SceneGrasp, TheHeavyBodyWarningLeavesOutTheGraspersOwnInstrument) {
 }
 
 TEST(SceneGrasp, AMultirateSceneIsRefusedAtTheGrasp) {
+  NUMEN_REQUIRE_DEFORMABLE();  // the default scene has an organ
   numen::test::TempDir dir;
   const std::string text = default_with_grasp(
       "\n[multirate]\nscene_dt = 0.002\nmargin = 0.002\n\n[[grasp]]\nname = \"grasper\"\njaws = [\"jaw_1\", \"jaw_2\"]\n");
