@@ -414,6 +414,7 @@ TEST(IgtlWorldServer, FaultsRejectionsTheBusAndGraspsAreStatusAndStringMessages)
 // that connects gets every device's state. Device 0's STATUS "numen" and its words are as ever.
 TEST(IgtlWorldServer, EveryDevicesStateIsAStatusUnderItsOwnName) {
   NUMEN_REQUIRE_ARTICULATION();
+  NUMEN_REQUIRE_DEFORMABLE();  // the bimanual scene's organs
   const numen::sim::Scene scene =
       numen::sim::load_scene(std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/bimanual.toml");
   ASSERT_EQ(scene.extra_devices.size(), 1u);
