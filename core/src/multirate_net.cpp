@@ -65,12 +65,8 @@ void build_tissue_planes(const Model& scene, Data& data, std::span<const int> de
   const int num_spheres = static_cast<int>(scene.body_spheres.size());
   for (int i = 0; i < n;) {
     const NodeContact& c = data.node_contacts[static_cast<std::size_t>(i)];
-    int last = i + 1;  // the contact's entries: the same sphere and point
-    while (last < n && data.node_contacts[static_cast<std::size_t>(last)].primary == c.primary &&
-           data.node_contacts[static_cast<std::size_t>(last)].sphere_b == c.sphere_b &&
-           data.node_contacts[static_cast<std::size_t>(last)].body_b == c.body_b &&
-           data.node_contacts[static_cast<std::size_t>(last)].position == c.position)
-      ++last;
+    int last = i + 1;  // the contact's entries
+    while (last < n && same_contact(data.node_contacts[static_cast<std::size_t>(last)], c)) ++last;
     const int first = i;
     i = last;
     if (!c.primary || c.face < 0 || c.node < 0 || c.node >= scene.num_nodes() || c.material_pair < 0 ||

@@ -375,34 +375,55 @@ const NetModel* tissue_net(const Model& model, const NodeContact& ct) noexcept {
   return net.contact_modulus > 0.0 ? &net : nullptr;
 }
 
-/// The two-scale law (net_tissue_contact.hpp) of the tissue contact `ct` on `net`, with the
-/// material pair `mp` (its stiffness already under the time-constant floor): at the sphere's
-/// deepest contact (NodeContact::primary, its depth seen through the load patch) F(d), and at
-/// every contact of the sphere the backstop, the pair's penalty with a C¹ onset over r / 4
-/// (kTissueBackstopOnset) on d_fine − 1.5 r once the touched fine surface is `fine_depth` > 1.5 r
-/// deep (kTissueBackstopDepth); − c v_n with the pair's damping scaled by
-/// the law's stiffness over the pair's (c = c_pair k(d) / k_pair: the pair's time constant), the
-/// pair's friction; never a pull. `elastic` gets the elastic force, `patch` F(d), the part laid
-/// on the load patch (the rest acts on the contact's own nodes).
-[[gnu::noinline]] ContactForceResult tissue_contact_force(const Model& model, const NetModel& net, const NodeContact& ct,
-                                        double fine_depth, const Vec3& v_rel, const MaterialPair& mp,
-                                        double& elastic, double& patch) noexcept {
-  const double radius = model.body_spheres[static_cast<std::size_t>(ct.sphere_b)].radius -
-                        model.bodies[static_cast<std::size_t>(ct.body_b)].sphere_margin;
+/// The radius of the true sphere of contact `ct` (m): its body's sphere less the margin a
+/// multirate scene loop grew it by (BodyModel::sphere_margin; 0 elsewhere).
+double true_radius(const Model& model, const NodeContact& ct) noexcept {
+  return model.body_spheres[static_cast<std::size_t>(ct.sphere_b)].radius -
+         model.bodies[static_cast<std::size_t>(ct.body_b)].sphere_margin;
+}
+
+/// The elastic part of a tissue contact on `net` (net_tissue_contact.hpp) for a sphere of
+/// `radius`, the pair `mp` (its stiffness already under the time-constant floor): at the sphere's
+/// deepest contact (`primary`, `depth` seen through the load patch) F(d) and its slope, and the
+/// backstop, the pair's penalty with a C¹ onset over r / 4 (kTissueBackstopOnset) on
+/// d_fine − 1.5 r once the touched fine surface is `fine_depth` > 1.5 r deep
+/// (kTissueBackstopDepth), along `normal`.
+struct TissueElastic {
+  double force = 0.0;      ///< F(d) + the backstop (N).
+  double stiffness = 0.0;  ///< Its slope (N/m).
+  double patch = 0.0;      ///< F(d) alone: the part laid on the load patch (N).
+};
+TissueElastic tissue_elastic(const NetModel& net, double radius, bool primary, double depth,
+                             double fine_depth, const Vec3& normal, const MaterialPair& mp) noexcept {
   TissueContactForce e;
-  if (ct.primary)
+  if (primary)
     e = tissue_contact_force(
         make_tissue_contact_law(net.contact_modulus, radius, net.load_patch_radius, mp.stiffness),
-        ct.depth);
+        depth);
   // The backstop, its onset smoothed over a quarter radius (contact_force.hpp's C¹ onset).
   MaterialPair onset = mp;
   onset.onset_depth = kTissueBackstopOnset * radius;
   const ContactForceResult b = contact_penalty_force(
-      ct.normal, fine_depth - kTissueBackstopDepth * radius, Vec3::Zero(), onset);
-  elastic = e.force + b.normal_force;
-  patch = e.force;
+      normal, fine_depth - kTissueBackstopDepth * radius, Vec3::Zero(), onset);
+  return {e.force + b.normal_force, e.stiffness + (b.active ? b.stiffness : 0.0), e.force};
+}
+
+/// The two-scale law (net_tissue_contact.hpp) of the tissue contact `ct` on `net`, with the
+/// material pair `mp` (its stiffness already under the time-constant floor): tissue_elastic()
+/// at its depth (NodeContact::primary: seen through the load patch) and the touched fine
+/// surface's `fine_depth`; − c v_n with the pair's damping scaled by the law's stiffness over the
+/// pair's (c = c_pair k(d) / k_pair: the pair's time constant), the pair's friction; never a
+/// pull. `elastic` gets the elastic force, `patch` F(d), the part laid on the load patch (the
+/// rest acts on the contact's own nodes).
+[[gnu::noinline]] ContactForceResult tissue_contact_force(const Model& model, const NetModel& net, const NodeContact& ct,
+                                        double fine_depth, const Vec3& v_rel, const MaterialPair& mp,
+                                        double& elastic, double& patch) noexcept {
+  const TissueElastic e =
+      tissue_elastic(net, true_radius(model, ct), ct.primary, ct.depth, fine_depth, ct.normal, mp);
+  elastic = e.force;
+  patch = e.patch;
   ContactForceResult r;
-  r.stiffness = e.stiffness + (b.active ? b.stiffness : 0.0);
+  r.stiffness = e.stiffness;
   r.damping = mp.stiffness > 0.0 ? mp.damping * r.stiffness / mp.stiffness : 0.0;
   r.friction = mp.friction;
   const double v_n = ct.normal.dot(v_rel);
@@ -436,13 +457,6 @@ const NetModel* tissue_net(const Model& model, const NodeContact& ct) noexcept {
   s.patch_count = kept;
   s.patch_net = net.node_begin;
   s.patch_at = p;
-}
-
-/// Whether node contacts `a` and `b` are entries of one contact (the sink writes a contact's
-/// entries one after the other with the same sphere and point).
-inline bool same_contact(const NodeContact& a, const NodeContact& b) noexcept {
-  return a.primary == b.primary && a.body_b == b.body_b && a.sphere_b == b.sphere_b &&
-         a.position == b.position;
 }
 
 /// The plane of the primary tissue contact whose entries are data.node_contacts[first, last)
@@ -496,8 +510,7 @@ bool patch_plane(const Model& model, const Data& data, NetScratch& s, const NetM
   const BodyState& tool = data.bodies[static_cast<std::size_t>(ct.body_b)];
   const Sphere& sphere = model.body_spheres[static_cast<std::size_t>(ct.sphere_b)];
   const Vec3 centre = tool.position + tool.orientation * sphere.center;
-  // The true sphere's radius (a multirate scene loop grew it: BodyModel::sphere_margin).
-  const double radius = sphere.radius - model.bodies[static_cast<std::size_t>(ct.body_b)].sphere_margin;
+  const double radius = true_radius(model, ct);
   // The touched point (NodeContact::position is ½ (q + c − r o), o = −normal, r the radius the
   // contact was made with), moved by ū − u.
   out.touched = 2.0 * ct.position - centre - position_radius * ct.normal + (mean - own);
@@ -514,10 +527,8 @@ bool patch_plane(const Model& model, const Data& data, NetScratch& s, const NetM
   const NodeContact& ct = data.node_contacts[static_cast<std::size_t>(first)];
   s.patch_fine_depth = ct.depth;
   // The entries were cut back to the true sphere (a multirate scene loop's) or made with it.
-  const double radius = model.body_spheres[static_cast<std::size_t>(ct.sphere_b)].radius -
-                        model.bodies[static_cast<std::size_t>(ct.body_b)].sphere_margin;
   PatchPlane plane;
-  if (!patch_plane(model, data, s, net, first, last, radius, plane)) return;
+  if (!patch_plane(model, data, s, net, first, last, true_radius(model, ct), plane)) return;
   const Vec3 position = plane.touched + 0.5 * plane.depth * plane.outward;
   for (int c = first; c < last; ++c) {
     NodeContact& e = data.node_contacts[static_cast<std::size_t>(c)];
@@ -559,8 +570,7 @@ TissuePlane tissue_plane(const Model& model, Data& data, const NetModel& net, in
   TissuePlane out;
   NetScratch& s = data.scratch->net;
   const NodeContact& ct = data.node_contacts[static_cast<std::size_t>(first)];
-  const double margin = model.bodies[static_cast<std::size_t>(ct.body_b)].sphere_margin;
-  const double radius = model.body_spheres[static_cast<std::size_t>(ct.sphere_b)].radius - margin;
+  const double radius = true_radius(model, ct);
   PatchPlane plane;
   if (!patch_plane(model, data, s, net, first, last, position_radius, plane)) return out;
   out.valid = true;
@@ -580,15 +590,12 @@ TissuePlane tissue_plane(const Model& model, Data& data, const NetModel& net, in
                                                  model.solver.node_contact_max_omega_dt);
     mp.stiffness = std::min(mp.stiffness, limit);
   }
+  const TissueElastic e =
+      tissue_elastic(net, radius, true, out.depth, out.fine_depth, -out.normal, mp);
+  out.force = e.force;
+  out.stiffness = e.stiffness;
   const TissueContactLaw law =
       make_tissue_contact_law(net.contact_modulus, radius, net.load_patch_radius, mp.stiffness);
-  const TissueContactForce e = tissue_contact_force(law, out.depth);
-  MaterialPair onset = mp;
-  onset.onset_depth = kTissueBackstopOnset * radius;
-  const ContactForceResult b = contact_penalty_force(
-      -out.normal, out.fine_depth - kTissueBackstopDepth * radius, Vec3::Zero(), onset);
-  out.force = e.force + b.normal_force;
-  out.stiffness = e.stiffness + (b.active ? b.stiffness : 0.0);
   out.patch_compliance = law.patch;
   const double d_ref = 0.01 * radius;
   out.secant_stiffness = tissue_contact_force(law, d_ref).force / d_ref;
@@ -703,11 +710,11 @@ void compute_net_forces(const Model& model, Data& data) noexcept {
     }
     const NetModel* tissue = any_tissue ? tissue_net(model, ct) : nullptr;
     if (tissue && ct.primary &&
-        (c == 0 || !same_contact(data.node_contacts[static_cast<std::size_t>(c - 1)], ct))) {
+        (c == 0 || !detail::same_contact(data.node_contacts[static_cast<std::size_t>(c - 1)], ct))) {
       // The sphere's deepest contact, at its first entry: all its entries seen through its load
       // patch (the others then find it in NetScratch::patch_*).
       int last = c + 1;
-      while (last < nc && same_contact(data.node_contacts[static_cast<std::size_t>(last)], ct)) ++last;
+      while (last < nc && detail::same_contact(data.node_contacts[static_cast<std::size_t>(last)], ct)) ++last;
       see_through_patch(model, data, s, *tissue, c, last);
     }
     // As detected, on the fine surface: the backstop's depth.

@@ -2,13 +2,21 @@
 /// @file net_tissue.hpp
 /// Private to numen::core (core/src/detail): the plane a tool's sphere meets an organ given by
 /// its material through (net_tissue_contact.hpp's load patch), for the multirate device loop's
-/// tissue planes (multirate_net.cpp; docs/tissue.md, "Multirate"). No allocation.
+/// tissue planes (multirate_net.cpp; docs/tissue.md, "Multirate"), and what tells a contact's
+/// entries apart. No allocation.
 
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"
 #include "numen/core/types.hpp"
 
 namespace numen::core::detail {
+
+/// Whether node contacts `a` and `b` are entries of one contact (the sink writes a contact's
+/// entries one after the other with the same sphere and point).
+inline bool same_contact(const NodeContact& a, const NodeContact& b) noexcept {
+  return a.primary == b.primary && a.body_b == b.body_b && a.sphere_b == b.sphere_b &&
+         a.position == b.position;
+}
 
 /// A tissue contact seen through its load patch at the scene loop's sample.
 struct TissuePlane {
