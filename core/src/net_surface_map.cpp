@@ -1,6 +1,5 @@
 /// @file net_surface_map.cpp
-/// A fine surface mapped onto a net (net_surface_map.hpp; docs/organs.md, "A fine surface on a
-/// coarser net").
+/// A fine surface mapped onto a net (net_surface_map.hpp; docs/fine-surface.md).
 
 #include "numen/core/net_surface_map.hpp"
 

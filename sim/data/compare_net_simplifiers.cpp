@@ -1,6 +1,6 @@
 /// @file compare_net_simplifiers.cpp
 /// Measures the two simplifiers Debian 12 packages for making an organ's coarse simulation net
-/// out of a fine surface (docs/organs.md, "A fine surface on a coarser net"): CGAL 5.5's
+/// out of a fine surface (docs/fine-surface.md): CGAL 5.5's
 /// Surface_mesh_simplification (edge collapse, link condition) with Lindstrom–Turk cost and
 /// placement ("CGAL", what numen uses) and with Garland–Heckbert plane quadrics ("CGAL-GH"), and
 /// meshoptimizer 0.18's meshopt_simplify (edge collapse onto existing vertices, quadric error).

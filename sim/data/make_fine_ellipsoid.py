@@ -1,8 +1,7 @@
 #!/usr/bin/env python3
 """Writes a closed ellipsoid of semi-axes 35 × 25 × 20 mm (the shipped organ's, before its lobe
 shape) as a fine Wavefront OBJ surface: the kind of mesh a user's organ from CT is, for measuring
-how numen makes a coarser simulation net of it (docs/organs.md, "A fine surface on a coarser
-net"). Procedural, no input data; not shipped (generate it where it is needed).
+how numen makes a coarser simulation net of it (docs/fine-surface.md). Procedural, no input data; not shipped (generate it where it is needed).
 
     python3 sim/data/make_fine_ellipsoid.py F > ellipsoid.obj
 

@@ -1,5 +1,5 @@
-// A fine surface mapped onto a coarser net (core/src/net_surface_map.cpp; docs/organs.md, "A
-// fine surface on a coarser net"): the embeddings reproduce the fine vertices at rest and follow
+// A fine surface mapped onto a coarser net (core/src/net_surface_map.cpp;
+// docs/fine-surface.md): the embeddings reproduce the fine vertices at rest and follow
 // the net, bad input is refused with the model unchanged, every fine triangle is listed under the
 // net triangles it rides on, and an organ with a fine surface meets the tool with it — where it
 // stands off the net, with the net's own contacts where it is the net's own surface, its shares

@@ -72,8 +72,7 @@ inline std::string mesh_load_message(const std::string& path) {
 /// scene `units = "mm"`) as a Wavefront OBJ: core::make_icosphere(1, subdivisions) scaled,
 /// 10·4^s + 2 vertices and 20·4^s triangles (s = 4: 2562 and 5120), outward. Optionally without
 /// its last `holes` triangles (an open surface), and with its first vertex `spike` times as far
-/// from the centre (a thin spike). The fine organ surface of the net-size tests (docs/organs.md,
-/// "A fine surface on a coarser net").
+/// from the centre (a thin spike). The fine organ surface of the net-size tests (docs/fine-surface.md).
 inline std::string fine_ellipsoid_obj(int subdivisions, int holes = 0, double spike = 1.0) {
   core::TriangleMesh m = core::make_icosphere(1.0, subdivisions);
   m.vertices.front() *= spike;

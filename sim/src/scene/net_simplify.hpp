@@ -1,7 +1,7 @@
 #pragma once
 /// @file net_simplify.hpp
 /// An organ's coarse simulation net made from its fine surface, and the nearest net triangle of
-/// each fine vertex (docs/organs.md, "A fine surface on a coarser net"): CGAL 5.5's
+/// each fine vertex (docs/fine-surface.md): CGAL 5.5's
 /// Surface_mesh_simplification (edge collapse, Lindstrom & Turk's cost and placement, the link
 /// condition keeping the surface manifold) and its AABB tree. CGAL's headers are included by
 /// net_simplify.cpp only (a heavy compile). Private to numen::sim; load time only (allocates).

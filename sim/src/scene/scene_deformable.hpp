@@ -26,7 +26,7 @@ namespace numen::sim {
 /// local to the net) to `triangles`, and how it was made to `loads`, in the order of model.nets.
 /// A mesh file of more vertices than the net asked for (`nodes`, `edge_length`, else
 /// kDefaultNetNodes) is simplified into the net (net_simplify.hpp) and rides on it as its fine
-/// surface (core::add_net_surface(); docs/organs.md, "A fine surface on a coarser net"); bad
+/// surface (core::add_net_surface(); docs/fine-surface.md); bad
 /// sizes, a mesh with holes and a failed simplification are errors located at the key that asked
 /// for the net's size (`file` for the default). Appends to `warnings` a mesh whose surface
 /// intersects itself (core::find_self_intersections(), at `file`, or at `mesh` for a built-in
@@ -41,7 +41,7 @@ void parse_deformables(const TomlTable& root, const std::filesystem::path& scene
 
 /// Largest distance from an organ's fine surface to the net simplified from it, as a share of
 /// the organ's size (the longest side of the fine mesh's bounding box), before a load warning
-/// (docs/organs.md, "A fine surface on a coarser net"): 2 %, 1.4 mm on the 70 mm shipped
+/// (docs/fine-surface.md): 2 %, 1.4 mm on the 70 mm shipped
 /// ellipsoid, where a 1024-node net stands 0.07–0.1 mm off.
 inline constexpr double kMaxFineOffsetShare = 0.02;
 

@@ -1,4 +1,4 @@
-// Organs at the user's scale (docs/organs.md, "A fine surface on a coarser net"): figure
+// Organs at the user's scale (docs/fine-surface.md): figure
 // reproductions, label figures (tests/CMakeLists.txt: OrganScale.*), left out of the README's
 // test command. A user's fine organ mesh — a closed 35 × 25 × 20 mm ellipsoid of 20 480 or
 // 200 000 triangles from sim/data/make_fine_ellipsoid.py — in place of the shipped organ runs the
@@ -75,7 +75,7 @@ TEST(OrganScale, FineEllipsoidOrgansRunTheShippedExcerptOnANetOfTheDefaultSize) 
   // The default scene with the organ (and its rigid core, the same mesh scaled 3 mm in) read
   // from the fine ellipsoid: loaded on a net of the default size carrying the file's surface, run
   // offline over the shipped excerpt, clean. Printed: the net, the load, the step times and the
-  // real-time factor (docs/organs.md, "A fine surface on a coarser net").
+  // real-time factor (docs/fine-surface.md).
   NUMEN_REQUIRE_ARTICULATION();  // the default scene's instrument
   NUMEN_REQUIRE_DEFORMABLE();
   TempDir dir;

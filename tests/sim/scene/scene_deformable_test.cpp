@@ -651,8 +651,8 @@ TEST(DeformableLoaderErrors, UnknownMaterial) {
 
 // ---------------------------------------------------------------- net size of a mesh file
 
-// A fine organ surface from a mesh file, simplified into a coarser net at load (docs/organs.md,
-// "A fine surface on a coarser net"): kMiniNet's deformable made of fine.obj (the 35 × 25 × 20 mm
+// A fine organ surface from a mesh file, simplified into a coarser net at load (docs/fine-surface.md):
+// kMiniNet's deformable made of fine.obj (the 35 × 25 × 20 mm
 // ellipsoid, 2562 vertices, in mm), placed off the core's origin, with `keys` added.
 std::string fine_organ_scene(const std::string& keys) {
   return replace(kMiniNet, "mesh = \"icosphere\"\nradius = 0.01\nsubdivisions = 1",

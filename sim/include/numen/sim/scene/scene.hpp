@@ -74,8 +74,8 @@ struct AdmittanceScene {
 /// counter-clockwise seen from outside: for display (the dynamics use the springs).
 using NetTriangles = std::vector<std::array<int, 3>>;
 
-/// How one organ's net was made from its mesh (docs/organs.md, "A fine surface on a coarser
-/// net"; `numen info` reports it). A mesh file of more vertices than the net asked for (scene keys
+/// How one organ's net was made from its mesh (docs/fine-surface.md; `numen info` reports
+/// it). A mesh file of more vertices than the net asked for (scene keys
 /// `nodes` or `edge_length`, else kDefaultNetNodes) is simplified into the net, and the file's
 /// own surface rides on it as the net's fine surface (core::add_net_surface(); the model's
 /// NetModel::surface_point_count and surface_face_count). Otherwise the mesh is the net.

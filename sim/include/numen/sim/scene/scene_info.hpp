@@ -53,8 +53,7 @@ struct MeshLine {
   std::size_t band_heap = 0;  ///< Of which the narrow band (core::mesh_band_bytes()); a net: 0.
   double band_width_m = 0.0;  ///< The band's width B (m); 0: none.
   std::string band_note;      ///< Why a shape has no band (the memory cap), else "".
-  /// A net's: how it was made from its mesh (Scene::net_loads; docs/organs.md, "A fine surface
-  /// on a coarser net"). Zero, false or empty for the other meshes.
+  /// A net's: how it was made from its mesh (Scene::net_loads; docs/fine-surface.md). Zero, false or empty for the other meshes.
   bool simplified = false;  ///< Simplified from its mesh file, whose surface rides on it.
   std::string nodes_from;   ///< NetLoad::nodes_from: "nodes", "edge_length", "default", "mesh".
   int mesh_vertices = 0;    ///< The mesh as read: its vertices (NetLoad::mesh_vertices).

@@ -10,7 +10,7 @@
 ///   "<body>_target" (numen's names, the default), or PLUS's "<Body>ToScene" and
 ///   "<Body>TargetToScene" (igtl_world_transform_name()).
 /// - POLYDATA, one per deformable named after it: its surface (the fine surface when the net
-///   carries one, docs/organs.md "A fine surface on a coarser net"; else the net's nodes and
+///   carries one, docs/fine-surface.md; else the net's nodes and
 ///   triangles), points and triangles, to each client when it connects (at the frame it is
 ///   first served), then at `organ_rate_hz` per second of simulated time (0: never again). Each
 ///   update is the whole POLYDATA, triangles included: OpenIGTLink has no points-only update
