@@ -64,12 +64,15 @@ numen_install_headers(${PROJECT_BINARY_DIR}/core/include  # generated
 # cobs.hpp and crc16.hpp (the serial frame's byte stuffing and checksum, reached through
 # serial_frame.hpp), and the backends this build leaves out (NUMEN_WITH_*).
 set(_hal_headers
-  numen/hal/canopen/canopen.hpp numen/hal/canopen/canopen_master.hpp numen/hal/canopen/cia402.hpp
+  numen/hal/canopen/canopen.hpp numen/hal/canopen/cia402.hpp
+  numen/hal/canopen/cia402_settings.hpp
   numen/hal/canopen/dcf.hpp numen/hal/canopen/dcf_configuration.hpp
-  numen/hal/canopen/device_lifecycle.hpp numen/hal/canopen/emcy.hpp
-  numen/hal/canopen/heartbeat.hpp numen/hal/canopen/nmt.hpp numen/hal/canopen/nmt_master.hpp
+  numen/hal/canopen/emcy.hpp
+  numen/hal/canopen/heartbeat.hpp numen/hal/canopen/nmt.hpp
   numen/hal/canopen/pdo_mapping.hpp
   numen/hal/canopen/sdo.hpp numen/hal/canopen/sdo_poller.hpp
+  numen/hal/device/canopen_master.hpp numen/hal/device/device_lifecycle.hpp
+  numen/hal/device/nmt_master.hpp
   numen/hal/device/admittance_device.hpp numen/hal/device/axis.hpp
   numen/hal/device/device.hpp numen/hal/device/device_config.hpp
   numen/hal/device/force_sensor.hpp numen/hal/device/impedance_device.hpp

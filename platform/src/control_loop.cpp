@@ -10,7 +10,7 @@
 #include <string>
 
 #include "numen/core/joint.hpp"
-#include "numen/hal/canopen/nmt_master.hpp"
+#include "numen/hal/device/nmt_master.hpp"
 #include "numen/hal/device/admittance_device.hpp"
 #include "numen/hal/device/bus_filters.hpp"
 

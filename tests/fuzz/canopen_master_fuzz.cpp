@@ -1,5 +1,5 @@
 /// @file canopen_master_fuzz.cpp
-/// libFuzzer harness of the controller's CANopen master (hal/canopen/canopen_master.hpp): frames of
+/// libFuzzer harness of the controller's CANopen master (hal/device/canopen_master.hpp): frames of
 /// every CANopen object of nodes 1–8 (boot-ups and heartbeats, EMCY, CiA 402 drive TPDOs with
 /// statusword and torque, NMT, SYNC, SDO) and others through CanopenMaster::on_frame(), with
 /// update(), begin_period() and the drive RPDOs between them, for the managed trocar,
@@ -9,7 +9,7 @@
 #include <cstdint>
 
 #include "fuzz_input.hpp"
-#include "numen/hal/canopen/canopen_master.hpp"
+#include "numen/hal/device/canopen_master.hpp"
 #include "numen/hal/transport/sim_bus.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {

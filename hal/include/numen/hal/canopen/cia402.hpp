@@ -16,7 +16,7 @@
 
 #include <cstdint>
 
-#include "numen/hal/device/device_status.hpp"  // Cia402MasterSettings: a supervision setting
+#include "numen/hal/canopen/cia402_settings.hpp"
 
 namespace numen::hal {
 

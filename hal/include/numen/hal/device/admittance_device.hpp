@@ -14,7 +14,7 @@
 #include <vector>
 
 #include "numen/core/types.hpp"
-#include "numen/hal/canopen/device_lifecycle.hpp"
+#include "numen/hal/device/device_lifecycle.hpp"
 #include "numen/hal/device/device.hpp"
 #include "numen/hal/transport/bus.hpp"
 #include "numen/hal/device/device_config.hpp"

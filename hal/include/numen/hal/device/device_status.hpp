@@ -3,7 +3,8 @@
 /// What a device's supervision says, as the code above hal reads it through the device face
 /// (hal::Device; platform::ControlLoop, sim's run and summaries): the lifecycle states, the
 /// start-up phases, the fault causes and their records, the supervision settings a device is
-/// built with (LifecycleSettings, SupervisionSettings, the drives' Cia402MasterSettings), and
+/// built with (LifecycleSettings, SupervisionSettings, and the drives' Cia402MasterSettings of
+/// canopen/cia402_settings.hpp, included here), and
 /// one device's report (DeviceReport:
 /// its protocol's figures — start-up, lifecycle, faults, EMCY, heartbeats, SDO reads — without
 /// naming the protocol's classes). The managed CANopen stack (canopen_master.hpp,
@@ -13,6 +14,8 @@
 #include <cstdint>
 #include <string>
 #include <vector>
+
+#include "numen/hal/canopen/cia402_settings.hpp"
 
 namespace numen::hal {
 
@@ -145,17 +148,6 @@ struct SupervisionSettings : LifecycleSettings {
   /// Consecutive overrun periods, >= 1, that latch (an overrun followed by a period on time
   /// restarts the count).
   std::uint32_t overrun_limit = 3;
-};
-
-/// Creation settings of a Cia402Master (cia402.hpp), each drive's: how long a drive may take
-/// to make a transition before the supervision reports it stuck (FaultCause::kDriveStuck).
-/// Here, with the other supervision settings, so that a device's settings
-/// (ImpedanceSettings::drive_settings) reach it without the CiA 402 header.
-struct Cia402MasterSettings {
-  /// Periods, >= 3, that the drive may stay in one state while the master waits for a
-  /// transition (towards the target, or out of fault after a reset) before it is reported
-  /// stuck. At 1 kHz the default is 0.5 s; a drive's power-up (not ready to switch on) counts.
-  std::uint32_t transition_timeout_periods = 500;
 };
 
 /// The NMT start-up's figures (the base of CanopenMaster's StartupReport; a DeviceReport's).

@@ -21,7 +21,7 @@
 #include <cstdint>
 #include <memory>
 
-#include "numen/hal/canopen/canopen_master.hpp"
+#include "numen/hal/device/canopen_master.hpp"
 #include "numen/hal/device/impedance_device.hpp"
 #include "numen/hal/device/safety_supervisor.hpp"
 

@@ -37,7 +37,7 @@
 
 #include "numen/hal/transport/bus.hpp"
 #include "numen/hal/canopen/cia402.hpp"
-#include "numen/hal/canopen/device_lifecycle.hpp"
+#include "numen/hal/device/device_lifecycle.hpp"
 #include "numen/hal/canopen/emcy.hpp"
 #include "numen/hal/canopen/heartbeat.hpp"
 #include "numen/hal/device/kinematics.hpp"

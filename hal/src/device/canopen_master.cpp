@@ -2,7 +2,7 @@
 /// The controller's side of the managed CANopen stack: NMT start-up, heartbeats, EMCY, CiA 402
 /// drive masters and their static PDOs.
 
-#include "numen/hal/canopen/canopen_master.hpp"
+#include "numen/hal/device/canopen_master.hpp"
 
 #include <algorithm>
 #include <stdexcept>

@@ -1,7 +1,7 @@
 // Tests of hal/canopen_master: the NMT start-up against the managed DeviceEmulator over SimBus
 // (phases and exact periods, retries of lost commands, the start-up deadline), the routing of
 // drive TPDOs, heartbeats and EMCYs, and the drive RPDOs (controlword + gated target torque).
-#include "numen/hal/canopen/canopen_master.hpp"
+#include "numen/hal/device/canopen_master.hpp"
 
 #include <gtest/gtest.h>
 

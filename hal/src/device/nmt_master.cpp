@@ -1,7 +1,7 @@
 /// @file nmt_master.cpp
 /// The NMT master and controller heartbeat of one CAN network, shared by its devices.
 
-#include "numen/hal/canopen/nmt_master.hpp"
+#include "numen/hal/device/nmt_master.hpp"
 
 #include <stdexcept>
 #include <string>

@@ -58,7 +58,7 @@
 #include "numen/hal/canopen/heartbeat.hpp"
 #include "numen/hal/device/kinematics.hpp"
 #include "numen/hal/canopen/nmt.hpp"
-#include "numen/hal/canopen/nmt_master.hpp"
+#include "numen/hal/device/nmt_master.hpp"
 #include "numen/hal/canopen/pdo_mapping.hpp"
 
 #include "numen/hal/device/device_status.hpp"

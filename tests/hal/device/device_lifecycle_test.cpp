@@ -1,7 +1,7 @@
-// Tests of numen/hal/canopen/device_lifecycle.hpp: every transition from every state (allowed or
+// Tests of numen/hal/device/device_lifecycle.hpp: every transition from every state (allowed or
 // refused with its reason), the safe stop (zero torque at once, kFault on drives disabled or
 // exactly at the timeout), rearm only without a cause present, no allocation per period.
-#include "numen/hal/canopen/device_lifecycle.hpp"
+#include "numen/hal/device/device_lifecycle.hpp"
 
 #include <gtest/gtest.h>
 

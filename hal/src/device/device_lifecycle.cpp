@@ -1,7 +1,7 @@
 /// @file device_lifecycle.cpp
 /// DeviceLifecycle: unconfigured / inactive / active / safe stop / fault (see the header).
 
-#include "numen/hal/canopen/device_lifecycle.hpp"
+#include "numen/hal/device/device_lifecycle.hpp"
 
 #include <stdexcept>
 

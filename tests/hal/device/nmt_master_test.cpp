@@ -4,7 +4,7 @@
 // device's nodes; the period's commands go out once every device has submitted; one controller
 // heartbeat per network; with a minimal device's nodes on the network (a bystander) nothing is
 // broadcast; the wirings one network cannot hold are refused; no allocation.
-#include "numen/hal/canopen/nmt_master.hpp"
+#include "numen/hal/device/nmt_master.hpp"
 
 #include <gtest/gtest.h>
 
