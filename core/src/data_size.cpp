@@ -70,10 +70,11 @@ DataFootprint data_footprint(const Data& d) noexcept {
            n.sweep_springs.weight_isotropic, n.sweep_springs.high, n.spring_constants.rest_length,
            n.spring_constants.stiffness, n.spring_constants.damping, n.spring_length,
            n.spring_low_begin, n.spring_slot, n.near_obstacles, n.obstacle_axis,
-           n.obstacle_rotation, n.near_bodies, n.near_sphere_end, n.near_spheres,
+           n.obstacle_rotation, n.near_bodies, n.near_sphere_end, n.near_spheres, n.near_order, n.near_key,
            n.face_candidates, n.face_lo, n.face_hi, n.node_outcode, n.surface_candidates, n.surface_lo,
            n.surface_hi, n.surface_sphere_mask, n.surface_face_slot, n.surface_face_stamp,
-           n.surface_point_stamp, n.surface_position, n.surface_net_stamp, n.surface_net_torn, n.rest_count, n.rest_flags, n.pass_position,
+           n.surface_point_stamp, n.surface_position, n.surface_net_stamp, n.surface_net_torn,
+           n.surface_cluster_stamp, n.surface_cluster_close, n.rest_count, n.rest_flags, n.pass_position,
            n.pass_velocity, n.still_flags, n.still_force, n.still_energy, n.active_nodes,
            n.active_positions, n.pass_positions, n.active_count, n.pass_count)};
   f.groups[6] = {"scratch block", sizeof(DataScratch)};
@@ -93,7 +94,8 @@ ModelFootprint model_footprint(const Model& m) noexcept {
   f.groups[3] = {"nets", heap(m.nets, m.net_springs, m.node_rest, m.node_mass, m.node_radius,
                               m.node_net, m.node_sweep_order, m.node_spring_begin, m.node_springs,
                               m.net_faces, m.net_surface_points, m.net_surface_faces,
-                              m.net_face_surface_begin, m.net_face_surface_faces)};
+                              m.net_face_surface_begin, m.net_face_surface_faces,
+                              m.net_face_surface_cluster, m.net_surface_clusters)};
   std::size_t meshes = heap(m.meshes);
   for (const MeshShape& s : m.meshes) meshes += s.memory_bytes();
   f.groups[4] = {"meshes", meshes};

@@ -111,6 +111,8 @@ void NetScratch::resize(const Model& model) {
   std::size_t body_spheres = 0;  // Σ sphere_count: room even if bodies shared a range
   for (const BodyModel& b : model.bodies) body_spheres += static_cast<std::size_t>(b.sphere_count);
   near_spheres.assign(n > 0 ? body_spheres : 0, 0);
+  near_order.assign(n > 0 && !model.net_surface_points.empty() ? body_spheres : 0, 0);
+  near_key.assign(near_order.size(), 0.0);
   // Room for the largest net's count of `what` (none without nodes).
   const auto largest = [&](int NetModel::*what) {
     std::size_t most = 0;
@@ -134,6 +136,8 @@ void NetScratch::resize(const Model& model) {
   const std::size_t carriers = n > 0 && !model.net_surface_points.empty() ? model.net_faces.size() : 0;
   surface_net_stamp.assign(carriers, 0);
   surface_net_torn.assign(carriers, 0);
+  surface_cluster_stamp.assign(n > 0 ? model.net_surface_clusters.size() : 0, 0);
+  surface_cluster_close.assign(n > 0 ? model.net_surface_clusters.size() : 0, 0);
   surface_stamp = 0;
   std::size_t patch = 0;
   for (const NetModel& net : model.nets) patch = std::max(patch, net.surface_node_area.size());

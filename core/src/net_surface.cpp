@@ -7,6 +7,7 @@
 #include "detail/net_surface.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <numbers>
@@ -16,6 +17,7 @@
 #include "detail/data_scratch.hpp"
 #include "detail/mesh_shape_query.hpp"
 #include "detail/net_scratch.hpp"
+#include "detail/net_surface_frame.hpp"
 #include "numen/core/data.hpp"
 #include "numen/core/net_surface_map.hpp"
 
@@ -78,6 +80,12 @@ void collide_candidates(const Model& model, const Data& data, const NetScratch& 
   const double* R = cs.sphere_r.data();
   const Vec3* sw = cs.sphere_world.data();
   const std::int32_t* near = ns.near_spheres.data();
+  // The spheres some candidate's mask names: the others meet none of them.
+  std::uint64_t any = ~std::uint64_t{0};
+  if (mask) {
+    any = 0;
+    for (int m = 0; m < nc; ++m) any |= mask[m];
+  }
   int j = 0;
   for (int k = 0; k < num_near; ++k) {
     const int body = ns.near_bodies[static_cast<std::size_t>(k)];
@@ -87,6 +95,7 @@ void collide_candidates(const Model& model, const Data& data, const NetScratch& 
     const BodyModel& bm = model.bodies[static_cast<std::size_t>(body)];
     const Vec3& com = data.bodies[static_cast<std::size_t>(body)].position;
     for (int i = begin; i < end; ++i) {
+      if (!(any & sphere_bit(i))) continue;
       const int s = near[i];
       const Vec3& centre = sw[s];
       const double r = R[s];
@@ -243,6 +252,73 @@ inline bool finite(const Vec3& v) noexcept {
   return std::isfinite(v.x()) && std::isfinite(v.y()) && std::isfinite(v.z());
 }
 
+/// How much a patch's bounds grow beyond what its corners and offsets give (m): the rounding
+/// of its corners' and its vertices' positions, many orders below it.
+constexpr double kClusterSlack = 1e-6;
+
+/// The near spheres among `close` (bits as NetScratch::surface_sphere_mask's, i <
+/// `num_spheres`) whose radius reaches patch `pc` (NetSurfaceCluster, its first record) at the
+/// nodes' current positions: the bounds of its records' parallelograms, grown by its largest
+/// offset and kClusterSlack, and for a patch on one net triangle that parallelogram (its two
+/// triangles) grown likewise. A sphere left out is at least its radius from every point of the patch's
+/// triangles, so none of them touches it or passes within kSamePoint of a point that does.
+/// Non-finite nodes give no sphere.
+std::uint64_t cluster_spheres(const Model& model, const CollisionScratch& cs,
+                              const std::int32_t* near, const NodeState* nodes, int pc,
+                              std::uint64_t close, int num_spheres) noexcept {
+  const NetSurfaceCluster* rec = model.net_surface_clusters.data() + pc;
+  // Each record's parallelogram: the corners (w_0, w_1, 1 − w_0 − w_1) of the box of the first
+  // two weights, at its triangle's current corners: x = d + w_0 (a − d) + w_1 (b − d).
+  Vec3 p00, p10, p01, p11;
+  const auto corners = [&](const NetSurfaceCluster& c) {
+    const std::array<int, 3>& t = model.net_faces[static_cast<std::size_t>(c.face)];
+    const Vec3& d = nodes[t[2]].position;
+    const Vec3 u = nodes[t[0]].position - d, v = nodes[t[1]].position - d;
+    const double lo0 = c.weights_lo[0], lo1 = c.weights_lo[1];
+    p00 = d + lo0 * u + lo1 * v;
+    const Vec3 du = (double{c.weights_hi[0]} - lo0) * u;
+    const Vec3 dv = (double{c.weights_hi[1]} - lo1) * v;
+    p10 = p00 + du, p01 = p00 + dv, p11 = p10 + dv;
+  };
+  Vec3 lo = Vec3::Constant(collision_detail::kInf), hi = Vec3::Constant(-collision_detail::kInf);
+  for (int q = rec->parts - 1; q >= 0; --q) {  // the first record's corners are left in p00…p11
+    corners(rec[q]);
+    lo = lo.cwiseMin(p00).cwiseMin(p10).cwiseMin(p01).cwiseMin(p11);
+    hi = hi.cwiseMax(p00).cwiseMax(p10).cwiseMax(p01).cwiseMax(p11);
+  }
+  const double grow = double{rec->offset_max} + kClusterSlack;
+  lo.array() -= grow;
+  hi.array() += grow;
+  // Its bounds first; then, for a patch on one net triangle, the parallelogram itself (its two
+  // triangles) grown by the offsets.
+  const auto reaches = [&](int i) {
+    const int sp = near[i];
+    const double r = cs.sphere_r[static_cast<std::size_t>(sp)];
+    const Vec3& centre = cs.sphere_world[static_cast<std::size_t>(sp)];
+    if (!(detail::box_distance2(centre, lo, hi) < r * r)) return false;
+    if (rec->parts > 1) return true;
+    const double reach = r + grow;
+    int feature = kFace;
+    if ((centre - detail::closest_on_triangle(centre, p00, p10, p11, feature)).squaredNorm() < reach * reach)
+      return true;
+    return (centre - detail::closest_on_triangle(centre, p00, p11, p01, feature)).squaredNorm() < reach * reach;
+  };
+  std::uint64_t bits = 0;
+  for (std::uint64_t rest = close; rest != 0; rest &= rest - 1) {
+    const int i = std::countr_zero(rest);
+    if (i < 63) {
+      if (reaches(i)) bits |= sphere_bit(i);
+      continue;
+    }
+    for (int j = 63; j < num_spheres; ++j)  // bit 63 stands for every sphere from 63 on
+      if (reaches(j)) {
+        bits |= sphere_bit(j);
+        break;
+      }
+  }
+  return bits;
+}
+
 /// The fine triangles riding on the net triangles near the `num_spheres` near spheres (a net
 /// triangle whose bounds come within a sphere's radius plus the net's surface_reach of its
 /// centre), whose bounds at their vertices' current positions meet [qlo, qhi] (the near spheres'
@@ -258,6 +334,7 @@ int gather_surface_candidates(const Model& model, const Data& data, NetScratch& 
     std::fill(ns.surface_face_stamp.begin(), ns.surface_face_stamp.end(), 0u);
     std::fill(ns.surface_point_stamp.begin(), ns.surface_point_stamp.end(), 0u);
     std::fill(ns.surface_net_stamp.begin(), ns.surface_net_stamp.end(), 0u);
+    std::fill(ns.surface_cluster_stamp.begin(), ns.surface_cluster_stamp.end(), 0u);
     ns.surface_stamp = 1;
   }
   const std::uint32_t stamp = ns.surface_stamp;
@@ -265,12 +342,25 @@ int gather_surface_candidates(const Model& model, const Data& data, NetScratch& 
   const Vec3 plo = qlo - Vec3::Constant(reach), phi = qhi + Vec3::Constant(reach);
   const int room = static_cast<int>(ns.surface_candidates.size());
   const std::span<const NodeState> node_states(data.nodes.data(), data.nodes.size());
+  // The net triangle whose riders are being gathered: its corners and frame, computed once for
+  // the fine vertices on it (the same arithmetic as net_surface_position()).
+  int face_now = -1;
+  const Vec3* corner_now[3] = {nullptr, nullptr, nullptr};
+  Mat3 frame_now;
+  bool frame_ok = false;
   const auto position = [&](int p) -> const Vec3& {
     Vec3& x = ns.surface_position[static_cast<std::size_t>(p)];
     std::uint32_t& st = ns.surface_point_stamp[static_cast<std::size_t>(p)];
     if (st != stamp) {
       st = stamp;
-      x = net_surface_position(model, node_states, p);
+      const NetSurfacePoint& e = model.net_surface_points[static_cast<std::size_t>(p)];
+      if (e.face == face_now) {
+        const Vec3 foot = e.weights.x() * *corner_now[0] + e.weights.y() * *corner_now[1] +
+                          e.weights.z() * *corner_now[2];
+        x = frame_ok ? Vec3(foot + frame_now * e.offset) : foot;
+      } else {
+        x = net_surface_position(model, node_states, p);
+      }
     }
     return x;
   };
@@ -284,6 +374,27 @@ int gather_surface_candidates(const Model& model, const Data& data, NetScratch& 
     return torn_f != 0;
   };
   const std::int32_t* near = ns.near_spheres.data();
+  const std::int32_t* cluster_of = model.net_face_surface_cluster.data();
+  // The near spheres sorted along the query box's longest axis (insertion sort: a tool's few
+  // dozen), so that a net triangle tests only those whose centres come within the largest
+  // radius plus `reach` of its bounds along it.
+  int axis = 0;
+  (qhi - qlo).maxCoeff(&axis);
+  double r_max = 0.0;
+  int sorted = 0;
+  std::int32_t* order = ns.near_order.data();
+  double* key = ns.near_key.data();
+  for (int i = 0; i < num_spheres; ++i) {
+    const int sp = near[i];
+    const double x = cs.sphere_world[static_cast<std::size_t>(sp)][axis];
+    if (!std::isfinite(x)) continue;
+    r_max = std::max(r_max, cs.sphere_r[static_cast<std::size_t>(sp)]);
+    int m = sorted++;
+    for (; m > 0 && key[m - 1] > x; --m) key[m] = key[m - 1], order[m] = order[m - 1];
+    key[m] = x;
+    order[m] = i;
+  }
+  const double sweep = r_max + reach + kMargin;
   int nc = 0;
   node_outcodes(data, ns, net, plo, phi);
   for (int f = net.face_begin; f < net.face_begin + net.face_count; ++f) {
@@ -296,7 +407,9 @@ int gather_surface_candidates(const Model& model, const Data& data, NetScratch& 
     // point of it within `reach` of that foot).
     std::uint64_t close = 0;
     const std::array<int, 3>& tri = model.net_faces[static_cast<std::size_t>(f)];
-    for (int i = 0; i < num_spheres; ++i) {
+    const int from = static_cast<int>(std::lower_bound(key, key + sorted, lo[axis] - sweep) - key);
+    for (int o = from; o < sorted && key[o] <= hi[axis] + sweep; ++o) {
+      const int i = order[o];
       const int sp = near[i];
       const double d = cs.sphere_r[static_cast<std::size_t>(sp)] + reach;
       const Vec3& centre = cs.sphere_world[static_cast<std::size_t>(sp)];
@@ -308,22 +421,42 @@ int gather_surface_candidates(const Model& model, const Data& data, NetScratch& 
       if ((centre - q).squaredNorm() < d * d) close |= sphere_bit(i);
     }
     if (close == 0) continue;
+    face_now = f;
+    for (int m = 0; m < 3; ++m) corner_now[m] = &nodes[tri[static_cast<std::size_t>(m)]].position;
+    frame_ok = net_surface_frame(*corner_now[0], *corner_now[1], *corner_now[2], frame_now);
     const auto first = static_cast<std::size_t>(model.net_face_surface_begin[static_cast<std::size_t>(f)]);
     const auto last = static_cast<std::size_t>(model.net_face_surface_begin[static_cast<std::size_t>(f) + 1]);
     for (std::size_t k = first; k < last && nc < room; ++k) {
+      // A triangle of a patch (all its vertices on f) meets only the spheres the patch's bounds
+      // come within the radius of: the others' tests would find it out of their reach.
+      std::uint64_t spheres = close;
+      if (const std::int32_t pc = cluster_of[k]; pc >= 0) {
+        std::uint32_t& cst = ns.surface_cluster_stamp[static_cast<std::size_t>(pc)];
+        std::uint64_t& cbits = ns.surface_cluster_close[static_cast<std::size_t>(pc)];
+        if (cst != stamp) {
+          cst = stamp;
+          cbits = cluster_spheres(model, cs, near, nodes, pc, close, num_spheres);
+        }
+        if (cbits == 0) continue;
+        spheres = cbits;
+      }
       const std::int32_t F = model.net_face_surface_faces[k];
       std::uint32_t& st = ns.surface_face_stamp[static_cast<std::size_t>(F)];
       std::int32_t& slot = ns.surface_face_slot[static_cast<std::size_t>(F)];
       if (st == stamp) {  // gathered from another net triangle it rides on: its spheres too
-        if (slot >= 0) ns.surface_sphere_mask[static_cast<std::size_t>(slot)] |= close;
+        if (slot >= 0) ns.surface_sphere_mask[static_cast<std::size_t>(slot)] |= spheres;
         continue;
       }
       st = stamp;
       slot = -1;
       const std::array<int, 3>& t = model.net_surface_faces[static_cast<std::size_t>(F)];
       bool keep = true;
-      for (int m = 0; m < 3 && keep; ++m)
-        keep = !is_torn(model.net_surface_points[static_cast<std::size_t>(t[static_cast<std::size_t>(m)])].face);
+      if (cluster_of[k] >= 0 && model.net_surface_clusters[static_cast<std::size_t>(cluster_of[k])].parts == 1)
+        // a patch on f alone: its triangle's three vertices ride on f
+        keep = !is_torn(f);
+      else
+        for (int m = 0; m < 3 && keep; ++m)
+          keep = !is_torn(model.net_surface_points[static_cast<std::size_t>(t[static_cast<std::size_t>(m)])].face);
       if (!keep) continue;
       const Vec3& a = position(t[0]);
       const Vec3& b = position(t[1]);
@@ -333,7 +466,7 @@ int gather_surface_candidates(const Model& model, const Data& data, NetScratch& 
       ns.surface_candidates[static_cast<std::size_t>(nc)] = F;
       ns.surface_lo[static_cast<std::size_t>(nc)] = flo;
       ns.surface_hi[static_cast<std::size_t>(nc)] = fhi;
-      ns.surface_sphere_mask[static_cast<std::size_t>(nc)] = close;
+      ns.surface_sphere_mask[static_cast<std::size_t>(nc)] = spheres;
       slot = nc;
       ++nc;
     }

@@ -4,8 +4,12 @@
 #include "numen/core/net_surface_map.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
+#include <limits>
+#include <map>
+#include <vector>
 
 #include "detail/mesh_shape_query.hpp"
 #include "detail/net_surface_frame.hpp"
@@ -13,6 +17,105 @@
 #include "numen/core/model.hpp"
 
 namespace numen::core {
+namespace {
+
+/// The fine triangles a patch (NetSurfaceCluster) holds, about: the contact search tests a
+/// patch's bounds once and its triangles only where those meet a sphere.
+constexpr int kClusterSize = 10;
+
+/// The float nearest `x` at or below it, at or above it: a patch's bounds kept in floats hold
+/// what the doubles they round hold.
+float float_below(double x) {
+  const auto f = static_cast<float>(x);
+  return static_cast<double>(f) > x ? std::nextafter(f, -std::numeric_limits<float>::infinity()) : f;
+}
+float float_above(double x) {
+  const auto f = static_cast<float>(x);
+  return static_cast<double>(f) < x ? std::nextafter(f, std::numeric_limits<float>::infinity()) : f;
+}
+
+/// Model::net_face_surface_cluster and net_surface_clusters from net_face_surface_begin /
+/// net_face_surface_faces (every net's): each net triangle f's riders are split into patches by
+/// the net triangles their vertices ride on (f alone, or f and one or two neighbours) and by the
+/// cell, in an n × n grid over the first two barycentric weights on f, of the mean weights of
+/// their vertices on f, n = round(√(count / kClusterSize)) (at least 1); a patch gets one record
+/// per net triangle its vertices ride on (the range of their first two weights there), the first
+/// holding the number of records and the largest offset of its vertices.
+void build_surface_clusters(Model& model) {
+  const std::vector<std::int32_t>& begin = model.net_face_surface_begin;
+  const std::vector<std::int32_t>& list = model.net_face_surface_faces;
+  std::vector<std::int32_t> cluster(list.size(), -1);
+  std::vector<NetSurfaceCluster> clusters;
+  using Key = std::array<int, 4>;  // the riders' net triangles (ascending, −1 padded), the cell
+  std::map<Key, std::size_t> group_of;
+  std::vector<std::vector<std::size_t>> groups;  // per patch of this net triangle: its entries
+  std::vector<Key> keys;
+  for (std::size_t f = 0; f + 1 < begin.size(); ++f) {
+    const auto first = static_cast<std::size_t>(begin[f]), last = static_cast<std::size_t>(begin[f + 1]);
+    if (first == last) continue;
+    const int n = std::max(1, static_cast<int>(std::lround(std::sqrt(static_cast<double>(last - first) / kClusterSize))));
+    const int nb = std::max(1, n / 2);  // riders on two or three net triangles: a strip along an edge
+    const auto cell_of = [](double w, int cells) { return std::clamp(static_cast<int>(w * cells), 0, cells - 1); };
+    group_of.clear();
+    groups.clear();
+    keys.clear();
+    for (std::size_t k = first; k < last; ++k) {
+      const std::array<int, 3>& t = model.net_surface_faces[static_cast<std::size_t>(list[k])];
+      Key key{-1, -1, -1, 0};
+      Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+      int on_f = 0;
+      for (const int p : t) {
+        const NetSurfacePoint& e = model.net_surface_points[static_cast<std::size_t>(p)];
+        if (e.face == static_cast<int>(f)) mean += e.weights.head<2>(), ++on_f;
+        if (std::find(key.begin(), key.begin() + 3, e.face) == key.begin() + 3)
+          *std::find(key.begin(), key.begin() + 3, -1) = e.face;
+      }
+      std::sort(key.begin(), std::find(key.begin(), key.begin() + 3, -1));
+      mean /= std::max(on_f, 1);
+      const int cells = key[1] < 0 ? n : nb;
+      key[3] = cell_of(mean.x(), cells) * cells + cell_of(mean.y(), cells);
+      const auto [it, added] = group_of.try_emplace(key, groups.size());
+      if (added) {
+        groups.emplace_back();
+        keys.push_back(key);
+      }
+      groups[it->second].push_back(k);
+    }
+    for (std::size_t g = 0; g < groups.size(); ++g) {
+      const auto head = static_cast<std::int32_t>(clusters.size());
+      const Key& key = keys[g];
+      for (int part = 0; part < 3 && key[static_cast<std::size_t>(part)] >= 0; ++part) {
+        NetSurfaceCluster rec;
+        rec.face = key[static_cast<std::size_t>(part)];
+        Eigen::Vector2d lo = Eigen::Vector2d::Constant(1.0), hi = Eigen::Vector2d::Constant(0.0);
+        for (const std::size_t k : groups[g])
+          for (const int p : model.net_surface_faces[static_cast<std::size_t>(list[k])]) {
+            const NetSurfacePoint& e = model.net_surface_points[static_cast<std::size_t>(p)];
+            if (e.face != rec.face) continue;
+            lo = lo.cwiseMin(e.weights.head<2>());
+            hi = hi.cwiseMax(e.weights.head<2>());
+          }
+        for (int a = 0; a < 2; ++a) {
+          rec.weights_lo[static_cast<std::size_t>(a)] = float_below(lo[a]);
+          rec.weights_hi[static_cast<std::size_t>(a)] = float_above(hi[a]);
+        }
+        clusters.push_back(rec);
+        ++clusters[static_cast<std::size_t>(head)].parts;
+      }
+      // The largest offset of the patch's vertices, on its first record.
+      double offset = 0.0;
+      for (const std::size_t k : groups[g])
+        for (const int p : model.net_surface_faces[static_cast<std::size_t>(list[k])])
+          offset = std::max(offset, model.net_surface_points[static_cast<std::size_t>(p)].offset.norm());
+      clusters[static_cast<std::size_t>(head)].offset_max = float_above(offset);
+      for (const std::size_t k : groups[g]) cluster[k] = head;
+    }
+  }
+  model.net_face_surface_cluster = std::move(cluster);
+  model.net_surface_clusters = std::move(clusters);
+}
+
+}  // namespace
 
 std::string add_net_surface(Model& model, int net_index, std::span<const Vec3> vertices,
                             std::span<const std::array<int, 3>> triangles,
@@ -118,6 +221,7 @@ std::string add_net_surface(Model& model, int net_index, std::span<const Vec3> v
   }
   model.net_face_surface_begin = std::move(begin);
   model.net_face_surface_faces = std::move(list);
+  build_surface_clusters(model);
   return "";
 }
 

@@ -26,7 +26,9 @@
 #include "numen/core/step.hpp"
 
 #include "alloc_counter.hpp"
+#include "detail/data_scratch.hpp"
 #include "detail/mesh_shape_query.hpp"
+#include "detail/net_scratch.hpp"
 #include "organ_indentation.hpp"
 #include "sanitizer.hpp"
 
@@ -350,6 +352,71 @@ TEST(NetSurfaceMap, ContactsAgainstEveryFineTriangle) {
               several);
   EXPECT_GT(touching, 100);
   EXPECT_GT(several, 5);
+}
+
+TEST(NetSurfaceMap, PatchesSkipOnlyTheFineTrianglesNoSphereReaches) {
+  // A 20 480-triangle surface on an 80-triangle net (every net triangle's riders in patches:
+  // Model::net_face_surface_cluster), the net deformed (random moves of up to 1.5 mm and a 4 mm
+  // dent), spheres of 1, 2.5 and 4 mm at random places around it: the contacts found are those
+  // found without the patches (every rider of a near net triangle gathered), entry for entry and
+  // to the bit, and the patches skip fine triangles on most calls that touch.
+  const core::TriangleMesh fine = core::make_icosphere(0.02, 5);
+  core::Model with = surface_map_organ(core::make_icosphere(0.02, 1), fine, 0.0025, Vec3(0, 0, 0.05));
+  ASSERT_EQ(with.net_face_surface_cluster.size(), with.net_face_surface_faces.size());
+  int multi = 0;
+  for (const std::int32_t pc : with.net_face_surface_cluster) {
+    ASSERT_GE(pc, 0) << "every rider is in a patch";
+    multi += with.net_surface_clusters[static_cast<std::size_t>(pc)].parts > 1 ? 1 : 0;
+  }
+  EXPECT_GT(multi, 0) << "riders on two or three net triangles make patches of several records";
+  EXPECT_LT(with.net_surface_clusters.size(), with.net_face_surface_faces.size() / 4);
+  core::Model without = with;
+  std::fill(without.net_face_surface_cluster.begin(), without.net_face_surface_cluster.end(), -1);
+  core::Data dw = core::make_data(with), dn = core::make_data(without);
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (std::size_t i = 0; i < dw.nodes.size(); ++i) {
+    Vec3& x = dw.nodes[i].position;
+    x += 1.5e-3 * Vec3(u(rng), u(rng), u(rng));
+    if (x.z() < -0.015) x.z() += 4e-3;  // the dent at the lower pole
+    dn.nodes[i].position = x;
+  }
+  const std::array<double, 3> radii{0.001, 0.0025, 0.004};
+  int touching = 0, skipping = 0;
+  for (int trial = 0; trial < 600; ++trial) {
+    const double r = radii[static_cast<std::size_t>(trial % 3)];
+    with.body_spheres[0].radius = without.body_spheres[0].radius = r;
+    const Vec3 at = (0.02 + 0.006 * u(rng)) * Vec3(u(rng), u(rng), u(rng)).normalized();
+    dw.bodies[1].position = dn.bodies[1].position = at;
+    for (auto [m, d] : {std::pair{&with, &dw}, std::pair{&without, &dn}}) {
+      core::detect_contacts(*m, *d);
+      core::detect_node_contacts(*m, *d);
+    }
+    ASSERT_EQ(dw.num_node_contacts, dn.num_node_contacts) << "trial " << trial;
+    for (int c = 0; c < dw.num_node_contacts; ++c) {
+      const core::NodeContact& a = dw.node_contacts[static_cast<std::size_t>(c)];
+      const core::NodeContact& b = dn.node_contacts[static_cast<std::size_t>(c)];
+      ASSERT_EQ(a.node, b.node) << "trial " << trial << " contact " << c;
+      ASSERT_EQ(a.face, b.face) << "trial " << trial << " contact " << c;
+      ASSERT_EQ(a.share, b.share) << "trial " << trial << " contact " << c;
+      ASSERT_EQ(a.depth, b.depth) << "trial " << trial << " contact " << c;
+      ASSERT_EQ(a.position, b.position) << "trial " << trial << " contact " << c;
+      ASSERT_EQ(a.normal, b.normal) << "trial " << trial << " contact " << c;
+      ASSERT_EQ(a.face_weights, b.face_weights) << "trial " << trial << " contact " << c;
+    }
+    if (dw.num_node_contacts == 0) continue;
+    ++touching;
+    const core::NetScratch& ns = dw.scratch->net;
+    for (std::size_t pc = 0; pc < ns.surface_cluster_stamp.size(); ++pc)
+      if (ns.surface_cluster_stamp[pc] == ns.surface_stamp && ns.surface_cluster_close[pc] == 0) {
+        ++skipping;
+        break;
+      }
+  }
+  std::printf("[fine surface patches] %d of 600 spheres touching, %d of them skipping a patch\n",
+              touching, skipping);
+  EXPECT_GT(touching, 150);
+  EXPECT_GT(skipping, touching / 2);
 }
 
 TEST(NetSurfaceMap, MultirateLoopsOnAFineSurfaceDoNotAllocate) {

@@ -154,6 +154,11 @@ struct NetScratch {
   std::vector<std::int32_t> near_bodies;
   std::vector<std::int32_t> near_sphere_end;  ///< Per near body: end of its run of near_spheres.
   std::vector<std::int32_t> near_spheres;     ///< Body spheres near the net, by near body.
+  /// An organ's fine surface (net_surface.cpp, gather_surface_candidates()): the near spheres
+  /// with a finite centre as their indices into near_spheres, in ascending order of their
+  /// centre's coordinate along the query box's longest axis, and those coordinates (m, world).
+  std::vector<std::int32_t> near_order;
+  std::vector<double> near_key;
   /// An organ's surface contacts (net_surface.hpp): the net's triangles (Model::net_faces
   /// indices) whose bounds meet the near spheres' bounds, and those bounds (m, world). Sized by
   /// the largest NetModel::face_count.
@@ -183,6 +188,11 @@ struct NetScratch {
   /// (1: torn), once a call whatever the number of fine vertices riding on it.
   std::vector<std::uint32_t> surface_net_stamp;
   std::vector<std::uint8_t> surface_net_torn;
+  /// Per fine-surface patch (Model::net_surface_clusters, at its first record): the stamp of the call that judged
+  /// it, and the near spheres (bits as surface_sphere_mask's) its bounds come within the radius
+  /// of then; 0: the call skips its triangles.
+  std::vector<std::uint32_t> surface_cluster_stamp;
+  std::vector<std::uint64_t> surface_cluster_close;
   std::uint32_t surface_stamp = 0;  ///< The current call's stamp (0: never; wraps by clearing).
   // Resting nodes (net_rest.hpp): per node, its consecutive quiet steps (saturating at
   // detail::kRestSteps) and its state bits (resting, eligible, boundary; net_rest.cpp).

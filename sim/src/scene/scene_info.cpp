@@ -57,13 +57,15 @@ MeshLine shape_line(const char* kind, const std::string& name, const core::MeshS
 /// Heap bytes of net `n`'s fine-surface map in `m` (MeshLine::map_heap).
 std::size_t map_bytes(const core::Model& m, const core::NetModel& n) {
   if (n.surface_point_count == 0) return 0;
-  std::size_t lists = 0;  // the net's triangles' rows of net_face_surface_begin / _faces
+  std::size_t lists = 0;  // the net's triangles' rows of net_face_surface_begin / _faces / _cluster
   if (m.net_face_surface_begin.size() > static_cast<std::size_t>(n.face_begin + n.face_count)) {
     const auto b = [&](int f) { return m.net_face_surface_begin[static_cast<std::size_t>(f)]; };
-    lists = (static_cast<std::size_t>(n.face_count) +
-             static_cast<std::size_t>(b(n.face_begin + n.face_count) - b(n.face_begin))) *
-            sizeof(std::int32_t);
+    const auto entries = static_cast<std::size_t>(b(n.face_begin + n.face_count) - b(n.face_begin));
+    lists = (static_cast<std::size_t>(n.face_count) + entries) * sizeof(std::int32_t);
+    if (m.net_face_surface_cluster.size() == m.net_face_surface_faces.size()) lists += entries * sizeof(std::int32_t);
   }
+  for (const core::NetSurfaceCluster& c : m.net_surface_clusters)  // its patches' records
+    if (c.face >= n.face_begin && c.face < n.face_begin + n.face_count) lists += sizeof(c);
   return static_cast<std::size_t>(n.surface_point_count) * sizeof(core::NetSurfacePoint) +
          static_cast<std::size_t>(n.surface_face_count) * sizeof(m.net_surface_faces[0]) + lists;
 }

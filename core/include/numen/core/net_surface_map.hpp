@@ -36,6 +36,25 @@ struct NetSurfacePoint {
   Vec3 offset = Vec3::Zero();     ///< Foot point to vertex in the triangle's frame F (m).
 };
 
+/// One record of a patch of the fine triangles riding on a net triangle, for the contact search
+/// to skip as a whole (net_surface.cpp, gather_surface_candidates()). A patch has one record per
+/// net triangle its vertices ride on (1 to 3: Model::net_surface_clusters[c .. c + parts) for the
+/// patch c): the patch's vertices on `face` have their first two barycentric weights in
+/// [weights_lo, weights_hi], so their feet lie in the parallelogram of those four corners (the
+/// third weight 1 − w_0 − w_1) at any shape of the net triangle (a foot is affine in its
+/// corners), and each vertex is within `offset_max` of its foot (F is orthonormal); the patch's
+/// triangles lie in the convex hull of its vertices. Built by add_net_surface().
+struct NetSurfaceCluster {
+  int face = -1;                        ///< Net triangle: global index into Model::net_faces.
+  int parts = 0;                        ///< On a patch's first record its records' count, else 0.
+  /// The least w_0, w_1 of the patch's vertices on `face` (rounded down to a float).
+  std::array<float, 2> weights_lo{0.0F, 0.0F};
+  /// The largest w_0, w_1 of the patch's vertices on `face` (rounded up to a float).
+  std::array<float, 2> weights_hi{0.0F, 0.0F};
+  /// On a patch's first record: its vertices' largest |offset| (m, rounded up to a float).
+  float offset_max = 0.0F;
+};
+
 /// Maps a fine surface onto net `net` of `model`: after add_net(), before or after
 /// finalize_model() (which reads nothing of it), before make_data() (which sizes the contacts'
 /// scratch by it).
@@ -49,7 +68,8 @@ struct NetSurfacePoint {
 /// foot point (Ericson 2005, §5.1.5) and the offset.
 ///
 /// Fills Model::net_surface_points, net_surface_faces, net_face_surface_begin /
-/// net_face_surface_faces (which fine triangles ride on each net triangle) and the net's
+/// net_face_surface_faces (which fine triangles ride on each net triangle),
+/// net_face_surface_cluster / net_surface_clusters (their patches) and the net's
 /// NetModel::surface_* ranges. Returns "" on success, else a message naming the net and the first
 /// offending fine vertex or triangle (index out of range, repeated index, a non-finite vertex, a
 /// degenerate net triangle under it); the model is then unchanged. A net takes one fine surface.
