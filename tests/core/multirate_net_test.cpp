@@ -21,7 +21,7 @@
 #include "numen/core/net_collision.hpp"
 #include "numen/core/step.hpp"
 
-#include "detail/multirate_net.hpp"
+#include "multirate/net.hpp"
 
 namespace core = numen::core;
 using core::Vec3;
