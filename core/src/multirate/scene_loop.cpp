@@ -84,7 +84,7 @@ void detect_and_build_planes(const Model& model, Data& data, const void* context
 }  // namespace
 
 void MultirateGodObject::scene_step(const MultirateDeviceReport& in, MultirateSceneModel& out) noexcept {
-  release_switched(in);                       // 1. a switch hands the released god-object back
+  release_switched(in);                       //    a switch hands the released god-object back
   const int body = enter_scene_slot(in);      //    the sampled god-object's scene-loop Data
   const double h = scene_model().dt;
   take_impulses(in);                          //    what the device loop's planes gave the bodies
