@@ -1,4 +1,4 @@
-// Tests of the nets of a multirate god-object (core/src/multirate_net.cpp, docs/multirate.md
+// Tests of the nets of a multirate god-object (core/src/multirate/net_planes.cpp, docs/multirate.md
 // "Deformable god-objects"): the god-object model lumps a net onto its rigid component, the
 // proximity model grows its node spheres, and the node planes render the net's contacts on the
 // component — at the sample what the ties carried, and for a further push the net's own
@@ -21,7 +21,7 @@
 #include "numen/core/net_collision.hpp"
 #include "numen/core/step.hpp"
 
-#include "detail/multirate_net.hpp"
+#include "multirate/net.hpp"
 
 namespace core = numen::core;
 using core::Vec3;

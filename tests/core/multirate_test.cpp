@@ -537,7 +537,7 @@ Vec3 angular_momentum(const core::MultirateGodObject& mr, const Vec3& o) {
 
 // Angular momentum across the two rates: the same throw at a block whose sphere sits 10 mm off
 // its centre of mass, so that the contact spins it. The device loop's moment on the block is
-// taken about its centre of mass as the plane carrier moved it (core/src/multirate_god_object.cpp,
+// taken about its centre of mass as the plane carrier moved it (core/src/multirate/god_object.cpp,
 // hand_back), and applied at the next scene step about the centre of mass the scene step moves:
 // the two differ by the carrier's error over the scene period, so the pair's angular momentum is
 // kept to that error, not to rounding: 0.02 % of the angular momentum the block took at N = 1,

@@ -22,7 +22,7 @@
 #include <vector>
 
 #include "alloc_counter.hpp"
-#include "detail/multirate_net.hpp"
+#include "multirate/net.hpp"
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"
 #include "numen/core/multirate.hpp"

@@ -2,7 +2,7 @@
 /// @file net_tissue.hpp
 /// Private to numen::core (core/src/detail): the plane a tool's sphere meets an organ given by
 /// its material through (net_tissue_contact.hpp's load patch), for the multirate device loop's
-/// tissue planes (multirate_net.cpp; docs/tissue.md, "Multirate"), and what tells a contact's
+/// tissue planes (multirate/net_planes.cpp; docs/tissue.md, "Multirate"), and what tells a contact's
 /// entries apart. No allocation.
 
 #include "numen/core/data.hpp"

@@ -1,14 +1,15 @@
 #pragma once
-/// @file multirate_contact.hpp
+/// @file multirate/contact.hpp
 /// The contacts of a multirate god-object seen by both loops (docs/multirate.md): which contact
-/// is the god-object's, and the force a contact applied over a step (the impulse hand-back).
-/// Private to numen::core (multirate.cpp, multirate_god_object.cpp).
+/// is the god-object's, the force a contact applied over a step (the impulse hand-back), and the
+/// counts the loops' states carry from one to the next.
+/// Private to numen::core (core/src/multirate/).
 
 #include <span>
 
 #include "numen/core/data.hpp"
 
-#include "detail/multirate_net.hpp"
+#include "multirate/net.hpp"
 #include "detail/solver_scratch.hpp"
 
 namespace numen::core::detail {
@@ -41,6 +42,21 @@ inline Vec3 effective_contact_force(const Contact& c, const ContactTerm& t, bool
   f -= (t.stiffness * h * (t.normal_velocity + n.dot(dv)) + t.damping * n.dot(dv)) * n;
   f -= t.friction * (dv - n.dot(dv) * n);
   return f;
+}
+
+/// The counts since reset (steps with a contact overflow, a clamped contact stiffness, a sphere
+/// behind a net's surface, a body–body crossing, pass-throughs, a non-finite state) from `from` to
+/// `to`, each a Data or a MultirateSceneSnapshot: the scene-loop model's Data, its snapshot, the
+/// device loop's copy of it, the view, and the next scene-loop model's Data at a tool switch carry
+/// the same counts.
+template <typename From, typename To>
+void copy_counts(const From& from, To& to) noexcept {
+  to.contact_overflow_steps = from.contact_overflow_steps;
+  to.contact_clamped_steps = from.contact_clamped_steps;
+  to.net_crossed_steps = from.net_crossed_steps;
+  to.crossed_contact_steps = from.crossed_contact_steps;
+  to.pass_throughs = from.pass_throughs;
+  to.nonfinite_steps = from.nonfinite_steps;
 }
 
 }  // namespace numen::core::detail

@@ -1,10 +1,10 @@
 #pragma once
-/// @file multirate_net.hpp
+/// @file multirate/net.hpp
 /// The nets of a multirate god-object (docs/multirate.md, "Deformable god-objects"): the net
 /// is the scene loop's; the device loop steps its rigid component (the paper's hidden rigid
 /// god-object, §4.2) with the net's mass lumped onto it, against node planes — one per node
 /// contact the scene loop found, rendered through the node's compliance (ContactPlane::node).
-/// Private to numen::core (multirate.cpp).
+/// Private to numen::core (core/src/multirate/).
 
 #include <algorithm>
 #include <span>
@@ -12,7 +12,7 @@
 
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"
-#include "numen/core/multirate.hpp"
+#include "numen/core/multirate/planes.hpp"
 
 namespace numen::core::detail {
 

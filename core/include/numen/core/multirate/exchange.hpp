@@ -1,0 +1,74 @@
+#pragma once
+/// @file exchange.hpp
+/// What the two loops of a multirate god-object hand each other (numen/core/multirate.hpp,
+/// docs/multirate.md): the device loop's report (MultirateDeviceReport), the scene loop's model
+/// (MultirateSceneModel: the planes and the snapshot of the scene, MultirateSceneSnapshot).
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "numen/core/data.hpp"
+#include "numen/core/multirate/planes.hpp"
+#include "numen/core/types.hpp"
+
+namespace numen::core {
+
+/// What the device loop hands the scene loop (MultirateGodObject::write_report()): the
+/// god-object's state, and the impulses its planes gave the scene bodies as running totals, so
+/// that a report the scene loop never read loses nothing.
+struct MultirateDeviceReport {
+  std::int64_t period = 0;   ///< Device periods stepped when written.
+  int body = -1;             ///< The held body (scene body index; −1: none held).
+  /// The states of the god-object's bodies (god_object_bodies() of `body`, in that order;
+  /// world); room for the largest god-object.
+  std::vector<BodyState> states;
+  /// Per scene body: Σ over all device periods of the impulse the planes gave it (N·s) and its
+  /// moment about its centre of mass as the device loop moved it (N·m·s).
+  std::vector<Wrench> impulse_total;
+  std::int64_t switches = 0;  ///< select() calls that changed the god-object so far.
+  int released_body = -1;     ///< The held body the last switch released (−1: none).
+  std::vector<BodyState> released_states;  ///< Its god-object's bodies' states at the switch.
+};
+
+/// The scene loop's state in a MultirateSceneModel: what the single-rate view needs
+/// (MultirateGodObject::view()), copied so that the device loop never reads the scene loop's
+/// Data.
+struct MultirateSceneSnapshot {
+  std::vector<BodyState> bodies;           ///< Every scene body at the scene step's end.
+  std::vector<JointState> joints;          ///< Every joint.
+  std::array<Contact, kMaxContacts> contacts{};  ///< [0, num_contacts): not on the god-object.
+  int num_contacts = 0;
+  int contacts_dropped = 0;
+  int contacts_clamped = 0;
+  std::int64_t contact_overflow_steps = 0;
+  std::int64_t contact_clamped_steps = 0;
+  std::int64_t net_crossed_steps = 0;  ///< Data::net_crossed_steps.
+  std::int64_t crossed_contact_steps = 0;  ///< Data::crossed_contact_steps.
+  std::int64_t pass_throughs = 0;          ///< Data::pass_throughs.
+  std::int64_t nonfinite_steps = 0;
+  std::uint32_t status = 0;
+  std::uint32_t stages_run = 0;
+  int solver_iterations = 0;
+  double solver_residual = 0.0;
+  double max_joint_drift = 0.0;
+  double max_joint_angle_drift = 0.0;
+  /// The nets (whole: a god-object's net is the scene loop's), sized like the scene's Data.
+  std::vector<NodeState> nodes;
+  std::vector<NodeContact> node_contacts;  ///< [0, num_node_contacts) valid.
+  int num_node_contacts = 0;
+  std::vector<NetOutput> nets;
+};
+
+/// What the scene loop hands the device loop (MultirateGodObject::scene_step()): the
+/// intermediate model for the god-object it sampled and the snapshot of the scene (where a
+/// switch starts the new god-object).
+struct MultirateSceneModel {
+  ContactPlaneSet planes;
+  int body = -1;                     ///< The god-object the planes are for (−1: none).
+  std::int64_t sample_period = -1;   ///< MultirateDeviceReport::period of the sample.
+  /// The scene at the scene step's end (where a switch starts the new god-object).
+  MultirateSceneSnapshot scene;
+};
+
+}  // namespace numen::core
