@@ -283,7 +283,7 @@ struct Model {
   /// are the indices into net_springs of node i's springs (structural and bending, ascending);
   /// every spring is listed at both its nodes. Sizes num_nodes() + 1 and 2 net_springs.size()
   /// (both empty without nets). What works on a few nodes' springs (the multirate node planes,
-  /// multirate_net.hpp) reads them there instead of passing over every spring. Derived by
+  /// multirate/net.hpp) reads them there instead of passing over every spring. Derived by
   /// finalize_model() (index_node_springs()).
   std::vector<std::int32_t> node_spring_begin;
   std::vector<std::int32_t> node_springs;
