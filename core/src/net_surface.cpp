@@ -323,8 +323,10 @@ std::uint64_t cluster_spheres(const Model& model, const CollisionScratch& cs,
 /// triangle whose bounds come within a sphere's radius plus the net's surface_reach of its
 /// centre), whose bounds at their vertices' current positions meet [qlo, qhi] (the near spheres'
 /// bounds) and which ride on no torn net triangle: into ns.surface_candidates / surface_lo /
-/// surface_hi, each once, their vertices' positions in ns.surface_position. Every net
-/// triangle's tear is judged once a call (ns.surface_net_*). Returns their count.
+/// surface_hi, each once, their vertices' positions in ns.surface_position; a patch of them
+/// (NetSurfaceCluster) that no sphere near its net triangle reaches is skipped before its
+/// vertices are placed. Every net triangle's tear is judged once a call (ns.surface_net_*).
+/// Returns their count.
 int gather_surface_candidates(const Model& model, const Data& data, NetScratch& ns,
                               const NetModel& net, int num_spheres, const Vec3& qlo,
                               const Vec3& qhi) noexcept {
@@ -427,8 +429,8 @@ int gather_surface_candidates(const Model& model, const Data& data, NetScratch& 
     const auto first = static_cast<std::size_t>(model.net_face_surface_begin[static_cast<std::size_t>(f)]);
     const auto last = static_cast<std::size_t>(model.net_face_surface_begin[static_cast<std::size_t>(f) + 1]);
     for (std::size_t k = first; k < last && nc < room; ++k) {
-      // A triangle of a patch (all its vertices on f) meets only the spheres the patch's bounds
-      // come within the radius of: the others' tests would find it out of their reach.
+      // A patch's triangle meets only the spheres that reach the patch (cluster_spheres(),
+      // judged once a call): the others' tests would find it out of their reach.
       std::uint64_t spheres = close;
       if (const std::int32_t pc = cluster_of[k]; pc >= 0) {
         std::uint32_t& cst = ns.surface_cluster_stamp[static_cast<std::size_t>(pc)];

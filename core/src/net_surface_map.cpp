@@ -38,7 +38,9 @@ float float_above(double x) {
 /// net_face_surface_faces (every net's): each net triangle f's riders are split into patches by
 /// the net triangles their vertices ride on (f alone, or f and one or two neighbours) and by the
 /// cell, in an n × n grid over the first two barycentric weights on f, of the mean weights of
-/// their vertices on f, n = round(√(count / kClusterSize)) (at least 1); a patch gets one record
+/// their vertices on f, n = round(√(count / kClusterSize)) (at least 1; half that, at least 1,
+/// for the riders on more than one net triangle, which lie in strips along f's edges), so that
+/// a patch holds about kClusterSize riders on f alone and more in a strip; a patch gets one record
 /// per net triangle its vertices ride on (the range of their first two weights there), the first
 /// holding the number of records and the largest offset of its vertices.
 void build_surface_clusters(Model& model) {
@@ -63,14 +65,18 @@ void build_surface_clusters(Model& model) {
       const std::array<int, 3>& t = model.net_surface_faces[static_cast<std::size_t>(list[k])];
       Key key{-1, -1, -1, 0};
       Eigen::Vector2d mean = Eigen::Vector2d::Zero();
-      int on_f = 0;
+      int on_f = 0, faces = 0;
       for (const int p : t) {
         const NetSurfacePoint& e = model.net_surface_points[static_cast<std::size_t>(p)];
         if (e.face == static_cast<int>(f)) mean += e.weights.head<2>(), ++on_f;
-        if (std::find(key.begin(), key.begin() + 3, e.face) == key.begin() + 3)
-          *std::find(key.begin(), key.begin() + 3, -1) = e.face;
+        bool seen = false;
+        for (int q = 0; q < faces; ++q) seen = seen || key[static_cast<std::size_t>(q)] == e.face;
+        if (seen) continue;
+        int q = faces++;  // inserted in ascending order
+        for (; q > 0 && key[static_cast<std::size_t>(q - 1)] > e.face; --q)
+          key[static_cast<std::size_t>(q)] = key[static_cast<std::size_t>(q - 1)];
+        key[static_cast<std::size_t>(q)] = e.face;
       }
-      std::sort(key.begin(), std::find(key.begin(), key.begin() + 3, -1));
       mean /= std::max(on_f, 1);
       const int cells = key[1] < 0 ? n : nb;
       key[3] = cell_of(mean.x(), cells) * cells + cell_of(mean.y(), cells);
