@@ -363,255 +363,15 @@ void linearization_pass(const Model& model, Data& data, double h) noexcept {
 
 }  // namespace
 
+
 namespace {
 
-/// (The tissue contact's functions below are kept out of line: nets given per spring never call
-/// them, and compute_net_forces() keeps its size, its spring pass inlined.)
-/// The net of an organ given by its material whose surface node contact `ct` is (a tool's
-/// sphere on its surface: the two-scale law of net_tissue_contact.hpp), else null.
-const NetModel* tissue_net(const Model& model, const NodeContact& ct) noexcept {
-  if (ct.face < 0 || ct.body_b < 0 || ct.sphere_b < 0) return nullptr;
-  const NetModel& net = model.nets[static_cast<std::size_t>(model.node_net[static_cast<std::size_t>(ct.node)])];
-  return net.contact_modulus > 0.0 ? &net : nullptr;
-}
-
-/// The radius of the true sphere of contact `ct` (m): its body's sphere less the margin a
-/// multirate scene loop grew it by (BodyModel::sphere_margin; 0 elsewhere).
-double true_radius(const Model& model, const NodeContact& ct) noexcept {
-  return model.body_spheres[static_cast<std::size_t>(ct.sphere_b)].radius -
-         model.bodies[static_cast<std::size_t>(ct.body_b)].sphere_margin;
-}
-
-/// The elastic part of a tissue contact on `net` (net_tissue_contact.hpp) for a sphere of
-/// `radius`, the pair `mp` (its stiffness already under the time-constant floor): at the sphere's
-/// deepest contact (`primary`, `depth` seen through the load patch) F(d) and its slope, and the
-/// backstop, the pair's penalty with a C¹ onset over r / 4 (kTissueBackstopOnset) on
-/// d_fine − 1.5 r once the touched fine surface is `fine_depth` > 1.5 r deep
-/// (kTissueBackstopDepth), along `normal`.
-struct TissueElastic {
-  double force = 0.0;      ///< F(d) + the backstop (N).
-  double stiffness = 0.0;  ///< Its slope (N/m).
-  double patch = 0.0;      ///< F(d) alone: the part laid on the load patch (N).
-};
-TissueElastic tissue_elastic(const NetModel& net, double radius, bool primary, double depth,
-                             double fine_depth, const Vec3& normal, const MaterialPair& mp) noexcept {
-  TissueContactForce e;
-  if (primary)
-    e = tissue_contact_force(
-        make_tissue_contact_law(net.contact_modulus, radius, net.load_patch_radius, mp.stiffness),
-        depth);
-  // The backstop, its onset smoothed over a quarter radius (contact_force.hpp's C¹ onset).
-  MaterialPair onset = mp;
-  onset.onset_depth = kTissueBackstopOnset * radius;
-  const ContactForceResult b = contact_penalty_force(
-      normal, fine_depth - kTissueBackstopDepth * radius, Vec3::Zero(), onset);
-  return {e.force + b.normal_force, e.stiffness + (b.active ? b.stiffness : 0.0), e.force};
-}
-
-/// The two-scale law (net_tissue_contact.hpp) of the tissue contact `ct` on `net`, with the
-/// material pair `mp` (its stiffness already under the time-constant floor): tissue_elastic()
-/// at its depth (NodeContact::primary: seen through the load patch) and the touched fine
-/// surface's `fine_depth`; − c v_n with the pair's damping scaled by the law's stiffness over the
-/// pair's (c = c_pair k(d) / k_pair: the pair's time constant), the pair's friction; never a
-/// pull. `elastic` gets the elastic force, `patch` F(d), the part laid on the load patch (the
-/// rest acts on the contact's own nodes).
-[[gnu::noinline]] ContactForceResult tissue_contact_force(const Model& model, const NetModel& net, const NodeContact& ct,
-                                        double fine_depth, const Vec3& v_rel, const MaterialPair& mp,
-                                        double& elastic, double& patch) noexcept {
-  const TissueElastic e =
-      tissue_elastic(net, true_radius(model, ct), ct.primary, ct.depth, fine_depth, ct.normal, mp);
-  elastic = e.force;
-  patch = e.patch;
-  ContactForceResult r;
-  r.stiffness = e.stiffness;
-  r.damping = mp.stiffness > 0.0 ? mp.damping * r.stiffness / mp.stiffness : 0.0;
-  r.friction = mp.friction;
-  const double v_n = ct.normal.dot(v_rel);
-  r.normal_force = std::max(0.0, elastic - r.damping * v_n);
-  r.active = r.normal_force > 0.0;
-  if (r.active) r.force = r.normal_force * ct.normal - mp.friction * (v_rel - v_n * ct.normal);
-  return r;
-}
-
-/// The load patch (net_tissue_contact.hpp) of `net` about the rest point `p` (body frame) into
-/// NetScratch::patch_*: the surface nodes within ρ of p, weighted K(|r_j − p| / ρ) A_j and
-/// normalised (no node: patch_count 0). The last patch is kept (NetScratch::patch_at).
-[[gnu::noinline]] void find_patch(const Model& model, NetScratch& s, const NetModel& net, const Vec3& p) noexcept {
-  if (s.patch_net == net.node_begin && s.patch_at == p) return;
-  const double rho = net.load_patch_radius, rho2 = rho * rho;
-  const int count = static_cast<int>(net.surface_node_area.size());
-  int kept = 0;
-  double total = 0.0;
-  for (int j = 0; j < count; ++j) {
-    const int node = net.node_begin + j;
-    const double d2 = (model.node_rest[static_cast<std::size_t>(node)] - p).squaredNorm();
-    if (!(d2 < rho2)) continue;
-    const double w = load_patch_kernel(std::sqrt(d2) / rho) * net.surface_node_area[static_cast<std::size_t>(j)];
-    if (!(w > 0.0)) continue;
-    s.patch_nodes[static_cast<std::size_t>(kept)] = node;
-    s.patch_weights[static_cast<std::size_t>(kept)] = w;
-    total += w;
-    ++kept;
-  }
-  for (int k = 0; k < kept; ++k) s.patch_weights[static_cast<std::size_t>(k)] /= total;
-  s.patch_count = kept;
-  s.patch_net = net.node_begin;
-  s.patch_at = p;
-}
-
-/// The plane of the primary tissue contact whose entries are data.node_contacts[first, last)
-/// (NodeContact::primary; net_tissue_contact.hpp): the patch about its material point
-/// p = Σ_e share_e r_e (rest positions of the entries' nodes) into NetScratch::patch_*, and the
-/// plane through the touched fine point moved by the patch's mean displacement ū instead of its
-/// own u = Σ_e share_e u_e, normal to the patch's mean rest normal (turned with the rigid
-/// component): its point, outward normal and the true sphere's depth into it. The entries'
-/// position was made with a sphere of `position_radius`. False (patch_count 0 where the entries
-/// have no share) for a patch without a node or a normal.
-struct PatchPlane {
-  Vec3 touched, outward;
-  double depth;
-};
-bool patch_plane(const Model& model, const Data& data, NetScratch& s, const NetModel& net, int first,
-                 int last, double position_radius, PatchPlane& out) noexcept {
-  const BodyState& body = data.bodies[static_cast<std::size_t>(net.body)];
-  const Mat3 rot = body.orientation.toRotationMatrix();
-  const auto move = [&](int v) -> Vec3 {  // u_v = x_v − a_v
-    const auto i = static_cast<std::size_t>(v);
-    return data.nodes[i].position - (body.position + rot * model.node_rest[i]);
-  };
-  Vec3 p = Vec3::Zero(), own = Vec3::Zero();
-  double shares = 0.0;
-  for (int c = first; c < last; ++c) {
-    const NodeContact& e = data.node_contacts[static_cast<std::size_t>(c)];
-    p += e.share * model.node_rest[static_cast<std::size_t>(e.node)];
-    own += e.share * move(e.node);
-    shares += e.share;
-  }
-  if (!(shares > 0.0)) {  // no patch: the force stays on the entries' nodes (lay_on_patch())
-    s.patch_count = 0;
-    s.patch_net = -1;
-    return false;
-  }
-  p /= shares;
-  own /= shares;
-  find_patch(model, s, net, p);
-  if (s.patch_count == 0) return false;
-  Vec3 mean = Vec3::Zero(), normal = Vec3::Zero();
-  for (int k = 0; k < s.patch_count; ++k) {
-    const int v = s.patch_nodes[static_cast<std::size_t>(k)];
-    const double w = s.patch_weights[static_cast<std::size_t>(k)];
-    mean += w * move(v);
-    normal += w * net.surface_node_normal[static_cast<std::size_t>(v - net.node_begin)];
-  }
-  const double len = normal.norm();
-  if (!(len > 0.0)) return false;
-  out.outward = rot * (normal / len);
-  const NodeContact& ct = data.node_contacts[static_cast<std::size_t>(first)];
-  const BodyState& tool = data.bodies[static_cast<std::size_t>(ct.body_b)];
-  const Sphere& sphere = model.body_spheres[static_cast<std::size_t>(ct.sphere_b)];
-  const Vec3 centre = tool.position + tool.orientation * sphere.center;
-  const double radius = true_radius(model, ct);
-  // The touched point (NodeContact::position is ½ (q + c − r o), o = −normal, r the radius the
-  // contact was made with), moved by ū − u.
-  out.touched = 2.0 * ct.position - centre - position_radius * ct.normal + (mean - own);
-  out.depth = radius - (centre - out.touched).dot(out.outward);
-  return true;
-}
-
-/// The primary tissue contact whose entries are data.node_contacts[first, last) seen through
-/// its load patch (patch_plane()): in every entry the depth, normal and point of the sphere's
-/// penetration into the patch's plane. A patch without a node leaves the entries as detected.
-/// Keeps the detected depth in NetScratch::patch_fine_depth.
-[[gnu::noinline]] void see_through_patch(const Model& model, Data& data, NetScratch& s, const NetModel& net, int first,
-                       int last) noexcept {
-  const NodeContact& ct = data.node_contacts[static_cast<std::size_t>(first)];
-  s.patch_fine_depth = ct.depth;
-  // The entries were cut back to the true sphere (a multirate scene loop's) or made with it.
-  PatchPlane plane;
-  if (!patch_plane(model, data, s, net, first, last, true_radius(model, ct), plane)) return;
-  const Vec3 position = plane.touched + 0.5 * plane.depth * plane.outward;
-  for (int c = first; c < last; ++c) {
-    NodeContact& e = data.node_contacts[static_cast<std::size_t>(c)];
-    e.depth = plane.depth;
-    e.normal = -plane.outward;
-    e.position = position;
-  }
-}
-
-/// Σ w_j² / m_j over the load patch find_patch() found last (1/kg): a force F laid on it moves its
-/// weighted mean as a mass 1 / Σ w_j² / m_j would.
-[[gnu::noinline]] double patch_inverse_mass(const Model& model, const NetScratch& s) noexcept {
-  double inv = 0.0;
-  for (int k = 0; k < s.patch_count; ++k) {
-    const double w = s.patch_weights[static_cast<std::size_t>(k)];
-    inv += w * w / model.node_mass[static_cast<std::size_t>(s.patch_nodes[static_cast<std::size_t>(k)])];
-  }
-  return inv;
-}
-
-/// Lays the force `f` (N, world) of a tissue contact on the load patch find_patch() found last
-/// (NetScratch::patch_*), or on `node` when it has no node.
-[[gnu::noinline]] void lay_on_patch(NetScratch& s, int node, const Vec3& f) noexcept {
-  if (s.patch_count == 0) {
-    s.force[static_cast<std::size_t>(node)] += f;
-    return;
-  }
-  for (int k = 0; k < s.patch_count; ++k)
-    s.force[static_cast<std::size_t>(s.patch_nodes[static_cast<std::size_t>(k)])] +=
-        s.patch_weights[static_cast<std::size_t>(k)] * f;
-}
-
-}  // namespace
-
-namespace detail {
-
-TissuePlane tissue_plane(const Model& model, Data& data, const NetModel& net, int first,
-                         int last, double position_radius) noexcept {
-  TissuePlane out;
+/// Gravity and the zero-length ties to the rigid component, with their reaction on it, into
+/// NetScratch::force and Data::body_wrench; each node's lever (NetScratch::lever), each net's
+/// energy at the step's start but the springs' (NetState::start_energy) and its ties' wrench.
+void add_ties_and_gravity(const Model& model, Data& data) noexcept {
   NetScratch& s = data.scratch->net;
-  const NodeContact& ct = data.node_contacts[static_cast<std::size_t>(first)];
-  const double radius = true_radius(model, ct);
-  PatchPlane plane;
-  if (!patch_plane(model, data, s, net, first, last, position_radius, plane)) return out;
-  out.valid = true;
-  out.point = plane.touched;
-  out.normal = plane.outward;
-  out.depth = plane.depth;
-  out.fine_depth = ct.depth - (position_radius - radius);  // the true sphere's
-  for (int k = 0; k < s.patch_count; ++k)
-    out.velocity += s.patch_weights[static_cast<std::size_t>(k)] *
-                    data.nodes[static_cast<std::size_t>(s.patch_nodes[static_cast<std::size_t>(k)])].velocity;
-  // The pair's stiffness under the time-constant floor on the patch's mass (the tool imposed, as
-  // in the scene loop), as compute_net_forces() takes it.
-  MaterialPair mp = model.material_pairs[static_cast<std::size_t>(ct.material_pair)];
-  if (mp.stiffness > 0.0 &&
-      model.solver.node_contact_max_omega_dt < std::numeric_limits<double>::infinity()) {
-    const double limit = contact_stiffness_limit(1.0 / patch_inverse_mass(model, s), model.dt,
-                                                 model.solver.node_contact_max_omega_dt);
-    mp.stiffness = std::min(mp.stiffness, limit);
-  }
-  const TissueElastic e =
-      tissue_elastic(net, radius, true, out.depth, out.fine_depth, -out.normal, mp);
-  out.force = e.force;
-  out.stiffness = e.stiffness;
-  const TissueContactLaw law =
-      make_tissue_contact_law(net.contact_modulus, radius, net.load_patch_radius, mp.stiffness);
-  out.patch_compliance = law.patch;
-  const double d_ref = 0.01 * radius;
-  out.secant_stiffness = tissue_contact_force(law, d_ref).force / d_ref;
-  return out;
-}
-
-}  // namespace detail
-
-void compute_net_forces(const Model& model, Data& data) noexcept {
-  if (model.nets.empty()) return;
-  data.stages_run |= kStageNetForces;  // the stage report (step_stages.hpp)
-  NetScratch& s = data.scratch->net;
-  detail::hold_resting_nodes(model, data);  // the nodes found at rest last step: held, v = 0
-
-  // Gravity, and the zero-length ties to the rigid component with their
-  // reaction on it. Raw pointers: the stores would otherwise make the
+  // Raw pointers: the stores would otherwise make the
   // compiler reload the vectors' data pointers per node.
   const Vec3* rest = model.node_rest.data();
   const double* mass = model.node_mass.data();
@@ -657,22 +417,15 @@ void compute_net_forces(const Model& model, Data& data) noexcept {
     data.body_wrench[bi].torque += reaction.torque;
     data.nets[k].tie_wrench = reaction;
   }
+}
 
-  // Structural and bending springs; a still node's from its last pass (net_still.hpp).
-  if (detail::mark_still_nodes(model, data))
-    spring_pass<true>(model, data);
-  else
-    spring_pass<false>(model, data);
-
-  // Node contacts (penalty law of contact_force.hpp, the node on side a). A triangle contact's
-  // share (NodeContact::face) takes the law at the triangle's point, Σ w_m v_m, and keeps its
-  // node's share w of the force and of the Jacobian's coefficients (net_surface.hpp).
-  const int nc = detail::node_contact_count(data);  // the held nodes' grasp springs included
+/// The look-ahead of the triangle contacts (NodeContact::engaged, face ≥ 0), decided for all
+/// their shares alike before any contact force joins the nodes' forces: each node of the
+/// triangle alone over the step, implicit, with its tie and its force at the start (gravity,
+/// tie, springs); the triangle's point Σ w_m (v_m + Δv_m) against the body's point.
+void look_ahead_triangle_contacts(const Model& model, Data& data, int nc) noexcept {
+  const NetScratch& s = data.scratch->net;
   const NodeState* node_states = data.nodes.data();
-  // The look-ahead of a triangle contact (NodeContact::engaged, face ≥ 0), decided for all its
-  // shares alike before any contact force joins the nodes' forces: each node of the triangle
-  // alone over the step, implicit, with its tie and its force at the start (gravity, tie,
-  // springs); the triangle's point Σ w_m (v_m + Δv_m) against the body's point.
   for (int c = 0; c < nc; ++c) {
     NodeContact& ct = data.node_contacts[static_cast<std::size_t>(c)];
     if (!ct.engaged || ct.face < 0) continue;
@@ -696,135 +449,181 @@ void compute_net_forces(const Model& model, Data& data) noexcept {
     }
     ct.engaged = ct.depth - h * ct.normal.dot(v_point) > 0.0;
   }
-  bool any_tissue = false;  // an organ given by its material among the nets (tissue_net())
-  for (const NetModel& net : model.nets) any_tissue = any_tissue || net.contact_modulus > 0.0;
-  for (int c = 0; c < nc; ++c) {
-    NodeContact& ct = data.node_contacts[static_cast<std::size_t>(c)];
-    const auto i = static_cast<std::size_t>(ct.node);
-    if (ct.held) {  // a grasp spring along its axis, its force set by the grasp stage (grasp.hpp)
-      s.force[i] += ct.force;
-      Wrench& w = data.body_wrench[static_cast<std::size_t>(ct.body_b)];
-      w.force -= ct.force;
-      w.torque -= ct.r_b.cross(ct.force);
-      continue;
+}
+
+/// The time-constant floor (contact_force.hpp, SolverSettings::node_contact_max_omega_dt) on
+/// the pair's stiffness `mp` of node contact `ct`: the node is a point mass (a tissue contact's
+/// load patch, `on_patch`: the mass that moves its mean, 1 / Σ w_j² / m_j); a body on the other
+/// side adds its mobility along n at the contact point (imposed: none). Counts
+/// Data::contacts_clamped.
+void floor_contact_stiffness(const Model& model, Data& data, const NodeContact& ct, bool on_patch,
+                             MaterialPair& mp) noexcept {
+  if (mp.stiffness > 0.0 &&
+      model.solver.node_contact_max_omega_dt < std::numeric_limits<double>::infinity()) {
+    double inv_mass = on_patch ? detail::patch_inverse_mass(model, data.scratch->net)
+                               : detail::contact_node_inverse_mass(model, ct);
+    if (ct.body_b >= 0 &&
+        data.scratch->solver.imposed[static_cast<std::size_t>(ct.body_b)] == 0) {
+      const auto b = static_cast<std::size_t>(ct.body_b);
+      inv_mass += 1.0 / contact_effective_mass(model.bodies[b], data.bodies[b], ct.r_b, false,
+                                               nullptr, nullptr, ct.r_b, false, ct.normal);
     }
-    const NetModel* tissue = any_tissue ? tissue_net(model, ct) : nullptr;
-    if (tissue && ct.primary &&
-        (c == 0 || !detail::same_contact(data.node_contacts[static_cast<std::size_t>(c - 1)], ct))) {
-      // The sphere's deepest contact, at its first entry: all its entries seen through its load
-      // patch (the others then find it in NetScratch::patch_*).
-      int last = c + 1;
-      while (last < nc && detail::same_contact(data.node_contacts[static_cast<std::size_t>(last)], ct)) ++last;
-      see_through_patch(model, data, s, *tissue, c, last);
-    }
-    // As detected, on the fine surface: the backstop's depth.
-    const double fine_depth = tissue && ct.primary ? s.patch_fine_depth : ct.depth;
-    const Vec3 v_point = detail::contact_node_value(
-        model, ct, [&](int v) -> const Vec3& { return node_states[v].velocity; });
-    Vec3 v_rel = v_point;
-    ct.r_b.setZero();
-    if (ct.body_b >= 0) {
-      const BodyState& b = data.bodies[static_cast<std::size_t>(ct.body_b)];
-      ct.r_b = ct.position - b.position;
-      v_rel -= b.linear_velocity + b.angular_velocity.cross(ct.r_b);
-    }
-    // The time-constant floor (contact_force.hpp, SolverSettings::node_contact_max_omega_dt):
-    // the node is a point mass (a tissue contact's load patch: the mass that moves its mean,
-    // 1 / Σ w_j² / m_j); a body on the other side adds its mobility along n at the contact point
-    // (imposed: none).
-    MaterialPair mp = model.material_pairs[static_cast<std::size_t>(ct.material_pair)];
-    if (mp.stiffness > 0.0 &&
-        model.solver.node_contact_max_omega_dt < std::numeric_limits<double>::infinity()) {
-      double inv_mass = tissue && ct.primary && s.patch_count > 0 ? patch_inverse_mass(model, s)
-                                                                 : detail::contact_node_inverse_mass(model, ct);
-      if (ct.body_b >= 0 &&
-          data.scratch->solver.imposed[static_cast<std::size_t>(ct.body_b)] == 0) {
-        const auto b = static_cast<std::size_t>(ct.body_b);
-        inv_mass += 1.0 / contact_effective_mass(model.bodies[b], data.bodies[b], ct.r_b, false,
-                                                 nullptr, nullptr, ct.r_b, false, ct.normal);
-      }
-      const double limit =
-          contact_stiffness_limit(1.0 / inv_mass, model.dt, model.solver.node_contact_max_omega_dt);
-      if (mp.stiffness > limit) {
-        mp.stiffness = limit;
-        ++data.contacts_clamped;
-      }
-    }
-    ct.stiffness = ct.share * mp.stiffness;
-    double elastic = 0.0, patch = 0.0;  // a tissue contact's elastic force, and F(d) of it
-    ContactForceResult r = tissue ? tissue_contact_force(model, *tissue, ct, fine_depth, v_rel, mp,
-                                                         elastic, patch)
-                                  : contact_penalty_force(ct.normal, ct.depth, v_rel, mp);
-    if (ct.face >= 0) {  // the node's share of the triangle's contact
-      r.force *= ct.share;
-      r.normal_force *= ct.share;
-      r.stiffness *= ct.share;
-      r.damping *= ct.share;
-      r.friction *= ct.share;
-    }
-    if (ct.engaged && !r.active && ct.face < 0) {
-      // The look-ahead (NodeContact::engaged): the node alone over the step, implicit, with its
-      // tie (the component moving at its twist) and its force at the step's start.
-      const NetModel& net = model.nets[static_cast<std::size_t>(model.node_net[i])];
-      const BodyState& body = data.bodies[static_cast<std::size_t>(net.body)];
-      const Vec3 anchor_velocity = body.linear_velocity + body.angular_velocity.cross(s.lever[i]);
-      const double h = model.dt;
-      const double ts = tie_scale(net, static_cast<int>(i));
-      const Vec3 dv =
-          h * (s.force[i] - h * ts * net.tie_stiffness * (data.nodes[i].velocity - anchor_velocity)) /
-          (model.node_mass[i] + ts * (h * net.tie_damping + h * h * net.tie_stiffness));
-      ct.engaged = ct.depth - h * ct.normal.dot(v_rel + dv) > 0.0;
-      if (ct.engaged) {  // below the surface at the step's end: k d − c v_n, unclamped
-        r.normal_force = mp.stiffness * ct.depth - mp.damping * ct.normal.dot(v_rel);
-        r.force = r.normal_force * ct.normal;
-        r.active = true;
-        r.stiffness = mp.stiffness;
-        r.damping = mp.damping;
-        r.friction = 0.0;
-      }
-    } else if (ct.engaged && !r.active && tissue) {
-      // A tissue contact's, decided above: its share of F(d) − c v_n ≥ 0 (r's coefficients
-      // are the law's at d, already the share's).
-      r.normal_force = std::max(0.0, ct.share * elastic - r.damping * ct.normal.dot(v_rel));
-      r.force = r.normal_force * ct.normal;
-      r.active = true;
-      r.friction = 0.0;
-    } else if (ct.engaged &&
-               !r.active) {  // a triangle's, decided above: its share of k d − c v_n ≥ 0
-      r.normal_force =
-          ct.share * std::max(0.0, mp.stiffness * ct.depth - mp.damping * ct.normal.dot(v_rel));
-      r.force = r.normal_force * ct.normal;
-      r.active = true;
-      r.stiffness = ct.share * mp.stiffness;
-      r.damping = ct.share * mp.damping;
-      r.friction = 0.0;
-    }
-    ct.force = r.force;
-    ct.active = r.active;
-    if (r.active) {  // the law's Jacobian coefficients (k_eff, c, μ for the linear law)
-      ct.stiffness = r.stiffness;
-      ct.damping = r.damping;
-      ct.friction = r.friction;
-    }
-    // The implicit step's h² K v₀ term uses the node's own relative velocity: with a triangle
-    // contact's Jacobian lumped on its nodes (docs/organs.md, "Surface contacts") the same
-    // K̃ must stand on both sides, else the triangle's nodes chatter.
-    ct.normal_velocity =
-        ct.normal.dot(ct.face < 0 ? v_rel : Vec3(v_rel - v_point + data.nodes[i].velocity));
-    if (!r.active) continue;
-    if (tissue) {  // F(d) on the load patch, the excess, damping and friction on the node
-      const Vec3 on_patch = std::min(ct.share * patch, r.normal_force) * ct.normal;
-      if (ct.primary) lay_on_patch(s, ct.node, on_patch);
-      s.force[i] += r.force - on_patch;
-    } else {
-      s.force[i] += r.force;
-    }
-    if (ct.body_b >= 0) {
-      Wrench& w = data.body_wrench[static_cast<std::size_t>(ct.body_b)];
-      w.force -= r.force;
-      w.torque -= ct.r_b.cross(r.force);
+    const double limit =
+        contact_stiffness_limit(1.0 / inv_mass, model.dt, model.solver.node_contact_max_omega_dt);
+    if (mp.stiffness > limit) {
+      mp.stiffness = limit;
+      ++data.contacts_clamped;
     }
   }
+}
+
+/// The force of a node contact `ct` that the law leaves inactive but NodeContact::engaged holds
+/// (the look-ahead: below the surface at the step's end), into `r`: a node's, decided here over
+/// the step; a tissue contact's (`tissue`, its law's elastic force `elastic`) or a triangle's,
+/// decided by look_ahead_triangle_contacts(). `v_rel`: the contact point's velocity relative to
+/// the body; `mp` the pair under the floor.
+void engaged_contact_force(const Model& model, Data& data, NodeContact& ct, bool tissue,
+                           double elastic, const Vec3& v_rel, const MaterialPair& mp,
+                           ContactForceResult& r) noexcept {
+  const auto i = static_cast<std::size_t>(ct.node);
+  const NetScratch& s = data.scratch->net;
+  if (ct.face < 0) {
+    // The look-ahead (NodeContact::engaged): the node alone over the step, implicit, with its
+    // tie (the component moving at its twist) and its force at the step's start.
+    const NetModel& net = model.nets[static_cast<std::size_t>(model.node_net[i])];
+    const BodyState& body = data.bodies[static_cast<std::size_t>(net.body)];
+    const Vec3 anchor_velocity = body.linear_velocity + body.angular_velocity.cross(s.lever[i]);
+    const double h = model.dt;
+    const double ts = tie_scale(net, static_cast<int>(i));
+    const Vec3 dv =
+        h * (s.force[i] - h * ts * net.tie_stiffness * (data.nodes[i].velocity - anchor_velocity)) /
+        (model.node_mass[i] + ts * (h * net.tie_damping + h * h * net.tie_stiffness));
+    ct.engaged = ct.depth - h * ct.normal.dot(v_rel + dv) > 0.0;
+    if (ct.engaged) {  // below the surface at the step's end: k d − c v_n, unclamped
+      r.normal_force = mp.stiffness * ct.depth - mp.damping * ct.normal.dot(v_rel);
+      r.force = r.normal_force * ct.normal;
+      r.active = true;
+      r.stiffness = mp.stiffness;
+      r.damping = mp.damping;
+      r.friction = 0.0;
+    }
+  } else if (tissue) {
+    // A tissue contact's, decided above: its share of F(d) − c v_n ≥ 0 (r's coefficients
+    // are the law's at d, already the share's).
+    r.normal_force = std::max(0.0, ct.share * elastic - r.damping * ct.normal.dot(v_rel));
+    r.force = r.normal_force * ct.normal;
+    r.active = true;
+    r.friction = 0.0;
+  } else {  // a triangle's, decided above: its share of k d − c v_n ≥ 0
+    r.normal_force =
+        ct.share * std::max(0.0, mp.stiffness * ct.depth - mp.damping * ct.normal.dot(v_rel));
+    r.force = r.normal_force * ct.normal;
+    r.active = true;
+    r.stiffness = ct.share * mp.stiffness;
+    r.damping = ct.share * mp.damping;
+    r.friction = 0.0;
+  }
+}
+
+/// Node contact `c`'s force (of the `nc`, NodeContact; penalty law of contact_force.hpp, the node
+/// on side a; the two-scale law of an organ given by its material, `any_tissue`): on its node
+/// (a tissue contact's F(d) on its load patch) in NetScratch::force and the reaction on its body
+/// in Data::body_wrench; its force, activity and the law's Jacobian coefficients in the contact.
+/// A triangle contact's share (NodeContact::face) takes the law at the triangle's point,
+/// Σ w_m v_m, and keeps its node's share w of the force and of the coefficients (net_surface.hpp).
+void add_node_contact_force(const Model& model, Data& data, int c, int nc, bool any_tissue) noexcept {
+  NetScratch& s = data.scratch->net;
+  const NodeState* node_states = data.nodes.data();
+  NodeContact& ct = data.node_contacts[static_cast<std::size_t>(c)];
+  const auto i = static_cast<std::size_t>(ct.node);
+  if (ct.held) {  // a grasp spring along its axis, its force set by the grasp stage (grasp.hpp)
+    s.force[i] += ct.force;
+    Wrench& w = data.body_wrench[static_cast<std::size_t>(ct.body_b)];
+    w.force -= ct.force;
+    w.torque -= ct.r_b.cross(ct.force);
+    return;
+  }
+  const NetModel* tissue = any_tissue ? detail::tissue_net(model, ct) : nullptr;
+  if (tissue && ct.primary &&
+      (c == 0 || !detail::same_contact(data.node_contacts[static_cast<std::size_t>(c - 1)], ct))) {
+    // The sphere's deepest contact, at its first entry: all its entries seen through its load
+    // patch (the others then find it in NetScratch::patch_*).
+    int last = c + 1;
+    while (last < nc && detail::same_contact(data.node_contacts[static_cast<std::size_t>(last)], ct)) ++last;
+    detail::see_through_patch(model, data, s, *tissue, c, last);
+  }
+  // As detected, on the fine surface: the backstop's depth.
+  const double fine_depth = tissue && ct.primary ? s.patch_fine_depth : ct.depth;
+  const Vec3 v_point = detail::contact_node_value(
+      model, ct, [&](int v) -> const Vec3& { return node_states[v].velocity; });
+  Vec3 v_rel = v_point;
+  ct.r_b.setZero();
+  if (ct.body_b >= 0) {
+    const BodyState& b = data.bodies[static_cast<std::size_t>(ct.body_b)];
+    ct.r_b = ct.position - b.position;
+    v_rel -= b.linear_velocity + b.angular_velocity.cross(ct.r_b);
+  }
+  MaterialPair mp = model.material_pairs[static_cast<std::size_t>(ct.material_pair)];
+  floor_contact_stiffness(model, data, ct, tissue && ct.primary && s.patch_count > 0, mp);
+  ct.stiffness = ct.share * mp.stiffness;
+  double elastic = 0.0, patch = 0.0;  // a tissue contact's elastic force, and F(d) of it
+  ContactForceResult r = tissue ? detail::tissue_node_contact_force(model, *tissue, ct, fine_depth, v_rel, mp,
+                                                               elastic, patch)
+                                : contact_penalty_force(ct.normal, ct.depth, v_rel, mp);
+  if (ct.face >= 0) {  // the node's share of the triangle's contact
+    r.force *= ct.share;
+    r.normal_force *= ct.share;
+    r.stiffness *= ct.share;
+    r.damping *= ct.share;
+    r.friction *= ct.share;
+  }
+  if (ct.engaged && !r.active) engaged_contact_force(model, data, ct, tissue != nullptr, elastic, v_rel, mp, r);
+  ct.force = r.force;
+  ct.active = r.active;
+  if (r.active) {  // the law's Jacobian coefficients (k_eff, c, μ for the linear law)
+    ct.stiffness = r.stiffness;
+    ct.damping = r.damping;
+    ct.friction = r.friction;
+  }
+  // The implicit step's h² K v₀ term uses the node's own relative velocity: with a triangle
+  // contact's Jacobian lumped on its nodes (docs/organs.md, "Surface contacts") the same
+  // K̃ must stand on both sides, else the triangle's nodes chatter.
+  ct.normal_velocity =
+      ct.normal.dot(ct.face < 0 ? v_rel : Vec3(v_rel - v_point + data.nodes[i].velocity));
+  if (!r.active) return;
+  if (tissue) {  // F(d) on the load patch, the excess, damping and friction on the node
+    const Vec3 on_patch = std::min(ct.share * patch, r.normal_force) * ct.normal;
+    if (ct.primary) detail::lay_on_patch(s, ct.node, on_patch);
+    s.force[i] += r.force - on_patch;
+  } else {
+    s.force[i] += r.force;
+  }
+  if (ct.body_b >= 0) {
+    Wrench& w = data.body_wrench[static_cast<std::size_t>(ct.body_b)];
+    w.force -= r.force;
+    w.torque -= ct.r_b.cross(r.force);
+  }
+}
+
+}  // namespace
+
+void compute_net_forces(const Model& model, Data& data) noexcept {
+  if (model.nets.empty()) return;
+  data.stages_run |= kStageNetForces;  // the stage report (step_stages.hpp)
+  detail::hold_resting_nodes(model, data);  // the nodes found at rest last step: held, v = 0
+  add_ties_and_gravity(model, data);
+  // Structural and bending springs; a still node's from its last pass (net_still.hpp).
+  if (detail::mark_still_nodes(model, data))
+    spring_pass<true>(model, data);
+  else
+    spring_pass<false>(model, data);
+  // Node contacts, the held nodes' grasp springs included: the triangle contacts' look-ahead
+  // decided for all their shares before any contact force joins the nodes' forces.
+  const int nc = detail::node_contact_count(data);
+  look_ahead_triangle_contacts(model, data, nc);
+  bool any_tissue = false;  // an organ given by its material among the nets (detail::tissue_net())
+  for (const NetModel& net : model.nets) any_tissue = any_tissue || net.contact_modulus > 0.0;
+  for (int c = 0; c < nc; ++c) add_node_contact_force(model, data, c, nc, any_tissue);
   // Which nodes rest in this step's solve, from their forces and contacts (net_rest.hpp).
   detail::update_resting_nodes(model, data);
 }

@@ -319,6 +319,63 @@ std::uint64_t cluster_spheres(const Model& model, const CollisionScratch& cs,
   return bits;
 }
 
+/// The near spheres with a finite centre sorted along the axis `axis` of the query box
+/// (NetScratch::near_order / near_key; insertion sort: a tool's few dozen), and the sweep's
+/// half-width: the largest radius plus `reach` (and kMargin).
+struct NearSweep {
+  int axis = 0;
+  int sorted = 0;
+  double half_width = 0.0;
+};
+NearSweep sort_near_spheres(const CollisionScratch& cs, NetScratch& ns, int num_spheres,
+                            const Vec3& extent, double reach) noexcept {
+  NearSweep out;
+  extent.maxCoeff(&out.axis);
+  double r_max = 0.0;
+  std::int32_t* order = ns.near_order.data();
+  double* key = ns.near_key.data();
+  for (int i = 0; i < num_spheres; ++i) {
+    const int sp = ns.near_spheres[static_cast<std::size_t>(i)];
+    const double x = cs.sphere_world[static_cast<std::size_t>(sp)][out.axis];
+    if (!std::isfinite(x)) continue;
+    r_max = std::max(r_max, cs.sphere_r[static_cast<std::size_t>(sp)]);
+    int m = out.sorted++;
+    for (; m > 0 && key[m - 1] > x; --m) key[m] = key[m - 1], order[m] = order[m - 1];
+    key[m] = x;
+    order[m] = i;
+  }
+  out.half_width = r_max + reach + kMargin;
+  return out;
+}
+
+/// The near spheres (bits as NetScratch::surface_sphere_mask's) within their radius plus `reach`
+/// of net triangle `f` itself (bounds [lo, hi]), not only of its bounds: the only ones its fine
+/// triangles can touch (each has a vertex whose foot is on it, and every point of it within
+/// `reach` of that foot). Only the spheres whose centres the sweep finds within its half-width
+/// of the bounds along its axis are tested.
+std::uint64_t net_face_spheres(const Model& model, const CollisionScratch& cs, const NetScratch& ns,
+                               const NodeState* nodes, int f, const Vec3& lo, const Vec3& hi,
+                               const NearSweep& sweep, double reach) noexcept {
+  const double* key = ns.near_key.data();
+  const std::int32_t* order = ns.near_order.data();
+  const std::array<int, 3>& tri = model.net_faces[static_cast<std::size_t>(f)];
+  std::uint64_t close = 0;
+  const int a = sweep.axis;
+  const int from = static_cast<int>(std::lower_bound(key, key + sweep.sorted, lo[a] - sweep.half_width) - key);
+  for (int o = from; o < sweep.sorted && key[o] <= hi[a] + sweep.half_width; ++o) {
+    const int i = order[o];
+    const int sp = ns.near_spheres[static_cast<std::size_t>(i)];
+    const double d = cs.sphere_r[static_cast<std::size_t>(sp)] + reach;
+    const Vec3& centre = cs.sphere_world[static_cast<std::size_t>(sp)];
+    if (!(detail::box_distance2(centre, lo, hi) < d * d)) continue;
+    int feature = kFace;
+    const Vec3 q = detail::closest_on_triangle(centre, nodes[tri[0]].position, nodes[tri[1]].position,
+                                               nodes[tri[2]].position, feature);
+    if ((centre - q).squaredNorm() < d * d) close |= sphere_bit(i);
+  }
+  return close;
+}
+
 /// The fine triangles riding on the net triangles near the `num_spheres` near spheres (a net
 /// triangle whose bounds come within a sphere's radius plus the net's surface_reach of its
 /// centre), whose bounds at their vertices' current positions meet [qlo, qhi] (the near spheres'
@@ -377,26 +434,7 @@ int gather_surface_candidates(const Model& model, const Data& data, NetScratch& 
   };
   const std::int32_t* near = ns.near_spheres.data();
   const std::int32_t* cluster_of = model.net_face_surface_cluster.data();
-  // The near spheres sorted along the query box's longest axis (insertion sort: a tool's few
-  // dozen), so that a net triangle tests only those whose centres come within the largest
-  // radius plus `reach` of its bounds along it.
-  int axis = 0;
-  (qhi - qlo).maxCoeff(&axis);
-  double r_max = 0.0;
-  int sorted = 0;
-  std::int32_t* order = ns.near_order.data();
-  double* key = ns.near_key.data();
-  for (int i = 0; i < num_spheres; ++i) {
-    const int sp = near[i];
-    const double x = cs.sphere_world[static_cast<std::size_t>(sp)][axis];
-    if (!std::isfinite(x)) continue;
-    r_max = std::max(r_max, cs.sphere_r[static_cast<std::size_t>(sp)]);
-    int m = sorted++;
-    for (; m > 0 && key[m - 1] > x; --m) key[m] = key[m - 1], order[m] = order[m - 1];
-    key[m] = x;
-    order[m] = i;
-  }
-  const double sweep = r_max + reach + kMargin;
+  const NearSweep sweep = sort_near_spheres(cs, ns, num_spheres, qhi - qlo, reach);
   int nc = 0;
   node_outcodes(data, ns, net, plo, phi);
   for (int f = net.face_begin; f < net.face_begin + net.face_count; ++f) {
@@ -404,26 +442,10 @@ int gather_surface_candidates(const Model& model, const Data& data, NetScratch& 
     Vec3 lo, hi;
     net_face_bounds(model, nodes, f, lo, hi);
     if (!boxes_overlap(lo, hi, plo, phi) || !finite(lo) || !finite(hi)) continue;
-    // The spheres within reach of the triangle itself, not only of its bounds or theirs: the
-    // only ones its fine triangles can touch (each has a vertex whose foot is on it, and every
-    // point of it within `reach` of that foot).
-    std::uint64_t close = 0;
-    const std::array<int, 3>& tri = model.net_faces[static_cast<std::size_t>(f)];
-    const int from = static_cast<int>(std::lower_bound(key, key + sorted, lo[axis] - sweep) - key);
-    for (int o = from; o < sorted && key[o] <= hi[axis] + sweep; ++o) {
-      const int i = order[o];
-      const int sp = near[i];
-      const double d = cs.sphere_r[static_cast<std::size_t>(sp)] + reach;
-      const Vec3& centre = cs.sphere_world[static_cast<std::size_t>(sp)];
-      if (!(detail::box_distance2(centre, lo, hi) < d * d)) continue;
-      int feature = kFace;
-      const Vec3 q = detail::closest_on_triangle(centre, nodes[tri[0]].position,
-                                                 nodes[tri[1]].position, nodes[tri[2]].position,
-                                                 feature);
-      if ((centre - q).squaredNorm() < d * d) close |= sphere_bit(i);
-    }
+    const std::uint64_t close = net_face_spheres(model, cs, ns, nodes, f, lo, hi, sweep, reach);
     if (close == 0) continue;
     face_now = f;
+    const std::array<int, 3>& tri = model.net_faces[static_cast<std::size_t>(f)];
     for (int m = 0; m < 3; ++m) corner_now[m] = &nodes[tri[static_cast<std::size_t>(m)]].position;
     frame_ok = net_surface_frame(*corner_now[0], *corner_now[1], *corner_now[2], frame_now);
     const auto first = static_cast<std::size_t>(model.net_face_surface_begin[static_cast<std::size_t>(f)]);

@@ -215,7 +215,7 @@ struct NetScratch {
   /// pass_positions[node_begin, node_begin + pass_count[k]) for net k.
   std::vector<std::int32_t> pass_positions;
   std::vector<int> active_count, pass_count;  ///< Per net.
-  /// The load patch of the last tissue contact (net_forces.cpp; net_tissue_contact.hpp): its
+  /// The load patch of the last tissue contact (net_tissue.cpp; net_tissue_contact.hpp): its
   /// surface nodes (global) and normalised weights, the first patch_count of them, about the
   /// rest point patch_at of the net whose first node is patch_net (-1: none yet; the entries of
   /// one contact follow one another and reuse it), and the contact's depth as detected on the

@@ -1,13 +1,19 @@
 #pragma once
 /// @file net_tissue.hpp
-/// Private to numen::core (core/src/detail): the plane a tool's sphere meets an organ given by
-/// its material through (net_tissue_contact.hpp's load patch), for the multirate device loop's
-/// tissue planes (multirate/net_planes.cpp; docs/tissue.md, "Multirate"), and what tells a contact's
-/// entries apart. No allocation.
+/// Private to numen::core (core/src/detail; defined in net_tissue.cpp): the contact of a tool's
+/// sphere with an organ given by its material (net_tissue_contact.hpp's two-scale law on its load
+/// patch; docs/tissue.md, "The contact") for compute_net_forces(), the plane the sphere meets it
+/// through for the multirate device loop's tissue planes (multirate/net_planes.cpp; docs/tissue.md,
+/// "Multirate"), and what tells a contact's entries apart. No allocation.
 
+#include "numen/core/contact_force.hpp"
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"
 #include "numen/core/types.hpp"
+
+namespace numen::core {
+struct NetScratch;
+}  // namespace numen::core
 
 namespace numen::core::detail {
 
@@ -17,6 +23,36 @@ inline bool same_contact(const NodeContact& a, const NodeContact& b) noexcept {
   return a.primary == b.primary && a.body_b == b.body_b && a.sphere_b == b.sphere_b &&
          a.position == b.position;
 }
+
+/// The net of an organ given by its material whose surface node contact `ct` is (a tool's
+/// sphere on its surface: the two-scale law of net_tissue_contact.hpp), else null.
+const NetModel* tissue_net(const Model& model, const NodeContact& ct) noexcept;
+
+/// The two-scale law (net_tissue_contact.hpp) of the tissue contact `ct` on `net`, with the
+/// material pair `mp` (its stiffness already under the time-constant floor): tissue_elastic()
+/// at its depth (NodeContact::primary: seen through the load patch) and the touched fine
+/// surface's `fine_depth`; − c v_n with the pair's damping scaled by the law's stiffness over the
+/// pair's (c = c_pair k(d) / k_pair: the pair's time constant), the pair's friction; never a
+/// pull. `elastic` gets the elastic force, `patch` F(d), the part laid on the load patch (the
+/// rest acts on the contact's own nodes).
+ContactForceResult tissue_node_contact_force(const Model& model, const NetModel& net,
+                                             const NodeContact& ct, double fine_depth, const Vec3& v_rel, const MaterialPair& mp,
+                                        double& elastic, double& patch) noexcept;
+
+/// The primary tissue contact whose entries are data.node_contacts[first, last) seen through
+/// its load patch (patch_plane()): in every entry the depth, normal and point of the sphere's
+/// penetration into the patch's plane. A patch without a node leaves the entries as detected.
+/// Keeps the detected depth in NetScratch::patch_fine_depth.
+void see_through_patch(const Model& model, Data& data, NetScratch& s, const NetModel& net, int first,
+                       int last) noexcept;
+
+/// Σ w_j² / m_j over the load patch find_patch() found last (1/kg): a force F laid on it moves its
+/// weighted mean as a mass 1 / Σ w_j² / m_j would.
+double patch_inverse_mass(const Model& model, const NetScratch& s) noexcept;
+
+/// Lays the force `f` (N, world) of a tissue contact on the load patch find_patch() found last
+/// (NetScratch::patch_*), or on `node` when it has no node.
+void lay_on_patch(NetScratch& s, int node, const Vec3& f) noexcept;
 
 /// A tissue contact seen through its load patch at the scene loop's sample.
 struct TissuePlane {

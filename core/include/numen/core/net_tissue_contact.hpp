@@ -29,7 +29,7 @@
 /// past the net's resolution sinks below the net-carried surface (the tissue would wrap it;
 /// the net cannot): half its radius below the touched fine surface, the penalty of the pair
 /// joins on the touched triangles' nodes with a C¹ onset, as a net given per spring meets a tool
-/// (kTissueBackstopDepth, kTissueBackstopOnset; net_forces.cpp).
+/// (kTissueBackstopDepth, kTissueBackstopOnset; net_tissue.cpp).
 ///
 /// Real-time safe: no allocation, no exception.
 
