@@ -402,7 +402,7 @@ int gather_surface_candidates(const Model& model, const Data& data, NetScratch& 
   const int room = static_cast<int>(ns.surface_candidates.size());
   const std::span<const NodeState> node_states(data.nodes.data(), data.nodes.size());
   // The net triangle whose riders are being gathered: its corners and frame, computed once for
-  // the fine vertices on it (the same arithmetic as net_surface_position()).
+  // the fine vertices on it.
   int face_now = -1;
   const Vec3* corner_now[3] = {nullptr, nullptr, nullptr};
   Mat3 frame_now;
@@ -413,13 +413,9 @@ int gather_surface_candidates(const Model& model, const Data& data, NetScratch& 
     if (st != stamp) {
       st = stamp;
       const NetSurfacePoint& e = model.net_surface_points[static_cast<std::size_t>(p)];
-      if (e.face == face_now) {
-        const Vec3 foot = e.weights.x() * *corner_now[0] + e.weights.y() * *corner_now[1] +
-                          e.weights.z() * *corner_now[2];
-        x = frame_ok ? Vec3(foot + frame_now * e.offset) : foot;
-      } else {
-        x = net_surface_position(model, node_states, p);
-      }
+      x = e.face == face_now ? net_surface_point(e, *corner_now[0], *corner_now[1], *corner_now[2],
+                                                 frame_ok ? &frame_now : nullptr)
+                             : net_surface_position(model, node_states, p);
     }
     return x;
   };

@@ -26,14 +26,21 @@ inline bool net_surface_frame(const Vec3& a, const Vec3& b, const Vec3& c, Mat3&
   return true;
 }
 
+/// The fine vertex `e` on the triangle at corners (a, b, c) whose frame F is `frame`
+/// (net_surface_frame(); null where the triangle has collapsed): Σ w_m x_m + F · offset, the foot
+/// point alone without a frame. For the vertices of one triangle, its frame computed once.
+inline Vec3 net_surface_point(const NetSurfacePoint& e, const Vec3& a, const Vec3& b, const Vec3& c,
+                              const Mat3* frame) noexcept {
+  const Vec3 foot = e.weights.x() * a + e.weights.y() * b + e.weights.z() * c;
+  return frame ? Vec3(foot + *frame * e.offset) : foot;
+}
+
 /// The fine vertex `e` on the triangle at corners (a, b, c): Σ w_m x_m + F · offset; the foot
 /// point alone where the triangle has collapsed.
 inline Vec3 net_surface_point(const NetSurfacePoint& e, const Vec3& a, const Vec3& b,
                               const Vec3& c) noexcept {
-  const Vec3 foot = e.weights.x() * a + e.weights.y() * b + e.weights.z() * c;
   Mat3 frame;
-  if (!net_surface_frame(a, b, c, frame)) return foot;
-  return foot + frame * e.offset;
+  return net_surface_point(e, a, b, c, net_surface_frame(a, b, c, frame) ? &frame : nullptr);
 }
 
 }  // namespace numen::core::detail
