@@ -1,8 +1,7 @@
 #pragma once
 /// @file control_loop.hpp
-/// One control period of numen (docs/architecture.md, "One encoder value, frame to torque
-/// frame"; docs/protocol.md), the same for every protocol and both kinds of device, through
-/// hal::Device. An impedance device (hal::ImpedanceDevice):
+/// One control period of numen (docs/encoder-path.md; docs/protocol.md), the same for every
+/// protocol and both kinds of device, through hal::Device. An impedance device (hal::ImpedanceDevice):
 ///   begin_period: Device::begin_period — SYNC (+ the managed stack's NMT command due and
 ///                 controller heartbeat);
 ///   end_period:   Device::read (frames → decode → check → forward kinematics)
