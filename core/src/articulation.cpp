@@ -154,34 +154,37 @@ void build_step_tree(const Model& model, ArticulationScratch& s) noexcept {
 
 }  // namespace
 
-std::string build_articulation_topology(Model& model) {
-  ArticulationTopology& topo = model.articulation;
-  topo = ArticulationTopology{};
-  const int nb = model.num_bodies();
-  const int nj = model.num_joints();
-  auto who = [&](int j) { return "joint '" + model.joints[idx(j)].name + "'"; };
-  auto body_name = [&](int b) { return "body '" + model.bodies[idx(b)].name + "'"; };
+namespace {
 
-  std::vector<int> parent_joint(idx(nb), -1);  // joint of which the body is the child
-  for (int j = 0; j < nj; ++j) {
+std::string joint_name(const Model& model, int j) { return "joint '" + model.joints[idx(j)].name + "'"; }
+std::string body_name(const Model& model, int b) { return "body '" + model.bodies[idx(b)].name + "'"; }
+
+/// Checks each joint's bodies, prescription and rows, and records the joint of which each body
+/// is the child (`parent_joint`, -1: none); "" or the error naming the joint.
+std::string check_joints(const Model& model, std::vector<int>& parent_joint) {
+  const int nb = model.num_bodies();
+  parent_joint.assign(idx(nb), -1);
+  for (int j = 0; j < model.num_joints(); ++j) {
     const JointModel& jm = model.joints[idx(j)];
+    const std::string who = joint_name(model, j);
     if (jm.child < 0 || jm.child >= nb)
-      return who(j) + ": child body index " + std::to_string(jm.child) + " out of range [0, " +
+      return who + ": child body index " + std::to_string(jm.child) + " out of range [0, " +
              std::to_string(nb) + ")";
     if (jm.parent < -1 || jm.parent >= nb)
-      return who(j) + ": parent body index " + std::to_string(jm.parent) +
+      return who + ": parent body index " + std::to_string(jm.parent) +
              " out of range [-1, " + std::to_string(nb) + ") (-1: the world)";
     if (jm.child == jm.parent)
-      return who(j) + ": child and parent are the same " + body_name(jm.child);
+      return who + ": child and parent are the same " + body_name(model, jm.child);
     if (jm.prescribed && !joint_can_be_prescribed(jm.type))
-      return who(j) + ": only revolute and prismatic joints can be prescribed (got " +
+      return who + ": only revolute and prismatic joints can be prescribed (got " +
              to_string(jm.type) + ")";
     if (jm.num_rows < 1 || jm.num_rows > kMaxJointRows)
-      return who(j) + ": num_rows must be in [1, " + std::to_string(kMaxJointRows) + "] (got " +
+      return who + ": num_rows must be in [1, " + std::to_string(kMaxJointRows) + "] (got " +
              std::to_string(jm.num_rows) + "; set by finalize_model())";
     if (const int other = parent_joint[idx(jm.child)]; other >= 0) {
-      std::string e = who(j) + ": its child " + body_name(jm.child) + " is already the child of " +
-                      who(other) + " (a body has at most one parent joint";
+      std::string e = who + ": its child " + body_name(model, jm.child) +
+                      " is already the child of " + joint_name(model, other) +
+                      " (a body has at most one parent joint";
       // In a tree only the root body has no parent joint, so this is also how
       // a second joint to the world in one articulation shows up.
       if (jm.parent < 0 || model.joints[idx(other)].parent < 0)
@@ -191,49 +194,66 @@ std::string build_articulation_topology(Model& model) {
     }
     parent_joint[idx(jm.child)] = j;
   }
+  return "";
+}
 
-  // Connected components (union-find over the body-body joints).
-  std::vector<int> uf(idx(nb));
-  std::iota(uf.begin(), uf.end(), 0);
-  auto find = [&](int b) {
+/// The bodies' connected components over the body-body joints (union-find) and each
+/// component's joint to the world.
+struct Components {
+  std::vector<int> uf;           ///< Union-find parents; find() gives a component's representative.
+  std::vector<int> world_joint;  ///< Per representative: its joint to the world, or -1.
+  int find(int b) {
     while (uf[idx(b)] != b) {
       uf[idx(b)] = uf[idx(uf[idx(b)])];
       b = uf[idx(b)];
     }
     return b;
-  };
+  }
+};
+
+/// Joins the bodies into `c`; "" or the error (a cycle, a second joint to the world).
+std::string join_components(const Model& model, Components& c) {
+  const int nb = model.num_bodies();
+  const int nj = model.num_joints();
+  c.uf.resize(idx(nb));
+  std::iota(c.uf.begin(), c.uf.end(), 0);
   for (int j = 0; j < nj; ++j) {
     const JointModel& jm = model.joints[idx(j)];
     if (jm.parent < 0) continue;
-    const int a = find(jm.child);
-    const int b = find(jm.parent);
+    const int a = c.find(jm.child);
+    const int b = c.find(jm.parent);
     if (a == b)
-      return who(j) + ": closes a cycle (its bodies " + body_name(jm.parent) + " and " +
-             body_name(jm.child) + " are already joined); articulations must be trees";
-    uf[idx(std::max(a, b))] = std::min(a, b);
+      return joint_name(model, j) + ": closes a cycle (its bodies " + body_name(model, jm.parent) +
+             " and " + body_name(model, jm.child) + " are already joined); articulations must be trees";
+    c.uf[idx(std::max(a, b))] = std::min(a, b);
   }
-  std::vector<int> world_joint(idx(nb), -1);  // per component representative
+  c.world_joint.assign(idx(nb), -1);
   for (int j = 0; j < nj; ++j) {
     const JointModel& jm = model.joints[idx(j)];
     if (jm.parent >= 0) continue;
-    const int r = find(jm.child);
+    const int r = c.find(jm.child);
     // Unreachable after the checks above (a second world joint needs a second
     // body without a parent joint in the tree), kept as a guard.
-    if (world_joint[idx(r)] >= 0)
-      return who(j) + ": a second joint to the world in the articulation of " +
-             who(world_joint[idx(r)]) + " (a loop through the world; at most one per tree)";
-    world_joint[idx(r)] = j;
+    if (c.world_joint[idx(r)] >= 0)
+      return joint_name(model, j) + ": a second joint to the world in the articulation of " +
+             joint_name(model, c.world_joint[idx(r)]) + " (a loop through the world; at most one per tree)";
+    c.world_joint[idx(r)] = j;
   }
+  return "";
+}
 
-  // Tree ids in the order of their smallest body index.
-  topo.body_tree.assign(idx(nb), -1);
-  std::vector<int> tree_of_rep(idx(nb), -1);
-  for (int b = 0; b < nb; ++b) {
-    const int r = find(b);
-    if (tree_of_rep[idx(r)] < 0) tree_of_rep[idx(r)] = topo.num_trees++;
-    topo.body_tree[idx(b)] = tree_of_rep[idx(r)];
-  }
+/// A node of the traversal: a body or a joint.
+struct TreeItem {
+  bool is_joint;
+  int index;
+};
 
+/// Post-order depth-first traversal of each tree from its root, a body's child joints in index
+/// order: fills topo.nodes, body_node and joint_node; "" or an internal error.
+std::string traverse_trees(const Model& model, const std::vector<TreeItem>& roots,
+                           ArticulationTopology& topo) {
+  const int nb = model.num_bodies();
+  const int nj = model.num_joints();
   // Child joints of each body (compressed rows, joint index order).
   std::vector<int> first(idx(nb) + 1, 0);
   for (const JointModel& jm : model.joints)
@@ -247,49 +267,32 @@ std::string build_articulation_topology(Model& model) {
       if (p >= 0) child_joints[idx(fill[idx(p)]++)] = j;
     }
   }
-
-  // Root of each tree: its world joint, else its body without a parent joint.
-  struct Item {
-    bool is_joint;
-    int index;
-  };
-  std::vector<Item> roots(idx(topo.num_trees), Item{false, -1});
-  for (int b = 0; b < nb; ++b) {
-    const int t = topo.body_tree[idx(b)];
-    const int wj = world_joint[idx(find(b))];
-    if (wj >= 0)
-      roots[idx(t)] = Item{true, wj};
-    else if (parent_joint[idx(b)] < 0)
-      roots[idx(t)] = Item{false, b};
-  }
-
-  // Post-order depth-first traversal of each tree, children in index order.
   topo.nodes.reserve(idx(nb + nj));
   topo.body_node.assign(idx(nb), -1);
   topo.joint_node.assign(idx(nj), -1);
   struct Frame {
-    Item item;
+    TreeItem item;
     int next_child;
   };
   std::vector<Frame> stack;
-  for (const Item& root : roots) {
+  for (const TreeItem& root : roots) {
     if (root.index < 0) return "articulation: internal error (a tree without a root)";
     stack.push_back(Frame{root, 0});
     while (!stack.empty()) {
       Frame& f = stack.back();
-      Item next{false, -1};
+      TreeItem next{false, -1};
       if (f.item.is_joint) {
-        if (f.next_child == 0) next = Item{false, model.joints[idx(f.item.index)].child};
+        if (f.next_child == 0) next = TreeItem{false, model.joints[idx(f.item.index)].child};
       } else {
         const int k = first[idx(f.item.index)] + f.next_child;
-        if (k < first[idx(f.item.index) + 1]) next = Item{true, child_joints[idx(k)]};
+        if (k < first[idx(f.item.index) + 1]) next = TreeItem{true, child_joints[idx(k)]};
       }
       if (next.index >= 0) {
         ++f.next_child;
         stack.push_back(Frame{next, 0});
         continue;
       }
-      const Item done = f.item;
+      const TreeItem done = f.item;
       stack.pop_back();
       (done.is_joint ? topo.joint_node : topo.body_node)[idx(done.index)] =
           static_cast<int>(topo.nodes.size());
@@ -298,6 +301,39 @@ std::string build_articulation_topology(Model& model) {
   }
   if (topo.nodes.size() != idx(nb + nj))
     return "articulation: internal error (traversal missed a body or joint)";
+  return "";
+}
+
+}  // namespace
+
+std::string build_articulation_topology(Model& model) {
+  ArticulationTopology& topo = model.articulation;
+  topo = ArticulationTopology{};
+  const int nb = model.num_bodies();
+  std::vector<int> parent_joint;  // joint of which the body is the child
+  if (std::string err = check_joints(model, parent_joint); !err.empty()) return err;
+  Components components;
+  if (std::string err = join_components(model, components); !err.empty()) return err;
+
+  // Tree ids in the order of their smallest body index.
+  topo.body_tree.assign(idx(nb), -1);
+  std::vector<int> tree_of_rep(idx(nb), -1);
+  for (int b = 0; b < nb; ++b) {
+    const int r = components.find(b);
+    if (tree_of_rep[idx(r)] < 0) tree_of_rep[idx(r)] = topo.num_trees++;
+    topo.body_tree[idx(b)] = tree_of_rep[idx(r)];
+  }
+  // Root of each tree: its world joint, else its body without a parent joint.
+  std::vector<TreeItem> roots(idx(topo.num_trees), TreeItem{false, -1});
+  for (int b = 0; b < nb; ++b) {
+    const int t = topo.body_tree[idx(b)];
+    const int wj = components.world_joint[idx(components.find(b))];
+    if (wj >= 0)
+      roots[idx(t)] = TreeItem{true, wj};
+    else if (parent_joint[idx(b)] < 0)
+      roots[idx(t)] = TreeItem{false, b};
+  }
+  if (std::string err = traverse_trees(model, roots, topo); !err.empty()) return err;
   for (ArticulationNode& n : topo.nodes) {
     if (n.is_joint) {
       const int p = model.joints[idx(n.index)].parent;

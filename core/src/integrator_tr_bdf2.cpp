@@ -96,22 +96,15 @@ void add_contact_stage_terms(const Model& model, Data& data, double weight) noex
   }
 }
 
-}  // namespace
-
-void integrate_tr_bdf2(const Model& model, Data& data) noexcept {
+/// Stage 1: the linearised trapezoidal rule over γh (system step h_s = γh/2), as
+/// integrate_trapezoidal() over a step γh: Δu½ solves A Δu½ = h_s (f0 + h_s K u0) + M (u* − u0),
+/// u_γ = u0 + 2 Δu½, x_γ = x0 ⊕ γh (u0 + Δu½). Writes the stage's start (SolverScratch::
+/// stage_start, NetScratch::stage_velocity), its gyroscopic change ω* − ω0 (stage_gyro), its
+/// move Δx_γ (stage_move) and velocity change Δu_γ (stage_delta) per body and node.
+void trapezoidal_stage(const Model& model, Data& data, bool nets, double hs) noexcept {
   SolverScratch& s = data.scratch->solver;
-  const double h = model.dt;
-  const double hs = tr_bdf2::kStageStep * h;  // h_s of both stages
-  const double h_gamma = 2.0 * hs;            // γh: the trapezoidal stage's length
-  const double a = tr_bdf2::kStageWeight;
+  const double h_gamma = 2.0 * hs;  // γh: the trapezoidal stage's length
   const std::size_t nb = data.bodies.size();
-  const bool nets = kWithDeformable && (model.stage_plan & kStageNetSolve) != 0;
-  [[maybe_unused]] const bool joints = kWithArticulation && !model.joints.empty();
-  s.system_step = hs;
-
-  // Stage 1: the linearised trapezoidal rule over γh (system step h_s = γh/2), as
-  // integrate_trapezoidal() over a step γh: Δu½ solves A Δu½ = h_s (f0 + h_s K u0) + M (u* − u0),
-  // u_γ = u0 + 2 Δu½, x_γ = x0 ⊕ γh (u0 + Δu½).
   for (std::size_t i = 0; i < nb; ++i) s.stage_start[i] = data.bodies[i];
   if constexpr (kWithDeformable) {
     if (nets) {
@@ -132,8 +125,6 @@ void integrate_tr_bdf2(const Model& model, Data& data) noexcept {
     if (nets) build_net_system(model, data);
   }
   solve_linearized_system(model, data);
-  const int stage1_iterations = data.solver_iterations;
-  const double stage1_residual = data.solver_residual;
   for (std::size_t i = 0; i < nb; ++i) {
     if (!s.in_solve[i]) {  // kDirect: moves with its imposed twist
       s.stage_move[i] = h_gamma * s.twist0[i];
@@ -152,34 +143,43 @@ void integrate_tr_bdf2(const Model& model, Data& data) noexcept {
       }
     }
   }
+}
+
 #if NUMEN_WITH_ARTICULATION
-  if (joints) {
-    // RATTLE at the stage's end, x_γ (as the trapezoidal rule at its step's end): u_γ without
-    // the second copy of the stage's joint impulse, projected onto G(x_γ) u_γ = v_ref.
-    for (std::size_t i = 0; i < nb; ++i) {
-      if (!s.in_solve[i]) continue;
-      BodyState& st = data.bodies[i];
-      move_pose(s.stage_start[i], s.stage_move[i], st);
-      const Vec6 u = s.twist0[i] + s.stage_delta[i];
-      st.linear_velocity = u.head<3>();
-      st.angular_velocity = u.tail<3>();
-    }
-    project_joint_velocities(model, data, h_gamma, true);
-    for (std::size_t i = 0; i < nb; ++i) {
-      if (!s.in_solve[i]) continue;
-      s.stage_delta[i] = twist_of(data.bodies[i]) - s.twist0[i];
-      data.bodies[i].position = s.stage_start[i].position;  // the rows of stage 2 start at x0
-      data.bodies[i].orientation = s.stage_start[i].orientation;
-    }
+/// RATTLE at stage 1's end, x_γ (as the trapezoidal rule at its step's end): u_γ without the
+/// second copy of the stage's joint impulse, projected onto G(x_γ) u_γ = v_ref; rewrites
+/// stage_delta and puts the bodies back at x0 (the rows of stage 2 start there).
+void project_stage_end(const Model& model, Data& data, double h_gamma) noexcept {
+  SolverScratch& s = data.scratch->solver;
+  const std::size_t nb = data.bodies.size();
+  for (std::size_t i = 0; i < nb; ++i) {
+    if (!s.in_solve[i]) continue;
+    BodyState& st = data.bodies[i];
+    move_pose(s.stage_start[i], s.stage_move[i], st);
+    const Vec6 u = s.twist0[i] + s.stage_delta[i];
+    st.linear_velocity = u.head<3>();
+    st.angular_velocity = u.tail<3>();
   }
+  project_joint_velocities(model, data, h_gamma, true);
+  for (std::size_t i = 0; i < nb; ++i) {
+    if (!s.in_solve[i]) continue;
+    s.stage_delta[i] = twist_of(data.bodies[i]) - s.twist0[i];
+    data.bodies[i].position = s.stage_start[i].position;
+    data.bodies[i].orientation = s.stage_start[i].orientation;
+  }
+}
 #endif
 
-  // Stage 2: BDF2 to t + h on the same linearisation, y1 = a y_γ − (a − 1) y0 + h_s F(y1):
-  //   A Δu = h_s (f0 + h_s K ũ) + a M Δu_γ + M (u* − u0),   ũ = u0 + (a / h_s) Δx_γ,
-  //   u1 = u0 + Δu,   x1 = x0 ⊕ (a Δx_γ + h_s u1) = x0 ⊕ h_s (ũ + Δu).
-  // The builders take K ũ from the twists and node velocities they read: they are set to ũ
-  // (the gyroscopic impulse M (u* − u0) of stage 1 kept through ω = ũ_ω + ω* − ω0); the
-  // contacts' stored normal velocities are completed by add_contact_stage_terms().
+/// Stage 2: BDF2 to t + h on the same linearisation, y1 = a y_γ − (a − 1) y0 + h_s F(y1):
+///   A Δu = h_s (f0 + h_s K ũ) + a M Δu_γ + M (u* − u0),   ũ = u0 + (a / h_s) Δx_γ.
+/// The builders take K ũ from the twists and node velocities they read: they are set to ũ
+/// (the gyroscopic impulse M (u* − u0) of stage 1 kept through ω = ũ_ω + ω* − ω0); the
+/// contacts' stored normal velocities are completed by add_contact_stage_terms(). Solves for
+/// Δu (SolverScratch::delta, NetScratch::delta).
+void bdf2_stage(const Model& model, Data& data, bool nets, double hs) noexcept {
+  SolverScratch& s = data.scratch->solver;
+  const double a = tr_bdf2::kStageWeight;
+  const std::size_t nb = data.bodies.size();
   const double w = a / hs;
   for (std::size_t i = 0; i < nb; ++i) {
     BodyState& st = data.bodies[i];
@@ -213,14 +213,18 @@ void integrate_tr_bdf2(const Model& model, Data& data) noexcept {
   }
   add_contact_stage_terms(model, data, w);
   s.joint_drift_step = hs;
-  s.joint_horizon = h;
+  s.joint_horizon = model.dt;
   s.joint_rate_from_stage_start = true;
   s.joint_rows_at_drift_end = true;
   solve_linearized_system(model, data);
-  data.solver_iterations += stage1_iterations;
-  if (stage1_residual > data.solver_residual) data.solver_residual = stage1_residual;
+}
 
-  for (std::size_t i = 0; i < nb; ++i) {
+/// The step's end: u1 = u0 + Δu, x1 = x0 ⊕ (a Δx_γ + h_s u1) per body (a kDirect body stays at
+/// its imposed target) and node.
+void advance_to_step_end(Data& data, bool nets, double hs) noexcept {
+  SolverScratch& s = data.scratch->solver;
+  const double a = tr_bdf2::kStageWeight;
+  for (std::size_t i = 0; i < data.bodies.size(); ++i) {
     BodyState& st = data.bodies[i];
     if (!s.in_solve[i]) {  // kDirect: stays at the imposed target
       st = s.stage_start[i];
@@ -242,8 +246,27 @@ void integrate_tr_bdf2(const Model& model, Data& data) noexcept {
       }
     }
   }
+}
+
+}  // namespace
+
+void integrate_tr_bdf2(const Model& model, Data& data) noexcept {
+  SolverScratch& s = data.scratch->solver;
+  const double hs = tr_bdf2::kStageStep * model.dt;  // h_s of both stages
+  const bool nets = kWithDeformable && (model.stage_plan & kStageNetSolve) != 0;
+  s.system_step = hs;
+  trapezoidal_stage(model, data, nets, hs);
+  const int stage1_iterations = data.solver_iterations;
+  const double stage1_residual = data.solver_residual;
 #if NUMEN_WITH_ARTICULATION
-  if (joints) project_joint_velocities(model, data, h, false);  // onto G(x1) u1 = v_ref
+  if (!model.joints.empty()) project_stage_end(model, data, 2.0 * hs);
+#endif
+  bdf2_stage(model, data, nets, hs);
+  data.solver_iterations += stage1_iterations;
+  if (stage1_residual > data.solver_residual) data.solver_residual = stage1_residual;
+  advance_to_step_end(data, nets, hs);
+#if NUMEN_WITH_ARTICULATION
+  if (!model.joints.empty()) project_joint_velocities(model, data, model.dt, false);  // onto G(x1) u1 = v_ref
 #endif
   s.joint_rate_from_stage_start = false;
   s.joint_rows_at_drift_end = false;

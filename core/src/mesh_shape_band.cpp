@@ -278,18 +278,30 @@ std::size_t mesh_band_bytes(const MeshBand& b) noexcept {
          b.triangles.capacity() * sizeof(std::int32_t);
 }
 
-void build_mesh_band(MeshShape& s, const MeshShapeOptions& options) {
-  MeshBand& b = s.band;
-  b = MeshBand{};
-  if (!(options.band > 0.0) || s.triangles.empty()) return;
-  const auto refuse = [&](const std::string& why) {
-    b = MeshBand{};
-    b.note = "no narrow band (" + why + "): every query searches the tree";
-  };
-  if (s.triangles.size() >= (std::size_t{1} << kTriangleBits)) {
-    refuse("more than 2^24 triangles");
-    return;
-  }
+namespace {
+
+/// Whole megabytes, or three digits and an exponent beyond 10^9 MB: a mesh far smaller than its
+/// band (a 1e-30 scale) estimates 10^90 bytes, which a long long cannot hold.
+std::string megabytes(double bytes) {
+  char text[32];
+  const double m = bytes / 1048576.0;
+  std::snprintf(text, sizeof text, m < 1e9 ? "%.0f MB" : "%.3g MB", m);
+  return std::string(text);
+}
+
+/// The band's grid over `s` (width, cell h = cell_factor × mean edge, origin, cells in whole
+/// bricks), or the reason it is refused (over the byte cap, too many cells or bricks).
+struct BandGrid {
+  std::string refused;           ///< Non-empty: no band, why.
+  std::uint64_t total_bricks = 0;
+  std::uint64_t total_cells = 0;
+  double rho = 0.0;    ///< The cell's half diagonal √3 h / 2 (m).
+  double slack = 0.0;  ///< Rounding slack of the region tests (m).
+};
+
+/// Sets b's width, cell, cells and origin for `s`; the grid's sizes in the result.
+BandGrid plan_band_grid(const MeshShape& s, const MeshShapeOptions& options, MeshBand& b) {
+  BandGrid g;
   double edges = 0.0, area = 0.0;
   for (std::size_t t = 0; t < s.triangles.size(); ++t) {
     const auto& tri = s.triangles[t];
@@ -301,22 +313,15 @@ void build_mesh_band(MeshShape& s, const MeshShapeOptions& options) {
   }
   const double B = options.band;
   const double h = std::max(options.cell_factor, 1e-3) * edges / (3.0 * static_cast<double>(s.triangles.size()));
-  const double rho = 0.5 * std::sqrt(3.0) * h;
+  g.rho = 0.5 * std::sqrt(3.0) * h;
   // Estimate first (cells of the band of area·2(B + ρ), about 16 keys each, 12 bytes a key
   // while built): refuse a band clearly over the cap before rasterising it.
-  const double estimate = area * 2.0 * (B + rho) / (h * h * h) * 16.0 * 12.0;
+  const double estimate = area * 2.0 * (B + g.rho) / (h * h * h) * 16.0 * 12.0;
   const std::size_t cap = options.max_band_bytes;
-  // Whole megabytes, or three digits and an exponent beyond 10^9 MB: a mesh far smaller than its
-  // band (a 1e-30 scale) estimates 10^90 bytes, which a long long cannot hold.
-  const auto mb = [](double bytes) {
-    char text[32];
-    const double m = bytes / 1048576.0;
-    std::snprintf(text, sizeof text, m < 1e9 ? "%.0f MB" : "%.3g MB", m);
-    return std::string(text);
-  };
   if (!(estimate <= static_cast<double>(cap))) {  // NaN too
-    refuse("it would take about " + mb(estimate) + ", over the cap of " + mb(static_cast<double>(cap)));
-    return;
+    g.refused = "it would take about " + megabytes(estimate) + ", over the cap of " +
+                megabytes(static_cast<double>(cap));
+    return g;
   }
   b.width = B;
   b.cell = h;
@@ -326,48 +331,35 @@ void build_mesh_band(MeshShape& s, const MeshShapeOptions& options) {
   for (int k = 0; k < 3; ++k) {
     const double cells = std::ceil(ext[k] / h / kB) * kB;
     if (cells > double{1 << 20}) {
-      refuse("more than 2^20 cells along an axis");
-      return;
+      g.refused = "more than 2^20 cells along an axis";
+      return g;
     }
     b.cells[static_cast<std::size_t>(k)] = static_cast<int>(cells);
     total_bricks *= static_cast<std::uint64_t>(cells) / kB;
   }
   if (total_bricks > (std::uint64_t{1} << 28)) {
-    refuse("more than 2^28 bricks");
-    return;
+    g.refused = "more than 2^28 bricks";
+    return g;
   }
-  const std::uint64_t total_cells = total_bricks * kBrick;
-  if (total_cells * sizeof(std::uint32_t) > cap) {
-    refuse("its grid of " + std::to_string(total_cells) + " cells is over the cap of " +
-           mb(static_cast<double>(cap)));
-    return;
+  g.total_bricks = total_bricks;
+  g.total_cells = total_bricks * kBrick;
+  if (g.total_cells * sizeof(std::uint32_t) > cap) {
+    g.refused = "its grid of " + std::to_string(g.total_cells) + " cells is over the cap of " +
+                megabytes(static_cast<double>(cap));
+    return g;
   }
   b.origin = lo;
-  const double slack = 1e-9 * (ext.norm() + B);
+  g.slack = 1e-9 * (ext.norm() + B);
+  return g;
+}
 
-  // (cell, triangle) keys, then the triangles grouped by cell (a counting sort: 8 + 4 bytes a
-  // key and 4 a cell while built, all under the cap).
-  std::vector<std::uint64_t> keys;
-  const std::size_t max_keys = (cap - total_cells * sizeof(std::uint32_t)) / 12;
-  if (!rasterize(s, b, slack, max_keys, keys)) {
-    refuse("more than " + mb(static_cast<double>(cap)) + " while built");
-    return;
-  }
-  std::vector<std::uint32_t> start(static_cast<std::size_t>(total_cells) + 1, 0);
-  for (const std::uint64_t k : keys) ++start[static_cast<std::size_t>(k >> kTriangleBits) + 1];
-  for (std::size_t c = 1; c < start.size(); ++c) start[c] += start[c - 1];
-  std::vector<std::int32_t> by_cell(keys.size());
-  {
-    std::vector<std::uint32_t> next(start.begin(), start.end() - 1);
-    for (const std::uint64_t k : keys)
-      by_cell[next[static_cast<std::size_t>(k >> kTriangleBits)]++] =
-          static_cast<std::int32_t>(k & ((std::uint64_t{1} << kTriangleBits) - 1));
-  }
-  std::vector<std::uint64_t>().swap(keys);
-
-  // Per cell: the listed triangles' distances to the centre; keep those within
-  // min(B, d_min + ρ) + ρ (no point of the cell within B has its closest point farther).
-  b.brick_slot.assign(static_cast<std::size_t>(total_bricks), -1);
+/// Per listed cell (`start`, `by_cell`: the rasterised triangles grouped by cell), the listed
+/// triangles' distances to its centre; keeps those within min(B, d_min + ρ) + ρ (no point of
+/// the cell within B has its closest point farther), quantised, into b's bricks.
+void fill_band_cells(const MeshShape& s, const BandGrid& g, const std::vector<std::uint32_t>& start,
+                     std::vector<std::int32_t>& by_cell, MeshBand& b) {
+  const double B = b.width, h = b.cell, rho = g.rho;
+  b.brick_slot.assign(static_cast<std::size_t>(g.total_bricks), -1);
   const std::uint64_t nbx = static_cast<std::uint64_t>(b.cells[0] / kB);
   const std::uint64_t nby = static_cast<std::uint64_t>(b.cells[1] / kB);
   const double unit = (B + 2.0 * rho) / 127.0;
@@ -380,7 +372,7 @@ void build_mesh_band(MeshShape& s, const MeshShapeOptions& options) {
     for (int k = filled; k <= kBrick; ++k)
       b.cell_begin[base + static_cast<std::size_t>(k)] = static_cast<std::uint32_t>(b.triangles.size());
   };
-  for (std::uint64_t cell = 0; cell < total_cells; ++cell) {
+  for (std::uint64_t cell = 0; cell < g.total_cells; ++cell) {
     if (start[cell] == start[cell + 1]) continue;
     const std::uint64_t brick = cell / kBrick;
     const int local = static_cast<int>(cell % kBrick);
@@ -404,7 +396,7 @@ void build_mesh_band(MeshShape& s, const MeshShapeOptions& options) {
       list.emplace_back(d, *it);
       d_min = std::min(d_min, d);
     }
-    const double keep = std::min(B, d_min + rho) + rho + slack;
+    const double keep = std::min(B, d_min + rho) + rho + g.slack;
     std::sort(list.begin(), list.end());
     while (!list.empty() && list.back().first > keep) list.pop_back();
     if (list.empty()) continue;
@@ -426,6 +418,48 @@ void build_mesh_band(MeshShape& s, const MeshShapeOptions& options) {
     filled = local + 1;
   }
   close_brick();
+}
+
+}  // namespace
+
+void build_mesh_band(MeshShape& s, const MeshShapeOptions& options) {
+  MeshBand& b = s.band;
+  b = MeshBand{};
+  if (!(options.band > 0.0) || s.triangles.empty()) return;
+  const auto refuse = [&](const std::string& why) {
+    b = MeshBand{};
+    b.note = "no narrow band (" + why + "): every query searches the tree";
+  };
+  if (s.triangles.size() >= (std::size_t{1} << kTriangleBits)) {
+    refuse("more than 2^24 triangles");
+    return;
+  }
+  const BandGrid g = plan_band_grid(s, options, b);
+  if (!g.refused.empty()) {
+    refuse(g.refused);
+    return;
+  }
+  // (cell, triangle) keys, then the triangles grouped by cell (a counting sort: 8 + 4 bytes a
+  // key and 4 a cell while built, all under the cap).
+  const std::size_t cap = options.max_band_bytes;
+  std::vector<std::uint64_t> keys;
+  const std::size_t max_keys = (cap - g.total_cells * sizeof(std::uint32_t)) / 12;
+  if (!rasterize(s, b, g.slack, max_keys, keys)) {
+    refuse("more than " + megabytes(static_cast<double>(cap)) + " while built");
+    return;
+  }
+  std::vector<std::uint32_t> start(static_cast<std::size_t>(g.total_cells) + 1, 0);
+  for (const std::uint64_t k : keys) ++start[static_cast<std::size_t>(k >> kTriangleBits) + 1];
+  for (std::size_t c = 1; c < start.size(); ++c) start[c] += start[c - 1];
+  std::vector<std::int32_t> by_cell(keys.size());
+  {
+    std::vector<std::uint32_t> next(start.begin(), start.end() - 1);
+    for (const std::uint64_t k : keys)
+      by_cell[next[static_cast<std::size_t>(k >> kTriangleBits)]++] =
+          static_cast<std::int32_t>(k & ((std::uint64_t{1} << kTriangleBits) - 1));
+  }
+  std::vector<std::uint64_t>().swap(keys);
+  fill_band_cells(s, g, start, by_cell, b);
   b.cell_begin.shrink_to_fit();
   b.triangles.shrink_to_fit();
 }

@@ -200,7 +200,7 @@ struct NetScratch {
   std::vector<std::uint8_t> rest_flags;
   /// Still neighbourhoods (net_still.hpp), per node: its state at the net's last force pass
   /// (none before the first: pass_stored), its bits (0: still), and its force after the springs
-  /// (N) and its springs' energy term (J) from the last pass that computed them (net_forces.cpp).
+  /// (N) and its springs' energy term (J) from the last pass that computed them (net_springs.cpp).
   std::vector<Vec3> pass_position, pass_velocity;
   bool pass_stored = false;  ///< Whether pass_position and pass_velocity hold a pass's states.
   std::vector<std::uint8_t> still_flags;

@@ -11,7 +11,7 @@
 /// therefore has last pass's force and energy to the bit. The resting nodes of net_rest.hpp
 /// are held with a zero velocity where they are: the inner ones of a resting region are still
 /// from their second resting step on, and on the shipped organ most of the net is (docs/organs.md,
-/// "Resting nodes"). The force pass (net_forces.cpp) takes a still node's force and energy from
+/// "Resting nodes"). The springs' pass (net_springs.cpp) takes a still node's force and energy from
 /// its last pass, and skips the springs from a still node to still later nodes altogether (their
 /// directions and lengths are those stored by the pass that last computed them, from the same
 /// states): the same forces, energies, directions and lengths to the bit as computing them.
