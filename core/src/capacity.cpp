@@ -24,7 +24,7 @@ bool body_pair_can_collide(const Model& model) noexcept {
 }  // namespace
 
 int contact_capacity(const Model& model) noexcept {
-  return model.caller_contacts || !model.obstacles.empty() || body_pair_can_collide(model)
+  return !model.obstacles.empty() || body_pair_can_collide(model)
              ? kMaxContacts
              : 0;
 }

@@ -55,7 +55,7 @@ DataScratchPtr::DataScratchPtr(DataScratchPtr&& other) noexcept = default;
 DataScratchPtr& DataScratchPtr::operator=(DataScratchPtr&& other) noexcept = default;
 DataScratchPtr::~DataScratchPtr() = default;
 
-Data make_data(const Model& model) {
+Data make_data(const Model& model, const DataOptions& options) {
   // The stage plan is computed once, by finalize_model(); step() only reads it.
   if (model.stage_plan == 0)
     throw std::invalid_argument(
@@ -93,7 +93,7 @@ Data make_data(const Model& model) {
   if constexpr (kWithArticulation)
     if (model.num_joints() > 0) scratch.articulation.resize(model);
   scratch.collision.resize(model);
-  scratch.solver.resize(model);
+  scratch.solver.resize(model, options.written_contacts);
   if constexpr (kWithDeformable) {
     scratch.net.resize(model);  // empty without nets
     // The arrowhead preconditioner's contacts by node (joints only; net_scratch.hpp).

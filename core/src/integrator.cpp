@@ -129,7 +129,7 @@ void add_cross_contact_terms(const SolverScratch& s, std::span<const Vec6> in,
   }
 }
 
-void SolverScratch::resize(const Model& model) {
+void SolverScratch::resize(const Model& model, int written_contacts) {
   const auto n = static_cast<std::size_t>(model.num_bodies());
   saved_state.assign(n, BodyState{});
   inertia_world.assign(n, Mat3::Identity());
@@ -144,7 +144,9 @@ void SolverScratch::resize(const Model& model) {
   isotropic_moments.assign(n, IsotropicMoments{});
   block_factor.assign(n, BlockCholesky{});
   in_solve.assign(n, 1);
-  contact_terms.assign(static_cast<std::size_t>(contact_capacity(model)), ContactTerm{});
+  contact_terms.assign(
+      static_cast<std::size_t>(std::clamp(std::max(contact_capacity(model), written_contacts), 0, kMaxContacts)),
+      ContactTerm{});
   cross_contacts.assign(
       static_cast<std::size_t>(cross_contact_capacity(model) + detail::grasp_point_capacity(model)),
       CrossContact{});

@@ -78,44 +78,38 @@ void compute_forces(const Model& model, Data& data) noexcept {
   }
 }
 
-namespace {
-
-/// step() and step_with_contacts(): the contact stage is `write` when given, else detection.
-void run_step(const Model& model, Data& data, ContactWriter write, const void* context) noexcept {
+void step_to_contacts(const Model& model, Data& data) noexcept {
   // The stages this model runs: its plan, computed once by finalize_model()
   // (Model::stage_plan, step_stages.hpp), never here. Every stage function sets its own
   // bit of Data::stages_run where it runs (the integrator's solves in integrator.cpp),
   // so the report is what ran. A part compiled out (features.hpp) has no model:
   // finalize_model() refuses it.
-  const std::uint32_t plan = model.stage_plan;
-  assert(plan == compiled_stages(model) &&
+  assert(model.stage_plan == compiled_stages(model) &&
          "Model::stage_plan is stale: call finalize_model() again after editing the model");
   data.status = kStepOk;
   data.stages_run = 0;
+  data.num_contacts = 0;
+  data.contacts_dropped = 0;
+  data.max_penetration = 0.0;
   save_state(data);
   impose_direct_target(model, data);  // clears SolverScratch::imposed; imposes by the plan
-  bool wrote = false;  // the caller's writer ran (and wrote the node contacts if it says so)
-  if ((plan & kStageContacts) && !data.scratch->solver.contact_terms.empty()) {  // capacity.hpp
-    data.contacts_dropped = 0;
-    if (write != nullptr) {
-      write(model, data, context);
-      wrote = true;
-      data.stages_run |= kStageContacts;  // the caller's writer is this step's contact stage
-    } else {
-      detect_contacts(model, data);  // sets its bit; may set kContactOverflow
-    }
-  } else {
-    data.num_contacts = 0;
-    data.contacts_dropped = 0;
-    data.max_penetration = 0.0;
+}
+
+bool add_contact(Data& data, const Contact& contact) noexcept {
+  const int room = std::min(kMaxContacts, static_cast<int>(data.scratch->solver.contact_terms.size()));
+  if (data.num_contacts >= room) {
+    ++data.contacts_dropped;
+    return false;
   }
-  if constexpr (kWithDeformable) {
-    if (plan & kStageNodeContacts) {
-      if (wrote && model.caller_node_contacts)
-        data.stages_run |= kStageNodeContacts;  // the caller's writer wrote them
-      else
-        detect_node_contacts(model, data);  // sets its bit
-    }
+  data.contacts[static_cast<std::size_t>(data.num_contacts++)] = contact;
+  return true;
+}
+
+void step_from_contacts(const Model& model, Data& data) noexcept {
+  const std::uint32_t plan = model.stage_plan;
+  if (data.contacts_dropped > 0 && (data.status & kContactOverflow) == 0) {  // the caller's
+    data.status |= kContactOverflow;
+    ++data.contact_overflow_steps;
   }
   if (plan & kStageGrasp) update_grasps(model, data);  // sets its bit; drops the held bodies' contacts
   compute_forces(model, data);
@@ -140,13 +134,13 @@ void run_step(const Model& model, Data& data, ContactWriter write, const void* c
   ++data.step_count;
 }
 
-}  // namespace
-
-void step(const Model& model, Data& data) noexcept { run_step(model, data, nullptr, nullptr); }
-
-void step_with_contacts(const Model& model, Data& data, ContactWriter write,
-                        const void* context) noexcept {
-  run_step(model, data, write, context);
+void step(const Model& model, Data& data) noexcept {
+  step_to_contacts(model, data);
+  if (model.stage_plan & kStageContacts) detect_contacts(model, data);  // sets its bit; may set kContactOverflow
+  if constexpr (kWithDeformable) {
+    if (model.stage_plan & kStageNodeContacts) detect_node_contacts(model, data);  // sets its bit
+  }
+  step_from_contacts(model, data);
 }
 
 void set_held_body(const Model& model, Data& data, int body) noexcept {

@@ -80,7 +80,7 @@ Vec3 plane_force(const SettledBall& ball, const core::Model& device, const Vec3&
   const std::unique_ptr<core::ContactPlaneSet> planes = ball_node_planes(ball, margin);
   EXPECT_GT(planes->count, 10);
   EXPECT_EQ(planes->dropped, 0);
-  core::Data d = core::make_data(device);
+  core::Data d = core::make_god_object_data(device);
   d.bodies[0] = ball.data.bodies[0];
   d.bodies[0].position += shift;
   d.bodies[0].linear_velocity.setZero();

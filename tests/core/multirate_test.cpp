@@ -18,6 +18,7 @@
 #include <gtest/gtest.h>
 
 #include "alloc_counter.hpp"
+#include "detail/data_scratch.hpp"
 #include "numen/core/capacity.hpp"
 #include "numen/core/collision.hpp"
 #include "numen/core/contact_force.hpp"
@@ -25,6 +26,7 @@
 #include "numen/core/model.hpp"
 #include "numen/core/rigid_body.hpp"
 #include "numen/core/step.hpp"
+#include "numen/core/step_stages.hpp"
 #include "sanitizer.hpp"
 
 namespace core = numen::core;
@@ -128,8 +130,12 @@ TEST(Multirate, GodObjectModelIsTheBodyAloneWithRoomForTheCallersContacts) {
   EXPECT_EQ(g.dt, 1e-4);
   EXPECT_EQ(g.bodies[0].mass, scene.bodies[0].mass);
   EXPECT_EQ(g.bodies[0].coupling.k_t, scene.bodies[0].coupling.k_t);
-  EXPECT_TRUE(g.caller_contacts);
-  EXPECT_EQ(core::contact_capacity(g), core::kMaxContacts);
+  EXPECT_EQ(core::contact_capacity(g), 0);  // the model itself collides with nothing
+  EXPECT_EQ(g.stage_plan & core::kStageContacts, 0u);
+  // Its Data has the room of the planes' contacts (DataOptions::written_contacts).
+  EXPECT_EQ(core::make_data(g).scratch->solver.contact_terms.size(), 0u);
+  EXPECT_EQ(core::make_god_object_data(g).scratch->solver.contact_terms.size(),
+            static_cast<std::size_t>(core::kMaxContacts));
   core::Model bad;
   EXPECT_NE(core::make_god_object_model(scene, 2, 1e-4, bad).find("not a body of the scene"), std::string::npos);
   EXPECT_NE(core::make_god_object_model(scene, 0, 0.0, bad).find("device period"), std::string::npos);
@@ -150,7 +156,7 @@ TEST(Multirate, PlanesFromTheProximityModelGiveTheTrueDepth) {
   ASSERT_EQ(core::make_god_object_model(scene, 0, 1e-3, g), "");
   ASSERT_EQ(core::make_proximity_model(scene, 0, 4e-3, p), "");
   core::Data pd = core::make_data(p);
-  core::Data dd = core::make_data(g);
+  core::Data dd = core::make_god_object_data(g);
   dd.bodies[0].position = Vec3(0.0, 0.0, 0.0325);  // lowest sphere 2.5 mm above the floor
   core::ContactPlaneSet planes;
   sample(p, pd, dd, planes);
@@ -178,7 +184,7 @@ TEST(Multirate, RatioOneIsTheSingleRateStep) {
   ASSERT_EQ(core::make_proximity_model(scene, 0, 0.0, p), "");
   core::Data single = core::make_data(scene);
   core::Data pd = core::make_data(p);
-  core::Data dd = core::make_data(g);
+  core::Data dd = core::make_god_object_data(g);
   core::ContactPlaneSet planes;
   double deepest = 0.0, largest_gap = 0.0, largest_force_gap = 0.0;
   int contact_steps = 0;
@@ -235,7 +241,7 @@ TEST(Multirate, WallIsPassiveAtTenKilohertzAgainstPlanesAtOneHundredHertz) {
     EXPECT_EQ(core::make_proximity_model(scene, 0, margin, p), "");
     core::Data single = core::make_data(scene);
     core::Data pd = core::make_data(p);
-    core::Data dd = core::make_data(g);
+    core::Data dd = core::make_god_object_data(g);
     core::Data& d = multirate ? dd : single;
     const core::Model& m = multirate ? g : scene;
     core::ContactPlaneSet planes;
@@ -283,7 +289,7 @@ TEST(Multirate, PlaneElasticEnergyIsTheLawsForceIntegratedOverTheDepth) {
   const double k = 2e4;
   core::Model g;
   ASSERT_EQ(core::make_god_object_model(tool_scene(1e-4, k, 10.0, Vec3::Zero()), 0, 1e-4, g), "");
-  core::Data d = core::make_data(g);
+  core::Data d = core::make_god_object_data(g);
   d.bodies[0].position = Vec3(0.0, 0.0, 0.05);
   d.bodies[0].orientation = Quat::Identity();
   // Sphere 0 (centre z = 0.05 − 0.02, r = 0.01) on a floor plane at z = h: depth h − 0.02.
@@ -372,7 +378,7 @@ TEST(Multirate, PlaneOfAMovingBodyMovesWithIt) {
   ASSERT_EQ(planes.count, 1);
   EXPECT_EQ(planes.planes[0].other_body, 1);
   EXPECT_NEAR((planes.planes[0].velocity - Vec3(0, 0, 0.2)).norm(), 0.0, 1e-15);
-  core::Data dd = core::make_data(g);
+  core::Data dd = core::make_god_object_data(g);
   dd.bodies[0] = sd.bodies[0];
   core::write_plane_contacts(g, planes, dd);
   ASSERT_EQ(dd.num_contacts, 1);
@@ -416,7 +422,7 @@ TEST(Multirate, CarrierTakesTheImpulseTheGodObjectGave) {
   const core::PlaneCarrier& k = planes.carriers[0];
   EXPECT_EQ(k.supports, 0);
   EXPECT_DOUBLE_EQ(k.inverse_mass, 1.0 / scene.bodies[1].mass) << "k m⁻¹ h² = 0.1: not scaled";
-  core::Data dd = core::make_data(g);
+  core::Data dd = core::make_god_object_data(g);
   dd.bodies[0] = sd.bodies[0];
   const double m_tool = scene.bodies[0].mass, m_block = scene.bodies[1].mass;
   const Vec3 p0 = m_tool * dd.bodies[0].linear_velocity;
@@ -447,7 +453,7 @@ TEST(Multirate, DeviceStepsDoNotAllocate) {
   ASSERT_EQ(core::make_god_object_model(scene, 0, 1e-4, g), "");
   ASSERT_EQ(core::make_proximity_model(scene, 0, 0.01, p), "");
   core::Data pd = core::make_data(p);
-  core::Data dd = core::make_data(g);
+  core::Data dd = core::make_god_object_data(g);
   core::ContactPlaneSet planes;
   numen::test::AllocationGuard guard;
   int contacts = 0;

@@ -80,7 +80,7 @@ struct SolverScratch {
   std::vector<IsotropicMoments> isotropic_moments;  ///< Per body, this step's contacts.
   std::vector<BlockCholesky> block_factor;  ///< Cholesky factors of `block` (preconditioner).
   std::vector<std::uint8_t> in_solve;   ///< 1: body's twist is unknown; 0: known (kDirect body).
-  std::vector<ContactTerm> contact_terms;   ///< Size contact_capacity(), parallel to Data::contacts.
+  std::vector<ContactTerm> contact_terms;   ///< Size max(contact_capacity(), DataOptions::written_contacts), parallel to Data::contacts.
   std::vector<CrossContact> cross_contacts;  ///< Size cross_contact_capacity(); [0, num_cross_contacts) valid.
   int num_cross_contacts = 0;  ///< Active body–body contacts in the solve this step.
   /// 1: the body has a cross contact this step (off-diagonal blocks in its rows
@@ -133,8 +133,9 @@ struct SolverScratch {
   /// (CouplingMode::kDirect: the held body and every targeted body).
   std::vector<std::uint8_t> imposed;
 
-  /// Sizes every buffer for `model`. Allocates: make_data() only.
-  void resize(const Model& model);
+  /// Sizes every buffer for `model`, the contacts' for `written_contacts` at least
+  /// (DataOptions::written_contacts). Allocates: make_data() only.
+  void resize(const Model& model, int written_contacts = 0);
 };
 
 }  // namespace numen::core

@@ -20,10 +20,6 @@
 namespace numen::core {
 namespace {
 
-void write_planes(const Model& model, Data& data, const void* context) noexcept {
-  write_plane_contacts(model, *static_cast<const ContactPlaneSet*>(context), data);
-}
-
 using detail::effective_contact_force;
 
 /// "" when `body` is a body of `scene`, else the message both model makers give.
@@ -114,11 +110,14 @@ std::string make_god_object_model(const Model& scene, int body, double device_dt
   m.node_spring_begin.clear();
   m.node_springs.clear();
   m.initial_held_body = local[static_cast<std::size_t>(body)];
-  m.caller_contacts = true;
   std::string error = finalize_model(m);
   if (!error.empty()) return "multirate: god-object model: " + error;
   out = std::move(m);
   return "";
+}
+
+Data make_god_object_data(const Model& god_object) {
+  return make_data(god_object, DataOptions{kMaxContacts});
 }
 
 std::string make_proximity_model(const Model& scene, int body, double margin, Model& out,
@@ -143,7 +142,9 @@ std::string make_proximity_model(const Model& scene, int body, double margin, Mo
 }
 
 void step_god_object(const Model& model, ContactPlaneSet& planes, Data& data) noexcept {
-  step_with_contacts(model, data, &write_planes, &planes);
+  step_to_contacts(model, data);
+  write_plane_contacts(model, planes, data);  // the contact stage: the planes'
+  step_from_contacts(model, data);
   const std::vector<BodyState>& before = data.scratch->solver.saved_state;  // the step's start
   const double h = model.dt;
   const int np = std::clamp(planes.count, 0, kMaxContactPlanes);

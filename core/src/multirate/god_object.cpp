@@ -101,12 +101,10 @@ MultirateGodObject::MultirateGodObject(const Model& scene, int body,
         s.scene_joints.push_back(static_cast<int>(j));
       }
     s.scene_model.joints = std::move(kept);
-    // With nets, the scene loop's contact stage detects the node contacts itself (node planes).
-    s.scene_model.caller_node_contacts = s.scene_model.num_nets() > 0;
     error = finalize_model(s.scene_model);
     if (!error.empty()) throw std::invalid_argument("multirate: scene-loop model: " + error);
     s.fold_model = fold_model_of(s.scene_model, fold_substeps_);
-    s.device = make_data(s.device_model);
+    s.device = make_god_object_data(s.device_model);
     s.scene = make_data(s.scene_model);
     slots_.push_back(std::move(s));
   }

@@ -14,6 +14,8 @@
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"
 #include "numen/core/rigid_body.hpp"
+#include "numen/core/step.hpp"
+#include "numen/core/step_stages.hpp"
 
 #include "multirate/contact.hpp"
 
@@ -240,11 +242,11 @@ void write_plane_contacts(const Model& model, const ContactPlaneSet& planes, Dat
   if (cross_contact_capacity(model) > 0) {
     detect_contacts(model, data);
   } else {
+    data.stages_run |= kStageContacts;  // the stage report (step_stages.hpp)
     data.num_contacts = 0;
     data.max_penetration = 0.0;
     data.contacts_dropped = 0;
   }
-  const bool overflowed = data.contacts_dropped > 0;  // counted by detect_contacts()
   const int n = std::clamp(planes.count, 0, kMaxContactPlanes);
   for (int i = 0; i < n; ++i) {
     const PlaneAtPose a = plane_at_pose(model, planes, i, data);
@@ -254,11 +256,7 @@ void write_plane_contacts(const Model& model, const ContactPlaneSet& planes, Dat
     const bool node = p.node >= 0;
     const double depth = a.depth;
     if (!(depth > 0.0)) continue;
-    if (data.num_contacts >= kMaxContacts) {
-      ++data.contacts_dropped;
-      continue;
-    }
-    Contact& c = data.contacts[static_cast<std::size_t>(data.num_contacts++)];
+    Contact c;
     c.body_a = p.body;
     c.body_b = -1;
     c.obstacle = -1;
@@ -273,11 +271,8 @@ void write_plane_contacts(const Model& model, const ContactPlaneSet& planes, Dat
     c.surface_velocity = a.surface_velocity;
     c.sphere_b = i;  // the plane
     // The overlap itself (a node plane's depth holds the node's deflection too).
+    if (!add_contact(data, c)) continue;  // dropped and counted: step_from_contacts() reports it
     data.max_penetration = std::max(data.max_penetration, node ? depth - p.depth_offset : depth);
-  }
-  if (data.contacts_dropped > 0 && !overflowed) {
-    data.status |= kContactOverflow;
-    ++data.contact_overflow_steps;
   }
 }
 

@@ -15,6 +15,7 @@
 #include "numen/core/net_collision.hpp"
 #include "numen/core/rigid_body.hpp"
 #include "numen/core/step.hpp"
+#include "numen/core/step_stages.hpp"
 
 #include "detail/data_scratch.hpp"
 #include "multirate/contact.hpp"
@@ -33,20 +34,20 @@ using detail::in_god_object;
 /// any body moves), then those contacts cut back to the god-object's true spheres (the
 /// proximity model grew them by the margin): depth − δ, the middle of the overlap δ/2 back
 /// towards the god-object; a contact left without depth is dropped, and so is one between two
-/// bodies of the god-object (the scene-loop model has not their joints). With nets
-/// (Model::caller_node_contacts), the node contacts likewise: detected, their node planes
-/// built, cut back.
+/// bodies of the god-object (the scene-loop model has not their joints). With nets and a
+/// god-object (SampleContext::node_planes), the node contacts likewise: detected, their node
+/// planes built, cut back.
 struct SampleContext {
   ContactPlaneSet* planes;
   std::span<const int> device_body;  // per scene body: god-object model index or −1
   double margin;
   double device_dt;
   detail::NodePlaneScratch node_scratch;
+  bool node_planes;  // the node contacts' planes too: a god-object sampled and nets
 };
 
 
-void detect_and_build_planes(const Model& model, Data& data, const void* context) noexcept {
-  const auto* c = static_cast<const SampleContext*>(context);
+void detect_and_build_planes(const Model& model, Data& data, const SampleContext* c) noexcept {
   detect_contacts(model, data);
   build_contact_planes(model, data, c->device_body, c->device_dt, *c->planes);
   int kept = 0;
@@ -69,7 +70,7 @@ void detect_and_build_planes(const Model& model, Data& data, const void* context
   data.num_contacts = kept;
   data.max_penetration = deepest;
   if constexpr (kWithDeformable) {
-    if (model.caller_node_contacts) {
+    if (c->node_planes) {
       detect_node_contacts(model, data);
       detail::drop_back_face_contacts(model, data, c->device_body, c->margin);
       detail::build_node_planes(model, data, c->device_body, c->margin, c->node_scratch, *c->planes);
@@ -79,6 +80,20 @@ void detect_and_build_planes(const Model& model, Data& data, const void* context
                                      model.dt > 1.5 * c->device_dt ? model.dt : 0.0);
     }
   }
+}
+
+/// One scene-loop step split at its contacts (step.hpp): its contact stage is
+/// detect_and_build_planes() where the model can collide (Model::stage_plan); the node contacts
+/// are detected as step() does where that stage does not build their planes.
+void step_sample(const Model& model, Data& data, const SampleContext& c) noexcept {
+  step_to_contacts(model, data);
+  const bool contacts = (model.stage_plan & kStageContacts) != 0;
+  if (contacts) detect_and_build_planes(model, data, &c);
+  if constexpr (kWithDeformable) {
+    if ((model.stage_plan & kStageNodeContacts) && !(contacts && c.node_planes))
+      detect_node_contacts(model, data);  // sets its bit
+  }
+  step_from_contacts(model, data);
 }
 
 }  // namespace
@@ -198,7 +213,8 @@ MultirateGodObject::SceneStepOutcome MultirateGodObject::step_scene(
                         body >= 0 ? margin_ : 0.0, slots_.front().device_model.dt,
                         detail::NodePlaneScratch{node_slot_, slot_node_, node_stiffness_, plane_slot_,
                                                  planes_stiffness_, planes_depth_, node_force_,
-                                                 plane_springs_}};
+                                                 plane_springs_},
+                        body >= 0 && model.num_nets() > 0};
   // Where an organ's surface has folded under the tool, the step is taken in sub-steps of at
   // most MultirateSettings::fold_step (fold_substeps_ of them), the god-object imposed along its
   // twist. Both models are finalized at construction and never written: a folded step's dt is
@@ -217,7 +233,7 @@ MultirateGodObject::SceneStepOutcome MultirateGodObject::step_scene(
       if constexpr (kWithDeformable) detail::drop_look_ahead_contacts(*scene_);
       advance_imposed(in, body, hs);
     }
-    step_with_contacts(step_model, *scene_, &detect_and_build_planes, &context);
+    step_sample(step_model, *scene_, context);
     stepped.rejected = (scene_->status & kNonFinite) != 0;
     if (stepped.rejected) break;
     stepped.time += hs;

@@ -28,11 +28,10 @@ inline constexpr int kMaxNodeContacts = NUMEN_MAX_NODE_CONTACTS;
 /// gives the per-contact solver scratch (SolverScratch::contact_terms):
 /// kMaxContacts when a body can touch an obstacle (at least one obstacle) or
 /// another body (two bodies in different articulations:
-/// ArticulationTopology::body_tree) or the caller writes the contacts
-/// (Model::caller_contacts), else 0 — a scene without anything to
-/// collide allocates no contact scratch and step() skips contact detection.
-/// Whether the bodies carry spheres is not looked at: contacts may also be
-/// written by a caller of the stage functions. Data::contacts itself is a fixed
+/// ArticulationTopology::body_tree), else 0 — a scene without anything to
+/// collide allocates no contact scratch and step() skips contact detection
+/// (a caller that writes its own contacts asks Data for room:
+/// DataOptions::written_contacts). Whether the bodies carry spheres is not looked at. Data::contacts itself is a fixed
 /// array inside Data (no heap). Finalized model; no allocation.
 int contact_capacity(const Model& model) noexcept;
 

@@ -218,13 +218,22 @@ struct Data {
   DataScratchPtr scratch;
 };
 
+/// What a Data holds beyond what its model needs (make_data()).
+struct DataOptions {
+  /// Room for the contacts a caller writes itself in a step split at its contacts
+  /// (step_to_contacts(), add_contact(), step.hpp) where the model makes none — the multirate
+  /// device loop's contact planes (multirate/device_loop.hpp). The contact scratch holds
+  /// max(contact_capacity(model), written_contacts) contacts, at most kMaxContacts.
+  int written_contacts = 0;
+};
+
 /// Allocates a Data for a finalized `model` (its scratch block included) and resets
 /// it: only what the model needs — no joint buffers or tree-solve scratch without joints, no node or net
 /// buffers without nets, no contact scratch when nothing can collide
-/// (capacity.hpp; sizes in data_size.hpp). Allocates. Throws std::invalid_argument
-/// for a model without a current stage plan (Model::stage_plan): never finalized,
-/// refused by finalize_model(), or edited since without finalize_model() again.
-Data make_data(const Model& model);
+/// (capacity.hpp; sizes in data_size.hpp) — and what `options` asks for. Allocates. Throws
+/// std::invalid_argument for a model without a current stage plan (Model::stage_plan): never
+/// finalized, refused by finalize_model(), or edited since without finalize_model() again.
+Data make_data(const Model& model, const DataOptions& options = {});
 
 /// Puts every body back at its initial pose and twist, clears inputs, outputs
 /// and counters; the device holds Model::initial_held_body.

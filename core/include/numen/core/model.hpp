@@ -299,24 +299,15 @@ struct Model {
   /// `feedback`.
   std::vector<FeedbackGains> extra_feedback;
   int initial_held_body = 0;       ///< Body the device holds at reset; -1 for none.
-  /// The contacts are written by the caller, not detected (the god-object model of the
-  /// multirate device loop, multirate.hpp): contact_capacity() gives the model the room of
-  /// kMaxContacts, step_with_contacts() steps it.
-  bool caller_contacts = false;
-  /// The contact writer of step_with_contacts() writes the nets' node contacts too, and the
-  /// node-contact stage does not detect them (the scene-loop model of a multirate god-object
-  /// with a net, multirate.hpp: the writer detects them on grown node spheres, builds the node
-  /// planes, then cuts the contacts back). Ignored by step().
-  bool caller_node_contacts = false;
   SolverSettings solver;
 
   StaticSphereGrid static_grid;    ///< Derived by finalize_model() (broad phase).
   ArticulationTopology articulation;  ///< Derived by finalize_model() (elimination order).
   /// The stage plan (StepStage bits, step_stages.hpp): the stages step() runs for this
   /// model and the solve integrate() picks, in every step, and what Data::stages_run holds
-  /// after any step. Derived by finalize_model() as compiled_stages(*this), from integrator,
-  /// coupling_mode, the joints, the nets and what can collide (bodies, obstacles,
-  /// caller_contacts); 0 before finalize_model() and after a refusal. A model edited after
+  /// after any step (a step split at its contacts adds the caller's contact stages, step.hpp).
+  /// Derived by finalize_model() as compiled_stages(*this), from integrator, coupling_mode, the
+  /// joints, the nets and what can collide (bodies, obstacles); 0 before finalize_model() and after a refusal. A model edited after
   /// finalize_model() has a stale plan until finalize_model() runs again: make_data() refuses
   /// a model whose plan is missing or stale, and step() asserts it current in builds without
   /// NDEBUG (it does not recompute it).

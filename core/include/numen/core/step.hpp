@@ -6,6 +6,7 @@ namespace numen::core {
 
 struct Model;
 struct Data;
+struct Contact;
 
 /// Advances `data` by model.dt. Stages, in order:
 ///   1. detect_contacts — collision geometry (collision.hpp), skipped when
@@ -39,26 +40,40 @@ struct Data;
 /// The stages are those Model::stage_plan names (computed once by finalize_model();
 /// step_stages.hpp: a model without joints or nets runs no pass for them; a plan left
 /// stale by an edit after finalize_model() fails an assertion in builds without NDEBUG);
-/// each stage function sets its own bit of Data::stages_run where it runs (the caller's
-/// contact writer's bits are set for it, step_with_contacts()), so that field is what
-/// ran; time += dt and ++step_count at the end. In kDirect the held body's
+/// each stage function sets its own bit of Data::stages_run where it runs, so that field is
+/// what ran; time += dt and ++step_count at the end. In kDirect the held body's
 /// pose/twist are imposed before detect_contacts.
 /// Never allocates, throws, locks or calls the OS. Deterministic.
 void step(const Model& model, Data& data) noexcept;
 
-/// Writes the contacts of one step into data.contacts / num_contacts (the caller's contact
-/// stage: step_with_contacts()). Must not allocate or throw.
-using ContactWriter = void (*)(const Model& model, Data& data, const void* context) noexcept;
+/// The step split where its contacts are made (MuJoCo's mj_step1 / mj_step2): step() is
+/// step_to_contacts(), the contact stages of Model::stage_plan (detect_contacts(), then
+/// detect_node_contacts() with nets), and step_from_contacts(). A caller that makes the step's
+/// contacts itself — the multirate device loop's planes (write_plane_contacts(),
+/// multirate/device_loop.hpp), the scene loop's cut-back contacts — calls the two halves and
+/// writes Data::contacts (add_contact(), or the detection functions) and Data::node_contacts
+/// between them; a contact stage it runs sets its bit of Data::stages_run, as each of step()'s
+/// stages does.
+///
+/// The first half: Data::status, stages_run and the step's contact outputs (num_contacts,
+/// contacts_dropped, max_penetration) cleared, the state saved for the checks' rollback, the
+/// targets imposed (kDirect, impose_direct_target()). Never allocates, throws, locks or calls
+/// the OS.
+void step_to_contacts(const Model& model, Data& data) noexcept;
 
-/// step() with stage 1 replaced by `write(model, data, context)`: the caller gives the contacts
-/// (the multirate device loop's planes, multirate.hpp) instead of detect_contacts; the node
-/// contacts are still detected for a model with nets, unless Model::caller_node_contacts says
-/// that `write` writes them too. `write` is the contact stage: step_with_contacts() sets
-/// kStageContacts of Data::stages_run for it (and kStageNodeContacts when it writes the node
-/// contacts). Everything else as step(). Never
-/// allocates, throws, locks or calls the OS (if `write` does not).
-void step_with_contacts(const Model& model, Data& data, ContactWriter write,
-                        const void* context) noexcept;
+/// The second half of a split step, after its contacts: a contact the caller dropped for want
+/// of room (Data::contacts_dropped without kContactOverflow) reported as detect_contacts()
+/// reports its own (kContactOverflow, contact_overflow_steps), then the grasps, forces,
+/// integration, measures, feedback and checks of step(); time += dt, ++step_count. Never
+/// allocates, throws, locks or calls the OS.
+void step_from_contacts(const Model& model, Data& data) noexcept;
+
+/// Appends `contact` to the step's contacts (Data::contacts[num_contacts++]), in a caller's
+/// contact stage between step_to_contacts() and step_from_contacts(). Returns false, and counts
+/// it in Data::contacts_dropped, when they are full: kMaxContacts, or the room of the Data's
+/// contact scratch (contact_capacity(), DataOptions::written_contacts); step_from_contacts()
+/// reports the overflow. No allocation.
+bool add_contact(Data& data, const Contact& contact) noexcept;
 
 /// Forces stage of step(): body_wrench := gravity + applied wrench
 /// (apply_external_forces), + coupling on the held body (apply_coupling,

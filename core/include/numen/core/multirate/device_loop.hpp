@@ -31,7 +31,8 @@ std::vector<int> god_object_bodies(const Model& scene, int body, std::span<const
 /// and the joints among them and to the world, prescribed ones included), with the scene's
 /// materials, integrator, coupling mode, gravity, Baumgarte and solver settings and device
 /// feedback, no obstacles, no other body, no nets, step `device_dt` (s, > 0), the device
-/// holding the held body, Model::caller_contacts set (its contacts are the planes'). A net whose rigid
+/// holding the held body (its contacts are the planes', written by write_plane_contacts() into
+/// a make_god_object_data()). A net whose rigid
 /// component is a body of the god-object is lumped onto it: the body's mass and inertia gain the
 /// nodes' (at their rest positions); the net itself stays in the scene loop. Returns "" and
 /// fills `out`, or a message naming what refuses: a body out of range, a net on the god-object
@@ -48,6 +49,12 @@ std::vector<int> god_object_bodies(const Model& scene, int body, std::span<const
 std::string make_god_object_model(const Model& scene, int body, double device_dt, Model& out,
                                   std::span<const int> others = {});
 
+/// A Data of a god-object model (make_god_object_model()) with room for its planes' contacts
+/// (DataOptions::written_contacts = kMaxContacts: the model itself collides with nothing, its
+/// contacts are written by write_plane_contacts(); a Data made without that room drops them, and
+/// each step reports kContactOverflow). Throws as make_data(). Load time: allocates.
+Data make_god_object_data(const Model& god_object);
+
 /// A copy of `scene` in which every sphere of the god-object of `body` (god_object_bodies()),
 /// and every node sphere of a net on it, has its radius grown by `margin` (m, ≥ 0): the scene loop detects the god-object's contacts
 /// on it, so that a contact is found, and its plane built, while the sphere is still up to
@@ -57,8 +64,9 @@ std::string make_god_object_model(const Model& scene, int body, double device_dt
 std::string make_proximity_model(const Model& scene, int body, double margin, Model& out,
                                  std::span<const int> others = {});
 
-/// One device period of the god-object against the intermediate model: step() of `model` (a
-/// god-object model) with write_plane_contacts() as its contact stage — coupling (Eq. 2), the
+/// One device period of the god-object against the intermediate model: the step of `model` (a
+/// god-object model) split at its contacts, write_plane_contacts() its contact stage
+/// (step_to_contacts(), step_from_contacts(), step.hpp) — coupling (Eq. 2), the
 /// planes' penalty forces with their stiffness and damping implicit, integration, feedback
 /// (Eq. 8), checks; then each plane's impulse on the god-object over the period (its effective
 /// force, MultirateGodObject) into ContactPlane::impulse, its opposite summed into the plane's

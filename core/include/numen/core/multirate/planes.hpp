@@ -167,8 +167,11 @@ void build_contact_planes(const Model& scene, const Data& data, std::span<const 
 /// (Contact::surface_velocity), its Contact::sphere_b the plane's index in `planes`. A model of
 /// several articulations (a composite god-object, make_god_object_model() with other devices)
 /// first gets the sphere contacts between bodies of different articulations (detect_contacts():
-/// the god-object model has no obstacle, net or mesh), body_b ≥ 0, then the planes' (body_b −1).
-/// No allocation.
+/// the god-object model has no obstacle, net or mesh), body_b ≥ 0, then the planes' (body_b −1,
+/// add_contact(): a plane beyond the contacts' room is dropped and counted, and
+/// step_from_contacts() reports the overflow). The device loop's contact stage, between
+/// step_to_contacts() and step_from_contacts() (step.hpp): sets kStageContacts of
+/// Data::stages_run. No allocation.
 void write_plane_contacts(const Model& model, const ContactPlaneSet& planes, Data& data) noexcept;
 
 /// The elastic energy (J) the contact law stores in the planes of `planes` at the god-object's
