@@ -409,15 +409,16 @@ void build_collision_structures(Model& model) {
   build_static_grid(model.static_spheres, model.obstacles, 0.0, model.static_grid);
 }
 
-void detect_contacts(const Model& model, Data& data) noexcept {
-  data.stages_run |= kStageContacts;  // the stage report (step_stages.hpp)
+namespace {
+
+/// Phase 1 of detect_contacts(): every body sphere's world centre (CollisionScratch::
+/// sphere_world and its x / y / z arrays) and each body's tight box of its spheres; a body with
+/// a non-finite pose gets an inverted box (skipped: the step's checks report it).
+void place_spheres(const Model& model, Data& data) noexcept {
   CollisionScratch& cs = data.scratch->collision;
   const int nb = model.num_bodies();
   const Sphere* bs = model.body_spheres.data();
   Vec3* sw = cs.sphere_world.data();
-
-  // 1. World centres and tight AABBs. A body with a non-finite pose is skipped
-  //    (inverted AABB): the step's checks report it.
   for (int b = 0; b < nb; ++b) {
     const BodyModel& bm = model.bodies[static_cast<std::size_t>(b)];
     const BodyState& st = data.bodies[static_cast<std::size_t>(b)];
@@ -450,10 +451,13 @@ void detect_contacts(const Model& model, Data& data) noexcept {
     cs.body_aabb_min[static_cast<std::size_t>(b)] = lo;
     cs.body_aabb_max[static_cast<std::size_t>(b)] = hi;
   }
+}
 
-  ContactSink sink{data};
-
-  // 2. Bodies against static obstacles.
+/// Phase 2: each body's spheres against the static obstacles its box meets, and against the
+/// static spheres' grid.
+void collide_with_obstacles(const Model& model, Data& data, ContactSink& sink) noexcept {
+  const CollisionScratch& cs = data.scratch->collision;
+  const int nb = model.num_bodies();
   const bool has_grid = !model.static_grid.empty();
   const int no = static_cast<int>(model.obstacles.size());
   for (int b = 0; b < nb; ++b) {
@@ -475,8 +479,12 @@ void detect_contacts(const Model& model, Data& data) noexcept {
         boxes_overlap(lo, hi, model.static_grid.bounds_min, model.static_grid.bounds_max))
       collide_body_grid(model, data, b, sink);
   }
+}
 
-  // 3. Body against body: sort-and-sweep along x; crossings held back (hold_back_crossing()).
+/// Phase 3: body against body, a sort-and-sweep along x over the bodies' boxes, two bodies of
+/// one articulation never; crossings held back (hold_back_crossing(), finish_pairs()).
+void collide_body_pairs(const Model& model, Data& data, ContactSink& sink) noexcept {
+  CollisionScratch& cs = data.scratch->collision;
   data.crossed_contacts = 0;
   cs.num_pairs = 0;
   const int ns = static_cast<int>(cs.sweep_order.size());
@@ -501,10 +509,14 @@ void detect_contacts(const Model& model, Data& data) noexcept {
   }
   finish_pairs(data);
   if (data.crossed_contacts > 0) ++data.crossed_contact_steps;
+}
 
-  // 4. Spheres against the meshes of the other bodies (BodyModel::mesh): the mesh's world box
-  //    from its local box at the body's pose, then the bodies of other articulations whose
-  //    sphere box meets it.
+/// Phase 4: spheres against the meshes of the other bodies (BodyModel::mesh): the mesh's world
+/// box from its local box at the body's pose, then the bodies of other articulations whose
+/// sphere box meets it.
+void collide_with_meshes(const Model& model, Data& data, ContactSink& sink) noexcept {
+  const CollisionScratch& cs = data.scratch->collision;
+  const int nb = model.num_bodies();
   const int* tree = model.articulation.body_tree.data();
   for (const std::int32_t m : cs.mesh_bodies) {
     const BodyModel& mb = model.bodies[static_cast<std::size_t>(m)];
@@ -523,7 +535,17 @@ void detect_contacts(const Model& model, Data& data) noexcept {
       collide_body_mesh(model, data, b, m, pose, lo, hi, sink);
     }
   }
+}
 
+}  // namespace
+
+void detect_contacts(const Model& model, Data& data) noexcept {
+  data.stages_run |= kStageContacts;  // the stage report (step_stages.hpp)
+  place_spheres(model, data);
+  ContactSink sink{data};
+  collide_with_obstacles(model, data, sink);
+  collide_body_pairs(model, data, sink);
+  collide_with_meshes(model, data, sink);
   data.num_contacts = sink.count;
   data.contacts_dropped = sink.dropped;
   data.max_penetration = sink.max_depth;

@@ -1,7 +1,9 @@
 /// @file integrator.cpp
 /// Linearly implicit Euler (Baraff & Witkin 1998) with a block-Jacobi
-/// preconditioned conjugate gradient, the linearised trapezoidal rule on the
-/// same system, and symplectic Euler (paper Eq. 1, §5).
+/// preconditioned conjugate gradient and the linearised trapezoidal rule on the
+/// same system (paper Eq. 1, §5); the integrate stage's dispatch. With joints the solve is
+/// integrator_joints.cpp's; TR-BDF2 is integrator_tr_bdf2.cpp, symplectic Euler
+/// integrator_symplectic.cpp.
 
 #include "numen/core/integrator.hpp"
 
@@ -31,15 +33,12 @@ namespace numen::core {
 namespace {
 
 using detail::dot;
+using detail::is_first_order;
 using detail::point_velocity;
 
 
 int active_contact_count(const Data& data) noexcept {  // within the scratch (capacity.hpp)
   return std::clamp(data.num_contacts, 0, static_cast<int>(data.scratch->solver.contact_terms.size()));
-}
-
-bool is_first_order(const SolverScratch& s, int body) noexcept {
-  return s.first_order && body == s.coupled_body;
 }
 
 /// Adds one body's share of a contact to its 6×6 block and right-hand side.
@@ -379,160 +378,6 @@ bool solve_implicit_system(const Model& model, Data& data) noexcept {
   return res.converged(stop);
 }
 
-#if NUMEN_WITH_ARTICULATION
-namespace {
-
-/// The joints' projected system for detail::pcg() (solve_constrained_system()):
-/// A of build_implicit_system() on the null space of G, the tree solve as
-/// constraint preconditioner with Gould, Hribar & Nocedal's residual update,
-/// ‖r‖ / ref.
-struct ProjectedJointSystem {
-  const Model& model;
-  Data& data;
-  std::span<Vec6> x, r, z, p, ap, rp;
-  std::span<JointVector> y, yz;
-  double ref;
-
-  /// z = P r (tree solve with zero constraint right-hand side); then r is
-  /// replaced by r − Gᵀ yz, which has the same z (P Gᵀ = 0) and tends to 0
-  /// instead of to Gᵀ y (no cancellation, no loss of accuracy), and yz is added
-  /// to y. Returns ‖r‖ / ref.
-  double project() noexcept {
-    SolverScratch& s = data.scratch->solver;
-    const std::size_t n = r.size();
-    for (JointVector& v : s.joint_rhs) v.setZero();
-    solve_articulation(model, data.scratch->articulation, r, s.joint_rhs, z, yz);
-    for (std::size_t i = 0; i < n; ++i) rp[i].setZero();
-    add_joint_transpose(model, data, yz, rp);
-    double rr = 0.0;
-    for (std::size_t i = 0; i < n; ++i) {
-      r[i] -= rp[i];
-      rr += r[i].squaredNorm();
-    }
-    for (std::size_t j = 0; j < y.size(); ++j) y[j] += yz[j];
-    return std::sqrt(rr) / ref;
-  }
-  double apply() noexcept {
-    apply_implicit_system(model, data, p, ap);
-    return dot(p, ap);
-  }
-  double advance(double alpha) noexcept {
-    for (std::size_t i = 0; i < x.size(); ++i) {
-      x[i] += alpha * p[i];
-      r[i] -= alpha * ap[i];
-    }
-    return project();
-  }
-  double precondition() noexcept { return dot(r, z); }  // z: project()'s
-  void direction(double beta) noexcept {
-    for (std::size_t i = 0; i < p.size(); ++i) p[i] = z[i] + beta * p[i];
-  }
-};
-
-}  // namespace
-
-bool solve_constrained_system(const Model& model, Data& data) noexcept {
-  SolverScratch& s = data.scratch->solver;
-  ArticulationScratch& art = data.scratch->articulation;
-  const std::size_t n = data.bodies.size();
-  for (std::size_t i = 0; i < n; ++i) art.known[i] = s.in_solve[i] ? 0 : 1;
-  build_joint_rows(model, data, s.twist0, s.delta, s.joint_rhs);
-  data.solver_iterations = 0;
-  data.solver_residual = 0.0;
-
-  ProjectedJointSystem sys{model,          data,         s.delta,       s.residual,
-                           s.precond_residual, s.direction, s.a_direction, s.projected_residual,
-                           s.joint_y,      s.joint_y_correction, 1.0};
-  const std::span<const Vec6> b(s.rhs);
-
-  // Tree solve with the block-diagonal part of A: exact without cross contacts.
-  factor_articulation(model, s.block, art);  // a bad pivot leaves NaN: rejected below / by step()
-  solve_articulation(model, art, b, s.joint_rhs, sys.x, sys.y);
-  bool converged = true;
-
-  if (s.num_cross_contacts > 0) {
-    // Projected PCG on the null space of G: r = b − A x − Gᵀ y.
-    apply_implicit_system(model, data, sys.x, sys.ap);
-    // Relative to ‖b‖, or to ‖A x0‖ when the joints' c drives the step.
-    const double b_norm = std::max(std::sqrt(dot(b, b)), std::sqrt(dot(sys.ap, sys.ap)));
-    sys.ref = b_norm > 0.0 ? b_norm : 1.0;
-    for (std::size_t i = 0; i < n; ++i)
-      sys.r[i] = s.in_solve[i] ? Vec6(b[i] - sys.ap[i]) : Vec6::Zero();
-    for (std::size_t i = 0; i < n; ++i) sys.ap[i].setZero();
-    add_joint_transpose(model, data, sys.y, sys.ap);
-    for (std::size_t i = 0; i < n; ++i) sys.r[i] -= sys.ap[i];
-
-    const double rel = sys.project();
-    const double rz = dot(sys.r, sys.z);
-    for (std::size_t i = 0; i < n; ++i) sys.p[i] = sys.z[i];
-    const detail::PcgStop stop{model.solver.tolerance, model.solver.max_iterations};
-    const detail::PcgResult res = detail::pcg(sys, rel, rz, stop);
-    if (!res.finite) return detail::poison_solve(data);
-    data.solver_iterations = res.iterations;
-    data.solver_residual = res.residual;
-    converged = res.converged(stop);
-  }
-  store_joint_multipliers(model, data, sys.y);
-  return converged;
-}
-
-// RATTLE's velocity step (implicit_system.hpp).
-void project_joint_velocities(const Model& model, Data& data, double elapsed,
-                              bool remove_half_impulse) noexcept {
-  SolverScratch& s = data.scratch->solver;
-  ArticulationScratch& art = data.scratch->articulation;
-  const double h = elapsed;
-  // Second half of the step without the first half's joint impulse: u0 + 2Δu½ counts the
-  // impulse −Gᵀy of the half step (along the rows at the step's start) twice; RATTLE gives the
-  // second half its own impulse along the rows at the end (the projection below). Remove one
-  // copy, A⁻¹ G0ᵀ y per body with its diagonal block of A (exact without body–body contacts
-  // and nets; the cross terms of those are left out of this correction).
-  for (std::size_t i = 0; i < data.bodies.size(); ++i) s.projected_residual[i].setZero();
-  if (remove_half_impulse) add_joint_transpose(model, data, s.joint_y, s.projected_residual);
-  for (std::size_t i = 0; i < data.bodies.size(); ++i) {
-    if (art.known[i] || !remove_half_impulse) continue;
-    factor_block(s.block[i], s.block_factor[i]);
-    Vec6 z;
-    solve_block(s.block_factor[i], s.projected_residual[i], z);
-    data.bodies[i].linear_velocity += z.head<3>();
-    data.bodies[i].angular_velocity += z.tail<3>();
-  }
-  const auto twist = [&](int b) noexcept {
-    const auto i = static_cast<std::size_t>(b);
-    Vec6 u;
-    if (art.known[i]) {
-      u.setZero();
-    } else {
-      u << data.bodies[i].linear_velocity, data.bodies[i].angular_velocity;
-    }
-    return u;
-  };
-  for (std::size_t j = 0; j < model.joints.size(); ++j) {
-    const JointModel& jm = model.joints[j];
-    const BodyState* parent =
-        jm.parent >= 0 ? &data.bodies[static_cast<std::size_t>(jm.parent)] : nullptr;
-    const BodyState& child = data.bodies[static_cast<std::size_t>(jm.child)];
-    const JointPrescription& jp = data.joint_prescribed[j];
-    JointRows& rows = art.rows[j];
-    evaluate_joint(jm, parent, child, jm.prescribed ? jp.value + h * jp.rate : 0.0, rows);
-    JointVector rate = rows.g_child * twist(jm.child);
-    if (parent) rate.noalias() += rows.g_parent * twist(jm.parent);
-    if (jm.prescribed) rate(rows.count - 1) -= jp.rate;
-    JointVector c = -rate;
-    for (int r = rows.count; r < kMaxJointRows; ++r) c(r) = 0.0;
-    s.joint_rhs[j] = c;
-  }
-  for (std::size_t i = 0; i < data.bodies.size(); ++i) s.residual[i].setZero();
-  factor_articulation(model, s.block, art);  // a failed pivot gives NaN: rolled back by step()
-  solve_articulation(model, art, s.residual, s.joint_rhs, s.a_direction, s.joint_y_correction);
-  for (std::size_t i = 0; i < data.bodies.size(); ++i) {
-    if (art.known[i]) continue;
-    data.bodies[i].linear_velocity += s.a_direction[i].head<3>();
-    data.bodies[i].angular_velocity += s.a_direction[i].tail<3>();
-  }
-}
-#endif  // NUMEN_WITH_ARTICULATION
-
 bool solve_linearized_system(const Model& model, Data& data) noexcept {
   const std::uint32_t plan = model.stage_plan;  // the solve step() reports (step_stages.hpp)
   bool converged = false;
@@ -606,120 +451,6 @@ void integrate_linearly_implicit_euler(const Model& model, Data& data) noexcept 
 
 void integrate_trapezoidal(const Model& model, Data& data) noexcept {
   integrate_linearized(model, data, 0.5 * model.dt);  // = linearized_system_step() of a trapezoidal model
-}
-
-namespace {
-
-/// Massless limit of Eq. 2 for the first-order held body:
-/// k e + γ (v_t − v) + F_other = 0 per axis group; sets its twist.
-void set_first_order_velocity(const Model& model, Data& data, std::size_t i) noexcept {
-  BodyState& st = data.bodies[i];
-  const CouplingGains& g = model.bodies[i].coupling;
-  const Wrench& f = data.body_wrench[i];
-  const Wrench& cw = data.coupling_wrench;
-  const Vec3 e = data.target.position - st.position;
-  const Vec3 theta_u = rotation_error(data.target.orientation, st.orientation);
-  st.linear_velocity = data.target_twist.linear + (g.k_t * e + (f.force - cw.force)) / g.gamma_t;
-  st.angular_velocity =
-      data.target_twist.angular + (g.k_r * theta_u + (f.torque - cw.torque)) / g.gamma_r;
-}
-
-/// Symplectic Euler with joints: the explicit impulses h(f + gyroscopic) go
-/// through the KKT system with A = M (paper Eq. 4 with the tendency and
-/// correction of Eq. 7 solved at once), then positions. Imposed bodies
-/// (kDirect) keep their twist; a first-order body enters with the block
-/// h·diag(γ_t I, γ_r I) and the right-hand side that takes it to its
-/// first-order twist (the joints' force adds λ/γ to it).
-#if NUMEN_WITH_ARTICULATION
-void integrate_symplectic_euler_constrained(const Model& model, Data& data) noexcept {
-  SolverScratch& s = data.scratch->solver;
-  ArticulationScratch& art = data.scratch->articulation;
-  const double h = model.dt;
-  for (std::size_t i = 0; i < data.bodies.size(); ++i) {
-    const int b = static_cast<int>(i);
-    BodyState& st = data.bodies[i];
-    Mat6& blk = s.block[i];
-    const bool known = s.imposed[i] != 0;
-    art.known[i] = known ? 1 : 0;
-    s.twist0[i] << st.linear_velocity, st.angular_velocity;  // the last step's twist
-    if (is_first_order(s, b)) {
-      // Massless body: its twist is the first-order law's u_fo, plus the
-      // joints' force through γ: u1 = u_fo + λ/γ. As a KKT block: B = h·diag(γ_t,
-      // γ_r), b = B (u_fo − u0), so that Δu = (u_fo − u0) + B⁻¹ h λ.
-      set_first_order_velocity(model, data, i);
-      const CouplingGains& g = model.bodies[i].coupling;
-      blk.setZero();
-      blk.topLeftCorner<3, 3>().diagonal().setConstant(h * g.gamma_t);
-      blk.bottomRightCorner<3, 3>().diagonal().setConstant(h * g.gamma_r);
-      s.rhs[i] << h * g.gamma_t * (st.linear_velocity - s.twist0[i].head<3>()),
-          h * g.gamma_r * (st.angular_velocity - s.twist0[i].tail<3>());
-      continue;
-    }
-    if (known) continue;
-    const BodyModel& bm = model.bodies[i];
-    const Wrench& f = data.body_wrench[i];
-    const Mat3 iw = world_inertia(st.orientation, bm.inertia_body);
-    blk.setZero();
-    blk.topLeftCorner<3, 3>().diagonal().setConstant(bm.mass);
-    blk.bottomRightCorner<3, 3>() = iw;
-    s.rhs[i] << h * f.force, h * (f.torque + gyroscopic_torque(iw, st.angular_velocity));
-  }
-  build_joint_rows(model, data, s.twist0, s.delta, s.joint_rhs);
-  factor_articulation(model, s.block, art);
-  solve_articulation(model, art, s.rhs, s.joint_rhs, s.delta, s.joint_y);
-  store_joint_multipliers(model, data, s.joint_y);
-  for (std::size_t i = 0; i < data.bodies.size(); ++i) {
-    if (s.imposed[i]) continue;
-    BodyState& st = data.bodies[i];
-    if (!art.known[i]) {
-      st.linear_velocity = s.twist0[i].head<3>() + s.delta[i].head<3>();
-      st.angular_velocity = s.twist0[i].tail<3>() + s.delta[i].tail<3>();
-    }
-    st.position += h * st.linear_velocity;
-    st.orientation = integrate_orientation(st.orientation, st.angular_velocity, h);
-  }
-}
-#endif  // NUMEN_WITH_ARTICULATION
-
-}  // namespace
-
-void integrate_symplectic_euler(const Model& model, Data& data) noexcept {
-  data.scratch->solver.system_step = model.dt;
-  data.scratch->solver.joint_drift_step = model.dt;
-  data.scratch->solver.joint_horizon = model.dt;
-  data.scratch->solver.joint_rate_from_stage_start = false;
-  data.scratch->solver.joint_rows_at_drift_end = false;
-  data.solver_iterations = 0;
-  data.solver_residual = 0.0;
-  if constexpr (kWithDeformable)
-    integrate_nodes_symplectic(model, data);  // forces of the step's start, like the bodies'
-#if NUMEN_WITH_ARTICULATION
-  if (model.stage_plan & kStageJointSolve) {
-    integrate_symplectic_euler_constrained(model, data);
-    data.stages_run |= kStageJointSolve;
-    return;
-  }
-#endif
-  const SolverScratch& s = data.scratch->solver;
-  const double h = model.dt;
-  for (std::size_t i = 0; i < data.bodies.size(); ++i) {
-    const int b = static_cast<int>(i);
-    if (s.imposed[i]) continue;
-    BodyState& st = data.bodies[i];
-    if (is_first_order(s, b)) {
-      set_first_order_velocity(model, data, i);
-    } else {
-      const BodyModel& bm = model.bodies[i];
-      const Wrench& f = data.body_wrench[i];
-      const Mat3 iw = world_inertia(st.orientation, bm.inertia_body);
-      const Mat3 iw_inv = world_inertia_inverse(st.orientation, bm.inertia_body_inv);
-      st.linear_velocity += (h / bm.mass) * f.force;
-      st.angular_velocity +=
-          h * (iw_inv * (f.torque + gyroscopic_torque(iw, st.angular_velocity)));
-    }
-    st.position += h * st.linear_velocity;
-    st.orientation = integrate_orientation(st.orientation, st.angular_velocity, h);
-  }
 }
 
 double linearized_system_step(const Model& model) noexcept {

@@ -117,7 +117,7 @@ void build_joint_rows(const Model& model, Data& data, std::span<const Vec6> twis
       drift_rate(r) = std::remainder(predicted.position_error(r) - c0(r), 2.0 * kPi) / h;
     }
     // The trapezoidal rule's u0 is a node velocity, not a chord, and its end-of-step
-    // projection (integrator.cpp, RATTLE) makes G0 u0 = v_ref: there Ċ0 = G0 u0 − v_ref.
+    // projection (integrator_joints.cpp, RATTLE) makes G0 u0 = v_ref: there Ċ0 = G0 u0 − v_ref.
     const JointVector cdot = chord_velocities ? JointVector(2.0 * cdot0 - drift_rate) : cdot0;
     const JointVector cdot1 = scale * (cdot - (beta_h2 / horizon) * c0);
     JointVector c = (c0 + horizon * cdot1 - predicted.position_error) / h;

@@ -29,6 +29,12 @@ inline Vec6 generalized_force(const Vec3& f, const Vec3& r) noexcept {
   return g;
 }
 
+/// True when `body` is this step's coupled body in the massless (first-order) model of Eq. 2:
+/// its twist is set by the law, not solved for.
+inline bool is_first_order(const SolverScratch& s, int body) noexcept {
+  return s.first_order && body == s.coupled_body;
+}
+
 /// Σ aᵢ · bᵢ over two block vectors (spans of Vec6 or Vec3) of the same size,
 /// in index order.
 template <class A, class B>
