@@ -115,8 +115,11 @@ double damping_from_ratio(double zeta, double mass, double stiffness) noexcept {
   return 2.0 * zeta * std::sqrt(mass * stiffness);
 }
 
-std::string finalize_model(Model& model) {
-  model.stage_plan = 0;  // not finalized until the end: a refused model has no plan
+namespace {
+
+/// finalize_model()'s checks of the step: dt, gravity, the integrator with the coupling, the
+/// materials and their pairs (a model without materials gets "default"). "" or the error.
+std::string check_step_settings(Model& model) {
   std::ostringstream err;
   if (!(model.dt > 0.0) || !std::isfinite(model.dt)) {
     err << "time step dt must be finite and > 0 (got " << model.dt << ")";
@@ -149,6 +152,12 @@ std::string finalize_model(Model& model) {
       return err.str();
     }
   }
+  return "";
+}
+
+/// Each body's mass, inertia (its inverse derived), material, spheres (its bounding radius
+/// derived), coupling gains, initial pose (normalised) and twist, mesh and its pose, anchoring.
+std::string finalize_bodies(Model& model) {
   for (std::size_t b = 0; b < model.bodies.size(); ++b) {
     BodyModel& body = model.bodies[b];
     const std::string who = "body '" + body.name + "'";
@@ -193,6 +202,12 @@ std::string finalize_model(Model& model) {
                           body.initial_twist.angular.squaredNorm() > 0.0))
       return who + ": anchored (a static body) with a non-zero initial twist";
   }
+  return "";
+}
+
+/// Each obstacle's material, pose (normalised), size and sphere or mesh range; the static
+/// spheres.
+std::string finalize_obstacles(Model& model) {
   for (const Obstacle& o : model.obstacles) {
     const std::string who = "obstacle '" + o.name + "'";
     if (o.material < 0 || o.material >= model.num_materials())
@@ -222,6 +237,12 @@ std::string finalize_model(Model& model) {
       return "static sphere " + std::to_string(i) + " needs a finite centre and radius > 0";
   }
   for (Obstacle& o : model.obstacles) o.pose.orientation.normalize();
+  return "";
+}
+
+/// The device's side and the solver: feedback gains and saturation, the held body, the
+/// solver's and Baumgarte's settings.
+std::string check_device_and_solver(const Model& model) {
   for (std::size_t g = 0; g <= model.extra_feedback.size(); ++g) {
     const FeedbackGains& f = g == 0 ? model.feedback : model.extra_feedback[g - 1];
     for (double v : {f.k_t, f.gamma_t, f.k_r, f.gamma_r})
@@ -251,6 +272,12 @@ std::string finalize_model(Model& model) {
     return "baumgarte: alpha_dt and beta_dt2 must be finite and >= 0";
   if (!(bg.alpha_dt + bg.beta_dt2 > 0.0))
     return "baumgarte: alpha_dt and beta_dt2 cannot both be 0 (the joint error would drift unchecked)";
+  return "";
+}
+
+/// Each joint's frames (normalised), prescription and row count (derived), and its bodies not
+/// anchored.
+std::string finalize_joints(Model& model) {
   for (JointModel& j : model.joints) {
     const std::string who = "joint '" + j.name + "'";
     for (const Pose* f : {&j.frame_parent, &j.frame_child})
@@ -267,6 +294,18 @@ std::string finalize_model(Model& model) {
         return who + ": body '" + model.bodies[static_cast<std::size_t>(b)].name +
                "' is anchored (a static body): it takes no joint";
   }
+  return "";
+}
+
+}  // namespace
+
+std::string finalize_model(Model& model) {
+  model.stage_plan = 0;  // not finalized until the end: a refused model has no plan
+  if (std::string e = check_step_settings(model); !e.empty()) return e;
+  if (std::string e = finalize_bodies(model); !e.empty()) return e;
+  if (std::string e = finalize_obstacles(model); !e.empty()) return e;
+  if (std::string e = check_device_and_solver(model); !e.empty()) return e;
+  if (std::string e = finalize_joints(model); !e.empty()) return e;
   if (std::string e = validate_nets(model); !e.empty()) return e;
   if (!kWithDeformable && !model.nets.empty())
     return "nets: this build has NUMEN_WITH_DEFORMABLE=OFF (no deformable nets)";

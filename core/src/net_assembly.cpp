@@ -100,13 +100,15 @@ void add_net_body_terms(const Model& model, Data& data) noexcept {
   }
 }
 
-void build_net_system(const Model& model, Data& data) noexcept {
-  if (model.nets.empty()) return;
+namespace {
+
+/// Each active node's row of the nets' system: its 3×3 block (the springs' weights
+/// linearize_nets() summed, plus its mass and tie weight on the diagonal, NetScratch::
+/// node_diagonal) and its right-hand side's force and tie terms; h = h_s.
+void add_node_rows(const Model& model, Data& data, double h) noexcept {
   const SolverScratch& s = data.scratch->solver;
   NetScratch& ns = data.scratch->net;
-  const double h = data.scratch->solver.system_step;  // h_s of the linearised system (integrator.hpp)
   const double h2 = h * h;
-
   // The springs' weights, their sum at each node (spring_block) and their
   // part of the right-hand side are already there (linearize_nets()).
   // Raw pointers: the stores would otherwise make the compiler reload every
@@ -145,7 +147,12 @@ void build_net_system(const Model& model, Data& data) noexcept {
     else
       rows.template operator()<true>();
   }
-  const int nc = node_contact_count(data);
+}
+
+/// The node contacts' weights into their nodes' blocks and their K u₀ into the right-hand
+/// sides.
+void add_node_contact_rows(Data& data, int nc, double h2) noexcept {
+  NetScratch& ns = data.scratch->net;
   for (int k = 0; k < nc; ++k) {
     const NodeContact& ct = data.node_contacts[static_cast<std::size_t>(k)];
     if (!ct.active) continue;
@@ -153,6 +160,14 @@ void build_net_system(const Model& model, Data& data) noexcept {
     add_weight(ct.weight_normal, ct.weight_isotropic, ct.normal, ns.block[i]);
     ns.rhs[i] += (-h2 * ct.stiffness * ct.normal_velocity) * ct.normal;  // k_eff
   }
+}
+
+/// The inverses of the active nodes' blocks: in the SSOR sweeps' order with their levers
+/// (SweepNode, without joints), else NetScratch::block_inverse (the arrowhead's).
+void invert_node_blocks(const Model& model, Data& data) noexcept {
+  NetScratch& ns = data.scratch->net;
+  const Vec3* lever = ns.lever.data();
+  Mat3* block = ns.block.data();
   if (model.joints.empty()) {  // the SSOR sweeps' A_kk⁻¹, in their order
     const std::int32_t* order = model.node_sweep_order.data();
     SweepNode* sweep_nodes = ns.sweep_nodes.data();
@@ -182,11 +197,13 @@ void build_net_system(const Model& model, Data& data) noexcept {
       }
     }
   }
+}
 
-  // The arrowhead preconditioner of the jointed solve: Schur blocks of the
-  // bodies, S_b = A_bb − Σ c² J_iᵀ A_ii⁻¹ J_i (without joints the bodies' D̃
-  // blocks are SolverScratch::block, factored by build_implicit_system()).
-  if (model.joints.empty()) return;
+/// The arrowhead preconditioner of the jointed solve: Schur blocks of the bodies,
+/// S_b = A_bb − Σ c² J_iᵀ A_ii⁻¹ J_i over the ties' nodes, then the node–body contacts' part.
+void build_body_schur_blocks(const Model& model, Data& data, int nc, double h) noexcept {
+  const SolverScratch& s = data.scratch->solver;
+  NetScratch& ns = data.scratch->net;
   for (std::size_t b = 0; b < ns.body_schur.size(); ++b) ns.body_schur[b] = s.block[b];
   for (const NetModel& net : model.nets) {
     const auto b = static_cast<std::size_t>(net.body);
@@ -256,6 +273,20 @@ void build_net_system(const Model& model, Data& data) noexcept {
     const NodeContact& ct = data.node_contacts[static_cast<std::size_t>(k)];
     if (couples_body(s, ct)) head[ct.node] = -1;
   }
+}
+
+}  // namespace
+
+void build_net_system(const Model& model, Data& data) noexcept {
+  if (model.nets.empty()) return;
+  const double h = data.scratch->solver.system_step;  // h_s of the linearised system (integrator.hpp)
+  add_node_rows(model, data, h);
+  const int nc = node_contact_count(data);
+  add_node_contact_rows(data, nc, h * h);
+  invert_node_blocks(model, data);
+  // Without joints the bodies' D̃ blocks are SolverScratch::block, factored by
+  // build_implicit_system(): no arrowhead.
+  if (!model.joints.empty()) build_body_schur_blocks(model, data, nc, h);
 }
 
 }  // namespace numen::core

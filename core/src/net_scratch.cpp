@@ -22,10 +22,16 @@ void SweepSprings::assign(std::size_t n) {
 void NetScratch::resize(const Model& model) {
   const auto n = static_cast<std::size_t>(model.num_nodes());
   const auto nb = n > 0 ? static_cast<std::size_t>(model.num_bodies()) : 0;
+  resize_solve(model, n, nb);
+  order_springs(model, n);
+  reset_resting(model, n);
+  resize_contact_search(model, n, nb);
+}
+
+void NetScratch::resize_solve(const Model& model, std::size_t n, std::size_t nb) {
   saved.assign(n, NodeState{});
   force.assign(n, Vec3::Zero());
   lever.assign(n, Vec3::Zero());
-  const std::size_t num_springs = n > 0 ? model.net_springs.size() : 0;
   node_diagonal.assign(n, 1.0);
   block.assign(n, Mat3::Identity());
   block_inverse.assign(model.joints.empty() ? 0 : n, Mat3::Identity());  // arrowhead only
@@ -44,6 +50,10 @@ void NetScratch::resize(const Model& model) {
   body_schur.assign(nb, Mat6::Identity());
   node_contact_head.assign(model.joints.empty() ? 0 : n, -1);  // arrowhead only
   body_tmp.assign(nb, Vec6::Zero());
+}
+
+void NetScratch::order_springs(const Model& model, std::size_t n) {
+  const std::size_t num_springs = n > 0 ? model.net_springs.size() : 0;
   // Positions in the sweep order Model::node_sweep_order (reverse Cuthill–McKee per net).
   sweep_position.assign(n, 0);
   sweep_nodes.assign(n, SweepNode{});
@@ -79,6 +89,9 @@ void NetScratch::resize(const Model& model) {
       spring_constants.damping[j] = sp.damping;
     }
   }
+}
+
+void NetScratch::reset_resting(const Model& model, std::size_t n) {
   // Resting nodes (net_rest.hpp): none yet, every node in the solve.
   rest_count.assign(n, 0);
   rest_flags.assign(n, 0);
@@ -102,6 +115,9 @@ void NetScratch::resize(const Model& model) {
     active_count[k] = model.nets[k].node_count;
     pass_count[k] = model.nets[k].node_count;
   }
+}
+
+void NetScratch::resize_contact_search(const Model& model, std::size_t n, std::size_t nb) {
   const auto no = n > 0 ? model.obstacles.size() : 0;
   near_obstacles.assign(no, 0);
   obstacle_axis.assign(no, Vec3::UnitZ());

@@ -228,6 +228,18 @@ struct NetScratch {
   double patch_fine_depth = 0.0;
   /// Sizes every buffer for `model` (all empty when it has no net). Allocates: make_data() only.
   void resize(const Model& model);
+
+ private:
+  // resize()'s parts, for `n` nodes and `nb` bodies (none without nodes).
+  /// The solve's per-node and per-body vectors.
+  void resize_solve(const Model& model, std::size_t n, std::size_t nb);
+  /// The sweep order's positions and the springs by their earlier node in it.
+  void order_springs(const Model& model, std::size_t n);
+  /// The resting nodes' bookkeeping: none rests yet, every node in the solve.
+  void reset_resting(const Model& model, std::size_t n);
+  /// The contact search's room: near obstacles, bodies and spheres, the largest net's
+  /// triangles and fine triangles, the fine surface's stamps and patches, the load patch.
+  void resize_contact_search(const Model& model, std::size_t n, std::size_t nb);
 };
 
 }  // namespace numen::core
