@@ -37,6 +37,10 @@ int add_needle(Model& model, const NeedleSpec& spec) {
   n.tail_angle = -0.5 * n.arc_angle;
   n.tip_angle = 0.5 * n.arc_angle;
   n.puncture_force = spec.puncture_force;
+  n.puncture_max_angle = spec.puncture_max_angle;
+  n.tie_stiffness = spec.tie_stiffness;
+  n.tie_damping = spec.tie_damping;
+  n.friction = spec.friction;
   const double half = 0.5 * n.arc_angle;
   // The arc's centroid lies at R sin(α)/α from the circle's centre along +x (α = φ/2).
   const double centroid = half > 0.0 ? n.radius * std::sin(half) / half : n.radius;
@@ -108,6 +112,12 @@ std::string finalize_needles(const Model& model) {
       return who + "arc must be a fraction of a circle in (0, 1), got " + std::to_string(n.arc_angle / (2.0 * kPi));
     if (!std::isnan(n.puncture_force) && !(n.puncture_force > 0.0 && std::isfinite(n.puncture_force)))
       return who + "puncture_force must be > 0 (N), got " + std::to_string(n.puncture_force);
+    if (!(n.puncture_max_angle > 0.0 && n.puncture_max_angle <= 0.5 * kPi))
+      return who + "puncture_max_angle must be in (0, π/2] (rad), got " + std::to_string(n.puncture_max_angle);
+    if (!(n.tie_stiffness > 0.0 && std::isfinite(n.tie_stiffness)))
+      return who + "tie_stiffness must be > 0 (N/m), got " + std::to_string(n.tie_stiffness);
+    if (!(n.tie_damping >= 0.0 && std::isfinite(n.tie_damping)) || !(n.friction >= 0.0 && std::isfinite(n.friction)))
+      return who + "tie_damping and friction must be ≥ 0 (N·s/m)";
     if (n.sphere_count < 2 || n.sphere_begin != b.sphere_begin || n.sphere_count != b.sphere_count)
       return who + "its spheres are not its body's (build it with add_needle())";
   }

@@ -46,6 +46,16 @@ struct NeedleSpec {
   /// Puncture threshold (N, > 0): the force of the tip's contact with tissue along the needle's
   /// tangent at which it punctures the surface. NaN: none given (the needle never punctures).
   double puncture_force = std::numeric_limits<double>::quiet_NaN();
+  /// The largest angle (rad, in (0, π/2]) between the tip's tangent and the surface's inward
+  /// normal at which it punctures: no puncture from the side or from behind (60°).
+  double puncture_max_angle = 1.0471975511965976;
+  /// A puncture point's tie to the arc (needle_puncture.hpp): k (N/m, > 0) and c (N·s/m, ≥ 0)
+  /// normal to the tangent, and the viscous friction along it (N·s/m, ≥ 0). Chosen, not measured:
+  /// the tie as stiff as ten of the shipped organ's node ties (100 N/m each), the friction 0.02 N
+  /// at 10 mm/s of needle travel.
+  double tie_stiffness = 1000.0;
+  double tie_damping = 1.0;
+  double friction = 2.0;
 };
 
 /// A needle of a model (Model::needles): its body and its arc in the body frame.
@@ -61,6 +71,10 @@ struct NeedleModel {
   int sphere_begin = 0;            ///< First of its spheres in Model::body_spheres (tail first).
   int sphere_count = 0;            ///< Its spheres along the arc, tail to tip.
   double puncture_force = std::numeric_limits<double>::quiet_NaN();  ///< NeedleSpec::puncture_force.
+  double puncture_max_angle = 1.0471975511965976;  ///< NeedleSpec::puncture_max_angle (rad).
+  double tie_stiffness = 1000.0;   ///< NeedleSpec::tie_stiffness (N/m).
+  double tie_damping = 1.0;        ///< NeedleSpec::tie_damping (N·s/m).
+  double friction = 2.0;           ///< NeedleSpec::friction (N·s/m).
   double length() const noexcept { return radius * arc_angle; }  ///< L = R φ (m).
 };
 
@@ -96,7 +110,8 @@ inline Vec3 needle_tip(const NeedleModel& needle) noexcept { return needle_point
 inline Vec3 needle_tail(const NeedleModel& needle) noexcept { return needle_point(needle, 0.0); }
 
 /// Checks every needle of `model` (radius > wire_radius > 0, arc angle in (0, 2π), a dynamic
-/// body with its spheres where add_needle() put them, puncture_force NaN or > 0); returns "" or a
+/// body with its spheres where add_needle() put them, puncture_force NaN or > 0, the puncture
+/// angle in (0, π/2], the tie's stiffness > 0, its damping and friction ≥ 0); returns "" or a
 /// message naming the needle and the field. Called by finalize_model().
 std::string finalize_needles(const Model& model);
 
