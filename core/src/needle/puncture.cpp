@@ -63,6 +63,20 @@ bool segment_crosses_face(const Model& model, const Data& data, int face, const 
   return true;
 }
 
+/// The passage's exit point (NeedlePuncture::exit), or nullptr.
+const NeedlePuncture* exit_point(const NeedleState& st) noexcept {
+  for (int i = 0; i < st.num_punctures; ++i)
+    if (st.punctures[static_cast<std::size_t>(i)].exit) return &st.punctures[static_cast<std::size_t>(i)];
+  return nullptr;
+}
+
+/// The passage's entry point, or nullptr (let go at the tail, or none).
+const NeedlePuncture* entry_point(const NeedleState& st) noexcept {
+  for (int i = 0; i < st.num_punctures; ++i)
+    if (!st.punctures[static_cast<std::size_t>(i)].exit) return &st.punctures[static_cast<std::size_t>(i)];
+  return nullptr;
+}
+
 /// The arc parameter (m) of sphere `i` (of the needle's own, tail first).
 double sphere_parameter(const NeedleModel& n, int i) noexcept {
   return n.length() * static_cast<double>(i) / static_cast<double>(std::max(1, n.sphere_count - 1));
@@ -87,9 +101,8 @@ void sweep_tip(const Model& model, Data& data, const NeedleModel& n, NeedleState
   if (!swept || (tip - a).squaredNorm() == 0.0) return;
   Vec3 w;
   if (st.num_punctures > 0) {
+    if (exit_point(st) != nullptr) return;  // one pass: the tip is out
     const NeedlePuncture& entry = st.punctures[0];
-    const bool has_exit = st.num_punctures > 1;
-    if (has_exit) return;  // one pass: the tip is out
     const int f = first_crossing(model, data, entry.net, a, tip, &w);
     if (f < 0 || face_normal(model, data, f).dot(tip - a) <= 0.0) return;  // not out
     if ((tip - a).dot(tangent) > 0.0) {  // out going forward: the exit
@@ -185,11 +198,14 @@ void write_tie_springs(const Model& model, Data& data, const NeedleModel& n, con
 }
 
 /// Drops this step's penalty node contacts between needle `n`'s spheres inside the net of its
-/// passage `st` (arc parameters in [s_entry − 2 r_w, s_exit + 2 r_w], s_exit = L without an exit)
-/// and that net, keeping the order of the rest (the grasp springs after them included).
+/// passage `st` (arc parameters in [s_entry − 2 r_w, s_exit + 2 r_w]: s_exit = L without an exit,
+/// s_entry = 0 once the entry is let go at the tail) and that net, keeping the order of the rest
+/// (the grasp springs after them included).
 void drop_inside_contacts(const Model& model, Data& data, const NeedleModel& n, const NeedleState& st) noexcept {
-  const double lo = st.punctures[0].arc_parameter - 2.0 * n.wire_radius;
-  const double hi = st.num_punctures > 1 ? st.punctures[1].arc_parameter + 2.0 * n.wire_radius : n.length() + 1.0;
+  const NeedlePuncture* entry = entry_point(st);
+  const NeedlePuncture* exit = exit_point(st);
+  const double lo = entry != nullptr ? entry->arc_parameter - 2.0 * n.wire_radius : -1.0;
+  const double hi = exit != nullptr ? exit->arc_parameter + 2.0 * n.wire_radius : n.length() + 1.0;
   const int net = st.punctures[0].net;
   const int total = std::clamp(data.num_node_contacts + data.num_node_grasp_springs, 0,
                                static_cast<int>(data.node_contacts.size()));

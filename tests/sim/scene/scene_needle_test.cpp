@@ -102,12 +102,12 @@ TEST(SceneNeedle, BadNeedlesAreLocatedErrorsNamingTheirKeys) {
       {"puncture_force = 0.0\nposition = [0.0, 0.1, 0.1]\n", "puncture_force = ", "0.0", "needle[0].puncture_force",
        "must be > 0"},
       {"puncture_force = -1.0\nposition = [0.0, 0.1, 0.1]\n", "puncture_force = ", "-1.0", "needle[0].puncture_force",
-       "must be > 0"},
+       "must be in [0, inf]"},
       {"wire_radius = 0.0015\nposition = [0.0, 0.1, 0.1]\n", "wire_radius = ", "0.0015", "needle[0].wire_radius",
        "larger than the jaws can hold"},
       {"position = [0.07072, 0.02836, -0.04475]\n", "position = ", "[0.07072", "needle[0].position",
        "starts inside the tissue of deformable \"organ\""},
-      {"radius_mm = 8.0\nposition = [0.0, 0.1, 0.1]\n", "radius_mm = ", "8.0", "needle[0].radius_mm", "radius_mm"},
+      {"radius_mm = 8.0\nposition = [0.0, 0.1, 0.1]\n", "radius_mm = ", "8.0", "needle[0].radius_mm", "unknown key"},
   };
   for (const Case& c : cases) {
     SCOPED_TRACE(c.keys);
@@ -116,4 +116,23 @@ TEST(SceneNeedle, BadNeedlesAreLocatedErrorsNamingTheirKeys) {
     expect_located(load_error(dir, text), (dir / "bad.toml").string(), line,
                    c.key == "needle[0].radius_mm" ? 0 : column, c.key, c.message);
   }
+}
+
+TEST(SceneNeedle, JawsThatDipDeeperThanTheWireBetweenTheirSpheresAreWarned) {
+  NUMEN_REQUIRE_DEFORMABLE();
+  // The default scene's jaws: four 1.5 mm spheres 3 mm apart (touching): their surface dips 1.5 mm
+  // between two, more than the 0.35 mm wire's radius: warned. The same jaws of ten spheres (1 mm
+  // apart, a dip of 0.09 mm): not.
+  numen::test::TempDir dir;
+  const std::string needle = "\n[[needle]]\nname = \"sh\"\nposition = [0.0, 0.1, 0.1]\n";
+  const numen::sim::Scene sparse = numen::sim::load_scene(dir.write("sparse.toml", default_with(needle)));
+  int warned = 0;
+  for (const std::string& w : sparse.warnings)
+    warned += w.find("needle \"sh\": grasper \"driver\"'s jaws dip 1.5") != std::string::npos &&
+              w.find("more than the wire's radius (0.35 mm)") != std::string::npos;
+  EXPECT_EQ(warned, 1);
+  using numen::test::replace;  // both jaws' sphere lines
+  const std::string dense_text = replace(replace(default_with(needle), "count = 4", "count = 10"), "count = 4", "count = 10");
+  const numen::sim::Scene dense = numen::sim::load_scene(dir.write("dense.toml", dense_text));
+  for (const std::string& w : dense.warnings) EXPECT_EQ(w.find("jaws dip"), std::string::npos) << w;
 }
