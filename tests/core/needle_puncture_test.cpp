@@ -209,6 +209,18 @@ TEST(NeedlePuncture, NoTunnellingAtRecordedSpeeds) {
   EXPECT_EQ(p.exits, 1);
 }
 
+TEST(NeedlePuncture, ATipThroughTheSurfaceWithoutAPunctureIsCountedAsATunnel) {
+  // The detector of the test above: with contacts of 1 N/m (the tissue nearly not there) the tip
+  // goes through the patch without reaching the threshold: one tunnel, no puncture.
+  core::Model m = puncture_rig();
+  for (core::MaterialPair& p : m.material_pairs) p = core::MaterialPair{1.0, 0.0, 0.0};
+  ASSERT_EQ(core::finalize_model(m), "");
+  const PuncturePass p = run_puncture_pass(m, 1.0, 200 * kPunctureDeg, 1.5);
+  ASSERT_TRUE(p.finite);
+  EXPECT_EQ(p.punctures, 0);
+  EXPECT_EQ(p.tunnels, 1);
+}
+
 TEST(NeedlePuncture, NoPunctureFromBehindOrAtTooSteepAnAngle) {
   // From behind: the same pass mirrored below the patch (C at z = −R/2), the tip going up into the
   // patch's underside: it never punctures (nor does the sheet push on it: its triangle contacts are
