@@ -52,6 +52,7 @@ numen_install_headers(${PROJECT_SOURCE_DIR}/core/include
   numen/core/collision.hpp numen/core/contact.hpp numen/core/contact_force.hpp
   numen/core/coupling.hpp numen/core/data.hpp numen/core/data_size.hpp numen/core/feedback.hpp
   numen/core/grasp.hpp
+  numen/core/needle.hpp numen/core/needle_puncture.hpp
   numen/core/integrator.hpp numen/core/joint.hpp numen/core/mesh.hpp numen/core/mesh_shape.hpp numen/core/model.hpp
   numen/core/multirate.hpp numen/core/multirate/device_loop.hpp numen/core/multirate/exchange.hpp
   numen/core/multirate/god_object.hpp numen/core/multirate/planes.hpp numen/core/net_collision.hpp numen/core/net_forces.hpp numen/core/net_model.hpp

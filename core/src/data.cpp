@@ -72,12 +72,14 @@ Data make_data(const Model& model, const DataOptions& options) {
   const auto n = static_cast<std::size_t>(model.num_bodies());
   data.bodies.resize(n);
   data.nodes.resize(static_cast<std::size_t>(model.num_nodes()));
-  // Room for the penalty contacts (detection stops at kMaxNodeContacts) and the held nodes'
-  // grasp springs after them (grasp.hpp).
+  // Room for the penalty contacts (detection stops at kMaxNodeContacts), the held nodes'
+  // grasp springs after them (grasp.hpp) and the needles' puncture ties (needle_puncture.hpp).
   data.node_contacts.resize(model.num_nodes() > 0
-                                ? static_cast<std::size_t>(kMaxNodeContacts + model.num_grasps() *
-                                                                                  kMaxGraspNodes * kGraspSpringsPerNode)
+                                ? static_cast<std::size_t>(kMaxNodeContacts +
+                                                           model.num_grasps() * kMaxGraspNodes * kGraspSpringsPerNode +
+                                                           model.num_needles() * kMaxNeedlePunctures * kNeedleTieSprings)
                                 : 0);
+  data.needles.resize(static_cast<std::size_t>(model.num_needles()));
   data.nets.resize(static_cast<std::size_t>(model.num_nets()));
   data.grasps.resize(static_cast<std::size_t>(model.num_grasps()));
   data.applied_wrench.resize(n);
@@ -137,6 +139,8 @@ void reset_data(const Model& model, Data& data) noexcept {
   data.num_contacts = 0;
   data.num_node_contacts = 0;
   data.num_node_grasp_springs = 0;
+  data.num_node_needle_ties = 0;
+  for (NeedleState& n : data.needles) n = NeedleState{};
   for (NetOutput& o : data.nets) o = NetOutput{};
   for (GraspState& g : data.grasps) g = GraspState{};
   data.contacts_dropped = 0;

@@ -126,6 +126,9 @@ std::string check_step_settings(Model& model) {
     return err.str();
   }
   if (!finite(model.gravity)) return "gravity must be finite";
+  // Before the bodies' checks: a needle's bad shape (a wire of radius 0 has a steel mass of 0)
+  // is named as the needle's.
+  if (std::string e = finalize_needles(model); !e.empty()) return e;
   if (model.integrator == Integrator::kTrapezoidal &&
       model.coupling_mode == CouplingMode::kFirstOrder)
     return "integrator trapezoidal cannot run coupling first-order: the rule is not L-stable, "

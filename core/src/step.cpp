@@ -14,6 +14,7 @@
 #include "numen/core/grasp.hpp"
 #include "numen/core/integrator.hpp"
 #include "numen/core/model.hpp"
+#include "numen/core/needle_puncture.hpp"
 #include "numen/core/net_collision.hpp"
 #include "numen/core/net_forces.hpp"
 #include "numen/core/rigid_body.hpp"
@@ -112,7 +113,13 @@ void step_from_contacts(const Model& model, Data& data) noexcept {
     ++data.contact_overflow_steps;
   }
   if (plan & kStageGrasp) update_grasps(model, data);  // sets its bit; drops the held bodies' contacts
+  if constexpr (kWithDeformable) {
+    if (plan & kStageNeedles) tie_needles(model, data);  // sets its bit; after the grasp springs
+  }
   compute_forces(model, data);
+  if constexpr (kWithDeformable) {
+    if (plan & kStageNeedles) find_punctures(model, data);  // reads this step's node contact forces
+  }
   if (data.contacts_clamped > 0) ++data.contact_clamped_steps;  // body and node contacts
   integrate(model, data);  // sets its bit, and kStageNetSolve or kStageJointSolve if run
   if constexpr (kWithArticulation) {

@@ -12,11 +12,12 @@
 namespace numen::core {
 namespace {
 
-constexpr std::array<StageDescription, 13> kStages{{
+constexpr std::array<StageDescription, 14> kStages{{
     {kStageDirectTarget, "direct target", "coupling mode is not direct, no anchored body"},
     {kStageContacts, "contacts (broad + narrow phase)", "nothing to collide"},
     {kStageNodeContacts, "node contacts", "no nets"},
     {kStageGrasp, "grasp (rules, held bodies)", "no graspers"},
+    {kStageNeedles, "needles (punctures, ties)", "no nets, or no needle with a puncture force"},
     {kStageBodyForces, "body forces (gravity, coupling, contacts)", nullptr},
     {kStageNetForces, "net forces", "no nets"},
     {kStageIntegrate, "integrate", nullptr},
@@ -48,6 +49,10 @@ std::uint32_t compiled_stages(const Model& model) noexcept {
   if (net_solve) s |= kStageNetSolve;
   if (joints) s |= kStageJointDrift;
   if (!model.grasps.empty()) s |= kStageGrasp;
+  // A needle through tissue: nets, and a needle that punctures (needle_puncture.hpp).
+  if (nets && std::any_of(model.needles.begin(), model.needles.end(),
+                          [](const NeedleModel& n) { return n.puncture_force > 0.0; }))
+    s |= kStageNeedles;
   // The net solve takes the joints in its arrowhead preconditioner; otherwise the
   // joints have their own KKT tree solve (implicit or symplectic).
   if (joints && !net_solve) s |= kStageJointSolve;

@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "alloc_counter.hpp"
+#include "build_features.hpp"
 #include "multirate/net.hpp"
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"

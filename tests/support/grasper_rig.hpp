@@ -19,10 +19,12 @@ inline constexpr double kGraspDeg = M_PI / 180.0;
 /// after): the tube (60 g, no spheres), its COM at `tube_at`, its z axis down (turned π about
 /// x); the device holds it (god-object coupling 1000 N/m, ζ 0.85); the jaws "jaw_1" and
 /// "jaw_2" (5 g each), hinged at the tube's tip (40 mm along its z, 40 mm below its COM) about
-/// its x axis by prescribed revolute joints turned ±opening/2, each a line of four 1.5 mm spheres
-/// 2–11 mm from the hinge; grasper "grasper" (close 30°, open 40°, springs 2000 N/m, 2 N·s/m,
-/// `max_force`). Returns the tube's body index (the jaws follow it). Not finalized.
-inline int add_grasper(core::Model& m, const core::Vec3& tube_at, double opening, double max_force) {
+/// its x axis by prescribed revolute joints turned ±opening/2, each a line of `jaw_spheres` (≥ 2;
+/// four by default, 3 mm apart) 1.5 mm spheres 2–11 mm from the hinge; grasper "grasper" (close
+/// 30°, open 40°, springs 2000 N/m, 2 N·s/m, `max_force`). Returns the tube's body index (the jaws
+/// follow it). Not finalized.
+inline int add_grasper(core::Model& m, const core::Vec3& tube_at, double opening, double max_force,
+                       int jaw_spheres = 4) {
   const int tube_index = m.num_bodies();
   const core::Quat down = numen::test::rot(M_PI, core::Vec3::UnitX());
   core::BodyModel tube;
@@ -39,9 +41,9 @@ inline int add_grasper(core::Model& m, const core::Vec3& tube_at, double opening
     jaw.mass = 0.005;
     jaw.inertia_body = core::Vec3(6e-8, 6e-8, 6e-9).asDiagonal();
     jaw.sphere_begin = static_cast<int>(m.body_spheres.size());
-    for (int i = 0; i < 4; ++i)
-      m.body_spheres.push_back(core::Sphere{core::Vec3(0, 0, -0.004 + 0.003 * i), 0.0015});
-    jaw.sphere_count = 4;
+    for (int i = 0; i < jaw_spheres; ++i)
+      m.body_spheres.push_back(core::Sphere{core::Vec3(0, 0, -0.004 + (jaw_spheres == 4 ? 0.003 * i : 0.009 * i / (jaw_spheres - 1))), 0.0015});
+    jaw.sphere_count = jaw_spheres;
     jaw.initial_pose = core::Pose{tube_at + down * core::Vec3(0, 0, 0.046), down};
     m.bodies.push_back(jaw);
     const core::Quat z_to_x = numen::test::rot(M_PI / 2, core::Vec3::UnitY());

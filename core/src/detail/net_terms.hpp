@@ -30,9 +30,10 @@ inline Vec3 weight_times(double alpha, double beta, const Vec3& n, const Vec3& v
 }
 
 /// Node contacts of this step within the scratch (Data::node_contacts), the grasp springs on held
-/// nodes after them (Data::num_node_grasp_springs) included: what the solve takes.
+/// nodes after them (Data::num_node_grasp_springs) and the needles' puncture ties after those
+/// (Data::num_node_needle_ties) included: what the solve takes.
 inline int node_contact_count(const Data& data) noexcept {
-  return std::clamp(data.num_node_contacts + data.num_node_grasp_springs, 0,
+  return std::clamp(data.num_node_contacts + data.num_node_grasp_springs + data.num_node_needle_ties, 0,
                     static_cast<int>(data.node_contacts.size()));
 }
 

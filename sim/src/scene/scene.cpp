@@ -19,6 +19,7 @@
 #include "numen/sim/device/simulated_instrument.hpp"
 #include "scene_articulation.hpp"
 #include "scene_grasp.hpp"
+#include "scene_needle.hpp"
 #include "scene_task.hpp"
 #include "scene_multirate.hpp"
 #include "scene_deformable.hpp"
@@ -346,7 +347,7 @@ Scene load_scene(const std::string& path, const SceneOverrides& overrides) {
                    "integrator", "coupling",    "solver",   "material",  "contact_default",
                    "contact",    "body",        "obstacle", "device",    "bus",
                    "trajectory", "event",       "joint",    "baumgarte", "deformable",
-                   "multirate",  "grasp",       "task"});
+                   "multirate",  "grasp",       "task",     "needle"});
   scene.name = root.string_or("name", std::filesystem::path(path).stem().string());
   scene.description = root.string_or("description", "");
   // Parts this build left out (features.hpp): refused before anything else is read.
@@ -418,6 +419,7 @@ Scene load_scene(const std::string& path, const SceneOverrides& overrides) {
   // Nets after the bodies' starting poses are known (their nodes start there).
   if constexpr (core::kWithDeformable)
     parse_deformables(root, dir, scene.model, scene.net_triangles, scene.net_loads, scene.warnings);
+  parse_needles(root, scene);  // bodies of their own, after every other body and the nets
 
   // Bus between controller and instrument.
   double latency = 100e-6;
@@ -492,10 +494,14 @@ Scene load_scene(const std::string& path, const SceneOverrides& overrides) {
     // Errors of a grasper name it: point at its jaws.
     for (const TomlTable& g : root.tables("grasp"))
       if (g.has("name") && err.rfind("grasp '" + g.string("name") + "'", 0) == 0) g.fail("jaws", err);
+    // Errors of a needle name it: point at its table.
+    for (const TomlTable& n : root.tables("needle"))
+      if (n.has("name") && err.rfind("needle '" + n.string("name") + "'", 0) == 0) n.fail("name", err);
     // An integrator that cannot run the coupling mode: point at the integrator key.
     if (err.rfind("integrator ", 0) == 0 && root.has("integrator")) root.fail("integrator", err);
     root.fail_at(nullptr, "", err);
   }
+  check_needles(root, scene);
   if (scene.model.integrator == core::Integrator::kTrapezoidal && !scene.model.nets.empty())
     scene.warnings.push_back(
         "integrator trapezoidal with deformable nets: the rule is not L-stable, so the stiff node "

@@ -514,10 +514,6 @@ void parse_deformables(const TomlTable& root, const std::filesystem::path& scene
     parse_deformable(t, scene_dir, model, triangles, loads, warnings);
 }
 
-namespace {
-
-/// Winding number of the closed triangle surface `tris` (vertices `verts`) about `p`: ±1 inside,
-/// 0 outside (Van Oosterom & Strackee 1983's solid angle of each triangle, summed over 4π).
 double winding_number(const std::vector<Vec3>& verts, const NetTriangles& tris, const Vec3& p) {
   double omega = 0.0;
   for (const auto& t : tris) {
@@ -531,8 +527,6 @@ double winding_number(const std::vector<Vec3>& verts, const NetTriangles& tris, 
   }
   return omega / (4.0 * std::numbers::pi);
 }
-
-}  // namespace
 
 void warn_organs_inside_tools(const core::Model& m, const std::vector<NetTriangles>& triangles,
                               std::vector<std::string>& warnings) {

@@ -56,6 +56,10 @@ double net_surface_offset_bound(double half_edge, double organ_size);
 /// organ and body, naming both, when a sphere of the body overlaps a node sphere of the organ's
 /// rest shape or has its centre inside the organ's closed rest surface (winding number of
 /// `triangles`, model.nets' order). Call after core::finalize_model(). Load time only.
+/// Winding number of the closed triangle surface `tris` (vertices `verts`) about `p`: ±1 inside,
+/// 0 outside (Van Oosterom & Strackee 1983's solid angle of each triangle, summed over 4π).
+double winding_number(const std::vector<core::Vec3>& verts, const NetTriangles& tris, const core::Vec3& p);
+
 void warn_organs_inside_tools(const core::Model& model, const std::vector<NetTriangles>& triangles,
                               std::vector<std::string>& warnings);
 

@@ -15,6 +15,7 @@
 #include "numen/core/contact.hpp"
 #include "numen/core/grasp.hpp"
 #include "numen/core/joint.hpp"
+#include "numen/core/needle_puncture.hpp"
 #include "numen/core/net_state.hpp"
 #include "numen/core/types.hpp"
 
@@ -193,6 +194,12 @@ struct Data {
   std::vector<NetOutput> nets;     ///< Per net (Model::nets).
   /// Per grasper (Model::grasps): what it holds, its springs and this step's event (grasp.hpp).
   std::vector<GraspState> grasps;
+  /// Per needle (Model::needles): its passage through tissue, its puncture points and events
+  /// (needle_puncture.hpp).
+  std::vector<NeedleState> needles;
+  /// The needles' puncture ties on net nodes (NodeContact::held), in node_contacts after the
+  /// grasp springs (needle_puncture.hpp, tie_needles()); 0 without a punctured needle.
+  int num_node_needle_ties = 0;
   int solver_iterations = 0;       ///< Iterations of the implicit solve this step (bodies and nets).
   /// The measure the solve stopped on (SolverSettings::tolerance): the relative residual
   /// ‖r‖/‖b‖; for a model with nets and no joints the estimated relative energy-norm error

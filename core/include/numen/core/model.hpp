@@ -15,6 +15,7 @@
 #include "numen/core/grasp.hpp"
 #include "numen/core/joint.hpp"
 #include "numen/core/mesh_shape.hpp"
+#include "numen/core/needle.hpp"
 #include "numen/core/net_model.hpp"
 #include "numen/core/net_surface_map.hpp"
 #include "numen/core/types.hpp"
@@ -290,6 +291,9 @@ struct Model {
 
   /// Graspers (grasp.hpp, docs/grasping.md): an instrument's two jaws and their grasp rules.
   std::vector<GraspModel> grasps;
+  /// Curved suture needles (needle.hpp, docs/suturing.md "The needle"), appended by add_needle():
+  /// each a body of Model::bodies with its arc. Empty: no needle, and nothing of a step for one.
+  std::vector<NeedleModel> needles;
   std::vector<std::string> material_names;  ///< Size num_materials.
   std::vector<MaterialPair> material_pairs; ///< num_materials², symmetric, row-major.
 
@@ -322,6 +326,7 @@ struct Model {
   int num_joints() const noexcept { return static_cast<int>(joints.size()); }
   int num_nets() const noexcept { return static_cast<int>(nets.size()); }
   int num_grasps() const noexcept { return static_cast<int>(grasps.size()); }
+  int num_needles() const noexcept { return static_cast<int>(needles.size()); }
   int num_nodes() const noexcept { return static_cast<int>(node_rest.size()); }
 };
 

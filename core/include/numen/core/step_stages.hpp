@@ -19,15 +19,18 @@ enum StepStage : std::uint32_t {
   kStageContacts = 1u << 1,       ///< detect_contacts: broad and narrow phase, bodies.
   kStageNodeContacts = 1u << 2,   ///< detect_node_contacts: net nodes against everything.
   kStageGrasp = 1u << 3,          ///< update_grasps: grasp rules, the held bodies' contacts off (grasp.hpp).
-  kStageBodyForces = 1u << 4,     ///< gravity, applied wrenches, coupling, contact and grasp forces.
-  kStageNetForces = 1u << 5,      ///< compute_net_forces: springs, tie, node contacts.
-  kStageIntegrate = 1u << 6,      ///< integrate: the bodies' (and nodes') time step.
-  kStageJointSolve = 1u << 7,     ///< integrate's KKT tree solve of the joints (Eq. 4–5).
-  kStageNetSolve = 1u << 8,       ///< integrate's one system of bodies and nodes (net_solve).
-  kStageJointDrift = 1u << 9,     ///< measure_joint_drift.
-  kStageMeasureNets = 1u << 10,   ///< measure_nets: strain, tie wrench.
-  kStageFeedback = 1u << 11,      ///< compute_feedback: Eq. 8–9.
-  kStageChecks = 1u << 12,        ///< check_finite: rollback of a non-finite result.
+  /// tie_needles (before the forces) and find_punctures (after them): a needle through tissue
+  /// (needle_puncture.hpp). Only a model with nets and a needle that punctures runs it.
+  kStageNeedles = 1u << 4,
+  kStageBodyForces = 1u << 5,     ///< gravity, applied wrenches, coupling, contact and grasp forces.
+  kStageNetForces = 1u << 6,      ///< compute_net_forces: springs, tie, node contacts.
+  kStageIntegrate = 1u << 7,      ///< integrate: the bodies' (and nodes') time step.
+  kStageJointSolve = 1u << 8,     ///< integrate's KKT tree solve of the joints (Eq. 4–5).
+  kStageNetSolve = 1u << 9,       ///< integrate's one system of bodies and nodes (net_solve).
+  kStageJointDrift = 1u << 10,    ///< measure_joint_drift.
+  kStageMeasureNets = 1u << 11,   ///< measure_nets: strain, tie wrench.
+  kStageFeedback = 1u << 12,      ///< compute_feedback: Eq. 8–9.
+  kStageChecks = 1u << 13,        ///< check_finite: rollback of a non-finite result.
 };
 
 /// A stage of step() and the scene property it depends on.

@@ -1,0 +1,298 @@
+/// @file puncture.cpp
+/// The needle through tissue: its puncture test, its ties and its sweep (needle_puncture.hpp).
+
+#include "numen/core/needle_puncture.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "numen/core/data.hpp"
+#include "numen/core/model.hpp"
+#include "numen/core/needle.hpp"
+#include "numen/core/step_stages.hpp"
+
+namespace numen::core {
+namespace {
+
+/// A world point of `body` given in its frame.
+Vec3 world_point(const BodyState& b, const Vec3& local) noexcept { return b.position + b.orientation * local; }
+
+/// The point Σ w_m x_m (or the velocity, `velocity`) of net triangle `face` (m or m/s, world).
+Vec3 face_point(const Model& model, const Data& data, int face, const Vec3& w, bool velocity) noexcept {
+  const std::array<int, 3>& f = model.net_faces[static_cast<std::size_t>(face)];
+  Vec3 p = Vec3::Zero();
+  for (int k = 0; k < 3; ++k) {
+    const NodeState& n = data.nodes[static_cast<std::size_t>(f[static_cast<std::size_t>(k)])];
+    p += w[k] * (velocity ? n.velocity : n.position);
+  }
+  return p;
+}
+
+/// The outward unit normal of net triangle `face` now ((x1 − x0) × (x2 − x0), Model::net_faces'
+/// winding), or zero for a degenerate one.
+Vec3 face_normal(const Model& model, const Data& data, int face) noexcept {
+  const std::array<int, 3>& f = model.net_faces[static_cast<std::size_t>(face)];
+  const Vec3& x0 = data.nodes[static_cast<std::size_t>(f[0])].position;
+  const Vec3 n = (data.nodes[static_cast<std::size_t>(f[1])].position - x0)
+                     .cross(data.nodes[static_cast<std::size_t>(f[2])].position - x0);
+  const double len = n.norm();
+  return len > 0.0 ? Vec3(n / len) : Vec3::Zero();
+}
+
+/// Whether the segment a → b crosses net triangle `face` (Möller & Trumbore 1997, "Fast, minimum
+/// storage ray/triangle intersection", on the segment u ∈ [0, 1]); its barycentric weights there.
+bool segment_crosses_face(const Model& model, const Data& data, int face, const Vec3& a, const Vec3& b,
+                          Vec3* weights) noexcept {
+  const std::array<int, 3>& f = model.net_faces[static_cast<std::size_t>(face)];
+  const Vec3& p0 = data.nodes[static_cast<std::size_t>(f[0])].position;
+  const Vec3 e1 = data.nodes[static_cast<std::size_t>(f[1])].position - p0;
+  const Vec3 e2 = data.nodes[static_cast<std::size_t>(f[2])].position - p0;
+  const Vec3 dir = b - a;
+  const Vec3 p = dir.cross(e2);
+  const double det = e1.dot(p);
+  if (std::abs(det) < 1e-30) return false;  // parallel
+  const Vec3 s = a - p0;
+  const double w1 = s.dot(p) / det;
+  if (w1 < 0.0 || w1 > 1.0) return false;
+  const Vec3 q = s.cross(e1);
+  const double w2 = dir.dot(q) / det;
+  if (w2 < 0.0 || w1 + w2 > 1.0) return false;
+  const double u = e2.dot(q) / det;
+  if (u < 0.0 || u > 1.0) return false;
+  *weights = Vec3(1.0 - w1 - w2, w1, w2);
+  return true;
+}
+
+/// The passage's exit point (NeedlePuncture::exit), or nullptr.
+const NeedlePuncture* exit_point(const NeedleState& st) noexcept {
+  for (int i = 0; i < st.num_punctures; ++i)
+    if (st.punctures[static_cast<std::size_t>(i)].exit) return &st.punctures[static_cast<std::size_t>(i)];
+  return nullptr;
+}
+
+/// The passage's entry point, or nullptr (let go at the tail, or none).
+const NeedlePuncture* entry_point(const NeedleState& st) noexcept {
+  for (int i = 0; i < st.num_punctures; ++i)
+    if (!st.punctures[static_cast<std::size_t>(i)].exit) return &st.punctures[static_cast<std::size_t>(i)];
+  return nullptr;
+}
+
+/// The arc parameter (m) of sphere `i` (of the needle's own, tail first).
+double sphere_parameter(const NeedleModel& n, int i) noexcept {
+  return n.length() * static_cast<double>(i) / static_cast<double>(std::max(1, n.sphere_count - 1));
+}
+
+/// The first crossing of net `net`'s triangles by a → b: its face (−1: none) and weights.
+int first_crossing(const Model& model, const Data& data, int net, const Vec3& a, const Vec3& b, Vec3* weights) noexcept {
+  const NetModel& nm = model.nets[static_cast<std::size_t>(net)];
+  for (int f = nm.face_begin; f < nm.face_begin + nm.face_count; ++f)
+    if (segment_crosses_face(model, data, f, a, b, weights)) return f;
+  return -1;
+}
+
+/// The tip's sweep over the last step (NeedleState::tip_previous → now): an exit, a way back out,
+/// or a tunnel (tie_needles()).
+void sweep_tip(const Model& model, Data& data, const NeedleModel& n, NeedleState& st, const Vec3& tip,
+               const Vec3& tangent) noexcept {
+  const Vec3 a = st.tip_previous;
+  st.tip_previous = tip;
+  const bool swept = st.tip_previous_valid;
+  st.tip_previous_valid = true;
+  if (!swept || (tip - a).squaredNorm() == 0.0) return;
+  Vec3 w;
+  if (st.num_punctures > 0) {
+    if (exit_point(st) != nullptr) return;  // one pass: the tip is out
+    const NeedlePuncture& entry = st.punctures[0];
+    const int f = first_crossing(model, data, entry.net, a, tip, &w);
+    if (f < 0 || face_normal(model, data, f).dot(tip - a) <= 0.0) return;  // not out
+    if ((tip - a).dot(tangent) > 0.0) {  // out going forward: the exit
+      NeedlePuncture& x = st.punctures[static_cast<std::size_t>(st.num_punctures++)];
+      x = NeedlePuncture{};
+      x.net = entry.net;
+      x.face = f;
+      x.weights = w;
+      x.exit = true;
+      x.friction = n.friction;
+      st.event = PunctureEvent::kExit;
+      ++st.exits;
+    } else {  // back out the way it came: the passage ends
+      st.releases += st.num_punctures;
+      st.num_punctures = 0;
+      st.event = PunctureEvent::kRelease;
+    }
+    return;
+  }
+  for (int net = 0; net < model.num_nets(); ++net) {
+    const int f = first_crossing(model, data, net, a, tip, &w);
+    if (f >= 0 && face_normal(model, data, f).dot(tip - a) < 0.0) {
+      ++st.tunnels;  // in without a puncture
+      return;
+    }
+  }
+}
+
+/// Updates puncture `p`'s geometry and force at the step's start (NeedlePuncture); false when its
+/// point has passed off the arc (past the tail, or more than 4 r_w past the tip) and is let go.
+bool measure_tie(const Model& model, const Data& data, const NeedleModel& n, NeedlePuncture& p) noexcept {
+  const BodyState& b = data.bodies[static_cast<std::size_t>(n.body)];
+  const Vec3 x = face_point(model, data, p.face, p.weights, false);
+  const Vec3 v = face_point(model, data, p.face, p.weights, true);
+  const Vec3 local = b.orientation.conjugate() * (x - b.position);
+  const double s = needle_closest_parameter(n, local);
+  if (s <= 0.0 && (local - needle_tail(n)).dot(needle_tangent(n, 0.0)) < 0.0) return false;
+  if (s >= n.length() && (local - needle_tip(n)).dot(needle_tangent(n, n.length())) > 4.0 * n.wire_radius)
+    return false;
+  const Vec3 at = world_point(b, needle_point(n, s));
+  const Vec3 t = b.orientation * needle_tangent(n, s);
+  const Vec3 v_at = b.linear_velocity + b.angular_velocity.cross(at - b.position);
+  const Vec3 d = x - at, dv = v - v_at;
+  // On the material point: stiff and damped sideways, viscous along the tangent.
+  const Vec3 f = -n.tie_stiffness * (d - d.dot(t) * t) - n.tie_damping * (dv - dv.dot(t) * t) -
+                 n.friction * dv.dot(t) * t;
+  p.arc_parameter = s;
+  p.position = x;
+  p.tangent = t;
+  p.friction = n.friction;
+  p.force = -f;
+  p.deviation = d.norm();
+  return true;
+}
+
+/// Writes puncture `p`'s springs after the node contacts, the grasp springs and the ties written
+/// so far (NodeContact::held; Data::num_node_needle_ties): per node of its triangle with a weight
+/// w > 0, three along the tangent and two normals to it.
+void write_tie_springs(const Model& model, Data& data, const NeedleModel& n, const NeedlePuncture& p) noexcept {
+  const BodyState& b = data.bodies[static_cast<std::size_t>(n.body)];
+  const Vec3 at = world_point(b, needle_point(n, p.arc_parameter));
+  const Vec3 v_at = b.linear_velocity + b.angular_velocity.cross(at - b.position);
+  const Vec3 on_point = -p.force;  // the tie's force on the material point
+  const Vec3 e1 = p.tangent.unitOrthogonal();
+  const std::array<Vec3, 3> axes{p.tangent, e1, p.tangent.cross(e1)};
+  const std::array<int, 3>& face = model.net_faces[static_cast<std::size_t>(p.face)];
+  for (int k = 0; k < 3; ++k) {
+    const double w = p.weights[k];
+    if (!(w > 0.0)) continue;
+    const int node = face[static_cast<std::size_t>(k)];
+    const Vec3& v_node = data.nodes[static_cast<std::size_t>(node)].velocity;
+    for (int axis = 0; axis < 3; ++axis) {
+      const auto slot = static_cast<std::size_t>(data.num_node_contacts + data.num_node_grasp_springs +
+                                                 data.num_node_needle_ties);
+      if (slot >= data.node_contacts.size()) return;  // make_data() gave them room: not reached
+      const Vec3& e = axes[static_cast<std::size_t>(axis)];
+      NodeContact& c = data.node_contacts[slot];
+      c = NodeContact{};
+      c.node = node;
+      c.body_b = n.body;
+      c.position = at;
+      c.r_b = at - b.position;
+      c.normal = e;
+      c.stiffness = axis == 0 ? 0.0 : w * n.tie_stiffness;
+      c.damping = w * (axis == 0 ? n.friction : n.tie_damping);
+      c.force = (w * e.dot(on_point)) * e;
+      c.normal_velocity = e.dot(v_node - v_at);
+      c.active = true;
+      c.held = true;
+      ++data.num_node_needle_ties;
+    }
+  }
+}
+
+/// Drops this step's penalty node contacts between needle `n`'s spheres inside the net of its
+/// passage `st` (arc parameters in [s_entry − 2 r_w, s_exit + 2 r_w]: s_exit = L without an exit,
+/// s_entry = 0 once the entry is let go at the tail) and that net, keeping the order of the rest
+/// (the grasp springs after them included).
+void drop_inside_contacts(const Model& model, Data& data, const NeedleModel& n, const NeedleState& st) noexcept {
+  const NeedlePuncture* entry = entry_point(st);
+  const NeedlePuncture* exit = exit_point(st);
+  const double lo = entry != nullptr ? entry->arc_parameter - 2.0 * n.wire_radius : -1.0;
+  const double hi = exit != nullptr ? exit->arc_parameter + 2.0 * n.wire_radius : n.length() + 1.0;
+  const int net = st.punctures[0].net;
+  const int total = std::clamp(data.num_node_contacts + data.num_node_grasp_springs, 0,
+                               static_cast<int>(data.node_contacts.size()));
+  NodeContact* first = data.node_contacts.data();
+  NodeContact* last = std::remove_if(first, first + total, [&](const NodeContact& c) {
+    if (c.held || c.body_b != n.body || c.sphere_b < n.sphere_begin || c.sphere_b >= n.sphere_begin + n.sphere_count ||
+        model.node_net[static_cast<std::size_t>(c.node)] != net)
+      return false;
+    const double s = sphere_parameter(n, c.sphere_b - n.sphere_begin);
+    return s >= lo && s <= hi;
+  });
+  data.num_node_contacts -= static_cast<int>((first + total) - last);
+}
+
+}  // namespace
+
+void tie_needles(const Model& model, Data& data) noexcept {
+  data.stages_run |= kStageNeedles;
+  data.num_node_needle_ties = 0;
+  for (std::size_t k = 0; k < model.needles.size(); ++k) {
+    const NeedleModel& n = model.needles[k];
+    NeedleState& st = data.needles[k];
+    st.event = PunctureEvent::kNone;
+    st.max_deviation = 0.0;
+    const BodyState& b = data.bodies[static_cast<std::size_t>(n.body)];
+    sweep_tip(model, data, n, st, world_point(b, needle_tip(n)), b.orientation * needle_tangent(n, n.length()));
+    // Measure each point; let go those past the arc's ends (keeping the entry first).
+    int kept = 0;
+    for (int i = 0; i < st.num_punctures; ++i) {
+      NeedlePuncture p = st.punctures[static_cast<std::size_t>(i)];
+      if (!measure_tie(model, data, n, p)) {
+        st.event = PunctureEvent::kRelease;
+        ++st.releases;
+        continue;
+      }
+      st.max_deviation = std::max(st.max_deviation, p.deviation);
+      st.punctures[static_cast<std::size_t>(kept++)] = p;
+    }
+    st.num_punctures = kept;
+    if (kept == 0) continue;
+    drop_inside_contacts(model, data, n, st);
+  }
+  // The ties after the node contacts the drops left and the grasp springs.
+  for (std::size_t k = 0; k < model.needles.size(); ++k)
+    for (int i = 0; i < data.needles[k].num_punctures; ++i)
+      write_tie_springs(model, data, model.needles[k], data.needles[k].punctures[static_cast<std::size_t>(i)]);
+}
+
+void find_punctures(const Model& model, Data& data) noexcept {
+  data.stages_run |= kStageNeedles;
+  const int nc = std::clamp(data.num_node_contacts, 0, static_cast<int>(data.node_contacts.size()));
+  for (std::size_t k = 0; k < model.needles.size(); ++k) {
+    const NeedleModel& n = model.needles[k];
+    NeedleState& st = data.needles[k];
+    const int tip_first = n.sphere_begin + std::max(0, n.sphere_count - 3);  // within 2 r_w of the tip
+    const int end = n.sphere_begin + n.sphere_count;
+    const BodyState& b = data.bodies[static_cast<std::size_t>(n.body)];
+    const Vec3 t = b.orientation * needle_tangent(n, n.length());
+    Vec3 force = Vec3::Zero();  // on the needle
+    int deepest = -1;
+    for (int c = 0; c < nc; ++c) {
+      const NodeContact& ct = data.node_contacts[static_cast<std::size_t>(c)];
+      if (ct.held || ct.body_b != n.body || ct.sphere_b < tip_first || ct.sphere_b >= end) continue;
+      force -= ct.force;
+      if (ct.face >= 0 && (deepest < 0 || ct.depth > data.node_contacts[static_cast<std::size_t>(deepest)].depth))
+        deepest = c;
+    }
+    st.tip_force = -force.dot(t);
+    if (st.num_punctures > 0 || !(st.tip_force >= n.puncture_force) || deepest < 0) continue;
+    const NodeContact& ct = data.node_contacts[static_cast<std::size_t>(deepest)];
+    // Into the surface, not along it or out of it: the tangent within the angle of the inward normal.
+    if (!(-face_normal(model, data, ct.face).dot(t) >= std::cos(n.puncture_max_angle))) continue;
+    NeedlePuncture& p = st.punctures[0];
+    p = NeedlePuncture{};
+    p.net = model.node_net[static_cast<std::size_t>(ct.node)];
+    p.face = ct.face;
+    p.weights = ct.face_weights;
+    p.arc_parameter = n.length();
+    p.position = face_point(model, data, p.face, p.weights, false);
+    p.tangent = t;
+    p.friction = n.friction;
+    st.num_punctures = 1;
+    st.event = PunctureEvent::kPuncture;
+    st.puncture_tip_force = st.tip_force;
+    st.puncture_time = data.time;
+    ++st.punctures_made;
+  }
+}
+
+}  // namespace numen::core

@@ -1,0 +1,256 @@
+// Tests of core/needle puncture (needle_puncture.hpp; docs/suturing.md, "The needle through
+// tissue"): a 26 mm half-circle needle, held by the device as the god-object, driven along its own
+// arc (turned about its circle's axis) through a flat 28 × 28 mm patch of tissue — it punctures at
+// its threshold, slides along its arc inside, comes out at an exit point, lets go of the points
+// that pass off its tail; no puncture from behind or at too steep an angle; no tunnelling at
+// recorded speeds; no allocation; a model without a needle that punctures runs no needle stage.
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <vector>
+
+#include "alloc_counter.hpp"
+#include "numen/core/data.hpp"
+#include "numen/core/model.hpp"
+#include "numen/core/needle.hpp"
+#include "numen/core/needle_puncture.hpp"
+#include "numen/core/step.hpp"
+#include "numen/core/step_stages.hpp"
+#include "organ_indentation.hpp"
+#include "rotation.hpp"
+
+namespace {
+
+namespace core = numen::core;
+
+constexpr double kPunctureDeg = M_PI / 180.0;
+/// The puncture threshold of these tests (N): not a published value (docs/suturing.md).
+constexpr double kPunctureThreshold = 1.0;
+
+/// The needle's arc in the world's x–z plane about C, its tip at world angle β (rad, from +x
+/// towards +z about C), going round towards decreasing β as it advances (a turn about +y): the
+/// rotation of its body frame and the position of its centre of mass.
+core::Pose puncture_needle_pose(const core::NeedleModel& n, const core::Vec3& c, double beta_tip) {
+  const double g = beta_tip + M_PI / 2;
+  core::Mat3 r;
+  r.col(0) = core::Vec3(std::cos(g), 0, std::sin(g));
+  r.col(1) = core::Vec3(std::sin(g), 0, -std::cos(g));
+  r.col(2) = core::Vec3(0, 1, 0);
+  const core::Quat q(r);
+  return core::Pose{c - q * n.centre, q};
+}
+
+/// Body 0 the patch's anchored core; the patch (14 × 14 cells of 2 mm in z = 0, normals +z, the
+/// shipped organ's constants); body 1 the needle (26 mm half circle, 0.35 mm wire, 78 mg), its
+/// circle's centre C = (0, 0, R/2) (so that its arc meets the patch 60° either side of straight
+/// down, x = ±7.2 mm), its tip at β = −10° (2.7 mm above the patch), held by the device (the
+/// god-object: coupling 500 N/m and 0.05 N·m/rad, ζ 0.85). No gravity; implicit Euler at 1 ms.
+/// `below`: the pass mirrored under the patch, C = (0, 0, −R/2), the tip at β = 190° (5.6 mm
+/// below), going up into the patch's underside near β = 150°.
+core::Model puncture_rig(double threshold = kPunctureThreshold, double max_angle = 60 * kPunctureDeg, bool below = false) {
+  core::Model m;
+  m.dt = 1e-3;
+  m.gravity = core::Vec3::Zero();
+  m.solver.tolerance = 1e-6;
+  m.solver.max_iterations = 200;
+  m.material_names = {"steel", "tissue"};
+  m.material_pairs.assign(4, core::MaterialPair{2e4, 10.0, 0.0});
+  m.bodies.push_back(numen::test::organ::organ_core_body());
+  const core::TriangleMesh patch = numen::test::organ::flat_patch(14, 0.002);
+  EXPECT_EQ(core::add_net(m, patch, numen::test::organ::organ_net_settings(patch, {})), "");
+  core::NeedleSpec spec;
+  spec.name = "needle";
+  spec.puncture_force = threshold;
+  spec.puncture_max_angle = max_angle;
+  core::add_needle(m, spec);
+  core::NeedleModel& n = m.needles[0];
+  m.bodies[1].initial_pose = below ? puncture_needle_pose(n, core::Vec3(0, 0, -n.radius / 2), 190 * kPunctureDeg)
+                                  : puncture_needle_pose(n, core::Vec3(0, 0, n.radius / 2), -10 * kPunctureDeg);
+  const double mass = m.bodies[1].mass, inertia = m.bodies[1].inertia_body(2, 2);
+  m.bodies[1].coupling = core::CouplingGains{500.0, core::damping_from_ratio(0.85, mass, 500.0), 0.05,
+                                             core::damping_from_ratio(0.85, inertia, 0.05)};
+  m.feedback = core::FeedbackGains{500.0, m.bodies[1].coupling.gamma_t, 0.05, m.bodies[1].coupling.gamma_r};
+  m.initial_held_body = 1;
+  EXPECT_EQ(core::finalize_model(m), "");
+  return m;
+}
+
+/// The device's target: the needle turned about its circle's axis (world y through C) by ψ = ω t
+/// (its tip going round towards −z), ψ capped at `turn`.
+void puncture_drive(const core::Model& m, core::Data& d, double t, double omega, double turn) {
+  const core::NeedleModel& n = m.needles[0];
+  const core::Pose& p0 = m.bodies[1].initial_pose;
+  const core::Vec3 c = p0.position + p0.orientation * n.centre;  // the circle's centre
+  const double psi = std::min(turn, omega * t);
+  const double rate = omega * t < turn ? omega : 0.0;
+  const core::Quat turn_q = numen::test::rot(psi, core::Vec3::UnitY());
+  d.target = core::Pose{c + turn_q * (p0.position - c), turn_q * p0.orientation};
+  const core::Vec3 w(0, rate, 0);
+  d.target_twist = core::Twist{w.cross(d.target.position - c), w};
+}
+
+/// What a drive through the patch saw.
+struct PuncturePass {
+  int puncture_step = -1, exit_step = -1, first_release_step = -1;
+  double puncture_force = 0.0;      ///< NeedleState::puncture_tip_force (N).
+  double largest_tip_force_before = 0.0;  ///< Largest tip_force before the puncture step (N).
+  double max_deviation = 0.0;       ///< Largest deviation of a point from the arc (m).
+  double entry_s_first = 0.0, entry_s_last = 0.0;  ///< The entry's arc parameter after it, and last.
+  bool entry_s_decreasing = true;   ///< Never rose by more than 0.05 mm a step.
+  std::int64_t tunnels = 0, punctures = 0, exits = 0, releases = 0;
+  std::vector<double> feedback;     ///< |feedback force| per step (N).
+  std::uint64_t allocations = 0;
+  bool finite = true;
+  core::Vec3 tip_end = core::Vec3::Zero();
+};
+
+PuncturePass run_puncture_pass(const core::Model& m, double omega, double turn, double seconds) {
+  PuncturePass out;
+  core::Data d = core::make_data(m);
+  const int steps = static_cast<int>(std::lround(seconds / m.dt));
+  out.feedback.reserve(static_cast<std::size_t>(steps));
+  double entry_prev = 1.0;
+  {
+    numen::test::AllocationGuard guard;
+    for (int s = 0; s < steps; ++s) {
+      puncture_drive(m, d, s * m.dt, omega, turn);
+      core::step(m, d);
+      if (d.status & core::kNonFinite) {
+        out.finite = false;
+        break;
+      }
+      const core::NeedleState& st = d.needles[0];
+      out.feedback.push_back(d.feedback_wrench.force.norm());
+      if (st.event == core::PunctureEvent::kPuncture && out.puncture_step < 0) {
+        out.puncture_step = s;
+        out.puncture_force = st.puncture_tip_force;
+      }
+      if (out.puncture_step < 0) out.largest_tip_force_before = std::max(out.largest_tip_force_before, st.tip_force);
+      if (st.event == core::PunctureEvent::kExit && out.exit_step < 0) out.exit_step = s;
+      if (st.event == core::PunctureEvent::kRelease && out.first_release_step < 0) out.first_release_step = s;
+      out.max_deviation = std::max(out.max_deviation, st.max_deviation);
+      if (st.num_punctures > 0 && !st.punctures[0].exit && out.first_release_step < 0 && s > out.puncture_step + 1) {
+        const double es = st.punctures[0].arc_parameter;
+        if (out.entry_s_first == 0.0) out.entry_s_first = es;
+        if (es > entry_prev + 5e-5) out.entry_s_decreasing = false;
+        entry_prev = es;
+        out.entry_s_last = es;
+      }
+    }
+    out.allocations = guard.count();
+  }
+  const core::NeedleState& st = d.needles[0];
+  out.tunnels = st.tunnels;
+  out.punctures = st.punctures_made;
+  out.exits = st.exits;
+  out.releases = st.releases;
+  const core::BodyState& b = d.bodies[1];
+  out.tip_end = b.position + b.orientation * core::needle_tip(m.needles[0]);
+  return out;
+}
+
+}  // namespace
+
+TEST(NeedlePuncture, ThePassPuncturesAtTheThresholdSlidesAlongTheArcAndComesOut) {
+  // Turned at 1 rad/s (the tip at 8.3 mm/s) through 230°: the tip meets the patch near β = −30°,
+  // presses it until the force along its tangent reaches 1 N, punctures, goes round under the patch
+  // and comes out near β = −150°; the tail passes the entry point after 180° from it.
+  const core::Model m = puncture_rig();
+  const PuncturePass p = run_puncture_pass(m, 1.0, 230 * kPunctureDeg, 4.5);
+  std::printf("pass at 8.3 mm/s: puncture at step %d, %.4f N along the needle (threshold %.2f N); exit at "
+              "step %d; first release at step %d; largest deviation %.3f mm; entry s %.2f -> %.2f mm\n",
+              p.puncture_step, p.puncture_force, kPunctureThreshold, p.exit_step, p.first_release_step,
+              p.max_deviation * 1e3, p.entry_s_first * 1e3, p.entry_s_last * 1e3);
+  ASSERT_TRUE(p.finite);
+  EXPECT_EQ(p.allocations, 0u) << "the needle in tissue allocated";
+  ASSERT_EQ(p.punctures, 1);
+  EXPECT_GE(p.puncture_force, kPunctureThreshold);
+  EXPECT_LT(p.puncture_force, 1.1 * kPunctureThreshold) << "N: within 10 % of the threshold";
+  EXPECT_LT(p.largest_tip_force_before, kPunctureThreshold);
+  EXPECT_GT(p.largest_tip_force_before, 0.5 * kPunctureThreshold) << "N: the tip pressed before it went in";
+  EXPECT_EQ(p.tunnels, 0);
+  ASSERT_EQ(p.exits, 1) << "the tip came out";
+  EXPECT_GT(p.exit_step, p.puncture_step);
+  EXPECT_TRUE(p.entry_s_decreasing) << "the entry slid along the arc towards the tail";
+  EXPECT_LT(p.entry_s_last, p.entry_s_first - 0.01) << "m: the needle went 10 mm through the entry";
+  EXPECT_LT(p.max_deviation, 1e-3) << "m: the tissue held the needle on its arc";
+  EXPECT_GE(p.releases, 1) << "the entry let go once the tail passed it";
+  EXPECT_GT(p.first_release_step, p.exit_step);
+  // The hand's force (the device's feedback, Eq. 8): continuous but for the puncture's drop.
+  double largest_jump = 0.0;
+  for (std::size_t k = 1; k < p.feedback.size(); ++k) {
+    const int s = static_cast<int>(k);
+    if (s >= p.puncture_step - 1 && s <= p.puncture_step + 3) continue;
+    largest_jump = std::max(largest_jump, std::abs(p.feedback[k] - p.feedback[k - 1]));
+  }
+  const auto at = static_cast<std::size_t>(p.puncture_step);
+  std::printf("feedback around the puncture:");
+  for (std::size_t k = at - 3; k < at + 8; ++k) std::printf(" %.4f", p.feedback[k]);
+  std::printf(" N; largest step elsewhere %.4f N\n", largest_jump);
+  EXPECT_LT(largest_jump, 0.15 * kPunctureThreshold) << "N in a step, away from the puncture";
+  double lowest_after = p.feedback[at];
+  for (std::size_t k = at; k < at + 4; ++k) lowest_after = std::min(lowest_after, p.feedback[k]);
+  EXPECT_GT(p.feedback[at - 1] - lowest_after, 0.3 * kPunctureThreshold) << "N: the puncture's drop";
+}
+
+TEST(NeedlePuncture, NoTunnellingAtRecordedSpeeds) {
+  // Turned at 36 rad/s: the tip at 0.3 m/s (the fastest of the JIGSAWS recordings' tool tips),
+  // 0.3 mm a step, under the wire's radius: it punctures, never crosses the patch without.
+  const core::Model m = puncture_rig();
+  const PuncturePass p = run_puncture_pass(m, 0.3 / m.needles[0].radius, 160 * kPunctureDeg, 0.25);
+  std::printf("pass at 0.3 m/s: puncture at step %d, %.4f N; exit at step %d; tunnels %lld\n", p.puncture_step,
+              p.puncture_force, p.exit_step, static_cast<long long>(p.tunnels));
+  ASSERT_TRUE(p.finite);
+  EXPECT_EQ(p.tunnels, 0);
+  EXPECT_EQ(p.punctures, 1);
+  EXPECT_EQ(p.exits, 1);
+}
+
+TEST(NeedlePuncture, ATipThroughTheSurfaceWithoutAPunctureIsCountedAsATunnel) {
+  // The detector of the test above: with contacts of 1 N/m (the tissue nearly not there) the tip
+  // goes through the patch without reaching the threshold: one tunnel, no puncture.
+  core::Model m = puncture_rig();
+  for (core::MaterialPair& p : m.material_pairs) p = core::MaterialPair{1.0, 0.0, 0.0};
+  ASSERT_EQ(core::finalize_model(m), "");
+  const PuncturePass p = run_puncture_pass(m, 1.0, 200 * kPunctureDeg, 1.5);
+  ASSERT_TRUE(p.finite);
+  EXPECT_EQ(p.punctures, 0);
+  EXPECT_EQ(p.tunnels, 1);
+}
+
+TEST(NeedlePuncture, NoPunctureFromBehindOrAtTooSteepAnAngle) {
+  // From behind: the same pass mirrored below the patch (C at z = −R/2), the tip going up into the
+  // patch's underside: it never punctures (nor does the sheet push on it: its triangle contacts are
+  // one-sided, so the tip passes its underside freely; an organ's closed surface has no underside).
+  // Too steep: the tip meets the patch about 30° off its normal (the arc's crossing at β = −30° is
+  // 60° from straight down, so the tangent there is 30° off the normal): pressed past the
+  // threshold, it punctures with a 50° limit, not with a 20° one.
+  const core::Model behind = puncture_rig(kPunctureThreshold, 60 * kPunctureDeg, true);
+  const PuncturePass b = run_puncture_pass(behind, 1.0, 120 * kPunctureDeg, 2.0);
+  std::printf("from behind: largest force along the needle %.3f N, punctures %lld\n", b.largest_tip_force_before,
+              static_cast<long long>(b.punctures));
+  ASSERT_TRUE(b.finite);
+  EXPECT_EQ(b.punctures, 0) << "punctured from behind";
+  const core::Model steep = puncture_rig(kPunctureThreshold, 20 * kPunctureDeg);
+  const PuncturePass p = run_puncture_pass(steep, 1.0, 200 * kPunctureDeg, 1.5);
+  ASSERT_TRUE(p.finite);
+  EXPECT_EQ(p.punctures, 0) << "punctured 30° off the normal with a 20° limit";
+  EXPECT_GT(p.largest_tip_force_before, kPunctureThreshold) << "N: pressed past the threshold all the same";
+  const core::Model ok = puncture_rig(kPunctureThreshold, 50 * kPunctureDeg);
+  EXPECT_EQ(run_puncture_pass(ok, 1.0, 200 * kPunctureDeg, 1.5).punctures, 1) << "the same pass with a 50° limit";
+}
+
+TEST(NeedlePuncture, AModelWithoutANeedleThatPuncturesRunsNoNeedleStage) {
+  core::Model m = puncture_rig();
+  EXPECT_NE(m.stage_plan & core::kStageNeedles, 0u);
+  m.needles[0].puncture_force = std::numeric_limits<double>::quiet_NaN();
+  ASSERT_EQ(core::finalize_model(m), "");
+  EXPECT_EQ(m.stage_plan & core::kStageNeedles, 0u) << "a needle that never punctures";
+  core::Data d = core::make_data(m);
+  core::step(m, d);
+  EXPECT_EQ(d.stages_run & core::kStageNeedles, 0u);
+  EXPECT_EQ(d.num_node_needle_ties, 0);
+}
