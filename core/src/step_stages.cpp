@@ -12,12 +12,13 @@
 namespace numen::core {
 namespace {
 
-constexpr std::array<StageDescription, 13> kStages{{
+constexpr std::array<StageDescription, 14> kStages{{
     {kStageDirectTarget, "direct target", "coupling mode is not direct, no anchored body"},
     {kStageContacts, "contacts (broad + narrow phase)", "nothing to collide"},
     {kStageNodeContacts, "node contacts", "no nets"},
     {kStageGrasp, "grasp (rules, held bodies)", "no graspers"},
     {kStageBodyForces, "body forces (gravity, coupling, contacts)", nullptr},
+    {kStageThreads, "threads", "no threads"},
     {kStageNetForces, "net forces", "no nets"},
     {kStageIntegrate, "integrate", nullptr},
     {kStageJointSolve, "joint solve (KKT tree)", "no joints, or in the net solve"},
@@ -48,6 +49,7 @@ std::uint32_t compiled_stages(const Model& model) noexcept {
   if (net_solve) s |= kStageNetSolve;
   if (joints) s |= kStageJointDrift;
   if (!model.grasps.empty()) s |= kStageGrasp;
+  if (!model.threads.empty()) s |= kStageThreads;
   // The net solve takes the joints in its arrowhead preconditioner; otherwise the
   // joints have their own KKT tree solve (implicit or symplectic).
   if (joints && !net_solve) s |= kStageJointSolve;

@@ -38,12 +38,16 @@ TEST(StepStages, TableListsEveryStageOnceInStepOrder) {
   std::set<std::string> names;
   for (const core::StageDescription& s : core::step_stage_table()) {
     EXPECT_EQ(seen & s.stage, 0u) << s.name;
-    EXPECT_GT(s.stage, previous) << s.name;  // bits ascend in step order
-    previous = s.stage;
+    // Bits ascend in step order, but for the stages added since, which take the next free bit
+    // wherever they run (kStageThreads, in the body-force stage).
+    if (s.stage != core::kStageThreads) {
+      EXPECT_GT(s.stage, previous) << s.name;
+      previous = s.stage;
+    }
     seen |= s.stage;
     EXPECT_TRUE(names.insert(s.name).second) << s.name;
   }
-  EXPECT_EQ(seen, (core::kStageChecks << 1) - 1);
+  EXPECT_EQ(seen, (core::kStageThreads << 1) - 1);
 }
 
 namespace {

@@ -16,6 +16,7 @@
 #include "numen/core/grasp.hpp"
 #include "numen/core/joint.hpp"
 #include "numen/core/net_state.hpp"
+#include "numen/core/thread.hpp"
 #include "numen/core/types.hpp"
 
 namespace numen::core {
@@ -191,6 +192,8 @@ struct Data {
   /// held net. The solve takes both; the contact reports count only num_node_contacts.
   int num_node_grasp_springs = 0;
   std::vector<NetOutput> nets;     ///< Per net (Model::nets).
+  /// Per thread (Model::threads): its nodes, inputs (external forces, eyelets) and outputs.
+  std::vector<ThreadState> threads;
   /// Per grasper (Model::grasps): what it holds, its springs and this step's event (grasp.hpp).
   std::vector<GraspState> grasps;
   int solver_iterations = 0;       ///< Iterations of the implicit solve this step (bodies and nets).

@@ -17,6 +17,7 @@
 #include "numen/core/mesh_shape.hpp"
 #include "numen/core/net_model.hpp"
 #include "numen/core/net_surface_map.hpp"
+#include "numen/core/thread.hpp"
 #include "numen/core/types.hpp"
 
 namespace numen::core {
@@ -288,6 +289,9 @@ struct Model {
   std::vector<std::int32_t> node_spring_begin;
   std::vector<std::int32_t> node_springs;
 
+  /// Suture threads (thread.hpp, docs/suturing.md "The thread"); empty: no thread stage.
+  std::vector<ThreadModel> threads;
+
   /// Graspers (grasp.hpp, docs/grasping.md): an instrument's two jaws and their grasp rules.
   std::vector<GraspModel> grasps;
   std::vector<std::string> material_names;  ///< Size num_materials.
@@ -332,6 +336,7 @@ struct Model {
   int num_nets() const noexcept { return static_cast<int>(nets.size()); }
   int num_grasps() const noexcept { return static_cast<int>(grasps.size()); }
   int num_nodes() const noexcept { return static_cast<int>(node_rest.size()); }
+  int num_threads() const noexcept { return static_cast<int>(threads.size()); }
 };
 
 /// Validates `model` and computes its derived fields (inverse inertias,

@@ -28,6 +28,7 @@ enum StepStage : std::uint32_t {
   kStageMeasureNets = 1u << 10,   ///< measure_nets: strain, tie wrench.
   kStageFeedback = 1u << 11,      ///< compute_feedback: Eq. 8–9.
   kStageChecks = 1u << 12,        ///< check_finite: rollback of a non-finite result.
+  kStageThreads = 1u << 13,       ///< step_threads: the suture threads' own implicit step (thread.hpp).
 };
 
 /// A stage of step() and the scene property it depends on.
