@@ -19,6 +19,7 @@
 #include "numen/sim/device/simulated_instrument.hpp"
 #include "scene_articulation.hpp"
 #include "scene_grasp.hpp"
+#include "scene_thread.hpp"
 #include "scene_task.hpp"
 #include "scene_multirate.hpp"
 #include "scene_deformable.hpp"
@@ -346,7 +347,7 @@ Scene load_scene(const std::string& path, const SceneOverrides& overrides) {
                    "integrator", "coupling",    "solver",   "material",  "contact_default",
                    "contact",    "body",        "obstacle", "device",    "bus",
                    "trajectory", "event",       "joint",    "baumgarte", "deformable",
-                   "multirate",  "grasp",       "task"});
+                   "multirate",  "grasp",       "task",     "thread"});
   scene.name = root.string_or("name", std::filesystem::path(path).stem().string());
   scene.description = root.string_or("description", "");
   // Parts this build left out (features.hpp): refused before anything else is read.
@@ -414,6 +415,7 @@ Scene load_scene(const std::string& path, const SceneOverrides& overrides) {
   }
   parse_articulation(root, body_tables, scene);
   parse_grasps(root, scene);
+  parse_threads(root, scene);  // scene_thread.hpp
   parse_task(root, scene);
   // Nets after the bodies' starting poses are known (their nodes start there).
   if constexpr (core::kWithDeformable)
