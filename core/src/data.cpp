@@ -101,6 +101,15 @@ Data make_data(const Model& model, const DataOptions& options) {
     // The arrowhead preconditioner's contacts by node (joints only; net_scratch.hpp).
     scratch.net.node_contact_next.assign(model.joints.empty() ? 0 : data.node_contacts.size(), -1);
   }
+  data.threads.resize(model.threads.size());  // thread.hpp
+  scratch.threads.resize(model.threads.size());
+  for (std::size_t i = 0; i < model.threads.size(); ++i) {
+    const auto nodes = static_cast<std::size_t>(model.threads[i].segments + 1);
+    data.threads[i].position.resize(nodes);
+    data.threads[i].velocity.resize(nodes);
+    data.threads[i].external_force.resize(nodes);
+    scratch.threads[i].resize(model.threads[i]);
+  }
   reset_data(model, data);
   return data;
 }
@@ -122,6 +131,7 @@ void reset_data(const Model& model, Data& data) noexcept {
   }
   data.device_wrench = Wrench{};
   reset_nodes(model, data);
+  for (std::size_t i = 0; i < data.threads.size(); ++i) reset_thread(model.threads[i], data.threads[i]);
   for (JointPrescription& p : data.joint_prescribed) p = JointPrescription{};
   for (JointState& j : data.joints) j = JointState{};
   for (Vec6& v : data.scratch->solver.delta) v.setZero();  // Δu_prev of the joint rows (joint_system.hpp)

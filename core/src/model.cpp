@@ -325,6 +325,11 @@ std::string finalize_model(Model& model) {
   }
   build_collision_structures(model);
   if (std::string e = finalize_grasps(model); !e.empty()) return e;
+  for (std::size_t i = 0; i < model.threads.size(); ++i) {  // thread.hpp
+    ThreadModel& t = model.threads[i];
+    if (std::string e = finalize_thread(t, model.num_bodies(), model.num_materials()); !e.empty())
+      return "thread " + std::to_string(i) + (t.name.empty() ? "" : " (" + t.name + ")") + ": " + e;
+  }
   model.stage_plan = compiled_stages(model);  // reads the articulation's body trees: last
   return {};
 }

@@ -19,6 +19,7 @@
 #include "numen/core/net_forces.hpp"
 #include "numen/core/rigid_body.hpp"
 #include "numen/core/step_stages.hpp"
+#include "numen/core/thread.hpp"
 
 #include "detail/data_scratch.hpp"
 #include "detail/joint_system.hpp"
@@ -74,6 +75,7 @@ void compute_forces(const Model& model, Data& data) noexcept {
   compute_contact_forces(model, data);
   apply_grasp_forces(model, data);
   data.stages_run |= kStageBodyForces;
+  if (model.stage_plan & kStageThreads) step_threads(model, data);  // sets its bit; body reactions
   if constexpr (kWithDeformable) {
     if (model.stage_plan & kStageNetForces) compute_net_forces(model, data);  // sets its bit
   }

@@ -12,13 +12,14 @@
 namespace numen::core {
 namespace {
 
-constexpr std::array<StageDescription, 14> kStages{{
+constexpr std::array<StageDescription, 15> kStages{{
     {kStageDirectTarget, "direct target", "coupling mode is not direct, no anchored body"},
     {kStageContacts, "contacts (broad + narrow phase)", "nothing to collide"},
     {kStageNodeContacts, "node contacts", "no nets"},
     {kStageGrasp, "grasp (rules, held bodies)", "no graspers"},
     {kStageNeedles, "needles (punctures, ties)", "no nets, or no needle with a puncture force"},
     {kStageBodyForces, "body forces (gravity, coupling, contacts)", nullptr},
+    {kStageThreads, "threads", "no threads"},
     {kStageNetForces, "net forces", "no nets"},
     {kStageIntegrate, "integrate", nullptr},
     {kStageJointSolve, "joint solve (KKT tree)", "no joints, or in the net solve"},
@@ -53,6 +54,7 @@ std::uint32_t compiled_stages(const Model& model) noexcept {
   if (nets && std::any_of(model.needles.begin(), model.needles.end(),
                           [](const NeedleModel& n) { return n.puncture_force > 0.0; }))
     s |= kStageNeedles;
+  if (!model.threads.empty()) s |= kStageThreads;
   // The net solve takes the joints in its arrowhead preconditioner; otherwise the
   // joints have their own KKT tree solve (implicit or symplectic).
   if (joints && !net_solve) s |= kStageJointSolve;

@@ -7,6 +7,7 @@
 #include "detail/collision_scratch.hpp"
 #include "detail/net_scratch.hpp"
 #include "detail/solver_scratch.hpp"
+#include "detail/thread_scratch.hpp"
 
 namespace numen::core {
 
@@ -20,6 +21,7 @@ struct DataScratch {
   SolverScratch solver;              ///< Integrator: the bodies' implicit system and its solves.
   ArticulationScratch articulation;  ///< Joints' tree solve; empty without joints.
   NetScratch net;                    ///< Nets' forces, collision and coupled solve; empty without nets.
+  std::vector<ThreadScratch> threads;  ///< Per thread (thread.hpp); empty without threads.
 };
 
 }  // namespace numen::core

@@ -109,6 +109,7 @@ std::string make_god_object_model(const Model& scene, int body, double device_dt
   m.node_sweep_order.clear();
   m.node_spring_begin.clear();
   m.node_springs.clear();
+  m.threads.clear();  // the threads are the scene loop's (thread.hpp): their ties name its bodies
   m.initial_held_body = local[static_cast<std::size_t>(body)];
   std::string error = finalize_model(m);
   if (!error.empty()) return "multirate: god-object model: " + error;

@@ -20,6 +20,7 @@
 #include "scene_articulation.hpp"
 #include "scene_grasp.hpp"
 #include "scene_needle.hpp"
+#include "scene_thread.hpp"
 #include "scene_task.hpp"
 #include "scene_multirate.hpp"
 #include "scene_deformable.hpp"
@@ -347,7 +348,7 @@ Scene load_scene(const std::string& path, const SceneOverrides& overrides) {
                    "integrator", "coupling",    "solver",   "material",  "contact_default",
                    "contact",    "body",        "obstacle", "device",    "bus",
                    "trajectory", "event",       "joint",    "baumgarte", "deformable",
-                   "multirate",  "grasp",       "task",     "needle"});
+                   "multirate",  "grasp",       "task",     "needle",    "thread"});
   scene.name = root.string_or("name", std::filesystem::path(path).stem().string());
   scene.description = root.string_or("description", "");
   // Parts this build left out (features.hpp): refused before anything else is read.
@@ -420,6 +421,7 @@ Scene load_scene(const std::string& path, const SceneOverrides& overrides) {
   if constexpr (core::kWithDeformable)
     parse_deformables(root, dir, scene.model, scene.net_triangles, scene.net_loads, scene.warnings);
   parse_needles(root, scene);  // bodies of their own, after every other body and the nets
+  parse_threads(root, scene);  // scene_thread.hpp; after the needles, whose tails they may tie to
 
   // Bus between controller and instrument.
   double latency = 100e-6;

@@ -17,6 +17,7 @@
 #include "numen/core/joint.hpp"
 #include "numen/core/needle_puncture.hpp"
 #include "numen/core/net_state.hpp"
+#include "numen/core/thread.hpp"
 #include "numen/core/types.hpp"
 
 namespace numen::core {
@@ -192,6 +193,8 @@ struct Data {
   /// held net. The solve takes both; the contact reports count only num_node_contacts.
   int num_node_grasp_springs = 0;
   std::vector<NetOutput> nets;     ///< Per net (Model::nets).
+  /// Per thread (Model::threads): its nodes, inputs (external forces, eyelets) and outputs.
+  std::vector<ThreadState> threads;
   /// Per grasper (Model::grasps): what it holds, its springs and this step's event (grasp.hpp).
   std::vector<GraspState> grasps;
   /// Per needle (Model::needles): its passage through tissue, its puncture points and events

@@ -18,6 +18,7 @@
 #include "numen/core/needle.hpp"
 #include "numen/core/net_model.hpp"
 #include "numen/core/net_surface_map.hpp"
+#include "numen/core/thread.hpp"
 #include "numen/core/types.hpp"
 
 namespace numen::core {
@@ -289,6 +290,9 @@ struct Model {
   std::vector<std::int32_t> node_spring_begin;
   std::vector<std::int32_t> node_springs;
 
+  /// Suture threads (thread.hpp, docs/suturing.md "The thread"); empty: no thread stage.
+  std::vector<ThreadModel> threads;
+
   /// Graspers (grasp.hpp, docs/grasping.md): an instrument's two jaws and their grasp rules.
   std::vector<GraspModel> grasps;
   /// Curved suture needles (needle.hpp, docs/suturing.md "The needle"), appended by add_needle():
@@ -328,6 +332,7 @@ struct Model {
   int num_grasps() const noexcept { return static_cast<int>(grasps.size()); }
   int num_needles() const noexcept { return static_cast<int>(needles.size()); }
   int num_nodes() const noexcept { return static_cast<int>(node_rest.size()); }
+  int num_threads() const noexcept { return static_cast<int>(threads.size()); }
 };
 
 /// Validates `model` and computes its derived fields (inverse inertias,

@@ -23,14 +23,15 @@ enum StepStage : std::uint32_t {
   /// (needle_puncture.hpp). Only a model with nets and a needle that punctures runs it.
   kStageNeedles = 1u << 4,
   kStageBodyForces = 1u << 5,     ///< gravity, applied wrenches, coupling, contact and grasp forces.
-  kStageNetForces = 1u << 6,      ///< compute_net_forces: springs, tie, node contacts.
-  kStageIntegrate = 1u << 7,      ///< integrate: the bodies' (and nodes') time step.
-  kStageJointSolve = 1u << 8,     ///< integrate's KKT tree solve of the joints (Eq. 4–5).
-  kStageNetSolve = 1u << 9,       ///< integrate's one system of bodies and nodes (net_solve).
-  kStageJointDrift = 1u << 10,    ///< measure_joint_drift.
-  kStageMeasureNets = 1u << 11,   ///< measure_nets: strain, tie wrench.
-  kStageFeedback = 1u << 12,      ///< compute_feedback: Eq. 8–9.
-  kStageChecks = 1u << 13,        ///< check_finite: rollback of a non-finite result.
+  kStageThreads = 1u << 6,        ///< step_threads: the suture threads' own implicit step (thread.hpp).
+  kStageNetForces = 1u << 7,      ///< compute_net_forces: springs, tie, node contacts.
+  kStageIntegrate = 1u << 8,      ///< integrate: the bodies' (and nodes') time step.
+  kStageJointSolve = 1u << 9,     ///< integrate's KKT tree solve of the joints (Eq. 4–5).
+  kStageNetSolve = 1u << 10,      ///< integrate's one system of bodies and nodes (net_solve).
+  kStageJointDrift = 1u << 11,    ///< measure_joint_drift.
+  kStageMeasureNets = 1u << 12,   ///< measure_nets: strain, tie wrench.
+  kStageFeedback = 1u << 13,      ///< compute_feedback: Eq. 8–9.
+  kStageChecks = 1u << 14,        ///< check_finite: rollback of a non-finite result.
 };
 
 /// A stage of step() and the scene property it depends on.

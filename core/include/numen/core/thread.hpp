@@ -1,0 +1,147 @@
+#pragma once
+/// @file thread.hpp
+/// A suture thread (issue 69, docs/suturing.md "The thread"): an elastic rod as a chain of
+/// `segments` straight segments between `segments + 1` nodes (point masses), stepped by the
+/// linearly implicit Euler the rest of numen uses (Baraff & Witkin 1998) with one block-banded
+/// solve per step (3×3 blocks, block bandwidth 2: O(n), detail/thread_band.hpp).
+///
+/// Energy of the rod (all terms in the world frame, SI units):
+///   - stretch: each segment a spring of stiffness E A / l0 (A = π r², l0 = length / segments),
+///     its full Jacobian (axial E A / l0 and the geometric term (1 − l0/l) E A / l0 across it,
+///     dropped when the segment is compressed so the system stays positive definite);
+///   - bend: E I / (2 l0³) Σ |x_{i−1} − 2 x_i + x_{i+1}|² (I = π r⁴ / 4), the discrete
+///     curvature κ_i ≈ |Δ² x_i| / l0² of a straight rest shape: E I κ² l0 / 2 per node, a
+///     constant Hessian, invariant under rigid motions (the quadratic bending model of
+///     Bergou et al. 2006, "A quadratic bending model for inextensible surfaces", on a curve);
+///   - gravity, and a viscous drag `damping` (N·s/m per metre of thread) against the world.
+/// No twist: a round thread without a knot's twist coupling does not need it (docs/suturing.md).
+///
+/// Couplings (step_threads(), in the step's body-force stage): an end tied to a point of a
+/// rigid body (ThreadTie; the body's translational effective mass at the point is in the
+/// thread's solve, the tie force goes back to the body in the same step), penalty contacts of
+/// the segments with the bodies' spheres (reaction on the body), of the nodes with the static
+/// obstacles (plane, box, sphere, capsule), of non-adjacent segments with each other
+/// (capsule–capsule with the thread radius), and eyelets: points the thread slides through
+/// with friction along it (ThreadEyelet, written by the caller before each step).
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "numen/core/types.hpp"
+
+namespace numen::core {
+
+struct Model;
+struct Data;
+
+/// Most eyelets (puncture points) one thread slides through at once.
+inline constexpr int kMaxThreadEyelets = 8;
+
+/// One end of a thread tied to a point of a rigid body (e.g. a needle's tail, where the thread
+/// is swaged into it). Body frame: origin at the body's centre of mass (BodyModel).
+struct ThreadTie {
+  /// Index into Model::bodies, or −1: the end is tied to the fixed world point `point`.
+  /// −2: the end is free (no tie).
+  int body = -2;
+  Vec3 point = Vec3::Zero();  ///< The point, in the body frame (world frame for body −1) (m).
+  /// Clamped: the second node is tied too, at point + l0 · direction (the thread leaves the
+  /// body along `direction`, body frame, normalised by finalize): a swaged needle's tail. Else
+  /// the end is a pin joint.
+  bool clamped = false;
+  Vec3 direction = Vec3::UnitX();
+};
+
+/// The settings of one thread (Model::threads). Default: a 3-0 silk suture (USP 3-0
+/// non-absorbable diameter 0.200–0.249 mm, USP <861>; initial modulus 8.70 GPa, Naleway et al.
+/// 2015, "Mechanical properties of suture materials in general and cutaneous surgery", J.
+/// Biomed. Mater. Res. B 103(4)), docs/suturing.md.
+struct ThreadModel {
+  std::string name;
+  double length = 0.15;            ///< Rest length (m), > 0.
+  int segments = 100;              ///< Segments, ≥ 1 (nodes: segments + 1).
+  double radius = 1.125e-4;        ///< Cross-section radius (m), > 0: 3-0, 0.225 mm diameter.
+  double young_modulus = 8.70e9;   ///< E (Pa), > 0.
+  double density = 1340.0;         ///< kg/m³, > 0 (silk fibroin, 1.3–1.4 g/cm³).
+  double damping = 1e-3;           ///< Viscous drag per length (N·s/m²), ≥ 0.
+  /// Strain at which a segment breaks (> 0): a pull that stretches a segment past it cuts the
+  /// thread there (ThreadOutput::broke) instead of stretching on. Silk 3-0: ~0.2 (Naleway 2015).
+  double break_strain = 0.2;
+  int material = 0;                ///< Contact material (Model::material_names index).
+  Vec3 start = Vec3::Zero();       ///< Initial shape: node 0 here (world, m) ...
+  Vec3 direction = Vec3::UnitX();  ///< ... the others along this direction (world; normalised).
+  ThreadTie tie_start;             ///< Node 0's tie.
+  ThreadTie tie_end;               ///< The last node's tie.
+  bool self_contact = true;        ///< Segment–segment contacts of the thread with itself.
+  // ---- derived by finalize_model() ----
+  double rest_segment = 0.0;       ///< l0 = length / segments (m).
+  double node_mass = 0.0;          ///< ρ A l0 (kg); the two end nodes carry half of it.
+  double stretch_stiffness = 0.0;  ///< E A / l0 (N/m).
+  double bend_stiffness = 0.0;     ///< E I / l0³ (N/m).
+};
+
+/// A point the thread slides through (a puncture in tissue), given by the caller before each
+/// step: it holds the thread's nearest point on the eyelet across the thread (a spring of
+/// `stiffness` perpendicular to the local tangent) and resists sliding along it by Coulomb
+/// friction μ |F_n| (regularised below `slip_speed`).
+struct ThreadEyelet {
+  bool active = false;
+  Vec3 position = Vec3::Zero();  ///< World (m).
+  Vec3 velocity = Vec3::Zero();  ///< World (m/s).
+  double friction = 0.0;         ///< μ (dimensionless), ≥ 0.
+  double stiffness = 1e3;        ///< Across the thread (N/m), > 0.
+  double slip_speed = 1e-3;      ///< Below this sliding speed (m/s) friction is viscous.
+};
+
+/// What an eyelet did in the last step.
+struct ThreadEyeletOutput {
+  int segment = -1;           ///< Segment through the eyelet (−1: not found yet).
+  double normal_force = 0.0;  ///< |F_n| across the thread (N).
+  double friction_force = 0.0;  ///< Along the thread, signed along the segment's direction (N).
+};
+
+/// Outputs of one thread's last step.
+struct ThreadOutput {
+  double max_tension = 0.0;  ///< Largest segment tension E A (l − l0)/l0, ≥ 0 (N).
+  double max_stretch = 0.0;  ///< Largest segment strain (l − l0)/l0.
+  int body_contacts = 0;     ///< Segment–body-sphere contacts this step.
+  int obstacle_contacts = 0; ///< Node–obstacle contacts this step.
+  int self_contacts = 0;     ///< Segment–segment contacts this step.
+  int contacts_dropped = 0;  ///< Contacts over the thread's capacity this step (not applied).
+  Wrench tie_wrench_start;   ///< Tie force on node 0's body (N, N·m about its COM; world).
+  Wrench tie_wrench_end;     ///< Same for the last node's tie.
+  bool broke = false;        ///< The thread broke in this step (event).
+  int iterations = 0;        ///< Newton iterations of the step (banded solves), 1 … 6.
+  std::array<ThreadEyeletOutput, kMaxThreadEyelets> eyelets{};
+};
+
+/// The state, inputs and outputs of one thread (Data::threads), sized by make_data().
+struct ThreadState {
+  std::vector<Vec3> position;  ///< Node positions (world, m), segments + 1.
+  std::vector<Vec3> velocity;  ///< Node velocities (world, m/s).
+  /// Input: an external force on each node (world, N), e.g. a grasper's pull; kept until changed.
+  std::vector<Vec3> external_force;
+  /// Input: the eyelets the thread slides through this step.
+  std::array<ThreadEyelet, kMaxThreadEyelets> eyelets{};
+  /// The segment the thread broke at (no stretch or bend across it from then on), or −1.
+  int broken_segment = -1;
+  ThreadOutput output;
+};
+
+/// Checks `thread` (its name or index in `label`) and fills its derived fields. Returns "" or
+/// a message naming the bad setting: length ≤ 0, segments < 1, radius ≤ 0, young_modulus ≤ 0,
+/// density ≤ 0, damping < 0, break_strain ≤ 0, a zero direction, a tie to a body that does not
+/// exist, a non-finite value. `num_bodies`, `num_materials`: the model's. Load time.
+std::string finalize_thread(ThreadModel& thread, int num_bodies, int num_materials);
+
+/// Puts `state` at the initial straight shape of `thread` at rest (no allocation once sized).
+void reset_thread(const ThreadModel& thread, ThreadState& state) noexcept;
+
+/// Steps every thread of `model` by Model::dt from the bodies' states at the step's start and
+/// adds the ties' and contacts' reactions to Data::body_wrench (the body-force stage; sets
+/// kStageThreads in Data::stages_run). A non-finite result restores the thread's last positions
+/// at rest and sets kNonFinite. No allocation, no exception.
+void step_threads(const Model& model, Data& data) noexcept;
+
+}  // namespace numen::core

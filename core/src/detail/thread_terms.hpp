@@ -1,0 +1,55 @@
+#pragma once
+/// @file thread_terms.hpp
+/// The point terms of a thread's step (thread.hpp, step_threads()): its contacts with the
+/// bodies' spheres, the static obstacles and itself, and its eyelets, each written as a
+/// ThreadPointTerm into its scratch for the implicit solve (thread_step.cpp). Node i of the
+/// thread is block i + 1 of its band. No allocation: a term past the scratch's capacity is
+/// dropped and counted in ThreadOutput::contacts_dropped.
+
+#include <vector>
+
+#include "numen/core/types.hpp"
+
+namespace numen::core {
+
+struct ThreadBand;
+
+struct Model;
+struct Data;
+struct ThreadModel;
+struct ThreadState;
+struct ThreadScratch;
+
+/// Segment–sphere contacts with every body sphere (a body's material pair with the thread's:
+/// stiffness under the body's contact time-constant floor, damping, viscous friction; the
+/// reaction goes to the body). The segments next to a tie (3) do not touch the tied body.
+void gather_thread_body_contacts(const Model& model, const Data& data, const ThreadModel& thread,
+                                 ThreadState& state, ThreadScratch& scratch) noexcept;
+
+/// Node contacts (a sphere of the thread's radius) with the plane, box, sphere and capsule
+/// obstacles (not sphere sets or meshes).
+void gather_thread_obstacle_contacts(const Model& model, const ThreadModel& thread,
+                                     ThreadState& state, ThreadScratch& scratch) noexcept;
+
+/// Self contact, candidates: the pairs of non-adjacent segments whose boxes, swept from the
+/// step's start (`state`) to the iterate `x` and grown by the radius, overlap (a sweep along the
+/// thread's longest axis), with their nearest points and normal at the step's start, into
+/// ThreadScratch::self_pairs. Pairs past its capacity are dropped and counted.
+void find_thread_self_pairs(const ThreadModel& thread, ThreadState& state,
+                            const std::vector<Vec3>& x, ThreadScratch& scratch) noexcept;
+
+/// Self contact, forces: each candidate pair closer than two radii along its start normal n0 at
+/// the iterate `x` (a pair that crossed within the step is held back the way it came) pushes its
+/// two segments apart by k (2 r − (p − q)·n0) n0, into `band` in Newton's form (its force h f at
+/// the iterate; its stiffness in each side's own blocks, doubled, the other side as given).
+/// Returns the pairs in contact.
+int add_thread_self_contacts(const Model& model, const ThreadModel& thread,
+                             const std::vector<Vec3>& x, const ThreadScratch& scratch, double h,
+                             ThreadBand& band) noexcept;
+
+/// The active eyelets of `state`: a spring across the thread at its nearest point and Coulomb
+/// friction along it (ThreadEyelet).
+void gather_thread_eyelets(const ThreadModel& thread, ThreadState& state,
+                           ThreadScratch& scratch) noexcept;
+
+}  // namespace numen::core

@@ -1,0 +1,312 @@
+/// @file thread_step.cpp
+/// One implicit step of every thread (thread.hpp, step_threads()): backward Euler on the
+/// node velocities, g(v) = M (v − v0) − h f(x0 + h v, v) = 0, solved by Newton's method (its
+/// first iteration is the linearly implicit Euler of Baraff & Witkin 1998, Eq. 6). Each
+/// iteration is one block-banded system (detail/thread_band.hpp) of the rod's stretch and bend
+/// terms, its ties to bodies (the body's translational effective mass at the tie in the
+/// system), and its contacts and eyelets (thread_contacts.cpp: linear in v over the step).
+/// The reactions go to the bodies.
+
+#include <algorithm>
+#include <cmath>
+
+#include "detail/data_scratch.hpp"
+#include "detail/thread_scratch.hpp"
+#include "detail/thread_terms.hpp"
+#include "numen/core/data.hpp"
+#include "numen/core/model.hpp"
+#include "numen/core/rigid_body.hpp"
+#include "numen/core/step_stages.hpp"
+#include "numen/core/thread.hpp"
+
+namespace numen::core {
+namespace {
+
+/// Newton iterations a step, at most: a straight segment turning by θ in a step stretches by
+/// θ²/2 under the first linearisation alone (its rotation is not linear); each further
+/// iteration squares the error.
+constexpr int kThreadNewtonIterations = 6;
+/// The iteration stops once no node moves by more than this fraction of l0 in an update.
+constexpr double kThreadNewtonTolerance = 1e-6;
+
+/// A tie's point: block `block` of the band, where it is and how it moves at the step's start,
+/// and its translational effective mass when a dynamic body's (else it moves as given).
+struct TiePoint {
+  int block = 0;
+  bool dynamic = false;
+  Mat3 mass = Mat3::Identity();   ///< (1/m − [r]× I_w⁻¹ [r]×)⁻¹ (kg), dynamic only.
+  Vec3 point = Vec3::Zero();      ///< World (m).
+  Vec3 velocity = Vec3::Zero();   ///< World (m/s).
+  Vec3 lever = Vec3::Zero();      ///< point − the body's COM (m).
+  Mat3 rotation = Mat3::Identity();  ///< The body's orientation (world for −1).
+};
+
+TiePoint tie_point(const Model& model, const Data& data, const ThreadTie& tie, int block) noexcept {
+  TiePoint p;
+  p.block = block;
+  if (tie.body == -1) p.point = tie.point;
+  if (tie.body < 0) return p;
+  const BodyModel& bm = model.bodies[static_cast<std::size_t>(tie.body)];
+  const BodyState& bs = data.bodies[static_cast<std::size_t>(tie.body)];
+  p.rotation = bs.orientation.toRotationMatrix();
+  p.lever = p.rotation * tie.point;
+  p.point = bs.position + p.lever;
+  p.velocity = bs.linear_velocity + bs.angular_velocity.cross(p.lever);
+  const bool imposed = model.coupling_mode == CouplingMode::kDirect && tie.body == data.held_body;
+  if (bm.anchored || imposed) return p;
+  Mat3 rx;
+  rx << 0, -p.lever.z(), p.lever.y(), p.lever.z(), 0, -p.lever.x(), -p.lever.y(), p.lever.x(), 0;
+  const Mat3 mobility = Mat3::Identity() / bm.mass -
+                        rx * world_inertia_inverse(bs.orientation, bm.inertia_body_inv) * rx;
+  p.mass = mobility.inverse();
+  p.dynamic = true;
+  return p;
+}
+
+/// A tie point's block: its inertia residual −M_p Δv_p (a dynamic body's), else identity.
+void add_tie_block(const TiePoint& p, const Vec3& delta, ThreadBand& band) noexcept {
+  const auto b = static_cast<std::size_t>(p.block);
+  band.diag[b] += p.mass;
+  if (p.dynamic) band.rhs[b] -= p.mass * delta;
+}
+
+/// Where the tie's point is at the iterate (m).
+Vec3 tie_position(const TiePoint& p, const Vec3& delta, double h) noexcept {
+  return p.point + h * (p.velocity + (p.dynamic ? delta : Vec3::Zero()));
+}
+
+/// The zero-length spring of stiffness k between node `node` and the tie point (offset `offset`
+/// from it, world): force k (p + offset − x) on the node, at the iterate.
+void add_tie_spring(const Vec3& x, const Vec3& p_at, const TiePoint& p, int node,
+                    const Vec3& offset, double k, double h, ThreadBand& band) noexcept {
+  const int nb = node + 1;
+  const Vec3 f = k * (p_at + offset - x);
+  const Mat3 hk = (h * h * k) * Mat3::Identity();
+  band.diag[static_cast<std::size_t>(nb)] += hk;
+  band.rhs[static_cast<std::size_t>(nb)] += h * f;
+  if (!p.dynamic) return;
+  band.diag[static_cast<std::size_t>(p.block)] += hk;
+  band.add(nb, p.block, -hk);
+  band.rhs[static_cast<std::size_t>(p.block)] -= h * f;
+}
+
+/// A point term's force at velocity v of its thread point (linear in v over the step).
+Vec3 point_term_force(const ThreadPointTerm& t, const Vec3& v, const Vec3& v0, double h) noexcept {
+  return t.force - h * t.stiffness * (v - t.target_velocity) - t.damping * (v - v0);
+}
+
+void add_point_term(const ThreadState& st, const std::vector<Vec3>& v, const ThreadPointTerm& t,
+                    double h, ThreadBand& band) noexcept {
+  const auto ia = static_cast<std::size_t>(t.a - 1), ib = static_cast<std::size_t>(t.b - 1);
+  const Vec3 vp = t.wa * v[ia] + t.wb * v[ib];
+  const Vec3 vp0 = t.wa * st.velocity[ia] + t.wb * st.velocity[ib];
+  const Vec3 f = h * point_term_force(t, vp, vp0, h);
+  const Mat3 m = h * t.damping + (h * h * t.matrix_scale) * t.stiffness;
+  band.rhs[ia + 1] += t.wa * f;
+  band.rhs[ib + 1] += t.wb * f;
+  band.add(t.a, t.a, (t.wa * t.wa) * m);
+  if (t.b != t.a) {
+    band.add(t.b, t.b, (t.wb * t.wb) * m);
+    band.add(t.b, t.a, (t.wa * t.wb) * m);
+  }
+}
+
+/// The nodes' inertia, gravity, drag and external forces, the stretch springs and the bend
+/// terms at the iterate (x, v) into the band, Newton's form: matrix M + h C + h² S(x),
+/// right-hand side h f(x, v) − M (v − v0).
+void add_rod_terms(const Model& model, const ThreadModel& th, const ThreadState& st,
+                   const std::vector<Vec3>& x, const std::vector<Vec3>& v, double h,
+                   ThreadBand& band) noexcept {
+  const int nodes = th.segments + 1;
+  for (int i = 0; i < nodes; ++i) {
+    const auto u = static_cast<std::size_t>(i);
+    const double share = (i == 0 || i == nodes - 1) ? 0.5 : 1.0;
+    const double m = share * th.node_mass;
+    const double drag = share * th.damping * th.rest_segment;
+    band.diag[u + 1] += (m + h * drag) * Mat3::Identity();
+    band.rhs[u + 1] += h * (m * model.gravity + st.external_force[u] - drag * v[u]) -
+                       m * (v[u] - st.velocity[u]);
+  }
+  const double k = th.stretch_stiffness;
+  for (int s = 0; s < th.segments; ++s) {
+    if (s == st.broken_segment) continue;
+    const auto a = static_cast<std::size_t>(s);
+    const Vec3 d = x[a + 1] - x[a];
+    const double l = d.norm();
+    if (!(l > 0.0)) continue;
+    const Vec3 u = d / l;
+    const Mat3 uu = u * u.transpose();
+    const double across = std::max(0.0, 1.0 - th.rest_segment / l);
+    const Mat3 stiff = (h * h * k) * (uu + across * (Mat3::Identity() - uu));
+    const Vec3 f = (h * k * (l - th.rest_segment)) * u;  // h × the force on node a; −it on a + 1
+    band.rhs[a + 1] += f;
+    band.rhs[a + 2] -= f;
+    band.add(s + 1, s + 1, stiff);
+    band.add(s + 2, s + 2, stiff);
+    band.add(s + 2, s + 1, -stiff);
+  }
+  const double kb = th.bend_stiffness;
+  constexpr double c[3] = {1.0, -2.0, 1.0};
+  for (int i = 1; i + 1 < nodes; ++i) {
+    if (st.broken_segment == i - 1 || st.broken_segment == i) continue;
+    const auto u = static_cast<std::size_t>(i);
+    const Vec3 dx = x[u - 1] - 2.0 * x[u] + x[u + 1];
+    for (int a = 0; a < 3; ++a) {
+      band.rhs[u + static_cast<std::size_t>(a)] -= (h * kb * c[a]) * dx;
+      for (int b = 0; b <= a; ++b)
+        band.add(i + a, i + b, (h * h * kb * c[a] * c[b]) * Mat3::Identity());
+    }
+  }
+}
+
+/// Tension, stretch and the break of the step's end state.
+void measure_thread(const ThreadModel& th, ThreadState& st) noexcept {
+  ThreadOutput& o = st.output;
+  int worst = -1;
+  for (int s = 0; s < th.segments; ++s) {
+    if (s == st.broken_segment) continue;
+    const auto a = static_cast<std::size_t>(s);
+    const double strain = (st.position[a + 1] - st.position[a]).norm() / th.rest_segment - 1.0;
+    if (strain > o.max_stretch) {
+      o.max_stretch = strain;
+      worst = s;
+    }
+  }
+  o.max_tension = th.stretch_stiffness * th.rest_segment * o.max_stretch;
+  if (st.broken_segment < 0 && o.max_stretch > th.break_strain) {
+    st.broken_segment = worst;
+    o.broke = true;
+  }
+}
+
+/// The tie's force on its body at the step's end (world), and its wrench about the COM.
+Wrench tie_reaction(const ThreadState& st, const ThreadTie& tie, const TiePoint& p,
+                    const Vec3& p_at, double k, double l0, int n0, int n1) noexcept {
+  Wrench w;
+  if (tie.body < 0) return w;
+  auto pull = [&](int node, const Vec3& offset) {
+    const Vec3 f = k * (st.position[static_cast<std::size_t>(node)] - (p_at + offset));
+    w.force += f;
+    w.torque += (p.lever + offset).cross(f);
+  };
+  pull(n0, Vec3::Zero());
+  if (tie.clamped) pull(n1, l0 * (p.rotation * tie.direction));
+  return w;
+}
+
+void step_thread(const Model& model, Data& data, const ThreadModel& th, ThreadState& st,
+                 ThreadScratch& sc) noexcept {
+  const double h = model.dt;
+  const int nodes = th.segments + 1;
+  const auto n = static_cast<std::size_t>(nodes);
+  ThreadBand& band = sc.band;
+  const std::array<ThreadEyeletOutput, kMaxThreadEyelets> eyelets = st.output.eyelets;
+  st.output = ThreadOutput{};
+  st.output.eyelets = eyelets;
+  const double k_tie = th.stretch_stiffness;
+  const TiePoint p0 = tie_point(model, data, th.tie_start, 0);
+  const TiePoint p1 = tie_point(model, data, th.tie_end, nodes + 1);
+  const Vec3 off0 = th.rest_segment * (p0.rotation * th.tie_start.direction);
+  const Vec3 off1 = th.rest_segment * (p1.rotation * th.tie_end.direction);
+  // The contacts and eyelets at the step's start (linear in v over the step).
+  sc.num_terms = 0;
+  gather_thread_body_contacts(model, data, th, st, sc);
+  gather_thread_obstacle_contacts(model, th, st, sc);
+  gather_thread_eyelets(th, st, sc);
+  std::vector<Vec3>& x = sc.trial_position;
+  std::vector<Vec3>& v = sc.trial_velocity;
+  for (std::size_t i = 0; i < n; ++i) {
+    sc.saved_position[i] = st.position[i];
+    v[i] = st.velocity[i];
+  }
+  sc.tie_delta = {Vec3::Zero(), Vec3::Zero()};
+  bool ok = true;
+  for (int iteration = 0; iteration < kThreadNewtonIterations && ok; ++iteration) {
+    for (std::size_t i = 0; i < n; ++i) x[i] = st.position[i] + h * v[i];
+    band.clear();
+    add_rod_terms(model, th, st, x, v, h, band);
+    add_tie_block(p0, sc.tie_delta[0], band);
+    add_tie_block(p1, sc.tie_delta[1], band);
+    const Vec3 at0 = tie_position(p0, sc.tie_delta[0], h), at1 = tie_position(p1, sc.tie_delta[1], h);
+    if (th.tie_start.body >= -1) {
+      add_tie_spring(x[0], at0, p0, 0, Vec3::Zero(), k_tie, h, band);
+      if (th.tie_start.clamped && nodes > 2) add_tie_spring(x[1], at0, p0, 1, off0, k_tie, h, band);
+    }
+    if (th.tie_end.body >= -1) {
+      add_tie_spring(x[n - 1], at1, p1, nodes - 1, Vec3::Zero(), k_tie, h, band);
+      if (th.tie_end.clamped && nodes > 2) add_tie_spring(x[n - 2], at1, p1, nodes - 2, off1, k_tie, h, band);
+    }
+    for (int t = 0; t < sc.num_terms; ++t)
+      add_point_term(st, v, sc.terms[static_cast<std::size_t>(t)], h, band);
+    // Self contact from the second iteration on: its candidates swept to the first iterate.
+    if (iteration == 1 && th.self_contact) find_thread_self_pairs(th, st, x, sc);
+    const int touching = iteration >= 1 && th.self_contact ? add_thread_self_contacts(model, th, x, sc, h, band) : 0;
+    st.output.self_contacts = touching;
+    ok = band.solve();
+    if (!ok) break;
+    st.output.iterations = iteration + 1;
+    double largest = 0.0;
+    for (std::size_t i = 0; i < n; ++i) {
+      v[i] += band.rhs[i + 1];
+      largest = std::max(largest, band.rhs[i + 1].squaredNorm());
+    }
+    if (p0.dynamic) sc.tie_delta[0] += band.rhs[0];
+    if (p1.dynamic) sc.tie_delta[1] += band.rhs[n + 1];
+    if (!(largest < 1e300)) ok = false;  // not finite
+    const bool self_checked = !th.self_contact || iteration >= 1;
+    if (self_checked && h * std::sqrt(largest) < kThreadNewtonTolerance * th.rest_segment) break;
+  }
+  for (std::size_t i = 0; ok && i < n; ++i) {
+    const Vec3 x1 = st.position[i] + h * v[i];
+    ok = x1.allFinite() && v[i].allFinite();
+  }
+  if (!ok) {
+    for (std::size_t i = 0; i < n; ++i) {
+      st.position[i] = sc.saved_position[i];
+      st.velocity[i].setZero();
+    }
+    data.status |= kNonFinite;
+    return;
+  }
+  // The point terms' forces at the step's end (before the state moves on).
+  for (int t = 0; t < sc.num_terms; ++t) {
+    const ThreadPointTerm& term = sc.terms[static_cast<std::size_t>(t)];
+    const auto ia = static_cast<std::size_t>(term.a - 1), ib = static_cast<std::size_t>(term.b - 1);
+    const Vec3 vp = term.wa * v[ia] + term.wb * v[ib];
+    const Vec3 vp0 = term.wa * st.velocity[ia] + term.wb * st.velocity[ib];
+    const Vec3 f = point_term_force(term, vp, vp0, h);
+    if (term.eyelet >= 0) {
+      st.output.eyelets[static_cast<std::size_t>(term.eyelet)].friction_force =
+          term.axis.dot(term.force - term.damping * (vp - vp0));
+    }
+    if (term.body < 0) continue;
+    const BodyState& bs = data.bodies[static_cast<std::size_t>(term.body)];
+    data.body_wrench[static_cast<std::size_t>(term.body)].force -= f;
+    data.body_wrench[static_cast<std::size_t>(term.body)].torque -= (term.point - bs.position).cross(f);
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    st.velocity[i] = v[i];
+    st.position[i] += h * v[i];
+  }
+  st.output.tie_wrench_start = tie_reaction(st, th.tie_start, p0, tie_position(p0, sc.tie_delta[0], h),
+                                            k_tie, th.rest_segment, 0, 1);
+  st.output.tie_wrench_end = tie_reaction(st, th.tie_end, p1, tie_position(p1, sc.tie_delta[1], h),
+                                          k_tie, th.rest_segment, nodes - 1, nodes - 2);
+  for (const auto& [tie, w] : {std::pair{&th.tie_start, &st.output.tie_wrench_start},
+                               std::pair{&th.tie_end, &st.output.tie_wrench_end}}) {
+    if (tie->body < 0 || model.bodies[static_cast<std::size_t>(tie->body)].anchored) continue;
+    data.body_wrench[static_cast<std::size_t>(tie->body)].force += w->force;
+    data.body_wrench[static_cast<std::size_t>(tie->body)].torque += w->torque;
+  }
+  measure_thread(th, st);
+}
+
+}  // namespace
+
+void step_threads(const Model& model, Data& data) noexcept {
+  data.stages_run |= kStageThreads;
+  for (std::size_t i = 0; i < model.threads.size(); ++i)
+    step_thread(model, data, model.threads[i], data.threads[i], data.scratch->threads[i]);
+}
+
+}  // namespace numen::core

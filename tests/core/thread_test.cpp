@@ -1,0 +1,403 @@
+/// @file thread_test.cpp
+/// The suture thread (core/include/numen/core/thread.hpp): settings refused by name, stretch
+/// under end tension, a clamped cantilever against Euler–Bernoulli, the catenary, stability at
+/// three time steps, the tie to a light body, instrument contact without pass-through, an
+/// eyelet's friction, self contact, the break, the stage plan, zero allocation.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "alloc_counter.hpp"
+#include "numen/core/data.hpp"
+#include "numen/core/model.hpp"
+#include "numen/core/step.hpp"
+#include "numen/core/step_stages.hpp"
+#include "numen/core/thread.hpp"
+#include "thread_scenes.hpp"
+
+namespace numen {
+namespace {
+
+using core::Vec3;
+
+double axial_stiffness(const core::ThreadModel& t) {  // E A (N)
+  return t.young_modulus * std::numbers::pi * t.radius * t.radius;
+}
+
+TEST(Thread, RefusesBadSettingsByName) {
+  struct Case {
+    const char* key;
+    std::function<void(core::ThreadModel&)> edit;
+  };
+  const Case cases[] = {
+      {"length", [](core::ThreadModel& t) { t.length = 0.0; }},
+      {"length", [](core::ThreadModel& t) { t.length = -0.1; }},
+      {"segments", [](core::ThreadModel& t) { t.segments = 0; }},
+      {"radius", [](core::ThreadModel& t) { t.radius = 0.0; }},
+      {"young_modulus", [](core::ThreadModel& t) { t.young_modulus = -1.0; }},
+      {"density", [](core::ThreadModel& t) { t.density = 0.0; }},
+      {"damping", [](core::ThreadModel& t) { t.damping = -1e-3; }},
+      {"break_strain", [](core::ThreadModel& t) { t.break_strain = 0.0; }},
+      {"tie_end.body", [](core::ThreadModel& t) { t.tie_end.body = 3; }},
+  };
+  for (const Case& c : cases) {
+    core::Model m;
+    m.material_pairs = {core::MaterialPair{}};
+    m.initial_held_body = -1;
+    core::ThreadModel t;
+    t.name = "suture";
+    c.edit(t);
+    m.threads.push_back(t);
+    const std::string err = core::finalize_model(m);
+    EXPECT_NE(err.find(std::string("thread 0 (suture): ") + c.key), std::string::npos) << err;
+    EXPECT_EQ(m.stage_plan, 0u);
+  }
+}
+
+TEST(Thread, StagePlanOnlyWithThreads) {
+  core::Model none;
+  none.material_pairs = {core::MaterialPair{}};
+  none.initial_held_body = -1;
+  ASSERT_EQ(core::finalize_model(none), "");
+  EXPECT_EQ(none.stage_plan & core::kStageThreads, 0u);
+  const core::Model with = test::thread_model(core::ThreadModel{});
+  EXPECT_NE(with.stage_plan & core::kStageThreads, 0u);
+  core::Data d = core::make_data(with);
+  core::step(with, d);
+  EXPECT_EQ(d.stages_run, with.stage_plan);
+}
+
+// A 200-segment thread tied at one end, pulled at the other by 2 N: stretch F / (E A).
+TEST(Thread, StretchUnderTwoNewtonsIsHookes) {
+  core::ThreadModel t;
+  t.segments = 200;
+  const core::Model m = test::thread_model(t);
+  core::Data d = core::make_data(m);
+  d.threads[0].external_force.back() = Vec3(2.0, 0.0, 0.0);
+  for (int i = 0; i < 200; ++i) core::step(m, d);
+  const double expected = 2.0 / axial_stiffness(t);
+  const double length = (d.threads[0].position.back() - d.threads[0].position.front()).norm();
+  EXPECT_NEAR(length / t.length - 1.0, expected, 0.01 * expected);
+  EXPECT_NEAR(d.threads[0].output.max_tension, 2.0, 0.02);
+  EXPECT_LE(d.threads[0].output.max_stretch, 0.01);  // the figure
+}
+
+// A clamped 20 mm cantilever under its own weight: tip deflection q L⁴ / (8 E I).
+TEST(Thread, CantileverDeflectionIsEulerBernoullis) {
+  core::ThreadModel t;
+  t.length = 0.02;
+  t.segments = 40;
+  const core::Model m = test::thread_model(t, [](core::Model& mm) {
+    mm.gravity = Vec3(0.0, 0.0, -9.81);
+    mm.threads[0].tie_start.clamped = true;
+    mm.threads[0].tie_start.direction = Vec3::UnitX();
+  });
+  core::Data d = core::make_data(m);
+  for (int i = 0; i < 3000; ++i) core::step(m, d);
+  const double r = t.radius;
+  const double q = t.density * std::numbers::pi * r * r * 9.81;
+  const double ei = t.young_modulus * std::numbers::pi * std::pow(r, 4) / 4.0;
+  const double expected = q * std::pow(t.length, 4) / (8.0 * ei);
+  const double tip = -d.threads[0].position.back().z();
+  EXPECT_NEAR(tip, expected, 0.05 * expected) << "tip " << tip << " m, expected " << expected;
+}
+
+// Both ends pinned 0.1 m apart, a 0.15 m thread made heavy (bending negligible): the catenary.
+TEST(Thread, SagIsTheCatenarys) {
+  core::ThreadModel t;
+  t.density *= 1e3;  // the bending length (E I / q)^(1/3) from 0.13 m to 13 mm
+  t.damping *= 1e3;  // the same terminal speed
+  const double span = 0.1;
+  const core::Model m = test::thread_model(t, [&](core::Model& mm) {
+    mm.gravity = Vec3(0.0, 0.0, -9.81);
+    mm.threads[0].tie_end.body = -1;
+    mm.threads[0].tie_end.point = Vec3(span, 0.0, 0.0);
+  });
+  core::Data d = core::make_data(m);
+  // Start as a V of the thread's length between the two points.
+  const double drop = std::sqrt(std::pow(0.5 * t.length, 2) - std::pow(0.5 * span, 2));
+  for (std::size_t i = 0; i < d.threads[0].position.size(); ++i) {
+    const double f = static_cast<double>(i) / t.segments;
+    d.threads[0].position[i] = Vec3(f * span, 0.0, -drop * (1.0 - std::abs(2.0 * f - 1.0)));
+  }
+  for (int i = 0; i < 3000; ++i) core::step(m, d);
+  // L = 2 a sinh(D / 2a), sag = a (cosh(D / 2a) − 1), by bisection on a.
+  double lo = 1e-4, hi = 10.0;
+  for (int i = 0; i < 200; ++i) {
+    const double a = 0.5 * (lo + hi);
+    (2.0 * a * std::sinh(span / (2.0 * a)) > t.length ? lo : hi) = a;
+  }
+  const double expected = lo * (std::cosh(span / (2.0 * lo)) - 1.0);
+  double sag = 0.0;
+  for (const Vec3& x : d.threads[0].position) sag = std::max(sag, -x.z());
+  EXPECT_NEAR(sag, expected, 0.02 * expected) << "sag " << sag << " m, catenary " << expected;
+}
+
+// A thread pinned at one end falls from horizontal and swings for 0.5 s: bounded at each step.
+TEST(Thread, StableAtTenthOneAndTenMilliseconds) {
+  for (const double dt : {1e-4, 1e-3, 1e-2}) {
+    core::ThreadModel t;
+    t.segments = 200;
+    const core::Model m = test::thread_model(t, [&](core::Model& mm) {
+      mm.dt = dt;
+      mm.gravity = Vec3(0.0, 0.0, -9.81);
+    });
+    core::Data d = core::make_data(m);
+    double worst = 0.0;
+    for (int i = 0; i < static_cast<int>(0.5 / dt); ++i) {
+      core::step(m, d);
+      worst = std::max(worst, d.threads[0].output.max_stretch);
+      ASSERT_EQ(d.status & core::kNonFinite, 0u) << "dt " << dt << " step " << i;
+    }
+    EXPECT_LT(worst, 0.01) << "dt " << dt;
+    EXPECT_FALSE(d.threads[0].broken_segment >= 0);
+    EXPECT_LT(d.threads[0].position.back().z(), -0.05) << "dt " << dt << ": it fell";
+  }
+}
+
+// A 0.5 g needle (a free body) tied by a clamped end to a thread pulled taut to 1 % stretch:
+// the tie's implicit coupling keeps it bounded (its elastic energy bounds its speed).
+TEST(Thread, LightBodyTiedToTautThreadStaysBounded) {
+  core::ThreadModel t;
+  t.segments = 200;
+  core::Model m = test::thread_model(t, [&](core::Model& mm) {
+    const int needle = test::add_thread_test_body(mm, 5e-4, 8.5e-8, Vec3::Zero(), 0.0);
+    core::ThreadModel& th = mm.threads[0];
+    th.tie_start.body = needle;
+    th.tie_start.point = Vec3::Zero();
+    th.tie_start.clamped = true;
+    th.tie_end.body = -1;
+    th.tie_end.point = Vec3(1.01 * th.length, 0.0, 0.0);
+  });
+  core::Data d = core::make_data(m);
+  const double k = axial_stiffness(t) / t.length;
+  const double energy = 0.5 * k * std::pow(0.01 * t.length, 2);
+  const double v_bound = std::sqrt(2.0 * energy / 5e-4);
+  double v_max = 0.0;
+  for (int i = 0; i < 1000; ++i) {
+    core::step(m, d);
+    ASSERT_EQ(d.status & core::kNonFinite, 0u) << "step " << i;
+    v_max = std::max(v_max, d.bodies[0].linear_velocity.norm());
+  }
+  EXPECT_GT(v_max, 0.1 * v_bound);  // it was pulled
+  EXPECT_LT(v_max, 1.05 * v_bound) << "v_max " << v_max << " bound " << v_bound;
+}
+
+/// A taut thread between two world points along x at z 0 and an instrument-size sphere (2.5 mm)
+/// driven up through it at `speed` m/s (imposed, kDirect) for 10 mm.
+struct SweptThread {
+  core::Model model;
+  core::Data data;
+  explicit SweptThread(double speed) : speed(speed) {
+    core::ThreadModel t;
+    t.length = 0.1;
+    t.segments = 200;
+    model = test::thread_model(t, [&](core::Model& mm) {
+      mm.coupling_mode = core::CouplingMode::kDirect;
+      test::add_thread_test_body(mm, 0.05, 1e-5, Vec3(0.05, 0.0, -z0), radius);
+      mm.initial_held_body = 0;
+      mm.threads[0].tie_end.body = -1;
+      mm.threads[0].tie_end.point = Vec3(1.002 * t.length, 0.0, 0.0);
+    });
+    data = core::make_data(model);
+  }
+  /// One step; false once the sphere's centre is past the thread (a node within the sphere's
+  /// x-extent at or below the centre).
+  bool step() {
+    const double z = data.bodies[0].position.z() + speed * model.dt;
+    data.target.position = Vec3(0.05, 0.0, z);
+    data.target_twist.linear = Vec3(0.0, 0.0, speed);
+    core::step(model, data);
+    const Vec3 c = data.bodies[0].position;
+    for (const Vec3& x : data.threads[0].position)
+      if (std::abs(x.x() - c.x()) < radius && x.z() <= c.z()) return false;
+    return true;
+  }
+  double speed;
+  static constexpr double radius = 2.5e-3;
+  static constexpr double z0 = 5e-3;
+};
+
+TEST(Thread, InstrumentAtHalfMetrePerSecondPushesThreadNeverCrosses) {
+  SweptThread s(0.5);
+  int steps = static_cast<int>((SweptThread::z0 + 10e-3) / (0.5 * s.model.dt));
+  int touching = 0;
+  for (int i = 0; i < steps; ++i) {
+    ASSERT_TRUE(s.step()) << "the sphere crossed the thread at step " << i;
+    touching += s.data.threads[0].output.body_contacts > 0;
+    ASSERT_EQ(s.data.status & core::kNonFinite, 0u);
+  }
+  EXPECT_GT(touching, steps / 2);
+  double top = -1.0;
+  for (const Vec3& x : s.data.threads[0].position) top = std::max(top, x.z());
+  EXPECT_GT(top, 9e-3);  // pushed up with the sphere
+}
+
+// A thread pulled through a fixed eyelet at 10 mm/s around a right angle, held back by 1 N at
+// its free end: the eyelet's friction is μ |F_n| against the sliding, and it is the tension step.
+TEST(Thread, EyeletFrictionIsCoulombs) {
+  core::ThreadModel t;
+  t.length = 0.1;
+  t.segments = 100;
+  const double mu = 0.3;
+  core::Model m = test::thread_model(t, [&](core::Model& mm) {
+    mm.coupling_mode = core::CouplingMode::kDirect;
+    const int puller = test::add_thread_test_body(mm, 0.05, 1e-5, Vec3(0.05, 0.0, 0.05), 0.0);
+    mm.initial_held_body = puller;
+    core::ThreadModel& th = mm.threads[0];
+    th.tie_start.body = -2;  // free, held back by a force
+    th.start = Vec3(-0.05, 0.0, 0.0);
+    th.tie_end.body = puller;
+    th.tie_end.point = Vec3::Zero();
+  });
+  core::Data d = core::make_data(m);
+  core::ThreadState& s = d.threads[0];
+  // Bend it round the eyelet: along x to (−R, 0, 0), a quarter circle of radius R (5 mm) to
+  // (0, 0, R), then up z; the eyelet at the circle's middle.
+  const double R = 5e-3, arc = 0.5 * std::numbers::pi * R, leg = 0.045;
+  const Vec3 centre(-R, 0.0, R);
+  for (std::size_t i = 0; i < s.position.size(); ++i) {
+    const double l = static_cast<double>(i) * m.threads[0].rest_segment;
+    if (l < leg) {
+      s.position[i] = Vec3(l - leg - R, 0.0, 0.0);
+    } else if (l < leg + arc) {
+      const double a = (l - leg) / R;  // angle turned
+      s.position[i] = centre + R * Vec3(std::sin(a), 0.0, -std::cos(a));
+    } else {
+      s.position[i] = Vec3(0.0, 0.0, R + l - leg - arc);
+    }
+  }
+  d.bodies[0].position = s.position.back();
+  s.external_force.front() = Vec3(-1.0, 0.0, 0.0);
+  s.eyelets[0].position = centre + R * Vec3(std::sqrt(0.5), 0.0, -std::sqrt(0.5));
+  s.eyelets[0].active = true;
+  s.eyelets[0].friction = mu;
+  s.eyelets[0].stiffness = 1e4;
+  const double speed = 0.01;
+  for (int i = 0; i < 1000; ++i) {
+    d.target.position = d.bodies[0].position + Vec3(0.0, 0.0, speed * m.dt);
+    d.target_twist.linear = Vec3(0.0, 0.0, speed);
+    core::step(m, d);
+  }
+  const core::ThreadEyeletOutput& e = s.output.eyelets[0];
+  EXPECT_GT(e.normal_force, 1.0);
+  EXPECT_NEAR(std::abs(e.friction_force), mu * e.normal_force, 0.01 * mu * e.normal_force);
+  // The tensions either side of the eyelet differ by the friction.
+  const auto tension = [&](int seg) {
+    const auto a = static_cast<std::size_t>(seg);
+    return axial_stiffness(t) * ((s.position[a + 1] - s.position[a]).norm() / m.threads[0].rest_segment - 1.0);
+  };
+  const double step = tension(e.segment + 3) - tension(e.segment - 3);
+  EXPECT_NEAR(step, std::abs(e.friction_force), 0.1 * std::abs(e.friction_force))
+      << "pull side " << tension(e.segment + 3) << " N, held side " << tension(e.segment - 3) << " N";
+  EXPECT_NEAR(tension(e.segment - 3), 1.0, 0.05);
+  EXPECT_LT(s.position.front().z(), 1e-3);  // still on the held side
+  EXPECT_GT(s.position.front().x(), -leg - R + 0.005);  // it slid through (10 mm pulled)
+}
+
+// A soft thread (bending negligible) tied at both ends and laid over itself, one strand along y
+// 1 mm above another along x, the upper strand pressed down by 10 µN a node through a viscous
+// medium: the strands touch and never pass (docs/suturing.md: a crossing faster than ~r a step
+// is not yet held).
+TEST(Thread, SelfContactKeepsStrandsApart) {
+  const Vec3 corners[] = {Vec3(0.0, -0.03, 1e-3), Vec3(0.0, 0.02, 1e-3), Vec3(0.02, 0.02, 0.0),
+                          Vec3(0.02, 0.0, 0.0), Vec3(-0.03, 0.0, 0.0)};
+  double total = 0.0;
+  for (int c = 0; c < 4; ++c) total += (corners[c + 1] - corners[c]).norm();
+  core::ThreadModel t;
+  t.length = total;
+  t.segments = 140;
+  t.start = corners[0];
+  t.young_modulus = 1e7;
+  t.damping = 1.0;  // a viscous medium: the strands meet at ~10 mm/s (10 µm a step)
+  const core::Model m = test::thread_model(t, [&](core::Model& mm) {  // both ends tied
+    mm.threads[0].tie_end.body = -1;
+    mm.threads[0].tie_end.point = corners[4];
+  });
+  core::Data d = core::make_data(m);
+  core::ThreadState& s = d.threads[0];
+  for (std::size_t i = 0; i < s.position.size(); ++i) {  // the nodes along the corners
+    double l = static_cast<double>(i) * m.threads[0].rest_segment;
+    int c = 0;
+    for (; c < 3 && l > (corners[c + 1] - corners[c]).norm(); ++c) l -= (corners[c + 1] - corners[c]).norm();
+    s.position[i] = corners[c] + l * (corners[c + 1] - corners[c]).normalized();
+  }
+  for (std::size_t i = 25; i < 36; ++i) s.external_force[i] = Vec3(0.0, 0.0, -1e-5);
+  int touching = 0;
+  for (int i = 0; i < 300; ++i) {
+    core::step(m, d);
+    // Where the strands cross seen from above (the node pair closest in x, y): the upper strand
+    // is above the lower.
+    double closest = 1.0, dz = 0.0;
+    std::size_t pa = 0, pb = 0;
+    for (std::size_t a = 0; a < 50; ++a)
+      for (std::size_t b = 95; b < s.position.size(); ++b)
+        if (const double r = (s.position[a] - s.position[b]).head<2>().norm(); r < closest) {
+          closest = r;
+          dz = s.position[a].z() - s.position[b].z();
+          pa = a; pb = b;
+        }
+    ASSERT_GT(dz, 0.0) << "step " << i << ": the upper strand went through the lower: nodes " << pa << " " << s.position[pa].transpose() << " and " << pb << " " << s.position[pb].transpose() << " self " << s.output.self_contacts;
+    touching += s.output.self_contacts > 0;
+  }
+  EXPECT_GT(touching, 100);
+}
+
+// Pulled apart at 0.5 m/s past its break strain, the thread breaks once, says so, and stays finite.
+TEST(Thread, BreaksPastItsLimitAndSaysSo) {
+  core::ThreadModel t;
+  t.length = 0.05;
+  t.segments = 50;
+  t.break_strain = 0.05;
+  core::Model m = test::thread_model(t, [&](core::Model& mm) {
+    mm.coupling_mode = core::CouplingMode::kDirect;
+    mm.initial_held_body = test::add_thread_test_body(mm, 0.05, 1e-5, Vec3(0.05, 0.0, 0.0), 0.0);
+    mm.threads[0].tie_end.body = 0;
+  });
+  core::Data d = core::make_data(m);
+  int breaks = 0;
+  for (int i = 0; i < 100; ++i) {
+    d.target.position = d.bodies[0].position + Vec3(0.5 * m.dt, 0.0, 0.0);
+    d.target_twist.linear = Vec3(0.5, 0.0, 0.0);
+    core::step(m, d);
+    breaks += d.threads[0].output.broke;
+    ASSERT_EQ(d.status & core::kNonFinite, 0u);
+  }
+  EXPECT_EQ(breaks, 1);
+  EXPECT_GE(d.threads[0].broken_segment, 0);
+  EXPECT_LT(d.threads[0].output.max_stretch, 0.05);
+}
+
+// Stepping a thread with a tie to a body, contacts with a sphere and an obstacle, an eyelet
+// and self contact allocates nothing.
+TEST(Thread, StepsWithoutAllocating) {
+  core::ThreadModel t;
+  t.segments = 200;
+  core::Model m = test::thread_model(t, [&](core::Model& mm) {
+    mm.gravity = Vec3(0.0, 0.0, -9.81);
+    const int b = test::add_thread_test_body(mm, 0.05, 1e-5, Vec3(0.05, 0.0, -0.0026), 2.5e-3);
+    mm.bodies[static_cast<std::size_t>(b)].anchored = true;
+    core::Obstacle floor;
+    floor.type = core::ShapeType::kPlane;
+    floor.pose.position = Vec3(0.0, 0.0, -0.01);
+    mm.obstacles.push_back(floor);
+  });
+  core::Data d = core::make_data(m);
+  d.threads[0].eyelets[0].active = true;
+  d.threads[0].eyelets[0].position = Vec3(0.1, 0.0, 0.0);
+  d.threads[0].eyelets[0].friction = 0.2;
+  for (int i = 0; i < 100; ++i) core::step(m, d);  // warm up: contacts found
+  int contacts = 0;
+  test::AllocationGuard guard;
+  for (int i = 0; i < 400; ++i) {
+    core::step(m, d);
+    contacts += d.threads[0].output.obstacle_contacts + d.threads[0].output.body_contacts;
+  }
+  EXPECT_EQ(guard.count(), 0);
+  EXPECT_GT(contacts, 0);
+}
+
+}  // namespace
+}  // namespace numen
