@@ -256,6 +256,16 @@ inline std::string shipped_scene_text(const std::string& name) {
   return with_absolute_dcf_paths(text.str(), dir);
 }
 
+/// A shipped scene's text (shipped_scene_text()) with its "../data/" paths made absolute, so that
+/// it loads from a temporary directory.
+inline std::string shipped_scene_text_anywhere(const std::string& name) {
+  std::string text = shipped_scene_text(name);
+  const std::string from = "\"../data/", to = "\"" + std::string(NUMEN_SOURCE_DIR) + "/sim/data/";
+  for (std::size_t at = text.find(from); at != std::string::npos; at = text.find(from, at + to.size()))
+    text.replace(at, from.size(), to);
+  return text;
+}
+
 /// Replaces the `nth` occurrence of `from` in `text` (which must exist: a
 /// missing one fails the test as a bug of the test's template).
 inline std::string replace(std::string text, const std::string& from, const std::string& to,

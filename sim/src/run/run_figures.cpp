@@ -60,6 +60,7 @@ constexpr FigureValue list(const std::vector<std::string>& v) noexcept {
 constexpr bool admittance_run(const S& s) noexcept { return s.admittance.enabled; }
 constexpr bool multirate_run(const S& s) noexcept { return s.multirate.enabled; }
 constexpr bool grasping(const S& s) noexcept { return s.grasping; }
+constexpr bool threaded(const S& s) noexcept { return s.threads; }
 constexpr bool task(const S& s) noexcept { return s.task.enabled; }
 /// A multirate run that sends feedback forces (not an admittance run, which sends poses).
 constexpr bool multirate_force_run(const S& s) noexcept {
@@ -250,6 +251,14 @@ constexpr RunFigure kFigures[] = {
      [](const S& s) noexcept { return count(s.nonfinite_steps); }},
     {"invalid_target_steps", "", "Steps whose device target was not finite (coupling skipped, feedback held)",
      K::kCount, [](const S& s) noexcept { return count(s.invalid_target_steps); }},
+    {"thread.tension_max_n", "N", "Largest segment tension of any suture thread", K::kReal,
+     [](const S& s) noexcept { return real(s.thread_tension_max_n); }, threaded},
+    {"thread.stretch_max", "1", "Largest segment strain (l − l0)/l0 of any suture thread", K::kReal,
+     [](const S& s) noexcept { return real(s.thread_stretch_max); }, threaded},
+    {"thread.breaks", "", "Threads that broke (a pull past their break_strain; each a warning)", K::kCount,
+     [](const S& s) noexcept { return count(s.thread_breaks); }, threaded},
+    {"thread.first_break_s", "s", "Time of the first break (−1: none)", K::kReal,
+     [](const S& s) noexcept { return real(s.thread_first_break_s); }, threaded},
     {"grasp.started", "", "Grasps started (jaws closed below close_angle_deg on a body or tissue)",
      K::kCount, [](const S& s) noexcept { return count(s.grasps_started); }, grasping},
     {"grasp.released", "", "Grasps ended by the jaws opening past open_angle_deg", K::kCount,

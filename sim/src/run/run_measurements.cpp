@@ -10,6 +10,7 @@
 
 #include "numen/core/data.hpp"
 #include "numen/sim/run/run.hpp"
+#include "numen/sim/run/thread_summary.hpp"
 
 #include "contact_depths.hpp"
 
@@ -250,6 +251,7 @@ void SceneRunner::accumulate_step_figures(const platform::PeriodReport& report,
     if (!std::isnan(s.solver_residual_max)) s.solver_residual_max = data_.solver_residual;
   if (data_.status & core::kSolverNotConverged) ++s.solver_not_converged_steps;
   s.node_contacts_max = std::max(s.node_contacts_max, data_.num_node_contacts);
+  accumulate_thread_figures(data_, s);
   for (const core::NetOutput& net : data_.nets) {
     s.net_penetration_max_mm = std::max(s.net_penetration_max_mm, net.max_penetration * 1e3);
     s.net_tie_stretch_max_mm = std::max(s.net_tie_stretch_max_mm, net.max_tie_stretch * 1e3);

@@ -49,6 +49,11 @@ constexpr RunSummarySegment kLayout[] = {
     {"  device: limit cycle at {limit_cycle_time_s} s: {limit_cycle_amplitude_mm} mm at "
      "{limit_cycle_hz} Hz\n",
      set("limit_cycle_detected")},
+    {"  threads: tension max {thread.tension_max_n} N, stretch max {thread.stretch_max}, breaks "
+     "{thread.breaks}",
+     set("thread.tension_max_n", "thread.breaks")},
+    {" (the first at {thread.first_break_s} s)", set("thread.breaks")},
+    {"\n", set("thread.tension_max_n", "thread.breaks")},
     {"  grasps: {grasp.started} started, {grasp.released} released, {grasp.slipped} slipped\n",
      set("grasp.started")},
     {"  grasp event: {*}\n", set("grasp.started"), {}, {}, "grasp.events"},

@@ -45,10 +45,7 @@ TEST(GraspSummary, TheDefaultRecordingGraspsTheOrgansTissueAndTheSummaryListsIt)
   NUMEN_REQUIRE_ARTICULATION();
   NUMEN_REQUIRE_DEFORMABLE();
   numen::test::TempDir dir;
-  std::string text = numen::test::shipped_scene_text("default.toml");
-  const std::string from = "\"../data/", to = "\"" + std::string(NUMEN_SOURCE_DIR) + "/sim/data/";
-  for (std::size_t at = text.find(from); at != std::string::npos; at = text.find(from, at + to.size()))
-    text.replace(at, from.size(), to);
+  std::string text = numen::test::shipped_scene_text_anywhere("default.toml");
   text += "\n[[grasp]]\nname = \"grasper\"\njaws = [\"jaw_1\", \"jaw_2\"]\n";
   const numen::sim::Scene scene = numen::sim::load_scene(dir.write("grasp.toml", text));
   numen::sim::RunOptions opt;

@@ -86,6 +86,11 @@ inline sim::RunSummary full_managed_summary() {
   s.nan_detected = true;
   s.nonfinite_steps = 14;
   s.invalid_target_steps = 3;
+  s.threads = true;
+  s.thread_tension_max_n = 1.5;
+  s.thread_stretch_max = 0.004;
+  s.thread_breaks = 1;
+  s.thread_first_break_s = 3.25;
   s.grasping = true;
   s.grasps_started = 2;
   s.grasps_released = 1;

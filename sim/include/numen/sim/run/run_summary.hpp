@@ -291,6 +291,12 @@ struct RunSummary {
   /// Steps whose device target was not finite (core::Data::invalid_target_steps): coupling
   /// skipped, feedback held at its last value.
   std::int64_t invalid_target_steps = 0;
+  // Suture threads (docs/suturing.md; accumulate_thread_figures(), summarize_threads()).
+  bool threads = false;                  ///< The scene has a thread ([[thread]]).
+  double thread_tension_max_n = 0.0;     ///< Largest segment tension of any thread over the run (N).
+  double thread_stretch_max = 0.0;       ///< Largest segment strain of any thread over the run.
+  std::int64_t thread_breaks = 0;        ///< Threads that broke (a pull past break_strain).
+  double thread_first_break_s = -1.0;    ///< Time of the first break (s; −1: none).
   // Grasping (docs/grasping.md; summarize_grasps()): sums over the scene's graspers.
   bool grasping = false;                 ///< The scene has a grasper ([[grasp]]).
   std::int64_t grasps_started = 0;       ///< Grasps that started.

@@ -1,0 +1,40 @@
+/// @file thread_summary.cpp
+/// The suture threads of a run in its summary (thread_summary.hpp).
+
+#include "numen/sim/run/thread_summary.hpp"
+
+#include <algorithm>
+#include <iomanip>
+#include <sstream>
+
+#include "numen/core/thread.hpp"
+#include "numen/sim/run/run_summary.hpp"
+
+namespace numen::sim {
+
+void accumulate_thread_figures(const core::Data& data, RunSummary& s) noexcept {
+  for (const core::ThreadState& t : data.threads) {
+    s.thread_tension_max_n = std::max(s.thread_tension_max_n, t.output.max_tension);
+    s.thread_stretch_max = std::max(s.thread_stretch_max, t.output.max_stretch);
+    if (t.output.broke) {
+      if (s.thread_breaks == 0) s.thread_first_break_s = data.time;
+      ++s.thread_breaks;
+    }
+  }
+}
+
+void summarize_threads(const core::Model& model, const core::Data& data, RunSummary& s) {
+  s.threads = !model.threads.empty();
+  for (std::size_t i = 0; i < model.threads.size() && i < data.threads.size(); ++i) {
+    const int segment = data.threads[i].broken_segment;
+    if (segment < 0) continue;
+    const core::ThreadModel& t = model.threads[i];
+    std::ostringstream os;
+    os << "thread '" << (t.name.empty() ? std::to_string(i) : t.name) << "' broke at segment "
+       << segment << " (strain past its break_strain " << t.break_strain << "; the run's first break at "
+       << std::fixed << std::setprecision(3) << s.thread_first_break_s << " s)";
+    s.warnings.push_back(os.str());
+  }
+}
+
+}  // namespace numen::sim
