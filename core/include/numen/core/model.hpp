@@ -315,7 +315,8 @@ struct Model {
   /// model and the solve integrate() picks, in every step, and what Data::stages_run holds
   /// after any step (a step split at its contacts adds the caller's contact stages, step.hpp).
   /// Derived by finalize_model() as compiled_stages(*this), from integrator, coupling_mode, the
-  /// joints, the nets and what can collide (bodies, obstacles); 0 before finalize_model() and after a refusal. A model edited after
+  /// joints, the nets, the graspers, needles and threads and what can collide (bodies,
+  /// obstacles); 0 before finalize_model() and after a refusal. A model edited after
   /// finalize_model() has a stale plan until finalize_model() runs again: make_data() refuses
   /// a model whose plan is missing or stale, and step() asserts it current in builds without
   /// NDEBUG (it does not recompute it).
