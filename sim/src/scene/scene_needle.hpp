@@ -1,6 +1,6 @@
 #pragma once
 /// @file scene_needle.hpp
-/// The [[needle]] tables of a scene file (docs/scenes.md, "Needles"; docs/suturing.md, "The
+/// The [[needle]] tables of a scene file (docs/suturing.md, "The
 /// needle"): curved suture needles, each a body of its own shape (core::add_needle()). Private to
 /// numen::sim (used by scene.cpp).
 

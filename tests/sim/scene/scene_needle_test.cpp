@@ -1,6 +1,6 @@
 // Tests of sim/scene/scene_needle: the [[needle]] keys of a scene file, their defaults, and the
 // located errors — a value out of range, a needle larger than the jaws can hold, a needle placed
-// inside tissue, a puncture threshold ≤ 0 (docs/scenes.md, "Needles"; docs/suturing.md).
+// inside tissue, a puncture threshold ≤ 0 (docs/suturing.md "Scene keys").
 
 #include <gtest/gtest.h>
 
