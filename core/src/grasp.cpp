@@ -15,6 +15,7 @@
 
 #include "detail/data_scratch.hpp"
 #include "detail/grasp_terms.hpp"
+#include "detail/net_terms.hpp"
 #include "detail/solver_terms.hpp"
 
 namespace numen::core {
@@ -207,19 +208,9 @@ void write_node_springs(Data& data, const GraspModel& g, GraspState& st) noexcep
     for (int axis = 0; axis < kGraspSpringsPerNode; ++axis) {
       const auto at = static_cast<std::size_t>(data.num_node_contacts + data.num_node_grasp_springs);
       if (at >= data.node_contacts.size()) return;  // make_data() gave them room: not reached
-      NodeContact& c = data.node_contacts[at];
-      c = NodeContact{};
-      c.node = n.node;
-      c.body_b = n.jaw;
-      c.position = jaw.position + r;
-      c.r_b = r;
-      c.normal = Vec3::Unit(axis);
-      c.stiffness = g.stiffness;
-      c.damping = g.damping;
-      c.force = c.normal.dot(n.force) * c.normal;
-      c.normal_velocity = c.normal.dot(node.velocity - v_jaw);
-      c.active = true;
-      c.held = true;
+      const Vec3 e = Vec3::Unit(axis);
+      detail::set_held_spring(data.node_contacts[at], n.node, n.jaw, jaw.position + r, r, e, g.stiffness,
+                              g.damping, e.dot(n.force) * e, e.dot(node.velocity - v_jaw));
       ++data.num_node_grasp_springs;
     }
   }

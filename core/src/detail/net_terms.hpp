@@ -37,6 +37,28 @@ inline int node_contact_count(const Data& data) noexcept {
                     static_cast<int>(data.node_contacts.size()));
 }
 
+/// Writes `c` as a held node contact (NodeContact::held): a spring along the unit `axis` between
+/// node `node` and the point `at` (world, m; lever `r_b` from body `body`'s COM) of stiffness `k`
+/// (N/m) and damping `damping` (N·s/m), its force on the node at the step's start `force` (N,
+/// along `axis`) and the node's velocity along `axis` relative to the point (m/s). What a grasp's
+/// springs on held nodes and a needle's puncture ties write (grasp.hpp, needle_puncture.hpp).
+inline void set_held_spring(NodeContact& c, int node, int body, const Vec3& at, const Vec3& r_b,
+                            const Vec3& axis, double k, double damping, const Vec3& force,
+                            double normal_velocity) noexcept {
+  c = NodeContact{};
+  c.node = node;
+  c.body_b = body;
+  c.position = at;
+  c.r_b = r_b;
+  c.normal = axis;
+  c.stiffness = k;
+  c.damping = damping;
+  c.force = force;
+  c.normal_velocity = normal_velocity;
+  c.active = true;
+  c.held = true;
+}
+
 /// A node contact with a dynamic body in the solve: an off-diagonal block.
 inline bool couples_body(const SolverScratch& s, const NodeContact& c) noexcept {
   return c.active && c.body_b >= 0 && s.in_solve[static_cast<std::size_t>(c.body_b)];

@@ -11,6 +11,8 @@
 #include "numen/core/needle.hpp"
 #include "numen/core/step_stages.hpp"
 
+#include "detail/net_terms.hpp"
+
 namespace numen::core {
 namespace {
 
@@ -179,19 +181,10 @@ void write_tie_springs(const Model& model, Data& data, const NeedleModel& n, con
                                                  data.num_node_needle_ties);
       if (slot >= data.node_contacts.size()) return;  // make_data() gave them room: not reached
       const Vec3& e = axes[static_cast<std::size_t>(axis)];
-      NodeContact& c = data.node_contacts[slot];
-      c = NodeContact{};
-      c.node = node;
-      c.body_b = n.body;
-      c.position = at;
-      c.r_b = at - b.position;
-      c.normal = e;
-      c.stiffness = axis == 0 ? 0.0 : w * n.tie_stiffness;
-      c.damping = w * (axis == 0 ? n.friction : n.tie_damping);
-      c.force = (w * e.dot(on_point)) * e;
-      c.normal_velocity = e.dot(v_node - v_at);
-      c.active = true;
-      c.held = true;
+      detail::set_held_spring(data.node_contacts[slot], node, n.body, at, at - b.position, e,
+                              axis == 0 ? 0.0 : w * n.tie_stiffness,
+                              w * (axis == 0 ? n.friction : n.tie_damping), (w * e.dot(on_point)) * e,
+                              e.dot(v_node - v_at));
       ++data.num_node_needle_ties;
     }
   }
