@@ -1,0 +1,55 @@
+// Tests of sim/scene/scene_thread: the [[thread]] keys of a scene file and their located errors —
+// a thread of zero or negative length or segments, a bad material value, an unknown body or key
+// (docs/suturing.md "Scene keys").
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <string>
+#include <vector>
+
+#include "numen/sim/scene/scene.hpp"
+#include "scene_text.hpp"
+#include "temp_dir.hpp"
+
+TEST(SceneThread, KeysAreReadIntoTheModel) {
+  numen::test::TempDir dir;
+  const std::string text = numen::test::shipped_scene_text_anywhere("default.toml") +
+                           "\n[[thread]]\nname = \"suture\"\nlength = 0.05\nsegments = 50\n"
+                           "attach_body = \"jaw_1\"\ndirection = [1.0, 0.0, 0.0]\n";
+  const numen::sim::Scene s = numen::sim::load_scene(dir.write("thread.toml", text));
+  ASSERT_EQ(s.model.threads.size(), 1u);
+  EXPECT_EQ(s.model.threads[0].name, "suture");
+  EXPECT_EQ(s.model.threads[0].length, 0.05);
+  EXPECT_EQ(s.model.threads[0].segments, 50);
+  EXPECT_GE(s.model.threads[0].tie_start.body, 0);
+}
+
+TEST(SceneThread, BadThreadsAreLocatedErrorsNamingTheirKeys) {
+  numen::test::TempDir dir;
+  using numen::test::expect_located;
+  using numen::test::load_error;
+  struct Case {
+    std::string keys, key, message;
+  };
+  const std::vector<Case> cases = {
+      {"length = 0.0\n", "thread[0].length", "must be > 0"},
+      {"length = -0.1\n", "thread[0].length", "must be > 0"},
+      {"segments = 0\n", "thread[0].segments", "must be 1"},
+      {"radius = 0.0\n", "thread[0].radius", "must be > 0"},
+      {"youngs_modulus_kpa = 0.0\n", "thread[0].youngs_modulus_kpa", "must be > 0"},
+      {"density = -1.0\n", "thread[0].density", "must be > 0"},
+      {"damping = -1.0\n", "thread[0].damping", "must be >= 0"},
+      {"attach_body = \"nowhere\"\n", "thread[0].attach_body", "no body named \"nowhere\""},
+      {"length_mm = 50.0\n", "thread[0].length_mm", "unknown key"},
+  };
+  const std::string base = numen::test::shipped_scene_text_anywhere("default.toml");
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.keys);
+    const std::string text = base + "\n[[thread]]\nname = \"suture\"\n" + c.keys;
+    const int line = 1 + static_cast<int>(std::count(text.begin(), text.end(), '\n')) - 1;
+    // The value's column ("length = 0.0": 10); an unknown key is located at its line only.
+    const int column = c.key == "thread[0].length_mm" ? 0 : static_cast<int>(c.keys.find('=') + 3);
+    expect_located(load_error(dir, text), (dir / "bad.toml").string(), line, column, c.key, c.message);
+  }
+}
