@@ -73,11 +73,13 @@ Data make_data(const Model& model, const DataOptions& options) {
   data.bodies.resize(n);
   data.nodes.resize(static_cast<std::size_t>(model.num_nodes()));
   // Room for the penalty contacts (detection stops at kMaxNodeContacts), the held nodes'
-  // grasp springs after them (grasp.hpp) and the needles' puncture ties (needle_puncture.hpp).
+  // grasp springs after them (grasp.hpp), the needles' puncture ties (needle_puncture.hpp) and the
+  // threads' eyelets on tissue (thread.hpp).
   data.node_contacts.resize(model.num_nodes() > 0
                                 ? static_cast<std::size_t>(kMaxNodeContacts +
                                                            model.num_grasps() * kMaxGraspNodes * kGraspSpringsPerNode +
-                                                           model.num_needles() * kMaxNeedlePunctures * kNeedleTieSprings)
+                                                           model.num_needles() * kMaxNeedlePunctures * kNeedleTieSprings +
+                                                           model.num_threads() * kMaxThreadEyelets * kThreadEyeletTieSprings)
                                 : 0);
   data.needles.resize(static_cast<std::size_t>(model.num_needles()));
   data.nets.resize(static_cast<std::size_t>(model.num_nets()));
@@ -150,6 +152,7 @@ void reset_data(const Model& model, Data& data) noexcept {
   data.num_node_contacts = 0;
   data.num_node_grasp_springs = 0;
   data.num_node_needle_ties = 0;
+  data.num_node_thread_ties = 0;
   for (NeedleState& n : data.needles) n = NeedleState{};
   for (NetOutput& o : data.nets) o = NetOutput{};
   for (GraspState& g : data.grasps) g = GraspState{};

@@ -9,6 +9,7 @@
 #include "numen/core/model.hpp"
 
 #include "detail/data_scratch.hpp"
+#include "detail/thread_scratch.hpp"
 
 namespace numen::core {
 namespace {
@@ -77,7 +78,14 @@ DataFootprint data_footprint(const Data& d) noexcept {
            n.surface_cluster_stamp, n.surface_cluster_close, n.rest_count, n.rest_flags, n.pass_position,
            n.pass_velocity, n.still_flags, n.still_force, n.still_energy, n.active_nodes,
            n.active_positions, n.pass_positions, n.active_count, n.pass_count)};
-  f.groups[6] = {"scratch block", sizeof(DataScratch)};
+  std::size_t threads = heap(d.needles, d.threads, scratch.threads);
+  for (const ThreadState& t : d.threads) threads += heap(t.position, t.velocity, t.external_force);
+  for (const ThreadScratch& t : scratch.threads)
+    threads += heap(t.band.diag, t.band.lower1, t.band.lower2, t.band.rhs, t.terms, t.saved_position,
+                    t.trial_position, t.trial_velocity, t.sweep_order, t.segment_min, t.segment_max,
+                    t.self_pairs);
+  f.groups[6] = {"needles and threads", threads};
+  f.groups[7] = {"scratch block", sizeof(DataScratch)};
   return f;
 }
 

@@ -329,6 +329,9 @@ std::string finalize_model(Model& model) {
     ThreadModel& t = model.threads[i];
     if (std::string e = finalize_thread(t, model.num_bodies(), model.num_materials()); !e.empty())
       return "thread " + std::to_string(i) + (t.name.empty() ? "" : " (" + t.name + ")") + ": " + e;
+    t.needle = -1;  // the needle it takes punctures over from: the one its start is tied to
+    for (int k = 0; k < model.num_needles(); ++k)
+      if (t.tie_start.body >= 0 && model.needles[static_cast<std::size_t>(k)].body == t.tie_start.body) t.needle = k;
   }
   model.stage_plan = compiled_stages(model);  // reads the articulation's body trees: last
   return {};

@@ -208,6 +208,7 @@ void add_node_contact_force(const Model& model, Data& data, int c, int nc, bool 
   const auto i = static_cast<std::size_t>(ct.node);
   if (ct.held) {  // a grasp spring along its axis, its force set by the grasp stage (grasp.hpp)
     s.force[i] += ct.force;
+    if (ct.body_b < 0) return;  // a thread's eyelet: the thread's step took the reaction
     Wrench& w = data.body_wrench[static_cast<std::size_t>(ct.body_b)];
     w.force -= ct.force;
     w.torque -= ct.r_b.cross(ct.force);

@@ -44,7 +44,12 @@ bool check_finite(Data& data) noexcept {
   for (const Vec6& d : data.scratch->solver.delta) finite = finite && d.allFinite();
   for (const NodeState& n : data.nodes)
     finite = finite && n.position.allFinite() && n.velocity.allFinite();
-  if (finite) return true;
+  if (finite) {
+    // A stage that rolled its own part back this step (a thread, step_threads()) set kNonFinite:
+    // the step is kept, and counted with the rejected ones.
+    if (data.status & kNonFinite) ++data.nonfinite_steps;
+    return true;
+  }
   for (Vec6& d : data.scratch->solver.delta) d.setZero();
   for (Vec3& d : data.scratch->net.delta) d.setZero();  // the next step's warm start
   for (std::size_t i = 0; i < data.nodes.size(); ++i) {
@@ -94,6 +99,7 @@ void step_to_contacts(const Model& model, Data& data) noexcept {
   data.num_contacts = 0;
   data.contacts_dropped = 0;
   data.max_penetration = 0.0;
+  data.num_node_thread_ties = 0;  // written again by the threads' stage, after the needles' ties
   save_state(data);
   impose_direct_target(model, data);  // clears SolverScratch::imposed; imposes by the plan
 }

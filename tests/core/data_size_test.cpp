@@ -12,6 +12,7 @@
 #include "lean_scenes.hpp"
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"
+#include "thread_scenes.hpp"
 
 namespace core = numen::core;
 using numen::test::LeanPart;
@@ -47,6 +48,19 @@ TEST(DataSize, FootprintIsExactlyWhatMakeDataAllocatedWithoutNets) {
     EXPECT_EQ(static_cast<std::size_t>(bytes), f.heap_bytes()) << static_cast<int>(part);
     EXPECT_EQ(f.sizeof_data, sizeof(core::Data));
   }
+}
+
+TEST(DataSize, FootprintIsExactlyWhatMakeDataAllocatedWithAThread) {
+  // A 200-segment thread: its state, its banded solve's and its terms' buffers, counted in
+  // "needles and threads"; nothing else of the Data's grows for it.
+  core::ThreadModel t;
+  t.segments = 200;
+  const core::Model m = numen::test::thread_model(t);
+  core::DataFootprint f;
+  const std::int64_t bytes = make_data_bytes(m, f);
+  EXPECT_EQ(static_cast<std::size_t>(bytes), f.heap_bytes());
+  EXPECT_GT(group(f, "needles and threads"), 201u * 3u * sizeof(core::Mat3)) << "its band at least";
+  EXPECT_EQ(group(f, "nets"), 0u);
 }
 
 TEST(DataSize, FootprintCoversTheNetsBuffers) {

@@ -29,14 +29,7 @@ namespace core = numen::core;
 /// 10.5 mm above the patch so that its jaws' tips dip 2 mm into it; feedback gains equal to the
 /// tube's coupling (the hand feels the coupling's force). No gravity. Implicit Euler, 1 ms.
 core::Model tissue_rig(double max_force) {
-  core::Model m;
-  m.dt = 1e-3;
-  m.gravity = core::Vec3::Zero();
-  m.solver.tolerance = 1e-6;
-  m.solver.max_iterations = 200;
-  m.material_names = {"steel", "tissue"};
-  m.material_pairs.assign(4, core::MaterialPair{2e4, 10.0, 0.0});
-  m.bodies.push_back(numen::test::organ::organ_core_body());
+  core::Model m = numen::test::organ::patch_rig_start();
   // Hinge at z = 0.0105: the tube's COM 40 mm above it.
   numen::test::add_grasper(m, core::Vec3(0, 0, 0.0505), 60 * numen::test::kGraspDeg, max_force);
   m.feedback = core::FeedbackGains{m.bodies[1].coupling.k_t, m.bodies[1].coupling.gamma_t,

@@ -2,7 +2,8 @@
 /// The suture thread (core/include/numen/core/thread.hpp): settings refused by name, stretch
 /// under end tension, a clamped cantilever against Euler–Bernoulli, the catenary, stability at
 /// three time steps, the tie to a light body, instrument contact without pass-through, an
-/// eyelet's friction, self contact, the break, the stage plan, zero allocation.
+/// eyelet's friction, self contact, the break, a non-finite step rolled back and counted, the
+/// stage plan, zero allocation.
 
 #include <gtest/gtest.h>
 
@@ -368,6 +369,28 @@ TEST(Thread, BreaksPastItsLimitAndSaysSo) {
   EXPECT_EQ(breaks, 1);
   EXPECT_GE(d.threads[0].broken_segment, 0);
   EXPECT_LT(d.threads[0].output.max_stretch, 0.05);
+}
+
+// A thread that goes non-finite (a NaN force on a node) is rolled back to its last positions at
+// rest by its own stage: the step says so (kNonFinite) and is counted with the rejected ones
+// (Data::nonfinite_steps), though the bodies' check finds nothing to reject; the next step is clean.
+TEST(Thread, ANonFiniteStepIsRolledBackAndCounted) {
+  core::ThreadModel t;
+  t.segments = 20;
+  t.length = 0.02;
+  core::Model m = test::thread_model(t);
+  core::Data d = core::make_data(m);
+  for (int i = 0; i < 5; ++i) core::step(m, d);
+  const Vec3 before = d.threads[0].position.back();
+  d.threads[0].external_force.back() = Vec3(std::nan(""), 0.0, 0.0);
+  core::step(m, d);
+  EXPECT_NE(d.status & core::kNonFinite, 0u);
+  EXPECT_EQ(d.nonfinite_steps, 1);
+  EXPECT_EQ(d.threads[0].position.back(), before) << "rolled back";
+  d.threads[0].external_force.back().setZero();
+  core::step(m, d);
+  EXPECT_EQ(d.status & core::kNonFinite, 0u);
+  EXPECT_EQ(d.nonfinite_steps, 1);
 }
 
 // Stepping a thread with a tie to a body, contacts with a sphere and an obstacle, an eyelet

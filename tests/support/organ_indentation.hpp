@@ -94,6 +94,22 @@ inline core::BodyModel organ_core_body() {
   return anchor;
 }
 
+/// The start of a flat-patch rig (grasping, puncture, a thread through tissue): implicit Euler
+/// at 1 ms, no gravity, the solve to 1e-6 in at most 200 iterations, materials "steel" and
+/// "tissue" (every pair 2e4 N/m, 10 N·s/m, no friction), body 0 organ_core_body(); the caller
+/// adds its net (organ_net_settings() of a flat_patch()), its bodies and finalizes.
+inline core::Model patch_rig_start() {
+  core::Model m;
+  m.dt = 1e-3;
+  m.gravity = core::Vec3::Zero();
+  m.solver.tolerance = 1e-6;
+  m.solver.max_iterations = 200;
+  m.material_names = {"steel", "tissue"};
+  m.material_pairs.assign(4, core::MaterialPair{2e4, 10.0, 0.0});
+  m.bodies.push_back(organ_core_body());
+  return m;
+}
+
 /// Net "organ" of `mesh` on body 0, material 1, with the constants `p` per spring and per node.
 inline core::NetSettings organ_net_settings(const core::TriangleMesh& mesh, const OrganParams& p) {
   core::NetSettings s;

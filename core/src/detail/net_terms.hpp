@@ -30,18 +30,22 @@ inline Vec3 weight_times(double alpha, double beta, const Vec3& n, const Vec3& v
 }
 
 /// Node contacts of this step within the scratch (Data::node_contacts), the grasp springs on held
-/// nodes after them (Data::num_node_grasp_springs) and the needles' puncture ties after those
-/// (Data::num_node_needle_ties) included: what the solve takes.
+/// nodes after them (Data::num_node_grasp_springs), the needles' puncture ties after those
+/// (Data::num_node_needle_ties) and the threads' eyelet springs last (Data::num_node_thread_ties)
+/// included: what the solve takes.
 inline int node_contact_count(const Data& data) noexcept {
-  return std::clamp(data.num_node_contacts + data.num_node_grasp_springs + data.num_node_needle_ties, 0,
-                    static_cast<int>(data.node_contacts.size()));
+  return std::clamp(data.num_node_contacts + data.num_node_grasp_springs + data.num_node_needle_ties +
+                        data.num_node_thread_ties,
+                    0, static_cast<int>(data.node_contacts.size()));
 }
 
 /// Writes `c` as a held node contact (NodeContact::held): a spring along the unit `axis` between
 /// node `node` and the point `at` (world, m; lever `r_b` from body `body`'s COM) of stiffness `k`
 /// (N/m) and damping `damping` (N·s/m), its force on the node at the step's start `force` (N,
 /// along `axis`) and the node's velocity along `axis` relative to the point (m/s). What a grasp's
-/// springs on held nodes and a needle's puncture ties write (grasp.hpp, needle_puncture.hpp).
+/// springs on held nodes, a needle's puncture ties and a thread's eyelets on tissue write
+/// (grasp.hpp, needle_puncture.hpp, thread.hpp). `body` −1: the point moves as given, no body
+/// takes the reaction (a thread's point: the thread's step takes it).
 inline void set_held_spring(NodeContact& c, int node, int body, const Vec3& at, const Vec3& r_b,
                             const Vec3& axis, double k, double damping, const Vec3& force,
                             double normal_velocity) noexcept {

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "detail/thread_band.hpp"
+#include "numen/core/thread.hpp"
 #include "numen/core/types.hpp"
 
 namespace numen::core {
@@ -42,6 +43,18 @@ struct ThreadSelfPair {
   Vec3 normal = Vec3::UnitZ();
 };
 
+/// An eyelet's term as the thread's step left it: the thread's point and its velocity at the
+/// step's end, the thread's axis there, the force on the thread, the friction's damping along it.
+struct ThreadEyeletTerm {
+  bool set = false;           ///< Written by this step (the eyelet active and its term applied).
+  Vec3 point = Vec3::Zero();  ///< The thread's point (world, m).
+  Vec3 velocity = Vec3::Zero();  ///< Its velocity (world, m/s).
+  Vec3 axis = Vec3::UnitX();  ///< The thread's unit tangent there (world).
+  Vec3 force = Vec3::Zero();  ///< The eyelet's force on the thread (N, world).
+  double stiffness = 0.0;     ///< Across the axis (N/m).
+  double damping = 0.0;       ///< Along the axis: friction's damping and the drag (N·s/m).
+};
+
 /// The scratch of one thread.
 struct ThreadScratch {
   ThreadBand band;  ///< Blocks: 0 the start tie's point, 1 … nodes, nodes + 1 the end tie's.
@@ -56,6 +69,9 @@ struct ThreadScratch {
   std::vector<ThreadSelfPair> self_pairs;  ///< Capacity fixed at make_data().
   int num_self_pairs = 0;
   int sweep_axis = 0;
+  /// Each eyelet's term at the step's end (ThreadState::eyelets; valid where `eyelet_term_set`):
+  /// what its springs on tissue give the net's nodes (thread_tissue.cpp).
+  std::array<ThreadEyeletTerm, kMaxThreadEyelets> eyelet_terms{};
   /// Resizes for `thread` (load time).
   void resize(const ThreadModel& thread);
 };

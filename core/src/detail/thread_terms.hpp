@@ -48,8 +48,27 @@ int add_thread_self_contacts(const Model& model, const ThreadModel& thread,
                              ThreadBand& band) noexcept;
 
 /// The active eyelets of `state`: a spring across the thread at its nearest point and Coulomb
-/// friction along it (ThreadEyelet).
+/// friction along it, with the eyelet's drag (ThreadEyelet). An eyelet on tissue past a free end
+/// of the thread is let go (ThreadState::eyelets_let_go).
 void gather_thread_eyelets(const ThreadModel& thread, ThreadState& state,
                            ThreadScratch& scratch) noexcept;
+
+/// Through tissue, before the thread's step: each puncture point its needle (ThreadModel::needle)
+/// let go past the tail this step (NeedleState::tail_releases) becomes an eyelet on that material
+/// point (ThreadEyelet::face), with the thread's tissue_friction and the needle's tie stiffness
+/// and friction; one with no free eyelet is counted (ThreadState::eyelets_dropped).
+void take_over_punctures(const Model& model, const Data& data, const ThreadModel& thread,
+                         ThreadState& state) noexcept;
+
+/// Each eyelet on tissue at its material point: position and velocity from its triangle's nodes
+/// at the step's start (an eyelet on a triangle the model does not have is let go).
+void place_tissue_eyelets(const Model& model, const Data& data, ThreadState& state) noexcept;
+
+/// After the thread's step: each eyelet on tissue's force given back to its triangle's nodes as
+/// held node springs (per node of weight w > 0: along the thread w × the friction's damping,
+/// across it w × the eyelet's stiffness, towards the thread's point moving as the step left it),
+/// appended after the needles' ties (Data::num_node_thread_ties).
+void tie_tissue_eyelets(const Model& model, Data& data, const ThreadState& state,
+                        const ThreadScratch& scratch) noexcept;
 
 }  // namespace numen::core

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"
@@ -133,17 +134,27 @@ void sweep_tip(const Model& model, Data& data, const NeedleModel& n, NeedleState
   }
 }
 
-/// Updates puncture `p`'s geometry and force at the step's start (NeedlePuncture); false when its
-/// point has passed off the arc (past the tail, or more than 4 r_w past the tip) and is let go.
-bool measure_tie(const Model& model, const Data& data, const NeedleModel& n, NeedlePuncture& p) noexcept {
+/// Where a puncture point is against the arc (measure_tie()).
+enum class TieFate : std::uint8_t {
+  kHeld,      ///< On the arc: tied.
+  kPastTail,  ///< Behind the tail: the needle was pulled through; a thread at the tail takes it.
+  kPastTip,   ///< More than 4 r_w past the tip: the needle was drawn back out.
+};
+
+/// Updates puncture `p`'s geometry and force at the step's start (NeedlePuncture); not kHeld when
+/// its point has passed off the arc (past the tail, or more than 4 r_w past the tip) and is let go.
+TieFate measure_tie(const Model& model, const Data& data, const NeedleModel& n, NeedlePuncture& p) noexcept {
   const BodyState& b = data.bodies[static_cast<std::size_t>(n.body)];
   const Vec3 x = face_point(model, data, p.face, p.weights, false);
   const Vec3 v = face_point(model, data, p.face, p.weights, true);
   const Vec3 local = b.orientation.conjugate() * (x - b.position);
   const double s = needle_closest_parameter(n, local);
-  if (s <= 0.0 && (local - needle_tail(n)).dot(needle_tangent(n, 0.0)) < 0.0) return false;
+  if (s <= 0.0 && (local - needle_tail(n)).dot(needle_tangent(n, 0.0)) < 0.0) {
+    p.position = x;
+    return TieFate::kPastTail;
+  }
   if (s >= n.length() && (local - needle_tip(n)).dot(needle_tangent(n, n.length())) > 4.0 * n.wire_radius)
-    return false;
+    return TieFate::kPastTip;
   const Vec3 at = world_point(b, needle_point(n, s));
   const Vec3 t = b.orientation * needle_tangent(n, s);
   const Vec3 v_at = b.linear_velocity + b.angular_velocity.cross(at - b.position);
@@ -157,7 +168,7 @@ bool measure_tie(const Model& model, const Data& data, const NeedleModel& n, Nee
   p.friction = n.friction;
   p.force = -f;
   p.deviation = d.norm();
-  return true;
+  return TieFate::kHeld;
 }
 
 /// Writes puncture `p`'s springs after the node contacts, the grasp springs and the ties written
@@ -223,15 +234,18 @@ void tie_needles(const Model& model, Data& data) noexcept {
     NeedleState& st = data.needles[k];
     st.event = PunctureEvent::kNone;
     st.max_deviation = 0.0;
+    st.num_tail_releases = 0;
     const BodyState& b = data.bodies[static_cast<std::size_t>(n.body)];
     sweep_tip(model, data, n, st, world_point(b, needle_tip(n)), b.orientation * needle_tangent(n, n.length()));
     // Measure each point; let go those past the arc's ends (keeping the entry first).
     int kept = 0;
     for (int i = 0; i < st.num_punctures; ++i) {
       NeedlePuncture p = st.punctures[static_cast<std::size_t>(i)];
-      if (!measure_tie(model, data, n, p)) {
+      const TieFate fate = measure_tie(model, data, n, p);
+      if (fate != TieFate::kHeld) {
         st.event = PunctureEvent::kRelease;
         ++st.releases;
+        if (fate == TieFate::kPastTail) st.tail_releases[static_cast<std::size_t>(st.num_tail_releases++)] = p;
         continue;
       }
       st.max_deviation = std::max(st.max_deviation, p.deviation);

@@ -282,6 +282,15 @@ void gather_thread_eyelets(const ThreadModel& thread, ThreadState& st,
         best_u = u;
       }
     }
+    // An eyelet on tissue past a free end: the thread has slid out through it.
+    const bool off_start = best == 0 && best_u <= 0.0 && thread.tie_start.body == -2;
+    const bool off_end = best == segs - 1 && best_u >= 1.0 && thread.tie_end.body == -2;
+    if (e.face >= 0 && (off_start || off_end)) {
+      st.eyelets[static_cast<std::size_t>(k)] = ThreadEyelet{};
+      ++st.eyelets_let_go;
+      out = ThreadEyeletOutput{};
+      continue;
+    }
     out.segment = best;
     ThreadPointTerm* term = next_thread_term(scratch, st);
     if (term == nullptr) return;
@@ -297,7 +306,7 @@ void gather_thread_eyelets(const ThreadModel& thread, ThreadState& st,
     const Mat3 across = Mat3::Identity() - axis * axis.transpose();
     const Vec3 fn = e.stiffness * (across * (e.position - p.x));
     const double v_slide = axis.dot(p.v - e.velocity);
-    const double c = e.friction * fn.norm() / std::max(std::abs(v_slide), e.slip_speed);
+    const double c = e.friction * fn.norm() / std::max(std::abs(v_slide), e.slip_speed) + e.drag;
     set_segment_blocks(*term, best, best_u);
     term->stiffness = e.stiffness * across;
     term->damping = c * axis * axis.transpose();

@@ -49,6 +49,8 @@ std::string finalize_thread(ThreadModel& t, int num_bodies, int num_materials) {
   if (!(t.damping >= 0.0) || !std::isfinite(t.damping)) return bad("damping", t.damping, ">= 0");
   if (!(t.break_strain > 0.0) || !std::isfinite(t.break_strain))
     return bad("break_strain", t.break_strain, "> 0");
+  if (!(t.tissue_friction >= 0.0) || !std::isfinite(t.tissue_friction))
+    return bad("tissue_friction", t.tissue_friction, ">= 0");
   if (t.material < 0 || t.material >= num_materials)
     return bad("material", t.material, "a material index");
   if (!t.start.allFinite()) return "start must be finite";
@@ -74,6 +76,7 @@ void reset_thread(const ThreadModel& t, ThreadState& s) noexcept {
   }
   for (ThreadEyelet& e : s.eyelets) e = ThreadEyelet{};
   s.broken_segment = -1;
+  s.eyelets_taken = s.eyelets_let_go = s.eyelets_dropped = 0;
   s.output = ThreadOutput{};
 }
 

@@ -210,6 +210,7 @@ void step_thread(const Model& model, Data& data, const ThreadModel& th, ThreadSt
   const Vec3 off1 = th.rest_segment * (p1.rotation * th.tie_end.direction);
   // The contacts and eyelets at the step's start (linear in v over the step).
   sc.num_terms = 0;
+  for (ThreadEyeletTerm& et : sc.eyelet_terms) et.set = false;
   gather_thread_body_contacts(model, data, th, st, sc);
   gather_thread_obstacle_contacts(model, th, st, sc);
   gather_thread_eyelets(th, st, sc);
@@ -276,8 +277,16 @@ void step_thread(const Model& model, Data& data, const ThreadModel& th, ThreadSt
     const Vec3 vp0 = term.wa * st.velocity[ia] + term.wb * st.velocity[ib];
     const Vec3 f = point_term_force(term, vp, vp0, h);
     if (term.eyelet >= 0) {
-      st.output.eyelets[static_cast<std::size_t>(term.eyelet)].friction_force =
-          term.axis.dot(term.force - term.damping * (vp - vp0));
+      const auto k = static_cast<std::size_t>(term.eyelet);
+      st.output.eyelets[k].friction_force = term.axis.dot(term.force - term.damping * (vp - vp0));
+      ThreadEyeletTerm& et = sc.eyelet_terms[k];
+      et.set = true;
+      et.point = term.wa * (st.position[ia] + h * v[ia]) + term.wb * (st.position[ib] + h * v[ib]);
+      et.velocity = vp;
+      et.axis = term.axis;
+      et.force = f;
+      et.stiffness = term.stiffness.trace() / 2.0;  // k (I − a aᵀ): trace 2k
+      et.damping = term.axis.dot(term.damping * term.axis);
     }
     if (term.body < 0) continue;
     const BodyState& bs = data.bodies[static_cast<std::size_t>(term.body)];
@@ -305,8 +314,15 @@ void step_thread(const Model& model, Data& data, const ThreadModel& th, ThreadSt
 
 void step_threads(const Model& model, Data& data) noexcept {
   data.stages_run |= kStageThreads;
-  for (std::size_t i = 0; i < model.threads.size(); ++i)
-    step_thread(model, data, model.threads[i], data.threads[i], data.scratch->threads[i]);
+  data.num_node_thread_ties = 0;
+  for (std::size_t i = 0; i < model.threads.size(); ++i) {
+    const ThreadModel& th = model.threads[i];
+    ThreadState& st = data.threads[i];
+    take_over_punctures(model, data, th, st);
+    place_tissue_eyelets(model, data, st);
+    step_thread(model, data, th, st, data.scratch->threads[i]);
+    tie_tissue_eyelets(model, data, st, data.scratch->threads[i]);
+  }
 }
 
 }  // namespace numen::core

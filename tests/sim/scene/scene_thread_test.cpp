@@ -53,6 +53,7 @@ TEST(SceneThread, BadThreadsAreLocatedErrorsNamingTheirKeys) {
       {"youngs_modulus_kpa = 0.0\n", "thread[0].youngs_modulus_kpa", "must be > 0"},
       {"density = -1.0\n", "thread[0].density", "must be > 0"},
       {"damping = -1.0\n", "thread[0].damping", "must be >= 0"},
+      {"tissue_friction = -0.1\n", "thread[0].tissue_friction", "must be >= 0"},
       {"attach_body = \"nowhere\"\n", "thread[0].attach_body", "no body named \"nowhere\""},
       {"length_mm = 50.0\n", "thread[0].length_mm", "unknown key"},
   };

@@ -203,6 +203,9 @@ struct Data {
   /// The needles' puncture ties on net nodes (NodeContact::held), in node_contacts after the
   /// grasp springs (needle_puncture.hpp, tie_needles()); 0 without a punctured needle.
   int num_node_needle_ties = 0;
+  /// The threads' eyelets on tissue as held node springs, in node_contacts after the needles'
+  /// ties (thread.hpp, step_threads()); 0 without a thread through tissue.
+  int num_node_thread_ties = 0;
   int solver_iterations = 0;       ///< Iterations of the implicit solve this step (bodies and nets).
   /// The measure the solve stopped on (SolverSettings::tolerance): the relative residual
   /// ‖r‖/‖b‖; for a model with nets and no joints the estimated relative energy-norm error

@@ -28,9 +28,10 @@ struct DataFootprint {
   /// bodies (states, inputs, outputs, wrenches, grasps), collision scratch, contact
   /// solver scratch (capacity.hpp), body solver scratch, joints (states,
   /// prescriptions, joint rows, tree solve), nets (nodes, node contacts,
-  /// outputs, net scratch), and the scratch block itself: the one heap object
-  /// behind Data::scratch that holds the scratch buffers' headers (fixed size).
-  std::array<BufferGroupBytes, 7> groups{};
+  /// outputs, net scratch), needles and threads (their states and the threads'
+  /// solve scratch), and the scratch block itself: the one heap object behind
+  /// Data::scratch that holds the scratch buffers' headers (fixed size).
+  std::array<BufferGroupBytes, 8> groups{};
   std::size_t heap_bytes() const noexcept;  ///< Σ groups.
 };
 

@@ -79,6 +79,11 @@ struct NeedleState {
   /// Steps since reset in which the tip crossed a net's surface inwards without a puncture (the
   /// penalty contact did not hold it: it went through without the threshold): must stay 0.
   std::int64_t tunnels = 0;
+  /// The points let go past the tail this step, [0, num_tail_releases): where the needle has been
+  /// pulled through, what a thread tied to its tail takes over as eyelets (thread.hpp,
+  /// ThreadModel::needle). Written by tie_needles() each step.
+  std::array<NeedlePuncture, kMaxNeedlePunctures> tail_releases{};
+  int num_tail_releases = 0;
 };
 
 /// The needle's ties, before the forces (step(), after the grasp stage; kStageNeedles): for each
@@ -86,7 +91,8 @@ struct NeedleState {
 /// point where it comes out going forward; every point let go where it comes out going back, or a
 /// tunnel counted where it goes in without a puncture), lets go the points past the arc's ends,
 /// drops this step's node contacts of its spheres inside the net (those between the entry's and
-/// the exit's arc parameters, ± 2 r_w), and writes each point's springs after the node contacts
+/// the exit's arc parameters, ± 2 r_w), keeps the points let go past the tail in
+/// NeedleState::tail_releases, and writes each point's springs after the node contacts
 /// and the grasp springs (Data::num_node_needle_ties). No allocation.
 void tie_needles(const Model& model, Data& data) noexcept;
 

@@ -33,7 +33,8 @@ struct Contact;
 ///      zero velocity, the feedback (composite and per body), the joint
 ///      states and the solver's Δu and Δv are zeroed, the nets' outputs
 ///      re-measured on the restored nodes (tie wrench zeroed),
-///      kNonFinite is set and Data::nonfinite_steps counted
+///      kNonFinite is set and Data::nonfinite_steps counted (a step whose thread went
+///      non-finite and was rolled back by its own stage, step_threads(), is counted too)
 /// Data::status is cleared first (then detect_contacts may set
 /// kContactOverflow and count contact_overflow_steps); a step that sets kInvalidTarget
 /// (a device target that is not finite, coupling.hpp) counts Data::invalid_target_steps;

@@ -22,7 +22,17 @@
 /// the segments with the bodies' spheres (reaction on the body), of the nodes with the static
 /// obstacles (plane, box, sphere, capsule), of non-adjacent segments with each other
 /// (capsule–capsule with the thread radius), and eyelets: points the thread slides through
-/// with friction along it (ThreadEyelet, written by the caller before each step).
+/// with friction along it (ThreadEyelet, written by the caller before each step, or taken over
+/// from a needle's punctures).
+///
+/// Through tissue (docs/suturing.md "The thread through tissue"): a thread whose start is tied
+/// to a needle (ThreadModel::needle) takes over each puncture point the needle lets go past its
+/// tail (NeedleState::tail_releases) as an eyelet on that material point of the net's surface
+/// (ThreadEyelet::face): the eyelet moves with the net's nodes, and its force goes back to them
+/// as held node springs in the nets' implicit step (Data::num_node_thread_ties) — across the
+/// thread the eyelet's stiffness, along it the friction's damping, each node by its barycentric
+/// weight — while the thread's own step holds the eyelet's point as given: each side implicit in
+/// its own unknowns, the other side's point moving as it did at the step's start.
 
 #include <array>
 #include <cstdint>
@@ -38,6 +48,8 @@ struct Data;
 
 /// Most eyelets (puncture points) one thread slides through at once.
 inline constexpr int kMaxThreadEyelets = 8;
+/// Held node springs one eyelet on tissue writes: three nodes, three axes.
+inline constexpr int kThreadEyeletTieSprings = 9;
 
 /// One end of a thread tied to a point of a rigid body (e.g. a needle's tail, where the thread
 /// is swaged into it). Body frame: origin at the body's centre of mass (BodyModel).
@@ -74,7 +86,15 @@ struct ThreadModel {
   ThreadTie tie_start;             ///< Node 0's tie.
   ThreadTie tie_end;               ///< The last node's tie.
   bool self_contact = true;        ///< Segment–segment contacts of the thread with itself.
+  /// Coulomb μ (≥ 0) of the thread sliding through a puncture point it takes over from its
+  /// needle. Chosen, not measured: suture–tissue friction depends on the load, the speed and the
+  /// suture (Zhang et al. 2017, "Friction Behavior at the Interface Between Surgical Sutures and
+  /// Tissues", Tribol. Lett. 65:4, braided silk the highest); docs/suturing.md.
+  double tissue_friction = 0.3;
   // ---- derived by finalize_model() ----
+  /// The needle (Model::needles) whose body the start is tied to, or −1: the thread takes over
+  /// its puncture points past the tail (needle_puncture.hpp, NeedleState::tail_releases).
+  int needle = -1;
   double rest_segment = 0.0;       ///< l0 = length / segments (m).
   double node_mass = 0.0;          ///< ρ A l0 (kg); the two end nodes carry half of it.
   double stretch_stiffness = 0.0;  ///< E A / l0 (N/m).
@@ -87,11 +107,18 @@ struct ThreadModel {
 /// friction μ |F_n| (regularised below `slip_speed`).
 struct ThreadEyelet {
   bool active = false;
-  Vec3 position = Vec3::Zero();  ///< World (m).
+  /// World (m) and velocity (m/s); for an eyelet on tissue (`face` ≥ 0) the stage writes them
+  /// from the net's nodes at the step's start.
+  Vec3 position = Vec3::Zero();
   Vec3 velocity = Vec3::Zero();  ///< World (m/s).
   double friction = 0.0;         ///< μ (dimensionless), ≥ 0.
   double stiffness = 1e3;        ///< Across the thread (N/m), > 0.
   double slip_speed = 1e-3;      ///< Below this sliding speed (m/s) friction is viscous.
+  double drag = 0.0;             ///< Viscous friction along the thread besides μ (N·s/m), ≥ 0.
+  /// On tissue: a triangle of Model::net_faces (−1: a point the caller moves) and the material
+  /// point's barycentric weights on its nodes (sum 1). Its force goes back to those nodes.
+  int face = -1;
+  Vec3 weights = Vec3::Zero();
 };
 
 /// What an eyelet did in the last step.
@@ -126,13 +153,18 @@ struct ThreadState {
   std::array<ThreadEyelet, kMaxThreadEyelets> eyelets{};
   /// The segment the thread broke at (no stretch or bend across it from then on), or −1.
   int broken_segment = -1;
+  std::int64_t eyelets_taken = 0;    ///< Puncture points taken over from the needle since reset.
+  /// Eyelets on tissue let go since reset: the thread's free end slid out through them.
+  std::int64_t eyelets_let_go = 0;
+  /// Puncture points not taken over for want of a free eyelet (kMaxThreadEyelets): must stay 0.
+  std::int64_t eyelets_dropped = 0;
   ThreadOutput output;
 };
 
 /// Checks `thread` (its name or index in `label`) and fills its derived fields. Returns "" or
 /// a message naming the bad setting: length ≤ 0, segments < 1, radius ≤ 0, young_modulus ≤ 0,
-/// density ≤ 0, damping < 0, break_strain ≤ 0, a zero direction, a tie to a body that does not
-/// exist, a non-finite value. `num_bodies`, `num_materials`: the model's. Load time.
+/// density ≤ 0, damping < 0, break_strain ≤ 0, tissue_friction < 0, a zero direction, a tie to a
+/// body that does not exist, a non-finite value. `num_bodies`, `num_materials`: the model's. Load time.
 std::string finalize_thread(ThreadModel& thread, int num_bodies, int num_materials);
 
 /// Puts `state` at the initial straight shape of `thread` at rest (no allocation once sized).
@@ -140,8 +172,10 @@ void reset_thread(const ThreadModel& thread, ThreadState& state) noexcept;
 
 /// Steps every thread of `model` by Model::dt from the bodies' states at the step's start and
 /// adds the ties' and contacts' reactions to Data::body_wrench (the body-force stage; sets
-/// kStageThreads in Data::stages_run). A non-finite result restores the thread's last positions
-/// at rest and sets kNonFinite. No allocation, no exception.
+/// kStageThreads in Data::stages_run); takes over its needle's puncture points let go past the
+/// tail this step, and writes its eyelets' forces on tissue as held node springs after the
+/// needles' ties (Data::num_node_thread_ties; before the nets' forces). A non-finite result
+/// restores the thread's last positions at rest and sets kNonFinite. No allocation, no exception.
 void step_threads(const Model& model, Data& data) noexcept;
 
 }  // namespace numen::core
