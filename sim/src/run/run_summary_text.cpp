@@ -53,6 +53,9 @@ constexpr RunSummarySegment kLayout[] = {
      "{thread.breaks}",
      set("thread.tension_max_n", "thread.breaks")},
     {" (the first at {thread.first_break_s} s)", set("thread.breaks")},
+    {"; through tissue: {thread.eyelets_taken} puncture points taken over, {thread.eyelets_let_go} let "
+     "go, {thread.eyelets_dropped} dropped",
+     set("thread.eyelets_taken", "thread.eyelets_dropped")},
     {"\n", set("thread.tension_max_n", "thread.breaks")},
     {"  grasps: {grasp.started} started, {grasp.released} released, {grasp.slipped} slipped\n",
      set("grasp.started")},

@@ -26,7 +26,17 @@ void accumulate_thread_figures(const core::Data& data, RunSummary& s) noexcept {
 void summarize_threads(const core::Model& model, const core::Data& data, RunSummary& s) {
   s.threads = !model.threads.empty();
   for (std::size_t i = 0; i < model.threads.size() && i < data.threads.size(); ++i) {
-    const int segment = data.threads[i].broken_segment;
+    const core::ThreadState& st = data.threads[i];
+    s.thread_eyelets_taken += st.eyelets_taken;
+    s.thread_eyelets_let_go += st.eyelets_let_go;
+    s.thread_eyelets_dropped += st.eyelets_dropped;
+    if (st.eyelets_dropped > 0) {
+      const core::ThreadModel& t = model.threads[i];
+      s.warnings.push_back("thread '" + (t.name.empty() ? std::to_string(i) : t.name) + "' did not follow its needle through " +
+                           std::to_string(st.eyelets_dropped) + " puncture point(s): all its " +
+                           std::to_string(core::kMaxThreadEyelets) + " eyelets were taken");
+    }
+    const int segment = st.broken_segment;
     if (segment < 0) continue;
     const core::ThreadModel& t = model.threads[i];
     std::ostringstream os;

@@ -91,6 +91,9 @@ inline sim::RunSummary full_managed_summary() {
   s.thread_stretch_max = 0.004;
   s.thread_breaks = 1;
   s.thread_first_break_s = 3.25;
+  s.thread_eyelets_taken = 2;
+  s.thread_eyelets_let_go = 1;
+  s.thread_eyelets_dropped = 1;
   s.grasping = true;
   s.grasps_started = 2;
   s.grasps_released = 1;

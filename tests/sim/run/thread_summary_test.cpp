@@ -62,6 +62,38 @@ TEST(ThreadSummary, TheLargestTensionAndEachBreakAreKeptAndTheBreakIsAWarning) {
   EXPECT_NE(text.find("threads: tension max 1.500 N"), std::string::npos) << text;
 }
 
+// A thread through tissue: the puncture points it took over, let go and dropped summed over the
+// threads; a dropped one (its eyelets all taken) is a warning naming the thread, and the text has
+// the through-tissue part only where a thread took one over.
+TEST(ThreadSummary, PuncturePointsTakenOverAreCountedAndADroppedOneIsAWarning) {
+  numen::core::Model m;
+  m.threads.resize(2);
+  m.threads[0].name = "suture";
+  numen::core::Data d;
+  d.threads.resize(2);
+  numen::sim::RunSummary none;
+  numen::sim::summarize_threads(m, d, none);
+  EXPECT_EQ(numen::sim::format_summary(none).find("through tissue"), std::string::npos);
+  d.threads[0].eyelets_taken = 3;
+  d.threads[0].eyelets_let_go = 1;
+  d.threads[0].eyelets_dropped = 1;
+  d.threads[1].eyelets_taken = 2;
+  numen::sim::RunSummary s;
+  numen::sim::summarize_threads(m, d, s);
+  EXPECT_EQ(s.thread_eyelets_taken, 5);
+  EXPECT_EQ(s.thread_eyelets_let_go, 1);
+  EXPECT_EQ(s.thread_eyelets_dropped, 1);
+  ASSERT_EQ(s.warnings.size(), 1u);
+  EXPECT_NE(s.warnings[0].find("thread 'suture' did not follow its needle through 1 puncture point"),
+            std::string::npos) << s.warnings[0];
+  const nlohmann::json j = nlohmann::json::parse(numen::sim::format_summary_json(s));
+  EXPECT_EQ(j["thread"]["eyelets_taken"].get<std::int64_t>(), 5);
+  EXPECT_EQ(j["thread"]["eyelets_dropped"].get<std::int64_t>(), 1);
+  const std::string text = numen::sim::format_summary(s);
+  EXPECT_NE(text.find("through tissue: 5 puncture points taken over, 1 let go, 1 dropped"), std::string::npos)
+      << text;
+}
+
 // The default scene with a thread tied to a jaw: the run's summary has the thread's figures
 // (its weight pulls: tension > 0) and no break; a scene without threads has none of them.
 TEST(ThreadSummary, ASceneWithAThreadReportsItsTension) {

@@ -297,6 +297,12 @@ struct RunSummary {
   double thread_stretch_max = 0.0;       ///< Largest segment strain of any thread over the run.
   std::int64_t thread_breaks = 0;        ///< Threads that broke (a pull past break_strain).
   double thread_first_break_s = -1.0;    ///< Time of the first break (s; −1: none).
+  /// Puncture points the threads took over from their needles as eyelets on tissue (core::
+  /// ThreadState::eyelets_taken, summed), those let go as a free end slid out, and those dropped
+  /// for want of a free eyelet (each thread's a warning).
+  std::int64_t thread_eyelets_taken = 0;
+  std::int64_t thread_eyelets_let_go = 0;
+  std::int64_t thread_eyelets_dropped = 0;
   // Grasping (docs/grasping.md; summarize_grasps()): sums over the scene's graspers.
   bool grasping = false;                 ///< The scene has a grasper ([[grasp]]).
   std::int64_t grasps_started = 0;       ///< Grasps that started.
