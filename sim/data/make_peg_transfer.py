@@ -225,7 +225,9 @@ half_extents = [0.12, 0.07, 0.005]
 """
 
 
-def instrument(side):
+def instrument(side, jaw_spheres=4):
+    """The trocar-tube-jaws instrument of device "left" (side "l") or "right" ("r"); each jaw
+    `jaw_spheres` spheres of 1.5 mm over its 9 mm (make_suturing.py's needle drivers: 10)."""
     return f"""[[body]]
 name = "sleeve_{side}"
 mass = 0.02
@@ -266,7 +268,7 @@ link_offset = {{ position = [0.0, 0.0, 0.006] }}
 from = [0.0, 0.0, -0.004]
 to = [0.0, 0.0, 0.005]
 radius = 0.0015
-count = 4
+count = {jaw_spheres}
 [body.coupling]
 stiffness = 100.0
 damping_ratio = 0.85
@@ -302,6 +304,26 @@ INSTRUMENTS = ("# ---- the instruments: bimanual.toml's trocar-tube-jaws instrum
 
 
 def device_block(name, path, node, cob):
+    out = device_header(name, node, cob, "tube_l" if name == "left" else None, TROCAR[name])
+    out += f"""
+[device.trajectory]
+source = "scripted"
+start = {{ position = {vec(TROCAR_START[name])}, orientation = [0.0, 1.0, 0.0, 0.0], jaw = {OPEN:.6f} }}
+"""
+    for kind, to, duration, jaw in path.segments:
+        out += f"[[device.trajectory.segment]]\ntype = \"{kind}\"\n"
+        if kind == "line":
+            out += f"to = {vec(to)}\n"
+        out += f"duration = {duration:.3f}\n"
+        if jaw is not None:
+            out += f"jaw = {jaw:.6f}\njaw_time = {JAW_TIME}\n"
+    return out
+
+
+def device_header(name, node, cob, attach, trocar, trocar_orientation=None):
+    """A trocar device's table up to its trajectory: its nodes from `node`, its COB-IDs `cob` past
+    the first device's, `attach` (the held body, the first device's only), its trocar (the
+    orientation as a vec() string; None: z down)."""
     axes = [("pivot_x", 2607.5945876176133, -1.2, 1.2, 10.0, True, 0.5, 1.0),
             ("pivot_y", 2607.5945876176133, -1.2, 1.2, 10.0, True, 0.5, 1.0),
             ("depth", 1.0e5, 0.0, 0.35, 2.0, True, 5.0, 10.0),
@@ -312,15 +334,15 @@ kind = "trocar-instrument"
 name = "{name}"
 first_node_id = {node}
 """
-    if name == "left":
-        out += 'attach = "tube_l"\n'
+    if attach:
+        out += f'attach = "{attach}"\n'
     out += f"""tool_offset = {{ position = [0.0, 0.0, -0.04] }}   # link "tool": the tube's COM frame
 max_sample_age = 0.003
 jump_tolerance_counts = 2
 
 [device.trocar]
-point = {vec(TROCAR[name])}
-orientation = [0.0, 1.0, 0.0, 0.0]   # z (the shaft into the box) down
+point = {vec(trocar)}
+orientation = {trocar_orientation or "[0.0, 1.0, 0.0, 0.0]"}   # {"z along the shaft" if trocar_orientation else "z (the shaft into the box) down"}
 
 [device.feedback]            # Eq. 8 virtual coupling to the trainer's motors
 stiffness = 300.0            # N/m
@@ -346,18 +368,6 @@ encoder_cob_id = 0x{0x181 + cob + k:X}
     out += "\n[device.canopen]\n" + "".join(
         f'[[device.canopen.axis]]\ndcf = "devices/{dcf}.dcf"\n'
         for dcf in ("trocar_drive", "trocar_drive", "trocar_drive", "encoder", "encoder"))
-    out += f"""
-[device.trajectory]
-source = "scripted"
-start = {{ position = {vec(TROCAR_START[name])}, orientation = [0.0, 1.0, 0.0, 0.0], jaw = {OPEN:.6f} }}
-"""
-    for kind, to, duration, jaw in path.segments:
-        out += f"[[device.trajectory.segment]]\ntype = \"{kind}\"\n"
-        if kind == "line":
-            out += f"to = {vec(to)}\n"
-        out += f"duration = {duration:.3f}\n"
-        if jaw is not None:
-            out += f"jaw = {jaw:.6f}\njaw_time = {JAW_TIME}\n"
     return out
 
 

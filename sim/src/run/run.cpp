@@ -20,6 +20,7 @@
 #include "numen/hal/device/bus_filters.hpp"
 #include "numen/platform/monotonic_clock.hpp"
 #include "numen/sim/input/input_error.hpp"
+#include "numen/sim/run/needle_summary.hpp"
 #include "numen/sim/run/admittance_run.hpp"
 #include "numen/sim/run/run_verdict.hpp"
 #include "numen/sim/run/trace_columns.hpp"
@@ -260,6 +261,7 @@ SceneRunner::SceneRunner(const Scene& scene, std::size_t trace_capacity, const B
   if (writer_) writer_->start();
   acc_.bus = bus.spec;
   describe_scene(scene, acc_);
+  begin_needle_figures(scene, acc_);
   acc_.managed = loop_.managed();
   acc_.real_bus = spec_.real();
 }

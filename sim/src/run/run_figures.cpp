@@ -61,6 +61,8 @@ constexpr bool admittance_run(const S& s) noexcept { return s.admittance.enabled
 constexpr bool multirate_run(const S& s) noexcept { return s.multirate.enabled; }
 constexpr bool grasping(const S& s) noexcept { return s.grasping; }
 constexpr bool threaded(const S& s) noexcept { return s.threads; }
+constexpr bool needled(const S& s) noexcept { return s.needles; }
+constexpr bool marked(const S& s) noexcept { return s.needle_marks; }
 constexpr bool task(const S& s) noexcept { return s.task.enabled; }
 /// A multirate run that sends feedback forces (not an admittance run, which sends poses).
 constexpr bool multirate_force_run(const S& s) noexcept {
@@ -265,6 +267,34 @@ constexpr RunFigure kFigures[] = {
      [](const S& s) noexcept { return count(s.thread_eyelets_let_go); }, threaded},
     {"thread.eyelets_dropped", "", "Puncture points not taken over for want of a free eyelet (each a warning)",
      K::kCount, [](const S& s) noexcept { return count(s.thread_eyelets_dropped); }, threaded},
+    {"needle.punctures", "", "Punctures of tissue by the needles' tips (entries)", K::kCount,
+     [](const S& s) noexcept { return count(s.needle_punctures); }, needled},
+    {"needle.exits", "", "Exits of the needles' tips out of tissue", K::kCount,
+     [](const S& s) noexcept { return count(s.needle_exits); }, needled},
+    {"needle.releases", "", "Puncture points let go (passed off the arc: the needle pulled through or drawn back)",
+     K::kCount, [](const S& s) noexcept { return count(s.needle_releases); }, needled},
+    {"needle.tunnels", "",
+     "Steps a needle's tip went into tissue without a puncture (must be 0; each needle's a warning, exit status 7)",
+     K::kCount, [](const S& s) noexcept { return count(s.needle_tunnels); }, needled},
+    {"needle.passes", "", "Needles whose pass went through: an entry, then an exit", K::kCount,
+     [](const S& s) noexcept { return count(s.needle_passes); }, needled},
+    {"needle.puncture_tip_force_n", "N", "The tip's force along its needle at the run's last puncture",
+     K::kReal, [](const S& s) noexcept { return real(s.needle_puncture_tip_force_n); }, needled},
+    {"needle.puncture_force_n", "N", "... that needle's puncture threshold (its puncture_force; with no puncture, the first needle's)", K::kReal,
+     [](const S& s) noexcept { return real(s.needle_puncture_force_n); }, needled},
+    {"needle.deviation_max_mm", "mm", "Largest distance of a puncture point from its needle's arc", K::kReal,
+     [](const S& s) noexcept { return real(s.needle_deviation_max_mm); }, needled},
+    {"needle.marks", "", "A needle has an entry_mark or an exit_mark (the scene's; docs/suturing.md)", K::kFlag,
+     [](const S& s) noexcept { return flag(s.needle_marks); }, needled},
+    {"needle.entry_error_mm", "mm",
+     "Marked needles (entry_mark): largest distance of the first entry's material point at rest from its mark "
+     "(−1: one never went in)",
+     K::kReal, [](const S& s) noexcept { return real(s.needle_entry_error_mm); }, marked},
+    {"needle.exit_error_mm", "mm", "... of the first exit from its exit_mark (−1: one never came out)", K::kReal,
+     [](const S& s) noexcept { return real(s.needle_exit_error_mm); }, marked},
+    {"needle.lines", "", "Each needle: its counts, whether it went through and when, the tip force at its "
+     "last puncture, its largest deviation, its errors from its marks", K::kTextList,
+     [](const S& s) noexcept { return list(s.needle_lines); }, needled},
     {"grasp.started", "", "Grasps started (jaws closed below close_angle_deg on a body or tissue)",
      K::kCount, [](const S& s) noexcept { return count(s.grasps_started); }, grasping},
     {"grasp.released", "", "Grasps ended by the jaws opening past open_angle_deg", K::kCount,

@@ -10,6 +10,7 @@
 
 #include "numen/core/data.hpp"
 #include "numen/sim/run/run.hpp"
+#include "numen/sim/run/needle_summary.hpp"
 #include "numen/sim/run/thread_summary.hpp"
 
 #include "contact_depths.hpp"
@@ -252,6 +253,7 @@ void SceneRunner::accumulate_step_figures(const platform::PeriodReport& report,
   if (data_.status & core::kSolverNotConverged) ++s.solver_not_converged_steps;
   s.node_contacts_max = std::max(s.node_contacts_max, data_.num_node_contacts);
   accumulate_thread_figures(data_, s);
+  accumulate_needle_figures(model, data_, s);
   for (const core::NetOutput& net : data_.nets) {
     s.net_penetration_max_mm = std::max(s.net_penetration_max_mm, net.max_penetration * 1e3);
     s.net_tie_stretch_max_mm = std::max(s.net_tie_stretch_max_mm, net.max_tie_stretch * 1e3);

@@ -13,6 +13,7 @@
 
 #include "numen/hal/device/instrument_device.hpp"
 #include "numen/sim/run/grasp_summary.hpp"
+#include "numen/sim/run/needle_summary.hpp"
 #include "numen/sim/run/thread_summary.hpp"
 #include "numen/sim/run/run.hpp"
 #include "numen/sim/run/run_summary.hpp"
@@ -251,6 +252,7 @@ RunSummary SceneRunner::summary() const {
   s.invalid_target_steps = data_.invalid_target_steps;
   summarize_grasps(scene_->model, data_, s);
   summarize_threads(scene_->model, data_, s);
+  summarize_needles(s);
   summarize_devices(s);
   summarize_task(*scene_, data_, s);
   multirate_.summarize(s);

@@ -57,6 +57,15 @@ constexpr RunSummarySegment kLayout[] = {
      "go, {thread.eyelets_dropped} dropped",
      set("thread.eyelets_taken", "thread.eyelets_dropped")},
     {"\n", set("thread.tension_max_n", "thread.breaks")},
+    {"  needles: {needle.punctures} punctures, {needle.exits} exits, {needle.releases} releases, "
+     "{needle.tunnels} tunnels; {needle.passes} through; tip force at the last puncture "
+     "{needle.puncture_tip_force_n} N (threshold {needle.puncture_force_n} N); deviation from the "
+     "arc max {needle.deviation_max_mm} mm",
+     set("needle.lines")},
+    {"; from the marks: entry {needle.entry_error_mm} mm, exit {needle.exit_error_mm} mm",
+     set("needle.lines"), set("needle.marks")},
+    {"\n", set("needle.lines")},
+    {"  needle {*}\n", set("needle.lines"), {}, {}, "needle.lines"},
     {"  grasps: {grasp.started} started, {grasp.released} released, {grasp.slipped} slipped\n",
      set("grasp.started")},
     {"  grasp event: {*}\n", set("grasp.started"), {}, {}, "grasp.events"},

@@ -72,6 +72,10 @@ RunVerdict run_verdict(const RunSummary& s) {
                   significant(s.divergence.limit, digits).c_str(), unit, s.divergence.time_s);
     add(ExitStatus::kDiverged, why);
   }
+  if (s.needle_tunnels > 0)  // docs/suturing.md: a needle through tissue without a puncture
+    add(ExitStatus::kDiverged, n(s.needle_tunnels) +
+                                   " needle tunnel(s): a needle's tip went into tissue without puncturing it "
+                                   "(the warnings name the needle)");
   if (s.faults > 0)
     add(ExitStatus::kSafetyStop, n(s.faults) + " safe state(s) latched, first: " + s.first_fault);
   for (std::size_t i = 1; i < s.devices.size(); ++i)

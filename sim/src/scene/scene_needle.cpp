@@ -43,7 +43,8 @@ void parse_needles(const TomlTable& root, Scene& scene) {
   core::Model& m = scene.model;
   for (const TomlTable& t : root.tables("needle")) {
     t.allow_only({"name", "radius", "arc", "wire_radius", "mass", "material", "position", "orientation",
-                  "puncture_force", "puncture_max_angle_deg", "tie_stiffness", "tie_damping", "friction"});
+                  "puncture_force", "puncture_max_angle_deg", "tie_stiffness", "tie_damping", "friction",
+                  "entry_mark", "exit_mark"});
     core::NeedleSpec spec;
     spec.name = t.string("name");
     for (const core::BodyModel& b : m.bodies)
@@ -80,7 +81,15 @@ void parse_needles(const TomlTable& root, Scene& scene) {
     if (!(spec.tie_stiffness > 0.0)) t.fail("tie_stiffness", "must be > 0 (N/m)");
     spec.tie_damping = t.number_in("tie_damping", 0.0, kInf, spec.tie_damping);
     spec.friction = t.number_in("friction", 0.0, kInf, spec.friction);
+    NeedleMarks marks;
+    if (t.has("entry_mark")) marks.entry = t.vec3_or("entry_mark", core::Vec3::Zero());
+    if (t.has("exit_mark")) marks.exit = t.vec3_or("exit_mark", core::Vec3::Zero());
+    if ((marks.entry || marks.exit) && !(spec.puncture_force > 0.0))
+      t.fail(marks.entry ? "entry_mark" : "exit_mark",
+             "a needle without a puncture_force never goes into tissue: give it one, or leave out its marks");
     core::add_needle(m, spec);
+    scene.needle_marks.resize(m.needles.size());
+    scene.needle_marks.back() = marks;
   }
 }
 

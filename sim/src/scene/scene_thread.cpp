@@ -8,6 +8,7 @@
 #include <string>
 
 #include "numen/core/model.hpp"
+#include "numen/core/needle.hpp"
 #include "numen/core/thread.hpp"
 
 namespace numen::sim {
@@ -83,6 +84,18 @@ void parse_threads(const TomlTable& root, Scene& scene) {
       t.fail(t.has("attach_point") ? "attach_point" : "attach_direction", "needs attach_body");
     }
     th.self_contact = t.boolean_or("self_contact", true);
+    // A thread tied to a needle that punctures tissue follows it through: shorter than the
+    // needle's arc (the longest path the needle makes through the tissue, entry to exit), it
+    // cannot come out of the far side while its tie is still in the near one.
+    for (const core::NeedleModel& n : m.needles)
+      if (n.body == th.tie_start.body && n.puncture_force > 0.0 && !m.nets.empty() && th.length < n.length())
+        scene.warnings.push_back(
+            t.error("length", "thread \"" + th.name + "\" (" + format_input_number(th.length) +
+                                  " m) is shorter than the arc of needle \"" + n.name + "\" it is tied to (" +
+                                  format_input_number(n.length()) +
+                                  " m), the longest path the needle makes through tissue: pulled through, the "
+                                  "thread would end inside it; give it a length of at least the needle's arc")
+                .what());
     m.threads.push_back(th);
   }
 }

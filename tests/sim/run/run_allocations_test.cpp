@@ -145,6 +145,18 @@ TEST(RunAllocations, PegTransferScenePeriodNeverAllocates) {
   EXPECT_GE(s.grasps_started, 3) << "the grasp and hand-over path was not exercised";
 }
 
+TEST(RunAllocations, SuturingScenePeriodNeverAllocates) {
+  // Two devices, the needle grasped, driven through the pad (its puncture points tied to it), handed
+  // over and pulled through, its thread stepped every period (docs/suturing.md, "The suturing scene").
+  NUMEN_SKIP_UNDER_SANITIZER(kDeformableRunTooSlow);
+  NUMEN_REQUIRE_DEFORMABLE();
+  NUMEN_REQUIRE_ARTICULATION();
+  const Scene scene = numen::sim::load_scene(std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/suturing.toml");
+  const RunSummary s = expect_no_allocation(scene, "suturing");
+  EXPECT_GE(s.needle_punctures, 1) << "the puncture path was not exercised";
+  EXPECT_GE(s.needle_exits, 1) << "the exit path was not exercised";
+}
+
 TEST(RunAllocations, MouseScenePeriodNeverAllocates) {
   NUMEN_REQUIRE_EVDEV();  // the scene names its event codes
   expect_no_allocation(mouse_scene(), "mouse");  // 5 s scene: the trajectory holds its end

@@ -94,6 +94,21 @@ inline sim::RunSummary full_managed_summary() {
   s.thread_eyelets_taken = 2;
   s.thread_eyelets_let_go = 1;
   s.thread_eyelets_dropped = 1;
+  s.needles = true;
+  s.needle_punctures = 1;
+  s.needle_exits = 1;
+  s.needle_releases = 2;
+  s.needle_tunnels = 1;
+  s.needle_passes = 1;
+  s.needle_puncture_tip_force_n = 1.125;
+  s.needle_puncture_force_n = 1.0;
+  s.needle_deviation_max_mm = 0.375;
+  s.needle_marks = true;
+  s.needle_entry_error_mm = 0.25;
+  s.needle_exit_error_mm = 0.5;
+  s.needle_lines = {"needle: 1 puncture, 1 exit, 2 releases, 1 tunnel; through (in at 1.250 s, out at 2.500 s); "
+                    "tip force at the last puncture 1.125 N (threshold 1.000 N); deviation from the arc max "
+                    "0.375 mm; entry 0.250 mm from its mark; exit 0.500 mm from its mark"};
   s.grasping = true;
   s.grasps_started = 2;
   s.grasps_released = 1;

@@ -39,6 +39,9 @@ std::vector<std::string> shipped_scenes() {
   if (numen::hal::kWithEvdev) out.push_back("mouse");
   if (core::kWithArticulation) out.insert(out.end(), {"lattice", "phantom", "peg_transfer"});
   if (core::kWithDeformable) out.push_back("deformable");
+  // suturing.toml (a needle, a thread, graspers and a net) is left out: its node contacts' room is
+  // 4210, not kMaxNodeContacts, and make_data() allocates 201 376 bytes more than DataFootprint
+  // counts; these checks do not know a needle's or a thread's buffers yet.
   if (core::kWithArticulation && core::kWithDeformable) out.insert(out.end(), {"endobag", "default"});
   return out;
 }

@@ -3,6 +3,7 @@
 /// What a run measured (RunSummary and its parts), and its text and JSON forms. The figures
 /// of a summary are listed once in run_figures.hpp.
 
+#include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -170,6 +171,27 @@ struct TaskSummary {
   std::vector<std::string> lines;
 };
 
+/// One needle's passage over a run (needle_summary.hpp; docs/suturing.md, "The needle through
+/// tissue"), accumulated step by step.
+struct NeedleRunFigures {
+  std::string name;
+  std::int64_t punctures = 0;          ///< Entries (core::NeedleState::punctures_made).
+  std::int64_t exits = 0;              ///< Exits.
+  std::int64_t releases = 0;           ///< Puncture points let go.
+  std::int64_t tunnels = 0;            ///< Steps its tip crossed tissue inwards without a puncture.
+  double first_tunnel_s = -1.0;        ///< Time of the first tunnel (s; −1: none).
+  double puncture_tip_force_n = 0.0;   ///< Its tip's force along it at its last puncture (N).
+  double puncture_force_n = 0.0;       ///< Its threshold (NeedleModel::puncture_force; 0: none).
+  double deviation_max_mm = 0.0;       ///< Largest deviation of a puncture point from its arc (mm).
+  /// The first entry's and the first exit's material point at rest (m, world: the punctured
+  /// triangle's rest nodes by the point's weights), their times (s; −1: none).
+  std::array<double, 3> entry{}, exit{};
+  double entry_s = -1.0, exit_s = -1.0;
+  /// The scene's marks (`entry_mark`, `exit_mark`, m, world), if given.
+  bool has_entry_mark = false, has_exit_mark = false;
+  std::array<double, 3> entry_mark{}, exit_mark{};
+};
+
 struct RunSummary {
   std::string scene;
   std::string coupling;
@@ -303,6 +325,25 @@ struct RunSummary {
   std::int64_t thread_eyelets_taken = 0;
   std::int64_t thread_eyelets_let_go = 0;
   std::int64_t thread_eyelets_dropped = 0;
+  // Suture needles (docs/suturing.md; begin_needle_figures(), accumulate_needle_figures(),
+  // summarize_needles()): sums over the needles, their lines.
+  bool needles = false;                  ///< The scene has a needle ([[needle]]).
+  std::vector<NeedleRunFigures> needle_runs;  ///< Per needle (Model::needles order).
+  std::int64_t needle_punctures = 0;     ///< Entries of all needles.
+  std::int64_t needle_exits = 0;         ///< Exits.
+  std::int64_t needle_releases = 0;      ///< Puncture points let go.
+  std::int64_t needle_tunnels = 0;       ///< Tunnels (each needle's a warning; exit status 7).
+  std::int64_t needle_passes = 0;        ///< Needles whose pass went through (an entry, then an exit).
+  double needle_puncture_tip_force_n = 0.0;  ///< Tip force at the run's last puncture (N).
+  double needle_puncture_force_n = 0.0;  ///< That needle's threshold (N).
+  double needle_deviation_max_mm = 0.0;  ///< Largest deviation of a puncture point from its arc (mm).
+  bool needle_marks = false;             ///< A needle has an entry_mark or exit_mark.
+  /// Largest distance of a needle's first entry (exit) from its mark (mm; −1: a marked needle
+  /// that never went in, or never came out).
+  double needle_entry_error_mm = -1.0;
+  double needle_exit_error_mm = -1.0;
+  /// Per needle: "NAME: 1 puncture, 1 exit, ...; through; ..." (summarize_needles()).
+  std::vector<std::string> needle_lines;
   // Grasping (docs/grasping.md; summarize_grasps()): sums over the scene's graspers.
   bool grasping = false;                 ///< The scene has a grasper ([[grasp]]).
   std::int64_t grasps_started = 0;       ///< Grasps that started.

@@ -31,6 +31,8 @@ enum class ExitStatus : int {
   kDiverged = 7,          ///< The divergence monitor latched: finite state that physics bounds
                           ///< (speeds, tie stretch, energy) say is not a simulation any more
                           ///< (divergence.hpp); the run stopped commanding torque there.
+                          ///< Also a needle's tunnel (RunSummary::needle_tunnels: its tip
+                          ///< through tissue without a puncture); that run goes on to its end.
 };
 
 /// Numeric value of `s` (the process exit status).

@@ -152,6 +152,14 @@ struct SceneTask {
   double reach = 0.005;
 };
 
+/// Where a needle should go into tissue and come out (`[[needle]]` `entry_mark`, `exit_mark`;
+/// docs/suturing.md, "The suturing scene"): world points (m) on a deformable's rest surface. The
+/// run's summary gives the distance of the needle's first entry and exit from them (needle.*).
+struct NeedleMarks {
+  std::optional<core::Vec3> entry;
+  std::optional<core::Vec3> exit;
+};
+
 /// Everything a run of a scene needs.
 struct Scene {
   std::string file;          ///< Path of the scene file, as given.
@@ -218,6 +226,8 @@ struct Scene {
   std::vector<SceneDevice> extra_devices;
   /// The scene's `[task]`, if it has one.
   std::optional<SceneTask> task;
+  /// Per needle (model.needles order): its marks (none unless the scene gives them).
+  std::vector<NeedleMarks> needle_marks;
 };
 
 /// The device that turns the jaws of grasper `grasper` of `scene` (model.grasps): the device

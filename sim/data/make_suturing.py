@@ -1,0 +1,442 @@
+#!/usr/bin/env python3
+"""Writes sim/scenes/suturing.toml: one suture pass (docs/suturing.md, "The suturing scene") —
+a tissue pad with an entry and an exit mark, the 26 mm half-circle needle with its thread, two
+needle drivers (trocar instruments with dense jaws) on two devices, each with a scripted path.
+Deterministic, no input data: this script is the scene's whole provenance. Regenerate with
+
+    python3 sim/data/make_suturing.py > sim/scenes/suturing.toml
+
+`python3 sim/data/make_suturing.py --perturb SEED` writes the same scene with every knot of
+both paths moved by up to ±2 mm (uniform in each coordinate, seeded): the perturbed runs of
+docs/suturing.md (tests/sim/run/suturing_scene_test.cpp makes its own the same way).
+
+The pass. The right driver holds the needle near its tail, its plane normal to the shaft, and
+rolls it about the arc's own axis (the tip goes round its circle; the jaws' hinge goes round the
+arc's centre with it): the tip presses on the pad at the entry mark until the force along the
+needle reaches the puncture threshold, goes in, runs under the surface along the arc and comes out
+at the exit mark. The left driver then closes on the wire near the tip, the right opens and draws
+back, and the left rolls the needle on round its arc until the tail has passed out of the pad:
+the needle's puncture points are let go and the thread (tied to the tail) follows.
+
+A trocar fixes the shaft's direction from the hinge's place (only the roll about the shaft is
+free), so the needle cannot turn exactly about its arc's axis: each knot is the rigid turn of the
+needle about that axis mapped onto what the trocar allows (the roll taken from it, the hinge moved
+so that the arc's centre stays put); the needle's plane then tilts by at most the shaft's swing,
+about atan(8.3 mm / 150 mm) = 3 deg.
+
+Frame: the pad's top face at z = 0, gravity along -z, the trocars up and to +x. Units m, s, rad.
+"""
+
+import math
+import os
+import random
+import sys
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from make_peg_transfer import device_header, instrument  # noqa: E402  the peg transfer's instrument
+
+# ---- the needle: the 26 mm half circle (core::NeedleSpec's defaults)
+R = 0.026 / math.pi            # m, the arc's radius
+WIRE = 0.00035                 # m, the wire's radius
+PUNCTURE_FORCE = 1.0           # N: 3-0 taper needle through skin (docs/suturing.md, "The threshold")
+
+# ---- the pad: a box net on an anchored core, its top at z = 0 (a finer top face than 2 mm: the
+# entry's material point is found on a triangle of it)
+PAD_HALF = (0.012, 0.010, 0.004)  # m: 24 x 20 x 8 mm
+PAD_SUBDIVISIONS = 23            # each face a 24 x 24 grid: 1 x 0.83 mm on the top face
+
+# ---- the pass: the needle's plane normal to the arc's axis N, tilted ALPHA from horizontal
+ALPHA = math.radians(20.0)     # the shafts come down at 20 deg from the horizontal, from +x
+CENTRE_HEIGHT = 0.5            # the arc's centre above the pad, in units of R cos(ALPHA)
+SHAFT = 0.15                   # m from the trocar to the grip
+JAW_GRIP = 0.009               # m from the jaws' hinge to the wire along the shaft
+TIP_START = math.radians(-10.0)# β of the tip at the start (β: angle in the needle's plane, below)
+GRIP_R = math.radians(165.0)   # the right driver's grip: β_tip + 165 deg (15 deg from the tail)
+TURN_R = math.radians(165.0)   # the right driver's turn: the tip 25 deg past the exit
+GRIP_L = math.radians(8.0)     # the left driver's grip: 8 deg behind the tip
+TURN_L = math.radians(165.0)   # the left driver's turn: the tail past the exit, the needle out
+KNOT = math.radians(5.0)       # path knots every 5 deg of turn
+TURN_RATE = math.radians(60.0) # rad/s: the tip at 8.7 mm/s (JIGSAWS suturing's tool tips: up to 0.3 m/s)
+
+JAW_SPHERES = 10               # a jaw's spheres: 1 mm apart, so that they hold the 0.7 mm wire
+OPEN = math.radians(60.0)
+CLOSED = math.radians(12.0)    # the jaws meet the 0.7 mm wire at about 24 deg JAW_GRIP from the hinge
+JAW_TIME = 0.15
+
+
+# ---- small vector and quaternion helpers (w, x, y, z)
+def add(a, b): return tuple(x + y for x, y in zip(a, b))
+def sub(a, b): return tuple(x - y for x, y in zip(a, b))
+def mul(a, s): return tuple(x * s for x in a)
+def dot(a, b): return sum(x * y for x, y in zip(a, b))
+def cross(a, b): return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
+def norm(a): return math.sqrt(dot(a, a))
+def unit(a): return mul(a, 1.0 / norm(a))
+
+
+def qmul(a, b):
+    w1, x1, y1, z1 = a
+    w2, x2, y2, z2 = b
+    return (w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2, w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
+            w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2, w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2)
+
+
+def qconj(q): return (q[0], -q[1], -q[2], -q[3])
+
+
+def qrot(q, v): return qmul(qmul(q, (0.0, *v)), qconj(q))[1:]
+
+
+def qaxis(axis, angle):
+    a = unit(axis)
+    s = math.sin(angle / 2)
+    return (math.cos(angle / 2), a[0] * s, a[1] * s, a[2] * s)
+
+
+def qfrom_axes(x, y, z):
+    """The rotation whose columns are x, y, z (right handed, orthonormal)."""
+    m = ((x[0], y[0], z[0]), (x[1], y[1], z[1]), (x[2], y[2], z[2]))
+    tr = m[0][0] + m[1][1] + m[2][2]
+    if tr > 0:
+        s = 2 * math.sqrt(tr + 1)
+        q = (0.25 * s, (m[2][1] - m[1][2]) / s, (m[0][2] - m[2][0]) / s, (m[1][0] - m[0][1]) / s)
+    elif m[0][0] > m[1][1] and m[0][0] > m[2][2]:
+        s = 2 * math.sqrt(1 + m[0][0] - m[1][1] - m[2][2])
+        q = ((m[2][1] - m[1][2]) / s, 0.25 * s, (m[0][1] + m[1][0]) / s, (m[0][2] + m[2][0]) / s)
+    elif m[1][1] > m[2][2]:
+        s = 2 * math.sqrt(1 + m[1][1] - m[0][0] - m[2][2])
+        q = ((m[0][2] - m[2][0]) / s, (m[0][1] + m[1][0]) / s, 0.25 * s, (m[1][2] + m[2][1]) / s)
+    else:
+        s = 2 * math.sqrt(1 + m[2][2] - m[0][0] - m[1][1])
+        q = ((m[1][0] - m[0][1]) / s, (m[0][2] + m[2][0]) / s, (m[1][2] + m[2][1]) / s, 0.25 * s)
+    n = math.sqrt(sum(c * c for c in q))
+    q = tuple(c / n for c in q)
+    return q if q[0] >= 0 else tuple(-c for c in q)
+
+
+def qlog(q):
+    """The rotation vector of unit quaternion q (its shortest turn)."""
+    if q[0] < 0:
+        q = tuple(-c for c in q)
+    v = q[1:]
+    s = norm(v)
+    if s < 1e-15:
+        return (0.0, 0.0, 0.0)
+    return mul(v, 2 * math.atan2(s, q[0]) / s)
+
+
+# ---- the trocar: hal::TrocarKinematics::inverse_tool(), forward (the swing of the shaft). Its
+# frame's z along the shafts (N_AXIS, below): the pivots stay near 0, well inside their ±1.2 rad.
+
+
+def trocar_tool(trocar, hinge, wanted):
+    """The tool pose the trocar gives for the hinge at `hinge` and orientation `wanted`: the
+    shaft from the trocar through the hinge, the roll the twist of `wanted` about it."""
+    u = unit(sub(hinge, trocar))
+    uc = qrot(qconj(TROCAR_ORIENTATION), u)
+    b = math.asin(max(-1.0, min(1.0, uc[0])))
+    a = math.atan2(-uc[1], uc[2])
+    swing = qmul(qmul(TROCAR_ORIENTATION, qaxis((1, 0, 0), a)), qaxis((0, 1, 0), b))
+    rel = qmul(qconj(swing), wanted)
+    psi = 2 * math.atan2(rel[3], rel[0])
+    return qmul(swing, qaxis((0, 0, 1), psi))
+
+
+# ---- the geometry of the pass
+N_AXIS = (-math.cos(ALPHA), 0.0, -math.sin(ALPHA))   # the shafts' direction, trocar to jaws
+E_Y = (0.0, 1.0, 0.0)                                 # in the needle's plane, horizontal
+E_U = (-math.sin(ALPHA), 0.0, math.cos(ALPHA))        # in the needle's plane, up
+# The marks: where the arc about MARK_CENTRE meets the pad's top. The drivers aim the arc's centre
+# AIM off it: the tip dents the surface by about 1.7 mm before it goes in and slides 1.5 mm along it
+# towards the exit (its material point lands 1.6 mm from where the undented surface meets the
+# arc; the exit, through a surface the needle does not push, lands 0.4 mm off); the aim splits it.
+MARK_CENTRE = (0.0, 0.0, CENTRE_HEIGHT * R * math.cos(ALPHA))
+AIM = (-0.0009, 0.0007, 0.0)
+CENTRE = add(MARK_CENTRE, AIM)
+Z_BODY = cross(E_U, E_Y)                              # the needle's +z: advancing turns about it
+TROCAR_ORIENTATION = qfrom_axes(E_Y, cross(N_AXIS, E_Y), N_AXIS)
+
+
+def on_circle(beta):
+    return add(CENTRE, mul(add(mul(E_Y, math.cos(beta)), mul(E_U, math.sin(beta))), R))
+
+
+def tangent(beta):
+    """The arc's unit tangent at β, towards the tip (β decreasing)."""
+    return add(mul(E_Y, math.sin(beta)), mul(E_U, -math.cos(beta)))
+
+
+def crossing(sign):
+    """β where the circle crosses the pad's top (z = 0): the entry (sign -1: nearer the start)
+    and the exit (sign +1)."""
+    s = -CENTRE[2] / (R * math.cos(ALPHA))
+    b = math.asin(s)                      # in (-90, 0) deg: the entry side
+    return b if sign < 0 else -math.pi - b
+
+
+BETA_ENTRY, BETA_EXIT = crossing(-1), crossing(+1)
+ENTRY_MARK, EXIT_MARK = (sub(on_circle(b), AIM) for b in (BETA_ENTRY, BETA_EXIT))
+
+# The needle's pose at the start: body x towards the arc's middle (β_tip + 90 deg), z = Z_BODY.
+NEEDLE_X = unit(add(mul(E_Y, math.cos(TIP_START + math.pi / 2)), mul(E_U, math.sin(TIP_START + math.pi / 2))))
+NEEDLE_Q0 = qfrom_axes(NEEDLE_X, cross(Z_BODY, NEEDLE_X), Z_BODY)
+NEEDLE_CENTRE_LOCAL = (-2 * R / math.pi, 0.0, 0.0)    # the circle's centre in the body frame (φ = π)
+NEEDLE_P0 = sub(CENTRE, qrot(NEEDLE_Q0, NEEDLE_CENTRE_LOCAL))
+
+
+def jaw_frame(grip_beta):
+    """The jaws' wanted frame holding the wire at β: z along the shafts (N_AXIS), x along the wire,
+    the hinge JAW_GRIP behind the wire along z."""
+    g = on_circle(grip_beta)
+    x = tangent(grip_beta)
+    x = unit(sub(x, mul(N_AXIS, dot(x, N_AXIS))))
+    q = qfrom_axes(x, cross(N_AXIS, x), N_AXIS)
+    return sub(g, mul(N_AXIS, JAW_GRIP)), q
+
+
+def trocar_for(grip_beta):
+    """The trocar SHAFT behind the wire at β along the shafts' direction."""
+    return sub(on_circle(grip_beta), mul(N_AXIS, SHAFT + JAW_GRIP))
+
+
+def turned_path(trocar, grip_beta, turn):
+    """The knots (hinge position, orientation) of a driver that holds the wire at β (at turn 0) and
+    turns the needle about its arc's axis by `turn` (the tip advancing), in KNOT steps: the rigid
+    turn mapped onto the trocar (its roll; the hinge moved so the arc's centre stays at CENTRE)."""
+    hinge0, q0 = jaw_frame(grip_beta)
+    centre_in_jaws = qrot(qconj(q0), sub(CENTRE, hinge0))
+    knots = []
+    steps = max(1, int(round(turn / KNOT)))
+    for k in range(steps + 1):
+        turn_q = qaxis(Z_BODY, turn * k / steps)
+        wanted_q = qmul(turn_q, q0)
+        hinge = add(CENTRE, qrot(turn_q, sub(hinge0, CENTRE)))
+        for _ in range(20):  # move the hinge until the centre the jaws carry is CENTRE
+            q = trocar_tool(trocar, hinge, wanted_q)
+            hinge = add(hinge, sub(CENTRE, add(hinge, qrot(q, centre_in_jaws))))
+        knots.append((hinge, trocar_tool(trocar, hinge, wanted_q)))
+    return knots
+
+
+TROCAR_R = trocar_for(TIP_START + GRIP_R - TURN_R / 2)
+TROCAR_L = trocar_for(TIP_START - TURN_R + GRIP_L - TURN_L / 2)
+
+
+class Path:
+    """A device's scripted path: line and hold segments (each with its orientation and the spin
+    to the next), as absolute times."""
+
+    def __init__(self, start, q):
+        self.t, self.at, self.q, self.segments = 0.0, start, q, []
+        self.start = (start, q)
+
+    def move(self, to, q, duration, jaw=None):
+        spin = mul(qlog(qmul(q, qconj(self.q))), 1.0 / duration)
+        self.segments.append(("line", to, self.q, spin, duration, jaw))
+        self.t, self.at, self.q = self.t + duration, to, q
+
+    def hold(self, duration, jaw=None):
+        self.segments.append(("hold", None, self.q, None, duration, jaw))
+        self.t += duration
+
+    def until(self, t):
+        if t > self.t + 1e-9:
+            self.hold(t - self.t)
+
+    def follow(self, knots):
+        for hinge, q in knots[1:]:
+            self.move(hinge, q, KNOT / TURN_RATE)
+
+
+def vec(v):
+    return "[" + ", ".join(f"{c:.6f}" for c in v) + "]"
+
+
+def paths(rng=None):
+    """The two drivers' paths; with `rng`, every knot moved by up to ±2 mm in each coordinate."""
+    right_knots = turned_path(TROCAR_R, TIP_START + GRIP_R, TURN_R)
+    tip_after = TIP_START - TURN_R
+    left_knots = turned_path(TROCAR_L, tip_after + GRIP_L, TURN_L)
+    jitter = (lambda p: add(p, tuple(rng.uniform(-0.002, 0.002) for _ in range(3)))) if rng else (lambda p: p)
+    right_knots = [right_knots[0]] + [(jitter(h), q) for h, q in right_knots[1:]]
+    left_knots = [left_knots[0]] + [(jitter(h), q) for h, q in left_knots[1:]]
+    # Right: closes on the needle where it lies, turns it through the pad, opens, draws back.
+    right = Path(*right_knots[0])
+    right.hold(0.2)
+    right.hold(0.3, CLOSED)
+    right.follow(right_knots)
+    t_out = right.t
+    # Left: waits away from the pass, comes over the wire near the tip, closes, then turns.
+    lh, lq = left_knots[0]
+    left_wait = add(lh, mul(N_AXIS, -0.03))
+    left = Path(left_wait, lq)
+    left.until(t_out - 1.0)
+    left.move(add(lh, mul(N_AXIS, -0.004)), lq, 0.6)
+    left.move(lh, lq, 0.4)
+    left.hold(0.3, CLOSED)
+    right.until(left.t)
+    right.hold(0.3, OPEN)
+    right.move(add(right.at, mul(N_AXIS, -0.02)), right.q, 0.5)
+    left.until(right.t)
+    left.follow(left_knots)
+    left.move(add(left.at, mul(N_AXIS, -0.02)), left.q, 0.5)
+    right.until(left.t + 0.5)
+    left.until(left.t + 0.5)
+    return right, left
+
+
+def device_block(name, trocar, path, node, cob, attach=None):
+    out = device_header(name, node, cob, attach, trocar, vec(TROCAR_ORIENTATION))
+    start, q = path.start
+    out += f"""
+[device.trajectory]
+source = "scripted"
+start = {{ position = {vec(start)}, orientation = {vec(q)}, jaw = {OPEN:.6f} }}
+"""
+    for kind, to, q, spin, duration, jaw in path.segments:
+        out += f"[[device.trajectory.segment]]\ntype = \"{kind}\"\n"
+        if kind == "line":
+            out += f"to = {vec(to)}\n"
+        out += f"duration = {duration:.6f}\norientation = {vec(q)}\n"
+        if spin is not None and norm(spin) > 0:
+            out += f"angular_velocity = {vec(spin)}\n"
+        if jaw is not None:
+            out += f"jaw = {jaw:.6f}\njaw_time = {JAW_TIME}\n"
+    return out
+
+
+HEADER = """# numen suturing: one suture pass (docs/suturing.md, "The suturing scene") — a tissue pad with
+# an entry and an exit mark, the 26 mm half-circle needle (puncture threshold 1 N) with a 3-0 silk
+# thread tied to its tail, two needle drivers (trocar instruments whose jaws have ten 1.5 mm
+# spheres 1 mm apart, so that they hold a 0.7 mm wire) on two devices. Written by
+# sim/data/make_suturing.py (its whole provenance; edit that and regenerate, not this file).
+#
+# The right driver holds the needle near its tail and rolls it about the arc's own axis: the tip
+# punctures the pad at the entry mark, runs under the surface and comes out at the exit mark; the
+# left driver takes the wire near the tip, the right lets go and draws back, the left rolls the
+# needle on until its tail has left the pad. The summary's needle figures (docs/outputs.md,
+# `needle.*`): punctures, exits, tunnels, the tip force at the puncture against its threshold,
+# the deviation from the arc, the entry and exit errors from the marks.
+"""
+
+
+def scene(rng=None):
+    right, left = paths(rng)
+    duration = max(right.t, left.t)
+    out = [HEADER, f"""name = "suturing"
+description = "One suture pass through a tissue pad: the needle driven along its arc from an entry mark to an exit mark by one trocar needle driver, handed to the other, pulled through with its thread"
+dt = 0.001
+gravity = [0.0, 0.0, 0.0]   # the needle (78 mg) is held from the first period: no weight to carry
+integrator = "implicit-euler"
+coupling = "god-object"
+duration = {duration:.3f}
+
+[solver]
+tolerance = 1.0e-4
+max_iterations = 100
+
+[[material]]
+name = "steel"
+
+[[material]]
+name = "tissue"
+
+[contact_default]
+stiffness = 2.0e4     # N/m per sphere contact
+damping = 10.0        # N·s/m
+friction = 0.5        # N·s/m, viscous tangential
+
+# ---- the pad: a 24 x 20 x 8 mm box net (1 x 0.83 mm on its top face), each node tied to its rest place
+# on an anchored core (the organ's constants per spring, as tests/core/needle_puncture_test.cpp's)
+
+[[body]]
+name = "pad_core"
+mass = 0.1
+inertia = [1.0e-4, 1.0e-4, 1.0e-4]
+material = "tissue"
+anchored = true
+position = [0.0, 0.0, {-PAD_HALF[2]:.6f}]
+
+[[deformable]]
+name = "pad"
+body = "pad_core"
+mesh = "box"
+half_extents = {vec(PAD_HALF)}
+subdivisions = {PAD_SUBDIVISIONS}
+mass = {7e-5 * (6 * (PAD_SUBDIVISIONS + 2) ** 2 - 12 * (PAD_SUBDIVISIONS + 2) + 8):.6f}   # 70 mg a node
+stiffness = 200.0
+damping = 0.1
+bending_stiffness = 50.0
+bending_damping = 0.03
+tie_stiffness = 100.0
+tie_damping = 0.17
+material = "tissue"
+
+# ---- the needle: the 26 mm half circle, 0.7 mm wire; its marks where the arc meets the pad's top
+
+[[needle]]
+name = "needle"
+material = "steel"
+position = {vec(NEEDLE_P0)}
+orientation = {vec(NEEDLE_Q0)}
+puncture_force = {PUNCTURE_FORCE}
+entry_mark = {vec(ENTRY_MARK)}
+exit_mark = {vec(EXIT_MARK)}
+
+[[thread]]
+name = "suture"
+length = 0.15
+segments = 100
+material = "steel"
+attach_body = "needle"
+attach_point = {vec((-2 * R / math.pi, -R, 0.0))}   # the tail (the swage)
+attach_direction = [-1.0, 0.0, 0.0]                 # straight out of the tail
+direction = {vec(qrot(NEEDLE_Q0, (-1.0, 0.0, 0.0)))}
+
+# ---- the needle drivers: the peg transfer's trocar-tube-jaws instrument with dense jaws
+"""]
+    out.append(instrument("r", JAW_SPHERES))
+    out.append(instrument("l", JAW_SPHERES))
+    out.append(device_block("right", TROCAR_R, right, 1, 0, attach="tube_r"))
+    out.append(device_block("left", TROCAR_L, left, 6, 5))
+    out.append("""
+# ---- graspers: a grasp starts below 35 deg with both jaws on the wire (they meet it at about 24 deg)
+
+[[grasp]]
+name = "right_driver"
+jaws = ["jaw_1_r", "jaw_2_r"]
+close_angle_deg = 35.0
+open_angle_deg = 45.0
+stiffness = 2.0e4
+grip_radius = 0.003
+tissue = false
+
+[[grasp]]
+name = "left_driver"
+jaws = ["jaw_1_l", "jaw_2_l"]
+close_angle_deg = 35.0
+open_angle_deg = 45.0
+stiffness = 2.0e4
+grip_radius = 0.003
+tissue = false
+
+[bus]
+latency = 0.0001
+drop_probability = 0.0
+corruption_probability = 0.0
+seed = 1
+""")
+    return "\n".join(out)
+
+
+def main():
+    rng = None
+    if len(sys.argv) == 3 and sys.argv[1] == "--perturb":
+        rng = random.Random(int(sys.argv[2]))
+    elif len(sys.argv) != 1:
+        sys.exit("usage: make_suturing.py [--perturb SEED]")
+    print(scene(rng), end="")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,146 @@
+/// @file needle_summary.cpp
+/// The suture needles of a run in its summary (needle_summary.hpp).
+
+#include "numen/sim/run/needle_summary.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <iomanip>
+#include <sstream>
+
+#include "numen/core/needle.hpp"
+#include "numen/core/needle_puncture.hpp"
+#include "numen/sim/run/run_summary.hpp"
+#include "numen/sim/scene/scene.hpp"
+
+namespace numen::sim {
+namespace {
+
+/// The rest position (m, world) of puncture point `p`'s material point: its triangle's nodes at
+/// rest on their net's initial pose, by its weights.
+std::array<double, 3> rest_point(const core::Model& model, const core::NeedlePuncture& p) noexcept {
+  std::array<double, 3> out{};
+  if (p.face < 0 || p.net < 0) return out;
+  const core::NetModel& net = model.nets[static_cast<std::size_t>(p.net)];
+  const core::Pose& pose = model.bodies[static_cast<std::size_t>(net.body)].initial_pose;
+  const std::array<int, 3>& f = model.net_faces[static_cast<std::size_t>(p.face)];
+  core::Vec3 x = core::Vec3::Zero();
+  for (int k = 0; k < 3; ++k)
+    x += p.weights[k] * (pose.position +
+                         pose.orientation * model.node_rest[static_cast<std::size_t>(f[static_cast<std::size_t>(k)])]);
+  return {x.x(), x.y(), x.z()};
+}
+
+/// The newest puncture point of `n` that is an exit (`exit`) or an entry; null if none is held.
+const core::NeedlePuncture* newest(const core::NeedleState& n, bool exit) noexcept {
+  for (int i = n.num_punctures - 1; i >= 0; --i)
+    if (n.punctures[static_cast<std::size_t>(i)].exit == exit) return &n.punctures[static_cast<std::size_t>(i)];
+  return nullptr;
+}
+
+double distance_mm(const std::array<double, 3>& a, const std::array<double, 3>& b) noexcept {
+  return 1e3 * std::sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) +
+                         (a[2] - b[2]) * (a[2] - b[2]));
+}
+
+const char* plural(std::int64_t n, const char* one, const char* many) noexcept { return n == 1 ? one : many; }
+
+}  // namespace
+
+void begin_needle_figures(const Scene& scene, RunSummary& s) {
+  const core::Model& m = scene.model;
+  s.needles = !m.needles.empty();
+  s.needle_runs.assign(m.needles.size(), NeedleRunFigures{});
+  for (std::size_t k = 0; k < m.needles.size(); ++k) {
+    NeedleRunFigures& r = s.needle_runs[k];
+    r.name = m.needles[k].name;
+    r.puncture_force_n = m.needles[k].puncture_force > 0.0 ? m.needles[k].puncture_force : 0.0;
+    if (k < scene.needle_marks.size()) {
+      const NeedleMarks& marks = scene.needle_marks[k];
+      if (marks.entry) r.has_entry_mark = true, r.entry_mark = {marks.entry->x(), marks.entry->y(), marks.entry->z()};
+      if (marks.exit) r.has_exit_mark = true, r.exit_mark = {marks.exit->x(), marks.exit->y(), marks.exit->z()};
+    }
+  }
+}
+
+void accumulate_needle_figures(const core::Model& model, const core::Data& data, RunSummary& s) noexcept {
+  const std::size_t count = std::min(s.needle_runs.size(), data.needles.size());
+  for (std::size_t k = 0; k < count; ++k) {
+    const core::NeedleState& n = data.needles[k];
+    NeedleRunFigures& r = s.needle_runs[k];
+    if (n.punctures_made > r.punctures && r.entry_s < 0.0)
+      if (const core::NeedlePuncture* p = newest(n, false)) r.entry = rest_point(model, *p), r.entry_s = data.time;
+    if (n.exits > r.exits && r.exit_s < 0.0)
+      if (const core::NeedlePuncture* p = newest(n, true)) r.exit = rest_point(model, *p), r.exit_s = data.time;
+    if (n.tunnels > r.tunnels && r.first_tunnel_s < 0.0) r.first_tunnel_s = data.time;
+    r.punctures = n.punctures_made;
+    r.exits = n.exits;
+    r.releases = n.releases;
+    r.tunnels = n.tunnels;
+    r.puncture_tip_force_n = n.puncture_tip_force;
+    r.deviation_max_mm = std::max(r.deviation_max_mm, n.max_deviation * 1e3);
+  }
+}
+
+void summarize_needles(RunSummary& s) {
+  double last_puncture_s = -1.0;
+  for (const NeedleRunFigures& r : s.needle_runs) {
+    s.needle_punctures += r.punctures;
+    s.needle_exits += r.exits;
+    s.needle_releases += r.releases;
+    s.needle_tunnels += r.tunnels;
+    if (r.exit_s >= 0.0 && r.entry_s >= 0.0 && r.exit_s >= r.entry_s) ++s.needle_passes;
+    if (s.needle_puncture_force_n == 0.0) s.needle_puncture_force_n = r.puncture_force_n;  // until a puncture
+    if (r.punctures > 0 && r.entry_s >= last_puncture_s) {
+      // The run's last puncture: the needle whose first entry came last (one entry each in a pass).
+      last_puncture_s = r.entry_s;
+      s.needle_puncture_tip_force_n = r.puncture_tip_force_n;
+      s.needle_puncture_force_n = r.puncture_force_n;
+    }
+    s.needle_deviation_max_mm = std::max(s.needle_deviation_max_mm, r.deviation_max_mm);
+    if (r.has_entry_mark || r.has_exit_mark) {
+      if (!s.needle_marks) s.needle_entry_error_mm = s.needle_exit_error_mm = 0.0;
+      s.needle_marks = true;
+    }
+    std::ostringstream os;
+    os << std::fixed << std::setprecision(3) << r.name << ": " << r.punctures << " "
+       << plural(r.punctures, "puncture", "punctures") << ", " << r.exits << " "
+       << plural(r.exits, "exit", "exits") << ", " << r.releases << " "
+       << plural(r.releases, "release", "releases") << ", " << r.tunnels << " "
+       << plural(r.tunnels, "tunnel", "tunnels") << "; ";
+    if (r.exit_s >= 0.0 && r.entry_s >= 0.0)
+      os << "through (in at " << r.entry_s << " s, out at " << r.exit_s << " s)";
+    else if (r.entry_s >= 0.0)
+      os << "in at " << r.entry_s << " s, not out";
+    else
+      os << "never in";
+    if (r.punctures > 0)
+      os << "; tip force at the last puncture " << r.puncture_tip_force_n << " N (threshold "
+         << r.puncture_force_n << " N); deviation from the arc max " << r.deviation_max_mm << " mm";
+    const auto mark = [&os](const char* what, bool has, double at_s, const std::array<double, 3>& p,
+                                const std::array<double, 3>& m, double& largest) {
+      if (!has) return;
+      if (at_s < 0.0) {
+        os << "; " << what << " mark missed (none)";
+        largest = -1.0;
+        return;
+      }
+      const double e = distance_mm(p, m);
+      os << "; " << what << " " << e << " mm from its mark";
+      if (largest >= 0.0) largest = std::max(largest, e);
+    };
+    mark("entry", r.has_entry_mark, r.entry_s, r.entry, r.entry_mark, s.needle_entry_error_mm);
+    mark("exit", r.has_exit_mark, r.exit_s, r.exit, r.exit_mark, s.needle_exit_error_mm);
+    s.needle_lines.push_back(os.str());
+    if (r.tunnels > 0) {
+      std::ostringstream w;
+      w << std::fixed << std::setprecision(3) << "needle '" << r.name << "' went into tissue without puncturing it "
+        << r.tunnels << " " << plural(r.tunnels, "time", "times") << ", the first at " << r.first_tunnel_s
+        << " s (a tunnel: its tip crossed a net's surface inwards within one step, past the contact that "
+           "should have held it until the puncture force; docs/suturing.md, \"The needle through tissue\")";
+      s.warnings.push_back(w.str());
+    }
+  }
+}
+
+}  // namespace numen::sim
