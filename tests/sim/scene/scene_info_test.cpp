@@ -18,10 +18,13 @@
 #include "numen/core/capacity.hpp"
 #include "numen/core/data.hpp"
 #include "numen/core/features.hpp"
+#include "numen/core/grasp.hpp"
 #include "numen/core/mesh_shape.hpp"
+#include "numen/core/needle_puncture.hpp"
 #include "numen/core/net_surface_map.hpp"  // NetSurfacePoint
 #include "numen/core/step.hpp"
 #include "numen/core/step_stages.hpp"
+#include "numen/core/thread.hpp"
 #include "numen/hal/features.hpp"
 #include "numen/sim/scene/scene.hpp"
 #include "scene_text.hpp"
@@ -39,10 +42,7 @@ std::vector<std::string> shipped_scenes() {
   if (numen::hal::kWithEvdev) out.push_back("mouse");
   if (core::kWithArticulation) out.insert(out.end(), {"lattice", "phantom", "peg_transfer"});
   if (core::kWithDeformable) out.push_back("deformable");
-  // suturing.toml (a needle, a thread, graspers and a net) is left out: its node contacts' room is
-  // 4210, not kMaxNodeContacts, and make_data() allocates 201 376 bytes more than DataFootprint
-  // counts; these checks do not know a needle's or a thread's buffers yet.
-  if (core::kWithArticulation && core::kWithDeformable) out.insert(out.end(), {"endobag", "default"});
+  if (core::kWithArticulation && core::kWithDeformable) out.insert(out.end(), {"endobag", "default", "suturing"});
   return out;
 }
 
@@ -65,7 +65,12 @@ TEST(SceneInfo, SizesAreTheModelsCounts) {
     EXPECT_EQ(i.obstacles, static_cast<int>(m.obstacles.size())) << name;
     EXPECT_EQ(i.body_spheres, static_cast<int>(m.body_spheres.size())) << name;
     EXPECT_EQ(i.contact_capacity, core::contact_capacity(m)) << name;
-    EXPECT_EQ(i.node_contact_capacity, m.num_nodes() > 0 ? core::kMaxNodeContacts : 0) << name;
+    // With nets: the penalty contacts' room, then the grasp springs', the needles' puncture ties'
+    // and the threads' eyelet springs' (make_data()).
+    const int room = core::kMaxNodeContacts + m.num_grasps() * core::kMaxGraspNodes * core::kGraspSpringsPerNode +
+                     m.num_needles() * core::kMaxNeedlePunctures * core::kNeedleTieSprings +
+                     m.num_threads() * core::kMaxThreadEyelets * core::kThreadEyeletTieSprings;
+    EXPECT_EQ(i.node_contact_capacity, m.num_nodes() > 0 ? room : 0) << name;
   }
 }
 

@@ -98,7 +98,9 @@ struct SceneInfo {
   int max_contacts = 0;            ///< kMaxContacts (compile time).
   int contact_capacity = 0;        ///< core::contact_capacity(): room of the contact scratch.
   int cross_contact_capacity = 0;  ///< core::cross_contact_capacity().
-  int node_contact_capacity = 0;   ///< Data::node_contacts.size(): kMaxNodeContacts with nets, else 0.
+  /// Data::node_contacts.size(): with nets kMaxNodeContacts and the room of the grasp springs,
+  /// the needles' puncture ties and the threads' eyelet springs (make_data()), else 0.
+  int node_contact_capacity = 0;
   core::ModelFootprint model_bytes;
   /// Every mesh: the mesh obstacles, then the mesh bodies, then the nets with triangles, each in
   /// the model's order.
