@@ -45,8 +45,8 @@ function(numen_install_headers base_dir)
 endfunction()
 
 # core: the model, the state, one step and its stages, the laws a study calls on its own.
-# Internals live in core/src/detail (solver scratch, PCG, the nets' and joints' solves, the
-# 6×6 block Cholesky).
+# Internals live beside their sources in core/src/<folder>/ (solver scratch, PCG, the nets' and
+# joints' solves, the 6×6 block Cholesky).
 numen_install_headers(${PROJECT_SOURCE_DIR}/core/include
   numen/core/articulation.hpp numen/core/broadphase.hpp numen/core/capacity.hpp
   numen/core/collision.hpp numen/core/contact.hpp numen/core/contact_force.hpp

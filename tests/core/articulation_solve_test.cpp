@@ -3,7 +3,7 @@
 // assembled H, with known bodies (including re-rooting at a joint grounded from below),
 // disabled joints, singular rows, and allocation-free factor + solve. The topology:
 // articulation_test.cpp.
-#include "detail/articulation_solve.hpp"
+#include "scratch/articulation_solve.hpp"
 
 #include <algorithm>
 #include <cmath>

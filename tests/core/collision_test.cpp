@@ -19,8 +19,8 @@
 #include "numen/core/model.hpp"
 #include "numen/core/step.hpp"
 
-#include "detail/data_scratch.hpp"
-#include "detail/narrowphase.hpp"
+#include "scratch/data_scratch.hpp"
+#include "contact/narrowphase.hpp"
 
 namespace numen::core {
 namespace {

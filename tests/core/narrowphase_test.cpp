@@ -7,7 +7,7 @@
 
 #include <cmath>
 
-#include "detail/narrowphase.hpp"
+#include "contact/narrowphase.hpp"
 
 namespace numen::core {
 namespace {

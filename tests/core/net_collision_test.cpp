@@ -24,8 +24,8 @@
 #include "numen/core/mesh.hpp"
 #include "numen/core/model.hpp"
 
-#include "detail/data_scratch.hpp"
-#include "detail/narrowphase.hpp"
+#include "scratch/data_scratch.hpp"
+#include "contact/narrowphase.hpp"
 #include "build_features.hpp"
 
 namespace numen::core {

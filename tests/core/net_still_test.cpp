@@ -6,7 +6,7 @@
 // is not still, nor are its neighbours; without the model's spring lists no node rests or is
 // still; the nets that cannot rest have no still node.
 
-#include "detail/net_still.hpp"
+#include "net/net_still.hpp"
 
 #include <gtest/gtest.h>
 
@@ -16,7 +16,7 @@
 #include <functional>
 #include <vector>
 
-#include "detail/data_scratch.hpp"
+#include "scratch/data_scratch.hpp"
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"
 #include "numen/core/step.hpp"

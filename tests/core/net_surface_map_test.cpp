@@ -26,9 +26,9 @@
 #include "numen/core/step.hpp"
 
 #include "alloc_counter.hpp"
-#include "detail/data_scratch.hpp"
-#include "detail/mesh_shape_query.hpp"
-#include "detail/net_scratch.hpp"
+#include "scratch/data_scratch.hpp"
+#include "mesh/mesh_shape_query.hpp"
+#include "scratch/net_scratch.hpp"
 #include "organ_indentation.hpp"
 #include "sanitizer.hpp"
 

@@ -24,8 +24,8 @@
 #include "numen/core/net_forces.hpp"
 #include "numen/core/step.hpp"
 
-#include "detail/mesh_shape_query.hpp"
-#include "detail/node_contact_sink.hpp"
+#include "mesh/mesh_shape_query.hpp"
+#include "net/node_contact_sink.hpp"
 #include "organ_indentation.hpp"
 #include "sanitizer.hpp"
 

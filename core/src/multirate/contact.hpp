@@ -10,7 +10,7 @@
 #include "numen/core/data.hpp"
 
 #include "multirate/net.hpp"
-#include "detail/solver_scratch.hpp"
+#include "scratch/solver_scratch.hpp"
 
 namespace numen::core::detail {
 

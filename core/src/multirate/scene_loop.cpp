@@ -17,7 +17,7 @@
 #include "numen/core/step.hpp"
 #include "numen/core/step_stages.hpp"
 
-#include "detail/data_scratch.hpp"
+#include "scratch/data_scratch.hpp"
 #include "multirate/contact.hpp"
 #include "multirate/net.hpp"
 #include "numen/core/multirate/planes.hpp"

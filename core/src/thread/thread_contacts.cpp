@@ -5,9 +5,9 @@
 #include <algorithm>
 #include <cmath>
 
-#include "detail/narrowphase.hpp"
-#include "detail/thread_scratch.hpp"
-#include "detail/thread_terms.hpp"
+#include "contact/narrowphase.hpp"
+#include "scratch/thread_scratch.hpp"
+#include "thread/thread_terms.hpp"
 #include "numen/core/contact_force.hpp"
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"

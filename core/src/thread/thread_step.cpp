@@ -10,9 +10,9 @@
 #include <algorithm>
 #include <cmath>
 
-#include "detail/data_scratch.hpp"
-#include "detail/thread_scratch.hpp"
-#include "detail/thread_terms.hpp"
+#include "scratch/data_scratch.hpp"
+#include "scratch/thread_scratch.hpp"
+#include "thread/thread_terms.hpp"
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"
 #include "numen/core/rigid_body.hpp"
