@@ -1,4 +1,4 @@
-// Collision stage (core/src/collision.cpp): detect_contacts against an O(n²)
+// Collision stage (core/src/contact/collision.cpp): detect_contacts against an O(n²)
 // reference on random scenes, contact conventions, obstacle bounds, capacity
 // overflow, zero allocation and determinism.
 #include "numen/core/collision.hpp"

@@ -1,4 +1,4 @@
-// Resting nodes of an organ's net (core/src/net_rest.cpp; docs/organs.md, "Resting nodes"):
+// Resting nodes of an organ's net (core/src/net/net_rest.cpp; docs/organs.md, "Resting nodes"):
 // the shipped organ at rest rests whole and stays exactly where it was; pressed by a sphere,
 // the nodes it reaches wake, and the forces on the tool and the organ's energy are those of
 // the solve with every node in it; the lists the solve runs on follow the rules; the step

@@ -1,5 +1,5 @@
-// Still neighbourhoods of an organ's net (core/src/net_still.cpp, the force pass of
-// core/src/net_forces.cpp; docs/organs.md, "Resting nodes"): a node whose state and every
+// Still neighbourhoods of an organ's net (core/src/net/net_still.cpp, the force pass of
+// core/src/net/net_forces.cpp; docs/organs.md, "Resting nodes"): a node whose state and every
 // neighbour's are those of the last force pass takes its force and energy from that pass, and
 // the springs between such nodes are skipped — the same forces, energies, spring lengths and
 // directions, and so the same steps, to the bit as computing them; a node moved by the caller

@@ -1,4 +1,4 @@
-// An organ's surface contacts (core/src/net_surface.cpp; docs/organs.md, "Surface
+// An organ's surface contacts (core/src/net/net_surface.cpp; docs/organs.md, "Surface
 // contacts"): the tool's spheres against the organ's triangles through its node centres. The
 // geometry against an every-triangle reference (depth, normal, barycentric shares), a centre
 // below the surface pushed back out, a vertex or an edge shared by several triangles counted

@@ -1,4 +1,4 @@
-// Tests of core/src/detail/pcg.hpp: the one preconditioned conjugate-gradient
+// Tests of core/src/linalg/pcg.hpp: the one preconditioned conjugate-gradient
 // kernel of the implicit solves, on a small system of its own.
 #include "linalg/pcg.hpp"
 

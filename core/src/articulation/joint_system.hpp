@@ -1,6 +1,6 @@
 #pragma once
 /// @file joint_system.hpp
-/// Private to numen::core (core/src/detail; tests reach it through numen_core_internal).
+/// Private to numen::core (core/src/articulation; tests reach it through numen_core_internal).
 /// The joint rows of one time step: Baumgarte-stabilised right-hand sides
 /// (paper Eq. 5), the transposed product Gᵀ y, the multipliers and reactions
 /// (Eq. 4), and the drift measured after the step. The integrators

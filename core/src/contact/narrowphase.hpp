@@ -1,6 +1,6 @@
 #pragma once
 /// @file narrowphase.hpp
-/// Private to numen::core (core/src/detail; tests reach it through numen_core_internal).
+/// Private to numen::core (core/src/contact; tests reach it through numen_core_internal).
 /// Narrow phase of the collision stage (paper §5): the contact geometry of a
 /// sphere (of a dynamic body, "a") against a static shape or another sphere
 /// ("b"), world frame, SI units.

@@ -3,7 +3,7 @@
 /// on the null space of the joints' rows by projected CG with the tree solve as constraint
 /// preconditioner (solve_constrained_system()), and the velocities projected onto the joints'
 /// rows at a step's or stage's end (project_joint_velocities(), RATTLE). Declared in
-/// detail/implicit_system.hpp; left out of a build without articulation (NUMEN_WITH_ARTICULATION).
+/// solver/implicit_system.hpp; left out of a build without articulation (NUMEN_WITH_ARTICULATION).
 
 #include <algorithm>
 #include <cmath>

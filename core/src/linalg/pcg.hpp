@@ -1,6 +1,6 @@
 #pragma once
 /// @file pcg.hpp
-/// Private to numen::core (core/src/detail): the one preconditioned conjugate
+/// Private to numen::core (core/src/linalg): the one preconditioned conjugate
 /// gradient loop of the implicit solves (Hestenes & Stiefel 1952; Saad,
 /// "Iterative Methods for Sparse Linear Systems", Alg. 9.1). The four solves of
 /// the core are its uses: the bodies' block-Jacobi CG (solve_implicit_system),

@@ -2,7 +2,7 @@
 /// The narrow band of a MeshShape (mesh_shape.hpp, MeshBand; docs/meshes.md): which triangles
 /// each cell near the surface lists, so that a query within the band tests a bounded number of
 /// triangles whatever the triangle count. Built at load; the query is band_nearest()
-/// (detail/mesh_shape_query.hpp).
+/// (mesh/mesh_shape_query.hpp).
 ///
 /// Every feature f (face, edge, vertex) is rasterised into the cells that meet its region R_f
 /// (the points whose closest point on the surface can lie on f) within distance B of f. R_f is an

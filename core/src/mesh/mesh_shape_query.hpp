@@ -1,6 +1,6 @@
 #pragma once
 /// @file mesh_shape_query.hpp
-/// Private to numen::core (core/src/detail). The pieces of a MeshShape's signed-distance query
+/// Private to numen::core (core/src/mesh). The pieces of a MeshShape's signed-distance query
 /// shared by the tree (mesh_shape.cpp) and the narrow band (mesh_shape_band.cpp): the closest point
 /// on a triangle (Ericson 2005, §5.1.5), the running nearest triangle, and the signed result from
 /// the feature's angle-weighted pseudo-normal (Bærentzen & Aanæs 2005). No allocation, no exception.

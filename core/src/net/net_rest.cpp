@@ -1,5 +1,5 @@
 /// @file net_rest.cpp
-/// Resting nodes of an organ's net (detail/net_rest.hpp; docs/organs.md, "Resting nodes").
+/// Resting nodes of an organ's net (net/net_rest.hpp; docs/organs.md, "Resting nodes").
 
 #include "net/net_rest.hpp"
 

@@ -1,6 +1,6 @@
 #pragma once
 /// @file net_rest.hpp
-/// Private to numen::core (core/src/detail; tests reach it through numen_core_internal).
+/// Private to numen::core (core/src/net; tests reach it through numen_core_internal).
 /// Resting nodes of an organ's net (docs/organs.md, "Resting nodes"): the sleeping
 /// (deactivation) of rigid-body engines — Bullet's activation states, PhysX's sleep
 /// threshold — applied node by node to a deformable net on an anchored body. A node that

@@ -1,5 +1,5 @@
 /// @file net_scratch.cpp
-/// Sizing of the nets' scratch (detail/net_scratch.hpp).
+/// Sizing of the nets' scratch (scratch/net_scratch.hpp).
 
 #include "scratch/net_scratch.hpp"
 

@@ -1,6 +1,6 @@
 #pragma once
 /// @file net_solve.hpp
-/// Private to numen::core (core/src/detail; tests reach it through numen_core_internal).
+/// Private to numen::core (core/src/net; tests reach it through numen_core_internal).
 /// Linearly implicit Euler of the rigid bodies and the deformable nets as one
 /// system (paper §4.2, §5; Baraff & Witkin 1998): unknowns Δu per body (6)
 /// and Δv per node (3),

@@ -1,5 +1,5 @@
 /// @file net_still.cpp
-/// Still neighbourhoods of an organ's net (detail/net_still.hpp).
+/// Still neighbourhoods of an organ's net (net/net_still.hpp).
 
 #include "net/net_still.hpp"
 

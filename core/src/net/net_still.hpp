@@ -1,6 +1,6 @@
 #pragma once
 /// @file net_still.hpp
-/// Private to numen::core (core/src/detail; tests reach it through numen_core_internal).
+/// Private to numen::core (core/src/net; tests reach it through numen_core_internal).
 /// Still neighbourhoods of an organ's net: the force pass's reuse of its own last result.
 ///
 /// A node's force after the springs (gravity, its tie and every spring at it, summed in the

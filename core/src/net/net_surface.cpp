@@ -1,5 +1,5 @@
 /// @file net_surface.cpp
-/// An organ's surface contacts (detail/net_surface.hpp; docs/organs.md, "Surface
+/// An organ's surface contacts (net/net_surface.hpp; docs/organs.md, "Surface
 /// contacts"): the dynamic bodies' spheres against the net's triangles through its node
 /// centres, the closest point by Ericson's test shared with the mesh obstacles
 /// (mesh_shape_query.hpp), inside or outside by the angle-weighted pseudo-normal.

@@ -1,6 +1,6 @@
 #pragma once
 /// @file net_surface.hpp
-/// Private to numen::core (core/src/detail): an organ's surface contacts (docs/organs.md,
+/// Private to numen::core (core/src/net): an organ's surface contacts (docs/organs.md,
 /// "Surface contacts"). An organ (a net on an anchored body, BodyModel::anchored) whose net has
 /// surface triangles (Model::net_faces) meets the dynamic bodies' spheres with its triangles
 /// through the node centres instead of its node spheres: a contact per triangle whose closest

@@ -1,6 +1,6 @@
 #pragma once
 /// @file net_surface_frame.hpp
-/// Private to numen::core (core/src/detail): the frame of a net triangle that carries the fine
+/// Private to numen::core (core/src/net): the frame of a net triangle that carries the fine
 /// surface's vertices (net_surface_map.hpp, NetSurfacePoint), and a fine vertex's position from
 /// it. No allocation.
 

@@ -1,6 +1,6 @@
 #pragma once
 /// @file net_terms.hpp
-/// Private to numen::core (core/src/detail): the terms of the nets' coupled
+/// Private to numen::core (core/src/net): the terms of the nets' coupled
 /// system (net_solve.hpp) shared by its assembly (net_assembly.cpp), the SSOR
 /// sweeps with Eisenstat's CG (net_sweeps.cpp) and the arrowhead projected CG
 /// (net_arrowhead.cpp): tie weights, contact weights, the springs' weights in

@@ -1,5 +1,5 @@
 /// @file net_tissue.cpp
-/// The contact of a tool's sphere with an organ given by its material (detail/net_tissue.hpp;
+/// The contact of a tool's sphere with an organ given by its material (net/net_tissue.hpp;
 /// net_tissue_contact.hpp's two-scale law, its load patch, the plane a sphere meets it through;
 /// docs/tissue.md, "The contact"): what compute_net_forces() (net_forces.cpp) and the multirate
 /// device loop's tissue planes (multirate/net_planes.cpp) take. Nets given per spring never call

@@ -1,6 +1,6 @@
 #pragma once
 /// @file net_tissue.hpp
-/// Private to numen::core (core/src/detail; defined in net_tissue.cpp): the contact of a tool's
+/// Private to numen::core (core/src/net; defined in net_tissue.cpp): the contact of a tool's
 /// sphere with an organ given by its material (net_tissue_contact.hpp's two-scale law on its load
 /// patch; docs/tissue.md, "The contact") for compute_net_forces(), the plane the sphere meets it
 /// through for the multirate device loop's tissue planes (multirate/net_planes.cpp; docs/tissue.md,

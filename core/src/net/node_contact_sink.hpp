@@ -1,6 +1,6 @@
 #pragma once
 /// @file node_contact_sink.hpp
-/// Private to numen::core (core/src/detail): the writer of the node contacts of the collision
+/// Private to numen::core (core/src/net): the writer of the node contacts of the collision
 /// stage of the nets (net_collision.cpp: node spheres; net_surface.cpp: an organ's surface
 /// triangles), bounded by the capacity, counting what it cannot keep. No allocation.
 

@@ -1,6 +1,6 @@
 #pragma once
 /// @file articulation_solve.hpp
-/// Private to numen::core (core/src/detail; tests and benchmarks reach it through
+/// Private to numen::core (core/src/scratch; tests and benchmarks reach it through
 /// numen_core_internal): the scratch and the factor and solve of the joints' tree solve,
 /// used by the integrator (joint_system.hpp) and the nets' arrowhead solve. The
 /// elimination order it follows is public (ArticulationTopology, articulation.hpp).

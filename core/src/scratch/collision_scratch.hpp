@@ -1,6 +1,6 @@
 #pragma once
 /// @file collision_scratch.hpp
-/// Private to numen::core (core/src/detail; tests reach it through numen_core_internal):
+/// Private to numen::core (core/src/scratch; tests reach it through numen_core_internal):
 /// the collision stage's scratch (collision.hpp, net_collision.hpp) — world sphere
 /// centres, body AABBs, the sort-and-sweep order kept between steps, the grid query
 /// stamps. Held in DataScratch (data_scratch.hpp) behind Data::scratch, sized once by

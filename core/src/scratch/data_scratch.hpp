@@ -1,6 +1,6 @@
 #pragma once
 /// @file data_scratch.hpp
-/// Private to numen::core (core/src/detail; tests and benchmarks reach it through
+/// Private to numen::core (core/src/scratch; tests and benchmarks reach it through
 /// numen_core_internal): DataScratch, the stages' scratch behind Data::scratch.
 
 #include "scratch/articulation_solve.hpp"

@@ -1,6 +1,6 @@
 #pragma once
 /// @file net_scratch.hpp
-/// Private to numen::core (core/src/detail; tests and benchmarks reach it through
+/// Private to numen::core (core/src/scratch; tests and benchmarks reach it through
 /// numen_core_internal): the scratch of the nets' force stage, collision stage and
 /// coupled implicit solve (net_forces.hpp, net_collision.hpp, net_solve.hpp) — the
 /// springs' linearisation in the sweep order and the solve's vectors. Held in

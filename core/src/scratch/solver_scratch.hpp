@@ -1,6 +1,6 @@
 #pragma once
 /// @file solver_scratch.hpp
-/// Private to numen::core (core/src/detail; tests and benchmarks reach it through
+/// Private to numen::core (core/src/scratch; tests and benchmarks reach it through
 /// numen_core_internal): the integrator's scratch (SolverScratch) and the per-contact
 /// terms of its implicit system (integrator.hpp; builders in implicit_system.hpp). Held
 /// in DataScratch (data_scratch.hpp) behind Data::scratch, sized once by make_data().

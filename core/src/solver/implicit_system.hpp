@@ -1,6 +1,6 @@
 #pragma once
 /// @file implicit_system.hpp
-/// Private to numen::core (core/src/detail): the builders and solves of the
+/// Private to numen::core (core/src/solver): the builders and solves of the
 /// bodies' implicit system A Δu = b, A = M − h_s D − h_s² K (integrator.hpp),
 /// that the linearised schemes are made of — the implicit gyroscopic step, the
 /// assembly of the 6×6 blocks and right-hand side, the matrix-free product, the

@@ -1,6 +1,6 @@
 #pragma once
 /// @file solver_terms.hpp
-/// Private to numen::core (core/src/detail): small terms shared by the bodies'
+/// Private to numen::core (core/src/solver): small terms shared by the bodies'
 /// solves (integrator.cpp) and the nets' (net_*.cpp) — the velocity of a point
 /// of a body, the generalized force of a force at a point, the dot product of
 /// block vectors, and the one non-finite result of a solve.
