@@ -155,7 +155,7 @@ MultirateGodObject::MultirateGodObject(const Model& scene, int body,
     plane_springs_.assign(scene.node_springs.size(), 0);
   }
   report_ = make_report();
-  model_ = make_scene_model();
+  scene_report_ = make_scene_report();
 }
 
 MultirateDeviceReport MultirateGodObject::make_report() const {
@@ -167,8 +167,8 @@ MultirateDeviceReport MultirateGodObject::make_report() const {
   return r;
 }
 
-MultirateSceneModel MultirateGodObject::make_scene_model() const {
-  MultirateSceneModel m;
+MultirateSceneReport MultirateGodObject::make_scene_report() const {
+  MultirateSceneReport m;
   m.scene.bodies = snapshot_.bodies;
   m.scene.joints = snapshot_.joints;
   m.scene.nodes = snapshot_.nodes;
@@ -261,7 +261,7 @@ void MultirateGodObject::write_report(MultirateDeviceReport& out) const noexcept
     out.released_states[i] = released_states_[i];
 }
 
-bool MultirateGodObject::take_model(const MultirateSceneModel& m) noexcept {
+bool MultirateGodObject::take_scene_report(const MultirateSceneReport& m) noexcept {
   const MultirateSceneSnapshot& from = m.scene;
   MultirateSceneSnapshot& to = snapshot_;
   for (std::size_t b = 0; b < to.bodies.size() && b < from.bodies.size(); ++b) to.bodies[b] = from.bodies[b];
@@ -306,13 +306,13 @@ void MultirateGodObject::hand_back() noexcept {
   }
 }
 
-void MultirateGodObject::device_step(const MultirateSceneModel* fresh) noexcept {
+void MultirateGodObject::device_step(const MultirateSceneReport* fresh) noexcept {
   took_model_ = fresh != nullptr;
   if (fresh != nullptr) {
     // What the new planes add at the god-object's pose (MultirateCounters::reset_energy).
     const bool held = slot_ >= 0;
     const double before = held ? plane_elastic_energy(device_model(), planes_, slot().device) : 0.0;
-    if (take_model(*fresh) && held) {
+    if (take_scene_report(*fresh) && held) {
       const double added = plane_elastic_energy(device_model(), planes_, slot().device) - before;
       if (added > 0.0) {
         counters_.reset_energy += added;
@@ -334,9 +334,9 @@ void MultirateGodObject::step() noexcept {
   const bool sample = period_ % ratio_ == 0;
   if (sample) {
     write_report(report_);
-    scene_step(report_, model_);
+    scene_step(report_, scene_report_);
   }
-  device_step(sample ? &model_ : nullptr);
+  device_step(sample ? &scene_report_ : nullptr);
 }
 
 void MultirateGodObject::write_feedback(Data& out) const noexcept {

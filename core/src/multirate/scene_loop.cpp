@@ -98,7 +98,7 @@ void step_sample(const Model& model, Data& data, const SampleContext& c) noexcep
 
 }  // namespace
 
-void MultirateGodObject::scene_step(const MultirateDeviceReport& in, MultirateSceneModel& out) noexcept {
+void MultirateGodObject::scene_step(const MultirateDeviceReport& in, MultirateSceneReport& out) noexcept {
   release_switched(in);                       //    a switch hands the released god-object back
   const int body = enter_scene_slot(in);      //    the sampled god-object's scene-loop Data
   const double h = scene_model().dt;
@@ -107,7 +107,7 @@ void MultirateGodObject::scene_step(const MultirateDeviceReport& in, MultirateSc
   apply_owed(h);                              // 2. what each body is owed, as its wrench
   const SceneStepOutcome stepped = step_scene(in, body, out);  // 3., 4. the step, its impulses
   settle_after_step(in, stepped, h);          //    the rest owed, the wrenches, the god-object
-  write_scene_model(in, body, out);           //    the model for the device loop
+  write_scene_report(in, body, out);           //    the report for the device loop
 }
 
 void MultirateGodObject::release_switched(const MultirateDeviceReport& in) noexcept {
@@ -206,7 +206,7 @@ void MultirateGodObject::apply_owed(double h) noexcept {
 }
 
 MultirateGodObject::SceneStepOutcome MultirateGodObject::step_scene(
-    const MultirateDeviceReport& in, int body, MultirateSceneModel& out) noexcept {
+    const MultirateDeviceReport& in, int body, MultirateSceneReport& out) noexcept {
   const Model& model = scene_model();
   const std::span<const int> device_body = scene_device_body();
   SampleContext context{&out.planes, std::span<const int>(device_body.data(), device_body.size()),
@@ -297,8 +297,8 @@ void MultirateGodObject::settle_after_step(const MultirateDeviceReport& in,
     scene_->bodies[static_cast<std::size_t>(god[i])] = in.states[i];
 }
 
-void MultirateGodObject::write_scene_model(const MultirateDeviceReport& in, int body,
-                                           MultirateSceneModel& out) noexcept {
+void MultirateGodObject::write_scene_report(const MultirateDeviceReport& in, int body,
+                                            MultirateSceneReport& out) noexcept {
   ++counters_.scene_steps;
   counters_.planes_dropped += out.planes.dropped;
   counters_.planes_max = std::max<std::int64_t>(counters_.planes_max, out.planes.count);

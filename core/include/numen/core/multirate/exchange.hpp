@@ -1,8 +1,9 @@
 #pragma once
 /// @file exchange.hpp
 /// What the two loops of a multirate god-object hand each other (numen/core/multirate.hpp,
-/// docs/multirate.md): the device loop's report (MultirateDeviceReport), the scene loop's model
-/// (MultirateSceneModel: the planes and the snapshot of the scene, MultirateSceneSnapshot).
+/// docs/multirate.md): the device loop's report (MultirateDeviceReport), the scene loop's report
+/// (MultirateSceneReport: the intermediate model, i.e. the planes, and the snapshot of the scene,
+/// MultirateSceneSnapshot).
 
 #include <array>
 #include <cstdint>
@@ -31,7 +32,7 @@ struct MultirateDeviceReport {
   std::vector<BodyState> released_states;  ///< Its god-object's bodies' states at the switch.
 };
 
-/// The scene loop's state in a MultirateSceneModel: what the single-rate view needs
+/// The scene loop's state in a MultirateSceneReport: what the single-rate view needs
 /// (MultirateGodObject::view()), copied so that the device loop never reads the scene loop's
 /// Data.
 struct MultirateSceneSnapshot {
@@ -60,10 +61,10 @@ struct MultirateSceneSnapshot {
   std::vector<NetOutput> nets;
 };
 
-/// What the scene loop hands the device loop (MultirateGodObject::scene_step()): the
+/// What the scene loop hands the device loop (MultirateGodObject::scene_step()), its report: the
 /// intermediate model for the god-object it sampled and the snapshot of the scene (where a
 /// switch starts the new god-object).
-struct MultirateSceneModel {
+struct MultirateSceneReport {
   ContactPlaneSet planes;
   int body = -1;                     ///< The god-object the planes are for (−1: none).
   std::int64_t sample_period = -1;   ///< MultirateDeviceReport::period of the sample.
