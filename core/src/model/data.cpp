@@ -3,6 +3,7 @@
 
 #include "numen/core/data.hpp"
 
+#include <algorithm>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -12,6 +13,7 @@
 #include "numen/core/capacity.hpp"
 #include "numen/core/features.hpp"
 #include "numen/core/model.hpp"
+#include "numen/core/step_outputs.hpp"
 #include "numen/core/step_stages.hpp"
 
 namespace numen::core {
@@ -172,6 +174,70 @@ void reset_data(const Model& model, Data& data) noexcept {
   data.stages_run = 0;
   data.nonfinite_steps = 0;
   data.invalid_target_steps = 0;
+}
+
+// One copy of a Data's state and outputs (step_outputs.hpp).
+namespace {
+
+/// Every field of `to` but the joints, from a Data or a StepOutputs.
+template <typename From>
+void copy_all_but_joints(const From& from, StepOutputs& to) noexcept {
+  std::copy_n(from.bodies.begin(), std::min(to.bodies.size(), from.bodies.size()),
+              to.bodies.begin());
+  to.num_contacts = std::clamp(from.num_contacts, 0, kMaxContacts);
+  std::copy_n(from.contacts.begin(), to.num_contacts, to.contacts.begin());
+  to.contacts_dropped = from.contacts_dropped;
+  to.contacts_clamped = from.contacts_clamped;
+  to.contact_overflow_steps = from.contact_overflow_steps;
+  to.contact_clamped_steps = from.contact_clamped_steps;
+  to.net_crossed_steps = from.net_crossed_steps;
+  to.crossed_contact_steps = from.crossed_contact_steps;
+  to.pass_throughs = from.pass_throughs;
+  to.nonfinite_steps = from.nonfinite_steps;
+  to.status = from.status;
+  to.stages_run = from.stages_run;
+  to.solver_iterations = from.solver_iterations;
+  to.solver_residual = from.solver_residual;
+  to.max_joint_drift = from.max_joint_drift;
+  to.max_joint_angle_drift = from.max_joint_angle_drift;
+  std::copy_n(from.nodes.begin(), std::min(to.nodes.size(), from.nodes.size()), to.nodes.begin());
+  to.num_node_contacts =
+      std::clamp(from.num_node_contacts, 0,
+                 static_cast<int>(std::min(to.node_contacts.size(), from.node_contacts.size())));
+  std::copy_n(from.node_contacts.begin(), to.num_node_contacts, to.node_contacts.begin());
+  std::copy_n(from.nets.begin(), std::min(to.nets.size(), from.nets.size()), to.nets.begin());
+}
+
+}  // namespace
+
+StepOutputs make_step_outputs(const Data& data, std::size_t num_joints) {
+  StepOutputs o;
+  o.bodies = data.bodies;
+  o.joints.assign(num_joints, JointState{});
+  o.nodes = data.nodes;
+  o.node_contacts.assign(data.node_contacts.size(), NodeContact{});
+  o.nets = data.nets;
+  return o;
+}
+
+void copy_outputs(const Data& from, StepOutputs& to) noexcept {
+  copy_all_but_joints(from, to);
+  std::copy_n(from.joints.begin(), std::min(to.joints.size(), from.joints.size()),
+              to.joints.begin());
+}
+
+void copy_outputs(const Data& from, std::span<const int> joint_index, StepOutputs& to) noexcept {
+  copy_all_but_joints(from, to);
+  for (std::size_t j = 0; j < joint_index.size() && j < from.joints.size(); ++j) {
+    const auto sj = static_cast<std::size_t>(joint_index[j]);
+    if (sj < to.joints.size()) to.joints[sj] = from.joints[j];
+  }
+}
+
+void copy_outputs(const StepOutputs& from, StepOutputs& to) noexcept {
+  copy_all_but_joints(from, to);
+  std::copy_n(from.joints.begin(), std::min(to.joints.size(), from.joints.size()),
+              to.joints.begin());
 }
 
 }  // namespace numen::core

@@ -139,11 +139,7 @@ MultirateGodObject::MultirateGodObject(const Model& scene, int body,
   seen_total_.assign(nb, Wrench{});
   base_applied_.assign(nb, Wrench{});
   released_states_.assign(largest, BodyState{});
-  snapshot_.bodies = scene_->bodies;
-  snapshot_.joints.assign(scene.joints.size(), JointState{});
-  snapshot_.nodes = scene_->nodes;
-  snapshot_.node_contacts.assign(scene_->node_contacts.size(), NodeContact{});
-  snapshot_.nets = scene_->nets;
+  snapshot_ = make_step_outputs(*scene_, scene.joints.size());
   if (scene.num_nets() > 0) {
     node_slot_.assign(static_cast<std::size_t>(scene.num_nodes()), -1);
     slot_node_.assign(kMaxContactPlanes, -1);
@@ -169,11 +165,7 @@ MultirateDeviceReport MultirateGodObject::make_report() const {
 
 MultirateSceneReport MultirateGodObject::make_scene_report() const {
   MultirateSceneReport m;
-  m.scene.bodies = snapshot_.bodies;
-  m.scene.joints = snapshot_.joints;
-  m.scene.nodes = snapshot_.nodes;
-  m.scene.node_contacts = snapshot_.node_contacts;
-  m.scene.nets = snapshot_.nets;
+  m.scene = snapshot_;
   return m;
 }
 
@@ -262,22 +254,7 @@ void MultirateGodObject::write_report(MultirateDeviceReport& out) const noexcept
 }
 
 bool MultirateGodObject::take_scene_report(const MultirateSceneReport& m) noexcept {
-  const MultirateSceneSnapshot& from = m.scene;
-  MultirateSceneSnapshot& to = snapshot_;
-  for (std::size_t b = 0; b < to.bodies.size() && b < from.bodies.size(); ++b) to.bodies[b] = from.bodies[b];
-  for (std::size_t j = 0; j < to.joints.size() && j < from.joints.size(); ++j) to.joints[j] = from.joints[j];
-  to.num_contacts = std::clamp(from.num_contacts, 0, kMaxContacts);
-  std::copy_n(from.contacts.begin(), to.num_contacts, to.contacts.begin());
-  to.contacts_dropped = from.contacts_dropped;
-  to.contacts_clamped = from.contacts_clamped;
-  copy_counts(from, to);
-  to.status = from.status;
-  to.stages_run = from.stages_run;
-  to.solver_iterations = from.solver_iterations;
-  to.solver_residual = from.solver_residual;
-  to.max_joint_drift = from.max_joint_drift;
-  to.max_joint_angle_drift = from.max_joint_angle_drift;
-  detail::copy_nets(from, to);
+  copy_outputs(m.scene, snapshot_);
   if (m.body != body_) return false;  // sampled before a switch: not this god-object's planes
   planes_.count = std::clamp(m.planes.count, 0, kMaxContactPlanes);
   planes_.carrier_count = std::clamp(m.planes.carrier_count, 0, kMaxPlaneCarriers);
@@ -354,7 +331,7 @@ void MultirateGodObject::write_feedback(Data& out) const noexcept {
 }
 
 void MultirateGodObject::view(Data& out) const noexcept {
-  const MultirateSceneSnapshot& snap = snapshot_;
+  const StepOutputs& snap = snapshot_;
   const std::size_t nb = std::min(out.bodies.size(), snap.bodies.size());
   for (std::size_t b = 0; b < nb; ++b) {
     out.bodies[b] = snap.bodies[b];

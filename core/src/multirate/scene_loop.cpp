@@ -308,31 +308,18 @@ void MultirateGodObject::write_scene_report(const MultirateDeviceReport& in, int
   const std::vector<int>& scene_joints =
       scene_slot_ >= 0 ? slots_[static_cast<std::size_t>(scene_slot_)].scene_joints : free_joints_;
   const std::span<const int> device_body = scene_device_body();
-  MultirateSceneSnapshot& snap = out.scene;
-  for (std::size_t b = 0; b < snap.bodies.size() && b < scene_->bodies.size(); ++b) snap.bodies[b] = scene_->bodies[b];
-  for (std::size_t j = 0; j < scene_joints.size() && j < scene_->joints.size(); ++j) {
-    const auto sj = static_cast<std::size_t>(scene_joints[j]);
-    if (sj < snap.joints.size()) snap.joints[sj] = scene_->joints[j];
-  }
+  StepOutputs& snap = out.scene;
+  // The scene loop's Data (its joint j is the scene's scene_joints[j]), then only its contacts
+  // not on the god-object (those on it are the device loop's), in order.
+  copy_outputs(*scene_, scene_joints, snap);
   int count = 0;
-  const int ns = std::clamp(scene_->num_contacts, 0, kMaxContacts);
-  for (int i = 0; i < ns; ++i) {
-    const Contact& c = scene_->contacts[static_cast<std::size_t>(i)];
+  for (int i = 0; i < snap.num_contacts; ++i) {
+    const Contact c = snap.contacts[static_cast<std::size_t>(i)];
     bool on_a = false;
     if (god_object_contact(c, device_body, on_a)) continue;  // the device loop's
     snap.contacts[static_cast<std::size_t>(count++)] = c;
   }
   snap.num_contacts = count;
-  snap.contacts_dropped = scene_->contacts_dropped;
-  snap.contacts_clamped = scene_->contacts_clamped;
-  copy_counts(*scene_, snap);
-  snap.status = scene_->status;
-  snap.stages_run = scene_->stages_run;
-  snap.solver_iterations = scene_->solver_iterations;
-  snap.solver_residual = scene_->solver_residual;
-  snap.max_joint_drift = scene_->max_joint_drift;
-  snap.max_joint_angle_drift = scene_->max_joint_angle_drift;
-  detail::copy_nets(*scene_, snap);
 }
 
 }  // namespace numen::core

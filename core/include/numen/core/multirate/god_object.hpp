@@ -289,7 +289,7 @@ class MultirateGodObject {
   int slot_ = -1;                 // the held body's slot; -1: none held
   ContactPlaneSet planes_;
   std::vector<Wrench> impulse_total_;   // per scene body, running totals (report)
-  MultirateSceneSnapshot snapshot_;     // from the last model
+  StepOutputs snapshot_;                // the scene, from the last scene report
   std::int64_t period_ = 0;       // device periods since construction or the last switch
   std::int64_t periods_since_model_ = 0;
   std::int64_t switches_ = 0;
