@@ -45,8 +45,8 @@ function(numen_install_headers base_dir)
 endfunction()
 
 # core: the model, the state, one step and its stages, the laws a study calls on its own.
-# Internals live in core/src/detail (solver scratch, PCG, the nets' and joints' solves, the
-# 6×6 block Cholesky).
+# Internals live beside their sources in core/src/<folder>/ (solver scratch, PCG, the nets' and
+# joints' solves, the 6×6 block Cholesky).
 numen_install_headers(${PROJECT_SOURCE_DIR}/core/include
   numen/core/articulation.hpp numen/core/broadphase.hpp numen/core/capacity.hpp
   numen/core/collision.hpp numen/core/contact.hpp numen/core/contact_force.hpp
@@ -58,7 +58,7 @@ numen_install_headers(${PROJECT_SOURCE_DIR}/core/include
   numen/core/multirate/god_object.hpp numen/core/multirate/planes.hpp numen/core/net_collision.hpp numen/core/net_forces.hpp numen/core/net_model.hpp
   numen/core/net_material.hpp numen/core/net_tissue_contact.hpp numen/core/net_surface_map.hpp
   numen/core/net_state.hpp numen/core/rigid_body.hpp numen/core/step.hpp
-  numen/core/step_stages.hpp numen/core/thread.hpp numen/core/types.hpp)
+  numen/core/step_outputs.hpp numen/core/step_stages.hpp numen/core/thread.hpp numen/core/types.hpp)
 numen_install_headers(${PROJECT_BINARY_DIR}/core/include  # generated
   numen/core/features.hpp numen/version.hpp)
 

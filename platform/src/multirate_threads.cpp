@@ -19,7 +19,7 @@ MultirateThreads::MultirateThreads(core::MultirateGodObject& god_object, std::in
       period_ns_(scene_period_ns),
       settings_(std::move(settings)),
       reports_(god_object.make_report()),
-      models_(god_object.make_scene_model()) {
+      scene_reports_(god_object.make_scene_report()) {
   if (scene_period_ns <= 0) throw std::invalid_argument("multirate: the scene period must be > 0 ns");
 }
 
@@ -31,8 +31,8 @@ void MultirateThreads::start() {
   god_object_.write_report(reports_.back());
   reports_.publish();
   reports_.acquire();
-  god_object_.scene_step(reports_.front(), models_.back());
-  models_.publish();
+  god_object_.scene_step(reports_.front(), scene_reports_.back());
+  scene_reports_.publish();
   stop_.store(false);
   setup_done_.store(false);
   setup_error_.clear();
@@ -50,7 +50,8 @@ void MultirateThreads::stop() noexcept {
 }
 
 void MultirateThreads::device_step() noexcept {
-  const core::MultirateSceneModel* fresh = models_.acquire() ? &models_.front() : nullptr;
+  const core::MultirateSceneReport* fresh =
+      scene_reports_.acquire() ? &scene_reports_.front() : nullptr;
   god_object_.device_step(fresh);
   god_object_.write_report(reports_.back());
   reports_.publish();
@@ -91,8 +92,8 @@ void MultirateThreads::run() noexcept {
     if (stop_.load(std::memory_order_relaxed)) break;
     const std::int64_t t0 = monotonic_now_ns();
     if (reports_.acquire()) reports_taken_.fetch_add(1, std::memory_order_relaxed);
-    god_object_.scene_step(reports_.front(), models_.back());
-    models_.publish();
+    god_object_.scene_step(reports_.front(), scene_reports_.back());
+    scene_reports_.publish();
     scene_time_.record(monotonic_now_ns() - t0);
     scene_steps_.fetch_add(1, std::memory_order_relaxed);
     if (settings_.extra_scene_time_ns > 0) {  // test hook: a slow scene

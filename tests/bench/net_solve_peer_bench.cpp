@@ -60,8 +60,8 @@
 #include "numen/core/model.hpp"
 #include "numen/core/step.hpp"
 
-#include "detail/data_scratch.hpp"
-#include "detail/net_solve.hpp"
+#include "scratch/data_scratch.hpp"
+#include "net/net_solve.hpp"
 #include "sample_median.hpp"
 
 namespace {

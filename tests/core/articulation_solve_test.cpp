@@ -1,9 +1,9 @@
-// Tests of the linear-time KKT solve of an articulation (core/src/detail/articulation_solve.hpp,
+// Tests of the linear-time KKT solve of an articulation (core/src/scratch/articulation_solve.hpp,
 // Baraff 1996) against the dense reference and against the residual of an independently
 // assembled H, with known bodies (including re-rooting at a joint grounded from below),
 // disabled joints, singular rows, and allocation-free factor + solve. The topology:
 // articulation_test.cpp.
-#include "detail/articulation_solve.hpp"
+#include "scratch/articulation_solve.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-// Broad phase (core/src/broadphase.cpp): the static sphere grid lists every
+// Broad phase (core/src/contact/broadphase.cpp): the static sphere grid lists every
 // sphere in every cell its box overlaps, queries return a superset of the
 // overlapping spheres, sizes stay bounded, and the sort-and-sweep order is a
 // pure function of the keys.

@@ -1,4 +1,5 @@
-// Mesh shapes on bodies (BodyModel::mesh; core/src/collision.cpp, step 4 of detect_contacts):
+// Mesh shapes on bodies (BodyModel::mesh; core/src/contact/collision.cpp, step 4 of
+// detect_contacts):
 // the spheres of a body against another body's mesh. An anchored mesh body gives the contacts and
 // the motion of the same mesh as an obstacle; a free one is pushed (equal and opposite forces, the
 // momentum kept) under every integrator; a body's own spheres do not touch its mesh; nothing

@@ -1,4 +1,5 @@
-// Mesh obstacles in the collision stage (core/src/collision.cpp, sphere_mesh in narrowphase.cpp)
+// Mesh obstacles in the collision stage (core/src/contact/collision.cpp, sphere_mesh in
+// narrowphase.cpp)
 // and in the nets' node contacts (net_collision.cpp): each contact's depth is r − the brute-force
 // signed distance of the sphere's centre in the mesh frame, the overflow is counted, nothing
 // allocates.

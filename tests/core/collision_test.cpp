@@ -1,4 +1,4 @@
-// Collision stage (core/src/collision.cpp): detect_contacts against an O(n²)
+// Collision stage (core/src/contact/collision.cpp): detect_contacts against an O(n²)
 // reference on random scenes, contact conventions, obstacle bounds, capacity
 // overflow, zero allocation and determinism.
 #include "numen/core/collision.hpp"
@@ -19,8 +19,8 @@
 #include "numen/core/model.hpp"
 #include "numen/core/step.hpp"
 
-#include "detail/data_scratch.hpp"
-#include "detail/narrowphase.hpp"
+#include "scratch/data_scratch.hpp"
+#include "contact/narrowphase.hpp"
 
 namespace numen::core {
 namespace {

@@ -18,7 +18,7 @@
 #include "numen/core/rigid_body.hpp"
 #include "numen/core/step.hpp"
 
-#include "detail/data_scratch.hpp"
+#include "scratch/data_scratch.hpp"
 #include "rotation.hpp"
 
 namespace core = numen::core;

@@ -16,7 +16,7 @@
 #include "numen/core/step.hpp"
 #include "alloc_counter.hpp"
 
-#include "detail/data_scratch.hpp"
+#include "scratch/data_scratch.hpp"
 #include "rotation.hpp"
 #include "test_constants.hpp"
 

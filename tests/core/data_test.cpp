@@ -15,7 +15,7 @@
 #include "numen/core/model.hpp"
 #include "numen/core/step.hpp"
 
-#include "detail/data_scratch.hpp"
+#include "scratch/data_scratch.hpp"
 
 namespace core = numen::core;
 using numen::test::LeanPart;

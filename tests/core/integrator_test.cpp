@@ -21,8 +21,8 @@
 #include "numen/core/rigid_body.hpp"
 #include "numen/core/step.hpp"
 
-#include "detail/data_scratch.hpp"
-#include "detail/implicit_system.hpp"
+#include "scratch/data_scratch.hpp"
+#include "solver/implicit_system.hpp"
 #include "rotation.hpp"
 
 namespace core = numen::core;

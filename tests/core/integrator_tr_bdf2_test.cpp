@@ -19,7 +19,7 @@
 #include "numen/core/rigid_body.hpp"
 #include "numen/core/step.hpp"
 
-#include "detail/implicit_system.hpp"
+#include "solver/implicit_system.hpp"
 
 namespace core = numen::core;
 using core::Mat3;

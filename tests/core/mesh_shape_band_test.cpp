@@ -11,7 +11,7 @@
 #include <string>
 
 #include "alloc_counter.hpp"
-#include "detail/mesh_shape_query.hpp"
+#include "mesh/mesh_shape_query.hpp"
 #include "numen/core/mesh.hpp"
 #include "numen/core/mesh_shape.hpp"
 #include "sanitizer.hpp"

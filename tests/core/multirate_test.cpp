@@ -18,7 +18,7 @@
 #include <gtest/gtest.h>
 
 #include "alloc_counter.hpp"
-#include "detail/data_scratch.hpp"
+#include "scratch/data_scratch.hpp"
 #include "numen/core/capacity.hpp"
 #include "numen/core/collision.hpp"
 #include "numen/core/contact_force.hpp"

@@ -1,4 +1,4 @@
-// Narrow phase (core/src/narrowphase.cpp): contact geometry of a sphere
+// Narrow phase (core/src/contact/narrowphase.cpp): contact geometry of a sphere
 // against sphere, plane, box and capsule on hand-computed cases, including the
 // degenerate ones (coincident centres, centre inside a box, centre on a
 // capsule's axis), which must give a finite unit normal.
@@ -7,7 +7,7 @@
 
 #include <cmath>
 
-#include "detail/narrowphase.hpp"
+#include "contact/narrowphase.hpp"
 
 namespace numen::core {
 namespace {

@@ -1,4 +1,4 @@
-// Collision stage of the deformable nets (core/src/net_collision.cpp):
+// Collision stage of the deformable nets (core/src/net/net_collision.cpp):
 // detect_node_contacts against an every-node-against-everything reference on
 // random scenes (every obstacle shape, sphere sets, other bodies' spheres),
 // the documented order, exclusion of the net's own articulation, coincident
@@ -24,8 +24,8 @@
 #include "numen/core/mesh.hpp"
 #include "numen/core/model.hpp"
 
-#include "detail/data_scratch.hpp"
-#include "detail/narrowphase.hpp"
+#include "scratch/data_scratch.hpp"
+#include "contact/narrowphase.hpp"
 #include "build_features.hpp"
 
 namespace numen::core {

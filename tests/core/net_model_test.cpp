@@ -17,7 +17,7 @@
 #include "numen/core/mesh.hpp"
 #include "numen/core/model.hpp"
 
-#include "detail/data_scratch.hpp"
+#include "scratch/data_scratch.hpp"
 #include "net_states.hpp"
 
 namespace core = numen::core;

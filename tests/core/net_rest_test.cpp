@@ -1,10 +1,10 @@
-// Resting nodes of an organ's net (core/src/net_rest.cpp; docs/organs.md, "Resting nodes"):
+// Resting nodes of an organ's net (core/src/net/net_rest.cpp; docs/organs.md, "Resting nodes"):
 // the shipped organ at rest rests whole and stays exactly where it was; pressed by a sphere,
 // the nodes it reaches wake, and the forces on the tool and the organ's energy are those of
 // the solve with every node in it; the lists the solve runs on follow the rules; the step
 // does not allocate while nodes rest and wake.
 
-#include "detail/net_rest.hpp"
+#include "net/net_rest.hpp"
 
 #include <gtest/gtest.h>
 
@@ -18,7 +18,7 @@
 #include "alloc_counter.hpp"
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"
-#include "detail/data_scratch.hpp"
+#include "scratch/data_scratch.hpp"
 #include "numen/core/step.hpp"
 #include "organ_indentation.hpp"
 

@@ -3,7 +3,7 @@
 // a permutation that keeps each net's range and narrows the spring graph's
 // bandwidth), the springs grouped by their earlier node in that order with
 // their constants copied, and the structure-of-arrays view of the springs.
-#include "detail/net_scratch.hpp"
+#include "scratch/net_scratch.hpp"
 
 #include <gtest/gtest.h>
 
@@ -17,7 +17,7 @@
 #include "numen/core/mesh.hpp"
 #include "numen/core/model.hpp"
 #include "numen/core/net_model.hpp"
-#include "detail/data_scratch.hpp"
+#include "scratch/data_scratch.hpp"
 #include "net_states.hpp"
 
 namespace core = numen::core;

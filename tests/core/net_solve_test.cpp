@@ -37,10 +37,10 @@
 #include "numen/core/rigid_body.hpp"
 #include "numen/core/step.hpp"
 
-#include "detail/data_scratch.hpp"
-#include "detail/implicit_system.hpp"
-#include "detail/joint_system.hpp"
-#include "detail/net_solve.hpp"
+#include "scratch/data_scratch.hpp"
+#include "solver/implicit_system.hpp"
+#include "articulation/joint_system.hpp"
+#include "net/net_solve.hpp"
 #include "net_states.hpp"
 #include "rotation.hpp"
 

@@ -1,12 +1,12 @@
-// Still neighbourhoods of an organ's net (core/src/net_still.cpp, the force pass of
-// core/src/net_forces.cpp; docs/organs.md, "Resting nodes"): a node whose state and every
+// Still neighbourhoods of an organ's net (core/src/net/net_still.cpp, the force pass of
+// core/src/net/net_forces.cpp; docs/organs.md, "Resting nodes"): a node whose state and every
 // neighbour's are those of the last force pass takes its force and energy from that pass, and
 // the springs between such nodes are skipped — the same forces, energies, spring lengths and
 // directions, and so the same steps, to the bit as computing them; a node moved by the caller
 // is not still, nor are its neighbours; without the model's spring lists no node rests or is
 // still; the nets that cannot rest have no still node.
 
-#include "detail/net_still.hpp"
+#include "net/net_still.hpp"
 
 #include <gtest/gtest.h>
 
@@ -16,7 +16,7 @@
 #include <functional>
 #include <vector>
 
-#include "detail/data_scratch.hpp"
+#include "scratch/data_scratch.hpp"
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"
 #include "numen/core/step.hpp"

@@ -1,4 +1,4 @@
-// A fine surface mapped onto a coarser net (core/src/net_surface_map.cpp;
+// A fine surface mapped onto a coarser net (core/src/net/net_surface_map.cpp;
 // docs/fine-surface.md): the embeddings reproduce the fine vertices at rest and follow
 // the net, bad input is refused with the model unchanged, every fine triangle is listed under the
 // net triangles it rides on, and an organ with a fine surface meets the tool with it — where it
@@ -26,9 +26,9 @@
 #include "numen/core/step.hpp"
 
 #include "alloc_counter.hpp"
-#include "detail/data_scratch.hpp"
-#include "detail/mesh_shape_query.hpp"
-#include "detail/net_scratch.hpp"
+#include "scratch/data_scratch.hpp"
+#include "mesh/mesh_shape_query.hpp"
+#include "scratch/net_scratch.hpp"
 #include "organ_indentation.hpp"
 #include "sanitizer.hpp"
 

@@ -1,4 +1,4 @@
-// An organ's surface contacts (core/src/net_surface.cpp; docs/organs.md, "Surface
+// An organ's surface contacts (core/src/net/net_surface.cpp; docs/organs.md, "Surface
 // contacts"): the tool's spheres against the organ's triangles through its node centres. The
 // geometry against an every-triangle reference (depth, normal, barycentric shares), a centre
 // below the surface pushed back out, a vertex or an edge shared by several triangles counted
@@ -24,8 +24,8 @@
 #include "numen/core/net_forces.hpp"
 #include "numen/core/step.hpp"
 
-#include "detail/mesh_shape_query.hpp"
-#include "detail/node_contact_sink.hpp"
+#include "mesh/mesh_shape_query.hpp"
+#include "net/node_contact_sink.hpp"
 #include "organ_indentation.hpp"
 #include "sanitizer.hpp"
 

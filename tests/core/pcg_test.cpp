@@ -1,6 +1,6 @@
-// Tests of core/src/detail/pcg.hpp: the one preconditioned conjugate-gradient
+// Tests of core/src/linalg/pcg.hpp: the one preconditioned conjugate-gradient
 // kernel of the implicit solves, on a small system of its own.
-#include "detail/pcg.hpp"
+#include "linalg/pcg.hpp"
 
 #include <gtest/gtest.h>
 

@@ -23,9 +23,9 @@
 #include "numen/core/rigid_body.hpp"
 #include "numen/core/step.hpp"
 
-#include "detail/data_scratch.hpp"
-#include "detail/implicit_system.hpp"
-#include "detail/joint_system.hpp"
+#include "scratch/data_scratch.hpp"
+#include "solver/implicit_system.hpp"
+#include "articulation/joint_system.hpp"
 #include "rotation.hpp"
 #include "sanitizer.hpp"
 

@@ -22,7 +22,7 @@
 #include "numen/core/step.hpp"
 #include "step_deformable_nets.hpp"
 
-#include "detail/data_scratch.hpp"
+#include "scratch/data_scratch.hpp"
 
 namespace core = numen::core;
 using core::Mat3;

@@ -25,8 +25,8 @@
 #include "numen/core/net_forces.hpp"
 #include "numen/core/step.hpp"
 
-#include "detail/data_scratch.hpp"
-#include "detail/joint_system.hpp"
+#include "scratch/data_scratch.hpp"
+#include "articulation/joint_system.hpp"
 
 namespace core = numen::core;
 using numen::test::LeanPart;

@@ -1,4 +1,4 @@
-// Tests of core/src/types.cpp: rotation_between().
+// Tests of core/src/body/types.cpp: rotation_between().
 #include "numen/core/types.hpp"
 
 #include <gtest/gtest.h>

@@ -24,7 +24,7 @@
 #include "numen/core/net_material.hpp"
 #include "numen/core/step.hpp"
 
-#include "detail/mesh_shape_query.hpp"
+#include "mesh/mesh_shape_query.hpp"
 
 namespace numen::test::organ {
 

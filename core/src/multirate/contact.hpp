@@ -10,7 +10,7 @@
 #include "numen/core/data.hpp"
 
 #include "multirate/net.hpp"
-#include "detail/solver_scratch.hpp"
+#include "scratch/solver_scratch.hpp"
 
 namespace numen::core::detail {
 
@@ -46,7 +46,7 @@ inline Vec3 effective_contact_force(const Contact& c, const ContactTerm& t, bool
 
 /// The counts since reset (steps with a contact overflow, a clamped contact stiffness, a sphere
 /// behind a net's surface, a body–body crossing, pass-throughs, a non-finite state) from `from` to
-/// `to`, each a Data or a MultirateSceneSnapshot: the scene-loop model's Data, its snapshot, the
+/// `to`, each a Data or a StepOutputs: the scene-loop model's Data, its snapshot, the
 /// device loop's copy of it, the view, and the next scene-loop model's Data at a tool switch carry
 /// the same counts.
 template <typename From, typename To>

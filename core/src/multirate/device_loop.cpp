@@ -13,7 +13,7 @@
 #include "numen/core/rigid_body.hpp"
 #include "numen/core/step.hpp"
 
-#include "detail/data_scratch.hpp"
+#include "scratch/data_scratch.hpp"
 #include "multirate/contact.hpp"
 #include "multirate/net.hpp"
 

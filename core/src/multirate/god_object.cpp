@@ -16,7 +16,7 @@
 #include "numen/core/rigid_body.hpp"
 #include "numen/core/step.hpp"
 
-#include "detail/data_scratch.hpp"
+#include "scratch/data_scratch.hpp"
 #include "multirate/contact.hpp"
 #include "multirate/net.hpp"
 #include "numen/core/multirate/device_loop.hpp"
@@ -139,11 +139,7 @@ MultirateGodObject::MultirateGodObject(const Model& scene, int body,
   seen_total_.assign(nb, Wrench{});
   base_applied_.assign(nb, Wrench{});
   released_states_.assign(largest, BodyState{});
-  snapshot_.bodies = scene_->bodies;
-  snapshot_.joints.assign(scene.joints.size(), JointState{});
-  snapshot_.nodes = scene_->nodes;
-  snapshot_.node_contacts.assign(scene_->node_contacts.size(), NodeContact{});
-  snapshot_.nets = scene_->nets;
+  snapshot_ = make_step_outputs(*scene_, scene.joints.size());
   if (scene.num_nets() > 0) {
     node_slot_.assign(static_cast<std::size_t>(scene.num_nodes()), -1);
     slot_node_.assign(kMaxContactPlanes, -1);
@@ -155,7 +151,7 @@ MultirateGodObject::MultirateGodObject(const Model& scene, int body,
     plane_springs_.assign(scene.node_springs.size(), 0);
   }
   report_ = make_report();
-  model_ = make_scene_model();
+  scene_report_ = make_scene_report();
 }
 
 MultirateDeviceReport MultirateGodObject::make_report() const {
@@ -167,13 +163,9 @@ MultirateDeviceReport MultirateGodObject::make_report() const {
   return r;
 }
 
-MultirateSceneModel MultirateGodObject::make_scene_model() const {
-  MultirateSceneModel m;
-  m.scene.bodies = snapshot_.bodies;
-  m.scene.joints = snapshot_.joints;
-  m.scene.nodes = snapshot_.nodes;
-  m.scene.node_contacts = snapshot_.node_contacts;
-  m.scene.nets = snapshot_.nets;
+MultirateSceneReport MultirateGodObject::make_scene_report() const {
+  MultirateSceneReport m;
+  m.scene = snapshot_;
   return m;
 }
 
@@ -261,23 +253,8 @@ void MultirateGodObject::write_report(MultirateDeviceReport& out) const noexcept
     out.released_states[i] = released_states_[i];
 }
 
-bool MultirateGodObject::take_model(const MultirateSceneModel& m) noexcept {
-  const MultirateSceneSnapshot& from = m.scene;
-  MultirateSceneSnapshot& to = snapshot_;
-  for (std::size_t b = 0; b < to.bodies.size() && b < from.bodies.size(); ++b) to.bodies[b] = from.bodies[b];
-  for (std::size_t j = 0; j < to.joints.size() && j < from.joints.size(); ++j) to.joints[j] = from.joints[j];
-  to.num_contacts = std::clamp(from.num_contacts, 0, kMaxContacts);
-  std::copy_n(from.contacts.begin(), to.num_contacts, to.contacts.begin());
-  to.contacts_dropped = from.contacts_dropped;
-  to.contacts_clamped = from.contacts_clamped;
-  copy_counts(from, to);
-  to.status = from.status;
-  to.stages_run = from.stages_run;
-  to.solver_iterations = from.solver_iterations;
-  to.solver_residual = from.solver_residual;
-  to.max_joint_drift = from.max_joint_drift;
-  to.max_joint_angle_drift = from.max_joint_angle_drift;
-  detail::copy_nets(from, to);
+bool MultirateGodObject::take_scene_report(const MultirateSceneReport& m) noexcept {
+  copy_outputs(m.scene, snapshot_);
   if (m.body != body_) return false;  // sampled before a switch: not this god-object's planes
   planes_.count = std::clamp(m.planes.count, 0, kMaxContactPlanes);
   planes_.carrier_count = std::clamp(m.planes.carrier_count, 0, kMaxPlaneCarriers);
@@ -306,13 +283,13 @@ void MultirateGodObject::hand_back() noexcept {
   }
 }
 
-void MultirateGodObject::device_step(const MultirateSceneModel* fresh) noexcept {
+void MultirateGodObject::device_step(const MultirateSceneReport* fresh) noexcept {
   took_model_ = fresh != nullptr;
   if (fresh != nullptr) {
     // What the new planes add at the god-object's pose (MultirateCounters::reset_energy).
     const bool held = slot_ >= 0;
     const double before = held ? plane_elastic_energy(device_model(), planes_, slot().device) : 0.0;
-    if (take_model(*fresh) && held) {
+    if (take_scene_report(*fresh) && held) {
       const double added = plane_elastic_energy(device_model(), planes_, slot().device) - before;
       if (added > 0.0) {
         counters_.reset_energy += added;
@@ -334,9 +311,9 @@ void MultirateGodObject::step() noexcept {
   const bool sample = period_ % ratio_ == 0;
   if (sample) {
     write_report(report_);
-    scene_step(report_, model_);
+    scene_step(report_, scene_report_);
   }
-  device_step(sample ? &model_ : nullptr);
+  device_step(sample ? &scene_report_ : nullptr);
 }
 
 void MultirateGodObject::write_feedback(Data& out) const noexcept {
@@ -354,7 +331,7 @@ void MultirateGodObject::write_feedback(Data& out) const noexcept {
 }
 
 void MultirateGodObject::view(Data& out) const noexcept {
-  const MultirateSceneSnapshot& snap = snapshot_;
+  const StepOutputs& snap = snapshot_;
   const std::size_t nb = std::min(out.bodies.size(), snap.bodies.size());
   for (std::size_t b = 0; b < nb; ++b) {
     out.bodies[b] = snap.bodies[b];

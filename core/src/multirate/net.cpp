@@ -4,7 +4,7 @@
 /// net_planes.cpp's.
 
 #include "multirate/net.hpp"
-#include "detail/net_surface.hpp"
+#include "net/net_surface.hpp"
 #include "numen/core/features.hpp"
 
 #include <algorithm>

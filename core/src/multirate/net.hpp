@@ -59,7 +59,7 @@ std::string lump_nets(const Model& scene, std::span<const int> device_body, Mode
 bool organ_surface_folded(const Model& scene, const Data& data) noexcept;
 
 /// The nets' state — nodes, node contacts, per-net outputs — from `from` to `to` (each a Data
-/// or a MultirateSceneSnapshot: the same fields), within the smaller sizes. No allocation.
+/// or a StepOutputs: the same fields), within the smaller sizes. No allocation.
 template <typename From, typename To>
 void copy_nets(const From& from, To& to) noexcept {
   std::copy_n(from.nodes.begin(), std::min(to.nodes.size(), from.nodes.size()), to.nodes.begin());

@@ -4,8 +4,8 @@
 /// "Deformable god-objects", docs/organs.md "Organs in multirate"), in their phases.
 
 #include "multirate/net.hpp"
-#include "detail/net_tissue.hpp"
-#include "detail/net_surface.hpp"
+#include "net/net_tissue.hpp"
+#include "net/net_surface.hpp"
 #include "numen/core/features.hpp"
 
 #include <algorithm>

@@ -17,7 +17,7 @@
 #include "numen/core/step.hpp"
 #include "numen/core/step_stages.hpp"
 
-#include "detail/data_scratch.hpp"
+#include "scratch/data_scratch.hpp"
 #include "multirate/contact.hpp"
 #include "multirate/net.hpp"
 #include "numen/core/multirate/planes.hpp"
@@ -98,7 +98,7 @@ void step_sample(const Model& model, Data& data, const SampleContext& c) noexcep
 
 }  // namespace
 
-void MultirateGodObject::scene_step(const MultirateDeviceReport& in, MultirateSceneModel& out) noexcept {
+void MultirateGodObject::scene_step(const MultirateDeviceReport& in, MultirateSceneReport& out) noexcept {
   release_switched(in);                       //    a switch hands the released god-object back
   const int body = enter_scene_slot(in);      //    the sampled god-object's scene-loop Data
   const double h = scene_model().dt;
@@ -107,7 +107,7 @@ void MultirateGodObject::scene_step(const MultirateDeviceReport& in, MultirateSc
   apply_owed(h);                              // 2. what each body is owed, as its wrench
   const SceneStepOutcome stepped = step_scene(in, body, out);  // 3., 4. the step, its impulses
   settle_after_step(in, stepped, h);          //    the rest owed, the wrenches, the god-object
-  write_scene_model(in, body, out);           //    the model for the device loop
+  write_scene_report(in, body, out);           //    the report for the device loop
 }
 
 void MultirateGodObject::release_switched(const MultirateDeviceReport& in) noexcept {
@@ -206,7 +206,7 @@ void MultirateGodObject::apply_owed(double h) noexcept {
 }
 
 MultirateGodObject::SceneStepOutcome MultirateGodObject::step_scene(
-    const MultirateDeviceReport& in, int body, MultirateSceneModel& out) noexcept {
+    const MultirateDeviceReport& in, int body, MultirateSceneReport& out) noexcept {
   const Model& model = scene_model();
   const std::span<const int> device_body = scene_device_body();
   SampleContext context{&out.planes, std::span<const int>(device_body.data(), device_body.size()),
@@ -297,8 +297,8 @@ void MultirateGodObject::settle_after_step(const MultirateDeviceReport& in,
     scene_->bodies[static_cast<std::size_t>(god[i])] = in.states[i];
 }
 
-void MultirateGodObject::write_scene_model(const MultirateDeviceReport& in, int body,
-                                           MultirateSceneModel& out) noexcept {
+void MultirateGodObject::write_scene_report(const MultirateDeviceReport& in, int body,
+                                            MultirateSceneReport& out) noexcept {
   ++counters_.scene_steps;
   counters_.planes_dropped += out.planes.dropped;
   counters_.planes_max = std::max<std::int64_t>(counters_.planes_max, out.planes.count);
@@ -308,31 +308,18 @@ void MultirateGodObject::write_scene_model(const MultirateDeviceReport& in, int 
   const std::vector<int>& scene_joints =
       scene_slot_ >= 0 ? slots_[static_cast<std::size_t>(scene_slot_)].scene_joints : free_joints_;
   const std::span<const int> device_body = scene_device_body();
-  MultirateSceneSnapshot& snap = out.scene;
-  for (std::size_t b = 0; b < snap.bodies.size() && b < scene_->bodies.size(); ++b) snap.bodies[b] = scene_->bodies[b];
-  for (std::size_t j = 0; j < scene_joints.size() && j < scene_->joints.size(); ++j) {
-    const auto sj = static_cast<std::size_t>(scene_joints[j]);
-    if (sj < snap.joints.size()) snap.joints[sj] = scene_->joints[j];
-  }
+  StepOutputs& snap = out.scene;
+  // The scene loop's Data (its joint j is the scene's scene_joints[j]), then only its contacts
+  // not on the god-object (those on it are the device loop's), in order.
+  copy_outputs(*scene_, scene_joints, snap);
   int count = 0;
-  const int ns = std::clamp(scene_->num_contacts, 0, kMaxContacts);
-  for (int i = 0; i < ns; ++i) {
-    const Contact& c = scene_->contacts[static_cast<std::size_t>(i)];
+  for (int i = 0; i < snap.num_contacts; ++i) {
+    const Contact c = snap.contacts[static_cast<std::size_t>(i)];
     bool on_a = false;
     if (god_object_contact(c, device_body, on_a)) continue;  // the device loop's
     snap.contacts[static_cast<std::size_t>(count++)] = c;
   }
   snap.num_contacts = count;
-  snap.contacts_dropped = scene_->contacts_dropped;
-  snap.contacts_clamped = scene_->contacts_clamped;
-  copy_counts(*scene_, snap);
-  snap.status = scene_->status;
-  snap.stages_run = scene_->stages_run;
-  snap.solver_iterations = scene_->solver_iterations;
-  snap.solver_residual = scene_->solver_residual;
-  snap.max_joint_drift = scene_->max_joint_drift;
-  snap.max_joint_angle_drift = scene_->max_joint_angle_drift;
-  detail::copy_nets(*scene_, snap);
 }
 
 }  // namespace numen::core

@@ -12,7 +12,7 @@
 #include "numen/core/needle.hpp"
 #include "numen/core/step_stages.hpp"
 
-#include "detail/net_terms.hpp"
+#include "net/net_terms.hpp"
 
 namespace numen::core {
 namespace {

@@ -1,7 +1,7 @@
 /// @file thread_band.cpp
-/// Block band Cholesky of a thread's implicit system (detail/thread_band.hpp).
+/// Block band Cholesky of a thread's implicit system (linalg/thread_band.hpp).
 
-#include "detail/thread_band.hpp"
+#include "linalg/thread_band.hpp"
 
 #include <cmath>
 

@@ -1,13 +1,13 @@
 /// @file thread_contacts.cpp
 /// A thread's contacts with the bodies' spheres, the static obstacles and itself, and its
-/// eyelets, as point terms of its implicit step (detail/thread_terms.hpp).
+/// eyelets, as point terms of its implicit step (thread/thread_terms.hpp).
 
 #include <algorithm>
 #include <cmath>
 
-#include "detail/narrowphase.hpp"
-#include "detail/thread_scratch.hpp"
-#include "detail/thread_terms.hpp"
+#include "contact/narrowphase.hpp"
+#include "scratch/thread_scratch.hpp"
+#include "thread/thread_terms.hpp"
 #include "numen/core/contact_force.hpp"
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"

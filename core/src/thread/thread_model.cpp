@@ -5,7 +5,7 @@
 #include <numbers>
 #include <sstream>
 
-#include "detail/thread_scratch.hpp"
+#include "scratch/thread_scratch.hpp"
 #include "numen/core/thread.hpp"
 
 namespace numen::core {

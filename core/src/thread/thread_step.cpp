@@ -2,7 +2,7 @@
 /// One implicit step of every thread (thread.hpp, step_threads()): backward Euler on the
 /// node velocities, g(v) = M (v − v0) − h f(x0 + h v, v) = 0, solved by Newton's method (its
 /// first iteration is the linearly implicit Euler of Baraff & Witkin 1998, Eq. 6). Each
-/// iteration is one block-banded system (detail/thread_band.hpp) of the rod's stretch and bend
+/// iteration is one block-banded system (linalg/thread_band.hpp) of the rod's stretch and bend
 /// terms, its ties to bodies (the body's translational effective mass at the tie in the
 /// system), and its contacts and eyelets (thread_contacts.cpp: linear in v over the step).
 /// The reactions go to the bodies.
@@ -10,9 +10,9 @@
 #include <algorithm>
 #include <cmath>
 
-#include "detail/data_scratch.hpp"
-#include "detail/thread_scratch.hpp"
-#include "detail/thread_terms.hpp"
+#include "scratch/data_scratch.hpp"
+#include "scratch/thread_scratch.hpp"
+#include "thread/thread_terms.hpp"
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"
 #include "numen/core/rigid_body.hpp"

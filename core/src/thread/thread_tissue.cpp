@@ -7,9 +7,9 @@
 #include <array>
 #include <cstddef>
 
-#include "detail/net_terms.hpp"
-#include "detail/thread_scratch.hpp"
-#include "detail/thread_terms.hpp"
+#include "net/net_terms.hpp"
+#include "scratch/thread_scratch.hpp"
+#include "thread/thread_terms.hpp"
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"
 #include "numen/core/needle.hpp"

@@ -30,7 +30,7 @@
 #include "numen/sim/device/simulated_instrument.hpp"
 #include "numen/sim/input/input_error.hpp"
 
-#include "detail/joint_system.hpp"
+#include "articulation/joint_system.hpp"
 #include "build_features.hpp"
 #include "lattice_scene.hpp"
 #include "rotation.hpp"

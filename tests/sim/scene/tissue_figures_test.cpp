@@ -24,7 +24,7 @@
 #include "numen/core/net_tissue_contact.hpp"
 #include "numen/core/step.hpp"
 #include "numen/sim/scene/scene.hpp"
-#include "detail/mesh_shape_query.hpp"
+#include "mesh/mesh_shape_query.hpp"
 #include "organ_indentation.hpp"
 #include "scene_text.hpp"
 #include "temp_dir.hpp"

@@ -7,7 +7,7 @@
 /// linear-time (D. Baraff, "Linear-time dynamics using Lagrange multipliers",
 /// SIGGRAPH 96, §5–7). Built once by finalize_model() into Model::articulation.
 /// The factor and solve themselves, and their scratch, are private to numen::core
-/// (core/src/detail/articulation_solve.hpp).
+/// (core/src/scratch/articulation_solve.hpp).
 
 #include <string>
 #include <vector>

@@ -14,7 +14,7 @@
 ///      (Model::static_grid), one query per sphere;
 ///   3. body–body: sort-and-sweep on the world AABBs along x (insertion sort of
 ///      the scratch's sweep order, CollisionScratch::sweep_order in
-///      core/src/detail/collision_scratch.hpp), then sphere–sphere between the spheres
+///      core/src/scratch/collision_scratch.hpp), then sphere–sphere between the spheres
 ///      of the two bodies that meet the overlap of their AABBs. body_a is the
 ///      lower body index;
 ///   4. body meshes (bodies with BodyModel::mesh, index order): the mesh's world box

@@ -4,7 +4,7 @@
 /// allocated once by make_data() from a finalized Model. Stage functions take
 /// (const Model&, Data&) and never allocate. The stages' scratch is private to
 /// numen::core: Data holds it behind an opaque, deep-copying pointer
-/// (Data::scratch; its type, DataScratch, in core/src/detail/data_scratch.hpp).
+/// (Data::scratch; its type, DataScratch, in core/src/scratch/data_scratch.hpp).
 
 #include <array>
 #include <cstdint>
@@ -23,7 +23,7 @@
 namespace numen::core {
 
 struct Model;
-struct DataScratch;  // core/src/detail/data_scratch.hpp
+struct DataScratch;  // core/src/scratch/data_scratch.hpp
 
 /// Owner of a Data's stage scratch (DataScratch, private to numen::core): one heap
 /// block, allocated by make_data(), with value semantics — a copy of a Data holds a
@@ -227,7 +227,7 @@ struct Data {
   // ---- scratch (sized once) ----
   std::vector<Wrench> body_wrench; ///< Accumulated explicit wrench per body (N, N·m, at COM).
   /// The stages' scratch (collision, solver, articulation, nets; DataScratch,
-  /// core/src/detail/data_scratch.hpp): private to numen::core and its tests.
+  /// core/src/scratch/data_scratch.hpp): private to numen::core and its tests.
   DataScratchPtr scratch;
 };
 

@@ -17,9 +17,9 @@
 /// diagonal block of each body (Cholesky).
 ///
 /// Public: the integrate stage and its three schemes. The solver's scratch
-/// (SolverScratch, core/src/detail/solver_scratch.hpp, behind Data::scratch) and
+/// (SolverScratch, core/src/scratch/solver_scratch.hpp, behind Data::scratch) and
 /// the implicit system's builders and solves the schemes are made of are private
-/// to numen::core (core/src/detail/implicit_system.hpp).
+/// to numen::core (core/src/solver/implicit_system.hpp).
 
 namespace numen::core {
 

@@ -10,7 +10,7 @@
 /// with each other. An organ's net (its rigid component anchored, BodyModel::anchored) is part
 /// of the static world and, like the obstacles among themselves, meets no obstacle: only the
 /// dynamic bodies' spheres, and with its surface triangles (Model::net_faces) instead of its node
-/// spheres when it has any (core/src/net_surface.cpp: one NodeContact per node of a triangle
+/// spheres when it has any (core/src/net/net_surface.cpp: one NodeContact per node of a triangle
 /// contact, NodeContact::face). Coincident centres (narrowphase.hpp fallbacks): the
 /// normal is the direction from the net's rigid component's COM to the node
 /// (+z when those coincide too).

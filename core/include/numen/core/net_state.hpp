@@ -3,7 +3,7 @@
 /// Mutable state, per-step outputs and contacts of the deformable nets
 /// (net_model.hpp), held by core::Data. Sized once by make_data(); empty for
 /// a model without nets (a scene pays only for what it has). The nets' solver
-/// scratch is private to numen::core (core/src/detail/net_scratch.hpp).
+/// scratch is private to numen::core (core/src/scratch/net_scratch.hpp).
 
 #include "numen/core/types.hpp"
 

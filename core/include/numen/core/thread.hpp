@@ -3,7 +3,7 @@
 /// A suture thread (issue 69, docs/suturing.md "The thread"): an elastic rod as a chain of
 /// `segments` straight segments between `segments + 1` nodes (point masses), stepped by the
 /// linearly implicit Euler the rest of numen uses (Baraff & Witkin 1998) with one block-banded
-/// solve per step (3×3 blocks, block bandwidth 2: O(n), detail/thread_band.hpp).
+/// solve per step (3×3 blocks, block bandwidth 2: O(n), linalg/thread_band.hpp).
 ///
 /// Energy of the rod (all terms in the world frame, SI units):
 ///   - stretch: each segment a spring of stiffness E A / l0 (A = π r², l0 = length / segments),

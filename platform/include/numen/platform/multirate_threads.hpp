@@ -1,15 +1,16 @@
 #pragma once
 /// @file multirate_threads.hpp
 /// MultirateThreads: the scene loop of a core::MultirateGodObject on its own thread, paced at
-/// scene_dt, exchanging the device report and the scene model with the device loop through two
-/// lock-free TripleBuffers (docs/multirate.md, "Two threads"). The device loop (the caller's
-/// real-time thread) calls device_step() every period: it takes the newest model if one came,
-/// steps the god-object, publishes its report — never blocking, never allocating, and keeping
-/// the last model when a scene step is late (MultirateCounters::stale_models). The scene thread
-/// wakes every scene_dt (CLOCK_MONOTONIC, absolute deadlines), takes the newest report, steps
-/// the scene and publishes the model; a scene step that runs past its next deadline is counted
-/// (scene_overruns) and the thread resumes at the next deadline after now (no catch-up burst).
-/// For offline, reproducible runs use MultirateGodObject::step() on one thread instead.
+/// scene_dt, exchanging the device report and the scene report (its planes: the intermediate model)
+/// with the device loop through two lock-free TripleBuffers (docs/multirate.md, "Two threads"). The
+/// device loop (the caller's real-time thread) calls device_step() every period: it takes the
+/// newest model if one came, steps the god-object, publishes its report — never blocking, never
+/// allocating, and keeping the last model when a scene step is late
+/// (MultirateCounters::stale_models). The scene thread wakes every scene_dt (CLOCK_MONOTONIC,
+/// absolute deadlines), takes the newest report, steps the scene and publishes the model; a scene
+/// step that runs past its next deadline is counted (scene_overruns) and the thread resumes at the
+/// next deadline after now (no catch-up burst). For offline, reproducible runs use
+/// MultirateGodObject::step() on one thread instead.
 
 #include <atomic>
 #include <cstdint>
@@ -93,8 +94,8 @@ class MultirateThreads {
   core::MultirateGodObject& god_object_;
   std::int64_t period_ns_;
   SceneThreadSettings settings_;
-  TripleBuffer<core::MultirateDeviceReport> reports_;  // device → scene
-  TripleBuffer<core::MultirateSceneModel> models_;     // scene → device
+  TripleBuffer<core::MultirateDeviceReport> reports_;       // device → scene
+  TripleBuffer<core::MultirateSceneReport> scene_reports_;  // scene → device
   std::thread thread_;
   std::atomic<bool> stop_{false};
   std::atomic<std::int64_t> scene_steps_{0};

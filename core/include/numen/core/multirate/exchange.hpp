@@ -1,8 +1,8 @@
 #pragma once
 /// @file exchange.hpp
 /// What the two loops of a multirate god-object hand each other (numen/core/multirate.hpp,
-/// docs/multirate.md): the device loop's report (MultirateDeviceReport), the scene loop's model
-/// (MultirateSceneModel: the planes and the snapshot of the scene, MultirateSceneSnapshot).
+/// docs/multirate.md): the device loop's report (MultirateDeviceReport), the scene loop's report
+/// (MultirateSceneReport: the intermediate model, i.e. the planes, and the scene's StepOutputs).
 
 #include <array>
 #include <cstdint>
@@ -10,6 +10,7 @@
 
 #include "numen/core/data.hpp"
 #include "numen/core/multirate/planes.hpp"
+#include "numen/core/step_outputs.hpp"
 #include "numen/core/types.hpp"
 
 namespace numen::core {
@@ -31,44 +32,18 @@ struct MultirateDeviceReport {
   std::vector<BodyState> released_states;  ///< Its god-object's bodies' states at the switch.
 };
 
-/// The scene loop's state in a MultirateSceneModel: what the single-rate view needs
-/// (MultirateGodObject::view()), copied so that the device loop never reads the scene loop's
-/// Data.
-struct MultirateSceneSnapshot {
-  std::vector<BodyState> bodies;           ///< Every scene body at the scene step's end.
-  std::vector<JointState> joints;          ///< Every joint.
-  std::array<Contact, kMaxContacts> contacts{};  ///< [0, num_contacts): not on the god-object.
-  int num_contacts = 0;
-  int contacts_dropped = 0;
-  int contacts_clamped = 0;
-  std::int64_t contact_overflow_steps = 0;
-  std::int64_t contact_clamped_steps = 0;
-  std::int64_t net_crossed_steps = 0;  ///< Data::net_crossed_steps.
-  std::int64_t crossed_contact_steps = 0;  ///< Data::crossed_contact_steps.
-  std::int64_t pass_throughs = 0;          ///< Data::pass_throughs.
-  std::int64_t nonfinite_steps = 0;
-  std::uint32_t status = 0;
-  std::uint32_t stages_run = 0;
-  int solver_iterations = 0;
-  double solver_residual = 0.0;
-  double max_joint_drift = 0.0;
-  double max_joint_angle_drift = 0.0;
-  /// The nets (whole: a god-object's net is the scene loop's), sized like the scene's Data.
-  std::vector<NodeState> nodes;
-  std::vector<NodeContact> node_contacts;  ///< [0, num_node_contacts) valid.
-  int num_node_contacts = 0;
-  std::vector<NetOutput> nets;
-};
-
-/// What the scene loop hands the device loop (MultirateGodObject::scene_step()): the
+/// What the scene loop hands the device loop (MultirateGodObject::scene_step()), its report: the
 /// intermediate model for the god-object it sampled and the snapshot of the scene (where a
 /// switch starts the new god-object).
-struct MultirateSceneModel {
+struct MultirateSceneReport {
   ContactPlaneSet planes;
   int body = -1;                     ///< The god-object the planes are for (−1: none).
   std::int64_t sample_period = -1;   ///< MultirateDeviceReport::period of the sample.
-  /// The scene at the scene step's end (where a switch starts the new god-object).
-  MultirateSceneSnapshot scene;
+  /// The scene at the scene step's end (where a switch starts the new god-object), copied so
+  /// that the device loop never reads the scene loop's Data: what the single-rate view
+  /// (MultirateGodObject::view()) needs. Sized like the scene's Data; its contacts are those not
+  /// on the god-object.
+  StepOutputs scene;
 };
 
 }  // namespace numen::core

@@ -69,7 +69,7 @@ struct MultirateCounters {
 /// A multirate god-object: the device loop steps the held body (the god-object) at dt against
 /// the intermediate model; the scene loop steps everything else at scene_dt = N·dt and makes
 /// the model (docs/multirate.md). The two loops exchange a MultirateDeviceReport and a
-/// MultirateSceneModel; step() interleaves them on one thread in a fixed order (deterministic,
+/// MultirateSceneReport; step() interleaves them on one thread in a fixed order (deterministic,
 /// bit-identical run to run), device_step() / scene_step() run them on two (the caller's
 /// threads and triple buffers: platform::MultirateThreads). One scene period:
 ///   1. the god-object's poses and twists from the report imposed on its bodies in the
@@ -138,17 +138,18 @@ class MultirateGodObject {
 
   /// Device loop: one device period (5–7 above) with `fresh`, the scene loop's newest model if
   /// one came since the last call (nullptr: none). Never allocates, throws, locks or blocks.
-  void device_step(const MultirateSceneModel* fresh) noexcept;
+  void device_step(const MultirateSceneReport* fresh) noexcept;
   /// Device loop: the report of the device loop's state now. `out` from make_report(). Never
   /// allocates.
   void write_report(MultirateDeviceReport& out) const noexcept;
   /// Scene loop: one scene period (1–4 above) from the device loop's newest report `in`; the
-  /// new model into `out` (from make_scene_model()). Never allocates, throws or locks.
-  void scene_step(const MultirateDeviceReport& in, MultirateSceneModel& out) noexcept;
-  /// A report and a model sized for this object (load time: allocates), holding the initial
-  /// state.
+  /// report (the new intermediate model, the scene) into `out` (from make_scene_report()).
+  /// Never allocates, throws or locks.
+  void scene_step(const MultirateDeviceReport& in, MultirateSceneReport& out) noexcept;
+  /// The two loops' reports sized for this object (load time: allocates), holding the
+  /// initial state.
   MultirateDeviceReport make_report() const;
-  MultirateSceneModel make_scene_model() const;
+  MultirateSceneReport make_scene_report() const;
 
   /// Device loop: makes `body` the god-object from the next period on (−1: none). The released
   /// body continues in the scene loop from the god-object's pose and twist; the new one starts
@@ -218,9 +219,9 @@ class MultirateGodObject {
   const Slot& slot() const noexcept { return slots_[static_cast<std::size_t>(std::max(slot_, 0))]; }
   int slot_of(int body) const noexcept;
   void hand_back() noexcept;
-  /// Takes the model's snapshot, and its planes when they are the held body's: returns whether
-  /// it took them.
-  bool take_model(const MultirateSceneModel& model) noexcept;
+  /// Takes the scene report's snapshot, and its planes when they are the held body's: returns
+  /// whether it took them.
+  bool take_scene_report(const MultirateSceneReport& report) noexcept;
 
   // The scene loop's period, scene_step(), as its stages in their order (scene_loop.cpp).
   /// What a scene-loop step leaves for the settling after it: whether it was rolled back, and
@@ -252,7 +253,7 @@ class MultirateGodObject {
   /// god-object contacts gave each scene body taken off what it is owed (writes the scene Data,
   /// out.planes, owed_, counters_.folded_scene_steps and scene_contacts).
   SceneStepOutcome step_scene(const MultirateDeviceReport& in, int body,
-                              MultirateSceneModel& out) noexcept;
+                              MultirateSceneReport& out) noexcept;
   /// The god-object's imposed poses moved along their twists by `dt` s: a folded step's next
   /// sub-step (writes the scene Data's target and body target poses).
   void advance_imposed(const MultirateDeviceReport& in, int body, double dt) noexcept;
@@ -265,10 +266,10 @@ class MultirateGodObject {
   /// the scene Data's applied wrenches and bodies).
   void settle_after_step(const MultirateDeviceReport& in, const SceneStepOutcome& stepped,
                          double h) noexcept;
-  /// The model for the device loop: the scene-step counters, the sampled god-object and period
+  /// The report for the device loop: the scene-step counters, the sampled god-object and period
   /// and the snapshot of the scene (writes counters_, out.body, out.sample_period, out.scene).
-  void write_scene_model(const MultirateDeviceReport& in, int body,
-                         MultirateSceneModel& out) noexcept;
+  void write_scene_report(const MultirateDeviceReport& in, int body,
+                          MultirateSceneReport& out) noexcept;
   /// The scene loop's current god-object: its bodies (scene indices; empty without one).
   std::span<const int> scene_god() const noexcept;
   /// ... per scene body its god-object model index or −1 (empty without one).
@@ -288,7 +289,7 @@ class MultirateGodObject {
   int slot_ = -1;                 // the held body's slot; -1: none held
   ContactPlaneSet planes_;
   std::vector<Wrench> impulse_total_;   // per scene body, running totals (report)
-  MultirateSceneSnapshot snapshot_;     // from the last model
+  StepOutputs snapshot_;                // the scene, from the last scene report
   std::int64_t period_ = 0;       // device periods since construction or the last switch
   std::int64_t periods_since_model_ = 0;
   std::int64_t switches_ = 0;
@@ -315,7 +316,7 @@ class MultirateGodObject {
   std::vector<std::int32_t> plane_springs_;
   // One thread (step()).
   MultirateDeviceReport report_;
-  MultirateSceneModel model_;
+  MultirateSceneReport scene_report_;
   MultirateCounters counters_;
 };
 

@@ -1,0 +1,79 @@
+#pragma once
+/// @file thread_scratch.hpp
+/// One thread's step scratch (thread.hpp, step_threads()): its banded system, the point terms of
+/// its contacts and eyelets, the saved state for a rollback, the self-contact sweep order. Sized
+/// by make_data(); private to numen::core (DataScratch::threads).
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "linalg/thread_band.hpp"
+#include "numen/core/thread.hpp"
+#include "numen/core/types.hpp"
+
+namespace numen::core {
+
+struct ThreadModel;
+
+/// A spring-damper between a point of the thread (w_a x_a + w_b x_b, blocks a, b of the band)
+/// and an outside point moving at `target_velocity` (a body's sphere, an obstacle, the other
+/// segment of a self-contact, an eyelet): force `force` on the thread point at the step's start,
+/// stiffness K and damping C on the relative motion, K scaled by `matrix_scale` in the matrix.
+struct ThreadPointTerm {
+  int a = 0, b = 0;
+  double wa = 1.0, wb = 0.0;
+  Mat3 stiffness = Mat3::Zero();
+  Mat3 damping = Mat3::Zero();
+  Vec3 force = Vec3::Zero();
+  Vec3 target_velocity = Vec3::Zero();
+  double matrix_scale = 1.0;
+  int body = -1;            ///< The body that takes the reaction at `point`, or −1.
+  Vec3 point = Vec3::Zero();  ///< World (m).
+  int eyelet = -1;          ///< The eyelet (ThreadState::eyelets) this term is, or −1.
+  Vec3 axis = Vec3::Zero(); ///< An eyelet's: the thread's unit tangent there.
+};
+
+/// A pair of non-adjacent segments that may touch within the step (their boxes swept from the
+/// step's start to the first Newton iterate overlap): the nearest points' parameters and the
+/// normal n0 from t's point to s's at the step's start, along which the pair is held apart.
+struct ThreadSelfPair {
+  int s = 0, t = 0;
+  double us = 0.0, ut = 0.0;
+  Vec3 normal = Vec3::UnitZ();
+};
+
+/// An eyelet's term as the thread's step left it: the thread's point and its velocity at the
+/// step's end, the thread's axis there, the force on the thread, the friction's damping along it.
+struct ThreadEyeletTerm {
+  bool set = false;           ///< Written by this step (the eyelet active and its term applied).
+  Vec3 point = Vec3::Zero();  ///< The thread's point (world, m).
+  Vec3 velocity = Vec3::Zero();  ///< Its velocity (world, m/s).
+  Vec3 axis = Vec3::UnitX();  ///< The thread's unit tangent there (world).
+  Vec3 force = Vec3::Zero();  ///< The eyelet's force on the thread (N, world).
+  double stiffness = 0.0;     ///< Across the axis (N/m).
+  double damping = 0.0;       ///< Along the axis: friction's damping and the drag (N·s/m).
+};
+
+/// The scratch of one thread.
+struct ThreadScratch {
+  ThreadBand band;  ///< Blocks: 0 the start tie's point, 1 … nodes, nodes + 1 the end tie's.
+  std::vector<ThreadPointTerm> terms;  ///< Capacity fixed at make_data().
+  int num_terms = 0;
+  std::vector<Vec3> saved_position;    ///< Rollback of a non-finite step.
+  std::vector<Vec3> trial_position;    ///< Newton's iterate x_k = x0 + h v_k (m).
+  std::vector<Vec3> trial_velocity;    ///< Newton's iterate v_k (m/s).
+  std::array<Vec3, 2> tie_delta{};     ///< The ties' points' velocity change so far (m/s).
+  std::vector<std::int32_t> sweep_order;  ///< Self contact: segments sorted along sweep_axis.
+  std::vector<Vec3> segment_min, segment_max;  ///< Self contact: each segment's swept box (m).
+  std::vector<ThreadSelfPair> self_pairs;  ///< Capacity fixed at make_data().
+  int num_self_pairs = 0;
+  int sweep_axis = 0;
+  /// Each eyelet's term at the step's end (ThreadState::eyelets; valid where `eyelet_term_set`):
+  /// what its springs on tissue give the net's nodes (thread_tissue.cpp).
+  std::array<ThreadEyeletTerm, kMaxThreadEyelets> eyelet_terms{};
+  /// Resizes for `thread` (load time).
+  void resize(const ThreadModel& thread);
+};
+
+}  // namespace numen::core
