@@ -178,7 +178,7 @@ void AdmittanceRunner::period(std::int64_t deadline_mono_ns, std::int64_t woke_m
   // The frame and the trace record of an admittance period (docs/viewer.md, "Admittance
   // runs"; docs/scenes.md): the target is the hand, the wrench the measured one that drove the
   // god-object, no axis torque.
-  data_.target = hand_;  // not read by the admittance coupling (core/src/coupling.cpp)
+  data_.target = hand_;  // not read by the admittance coupling (core/src/coupling/coupling.cpp)
   view_report_ = r;
   if (trace_.records().capacity() > 0)
     trace_.push(make_trace_record(data_, held, tool_contacts, tool_pen_, hand_pen_, view_report_,
