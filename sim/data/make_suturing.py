@@ -390,8 +390,7 @@ segments = 100
 material = "steel"
 attach_body = "needle"
 attach_point = {vec((-2 * R / math.pi, -R, 0.0))}   # the tail (the swage)
-attach_direction = [-1.0, 0.0, 0.0]                 # straight out of the tail
-direction = {vec(qrot(NEEDLE_Q0, (-1.0, 0.0, 0.0)))}
+direction = [-0.957826, 0.0, 0.287348]   # pinned at the tail, away from the drivers over the pad: along the tail's tangent it would start through the pad
 
 # ---- the needle drivers: the peg transfer's trocar-tube-jaws instrument with dense jaws
 """]

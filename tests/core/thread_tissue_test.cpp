@@ -184,7 +184,8 @@ TEST(ThreadTissue, AnEyeletTheFreeEndSlidesOutOfIsLetGo) {
 
 TEST(ThreadTissue, TheNeedlesEntryIsTakenOverByTheThreadAtItsTail) {
   // The puncture rig's needle (26 mm half circle through a 28 × 28 mm patch at 8.3 mm/s) with a
-  // 60 mm thread clamped at its tail; turned 230°, then pulled up 20 mm at 10 mm/s: once the tail
+  // 60 mm thread tied at its tail, starting straight up (along the tail's tangent it would start
+  // through the patch, which it touches); turned 230°, then pulled up 20 mm at 10 mm/s: once the tail
   // passes the entry the thread takes the point over as an eyelet on the tissue, passes through
   // it, slides through it as the needle is pulled on, and tents the tissue up through friction.
   core::Model m = numen::test::puncture_rig(numen::test::kPunctureThreshold, 60 * numen::test::kPunctureDeg, false, false);
@@ -195,13 +196,10 @@ TEST(ThreadTissue, TheNeedlesEntryIsTakenOverByTheThreadAtItsTail) {
     t.name = "suture";
     t.length = 0.06;
     t.segments = 60;
-    const core::Vec3 back = -core::needle_tangent(n, 0.0);  // out of the tail, body frame
     t.start = pose.position + pose.orientation * core::needle_tail(n);
-    t.direction = pose.orientation * back;
+    t.direction = core::Vec3::UnitZ();
     t.tie_start.body = 1;
     t.tie_start.point = core::needle_tail(n);
-    t.tie_start.clamped = true;
-    t.tie_start.direction = back;
     m.threads.push_back(t);
   }
   ASSERT_EQ(core::finalize_model(m), "");

@@ -89,7 +89,24 @@ BulletOrgan::BulletOrgan(const core::Model& model, const BulletOptions& options)
   tris.reserve(static_cast<std::size_t>(3 * net.face_count));
   for (int f = net.face_begin; f < net.face_begin + net.face_count; ++f)
     for (int c = 0; c < 3; ++c) tris.push_back(model.net_faces[static_cast<std::size_t>(f)][static_cast<std::size_t>(c)] - n0);
-  p.soft.reset(btSoftBodyHelpers::CreateFromTriMesh(info, xyz.data(), tris.data(), net.face_count));
+  // A net given by its material (NetModel::tie_scale set) has interior nodes on no triangle:
+  // its nodes are made one by one and its links are its springs, each with its own k.
+  const bool by_material = !net.tie_scale.empty();
+  if (by_material) {
+    std::vector<btVector3> x;
+    std::vector<btScalar> m;
+    for (int i = 0; i < n; ++i) {
+      x.emplace_back(xyz[static_cast<std::size_t>(3 * i)], xyz[static_cast<std::size_t>(3 * i + 1)],
+                     xyz[static_cast<std::size_t>(3 * i + 2)]);
+      m.push_back(static_cast<btScalar>(model.node_mass[static_cast<std::size_t>(n0 + i)]));
+    }
+    p.soft = std::make_unique<btSoftBody>(&info, n, x.data(), m.data());
+    for (int f = 0; f < net.face_count; ++f)
+      p.soft->appendFace(tris[static_cast<std::size_t>(3 * f)], tris[static_cast<std::size_t>(3 * f + 1)],
+                         tris[static_cast<std::size_t>(3 * f + 2)]);
+  } else {
+    p.soft.reset(btSoftBodyHelpers::CreateFromTriMesh(info, xyz.data(), tris.data(), net.face_count));
+  }
   soft_ = p.soft.get();
   if (soft_->m_nodes.size() != n)
     throw std::invalid_argument("BulletOrgan: the net's triangles do not use every node");
@@ -113,29 +130,46 @@ BulletOrgan::BulletOrgan(const core::Model& model, const BulletOptions& options)
   stats_.structural_links = soft_->m_links.size();
   stats_.klst_min = stats_.bend_klst_min = kInf;
   stats_.klst_max = stats_.bend_klst_max = -kInf;
-  // Structural: the mesh edges CreateFromTriMesh linked; every numen structural spring of the
-  // net has the same k (NetSettings::stiffness).
-  const double k_structural = net.structural_count > 0
-                                  ? model.net_springs[static_cast<std::size_t>(net.spring_begin)].stiffness
-                                  : 0.0;
-  for (int i = 0; i < soft_->m_links.size(); ++i) {
-    btSoftBody::Link& l = soft_->m_links[i];
-    const double klst = link_stiffness_fraction(k_structural, reduced(l.m_n[0], l.m_n[1]), dt_, iterations);
-    l.m_material = material(klst);
-    stats_.klst_min = std::min(stats_.klst_min, klst);
-    stats_.klst_max = std::max(stats_.klst_max, klst);
-  }
-  // Bending: numen's bending springs, one link each.
-  for (int s = net.spring_begin + net.structural_count;
-       s < net.spring_begin + net.structural_count + net.bending_count; ++s) {
+  // One link for numen spring s, its kLST from the spring's k; returns the kLST.
+  const auto append_spring_link = [&](int s) {
     const core::NetSpring& sp = model.net_springs[static_cast<std::size_t>(s)];
     const int a = sp.node_a - n0, b = sp.node_b - n0;
     const double klst =
         link_stiffness_fraction(sp.stiffness, reduced(&soft_->m_nodes[a], &soft_->m_nodes[b]), dt_, iterations);
     soft_->appendLink(a, b, material(klst), false);
-    stats_.bend_klst_min = std::min(stats_.bend_klst_min, klst);
-    stats_.bend_klst_max = std::max(stats_.bend_klst_max, klst);
-    ++stats_.bending_links;
+    return klst;
+  };
+  const int springs_end = net.spring_begin + net.structural_count + net.bending_count;
+  if (by_material) {
+    // A material net: every spring (the tetrahedra's edges) one link, with its own k; shuffled as
+    // CreateFromTriMesh shuffles its links (Bullet's Gauss–Seidel order).
+    for (int s = net.spring_begin; s < springs_end; ++s) {
+      const double klst = append_spring_link(s);
+      stats_.klst_min = std::min(stats_.klst_min, klst);
+      stats_.klst_max = std::max(stats_.klst_max, klst);
+    }
+    soft_->randomizeConstraints();
+    stats_.structural_links = soft_->m_links.size();
+  } else {
+    // Structural: the mesh edges CreateFromTriMesh linked; every numen structural spring of the
+    // net has the same k (NetSettings::stiffness).
+    const double k_structural = net.structural_count > 0
+                                    ? model.net_springs[static_cast<std::size_t>(net.spring_begin)].stiffness
+                                    : 0.0;
+    for (int i = 0; i < soft_->m_links.size(); ++i) {
+      btSoftBody::Link& l = soft_->m_links[i];
+      const double klst = link_stiffness_fraction(k_structural, reduced(l.m_n[0], l.m_n[1]), dt_, iterations);
+      l.m_material = material(klst);
+      stats_.klst_min = std::min(stats_.klst_min, klst);
+      stats_.klst_max = std::max(stats_.klst_max, klst);
+    }
+    // Bending: numen's bending springs, one link each.
+    for (int s = net.spring_begin + net.structural_count; s < springs_end; ++s) {
+      const double klst = append_spring_link(s);
+      stats_.bend_klst_min = std::min(stats_.bend_klst_min, klst);
+      stats_.bend_klst_max = std::max(stats_.bend_klst_max, klst);
+      ++stats_.bending_links;
+    }
   }
   if (stats_.bending_links == 0) stats_.bend_klst_min = stats_.bend_klst_max = 0.0;
 
@@ -145,7 +179,9 @@ BulletOrgan::BulletOrgan(const core::Model& model, const BulletOptions& options)
   stats_.influence_min = kInf;
   stats_.influence_max = -kInf;
   for (int i = 0; i < n; ++i) {
-    const AnchorMapping am = anchor_mapping(net.tie_stiffness, net.tie_damping, mass(&soft_->m_nodes[i]), dt_, iterations);
+    const double scale = core::tie_scale(net, n0 + i);  // a material net's per-node volume share
+    const AnchorMapping am = anchor_mapping(scale * net.tie_stiffness, scale * net.tie_damping,
+                                            mass(&soft_->m_nodes[i]), dt_, iterations);
     soft_->appendAnchor(i, p.anchor_body.get(), false, static_cast<btScalar>(am.influence));
     soft_->m_nodes[i].m_battach = 0;  // anchored nodes still collide (CollideSDF_RS skips them)
     stats_.anchor_hardness = am.hardness;

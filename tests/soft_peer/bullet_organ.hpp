@@ -14,6 +14,11 @@
 ///    one link per mesh edge = numen's structural springs; one more link per numen bending
 ///    spring (the two far nodes of adjacent triangles); each link its own material, its
 ///    kLST from its spring's k and its nodes' reduced mass (link_stiffness_fraction());
+///  - a net given by its material (NetModel::tie_scale set; docs/tissue.md): its surface and
+///    interior nodes made one by one (btSoftBody's constructor), the net's triangles appended
+///    as faces, one link per numen spring (the tetrahedra's edges) with its own k, shuffled
+///    (btSoftBody::randomizeConstraints(), as CreateFromTriMesh does), every link counted in
+///    BulletOrganStats::structural_links; each node's tie scaled by its tie_scale();
 ///  - ties: one anchor per node on a static rigid body at the organ's pose (anchor_mapping():
 ///    Config::kAHR and each anchor's influence); Bullet skips rigid contacts of anchored nodes
 ///    (Node::m_battach), which is cleared so that they still collide with the tool;

@@ -4,7 +4,8 @@
 /// the same node count and dt, the force against indentation of each against numen's dt/10
 /// reference; a Markdown table on stdout, CSVs on request.
 ///
-///   ./build/numen_soft_peer                          # organ (1002 nodes) and ellipsoid (2562)
+///   ./build/numen_soft_peer                          # organ (1002 nodes) and ellipsoid (2562),
+///                                                    # then both given their material
 ///   ./build/numen_soft_peer --scene organ --depth 1 --csv soft_peer.csv --curves curves.csv
 
 #include <LinearMath/btScalar.h>
@@ -31,7 +32,8 @@ int main(int argc, char** argv) {
   std::string csv, curves_csv, only;
   double depth_mm = 6.0;
   numen::soft_peer::BulletOptions options;
-  app.add_option("--scene", only, "Only this scene")->check(CLI::IsMember({"organ", "ellipsoid"}));
+  app.add_option("--scene", only, "Only this scene")
+      ->check(CLI::IsMember({"organ", "ellipsoid", "organ-material", "ellipsoid-material"}));
   app.add_option("--depth", depth_mm, "How far past the first touch the press goes (mm)")
       ->check(CLI::Range(0.1, 10.0));
   app.add_option("--piterations", options.position_iterations,
@@ -47,6 +49,10 @@ int main(int argc, char** argv) {
     std::vector<numen::soft_peer::PressScene> scenes;
     if (only.empty() || only == "organ") scenes.push_back(numen::soft_peer::organ_scene());
     if (only.empty() || only == "ellipsoid") scenes.push_back(numen::soft_peer::ellipsoid_scene());
+    if (only.empty() || only == "organ-material")
+      scenes.push_back(numen::soft_peer::material_scene(numen::soft_peer::organ_scene()));
+    if (only.empty() || only == "ellipsoid-material")
+      scenes.push_back(numen::soft_peer::material_scene(numen::soft_peer::ellipsoid_scene()));
     std::cerr << "Bullet " << btGetVersion() << " (" << (sizeof(btScalar) == 8 ? "double" : "float")
               << "), " << options.position_iterations << " position iterations\n";
     std::vector<numen::soft_peer::SoftPeerRow> rows;

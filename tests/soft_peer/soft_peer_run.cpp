@@ -10,6 +10,7 @@
 #include <stdexcept>
 
 #include "numen/core/step.hpp"
+#include "scene/net_tetrahedralize.hpp"
 #include "step_percentiles.hpp"
 
 namespace numen::soft_peer {
@@ -49,6 +50,9 @@ long path_steps(const PressScene& sc, double touch, double dt, int every) {
 }
 
 core::Model numen_model(const PressScene& sc, double dt) {
+  if (sc.tissue)
+    return test::organ::tissue_model(sc.volume, *sc.tissue, dt, core::CouplingMode::kDirect,
+                                     sc.tool_radius, sc.from);
   return test::organ::organ_model(sc.mesh, sc.params, dt, core::CouplingMode::kDirect,
                                   sc.tool_radius, sc.from);
 }
@@ -131,6 +135,24 @@ PressScene ellipsoid_scene() {
   return sc;
 }
 
+PressScene material_scene(PressScene sc) {
+  core::NetMaterial tissue;
+  tissue.youngs_modulus = 100e3;
+  tissue.poisson_ratio = 0.45;
+  tissue.density = 1000.0;
+  tissue.rayleigh_stiffness = 1e-3;
+  tissue.support_length = 0.02;
+  sc.tissue = tissue;
+  const std::string why =
+      sim::tetrahedralize_net(sc.mesh, sim::kInteriorSpacingEdges * sim::mean_edge_length(sc.mesh), sc.volume);
+  if (!why.empty()) throw std::runtime_error(sc.name + ": " + why);
+  sc.name += "-material";
+  sc.description = "the same, given its material (E 100 kPa, nu 0.45, rho 1000 kg/m3, beta 1 ms, "
+                   "support 20 mm; docs/tissue.md), " + std::to_string(sc.volume.interior.size()) +
+                   " interior nodes, " + std::to_string(sc.volume.tetrahedra.size()) + " tetrahedra";
+  return sc;
+}
+
 CurveError curve_error(const std::vector<IndentationSample>& means,
                        const std::vector<IndentationSample>& reference_means) {
   if (means.size() != reference_means.size())
@@ -180,13 +202,14 @@ std::vector<SoftPeerRow> run_scene(const PressScene& sc, const BulletOptions& op
 
   const BulletOrganStats& bs = bullet.stats();
   std::vector<SoftPeerRow> rows;
-  rows.push_back(make_row(sc, "numen", "linearly implicit Euler, CG 3e-4", coarse.num_nodes(),
-                          springs, sc.dt, pn));
+  const std::string numen_variant =
+      std::string(sc.tissue ? "material net, " : "") + "linearly implicit Euler, CG 3e-4";
+  rows.push_back(make_row(sc, "numen", numen_variant, coarse.num_nodes(), springs, sc.dt, pn));
   rows.push_back(make_row(sc, "bullet",
                           "btSoftBody, " + std::to_string(options.position_iterations) +
                               " position iterations",
                           bs.nodes, bs.structural_links + bs.bending_links, sc.dt, pb));
-  rows.push_back(make_row(sc, "numen", "linearly implicit Euler, CG 3e-4 (reference)",
+  rows.push_back(make_row(sc, "numen", numen_variant + " (reference)",
                           fine.num_nodes(), springs, fine.dt, pf));
   const auto ref = test::organ::block_means(pf.curve, 5);
   const std::vector<IndentationSample>* curve_of[] = {&pn.curve, &pb.curve, &pf.curve};

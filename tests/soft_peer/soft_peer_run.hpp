@@ -13,10 +13,12 @@
 /// indentation").
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "bullet_organ.hpp"
+#include "numen/core/net_material.hpp"
 #include "organ_indentation.hpp"
 
 namespace numen::soft_peer {
@@ -26,7 +28,12 @@ struct PressScene {
   std::string name;         ///< "organ" or "ellipsoid" (the table's first column).
   std::string description;  ///< One line for the report.
   core::TriangleMesh mesh;  ///< The organ's rest shape (m, the organ's frame = world).
-  test::organ::OrganParams params;
+  test::organ::OrganParams params;  ///< The net's constants per spring (when `tissue` is empty).
+  /// The organ given by its material instead (docs/tissue.md): the net is `volume`, `mesh`
+  /// filled with interior nodes (sim's tetrahedralize_net at its default interior spacing), its
+  /// constants derived from this material (core::add_material_net()).
+  std::optional<core::NetMaterial> tissue;
+  core::TetrahedralMesh volume;  ///< The material net's nodes and tetrahedra (with `tissue`).
   double tool_radius = 0.0025;              ///< m
   /// Tool centre at step 0 (m, world): the indentation test's, 4 mm, −3 mm off the axis, 30 mm
   /// below the organ's centre.
@@ -44,6 +51,12 @@ PressScene organ_scene();
 /// An ellipsoid of semi-axes 40 × 30 × 20 mm (the icosphere of 4 subdivisions, 2562 nodes,
 /// scaled), the same constants, the same sphere from −z onto its pole at 20 mm/s, 6 mm deep.
 PressScene ellipsoid_scene();
+
+/// `sc` given its material: E = 100 kPa, ν = 0.45, ρ = 1000 kg/m³, β = 1 ms, ℓ = 20 mm (the
+/// shipped organ's material, docs/tissue.md), its mesh filled with interior nodes at twice its
+/// mean edge (sim::kInteriorSpacingEdges) and tetrahedralised; the name gains "-material".
+/// Throws std::runtime_error when the mesh cannot be tetrahedralised (its message).
+PressScene material_scene(PressScene sc);
 
 /// One engine's row of the comparison.
 struct SoftPeerRow {

@@ -121,5 +121,61 @@ TEST(SoftPeerRun, AShortPressOfTheOrganPushesBackInBothEngines) {
       }
 }
 
+// The shipped organ given its material (docs/tissue.md): Bullet's soft body has numen's surface
+// and interior nodes with their masses, one link per spring of the tetrahedral net, the net's
+// triangles as faces, and one anchor per node with that node's share of the ties.
+TEST(SoftPeerTranslation, TheOrganGivenItsMaterialHasNumensNodesSpringsAndTies) {
+  const PressScene sc = material_scene(organ_scene());
+  EXPECT_EQ(sc.name, "organ-material");
+  const core::Model m = test::organ::tissue_model(sc.volume, *sc.tissue, 1e-3, core::CouplingMode::kDirect,
+                                                  sc.tool_radius, sc.from);
+  const core::NetModel& net = m.nets[0];
+  const BulletOrgan b(m, BulletOptions{});
+  ASSERT_GT(b.num_nodes(), 1002) << "interior nodes";
+  ASSERT_EQ(b.num_nodes(), m.num_nodes());
+  const btSoftBody* sb = b.soft_body();
+  for (int i = 0; i < b.num_nodes(); ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    EXPECT_LT((b.node_position(i) - m.node_rest[k]).norm(), 1e-7) << "node " << i;
+    EXPECT_NEAR(1.0 / sb->m_nodes[i].m_im, m.node_mass[k], 1e-6 * m.node_mass[k]) << "node " << i;
+  }
+  using PairSet = std::multiset<std::pair<int, int>>;
+  PairSet springs;
+  for (int s = 0; s < net.structural_count + net.bending_count; ++s) {
+    const core::NetSpring& sp = m.net_springs[static_cast<std::size_t>(net.spring_begin + s)];
+    springs.insert({std::min(sp.node_a, sp.node_b), std::max(sp.node_a, sp.node_b)});
+  }
+  const auto pairs = b.link_pairs();
+  EXPECT_EQ(PairSet(pairs.begin(), pairs.end()), springs);
+  EXPECT_EQ(b.stats().structural_links, static_cast<int>(springs.size()));
+  EXPECT_EQ(b.stats().bending_links, 0);
+  EXPECT_EQ(b.stats().faces, net.face_count);
+  EXPECT_EQ(b.stats().anchors, m.num_nodes());
+  // The springs span more than a decade of k (docs/tissue.md: 0.69–875 N/m), so their kLST do.
+  EXPECT_GT(b.stats().klst_min, 0.0);
+  EXPECT_LT(b.stats().klst_max, 1.0);
+  EXPECT_LT(10.0 * b.stats().klst_min, b.stats().klst_max);
+  // Each anchor's influence follows its node's tie (k_i = s_i k̄): not all alike.
+  EXPECT_LT(b.stats().influence_min, b.stats().influence_max);
+}
+
+// A short press of the organ given its material: both engines push back, numen's rows count
+// the material net's nodes.
+TEST(SoftPeerRun, AShortPressOfTheOrganGivenItsMaterialPushesBackInBothEngines) {
+  PressScene sc = material_scene(organ_scene());
+  sc.depth = 0.002;
+  const auto rows = run_scene(sc, BulletOptions{}, nullptr);
+  ASSERT_EQ(rows.size(), 3u);
+  for (const auto& r : rows) {
+    EXPECT_EQ(r.nodes, 1002 + static_cast<int>(sc.volume.interior.size())) << r.engine;
+    EXPECT_TRUE(r.finite) << r.engine;
+    EXPECT_GT(r.peak_force, 0.05) << r.engine << ": the organ must push back";
+  }
+  EXPECT_NE(rows[0].variant.find("material net"), std::string::npos);
+  // numen's material organ at 2 mm: 0.76 N (docs/tissue.md, "The shipped organ keeps its feel").
+  EXPECT_GT(rows[0].peak_force, 0.5);
+  EXPECT_LE(rows[0].force_error_max, 0.1);
+}
+
 }  // namespace
 }  // namespace numen::soft_peer

@@ -76,12 +76,13 @@ Data make_data(const Model& model, const DataOptions& options) {
   data.nodes.resize(static_cast<std::size_t>(model.num_nodes()));
   // Room for the penalty contacts (detection stops at kMaxNodeContacts), the held nodes'
   // grasp springs after them (grasp.hpp), the needles' puncture ties (needle_puncture.hpp) and the
-  // threads' eyelets on tissue (thread.hpp).
+  // threads' eyelets on tissue and contacts with it (thread.hpp).
   data.node_contacts.resize(model.num_nodes() > 0
                                 ? static_cast<std::size_t>(kMaxNodeContacts +
                                                            model.num_grasps() * kMaxGraspNodes * kGraspSpringsPerNode +
                                                            model.num_needles() * kMaxNeedlePunctures * kNeedleTieSprings +
-                                                           model.num_threads() * kMaxThreadEyelets * kThreadEyeletTieSprings)
+                                                           model.num_threads() * (kMaxThreadEyelets * kThreadEyeletTieSprings +
+                                                                                  kMaxThreadTissueContacts * kThreadTissueContactSprings))
                                 : 0);
   data.needles.resize(static_cast<std::size_t>(model.num_needles()));
   data.nets.resize(static_cast<std::size_t>(model.num_nets()));

@@ -32,6 +32,32 @@ struct ThreadPointTerm {
   Vec3 point = Vec3::Zero();  ///< World (m).
   int eyelet = -1;          ///< The eyelet (ThreadState::eyelets) this term is, or −1.
   Vec3 axis = Vec3::Zero(); ///< An eyelet's: the thread's unit tangent there.
+  /// A contact with a net's surface: the triangle (Model::net_faces), or −1, and the touched
+  /// point's barycentric weights on its nodes; `axis` is then the contact's unit normal (out of
+  /// the tissue).
+  int face = -1;
+  Vec3 face_weights = Vec3::Zero();
+};
+
+/// A thread node's deepest contact with the nets' surfaces this step (thread_tissue_contact.cpp).
+struct ThreadTissueHit {
+  double depth = 0.0;           ///< Penetration of the node's sphere (m); 0: none.
+  int face = -1;                ///< Model::net_faces index, or −1.
+  int material = 0;             ///< The net's contact material (NetModel::material).
+  Vec3 weights = Vec3::Zero();  ///< Barycentric weights of the touched point.
+  Vec3 normal = Vec3::UnitZ();  ///< Unit, out of the tissue (world).
+};
+
+/// A contact with tissue as the thread's step left it, for the net's nodes (as ThreadEyeletTerm).
+struct ThreadTissueTerm {
+  int face = -1;                 ///< Model::net_faces index.
+  Vec3 weights = Vec3::Zero();   ///< Barycentric weights of the touched point.
+  Vec3 point = Vec3::Zero();     ///< The thread's node (world, m) at the step's end.
+  Vec3 velocity = Vec3::Zero();  ///< Its velocity (world, m/s).
+  Vec3 normal = Vec3::UnitZ();   ///< The contact's unit normal, out of the tissue (world).
+  Vec3 force = Vec3::Zero();     ///< The contact's force on the thread (N, world).
+  double stiffness = 0.0;        ///< Along the normal (N/m).
+  double damping = 0.0;          ///< Along the normal (N·s/m).
 };
 
 /// A pair of non-adjacent segments that may touch within the step (their boxes swept from the
@@ -72,6 +98,14 @@ struct ThreadScratch {
   /// Each eyelet's term at the step's end (ThreadState::eyelets; valid where `eyelet_term_set`):
   /// what its springs on tissue give the net's nodes (thread_tissue.cpp).
   std::array<ThreadEyeletTerm, kMaxThreadEyelets> eyelet_terms{};
+  /// Contacts with tissue: per node its deepest hit, the nodes in order of their coordinate
+  /// along the thread's longest axis (`tissue_key`), and the contacts as the step left them
+  /// (the first num_tissue_terms), what their springs on the net's nodes take.
+  std::vector<ThreadTissueHit> tissue_hits;
+  std::vector<std::int32_t> tissue_order;
+  std::vector<double> tissue_key;
+  std::array<ThreadTissueTerm, kMaxThreadTissueContacts> tissue_terms{};
+  int num_tissue_terms = 0;
   /// Resizes for `thread` (load time).
   void resize(const ThreadModel& thread);
 };

@@ -16,17 +16,6 @@
 namespace numen::core {
 namespace {
 
-/// The next free term, or nullptr (counted as dropped) when the scratch is full.
-ThreadPointTerm* next_thread_term(ThreadScratch& scratch, ThreadState& state) noexcept {
-  if (scratch.num_terms >= static_cast<int>(scratch.terms.size())) {
-    ++state.output.contacts_dropped;
-    return nullptr;
-  }
-  ThreadPointTerm& t = scratch.terms[static_cast<std::size_t>(scratch.num_terms++)];
-  t = ThreadPointTerm{};
-  return &t;
-}
-
 /// Parameter in [0, 1] of the point of segment [a, b] nearest to c.
 double segment_parameter(const Vec3& a, const Vec3& b, const Vec3& c) noexcept {
   const Vec3 d = b - a;
@@ -53,20 +42,6 @@ void segment_segment(const Vec3& p1, const Vec3& q1, const Vec3& p2, const Vec3&
   }
 }
 
-/// Fills a penalty contact term: depth along unit n (out of the other side, towards the
-/// thread), the thread point's velocity relative to the other side `v_rel`.
-void fill_contact(ThreadPointTerm& term, const MaterialPair& mp, double stiffness, double depth,
-                  const Vec3& n, const Vec3& v_rel) noexcept {
-  const Mat3 nn = n * n.transpose();
-  const double vn = v_rel.dot(n);
-  const double elastic = stiffness * depth;
-  const bool damped = elastic - mp.damping * vn > 0.0;
-  const double fn = damped ? elastic - mp.damping * vn : elastic;
-  term.stiffness = stiffness * nn;
-  term.damping = (damped ? mp.damping : 0.0) * nn + mp.friction * (Mat3::Identity() - nn);
-  term.force = fn * n - mp.friction * (v_rel - vn * n);
-}
-
 /// The thread point w_a x_a + w_b x_b of segment s at parameter u, and its velocity.
 struct SegmentPoint {
   Vec3 x, v;
@@ -85,6 +60,28 @@ void set_segment_blocks(ThreadPointTerm& term, int s, double u) noexcept {
 }
 
 }  // namespace
+
+ThreadPointTerm* next_thread_term(ThreadScratch& scratch, ThreadState& state) noexcept {
+  if (scratch.num_terms >= static_cast<int>(scratch.terms.size())) {
+    ++state.output.contacts_dropped;
+    return nullptr;
+  }
+  ThreadPointTerm& t = scratch.terms[static_cast<std::size_t>(scratch.num_terms++)];
+  t = ThreadPointTerm{};
+  return &t;
+}
+
+void fill_contact(ThreadPointTerm& term, const MaterialPair& mp, double stiffness, double depth,
+                  const Vec3& n, const Vec3& v_rel) noexcept {
+  const Mat3 nn = n * n.transpose();
+  const double vn = v_rel.dot(n);
+  const double elastic = stiffness * depth;
+  const bool damped = elastic - mp.damping * vn > 0.0;
+  const double fn = damped ? elastic - mp.damping * vn : elastic;
+  term.stiffness = stiffness * nn;
+  term.damping = (damped ? mp.damping : 0.0) * nn + mp.friction * (Mat3::Identity() - nn);
+  term.force = fn * n - mp.friction * (v_rel - vn * n);
+}
 
 void gather_thread_body_contacts(const Model& model, const Data& data, const ThreadModel& thread,
                                  ThreadState& st, ThreadScratch& scratch) noexcept {

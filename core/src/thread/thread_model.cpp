@@ -11,9 +11,10 @@
 namespace numen::core {
 namespace {
 
-/// Terms a thread can hold in one step: two contacts per segment, the eyelets, room besides.
+/// Terms a thread can hold in one step: two contacts per segment, the eyelets, the contacts
+/// with tissue, room besides.
 int thread_term_capacity(const ThreadModel& t) noexcept {
-  return 4 * t.segments + kMaxThreadEyelets + 64;
+  return 4 * t.segments + kMaxThreadEyelets + kMaxThreadTissueContacts + 64;
 }
 
 std::string check_tie(ThreadTie& tie, const char* key, int num_bodies) {
@@ -95,6 +96,11 @@ void ThreadScratch::resize(const ThreadModel& t) {
   segment_min.assign(static_cast<std::size_t>(t.segments), Vec3::Zero());
   segment_max.assign(static_cast<std::size_t>(t.segments), Vec3::Zero());
   sweep_axis = 0;
+  tissue_hits.assign(nodes, ThreadTissueHit{});
+  tissue_order.resize(nodes);
+  for (std::size_t i = 0; i < nodes; ++i) tissue_order[i] = static_cast<std::int32_t>(i);
+  tissue_key.assign(nodes, 0.0);
+  num_tissue_terms = 0;
 }
 
 }  // namespace numen::core

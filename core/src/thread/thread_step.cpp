@@ -213,6 +213,7 @@ void step_thread(const Model& model, Data& data, const ThreadModel& th, ThreadSt
   for (ThreadEyeletTerm& et : sc.eyelet_terms) et.set = false;
   gather_thread_body_contacts(model, data, th, st, sc);
   gather_thread_obstacle_contacts(model, th, st, sc);
+  gather_thread_tissue_contacts(model, data, th, st, sc);
   gather_thread_eyelets(th, st, sc);
   std::vector<Vec3>& x = sc.trial_position;
   std::vector<Vec3>& v = sc.trial_velocity;
@@ -288,6 +289,17 @@ void step_thread(const Model& model, Data& data, const ThreadModel& th, ThreadSt
       et.stiffness = term.stiffness.trace() / 2.0;  // k (I − a aᵀ): trace 2k
       et.damping = term.axis.dot(term.damping * term.axis);
     }
+    if (term.face >= 0 && sc.num_tissue_terms < kMaxThreadTissueContacts) {
+      ThreadTissueTerm& tt = sc.tissue_terms[static_cast<std::size_t>(sc.num_tissue_terms++)];
+      tt.face = term.face;
+      tt.weights = term.face_weights;
+      tt.point = term.wa * (st.position[ia] + h * v[ia]) + term.wb * (st.position[ib] + h * v[ib]);
+      tt.velocity = vp;
+      tt.normal = term.axis;
+      tt.force = f;
+      tt.stiffness = term.axis.dot(term.stiffness * term.axis);
+      tt.damping = term.axis.dot(term.damping * term.axis);
+    }
     if (term.body < 0) continue;
     const BodyState& bs = data.bodies[static_cast<std::size_t>(term.body)];
     data.body_wrench[static_cast<std::size_t>(term.body)].force -= f;
@@ -322,6 +334,7 @@ void step_threads(const Model& model, Data& data) noexcept {
     place_tissue_eyelets(model, data, st);
     step_thread(model, data, th, st, data.scratch->threads[i]);
     tie_tissue_eyelets(model, data, st, data.scratch->threads[i]);
+    tie_tissue_contacts(model, data, data.scratch->threads[i]);
   }
 }
 

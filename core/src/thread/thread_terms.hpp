@@ -13,12 +13,24 @@
 namespace numen::core {
 
 struct ThreadBand;
+struct ThreadPointTerm;
+struct MaterialPair;
 
 struct Model;
 struct Data;
 struct ThreadModel;
 struct ThreadState;
 struct ThreadScratch;
+
+/// The next free term of `scratch` (cleared), or nullptr (counted in
+/// ThreadOutput::contacts_dropped) when its capacity is used up.
+ThreadPointTerm* next_thread_term(ThreadScratch& scratch, ThreadState& state) noexcept;
+
+/// Fills a penalty contact term of `stiffness` (N/m) and the pair `mp`'s damping (on closing
+/// only) and viscous friction: `depth` (m) along the unit normal `n` (out of the other side,
+/// towards the thread), `v_rel` the thread point's velocity relative to the other side (m/s).
+void fill_contact(ThreadPointTerm& term, const MaterialPair& mp, double stiffness, double depth,
+                  const Vec3& n, const Vec3& v_rel) noexcept;
 
 /// Segment–sphere contacts with every body sphere (a body's material pair with the thread's:
 /// stiffness under the body's contact time-constant floor, damping, viscous friction; the
@@ -63,6 +75,25 @@ void take_over_punctures(const Model& model, const Data& data, const ThreadModel
 /// Each eyelet on tissue at its material point: position and velocity from its triangle's nodes
 /// at the step's start (an eyelet on a triangle the model does not have is let go).
 void place_tissue_eyelets(const Model& model, const Data& data, ThreadState& state) noexcept;
+
+/// Node contacts with the nets' surface triangles (tissue): each node's sphere (the thread's
+/// radius) against the triangle it is deepest under (on a face: less than
+/// kThreadTissueContactReach below its plane; at an edge or corner: reaching it from outside),
+/// the net's material pair with the thread's (stiffness, damping, viscous friction), the surface
+/// point moving with its nodes. Left out (a passage through the tissue): the nodes between two
+/// eyelets on tissue along the thread (and, for a thread following a needle with an odd count of
+/// them, from its start to the first: the needle's tail is in the tissue), the nodes next to a
+/// tie to a body and within 2.5 segments of an active eyelet. At most kMaxThreadTissueContacts; the
+/// triangles are visited once each, the nodes within a triangle's extent along the thread's
+/// longest axis found in their sorted order (ThreadScratch::tissue_order).
+void gather_thread_tissue_contacts(const Model& model, const Data& data, const ThreadModel& thread,
+                                   ThreadState& state, ThreadScratch& scratch) noexcept;
+
+/// After the thread's step: each contact with tissue's force given back to its triangle's nodes
+/// as held node springs along its normal (per node of weight w > 0: w × the contact's stiffness
+/// and damping, towards the thread's node as the step left it; ThreadScratch::tissue_terms),
+/// appended after the needles' ties (Data::num_node_thread_ties).
+void tie_tissue_contacts(const Model& model, Data& data, const ThreadScratch& scratch) noexcept;
 
 /// After the thread's step: each eyelet on tissue's force given back to its triangle's nodes as
 /// held node springs (per node of weight w > 0: along the thread w × the friction's damping,

@@ -528,17 +528,23 @@ double winding_number(const std::vector<Vec3>& verts, const NetTriangles& tris, 
   return omega / (4.0 * std::numbers::pi);
 }
 
+std::vector<Vec3> net_rest_positions(const core::Model& m, const core::NetModel& net) {
+  const core::BodyModel& anchor = m.bodies[static_cast<std::size_t>(net.body)];
+  std::vector<Vec3> rest(static_cast<std::size_t>(net.node_count));
+  for (int i = 0; i < net.node_count; ++i)
+    rest[static_cast<std::size_t>(i)] =
+        anchor.initial_pose.position +
+        anchor.initial_pose.orientation * m.node_rest[static_cast<std::size_t>(net.node_begin + i)];
+  return rest;
+}
+
 void warn_organs_inside_tools(const core::Model& m, const std::vector<NetTriangles>& triangles,
                               std::vector<std::string>& warnings) {
   for (std::size_t k = 0; k < m.nets.size() && k < triangles.size(); ++k) {
     const core::NetModel& net = m.nets[k];
     const core::BodyModel& anchor = m.bodies[static_cast<std::size_t>(net.body)];
     if (!anchor.anchored) continue;
-    std::vector<Vec3> rest(static_cast<std::size_t>(net.node_count));
-    for (int i = 0; i < net.node_count; ++i)
-      rest[static_cast<std::size_t>(i)] =
-          anchor.initial_pose.position +
-          anchor.initial_pose.orientation * m.node_rest[static_cast<std::size_t>(net.node_begin + i)];
+    const std::vector<Vec3> rest = net_rest_positions(m, net);
     for (const core::BodyModel& tool : m.bodies) {
       if (tool.anchored || tool.sphere_count == 0) continue;
       double overlap = 0.0;  // deepest node-sphere overlap (m)

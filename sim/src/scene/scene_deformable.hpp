@@ -56,6 +56,10 @@ double net_surface_offset_bound(double half_edge, double organ_size);
 /// organ and body, naming both, when a sphere of the body overlaps a node sphere of the organ's
 /// rest shape or has its centre inside the organ's closed rest surface (winding number of
 /// `triangles`, model.nets' order). Call after core::finalize_model(). Load time only.
+/// The rest positions (m, world) of `net`'s nodes at its body's starting pose (Model::node_rest
+/// placed by BodyModel::initial_pose), in the net's node order. Load time only.
+std::vector<core::Vec3> net_rest_positions(const core::Model& m, const core::NetModel& net);
+
 /// Winding number of the closed triangle surface `tris` (vertices `verts`) about `p`: ±1 inside,
 /// 0 outside (Van Oosterom & Strackee 1983's solid angle of each triangle, summed over 4π).
 double winding_number(const std::vector<core::Vec3>& verts, const NetTriangles& tris, const core::Vec3& p);

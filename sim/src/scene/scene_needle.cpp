@@ -130,12 +130,7 @@ void check_needles(const TomlTable& root, Scene& scene) {
       const core::BodyModel& b = m.bodies[static_cast<std::size_t>(n.body)];
       for (std::size_t net_k = 0; net_k < m.nets.size() && net_k < scene.net_triangles.size(); ++net_k) {
         const core::NetModel& net = m.nets[net_k];
-        const core::BodyModel& anchor = m.bodies[static_cast<std::size_t>(net.body)];
-        std::vector<core::Vec3> rest(static_cast<std::size_t>(net.node_count));
-        for (int i = 0; i < net.node_count; ++i)
-          rest[static_cast<std::size_t>(i)] =
-              anchor.initial_pose.position +
-              anchor.initial_pose.orientation * m.node_rest[static_cast<std::size_t>(net.node_begin + i)];
+        const std::vector<core::Vec3> rest = net_rest_positions(m, net);
         for (int s = b.sphere_begin; s < b.sphere_begin + b.sphere_count; ++s) {
           const core::Sphere& sp = m.body_spheres[static_cast<std::size_t>(s)];
           const core::Vec3 c = b.initial_pose.position + b.initial_pose.orientation * sp.center;

@@ -6,10 +6,13 @@
 #include <cmath>
 #include <sstream>
 #include <string>
+#include <vector>
 
+#include "numen/core/features.hpp"
 #include "numen/core/model.hpp"
 #include "numen/core/needle.hpp"
 #include "numen/core/thread.hpp"
+#include "scene_deformable.hpp"
 
 namespace numen::sim {
 namespace {
@@ -96,6 +99,25 @@ void parse_threads(const TomlTable& root, Scene& scene) {
                                   " m), the longest path the needle makes through tissue: pulled through, the "
                                   "thread would end inside it; give it a length of at least the needle's arc")
                 .what());
+    // Placed inside tissue: a thread touches the nets' surfaces from outside (docs/suturing.md,
+    // "The thread on tissue") and goes into tissue only behind a needle.
+    if constexpr (core::kWithDeformable) {
+      const core::Vec3 dir = th.direction.normalized();
+      for (std::size_t net_k = 0; net_k < m.nets.size() && net_k < scene.net_triangles.size(); ++net_k) {
+        const core::NetModel& net = m.nets[net_k];
+        const std::vector<core::Vec3> rest = net_rest_positions(m, net);
+        for (int i = 0; i <= th.segments; ++i) {
+          const core::Vec3 x = th.start + (th.length * i / th.segments) * dir;
+          if (std::abs(winding_number(rest, scene.net_triangles[net_k], x)) > 0.5)
+            t.fail(t.has("direction") ? "direction" : "start",
+                   "thread \"" + th.name + "\" starts inside the tissue of deformable \"" + net.name + "\" (its node " +
+                       std::to_string(i) + " of " + std::to_string(th.segments + 1) + ", " +
+                       format_input_number(th.length * i / th.segments * 1e3) +
+                       " mm along it, in the net's rest surface): give it a start and direction that keep it out; "
+                       "it goes into tissue behind a needle");
+        }
+      }
+    }
     m.threads.push_back(th);
   }
 }

@@ -66,10 +66,11 @@ TEST(SceneInfo, SizesAreTheModelsCounts) {
     EXPECT_EQ(i.body_spheres, static_cast<int>(m.body_spheres.size())) << name;
     EXPECT_EQ(i.contact_capacity, core::contact_capacity(m)) << name;
     // With nets: the penalty contacts' room, then the grasp springs', the needles' puncture ties'
-    // and the threads' eyelet springs' (make_data()).
+    // and the threads' eyelet and tissue contact springs' (make_data()).
     const int room = core::kMaxNodeContacts + m.num_grasps() * core::kMaxGraspNodes * core::kGraspSpringsPerNode +
                      m.num_needles() * core::kMaxNeedlePunctures * core::kNeedleTieSprings +
-                     m.num_threads() * core::kMaxThreadEyelets * core::kThreadEyeletTieSprings;
+                     m.num_threads() * (core::kMaxThreadEyelets * core::kThreadEyeletTieSprings +
+                                        core::kMaxThreadTissueContacts * core::kThreadTissueContactSprings);
     EXPECT_EQ(i.node_contact_capacity, m.num_nodes() > 0 ? room : 0) << name;
   }
 }

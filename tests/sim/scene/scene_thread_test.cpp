@@ -1,7 +1,7 @@
 // Tests of sim/scene/scene_thread: the [[thread]] keys of a scene file and their located errors —
-// a thread of zero or negative length or segments, a bad material value, an unknown body or key
-// (docs/suturing.md "Scene keys"). On the shipped probe scene, which has no joints, so these run
-// in every build.
+// a thread of zero or negative length or segments, a bad material value, an unknown body or key,
+// a thread that starts inside tissue (docs/suturing.md "Scene keys"). On the shipped probe scene,
+// which has no joints, so these run in every build (the one with tissue where there are nets).
 
 #include <gtest/gtest.h>
 
@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "build_features.hpp"
 #include "numen/sim/scene/scene.hpp"
 #include "scene_text.hpp"
 #include "temp_dir.hpp"
@@ -66,4 +67,26 @@ TEST(SceneThread, BadThreadsAreLocatedErrorsNamingTheirKeys) {
     const int column = c.key == "thread[0].length_mm" ? 0 : static_cast<int>(c.keys.find('=') + 3);
     expect_located(load_error(dir, text), (dir / "bad.toml").string(), line, column, c.key, c.message);
   }
+}
+
+// A thread touches tissue from outside and goes into it only behind a needle: one whose initial
+// straight shape runs through a deformable's closed rest surface is refused at its direction,
+// naming the thread, the deformable and the node; pointed away from it, it loads.
+TEST(SceneThread, AThreadStartingInsideTissueIsALocatedError) {
+  NUMEN_REQUIRE_DEFORMABLE();
+  numen::test::TempDir dir;
+  const std::string block =
+      numen::test::indentation_bench_scene("mesh = \"box\"\nhalf_extents = [0.01, 0.01, 0.005]\nsubdivisions = 4\n"
+                                           "mass = 0.01\nstiffness = 200.0\ndamping = 0.1\n"
+                                           "tie_stiffness = 100.0\ntie_damping = 0.17\n");
+  const auto with_thread = [&](const std::string& direction) {
+    return block + "\n[[thread]]\nname = \"suture\"\nlength = 0.04\nsegments = 20\nstart = [0.0, 0.0, 0.02]\n"
+                   "direction = " + direction + "\n";
+  };
+  const std::string text = with_thread("[0.0, 0.0, -1.0]");
+  const int line = static_cast<int>(std::count(text.begin(), text.end(), '\n'));
+  numen::test::expect_located(numen::test::load_error(dir, text), (dir / "bad.toml").string(), line, 13,
+                              "thread[0].direction",
+                              "thread \"suture\" starts inside the tissue of deformable \"organ\" (its node 8 of 21");
+  EXPECT_EQ(numen::sim::load_scene(dir.write("ok.toml", with_thread("[0.0, 0.0, 1.0]"))).model.threads.size(), 1u);
 }

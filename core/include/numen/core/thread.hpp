@@ -21,7 +21,9 @@
 /// thread's solve, the tie force goes back to the body in the same step), penalty contacts of
 /// the segments with the bodies' spheres (reaction on the body), of the nodes with the static
 /// obstacles (plane, box, sphere, capsule), of non-adjacent segments with each other
-/// (capsule–capsule with the thread radius), and eyelets: points the thread slides through
+/// (capsule–capsule with the thread radius), of the nodes with the nets' surface triangles
+/// (tissue; the reaction goes to the triangle's nodes as held node springs, as an eyelet's on
+/// tissue below), and eyelets: points the thread slides through
 /// with friction along it (ThreadEyelet, written by the caller before each step, or taken over
 /// from a needle's punctures).
 ///
@@ -50,6 +52,16 @@ struct Data;
 inline constexpr int kMaxThreadEyelets = 8;
 /// Held node springs one eyelet on tissue writes: three nodes, three axes.
 inline constexpr int kThreadEyeletTieSprings = 9;
+/// Contacts of one thread with the nets' surfaces in one step at most (one per node, with the
+/// triangle it is deepest under; more are dropped and counted in ThreadOutput::contacts_dropped),
+/// and the held node
+/// springs each gives its triangle's nodes (one along its normal per node): Data::node_contacts'
+/// room for them (make_data()).
+inline constexpr int kMaxThreadTissueContacts = 64;
+inline constexpr int kThreadTissueContactSprings = 3;
+/// How deep below a net's surface (m) a thread node still touches it: a node deeper is in a
+/// passage through the tissue (behind an eyelet or the needle), not on it.
+inline constexpr double kThreadTissueContactReach = 1e-3;
 
 /// One end of a thread tied to a point of a rigid body (e.g. a needle's tail, where the thread
 /// is swaged into it). Body frame: origin at the body's centre of mass (BodyModel).
@@ -135,6 +147,7 @@ struct ThreadOutput {
   int body_contacts = 0;     ///< Segment–body-sphere contacts this step.
   int obstacle_contacts = 0; ///< Node–obstacle contacts this step.
   int self_contacts = 0;     ///< Segment–segment contacts this step.
+  int tissue_contacts = 0;   ///< Node–net-surface contacts this step (thread_tissue_contact.cpp).
   int contacts_dropped = 0;  ///< Contacts over the thread's capacity this step (not applied).
   Wrench tie_wrench_start;   ///< Tie force on node 0's body (N, N·m about its COM; world).
   Wrench tie_wrench_end;     ///< Same for the last node's tie.

@@ -1,0 +1,202 @@
+/// @file thread_tissue_contact.cpp
+/// A thread lying on tissue (thread.hpp, "Couplings"; docs/suturing.md "The thread on tissue"):
+/// its nodes' penalty contacts with the nets' surface triangles as point terms of its implicit
+/// step, and their reactions given back to the triangles' nodes as held node springs in the
+/// nets' implicit step, as an eyelet's on tissue (thread_tissue.cpp).
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstddef>
+#include <limits>
+#include <numbers>
+
+#include "mesh/mesh_shape_query.hpp"
+#include "net/net_terms.hpp"
+#include "scratch/thread_scratch.hpp"
+#include "thread/thread_terms.hpp"
+#include "numen/core/contact_force.hpp"
+#include "numen/core/data.hpp"
+#include "numen/core/model.hpp"
+#include "numen/core/thread.hpp"
+
+namespace numen::core {
+namespace {
+
+/// Whether node `i` is left out of the contacts with tissue: next to a tie to a body (the tied
+/// body, a needle in the tissue, holds it), or within two and a half segments of an active
+/// eyelet (the thread enters the tissue there; an eyelet taken over this step included).
+bool near_a_passage(const ThreadModel& thread, const ThreadState& st, int i) noexcept {
+  const int last = thread.segments;
+  if (thread.tie_start.body >= 0 && i < 3) return true;
+  if (thread.tie_end.body >= 0 && i > last - 3) return true;
+  const double clear = 2.5 * thread.rest_segment;
+  const Vec3& x = st.position[static_cast<std::size_t>(i)];
+  for (const ThreadEyelet& e : st.eyelets)
+    if (e.active && (x - e.position).squaredNorm() < clear * clear) return true;
+  return false;
+}
+
+/// Node i's contact with the triangle (a, b, c) of unit outward normal n, if deeper than its
+/// hit so far: on the triangle's face, the node's sphere below the plane by less than
+/// kThreadTissueContactReach; at an edge or a corner, the sphere reaching it from outside.
+void touch_triangle(const Vec3& x, double radius, int face, int material, const Vec3& a,
+                    const Vec3& b, const Vec3& c, const Vec3& n, ThreadTissueHit& hit) noexcept {
+  int feature = detail::kFace;
+  Vec3 w;
+  const Vec3 q = detail::closest_on_triangle(x, a, b, c, feature, w);
+  const Vec3 d = x - q;
+  const double above = d.dot(n);
+  double depth = 0.0;
+  Vec3 normal = n;
+  if (feature == detail::kFace) {
+    if (above < -kThreadTissueContactReach) return;
+    depth = radius - above;
+  } else {
+    const double dist = d.norm();
+    if (!(above > 0.0) || dist <= 0.0) return;
+    depth = radius - dist;
+    normal = d / dist;
+  }
+  if (!(depth > hit.depth)) return;
+  hit.depth = depth;
+  hit.face = face;
+  hit.material = material;
+  hit.weights = w;
+  hit.normal = normal;
+}
+
+}  // namespace
+
+void gather_thread_tissue_contacts(const Model& model, const Data& data, const ThreadModel& thread,
+                                   ThreadState& st, ThreadScratch& scratch) noexcept {
+  scratch.num_tissue_terms = 0;
+  if (model.net_faces.empty()) return;
+  const double rt = thread.radius;
+  const double thread_node_mass = thread.density * std::numbers::pi * rt * rt * thread.rest_segment;
+  const auto nodes = st.position.size();
+  Vec3 lo = st.position[0], hi = st.position[0];
+  for (const Vec3& x : st.position) {
+    lo = lo.cwiseMin(x);
+    hi = hi.cwiseMax(x);
+  }
+  lo.array() -= rt;
+  hi.array() += rt;
+  int axis = 0;
+  (hi - lo).maxCoeff(&axis);
+  // The nodes in order along the longest axis: insertion sort of last step's order (nearly
+  // sorted, O(n) a step), so that each triangle visits only the nodes within its extent.
+  std::vector<std::int32_t>& order = scratch.tissue_order;
+  for (std::size_t i = 0; i < nodes; ++i) scratch.tissue_hits[i] = ThreadTissueHit{};
+  for (std::size_t p = 1; p < nodes; ++p) {
+    const std::int32_t key = order[p];
+    const double v = st.position[static_cast<std::size_t>(key)][axis];
+    std::size_t q = p;
+    for (; q > 0 && st.position[static_cast<std::size_t>(order[q - 1])][axis] > v; --q) order[q] = order[q - 1];
+    order[q] = key;
+  }
+  for (std::size_t p = 0; p < nodes; ++p)
+    scratch.tissue_key[p] = st.position[static_cast<std::size_t>(order[p])][axis];
+  const auto key_begin = scratch.tissue_key.begin(), key_end = scratch.tissue_key.end();
+  for (const NetModel& net : model.nets) {
+    for (int f = net.face_begin; f < net.face_begin + net.face_count; ++f) {
+      const std::array<int, 3>& t = model.net_faces[static_cast<std::size_t>(f)];
+      const Vec3& a = data.nodes[static_cast<std::size_t>(t[0])].position;
+      const Vec3& b = data.nodes[static_cast<std::size_t>(t[1])].position;
+      const Vec3& c = data.nodes[static_cast<std::size_t>(t[2])].position;
+      const Vec3 flo = a.cwiseMin(b).cwiseMin(c), fhi = a.cwiseMax(b).cwiseMax(c);
+      if ((flo.array() > hi.array()).any() || (fhi.array() < lo.array()).any()) continue;
+      const Vec3 cross = (b - a).cross(c - a);
+      const double area2 = cross.norm();
+      if (!(area2 > 0.0)) continue;
+      const Vec3 n = cross / area2;
+      const double reach = rt + kThreadTissueContactReach;
+      const auto first = std::lower_bound(key_begin, key_end, flo[axis] - reach);
+      for (auto it = first; it != key_end && *it <= fhi[axis] + reach; ++it) {
+        const int i = order[static_cast<std::size_t>(it - key_begin)];
+        const Vec3& x = st.position[static_cast<std::size_t>(i)];
+        if ((x.array() < flo.array() - reach).any() || (x.array() > fhi.array() + reach).any()) continue;
+        touch_triangle(x, rt, f, net.material, a, b, c, n, scratch.tissue_hits[static_cast<std::size_t>(i)]);
+      }
+    }
+  }
+  // The passages: each eyelet on tissue is where the thread goes in or out, at its nearest node;
+  // walking from the start, the thread is inside the tissue from a tissue eyelet to the next. A
+  // thread that follows a needle starts inside while its count is odd (the tail has passed an
+  // entry and not yet its exit: each pass takes over two points).
+  std::array<int, kMaxThreadEyelets> gates{};
+  int num_gates = 0;
+  for (const ThreadEyelet& e : st.eyelets) {
+    if (!e.active || e.face < 0) continue;
+    std::size_t nearest = 0;
+    double best = std::numeric_limits<double>::infinity();
+    for (std::size_t i = 0; i < nodes; ++i) {
+      const double d2 = (st.position[i] - e.position).squaredNorm();
+      if (d2 < best) best = d2, nearest = i;
+    }
+    int g = num_gates++;
+    for (; g > 0 && gates[static_cast<std::size_t>(g - 1)] > static_cast<int>(nearest); --g)
+      gates[static_cast<std::size_t>(g)] = gates[static_cast<std::size_t>(g - 1)];
+    gates[static_cast<std::size_t>(g)] = static_cast<int>(nearest);
+  }
+  bool inside = thread.needle >= 0 && num_gates % 2 == 1;
+  int next_gate = 0;
+  for (std::size_t i = 0; i < nodes; ++i) {
+    for (; next_gate < num_gates && gates[static_cast<std::size_t>(next_gate)] <= static_cast<int>(i); ++next_gate)
+      inside = !inside;
+    const ThreadTissueHit& hit = scratch.tissue_hits[i];
+    if (hit.face < 0 || inside || near_a_passage(thread, st, static_cast<int>(i))) continue;
+    if (st.output.tissue_contacts >= kMaxThreadTissueContacts) {
+      ++st.output.contacts_dropped;
+      continue;
+    }
+    ThreadPointTerm* term = next_thread_term(scratch, st);
+    if (term == nullptr) return;
+    const std::array<int, 3>& t = model.net_faces[static_cast<std::size_t>(hit.face)];
+    Vec3 v_surface = Vec3::Zero();
+    for (int m = 0; m < 3; ++m)
+      v_surface += hit.weights[m] * data.nodes[static_cast<std::size_t>(t[static_cast<std::size_t>(m)])].velocity;
+    // Under the time-constant floor of the lighter side: the touched point's effective mass on
+    // its nodes, 1 / Σ w_j² / m_j, or the thread's node. Each side steps the other's point as
+    // given (staggered), so a contact stiffer than the lighter side's step resolves pumps energy
+    // into the pair (a heavy thread dropped on the patch bounced off it with the pair's 2e4 N/m).
+    double inverse_mass = 0.0;
+    for (int m = 0; m < 3; ++m)
+      inverse_mass += hit.weights[m] * hit.weights[m] /
+                      model.node_mass[static_cast<std::size_t>(t[static_cast<std::size_t>(m)])];
+    const double m_eff = std::min(1.0 / inverse_mass, thread_node_mass);
+    const MaterialPair& mp = model.material_pair(thread.material, hit.material);
+    const double k = std::min(mp.stiffness, contact_stiffness_limit(m_eff, model.dt, model.solver.contact_max_omega_dt));
+    term->a = term->b = static_cast<int>(i) + 1;
+    fill_contact(*term, mp, k, hit.depth, hit.normal, st.velocity[i] - v_surface);
+    term->target_velocity = v_surface;
+    term->point = st.position[i];
+    term->face = hit.face;
+    term->face_weights = hit.weights;
+    term->axis = hit.normal;
+    ++st.output.tissue_contacts;
+  }
+}
+
+void tie_tissue_contacts(const Model& model, Data& data, const ThreadScratch& scratch) noexcept {
+  for (int j = 0; j < scratch.num_tissue_terms; ++j) {
+    const ThreadTissueTerm& t = scratch.tissue_terms[static_cast<std::size_t>(j)];
+    const std::array<int, 3>& face = model.net_faces[static_cast<std::size_t>(t.face)];
+    for (int m = 0; m < 3; ++m) {
+      const double w = t.weights[m];
+      if (!(w > 0.0)) continue;
+      const int node = face[static_cast<std::size_t>(m)];
+      const auto slot = static_cast<std::size_t>(detail::node_contact_count(data));
+      if (slot >= data.node_contacts.size()) return;  // make_data() gave them room: not reached
+      const Vec3& v_node = data.nodes[static_cast<std::size_t>(node)].velocity;
+      // On the node: its weight of the contact's force on the thread, reversed, along the
+      // normal, stiff and damped towards the thread's node as the step left it.
+      detail::set_held_spring(data.node_contacts[slot], node, -1, t.point, Vec3::Zero(), t.normal,
+                              w * t.stiffness, w * t.damping, (-w * t.normal.dot(t.force)) * t.normal,
+                              t.normal.dot(v_node - t.velocity));
+      ++data.num_node_thread_ties;
+    }
+  }
+}
+
+}  // namespace numen::core
