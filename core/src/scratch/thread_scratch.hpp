@@ -104,10 +104,14 @@ struct ThreadScratch {
   std::vector<ThreadTissueHit> tissue_hits;
   std::vector<std::int32_t> tissue_order;
   std::vector<double> tissue_key;
+  /// Per net node (global): its outcode against the thread's box grown by the contact's reach
+  /// (per axis one bit for "below", one for "above"): a triangle whose three nodes share a bit is
+  /// out of reach of every node of the thread.
+  std::vector<std::uint8_t> net_node_outcode;
   std::array<ThreadTissueTerm, kMaxThreadTissueContacts> tissue_terms{};
   int num_tissue_terms = 0;
-  /// Resizes for `thread` (load time).
-  void resize(const ThreadModel& thread);
+  /// Resizes for `thread` in a model of `model_nodes` net nodes (load time).
+  void resize(const ThreadModel& thread, int model_nodes);
 };
 
 }  // namespace numen::core

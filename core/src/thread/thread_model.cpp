@@ -81,7 +81,7 @@ void reset_thread(const ThreadModel& t, ThreadState& s) noexcept {
   s.output = ThreadOutput{};
 }
 
-void ThreadScratch::resize(const ThreadModel& t) {
+void ThreadScratch::resize(const ThreadModel& t, int model_nodes) {
   const auto nodes = static_cast<std::size_t>(t.segments + 1);
   band.resize(t.segments + 3);
   terms.assign(static_cast<std::size_t>(thread_term_capacity(t)), ThreadPointTerm{});
@@ -100,6 +100,7 @@ void ThreadScratch::resize(const ThreadModel& t) {
   tissue_order.resize(nodes);
   for (std::size_t i = 0; i < nodes; ++i) tissue_order[i] = static_cast<std::int32_t>(i);
   tissue_key.assign(nodes, 0.0);
+  net_node_outcode.assign(static_cast<std::size_t>(model_nodes), 0);
   num_tissue_terms = 0;
 }
 

@@ -8,6 +8,7 @@
 #include <array>
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
 #include <limits>
 #include <numbers>
 
@@ -98,19 +99,37 @@ void gather_thread_tissue_contacts(const Model& model, const Data& data, const T
   for (std::size_t p = 0; p < nodes; ++p)
     scratch.tissue_key[p] = st.position[static_cast<std::size_t>(order[p])][axis];
   const auto key_begin = scratch.tissue_key.begin(), key_end = scratch.tissue_key.end();
+  const double reach = rt + kThreadTissueContactReach;
+  const Vec3 box_lo = lo.array() - kThreadTissueContactReach, box_hi = hi.array() + kThreadTissueContactReach;
+  std::vector<std::uint8_t>& outcode = scratch.net_node_outcode;
   for (const NetModel& net : model.nets) {
+    if (net.face_count == 0) continue;
+    // Each node's outcode against the thread's box grown by the reach; a net all of whose nodes
+    // share a bit is out of reach, a triangle whose nodes share one too.
+    std::uint8_t all = 0x3f;
+    for (int i = net.node_begin; i < net.node_begin + net.node_count; ++i) {
+      const Vec3& x = data.nodes[static_cast<std::size_t>(i)].position;
+      std::uint8_t code = 0;
+      for (int k = 0; k < 3; ++k)
+        code |= static_cast<std::uint8_t>((x[k] < box_lo[k] ? 1u : 0u) << (2 * k) |
+                                          (x[k] > box_hi[k] ? 2u : 0u) << (2 * k));
+      outcode[static_cast<std::size_t>(i)] = code;
+      all &= code;
+    }
+    if (all != 0) continue;
     for (int f = net.face_begin; f < net.face_begin + net.face_count; ++f) {
       const std::array<int, 3>& t = model.net_faces[static_cast<std::size_t>(f)];
+      if ((outcode[static_cast<std::size_t>(t[0])] & outcode[static_cast<std::size_t>(t[1])] &
+           outcode[static_cast<std::size_t>(t[2])]) != 0)
+        continue;
       const Vec3& a = data.nodes[static_cast<std::size_t>(t[0])].position;
       const Vec3& b = data.nodes[static_cast<std::size_t>(t[1])].position;
       const Vec3& c = data.nodes[static_cast<std::size_t>(t[2])].position;
       const Vec3 flo = a.cwiseMin(b).cwiseMin(c), fhi = a.cwiseMax(b).cwiseMax(c);
-      if ((flo.array() > hi.array()).any() || (fhi.array() < lo.array()).any()) continue;
       const Vec3 cross = (b - a).cross(c - a);
       const double area2 = cross.norm();
       if (!(area2 > 0.0)) continue;
       const Vec3 n = cross / area2;
-      const double reach = rt + kThreadTissueContactReach;
       const auto first = std::lower_bound(key_begin, key_end, flo[axis] - reach);
       for (auto it = first; it != key_end && *it <= fhi[axis] + reach; ++it) {
         const int i = order[static_cast<std::size_t>(it - key_begin)];
