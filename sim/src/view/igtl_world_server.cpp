@@ -118,6 +118,7 @@ struct IgtlWorldServer::Thread {
 #endif
 };
 
+#if NUMEN_WITH_OPENIGTLINK
 namespace {
 
 /// The polylines of a thread of `count` nodes broken at segment `broken` (−1: whole): nodes
@@ -136,6 +137,7 @@ std::vector<std::vector<std::uint32_t>> thread_lines(std::size_t count, int brok
 }
 
 }  // namespace
+#endif
 
 IgtlWorldServer::IgtlWorldServer(const core::Model& model, IgtlWorldSettings settings)
     : model_(model), settings_(std::move(settings)) {
