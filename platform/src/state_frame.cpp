@@ -60,13 +60,14 @@ field_t<F> get_field(const std::byte* frame) noexcept {
 constexpr std::size_t offset_of(FrameField f) noexcept { return frame_field(f).offset; }
 
 // Byte offsets of the arrays after the header (kStateFrameArrays, in order) and of the end,
-// for counts B, N, C, A, G, D, E.
+// for counts B, N, C, A, G, D, E, H, T.
 struct Offsets {
   std::array<std::size_t, kStateFrameArrays.size()> at;
   std::size_t end;
 };
 Offsets offsets(std::uint64_t b, std::uint64_t n, std::uint64_t c, std::uint64_t a,
-                std::uint64_t g, std::uint64_t d, std::uint64_t e) noexcept {
+                std::uint64_t g, std::uint64_t d, std::uint64_t e, std::uint64_t threads,
+                std::uint64_t thread_nodes) noexcept {
   Offsets o{};
   std::size_t at = kStateFrameHeaderBytes;
   for (std::size_t i = 0; i < kStateFrameArrays.size(); ++i) {
@@ -80,6 +81,8 @@ Offsets offsets(std::uint64_t b, std::uint64_t n, std::uint64_t c, std::uint64_t
         case FrameField::kNumGrasps: items = g; break;
         case FrameField::kNumExtraDevices: items = d; break;
         case FrameField::kNumExtraAxes: items = e; break;
+        case FrameField::kNumThreads: items = threads; break;
+        case FrameField::kNumThreadNodes: items = thread_nodes; break;
         default: items = a; break;  // kNumAxes (frame_arrays_are_well_formed())
       }
     }
@@ -127,7 +130,7 @@ std::byte* put_contact(std::byte* p, const core::Vec3& point, const core::Vec3& 
 
 std::size_t StateFrameLayout::frame_bytes(std::uint32_t contacts) const noexcept {
   return offsets(num_bodies, num_nodes, contacts, num_axes, num_grasps, num_extra_devices,
-                 num_extra_axes).end;
+                 num_extra_axes, num_threads, num_thread_nodes).end;
 }
 
 std::size_t encode_state_frame(const StateFrameLayout& layout, const core::Data& data,
@@ -144,11 +147,16 @@ std::size_t encode_state_frame(const StateFrameLayout& layout, const core::Data&
     extra_axes += d.axis_torques.size();
   }
   if (extra_axes != layout.num_extra_axes) return 0;
+  if (data.threads.size() != layout.num_threads) return 0;
+  std::size_t thread_nodes = 0;
+  for (const core::ThreadState& th : data.threads) thread_nodes += th.position.size();
+  if (thread_nodes != layout.num_thread_nodes) return 0;
   const auto rigid = static_cast<std::uint32_t>(std::max(data.num_contacts, 0));
   const auto nodal = static_cast<std::uint32_t>(std::max(data.num_node_contacts, 0));
   const std::uint32_t contacts = std::min(rigid + nodal, layout.max_contacts);
   const Offsets o = offsets(layout.num_bodies, layout.num_nodes, contacts, layout.num_axes,
-                            layout.num_grasps, layout.num_extra_devices, layout.num_extra_axes);
+                            layout.num_grasps, layout.num_extra_devices, layout.num_extra_axes,
+                            layout.num_threads, layout.num_thread_nodes);
 
   std::byte* h = out.data();
   std::memcpy(h + offset_of(FrameField::kMagic), kStateFrameMagic, sizeof kStateFrameMagic);
@@ -182,6 +190,8 @@ std::size_t encode_state_frame(const StateFrameLayout& layout, const core::Data&
   put_field<FrameField::kNumGrasps>(h, layout.num_grasps);
   put_field<FrameField::kNumExtraDevices>(h, layout.num_extra_devices);
   put_field<FrameField::kNumExtraAxes>(h, layout.num_extra_axes);
+  put_field<FrameField::kNumThreads>(h, layout.num_threads);
+  put_field<FrameField::kNumThreadNodes>(h, layout.num_thread_nodes);
 
   // Each array from its declared offset (kStateFrameArrays), items in order.
   auto array = [&](FrameArray a) { return out.data() + o.at[array_index(a)]; };
@@ -237,6 +247,12 @@ std::size_t encode_state_frame(const StateFrameLayout& layout, const core::Data&
                    r.sample_faults, d.axis_torques.size());
     p = put_vec3(put_vec3(p, r.feedback.force), r.feedback.torque);
     for (double tau : d.axis_torques) t = put_floats(t, tau);
+  }
+  p = array(FrameArray::kThread);
+  std::byte* x = array(FrameArray::kThreadNode);
+  for (const core::ThreadState& th : data.threads) {
+    p = put_floats(p, th.broken_segment, th.output.max_tension);
+    for (const core::Vec3& node : th.position) x = put_vec3(x, node);
   }
   return o.end;
 }
@@ -328,6 +344,19 @@ float StateFrameView::extra_axis_torque(std::uint32_t a) const noexcept {
   return f32(item(FrameArray::kExtraAxisTorque, a));
 }
 
+FrameThread StateFrameView::thread(std::uint32_t t) const noexcept {
+  float v[kFrameThreadFloats];
+  f32s(item(FrameArray::kThread, t), v, kFrameThreadFloats);
+  static_assert(kFrameThreadFloats == 2);
+  // The segment index was written as a float (exact below 2^24); a garbled one reads as whole.
+  const bool index = v[0] >= 0.0F && v[0] < 16777216.0F;
+  return FrameThread{index ? static_cast<std::int32_t>(v[0]) : -1, v[1]};
+}
+
+void StateFrameView::thread_node(std::uint32_t n, float out[3]) const noexcept {
+  f32s(item(FrameArray::kThreadNode, n), out, kFrameNodeFloats);
+}
+
 StateFrameDecodeResult StateFrameDecoder::decode(std::span<const std::byte> bytes,
                                                  StateFrameView& view) {
   auto fail = [](FrameField at, const std::string& what) {
@@ -343,9 +372,12 @@ StateFrameDecodeResult StateFrameDecoder::decode(std::span<const std::byte> byte
     return fail(FrameField::kMagic, "not a state frame (magic is not NMVF)");
   const auto version = get_field<FrameField::kVersion>(h);
   if (version != kStateFrameVersion)
-    return fail(FrameField::kVersion, "frame version " + std::to_string(version) +
-                                          ", this reader knows " +
-                                          std::to_string(kStateFrameVersion));
+    return fail(FrameField::kVersion,
+                "frame version " + std::to_string(version) + ", this reader knows " +
+                    std::to_string(kStateFrameVersion) +
+                    (version < kStateFrameVersion
+                         ? " (written by an older numen: record the run again with this one)"
+                         : ""));
   const auto header_bytes = get_field<FrameField::kHeaderBytes>(h);
   if (header_bytes != kStateFrameHeaderBytes)
     return fail(FrameField::kHeaderBytes, "header size " + std::to_string(header_bytes) +
@@ -370,13 +402,16 @@ StateFrameDecodeResult StateFrameDecoder::decode(std::span<const std::byte> byte
   hd.num_grasps = get_field<FrameField::kNumGrasps>(h);
   hd.num_extra_devices = get_field<FrameField::kNumExtraDevices>(h);
   hd.num_extra_axes = get_field<FrameField::kNumExtraAxes>(h);
+  hd.num_threads = get_field<FrameField::kNumThreads>(h);
+  hd.num_thread_nodes = get_field<FrameField::kNumThreadNodes>(h);
   if (hd.frame_bytes != bytes.size())
     return fail(FrameField::kFrameBytes, "frame size field says " + std::to_string(hd.frame_bytes) +
                                              " bytes, the frame has " +
                                              std::to_string(bytes.size()));
   // Counts are u32: the offsets below are computed in 64 bits and cannot overflow.
   const Offsets o = offsets(hd.num_bodies, hd.num_nodes, hd.num_contacts, hd.num_axes,
-                            hd.num_grasps, hd.num_extra_devices, hd.num_extra_axes);
+                            hd.num_grasps, hd.num_extra_devices, hd.num_extra_axes,
+                            hd.num_threads, hd.num_thread_nodes);
   if (o.end != bytes.size())
     return fail(FrameField::kNumBodies,
                 "counts (bodies " + std::to_string(hd.num_bodies) + ", nodes " +
@@ -384,7 +419,9 @@ StateFrameDecodeResult StateFrameDecoder::decode(std::span<const std::byte> byte
                     ", axes " + std::to_string(hd.num_axes) + ", graspers " +
                     std::to_string(hd.num_grasps) + ", other devices " +
                     std::to_string(hd.num_extra_devices) + ", their axes " +
-                    std::to_string(hd.num_extra_axes) + ") need " + std::to_string(o.end) +
+                    std::to_string(hd.num_extra_axes) + ", threads " +
+                    std::to_string(hd.num_threads) + ", their nodes " +
+                    std::to_string(hd.num_thread_nodes) + ") need " + std::to_string(o.end) +
                     " bytes, the frame has " + std::to_string(bytes.size()));
   if (hd.held_body < -1 || hd.held_body >= static_cast<std::int64_t>(hd.num_bodies))
     return fail(FrameField::kHeldBody, "held body " + std::to_string(hd.held_body) +

@@ -3,7 +3,7 @@
 /// (platform/state_frame.hpp; the frames `numen view` replays and the live stream sends): the
 /// input as one frame through StateFrameDecoder::decode(). A frame it accepts is read whole
 /// through every accessor of the view (each body's pose and target, each node, contact and
-/// axis, the wrench, the penetrations and the closed loop's figures): the decoder's checks must
+/// axis, the wrench, the penetrations, the closed loop's figures, each thread and thread node): the decoder's checks must
 /// keep them inside the bytes (AddressSanitizer sees a read past them: the input is copied into
 /// a buffer of its exact size). Checks: an accepted frame's header says its own size, and a refused one has a reason.
 
@@ -40,6 +40,11 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   sum += out[5] + view.tool_penetration() + view.target_penetration();
   view.device_loop(out);
   sum += out[0] + out[1] + out[2];
+  for (std::uint32_t t = 0; t < h.num_threads; ++t) sum += view.thread(t).max_tension;
+  for (std::uint32_t n = 0; n < h.num_thread_nodes; ++n) {
+    view.thread_node(n, out);
+    sum += out[1];
+  }
   volatile float keep = sum;
   (void)keep;
   return 0;

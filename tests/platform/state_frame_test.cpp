@@ -80,9 +80,9 @@ struct Period {
 
 TEST(StateFrame, SizeFollowsTheLayout) {
   const StateFrameLayout layout{2, 10, 3, 5, 2};
-  // 76 header + 2·28 poses + 2·32 targets + 10·12 nodes + c·40 contacts + 24 wrench + 4·3 axes
+  // 84 header + 2·28 poses + 2·32 targets + 10·12 nodes + c·40 contacts + 24 wrench + 4·3 axes
   // + 8 penetrations + 12 closed-loop figures + 2·32 graspers.
-  EXPECT_EQ(layout.frame_bytes(0), 76u + 56 + 64 + 120 + 24 + 12 + 8 + 12 + 64);
+  EXPECT_EQ(layout.frame_bytes(0), 84u + 56 + 64 + 120 + 24 + 12 + 8 + 12 + 64);
   EXPECT_EQ(layout.frame_bytes(4), layout.frame_bytes(0) + 160);
   EXPECT_EQ(layout.max_frame_bytes(), layout.frame_bytes(5));
   // Two other devices of 6 and 7 axes: 2·48 + 13·4.
@@ -90,6 +90,11 @@ TEST(StateFrame, SizeFollowsTheLayout) {
   two_more.num_extra_devices = 2;
   two_more.num_extra_axes = 13;
   EXPECT_EQ(two_more.frame_bytes(0), layout.frame_bytes(0) + 96 + 52);
+  // Two threads of 101 and 11 nodes: 2·8 + 112·12.
+  StateFrameLayout threads = layout;
+  threads.num_threads = 2;
+  threads.num_thread_nodes = 112;
+  EXPECT_EQ(threads.frame_bytes(0), layout.frame_bytes(0) + 16 + 1344);
 }
 
 TEST(StateFrame, RoundTripsEveryField) {
@@ -178,6 +183,11 @@ TEST(StateFrame, CarriesAGraspOfTissue) {
   EXPECT_FLOAT_EQ(g.slips, 4.0F);
 }
 
+/// Decodes the first `n` bytes of `buf` into `v`: the decoder's reason, empty when accepted.
+std::string decode_into(const std::vector<std::byte>& buf, std::size_t n, StateFrameView& v) {
+  return StateFrameDecoder::decode(std::span(buf.data(), n), v).error;
+}
+
 // Issue 70: the frame carried device 0's state alone. The loop's other devices come after the
 // graspers, each its flags, lifecycle, start-up, fault, sample faults, axis count and feedback,
 // their axis torques in one array; device 0's header fields and arrays are as they were.
@@ -208,8 +218,7 @@ TEST(StateFrame, CarriesTheLoopsOtherDevices) {
                                                             p.figures, buf, extra);
   ASSERT_EQ(n, p.layout.frame_bytes(1));
   StateFrameView v;
-  const auto r = StateFrameDecoder::decode(std::span(buf.data(), n), v);
-  ASSERT_TRUE(r.ok()) << r.error;
+  ASSERT_EQ(decode_into(buf, n, v), "");
   EXPECT_EQ(v.header().num_extra_devices, 2u);
   EXPECT_EQ(v.header().num_extra_axes, 5u);
   // Device 0's, unchanged.
@@ -266,6 +275,58 @@ TEST(StateFrame, CarriesTheLoopsOtherDevices) {
       << StateFrameDecoder::decode(bad, u).error;
 }
 
+// Issue 69: the suture threads after the other devices, each its broken segment and largest
+// tension, then all their nodes; a thread count or node count that does not match the Data is
+// refused, as is a frame whose counts need more bytes than it has. No allocation.
+TEST(StateFrame, CarriesTheThreadsNodesAndTheirBreak) {
+  Period p;
+  p.data.threads.resize(2);
+  p.data.threads[0].position = {Vec3(0.0, 0.0, 0.01), Vec3(0.001, 0.0, 0.01), Vec3(0.002, 0.0, 0.011)};
+  p.data.threads[0].output.max_tension = 0.25;
+  p.data.threads[1].position = {Vec3(0.5, 0.0, 0.0), Vec3(0.5, 0.001, 0.0)};
+  p.data.threads[1].broken_segment = 0;
+  p.layout.num_threads = 2;
+  p.layout.num_thread_nodes = 5;
+  std::vector<std::byte> buf(p.layout.max_frame_bytes());
+  std::size_t n = 0;
+  {
+    numen::test::AllocationGuard guard;
+    n = numen::platform::encode_state_frame(p.layout, p.data, p.report, p.torques, p.figures, buf);
+    EXPECT_EQ(guard.count(), 0);
+  }
+  ASSERT_EQ(n, p.layout.frame_bytes(1));
+  StateFrameView v;
+  ASSERT_EQ(decode_into(buf, n, v), "");
+  EXPECT_EQ(v.header().num_threads, 2u);
+  EXPECT_EQ(v.header().num_thread_nodes, 5u);
+  EXPECT_EQ(v.thread(0).broken_segment, -1);
+  EXPECT_FLOAT_EQ(v.thread(0).max_tension, 0.25F);
+  EXPECT_EQ(v.thread(1).broken_segment, 0);
+  float x[3];
+  v.thread_node(2, x);  // thread 0's last node
+  EXPECT_FLOAT_EQ(x[0], 0.002F);
+  EXPECT_FLOAT_EQ(x[2], 0.011F);
+  v.thread_node(4, x);  // thread 1's last node
+  EXPECT_FLOAT_EQ(x[0], 0.5F);
+  EXPECT_FLOAT_EQ(x[1], 0.001F);
+  float pose[7];
+  v.body_pose(1, pose);  // the rest of the frame as it was
+  EXPECT_FLOAT_EQ(pose[0], 0.1F);
+  // Data that does not match: a thread short, a node more.
+  StateFrameLayout wrong = p.layout;
+  wrong.num_threads = 1;
+  EXPECT_EQ(numen::platform::encode_state_frame(wrong, p.data, p.report, p.torques, p.figures, buf), 0u);
+  wrong = p.layout;
+  wrong.num_thread_nodes = 6;
+  std::vector<std::byte> big(wrong.max_frame_bytes());
+  EXPECT_EQ(numen::platform::encode_state_frame(wrong, p.data, p.report, p.torques, p.figures, big), 0u);
+  // A frame that says one node more than it carries is refused with its counts.
+  std::vector<std::byte> bad(buf.begin(), buf.begin() + static_cast<std::ptrdiff_t>(n));
+  bad[80] = std::byte{6};
+  EXPECT_NE(StateFrameDecoder::decode(bad, v).error.find("threads 2, their nodes 6) need"), std::string::npos)
+      << StateFrameDecoder::decode(bad, v).error;
+}
+
 /// The `bytes` bytes at `at`, little-endian, as an unsigned number.
 std::uint64_t frame_le_bytes(const std::vector<std::byte>& frame, std::size_t at,
                              std::size_t bytes) {
@@ -291,8 +352,8 @@ TEST(StateFrame, EachDeclaredFieldIsAtItsDeclaredOffset) {
     std::uint64_t want = 0;
     switch (f.id) {
       case FrameField::kMagic: want = 0x46564D4E; break;  // "NMVF"
-      case FrameField::kVersion: want = 4; break;
-      case FrameField::kHeaderBytes: want = 76; break;
+      case FrameField::kVersion: want = 5; break;
+      case FrameField::kHeaderBytes: want = 84; break;
       case FrameField::kFrameBytes: want = n; break;
       case FrameField::kNumBodies: want = 2; break;
       case FrameField::kNumNodes: want = 0; break;
@@ -317,6 +378,8 @@ TEST(StateFrame, EachDeclaredFieldIsAtItsDeclaredOffset) {
       case FrameField::kNumGrasps: want = 1; break;
       case FrameField::kNumExtraDevices: want = 0; break;  // one device
       case FrameField::kNumExtraAxes: want = 0; break;
+      case FrameField::kNumThreads: want = 0; break;  // no thread
+      case FrameField::kNumThreadNodes: want = 0; break;
     }
     EXPECT_EQ(got, want) << f.name << " at byte " << f.offset;
   }
@@ -331,6 +394,7 @@ TEST(StateFrame, EachDeclaredFieldIsAtItsDeclaredOffset) {
     if (a.count == FrameField::kNumAxes) items = 3;
     if (a.count == FrameField::kNumGrasps) items = 1;
     if (a.count == FrameField::kNumExtraDevices || a.count == FrameField::kNumExtraAxes) items = 0;
+    if (a.count == FrameField::kNumThreads || a.count == FrameField::kNumThreadNodes) items = 0;
     float want = 0.0F;
     switch (a.id) {
       case FrameArray::kBodyPose: want = 0.01F; break;    // body 0's x
@@ -343,7 +407,9 @@ TEST(StateFrame, EachDeclaredFieldIsAtItsDeclaredOffset) {
       case FrameArray::kDeviceLoop: want = 0.02F; break;     // hand penetration
       case FrameArray::kGrasp: want = 1.0F; break;           // the held body
       case FrameArray::kExtraDevice:                         // none: one device
-      case FrameArray::kExtraAxisTorque: break;
+      case FrameArray::kExtraAxisTorque:
+      case FrameArray::kThread:                              // none: no thread
+      case FrameArray::kThreadNode: break;
     }
     if (items > 0) {
       const auto bits = static_cast<std::uint32_t>(frame_le_bytes(buf, at, 4));
@@ -359,14 +425,14 @@ TEST(StateFrame, IsLittleEndianOnTheWire) {
   std::vector<std::byte> buf(p.layout.max_frame_bytes());
   const std::size_t n =
       numen::platform::encode_state_frame(p.layout, p.data, p.report, p.torques, p.figures, buf);
-  ASSERT_GT(n, 76u);
+  ASSERT_GT(n, 84u);
   EXPECT_EQ(std::memcmp(buf.data(), "NMVF", 4), 0);
-  EXPECT_EQ(std::to_integer<int>(buf[4]), 4);  // version, low byte first
+  EXPECT_EQ(std::to_integer<int>(buf[4]), 5);  // version, low byte first
   EXPECT_EQ(std::to_integer<int>(buf[5]), 0);
   EXPECT_EQ(std::to_integer<int>(buf[32]), 42);  // period 42, low byte first
   // body 0's x = 0.01f: 0x3C23D70A, bytes 0A D7 23 3C
-  EXPECT_EQ(std::to_integer<int>(buf[76]), 0x0A);
-  EXPECT_EQ(std::to_integer<int>(buf[79]), 0x3C);
+  EXPECT_EQ(std::to_integer<int>(buf[84]), 0x0A);
+  EXPECT_EQ(std::to_integer<int>(buf[87]), 0x3C);
 }
 
 TEST(StateFrame, ContactsBeyondTheCapacityAreCutAndFlagged) {
@@ -442,13 +508,16 @@ TEST(StateFrameDecoder, RejectsEveryMalformedFrameWithItsOffset) {
   buf.resize(n);
   StateFrameView v;
   auto decode = [&](std::vector<std::byte> b) { return StateFrameDecoder::decode(b, v).error; };
-  EXPECT_NE(decode({}).find("shorter than its 76-byte header"), std::string::npos);
+  EXPECT_NE(decode({}).find("shorter than its 84-byte header"), std::string::npos);
   auto b = buf;
   b[0] = std::byte{'X'};
   EXPECT_NE(decode(b).find("byte 0: not a state frame"), std::string::npos);
   b = buf;
-  b[4] = std::byte{3};  // the version before the other devices
-  EXPECT_NE(decode(b).find("byte 4: frame version 3, this reader knows 4"), std::string::npos);
+  b[4] = std::byte{4};  // the version before the threads: a recording of an older numen
+  EXPECT_NE(decode(b).find("byte 4: frame version 4, this reader knows 5 (written by an older numen: "
+                           "record the run again with this one)"),
+            std::string::npos)
+      << decode(b);
   b = buf;
   b.pop_back();
   EXPECT_NE(decode(b).find("byte 8: frame size field"), std::string::npos);
@@ -460,7 +529,8 @@ TEST(StateFrameDecoder, RejectsEveryMalformedFrameWithItsOffset) {
   EXPECT_NE(decode(b).find("byte 12: counts"), std::string::npos);
   b = buf;
   b[64] = std::byte{2};  // two graspers, one there
-  EXPECT_NE(decode(b).find("graspers 2, other devices 0, their axes 0) need"), std::string::npos)
+  EXPECT_NE(decode(b).find("graspers 2, other devices 0, their axes 0, threads 0, their nodes 0) need"),
+            std::string::npos)
       << decode(b);
   b = buf;
   b[28] = std::byte{5};

@@ -43,10 +43,31 @@ struct IgtlPolyDataPacker::Impl {
   igtl::PolyDataMessage::Pointer message = igtl::PolyDataMessage::New();
   igtl::PolyDataPointArray::Pointer points = igtl::PolyDataPointArray::New();
   igtl::PolyDataCellArray::Pointer polygons = igtl::PolyDataCellArray::New();
+  igtl::PolyDataCellArray::Pointer lines = igtl::PolyDataCellArray::New();
 };
 
+namespace {
+
+// Checks `lines` against `point_count` for POLYDATA `name`: each of 2 points or more, in range.
+void check_lines(const std::string& name, std::size_t point_count,
+                 std::span<const std::vector<std::uint32_t>> lines) {
+  for (std::size_t l = 0; l < lines.size(); ++l) {
+    if (lines[l].size() < 2)
+      throw std::invalid_argument("POLYDATA '" + name + "': line " + std::to_string(l) + " has " +
+                                  std::to_string(lines[l].size()) + " points, fewer than 2");
+    for (std::uint32_t k : lines[l])
+      if (k >= point_count)
+        throw std::invalid_argument("POLYDATA '" + name + "': line " + std::to_string(l) +
+                                    " has point " + std::to_string(k) + " of " +
+                                    std::to_string(point_count));
+  }
+}
+
+}  // namespace
+
 IgtlPolyDataPacker::IgtlPolyDataPacker(const std::string& device_name, std::size_t point_count,
-                                       std::span<const std::array<std::uint32_t, 3>> triangles)
+                                       std::span<const std::array<std::uint32_t, 3>> triangles,
+                                       std::span<const std::vector<std::uint32_t>> lines)
     : impl_(std::make_unique<Impl>()), point_count_(point_count) {
   check_device_name(device_name, "POLYDATA");
   if (point_count == 0) throw std::invalid_argument("POLYDATA '" + device_name + "': no point");
@@ -64,6 +85,20 @@ IgtlPolyDataPacker::IgtlPolyDataPacker(const std::string& device_name, std::size
   impl_->message->SetDeviceName(device_name.c_str());
   impl_->message->SetPoints(impl_->points);
   impl_->message->SetPolygons(impl_->polygons);
+  if (!lines.empty()) {
+    set_lines(lines);
+    impl_->message->SetLines(impl_->lines);
+  }
+}
+
+void IgtlPolyDataPacker::set_lines(std::span<const std::vector<std::uint32_t>> lines) {
+  check_lines(impl_->message->GetDeviceName(), point_count_, lines);
+  impl_->lines->Clear();
+  for (const std::vector<std::uint32_t>& l : lines) {
+    std::vector<igtlUint32> cell(l.begin(), l.end());
+    impl_->lines->AddCell(static_cast<int>(cell.size()), cell.data());
+  }
+  impl_->message->SetLines(impl_->lines);
 }
 
 IgtlPolyDataPacker::~IgtlPolyDataPacker() = default;
@@ -241,6 +276,17 @@ IgtlUnpacked unpack_igtl(std::span<const std::uint8_t> bytes) {
       }
       out.triangles.push_back({cell[1], cell[2], cell[3]});
       cell += 4;
+    }
+    // LINES: each cell its point count n, then n indices (size_lines bytes in all).
+    const igtlUint32* line = info.lines;
+    const igtlUint32* end = info.lines + info.header.size_lines / sizeof(igtlUint32);
+    for (igtlUint32 l = 0; l < info.header.nlines && bad.empty() && line != nullptr; ++l) {
+      if (line >= end || line + 1 + *line > end) {
+        bad = what + ": line " + std::to_string(l) + " runs past the lines' data";
+        break;
+      }
+      out.lines.emplace_back(line + 1, line + 1 + *line);
+      line += 1 + *line;
     }
     igtl_polydata_free_info(&info);
     if (!bad.empty()) throw std::invalid_argument(bad);

@@ -63,7 +63,29 @@ void begin_needle_figures(const Scene& scene, RunSummary& s) {
   }
 }
 
+namespace {
+
+/// The force the needles' puncture ties and the threads' eyelets on tissue put on the nets this
+/// step (N, world): the sum of their held node springs' forces (NodeContact::force, on the node),
+/// which follow the penalty contacts and the grasp springs in Data::node_contacts.
+core::Vec3 tissue_force(const core::Data& data) noexcept {
+  const std::size_t size = data.node_contacts.size();
+  const auto at = [size](int i) { return static_cast<std::size_t>(std::clamp<std::int64_t>(i, 0, static_cast<std::int64_t>(size))); };
+  const std::size_t begin = at(data.num_node_contacts + data.num_node_grasp_springs);
+  const std::size_t end = at(data.num_node_contacts + data.num_node_grasp_springs +
+                             data.num_node_needle_ties + data.num_node_thread_ties);
+  core::Vec3 f = core::Vec3::Zero();
+  for (std::size_t i = begin; i < end; ++i) f += data.node_contacts[i].force;
+  return f;
+}
+
+}  // namespace
+
 void accumulate_needle_figures(const core::Model& model, const core::Data& data, RunSummary& s) noexcept {
+  if (s.needles) {
+    const double f = tissue_force(data).norm();
+    if (f > s.needle_tissue_force_max_n) s.needle_tissue_force_max_n = f, s.needle_tissue_force_max_s = data.time;
+  }
   const std::size_t count = std::min(s.needle_runs.size(), data.needles.size());
   for (std::size_t k = 0; k < count; ++k) {
     const core::NeedleState& n = data.needles[k];

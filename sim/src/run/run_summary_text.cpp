@@ -60,7 +60,8 @@ constexpr RunSummarySegment kLayout[] = {
     {"  needles: {needle.punctures} punctures, {needle.exits} exits, {needle.releases} releases, "
      "{needle.tunnels} tunnels; {needle.passes} through; tip force at the last puncture "
      "{needle.puncture_tip_force_n} N (threshold {needle.puncture_force_n} N); deviation from the "
-     "arc max {needle.deviation_max_mm} mm",
+     "arc max {needle.deviation_max_mm} mm; force on the tissue max {needle.tissue_force_max_n} N at "
+     "{needle.tissue_force_max_s} s",
      set("needle.lines")},
     {"; from the marks: entry {needle.entry_error_mm} mm, exit {needle.exit_error_mm} mm",
      set("needle.lines"), set("needle.marks")},

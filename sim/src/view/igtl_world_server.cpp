@@ -108,6 +108,37 @@ struct IgtlWorldServer::Organ {
 #endif
 };
 
+/// One suture thread's POLYDATA: its nodes as points, its polyline (or two, broken) as LINES.
+struct IgtlWorldServer::Thread {
+  std::size_t node_begin = 0;  // its first node in the frame's thread_node
+  int broken = -1;             // the broken segment its lines were made for (−1: whole)
+  std::vector<core::Vec3> points;  // mm, this frame's
+#if NUMEN_WITH_OPENIGTLINK
+  std::unique_ptr<hal::IgtlPolyDataPacker> packer;
+#endif
+};
+
+#if NUMEN_WITH_OPENIGTLINK
+namespace {
+
+/// The polylines of a thread of `count` nodes broken at segment `broken` (−1: whole): nodes
+/// 0 … broken and broken + 1 … count − 1, each kept when it has two nodes or more.
+std::vector<std::vector<std::uint32_t>> thread_lines(std::size_t count, int broken) {
+  std::vector<std::vector<std::uint32_t>> lines;
+  const std::size_t cut = broken >= 0 && static_cast<std::size_t>(broken) + 1 < count
+                              ? static_cast<std::size_t>(broken) + 1
+                              : count;
+  for (const auto& [lo, hi] : {std::pair{std::size_t{0}, cut}, std::pair{cut, count}}) {
+    if (hi < lo + 2) continue;
+    std::vector<std::uint32_t>& l = lines.emplace_back();
+    for (std::size_t i = lo; i < hi; ++i) l.push_back(static_cast<std::uint32_t>(i));
+  }
+  return lines;
+}
+
+}  // namespace
+#endif
+
 IgtlWorldServer::IgtlWorldServer(const core::Model& model, IgtlWorldSettings settings)
     : model_(model), settings_(std::move(settings)) {
   if (!hal::kWithOpenIgtLink)
@@ -151,6 +182,20 @@ IgtlWorldServer::IgtlWorldServer(const core::Model& model, IgtlWorldSettings set
     o.points.resize(count);
     o.packer = std::make_unique<hal::IgtlPolyDataPacker>(net.name, count, triangles);
     organs_.push_back(std::move(o));
+  }
+  std::size_t thread_node = 0;
+  for (const core::ThreadModel& t : model_.threads) {
+    if (t.name.empty() || t.name.size() > 20)
+      throw std::invalid_argument("--igtl: thread name '" + t.name +
+                                  "' must have 1 to 20 characters (OpenIGTLink's device name)");
+    const std::size_t count = static_cast<std::size_t>(std::max(t.segments, 0) + 1);
+    Thread th;
+    th.node_begin = thread_node;
+    th.points.resize(count);
+    thread_node += count;
+    th.packer = std::make_unique<hal::IgtlPolyDataPacker>(
+        t.name, count, std::span<const std::array<std::uint32_t, 3>>{}, thread_lines(count, -1));
+    threads_.push_back(std::move(th));
   }
 #endif
   nodes_.resize(static_cast<std::size_t>(model_.num_nodes()));
@@ -345,6 +390,35 @@ void IgtlWorldServer::add_organs(std::string& out, const platform::StateFrameVie
 #endif
 }
 
+std::uint64_t IgtlWorldServer::add_threads(std::string& out, const platform::StateFrameView& view) {
+  std::uint64_t messages = 0;
+#if NUMEN_WITH_OPENIGTLINK
+  const platform::StateFrameHeader& h = view.header();
+  // The frame's threads are the model's (the stream was laid out from it): a frame that does not
+  // carry them all has none drawn.
+  if (h.num_threads != model_.threads.size()) return 0;
+  for (std::size_t t = 0; t < threads_.size(); ++t) {
+    Thread& th = threads_[t];
+    if (th.node_begin + th.points.size() > h.num_thread_nodes) break;
+    const int broken = view.thread(static_cast<std::uint32_t>(t)).broken_segment;
+    if (broken != th.broken) {
+      th.packer->set_lines(thread_lines(th.points.size(), broken));
+      th.broken = broken;
+    }
+    float x[3];
+    for (std::size_t i = 0; i < th.points.size(); ++i) {
+      view.thread_node(static_cast<std::uint32_t>(th.node_begin + i), x);
+      th.points[i] = 1e3 * core::Vec3(x[0], x[1], x[2]);  // mm
+    }
+    th.packer->pack(h.time_ns, th.points, out);
+    ++messages;
+  }
+#else
+  (void)out, (void)view;
+#endif
+  return messages;
+}
+
 bool IgtlWorldServer::write_frame(std::span<const std::byte> frame) noexcept {
   ++counters_.frames;
   accept_clients();
@@ -373,6 +447,7 @@ bool IgtlWorldServer::write_frame(std::span<const std::byte> frame) noexcept {
       add(pose_names_[b], pose);
       if (view.target_pose(static_cast<std::uint32_t>(b), pose)) add(target_names_[b], pose);
     }
+    batch_polydata_ = add_threads(batch_, view);  // the threads, every frame after the poses
     // The organs: due on the grid of organ_rate_hz in simulated time (no burst after a gap).
     const bool any_fresh =
         std::any_of(clients_.begin(), clients_.end(), [](const Client& c) { return c.fresh; });
@@ -404,7 +479,7 @@ bool IgtlWorldServer::write_frame(std::span<const std::byte> frame) noexcept {
         c.backlog += organs;
         c.backlog += intro_;
         c.backlog += batch_;
-        counters_.polydata += organs_.size();
+        counters_.polydata += organs_.size() + batch_polydata_;
         counters_.statuses += intro_statuses;
         counters_.messages += batch_transforms_;
         c.fresh = false;
@@ -417,6 +492,7 @@ bool IgtlWorldServer::write_frame(std::span<const std::byte> frame) noexcept {
         }
         c.backlog += batch_;
         counters_.messages += batch_transforms_;
+        counters_.polydata += batch_polydata_;
       }
       if (c.backlog.size() + events_.size() <= limit + kEventsAllowance) {
         c.backlog += events_;  // small and rare: kept when the frame is not

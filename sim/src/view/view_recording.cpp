@@ -128,7 +128,11 @@ ViewRecordingReader::ViewRecordingReader(const std::string& path) : path_(path) 
     if (version == scene.end()) throw bad("version", "missing");
     if (!version->is_number_integer() || *version != kViewSceneVersion)
       throw bad("version", "scene message version " + json_input::shown(*version) +
-                               ", this reader knows integer " + std::to_string(kViewSceneVersion));
+                               ", this reader knows integer " + std::to_string(kViewSceneVersion) +
+                               (version->is_number_integer() && *version < kViewSceneVersion
+                                    ? " (a recording of an older numen: record the run again "
+                                      "with this one)"
+                                    : ""));
     const auto layout = scene.find("layout");
     if (layout == scene.end()) throw bad("layout", "missing");
     if (!layout->is_object())
@@ -145,7 +149,8 @@ ViewRecordingReader::ViewRecordingReader(const std::string& path) : path_(path) 
     };
     const std::uint64_t bodies = count("bodies"), nodes = count("nodes"), axes = count("axes"),
                         grasps = count("grasps"), extra_devices = count("extra_devices"),
-                        extra_axes = count("extra_axes");
+                        extra_axes = count("extra_axes"), threads = count("threads"),
+                        thread_nodes = count("thread_nodes");
     at += *scene_bytes;
 
     std::vector<std::byte> buffer;
@@ -164,15 +169,19 @@ ViewRecordingReader::ViewRecordingReader(const std::string& path) : path_(path) 
       const auto& h = view.header();
       if (h.num_bodies != bodies || h.num_nodes != nodes || h.num_axes != axes ||
           h.num_grasps != grasps || h.num_extra_devices != extra_devices ||
-          h.num_extra_axes != extra_axes)
+          h.num_extra_axes != extra_axes || h.num_threads != threads ||
+          h.num_thread_nodes != thread_nodes)
         throw fail(at, "frame " + std::to_string(index_.size()) + " has " + std::to_string(h.num_bodies) +
                            " bodies, " + std::to_string(h.num_nodes) + " nodes, " + std::to_string(h.num_axes) +
                            " axes, " + std::to_string(h.num_grasps) + " graspers, " +
                            std::to_string(h.num_extra_devices) + " other devices of " +
-                           std::to_string(h.num_extra_axes) + " axes; the scene message says " +
+                           std::to_string(h.num_extra_axes) + " axes, " +
+                           std::to_string(h.num_threads) + " threads of " +
+                           std::to_string(h.num_thread_nodes) + " nodes; the scene message says " +
                            std::to_string(bodies) + ", " + std::to_string(nodes) + ", " +
                            std::to_string(axes) + ", " + std::to_string(grasps) + ", " +
-                           std::to_string(extra_devices) + ", " + std::to_string(extra_axes));
+                           std::to_string(extra_devices) + ", " + std::to_string(extra_axes) +
+                           ", " + std::to_string(threads) + ", " + std::to_string(thread_nodes));
       if (!index_.empty() && h.period <= index_.back().period)
         throw fail(at, "frame " + std::to_string(index_.size()) + " is period " + std::to_string(h.period) +
                            ", not after the previous frame's " + std::to_string(index_.back().period));

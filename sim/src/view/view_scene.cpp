@@ -7,6 +7,8 @@
 
 #include "numen/core/capacity.hpp"
 #include "numen/core/mesh_shape.hpp"
+#include "numen/core/needle.hpp"
+#include "numen/core/thread.hpp"
 
 namespace numen::sim {
 namespace {
@@ -128,6 +130,10 @@ platform::StateFrameLayout view_frame_layout(const Scene& scene) {
   layout.num_extra_devices = static_cast<std::uint32_t>(scene.extra_devices.size());
   for (const SceneDevice& d : scene.extra_devices)
     layout.num_extra_axes += static_cast<std::uint32_t>(d.device.axes.size());
+  // The threads' nodes, reserved from their segment counts: fixed for the run.
+  layout.num_threads = static_cast<std::uint32_t>(m.threads.size());
+  for (const core::ThreadModel& t : m.threads)
+    layout.num_thread_nodes += static_cast<std::uint32_t>(std::max(t.segments, 0) + 1);
   return layout;
 }
 
@@ -190,6 +196,30 @@ std::string view_scene_message(const Scene& scene, const platform::StateFrameLay
   json grasps = json::array();
   for (const core::GraspModel& g : m.grasps)
     grasps.push_back({{"name", g.name}, {"jaws", json::array({g.jaws[0], g.jaws[1]})}});
+  // The needles: each one's body (its pose is the frames' body_pose) and its arc in that body's
+  // frame, so that the page draws the wire as a tube instead of its spheres.
+  json needles = json::array();
+  for (const core::NeedleModel& n : m.needles)
+    needles.push_back({{"name", n.name},
+                       {"body", n.body},
+                       {"radius", n.radius},
+                       {"arc_angle", n.arc_angle},
+                       {"wire_radius", n.wire_radius},
+                       {"centre", vec3(n.centre)},
+                       {"tail_angle", n.tail_angle},
+                       {"tip_angle", n.tip_angle}});
+  // The threads, in the frames' thread order: each one's nodes in thread_node.
+  json threads = json::array();
+  int thread_node = 0;
+  for (const core::ThreadModel& t : m.threads) {
+    const int count = std::max(t.segments, 0) + 1;
+    threads.push_back({{"name", t.name},
+                       {"node_begin", thread_node},
+                       {"node_count", count},
+                       {"radius", t.radius},
+                       {"needle", t.needle}});
+    thread_node += count;
+  }
   const json message{
       {"format", "numen-view"},
       {"version", kViewSceneVersion},
@@ -206,13 +236,17 @@ std::string view_scene_message(const Scene& scene, const platform::StateFrameLay
         {"max_contacts", layout.max_contacts},
         {"grasps", layout.num_grasps},
         {"extra_devices", layout.num_extra_devices},
-        {"extra_axes", layout.num_extra_axes}}},
+        {"extra_axes", layout.num_extra_axes},
+        {"threads", layout.num_threads},
+        {"thread_nodes", layout.num_thread_nodes}}},
       {"attached_body", m.initial_held_body},
       {"bodies", std::move(bodies)},
       {"obstacles", std::move(obstacles)},
       {"nets", std::move(nets)},
       {"joints", std::move(joints)},
       {"grasps", std::move(grasps)},
+      {"needles", std::move(needles)},
+      {"threads", std::move(threads)},
       {"device",
        {{"name", scene.device.name},
         {"kind", hal::to_string(scene.device.kind)},

@@ -4,6 +4,7 @@ import * as THREE from 'three';
 import { scene3, v3, q } from './stage.js';
 import { FLOATS } from './protocol.js';
 import { hasFineSurface, fineSurface } from './fine_surface.js';
+import { needleGeometry, needleOf } from './suture.js';
 
 /// Colours of what is drawn (the legend's too).
 export const COLORS = { tool: 0xff8800, body: 0x9aa4b0, held: 0xd040d0, ghost: 0x00c8ff, obstacle: 0xc0504d,
@@ -68,6 +69,8 @@ function drawable(g, material) {
 /// Body i's visual shape in its own frame (a geometry), or null when its spheres are its look:
 ///  - a mesh (the scene message's `mesh` of the body): its surface placed by the mesh's pose in
 ///    the body frame (userData.surface);
+///  - a needle's body (the scene message's `needles`): its arc, a tube of the wire's radius
+///    (suture.js);
 ///  - spheres on one line (a shaft, a jaw): a capsule from the first centre to the last, of
 ///    the largest radius;
 ///  - no spheres, a deformable net on it (the hidden rigid core): a 1.5 mm shaft along its z
@@ -82,6 +85,8 @@ function visualShape(msg, i) {
     g.userData.surface = true;
     return g;
   }
+  const needle = needleOf(msg, i);
+  if (needle) return needleGeometry(needle);
   const sp = msg.bodies[i].spheres;
   if (sp.length >= 2) {
     const a = v3(sp[0]), b = v3(sp[sp.length - 1]), ab = b.clone().sub(a);

@@ -1,6 +1,7 @@
 // The legend (docs/viewer.md "Page"): what each colour means, the contacts' depth scale of
 // the frame shown and the force arrows' scale.
 import { COLORS } from './geometry.js';
+import { THREAD_COLOR } from './suture.js';
 
 const el = document.getElementById('legend');
 const hex = (c) => '#' + c.toString(16).padStart(6, '0');
@@ -9,6 +10,7 @@ el.innerHTML =
   [swatch(hex(COLORS.tool), 'tool'), swatch(hex(COLORS.body), 'body'), swatch(hex(COLORS.ghost), 'ghost (hand\'s target)'),
    swatch(hex(COLORS.obstacle), 'organ, obstacle'), swatch(hex(COLORS.box), 'box'), swatch(hex(COLORS.net), 'deformable'),
    swatch(hex(COLORS.plane), 'ground'), swatch(hex(COLORS.spheres), 'collision spheres'),
+   swatch(hex(THREAD_COLOR), 'suture thread', 'line'),
    swatch('#e0f4ff', 'coupling spring (ghost → body)', 'line'), swatch('#ffee00', 'force sent to the device', 'line')]
     .map((s) => `<span class="item">${s}</span>`).join('') +
   '<div class="item"><span class="sw grad"></span><span id="legend-depth"></span></div>' +

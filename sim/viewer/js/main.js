@@ -14,12 +14,14 @@ import { setupLive, liveFrame, liveReset, pauseAt, live } from './live.js';
 import { connect, link } from './connection.js';
 import { setupReplay, replayed, seek, replay } from './replay.js';
 import { showFault, markTimeline } from './faults.js';
+import { buildThreads, showThreads, threadProbe } from './suture.js';
 
 // The device's protocol (scene message): only the managed stack has a start-up to show.
 let protocol = 'managed', managed = true, fitted = false;
 
 function onScene(msg) {
   buildScene(msg);
+  buildThreads(msg);
   S.scene = msg;
   protocol = (msg.device && msg.device.protocol) || 'managed';
   managed = protocol === 'managed';
@@ -87,6 +89,7 @@ function graspLines(fr) {
 function draw(fr) {
   const { h } = fr;
   showBodies(fr);
+  showThreads(fr);
   if (!fitted) {  // the whole scene: obstacles, and where the bodies, targets and nets are now
     fitted = true;
     sizeCores(S.scene, fr);
@@ -223,6 +226,9 @@ window.numenView = {
     p.pick = pick;
     p.scale = { ...forceScale };
     p.shapes = S.scene ? S.scene.bodies.filter((b, i) => G.bodies[i].children.length > 1).map((b) => b.name) : [];
+    // The needles (drawn as their arcs: a shape, so in p.shapes too) and the threads.
+    p.needles = (S.scene?.needles ?? []).map((n) => ({ name: n.name, body: n.body, shape: G.bodies[n.body]?.children.length > 1 }));
+    p.threads = threadProbe();
     // The bodies with a mesh: the triangles drawn, the body's position in the frame shown (m,
     // world) and the middle of the drawn surface's world box (it moves with the body's pose).
     p.meshBodies = [];
@@ -266,6 +272,9 @@ window.numenView = {
   perf,
   /// Replay: shows frame i, paused.
   seek: (i) => seek(i),
+  /// The scene message, and body i's group in the view (its pose of the frame shown), for tests.
+  scene: () => S.scene,
+  body: (i) => G.bodies[i],
   /// A preset view by name (the buttons' names).
   view: (name) => document.querySelector(`#views button[data-view="${name}"]`).click(),
 };

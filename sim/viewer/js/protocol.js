@@ -13,9 +13,9 @@ const READ = {
 const USED_FIELDS = ['magic', 'version', 'header_bytes', 'frame_bytes', 'num_bodies', 'num_nodes',
                      'num_contacts', 'num_axes', 'attached_body', 'period', 'time_ns', 'step_status',
                      'flags', 'step_ns', 'lifecycle', 'startup', 'fault_cause', 'num_grasps',
-                     'num_extra_devices', 'num_extra_axes'];
+                     'num_extra_devices', 'num_extra_axes', 'num_threads', 'num_thread_nodes'];
 const USED_ARRAYS = ['body_pose', 'target_pose', 'node_position', 'contact', 'feedback', 'penetration',
-                     'device_loop', 'grasp', 'extra_device', 'extra_axis_torque'];
+                     'device_loop', 'grasp', 'extra_device', 'extra_axis_torque', 'thread', 'thread_node'];
 let frameLayout = null;  // the session message's frame_layout, checked
 /// Floats per item, by array name (from the layout).
 export const FLOATS = {};

@@ -122,10 +122,53 @@ TEST(NeedleSummary, CountsThePassItsErrorsFromTheMarksAndATunnelIsAWarningAndAFa
   EXPECT_NEAR(j["needle"]["entry_error_mm"].get<double>(), 1.0, 1e-9);
   const std::string text = numen::sim::format_summary(s);
   EXPECT_NE(text.find("  needles: 1 punctures, 1 exits, 1 releases, 1 tunnels; 1 through; tip force at the last "
-                      "puncture 1.030 N (threshold 1.000 N); deviation from the arc max 0.300 mm; from the "
-                      "marks: entry 1.000 mm, exit 2.000 mm\n  needle sh: "),
+                      "puncture 1.030 N (threshold 1.000 N); deviation from the arc max 0.300 mm; force on "
+                      "the tissue max 0.000 N at -1.000 s; from the marks: entry 1.000 mm, exit 2.000 mm\n  "
+                      "needle sh: "),
             std::string::npos)
       << text;
+}
+
+// The largest force on the tissue: |Σ F| of the held node springs after the penalty contacts and
+// the grasp springs — the needles' ties, then the threads' eyelets on tissue — at each step, and its
+// time; the contacts and grasp springs before them are not counted. No allocation.
+TEST(NeedleSummary, TheLargestForceOnTheTissueIsTheSumOfTheNeedleTiesAndThreadEyeletsSprings) {
+  const numen::sim::Scene scene = pad_scene();
+  numen::core::Data d;
+  d.needles.resize(1);
+  d.node_contacts.resize(8);
+  numen::sim::RunSummary s;
+  numen::sim::begin_needle_figures(scene, s);
+  {
+    numen::test::AllocationGuard guard;
+    d.time = 0.5;  // a penalty contact and a grasp spring only: nothing on the tissue from a needle
+    d.num_node_contacts = 1;
+    d.num_node_grasp_springs = 1;
+    d.node_contacts[0].force = Vec3(0.0, 0.0, 50.0);
+    d.node_contacts[1].force = Vec3(0.0, 0.0, 40.0);
+    numen::sim::accumulate_needle_figures(scene.model, d, s);
+    EXPECT_EQ(s.needle_tissue_force_max_n, 0.0);
+    EXPECT_EQ(s.needle_tissue_force_max_s, -1.0);
+    d.time = 1.0;  // two needle tie springs and a thread eyelet's: (0.3, 0.4, 0) + (0, 0, 1.2) N
+    d.num_node_needle_ties = 2;
+    d.num_node_thread_ties = 1;
+    d.node_contacts[2].force = Vec3(0.3, 0.0, 0.0);
+    d.node_contacts[3].force = Vec3(0.0, 0.4, 0.0);
+    d.node_contacts[4].force = Vec3(0.0, 0.0, 1.2);
+    d.node_contacts[5].force = Vec3(0.0, 0.0, 99.0);  // past the ties: not counted
+    numen::sim::accumulate_needle_figures(scene.model, d, s);
+    d.time = 1.5;  // smaller: the largest stays
+    d.node_contacts[4].force = Vec3(0.0, 0.0, 0.1);
+    numen::sim::accumulate_needle_figures(scene.model, d, s);
+    EXPECT_EQ(guard.count(), 0);
+  }
+  EXPECT_NEAR(s.needle_tissue_force_max_n, 1.3, 1e-12);
+  EXPECT_DOUBLE_EQ(s.needle_tissue_force_max_s, 1.0);
+  numen::sim::summarize_needles(s);
+  EXPECT_NE(numen::sim::format_summary(s).find("force on the tissue max 1.300 N at 1.000 s"), std::string::npos);
+  const nlohmann::json j = nlohmann::json::parse(numen::sim::format_summary_json(s));
+  EXPECT_NEAR(j["needle"]["tissue_force_max_n"].get<double>(), 1.3, 1e-9);
+  EXPECT_DOUBLE_EQ(j["needle"]["tissue_force_max_s"].get<double>(), 1.0);
 }
 
 // A needle that went in and never came out: not through; its exit mark missed (−1); no tunnel,

@@ -158,7 +158,7 @@ TEST(RecordNames, StateFrameListIsEveryDeclaredFieldThenEveryArray) {
     declared.emplace_back(f.name);
   for (const numen::platform::StateFrameArray& a : numen::platform::kStateFrameArrays)
     declared.emplace_back(a.name);
-  ASSERT_EQ(declared.size(), 21u + 11u);
+  ASSERT_EQ(declared.size(), 23u + 13u);
   EXPECT_EQ(list_of(sim::record_lists(), "state frame").names, declared);
   const nlohmann::json page = nlohmann::json::parse(sim::state_frame_layout_json());
   std::vector<std::string> sent;

@@ -19,6 +19,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <limits>
 #include <memory>
 #include <numbers>
 #include <sstream>
@@ -37,6 +38,7 @@
 #include "numen/sim/input/jigsaws.hpp"
 #include "numen/sim/run/run_verdict.hpp"
 #include "numen/sim/scene/scene.hpp"
+#include "numen/sim/view/view_scene.hpp"
 #include "numen/sim/device/simulated_instrument.hpp"
 #include "build_features.hpp"
 #include "numen/hal/canopen/emcy.hpp"
@@ -54,13 +56,17 @@ class CountingViewSink final : public numen::platform::StateFrameSink {
   bool write_frame(std::span<const std::byte> frame) noexcept override {
     frames.fetch_add(1);
     bytes.fetch_add(frame.size());
+    if (static_cast<std::int64_t>(frame.size()) < smallest.load()) smallest.store(static_cast<std::int64_t>(frame.size()));
     return true;
   }
   std::atomic<std::int64_t> frames{0}, bytes{0};
+  std::atomic<std::int64_t> smallest{std::numeric_limits<std::int64_t>::max()};  // one writer: the stream's thread
 };
 
-/// Returns the run's summary (the callers may check what the 10,000 periods exercised).
-RunSummary expect_no_allocation(const Scene& scene, const char* name) {
+/// Returns the run's summary (the callers may check what the 10,000 periods exercised); the
+/// viewer's smallest frame (bytes) in `*smallest_frame` when given.
+RunSummary expect_no_allocation(const Scene& scene, const char* name,
+                                std::int64_t* smallest_frame = nullptr) {
   SceneRunner runner(scene, 10'000);  // construction allocates (trace storage too)
   // A viewer is connected: the state stream publishes every period (1 kHz, its worst case).
   CountingViewSink viewer;
@@ -78,6 +84,7 @@ RunSummary expect_no_allocation(const Scene& scene, const char* name) {
   const RunSummary s = runner.summary();
   EXPECT_EQ(s.view_frames_published + s.view_frames_dropped, 10'000) << name;
   EXPECT_EQ(viewer.frames.load(), s.view_frames_published) << name;
+  if (smallest_frame != nullptr) *smallest_frame = viewer.smallest.load();
   EXPECT_GT(s.contacts_max + s.node_contacts_max, 0)
       << name << ": the contact path was not exercised";
   if (scene.model.num_nets() > 0) {
@@ -152,9 +159,15 @@ TEST(RunAllocations, SuturingScenePeriodNeverAllocates) {
   NUMEN_REQUIRE_DEFORMABLE();
   NUMEN_REQUIRE_ARTICULATION();
   const Scene scene = numen::sim::load_scene(std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/suturing.toml");
-  const RunSummary s = expect_no_allocation(scene, "suturing");
+  std::int64_t smallest_frame = 0;
+  const RunSummary s = expect_no_allocation(scene, "suturing", &smallest_frame);
   EXPECT_GE(s.needle_punctures, 1) << "the puncture path was not exercised";
   EXPECT_GE(s.needle_exits, 1) << "the exit path was not exercised";
+  // Every frame carried the thread's 101 nodes (issue 69: the view draws it), encoded on the loop.
+  const numen::platform::StateFrameLayout layout = numen::sim::view_frame_layout(scene);
+  EXPECT_EQ(layout.num_thread_nodes, 101u);
+  EXPECT_GE(smallest_frame, static_cast<std::int64_t>(layout.frame_bytes(0)));
+  EXPECT_GT(s.needle_tissue_force_max_n, 0.0) << "no force on the tissue";
 }
 
 TEST(RunAllocations, MouseScenePeriodNeverAllocates) {

@@ -103,6 +103,8 @@ inline sim::RunSummary full_managed_summary() {
   s.needle_puncture_tip_force_n = 1.125;
   s.needle_puncture_force_n = 1.0;
   s.needle_deviation_max_mm = 0.375;
+  s.needle_tissue_force_max_n = 0.625;
+  s.needle_tissue_force_max_s = 2.5;
   s.needle_marks = true;
   s.needle_entry_error_mm = 0.25;
   s.needle_exit_error_mm = 0.5;

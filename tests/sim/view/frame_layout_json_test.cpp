@@ -120,12 +120,14 @@ TEST(FrameLayoutJson, AFrameDecodedFromTheJsonReadsWhatTheViewReads) {
       {"lifecycle", h.lifecycle},
       {"startup", h.startup},
       {"fault_cause", h.fault_cause},
-      {"version", 4},
-      {"header_bytes", 76},
+      {"version", 5},
+      {"header_bytes", 84},
       {"sample_faults", h.sample_faults},
       {"num_grasps", h.num_grasps},
       {"num_extra_devices", h.num_extra_devices},
-      {"num_extra_axes", h.num_extra_axes}};
+      {"num_extra_axes", h.num_extra_axes},
+      {"num_threads", h.num_threads},
+      {"num_thread_nodes", h.num_thread_nodes}};
   const auto j = nlohmann::json::parse(numen::sim::state_frame_layout_json());
   std::map<std::string, std::int64_t> fields;
   for (const auto& f : j.at("header")) {

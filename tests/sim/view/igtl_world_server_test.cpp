@@ -295,6 +295,85 @@ TEST(IgtlWorldServer, TheOrgansPolyDataIsTheirSurfaceAtTheFramesTimeAndLateClien
   }
 }
 
+// Issue 69: the suturing scene's thread is a POLYDATA named after it every frame: its segments + 1
+// nodes (mm) at the frame's time as points and one LINES cell through them in order; once it
+// broke, two (the pieces either side of the broken segment). The needle is its body's TRANSFORM.
+TEST(IgtlWorldServer, TheThreadIsAPolylineEveryFrameBrokenInTwoAndTheNeedleItsBodysTransform) {
+  NUMEN_REQUIRE_DEFORMABLE();
+  const numen::sim::Scene scene =
+      numen::sim::load_scene(std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/suturing.toml");
+  const numen::core::Model& model = scene.model;
+  ASSERT_EQ(model.threads.size(), 1u);
+  ASSERT_EQ(model.needles.size(), 1u);
+  const std::size_t nodes = static_cast<std::size_t>(model.threads[0].segments) + 1;  // 101
+  numen::sim::IgtlWorldSettings ws;
+  ws.port = 0;
+  ws.organ_rate_hz = 0.0;  // the pad's shape once
+  numen::sim::IgtlWorldServer server(model, ws);
+  numen::test::IgtlTestReader reader(server.port());
+  ASSERT_TRUE(reader.connected());
+  numen::platform::StateFrameLayout layout = numen::sim::view_frame_layout(scene);
+  layout.num_extra_devices = layout.num_extra_axes = 0;  // the left driver's device: not needed here
+  ASSERT_EQ(layout.num_threads, 1u);
+  ASSERT_EQ(layout.num_thread_nodes, nodes);
+  numen::core::Data data = numen::core::make_data(model);
+  std::map<std::int64_t, std::vector<numen::core::Vec3>> thread_at;  // mm, by ns
+  constexpr int kFrames = 6;
+  constexpr int kBroken = 40;  // broken from frame 3 on
+  for (int k = 0; k < kFrames; ++k) {
+    data.time = 0.01 * k;
+    std::vector<numen::core::Vec3>& x = data.threads[0].position;
+    ASSERT_EQ(x.size(), nodes);
+    for (std::size_t i = 0; i < nodes; ++i)
+      x[i] = numen::core::Vec3(0.001 * static_cast<double>(i), 0.002 * std::sin(0.3 * static_cast<double>(i) + k),
+                               0.01 + 0.001 * k);
+    data.threads[0].broken_segment = k >= 3 ? kBroken : -1;
+    std::vector<numen::core::Vec3>& want = thread_at[std::llround(data.time * 1e9)];
+    for (const numen::core::Vec3& p : x) want.push_back(1e3 * p);
+    const std::vector<std::byte> frame = igtl_world_test_frame(layout, data, {}, {});
+    ASSERT_FALSE(frame.empty());
+    ASSERT_TRUE(server.write_frame(frame));
+  }
+  const auto count = [](const numen::test::IgtlTestReader& r, const std::string& name) {
+    int n = 0;
+    for (const std::string& m : r.messages())
+      n += numen::test::IgtlTestReader::type_of(m) == "POLYDATA" && numen::test::IgtlTestReader::name_of(m) == name;
+    return n;
+  };
+  ASSERT_TRUE(reader.read_until([&] { return count(reader, "suture") >= kFrames; }, [&] { server.flush(); }));
+  const std::vector<numen::hal::IgtlUnpacked> got = igtl_world_test_of(reader, "POLYDATA", "suture");
+  ASSERT_EQ(got.size(), static_cast<std::size_t>(kFrames));
+  for (std::size_t u = 0; u < got.size(); ++u) {
+    const numen::hal::IgtlUnpacked& p = got[u];
+    EXPECT_EQ(p.timestamp_ns, static_cast<std::int64_t>(u) * 10'000'000);
+    const std::vector<numen::core::Vec3>& want = thread_at.at(p.timestamp_ns);
+    ASSERT_EQ(p.points.size(), nodes);
+    double worst = 0.0;
+    for (std::size_t i = 0; i < nodes; ++i) worst = std::max(worst, (p.points[i] - want[i]).norm());
+    EXPECT_LT(worst, 1e-3) << "at " << p.timestamp_ns << " ns (mm)";  // 1 µm: float32
+    EXPECT_TRUE(p.triangles.empty());
+    if (u < 3) {  // whole: one polyline through every node in order
+      ASSERT_EQ(p.lines.size(), 1u);
+      ASSERT_EQ(p.lines[0].size(), nodes);
+      for (std::size_t i = 0; i < nodes; ++i) EXPECT_EQ(p.lines[0][i], i);
+    } else {  // broken at segment 40: nodes 0-40 and 41-100
+      ASSERT_EQ(p.lines.size(), 2u);
+      ASSERT_EQ(p.lines[0].size(), static_cast<std::size_t>(kBroken) + 1);
+      ASSERT_EQ(p.lines[1].size(), nodes - kBroken - 1);
+      EXPECT_EQ(p.lines[0].back(), static_cast<std::uint32_t>(kBroken));
+      EXPECT_EQ(p.lines[1].front(), static_cast<std::uint32_t>(kBroken) + 1);
+      EXPECT_EQ(p.lines[1].back(), nodes - 1);
+    }
+  }
+  // The needle: its body's TRANSFORM every frame, at the body's pose (mm).
+  const std::vector<numen::hal::IgtlUnpacked> needle = igtl_world_test_of(reader, "TRANSFORM", "needle");
+  ASSERT_EQ(needle.size(), static_cast<std::size_t>(kFrames));
+  const numen::core::Vec3 at = 1e3 * data.bodies[static_cast<std::size_t>(model.needles[0].body)].position;
+  EXPECT_LT((needle.back().translation - at).norm(), 1e-3);
+  // One organ (the pad) once, and the thread every frame.
+  EXPECT_EQ(server.counters().polydata, 1u + kFrames);
+}
+
 // Organ rate 0: the shapes once per client (at its first frame), never again.
 TEST(IgtlWorldServer, AnOrganRateOfZeroSendsTheShapeOncePerClient) {
   NUMEN_REQUIRE_DEFORMABLE();

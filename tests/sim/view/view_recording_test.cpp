@@ -224,7 +224,8 @@ std::string recording_bytes(const std::string& scene) {
 TEST(ViewRecording, ASceneMessageMemberOfTheWrongTypeIsNamedByItsKey) {
   TempDir dir;
   const std::string layout =
-      R"("layout": {"bodies": 2, "nodes": 0, "axes": 3, "grasps": 0, "extra_devices": 0, "extra_axes": 0})";
+      R"("layout": {"bodies": 2, "nodes": 0, "axes": 3, "grasps": 0, "extra_devices": 0, "extra_axes": 0, )"
+      R"("threads": 0, "thread_nodes": 0})";
   const std::string v = std::to_string(numen::sim::kViewSceneVersion);
   const std::vector<std::pair<std::string, std::string>> cases = {
       {R"({"format": {"a": 1}, "version": )" + v + ", " + layout + "}", "format"},
@@ -252,6 +253,13 @@ TEST(ViewRecording, ASceneMessageMemberOfTheWrongTypeIsNamedByItsKey) {
       {R"({"format": "numen-view", "version": )" + v +
            R"(, "layout": {"bodies": 2, "nodes": 0, "axes": 3, "grasps": 0, "extra_devices": 1.5, "extra_axes": 0}})",
        "layout.extra_devices"},
+      {R"({"format": "numen-view", "version": )" + v +
+           R"(, "layout": {"bodies": 2, "nodes": 0, "axes": 3, "grasps": 0, "extra_devices": 0, "extra_axes": 0}})",
+       "layout.threads"},
+      {R"({"format": "numen-view", "version": )" + v +
+           R"(, "layout": {"bodies": 2, "nodes": 0, "axes": 3, "grasps": 0, "extra_devices": 0, "extra_axes": 0, )"
+           R"("threads": 1, "thread_nodes": -101}})",
+       "layout.thread_nodes"},
   };
   for (const auto& [scene, key] : cases) {
     const std::string path = write_bytes(dir, "bad.nmv", recording_bytes(scene));
@@ -274,6 +282,19 @@ TEST(ViewRecording, ASceneMessageMemberOfTheWrongTypeIsNamedByItsKey) {
                 dir, "good.nmv",
                 recording_bytes(R"({"format": "numen-view", "version": )" + v + ", " + layout + "}"))),
             "");
+}
+
+// Issue 69: the frames carry the threads (version 5) and the scene message the needles and threads
+// (version 4). A recording of an older numen (scene message 3, frames 4) is refused at its version,
+// saying to record the run again, not with an unexplained count mismatch.
+TEST(ViewRecording, ARecordingOfAnOlderNumenIsRefusedSayingToRecordItAgain) {
+  TempDir dir;
+  const std::string older = R"({"format": "numen-view", "version": 3, "frame_version": 4, )"
+                            R"("layout": {"bodies": 2, "nodes": 0, "axes": 3, "grasps": 0, "extra_devices": 0, )"
+                            R"("extra_axes": 0}})";
+  const std::string path = write_bytes(dir, "old.nmv", recording_bytes(older));
+  EXPECT_EQ(reader_error(path), path + ": version: byte 12: scene message version number 3, this reader knows integer 4 "
+                                       "(a recording of an older numen: record the run again with this one)");
 }
 
 // Arrays and objects nested more than 64 deep are refused while the scene message is parsed,

@@ -9,6 +9,7 @@
 #include <array>
 #include <cmath>
 #include <filesystem>
+#include <numbers>
 #include <nlohmann/json.hpp>
 #include <vector>
 
@@ -17,6 +18,7 @@
 #include "numen/core/data.hpp"
 #include "numen/core/mesh_shape.hpp"
 #include "numen/core/model.hpp"
+#include "numen/core/needle.hpp"
 #include "numen/core/net_surface_map.hpp"
 #include "numen/sim/scene/scene.hpp"
 
@@ -224,4 +226,54 @@ TEST(ViewSceneWarnings, AFineSurfaceTheMessageLeavesOutIsSaid) {
       scene, numen::sim::view_frame_layout(scene), 30.0));
   EXPECT_FALSE(j["nets"][0]["surface"].contains("triangles"));
   EXPECT_EQ(j["nets"][0]["surface"]["triangle_count"].get<int>(), 400001);
+}
+
+// Issue 69: the suturing scene's needle is described by its arc in its body's frame (the page
+// draws the wire as a tube there, posed by the frames' body_pose) and its thread by its nodes'
+// place in the frames' thread_node; the layout reserves the thread's segments + 1 nodes. A scene
+// without either has empty lists and no thread in its frames.
+TEST(ViewSceneMessage, CarriesTheNeedlesArcAndTheThreadsNodes) {
+  NUMEN_REQUIRE_DEFORMABLE();
+  const numen::sim::Scene scene = numen::sim::load_scene(shipped_scene("suturing.toml"));
+  const numen::core::Model& m = scene.model;
+  ASSERT_EQ(m.needles.size(), 1u);
+  ASSERT_EQ(m.threads.size(), 1u);
+  const auto layout = numen::sim::view_frame_layout(scene);
+  EXPECT_EQ(layout.num_threads, 1u);
+  EXPECT_EQ(layout.num_thread_nodes, static_cast<std::uint32_t>(m.threads[0].segments + 1));
+  const nlohmann::json j = parsed_scene_message(scene);
+  EXPECT_EQ(j["layout"]["threads"], 1);
+  EXPECT_EQ(j["layout"]["thread_nodes"], m.threads[0].segments + 1);
+  ASSERT_EQ(j["needles"].size(), 1u);
+  const nlohmann::json& n = j["needles"][0];
+  const numen::core::NeedleModel& needle = m.needles[0];
+  EXPECT_EQ(n["name"], "needle");
+  EXPECT_EQ(n["body"], needle.body);
+  EXPECT_EQ(j["bodies"][static_cast<std::size_t>(needle.body)]["name"], "needle");
+  EXPECT_DOUBLE_EQ(n["radius"].get<double>(), 0.026 / std::numbers::pi);
+  EXPECT_DOUBLE_EQ(n["arc_angle"].get<double>(), needle.arc_angle);
+  EXPECT_DOUBLE_EQ(n["wire_radius"].get<double>(), 0.00035);
+  EXPECT_DOUBLE_EQ(n["tail_angle"].get<double>(), -needle.arc_angle / 2);
+  EXPECT_DOUBLE_EQ(n["tip_angle"].get<double>(), needle.arc_angle / 2);
+  for (int k = 0; k < 3; ++k) EXPECT_DOUBLE_EQ(n["centre"][k].get<double>(), needle.centre[k]);
+  // The arc as the page draws it (about centre, radius R, from the tail's angle) goes through the
+  // needle's collision spheres, tail first.
+  const double R = n["radius"].get<double>(), tail = n["tail_angle"].get<double>();
+  const auto& spheres = j["bodies"][static_cast<std::size_t>(needle.body)]["spheres"];
+  const auto& first = spheres.front();
+  EXPECT_NEAR(first[0].get<double>(), needle.centre.x() + R * std::cos(tail), 1e-9);
+  EXPECT_NEAR(first[1].get<double>(), needle.centre.y() + R * std::sin(tail), 1e-9);
+  ASSERT_EQ(j["threads"].size(), 1u);
+  const nlohmann::json& t = j["threads"][0];
+  EXPECT_EQ(t["name"], "suture");
+  EXPECT_EQ(t["node_begin"], 0);
+  EXPECT_EQ(t["node_count"], m.threads[0].segments + 1);
+  EXPECT_DOUBLE_EQ(t["radius"].get<double>(), m.threads[0].radius);
+  EXPECT_EQ(t["needle"], 0);
+  // The deformable scene: no needle, no thread.
+  const numen::sim::Scene plain = numen::sim::load_scene(shipped_scene("deformable.toml"));
+  const nlohmann::json k = parsed_scene_message(plain);
+  EXPECT_TRUE(k["needles"].empty());
+  EXPECT_TRUE(k["threads"].empty());
+  EXPECT_EQ(numen::sim::view_frame_layout(plain).num_thread_nodes, 0u);
 }

@@ -35,6 +35,9 @@ On the default scene with a grasper on its jaws (7.3 s of the recording, which g
 On 0.3 s of the two-device bimanual scene:
   - the panel has a line for the second device ("right"): its state, feedback force and the
     torques sent to its axes.
+On 1 s of the suturing scene (issue 69):
+  - the needle is drawn as its arc (a shape of its body, not its spheres) and the thread as its
+    100 segments through its 101 nodes, its first node at the needle's tail.
 Exit 0: passed; 1: failed; 77: skipped, only when Chromium or the Python module PIL
 (python3-pil) is not installed.
 
@@ -629,27 +632,64 @@ def check_grasp(numen, browser, out):
     return failures
 
 
-def check_devices(numen, browser, out):
-    """The two-device bimanual scene (issue 70: the view carried device 0's state alone): the
-    panel has a line for the loop's other device, "right", with its lifecycle, samples,
-    feedback force and the torques sent to its axes, and the page logs no error."""
-    rec, r = record(numen, out, "bimanual", os.path.join(ROOT, "sim", "scenes", "bimanual.toml"), 0.3)
+def check_last_frame(numen, browser, out, name, scene, duration, check_page):
+    """Records `duration` s of `scene` (a file of sim/scenes), serves it, opens its last frame and
+    returns check_page(page, frame)'s failures, the page's errors and the server's."""
+    rec, r = record(numen, out, name, os.path.join(ROOT, "sim", "scenes", scene), duration)
     if r.returncode != 0:
-        return ["bimanual: the run exited %d\n%s" % (r.returncode, r.stderr)]
+        return ["%s: the run exited %d\n%s" % (name, r.returncode, r.stderr)]
 
     def check(viewer):
         last = viewer.frames - 1
         page = open_page(browser, viewer.url, "?frame=%d&w=%d&h=%d" % (last, VIEW_W, VIEW_H))
-        text = page.eval("numenView.probe().devices")
-        print("bimanual: at frame %d the panel says %r" % (last, text))
-        failures = []
-        if not re.search(r"^device 1 'right': .*samples valid, \|F\| = \d+\.\d\d N, "
-                         r"τ = \[-?\d+\.\d{3}(, -?\d+\.\d{3})*\]$", text):
-            failures.append("bimanual: the panel's line of device 1 is %r" % text)
-        failures += page_failures(page, "bimanual")
+        failures = check_page(page, last)
+        failures += page_failures(page, name)
         page.send("Page.close")
         return failures
     return served(numen, rec, check)
+
+
+def check_devices(numen, browser, out):
+    """The two-device bimanual scene (issue 70: the view carried device 0's state alone): the
+    panel has a line for the loop's other device, "right", with its lifecycle, samples,
+    feedback force and the torques sent to its axes, and the page logs no error."""
+    def check(page, last):
+        text = page.eval("numenView.probe().devices")
+        print("bimanual: at frame %d the panel says %r" % (last, text))
+        if not re.search(r"^device 1 'right': .*samples valid, \|F\| = \d+\.\d\d N, "
+                         r"τ = \[-?\d+\.\d{3}(, -?\d+\.\d{3})*\]$", text):
+            return ["bimanual: the panel's line of device 1 is %r" % text]
+        return []
+    return check_last_frame(numen, browser, out, "bimanual", "bimanual.toml", 0.3, check)
+
+
+def check_suturing(numen, browser, out):
+    """The suturing scene (issue 69: the view did not draw the needle and the thread): at the last
+    frame of 1 s (the needle held by the right driver since 0.317 s) the needle's body has its arc
+    as a shape, the thread "suture" is drawn whole (100 segments, 101 nodes) and its first node is
+    at the needle's tail (within 1 mm: the thread's tie), and the page logs no error."""
+    def check(page, last):
+        p = page.eval("numenView.probe()")
+        tail = page.eval("(() => { const n = numenView.scene().needles[0]; const g = numenView.body(n.body);"
+                         " g.updateMatrixWorld(); const a = n.tail_angle; return g.localToWorld(new g.position.constructor("
+                         "n.centre[0] + n.radius * Math.cos(a), n.centre[1] + n.radius * Math.sin(a), n.centre[2]))"
+                         ".toArray(); })()")
+        print("suturing: at frame %d needles %s, threads %s, the needle's tail at %s"
+              % (last, p["needles"], [{k: t[k] for k in ("name", "nodes", "segmentsDrawn", "broken")}
+                                      for t in p["threads"]], tail))
+        failures = []
+        if [n["name"] for n in p["needles"]] != ["needle"] or not p["needles"][0]["shape"] \
+                or "needle" not in p["shapes"]:
+            failures.append("suturing: the needle is not drawn as its arc: %s, shapes %s" % (p["needles"], p["shapes"]))
+        threads = p["threads"]
+        if len(threads) != 1 or threads[0]["name"] != "suture" or threads[0]["nodes"] != 101 \
+                or threads[0]["segmentsDrawn"] != 100 or threads[0]["broken"] != -1:
+            failures.append("suturing: the thread is not drawn whole: %s" % threads)
+        elif math.dist(threads[0]["first"], tail) > 1e-3:
+            failures.append("suturing: the thread's first node %s is %.2f mm from the needle's tail %s"
+                            % (threads[0]["first"], 1e3 * math.dist(threads[0]["first"], tail), tail))
+        return failures
+    return check_last_frame(numen, browser, out, "suturing", "suturing.toml", 1.0, check)
 
 
 def served(numen, rec, check):
@@ -753,6 +793,7 @@ def main():
             failures += check_fault(a.numen, browser, a.out)
             failures += check_grasp(a.numen, browser, a.out)
             failures += check_devices(a.numen, browser, a.out)
+            failures += check_suturing(a.numen, browser, a.out)
     shutil.rmtree(profile, ignore_errors=True)
     for f in failures:
         print("FAIL: " + f)

@@ -1,9 +1,10 @@
 #pragma once
 /// @file state_frame.hpp
 /// The state frame: one period of the simulated world, as the viewer and any other renderer
-/// receive it (docs/viewer.md, "Frames"). A frame is a little-endian byte string of a 76-byte
+/// receive it (docs/viewer.md, "Frames"). A frame is a little-endian byte string of an 84-byte
 /// header followed by float32 arrays; its size depends only on the scene (bodies, net nodes,
-/// axes, graspers, the loop's other devices and their axes) and on the contacts of the period. The loop writes it straight into a preallocated
+/// axes, graspers, the loop's other devices and their axes, suture threads and their nodes) and
+/// on the contacts of the period. The loop writes it straight into a preallocated
 /// buffer (encode_state_frame(): noexcept, no allocation); readers check it with
 /// decode_state_frame(), which never reads past the bytes it is given.
 ///
@@ -33,9 +34,10 @@ namespace numen::platform {
 /// First bytes of every frame.
 inline constexpr char kStateFrameMagic[4] = {'N', 'M', 'V', 'F'};
 /// Version written by encode_state_frame() and the only one decode_state_frame() accepts.
-inline constexpr std::uint16_t kStateFrameVersion = 4;
+/// 5: the suture threads (num_threads, num_thread_nodes, thread, thread_node; issue 69).
+inline constexpr std::uint16_t kStateFrameVersion = 5;
 /// Size of the fixed header, bytes.
-inline constexpr std::size_t kStateFrameHeaderBytes = 76;
+inline constexpr std::size_t kStateFrameHeaderBytes = 84;
 
 /// Bytes of each float32 of the arrays.
 inline constexpr std::size_t kFrameFloatBytes = sizeof(float);
@@ -79,7 +81,7 @@ constexpr std::string_view frame_field_type_name(FrameFieldType t) noexcept {
 enum class FrameField : std::uint8_t {
   kMagic, kVersion, kHeaderBytes, kFrameBytes, kNumBodies, kNumNodes, kNumContacts, kNumAxes,
   kHeldBody, kPeriod, kTimeNs, kStepStatus, kFlags, kStepNs, kLifecycle, kStartup, kFaultCause,
-  kSampleFaults, kNumGrasps, kNumExtraDevices, kNumExtraAxes
+  kSampleFaults, kNumGrasps, kNumExtraDevices, kNumExtraAxes, kNumThreads, kNumThreadNodes
 };
 
 /// One field of the header.
@@ -90,7 +92,7 @@ struct StateFrameField {
   FrameFieldType type;    ///< Wire type (its size: frame_field_bytes()).
 };
 
-/// The 76-byte header, field by field (names as StateFrameHeader's members):
+/// The 84-byte header, field by field (names as StateFrameHeader's members):
 ///
 ///     magic          "NMVF" (kStateFrameMagic)
 ///     version        kStateFrameVersion (4)
@@ -118,10 +120,12 @@ struct StateFrameField {
 ///                    fields above and the feedback and axis_torque arrays carry): 0 for one
 ///                    device
 ///     num_extra_axes E: their axes, all together
+///     num_threads    H: suture threads (core::Model::threads; 0 without)
+///     num_thread_nodes T: their nodes, all together (Σ segments + 1)
 /// The device fields above (flags but kFrameOverrun and kFrameContactsTruncated, lifecycle,
 /// startup, fault_cause, sample_faults) are device 0's; the other devices' are in the
 /// extra_device array.
-inline constexpr std::array<StateFrameField, 21> kStateFrameFields{{
+inline constexpr std::array<StateFrameField, 23> kStateFrameFields{{
     {FrameField::kMagic, "magic", 0, FrameFieldType::kChar4},
     {FrameField::kVersion, "version", 4, FrameFieldType::kU16},
     {FrameField::kHeaderBytes, "header_bytes", 6, FrameFieldType::kU16},
@@ -143,6 +147,8 @@ inline constexpr std::array<StateFrameField, 21> kStateFrameFields{{
     {FrameField::kNumGrasps, "num_grasps", 64, FrameFieldType::kU32},
     {FrameField::kNumExtraDevices, "num_extra_devices", 68, FrameFieldType::kU32},
     {FrameField::kNumExtraAxes, "num_extra_axes", 72, FrameFieldType::kU32},
+    {FrameField::kNumThreads, "num_threads", 76, FrameFieldType::kU32},
+    {FrameField::kNumThreadNodes, "num_thread_nodes", 80, FrameFieldType::kU32},
 }};
 
 /// The declaration of header field `f`.
@@ -153,7 +159,7 @@ constexpr const StateFrameField& frame_field(FrameField f) noexcept {
 /// The arrays after the header, in their order: each one's index in kStateFrameArrays.
 enum class FrameArray : std::uint8_t {
   kBodyPose, kTargetPose, kNodePosition, kContact, kFeedback, kAxisTorque, kPenetration,
-  kDeviceLoop, kGrasp, kExtraDevice, kExtraAxisTorque
+  kDeviceLoop, kGrasp, kExtraDevice, kExtraAxisTorque, kThread, kThreadNode
 };
 
 /// One float32 array after the header: `count` items of `floats` floats each.
@@ -161,7 +167,7 @@ struct StateFrameArray {
   FrameArray id;                    ///< Its index in kStateFrameArrays.
   std::string_view name;            ///< The name StateFrameView's accessor and the page use.
   std::size_t floats;               ///< float32 values per item.
-  std::optional<FrameField> count;  ///< Header count of items (B, N, C, A, G, D, E); none: one item.
+  std::optional<FrameField> count;  ///< Header count of items (B, N, C, A, G, D, E, H, T); none: one item.
 };
 
 /// The arrays, in order from byte kStateFrameHeaderBytes, each item's floats:
@@ -198,7 +204,12 @@ struct StateFrameArray {
 ///     extra_axis_torque E × 1 the torque or force sent to each axis of those devices, device
 ///                            1's axes first, then device 2's, ... (each device's count in its
 ///                            item)
-inline constexpr std::array<StateFrameArray, 11> kStateFrameArrays{{
+///     thread         H × 2   each suture thread (core::ThreadState, in Model::threads order):
+///                            the segment it broke at (−1: whole; the view draws it in two
+///                            pieces), its largest segment tension this period (N)
+///     thread_node    T × 3   the threads' node positions (m) x y z, thread 0's segments + 1
+///                            nodes first, then thread 1's, ...
+inline constexpr std::array<StateFrameArray, 13> kStateFrameArrays{{
     {FrameArray::kBodyPose, "body_pose", 7, FrameField::kNumBodies},
     {FrameArray::kTargetPose, "target_pose", 8, FrameField::kNumBodies},
     {FrameArray::kNodePosition, "node_position", 3, FrameField::kNumNodes},
@@ -210,6 +221,8 @@ inline constexpr std::array<StateFrameArray, 11> kStateFrameArrays{{
     {FrameArray::kGrasp, "grasp", 8, FrameField::kNumGrasps},
     {FrameArray::kExtraDevice, "extra_device", 12, FrameField::kNumExtraDevices},
     {FrameArray::kExtraAxisTorque, "extra_axis_torque", 1, FrameField::kNumExtraAxes},
+    {FrameArray::kThread, "thread", 2, FrameField::kNumThreads},
+    {FrameArray::kThreadNode, "thread_node", 3, FrameField::kNumThreadNodes},
 }};
 
 /// The declaration of array `a`.
@@ -240,17 +253,18 @@ constexpr bool frame_arrays_are_well_formed() noexcept {
     if (a.count && *a.count != FrameField::kNumBodies && *a.count != FrameField::kNumNodes &&
         *a.count != FrameField::kNumContacts && *a.count != FrameField::kNumAxes &&
         *a.count != FrameField::kNumGrasps && *a.count != FrameField::kNumExtraDevices &&
-        *a.count != FrameField::kNumExtraAxes)
+        *a.count != FrameField::kNumExtraAxes && *a.count != FrameField::kNumThreads &&
+        *a.count != FrameField::kNumThreadNodes)
       return false;
   }
   return true;
 }
 }  // namespace detail
 static_assert(detail::frame_fields_tile_the_header(),
-              "kStateFrameFields must tile the 76-byte header in order, without overlap");
+              "kStateFrameFields must tile the 84-byte header in order, without overlap");
 static_assert(detail::frame_arrays_are_well_formed(),
               "kStateFrameArrays: ids in order, floats > 0, counts of bodies/nodes/contacts/axes/"
-              "graspers/devices/their axes");
+              "graspers/devices/their axes/threads/their nodes");
 static_assert(frame_field(FrameField::kMagic).type == FrameFieldType::kChar4 &&
               sizeof kStateFrameMagic == frame_field_bytes(FrameFieldType::kChar4));
 
@@ -264,7 +278,8 @@ inline constexpr std::size_t kFramePoseFloats = frame_array(FrameArray::kBodyPos
                              kFrameFigureFloats = frame_array(FrameArray::kPenetration).floats,
                              kFrameDeviceLoopFloats = frame_array(FrameArray::kDeviceLoop).floats,
                              kFrameGraspFloats = frame_array(FrameArray::kGrasp).floats,
-                             kFrameDeviceFloats = frame_array(FrameArray::kExtraDevice).floats;
+                             kFrameDeviceFloats = frame_array(FrameArray::kExtraDevice).floats,
+                             kFrameThreadFloats = frame_array(FrameArray::kThread).floats;
 static_assert(kFrameTargetFloats == kFramePoseFloats + 1, "a target is a pose and its flag");
 
 /// Bits of the header's flags word.
@@ -280,8 +295,8 @@ enum StateFrameFlag : std::uint32_t {
                             ///< lost; StateFrameFigures::bus_down).
 };
 
-/// What fixes a frame's size: the scene's counts and the contact capacity. B, N, A, G, D, E are
-/// the same in every frame of a run; C varies per period, up to max_contacts.
+/// What fixes a frame's size: the scene's counts and the contact capacity. B, N, A, G, D, E, H,
+/// T are the same in every frame of a run; C varies per period, up to max_contacts.
 struct StateFrameLayout {
   std::uint32_t num_bodies = 0;    ///< B: core::Model::num_bodies().
   std::uint32_t num_nodes = 0;     ///< N: core::Model::num_nodes().
@@ -290,6 +305,9 @@ struct StateFrameLayout {
   std::uint32_t num_grasps = 0;    ///< G: core::Model::grasps.size().
   std::uint32_t num_extra_devices = 0;  ///< D: the loop's devices after device 0.
   std::uint32_t num_extra_axes = 0;     ///< E: their axes, all together.
+  std::uint32_t num_threads = 0;        ///< H: core::Model::threads.size().
+  /// T: the threads' nodes, all together (Σ ThreadModel::segments + 1; 0 without threads).
+  std::uint32_t num_thread_nodes = 0;
 
   /// Bytes of a frame with `contacts` contacts.
   std::size_t frame_bytes(std::uint32_t contacts) const noexcept;
@@ -321,6 +339,14 @@ struct FrameDevice {
   float feedback[6] = {};         ///< Feedback wrench sent: N x y z, N·m x y z, world.
 };
 
+/// One suture thread of a frame (kStateFrameArrays' thread item; core::ThreadState).
+struct FrameThread {
+  /// The segment it broke at (core::ThreadState::broken_segment): its nodes i and i + 1 are no
+  /// longer joined; −1: whole.
+  std::int32_t broken_segment = -1;
+  float max_tension = 0.0F;  ///< Its largest segment tension this period (N, ≥ 0).
+};
+
 /// One contact of a frame, in the frame's order.
 struct FrameContact {
   float point[3];   ///< m, world.
@@ -347,6 +373,8 @@ struct StateFrameHeader {
   std::uint32_t num_grasps = 0;   ///< G: graspers.
   std::uint32_t num_extra_devices = 0;  ///< D: the loop's devices after device 0.
   std::uint32_t num_extra_axes = 0;     ///< E: their axes, all together.
+  std::uint32_t num_threads = 0;        ///< H: suture threads.
+  std::uint32_t num_thread_nodes = 0;   ///< T: their nodes, all together.
 };
 
 /// A checked frame: the header and the offsets of its arrays in the bytes it was decoded from
@@ -379,6 +407,11 @@ class StateFrameView {
   FrameDevice extra_device(std::uint32_t d) const noexcept;
   /// Torque or force sent to value a of extra_axis_torque (a < num_extra_axes).
   float extra_axis_torque(std::uint32_t a) const noexcept;
+  /// Suture thread t (t < num_threads).
+  FrameThread thread(std::uint32_t t) const noexcept;
+  /// Thread node n's position (3 floats, m, world): the threads' nodes in order, thread 0's
+  /// first (n < num_thread_nodes).
+  void thread_node(std::uint32_t n, float out[3]) const noexcept;
 
  private:
   friend class StateFrameDecoder;
@@ -405,7 +438,8 @@ class StateFrameDecoder {
  public:
   /// Checks `bytes` as one frame: magic, version, header size, frame size equal to
   /// bytes.size() and to the size its counts imply, the other devices' axis counts adding up to
-  /// num_extra_axes. On success `view` refers into `bytes` (unchanged otherwise).
+  /// num_extra_axes. On success `view` refers into `bytes` (unchanged otherwise). A frame of
+  /// another version (4: an older numen's, before the threads) is refused naming both versions.
   /// A non-finite float is accepted (it is data); a malformed frame is never read past its
   /// end.
   static StateFrameDecodeResult decode(std::span<const std::byte> bytes, StateFrameView& view);
@@ -444,9 +478,11 @@ struct FrameDeviceInput {
 /// rest are cut and kFrameContactsTruncated is set). Targets: the held body's is
 /// data.target, the others' data.body_targets. Graspers from data.grasps. The loop's other
 /// devices from `extra_devices` (layout.num_extra_devices of them, their axis torques
-/// layout.num_extra_axes in all). Returns the bytes written, or 0 when `data` (bodies, nodes,
-/// graspers), `axis_torques` or `extra_devices` do not match the layout or `out` is shorter than
-/// layout.max_frame_bytes() (nothing is written then). noexcept, no allocation.
+/// layout.num_extra_axes in all). The suture threads from data.threads (their broken segment,
+/// largest tension and node positions). Returns the bytes written, or 0 when `data` (bodies,
+/// nodes, graspers, threads and their nodes), `axis_torques` or `extra_devices` do not match the
+/// layout or `out` is shorter than layout.max_frame_bytes() (nothing is written then). noexcept,
+/// no allocation.
 std::size_t encode_state_frame(const StateFrameLayout& layout, const core::Data& data,
                                const PeriodReport& report, std::span<const double> axis_torques,
                                const StateFrameFigures& figures, std::span<std::byte> out,

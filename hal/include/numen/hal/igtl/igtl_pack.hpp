@@ -45,16 +45,23 @@ enum class IgtlStatusCode : std::uint16_t {
   kShutDown = 19,        ///< Exiting / shut down in progress.
 };
 
-/// Packs POLYDATA messages of one triangle surface whose triangles do not change and whose
-/// points move: the library's message is made once with the triangles as its POLYGONS, and each
-/// pack() sets the points and the timestamp (header version 1, as Slicer reads it). Points and
-/// triangles only: no vertices, lines, strips or attributes.
+/// Packs POLYDATA messages of one triangle surface (or polylines: a suture thread) whose cells
+/// rarely change and whose points move: the library's message is made once with the triangles
+/// as its POLYGONS and the polylines as its LINES, and each pack() sets the points and the
+/// timestamp (header version 1, as Slicer reads it). Points, triangles and lines only: no
+/// vertices, strips or attributes.
 class IgtlPolyDataPacker {
  public:
-  /// `device_name` ≤ 20 characters; `triangles` index the surface's `point_count` points.
-  /// Throws std::invalid_argument: a name too long or empty, no point, an index out of range.
+  /// `device_name` ≤ 20 characters; `triangles` index the surface's `point_count` points, as
+  /// do `lines` (each a polyline of at least 2 points, a LINES cell).
+  /// Throws std::invalid_argument: a name too long or empty, no point, an index out of range, a
+  /// polyline of fewer than 2 points.
   IgtlPolyDataPacker(const std::string& device_name, std::size_t point_count,
-                     std::span<const std::array<std::uint32_t, 3>> triangles);
+                     std::span<const std::array<std::uint32_t, 3>> triangles,
+                     std::span<const std::vector<std::uint32_t>> lines = {});
+  /// Replaces the LINES cells by `lines` (a thread that broke: two polylines), checked as the
+  /// constructor checks them (std::invalid_argument; the old lines are kept then). Allocates.
+  void set_lines(std::span<const std::vector<std::uint32_t>> lines);
   ~IgtlPolyDataPacker();
   IgtlPolyDataPacker(const IgtlPolyDataPacker&) = delete;
   IgtlPolyDataPacker& operator=(const IgtlPolyDataPacker&) = delete;
@@ -102,9 +109,9 @@ std::string pack_igtl_qtrans(const std::string& device_name, std::int64_t timest
                              const core::Quat& orientation, const core::Vec3& translation);
 
 /// A message read back (unpack_igtl()): the header's type, device name and timestamp, and the
-/// body's content by type (TRANSFORM: rotation and translation; POLYDATA: points and
-/// triangles, polygons of three points only; STATUS: code, subcode, error name, message; STRING:
-/// text in `text`).
+/// body's content by type (TRANSFORM: rotation and translation; POLYDATA: points,
+/// triangles (polygons of three points only) and lines (polylines, point indices); STATUS: code,
+/// subcode, error name, message; STRING: text in `text`).
 struct IgtlUnpacked {
   std::string type;
   std::string device_name;
@@ -113,6 +120,7 @@ struct IgtlUnpacked {
   core::Vec3 translation = core::Vec3::Zero();
   std::vector<core::Vec3> points;
   std::vector<std::array<std::uint32_t, 3>> triangles;
+  std::vector<std::vector<std::uint32_t>> lines;  ///< POLYDATA's LINES cells, each a polyline.
   std::uint16_t status_code = 0;
   std::int64_t status_subcode = 0;
   std::string error_name;

@@ -4,7 +4,8 @@
 /// docs/outputs.md `needle.*`): per needle its punctures, exits, releases and tunnels, the tip's
 /// force at the last puncture against its threshold, the largest deviation of a puncture point
 /// from the arc, whether its pass went through, and where it went in and came out against the
-/// scene's marks (`entry_mark`, `exit_mark`).
+/// scene's marks (`entry_mark`, `exit_mark`); and the largest force the needles and their threads
+/// put on the tissue.
 
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"
@@ -21,7 +22,9 @@ void begin_needle_figures(const Scene& scene, RunSummary& s);
 /// Adds one step's needle outputs (core::NeedleState of each Data::needles) to `s`'s
 /// needle_runs: the counts, the largest deviation, and at a new entry or exit its material
 /// point's rest position (the punctured triangle's rest nodes by its weights) and time, at a new
-/// tunnel its time. Real-time path: no allocation, no throw.
+/// tunnel its time; and the largest force on the tissue (RunSummary::needle_tissue_force_max_n:
+/// |Σ F| of the needles' ties and the threads' eyelets on tissue, their held node springs) and
+/// its time. Real-time path: no allocation, no throw.
 void accumulate_needle_figures(const core::Model& model, const core::Data& data, RunSummary& s) noexcept;
 
 /// After a run: the needle.* figures from needle_runs (sums; the last puncture's tip force and

@@ -337,6 +337,11 @@ struct RunSummary {
   double needle_puncture_tip_force_n = 0.0;  ///< Tip force at the run's last puncture (N).
   double needle_puncture_force_n = 0.0;  ///< That needle's threshold (N).
   double needle_deviation_max_mm = 0.0;  ///< Largest deviation of a puncture point from its arc (mm).
+  /// Largest force the needles and their threads put on the tissue over the run (N): |Σ F| over
+  /// the needles' puncture ties and the threads' eyelets on tissue, their held node springs
+  /// (Data::num_node_needle_ties, num_node_thread_ties) at each step, all nets together.
+  double needle_tissue_force_max_n = 0.0;
+  double needle_tissue_force_max_s = -1.0;  ///< When (s; −1: never any force on the tissue).
   bool needle_marks = false;             ///< A needle has an entry_mark or exit_mark.
   /// Largest distance of a needle's first entry (exit) from its mark (mm; −1: a marked needle
   /// that never went in, or never came out).

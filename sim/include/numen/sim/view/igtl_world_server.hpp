@@ -8,7 +8,12 @@
 /// - TRANSFORM, every frame: one per body (its pose: the god-object) and one per body with a
 ///   target (where the device puts it: the ghost), named by IgtlNameStyle: "<body>" and
 ///   "<body>_target" (numen's names, the default), or PLUS's "<Body>ToScene" and
-///   "<Body>TargetToScene" (igtl_world_transform_name()).
+///   "<Body>TargetToScene" (igtl_world_transform_name()). A suture needle is a body: its
+///   TRANSFORM is its body's ("needle"; its arc in that frame: docs/openigtlink.md).
+/// - POLYDATA, every frame, one per suture thread named after it (core::ThreadModel::name): its
+///   segments + 1 node positions as points and one LINES cell, the polyline through them in
+///   order; a thread that broke, two (the pieces either side of its broken segment; a piece of
+///   one node is left out).
 /// - POLYDATA, one per deformable named after it: its surface (the fine surface when the net
 ///   carries one, docs/fine-surface.md; else the net's nodes and
 ///   triangles), points and triangles, to each client when it connects (at the frame it is
@@ -31,7 +36,7 @@
 ///   its safe state at t = ..."), and its current state to a client that connects.
 ///
 /// In each client's stream, per frame: the shapes (at its first frame, then when due), its state
-/// (at its first frame), the TRANSFORMs, the frame's STATUS and STRING.
+/// (at its first frame), the TRANSFORMs, the threads' POLYDATA, the frame's STATUS and STRING.
 ///
 /// Translations and points in millimetres (Slicer's unit), world frame; rotations as they are;
 /// the timestamp is the frame's simulated time (ns since the run's start). The period never
@@ -131,8 +136,8 @@ class IgtlWorldServer final : public platform::StateFrameSink {
   /// deformables; kept by reference: it must outlive the server). Binds and listens; throws
   /// std::runtime_error naming the address when it cannot (or when the build has no
   /// OpenIGTLink), std::invalid_argument for a body name that igtl_world_transform_name()
-  /// refuses in settings.names, a deformable's name longer than 20, or an organ rate not
-  /// finite and ≥ 0.
+  /// refuses in settings.names, a deformable's or a thread's name empty or longer than 20, or an
+  /// organ rate not finite and ≥ 0.
   IgtlWorldServer(const core::Model& model, IgtlWorldSettings settings);
   ~IgtlWorldServer() override;
   IgtlWorldServer(const IgtlWorldServer&) = delete;
@@ -157,6 +162,7 @@ class IgtlWorldServer final : public platform::StateFrameSink {
     bool fresh = true;    // not served a frame yet: gets the shapes and the state first
   };
   struct Organ;
+  struct Thread;
   struct Last {  // what the previous frame showed (the events are its changes)
     bool seen = false;
     std::uint8_t fault_cause = 0;
@@ -178,6 +184,8 @@ class IgtlWorldServer final : public platform::StateFrameSink {
                   const std::string& name, const std::string& message, std::size_t device = 0);
   void add_string(std::string& out, std::int64_t t_ns, const std::string& text);
   void add_organs(std::string& out, const platform::StateFrameView& view);
+  // Every thread's POLYDATA at this frame's thread nodes into `out`; returns the messages added.
+  std::uint64_t add_threads(std::string& out, const platform::StateFrameView& view);
 
   const core::Model& model_;
   std::vector<std::string> names_;         // the bodies' names (events' text)
@@ -188,6 +196,7 @@ class IgtlWorldServer final : public platform::StateFrameSink {
   std::uint16_t port_ = 0;
   std::vector<Client> clients_;
   std::vector<Organ> organs_;
+  std::vector<Thread> threads_;
   std::vector<core::NodeState> nodes_;  // the frame's node positions (m), for the fine surfaces
   std::int64_t organ_due_ns_ = 0;       // next frame time an organ update is due
   bool organ_sent_ = false;
@@ -196,7 +205,7 @@ class IgtlWorldServer final : public platform::StateFrameSink {
   std::string batch_;   // one frame's TRANSFORMs for every client (reused)
   std::string events_;  // one frame's STATUS / STRING (reused)
   std::string intro_;   // a new client's STATUS of the current state (reused)
-  std::uint64_t batch_transforms_ = 0, events_statuses_ = 0, events_strings_ = 0;
+  std::uint64_t batch_transforms_ = 0, batch_polydata_ = 0, events_statuses_ = 0, events_strings_ = 0;
   IgtlWorldCounters counters_;
 };
 

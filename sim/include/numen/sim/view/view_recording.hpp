@@ -61,13 +61,16 @@ class ViewRecordingReader {
   /// Opens and checks `path`. Throws InputError (file = path, key empty) with the byte offset
   /// and what is wrong: cannot open, not a view recording, a length above kViewRecordMaxBytes,
   /// a scene message that is not a JSON object (the offset of the syntax error), a frame cut
-  /// short, a malformed frame (StateFrameDecoder's reason), a frame whose bodies, nodes, axes or
-  /// graspers differ from the scene message's layout, a period not after its predecessor's, or a time
+  /// short, a malformed frame (StateFrameDecoder's reason), a frame whose bodies, nodes, axes,
+  /// graspers, other devices, their axes, threads or thread nodes differ from the scene
+  /// message's layout, a period not after its predecessor's, or a time
   /// before its predecessor's (found by fuzzing: frame_at_or_after() searched unsorted times). A member
   /// of the scene message that is missing or of the wrong JSON type or value names its key
   /// ("format": string "numen-view", "version": integer kViewSceneVersion, "layout": object,
-  /// "layout.bodies", "layout.nodes", "layout.axes", "layout.grasps": whole numbers) with the
-  /// message's offset.
+  /// "layout.bodies", "layout.nodes", "layout.axes", "layout.grasps", "layout.extra_devices",
+  /// "layout.extra_axes", "layout.threads", "layout.thread_nodes": whole numbers) with the
+  /// message's offset; a recording of an older numen (an earlier "version") is refused at its
+  /// "version", saying to record the run again.
   /// No other exception escapes but std::bad_alloc.
   explicit ViewRecordingReader(const std::string& path);
   ~ViewRecordingReader();

@@ -14,7 +14,8 @@
 namespace numen::sim {
 
 /// Version of the scene message's schema (its "version" key); bumped with the frame version.
-inline constexpr int kViewSceneVersion = 3;
+/// 4: the needles and the threads (layout threads and thread_nodes; issue 69).
+inline constexpr int kViewSceneVersion = 4;
 
 /// Most triangles of a mesh (obstacle or body) the scene message carries (about 5 MB of JSON); a
 /// larger mesh is sent as its bounds ("aabb") and triangle count only.
@@ -27,8 +28,9 @@ inline constexpr int kViewMeshMaxTriangles = 200'000;
 inline constexpr int kViewNetSurfaceMaxTriangles = 400'000;
 
 /// The frame layout of a run of `scene`: its bodies, net nodes, axes, graspers, other devices
-/// (Scene::extra_devices) and their axes, and room for every contact the model can report
-/// (core::kMaxContacts rigid + the nets' node contacts).
+/// (Scene::extra_devices) and their axes, suture threads and their nodes (segments + 1 each),
+/// and room for every contact the model can report (core::kMaxContacts rigid + the nets' node
+/// contacts).
 platform::StateFrameLayout view_frame_layout(const Scene& scene);
 
 /// The scene message as compact JSON (UTF-8): format, version, scene name and description,
@@ -49,7 +51,13 @@ platform::StateFrameLayout view_frame_layout(const Scene& scene);
 /// fine surface's vertices, outward): docs/viewer.md, "Scene message"), joints (name, type, parent, child
 /// (−1: world), frame in the parent and in the child), the device (name, kind, protocol "managed" |
 /// "minimal" | "admittance", axis names), the loop's other devices ("extra_devices", in the
-/// frames' extra_device order: name, kind, protocol, axis names) and the initially held body. Numbers are the
+/// frames' extra_device order: name, kind, protocol, axis names), the needles ("needles": name,
+/// body index (its pose is the frames' body_pose), radius R (m), arc_angle φ (rad), wire_radius
+/// (m), centre (the circle's centre in the body frame, m), tail_angle and tip_angle (rad about
+/// the body's +z from its +x): the wire is the arc of radius R about centre from tail_angle to
+/// tip_angle in the body's x–y plane), the suture threads ("threads", in the frames' thread
+/// order: name, node_begin and node_count (segments + 1) in the frames' thread_node, radius (m),
+/// needle (its Model::needles index, −1: none)) and the initially held body. Numbers are the
 /// model's doubles, but for a fine surface's weights and offsets (rounded as said).
 std::string view_scene_message(const Scene& scene, const platform::StateFrameLayout& layout,
                                double display_rate_hz);
