@@ -65,8 +65,9 @@ void begin_needle_figures(const Scene& scene, RunSummary& s) {
 
 namespace {
 
-/// The force the needles' puncture ties and the threads' eyelets on tissue put on the nets this
-/// step (N, world): the sum of their held node springs' forces (NodeContact::force, on the node),
+/// The force the needles' puncture ties and the threads' eyelets on tissue and contacts with it
+/// put on the nets this step (N, world): the sum of their held node springs' forces
+/// (NodeContact::force, on the node),
 /// which follow the penalty contacts and the grasp springs in Data::node_contacts.
 core::Vec3 tissue_force(const core::Data& data) noexcept {
   const std::size_t size = data.node_contacts.size();

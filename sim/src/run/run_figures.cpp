@@ -285,8 +285,8 @@ constexpr RunFigure kFigures[] = {
     {"needle.deviation_max_mm", "mm", "Largest distance of a puncture point from its needle's arc", K::kReal,
      [](const S& s) noexcept { return real(s.needle_deviation_max_mm); }, needled},
     {"needle.tissue_force_max_n", "N",
-     "Largest force the needles and their threads put on the tissue: |sum| of the puncture ties' and "
-     "the threads' eyelets' forces on the nets",
+     "Largest force the needles and their threads put on the tissue: |sum| of the puncture ties', "
+     "the threads' eyelets' and their contacts' forces on the nets",
      K::kReal, [](const S& s) noexcept { return real(s.needle_tissue_force_max_n); }, needled},
     {"needle.tissue_force_max_s", "s", "... its time (−1: no force on the tissue)", K::kReal,
      [](const S& s) noexcept { return real(s.needle_tissue_force_max_s); }, needled},

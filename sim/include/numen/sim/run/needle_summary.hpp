@@ -23,8 +23,8 @@ void begin_needle_figures(const Scene& scene, RunSummary& s);
 /// needle_runs: the counts, the largest deviation, and at a new entry or exit its material
 /// point's rest position (the punctured triangle's rest nodes by its weights) and time, at a new
 /// tunnel its time; and the largest force on the tissue (RunSummary::needle_tissue_force_max_n:
-/// |Σ F| of the needles' ties and the threads' eyelets on tissue, their held node springs) and
-/// its time. Real-time path: no allocation, no throw.
+/// |Σ F| of the needles' ties and the threads' eyelets on and contacts with tissue, their held
+/// node springs) and its time. Real-time path: no allocation, no throw.
 void accumulate_needle_figures(const core::Model& model, const core::Data& data, RunSummary& s) noexcept;
 
 /// After a run: the needle.* figures from needle_runs (sums; the last puncture's tip force and

@@ -338,7 +338,7 @@ struct RunSummary {
   double needle_puncture_force_n = 0.0;  ///< That needle's threshold (N).
   double needle_deviation_max_mm = 0.0;  ///< Largest deviation of a puncture point from its arc (mm).
   /// Largest force the needles and their threads put on the tissue over the run (N): |Σ F| over
-  /// the needles' puncture ties and the threads' eyelets on tissue, their held node springs
+  /// the needles' puncture ties and the threads' eyelets on and contacts with tissue, their held node springs
   /// (Data::num_node_needle_ties, num_node_thread_ties) at each step, all nets together.
   double needle_tissue_force_max_n = 0.0;
   double needle_tissue_force_max_s = -1.0;  ///< When (s; −1: never any force on the tissue).
