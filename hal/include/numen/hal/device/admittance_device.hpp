@@ -171,7 +171,6 @@ class AdmittanceDevice final : public Device {
   PdoMapping rpdo_map_;
   DeviceLifecycle lifecycle_;
   ForceSample sample_;
-  DeviceOutput output_;
   AxisVector q_;
   std::array<std::int32_t, kMaxAxes> counts_{};
   AdmittanceDeviceCounters counters_;

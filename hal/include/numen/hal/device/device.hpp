@@ -80,6 +80,14 @@ class Device {
   /// kActive, held with controlword shutdown otherwise; AdmittanceDevice::write_pose()).
   /// Returns what was sent, valid until the next write().
   virtual const DeviceOutput& write(const DeviceCommand& command, std::int64_t now_ns) noexcept = 0;
+  /// What the last write() sent (the same record write() returned; the defaults before the
+  /// first write): the device face's view of the output — an impedance device's sent torques
+  /// (DeviceOutput::torque), gate and soft start, an admittance device's controlword.
+  const DeviceOutput& output() const noexcept { return output_; }
+  /// What the writes' conditioning did since construction (OutputConditioning: the torque
+  /// counters and the passivity controller of an impedance device; none by default). Never
+  /// allocates.
+  virtual OutputConditioning conditioning() const noexcept { return {}; }
 
   /// Watchdogs and lifecycle at `now_ns` after read(): whether the device may be driven this
   /// period (a fault latches the safe state in this very period). `overrun`: the previous
@@ -173,6 +181,8 @@ class Device {
   }
 
   Bus* bus_;
+  /// What the last write() sent (output()): the kind's write() fills it and returns it.
+  DeviceOutput output_;
 
  private:
   DeviceState state_;
