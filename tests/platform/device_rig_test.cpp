@@ -97,6 +97,7 @@ TEST(DeviceRig, BuildsOrBorrowsOneAdmittanceDevice) {
   EXPECT_EQ(&built.device(), static_cast<const hal::Device*>(built.admittance()));
   EXPECT_EQ(built.instrument(), nullptr);
   EXPECT_EQ(built.device().conditioning().torque, nullptr);  // it sends no torque
+  EXPECT_NE(built.device().conditioning().setpoints, nullptr);
   hal::AdmittanceDevice own(tracker, hal::make_admittance_config(tracker), bus.controller());
   platform::DeviceRig borrowed(own);
   EXPECT_EQ(borrowed.admittance(), &own);

@@ -69,7 +69,9 @@ AdmittanceRunner::AdmittanceRunner(const Scene& scene, std::size_t trace_capacit
       bus_(scene.bus),
       hand_motion_(scene.device, scene.hand, admittance_of(scene).drive_lag_s),
       emulator_(scene.device, admittance_of(scene).config),
-      rig_(scene.device, admittance_of(scene).config, bus_.controller(), initial_axes(scene),
+      kinematics_(hal::make_kinematics(scene.device)),
+      start_axes_(initial_axes(scene)),
+      rig_(scene.device, admittance_of(scene).config, bus_.controller(), start_axes_,
            device_settings(overrun_limit)),
       data_(core::make_data(scene.model)),
       ghost_(core::make_data(scene.model)),
@@ -78,8 +80,8 @@ AdmittanceRunner::AdmittanceRunner(const Scene& scene, std::size_t trace_capacit
       period_ns_(static_cast<std::int64_t>(std::llround(scene.model.dt * 1e9))),
       phase_ns_(static_cast<std::int64_t>(std::llround(scene.compute_phase_s * 1e9))),
       divergence_(scene.model, data_) {
-  emulator_.set_axis_values(device().setpoints());
-  hand_motion_.set_axis_values(device().setpoints());
+  emulator_.set_axis_values(start_axes_);  // the device's set-points (the rig's device starts there)
+  hand_motion_.set_axis_values(start_axes_);
   emulator_.set_motion(&hand_motion_);
   if (multirate_.enabled()) loop_.set_stepper(&multirate_);
   describe_scene(scene, acc_);
@@ -112,7 +114,7 @@ void AdmittanceRunner::period(std::int64_t deadline_mono_ns, std::int64_t woke_m
   const std::int64_t t = k_ * period_ns_;
   const double ts = static_cast<double>(t) * 1e-9;
   // The hand: where the trajectory puts the controlled frame (through the device's constraint).
-  const hal::Kinematics& kin = device().kinematics();
+  const hal::Kinematics& kin = *kinematics_;
   hand_ = kin.forward(instrument_axes(scene_->device, kin, scene_->trajectory.at(ts)));
   hand_motion_.set_hand(hand_, scene_->trajectory.twist_at(ts));
 
@@ -209,11 +211,15 @@ RunSummary AdmittanceRunner::summary() const {
   s.zero_torque_periods = 0;
   AdmittanceSummary& a = s.admittance;
   a.device_error_rms_mm = k_ > 0 ? std::sqrt(error_sq_ / static_cast<double>(k_)) * 1e3 : 0.0;
-  a.sensor_frames = static_cast<std::int64_t>(device().sensor().counters().frames);
-  a.csp_rpdos = static_cast<std::int64_t>(device().counters().rpdos_written);
-  a.setpoints_clamped = static_cast<std::int64_t>(device().counters().clamped_to_range);
-  a.setpoints_rate_limited = static_cast<std::int64_t>(device().counters().rate_limited);
-  a.hold_periods = static_cast<std::int64_t>(device().counters().hold_periods);
+  // Through the device face: the force TPDOs its input took, its set-points' counters.
+  const hal::Device& device = rig_.device();
+  a.sensor_frames = static_cast<std::int64_t>(device.input_frames());
+  if (const hal::AdmittanceDeviceCounters* c = device.conditioning().setpoints) {
+    a.csp_rpdos = static_cast<std::int64_t>(c->rpdos_written);
+    a.setpoints_clamped = static_cast<std::int64_t>(c->clamped_to_range);
+    a.setpoints_rate_limited = static_cast<std::int64_t>(c->rate_limited);
+    a.hold_periods = static_cast<std::int64_t>(c->hold_periods);
+  }
   s.rejected_samples = a.sensor_rejected_periods;
   multirate_.summarize(s);
   return s;

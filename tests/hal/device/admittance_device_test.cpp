@@ -206,3 +206,32 @@ TEST(AdmittanceDevice, PeriodicCallsDoNotAllocate) {
   EXPECT_EQ(dev.lifecycle(), hal::LifecycleState::kActive);
   EXPECT_EQ(dev.controlword(), hal::Controlword::kEnableOperation);
 }
+
+// The face gives an admittance device's figures without naming the kind (issue 68): the force
+// TPDOs its input took (the sensor's frames) and its set-points' counters; no torque counters,
+// no passivity controller.
+TEST(AdmittanceDevice, TheFaceGivesItsInputFramesAndItsSetPointsCounters) {
+  hal::SimBus bus{hal::SimBusSettings{}};
+  hal::AdmittanceEmulator emu(tracker(), hal::make_admittance_config(tracker()));
+  numen::test::FixedMotion motion(6);
+  emu.set_motion(&motion);
+  hal::AdmittanceDevice dev(tracker(), hal::make_admittance_config(tracker()), bus.controller(), zeros());
+  emu.set_axis_values(zeros());
+  for (int i = 0; i < 20; ++i) {
+    const std::int64_t t = i * 1'000'000LL;
+    bus.set_time_ns(t);
+    dev.begin_period(t);
+    emu.poll(bus.device());
+    (void)dev.read(t);
+    (void)dev.supervise(t, false);
+    const core::Pose p = dev.commanded_pose();
+    dev.write_pose(&p, t);
+  }
+  const hal::Device& face = dev;
+  EXPECT_EQ(face.input_frames(), dev.sensor().counters().frames);
+  EXPECT_GT(face.input_frames(), 0u);
+  EXPECT_EQ(face.conditioning().setpoints, &dev.counters());
+  EXPECT_EQ(face.conditioning().torque, nullptr);
+  EXPECT_EQ(face.conditioning().passivity, nullptr);
+  EXPECT_TRUE(face.output().torque.empty());
+}

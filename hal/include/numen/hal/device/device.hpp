@@ -72,6 +72,9 @@ class Device {
   /// force TPDOs), then checks the kind's input at `now_ns` (end_read): the period's
   /// DeviceState (device_state.hpp), valid until the next read().
   const DeviceState& read(std::int64_t now_ns) noexcept;
+  /// Frames the kind's input took since construction (encoder or force TPDOs: the sum of
+  /// DeviceState::input_frames over the reads).
+  std::uint64_t input_frames() const noexcept { return input_frames_; }
 
   /// Sends the period's command at `now_ns`, gated here (the one gate of the device's output):
   /// an impedance device the axis torques (DeviceCommand::torques: gate, passivity controller,
@@ -186,6 +189,7 @@ class Device {
 
  private:
   DeviceState state_;
+  std::uint64_t input_frames_ = 0;
   std::uint8_t sync_counter_ = 0;
   bool sync_producer_ = true;
   bool activation_held_ = false;

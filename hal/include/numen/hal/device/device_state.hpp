@@ -21,6 +21,7 @@
 namespace numen::hal {
 
 class PassivityController;  // passivity_controller.hpp: an impedance device's output controller
+struct AdmittanceDeviceCounters;  // admittance_device.hpp: an admittance device's set-points
 
 /// What Device::read() found this period: the instrument's checked sample (the DeviceSample
 /// it holds, device_sample.hpp: an impedance device's read() assigns InstrumentDevice::sample()'s
@@ -106,7 +107,7 @@ struct TorqueCounters {
 
 /// What the writes' conditioning did since construction, as the device face gives it
 /// (Device::conditioning()): the figures a run's summary reads without naming the kind of
-/// device. Both pointers are the device's storage (valid while it lives) or null.
+/// device. Each pointer is the device's storage (valid while it lives) or null.
 struct OutputConditioning {
   /// The writes' counters (an impedance device: ImpedanceDevice::torque_counters()); null for a
   /// device that sends no torque (admittance).
@@ -115,6 +116,10 @@ struct OutputConditioning {
   /// num_axes() == 0 when DeviceConfig::passivity is off); null for a device without one
   /// (admittance).
   const PassivityController* passivity = nullptr;
+  /// The set-points' counters (an admittance device: AdmittanceDevice::counters(), the csp
+  /// RPDOs written, the set-points clamped to range or rate limited, the held periods); null
+  /// for a device that sends torque (impedance).
+  const AdmittanceDeviceCounters* setpoints = nullptr;
 };
 
 }  // namespace numen::hal

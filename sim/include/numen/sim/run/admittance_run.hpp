@@ -84,8 +84,6 @@ class AdmittanceRunner final : public RunHarness {
   const core::Data& data() const noexcept { return data_; }
   const hal::AdmittanceEmulator& emulator() const noexcept { return emulator_; }
   hal::AdmittanceEmulator& emulator() noexcept { return emulator_; }
-  /// The admittance device (the rig's; its set-points, kinematics and counters).
-  const hal::AdmittanceDevice& device() const noexcept { return *rig_.admittance(); }
   const platform::ControlLoop& loop() const noexcept { return loop_; }
   platform::ControlLoop& loop() noexcept override { return loop_; }
   /// The multirate god-object (enabled() false in a single-rate run) and its scene thread.
@@ -109,6 +107,10 @@ class AdmittanceRunner final : public RunHarness {
   hal::SimBus bus_;
   AdmittanceHand hand_motion_;  // the emulator's motion: drive lag and the hand's spring
   hal::AdmittanceEmulator emulator_;
+  // The device's kinematics (the hand's pose from the trajectory's axes) and its axes at the
+  // held body's initial pose: where the device's set-points, the emulator and the hand start.
+  std::unique_ptr<const hal::Kinematics> kinematics_;
+  hal::AxisVector start_axes_;
   platform::DeviceRig rig_;  // the admittance device, assembled in the rig the loop runs
   core::Data data_;
   core::Data ghost_;  // the held body placed at the hand, for measurement
