@@ -179,7 +179,7 @@ TEST(AdmittanceDevice, ReadReturnsTheMeasuredWrenchInTheWorldAsTheState) {
 }
 
 // One period as a control loop runs it: begin_period (SYNC), read (the sensor's TPDOs),
-// supervise, write_pose; never allocates.
+// supervise, write_pose; never allocates; the face's figures after it.
 TEST(AdmittanceDevice, PeriodicCallsDoNotAllocate) {
   hal::SimBus bus{hal::SimBusSettings{}};
   hal::AdmittanceEmulator emu(tracker(), hal::make_admittance_config(tracker()));
@@ -205,28 +205,9 @@ TEST(AdmittanceDevice, PeriodicCallsDoNotAllocate) {
   EXPECT_GT(dev.sensor().counters().accepted, 990u);
   EXPECT_EQ(dev.lifecycle(), hal::LifecycleState::kActive);
   EXPECT_EQ(dev.controlword(), hal::Controlword::kEnableOperation);
-}
-
-// The face gives an admittance device's figures without naming the kind (issue 68): the force
-// TPDOs its input took (the sensor's frames) and its set-points' counters; no torque counters,
-// no passivity controller.
-TEST(AdmittanceDevice, TheFaceGivesItsInputFramesAndItsSetPointsCounters) {
-  hal::SimBus bus{hal::SimBusSettings{}};
-  hal::AdmittanceEmulator emu(tracker(), hal::make_admittance_config(tracker()));
-  numen::test::FixedMotion motion(6);
-  emu.set_motion(&motion);
-  hal::AdmittanceDevice dev(tracker(), hal::make_admittance_config(tracker()), bus.controller(), zeros());
-  emu.set_axis_values(zeros());
-  for (int i = 0; i < 20; ++i) {
-    const std::int64_t t = i * 1'000'000LL;
-    bus.set_time_ns(t);
-    dev.begin_period(t);
-    emu.poll(bus.device());
-    (void)dev.read(t);
-    (void)dev.supervise(t, false);
-    const core::Pose p = dev.commanded_pose();
-    dev.write_pose(&p, t);
-  }
+  // The face gives its figures without naming the kind (issue 68): the force TPDOs its input
+  // took (the sensor's frames) and its set-points' counters; no torque counters, no passivity
+  // controller, no torque sent.
   const hal::Device& face = dev;
   EXPECT_EQ(face.input_frames(), dev.sensor().counters().frames);
   EXPECT_GT(face.input_frames(), 0u);
