@@ -84,7 +84,8 @@ set(_hal_headers
   numen/hal/device/kinematics.hpp numen/hal/device/kinematics_factory.hpp
   numen/hal/device/managed_device.hpp numen/hal/device/minimal_device.hpp
   numen/hal/device/phantom_kinematics.hpp numen/hal/device/pose_tracker_kinematics.hpp
-  numen/hal/device/bus_filters.hpp numen/hal/device/device_state.hpp
+  numen/hal/device/bus_filters.hpp numen/hal/device/device_sample.hpp
+  numen/hal/device/device_state.hpp
   numen/hal/device/device_status.hpp
   numen/hal/device/safety_supervisor.hpp numen/hal/device/sample_check.hpp
   numen/hal/device/trocar_kinematics.hpp
@@ -122,7 +123,8 @@ numen_install_headers(${PROJECT_BINARY_DIR}/hal/include numen/hal/features.hpp) 
 # the multirate scene thread and its triple buffers.
 numen_install_headers(${PROJECT_SOURCE_DIR}/platform/include
   numen/platform/control_loop.hpp
-  numen/platform/device_binding.hpp numen/platform/latency_histogram.hpp
+  numen/platform/device_binding.hpp numen/platform/device_rig.hpp
+  numen/platform/latency_histogram.hpp
   numen/platform/loop_statistics.hpp numen/platform/monotonic_clock.hpp
   numen/platform/multirate_threads.hpp numen/platform/periodic_timer.hpp
   numen/platform/realtime_setup.hpp numen/platform/state_frame.hpp
@@ -150,6 +152,7 @@ numen_install_headers(${PROJECT_SOURCE_DIR}/sim/include
   numen/sim/run/admittance_run.hpp numen/sim/run/divergence.hpp numen/sim/run/igtl_run.hpp
   numen/sim/run/energy.hpp
   numen/sim/run/multirate_run.hpp numen/sim/run/run.hpp numen/sim/run/run_figures.hpp
+  numen/sim/run/run_harness.hpp
   numen/sim/run/run_options.hpp numen/sim/run/run_summary.hpp numen/sim/run/run_verdict.hpp
   numen/sim/run/target_measurement.hpp numen/sim/run/trace.hpp
   numen/sim/study/study_accuracy.hpp numen/sim/study/study_shard.hpp

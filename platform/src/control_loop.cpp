@@ -10,46 +10,22 @@
 #include <string>
 
 #include "numen/core/joint.hpp"
-#include "numen/hal/device/nmt_master.hpp"
 #include "numen/hal/device/admittance_device.hpp"
-#include "numen/hal/device/bus_filters.hpp"
 
 namespace numen::platform {
 
 namespace {
 
-std::int64_t period_of(const hal::DeviceConfig& config) {
-  return static_cast<std::int64_t>(std::llround(config.control_period_s * 1e9));
-}
-
 // The device's control period when it is the model's step (Model::dt, the one source of the
 // period: the scene copies it into DeviceConfig::control_period_s); throws otherwise.
 std::int64_t period_of(const hal::DeviceConfig& config, const core::Model& model) {
-  const std::int64_t period = period_of(config);
+  const auto period = static_cast<std::int64_t>(std::llround(config.control_period_s * 1e9));
   if (period != static_cast<std::int64_t>(std::llround(model.dt * 1e9)))
     throw std::invalid_argument("device '" + config.name + "': control_period_s " +
                                 std::to_string(config.control_period_s) +
                                 " s is not the model's step dt " + std::to_string(model.dt) +
                                 " s (one period steps the model once)");
   return period;
-}
-
-// The devices of the LoopDevice constructor, checked (count, pointers, one control period).
-std::span<const LoopDevice> checked(std::span<const LoopDevice> devices) {
-  if (devices.empty() || devices.size() > static_cast<std::size_t>(kMaxLoopDevices))
-    throw std::invalid_argument("control loop: " + std::to_string(devices.size()) +
-                                " devices (1 to " + std::to_string(kMaxLoopDevices) + ")");
-  for (std::size_t i = 0; i < devices.size(); ++i) {
-    const LoopDevice& d = devices[i];
-    if (d.bus == nullptr || d.instrument == nullptr)
-      throw std::invalid_argument("control loop: device " + std::to_string(i) +
-                                  " has no bus or no instrument");
-    if (period_of(d.instrument->config()) != period_of(devices[0].instrument->config()))
-      throw std::invalid_argument("control loop: device " + std::to_string(i) + " ('" +
-                                  d.instrument->config().name +
-                                  "') has another control period than device 0");
-  }
-  return devices;
 }
 
 }  // namespace
@@ -65,51 +41,51 @@ ControlLoop::ControlLoop(const core::Model& model, core::Data& data, hal::Bus& b
 
 ControlLoop::ControlLoop(const core::Model& model, core::Data& data,
                          std::span<const LoopDevice> devices, const ControlLoopSettings& settings)
-    : stats_(std::make_unique<LoopStatistics>(
-          period_of(checked(devices)[0].instrument->config(), model))),
-      num_devices_(devices.size()),
-      stages_(impedance_period_stages()) {
-  // The buses several devices share: one BusShare each, a port per device with its filters;
-  // the first device on a bus sends the SYNC; its managed devices share one NMT master, which
-  // knows its minimal devices too (it then addresses every command).
-  static_assert(static_cast<std::size_t>(kMaxLoopDevices) <= hal::kMaxNmtDevices);
-  std::array<hal::Bus*, kMaxLoopDevices> port{};
-  std::array<hal::NmtMaster*, kMaxLoopDevices> network{};
-  std::array<bool, kMaxLoopDevices> sync_producer{};
-  for (std::size_t i = 0; i < devices.size(); ++i) {
-    std::size_t first = i;
-    std::size_t users = 0;
-    for (std::size_t j = 0; j < devices.size(); ++j) {
-      if (devices[j].bus != devices[i].bus) continue;
-      if (j < first) first = j;
-      ++users;
-    }
-    sync_producer[i] = first == i;
-    if (users == 1) {
-      port[i] = devices[i].bus;
-      continue;
-    }
-    if (first == i) {
-      shares_.push_back(std::make_unique<hal::BusShare>(*devices[i].bus));
-      networks_.push_back(std::make_unique<hal::NmtMaster>());
-    }
-    std::size_t s = 0;
-    while (&shares_[s]->bus() != devices[i].bus) ++s;
-    port[i] = &shares_[s]->add_port(hal::controller_filters(devices[i].instrument->config()));
-    network[i] = networks_[s].get();
-    // A minimal device's self-starting nodes share the network: no NMT broadcast may reach
-    // them (its managed peers' commands go to their own nodes, addressed).
-    const hal::DeviceConfig& config = devices[i].instrument->config();
-    if (!config.canopen.managed) networks_[s]->add_bystander(config);
+    : ControlLoop(model, data, std::make_unique<DeviceRig>(devices), settings) {}
+
+ControlLoop::ControlLoop(const core::Model& model, core::Data& data,
+                         hal::AdmittanceDevice& device, const ControlLoopSettings& settings)
+    : ControlLoop(model, data, std::make_unique<DeviceRig>(device), settings) {}
+
+ControlLoop::ControlLoop(const core::Model& model, core::Data& data,
+                         std::unique_ptr<DeviceRig> owned, const ControlLoopSettings& settings)
+    : ControlLoop(model, data, *owned, settings) {
+  owned_rig_ = std::move(owned);
+}
+
+ControlLoop::ControlLoop(const core::Model& model, core::Data& data, DeviceRig& rig,
+                         const ControlLoopSettings& settings)
+    : rig_(&rig),
+      stats_(std::make_unique<LoopStatistics>(period_of(
+          rig.kind() == DeviceKind::kAdmittance ? rig.admittance()->config()
+                                                : rig.instrument(0)->config(),
+          model))),
+      num_devices_(rig.size()),
+      stages_(rig.kind() == DeviceKind::kAdmittance ? admittance_period_stages()
+                                                    : impedance_period_stages()) {
+  if (rig.kind() == DeviceKind::kAdmittance) {
+    if (model.coupling_mode != core::CouplingMode::kAdmittance)
+      throw std::invalid_argument("admittance device '" + rig.admittance()->config().name +
+                                  "': the model's coupling mode must be admittance");
+    init_context(0, model, data, rig.device(0), settings);
+    periods_[0].bound_body.fill(-1);
+    return;
   }
+  bind_all(model, data, settings);
+}
+
+ControlLoop::~ControlLoop() = default;
+
+void ControlLoop::bind_all(const core::Model& model, core::Data& data,
+                           const ControlLoopSettings& settings) {
   // Every device's bodies: bound at most once over the loop (explicitly_bound_bodies() throws
   // for a body bound twice), the held body by one rigid binding at most.
   DeviceBinding all;
   int rigid_user = -1;
-  for (std::size_t i = 0; i < devices.size(); ++i) {
-    const std::vector<LinkBinding>& links = is_default_rigid(devices[i].binding)
-                                                ? DeviceBinding::rigid().links
-                                                : devices[i].binding.links;
+  for (std::size_t i = 0; i < num_devices_; ++i) {
+    const DeviceBinding& binding = rig_->binding(i);
+    const std::vector<LinkBinding>& links =
+        is_default_rigid(binding) ? DeviceBinding::rigid().links : binding.links;
     for (const LinkBinding& b : links) {
       all.links.push_back(b);
       if (b.body >= 0) continue;
@@ -117,7 +93,7 @@ ControlLoop::ControlLoop(const core::Model& model, core::Data& data,
         throw std::invalid_argument(
             "control loop: devices " + std::to_string(rigid_user) + " and " + std::to_string(i) +
             " both drive the held body (a link binding of body -1" +
-            (is_default_rigid(devices[i].binding)
+            (is_default_rigid(binding)
                  ? ": device " + std::to_string(i) +
                        "'s binding is empty, which is the rigid binding, link 0 -> the held "
                        "body; bind it to a body of its own)"
@@ -125,40 +101,23 @@ ControlLoop::ControlLoop(const core::Model& model, core::Data& data,
       rigid_user = static_cast<int>(i);
     }
   }
-  for (std::size_t i = 0; i < devices.size(); ++i) {
-    const LoopDevice& d = devices[i];
-    owned_[i] = hal::make_device(*d.instrument, *port[i], period_of(d.instrument->config()),
-                                 d.settings, network[i]);
-    owned_[i]->set_sync_producer(sync_producer[i]);
-    init_context(i, model, data, *owned_[i], settings);
-    bind(i, model, data, *d.instrument, d.binding);
+  for (std::size_t i = 0; i < num_devices_; ++i) {
+    init_context(i, model, data, rig_->device(i), settings);
+    bind(i, model, data, *rig_->instrument(i), rig_->binding(i));
   }
   const std::vector<std::uint8_t> bound = explicitly_bound_bodies(all, model.num_bodies());
-  for (std::size_t i = 0; i < devices.size(); ++i) contexts_[i].explicit_bound = bound;
+  for (std::size_t i = 0; i < num_devices_; ++i) contexts_[i].explicit_bound = bound;
   // Each body's feedback is its driver's (core::Data::feedback_group): a body bound by a
   // device is that device's, any other (the held body when it has no binding of its own) the
   // rigid binding's device's — so one device's load never scales another's feedback.
   std::fill(data.feedback_group.begin(), data.feedback_group.end(), std::max(rigid_user, 0));
-  for (std::size_t i = 0; i < devices.size(); ++i)
+  for (std::size_t i = 0; i < num_devices_; ++i)
     for (const LinkBinding& b : contexts_[i].binding.links)
       if (b.body >= 0) data.feedback_group[static_cast<std::size_t>(b.body)] = static_cast<int>(i);
   // ... taken about each device's own tool (core::Data::feedback_point, written every period).
-  if (data.feedback_point.size() < devices.size())
-    data.feedback_point.resize(devices.size(),
+  if (data.feedback_point.size() < num_devices_)
+    data.feedback_point.resize(num_devices_,
                                core::Vec3::Constant(std::numeric_limits<double>::quiet_NaN()));
-}
-
-ControlLoop::~ControlLoop() = default;
-
-ControlLoop::ControlLoop(const core::Model& model, core::Data& data,
-                         hal::AdmittanceDevice& device, const ControlLoopSettings& settings)
-    : stats_(std::make_unique<LoopStatistics>(period_of(device.config(), model))),
-      stages_(admittance_period_stages()) {
-  if (model.coupling_mode != core::CouplingMode::kAdmittance)
-    throw std::invalid_argument("admittance device '" + device.config().name +
-                                "': the model's coupling mode must be admittance");
-  init_context(0, model, data, device, settings);
-  periods_[0].bound_body.fill(-1);
 }
 
 void ControlLoop::bind(std::size_t i, const core::Model& model, core::Data& data,
@@ -253,10 +212,6 @@ const PeriodReport& ControlLoop::end_period(std::int64_t now_ns, PeriodObserver*
     }
   }
   return periods_[0].report;
-}
-
-const hal::AdmittanceDevice* ControlLoop::admittance() const noexcept {
-  return dynamic_cast<const hal::AdmittanceDevice*>(contexts_[0].device);
 }
 
 void ControlLoop::set_stepper(Stepper* stepper) noexcept {

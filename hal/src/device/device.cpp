@@ -47,6 +47,7 @@ const DeviceState& Device::read(std::int64_t now_ns) noexcept {
     ++state_.frames_read;
     if (!take_frame(frame) && on_input_frame(frame)) ++state_.input_frames;
   }
+  input_frames_ += static_cast<std::uint64_t>(state_.input_frames);
   end_read(now_ns, state_);
   return state_;
 }

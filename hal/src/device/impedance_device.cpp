@@ -116,22 +116,10 @@ void ImpedanceDevice::clamp_and_ramp(bool open) noexcept {
 }
 
 void ImpedanceDevice::end_read(std::int64_t now_ns, DeviceState& state) noexcept {
-  (void)instrument_->sample(now_ns);
-  const DeviceSample& s = instrument_->last_sample();
-  const int n = instrument_->num_axes();
-  state.valid = s.valid;
-  state.ready = s.ready;
-  state.faults = s.faults;
-  state.num_axes = n;
-  state.axis_faults = s.axis_faults;
-  state.periods_since_accepted = s.periods_since_accepted;
-  state.q = s.q;
-  state.qdot = s.qdot;
-  state.dq = s.dq;
-  state.num_links = s.num_links;
-  state.link_poses = s.link_poses;
-  state.link_twists = s.link_twists;
-  for (int l = 0; l < s.num_links; ++l)
+  // The sample is the state's (DeviceState holds a DeviceSample): assigned whole, once.
+  static_cast<DeviceSample&>(state) = instrument_->sample(now_ns);
+  state.num_axes = instrument_->num_axes();
+  for (int l = 0; l < state.num_links; ++l)
     state.link_jacobians[static_cast<std::size_t>(l)] = instrument_->link_jacobian(l);
 }
 

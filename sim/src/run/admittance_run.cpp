@@ -9,12 +9,9 @@
 
 #include "numen/core/collision.hpp"
 #include "numen/hal/device/kinematics_factory.hpp"
-#include "numen/platform/monotonic_clock.hpp"
-#include "numen/platform/periodic_timer.hpp"
 #include "numen/sim/device/simulated_instrument.hpp"
 #include "numen/sim/run/grasp_summary.hpp"
 #include "numen/sim/run/task_summary.hpp"
-#include "numen/sim/input/input_error.hpp"
 #include "numen/sim/run/run.hpp"
 
 namespace numen::sim {
@@ -72,17 +69,19 @@ AdmittanceRunner::AdmittanceRunner(const Scene& scene, std::size_t trace_capacit
       bus_(scene.bus),
       hand_motion_(scene.device, scene.hand, admittance_of(scene).drive_lag_s),
       emulator_(scene.device, admittance_of(scene).config),
-      device_(scene.device, admittance_of(scene).config, bus_.controller(), initial_axes(scene),
-              device_settings(overrun_limit)),
+      kinematics_(hal::make_kinematics(scene.device)),
+      start_axes_(initial_axes(scene)),
+      rig_(scene.device, admittance_of(scene).config, bus_.controller(), start_axes_,
+           device_settings(overrun_limit)),
       data_(core::make_data(scene.model)),
       ghost_(core::make_data(scene.model)),
-      loop_(scene.model, data_, device_, loop_settings(overrun_limit)),
+      loop_(scene.model, data_, rig_, loop_settings(overrun_limit)),
       multirate_(scene),
       period_ns_(static_cast<std::int64_t>(std::llround(scene.model.dt * 1e9))),
       phase_ns_(static_cast<std::int64_t>(std::llround(scene.compute_phase_s * 1e9))),
       divergence_(scene.model, data_) {
-  emulator_.set_axis_values(device_.setpoints());
-  hand_motion_.set_axis_values(device_.setpoints());
+  emulator_.set_axis_values(start_axes_);  // the device's set-points (the rig's device starts there)
+  hand_motion_.set_axis_values(start_axes_);
   emulator_.set_motion(&hand_motion_);
   if (multirate_.enabled()) loop_.set_stepper(&multirate_);
   describe_scene(scene, acc_);
@@ -115,7 +114,7 @@ void AdmittanceRunner::period(std::int64_t deadline_mono_ns, std::int64_t woke_m
   const std::int64_t t = k_ * period_ns_;
   const double ts = static_cast<double>(t) * 1e-9;
   // The hand: where the trajectory puts the controlled frame (through the device's constraint).
-  const hal::Kinematics& kin = device_.kinematics();
+  const hal::Kinematics& kin = *kinematics_;
   hand_ = kin.forward(instrument_axes(scene_->device, kin, scene_->trajectory.at(ts)));
   hand_motion_.set_hand(hand_, scene_->trajectory.twist_at(ts));
 
@@ -167,9 +166,9 @@ void AdmittanceRunner::period(std::int64_t deadline_mono_ns, std::int64_t woke_m
   if (data_.solver_residual > s.solver_residual_max) s.solver_residual_max = data_.solver_residual;
   if (data_.status & core::kSolverNotConverged) ++s.solver_not_converged_steps;
   if (r.entered_safe_stop) {
-    if (s.faults == 0 && device_.first_fault() != nullptr) {
+    if (s.faults == 0 && rig_.device().first_fault() != nullptr) {
       // the first latched safe state of the run (kept across re-arms)
-      s.first_fault = hal::to_string(device_.first_fault()->cause);
+      s.first_fault = hal::to_string(rig_.device().first_fault()->cause);
       s.first_fault_time_s = static_cast<double>(t + phase_ns_) * 1e-9;
       s.first_fault_period = k_ - 1;
     }
@@ -182,7 +181,7 @@ void AdmittanceRunner::period(std::int64_t deadline_mono_ns, std::int64_t woke_m
   view_report_ = r;
   if (trace_.records().capacity() > 0)
     trace_.push(make_trace_record(data_, held, tool_contacts, tool_pen_, hand_pen_, view_report_,
-                                  hal::AxisVector()));
+                                  loop_.device().output().torque));
   if (view_)
     view_->publish(data_, view_report_, view_axis_values_,
                    {static_cast<std::uint64_t>(k_ - 1), tool_pen_, hand_pen_, hand_pen_, 0.0, 0.0});
@@ -208,84 +207,21 @@ RunSummary AdmittanceRunner::summary() const {
     s.bus_frames_dropped += static_cast<std::int64_t>(bus_.link_counters(dir).dropped);
     s.bus_frames_corrupted += static_cast<std::int64_t>(bus_.link_counters(dir).corrupted());
   }
-  s.lifecycle = hal::to_string(device_.lifecycle());
+  s.lifecycle = hal::to_string(rig_.device().lifecycle());
   s.zero_torque_periods = 0;
   AdmittanceSummary& a = s.admittance;
   a.device_error_rms_mm = k_ > 0 ? std::sqrt(error_sq_ / static_cast<double>(k_)) * 1e3 : 0.0;
-  a.sensor_frames = static_cast<std::int64_t>(device_.sensor().counters().frames);
-  a.csp_rpdos = static_cast<std::int64_t>(device_.counters().rpdos_written);
-  a.setpoints_clamped = static_cast<std::int64_t>(device_.counters().clamped_to_range);
-  a.setpoints_rate_limited = static_cast<std::int64_t>(device_.counters().rate_limited);
-  a.hold_periods = static_cast<std::int64_t>(device_.counters().hold_periods);
+  // Through the device face: the force TPDOs its input took, its set-points' counters.
+  const hal::Device& device = rig_.device();
+  a.sensor_frames = static_cast<std::int64_t>(device.input_frames());
+  if (const hal::AdmittanceDeviceCounters* c = device.conditioning().setpoints) {
+    a.csp_rpdos = static_cast<std::int64_t>(c->rpdos_written);
+    a.setpoints_clamped = static_cast<std::int64_t>(c->clamped_to_range);
+    a.setpoints_rate_limited = static_cast<std::int64_t>(c->rate_limited);
+    a.hold_periods = static_cast<std::int64_t>(c->hold_periods);
+  }
   s.rejected_samples = a.sensor_rejected_periods;
   multirate_.summarize(s);
-  return s;
-}
-
-RunSummary run_admittance_scene(const Scene& scene, const RunOptions& options) {
-  // The emulated device lives on the scene's SimBus: another bus, or a log of it, is refused.
-  if (options.bus.spec != "sim")
-    throw InputError("", 0, 0, "--bus",
-                     "'" + options.bus.spec + "': the admittance scene '" + scene.name +
-                         "' runs its emulated device on the simulated bus only (use --bus sim)");
-  if (!options.bus.record_path.empty())
-    throw InputError("", 0, 0, "--record",
-                     "the admittance scene '" + scene.name +
-                         "' does not record its simulated bus (use --trace or --record-view)");
-  const double duration = options.duration_s >= 0.0 ? options.duration_s : scene.duration_s;
-  const auto steps = static_cast<std::int64_t>(std::llround(duration / scene.model.dt));
-  // Overruns latch only where there is a deadline to miss (a paced run).
-  const std::uint32_t overrun_limit = options.realtime ? options.overrun_limit : 0;
-  AdmittanceRunner runner(scene,
-                          options.trace_path.empty() ? 0 : in_memory_trace_capacity(steps),
-                          overrun_limit);
-  if (const std::int64_t phase = compute_phase_override_ns(scene, options); phase >= 0)
-    runner.set_compute_phase_ns(phase);
-  // A multirate scene's scene thread is started before the real-time setup pins and promotes
-  // this thread (as run_impedance_scene does).
-  if (options.realtime) runner.start_scene_thread(paced_scene_thread(options));
-  if (!options.record_view_path.empty() || !options.view_sinks.empty())
-    runner.stream_view(options.record_view_path, options.view_sinks, options.view_rate_hz,
-                       !options.realtime);
-  RunRealtime rt_setup = apply_run_realtime(options, options.realtime);  // held until the end
-  const std::int64_t wall0 = platform::monotonic_now_ns();
-  platform::PeriodicTimer timer = run_timer(options, scene.model.dt, wall0);
-  ViewPacer view_pacer(scene.model.dt, options.realtime ? 0.0 : options.view_speed, wall0,
-                       options.stop);
-  RunLoopTally tally;
-  bool stopped = false;
-  for (std::int64_t k = 0; k < steps && !runner.diverged(); ++k) {
-    if (options.stop != nullptr && options.stop->load(std::memory_order_relaxed)) {
-      stopped = true;  // SIGINT / SIGTERM / SIGHUP (docs/inputs.md, "Signals")
-      break;
-    }
-    // SIGUSR1 (docs/safety.md, "How the control loop uses it")
-    if (tally.take_rearm(options.rearm, k) &&
-        runner.loop().rearm() == platform::RearmResult::kAccepted)
-      tally.rearm_accepted();
-    view_pacer.wait();
-    std::int64_t deadline = -1, woke = -1;
-    if (options.realtime) {  // a stop is heard while waiting, whatever dt is
-      const platform::Wakeup w = timer.wait_next(options.stop, platform::kStopSliceNs);
-      if (w.stopped) {
-        stopped = true;
-        break;
-      }
-      deadline = w.deadline_ns;
-      woke = w.woke_ns;
-      tally.woke(w);
-    }
-    runner.period(deadline, woke);
-  }
-  runner.finish();
-  RunSummary s = runner.summary();
-  s.wall_time_s = static_cast<double>(platform::monotonic_now_ns() - wall0) * 1e-9;
-  tally.write(s);
-  s.overrun_limit = overrun_limit;
-  s.realtime_setup = std::move(rt_setup.lines);
-  runner.multirate().describe_scene_thread(paced_scene_thread(options), s.realtime_setup);
-  s.stopped = stopped;
-  if (!options.trace_path.empty()) write_in_memory_trace(runner.trace(), options.trace_path, s);
   return s;
 }
 

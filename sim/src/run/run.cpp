@@ -155,7 +155,7 @@ std::unique_ptr<hal::BusShare> make_device_share(const Scene& scene, hal::SimBus
   return share;
 }
 
-/// The loop's devices: device 0 on `port`, the others on it too (ControlLoop shares it).
+/// The loop's devices: device 0 on `port`, the others on it too (the rig shares it).
 std::vector<platform::LoopDevice> loop_devices(
     const Scene& scene, hal::Bus& port, hal::InstrumentDevice& first,
     const std::vector<std::unique_ptr<hal::InstrumentDevice>>& extra,
@@ -230,11 +230,11 @@ SceneRunner::SceneRunner(const Scene& scene, std::size_t trace_capacity, const B
       extra_instruments_(make_extra_instruments(scene)),
       extra_devices_(make_extra_devices(scene)),
       device_share_(make_device_share(scene, bus_, !extra_devices_.empty())),
-      loop_(scene.model, data_,
-            loop_devices(
-                scene, *port_, device_, extra_devices_,
-                with_live_start(control_loop_settings(realtime || spec_.real(), overrun_limit),
-                                spec_.real() || igtl_ != nullptr, scene)),
+      rig_(loop_devices(
+          scene, *port_, device_, extra_devices_,
+          with_live_start(control_loop_settings(realtime || spec_.real(), overrun_limit),
+                          spec_.real() || igtl_ != nullptr, scene))),
+      loop_(scene.model, data_, rig_,
             with_live_start(control_loop_settings(realtime || spec_.real(), overrun_limit),
                             spec_.real() || igtl_ != nullptr, scene)),
       multirate_(scene),
@@ -312,10 +312,7 @@ void SceneRunner::period(std::int64_t deadline_mono_ns, std::int64_t woke_mono_n
 
 void SceneRunner::publish_view(const platform::PeriodReport& report,
                                const PeriodContacts& contacts) noexcept {
-  const auto sent = [&](std::size_t i) {
-    const hal::AxisVector& tau = loop_.impedance(i).sent_torques().torque;
-    return std::span<const double>(tau.data(), static_cast<std::size_t>(tau.size()));
-  };
+  const auto sent = [&](std::size_t i) { return loop_.device(i).output().torque; };
   // The loop's other devices: each its report and torques (one bus: device 0's state).
   std::array<platform::FrameDeviceInput, platform::kMaxLoopDevices> extra{};
   const std::size_t n = std::min(loop_.num_devices(), extra.size() + 1) - 1;
@@ -421,8 +418,8 @@ const platform::PeriodReport& SceneRunner::exchange(std::int64_t t, std::int64_t
 void SceneRunner::count_zero_torque(const platform::PeriodReport& report,
                                     RunSummary& s) const noexcept {
   ++s.zero_torque_periods;
-  const hal::ImpedanceDevice& device = loop_.impedance();
-  const hal::SentTorques& sent = device.sent_torques();
+  const hal::Device& device = loop_.device();
+  const hal::DeviceOutput& sent = device.output();
   if (report.fault_cause != hal::FaultCause::kNone)
     ++s.zero_torque_safe_state;
   else if (device.shutting_down())
@@ -472,7 +469,7 @@ void SceneRunner::tally_stale(bool stale) noexcept {
 
 void SceneRunner::record(const platform::PeriodReport& report, const PeriodContacts& c) noexcept {
   TraceRecord rec = make_trace_record(data_, data_.held_body, c.tool_contacts, c.tool_pen,
-                                      c.target_pen, report, loop_.impedance().sent_torques().torque);
+                                      c.target_pen, report, loop_.device().output().torque);
   if (const PlantMotion* plant = instrument_.plant()) {
     rec.hand_penetration_mm = c.hand_pen * 1e3;
     rec.handle_force_n = plant->figures().handle_force_n;
@@ -551,31 +548,61 @@ void write_in_memory_trace(const Trace& trace, const std::string& path, RunSumma
 
 namespace {
 
-RunSummary run_impedance_scene(const Scene& scene, const RunOptions& options) {
-  const double duration = options.duration_s >= 0.0 ? options.duration_s : scene.duration_s;
-  const auto steps = static_cast<std::int64_t>(std::llround(duration / scene.model.dt));
-  const bool real = parse_bus_spec(options.bus.spec).real();
-  // A real bus streams its trace through the TraceWriter; the in-memory trace is for sim runs,
-  // refused before anything is allocated when it would not fit the budget.
+/// The harness of `scene` for a run with `options` of `steps` periods: an AdmittanceRunner for an
+/// admittance scene (refusing a bus other than the simulated one and a bus recording, before
+/// anything is allocated: its emulated device lives on the scene's SimBus), else a SceneRunner.
+/// `real`: the controller's port is a real bus (it streams its trace; the in-memory trace is
+/// for sim runs, refused when it would not fit the budget).
+std::unique_ptr<RunHarness> make_harness(const Scene& scene, const RunOptions& options,
+                                         std::int64_t steps, bool real) {
+  if (scene.admittance) {
+    if (options.bus.spec != "sim")
+      throw InputError("", 0, 0, "--bus",
+                       "'" + options.bus.spec + "': the admittance scene '" + scene.name +
+                           "' runs its emulated device on the simulated bus only (use --bus sim)");
+    if (!options.bus.record_path.empty())
+      throw InputError("", 0, 0, "--record",
+                       "the admittance scene '" + scene.name +
+                           "' does not record its simulated bus (use --trace or --record-view)");
+  }
   const std::size_t trace_capacity =
       options.trace_path.empty() || real ? 0 : in_memory_trace_capacity(steps);
-  SceneRunner runner(scene, trace_capacity, options.bus, options.realtime, options.overrun_limit);
+  // Overruns latch only where there is a deadline to miss (a paced run).
+  if (scene.admittance)
+    return std::make_unique<AdmittanceRunner>(scene, trace_capacity,
+                                              options.realtime ? options.overrun_limit : 0);
+  return std::make_unique<SceneRunner>(scene, trace_capacity, options.bus, options.realtime,
+                                       options.overrun_limit);
+}
+
+/// The one period loop of a run of either kind of device (RunHarness).
+RunSummary run_harness(const Scene& scene, const RunOptions& options) {
+  const double duration = options.duration_s >= 0.0 ? options.duration_s : scene.duration_s;
+  const auto steps = static_cast<std::int64_t>(std::llround(duration / scene.model.dt));
+  const bool real = !scene.admittance && parse_bus_spec(options.bus.spec).real();
+  const std::unique_ptr<RunHarness> harness = make_harness(scene, options, steps, real);
+  RunHarness& runner = *harness;
+  // The impedance instruments' harness: its streamed trace and target thread (none for an
+  // admittance device, whose hand's depth is measured inline).
+  auto* const scene_runner = dynamic_cast<SceneRunner*>(harness.get());
   if (const std::int64_t phase = compute_phase_override_ns(scene, options); phase >= 0)
     runner.set_compute_phase_ns(phase);
   // The writer threads and a multirate scene's scene thread are started before the real-time
   // setup pins and promotes this thread.
-  if (real && !options.trace_path.empty()) runner.stream_trace(options.trace_path);
-  if (options.realtime || real) {
+  if (real && !options.trace_path.empty()) scene_runner->stream_trace(options.trace_path);
+  const bool paced = options.realtime || real;
+  if (paced) {
     runner.start_scene_thread(paced_scene_thread(options));
-    std::vector<int> busy = options.rt.cpu_affinity;  // the measurement keeps off these
-    busy.insert(busy.end(), options.scene_thread.cpu_affinity.begin(),
-                options.scene_thread.cpu_affinity.end());
-    runner.start_target_thread(busy);
+    if (scene_runner != nullptr) {
+      std::vector<int> busy = options.rt.cpu_affinity;  // the measurement keeps off these
+      busy.insert(busy.end(), options.scene_thread.cpu_affinity.begin(),
+                  options.scene_thread.cpu_affinity.end());
+      scene_runner->start_target_thread(busy);
+    }
   }
   if (!options.record_view_path.empty() || !options.view_sinks.empty())
     runner.stream_view(options.record_view_path, options.view_sinks, options.view_rate_hz,
-                       !(options.realtime || real));
-  const bool paced = options.realtime || real;
+                       !paced);
   RunRealtime rt_setup = apply_run_realtime(options, paced);  // held until the run ends
   RunLoopTally tally;
   const std::int64_t wall0 = platform::monotonic_now_ns();
@@ -604,9 +631,10 @@ RunSummary run_impedance_scene(const Scene& scene, const RunOptions& options) {
   bool stopped = false;
   for (std::int64_t k = 0; k < steps && !runner.diverged(); ++k) {
     if (stop_requested()) {
-      stopped = true;
+      stopped = true;  // SIGINT / SIGTERM / SIGHUP (docs/inputs.md, "Signals")
       break;
     }
+    // SIGUSR1 (docs/safety.md, "How the control loop uses it")
     if (tally.take_rearm(options.rearm, k) &&
         runner.loop().rearm() == platform::RearmResult::kAccepted)
       tally.rearm_accepted();
@@ -632,17 +660,19 @@ RunSummary run_impedance_scene(const Scene& scene, const RunOptions& options) {
   RunSummary s = runner.summary();
   s.wall_time_s = static_cast<double>(platform::monotonic_now_ns() - wall0) * 1e-9;
   tally.write(s);
-  // Only the managed stack's supervisor latches on overruns (MinimalDevice::supervise ignores
-  // them), and only in a paced run (an offline run has no deadlines): any other run reports
-  // the policy it has, count only.
-  s.overrun_limit = s.managed && paced ? options.overrun_limit : 0;
+  // Only a managed stack's supervisor (and the admittance device's) latches on overruns
+  // (MinimalDevice::supervise ignores them), and only in a paced run (an offline run has no
+  // deadlines): any other run reports the policy it has, count only.
+  s.overrun_limit = (scene.admittance || s.managed) && paced ? options.overrun_limit : 0;
   s.realtime_setup = std::move(rt_setup.lines);
   // The scene thread's own scheduling and CPUs (--scene-rt-priority, --scene-cpu), if asked.
   runner.multirate().describe_scene_thread(paced_scene_thread(options), s.realtime_setup);
-  runner.describe_target_thread(s.realtime_setup);
+  if (scene_runner != nullptr) scene_runner->describe_target_thread(s.realtime_setup);
   s.stopped = stopped;
-  s.shutdown_periods = shutdown;
-  s.drives_disabled = runner.loop().drives_disabled();
+  if (scene_runner != nullptr) {
+    s.shutdown_periods = shutdown;
+    s.drives_disabled = runner.loop().drives_disabled();
+  }
   if (!options.trace_path.empty() && !real)
     write_in_memory_trace(runner.trace(), options.trace_path, s);
   return s;
@@ -653,8 +683,7 @@ RunSummary run_impedance_scene(const Scene& scene, const RunOptions& options) {
 RunSummary run_scene(const Scene& scene, const RunOptions& options) {
   require_runnable(scene);  // a scene loaded to be stepped by its caller may lack both
   check_run_options(scene, options);  // every refusal before any output is opened
-  RunSummary s = scene.admittance ? run_admittance_scene(scene, options)  // admittance_run.cpp
-                                  : run_impedance_scene(scene, options);
+  RunSummary s = run_harness(scene, options);
   if (s.stopped && options.stop_signal != nullptr) s.stop_signal = options.stop_signal->load();
   judge_run(s);
   return s;

@@ -235,8 +235,9 @@ void SceneRunner::accumulate_step_figures(const platform::PeriodReport& report,
     at = std::max(at, jump);
   }
   s.feedback_torque_max_nm = std::max(s.feedback_torque_max_nm, report.feedback.torque.norm());
-  const hal::AxisVector& tau = loop_.impedance().sent_torques().torque;
-  if (tau.size() > 0) s.axis_torque_max = std::max(s.axis_torque_max, tau.cwiseAbs().maxCoeff());
+  // The torques sent (the device face's output; none from a device that sends no torque).
+  for (const double tau : loop_.device().output().torque)
+    s.axis_torque_max = std::max(s.axis_torque_max, std::abs(tau));
   const int held = data_.held_body;
   const int held_tree = held >= 0 ? model.articulation.body_tree[static_cast<std::size_t>(held)] : -1;
   for (int b = 0; b < model.num_bodies(); ++b)

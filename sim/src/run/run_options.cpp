@@ -98,7 +98,7 @@ void check_option_values(const Scene& scene, const RunOptions& options) {
     throw InputError("", 0, 0, "--duration",
                      format_input_number(duration) + " s is less than half a period (dt = " +
                          format_input_number(scene.model.dt) + " s): the run would have none");
-  // An admittance scene's real bus is refused by its runner (run_admittance_scene).
+  // An admittance scene's real bus is refused by its runner (run_scene(): its harness).
   const bool paced =
       options.realtime || (!scene.admittance && parse_bus_spec(options.bus.spec).real());
   if (options.view_speed > 0.0 && paced)
@@ -258,7 +258,7 @@ void check_run_options(const Scene& scene, const RunOptions& options) {
       !why.empty())
     throw InputError("", 0, 0, "--bus", why);
   if (!options.trace_path.empty()) check_output_path(options.trace_path, "--trace");
-  // (an admittance run refuses --record: run_admittance_scene)
+  // (an admittance run refuses --record: run_scene())
   if (!options.bus.record_path.empty() && !scene.admittance)
     check_output_path(options.bus.record_path, "--record");
   if (!options.record_view_path.empty())

@@ -12,6 +12,7 @@
 #include <string_view>
 
 #include "numen/hal/device/instrument_device.hpp"
+#include "numen/hal/device/passivity_controller.hpp"
 #include "numen/sim/run/grasp_summary.hpp"
 #include "numen/sim/run/needle_summary.hpp"
 #include "numen/sim/run/thread_summary.hpp"
@@ -164,11 +165,14 @@ RunSummary SceneRunner::summary() const {
       s.warnings.push_back(os.str());
     }
   }
-  s.soft_start_ramps = static_cast<std::int64_t>(loop_.impedance().torque_counters().soft_starts);
-  const hal::PassivityController& pc = loop_.impedance().passivity();
-  s.passivity_controller = pc.num_axes() > 0;
-  s.passivity_acting_periods = static_cast<std::int64_t>(pc.counters().acting_periods);
-  s.passivity_dissipated_j = pc.counters().dissipated_j;
+  // The output's conditioning through the device face (hal::Device::conditioning()).
+  const hal::OutputConditioning out = loop_.device().conditioning();
+  if (out.torque != nullptr) s.soft_start_ramps = static_cast<std::int64_t>(out.torque->soft_starts);
+  if (const hal::PassivityController* pc = out.passivity) {
+    s.passivity_controller = pc->num_axes() > 0;
+    s.passivity_acting_periods = static_cast<std::int64_t>(pc->counters().acting_periods);
+    s.passivity_dissipated_j = pc->counters().dissipated_j;
+  }
   // A run that ends inside the start-up: the periods after its last minimum are the god-object's.
   if (in_startup_)
     s.tool_penetration_max_mm = std::max(s.tool_penetration_max_mm, startup_window_max_ * 1e3);

@@ -15,7 +15,7 @@ namespace numen::sim {
 TraceRecord make_trace_record(const core::Data& data, int held, int tool_contacts,
                               double tool_penetration_m, double target_penetration_m,
                               const platform::PeriodReport& report,
-                              const hal::AxisVector& axis_torques) noexcept {
+                              std::span<const double> axis_torques) noexcept {
   TraceRecord r;
   r.time_s = data.time;
   r.held_body = held;
@@ -34,7 +34,8 @@ TraceRecord make_trace_record(const core::Data& data, int held, int tool_contact
   r.target_penetration_mm = target_penetration_m * 1e3;
   r.feedback = report.feedback;  // the wrench whose torques were sent (hal::ImpedanceDevice::write)
   r.num_axes = static_cast<int>(axis_torques.size());
-  for (int i = 0; i < r.num_axes; ++i) r.axis_torque[static_cast<std::size_t>(i)] = axis_torques[i];
+  for (int i = 0; i < r.num_axes; ++i)
+    r.axis_torque[static_cast<std::size_t>(i)] = axis_torques[static_cast<std::size_t>(i)];
   r.step_time_us = static_cast<double>(report.step_ns) * 1e-3;
   r.end_to_end_us = static_cast<double>(report.output_end_ns - report.sync_sent_ns) * 1e-3;
   r.wakeup_latency_us = static_cast<double>(report.woke_ns - report.deadline_ns) * 1e-3;

@@ -179,7 +179,7 @@ TEST(AdmittanceDevice, ReadReturnsTheMeasuredWrenchInTheWorldAsTheState) {
 }
 
 // One period as a control loop runs it: begin_period (SYNC), read (the sensor's TPDOs),
-// supervise, write_pose; never allocates.
+// supervise, write_pose; never allocates; the face's figures after it.
 TEST(AdmittanceDevice, PeriodicCallsDoNotAllocate) {
   hal::SimBus bus{hal::SimBusSettings{}};
   hal::AdmittanceEmulator emu(tracker(), hal::make_admittance_config(tracker()));
@@ -205,4 +205,14 @@ TEST(AdmittanceDevice, PeriodicCallsDoNotAllocate) {
   EXPECT_GT(dev.sensor().counters().accepted, 990u);
   EXPECT_EQ(dev.lifecycle(), hal::LifecycleState::kActive);
   EXPECT_EQ(dev.controlword(), hal::Controlword::kEnableOperation);
+  // The face gives its figures without naming the kind (issue 68): the force TPDOs its input
+  // took (the sensor's frames) and its set-points' counters; no torque counters, no passivity
+  // controller, no torque sent.
+  const hal::Device& face = dev;
+  EXPECT_EQ(face.input_frames(), dev.sensor().counters().frames);
+  EXPECT_GT(face.input_frames(), 0u);
+  EXPECT_EQ(face.conditioning().setpoints, &dev.counters());
+  EXPECT_EQ(face.conditioning().torque, nullptr);
+  EXPECT_EQ(face.conditioning().passivity, nullptr);
+  EXPECT_TRUE(face.output().torque.empty());
 }

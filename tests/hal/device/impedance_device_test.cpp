@@ -183,6 +183,32 @@ TEST(ImpedanceDevice, ReadReturnsTheCheckedSampleAndItsJacobiansAsTheState) {
   EXPECT_EQ(r.dev.sends, 1);
 }
 
+// The state holds the instrument's sample whole (DeviceState is a DeviceSample), and the face
+// gives what was sent and the conditioning's figures without naming the kind (issue 68).
+TEST(ImpedanceDevice, TheFaceHoldsTheSampleWholeAndGivesTheOutputAndItsConditioning) {
+  ImpedanceRig r;
+  (void)r.answer_and_read(0);
+  const DeviceState& s = r.answer_and_read(kMs, 1e-4);
+  const DeviceSample& d = r.instrument.last_sample();
+  EXPECT_EQ(s.pose.position, d.pose.position);
+  EXPECT_EQ(s.twist.linear, d.twist.linear);
+  EXPECT_EQ(s.dq, d.dq);
+  EXPECT_EQ(s.time_ns, d.time_ns);
+  EXPECT_EQ(r.dev.input_frames(), 10u);  // 5 encoder TPDOs in each of the two reads
+  const Device& face = r.dev;
+  EXPECT_EQ(face.conditioning().torque, &r.dev.torque_counters());
+  EXPECT_EQ(face.conditioning().passivity, &r.dev.passivity());
+  EXPECT_EQ(face.conditioning().setpoints, nullptr);
+  const std::vector<double> tau{0.1, 0.0, -0.1, 0.0, 0.0};
+  DeviceCommand c;
+  c.torques = std::span<const double>(tau.data(), tau.size());
+  const DeviceOutput& out = r.dev.write(c, kMs);
+  EXPECT_EQ(&face.output(), &out);
+  ASSERT_EQ(face.output().torque.size(), 5u);
+  EXPECT_EQ(face.output().torque[0], r.dev.sent_torques().torque[0]);
+  EXPECT_EQ(face.conditioning().torque->writes, 1u);
+}
+
 TEST(ImpedanceDevice, WriteGatesEveryAxisWithoutAValidSampleOrAfterShutdown) {
   ImpedanceRig r;
   r.dev.read(0);  // no encoder frame: not valid

@@ -10,6 +10,7 @@
 #include "temp_dir.hpp"
 #include <unistd.h>
 
+#include <array>
 #include <atomic>
 #include <filesystem>
 #include <fstream>
@@ -233,8 +234,7 @@ TEST(Trace, MakeTraceRecordReadsTheStateAfterTheStep) {
   report.sample_valid = true;
   report.step_ns = 12'500;
   report.feedback.force = Vec3(0.5, -1.0, 2.0);  // what was sent; the core's wrench differs
-  numen::hal::AxisVector tau(3);
-  tau << 0.1, -0.2, 0.3;
+  const std::array<double, 3> tau{0.1, -0.2, 0.3};
 
   const TraceRecord r = numen::sim::make_trace_record(data, 1, 2, 0.0015, 0.012, report, tau);
   EXPECT_EQ(r.time_s, 0.123);

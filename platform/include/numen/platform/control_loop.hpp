@@ -22,8 +22,10 @@
 ///                 each step → core::step (CouplingMode::kAdmittance) → the held body's pose
 ///                 → AdmittanceDevice::write → write_pose (inverse kinematics, csp RPDOs; the
 ///                 set-points held with controlword shutdown outside kActive).
-/// The kind and protocol (DeviceConfig::canopen.managed) are chosen once, at construction
-/// (hal::make_device(); the stage list); no period branches on them. A loop may run several
+/// The devices are assembled in one place, a platform::DeviceRig (device_rig.hpp: the devices,
+/// their shared buses and NMT masters, their bindings), the caller's or one the loop builds; the
+/// kind and protocol (DeviceConfig::canopen.managed) are chosen once, at construction
+/// (hal::make_device(); the stage list, DeviceRig::kind()); no period branches on them. A loop may run several
 /// impedance devices (at most kMaxLoopDevices; LoopDevice), on one bus or on several, each with
 /// its binding to the bodies it drives, its own supervision and its own safe state; each stage
 /// runs over every device, the step once (period_stages.hpp), and one device's safe state
@@ -46,16 +48,12 @@
 #include "numen/hal/device/impedance_device.hpp"
 #include "numen/hal/device/instrument_device.hpp"
 #include "numen/platform/device_binding.hpp"
+#include "numen/platform/device_rig.hpp"
 #include "numen/platform/latency_histogram.hpp"
 #include "numen/platform/loop_statistics.hpp"
 #include "numen/platform/period_data.hpp"
 #include "numen/platform/period_stages.hpp"
 #include "numen/platform/stepper.hpp"
-
-namespace numen::hal {
-class AdmittanceDevice;  // admittance_device.hpp: the loop's second kind of device
-class NmtMaster;         // the NMT master the managed devices on one bus share (built with them)
-}  // namespace numen::hal
 
 namespace numen::platform {
 
@@ -87,26 +85,6 @@ struct ControlLoopSettings : hal::ImpedanceSettings {
   bool rejoin_after_stale = false;
 };
 
-/// One device of a ControlLoop that runs several (the LoopDevice constructor): an impedance
-/// instrument on a bus, the bodies it drives and its supervision.
-struct LoopDevice {
-  /// Its bus (must outlive the loop). Devices that name the same Bus share it: the loop reads
-  /// it through one hal::BusShare port per device, filtered to that device's frames
-  /// (hal::controller_filters()), the first of them sends the period's SYNC, and the managed
-  /// ones share one NMT master and controller heartbeat (hal::make_device()'s `network`), so
-  /// that one device's NMT commands (its start-up, a re-arm's) reach its own nodes only.
-  hal::Bus* bus = nullptr;
-  /// The instrument (configuration, kinematics, decoding; must outlive the loop); its
-  /// DeviceConfig::canopen.managed picks the protocol (hal::make_device()).
-  hal::InstrumentDevice* instrument = nullptr;
-  /// Which bodies its links drive and which prescribed joints its axes impose (an empty link
-  /// list: the rigid binding, link 0 → the held body).
-  DeviceBinding binding = DeviceBinding::rigid();
-  /// Its supervision (encoder timeout, overrun limit, safe-stop timeout, auto-activation,
-  /// drive settings).
-  hal::ImpedanceSettings settings;
-};
-
 /// Result of ControlLoop::rearm() (hal::Device::rearm()).
 using RearmResult = hal::RearmResult;
 /// Short English name of a RearmResult (hal::to_string()).
@@ -125,9 +103,9 @@ class ControlLoop {
   /// prescription names a joint that is not prescribed. The held body
   /// follows its own binding if it has one, else the binding with body = -1.
   /// Allocates (construction only).
-  /// Builds the hal::Device of `device`'s protocol around `device` and `bus`
-  /// (hal::make_device(): managed — CanopenMaster, SafetySupervisor, lifecycle configured to
-  /// kInactive; or minimal); throws std::invalid_argument for bad settings or a device whose
+  /// Builds the hal::Device of `device`'s protocol around `device` and `bus` in a rig of its
+  /// own (DeviceRig: hal::make_device(): managed — CanopenMaster, SafetySupervisor, lifecycle
+  /// configured to kInactive; or minimal); throws std::invalid_argument for bad settings or a device whose
   /// control_period_s is not model.dt (one period steps the model once). The LoopStatistics
   /// period is that control period.
   ControlLoop(const core::Model& model, core::Data& data, hal::Bus& bus,
@@ -142,7 +120,8 @@ class ControlLoop {
   /// std::invalid_argument naming the device for any of these, a null bus or instrument,
   /// no device / more than kMaxLoopDevices, or managed devices on one bus whose CANopen
   /// nodes overlap or whose controller node id or heartbeat period differ (one NMT master
-  /// per bus). Allocates (construction only).
+  /// per bus). The devices are assembled in a rig the loop owns (DeviceRig). Allocates
+  /// (construction only).
   ControlLoop(const core::Model& model, core::Data& data, std::span<const LoopDevice> devices,
               const ControlLoopSettings& settings = {});
   /// The loop of an admittance device (built by the caller on its bus, with its supervision
@@ -152,8 +131,16 @@ class ControlLoop {
   /// device's own settings supervise). The LoopStatistics period is that control period.
   ControlLoop(const core::Model& model, core::Data& data, hal::AdmittanceDevice& device,
               const ControlLoopSettings& settings = {});
+  /// The loop of the devices `rig` assembled (device_rig.hpp; kept by reference: it must
+  /// outlive the loop), of either kind: an impedance rig's devices each with the binding the
+  /// rig holds and checked as for the LoopDevice constructor, an admittance rig's device as
+  /// for the admittance constructor (the model's coupling mode kAdmittance). The stage list
+  /// follows DeviceRig::kind(). Throws std::invalid_argument as those constructors do.
+  /// Allocates (construction only).
+  ControlLoop(const core::Model& model, core::Data& data, DeviceRig& rig,
+              const ControlLoopSettings& settings = {});
 
-  /// Out of line: the header declares the bus's NMT master (hal::NmtMaster) only.
+  /// Out of line: the loop may own its rig (the constructors above that take no DeviceRig).
   ~ControlLoop();
   /// Not copied or moved: the devices' contexts point at the loop's own records.
   ControlLoop(const ControlLoop&) = delete;
@@ -230,12 +217,15 @@ class ControlLoop {
   /// end_period() runs.
   hal::Device& device(std::size_t i = 0) noexcept { return *contexts_[i].device; }
   /// Impedance device `i` (the torques sent); precondition: the loop was built for impedance
-  /// devices (admittance() is null).
+  /// devices (admittance() is null). For tests of the kind: code above the loop reads a device
+  /// through the face (device(), hal::Device::output(), conditioning()).
   const hal::ImpedanceDevice& impedance(std::size_t i = 0) const noexcept {
     return static_cast<const hal::ImpedanceDevice&>(*contexts_[i].device);
   }
-  /// The admittance device (nullptr for an impedance device).
-  const hal::AdmittanceDevice* admittance() const noexcept;
+  /// The admittance device (nullptr for an impedance device; DeviceRig::admittance()).
+  const hal::AdmittanceDevice* admittance() const noexcept { return rig_->admittance(); }
+  /// The devices the loop runs (device_rig.hpp): their kind, instruments and bindings.
+  const DeviceRig& rig() const noexcept { return *rig_; }
   /// Timing statistics of the periods (wake-up, step, bus I/O, end-to-end, overruns; with
   /// several devices from the first device's read to the last one's writes).
   const LoopStatistics& statistics() const noexcept { return *stats_; }
@@ -277,6 +267,12 @@ class ControlLoop {
   std::span<const PeriodStageEntry> stages() const noexcept { return stages_; }
 
  private:
+  // The loop over a rig it owns (the constructors that take none): `owned` is kept.
+  ControlLoop(const core::Model& model, core::Data& data, std::unique_ptr<DeviceRig> owned,
+              const ControlLoopSettings& settings);
+  // The impedance devices' bodies (bound at most once over the loop, the held body by one rigid
+  // binding at most), each device's context and binding, the feedback groups and points.
+  void bind_all(const core::Model& model, core::Data& data, const ControlLoopSettings& settings);
   // Device i's context: its fixed part (construction).
   void init_context(std::size_t i, const core::Model& model, core::Data& data,
                     hal::Device& device, const ControlLoopSettings& settings);
@@ -285,10 +281,9 @@ class ControlLoop {
   void bind(std::size_t i, const core::Model& model, core::Data& data,
             const hal::InstrumentDevice& instrument, DeviceBinding binding);
 
+  std::unique_ptr<DeviceRig> owned_rig_;  // the rig built by the loop (null: the caller's)
+  DeviceRig* rig_ = nullptr;               // the devices: owned_rig_ or the caller's
   CoreStepper core_stepper_;
-  std::vector<std::unique_ptr<hal::BusShare>> shares_;  // one per bus several devices share
-  std::vector<std::unique_ptr<hal::NmtMaster>> networks_;  // same order: their NMT master
-  std::array<std::unique_ptr<hal::Device>, kMaxLoopDevices> owned_;  // impedance devices
   std::unique_ptr<LoopStatistics> stats_;
   std::size_t num_devices_ = 1;
   // Per device: the device (owned_ or the caller's), binding, tallies; and its record.

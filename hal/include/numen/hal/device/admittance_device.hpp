@@ -149,6 +149,8 @@ class AdmittanceDevice final : public Device {
   const AdmittanceSettings& settings() const noexcept { return settings_; }
   const ForceSensor& sensor() const noexcept { return sensor_; }
   const AdmittanceDeviceCounters& counters() const noexcept { return counters_; }
+  /// Device::conditioning(): the set-points' counters (counters()).
+  OutputConditioning conditioning() const noexcept override { return {nullptr, nullptr, &counters_}; }
 
  private:
   bool on_input_frame(const CanFrame& frame) noexcept override {
@@ -171,7 +173,6 @@ class AdmittanceDevice final : public Device {
   PdoMapping rpdo_map_;
   DeviceLifecycle lifecycle_;
   ForceSample sample_;
-  DeviceOutput output_;
   AxisVector q_;
   std::array<std::int32_t, kMaxAxes> counts_{};
   AdmittanceDeviceCounters counters_;

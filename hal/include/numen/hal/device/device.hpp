@@ -72,6 +72,9 @@ class Device {
   /// force TPDOs), then checks the kind's input at `now_ns` (end_read): the period's
   /// DeviceState (device_state.hpp), valid until the next read().
   const DeviceState& read(std::int64_t now_ns) noexcept;
+  /// Frames the kind's input took since construction (encoder or force TPDOs: the sum of
+  /// DeviceState::input_frames over the reads).
+  std::uint64_t input_frames() const noexcept { return input_frames_; }
 
   /// Sends the period's command at `now_ns`, gated here (the one gate of the device's output):
   /// an impedance device the axis torques (DeviceCommand::torques: gate, passivity controller,
@@ -80,6 +83,14 @@ class Device {
   /// kActive, held with controlword shutdown otherwise; AdmittanceDevice::write_pose()).
   /// Returns what was sent, valid until the next write().
   virtual const DeviceOutput& write(const DeviceCommand& command, std::int64_t now_ns) noexcept = 0;
+  /// What the last write() sent (the same record write() returned; the defaults before the
+  /// first write): the device face's view of the output — an impedance device's sent torques
+  /// (DeviceOutput::torque), gate and soft start, an admittance device's controlword.
+  const DeviceOutput& output() const noexcept { return output_; }
+  /// What the writes' conditioning did since construction (OutputConditioning: the torque
+  /// counters and the passivity controller of an impedance device; none by default). Never
+  /// allocates.
+  virtual OutputConditioning conditioning() const noexcept { return {}; }
 
   /// Watchdogs and lifecycle at `now_ns` after read(): whether the device may be driven this
   /// period (a fault latches the safe state in this very period). `overrun`: the previous
@@ -173,9 +184,12 @@ class Device {
   }
 
   Bus* bus_;
+  /// What the last write() sent (output()): the kind's write() fills it and returns it.
+  DeviceOutput output_;
 
  private:
   DeviceState state_;
+  std::uint64_t input_frames_ = 0;
   std::uint8_t sync_counter_ = 0;
   bool sync_producer_ = true;
   bool activation_held_ = false;

@@ -1,59 +1,54 @@
 #pragma once
 /// @file device_state.hpp
-/// The device face's two records (hal::Device, device.hpp): DeviceState, what Device::read()
-/// found this period — everything a control period needs from a device of either kind — and
-/// DeviceCommand / DeviceOutput, what Device::write() is given and what it sent. The values
-/// are checked once, where they are decoded (InstrumentDevice, ForceSensor): range, freshness
-/// and speed; nothing above hal checks them again.
+/// The device face's records (hal::Device, device.hpp): DeviceState, what Device::read()
+/// found this period — everything a control period needs from a device of either kind, the
+/// instrument's DeviceSample held whole — DeviceCommand / DeviceOutput, what Device::write() is
+/// given and what it sent, and TorqueCounters / OutputConditioning, what the writes'
+/// conditioning did so far. The values are checked once, where they are decoded
+/// (InstrumentDevice, ForceSensor): range, freshness and speed; nothing above hal checks them
+/// again.
 
 #include <array>
 #include <cstdint>
 #include <span>
 
 #include "numen/core/types.hpp"
+#include "numen/hal/device/device_sample.hpp"
 #include "numen/hal/device/kinematics.hpp"
 #include "numen/hal/device/sample_check.hpp"
 #include "numen/hal/transport/bus.hpp"
 
 namespace numen::hal {
 
-/// What Device::read() found this period. An impedance device (encoders in) fills the axis and
-/// link fields; an admittance device (a force sensor in) fills `wrench` and `wrench_point` and
-/// leaves the axes and links empty (num_axes = num_links = 0).
-struct DeviceState {
+class PassivityController;  // passivity_controller.hpp: an impedance device's output controller
+struct AdmittanceDeviceCounters;  // admittance_device.hpp: an admittance device's set-points
+
+/// What Device::read() found this period: the instrument's checked sample (the DeviceSample
+/// it holds, device_sample.hpp: an impedance device's read() assigns InstrumentDevice::sample()'s
+/// result to it whole) and what the sample does not say — the bus, the axis count, the links'
+/// Jacobians, an admittance device's wrench. An impedance device (encoders in) fills the sample's
+/// axis and link fields; an admittance device (a force sensor in) fills `valid`, `ready` and
+/// `faults` of it (its force reading's), `wrench` and `wrench_point`, and leaves the axes and
+/// links empty (num_axes = num_links = 0). Of the sample's fields: `valid`: every axis
+/// (impedance) or the force reading (admittance) fresh and plausible this period; `ready`: the
+/// input has a value to drive with — every axis has had an accepted value (impedance; the values
+/// may be held from an earlier period when `valid` is false), always true for an admittance
+/// device (its last accepted reading, zero before the first); `faults`: the union of the failed
+/// checks this period (SampleFault bits; kNoData before the first read); `time_ns`: `now_ns`
+/// given to read() (bus clock, ns); `periods_since_accepted`: the freshness the encoder watchdog
+/// reads.
+struct DeviceState : DeviceSample {
+  /// Before the first read: no data, no link.
+  DeviceState() noexcept {
+    faults = SampleFault::kNoData;
+    num_links = 0;
+  }
   // ---- the bus ----
   int frames_read = 0;      ///< Frames taken from the bus this period.
   bool read_error = false;  ///< A Bus::read() returned IoStatus::kError (the reads stopped).
   int input_frames = 0;     ///< Frames the kind's input took (encoder or force TPDOs).
-  // ---- the checked input ----
-  /// Every axis (impedance) or the force reading (admittance) fresh and plausible this period.
-  bool valid = false;
-  /// The input has a value to drive with: every axis has had an accepted value (impedance; the
-  /// values may be held from an earlier period when `valid` is false); always true for an
-  /// admittance device (its last accepted reading, zero before the first).
-  bool ready = false;
-  /// Union of the failed checks this period (SampleFault bits).
-  FaultMask faults = SampleFault::kNoData;
-  /// `now_ns` given to read() (bus clock, ns).
-  std::int64_t time_ns = 0;
-  // ---- impedance: axes (n = num_axes entries) ----
+  // ---- impedance: axes and links (the sample's q, qdot, dq, link_poses, link_twists) ----
   int num_axes = 0;  ///< n; 0 for an admittance device.
-  /// Failed checks per axis this period (SampleFault bits; entries >= n are 0).
-  std::array<FaultMask, kMaxAxes> axis_faults{};
-  /// Per axis: periods since the axis last accepted a value (0: this period), the freshness the
-  /// encoder watchdog reads (DeviceSample::periods_since_accepted).
-  std::array<std::uint32_t, kMaxAxes> periods_since_accepted{};
-  AxisVector q;     ///< Axis values, m or rad (the last accepted, held through a rejection).
-  AxisVector qdot;  ///< Axis rates, m/s or rad/s (DeviceSample::qdot: the one estimate).
-  /// Axis displacements over the period, m or rad (DeviceSample::dq: the passivity port's flow
-  /// times T, 0 after a sample that was not valid).
-  AxisVector dq;
-  // ---- impedance: links (num_links entries) ----
-  int num_links = 0;  ///< Links of the kinematics, 1..kMaxLinks; 0 for an admittance device.
-  /// Pose of each link, world (Kinematics::link_pose(l, q); link 0: the controlled frame).
-  std::array<core::Pose, kMaxLinks> link_poses{};
-  /// Twist of each link, world, linear part at the link's origin: J_l(q) q̇.
-  std::array<core::Twist, kMaxLinks> link_twists{};
   /// Geometric Jacobian of each link at q (6 × n, world, linear part at the link's origin):
   /// what maps a link wrench w_l to axis torques, τ = Σ_l J_lᵀ w_l (paper Eq. 8 by virtual work).
   std::array<Jacobian, kMaxLinks> link_jacobians{};
@@ -93,6 +88,38 @@ struct DeviceOutput {
   /// the soft start (SentTorques::torque, n entries, the device's storage: valid until the next
   /// write); empty for an admittance device.
   std::span<const double> torque;
+};
+
+/// Counters of an impedance device's writes since construction (ImpedanceDevice::write(): the
+/// gate, the clamp, the soft start; OutputConditioning::torque).
+struct TorqueCounters {
+  std::uint64_t writes = 0;        ///< write() calls.
+  std::uint64_t gated_writes = 0;  ///< write() calls that zeroed every axis (SentTorques::gated).
+  std::uint64_t saturations = 0;   ///< Axis torques clamped to ±max_torque.
+  std::uint64_t non_finite = 0;    ///< write() calls given a NaN / inf torque on an allowed axis.
+  /// Per axis: clamps to ±max_torque (entries >= n are 0).
+  std::array<std::uint64_t, kMaxAxes> axis_saturations{};
+  /// Soft-start ramps begun (torque enabled with DeviceConfig::soft_start_s > 0).
+  std::uint64_t soft_starts = 0;
+  /// Writes that scaled an open gate's torques by r < 1 (SentTorques::ramp).
+  std::uint64_t ramped_writes = 0;
+};
+
+/// What the writes' conditioning did since construction, as the device face gives it
+/// (Device::conditioning()): the figures a run's summary reads without naming the kind of
+/// device. Each pointer is the device's storage (valid while it lives) or null.
+struct OutputConditioning {
+  /// The writes' counters (an impedance device: ImpedanceDevice::torque_counters()); null for a
+  /// device that sends no torque (admittance).
+  const TorqueCounters* torque = nullptr;
+  /// The passivity controller on the output (an impedance device: ImpedanceDevice::passivity(),
+  /// num_axes() == 0 when DeviceConfig::passivity is off); null for a device without one
+  /// (admittance).
+  const PassivityController* passivity = nullptr;
+  /// The set-points' counters (an admittance device: AdmittanceDevice::counters(), the csp
+  /// RPDOs written, the set-points clamped to range or rate limited, the held periods); null
+  /// for a device that sends torque (impedance).
+  const AdmittanceDeviceCounters* setpoints = nullptr;
 };
 
 }  // namespace numen::hal

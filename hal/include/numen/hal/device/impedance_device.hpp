@@ -92,20 +92,6 @@ struct SentTorques {
   }
 };
 
-/// Counters of ImpedanceDevice::write() since construction.
-struct TorqueCounters {
-  std::uint64_t writes = 0;        ///< write() calls.
-  std::uint64_t gated_writes = 0;  ///< write() calls that zeroed every axis (SentTorques::gated).
-  std::uint64_t saturations = 0;   ///< Axis torques clamped to ±max_torque.
-  std::uint64_t non_finite = 0;    ///< write() calls given a NaN / inf torque on an allowed axis.
-  /// Per axis: clamps to ±max_torque (entries >= n are 0).
-  std::array<std::uint64_t, kMaxAxes> axis_saturations{};
-  /// Soft-start ramps begun (torque enabled with DeviceConfig::soft_start_s > 0).
-  std::uint64_t soft_starts = 0;
-  /// Writes that scaled an open gate's torques by r < 1 (SentTorques::ramp).
-  std::uint64_t ramped_writes = 0;
-};
-
 /// One instrument on one bus, the impedance kind (see the file comment). Not thread safe: one
 /// real-time thread owns it.
 class ImpedanceDevice : public Device {
@@ -135,6 +121,10 @@ class ImpedanceDevice : public Device {
   /// The passivity controller write() runs (num_axes() == 0 when DeviceConfig::passivity is
   /// off): its energies E_i, dampers and counters.
   const PassivityController& passivity() const noexcept { return passivity_; }
+  /// Device::conditioning(): torque_counters() and passivity().
+  OutputConditioning conditioning() const noexcept override {
+    return {&torque_counters_, &passivity_};
+  }
 
  protected:
   /// Keeps references: `instrument` and `bus` must outlive the device.
@@ -169,7 +159,6 @@ class ImpedanceDevice : public Device {
   void end_read(std::int64_t now_ns, DeviceState& state) noexcept override;
 
   SentTorques sent_;
-  DeviceOutput output_;
   TorqueCounters torque_counters_;
   PassivityController passivity_;
   // The passivity controller's port flow this period: DeviceSample::dq / T per axis.

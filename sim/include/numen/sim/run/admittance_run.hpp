@@ -3,8 +3,8 @@
 /// The run harness of a scene with an admittance device (`coupling = "admittance"`,
 /// `[device.admittance]`; paper Fig. 2 note): a SimBus, a hal::AdmittanceEmulator on its
 /// device port (the position-controlled device and its force sensor, pushed by a simulated
-/// hand that follows the scene trajectory), a hal::AdmittanceDevice and the
-/// platform::ControlLoop that runs it on its controller port. run_scene() dispatches here.
+/// hand that follows the scene trajectory), a hal::AdmittanceDevice in a platform::DeviceRig
+/// and the platform::ControlLoop that runs the rig on its controller port. run_scene() dispatches here.
 /// One period (bus time t = k·dt):
 ///   t            controller: SYNC
 ///   t + latency  device: the drives advance to their targets, the hand's wrench is measured,
@@ -27,10 +27,12 @@
 #include "numen/sim/device/admittance_hand.hpp"
 #include "numen/hal/transport/sim_bus.hpp"
 #include "numen/platform/control_loop.hpp"
+#include "numen/platform/device_rig.hpp"
 #include "numen/platform/latency_histogram.hpp"
 #include "numen/platform/multirate_threads.hpp"
 #include "numen/sim/run/divergence.hpp"
 #include "numen/sim/run/multirate_run.hpp"
+#include "numen/sim/run/run_harness.hpp"
 #include "numen/sim/run/run_options.hpp"
 #include "numen/sim/run/run_summary.hpp"
 #include "numen/sim/scene/scene.hpp"
@@ -40,7 +42,7 @@
 namespace numen::sim {
 
 /// A scene with an admittance device wired for a run.
-class AdmittanceRunner {
+class AdmittanceRunner final : public RunHarness {
  public:
   /// `scene` (with Scene::admittance set) must outlive the runner. The device starts at the
   /// held body's initial pose (inverse kinematics), the hand at the trajectory's first sample.
@@ -55,37 +57,37 @@ class AdmittanceRunner {
   /// the state stream if stream_view() was called. `deadline_mono_ns` / `woke_mono_ns`: a paced
   /// run's platform::Wakeup (CLOCK_MONOTONIC), for the loop's statistics and overrun verdict
   /// (ControlLoop::begin_period); < 0: this call's time.
-  void period(std::int64_t deadline_mono_ns = -1, std::int64_t woke_mono_ns = -1) noexcept;
+  void period(std::int64_t deadline_mono_ns = -1,
+              std::int64_t woke_mono_ns = -1) noexcept override;
   /// Publishes the run's state stream (docs/viewer.md, "Admittance runs") to a view recording
   /// at `record_path` (empty: none) and to `sinks` (not owned), at `rate_hz` frames per
   /// simulated second; `wait`: the loop waits for the consumers, else drops. Setup only; throws
   /// InputError at --record-view when the file cannot be created.
   void stream_view(const std::string& record_path, std::vector<platform::StateFrameSink*> sinks,
-                   double rate_hz, bool wait);
+                   double rate_hz, bool wait) override;
   /// A multirate scene in a paced run: steps the scene loop on its own thread from now on
   /// (MultirateRun::start_scene_thread()) until finish(); nothing for a single-rate scene.
   /// Allocates (call before the first period). Throws std::system_error if the thread cannot
   /// start.
-  void start_scene_thread(const platform::SceneThreadSettings& settings);
+  void start_scene_thread(const platform::SceneThreadSettings& settings) override;
   /// Stops the scene thread (if any), delivers and closes the state stream (if any). Idempotent.
-  void finish();
+  void finish() override;
   /// Overrides the scene's compute phase (ns after the SYNC, >= 0): when the loop reads the
   /// sensor's answers and steps (`numen run --phase`).
-  void set_compute_phase_ns(std::int64_t ns) noexcept { phase_ns_ = ns; }
+  void set_compute_phase_ns(std::int64_t ns) noexcept override { phase_ns_ = ns; }
   /// Periods run so far.
   std::int64_t periods() const noexcept { return k_; }
   /// The summary of the periods run so far (RunSummary::admittance filled in; wall time is the
   /// caller's).
-  RunSummary summary() const;
+  RunSummary summary() const override;
 
   const core::Data& data() const noexcept { return data_; }
   const hal::AdmittanceEmulator& emulator() const noexcept { return emulator_; }
   hal::AdmittanceEmulator& emulator() noexcept { return emulator_; }
-  const hal::AdmittanceDevice& device() const noexcept { return device_; }
   const platform::ControlLoop& loop() const noexcept { return loop_; }
-  platform::ControlLoop& loop() noexcept { return loop_; }
+  platform::ControlLoop& loop() noexcept override { return loop_; }
   /// The multirate god-object (enabled() false in a single-rate run) and its scene thread.
-  const MultirateRun& multirate() const noexcept { return multirate_; }
+  const MultirateRun& multirate() const noexcept override { return multirate_; }
   /// Where the hand was at the last period (the controlled frame's target, world).
   const core::Pose& hand_pose() const noexcept { return hand_; }
   /// Deepest contact of the held body at the hand's pose in the last period (m).
@@ -95,17 +97,21 @@ class AdmittanceRunner {
   /// One record per period (if a capacity was given): the target is the hand's pose, the
   /// feedback the measured wrench that drove the god-object, no axis columns (no torque is
   /// sent), step time that of the loop's step.
-  const Trace& trace() const noexcept { return trace_; }
+  const Trace& trace() const noexcept override { return trace_; }
   /// The divergence monitor latched (divergence.hpp): the run stops after this period (the
   /// emulated device lives on the simulated bus only; nothing is sent after the run).
-  bool diverged() const noexcept { return divergence_.divergence().cause != nullptr; }
+  bool diverged() const noexcept override { return divergence_.divergence().cause != nullptr; }
 
  private:
   const Scene* scene_;
   hal::SimBus bus_;
   AdmittanceHand hand_motion_;  // the emulator's motion: drive lag and the hand's spring
   hal::AdmittanceEmulator emulator_;
-  hal::AdmittanceDevice device_;
+  // The device's kinematics (the hand's pose from the trajectory's axes) and its axes at the
+  // held body's initial pose: where the device's set-points, the emulator and the hand start.
+  std::unique_ptr<const hal::Kinematics> kinematics_;
+  hal::AxisVector start_axes_;
+  platform::DeviceRig rig_;  // the admittance device, assembled in the rig the loop runs
   core::Data data_;
   core::Data ghost_;  // the held body placed at the hand, for measurement
   platform::ControlLoop loop_;
@@ -128,19 +134,5 @@ class AdmittanceRunner {
   Trace trace_;                           // --trace
   DivergenceMonitor divergence_;          // judged after each period's measurements
 };
-
-/// Runs an admittance scene for `options.duration_s` (or the scene's duration): as fast as
-/// possible, paced with options.realtime, or at options.view_speed × real time for a live
-/// viewer; with the state stream of options.record_view_path / view_sinks and the CSV trace of
-/// options.trace_path (AdmittanceRunner::trace(), written after the run). Throws InputError
-/// (key "--bus" or "--record") for a bus other than "sim" or a bus recording: the emulated
-/// device lives on the scene's SimBus; key "--trace" for a trace over the in-memory budget;
-/// key "--phase" for a compute phase not below dt. options.rearm re-arms the loop after a latched
-/// safe state (ControlLoop::rearm()); a paced run reports its overruns, missed periods and
-/// wake-up latency, and latches the safe state after options.overrun_limit consecutive
-/// overruns (0: counted only; an offline run has no deadline and never latches on them;
-/// docs/safety.md). The summary's first_fault names what latched first (to_string of
-/// hal::FaultCause: "force out of range", "force reading timeout", "overruns").
-RunSummary run_admittance_scene(const Scene& scene, const RunOptions& options);
 
 }  // namespace numen::sim

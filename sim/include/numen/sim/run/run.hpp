@@ -20,6 +20,7 @@
 #include "numen/hal/transport/log_bus.hpp"
 #include "numen/hal/transport/sim_bus.hpp"
 #include "numen/platform/control_loop.hpp"
+#include "numen/platform/device_rig.hpp"
 #include "numen/platform/latency_histogram.hpp"
 #include "numen/platform/multirate_threads.hpp"
 #include "numen/platform/periodic_timer.hpp"
@@ -31,6 +32,7 @@
 #include "numen/sim/run/divergence.hpp"
 #include "numen/sim/run/igtl_run.hpp"
 #include "numen/sim/run/multirate_run.hpp"
+#include "numen/sim/run/run_harness.hpp"
 #include "numen/sim/run/run_options.hpp"
 #include "numen/sim/run/run_summary.hpp"
 #include "numen/sim/run/target_measurement.hpp"
@@ -44,8 +46,8 @@ namespace numen::sim {
 /// tool's penetration has set no new minimum for this long (s).
 inline constexpr double kStartupSettle = 0.02;
 
-/// What a run's period loop counts around its runner (run_scene's impedance loop and
-/// run_admittance_scene share it): a paced loop's wake-ups and the operator's re-arm
+/// What a run's period loop counts around its harness (run_scene()'s one loop, for both kinds
+/// of device): a paced loop's wake-ups and the operator's re-arm
 /// requests (RunOptions::rearm, SIGUSR1). Not used inside the real-time period.
 class RunLoopTally {
  public:
@@ -118,11 +120,12 @@ hal::CandumpWriterSettings recorder_settings(bool paced) noexcept;
 void write_in_memory_trace(const Trace& trace, const std::string& path, RunSummary& s);
 
 /// A scene wired for a run: SimBus, simulated instrument on its device port,
-/// InstrumentDevice and ControlLoop on its controller port, core Data, the
+/// InstrumentDevice in a platform::DeviceRig and the ControlLoop over it on its controller
+/// port, core Data, the
 /// measurement state and the trace storage. The constructor allocates
 /// everything; period() never allocates, throws or locks (tested), so the
 /// same loop can be driven by a test, a benchmark or `numen run`.
-class SceneRunner {
+class SceneRunner final : public RunHarness {
  public:
   /// `scene` must outlive the runner; each of its devices (Scene::extra_devices beside the
   /// first) is emulated on the simulated bus and driven by the one ControlLoop (a LoopDevice
@@ -153,7 +156,8 @@ class SceneRunner {
   /// TIMER_ABSTIME; `deadline_mono_ns` < 0: from now) while the device answers, then
   /// end_period reads, checks, steps and writes the torques at that time. This sleep is the
   /// only blocking call; nothing allocates, throws or locks.
-  void period(std::int64_t deadline_mono_ns = -1, std::int64_t woke_mono_ns = -1) noexcept;
+  void period(std::int64_t deadline_mono_ns = -1,
+              std::int64_t woke_mono_ns = -1) noexcept override;
   /// True when the controller's port is a real bus (can:, serial:).
   bool real_bus() const noexcept { return spec_.real(); }
   /// The controller's port (the real bus, the log replay, the recorder, or the SimBus port).
@@ -171,21 +175,21 @@ class SceneRunner {
   /// waits for the consumers (offline runs), else drops. Starts the stream's thread. Throws
   /// InputError at --record-view when the file cannot be created.
   void stream_view(const std::string& record_path, std::vector<platform::StateFrameSink*> sinks,
-                   double rate_hz, bool wait);
+                   double rate_hz, bool wait) override;
   /// The streaming trace writer (nullptr unless stream_trace() was called).
   platform::TraceWriter* trace_writer() noexcept { return trace_writer_.get(); }
   /// Overrides the scene's compute phase (ns, >= 0).
-  void set_compute_phase_ns(std::int64_t ns) noexcept { phase_ns_ = ns; }
+  void set_compute_phase_ns(std::int64_t ns) noexcept override { phase_ns_ = ns; }
   /// Periods run so far.
   std::int64_t periods() const noexcept { return k_; }
   /// The divergence monitor latched (divergence.hpp): the period that breached it shut the
   /// device down (zero torque from the next write on); the run stops after it.
-  bool diverged() const noexcept { return divergence_.divergence().cause != nullptr; }
+  bool diverged() const noexcept override { return divergence_.divergence().cause != nullptr; }
   /// A multirate scene in a paced run: steps the scene loop on its own thread from now on
   /// (platform::MultirateThreads, `settings`) until finish(); nothing for a single-rate scene.
   /// Allocates (call before the first period). Throws std::system_error if the thread cannot
   /// start.
-  void start_scene_thread(const platform::SceneThreadSettings& settings);
+  void start_scene_thread(const platform::SceneThreadSettings& settings) override;
   /// A paced run: measures the target (the summary's "penetration max: target", the hand's
   /// depth) on a thread of its own from now on (TargetMeasurementThread), kept off
   /// `avoid_cpus` (the loop's and the scene thread's), the loop handing over its inputs and
@@ -197,17 +201,17 @@ class SceneRunner {
   void describe_target_thread(std::vector<std::string>& lines) const;
   /// The multirate god-object (MultirateRun::enabled() false in a single-rate run) and its
   /// scene thread; read the thread's realtime_report() after finish().
-  const MultirateRun& multirate() const noexcept { return multirate_; }
+  const MultirateRun& multirate() const noexcept override { return multirate_; }
 
   /// Ends the run's streams: stops the bus recorder's and the trace's writer threads, which
   /// write what is still queued and close the files (they appear under their paths), so that
   /// summary() reports what reached them.
   /// Idempotent; call it after the last period() (setup thread).
-  void finish();
+  void finish() override;
 
   /// The summary of the periods run so far (wall time and realtime overruns
   /// are the caller's, see run_scene).
-  RunSummary summary() const;
+  RunSummary summary() const override;
 
   const core::Data& data() const noexcept { return data_; }
   const hal::InstrumentDevice& device() const noexcept { return device_; }
@@ -220,9 +224,9 @@ class SceneRunner {
   }
   /// The control loop (lifecycle, supervisor, CANopen master, statistics, rearm()).
   const platform::ControlLoop& loop() const noexcept { return loop_; }
-  platform::ControlLoop& loop() noexcept { return loop_; }
+  platform::ControlLoop& loop() noexcept override { return loop_; }
   hal::SimBus& bus() noexcept { return bus_; }
-  const Trace& trace() const noexcept { return trace_; }
+  const Trace& trace() const noexcept override { return trace_; }
   /// What the control loop did in the last period (step wall time included).
   const platform::PeriodReport& last_report() const noexcept { return loop_.last_report(); }
 
@@ -319,6 +323,7 @@ class SceneRunner {
   void tally_devices() noexcept;
   // A scene of several devices: each device's figures into s.devices and s.device_lines.
   void summarize_devices(RunSummary& s) const;
+  platform::DeviceRig rig_;  // the loop's devices, assembled (their buses' shares, NMT masters)
   platform::ControlLoop loop_;
   /// The multirate god-object (scene [multirate]), stepped in place of core::step by the
   /// loop (its platform::Stepper, ControlLoop::set_stepper()); not enabled in a single-rate run.
@@ -385,9 +390,20 @@ class SceneRunner {
 int extra_device_body(const Scene& scene, std::size_t i) noexcept;
 
 /// Runs `scene` for options.duration_s (or the scene's duration) and judges it
-/// (RunSummary::exit_status, run_verdict()).
-/// Throws InputError for a scene without [trajectory] or [device] (require_runnable()),
-/// std::runtime_error if the trace cannot be written.
+/// (RunSummary::exit_status, run_verdict()): one period loop (as fast as possible, paced with
+/// options.realtime or on a real bus, or at options.view_speed × real time for a live viewer)
+/// over the scene's harness (RunHarness): an AdmittanceRunner for an admittance scene
+/// (Scene::admittance), else a SceneRunner. options.rearm re-arms the loop after a latched safe
+/// state (ControlLoop::rearm()); a paced run reports its overruns, missed periods and wake-up
+/// latency, and latches the safe state after options.overrun_limit consecutive overruns where
+/// a supervisor latches on them (the managed stack, the admittance device; 0: counted only; an
+/// offline run has no deadline and never latches on them; docs/safety.md). A run on a real bus
+/// ends with the shutdown periods (zero torque, drives disabled). The in-memory trace of a
+/// simulated run is written to options.trace_path after the run; a real bus streams it.
+/// Throws InputError for a scene without [trajectory] or [device] (require_runnable()), for an
+/// admittance scene on a bus other than "sim" or with a bus recording (key "--bus" or
+/// "--record": its emulated device lives on the scene's SimBus), for a trace over the
+/// in-memory budget (key "--trace"), std::runtime_error if the trace cannot be written.
 RunSummary run_scene(const Scene& scene, const RunOptions& options);
 
 }  // namespace numen::sim

@@ -48,7 +48,7 @@ struct BusChoice {
 inline constexpr std::size_t kMaxInMemoryTraceBytes = std::size_t{1} << 30;
 
 /// The capacity (records) of the in-memory trace of a simulated run of `periods` periods, for
-/// run_scene() and run_admittance_scene(). Throws InputError (key "--trace", the periods and
+/// run_scene() (either kind of device). Throws InputError (key "--trace", the periods and
 /// MiB asked for and the limit) if it would take more than kMaxInMemoryTraceBytes; 0 periods
 /// or fewer need none (0).
 std::size_t in_memory_trace_capacity(std::int64_t periods);

@@ -10,6 +10,7 @@
 
 #include <array>
 #include <cstdint>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -86,11 +87,12 @@ struct TraceRecord {
 };
 
 /// Builds a record from the state after a step: `report.feedback` is the feedback wrench whose
-/// torques were sent (platform::PeriodReport), `axis_torques` the torques sent.
+/// torques were sent (platform::PeriodReport), `axis_torques` the torques sent (N·m or N per
+/// axis: hal::DeviceOutput::torque, the device face's; empty for a device that sends none).
 TraceRecord make_trace_record(const core::Data& data, int held, int tool_contacts,
                               double tool_penetration_m, double target_penetration_m,
                               const platform::PeriodReport& report,
-                              const hal::AxisVector& axis_torques) noexcept;
+                              std::span<const double> axis_torques) noexcept;
 
 /// Fixed-capacity store of records.
 class Trace {
