@@ -1,4 +1,4 @@
-# numen as an installed component (docs/architecture.md "Installed package"):
+# numen as an installed component (docs/package.md):
 #   cmake --install build --prefix P
 # installs the four libraries (static unless BUILD_SHARED_LIBS=ON), the public headers (the
 # curated lists below), the `numen` executable, the shipped scenes, data and viewer page under
@@ -183,7 +183,7 @@ configure_package_config_file(${PROJECT_SOURCE_DIR}/cmake/numenConfig.cmake.in
   ${PROJECT_BINARY_DIR}/numenConfig.cmake INSTALL_DESTINATION ${NUMEN_INSTALL_CMAKEDIR}
   PATH_VARS NUMEN_INSTALL_DATADIR)
 # While MAJOR is 0, a MINOR release may change the API: a request for 0.1 accepts 0.1.x only
-# (semantic versioning; docs/architecture.md "Installed package"). From 1.0 on: SameMajorVersion.
+# (semantic versioning; docs/package.md). From 1.0 on: SameMajorVersion.
 write_basic_package_version_file(${PROJECT_BINARY_DIR}/numenConfigVersion.cmake
   VERSION ${PROJECT_VERSION} COMPATIBILITY SameMinorVersion)
 install(FILES ${PROJECT_BINARY_DIR}/numenConfig.cmake ${PROJECT_BINARY_DIR}/numenConfigVersion.cmake

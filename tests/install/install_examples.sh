@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# CTest install_examples (tests/CMakeLists.txt, docs/architecture.md "Installed package"):
+# CTest install_examples (tests/CMakeLists.txt, docs/package.md):
 # installs the build tree into a temporary prefix, then, against that prefix only
 # (CMAKE_PREFIX_PATH, never the build tree), configures, builds and runs the two C++ examples
 # (examples/scene_step on the installed probe.toml and SCENE_NAME, examples/minimal_core) and

@@ -2,7 +2,7 @@
 /// @file shipped_files.hpp
 /// Where the files shipped with numen are found at run time: the scenes, their data
 /// (recordings) and the viewer page. An installed `numen` finds them relative to its own
-/// executable, `<prefix>/bin/../share/numen/...` (docs/architecture.md "Installed package");
+/// executable, `<prefix>/bin/../share/numen/...` (docs/package.md);
 /// a program run from the build tree falls back to the source tree's sim/ and the build
 /// tree's viewer/.
 
