@@ -194,6 +194,47 @@ Wrench tie_reaction(const ThreadState& st, const ThreadTie& tie, const TiePoint&
   return w;
 }
 
+/// The point terms' forces at the step's end, before the state moves on (`v`: the step's
+/// velocities): each eyelet's and each tissue contact's for the nets' step (sc.eyelet_terms,
+/// sc.tissue_terms), each body contact's reaction on its body's wrench.
+void hand_point_term_forces(Data& data, ThreadState& st, ThreadScratch& sc,
+                            const std::vector<Vec3>& v, double h) noexcept {
+  for (int t = 0; t < sc.num_terms; ++t) {
+    const ThreadPointTerm& term = sc.terms[static_cast<std::size_t>(t)];
+    const auto ia = static_cast<std::size_t>(term.a - 1), ib = static_cast<std::size_t>(term.b - 1);
+    const Vec3 vp = term.wa * v[ia] + term.wb * v[ib];
+    const Vec3 vp0 = term.wa * st.velocity[ia] + term.wb * st.velocity[ib];
+    const Vec3 f = point_term_force(term, vp, vp0, h);
+    if (term.eyelet >= 0) {
+      const auto k = static_cast<std::size_t>(term.eyelet);
+      st.output.eyelets[k].friction_force = term.axis.dot(term.force - term.damping * (vp - vp0));
+      ThreadEyeletTerm& et = sc.eyelet_terms[k];
+      et.set = true;
+      et.point = term.wa * (st.position[ia] + h * v[ia]) + term.wb * (st.position[ib] + h * v[ib]);
+      et.velocity = vp;
+      et.axis = term.axis;
+      et.force = f;
+      et.stiffness = term.stiffness.trace() / 2.0;  // k (I − a aᵀ): trace 2k
+      et.damping = term.axis.dot(term.damping * term.axis);
+    }
+    if (term.face >= 0 && sc.num_tissue_terms < kMaxThreadTissueContacts) {
+      ThreadTissueTerm& tt = sc.tissue_terms[static_cast<std::size_t>(sc.num_tissue_terms++)];
+      tt.face = term.face;
+      tt.weights = term.face_weights;
+      tt.point = term.wa * (st.position[ia] + h * v[ia]) + term.wb * (st.position[ib] + h * v[ib]);
+      tt.velocity = vp;
+      tt.normal = term.axis;
+      tt.force = f;
+      tt.stiffness = term.axis.dot(term.stiffness * term.axis);
+      tt.damping = term.axis.dot(term.damping * term.axis);
+    }
+    if (term.body < 0) continue;
+    const BodyState& bs = data.bodies[static_cast<std::size_t>(term.body)];
+    data.body_wrench[static_cast<std::size_t>(term.body)].force -= f;
+    data.body_wrench[static_cast<std::size_t>(term.body)].torque -= (term.point - bs.position).cross(f);
+  }
+}
+
 void step_thread(const Model& model, Data& data, const ThreadModel& th, ThreadState& st,
                  ThreadScratch& sc) noexcept {
   const double h = model.dt;
@@ -270,41 +311,7 @@ void step_thread(const Model& model, Data& data, const ThreadModel& th, ThreadSt
     data.status |= kNonFinite;
     return;
   }
-  // The point terms' forces at the step's end (before the state moves on).
-  for (int t = 0; t < sc.num_terms; ++t) {
-    const ThreadPointTerm& term = sc.terms[static_cast<std::size_t>(t)];
-    const auto ia = static_cast<std::size_t>(term.a - 1), ib = static_cast<std::size_t>(term.b - 1);
-    const Vec3 vp = term.wa * v[ia] + term.wb * v[ib];
-    const Vec3 vp0 = term.wa * st.velocity[ia] + term.wb * st.velocity[ib];
-    const Vec3 f = point_term_force(term, vp, vp0, h);
-    if (term.eyelet >= 0) {
-      const auto k = static_cast<std::size_t>(term.eyelet);
-      st.output.eyelets[k].friction_force = term.axis.dot(term.force - term.damping * (vp - vp0));
-      ThreadEyeletTerm& et = sc.eyelet_terms[k];
-      et.set = true;
-      et.point = term.wa * (st.position[ia] + h * v[ia]) + term.wb * (st.position[ib] + h * v[ib]);
-      et.velocity = vp;
-      et.axis = term.axis;
-      et.force = f;
-      et.stiffness = term.stiffness.trace() / 2.0;  // k (I − a aᵀ): trace 2k
-      et.damping = term.axis.dot(term.damping * term.axis);
-    }
-    if (term.face >= 0 && sc.num_tissue_terms < kMaxThreadTissueContacts) {
-      ThreadTissueTerm& tt = sc.tissue_terms[static_cast<std::size_t>(sc.num_tissue_terms++)];
-      tt.face = term.face;
-      tt.weights = term.face_weights;
-      tt.point = term.wa * (st.position[ia] + h * v[ia]) + term.wb * (st.position[ib] + h * v[ib]);
-      tt.velocity = vp;
-      tt.normal = term.axis;
-      tt.force = f;
-      tt.stiffness = term.axis.dot(term.stiffness * term.axis);
-      tt.damping = term.axis.dot(term.damping * term.axis);
-    }
-    if (term.body < 0) continue;
-    const BodyState& bs = data.bodies[static_cast<std::size_t>(term.body)];
-    data.body_wrench[static_cast<std::size_t>(term.body)].force -= f;
-    data.body_wrench[static_cast<std::size_t>(term.body)].torque -= (term.point - bs.position).cross(f);
-  }
+  hand_point_term_forces(data, st, sc, v, h);
   for (std::size_t i = 0; i < n; ++i) {
     st.velocity[i] = v[i];
     st.position[i] += h * v[i];

@@ -67,16 +67,16 @@ void touch_triangle(const Vec3& x, double radius, int face, int material, const 
   hit.normal = normal;
 }
 
-}  // namespace
-
-void gather_thread_tissue_contacts(const Model& model, const Data& data, const ThreadModel& thread,
-                                   ThreadState& st, ThreadScratch& scratch) noexcept {
-  scratch.num_tissue_terms = 0;
-  if (model.net_faces.empty()) return;
+/// The thread's box (its nodes grown by its radius) and its nodes in order along the box's
+/// longest axis into scratch.tissue_order / tissue_key: insertion sort of last step's order
+/// (nearly sorted, O(n) a step), so that each triangle visits only the nodes within its extent.
+/// Returns the axis; `lo`, `hi`: the box.
+int sort_nodes_along_the_thread(const ThreadModel& thread, const ThreadState& st,
+                                ThreadScratch& scratch, Vec3& lo, Vec3& hi) noexcept {
   const double rt = thread.radius;
-  const double thread_node_mass = thread.density * std::numbers::pi * rt * rt * thread.rest_segment;
   const auto nodes = st.position.size();
-  Vec3 lo = st.position[0], hi = st.position[0];
+  lo = st.position[0];
+  hi = st.position[0];
   for (const Vec3& x : st.position) {
     lo = lo.cwiseMin(x);
     hi = hi.cwiseMax(x);
@@ -85,10 +85,7 @@ void gather_thread_tissue_contacts(const Model& model, const Data& data, const T
   hi.array() += rt;
   int axis = 0;
   (hi - lo).maxCoeff(&axis);
-  // The nodes in order along the longest axis: insertion sort of last step's order (nearly
-  // sorted, O(n) a step), so that each triangle visits only the nodes within its extent.
   std::vector<std::int32_t>& order = scratch.tissue_order;
-  for (std::size_t i = 0; i < nodes; ++i) scratch.tissue_hits[i] = ThreadTissueHit{};
   for (std::size_t p = 1; p < nodes; ++p) {
     const std::int32_t key = order[p];
     const double v = st.position[static_cast<std::size_t>(key)][axis];
@@ -98,14 +95,24 @@ void gather_thread_tissue_contacts(const Model& model, const Data& data, const T
   }
   for (std::size_t p = 0; p < nodes; ++p)
     scratch.tissue_key[p] = st.position[static_cast<std::size_t>(order[p])][axis];
+  return axis;
+}
+
+/// Each node's deepest hit on the nets' surface triangles (touch_triangle()) into
+/// scratch.tissue_hits. The net's triangles are culled by their nodes' outcodes against the
+/// thread's box [lo, hi] grown by the reach: a net all of whose nodes share a bit is out of
+/// reach, a triangle whose nodes share one too.
+void find_tissue_hits(const Model& model, const Data& data, const ThreadModel& thread,
+                      const ThreadState& st, ThreadScratch& scratch, int axis, const Vec3& lo,
+                      const Vec3& hi) noexcept {
+  const double rt = thread.radius;
+  const std::vector<std::int32_t>& order = scratch.tissue_order;
   const auto key_begin = scratch.tissue_key.begin(), key_end = scratch.tissue_key.end();
   const double reach = rt + kThreadTissueContactReach;
   const Vec3 box_lo = lo.array() - kThreadTissueContactReach, box_hi = hi.array() + kThreadTissueContactReach;
   std::vector<std::uint8_t>& outcode = scratch.net_node_outcode;
   for (const NetModel& net : model.nets) {
     if (net.face_count == 0) continue;
-    // Each node's outcode against the thread's box grown by the reach; a net all of whose nodes
-    // share a bit is out of reach, a triangle whose nodes share one too.
     std::uint8_t all = 0x3f;
     for (int i = net.node_begin; i < net.node_begin + net.node_count; ++i) {
       const Vec3& x = data.nodes[static_cast<std::size_t>(i)].position;
@@ -139,11 +146,12 @@ void gather_thread_tissue_contacts(const Model& model, const Data& data, const T
       }
     }
   }
-  // The passages: each eyelet on tissue is where the thread goes in or out, at its nearest node;
-  // walking from the start, the thread is inside the tissue from a tissue eyelet to the next. A
-  // thread that follows a needle starts inside while its count is odd (the tail has passed an
-  // entry and not yet its exit: each pass takes over two points).
-  std::array<int, kMaxThreadEyelets> gates{};
+}
+
+/// The passages: each eyelet on tissue is where the thread goes in or out, at its nearest node.
+/// Writes those nodes' indices in increasing order into `gates`; returns their count.
+int passage_gates(const ThreadState& st, std::array<int, kMaxThreadEyelets>& gates) noexcept {
+  const auto nodes = st.position.size();
   int num_gates = 0;
   for (const ThreadEyelet& e : st.eyelets) {
     if (!e.active || e.face < 0) continue;
@@ -158,6 +166,55 @@ void gather_thread_tissue_contacts(const Model& model, const Data& data, const T
       gates[static_cast<std::size_t>(g)] = gates[static_cast<std::size_t>(g - 1)];
     gates[static_cast<std::size_t>(g)] = static_cast<int>(nearest);
   }
+  return num_gates;
+}
+
+/// Node i's contact with the triangle of its hit as a point term of the thread's step.
+void write_tissue_term(const Model& model, const Data& data, const ThreadModel& thread,
+                       const ThreadState& st, const ThreadTissueHit& hit, std::size_t i,
+                       ThreadPointTerm& term) noexcept {
+  const double rt = thread.radius;
+  const double thread_node_mass = thread.density * std::numbers::pi * rt * rt * thread.rest_segment;
+  const std::array<int, 3>& t = model.net_faces[static_cast<std::size_t>(hit.face)];
+  Vec3 v_surface = Vec3::Zero();
+  for (int m = 0; m < 3; ++m)
+    v_surface += hit.weights[m] * data.nodes[static_cast<std::size_t>(t[static_cast<std::size_t>(m)])].velocity;
+  // Under the time-constant floor of the lighter side: the touched point's effective mass on
+  // its nodes, 1 / Σ w_j² / m_j, or the thread's node. Each side steps the other's point as
+  // given (staggered), so a contact stiffer than the lighter side's step resolves pumps energy
+  // into the pair (a heavy thread dropped on the patch bounced off it with the pair's 2e4 N/m).
+  double inverse_mass = 0.0;
+  for (int m = 0; m < 3; ++m)
+    inverse_mass += hit.weights[m] * hit.weights[m] /
+                    model.node_mass[static_cast<std::size_t>(t[static_cast<std::size_t>(m)])];
+  const double m_eff = std::min(1.0 / inverse_mass, thread_node_mass);
+  const MaterialPair& mp = model.material_pair(thread.material, hit.material);
+  const double k = std::min(mp.stiffness, contact_stiffness_limit(m_eff, model.dt, model.solver.contact_max_omega_dt));
+  term.a = term.b = static_cast<int>(i) + 1;
+  fill_contact(term, mp, k, hit.depth, hit.normal, st.velocity[i] - v_surface);
+  term.target_velocity = v_surface;
+  term.point = st.position[i];
+  term.face = hit.face;
+  term.face_weights = hit.weights;
+  term.axis = hit.normal;
+}
+
+}  // namespace
+
+void gather_thread_tissue_contacts(const Model& model, const Data& data, const ThreadModel& thread,
+                                   ThreadState& st, ThreadScratch& scratch) noexcept {
+  scratch.num_tissue_terms = 0;
+  if (model.net_faces.empty()) return;
+  const auto nodes = st.position.size();
+  for (std::size_t i = 0; i < nodes; ++i) scratch.tissue_hits[i] = ThreadTissueHit{};
+  Vec3 lo, hi;
+  const int axis = sort_nodes_along_the_thread(thread, st, scratch, lo, hi);
+  find_tissue_hits(model, data, thread, st, scratch, axis, lo, hi);
+  // Walking from the start, the thread is inside the tissue from a tissue eyelet to the next. A
+  // thread that follows a needle starts inside while its count is odd (the tail has passed an
+  // entry and not yet its exit: each pass takes over two points).
+  std::array<int, kMaxThreadEyelets> gates{};
+  const int num_gates = passage_gates(st, gates);
   bool inside = thread.needle >= 0 && num_gates % 2 == 1;
   int next_gate = 0;
   for (std::size_t i = 0; i < nodes; ++i) {
@@ -171,28 +228,7 @@ void gather_thread_tissue_contacts(const Model& model, const Data& data, const T
     }
     ThreadPointTerm* term = next_thread_term(scratch, st);
     if (term == nullptr) return;
-    const std::array<int, 3>& t = model.net_faces[static_cast<std::size_t>(hit.face)];
-    Vec3 v_surface = Vec3::Zero();
-    for (int m = 0; m < 3; ++m)
-      v_surface += hit.weights[m] * data.nodes[static_cast<std::size_t>(t[static_cast<std::size_t>(m)])].velocity;
-    // Under the time-constant floor of the lighter side: the touched point's effective mass on
-    // its nodes, 1 / Σ w_j² / m_j, or the thread's node. Each side steps the other's point as
-    // given (staggered), so a contact stiffer than the lighter side's step resolves pumps energy
-    // into the pair (a heavy thread dropped on the patch bounced off it with the pair's 2e4 N/m).
-    double inverse_mass = 0.0;
-    for (int m = 0; m < 3; ++m)
-      inverse_mass += hit.weights[m] * hit.weights[m] /
-                      model.node_mass[static_cast<std::size_t>(t[static_cast<std::size_t>(m)])];
-    const double m_eff = std::min(1.0 / inverse_mass, thread_node_mass);
-    const MaterialPair& mp = model.material_pair(thread.material, hit.material);
-    const double k = std::min(mp.stiffness, contact_stiffness_limit(m_eff, model.dt, model.solver.contact_max_omega_dt));
-    term->a = term->b = static_cast<int>(i) + 1;
-    fill_contact(*term, mp, k, hit.depth, hit.normal, st.velocity[i] - v_surface);
-    term->target_velocity = v_surface;
-    term->point = st.position[i];
-    term->face = hit.face;
-    term->face_weights = hit.weights;
-    term->axis = hit.normal;
+    write_tissue_term(model, data, thread, st, hit, i, *term);
     ++st.output.tissue_contacts;
   }
 }
