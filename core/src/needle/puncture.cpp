@@ -181,24 +181,10 @@ void write_tie_springs(const Model& model, Data& data, const NeedleModel& n, con
   const Vec3 on_point = -p.force;  // the tie's force on the material point
   const Vec3 e1 = p.tangent.unitOrthogonal();
   const std::array<Vec3, 3> axes{p.tangent, e1, p.tangent.cross(e1)};
-  const std::array<int, 3>& face = model.net_faces[static_cast<std::size_t>(p.face)];
-  for (int k = 0; k < 3; ++k) {
-    const double w = p.weights[k];
-    if (!(w > 0.0)) continue;
-    const int node = face[static_cast<std::size_t>(k)];
-    const Vec3& v_node = data.nodes[static_cast<std::size_t>(node)].velocity;
-    for (int axis = 0; axis < 3; ++axis) {
-      const auto slot = static_cast<std::size_t>(data.num_node_contacts + data.num_node_grasp_springs +
-                                                 data.num_node_needle_ties);
-      if (slot >= data.node_contacts.size()) return;  // make_data() gave them room: not reached
-      const Vec3& e = axes[static_cast<std::size_t>(axis)];
-      detail::set_held_spring(data.node_contacts[slot], node, n.body, at, at - b.position, e,
-                              axis == 0 ? 0.0 : w * n.tie_stiffness,
-                              w * (axis == 0 ? n.friction : n.tie_damping), (w * e.dot(on_point)) * e,
-                              e.dot(v_node - v_at));
-      ++data.num_node_needle_ties;
-    }
-  }
+  detail::write_face_springs(model, data, p.face, p.weights, axes, {0.0, n.tie_stiffness, n.tie_stiffness},
+                             {n.friction, n.tie_damping, n.tie_damping}, on_point, n.body, at,
+                             at - b.position, v_at, data.num_node_contacts + data.num_node_grasp_springs,
+                             data.num_node_needle_ties);
 }
 
 /// Drops this step's penalty node contacts between needle `n`'s spheres inside the net of its

@@ -8,6 +8,7 @@
 
 #include <Eigen/Core>
 #include <algorithm>
+#include <array>
 #include <cstdint>
 #include <span>
 
@@ -61,6 +62,36 @@ inline void set_held_spring(NodeContact& c, int node, int body, const Vec3& at, 
   c.normal_velocity = normal_velocity;
   c.active = true;
   c.held = true;
+}
+
+/// Writes the held springs (set_held_spring()) that carry a force on the material point of net
+/// triangle `face` (barycentric `weights`) to its nodes: for each node with weight w > 0, one
+/// spring along each of the three orthonormal `axes`, of stiffness w k[a] (N/m) and damping
+/// w c[a] (N·s/m), its force on the node w (axes[a] · force) axes[a] (`force`: the whole force
+/// on the point, N, world), tied to the point `at` (world, m) moving at `v_at` (m/s) of `body`
+/// (lever `r_b`; −1: no body). They go at Data::node_contacts[base + count], `count` counting
+/// them (a needle's puncture ties, Data::num_node_needle_ties; a thread's eyelets on tissue,
+/// Data::num_node_thread_ties); stops when the buffer is full (make_data() gives them room).
+inline void write_face_springs(const Model& model, Data& data, int face, const Vec3& weights,
+                               const std::array<Vec3, 3>& axes, const std::array<double, 3>& k,
+                               const std::array<double, 3>& c, const Vec3& force, int body,
+                               const Vec3& at, const Vec3& r_b, const Vec3& v_at, int base,
+                               int& count) noexcept {
+  const std::array<int, 3>& f = model.net_faces[static_cast<std::size_t>(face)];
+  for (int m = 0; m < 3; ++m) {
+    const double w = weights[m];
+    if (!(w > 0.0)) continue;
+    const int node = f[static_cast<std::size_t>(m)];
+    const Vec3& v_node = data.nodes[static_cast<std::size_t>(node)].velocity;
+    for (std::size_t a = 0; a < 3; ++a) {
+      const auto slot = static_cast<std::size_t>(base + count);
+      if (slot >= data.node_contacts.size()) return;
+      const Vec3& e = axes[a];
+      set_held_spring(data.node_contacts[slot], node, body, at, r_b, e, w * k[a], w * c[a],
+                      (w * e.dot(force)) * e, e.dot(v_node - v_at));
+      ++count;
+    }
+  }
 }
 
 /// A node contact with a dynamic body in the solve: an off-diagonal block.

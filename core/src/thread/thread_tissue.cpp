@@ -82,24 +82,12 @@ void tie_tissue_eyelets(const Model& model, Data& data, const ThreadState& state
     if (!e.active || e.face < 0 || !t.set || !valid_face(model, e.face)) continue;
     const Vec3 e1 = t.axis.unitOrthogonal();
     const std::array<Vec3, 3> axes{t.axis, e1, t.axis.cross(e1)};
-    const std::array<int, 3>& face = model.net_faces[static_cast<std::size_t>(e.face)];
-    for (int m = 0; m < 3; ++m) {
-      const double w = e.weights[m];
-      if (!(w > 0.0)) continue;
-      const int node = face[static_cast<std::size_t>(m)];
-      const Vec3& v_node = data.nodes[static_cast<std::size_t>(node)].velocity;
-      for (int a = 0; a < 3; ++a) {
-        const auto slot = static_cast<std::size_t>(detail::node_contact_count(data));
-        if (slot >= data.node_contacts.size()) return;  // make_data() gave them room: not reached
-        const Vec3& axis = axes[static_cast<std::size_t>(a)];
-        // On the node: its weight of the eyelet's force on the thread, reversed; stiff across
-        // the thread towards its point, damped along it (the friction), the point as given.
-        detail::set_held_spring(data.node_contacts[slot], node, -1, t.point, Vec3::Zero(), axis,
-                                a == 0 ? 0.0 : w * t.stiffness, a == 0 ? w * t.damping : 0.0,
-                                (-w * axis.dot(t.force)) * axis, axis.dot(v_node - t.velocity));
-        ++data.num_node_thread_ties;
-      }
-    }
+    // On the nodes: the eyelet's force on the thread, reversed, by their weights; stiff across
+    // the thread towards its point, damped along it (the friction), the point as given.
+    detail::write_face_springs(model, data, e.face, e.weights, axes, {0.0, t.stiffness, t.stiffness},
+                               {t.damping, 0.0, 0.0}, -t.force, -1, t.point, Vec3::Zero(), t.velocity,
+                               data.num_node_contacts + data.num_node_grasp_springs + data.num_node_needle_ties,
+                               data.num_node_thread_ties);
   }
 }
 

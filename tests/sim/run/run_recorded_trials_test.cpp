@@ -336,8 +336,8 @@ TEST(RunSoftStart, TheHeldOutTrialsStartingInsideAnObstacleRampTheFeedbackInInst
       const numen::platform::PeriodReport& b = on.last_report();
       const numen::core::Vec3 fa = a.feedback.force, fb = b.feedback.force;
       EXPECT_EQ(a.soft_start_ramp, 1.0) << "period " << k;  // soft_start = 0: today's behaviour
-      const bool open = !on.loop().impedance().sent_torques().gated;
-      ASSERT_EQ(open, !off.loop().impedance().sent_torques().gated) << "period " << k;
+      const bool open = !on.loop().device().output().gated;
+      ASSERT_EQ(open, !off.loop().device().output().gated) << "period " << k;
       if (first < 0 && open) {  // torque enabled: the ramp begins
         first = k;
         off_first = fa.norm();

@@ -245,6 +245,7 @@ TEST(RunLatticeScene, SummaryFeedbackFiguresAreTheOnesTheDrivesReceive) {
   const auto n = static_cast<int>(scene.device.axes.size());
   for (std::int64_t k = 0; k < periods_for(scene, 3.0); ++k) {
     runner.period();
+    // The RPDOs' per mille are the impedance device's wire encoding, not on the face.
     const numen::hal::SentTorques& sent = runner.loop().impedance().sent_torques();
     const numen::platform::PeriodReport& r = runner.last_report();
     // The simulated drives applied, at this period's SYNC, the RPDOs of the period before.
