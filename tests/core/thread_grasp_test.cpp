@@ -35,10 +35,10 @@ constexpr double kClosed = 4 * kDeg;
 /// Bodies 0–2: numen::test::add_grasper() pointing down, its hinge at z = kHingeZ above the
 /// plane z = 0, its jaws open 60° (close below 30°, open above 40°, springs 2000 N/m, 2 N·s/m,
 /// `max_force`). One thread "suture": the default 3-0 silk, 30 mm in 20 segments of 1.5 mm,
-/// lying along x on the plane from x = −15 mm (node 10 under the jaws at x = 0), its start
-/// tied to the world there (`tied`) or free, drag `drag` (N·s/m²). Gravity; dt 1 ms; one
-/// material (2·10⁴ N/m, 10 N·s/m, viscous friction 0.5 N·s/m).
-core::Model thread_grasp_rig(double max_force, bool tied, double drag = 1e-3) {
+/// lying along x on the plane from x = −15 mm + `shift` (node 10 under the jaws at x = 0 when
+/// `shift` is 0), its start tied to the world there (`tied`) or free, drag `drag` (N·s/m²).
+/// Gravity; dt 1 ms; one material (2·10⁴ N/m, 10 N·s/m, viscous friction 0.5 N·s/m).
+core::Model thread_grasp_rig(double max_force, bool tied, double drag = 1e-3, double shift = 0.0) {
   core::Model m;
   m.dt = 1e-3;
   m.material_names = {"steel"};
@@ -52,7 +52,7 @@ core::Model thread_grasp_rig(double max_force, bool tied, double drag = 1e-3) {
   th.length = 0.03;
   th.segments = 20;
   th.damping = drag;
-  th.start = Vec3(-0.015, 0, th.radius);
+  th.start = Vec3(-0.015 + shift, 0, th.radius);
   th.direction = Vec3::UnitX();
   th.tie_start.body = tied ? -1 : -2;
   th.tie_start.point = th.start;
@@ -176,6 +176,51 @@ TEST(ThreadGrasp, TheJawsTakeTheThreadAndLiftIt) {
   const double weight = th.density * M_PI * th.radius * th.radius * th.length * 9.81;
   std::printf("[ figures  ] the grip's pull %.4e N, the thread's weight %.4e N\n", g.grip_force, weight);
   EXPECT_NEAR(g.grip_force, weight, 0.01 * weight);
+}
+
+/// How far node `n`'s sphere (the thread's radius) is out of reach of jaw `j`'s nearest sphere
+/// (m; < 0: within reach).
+double node_gap(const core::Model& m, const core::Data& d, int j, int n) {
+  const core::BodyModel& bm = m.bodies[static_cast<std::size_t>(m.grasps[0].jaws[static_cast<std::size_t>(j)])];
+  const core::BodyState& bs = d.bodies[static_cast<std::size_t>(m.grasps[0].jaws[static_cast<std::size_t>(j)])];
+  double gap = 1.0;
+  for (int k = bm.sphere_begin; k < bm.sphere_begin + bm.sphere_count; ++k) {
+    const core::Sphere& sp = m.body_spheres[static_cast<std::size_t>(k)];
+    const Vec3 c = bs.position + bs.orientation * sp.center;
+    gap = std::min(gap, (d.threads[0].position[static_cast<std::size_t>(n)] - c).norm() - sp.radius - m.threads[0].radius);
+  }
+  return gap;
+}
+
+TEST(ThreadGrasp, TheJawsTakeAThreadPinchedBetweenTwoNodes) {
+  // The thread shifted half a segment (0.75 mm) along itself: the jaws meet it between nodes 9
+  // and 10. The grasp starts when both touch the segment (the thread's own contact test), while
+  // no node's sphere is yet within reach of both jaws (a rule on the nodes would wait for the
+  // jaws to squeeze deeper); lifted 15 mm, the thread follows.
+  const core::Model m = thread_grasp_rig(5.0, false, 1e-3, 0.00075);
+  core::Data d = core::make_data(m);
+  double theta = 60 * kDeg, opening = 0.0, nearest_gap = 1.0;
+  int grasped = -1;
+  ASSERT_TRUE(drive(m, d, 660, theta, -100 * kDeg, still, [&](int s) {
+    if (d.grasps[0].event != core::GraspEvent::kGrasp) return;
+    grasped = s;
+    opening = d.grasps[0].opening;
+    for (int n = 0; n <= m.threads[0].segments; ++n)
+      nearest_gap = std::min(nearest_gap, std::max(node_gap(m, d, 0, n), node_gap(m, d, 1, n)));
+  }));
+  ASSERT_GE(grasped, 0) << "the jaws never took the thread";
+  const core::GraspState& g = d.grasps[0];
+  ASSERT_EQ(g.thread, 0);
+  const double z0 = d.threads[0].position[10].z();
+  ASSERT_TRUE(drive(m, d, 800, theta, 0.0, ramp(Vec3(0, 0, 0.015))));
+  ASSERT_EQ(g.thread, 0);
+  std::printf("[ figures  ] between two nodes: grasp at %.2f deg, %d nodes held (%d..%d); at the grasp the "
+              "node nearest both jaws was %.3f mm out of a jaw sphere's reach; lifted %.3f mm\n",
+              opening / kDeg, g.num_thread_nodes, g.thread_nodes[0].node,
+              g.thread_nodes[static_cast<std::size_t>(g.num_thread_nodes - 1)].node, nearest_gap * 1e3,
+              (d.threads[0].position[10].z() - z0) * 1e3);
+  EXPECT_GT(nearest_gap, 0.0);
+  EXPECT_GT(d.threads[0].position[10].z() - z0, 0.012);
 }
 
 TEST(ThreadGrasp, TheTensionNextToTheJawsIsTheGripsPull) {
