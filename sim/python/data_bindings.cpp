@@ -500,6 +500,10 @@ void bind_data(py::module_& m) {
             out["net"] = g.net;
             out["nodes"] = nodes;
             out["points"] = g.num_points;
+            py::list thread_nodes;
+            for (int k = 0; k < g.num_thread_nodes; ++k) thread_nodes.append(g.thread_nodes[static_cast<std::size_t>(k)].node);
+            out["thread"] = g.thread;
+            out["thread_nodes"] = thread_nodes;
             out["opening"] = g.opening;
             out["event"] = core::to_string(g.event);
             out["started"] = g.started;
@@ -514,7 +518,8 @@ void bind_data(py::module_& m) {
           "Grasper `index`'s state after the last step (core::GraspState, docs/grasping.md), a "
           "dict (a copy): holding (bool); body (the held body, -1) or net (the net whose tissue "
           "is held, -1) and nodes (its held global node indices); points (the grip's springs on "
-          "a held body); opening (rad, the jaws' |q1 - q2|); event ('none', 'grasp', 'release', "
+          "a held body); thread (the held thread, -1) and thread_nodes (its held node indices in "
+          "the thread); opening (rad, the jaws' |q1 - q2|); event ('none', 'grasp', 'release', "
           "'slip': this step's); started (s, the current grasp's start); grip_force (N, the "
           "springs' net pull at the last step's start); armed; grasps, releases, slips (counts "
           "since reset). IndexError for an index outside Model.grasp_names.")

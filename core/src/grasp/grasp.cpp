@@ -15,6 +15,7 @@
 
 #include "scratch/data_scratch.hpp"
 #include "grasp/grasp_terms.hpp"
+#include "grasp/grasp_thread.hpp"
 #include "net/net_terms.hpp"
 #include "solver/solver_terms.hpp"
 
@@ -64,10 +65,21 @@ int grasped_side(const Model& model, const GraspModel& g, const Contact& c, int*
   return other;
 }
 
+/// What `st` holds: the body, the net and the thread (each -1 if not), and its springs' or held
+/// nodes' count (GraspRecord).
+struct Held {
+  int body = -1, net = -1, thread = -1, count = 0;
+};
+Held held_by(const GraspState& st) noexcept {
+  return {st.body, st.net, st.thread,
+          st.body >= 0 ? st.num_points : (st.thread >= 0 ? st.num_thread_nodes : st.num_nodes)};
+}
+
 /// Logs this step's event of `st` (GraspState::log), if there is room.
-void log_event(GraspState& st, double time, int body, int net, int count) noexcept {
+void log_event(GraspState& st, double time, const Held& held) noexcept {
   if (st.logged >= kGraspLogSize) return;
-  st.log[static_cast<std::size_t>(st.logged++)] = GraspRecord{time, st.event, body, net, count, st.grip_force};
+  st.log[static_cast<std::size_t>(st.logged++)] =
+      GraspRecord{time, st.event, held.body, held.net, held.count, st.grip_force, held.thread};
 }
 
 /// A grasp started at `time` (s): the event, the count and the log.
@@ -75,7 +87,17 @@ void begin_grasp(GraspState& st, double time) noexcept {
   st.started = time;
   st.event = GraspEvent::kGrasp;
   ++st.grasps;
-  log_event(st, time, st.body, st.net, st.body >= 0 ? st.num_points : st.num_nodes);
+  log_event(st, time, held_by(st));
+}
+
+/// Lets go of whatever `st` holds (the event is the caller's).
+void let_go(GraspState& st) noexcept {
+  st.body = -1;
+  st.num_points = 0;
+  st.net = -1;
+  st.num_nodes = 0;
+  st.thread = -1;
+  st.num_thread_nodes = 0;
 }
 
 /// Starts a grasp of `g` if both jaws touch one body this step: per jaw, five springs over its
@@ -237,38 +259,35 @@ void update_grasps(const Model& model, Data& data) noexcept {
     st.event = GraspEvent::kNone;
     st.opening = std::abs(jaw_angle(model, data, g.jaw_joints[0]) - jaw_angle(model, data, g.jaw_joints[1]));
     if (st.holding()) {
-      const int held_body = st.body, held_net = st.net;
-      const int held_count = st.body >= 0 ? st.num_points : st.num_nodes;
+      const Held held = held_by(st);
       if (st.opening > g.open_angle) {
-        st.body = -1;
-        st.num_points = 0;
-        st.net = -1;
-        st.num_nodes = 0;
+        let_go(st);
         st.event = GraspEvent::kRelease;
         ++st.releases;
-        log_event(st, data.time, held_body, held_net, held_count);
+        log_event(st, data.time, held);
       } else {
         // The grip slips when the springs' net pull on what it holds at the last step exceeded
         // its limit (a NaN too).
         Vec3 pull = Vec3::Zero();
         for (int k = 0; k < st.num_points; ++k) pull += st.points[static_cast<std::size_t>(k)].force;
         for (int k = 0; k < st.num_nodes; ++k) pull += st.nodes[static_cast<std::size_t>(k)].force;
+        for (int k = 0; k < st.num_thread_nodes; ++k) pull += st.thread_nodes[static_cast<std::size_t>(k)].force;
         st.grip_force = pull.norm();
         if (!(st.grip_force <= g.max_force)) {
-          st.body = -1;
-          st.num_points = 0;
-          st.net = -1;
-          st.num_nodes = 0;
+          let_go(st);
           st.event = GraspEvent::kSlip;
           st.armed = false;  // no new grasp until the jaws open past θ_o
           ++st.slips;
-          log_event(st, data.time, held_body, held_net, held_count);
+          log_event(st, data.time, held);
         }
       }
     } else if (st.opening > g.open_angle) {
       st.armed = true;
     } else if (st.armed && st.opening < g.close_angle) {
       try_grasp(model, data, g, st);
+      // A thread before tissue: a thread lying on tissue between the jaws is taken, not the
+      // tissue under it (docs/suturing.md "The thread in the jaws").
+      if (!st.holding() && !model.threads.empty() && take_thread(model, data, g, st)) begin_grasp(st, data.time);
       if (!st.holding() && g.tissue && model.num_nets() > 0) try_grasp_tissue(model, data, g, st);
     }
     if (st.body >= 0) drop_held_contacts(model, data, g, st);

@@ -113,7 +113,7 @@ Data make_data(const Model& model, const DataOptions& options) {
     data.threads[i].position.resize(nodes);
     data.threads[i].velocity.resize(nodes);
     data.threads[i].external_force.resize(nodes);
-    scratch.threads[i].resize(model.threads[i], model.num_nodes());
+    scratch.threads[i].resize(model.threads[i], model.num_nodes(), model.num_grasps());
   }
   reset_data(model, data);
   return data;

@@ -37,6 +37,10 @@ struct ThreadPointTerm {
   /// the tissue).
   int face = -1;
   Vec3 face_weights = Vec3::Zero();
+  /// A held node's spring to a jaw (GraspThreadNode): the grasp (Data::grasps), or −1, and the
+  /// held node (GraspState::thread_nodes) whose `force` this term's adds to.
+  int grasp = -1;
+  int grasp_node = -1;
 };
 
 /// A thread node's deepest contact with the nets' surfaces this step (thread_tissue_contact.cpp).
@@ -110,8 +114,9 @@ struct ThreadScratch {
   std::vector<std::uint8_t> net_node_outcode;
   std::array<ThreadTissueTerm, kMaxThreadTissueContacts> tissue_terms{};
   int num_tissue_terms = 0;
-  /// Resizes for `thread` in a model of `model_nodes` net nodes (load time).
-  void resize(const ThreadModel& thread, int model_nodes);
+  /// Resizes for `thread` in a model of `model_nodes` net nodes and `graspers` graspers (their
+  /// held nodes' springs: 2 kMaxGraspThreadNodes terms each) (load time).
+  void resize(const ThreadModel& thread, int model_nodes, int graspers);
 };
 
 }  // namespace numen::core

@@ -83,7 +83,7 @@ void fill_contact(ThreadPointTerm& term, const MaterialPair& mp, double stiffnes
   term.force = fn * n - mp.friction * (v_rel - vn * n);
 }
 
-void gather_thread_body_contacts(const Model& model, const Data& data, const ThreadModel& thread,
+void gather_thread_body_contacts(const Model& model, const Data& data, int index, const ThreadModel& thread,
                                  ThreadState& st, ThreadScratch& scratch) noexcept {
   const int segs = thread.segments;
   const double rt = thread.radius;
@@ -101,6 +101,7 @@ void gather_thread_body_contacts(const Model& model, const Data& data, const Thr
     const int first = thread.tie_start.body == b ? 3 : 0;
     const int last = thread.tie_end.body == b ? segs - 3 : segs;
     const MaterialPair& mp = model.material_pair(thread.material, bm.material);
+    const GraspState* hold = jaw_holding_thread(model, data, index, b);  // a jaw holding the thread
     for (int k = bm.sphere_begin; k < bm.sphere_begin + bm.sphere_count; ++k) {
       const Sphere& sp = model.body_spheres[static_cast<std::size_t>(k)];
       const Vec3 c = bs.position + rot * sp.center;
@@ -108,6 +109,7 @@ void gather_thread_body_contacts(const Model& model, const Data& data, const Thr
       if (((c.array() + reach) < lo.array()).any() || ((c.array() - reach) > hi.array()).any())
         continue;
       for (int s = std::max(first, 0); s < last; ++s) {
+        if (hold != nullptr && next_to_held_node(*hold, s)) continue;
         const auto i = static_cast<std::size_t>(s);
         const double u = segment_parameter(st.position[i], st.position[i + 1], c);
         const SegmentPoint p = segment_point(st, s, u);

@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "scratch/thread_scratch.hpp"
+#include "numen/core/grasp.hpp"
 #include "numen/core/thread.hpp"
 
 namespace numen::core {
@@ -81,10 +82,11 @@ void reset_thread(const ThreadModel& t, ThreadState& s) noexcept {
   s.output = ThreadOutput{};
 }
 
-void ThreadScratch::resize(const ThreadModel& t, int model_nodes) {
+void ThreadScratch::resize(const ThreadModel& t, int model_nodes, int graspers) {
   const auto nodes = static_cast<std::size_t>(t.segments + 1);
   band.resize(t.segments + 3);
-  terms.assign(static_cast<std::size_t>(thread_term_capacity(t)), ThreadPointTerm{});
+  terms.assign(static_cast<std::size_t>(thread_term_capacity(t) + 2 * kMaxGraspThreadNodes * graspers),
+               ThreadPointTerm{});
   num_terms = 0;
   saved_position.assign(nodes, Vec3::Zero());
   trial_position.assign(nodes, Vec3::Zero());

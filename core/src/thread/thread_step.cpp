@@ -14,6 +14,7 @@
 #include "scratch/thread_scratch.hpp"
 #include "thread/thread_terms.hpp"
 #include "numen/core/data.hpp"
+#include "numen/core/grasp.hpp"
 #include "numen/core/model.hpp"
 #include "numen/core/rigid_body.hpp"
 #include "numen/core/step_stages.hpp"
@@ -196,7 +197,8 @@ Wrench tie_reaction(const ThreadState& st, const ThreadTie& tie, const TiePoint&
 
 /// The point terms' forces at the step's end, before the state moves on (`v`: the step's
 /// velocities): each eyelet's and each tissue contact's for the nets' step (sc.eyelet_terms,
-/// sc.tissue_terms), each body contact's reaction on its body's wrench.
+/// sc.tissue_terms), each body contact's and held node spring's reaction on its body's wrench,
+/// each held node spring's force into its GraspThreadNode::force.
 void hand_point_term_forces(Data& data, ThreadState& st, ThreadScratch& sc,
                             const std::vector<Vec3>& v, double h) noexcept {
   for (int t = 0; t < sc.num_terms; ++t) {
@@ -228,6 +230,8 @@ void hand_point_term_forces(Data& data, ThreadState& st, ThreadScratch& sc,
       tt.stiffness = term.axis.dot(term.stiffness * term.axis);
       tt.damping = term.axis.dot(term.damping * term.axis);
     }
+    if (term.grasp >= 0)
+      data.grasps[static_cast<std::size_t>(term.grasp)].thread_nodes[static_cast<std::size_t>(term.grasp_node)].force += f;
     if (term.body < 0) continue;
     const BodyState& bs = data.bodies[static_cast<std::size_t>(term.body)];
     data.body_wrench[static_cast<std::size_t>(term.body)].force -= f;
@@ -235,7 +239,7 @@ void hand_point_term_forces(Data& data, ThreadState& st, ThreadScratch& sc,
   }
 }
 
-void step_thread(const Model& model, Data& data, const ThreadModel& th, ThreadState& st,
+void step_thread(const Model& model, Data& data, int index, const ThreadModel& th, ThreadState& st,
                  ThreadScratch& sc) noexcept {
   const double h = model.dt;
   const int nodes = th.segments + 1;
@@ -249,10 +253,12 @@ void step_thread(const Model& model, Data& data, const ThreadModel& th, ThreadSt
   const TiePoint p1 = tie_point(model, data, th.tie_end, nodes + 1);
   const Vec3 off0 = th.rest_segment * (p0.rotation * th.tie_start.direction);
   const Vec3 off1 = th.rest_segment * (p1.rotation * th.tie_end.direction);
-  // The contacts and eyelets at the step's start (linear in v over the step).
+  // The held nodes' springs (first: never dropped), the contacts and eyelets at the step's start
+  // (linear in v over the step).
   sc.num_terms = 0;
   for (ThreadEyeletTerm& et : sc.eyelet_terms) et.set = false;
-  gather_thread_body_contacts(model, data, th, st, sc);
+  gather_thread_grasps(model, data, index, st, sc);
+  gather_thread_body_contacts(model, data, index, th, st, sc);
   gather_thread_obstacle_contacts(model, th, st, sc);
   gather_thread_tissue_contacts(model, data, th, st, sc);
   gather_thread_eyelets(th, st, sc);
@@ -339,7 +345,7 @@ void step_threads(const Model& model, Data& data) noexcept {
     ThreadState& st = data.threads[i];
     take_over_punctures(model, data, th, st);
     place_tissue_eyelets(model, data, st);
-    step_thread(model, data, th, st, data.scratch->threads[i]);
+    step_thread(model, data, static_cast<int>(i), th, st, data.scratch->threads[i]);
     tie_tissue_eyelets(model, data, st, data.scratch->threads[i]);
     tie_tissue_contacts(model, data, data.scratch->threads[i]);
   }

@@ -21,6 +21,7 @@ struct Data;
 struct ThreadModel;
 struct ThreadState;
 struct ThreadScratch;
+struct GraspState;
 
 /// The next free term of `scratch` (cleared), or nullptr (counted in
 /// ThreadOutput::contacts_dropped) when its capacity is used up.
@@ -34,9 +35,26 @@ void fill_contact(ThreadPointTerm& term, const MaterialPair& mp, double stiffnes
 
 /// Segment–sphere contacts with every body sphere (a body's material pair with the thread's:
 /// stiffness under the body's contact time-constant floor, damping, viscous friction; the
-/// reaction goes to the body). The segments next to a tie (3) do not touch the tied body.
-void gather_thread_body_contacts(const Model& model, const Data& data, const ThreadModel& thread,
+/// reaction goes to the body). The segments next to a tie (3) do not touch the tied body; the
+/// segments next to a node a grasper holds (thread_grasp.cpp) do not touch its jaws. `index`:
+/// the thread's in Model::threads.
+void gather_thread_body_contacts(const Model& model, const Data& data, int index, const ThreadModel& thread,
                                  ThreadState& state, ThreadScratch& scratch) noexcept;
+
+/// The thread in the jaws (grasp.hpp GraspThreadNode, docs/suturing.md "The thread in the
+/// jaws"): for each grasp holding thread `index` (GraspState::thread), each held node's springs
+/// to both jaws — half the grasper's stiffness and damping each, towards the node's place at the
+/// grasp's start in the jaw's frame, the jaw's point moving as given — as point terms whose
+/// reaction goes to the jaw (ThreadPointTerm::body) and whose force the step adds to
+/// GraspThreadNode::force (zeroed here). No allocation.
+void gather_thread_grasps(const Model& model, Data& data, int index, ThreadState& state,
+                          ThreadScratch& scratch) noexcept;
+
+/// The grasp of Data::grasps holding thread `index` with `body` as one of its jaws, or nullptr.
+const GraspState* jaw_holding_thread(const Model& model, const Data& data, int index, int body) noexcept;
+
+/// Whether `segment` is next to a node `hold` holds (its contacts with the jaws are off).
+bool next_to_held_node(const GraspState& hold, int segment) noexcept;
 
 /// Node contacts (a sphere of the thread's radius) with the plane, box, sphere and capsule
 /// obstacles (not sphere sets or meshes).

@@ -19,6 +19,9 @@ std::string format_grasp_event(const core::Model& model, const core::GraspModel&
     os << model.bodies[static_cast<std::size_t>(record.body)].name << " (" << record.nodes << " grip springs";
   } else if (record.net >= 0) {
     os << model.nets[static_cast<std::size_t>(record.net)].name << " (" << record.nodes << " nodes";
+  } else if (record.thread >= 0 && record.thread < model.num_threads()) {
+    const std::string& name = model.threads[static_cast<std::size_t>(record.thread)].name;
+    os << "thread " << (name.empty() ? std::to_string(record.thread) : name) << " (" << record.nodes << " nodes";
   } else {
     os << "? (";
   }

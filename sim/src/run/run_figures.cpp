@@ -301,13 +301,14 @@ constexpr RunFigure kFigures[] = {
     {"needle.lines", "", "Each needle: its counts, whether it went through and when, the tip force at its "
      "last puncture, its largest deviation, its errors from its marks", K::kTextList,
      [](const S& s) noexcept { return list(s.needle_lines); }, needled},
-    {"grasp.started", "", "Grasps started (jaws closed below close_angle_deg on a body or tissue)",
+    {"grasp.started", "", "Grasps started (jaws closed below close_angle_deg on a body, a thread or tissue)",
      K::kCount, [](const S& s) noexcept { return count(s.grasps_started); }, grasping},
     {"grasp.released", "", "Grasps ended by the jaws opening past open_angle_deg", K::kCount,
      [](const S& s) noexcept { return count(s.grasps_released); }, grasping},
     {"grasp.slipped", "", "Grasps ended by a pull past the grip's max_force", K::kCount,
      [](const S& s) noexcept { return count(s.grasps_slipped); }, grasping},
-    {"grasp.events", "", "Each grasp, release and slip: time, grasper, what it held", K::kTextList,
+    {"grasp.events", "", "Each grasp, release and slip: time, grasper, what it held (a body, a net or a thread)",
+     K::kTextList,
      [](const S& s) noexcept { return list(s.grasp_events); }, grasping},
     {"grasp.graspers", "", "Each grasper: its device, its counts, the hand-overs it gave and took ([task]), "
      "the largest feedback force on its device's hand", K::kTextList,

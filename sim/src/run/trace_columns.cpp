@@ -122,7 +122,7 @@ constexpr TraceColumn kColumns[] = {
      [](const R& r, int) noexcept { return static_cast<double>(r.emcy_node); }, false, true},
     {"emcy_code", "", "Its error code (0: none; named by CiA 301/402 in the summary's EMCY list)",
      [](const R& r, int) noexcept { return static_cast<double>(r.emcy_code); }, false, true},
-    {"grasps_held", "", "Graspers holding a body or tissue after the step (docs/grasping.md)",
+    {"grasps_held", "", "Graspers holding a body, a thread or tissue after the step (docs/grasping.md)",
      [](const R& r, int) noexcept { return static_cast<double>(r.grasps_held); }},
     // Devices 1 .. N−1 of a scene of several (device 0's are the columns above).
     {"sample_valid@", "", "Each other device (a scene of several): 1: its sample was valid",

@@ -486,6 +486,7 @@ def test_grasp_state_is_read_per_grasper(tmp_path):
     g = data.grasp(0)
     assert g["opening"] == pytest.approx(0.2, abs=0.01)
     assert not g["holding"] and g["body"] == -1 and g["net"] == -1 and g["nodes"] == []
+    assert g["thread"] == -1 and g["thread_nodes"] == []
     assert g["event"] == "none" and g["grasps"] == g["releases"] == g["slips"] == 0
     assert g["armed"]
     with pytest.raises(IndexError, match="no grasper 1"):

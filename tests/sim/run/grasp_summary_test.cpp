@@ -27,6 +27,8 @@ TEST(GraspSummary, AnEventReadsAsTimeWhatWhoAndWhat) {
   m.bodies[1].name = "block";
   m.nets.resize(1);
   m.nets[0].name = "organ";
+  m.threads.resize(2);
+  m.threads[0].name = "suture";
   numen::core::GraspModel g;
   g.name = "grasper";
   using numen::core::GraspEvent;
@@ -36,6 +38,11 @@ TEST(GraspSummary, AnEventReadsAsTimeWhatWhoAndWhat) {
             "8.611 s slip grasper: organ (4 nodes, pull 5.005 N)");
   EXPECT_EQ(numen::sim::format_grasp_event(m, g, {1.0, GraspEvent::kRelease, 1, -1, 10, 0.25}),
             "1.000 s release grasper: block (10 grip springs, pull 0.250 N)");
+  // A thread (docs/suturing.md, "The thread in the jaws"): named, or by index without a name.
+  EXPECT_EQ(numen::sim::format_grasp_event(m, g, {2.5, GraspEvent::kGrasp, -1, -1, 3, 0.0, 0}),
+            "2.500 s grasp grasper: thread suture (3 nodes)");
+  EXPECT_EQ(numen::sim::format_grasp_event(m, g, {2.75, GraspEvent::kSlip, -1, -1, 2, 0.5123, 1}),
+            "2.750 s slip grasper: thread 1 (2 nodes, pull 0.512 N)");
 }
 
 // The default scene's recording with a grasper on its jaws: the recorded suturing motion closes

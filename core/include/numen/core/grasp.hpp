@@ -18,6 +18,10 @@
 /// step's start on both bodies' explicit wrenches, and their Jacobian, W = (h c + h² k) I per
 /// point, in the linearised step's matrix with the cross blocks of a body–body contact, so the
 /// held body and the instrument are one implicit system (no stiffness limit from the step).
+///
+/// A suture thread between the jaws (no body touched) is held at its nodes by springs to both
+/// jaws in the thread's own implicit step (GraspThreadNode; docs/suturing.md "The thread in the
+/// jaws"); tissue, when neither a body nor a thread is touched, at its nodes in the nets' step.
 
 #include <array>
 #include <cstdint>
@@ -39,6 +43,12 @@ inline constexpr int kMaxGraspPoints = 2 * kGripPointsPerJaw;
 inline constexpr int kMaxGraspNodes = 16;
 /// Node contacts' room for the grasp springs of held nodes: three per node (NodeContact::held).
 inline constexpr int kGraspSpringsPerNode = 3;
+/// Thread nodes one grasp holds at most (docs/suturing.md "The thread in the jaws"): the nodes of
+/// the segments both jaws touch, the nearest to the pinch's centre first. A thread across a jaw
+/// gives 2–4 (a 3 mm jaw sphere over 1.5 mm segments of the default 3-0 thread); laid along a
+/// jaw of 9 mm of spheres (the graspers' jaws), about 8: each node's spring is the grasper's, so
+/// more would only stiffen the grip, not hold the thread better.
+inline constexpr int kMaxGraspThreadNodes = 8;
 
 /// An instrument's grasper: its two jaws and the rules and springs of its grasps. Model::grasps.
 struct GraspModel {
@@ -74,6 +84,22 @@ struct GraspNode {
   Vec3 force = Vec3::Zero();       ///< The spring's force on the node at the step's start (N, world).
 };
 
+/// A held node of a thread (GraspState::thread_nodes): tied to the point of each jaw where it
+/// was at the grasp's start, by half the grasper's spring to each (k/2, c/2: together the
+/// grasper's k and c towards the jaws' mean point, and a thread pinched between the jaws stays
+/// between them as they move apart before the release). Stepped by the thread's own implicit
+/// step (step_threads(): a point term, the jaws' points moving as given), the reaction on the
+/// jaws' Data::body_wrench.
+struct GraspThreadNode {
+  int node = -1;  ///< The node's index in its thread (ThreadState::position), 0 … segments.
+  /// The node's place at the grasp's start in the frame of each jaw (GraspModel::jaws[j], m from
+  /// its COM).
+  std::array<Vec3, 2> jaw_points{Vec3::Zero(), Vec3::Zero()};
+  /// Both springs' force on the node over the last thread step (N, world; at the step's end, as
+  /// the implicit step applied it): the jaws together got its opposite.
+  Vec3 force = Vec3::Zero();
+};
+
 /// One spring of a grasp: a point of a jaw tied to a point of the held body.
 struct GraspPoint {
   int jaw = -1;                       ///< The jaw's body.
@@ -99,10 +125,12 @@ const char* to_string(GraspEvent event) noexcept;
 struct GraspRecord {
   double time = 0.0;                      ///< Simulated time of the step (s, Data::time at its start).
   GraspEvent event = GraspEvent::kNone;   ///< kGrasp, kRelease or kSlip.
-  int body = -1;                          ///< The body grasped or let go, or -1 for tissue.
+  int body = -1;                          ///< The body grasped or let go, or -1 for tissue or a thread.
   int net = -1;                           ///< The net whose tissue was grasped or let go, or -1.
-  int nodes = 0;                          ///< Held nodes (tissue), or the grip's springs (a body).
+  /// Held nodes (tissue or a thread), or the grip's springs (a body).
+  int nodes = 0;
   double grip_force = 0.0;                ///< GraspState::grip_force then (N): the pull at a release or slip.
+  int thread = -1;                        ///< The thread (Model::threads) grasped or let go, or -1.
 };
 
 /// Events one grasper logs (GraspState::log): the first ones of a run; the counts go on.
@@ -116,6 +144,9 @@ struct GraspState {
   int net = -1;           ///< The net whose tissue is held; -1: none.
   int num_nodes = 0;      ///< Held nodes, [0, num_nodes) of `nodes`.
   std::array<GraspNode, kMaxGraspNodes> nodes{};
+  int thread = -1;           ///< The thread (Model::threads) held; -1: none.
+  int num_thread_nodes = 0;  ///< Held thread nodes, [0, num_thread_nodes) of `thread_nodes`.
+  std::array<GraspThreadNode, kMaxGraspThreadNodes> thread_nodes{};
   double opening = 0.0;   ///< The jaws' opening this step (rad).
   GraspEvent event = GraspEvent::kNone;  ///< This step's event.
   double started = 0.0;   ///< Simulated time (s) the current grasp started.
@@ -125,13 +156,15 @@ struct GraspState {
   std::int64_t grasps = 0;    ///< Grasps started since reset.
   std::int64_t releases = 0;  ///< Grasps ended by the jaws opening.
   std::int64_t slips = 0;     ///< Grasps ended by slipping (the net pull past max_force).
-  /// ‖Σ GraspPoint::force‖ at the last step's start (N): the pull the grip transmits.
+  /// ‖Σ GraspPoint::force‖ at the last step's start, ‖Σ GraspNode::force‖ likewise, or
+  /// ‖Σ GraspThreadNode::force‖ of the last thread step (N): the pull the grip transmits.
   double grip_force = 0.0;
   /// The first kGraspLogSize events since reset, [0, logged) (the run's summary lists them);
   /// grasps + releases + slips count them all.
   std::array<GraspRecord, kGraspLogSize> log{};
   int logged = 0;
-  bool holding() const noexcept { return body >= 0 || net >= 0; }
+  /// Something is held: a body, a net's tissue or a thread.
+  bool holding() const noexcept { return body >= 0 || net >= 0 || thread >= 0; }
 };
 
 /// The grasp stage (step(), after the contacts): for each grasper, reads the opening; ends a
@@ -139,8 +172,12 @@ struct GraspState {
 /// max_force (slip); starts a grasp when the opening is below θ_c, nothing is held, the grasper
 /// is armed (GraspState::armed: no slip since the jaws last opened past θ_o), and both
 /// jaws touch one dynamic body outside their articulation — kGripPointsPerJaw springs on each
-/// jaw's grip — or, when they touch no body but both touch one net's nodes (GraspModel::tissue),
-/// ties each node they touch (up to kMaxGraspNodes) to the jaw that touched it. Then removes this
+/// jaw's grip — or, when they touch no body but both touch a thread's segments, ties the nodes of
+/// those segments (up to kMaxGraspThreadNodes, the nearest to the pinch first) to both jaws
+/// (GraspThreadNode; the thread's step applies the springs and turns off its contacts with the
+/// jaws next to them) — or, when they touch neither but both touch one net's nodes
+/// (GraspModel::tissue), ties each node they touch (up to kMaxGraspNodes) to the jaw that
+/// touched it: a thread on tissue is taken before the tissue under it. Then removes this
 /// step's contacts between the jaws and what they hold, and writes the held nodes' springs after
 /// the node contacts (NodeContact::held, Data::num_node_grasp_springs). Sets kStageGrasp in
 /// Data::stages_run. No allocation.

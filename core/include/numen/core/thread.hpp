@@ -25,7 +25,9 @@
 /// (tissue; the reaction goes to the triangle's nodes as held node springs, as an eyelet's on
 /// tissue below), and eyelets: points the thread slides through
 /// with friction along it (ThreadEyelet, written by the caller before each step, or taken over
-/// from a needle's punctures).
+/// from a needle's punctures), and a grasper's jaws holding some of its nodes (GraspThreadNode,
+/// grasp.hpp: springs to the jaws' points, the reaction on the jaws; docs/suturing.md "The
+/// thread in the jaws").
 ///
 /// Through tissue (docs/suturing.md "The thread through tissue"): a thread whose start is tied
 /// to a needle (ThreadModel::needle) takes over each puncture point the needle lets go past its
@@ -184,7 +186,8 @@ std::string finalize_thread(ThreadModel& thread, int num_bodies, int num_materia
 void reset_thread(const ThreadModel& thread, ThreadState& state) noexcept;
 
 /// Steps every thread of `model` by Model::dt from the bodies' states at the step's start and
-/// adds the ties' and contacts' reactions to Data::body_wrench (the body-force stage; sets
+/// adds the ties', contacts' and held nodes' springs' reactions to Data::body_wrench (the jaws
+/// get the springs' of GraspState::thread_nodes, whose `force` it writes; the body-force stage; sets
 /// kStageThreads in Data::stages_run); takes over its needle's puncture points let go past the
 /// tail this step, and writes its eyelets' forces on tissue as held node springs after the
 /// needles' ties (Data::num_node_thread_ties; before the nets' forces). A non-finite result

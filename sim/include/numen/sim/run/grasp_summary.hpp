@@ -15,7 +15,8 @@ struct RunSummary;
 
 /// One logged event (core::GraspRecord) of grasper `grasper` as a line: "6.961 s grasp
 /// grasper: organ (7 nodes)", "8.611 s slip grasper: organ (4 nodes, pull 5.005 N)", "… block
-/// (10 grip springs)". Time in s (3 decimals), the body's or the net's name.
+/// (10 grip springs)", "… thread suture (3 nodes)". Time in s (3 decimals), the body's or the
+/// net's name, or "thread" and the thread's name (its index if it has none).
 std::string format_grasp_event(const core::Model& model, const core::GraspModel& grasper,
                                const core::GraspRecord& record);
 

@@ -78,7 +78,7 @@ struct TraceRecord {
   int emcys = 0;          ///< EMCY messages received this period.
   int emcy_node = 0;      ///< Node id of the newest of them (0: none this period).
   int emcy_code = 0;      ///< Its emergency error code (0: none); named in the summary's EMCY list.
-  /// Graspers holding a body or tissue after the step (core::GraspState::holding(); a grasp, a
+  /// Graspers holding a body, a thread or tissue after the step (core::GraspState::holding(); a grasp, a
   /// release or a slip changes it; the summary's grasp.events names each).
   int grasps_held = 0;
   /// Devices 1 .. num_extra_devices of a scene of several, in order (empty for one device).
