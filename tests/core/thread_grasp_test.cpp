@@ -178,6 +178,21 @@ TEST(ThreadGrasp, TheJawsTakeTheThreadAndLiftIt) {
   EXPECT_NEAR(g.grip_force, weight, 0.01 * weight);
 }
 
+// A grasper with `thread = false` (GraspModel::thread; the scene key of [[grasp]]) closes on the
+// same thread and takes nothing: its jaws press on it through their contacts.
+TEST(ThreadGrasp, AGrasperWithoutThreadGraspingTakesNothing) {
+  core::Model m = thread_grasp_rig(5.0, false);
+  m.grasps[0].thread = false;
+  ASSERT_EQ(core::finalize_model(m), "");
+  core::Data d = core::make_data(m);
+  double theta = 60 * kDeg;
+  int touching = 0;
+  drive(m, d, 660, theta, -100 * kDeg, still, [&](int) { touching += d.threads[0].output.body_contacts > 0; });
+  EXPECT_EQ(d.grasps[0].grasps, 0);
+  EXPECT_EQ(d.grasps[0].thread, -1);
+  EXPECT_GT(touching, 0) << "the jaws never reached the thread: the test checks nothing";
+}
+
 /// How far node `n`'s sphere (the thread's radius) is out of reach of jaw `j`'s nearest sphere
 /// (m; < 0: within reach).
 double node_gap(const core::Model& m, const core::Data& d, int j, int n) {

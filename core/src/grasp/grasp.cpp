@@ -287,7 +287,7 @@ void update_grasps(const Model& model, Data& data) noexcept {
       try_grasp(model, data, g, st);
       // A thread before tissue: a thread lying on tissue between the jaws is taken, not the
       // tissue under it (docs/suturing.md "The thread in the jaws").
-      if (!st.holding() && !model.threads.empty() && take_thread(model, data, g, st)) begin_grasp(st, data.time);
+      if (!st.holding() && g.thread && !model.threads.empty() && take_thread(model, data, g, st)) begin_grasp(st, data.time);
       if (!st.holding() && g.tissue && model.num_nets() > 0) try_grasp_tissue(model, data, g, st);
     }
     if (st.body >= 0) drop_held_contacts(model, data, g, st);

@@ -55,7 +55,7 @@ void parse_grasps(const TomlTable& root, Scene& scene) {
   core::Model& m = scene.model;
   for (const TomlTable& t : root.tables("grasp")) {
     t.allow_only({"name", "jaws", "close_angle_deg", "open_angle_deg", "stiffness", "damping",
-                  "grip_radius", "max_force", "tissue"});
+                  "grip_radius", "max_force", "tissue", "thread"});
     core::GraspModel g;
     g.name = t.string("name");
     for (const core::GraspModel& other : m.grasps)
@@ -82,6 +82,7 @@ void parse_grasps(const TomlTable& root, Scene& scene) {
     if (!(g.grip_radius > 0.0)) t.fail("grip_radius", "must be > 0 (m)");
     g.max_force = t.number_in("max_force", 0.0, kInf, g.max_force);
     g.tissue = t.boolean_or("tissue", true);
+    g.thread = t.boolean_or("thread", true);
     if (!(g.max_force > 0.0)) t.fail("max_force", "must be > 0 (N)");
     // A body the grip cannot hold against gravity: said at load, with the numbers. Not the
     // grasper's own instrument: its jaws and every body joined to them (its tube, its sleeve).

@@ -54,6 +54,7 @@ damping = 3.0
 grip_radius = 0.002
 max_force = 12.0
 tissue = false
+thread = false
 )");
   const numen::sim::Scene s = numen::sim::load_scene(dir.write("grasp.toml", text));
   ASSERT_EQ(s.model.grasps.size(), 2u);
@@ -83,6 +84,8 @@ tissue = false
   EXPECT_EQ(t.max_force, 12.0);
   EXPECT_TRUE(g.tissue);
   EXPECT_FALSE(t.tissue);
+  EXPECT_TRUE(g.thread);
+  EXPECT_FALSE(t.thread);
   EXPECT_NE(s.model.stage_plan & numen::core::kStageGrasp, 0u);
 }
 
@@ -106,6 +109,7 @@ TEST(SceneGrasp, ErrorsAreLocatedAtTheirKeys) {
       {"jaws = [\"jaw_1\", \"jaw_2\"]\nstiffness = 0.0\n", "stiffness = 0.0", "0.0", "grasp[0].stiffness", "must be > 0"},
       {"jaws = [\"jaw_1\", \"jaw_2\"]\ngrip = 0.002\n", "grip = ", "0.002", "grasp[0].grip", "grip"},
       {"jaws = [\"jaw_1\", \"jaw_2\"]\ntissue = 1\n", "tissue = ", "1", "grasp[0].tissue", "expected true or false"},
+      {"jaws = [\"jaw_1\", \"jaw_2\"]\nthread = \"no\"\n", "thread = ", "\"no\"", "grasp[0].thread", "expected true or false"},
   };
   for (const Case& c : cases) {
     SCOPED_TRACE(c.keys);

@@ -74,6 +74,9 @@ struct GraspModel {
   /// Grasp a deformable net's tissue when the jaws touch no body: the nodes the jaws touch are
   /// tied to them (GraspState::nodes).
   bool tissue = true;
+  /// Grasp a suture thread when the jaws touch no body: the nodes of the segments both jaws
+  /// touch are tied to them (GraspState::thread_nodes; docs/suturing.md "The thread in the jaws").
+  bool thread = true;
 };
 
 /// A held node of tissue: tied to a point of the jaw that touched it by the grasper's spring.
