@@ -11,6 +11,7 @@
 #include <limits>
 #include <utility>
 
+#include "mesh/mesh_shape_query.hpp"
 #include "numen/core/data.hpp"
 #include "numen/core/grasp.hpp"
 #include "numen/core/model.hpp"
@@ -51,11 +52,10 @@ bool jaw_touches(const Model& model, const Data& data, const JawReach& jaw, cons
   const BodyModel& bm = model.bodies[static_cast<std::size_t>(jaw.body)];
   const BodyState& bs = data.bodies[static_cast<std::size_t>(jaw.body)];
   const Vec3 d = b - a;
-  const double dd = d.squaredNorm();
   for (int k = bm.sphere_begin; k < bm.sphere_begin + bm.sphere_count; ++k) {
     const Sphere& sp = model.body_spheres[static_cast<std::size_t>(k)];
     const Vec3 c = bs.position + bs.orientation * sp.center;
-    const double u = dd > 0.0 ? std::clamp((c - a).dot(d) / dd, 0.0, 1.0) : 0.0;
+    const double u = detail::segment_parameter(a, b, c);
     const double reach = sp.radius + rt;
     if ((a + u * d - c).squaredNorm() < reach * reach) return true;
   }

@@ -2,9 +2,11 @@
 /// @file mesh_shape_query.hpp
 /// Private to numen::core (core/src/mesh). The pieces of a MeshShape's signed-distance query
 /// shared by the tree (mesh_shape.cpp) and the narrow band (mesh_shape_band.cpp): the closest point
-/// on a triangle (Ericson 2005, §5.1.5), the running nearest triangle, and the signed result from
+/// on a segment (Ericson 2005, §5.1.2; the thread's contacts and the jaws' test of a thread use it too)
+/// and on a triangle (Ericson 2005, §5.1.5), the running nearest triangle, and the signed result from
 /// the feature's angle-weighted pseudo-normal (Bærentzen & Aanæs 2005). No allocation, no exception.
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -15,6 +17,14 @@
 namespace numen::core::detail {
 
 inline constexpr double kInf = std::numeric_limits<double>::infinity();
+
+/// Parameter u in [0, 1] of the point a + u (b − a) of segment [a, b] nearest to `c` (0 for a
+/// segment of zero length): Ericson, Real-Time Collision Detection (2005), §5.1.2.
+inline double segment_parameter(const Vec3& a, const Vec3& b, const Vec3& c) noexcept {
+  const Vec3 d = b - a;
+  const double dd = d.squaredNorm();
+  return dd > 0.0 ? std::clamp((c - a).dot(d) / dd, 0.0, 1.0) : 0.0;
+}
 
 /// Closest feature of a triangle to a point.
 enum Feature : int { kFace = 0, kVertex0, kVertex1, kVertex2, kEdge01, kEdge12, kEdge20 };

@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "contact/narrowphase.hpp"
+#include "mesh/mesh_shape_query.hpp"
 #include "scratch/thread_scratch.hpp"
 #include "thread/thread_terms.hpp"
 #include "numen/core/contact_force.hpp"
@@ -16,12 +17,7 @@
 namespace numen::core {
 namespace {
 
-/// Parameter in [0, 1] of the point of segment [a, b] nearest to c.
-double segment_parameter(const Vec3& a, const Vec3& b, const Vec3& c) noexcept {
-  const Vec3 d = b - a;
-  const double dd = d.squaredNorm();
-  return dd > 0.0 ? std::clamp((c - a).dot(d) / dd, 0.0, 1.0) : 0.0;
-}
+using detail::segment_parameter;  // mesh/mesh_shape_query.hpp
 
 /// Nearest points of segments [p1, q1] and [p2, q2]: parameters s, t (Ericson, "Real-Time
 /// Collision Detection", 2005, §5.1.9).
