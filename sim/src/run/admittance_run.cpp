@@ -14,6 +14,8 @@
 #include "numen/sim/run/task_summary.hpp"
 #include "numen/sim/run/run.hpp"
 
+#include "contact_depths.hpp"
+
 namespace numen::sim {
 namespace {
 
@@ -22,21 +24,6 @@ const AdmittanceScene& admittance_of(const Scene& scene) {
     throw std::invalid_argument(scene.name +
                                 ": not an admittance scene (coupling = \"admittance\")");
   return *scene.admittance;
-}
-
-/// Deepest contact (m) of `body` among data's contacts (0 if none); `count` (if given): how many.
-double deepest_of(const core::Data& data, int body, int* count = nullptr) noexcept {
-  double deepest = 0.0;
-  int n = 0;
-  for (int i = 0; i < data.num_contacts; ++i) {
-    const core::Contact& c = data.contacts[static_cast<std::size_t>(i)];
-    if (c.body_a == body || c.body_b == body) {
-      deepest = std::max(deepest, c.depth);
-      ++n;
-    }
-  }
-  if (count != nullptr) *count = n;
-  return deepest;
 }
 
 /// Axis values that put the device's controlled frame at the held body's initial pose.
@@ -65,44 +52,27 @@ platform::ControlLoopSettings loop_settings(std::uint32_t overrun_limit) noexcep
 
 AdmittanceRunner::AdmittanceRunner(const Scene& scene, std::size_t trace_capacity,
                                    std::uint32_t overrun_limit)
-    : scene_(&scene),
-      bus_(scene.bus),
+    : RunHarness(scene, trace_capacity),
       hand_motion_(scene.device, scene.hand, admittance_of(scene).drive_lag_s),
       emulator_(scene.device, admittance_of(scene).config),
       kinematics_(hal::make_kinematics(scene.device)),
       start_axes_(initial_axes(scene)),
-      rig_(scene.device, admittance_of(scene).config, bus_.controller(), start_axes_,
-           device_settings(overrun_limit)),
-      data_(core::make_data(scene.model)),
-      ghost_(core::make_data(scene.model)),
-      loop_(scene.model, data_, rig_, loop_settings(overrun_limit)),
-      multirate_(scene),
-      period_ns_(static_cast<std::int64_t>(std::llround(scene.model.dt * 1e9))),
-      phase_ns_(static_cast<std::int64_t>(std::llround(scene.compute_phase_s * 1e9))),
-      divergence_(scene.model, data_) {
+      ghost_(core::make_data(scene.model)) {
+  // The admittance device, assembled in the rig the loop runs, on the bus's controller side.
+  assemble(loop_settings(overrun_limit), scene.device, admittance_of(scene).config,
+           bus_.controller(), start_axes_, device_settings(overrun_limit));
   emulator_.set_axis_values(start_axes_);  // the device's set-points (the rig's device starts there)
   hand_motion_.set_axis_values(start_axes_);
   emulator_.set_motion(&hand_motion_);
-  if (multirate_.enabled()) loop_.set_stepper(&multirate_);
-  describe_scene(scene, acc_);
   acc_.admittance.enabled = true;
   acc_.device_loop = "admittance";
   acc_.admittance.k_hand = scene.hand.stiffness;
   acc_.managed = false;
   acc_.startup = "admittance: SYNC, force TPDOs, csp RPDOs (no NMT start-up)";
   view_axis_values_.assign(scene.device.axes.size(), 0.0);
-  trace_.reserve(trace_capacity);
 }
 
-void AdmittanceRunner::stream_view(const std::string& record_path,
-                                   std::vector<platform::StateFrameSink*> sinks, double rate_hz,
-                                   bool wait) {
-  view_ = std::make_unique<ViewOutput>(*scene_, record_path, std::move(sinks), rate_hz, wait);
-}
-
-void AdmittanceRunner::start_scene_thread(const platform::SceneThreadSettings& settings) {
-  multirate_.start_scene_thread(settings);
-}
+AdmittanceRunner::~AdmittanceRunner() { disassemble(); }
 
 void AdmittanceRunner::finish() {
   multirate_.stop();
@@ -119,12 +89,11 @@ void AdmittanceRunner::period(std::int64_t deadline_mono_ns, std::int64_t woke_m
   hand_motion_.set_hand(hand_, scene_->trajectory.twist_at(ts));
 
   bus_.set_time_ns(t);
-  loop_.begin_period(t, deadline_mono_ns, woke_mono_ns);
+  loop_->begin_period(t, deadline_mono_ns, woke_mono_ns);
   bus_.set_time_ns(t + scene_->bus.latency_ns);
   emulator_.poll(bus_.device());
   bus_.set_time_ns(t + phase_ns_);
-  const platform::PeriodReport& r = loop_.end_period(t + phase_ns_);
-  step_time_.record(r.step_ns);
+  const platform::PeriodReport& r = loop_->end_period(t + phase_ns_);
   ++k_;  // (a multirate run: the loop's Stepper::finish() left both loops' single-rate view)
 
   // ---- measurements ----
@@ -136,12 +105,12 @@ void AdmittanceRunner::period(std::int64_t deadline_mono_ns, std::int64_t woke_m
   const core::Vec3 x_dev = emulator_.pose().position;
   if (held >= 0) {
     const auto h = static_cast<std::size_t>(held);
-    tool_pen_ = deepest_of(data_, held, &tool_contacts);
+    tool_pen_ = detail::deepest_contact_of(data_, held, &tool_contacts);
     ghost_.bodies = data_.bodies;  // same size: no allocation
     ghost_.bodies[h].position = hand_.position;
     ghost_.bodies[h].orientation = hand_.orientation;
     core::detect_contacts(model, ghost_);
-    hand_pen_ = deepest_of(ghost_, held);
+    hand_pen_ = detail::deepest_contact_of(ghost_, held);
     const double e = (x_dev - data_.bodies[h].position).norm();
     error_sq_ += e * e;
     a.device_error_max_mm = std::max(a.device_error_max_mm, e * 1e3);
@@ -166,9 +135,9 @@ void AdmittanceRunner::period(std::int64_t deadline_mono_ns, std::int64_t woke_m
   if (data_.solver_residual > s.solver_residual_max) s.solver_residual_max = data_.solver_residual;
   if (data_.status & core::kSolverNotConverged) ++s.solver_not_converged_steps;
   if (r.entered_safe_stop) {
-    if (s.faults == 0 && rig_.device().first_fault() != nullptr) {
+    if (s.faults == 0 && rig_->device().first_fault() != nullptr) {
       // the first latched safe state of the run (kept across re-arms)
-      s.first_fault = hal::to_string(rig_.device().first_fault()->cause);
+      s.first_fault = hal::to_string(rig_->device().first_fault()->cause);
       s.first_fault_time_s = static_cast<double>(t + phase_ns_) * 1e-9;
       s.first_fault_period = k_ - 1;
     }
@@ -181,7 +150,7 @@ void AdmittanceRunner::period(std::int64_t deadline_mono_ns, std::int64_t woke_m
   view_report_ = r;
   if (trace_.records().capacity() > 0)
     trace_.push(make_trace_record(data_, held, tool_contacts, tool_pen_, hand_pen_, view_report_,
-                                  loop_.device().output().torque));
+                                  loop_->device().output().torque));
   if (view_)
     view_->publish(data_, view_report_, view_axis_values_,
                    {static_cast<std::uint64_t>(k_ - 1), tool_pen_, hand_pen_, hand_pen_, 0.0, 0.0});
@@ -192,27 +161,15 @@ RunSummary AdmittanceRunner::summary() const {
   RunSummary s = acc_;
   if (view_) view_->summarize(s);
   summarize_divergence(divergence_, scene_->model, s);
-  s.steps = k_;
-  s.sim_time_s = static_cast<double>(k_) * scene_->model.dt;
-  s.step_time_us = summarize_ns(step_time_);
-  s.solver_iterations_mean = k_ > 0 ? solver_iterations_sum_ / static_cast<double>(k_) : 0.0;
-  s.nonfinite_steps = data_.nonfinite_steps;
-  s.invalid_target_steps = data_.invalid_target_steps;
+  summarize_periods(s);
   summarize_grasps(scene_->model, data_, s);
   summarize_task(*scene_, data_, s);
-  s.nan_detected = data_.nonfinite_steps > 0;
-  s.contact_overflow = data_.contact_overflow_steps;
-  for (auto dir :
-       {hal::SimBus::Direction::kControllerToDevice, hal::SimBus::Direction::kDeviceToController}) {
-    s.bus_frames_dropped += static_cast<std::int64_t>(bus_.link_counters(dir).dropped);
-    s.bus_frames_corrupted += static_cast<std::int64_t>(bus_.link_counters(dir).corrupted());
-  }
-  s.lifecycle = hal::to_string(rig_.device().lifecycle());
+  s.lifecycle = hal::to_string(rig_->device().lifecycle());
   s.zero_torque_periods = 0;
   AdmittanceSummary& a = s.admittance;
   a.device_error_rms_mm = k_ > 0 ? std::sqrt(error_sq_ / static_cast<double>(k_)) * 1e3 : 0.0;
   // Through the device face: the force TPDOs its input took, its set-points' counters.
-  const hal::Device& device = rig_.device();
+  const hal::Device& device = rig_->device();
   a.sensor_frames = static_cast<std::int64_t>(device.input_frames());
   if (const hal::AdmittanceDeviceCounters* c = device.conditioning().setpoints) {
     a.csp_rpdos = static_cast<std::int64_t>(c->rpdos_written);

@@ -1,6 +1,7 @@
 #pragma once
 /// @file contact_depths.hpp
-/// The deepest contacts of a run's measurements (run_measurements.cpp, target_measurement.cpp):
+/// The deepest contacts of a run's measurements (run_measurements.cpp, target_measurement.cpp,
+/// admittance_run.cpp):
 /// the tool's as the step found them and the target's on a ghost Data. Depths in m.
 
 #include <algorithm>

@@ -196,9 +196,8 @@ hal::CandumpWriterSettings recorder_settings(bool paced) noexcept {
 
 SceneRunner::SceneRunner(const Scene& scene, std::size_t trace_capacity, const BusChoice& bus,
                          bool realtime, std::uint32_t overrun_limit)
-    : scene_((require_runnable(scene), &scene)),
+    : RunHarness((require_runnable(scene), scene), trace_capacity),
       spec_(bus_spec_for(scene, bus.spec)),
-      bus_(scene.bus),
       real_bus_(spec_.real() ? open_real_bus(spec_, controller_filters(scene.device)) : nullptr),
       log_bus_(make_log_bus(scene, spec_, realtime, log_stats_)),
       igtl_(make_igtl_run(scene, spec_, realtime)),
@@ -224,31 +223,22 @@ SceneRunner::SceneRunner(const Scene& scene, std::size_t trace_capacity, const B
                   scene.plant && !real_bus_ && !log_bus_ && !igtl_ ? &*scene.plant : nullptr,
                   scene.hand),
       device_(scene.device),
-      data_(core::make_data(scene.model)),
       target_measurement_(scene.model),
       target_inputs_(make_target_inputs(scene.model)),
       extra_instruments_(make_extra_instruments(scene)),
       extra_devices_(make_extra_devices(scene)),
       device_share_(make_device_share(scene, bus_, !extra_devices_.empty())),
-      rig_(loop_devices(
-          scene, *port_, device_, extra_devices_,
-          with_live_start(control_loop_settings(realtime || spec_.real(), overrun_limit),
-                          spec_.real() || igtl_ != nullptr, scene))),
-      loop_(scene.model, data_, rig_,
-            with_live_start(control_loop_settings(realtime || spec_.real(), overrun_limit),
-                            spec_.real() || igtl_ != nullptr, scene)),
-      multirate_(scene),
-      period_ns_(static_cast<std::int64_t>(std::llround(scene.model.dt * 1e9))),
-      phase_ns_(static_cast<std::int64_t>(std::llround(scene.compute_phase_s * 1e9))),
       startup_settle_periods_(
-          std::max<std::int64_t>(1, std::llround(kStartupSettle / scene.model.dt))),
-      divergence_(scene.model, data_) {
-  if (multirate_.enabled()) loop_.set_stepper(&multirate_);
+          std::max<std::int64_t>(1, std::llround(kStartupSettle / scene.model.dt))) {
+  // The loop's devices (their buses' shares, NMT masters) in the harness's rig, the loop over it.
+  const platform::ControlLoopSettings settings =
+      with_live_start(control_loop_settings(realtime || spec_.real(), overrun_limit),
+                      spec_.real() || igtl_ != nullptr, scene);
+  assemble(settings, loop_devices(scene, *port_, device_, extra_devices_, settings));
   if (multirate_.enabled() && scene.multirate) {
     ghost_every_ = std::max<std::int64_t>(1, std::llround(1e-3 / scene.model.dt));
   }
   explicit_bound_ = platform::explicitly_bound_bodies(scene.binding, scene.model.num_bodies());
-  trace_.reserve(trace_capacity);
   std::vector<std::string> axis_names;
   for (const hal::AxisConfig& a : scene.device.axes) axis_names.push_back(a.name);
   trace_.set_axis_names(std::move(axis_names));
@@ -260,11 +250,12 @@ SceneRunner::SceneRunner(const Scene& scene, std::size_t trace_capacity, const B
   trace_.set_device_names(std::move(device_names));
   if (writer_) writer_->start();
   acc_.bus = bus.spec;
-  describe_scene(scene, acc_);
   begin_needle_figures(scene, acc_);
-  acc_.managed = loop_.managed();
+  acc_.managed = loop_->managed();
   acc_.real_bus = spec_.real();
 }
+
+SceneRunner::~SceneRunner() { disassemble(); }
 
 void SceneRunner::stream_trace(const std::string& path) {
   std::vector<std::string> axis_names;
@@ -274,19 +265,13 @@ void SceneRunner::stream_trace(const std::string& path) {
   trace_writer_->start();
 }
 
-void SceneRunner::stream_view(const std::string& record_path,
-                              std::vector<platform::StateFrameSink*> sinks, double rate_hz,
-                              bool wait) {
-  view_ = std::make_unique<ViewOutput>(*scene_, record_path, std::move(sinks), rate_hz, wait);
-}
-
 void SceneRunner::period(std::int64_t deadline_mono_ns, std::int64_t woke_mono_ns) noexcept {
   const std::int64_t t = k_ * period_ns_;
   apply_due_events(t);
   const platform::PeriodReport& report = exchange(t, deadline_mono_ns, woke_mono_ns);
   ++k_;
   // ---- measurements (outside the timed step) ----
-  if (loop_.placed_period(0) == k_ - 1) note_live_start();
+  if (loop_->placed_period(0) == k_ - 1) note_live_start();
   count_period(report);
   if (!extra_devices_.empty()) tally_devices();
 
@@ -306,19 +291,19 @@ void SceneRunner::period(std::int64_t deadline_mono_ns, std::int64_t woke_mono_n
                                             static_cast<double>(t) * 1e-9) ||
                  diverged;
   if (diverged)
-    loop_.shutdown();  // zero torque from the next write on; the run stops after this period
+    loop_->shutdown();  // zero torque from the next write on; the run stops after this period
   if (view_) publish_view(report, contacts);
 }
 
 void SceneRunner::publish_view(const platform::PeriodReport& report,
                                const PeriodContacts& contacts) noexcept {
-  const auto sent = [&](std::size_t i) { return loop_.device(i).output().torque; };
+  const auto sent = [&](std::size_t i) { return loop_->device(i).output().torque; };
   // The loop's other devices: each its report and torques (one bus: device 0's state).
   std::array<platform::FrameDeviceInput, platform::kMaxLoopDevices> extra{};
-  const std::size_t n = std::min(loop_.num_devices(), extra.size() + 1) - 1;
+  const std::size_t n = std::min(loop_->num_devices(), extra.size() + 1) - 1;
   const bool bus_down = port_->state() != hal::BusState::kOk;
   for (std::size_t i = 0; i < n; ++i)
-    extra[i] = platform::FrameDeviceInput{&loop_.last_report(i + 1), sent(i + 1), bus_down};
+    extra[i] = platform::FrameDeviceInput{&loop_->last_report(i + 1), sent(i + 1), bus_down};
   view_->publish(data_, report, sent(0), view_figures(contacts),
                  std::span<const platform::FrameDeviceInput>(extra.data(), n));
 }
@@ -340,18 +325,14 @@ void SceneRunner::note_live_start() noexcept {
 }
 
 void SceneRunner::tally_devices() noexcept {
-  for (std::size_t i = 0; i < loop_.num_devices(); ++i) {
-    const platform::PeriodReport& r = loop_.last_report(i);
+  for (std::size_t i = 0; i < loop_->num_devices(); ++i) {
+    const platform::PeriodReport& r = loop_->last_report(i);
     DeviceTally& t = device_tally_[i];
     t.force_max = std::max(t.force_max, r.feedback.force.norm());
     t.torque_max = std::max(t.torque_max, r.feedback.torque.norm());
     t.torque_periods += r.torque_commanded ? 1 : 0;
     t.invalid_periods += r.sample_valid ? 0 : 1;
   }
-}
-
-void SceneRunner::start_scene_thread(const platform::SceneThreadSettings& settings) {
-  multirate_.start_scene_thread(settings);
 }
 
 void SceneRunner::start_target_thread(const std::vector<int>& avoid_cpus) {
@@ -380,28 +361,28 @@ const platform::PeriodReport& SceneRunner::exchange(std::int64_t t, std::int64_t
                                                     std::int64_t woke_mono_ns) noexcept {
   if (real_bus_) {  // bus time = CLOCK_MONOTONIC; the device answers in another process
     const std::int64_t now = platform::monotonic_now_ns();
-    loop_.begin_period(now, deadline_mono_ns, woke_mono_ns);
+    loop_->begin_period(now, deadline_mono_ns, woke_mono_ns);
     const std::int64_t read_at = (deadline_mono_ns >= 0 ? deadline_mono_ns : now) + phase_ns_;
     const timespec ts{static_cast<time_t>(read_at / 1'000'000'000),
                       static_cast<long>(read_at % 1'000'000'000)};
     while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
     }
-    return loop_.end_period(platform::monotonic_now_ns());
+    return loop_->end_period(platform::monotonic_now_ns());
   }
   if (log_bus_) {  // the recorded instrument's frames arrive at their logged times
     log_bus_->set_time_ns(t);
-    loop_.begin_period(t, deadline_mono_ns, woke_mono_ns);
+    loop_->begin_period(t, deadline_mono_ns, woke_mono_ns);
     log_bus_->set_time_ns(t + phase_ns_);
-    return loop_.end_period(t + phase_ns_);
+    return loop_->end_period(t + phase_ns_);
   }
   if (igtl_) {  // the tracker's poses: taken at the SYNC, stamped with their messages' times
     igtl_->set_time_ns(t);
-    loop_.begin_period(t, deadline_mono_ns, woke_mono_ns);
+    loop_->begin_period(t, deadline_mono_ns, woke_mono_ns);
     igtl_->set_time_ns(t + phase_ns_);
-    return loop_.end_period(t + phase_ns_);
+    return loop_->end_period(t + phase_ns_);
   }
   bus_.set_time_ns(t);
-  loop_.begin_period(t, deadline_mono_ns, woke_mono_ns);
+  loop_->begin_period(t, deadline_mono_ns, woke_mono_ns);
   bus_.set_time_ns(t + scene_->bus.latency_ns);
   // The encoders latch at SYNC and answer; several devices: each on its port of the device side.
   if (device_share_) {
@@ -412,13 +393,13 @@ const platform::PeriodReport& SceneRunner::exchange(std::int64_t t, std::int64_t
     instrument_.poll(bus_.device(), t + scene_->bus.latency_ns);
   }
   bus_.set_time_ns(t + phase_ns_);
-  return loop_.end_period(t + phase_ns_);
+  return loop_->end_period(t + phase_ns_);
 }
 
 void SceneRunner::count_zero_torque(const platform::PeriodReport& report,
                                     RunSummary& s) const noexcept {
   ++s.zero_torque_periods;
-  const hal::Device& device = loop_.device();
+  const hal::Device& device = loop_->device();
   const hal::DeviceOutput& sent = device.output();
   if (report.fault_cause != hal::FaultCause::kNone)
     ++s.zero_torque_safe_state;
@@ -444,9 +425,9 @@ void SceneRunner::count_period(const platform::PeriodReport& report) noexcept {
   if (!report.sample_valid) ++s.invalid_periods;
   tally_stale((report.sample_faults & hal::SampleFault::kStale) != 0);
   if (!report.torque_commanded) count_zero_torque(report, s);
-  if (report.entered_safe_stop && !has_first_fault_ && loop_.managed() &&
-      loop_.device().first_fault() != nullptr) {
-    first_fault_ = *loop_.device().first_fault();
+  if (report.entered_safe_stop && !has_first_fault_ && loop_->managed() &&
+      loop_->device().first_fault() != nullptr) {
+    first_fault_ = *loop_->device().first_fault();
     has_first_fault_ = true;
   }
 }
@@ -469,7 +450,7 @@ void SceneRunner::tally_stale(bool stale) noexcept {
 
 void SceneRunner::record(const platform::PeriodReport& report, const PeriodContacts& c) noexcept {
   TraceRecord rec = make_trace_record(data_, data_.held_body, c.tool_contacts, c.tool_pen,
-                                      c.target_pen, report, loop_.device().output().torque);
+                                      c.target_pen, report, loop_->device().output().torque);
   if (const PlantMotion* plant = instrument_.plant()) {
     rec.hand_penetration_mm = c.hand_pen * 1e3;
     rec.handle_force_n = plant->figures().handle_force_n;
@@ -477,7 +458,7 @@ void SceneRunner::record(const platform::PeriodReport& report, const PeriodConta
   }
   rec.num_extra_devices = static_cast<int>(std::min(extra_devices_.size(), extra_trace_body_.size()));
   for (int i = 0; i < rec.num_extra_devices; ++i) {
-    const platform::PeriodReport& r = loop_.last_report(static_cast<std::size_t>(i) + 1);
+    const platform::PeriodReport& r = loop_->last_report(static_cast<std::size_t>(i) + 1);
     DeviceTraceRecord& t = rec.devices[static_cast<std::size_t>(i)];
     const auto single = [](const core::Vec3& v) {
       return std::array<float, 3>{static_cast<float>(v.x()), static_cast<float>(v.y()), static_cast<float>(v.z())};
@@ -489,7 +470,7 @@ void SceneRunner::record(const platform::PeriodReport& report, const PeriodConta
       t.tool = single(data_.bodies[static_cast<std::size_t>(b)].position);
     }
   }
-  if (const hal::DeviceReport d = loop_.device().report(); d.managed) {
+  if (const hal::DeviceReport d = loop_->device().report(); d.managed) {
     if (d.emcys > emcys_traced_) {
       rec.emcys = static_cast<int>(std::min<std::uint64_t>(d.emcys - emcys_traced_, 1'000'000));
       if (d.has_emcy) {

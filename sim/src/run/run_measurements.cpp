@@ -236,7 +236,7 @@ void SceneRunner::accumulate_step_figures(const platform::PeriodReport& report,
   }
   s.feedback_torque_max_nm = std::max(s.feedback_torque_max_nm, report.feedback.torque.norm());
   // The torques sent (the device face's output; none from a device that sends no torque).
-  for (const double tau : loop_.device().output().torque)
+  for (const double tau : loop_->device().output().torque)
     s.axis_torque_max = std::max(s.axis_torque_max, std::abs(tau));
   const int held = data_.held_body;
   const int held_tree = held >= 0 ? model.articulation.body_tree[static_cast<std::size_t>(held)] : -1;

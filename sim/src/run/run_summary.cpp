@@ -107,7 +107,7 @@ std::string format_device_line(const DeviceRunSummary& d) {
 
 void SceneRunner::summarize_devices(RunSummary& s) const {
   if (extra_devices_.empty()) return;
-  for (std::size_t i = 0; i < loop_.num_devices(); ++i) {
+  for (std::size_t i = 0; i < loop_->num_devices(); ++i) {
     DeviceRunSummary d;
     const hal::InstrumentDevice& dev = i == 0 ? device_ : *extra_devices_[i - 1];
     d.name = dev.config().name;
@@ -117,7 +117,7 @@ void SceneRunner::summarize_devices(RunSummary& s) const {
     d.invalid_periods = device_tally_[i].invalid_periods;
     d.rejected_samples = static_cast<std::int64_t>(dev.counters().values_rejected);
     d.rejected_causes = rejection_causes(dev.counters());
-    if (const hal::DeviceReport r = loop_.device(i).report(); r.managed) {
+    if (const hal::DeviceReport r = loop_->device(i).report(); r.managed) {
       d.lifecycle = hal::to_string(r.lifecycle);
       d.faults = static_cast<std::int64_t>(r.latches);
     }
@@ -134,11 +134,7 @@ void SceneRunner::summarize_devices(RunSummary& s) const {
 
 RunSummary SceneRunner::summary() const {
   RunSummary s = acc_;
-  s.steps = k_;
-  s.sim_time_s = static_cast<double>(k_) * scene_->model.dt;
-  s.step_time_us = summarize_ns(loop_.step_time());
-  s.solver_iterations_mean =
-      k_ > 0 ? static_cast<double>(solver_iterations_sum_) / static_cast<double>(k_) : 0.0;
+  summarize_periods(s);
   s.tracking_error_free_rms_mm = s.free_steps ? std::sqrt(free_sq_ / static_cast<double>(s.free_steps)) * 1e3 : 0.0;
   s.soft_start_s = scene_->device.soft_start_s;
   // On a real bus or a replayed log the device is not this process's: what moves it is unknown.
@@ -166,7 +162,7 @@ RunSummary SceneRunner::summary() const {
     }
   }
   // The output's conditioning through the device face (hal::Device::conditioning()).
-  const hal::OutputConditioning out = loop_.device().conditioning();
+  const hal::OutputConditioning out = loop_->device().conditioning();
   if (out.torque != nullptr) s.soft_start_ramps = static_cast<std::int64_t>(out.torque->soft_starts);
   if (const hal::PassivityController* pc = out.passivity) {
     s.passivity_controller = pc->num_axes() > 0;
@@ -218,7 +214,7 @@ RunSummary SceneRunner::summary() const {
   }
   s.stale_longest_s = static_cast<double>(stale_longest_) * scene_->model.dt;
   s.stale_longest_from_s = static_cast<double>(stale_longest_from_) * scene_->model.dt;
-  const platform::RejoinTally& rejoin = loop_.rejoins(0);
+  const platform::RejoinTally& rejoin = loop_->rejoins(0);
   s.stale_rejoins = static_cast<std::int64_t>(rejoin.rejoins);
   s.stale_rejoin_gap_mm = rejoin.gap_max_m * 1e3;
   s.stale_rejoin_gap_deg = rejoin.gap_max_rad * 180.0 / std::numbers::pi;
@@ -239,7 +235,6 @@ RunSummary SceneRunner::summary() const {
   }
   s.rejected_samples = static_cast<std::int64_t>(device_.counters().values_rejected);
   s.rejected_causes = rejection_causes(device_.counters());
-  s.contact_overflow = data_.contact_overflow_steps;
   s.contact_clamped_steps = data_.contact_clamped_steps;
   s.net_crossed_steps = data_.net_crossed_steps;
   s.crossed_contact_steps = data_.crossed_contact_steps;
@@ -252,32 +247,21 @@ RunSummary SceneRunner::summary() const {
        << " s: faster than the contacts can hold (docs/dynamics.md, \"Crossing\")";
     s.warnings.push_back(os.str());
   }
-  s.nonfinite_steps = data_.nonfinite_steps;
-  s.invalid_target_steps = data_.invalid_target_steps;
   summarize_grasps(scene_->model, data_, s);
   summarize_threads(scene_->model, data_, s);
   summarize_needles(s);
   summarize_devices(s);
   summarize_task(*scene_, data_, s);
   multirate_.summarize(s);
-  s.nan_detected = data_.nonfinite_steps > 0;
-  for (const auto& b : data_.bodies)
-    s.nan_detected = s.nan_detected || !b.position.allFinite() || !b.orientation.coeffs().allFinite();
-  for (const auto& n : data_.nodes)
-    s.nan_detected = s.nan_detected || !n.position.allFinite() || !n.velocity.allFinite();
-  for (auto dir : {hal::SimBus::Direction::kControllerToDevice, hal::SimBus::Direction::kDeviceToController}) {
-    s.bus_frames_dropped += static_cast<std::int64_t>(bus_.link_counters(dir).dropped);
-    s.bus_frames_corrupted += static_cast<std::int64_t>(bus_.link_counters(dir).corrupted());
-  }
   if (real_bus_) {
     s.port = port_->counters();
     s.transport = describe_transport_counters(*real_bus_);
     s.bus_state = hal::to_string(port_->state());
-    s.loop = loop_.statistics().summary();
+    s.loop = loop_->statistics().summary();
   }
-  s.read_errors = static_cast<std::int64_t>(loop_.counters().read_errors);
-  s.sync_write_failures = static_cast<std::int64_t>(loop_.counters().sync_write_failures);
-  s.command_failures = static_cast<std::int64_t>(loop_.counters().command_failures);
+  s.read_errors = static_cast<std::int64_t>(loop_->counters().read_errors);
+  s.sync_write_failures = static_cast<std::int64_t>(loop_->counters().sync_write_failures);
+  s.command_failures = static_cast<std::int64_t>(loop_->counters().command_failures);
   {
     const hal::DeviceCounters& d = device_.counters();
     s.frames_unknown_id = static_cast<std::int64_t>(d.frames_unknown_id);
@@ -288,7 +272,7 @@ RunSummary SceneRunner::summary() const {
     s.encoder_frames_wrong_length = static_cast<std::int64_t>(d.frames_wrong_length);
     s.values_out_of_range = static_cast<std::int64_t>(d.rejected_out_of_range);
     s.values_jump = static_cast<std::int64_t>(d.rejected_jump);
-    s.frames_rejected += static_cast<std::int64_t>(loop_.device().report().malformed_drive_frames);
+    s.frames_rejected += static_cast<std::int64_t>(loop_->device().report().malformed_drive_frames);
   }
   if (trace_writer_) {
     const platform::TraceWriterCounters c = trace_writer_->counters();
@@ -325,8 +309,8 @@ RunSummary SceneRunner::summary() const {
     s.bus_record_io_errors = static_cast<std::int64_t>(w.io_errors);
     s.bus_record_format_errors = static_cast<std::int64_t>(w.format_errors);
   }
-  if (const hal::DeviceReport d = loop_.device().report(); d.managed) {
-    const hal::DeviceNotes notes = loop_.device().notes();
+  if (const hal::DeviceReport d = loop_->device().report(); d.managed) {
+    const hal::DeviceNotes notes = loop_->device().notes();
     const hal::StartupStatus& st = d.startup;
     s.startup = hal::to_string(st.phase);
     if (st.phase == hal::StartupPhase::kFailed)
@@ -334,8 +318,8 @@ RunSummary SceneRunner::summary() const {
     if (st.configuration_failed) s.startup += ": " + notes.configuration_error;
     if (st.phase == hal::StartupPhase::kOperational || st.attempts > 1)
       s.periods_to_operational = static_cast<std::int64_t>(st.done_period);
-    s.periods_to_active = loop_.first_active_period();
-    s.periods_to_torque = loop_.first_torque_period();
+    s.periods_to_active = loop_->first_active_period();
+    s.periods_to_torque = loop_->first_torque_period();
     s.lifecycle = hal::to_string(d.lifecycle);
     s.faults = static_cast<std::int64_t>(d.latches);
     s.fault_records = static_cast<std::int64_t>(d.fault_records);

@@ -4,7 +4,6 @@
 #include "numen/sim/input/jigsaws.hpp"
 
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <array>
 #include <cmath>
@@ -20,6 +19,7 @@
 
 #include "jigsaws_trials.hpp"
 #include "numen/sim/input/input_error.hpp"
+#include "temp_dir.hpp"
 
 namespace {
 
@@ -39,23 +39,16 @@ fs::path excerpt() {
   return fs::path(NUMEN_SOURCE_DIR) / "sim" / "data" / "jigsaws_suturing_b002_excerpt.txt";
 }
 
-/// A file in a per-process temporary directory, removed at the end of the test.
+/// A file in its own temporary directory (numen::test::TempDir), removed with the
+/// directory at the end of the test.
 class TempFile {
  public:
-  TempFile(const std::string& name, const std::string& content) {
-    const fs::path dir =
-        fs::temp_directory_path() / ("numen_jigsaws_test_" + std::to_string(::getpid()));
-    fs::create_directories(dir);
-    path_ = dir / name;
-    std::ofstream(path_, std::ios::binary) << content;
-  }
-  ~TempFile() {
-    std::error_code ec;
-    fs::remove(path_, ec);
-  }
+  TempFile(const std::string& name, const std::string& content)
+      : path_(dir_.write(name, content)) {}
   const fs::path& path() const { return path_; }
 
  private:
+  numen::test::TempDir dir_;
   fs::path path_;
 };
 
@@ -480,8 +473,8 @@ TEST(JigsawsMalformed, ATipFartherThan10mIsLocatedAtItsColumn) {
 }
 
 TEST(JigsawsMalformed, ADirectoryIsNamedAsSuchWithoutLibraryInternals) {
-  const fs::path dir = fs::temp_directory_path() / ("numen_jigsaws_dir_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
+  const numen::test::TempDir temp;
+  const fs::path& dir = temp.path();
   try {
     load_jigsaws(dir, JigsawsManipulator::slave_right);
     ADD_FAILURE() << "no InputError";
@@ -493,7 +486,6 @@ TEST(JigsawsMalformed, ADirectoryIsNamedAsSuchWithoutLibraryInternals) {
   } catch (const std::exception& e) {
     ADD_FAILURE() << "not an InputError: " << e.what();
   }
-  fs::remove(dir);
 }
 
 TEST(JigsawsMalformed, ANulByteIsShownAndDoesNotCutTheMessage) {

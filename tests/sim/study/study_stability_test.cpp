@@ -17,6 +17,7 @@
 #include "numen/core/step.hpp"
 #include "build_features.hpp"
 #include "sanitizer.hpp"
+#include "temp_dir.hpp"
 #include "numen/sim/input/input_error.hpp"
 #include "numen/sim/scene/scene.hpp"
 #include "numen/sim/study/study_common.hpp"
@@ -393,8 +394,8 @@ TEST(StudyStability, CsvSchemaAndTables) {
   b.growth_ratio = {1.0, kInf};
   b.measured_growth_omega_dt = 2.0;
   result.boundaries = {b};
-  const auto dir = std::filesystem::temp_directory_path() / "numen_stability_csv_test";
-  std::filesystem::remove_all(dir);
+  const numen::test::TempDir temp;
+  const std::filesystem::path& dir = temp.path();
   write_stability_csv(result, dir.string());
   std::ifstream f(dir / "stability_coupling.csv");
   std::string header, line;
@@ -421,7 +422,6 @@ TEST(StudyStability, CsvSchemaAndTables) {
   EXPECT_NE(tables.find("| coupling-undamped | symplectic-euler | 1 | 0 | 1 (energy 1) | 2 |"),
             std::string::npos)
       << tables;
-  std::filesystem::remove_all(dir);
 }
 
 TEST(StudyStability, UnknownFamilyIsAnInputError) {

@@ -29,6 +29,7 @@
 #include <unistd.h>
 
 #include "numen/sim/view/frame_layout_json.hpp"
+#include "temp_dir.hpp"
 
 namespace {
 
@@ -351,8 +352,8 @@ http::response<http::string_body> get(std::uint16_t port, const std::string& tar
 }
 
 TEST(ViewServer, ServesTheStaticFilesOfItsFolderOnly) {
-  const auto dir = std::filesystem::temp_directory_path() /
-                   ("numen_view_server_" + std::to_string(::getpid()));
+  const numen::test::TempDir temp;
+  const std::filesystem::path& dir = temp.path();
   std::filesystem::create_directories(dir / "vendor");
   std::ofstream(dir / "index.html") << "<html>viewer</html>";
   std::ofstream(dir / "vendor" / "lib.js") << "export {};";
@@ -372,7 +373,6 @@ TEST(ViewServer, ServesTheStaticFilesOfItsFolderOnly) {
     EXPECT_EQ(get(server.port(), t).result(), http::status::not_found) << t;
   EXPECT_GE(server.counters().http_requests, 7u);
   server.stop();
-  std::filesystem::remove_all(dir);
 }
 
 TEST(ViewServer, StopClosesConnectedClients) {

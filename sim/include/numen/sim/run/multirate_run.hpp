@@ -1,7 +1,7 @@
 #pragma once
 /// @file multirate_run.hpp
-/// The multirate god-object of a run (scene [multirate]; docs/multirate.md), shared by the two
-/// run harnesses (SceneRunner and AdmittanceRunner, each through its platform::ControlLoop):
+/// The multirate god-object of a run (scene [multirate]; docs/multirate.md), owned by the run
+/// harness (RunHarness, for either kind of device, through its platform::ControlLoop):
 /// the core::MultirateGodObject the loop steps in place of
 /// core::step (a platform::Stepper given to ControlLoop::set_stepper()), its scene thread in a paced run
 /// (platform::MultirateThreads), the single-rate view the measurements read, and the run

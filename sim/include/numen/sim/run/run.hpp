@@ -1,9 +1,10 @@
 #pragma once
 /// @file run.hpp
-/// The run harness behind `numen run`: a SimBus, a SimulatedInstrument on its
-/// device port, the platform::ControlLoop on its controller port, the fixed-step
-/// loop (as fast as possible, or paced to wall-clock time), the measurements of
-/// the summary and an optional per-step trace. The options of a run are in
+/// `numen run`: run_scene()'s one period loop (as fast as possible, or paced to wall-clock
+/// time) over the run harness (RunHarness, run_harness.hpp), and SceneRunner, the harness
+/// wired for impedance instruments: the SimulatedInstruments on the simulated bus's device
+/// side (or a real bus, a log replay, a tracker), their InstrumentDevices in the harness's
+/// DeviceRig, the measurements of the summary and the trace. The options of a run are in
 /// run_options.hpp, what it measured in run_summary.hpp.
 
 #include <array>
@@ -119,12 +120,13 @@ hal::CandumpWriterSettings recorder_settings(bool paced) noexcept;
 /// the run keeps its summary and its verdict reports the lost records (exit status 5).
 void write_in_memory_trace(const Trace& trace, const std::string& path, RunSummary& s);
 
-/// A scene wired for a run: SimBus, simulated instrument on its device port,
-/// InstrumentDevice in a platform::DeviceRig and the ControlLoop over it on its controller
-/// port, core Data, the
-/// measurement state and the trace storage. The constructor allocates
-/// everything; period() never allocates, throws or locks (tested), so the
-/// same loop can be driven by a test, a benchmark or `numen run`.
+/// The run harness (RunHarness: data, simulated bus, rig and loop, multirate, trace, view,
+/// divergence) wired for impedance instruments: the simulated instrument on the bus's device
+/// port (or the real bus, log or tracker of --bus), its InstrumentDevice (and those of a scene
+/// of several devices) in the harness's DeviceRig, the bus recorder and streamed trace, and
+/// the impedance measurements (target, free space, start-up, per device). The constructor
+/// allocates everything; period() never allocates, throws or locks (tested), so the same loop
+/// can be driven by a test, a benchmark or `numen run`.
 class SceneRunner final : public RunHarness {
  public:
   /// `scene` must outlive the runner; each of its devices (Scene::extra_devices beside the
@@ -142,6 +144,8 @@ class SceneRunner final : public RunHarness {
   explicit SceneRunner(const Scene& scene, std::size_t trace_capacity = 0,
                        const BusChoice& bus = {}, bool realtime = false,
                        std::uint32_t overrun_limit = 3);
+  /// Ends the loop and its rig before the devices and buses they refer to.
+  ~SceneRunner() override;
 
   /// Runs control period k (bus time k·dt), in named parts: apply_due_events() (tool
   /// switching), exchange() (SYNC and the managed stack's NMT / heartbeat, the instrument's
@@ -174,22 +178,8 @@ class SceneRunner final : public RunHarness {
   /// (empty: none) and to `sinks`, at `rate_hz` frames per simulated second; `wait`: the loop
   /// waits for the consumers (offline runs), else drops. Starts the stream's thread. Throws
   /// InputError at --record-view when the file cannot be created.
-  void stream_view(const std::string& record_path, std::vector<platform::StateFrameSink*> sinks,
-                   double rate_hz, bool wait) override;
   /// The streaming trace writer (nullptr unless stream_trace() was called).
   platform::TraceWriter* trace_writer() noexcept { return trace_writer_.get(); }
-  /// Overrides the scene's compute phase (ns, >= 0).
-  void set_compute_phase_ns(std::int64_t ns) noexcept override { phase_ns_ = ns; }
-  /// Periods run so far.
-  std::int64_t periods() const noexcept { return k_; }
-  /// The divergence monitor latched (divergence.hpp): the period that breached it shut the
-  /// device down (zero torque from the next write on); the run stops after it.
-  bool diverged() const noexcept override { return divergence_.divergence().cause != nullptr; }
-  /// A multirate scene in a paced run: steps the scene loop on its own thread from now on
-  /// (platform::MultirateThreads, `settings`) until finish(); nothing for a single-rate scene.
-  /// Allocates (call before the first period). Throws std::system_error if the thread cannot
-  /// start.
-  void start_scene_thread(const platform::SceneThreadSettings& settings) override;
   /// A paced run: measures the target (the summary's "penetration max: target", the hand's
   /// depth) on a thread of its own from now on (TargetMeasurementThread), kept off
   /// `avoid_cpus` (the loop's and the scene thread's), the loop handing over its inputs and
@@ -199,9 +189,6 @@ class SceneRunner final : public RunHarness {
   /// The target thread's line for the summary's real-time setup ("target measurement: …"),
   /// appended to `lines` after finish(); nothing when the target was measured inline.
   void describe_target_thread(std::vector<std::string>& lines) const;
-  /// The multirate god-object (MultirateRun::enabled() false in a single-rate run) and its
-  /// scene thread; read the thread's realtime_report() after finish().
-  const MultirateRun& multirate() const noexcept override { return multirate_; }
 
   /// Ends the run's streams: stops the bus recorder's and the trace's writer threads, which
   /// write what is still queued and close the files (they appear under their paths), so that
@@ -213,7 +200,6 @@ class SceneRunner final : public RunHarness {
   /// are the caller's, see run_scene).
   RunSummary summary() const override;
 
-  const core::Data& data() const noexcept { return data_; }
   const hal::InstrumentDevice& device() const noexcept { return device_; }
   const SimulatedInstrument& instrument() const noexcept { return instrument_; }
   /// The simulated instrument, for fault injection in tests.
@@ -222,13 +208,6 @@ class SceneRunner final : public RunHarness {
   const SimulatedInstrument& instrument(std::size_t i) const noexcept {
     return i == 0 ? instrument_ : *extra_instruments_[i - 1];
   }
-  /// The control loop (lifecycle, supervisor, CANopen master, statistics, rearm()).
-  const platform::ControlLoop& loop() const noexcept { return loop_; }
-  platform::ControlLoop& loop() noexcept override { return loop_; }
-  hal::SimBus& bus() noexcept { return bus_; }
-  const Trace& trace() const noexcept override { return trace_; }
-  /// What the control loop did in the last period (step wall time included).
-  const platform::PeriodReport& last_report() const noexcept { return loop_.last_report(); }
 
  private:
   /// What measure_contacts() found after a period's step (penetrations in m).
@@ -277,9 +256,7 @@ class SceneRunner final : public RunHarness {
   /// other devices' (platform::FrameDeviceInput), the figures. Never allocates.
   void publish_view(const platform::PeriodReport& report, const PeriodContacts& c) noexcept;
 
-  const Scene* scene_;
   BusSpec spec_;
-  hal::SimBus bus_;
   std::unique_ptr<hal::Bus> real_bus_;            // --bus can:IFACE / serial:PATH
   hal::CandumpLoadStats log_stats_;               // --bus log:FILE, what the loader counted
   std::unique_ptr<hal::LogBus> log_bus_;          // --bus log:FILE
@@ -290,7 +267,6 @@ class SceneRunner final : public RunHarness {
   SimulatedInstrument instrument_;
   std::vector<std::uint8_t> explicit_bound_;  // per body: 1 if a binding names it
   hal::InstrumentDevice device_;
-  core::Data data_;
   TargetMeasurement target_measurement_;  // offline: the target measured inline
   TargetInputs target_inputs_;            // its inputs
   std::unique_ptr<TargetMeasurementThread> target_thread_;  // paced: on its own thread
@@ -323,21 +299,9 @@ class SceneRunner final : public RunHarness {
   void tally_devices() noexcept;
   // A scene of several devices: each device's figures into s.devices and s.device_lines.
   void summarize_devices(RunSummary& s) const;
-  platform::DeviceRig rig_;  // the loop's devices, assembled (their buses' shares, NMT masters)
-  platform::ControlLoop loop_;
-  /// The multirate god-object (scene [multirate]), stepped in place of core::step by the
-  /// loop (its platform::Stepper, ControlLoop::set_stepper()); not enabled in a single-rate run.
-  MultirateRun multirate_;
-  Trace trace_;
-  std::int64_t k_ = 0;
   std::size_t next_event_ = 0;
-  std::int64_t period_ns_;
-  std::int64_t phase_ns_;
-  RunSummary acc_;     // running maxima and counts
   double free_sq_ = 0.0;
-  std::int64_t solver_iterations_sum_ = 0;
   std::unique_ptr<platform::TraceWriter> trace_writer_;  // real-bus --trace
-  std::unique_ptr<ViewOutput> view_;                     // --record-view, --view
   bool last_torque_ = false;
   std::int64_t startup_settle_periods_;  // kStartupSettle in periods (>= 1)
   bool in_startup_ = false;       // the spawned tool is being pushed out (RunSummary::startup_steps)
@@ -381,7 +345,6 @@ class SceneRunner final : public RunHarness {
   bool has_first_fault_ = false;
   std::uint64_t emcys_traced_ = 0;  // EMCY messages received up to the last trace record
   core::Vec3 last_feedback_force_ = core::Vec3::Zero();  // sent the period before (N)
-  DivergenceMonitor divergence_;  // judged after each period's measurements
 };
 
 /// The body device `i` + 1 of `scene` (extra_devices[i]) drives that the trace's per-device

@@ -1,7 +1,7 @@
 #pragma once
 /// @file view_output.hpp
-/// A run's state stream (docs/viewer.md), as both run harnesses use it (SceneRunner, run.cpp;
-/// AdmittanceRunner, admittance_run.cpp): the platform::StateStream, the view recording it
+/// A run's state stream (docs/viewer.md), as the run harness holds it (RunHarness::stream_view(),
+/// published by SceneRunner, run.cpp, and AdmittanceRunner, admittance_run.cpp): the platform::StateStream, the view recording it
 /// feeds (`--record-view`), the further sinks (`--view`'s server), its figures in the run
 /// summary, and the pacing of an offline run that a live viewer watches (`--speed`).
 
