@@ -174,10 +174,6 @@ class SceneRunner final : public RunHarness {
   /// bit 0 sample valid, bit 1 torque commanded, bit 2 overrun. Throws like TraceWriter's
   /// constructor.
   void stream_trace(const std::string& path);
-  /// Publishes the run's state stream (docs/viewer.md) to a view recording at `record_path`
-  /// (empty: none) and to `sinks`, at `rate_hz` frames per simulated second; `wait`: the loop
-  /// waits for the consumers (offline runs), else drops. Starts the stream's thread. Throws
-  /// InputError at --record-view when the file cannot be created.
   /// The streaming trace writer (nullptr unless stream_trace() was called).
   platform::TraceWriter* trace_writer() noexcept { return trace_writer_.get(); }
   /// A paced run: measures the target (the summary's "penetration max: target", the hand's
