@@ -7,7 +7,6 @@
 #include <memory>
 #include <string>
 
-#include "numen/platform/device_rig.hpp"
 #include "numen/sim/run/admittance_run.hpp"
 #include "numen/sim/run/run.hpp"
 #include "numen/sim/scene/scene.hpp"
